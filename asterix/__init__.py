@@ -1,0 +1,1 @@
+"""ASTERIX decoding: containers, framing, edition tables, the record walker, typed frames, encoder."""

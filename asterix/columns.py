@@ -1,0 +1,148 @@
+"""The typed-frame schema: which item field feeds each column, per category family, as data.
+
+Each column lists one or more sources ``(item, field path)``; the first source present in a record
+wins (I021/131 before I021/130, for instance). Bit positions, LSBs and signedness come from the
+edition table, so one column definition serves every edition in which the field exists.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+NM_PER_S_TO_KT = 3600.0
+
+
+@dataclass(frozen=True)
+class Column:
+    """One frame column: its name, sources, how raw bits become a value, and its documentation."""
+
+    name: str
+    sources: tuple[tuple[str, tuple[str, ...]], ...]
+    kind: str = "float"  # float (LSB-scaled) | int | flag | octal | icao | hex | count
+    scale: float = 1.0  # applied after the LSB, for unit conversion (NM/s -> kt)
+    unit: str = ""
+    doc: str = ""
+
+
+def _c(name: str, item: str, path: str, kind: str = "float", unit: str = "", doc: str = "",
+       scale: float = 1.0, also: tuple[tuple[str, str], ...] = ()) -> Column:
+    sources = ((item, tuple(path.split("/")) if path else ()),) + tuple(
+        (i, tuple(p.split("/")) if p else ()) for i, p in also)
+    return Column(name, sources, kind, scale, unit, doc)
+
+
+def _flags(item: str, names: dict[str, str], doc: str) -> list[Column]:
+    return [_c(col, item, field, "flag", doc=f"{doc} {field}") for col, field in names.items()]
+
+
+_COMMON_ID = [
+    _c("sac", "010", "SAC", "int", doc="System Area Code"),
+    _c("sic", "010", "SIC", "int", doc="System Identification Code"),
+]
+
+CAT048: list[Column] = [
+    *_COMMON_ID,
+    _c("time_of_day", "140", "", unit="s", doc="Time of day (UTC seconds since midnight)"),
+    *_flags("020", {"typ": "TYP", "sim": "SIM", "rdp": "RDP", "spi": "SPI", "rab": "RAB", "tst": "TST",
+                    "err": "ERR", "xpp": "XPP", "me": "ME", "mi": "MI", "foe_fri": "FOEFRI"},
+            "Target report descriptor"),
+    _c("rho_nm", "040", "RHO", unit="NM", doc="Measured slant range"),
+    _c("theta_deg", "040", "THETA", unit="deg", doc="Measured azimuth, clockwise from north"),
+    _c("mode3a", "070", "MODE3A", "octal", doc="Mode 3/A code, 4 octal digits"),
+    _c("mode3a_v", "070", "V", "flag", doc="Mode 3/A not validated"),
+    _c("mode3a_g", "070", "G", "flag", doc="Mode 3/A garbled"),
+    _c("mode3a_l", "070", "L", "flag", doc="Mode 3/A not extracted in the last scan (smoothed)"),
+    _c("flight_level", "090", "FL", unit="FL", doc="Flight level (100 ft)"),
+    _c("flight_level_v", "090", "V", "flag", doc="Flight level not validated"),
+    _c("flight_level_g", "090", "G", "flag", doc="Flight level garbled"),
+    _c("ssr_runlength_deg", "130", "SRL/SRL", unit="deg", doc="SSR plot runlength"),
+    _c("ssr_replies", "130", "SRR/SRR", "int", doc="Number of received SSR replies"),
+    _c("ssr_amplitude_dbm", "130", "SAM/SAM", unit="dBm", doc="SSR reply amplitude"),
+    _c("psr_runlength_deg", "130", "PRL/PRL", unit="deg", doc="PSR plot runlength"),
+    _c("psr_amplitude_dbm", "130", "PAM/PAM", unit="dBm", doc="PSR plot amplitude"),
+    _c("address", "220", "", "hex", doc="24-bit aircraft address, 6 upper-case hex digits"),
+    _c("callsign", "240", "", "icao", doc="Aircraft identification, trailing spaces stripped"),
+    _c("bds_count", "250", "", "count", doc="Number of BDS registers in I048/250"),
+    _c("track_number", "161", "TRN", "int", doc="Track number"),
+    _c("x_nm", "042", "X", unit="NM", doc="Calculated cartesian X (east)"),
+    _c("y_nm", "042", "Y", unit="NM", doc="Calculated cartesian Y (north)"),
+    _c("ground_speed_kt", "200", "GSP", unit="kt", scale=NM_PER_S_TO_KT, doc="Calculated ground speed"),
+    _c("heading_deg", "200", "HDG", unit="deg", doc="Calculated heading"),
+    *_flags("170", {"cnf": "CNF", "rad": "RAD", "dou": "DOU", "mah": "MAH", "cdm": "CDM", "tre": "TRE",
+                    "gho": "GHO", "sup": "SUP", "tcc": "TCC"}, "Track status"),
+    _c("height_3d_ft", "110", "3DH", unit="ft", doc="Height measured by a 3D radar"),
+    _c("doppler_speed_ms", "120", "CAL/CAL", unit="m/s", doc="Calculated radial Doppler speed"),
+    _c("com", "230", "COM", "flag", doc="Transponder communications capability"),
+    _c("flight_status", "230", "STAT", "flag", doc="Flight status (alert, SPI, on ground)"),
+]
+
+_CAT021_SHARED = [
+    _c("address", "080", "", "hex", doc="24-bit target address, 6 upper-case hex digits"),
+    _c("callsign", "170", "", "icao", doc="Target identification, trailing spaces stripped"),
+    _c("mode3a", "070", "MODE3A", "octal", doc="Mode 3/A code, 4 octal digits"),
+    _c("flight_level", "145", "", unit="FL", doc="Flight level (barometric, 100 ft)"),
+    _c("geometric_height_ft", "140", "", unit="ft", doc="Geometric height (2.x) / altitude (0.2x)"),
+    _c("track_angle_deg", "160", "TA", unit="deg", doc="Track angle, clockwise from true north"),
+    _c("true_airspeed_kt", "151", "", unit="kt", doc="True airspeed"),
+    _c("magnetic_heading_deg", "152", "", unit="deg", doc="Magnetic heading"),
+    _c("roll_angle_deg", "230", "", unit="deg", doc="Roll angle"),
+    _c("emitter_category", "020", "", "int", doc="Emitter category code"),
+]
+
+CAT021_V2: list[Column] = [
+    *_COMMON_ID,
+    _c("time_of_day", "071", "", unit="s", also=(("073", ""),),
+       doc="Time of applicability for position (I021/071), else of reception for position (I021/073)"),
+    _c("time_applicability_position", "071", "", unit="s", doc="I021/071"),
+    _c("time_applicability_velocity", "072", "", unit="s", doc="I021/072"),
+    _c("time_reception_position", "073", "", unit="s", doc="I021/073"),
+    _c("time_reception_velocity", "075", "", unit="s", doc="I021/075"),
+    _c("time_report_transmission", "077", "", unit="s", doc="I021/077"),
+    *_flags("040", {"atp": "ATP", "arc": "ARC", "rc": "RC", "rab": "RAB", "dcr": "DCR", "gbs": "GBS",
+                    "sim": "SIM", "tst": "TST", "saa": "SAA", "cl": "CL"}, "Target report descriptor"),
+    _c("latitude", "131", "LAT", unit="deg", also=(("130", "LAT"),),
+       doc="WGS-84 latitude, high resolution (I021/131) else I021/130"),
+    _c("longitude", "131", "LON", unit="deg", also=(("130", "LON"),),
+       doc="WGS-84 longitude, high resolution (I021/131) else I021/130"),
+    *_CAT021_SHARED,
+    _c("ground_speed_kt", "160", "GS", unit="kt", scale=NM_PER_S_TO_KT, doc="Airborne ground speed"),
+    _c("track_number", "161", "TRNUM", "int", doc="Track number"),
+    _c("nucp_nic", "090", "NUCPNIC", "int", doc="NUCp (DO-260) or NIC (DO-260A/B)"),
+    _c("nucr_nacv", "090", "NUCRNACV", "int", doc="NUCr or NACv"),
+    _c("nacp", "090", "NACP", "int", doc="Navigation accuracy category for position"),
+    _c("sil", "090", "SIL", "int", doc="Surveillance/source integrity level"),
+    _c("nic_baro", "090", "NICBARO", "int", doc="NIC for barometric altitude"),
+    _c("mops_version", "210", "VN", "int", doc="MOPS version (0 DO-260, 1 DO-260A, 2 DO-260B)"),
+    _c("link_technology", "210", "LTT", "int", doc="Link technology type (2 = 1090 ES)"),
+    _c("service_id", "015", "", "int", doc="Service identification"),
+    _c("receiver_id", "400", "", "int", doc="Receiver ID"),
+    _c("baro_vertical_rate_ftmin", "155", "BVR", unit="ft/min", doc="Barometric vertical rate"),
+    _c("geo_vertical_rate_ftmin", "157", "GVR", unit="ft/min", doc="Geometric vertical rate"),
+]
+
+CAT021_V0: list[Column] = [
+    *_COMMON_ID,
+    _c("time_of_day", "030", "", unit="s", doc="Time of day (I021/030)"),
+    *_flags("040", {"atp": "ATP", "arc": "ARC", "rab": "RAB", "dcr": "DCR", "gbs": "GBS", "sim": "SIM",
+                    "tst": "TST", "saa": "SAA", "spi": "SPI"}, "Target report descriptor"),
+    _c("latitude", "130", "LAT", unit="deg", doc="WGS-84 latitude (I021/130)"),
+    _c("longitude", "130", "LON", unit="deg", doc="WGS-84 longitude (I021/130)"),
+    *_CAT021_SHARED,
+    _c("ground_speed_kt", "160", "GS", unit="kt", scale=NM_PER_S_TO_KT, doc="Ground speed (signed in 0.2x)"),
+    _c("fom_ac", "090", "AC", "int", doc="Figure of merit: ACAS capabilities"),
+    _c("fom_mn", "090", "MN", "int", doc="Figure of merit: multiple navigation aids"),
+    _c("fom_dc", "090", "DC", "int", doc="Figure of merit: differential correction"),
+    _c("fom_pa", "090", "PA", "int", doc="Figure of merit: position accuracy (NUCp-like, 0-15)"),
+    _c("signal_amplitude", "131", "", "int", doc="Signal amplitude (0.26 only)"),
+    _c("baro_vertical_rate_ftmin", "155", "", unit="ft/min", doc="Barometric vertical rate"),
+    _c("geo_vertical_rate_ftmin", "157", "", unit="ft/min", doc="Geometric vertical rate"),
+]
+
+
+def columns_for(category: int, edition: str) -> list[Column]:
+    """The column list of a category edition."""
+    if category == 48:
+        return CAT048
+    if category == 21:
+        return CAT021_V0 if edition.startswith("0.") else CAT021_V2
+    raise KeyError(category)

@@ -1,0 +1,1 @@
+"""Per-edition ASTERIX item tables (JSON data) and the loader."""

@@ -1,0 +1,134 @@
+"""Convert the printed asterix-specs item layouts into msdc's JSON edition tables.
+
+Run by hand when an edition is added: ``python -m asterix.tables.build ../shared/specs``.
+The JSON files it writes are committed; the decoder never reads the printed specs.
+"""
+
+from __future__ import annotations
+
+import json
+import re
+import sys
+from pathlib import Path
+
+HERE = Path(__file__).parent
+
+_FRN = re.compile(r"^FRN (\d+): (?:I(\d{3})/(\w+): (.*)|\(spare FRN, no item\))$")
+_ELEMENT = re.compile(r"^element (\d+) bits: (.*)$")
+_GROUP = re.compile(r"^group (\d+) bits$")
+_SPARE = re.compile(r"^spare (\d+) bits$")
+_REP = re.compile(r"^repetitive \(rep bytes=(\w+)\)$")
+_OCTET = re.compile(r"^octet-group (\d+):$")
+_SUB = re.compile(r"^\[(\d+)\] (\w+): ?(.*)$")
+_NAMED = re.compile(r"^(\w+): ?(.*)$")
+_QTY = re.compile(r"^(signed|unsigned) quantity lsb=([-+0-9.e]+) ?(.*)$")
+
+
+def _content(text: str) -> dict:
+    """Element content: how its raw bits become a value."""
+    m = _QTY.match(text)
+    if m:
+        return {"type": "quantity", "signed": m[1] == "signed", "lsb": float(m[2]), "unit": m[3].strip()}
+    if text.startswith("string "):
+        return {"type": "string", "string": text.split()[1].removeprefix("String")}
+    if text.startswith("table"):
+        return {"type": "table"}
+    if text.startswith("signed integer"):
+        return {"type": "integer", "signed": True}
+    if text.startswith("unsigned integer"):
+        return {"type": "integer", "signed": False}
+    return {"type": "raw"}
+
+
+class _Lines:
+    def __init__(self, lines: list[str]):
+        self.items = [(len(s) - len(s.lstrip(" ")), s.strip()) for s in lines if s.strip()]
+        self.i = 0
+
+    def peek(self) -> tuple[int, str] | None:
+        return self.items[self.i] if self.i < len(self.items) else None
+
+    def next(self) -> tuple[int, str]:
+        self.i += 1
+        return self.items[self.i - 1]
+
+
+def _node(ls: _Lines) -> dict:
+    """Parse one structural node (element, group, extended, repetitive, compound, explicit)."""
+    indent, text = ls.next()
+    if m := _ELEMENT.match(text):
+        return {"kind": "element", "bits": int(m[1]), **_content(m[2])}
+    if m := _SPARE.match(text):
+        return {"kind": "spare", "bits": int(m[1])}
+    if m := _GROUP.match(text):
+        return {"kind": "group", "bits": int(m[1]), "items": _children(ls, indent)}
+    if m := _REP.match(text):
+        rep = None if m[1] == "None" else int(m[1])
+        return {"kind": "repetitive", "rep_bytes": rep, "item": _node(ls)}
+    if text == "extended (FX)":
+        groups = []
+        while (p := ls.peek()) and p[0] > indent and _OCTET.match(p[1]):
+            gi, _ = ls.next()
+            groups.append([c for c in _children(ls, gi) if c["kind"] != "fx"])
+        return {"kind": "extended", "groups": groups}
+    if text == "compound":
+        subs: list[dict | None] = []
+        while (p := ls.peek()) and p[0] > indent and (m := _SUB.match(p[1])):
+            ls.next()
+            index = int(m[1])
+            while len(subs) < index - 1:
+                subs.append(None)
+            subs.append({"name": m[2], "title": m[3], "node": _node(ls)})
+        return {"kind": "compound", "subitems": subs}
+    if text.startswith("explicit"):
+        return {"kind": "explicit"}
+    if text == "FX":
+        return {"kind": "fx"}
+    if m := _NAMED.match(text):
+        child = _node(ls)
+        child["name"] = m[1]
+        if m[2]:
+            child["title"] = m[2]
+        return child
+    raise ValueError(f"unparsed spec line: {text!r}")
+
+
+def _children(ls: _Lines, indent: int) -> list[dict]:
+    out = []
+    while (p := ls.peek()) and p[0] > indent and not _FRN.match(p[1]):
+        out.append(_node(ls))
+    return out
+
+
+def parse_spec(text: str) -> dict:
+    """Parse one printed edition into {'category', 'edition', 'uap': [item or None by FRN]}."""
+    lines = text.splitlines()
+    head = re.match(r"# Cat_(\d+)_(\d+)_(\d+)", lines[0])
+    assert head, lines[0]
+    ls = _Lines(lines[1:])
+    uap: list[dict | None] = []
+    while ls.peek():
+        _, text_line = ls.next()
+        m = _FRN.match(text_line)
+        if not m:
+            raise ValueError(f"expected FRN line, got {text_line!r}")
+        if m[2] is None:
+            uap.append(None)
+            continue
+        node = _node(ls)
+        uap.append({"frn": int(m[1]), "id": m[3], "title": m[4], "node": node})
+    return {"category": int(head[1]), "edition": f"{int(head[2])}.{int(head[3])}", "uap": uap}
+
+
+def main(argv: list[str]) -> int:
+    src = Path(argv[1] if len(argv) > 1 else "../shared/specs")
+    for path in sorted(src.glob("Cat_*.txt")):
+        table = parse_spec(path.read_text())
+        out = HERE / f"cat{table['category']:03d}_{table['edition']}.json"
+        out.write_text(json.dumps(table, indent=1) + "\n")
+        print(f"{path.name} -> {out.name}: {sum(1 for u in table['uap'] if u)} items")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main(sys.argv))
