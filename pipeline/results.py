@@ -1,0 +1,62 @@
+"""Result types passed from the correlation steps to the report writers.
+
+Measurement frames (output of ``pipeline.measurements``), one row per report, columns:
+``sensor`` ("radar" | "adsb"), ``time_of_day`` (s since midnight of the recording's first day,
+above 86400 after midnight), ``timestamp`` (UTC, NaT when the date is unknown), ``latitude``,
+``longitude`` (deg WGS-84), ``flight_level``, ``ground_speed_kt``, ``heading_deg``, ``callsign``,
+``address``, ``sac``, ``sic``; radar rows also ``rho_nm``, ``theta_deg``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import pandas as pd
+
+# Columns of WindowResult.slots
+SLOT_COLUMNS = [
+    "slot", "time_of_day", "timestamp", "radar_lat", "radar_lon", "adsb_lat", "adsb_lon",
+    "radar_count", "adsb_count", "radar_filled", "adsb_filled", "sep_m",
+]
+# Columns of WindowResult.lags
+LAG_COLUMNS = ["lag", "ncc_lat", "ncc_lon", "pearson_lat", "pearson_lon"]
+# Keys of WindowResult.summary, in report order (the JSON fields of a window)
+SUMMARY_KEYS = [
+    "callsign", "address", "window", "start_tod", "end_tod", "start", "end", "slots",
+    "radar_before", "radar_after", "adsb_before", "adsb_after", "radar_duplicates", "adsb_duplicates",
+    "ncc0_lat", "ncc0_lon", "ncc_peak_lag_lat", "ncc_peak_lag_lon",
+    "pearson0_lat", "pearson0_lon", "pearson_peak_lag_lat", "pearson_peak_lag_lon",
+    "sep_mean_m", "sep_rms_m", "sep_p95_m", "sep_max_m",
+]
+
+
+@dataclass
+class WindowResult:
+    """One overlap window of one aircraft: its slots, its lag table and its summary row."""
+
+    summary: dict
+    slots: pd.DataFrame
+    lags: pd.DataFrame
+
+
+@dataclass
+class SkippedWindow:
+    """A window that was found but not correlated, and why."""
+
+    callsign: str
+    address: str
+    start_tod: float
+    end_tod: float
+    reason: str
+
+
+@dataclass
+class CorrelationRun:
+    """Everything one ``msdc correlate`` run produced, for the report, JSON and figure writers."""
+
+    windows: list[WindowResult] = field(default_factory=list)
+    skipped: list[SkippedWindow] = field(default_factory=list)
+    parameters: dict = field(default_factory=dict)  # options, editions, software version, run time
+    inputs: list[dict] = field(default_factory=list)  # {"path", "sha256", "bytes", "format"}
+    filters: dict = field(default_factory=dict)  # filter name -> reports removed (issue 4 filters)
+    extra_sheets: dict[str, pd.DataFrame] = field(default_factory=dict)  # e.g. Quality, Radar accuracy
