@@ -1,1 +1,15 @@
-"""ASTERIX decoding: containers, framing, edition tables, the record walker, typed frames, encoder."""
+"""ASTERIX decoding for msdc: CAT048 and CAT021 recordings into typed pandas frames.
+
+``read`` decodes a file (raw data blocks, pcap/pcapng or the "final" recorder format) into a
+Recording with one DataFrame per category and an account of what was skipped; ``iter_read``
+streams it in chunks; ``encode`` builds records and data blocks from column values.
+"""
+
+from .errors import AsterixError, DecodeError, UnreadableInput
+from .reader import Recording, decode_buffer, iter_read, read
+from .tables import available as available_editions
+
+__all__ = [
+    "AsterixError", "DecodeError", "Recording", "UnreadableInput", "available_editions", "decode_buffer",
+    "iter_read", "read",
+]

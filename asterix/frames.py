@@ -1,0 +1,63 @@
+"""Turn the kernel's column arrays into typed pandas columns (nullable ints, text, floats)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+
+from .columns import Column
+
+_ICAO = np.array(["?"] * 64)
+_ICAO[1:27] = list("ABCDEFGHIJKLMNOPQRSTUVWXYZ")
+_ICAO[32] = " "
+_ICAO[48:58] = list("0123456789")
+
+
+def icao_text(raw: int) -> str:
+    """The 8-character ICAO 6-bit string of a 48-bit value, trailing spaces stripped."""
+    return "".join(_ICAO[(raw >> (42 - 6 * i)) & 63] for i in range(8)).rstrip()
+
+
+def _text_column(raw: np.ndarray, fmt) -> pd.Categorical:
+    """Categorical text from raw ints (-1 = absent): each distinct value is formatted once."""
+    codes, uniques = pd.factorize(raw, sort=False)
+    labels = [fmt(int(u)) for u in uniques]
+    missing = [i for i, u in enumerate(uniques) if u < 0 or labels[i] == ""]
+    if missing:
+        remap = np.arange(len(uniques))
+        keep = np.ones(len(uniques), bool)
+        keep[missing] = False
+        remap[keep] = np.arange(keep.sum())
+        remap[~keep] = -1
+        codes = np.where(codes >= 0, remap[codes], -1)
+        labels = [lab for i, lab in enumerate(labels) if keep[i]]
+    # identical labels from distinct raws (e.g. trailing-space variants) are merged
+    cats, inv = np.unique(np.array(labels, dtype=object), return_inverse=True) if labels else ([], [])
+    if len(labels):
+        codes = np.where(codes >= 0, np.asarray(inv)[np.maximum(codes, 0)], -1)
+    return pd.Categorical.from_codes(codes, categories=pd.Index(list(cats), dtype=object))
+
+
+_FORMATS = {
+    "hex": lambda v: f"{v:06X}",
+    "octal": lambda v: f"{v:04o}",
+    "icao": icao_text,
+}
+_INT_DTYPES = {"flag": np.int8, "int": np.int32, "count": np.int16}
+
+
+def typed_column(col: Column, values: np.ndarray):
+    """One pandas column from kernel output (floats with NaN, or ints with -1 for absent)."""
+    if col.kind == "float":
+        return values
+    if col.kind in _FORMATS:
+        return _text_column(values, _FORMATS[col.kind])
+    dtype = _INT_DTYPES[col.kind]
+    return pd.arrays.IntegerArray(values.astype(dtype), values < 0)
+
+
+def empty_column(col: Column, n: int):
+    """An all-absent column of the right dtype, for fields the edition does not have."""
+    if col.kind == "float":
+        return np.full(n, np.nan)
+    return typed_column(col, np.full(n, -1, np.int64))

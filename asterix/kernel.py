@@ -1,0 +1,344 @@
+"""The compiled record-walk kernel: frame data blocks, walk FSPECs and items, gather fields.
+
+Generic over the Layout arrays: ``frame_blocks`` finds data blocks in the payload segments;
+``scan`` walks each block of one category (all or nothing), first to count records, then to
+note where each item of each record lies; ``gather`` reads every field into column arrays.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+# Error codes (see errors.REASONS for their text).
+E_PAST_END = 1  # an FSPEC or item runs past the end of its block
+E_UNDEFINED_FRN = 2  # FSPEC sets an FRN that the edition does not define
+E_UNDEFINED_SUB = 3  # compound subfield not defined in the edition
+E_EXPLICIT_LEN = 4  # explicit item (RE/SP) with a zero length byte
+E_EMPTY_FSPEC = 5  # a record whose FSPEC has no item
+E_BAD_LEN = 6  # data block LEN below 3 or past the end of the data
+E_NO_FRAME = 7  # UDP payload / frame that does not frame exactly into data blocks
+E_UNKNOWN_CAT = 8  # category msdc cannot decode
+E_GARBAGE = 9  # bytes between blocks that do not start a plausible data block
+E_EMPTY_BLOCK = 10  # a data block with no record
+
+
+@njit(cache=True, nogil=True)
+def _plausible(buf, q, stop, known):
+    """A data block header at q with a known category and a LEN that fits."""
+    if q + 3 > stop or known[buf[q]] == 0:
+        return False
+    n = (np.int64(buf[q + 1]) << 8) | buf[q + 2]
+    return n >= 3 and q + n <= stop
+
+
+@njit(cache=True, nogil=True)
+def frame_blocks(buf, seg_start, seg_stop, exact, known):
+    """Split payload segments into data blocks; return block and error arrays.
+
+    known[cat] is 1 for categories msdc decodes (resynchronisation looks for those only).
+    Returns (blk_start, blk_len, blk_cat, blk_seg, err_off, err_len, err_cat, err_code).
+    """
+    cap = 16
+    b_start = np.empty(cap, np.int64)
+    b_len = np.empty(cap, np.int64)
+    b_cat = np.empty(cap, np.int16)
+    b_seg = np.empty(cap, np.int64)
+    e_off = np.empty(cap, np.int64)
+    e_len = np.empty(cap, np.int64)
+    e_cat = np.empty(cap, np.int16)
+    e_code = np.empty(cap, np.int16)
+    nb = 0
+    ne = 0
+    for s in range(seg_start.shape[0]):
+        start = seg_start[s]
+        stop = seg_stop[s]
+        if exact:
+            # the payload must tile exactly into blocks, else it is skipped whole
+            q = start
+            ok = True
+            while q < stop:
+                if q + 3 > stop:
+                    ok = False
+                    break
+                n = (np.int64(buf[q + 1]) << 8) | buf[q + 2]
+                if n < 3 or q + n > stop:
+                    ok = False
+                    break
+                q += n
+            if not ok:
+                if ne == e_off.shape[0]:
+                    e_off, e_len, e_cat, e_code = _grow4(e_off, e_len, e_cat, e_code)
+                e_off[ne] = start
+                e_len[ne] = stop - start
+                e_cat[ne] = buf[start] if stop > start else -1
+                e_code[ne] = E_NO_FRAME
+                ne += 1
+                continue
+        q = start
+        while q < stop:
+            n = np.int64(0)
+            if q + 3 <= stop:
+                n = (np.int64(buf[q + 1]) << 8) | buf[q + 2]
+            if q + 3 <= stop and n >= 3 and q + n <= stop and (exact or known[buf[q]] == 1 or (
+                    q + n == stop or _plausible(buf, q + n, stop, known))):
+                if nb == b_start.shape[0]:
+                    b_start, b_len, b_seg, b_cat = _grow4(b_start, b_len, b_seg, b_cat)
+                b_start[nb] = q
+                b_len[nb] = n
+                b_cat[nb] = buf[q]
+                b_seg[nb] = s
+                nb += 1
+                q += n
+                continue
+            # bad header in a raw stream: skip to the next plausible block header
+            r = q + 1
+            while r < stop and not (_plausible(buf, r, stop, known) and (
+                    r + ((np.int64(buf[r + 1]) << 8) | buf[r + 2]) == stop or _plausible(
+                        buf, r + ((np.int64(buf[r + 1]) << 8) | buf[r + 2]), stop, known))):
+                r += 1
+            if ne == e_off.shape[0]:
+                e_off, e_len, e_cat, e_code = _grow4(e_off, e_len, e_cat, e_code)
+            e_off[ne] = q
+            e_len[ne] = r - q
+            e_cat[ne] = buf[q]
+            e_code[ne] = E_BAD_LEN if q + 3 <= stop and known[buf[q]] == 1 else E_GARBAGE
+            ne += 1
+            q = r
+    return (b_start[:nb], b_len[:nb], b_cat[:nb], b_seg[:nb], e_off[:ne], e_len[:ne], e_cat[:ne],
+            e_code[:ne])
+
+
+@njit(cache=True, nogil=True)
+def _grow4(a, b, c, d):
+    n = a.shape[0] * 2
+    a2 = np.empty(n, a.dtype)
+    b2 = np.empty(n, b.dtype)
+    c2 = np.empty(n, c.dtype)
+    d2 = np.empty(n, d.dtype)
+    a2[: a.shape[0]] = a
+    b2[: b.shape[0]] = b
+    c2[: c.shape[0]] = c
+    d2[: d.shape[0]] = d
+    return a2, b2, c2, d2
+
+
+# Columns of the packed part table P.
+K_KIND, K_SIZE, K_EXT_START, K_EXT_COUNT, K_SUB_START, K_SUB_COUNT, K_SLOT = range(7)
+
+
+@njit(cache=True, nogil=True)
+def scan(buf, blk_start, blk_len, counts, P, ext_sizes, sub_parts, n_frn, n_slots, n_rec, mode_extract):
+    """Walk blocks record by record; count (mode 0) or gather fields (mode 1) in one code path.
+
+    Count mode fills ``counts`` (records per block, or minus an error code) and ``fail_at``.
+    Extract mode walks blocks with counts > 0 and records where each part of each record lies
+    (offset from the record start and length, 0xFFFF when absent) for ``gather``.
+    The walk is written out in one body: calls passing arrays cost more than the walk itself.
+    """
+    nblk = blk_start.shape[0]
+    fail_at = np.full(nblk, -1, np.int64)
+    rel_off = np.full((n_rec, n_slots), 0xFFFF, np.uint16)
+    rel_len = np.zeros((n_rec, n_slots), np.uint16)
+    rec_off = np.empty(n_rec, np.int64)
+    rec_blk = np.empty(n_rec, np.int64)
+    part_off = np.empty(max(n_slots, 1), np.int64)
+    part_len = np.empty(max(n_slots, 1), np.int64)
+    work = np.empty(64, np.int64)
+    i = 0
+    for b in range(nblk):
+        if mode_extract and counts[b] <= 0:
+            continue
+        pos = blk_start[b] + 3
+        end = blk_start[b] + blk_len[b]
+        nrec = 0
+        err = 0
+        while pos < end and err == 0:
+            rec_start = pos
+            for s in range(n_slots):
+                part_off[s] = -1
+            fs = pos
+            while True:
+                if pos >= end:
+                    err = E_PAST_END
+                    break
+                pos += 1
+                if buf[pos - 1] & 1 == 0:
+                    break
+            if err:
+                break
+            fs_end = pos
+            any_item = False
+            for q in range(fs, fs_end):
+                byte = buf[q]
+                for bit in range(7):
+                    if byte & (0x80 >> bit) == 0:
+                        continue
+                    any_item = True
+                    p = (q - fs) * 7 + bit
+                    if p >= n_frn or P[p, K_KIND] == 0:
+                        err = E_UNDEFINED_FRN
+                        break
+                    item_start = pos
+                    # the parts to measure: the item itself, or a compound item's present subitems
+                    nwork = 0
+                    if P[p, K_KIND] == 5:
+                        cs = pos
+                        while True:
+                            if pos >= end:
+                                err = E_PAST_END
+                                break
+                            pos += 1
+                            if buf[pos - 1] & 1 == 0:
+                                break
+                        if err:
+                            break
+                        for cq in range(cs, pos):
+                            cb = buf[cq]
+                            for cbit in range(7):
+                                if cb & (0x80 >> cbit) == 0:
+                                    continue
+                                si = (cq - cs) * 7 + cbit
+                                if si >= P[p, K_SUB_COUNT] or sub_parts[P[p, K_SUB_START] + si] < 0:
+                                    err = E_UNDEFINED_SUB
+                                    break
+                                work[nwork] = sub_parts[P[p, K_SUB_START] + si]
+                                nwork += 1
+                            if err:
+                                break
+                        if err:
+                            break
+                    else:
+                        work[0] = p
+                        nwork = 1
+                    for w in range(nwork):
+                        sp = work[w]
+                        k = P[sp, K_KIND]
+                        n = np.int64(0)
+                        if k == 1:
+                            n = P[sp, K_SIZE]
+                        elif k == 2:
+                            g = 0
+                            gcount = P[sp, K_EXT_COUNT]
+                            while True:
+                                gi = g if g < gcount else gcount - 1
+                                n += ext_sizes[P[sp, K_EXT_START] + gi]
+                                if pos + n > end:
+                                    break
+                                if buf[pos + n - 1] & 1 == 0:
+                                    break
+                                g += 1
+                        elif k == 3:
+                            if pos >= end:
+                                err = E_PAST_END
+                                break
+                            n = 1 + np.int64(buf[pos]) * P[sp, K_SIZE]
+                        elif k == 4:
+                            while True:
+                                n += P[sp, K_SIZE]
+                                if pos + n > end:
+                                    break
+                                if buf[pos + n - 1] & 1 == 0:
+                                    break
+                        elif k == 6:
+                            if pos >= end:
+                                err = E_PAST_END
+                                break
+                            n = np.int64(buf[pos])
+                            if n == 0:
+                                err = E_EXPLICIT_LEN
+                                break
+                        else:
+                            err = E_UNDEFINED_FRN
+                            break
+                        if pos + n > end:
+                            err = E_PAST_END
+                            break
+                        s = P[sp, K_SLOT]
+                        if s >= 0:
+                            part_off[s] = pos
+                            part_len[s] = n
+                        pos += n
+                    if err:
+                        break
+                    s = P[p, K_SLOT]
+                    if s >= 0:
+                        part_off[s] = item_start
+                        part_len[s] = pos - item_start
+                if err:
+                    break
+            if err == 0 and not any_item:
+                err = E_EMPTY_FSPEC
+            if err:
+                fail_at[b] = rec_start
+                break
+            nrec += 1
+            if mode_extract:
+                rec_off[i] = rec_start
+                rec_blk[i] = b
+                for sl in range(n_slots):
+                    if part_off[sl] >= 0:
+                        rel_off[i, sl] = part_off[sl] - rec_start
+                        rel_len[i, sl] = part_len[sl]
+                i += 1
+        if not mode_extract:
+            if err:
+                counts[b] = -err
+            elif nrec == 0:
+                counts[b] = -E_EMPTY_BLOCK
+                fail_at[b] = blk_start[b]
+            else:
+                counts[b] = nrec
+    return fail_at, rel_off, rel_len, rec_off, rec_blk
+
+
+@njit(cache=True, nogil=True)
+def gather(buf, rec_off, rel_off, rel_len, F, f_mult, n_float, n_int):
+    """Fill the float (scaled, NaN if absent) and int (-1 if absent) column matrices field by field.
+
+    A column fed by several sources takes the first source present (F rows are in source order).
+    """
+    n_rec = rec_off.shape[0]
+    fl = np.full((n_float, n_rec), np.nan)
+    it = np.full((n_int, n_rec), -1, np.int64)
+    for f in range(F.shape[0]):
+        sl, bit0, nbits, signed, o, is_float = F[f, 0], F[f, 1], F[f, 2], F[f, 3], F[f, 4], F[f, 5]
+        lead = bit0 & 7
+        nbytes = (lead + nbits + 7) >> 3
+        shift = nbytes * 8 - lead - nbits
+        mask = (np.int64(1) << nbits) - 1
+        need = (bit0 + nbits + 7) >> 3
+        half = np.int64(1) << (nbits - 1)
+        full = np.int64(1) << nbits
+        mult = f_mult[f]
+        skip = bit0 >> 3
+        fallback = F[f, 6]
+        for i in range(n_rec):
+            r = rel_off[i, sl]
+            if r == 0xFFFF or rel_len[i, sl] < need:
+                continue
+            if fallback:
+                if is_float:
+                    if not np.isnan(fl[o, i]):
+                        continue
+                elif it[o, i] >= 0:
+                    continue
+            x = rec_off[i] + r + skip
+            if nbytes == 1:
+                v = np.int64(buf[x])
+            elif nbytes == 2:
+                v = (np.int64(buf[x]) << 8) | np.int64(buf[x + 1])
+            elif nbytes == 3:
+                v = (np.int64(buf[x]) << 16) | (np.int64(buf[x + 1]) << 8) | np.int64(buf[x + 2])
+            else:
+                v = np.int64(0)
+                for j in range(nbytes):
+                    v = (v << 8) | np.int64(buf[x + j])
+            v = (v >> shift) & mask
+            if is_float:
+                if signed and v >= half:
+                    v -= full
+                fl[o, i] = v * mult
+            else:
+                it[o, i] = v
+    return fl, it

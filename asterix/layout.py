@@ -1,0 +1,220 @@
+"""Compile an edition table and its column list into flat arrays for the record-walk kernel.
+
+Parts are the walkable units: every UAP item (index = FRN - 1), then every compound subitem.
+Fields say where a column's raw bits lie: in which part, at which bit offset, how wide.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import cache
+
+import numpy as np
+
+from .columns import Column, columns_for
+from .tables import load_table, resolve_edition
+
+# Part kinds understood by the kernel.
+ABSENT, FIXED, EXTENDED, REP_COUNT, REP_FX, COMPOUND, EXPLICIT = range(7)
+# Output kinds of a field.
+OUT_FLOAT, OUT_INT = 0, 1
+
+
+def fixed_bits(node: dict) -> int | None:
+    """Bit size of a fixed-size node, or None when its size depends on the data."""
+    kind = node["kind"]
+    if kind in ("element", "spare", "group"):
+        return node["bits"]
+    return None
+
+
+@dataclass(frozen=True)
+class Layout:
+    """Kernel arrays for one category edition."""
+
+    category: int
+    edition: str
+    columns: tuple[Column, ...]
+    kind: np.ndarray  # int8 per part
+    size: np.ndarray  # int32 per part: bytes (fixed), element bytes (repetitive), first group (extended)
+    ext_start: np.ndarray  # int32 per part: index into ext_sizes
+    ext_count: np.ndarray  # int32 per part
+    ext_sizes: np.ndarray  # int32 octet-group sizes of extended parts
+    sub_start: np.ndarray  # int32 per part: index into sub_parts (compound)
+    sub_count: np.ndarray  # int32 per part
+    sub_parts: np.ndarray  # int32 part index of each compound subitem, -1 for a spare position
+    slot: np.ndarray  # int32 per part: where the walker records its offset/length, -1 if unused
+    n_frn: int
+    n_slots: int
+    f_slot: np.ndarray  # int32 per field
+    f_bit: np.ndarray  # int32 bit offset in the part
+    f_bits: np.ndarray  # int32 width
+    f_signed: np.ndarray  # bool
+    f_out: np.ndarray  # int32 output row
+    f_float: np.ndarray  # bool: goes to the float matrix (scaled) rather than the int matrix
+    f_mult: np.ndarray  # float64 LSB * column scale
+    out_names_float: tuple[str, ...]
+    out_names_int: tuple[str, ...]
+    item_frn: dict  # item id -> FRN (1-based)
+
+    @property
+    def P(self) -> np.ndarray:
+        """Packed part table for the kernel: kind, size, ext start/count, sub start/count, slot."""
+        return _packed(self, "parts")
+
+    @property
+    def F(self) -> np.ndarray:
+        """Packed field table for the kernel: slot, bit, bits, signed, out row, is-float, fallback."""
+        return _packed(self, "fields")
+
+
+def _fallback(lay: Layout) -> np.ndarray:
+    """1 for a field that feeds a column already fed by an earlier field (first present wins)."""
+    seen: set[tuple[bool, int]] = set()
+    out = np.zeros(len(lay.f_out), np.int64)
+    for i, key in enumerate(zip(lay.f_float.tolist(), lay.f_out.tolist(), strict=True)):
+        out[i] = key in seen
+        seen.add(key)
+    return out
+
+
+_PACKED: dict[tuple[int, str, str], np.ndarray] = {}
+
+
+def _packed(lay: Layout, which: str) -> np.ndarray:
+    key = (lay.category, lay.edition, which)
+    if key not in _PACKED:
+        cols = ((lay.kind, lay.size, lay.ext_start, lay.ext_count, lay.sub_start, lay.sub_count, lay.slot)
+                if which == "parts" else
+                (lay.f_slot, lay.f_bit, lay.f_bits, lay.f_signed, lay.f_out, lay.f_float, _fallback(lay)))
+        _PACKED[key] = np.ascontiguousarray(np.stack([c.astype(np.int64) for c in cols], axis=1))
+    return _PACKED[key]
+
+
+def _locate(node: dict, path: tuple[str, ...]) -> tuple[int, dict] | None:
+    """Bit offset and element node of a named field inside a fixed or extended node."""
+    kind = node["kind"]
+    if not path:
+        return (0, node) if kind == "element" else None
+    if kind == "element":
+        return None
+    if kind == "group":
+        children, fx_every = node["items"], None
+    elif kind == "extended":
+        children, fx_every = [c for g in node["groups"] for c in g + [{"kind": "fx", "bits": 1}]], True
+    else:
+        return None
+    bit = 0
+    for child in children:
+        if child.get("name") == path[0]:
+            inner = _locate(child, path[1:]) if child["kind"] != "element" or len(path) > 1 else (0, child)
+            return None if inner is None else (bit + inner[0], inner[1])
+        bit += child["bits"]
+    del fx_every
+    return None
+
+
+@cache
+def compile_layout(category: int, edition: str | None = None) -> Layout:
+    """Build the kernel arrays for a category edition (cached)."""
+    edition = resolve_edition(category, edition)
+    table = load_table(category, edition)
+    columns = tuple(columns_for(category, edition))
+    uap = table["uap"]
+    parts: list[dict | None] = [u["node"] if u else None for u in uap]
+    n_frn = len(parts)
+    kind, size, ext_start, ext_count, sub_start, sub_count = ([] for _ in range(6))
+    ext_sizes: list[int] = []
+    sub_parts: list[int] = []
+    i = 0
+    while i < len(parts):
+        node = parts[i]
+        k, s, es, ec, ss, sc = ABSENT, 0, 0, 0, 0, 0
+        if node is not None:
+            nk = node["kind"]
+            if (bits := fixed_bits(node)) is not None:
+                k, s = FIXED, bits // 8
+            elif nk == "extended":
+                k, es = EXTENDED, len(ext_sizes)
+                for g in node["groups"]:
+                    ext_sizes.append((sum(c["bits"] for c in g) + 1) // 8)
+                ec, s = len(node["groups"]), ext_sizes[es]
+            elif nk == "repetitive":
+                bits = fixed_bits(node["item"])
+                if bits is None:
+                    raise ValueError(f"CAT{category} {edition}: repetitive of variable items unsupported")
+                if node["rep_bytes"] is None:
+                    k, s = REP_FX, (bits + 1) // 8
+                else:
+                    k, s = REP_COUNT, bits // 8
+                    if node["rep_bytes"] != 1:
+                        raise ValueError("only one-byte repetition counts are supported")
+            elif nk == "compound":
+                k, ss, sc = COMPOUND, len(sub_parts), len(node["subitems"])
+                for sub in node["subitems"]:
+                    if sub is None:
+                        sub_parts.append(-1)
+                    else:
+                        if sub["node"]["kind"] == "compound":
+                            raise ValueError("nested compound items are unsupported")
+                        sub_parts.append(len(parts))
+                        parts.append(sub["node"])
+            elif nk == "explicit":
+                k = EXPLICIT
+        kind.append(k)
+        size.append(s)
+        ext_start.append(es)
+        ext_count.append(ec)
+        sub_start.append(ss)
+        sub_count.append(sc)
+        i += 1
+
+    item_frn = {u["id"]: u["frn"] for u in uap if u}
+    slot = [-1] * len(parts)
+    fields: list[tuple[int, int, int, bool, int, bool, float]] = []
+    names_float: list[str] = []
+    names_int: list[str] = []
+    for col in columns:
+        is_float = col.kind == "float"
+        names = names_float if is_float else names_int
+        out = len(names)
+        names.append(col.name)
+        for item_id, path in col.sources:
+            if item_id not in item_frn:
+                continue
+            p = item_frn[item_id] - 1
+            node = parts[p]
+            assert node is not None
+            if col.kind == "count":
+                loc: tuple[int, dict] | None = (0, {"bits": 8, "signed": False, "lsb": 1.0})
+            else:
+                if node["kind"] == "compound" and path:
+                    subs = uap[p]["node"]["subitems"]
+                    names_sub = [s["name"] if s else None for s in subs]
+                    if path[0] not in names_sub:
+                        continue
+                    p = sub_parts[sub_start[p] + names_sub.index(path[0])]
+                    node, path = parts[p], path[1:]
+                    if node["kind"] == "element" and len(path) == 1:
+                        path = ()
+                loc = _locate(node, path)
+            if loc is None:
+                continue
+            bit, elem = loc
+            if slot[p] < 0:
+                slot[p] = max(slot) + 1 if max(slot) >= 0 else 0
+            lsb = elem.get("lsb", 1.0) if is_float else 1.0
+            fields.append((slot[p], bit, elem["bits"], bool(elem.get("signed", False)), out, is_float,
+                           lsb * col.scale))
+    n_slots = max(slot) + 1 if max(slot) >= 0 else 0
+    f = list(zip(*fields, strict=True)) if fields else [[]] * 7
+    i32 = np.int32
+    return Layout(
+        category, edition, columns,
+        np.array(kind, np.int8), np.array(size, i32), np.array(ext_start, i32), np.array(ext_count, i32),
+        np.array(ext_sizes or [1], i32), np.array(sub_start, i32), np.array(sub_count, i32),
+        np.array(sub_parts or [-1], i32), np.array(slot, i32), n_frn, n_slots,
+        np.array(f[0], i32), np.array(f[1], i32), np.array(f[2], i32), np.array(f[3], np.bool_),
+        np.array(f[4], i32), np.array(f[5], np.bool_), np.array(f[6], np.float64),
+        tuple(names_float), tuple(names_int), item_frn,
+    )

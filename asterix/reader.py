@@ -1,0 +1,375 @@
+"""``read`` and ``iter_read``: recordings in, one typed DataFrame per category out."""
+
+from __future__ import annotations
+
+import datetime as dt
+import mmap
+import os
+from collections.abc import Iterator
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from . import kernel
+from .containers import Segments, read_segments
+from .errors import REASONS, DecodeError, UnreadableInput
+from .frames import empty_column, typed_column
+from .layout import Layout, compile_layout
+from .tables import resolve_edition
+
+DECODABLE = (21, 48)
+AUTO_CANDIDATES = {21: ("2.7", "0.26", "0.23")}
+ERROR_COLUMNS = ["file", "offset", "length", "category", "reason"]
+
+
+@dataclass
+class Recording:
+    """Decoded recording: frames by category, the error account, and how it was read."""
+
+    frames: dict[int, pd.DataFrame]
+    errors: pd.DataFrame
+    editions: dict[int, str]
+    path: str = ""
+    format: str = ""
+    date: dt.date | None = None
+    size_bytes: int = 0
+    container_bytes: int = 0
+    decoded_bytes: int = 0
+    ignored_blocks: dict[int, int] = field(default_factory=dict)
+    edition_choice: dict[int, str] = field(default_factory=dict)  # how 'auto' chose, in words
+
+    def __getitem__(self, category: int) -> pd.DataFrame:
+        return self.frames[category]
+
+
+def _parse_date(date) -> dt.date | None:
+    if date is None or isinstance(date, dt.date):
+        return date
+    return dt.date.fromisoformat(str(date))
+
+
+def _open(path) -> tuple[np.ndarray, object]:
+    """The file as a read-only uint8 array (memory-mapped when non-empty)."""
+    try:
+        with open(path, "rb") as fh:
+            size = os.fstat(fh.fileno()).st_size
+            if size == 0:
+                return np.zeros(0, np.uint8), None
+            mm = mmap.mmap(fh.fileno(), 0, access=mmap.ACCESS_READ)
+    except OSError as exc:
+        raise UnreadableInput(f"{path}: cannot read: {exc.strerror or exc}") from exc
+    return np.frombuffer(mm, np.uint8), mm
+
+
+def _count(buf, starts, lens, lay: Layout) -> tuple[np.ndarray, np.ndarray]:
+    """Records per block (minus an error code for a bad block) and where a bad walk failed."""
+    counts = np.zeros(len(starts), np.int64)
+    fail_at, *_ = kernel.scan(buf, starts, lens, counts, lay.P, lay.ext_sizes, lay.sub_parts, lay.n_frn,
+                              lay.n_slots, 0, False)
+    return counts, fail_at
+
+
+def choose_edition(buf: np.ndarray, starts: np.ndarray, lens: np.ndarray, category: int,
+                   sample: int = 400) -> tuple[str, str]:
+    """Pick the edition family under which a sample of blocks walks exactly with plausible values."""
+    idx = np.unique(np.linspace(0, len(starts) - 1, min(sample, len(starts))).astype(np.int64))
+    s, n = starts[idx], lens[idx]
+    scores = []
+    for ed in AUTO_CANDIDATES[category]:
+        lay = compile_layout(category, ed)
+        counts, _ = _count(buf, s, n, lay)
+        good = counts > 0
+        plausible = 0.0
+        if good.any():
+            fl, _, _, _ = _extract(buf, s, n, counts, lay)
+            cols = {nm: fl[i] for i, nm in enumerate(lay.out_names_float)}
+            lat, lon, tod = cols["latitude"], cols["longitude"], cols["time_of_day"]
+            ok = (np.abs(lat) <= 90) & (np.abs(lon) <= 180) & (tod >= 0) & (tod < 86400)
+            plausible = float(np.mean(ok)) if len(ok) else 0.0
+        scores.append((float(good.mean()) if len(good) else 0.0, plausible, ed))
+    best = max(scores, key=lambda t: (t[0], t[1]))
+    words = "; ".join(f"{ed}: {w:.0%} of sampled blocks walk, {p:.0%} plausible" for w, p, ed in scores)
+    return best[2], f"chose {best[2]} ({words})"
+
+
+def _extract(buf, starts, lens, counts, lay: Layout):
+    n_rec = int(counts[counts > 0].sum())
+    _, rel_off, rel_len, rec_off, rec_blk = kernel.scan(
+        buf, starts, lens, counts, lay.P, lay.ext_sizes, lay.sub_parts, lay.n_frn, lay.n_slots, n_rec, True)
+    fl, it = kernel.gather(buf, rec_off, rel_off, rel_len, lay.F, lay.f_mult, len(lay.out_names_float),
+                           len(lay.out_names_int))
+    del rel_off, rel_len
+    return fl, it, rec_off, rec_blk
+
+
+def _frame(lay: Layout, fl, it, rec_off, rec_blk) -> pd.DataFrame:
+    """Assemble the typed frame of one category from kernel arrays."""
+    n = rec_off.shape[0]
+    fidx = {nm: i for i, nm in enumerate(lay.out_names_float)}
+    iidx = {nm: i for i, nm in enumerate(lay.out_names_int)}
+    data: dict[str, object] = {}
+    for col in lay.columns:
+        has_source = any(src[0] in lay.item_frn for src in col.sources)
+        if col.name in fidx:
+            data[col.name] = fl[fidx[col.name]] if has_source else empty_column(col, n)
+        else:
+            data[col.name] = typed_column(col, it[iidx[col.name]]) if has_source else empty_column(col, n)
+    data["block"] = rec_blk
+    data["offset"] = rec_off
+    return pd.DataFrame(data, copy=False)
+
+
+def _days(frames: dict[int, pd.DataFrame], seg: Segments, blk_seg: np.ndarray) -> int | None:
+    """Add the ``day`` column (days after the first) to each frame; return the first day number."""
+    parts = [(c, f) for c, f in frames.items() if len(f)]
+    if not parts:
+        for f in frames.values():
+            f["day"] = np.zeros(0, np.int64)
+        return None
+    if seg.format in ("raw",) or not len(seg.start):
+        # file order across categories; a drop of more than 12 h is a new day, a rise of more
+        # than 12 h a late report from the day before
+        off = np.concatenate([f["offset"].to_numpy() for _, f in parts])
+        tod = np.concatenate([f["time_of_day"].to_numpy() for _, f in parts])
+        order = np.argsort(off, kind="stable")
+        t = pd.Series(tod[order]).ffill().bfill().to_numpy()
+        d = np.diff(t, prepend=t[:1] if len(t) else t)
+        day_sorted = np.cumsum(d < -43200) - np.cumsum(d > 43200)
+        day = np.empty_like(day_sorted)
+        day[order] = day_sorted
+        first = int(day.min())
+        i = 0
+        for _, f in parts:
+            f["day"] = (day[i:i + len(f)] - first).astype(np.int64)
+            i += len(f)
+        first_day = None
+    else:
+        # container capture time: the day that puts the report nearest its capture
+        all_days = []
+        for _, f in parts:
+            s = blk_seg[f["block"].to_numpy()]
+            cday, ctod = seg.capture_day[s], seg.capture_tod[s]
+            tod = f["time_of_day"].to_numpy()
+            tod = np.where(np.isnan(tod), ctod, tod)
+            all_days.append(cday + np.rint((ctod - tod) / 86400.0).astype(np.int64))
+        first_day = int(min(a.min() for a in all_days))
+        for (_, f), a in zip(parts, all_days, strict=True):
+            f["day"] = a - first_day
+    for f in frames.values():
+        if "day" not in f:
+            f["day"] = np.zeros(len(f), np.int64)
+    return first_day if seg.dated else None
+
+
+def _timestamps(frames: dict[int, pd.DataFrame], date: dt.date | None) -> None:
+    for f in frames.values():
+        if date is None:
+            f["timestamp"] = pd.Series(pd.NaT, index=f.index, dtype="datetime64[ns, UTC]")
+            continue
+        base = np.datetime64(date, "ns")
+        ns = np.rint((f["day"].to_numpy() * 86400.0 + f["time_of_day"].to_numpy()) * 1e9)
+        vals = base + np.where(np.isnan(ns), 0, ns).astype("timedelta64[ns]")
+        vals = np.where(np.isnan(ns), np.datetime64("NaT"), vals)
+        f["timestamp"] = pd.DatetimeIndex(vals).tz_localize("UTC")
+
+
+def _order(frame: pd.DataFrame, category: int) -> pd.DataFrame:
+    first = ["sac", "sic", "time_of_day", "day", "timestamp"]
+    rest = [c for c in frame.columns if c not in first and c not in ("block", "offset")]
+    return frame[first + rest + ["block", "offset"]]
+
+
+def decode_buffer(buf: np.ndarray, seg: Segments, *, path: str = "", editions: dict | None = None,
+                  categories=None, date=None, strict: bool = False) -> Recording:
+    """Decode an in-memory recording whose container segments are already known."""
+    editions = dict(editions or {})
+    wanted = set(DECODABLE if categories is None else categories)
+    known = np.zeros(256, np.uint8)
+    known[list(DECODABLE)] = 1
+    b_start, b_len, b_cat, b_seg, e_off, e_len, e_cat, e_code = kernel.frame_blocks(
+        buf, seg.start, seg.stop, seg.exact, known)
+    errors: list[tuple[int, int, int, str]] = [
+        (int(o), int(n), int(c), REASONS[int(code)])
+        for o, n, c, code in zip(e_off, e_len, e_cat, e_code, strict=True)]
+    errors += [(o, n, -1, f"container: {why}") for o, n, why in seg.problems]
+    frames: dict[int, pd.DataFrame] = {}
+    chosen: dict[int, str] = {}
+    choice: dict[int, str] = {}
+    ignored: dict[int, int] = {}
+    decoded_bytes = 0
+    for cat in (int(c) for c in np.unique(b_cat)):
+        sel = np.flatnonzero(b_cat == cat)
+        if cat not in DECODABLE:
+            errors += [(int(o), int(n), cat, f"unknown category {cat} (msdc decodes CAT021 and CAT048)")
+                       for o, n in zip(b_start[sel], b_len[sel], strict=True)]
+            continue
+        if cat not in wanted:
+            ignored[cat] = len(sel)
+            continue
+        starts, lens = b_start[sel], b_len[sel]
+        ed = editions.get(cat)
+        if ed == "auto":
+            ed, choice[cat] = choose_edition(buf, starts, lens, cat)
+        lay = compile_layout(cat, ed)
+        chosen[cat] = lay.edition
+        counts, fail_at = _count(buf, starts, lens, lay)
+        for j in np.flatnonzero(counts < 0):
+            reason = f"{REASONS[int(-counts[j])]} (record at offset {int(fail_at[j])})"
+            errors.append((int(starts[j]), int(lens[j]), cat, reason))
+        decoded_bytes += int(lens[counts > 0].sum())
+        fl, it, rec_off, rec_blk = _extract(buf, starts, lens, counts, lay)
+        frames[cat] = _frame(lay, fl, it, rec_off, sel[rec_blk])
+    errors.sort()
+    if strict and errors:
+        o, _, c, why = errors[0]
+        raise DecodeError(path, o, why, c)
+    date = _parse_date(date)
+    first_day = _days(frames, seg, b_seg)
+    if first_day is not None:
+        date = dt.date(1970, 1, 1) + dt.timedelta(days=first_day)
+    _timestamps(frames, date)
+    frames = {c: _order(f, c) for c, f in frames.items()}
+    err = pd.DataFrame(errors, columns=["offset", "length", "category", "reason"])
+    err.insert(0, "file", path)
+    err["category"] = err["category"].astype("Int16").where(err["category"] >= 0)
+    return Recording(frames, err, chosen, path, seg.format, date, int(len(buf)), int(seg.container_bytes),
+                     decoded_bytes, ignored, choice)
+
+
+def _parse_editions(editions) -> dict[int, str]:
+    """Accept {21: "0.26"} or ["21=0.26", ...] or "21=0.26"."""
+    if editions is None:
+        return {}
+    if isinstance(editions, str):
+        editions = [editions]
+    if isinstance(editions, dict):
+        return {int(k): str(v) for k, v in editions.items()}
+    out = {}
+    for item in editions:
+        cat, _, ed = str(item).partition("=")
+        out[int(cat)] = ed
+    return out
+
+
+def read(path, *, editions=None, date=None, categories=None, format: str | None = None,
+         strict: bool = False) -> Recording:
+    """Decode a recording file (raw blocks, pcap/pcapng or final) into typed frames by category."""
+    eds = _parse_editions(editions)
+    for cat, ed in eds.items():
+        if ed != "auto":
+            resolve_edition(cat, ed)
+    buf, mm = _open(path)
+    try:
+        try:
+            seg = read_segments(buf, format)
+        except ValueError as exc:
+            raise UnreadableInput(f"{path}: {exc}") from exc
+        rec = decode_buffer(buf, seg, path=str(path), editions=eds, categories=categories, date=date,
+                            strict=strict)
+    finally:
+        del buf
+        if mm is not None:
+            try:
+                mm.close()
+            except BufferError:
+                pass
+    return rec
+
+
+def iter_read(path, *, chunk: int = 1_000_000, editions=None, date=None, categories=None,
+              format: str | None = None, strict: bool = False) -> Iterator[Recording]:
+    """Stream a recording in chunks of about ``chunk`` bytes of payload, yielding a Recording each.
+
+    Days and timestamps continue across chunks; memory stays bounded by the chunk size.
+    """
+    eds = _parse_editions(editions)
+    buf, mm = _open(path)
+    try:
+        seg = read_segments(buf, format)
+        bounds = _chunk_bounds(buf, seg, chunk)
+        carry_day = 0
+        last_tod = np.nan
+        first_date = _parse_date(date)
+        for sub in bounds:
+            rec = decode_buffer(buf, sub, path=str(path), editions=eds, categories=categories,
+                                date=first_date, strict=strict)
+            if rec.date is not None and first_date is None:
+                first_date = rec.date
+            if seg.format == "raw":
+                carry_day, last_tod = _continue_days(rec, carry_day, last_tod, first_date)
+            elif rec.date is not None and first_date is not None and rec.date != first_date:
+                shift = (rec.date - first_date).days
+                for f in rec.frames.values():
+                    f["day"] += shift
+                _timestamps(rec.frames, first_date)
+                rec.date = first_date
+            eds = {**eds, **{c: e for c, e in rec.editions.items() if eds.get(c) == "auto"}}
+            yield rec
+    finally:
+        del buf
+        if mm is not None:
+            try:
+                mm.close()
+            except BufferError:
+                pass
+
+
+def _continue_days(rec: Recording, carry_day: int, last_tod: float, date) -> tuple[int, float]:
+    """Carry the midnight count of a raw stream from one chunk to the next."""
+    firsts = [(f["offset"].iloc[0], f["time_of_day"].iloc[0]) for f in rec.frames.values() if len(f)]
+    if not firsts:
+        return carry_day, last_tod
+    first_tod = min(firsts)[1]
+    if not np.isnan(last_tod) and not np.isnan(first_tod) and first_tod < last_tod - 43200:
+        carry_day += 1
+    for f in rec.frames.values():
+        f["day"] += carry_day
+    _timestamps(rec.frames, date)
+    rec.frames = {c: _order(f, c) for c, f in rec.frames.items()}
+    lasts = [(f["offset"].iloc[-1], f["time_of_day"].iloc[-1], f["day"].iloc[-1])
+             for f in rec.frames.values() if len(f)]
+    _, tod, day = max(lasts)
+    return int(day), float(tod)
+
+
+def _chunk_bounds(buf: np.ndarray, seg: Segments, chunk: int):
+    """Split the segments into groups of about ``chunk`` bytes, cutting raw streams at block starts."""
+    out = []
+    if seg.format == "raw" and len(seg.start):
+        known = np.zeros(256, np.uint8)
+        known[list(DECODABLE)] = 1
+        b_start, _, _, _, _, _, _, _ = kernel.frame_blocks(buf, seg.start, seg.stop, False, known)
+        cuts = [int(seg.start[0])]
+        for s in b_start:
+            if s - cuts[-1] >= chunk:
+                cuts.append(int(s))
+        cuts.append(int(seg.stop[0]))
+        for lo, hi in zip(cuts[:-1], cuts[1:], strict=True):
+            sub = _sub_segments(seg, np.array([lo]), np.array([hi]), np.array([0]))
+            out.append(sub)
+        return out
+    sizes = np.cumsum(seg.stop - seg.start)
+    group = (sizes // max(chunk, 1)).astype(np.int64)
+    for g in np.unique(group):
+        idx = np.flatnonzero(group == g)
+        sub = _sub_segments(seg, seg.start[idx], seg.stop[idx], idx)
+        out.append(sub)
+    if not len(seg.start):
+        out.append(seg)
+    return out
+
+
+def _sub_segments(seg: Segments, start, stop, idx) -> Segments:
+    first = len(idx) and idx[0] == 0
+    return Segments(seg.format, np.asarray(start, np.int64), np.asarray(stop, np.int64),
+                    seg.capture_day[idx] if len(seg.capture_day) else np.full(len(idx), -1, np.int64),
+                    seg.capture_tod[idx] if len(seg.capture_tod) else np.full(len(idx), np.nan),
+                    seg.dated, seg.exact, seg.container_bytes if first else 0,
+                    seg.problems if first else [])
+
+
+def read_path_list(paths, **kw) -> list[Recording]:
+    """Read several recordings with the same options."""
+    return [read(Path(p), **kw) for p in paths]

@@ -1,0 +1,40 @@
+"""Hand-building helpers for decoder tests: FSPECs and data blocks written from the ASTERIX rules.
+
+Kept deliberately naive (and separate from asterix.encode) so tests do not share code with the
+implementation they check.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+import asterix
+from asterix.containers import read_segments
+
+SHARED = Path(__file__).resolve().parents[1].parent / "shared"
+
+
+def fspec(*frns: int) -> bytes:
+    """FSPEC with the given FRNs set: 7 presence bits per octet, MSB = lowest FRN, FX = LSB."""
+    n_octets = (max(frns) + 6) // 7
+    out = bytearray(n_octets)
+    for frn in frns:
+        octet, bit = divmod(frn - 1, 7)
+        out[octet] |= 0x80 >> bit
+    for i in range(n_octets - 1):
+        out[i] |= 1
+    return bytes(out)
+
+
+def block(cat: int, *records: bytes) -> bytes:
+    """A data block: CAT, LEN (big-endian, counting the 3 header bytes), records."""
+    body = b"".join(records)
+    return bytes([cat]) + (len(body) + 3).to_bytes(2, "big") + body
+
+
+def decode_bytes(data: bytes, **kw) -> asterix.Recording:
+    """Decode in-memory bytes as a raw recording."""
+    buf = np.frombuffer(data, np.uint8)
+    return asterix.decode_buffer(buf, read_segments(buf, kw.pop("fmt", "raw")), path="<test>", **kw)
