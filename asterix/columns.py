@@ -83,7 +83,6 @@ _CAT021_SHARED = [
     _c("flight_level", "145", "", unit="FL", doc="Flight level (barometric, 100 ft)"),
     _c("geometric_height_ft", "140", "", unit="ft", doc="Geometric height (2.x) / altitude (0.2x)"),
     _c("track_angle_deg", "160", "TA", unit="deg", doc="Track angle, clockwise from true north"),
-    _c("true_airspeed_kt", "151", "", unit="kt", doc="True airspeed"),
     _c("magnetic_heading_deg", "152", "", unit="deg", doc="Magnetic heading"),
     _c("roll_angle_deg", "230", "", unit="deg", doc="Roll angle"),
     _c("emitter_category", "020", "", "int", doc="Emitter category code"),
@@ -114,6 +113,7 @@ CAT021_V2: list[Column] = [
     _c("nic_baro", "090", "NICBARO", "int", doc="NIC for barometric altitude"),
     _c("mops_version", "210", "VN", "int", doc="MOPS version (0 DO-260, 1 DO-260A, 2 DO-260B)"),
     _c("link_technology", "210", "LTT", "int", doc="Link technology type (2 = 1090 ES)"),
+    _c("true_airspeed_kt", "151", "TAS", unit="kt", doc="True airspeed"),
     _c("service_id", "015", "", "int", doc="Service identification"),
     _c("receiver_id", "400", "", "int", doc="Receiver ID"),
     _c("baro_vertical_rate_ftmin", "155", "BVR", unit="ft/min", doc="Barometric vertical rate"),
@@ -134,6 +134,7 @@ CAT021_V0: list[Column] = [
     _c("fom_dc", "090", "DC", "int", doc="Figure of merit: differential correction"),
     _c("fom_pa", "090", "PA", "int", doc="Figure of merit: position accuracy (NUCp-like, 0-15)"),
     _c("signal_amplitude", "131", "", "int", doc="Signal amplitude (0.26 only)"),
+    _c("true_airspeed_kt", "151", "", unit="kt", doc="True airspeed"),
     _c("baro_vertical_rate_ftmin", "155", "", unit="ft/min", doc="Barometric vertical rate"),
     _c("geo_vertical_rate_ftmin", "157", "", unit="ft/min", doc="Geometric vertical rate"),
 ]

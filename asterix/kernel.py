@@ -33,6 +33,34 @@ def _plausible(buf, q, stop, known):
 
 
 @njit(cache=True, nogil=True)
+def _chain(buf, r, stop, known):
+    """What follows a block is the end, or a plausible header: of a known category (maybe cut
+    short by the end of the data), or of another category whose block is followed in turn by the
+    end or a known category."""
+    if r == stop:
+        return True
+    if r + 3 > stop:
+        return known[buf[r]] == 1
+    n = (np.int64(buf[r + 1]) << 8) | buf[r + 2]
+    if n < 3:
+        return False
+    if known[buf[r]] == 1:
+        return True
+    r2 = r + n
+    return r2 == stop or (r2 < stop and known[buf[r2]] == 1)
+
+
+@njit(cache=True, nogil=True)
+def _chained_inside(buf, q, end, stop, known):
+    """A header followed by a chain starts inside [q+1, end): the LEN at q is probably damaged."""
+    for r in range(q + 1, end):
+        if _plausible(buf, r, stop, known) and _chain(
+                buf, r + ((np.int64(buf[r + 1]) << 8) | buf[r + 2]), stop, known):
+            return True
+    return False
+
+
+@njit(cache=True, nogil=True)
 def frame_blocks(buf, seg_start, seg_stop, exact, known):
     """Split payload segments into data blocks; return block and error arrays.
 
@@ -80,8 +108,10 @@ def frame_blocks(buf, seg_start, seg_stop, exact, known):
             n = np.int64(0)
             if q + 3 <= stop:
                 n = (np.int64(buf[q + 1]) << 8) | buf[q + 2]
-            if q + 3 <= stop and n >= 3 and q + n <= stop and (exact or known[buf[q]] == 1 or (
-                    q + n == stop or _plausible(buf, q + n, stop, known))):
+            # in a raw stream a header is trusted only when the next one is plausible too
+            if q + 3 <= stop and n >= 3 and q + n <= stop and (
+                    exact or _chain(buf, q + n, stop, known)
+                    or (known[buf[q]] == 1 and not _chained_inside(buf, q, q + n, stop, known))):
                 if nb == b_start.shape[0]:
                     b_start, b_len, b_seg, b_cat = _grow4(b_start, b_len, b_seg, b_cat)
                 b_start[nb] = q
@@ -93,9 +123,9 @@ def frame_blocks(buf, seg_start, seg_stop, exact, known):
                 continue
             # bad header in a raw stream: skip to the next plausible block header
             r = q + 1
-            while r < stop and not (_plausible(buf, r, stop, known) and (
-                    r + ((np.int64(buf[r + 1]) << 8) | buf[r + 2]) == stop or _plausible(
-                        buf, r + ((np.int64(buf[r + 1]) << 8) | buf[r + 2]), stop, known))):
+            while r < stop and not (
+                    _plausible(buf, r, stop, known)
+                    and _chain(buf, r + ((np.int64(buf[r + 1]) << 8) | buf[r + 2]), stop, known)):
                 r += 1
             if ne == e_off.shape[0]:
                 e_off, e_len, e_cat, e_code = _grow4(e_off, e_len, e_cat, e_code)

@@ -37,7 +37,8 @@ class Recording:
     size_bytes: int = 0
     container_bytes: int = 0
     decoded_bytes: int = 0
-    ignored_blocks: dict[int, int] = field(default_factory=dict)
+    ignored_blocks: dict[int, int] = field(default_factory=dict)  # blocks of unselected categories
+    ignored_bytes: int = 0
     edition_choice: dict[int, str] = field(default_factory=dict)  # how 'auto' chose, in words
 
     def __getitem__(self, category: int) -> pd.DataFrame:
@@ -198,7 +199,7 @@ def decode_buffer(buf: np.ndarray, seg: Segments, *, path: str = "", editions: d
     chosen: dict[int, str] = {}
     choice: dict[int, str] = {}
     ignored: dict[int, int] = {}
-    decoded_bytes = 0
+    decoded_bytes = ignored_bytes = 0
     for cat in (int(c) for c in np.unique(b_cat)):
         sel = np.flatnonzero(b_cat == cat)
         if cat not in DECODABLE:
@@ -207,6 +208,7 @@ def decode_buffer(buf: np.ndarray, seg: Segments, *, path: str = "", editions: d
             continue
         if cat not in wanted:
             ignored[cat] = len(sel)
+            ignored_bytes += int(b_len[sel].sum())
             continue
         starts, lens = b_start[sel], b_len[sel]
         ed = editions.get(cat)
@@ -235,7 +237,7 @@ def decode_buffer(buf: np.ndarray, seg: Segments, *, path: str = "", editions: d
     err.insert(0, "file", path)
     err["category"] = err["category"].astype("Int16").where(err["category"] >= 0)
     return Recording(frames, err, chosen, path, seg.format, date, int(len(buf)), int(seg.container_bytes),
-                     decoded_bytes, ignored, choice)
+                     decoded_bytes, ignored, ignored_bytes, choice)
 
 
 def _parse_editions(editions) -> dict[int, str]:

@@ -32,9 +32,12 @@ def test_sac_sic_time_of_day():
     assert r.time_of_day == TOD == 27323.0
 
 
-def test_flight_level_is_14_bit_twos_complement():
-    # I048/090 (FRN 6): V=0 G=0, FL field 0x2000 -> -8192 quarter-FL -> FL -2048
-    assert one048((6, bytes([0x20, 0x00]))).flight_level == -2048
+@pytest.mark.parametrize("edition", ["1.21", "1.27", "1.31", "1.32"])
+def test_flight_level_is_14_bit_twos_complement(edition):
+    # I048/090 (FRN 6): V=0 G=0, FL field 0x2000 -> -8192 quarter-FL -> FL -2048 (every edition)
+    assert one048((6, bytes([0x20, 0x00])), editions={48: edition}).flight_level == -2048
+    # 0x3FFC -> -4 quarter-FL -> FL -1
+    assert one048((6, bytes([0x3F, 0xFC])), editions={48: edition}).flight_level == -1
     # 0x0528 -> 1320 * 0.25 = FL 330; V bit set (0x8000) flags "not validated"
     r = one048((6, bytes([0x85, 0x28])))
     assert r.flight_level == 330 and r.flight_level_v == 1 and r.flight_level_g == 0

@@ -120,10 +120,36 @@ def parse_spec(text: str) -> dict:
     return {"category": int(head[1]), "edition": f"{int(head[2])}.{int(head[3])}", "uap": uap}
 
 
+# Corrections to the printed layouts, each with its reason. (category, item, field) -> changes.
+ERRATA: dict[tuple[int, str, str], dict] = {
+    # The CAT048 standard gives I048/090 FL as 14-bit two's complement in every edition (1.21 on);
+    # the 1.27 and 1.31 printouts mark it unsigned, which would read FL -1 as FL 4095.75.
+    (48, "090", "FL"): {"signed": True},
+}
+
+
+def apply_errata(table: dict) -> dict:
+    """Patch the parsed table with ERRATA (fields found by name inside their item)."""
+    for (cat, item_id, name), patch in ERRATA.items():
+        if table["category"] != cat:
+            continue
+        for item in table["uap"]:
+            if item and item["id"] == item_id:
+                _patch(item["node"], name, patch)
+    return table
+
+
+def _patch(node: dict, name: str, patch: dict) -> None:
+    if node.get("name") == name and node["kind"] == "element":
+        node.update(patch)
+    for child in node.get("items", []) + [c for g in node.get("groups", []) for c in g]:
+        _patch(child, name, patch)
+
+
 def main(argv: list[str]) -> int:
     src = Path(argv[1] if len(argv) > 1 else "../shared/specs")
     for path in sorted(src.glob("Cat_*.txt")):
-        table = parse_spec(path.read_text())
+        table = apply_errata(parse_spec(path.read_text()))
         out = HERE / f"cat{table['category']:03d}_{table['edition']}.json"
         out.write_text(json.dumps(table, indent=1) + "\n")
         print(f"{path.name} -> {out.name}: {sum(1 for u in table['uap'] if u)} items")

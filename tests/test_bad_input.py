@@ -1,0 +1,157 @@
+"""Bad input: clear account of what was skipped, nothing decodable lost, no bytes ever crash."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from asterix_bytes import block, decode_bytes, fspec
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+import asterix
+
+
+def rec048(i: int) -> bytes:
+    """A CAT048 record: I048/010 (SAC 7, SIC i), I048/140 ToD = i seconds, I048/161 track i."""
+    return fspec(1, 2, 11) + bytes([7, i & 0xFF]) + (128 * i).to_bytes(3, "big") + (i & 0xFFF).to_bytes(2, "big")
+
+
+def good_stream(n_blocks: int = 6, per_block: int = 3) -> tuple[bytes, list[int]]:
+    """Raw data blocks and the offset at which each block starts."""
+    out, starts = b"", []
+    for b in range(n_blocks):
+        starts.append(len(out))
+        out += block(48, *(rec048(b * per_block + k + 1) for k in range(per_block)))
+    return out, starts
+
+
+def accounted(rec: asterix.Recording) -> int:
+    """Bytes in decoded blocks, error entries, container headers and ignored blocks."""
+    return rec.decoded_bytes + int(rec.errors["length"].sum()) + rec.container_bytes + rec.ignored_bytes
+
+
+def test_good_stream_has_no_errors():
+    data, _ = good_stream()
+    rec = decode_bytes(data)
+    assert rec.errors.empty and len(rec.frames[48]) == 18
+    assert list(rec.frames[48].track_number) == list(range(1, 19))
+    assert accounted(rec) == len(data)
+
+
+def test_truncated_file_keeps_every_complete_block():
+    data, starts = good_stream()
+    cut = starts[-1] + 7  # last block cut inside its first record
+    rec = decode_bytes(data[:cut])
+    assert len(rec.frames[48]) == 15
+    assert list(rec.errors.offset) == [starts[-1]]
+    assert "past the end" in rec.errors.reason.iloc[0]
+    assert accounted(rec) == cut
+
+
+def test_len_past_end_and_fspec_past_block():
+    data, starts = good_stream()
+    # block 2 claims one byte less than it has: its last record's item runs past the block end
+    bad = bytearray(data)
+    n = int.from_bytes(bad[starts[2] + 1:starts[2] + 3], "big")
+    bad[starts[2] + 1:starts[2] + 3] = (n - 1).to_bytes(2, "big")
+    rec = decode_bytes(bytes(bad))
+    assert not rec.errors.empty and rec.errors.offset.iloc[0] == starts[2]
+    tracks = set(rec.frames[48].track_number)
+    assert {1, 2, 3, 4, 5, 6}.issubset(tracks)  # blocks before
+    assert {13, 14, 15, 16, 17, 18}.issubset(tracks)  # blocks after the damage
+    assert accounted(rec) == len(data)
+
+
+def test_unknown_category_is_reported_and_skipped():
+    data, starts = good_stream(3)
+    alien = block(62, bytes([0x80, 1, 2]))
+    rec = decode_bytes(data[:starts[1]] + alien + data[starts[1]:])
+    assert len(rec.frames[48]) == 9
+    assert list(rec.errors.category) == [62]
+    assert "unknown category 62" in rec.errors.reason.iloc[0]
+    assert rec.errors.offset.iloc[0] == starts[1]
+
+
+def test_garbage_between_blocks_is_one_entry():
+    data, starts = good_stream(4)
+    junk = bytes([0x00, 0xFF, 0x13, 0x37, 0x00])
+    rec = decode_bytes(data[:starts[2]] + junk + data[starts[2]:])
+    assert len(rec.frames[48]) == 12
+    assert list(rec.errors.offset) == [starts[2]] and list(rec.errors.length) == [len(junk)]
+
+
+def test_not_asterix_at_all():
+    data = bytes(range(256)) * 4
+    rec = decode_bytes(data)
+    assert sum(len(f) for f in rec.frames.values()) == 0
+    assert accounted(rec) == len(data)
+
+
+def test_strict_raises_with_file_offset_reason():
+    data, starts = good_stream()
+    with pytest.raises(asterix.DecodeError) as exc:
+        decode_bytes(data[: starts[-1] + 7], strict=True)
+    assert exc.value.offset == starts[-1] and "<test>" in str(exc.value)
+    assert f"offset {starts[-1]}" in str(exc.value)
+
+
+def test_block_is_all_or_nothing():
+    # second record of the block has an FRN the edition does not define (FRN 29+ does not exist)
+    bad_record = fspec(1, 35) + bytes([7, 1, 0])
+    rec = decode_bytes(block(48, rec048(1), bad_record) + block(48, rec048(2)))
+    assert list(rec.frames[48].track_number) == [2]
+    assert "FRN" in rec.errors.reason.iloc[0]
+
+
+@settings(max_examples=300, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(st.binary(max_size=600))
+def test_random_bytes_never_crash_and_are_accounted(data):
+    rec = decode_bytes(data)
+    assert accounted(rec) == len(data)
+
+
+@settings(max_examples=300, deadline=None)
+@given(st.data())
+def test_mutated_stream_accounted_and_far_blocks_survive(data):
+    stream, starts = good_stream(8, 3)
+    buf = bytearray(stream)
+    pos = data.draw(st.integers(0, len(buf) - 1))
+    action = data.draw(st.sampled_from(["flip", "truncate", "insert", "delete"]))
+    if action == "flip":
+        buf[pos] ^= 1 << data.draw(st.integers(0, 7))
+    elif action == "truncate":
+        del buf[pos:]
+    elif action == "insert":
+        buf[pos:pos] = data.draw(st.binary(min_size=1, max_size=8))
+    else:
+        del buf[pos:pos + data.draw(st.integers(1, 8))]
+    rec = decode_bytes(bytes(buf))
+    assert accounted(rec) == len(buf)
+    hit = max(i for i, s in enumerate(starts) if s <= pos)
+    tracks = set(rec.frames[48].track_number) if 48 in rec.frames else set()
+    before = {t for b in range(hit) for t in range(b * 3 + 1, b * 3 + 4)}
+    assert before <= tracks  # every block before the damage decodes
+    if action != "truncate":
+        after = {t for b in range(hit + 2, 8) for t in range(b * 3 + 1, b * 3 + 4)}
+        assert after <= tracks  # and every block from the second after it
+
+
+def test_unreadable_input_message(tmp_path):
+    with pytest.raises(asterix.UnreadableInput) as exc:
+        asterix.read(tmp_path / "missing.ast")
+    assert "missing.ast" in str(exc.value)
+
+
+def test_empty_file(tmp_path):
+    p = tmp_path / "empty.ast"
+    p.write_bytes(b"")
+    rec = asterix.read(p)
+    assert rec.frames == {} and rec.errors.empty
+
+
+def test_record_values_independent_of_block_grouping():
+    recs = [rec048(i) for i in range(1, 10)]
+    a = decode_bytes(b"".join(block(48, r) for r in recs)).frames[48]
+    b = decode_bytes(block(48, *recs)).frames[48]
+    assert np.array_equal(a.track_number.to_numpy(), b.track_number.to_numpy())
+    assert list(a.block) == list(range(9)) and set(b.block) == {0}
