@@ -1,0 +1,812 @@
+"""ASTERIX encoder: engineering values -> item bytes, records and data blocks (the decoder's inverse).
+
+Items are laid out from the edition tables (``asterix/tables/*.json``); records and frames are keyed by the
+column names of ``asterix/columns.py`` so that encode -> decode gives back the same values.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterable, Mapping
+from dataclasses import dataclass
+from functools import cache
+from typing import Any
+
+import numpy as np
+import pandas as pd
+from bitstring import BitArray, Bits, pack
+
+from asterix.columns import Column, columns_for
+from asterix.tables import available, load_table, resolve_edition
+
+__all__ = [
+    "EDITIONS", "load_table", "encode_item", "encode_record", "encode_block", "encode_frame", "item_fields",
+]
+
+EDITIONS: dict[int, list[str]] = available()
+MAX_BLOCK = 0xFFFF
+_ICAO_CODE = {**{chr(64 + i): i for i in range(1, 27)}, " ": 32, **{str(d): 48 + d for d in range(10)}}
+_CHUNK = 1 << 16  # rows encoded at once by encode_frame (bounds the padded byte matrices)
+
+
+# ---------------------------------------------------------------------------------------------------------
+# Layouts: one per (category, edition, item), compiled once from the table nodes.
+
+
+@dataclass(frozen=True)
+class Field:
+    """One element: its path in the item, bit offset in its fixed part (MSB first), width and content."""
+
+    path: str
+    offset: int
+    bits: int
+    type: str  # raw | table | quantity | integer | string
+    signed: bool = False
+    lsb: float = 1.0
+    string: str = ""  # ICAO | Octal for strings
+
+    @property
+    def lo(self) -> int:
+        """Smallest raw value the field holds."""
+        return -(1 << (self.bits - 1)) if self.signed else 0
+
+    @property
+    def hi(self) -> int:
+        """Largest raw value the field holds."""
+        return (1 << (self.bits - 1)) - 1 if self.signed else (1 << self.bits) - 1
+
+
+@dataclass(frozen=True)
+class Fixed:
+    """A fixed-size run of elements and spares (an element, a group, an octet group without its FX)."""
+
+    bits: int
+    segments: tuple[Field | int, ...]  # fields, and spare widths as ints
+    fields: dict[str, Field]
+    fmt: str  # bitstring pack format: one 'u<bits>' per segment
+
+
+@dataclass(frozen=True)
+class Extended:
+    """Octet groups, each but possibly the last followed by an FX bit."""
+
+    groups: tuple[Fixed, ...]
+    fx: tuple[bool, ...]
+
+
+@dataclass(frozen=True)
+class Repetitive:
+    """N copies of a fixed element: after a count byte (rep_bytes 1) or each followed by an FX bit."""
+
+    path: str  # the path a count column addresses
+    rep_bytes: int | None
+    inner: Fixed  # paths relative to one repetition
+
+
+@dataclass(frozen=True)
+class Compound:
+    """Subitems announced by their own FSPEC (7 presence bits per octet + FX)."""
+
+    subs: tuple[tuple[str, Any] | None, ...]
+    aliases: dict[str, str]  # "SRL" -> "SRL/SRL" for subitems that are a bare element
+
+
+@dataclass(frozen=True)
+class Explicit:
+    """A length byte counting itself, then opaque content (RE, SP)."""
+
+
+Layout = Fixed | Extended | Repetitive | Compound | Explicit
+
+
+@dataclass(frozen=True)
+class Item:
+    """A UAP entry with its compiled layout."""
+
+    frn: int
+    id: str
+    layout: Layout
+
+
+def _fixed(nodes: Iterable[dict], prefix: tuple[str, ...]) -> Fixed:
+    segments: list[Field | int] = []
+    offset = 0
+
+    def walk(node: dict, path: tuple[str, ...]) -> None:
+        nonlocal offset
+        if node.get("name"):
+            path = (*path, node["name"])
+        kind = node["kind"]
+        if kind == "spare":
+            segments.append(node["bits"])
+            offset += node["bits"]
+        elif kind == "element":
+            segments.append(Field("/".join(path), offset, node["bits"], node.get("type", "raw"),
+                                  bool(node.get("signed", False)), float(node.get("lsb", 1.0)),
+                                  node.get("string", "")))
+            offset += node["bits"]
+        elif kind == "group":
+            for child in node["items"]:
+                walk(child, path)
+        else:
+            raise ValueError(f"{kind} node inside a fixed-size part at {'/'.join(path)!r}")
+
+    for node in nodes:
+        walk(node, prefix)
+    fields = {s.path: s for s in segments if isinstance(s, Field)}
+    if len(fields) != sum(isinstance(s, Field) for s in segments):
+        raise ValueError(f"duplicate field paths under {'/'.join(prefix)!r}")
+    fmt = ", ".join(f"u{s.bits if isinstance(s, Field) else s}" for s in segments)
+    return Fixed(offset, tuple(segments), fields, fmt)
+
+
+def _layout(node: dict, prefix: tuple[str, ...]) -> Layout:
+    kind = node["kind"]
+    if kind in ("element", "group", "spare"):
+        return _fixed([node], prefix)
+    if kind == "extended":
+        groups = tuple(_fixed(g, prefix) for g in node["groups"])
+        fx = tuple(g.bits % 8 == 7 for g in groups)
+        for i, g in enumerate(groups):
+            if g.bits % 8 not in (0, 7) or (not fx[i] and i != len(groups) - 1):
+                raise ValueError(f"extended octet group {i} of {g.bits} bits at {'/'.join(prefix)!r}")
+        return Extended(groups, fx)
+    if kind == "repetitive":
+        inner = _fixed([node["item"]], ())
+        if node["rep_bytes"] is None and inner.bits % 8 != 7 or node["rep_bytes"] and inner.bits % 8:
+            raise ValueError(f"repetitive element of {inner.bits} bits at {'/'.join(prefix)!r}")
+        return Repetitive("/".join(prefix), node["rep_bytes"], inner)
+    if kind == "compound":
+        subs: list[tuple[str, Any] | None] = []
+        aliases: dict[str, str] = {}
+        for sub in node["subitems"]:
+            if sub is None:
+                subs.append(None)
+                continue
+            child = sub["node"]
+            if child["kind"] == "element" and not child.get("name"):
+                child = {**child, "name": sub["name"]}  # a bare element subitem is named like the subitem
+                aliases[sub["name"]] = f"{sub['name']}/{sub['name']}"
+            subs.append((sub["name"], _layout(child, (*prefix, sub["name"]))))
+        return Compound(tuple(subs), aliases)
+    if kind == "explicit":
+        return Explicit()
+    raise ValueError(f"unknown node kind {kind!r}")
+
+
+@cache
+def _items(category: int, edition: str) -> dict[str, Item]:
+    """All items of an edition (resolved name), compiled, by item id."""
+    table = load_table(category, edition)
+    out: dict[str, Item] = {}
+    for frn, entry in enumerate(table["uap"], start=1):
+        if entry is not None:
+            out[entry["id"]] = Item(frn, entry["id"], _layout(entry["node"], ()))
+    return out
+
+
+def _item(category: int, edition: str | None, item_id: str) -> Item:
+    ed = resolve_edition(category, edition)
+    items = _items(category, ed)
+    key = item_id.removeprefix(f"I{category:03d}/").removeprefix("I")
+    if key not in items:
+        raise ValueError(f"CAT{category:03d} edition {ed} has no item {item_id!r}")
+    return items[key]
+
+
+def _paths(layout: Layout) -> dict[str, Field | Repetitive]:
+    """Addressable paths of a layout: its fields, and the count of each repetitive part."""
+    if isinstance(layout, Fixed):
+        return dict(layout.fields)
+    if isinstance(layout, Extended):
+        return {p: f for g in layout.groups for p, f in g.fields.items()}
+    if isinstance(layout, Repetitive):
+        return {layout.path: layout}
+    if isinstance(layout, Compound):
+        return {p: f for sub in layout.subs if sub for p, f in _paths(sub[1]).items()}
+    return {}
+
+
+def item_fields(category: int, edition: str | None, item_id: str) -> list[str]:
+    """The field paths encode_item accepts for an item (repetitive parts: the list's key)."""
+    return list(_paths(_item(category, edition, item_id).layout))
+
+
+# ---------------------------------------------------------------------------------------------------------
+# Values -> raw field bits.
+
+
+def _at(f: Field, where: str) -> str:
+    return f"{where or 'field'} {f.path or '(element)'!r}"
+
+
+def _range_error(f: Field, value: Any, raw: int, where: str) -> ValueError:
+    return ValueError(f"{_at(f, where)}: {value!r} -> raw {raw} is outside "
+                      f"{f.bits}-bit {'signed' if f.signed else 'unsigned'} range [{f.lo}, {f.hi}]")
+
+
+def _icao(text: str, f: Field, where: str) -> int:
+    n = f.bits // 6
+    text = text.upper()
+    if len(text) > n:
+        raise ValueError(f"{_at(f, where)}: {text!r} is longer than {n} characters")
+    raw = 0
+    for ch in text.ljust(n):
+        if ch not in _ICAO_CODE:
+            raise ValueError(f"{_at(f, where)}: {ch!r} is not an ICAO character")
+        raw = raw << 6 | _ICAO_CODE[ch]
+    return raw
+
+
+def _octal(text: str, f: Field, where: str) -> int:
+    n = f.bits // 3
+    text = text.strip()
+    if not 0 < len(text) <= n or any(c not in "01234567" for c in text):
+        raise ValueError(f"{_at(f, where)}: {text!r} is not a {n}-digit octal code")
+    return int(text, 8)
+
+
+def _raw(f: Field, value: Any, where: str = "") -> int:
+    """One engineering value as the field's raw bits (two's complement for signed fields)."""
+    if isinstance(value, np.generic):
+        value = value.item()
+    if isinstance(value, str) and f.type == "quantity":
+        value = float(value)
+    if isinstance(value, str) and f.type == "string":
+        raw = _icao(value, f, where) if f.string == "ICAO" else _octal(value, f, where)
+    elif isinstance(value, str):
+        try:
+            raw = int(value, 16)
+        except ValueError:
+            raise ValueError(f"{_at(f, where)}: {value!r} is not hex") from None
+    elif isinstance(value, bytes | bytearray):
+        if len(value) != (f.bits + 7) // 8:
+            raise ValueError(f"{_at(f, where)}: {len(value)} bytes for {f.bits} bits")
+        raw = int.from_bytes(value, "big")
+    elif f.type == "quantity":
+        x = float(value)
+        if not math.isfinite(x):
+            raise ValueError(f"{_at(f, where)}: {value!r} is not finite")
+        raw = math.floor(x / f.lsb + 0.5)
+    else:
+        if isinstance(value, bool):
+            value = int(value)
+        if isinstance(value, float) and not (math.isfinite(value) and value.is_integer()):
+            raise ValueError(f"{_at(f, where)}: {value!r} is not an integer")
+        raw = int(value)
+    lo, hi = (f.lo, f.hi) if f.type in ("quantity", "integer") else (0, (1 << f.bits) - 1)
+    if not lo <= raw <= hi:
+        raise _range_error(f, value, raw, where)
+    return raw & ((1 << f.bits) - 1)
+
+
+# ---------------------------------------------------------------------------------------------------------
+# encode_item: one item from a dict of field values, assembled with bitstring.
+
+
+def _check_keys(keys: Iterable[str], known: Iterable[str], where: str) -> None:
+    unknown = set(keys) - set(known)
+    if unknown:
+        raise ValueError(f"{where}: unknown field(s) {sorted(unknown)}; known: {sorted(known)}")
+
+
+def _fixed_bits(fx: Fixed, fields: Mapping[str, Any], where: str) -> Bits:
+    values = [0 if isinstance(s, int) else
+              _raw(s, fields[s.path], where) if fields.get(s.path) is not None else 0 for s in fx.segments]
+    return pack(fx.fmt, *values)
+
+
+def _fspec_bits(present: list[bool]) -> Bits:
+    last = max((i for i, p in enumerate(present) if p), default=-1)
+    if last < 0:
+        raise ValueError("nothing to encode: no item or subitem present")
+    n = last // 7 + 1
+    bits = BitArray()
+    for octet in range(n):
+        for k in range(7):
+            i = octet * 7 + k
+            bits.append(Bits.from_bools([i < len(present) and present[i]]))
+        bits.append(Bits.from_bools([octet < n - 1]))
+    return bits
+
+
+def _repetitions(value: Any) -> list[Any]:
+    if isinstance(value, Mapping):
+        value = value.get("", [])
+    if isinstance(value, bytes | bytearray | str) or not isinstance(value, Iterable):
+        raise ValueError(f"repetitive item needs a list of repetitions, got {type(value).__name__}")
+    return list(value)
+
+
+def _one_repetition(inner: Fixed, rep: Any, where: str) -> Bits:
+    if isinstance(rep, bytes | bytearray):
+        if len(rep) * 8 != inner.bits:
+            raise ValueError(f"{where}: repetition of {len(rep)} bytes, expected {inner.bits // 8}")
+        return Bits.from_bytes(bytes(rep))
+    if not isinstance(rep, Mapping):
+        rep = {"": rep}
+    _check_keys(rep, inner.fields, where)
+    return _fixed_bits(inner, rep, where)
+
+
+def _encode_bits(layout: Layout, fields: Any, where: str) -> Bits:
+    if isinstance(layout, Fixed):
+        if isinstance(fields, bytes | bytearray):
+            if len(fields) * 8 != layout.bits:
+                raise ValueError(f"{where}: {len(fields)} bytes given, item is {layout.bits // 8}")
+            return Bits.from_bytes(bytes(fields))
+        _check_keys(fields, layout.fields, where)
+        return _fixed_bits(layout, fields, where)
+    if isinstance(layout, Extended):
+        known = _paths(layout)
+        _check_keys(fields, known, where)
+        last = max((g for g, grp in enumerate(layout.groups) for p in grp.fields
+                    if fields.get(p) is not None), default=0)
+        parts = []
+        for g in range(last + 1):
+            parts.append(_fixed_bits(layout.groups[g], fields, where))
+            if layout.fx[g]:
+                parts.append(Bits.from_bools([g < last]))
+        return Bits.from_joined(parts)
+    if isinstance(layout, Repetitive):
+        reps = _repetitions(fields)
+        if layout.rep_bytes:
+            if len(reps) >= 1 << (8 * layout.rep_bytes):
+                raise ValueError(f"{where}: {len(reps)} repetitions do not fit the count")
+            parts = [pack(f"u{8 * layout.rep_bytes}", len(reps))]
+            parts += [_one_repetition(layout.inner, r, where) for r in reps]
+            return Bits.from_joined(parts)
+        if not reps:
+            raise ValueError(f"{where}: an FX-repetitive item needs at least one repetition")
+        parts = []
+        for i, r in enumerate(reps):
+            parts += [_one_repetition(layout.inner, r, where), Bits.from_bools([i < len(reps) - 1])]
+        return Bits.from_joined(parts)
+    if isinstance(layout, Compound):
+        fields = {layout.aliases.get(k, k): v for k, v in fields.items()}
+        present = []
+        parts = []
+        for sub in layout.subs:
+            if sub is None:
+                present.append(False)
+                continue
+            name, sl = sub
+            if isinstance(sl, Repetitive):
+                here = {k: v for k, v in fields.items() if k == name}
+                value: Any = fields.get(name)
+            else:
+                here = {k: v for k, v in fields.items() if k.split("/")[0] == name and v is not None}
+                value = here
+            present.append(bool(here))
+            if here:
+                parts.append(_encode_bits(sl, value, f"{where} {name}"))
+        _check_keys(fields, [*_paths(layout), *(s[0] for s in layout.subs if s)], where)
+        return Bits.from_joined([_fspec_bits(present), *parts])
+    if isinstance(layout, Explicit):
+        if isinstance(fields, Mapping):
+            _check_keys(fields, ("", "raw"), where)
+            if "raw" in fields:
+                whole = bytes(fields["raw"])
+                if not whole or whole[0] != len(whole):
+                    raise ValueError(f"{where}: length byte {whole[:1].hex()} != {len(whole)} bytes given")
+                return Bits.from_bytes(whole)
+            fields = fields.get("", b"")
+        content = bytes(fields)
+        if len(content) + 1 > 255:
+            raise ValueError(f"{where}: {len(content)} content bytes do not fit a one-byte length")
+        return Bits.from_bytes(bytes([len(content) + 1]) + content)
+    raise TypeError(layout)
+
+
+def encode_item(category: int, edition: str | None, item_id: str, fields: Any) -> bytes:
+    """One item's bytes from field values keyed by path ("RHO", "SRL/SRL", "" for a bare element).
+
+    Repetitive items take a list (dicts or raw bytes per repetition); explicit items (RE, SP) take the content
+    bytes (the length byte is prepended) or {"raw": bytes including the length byte}.
+    """
+    item = _item(category, edition, item_id)
+    where = f"I{category:03d}/{item.id}"
+    if not isinstance(fields, Mapping | bytes | bytearray | list | tuple):
+        fields = {"": fields}
+    return _encode_bits(item.layout, fields, where).tobytes()
+
+
+# ---------------------------------------------------------------------------------------------------------
+# Column plans: which (item, field) each column of an edition writes.
+
+
+@dataclass(frozen=True)
+class _Target:
+    item: str
+    path: str
+    node: Field | Repetitive
+
+
+@cache
+def _targets(category: int, edition: str) -> dict[str, tuple[_Target, ...]]:
+    """For each column of the edition, its sources that exist in that edition, in column order."""
+    items = _items(category, edition)
+    out: dict[str, tuple[_Target, ...]] = {}
+    for col in columns_for(category, edition):
+        found = []
+        for item_id, path in col.sources:
+            if item_id not in items:
+                continue
+            layout = items[item_id].layout
+            key = "/".join(path)
+            if isinstance(layout, Compound):
+                key = layout.aliases.get(key, key)
+            node = _paths(layout).get(key)
+            if node is not None:
+                found.append(_Target(item_id, key, node))
+        out[col.name] = tuple(found)
+    return out
+
+
+def _columns(category: int, edition: str) -> dict[str, Column]:
+    return {c.name: c for c in columns_for(category, edition)}
+
+
+# ---------------------------------------------------------------------------------------------------------
+# Vectorised record assembly: each part is (present[n], length[n], bytes[n, width]) with rows padded.
+
+_Part = tuple[np.ndarray, np.ndarray, np.ndarray]
+_Assigned = dict[str, tuple[np.ndarray, np.ndarray]]  # field path -> (present, raw)
+
+
+def _column_values(col: Column, values: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Presence mask and values (object or float array, scale undone) of one column."""
+    present = ~pd.isna(values)
+    if col.kind in ("float", "int", "flag", "count"):
+        out = np.full(len(values), np.nan)
+        try:
+            out[present] = np.asarray(values[present], dtype=float)
+        except (TypeError, ValueError):
+            raise ValueError(f"column {col.name!r}: non-numeric values") from None
+        if col.scale != 1.0:
+            out = out / col.scale
+        return present, out
+    return present, values
+
+
+def _raw_array(col: Column, target: _Target, present: np.ndarray, values: np.ndarray) -> np.ndarray:
+    """Raw field bits (int64, two's complement masked) of one column's present rows, 0 elsewhere."""
+    f = target.node
+    assert isinstance(f, Field)
+    where = f"column {col.name!r} -> I{target.item}"
+    raw = np.zeros(len(values), dtype=np.int64)
+    idx = np.flatnonzero(present)
+    if not len(idx):
+        return raw
+    if values.dtype == object:
+        cache_: dict[Any, int] = {}
+        out = np.empty(len(idx), dtype=np.int64)
+        for j, i in enumerate(idx):
+            v = values[i]
+            try:
+                out[j] = cache_[v]
+            except KeyError:
+                out[j] = cache_[v] = _raw(f, v, where)
+            except TypeError:  # unhashable
+                out[j] = _raw(f, v, where)
+        raw[idx] = out
+        return raw
+    x = values[idx]
+    if f.type == "quantity":
+        r = np.floor(x / f.lsb + 0.5)
+        lo, hi = f.lo, f.hi
+    else:
+        r = np.round(x)
+        bad = np.flatnonzero(r != x)
+        if len(bad):
+            raise ValueError(f"{_at(f, where)}: row {idx[bad[0]]} value {x[bad[0]]!r} is not an integer")
+        lo, hi = (f.lo, f.hi) if f.type == "integer" else (0, (1 << f.bits) - 1)
+    bad = np.flatnonzero((r < lo) | (r > hi))
+    if len(bad):
+        raise ValueError(f"row {idx[bad[0]]}: " + str(_range_error(f, x[bad[0]], int(r[bad[0]]), where)))
+    raw[idx] = r.astype(np.int64) & ((1 << f.bits) - 1 if f.bits < 64 else -1)
+    return raw
+
+
+def _fixed_part(fx: Fixed, assigned: _Assigned, n: int,
+                extra_bit: np.ndarray | None = None) -> _Part:
+    """A fixed part (optionally followed by an FX bit) as a byte matrix; present if any field is assigned."""
+    present = np.zeros(n, dtype=bool)
+    total = fx.bits + (extra_bit is not None)
+    nbytes = total // 8
+    if total <= 64:
+        acc = np.zeros(n, dtype=np.uint64)
+        for path, f in fx.fields.items():
+            if path in assigned:
+                mask, raw = assigned[path]
+                present |= mask
+                acc |= raw.astype(np.uint64) << np.uint64(total - f.offset - f.bits)
+        if extra_bit is not None:
+            acc |= extra_bit.astype(np.uint64)
+        mat = acc.astype(">u8").view(np.uint8).reshape(n, 8)[:, 8 - nbytes:]
+    else:  # wider than a machine word: python integers
+        ints = [0] * n
+        for path, f in fx.fields.items():
+            if path in assigned:
+                mask, raw = assigned[path]
+                present |= mask
+                shift = total - f.offset - f.bits
+                ints = [a | (int(r) << shift) for a, r in zip(ints, raw, strict=True)]
+        if extra_bit is not None:
+            ints = [a | int(b) for a, b in zip(ints, extra_bit, strict=True)]
+        mat = np.frombuffer(b"".join(a.to_bytes(nbytes, "big") for a in ints), dtype=np.uint8)
+        mat = mat.reshape(n, nbytes)
+    return present, np.full(n, nbytes, dtype=np.int64), np.ascontiguousarray(mat)
+
+
+def _concat(parts: list[_Part], n: int) -> tuple[np.ndarray, np.ndarray]:
+    """Row-wise concatenation of the present parts: (length[n], bytes[n, width])."""
+    width = sum(p[2].shape[1] for p in parts)
+    out = np.zeros((n, width), dtype=np.uint8)
+    offset = np.zeros(n, dtype=np.int64)
+    for present, length, mat in parts:
+        length = np.where(present, length, 0)
+        cols = np.arange(mat.shape[1])
+        rows, cs = np.nonzero(cols[None, :] < length[:, None])
+        out[rows, offset[rows] + cs] = mat[rows, cs]
+        offset += length
+    return offset, out
+
+
+def _fspec_part(present: list[np.ndarray], n: int) -> _Part:
+    """The FSPEC (record or compound) of each row from the presence masks by FRN."""
+    nbits = len(present)
+    width = max(1, -(-nbits // 7))
+    p = np.zeros((n, width * 7), dtype=bool)
+    for i, m in enumerate(present):
+        p[:, i] = m
+    any_ = p.any(axis=1)
+    last = np.where(any_, width * 7 - 1 - np.argmax(p[:, ::-1], axis=1), 0)
+    length = last // 7 + 1
+    weights = np.array([128, 64, 32, 16, 8, 4, 2], dtype=np.uint8)
+    mat = (p.reshape(n, width, 7) * weights).sum(axis=2).astype(np.uint8)
+    mat |= (np.arange(width)[None, :] < (length - 1)[:, None]).astype(np.uint8)
+    return any_, length, mat
+
+
+def _node_part(layout: Layout, assigned: _Assigned, n: int, where: str) -> _Part:
+    """One item or subitem from the assigned fields (zero-filled where unassigned)."""
+    if isinstance(layout, Fixed):
+        return _fixed_part(layout, assigned, n)
+    if isinstance(layout, Extended):
+        # groups up to the last one with an assigned (non-missing) field; FX set on all but the last emitted
+        present = np.zeros(n, dtype=bool)
+        last = np.zeros(n, dtype=np.int64)
+        for g, grp in enumerate(layout.groups):
+            for p in grp.fields:
+                if p in assigned:
+                    present |= assigned[p][0]
+                    last[assigned[p][0]] = g
+        parts = []
+        for g, grp in enumerate(layout.groups):
+            fx = (g < last) if layout.fx[g] else None
+            _, length, mat = _fixed_part(grp, assigned, n, fx)
+            parts.append((present & (g <= last), length, mat))
+        length, mat = _concat(parts, n)
+        return present, length, mat
+    if isinstance(layout, Repetitive):
+        if layout.path not in assigned:
+            return np.zeros(n, dtype=bool), np.zeros(n, dtype=np.int64), np.zeros((n, 0), dtype=np.uint8)
+        present, count = assigned[layout.path]
+        size = layout.inner.bits // 8 + (layout.rep_bytes is None)
+        limit = (1 << (8 * layout.rep_bytes)) - 1 if layout.rep_bytes else None
+        lo = 0 if layout.rep_bytes else 1
+        bad = np.flatnonzero(present & ((count < lo) | (count > (limit if limit is not None else count))))
+        if len(bad):
+            raise ValueError(f"{where}: row {bad[0]} repetition count {count[bad[0]]} is out of range")
+        count = np.where(present, count, 0)
+        head = layout.rep_bytes or 0
+        width = head + size * int(count.max(initial=0))
+        mat = np.zeros((n, width), dtype=np.uint8)
+        for b in range(head):
+            mat[:, b] = (count >> (8 * (head - 1 - b))) & 0xFF
+        if layout.rep_bytes is None:  # zero elements, FX set on all but the last
+            for k in range(int(count.max(initial=0)) - 1):
+                mat[:, size * k + size - 1] = (k < count - 1).astype(np.uint8)
+        return present, head + size * count, mat
+    if isinstance(layout, Compound):
+        subs = [_node_part(s[1], assigned, n, f"{where} {s[0]}") if s else None for s in layout.subs]
+        zero = np.zeros(n, dtype=bool)
+        fspec = _fspec_part([s[0] if s else zero for s in subs], n)
+        length, mat = _concat([fspec, *(s for s in subs if s)], n)
+        return fspec[0], length, mat
+    raise ValueError(f"{where}: explicit items cannot be encoded from columns (pass them in `extra`)")
+
+
+def _assign(category: int, edition: str, data: Mapping[str, np.ndarray], n: int,
+            prefer: Mapping[str, str] | None) -> dict[str, dict[str, tuple[np.ndarray, np.ndarray]]]:
+    """Raw values by item and field path from column arrays (multi-source columns last)."""
+    cols = _columns(category, edition)
+    targets = _targets(category, edition)
+    prefer = dict(prefer or {})
+    for name in prefer:
+        if name not in cols:
+            raise ValueError(f"prefer: unknown column {name!r}")
+    assigned: dict[str, dict[str, tuple[np.ndarray, np.ndarray]]] = {}
+    converted: dict[str, tuple[np.ndarray, np.ndarray]] = {}
+    for name, values in data.items():
+        present, vals = _column_values(cols[name], values)
+        if present.any():
+            converted[name] = (present, vals)
+    single = [c for c in converted if len(targets[c]) <= 1 and c not in prefer]
+    multi = [c for c in converted if c not in single]
+
+    def put(name: str, t: _Target, rows: np.ndarray, raw: np.ndarray) -> None:
+        slot = assigned.setdefault(t.item, {})
+        if t.path in slot:
+            old_mask, old_raw = slot[t.path]
+            clash = np.flatnonzero(rows & old_mask & (old_raw != raw))
+            if len(clash):
+                raise ValueError(f"column {name!r} row {clash[0]} conflicts with another column writing "
+                                 f"I{category:03d}/{t.item} {t.path!r}")
+            slot[t.path] = (rows | old_mask, np.where(rows, raw, old_raw))
+        else:
+            slot[t.path] = (rows, np.where(rows, raw, 0))
+
+    def raw_of(name: str, t: _Target, present: np.ndarray, vals: np.ndarray) -> np.ndarray:
+        if isinstance(t.node, Repetitive):
+            bad = np.flatnonzero(present & (vals != np.round(vals)))
+            if len(bad):
+                raise ValueError(f"column {name!r} row {bad[0]}: count {vals[bad[0]]!r} is not an integer")
+            return np.where(present, vals, 0).astype(np.int64)
+        return _raw_array(cols[name], t, present, vals)
+
+    for name in single + multi:
+        present, vals = converted[name]
+        ts = targets[name]
+        if not ts:
+            raise ValueError(f"column {name!r} has no item in CAT{category:03d} edition {edition}")
+        if name in prefer:
+            want = prefer[name].rsplit("/", 1)[-1].removeprefix("I")
+            chosen = [t for t in ts if t.item == want]
+            if not chosen:
+                raise ValueError(f"prefer: column {name!r} cannot be written to item {prefer[name]!r} in "
+                                 f"edition {edition} (sources: {[t.item for t in ts]})")
+            put(name, chosen[0], present, raw_of(name, chosen[0], present, vals))
+            continue
+        rows = present.copy()
+        if len(ts) > 1:  # already carried by a source another column wrote with the same value?
+            for t in ts:
+                slot = assigned.get(t.item, {})
+                if t.path in slot:
+                    mask, raw = slot[t.path]
+                    both = present & mask
+                    try:
+                        rows &= ~(both & (raw == raw_of(name, t, both, vals)))
+                    except ValueError:  # does not fit that source: not carried there
+                        pass
+        put(name, ts[0], rows, raw_of(name, ts[0], rows, vals))
+    return assigned
+
+
+def _item_parts(category: int, edition: str, data: Mapping[str, np.ndarray], n: int,
+                prefer: Mapping[str, str] | None) -> dict[int, _Part]:
+    """The encoded items of n rows, by FRN."""
+    assigned = _assign(category, edition, data, n, prefer)
+    items = _items(category, edition)
+    parts = {}
+    for item_id, fields in assigned.items():
+        item = items[item_id]
+        parts[item.frn] = _node_part(item.layout, fields, n, f"I{category:03d}/{item_id}")
+    return parts
+
+
+def _records(category: int, edition: str, data: Mapping[str, np.ndarray], n: int,
+             prefer: Mapping[str, str] | None) -> tuple[np.ndarray, np.ndarray]:
+    """All records of n rows: (lengths, flat bytes in row order)."""
+    parts = _item_parts(category, edition, data, n, prefer)
+    nfrn = len(load_table(category, edition)["uap"])
+    zero = np.zeros(n, dtype=bool)
+    fspec = _fspec_part([parts[f][0] if f in parts else zero for f in range(1, nfrn + 1)], n)
+    empty = np.flatnonzero(~fspec[0])
+    if len(empty):
+        raise ValueError(f"row {empty[0]} has no value to encode")
+    length, mat = _concat([fspec, *(parts[f] for f in sorted(parts))], n)
+    flat = mat[np.arange(mat.shape[1])[None, :] < length[:, None]]
+    return length, flat
+
+
+# ---------------------------------------------------------------------------------------------------------
+# Public record, block and frame encoders.
+
+
+def encode_record(category: int, values: Mapping[str, Any], edition: str | None = None,
+                  extra: Mapping[str, bytes] | None = None, prefer: Mapping[str, str] | None = None) -> bytes:
+    """One record (FSPEC + items) from column values; `extra` gives complete raw items by item id.
+
+    None/NaN/NA values are absent. Multi-source columns go to their first source (or `prefer[column]`)
+    unless another column already wrote the same value to one of their sources. `extra` replaces an item
+    built from the values.
+    """
+    ed = resolve_edition(category, edition)
+    cols = _columns(category, ed)
+    unknown = [k for k in values if k not in cols]
+    if unknown:
+        raise ValueError(f"unknown column(s) for CAT{category:03d} edition {ed}: {unknown}")
+    data = {}
+    for k, v in values.items():
+        if v is None or v is pd.NA or (isinstance(v, float) and math.isnan(v)):
+            continue
+        if cols[k].kind in ("float", "int", "flag", "count"):
+            try:
+                data[k] = np.array([float(v)])
+            except (TypeError, ValueError):
+                raise ValueError(f"column {k!r}: {v!r} is not a number") from None
+        else:
+            data[k] = np.array([v], dtype=object)
+    parts = _item_parts(category, ed, data, 1, prefer)
+    raw_items = {frn: bytes(mat[0, : length[0]]) for frn, (present, length, mat) in parts.items()
+                 if present[0]}
+    for item_id, raw in (extra or {}).items():
+        raw_items[_item(category, ed, item_id).frn] = bytes(raw)
+    if not raw_items:
+        raise ValueError("record has no value to encode")
+    nfrn = len(load_table(category, ed)["uap"])
+    fspec = _fspec_bits([f in raw_items for f in range(1, nfrn + 1)]).tobytes()
+    return fspec + b"".join(raw_items[f] for f in sorted(raw_items))
+
+
+def encode_block(category: int, records: list[bytes]) -> bytes:
+    """A data block: CAT, LEN (big-endian, counting the 3 header bytes), records."""
+    if not 0 <= category <= 255:
+        raise ValueError(f"category {category} does not fit a byte")
+    body = b"".join(records)
+    if len(body) + 3 > MAX_BLOCK:
+        raise ValueError(f"data block of {len(body) + 3} bytes exceeds {MAX_BLOCK}")
+    return bytes([category]) + (len(body) + 3).to_bytes(2, "big") + body
+
+
+def _frame_arrays(frame: pd.DataFrame, names: Iterable[str]) -> dict[str, np.ndarray]:
+    out = {}
+    for name in names:
+        s = frame[name]
+        if pd.api.types.is_numeric_dtype(s.dtype) and not pd.api.types.is_bool_dtype(s.dtype):
+            out[name] = s.to_numpy(dtype=float, na_value=np.nan)
+        else:
+            out[name] = s.to_numpy(dtype=object)
+    return out
+
+
+def encode_frame(category: int, frame: pd.DataFrame, edition: str | None = None, records_per_block: int = 20,
+                 prefer: Mapping[str, str] | None = None) -> bytes:
+    """Data blocks for a frame (one record per row, in order), at most records_per_block records and 65535
+    bytes per block. Frame columns that are not in the category's schema are ignored."""
+    if records_per_block < 1:
+        raise ValueError("records_per_block must be at least 1")
+    ed = resolve_edition(category, edition)
+    names = [c for c in _columns(category, ed) if c in frame.columns]
+    n = len(frame)
+    if n == 0:
+        return b""
+    lengths, flats = [], []
+    for start in range(0, n, _CHUNK):
+        chunk = frame.iloc[start:start + _CHUNK]
+        try:
+            length, flat = _records(category, ed, _frame_arrays(chunk, names), len(chunk), prefer)
+        except ValueError as exc:
+            raise ValueError(f"{exc} (rows counted from {start})" if start else str(exc)) from None
+        lengths.append(length)
+        flats.append(flat)
+    length = np.concatenate(lengths)
+    flat = np.concatenate(flats).tobytes()
+    if length.max() + 3 > MAX_BLOCK:
+        row = int(np.argmax(length))
+        raise ValueError(f"row {row}: record of {int(length[row])} bytes cannot fit a data block")
+    ends = np.cumsum(length)
+    starts = ends - length
+    out = []
+    i = 0
+    head = bytes([category])
+    while i < n:
+        j = min(i + records_per_block, n)
+        while ends[j - 1] - starts[i] + 3 > MAX_BLOCK:
+            j -= 1
+        size = int(ends[j - 1] - starts[i]) + 3
+        out.append(head + size.to_bytes(2, "big") + flat[starts[i]:ends[j - 1]])
+        i = j
+    return b"".join(out)
