@@ -1,0 +1,243 @@
+"""Cross-correlation of slotted radar and ADS-B positions, and the per-aircraft orchestration.
+
+Lag convention (thesis eqs. 5.4/5.5): at lag d the radar series x[i] is paired with the ADS-B series
+y[i - d]. A positive peak lag d means the radar series repeats the ADS-B series d slots later
+(x[i] ~ y[i - d]: radar lags ADS-B); a negative one means radar leads.
+"""
+
+from __future__ import annotations
+
+import datetime as dt
+import math
+
+import numpy as np
+import pandas as pd
+
+from .aircraft import Aircraft, NoSuchAircraft, one_aircraft
+from .aircraft import all_aircraft as every_aircraft
+from .dedup import duplicate_mask, sort_by_time
+from .geodesy import distance_m
+from .results import LAG_COLUMNS, SLOT_COLUMNS, SUMMARY_KEYS, CorrelationRun, SkippedWindow, WindowResult
+from .slots import slot_window
+from .windows import in_window, overlap_windows, short_window_reason
+
+__all__ = ["NoOverlap", "NoSuchAircraft", "correlate", "ncc", "pearson_by_lag", "pearson_max_lag", "peak_lag",
+           "separation_stats"]
+
+
+class NoOverlap(LookupError):
+    """Radar and ADS-B both saw the aircraft, but never at the same time; gives each sensor's time span."""
+
+    def __init__(self, aircraft: str, radar_span_s: tuple[float, float], adsb_span_s: tuple[float, float],
+                 day0: dt.date | None = None):
+        self.radar_span_s, self.adsb_span_s = radar_span_s, adsb_span_s
+
+        def span(s: tuple[float, float]) -> str:
+            text = f"{s[0]:g}-{s[1]:g} s"
+            return f"{text} ({iso_utc(day0, s[0])} to {iso_utc(day0, s[1])})" if day0 else text
+
+        super().__init__(f"{aircraft}: radar ({span(radar_span_s)}) and ADS-B ({span(adsb_span_s)}) "
+                         "tracks never overlap in time")
+
+
+def _lags(n: int) -> np.ndarray:
+    return np.arange(-(n - 1), n)
+
+
+def _pair(x, y) -> tuple[np.ndarray, np.ndarray]:
+    x, y = np.asarray(x, dtype=float), np.asarray(y, dtype=float)
+    if x.shape != y.shape or x.ndim != 1:
+        raise ValueError(f"series must be 1-D and of equal length, got {x.shape} and {y.shape}")
+    return x, y
+
+
+def ncc(x, y) -> tuple[np.ndarray, np.ndarray]:
+    """Lags d = -(N-1)..N-1 and r(d) = sum_i x[i] y[i-d] / sqrt(sum x^2 sum y^2); not circular, mean kept."""
+    x, y = _pair(x, y)
+    norm = math.sqrt(float(x @ x) * float(y @ y))
+    num = np.correlate(x, y, mode="full")  # index j holds lag j - (N - 1)
+    return _lags(x.size), num / norm if norm > 0 else np.full(num.shape, np.nan)
+
+
+def pearson_by_lag(x, y) -> tuple[np.ndarray, np.ndarray]:
+    """Lags and the Pearson coefficient of the overlapping pairs (x[i], y[i-d]), mean removed per overlap.
+
+    NaN where the overlap has fewer than 2 points or either side is constant.
+    """
+    x, y = _pair(x, y)
+    n = x.size
+    lags = _lags(n)
+    r = np.full(lags.size, np.nan)
+    for j, d in enumerate(lags):
+        a, b = (x[d:], y[: n - d]) if d >= 0 else (x[: n + d], y[-d:])
+        if a.size < 2 or np.ptp(a) == 0 or np.ptp(b) == 0:
+            continue
+        a, b = a - a.mean(), b - b.mean()
+        r[j] = np.clip((a @ b) / math.sqrt(float(a @ a) * float(b @ b)), -1.0, 1.0)
+    return lags, r
+
+
+def peak_lag(lags: np.ndarray, r: np.ndarray, max_abs_lag: int | None = None) -> int | None:
+    """Lag of the largest coefficient with |lag| <= max_abs_lag (first, i.e. most negative, on ties;
+    NaN ignored); None if there is none."""
+    lags, r = np.asarray(lags), np.asarray(r, dtype=float)
+    if max_abs_lag is not None:
+        keep = np.abs(lags) <= max_abs_lag
+        lags, r = lags[keep], r[keep]
+    if r.size == 0 or np.all(np.isnan(r)):
+        return None
+    return int(lags[int(np.nanargmax(r))])
+
+
+def pearson_max_lag(n_slots: int) -> int:
+    """Largest |lag| searched for the Pearson peak: the overlap keeps at least half the slots.
+
+    Short overlaps are degenerate (any 2-point overlap has r = +-1), so the peak is not searched there.
+    """
+    return n_slots // 2
+
+
+def separation_stats(sep_m) -> dict[str, float]:
+    """Mean, RMS, 95th percentile (linear interpolation) and maximum of separations in metres."""
+    sep_m = np.asarray(sep_m, dtype=float)
+    if sep_m.size == 0:
+        return dict.fromkeys(["sep_mean_m", "sep_rms_m", "sep_p95_m", "sep_max_m"], math.nan)
+    return {"sep_mean_m": float(sep_m.mean()), "sep_rms_m": float(np.sqrt(np.mean(sep_m**2))),
+            "sep_p95_m": float(np.percentile(sep_m, 95)), "sep_max_m": float(sep_m.max())}
+
+
+def iso_utc(day0: dt.date | None, seconds: float) -> str | None:
+    """ISO 8601 UTC text of a time in seconds from midnight of day0 (None when the date is unknown)."""
+    if day0 is None or not np.isfinite(seconds):
+        return None
+    ts = pd.Timestamp(day0, tz="UTC") + pd.to_timedelta(seconds, unit="s")
+    return ts.isoformat(timespec="milliseconds").replace("+00:00", "Z")
+
+
+def _first_day(date, *frames: pd.DataFrame) -> dt.date | None:
+    """The recording's first UTC day: the given date, else inferred from any timestamp, else None."""
+    if date is not None:
+        return pd.Timestamp(date).date()
+    for f in frames:
+        ok = f["timestamp"].notna() & f["time_of_day"].notna()
+        if ok.any():
+            row = f[ok].iloc[0]
+            midnight = row["timestamp"] - pd.to_timedelta(row["time_of_day"], unit="s")
+            return midnight.round("D").date()
+    return None
+
+
+def _unwrapped_lon(radar_lon: np.ndarray, adsb_lon: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Longitude series without +-180 jumps, ADS-B shifted by whole turns to sit next to radar."""
+    x, y = np.unwrap(radar_lon, period=360.0), np.unwrap(adsb_lon, period=360.0)
+    return x, y + 360.0 * np.round((x[0] - y[0]) / 360.0)
+
+
+def _none_if_nan(v):
+    return None if isinstance(v, float) and math.isnan(v) else v
+
+
+def _window_result(ac: Aircraft, number: int, start_s: float, end_s: float, radar: pd.DataFrame,
+                   adsb: pd.DataFrame, dups: tuple[int, int], slot_s: float,
+                   day0: dt.date | None) -> WindowResult:
+    """Slot, correlate and summarise one window."""
+    rs, as_ = slot_window(radar, start_s, end_s, slot_s), slot_window(adsb, start_s, end_s, slot_s)
+    tod = rs["time_of_day"].to_numpy()
+    if day0 is None:
+        stamps = pd.Series(pd.NaT, index=rs.index, dtype="datetime64[ns, UTC]")
+    else:
+        stamps = (pd.Timestamp(day0, tz="UTC") + pd.to_timedelta(tod, unit="s")).astype("datetime64[ns, UTC]")
+    slots = pd.DataFrame({
+        "slot": rs["slot"], "time_of_day": tod, "timestamp": stamps,
+        "radar_lat": rs["latitude"], "radar_lon": rs["longitude"],
+        "adsb_lat": as_["latitude"], "adsb_lon": as_["longitude"],
+        "radar_count": rs["count"], "adsb_count": as_["count"],
+        "radar_filled": rs["filled"], "adsb_filled": as_["filled"],
+    })
+    slots["sep_m"] = distance_m(slots["radar_lat"].to_numpy(), slots["radar_lon"].to_numpy(),
+                                slots["adsb_lat"].to_numpy(), slots["adsb_lon"].to_numpy())
+    x_lon, y_lon = _unwrapped_lon(slots["radar_lon"].to_numpy(), slots["adsb_lon"].to_numpy())
+    lags, ncc_lat = ncc(slots["radar_lat"], slots["adsb_lat"])
+    _, ncc_lon = ncc(x_lon, y_lon)
+    _, p_lat = pearson_by_lag(slots["radar_lat"], slots["adsb_lat"])
+    _, p_lon = pearson_by_lag(x_lon, y_lon)
+    lag_frame = pd.DataFrame(dict(zip(LAG_COLUMNS, [lags, ncc_lat, ncc_lon, p_lat, p_lon], strict=True)))
+    zero = len(slots) - 1
+    summary = {
+        "callsign": ac.callsign, "address": ac.address, "window": number,
+        "start_tod": float(start_s), "end_tod": float(end_s),
+        "start": iso_utc(day0, start_s), "end": iso_utc(day0, end_s), "slots": len(slots),
+        "radar_before": len(radar), "radar_after": len(slots),
+        "adsb_before": len(adsb), "adsb_after": len(slots),
+        "radar_duplicates": dups[0], "adsb_duplicates": dups[1],
+        "ncc0_lat": float(ncc_lat[zero]), "ncc0_lon": float(ncc_lon[zero]),
+        "ncc_peak_lag_lat": peak_lag(lags, ncc_lat), "ncc_peak_lag_lon": peak_lag(lags, ncc_lon),
+        "pearson0_lat": float(p_lat[zero]), "pearson0_lon": float(p_lon[zero]),
+        "pearson_peak_lag_lat": peak_lag(lags, p_lat, pearson_max_lag(len(slots))),
+        "pearson_peak_lag_lon": peak_lag(lags, p_lon, pearson_max_lag(len(slots))),
+        **separation_stats(slots["sep_m"]),
+    }
+    summary = {k: _none_if_nan(summary[k]) for k in SUMMARY_KEYS}
+    return WindowResult(summary=summary, slots=slots[SLOT_COLUMNS], lags=lag_frame)
+
+
+def _span(times: pd.Series) -> tuple[float, float]:
+    return float(times.min()), float(times.max())
+
+
+def _correlate_aircraft(ac: Aircraft, run: CorrelationRun, slot_s: float, gap_s: float,
+                        day0: dt.date | None, strict: bool) -> None:
+    """Append the windows (or skipped windows) of one aircraft to ``run``."""
+    radar, adsb = sort_by_time(ac.radar), sort_by_time(ac.adsb)
+    r_dup, a_dup = duplicate_mask(radar).to_numpy(), duplicate_mask(adsb).to_numpy()
+    r_dup_t, a_dup_t = radar["time_of_day"].to_numpy()[r_dup], adsb["time_of_day"].to_numpy()[a_dup]
+    radar, adsb = radar[~r_dup].reset_index(drop=True), adsb[~a_dup].reset_index(drop=True)
+    windows = overlap_windows(radar["time_of_day"], adsb["time_of_day"], gap_s)
+    if not windows:
+        label = ac.callsign or ac.address
+        r_span, a_span = _span(radar["time_of_day"]), _span(adsb["time_of_day"])
+        if strict:
+            raise NoOverlap(label, r_span, a_span, day0)
+        run.skipped.append(SkippedWindow(ac.callsign, ac.address, min(r_span[0], a_span[0]),
+                                         max(r_span[1], a_span[1]), str(NoOverlap(label, r_span, a_span))))
+        return
+    number = 0
+    for start_s, end_s in windows:
+        r_in = radar[in_window(radar["time_of_day"], start_s, end_s)]
+        a_in = adsb[in_window(adsb["time_of_day"], start_s, end_s)]
+        reason = short_window_reason(start_s, end_s, slot_s)
+        if reason is None and (r_in.empty or a_in.empty):
+            reason = f"no {'radar' if r_in.empty else 'ADS-B'} measurement inside the window"
+        if reason:
+            run.skipped.append(SkippedWindow(ac.callsign, ac.address, start_s, end_s, reason))
+            continue
+        number += 1
+        dups = (int(in_window(r_dup_t, start_s, end_s).sum()), int(in_window(a_dup_t, start_s, end_s).sum()))
+        run.windows.append(_window_result(ac, number, start_s, end_s, r_in, a_in, dups, slot_s, day0))
+
+
+def correlate(radar_meas: pd.DataFrame, adsb_meas: pd.DataFrame, *, callsign: str | None = None,
+              address: str | None = None, all_aircraft: bool = False, slot_s: float = 10.0,
+              gap_s: float = 180.0, date: dt.date | str | None = None) -> CorrelationRun:
+    """Correlate radar against ADS-B per aircraft and overlap window (see the module docstring).
+
+    One aircraft by call sign and/or address (NoSuchAircraft, NoOverlap on failure), or with
+    ``all_aircraft`` every aircraft seen by both sensors. ``date`` is the recording's first UTC day;
+    when None it is inferred from the measurement timestamps if they have any.
+    """
+    if slot_s <= 0 or gap_s < 0:
+        raise ValueError(f"slot_s must be > 0 and gap_s >= 0, got {slot_s} and {gap_s}")
+    day0 = _first_day(date, radar_meas, adsb_meas)
+    run = CorrelationRun(parameters={
+        "callsign": callsign, "address": address, "all_aircraft": all_aircraft, "slot_s": slot_s,
+        "gap_s": gap_s, "date": day0.isoformat() if day0 else None})
+    if all_aircraft:
+        targets = every_aircraft(radar_meas, adsb_meas)
+        if not targets:
+            raise NoSuchAircraft("any aircraft", ["radar", "ADS-B"], [],
+                                 "no aircraft is seen by both radar and ADS-B")
+    else:
+        targets = [one_aircraft(radar_meas, adsb_meas, callsign, address)]
+    for ac in targets:
+        _correlate_aircraft(ac, run, slot_s, gap_s, day0, strict=not all_aircraft)
+    return run

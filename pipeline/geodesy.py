@@ -1,0 +1,210 @@
+"""WGS-84 geodesy: geodetic/ECEF/ENU conversions, radar polar plots to positions, ellipsoidal distance.
+
+All functions are vectorised over numpy arrays (scalars broadcast). Angles are in degrees, lengths in
+metres unless the name says otherwise (``rho_nm``).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+# WGS-84 defining constants and derived quantities
+A_M = 6378137.0
+F = 1.0 / 298.257223563
+B_M = A_M * (1.0 - F)
+E2 = F * (2.0 - F)  # first eccentricity squared
+EP2 = E2 / (1.0 - E2)  # second eccentricity squared
+M_PER_NM = 1852.0
+M_PER_FT = 0.3048
+
+_NEWTON_STEPS = 8
+_HEIGHT_TOL_M = 1e-4
+
+
+def geodetic_to_ecef(lat_deg, lon_deg, h_m):
+    """Earth-centred, earth-fixed (x, y, z) in metres of geodetic latitude, longitude and height."""
+    lat, lon = np.radians(lat_deg), np.radians(lon_deg)
+    sin_lat, cos_lat = np.sin(lat), np.cos(lat)
+    n_m = A_M / np.sqrt(1.0 - E2 * sin_lat**2)  # prime-vertical radius of curvature
+    return ((n_m + h_m) * cos_lat * np.cos(lon), (n_m + h_m) * cos_lat * np.sin(lon),
+            (n_m * (1.0 - E2) + h_m) * sin_lat)
+
+
+def ecef_to_geodetic(x_m, y_m, z_m):
+    """Geodetic (latitude, longitude, height) of ECEF coordinates, closed form (Zhu 1993 / Heikkinen).
+
+    Exact to well below a millimetre for any point more than a few km from the earth's centre.
+    """
+    x_m, y_m, z_m = (np.asarray(v, dtype=float) for v in (x_m, y_m, z_m))
+    p2 = x_m**2 + y_m**2
+    p = np.sqrt(p2)
+    z2 = z_m**2
+    f54 = 54.0 * B_M**2 * z2
+    g = p2 + (1.0 - E2) * z2 - E2 * (A_M**2 - B_M**2)
+    c = E2**2 * f54 * p2 / g**3
+    s = np.cbrt(1.0 + c + np.sqrt(c**2 + 2.0 * c))
+    k = s + 1.0 + 1.0 / s
+    pk = f54 / (3.0 * k**2 * g**2)
+    q = np.sqrt(1.0 + 2.0 * E2**2 * pk)
+    root = 0.5 * A_M**2 * (1.0 + 1.0 / q) - pk * (1.0 - E2) * z2 / (q * (1.0 + q)) - 0.5 * pk * p2
+    r0 = -pk * E2 * p / (1.0 + q) + np.sqrt(np.maximum(root, 0.0))
+    u = np.sqrt((p - E2 * r0) ** 2 + z2)
+    v = np.sqrt((p - E2 * r0) ** 2 + (1.0 - E2) * z2)
+    z0 = B_M**2 * z_m / (A_M * v)
+    h_m = u * (1.0 - B_M**2 / (A_M * v))
+    lat = np.degrees(np.arctan2(z_m + EP2 * z0, p))
+    lon = np.degrees(np.arctan2(y_m, x_m))
+    return lat, lon, h_m
+
+
+def enu_basis(lat_deg, lon_deg):
+    """Unit vectors (east, north, up) in ECEF at a geodetic position, each of shape (..., 3)."""
+    lat, lon = np.radians(lat_deg), np.radians(lon_deg)
+    sl, cl, so, co = np.sin(lat), np.cos(lat), np.sin(lon), np.cos(lon)
+    east = np.stack(np.broadcast_arrays(-so, co, np.zeros_like(so)), axis=-1)
+    north = np.stack(np.broadcast_arrays(-sl * co, -sl * so, cl), axis=-1)
+    up = np.stack(np.broadcast_arrays(cl * co, cl * so, sl), axis=-1)
+    return east, north, up
+
+
+def ecef_to_enu(x_m, y_m, z_m, lat0_deg, lon0_deg, h0_m):
+    """Local east, north, up (m) of ECEF points relative to the origin (lat0, lon0, h0)."""
+    ox, oy, oz = geodetic_to_ecef(lat0_deg, lon0_deg, h0_m)
+    d = np.stack(np.broadcast_arrays(np.subtract(x_m, ox), np.subtract(y_m, oy), np.subtract(z_m, oz)), -1)
+    east, north, up = enu_basis(lat0_deg, lon0_deg)
+    return (d * east).sum(-1), (d * north).sum(-1), (d * up).sum(-1)
+
+
+def enu_to_ecef(e_m, n_m, u_m, lat0_deg, lon0_deg, h0_m):
+    """ECEF (x, y, z) of local east, north, up offsets (m) from the origin (lat0, lon0, h0)."""
+    ox, oy, oz = geodetic_to_ecef(lat0_deg, lon0_deg, h0_m)
+    east, north, up = enu_basis(lat0_deg, lon0_deg)
+    e_m, n_m, u_m = (np.asarray(v, dtype=float)[..., None] for v in (e_m, n_m, u_m))
+    d = e_m * east + n_m * north + u_m * up
+    return ox + d[..., 0], oy + d[..., 1], oz + d[..., 2]
+
+
+def _solve_height(site_ecef, along, across_fn, target_alt_m, start):
+    """Newton iteration on a scalar parameter s so that the geodetic height of P(s) is target_alt_m.
+
+    ``across_fn(s) -> (P, dP/ds)`` gives the point and its derivative; the derivative of geodetic
+    height along dP is its component on the ellipsoid normal at P.
+    """
+    s = start
+    for _ in range(_NEWTON_STEPS):
+        p, dp = across_fn(s)
+        lat, lon, h = ecef_to_geodetic(p[..., 0], p[..., 1], p[..., 2])
+        _, _, normal = enu_basis(lat, lon)
+        slope = (dp * normal).sum(-1)
+        err = h - target_alt_m
+        with np.errstate(divide="ignore", invalid="ignore"):
+            step = np.where(np.abs(slope) > 1e-9, err / slope, 0.0)
+        s = along(s - step)
+        if np.all(~np.isfinite(err) | (np.abs(err) < _HEIGHT_TOL_M)):
+            break
+    return s
+
+
+def polar_to_geodetic(site_lat_deg, site_lon_deg, site_alt_m, rho_nm, theta_deg, target_alt_m):
+    """Geodetic (lat, lon, h_m) of radar plots: slant range rho, azimuth theta, known target height.
+
+    The point lies at slant range rho from the site, in the vertical plane of azimuth theta (clockwise
+    from north in the site's ENU frame); the elevation is solved by Newton iteration so that the
+    geodetic height equals ``target_alt_m``. Where ``target_alt_m`` is NaN the elevation is taken as 0
+    (the plot lies on the site's horizontal plane) and h_m is the resulting height. Heights that the
+    range cannot reach (|target - site| > rho) give the nearest reachable point (elevation +-90 deg).
+    """
+    site_lat, site_lon, site_alt, rho_m, theta, target = np.broadcast_arrays(
+        *(np.asarray(v, dtype=float) for v in (site_lat_deg, site_lon_deg, site_alt_m, rho_nm,
+                                               theta_deg, target_alt_m)))
+    rho_m = rho_m * M_PER_NM
+    site = np.stack(geodetic_to_ecef(site_lat, site_lon, site_alt), -1)
+    east, north, up = enu_basis(site_lat, site_lon)
+    t = np.radians(theta)[..., None]
+    horiz = np.sin(t) * east + np.cos(t) * north
+    r = rho_m[..., None]
+
+    def point(elev):
+        ce, se = np.cos(elev)[..., None], np.sin(elev)[..., None]
+        return site + r * (ce * horiz + se * up), r * (-se * horiz + ce * up)
+
+    # start from the spherical law of cosines with the local mean radius
+    radius = np.sqrt(A_M * B_M) + site_alt
+    known = np.isfinite(target)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        sin_e = ((radius - site_alt + target) ** 2 - radius**2 - rho_m**2) / (2.0 * radius * rho_m)
+    elev0 = np.where(known, np.arcsin(np.clip(np.nan_to_num(sin_e), -1.0, 1.0)), 0.0)
+    half_pi = np.pi / 2
+    elev = _solve_height(site, lambda e: np.clip(e, -half_pi, half_pi), point,
+                         np.where(known, target, np.nan), elev0)
+    elev = np.where(known, elev, 0.0)
+    p, _ = point(elev)
+    return ecef_to_geodetic(p[..., 0], p[..., 1], p[..., 2])
+
+
+def plane_to_geodetic(site_lat_deg, site_lon_deg, site_alt_m, x_nm, y_nm, target_alt_m):
+    """Geodetic (lat, lon, h_m) of local cartesian plots (x east, y north, NM, on the site's tangent plane).
+
+    The point is moved along the site's up axis until its geodetic height is ``target_alt_m``; where
+    that is NaN it stays on the tangent plane through the site.
+    """
+    site_lat, site_lon, site_alt, x_m, y_m, target = np.broadcast_arrays(
+        *(np.asarray(v, dtype=float) for v in (site_lat_deg, site_lon_deg, site_alt_m, x_nm, y_nm,
+                                               target_alt_m)))
+    site = np.stack(geodetic_to_ecef(site_lat, site_lon, site_alt), -1)
+    east, north, up = enu_basis(site_lat, site_lon)
+    base = site + (x_m * M_PER_NM)[..., None] * east + (y_m * M_PER_NM)[..., None] * north
+
+    def point(u_m):
+        return base + u_m[..., None] * up, up
+
+    known = np.isfinite(target)
+    u0 = np.where(known, target - site_alt, 0.0)
+    u_m = _solve_height(site, lambda u: u, point, np.where(known, target, np.nan), u0)
+    p, _ = point(np.where(known, u_m, 0.0))
+    return ecef_to_geodetic(p[..., 0], p[..., 1], p[..., 2])
+
+
+def slant_range_azimuth(site_lat_deg, site_lon_deg, site_alt_m, lat_deg, lon_deg, h_m):
+    """Slant range (NM), azimuth (deg clockwise from north, 0..360) and elevation (deg) seen from a site."""
+    e_m, n_m, u_m = ecef_to_enu(*geodetic_to_ecef(lat_deg, lon_deg, h_m), site_lat_deg, site_lon_deg,
+                                site_alt_m)
+    rho_m = np.sqrt(e_m**2 + n_m**2 + u_m**2)
+    azimuth = np.degrees(np.arctan2(e_m, n_m)) % 360.0
+    return rho_m / M_PER_NM, azimuth, np.degrees(np.arctan2(u_m, np.hypot(e_m, n_m)))
+
+
+def distance_m(lat1_deg, lon1_deg, lat2_deg, lon2_deg, max_iter: int = 50):
+    """Geodesic distance (m) on the WGS-84 ellipsoid by Vincenty's inverse method (sub-mm accuracy).
+
+    Nearly antipodal pairs, where the iteration may not converge, return the last iterate
+    (never the case for radar/ADS-B separations). NaN inputs give NaN.
+    """
+    lat1, lat2 = np.radians(np.asarray(lat1_deg, float)), np.radians(np.asarray(lat2_deg, float))
+    dlon = np.radians((np.asarray(lon2_deg, float) - np.asarray(lon1_deg, float) + 180.0) % 360.0 - 180.0)
+    lat1, lat2, dlon = np.broadcast_arrays(lat1, lat2, dlon)
+    u1, u2 = np.arctan((1.0 - F) * np.tan(lat1)), np.arctan((1.0 - F) * np.tan(lat2))
+    su1, cu1, su2, cu2 = np.sin(u1), np.cos(u1), np.sin(u2), np.cos(u2)
+    lam = dlon.copy()
+    with np.errstate(invalid="ignore", divide="ignore"):
+        for _ in range(max_iter):
+            sl, cl = np.sin(lam), np.cos(lam)
+            sin_sig = np.hypot(cu2 * sl, cu1 * su2 - su1 * cu2 * cl)
+            cos_sig = su1 * su2 + cu1 * cu2 * cl
+            sig = np.arctan2(sin_sig, cos_sig)
+            sin_alpha = np.where(sin_sig > 0, cu1 * cu2 * sl / sin_sig, 0.0)
+            cos2_alpha = 1.0 - sin_alpha**2
+            cos_2sm = np.where(cos2_alpha > 0, cos_sig - 2.0 * su1 * su2 / cos2_alpha, 0.0)
+            c = F / 16.0 * cos2_alpha * (4.0 + F * (4.0 - 3.0 * cos2_alpha))
+            lam_prev = lam
+            lam = dlon + (1.0 - c) * F * sin_alpha * (
+                sig + c * sin_sig * (cos_2sm + c * cos_sig * (-1.0 + 2.0 * cos_2sm**2)))
+            if np.all(~np.isfinite(lam) | (np.abs(lam - lam_prev) < 1e-12)):
+                break
+        u_sq = cos2_alpha * EP2
+        big_a = 1.0 + u_sq / 16384.0 * (4096.0 + u_sq * (-768.0 + u_sq * (320.0 - 175.0 * u_sq)))
+        big_b = u_sq / 1024.0 * (256.0 + u_sq * (-128.0 + u_sq * (74.0 - 47.0 * u_sq)))
+        d_sig = big_b * sin_sig * (cos_2sm + big_b / 4.0 * (
+            cos_sig * (-1.0 + 2.0 * cos_2sm**2)
+            - big_b / 6.0 * cos_2sm * (-3.0 + 4.0 * sin_sig**2) * (-3.0 + 4.0 * cos_2sm**2)))
+    return B_M * big_a * (sig - d_sig)

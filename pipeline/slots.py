@@ -1,0 +1,55 @@
+"""Resampling one sensor's measurements in a window onto fixed time slots."""
+
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+
+SLOTTED_COLUMNS = ["slot", "time_of_day", "latitude", "longitude", "count", "filled"]
+
+
+def slot_count(start_s: float, end_s: float, slot_s: float) -> int:
+    """N = floor((end - start) / D) + 1 slots cover [start, end]."""
+    return int(np.floor((end_s - start_s) / slot_s)) + 1
+
+
+def slot_index(times_s, start_s: float, slot_s: float) -> np.ndarray:
+    """k with start + k*D <= t < start + (k+1)*D, exact at slot edges despite floating point."""
+    t = np.asarray(times_s, dtype=float)
+    k = np.floor((t - start_s) / slot_s)
+    k = np.where(start_s + (k + 1) * slot_s <= t, k + 1, k)
+    k = np.where(start_s + k * slot_s > t, k - 1, k)
+    return k.astype(np.int64)
+
+
+def wrap_lon(lon_deg):
+    """Longitude wrapped into [-180, 180)."""
+    return (np.asarray(lon_deg, dtype=float) + 180.0) % 360.0 - 180.0
+
+
+def slot_window(meas: pd.DataFrame, start_s: float, end_s: float, slot_s: float = 10.0) -> pd.DataFrame:
+    """Mean position per slot of measurements in [start, end]; empty slots copy the previous (or first) slot.
+
+    Longitudes are averaged relative to the window's first longitude, so slots straddling +-180 deg
+    average correctly; results are wrapped into [-180, 180). Columns: SLOTTED_COLUMNS, where
+    time_of_day is the slot start and ``filled`` marks slots that had no measurement.
+    """
+    n = slot_count(start_s, end_s, slot_s)
+    t = meas["time_of_day"].to_numpy(float)
+    inside = (t >= start_s) & (t <= end_s)
+    lat = meas["latitude"].to_numpy(float)[inside]
+    lon = meas["longitude"].to_numpy(float)[inside]
+    k = slot_index(t[inside], start_s, slot_s)
+    count = np.bincount(k, minlength=n)[:n]
+    with np.errstate(invalid="ignore", divide="ignore"):
+        lat_mean = np.bincount(k, lat, minlength=n)[:n] / count
+        ref = lon[0] if lon.size else 0.0
+        rel = wrap_lon(lon - ref)
+        lon_mean = np.bincount(k, rel, minlength=n)[:n] / count + ref
+    frame = pd.DataFrame({"slot": np.arange(n), "time_of_day": start_s + np.arange(n) * slot_s,
+                          "latitude": lat_mean, "longitude": lon_mean})
+    frame[["latitude", "longitude"]] = frame[["latitude", "longitude"]].ffill().bfill()
+    frame["longitude"] = wrap_lon(frame["longitude"].to_numpy())
+    frame["count"] = count.astype(np.int64)
+    frame["filled"] = count == 0
+    return frame[SLOTTED_COLUMNS]

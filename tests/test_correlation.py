@@ -1,0 +1,218 @@
+"""NCC and lagged Pearson against hand values and synthetic truth; the correlate() orchestration."""
+
+import math
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from pipeline.correlation import (
+    NoOverlap,
+    NoSuchAircraft,
+    correlate,
+    ncc,
+    peak_lag,
+    pearson_by_lag,
+    pearson_max_lag,
+    separation_stats,
+)
+from pipeline.results import LAG_COLUMNS, SLOT_COLUMNS, SUMMARY_KEYS
+
+
+def test_ncc_hand_computed_three_elements():
+    # x = (1, 2, 3), y = (4, 5, 6); r(d) = sum_i x[i] y[i-d] / sqrt(14 * 77) = . / sqrt(1078)
+    # d = -2: x0 y2 = 6;  d = -1: x0 y1 + x1 y2 = 5 + 12 = 17;  d = 0: 4 + 10 + 18 = 32
+    # d = +1: x1 y0 + x2 y1 = 8 + 15 = 23;  d = +2: x2 y0 = 12
+    lags, r = ncc([1.0, 2.0, 3.0], [4.0, 5.0, 6.0])
+    assert lags.tolist() == [-2, -1, 0, 1, 2]
+    assert r == pytest.approx(np.array([6, 17, 32, 23, 12]) / math.sqrt(1078))
+
+
+def test_identical_series_peak_at_zero():
+    x = np.sin(np.linspace(0, 7, 50)) + 3.0
+    lags, r = ncc(x, x)
+    assert r[lags == 0][0] == pytest.approx(1.0)
+    assert peak_lag(lags, r) == 0
+    lags, p = pearson_by_lag(x, x)
+    assert p[lags == 0][0] == pytest.approx(1.0)
+    assert peak_lag(lags, p, pearson_max_lag(50)) == 0
+
+
+def test_shift_by_three_slots():
+    # convention: x[i] ~ y[i - d] at the peak. Build x[i] = y[i - 3] (radar 3 slots behind ADS-B) -> +3
+    s = np.cumsum(np.random.default_rng(5).normal(size=63))
+    y, x = s[3:], s[:-3]  # y[j] = s[j + 3], so y[i - 3] = s[i] = x[i]
+    lags, p = pearson_by_lag(x, y)
+    assert peak_lag(lags, p, pearson_max_lag(60)) == 3
+    assert p[lags == 3][0] == pytest.approx(1.0)
+    lags, p = pearson_by_lag(y, x)
+    assert peak_lag(lags, p, pearson_max_lag(60)) == -3
+    # unrestricted, 2-point overlaps (always r = +-1) compete with the true peak
+    assert pearson_max_lag(60) == 30
+
+
+def test_pearson_hand_values_and_nan():
+    # x = (1, 2, 3), y = (1, 2, 4).
+    # d = 0: centred x (-1, 0, 1), y (-4/3, -1/3, 5/3): cov 3, sxx 2, syy 42/9 -> 3 / sqrt(84/9) = 0.98198
+    # d = +1: pairs (x1, y0), (x2, y1) = (2, 1), (3, 2) -> 1;  d = -1: (1, 2), (2, 4) -> 1
+    # d = +-2: a single pair -> NaN
+    lags, p = pearson_by_lag([1.0, 2.0, 3.0], [1.0, 2.0, 4.0])
+    assert lags.tolist() == [-2, -1, 0, 1, 2]
+    assert np.isnan(p[0]) and np.isnan(p[4])
+    assert p[1:4] == pytest.approx([1.0, 0.98198, 1.0], abs=1e-5)
+    # ties: the first (most negative) lag wins; NaN ignored; the search can be limited to |lag| <= 0
+    assert peak_lag(lags, p) == -1
+    assert peak_lag(lags, p, max_abs_lag=0) == 0
+    # a constant side has no Pearson coefficient
+    _, p = pearson_by_lag([1.0, 1.0, 1.0], [1.0, 2.0, 4.0])
+    assert np.isnan(p).all()
+    assert peak_lag(lags, p) is None
+
+
+def test_ncc_rejects_unequal_lengths():
+    with pytest.raises(ValueError):
+        ncc([1.0, 2.0], [1.0])
+
+
+def test_separation_stats_hand():
+    # (3, 4): mean 3.5, RMS sqrt((9 + 16) / 2) = 3.5355, p95 by linear interpolation 3 + 0.95 = 3.95
+    stats = separation_stats([3.0, 4.0])
+    assert stats == pytest.approx({"sep_mean_m": 3.5, "sep_rms_m": math.sqrt(12.5), "sep_p95_m": 3.95,
+                                   "sep_max_m": 4.0})
+
+
+def frame(sensor, times, lat, lon, callsign="MAS72", address="750123"):
+    n = len(times)
+    return pd.DataFrame({
+        "sensor": sensor, "time_of_day": np.asarray(times, float),
+        "timestamp": pd.Series(pd.NaT, index=range(n), dtype="datetime64[ns, UTC]"),
+        "latitude": np.asarray(lat, float), "longitude": np.asarray(lon, float), "flight_level": 350.0,
+        "ground_speed_kt": 450.0, "heading_deg": 45.0,
+        "callsign": pd.Series([callsign] * n, dtype="str"), "address": pd.Series([address] * n, dtype="str"),
+        "sac": pd.array([1] * n, dtype="Int64"), "sic": pd.array([2] * n, dtype="Int64"),
+    })
+
+
+def weave(t):
+    """A weaving, non-periodic track, so lagged Pearson has a single clear peak."""
+    w = 2 * np.pi * (t - 36000.0)
+    return (1.3 + 0.02 * np.sin(w / 2900.0) + 0.01 * np.sin(w / 1300.0 + 1.0),
+            103.8 + 0.03 * np.cos(w / 3100.0) + 0.01 * np.sin(w / 1100.0))
+
+
+def test_correlate_identical_tracks_two_windows():
+    t = np.concatenate([np.arange(36000.0, 36600.0, 4.0), np.arange(40000.0, 40300.0, 4.0)])
+    lat, lon = weave(t)
+    radar = frame("radar", t, lat, lon, callsign=None)  # radar without I048/240: joined by address
+    adsb = frame("adsb", t, lat, lon)
+    # two repeated ADS-B reports in the first window, one repeated radar report in the second
+    adsb = pd.concat([adsb, adsb.iloc[[3, 10]]], ignore_index=True)
+    radar = pd.concat([radar, radar.iloc[[-1]]], ignore_index=True)
+    run = correlate(radar, adsb, callsign="mas 72", date="2019-03-01")
+    assert [w.summary["window"] for w in run.windows] == [1, 2]
+    first, second = (w.summary for w in run.windows)
+    assert list(first) == SUMMARY_KEYS
+    assert (first["callsign"], first["address"]) == ("MAS72", "750123")
+    # window 1: [36000, 36596] -> floor(596 / 10) + 1 = 60 slots; 150 reports each after dedup
+    assert (first["start_tod"], first["end_tod"], first["slots"]) == (36000.0, 36596.0, 60)
+    assert (first["radar_before"], first["adsb_before"]) == (150, 150)
+    assert (first["radar_after"], first["adsb_after"]) == (60, 60)
+    assert (first["adsb_duplicates"], first["radar_duplicates"]) == (2, 0)
+    assert (second["adsb_duplicates"], second["radar_duplicates"]) == (0, 1)
+    assert first["start"] == "2019-03-01T10:00:00.000Z"
+    assert first["ncc0_lat"] == pytest.approx(1.0) and first["pearson0_lon"] == pytest.approx(1.0)
+    assert first["pearson_peak_lag_lat"] == 0 and first["ncc_peak_lag_lon"] == 0
+    assert first["sep_max_m"] == pytest.approx(0.0, abs=1e-6)
+    w = run.windows[0]
+    assert list(w.slots.columns) == SLOT_COLUMNS and len(w.slots) == 60
+    assert list(w.lags.columns) == LAG_COLUMNS and w.lags["lag"].tolist() == list(range(-59, 60))
+    assert w.slots["timestamp"].iloc[1] == pd.Timestamp("2019-03-01T10:00:10", tz="UTC")
+    assert w.slots["timestamp"].dtype == "datetime64[ns, UTC]"
+    assert run.skipped == []
+
+
+def test_correlate_detects_a_30_s_delay():
+    # radar reports the ADS-B position 30 s late = 3 slots of 10 s -> peak lag +3 (radar lags)
+    t = np.arange(36000.0, 37800.0, 2.0)
+    radar = frame("radar", t, *weave(t - 30.0))
+    adsb = frame("adsb", t, *weave(t))
+    (w,) = correlate(radar, adsb, address="750123").windows
+    assert w.summary["pearson_peak_lag_lat"] == 3 and w.summary["pearson_peak_lag_lon"] == 3
+    assert w.summary["start"] is None and w.slots["timestamp"].isna().all()
+    assert w.slots["timestamp"].dtype == "datetime64[ns, UTC]"
+    # 30 s along the weave moves the point by a few hundred metres at most (~0.005 deg)
+    assert 100.0 < w.summary["sep_max_m"] < 2000.0
+
+
+def test_correlate_across_midnight_and_short_window():
+    # day 0 86300..86399 and day 1 (86400 + 0..200): one window spanning midnight, plus a 5 s window
+    t = np.concatenate([np.arange(86300.0, 86600.0, 5.0), [90000.0, 90005.0]])
+    lat, lon = weave(t)
+    run = correlate(frame("radar", t, lat, lon), frame("adsb", t, lat, lon), callsign="MAS72",
+                    date="2019-03-01")
+    (w,) = run.windows
+    assert (w.summary["start_tod"], w.summary["end_tod"]) == (86300.0, 86595.0)
+    assert w.summary["end"] == "2019-03-02T00:03:15.000Z"
+    (skip,) = run.skipped
+    assert (skip.start_tod, skip.end_tod) == (90000.0, 90005.0) and "shorter than one slot" in skip.reason
+
+
+def test_no_such_aircraft_suggests_close_callsigns():
+    t = np.arange(0.0, 100.0, 5.0)
+    radar = pd.concat([frame("radar", t, *weave(t)), frame("radar", t, *weave(t), "SIA321", "76CD01")])
+    adsb = pd.concat([frame("adsb", t, *weave(t)), frame("adsb", t, *weave(t), "SIA321", "76CD01")])
+    with pytest.raises(NoSuchAircraft) as info:
+        correlate(radar, adsb, callsign="MAS 27")
+    assert "MAS72" in str(info.value)
+    assert info.value.missing_in == ["radar", "ADS-B"]
+
+
+def test_no_overlap_gives_both_spans():
+    radar = frame("radar", np.arange(0.0, 100.0, 5.0), 1.0, 103.0)
+    adsb = frame("adsb", np.arange(1000.0, 1100.0, 5.0), 1.0, 103.0)
+    with pytest.raises(NoOverlap) as info:
+        correlate(radar, adsb, callsign="MAS72")
+    assert "0-95 s" in str(info.value) and "1000-1095 s" in str(info.value)
+
+
+def test_all_aircraft_needs_both_sensors():
+    # MAS72 in both; SIA321's radar plots lack the call sign; AXM1's radar plots lack the address;
+    # QFA1 only in ADS-B; BAW9 only by call sign in both sensors
+    t = np.arange(0.0, 200.0, 5.0)
+
+    def sensor(name, ids):
+        return pd.concat([frame(name, t, *weave(t), cs, addr) for cs, addr in ids], ignore_index=True)
+
+    radar = sensor("radar", [("MAS72", "750123"), (None, "76CD01"), ("AXM1", None), ("BAW9", None)])
+    adsb = sensor("adsb", [("MAS72", "750123"), ("SIA321", "76CD01"), ("AXM1", "75008F"), ("QFA1", "7C0001"),
+                           ("BAW9", None)])
+    run = correlate(radar, adsb, all_aircraft=True)
+    assert [(w.summary["callsign"], w.summary["address"]) for w in run.windows] == [
+        ("AXM1", "75008F"), ("BAW9", ""), ("MAS72", "750123"), ("SIA321", "76CD01")]
+    assert all(w.summary["radar_before"] == 40 and w.summary["adsb_before"] == 40 for w in run.windows)
+    with pytest.raises(NoSuchAircraft, match="no aircraft is seen by both"):
+        correlate(radar.iloc[:0], adsb, all_aircraft=True)
+
+
+def test_date_inferred_from_timestamps():
+    t = np.arange(36000.0, 36100.0, 5.0)
+    radar, adsb = frame("radar", t, *weave(t)), frame("adsb", t, *weave(t))
+    adsb["timestamp"] = pd.Timestamp("2019-03-01", tz="UTC") + pd.to_timedelta(t, unit="s")
+    (w,) = correlate(radar, adsb, callsign="MAS72").windows
+    assert w.summary["start"] == "2019-03-01T10:00:00.000Z"
+
+
+def test_ncc_and_pearson_match_their_definitions():
+    rng = np.random.default_rng(11)
+    for n in (1, 2, 5, 17):
+        x, y = rng.normal(size=n) + 2, rng.normal(size=n) - 1
+        lags, r = ncc(x, y)
+        _, p = pearson_by_lag(x, y)
+        for d, r_d, p_d in zip(lags, r, p, strict=True):
+            pairs = [(x[i], y[i - d]) for i in range(n) if 0 <= i - d < n]
+            a, b = np.array(pairs).T
+            assert r_d == pytest.approx(np.sum(a * b) / np.sqrt(np.sum(x**2) * np.sum(y**2)))
+            if len(pairs) < 2:
+                assert np.isnan(p_d)
+            else:
+                assert p_d == pytest.approx(np.corrcoef(a, b)[0, 1])

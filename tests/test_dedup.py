@@ -1,0 +1,47 @@
+"""Duplicate removal on small hand-built frames."""
+
+import numpy as np
+import pandas as pd
+
+from pipeline.dedup import deduplicate
+
+NAN = np.nan
+
+
+def frame(rows):
+    cols = ["id", "time_of_day", "latitude", "longitude", "ground_speed_kt", "heading_deg"]
+    return pd.DataFrame(rows, columns=cols)
+
+
+def test_deduplicate_counts_and_keeps_the_earliest():
+    meas = frame([
+        ("a", 10.0, 1.0, 103.0, 400.0, 90.0),
+        ("b", 5.0, 1.0, 103.0, 400.0, 90.0),  # earlier time: different measurement
+        ("c", 10.0, 1.0, 103.0, 400.0, 90.0),  # repeat of a -> dropped
+        ("d", 10.0, 1.0, 103.0, 400.0, 91.0),  # heading differs -> kept
+        ("e", 20.0, 1.0, 103.0, NAN, NAN),
+        ("f", 20.0, 1.0, 103.0, NAN, NAN),  # missing equals missing -> dropped
+        ("g", 20.0, 1.0, 103.0, NAN, 10.0),  # heading present vs missing -> kept
+        ("h", 10.0, 1.0, 103.0, 400.0, 90.0),  # second repeat of a -> dropped
+    ])
+    out, dropped = deduplicate(meas)
+    assert dropped == 3
+    # stable time sort: b (5 s), then a, d (10 s, input order), then e, g (20 s)
+    assert out["id"].tolist() == ["b", "a", "d", "e", "g"]
+    assert out.index.tolist() == list(range(5))
+
+
+def test_deduplicate_does_not_mix_sensors_and_handles_empty():
+    meas = frame([("r", 1.0, 1.0, 2.0, 3.0, 4.0), ("a", 1.0, 1.0, 2.0, 3.0, 4.0)])
+    meas["sensor"] = ["radar", "adsb"]
+    out, dropped = deduplicate(meas)
+    assert dropped == 0 and len(out) == 2
+    out, dropped = deduplicate(meas.iloc[:0])
+    assert dropped == 0 and out.empty
+
+
+def test_midnight_crossing_sorts_after():
+    # measurement time = day * 86400 + item value: 86405 (day 1, 00:00:05) after 86399 (day 0)
+    meas = frame([("late", 1 * 86400 + 5.0, 1, 2, 3, 4), ("early", 0 * 86400 + 86399.0, 1, 2, 3, 4)])
+    out, _ = deduplicate(meas)
+    assert out["id"].tolist() == ["early", "late"]

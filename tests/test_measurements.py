@@ -1,0 +1,181 @@
+"""Sensor table reading, decoded frames to measurement frames, call sign handling and aircraft selection."""
+
+import math
+import tomllib
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from pipeline.measurements import (
+    UnknownRadar,
+    adsb_measurements,
+    normalise_callsign,
+    radar_measurements,
+    select,
+)
+from pipeline.results import __doc__ as results_doc
+from pipeline.sensors import read_sensors, sensor_toml_snippet
+
+A = 6378137.0
+GOOD = """
+[[sensor]]
+name = "Equator"
+sac = 1
+sic = 2
+latitude = 0.0
+longitude = 0
+altitude_m = 0.0
+
+[[sensor]]
+name = "Changi"
+sac = 1
+sic = 3
+latitude = 1.35
+longitude = 103.99
+altitude_m = 20
+"""
+
+
+def write(tmp_path, text):
+    path = tmp_path / "sensors.toml"
+    path.write_text(text)
+    return path
+
+
+def test_read_sensors(tmp_path):
+    table = read_sensors(write(tmp_path, GOOD))
+    assert list(table.columns) == ["name", "sac", "sic", "latitude", "longitude", "altitude_m"]
+    assert table["name"].tolist() == ["Equator", "Changi"]
+    assert table.loc[1, "altitude_m"] == 20.0 and table["altitude_m"].dtype == np.float64
+
+
+@pytest.mark.parametrize(("text", "words"), [
+    (GOOD.replace("altitude_m = 20\n", ""), ["entry 2", "altitude_m"]),
+    (GOOD.replace("sac = 1\nsic = 3", 'sac = "1"\nsic = 3'), ["sac", "'1'", "integer"]),
+    (GOOD.replace("latitude = 1.35", "latitude = true"), ["latitude", "True"]),
+    (GOOD.replace("sic = 3", "sic = 2"), ["SAC 1 SIC 2", "twice"]),
+    (GOOD.replace("latitude = 1.35", "latitude = 91.0"), ["latitude", "outside"]),
+    ("[[sensor]\n", ["not valid TOML"]),
+    ("title = 'x'\n", ["no [[sensor]]"]),
+])
+def test_read_sensors_errors_name_the_file(tmp_path, text, words):
+    path = write(tmp_path, text)
+    with pytest.raises(ValueError) as info:
+        read_sensors(path)
+    message = str(info.value)
+    assert str(path) in message
+    for word in words:
+        assert word in message
+
+
+def test_sensor_snippet_is_valid_toml():
+    doc = tomllib.loads(sensor_toml_snippet(25, 7))
+    (entry,) = doc["sensor"]
+    assert (entry["sac"], entry["sic"]) == (25, 7)
+    assert {"name", "latitude", "longitude", "altitude_m"} <= set(entry)
+
+
+def test_normalise_callsign():
+    assert normalise_callsign("mas 72") == "MAS72"
+    assert normalise_callsign(" sia321 ") == "SIA321"
+    assert normalise_callsign(None) is None
+    assert normalise_callsign(pd.NA) is None
+    out = normalise_callsign(pd.Series(pd.Categorical(["mas 72", None, "  "])))
+    assert out.iloc[0] == "MAS72" and out.iloc[1:].isna().all()
+
+
+def cat048(**cols):
+    n = len(cols["time_of_day"])
+    base = {
+        "sac": pd.array([1] * n, dtype="Int32"), "sic": pd.array([2] * n, dtype="Int32"),
+        "day": np.zeros(n, np.int64),
+        "timestamp": pd.Series(pd.NaT, index=range(n), dtype="datetime64[ns, UTC]"),
+        "rho_nm": np.full(n, np.nan), "theta_deg": np.full(n, np.nan), "x_nm": np.full(n, np.nan),
+        "y_nm": np.full(n, np.nan), "flight_level": np.full(n, np.nan),
+        "address": pd.Categorical(["750123"] * n), "callsign": pd.Categorical(["MAS72  "] * n),
+        "ground_speed_kt": np.full(n, 400.0), "heading_deg": np.full(n, 90.0),
+    }
+    base.update(cols)
+    return pd.DataFrame(base)
+
+
+def test_radar_measurements_positions_and_schema(tmp_path):
+    sensors = read_sensors(write(tmp_path, GOOD))
+    frame = cat048(
+        time_of_day=np.array([86399.0, 5.0, 6.0, np.nan]),
+        day=np.array([0, 1, 1, 1]),
+        rho_nm=np.array([100.0, np.nan, np.nan, 10.0]), theta_deg=np.array([90.0, np.nan, np.nan, 0.0]),
+        x_nm=np.array([np.nan, 0.0, np.nan, np.nan]), y_nm=np.array([np.nan, 0.0, np.nan, np.nan]),
+        flight_level=np.array([0.0, 100.0, 50.0, 50.0]),
+    )
+    meas = radar_measurements(frame, sensors)
+    documented = ["sensor", "time_of_day", "timestamp", "latitude", "longitude", "flight_level",
+                  "ground_speed_kt", "heading_deg", "callsign", "address", "sac", "sic", "rho_nm",
+                  "theta_deg"]
+    for col in documented:
+        assert f"``{col}``" in results_doc
+        assert col in meas.columns
+    # row 3 has no position, row 4 no time: both dropped; day 1 continues past 86400
+    assert meas["time_of_day"].tolist() == [86399.0, 86405.0]
+    assert (meas["sensor"] == "radar").all()
+    # polar, site (0, 0, 0), due east, 100 NM, FL 0: chord of the equator, lon = 2 asin(185200 / 2a)
+    assert meas.loc[0, "latitude"] == pytest.approx(0.0, abs=1e-9)
+    assert meas.loc[0, "longitude"] == pytest.approx(math.degrees(2 * math.asin(185200 / (2 * A))), abs=1e-8)
+    # cartesian (0, 0): straight above the site
+    assert (meas.loc[1, "latitude"], meas.loc[1, "longitude"]) == pytest.approx((0.0, 0.0), abs=1e-9)
+    assert meas["position_item"].tolist() == ["040", "042"]
+    assert meas["callsign"].tolist() == ["MAS72", "MAS72"]
+
+
+def test_radar_measurements_unknown_radar(tmp_path):
+    sensors = read_sensors(write(tmp_path, GOOD))
+    frame = cat048(time_of_day=np.array([1.0, 2.0, 3.0]), rho_nm=np.full(3, 50.0), theta_deg=np.full(3, 10.0),
+                   sac=pd.array([7, 1, 7], dtype="Int32"), sic=pd.array([9, 2, 9], dtype="Int32"))
+    with pytest.raises(UnknownRadar) as info:
+        radar_measurements(frame, sensors)
+    assert info.value.missing == [(7, 9)]
+    assert "SAC 7 SIC 9" in str(info.value) and "[[sensor]]" in str(info.value)
+
+
+def test_radar_measurements_flags_missing_height(tmp_path):
+    sensors = read_sensors(write(tmp_path, GOOD))
+    frame = cat048(time_of_day=np.array([1.0, 2.0]), rho_nm=np.full(2, 50.0), theta_deg=np.full(2, 10.0),
+                   flight_level=np.array([np.nan, 300.0]))
+    assert radar_measurements(frame, sensors)["height_assumed"].tolist() == [True, False]
+
+
+def test_adsb_measurements():
+    n = 3
+    frame = pd.DataFrame({
+        "sac": pd.array([0] * n, dtype="Int32"), "sic": pd.array([9] * n, dtype="Int32"),
+        "time_of_day": [10.0, 11.0, 12.0], "day": np.zeros(n, np.int64),
+        "timestamp": pd.Series(pd.NaT, index=range(n), dtype="datetime64[ns, UTC]"),
+        "latitude": [1.0, np.nan, 1.2], "longitude": [103.0, 103.1, 103.2],
+        "address": pd.Categorical(["750123"] * n), "callsign": pd.Categorical(["mas72"] * n),
+        "flight_level": [350.0] * n, "ground_speed_kt": [450.0] * n, "track_angle_deg": [45.0, 46.0, 47.0],
+        "nucp_nic": pd.array([7] * n, dtype="Int32"), "nacp": pd.array([9] * n, dtype="Int32"),
+    })
+    meas = adsb_measurements(frame)
+    assert meas["time_of_day"].tolist() == [10.0, 12.0]
+    assert meas["heading_deg"].tolist() == [45.0, 47.0]
+    assert meas["callsign"].tolist() == ["MAS72", "MAS72"]
+    assert (meas["sensor"] == "adsb").all()
+
+
+def frame_ids(callsigns, addresses):
+    return pd.DataFrame({"callsign": pd.Series(callsigns, dtype="str"),
+                         "address": pd.Series(addresses, dtype="str"), "i": range(len(callsigns))})
+
+
+def test_select_by_callsign_and_address():
+    meas = frame_ids(["MAS72", None, "SIA1", None, "MAS72"], ["750123", "750123", "76CD01", None, "750124"])
+    # case/space-insensitive; the row without call sign joins through its address
+    assert select(meas, callsign="mas 72")["i"].tolist() == [0, 1, 4]
+    assert select(meas, address="0x750123")["i"].tolist() == [0, 1]
+    assert select(meas, callsign="MAS72", address="750124")["i"].tolist() == [4]
+    # linking through the other sensor's rows
+    other = frame_ids(["SIA1"], ["ABCDEF"])
+    radar = frame_ids([None], ["ABCDEF"])
+    assert select(radar, callsign="SIA1", link_with=other)["i"].tolist() == [0]
+    assert select(radar, callsign="SIA1")["i"].tolist() == []
