@@ -1,0 +1,484 @@
+"""Container layer: find the ASTERIX payloads in raw, pcap, pcapng and IOSS "final" recordings.
+
+Every input byte ends up in exactly one place: a payload range, ``container_bytes`` or a problem.
+"""
+
+from __future__ import annotations
+
+import struct
+from dataclasses import dataclass
+
+import numpy as np
+from numba import njit
+
+FORMATS = ("raw", "pcap", "pcapng", "final")
+DETECT_BYTES = 1 << 17  # two maximal final frames: enough head for detect_format
+SECONDS_PER_DAY = 86400
+FINAL_HEADER_BYTES = 8
+FINAL_TRAILER = b"\xa5\xa5\xa5\xa5"
+FINAL_MIN_FRAME_BYTES = FINAL_HEADER_BYTES + len(FINAL_TRAILER)
+FINAL_TOD_UNIT_S = 0.01
+
+_PCAP_MAGICS = {  # first four file bytes -> (big endian, nanosecond timestamps)
+    b"\xd4\xc3\xb2\xa1": (False, False),
+    b"\xa1\xb2\xc3\xd4": (True, False),
+    b"\x4d\x3c\xb2\xa1": (False, True),
+    b"\xa1\xb2\x3c\x4d": (True, True),
+}
+_PCAP_HEADER_BYTES = 24
+_PCAPNG_SHB = b"\x0a\x0d\x0d\x0a"
+_PCAPNG_BYTE_ORDERS = {b"\x1a\x2b\x3c\x4d": ">", b"\x4d\x3c\x2b\x1a": "<"}
+
+# Packet classes returned by _classify; codes >= 2 are problems.
+_PKT_IGNORED, _PKT_UDP = 0, 1
+_PKT_REASONS = {
+    2: "IPv4 fragment (not reassembled)",
+    3: "bad IPv4 header",
+    4: "truncated IPv4 header",
+    5: "truncated UDP header",
+    6: "bad UDP length",
+}
+_FINAL_REASONS = {1: "impossible frame length", 2: "bad frame trailer"}
+_PCAPNG_REASONS = {1: "bad packet block", 2: "packet for unknown interface"}
+
+
+@dataclass
+class Segments:
+    """ASTERIX payload byte ranges of one recording, their capture times, and the byte accounting."""
+
+    format: str  # "raw" | "pcap" | "pcapng" | "final"
+    start: np.ndarray  # int64 file offset of each ASTERIX payload
+    stop: np.ndarray  # int64 exclusive end offset
+    capture_day: np.ndarray  # int64: days since 1970-01-01 UTC (pcap, pcapng), recording-day byte (final), -1
+    capture_tod: np.ndarray  # float64 seconds since midnight of the capture; NaN when unknown
+    dated: bool  # True when capture_day is a real calendar day (pcap, pcapng)
+    exact: bool  # True when each payload must frame exactly into ASTERIX blocks
+    container_bytes: int  # headers, trailers, padding and ignored (non-UDP) packets
+    problems: list[tuple[int, int, str]]  # (file offset, length, reason) for damaged container structure
+
+
+def detect_format(head: bytes) -> str:
+    """Guess the container format from the first bytes of a file (pass >= DETECT_BYTES if available)."""
+    head = bytes(head[:DETECT_BYTES])
+    if head[:4] in _PCAP_MAGICS:
+        return "pcap"
+    if head[:4] == _PCAPNG_SHB:
+        return "pcapng"
+    first_bytes = _final_frame_bytes(head, 0)
+    if first_bytes == 0:
+        return "raw"
+    if len(head) - first_bytes < 2:  # a single frame, or the next one is out of sight
+        return "final"
+    # The first trailer is strong evidence; the next frame need only have a plausible length, so that a
+    # recording whose second frame is damaged is still recognised.
+    second_bytes = int.from_bytes(head[first_bytes:first_bytes + 2], "big")
+    return "final" if second_bytes >= FINAL_MIN_FRAME_BYTES else "raw"
+
+
+def read_segments(data: bytes | memoryview | np.ndarray, fmt: str | None = None) -> Segments:
+    """Locate the ASTERIX payloads of a recording held in memory; fmt=None detects the format."""
+    if fmt is not None and fmt not in FORMATS:
+        raise ValueError(f"unknown container format {fmt!r}; expected one of {FORMATS}")
+    if isinstance(data, np.ndarray):
+        buf = np.ascontiguousarray(data).reshape(-1).view(np.uint8)
+    else:
+        buf = np.frombuffer(data, dtype=np.uint8)
+    fmt = fmt or detect_format(buf[:DETECT_BYTES].tobytes())
+    if fmt == "raw":
+        return _read_raw(buf)
+    if fmt == "pcap":
+        return _read_pcap(buf)
+    if fmt == "pcapng":
+        return _read_pcapng(buf)
+    return _read_final(buf)
+
+
+def _final_frame_bytes(head: bytes, pos: int) -> int:
+    """Length of the plausible final frame starting at pos in head, else 0."""
+    if len(head) - pos < FINAL_MIN_FRAME_BYTES:
+        return 0
+    frame_bytes = int.from_bytes(head[pos:pos + 2], "big")
+    end = pos + frame_bytes
+    if frame_bytes < FINAL_MIN_FRAME_BYTES or end > len(head) or head[end - 4:end] != FINAL_TRAILER:
+        return 0
+    return frame_bytes
+
+
+def _segments(fmt: str, n_bytes: int, start: np.ndarray, stop: np.ndarray, day: np.ndarray,
+              tod: np.ndarray, problems: list[tuple[int, int, str]]) -> Segments:
+    """Assemble a Segments; container bytes are whatever is neither payload nor problem."""
+    problems.sort()
+    payload_bytes = int((stop - start).sum())
+    problem_bytes = sum(length for _, length, _ in problems)
+    return Segments(fmt, start.astype(np.int64), stop.astype(np.int64), day.astype(np.int64),
+                    tod.astype(np.float64), fmt in ("pcap", "pcapng"), fmt != "raw",
+                    n_bytes - payload_bytes - problem_bytes, problems)
+
+
+def _empty(fmt: str, n_bytes: int, problems: list[tuple[int, int, str]]) -> Segments:
+    """Segments with no payload at all."""
+    none = np.zeros(0, np.int64)
+    return _segments(fmt, n_bytes, none, none, none, np.zeros(0), problems)
+
+
+def _read_raw(buf: np.ndarray) -> Segments:
+    """The whole file is one payload of concatenated ASTERIX data blocks."""
+    if buf.size == 0:
+        return _empty("raw", 0, [])
+    return _segments("raw", buf.size, np.array([0]), np.array([buf.size]), np.array([-1]),
+                     np.array([np.nan]), [])
+
+
+# ---------------------------------------------------------------- numba helpers (byte-level walkers)
+
+@njit(cache=True)
+def _be16(buf, pos):
+    return (np.int64(buf[pos]) << 8) | np.int64(buf[pos + 1])
+
+
+@njit(cache=True)
+def _u32(buf, pos, big):
+    b0, b1 = np.int64(buf[pos]), np.int64(buf[pos + 1])
+    b2, b3 = np.int64(buf[pos + 2]), np.int64(buf[pos + 3])
+    if big:
+        return (b0 << 24) | (b1 << 16) | (b2 << 8) | b3
+    return (b3 << 24) | (b2 << 16) | (b1 << 8) | b0
+
+
+@njit(cache=True)
+def _ipv4_offset(buf, start, stop, link):
+    """File offset of the IPv4 header inside a link-layer packet, or -1 if it carries no IPv4."""
+    if link == 1:  # Ethernet
+        pos, type_pos = start + 14, start + 12
+    elif link == 113:  # Linux cooked SLL
+        pos, type_pos = start + 16, start + 14
+    elif link == 276:  # Linux cooked SLL2
+        pos, type_pos = start + 20, start
+    elif link == 228:  # raw IPv4
+        return start
+    elif link == 101 or link == 12:  # raw IP: v4 or v6
+        return start if stop > start and buf[start] >> 4 == 4 else -1
+    elif link == 0 or link == 108:  # BSD loopback: 4-byte address family, AF_INET = 2 in either order
+        if stop - start >= 4 and (_u32(buf, start, False) == 2 or _u32(buf, start, True) == 2):
+            return start + 4
+        return -1
+    else:
+        return -1
+    if pos > stop:
+        return -1
+    ethertype = _be16(buf, type_pos)
+    while (ethertype == 0x8100 or ethertype == 0x88A8 or ethertype == 0x9100) and pos + 4 <= stop:
+        ethertype = _be16(buf, pos + 2)  # VLAN tag: 2-byte TCI, then the next ethertype
+        pos += 4
+    return pos if ethertype == 0x0800 else -1
+
+
+@njit(cache=True)
+def _classify_packet(buf, start, stop, link):
+    """(class, payload start, payload stop) of one captured packet; see _PKT_REASONS."""
+    ip = _ipv4_offset(buf, start, stop, link) if stop > start else -1
+    if ip < 0:
+        return _PKT_IGNORED, 0, 0
+    if stop - ip < 20:
+        return 4, 0, 0
+    header_bytes = (np.int64(buf[ip]) & 15) * 4
+    if buf[ip] >> 4 != 4 or header_bytes < 20:
+        return 3, 0, 0
+    if stop - ip < header_bytes:
+        return 4, 0, 0
+    if buf[ip + 9] != 17:  # not UDP
+        return _PKT_IGNORED, 0, 0
+    if _be16(buf, ip + 6) & 0x3FFF:  # more-fragments flag or fragment offset
+        return 2, 0, 0
+    limit = stop
+    total_bytes = _be16(buf, ip + 2)
+    if total_bytes >= header_bytes and ip + total_bytes < limit:  # ignore link padding; 0 = TSO, unbounded
+        limit = ip + total_bytes
+    udp = ip + header_bytes
+    if limit - udp < 8:
+        return 5, 0, 0
+    udp_bytes = _be16(buf, udp + 4)
+    if udp_bytes < 8:
+        return 6, 0, 0
+    return _PKT_UDP, udp + 8, min(udp + udp_bytes, limit)
+
+
+@njit(cache=True)
+def _classify(buf, pkt_start, pkt_stop, link):
+    """Vector form of _classify_packet over captured packet ranges with per-packet link types."""
+    count = pkt_start.size
+    kind = np.zeros(count, np.int8)
+    pay_start = np.zeros(count, np.int64)
+    pay_stop = np.zeros(count, np.int64)
+    for i in range(count):
+        kind[i], pay_start[i], pay_stop[i] = _classify_packet(buf, pkt_start[i], pkt_stop[i], link[i])
+    return kind, pay_start, pay_stop
+
+
+@njit(cache=True)
+def _walk_pcap(buf, big, fill, pkt_start, pkt_stop, ts_s, ts_frac):
+    """Walk classic pcap records, filling the arrays when fill. Returns (packets, offset where it stopped)."""
+    pos, count = 24, 0
+    while pos + 16 <= buf.size:
+        captured_bytes = _u32(buf, pos + 8, big)
+        if pos + 16 + captured_bytes > buf.size:
+            break
+        if fill:
+            pkt_start[count] = pos + 16
+            pkt_stop[count] = pos + 16 + captured_bytes
+            ts_s[count] = _u32(buf, pos, big)
+            ts_frac[count] = _u32(buf, pos + 4, big)
+        count += 1
+        pos += 16 + captured_bytes
+    return count, pos
+
+
+@njit(cache=True)
+def _final_frame_error(buf, pos):
+    """0 if a well-formed final frame starts at pos, else a _FINAL_REASONS code."""
+    if buf.size - pos < 2:
+        return 1
+    frame_bytes = _be16(buf, pos)
+    end = pos + frame_bytes
+    if frame_bytes < 12 or end > buf.size:
+        return 1
+    if buf[end - 4] != 0xA5 or buf[end - 3] != 0xA5 or buf[end - 2] != 0xA5 or buf[end - 1] != 0xA5:
+        return 2
+    return 0
+
+
+@njit(cache=True)
+def _final_resync(buf, pos):
+    """First offset >= pos where a well-formed final frame starts, else the buffer size."""
+    for start in range(pos, buf.size - 11):
+        end = start + ((np.int64(buf[start]) << 8) | buf[start + 1])
+        if end - start >= 12 and end <= buf.size and buf[end - 1] == 0xA5 and buf[end - 2] == 0xA5:
+            if buf[end - 3] == 0xA5 and buf[end - 4] == 0xA5:
+                return start
+    return buf.size
+
+
+@njit(cache=True)
+def _walk_final(buf, fill, seg_start, seg_stop, seg_day, seg_tod, bad_start, bad_stop, bad_code):
+    """Walk final frames, resynchronising after damage; fills arrays when fill. Returns (frames, problems)."""
+    pos, frames, problems = 0, 0, 0
+    while pos < buf.size:
+        code = _final_frame_error(buf, pos)
+        if code == 0:
+            frame_bytes = _be16(buf, pos)
+            if frame_bytes > 12:
+                if fill:
+                    seg_start[frames] = pos + 8
+                    seg_stop[frames] = pos + frame_bytes - 4
+                    seg_day[frames] = buf[pos + 4]
+                    tod_units = (np.int64(buf[pos + 5]) << 16) | _be16(buf, pos + 6)
+                    seg_tod[frames] = tod_units * FINAL_TOD_UNIT_S
+                frames += 1
+            pos += frame_bytes
+        else:
+            resume = _final_resync(buf, pos + 1)
+            if fill:
+                bad_start[problems], bad_stop[problems], bad_code[problems] = pos, resume, code
+            problems += 1
+            pos = resume
+    return frames, problems
+
+
+# ---------------------------------------------------------------- format readers
+
+def _packet_segments(fmt: str, buf: np.ndarray, pkt_start: np.ndarray, pkt_stop: np.ndarray,
+                     link: np.ndarray, day: np.ndarray, tod: np.ndarray,
+                     problems: list[tuple[int, int, str]]) -> Segments:
+    """Extract IPv4/UDP payloads from captured packets; problem packets are reported whole."""
+    kind, pay_start, pay_stop = _classify(buf, pkt_start, pkt_stop, link)
+    for code, reason in _PKT_REASONS.items():
+        for i in np.flatnonzero(kind == code):
+            problems.append((int(pkt_start[i]), int(pkt_stop[i] - pkt_start[i]), reason))
+    keep = (kind == _PKT_UDP) & (pay_stop > pay_start)
+    return _segments(fmt, buf.size, pay_start[keep], pay_stop[keep], day[keep], tod[keep], problems)
+
+
+def _day_tod(ts_s: np.ndarray, ts_frac: np.ndarray, units_per_s: int) -> tuple[np.ndarray, np.ndarray]:
+    """(days since 1970-01-01, seconds since midnight) of Unix times given as seconds + fraction units."""
+    seconds = ts_s + ts_frac // units_per_s
+    return seconds // SECONDS_PER_DAY, seconds % SECONDS_PER_DAY + (ts_frac % units_per_s) / units_per_s
+
+
+def _read_pcap(buf: np.ndarray) -> Segments:
+    """Classic libpcap: 24-byte file header, then 16-byte record headers each followed by a packet."""
+    magic = buf[:4].tobytes()
+    if magic not in _PCAP_MAGICS:
+        return _empty("pcap", buf.size, [(0, buf.size, "bad pcap magic")] if buf.size else [])
+    if buf.size < _PCAP_HEADER_BYTES:
+        return _empty("pcap", buf.size, [(0, buf.size, "truncated pcap file header")])
+    big, nano = _PCAP_MAGICS[magic]
+    link = struct.unpack_from(">I" if big else "<I", buf, 20)[0] & 0xFFFF
+    none = np.zeros(0, np.int64)
+    count, _ = _walk_pcap(buf, big, False, none, none, none, none)
+    pkt_start, pkt_stop, ts_s, ts_frac = (np.zeros(count, np.int64) for _ in range(4))
+    _, end = _walk_pcap(buf, big, True, pkt_start, pkt_stop, ts_s, ts_frac)
+    problems = [(int(end), int(buf.size - end), "truncated packet record")] if end < buf.size else []
+    day, tod = _day_tod(ts_s, ts_frac, 10**9 if nano else 10**6)
+    return _packet_segments("pcap", buf, pkt_start, pkt_stop, np.full(count, link, np.int64), day, tod,
+                            problems)
+
+
+def _idb_options(raw: memoryview, order: str, pos: int, end: int) -> tuple[int, int]:
+    """(timestamp units per second, timestamp offset in s) from an Interface Description Block's options."""
+    units_per_s, offset_s = 10**6, 0
+    while end - pos >= 4:
+        code, length = struct.unpack_from(order + "HH", raw, pos)
+        value = pos + 4
+        if code == 0 or value + length > end:
+            break
+        if code == 9 and length >= 1:  # if_tsresol: 10^-v, or 2^-v when the top bit is set
+            resolution = raw[value]
+            units_per_s = 2 ** (resolution & 0x7F) if resolution & 0x80 else 10**resolution
+        elif code == 14 and length == 8:  # if_tsoffset
+            offset_s = struct.unpack_from(order + "q", raw, value)[0]
+        pos = value + (length + 3) // 4 * 4
+    return units_per_s, offset_s
+
+
+@njit(cache=True)
+def _walk_pcapng(buf, pos, big, interfaces, snap_bytes, fill, packets, bad):
+    """Walk one section's packet and skippable blocks from pos; stop at an SHB, IDB or broken block framing.
+
+    Fills (when fill) packets rows (offset, captured bytes, interface, ts high, ts low or -1 if none) and bad
+    rows (offset, bytes, _PCAPNG_REASONS code). Returns (packet rows, bad rows, offset where it stopped).
+    """
+    count, problems = 0, 0
+    while buf.size - pos >= 12:
+        block_type, block_bytes = _u32(buf, pos, big), _u32(buf, pos + 4, big)
+        if block_type == 1 or block_type == 0x0A0D0D0A or block_bytes < 12 or block_bytes % 4 != 0:
+            break
+        if block_bytes > buf.size - pos or _u32(buf, pos + block_bytes - 4, big) != block_bytes:
+            break
+        if block_type == 2 or block_type == 6:  # obsolete / enhanced packet block
+            start, captured_bytes, interface, ts_high, ts_low = pos + 28, -1, 0, 0, 0
+            if block_bytes >= 32:
+                interface = _u32(buf, pos + 8, big)
+                if block_type == 2:  # 2-byte interface id, then a 2-byte drop count
+                    interface = interface >> 16 if big else interface & 0xFFFF
+                ts_high, ts_low = _u32(buf, pos + 12, big), _u32(buf, pos + 16, big)
+                captured_bytes = _u32(buf, pos + 20, big)
+                if captured_bytes > block_bytes - 32:
+                    captured_bytes = -1
+        elif block_type == 3:  # simple packet block: interface 0, no timestamp, captured length implied
+            start, captured_bytes, interface, ts_high, ts_low = pos + 12, -1, 0, 0, -1
+            if block_bytes >= 16:
+                captured_bytes = min(_u32(buf, pos + 8, big), block_bytes - 16)
+                if snap_bytes > 0:
+                    captured_bytes = min(captured_bytes, snap_bytes)
+        else:
+            pos += block_bytes
+            continue
+        if captured_bytes < 0 or (interface >= interfaces and captured_bytes > 0):
+            if fill:
+                if captured_bytes < 0:
+                    bad[problems, 0], bad[problems, 1], bad[problems, 2] = pos, block_bytes, 1
+                else:
+                    bad[problems, 0], bad[problems, 1], bad[problems, 2] = start, captured_bytes, 2
+            problems += 1
+        elif interface < interfaces:
+            if fill:
+                packets[count, 0], packets[count, 1], packets[count, 2] = start, captured_bytes, interface
+                packets[count, 3], packets[count, 4] = ts_high, ts_low
+            count += 1
+        pos += block_bytes
+    return count, problems, pos
+
+
+def _read_pcapng(buf: np.ndarray) -> Segments:
+    """pcapng: walk blocks by their lengths; packets come from EPB, SPB and obsolete packet blocks.
+
+    Section and interface blocks and broken framing are handled here; runs of other blocks by _walk_pcapng.
+    """
+    raw, n = memoryview(buf), buf.size
+    problems: list[tuple[int, int, str]] = []
+    interfaces: list[tuple[int, int, int, int]] = []  # every section's: (link, units per s, offset s, snap)
+    first_interface = 0  # index in interfaces of the current section's interface 0
+    packets = [np.zeros((0, 5), np.int64)]  # rows (offset, bytes, interface index, ts high, ts low)
+    pos, order = 0, ""
+    while pos < n:
+        if order:
+            section_interfaces = interfaces[first_interface:]
+            snap_bytes = section_interfaces[0][3] if section_interfaces else 0
+            walk = (buf, pos, order == ">", len(section_interfaces), snap_bytes)
+            count, bad, _ = _walk_pcapng(*walk, False, np.zeros((0, 5), np.int64), np.zeros((0, 3), np.int64))
+            rows, bad_rows = np.zeros((count, 5), np.int64), np.zeros((bad, 3), np.int64)
+            _, _, pos = _walk_pcapng(*walk, True, rows, bad_rows)
+            rows[:, 2] += first_interface
+            packets.append(rows)
+            problems.extend((int(offset), int(length), _PCAPNG_REASONS[int(code)])
+                            for offset, length, code in bad_rows)
+            if pos >= n:
+                break
+        if n - pos < 12:
+            problems.append((pos, n - pos, "truncated block"))
+            break
+        if raw[pos:pos + 4] == _PCAPNG_SHB:
+            order = _PCAPNG_BYTE_ORDERS.get(bytes(raw[pos + 8:pos + 12]), "")
+            if not order:
+                problems.append((pos, n - pos, "bad section header byte order"))
+                break
+            first_interface = len(interfaces)
+        elif not order:
+            problems.append((pos, n - pos, "missing section header"))
+            break
+        block_type, block_bytes = struct.unpack_from(order + "II", raw, pos)
+        if block_bytes < 12 or block_bytes % 4 or block_bytes > n - pos:
+            problems.append((pos, n - pos, "bad block length"))
+            break
+        if struct.unpack_from(order + "I", raw, pos + block_bytes - 4)[0] != block_bytes:
+            problems.append((pos, n - pos, "block length mismatch"))
+            break
+        if block_type == 0x0A0D0D0A and block_bytes < 28:
+            problems.append((pos, block_bytes, "bad section header block"))
+        elif block_type == 1 and block_bytes < 20:
+            problems.append((pos, block_bytes, "bad interface description block"))
+            interfaces.append((-1, 10**6, 0, 0))
+        elif block_type == 1:  # Interface Description Block
+            link, _, snap_bytes = struct.unpack_from(order + "HHI", raw, pos + 8)
+            interfaces.append((link, *_idb_options(raw, order, pos + 16, pos + block_bytes - 4), snap_bytes))
+        pos += block_bytes
+    table = np.concatenate(packets)
+    start, stop, interface = table[:, 0], table[:, 0] + table[:, 1], table[:, 2]
+    link = np.array([link for link, *_ in interfaces], np.int64)[interface]
+    day, tod = _pcapng_day_tod(table[:, 3], table[:, 4], interface, interfaces)
+    return _packet_segments("pcapng", buf, start, stop, link, day, tod, problems)
+
+
+def _pcapng_day_tod(ts_high: np.ndarray, ts_low: np.ndarray, interface: np.ndarray,
+                    interfaces: list[tuple[int, int, int, int]]) -> tuple[np.ndarray, np.ndarray]:
+    """(days since 1970-01-01, seconds since midnight) of pcapng timestamps; -1 / NaN where ts_low < 0."""
+    day, tod = np.full(len(interface), -1, np.int64), np.full(len(interface), np.nan)
+    for index, (_, units_per_s, offset_s, _) in enumerate(interfaces):
+        rows = np.flatnonzero((interface == index) & (ts_low >= 0))
+        if len(rows) == 0:
+            continue
+        if units_per_s < 2**63:
+            ts = (ts_high[rows].astype(np.uint64) << np.uint64(32)) | ts_low[rows].astype(np.uint64)
+            seconds, fraction = np.divmod(ts, np.uint64(units_per_s))
+            seconds = seconds.astype(np.int64) + np.int64(offset_s)  # wraps only for absurd ts / resolution
+            day[rows] = seconds // SECONDS_PER_DAY
+            tod[rows] = seconds % SECONDS_PER_DAY + fraction / units_per_s
+        else:  # resolutions finer than 2^-63 s: exact integers in Python
+            for row in rows:
+                seconds, fraction = divmod((int(ts_high[row]) << 32) | int(ts_low[row]), units_per_s)
+                day[row], second_of_day = divmod(seconds + offset_s, SECONDS_PER_DAY)
+                tod[row] = second_of_day + fraction / units_per_s
+    return day, tod
+
+
+def _read_final(buf: np.ndarray) -> Segments:
+    """IOSS final: frames of 8-byte header, ASTERIX data and an A5A5A5A5 trailer."""
+    none_i, none_f = np.zeros(0, np.int64), np.zeros(0)
+    frames, bad = _walk_final(buf, False, none_i, none_i, none_i, none_f, none_i, none_i, none_i)
+    start, stop, day = (np.zeros(frames, np.int64) for _ in range(3))
+    bad_start, bad_stop, bad_code = (np.zeros(bad, np.int64) for _ in range(3))
+    tod = np.zeros(frames)
+    _walk_final(buf, True, start, stop, day, tod, bad_start, bad_stop, bad_code)
+    problems = [(int(s), int(e - s), _FINAL_REASONS[int(c)])
+                for s, e, c in zip(bad_start, bad_stop, bad_code, strict=True)]
+    return _segments("final", buf.size, start, stop, day, tod, problems)
