@@ -133,7 +133,7 @@ def cmd_decode(args) -> int:
                     total_records += len(frame)
                     if out is not None:
                         frame = frame.assign(file=Path(path).name)
-                        _write_chunk(out, cat, frame, outputs, writers, several=_several(args, rec))
+                        _write_chunk(out, cat, frame, outputs, writers, several=_several(args))
                 done = max((int(f["offset"].max()) for f in rec.frames.values() if len(f)), default=0)
                 progress.bar(done, size, Path(path).name)
     except UnreadableInput as exc:
@@ -158,12 +158,13 @@ def cmd_decode(args) -> int:
     return 0
 
 
-def _several(args, rec) -> bool:
-    cats = set(args.category or [])
-    return len(cats) != 1
+def _several(args) -> bool:
+    """One output file per category unless a single category was asked for."""
+    return len(set(args.category or [])) != 1
 
 
-def _write_chunk(out: Path, cat: int, frame: pd.DataFrame, outputs: dict, writers: dict, several: bool) -> None:
+def _write_chunk(out: Path, cat: int, frame: pd.DataFrame, outputs: dict, writers: dict,
+                 several: bool) -> None:
     """Append one chunk of a category to its output (CSV or Parquet), opening it on first use."""
     if cat not in outputs:
         outputs[cat] = out.with_name(f"{out.stem}_cat{cat:03d}{out.suffix}") if several else out
@@ -218,7 +219,7 @@ def _measurements(loaded: Loaded, sensors_path: str) -> tuple[pd.DataFrame, pd.D
 
 def _parameters(args, loaded: Loaded, started: float) -> dict:
     return {"software": f"msdc {software_version()}", "command": " ".join(sys.argv[1:]) or "correlate",
-            "run_utc": dt.datetime.now(dt.timezone.utc).strftime("%Y-%m-%dT%H:%M:%SZ"),
+            "run_utc": dt.datetime.now(dt.UTC).strftime("%Y-%m-%dT%H:%M:%SZ"),
             "run_time_s": round(time.monotonic() - started, 3), "editions": {
                 f"CAT{c:03d}": e for c, e in sorted(loaded.editions.items())},
             "sensors": str(args.sensors), "date": loaded.date.isoformat() if loaded.date else None}

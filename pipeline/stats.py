@@ -17,7 +17,8 @@ def _clock(seconds: float) -> str:
     day, rem = divmod(seconds, 86400.0)
     h, rem = divmod(rem, 3600.0)
     m, s = divmod(rem, 60.0)
-    return f"{'+%dd ' % day if day else ''}{int(h):02d}:{int(m):02d}:{s:06.3f}"
+    prefix = f"+{int(day)}d " if day else ""
+    return f"{prefix}{int(h):02d}:{int(m):02d}:{s:06.3f}"
 
 
 def stats_tables(frames: dict[int, pd.DataFrame], errors: pd.DataFrame) -> dict[str, pd.DataFrame]:
