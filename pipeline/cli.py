@@ -13,6 +13,7 @@ import pandas as pd
 
 import asterix
 from asterix.errors import AsterixError, DecodeError, UnreadableInput
+from asterix.reader import categories_in
 
 from .aircraft import NoSuchAircraft
 from .correlation import NoOverlap, correlate
@@ -120,6 +121,10 @@ def cmd_decode(args) -> int:
         raise CliError(f"{out}: output must end in .csv or .parquet")
     counts: dict[int, int] = {}
     try:
+        present: set[int] = set()
+        for path in args.inputs:
+            present |= set(categories_in(path, format=args.format)) & {21, 48}
+        several = len(present & set(args.category or present)) > 1
         for path in args.inputs:
             size = Path(path).stat().st_size if Path(path).exists() else 0
             chunk = max(int(args.chunk_mb * 1e6), 1)
@@ -133,7 +138,7 @@ def cmd_decode(args) -> int:
                     total_records += len(frame)
                     if out is not None:
                         frame = frame.assign(file=Path(path).name)
-                        _write_chunk(out, cat, frame, outputs, writers, several=_several(args))
+                        _write_chunk(out, cat, frame, outputs, writers, several=several)
                 done = max((int(f["offset"].max()) for f in rec.frames.values() if len(f)), default=0)
                 progress.bar(done, size, Path(path).name)
     except UnreadableInput as exc:
@@ -156,11 +161,6 @@ def cmd_decode(args) -> int:
         print("msdc: nothing could be decoded", file=sys.stderr)
         return 1
     return 0
-
-
-def _several(args) -> bool:
-    """One output file per category unless a single category was asked for."""
-    return len(set(args.category or [])) != 1
 
 
 def _write_chunk(out: Path, cat: int, frame: pd.DataFrame, outputs: dict, writers: dict,

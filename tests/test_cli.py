@@ -1,0 +1,126 @@
+"""The msdc command line on the bundled fixtures: outputs, messages and exit codes."""
+
+from __future__ import annotations
+
+import json
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import openpyxl
+import pandas as pd
+import pytest
+
+import asterix
+from asterix.encode import encode_frame
+from pipeline.cli import main
+
+FIX = Path(__file__).resolve().parents[1] / "fixtures"
+RADAR, ADSB, SENSORS = FIX / "radar.ast", FIX / "adsb.ast", FIX / "sensors.toml"
+TRUTH = json.loads((FIX / "truth.json").read_text())
+
+
+def test_decode_two_categories_writes_one_csv_each(tmp_path, capsys):
+    out = tmp_path / "out.csv"
+    assert main(["decode", str(RADAR), str(ADSB), "-o", str(out)]) == 0
+    err = capsys.readouterr().err
+    r, a = tmp_path / "out_cat048.csv", tmp_path / "out_cat021.csv"
+    assert "out_cat048.csv" in err and "out_cat021.csv" in err
+    radar, adsb = pd.read_csv(r), pd.read_csv(a, dtype={"address": str, "mode3a": str})
+    assert len(radar) == TRUTH["radar"]["rows"] and len(adsb) == TRUTH["adsb"]["rows"]
+    assert {"sac", "sic", "time_of_day", "rho_nm", "theta_deg", "mode3a", "address", "callsign"} <= set(radar)
+    assert set(adsb.address) == {ac["address"] for ac in TRUTH["aircraft"]}
+
+
+def test_decode_single_category_parquet(tmp_path):
+    out = tmp_path / "r.parquet"
+    assert main(["decode", str(RADAR), "-o", str(out)]) == 0
+    frame = pd.read_parquet(out)
+    assert len(frame) == TRUTH["radar"]["rows"]
+    assert frame["sac"].iloc[0] == TRUTH["radar"]["sac"]
+
+
+def test_decode_exit_codes(tmp_path, capsys):
+    junk = tmp_path / "junk.bin"
+    junk.write_bytes(bytes(range(200)))
+    assert main(["decode", str(junk)]) == 1
+    assert "nothing could be decoded" in capsys.readouterr().err
+    assert main(["decode", str(tmp_path / "nope.ast")]) == 2
+    assert "nope.ast" in capsys.readouterr().err
+    damaged = tmp_path / "damaged.ast"
+    data = RADAR.read_bytes()
+    damaged.write_bytes(data[:1000] + b"\x00\x13\x37" + data[1000:])
+    assert main(["decode", str(damaged)]) == 0
+    assert "skipped" in capsys.readouterr().err
+
+
+def test_stats(capsys):
+    assert main(["stats", str(RADAR), str(ADSB)]) == 0
+    out = capsys.readouterr().out
+    assert str(TRUTH["radar"]["rows"]) in out and str(TRUTH["adsb"]["rows"]) in out
+    assert "Skipped blocks" in out
+
+
+def test_correlate_report_json_and_figure(tmp_path, capsys):
+    xlsx, js = tmp_path / "report.xlsx", tmp_path / "s.json"
+    assert main(["correlate", str(RADAR), str(ADSB), "--sensors", str(SENSORS), "--callsign", "mas 72",
+                 "-o", str(xlsx), "--json", str(js)]) == 0
+    captured = capsys.readouterr()
+    for stage in ("Processing data files", "Pre-processing data", "Slotting data", "Correlating data"):
+        assert stage in captured.err
+    assert "MAS72" in captured.out
+    expected = [w for w in TRUTH["overlap_windows"] if w["callsign"] == "MAS72"]
+    windows = json.loads(js.read_text())["windows"]
+    assert len(windows) == len(expected)
+    for got, exp in zip(windows, expected, strict=True):
+        assert got["start_tod"] == pytest.approx(exp["start_s"], abs=1 / 128)
+        assert got["end_tod"] == pytest.approx(exp["end_s"], abs=1 / 128)
+    wb = openpyxl.load_workbook(xlsx)
+    assert {"Summary", "Correlation", "Slots", "Parameters"} <= set(wb.sheetnames)
+    params = [[c.value for c in row] for row in wb["Parameters"].iter_rows()]
+    flat = " ".join(str(v) for row in params for v in row if v is not None)
+    assert "sha256" in flat.lower() and RADAR.name in flat
+    assert (tmp_path / "report_tracks.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+def test_correlate_unknown_callsign_lists_closest(capsys):
+    assert main(["correlate", str(RADAR), str(ADSB), "--sensors", str(SENSORS), "--callsign", "MAS73"]) == 1
+    err = capsys.readouterr().err
+    assert "MAS73" in err and "MAS72" in err
+
+
+def test_correlate_missing_radar_prints_toml(tmp_path, capsys):
+    other = tmp_path / "sensors.toml"
+    other.write_text('[[sensor]]\nname = "Other"\nsac = 1\nsic = 2\nlatitude = 0.0\nlongitude = 0.0\n'
+                     'altitude_m = 0.0\n')
+    assert main(["correlate", str(RADAR), str(ADSB), "--sensors", str(other), "--callsign", "MAS72"]) == 1
+    err = capsys.readouterr().err
+    assert "25/201" in err and "[[sensor]]" in err and "sac = 25" in err and "sic = 201" in err
+
+
+def test_correlate_no_overlap_gives_spans(tmp_path, capsys):
+    # MAS72 radar only before 08:03:20, ADS-B only after 08:36:40: the sensors never overlap
+    r = asterix.read(RADAR).frames[48]
+    a = asterix.read(ADSB).frames[21]
+    r = r[(r.callsign == "MAS72") & (r.time_of_day < 29000)]
+    a = a[(a.callsign == "MAS72") & (a.time_of_day > 31000)]
+    rp, ap = tmp_path / "r.ast", tmp_path / "a.ast"
+    rp.write_bytes(encode_frame(48, r))
+    ap.write_bytes(encode_frame(21, a))
+    assert main(["correlate", str(rp), str(ap), "--sensors", str(SENSORS), "--callsign", "MAS72"]) == 1
+    err = capsys.readouterr().err
+    assert "never overlap" in err and "radar" in err.lower()
+
+
+def test_correlate_unreadable_input(capsys):
+    assert main(["correlate", "/nonexistent/x.ast", "--sensors", str(SENSORS), "--all"]) == 2
+    assert "/nonexistent/x.ast" in capsys.readouterr().err
+
+
+@pytest.mark.skipif(shutil.which("msdc") is None, reason="console script not installed")
+def test_console_script():
+    out = subprocess.run(["msdc", "--version"], capture_output=True, text=True, check=True)
+    assert out.stdout.startswith("msdc ")
+    done = subprocess.run([sys.executable, "-m", "pipeline.cli", "--help"], capture_output=True)
+    assert done.returncode == 0
