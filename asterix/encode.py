@@ -492,7 +492,7 @@ def _raw_array(col: Column, target: _Target, present: np.ndarray, values: np.nda
         raw[idx] = out
         return raw
     x = values[idx]
-    if f.type == "quantity":
+    if f.type == "quantity" and col.kind == "float":
         r = np.floor(x / f.lsb + 0.5)
         lo, hi = f.lo, f.hi
     else:
@@ -500,7 +500,9 @@ def _raw_array(col: Column, target: _Target, present: np.ndarray, values: np.nda
         bad = np.flatnonzero(r != x)
         if len(bad):
             raise ValueError(f"{_at(f, where)}: row {idx[bad[0]]} value {x[bad[0]]!r} is not an integer")
-        lo, hi = (f.lo, f.hi) if f.type == "integer" else (0, (1 << f.bits) - 1)
+        # int and flag columns are the field's raw bits, unsigned, as the decoder reads them (fom_pa is 0-15
+        # though the 0.2x table prints I021/090 PA as a signed quantity)
+        lo, hi = (f.lo, f.hi) if f.type == "integer" and col.kind == "float" else (0, (1 << f.bits) - 1)
     bad = np.flatnonzero((r < lo) | (r > hi))
     if len(bad):
         raise ValueError(f"row {idx[bad[0]]}: " + str(_range_error(f, x[bad[0]], int(r[bad[0]]), where)))

@@ -51,11 +51,23 @@ def _chain(buf, r, stop, known):
 
 
 @njit(cache=True, nogil=True)
+def _strong(buf, r, stop, known):
+    """A header at r that starts two plausible blocks in a row (or one that ends the data)."""
+    if not _plausible(buf, r, stop, known):
+        return False
+    r2 = r + ((np.int64(buf[r + 1]) << 8) | buf[r + 2])
+    if r2 == stop:
+        return True
+    if not _plausible(buf, r2, stop, known):
+        return False
+    return _chain(buf, r2 + ((np.int64(buf[r2 + 1]) << 8) | buf[r2 + 2]), stop, known)
+
+
+@njit(cache=True, nogil=True)
 def _chained_inside(buf, q, end, stop, known):
-    """A header followed by a chain starts inside [q+1, end): the LEN at q is probably damaged."""
+    """A strongly chained header starts inside [q+1, end): the LEN at q is probably damaged."""
     for r in range(q + 1, end):
-        if _plausible(buf, r, stop, known) and _chain(
-                buf, r + ((np.int64(buf[r + 1]) << 8) | buf[r + 2]), stop, known):
+        if _strong(buf, r, stop, known):
             return True
     return False
 
@@ -123,9 +135,7 @@ def frame_blocks(buf, seg_start, seg_stop, exact, known):
                 continue
             # bad header in a raw stream: skip to the next plausible block header
             r = q + 1
-            while r < stop and not (
-                    _plausible(buf, r, stop, known)
-                    and _chain(buf, r + ((np.int64(buf[r + 1]) << 8) | buf[r + 2]), stop, known)):
+            while r < stop and not _strong(buf, r, stop, known):
                 r += 1
             if ne == e_off.shape[0]:
                 e_off, e_len, e_cat, e_code = _grow4(e_off, e_len, e_cat, e_code)
@@ -158,27 +168,44 @@ K_KIND, K_SIZE, K_EXT_START, K_EXT_COUNT, K_SUB_START, K_SUB_COUNT, K_SLOT = ran
 
 
 @njit(cache=True, nogil=True)
-def scan(buf, blk_start, blk_len, counts, P, ext_sizes, sub_parts, n_frn, n_slots, n_rec, mode_extract):
-    """Walk blocks record by record; count (mode 0) or gather fields (mode 1) in one code path.
+def _grow_records(rel_off, rel_len, rec_off, rec_blk):
+    """Double the capacity of the per-record outputs of ``scan``."""
+    n_slots, cap = rel_off.shape
+    new_cap = max(2 * cap, 16)
+    ro = np.full((n_slots, new_cap), 0xFFFF, np.uint16)
+    rl = np.zeros((n_slots, new_cap), np.uint16)
+    ro[:, :cap] = rel_off
+    rl[:, :cap] = rel_len
+    off = np.empty(new_cap, np.int64)
+    blk = np.empty(new_cap, np.int64)
+    off[:cap] = rec_off
+    blk[:cap] = rec_blk
+    return ro, rl, off, blk
 
-    Count mode fills ``counts`` (records per block, or minus an error code) and ``fail_at``.
-    Extract mode walks blocks with counts > 0 and records where each part of each record lies
-    (offset from the record start and length, 0xFFFF when absent) for ``gather``.
+
+@njit(cache=True, nogil=True)
+def scan(buf, blk_start, blk_len, P, ext_sizes, sub_parts, n_frn, n_slots, cap):
+    """Walk every block record by record, all or nothing per block, in one pass.
+
+    Returns counts (records per block, or minus an error code), fail_at (where a bad walk
+    failed), and for the records of good blocks: where each part lies (offset from the record
+    start and length, slot-major, 0xFFFF when absent), record offsets, block indices, and n.
     The walk is written out in one body: calls passing arrays cost more than the walk itself.
     """
     nblk = blk_start.shape[0]
+    counts = np.zeros(nblk, np.int64)
     fail_at = np.full(nblk, -1, np.int64)
-    rel_off = np.full((n_rec, n_slots), 0xFFFF, np.uint16)
-    rel_len = np.zeros((n_rec, n_slots), np.uint16)
-    rec_off = np.empty(n_rec, np.int64)
-    rec_blk = np.empty(n_rec, np.int64)
+    cap = max(cap, 16)
+    rel_off = np.full((n_slots, cap), 0xFFFF, np.uint16)  # slot-major: gather reads rows
+    rel_len = np.zeros((n_slots, cap), np.uint16)
+    rec_off = np.empty(cap, np.int64)
+    rec_blk = np.empty(cap, np.int64)
     part_off = np.empty(max(n_slots, 1), np.int64)
     part_len = np.empty(max(n_slots, 1), np.int64)
     work = np.empty(64, np.int64)
     i = 0
     for b in range(nblk):
-        if mode_extract and counts[b] <= 0:
-            continue
+        first_i = i
         pos = blk_start[b] + 3
         end = blk_start[b] + blk_len[b]
         nrec = 0
@@ -303,36 +330,41 @@ def scan(buf, blk_start, blk_len, counts, P, ext_sizes, sub_parts, n_frn, n_slot
                 fail_at[b] = rec_start
                 break
             nrec += 1
-            if mode_extract:
-                rec_off[i] = rec_start
-                rec_blk[i] = b
+            if i == rec_off.shape[0]:
+                rel_off, rel_len, rec_off, rec_blk = _grow_records(rel_off, rel_len, rec_off, rec_blk)
+            rec_off[i] = rec_start
+            rec_blk[i] = b
+            for sl in range(n_slots):
+                if part_off[sl] >= 0:
+                    rel_off[sl, i] = part_off[sl] - rec_start
+                    rel_len[sl, i] = part_len[sl]
+            i += 1
+        if err or nrec == 0:
+            # all or nothing: forget this block's records
+            for j in range(first_i, i):
                 for sl in range(n_slots):
-                    if part_off[sl] >= 0:
-                        rel_off[i, sl] = part_off[sl] - rec_start
-                        rel_len[i, sl] = part_len[sl]
-                i += 1
-        if not mode_extract:
-            if err:
-                counts[b] = -err
-            elif nrec == 0:
-                counts[b] = -E_EMPTY_BLOCK
+                    rel_off[sl, j] = 0xFFFF
+                    rel_len[sl, j] = 0
+            i = first_i
+            counts[b] = -err if err else -E_EMPTY_BLOCK
+            if not err:
                 fail_at[b] = blk_start[b]
-            else:
-                counts[b] = nrec
-    return fail_at, rel_off, rel_len, rec_off, rec_blk
+        else:
+            counts[b] = nrec
+    return counts, fail_at, rel_off, rel_len, rec_off, rec_blk, i
 
 
 @njit(cache=True, nogil=True)
-def gather(buf, rec_off, rel_off, rel_len, F, f_mult, n_float, n_int):
-    """Fill the float (scaled, NaN if absent) and int (-1 if absent) column matrices field by field.
-
-    A column fed by several sources takes the first source present (F rows are in source order).
-    """
+def gather(buf, rec_off, rel_off, rel_len, F, f_mult, n_float, n_int, n_wide):
+    """Fill the column matrices field by field: float64 (LSB-scaled, NaN if absent), int32 and
+    int64 for fields over 31 bits (-1 if absent). A column fed by several sources takes the first
+    source present (F rows are in source order; later ones are flagged as fallbacks)."""
     n_rec = rec_off.shape[0]
     fl = np.full((n_float, n_rec), np.nan)
-    it = np.full((n_int, n_rec), -1, np.int64)
+    it = np.full((n_int, n_rec), -1, np.int32)
+    wd = np.full((n_wide, n_rec), -1, np.int64)
     for f in range(F.shape[0]):
-        sl, bit0, nbits, signed, o, is_float = F[f, 0], F[f, 1], F[f, 2], F[f, 3], F[f, 4], F[f, 5]
+        sl, bit0, nbits, signed, o, kind = F[f, 0], F[f, 1], F[f, 2], F[f, 3], F[f, 4], F[f, 5]
         lead = bit0 & 7
         nbytes = (lead + nbits + 7) >> 3
         shift = nbytes * 8 - lead - nbits
@@ -344,14 +376,17 @@ def gather(buf, rec_off, rel_off, rel_len, F, f_mult, n_float, n_int):
         skip = bit0 >> 3
         fallback = F[f, 6]
         for i in range(n_rec):
-            r = rel_off[i, sl]
-            if r == 0xFFFF or rel_len[i, sl] < need:
+            r = rel_off[sl, i]
+            if r == 0xFFFF or rel_len[sl, i] < need:
                 continue
             if fallback:
-                if is_float:
+                if kind == 1:
                     if not np.isnan(fl[o, i]):
                         continue
-                elif it[o, i] >= 0:
+                elif kind == 0:
+                    if it[o, i] >= 0:
+                        continue
+                elif wd[o, i] >= 0:
                     continue
             x = rec_off[i] + r + skip
             if nbytes == 1:
@@ -365,10 +400,12 @@ def gather(buf, rec_off, rel_off, rel_len, F, f_mult, n_float, n_int):
                 for j in range(nbytes):
                     v = (v << 8) | np.int64(buf[x + j])
             v = (v >> shift) & mask
-            if is_float:
+            if kind == 1:
                 if signed and v >= half:
                     v -= full
                 fl[o, i] = v * mult
+            elif kind == 0:
+                it[o, i] = np.int32(v)
             else:
-                it[o, i] = v
-    return fl, it
+                wd[o, i] = v
+    return fl, it, wd

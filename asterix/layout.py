@@ -17,7 +17,7 @@ from .tables import load_table, resolve_edition
 # Part kinds understood by the kernel.
 ABSENT, FIXED, EXTENDED, REP_COUNT, REP_FX, COMPOUND, EXPLICIT = range(7)
 # Output kinds of a field.
-OUT_FLOAT, OUT_INT = 0, 1
+OUT_INT, OUT_FLOAT, OUT_WIDE = 0, 1, 2  # int32 matrix, float64 matrix, int64 matrix
 
 
 def fixed_bits(node: dict) -> int | None:
@@ -51,10 +51,11 @@ class Layout:
     f_bits: np.ndarray  # int32 width
     f_signed: np.ndarray  # bool
     f_out: np.ndarray  # int32 output row
-    f_float: np.ndarray  # bool: goes to the float matrix (scaled) rather than the int matrix
+    f_kind: np.ndarray  # int32 OUT_INT / OUT_FLOAT (LSB-scaled) / OUT_WIDE (raw over 31 bits)
     f_mult: np.ndarray  # float64 LSB * column scale
     out_names_float: tuple[str, ...]
     out_names_int: tuple[str, ...]
+    out_names_wide: tuple[str, ...]
     item_frn: dict  # item id -> FRN (1-based)
 
     @property
@@ -64,7 +65,7 @@ class Layout:
 
     @property
     def F(self) -> np.ndarray:
-        """Packed field table for the kernel: slot, bit, bits, signed, out row, is-float, fallback."""
+        """Packed field table for the kernel: slot, bit, bits, signed, out row, out kind, fallback."""
         return _packed(self, "fields")
 
 
@@ -72,7 +73,7 @@ def _fallback(lay: Layout) -> np.ndarray:
     """1 for a field that feeds a column already fed by an earlier field (first present wins)."""
     seen: set[tuple[bool, int]] = set()
     out = np.zeros(len(lay.f_out), np.int64)
-    for i, key in enumerate(zip(lay.f_float.tolist(), lay.f_out.tolist(), strict=True)):
+    for i, key in enumerate(zip(lay.f_kind.tolist(), lay.f_out.tolist(), strict=True)):
         out[i] = key in seen
         seen.add(key)
     return out
@@ -86,7 +87,7 @@ def _packed(lay: Layout, which: str) -> np.ndarray:
     if key not in _PACKED:
         cols = ((lay.kind, lay.size, lay.ext_start, lay.ext_count, lay.sub_start, lay.sub_count, lay.slot)
                 if which == "parts" else
-                (lay.f_slot, lay.f_bit, lay.f_bits, lay.f_signed, lay.f_out, lay.f_float, _fallback(lay)))
+                (lay.f_slot, lay.f_bit, lay.f_bits, lay.f_signed, lay.f_out, lay.f_kind, _fallback(lay)))
         _PACKED[key] = np.ascontiguousarray(np.stack([c.astype(np.int64) for c in cols], axis=1))
     return _PACKED[key]
 
@@ -174,9 +175,11 @@ def compile_layout(category: int, edition: str | None = None) -> Layout:
     fields: list[tuple[int, int, int, bool, int, bool, float]] = []
     names_float: list[str] = []
     names_int: list[str] = []
+    names_wide: list[str] = []
     for col in columns:
         is_float = col.kind == "float"
-        names = names_float if is_float else names_int
+        out_kind = OUT_FLOAT if is_float else OUT_WIDE if col.kind == "icao" else OUT_INT
+        names = {OUT_FLOAT: names_float, OUT_INT: names_int, OUT_WIDE: names_wide}[out_kind]
         out = len(names)
         names.append(col.name)
         for item_id, path in col.sources:
@@ -204,7 +207,7 @@ def compile_layout(category: int, edition: str | None = None) -> Layout:
             if slot[p] < 0:
                 slot[p] = max(slot) + 1 if max(slot) >= 0 else 0
             lsb = elem.get("lsb", 1.0) if is_float else 1.0
-            fields.append((slot[p], bit, elem["bits"], bool(elem.get("signed", False)), out, is_float,
+            fields.append((slot[p], bit, elem["bits"], bool(elem.get("signed", False)), out, out_kind,
                            lsb * col.scale))
     n_slots = max(slot) + 1 if max(slot) >= 0 else 0
     f = list(zip(*fields, strict=True)) if fields else [[]] * 7
@@ -215,6 +218,6 @@ def compile_layout(category: int, edition: str | None = None) -> Layout:
         np.array(ext_sizes or [1], i32), np.array(sub_start, i32), np.array(sub_count, i32),
         np.array(sub_parts or [-1], i32), np.array(slot, i32), n_frn, n_slots,
         np.array(f[0], i32), np.array(f[1], i32), np.array(f[2], i32), np.array(f[3], np.bool_),
-        np.array(f[4], i32), np.array(f[5], np.bool_), np.array(f[6], np.float64),
-        tuple(names_float), tuple(names_int), item_frn,
+        np.array(f[4], i32), np.array(f[5], i32), np.array(f[6], np.float64),
+        tuple(names_float), tuple(names_int), tuple(names_wide), item_frn,
     )

@@ -40,6 +40,7 @@ class Recording:
     ignored_blocks: dict[int, int] = field(default_factory=dict)  # blocks of unselected categories
     ignored_bytes: int = 0
     edition_choice: dict[int, str] = field(default_factory=dict)  # how 'auto' chose, in words
+    day0: int | None = None  # container day number of day 0: capture day (pcap), day byte (final); raw None
 
     def __getitem__(self, category: int) -> pd.DataFrame:
         return self.frames[category]
@@ -64,12 +65,11 @@ def _open(path) -> tuple[np.ndarray, object]:
     return np.frombuffer(mm, np.uint8), mm
 
 
-def _count(buf, starts, lens, lay: Layout) -> tuple[np.ndarray, np.ndarray]:
-    """Records per block (minus an error code for a bad block) and where a bad walk failed."""
-    counts = np.zeros(len(starts), np.int64)
-    fail_at, *_ = kernel.scan(buf, starts, lens, counts, lay.P, lay.ext_sizes, lay.sub_parts, lay.n_frn,
-                              lay.n_slots, 0, False)
-    return counts, fail_at
+def _scan(buf, starts, lens, lay: Layout):
+    """One walk over the blocks: records per block (minus an error code for a bad block), where
+    bad walks failed, and where each part of each good record lies."""
+    cap = int(lens.sum()) // 40 + 16  # a first guess at the record count; scan grows as needed
+    return kernel.scan(buf, starts, lens, lay.P, lay.ext_sizes, lay.sub_parts, lay.n_frn, lay.n_slots, cap)
 
 
 def choose_edition(buf: np.ndarray, starts: np.ndarray, lens: np.ndarray, category: int,
@@ -80,11 +80,12 @@ def choose_edition(buf: np.ndarray, starts: np.ndarray, lens: np.ndarray, catego
     scores = []
     for ed in AUTO_CANDIDATES[category]:
         lay = compile_layout(category, ed)
-        counts, _ = _count(buf, s, n, lay)
+        scanned = _scan(buf, s, n, lay)
+        counts = scanned[0]
         good = counts > 0
         plausible = 0.0
         if good.any():
-            fl, _, _, _ = _extract(buf, s, n, counts, lay)
+            fl, _, _, _ = _extract(buf, scanned, lay)
             cols = {nm: fl[i] for i, nm in enumerate(lay.out_names_float)}
             lat, lon, tod = cols["latitude"], cols["longitude"], cols["time_of_day"]
             ok = (np.abs(lat) <= 90) & (np.abs(lon) <= 180) & (tod >= 0) & (tod < 86400)
@@ -95,36 +96,37 @@ def choose_edition(buf: np.ndarray, starts: np.ndarray, lens: np.ndarray, catego
     return best[2], f"chose {best[2]} ({words})"
 
 
-def _extract(buf, starts, lens, counts, lay: Layout):
-    n_rec = int(counts[counts > 0].sum())
-    _, rel_off, rel_len, rec_off, rec_blk = kernel.scan(
-        buf, starts, lens, counts, lay.P, lay.ext_sizes, lay.sub_parts, lay.n_frn, lay.n_slots, n_rec, True)
-    fl, it = kernel.gather(buf, rec_off, rel_off, rel_len, lay.F, lay.f_mult, len(lay.out_names_float),
-                           len(lay.out_names_int))
-    del rel_off, rel_len
-    return fl, it, rec_off, rec_blk
+def _extract(buf, scanned, lay: Layout):
+    """Gather every field of the scanned records into column matrices."""
+    _, _, rel_off, rel_len, rec_off, rec_blk, n = scanned
+    fl, it, wd = kernel.gather(buf, rec_off[:n], rel_off[:, :n], rel_len[:, :n], lay.F, lay.f_mult,
+                               len(lay.out_names_float), len(lay.out_names_int), len(lay.out_names_wide))
+    return fl, (it, wd), rec_off[:n].copy(), rec_blk[:n].copy()
 
 
-def _frame(lay: Layout, fl, it, rec_off, rec_blk) -> pd.DataFrame:
-    """Assemble the typed frame of one category from kernel arrays."""
+def _columns(lay: Layout, fl, ints, rec_off, rec_blk) -> dict[str, object]:
+    """The typed columns of one category from kernel arrays, in schema order."""
     n = rec_off.shape[0]
-    fidx = {nm: i for i, nm in enumerate(lay.out_names_float)}
-    iidx = {nm: i for i, nm in enumerate(lay.out_names_int)}
+    it, wd = ints
+    where = {nm: (fl, i) for i, nm in enumerate(lay.out_names_float)}
+    where |= {nm: (it, i) for i, nm in enumerate(lay.out_names_int)}
+    where |= {nm: (wd, i) for i, nm in enumerate(lay.out_names_wide)}
     data: dict[str, object] = {}
     for col in lay.columns:
-        has_source = any(src[0] in lay.item_frn for src in col.sources)
-        if col.name in fidx:
-            data[col.name] = fl[fidx[col.name]] if has_source else empty_column(col, n)
-        else:
-            data[col.name] = typed_column(col, it[iidx[col.name]]) if has_source else empty_column(col, n)
+        if not any(src[0] in lay.item_frn for src in col.sources):
+            data[col.name] = empty_column(col, n)
+            continue
+        matrix, row = where[col.name]
+        data[col.name] = matrix[row] if matrix is fl else typed_column(col, matrix[row])
     data["block"] = rec_blk
     data["offset"] = rec_off
-    return pd.DataFrame(data, copy=False)
+    return data
 
 
-def _days(frames: dict[int, pd.DataFrame], seg: Segments, blk_seg: np.ndarray) -> int | None:
-    """Add the ``day`` column (days after the first) to each frame; return the first day number."""
-    parts = [(c, f) for c, f in frames.items() if len(f)]
+def _days(frames: dict[int, dict], seg: Segments, blk_seg: np.ndarray) -> int | None:
+    """Add the ``day`` column (days after the first) to each category's columns; return the
+    container's day number of day 0 (days since 1970 when ``seg.dated``), None for raw streams."""
+    parts = [(c, f) for c, f in frames.items() if len(f["offset"])]
     if not parts:
         for f in frames.values():
             f["day"] = np.zeros(0, np.int64)
@@ -132,8 +134,8 @@ def _days(frames: dict[int, pd.DataFrame], seg: Segments, blk_seg: np.ndarray) -
     if seg.format in ("raw",) or not len(seg.start):
         # file order across categories; a drop of more than 12 h is a new day, a rise of more
         # than 12 h a late report from the day before
-        off = np.concatenate([f["offset"].to_numpy() for _, f in parts])
-        tod = np.concatenate([f["time_of_day"].to_numpy() for _, f in parts])
+        off = np.concatenate([np.asarray(f["offset"]) for _, f in parts])
+        tod = np.concatenate([np.asarray(f["time_of_day"]) for _, f in parts])
         order = np.argsort(off, kind="stable")
         t = pd.Series(tod[order]).ffill().bfill().to_numpy()
         d = np.diff(t, prepend=t[:1] if len(t) else t)
@@ -143,16 +145,17 @@ def _days(frames: dict[int, pd.DataFrame], seg: Segments, blk_seg: np.ndarray) -
         first = int(day.min())
         i = 0
         for _, f in parts:
-            f["day"] = (day[i:i + len(f)] - first).astype(np.int64)
-            i += len(f)
+            n = len(f["offset"])
+            f["day"] = (day[i:i + n] - first).astype(np.int64)
+            i += n
         first_day = None
     else:
         # container capture time: the day that puts the report nearest its capture
         all_days = []
         for _, f in parts:
-            s = blk_seg[f["block"].to_numpy()]
+            s = blk_seg[np.asarray(f["block"])]
             cday, ctod = seg.capture_day[s], seg.capture_tod[s]
-            tod = f["time_of_day"].to_numpy()
+            tod = np.asarray(f["time_of_day"])
             tod = np.where(np.isnan(tod), ctod, tod)
             all_days.append(cday + np.rint((ctod - tod) / 86400.0).astype(np.int64))
         first_day = int(min(a.min() for a in all_days))
@@ -160,26 +163,36 @@ def _days(frames: dict[int, pd.DataFrame], seg: Segments, blk_seg: np.ndarray) -
             f["day"] = a - first_day
     for f in frames.values():
         if "day" not in f:
-            f["day"] = np.zeros(len(f), np.int64)
-    return first_day if seg.dated else None
+            f["day"] = np.zeros(len(f["offset"]), np.int64)
+    return first_day
+
+
+def _timestamp(day, tod, date: dt.date | None) -> pd.DatetimeIndex:
+    """UTC timestamps from day offsets and times of day (NaT when the date or the time is unknown)."""
+    day, tod = np.asarray(day), np.asarray(tod)
+    if date is None:
+        return pd.DatetimeIndex(np.full(len(day), np.datetime64("NaT"), "datetime64[ns]")).tz_localize("UTC")
+    ns = np.rint((day * 86400.0 + tod) * 1e9)
+    missing = np.isnan(ns)
+    vals = np.datetime64(date, "ns") + np.where(missing, 0, ns).astype("timedelta64[ns]")
+    vals[missing] = np.datetime64("NaT")
+    return pd.DatetimeIndex(vals).tz_localize("UTC")
 
 
 def _timestamps(frames: dict[int, pd.DataFrame], date: dt.date | None) -> None:
+    """Recompute the timestamp column of finished frames (after a day shift)."""
     for f in frames.values():
-        if date is None:
-            f["timestamp"] = pd.Series(pd.NaT, index=f.index, dtype="datetime64[ns, UTC]")
-            continue
-        base = np.datetime64(date, "ns")
-        ns = np.rint((f["day"].to_numpy() * 86400.0 + f["time_of_day"].to_numpy()) * 1e9)
-        vals = base + np.where(np.isnan(ns), 0, ns).astype("timedelta64[ns]")
-        vals = np.where(np.isnan(ns), np.datetime64("NaT"), vals)
-        f["timestamp"] = pd.DatetimeIndex(vals).tz_localize("UTC")
+        f["timestamp"] = _timestamp(f["day"], f["time_of_day"], date)
 
 
-def _order(frame: pd.DataFrame, category: int) -> pd.DataFrame:
-    first = ["sac", "sic", "time_of_day", "day", "timestamp"]
-    rest = [c for c in frame.columns if c not in first and c not in ("block", "offset")]
-    return frame[first + rest + ["block", "offset"]]
+LEADING = ("sac", "sic", "time_of_day", "day", "timestamp")
+
+
+def _build(cols: dict[str, object]) -> pd.DataFrame:
+    """One DataFrame in schema order (identity and time first, provenance last), built once."""
+    order = [*LEADING, *(c for c in cols if c not in LEADING and c not in ("block", "offset")), "block",
+             "offset"]
+    return pd.DataFrame({c: cols[c] for c in order}, copy=False)
 
 
 def decode_buffer(buf: np.ndarray, seg: Segments, *, path: str = "", editions: dict | None = None,
@@ -195,7 +208,7 @@ def decode_buffer(buf: np.ndarray, seg: Segments, *, path: str = "", editions: d
         (int(o), int(n), int(c), REASONS[int(code)])
         for o, n, c, code in zip(e_off, e_len, e_cat, e_code, strict=True)]
     errors += [(o, n, -1, f"container: {why}") for o, n, why in seg.problems]
-    frames: dict[int, pd.DataFrame] = {}
+    columns: dict[int, dict] = {}
     chosen: dict[int, str] = {}
     choice: dict[int, str] = {}
     ignored: dict[int, int] = {}
@@ -216,28 +229,35 @@ def decode_buffer(buf: np.ndarray, seg: Segments, *, path: str = "", editions: d
             ed, choice[cat] = choose_edition(buf, starts, lens, cat)
         lay = compile_layout(cat, ed)
         chosen[cat] = lay.edition
-        counts, fail_at = _count(buf, starts, lens, lay)
+        scanned = _scan(buf, starts, lens, lay)
+        counts, fail_at = scanned[0], scanned[1]
         for j in np.flatnonzero(counts < 0):
             reason = f"{REASONS[int(-counts[j])]} (record at offset {int(fail_at[j])})"
             errors.append((int(starts[j]), int(lens[j]), cat, reason))
         decoded_bytes += int(lens[counts > 0].sum())
-        fl, it, rec_off, rec_blk = _extract(buf, starts, lens, counts, lay)
-        frames[cat] = _frame(lay, fl, it, rec_off, sel[rec_blk])
+        fl, ints, rec_off, rec_blk = _extract(buf, scanned, lay)
+        del scanned
+        columns[cat] = _columns(lay, fl, ints, rec_off, sel[rec_blk])
+        del fl, ints
     errors.sort()
     if strict and errors:
         o, _, c, why = errors[0]
         raise DecodeError(path, o, why, c)
     date = _parse_date(date)
-    first_day = _days(frames, seg, b_seg)
-    if first_day is not None:
+    first_day = _days(columns, seg, b_seg)
+    if first_day is not None and seg.dated:
         date = dt.date(1970, 1, 1) + dt.timedelta(days=first_day)
-    _timestamps(frames, date)
-    frames = {c: _order(f, c) for c, f in frames.items()}
+    frames: dict[int, pd.DataFrame] = {}
+    for cat in list(columns):
+        cols = columns.pop(cat)
+        cols["timestamp"] = _timestamp(cols["day"], cols["time_of_day"], date)
+        frames[cat] = _build(cols)
+        del cols
     err = pd.DataFrame(errors, columns=["offset", "length", "category", "reason"])
     err.insert(0, "file", path)
     err["category"] = err["category"].astype("Int16").where(err["category"] >= 0)
     return Recording(frames, err, chosen, path, seg.format, date, int(len(buf)), int(seg.container_bytes),
-                     decoded_bytes, ignored, ignored_bytes, choice)
+                     decoded_bytes, ignored, ignored_bytes, choice, first_day)
 
 
 def _parse_editions(editions) -> dict[int, str]:
@@ -294,19 +314,20 @@ def iter_read(path, *, chunk: int = 1_000_000, editions=None, date=None, categor
         carry_day = 0
         last_tod = np.nan
         first_date = _parse_date(date)
+        day0 = None  # container day number of the first chunk's day 0
         for sub in bounds:
             rec = decode_buffer(buf, sub, path=str(path), editions=eds, categories=categories,
                                 date=first_date, strict=strict)
-            if rec.date is not None and first_date is None:
-                first_date = rec.date
             if seg.format == "raw":
                 carry_day, last_tod = _continue_days(rec, carry_day, last_tod, first_date)
-            elif rec.date is not None and first_date is not None and rec.date != first_date:
-                shift = (rec.date - first_date).days
+            elif rec.day0 is not None and day0 is None:
+                day0, first_date = rec.day0, rec.date  # a dated container's date wins over date=
+            elif rec.day0 is not None and rec.day0 != day0:
+                # each chunk counts days from its own first: count them from the first chunk's
                 for f in rec.frames.values():
-                    f["day"] += shift
+                    f["day"] += rec.day0 - day0
                 _timestamps(rec.frames, first_date)
-                rec.date = first_date
+                rec.date, rec.day0 = first_date, day0
             eds = {**eds, **{c: e for c, e in rec.editions.items() if eds.get(c) == "auto"}}
             yield rec
     finally:
@@ -329,7 +350,6 @@ def _continue_days(rec: Recording, carry_day: int, last_tod: float, date) -> tup
     for f in rec.frames.values():
         f["day"] += carry_day
     _timestamps(rec.frames, date)
-    rec.frames = {c: _order(f, c) for c, f in rec.frames.items()}
     lasts = [(f["offset"].iloc[-1], f["time_of_day"].iloc[-1], f["day"].iloc[-1])
              for f in rec.frames.values() if len(f)]
     _, tod, day = max(lasts)

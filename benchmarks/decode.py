@@ -1,0 +1,168 @@
+"""Decode speed and memory: records/s and peak RSS per category, and pyasteryx's rate when installed.
+
+Run by hand (never a timed test): ``python benchmarks/decode.py [--records 1000000]``.
+Recordings are built with msdc's own encoder and cached in --work. Each measurement runs in a fresh
+process: one warm-up decode (numba's cached kernel loads, memory pages are touched once), then the
+best of --repeat timed decodes, file in page cache to DataFrame.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import resource
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+CALLSIGNS = np.array(["MAS72", "AXM123", "SIA305", "DLH65A", "BAW22", "EZS14ZH", "KLM1605", "UAE343"])
+
+
+def cat048_frame(n: int, rng: np.random.Generator) -> pd.DataFrame:
+    """Typical Mode S monoradar plots: the items a radar sends on nearly every report."""
+    ac = rng.integers(0, len(CALLSIGNS), n)
+    return pd.DataFrame({
+        "sac": 25, "sic": 201, "time_of_day": np.sort(rng.uniform(0, 86000, n)).round(7),
+        "typ": 5, "sim": 0, "rdp": 0, "spi": 0, "rab": 0,
+        "rho_nm": rng.uniform(5, 250, n), "theta_deg": rng.uniform(0, 359.9, n),
+        "mode3a": pd.Series(rng.integers(0, 4096, n)).map(lambda v: f"{v:04o}"),
+        "mode3a_v": 0, "mode3a_g": 0, "mode3a_l": 0,
+        "flight_level": rng.integers(0, 1600, n) / 4, "flight_level_v": 0, "flight_level_g": 0,
+        "ssr_runlength_deg": 0.703125, "ssr_replies": 12, "ssr_amplitude_dbm": -60.0,
+        "address": pd.Series(0x750000 + ac).map(lambda v: f"{v:06X}"), "callsign": CALLSIGNS[ac],
+        "bds_count": 1, "track_number": rng.integers(0, 4096, n),
+        "ground_speed_kt": rng.uniform(100, 500, n), "heading_deg": rng.uniform(0, 359, n),
+        "cnf": 0, "rad": 2, "dou": 0, "mah": 0, "cdm": 0, "com": 1, "flight_status": 0,
+    })
+
+
+def cat021_frame(n: int, rng: np.random.Generator) -> pd.DataFrame:
+    """Typical 1090ES ADS-B reports in the 2.x family."""
+    ac = rng.integers(0, len(CALLSIGNS), n)
+    tod = np.sort(rng.uniform(0, 86000, n))
+    return pd.DataFrame({
+        "sac": 0, "sic": 1, "time_applicability_position": tod, "time_applicability_velocity": tod,
+        "time_reception_position": tod + 0.5, "time_reception_velocity": tod + 0.5,
+        "time_report_transmission": tod + 0.6, "atp": 1, "arc": 1, "rc": 0, "rab": 0,
+        "latitude": rng.uniform(-10, 10, n), "longitude": rng.uniform(95, 115, n),
+        "address": pd.Series(0x750000 + ac).map(lambda v: f"{v:06X}"), "callsign": CALLSIGNS[ac],
+        "mode3a": "2301", "flight_level": rng.integers(0, 1600, n) / 4,
+        "geometric_height_ft": rng.integers(0, 6000, n) * 6.25,
+        "ground_speed_kt": rng.uniform(100, 500, n), "track_angle_deg": rng.uniform(0, 359, n),
+        "track_number": rng.integers(0, 4096, n), "nucp_nic": 8, "nucr_nacv": 2, "nacp": 9, "sil": 3,
+        "nic_baro": 1, "mops_version": 2, "link_technology": 2, "emitter_category": 3,
+        "geo_vertical_rate_ftmin": 0.0, "service_id": 1,
+    })
+
+
+def build(path: Path, category: int, n: int) -> None:
+    """Encode n records of one category with msdc's encoder (cached on disk)."""
+    from asterix.encode import encode_frame
+
+    rng = np.random.default_rng(category)
+    make = cat048_frame if category == 48 else cat021_frame
+    with open(path, "wb") as fh:
+        step = 200_000
+        for lo in range(0, n, step):
+            fh.write(encode_frame(category, make(min(step, n - lo), rng), records_per_block=25,
+                                  prefer={"latitude": "130", "longitude": "130"} if category == 21 else None))
+
+
+def measure(path: Path, repeat: int) -> dict:
+    """In this (fresh) process: warm up on a prefix, then the peak-memory decode and best-of-repeat."""
+    import gc
+    import tempfile
+
+    import asterix
+
+    with tempfile.NamedTemporaryFile(suffix=".ast") as tiny:
+        tiny.write(path.read_bytes()[:200_000])
+        tiny.flush()
+        asterix.read(tiny.name)  # loads the cached kernel and pandas machinery
+    base_rss_mb = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+    t0 = time.perf_counter()
+    rec = asterix.read(path)
+    first_s = time.perf_counter() - t0
+    peak_rss_mb = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+    n = sum(len(f) for f in rec.frames.values())
+    frame_mb = sum(f.memory_usage(deep=True).sum() for f in rec.frames.values()) / 1e6
+    del rec
+    gc.collect()
+    times = []
+    for _ in range(repeat):
+        t0 = time.perf_counter()
+        asterix.read(path)
+        times.append(time.perf_counter() - t0)
+    return {"records": n, "first_s": first_s, "best_s": min(times), "records_per_s": n / min(times),
+            "peak_rss_mb": peak_rss_mb, "rss_before_mb": base_rss_mb, "frame_mb": frame_mb,
+            "file_mb": path.stat().st_size / 1e6}
+
+
+def measure_pyasteryx(path: Path, max_records: int) -> dict | None:
+    """pyasteryx's records/s on the first max_records records of the same file, if it is installed."""
+    try:
+        from pyasteryx import Decoder
+    except ImportError:
+        return None
+    dec = Decoder()
+    t0 = time.perf_counter()
+    n = 0
+    for _ in dec.iter_file(path):
+        n += 1
+        if n >= max_records:
+            break
+    dt = time.perf_counter() - t0
+    return {"records": n, "seconds": dt, "records_per_s": n / dt}
+
+
+def main() -> int:
+    ap = argparse.ArgumentParser(description=__doc__)
+    ap.add_argument("--records", type=int, default=1_000_000)
+    ap.add_argument("--repeat", type=int, default=3)
+    ap.add_argument("--work", default="/tmp/msdc-bench")
+    ap.add_argument("--pyasteryx-records", type=int, default=100_000)
+    ap.add_argument("--measure", help=argparse.SUPPRESS)
+    ap.add_argument("--measure-pyasteryx", help=argparse.SUPPRESS)
+    args = ap.parse_args()
+    if args.measure:
+        print(json.dumps(measure(Path(args.measure), args.repeat)))
+        return 0
+    if args.measure_pyasteryx:
+        print(json.dumps(measure_pyasteryx(Path(args.measure_pyasteryx), args.pyasteryx_records)))
+        return 0
+    work = Path(args.work)
+    work.mkdir(parents=True, exist_ok=True)
+    for cat in (48, 21):
+        path = work / f"cat{cat:03d}_{args.records}.ast"
+        if not path.exists():
+            t0 = time.perf_counter()
+            build(path, cat, args.records)
+            print(f"built {path} ({path.stat().st_size / 1e6:.1f} MB) in {time.perf_counter() - t0:.1f} s")
+        run = [sys.executable, __file__, "--repeat", str(args.repeat)]
+        m = json.loads(subprocess.run(run + ["--measure", str(path)], check=True, capture_output=True,
+                                      text=True).stdout)
+        grow_mb = m["peak_rss_mb"] - m["rss_before_mb"]
+        print(f"CAT{cat:03d}: {m['records']:,} records in {m['best_s']:.3f} s = "
+              f"{m['records_per_s']:,.0f} rec/s (first decode in a fresh process {m['first_s']:.3f} s)")
+        print(f"CAT{cat:03d}: peak RSS {m['peak_rss_mb']:.0f} MB, of which the decode added {grow_mb:.0f} MB"
+              f" (imports and kernel before it: {m['rss_before_mb']:.0f} MB); frames {m['frame_mb']:.0f} MB,"
+              f" file {m['file_mb']:.0f} MB;"
+              f" added/(frames+file) = {grow_mb / (m['frame_mb'] + m['file_mb']):.2f}")
+        p = json.loads(subprocess.run(run + ["--measure-pyasteryx", str(path), "--pyasteryx-records",
+                                             str(args.pyasteryx_records)], check=True, capture_output=True,
+                                      text=True).stdout)
+        if p is None:
+            print(f"CAT{cat:03d}: pyasteryx not installed (pip install pyasteryx to compare)")
+        else:
+            ratio = m["records_per_s"] / p["records_per_s"]
+            print(f"CAT{cat:03d}: pyasteryx {p['records']:,} records in {p['seconds']:.2f} s = "
+                  f"{p['records_per_s']:,.0f} rec/s; msdc / pyasteryx = {ratio:.0f}x")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
