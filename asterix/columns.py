@@ -147,3 +147,26 @@ def columns_for(category: int, edition: str) -> list[Column]:
     if category == 21:
         return CAT021_V0 if edition.startswith("0.") else CAT021_V2
     raise KeyError(category)
+
+
+FAMILIES = {"CAT048 (all editions)": CAT048, "CAT021 2.x (2.1-2.7)": CAT021_V2,
+            "CAT021 0.2x (0.23-0.26)": CAT021_V0}
+KIND_DTYPES = {"float": "float64 (NaN if absent)", "int": "Int32", "flag": "Int8", "count": "Int16",
+               "octal": "text (categorical)", "hex": "text (categorical)", "icao": "text (categorical)"}
+
+
+def markdown_schema() -> str:
+    """The column reference (docs/columns.md), generated from the tables above."""
+    lines = ["# Frame columns", "", "Generated from `asterix/columns.py` by "
+             "`python -c 'from asterix.columns import markdown_schema; print(markdown_schema())'`.",
+             "Every frame also has `day` (int64: days after the recording's first day), `timestamp` "
+             "(datetime64[ns, UTC], NaT when the date is unknown), `block` (data block index in the file) "
+             "and `offset` (byte offset of the record in the file).", ""]
+    for family, cols in FAMILIES.items():
+        lines += [f"## {family}", "", "| column | unit | dtype | source | meaning |", "|---|---|---|---|---|"]
+        for c in cols:
+            src = " else ".join(f"I{item}" + (f"/{'/'.join(path)}" if path else "")
+                                for item, path in c.sources)
+            lines.append(f"| `{c.name}` | {c.unit} | {KIND_DTYPES[c.kind]} | {src} | {c.doc} |")
+        lines.append("")
+    return "\n".join(lines)

@@ -221,3 +221,12 @@ def test_021_auto_edition_picks_the_family_that_walks():
     assert rec.editions[21].startswith("0.2") and rec.errors.empty
     assert "0.2" in rec.edition_choice[21]
     assert list(rec.frames[21].latitude) == [45.0] * 5
+
+
+def test_column_docs_are_current():
+    from pathlib import Path
+
+    from asterix.columns import markdown_schema
+
+    doc = Path(__file__).resolve().parents[1] / "docs" / "columns.md"
+    assert doc.read_text().strip() == markdown_schema().strip(), "regenerate docs/columns.md"
