@@ -1,0 +1,421 @@
+"""Encode -> decode round trip over every edition table: every column comes back within one LSB.
+
+Which columns exist in an edition, their widths, signedness and LSBs are read here from the edition tables
+by a walker of this file (and checked against the compiled decoder layout); values are drawn in engineering
+units over each field's whole range, encoded with ``encode_frame`` and decoded with ``decode_buffer``.
+
+Absence is drawn per *presence unit*: an item, a compound subitem, or an octet group of an extended item.
+A unit that is not written decodes as missing (NaN / <NA>), never 0. A column left out of a unit that is
+written is zero-filled on the wire, so it decodes as 0; an extended item's octet groups before a written one
+are sent too (zero-filled).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+import pandas as pd
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+from asterix import decode_buffer
+from asterix.columns import Column, columns_for
+from asterix.containers import read_segments
+from asterix.encode import encode_frame
+from asterix.layout import compile_layout
+from asterix.tables import load_table
+
+EDITIONS = [(48, "1.27"), (48, "1.31"), (48, "1.32"),
+            (21, "0.23"), (21, "0.24"), (21, "0.25"), (21, "0.26"),
+            (21, "2.1"), (21, "2.4"), (21, "2.6"), (21, "2.7")]
+V2 = [(c, e) for c, e in EDITIONS if c == 21 and e.startswith("2.")]
+PREFER_130 = {"latitude": "130", "longitude": "130"}
+ICAO_CHARS = "ABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789 "
+DAY_S = 86400.0
+# columns fed by a time-of-day item: kept within one day
+TOD_COLUMNS = {"time_of_day", "time_applicability_position", "time_reception_position"}
+# 2.x: time_of_day is I021/071, else I021/073 (derived below, not drawn)
+V2_DERIVED = {"time_of_day"}
+
+
+@dataclass(frozen=True)
+class Spec:
+    """Where a column's value lies in an edition (from the table) and what it may hold."""
+
+    name: str
+    kind: str
+    item: str
+    unit: tuple  # presence unit: (item,), (item, subitem), or either + (octet group,) for extended items
+    group: int | None  # octet group index inside an extended node
+    bits: int
+    signed: bool
+    step: float  # LSB * column scale (1 for non-float kinds)
+
+    @property
+    def lo(self) -> float:
+        raw = -(1 << (self.bits - 1)) if self.signed and self.kind == "float" else 0
+        return raw * self.step
+
+    @property
+    def hi(self) -> float:
+        raw = (1 << (self.bits - 1)) - 1 if self.signed and self.kind == "float" else (1 << self.bits) - 1
+        top = raw * self.step
+        return min(top, DAY_S - self.step) if self.name in TOD_COLUMNS else top
+
+
+def _locate(node: dict, path: tuple[str, ...]) -> tuple[dict, int] | None:
+    """(element node, octet group) of a named field inside a fixed or extended node."""
+    kind = node["kind"]
+    if not path:
+        return (node, 0) if kind == "element" else None
+    if kind == "group":
+        children = [(c, 0) for c in node["items"]]
+    elif kind == "extended":
+        children = [(c, g) for g, grp in enumerate(node["groups"]) for c in grp]
+    else:
+        return None
+    for child, g in children:
+        if child.get("name") == path[0]:
+            if child["kind"] == "element":
+                return (child, g) if len(path) == 1 else None
+            found = _locate(child, path[1:])
+            return None if found is None else (found[0], g)
+    return None
+
+
+def _resolve(category: int, edition: str, col: Column, only_item: str | None = None) -> Spec | None:
+    """The first source of a column that exists in the edition (or the source in only_item)."""
+    items = {u["id"]: u["node"] for u in load_table(category, edition)["uap"] if u}
+    for item, path in col.sources:
+        if item not in items or (only_item is not None and item != only_item):
+            continue
+        node, unit = items[item], (item,)
+        if col.kind == "count":
+            if node["kind"] == "repetitive":
+                return Spec(col.name, col.kind, item, unit, None, 8, False, 1.0)
+            continue
+        if node["kind"] == "compound":
+            sub = next((s for s in node["subitems"] if s and path and s["name"] == path[0]), None)
+            if sub is None:
+                continue
+            node, path, unit = sub["node"], path[1:], (item, path[0])
+            if node["kind"] == "element" and len(path) == 1:  # a bare element subitem, named like it
+                path = ()
+        found = _locate(node, path)
+        if found is None:
+            continue
+        elem, g = found
+        group = g if node["kind"] == "extended" else None
+        step = float(elem.get("lsb", 1.0)) * col.scale if col.kind == "float" else 1.0
+        return Spec(col.name, col.kind, item, unit + ((group,) if group is not None else ()), group,
+                    int(elem["bits"]), bool(elem.get("signed", False)), step)
+    return None
+
+
+def specs_for(category: int, edition: str, prefer130: bool = False) -> dict[str, Spec]:
+    out = {}
+    for col in columns_for(category, edition):
+        only = PREFER_130.get(col.name) if prefer130 else None
+        spec = _resolve(category, edition, col, only)
+        if spec is not None:
+            out[col.name] = spec
+    return out
+
+
+@pytest.mark.parametrize(("category", "edition"), EDITIONS)
+def test_table_walk_agrees_with_layout(category: int, edition: str) -> None:
+    specs = specs_for(category, edition)
+    items = set(compile_layout(category, edition).item_frn)
+    assert {s.item for s in specs.values()} <= items
+    # a column exists in an edition when one of its sources resolves there
+    for col in columns_for(category, edition):
+        if col.name not in specs:
+            assert not any(item in items for item, _ in col.sources), col.name
+    missing = {c.name for c in columns_for(category, edition)} - set(specs)
+    if category == 48 or edition.startswith("2.") or edition == "0.26":
+        assert missing == set()
+    else:
+        assert missing == {"mode3a", "signal_amplitude"}  # no I021/070 nor I021/131 before 0.26
+
+
+# ---------------------------------------------------------------------------------------------------------
+# Values
+
+
+def _zero(spec: Spec):
+    return {"float": 0.0, "octal": "0000"}.get(spec.kind, 0)
+
+
+def _value(spec: Spec) -> st.SearchStrategy:
+    """An engineering value over the whole field range, extremes favoured."""
+    if spec.kind == "float":
+        lo, hi = spec.lo, spec.hi
+        edges = [lo, hi, spec.step, min(max(0.0, lo), hi)]
+        if spec.signed:
+            edges += [-spec.step, lo + spec.step]
+        return st.one_of(st.sampled_from(edges), st.floats(lo, hi, allow_nan=False))
+    if spec.kind in ("int", "flag"):
+        return st.integers(0, (1 << spec.bits) - 1)
+    if spec.kind == "count":
+        return st.integers(0, 255)
+    if spec.kind == "octal":
+        return st.integers(0, 0o7777).map(lambda v: f"{v:04o}")
+    if spec.kind == "hex":
+        return st.integers(0, (1 << 24) - 1).map(lambda v: f"{v:06X}")
+    if spec.kind == "icao":
+        return st.text(ICAO_CHARS, min_size=1, max_size=8).filter(lambda s: s.strip() != "")
+    raise AssertionError(spec.kind)
+
+
+def _expected_text(spec: Spec, value):
+    return value.rstrip() if spec.kind == "icao" else value
+
+
+@st.composite
+def rows(draw, category: int, edition: str, prefer130: bool) -> tuple[dict, dict]:
+    """(input row for encode_frame, expected decoded row)."""
+    specs = specs_for(category, edition, prefer130)
+    v2 = category == 21 and edition.startswith("2.")
+    drawn = {n: s for n, s in specs.items() if not (v2 and n in V2_DERIVED)}
+    units: dict[tuple, list[Spec]] = {}
+    for s in drawn.values():
+        units.setdefault(s.unit, []).append(s)
+    present = {u for u in units if draw(st.booleans())}
+    if not present:
+        present = {drawn["sac"].unit}
+    # octet groups of an extended node before a written one are written too (zero-filled)
+    emitted = set(present)
+    for u in units:
+        if len(u) and isinstance(u[-1], int) and any(
+                p[:-1] == u[:-1] and isinstance(p[-1], int) and p[-1] > u[-1] for p in present):
+            emitted.add(u)
+    given_row: dict = {}
+    expected: dict = {}
+    for u, members in units.items():
+        if u not in present:
+            for s in members:
+                given_row[s.name] = None
+                expected[s.name] = _zero(s) if u in emitted else None
+            continue
+        # a unit is written when at least one of its columns has a value; the others are zero-filled
+        droppable = [s for s in members if s.kind in ("float", "int", "flag", "octal")]
+        keep = draw(st.sampled_from(members))
+        for s in members:
+            if s is not keep and s in droppable and draw(st.integers(0, 4)) == 0:
+                given_row[s.name] = None
+                expected[s.name] = _zero(s)
+            else:
+                v = draw(_value(s))
+                given_row[s.name] = v
+                expected[s.name] = _expected_text(s, v)
+    if v2:
+        t071, t073 = expected["time_applicability_position"], expected["time_reception_position"]
+        tod = t071 if t071 is not None else t073
+        expected["time_of_day"] = tod
+        given_row["time_of_day"] = tod if tod is not None and draw(st.booleans()) else None
+        step = drawn["time_applicability_position"].step
+        same = t073 is not None and math.floor(t071 / step + 0.5) == math.floor(t073 / step + 0.5) \
+            if t071 is not None else True
+        if not same and given_row["time_applicability_position"] is not None and draw(st.booleans()):
+            # I021/071 written through time_of_day alone (the encoder would leave time_of_day in I021/073
+            # when that already holds the same value)
+            given_row["time_of_day"] = t071
+            given_row["time_applicability_position"] = None
+    return given_row, expected
+
+
+# ---------------------------------------------------------------------------------------------------------
+# Round trip
+
+
+def round_trip(category: int, edition: str, frame: pd.DataFrame, prefer: dict | None = None,
+               records_per_block: int = 20) -> pd.DataFrame:
+    data = encode_frame(category, frame, edition=edition, prefer=prefer, records_per_block=records_per_block)
+    buf = np.frombuffer(data, np.uint8)
+    rec = decode_buffer(buf, read_segments(buf, "raw"), path="<round trip>", editions={category: edition})
+    assert rec.errors.empty, rec.errors.to_dict("records")
+    assert rec.decoded_bytes == len(data)
+    assert list(rec.frames) == [category]
+    out = rec.frames[category]
+    assert len(out) == len(frame)
+    return out
+
+
+def assert_row(decoded: pd.DataFrame, i: int, expected: dict, specs: dict[str, Spec]) -> None:
+    for name, want in expected.items():
+        got = decoded[name].iloc[i]
+        where = f"row {i} column {name!r}: expected {want!r}, decoded {got!r}"
+        if want is None:
+            assert pd.isna(got), where
+            continue
+        assert not pd.isna(got), where
+        spec = specs[name]
+        if spec.kind == "float":
+            tol = spec.step / 2 + 1e-9 * max(1.0, abs(want))
+            assert abs(float(got) - float(want)) <= tol, where
+        elif spec.kind in ("int", "flag", "count"):
+            assert int(got) == int(want), where
+        else:
+            assert str(got) == want, where
+
+
+def check(category: int, edition: str, given_rows: list[dict], expected: list[dict], prefer130: bool = False,
+          records_per_block: int = 20) -> pd.DataFrame:
+    frame = pd.DataFrame(given_rows)
+    decoded = round_trip(category, edition, frame, PREFER_130 if prefer130 else None, records_per_block)
+    specs = specs_for(category, edition, prefer130)
+    if category == 21 and edition.startswith("2."):
+        specs["time_of_day"] = specs["time_applicability_position"]
+    for i, row in enumerate(expected):
+        assert_row(decoded, i, row, specs)
+    # columns the edition does not have are all-missing
+    for col in columns_for(category, edition):
+        if col.name not in specs:
+            assert decoded[col.name].isna().all(), col.name
+    return decoded
+
+
+@pytest.mark.parametrize(("category", "edition"), EDITIONS)
+@settings(max_examples=30, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(data=st.data())
+def test_round_trip_every_edition(category: int, edition: str, data: st.DataObject) -> None:
+    prefer130 = category == 21 and edition.startswith("2.") and data.draw(st.booleans(), label="prefer 130")
+    n = data.draw(st.integers(1, 7), label="rows")
+    drawn = [data.draw(rows(category, edition, prefer130), label=f"row {i}") for i in range(n)]
+    per_block = data.draw(st.integers(1, 5), label="records per block")
+    check(category, edition, [g for g, _ in drawn], [e for _, e in drawn], prefer130, per_block)
+
+
+def _full_row(specs: dict[str, Spec], pick) -> dict:
+    return {n: pick(s) for n, s in specs.items()}
+
+
+@pytest.mark.parametrize(("category", "edition", "prefer130"),
+                         [(c, e, False) for c, e in EDITIONS] + [(c, e, True) for c, e in V2])
+def test_every_field_at_its_extremes(category: int, edition: str, prefer130: bool) -> None:
+    specs = specs_for(category, edition, prefer130)
+    if category == 21 and edition.startswith("2."):
+        del specs["time_of_day"]
+
+    def lowest(s: Spec):
+        return {"float": s.lo, "octal": "0000", "hex": "000000", "icao": "0"}.get(s.kind, 0)
+
+    def highest(s: Spec):
+        return {"float": s.hi, "octal": "7777", "hex": "FFFFFF", "icao": "ZZZZZZZZ", "count": 3}.get(
+            s.kind, (1 << s.bits) - 1)
+
+    def one_step(s: Spec):
+        return {"float": -s.step if s.signed else s.step, "octal": "0001", "hex": "000001",
+                "icao": "A 1", "count": 1}.get(s.kind, 1)
+
+    given_rows = [_full_row(specs, lowest), _full_row(specs, highest), _full_row(specs, one_step)]
+    expected = [dict(r) for r in given_rows]
+    if category == 21 and edition.startswith("2."):
+        for r in expected:
+            r["time_of_day"] = r["time_applicability_position"]
+    decoded = check(category, edition, given_rows, expected, prefer130)
+    for name, s in specs.items():
+        if s.kind == "float" and s.signed:  # signed minimum: exactly -2^(bits-1) LSBs, sign bit only
+            assert decoded[name].iloc[0] == pytest.approx(-(2.0 ** (s.bits - 1)) * s.step, rel=1e-12)
+            assert decoded[name].iloc[0] < 0 < decoded[name].iloc[1]
+
+
+# ---------------------------------------------------------------------------------------------------------
+# Named edge cases
+
+
+@pytest.mark.parametrize("edition", ["1.27", "1.31", "1.32"])
+def test_cat048_flight_level_signed_extremes(edition: str) -> None:
+    fls = [-2048.0, 2047.75, -0.25, 0.0, -1200.5, 330.0]
+    decoded = round_trip(48, edition, pd.DataFrame({"sac": 1, "sic": 2, "flight_level": fls}))
+    assert decoded.flight_level.tolist() == fls
+
+
+@pytest.mark.parametrize("edition", ["0.23", "0.26", "2.1", "2.7"])
+def test_cat021_flight_level_signed_extremes(edition: str) -> None:
+    fls = [-8192.0, 8191.75, -2048.0, -0.25, 0.0]  # I021/145: 16-bit two's complement, 1/4 FL
+    decoded = round_trip(21, edition, pd.DataFrame({"sac": 1, "sic": 2, "flight_level": fls}))
+    assert decoded.flight_level.tolist() == fls
+
+
+CALLSIGNS = ["AB 12 C", "1 2 3 4", "A1B2C3D4", "  X9", "DLH65A", "0", "Z 9", "12345678", "EZY 4 Y"]
+
+
+@pytest.mark.parametrize(("category", "edition"), EDITIONS)
+def test_callsigns_with_digits_and_spaces(category: int, edition: str) -> None:
+    frame = pd.DataFrame({"sac": 1, "sic": 2, "callsign": CALLSIGNS + [None]})
+    decoded = round_trip(category, edition, frame)
+    assert decoded.callsign.tolist()[:-1] == [c.rstrip() for c in CALLSIGNS]
+    assert pd.isna(decoded.callsign.iloc[-1])
+
+
+@pytest.mark.parametrize(("category", "edition"), [(c, e) for c, e in EDITIONS if (c, e) not in
+                                                    {(21, "0.23"), (21, "0.24"), (21, "0.25")}])
+def test_octal_codes_0000_and_7777(category: int, edition: str) -> None:
+    codes = ["0000", "7777", "0001", "7000", "1200", None]
+    decoded = round_trip(category, edition, pd.DataFrame({"sac": 1, "sic": 2, "mode3a": codes}))
+    assert decoded.mode3a.tolist()[:-1] == codes[:-1]
+    assert pd.isna(decoded.mode3a.iloc[-1])
+
+
+def test_no_mode3a_before_0_26() -> None:
+    with pytest.raises(ValueError, match="mode3a"):
+        encode_frame(21, pd.DataFrame({"mode3a": ["7777"]}), edition="0.23")
+
+
+def fspec_frns(record: bytes) -> set[int]:
+    """FRNs set in the FSPEC at the start of a record, read bit by bit."""
+    out, i = set(), 0
+    while True:
+        for bit in range(7):
+            if record[i] & (0x80 >> bit):
+                out.add(7 * i + bit + 1)
+        if not record[i] & 1:
+            return out
+        i += 1
+
+
+@pytest.mark.parametrize(("edition", "prefer130"), [
+    ("0.23", False), ("0.24", False), ("0.25", False), ("0.26", False),
+    *((e, p) for _, e in V2 for p in (False, True))])
+def test_positions_near_the_poles_and_antimeridian(edition: str, prefer130: bool) -> None:
+    spec = specs_for(21, edition, prefer130)["longitude"]
+    step = spec.step
+    assert spec.item == ("131" if edition.startswith("2.") and not prefer130 else "130")
+    assert spec.bits == (24 if edition == "0.23" or prefer130 else 32)
+    # +180 fits unless the field stops one LSB short of it (24-bit I021/130: 2^23 LSBs = 180 exactly)
+    lon_max = min(180.0, spec.hi)
+    lats = [90.0, -90.0, 90.0 - step, -90.0 + step, 0.0, 45.123456]
+    lons = [lon_max, -180.0, -180.0 + step, 179.0, 0.0, -0.000001]
+    frame = pd.DataFrame({"sac": 1, "sic": 2, "latitude": lats, "longitude": lons})
+    prefer = PREFER_130 if prefer130 else None
+    data = encode_frame(21, frame, edition=edition, prefer=prefer)
+    buf = np.frombuffer(data, np.uint8)
+    rec = decode_buffer(buf, read_segments(buf, "raw"), editions={21: edition})
+    out = rec.frames[21]
+    assert rec.errors.empty and len(out) == len(lats)
+    assert np.all(np.abs(out.latitude.to_numpy() - lats) <= step / 2 + 1e-12)
+    assert np.all(np.abs(out.longitude.to_numpy() - lons) <= step / 2 + 1e-12)
+    assert out.latitude.iloc[1] == -90.0 and out.longitude.iloc[1] == -180.0
+    frns = fspec_frns(data[3:])  # first record, after the block header
+    lay = compile_layout(21, edition)
+    assert lay.item_frn[spec.item] in frns
+    assert "131" not in lay.item_frn or spec.item == "131" or lay.item_frn["131"] not in frns
+    if lon_max < 180.0:
+        assert spec.bits == 24
+        with pytest.raises(ValueError, match="range"):
+            encode_frame(21, pd.DataFrame({"latitude": [0.0], "longitude": [180.0]}), edition=edition,
+                         prefer=prefer)
+
+
+@pytest.mark.parametrize(("category", "edition"), EDITIONS)
+def test_time_of_day_near_midnight(category: int, edition: str) -> None:
+    tods = [0.0, 0.0078125, 0.004, 86399.99, 86399.9921875, 43200.0]
+    decoded = round_trip(category, edition, pd.DataFrame({"sac": 1, "sic": 2, "time_of_day": tods}))
+    assert np.all(np.abs(decoded.time_of_day.to_numpy() - tods) <= 1 / 256 + 1e-9)
+    assert decoded.time_of_day.iloc[-2] == 86399.9921875 and decoded.time_of_day.iloc[0] == 0.0
+    assert decoded.timestamp.isna().all()  # no date given
+    assert math.isclose(decoded.time_of_day.max(), 86399.9921875)
