@@ -1,0 +1,323 @@
+"""Radar accuracy against ADS-B: per-report errors in the radar's own terms, their statistics, and biases.
+
+Each radar report of an aircraft that also has (jump-free, de-duplicated) ADS-B is compared with the ADS-B
+track interpolated linearly to the radar time, only across ADS-B gaps of at most ``max_gap_s``; the
+reference height is the ADS-B flight level (FL * 100 ft, taken as height above the ellipsoid, as
+``pipeline.measurements`` does for radar). The radar plot is placed at that same height, so the horizontal
+errors reflect range and azimuth only.
+
+Limitation (thesis): ADS-B is the reference but carries its own position error, bounded at 95 % by its
+NACp (DO-260B: NACp 8 < 92.6 m, 9 < 30 m, 10 < 10 m, 11 < 3 m); systematic errors below that level cannot
+be attributed to the radar, and the ADS-B altitude is pressure altitude, not geometric height.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+
+from .aircraft import all_aircraft
+from .dedup import deduplicate
+from .geodesy import (
+    M_PER_FT,
+    M_PER_NM,
+    distance_m,
+    ecef_to_enu,
+    enu_basis,
+    geodetic_to_ecef,
+    polar_to_geodetic,
+    slant_range_azimuth,
+)
+from .jumps import KT_TO_MS, detect_jumps
+from .measurements import UnknownRadar
+
+MAX_ADSB_GAP_S = 10.0
+# DO-260B NACp: 95 % horizontal position accuracy bound (EPU) in metres
+NACP_95_M = {11: 3.0, 10: 10.0, 9: 30.0, 8: 92.6, 7: 185.2, 6: 555.6, 5: 926.0, 4: 1852.0, 3: 3704.0,
+             2: 7408.0, 1: 18520.0}
+ERROR_COLUMNS = [
+    "radar", "sac", "sic", "callsign", "address", "time_of_day", "timestamp", "radar_row", "rho_nm",
+    "theta_deg", "adsb_latitude", "adsb_longitude", "adsb_height_m", "adsb_track_deg", "adsb_speed_ms",
+    "adsb_gap_s", "adsb_nacp", "slant_range_m", "ground_range_m", "azimuth_deg", "range_rate_ms",
+    "tangential_speed_ms", "range_error_m", "azimuth_error_deg", "along_track_m", "cross_track_m",
+    "horizontal_error_m",
+]
+ERROR_METRICS = ["range_error_m", "azimuth_error_deg", "along_track_m", "cross_track_m", "horizontal_error_m"]
+BIAS_COLUMNS = [
+    "radar", "sac", "sic", "n_reports", "n_rejected", "aircraft", "range_bias_m", "range_bias_se_m",
+    "range_gain_ppm", "range_gain_se_ppm", "azimuth_bias_deg", "azimuth_bias_se_deg", "time_bias_s",
+    "time_bias_se_s", "range_residual_rms_m", "azimuth_residual_rms_deg", "adsb_nacp_median",
+    "adsb_nacp_95_m", "note",
+]
+MIN_BIAS_REPORTS = 20
+LIMITATION_NOTE = ("ADS-B is the reference but carries its own position error, bounded at 95 % by its NACp "
+                   "(DO-260B: NACp 8 < 92.6 m, 9 < 30 m, 10 < 10 m, 11 < 3 m); radar errors below that level "
+                   "cannot be attributed to the radar (thesis limitation).")
+CLIP_SIGMAS = 5.0  # rows further than this many robust sigmas from the fit are rejected
+_FIT_PASSES = 6
+
+
+def wrap180(deg):
+    """Angles wrapped into [-180, 180)."""
+    return (np.asarray(deg, dtype=float) + 180.0) % 360.0 - 180.0
+
+
+def nacp_bound_m(nacp) -> float:
+    """95 % horizontal accuracy bound (m) of a NACp value (NaN when unknown or 0)."""
+    if nacp is None or pd.isna(nacp):
+        return float("nan")
+    return NACP_95_M.get(int(nacp), float("nan"))
+
+
+def _sites(radar: pd.DataFrame, sensors: pd.DataFrame) -> pd.DataFrame:
+    """Site name, latitude, longitude, altitude per radar row; UnknownRadar for pairs not in ``sensors``."""
+    table = sensors.astype({"sac": "Int64", "sic": "Int64"})[["name", "sac", "sic", "latitude", "longitude",
+                                                              "altitude_m"]]
+    site = radar[["sac", "sic"]].astype("Int64").merge(table, on=["sac", "sic"], how="left")
+    missing = site["latitude"].isna().to_numpy()
+    if missing.any():
+        pairs = site.loc[missing, ["sac", "sic"]].drop_duplicates()
+        raise UnknownRadar([(int(a), int(b)) for a, b in pairs.itertuples(index=False)])
+    return site
+
+
+def _adsb_track(adsb: pd.DataFrame) -> pd.DataFrame:
+    """One aircraft's ADS-B reports by unique time (reports at the same time averaged, NACp the worst)."""
+    a = adsb.sort_values("time_of_day", kind="stable")
+    lon = np.unwrap(a["longitude"].to_numpy(float), period=360.0)
+    trk = np.radians(a["heading_deg"].to_numpy(float))
+    gs_ms = a["ground_speed_kt"].to_numpy(float) * KT_TO_MS
+    frame = pd.DataFrame({"t": a["time_of_day"].to_numpy(float), "lat": a["latitude"].to_numpy(float),
+                          "lon": lon, "h": a["flight_level"].to_numpy(float) * 100.0 * M_PER_FT,
+                          "ve": gs_ms * np.sin(trk), "vn": gs_ms * np.cos(trk),
+                          "nacp": pd.to_numeric(a["nacp"], errors="coerce").to_numpy(float)
+                          if "nacp" in a else np.nan})
+    agg = {c: "mean" for c in ("lat", "lon", "h", "ve", "vn")} | {"nacp": "min"}
+    return frame.groupby("t", sort=True).agg(agg).reset_index()
+
+
+def _interpolate(track: pd.DataFrame, t_s: np.ndarray, max_gap_s: float) -> dict[str, np.ndarray]:
+    """ADS-B state at the radar times: position, height, ENU velocity (m/s), gap and NACp of the segment."""
+    ta = track["t"].to_numpy()
+    out = {k: np.full(t_s.size, np.nan) for k in ("lat", "lon", "h", "ve", "vn", "vu", "gap", "nacp")}
+    if ta.size < 2:
+        return out
+    k = np.searchsorted(ta, t_s, side="right") - 1
+    k = np.where(t_s == ta[-1], ta.size - 2, k)
+    inside = (k >= 0) & (k <= ta.size - 2)
+    k = np.clip(k, 0, ta.size - 2)
+    gap = ta[k + 1] - ta[k]
+    ok = inside & (gap <= max_gap_s)
+    f = np.where(ok, (t_s - ta[k]) / gap, np.nan)
+
+    def col(name: str) -> tuple[np.ndarray, np.ndarray]:
+        v = track[name].to_numpy()
+        return v[k], v[k + 1]
+
+    for name in ("lat", "lon", "h", "ve", "vn"):
+        a, b = col(name)
+        out[name] = a + f * (b - a)
+    h0, h1 = col("h")
+    out["vu"] = np.nan_to_num((h1 - h0) / gap)
+    # velocity of the segment itself where the reported ground vector is missing at either end
+    lat0, lat1 = col("lat")
+    lon0, lon1 = col("lon")
+    e0, n0, _ = ecef_to_enu(*geodetic_to_ecef(lat0, lon0, h0), out["lat"], out["lon"], out["h"])
+    e1, n1, _ = ecef_to_enu(*geodetic_to_ecef(lat1, lon1, h1), out["lat"], out["lon"], out["h"])
+    no_vel = ~(np.isfinite(out["ve"]) & np.isfinite(out["vn"]))
+    out["ve"] = np.where(no_vel, (e1 - e0) / gap, out["ve"])
+    out["vn"] = np.where(no_vel, (n1 - n0) / gap, out["vn"])
+    out["gap"] = np.where(ok, gap, np.nan)
+    out["nacp"] = np.fmin(*col("nacp"))
+    out["lon"] = wrap180(out["lon"])
+    for name in out:
+        out[name] = np.where(ok, out[name], np.nan)
+    return out
+
+
+def _matched(radar_meas: pd.DataFrame, adsb_meas: pd.DataFrame, max_gap_s: float,
+             jump_kw: dict | None) -> pd.DataFrame:
+    """Radar reports (de-duplicated) with the interpolated ADS-B reference, for aircraft seen by both."""
+    radar = radar_meas.assign(radar_row=radar_meas.index.to_numpy())
+    adsb = adsb_meas[~detect_jumps(adsb_meas, **(jump_kw or {})).to_numpy()] if len(adsb_meas) else adsb_meas
+    parts = []
+    for ac in all_aircraft(radar, adsb):
+        r, _ = deduplicate(ac.radar)
+        a, _ = deduplicate(ac.adsb)
+        ref = _interpolate(_adsb_track(a), r["time_of_day"].to_numpy(float), max_gap_s)
+        r = r.assign(callsign=ac.callsign or pd.NA, address=ac.address or pd.NA,
+                     **{f"ref_{k}": v for k, v in ref.items()})
+        parts.append(r[np.isfinite(ref["lat"])])
+    if not parts:
+        return pd.DataFrame(columns=[*radar.columns, "ref_lat"])
+    return pd.concat(parts, ignore_index=True)
+
+
+def radar_errors(radar_meas: pd.DataFrame, adsb_meas: pd.DataFrame, sensors: pd.DataFrame, *,
+                 max_gap_s: float = MAX_ADSB_GAP_S, jump_kw: dict | None = None) -> pd.DataFrame:
+    """One row per radar report matched to ADS-B: range, azimuth, along/cross-track and horizontal error.
+
+    range_error_m = radar slant range - slant range from the site to the ADS-B reference; azimuth error
+    wrapped to +-180 deg; along-track along the ADS-B ground track, cross-track positive to the right of
+    it. Also the reference geometry (slant/ground range, azimuth, range rate, tangential speed) that
+    ``estimate_biases`` regresses on.
+    """
+    m = _matched(radar_meas, adsb_meas, max_gap_s, jump_kw)
+    if m.empty:
+        return pd.DataFrame(columns=ERROR_COLUMNS)
+    site = _sites(m, sensors)
+    s_lat, s_lon, s_alt = (site[c].to_numpy(float) for c in ("latitude", "longitude", "altitude_m"))
+    lat, lon, h = m["ref_lat"].to_numpy(), m["ref_lon"].to_numpy(), m["ref_h"].to_numpy()
+    ve, vn, vu = m["ref_ve"].to_numpy(), m["ref_vn"].to_numpy(), m["ref_vu"].to_numpy()
+
+    # reference geometry seen from the site, and its rates from the ADS-B velocity
+    e, n, u = ecef_to_enu(*geodetic_to_ecef(lat, lon, h), s_lat, s_lon, s_alt)
+    slant_m, ground_m = np.sqrt(e**2 + n**2 + u**2), np.hypot(e, n)
+    east, north, up = enu_basis(lat, lon)
+    v_ecef = ve[:, None] * east + vn[:, None] * north + vu[:, None] * up
+    s_east, s_north, s_up = enu_basis(s_lat, s_lon)
+    vs_e, vs_n, vs_u = ((v_ecef * b).sum(-1) for b in (s_east, s_north, s_up))
+    range_rate = (e * vs_e + n * vs_n + u * vs_u) / slant_m
+    tangential = (n * vs_e - e * vs_n) / ground_m
+
+    # the radar plot in its own terms; cartesian-only plots get them from their position
+    rho_nm, theta = m["rho_nm"].to_numpy(float), m["theta_deg"].to_numpy(float)
+    polar = np.isfinite(rho_nm) & np.isfinite(theta)
+    if (~polar).any():
+        fl_h = m["flight_level"].to_numpy(float) * 100.0 * M_PER_FT
+        rr, tt, _ = slant_range_azimuth(s_lat, s_lon, s_alt, m["latitude"].to_numpy(float),
+                                        m["longitude"].to_numpy(float), np.where(np.isfinite(fl_h), fl_h, h))
+        rho_nm, theta = np.where(polar, rho_nm, rr), np.where(polar, theta, tt)
+    p_lat, p_lon, p_h = polar_to_geodetic(s_lat, s_lon, s_alt, rho_nm, theta, h)
+    de, dn, _ = ecef_to_enu(*geodetic_to_ecef(p_lat, p_lon, p_h), lat, lon, h)
+    trk = np.arctan2(ve, vn)
+
+    out = pd.DataFrame({
+        "radar": site["name"].to_numpy(), "sac": m["sac"].astype("Int64").to_numpy(),
+        "sic": m["sic"].astype("Int64").to_numpy(), "callsign": m["callsign"].to_numpy(),
+        "address": m["address"].to_numpy(), "time_of_day": m["time_of_day"].to_numpy(float),
+        "timestamp": m["timestamp"].to_numpy(), "radar_row": m["radar_row"].to_numpy(),
+        "rho_nm": rho_nm, "theta_deg": theta, "adsb_latitude": lat, "adsb_longitude": lon,
+        "adsb_height_m": h, "adsb_track_deg": np.degrees(trk) % 360.0, "adsb_speed_ms": np.hypot(ve, vn),
+        "adsb_gap_s": m["ref_gap"].to_numpy(), "adsb_nacp": m["ref_nacp"].to_numpy(),
+        "slant_range_m": slant_m, "ground_range_m": ground_m,
+        "azimuth_deg": np.degrees(np.arctan2(e, n)) % 360.0, "range_rate_ms": range_rate,
+        "tangential_speed_ms": tangential, "range_error_m": rho_nm * M_PER_NM - slant_m,
+        "azimuth_error_deg": wrap180(theta - np.degrees(np.arctan2(e, n))),
+        "along_track_m": de * np.sin(trk) + dn * np.cos(trk),
+        "cross_track_m": de * np.cos(trk) - dn * np.sin(trk),
+        "horizontal_error_m": distance_m(lat, lon, p_lat, p_lon),
+    })
+    return out[ERROR_COLUMNS].sort_values(["sac", "sic", "time_of_day"], kind="stable").reset_index(drop=True)
+
+
+def _moments(values: pd.Series, base: str, unit: str) -> dict[str, float]:
+    v = values.to_numpy(float)
+    v = v[np.isfinite(v)]
+    if v.size == 0:
+        return {f"{base}_{s}_{unit}": np.nan for s in ("mean", "std", "rms")}
+    return {f"{base}_mean_{unit}": float(v.mean()), f"{base}_std_{unit}": float(v.std(ddof=1)) if v.size > 1
+            else np.nan, f"{base}_rms_{unit}": float(np.sqrt(np.mean(v**2)))}
+
+
+def error_stats(errors: pd.DataFrame) -> pd.DataFrame:
+    """Mean, standard deviation and RMS of each error per radar, for all aircraft ("(all)") and each one."""
+    rows = []
+    for (name, sac, sic), g in errors.groupby(["radar", "sac", "sic"], sort=True, dropna=False):
+        parts = [("(all)", "", g)] + [(cs, addr, a) for (cs, addr), a in
+                                      g.groupby(["callsign", "address"], sort=True, dropna=False)]
+        for cs, addr, a in parts:
+            row = {"radar": name, "sac": sac, "sic": sic, "callsign": cs, "address": addr,
+                   "n_reports": len(a)}
+            for metric in ERROR_METRICS:
+                base, unit = metric.rsplit("_", 1)
+                row |= _moments(a[metric], base, unit)
+            rows.append(row)
+    stats = [f"{base}_{s}_{unit}" for base, unit in (m.rsplit("_", 1) for m in ERROR_METRICS)
+             for s in ("mean", "std", "rms")]
+    columns = ["radar", "sac", "sic", "callsign", "address", "n_reports", *stats]
+    return pd.DataFrame(rows, columns=columns)
+
+
+def _robust_sigma(r: np.ndarray) -> float:
+    return float(1.4826 * np.median(np.abs(r - np.median(r)))) if r.size else float("nan")
+
+
+def fit_biases(errors: pd.DataFrame) -> dict:
+    """Joint weighted least squares of one radar's errors: range rows [1, R, 0, -range_rate] (R in Mm,
+    giving ppm) and azimuth rows [0, 0, 1, -azimuth_rate] in degrees, weighted by the inverse residual
+    variance of each row type, re-weighted and clipped at CLIP_SIGMAS robust sigmas until stable."""
+    ok = errors[["range_error_m", "azimuth_error_deg", "slant_range_m", "ground_range_m", "range_rate_ms",
+                 "tangential_speed_ms"]].notna().all(axis=1).to_numpy()
+    e = errors[ok]
+    n = len(e)
+    az_rate_dps = np.degrees(e["tangential_speed_ms"].to_numpy() / e["ground_range_m"].to_numpy())
+    x = np.zeros((2 * n, 4))
+    x[:n, 0], x[:n, 1], x[:n, 3] = 1.0, e["slant_range_m"].to_numpy() * 1e-6, -e["range_rate_ms"].to_numpy()
+    x[n:, 2], x[n:, 3] = 1.0, -az_rate_dps
+    y = np.concatenate([e["range_error_m"].to_numpy(), e["azimuth_error_deg"].to_numpy()])
+    is_range = np.arange(2 * n) < n
+    result = {"n_reports": n, "n_rejected": 0, "params": np.full(4, np.nan), "se": np.full(4, np.nan),
+              "rms": (np.nan, np.nan)}
+    if n < MIN_BIAS_REPORTS or np.linalg.matrix_rank(x) < 4:
+        return result
+    keep = np.ones(2 * n, dtype=bool)
+    sig = np.array([_robust_sigma(y[is_range]), _robust_sigma(y[~is_range])])
+    sig = np.where(sig > 0, sig, 1.0)
+    for _ in range(_FIT_PASSES):
+        w = np.where(is_range, 1.0 / sig[0], 1.0 / sig[1])
+        if np.linalg.matrix_rank(x[keep]) < 4:
+            return result
+        beta, *_ = np.linalg.lstsq(x[keep] * w[keep, None], y[keep] * w[keep], rcond=None)
+        res = y - x @ beta
+        robust = np.array([_robust_sigma(res[is_range & keep]), _robust_sigma(res[~is_range & keep])])
+        new_keep = np.abs(res) <= CLIP_SIGMAS * np.where(is_range, robust[0], robust[1])
+        new_sig = np.array([np.std(res[is_range & new_keep]), np.std(res[~is_range & new_keep])])
+        stable = np.array_equal(new_keep, keep) and np.allclose(new_sig, sig, rtol=1e-3)
+        keep, sig = new_keep, np.where(new_sig > 0, new_sig, 1.0)
+        if stable:
+            break
+    w = np.where(is_range, 1.0 / sig[0], 1.0 / sig[1])
+    xw = x[keep] * w[keep, None]
+    beta, *_ = np.linalg.lstsq(xw, y[keep] * w[keep], rcond=None)
+    res = y - x @ beta
+    cov = np.linalg.inv(xw.T @ xw)
+    result.update(params=beta, se=np.sqrt(np.diag(cov)), n_rejected=int((~keep).sum()),
+                  rms=(float(np.sqrt(np.mean(res[is_range & keep] ** 2))),
+                       float(np.sqrt(np.mean(res[~is_range & keep] ** 2)))))
+    return result
+
+
+def _note(nacp_median: float) -> str:
+    bound = nacp_bound_m(nacp_median)
+    level = (f"median NACp {nacp_median:g}: 95 % of ADS-B positions within {bound:g} m (DO-260B)"
+             if np.isfinite(bound) else "ADS-B NACp unknown")
+    return (f"ADS-B is the reference but has its own position error ({level}); radar errors below that "
+            "level cannot be attributed to the radar (thesis limitation). ADS-B height is pressure altitude.")
+
+
+def estimate_biases(errors: pd.DataFrame) -> pd.DataFrame:
+    """Per radar: range bias (m), range gain (ppm), azimuth bias (deg) and time bias (s, radar time minus
+    true time) over all aircraft by ``fit_biases``, with standard errors, counts, residual RMS and the
+    ADS-B accuracy note (also in ``attrs["note"]``)."""
+    rows = []
+    for (name, sac, sic), g in errors.groupby(["radar", "sac", "sic"], sort=True, dropna=False):
+        fit = fit_biases(g)
+        nacp = pd.to_numeric(g["adsb_nacp"], errors="coerce").dropna()
+        nacp_median = float(np.floor(nacp.median())) if len(nacp) else float("nan")
+        (b_r, gain, b_a, dt), (se_r, se_g, se_a, se_t) = fit["params"], fit["se"]
+        note = _note(nacp_median)
+        if not np.isfinite(b_r):
+            note = (f"too few reports (< {MIN_BIAS_REPORTS}) or too little geometry diversity to separate "
+                    "range bias, gain, azimuth bias and time bias. ") + note
+        rows.append({"radar": name, "sac": sac, "sic": sic, "n_reports": fit["n_reports"],
+                     "n_rejected": fit["n_rejected"],
+                     "aircraft": len(g[["callsign", "address"]].drop_duplicates()),
+                     "range_bias_m": b_r, "range_bias_se_m": se_r, "range_gain_ppm": gain,
+                     "range_gain_se_ppm": se_g, "azimuth_bias_deg": b_a, "azimuth_bias_se_deg": se_a,
+                     "time_bias_s": dt, "time_bias_se_s": se_t, "range_residual_rms_m": fit["rms"][0],
+                     "azimuth_residual_rms_deg": fit["rms"][1], "adsb_nacp_median": nacp_median,
+                     "adsb_nacp_95_m": nacp_bound_m(nacp_median), "note": note})
+    out = pd.DataFrame(rows, columns=BIAS_COLUMNS)
+    out.attrs["note"] = LIMITATION_NOTE
+    return out

@@ -1,0 +1,44 @@
+"""Optional ADS-B report filters (all off by default): position jumps, low NIC, low NACp.
+
+Filters run in a fixed order (jumps, then NIC, then NACp), each on what the previous one left, so a report
+is counted once, by the first filter that removes it. NIC uses ``nucp_nic``, which holds NUCp for MOPS
+version 0 reports and NIC for versions 1/2: choose ``min_nic`` for the version in the data. Reports whose
+NIC (or NACp) is missing are kept, and counted under ``nic_missing_kept`` (``nacp_missing_kept``) when that
+minimum is set, among the reports that reach that filter.
+"""
+
+from __future__ import annotations
+
+import pandas as pd
+
+from .jumps import detect_jumps
+
+FILTER_KEYS = ["jumps", "nic_below_min", "nacp_below_min", "nic_missing_kept", "nacp_missing_kept"]
+
+
+def _below(meas: pd.DataFrame, column: str, minimum: int | None) -> tuple[pd.Series, int]:
+    """Rows below the minimum (missing values are not below) and how many values are missing."""
+    if minimum is None:
+        return pd.Series(False, index=meas.index), 0
+    values = pd.to_numeric(meas[column], errors="coerce") if column in meas else pd.Series(
+        float("nan"), index=meas.index)
+    return (values < minimum).fillna(False).astype(bool), int(values.isna().sum())
+
+
+def apply_filters(adsb_meas: pd.DataFrame, *, drop_jumps: bool = False, min_nic: int | None = None,
+                  min_nacp: int | None = None,
+                  jump_kw: dict | None = None) -> tuple[pd.DataFrame, dict[str, int]]:
+    """ADS-B reports that pass the chosen filters (index reset), and the count per key of FILTER_KEYS."""
+    removed = dict.fromkeys(FILTER_KEYS, 0)
+    kept = adsb_meas
+    if drop_jumps and len(kept):
+        jump = detect_jumps(kept, **(jump_kw or {}))
+        removed["jumps"] = int(jump.sum())
+        kept = kept[~jump.to_numpy()]
+    low_nic, removed["nic_missing_kept"] = _below(kept, "nucp_nic", min_nic)
+    removed["nic_below_min"] = int(low_nic.sum())
+    kept = kept[~low_nic.to_numpy()]
+    low_nacp, removed["nacp_missing_kept"] = _below(kept, "nacp", min_nacp)
+    removed["nacp_below_min"] = int(low_nacp.sum())
+    kept = kept[~low_nacp.to_numpy()]
+    return kept.reset_index(drop=True), removed

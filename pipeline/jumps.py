@@ -1,0 +1,203 @@
+"""ADS-B position jumps: reports inconsistent with their neighbours in time (implied speed, robust local fit).
+
+Per aircraft (24-bit address, else call sign; rows with neither are never judged), reports are sorted by
+time and split into segments at gaps longer than ``SEGMENT_GAP_S``. A report is a jump when, against the
+reports currently accepted around it (itself excluded):
+
+* speed test: the implied speed to BOTH the previous and the next accepted report exceeds ``max_speed_kt``
+  (distance > max speed * dt + ``SPEED_SLACK_M``); at a segment end, to both of the two nearest reports on
+  the one side it has; or
+* fit test: its distance from a robust local fit (Theil-Sen line of latitude and of longitude against time
+  over the ``robust_window - 1`` nearest accepted reports) exceeds ``robust_threshold_m``, plus an allowance
+  ``TURN_ACCEL_MS2 * tau^2 / 2`` for the fit's curvature error when the neighbours are far away in time
+  (tau^2 = dt_before * dt_after between neighbours, dt * (dt + span) when they are all on one side).
+
+The search is iterative: each pass rejects only the worst offender within +-robust_window/2 reports, then
+re-fits without it, and reinstates rejected reports that agree with the final accepted track, so one
+jump never condemns its good neighbours and runs of 2-3 consecutive jumps are peeled off one by one.
+"""
+
+from __future__ import annotations
+
+import itertools
+import warnings
+
+import numpy as np
+import pandas as pd
+
+from .geodesy import distance_m
+
+KT_TO_MS = 1852.0 / 3600.0
+SPEED_SLACK_M = 300.0  # allowance added to max speed * dt: position noise (NACp 6) and time quantisation
+TURN_ACCEL_MS2 = 15.0  # lateral acceleration bound (3.5 deg/s at 480 kt) for the fit's curvature allowance
+SEGMENT_GAP_S = 120.0  # neighbours are never taken across a longer gap
+MIN_FIT_NEIGHBOURS = 4  # fewer accepted neighbours: the fit test is not applied (speed test only)
+_MAX_PASSES = 40
+
+JUMP_COLUMNS = ["row", "callsign", "address", "sac", "sic", "time_of_day", "timestamp", "latitude",
+                "longitude", "fit_latitude", "fit_longitude", "jump_size_m"]
+
+
+def aircraft_key(meas: pd.DataFrame) -> pd.Series:
+    """Grouping key per row: "A:" + address, else "C:" + call sign, else NA (unidentified)."""
+    addr = meas["address"] if "address" in meas else pd.Series(pd.NA, index=meas.index, dtype="object")
+    cs = meas["callsign"] if "callsign" in meas else pd.Series(pd.NA, index=meas.index, dtype="object")
+    return ("A:" + addr.astype("object")).fillna("C:" + cs.astype("object"))
+
+
+_EARTH_RADIUS_M = 6371008.8
+
+
+def _flat_m(lat1, lon1, lat2, lon2) -> np.ndarray:
+    """Distance (m) on a local flat earth: within 0.5 % up to 1000 km, enough for the consistency tests."""
+    dlon = (np.asarray(lon2) - lon1 + 180.0) % 360.0 - 180.0
+    mean_lat = np.radians(0.5 * (np.asarray(lat1) + lat2))
+    return _EARTH_RADIUS_M * np.radians(np.hypot(np.asarray(lat2) - lat1, dlon * np.cos(mean_lat)))
+
+
+class _Tracks:
+    """Reports of every segment, sorted and concatenated; the search works on all segments at once.
+
+    ``lo``/``hi`` of a report are the first and one-past-last index of its segment.
+    """
+
+    def __init__(self, t_s: np.ndarray, lat: np.ndarray, lon: np.ndarray, seg: np.ndarray, half: int):
+        self.t, self.lat, self.lon, self.half = t_s, lat, np.unwrap(lon, period=360.0), half
+        self.n = t_s.size
+        first = np.flatnonzero(np.r_[True, seg[1:] != seg[:-1]])
+        size = np.diff(np.r_[first, self.n])
+        self.seg_lo = np.repeat(first, size)
+        self.seg_hi = self.seg_lo + np.repeat(size, size)
+
+    def _accepted_ranges(self, acc: np.ndarray):
+        """Per report: accepted positions before it (left), up to and including it (right), and the
+        accepted range [lo, hi) of its segment, all as indices into ``acc``."""
+        i = np.arange(self.n)
+        return (np.searchsorted(acc, i, side="left"), np.searchsorted(acc, i, side="right"),
+                np.searchsorted(acc, self.seg_lo, side="left"),
+                np.searchsorted(acc, self.seg_hi, side="left"))
+
+    def neighbours(self, acc: np.ndarray, left, right, lo, hi) -> np.ndarray:
+        """Indices (n, 2*half) of the nearest accepted reports of its segment, itself excluded (-1: none)."""
+        excl = right - left
+        width = 2 * self.half
+        last = hi - excl  # one past the last index of the virtual list acc[lo:left] + acc[right:hi]
+        start = np.minimum(np.maximum(left - self.half, lo), np.maximum(lo, last - width))
+        v = start[:, None] + np.arange(width)[None, :]
+        pos = np.where(v < left[:, None], v, v + excl[:, None])
+        safe = acc[np.clip(pos, 0, acc.size - 1)] if acc.size else np.zeros_like(pos)
+        return np.where(v < last[:, None], safe, -1)
+
+    def fit(self, idx: np.ndarray, threshold_m: float):
+        """Theil-Sen prediction of each report from its neighbours; score = distance / allowed distance."""
+        valid = idx >= 0
+        safe = np.where(valid, idx, 0)
+        tj = np.where(valid, self.t[safe], np.nan)
+        dt = tj - self.t[:, None]  # neighbour time relative to the report
+        pairs = np.array(list(itertools.combinations(range(idx.shape[1]), 2)))
+        a, b = pairs[:, 0], pairs[:, 1]
+        with np.errstate(invalid="ignore", divide="ignore"), warnings.catch_warnings():
+            warnings.simplefilter("ignore", RuntimeWarning)
+            span = tj[:, b] - tj[:, a]
+            span = np.where(span != 0, span, np.nan)
+            fitted = []
+            for y in (self.lat, self.lon):
+                yj = np.where(valid, y[safe], np.nan)
+                slope = np.nanmedian((yj[:, b] - yj[:, a]) / span, axis=1)
+                slope = np.where(np.isfinite(slope), slope, 0.0)
+                fitted.append(np.nanmedian(yj - slope[:, None] * dt, axis=1))
+            dt_b = np.nanmin(np.where(dt < 0, -dt, np.nan), axis=1)
+            dt_a = np.nanmin(np.where(dt > 0, dt, np.nan), axis=1)
+            far = np.nanmax(np.abs(dt), axis=1)
+        tau2 = np.where(np.isfinite(dt_b) & np.isfinite(dt_a), dt_b * dt_a, np.fmin(dt_b, dt_a) * far)
+        enough = valid.sum(axis=1) >= MIN_FIT_NEIGHBOURS
+        fit_lat = np.where(enough, fitted[0], np.nan)
+        fit_lon = np.where(enough, fitted[1], np.nan)
+        allowed = threshold_m + 0.5 * TURN_ACCEL_MS2 * np.nan_to_num(tau2)
+        return np.nan_to_num(_flat_m(self.lat, self.lon, fit_lat, fit_lon) / allowed), fit_lat, fit_lon
+
+    def _pair_score(self, j: np.ndarray, ok: np.ndarray, v_max_ms: float) -> np.ndarray:
+        """Distance / (max speed * dt + slack) from each report to report j (0 where ok is False)."""
+        jj = np.where(ok, j, 0)
+        allowed = v_max_ms * np.abs(self.t - self.t[jj]) + SPEED_SLACK_M
+        return np.where(ok, _flat_m(self.lat, self.lon, self.lat[jj], self.lon[jj]) / allowed, 0.0)
+
+    def speed(self, acc: np.ndarray, left, right, lo, hi, v_max_ms: float) -> np.ndarray:
+        """Speed-test score: min over both sides, or over the two nearest reports on the only side."""
+        def at(k: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+            ok = (k >= lo) & (k < hi)
+            return (acc[np.clip(k, 0, acc.size - 1)] if acc.size else np.zeros_like(k)), ok
+
+        (p1, ok_p1), (p2, ok_p2) = at(left - 1), at(left - 2)
+        (n1, ok_n1), (n2, ok_n2) = at(right), at(right + 1)
+        s_p1, s_p2 = self._pair_score(p1, ok_p1, v_max_ms), self._pair_score(p2, ok_p2, v_max_ms)
+        s_n1, s_n2 = self._pair_score(n1, ok_n1, v_max_ms), self._pair_score(n2, ok_n2, v_max_ms)
+        one_sided = np.where(ok_n2 & ~ok_p1, np.minimum(s_n1, s_n2),
+                             np.where(ok_p2 & ~ok_n1, np.minimum(s_p1, s_p2), 0.0))
+        return np.where(ok_p1 & ok_n1, np.minimum(s_p1, s_n1), one_sided)
+
+    def search(self, v_max_ms: float, threshold_m: float):
+        """Reject the worst offender per neighbourhood and reinstate what fits, until stable; the jump
+        mask and each report's fitted position against the final accepted reports."""
+        accepted = np.ones(self.n, dtype=bool)
+        for _ in range(_MAX_PASSES):
+            acc = np.flatnonzero(accepted)
+            ranges = self._accepted_ranges(acc)
+            fit_score, fit_lat, fit_lon = self.fit(self.neighbours(acc, *ranges), threshold_m)
+            score = np.fmax(fit_score, self.speed(acc, *ranges, v_max_ms))
+            live = np.where(accepted, score, -np.inf)
+            pad = np.pad(live, self.half, constant_values=-np.inf)
+            local_max = np.lib.stride_tricks.sliding_window_view(pad, 2 * self.half + 1).max(axis=1)
+            reject = accepted & (score > 1.0) & (live >= local_max)
+            reinstate = ~accepted & (score <= 1.0)
+            if not reject.any() and not reinstate.any():
+                break
+            accepted = (accepted & ~reject) | reinstate
+        return ~accepted, fit_lat, (fit_lon + 180.0) % 360.0 - 180.0
+
+
+def _detect(adsb_meas: pd.DataFrame, max_speed_kt: float, robust_window: int,
+            robust_threshold_m: float) -> pd.DataFrame:
+    """Per row (original index): jump flag, distance from the robust fit (m) and the fitted lat/lon."""
+    if robust_window < 3:
+        raise ValueError(f"robust_window must be at least 3, got {robust_window}")
+    n = len(adsb_meas)
+    cols = {"jump": np.zeros(n, bool), "jump_size_m": np.full(n, np.nan), "fit_latitude": np.full(n, np.nan),
+            "fit_longitude": np.full(n, np.nan)}
+    frame = pd.DataFrame({"key": aircraft_key(adsb_meas).to_numpy(),
+                          "t": adsb_meas["time_of_day"].to_numpy(float),
+                          "lat": adsb_meas["latitude"].to_numpy(float),
+                          "lon": adsb_meas["longitude"].to_numpy(float), "pos": np.arange(n)})
+    frame = frame[frame["key"].notna() & frame[["t", "lat", "lon"]].notna().all(axis=1)]
+    frame = frame.sort_values(["key", "t"], kind="stable")
+    seg = ((frame["key"] != frame["key"].shift()) | (frame["t"].diff() > SEGMENT_GAP_S)).cumsum()
+    frame = frame[seg.map(seg.value_counts()).to_numpy() >= 3]  # shorter segments are not judged
+    if frame.empty:
+        return pd.DataFrame(cols, index=adsb_meas.index)
+    tracks = _Tracks(frame["t"].to_numpy(), frame["lat"].to_numpy(), frame["lon"].to_numpy(),
+                     seg[frame.index].to_numpy(), (robust_window - 1) // 2)
+    jump, fit_lat, fit_lon = tracks.search(max_speed_kt * KT_TO_MS, robust_threshold_m)
+    pos, lat, lon = frame["pos"].to_numpy(), frame["lat"].to_numpy(), frame["lon"].to_numpy()
+    cols["jump"][pos], cols["fit_latitude"][pos], cols["fit_longitude"][pos] = jump, fit_lat, fit_lon
+    cols["jump_size_m"][pos] = distance_m(lat, lon, fit_lat, fit_lon)
+    return pd.DataFrame(cols, index=adsb_meas.index)
+
+
+def detect_jumps(adsb_meas: pd.DataFrame, *, max_speed_kt: float = 1000.0, robust_window: int = 7,
+                 robust_threshold_m: float = 2000.0) -> pd.Series:
+    """True for ADS-B reports that are position jumps (see the module docstring); indexed like the input."""
+    return _detect(adsb_meas, max_speed_kt, robust_window, robust_threshold_m)["jump"].rename("jump")
+
+
+def jump_table(adsb_meas: pd.DataFrame, *, max_speed_kt: float = 1000.0, robust_window: int = 7,
+               robust_threshold_m: float = 2000.0) -> pd.DataFrame:
+    """One row per jump: identity, time, reported and fitted position, size (distance to the fit, m)."""
+    found = _detect(adsb_meas, max_speed_kt, robust_window, robust_threshold_m)
+    hit = found["jump"].to_numpy()
+    rows = adsb_meas[hit]
+    table = pd.DataFrame({"row": rows.index.to_numpy()})
+    for c in JUMP_COLUMNS[1:9]:
+        table[c] = rows[c].to_numpy() if c in rows else pd.NA
+    for c in ("fit_latitude", "fit_longitude", "jump_size_m"):
+        table[c] = found[c].to_numpy()[hit]
+    return table[JUMP_COLUMNS].sort_values(["time_of_day", "row"], kind="stable").reset_index(drop=True)

@@ -1,0 +1,245 @@
+"""Sensor data quality tables: counts, duplicates, update intervals, gaps, missing speeds, jumps, ADS-B NIC.
+
+Rows are per aircraft (address, else call sign; "(all)" pools every aircraft) and per sensor (radar or
+ADS-B, with its SAC/SIC). Everything after the duplicate count is computed on de-duplicated reports
+(``pipeline.dedup``, per aircraft and sensor). Update intervals are the time differences between
+consecutive reports of one aircraft from one sensor of at most ``gap_s``; longer ones are gaps (listed
+with their start and end; "reappeared_after_1h" when longer than an hour).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+
+from .dedup import deduplicate
+from .jumps import jump_table
+
+ALL = "(all)"
+REAPPEARANCE_S = 3600.0
+QUALITY_BIN_S = 600.0
+NUCP_MIN = 5  # NUCp below this is low integrity (MOPS version 0)
+NIC_MIN = 6  # NIC below this is low integrity (MOPS versions 1 and 2)
+ADSB_INDICATORS = ["nucp_nic", "nacp", "nucr_nacv", "sil"]
+SENSOR_KEYS = ["sensor", "sac", "sic"]
+SHARE_COLUMNS = ["nucp_below_5_pct", "nic_below_6_pct", "low_integrity_pct"]
+ID_KEYS = ["callsign", "address", *SENSOR_KEYS]
+
+QUALITY_COLUMNS = [
+    *ID_KEYS, "reports", "duplicates_removed", "reports_after_dedup", "first_tod_s", "last_tod_s",
+    "first_utc", "last_utc", "intervals", "interval_min_s", "interval_median_s", "interval_p95_s",
+    "interval_max_s", "gaps", "longest_gap_s", "reappearances", "speed_missing", "speed_zero",
+    "speed_missing_or_zero", "speed_missing_or_zero_pct", "jumps", "nucp_below_5_pct", "nic_below_6_pct",
+    "low_integrity_pct", "mops_versions",
+]
+HISTOGRAM_COLUMNS = [*SENSOR_KEYS, "bin_start_s", "bin_end_s", "intervals"]
+GAP_COLUMNS = [*ID_KEYS, "gap_start_tod_s", "gap_end_tod_s", "gap_start_utc", "gap_end_utc", "gap_duration_s",
+               "reappeared_after_1h"]
+JUMP_COLUMNS = [*ID_KEYS, "time_of_day", "utc", "latitude", "longitude", "fit_latitude", "fit_longitude",
+                "jump_size_m"]
+VALUE_COUNT_COLUMNS = [*ID_KEYS, "indicator", "value", "reports", "share_pct"]
+
+
+def iso_utc(ts) -> str | None:
+    """ISO 8601 UTC text (milliseconds, "Z") of a timestamp; None when missing."""
+    if ts is None or pd.isna(ts):
+        return None
+    ts = pd.Timestamp(ts)
+    ts = ts.tz_localize("UTC") if ts.tzinfo is None else ts.tz_convert("UTC")
+    return ts.isoformat(timespec="milliseconds").replace("+00:00", "Z")
+
+
+def histogram_edges_s(gap_s: float) -> np.ndarray:
+    """Update-interval bin edges: 0.5 s up to 20 s, then 30, 60, 120 s, closed by gap_s."""
+    fine = np.arange(0.0, 20.0 + 1e-9, 0.5)
+    edges = np.concatenate([fine, [30.0, 60.0, 120.0]])
+    return np.append(edges[edges < gap_s], gap_s)
+
+
+def _aircraft_labels(radar: pd.DataFrame, adsb: pd.DataFrame) -> pd.DataFrame:
+    """Both sensors' reports stacked, with an aircraft key (address, else the address the call sign is
+    uniquely seen with, else the call sign, else "?") and its call-sign/address labels."""
+    both = pd.concat([radar, adsb], ignore_index=True)
+    pairs = both[["callsign", "address"]].dropna().drop_duplicates()
+    unique_cs = pairs.groupby("callsign")["address"].agg(lambda a: a.iloc[0] if len(a) == 1 else pd.NA)
+    address = both["address"].astype("object").fillna(both["callsign"].map(unique_cs.dropna()))
+    key = ("A:" + address).fillna("C:" + both["callsign"].astype("object")).fillna("?")
+    both["aircraft"] = key.to_numpy()
+    both["address"] = address.to_numpy()
+    label = (both.assign(_adsb=both["sensor"] == "adsb").dropna(subset=["callsign"])
+             .groupby(["aircraft", "callsign"]).agg(n=("sensor", "size"), a=("_adsb", "sum")).reset_index()
+             .sort_values(["aircraft", "a", "n", "callsign"], ascending=[True, False, False, True])
+             .drop_duplicates("aircraft").set_index("aircraft")["callsign"])
+    both["callsign"] = both["aircraft"].map(label).fillna("").to_numpy()
+    both["address"] = both["address"].fillna("")
+    return both
+
+
+def _interval_stats(intervals_s: np.ndarray) -> dict:
+    if intervals_s.size == 0:
+        return {"intervals": 0} | dict.fromkeys(
+            ["interval_min_s", "interval_median_s", "interval_p95_s", "interval_max_s"], np.nan)
+    return {"intervals": int(intervals_s.size), "interval_min_s": float(intervals_s.min()),
+            "interval_median_s": float(np.median(intervals_s)),
+            "interval_p95_s": float(np.percentile(intervals_s, 95)),
+            "interval_max_s": float(intervals_s.max())}
+
+
+def _speed_stats(gs_kt: pd.Series) -> dict:
+    missing, zero = int(gs_kt.isna().sum()), int((gs_kt == 0).sum())
+    n = len(gs_kt)
+    return {"speed_missing": missing, "speed_zero": zero, "speed_missing_or_zero": missing + zero,
+            "speed_missing_or_zero_pct": 100.0 * (missing + zero) / n if n else np.nan}
+
+
+def integrity_shares(adsb: pd.DataFrame) -> dict:
+    """Percent of reports with nucp_nic below 5 (read as NUCp) and below 6 (read as NIC), and the low-
+    integrity percent choosing by mops_version per report (NaN without versions); versions seen."""
+    v = pd.to_numeric(adsb["nucp_nic"], errors="coerce") if "nucp_nic" in adsb else pd.Series(
+        np.nan, index=adsb.index)
+    known = v.notna()
+    n = int(known.sum())
+    out = {"nucp_below_5_pct": 100.0 * float((v[known] < NUCP_MIN).sum()) / n if n else np.nan,
+           "nic_below_6_pct": 100.0 * float((v[known] < NIC_MIN).sum()) / n if n else np.nan,
+           "low_integrity_pct": np.nan, "mops_versions": ""}
+    if "mops_version" in adsb:
+        mops = pd.to_numeric(adsb["mops_version"], errors="coerce")
+        both = known & mops.notna()
+        if both.any():
+            low = np.where(mops[both] == 0, v[both] < NUCP_MIN, v[both] < NIC_MIN)
+            out["low_integrity_pct"] = 100.0 * float(low.sum()) / int(both.sum())
+            out["mops_versions"] = ",".join(str(int(m)) for m in sorted(mops[both].unique()))
+    return out
+
+
+def _group_rows(group: pd.DataFrame, gap_s: float,
+                jumps_by_aircraft: pd.Series) -> tuple[dict, np.ndarray, list[dict], pd.DataFrame]:
+    """Summary row, within-track intervals, gap rows and de-duplicated reports of one aircraft and sensor."""
+    ident = {k: group[k].iloc[0] for k in ID_KEYS}
+    clean, dups = deduplicate(group)
+    t = clean["time_of_day"].to_numpy(float)
+    dt = np.diff(t)
+    within, gap = dt[dt <= gap_s], np.flatnonzero(dt > gap_s)
+    stamps = clean["timestamp"] if "timestamp" in clean else pd.Series(pd.NaT, index=clean.index)
+    gaps = [{**ident, "gap_start_tod_s": t[i], "gap_end_tod_s": t[i + 1],
+             "gap_start_utc": iso_utc(stamps.iloc[i]), "gap_end_utc": iso_utc(stamps.iloc[i + 1]),
+             "gap_duration_s": t[i + 1] - t[i], "reappeared_after_1h": bool(t[i + 1] - t[i] > REAPPEARANCE_S)}
+            for i in gap]
+    row = {**ident, "reports": len(group), "duplicates_removed": dups, "reports_after_dedup": len(clean),
+           "first_tod_s": t[0], "last_tod_s": t[-1], "first_utc": iso_utc(stamps.iloc[0]),
+           "last_utc": iso_utc(stamps.iloc[-1]), **_interval_stats(within), "gaps": len(gaps),
+           "longest_gap_s": float(dt[gap].max()) if gap.size else np.nan,
+           "reappearances": sum(g["reappeared_after_1h"] for g in gaps),
+           **_speed_stats(clean["ground_speed_kt"])}
+    if ident["sensor"] == "adsb":
+        row["jumps"] = int(jumps_by_aircraft.get(group["aircraft"].iloc[0], 0))
+        row |= integrity_shares(clean)
+    return row, within, gaps, clean
+
+
+def _pooled_row(rows: list[dict], intervals: list[np.ndarray], sensor_id: tuple,
+                clean: list[pd.DataFrame]) -> dict:
+    """The "(all)" summary row of one sensor from its per-aircraft rows, intervals and reports."""
+    frame = pd.DataFrame(rows)
+    row = {"callsign": ALL, "address": "", **dict(zip(SENSOR_KEYS, sensor_id, strict=True))}
+    for c in ("reports", "duplicates_removed", "reports_after_dedup", "gaps", "reappearances",
+              "speed_missing", "speed_zero", "speed_missing_or_zero"):
+        row[c] = int(frame[c].sum())
+    row["first_tod_s"], row["last_tod_s"] = frame["first_tod_s"].min(), frame["last_tod_s"].max()
+    first, last = frame["first_tod_s"].idxmin(), frame["last_tod_s"].idxmax()
+    row["first_utc"], row["last_utc"] = frame.loc[first, "first_utc"], frame.loc[last, "last_utc"]
+    row |= _interval_stats(np.concatenate(intervals) if intervals else np.array([]))
+    row["longest_gap_s"] = frame["longest_gap_s"].max()
+    row["speed_missing_or_zero_pct"] = (100.0 * row["speed_missing_or_zero"] / row["reports_after_dedup"]
+                                        if row["reports_after_dedup"] else np.nan)
+    if sensor_id[0] == "adsb":
+        row["jumps"] = int(frame["jumps"].sum())
+        row |= integrity_shares(pd.concat(clean, ignore_index=True))
+    return row
+
+
+def _adsb_value_counts(adsb: pd.DataFrame) -> pd.DataFrame:
+    """Value counts of each ADS-B quality indicator present, per aircraft and pooled per ADS-B sensor."""
+    indicators = [c for c in ADSB_INDICATORS if c in adsb]
+    if adsb.empty or not indicators:
+        return pd.DataFrame(columns=VALUE_COUNT_COLUMNS)
+    pooled = adsb.assign(callsign=ALL, address="", aircraft=ALL)
+    long = pd.concat([adsb, pooled], ignore_index=True).melt(
+        id_vars=ID_KEYS, value_vars=indicators, var_name="indicator", value_name="value")
+    long["value"] = pd.to_numeric(long["value"], errors="coerce").astype("Int64")
+    keys = [*ID_KEYS, "indicator"]
+    counts = long.groupby([*keys, "value"], dropna=False, sort=True).size().rename("reports").reset_index()
+    totals = counts.groupby(keys, dropna=False)["reports"].transform("sum")
+    counts["share_pct"] = 100.0 * counts["reports"] / totals
+    return counts[VALUE_COUNT_COLUMNS]
+
+
+def _adsb_over_time(adsb: pd.DataFrame) -> pd.DataFrame:
+    """Median of each indicator and the integrity shares per 10-minute bin, per aircraft and pooled."""
+    indicators = [c for c in ADSB_INDICATORS if c in adsb]
+    columns = [*ID_KEYS, "bin_start_tod_s", "bin_start_utc", "reports", *[f"{c}_median" for c in indicators],
+               *SHARE_COLUMNS]
+    if adsb.empty:
+        return pd.DataFrame(columns=columns)
+    frame = pd.concat([adsb, adsb.assign(callsign=ALL, address="")], ignore_index=True)
+    frame["bin_start_tod_s"] = np.floor(frame["time_of_day"].to_numpy(float) / QUALITY_BIN_S) * QUALITY_BIN_S
+    rows = []
+    for keys, g in frame.groupby([*ID_KEYS, "bin_start_tod_s"], dropna=False, sort=True):
+        row = dict(zip([*ID_KEYS, "bin_start_tod_s"], keys, strict=True))
+        first = g["timestamp"].iloc[0] if "timestamp" in g else pd.NaT
+        start = None if pd.isna(first) else first - pd.to_timedelta(g["time_of_day"].iloc[0]
+                                                                    - row["bin_start_tod_s"], unit="s")
+        row |= {"bin_start_utc": iso_utc(start), "reports": len(g)}
+        row |= {f"{c}_median": pd.to_numeric(g[c], errors="coerce").median() for c in indicators}
+        shares = integrity_shares(g)
+        rows.append(row | {k: shares[k] for k in SHARE_COLUMNS})
+    return pd.DataFrame(rows, columns=columns)
+
+
+def quality_tables(radar_meas: pd.DataFrame, adsb_meas: pd.DataFrame, *, gap_s: float = 180.0,
+                   jump_kw: dict | None = None) -> dict[str, pd.DataFrame]:
+    """Sheets "Quality", "Update intervals", "Gaps", "Jumps", "ADS-B quality" and "ADS-B quality over time"
+    (see the module docstring); ADS-B indicators nucr_nacv, sil and mops_version are used when present."""
+    both = _aircraft_labels(radar_meas, adsb_meas)
+    both["sensor"] = both["sensor"].astype("object")
+    adsb_rows = both["sensor"] == "adsb"
+
+    clean_adsb = []
+    for _, g in both[adsb_rows].groupby(["aircraft", "sac", "sic"], dropna=False, sort=False):
+        clean_adsb.append(deduplicate(g)[0])
+    adsb = pd.concat(clean_adsb, ignore_index=True) if clean_adsb else both[adsb_rows].iloc[:0]
+    keyed = adsb.assign(address=adsb["aircraft"].where(adsb["aircraft"] != "?"), callsign=pd.NA)
+    jumps = jump_table(keyed, **(jump_kw or {}))
+    jump_rows = adsb.loc[jumps["row"].to_numpy()] if len(jumps) else adsb.iloc[:0]
+    jumps_by_aircraft = jump_rows["aircraft"].value_counts()
+
+    summary, gaps, hist = [], [], []
+    edges = histogram_edges_s(gap_s)
+    for sensor_id, s in both.groupby(SENSOR_KEYS, dropna=False, sort=True):
+        rows, intervals, clean = [], [], []
+        for _, g in s.groupby(["callsign", "address", "aircraft"], dropna=False, sort=True):
+            row, within, g_gaps, g_clean = _group_rows(g, gap_s, jumps_by_aircraft)
+            rows.append(row)
+            intervals.append(within)
+            clean.append(g_clean)
+            gaps += g_gaps
+        summary += [_pooled_row(rows, intervals, sensor_id, clean), *rows]
+        counts, _ = np.histogram(np.concatenate(intervals), bins=edges)
+        hist.append(pd.DataFrame({**dict(zip(SENSOR_KEYS, sensor_id, strict=True)), "bin_start_s": edges[:-1],
+                                  "bin_end_s": edges[1:], "intervals": counts}))
+
+    jump_sheet = pd.DataFrame({k: jump_rows[k].to_numpy() for k in ID_KEYS} | {
+        "time_of_day": jumps["time_of_day"].to_numpy(float),
+        "utc": [iso_utc(ts) for ts in jumps["timestamp"]] if len(jumps) else [],
+        **{c: jumps[c].to_numpy(float) for c in ("latitude", "longitude", "fit_latitude", "fit_longitude",
+                                                  "jump_size_m")}}, columns=JUMP_COLUMNS)
+    quality = pd.DataFrame(summary, columns=QUALITY_COLUMNS).astype({"jumps": "Int64"})
+    return {
+        "Quality": quality,
+        "Update intervals": (pd.concat(hist, ignore_index=True) if hist
+                             else pd.DataFrame(columns=HISTOGRAM_COLUMNS)),
+        "Gaps": pd.DataFrame(gaps, columns=GAP_COLUMNS),
+        "Jumps": jump_sheet,
+        "ADS-B quality": _adsb_value_counts(adsb),
+        "ADS-B quality over time": _adsb_over_time(adsb),
+    }

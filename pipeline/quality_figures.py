@@ -1,0 +1,179 @@
+"""PNG figures of data quality and radar accuracy (thesis figures 6.7-6.18), on bare Agg figures.
+
+Each function draws one figure and returns the PNG path. The coefficient-against-lag figure is
+``pipeline.figures.lag_figure`` (not repeated here).
+"""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+from matplotlib.axes import Axes
+from matplotlib.backends.backend_agg import FigureCanvasAgg
+from matplotlib.figure import Figure
+from matplotlib.ticker import FuncFormatter, MultipleLocator
+
+from .measurements import select
+from .results import WindowResult
+from .windows import in_window
+
+RADAR_COLOR = "#d62728"
+ADSB_COLOR = "#e6b800"
+_SENSOR_LABEL = {"radar": "Radar (CAT048)", "adsb": "ADS-B (CAT021)"}
+_TICK_STEPS_S = (10, 30, 60, 120, 300, 600, 900, 1800, 3600, 7200, 14400)
+
+
+def _figure(width: float, height: float) -> Figure:
+    fig = Figure(figsize=(width, height), dpi=120, layout="constrained", facecolor="white")
+    FigureCanvasAgg(fig)
+    return fig
+
+
+def _save(fig: Figure, path: str | os.PathLike[str]) -> Path:
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path, format="png", facecolor="white")
+    return path
+
+
+def _clock(seconds: float, _pos=None) -> str:
+    """HH:MM:SS of seconds since midnight (with +Nd past the first day)."""
+    if not np.isfinite(seconds):
+        return ""
+    day, rem = divmod(int(round(seconds)), 86400)
+    text = f"{rem // 3600:02d}:{rem % 3600 // 60:02d}:{rem % 60:02d}"
+    return f"+{day}d {text}" if day else text
+
+
+def _time_axis(ax: Axes, t_s) -> None:
+    """Clock-time ticks on round steps (10 s .. 2 h) for an axis of seconds since midnight."""
+    t = np.asarray(t_s, dtype=float)
+    t = t[np.isfinite(t)]
+    span = float(t.max() - t.min()) if t.size else 0.0
+    step = next((s for s in _TICK_STEPS_S if span / s <= 7), _TICK_STEPS_S[-1])
+    ax.xaxis.set_major_locator(MultipleLocator(step))
+    ax.xaxis.set_major_formatter(FuncFormatter(_clock))
+    ax.set_xlabel("time (UTC)")
+
+
+def _grid(ax: Axes) -> None:
+    ax.grid(True, color="0.88", lw=0.6)
+    ax.set_axisbelow(True)
+
+
+def _empty(ax: Axes, text: str) -> None:
+    ax.text(0.5, 0.5, text, ha="center", va="center", transform=ax.transAxes, color="0.4", fontsize=12)
+
+
+def interval_histogram_figure(histogram: pd.DataFrame, path: str | os.PathLike[str]) -> Path:
+    """Update-interval histogram, one log-scaled panel per sensor ("Update intervals" of quality_tables)."""
+    sensors = list(histogram.groupby(["sensor", "sac", "sic"], dropna=False, sort=True))
+    fig = _figure(9, 2.6 * max(len(sensors), 1))
+    if not sensors:
+        _empty(fig.add_subplot(), "No update intervals")
+        return _save(fig, path)
+    axes = fig.subplots(len(sensors), 1, squeeze=False)[:, 0]
+    for ax, ((sensor, sac, sic), h) in zip(axes, sensors, strict=True):
+        used = h[h["intervals"] > 0]
+        top = float(used["bin_end_s"].max()) if len(used) else float(h["bin_end_s"].max())
+        shown = h[h["bin_start_s"] < top]
+        color = RADAR_COLOR if sensor == "radar" else ADSB_COLOR
+        ax.bar(shown["bin_start_s"], shown["intervals"], width=shown["bin_end_s"] - shown["bin_start_s"],
+               align="edge", color=color, edgecolor="0.25", lw=0.5)
+        ax.set_title(f"{_SENSOR_LABEL.get(sensor, sensor)} SAC {sac} SIC {sic}: "
+                     f"{int(h['intervals'].sum())} intervals", fontsize=10)
+        ax.set_yscale("log")
+        ax.set_ylabel("intervals (log)")
+        _grid(ax)
+    axes[-1].set_xlabel("update interval (s)")
+    fig.suptitle("Update intervals after de-duplication", fontsize=12)
+    return _save(fig, path)
+
+
+def radar_error_figure(errors: pd.DataFrame, path: str | os.PathLike[str],
+                       biases: pd.DataFrame | None = None) -> Path:
+    """Range and azimuth error against slant range and against time (``radar_errors`` rows of one radar),
+    coloured per aircraft; with ``biases`` (one row) the fitted range bias + gain and azimuth bias lines."""
+    fig = _figure(11, 7)
+    axes = fig.subplots(2, 2, sharey="row")
+    if errors.empty:
+        for ax in axes.ravel():
+            _empty(ax, "No matched reports")
+        return _save(fig, path)
+    range_nm = errors["slant_range_m"].to_numpy(float) / 1852.0
+    for label, g in errors.groupby(errors["callsign"].fillna(errors["address"]).fillna("?"), sort=True):
+        idx = g.index.to_numpy()
+        pos = errors.index.get_indexer(idx)
+        for row, metric in enumerate(("range_error_m", "azimuth_error_deg")):
+            y = g[metric].to_numpy(float)
+            axes[row, 0].plot(range_nm[pos], y, ".", ms=2.5, alpha=0.7, label=str(label))
+            axes[row, 1].plot(g["time_of_day"].to_numpy(float), y, ".", ms=2.5, alpha=0.7)
+    if biases is not None and len(biases):
+        b = biases.iloc[0]
+        r = np.linspace(np.nanmin(range_nm), np.nanmax(range_nm), 50)
+        axes[0, 0].plot(r, b["range_bias_m"] + b["range_gain_ppm"] * 1e-6 * r * 1852.0, "k-", lw=1.5,
+                        label="bias + gain fit")
+        axes[1, 0].axhline(b["azimuth_bias_deg"], color="k", lw=1.5, label="azimuth bias fit")
+    for ax in axes.ravel():
+        ax.axhline(0.0, color="0.5", lw=0.8)
+        _grid(ax)
+    axes[0, 0].set_ylabel("range error (m)")
+    axes[1, 0].set_ylabel("azimuth error (deg)")
+    axes[1, 0].set_xlabel("slant range (NM)")
+    for ax in axes[:, 1]:
+        _time_axis(ax, errors["time_of_day"])
+    axes[0, 1].set_xlabel("")
+    axes[0, 0].legend(fontsize=7, markerscale=3, ncol=2, loc="best")
+    radars = ", ".join(str(r) for r in errors["radar"].dropna().unique()[:3])
+    fig.suptitle(f"Radar errors against ADS-B: {radars} ({len(errors)} reports)", fontsize=12)
+    return _save(fig, path)
+
+
+def _none_if_blank(value) -> str | None:
+    return None if value is None or (not isinstance(value, str) and pd.isna(value)) or value == "" else value
+
+
+def _raw_in_window(window: WindowResult, meas: pd.DataFrame, other: pd.DataFrame) -> pd.DataFrame:
+    """The window aircraft's raw reports of one sensor inside the window."""
+    s = window.summary
+    cs, addr = _none_if_blank(s.get("callsign")), _none_if_blank(s.get("address"))
+    if cs is None and addr is None:
+        return meas.iloc[:0]
+    rows = select(meas, cs, addr, link_with=other)
+    return rows[in_window(rows["time_of_day"], s["start_tod"], s["end_tod"])]
+
+
+def slotting_figure(window: WindowResult, radar_meas: pd.DataFrame, adsb_meas: pd.DataFrame,
+                    path: str | os.PathLike[str]) -> Path:
+    """Latitude and longitude against time of one window: raw reports (left) and 10 s slots (right)."""
+    fig = _figure(12, 6.5)
+    axes = fig.subplots(2, 2, sharex=True, sharey="row")
+    raw = {"radar": _raw_in_window(window, radar_meas, adsb_meas),
+           "adsb": _raw_in_window(window, adsb_meas, radar_meas)}
+    slots = window.slots
+    for row, (axis, name) in enumerate((("lat", "latitude"), ("lon", "longitude"))):
+        for sensor, color in (("adsb", ADSB_COLOR), ("radar", RADAR_COLOR)):
+            r = raw[sensor]
+            axes[row, 0].plot(r["time_of_day"], r[name], ".", ms=3, color=color, label=_SENSOR_LABEL[sensor])
+            filled = slots[f"{sensor}_filled"].fillna(False).astype(bool).to_numpy()
+            t, y = slots["time_of_day"].to_numpy(float), slots[f"{sensor}_{axis}"].to_numpy(float)
+            axes[row, 1].plot(t, y, "-", color=color, lw=1.2)
+            axes[row, 1].plot(t[~filled], y[~filled], "o", ms=4, color=color, mec="0.2", mew=0.5,
+                              label=_SENSOR_LABEL[sensor])
+            axes[row, 1].plot(t[filled], y[filled], "o", ms=4, mfc="white", mec=color, mew=0.9)
+        axes[row, 0].set_ylabel(f"{name} (deg)")
+        for ax in axes[row]:
+            ax.ticklabel_format(axis="y", useOffset=False)
+            _grid(ax)
+    axes[0, 0].set_title("before slotting (reports)", fontsize=10)
+    axes[0, 1].set_title("after slotting (slot means; hollow = filled)", fontsize=10)
+    axes[0, 0].legend(fontsize=8, markerscale=2)
+    for ax in axes[1]:
+        _time_axis(ax, slots["time_of_day"])
+    s = window.summary
+    fig.suptitle(f"Latitude and longitude before and after slotting: {s.get('callsign') or s.get('address')} "
+                 f"window {s.get('window')}", fontsize=12)
+    return _save(fig, path)

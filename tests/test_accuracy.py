@@ -1,0 +1,274 @@
+"""Radar accuracy against ADS-B: hand-worked error decomposition, statistics, bias recovery in simulation."""
+
+from __future__ import annotations
+
+import functools
+from dataclasses import asdict
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from fixtures.scenario import AircraftSpec, Scenario
+from fixtures.simulate import simulate
+from pipeline.accuracy import (
+    BIAS_COLUMNS,
+    ERROR_COLUMNS,
+    LIMITATION_NOTE,
+    error_stats,
+    estimate_biases,
+    nacp_bound_m,
+    radar_errors,
+)
+from pipeline.geodesy import (
+    A_M,
+    E2,
+    M_PER_NM,
+    ecef_to_geodetic,
+    enu_to_ecef,
+    geodetic_to_ecef,
+    slant_range_azimuth,
+)
+from pipeline.measurements import adsb_measurements, radar_measurements
+from pipeline.quality_figures import radar_error_figure
+from pipeline.sensors import SENSOR_COLUMNS
+
+SITE = {"name": "TEST", "sac": 25, "sic": 1, "latitude": 0.0, "longitude": 0.0, "altitude_m": 0.0}
+SENSORS = pd.DataFrame([SITE])[SENSOR_COLUMNS]
+FL = 100.0
+H_M = FL * 100 * 0.3048
+SPEED_MS = 200.0
+
+
+# ---------------------------------------------------------------------------------------------------------
+# Hand-worked geometry: radar at (0, 0), target 0.5 deg north of it
+
+
+def _m_per_deg_lon(lat_deg: float) -> float:
+    n = A_M / np.sqrt(1.0 - E2 * np.sin(np.radians(lat_deg)) ** 2)
+    return (n + H_M) * np.cos(np.radians(lat_deg)) * np.pi / 180.0
+
+
+def _m_per_deg_lat(lat_deg: float) -> float:
+    s2 = np.sin(np.radians(lat_deg)) ** 2
+    return (A_M * (1 - E2) / (1 - E2 * s2) ** 1.5 + H_M) * np.pi / 180.0
+
+
+def adsb_track(t_s, track_deg: float, lat0: float = 0.5, lon0: float = 0.0, *, velocity=True) -> pd.DataFrame:
+    """ADS-B reports of a target at FL 100 flying a constant track through (lat0, lon0) at t = 10 s."""
+    t = np.asarray(t_s, dtype=float)
+    d_m = SPEED_MS * (t - 10.0)
+    lat = lat0 + d_m * np.cos(np.radians(track_deg)) / _m_per_deg_lat(lat0)
+    lon = lon0 + d_m * np.sin(np.radians(track_deg)) / _m_per_deg_lon(lat0)
+    return pd.DataFrame({
+        "sensor": "adsb", "time_of_day": t, "timestamp": pd.NaT, "latitude": lat, "longitude": lon,
+        "flight_level": FL, "ground_speed_kt": SPEED_MS * 3600 / 1852 if velocity else np.nan,
+        "heading_deg": track_deg if velocity else np.nan, "callsign": "HAND1", "address": "ABCDEF",
+        "sac": 0, "sic": 1, "nucp_nic": 8, "nacp": 9})
+
+
+def radar_plot(t_s: float, lat: float, lon: float, d_east_m: float,
+               d_north_m: float) -> tuple[pd.DataFrame, float]:
+    """A radar report at t of the point (east, north) metres from (lat, lon, FL 100); also the true
+    slant-range difference plot - target (m) computed directly from ECEF."""
+    plot = enu_to_ecef(d_east_m, d_north_m, 0.0, lat, lon, H_M)
+    p_lat, p_lon, p_h = ecef_to_geodetic(*plot)
+    rho_nm, theta, _ = slant_range_azimuth(0.0, 0.0, 0.0, p_lat, p_lon, p_h)
+    site = np.array(geodetic_to_ecef(0.0, 0.0, 0.0))
+    target = np.array(geodetic_to_ecef(lat, lon, H_M))
+    drange = np.linalg.norm(np.array(plot) - site) - np.linalg.norm(target - site)
+    frame = pd.DataFrame({
+        "sensor": ["radar"], "time_of_day": [t_s], "timestamp": [pd.NaT], "latitude": [float(p_lat)],
+        "longitude": [float(p_lon)], "flight_level": [FL], "ground_speed_kt": [np.nan],
+        "heading_deg": [np.nan],
+        "callsign": ["HAND1"], "address": ["ABCDEF"], "sac": [25], "sic": [1], "rho_nm": [float(rho_nm)],
+        "theta_deg": [float(theta)], "position_item": ["040"], "height_assumed": [False]})
+    return frame, float(drange)
+
+
+def one_error(track_deg: float, d_east_m: float, d_north_m: float, *, velocity=True, t_radar=10.0,
+              lat0=0.5, lon0=0.0) -> tuple[pd.Series, float]:
+    adsb = adsb_track(np.arange(0.0, 21.0), track_deg, lat0, lon0, velocity=velocity)
+    row = adsb[adsb["time_of_day"] == t_radar].iloc[0]
+    radar, drange = radar_plot(t_radar, row["latitude"], row["longitude"], d_east_m, d_north_m)
+    errors = radar_errors(radar, adsb, SENSORS)
+    assert list(errors.columns) == ERROR_COLUMNS and len(errors) == 1
+    return errors.iloc[0], drange
+
+
+@pytest.mark.parametrize("velocity", [True, False])
+def test_target_flying_east_radar_due_south(velocity):
+    e, drange = one_error(90.0, 100.0, 50.0, velocity=velocity)
+    assert e["along_track_m"] == pytest.approx(100.0, abs=0.2)  # along = east component
+    assert e["cross_track_m"] == pytest.approx(-50.0, abs=0.2)  # north is left of an eastbound track
+    assert e["horizontal_error_m"] == pytest.approx(np.hypot(100.0, 50.0), abs=0.2)
+    assert e["range_error_m"] == pytest.approx(drange, abs=0.05)
+    assert e["range_error_m"] == pytest.approx(50.0, abs=0.5)  # north is radial here
+    ground = e["ground_range_m"]
+    assert e["azimuth_error_deg"] == pytest.approx(np.degrees(np.arctan2(100.0, ground)), abs=2e-4)
+    assert e["adsb_track_deg"] == pytest.approx(90.0, abs=0.05)
+    assert e["range_rate_ms"] == pytest.approx(0.0, abs=0.5)
+    assert e["tangential_speed_ms"] == pytest.approx(SPEED_MS, abs=0.5)  # clockwise = eastward at north
+    assert e["azimuth_deg"] == pytest.approx(0.0, abs=1e-6)
+    assert e["slant_range_m"] == pytest.approx(e["rho_nm"] * M_PER_NM - e["range_error_m"], abs=1e-6)
+
+
+def test_target_flying_west_and_north():
+    e, _ = one_error(270.0, 100.0, 50.0)
+    assert e["along_track_m"] == pytest.approx(-100.0, abs=0.2)
+    assert e["cross_track_m"] == pytest.approx(50.0, abs=0.2)  # north is right of a westbound track
+    assert e["tangential_speed_ms"] == pytest.approx(-SPEED_MS, abs=0.5)
+    e, _ = one_error(0.0, 30.0, -80.0)  # flying north, straight away from the radar
+    assert e["along_track_m"] == pytest.approx(-80.0, abs=0.2)
+    assert e["cross_track_m"] == pytest.approx(30.0, abs=0.2)
+    assert e["range_rate_ms"] == pytest.approx(SPEED_MS, rel=0.01)
+    assert e["tangential_speed_ms"] == pytest.approx(0.0, abs=0.5)
+    assert e["range_error_m"] == pytest.approx(-80.0, abs=0.5)
+
+
+def test_azimuth_error_wraps_at_north():
+    e, _ = one_error(90.0, -100.0, 0.0)  # plot just west of north: theta near 360
+    assert e["theta_deg"] > 359.0
+    expected = -np.degrees(np.arctan2(100.0, e["ground_range_m"]))
+    assert e["azimuth_error_deg"] == pytest.approx(expected, abs=2e-4)
+
+
+def test_interpolation_between_reports_and_only_across_short_gaps():
+    adsb = adsb_track(np.arange(0.0, 41.0, 2.0), 90.0)
+    adsb = adsb[(adsb["time_of_day"] < 20) | (adsb["time_of_day"] > 31)]  # gap 18 -> 32 s
+    truth = adsb_track([13.0, 25.0, 40.0], 90.0)
+    radar = pd.concat([radar_plot(t, r["latitude"], r["longitude"], 0.0, 0.0)[0]
+                       for t, (_, r) in zip([13.0, 25.0, 40.0], truth.iterrows(), strict=True)])
+    radar = pd.concat([radar, radar_plot(60.0, 0.5, 0.0, 0.0, 0.0)[0]], ignore_index=True)  # after ADS-B ends
+    errors = radar_errors(radar, adsb, SENSORS)
+    assert errors["time_of_day"].tolist() == [13.0, 40.0]  # 25 s falls in the 14 s gap; 60 s is beyond
+    assert errors["radar_row"].tolist() == [0, 2]
+    np.testing.assert_allclose(errors["horizontal_error_m"], 0.0, atol=0.05)
+    np.testing.assert_allclose(errors["adsb_gap_s"], 2.0)
+    assert radar_errors(radar, adsb, SENSORS, max_gap_s=20.0)["time_of_day"].tolist() == [13.0, 25.0, 40.0]
+
+
+def test_jumps_and_duplicates_in_adsb_do_not_disturb_the_reference():
+    adsb = adsb_track(np.arange(0.0, 60.0), 45.0)
+    adsb.loc[30, "latitude"] += 0.3  # a 33 km jump next to the radar time
+    adsb = pd.concat([adsb, adsb.iloc[[10, 29]]]).sort_values("time_of_day", kind="stable")
+    truth = adsb_track([30.5], 45.0).iloc[0]
+    radar, _ = radar_plot(30.5, truth["latitude"], truth["longitude"], 0.0, 0.0)
+    radar = pd.concat([radar, radar], ignore_index=True)  # a duplicated radar report counts once
+    e = radar_errors(radar, adsb, SENSORS)
+    assert len(e) == 1
+    assert e["horizontal_error_m"].iloc[0] < 1.0
+
+
+def test_unknown_radar_and_no_common_aircraft():
+    adsb = adsb_track(np.arange(0.0, 21.0), 90.0)
+    radar, _ = radar_plot(10.0, 0.5, 0.0, 0.0, 0.0)
+    with pytest.raises(ValueError, match="SAC 25 SIC 1"):
+        radar_errors(radar, adsb, SENSORS.assign(sic=2))
+    empty = radar_errors(radar.assign(address="000001", callsign="OTHER"), adsb, SENSORS)
+    assert empty.empty and list(empty.columns) == ERROR_COLUMNS
+    assert estimate_biases(empty).empty and error_stats(empty).empty
+
+
+def test_error_stats_by_radar_and_aircraft():
+    errors = pd.DataFrame({
+        "radar": "R", "sac": 1, "sic": 2, "callsign": ["A", "A", "B", "B", "B"],
+        "address": ["000001", "000001", "000002", "000002", "000002"],
+        "range_error_m": [10.0, 30.0, -5.0, 5.0, 15.0], "azimuth_error_deg": [0.1, 0.3, 0.0, 0.0, 0.3],
+        "along_track_m": 1.0, "cross_track_m": -2.0, "horizontal_error_m": [3.0, 4.0, 5.0, 6.0, 7.0]})
+    stats = error_stats(errors).set_index("callsign")
+    assert stats.loc["(all)", "n_reports"] == 5 and stats.loc["B", "n_reports"] == 3
+    assert stats.loc["A", "range_error_mean_m"] == pytest.approx(20.0)
+    assert stats.loc["A", "range_error_std_m"] == pytest.approx(np.std([10.0, 30.0], ddof=1))
+    assert stats.loc["A", "range_error_rms_m"] == pytest.approx(np.sqrt((100 + 900) / 2))
+    assert stats.loc["(all)", "azimuth_error_mean_deg"] == pytest.approx(0.14)
+    assert stats.loc["B", "horizontal_error_rms_m"] == pytest.approx(np.sqrt((25 + 36 + 49) / 3))
+    assert stats.loc["(all)", "cross_track_rms_m"] == pytest.approx(2.0)
+
+
+def test_nacp_bounds_and_too_few_reports():
+    assert [nacp_bound_m(n) for n in (8, 9, 10, 11)] == [92.6, 30.0, 10.0, 3.0]
+    assert np.isnan(nacp_bound_m(0)) and np.isnan(nacp_bound_m(None))
+    e, _ = one_error(90.0, 0.0, 0.0)
+    b = estimate_biases(pd.DataFrame([e]))
+    assert list(b.columns) == BIAS_COLUMNS
+    assert np.isnan(b["range_bias_m"].iloc[0]) and "too few reports" in b["note"].iloc[0]
+    assert b["adsb_nacp_95_m"].iloc[0] == 30.0 and "within 30 m" in b["note"].iloc[0]
+    assert b.attrs["note"] == LIMITATION_NOTE
+
+
+# ---------------------------------------------------------------------------------------------------------
+# Bias recovery in simulation: 12 aircraft for 40 min at random ranges, azimuths, turns and levels
+
+INJECTED = {"range_bias_m": 150.0, "range_gain_ppm": 200.0, "azimuth_bias_deg": 0.1, "time_bias_s": 1.0}
+TOLERANCE = {"range_bias_m": 15.0, "range_gain_ppm": 50.0, "azimuth_bias_deg": 0.01, "time_bias_s": 0.1}
+FLEET = tuple(AircraftSpec(f"TST{i}", 0x710000 + i, f"{i + 1:04o}", ((0.0, 2400.0),)) for i in range(12))
+CASES = {"none": (), "range": ("range_bias_m",), "gain": ("range_gain_ppm",),
+         "azimuth": ("azimuth_bias_deg",), "time": ("time_bias_s",), "all": tuple(INJECTED)}
+
+
+def _simulated_errors(injected: dict) -> pd.DataFrame:
+    sc = Scenario(name="bias-test", aircraft=FLEET, **injected)
+    sim = simulate(sc, seed=42)
+    sensors = pd.DataFrame([asdict(sc.radar)])[SENSOR_COLUMNS]
+    return radar_errors(radar_measurements(sim.radar, sensors), adsb_measurements(sim.adsb), sensors)
+
+
+@functools.cache
+def simulated_case(name: str) -> tuple[str, dict, pd.DataFrame, pd.DataFrame]:
+    """Injected biases, radar errors and the bias estimates of one case (cached across tests)."""
+    injected = {k: INJECTED[k] for k in CASES[name]}
+    errors = _simulated_errors(injected)
+    return name, injected, errors, estimate_biases(errors)
+
+
+@pytest.fixture(params=list(CASES))
+def bias_case(request):
+    return simulated_case(request.param)
+
+
+def test_biases_are_recovered(bias_case):
+    name, injected, errors, biases = bias_case
+    assert len(biases) == 1
+    b = biases.iloc[0]
+    assert b["n_reports"] > 4000 and b["aircraft"] == len(FLEET)
+    assert b["n_rejected"] < 0.01 * 2 * b["n_reports"]
+    for key, tol in TOLERANCE.items():
+        expected = injected.get(key, 0.0)
+        assert b[key] == pytest.approx(expected, abs=tol), (name, key)
+        se = b[_se_name(key)]
+        assert 0 < se < tol / 2, (name, key)
+        assert abs(b[key] - expected) < 4.0 * se, (name, key)
+    assert b["range_residual_rms_m"] == pytest.approx(70.0, rel=0.1)  # the simulator's radar noise
+    assert b["azimuth_residual_rms_deg"] == pytest.approx(0.08, rel=0.1)
+    assert b["adsb_nacp_median"] == 9 and b["adsb_nacp_95_m"] == 30.0
+    print(name, {k: round(float(b[k]), 4) for k in TOLERANCE})
+
+
+def _se_name(key: str) -> str:
+    stem, unit = key.rsplit("_", 1)
+    return f"{stem}_se_{unit}"
+
+
+def test_error_stats_and_figure_on_simulation(tmp_path):
+    _, _, errors, biases = simulated_case("all")
+    stats = error_stats(errors)
+    overall = stats[stats["callsign"] == "(all)"].iloc[0]
+    assert overall["n_reports"] == len(errors)
+    assert overall["azimuth_error_mean_deg"] == pytest.approx(errors["azimuth_error_deg"].mean())
+    assert len(stats) == len(FLEET) + 1
+    assert errors["adsb_gap_s"].max() <= 10.0
+    path = radar_error_figure(errors, tmp_path / "errors.png", biases)
+    assert path.exists() and path.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+def test_cartesian_plots_are_evaluated_from_their_position():
+    adsb = adsb_track(np.arange(0.0, 21.0), 90.0)
+    row = adsb[adsb["time_of_day"] == 10.0].iloc[0]
+    radar, _ = radar_plot(10.0, row["latitude"], row["longitude"], 100.0, 50.0)
+    polar = radar_errors(radar, adsb, SENSORS).iloc[0]
+    cart = radar_errors(radar.assign(rho_nm=np.nan, theta_deg=np.nan, position_item="042"), adsb,
+                        SENSORS).iloc[0]
+    for c in ("range_error_m", "along_track_m", "cross_track_m", "horizontal_error_m"):
+        assert cart[c] == pytest.approx(polar[c], abs=0.01), c
+    assert cart["azimuth_error_deg"] == pytest.approx(polar["azimuth_error_deg"], abs=1e-6)

@@ -1,0 +1,246 @@
+"""Quality tables against what the simulator emitted: counts, duplicates, intervals, gaps, speeds, NIC."""
+
+from __future__ import annotations
+
+from dataclasses import asdict
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from fixtures.scenario import midnight_scenario
+from fixtures.simulate import GAP_RULE_S, simulate
+from pipeline.correlation import correlate
+from pipeline.measurements import adsb_measurements, radar_measurements
+from pipeline.quality import (
+    GAP_COLUMNS,
+    HISTOGRAM_COLUMNS,
+    QUALITY_COLUMNS,
+    VALUE_COUNT_COLUMNS,
+    histogram_edges_s,
+    integrity_shares,
+    iso_utc,
+    quality_tables,
+)
+from pipeline.quality_figures import interval_histogram_figure, slotting_figure
+from pipeline.sensors import SENSOR_COLUMNS
+
+DAY0 = pd.Timestamp("2019-06-14", tz="UTC")
+EXTRA_ADSB = ["nucr_nacv", "sil", "mops_version"]  # carried by CAT021 but not (yet) by adsb_measurements
+
+
+def measurements(sim) -> tuple[pd.DataFrame, pd.DataFrame]:
+    """Measurement frames of a simulation, with UTC timestamps and the extra ADS-B quality columns."""
+    sensors = pd.DataFrame([asdict(sim.scenario.radar)])[SENSOR_COLUMNS]
+    radar = radar_measurements(sim.radar, sensors)
+    adsb = adsb_measurements(sim.adsb)
+    assert len(adsb) == len(sim.adsb)  # every simulated report has a position: rows stay aligned
+    for c in EXTRA_ADSB:
+        adsb[c] = sim.adsb[c].to_numpy()
+    for m in (radar, adsb):
+        m["timestamp"] = DAY0 + pd.to_timedelta(m["time_of_day"], unit="s")
+    return radar, adsb
+
+
+@pytest.fixture(scope="module")
+def sim():
+    return simulate(seed=2019)
+
+
+@pytest.fixture(scope="module")
+def frames(sim):
+    return measurements(sim)
+
+
+@pytest.fixture(scope="module")
+def tables(frames):
+    return quality_tables(*frames)
+
+
+def row_of(table: pd.DataFrame, callsign: str, sensor: str) -> pd.Series:
+    hit = table[(table["callsign"] == callsign) & (table["sensor"] == sensor)]
+    assert len(hit) == 1, (callsign, sensor)
+    return hit.iloc[0]
+
+
+def emitted(sim, sensor: str, callsign: str | None = None) -> pd.DataFrame:
+    """The simulator's truth rows of one sensor (and aircraft), originals only (no duplicate copies)."""
+    tt = sim.truth_tracks.query("sensor == @sensor and not duplicate")
+    return tt if callsign is None else tt[tt["callsign"] == callsign]
+
+
+def expected_intervals(sim, sensor: str, callsign: str) -> np.ndarray:
+    dt = np.diff(np.sort(emitted(sim, sensor, callsign)["t_s"].to_numpy()))
+    return dt[dt <= GAP_RULE_S]
+
+
+def test_sheets_and_columns(tables):
+    assert list(tables) == ["Quality", "Update intervals", "Gaps", "Jumps", "ADS-B quality",
+                            "ADS-B quality over time"]
+    assert list(tables["Quality"].columns) == QUALITY_COLUMNS
+    assert list(tables["Update intervals"].columns) == HISTOGRAM_COLUMNS
+    assert list(tables["Gaps"].columns) == GAP_COLUMNS
+    assert list(tables["ADS-B quality"].columns) == VALUE_COUNT_COLUMNS
+
+
+@pytest.mark.parametrize("sensor", ["radar", "adsb"])
+def test_counts_duplicates_and_update_intervals_equal_the_emitted_reports(sim, tables, sensor):
+    q = tables["Quality"]
+    for ac in sim.aircraft:
+        cs = ac.spec.callsign
+        row = row_of(q, cs, sensor)
+        originals = emitted(sim, sensor, cs)
+        assert row["address"] == ac.spec.address_hex
+        assert row["reports_after_dedup"] == len(originals)
+        assert row["duplicates_removed"] == sim.truth["duplicates"][sensor]["by_aircraft"][cs]["count"]
+        assert row["reports"] == len(originals) + row["duplicates_removed"]
+        dt = expected_intervals(sim, sensor, cs)
+        assert row["intervals"] == dt.size
+        assert row["interval_min_s"] == dt.min() and row["interval_max_s"] == dt.max()
+        assert row["interval_median_s"] == pytest.approx(np.median(dt))
+        assert row["interval_p95_s"] == pytest.approx(np.percentile(dt, 95))
+        assert row["first_tod_s"] == originals["t_s"].min() and row["last_tod_s"] == originals["t_s"].max()
+        assert row["first_utc"] == iso_utc(DAY0 + pd.to_timedelta(originals["t_s"].min(), unit="s"))
+    pooled = row_of(q, "(all)", sensor)
+    every = np.concatenate([expected_intervals(sim, sensor, a.spec.callsign) for a in sim.aircraft])
+    assert pooled["reports_after_dedup"] == len(emitted(sim, sensor))
+    assert pooled["duplicates_removed"] == sim.truth["duplicates"][sensor]["total"]
+    assert pooled["interval_median_s"] == pytest.approx(np.median(every))
+    assert pooled["interval_p95_s"] == pytest.approx(np.percentile(every, 95))
+    hist = tables["Update intervals"].query("sensor == @sensor")
+    counts, _ = np.histogram(every, bins=histogram_edges_s(GAP_RULE_S))
+    np.testing.assert_array_equal(hist["intervals"], counts)
+    assert hist["bin_end_s"].iloc[-1] == GAP_RULE_S
+    if sensor == "radar":  # one report per scan: the scan period
+        assert pooled["interval_median_s"] == pytest.approx(sim.scenario.scan_period_s, abs=0.05)
+    else:
+        lo, hi = sim.scenario.adsb_interval_s
+        assert lo - 0.01 <= pooled["interval_min_s"]
+        assert row_of(q, "MAS72", "adsb")["interval_p95_s"] <= hi + 0.01
+
+
+def test_missing_and_zero_radar_speeds_equal_the_injected_flags(sim, tables):
+    q = tables["Quality"]
+    for cs, flags in sim.truth["radar_speed_flags"].items():
+        row = row_of(q, cs, "radar")
+        assert row["speed_missing"] == flags["missing_reports"]
+        assert row["speed_zero"] == flags["zero_reports"]
+        n = len(emitted(sim, "radar", cs))
+        assert row["speed_missing_or_zero_pct"] == pytest.approx(
+            100.0 * (flags["missing_reports"] + flags["zero_reports"]) / n)
+    flags = emitted(sim, "radar")["speed_flag"]
+    pooled = row_of(q, "(all)", "radar")
+    assert pooled["speed_missing"] == (flags == "missing").sum()
+    assert pooled["speed_zero"] == (flags == "zero").sum()
+    assert row_of(q, "(all)", "adsb")["speed_missing_or_zero"] == 0
+
+
+def test_gaps_and_reappearance(sim, tables):
+    gaps = tables["Gaps"]
+    for sensor, key in (("adsb", "adsb_gaps"), ("radar", "radar_gaps")):
+        got = gaps[gaps["sensor"] == sensor].sort_values(["callsign", "gap_start_tod_s"])
+        want = pd.DataFrame(sim.truth[key]).sort_values(["callsign", "start_s"])
+        assert got["callsign"].tolist() == want["callsign"].tolist()
+        np.testing.assert_array_equal(got["gap_start_tod_s"], want["start_s"])
+        np.testing.assert_array_equal(got["gap_end_tod_s"], want["end_s"])
+        np.testing.assert_allclose(got["gap_duration_s"], want["duration_s"])
+        assert got["reappeared_after_1h"].tolist() == (want["duration_s"] > 3600).tolist()
+    back = gaps[gaps["reappeared_after_1h"]]
+    assert set(back["callsign"]) == {"MAS136"} and set(back["sensor"]) == {"radar", "adsb"}
+    first = back.iloc[0]
+    assert first["gap_start_utc"] == iso_utc(DAY0 + pd.to_timedelta(first["gap_start_tod_s"], unit="s"))
+    assert first["gap_end_utc"].endswith("Z")
+    q = tables["Quality"]
+    assert row_of(q, "MAS136", "radar")["reappearances"] == 1
+    assert row_of(q, "(all)", "adsb")["gaps"] == len(sim.truth["adsb_gaps"])
+
+
+def test_jumps_per_aircraft(sim, tables):
+    injected = pd.DataFrame(sim.truth["jumps"])
+    q = tables["Quality"]
+    for cs, n in injected["callsign"].value_counts().items():
+        assert row_of(q, cs, "adsb")["jumps"] == n
+    assert row_of(q, "(all)", "adsb")["jumps"] == len(injected)
+    jumps = tables["Jumps"]
+    np.testing.assert_array_equal(np.sort(jumps["time_of_day"]), np.sort(injected["t_s"]))
+    assert (jumps["jump_size_m"] > 10_000).all()
+    assert jumps["utc"].str.endswith("Z").all()
+
+
+def test_adsb_quality_indicators(sim, tables):
+    copy = sim.truth_tracks.query("sensor == 'adsb'").sort_values("row")["duplicate"].to_numpy()
+    originals = sim.adsb[~copy]
+    counts = tables["ADS-B quality"]
+    pooled = counts[counts["callsign"] == "(all)"]
+    for indicator in ("nucp_nic", "nacp", "nucr_nacv", "sil"):
+        got = pooled[pooled["indicator"] == indicator].set_index("value")["reports"]
+        want = originals[indicator].value_counts()
+        assert got.sort_index().tolist() == want.sort_index().tolist(), indicator
+        assert got.index.tolist() == sorted(want.index.tolist())
+    shares = pooled[pooled["indicator"] == "nacp"]["share_pct"]
+    assert shares.sum() == pytest.approx(100.0)
+    low = sim.truth_tracks.query("sensor == 'adsb' and not duplicate")["low_quality"]
+    q = row_of(tables["Quality"], "(all)", "adsb")
+    assert q["nic_below_6_pct"] == pytest.approx(100.0 * low.mean())
+    assert q["low_integrity_pct"] == pytest.approx(100.0 * low.mean())  # MOPS 2: NIC < 6
+    assert q["nucp_below_5_pct"] == pytest.approx(  # episodes carry NIC 4 or 5
+        100.0 * (originals["nucp_nic"] < 5).mean())
+    assert q["mops_versions"] == "2"
+    over_time = tables["ADS-B quality over time"]
+    whole = over_time[over_time["callsign"] == "(all)"]
+    assert whole["reports"].sum() == len(originals)
+    assert (whole["bin_start_tod_s"] % 600 == 0).all()
+    assert whole["bin_start_utc"].iloc[0] == iso_utc(DAY0 + pd.to_timedelta(whole["bin_start_tod_s"].iloc[0],
+                                                                           unit="s"))
+    assert set(whole["nacp_median"]) <= {8.0, 8.5, 9.0}
+
+
+def test_integrity_shares_follow_the_mops_version():
+    frame = pd.DataFrame({"nucp_nic": [4, 5, 5, 6, 7, 9], "mops_version": [0, 0, 2, 2, 1, 2]})
+    s = integrity_shares(frame)
+    assert s["nucp_below_5_pct"] == pytest.approx(100 / 6) and s["nic_below_6_pct"] == pytest.approx(50.0)
+    # MOPS 0: NUCp 4 low, NUCp 5 fine; MOPS 1/2: NIC 5 low
+    assert s["low_integrity_pct"] == pytest.approx(100 * 2 / 6)
+    assert s["mops_versions"] == "0,1,2"
+    s = integrity_shares(frame.drop(columns="mops_version"))
+    assert np.isnan(s["low_integrity_pct"]) and s["nic_below_6_pct"] == pytest.approx(50.0)
+
+
+def test_without_timestamps_identities_or_optional_columns(sim):
+    sensors = pd.DataFrame([asdict(sim.scenario.radar)])[SENSOR_COLUMNS]
+    radar = radar_measurements(sim.radar, sensors)
+    adsb = adsb_measurements(sim.adsb)  # no nucr_nacv / sil / mops_version, no timestamps
+    radar.loc[radar.index[:50], ["callsign", "address"]] = pd.NA  # Mode A/C-only plots
+    t = quality_tables(radar, adsb)
+    q = t["Quality"]
+    anon = q[(q["callsign"] == "") & (q["address"] == "")]
+    assert len(anon) == 1 and anon["reports"].iloc[0] == 50
+    assert q["first_utc"].isna().all() and t["Gaps"]["gap_start_utc"].isna().all()
+    assert set(t["ADS-B quality"]["indicator"]) == {"nucp_nic", "nacp"}
+    assert np.isnan(row_of(q, "(all)", "adsb")["low_integrity_pct"])
+    assert row_of(q, "(all)", "radar")["reports"] == len(radar)
+    empty = quality_tables(radar.iloc[:0], adsb.iloc[:0])
+    assert all(v.empty for v in empty.values())
+
+
+def test_intervals_across_midnight():
+    sim = simulate(midnight_scenario(), seed=5)
+    radar, adsb = measurements(sim)
+    q = quality_tables(radar, adsb)["Quality"]
+    for sensor in ("radar", "adsb"):
+        row = row_of(q, "(all)", sensor)
+        assert row["first_tod_s"] < 86400.0 < row["last_tod_s"]
+        assert row["interval_max_s"] <= GAP_RULE_S
+        assert row["gaps"] == len(sim.truth[f"{sensor}_gaps"])
+    assert row_of(q, "(all)", "radar")["last_utc"].startswith("2019-06-15T00:")
+
+
+def test_quality_figures(sim, frames, tables, tmp_path):
+    radar, adsb = frames
+    png = interval_histogram_figure(tables["Update intervals"], tmp_path / "intervals.png")
+    assert png.read_bytes()[:4] == b"\x89PNG"
+    run = correlate(radar, adsb, callsign="MAS72")
+    png = slotting_figure(run.windows[0], radar, adsb, tmp_path / "slots.png")
+    assert png.exists() and png.stat().st_size > 10_000
+    empty = interval_histogram_figure(tables["Update intervals"].iloc[:0], tmp_path / "none.png")
+    assert empty.exists()
