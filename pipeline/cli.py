@@ -17,9 +17,12 @@ from asterix.reader import categories_in
 
 from .aircraft import NoSuchAircraft
 from .correlation import NoOverlap, correlate
+from .filters import apply_filters
 from .load import Loaded, load
 from .measurements import UnknownRadar, adsb_measurements, radar_measurements
 from .progress import Progress
+from .quality_figures import slotting_figure
+from .quality_run import quality_figures, quality_run
 from .sensors import read_sensors, sensor_toml_snippet
 from .stats import format_stats, stats_tables
 
@@ -91,7 +94,23 @@ def build_parser() -> argparse.ArgumentParser:
     c.add_argument("--json", help="window summary as JSON")
     c.add_argument("--slot", type=float, default=10.0, help="slot width D in seconds (default 10)")
     c.add_argument("--gap", type=float, default=180.0, help="gap G in seconds that ends a period (180)")
+    c.add_argument("--quality", action="store_true", help="add the Quality and Radar accuracy sheets")
+    c.add_argument("--drop-jumps", action="store_true", help="remove detected ADS-B position jumps first")
+    c.add_argument("--min-nic", type=int, help="drop ADS-B reports with NUCp/NIC below N")
+    c.add_argument("--min-nacp", type=int, help="drop ADS-B reports with NACp below N")
     _decoding_options(c)
+
+    q = sub.add_parser("quality", help="sensor data quality and radar accuracy against ADS-B")
+    q.add_argument("inputs", nargs="+", metavar="INPUT")
+    q.add_argument("--sensors", required=True, help="sensor positions (TOML [[sensor]] tables)")
+    who = q.add_mutually_exclusive_group(required=True)
+    who.add_argument("--callsign", help="call sign (case and spaces ignored)")
+    who.add_argument("--address", help="24-bit aircraft address in hex")
+    who.add_argument("--all", action="store_true", help="every aircraft")
+    q.add_argument("-o", "--output", help="Excel workbook (.xlsx); figures are written beside it")
+    q.add_argument("--json", help="the tables as JSON")
+    q.add_argument("--gap", type=float, default=180.0, help="gap in seconds reported as discontinuity")
+    _decoding_options(q)
     return parser
 
 
@@ -198,12 +217,16 @@ def cmd_stats(args) -> int:
     return 0
 
 
-def _measurements(loaded: Loaded, sensors_path: str) -> tuple[pd.DataFrame, pd.DataFrame]:
-    """Radar and ADS-B measurements, with the user-facing errors for missing data and sensors."""
+def _sensors(sensors_path: str) -> pd.DataFrame:
     try:
-        sensors = read_sensors(sensors_path)
+        return read_sensors(sensors_path)
     except (OSError, ValueError) as exc:
         raise CliError(f"{sensors_path}: {exc}", 2 if isinstance(exc, OSError) else 1) from exc
+
+
+def _measurements(loaded: Loaded, sensors: pd.DataFrame,
+                  sensors_path: str) -> tuple[pd.DataFrame, pd.DataFrame]:
+    """Radar and ADS-B measurements, with the user-facing errors for missing data and sensors."""
     if 48 not in loaded.frames or loaded.frames[48].empty:
         raise CliError("no radar (CAT048) records in the inputs")
     if 21 not in loaded.frames or loaded.frames[21].empty:
@@ -231,7 +254,11 @@ def cmd_correlate(args) -> int:
     loaded = _load(args, progress)
     _report_skipped(loaded.errors)
     progress.stage("Pre-processing data")
-    radar, adsb = _measurements(loaded, args.sensors)
+    sensors = _sensors(args.sensors)
+    radar, adsb = _measurements(loaded, sensors, args.sensors)
+    adsb_all = adsb
+    adsb, removed = apply_filters(adsb, drop_jumps=args.drop_jumps, min_nic=args.min_nic,
+                                  min_nacp=args.min_nacp)
     progress.stage("Slotting data")
     progress.stage("Correlating data")
     try:
@@ -240,12 +267,106 @@ def cmd_correlate(args) -> int:
     except (NoSuchAircraft, NoOverlap) as exc:
         raise CliError(str(exc)) from exc
     run.inputs = loaded.inputs
-    run.parameters = {**run.parameters, **_parameters(args, loaded, started)}
-    _write_outputs(run, args, progress)
+    run.filters = {k: v for k, v in removed.items() if _filter_on(args, k)}
+    run.parameters = {**run.parameters, **_parameters(args, loaded, started),
+                      "filters": {"drop_jumps": args.drop_jumps, "min_nic": args.min_nic,
+                                  "min_nacp": args.min_nacp, "removed": run.filters}}
+    for name, n in run.filters.items():
+        print(f"filter {name}: {n} of the input's ADS-B reports", file=sys.stderr)
+    images = None
+    if args.quality:
+        progress.stage("Analysing data quality")
+        result = _quality(radar, adsb_all, sensors, args)
+        run.extra_sheets.update(result.sheets)
+        if args.output:
+            images = _correlation_images(run, radar, adsb, result, Path(args.output))
+    _write_outputs(run, args, progress, images)
     return 0
 
 
-def _write_outputs(run, args, progress: Progress) -> None:
+def _filter_on(args, key: str) -> bool:
+    """Whether a filter's count belongs in the report (only the filters that were asked for)."""
+    return {"jumps": args.drop_jumps, "nic_below_min": args.min_nic is not None,
+            "nic_missing_kept": args.min_nic is not None, "nacp_below_min": args.min_nacp is not None,
+            "nacp_missing_kept": args.min_nacp is not None}.get(key, True)
+
+
+def _quality(radar, adsb, sensors, args):
+    try:
+        return quality_run(radar, adsb, sensors, callsign=args.callsign, address=args.address,
+                           gap_s=args.gap)
+    except NoSuchAircraft as exc:
+        raise CliError(str(exc)) from exc
+
+
+def _correlation_images(run, radar, adsb, result, out: Path, max_windows: int = 6) -> dict[str, Path]:
+    """Quality figures plus, for the first windows, lat/lon before and after slotting and NCC by lag."""
+    from .figures import lag_figure
+
+    images = dict(quality_figures(result, out.parent, out.stem))
+    for i, w in enumerate(run.windows[:max_windows]):
+        label = f"{w.summary['callsign'] or w.summary['address']} window {w.summary['window']}"
+        images[f"{label}: latitude and longitude before and after slotting"] = slotting_figure(
+            w, radar, adsb, out.with_name(f"{out.stem}_slotting_{i + 1}.png"))
+        images[f"{label}: coefficient against lag"] = lag_figure(
+            w, out.with_name(f"{out.stem}_lags_{i + 1}.png"))
+    return images
+
+
+def cmd_quality(args) -> int:
+    started = time.monotonic()
+    progress = Progress()
+    loaded = _load(args, progress)
+    _report_skipped(loaded.errors)
+    progress.stage("Pre-processing data")
+    sensors = _sensors(args.sensors)
+    radar, adsb = _measurements(loaded, sensors, args.sensors)
+    progress.stage("Analysing data quality")
+    result = _quality(radar, adsb, sensors, args)
+    print(_quality_text(result))
+    params = {**_parameters(args, loaded, started), "callsign": args.callsign, "address": args.address,
+              "gap_s": args.gap}
+    if args.json:
+        _write_quality_json(result, params, loaded.inputs, args.json)
+        print(f"JSON: {args.json}", file=sys.stderr)
+    if args.output:
+        from .report import write_tables
+
+        progress.stage("Writing report")
+        out = Path(args.output)
+        images = quality_figures(result, out.parent, out.stem)
+        write_tables(result.sheets, out, images=images, parameters={**params, "inputs": loaded.inputs})
+        print(f"Report: {out}", file=sys.stderr)
+    return 0
+
+
+def _quality_text(result) -> str:
+    """The per-sensor summary and the bias estimates, for the terminal."""
+    q = result.sheets["Quality"]
+    b = result.sheets["Radar biases"]
+    keep = [c for c in ("callsign", "address", "sensor", "sac", "sic", "reports", "duplicates_removed",
+                        "interval_median_s",
+                        "interval_p95_s", "speed_missing_or_zero_pct", "gaps", "jumps") if c in q]
+    bias_cols = [c for c in ("radar", "n_reports", "range_bias_m", "range_gain_ppm", "azimuth_bias_deg",
+                             "time_bias_s") if c in b]
+    text = "Quality:\n" + q[keep].to_string(index=False) + "\n\nRadar biases:\n"
+    text += b[bias_cols].to_string(index=False) if len(b) else "  no radar report matched to ADS-B"
+    note = b.attrs.get("note")
+    return text + (f"\n\nNote: {note}" if note else "")
+
+
+def _write_quality_json(result, params: dict, inputs: list, path: str) -> None:
+    import json
+
+    from .summary import json_value
+
+    doc = {"parameters": params, "inputs": inputs,
+           "tables": {name: [{k: json_value(v) for k, v in row.items()} for row in t.to_dict("records")]
+                      for name, t in result.sheets.items()}}
+    Path(path).write_text(json.dumps(doc, indent=1, default=str))
+
+
+def _write_outputs(run, args, progress: Progress, images: dict | None = None) -> None:
     from .figures import track_figure
     from .report import write_report
     from .summary import summary_table, write_json
@@ -259,11 +380,11 @@ def _write_outputs(run, args, progress: Progress) -> None:
         out = Path(args.output)
         png = out.with_name(out.stem + "_tracks.png")
         track_figure(run, png)
-        write_report(run, out, figure_png=png)
+        write_report(run, out, figure_png=png, images=images)
         print(f"Report: {out}\nTrack figure: {png}", file=sys.stderr)
 
 
-COMMANDS = {"decode": cmd_decode, "stats": cmd_stats, "correlate": cmd_correlate}
+COMMANDS = {"decode": cmd_decode, "stats": cmd_stats, "correlate": cmd_correlate, "quality": cmd_quality}
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -17,7 +17,7 @@ from .sensors import sensor_toml_snippet
 MEASUREMENT_COLUMNS = ["sensor", "time_of_day", "timestamp", "latitude", "longitude", "flight_level",
                        "ground_speed_kt", "heading_deg", "callsign", "address", "sac", "sic"]
 RADAR_COLUMNS = [*MEASUREMENT_COLUMNS, "rho_nm", "theta_deg", "position_item", "height_assumed"]
-ADSB_COLUMNS = [*MEASUREMENT_COLUMNS, "nucp_nic", "nacp"]
+ADSB_COLUMNS = [*MEASUREMENT_COLUMNS, "nucp_nic", "nacp", "nucr_nacv", "sil", "mops_version"]
 
 
 class UnknownRadar(ValueError):
@@ -130,6 +130,8 @@ def adsb_measurements(cat021: pd.DataFrame) -> pd.DataFrame:
     out["longitude"] = _column(cat021, "longitude")
     out["nucp_nic"] = _column(cat021, "nucp_nic", "Int64")
     out["nacp"] = _column(cat021, "nacp", "Int64")
+    for name in ("nucr_nacv", "sil", "mops_version"):
+        out[name] = _column(cat021, name, "Int64")
     keep = out[["time_of_day", "latitude", "longitude"]].notna().all(axis=1)
     return out.loc[keep, ADSB_COLUMNS].reset_index(drop=True)
 

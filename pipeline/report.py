@@ -566,9 +566,27 @@ def _write_frame(wb: Workbook, title: str, frame: pd.DataFrame | pd.Series) -> N
     _write_table(ws, headers, lambda: (list(r) for r in zip(*values, strict=True)), len(frame))
 
 
+def _write_figures(wb: Workbook, title: str, images: dict[str, str | os.PathLike[str]]) -> None:
+    """A sheet of PNG figures stacked vertically, each under its caption."""
+    ws = wb.create_sheet(title)
+    row = 1
+    for caption, png in images.items():
+        image = Image(str(png))
+        scale = min(1.0, 1000 / image.width) if image.width else 1.0
+        image.width, image.height = int(image.width * scale), int(image.height * scale)
+        ws.append([text_cell(ws, caption, font=Font(bold=True, size=12))])
+        ws.add_image(image, f"A{row + 1}")
+        rows_used = int(image.height / 20) + 3
+        for _ in range(rows_used):
+            ws.append([])
+        row += rows_used + 1
+
+
 def write_report(run: CorrelationRun, path_xlsx: str | os.PathLike[str], *,
-                 figure_png: str | os.PathLike[str] | None = None) -> None:
-    """Write the run's workbook to ``path_xlsx``; embed ``figure_png`` on a Map sheet when given."""
+                 figure_png: str | os.PathLike[str] | None = None,
+                 images: dict[str, str | os.PathLike[str]] | None = None) -> None:
+    """Write the run's workbook to ``path_xlsx``; embed ``figure_png`` on a Map sheet when given and
+    further ``images`` (caption -> PNG) on a Figures sheet."""
     wb = Workbook(write_only=True)
     taken = {name.lower() for name in _CORE_SHEETS}
     _write_summary(wb, run)
@@ -578,5 +596,22 @@ def write_report(run: CorrelationRun, path_xlsx: str | os.PathLike[str], *,
     _write_slots(wb, run)
     for name, frame in run.extra_sheets.items():
         _write_frame(wb, sheet_name(name, taken), frame)
+    if images:
+        _write_figures(wb, sheet_name("Figures", taken), images)
     _write_parameters(wb, run)
+    write_atomically(path_xlsx, wb.save)
+
+
+def write_tables(tables: dict[str, pd.DataFrame], path_xlsx: str | os.PathLike[str], *,
+                 images: dict[str, str | os.PathLike[str]] | None = None,
+                 parameters: dict | None = None) -> None:
+    """A workbook of plain tables (one sheet each, same formatting rules), figures and parameters."""
+    wb = Workbook(write_only=True)
+    taken: set[str] = set()
+    for name, frame in tables.items():
+        _write_frame(wb, sheet_name(name, taken), frame)
+    if images:
+        _write_figures(wb, sheet_name("Figures", taken), images)
+    if parameters is not None:
+        _write_parameters(wb, CorrelationRun(parameters=parameters))
     write_atomically(path_xlsx, wb.save)

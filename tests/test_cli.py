@@ -124,3 +124,35 @@ def test_console_script():
     assert out.stdout.startswith("msdc ")
     done = subprocess.run([sys.executable, "-m", "pipeline.cli", "--help"], capture_output=True)
     assert done.returncode == 0
+
+
+def test_quality_command(tmp_path, capsys):
+    xlsx, js = tmp_path / "quality.xlsx", tmp_path / "q.json"
+    assert main(["quality", str(RADAR), str(ADSB), "--sensors", str(SENSORS), "--callsign", "MAS72",
+                 "-o", str(xlsx), "--json", str(js)]) == 0
+    out = capsys.readouterr().out
+    assert "Radar biases" in out and "NACp" in out
+    wb = openpyxl.load_workbook(xlsx)
+    assert {"Quality", "Update intervals", "Gaps", "Jumps", "ADS-B quality", "Radar accuracy", "Radar biases",
+            "Figures", "Parameters"} <= set(wb.sheetnames)
+    tables = json.loads(js.read_text())["tables"]
+    jumps = [j for j in TRUTH["jumps"] if j["callsign"] == "MAS72"]
+    assert len(tables["Jumps"]) == len(jumps)
+    assert (tmp_path / "quality_intervals.png").exists()
+
+
+def test_correlate_filters_and_quality_sheets(tmp_path, capsys):
+    xlsx, js = tmp_path / "c.xlsx", tmp_path / "c.json"
+    assert main(["correlate", str(RADAR), str(ADSB), "--sensors", str(SENSORS), "--callsign", "MAS72",
+                 "--drop-jumps", "--quality", "-o", str(xlsx), "--json", str(js)]) == 0
+    err = capsys.readouterr().err
+    n_jumps = len(TRUTH["jumps"])  # filters run over all the input's ADS-B reports, before selection
+    assert f"filter jumps: {n_jumps} of the input's ADS-B reports" in err
+    doc = json.loads(js.read_text())
+    assert doc["filters"]["jumps"] == n_jumps
+    sheets = set(openpyxl.load_workbook(xlsx).sheetnames)
+    assert {"Quality", "Radar accuracy", "Radar biases", "Figures"} <= sheets
+    # without filters the thesis numbers are reproduced: nothing removed, no filter entry
+    assert main(["correlate", str(RADAR), str(ADSB), "--sensors", str(SENSORS), "--callsign", "MAS72",
+                 "--json", str(js)]) == 0
+    assert json.loads(js.read_text())["filters"] == {}

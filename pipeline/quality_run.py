@@ -1,0 +1,59 @@
+"""The quality job: per-sensor data quality and radar accuracy against ADS-B, as sheets and figures."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import pandas as pd
+
+from .accuracy import error_stats, estimate_biases, radar_errors
+from .aircraft import one_aircraft
+from .quality import quality_tables
+from .quality_figures import interval_histogram_figure, radar_error_figure
+
+
+@dataclass
+class QualityResult:
+    """Quality and accuracy sheets (name -> table), the matched radar errors, and the figures made."""
+
+    sheets: dict[str, pd.DataFrame]
+    errors: pd.DataFrame
+    figures: dict[str, Path] = field(default_factory=dict)
+
+
+def select_aircraft(radar: pd.DataFrame, adsb: pd.DataFrame, *, callsign: str | None = None,
+                    address: str | None = None) -> tuple[pd.DataFrame, pd.DataFrame]:
+    """Both sensors' measurements of one aircraft (NoSuchAircraft lists the closest), or all of them."""
+    if callsign is None and address is None:
+        return radar, adsb
+    ac = one_aircraft(radar, adsb, callsign, address)
+    return ac.radar, ac.adsb
+
+
+def quality_run(radar: pd.DataFrame, adsb: pd.DataFrame, sensors: pd.DataFrame, *,
+                callsign: str | None = None, address: str | None = None, gap_s: float = 180.0,
+                jump_kw: dict | None = None) -> QualityResult:
+    """Quality tables per aircraft and sensor, radar error statistics and per-radar bias estimates."""
+    radar, adsb = select_aircraft(radar, adsb, callsign=callsign, address=address)
+    sheets = quality_tables(radar, adsb, gap_s=gap_s, jump_kw=jump_kw)
+    errors = radar_errors(radar, adsb, sensors, jump_kw=jump_kw)
+    sheets["Radar accuracy"] = error_stats(errors)
+    biases = estimate_biases(errors)
+    sheets["Radar biases"] = biases
+    return QualityResult(sheets, errors)
+
+
+def quality_figures(result: QualityResult, out_dir: Path, stem: str) -> dict[str, Path]:
+    """Update-interval histogram and, per radar, range/azimuth error against range and time (PNG)."""
+    out_dir.mkdir(parents=True, exist_ok=True)
+    figs = {"Update intervals": interval_histogram_figure(result.sheets["Update intervals"],
+                                                          out_dir / f"{stem}_intervals.png")}
+    biases = result.sheets.get("Radar biases")
+    if len(result.errors):
+        for (sac, sic), g in result.errors.groupby(["sac", "sic"], sort=True):
+            row = biases[(biases["sac"] == sac) & (biases["sic"] == sic)] if biases is not None else None
+            figs[f"Radar errors {sac}/{sic}"] = radar_error_figure(
+                g, out_dir / f"{stem}_radar_errors_{sac}_{sic}.png", row)
+    result.figures.update(figs)
+    return figs
