@@ -129,6 +129,8 @@ def adsb_measurements(cat021: pd.DataFrame) -> pd.DataFrame:
     out["latitude"] = _column(cat021, "latitude")
     out["longitude"] = _column(cat021, "longitude")
     out["nucp_nic"] = _column(cat021, "nucp_nic", "Int64")
+    if "fom_pa" in cat021:  # 0.2x editions carry the NUCp-like figure as I021/090 PA
+        out["nucp_nic"] = out["nucp_nic"].fillna(_column(cat021, "fom_pa", "Int64"))
     out["nacp"] = _column(cat021, "nacp", "Int64")
     for name in ("nucr_nacv", "sil", "mops_version"):
         out[name] = _column(cat021, name, "Int64")

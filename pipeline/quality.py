@@ -158,9 +158,14 @@ def _pooled_row(rows: list[dict], intervals: list[np.ndarray], sensor_id: tuple,
     return row
 
 
+def _indicators(adsb: pd.DataFrame) -> list[str]:
+    """The ADS-B quality indicators the data carries (a column with no value counts as absent)."""
+    return [c for c in ADSB_INDICATORS if c in adsb and adsb[c].notna().any()]
+
+
 def _adsb_value_counts(adsb: pd.DataFrame) -> pd.DataFrame:
     """Value counts of each ADS-B quality indicator present, per aircraft and pooled per ADS-B sensor."""
-    indicators = [c for c in ADSB_INDICATORS if c in adsb]
+    indicators = _indicators(adsb)
     if adsb.empty or not indicators:
         return pd.DataFrame(columns=VALUE_COUNT_COLUMNS)
     pooled = adsb.assign(callsign=ALL, address="", aircraft=ALL)
@@ -176,7 +181,7 @@ def _adsb_value_counts(adsb: pd.DataFrame) -> pd.DataFrame:
 
 def _adsb_over_time(adsb: pd.DataFrame) -> pd.DataFrame:
     """Median of each indicator and the integrity shares per 10-minute bin, per aircraft and pooled."""
-    indicators = [c for c in ADSB_INDICATORS if c in adsb]
+    indicators = _indicators(adsb)
     columns = [*ID_KEYS, "bin_start_tod_s", "bin_start_utc", "reports", *[f"{c}_median" for c in indicators],
                *SHARE_COLUMNS]
     if adsb.empty:

@@ -179,3 +179,14 @@ def test_select_by_callsign_and_address():
     radar = frame_ids([None], ["ABCDEF"])
     assert select(radar, callsign="SIA1", link_with=other)["i"].tolist() == [0]
     assert select(radar, callsign="SIA1")["i"].tolist() == []
+
+
+def test_adsb_0_2x_figure_of_merit_feeds_nucp():
+    # 0.2x frames have no nucp_nic column; I021/090 PA (fom_pa) is the NUCp-like figure
+    from pipeline.measurements import adsb_measurements
+
+    frame = pd.DataFrame({"time_of_day": [1.0, 2.0], "day": [0, 0], "latitude": [1.0, 1.1],
+                          "longitude": [100.0, 100.1], "sac": [0, 0], "sic": [1, 1],
+                          "fom_pa": pd.array([7, pd.NA], dtype="Int64")})
+    out = adsb_measurements(frame)
+    assert out["nucp_nic"].iloc[0] == 7 and pd.isna(out["nucp_nic"].iloc[1])

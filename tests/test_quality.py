@@ -209,7 +209,8 @@ def test_integrity_shares_follow_the_mops_version():
 def test_without_timestamps_identities_or_optional_columns(sim):
     sensors = pd.DataFrame([asdict(sim.scenario.radar)])[SENSOR_COLUMNS]
     radar = radar_measurements(sim.radar, sensors)
-    adsb = adsb_measurements(sim.adsb)  # no nucr_nacv / sil / mops_version, no timestamps
+    # no nucr_nacv / sil / mops_version, no timestamps
+    adsb = adsb_measurements(sim.adsb.drop(columns=["nucr_nacv", "sil", "mops_version"], errors="ignore"))
     radar.loc[radar.index[:50], ["callsign", "address"]] = pd.NA  # Mode A/C-only plots
     t = quality_tables(radar, adsb)
     q = t["Quality"]
