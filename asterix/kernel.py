@@ -170,12 +170,12 @@ K_KIND, K_SIZE, K_EXT_START, K_EXT_COUNT, K_SUB_START, K_SUB_COUNT, K_SLOT = ran
 @njit(cache=True, nogil=True)
 def _grow_records(rel_off, rel_len, rec_off, rec_blk):
     """Double the capacity of the per-record outputs of ``scan``."""
-    n_slots, cap = rel_off.shape
+    cap, n_slots = rel_off.shape
     new_cap = max(2 * cap, 16)
-    ro = np.full((n_slots, new_cap), 0xFFFF, np.uint16)
-    rl = np.zeros((n_slots, new_cap), np.uint16)
-    ro[:, :cap] = rel_off
-    rl[:, :cap] = rel_len
+    ro = np.full((new_cap, n_slots), 0xFFFF, np.uint16)
+    rl = np.zeros((new_cap, n_slots), np.uint16)
+    ro[:cap] = rel_off
+    rl[:cap] = rel_len
     off = np.empty(new_cap, np.int64)
     blk = np.empty(new_cap, np.int64)
     off[:cap] = rec_off
@@ -189,15 +189,15 @@ def scan(buf, blk_start, blk_len, P, ext_sizes, sub_parts, n_frn, n_slots, cap):
 
     Returns counts (records per block, or minus an error code), fail_at (where a bad walk
     failed), and for the records of good blocks: where each part lies (offset from the record
-    start and length, slot-major, 0xFFFF when absent), record offsets, block indices, and n.
+    start and length, one row per record, 0xFFFF when absent), record offsets, block indices, and n.
     The walk is written out in one body: calls passing arrays cost more than the walk itself.
     """
     nblk = blk_start.shape[0]
     counts = np.zeros(nblk, np.int64)
     fail_at = np.full(nblk, -1, np.int64)
     cap = max(cap, 16)
-    rel_off = np.full((n_slots, cap), 0xFFFF, np.uint16)  # slot-major: gather reads rows
-    rel_len = np.zeros((n_slots, cap), np.uint16)
+    rel_off = np.full((cap, max(n_slots, 1)), 0xFFFF, np.uint16)
+    rel_len = np.zeros((cap, max(n_slots, 1)), np.uint16)
     rec_off = np.empty(cap, np.int64)
     rec_blk = np.empty(cap, np.int64)
     part_off = np.empty(max(n_slots, 1), np.int64)
@@ -236,6 +236,18 @@ def scan(buf, blk_start, blk_len, P, ext_sizes, sub_parts, n_frn, n_slots, cap):
                     if p >= n_frn or P[p, K_KIND] == 0:
                         err = E_UNDEFINED_FRN
                         break
+                    if P[p, K_KIND] == 1:
+                        # fast path: a fixed-size item (most items)
+                        n = P[p, K_SIZE]
+                        if pos + n > end:
+                            err = E_PAST_END
+                            break
+                        s = P[p, K_SLOT]
+                        if s >= 0:
+                            part_off[s] = pos
+                            part_len[s] = n
+                        pos += n
+                        continue
                     item_start = pos
                     # the parts to measure: the item itself, or a compound item's present subitems
                     nwork = 0
@@ -336,15 +348,15 @@ def scan(buf, blk_start, blk_len, P, ext_sizes, sub_parts, n_frn, n_slots, cap):
             rec_blk[i] = b
             for sl in range(n_slots):
                 if part_off[sl] >= 0:
-                    rel_off[sl, i] = part_off[sl] - rec_start
-                    rel_len[sl, i] = part_len[sl]
+                    rel_off[i, sl] = part_off[sl] - rec_start
+                    rel_len[i, sl] = part_len[sl]
             i += 1
         if err or nrec == 0:
             # all or nothing: forget this block's records
             for j in range(first_i, i):
                 for sl in range(n_slots):
-                    rel_off[sl, j] = 0xFFFF
-                    rel_len[sl, j] = 0
+                    rel_off[j, sl] = 0xFFFF
+                    rel_len[j, sl] = 0
             i = first_i
             counts[b] = -err if err else -E_EMPTY_BLOCK
             if not err:
@@ -352,6 +364,9 @@ def scan(buf, blk_start, blk_len, P, ext_sizes, sub_parts, n_frn, n_slots, cap):
         else:
             counts[b] = nrec
     return counts, fail_at, rel_off, rel_len, rec_off, rec_blk, i
+
+
+GATHER_CHUNK = 4096  # records per pass: their part table rows stay in cache across all fields
 
 
 @njit(cache=True, nogil=True)
@@ -363,49 +378,51 @@ def gather(buf, rec_off, rel_off, rel_len, F, f_mult, n_float, n_int, n_wide):
     fl = np.full((n_float, n_rec), np.nan)
     it = np.full((n_int, n_rec), -1, np.int32)
     wd = np.full((n_wide, n_rec), -1, np.int64)
-    for f in range(F.shape[0]):
-        sl, bit0, nbits, signed, o, kind = F[f, 0], F[f, 1], F[f, 2], F[f, 3], F[f, 4], F[f, 5]
-        lead = bit0 & 7
-        nbytes = (lead + nbits + 7) >> 3
-        shift = nbytes * 8 - lead - nbits
-        mask = (np.int64(1) << nbits) - 1
-        need = (bit0 + nbits + 7) >> 3
-        half = np.int64(1) << (nbits - 1)
-        full = np.int64(1) << nbits
-        mult = f_mult[f]
-        skip = bit0 >> 3
-        fallback = F[f, 6]
-        for i in range(n_rec):
-            r = rel_off[sl, i]
-            if r == 0xFFFF or rel_len[sl, i] < need:
-                continue
-            if fallback:
-                if kind == 1:
-                    if not np.isnan(fl[o, i]):
-                        continue
-                elif kind == 0:
-                    if it[o, i] >= 0:
-                        continue
-                elif wd[o, i] >= 0:
+    for c0 in range(0, n_rec, GATHER_CHUNK):
+        c1 = min(c0 + GATHER_CHUNK, n_rec)
+        for f in range(F.shape[0]):
+            sl, bit0, nbits, signed, o, kind = F[f, 0], F[f, 1], F[f, 2], F[f, 3], F[f, 4], F[f, 5]
+            lead = bit0 & 7
+            nbytes = (lead + nbits + 7) >> 3
+            shift = nbytes * 8 - lead - nbits
+            mask = (np.int64(1) << nbits) - 1
+            need = (bit0 + nbits + 7) >> 3
+            half = np.int64(1) << (nbits - 1)
+            full = np.int64(1) << nbits
+            mult = f_mult[f]
+            skip = bit0 >> 3
+            fallback = F[f, 6]
+            for i in range(c0, c1):
+                r = rel_off[i, sl]
+                if r == 0xFFFF or rel_len[i, sl] < need:
                     continue
-            x = rec_off[i] + r + skip
-            if nbytes == 1:
-                v = np.int64(buf[x])
-            elif nbytes == 2:
-                v = (np.int64(buf[x]) << 8) | np.int64(buf[x + 1])
-            elif nbytes == 3:
-                v = (np.int64(buf[x]) << 16) | (np.int64(buf[x + 1]) << 8) | np.int64(buf[x + 2])
-            else:
-                v = np.int64(0)
-                for j in range(nbytes):
-                    v = (v << 8) | np.int64(buf[x + j])
-            v = (v >> shift) & mask
-            if kind == 1:
-                if signed and v >= half:
-                    v -= full
-                fl[o, i] = v * mult
-            elif kind == 0:
-                it[o, i] = np.int32(v)
-            else:
-                wd[o, i] = v
+                if fallback:
+                    if kind == 1:
+                        if not np.isnan(fl[o, i]):
+                            continue
+                    elif kind == 0:
+                        if it[o, i] >= 0:
+                            continue
+                    elif wd[o, i] >= 0:
+                        continue
+                x = rec_off[i] + r + skip
+                if nbytes == 1:
+                    v = np.int64(buf[x])
+                elif nbytes == 2:
+                    v = (np.int64(buf[x]) << 8) | np.int64(buf[x + 1])
+                elif nbytes == 3:
+                    v = (np.int64(buf[x]) << 16) | (np.int64(buf[x + 1]) << 8) | np.int64(buf[x + 2])
+                else:
+                    v = np.int64(0)
+                    for j in range(nbytes):
+                        v = (v << 8) | np.int64(buf[x + j])
+                v = (v >> shift) & mask
+                if kind == 1:
+                    if signed and v >= half:
+                        v -= full
+                    fl[o, i] = v * mult
+                elif kind == 0:
+                    it[o, i] = np.int32(v)
+                else:
+                    wd[o, i] = v
     return fl, it, wd

@@ -99,7 +99,7 @@ def choose_edition(buf: np.ndarray, starts: np.ndarray, lens: np.ndarray, catego
 def _extract(buf, scanned, lay: Layout):
     """Gather every field of the scanned records into column matrices."""
     _, _, rel_off, rel_len, rec_off, rec_blk, n = scanned
-    fl, it, wd = kernel.gather(buf, rec_off[:n], rel_off[:, :n], rel_len[:, :n], lay.F, lay.f_mult,
+    fl, it, wd = kernel.gather(buf, rec_off[:n], rel_off[:n], rel_len[:n], lay.F, lay.f_mult,
                                len(lay.out_names_float), len(lay.out_names_int), len(lay.out_names_wide))
     return fl, (it, wd), rec_off[:n].copy(), rec_blk[:n].copy()
 
