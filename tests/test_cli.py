@@ -156,3 +156,32 @@ def test_correlate_filters_and_quality_sheets(tmp_path, capsys):
     assert main(["correlate", str(RADAR), str(ADSB), "--sensors", str(SENSORS), "--callsign", "MAS72",
                  "--json", str(js)]) == 0
     assert json.loads(js.read_text())["filters"] == {}
+
+
+def test_correlate_single_pcap_with_both_categories(tmp_path):
+    # the fixture blocks, one per UDP packet, merged by time into one capture dated 2019-03-01
+    from test_decode_containers import pcap_file, udp_frame
+
+    day0 = 1551398400  # 2019-03-01T00:00:00Z = 17956 days * 86400 s
+    blocks = []
+    for path in (RADAR, ADSB):
+        data = path.read_bytes()
+        frame = asterix.read(path).frames
+        (cat,) = frame
+        first_tod = frame[cat].groupby("block")["time_of_day"].first()
+        pos, i = 0, 0
+        while pos < len(data):
+            n = int.from_bytes(data[pos + 1:pos + 3], "big")
+            blocks.append((float(first_tod[i]), data[pos:pos + n]))
+            pos, i = pos + n, i + 1
+    blocks.sort(key=lambda b: b[0])
+    packets = [(day0 + int(t), int((t % 1) * 1e6), udp_frame(b)) for t, b in blocks]
+    pcap = tmp_path / "both.pcap"
+    pcap.write_bytes(pcap_file(packets)[0])
+    js = tmp_path / "s.json"
+    assert main(["correlate", str(pcap), "--sensors", str(SENSORS), "--callsign", "MAS72",
+                 "--json", str(js)]) == 0
+    windows = json.loads(js.read_text())["windows"]
+    expected = [w for w in TRUTH["overlap_windows"] if w["callsign"] == "MAS72"]
+    assert [round(w["start_tod"], 2) for w in windows] == [round(w["start_s"], 2) for w in expected]
+    assert windows[0]["start"].startswith("2019-03-01T08:00:0")
