@@ -6,6 +6,7 @@ import datetime as dt
 import mmap
 import os
 from collections.abc import Iterator
+from contextlib import contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -52,17 +53,25 @@ def _parse_date(date) -> dt.date | None:
     return dt.date.fromisoformat(str(date))
 
 
-def _open(path) -> tuple[np.ndarray, object]:
-    """The file as a read-only uint8 array (memory-mapped when non-empty)."""
+@contextmanager
+def _mapped(path) -> Iterator[np.ndarray]:
+    """The file as a read-only uint8 array, memory-mapped while the block runs."""
     try:
         with open(path, "rb") as fh:
             size = os.fstat(fh.fileno()).st_size
-            if size == 0:
-                return np.zeros(0, np.uint8), None
-            mm = mmap.mmap(fh.fileno(), 0, access=mmap.ACCESS_READ)
+            mm = mmap.mmap(fh.fileno(), 0, access=mmap.ACCESS_READ) if size else None
     except OSError as exc:
         raise UnreadableInput(f"{path}: cannot read: {exc.strerror or exc}") from exc
-    return np.frombuffer(mm, np.uint8), mm
+    buf = np.frombuffer(mm, np.uint8) if mm is not None else np.zeros(0, np.uint8)
+    try:
+        yield buf
+    finally:
+        del buf
+        if mm is not None:
+            try:
+                mm.close()
+            except BufferError:  # frames still view the map: the OS unmaps it when they go
+                pass
 
 
 def _scan(buf, starts, lens, lay: Layout):
@@ -282,22 +291,13 @@ def read(path, *, editions=None, date=None, categories=None, format: str | None 
     for cat, ed in eds.items():
         if ed != "auto":
             resolve_edition(cat, ed)
-    buf, mm = _open(path)
-    try:
+    with _mapped(path) as buf:
         try:
             seg = read_segments(buf, format)
         except ValueError as exc:
             raise UnreadableInput(f"{path}: {exc}") from exc
-        rec = decode_buffer(buf, seg, path=str(path), editions=eds, categories=categories, date=date,
-                            strict=strict)
-    finally:
-        del buf
-        if mm is not None:
-            try:
-                mm.close()
-            except BufferError:
-                pass
-    return rec
+        return decode_buffer(buf, seg, path=str(path), editions=eds, categories=categories, date=date,
+                             strict=strict)
 
 
 def iter_read(path, *, chunk: int = 1_000_000, editions=None, date=None, categories=None,
@@ -307,8 +307,7 @@ def iter_read(path, *, chunk: int = 1_000_000, editions=None, date=None, categor
     Days and timestamps continue across chunks; memory stays bounded by the chunk size.
     """
     eds = _parse_editions(editions)
-    buf, mm = _open(path)
-    try:
+    with _mapped(path) as buf:
         seg = read_segments(buf, format)
         bounds = _chunk_bounds(buf, seg, chunk)
         carry_day = 0
@@ -330,13 +329,6 @@ def iter_read(path, *, chunk: int = 1_000_000, editions=None, date=None, categor
                 rec.date, rec.day0 = first_date, day0
             eds = {**eds, **{c: e for c, e in rec.editions.items() if eds.get(c) == "auto"}}
             yield rec
-    finally:
-        del buf
-        if mm is not None:
-            try:
-                mm.close()
-            except BufferError:
-                pass
 
 
 def _continue_days(rec: Recording, carry_day: int, last_tod: float, date) -> tuple[int, float]:
@@ -394,21 +386,13 @@ def _sub_segments(seg: Segments, start, stop, idx) -> Segments:
 
 def categories_in(path, *, format: str | None = None) -> dict[int, int]:
     """Data blocks per category in a recording, from framing alone (fast: no record is walked)."""
-    buf, mm = _open(path)
-    try:
+    with _mapped(path) as buf:
         seg = read_segments(buf, format)
         known = np.zeros(256, np.uint8)
         known[list(DECODABLE)] = 1
         cats = kernel.frame_blocks(buf, seg.start, seg.stop, seg.exact, known)[2]
         values, counts = np.unique(cats, return_counts=True)
         return {int(v): int(n) for v, n in zip(values, counts, strict=True)}
-    finally:
-        del buf
-        if mm is not None:
-            try:
-                mm.close()
-            except BufferError:
-                pass
 
 
 def read_path_list(paths, **kw) -> list[Recording]:

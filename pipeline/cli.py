@@ -65,6 +65,16 @@ def _decoding_options(p: argparse.ArgumentParser) -> None:
     p.add_argument("--format", choices=FORMATS, help="container format (default: detected)")
 
 
+def _aircraft_options(p: argparse.ArgumentParser, all_help: str) -> None:
+    """Inputs, the sensor file and the aircraft selection shared by correlate and quality."""
+    p.add_argument("inputs", nargs="+", metavar="INPUT")
+    p.add_argument("--sensors", required=True, help="sensor positions (TOML [[sensor]] tables)")
+    who = p.add_mutually_exclusive_group(required=True)
+    who.add_argument("--callsign", help="call sign (case and spaces ignored)")
+    who.add_argument("--address", help="24-bit aircraft address in hex")
+    who.add_argument("--all", action="store_true", help=all_help)
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="msdc", description="Multi-Sensor Data Correlator: ASTERIX "
                                      "CAT048/CAT021 decoding and radar/ADS-B correlation.")
@@ -84,12 +94,7 @@ def build_parser() -> argparse.ArgumentParser:
     _decoding_options(s)
 
     c = sub.add_parser("correlate", help="correlate radar against ADS-B per aircraft (thesis algorithm)")
-    c.add_argument("inputs", nargs="+", metavar="INPUT")
-    c.add_argument("--sensors", required=True, help="sensor positions (TOML [[sensor]] tables)")
-    who = c.add_mutually_exclusive_group(required=True)
-    who.add_argument("--callsign", help="call sign (case and spaces ignored)")
-    who.add_argument("--address", help="24-bit aircraft address in hex")
-    who.add_argument("--all", action="store_true", help="every aircraft seen by both sensors")
+    _aircraft_options(c, "every aircraft seen by both sensors")
     c.add_argument("-o", "--output", help="Excel report (.xlsx); the track figure is written beside it")
     c.add_argument("--json", help="window summary as JSON")
     c.add_argument("--slot", type=float, default=10.0, help="slot width D in seconds (default 10)")
@@ -101,12 +106,7 @@ def build_parser() -> argparse.ArgumentParser:
     _decoding_options(c)
 
     q = sub.add_parser("quality", help="sensor data quality and radar accuracy against ADS-B")
-    q.add_argument("inputs", nargs="+", metavar="INPUT")
-    q.add_argument("--sensors", required=True, help="sensor positions (TOML [[sensor]] tables)")
-    who = q.add_mutually_exclusive_group(required=True)
-    who.add_argument("--callsign", help="call sign (case and spaces ignored)")
-    who.add_argument("--address", help="24-bit aircraft address in hex")
-    who.add_argument("--all", action="store_true", help="every aircraft")
+    _aircraft_options(q, "every aircraft")
     q.add_argument("-o", "--output", help="Excel workbook (.xlsx); figures are written beside it")
     q.add_argument("--json", help="the tables as JSON")
     q.add_argument("--gap", type=float, default=180.0, help="gap in seconds reported as discontinuity")
@@ -248,14 +248,20 @@ def _parameters(args, loaded: Loaded, started: float) -> dict:
             "sensors": str(args.sensors), "date": loaded.date.isoformat() if loaded.date else None}
 
 
-def cmd_correlate(args) -> int:
-    started = time.monotonic()
-    progress = Progress()
+def _prepare(args, progress: Progress):
+    """Load the inputs and the sensor file and build both sensors' measurements."""
     loaded = _load(args, progress)
     _report_skipped(loaded.errors)
     progress.stage("Pre-processing data")
     sensors = _sensors(args.sensors)
     radar, adsb = _measurements(loaded, sensors, args.sensors)
+    return loaded, sensors, radar, adsb
+
+
+def cmd_correlate(args) -> int:
+    started = time.monotonic()
+    progress = Progress()
+    loaded, sensors, radar, adsb = _prepare(args, progress)
     adsb_all = adsb
     adsb, removed = apply_filters(adsb, drop_jumps=args.drop_jumps, min_nic=args.min_nic,
                                   min_nacp=args.min_nacp)
@@ -316,11 +322,7 @@ def _correlation_images(run, radar, adsb, result, out: Path, max_windows: int = 
 def cmd_quality(args) -> int:
     started = time.monotonic()
     progress = Progress()
-    loaded = _load(args, progress)
-    _report_skipped(loaded.errors)
-    progress.stage("Pre-processing data")
-    sensors = _sensors(args.sensors)
-    radar, adsb = _measurements(loaded, sensors, args.sensors)
+    loaded, sensors, radar, adsb = _prepare(args, progress)
     progress.stage("Analysing data quality")
     result = _quality(radar, adsb, sensors, args)
     print(_quality_text(result))

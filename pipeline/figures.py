@@ -30,13 +30,15 @@ _MAX_TITLE_CALLSIGNS = 6
 _MAX_TRACK_LABELS = 30
 
 
-def _figure(width: float, height: float) -> Figure:
-    fig = Figure(figsize=(width, height), dpi=130, layout="constrained", facecolor="white")
+def new_figure(width: float, height: float, dpi: int = 130) -> Figure:
+    """A white, constrained-layout Figure on its own Agg canvas (no pyplot state)."""
+    fig = Figure(figsize=(width, height), dpi=dpi, layout="constrained", facecolor="white")
     FigureCanvasAgg(fig)
     return fig
 
 
-def _save(fig: Figure, path: str | os.PathLike[str]) -> Path:
+def save_png(fig: Figure, path: str | os.PathLike[str]) -> Path:
+    """Write the figure as PNG, creating the folder; returns the path."""
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     fig.savefig(path, format="png", facecolor="white")
@@ -110,7 +112,7 @@ def _callsign_title(windows: list[WindowResult]) -> str:
 
 def track_figure(run: CorrelationRun, path_png: str | os.PathLike[str]) -> Path:
     """Map of every window's slotted tracks: lon on x, lat on y, radar red, ADS-B yellow; returns the path."""
-    fig = _figure(10, 7.5)
+    fig = new_figure(10, 7.5)
     ax = fig.add_subplot()
     lats: list[np.ndarray] = []
     any_filled = False
@@ -148,12 +150,12 @@ def track_figure(run: CorrelationRun, path_png: str | os.PathLike[str]) -> Path:
     fig.suptitle(f"Slotted tracks: {_callsign_title(run.windows) or 'none'}", fontsize=13, fontweight="bold")
     ax.set_title(f"radar (red) vs ADS-B (yellow), {len(run.windows)} window(s), equal-distance aspect",
                  fontsize=9, color="0.35")
-    return _save(fig, path_png)
+    return save_png(fig, path_png)
 
 
 def lag_figure(window: WindowResult, path: str | os.PathLike[str]) -> Path:
     """NCC and Pearson coefficient against lag, latitude and longitude panels; returns the path."""
-    fig = _figure(10, 4.2)
+    fig = new_figure(10, 4.2)
     lags = window.lags.sort_values("lag") if "lag" in window.lags.columns else window.lags
     x = _floats(lags, "lag")
     for i, axis in enumerate(("lat", "lon")):
@@ -175,12 +177,12 @@ def lag_figure(window: WindowResult, path: str | os.PathLike[str]) -> Path:
     step = slot_seconds(window)
     note = f", 1 slot = {step:g} s" if math.isfinite(step) else ""
     fig.suptitle(f"Correlation against lag: {_window_label(window)}{note} (star = peak)", fontsize=11)
-    return _save(fig, path)
+    return save_png(fig, path)
 
 
 def latlon_time_figure(window: WindowResult, path: str | os.PathLike[str]) -> Path:
     """Radar and ADS-B slotted latitude and longitude against time; returns the path."""
-    fig = _figure(10, 6)
+    fig = new_figure(10, 6)
     s = window.slots
     x, is_time = _time_axis(s)
     axes = fig.subplots(2, 1, sharex=True)
@@ -201,4 +203,4 @@ def latlon_time_figure(window: WindowResult, path: str | os.PathLike[str]) -> Pa
     else:
         axes[1].set_xlabel("time of day (s)")
     fig.suptitle(f"Latitude and longitude against time: {_window_label(window)}", fontsize=11)
-    return _save(fig, path)
+    return save_png(fig, path)

@@ -12,10 +12,9 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 from matplotlib.axes import Axes
-from matplotlib.backends.backend_agg import FigureCanvasAgg
-from matplotlib.figure import Figure
 from matplotlib.ticker import FuncFormatter, MultipleLocator
 
+from .figures import new_figure, save_png
 from .measurements import select
 from .results import WindowResult
 from .windows import in_window
@@ -24,19 +23,6 @@ RADAR_COLOR = "#d62728"
 ADSB_COLOR = "#e6b800"
 _SENSOR_LABEL = {"radar": "Radar (CAT048)", "adsb": "ADS-B (CAT021)"}
 _TICK_STEPS_S = (10, 30, 60, 120, 300, 600, 900, 1800, 3600, 7200, 14400)
-
-
-def _figure(width: float, height: float) -> Figure:
-    fig = Figure(figsize=(width, height), dpi=120, layout="constrained", facecolor="white")
-    FigureCanvasAgg(fig)
-    return fig
-
-
-def _save(fig: Figure, path: str | os.PathLike[str]) -> Path:
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, format="png", facecolor="white")
-    return path
 
 
 def _clock(seconds: float, _pos=None) -> str:
@@ -71,10 +57,10 @@ def _empty(ax: Axes, text: str) -> None:
 def interval_histogram_figure(histogram: pd.DataFrame, path: str | os.PathLike[str]) -> Path:
     """Update-interval histogram, one log-scaled panel per sensor ("Update intervals" of quality_tables)."""
     sensors = list(histogram.groupby(["sensor", "sac", "sic"], dropna=False, sort=True))
-    fig = _figure(9, 2.6 * max(len(sensors), 1))
+    fig = new_figure(9, 2.6 * max(len(sensors), 1))
     if not sensors:
         _empty(fig.add_subplot(), "No update intervals")
-        return _save(fig, path)
+        return save_png(fig, path)
     axes = fig.subplots(len(sensors), 1, squeeze=False)[:, 0]
     for ax, ((sensor, sac, sic), h) in zip(axes, sensors, strict=True):
         used = h[h["intervals"] > 0]
@@ -90,19 +76,19 @@ def interval_histogram_figure(histogram: pd.DataFrame, path: str | os.PathLike[s
         _grid(ax)
     axes[-1].set_xlabel("update interval (s)")
     fig.suptitle("Update intervals after de-duplication", fontsize=12)
-    return _save(fig, path)
+    return save_png(fig, path)
 
 
 def radar_error_figure(errors: pd.DataFrame, path: str | os.PathLike[str],
                        biases: pd.DataFrame | None = None) -> Path:
     """Range and azimuth error against slant range and against time (``radar_errors`` rows of one radar),
     coloured per aircraft; with ``biases`` (one row) the fitted range bias + gain and azimuth bias lines."""
-    fig = _figure(11, 7)
+    fig = new_figure(11, 7)
     axes = fig.subplots(2, 2, sharey="row")
     if errors.empty:
         for ax in axes.ravel():
             _empty(ax, "No matched reports")
-        return _save(fig, path)
+        return save_png(fig, path)
     range_nm = errors["slant_range_m"].to_numpy(float) / 1852.0
     for label, g in errors.groupby(errors["callsign"].fillna(errors["address"]).fillna("?"), sort=True):
         idx = g.index.to_numpy()
@@ -129,7 +115,7 @@ def radar_error_figure(errors: pd.DataFrame, path: str | os.PathLike[str],
     axes[0, 0].legend(fontsize=7, markerscale=3, ncol=2, loc="best")
     radars = ", ".join(str(r) for r in errors["radar"].dropna().unique()[:3])
     fig.suptitle(f"Radar errors against ADS-B: {radars} ({len(errors)} reports)", fontsize=12)
-    return _save(fig, path)
+    return save_png(fig, path)
 
 
 def _none_if_blank(value) -> str | None:
@@ -149,7 +135,7 @@ def _raw_in_window(window: WindowResult, meas: pd.DataFrame, other: pd.DataFrame
 def slotting_figure(window: WindowResult, radar_meas: pd.DataFrame, adsb_meas: pd.DataFrame,
                     path: str | os.PathLike[str]) -> Path:
     """Latitude and longitude against time of one window: raw reports (left) and 10 s slots (right)."""
-    fig = _figure(12, 6.5)
+    fig = new_figure(12, 6.5)
     axes = fig.subplots(2, 2, sharex=True, sharey="row")
     raw = {"radar": _raw_in_window(window, radar_meas, adsb_meas),
            "adsb": _raw_in_window(window, adsb_meas, radar_meas)}
@@ -176,4 +162,4 @@ def slotting_figure(window: WindowResult, radar_meas: pd.DataFrame, adsb_meas: p
     s = window.summary
     fig.suptitle(f"Latitude and longitude before and after slotting: {s.get('callsign') or s.get('address')} "
                  f"window {s.get('window')}", fontsize=12)
-    return _save(fig, path)
+    return save_png(fig, path)
