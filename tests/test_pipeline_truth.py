@@ -483,7 +483,8 @@ def test_separation_is_explained_by_noise_and_slot_timing(quiet):
                                            "lon": st.longitude, "rho": tr["rho_true_nm"].to_numpy()})
                              .groupby("k").agg(lat=("lat", "mean"), lon=("lon", "mean"), n=("lat", "size"),
                                                rho=("rho", "mean")))
-            both = means[0].join(means[1], how="inner", rsuffix="_a")
+            both = means[0].merge(means[1], left_index=True, right_index=True, how="inner",
+                                  suffixes=("", "_a"))
             e_r, n_r = geo_offsets(both["lat"], both["lon"], both["lat_a"], both["lon_a"])
             cross = both["rho"] * M_PER_NM * math.radians(sc.sigma_azimuth_deg)
             noise2 = ((sc.sigma_range_m**2 + cross**2) / both["n"]
