@@ -160,3 +160,36 @@ def test_record_values_independent_of_block_grouping():
     b = decode_bytes(block(48, *recs)).frames[48]
     assert np.array_equal(a.track_number.to_numpy(), b.track_number.to_numpy())
     assert list(a.block) == list(range(9)) and set(b.block) == {0}
+
+
+def _real_streams() -> list[tuple[str, bytes]]:
+    """Real recordings: the conformance records (when ../shared is there) and the fixtures' first blocks."""
+    from pathlib import Path
+
+    from asterix_bytes import SHARED
+
+    fixtures = Path(__file__).resolve().parents[1] / "fixtures"
+    out = [(p.name, p.read_bytes()[:3000]) for p in (fixtures / "radar.ast", fixtures / "adsb.ast")]
+    conf = SHARED / "conformance"
+    if conf.is_dir():
+        out += [(p.name, p.read_bytes()) for p in sorted(conf.iterdir())
+                if not p.name.endswith((".json", ".md"))]
+    return out
+
+
+REAL = _real_streams()
+
+
+@settings(max_examples=200, deadline=None)
+@given(st.sampled_from(REAL), st.data())
+def test_bit_flipped_and_truncated_real_blocks(named, data):
+    _, stream = named
+    buf = bytearray(stream)
+    for _ in range(data.draw(st.integers(1, 3))):
+        pos = data.draw(st.integers(0, len(buf) - 1))
+        buf[pos] ^= 1 << data.draw(st.integers(0, 7))
+    cut = data.draw(st.integers(0, len(buf)))
+    rec = decode_bytes(bytes(buf[:cut]), editions={21: data.draw(st.sampled_from(["2.1", "0.26", "auto"]))})
+    assert accounted(rec) == cut
+    for frame in rec.frames.values():  # whatever decodes comes with a place in the file
+        assert frame["offset"].between(0, cut - 1).all()
