@@ -137,21 +137,25 @@ def printable(text: Any) -> str:
 
 
 def _clock(timestamp: Any, tod: Any) -> str:
-    """HH:MM:SS(.s) UTC from the timestamp when known, else from the time of day (+Nd past midnight)."""
-    try:
-        moment = utc_naive(timestamp)
-    except (TypeError, ValueError):
-        moment = None
-    if moment is not None:
-        return moment.strftime("%H:%M:%S.") + f"{moment.microsecond // 100000}"
-    if is_missing(tod) or not isinstance(tod, Real):
+    """HH:MM:SS.s UTC rounded to 0.1 s, from the time of day (+Nd past the first day), else the timestamp."""
+    seconds = None
+    if not is_missing(tod) and isinstance(tod, Real):
+        seconds = float(tod)
+    else:
+        try:
+            moment = utc_naive(timestamp)
+        except (TypeError, ValueError):
+            moment = None
+        if moment is not None:
+            seconds = moment.hour * 3600 + moment.minute * 60 + moment.second + moment.microsecond / 1e6
+    if seconds is None:
         return "-"
-    seconds = float(tod)
-    days, rest = divmod(seconds, 86400.0)
-    hours, rest = divmod(rest, 3600.0)
-    minutes, secs = divmod(rest, 60.0)
-    text = f"{int(hours):02d}:{int(minutes):02d}:{secs:04.1f}"
-    return text + (f"+{int(days)}d" if days else "")
+    tenths = int(round(seconds * 10))
+    days, tenths = divmod(tenths, 864000)
+    hours, tenths = divmod(tenths, 36000)
+    minutes, tenths = divmod(tenths, 600)
+    text = f"{hours:02d}:{minutes:02d}:{tenths // 10:02d}.{tenths % 10}"
+    return text + (f"+{days}d" if days else "")
 
 
 def _num(value: Any, decimals: int) -> str:

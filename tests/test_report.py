@@ -261,3 +261,13 @@ def test_sheet_names_are_valid_and_unique() -> None:
     assert sheet_name("Radar accuracy [m]: a/b?", taken) == "Radar accuracy _m__ a_b_"
     assert len(sheet_name("x" * 40, taken)) == 31
     assert sheet_name("history", taken) == "History_"
+
+
+def test_summary_clock_rounds_whole_time():
+    from pipeline.summary import _clock
+
+    # 59.96 s rounds to 00:01:00.0 (not 00:00:60.0); 86400 + 3661.04 s is 01:01:01.0 on the next day
+    assert _clock(None, 59.96) == "00:01:00.0"
+    assert _clock(None, 86400 + 3661.04) == "01:01:01.0+1d"
+    assert _clock(None, 28802.984375) == "08:00:03.0"
+    assert _clock(None, None) == "-"
