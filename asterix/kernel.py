@@ -168,38 +168,21 @@ K_KIND, K_SIZE, K_EXT_START, K_EXT_COUNT, K_SUB_START, K_SUB_COUNT, K_SLOT = ran
 
 
 @njit(cache=True, nogil=True)
-def _grow_records(rel_off, rel_len, rec_off, rec_blk):
-    """Double the capacity of the per-record outputs of ``scan``."""
-    cap, n_slots = rel_off.shape
-    new_cap = max(2 * cap, 16)
-    ro = np.full((new_cap, n_slots), 0xFFFF, np.uint16)
-    rl = np.zeros((new_cap, n_slots), np.uint16)
-    ro[:cap] = rel_off
-    rl[:cap] = rel_len
-    off = np.empty(new_cap, np.int64)
-    blk = np.empty(new_cap, np.int64)
-    off[:cap] = rec_off
-    blk[:cap] = rec_blk
-    return ro, rl, off, blk
-
-
-@njit(cache=True, nogil=True)
-def scan(buf, blk_start, blk_len, P, ext_sizes, sub_parts, n_frn, n_slots, cap):
+def scan(buf, blk_start, blk_len, P, ext_sizes, sub_parts, n_frn, n_slots, rel_off, rel_len, rec_off,
+         rec_blk):
     """Walk every block record by record, all or nothing per block, in one pass.
 
     Returns counts (records per block, or minus an error code), fail_at (where a bad walk
-    failed), and for the records of good blocks: where each part lies (offset from the record
-    start and length, one row per record, 0xFFFF when absent), record offsets, block indices, and n.
-    The walk is written out in one body: calls passing arrays cost more than the walk itself.
+    failed) and n, the records of good blocks written to the caller's arrays: where each part
+    lies (rel_off/rel_len rows, offset from the record start and length; rel_off must come filled
+    with 0xFFFF), record offsets and block indices. n is -1 when the arrays are too small.
+    The caller allocates (numpy's allocator reuses huge pages; page faults cost more than the walk),
+    and the walk is written out in one body: calls passing arrays cost more than the walk itself.
     """
     nblk = blk_start.shape[0]
     counts = np.zeros(nblk, np.int64)
     fail_at = np.full(nblk, -1, np.int64)
-    cap = max(cap, 16)
-    rel_off = np.full((cap, max(n_slots, 1)), 0xFFFF, np.uint16)
-    rel_len = np.zeros((cap, max(n_slots, 1)), np.uint16)
-    rec_off = np.empty(cap, np.int64)
-    rec_blk = np.empty(cap, np.int64)
+    cap = rec_off.shape[0]
     part_off = np.empty(max(n_slots, 1), np.int64)
     part_len = np.empty(max(n_slots, 1), np.int64)
     work = np.empty(64, np.int64)
@@ -342,8 +325,8 @@ def scan(buf, blk_start, blk_len, P, ext_sizes, sub_parts, n_frn, n_slots, cap):
                 fail_at[b] = rec_start
                 break
             nrec += 1
-            if i == rec_off.shape[0]:
-                rel_off, rel_len, rec_off, rec_blk = _grow_records(rel_off, rel_len, rec_off, rec_blk)
+            if i == cap:
+                return counts, fail_at, -1
             rec_off[i] = rec_start
             rec_blk[i] = b
             for sl in range(n_slots):
@@ -363,21 +346,18 @@ def scan(buf, blk_start, blk_len, P, ext_sizes, sub_parts, n_frn, n_slots, cap):
                 fail_at[b] = blk_start[b]
         else:
             counts[b] = nrec
-    return counts, fail_at, rel_off, rel_len, rec_off, rec_blk, i
+    return counts, fail_at, i
 
 
 GATHER_CHUNK = 4096  # records per pass: their part table rows stay in cache across all fields
 
 
 @njit(cache=True, nogil=True)
-def gather(buf, rec_off, rel_off, rel_len, F, f_mult, n_float, n_int, n_wide):
-    """Fill the column matrices field by field: float64 (LSB-scaled, NaN if absent), int32 and
-    int64 for fields over 31 bits (-1 if absent). A column fed by several sources takes the first
-    source present (F rows are in source order; later ones are flagged as fallbacks)."""
+def gather(buf, rec_off, rel_off, rel_len, F, f_mult, fl, it, wd):
+    """Fill the caller's column matrices field by field: float64 (LSB-scaled; come filled with NaN),
+    int32 and int64 for fields over 31 bits (come filled with -1). A column fed by several sources
+    takes the first source present (F rows are in source order; later ones are flagged fallbacks)."""
     n_rec = rec_off.shape[0]
-    fl = np.full((n_float, n_rec), np.nan)
-    it = np.full((n_int, n_rec), -1, np.int32)
-    wd = np.full((n_wide, n_rec), -1, np.int64)
     for c0 in range(0, n_rec, GATHER_CHUNK):
         c1 = min(c0 + GATHER_CHUNK, n_rec)
         for f in range(F.shape[0]):
@@ -425,4 +405,3 @@ def gather(buf, rec_off, rel_off, rel_len, F, f_mult, n_float, n_int, n_wide):
                     it[o, i] = np.int32(v)
                 else:
                     wd[o, i] = v
-    return fl, it, wd

@@ -76,9 +76,18 @@ def _mapped(path) -> Iterator[np.ndarray]:
 
 def _scan(buf, starts, lens, lay: Layout):
     """One walk over the blocks: records per block (minus an error code for a bad block), where
-    bad walks failed, and where each part of each good record lies."""
-    cap = int(lens.sum()) // 40 + 16  # a first guess at the record count; scan grows as needed
-    return kernel.scan(buf, starts, lens, lay.P, lay.ext_sizes, lay.sub_parts, lay.n_frn, lay.n_slots, cap)
+    bad walks failed, and where each part of each good record lies (arrays sized by numpy)."""
+    cap = int(lens.sum()) // 40 + 16  # a first guess at the record count, doubled until it fits
+    slots = max(lay.n_slots, 1)
+    while True:
+        rel_off = np.full((cap, slots), 0xFFFF, np.uint16)
+        rel_len = np.zeros((cap, slots), np.uint16)
+        rec_off, rec_blk = np.empty(cap, np.int64), np.empty(cap, np.int64)
+        counts, fail_at, n = kernel.scan(buf, starts, lens, lay.P, lay.ext_sizes, lay.sub_parts, lay.n_frn,
+                                         lay.n_slots, rel_off, rel_len, rec_off, rec_blk)
+        if n >= 0:
+            return counts, fail_at, rel_off, rel_len, rec_off, rec_blk, n
+        cap *= 2
 
 
 def choose_edition(buf: np.ndarray, starts: np.ndarray, lens: np.ndarray, category: int,
@@ -108,8 +117,10 @@ def choose_edition(buf: np.ndarray, starts: np.ndarray, lens: np.ndarray, catego
 def _extract(buf, scanned, lay: Layout):
     """Gather every field of the scanned records into column matrices."""
     _, _, rel_off, rel_len, rec_off, rec_blk, n = scanned
-    fl, it, wd = kernel.gather(buf, rec_off[:n], rel_off[:n], rel_len[:n], lay.F, lay.f_mult,
-                               len(lay.out_names_float), len(lay.out_names_int), len(lay.out_names_wide))
+    fl = np.full((len(lay.out_names_float), n), np.nan)
+    it = np.full((len(lay.out_names_int), n), -1, np.int32)
+    wd = np.full((len(lay.out_names_wide), n), -1, np.int64)
+    kernel.gather(buf, rec_off[:n], rel_off[:n], rel_len[:n], lay.F, lay.f_mult, fl, it, wd)
     return fl, (it, wd), rec_off[:n].copy(), rec_blk[:n].copy()
 
 
