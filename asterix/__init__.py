@@ -6,7 +6,8 @@ streams it in chunks; ``encode`` builds records and data blocks from column valu
 """
 
 from .errors import AsterixError, DecodeError, UnreadableInput
-from .reader import Recording, decode_buffer, iter_read, read
+from .reader import Recording, decode_buffer, read
+from .stream import iter_read
 from .tables import available as available_editions
 
 __all__ = [

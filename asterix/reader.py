@@ -1,4 +1,4 @@
-"""``read`` and ``iter_read``: recordings in, one typed DataFrame per category out."""
+"""``read``: a recording in, one typed DataFrame per category out, with an account of what was skipped."""
 
 from __future__ import annotations
 
@@ -8,7 +8,6 @@ import os
 from collections.abc import Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass, field
-from pathlib import Path
 
 import numpy as np
 import pandas as pd
@@ -19,6 +18,7 @@ from .errors import REASONS, DecodeError, UnreadableInput
 from .frames import empty_column, typed_column
 from .layout import Layout, compile_layout
 from .tables import resolve_edition
+from .timeline import assign_days, timestamp_index
 
 DECODABLE = (21, 48)
 AUTO_CANDIDATES = {21: ("2.7", "0.26", "0.23")}
@@ -143,68 +143,6 @@ def _columns(lay: Layout, fl, ints, rec_off, rec_blk) -> dict[str, object]:
     return data
 
 
-def _days(frames: dict[int, dict], seg: Segments, blk_seg: np.ndarray) -> int | None:
-    """Add the ``day`` column (days after the first) to each category's columns; return the
-    container's day number of day 0 (days since 1970 when ``seg.dated``), None for raw streams."""
-    parts = [(c, f) for c, f in frames.items() if len(f["offset"])]
-    if not parts:
-        for f in frames.values():
-            f["day"] = np.zeros(0, np.int64)
-        return None
-    if seg.format in ("raw",) or not len(seg.start):
-        # file order across categories; a drop of more than 12 h is a new day, a rise of more
-        # than 12 h a late report from the day before
-        off = np.concatenate([np.asarray(f["offset"]) for _, f in parts])
-        tod = np.concatenate([np.asarray(f["time_of_day"]) for _, f in parts])
-        order = np.argsort(off, kind="stable")
-        t = pd.Series(tod[order]).ffill().bfill().to_numpy()
-        d = np.diff(t, prepend=t[:1] if len(t) else t)
-        day_sorted = np.cumsum(d < -43200) - np.cumsum(d > 43200)
-        day = np.empty_like(day_sorted)
-        day[order] = day_sorted
-        first = int(day.min())
-        i = 0
-        for _, f in parts:
-            n = len(f["offset"])
-            f["day"] = (day[i:i + n] - first).astype(np.int64)
-            i += n
-        first_day = None
-    else:
-        # container capture time: the day that puts the report nearest its capture
-        all_days = []
-        for _, f in parts:
-            s = blk_seg[np.asarray(f["block"])]
-            cday, ctod = seg.capture_day[s], seg.capture_tod[s]
-            tod = np.asarray(f["time_of_day"])
-            tod = np.where(np.isnan(tod), ctod, tod)
-            all_days.append(cday + np.rint((ctod - tod) / 86400.0).astype(np.int64))
-        first_day = int(min(a.min() for a in all_days))
-        for (_, f), a in zip(parts, all_days, strict=True):
-            f["day"] = a - first_day
-    for f in frames.values():
-        if "day" not in f:
-            f["day"] = np.zeros(len(f["offset"]), np.int64)
-    return first_day
-
-
-def _timestamp(day, tod, date: dt.date | None) -> pd.DatetimeIndex:
-    """UTC timestamps from day offsets and times of day (NaT when the date or the time is unknown)."""
-    day, tod = np.asarray(day), np.asarray(tod)
-    if date is None:
-        return pd.DatetimeIndex(np.full(len(day), np.datetime64("NaT"), "datetime64[ns]")).tz_localize("UTC")
-    ns = np.rint((day * 86400.0 + tod) * 1e9)
-    missing = np.isnan(ns)
-    vals = np.datetime64(date, "ns") + np.where(missing, 0, ns).astype("timedelta64[ns]")
-    vals[missing] = np.datetime64("NaT")
-    return pd.DatetimeIndex(vals).tz_localize("UTC")
-
-
-def _timestamps(frames: dict[int, pd.DataFrame], date: dt.date | None) -> None:
-    """Recompute the timestamp column of finished frames (after a day shift)."""
-    for f in frames.values():
-        f["timestamp"] = _timestamp(f["day"], f["time_of_day"], date)
-
-
 LEADING = ("sac", "sic", "time_of_day", "day", "timestamp")
 
 
@@ -264,13 +202,13 @@ def decode_buffer(buf: np.ndarray, seg: Segments, *, path: str = "", editions: d
         o, _, c, why = errors[0]
         raise DecodeError(path, o, why, c)
     date = _parse_date(date)
-    first_day = _days(columns, seg, b_seg)
+    first_day = assign_days(columns, seg, b_seg)
     if first_day is not None and seg.dated:
         date = dt.date(1970, 1, 1) + dt.timedelta(days=first_day)
     frames: dict[int, pd.DataFrame] = {}
     for cat in list(columns):
         cols = columns.pop(cat)
-        cols["timestamp"] = _timestamp(cols["day"], cols["time_of_day"], date)
+        cols["timestamp"] = timestamp_index(cols["day"], cols["time_of_day"], date)
         frames[cat] = _build(cols)
         del cols
     err = pd.DataFrame(errors, columns=["offset", "length", "category", "reason"])
@@ -311,90 +249,6 @@ def read(path, *, editions=None, date=None, categories=None, format: str | None 
                              strict=strict)
 
 
-def iter_read(path, *, chunk: int = 1_000_000, editions=None, date=None, categories=None,
-              format: str | None = None, strict: bool = False) -> Iterator[Recording]:
-    """Stream a recording in chunks of about ``chunk`` bytes of payload, yielding a Recording each.
-
-    Days and timestamps continue across chunks; memory stays bounded by the chunk size.
-    """
-    eds = _parse_editions(editions)
-    with _mapped(path) as buf:
-        seg = read_segments(buf, format)
-        bounds = _chunk_bounds(buf, seg, chunk)
-        carry_day = 0
-        last_tod = np.nan
-        first_date = _parse_date(date)
-        day0 = None  # container day number of the first chunk's day 0
-        for sub in bounds:
-            rec = decode_buffer(buf, sub, path=str(path), editions=eds, categories=categories,
-                                date=first_date, strict=strict)
-            if seg.format == "raw":
-                carry_day, last_tod = _continue_days(rec, carry_day, last_tod, first_date)
-            elif rec.day0 is not None and day0 is None:
-                day0, first_date = rec.day0, rec.date  # a dated container's date wins over date=
-            elif rec.day0 is not None and rec.day0 != day0:
-                # each chunk counts days from its own first: count them from the first chunk's
-                for f in rec.frames.values():
-                    f["day"] += rec.day0 - day0
-                _timestamps(rec.frames, first_date)
-                rec.date, rec.day0 = first_date, day0
-            eds = {**eds, **{c: e for c, e in rec.editions.items() if eds.get(c) == "auto"}}
-            yield rec
-
-
-def _continue_days(rec: Recording, carry_day: int, last_tod: float, date) -> tuple[int, float]:
-    """Carry the midnight count of a raw stream from one chunk to the next."""
-    firsts = [(f["offset"].iloc[0], f["time_of_day"].iloc[0]) for f in rec.frames.values() if len(f)]
-    if not firsts:
-        return carry_day, last_tod
-    first_tod = min(firsts)[1]
-    if not np.isnan(last_tod) and not np.isnan(first_tod) and first_tod < last_tod - 43200:
-        carry_day += 1
-    for f in rec.frames.values():
-        f["day"] += carry_day
-    _timestamps(rec.frames, date)
-    lasts = [(f["offset"].iloc[-1], f["time_of_day"].iloc[-1], f["day"].iloc[-1])
-             for f in rec.frames.values() if len(f)]
-    _, tod, day = max(lasts)
-    return int(day), float(tod)
-
-
-def _chunk_bounds(buf: np.ndarray, seg: Segments, chunk: int):
-    """Split the segments into groups of about ``chunk`` bytes, cutting raw streams at block starts."""
-    out = []
-    if seg.format == "raw" and len(seg.start):
-        known = np.zeros(256, np.uint8)
-        known[list(DECODABLE)] = 1
-        b_start, _, _, _, _, _, _, _ = kernel.frame_blocks(buf, seg.start, seg.stop, False, known)
-        cuts = [int(seg.start[0])]
-        for s in b_start:
-            if s - cuts[-1] >= chunk:
-                cuts.append(int(s))
-        cuts.append(int(seg.stop[0]))
-        for lo, hi in zip(cuts[:-1], cuts[1:], strict=True):
-            sub = _sub_segments(seg, np.array([lo]), np.array([hi]), np.array([0]))
-            out.append(sub)
-        return out
-    sizes = np.cumsum(seg.stop - seg.start)
-    group = (sizes // max(chunk, 1)).astype(np.int64)
-    for g in np.unique(group):
-        idx = np.flatnonzero(group == g)
-        sub = _sub_segments(seg, seg.start[idx], seg.stop[idx], idx)
-        out.append(sub)
-    if not len(seg.start):
-        out.append(seg)
-    return out
-
-
-def _sub_segments(seg: Segments, start, stop, idx) -> Segments:
-    first = len(idx) and idx[0] == 0
-    return Segments(seg.format, np.asarray(start, np.int64), np.asarray(stop, np.int64),
-                    seg.capture_day[idx] if len(seg.capture_day) else np.full(len(idx), -1, np.int64),
-                    seg.capture_tod[idx] if len(seg.capture_tod) else np.full(len(idx), np.nan),
-                    seg.dated, seg.exact, seg.container_bytes if first else 0,
-                    seg.problems if first else [])
-
-
 def categories_in(path, *, format: str | None = None) -> dict[int, int]:
     """Data blocks per category in a recording, from framing alone (fast: no record is walked)."""
     with _mapped(path) as buf:
@@ -404,8 +258,3 @@ def categories_in(path, *, format: str | None = None) -> dict[int, int]:
         cats = kernel.frame_blocks(buf, seg.start, seg.stop, seg.exact, known)[2]
         values, counts = np.unique(cats, return_counts=True)
         return {int(v): int(n) for v, n in zip(values, counts, strict=True)}
-
-
-def read_path_list(paths, **kw) -> list[Recording]:
-    """Read several recordings with the same options."""
-    return [read(Path(p), **kw) for p in paths]

@@ -1,0 +1,96 @@
+"""``iter_read``: decode a recording in bounded chunks, days and timestamps continuing across them."""
+
+from __future__ import annotations
+
+from collections.abc import Iterator
+
+import numpy as np
+
+from . import kernel
+from .containers import Segments, read_segments
+from .reader import DECODABLE, Recording, _mapped, _parse_date, _parse_editions, decode_buffer
+from .timeline import restamp
+
+
+def iter_read(path, *, chunk: int = 1_000_000, editions=None, date=None, categories=None,
+              format: str | None = None, strict: bool = False) -> Iterator[Recording]:
+    """Stream a recording in chunks of about ``chunk`` bytes of payload, yielding a Recording each.
+
+    Days and timestamps continue across chunks; memory stays bounded by the chunk size.
+    """
+    eds = _parse_editions(editions)
+    with _mapped(path) as buf:
+        seg = read_segments(buf, format)
+        bounds = _chunk_bounds(buf, seg, chunk)
+        carry_day = 0
+        last_tod = np.nan
+        first_date = _parse_date(date)
+        day0 = None  # container day number of the first chunk's day 0
+        for sub in bounds:
+            rec = decode_buffer(buf, sub, path=str(path), editions=eds, categories=categories,
+                                date=first_date, strict=strict)
+            if seg.format == "raw":
+                carry_day, last_tod = _continue_days(rec, carry_day, last_tod, first_date)
+            elif rec.day0 is not None and day0 is None:
+                day0, first_date = rec.day0, rec.date  # a dated container's date wins over date=
+            elif rec.day0 is not None and rec.day0 != day0:
+                # each chunk counts days from its own first: count them from the first chunk's
+                for f in rec.frames.values():
+                    f["day"] += rec.day0 - day0
+                restamp(rec.frames, first_date)
+                rec.date, rec.day0 = first_date, day0
+            eds = {**eds, **{c: e for c, e in rec.editions.items() if eds.get(c) == "auto"}}
+            yield rec
+
+
+def _continue_days(rec: Recording, carry_day: int, last_tod: float, date) -> tuple[int, float]:
+    """Carry the midnight count of a raw stream from one chunk to the next."""
+    firsts = [(f["offset"].iloc[0], f["time_of_day"].iloc[0]) for f in rec.frames.values() if len(f)]
+    if not firsts:
+        return carry_day, last_tod
+    first_tod = min(firsts)[1]
+    if not np.isnan(last_tod) and not np.isnan(first_tod) and first_tod < last_tod - 43200:
+        carry_day += 1
+    for f in rec.frames.values():
+        f["day"] += carry_day
+    restamp(rec.frames, date)
+    lasts = [(f["offset"].iloc[-1], f["time_of_day"].iloc[-1], f["day"].iloc[-1])
+             for f in rec.frames.values() if len(f)]
+    _, tod, day = max(lasts)
+    return int(day), float(tod)
+
+
+def _chunk_bounds(buf: np.ndarray, seg: Segments, chunk: int):
+    """Split the segments into groups of about ``chunk`` bytes, cutting raw streams at block starts."""
+    out = []
+    if seg.format == "raw" and len(seg.start):
+        known = np.zeros(256, np.uint8)
+        known[list(DECODABLE)] = 1
+        b_start, _, _, _, _, _, _, _ = kernel.frame_blocks(buf, seg.start, seg.stop, False, known)
+        cuts = [int(seg.start[0])]
+        for s in b_start:
+            if s - cuts[-1] >= chunk:
+                cuts.append(int(s))
+        cuts.append(int(seg.stop[0]))
+        for lo, hi in zip(cuts[:-1], cuts[1:], strict=True):
+            sub = _sub_segments(seg, np.array([lo]), np.array([hi]), np.array([0]))
+            out.append(sub)
+        return out
+    sizes = np.cumsum(seg.stop - seg.start)
+    group = (sizes // max(chunk, 1)).astype(np.int64)
+    for g in np.unique(group):
+        idx = np.flatnonzero(group == g)
+        sub = _sub_segments(seg, seg.start[idx], seg.stop[idx], idx)
+        out.append(sub)
+    if not len(seg.start):
+        out.append(seg)
+    return out
+
+
+def _sub_segments(seg: Segments, start, stop, idx) -> Segments:
+    first = len(idx) and idx[0] == 0
+    return Segments(seg.format, np.asarray(start, np.int64), np.asarray(stop, np.int64),
+                    seg.capture_day[idx] if len(seg.capture_day) else np.full(len(idx), -1, np.int64),
+                    seg.capture_tod[idx] if len(seg.capture_tod) else np.full(len(idx), np.nan),
+                    seg.dated, seg.exact, seg.container_bytes if first else 0,
+                    seg.problems if first else [])

@@ -1,0 +1,76 @@
+"""Days and timestamps: a recording's reports on one continuous time line, across midnight.
+
+Raw streams count midnights in file order (a drop of more than 12 h is a new day); dated
+containers put each report on the day nearest its capture time.
+"""
+
+from __future__ import annotations
+
+import datetime as dt
+
+import numpy as np
+import pandas as pd
+
+from .containers import Segments
+
+
+def assign_days(frames: dict[int, dict], seg: Segments, blk_seg: np.ndarray) -> int | None:
+    """Add the ``day`` column (days after the first) to each category's columns; return the
+    container's day number of day 0 (days since 1970 when ``seg.dated``), None for raw streams."""
+    parts = [(c, f) for c, f in frames.items() if len(f["offset"])]
+    if not parts:
+        for f in frames.values():
+            f["day"] = np.zeros(0, np.int64)
+        return None
+    if seg.format in ("raw",) or not len(seg.start):
+        # file order across categories; a drop of more than 12 h is a new day, a rise of more
+        # than 12 h a late report from the day before
+        off = np.concatenate([np.asarray(f["offset"]) for _, f in parts])
+        tod = np.concatenate([np.asarray(f["time_of_day"]) for _, f in parts])
+        order = np.argsort(off, kind="stable")
+        t = pd.Series(tod[order]).ffill().bfill().to_numpy()
+        d = np.diff(t, prepend=t[:1] if len(t) else t)
+        day_sorted = np.cumsum(d < -43200) - np.cumsum(d > 43200)
+        day = np.empty_like(day_sorted)
+        day[order] = day_sorted
+        first = int(day.min())
+        i = 0
+        for _, f in parts:
+            n = len(f["offset"])
+            f["day"] = (day[i:i + n] - first).astype(np.int64)
+            i += n
+        first_day = None
+    else:
+        # container capture time: the day that puts the report nearest its capture
+        all_days = []
+        for _, f in parts:
+            s = blk_seg[np.asarray(f["block"])]
+            cday, ctod = seg.capture_day[s], seg.capture_tod[s]
+            tod = np.asarray(f["time_of_day"])
+            tod = np.where(np.isnan(tod), ctod, tod)
+            all_days.append(cday + np.rint((ctod - tod) / 86400.0).astype(np.int64))
+        first_day = int(min(a.min() for a in all_days))
+        for (_, f), a in zip(parts, all_days, strict=True):
+            f["day"] = a - first_day
+    for f in frames.values():
+        if "day" not in f:
+            f["day"] = np.zeros(len(f["offset"]), np.int64)
+    return first_day
+
+
+def timestamp_index(day, tod, date: dt.date | None) -> pd.DatetimeIndex:
+    """UTC timestamps from day offsets and times of day (NaT when the date or the time is unknown)."""
+    day, tod = np.asarray(day), np.asarray(tod)
+    if date is None:
+        return pd.DatetimeIndex(np.full(len(day), np.datetime64("NaT"), "datetime64[ns]")).tz_localize("UTC")
+    ns = np.rint((day * 86400.0 + tod) * 1e9)
+    missing = np.isnan(ns)
+    vals = np.datetime64(date, "ns") + np.where(missing, 0, ns).astype("timedelta64[ns]")
+    vals[missing] = np.datetime64("NaT")
+    return pd.DatetimeIndex(vals).tz_localize("UTC")
+
+
+def restamp(frames: dict[int, pd.DataFrame], date: dt.date | None) -> None:
+    """Recompute the timestamp column of finished frames (after a day shift)."""
+    for f in frames.values():
+        f["timestamp"] = timestamp_index(f["day"], f["time_of_day"], date)
