@@ -14,17 +14,16 @@ import pandas as pd
 import asterix
 from asterix.errors import AsterixError, DecodeError, UnreadableInput
 from asterix.reader import categories_in
-
-from .aircraft import NoSuchAircraft
-from .correlation import NoOverlap, correlate
-from .filters import apply_filters
-from .load import Loaded, load
-from .measurements import UnknownRadar, adsb_measurements, radar_measurements
-from .progress import Progress
-from .quality_figures import slotting_figure
-from .quality_run import quality_figures, quality_run
-from .sensors import read_sensors, sensor_toml_snippet
-from .stats import format_stats, stats_tables
+from pipeline.correlate.aircraft import NoSuchAircraft
+from pipeline.correlate.correlation import NoOverlap, correlate
+from pipeline.model.load import Loaded, load
+from pipeline.model.measurements import UnknownRadar, adsb_measurements, radar_measurements
+from pipeline.model.sensors import read_sensors, sensor_toml_snippet
+from pipeline.progress import Progress
+from pipeline.quality.filters import apply_filters
+from pipeline.quality.quality_run import quality_figures, quality_run
+from pipeline.report.quality_figures import slotting_figure
+from pipeline.stats import format_stats, stats_tables
 
 FORMATS = ["raw", "pcap", "pcapng", "final"]
 
@@ -307,7 +306,7 @@ def _quality(radar, adsb, sensors, args):
 
 def _correlation_images(run, radar, adsb, result, out: Path, max_windows: int = 6) -> dict[str, Path]:
     """Quality figures plus, for the first windows, lat/lon before and after slotting and NCC by lag."""
-    from .figures import lag_figure
+    from pipeline.report.figures import lag_figure
 
     images = dict(quality_figures(result, out.parent, out.stem))
     for i, w in enumerate(run.windows[:max_windows]):
@@ -332,7 +331,7 @@ def cmd_quality(args) -> int:
         _write_quality_json(result, params, loaded.inputs, args.json)
         print(f"JSON: {args.json}", file=sys.stderr)
     if args.output:
-        from .report import write_tables
+        from pipeline.report.excel import write_tables
 
         progress.stage("Writing report")
         out = Path(args.output)
@@ -360,7 +359,7 @@ def _quality_text(result) -> str:
 def _write_quality_json(result, params: dict, inputs: list, path: str) -> None:
     import json
 
-    from .summary import json_value
+    from pipeline.report.summary import json_value
 
     doc = {"parameters": params, "inputs": inputs,
            "tables": {name: [{k: json_value(v) for k, v in row.items()} for row in t.to_dict("records")]
@@ -369,9 +368,9 @@ def _write_quality_json(result, params: dict, inputs: list, path: str) -> None:
 
 
 def _write_outputs(run, args, progress: Progress, images: dict | None = None) -> None:
-    from .figures import track_figure
-    from .report import write_report
-    from .summary import summary_table, write_json
+    from pipeline.report.excel import write_report
+    from pipeline.report.figures import track_figure
+    from pipeline.report.summary import summary_table, write_json
 
     print(summary_table(run))
     if args.json:

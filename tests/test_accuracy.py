@@ -11,16 +11,7 @@ import pytest
 
 from fixtures.scenario import AircraftSpec, Scenario
 from fixtures.simulate import simulate
-from pipeline.accuracy import (
-    BIAS_COLUMNS,
-    ERROR_COLUMNS,
-    LIMITATION_NOTE,
-    error_stats,
-    estimate_biases,
-    nacp_bound_m,
-    radar_errors,
-)
-from pipeline.geodesy import (
+from pipeline.model.geodesy import (
     A_M,
     E2,
     M_PER_NM,
@@ -29,9 +20,18 @@ from pipeline.geodesy import (
     geodetic_to_ecef,
     slant_range_azimuth,
 )
-from pipeline.measurements import adsb_measurements, radar_measurements
-from pipeline.quality_figures import radar_error_figure
-from pipeline.sensors import SENSOR_COLUMNS
+from pipeline.model.measurements import adsb_measurements, radar_measurements
+from pipeline.model.sensors import SENSOR_COLUMNS
+from pipeline.quality.accuracy import (
+    BIAS_COLUMNS,
+    ERROR_COLUMNS,
+    LIMITATION_NOTE,
+    error_stats,
+    estimate_biases,
+    nacp_bound_m,
+    radar_errors,
+)
+from pipeline.report.quality_figures import radar_error_figure
 
 SITE = {"name": "TEST", "sac": 25, "sic": 1, "latitude": 0.0, "longitude": 0.0, "altitude_m": 0.0}
 SENSORS = pd.DataFrame([SITE])[SENSOR_COLUMNS]

@@ -6,7 +6,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from pipeline.correlation import (
+from pipeline.correlate.correlation import (
     NoOverlap,
     NoSuchAircraft,
     correlate,
@@ -16,7 +16,7 @@ from pipeline.correlation import (
     pearson_max_lag,
     separation_stats,
 )
-from pipeline.results import LAG_COLUMNS, SLOT_COLUMNS, SUMMARY_KEYS
+from pipeline.correlate.results import LAG_COLUMNS, SLOT_COLUMNS, SUMMARY_KEYS
 
 
 def test_ncc_hand_computed_three_elements():

@@ -3,7 +3,7 @@
 import numpy as np
 import pandas as pd
 
-from pipeline.dedup import deduplicate
+from pipeline.model.dedup import deduplicate
 
 NAN = np.nan
 

@@ -6,8 +6,8 @@ import pandas as pd
 import pytest
 
 from fixtures.simulate import simulate
-from pipeline.filters import FILTER_KEYS, apply_filters
-from pipeline.measurements import adsb_measurements
+from pipeline.model.measurements import adsb_measurements
+from pipeline.quality.filters import FILTER_KEYS, apply_filters
 
 
 @pytest.fixture(scope="module")

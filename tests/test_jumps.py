@@ -10,9 +10,9 @@ import pytest
 
 from fixtures.scenario import default_scenario
 from fixtures.simulate import simulate
-from pipeline.geodesy import distance_m, ecef_to_geodetic, enu_to_ecef
-from pipeline.jumps import JUMP_COLUMNS, detect_jumps, jump_table
-from pipeline.measurements import adsb_measurements
+from pipeline.model.geodesy import distance_m, ecef_to_geodetic, enu_to_ecef
+from pipeline.model.measurements import adsb_measurements
+from pipeline.quality.jumps import JUMP_COLUMNS, detect_jumps, jump_table
 
 LAT0, LON0 = 3.0, 101.5
 

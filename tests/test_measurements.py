@@ -7,15 +7,15 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from pipeline.measurements import (
+from pipeline.correlate.results import __doc__ as results_doc
+from pipeline.model.measurements import (
     UnknownRadar,
     adsb_measurements,
     normalise_callsign,
     radar_measurements,
     select,
 )
-from pipeline.results import __doc__ as results_doc
-from pipeline.sensors import read_sensors, sensor_toml_snippet
+from pipeline.model.sensors import read_sensors, sensor_toml_snippet
 
 A = 6378137.0
 GOOD = """
@@ -183,7 +183,7 @@ def test_select_by_callsign_and_address():
 
 def test_adsb_0_2x_figure_of_merit_feeds_nucp():
     # 0.2x frames have no nucp_nic column; I021/090 PA (fom_pa) is the NUCp-like figure
-    from pipeline.measurements import adsb_measurements
+    from pipeline.model.measurements import adsb_measurements
 
     frame = pd.DataFrame({"time_of_day": [1.0, 2.0], "day": [0, 0], "latitude": [1.0, 1.1],
                           "longitude": [100.0, 100.1], "sac": [0, 0], "sic": [1, 1],

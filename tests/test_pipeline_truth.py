@@ -1,10 +1,11 @@
 """End-to-end validation of the correlation pipeline against the scenario simulator's truth.
 
 Every case goes through real bytes: simulate -> asterix.encode (``write_fixtures``) -> ``asterix.read`` ->
-``pipeline.measurements`` -> ``pipeline.correlation.correlate``, and the results are compared with what
+``pipeline.model.measurements`` -> ``pipeline.correlate.correlation.correlate``, and the
+results are compared with what
 the simulator injected (``Simulation.truth`` / ``truth.json`` and ``truth_tracks``). The bundled fixtures
 (fixtures/radar.ast, adsb.ast, sensors.toml, truth.json) are checked the same way, through
-``pipeline.load`` and the ``msdc correlate`` command as a user would run them.
+``pipeline.model.load`` and the ``msdc correlate`` command as a user would run them.
 
 Data sets:
 
@@ -38,13 +39,13 @@ from fixtures import geodesy as geo
 from fixtures.scenario import RadarSite, Scenario, midnight_scenario
 from fixtures.simulate import DEFAULT_SEED, TOD_LSB_S, Simulation, simulate, write_fixtures
 from pipeline.cli import main as msdc
-from pipeline.correlation import correlate
-from pipeline.dedup import deduplicate
-from pipeline.geodesy import M_PER_NM
-from pipeline.load import load
-from pipeline.measurements import adsb_measurements, radar_measurements, select
-from pipeline.sensors import read_sensors
-from pipeline.slots import slot_index
+from pipeline.correlate.correlation import correlate
+from pipeline.correlate.slots import slot_index
+from pipeline.model.dedup import deduplicate
+from pipeline.model.geodesy import M_PER_NM
+from pipeline.model.load import load
+from pipeline.model.measurements import adsb_measurements, radar_measurements, select
+from pipeline.model.sensors import read_sensors
 
 FIX = Path(__file__).resolve().parents[1] / "fixtures"
 SLOT_S = 10.0

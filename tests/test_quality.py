@@ -10,9 +10,10 @@ import pytest
 
 from fixtures.scenario import midnight_scenario
 from fixtures.simulate import GAP_RULE_S, simulate
-from pipeline.correlation import correlate
-from pipeline.measurements import adsb_measurements, radar_measurements
-from pipeline.quality import (
+from pipeline.correlate.correlation import correlate
+from pipeline.model.measurements import adsb_measurements, radar_measurements
+from pipeline.model.sensors import SENSOR_COLUMNS
+from pipeline.quality.tables import (
     GAP_COLUMNS,
     HISTOGRAM_COLUMNS,
     QUALITY_COLUMNS,
@@ -22,8 +23,7 @@ from pipeline.quality import (
     iso_utc,
     quality_tables,
 )
-from pipeline.quality_figures import interval_histogram_figure, slotting_figure
-from pipeline.sensors import SENSOR_COLUMNS
+from pipeline.report.quality_figures import interval_histogram_figure, slotting_figure
 
 DAY0 = pd.Timestamp("2019-06-14", tz="UTC")
 EXTRA_ADSB = ["nucr_nacv", "sil", "mops_version"]  # carried by CAT021 but not (yet) by adsb_measurements

@@ -13,10 +13,10 @@ import pandas as pd
 import pytest
 from openpyxl import load_workbook
 
-from pipeline.figures import lag_figure, latlon_time_figure, track_figure
-from pipeline.report import sheet_name, write_report
-from pipeline.results import SLOT_COLUMNS, SUMMARY_KEYS, CorrelationRun, SkippedWindow, WindowResult
-from pipeline.summary import run_to_json, summary_table, write_json
+from pipeline.correlate.results import SLOT_COLUMNS, SUMMARY_KEYS, CorrelationRun, SkippedWindow, WindowResult
+from pipeline.report.excel import sheet_name, write_report
+from pipeline.report.figures import lag_figure, latlon_time_figure, track_figure
+from pipeline.report.summary import run_to_json, summary_table, write_json
 
 EVIL = "=cmd|' /C calc'!A0"
 T0 = pd.Timestamp("2019-03-01 10:00:00.500", tz="UTC")
@@ -264,7 +264,7 @@ def test_sheet_names_are_valid_and_unique() -> None:
 
 
 def test_summary_clock_rounds_whole_time():
-    from pipeline.summary import _clock
+    from pipeline.report.summary import _clock
 
     # 59.96 s rounds to 00:01:00.0 (not 00:00:60.0); 86400 + 3661.04 s is 01:01:01.0 on the next day
     assert _clock(None, 59.96) == "00:01:00.0"

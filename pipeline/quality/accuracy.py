@@ -3,8 +3,8 @@
 Each radar report of an aircraft that also has (jump-free, de-duplicated) ADS-B is compared with the ADS-B
 track interpolated linearly to the radar time, only across ADS-B gaps of at most ``max_gap_s``; the
 reference height is the ADS-B flight level (FL * 100 ft, taken as height above the ellipsoid, as
-``pipeline.measurements`` does for radar). The radar plot is placed at that same height, so the horizontal
-errors reflect range and azimuth only.
+``pipeline.model.measurements`` does for radar). The radar plot is placed at that same height, so the
+horizontal errors reflect range and azimuth only.
 
 Limitation (thesis): ADS-B is the reference but carries its own position error, bounded at 95 % by its
 NACp (DO-260B: NACp 8 < 92.6 m, 9 < 30 m, 10 < 10 m, 11 < 3 m); systematic errors below that level cannot
@@ -16,9 +16,9 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
-from .aircraft import all_aircraft
-from .dedup import deduplicate
-from .geodesy import (
+from pipeline.correlate.aircraft import all_aircraft
+from pipeline.model.dedup import deduplicate
+from pipeline.model.geodesy import (
     M_PER_FT,
     M_PER_NM,
     distance_m,
@@ -28,8 +28,8 @@ from .geodesy import (
     polar_to_geodetic,
     slant_range_azimuth,
 )
-from .jumps import KT_TO_MS, detect_jumps
-from .measurements import UnknownRadar
+from pipeline.model.measurements import UnknownRadar
+from pipeline.quality.jumps import KT_TO_MS, detect_jumps
 
 MAX_ADSB_GAP_S = 10.0
 # DO-260B NACp: 95 % horizontal position accuracy bound (EPU) in metres

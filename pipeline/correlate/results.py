@@ -1,6 +1,6 @@
 """Result types passed from the correlation steps to the report writers.
 
-Measurement frames (output of ``pipeline.measurements``), one row per report, columns:
+Measurement frames (output of ``pipeline.model.measurements``), one row per report, columns:
 ``sensor`` ("radar" | "adsb"), ``time_of_day`` (s since midnight of the recording's first day,
 above 86400 after midnight), ``timestamp`` (UTC, NaT when the date is unknown), ``latitude``,
 ``longitude`` (deg WGS-84), ``flight_level``, ``ground_speed_kt``, ``heading_deg``, ``callsign``,

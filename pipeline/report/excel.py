@@ -33,8 +33,8 @@ from openpyxl.utils import get_column_letter
 from openpyxl.utils.datetime import to_excel
 from openpyxl.worksheet._write_only import WriteOnlyWorksheet
 
-from pipeline.results import LAG_COLUMNS, SLOT_COLUMNS, SUMMARY_KEYS, CorrelationRun, WindowResult
-from pipeline.summary import (
+from pipeline.correlate.results import LAG_COLUMNS, SLOT_COLUMNS, SUMMARY_KEYS, CorrelationRun, WindowResult
+from pipeline.report.summary import (
     SKIPPED_KEYS,
     is_missing,
     json_value,

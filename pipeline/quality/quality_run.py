@@ -7,10 +7,10 @@ from pathlib import Path
 
 import pandas as pd
 
-from .accuracy import error_stats, estimate_biases, radar_errors
-from .aircraft import one_aircraft
-from .quality import quality_tables
-from .quality_figures import interval_histogram_figure, radar_error_figure
+from pipeline.correlate.aircraft import one_aircraft
+from pipeline.quality.accuracy import error_stats, estimate_biases, radar_errors
+from pipeline.quality.tables import quality_tables
+from pipeline.report.quality_figures import interval_histogram_figure, radar_error_figure
 
 
 @dataclass

@@ -15,7 +15,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from pipeline.results import SUMMARY_KEYS, CorrelationRun, WindowResult
+from pipeline.correlate.results import SUMMARY_KEYS, CorrelationRun, WindowResult
 
 SKIPPED_KEYS = ["callsign", "address", "start_tod", "end_tod", "reason"]
 # Parameter names (top level or under "options") that may hold the slot length in seconds

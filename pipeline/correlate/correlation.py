@@ -13,13 +13,20 @@ import math
 import numpy as np
 import pandas as pd
 
-from .aircraft import Aircraft, NoSuchAircraft, one_aircraft
-from .aircraft import all_aircraft as every_aircraft
-from .dedup import duplicate_mask, sort_by_time
-from .geodesy import distance_m
-from .results import LAG_COLUMNS, SLOT_COLUMNS, SUMMARY_KEYS, CorrelationRun, SkippedWindow, WindowResult
-from .slots import slot_window
-from .windows import in_window, overlap_windows, short_window_reason
+from pipeline.correlate.aircraft import Aircraft, NoSuchAircraft, one_aircraft
+from pipeline.correlate.aircraft import all_aircraft as every_aircraft
+from pipeline.correlate.results import (
+    LAG_COLUMNS,
+    SLOT_COLUMNS,
+    SUMMARY_KEYS,
+    CorrelationRun,
+    SkippedWindow,
+    WindowResult,
+)
+from pipeline.correlate.slots import slot_window
+from pipeline.correlate.windows import in_window, overlap_windows, short_window_reason
+from pipeline.model.dedup import duplicate_mask, sort_by_time
+from pipeline.model.geodesy import distance_m
 
 __all__ = ["NoOverlap", "NoSuchAircraft", "correlate", "ncc", "pearson_by_lag", "pearson_max_lag", "peak_lag",
            "separation_stats"]

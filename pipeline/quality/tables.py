@@ -2,7 +2,7 @@
 
 Rows are per aircraft (address, else call sign; "(all)" pools every aircraft) and per sensor (radar or
 ADS-B, with its SAC/SIC). Everything after the duplicate count is computed on de-duplicated reports
-(``pipeline.dedup``, per aircraft and sensor). Update intervals are the time differences between
+(``pipeline.model.dedup``, per aircraft and sensor). Update intervals are the time differences between
 consecutive reports of one aircraft from one sensor of at most ``gap_s``; longer ones are gaps (listed
 with their start and end; "reappeared_after_1h" when longer than an hour).
 """
@@ -12,8 +12,8 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
-from .dedup import deduplicate
-from .jumps import jump_table
+from pipeline.model.dedup import deduplicate
+from pipeline.quality.jumps import jump_table
 
 ALL = "(all)"
 REAPPEARANCE_S = 3600.0

@@ -12,8 +12,7 @@ import pandas as pd
 
 import asterix
 from asterix.reader import Recording
-
-from .progress import Progress
+from pipeline.progress import Progress
 
 
 @dataclass

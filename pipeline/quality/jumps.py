@@ -25,7 +25,7 @@ import warnings
 import numpy as np
 import pandas as pd
 
-from .geodesy import distance_m
+from pipeline.model.geodesy import distance_m
 
 KT_TO_MS = 1852.0 / 3600.0
 SPEED_SLACK_M = 300.0  # allowance added to max speed * dt: position noise (NACp 6) and time quantisation

@@ -15,8 +15,8 @@ from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 
-from pipeline.results import CorrelationRun, WindowResult
-from pipeline.summary import printable, slot_seconds
+from pipeline.correlate.results import CorrelationRun, WindowResult
+from pipeline.report.summary import printable, slot_seconds
 
 RADAR_COLOR = "#d62728"
 ADSB_COLOR = "#ffd400"

@@ -1,7 +1,7 @@
 """PNG figures of data quality and radar accuracy (thesis figures 6.7-6.18), on bare Agg figures.
 
 Each function draws one figure and returns the PNG path. The coefficient-against-lag figure is
-``pipeline.figures.lag_figure`` (not repeated here).
+``pipeline.report.figures.lag_figure`` (not repeated here).
 """
 
 from __future__ import annotations
@@ -14,10 +14,10 @@ import pandas as pd
 from matplotlib.axes import Axes
 from matplotlib.ticker import FuncFormatter, MultipleLocator
 
-from .figures import new_figure, save_png
-from .measurements import select
-from .results import WindowResult
-from .windows import in_window
+from pipeline.correlate.results import WindowResult
+from pipeline.correlate.windows import in_window
+from pipeline.model.measurements import select
+from pipeline.report.figures import new_figure, save_png
 
 RADAR_COLOR = "#d62728"
 ADSB_COLOR = "#e6b800"

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import pandas as pd
 
-from .jumps import detect_jumps
+from pipeline.quality.jumps import detect_jumps
 
 FILTER_KEYS = ["jumps", "nic_below_min", "nacp_below_min", "nic_missing_kept", "nacp_missing_kept"]
 

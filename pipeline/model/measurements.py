@@ -1,6 +1,7 @@
 """Decoded CAT048/CAT021 frames to measurement frames (positions in WGS-84), and aircraft selection.
 
-Measurement schema: see ``pipeline.results``. ``time_of_day`` there is ``day * 86400 + time_of_day``.
+Measurement schema: see ``pipeline.correlate.results``. ``time_of_day`` there is
+``day * 86400 + time_of_day``.
 Radar rows also carry ``position_item`` ("040" polar, "042" cartesian) and ``height_assumed``
 (True where the flight level was absent, so the plot was placed at zero elevation / on the tangent
 plane and its latitude/longitude are less accurate). ADS-B rows carry ``nucp_nic`` and ``nacp``.
@@ -11,8 +12,8 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
-from .geodesy import M_PER_FT, plane_to_geodetic, polar_to_geodetic
-from .sensors import sensor_toml_snippet
+from pipeline.model.geodesy import M_PER_FT, plane_to_geodetic, polar_to_geodetic
+from pipeline.model.sensors import sensor_toml_snippet
 
 MEASUREMENT_COLUMNS = ["sensor", "time_of_day", "timestamp", "latitude", "longitude", "flight_level",
                        "ground_speed_kt", "heading_deg", "callsign", "address", "sac", "sic"]

@@ -7,7 +7,7 @@ from dataclasses import dataclass
 
 import pandas as pd
 
-from .measurements import normalise_address, normalise_callsign, select
+from pipeline.model.measurements import normalise_address, normalise_callsign, select
 
 
 class NoSuchAircraft(LookupError):

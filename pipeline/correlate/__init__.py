@@ -1,0 +1,1 @@
+"""Radar/ADS-B correlation: overlap windows, slots, coefficients and their result types."""

@@ -1,0 +1,1 @@
+"""The data model: sensors, geodesy, measurements, deduplication and loading recordings."""

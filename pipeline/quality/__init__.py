@@ -1,0 +1,1 @@
+"""Sensor data quality: update intervals, gaps, jumps, filters and radar accuracy."""

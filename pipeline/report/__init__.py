@@ -1,0 +1,1 @@
+"""Report writers: workbook, JSON and text summary, figures."""
