@@ -17,7 +17,7 @@ from asterix.reader import categories_in
 from pipeline.correlate.aircraft import NoSuchAircraft
 from pipeline.correlate.correlation import NoOverlap, correlate
 from pipeline.model.load import Loaded, load
-from pipeline.model.measurements import UnknownRadar, adsb_measurements, radar_measurements
+from pipeline.model.measurements import UnknownRadar, build_measurements
 from pipeline.model.sensors import read_sensors, sensor_toml_snippet
 from pipeline.progress import Progress
 from pipeline.quality.filters import apply_filters
@@ -223,20 +223,18 @@ def _sensors(sensors_path: str) -> pd.DataFrame:
         raise CliError(f"{sensors_path}: {exc}", 2 if isinstance(exc, OSError) else 1) from exc
 
 
-def _measurements(loaded: Loaded, sensors: pd.DataFrame,
-                  sensors_path: str) -> tuple[pd.DataFrame, pd.DataFrame]:
+def _measurements(loaded: Loaded, sensors: pd.DataFrame, sensors_path: str) -> pd.DataFrame:
     """Radar and ADS-B measurements, with the user-facing errors for missing data and sensors."""
     if 48 not in loaded.frames or loaded.frames[48].empty:
         raise CliError("no radar (CAT048) records in the inputs")
     if 21 not in loaded.frames or loaded.frames[21].empty:
         raise CliError("no ADS-B (CAT021) records in the inputs")
     try:
-        radar = radar_measurements(loaded.frames[48], sensors)
+        return build_measurements(loaded.frames[48], loaded.frames[21], sensors, date=loaded.date)
     except UnknownRadar as exc:
         lines = "\n\n".join(sensor_toml_snippet(sac, sic) for sac, sic in exc.missing)
         raise CliError(f"radar SAC/SIC {', '.join(f'{a}/{b}' for a, b in exc.missing)} not in {sensors_path};"
                        f" add its position:\n\n{lines}") from exc
-    return radar, adsb_measurements(loaded.frames[21])
 
 
 def _parameters(args, loaded: Loaded, started: float) -> dict:
@@ -253,22 +251,20 @@ def _prepare(args, progress: Progress):
     _report_skipped(loaded.errors)
     progress.stage("Pre-processing data")
     sensors = _sensors(args.sensors)
-    radar, adsb = _measurements(loaded, sensors, args.sensors)
-    return loaded, sensors, radar, adsb
+    return loaded, sensors, _measurements(loaded, sensors, args.sensors)
 
 
 def cmd_correlate(args) -> int:
     started = time.monotonic()
     progress = Progress()
-    loaded, sensors, radar, adsb = _prepare(args, progress)
-    adsb_all = adsb
-    adsb, removed = apply_filters(adsb, drop_jumps=args.drop_jumps, min_nic=args.min_nic,
+    loaded, sensors, meas_all = _prepare(args, progress)
+    meas, removed = apply_filters(meas_all, drop_jumps=args.drop_jumps, min_nic=args.min_nic,
                                   min_nacp=args.min_nacp)
     progress.stage("Slotting data")
     progress.stage("Correlating data")
     try:
-        run = correlate(radar, adsb, callsign=args.callsign, address=args.address, all_aircraft=args.all,
-                        slot_s=args.slot, gap_s=args.gap, date=loaded.date)
+        run = correlate(meas, callsign=args.callsign, address=args.address, all_aircraft=args.all,
+                        slot_s=args.slot, gap_s=args.gap)
     except (NoSuchAircraft, NoOverlap) as exc:
         raise CliError(str(exc)) from exc
     run.inputs = loaded.inputs
@@ -281,10 +277,10 @@ def cmd_correlate(args) -> int:
     images = None
     if args.quality:
         progress.stage("Analysing data quality")
-        result = _quality(radar, adsb_all, sensors, args)
+        result = _quality(meas_all, sensors, args)
         run.extra_sheets.update(result.sheets)
         if args.output:
-            images = _correlation_images(run, radar, adsb, result, Path(args.output))
+            images = _correlation_images(run, meas, result, Path(args.output))
     _write_outputs(run, args, progress, images)
     return 0
 
@@ -296,19 +292,20 @@ def _filter_on(args, key: str) -> bool:
             "nacp_missing_kept": args.min_nacp is not None}.get(key, True)
 
 
-def _quality(radar, adsb, sensors, args):
+def _quality(meas, sensors, args):
     try:
-        return quality_run(radar, adsb, sensors, callsign=args.callsign, address=args.address,
-                           gap_s=args.gap)
+        return quality_run(meas, sensors, callsign=args.callsign, address=args.address, gap_s=args.gap)
     except NoSuchAircraft as exc:
         raise CliError(str(exc)) from exc
 
 
-def _correlation_images(run, radar, adsb, result, out: Path, max_windows: int = 6) -> dict[str, Path]:
+def _correlation_images(run, meas, result, out: Path, max_windows: int = 6) -> dict[str, Path]:
     """Quality figures plus, for the first windows, lat/lon before and after slotting and NCC by lag."""
     from pipeline.report.figures import lag_figure
 
     images = dict(quality_figures(result, out.parent, out.stem))
+    is_radar = (meas["sensor_kind"] == "radar").to_numpy(bool)
+    radar, adsb = meas[is_radar], meas[~is_radar]
     for i, w in enumerate(run.windows[:max_windows]):
         label = f"{w.summary['callsign'] or w.summary['address']} window {w.summary['window']}"
         images[f"{label}: latitude and longitude before and after slotting"] = slotting_figure(
@@ -321,9 +318,9 @@ def _correlation_images(run, radar, adsb, result, out: Path, max_windows: int = 
 def cmd_quality(args) -> int:
     started = time.monotonic()
     progress = Progress()
-    loaded, sensors, radar, adsb = _prepare(args, progress)
+    loaded, sensors, meas = _prepare(args, progress)
     progress.stage("Analysing data quality")
-    result = _quality(radar, adsb, sensors, args)
+    result = _quality(meas, sensors, args)
     print(_quality_text(result))
     params = {**_parameters(args, loaded, started), "callsign": args.callsign, "address": args.address,
               "gap_s": args.gap}

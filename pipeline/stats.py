@@ -4,11 +4,17 @@ from __future__ import annotations
 
 import pandas as pd
 
+from pipeline.model.time import absolute_time, midnight, seconds_since
+
 
 def _span(frame: pd.DataFrame) -> tuple[float, float]:
-    t = frame["day"].to_numpy() * 86400.0 + frame["time_of_day"].to_numpy()
-    t = t[~pd.isna(t)]
-    return (float(t.min()), float(t.max())) if len(t) else (float("nan"), float("nan"))
+    """First and last time, in seconds from midnight of the frame's first day."""
+    times = absolute_time(frame)
+    ref = midnight(times)
+    if ref is None:
+        return float("nan"), float("nan")
+    t = seconds_since(times.dropna(), ref)
+    return float(t.min()), float(t.max())
 
 
 def _clock(seconds: float) -> str:

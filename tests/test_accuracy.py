@@ -8,6 +8,7 @@ from dataclasses import asdict
 import numpy as np
 import pandas as pd
 import pytest
+from measurement_frames import meas_frame
 
 from fixtures.scenario import AircraftSpec, Scenario
 from fixtures.simulate import simulate
@@ -20,8 +21,8 @@ from pipeline.model.geodesy import (
     geodetic_to_ecef,
     slant_range_azimuth,
 )
-from pipeline.model.measurements import adsb_measurements, radar_measurements
-from pipeline.model.sensors import SENSOR_COLUMNS
+from pipeline.model.measurements import build_measurements
+from pipeline.model.sensors import REQUIRED_COLUMNS as SENSOR_COLUMNS
 from pipeline.quality.accuracy import (
     BIAS_COLUMNS,
     ERROR_COLUMNS,
@@ -38,6 +39,11 @@ SENSORS = pd.DataFrame([SITE])[SENSOR_COLUMNS]
 FL = 100.0
 H_M = FL * 100 * 0.3048
 SPEED_MS = 200.0
+
+
+def errors_of(radar: pd.DataFrame, adsb: pd.DataFrame, sensors: pd.DataFrame, **kw) -> pd.DataFrame:
+    """radar_errors of hand-made radar and ADS-B reports (radar first, so radar_row is the radar row)."""
+    return radar_errors(meas_frame(pd.concat([radar, adsb], ignore_index=True)), sensors, **kw)
 
 
 # ---------------------------------------------------------------------------------------------------------
@@ -91,7 +97,7 @@ def one_error(track_deg: float, d_east_m: float, d_north_m: float, *, velocity=T
     adsb = adsb_track(np.arange(0.0, 21.0), track_deg, lat0, lon0, velocity=velocity)
     row = adsb[adsb["time_of_day"] == t_radar].iloc[0]
     radar, drange = radar_plot(t_radar, row["latitude"], row["longitude"], d_east_m, d_north_m)
-    errors = radar_errors(radar, adsb, SENSORS)
+    errors = errors_of(radar, adsb, SENSORS)
     assert list(errors.columns) == ERROR_COLUMNS and len(errors) == 1
     return errors.iloc[0], drange
 
@@ -140,12 +146,12 @@ def test_interpolation_between_reports_and_only_across_short_gaps():
     radar = pd.concat([radar_plot(t, r["latitude"], r["longitude"], 0.0, 0.0)[0]
                        for t, (_, r) in zip([13.0, 25.0, 40.0], truth.iterrows(), strict=True)])
     radar = pd.concat([radar, radar_plot(60.0, 0.5, 0.0, 0.0, 0.0)[0]], ignore_index=True)  # after ADS-B ends
-    errors = radar_errors(radar, adsb, SENSORS)
+    errors = errors_of(radar, adsb, SENSORS)
     assert errors["time_of_day"].tolist() == [13.0, 40.0]  # 25 s falls in the 14 s gap; 60 s is beyond
     assert errors["radar_row"].tolist() == [0, 2]
     np.testing.assert_allclose(errors["horizontal_error_m"], 0.0, atol=0.05)
     np.testing.assert_allclose(errors["adsb_gap_s"], 2.0)
-    assert radar_errors(radar, adsb, SENSORS, max_gap_s=20.0)["time_of_day"].tolist() == [13.0, 25.0, 40.0]
+    assert errors_of(radar, adsb, SENSORS, max_gap_s=20.0)["time_of_day"].tolist() == [13.0, 25.0, 40.0]
 
 
 def test_jumps_and_duplicates_in_adsb_do_not_disturb_the_reference():
@@ -155,7 +161,7 @@ def test_jumps_and_duplicates_in_adsb_do_not_disturb_the_reference():
     truth = adsb_track([30.5], 45.0).iloc[0]
     radar, _ = radar_plot(30.5, truth["latitude"], truth["longitude"], 0.0, 0.0)
     radar = pd.concat([radar, radar], ignore_index=True)  # a duplicated radar report counts once
-    e = radar_errors(radar, adsb, SENSORS)
+    e = errors_of(radar, adsb, SENSORS)
     assert len(e) == 1
     assert e["horizontal_error_m"].iloc[0] < 1.0
 
@@ -164,8 +170,8 @@ def test_unknown_radar_and_no_common_aircraft():
     adsb = adsb_track(np.arange(0.0, 21.0), 90.0)
     radar, _ = radar_plot(10.0, 0.5, 0.0, 0.0, 0.0)
     with pytest.raises(ValueError, match="SAC 25 SIC 1"):
-        radar_errors(radar, adsb, SENSORS.assign(sic=2))
-    empty = radar_errors(radar.assign(address="000001", callsign="OTHER"), adsb, SENSORS)
+        errors_of(radar, adsb, SENSORS.assign(sic=2))
+    empty = errors_of(radar.assign(address="000001", callsign="OTHER"), adsb, SENSORS)
     assert empty.empty and list(empty.columns) == ERROR_COLUMNS
     assert estimate_biases(empty).empty and error_stats(empty).empty
 
@@ -211,7 +217,7 @@ def _simulated_errors(injected: dict) -> pd.DataFrame:
     sc = Scenario(name="bias-test", aircraft=FLEET, **injected)
     sim = simulate(sc, seed=42)
     sensors = pd.DataFrame([asdict(sc.radar)])[SENSOR_COLUMNS]
-    return radar_errors(radar_measurements(sim.radar, sensors), adsb_measurements(sim.adsb), sensors)
+    return radar_errors(build_measurements(sim.radar, sim.adsb, sensors), sensors)
 
 
 @functools.cache
@@ -266,9 +272,9 @@ def test_cartesian_plots_are_evaluated_from_their_position():
     adsb = adsb_track(np.arange(0.0, 21.0), 90.0)
     row = adsb[adsb["time_of_day"] == 10.0].iloc[0]
     radar, _ = radar_plot(10.0, row["latitude"], row["longitude"], 100.0, 50.0)
-    polar = radar_errors(radar, adsb, SENSORS).iloc[0]
-    cart = radar_errors(radar.assign(rho_nm=np.nan, theta_deg=np.nan, position_item="042"), adsb,
-                        SENSORS).iloc[0]
+    polar = errors_of(radar, adsb, SENSORS).iloc[0]
+    cart = errors_of(radar.assign(rho_nm=np.nan, theta_deg=np.nan, position_item="042"), adsb,
+                     SENSORS).iloc[0]
     for c in ("range_error_m", "along_track_m", "cross_track_m", "horizontal_error_m"):
         assert cart[c] == pytest.approx(polar[c], abs=0.01), c
     assert cart["azimuth_error_deg"] == pytest.approx(polar["azimuth_error_deg"], abs=1e-6)

@@ -5,6 +5,7 @@ import math
 import numpy as np
 import pandas as pd
 import pytest
+from measurement_frames import meas_frame
 
 from pipeline.correlate.correlation import (
     NoOverlap,
@@ -93,6 +94,11 @@ def frame(sensor, times, lat, lon, callsign="MAS72", address="750123"):
     })
 
 
+def corr(radar, adsb, date=None, **kw):
+    """correlate() on hand-made radar and ADS-B reports (dated ``date``, else undated)."""
+    return correlate(meas_frame(pd.concat([radar, adsb], ignore_index=True), day=date), **kw)
+
+
 def weave(t):
     """A weaving, non-periodic track, so lagged Pearson has a single clear peak."""
     w = 2 * np.pi * (t - 36000.0)
@@ -108,7 +114,7 @@ def test_correlate_identical_tracks_two_windows():
     # two repeated ADS-B reports in the first window, one repeated radar report in the second
     adsb = pd.concat([adsb, adsb.iloc[[3, 10]]], ignore_index=True)
     radar = pd.concat([radar, radar.iloc[[-1]]], ignore_index=True)
-    run = correlate(radar, adsb, callsign="mas 72", date="2019-03-01")
+    run = corr(radar, adsb, callsign="mas 72", date="2019-03-01")
     assert [w.summary["window"] for w in run.windows] == [1, 2]
     first, second = (w.summary for w in run.windows)
     assert list(first) == SUMMARY_KEYS
@@ -136,7 +142,7 @@ def test_correlate_detects_a_30_s_delay():
     t = np.arange(36000.0, 37800.0, 2.0)
     radar = frame("radar", t, *weave(t - 30.0))
     adsb = frame("adsb", t, *weave(t))
-    (w,) = correlate(radar, adsb, address="750123").windows
+    (w,) = corr(radar, adsb, address="750123").windows
     assert w.summary["pearson_peak_lag_lat"] == 3 and w.summary["pearson_peak_lag_lon"] == 3
     assert w.summary["start"] is None and w.slots["timestamp"].isna().all()
     assert w.slots["timestamp"].dtype == "datetime64[ns, UTC]"
@@ -148,8 +154,7 @@ def test_correlate_across_midnight_and_short_window():
     # day 0 86300..86399 and day 1 (86400 + 0..200): one window spanning midnight, plus a 5 s window
     t = np.concatenate([np.arange(86300.0, 86600.0, 5.0), [90000.0, 90005.0]])
     lat, lon = weave(t)
-    run = correlate(frame("radar", t, lat, lon), frame("adsb", t, lat, lon), callsign="MAS72",
-                    date="2019-03-01")
+    run = corr(frame("radar", t, lat, lon), frame("adsb", t, lat, lon), callsign="MAS72", date="2019-03-01")
     (w,) = run.windows
     assert (w.summary["start_tod"], w.summary["end_tod"]) == (86300.0, 86595.0)
     assert w.summary["end"] == "2019-03-02T00:03:15.000Z"
@@ -162,7 +167,7 @@ def test_no_such_aircraft_suggests_close_callsigns():
     radar = pd.concat([frame("radar", t, *weave(t)), frame("radar", t, *weave(t), "SIA321", "76CD01")])
     adsb = pd.concat([frame("adsb", t, *weave(t)), frame("adsb", t, *weave(t), "SIA321", "76CD01")])
     with pytest.raises(NoSuchAircraft) as info:
-        correlate(radar, adsb, callsign="MAS 27")
+        corr(radar, adsb, callsign="MAS 27")
     assert "MAS72" in str(info.value)
     assert info.value.missing_in == ["radar", "ADS-B"]
 
@@ -171,7 +176,7 @@ def test_no_overlap_gives_both_spans():
     radar = frame("radar", np.arange(0.0, 100.0, 5.0), 1.0, 103.0)
     adsb = frame("adsb", np.arange(1000.0, 1100.0, 5.0), 1.0, 103.0)
     with pytest.raises(NoOverlap) as info:
-        correlate(radar, adsb, callsign="MAS72")
+        corr(radar, adsb, callsign="MAS72")
     assert "0-95 s" in str(info.value) and "1000-1095 s" in str(info.value)
 
 
@@ -186,20 +191,22 @@ def test_all_aircraft_needs_both_sensors():
     radar = sensor("radar", [("MAS72", "750123"), (None, "76CD01"), ("AXM1", None), ("BAW9", None)])
     adsb = sensor("adsb", [("MAS72", "750123"), ("SIA321", "76CD01"), ("AXM1", "75008F"), ("QFA1", "7C0001"),
                            ("BAW9", None)])
-    run = correlate(radar, adsb, all_aircraft=True)
+    run = corr(radar, adsb, all_aircraft=True)
     assert [(w.summary["callsign"], w.summary["address"]) for w in run.windows] == [
         ("AXM1", "75008F"), ("BAW9", ""), ("MAS72", "750123"), ("SIA321", "76CD01")]
     assert all(w.summary["radar_before"] == 40 and w.summary["adsb_before"] == 40 for w in run.windows)
     with pytest.raises(NoSuchAircraft, match="no aircraft is seen by both"):
-        correlate(radar.iloc[:0], adsb, all_aircraft=True)
+        corr(radar.iloc[:0], adsb, all_aircraft=True)
 
 
-def test_date_inferred_from_timestamps():
+def test_times_count_from_the_first_midnight_of_the_data():
     t = np.arange(36000.0, 36100.0, 5.0)
     radar, adsb = frame("radar", t, *weave(t)), frame("adsb", t, *weave(t))
-    adsb["timestamp"] = pd.Timestamp("2019-03-01", tz="UTC") + pd.to_timedelta(t, unit="s")
-    (w,) = correlate(radar, adsb, callsign="MAS72").windows
-    assert w.summary["start"] == "2019-03-01T10:00:00.000Z"
+    run = corr(radar, adsb, date="2019-03-01", callsign="MAS72")
+    (w,) = run.windows
+    assert w.summary["start"] == "2019-03-01T10:00:00.000Z" and w.summary["start_tod"] == 36000.0
+    assert run.parameters["date"] == "2019-03-01"
+    assert corr(radar, adsb, callsign="MAS72").parameters["date"] is None  # undated
 
 
 def test_ncc_and_pearson_match_their_definitions():

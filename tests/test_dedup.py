@@ -10,7 +10,9 @@ NAN = np.nan
 
 def frame(rows):
     cols = ["id", "time_of_day", "latitude", "longitude", "ground_speed_kt", "heading_deg"]
-    return pd.DataFrame(rows, columns=cols)
+    out = pd.DataFrame(rows, columns=cols)
+    day = pd.Timestamp("2019-03-01", tz="UTC")
+    return out.assign(time=day + pd.to_timedelta(out["time_of_day"], unit="s"))
 
 
 def test_deduplicate_counts_and_keeps_the_earliest():
@@ -33,9 +35,14 @@ def test_deduplicate_counts_and_keeps_the_earliest():
 
 def test_deduplicate_does_not_mix_sensors_and_handles_empty():
     meas = frame([("r", 1.0, 1.0, 2.0, 3.0, 4.0), ("a", 1.0, 1.0, 2.0, 3.0, 4.0)])
-    meas["sensor"] = ["radar", "adsb"]
+    meas["sensor_kind"] = ["radar", "adsb"]
+    meas["sensor_id"] = ["048:1/2", "021:0/9"]
     out, dropped = deduplicate(meas)
     assert dropped == 0 and len(out) == 2
+    # two radars never duplicate each other; two ADS-B ground stations relaying one report do
+    twice = pd.concat([meas, meas.assign(sensor_id=["048:1/3", "021:0/8"])], ignore_index=True)
+    out, dropped = deduplicate(twice)
+    assert dropped == 1 and out["sensor_id"].tolist() == ["048:1/2", "021:0/9", "048:1/3"]
     out, dropped = deduplicate(meas.iloc[:0])
     assert dropped == 0 and out.empty
 

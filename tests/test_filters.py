@@ -67,8 +67,8 @@ def test_missing_nic_and_nacp_are_kept_and_counted(adsb):
     assert removed["nic_below_min"] == base_nic + 2
     assert removed["nacp_below_min"] == base_nacp + 1
     assert len(kept) == len(a) - base_nic - base_nacp - 3
-    kept_keys = set(zip(kept["time_of_day"], kept["latitude"], strict=True))
-    assert all((a.loc[r, "time_of_day"], a.loc[r, "latitude"]) in kept_keys for r in (5, 7))
+    kept_keys = set(zip(kept["time"], kept["latitude"], strict=True))
+    assert all((a.loc[r, "time"], a.loc[r, "latitude"]) in kept_keys for r in (5, 7))
     _, removed = apply_filters(a)  # no minimum set: nothing counted
     assert removed["nic_missing_kept"] == removed["nacp_missing_kept"] == 0
 
@@ -76,6 +76,11 @@ def test_missing_nic_and_nacp_are_kept_and_counted(adsb):
 def test_empty_and_missing_columns(adsb):
     kept, removed = apply_filters(adsb.iloc[:0], drop_jumps=True, min_nic=6, min_nacp=7)
     assert kept.empty and not any(removed.values())
+    # radar rows pass untouched, in place
+    radar = adsb.iloc[:3].assign(sensor_kind="radar", nucp_nic=pd.NA)
+    kept, removed = apply_filters(pd.concat([radar, adsb], ignore_index=True), min_nic=6)
+    assert (kept["sensor_kind"].iloc[:3] == "radar").all()
+    assert removed["nic_below_min"] == int((adsb["nucp_nic"] < 6).sum())
     no_nacp = adsb.drop(columns="nacp")
     kept, removed = apply_filters(no_nacp, min_nacp=7)
     assert len(kept) == len(adsb) and removed["nacp_missing_kept"] == len(adsb)

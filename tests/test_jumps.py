@@ -7,10 +7,12 @@ from dataclasses import replace
 import numpy as np
 import pandas as pd
 import pytest
+from measurement_frames import meas_frame
 
 from fixtures.scenario import default_scenario
 from fixtures.simulate import simulate
 from pipeline.model.geodesy import distance_m, ecef_to_geodetic, enu_to_ecef
+from pipeline.model.identity import assign_aircraft_id
 from pipeline.model.measurements import adsb_measurements
 from pipeline.quality.jumps import JUMP_COLUMNS, detect_jumps, jump_table
 
@@ -35,10 +37,10 @@ def track(t_s, *, speed_ms=230.0, track_deg=60.0, turn_dps=0.0, noise_m=5.0, see
     rng = np.random.default_rng(seed)
     e, n = e + rng.normal(0, noise_m, t.size), n + rng.normal(0, noise_m, t.size)
     lat, lon, _ = ecef_to_geodetic(*enu_to_ecef(e, n, np.zeros(t.size), lat0, lon0, 9144.0))
-    return pd.DataFrame({
-        "sensor": "adsb", "time_of_day": t, "timestamp": pd.NaT, "latitude": lat, "longitude": lon,
+    return meas_frame(pd.DataFrame({
+        "sensor": "adsb", "time_of_day": t, "latitude": lat, "longitude": lon,
         "flight_level": 300.0, "ground_speed_kt": speed_ms * 3600 / 1852, "heading_deg": trk,
-        "callsign": callsign, "address": address, "sac": 0, "sic": 1, "nucp_nic": 8, "nacp": 9})
+        "callsign": callsign, "address": address, "sac": 0, "sic": 1, "nucp_nic": 8, "nacp": 9}))
 
 
 def shift(frame: pd.DataFrame, rows, d_east_m: float, d_north_m: float) -> pd.DataFrame:
@@ -171,15 +173,16 @@ def test_aircraft_are_judged_separately_and_index_is_kept():
     assert jumps.index.equals(both.index)
     hit = both[jumps.to_numpy()]
     assert len(hit) == 1 and hit["address"].iloc[0] == "750002" and hit["time_of_day"].iloc[0] == 30.5
-    # without addresses the call sign groups the reports
-    assert detect_jumps(both.assign(address=pd.NA)).sum() == 1
+    # without addresses the call sign groups the reports (identity rule)
+    anonymous = both.assign(address=pd.NA)
+    assert detect_jumps(anonymous.assign(aircraft_id=assign_aircraft_id(anonymous))).sum() == 1
 
 
 def test_unidentified_rows_are_not_judged_and_duplicates_do_no_harm():
     t = track(np.arange(100.0))
     t = pd.concat([t, t.iloc[[10, 20, 30]]]).sort_values("time_of_day", kind="stable")
     assert detect_jumps(t).sum() == 0
-    anon = shift(t, [50], 50_000.0, 0.0).assign(address=pd.NA, callsign=pd.NA)
+    anon = shift(t, [50], 50_000.0, 0.0).assign(aircraft_id=pd.NA)
     assert detect_jumps(anon).sum() == 0
 
 

@@ -1,13 +1,14 @@
 """Sensor table reading, decoded frames to measurement frames, call sign handling and aircraft selection."""
 
+import datetime as dt
 import math
 import tomllib
 
 import numpy as np
 import pandas as pd
 import pytest
+from measurement_frames import meas_frame
 
-from pipeline.correlate.results import __doc__ as results_doc
 from pipeline.model.measurements import (
     UnknownRadar,
     adsb_measurements,
@@ -15,7 +16,9 @@ from pipeline.model.measurements import (
     radar_measurements,
     select,
 )
+from pipeline.model.schema import MEASUREMENT_COLUMNS
 from pipeline.model.sensors import read_sensors, sensor_toml_snippet
+from pipeline.model.time import UNDATED_DAY, seconds_since
 
 A = 6378137.0
 GOOD = """
@@ -45,9 +48,17 @@ def write(tmp_path, text):
 
 def test_read_sensors(tmp_path):
     table = read_sensors(write(tmp_path, GOOD))
-    assert list(table.columns) == ["name", "sac", "sic", "latitude", "longitude", "altitude_m"]
+    assert list(table.columns) == ["name", "sac", "sic", "latitude", "longitude", "altitude_m",
+                                   "sigma_range_m", "sigma_azimuth_deg"]
     assert table["name"].tolist() == ["Equator", "Changi"]
     assert table.loc[1, "altitude_m"] == 20.0 and table["altitude_m"].dtype == np.float64
+    # optional noise: defaults 70 m and 0.08 deg, or per radar
+    assert table["sigma_range_m"].tolist() == [70.0, 70.0]
+    assert table["sigma_azimuth_deg"].tolist() == [0.08, 0.08]
+    text = GOOD.replace("altitude_m = 20", "altitude_m = 20\nsigma_range_m = 30\nsigma_azimuth_deg = 0.05")
+    noisy = read_sensors(write(tmp_path, text))
+    assert noisy["sigma_range_m"].tolist() == [70.0, 30.0]
+    assert noisy["sigma_azimuth_deg"].tolist() == [0.08, 0.05]
 
 
 @pytest.mark.parametrize(("text", "words"), [
@@ -56,6 +67,9 @@ def test_read_sensors(tmp_path):
     (GOOD.replace("latitude = 1.35", "latitude = true"), ["latitude", "True"]),
     (GOOD.replace("sic = 3", "sic = 2"), ["SAC 1 SIC 2", "twice"]),
     (GOOD.replace("latitude = 1.35", "latitude = 91.0"), ["latitude", "outside"]),
+    (GOOD.replace("altitude_m = 20", "altitude_m = 20\nsigma_range_m = 0"), ["sigma_range_m", "outside"]),
+    (GOOD.replace("altitude_m = 20", "altitude_m = 20\nsigma_azimuth_deg = 'x'"),
+     ["sigma_azimuth_deg", "float"]),
     ("[[sensor]\n", ["not valid TOML"]),
     ("title = 'x'\n", ["no [[sensor]]"]),
 ])
@@ -110,15 +124,11 @@ def test_radar_measurements_positions_and_schema(tmp_path):
         flight_level=np.array([0.0, 100.0, 50.0, 50.0]),
     )
     meas = radar_measurements(frame, sensors)
-    documented = ["sensor", "time_of_day", "timestamp", "latitude", "longitude", "flight_level",
-                  "ground_speed_kt", "heading_deg", "callsign", "address", "sac", "sic", "rho_nm",
-                  "theta_deg"]
-    for col in documented:
-        assert f"``{col}``" in results_doc
-        assert col in meas.columns
-    # row 3 has no position, row 4 no time: both dropped; day 1 continues past 86400
-    assert meas["time_of_day"].tolist() == [86399.0, 86405.0]
-    assert (meas["sensor"] == "radar").all()
+    assert list(meas.columns) == MEASUREMENT_COLUMNS
+    # row 3 has no position, row 4 no time: both dropped; undated, day 1 continues past 86400
+    assert seconds_since(meas["time"], UNDATED_DAY).tolist() == [86399.0, 86405.0]
+    assert (meas["sensor_kind"] == "radar").all() and (meas["sensor_id"] == "048:1/2").all()
+    assert (meas["aircraft_id"] == "750123").all()
     # polar, site (0, 0, 0), due east, 100 NM, FL 0: chord of the equator, lon = 2 asin(185200 / 2a)
     assert meas.loc[0, "latitude"] == pytest.approx(0.0, abs=1e-9)
     assert meas.loc[0, "longitude"] == pytest.approx(math.degrees(2 * math.asin(185200 / (2 * A))), abs=1e-8)
@@ -142,7 +152,9 @@ def test_radar_measurements_flags_missing_height(tmp_path):
     sensors = read_sensors(write(tmp_path, GOOD))
     frame = cat048(time_of_day=np.array([1.0, 2.0]), rho_nm=np.full(2, 50.0), theta_deg=np.full(2, 10.0),
                    flight_level=np.array([np.nan, 300.0]))
-    assert radar_measurements(frame, sensors)["height_assumed"].tolist() == [True, False]
+    meas = radar_measurements(frame, sensors)
+    assert meas["height_source"].tolist() == ["none", "flight_level"]
+    assert np.isnan(meas["height_m"].iloc[0]) and meas["height_m"].iloc[1] == pytest.approx(300 * 30.48)
 
 
 def test_adsb_measurements():
@@ -156,29 +168,36 @@ def test_adsb_measurements():
         "flight_level": [350.0] * n, "ground_speed_kt": [450.0] * n, "track_angle_deg": [45.0, 46.0, 47.0],
         "nucp_nic": pd.array([7] * n, dtype="Int32"), "nacp": pd.array([9] * n, dtype="Int32"),
     })
-    meas = adsb_measurements(frame)
-    assert meas["time_of_day"].tolist() == [10.0, 12.0]
+    meas = adsb_measurements(frame, date=dt.date(2019, 3, 1))
+    assert meas["time"].tolist() == [pd.Timestamp("2019-03-01 00:00:10", tz="UTC"),
+                                     pd.Timestamp("2019-03-01 00:00:12", tz="UTC")]
     assert meas["heading_deg"].tolist() == [45.0, 47.0]
     assert meas["callsign"].tolist() == ["MAS72", "MAS72"]
-    assert (meas["sensor"] == "adsb").all()
+    assert (meas["sensor_kind"] == "adsb").all() and (meas["sensor_id"] == "021:0/9").all()
+    # NACp 9: 95 % within 30 m, so sigma = 30 / 2.45 per axis, isotropic
+    assert meas["cov_ee_m2"].tolist() == pytest.approx([(30 / 2.45) ** 2] * 2)
+    assert meas["cov_nn_m2"].tolist() == meas["cov_ee_m2"].tolist() and (meas["cov_en_m2"] == 0).all()
+    assert meas["sigma_major_m"].tolist() == pytest.approx([30 / 2.45] * 2)
+    assert meas["height_source"].tolist() == ["flight_level"] * 2
 
 
 def frame_ids(callsigns, addresses):
-    return pd.DataFrame({"callsign": pd.Series(callsigns, dtype="str"),
-                         "address": pd.Series(addresses, dtype="str"), "i": range(len(callsigns))})
+    n = len(callsigns)
+    return meas_frame(pd.DataFrame({"callsign": callsigns, "address": addresses, "i": range(n),
+                                    "time_of_day": np.arange(n, dtype=float), "latitude": 0.0,
+                                    "longitude": 0.0, "sensor": "adsb"}))
 
 
 def test_select_by_callsign_and_address():
     meas = frame_ids(["MAS72", None, "SIA1", None, "MAS72"], ["750123", "750123", "76CD01", None, "750124"])
-    # case/space-insensitive; the row without call sign joins through its address
+    # case/space-insensitive; the row without call sign belongs to its address's aircraft
     assert select(meas, callsign="mas 72")["i"].tolist() == [0, 1, 4]
     assert select(meas, address="0x750123")["i"].tolist() == [0, 1]
     assert select(meas, callsign="MAS72", address="750124")["i"].tolist() == [4]
-    # linking through the other sensor's rows
-    other = frame_ids(["SIA1"], ["ABCDEF"])
-    radar = frame_ids([None], ["ABCDEF"])
-    assert select(radar, callsign="SIA1", link_with=other)["i"].tolist() == [0]
-    assert select(radar, callsign="SIA1")["i"].tolist() == []
+    # a radar plot without address joins the aircraft its call sign is seen with (identity over all sensors)
+    both = frame_ids(["SIA1", "SIA1"], ["ABCDEF", None])
+    assert both["aircraft_id"].tolist() == ["ABCDEF", "ABCDEF"]
+    assert select(both, address="abcdef")["i"].tolist() == [0, 1]
 
 
 def test_adsb_0_2x_figure_of_merit_feeds_nucp():

@@ -44,8 +44,9 @@ from pipeline.correlate.slots import slot_index
 from pipeline.model.dedup import deduplicate
 from pipeline.model.geodesy import M_PER_NM
 from pipeline.model.load import load
-from pipeline.model.measurements import adsb_measurements, radar_measurements, select
+from pipeline.model.measurements import build_measurements, radar_measurements, select
 from pipeline.model.sensors import read_sensors
+from pipeline.model.time import with_clock
 
 FIX = Path(__file__).resolve().parents[1] / "fixtures"
 SLOT_S = 10.0
@@ -78,7 +79,7 @@ class Case:
 
     def __init__(self, sim: Simulation, truth: dict, radar: pd.DataFrame, adsb: pd.DataFrame, date=None):
         self.sim, self.truth, self.radar, self.adsb = sim, truth, radar, adsb
-        self.run = correlate(radar, adsb, all_aircraft=True, date=date)
+        self.run = correlate(pd.concat([radar, adsb], ignore_index=True), all_aircraft=True)
 
     def windows(self, callsign: str | None = None) -> list[dict]:
         return [w.summary for w in self.run.windows if callsign in (None, w.summary["callsign"])]
@@ -98,11 +99,14 @@ class Case:
 
 
 def decode_dir(directory: Path, date=None) -> tuple[pd.DataFrame, pd.DataFrame]:
-    """Measurements of radar.ast / adsb.ast / sensors.toml in a directory, loaded as ``msdc`` does."""
+    """Radar and ADS-B measurements of radar.ast / adsb.ast / sensors.toml in a directory, loaded as ``msdc``
+    does, with the thesis clock (``time_of_day`` from the first midnight) for the checks."""
     loaded = load([directory / "radar.ast", directory / "adsb.ast"], date=date)
     assert loaded.errors.empty
     sensors = read_sensors(directory / "sensors.toml")
-    return radar_measurements(loaded.frames[48], sensors), adsb_measurements(loaded.frames[21])
+    meas = with_clock(build_measurements(loaded.frames[48], loaded.frames[21], sensors, date=loaded.date))
+    is_radar = (meas["sensor_kind"] == "radar").to_numpy(bool)
+    return meas[is_radar].reset_index(drop=True), meas[~is_radar].reset_index(drop=True)
 
 
 def simulated_case(tmp: Path, scenario: Scenario, seed: int, date=None) -> Case:
@@ -691,7 +695,7 @@ def test_midnight_without_a_date(tmp_path, midnight):
     """Without date= the days still come from the time-of-day wrap: same windows, no ISO times."""
     write_fixtures(tmp_path, MIDNIGHT_SEED, "midnight")
     radar, adsb = decode_dir(tmp_path)
-    run = correlate(radar, adsb, all_aircraft=True)
+    run = correlate(pd.concat([radar, adsb], ignore_index=True), all_aircraft=True)
     got = [(w.summary["callsign"], w.summary["start_tod"], w.summary["end_tod"], w.summary["slots"])
            for w in run.windows]
     assert got == [(w["callsign"], w["start_tod"], w["end_tod"], w["slots"]) for w in midnight.windows()]
@@ -724,7 +728,7 @@ def test_returning_callsign_gets_separate_windows(bundled):
 def test_bundled_mas72_and_the_command_line(bundled, tmp_path):
     """What the README's first command runs: MAS72 alone gives the same windows as the all-aircraft run and
     the truth; ``msdc correlate --all --json`` writes exactly the summaries validated above."""
-    one = correlate(bundled.radar, bundled.adsb, callsign="MAS72")
+    one = correlate(pd.concat([bundled.radar, bundled.adsb], ignore_index=True), callsign="MAS72")
     assert [w.summary for w in one.windows] == bundled.windows("MAS72")
     assert [(w["start_tod"], w["end_tod"]) for w in bundled.windows("MAS72")] == [
         (w["start_s"], w["end_s"]) for w in bundled.truth_windows("MAS72")]

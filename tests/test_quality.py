@@ -11,8 +11,8 @@ import pytest
 from fixtures.scenario import midnight_scenario
 from fixtures.simulate import GAP_RULE_S, simulate
 from pipeline.correlate.correlation import correlate
-from pipeline.model.measurements import adsb_measurements, radar_measurements
-from pipeline.model.sensors import SENSOR_COLUMNS
+from pipeline.model.measurements import build_measurements
+from pipeline.model.sensors import REQUIRED_COLUMNS as SENSOR_COLUMNS
 from pipeline.quality.tables import (
     GAP_COLUMNS,
     HISTOGRAM_COLUMNS,
@@ -26,20 +26,14 @@ from pipeline.quality.tables import (
 from pipeline.report.quality_figures import interval_histogram_figure, slotting_figure
 
 DAY0 = pd.Timestamp("2019-06-14", tz="UTC")
-EXTRA_ADSB = ["nucr_nacv", "sil", "mops_version"]  # carried by CAT021 but not (yet) by adsb_measurements
 
 
-def measurements(sim) -> tuple[pd.DataFrame, pd.DataFrame]:
-    """Measurement frames of a simulation, with UTC timestamps and the extra ADS-B quality columns."""
+def measurements(sim, radar=None) -> pd.DataFrame:
+    """The measurement frame of a simulation, dated DAY0."""
     sensors = pd.DataFrame([asdict(sim.scenario.radar)])[SENSOR_COLUMNS]
-    radar = radar_measurements(sim.radar, sensors)
-    adsb = adsb_measurements(sim.adsb)
-    assert len(adsb) == len(sim.adsb)  # every simulated report has a position: rows stay aligned
-    for c in EXTRA_ADSB:
-        adsb[c] = sim.adsb[c].to_numpy()
-    for m in (radar, adsb):
-        m["timestamp"] = DAY0 + pd.to_timedelta(m["time_of_day"], unit="s")
-    return radar, adsb
+    meas = build_measurements(sim.radar if radar is None else radar, sim.adsb, sensors, date=DAY0.date())
+    assert (meas["sensor_kind"] == "adsb").sum() == len(sim.adsb)  # every simulated report has a position
+    return meas
 
 
 @pytest.fixture(scope="module")
@@ -54,7 +48,7 @@ def frames(sim):
 
 @pytest.fixture(scope="module")
 def tables(frames):
-    return quality_tables(*frames)
+    return quality_tables(frames)
 
 
 def row_of(table: pd.DataFrame, callsign: str, sensor: str) -> pd.Series:
@@ -208,11 +202,14 @@ def test_integrity_shares_follow_the_mops_version():
 
 def test_without_timestamps_identities_or_optional_columns(sim):
     sensors = pd.DataFrame([asdict(sim.scenario.radar)])[SENSOR_COLUMNS]
-    radar = radar_measurements(sim.radar, sensors)
-    # no nucr_nacv / sil / mops_version, no timestamps
-    adsb = adsb_measurements(sim.adsb.drop(columns=["nucr_nacv", "sil", "mops_version"], errors="ignore"))
-    radar.loc[radar.index[:50], ["callsign", "address"]] = pd.NA  # Mode A/C-only plots
-    t = quality_tables(radar, adsb)
+    radar = sim.radar.copy()
+    for c in ("callsign", "address", "mode3a"):  # plots with no identity at all
+        radar[c] = radar[c].astype(object)
+        radar.loc[radar.index[:50], c] = None
+    # no nucr_nacv / sil / mops_version, no date
+    meas = build_measurements(radar, sim.adsb.drop(columns=["nucr_nacv", "sil", "mops_version"],
+                                                   errors="ignore"), sensors)
+    t = quality_tables(meas)
     q = t["Quality"]
     anon = q[(q["callsign"] == "") & (q["address"] == "")]
     assert len(anon) == 1 and anon["reports"].iloc[0] == 50
@@ -220,14 +217,13 @@ def test_without_timestamps_identities_or_optional_columns(sim):
     assert set(t["ADS-B quality"]["indicator"]) == {"nucp_nic", "nacp"}
     assert np.isnan(row_of(q, "(all)", "adsb")["low_integrity_pct"])
     assert row_of(q, "(all)", "radar")["reports"] == len(radar)
-    empty = quality_tables(radar.iloc[:0], adsb.iloc[:0])
+    empty = quality_tables(meas.iloc[:0])
     assert all(v.empty for v in empty.values())
 
 
 def test_intervals_across_midnight():
     sim = simulate(midnight_scenario(), seed=5)
-    radar, adsb = measurements(sim)
-    q = quality_tables(radar, adsb)["Quality"]
+    q = quality_tables(measurements(sim))["Quality"]
     for sensor in ("radar", "adsb"):
         row = row_of(q, "(all)", sensor)
         assert row["first_tod_s"] < 86400.0 < row["last_tod_s"]
@@ -237,10 +233,10 @@ def test_intervals_across_midnight():
 
 
 def test_quality_figures(sim, frames, tables, tmp_path):
-    radar, adsb = frames
+    radar, adsb = frames[frames["sensor_kind"] == "radar"], frames[frames["sensor_kind"] == "adsb"]
     png = interval_histogram_figure(tables["Update intervals"], tmp_path / "intervals.png")
     assert png.read_bytes()[:4] == b"\x89PNG"
-    run = correlate(radar, adsb, callsign="MAS72")
+    run = correlate(frames, callsign="MAS72")
     png = slotting_figure(run.windows[0], radar, adsb, tmp_path / "slots.png")
     assert png.exists() and png.stat().st_size > 10_000
     empty = interval_histogram_figure(tables["Update intervals"].iloc[:0], tmp_path / "none.png")

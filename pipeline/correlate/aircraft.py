@@ -1,4 +1,7 @@
-"""Which aircraft to correlate: one named by call sign / address, or every aircraft both sensors saw."""
+"""Which aircraft to correlate: one named by call sign / address, or every aircraft both kinds of sensor saw.
+
+Aircraft are told apart by ``aircraft_id`` only (assigned once, pipeline.model.identity).
+"""
 
 from __future__ import annotations
 
@@ -7,7 +10,8 @@ from dataclasses import dataclass
 
 import pandas as pd
 
-from pipeline.model.measurements import normalise_address, normalise_callsign, select
+from pipeline.model.identity import aircraft_labels, normalise_address, normalise_callsign
+from pipeline.model.measurements import select
 
 
 class NoSuchAircraft(LookupError):
@@ -21,75 +25,58 @@ class NoSuchAircraft(LookupError):
 
 @dataclass
 class Aircraft:
-    """One aircraft's measurements from each sensor, with the labels used in reports ("" if unknown)."""
+    """One aircraft's measurements from each kind of sensor, with the labels used in reports ("" if none)."""
 
     callsign: str
     address: str
     radar: pd.DataFrame
     adsb: pd.DataFrame
+    aircraft_id: str = ""
 
 
-def _most_common(values: pd.Series) -> str:
-    counts = values.dropna().value_counts(sort=True)
-    return str(counts.index[0]) if len(counts) else ""
+def _split(meas: pd.DataFrame) -> tuple[pd.DataFrame, pd.DataFrame]:
+    radar = meas["sensor_kind"] == "radar"
+    return meas[radar.to_numpy()].reset_index(drop=True), meas[(~radar).to_numpy()].reset_index(drop=True)
 
 
-def _label(radar: pd.DataFrame, adsb: pd.DataFrame, column: str) -> str:
-    """The most frequent value of a column, ADS-B first (it always transmits identity)."""
-    return _most_common(adsb[column]) or _most_common(radar[column])
-
-
-def _closest(wanted: str, radar: pd.DataFrame, adsb: pd.DataFrame, column: str) -> list[str]:
+def _closest(wanted: str, meas: pd.DataFrame, column: str) -> list[str]:
+    radar, adsb = _split(meas)
     both = sorted(set(radar[column].dropna()) & set(adsb[column].dropna()))
     return difflib.get_close_matches(wanted, both, n=5, cutoff=0.5)
 
 
-def one_aircraft(radar: pd.DataFrame, adsb: pd.DataFrame, callsign: str | None = None,
-                 address: str | None = None) -> Aircraft:
-    """The aircraft with this call sign and/or address; NoSuchAircraft if either sensor lacks it."""
+def one_aircraft(meas: pd.DataFrame, callsign: str | None = None, address: str | None = None) -> Aircraft:
+    """The aircraft with this call sign and/or address; NoSuchAircraft if radar or ADS-B lacks it."""
     if callsign is None and address is None:
         raise ValueError("give a call sign or an address (or ask for all aircraft)")
-    r = select(radar, callsign, address, link_with=adsb)
-    a = select(adsb, callsign, address, link_with=radar)
+    r, a = _split(select(meas, callsign, address))
     missing = [name for name, f in (("radar", r), ("ADS-B", a)) if f.empty]
     if missing:
         if callsign is not None:
             wanted = normalise_callsign(callsign)
-            closest = _closest(wanted or "", radar, adsb, "callsign")
+            closest = _closest(wanted or "", meas, "callsign")
             what = f"call sign {wanted}"
         else:
             wanted = normalise_address(address)
-            closest = _closest(wanted or "", radar, adsb, "address")
+            closest = _closest(wanted or "", meas, "address")
             what = f"address {wanted}"
         if callsign is not None and address is not None:
             what += f" with address {normalise_address(address)}"
         raise NoSuchAircraft(what, missing, closest)
-    cs = normalise_callsign(callsign) if callsign is not None else _label(r, a, "callsign")
-    addr = normalise_address(address) if address is not None else _label(r, a, "address")
-    return Aircraft(cs or "", addr or "", r, a)
+    labels = aircraft_labels(pd.concat([r, a], ignore_index=True))
+    cs = normalise_callsign(callsign) if callsign is not None else labels["callsign"].iloc[0]
+    addr = normalise_address(address) if address is not None else labels["address"].iloc[0]
+    ident = r["aircraft_id"].iloc[0] if r["aircraft_id"].nunique() == 1 else ""
+    return Aircraft(cs or "", addr or "", r, a, ident)
 
 
-def _keys(meas: pd.DataFrame, by_callsign: dict[str, str]) -> pd.Series:
-    """Aircraft key per row: "A:" + address, else the address the call sign maps to, else "C:" + call sign."""
-    from_cs = meas["callsign"].map(by_callsign)
-    key = ("A:" + meas["address"]).fillna("A:" + from_cs).fillna("C:" + meas["callsign"])
-    return key
-
-
-def all_aircraft(radar: pd.DataFrame, adsb: pd.DataFrame) -> list[Aircraft]:
-    """Every aircraft seen by both sensors, matched by address where present, else by call sign.
-
-    A row without an address takes the address its call sign is seen with, when that is unique.
-    Sorted by call sign, then address.
-    """
-    pairs = pd.concat([radar[["callsign", "address"]], adsb[["callsign", "address"]]]).dropna()
-    per_cs = pairs.drop_duplicates().groupby("callsign")["address"]
-    by_callsign = {cs: addrs.iloc[0] for cs, addrs in per_cs if len(addrs) == 1}
-    r_key, a_key = _keys(radar, by_callsign), _keys(adsb, by_callsign)
+def all_aircraft(meas: pd.DataFrame) -> list[Aircraft]:
+    """Every aircraft seen by both radar and ADS-B, sorted by call sign, then address."""
+    radar, adsb = _split(meas)
+    labels = aircraft_labels(meas).set_index("aircraft_id")
     out = []
-    for key in sorted(set(r_key.dropna()) & set(a_key.dropna())):
-        r = radar[(r_key == key).to_numpy()].reset_index(drop=True)
-        a = adsb[(a_key == key).to_numpy()].reset_index(drop=True)
-        addr = key[2:] if key.startswith("A:") else ""
-        out.append(Aircraft(_label(r, a, "callsign"), addr, r, a))
+    for ident in sorted(set(radar["aircraft_id"].dropna()) & set(adsb["aircraft_id"].dropna())):
+        r = radar[(radar["aircraft_id"] == ident).to_numpy(bool)].reset_index(drop=True)
+        a = adsb[(adsb["aircraft_id"] == ident).to_numpy(bool)].reset_index(drop=True)
+        out.append(Aircraft(labels.at[ident, "callsign"], labels.at[ident, "address"], r, a, ident))
     return sorted(out, key=lambda ac: (ac.callsign, ac.address))

@@ -7,7 +7,6 @@ y[i - d]. A positive peak lag d means the radar series repeats the ADS-B series 
 
 from __future__ import annotations
 
-import datetime as dt
 import math
 
 import numpy as np
@@ -27,6 +26,7 @@ from pipeline.correlate.slots import slot_window
 from pipeline.correlate.windows import in_window, overlap_windows, short_window_reason
 from pipeline.model.dedup import duplicate_mask, sort_by_time
 from pipeline.model.geodesy import distance_m
+from pipeline.model.time import is_dated, iso_utc, midnight, with_clock
 
 __all__ = ["NoOverlap", "NoSuchAircraft", "correlate", "ncc", "pearson_by_lag", "pearson_max_lag", "peak_lag",
            "separation_stats"]
@@ -36,12 +36,14 @@ class NoOverlap(LookupError):
     """Radar and ADS-B both saw the aircraft, but never at the same time; gives each sensor's time span."""
 
     def __init__(self, aircraft: str, radar_span_s: tuple[float, float], adsb_span_s: tuple[float, float],
-                 day0: dt.date | None = None):
+                 reference: pd.Timestamp | None = None):
         self.radar_span_s, self.adsb_span_s = radar_span_s, adsb_span_s
 
         def span(s: tuple[float, float]) -> str:
             text = f"{s[0]:g}-{s[1]:g} s"
-            return f"{text} ({iso_utc(day0, s[0])} to {iso_utc(day0, s[1])})" if day0 else text
+            if not is_dated(reference):
+                return text
+            return f"{text} ({at_seconds(reference, s[0])} to {at_seconds(reference, s[1])})"
 
         super().__init__(f"{aircraft}: radar ({span(radar_span_s)}) and ADS-B ({span(adsb_span_s)}) "
                          "tracks never overlap in time")
@@ -113,25 +115,11 @@ def separation_stats(sep_m) -> dict[str, float]:
             "sep_p95_m": float(np.percentile(sep_m, 95)), "sep_max_m": float(sep_m.max())}
 
 
-def iso_utc(day0: dt.date | None, seconds: float) -> str | None:
-    """ISO 8601 UTC text of a time in seconds from midnight of day0 (None when the date is unknown)."""
-    if day0 is None or not np.isfinite(seconds):
+def at_seconds(reference: pd.Timestamp | None, seconds: float) -> str | None:
+    """ISO 8601 UTC text of the instant ``seconds`` after ``reference`` (None when undated or not finite)."""
+    if reference is None or not np.isfinite(seconds):
         return None
-    ts = pd.Timestamp(day0, tz="UTC") + pd.to_timedelta(seconds, unit="s")
-    return ts.isoformat(timespec="milliseconds").replace("+00:00", "Z")
-
-
-def _first_day(date, *frames: pd.DataFrame) -> dt.date | None:
-    """The recording's first UTC day: the given date, else inferred from any timestamp, else None."""
-    if date is not None:
-        return pd.Timestamp(date).date()
-    for f in frames:
-        ok = f["timestamp"].notna() & f["time_of_day"].notna()
-        if ok.any():
-            row = f[ok].iloc[0]
-            midnight = row["timestamp"] - pd.to_timedelta(row["time_of_day"], unit="s")
-            return midnight.round("D").date()
-    return None
+    return iso_utc(reference + pd.to_timedelta(seconds, unit="s"))
 
 
 def _unwrapped_lon(radar_lon: np.ndarray, adsb_lon: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -146,14 +134,14 @@ def _none_if_nan(v):
 
 def _window_result(ac: Aircraft, number: int, start_s: float, end_s: float, radar: pd.DataFrame,
                    adsb: pd.DataFrame, dups: tuple[int, int], slot_s: float,
-                   day0: dt.date | None) -> WindowResult:
+                   reference: pd.Timestamp) -> WindowResult:
     """Slot, correlate and summarise one window."""
     rs, as_ = slot_window(radar, start_s, end_s, slot_s), slot_window(adsb, start_s, end_s, slot_s)
     tod = rs["time_of_day"].to_numpy()
-    if day0 is None:
+    if not is_dated(reference):
         stamps = pd.Series(pd.NaT, index=rs.index, dtype="datetime64[ns, UTC]")
     else:
-        stamps = (pd.Timestamp(day0, tz="UTC") + pd.to_timedelta(tod, unit="s")).astype("datetime64[ns, UTC]")
+        stamps = (reference + pd.to_timedelta(tod, unit="s")).astype("datetime64[ns, UTC]")
     slots = pd.DataFrame({
         "slot": rs["slot"], "time_of_day": tod, "timestamp": stamps,
         "radar_lat": rs["latitude"], "radar_lon": rs["longitude"],
@@ -173,7 +161,7 @@ def _window_result(ac: Aircraft, number: int, start_s: float, end_s: float, rada
     summary = {
         "callsign": ac.callsign, "address": ac.address, "window": number,
         "start_tod": float(start_s), "end_tod": float(end_s),
-        "start": iso_utc(day0, start_s), "end": iso_utc(day0, end_s), "slots": len(slots),
+        "start": at_seconds(reference, start_s), "end": at_seconds(reference, end_s), "slots": len(slots),
         "radar_before": len(radar), "radar_after": len(slots),
         "adsb_before": len(adsb), "adsb_after": len(slots),
         "radar_duplicates": dups[0], "adsb_duplicates": dups[1],
@@ -193,7 +181,7 @@ def _span(times: pd.Series) -> tuple[float, float]:
 
 
 def _correlate_aircraft(ac: Aircraft, run: CorrelationRun, slot_s: float, gap_s: float,
-                        day0: dt.date | None, strict: bool) -> None:
+                        reference: pd.Timestamp, strict: bool) -> None:
     """Append the windows (or skipped windows) of one aircraft to ``run``."""
     radar, adsb = sort_by_time(ac.radar), sort_by_time(ac.adsb)
     r_dup, a_dup = duplicate_mask(radar).to_numpy(), duplicate_mask(adsb).to_numpy()
@@ -204,7 +192,7 @@ def _correlate_aircraft(ac: Aircraft, run: CorrelationRun, slot_s: float, gap_s:
         label = ac.callsign or ac.address
         r_span, a_span = _span(radar["time_of_day"]), _span(adsb["time_of_day"])
         if strict:
-            raise NoOverlap(label, r_span, a_span, day0)
+            raise NoOverlap(label, r_span, a_span, reference)
         run.skipped.append(SkippedWindow(ac.callsign, ac.address, min(r_span[0], a_span[0]),
                                          max(r_span[1], a_span[1]), str(NoOverlap(label, r_span, a_span))))
         return
@@ -220,31 +208,33 @@ def _correlate_aircraft(ac: Aircraft, run: CorrelationRun, slot_s: float, gap_s:
             continue
         number += 1
         dups = (int(in_window(r_dup_t, start_s, end_s).sum()), int(in_window(a_dup_t, start_s, end_s).sum()))
-        run.windows.append(_window_result(ac, number, start_s, end_s, r_in, a_in, dups, slot_s, day0))
+        run.windows.append(_window_result(ac, number, start_s, end_s, r_in, a_in, dups, slot_s, reference))
 
 
-def correlate(radar_meas: pd.DataFrame, adsb_meas: pd.DataFrame, *, callsign: str | None = None,
-              address: str | None = None, all_aircraft: bool = False, slot_s: float = 10.0,
-              gap_s: float = 180.0, date: dt.date | str | None = None) -> CorrelationRun:
+def correlate(meas: pd.DataFrame, *, callsign: str | None = None, address: str | None = None,
+              all_aircraft: bool = False, slot_s: float = 10.0, gap_s: float = 180.0) -> CorrelationRun:
     """Correlate radar against ADS-B per aircraft and overlap window (see the module docstring).
 
-    One aircraft by call sign and/or address (NoSuchAircraft, NoOverlap on failure), or with
-    ``all_aircraft`` every aircraft seen by both sensors. ``date`` is the recording's first UTC day;
-    when None it is inferred from the measurement timestamps if they have any.
+    ``meas`` is a measurement frame (pipeline.model.schema) holding both kinds of sensor. One aircraft by
+    call sign and/or address (NoSuchAircraft, NoOverlap on failure), or with ``all_aircraft`` every
+    aircraft seen by both. Times in the tables count seconds from midnight UTC of the earliest report.
     """
     if slot_s <= 0 or gap_s < 0:
         raise ValueError(f"slot_s must be > 0 and gap_s >= 0, got {slot_s} and {gap_s}")
-    day0 = _first_day(date, radar_meas, adsb_meas)
+    reference = midnight(meas["time"])
+    if reference is None:
+        raise NoSuchAircraft("any aircraft", ["radar", "ADS-B"], [], "there are no measurements")
+    meas = with_clock(meas, reference)
     run = CorrelationRun(parameters={
         "callsign": callsign, "address": address, "all_aircraft": all_aircraft, "slot_s": slot_s,
-        "gap_s": gap_s, "date": day0.isoformat() if day0 else None})
+        "gap_s": gap_s, "date": reference.date().isoformat() if is_dated(reference) else None})
     if all_aircraft:
-        targets = every_aircraft(radar_meas, adsb_meas)
+        targets = every_aircraft(meas)
         if not targets:
             raise NoSuchAircraft("any aircraft", ["radar", "ADS-B"], [],
                                  "no aircraft is seen by both radar and ADS-B")
     else:
-        targets = [one_aircraft(radar_meas, adsb_meas, callsign, address)]
+        targets = [one_aircraft(meas, callsign, address)]
     for ac in targets:
-        _correlate_aircraft(ac, run, slot_s, gap_s, day0, strict=not all_aircraft)
+        _correlate_aircraft(ac, run, slot_s, gap_s, reference, strict=not all_aircraft)
     return run

@@ -1,23 +1,30 @@
-"""Removal of repeated measurements (same time, position, speed and heading)."""
+"""Removal of repeated measurements (same kind of sensor, time, position, speed and heading)."""
 
 from __future__ import annotations
 
 import pandas as pd
 
-DEDUP_KEYS = ["time_of_day", "latitude", "longitude", "ground_speed_kt", "heading_deg"]
+DEDUP_KEYS = ["time", "latitude", "longitude", "ground_speed_kt", "heading_deg"]
 
 
 def sort_by_time(meas: pd.DataFrame) -> pd.DataFrame:
     """Measurements in stable time order, index reset."""
-    return meas.sort_values("time_of_day", kind="stable").reset_index(drop=True)
+    return meas.sort_values("time", kind="stable").reset_index(drop=True)
 
 
 def duplicate_mask(meas: pd.DataFrame) -> pd.Series:
     """True for rows equal to an earlier row in time, position, speed and heading (NaN equals NaN).
 
-    The ``sensor`` column, when present, is part of the key so radar never duplicates ADS-B.
+    The source is part of the key: each radar (``sensor_id``) on its own, ADS-B as one source whatever
+    the ground station, so a report relayed by two stations counts once.
     """
-    keys = [k for k in ["sensor", *DEDUP_KEYS] if k in meas]
+    keys = [k for k in DEDUP_KEYS if k in meas]
+    if "sensor_kind" in meas:
+        source = meas["sensor_kind"].astype("object")
+        if "sensor_id" in meas:  # radars are told apart; ADS-B ground stations are one source
+            source = source.where(source == "adsb", meas["sensor_id"].astype("object"))
+        meas = meas[keys].assign(_source=source.to_numpy())
+        keys = ["_source", *keys]
     return meas.duplicated(subset=keys, keep="first")
 
 

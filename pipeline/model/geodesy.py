@@ -208,3 +208,13 @@ def distance_m(lat1_deg, lon1_deg, lat2_deg, lon2_deg, max_iter: int = 50):
             cos_sig * (-1.0 + 2.0 * cos_2sm**2)
             - big_b / 6.0 * cos_2sm * (-3.0 + 4.0 * sin_sig**2) * (-3.0 + 4.0 * cos_2sm**2)))
     return B_M * big_a * (sig - d_sig)
+
+
+def wrap180(deg):
+    """Angles (deg) wrapped into [-180, 180): the one helper for longitude and angle differences."""
+    return (np.asarray(deg, dtype=float) + 180.0) % 360.0 - 180.0
+
+
+def flight_level_to_m(flight_level):
+    """Flight level to metres (FL x 100 ft), taken as height above the ellipsoid where a height is needed."""
+    return np.asarray(flight_level, dtype=float) * 100.0 * M_PER_FT

@@ -7,7 +7,6 @@ import hashlib
 from dataclasses import dataclass, field
 from pathlib import Path
 
-import numpy as np
 import pandas as pd
 
 import asterix
@@ -60,7 +59,11 @@ def _concat(parts: list[pd.DataFrame]) -> pd.DataFrame:
 
 def load(paths: list[str | Path], *, editions=None, date=None, format: str | None = None,
          categories=None, progress: Progress | None = None) -> Loaded:
-    """Decode every input; days are aligned on the earliest known date across inputs."""
+    """Decode every input into one frame per category, each row tagged with its file.
+
+    Records keep their own ``timestamp``; ``Loaded.date`` (the earliest known date) dates the records of
+    inputs that have none (pipeline.model.time.absolute_time).
+    """
     recs: list[Recording] = []
     inputs: list[dict] = []
     for i, p in enumerate(paths):
@@ -76,17 +79,8 @@ def load(paths: list[str | Path], *, editions=None, date=None, format: str | Non
     first = min(dates) if dates else None
     by_cat: dict[int, list[pd.DataFrame]] = {}
     for p, rec in zip(paths, recs, strict=True):
-        shift = (rec.date - first).days if (rec.date and first) else 0
         for cat, frame in rec.frames.items():
-            frame = frame.copy()
-            frame["day"] = frame["day"] + shift
-            if first is not None and rec.date is None:
-                base = np.datetime64(first, "ns")
-                ns = np.rint((frame["day"].to_numpy() * 86400.0 + frame["time_of_day"].to_numpy()) * 1e9)
-                frame["timestamp"] = pd.DatetimeIndex(
-                    np.where(np.isnan(ns), np.datetime64("NaT"), base + np.nan_to_num(ns).astype(
-                        "timedelta64[ns]"))).tz_localize("UTC")
-            frame["file"] = pd.Categorical([Path(p).name] * len(frame))
+            frame = frame.assign(file=pd.Categorical([Path(p).name] * len(frame)))
             by_cat.setdefault(cat, []).append(frame)
     frames = {cat: _concat(parts) for cat, parts in by_cat.items()}
     return Loaded(frames, recs, inputs, first)

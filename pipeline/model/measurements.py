@@ -1,162 +1,206 @@
-"""Decoded CAT048/CAT021 frames to measurement frames (positions in WGS-84), and aircraft selection.
+"""Decoded CAT048/CAT021 frames to one measurement frame (pipeline.model.schema), and aircraft selection.
 
-Measurement schema: see ``pipeline.correlate.results``. ``time_of_day`` there is
-``day * 86400 + time_of_day``.
-Radar rows also carry ``position_item`` ("040" polar, "042" cartesian) and ``height_assumed``
-(True where the flight level was absent, so the plot was placed at zero elevation / on the tangent
-plane and its latitude/longitude are less accurate). ADS-B rows carry ``nucp_nic`` and ``nacp``.
+Radar slant range and azimuth (I048/040, else x/y of I048/042) become WGS-84 positions from the radar site
+at the height of the flight level; ADS-B positions come from I021/131 or /130. Each row gets its absolute
+UTC ``time``, its sensor, its aircraft identity (pipeline.model.identity) and its horizontal position
+covariance. Rows without a position or a time are dropped.
 """
 
 from __future__ import annotations
 
+import datetime as dt
+
 import numpy as np
 import pandas as pd
 
-from pipeline.model.geodesy import M_PER_FT, plane_to_geodetic, polar_to_geodetic
-from pipeline.model.sensors import sensor_toml_snippet
+from pipeline.model.geodesy import (
+    enu_basis,
+    flight_level_to_m,
+    geodetic_to_ecef,
+    plane_to_geodetic,
+    polar_to_geodetic,
+)
+from pipeline.model.identity import assign_aircraft_id, normalise_address, normalise_callsign
+from pipeline.model.schema import conform, empty_measurements, validate
+from pipeline.model.sensors import UnknownRadar, sensor_sites
+from pipeline.model.time import absolute_time
 
-MEASUREMENT_COLUMNS = ["sensor", "time_of_day", "timestamp", "latitude", "longitude", "flight_level",
-                       "ground_speed_kt", "heading_deg", "callsign", "address", "sac", "sic"]
-RADAR_COLUMNS = [*MEASUREMENT_COLUMNS, "rho_nm", "theta_deg", "position_item", "height_assumed"]
-ADSB_COLUMNS = [*MEASUREMENT_COLUMNS, "nucp_nic", "nacp", "nucr_nacv", "sil", "mops_version"]
+__all__ = ["NACP_95_M", "UnknownRadar", "adsb_measurements", "build_measurements", "nacp_sigma_m",
+           "normalise_address", "normalise_callsign", "radar_measurements", "select", "sensor_id"]
 
-
-class UnknownRadar(ValueError):
-    """Radar reports come from SAC/SIC pairs that the sensor table does not list."""
-
-    def __init__(self, missing: list[tuple[int, int]]):
-        self.missing = missing
-        pairs = ", ".join(f"SAC {sac} SIC {sic}" for sac, sic in missing)
-        snippets = "\n".join(sensor_toml_snippet(sac, sic) for sac, sic in missing)
-        super().__init__(f"radar {pairs} not in the sensor table; add:\n{snippets}")
-
-
-def normalise_callsign(s):
-    """Upper-case call sign with spaces removed ("mas 72" -> "MAS72"); Series in, Series out; NA kept."""
-    if isinstance(s, pd.Series):
-        out = s.astype("str").str.upper().str.replace(" ", "", regex=False)
-        return out.where(out.str.len() > 0)
-    if s is None or (not isinstance(s, str) and pd.isna(s)):
-        return None
-    text = str(s).upper().replace(" ", "")
-    return text or None
+# DO-260B NACp: 95 % horizontal position accuracy bound (EPU) in metres; 0 = unknown
+NACP_95_M = {11: 3.0, 10: 10.0, 9: 30.0, 8: 92.6, 7: 185.2, 6: 555.6, 5: 926.0, 4: 1852.0, 3: 3704.0,
+             2: 7408.0, 1: 18520.0}
+# 95 % of a circular 2-D Gaussian lies within sqrt(-2 ln 0.05) = 2.4477 sigma
+CIRCULAR_95_PER_SIGMA = 2.45
 
 
-def normalise_address(s):
-    """Upper-case 6-hex-digit address ("0x76cd41" -> "76CD41"); Series in, Series out; NA kept."""
-    if isinstance(s, pd.Series):
-        out = s.astype("str").str.strip().str.upper().str.removeprefix("0X").str.zfill(6)
-        return out.where(out.str.len() > 0)
-    if s is None or (not isinstance(s, str) and pd.isna(s)):
-        return None
-    text = str(s).strip().upper().removeprefix("0X")
-    return text.zfill(6) if text else None
+def sensor_id(category: int, sac, sic) -> pd.Series:
+    """Sensor ids "CCC:SAC/SIC" (e.g. "048:25/201"); SAC/SIC missing shows as "?"."""
+    sac = pd.Series(sac).astype("Int64").astype("string")
+    sic = pd.Series(sic).astype("Int64").astype("string")
+    return (f"{category:03d}:" + sac.fillna("?") + "/" + sic.fillna("?")).astype("string")
 
 
 def _column(frame: pd.DataFrame, name: str, dtype: str = "float64") -> pd.Series:
     if name in frame:
         return frame[name].astype(dtype)
-    return pd.Series(np.nan, index=frame.index, dtype=dtype)
+    return pd.Series(np.nan, index=frame.index).astype(dtype)
 
 
-def _common(frame: pd.DataFrame, sensor: str) -> pd.DataFrame:
-    """The identity/time/kinematics columns shared by both sensors."""
+def _common(frame: pd.DataFrame, category: int, kind: str, date: dt.date | None) -> pd.DataFrame:
+    """The time, sensor, identity, kinematics and provenance columns of both sensors."""
     out = pd.DataFrame(index=frame.index)
-    out["sensor"] = pd.Series(sensor, index=frame.index, dtype="str")
-    out["time_of_day"] = _column(frame, "day") * 86400.0 + _column(frame, "time_of_day")
-    if "timestamp" in frame:
-        out["timestamp"] = frame["timestamp"]
-    else:
-        out["timestamp"] = pd.Series(pd.NaT, index=frame.index, dtype="datetime64[ns, UTC]")
+    out["time"] = absolute_time(frame, date)
+    out["sac"], out["sic"] = _column(frame, "sac", "Int64"), _column(frame, "sic", "Int64")
+    out["sensor_id"] = sensor_id(category, out["sac"], out["sic"]).to_numpy()
+    out["sensor_kind"] = kind
     out["flight_level"] = _column(frame, "flight_level")
     out["ground_speed_kt"] = _column(frame, "ground_speed_kt")
-    out["callsign"] = normalise_callsign(frame["callsign"]) if "callsign" in frame else pd.Series(
-        np.nan, index=frame.index, dtype="str")
-    out["address"] = normalise_address(frame["address"]) if "address" in frame else pd.Series(
-        np.nan, index=frame.index, dtype="str")
-    out["sac"] = _column(frame, "sac", "Int64")
-    out["sic"] = _column(frame, "sic", "Int64")
+    for name, norm in (("callsign", normalise_callsign), ("address", normalise_address)):
+        out[name] = (norm(frame[name]) if name in frame
+                     else pd.Series(pd.NA, index=frame.index, dtype="string"))
+    out["mode3a"] = _column(frame, "mode3a", "string")
+    out["track_number"] = _column(frame, "track_number", "Int64")
+    out["file"] = _column(frame, "file", "string")
+    out["offset"] = _column(frame, "offset", "Int64")
     return out
 
 
-def radar_measurements(cat048: pd.DataFrame, sensors: pd.DataFrame) -> pd.DataFrame:
-    """Radar plots as WGS-84 positions: I048/040 (slant range, azimuth) else I048/042 (x east, y north).
+def _radar_covariance(site: pd.DataFrame, lat, lon, h_m) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """East/north covariance (m^2) at each plot from the site's range and azimuth sigmas.
 
-    Height from the flight level (FL * 100 ft, taken as height above the ellipsoid); rows with no
-    position or no time are dropped. Raises ``UnknownRadar`` for SAC/SIC pairs absent from ``sensors``.
+    The slant-range error moves the plot along the horizontal radial by sigma_r * r / g (r slant, g
+    horizontal distance: the height is fixed by the flight level), the azimuth error across it by
+    g * sigma_theta; the radial direction is taken in the plot's own east/north frame.
     """
-    out = _common(cat048, "radar")
+    site_ecef = np.stack(geodetic_to_ecef(site["latitude"].to_numpy(float), site["longitude"].to_numpy(float),
+                                          site["altitude_m"].to_numpy(float)), -1)
+    d = np.stack(geodetic_to_ecef(lat, lon, h_m), -1) - site_ecef
+    s_east, s_north, _ = enu_basis(site["latitude"].to_numpy(float), site["longitude"].to_numpy(float))
+    g = np.hypot((d * s_east).sum(-1), (d * s_north).sum(-1))
+    r = np.linalg.norm(d, axis=-1)
+    east, north, _ = enu_basis(lat, lon)
+    alpha = np.arctan2((d * east).sum(-1), (d * north).sum(-1))  # radial direction at the plot
+    var_tangential = (g * np.radians(site["sigma_azimuth_deg"].to_numpy(float))) ** 2
+    sa, ca = np.sin(alpha), np.cos(alpha)
+    with np.errstate(divide="ignore", invalid="ignore"):  # a plot right above the site: undefined (NaN)
+        var_radial = (site["sigma_range_m"].to_numpy(float) * r / g) ** 2
+        cov = (var_radial * sa**2 + var_tangential * ca**2, (var_radial - var_tangential) * sa * ca,
+               var_radial * ca**2 + var_tangential * sa**2)
+    return tuple(np.where(g > 0, c, np.nan) for c in cov)
+
+
+def _sigma_major(cov_ee, cov_en, cov_nn) -> np.ndarray:
+    """Square root of the larger eigenvalue of [[ee, en], [en, nn]]."""
+    half_trace = (cov_ee + cov_nn) / 2.0
+    return np.sqrt(half_trace + np.sqrt(((cov_ee - cov_nn) / 2.0) ** 2 + cov_en**2))
+
+
+def _radar_rows(cat048: pd.DataFrame, sensors: pd.DataFrame, date: dt.date | None) -> pd.DataFrame:
+    """Radar plots as WGS-84 positions (see the module docstring); UnknownRadar for SAC/SIC not in sensors."""
+    out = _common(cat048, 48, "radar", date)
     out["heading_deg"] = _column(cat048, "heading_deg")
     out["rho_nm"] = _column(cat048, "rho_nm")
     out["theta_deg"] = _column(cat048, "theta_deg")
     x_nm, y_nm = _column(cat048, "x_nm"), _column(cat048, "y_nm")
     polar = (out["rho_nm"].notna() & out["theta_deg"].notna()).to_numpy()
     plane = ~polar & (x_nm.notna() & y_nm.notna()).to_numpy()
-    keep = (polar | plane) & out["time_of_day"].notna().to_numpy()
+    keep = (polar | plane) & out["time"].notna().to_numpy()
     out, polar, plane = out[keep], polar[keep], plane[keep]
     x_nm, y_nm = x_nm[keep].to_numpy(), y_nm[keep].to_numpy()
 
-    if sensors.duplicated(["sac", "sic"]).any():
-        raise ValueError("sensor table lists a SAC/SIC pair twice")
-    site = out[["sac", "sic"]].merge(sensors.astype({"sac": "Int64", "sic": "Int64"}), on=["sac", "sic"],
-                                     how="left")
-    unknown = site["latitude"].isna().to_numpy()
-    if unknown.any():
-        pairs = site.loc[unknown, ["sac", "sic"]].drop_duplicates().sort_values(["sac", "sic"])
-        raise UnknownRadar([(int(a) if pd.notna(a) else pd.NA, int(b) if pd.notna(b) else pd.NA)
-                            for a, b in pairs.itertuples(index=False)])
+    site = sensor_sites(out, sensors)
     site_lat, site_lon, site_alt = (site[c].to_numpy(float) for c in ("latitude", "longitude", "altitude_m"))
-    alt_m = out["flight_level"].to_numpy() * 100.0 * M_PER_FT
-    lat, lon = np.full(len(out), np.nan), np.full(len(out), np.nan)
+    alt_m = flight_level_to_m(out["flight_level"].to_numpy())
+    lat, lon, h = (np.full(len(out), np.nan) for _ in range(3))
     if polar.any():
-        la, lo, _ = polar_to_geodetic(site_lat[polar], site_lon[polar], site_alt[polar],
-                                      out["rho_nm"].to_numpy()[polar], out["theta_deg"].to_numpy()[polar],
-                                      alt_m[polar])
-        lat[polar], lon[polar] = la, lo
+        lat[polar], lon[polar], h[polar] = polar_to_geodetic(
+            site_lat[polar], site_lon[polar], site_alt[polar], out["rho_nm"].to_numpy()[polar],
+            out["theta_deg"].to_numpy()[polar], alt_m[polar])
     if plane.any():
-        la, lo, _ = plane_to_geodetic(site_lat[plane], site_lon[plane], site_alt[plane], x_nm[plane],
-                                      y_nm[plane], alt_m[plane])
-        lat[plane], lon[plane] = la, lo
+        lat[plane], lon[plane], h[plane] = plane_to_geodetic(
+            site_lat[plane], site_lon[plane], site_alt[plane], x_nm[plane], y_nm[plane], alt_m[plane])
     out["latitude"], out["longitude"] = lat, lon
-    out["position_item"] = pd.Series(np.where(polar, "040", "042"), index=out.index, dtype="str")
-    out["height_assumed"] = np.isnan(alt_m)
-    return out[RADAR_COLUMNS].reset_index(drop=True)
+    known = np.isfinite(alt_m)
+    out["height_m"] = np.where(known, h, np.nan)
+    out["height_source"] = np.where(known, "flight_level", "none")
+    out["position_item"] = np.where(polar, "040", "042")
+    out["cov_ee_m2"], out["cov_en_m2"], out["cov_nn_m2"] = _radar_covariance(site, lat, lon, h)
+    return out
 
 
-def adsb_measurements(cat021: pd.DataFrame) -> pd.DataFrame:
-    """ADS-B reports with a position and a time, in the measurement schema (heading = track angle)."""
-    out = _common(cat021, "adsb")
+def nacp_sigma_m(nacp) -> np.ndarray:
+    """1-sigma horizontal error per axis (m) from NACp: its 95 % bound / 2.45; NaN when absent or 0."""
+    values = pd.Series(nacp).astype("Int64")
+    return values.map(NACP_95_M).astype("float64").to_numpy() / CIRCULAR_95_PER_SIGMA
+
+
+def _adsb_rows(cat021: pd.DataFrame, date: dt.date | None) -> pd.DataFrame:
+    """ADS-B reports with a position and a time (heading = track angle)."""
+    out = _common(cat021, 21, "adsb", date)
     out["heading_deg"] = _column(cat021, "track_angle_deg")
     out["latitude"] = _column(cat021, "latitude")
     out["longitude"] = _column(cat021, "longitude")
     out["nucp_nic"] = _column(cat021, "nucp_nic", "Int64")
     if "fom_pa" in cat021:  # 0.2x editions carry the NUCp-like figure as I021/090 PA
         out["nucp_nic"] = out["nucp_nic"].fillna(_column(cat021, "fom_pa", "Int64"))
-    out["nacp"] = _column(cat021, "nacp", "Int64")
-    for name in ("nucr_nacv", "sil", "mops_version"):
+    for name in ("nacp", "nucr_nacv", "sil", "mops_version"):
         out[name] = _column(cat021, name, "Int64")
-    keep = out[["time_of_day", "latitude", "longitude"]].notna().all(axis=1)
-    return out.loc[keep, ADSB_COLUMNS].reset_index(drop=True)
+    geometric_m = _column(cat021, "geometric_height_ft").to_numpy() * 0.3048
+    fl_m = flight_level_to_m(out["flight_level"].to_numpy())
+    out["height_m"] = np.where(np.isfinite(geometric_m), geometric_m, fl_m)
+    out["height_source"] = np.where(np.isfinite(geometric_m), "geometric",
+                                    np.where(np.isfinite(fl_m), "flight_level", "none"))
+    var = nacp_sigma_m(out["nacp"]) ** 2
+    out["cov_ee_m2"], out["cov_en_m2"], out["cov_nn_m2"] = var, np.where(np.isnan(var), np.nan, 0.0), var
+    keep = out[["time", "latitude", "longitude"]].notna().all(axis=1)
+    return out[keep]
 
 
-def select(meas: pd.DataFrame, callsign: str | None = None, address: str | None = None, *,
-           link_with: pd.DataFrame | None = None) -> pd.DataFrame:
-    """Rows of one aircraft: call sign (case/space-insensitive) and/or 24-bit address (hex, any case).
+def build_measurements(cat048: pd.DataFrame | None = None, cat021: pd.DataFrame | None = None,
+                       sensors: pd.DataFrame | None = None, *, date: dt.date | None = None) -> pd.DataFrame:
+    """Every radar and ADS-B report as one validated measurement frame, identity assigned over both.
 
-    Rows lacking the call sign are kept when their address was seen with that call sign in ``meas``
-    or ``link_with`` (and likewise rows lacking the address), so radar plots without I048/240 count.
+    ``date`` dates records that carry no timestamp of their own (see pipeline.model.time.absolute_time).
+    Rows are in input order, radar first.
     """
-    pairs = meas[["callsign", "address"]]
-    if link_with is not None:
-        pairs = pd.concat([pairs, link_with[["callsign", "address"]]], ignore_index=True)
-    mask = pd.Series(True, index=meas.index)
-    cs, addr = meas["callsign"], meas["address"]
+    parts = []
+    if cat048 is not None and len(cat048):
+        if sensors is None:
+            raise ValueError("radar measurements need the sensor table (radar sites)")
+        parts.append(_radar_rows(cat048, sensors, date))
+    if cat021 is not None and len(cat021):
+        parts.append(_adsb_rows(cat021, date))
+    parts = [conform(p) for p in parts if len(p)]
+    if not parts:
+        return empty_measurements()
+    meas = pd.concat(parts, ignore_index=True) if len(parts) > 1 else parts[0].reset_index(drop=True)
+    meas["aircraft_id"] = assign_aircraft_id(meas)
+    meas["sigma_major_m"] = _sigma_major(meas["cov_ee_m2"].to_numpy(), meas["cov_en_m2"].to_numpy(),
+                                         meas["cov_nn_m2"].to_numpy())
+    return validate(meas)
+
+
+def radar_measurements(cat048: pd.DataFrame, sensors: pd.DataFrame, *, date: dt.date | None = None):
+    """Radar reports alone as a measurement frame (identity from radar data only)."""
+    return build_measurements(cat048, None, sensors, date=date)
+
+
+def adsb_measurements(cat021: pd.DataFrame, *, date: dt.date | None = None) -> pd.DataFrame:
+    """ADS-B reports alone as a measurement frame (identity from ADS-B data only)."""
+    return build_measurements(None, cat021, date=date)
+
+
+def select(meas: pd.DataFrame, callsign: str | None = None, address: str | None = None) -> pd.DataFrame:
+    """Rows of the aircraft (by ``aircraft_id``) seen with this call sign and/or 24-bit address.
+
+    Call signs match case- and space-insensitively, addresses as hex in any case; a radar plot without
+    I048/240 belongs to the aircraft when its identity rule linked it there.
+    """
+    ids = set(meas["aircraft_id"].dropna())
     if callsign is not None:
-        wanted = normalise_callsign(callsign)
-        linked = set(pairs.loc[pairs["callsign"] == wanted, "address"].dropna())
-        mask &= (cs == wanted) | (cs.isna() & addr.isin(linked))
+        ids &= set(meas.loc[meas["callsign"] == normalise_callsign(callsign), "aircraft_id"].dropna())
     if address is not None:
-        wanted = normalise_address(address)
-        linked = set(pairs.loc[pairs["address"] == wanted, "callsign"].dropna())
-        mask &= (addr == wanted) | (addr.isna() & cs.isin(linked))
-    return meas[mask.fillna(False).astype(bool)].reset_index(drop=True)
+        ids &= set(meas.loc[meas["address"] == normalise_address(address), "aircraft_id"].dropna())
+    return meas[meas["aircraft_id"].isin(ids).fillna(False).to_numpy(bool)].reset_index(drop=True)

@@ -1,4 +1,5 @@
-"""The radar site table: read ``[[sensor]]`` entries from TOML, and print the entry a missing radar needs."""
+"""The radar site table: read ``[[sensor]]`` entries from TOML, look up each plot's site, and print the
+entry a missing radar needs."""
 
 from __future__ import annotations
 
@@ -7,19 +8,37 @@ from pathlib import Path
 
 import pandas as pd
 
-SENSOR_COLUMNS = ["name", "sac", "sic", "latitude", "longitude", "altitude_m"]
-_TYPES = {"name": (str,), "sac": (int,), "sic": (int,), "latitude": (int, float),
-          "longitude": (int, float), "altitude_m": (int, float)}
-_RANGES = {"sac": (0, 255), "sic": (0, 255), "latitude": (-90.0, 90.0), "longitude": (-180.0, 180.0)}
+REQUIRED_COLUMNS = ["name", "sac", "sic", "latitude", "longitude", "altitude_m"]
+# Optional per-radar measurement noise (1 sigma), used for the position covariance of its plots.
+DEFAULT_SIGMA_RANGE_M = 70.0
+DEFAULT_SIGMA_AZIMUTH_DEG = 0.08
+OPTIONAL_DEFAULTS = {"sigma_range_m": DEFAULT_SIGMA_RANGE_M, "sigma_azimuth_deg": DEFAULT_SIGMA_AZIMUTH_DEG}
+SENSOR_COLUMNS = [*REQUIRED_COLUMNS, *OPTIONAL_DEFAULTS]
+_NUMBER = (int, float)
+_TYPES = {"name": (str,), "sac": (int,), "sic": (int,), "latitude": _NUMBER, "longitude": _NUMBER,
+          "altitude_m": _NUMBER, "sigma_range_m": _NUMBER, "sigma_azimuth_deg": _NUMBER}
+_RANGES = {"sac": (0, 255), "sic": (0, 255), "latitude": (-90.0, 90.0), "longitude": (-180.0, 180.0),
+           "sigma_range_m": (0.001, 10_000.0), "sigma_azimuth_deg": (0.0001, 10.0)}
+
+
+class UnknownRadar(ValueError):
+    """Radar reports come from SAC/SIC pairs that the sensor table does not list."""
+
+    def __init__(self, missing: list[tuple[int, int]]):
+        self.missing = missing
+        pairs = ", ".join(f"SAC {sac} SIC {sic}" for sac, sic in missing)
+        snippets = "\n".join(sensor_toml_snippet(sac, sic) for sac, sic in missing)
+        super().__init__(f"radar {pairs} not in the sensor table; add:\n{snippets}")
 
 
 def _check_entry(path: Path, i: int, entry: object) -> dict:
     where = f"{path}: [[sensor]] entry {i + 1}"
     if not isinstance(entry, dict):
         raise ValueError(f"{where} is not a table")
-    missing = [k for k in SENSOR_COLUMNS if k not in entry]
+    missing = [k for k in REQUIRED_COLUMNS if k not in entry]
     if missing:
-        raise ValueError(f"{where} lacks {', '.join(missing)} (needs {', '.join(SENSOR_COLUMNS)})")
+        raise ValueError(f"{where} lacks {', '.join(missing)} (needs {', '.join(REQUIRED_COLUMNS)})")
+    entry = OPTIONAL_DEFAULTS | entry
     for key, types in _TYPES.items():
         value = entry[key]
         if isinstance(value, bool) or not isinstance(value, types):
@@ -32,9 +51,10 @@ def _check_entry(path: Path, i: int, entry: object) -> dict:
 
 
 def read_sensors(path: str | Path) -> pd.DataFrame:
-    """The sensor table (name, sac, sic, latitude, longitude, altitude_m) of a TOML file; ValueError if bad.
+    """The sensor table (SENSOR_COLUMNS) of a TOML file; ValueError naming the file and entry if bad.
 
-    Latitude/longitude are WGS-84 degrees, altitude_m the antenna height above the WGS-84 ellipsoid.
+    Latitude/longitude are WGS-84 degrees, altitude_m the antenna height above the WGS-84 ellipsoid;
+    sigma_range_m and sigma_azimuth_deg (optional, defaults 70 m and 0.08 deg) the 1-sigma plot noise.
     """
     path = Path(path)
     try:
@@ -54,9 +74,25 @@ def read_sensors(path: str | Path) -> pd.DataFrame:
                              f"({seen[key]!r} and {row['name']!r})")
         seen[key] = row["name"]
     frame = pd.DataFrame(rows, columns=SENSOR_COLUMNS)
-    frame = frame.astype({"sac": "int64", "sic": "int64", "latitude": "float64", "longitude": "float64",
-                          "altitude_m": "float64"})
-    return frame
+    return frame.astype({"sac": "int64", "sic": "int64"} | dict.fromkeys(SENSOR_COLUMNS[3:], "float64"))
+
+
+def sensor_sites(reports: pd.DataFrame, sensors: pd.DataFrame) -> pd.DataFrame:
+    """The sensor-table row (SENSOR_COLUMNS) of each report's SAC/SIC, aligned with ``reports`` by position;
+    UnknownRadar for pairs the table lacks. Sigma columns missing from ``sensors`` take their defaults."""
+    if sensors.duplicated(["sac", "sic"]).any():
+        raise ValueError("sensor table lists a SAC/SIC pair twice")
+    table = sensors.assign(**{k: sensors[k] if k in sensors else v for k, v in OPTIONAL_DEFAULTS.items()})
+    table = table.astype({"sac": "Int64", "sic": "Int64"})[SENSOR_COLUMNS]
+    keys = pd.DataFrame({"sac": reports["sac"].astype("Int64").to_numpy(),
+                         "sic": reports["sic"].astype("Int64").to_numpy()})
+    site = keys.merge(table, on=["sac", "sic"], how="left")
+    unknown = site["latitude"].isna().to_numpy()
+    if unknown.any():
+        pairs = site.loc[unknown, ["sac", "sic"]].drop_duplicates().sort_values(["sac", "sic"])
+        raise UnknownRadar([(int(a) if pd.notna(a) else pd.NA, int(b) if pd.notna(b) else pd.NA)
+                            for a, b in pairs.itertuples(index=False)])
+    return site
 
 
 def sensor_toml_snippet(sac: int, sic: int) -> str:
@@ -69,4 +105,5 @@ def sensor_toml_snippet(sac: int, sic: int) -> str:
         "latitude = 0.0    # TODO: antenna latitude, degrees north (WGS-84)\n"
         "longitude = 0.0   # TODO: antenna longitude, degrees east (WGS-84)\n"
         "altitude_m = 0.0  # TODO: antenna height above the WGS-84 ellipsoid, metres\n"
+        "# optional: sigma_range_m = 70.0, sigma_azimuth_deg = 0.08 (1-sigma plot noise)\n"
     )

@@ -27,14 +27,14 @@ from pipeline.model.geodesy import (
     geodetic_to_ecef,
     polar_to_geodetic,
     slant_range_azimuth,
+    wrap180,
 )
-from pipeline.model.measurements import UnknownRadar
+from pipeline.model.measurements import NACP_95_M
+from pipeline.model.sensors import sensor_sites
+from pipeline.model.time import with_clock
 from pipeline.quality.jumps import KT_TO_MS, detect_jumps
 
 MAX_ADSB_GAP_S = 10.0
-# DO-260B NACp: 95 % horizontal position accuracy bound (EPU) in metres
-NACP_95_M = {11: 3.0, 10: 10.0, 9: 30.0, 8: 92.6, 7: 185.2, 6: 555.6, 5: 926.0, 4: 1852.0, 3: 3704.0,
-             2: 7408.0, 1: 18520.0}
 ERROR_COLUMNS = [
     "radar", "sac", "sic", "callsign", "address", "time_of_day", "timestamp", "radar_row", "rho_nm",
     "theta_deg", "adsb_latitude", "adsb_longitude", "adsb_height_m", "adsb_track_deg", "adsb_speed_ms",
@@ -57,28 +57,11 @@ CLIP_SIGMAS = 5.0  # rows further than this many robust sigmas from the fit are 
 _FIT_PASSES = 6
 
 
-def wrap180(deg):
-    """Angles wrapped into [-180, 180)."""
-    return (np.asarray(deg, dtype=float) + 180.0) % 360.0 - 180.0
-
-
 def nacp_bound_m(nacp) -> float:
     """95 % horizontal accuracy bound (m) of a NACp value (NaN when unknown or 0)."""
     if nacp is None or pd.isna(nacp):
         return float("nan")
     return NACP_95_M.get(int(nacp), float("nan"))
-
-
-def _sites(radar: pd.DataFrame, sensors: pd.DataFrame) -> pd.DataFrame:
-    """Site name, latitude, longitude, altitude per radar row; UnknownRadar for pairs not in ``sensors``."""
-    table = sensors.astype({"sac": "Int64", "sic": "Int64"})[["name", "sac", "sic", "latitude", "longitude",
-                                                              "altitude_m"]]
-    site = radar[["sac", "sic"]].astype("Int64").merge(table, on=["sac", "sic"], how="left")
-    missing = site["latitude"].isna().to_numpy()
-    if missing.any():
-        pairs = site.loc[missing, ["sac", "sic"]].drop_duplicates()
-        raise UnknownRadar([(int(a), int(b)) for a, b in pairs.itertuples(index=False)])
-    return site
 
 
 def _adsb_track(adsb: pd.DataFrame) -> pd.DataFrame:
@@ -135,13 +118,18 @@ def _interpolate(track: pd.DataFrame, t_s: np.ndarray, max_gap_s: float) -> dict
     return out
 
 
-def _matched(radar_meas: pd.DataFrame, adsb_meas: pd.DataFrame, max_gap_s: float,
-             jump_kw: dict | None) -> pd.DataFrame:
-    """Radar reports (de-duplicated) with the interpolated ADS-B reference, for aircraft seen by both."""
-    radar = radar_meas.assign(radar_row=radar_meas.index.to_numpy())
-    adsb = adsb_meas[~detect_jumps(adsb_meas, **(jump_kw or {})).to_numpy()] if len(adsb_meas) else adsb_meas
+def _matched(meas: pd.DataFrame, max_gap_s: float, jump_kw: dict | None) -> pd.DataFrame:
+    """Radar reports (de-duplicated) with the interpolated ADS-B reference, for aircraft seen by both;
+    ``radar_row`` is the report's row in ``meas``."""
+    meas = with_clock(meas).assign(radar_row=np.arange(len(meas)))
+    is_adsb = (meas["sensor_kind"] == "adsb").to_numpy(bool)
+    adsb = meas[is_adsb]
+    jumps = detect_jumps(adsb, **(jump_kw or {})).to_numpy() if len(adsb) else np.zeros(0, bool)
+    drop = np.zeros(len(meas), bool)
+    drop[np.flatnonzero(is_adsb)[jumps]] = True
+    radar = meas[~is_adsb]
     parts = []
-    for ac in all_aircraft(radar, adsb):
+    for ac in all_aircraft(meas[~drop]):
         r, _ = deduplicate(ac.radar)
         a, _ = deduplicate(ac.adsb)
         ref = _interpolate(_adsb_track(a), r["time_of_day"].to_numpy(float), max_gap_s)
@@ -153,8 +141,8 @@ def _matched(radar_meas: pd.DataFrame, adsb_meas: pd.DataFrame, max_gap_s: float
     return pd.concat(parts, ignore_index=True)
 
 
-def radar_errors(radar_meas: pd.DataFrame, adsb_meas: pd.DataFrame, sensors: pd.DataFrame, *,
-                 max_gap_s: float = MAX_ADSB_GAP_S, jump_kw: dict | None = None) -> pd.DataFrame:
+def radar_errors(meas: pd.DataFrame, sensors: pd.DataFrame, *, max_gap_s: float = MAX_ADSB_GAP_S,
+                 jump_kw: dict | None = None) -> pd.DataFrame:
     """One row per radar report matched to ADS-B: range, azimuth, along/cross-track and horizontal error.
 
     range_error_m = radar slant range - slant range from the site to the ADS-B reference; azimuth error
@@ -162,10 +150,10 @@ def radar_errors(radar_meas: pd.DataFrame, adsb_meas: pd.DataFrame, sensors: pd.
     it. Also the reference geometry (slant/ground range, azimuth, range rate, tangential speed) that
     ``estimate_biases`` regresses on.
     """
-    m = _matched(radar_meas, adsb_meas, max_gap_s, jump_kw)
+    m = _matched(meas, max_gap_s, jump_kw)
     if m.empty:
         return pd.DataFrame(columns=ERROR_COLUMNS)
-    site = _sites(m, sensors)
+    site = sensor_sites(m, sensors)
     s_lat, s_lon, s_alt = (site[c].to_numpy(float) for c in ("latitude", "longitude", "altitude_m"))
     lat, lon, h = m["ref_lat"].to_numpy(), m["ref_lon"].to_numpy(), m["ref_h"].to_numpy()
     ve, vn, vu = m["ref_ve"].to_numpy(), m["ref_vn"].to_numpy(), m["ref_vu"].to_numpy()

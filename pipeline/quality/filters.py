@@ -9,6 +9,7 @@ minimum is set, among the reports that reach that filter.
 
 from __future__ import annotations
 
+import numpy as np
 import pandas as pd
 
 from pipeline.quality.jumps import detect_jumps
@@ -25,12 +26,23 @@ def _below(meas: pd.DataFrame, column: str, minimum: int | None) -> tuple[pd.Ser
     return (values < minimum).fillna(False).astype(bool), int(values.isna().sum())
 
 
-def apply_filters(adsb_meas: pd.DataFrame, *, drop_jumps: bool = False, min_nic: int | None = None,
+def apply_filters(meas: pd.DataFrame, *, drop_jumps: bool = False, min_nic: int | None = None,
                   min_nacp: int | None = None,
                   jump_kw: dict | None = None) -> tuple[pd.DataFrame, dict[str, int]]:
-    """ADS-B reports that pass the chosen filters (index reset), and the count per key of FILTER_KEYS."""
+    """Measurements with the ADS-B reports that fail the chosen filters removed (radar rows untouched,
+    order kept, index reset), and the count per key of FILTER_KEYS."""
+    is_adsb = (meas["sensor_kind"] == "adsb").to_numpy(bool)
+    kept, removed = _filter_adsb(meas[is_adsb], drop_jumps, min_nic, min_nacp, jump_kw)
+    keep = ~is_adsb
+    keep[np.flatnonzero(is_adsb)[kept]] = True
+    return meas[keep].reset_index(drop=True), removed
+
+
+def _filter_adsb(adsb_meas: pd.DataFrame, drop_jumps: bool, min_nic: int | None, min_nacp: int | None,
+                 jump_kw: dict | None) -> tuple[np.ndarray, dict[str, int]]:
+    """Which ADS-B rows pass (by position) and the count removed per filter."""
     removed = dict.fromkeys(FILTER_KEYS, 0)
-    kept = adsb_meas
+    kept = adsb_meas.reset_index(drop=True)
     if drop_jumps and len(kept):
         jump = detect_jumps(kept, **(jump_kw or {}))
         removed["jumps"] = int(jump.sum())
@@ -41,4 +53,6 @@ def apply_filters(adsb_meas: pd.DataFrame, *, drop_jumps: bool = False, min_nic:
     low_nacp, removed["nacp_missing_kept"] = _below(kept, "nacp", min_nacp)
     removed["nacp_below_min"] = int(low_nacp.sum())
     kept = kept[~low_nacp.to_numpy()]
-    return kept.reset_index(drop=True), removed
+    passed = np.zeros(len(adsb_meas), bool)
+    passed[kept.index.to_numpy()] = True
+    return passed, removed

@@ -1,6 +1,6 @@
 """ADS-B position jumps: reports inconsistent with their neighbours in time (implied speed, robust local fit).
 
-Per aircraft (24-bit address, else call sign; rows with neither are never judged), reports are sorted by
+Per aircraft (``aircraft_id``; unidentified rows are never judged), reports are sorted by
 time and split into segments at gaps longer than ``SEGMENT_GAP_S``. A report is a jump when, against the
 reports currently accepted around it (itself excluded):
 
@@ -26,6 +26,7 @@ import numpy as np
 import pandas as pd
 
 from pipeline.model.geodesy import distance_m
+from pipeline.model.time import midnight, seconds_since, with_clock
 
 KT_TO_MS = 1852.0 / 3600.0
 SPEED_SLACK_M = 300.0  # allowance added to max speed * dt: position noise (NACp 6) and time quantisation
@@ -38,11 +39,6 @@ JUMP_COLUMNS = ["row", "callsign", "address", "sac", "sic", "time_of_day", "time
                 "longitude", "fit_latitude", "fit_longitude", "jump_size_m"]
 
 
-def aircraft_key(meas: pd.DataFrame) -> pd.Series:
-    """Grouping key per row: "A:" + address, else "C:" + call sign, else NA (unidentified)."""
-    addr = meas["address"] if "address" in meas else pd.Series(pd.NA, index=meas.index, dtype="object")
-    cs = meas["callsign"] if "callsign" in meas else pd.Series(pd.NA, index=meas.index, dtype="object")
-    return ("A:" + addr.astype("object")).fillna("C:" + cs.astype("object"))
 
 
 _EARTH_RADIUS_M = 6371008.8
@@ -164,8 +160,10 @@ def _detect(adsb_meas: pd.DataFrame, max_speed_kt: float, robust_window: int,
     n = len(adsb_meas)
     cols = {"jump": np.zeros(n, bool), "jump_size_m": np.full(n, np.nan), "fit_latitude": np.full(n, np.nan),
             "fit_longitude": np.full(n, np.nan)}
-    frame = pd.DataFrame({"key": aircraft_key(adsb_meas).to_numpy(),
-                          "t": adsb_meas["time_of_day"].to_numpy(float),
+    reference = midnight(adsb_meas["time"])
+    frame = pd.DataFrame({"key": adsb_meas["aircraft_id"].astype("object").to_numpy(),
+                          "t": seconds_since(adsb_meas["time"], reference) if reference is not None
+                          else np.full(n, np.nan),
                           "lat": adsb_meas["latitude"].to_numpy(float),
                           "lon": adsb_meas["longitude"].to_numpy(float), "pos": np.arange(n)})
     frame = frame[frame["key"].notna() & frame[["t", "lat", "lon"]].notna().all(axis=1)]
@@ -193,6 +191,8 @@ def jump_table(adsb_meas: pd.DataFrame, *, max_speed_kt: float = 1000.0, robust_
                robust_threshold_m: float = 2000.0) -> pd.DataFrame:
     """One row per jump: identity, time, reported and fitted position, size (distance to the fit, m)."""
     found = _detect(adsb_meas, max_speed_kt, robust_window, robust_threshold_m)
+    if "time_of_day" not in adsb_meas:
+        adsb_meas = with_clock(adsb_meas)
     hit = found["jump"].to_numpy()
     rows = adsb_meas[hit]
     table = pd.DataFrame({"row": rows.index.to_numpy()})

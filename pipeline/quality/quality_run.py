@@ -22,22 +22,22 @@ class QualityResult:
     figures: dict[str, Path] = field(default_factory=dict)
 
 
-def select_aircraft(radar: pd.DataFrame, adsb: pd.DataFrame, *, callsign: str | None = None,
-                    address: str | None = None) -> tuple[pd.DataFrame, pd.DataFrame]:
+def select_aircraft(meas: pd.DataFrame, *, callsign: str | None = None,
+                    address: str | None = None) -> pd.DataFrame:
     """Both sensors' measurements of one aircraft (NoSuchAircraft lists the closest), or all of them."""
     if callsign is None and address is None:
-        return radar, adsb
-    ac = one_aircraft(radar, adsb, callsign, address)
-    return ac.radar, ac.adsb
+        return meas
+    ac = one_aircraft(meas, callsign, address)
+    return pd.concat([ac.radar, ac.adsb], ignore_index=True)
 
 
-def quality_run(radar: pd.DataFrame, adsb: pd.DataFrame, sensors: pd.DataFrame, *,
-                callsign: str | None = None, address: str | None = None, gap_s: float = 180.0,
+def quality_run(meas: pd.DataFrame, sensors: pd.DataFrame, *, callsign: str | None = None,
+                address: str | None = None, gap_s: float = 180.0,
                 jump_kw: dict | None = None) -> QualityResult:
     """Quality tables per aircraft and sensor, radar error statistics and per-radar bias estimates."""
-    radar, adsb = select_aircraft(radar, adsb, callsign=callsign, address=address)
-    sheets = quality_tables(radar, adsb, gap_s=gap_s, jump_kw=jump_kw)
-    errors = radar_errors(radar, adsb, sensors, jump_kw=jump_kw)
+    meas = select_aircraft(meas, callsign=callsign, address=address)
+    sheets = quality_tables(meas, gap_s=gap_s, jump_kw=jump_kw)
+    errors = radar_errors(meas, sensors, jump_kw=jump_kw)
     sheets["Radar accuracy"] = error_stats(errors)
     biases = estimate_biases(errors)
     sheets["Radar biases"] = biases

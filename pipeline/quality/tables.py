@@ -1,10 +1,10 @@
 """Sensor data quality tables: counts, duplicates, update intervals, gaps, missing speeds, jumps, ADS-B NIC.
 
-Rows are per aircraft (address, else call sign; "(all)" pools every aircraft) and per sensor (radar or
-ADS-B, with its SAC/SIC). Everything after the duplicate count is computed on de-duplicated reports
-(``pipeline.model.dedup``, per aircraft and sensor). Update intervals are the time differences between
-consecutive reports of one aircraft from one sensor of at most ``gap_s``; longer ones are gaps (listed
-with their start and end; "reappeared_after_1h" when longer than an hour).
+Rows are per aircraft (``aircraft_id``, pipeline.model.identity; "(all)" pools every aircraft) and per
+sensor (radar or ADS-B, with its SAC/SIC). Everything after the duplicate count is computed on
+de-duplicated reports (``pipeline.model.dedup``, per aircraft and sensor). Update intervals are the time
+differences between consecutive reports of one aircraft from one sensor of at most ``gap_s``; longer
+ones are gaps (listed with their start and end; "reappeared_after_1h" when longer than an hour).
 """
 
 from __future__ import annotations
@@ -13,6 +13,8 @@ import numpy as np
 import pandas as pd
 
 from pipeline.model.dedup import deduplicate
+from pipeline.model.identity import aircraft_labels
+from pipeline.model.time import iso_utc, with_clock
 from pipeline.quality.jumps import jump_table
 
 ALL = "(all)"
@@ -40,15 +42,6 @@ JUMP_COLUMNS = [*ID_KEYS, "time_of_day", "utc", "latitude", "longitude", "fit_la
 VALUE_COUNT_COLUMNS = [*ID_KEYS, "indicator", "value", "reports", "share_pct"]
 
 
-def iso_utc(ts) -> str | None:
-    """ISO 8601 UTC text (milliseconds, "Z") of a timestamp; None when missing."""
-    if ts is None or pd.isna(ts):
-        return None
-    ts = pd.Timestamp(ts)
-    ts = ts.tz_localize("UTC") if ts.tzinfo is None else ts.tz_convert("UTC")
-    return ts.isoformat(timespec="milliseconds").replace("+00:00", "Z")
-
-
 def histogram_edges_s(gap_s: float) -> np.ndarray:
     """Update-interval bin edges: 0.5 s up to 20 s, then 30, 60, 120 s, closed by gap_s."""
     fine = np.arange(0.0, 20.0 + 1e-9, 0.5)
@@ -56,22 +49,15 @@ def histogram_edges_s(gap_s: float) -> np.ndarray:
     return np.append(edges[edges < gap_s], gap_s)
 
 
-def _aircraft_labels(radar: pd.DataFrame, adsb: pd.DataFrame) -> pd.DataFrame:
-    """Both sensors' reports stacked, with an aircraft key (address, else the address the call sign is
-    uniquely seen with, else the call sign, else "?") and its call-sign/address labels."""
-    both = pd.concat([radar, adsb], ignore_index=True)
-    pairs = both[["callsign", "address"]].dropna().drop_duplicates()
-    unique_cs = pairs.groupby("callsign")["address"].agg(lambda a: a.iloc[0] if len(a) == 1 else pd.NA)
-    address = both["address"].astype("object").fillna(both["callsign"].map(unique_cs.dropna()))
-    key = ("A:" + address).fillna("C:" + both["callsign"].astype("object")).fillna("?")
-    both["aircraft"] = key.to_numpy()
-    both["address"] = address.to_numpy()
-    label = (both.assign(_adsb=both["sensor"] == "adsb").dropna(subset=["callsign"])
-             .groupby(["aircraft", "callsign"]).agg(n=("sensor", "size"), a=("_adsb", "sum")).reset_index()
-             .sort_values(["aircraft", "a", "n", "callsign"], ascending=[True, False, False, True])
-             .drop_duplicates("aircraft").set_index("aircraft")["callsign"])
-    both["callsign"] = both["aircraft"].map(label).fillna("").to_numpy()
-    both["address"] = both["address"].fillna("")
+def _aircraft_labels(meas: pd.DataFrame) -> pd.DataFrame:
+    """Reports with the thesis clock, an ``aircraft`` key ("?" when unidentified), ``sensor`` (the kind)
+    and each aircraft's call-sign/address labels in place of the per-report values."""
+    both = with_clock(meas)
+    both["sensor"] = both["sensor_kind"].astype("object")
+    both["aircraft"] = both["aircraft_id"].astype("object").fillna("?")
+    labels = aircraft_labels(meas).set_index("aircraft_id")
+    for column in ("callsign", "address"):
+        both[column] = both["aircraft"].map(labels[column]).fillna("").astype("object")
     return both
 
 
@@ -201,20 +187,18 @@ def _adsb_over_time(adsb: pd.DataFrame) -> pd.DataFrame:
     return pd.DataFrame(rows, columns=columns)
 
 
-def quality_tables(radar_meas: pd.DataFrame, adsb_meas: pd.DataFrame, *, gap_s: float = 180.0,
+def quality_tables(meas: pd.DataFrame, *, gap_s: float = 180.0,
                    jump_kw: dict | None = None) -> dict[str, pd.DataFrame]:
     """Sheets "Quality", "Update intervals", "Gaps", "Jumps", "ADS-B quality" and "ADS-B quality over time"
-    (see the module docstring); ADS-B indicators nucr_nacv, sil and mops_version are used when present."""
-    both = _aircraft_labels(radar_meas, adsb_meas)
-    both["sensor"] = both["sensor"].astype("object")
+    (see the module docstring) of a measurement frame holding radar and/or ADS-B."""
+    both = _aircraft_labels(meas)
     adsb_rows = both["sensor"] == "adsb"
 
     clean_adsb = []
     for _, g in both[adsb_rows].groupby(["aircraft", "sac", "sic"], dropna=False, sort=False):
         clean_adsb.append(deduplicate(g)[0])
     adsb = pd.concat(clean_adsb, ignore_index=True) if clean_adsb else both[adsb_rows].iloc[:0]
-    keyed = adsb.assign(address=adsb["aircraft"].where(adsb["aircraft"] != "?"), callsign=pd.NA)
-    jumps = jump_table(keyed, **(jump_kw or {}))
+    jumps = jump_table(adsb, **(jump_kw or {}))
     jump_rows = adsb.loc[jumps["row"].to_numpy()] if len(jumps) else adsb.iloc[:0]
     jumps_by_aircraft = jump_rows["aircraft"].value_counts()
 

@@ -17,6 +17,7 @@ from matplotlib.ticker import FuncFormatter, MultipleLocator
 from pipeline.correlate.results import WindowResult
 from pipeline.correlate.windows import in_window
 from pipeline.model.measurements import select
+from pipeline.model.time import midnight, with_clock
 from pipeline.report.figures import new_figure, save_png
 
 RADAR_COLOR = "#d62728"
@@ -128,7 +129,9 @@ def _raw_in_window(window: WindowResult, meas: pd.DataFrame, other: pd.DataFrame
     cs, addr = _none_if_blank(s.get("callsign")), _none_if_blank(s.get("address"))
     if cs is None and addr is None:
         return meas.iloc[:0]
-    rows = select(meas, cs, addr, link_with=other)
+    both = pd.concat([meas, other], ignore_index=True)
+    rows = with_clock(select(both, cs, addr), midnight(both["time"]))
+    rows = rows[(rows["sensor_kind"] == meas["sensor_kind"].iloc[0]).to_numpy(bool)] if len(meas) else rows
     return rows[in_window(rows["time_of_day"], s["start_tod"], s["end_tod"])]
 
 

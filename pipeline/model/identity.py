@@ -1,0 +1,75 @@
+"""Aircraft identity, assigned once when measurements are built, and the normalisation of its parts.
+
+Rule, per report, over all sensors of the run together:
+1. the report's 24-bit address, when it has one;
+2. else the address its call sign is seen with elsewhere in the run, when that address is unique;
+3. else "CS:" + call sign;
+4. else the address its Mode 3/A code is seen with, when unique; else "M3A:" + Mode 3/A code;
+5. else <NA>: the report belongs to no aircraft (it still counts as a report of its sensor).
+Correlation, quality, jump detection and everything after group by this ``aircraft_id`` only.
+"""
+
+from __future__ import annotations
+
+import pandas as pd
+
+
+def normalise_callsign(s):
+    """Upper-case call sign with spaces removed ("mas 72" -> "MAS72"); Series in, Series out; NA kept."""
+    if isinstance(s, pd.Series):
+        out = s.astype("string").str.upper().str.replace(" ", "", regex=False)
+        return out.where(out.str.len() > 0)
+    if s is None or (not isinstance(s, str) and pd.isna(s)):
+        return None
+    text = str(s).upper().replace(" ", "")
+    return text or None
+
+
+def normalise_address(s):
+    """Upper-case 6-hex-digit address ("0x76cd41" -> "76CD41"); Series in, Series out; NA kept."""
+    if isinstance(s, pd.Series):
+        out = s.astype("string").str.strip().str.upper().str.removeprefix("0X").str.zfill(6)
+        return out.where(out.str.len() > 0)
+    if s is None or (not isinstance(s, str) and pd.isna(s)):
+        return None
+    text = str(s).strip().upper().removeprefix("0X")
+    return text.zfill(6) if text else None
+
+
+def _unique_address(meas: pd.DataFrame, column: str) -> pd.Series:
+    """Per row, the address its ``column`` value is seen with when that address is unique, else NA."""
+    pairs = meas[[column, "address"]].dropna().drop_duplicates()
+    counts = pairs[column].value_counts()
+    unique = pairs[pairs[column].isin(counts.index[counts == 1])].set_index(column)["address"]
+    return meas[column].map(unique).astype("string")
+
+
+def assign_aircraft_id(meas: pd.DataFrame) -> pd.Series:
+    """The ``aircraft_id`` of every row by the module's rule (string dtype, <NA> when unidentified)."""
+    address = meas["address"].astype("string")
+    callsign = meas["callsign"].astype("string")
+    mode3a = meas["mode3a"].astype("string")
+    ident = address.fillna(_unique_address(meas, "callsign")).fillna("CS:" + callsign)
+    ident = ident.fillna(_unique_address(meas, "mode3a")).fillna("M3A:" + mode3a)
+    return ident.astype("string")
+
+
+def aircraft_labels(meas: pd.DataFrame) -> pd.DataFrame:
+    """Per aircraft_id, the labels shown in reports: the most frequent call sign and address (ADS-B first,
+    as it always transmits identity), "" when none."""
+    rows = []
+    for ident, g in meas.dropna(subset=["aircraft_id"]).groupby("aircraft_id", sort=True):
+        adsb = g[g["sensor_kind"] == "adsb"]
+        labels = {"aircraft_id": ident}
+        for column in ("callsign", "address"):
+            labels[column] = _most_common(adsb[column]) or _most_common(g[column])
+        rows.append(labels)
+    return pd.DataFrame(rows, columns=["aircraft_id", "callsign", "address"])
+
+
+def _most_common(values: pd.Series) -> str:
+    counts = values.dropna().value_counts(sort=True)
+    if not len(counts):
+        return ""
+    top = counts[counts == counts.iloc[0]].index
+    return str(sorted(top)[0])

@@ -1,0 +1,142 @@
+"""The measurement schema: every report of every sensor as one row; name, dtype, unit and meaning per column.
+
+This is the single source of truth for the columns that ``pipeline.model.measurements`` builds and every
+later step (correlation, quality, tracking) reads. ``docs/measurements.md`` is generated from it
+(``python -m pipeline.model.schema > docs/measurements.md``; a test keeps the two in sync).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import pandas as pd
+
+
+@dataclass(frozen=True)
+class Column:
+    """One measurement column: its name, pandas dtype, unit ("" if none) and what it holds."""
+
+    name: str
+    dtype: str
+    unit: str
+    description: str
+
+
+_TEXT = "string"  # pandas string dtype, <NA> where absent
+
+MEASUREMENT_SCHEMA: tuple[Column, ...] = (
+    Column("time", "datetime64[ns, UTC]", "UTC",
+           "Instant of the report (radar I048/140, ADS-B time of applicability); an undated recording is "
+           "placed on 1970-01-01 (see pipeline.model.time)"),
+    Column("sensor_id", _TEXT, "",
+           "Sensor: category, SAC and SIC as \"CCC:SAC/SIC\" (e.g. 048:25/201, 021:0/107)"),
+    Column("sensor_kind", _TEXT, "", "\"radar\" (CAT048) or \"adsb\" (CAT021)"),
+    Column("sac", "Int64", "", "System area code of the sensor"),
+    Column("sic", "Int64", "", "System identification code of the sensor"),
+    Column("aircraft_id", _TEXT, "",
+           "Aircraft identity assigned once (pipeline.model.identity): the 24-bit address, else "
+           "\"CS:\" call sign, else \"M3A:\" Mode 3/A code; <NA> when the report has none"),
+    Column("latitude", "float64", "deg", "WGS-84 latitude"),
+    Column("longitude", "float64", "deg", "WGS-84 longitude, -180..180"),
+    Column("height_m", "float64", "m",
+           "Height used for the position, above the WGS-84 ellipsoid (see height_source); NaN if none"),
+    Column("height_source", _TEXT, "",
+           "\"flight_level\" (FL x 100 ft taken as height), \"geometric\" (ADS-B geometric height) or "
+           "\"none\" (radar plot without FL: placed at zero elevation)"),
+    Column("flight_level", "float64", "FL", "Flight level (pressure altitude / 100 ft)"),
+    Column("ground_speed_kt", "float64", "kt", "Ground speed"),
+    Column("heading_deg", "float64", "deg",
+           "Direction of motion, clockwise from true north (radar I048/200 heading, ADS-B track angle)"),
+    Column("address", _TEXT, "", "24-bit ICAO aircraft address, 6 upper-case hex digits"),
+    Column("callsign", _TEXT, "", "Call sign (target identification), upper case without spaces"),
+    Column("mode3a", _TEXT, "", "Mode 3/A code, 4 octal digits"),
+    Column("track_number", "Int64", "", "Sensor track number"),
+    Column("rho_nm", "float64", "NM", "Radar slant range (I048/040); NaN for ADS-B"),
+    Column("theta_deg", "float64", "deg", "Radar azimuth clockwise from north (I048/040); NaN for ADS-B"),
+    Column("position_item", _TEXT, "",
+           "Source item of a radar position: \"040\" polar or \"042\" cartesian; <NA> for ADS-B"),
+    Column("nucp_nic", "Int64", "", "ADS-B NUCp (MOPS version 0) or NIC (versions 1, 2)"),
+    Column("nacp", "Int64", "", "ADS-B navigation accuracy category for position"),
+    Column("nucr_nacv", "Int64", "", "ADS-B NUCr or NACv"),
+    Column("sil", "Int64", "", "ADS-B source integrity level"),
+    Column("mops_version", "Int64", "", "ADS-B MOPS version (0, 1, 2)"),
+    Column("cov_ee_m2", "float64", "m^2",
+           "Horizontal position covariance, east-east, in the local east/north frame at the report; radar: "
+           "from the sensor's range and azimuth sigmas with the slant-range geometry; ADS-B: "
+           "(NACp 95 % bound / 2.45)^2; NaN when unknown"),
+    Column("cov_en_m2", "float64", "m^2", "Horizontal position covariance, east-north"),
+    Column("cov_nn_m2", "float64", "m^2", "Horizontal position covariance, north-north"),
+    Column("sigma_major_m", "float64", "m", "Standard deviation along the error ellipse's major axis"),
+    Column("file", _TEXT, "", "Input file name the report came from"),
+    Column("offset", "Int64", "B", "Byte offset of the record in that file"),
+)
+MEASUREMENT_COLUMNS = [c.name for c in MEASUREMENT_SCHEMA]
+_BY_NAME = {c.name: c for c in MEASUREMENT_SCHEMA}
+
+
+class SchemaError(ValueError):
+    """A frame does not follow the measurement schema; names the column."""
+
+
+def empty_measurements() -> pd.DataFrame:
+    """A measurement frame with no rows and every column at its schema dtype."""
+    return pd.DataFrame({c.name: pd.Series(dtype=c.dtype) for c in MEASUREMENT_SCHEMA})
+
+
+def conform(frame: pd.DataFrame) -> pd.DataFrame:
+    """The schema columns of ``frame`` in schema order, each cast to its dtype (missing ones all NA)."""
+    out = {}
+    for c in MEASUREMENT_SCHEMA:
+        if c.name in frame:
+            out[c.name] = frame[c.name].astype(c.dtype)
+        else:
+            out[c.name] = pd.Series(pd.NA if c.dtype in ("Int64", _TEXT) else float("nan"),
+                                    index=frame.index).astype(c.dtype)
+    return pd.DataFrame(out, index=frame.index)
+
+
+def validate(frame: pd.DataFrame) -> pd.DataFrame:
+    """``frame`` unchanged if it has every schema column with its dtype and sane values; else SchemaError
+    naming the first offending column."""
+    for c in MEASUREMENT_SCHEMA:
+        if c.name not in frame:
+            raise SchemaError(f"measurement column {c.name!r} is missing ({c.description})")
+        if str(frame[c.name].dtype) != c.dtype:
+            raise SchemaError(f"measurement column {c.name!r} has dtype {frame[c.name].dtype}, "
+                              f"the schema says {c.dtype}")
+    if frame["time"].isna().any():
+        raise SchemaError("measurement column 'time' has missing values")
+    kinds = set(frame["sensor_kind"].dropna().unique()) - {"radar", "adsb"}
+    if kinds or frame["sensor_kind"].isna().any():
+        raise SchemaError(f"measurement column 'sensor_kind' holds {sorted(kinds) or ['<NA>']}; "
+                          "allowed: radar, adsb")
+    for name, lo, hi in (("latitude", -90.0, 90.0), ("longitude", -180.0, 180.0)):
+        v = frame[name]
+        if v.isna().any() or ((v < lo) | (v > hi)).any():
+            raise SchemaError(f"measurement column {name!r} has values missing or outside {lo:g}..{hi:g}")
+    for name in ("cov_ee_m2", "cov_nn_m2", "sigma_major_m"):
+        if (frame[name] < 0).any():
+            raise SchemaError(f"measurement column {name!r} has negative values")
+    return frame
+
+
+def markdown() -> str:
+    """The schema as a Markdown table (docs/measurements.md)."""
+    lines = [
+        "# Measurement columns",
+        "",
+        "Generated from `pipeline/model/schema.py`",
+        "(`python -m pipeline.model.schema > docs/measurements.md`).",
+        "One row per report of every sensor, radar and ADS-B alike; `validate(frame)` checks a frame against",
+        "it. Derived for the thesis tables (not stored): `time_of_day`, seconds since midnight UTC of the",
+        "run's first day (above 86400 after midnight), from `pipeline.model.time.with_clock`.",
+        "",
+        "| column | dtype | unit | description |",
+        "|---|---|---|---|",
+    ]
+    lines += [f"| `{c.name}` | {c.dtype} | {c.unit} | {c.description} |" for c in MEASUREMENT_SCHEMA]
+    return "\n".join(lines) + "\n"
+
+
+if __name__ == "__main__":
+    print(markdown(), end="")

@@ -1,0 +1,104 @@
+"""The measurement model: schema and validate, generated docs, absolute time, identity rule, covariance."""
+
+import math
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from pipeline.model.geodesy import ecef_to_enu, geodetic_to_ecef, polar_to_geodetic
+from pipeline.model.identity import assign_aircraft_id
+from pipeline.model.measurements import build_measurements, nacp_sigma_m
+from pipeline.model.schema import MEASUREMENT_COLUMNS, SchemaError, empty_measurements, markdown, validate
+from pipeline.model.time import UNDATED_DAY, absolute_time, is_dated, iso_utc, midnight, seconds_since
+
+ROOT = Path(__file__).resolve().parents[1]
+SENSORS = pd.DataFrame([{"name": "R", "sac": 25, "sic": 201, "latitude": 2.7456, "longitude": 101.7099,
+                         "altitude_m": 40.0, "sigma_range_m": 70.0, "sigma_azimuth_deg": 0.08}])
+
+
+def radar_frame(rho_nm, theta_deg, fl, tod=None):
+    n = len(rho_nm)
+    return pd.DataFrame({"sac": [25] * n, "sic": [201] * n, "day": [0] * n,
+                         "time_of_day": tod if tod is not None else np.arange(n, dtype=float),
+                         "rho_nm": rho_nm, "theta_deg": theta_deg, "flight_level": fl,
+                         "address": ["750001"] * n, "offset": np.arange(n) * 10})
+
+
+def test_docs_are_generated_from_the_schema():
+    assert (ROOT / "docs" / "measurements.md").read_text() == markdown()
+    for name in MEASUREMENT_COLUMNS:
+        assert f"| `{name}` |" in markdown()
+
+
+def test_validate_names_the_offending_column():
+    meas = build_measurements(radar_frame([50.0, 60.0], [10.0, 20.0], [300.0, 310.0]), None, SENSORS)
+    assert validate(meas) is meas and validate(empty_measurements()).empty
+    with pytest.raises(SchemaError, match="'cov_nn_m2' is missing"):
+        validate(meas.drop(columns="cov_nn_m2"))
+    with pytest.raises(SchemaError, match="'latitude' has dtype object"):
+        validate(meas.assign(latitude=meas["latitude"].astype(object)))
+    with pytest.raises(SchemaError, match="'sensor_kind'.*allowed: radar, adsb"):
+        validate(meas.assign(sensor_kind=pd.Series(["radar", "lidar"], dtype="string")))
+    with pytest.raises(SchemaError, match="'longitude'"):
+        validate(meas.assign(longitude=[200.0, 0.0]))
+
+
+def test_absolute_time_dated_undated_and_midnight():
+    frame = pd.DataFrame({"day": [0, 1], "time_of_day": [86399.0078125, 0.5]})
+    undated = absolute_time(frame)
+    assert undated.tolist() == [UNDATED_DAY + pd.Timedelta(seconds=86399.0078125),
+                                UNDATED_DAY + pd.Timedelta(days=1, seconds=0.5)]
+    assert not is_dated(undated.iloc[1]) and iso_utc(undated.iloc[0]) is None
+    dated = absolute_time(frame, pd.Timestamp("2019-03-01").date())
+    assert is_dated(dated.iloc[0]) and iso_utc(dated.iloc[1]) == "2019-03-02T00:00:00.500Z"
+    # seconds since the first midnight: exact multiples of 1/128 s, above 86400 after midnight
+    assert seconds_since(dated, midnight(dated)).tolist() == [86399.0078125, 86400.5]
+    # a record's own timestamp wins over the fallback date
+    stamped = frame.assign(timestamp=pd.to_datetime(["2020-01-01 00:00:01", None], utc=True))
+    assert absolute_time(stamped, pd.Timestamp("2019-03-01").date()).iloc[0] == pd.Timestamp(
+        "2020-01-01 00:00:01", tz="UTC")
+
+
+def test_identity_rule():
+    ids = pd.DataFrame({
+        "address": ["750001", None, None, None, None, None, "750002", None],
+        "callsign": ["MAS72", "MAS72", "SIA1", None, None, None, "DUP", "DUP"],
+        "mode3a": [None, None, None, "1234", "7777", None, "1234", None],
+    }).astype("string")
+    got = assign_aircraft_id(ids).tolist()
+    # address; call sign linked to its unique address; call sign alone; Mode 3/A linked to its unique
+    # address; Mode 3/A alone; nothing; address; call sign seen with one address
+    assert got == ["750001", "750001", "CS:SIA1", "750002", "M3A:7777", pd.NA, "750002", "750002"]
+
+
+def test_radar_covariance_matches_a_numerical_jacobian():
+    """cov = J diag(sigma_r^2, sigma_theta^2) J^T, J from finite differences of the exact geodesy."""
+    rho, theta = np.array([20.0, 80.0, 150.0]), np.array([30.0, 200.0, 315.0])
+    fl = np.array([50.0, 250.0, 390.0])
+    meas = build_measurements(radar_frame(rho, theta, fl), None, SENSORS)
+    site = SENSORS.iloc[0]
+    h = fl * 100 * 0.3048
+    for i in range(3):
+        lat0, lon0, h0 = polar_to_geodetic(site.latitude, site.longitude, site.altitude_m, rho[i], theta[i],
+                                           h[i])
+        jac = np.zeros((2, 2))
+        for j, (dr, dt) in enumerate(((1e-4, 0.0), (0.0, 1e-5))):
+            la, lo, hh = polar_to_geodetic(site.latitude, site.longitude, site.altitude_m, rho[i] + dr,
+                                           theta[i] + dt, h[i])
+            e, n, _ = ecef_to_enu(*geodetic_to_ecef(la, lo, hh), lat0, lon0, h0)
+            jac[:, j] = [e / (dr * 1852.0 or dt), n / (dr * 1852.0 or dt)]
+        cov = jac @ np.diag([70.0**2, 0.08**2]) @ jac.T
+        row = meas.iloc[i]
+        got = np.array([[row.cov_ee_m2, row.cov_en_m2], [row.cov_en_m2, row.cov_nn_m2]])
+        np.testing.assert_allclose(got, cov, rtol=2e-3, atol=1.0)
+        assert row.sigma_major_m == pytest.approx(math.sqrt(np.linalg.eigvalsh(cov).max()), rel=2e-3)
+    # at 150 NM the azimuth noise dominates: 0.08 deg x 278 km = 388 m
+    assert meas["sigma_major_m"].iloc[2] == pytest.approx(math.radians(0.08) * 150 * 1852, rel=0.01)
+
+
+def test_adsb_sigma_from_nacp():
+    # DO-260B bounds: NACp 8 < 92.6 m, 11 < 3 m; 0 (unknown) and absent give NaN
+    got = nacp_sigma_m(pd.array([8, 11, 0, pd.NA], dtype="Int64"))
+    assert got[:2].tolist() == pytest.approx([92.6 / 2.45, 3.0 / 2.45]) and np.isnan(got[2:]).all()
