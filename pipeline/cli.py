@@ -98,6 +98,11 @@ def build_parser() -> argparse.ArgumentParser:
     c.add_argument("--json", help="window summary as JSON")
     c.add_argument("--slot", type=float, default=10.0, help="slot width D in seconds (default 10)")
     c.add_argument("--gap", type=float, default=180.0, help="gap G in seconds that ends a period (180)")
+    c.add_argument("--pairs", choices=["radar-adsb", "radar-radar", "all"], default="radar-adsb",
+                   help="sensor pairs to correlate per aircraft: each radar against ADS-B (default), each "
+                        "two radars, or both; plots of two radars are never mixed")
+    c.add_argument("--split-adsb", action="store_true",
+                   help="keep ADS-B ground stations apart (default: one ADS-B source per aircraft)")
     c.add_argument("--quality", action="store_true", help="add the Quality and Radar accuracy sheets")
     c.add_argument("--drop-jumps", action="store_true", help="remove detected ADS-B position jumps first")
     c.add_argument("--min-nic", type=int, help="drop ADS-B reports with NUCp/NIC below N")
@@ -264,7 +269,7 @@ def cmd_correlate(args) -> int:
     progress.stage("Correlating data")
     try:
         run = correlate(meas, callsign=args.callsign, address=args.address, all_aircraft=args.all,
-                        slot_s=args.slot, gap_s=args.gap)
+                        slot_s=args.slot, gap_s=args.gap, pairs=args.pairs, split_adsb=args.split_adsb)
     except (NoSuchAircraft, NoOverlap) as exc:
         raise CliError(str(exc)) from exc
     run.inputs = loaded.inputs

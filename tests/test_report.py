@@ -105,7 +105,7 @@ def test_sheets_headers_and_freeze(outputs: dict[str, Path]) -> None:
     assert groups == ["Window", "Table 6.1 counts", "Table 6.2 coefficients", "Added measures"]
     headers = [c.value for c in summary[2]]
     assert sorted(headers) == sorted(SUMMARY_KEYS)
-    assert headers[8:14] == [
+    assert headers[10:16] == [
         "radar_before", "radar_after", "adsb_before", "adsb_after", "ncc0_lat", "ncc0_lon"]
     assert all(c.font.b for c in summary[2])
     assert summary.freeze_panes == "C3"
@@ -225,7 +225,7 @@ def test_summary_table(run: CorrelationRun) -> None:
     text = summary_table(run)
     lines = text.splitlines()
     assert len(lines) == 2 + len(run.windows) + 1
-    assert lines[0].split()[:3] == ["callsign", "window", "start"]
+    assert lines[0].split()[:4] == ["callsign", "window", "sensors", "start"]
     assert "SIA321" in lines[2] and "0.9999800000" in lines[2]
     assert "50.8" in lines[2] and "10:00:00.5" in lines[2]
     assert EVIL in lines[3] and "-" in lines[3].split()

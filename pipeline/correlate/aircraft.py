@@ -45,12 +45,15 @@ def _closest(wanted: str, meas: pd.DataFrame, column: str) -> list[str]:
     return difflib.get_close_matches(wanted, both, n=5, cutoff=0.5)
 
 
-def one_aircraft(meas: pd.DataFrame, callsign: str | None = None, address: str | None = None) -> Aircraft:
-    """The aircraft with this call sign and/or address; NoSuchAircraft if radar or ADS-B lacks it."""
+def one_aircraft(meas: pd.DataFrame, callsign: str | None = None, address: str | None = None, *,
+                 need_adsb: bool = True) -> Aircraft:
+    """The aircraft with this call sign and/or address; NoSuchAircraft if radar (or, when ``need_adsb``,
+    ADS-B) lacks it."""
     if callsign is None and address is None:
         raise ValueError("give a call sign or an address (or ask for all aircraft)")
     r, a = _split(select(meas, callsign, address))
-    missing = [name for name, f in (("radar", r), ("ADS-B", a)) if f.empty]
+    missing = [name for name, f in (("radar", r), ("ADS-B", a))
+               if f.empty and (need_adsb or name == "radar")]
     if missing:
         if callsign is not None:
             wanted = normalise_callsign(callsign)
@@ -63,19 +66,20 @@ def one_aircraft(meas: pd.DataFrame, callsign: str | None = None, address: str |
         if callsign is not None and address is not None:
             what += f" with address {normalise_address(address)}"
         raise NoSuchAircraft(what, missing, closest)
-    labels = aircraft_labels(pd.concat([r, a], ignore_index=True))
+    labels = aircraft_labels(pd.concat([r, a], ignore_index=True) if len(a) else r)
     cs = normalise_callsign(callsign) if callsign is not None else labels["callsign"].iloc[0]
     addr = normalise_address(address) if address is not None else labels["address"].iloc[0]
     ident = r["aircraft_id"].iloc[0] if r["aircraft_id"].nunique() == 1 else ""
     return Aircraft(cs or "", addr or "", r, a, ident)
 
 
-def all_aircraft(meas: pd.DataFrame) -> list[Aircraft]:
-    """Every aircraft seen by both radar and ADS-B, sorted by call sign, then address."""
+def all_aircraft(meas: pd.DataFrame, *, need_adsb: bool = True) -> list[Aircraft]:
+    """Every aircraft seen by radar and (when ``need_adsb``) ADS-B, sorted by call sign, then address."""
     radar, adsb = _split(meas)
     labels = aircraft_labels(meas).set_index("aircraft_id")
     out = []
-    for ident in sorted(set(radar["aircraft_id"].dropna()) & set(adsb["aircraft_id"].dropna())):
+    ids = set(radar["aircraft_id"].dropna())
+    for ident in sorted(ids & set(adsb["aircraft_id"].dropna()) if need_adsb else ids):
         r = radar[(radar["aircraft_id"] == ident).to_numpy(bool)].reset_index(drop=True)
         a = adsb[(adsb["aircraft_id"] == ident).to_numpy(bool)].reset_index(drop=True)
         out.append(Aircraft(labels.at[ident, "callsign"], labels.at[ident, "address"], r, a, ident))

@@ -28,8 +28,10 @@ from pipeline.model.dedup import duplicate_mask, sort_by_time
 from pipeline.model.geodesy import distance_m
 from pipeline.model.time import is_dated, iso_utc, midnight, with_clock
 
-__all__ = ["NoOverlap", "NoSuchAircraft", "correlate", "ncc", "pearson_by_lag", "pearson_max_lag", "peak_lag",
-           "separation_stats"]
+PAIRS = ("radar-adsb", "radar-radar", "all")
+
+__all__ = ["PAIRS", "NoOverlap", "NoSuchAircraft", "correlate", "ncc", "pearson_by_lag", "pearson_max_lag",
+           "peak_lag", "sensor_pairs", "separation_stats", "sources"]
 
 
 class NoOverlap(LookupError):
@@ -134,7 +136,7 @@ def _none_if_nan(v):
 
 def _window_result(ac: Aircraft, number: int, start_s: float, end_s: float, radar: pd.DataFrame,
                    adsb: pd.DataFrame, dups: tuple[int, int], slot_s: float,
-                   reference: pd.Timestamp) -> WindowResult:
+                   reference: pd.Timestamp, sensors: dict[str, str]) -> WindowResult:
     """Slot, correlate and summarise one window."""
     rs, as_ = slot_window(radar, start_s, end_s, slot_s), slot_window(adsb, start_s, end_s, slot_s)
     tod = rs["time_of_day"].to_numpy()
@@ -159,7 +161,7 @@ def _window_result(ac: Aircraft, number: int, start_s: float, end_s: float, rada
     lag_frame = pd.DataFrame(dict(zip(LAG_COLUMNS, [lags, ncc_lat, ncc_lon, p_lat, p_lon], strict=True)))
     zero = len(slots) - 1
     summary = {
-        "callsign": ac.callsign, "address": ac.address, "window": number,
+        "callsign": ac.callsign, "address": ac.address, "window": number, **sensors,
         "start_tod": float(start_s), "end_tod": float(end_s),
         "start": at_seconds(reference, start_s), "end": at_seconds(reference, end_s), "slots": len(slots),
         "radar_before": len(radar), "radar_after": len(slots),
@@ -180,44 +182,79 @@ def _span(times: pd.Series) -> tuple[float, float]:
     return float(times.min()), float(times.max())
 
 
-def _correlate_aircraft(ac: Aircraft, run: CorrelationRun, slot_s: float, gap_s: float,
-                        reference: pd.Timestamp, strict: bool) -> None:
-    """Append the windows (or skipped windows) of one aircraft to ``run``."""
-    radar, adsb = sort_by_time(ac.radar), sort_by_time(ac.adsb)
+def sources(meas: pd.DataFrame, kind: str, split_adsb: bool = False) -> dict[str, pd.DataFrame]:
+    """One aircraft's reports of one kind by source: each radar (``sensor_id``) on its own; ADS-B one
+    source named by its ground stations joined with "+", or each station apart with ``split_adsb``."""
+    rows = meas[(meas["sensor_kind"] == kind).to_numpy(bool)]
+    if rows.empty:
+        return {}
+    if kind == "adsb" and not split_adsb:
+        return {"+".join(sorted(rows["sensor_id"].dropna().unique())): rows}
+    return {str(k): g for k, g in rows.groupby("sensor_id", sort=True)}
+
+
+def sensor_pairs(ac: Aircraft, pairs: str = "radar-adsb", split_adsb: bool = False
+                 ) -> list[tuple[str, pd.DataFrame, str, pd.DataFrame]]:
+    """(radar id, its reports, reference id, its reports) to correlate for one aircraft: every radar
+    against every ADS-B source ("radar-adsb"), every two radars ("radar-radar"), or both ("all")."""
+    if pairs not in PAIRS:
+        raise ValueError(f"pairs must be one of {', '.join(PAIRS)}, got {pairs!r}")
+    radars = sources(ac.radar, "radar")
+    out = []
+    if pairs in ("radar-adsb", "all"):
+        out += [(r, rf, a, af) for r, rf in radars.items()
+                for a, af in sources(ac.adsb, "adsb", split_adsb).items()]
+    if pairs in ("radar-radar", "all"):
+        ids = sorted(radars)
+        out += [(a, radars[a], b, radars[b]) for i, a in enumerate(ids) for b in ids[i + 1:]]
+    return out
+
+
+def _correlate_pair(ac: Aircraft, run: CorrelationRun, pair: tuple[str, pd.DataFrame, str, pd.DataFrame],
+                    slot_s: float, gap_s: float, reference: pd.Timestamp) -> NoOverlap | None:
+    """Append the windows (or skipped windows) of one aircraft and sensor pair to ``run``; the NoOverlap
+    when the two sensors never overlap."""
+    radar_id, radar, ref_id, other = pair
+    radar, adsb = sort_by_time(radar), sort_by_time(other)
     r_dup, a_dup = duplicate_mask(radar).to_numpy(), duplicate_mask(adsb).to_numpy()
     r_dup_t, a_dup_t = radar["time_of_day"].to_numpy()[r_dup], adsb["time_of_day"].to_numpy()[a_dup]
     radar, adsb = radar[~r_dup].reset_index(drop=True), adsb[~a_dup].reset_index(drop=True)
     windows = overlap_windows(radar["time_of_day"], adsb["time_of_day"], gap_s)
+    sensors = {"radar_sensor": radar_id, "reference_sensor": ref_id}
     if not windows:
-        label = ac.callsign or ac.address
+        label = f"{ac.callsign or ac.address} ({radar_id} and {ref_id})"
         r_span, a_span = _span(radar["time_of_day"]), _span(adsb["time_of_day"])
-        if strict:
-            raise NoOverlap(label, r_span, a_span, reference)
         run.skipped.append(SkippedWindow(ac.callsign, ac.address, min(r_span[0], a_span[0]),
-                                         max(r_span[1], a_span[1]), str(NoOverlap(label, r_span, a_span))))
-        return
+                                         max(r_span[1], a_span[1]), str(NoOverlap(label, r_span, a_span)),
+                                         **sensors))
+        return NoOverlap(label, r_span, a_span, reference)
     number = 0
     for start_s, end_s in windows:
         r_in = radar[in_window(radar["time_of_day"], start_s, end_s)]
         a_in = adsb[in_window(adsb["time_of_day"], start_s, end_s)]
         reason = short_window_reason(start_s, end_s, slot_s)
         if reason is None and (r_in.empty or a_in.empty):
-            reason = f"no {'radar' if r_in.empty else 'ADS-B'} measurement inside the window"
+            reason = f"no {radar_id if r_in.empty else ref_id} measurement inside the window"
         if reason:
-            run.skipped.append(SkippedWindow(ac.callsign, ac.address, start_s, end_s, reason))
+            run.skipped.append(SkippedWindow(ac.callsign, ac.address, start_s, end_s, reason, **sensors))
             continue
         number += 1
         dups = (int(in_window(r_dup_t, start_s, end_s).sum()), int(in_window(a_dup_t, start_s, end_s).sum()))
-        run.windows.append(_window_result(ac, number, start_s, end_s, r_in, a_in, dups, slot_s, reference))
+        run.windows.append(_window_result(ac, number, start_s, end_s, r_in, a_in, dups, slot_s, reference,
+                                          sensors))
+    return None
 
 
 def correlate(meas: pd.DataFrame, *, callsign: str | None = None, address: str | None = None,
-              all_aircraft: bool = False, slot_s: float = 10.0, gap_s: float = 180.0) -> CorrelationRun:
-    """Correlate radar against ADS-B per aircraft and overlap window (see the module docstring).
+              all_aircraft: bool = False, slot_s: float = 10.0, gap_s: float = 180.0,
+              pairs: str = "radar-adsb", split_adsb: bool = False) -> CorrelationRun:
+    """Correlate per aircraft, sensor pair and overlap window (see the module docstring).
 
-    ``meas`` is a measurement frame (pipeline.model.schema) holding both kinds of sensor. One aircraft by
-    call sign and/or address (NoSuchAircraft, NoOverlap on failure), or with ``all_aircraft`` every
-    aircraft seen by both. Times in the tables count seconds from midnight UTC of the earliest report.
+    ``meas`` is a measurement frame (pipeline.model.schema). Each radar is correlated on its own (plots
+    of two radars are never mixed) against each ADS-B source and/or each other radar (``pairs``); ADS-B
+    ground stations are one source unless ``split_adsb``. One aircraft by call sign and/or address
+    (NoSuchAircraft, NoOverlap when no pair overlaps), or with ``all_aircraft`` every aircraft seen by a
+    pair. Times in the tables count seconds from midnight UTC of the earliest report.
     """
     if slot_s <= 0 or gap_s < 0:
         raise ValueError(f"slot_s must be > 0 and gap_s >= 0, got {slot_s} and {gap_s}")
@@ -227,14 +264,19 @@ def correlate(meas: pd.DataFrame, *, callsign: str | None = None, address: str |
     meas = with_clock(meas, reference)
     run = CorrelationRun(parameters={
         "callsign": callsign, "address": address, "all_aircraft": all_aircraft, "slot_s": slot_s,
-        "gap_s": gap_s, "date": reference.date().isoformat() if is_dated(reference) else None})
+        "gap_s": gap_s, "pairs": pairs, "split_adsb": split_adsb,
+        "date": reference.date().isoformat() if is_dated(reference) else None})
+    need_adsb = pairs == "radar-adsb"
     if all_aircraft:
-        targets = every_aircraft(meas)
+        targets = every_aircraft(meas, need_adsb=need_adsb)
         if not targets:
             raise NoSuchAircraft("any aircraft", ["radar", "ADS-B"], [],
                                  "no aircraft is seen by both radar and ADS-B")
     else:
-        targets = [one_aircraft(meas, callsign, address)]
+        targets = [one_aircraft(meas, callsign, address, need_adsb=need_adsb)]
     for ac in targets:
-        _correlate_aircraft(ac, run, slot_s, gap_s, reference, strict=not all_aircraft)
+        found = [_correlate_pair(ac, run, pair, slot_s, gap_s, reference)
+                 for pair in sensor_pairs(ac, pairs, split_adsb)]
+        if not all_aircraft and found and all(f is not None for f in found):
+            raise found[0]
     return run

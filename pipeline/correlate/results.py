@@ -1,10 +1,12 @@
 """Result types passed from the correlation steps to the report writers.
 
-Measurement frames (output of ``pipeline.model.measurements``), one row per report, columns:
-``sensor`` ("radar" | "adsb"), ``time_of_day`` (s since midnight of the recording's first day,
-above 86400 after midnight), ``timestamp`` (UTC, NaT when the date is unknown), ``latitude``,
-``longitude`` (deg WGS-84), ``flight_level``, ``ground_speed_kt``, ``heading_deg``, ``callsign``,
-``address``, ``sac``, ``sic``; radar rows also ``rho_nm``, ``theta_deg``.
+Each window belongs to one aircraft and one sensor pair: ``radar_sensor`` (a radar's sensor_id) and
+``reference_sensor`` (the ADS-B source, its ground stations joined by "+", or a second radar). In the
+slot and summary columns "radar" means the radar sensor and "adsb" the reference sensor.
+
+Correlation reads measurement frames (pipeline.model.schema). ``start_tod``, ``end_tod`` and the slots'
+``time_of_day`` count seconds from midnight UTC of the run's earliest report (above 86400 after
+midnight); ``start``, ``end`` and ``timestamp`` are UTC, None/NaT when the recording had no date.
 """
 
 from __future__ import annotations
@@ -22,7 +24,8 @@ SLOT_COLUMNS = [
 LAG_COLUMNS = ["lag", "ncc_lat", "ncc_lon", "pearson_lat", "pearson_lon"]
 # Keys of WindowResult.summary, in report order (the JSON fields of a window)
 SUMMARY_KEYS = [
-    "callsign", "address", "window", "start_tod", "end_tod", "start", "end", "slots",
+    "callsign", "address", "window", "radar_sensor", "reference_sensor", "start_tod", "end_tod", "start",
+    "end", "slots",
     "radar_before", "radar_after", "adsb_before", "adsb_after", "radar_duplicates", "adsb_duplicates",
     "ncc0_lat", "ncc0_lon", "ncc_peak_lag_lat", "ncc_peak_lag_lon",
     "pearson0_lat", "pearson0_lon", "pearson_peak_lag_lat", "pearson_peak_lag_lon",
@@ -48,6 +51,8 @@ class SkippedWindow:
     start_tod: float
     end_tod: float
     reason: str
+    radar_sensor: str = ""  # sensor_id of the radar
+    reference_sensor: str = ""  # sensor_id(s) of the ADS-B source or of the second radar
 
 
 @dataclass

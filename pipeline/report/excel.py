@@ -58,7 +58,8 @@ _ISO_DATETIME = re.compile(r"\d{4}-\d{2}-\d{2}[T ]\d{2}:\d{2}(:\d{2}(\.\d{1,9})?
 _DATETIME_HEADERS = {"time_utc", "start", "end", "timestamp", "run_time"}
 
 SUMMARY_GROUPS: list[tuple[str, list[str]]] = [
-    ("Window", ["callsign", "address", "window", "start", "end", "start_tod", "end_tod", "slots"]),
+    ("Window", ["callsign", "address", "window", "radar_sensor", "reference_sensor", "start", "end",
+                "start_tod", "end_tod", "slots"]),
     ("Table 6.1 counts", ["radar_before", "radar_after", "adsb_before", "adsb_after"]),
     ("Table 6.2 coefficients", ["ncc0_lat", "ncc0_lon"]),
     ("Added measures", []),  # every other SUMMARY_KEYS entry, in SUMMARY_KEYS order

@@ -170,15 +170,16 @@ def _count(value: Any) -> str:
 
 def summary_table(run: CorrelationRun) -> str:
     """A fixed-width text table, one line per window, for printing after a run."""
-    header = ["callsign", "window", "start", "end", "slots", "radar b>a", "adsb b>a",
+    header = ["callsign", "window", "sensors", "start", "end", "slots", "radar b>a", "adsb b>a",
               "ncc0_lat", "ncc0_lon", "pearson0_lat", "pearson0_lon", "sep_rms_m"]
-    right = [False, True, True, True, True, True, True, True, True, True, True, True]
+    right = [False, True, False, True, True, True, True, True, True, True, True, True, True]
     rows = []
     for w in run.windows:
         s = w.summary
         rows.append([
             printable(s.get("callsign")) or "-",
             printable(s.get("window")) or "-",
+            f"{printable(s.get('radar_sensor')) or '-'} vs {printable(s.get('reference_sensor')) or '-'}",
             _clock(s.get("start"), s.get("start_tod")),
             _clock(s.get("end"), s.get("end_tod")),
             _count(s.get("slots")),

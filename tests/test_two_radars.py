@@ -1,0 +1,135 @@
+"""Two radars over the same traffic (fixtures.multiradar): each radar is correlated on its own, and its
+windows, counts and slot positions match its own truth; mixing the two radars would not."""
+
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from asterix.encode import encode_frame
+from fixtures import geodesy as geo
+from fixtures.multiradar import simulate_two_radars
+from fixtures.simulate import _segments
+from pipeline.correlate.correlation import correlate
+from pipeline.model.load import load
+from pipeline.model.measurements import build_measurements
+from pipeline.model.sensors import read_sensors
+
+R1, R2, ADSB = "048:25/201", "048:25/202", "021:0/1"
+LSB = 128  # ToD units per second
+SLOT_S = 10.0
+
+
+@pytest.fixture(scope="module")
+def two(tmp_path_factory):
+    """Real bytes: both radars interleaved in time in one CAT048 file, ADS-B in another."""
+    m = simulate_two_radars()
+    tmp = tmp_path_factory.mktemp("two_radars")
+    radar = pd.concat([m.sim.radar, m.radar2], ignore_index=True)
+    radar = radar.iloc[np.lexsort((radar["sic"], radar["time_of_day"] + 86400 * radar["day"]))]
+    (tmp / "radar.ast").write_bytes(encode_frame(48, radar, edition=None))
+    (tmp / "adsb.ast").write_bytes(encode_frame(21, m.sim.adsb, edition=None))
+    (tmp / "sensors.toml").write_text(m.sensors_toml())
+    loaded = load([tmp / "radar.ast", tmp / "adsb.ast"], date="2019-03-01")
+    meas = build_measurements(loaded.frames[48], loaded.frames[21], read_sensors(tmp / "sensors.toml"),
+                              date=loaded.date)
+    return m, meas
+
+
+def _spans(run, radar_sensor, reference=ADSB):
+    return sorted((w.summary["callsign"], w.summary["start_tod"], w.summary["end_tod"]) for w in run.windows
+                  if w.summary["radar_sensor"] == radar_sensor and w.summary["reference_sensor"] == reference)
+
+
+def test_each_radar_gets_its_own_truth_windows(two):
+    m, meas = two
+    run = correlate(meas, all_aircraft=True)
+    assert {w.summary["radar_sensor"] for w in run.windows} == {R1, R2}
+    truth1 = sorted((w["callsign"], w["start_s"], w["end_s"]) for w in m.sim.truth["overlap_windows"])
+    truth2 = sorted((w["callsign"], w["start_s"], w["end_s"]) for w in m.windows2)
+    assert _spans(run, R1) == truth1
+    assert _spans(run, R2) == truth2
+    # counts: radar 2 has no duplicates, so every truth row of the window is a report before slotting
+    rows2 = {(w["callsign"], w["start_s"]): w["radar_rows"] for w in m.windows2}
+    for w in run.windows:
+        s = w.summary
+        if s["radar_sensor"] == R2:
+            assert s["radar_before"] == rows2[(s["callsign"], s["start_tod"])]
+            assert s["radar_duplicates"] == 0
+    # window numbers restart for each sensor pair of an aircraft
+    for cs in {w.summary["callsign"] for w in run.windows}:
+        for sensor in (R1, R2):
+            numbers = [w.summary["window"] for w in run.windows
+                       if w.summary["callsign"] == cs and w.summary["radar_sensor"] == sensor]
+            assert numbers == list(range(1, len(numbers) + 1))
+
+
+def test_mixing_the_radars_would_give_other_windows(two):
+    """The windows of the two radars' plots taken together differ from both radars' truth: a pipeline that
+    averaged the radars into one series would fail the test above."""
+    m, _ = two
+    tt = m.sim.truth_tracks
+    adsb = tt[tt["sensor"] == "adsb"]
+    radar1 = tt[tt["sensor"] == "radar"]
+    own = [sorted((w["callsign"], w["start_s"], w["end_s"]) for w in windows)
+           for windows in (m.sim.truth["overlap_windows"], m.windows2)]
+    mixed = []
+    for i, ac in enumerate(m.sim.aircraft):
+        tr = np.sort(np.concatenate([radar1.loc[radar1["aircraft"] == i, "t_s"],
+                                     m.truth2.loc[m.truth2["aircraft"] == i, "t_s"]]))
+        ta = np.sort(adsb.loc[adsb["aircraft"] == i, "t_s"].to_numpy())
+        mixed += [(ac.spec.callsign, max(a, c), min(b, d)) for a, b in _segments(tr) for c, d in _segments(ta)
+                  if max(a, c) <= min(b, d)]
+    assert sorted(mixed) != own[0] and sorted(mixed) != own[1]
+
+
+def test_slot_positions_come_from_one_radar_only(two):
+    """Each radar slot mean lies at the mean true position of THAT radar's plots in the slot, within its
+    own noise; the other radar's plots, taken at other instants of the slot, are not in it."""
+    m, meas = two
+    run = correlate(meas, all_aircraft=True)
+    truth = {R1: m.sim.truth_tracks[m.sim.truth_tracks["sensor"] == "radar"], R2: m.truth2}
+    sigma_m = {R1: (70.0, 0.08), R2: (m.second.sigma_range_m, m.second.sigma_azimuth_deg)}
+    checked = {R1: 0, R2: 0}
+    for res in run.windows:
+        s = res.summary
+        sensor = s["radar_sensor"]
+        if s["reference_sensor"] != ADSB:
+            continue
+        ac = next(i for i, a in enumerate(m.sim.aircraft) if a.spec.callsign == s["callsign"])
+        tt = truth[sensor]
+        tt = tt[(tt["aircraft"] == ac) & ~tt["duplicate"]]
+        t = np.round(tt["t_s"].to_numpy() * LSB).astype(np.int64)
+        start, end = round(s["start_tod"] * LSB), round(s["end_tod"] * LSB)
+        inside = (t >= start) & (t <= end)
+        k = (t[inside] - start) // int(SLOT_S * LSB)
+        lat, lon = tt["latitude"].to_numpy()[inside], tt["longitude"].to_numpy()[inside]
+        for slot in res.slots[~res.slots["radar_filled"]].itertuples():
+            sel = k == slot.slot
+            assert sel.sum() == slot.radar_count
+            e, n, _ = geo.ecef_to_enu(geo.geodetic_to_ecef(slot.radar_lat, slot.radar_lon, 0.0),
+                                      lat[sel].mean(), lon[sel].mean(), 0.0)
+            # plot noise: range sigma, and azimuth sigma at up to 250 NM; the slot mean of n plots
+            bound_m = 5.0 * np.hypot(sigma_m[sensor][0], np.radians(sigma_m[sensor][1]) * 250 * 1852.0)
+            assert np.hypot(e, n) < bound_m / np.sqrt(sel.sum()) + 50.0, (sensor, s["callsign"], slot.slot)
+            checked[sensor] += 1
+    assert checked[R1] > 500 and checked[R2] > 200
+
+
+def test_radar_radar_pairs_and_split_adsb(two):
+    _, meas = two
+    rr = correlate(meas, all_aircraft=True, pairs="radar-radar")
+    assert rr.windows
+    assert {(w.summary["radar_sensor"], w.summary["reference_sensor"]) for w in rr.windows} == {(R1, R2)}
+    both = correlate(meas, all_aircraft=True, pairs="all")
+    assert len(both.windows) == len(rr.windows) + len(correlate(meas, all_aircraft=True).windows)
+    # two ground stations: one source by default, apart with split_adsb
+    adsb = meas["sensor_kind"] == "adsb"
+    half = meas.assign(sensor_id=meas["sensor_id"].where(~adsb | (meas.index % 2 == 0), "021:0/2"))
+    merged = correlate(half, callsign="MAS72")
+    assert {w.summary["reference_sensor"] for w in merged.windows} == {"021:0/1+021:0/2"}
+    split = correlate(half, callsign="MAS72", split_adsb=True)
+    assert {w.summary["reference_sensor"] for w in split.windows} == {"021:0/1", "021:0/2"}
+    with pytest.raises(ValueError, match="pairs must be one of"):
+        correlate(meas, all_aircraft=True, pairs="adsb-adsb")
