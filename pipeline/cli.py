@@ -1,38 +1,23 @@
-"""The ``msdc`` command: decode, stats, correlate and quality, each a thin layer over library calls."""
+"""The ``msdc`` command: argparse over the jobs (pipeline.jobs); options are validated there, before any
+decoding, and every failure is one line on stderr with exit status 2 (usage) or 1 (data)."""
 
 from __future__ import annotations
 
 import argparse
 import datetime as dt
 import sys
-import time
-from importlib.metadata import PackageNotFoundError, version
-from pathlib import Path
 
 import pandas as pd
 
-import asterix
-from asterix.errors import AsterixError, DecodeError, UnreadableInput
-from asterix.reader import categories_in
-from pipeline.correlate.aircraft import NoSuchAircraft
-from pipeline.correlate.correlation import NoOverlap, correlate
-from pipeline.model.load import Loaded, load
-from pipeline.model.measurements import UnknownRadar, build_measurements
-from pipeline.model.sensors import read_sensors, sensor_toml_snippet
+from asterix.errors import AsterixError, DecodeError
+from pipeline import jobs
 from pipeline.progress import Progress
-from pipeline.quality.filters import apply_filters
-from pipeline.quality.quality_run import quality_figures, quality_run
-from pipeline.report.quality_figures import slotting_figure
-from pipeline.stats import format_stats, stats_tables
+from pipeline.stats import format_stats
 
-FORMATS = ["raw", "pcap", "pcapng", "final"]
+FORMATS = list(jobs.FORMATS)
 
 
-def software_version() -> str:
-    try:
-        return version("msdc")
-    except PackageNotFoundError:
-        return "unknown"
+software_version = jobs.software_version
 
 
 class CliError(Exception):
@@ -118,13 +103,19 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
-def _load(args, progress: Progress, categories=None) -> Loaded:
-    progress.stage("Processing data files")
-    try:
-        return load(args.inputs, editions=args.edition, date=args.date, format=args.format,
-                    categories=categories, progress=progress)
-    except UnreadableInput as exc:
-        raise CliError(str(exc), 2) from exc
+def _decoding(args) -> dict:
+    return {"inputs": tuple(args.inputs), "editions": tuple(args.edition), "date": args.date,
+            "format": args.format}
+
+
+def _aircraft(args) -> dict:
+    return {**_decoding(args), "sensors": args.sensors, "callsign": args.callsign, "address": args.address,
+            "all_aircraft": args.all, "output": args.output, "json": args.json, "gap_s": args.gap}
+
+
+def _warn(command: str, warnings: list[str]) -> None:
+    for w in warnings:
+        print(f"msdc {command}: warning: {w}", file=sys.stderr)
 
 
 def _report_skipped(loaded_errors: pd.DataFrame) -> None:
@@ -135,211 +126,84 @@ def _report_skipped(loaded_errors: pd.DataFrame) -> None:
 
 def cmd_decode(args) -> int:
     progress = Progress()
-    outputs: dict[int, Path] = {}
-    writers: dict[int, object] = {}
-    total_records = 0
-    skipped = 0
-    out = Path(args.output) if args.output else None
-    if out is not None and out.suffix.lower() not in (".csv", ".parquet"):
-        raise CliError(f"{out}: output must end in .csv or .parquet")
-    counts: dict[int, int] = {}
+    options = jobs.DecodeOptions(**_decoding(args), output=args.output, categories=tuple(args.category or ()),
+                                 strict=args.strict, chunk_mb=args.chunk_mb)
     try:
-        present: set[int] = set()
-        for path in args.inputs:
-            present |= set(categories_in(path, format=args.format)) & {21, 48}
-        several = len(present & set(args.category or present)) > 1
-        for path in args.inputs:
-            size = Path(path).stat().st_size if Path(path).exists() else 0
-            chunk = max(int(args.chunk_mb * 1e6), 1)
-            for rec in asterix.iter_read(path, chunk=chunk, editions=args.edition, date=args.date,
-                                         format=args.format, categories=args.category, strict=args.strict):
-                skipped += len(rec.errors)
-                for err in rec.errors.itertuples():
-                    print(f"msdc: {path}: offset {err.offset}: {err.reason}", file=sys.stderr)
-                for cat, frame in rec.frames.items():
-                    counts[cat] = counts.get(cat, 0) + len(frame)
-                    total_records += len(frame)
-                    if out is not None:
-                        frame = frame.assign(file=Path(path).name)
-                        _write_chunk(out, cat, frame, outputs, writers, several=several)
-                done = max((int(f["offset"].max()) for f in rec.frames.values() if len(f)), default=0)
-                progress.bar(done, size, Path(path).name)
-    except UnreadableInput as exc:
-        raise CliError(str(exc), 2) from exc
+        result = jobs.decode_job(options, on_chunk=lambda done, size, name: progress.bar(done, size, name))
     except DecodeError as exc:
         raise CliError(f"strict: {exc}") from exc
-    finally:
-        for w in writers.values():
-            if hasattr(w, "close"):
-                w.close()
-    if out is None:
-        for cat, n in sorted(counts.items()):
+    _warn("decode", result.warnings)
+    for note in result.notes:
+        print(f"msdc: {note}", file=sys.stderr)
+    for path, offset, reason in result.skipped:
+        print(f"msdc: {path}: offset {offset}: {reason}", file=sys.stderr)
+    if not result.outputs:
+        for cat, n in sorted(result.counts.items()):
             print(f"CAT{cat:03d}: {n} records")
     else:
-        for cat, p in sorted(outputs.items()):
-            print(f"CAT{cat:03d}: {counts.get(cat, 0)} records -> {p}")
-    if skipped:
-        print(f"msdc: {skipped} block(s) skipped", file=sys.stderr)
-    if total_records == 0:
+        for cat, p in sorted(result.outputs.items()):
+            print(f"CAT{cat:03d}: {result.counts.get(cat, 0)} records -> {p}")
+    if result.skipped:
+        print(f"msdc: {len(result.skipped)} block(s) skipped", file=sys.stderr)
+    if sum(result.counts.values()) == 0:
         print("msdc: nothing could be decoded", file=sys.stderr)
         return 1
     return 0
-
-
-def _write_chunk(out: Path, cat: int, frame: pd.DataFrame, outputs: dict, writers: dict,
-                 several: bool) -> None:
-    """Append one chunk of a category to its output (CSV or Parquet), opening it on first use."""
-    if cat not in outputs:
-        outputs[cat] = out.with_name(f"{out.stem}_cat{cat:03d}{out.suffix}") if several else out
-        if several:
-            print(f"msdc: several categories: writing {outputs[cat]}", file=sys.stderr)
-    path = outputs[cat]
-    frame = frame.assign(timestamp=frame["timestamp"].dt.strftime("%Y-%m-%dT%H:%M:%S.%fZ")) \
-        if path.suffix.lower() == ".csv" else frame
-    if path.suffix.lower() == ".csv":
-        frame.to_csv(path, mode="a" if cat in writers else "w", header=cat not in writers, index=False)
-        writers[cat] = True
-    else:
-        import pyarrow as pa
-        import pyarrow.parquet as pq
-
-        table = pa.Table.from_pandas(frame, preserve_index=False)
-        if cat not in writers:
-            writers[cat] = pq.ParquetWriter(path, table.schema)
-        writers[cat].write_table(table.cast(writers[cat].schema))
 
 
 def cmd_stats(args) -> int:
-    loaded = _load(args, Progress())
-    print(format_stats(stats_tables(loaded.frames, loaded.errors)), end="")
-    for rec in loaded.recordings:
+    result = jobs.stats_job(jobs.StatsOptions(**_decoding(args)), progress=Progress())
+    _warn("stats", result.warnings)
+    print(format_stats(result.tables), end="")
+    for rec in result.loaded.recordings:
         for cat, why in rec.edition_choice.items():
             print(f"{rec.path}: CAT{cat:03d} edition {why}")
-    if not any(len(f) for f in loaded.frames.values()):
+    if not any(len(f) for f in result.loaded.frames.values()):
         print("msdc: nothing could be decoded", file=sys.stderr)
         return 1
     return 0
 
 
-def _sensors(sensors_path: str) -> pd.DataFrame:
-    try:
-        return read_sensors(sensors_path)
-    except (OSError, ValueError) as exc:
-        raise CliError(f"{sensors_path}: {exc}", 2 if isinstance(exc, OSError) else 1) from exc
-
-
-def _measurements(loaded: Loaded, sensors: pd.DataFrame, sensors_path: str) -> pd.DataFrame:
-    """Radar and ADS-B measurements, with the user-facing errors for missing data and sensors."""
-    if 48 not in loaded.frames or loaded.frames[48].empty:
-        raise CliError("no radar (CAT048) records in the inputs")
-    if 21 not in loaded.frames or loaded.frames[21].empty:
-        raise CliError("no ADS-B (CAT021) records in the inputs")
-    try:
-        return build_measurements(loaded.frames[48], loaded.frames[21], sensors, date=loaded.date)
-    except UnknownRadar as exc:
-        lines = "\n\n".join(sensor_toml_snippet(sac, sic) for sac, sic in exc.missing)
-        raise CliError(f"radar SAC/SIC {', '.join(f'{a}/{b}' for a, b in exc.missing)} not in {sensors_path};"
-                       f" add its position:\n\n{lines}") from exc
-
-
-def _parameters(args, loaded: Loaded, started: float) -> dict:
-    return {"software": f"msdc {software_version()}", "command": " ".join(sys.argv[1:]) or "correlate",
-            "run_utc": dt.datetime.now(dt.UTC).strftime("%Y-%m-%dT%H:%M:%SZ"),
-            "run_time_s": round(time.monotonic() - started, 3), "editions": {
-                f"CAT{c:03d}": e for c, e in sorted(loaded.editions.items())},
-            "sensors": str(args.sensors), "date": loaded.date.isoformat() if loaded.date else None}
-
-
-def _prepare(args, progress: Progress):
-    """Load the inputs and the sensor file and build both sensors' measurements."""
-    loaded = _load(args, progress)
-    _report_skipped(loaded.errors)
-    progress.stage("Pre-processing data")
-    sensors = _sensors(args.sensors)
-    return loaded, sensors, _measurements(loaded, sensors, args.sensors)
-
-
 def cmd_correlate(args) -> int:
-    started = time.monotonic()
     progress = Progress()
-    loaded, sensors, meas_all = _prepare(args, progress)
-    meas, removed = apply_filters(meas_all, drop_jumps=args.drop_jumps, min_nic=args.min_nic,
-                                  min_nacp=args.min_nacp)
-    progress.stage("Slotting data")
-    progress.stage("Correlating data")
-    try:
-        run = correlate(meas, callsign=args.callsign, address=args.address, all_aircraft=args.all,
-                        slot_s=args.slot, gap_s=args.gap, pairs=args.pairs, split_adsb=args.split_adsb)
-    except (NoSuchAircraft, NoOverlap) as exc:
-        raise CliError(str(exc)) from exc
-    run.inputs = loaded.inputs
-    run.filters = {k: v for k, v in removed.items() if _filter_on(args, k)}
-    run.parameters = {**run.parameters, **_parameters(args, loaded, started),
-                      "filters": {"drop_jumps": args.drop_jumps, "min_nic": args.min_nic,
-                                  "min_nacp": args.min_nacp, "removed": run.filters}}
-    for name, n in run.filters.items():
+    options = jobs.CorrelateOptions(
+        **_aircraft(args), slot_s=args.slot, pairs=args.pairs, split_adsb=args.split_adsb,
+        quality=args.quality, drop_jumps=args.drop_jumps, min_nic=args.min_nic, min_nacp=args.min_nacp)
+    checked = jobs.validate(options)
+    _warn("correlate", checked.warnings)
+    seen = len(checked.warnings)
+    result = jobs.correlate_job(options, progress=progress, checked=checked,
+                                command=" ".join(sys.argv[1:]) or "correlate")
+    _warn("correlate", checked.warnings[seen:])
+    _report_skipped(result.loaded.errors)
+    for name, n in result.run.filters.items():
         print(f"filter {name}: {n} of the input's ADS-B reports", file=sys.stderr)
-    images = None
-    if args.quality:
-        progress.stage("Analysing data quality")
-        result = _quality(meas_all, sensors, args)
-        run.extra_sheets.update(result.sheets)
-        if args.output:
-            images = _correlation_images(run, meas, result, Path(args.output))
-    _write_outputs(run, args, progress, images)
+    from pipeline.report.summary import summary_table
+
+    print(summary_table(result.run))
+    written = jobs.write_correlation(result, progress)
+    if "json" in written:
+        print(f"JSON summary: {written['json']}", file=sys.stderr)
+    if "report" in written:
+        print(f"Report: {written['report']}\nTrack figure: {written['figure']}", file=sys.stderr)
     return 0
 
 
-def _filter_on(args, key: str) -> bool:
-    """Whether a filter's count belongs in the report (only the filters that were asked for)."""
-    return {"jumps": args.drop_jumps, "nic_below_min": args.min_nic is not None,
-            "nic_missing_kept": args.min_nic is not None, "nacp_below_min": args.min_nacp is not None,
-            "nacp_missing_kept": args.min_nacp is not None}.get(key, True)
-
-
-def _quality(meas, sensors, args):
-    try:
-        return quality_run(meas, sensors, callsign=args.callsign, address=args.address, gap_s=args.gap)
-    except NoSuchAircraft as exc:
-        raise CliError(str(exc)) from exc
-
-
-def _correlation_images(run, meas, result, out: Path, max_windows: int = 6) -> dict[str, Path]:
-    """Quality figures plus, for the first windows, lat/lon before and after slotting and NCC by lag."""
-    from pipeline.report.figures import lag_figure
-
-    images = dict(quality_figures(result, out.parent, out.stem))
-    is_radar = (meas["sensor_kind"] == "radar").to_numpy(bool)
-    radar, adsb = meas[is_radar], meas[~is_radar]
-    for i, w in enumerate(run.windows[:max_windows]):
-        label = f"{w.summary['callsign'] or w.summary['address']} window {w.summary['window']}"
-        images[f"{label}: latitude and longitude before and after slotting"] = slotting_figure(
-            w, radar, adsb, out.with_name(f"{out.stem}_slotting_{i + 1}.png"))
-        images[f"{label}: coefficient against lag"] = lag_figure(
-            w, out.with_name(f"{out.stem}_lags_{i + 1}.png"))
-    return images
-
-
 def cmd_quality(args) -> int:
-    started = time.monotonic()
-    progress = Progress()
-    loaded, sensors, meas = _prepare(args, progress)
-    progress.stage("Analysing data quality")
-    result = _quality(meas, sensors, args)
-    print(_quality_text(result))
-    params = {**_parameters(args, loaded, started), "callsign": args.callsign, "address": args.address,
-              "gap_s": args.gap}
-    if args.json:
-        _write_quality_json(result, params, loaded.inputs, args.json)
-        print(f"JSON: {args.json}", file=sys.stderr)
-    if args.output:
-        from pipeline.report.excel import write_tables
-
-        progress.stage("Writing report")
-        out = Path(args.output)
-        images = quality_figures(result, out.parent, out.stem)
-        write_tables(result.sheets, out, images=images, parameters={**params, "inputs": loaded.inputs})
-        print(f"Report: {out}", file=sys.stderr)
+    options = jobs.QualityOptions(**_aircraft(args))
+    checked = jobs.validate(options)
+    _warn("quality", checked.warnings)
+    seen = len(checked.warnings)
+    result = jobs.quality_job(options, progress=Progress(), checked=checked,
+                              command=" ".join(sys.argv[1:]) or "quality")
+    _warn("quality", checked.warnings[seen:])
+    _report_skipped(result.loaded.errors)
+    print(_quality_text(result.quality))
+    written = jobs.write_quality(result)
+    if "json" in written:
+        print(f"JSON: {written['json']}", file=sys.stderr)
+    if "report" in written:
+        print(f"Report: {written['report']}", file=sys.stderr)
     return 0
 
 
@@ -358,35 +222,6 @@ def _quality_text(result) -> str:
     return text + (f"\n\nNote: {note}" if note else "")
 
 
-def _write_quality_json(result, params: dict, inputs: list, path: str) -> None:
-    import json
-
-    from pipeline.report.summary import json_value
-
-    doc = {"parameters": params, "inputs": inputs,
-           "tables": {name: [{k: json_value(v) for k, v in row.items()} for row in t.to_dict("records")]
-                      for name, t in result.sheets.items()}}
-    Path(path).write_text(json.dumps(doc, indent=1, default=str))
-
-
-def _write_outputs(run, args, progress: Progress, images: dict | None = None) -> None:
-    from pipeline.report.excel import write_report
-    from pipeline.report.figures import track_figure
-    from pipeline.report.summary import summary_table, write_json
-
-    print(summary_table(run))
-    if args.json:
-        write_json(run, args.json)
-        print(f"JSON summary: {args.json}", file=sys.stderr)
-    if args.output:
-        progress.stage("Writing report")
-        out = Path(args.output)
-        png = out.with_name(out.stem + "_tracks.png")
-        track_figure(run, png)
-        write_report(run, out, figure_png=png, images=images)
-        print(f"Report: {out}\nTrack figure: {png}", file=sys.stderr)
-
-
 COMMANDS = {"decode": cmd_decode, "stats": cmd_stats, "correlate": cmd_correlate, "quality": cmd_quality}
 
 
@@ -394,7 +229,7 @@ def main(argv: list[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
     try:
         return COMMANDS[args.command](args)
-    except CliError as exc:
+    except (CliError, jobs.OptionError, jobs.JobError) as exc:
         print(f"msdc {args.command}: {exc}", file=sys.stderr)
         return exc.status
     except AsterixError as exc:

@@ -12,17 +12,22 @@ def sort_by_time(meas: pd.DataFrame) -> pd.DataFrame:
     return meas.sort_values("time", kind="stable").reset_index(drop=True)
 
 
-def duplicate_mask(meas: pd.DataFrame) -> pd.Series:
+def duplicate_mask(meas: pd.DataFrame, *, split_adsb: bool = False) -> pd.Series:
     """True for rows equal to an earlier row in time, position, speed and heading (NaN equals NaN).
 
     The source is part of the key: each radar (``sensor_id``) on its own, ADS-B as one source whatever
-    the ground station, so a report relayed by two stations counts once.
+    the ground station (so a report relayed by two stations counts once) unless ``split_adsb``. A
+    ``duplicate`` column, when present, was computed once for the job (pipeline.jobs.mark_once) and is
+    returned as it is.
     """
+    if "duplicate" in meas:
+        return meas["duplicate"].astype(bool)
     keys = [k for k in DEDUP_KEYS if k in meas]
     if "sensor_kind" in meas:
         source = meas["sensor_kind"].astype("object")
         if "sensor_id" in meas:  # radars are told apart; ADS-B ground stations are one source
-            source = source.where(source == "adsb", meas["sensor_id"].astype("object"))
+            apart = (source != "adsb") | split_adsb
+            source = source.where(~apart, meas["sensor_id"].astype("object"))
         meas = meas[keys].assign(_source=source.to_numpy())
         keys = ["_source", *keys]
     return meas.duplicated(subset=keys, keep="first")

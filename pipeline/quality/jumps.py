@@ -152,11 +152,20 @@ class _Tracks:
         return ~accepted, fit_lat, (fit_lon + 180.0) % 360.0 - 180.0
 
 
+JUMP_FLAG_COLUMNS = ["jump", "jump_size_m", "fit_latitude", "fit_longitude"]
+
+
 def _detect(adsb_meas: pd.DataFrame, max_speed_kt: float, robust_window: int,
             robust_threshold_m: float) -> pd.DataFrame:
-    """Per row (original index): jump flag, distance from the robust fit (m) and the fitted lat/lon."""
+    """Per row (original index): jump flag, distance from the robust fit (m) and the fitted lat/lon; taken
+    as they are when the frame already carries them (computed once per job, pipeline.jobs.mark_once)."""
     if robust_window < 3:
         raise ValueError(f"robust_window must be at least 3, got {robust_window}")
+    if all(c in adsb_meas for c in JUMP_FLAG_COLUMNS) and (max_speed_kt, robust_window,
+                                                           robust_threshold_m) == _DEFAULTS:
+        found = adsb_meas[JUMP_FLAG_COLUMNS].copy()
+        found["jump"] = found["jump"].fillna(False).astype(bool)
+        return found
     n = len(adsb_meas)
     cols = {"jump": np.zeros(n, bool), "jump_size_m": np.full(n, np.nan), "fit_latitude": np.full(n, np.nan),
             "fit_longitude": np.full(n, np.nan)}
@@ -179,6 +188,14 @@ def _detect(adsb_meas: pd.DataFrame, max_speed_kt: float, robust_window: int,
     cols["jump"][pos], cols["fit_latitude"][pos], cols["fit_longitude"][pos] = jump, fit_lat, fit_lon
     cols["jump_size_m"][pos] = distance_m(lat, lon, fit_lat, fit_lon)
     return pd.DataFrame(cols, index=adsb_meas.index)
+
+
+_DEFAULTS = (1000.0, 7, 2000.0)
+
+
+def jump_flags(adsb_meas: pd.DataFrame) -> pd.DataFrame:
+    """JUMP_FLAG_COLUMNS per row (index kept) with the default parameters: what a job computes once."""
+    return _detect(adsb_meas.drop(columns=[c for c in JUMP_FLAG_COLUMNS if c in adsb_meas]), *_DEFAULTS)
 
 
 def detect_jumps(adsb_meas: pd.DataFrame, *, max_speed_kt: float = 1000.0, robust_window: int = 7,

@@ -1,0 +1,602 @@
+"""The jobs: decode, stats, correlate and quality as library calls that the CLI, notebooks and any other
+front end share.
+
+Each job takes validated options (``*Options.validate()`` checks every option, the sensor file and the
+output paths before anything is decoded, each failure an ``OptionError`` naming the option or file and
+what is allowed) and returns a result object; writing reports is a separate call. Duplicate flags and
+ADS-B jump flags are computed once per job (``mark_once``) and reused by every step after.
+"""
+
+from __future__ import annotations
+
+import datetime as dt
+import hashlib
+import math
+import os
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import pandas as pd
+
+from pipeline.correlate.correlation import PAIRS, correlate
+from pipeline.correlate.results import CorrelationRun
+from pipeline.model.dedup import DEDUP_KEYS, duplicate_mask
+from pipeline.model.identity import normalise_address, normalise_callsign
+from pipeline.model.load import Loaded, load
+from pipeline.model.measurements import build_measurements
+from pipeline.model.sensors import read_sensors
+from pipeline.progress import Progress
+from pipeline.quality.filters import apply_filters
+from pipeline.quality.jumps import JUMP_FLAG_COLUMNS, jump_flags
+from pipeline.quality.quality_run import QualityResult, quality_figures, quality_run
+
+FORMATS = ("raw", "pcap", "pcapng", "final")
+SLOT_RANGE_S = (0.1, 3600.0)  # below 0.1 s the slot count and the lag tables explode
+GAP_RANGE_S = (0.1, 86400.0)
+INDICATOR_RANGE = (0, 11)  # NIC and NACp values
+CHUNK_RANGE_MB = (0.1, 4096.0)
+
+
+class OptionError(ValueError):
+    """An option, the sensor file or an output path is not usable: one line naming it and what is allowed.
+    ``status`` is the exit status a command line should use (2: usage)."""
+
+    def __init__(self, message: str, status: int = 2):
+        super().__init__(message)
+        self.status = status
+
+
+class JobError(RuntimeError):
+    """The data do not allow the job (no radar, no such aircraft, no overlap...); exit status 1."""
+
+    def __init__(self, message: str, status: int = 1):
+        super().__init__(message)
+        self.status = status
+
+
+# ---------------------------------------------------------------------------------------------------------
+# Validation helpers, one per kind of value
+
+
+def _number(name: str, value: float | None, lo: float, hi: float, unit: str = "") -> None:
+    """A finite number within [lo, hi], else OptionError naming the option."""
+    if value is None:
+        return
+    if not isinstance(value, int | float) or not math.isfinite(value) or not lo <= value <= hi:
+        raise OptionError(f"{name} {value!r}: must be a finite number from {lo:g} to {hi:g}{unit}")
+
+
+def _integer(name: str, value: int | None, lo: int, hi: int) -> None:
+    if value is not None and not (isinstance(value, int) and lo <= value <= hi):
+        raise OptionError(f"{name} {value!r}: must be an integer from {lo} to {hi}")
+
+
+def _editions(editions: list[str] | dict | None) -> dict[int, str]:
+    """CAT=EDITION pins checked against the shipped tables ("auto" for CAT021)."""
+    from asterix.tables import available, resolve_edition
+
+    items = editions.items() if isinstance(editions, dict) else (
+        str(e).partition("=")[::2] for e in (editions or []))
+    out = {}
+    for cat, ed in items:
+        if not str(cat).strip().isdigit() or int(cat) not in available():
+            raise OptionError(f"--edition {cat}={ed}: category must be one of "
+                              f"{', '.join(str(c) for c in sorted(available()))}")
+        cat = int(cat)
+        if not (cat == 21 and ed == "auto"):
+            try:
+                resolve_edition(cat, ed)
+            except ValueError as exc:
+                raise OptionError(f"--edition {cat}={ed}: {exc}") from None
+        out[cat] = ed
+    return out
+
+
+def _sha256(path: Path, chunk: int = 1 << 20) -> str:
+    h = hashlib.sha256()
+    with open(path, "rb") as fh:
+        while block := fh.read(chunk):
+            h.update(block)
+    return h.hexdigest()
+
+
+def _inputs(paths: list[str | Path], warnings: list[str]) -> list[Path]:
+    """Readable input files; the same content given twice is skipped with a warning."""
+    if not paths:
+        raise OptionError("no input file given")
+    out, seen = [], {}
+    for p in map(Path, paths):
+        if not p.exists():
+            raise OptionError(f"{p}: input file does not exist")
+        if p.is_dir():
+            raise OptionError(f"{p}: input is a directory, not a recording")
+        if not os.access(p, os.R_OK):
+            raise OptionError(f"{p}: input file is not readable")
+        digest = _sha256(p)
+        if digest in seen:
+            warnings.append(f"{p}: same content as {seen[digest]} (SHA-256); skipped")
+            continue
+        seen[digest] = p
+        out.append(p)
+    return out
+
+
+def _output(name: str, path: str | Path | None, suffixes: tuple[str, ...]) -> Path | None:
+    """An output path with an allowed suffix, not a directory, in a writable directory."""
+    if path is None:
+        return None
+    p = Path(path)
+    if p.suffix.lower() not in suffixes:
+        raise OptionError(f"{name} {p}: must end in {' or '.join(suffixes)}")
+    if p.is_dir():
+        raise OptionError(f"{name} {p}: is a directory")
+    parent = p.parent if str(p.parent) else Path(".")
+    if not parent.is_dir():
+        raise OptionError(f"{name} {p}: directory {parent} does not exist")
+    if not os.access(parent, os.W_OK) or (p.exists() and not os.access(p, os.W_OK)):
+        raise OptionError(f"{name} {p}: not writable")
+    return p
+
+
+def _sensors(path: str | Path | None) -> pd.DataFrame:
+    if path is None:
+        raise OptionError("--sensors: the sensor file (TOML [[sensor]] tables) is required")
+    p = Path(path)
+    if not p.is_file():
+        raise OptionError(f"--sensors {p}: file does not exist")
+    try:
+        return read_sensors(p)
+    except OSError as exc:
+        raise OptionError(f"--sensors {p}: cannot be read ({exc.strerror})") from None
+    except ValueError as exc:
+        raise OptionError(str(exc).replace("\n", " "), status=1) from None
+
+
+# ---------------------------------------------------------------------------------------------------------
+# Options
+
+
+@dataclass(frozen=True)
+class DecodingOptions:
+    """How to read the inputs (shared by every job)."""
+
+    inputs: tuple[str, ...] = ()
+    editions: tuple[str, ...] = ()  # "CAT=EDITION"
+    date: dt.date | None = None
+    format: str | None = None
+
+
+def _check_decoding(o: DecodingOptions, warnings: list[str]) -> tuple[list[Path], dict[int, str]]:
+    if o.format is not None and o.format not in FORMATS:
+        raise OptionError(f"--format {o.format!r}: must be one of {', '.join(FORMATS)}")
+    if o.date is not None and not isinstance(o.date, dt.date):
+        raise OptionError(f"--date {o.date!r}: must be a date (YYYY-MM-DD)")
+    return _inputs(list(o.inputs), warnings), _editions(list(o.editions))
+
+
+@dataclass(frozen=True)
+class AircraftOptions(DecodingOptions):
+    """Inputs, the sensor file and the aircraft selection (call sign, address or all)."""
+
+    sensors: str | None = None
+    callsign: str | None = None
+    address: str | None = None
+    all_aircraft: bool = False
+    output: str | None = None
+    json: str | None = None
+    gap_s: float = 180.0
+
+
+def _check_aircraft(o: AircraftOptions) -> None:
+    chosen = [o.callsign is not None, o.address is not None, bool(o.all_aircraft)]
+    if sum(chosen) != 1:
+        raise OptionError("choose exactly one of --callsign, --address or --all")
+    if o.callsign is not None and not (normalise_callsign(o.callsign) or "").isalnum():
+        raise OptionError(f"--callsign {o.callsign!r}: must be letters and digits (spaces ignored)")
+    if o.address is not None:
+        text = (normalise_address(o.address) or "")
+        if len(text) != 6 or any(c not in "0123456789ABCDEF" for c in text):
+            raise OptionError(f"--address {o.address!r}: must be a 24-bit hex address (up to 6 hex digits)")
+    _number("--gap", o.gap_s, *GAP_RANGE_S, " s")
+
+
+@dataclass(frozen=True)
+class CorrelateOptions(AircraftOptions):
+    """Everything ``correlate_job`` needs; see the CLI for the meaning of each option."""
+
+    slot_s: float = 10.0
+    pairs: str = "radar-adsb"
+    split_adsb: bool = False
+    quality: bool = False
+    drop_jumps: bool = False
+    min_nic: int | None = None
+    min_nacp: int | None = None
+
+
+@dataclass(frozen=True)
+class QualityOptions(AircraftOptions):
+    """Everything ``quality_job`` needs."""
+
+
+@dataclass(frozen=True)
+class StatsOptions(DecodingOptions):
+    """Everything ``stats_job`` needs."""
+
+
+@dataclass(frozen=True)
+class DecodeOptions(DecodingOptions):
+    """Everything ``decode_job`` needs."""
+
+    output: str | None = None
+    categories: tuple[int, ...] = ()
+    strict: bool = False
+    chunk_mb: float = 64.0
+
+
+@dataclass
+class Checked:
+    """Options after validation: the inputs to read (duplicates dropped), editions, sensor table, outputs."""
+
+    inputs: list[Path]
+    editions: dict[int, str]
+    sensors: pd.DataFrame | None = None
+    output: Path | None = None
+    json: Path | None = None
+    warnings: list[str] = field(default_factory=list)
+
+
+def validate(options) -> Checked:
+    """Check every option, the sensor file and the output paths, before any decoding; OptionError if bad."""
+    warnings: list[str] = []
+    inputs, editions = _check_decoding(options, warnings)
+    checked = Checked(inputs, editions, warnings=warnings)
+    if isinstance(options, AircraftOptions):
+        _check_aircraft(options)
+        if isinstance(options, CorrelateOptions):
+            _number("--slot", options.slot_s, *SLOT_RANGE_S, " s")
+            if options.pairs not in PAIRS:
+                raise OptionError(f"--pairs {options.pairs!r}: must be one of {', '.join(PAIRS)}")
+            _integer("--min-nic", options.min_nic, *INDICATOR_RANGE)
+            _integer("--min-nacp", options.min_nacp, *INDICATOR_RANGE)
+        checked.output = _output("-o", options.output, (".xlsx",))
+        checked.json = _output("--json", options.json, (".json",))
+        checked.sensors = _sensors(options.sensors)
+    if isinstance(options, DecodeOptions):
+        checked.output = _output("-o", options.output, (".csv", ".parquet"))
+        _number("--chunk-mb", options.chunk_mb, *CHUNK_RANGE_MB, " MB")
+        bad = [c for c in options.categories if c not in (21, 48)]
+        if bad:
+            raise OptionError(f"--category {bad[0]}: must be 21 or 48")
+    return checked
+
+
+# ---------------------------------------------------------------------------------------------------------
+# Shared steps
+
+
+def _load(options: DecodingOptions, checked: Checked, progress: Progress | None) -> Loaded:
+    from asterix.errors import UnreadableInput
+
+    try:
+        loaded = load(checked.inputs, editions=checked.editions or None, date=options.date,
+                      format=options.format, progress=progress)
+    except UnreadableInput as exc:
+        raise JobError(str(exc), 2) from exc
+    if options.date is not None:
+        for info in loaded.inputs:
+            if info["format"] in ("pcap", "pcapng"):
+                checked.warnings.append(f"{info['path']}: --date ignored, the capture time dates a "
+                                        f"{info['format']} file")
+    return loaded
+
+
+def _measurements(loaded: Loaded, sensors: pd.DataFrame, sensors_path: str) -> pd.DataFrame:
+    """Radar and ADS-B measurements, with the user-facing errors for missing data and sensors."""
+    from pipeline.model.sensors import UnknownRadar, sensor_toml_snippet
+
+    if 48 not in loaded.frames or loaded.frames[48].empty:
+        raise JobError("no radar (CAT048) records in the inputs")
+    if 21 not in loaded.frames or loaded.frames[21].empty:
+        raise JobError("no ADS-B (CAT021) records in the inputs")
+    try:
+        return build_measurements(loaded.frames[48], loaded.frames[21], sensors, date=loaded.date)
+    except UnknownRadar as exc:
+        lines = "\n\n".join(sensor_toml_snippet(sac, sic) for sac, sic in exc.missing)
+        raise JobError(f"radar SAC/SIC {', '.join(f'{a}/{b}' for a, b in exc.missing)} not in "
+                       f"{sensors_path}; add its position:\n\n{lines}") from exc
+
+
+def mark_once(meas: pd.DataFrame, *, split_adsb: bool = False) -> pd.DataFrame:
+    """The measurements with the ``duplicate`` flag and the ADS-B jump columns (``jump``, ``jump_size_m``,
+    ``fit_latitude``, ``fit_longitude``) computed once for the whole job; deduplication, filters, quality
+    and accuracy reuse them instead of recomputing."""
+    meas = meas.drop(columns=[c for c in ("duplicate", *JUMP_FLAG_COLUMNS) if c in meas])
+    dup = duplicate_mask(meas.sort_values("time", kind="stable"), split_adsb=split_adsb).reindex(meas.index)
+    adsb = (meas["sensor_kind"] == "adsb").to_numpy(bool)
+    flags = jump_flags(meas[adsb & ~dup.to_numpy(bool)]).reindex(meas.index)  # judged without repeats
+    # a repeated report shares the verdict of the report it repeats
+    keys = meas[[k for k in DEDUP_KEYS if k in meas]].astype("object").where(meas.notna(), "<NA>")
+    for c in JUMP_FLAG_COLUMNS:
+        flags[c] = flags[c].groupby([meas["sensor_kind"].astype("object"), *(keys[k] for k in keys)],
+                                    dropna=False).transform("first")
+    flags["jump"] = flags["jump"].fillna(False).astype(bool) & adsb
+    return meas.assign(duplicate=dup.to_numpy(bool), **{c: flags[c].to_numpy() for c in JUMP_FLAG_COLUMNS})
+
+
+def software_version() -> str:
+    from importlib.metadata import PackageNotFoundError, version
+
+    try:
+        return version("msdc")
+    except PackageNotFoundError:
+        return "unknown"
+
+
+def _parameters(options: AircraftOptions, loaded: Loaded, started: float, command: str) -> dict:
+    return {"software": f"msdc {software_version()}", "command": command,
+            "run_utc": dt.datetime.now(dt.UTC).strftime("%Y-%m-%dT%H:%M:%SZ"),
+            "run_time_s": round(time.monotonic() - started, 3), "editions": {
+                f"CAT{c:03d}": e for c, e in sorted(loaded.editions.items())},
+            "sensors": str(options.sensors), "date": loaded.date.isoformat() if loaded.date else None}
+
+
+def _quality(meas: pd.DataFrame, sensors: pd.DataFrame, options: AircraftOptions) -> QualityResult:
+    from pipeline.correlate.aircraft import NoSuchAircraft
+
+    try:
+        return quality_run(meas, sensors, callsign=options.callsign, address=options.address,
+                           gap_s=options.gap_s)
+    except NoSuchAircraft as exc:
+        raise JobError(str(exc)) from exc
+
+
+# ---------------------------------------------------------------------------------------------------------
+# Jobs
+
+
+@dataclass
+class CorrelateResult:
+    """A correlation run, the measurements it used, the quality result (with ``quality``) and warnings."""
+
+    options: CorrelateOptions
+    checked: Checked
+    run: CorrelationRun
+    measurements: pd.DataFrame
+    loaded: Loaded
+    quality: QualityResult | None = None
+
+
+def correlate_job(options: CorrelateOptions, *, progress: Progress | None = None,
+                  checked: Checked | None = None, command: str = "correlate") -> CorrelateResult:
+    """Validate, decode, build measurements, filter, correlate (and assess quality); nothing is written."""
+    from pipeline.correlate.aircraft import NoSuchAircraft
+    from pipeline.correlate.correlation import NoOverlap
+
+    started = time.monotonic()
+    checked = checked or validate(options)
+    if progress:
+        progress.stage("Processing data files")
+    loaded = _load(options, checked, progress)
+    if progress:
+        progress.stage("Pre-processing data")
+    meas_all = mark_once(_measurements(loaded, checked.sensors, str(options.sensors)),
+                         split_adsb=options.split_adsb)
+    meas, removed = apply_filters(meas_all, drop_jumps=options.drop_jumps, min_nic=options.min_nic,
+                                  min_nacp=options.min_nacp)
+    if progress:  # the thesis tool's stage names
+        progress.stage("Slotting data")
+        progress.stage("Correlating data")
+    try:
+        run = correlate(meas, callsign=options.callsign, address=options.address,
+                        all_aircraft=options.all_aircraft, slot_s=options.slot_s, gap_s=options.gap_s,
+                        pairs=options.pairs, split_adsb=options.split_adsb)
+    except (NoSuchAircraft, NoOverlap) as exc:
+        raise JobError(str(exc)) from exc
+    asked = {"jumps": options.drop_jumps, "nic_below_min": options.min_nic is not None,
+             "nic_missing_kept": options.min_nic is not None,
+             "nacp_below_min": options.min_nacp is not None,
+             "nacp_missing_kept": options.min_nacp is not None}
+    run.inputs = loaded.inputs
+    run.filters = {k: v for k, v in removed.items() if asked.get(k, True)}
+    run.parameters = {**run.parameters, **_parameters(options, loaded, started, command),
+                      "filters": {"drop_jumps": options.drop_jumps, "min_nic": options.min_nic,
+                                  "min_nacp": options.min_nacp, "removed": run.filters}}
+    result = CorrelateResult(options, checked, run, meas, loaded)
+    if options.quality:
+        if progress:
+            progress.stage("Analysing data quality")
+        result.quality = _quality(meas_all, checked.sensors, options)
+        run.extra_sheets.update(result.quality.sheets)
+    return result
+
+
+def write_correlation(result: CorrelateResult, progress: Progress | None = None,
+                      max_windows: int = 6) -> dict[str, Path]:
+    """Write what the options ask for: JSON summary, workbook with its track figure (and, with quality,
+    the quality and per-window figures). Returns what was written, by kind."""
+    from pipeline.report.excel import write_report
+    from pipeline.report.figures import lag_figure, track_figure
+    from pipeline.report.quality_figures import slotting_figure
+    from pipeline.report.summary import write_json
+
+    written: dict[str, Path] = {}
+    run, checked = result.run, result.checked
+    if checked.json:
+        write_json(run, checked.json)
+        written["json"] = checked.json
+    if checked.output:
+        if progress:
+            progress.stage("Writing report")
+        out = checked.output
+        images = None
+        if result.quality is not None:
+            images = dict(quality_figures(result.quality, out.parent, out.stem))
+            is_radar = (result.measurements["sensor_kind"] == "radar").to_numpy(bool)
+            radar, adsb = result.measurements[is_radar], result.measurements[~is_radar]
+            for i, w in enumerate(run.windows[:max_windows]):
+                label = f"{w.summary['callsign'] or w.summary['address']} window {w.summary['window']}"
+                images[f"{label}: latitude and longitude before and after slotting"] = slotting_figure(
+                    w, radar, adsb, out.with_name(f"{out.stem}_slotting_{i + 1}.png"))
+                images[f"{label}: coefficient against lag"] = lag_figure(
+                    w, out.with_name(f"{out.stem}_lags_{i + 1}.png"))
+        png = out.with_name(out.stem + "_tracks.png")
+        track_figure(run, png)
+        write_report(run, out, figure_png=png, images=images)
+        written["report"], written["figure"] = out, png
+    return written
+
+
+@dataclass
+class QualityJobResult:
+    """Quality tables and radar accuracy of a run, with its parameters and inputs."""
+
+    options: QualityOptions
+    checked: Checked
+    quality: QualityResult
+    parameters: dict
+    loaded: Loaded
+
+
+def quality_job(options: QualityOptions, *, progress: Progress | None = None, checked: Checked | None = None,
+                command: str = "quality") -> QualityJobResult:
+    """Validate, decode, build measurements and compute the quality and accuracy tables."""
+    started = time.monotonic()
+    checked = checked or validate(options)
+    if progress:
+        progress.stage("Processing data files")
+    loaded = _load(options, checked, progress)
+    if progress:
+        progress.stage("Analysing data quality")
+    meas = mark_once(_measurements(loaded, checked.sensors, str(options.sensors)))
+    quality = _quality(meas, checked.sensors, options)
+    params = {**_parameters(options, loaded, started, command), "callsign": options.callsign,
+              "address": options.address, "gap_s": options.gap_s}
+    return QualityJobResult(options, checked, quality, params, loaded)
+
+
+def write_quality(result: QualityJobResult) -> dict[str, Path]:
+    """Write the JSON tables and/or the workbook with its figures, as the options ask."""
+    import json
+
+    from pipeline.report.excel import write_tables
+    from pipeline.report.summary import json_value
+
+    written: dict[str, Path] = {}
+    if result.checked.json:
+        doc = {"parameters": result.parameters, "inputs": result.loaded.inputs,
+               "tables": {name: [{k: json_value(v) for k, v in row.items()} for row in t.to_dict("records")]
+                          for name, t in result.quality.sheets.items()}}
+        result.checked.json.write_text(json.dumps(doc, indent=1, default=str))
+        written["json"] = result.checked.json
+    if result.checked.output:
+        out = result.checked.output
+        images = quality_figures(result.quality, out.parent, out.stem)
+        write_tables(result.quality.sheets, out, images=images,
+                     parameters={**result.parameters, "inputs": result.loaded.inputs})
+        written["report"] = out
+    return written
+
+
+@dataclass
+class StatsResult:
+    """What the recordings hold: the stats tables and the edition choices."""
+
+    tables: dict[str, pd.DataFrame]
+    loaded: Loaded
+    warnings: list[str]
+
+
+def stats_job(options: StatsOptions, *, progress: Progress | None = None) -> StatsResult:
+    """Validate and decode the inputs and tabulate records, sources and skipped blocks."""
+    from pipeline.stats import stats_tables
+
+    checked = validate(options)
+    if progress:
+        progress.stage("Processing data files")
+    loaded = _load(options, checked, progress)
+    return StatsResult(stats_tables(loaded.frames, loaded.errors), loaded, checked.warnings)
+
+
+@dataclass
+class DecodeResult:
+    """Records per category, the files written, and every skipped block (path, offset, reason)."""
+
+    counts: dict[int, int]
+    outputs: dict[int, Path]
+    skipped: list[tuple[str, int, str]]
+    warnings: list[str]
+    notes: list[str] = field(default_factory=list)
+
+
+def decode_job(options: DecodeOptions, *, on_chunk: Callable[[int, int, str], None] | None = None
+               ) -> DecodeResult:
+    """Stream every input in chunks and write CSV or Parquet (one file per category when several are
+    present); nothing is written when nothing decodes. ``on_chunk(done_bytes, size, name)`` reports
+    progress. Raises asterix DecodeError in strict mode, JobError for unreadable input."""
+    import asterix
+    from asterix.errors import UnreadableInput
+    from asterix.reader import categories_in
+
+    checked = validate(options)
+    out = checked.output
+    counts: dict[int, int] = {}
+    outputs: dict[int, Path] = {}
+    writers: dict[int, object] = {}
+    skipped: list[tuple[str, int, str]] = []
+    notes: list[str] = []
+    cats = list(options.categories) or None
+    try:
+        present: set[int] = set()
+        for path in checked.inputs:
+            present |= set(categories_in(path, format=options.format)) & {21, 48}
+        several = len(present & set(cats or present)) > 1
+        for path in checked.inputs:
+            size = path.stat().st_size
+            chunk = max(int(options.chunk_mb * 1e6), 1)
+            for rec in asterix.iter_read(path, chunk=chunk, editions=checked.editions or None,
+                                         date=options.date, format=options.format, categories=cats,
+                                         strict=options.strict):
+                skipped += [(str(path), int(e.offset), str(e.reason)) for e in rec.errors.itertuples()]
+                for cat, frame in rec.frames.items():
+                    counts[cat] = counts.get(cat, 0) + len(frame)
+                    if out is not None and len(frame):
+                        _write_chunk(out, cat, frame.assign(file=path.name), outputs, writers, several, notes)
+                done = max((int(f["offset"].max()) for f in rec.frames.values() if len(f)), default=0)
+                if on_chunk:
+                    on_chunk(done, size, path.name)
+    except UnreadableInput as exc:
+        raise JobError(str(exc), 2) from exc
+    finally:
+        for w in writers.values():
+            if hasattr(w, "close"):
+                w.close()
+    return DecodeResult(counts, outputs, skipped, checked.warnings, notes)
+
+
+def _write_chunk(out: Path, cat: int, frame: pd.DataFrame, outputs: dict, writers: dict, several: bool,
+                 notes: list[str]) -> None:
+    """Append one chunk of a category to its output (CSV or Parquet), opening it on first use."""
+    if cat not in outputs:
+        outputs[cat] = out.with_name(f"{out.stem}_cat{cat:03d}{out.suffix}") if several else out
+        if several:
+            notes.append(f"several categories: writing {outputs[cat]}")
+    path = outputs[cat]
+    if path.suffix.lower() == ".csv":
+        frame = frame.assign(timestamp=frame["timestamp"].dt.strftime("%Y-%m-%dT%H:%M:%S.%fZ"))
+        frame.to_csv(path, mode="a" if cat in writers else "w", header=cat not in writers, index=False)
+        writers[cat] = True
+    else:
+        import pyarrow as pa
+        import pyarrow.parquet as pq
+
+        table = pa.Table.from_pandas(frame, preserve_index=False)
+        if cat not in writers:
+            writers[cat] = pq.ParquetWriter(path, table.schema)
+        writers[cat].write_table(table.cast(writers[cat].schema))
+
+
+__all__ = ["CorrelateOptions", "DecodeOptions", "JobError", "OptionError", "QualityOptions", "StatsOptions",
+           "correlate_job", "decode_job", "mark_once", "quality_job", "stats_job", "validate",
+           "write_correlation", "write_quality"]

@@ -1,0 +1,113 @@
+"""The jobs layer: options checked before any decoding (one-line messages naming the option or file), the
+jobs' results, and work done once per job."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import pytest
+
+from pipeline import jobs
+from pipeline.jobs import CorrelateOptions, DecodeOptions, OptionError, QualityOptions, StatsOptions
+
+FIX = Path(__file__).resolve().parents[1] / "fixtures"
+RADAR, ADSB, SENSORS = str(FIX / "radar.ast"), str(FIX / "adsb.ast"), str(FIX / "sensors.toml")
+
+
+def corr(**kw) -> CorrelateOptions:
+    base = {"inputs": (RADAR, ADSB), "sensors": SENSORS, "callsign": "MAS72"}
+    return CorrelateOptions(**(base | kw))
+
+
+CASES = [
+    (corr(slot_s=0.0), "--slot 0.0"),
+    (corr(slot_s=math.nan), "--slot nan"),
+    (corr(slot_s=math.inf), "--slot inf"),
+    (corr(slot_s=1e-9), "--slot 1e-09"),
+    (corr(gap_s=-1.0), "--gap -1.0"),
+    (corr(gap_s=math.nan), "--gap nan"),
+    (corr(gap_s=0.0), "--gap 0.0"),
+    (corr(min_nacp=-3), "--min-nacp -3"),
+    (corr(min_nic=99), "--min-nic 99"),
+    (corr(pairs="adsb-adsb"), "--pairs 'adsb-adsb'"),
+    (corr(callsign=None, address="XYZ"), "--address 'XYZ'"),
+    (corr(callsign=None), "exactly one of --callsign, --address or --all"),
+    (corr(all_aircraft=True), "exactly one of"),
+    (corr(editions=("21=9.9",)), "--edition 21=9.9"),
+    (corr(editions=("62=1.0",)), "--edition 62=1.0"),
+    (corr(output="report.txt"), "-o report.txt: must end in .xlsx"),
+    (corr(output="/nonexistent/dir/r.xlsx"), "does not exist"),
+    (corr(json="x.csv"), "--json x.csv: must end in .json"),
+    (corr(sensors="/nonexistent/s.toml"), "--sensors /nonexistent/s.toml"),
+    (corr(inputs=("/nonexistent/x.ast",)), "/nonexistent/x.ast: input file does not exist"),
+    (corr(inputs=(str(FIX),)), "is a directory"),
+    (corr(format="zip"), "--format 'zip'"),
+    (QualityOptions(inputs=(RADAR,), sensors=SENSORS, all_aircraft=True, gap_s=-5.0), "--gap -5.0"),
+    (DecodeOptions(inputs=(RADAR,), chunk_mb=0.0), "--chunk-mb 0.0"),
+    (DecodeOptions(inputs=(RADAR,), output="out.txt"), "-o out.txt: must end in .csv or .parquet"),
+    (StatsOptions(inputs=(RADAR,), editions=("48=abc",)), "--edition 48=abc"),
+]
+
+
+@pytest.mark.parametrize(("options", "words"), CASES)
+def test_bad_options_are_refused_before_decoding(options, words, tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.setattr(jobs, "load", lambda *a, **k: pytest.fail("decoded before validating"))
+    with pytest.raises(OptionError) as info:
+        jobs.validate(options)
+    message = str(info.value)
+    assert words in message and "\n" not in message
+    assert info.value.status == 2
+
+
+def test_output_directory_and_unwritable(tmp_path):
+    (tmp_path / "d.xlsx").mkdir()
+    with pytest.raises(OptionError, match="is a directory"):
+        jobs.validate(corr(output=str(tmp_path / "d.xlsx")))
+    locked = tmp_path / "locked"
+    locked.mkdir()
+    locked.chmod(0o500)
+    try:
+        if not __import__("os").access(locked, __import__("os").W_OK):  # root can write anyway
+            with pytest.raises(OptionError, match="not writable"):
+                jobs.validate(corr(output=str(locked / "r.xlsx")))
+    finally:
+        locked.chmod(0o700)
+
+
+def test_bad_sensor_file_is_reported_once_before_decoding(tmp_path):
+    bad = tmp_path / "s.toml"
+    bad.write_text("[[sensor]]\nname = 'x'\n")
+    with pytest.raises(OptionError) as info:
+        jobs.validate(corr(sensors=str(bad)))
+    assert str(info.value).count(str(bad)) == 1 and "lacks" in str(info.value)
+
+
+def test_duplicate_inputs_are_skipped_with_a_warning(tmp_path):
+    copy = tmp_path / "copy.ast"
+    copy.write_bytes(Path(RADAR).read_bytes())
+    checked = jobs.validate(corr(inputs=(RADAR, ADSB, str(copy))))
+    assert [p.name for p in checked.inputs] == ["radar.ast", "adsb.ast"]
+    (warning,) = checked.warnings
+    assert "copy.ast" in warning and "SHA-256" in warning
+
+
+def test_correlate_job_returns_results_and_writes_only_when_asked(tmp_path):
+    result = jobs.correlate_job(corr(date=None, quality=True, drop_jumps=True))
+    assert [w.summary["window"] for w in result.run.windows] == [1, 2]
+    assert {w.summary["radar_sensor"] for w in result.run.windows} == {"048:25/201"}
+    assert result.quality is not None and "Radar biases" in result.run.extra_sheets
+    # jumps were detected once and reused: the filter removed exactly the flagged reports
+    assert result.run.filters["jumps"] > 0 and "jump" in result.measurements
+    assert jobs.write_correlation(result) == {}
+    out = tmp_path / "r.xlsx"
+    written = jobs.write_correlation(jobs.correlate_job(corr(output=str(out))))
+    assert written["report"] == out and out.exists() and written["figure"].exists()
+
+
+def test_stats_and_quality_jobs():
+    stats = jobs.stats_job(StatsOptions(inputs=(RADAR, ADSB)))
+    assert set(stats.tables["categories"]["category"]) == {21, 48}
+    q = jobs.quality_job(QualityOptions(inputs=(RADAR, ADSB), sensors=SENSORS, callsign="MAS72"))
+    assert set(q.quality.sheets["Quality"]["callsign"]) >= {"MAS72"}
