@@ -27,6 +27,7 @@ from pipeline.model.identity import normalise_address, normalise_callsign
 from pipeline.model.load import Loaded, load
 from pipeline.model.measurements import build_measurements
 from pipeline.model.sensors import read_sensors
+from pipeline.model.time import absolute_time
 from pipeline.progress import Progress
 from pipeline.quality.filters import apply_filters
 from pipeline.quality.jumps import JUMP_FLAG_COLUMNS, jump_flags
@@ -37,6 +38,7 @@ SLOT_RANGE_S = (0.1, 3600.0)  # below 0.1 s the slot count and the lag tables ex
 GAP_RANGE_S = (0.1, 86400.0)
 INDICATOR_RANGE = (0, 11)  # NIC and NACp values
 CHUNK_RANGE_MB = (0.1, 4096.0)
+SITE_ALTITUDE_RANGE_M = (-500.0, 6000.0)  # outside: almost certainly a wrong sensor file entry
 
 
 class OptionError(ValueError):
@@ -263,6 +265,11 @@ def validate(options) -> Checked:
         checked.output = _output("-o", options.output, (".xlsx",))
         checked.json = _output("--json", options.json, (".json",))
         checked.sensors = _sensors(options.sensors)
+        odd = checked.sensors[~checked.sensors["altitude_m"].between(*SITE_ALTITUDE_RANGE_M)]
+        lo, hi = SITE_ALTITUDE_RANGE_M
+        warnings += [f"--sensors {options.sensors}: {row.name!r} altitude_m = {row.altitude_m:g} is "
+                     f"implausible for a radar site (expected {lo:g} to {hi:g} m)"
+                     for row in odd.itertuples()]
     if isinstance(options, DecodeOptions):
         checked.output = _output("-o", options.output, (".csv", ".parquet"))
         _number("--chunk-mb", options.chunk_mb, *CHUNK_RANGE_MB, " MB")
@@ -284,6 +291,16 @@ def _load(options: DecodingOptions, checked: Checked, progress: Progress | None)
                       format=options.format, progress=progress)
     except UnreadableInput as exc:
         raise JobError(str(exc), 2) from exc
+    last: dict[int, tuple[pd.Timestamp, str]] = {}
+    for path, rec in zip(checked.inputs, loaded.recordings, strict=True):
+        for cat, frame in sorted(rec.frames.items()):
+            times = absolute_time(frame, loaded.date).dropna()
+            if times.empty:
+                continue
+            if cat in last and times.min() < last[cat][0]:
+                checked.warnings.append(f"{path}: CAT{cat:03d} starts at {times.min()}, before the end of "
+                                        f"{last[cat][1]} ({last[cat][0]}): inputs run backwards in time")
+            last[cat] = (times.max(), str(path))
     if options.date is not None:
         for info in loaded.inputs:
             if info["format"] in ("pcap", "pcapng"):

@@ -111,3 +111,22 @@ def test_stats_and_quality_jobs():
     assert set(stats.tables["categories"]["category"]) == {21, 48}
     q = jobs.quality_job(QualityOptions(inputs=(RADAR, ADSB), sensors=SENSORS, callsign="MAS72"))
     assert set(q.quality.sheets["Quality"]["callsign"]) >= {"MAS72"}
+
+
+def test_warnings_implausible_site_height_and_time_running_backwards(tmp_path):
+    sensors = tmp_path / "s.toml"
+    sensors.write_text(Path(SENSORS).read_text().replace("altitude_m = 40.0", "altitude_m = -99999.0"))
+    checked = jobs.validate(corr(sensors=str(sensors)))
+    assert any("altitude_m = -99999" in w for w in checked.warnings)
+    # the second half of the radar recording given first: CAT048 runs backwards between the inputs
+    import asterix
+    from asterix.encode import encode_frame
+
+    frame = asterix.read(RADAR).frames[48]
+    early, late = tmp_path / "early.ast", tmp_path / "late.ast"
+    early.write_bytes(encode_frame(48, frame.iloc[: len(frame) // 2]))
+    late.write_bytes(encode_frame(48, frame.iloc[len(frame) // 2:]))
+    result = jobs.correlate_job(corr(inputs=(str(late), str(early), ADSB)))
+    assert any("runs backwards" in w or "run backwards" in w for w in result.checked.warnings)
+    ordered = jobs.correlate_job(corr(inputs=(str(early), str(late), ADSB)))
+    assert not any("backwards" in w for w in ordered.checked.warnings)

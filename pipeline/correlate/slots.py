@@ -5,6 +5,8 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
+from pipeline.model.geodesy import wrap180
+
 SLOTTED_COLUMNS = ["slot", "time_of_day", "latitude", "longitude", "count", "filled"]
 
 
@@ -20,11 +22,6 @@ def slot_index(times_s, start_s: float, slot_s: float) -> np.ndarray:
     k = np.where(start_s + (k + 1) * slot_s <= t, k + 1, k)
     k = np.where(start_s + k * slot_s > t, k - 1, k)
     return k.astype(np.int64)
-
-
-def wrap_lon(lon_deg):
-    """Longitude wrapped into [-180, 180)."""
-    return (np.asarray(lon_deg, dtype=float) + 180.0) % 360.0 - 180.0
 
 
 def slot_window(meas: pd.DataFrame, start_s: float, end_s: float, slot_s: float = 10.0) -> pd.DataFrame:
@@ -44,12 +41,12 @@ def slot_window(meas: pd.DataFrame, start_s: float, end_s: float, slot_s: float 
     with np.errstate(invalid="ignore", divide="ignore"):
         lat_mean = np.bincount(k, lat, minlength=n)[:n] / count
         ref = lon[0] if lon.size else 0.0
-        rel = wrap_lon(lon - ref)
+        rel = wrap180(lon - ref)
         lon_mean = np.bincount(k, rel, minlength=n)[:n] / count + ref
     frame = pd.DataFrame({"slot": np.arange(n), "time_of_day": start_s + np.arange(n) * slot_s,
                           "latitude": lat_mean, "longitude": lon_mean})
     frame[["latitude", "longitude"]] = frame[["latitude", "longitude"]].ffill().bfill()
-    frame["longitude"] = wrap_lon(frame["longitude"].to_numpy())
+    frame["longitude"] = wrap180(frame["longitude"].to_numpy())
     frame["count"] = count.astype(np.int64)
     frame["filled"] = count == 0
     return frame[SLOTTED_COLUMNS]

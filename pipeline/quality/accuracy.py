@@ -19,11 +19,11 @@ import pandas as pd
 from pipeline.correlate.aircraft import all_aircraft
 from pipeline.model.dedup import deduplicate
 from pipeline.model.geodesy import (
-    M_PER_FT,
     M_PER_NM,
     distance_m,
     ecef_to_enu,
     enu_basis,
+    flight_level_to_m,
     geodetic_to_ecef,
     polar_to_geodetic,
     slant_range_azimuth,
@@ -71,7 +71,7 @@ def _adsb_track(adsb: pd.DataFrame) -> pd.DataFrame:
     trk = np.radians(a["heading_deg"].to_numpy(float))
     gs_ms = a["ground_speed_kt"].to_numpy(float) * KT_TO_MS
     frame = pd.DataFrame({"t": a["time_of_day"].to_numpy(float), "lat": a["latitude"].to_numpy(float),
-                          "lon": lon, "h": a["flight_level"].to_numpy(float) * 100.0 * M_PER_FT,
+                          "lon": lon, "h": flight_level_to_m(a["flight_level"].to_numpy(float)),
                           "ve": gs_ms * np.sin(trk), "vn": gs_ms * np.cos(trk),
                           "nacp": pd.to_numeric(a["nacp"], errors="coerce").to_numpy(float)
                           if "nacp" in a else np.nan})
@@ -172,7 +172,7 @@ def radar_errors(meas: pd.DataFrame, sensors: pd.DataFrame, *, max_gap_s: float 
     rho_nm, theta = m["rho_nm"].to_numpy(float), m["theta_deg"].to_numpy(float)
     polar = np.isfinite(rho_nm) & np.isfinite(theta)
     if (~polar).any():
-        fl_h = m["flight_level"].to_numpy(float) * 100.0 * M_PER_FT
+        fl_h = flight_level_to_m(m["flight_level"].to_numpy(float))
         rr, tt, _ = slant_range_azimuth(s_lat, s_lon, s_alt, m["latitude"].to_numpy(float),
                                         m["longitude"].to_numpy(float), np.where(np.isfinite(fl_h), fl_h, h))
         rho_nm, theta = np.where(polar, rho_nm, rr), np.where(polar, theta, tt)

@@ -25,7 +25,7 @@ import warnings
 import numpy as np
 import pandas as pd
 
-from pipeline.model.geodesy import distance_m
+from pipeline.model.geodesy import distance_m, wrap180
 from pipeline.model.time import midnight, seconds_since, with_clock
 
 KT_TO_MS = 1852.0 / 3600.0
@@ -46,7 +46,7 @@ _EARTH_RADIUS_M = 6371008.8
 
 def _flat_m(lat1, lon1, lat2, lon2) -> np.ndarray:
     """Distance (m) on a local flat earth: within 0.5 % up to 1000 km, enough for the consistency tests."""
-    dlon = (np.asarray(lon2) - lon1 + 180.0) % 360.0 - 180.0
+    dlon = wrap180(np.asarray(lon2) - lon1)
     mean_lat = np.radians(0.5 * (np.asarray(lat1) + lat2))
     return _EARTH_RADIUS_M * np.radians(np.hypot(np.asarray(lat2) - lat1, dlon * np.cos(mean_lat)))
 
@@ -149,7 +149,7 @@ class _Tracks:
             if not reject.any() and not reinstate.any():
                 break
             accepted = (accepted & ~reject) | reinstate
-        return ~accepted, fit_lat, (fit_lon + 180.0) % 360.0 - 180.0
+        return ~accepted, fit_lat, wrap180(fit_lon)
 
 
 JUMP_FLAG_COLUMNS = ["jump", "jump_size_m", "fit_latitude", "fit_longitude"]
