@@ -31,7 +31,7 @@ from pipeline.model.time import absolute_time
 from pipeline.progress import Progress
 from pipeline.quality.filters import apply_filters
 from pipeline.quality.jumps import JUMP_FLAG_COLUMNS, jump_flags
-from pipeline.quality.quality_run import QualityResult, quality_figures, quality_run
+from pipeline.quality.quality_run import QualityResult, quality_run
 
 FORMATS = ("raw", "pcap", "pcapng", "final")
 SLOT_RANGE_S = (0.1, 3600.0)  # below 0.1 s the slot count and the lag tables explode
@@ -427,6 +427,23 @@ def correlate_job(options: CorrelateOptions, *, progress: Progress | None = None
         result.quality = _quality(meas_all, checked.sensors, options)
         run.extra_sheets.update(result.quality.sheets)
     return result
+
+
+def quality_figures(result: QualityResult, out_dir: Path, stem: str) -> dict[str, Path]:
+    """Update-interval histogram and, per radar, range/azimuth error against range and time (PNG)."""
+    from pipeline.report.quality_figures import interval_histogram_figure, radar_error_figure
+
+    out_dir.mkdir(parents=True, exist_ok=True)
+    figs = {"Update intervals": interval_histogram_figure(result.sheets["Update intervals"],
+                                                          out_dir / f"{stem}_intervals.png")}
+    biases = result.sheets.get("Radar biases")
+    if len(result.errors):
+        for (sac, sic), g in result.errors.groupby(["sac", "sic"], sort=True):
+            row = biases[(biases["sac"] == sac) & (biases["sic"] == sic)] if biases is not None else None
+            figs[f"Radar errors {sac}/{sic}"] = radar_error_figure(
+                g, out_dir / f"{stem}_radar_errors_{sac}_{sic}.png", row)
+    result.figures.update(figs)
+    return figs
 
 
 def write_correlation(result: CorrelateResult, progress: Progress | None = None,

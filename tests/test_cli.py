@@ -185,3 +185,16 @@ def test_correlate_single_pcap_with_both_categories(tmp_path):
     expected = [w for w in TRUTH["overlap_windows"] if w["callsign"] == "MAS72"]
     assert [round(w["start_tod"], 2) for w in windows] == [round(w["start_s"], 2) for w in expected]
     assert windows[0]["start"].startswith("2019-03-01T08:00:0")
+
+
+def test_correlate_names_the_sensors_and_pairs(tmp_path, capsys):
+    out = tmp_path / "s.json"
+    assert main(["correlate", str(RADAR), str(ADSB), "--sensors", str(SENSORS), "--callsign", "MAS72",
+                 "--json", str(out)]) == 0
+    assert "048:25/201 vs 021:0/1" in capsys.readouterr().out
+    windows = json.loads(out.read_text())["windows"]
+    assert {(w["radar_sensor"], w["reference_sensor"]) for w in windows} == {("048:25/201", "021:0/1")}
+    # one radar: no radar pair to correlate, said plainly
+    assert main(["correlate", str(RADAR), str(ADSB), "--sensors", str(SENSORS), "--all",
+                 "--pairs", "radar-radar"]) == 1
+    assert "seen by two radars" in capsys.readouterr().err

@@ -274,9 +274,14 @@ def correlate(meas: pd.DataFrame, *, callsign: str | None = None, address: str |
                                  "no aircraft is seen by both radar and ADS-B")
     else:
         targets = [one_aircraft(meas, callsign, address, need_adsb=need_adsb)]
+    paired = False
     for ac in targets:
         found = [_correlate_pair(ac, run, pair, slot_s, gap_s, reference)
                  for pair in sensor_pairs(ac, pairs, split_adsb)]
+        paired |= bool(found)
         if not all_aircraft and found and all(f is not None for f in found):
             raise found[0]
+    if not paired:
+        what = "the aircraft is" if not all_aircraft else "no aircraft is"
+        raise NoSuchAircraft("a sensor pair", ["radar"], [], f"{what} seen by two radars (--pairs {pairs})")
     return run

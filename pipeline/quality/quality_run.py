@@ -1,4 +1,5 @@
-"""The quality job: per-sensor data quality and radar accuracy against ADS-B, as sheets and figures."""
+"""The quality step: per-sensor data quality and radar accuracy against ADS-B, as sheets (figures are drawn
+by pipeline.jobs)."""
 
 from __future__ import annotations
 
@@ -10,7 +11,6 @@ import pandas as pd
 from pipeline.correlate.aircraft import one_aircraft
 from pipeline.quality.accuracy import error_stats, estimate_biases, radar_errors
 from pipeline.quality.tables import quality_tables
-from pipeline.report.quality_figures import interval_histogram_figure, radar_error_figure
 
 
 @dataclass
@@ -43,17 +43,3 @@ def quality_run(meas: pd.DataFrame, sensors: pd.DataFrame, *, callsign: str | No
     sheets["Radar biases"] = biases
     return QualityResult(sheets, errors)
 
-
-def quality_figures(result: QualityResult, out_dir: Path, stem: str) -> dict[str, Path]:
-    """Update-interval histogram and, per radar, range/azimuth error against range and time (PNG)."""
-    out_dir.mkdir(parents=True, exist_ok=True)
-    figs = {"Update intervals": interval_histogram_figure(result.sheets["Update intervals"],
-                                                          out_dir / f"{stem}_intervals.png")}
-    biases = result.sheets.get("Radar biases")
-    if len(result.errors):
-        for (sac, sic), g in result.errors.groupby(["sac", "sic"], sort=True):
-            row = biases[(biases["sac"] == sac) & (biases["sic"] == sic)] if biases is not None else None
-            figs[f"Radar errors {sac}/{sic}"] = radar_error_figure(
-                g, out_dir / f"{stem}_radar_errors_{sac}_{sic}.png", row)
-    result.figures.update(figs)
-    return figs
