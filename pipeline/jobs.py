@@ -325,12 +325,15 @@ def _measurements(loaded: Loaded, sensors: pd.DataFrame, sensors_path: str) -> p
                        f"{sensors_path}; add its position:\n\n{lines}") from exc
 
 
-def mark_once(meas: pd.DataFrame, *, split_adsb: bool = False) -> pd.DataFrame:
+def mark_once(meas: pd.DataFrame, *, split_adsb: bool = False, jumps: bool = True) -> pd.DataFrame:
     """The measurements with the ``duplicate`` flag and the ADS-B jump columns (``jump``, ``jump_size_m``,
     ``fit_latitude``, ``fit_longitude``) computed once for the whole job; deduplication, filters, quality
-    and accuracy reuse them instead of recomputing."""
+    and accuracy reuse them instead of recomputing. ``jumps=False`` skips the jump search (a job that
+    neither filters jumps nor assesses quality does not need it)."""
     meas = meas.drop(columns=[c for c in ("duplicate", *JUMP_FLAG_COLUMNS) if c in meas])
     dup = duplicate_mask(meas.sort_values("time", kind="stable"), split_adsb=split_adsb).reindex(meas.index)
+    if not jumps:
+        return meas.assign(duplicate=dup.to_numpy(bool))
     adsb = (meas["sensor_kind"] == "adsb").to_numpy(bool)
     flags = jump_flags(meas[adsb & ~dup.to_numpy(bool)]).reindex(meas.index)  # judged without repeats
     # a repeated report shares the verdict of the report it repeats
@@ -399,7 +402,7 @@ def correlate_job(options: CorrelateOptions, *, progress: Progress | None = None
     if progress:
         progress.stage("Pre-processing data")
     meas_all = mark_once(_measurements(loaded, checked.sensors, str(options.sensors)),
-                         split_adsb=options.split_adsb)
+                         split_adsb=options.split_adsb, jumps=options.drop_jumps or options.quality)
     meas, removed = apply_filters(meas_all, drop_jumps=options.drop_jumps, min_nic=options.min_nic,
                                   min_nacp=options.min_nacp)
     if progress:  # the thesis tool's stage names
