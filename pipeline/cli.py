@@ -23,6 +23,7 @@ from pipeline.progress import Progress
 from pipeline.quality.filters import apply_filters
 from pipeline.quality.quality_run import quality_figures, quality_run
 from pipeline.report.quality_figures import slotting_figure
+from pipeline.report.textguard import guard_frame
 from pipeline.stats import format_stats, stats_tables
 
 FORMATS = ["raw", "pcap", "pcapng", "final"]
@@ -192,6 +193,7 @@ def _write_chunk(out: Path, cat: int, frame: pd.DataFrame, outputs: dict, writer
     frame = frame.assign(timestamp=frame["timestamp"].dt.strftime("%Y-%m-%dT%H:%M:%S.%fZ")) \
         if path.suffix.lower() == ".csv" else frame
     if path.suffix.lower() == ".csv":
+        frame = guard_frame(frame)
         frame.to_csv(path, mode="a" if cat in writers else "w", header=cat not in writers, index=False)
         writers[cat] = True
     else:
@@ -285,7 +287,7 @@ def cmd_correlate(args) -> int:
         run.extra_sheets.update(result.sheets)
         if args.output:
             images = _correlation_images(run, radar, adsb, result, Path(args.output))
-    _write_outputs(run, args, progress, images)
+    _write_outputs(run, args, progress, images, sensors)
     return 0
 
 
@@ -367,7 +369,7 @@ def _write_quality_json(result, params: dict, inputs: list, path: str) -> None:
     Path(path).write_text(json.dumps(doc, indent=1, default=str))
 
 
-def _write_outputs(run, args, progress: Progress, images: dict | None = None) -> None:
+def _write_outputs(run, args, progress: Progress, images: dict | None = None, sensors=None) -> None:
     from pipeline.report.excel import write_report
     from pipeline.report.figures import track_figure
     from pipeline.report.summary import summary_table, write_json
@@ -380,7 +382,7 @@ def _write_outputs(run, args, progress: Progress, images: dict | None = None) ->
         progress.stage("Writing report")
         out = Path(args.output)
         png = out.with_name(out.stem + "_tracks.png")
-        track_figure(run, png)
+        track_figure(run, png, sensors)
         write_report(run, out, figure_png=png, images=images)
         print(f"Report: {out}\nTrack figure: {png}", file=sys.stderr)
 
