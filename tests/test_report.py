@@ -239,29 +239,23 @@ def test_every_sheet_prints_landscape_fitted_with_titles(outputs: dict[str, Path
 
 
 def _chart_boxes_cm(ws) -> list[tuple[float, float, float, float]]:
-    """(left, top, right, bottom) of every chart in cm, from its anchor cell and size, with the sheet's
-    column widths (characters -> 7 px + 5 px padding at 96 dpi) and fixed row height (15 pt)."""
-    from openpyxl.utils import get_column_letter
-
-    px_cm = 2.54 / 96
-    row_cm = ws.sheet_format.defaultRowHeight / 72 * 2.54
-
-    def col_left(col0: int) -> float:
-        widths = (ws.column_dimensions[get_column_letter(c + 1)].width for c in range(col0))
-        return sum((w * 7 + 5) * px_cm for w in widths)
-
+    """(left, top, right, bottom) of every chart in cm, from its absolute anchor (EMU, 360000 per cm)."""
     boxes = []
     for chart in ws._charts:
-        marker = chart.anchor._from
-        left, top = col_left(marker.col), marker.row * row_cm
-        ext = chart.anchor.ext  # EMU, 360000 per cm
-        boxes.append((left, top, left + ext.width / 360000, top + ext.height / 360000))
+        pos, ext = chart.anchor.pos, chart.anchor.ext
+        boxes.append((pos.x / 360000, pos.y / 360000, (pos.x + ext.width) / 360000,
+                      (pos.y + ext.height) / 360000))
     return boxes
 
 
+def _page_rows_cm(ws) -> float:
+    return ws.sheet_format.defaultRowHeight / 72 * 2.54
+
+
 def test_charts_on_their_own_grid(outputs: dict[str, Path]) -> None:
-    """Charts anchored on whole grid slots, none overlapping another, none crossing a page break."""
-    from pipeline.report.excel import CHART_SLOT_ROWS
+    """Charts on a grid of 2 across, none overlapping another, each inside the printable width of an A4
+    landscape page and inside its grid slot; data sheets carry no chart."""
+    from pipeline.report.excel import CHART_HEADING_ROWS, CHART_SLOT_ROWS
 
     wb = load_workbook(outputs["xlsx"])
     assert len(wb["Lag charts"]._charts) == 2
@@ -269,21 +263,24 @@ def test_charts_on_their_own_grid(outputs: dict[str, Path]) -> None:
     assert not wb["Correlation"]._charts and not wb["Slots"]._charts  # data sheets stay data
     for name in ("Lag charts", "Slot charts"):
         ws = wb[name]
-        anchors = [(c.anchor._from.col, c.anchor._from.row) for c in ws._charts]
-        grid = [(0, 2), (7, 2), (0, 2 + CHART_SLOT_ROWS), (7, 2 + CHART_SLOT_ROWS)]
-        assert anchors[:4] == grid[:len(anchors)]
+        assert ws.sheet_format.customHeight and ws.sheet_format.defaultRowHeight == 15
+        row_cm = _page_rows_cm(ws)
         boxes = _chart_boxes_cm(ws)
         for i, a in enumerate(boxes):
             for b in boxes[i + 1:]:
                 assert a[2] <= b[0] or b[2] <= a[0] or a[3] <= b[1] or b[3] <= a[1], (name, a, b)
-            assert a[2] - a[0] <= 27.7 / 2  # two across a landscape A4 page (27.7 cm inside the margins)
-        slot_cm = CHART_SLOT_ROWS * ws.sheet_format.defaultRowHeight / 72 * 2.54
-        assert all(b[3] - b[1] < slot_cm for b in boxes)  # each chart ends inside its grid slot
+            assert a[0] >= 0 and a[2] <= 29.7 - 2 * 0.4 * 2.54  # inside the margins of landscape A4
+            slot = int((a[1] / row_cm - CHART_HEADING_ROWS) // CHART_SLOT_ROWS)
+            slot_top = (CHART_HEADING_ROWS + slot * CHART_SLOT_ROWS) * row_cm
+            assert slot_top <= a[1] and a[3] <= slot_top + CHART_SLOT_ROWS * row_cm  # inside its slot
+        lefts = sorted({round(b[0], 3) for b in boxes})
+        assert len(lefts) == 2  # two columns of charts
     assert "Wider lags are left out" in wb["Lag charts"]["A2"].value
 
 
 def test_page_breaks_fall_between_chart_rows(tmp_path: Path) -> None:
-    """Seven windows: 7 lag charts, 4 rows of 2, 2 rows per page: one break after the first page's charts."""
+    """Seven windows: 7 lag charts, 4 rows of 2, 2 rows per page: one break, after the first page's
+    charts, and no chart crosses it."""
     from pipeline.report.excel import CHART_HEADING_ROWS, CHART_ROWS_PER_PAGE, CHART_SLOT_ROWS
 
     windows = [WindowResult(summary=_summary(callsign=f"C{i}", window=1, slots=5),
@@ -291,9 +288,15 @@ def test_page_breaks_fall_between_chart_rows(tmp_path: Path) -> None:
     write_report(CorrelationRun(windows=windows), tmp_path / "seven.xlsx")
     ws = load_workbook(tmp_path / "seven.xlsx")["Lag charts"]
     assert len(ws._charts) == 7
-    assert [b.id for b in ws.row_breaks.brk] == [CHART_HEADING_ROWS + CHART_ROWS_PER_PAGE * CHART_SLOT_ROWS]
-    top_rows = sorted({c.anchor._from.row + 1 for c in ws._charts})  # 1-based
-    assert top_rows == [3, 3 + CHART_SLOT_ROWS, 3 + 2 * CHART_SLOT_ROWS, 3 + 3 * CHART_SLOT_ROWS]
+    breaks = [b.id for b in ws.row_breaks.brk]
+    assert breaks == [CHART_HEADING_ROWS + CHART_ROWS_PER_PAGE * CHART_SLOT_ROWS]  # after row 32
+    break_cm = breaks[0] * _page_rows_cm(ws)
+    boxes = _chart_boxes_cm(ws)
+    assert all(b[3] <= break_cm or b[1] >= break_cm for b in boxes)
+    assert sum(b[3] <= break_cm for b in boxes) == 4  # the first page holds 2 x 2 charts
+    # the page below the repeated heading rows is taller than its two chart rows
+    page_cm = (21.0 - 2 * 0.5 * 2.54) - CHART_HEADING_ROWS * _page_rows_cm(ws)
+    assert CHART_ROWS_PER_PAGE * CHART_SLOT_ROWS * _page_rows_cm(ws) < page_cm
 
 
 def test_lag_charts_cover_half_the_lags(outputs: dict[str, Path]) -> None:

@@ -33,9 +33,12 @@ from openpyxl.chart.marker import Marker
 from openpyxl.chart.shapes import GraphicalProperties
 from openpyxl.drawing.image import Image
 from openpyxl.drawing.line import LineProperties
+from openpyxl.drawing.spreadsheet_drawing import AbsoluteAnchor
+from openpyxl.drawing.xdr import XDRPoint2D, XDRPositiveSize2D
 from openpyxl.styles import Alignment, Border, Font, PatternFill, Side
 from openpyxl.utils import get_column_letter
 from openpyxl.utils.datetime import to_excel
+from openpyxl.utils.units import cm_to_EMU
 from openpyxl.worksheet._write_only import WriteOnlyWorksheet
 from openpyxl.worksheet.pagebreak import Break
 from openpyxl.xml import LXML
@@ -104,14 +107,16 @@ _HEADER_ALIGN = Alignment(vertical="center", wrap_text=True)
 RADAR_RGB, ADSB_RGB, ADSB_EDGE_RGB = "D62728", "E6B800", "3D3000"
 LAT_RGB, LON_RGB = "1F77B4", "2CA02C"
 
+CHART_HEADING_ROWS = 2  # rows 1-2 of a chart sheet: its heading, repeated on every printed page
 # Page grid (A4 landscape, margins below, rows of 15 pt): a chart sheet holds 2 x 2 charts per page
 PAPER_A4 = 9
 MARGIN_IN = 0.4
 ROW_HEIGHT_PT = 15.0
 CHART_COL_WIDTH = 9.5  # characters; 7 columns per chart slot
 CHART_SLOT_COLS, CHART_SLOT_ROWS, CHARTS_PER_ROW, CHART_ROWS_PER_PAGE = 7, 15, 2, 2
-CHART_W_CM, CHART_H_CM = 12.4, 7.4
-IMAGE_MAX_W_PX, IMAGE_MAX_H_PX = 980, 600  # one figure per printed page
+CHART_W_CM, CHART_H_CM = 12.6, 7.4
+CHART_SLOT_W_CM = 13.3  # two slots (26.6 cm) inside the 27.7 cm between A4 landscape margins
+IMAGE_MAX_W_PX, IMAGE_MAX_H_PX = 1000, 620  # one figure per printed page
 
 
 # ----------------------------------------------------------------------------------------------- values
@@ -391,6 +396,11 @@ def _write_table(ws: WriteOnlyWorksheet, columns: list[Column], *, freeze: str =
 
 # ------------------------------------------------------------------------------------------------ charts
 
+def pt_to_EMU(points: float) -> int:
+    """Points (1/72 inch) to EMU (914400 per inch)."""
+    return int(round(points * 12700))
+
+
 def _scatter(title: str, x_title: str, y_title: str) -> ScatterChart:
     chart = ScatterChart()
     chart.title = clean_text(title)
@@ -431,14 +441,16 @@ def _limits(values: Iterable[Any], pad: float = 0.05) -> tuple[float, float] | N
     return low - pad * span, high + pad * span
 
 
-def chart_anchor(index: int, first_row: int = 3) -> str:
-    """Top-left cell of chart ``index`` on a chart sheet: CHARTS_PER_ROW across, whole pages down."""
+def chart_anchor(index: int, chart: ScatterChart | None = None) -> AbsoluteAnchor:
+    """Where chart ``index`` sits on a chart sheet: CHARTS_PER_ROW across, CHART_SLOT_ROWS rows of
+    ROW_HEIGHT_PT each down, below the heading rows. Absolute (EMU from the sheet's corner), so the grid
+    does not depend on column widths, which differ between spreadsheet programs and their fonts."""
     grid_row, grid_col = divmod(index, CHARTS_PER_ROW)
-    row = first_row + grid_row * CHART_SLOT_ROWS
-    return f"{get_column_letter(1 + grid_col * CHART_SLOT_COLS)}{row}"
-
-
-CHART_HEADING_ROWS = 2  # rows 1-2: the sheet's heading, repeated on every printed page
+    x_cm = grid_col * CHART_SLOT_W_CM
+    y_pt = (CHART_HEADING_ROWS + grid_row * CHART_SLOT_ROWS) * ROW_HEIGHT_PT + 4.0
+    width, height = (chart.width, chart.height) if chart is not None else (CHART_W_CM, CHART_H_CM)
+    return AbsoluteAnchor(pos=XDRPoint2D(cm_to_EMU(x_cm), pt_to_EMU(y_pt)),
+                          ext=XDRPositiveSize2D(cm_to_EMU(width), cm_to_EMU(height)))
 
 
 def _chart_sheet(wb: Workbook, title: str, heading: tuple[str, str], n_charts: int) -> WriteOnlyWorksheet:
@@ -493,7 +505,7 @@ def _summary_block(ws: WriteOnlyWorksheet, run: CorrelationRun, title: str, keys
     next free row."""
     keys = [k for k in keys if k in SUMMARY_KEYS]
     ws.append([text_cell(ws, title, font=_BOLD)])
-    ws.row_dimensions[row + 1].height = 2 * ROW_HEIGHT_PT
+    ws.row_dimensions[row + 1].height = 3 * ROW_HEIGHT_PT  # "radar filled slots" wraps onto 3 lines
     ws.append(_header_cells(ws, [summary_header(k) for k in keys], PatternFill("solid", fgColor=fill)))
     rows = [[_summary_value(w, k) for k in keys] for w in run.windows]
     formats = [number_format_for(k, [r[j] for r in rows]) for j, k in enumerate(keys)]
@@ -546,8 +558,10 @@ def _write_summary(wb: Workbook, run: CorrelationRun) -> None:
     notes = [(w, n) for w, n in notes if n]
     ws.append([text_cell(ws, f"Notes ({len(notes)})", font=_BOLD)])
     for w, note in notes:
+        note_cell = _note(ws, note)
+        note_cell.alignment = Alignment(indent=1)
         ws.append([_cell(ws, excel_value(w.summary.get("callsign")), None),
-                   _cell(ws, excel_value(w.summary.get("window")), None), _note(ws, note)])
+                   _cell(ws, excel_value(w.summary.get("window")), None), note_cell])
     if not notes:
         ws.append([_note(ws, "none: in every window the RMS separation is within 3 x the median")])
     ws.append([])
@@ -665,7 +679,7 @@ def _write_lag_charts(wb: Workbook, run: CorrelationRun, data_sheet: str = "Corr
         chart.y_axis.scaling.min, chart.y_axis.scaling.max = y_span
         chart.y_axis.number_format = "0.0"
         chart.x_axis.number_format = "0"
-        ws.add_chart(chart, chart_anchor(n))
+        ws.add_chart(chart, chart_anchor(n, chart))
 
 
 def coefficient_axis(values: Iterable[float]) -> tuple[float, float]:
@@ -768,7 +782,7 @@ def _write_slot_charts(wb: Workbook, run: CorrelationRun, data_sheet: str = "Slo
             y_span = _limits(y_values)
             if y_span:
                 chart.y_axis.scaling.min, chart.y_axis.scaling.max = y_span
-            ws.add_chart(chart, chart_anchor(2 * n + k))
+            ws.add_chart(chart, chart_anchor(2 * n + k, chart))
 
 
 def _time_step_days(span_days: float) -> float:

@@ -216,6 +216,19 @@ def _table_row(s: Mapping[str, Any]) -> list[str]:
     return cells
 
 
+def frame_text(frame: pd.DataFrame) -> str:
+    """A DataFrame as terminal text, each number to the decimals of its unit (``formats.decimals``)."""
+    shown = frame.copy()
+    for name in shown.columns:
+        column = shown[name]
+        if pd.api.types.is_float_dtype(column.dtype):
+            places = decimals(str(name))
+            shown[name] = [("-" if is_missing(v) else f"{v:.{places}f}") for v in column.tolist()]
+        elif column.isna().any():
+            shown[name] = ["-" if is_missing(v) else v for v in column.tolist()]
+    return shown.to_string(index=False)
+
+
 def summary_table(run: CorrelationRun) -> str:
     """A fixed-width text table, one line per window, then the windows' notes, for printing after a run."""
     header = [h for h, _, _ in _TABLE]
