@@ -499,6 +499,20 @@ def summary_header(key: str) -> str:
     return key.replace("_", " ")
 
 
+_INDENT = Alignment(horizontal="left", indent=1)
+
+
+def _summary_time_cell(ws: WriteOnlyWorksheet, value: Any) -> Any:
+    """A Summary start/end: UTC date-time to the second, or ("tod", seconds) as a clock time."""
+    if isinstance(value, tuple):
+        return _cell(ws, value[1], CLOCK_FORMAT)
+    if isinstance(value, dt.datetime):
+        cell = WriteOnlyCell(ws, value)
+        cell.number_format = SUMMARY_DATETIME_FORMAT
+        return cell
+    return _cell(ws, value, None)
+
+
 def _summary_block(ws: WriteOnlyWorksheet, run: CorrelationRun, title: str, keys: list[str],
                    fill: str, row: int) -> int:
     """One Summary block (title, header, one row per window, blank) from sheet row ``row``; returns the
@@ -512,11 +526,11 @@ def _summary_block(ws: WriteOnlyWorksheet, run: CorrelationRun, title: str, keys
     for values in rows:
         cells = []
         for value, fmt in zip(values, formats, strict=True):
-            if isinstance(value, tuple):  # ("tod", seconds): clock time
-                cells.append(_cell(ws, value[1], CLOCK_FORMAT))
-            elif isinstance(value, dt.datetime):
-                cell = WriteOnlyCell(ws, value)
-                cell.number_format = SUMMARY_DATETIME_FORMAT
+            if isinstance(value, tuple | dt.datetime):
+                cells.append(_summary_time_cell(ws, value))
+            elif isinstance(value, str):  # indented: never glued to the number on its left
+                cell = _cell(ws, value, None)
+                cell.alignment = _INDENT
                 cells.append(cell)
             else:
                 cells.append(_cell(ws, value, fmt))
@@ -558,10 +572,12 @@ def _write_summary(wb: Workbook, run: CorrelationRun) -> None:
     notes = [(w, n) for w, n in notes if n]
     ws.append([text_cell(ws, f"Notes ({len(notes)})", font=_BOLD)])
     for w, note in notes:
+        start = _summary_value(w, "start")
         note_cell = _note(ws, note)
-        note_cell.alignment = Alignment(indent=1)
+        note_cell.alignment = _INDENT
         ws.append([_cell(ws, excel_value(w.summary.get("callsign")), None),
-                   _cell(ws, excel_value(w.summary.get("window")), None), note_cell])
+                   _cell(ws, excel_value(w.summary.get("window")), None),
+                   _summary_time_cell(ws, start), note_cell])
     if not notes:
         ws.append([_note(ws, "none: in every window the RMS separation is within 3 x the median")])
     ws.append([])
