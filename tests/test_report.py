@@ -417,3 +417,18 @@ def test_summary_clock_text():
     # dated: the UTC date-time wins over the time of day
     assert clock_text("2019-03-01T08:00:02.984Z", 28802.984) == "2019-03-01 08:00:02"
     assert clock_text(pd.Timestamp("2019-03-02 00:00:01", tz="UTC"), None, date=False) == "00:00:01"
+
+
+def test_wide_tables_span_pages_with_identity_repeated(tmp_path: Path) -> None:
+    """29 columns, 27 of them 22 characters wide (header + 2), are over 600 characters: far more than one
+    legible landscape page (170), so the sheet is fitted to the cap of 3 pages wide and repeats its leading
+    text columns (call sign, address) on each; a narrow sheet stays one page wide."""
+    from pipeline.report.excel import write_tables
+
+    wide = pd.DataFrame({"callsign": ["MAS72"], "address": ["750312"],
+                         **{f"interval_{i:02d}_median_s": [4.8] for i in range(27)}})
+    narrow = pd.DataFrame({"callsign": ["MAS72"], "interval_median_s": [4.8]})
+    write_tables({"Quality": wide, "Small": narrow}, tmp_path / "wide.xlsx")
+    wb = load_workbook(tmp_path / "wide.xlsx")
+    assert wb["Quality"].page_setup.fitToWidth == 3 and wb["Quality"].print_title_cols == "$A:$B"
+    assert wb["Small"].page_setup.fitToWidth == 1 and wb["Small"].print_title_cols is None

@@ -367,6 +367,24 @@ def page_setup(ws: WriteOnlyWorksheet, title_rows: str | None = "1:1", *, fit_he
     ws.oddFooter.center.text = "&A, page &P of &N"
 
 
+PAGE_WIDTH_CHARS = 170  # characters of column width a landscape page shows legibly
+
+
+def wide_pages(ws: WriteOnlyWorksheet, widths: list[float], text: list[bool]) -> int:
+    """For a table wider than one legible landscape page: fit it to 2 or 3 pages wide instead of 1 and
+    repeat its leading text columns (identity: call sign, address, sensor) on every page. Returns the
+    number of pages wide."""
+    pages = min(3, math.ceil(sum(widths) / PAGE_WIDTH_CHARS)) if widths else 1
+    if pages > 1:
+        ws.page_setup.fitToWidth = pages
+        lead = 0
+        while lead < min(3, len(text)) and text[lead]:
+            lead += 1
+        if lead:
+            ws.print_title_cols = f"A:{get_column_letter(lead)}"
+    return max(pages, 1)
+
+
 def fixed_rows(ws: WriteOnlyWorksheet) -> None:
     """Every row ROW_HEIGHT_PT high in Excel and LibreOffice alike (their defaults differ), so a grid of
     charts or images lands on the same pages in both."""
@@ -379,9 +397,11 @@ def _write_table(ws: WriteOnlyWorksheet, columns: list[Column], *, freeze: str =
     """Header row, the rows and an optional note under them; returns the number of rows kept."""
     n_rows = len(columns[0].values) if columns else 0
     sample = [c.values[:_WIDTH_SAMPLE_ROWS] for c in columns]
-    _set_widths(ws, [_width(c.header, v, c.number_format) for c, v in zip(columns, sample, strict=True)])
+    widths = [_width(c.header, v, c.number_format) for c, v in zip(columns, sample, strict=True)]
+    _set_widths(ws, widths)
     ws.freeze_panes = freeze
     page_setup(ws)
+    wide_pages(ws, widths, [c.text for c in columns])
     kept = min(n_rows, EXCEL_MAX_ROWS - 1)
     if kept < n_rows:
         note = f"{note} Rows cut at Excel's limit: {kept} of {n_rows} written.".strip()
