@@ -255,7 +255,7 @@ def _page_rows_cm(ws) -> float:
 def test_charts_on_their_own_grid(outputs: dict[str, Path]) -> None:
     """Charts on a grid of 2 across, none overlapping another, each inside the printable width of an A4
     landscape page and inside its grid slot; data sheets carry no chart."""
-    from pipeline.report.excel import CHART_HEADING_ROWS, CHART_SLOT_ROWS
+    from pipeline.report.charts import CHART_HEADING_ROWS, CHART_SLOT_ROWS
 
     wb = load_workbook(outputs["xlsx"])
     assert len(wb["Lag charts"]._charts) == 2
@@ -281,7 +281,7 @@ def test_charts_on_their_own_grid(outputs: dict[str, Path]) -> None:
 def test_page_breaks_fall_between_chart_rows(tmp_path: Path) -> None:
     """Seven windows: 7 lag charts, 4 rows of 2, 2 rows per page: one break, after the first page's
     charts, and no chart crosses it."""
-    from pipeline.report.excel import CHART_HEADING_ROWS, CHART_ROWS_PER_PAGE, CHART_SLOT_ROWS
+    from pipeline.report.charts import CHART_HEADING_ROWS, CHART_ROWS_PER_PAGE, CHART_SLOT_ROWS
 
     windows = [WindowResult(summary=_summary(callsign=f"C{i}", window=1, slots=5),
                             slots=_slots(5, T0, 1.0, 100.0), lags=_lags(range(-4, 5))) for i in range(7)]
