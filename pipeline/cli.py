@@ -216,8 +216,10 @@ def _quality_text(result) -> str:
                         "interval_p95_s", "speed_missing_or_zero_pct", "gaps", "jumps") if c in q]
     bias_cols = [c for c in ("radar", "n_reports", "range_bias_m", "range_gain_ppm", "azimuth_bias_deg",
                              "time_bias_s") if c in b]
-    text = "Quality:\n" + q[keep].to_string(index=False) + "\n\nRadar biases:\n"
-    text += b[bias_cols].to_string(index=False) if len(b) else "  no radar report matched to ADS-B"
+    from pipeline.report.summary import frame_text
+
+    text = "Quality:\n" + frame_text(q[keep]) + "\n\nRadar biases:\n"
+    text += frame_text(b[bias_cols]) if len(b) else "  no radar report matched to ADS-B"
     note = b.attrs.get("note")
     return text + (f"\n\nNote: {note}" if note else "")
 

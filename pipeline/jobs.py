@@ -32,6 +32,7 @@ from pipeline.progress import Progress
 from pipeline.quality.filters import apply_filters
 from pipeline.quality.jumps import JUMP_FLAG_COLUMNS, jump_flags
 from pipeline.quality.quality_run import QualityResult, quality_run
+from pipeline.report.textguard import guard_frame
 
 FORMATS = ("raw", "pcap", "pcapng", "final")
 SLOT_RANGE_S = (0.1, 3600.0)  # below 0.1 s the slot count and the lag tables explode
@@ -402,7 +403,7 @@ def correlate_job(options: CorrelateOptions, *, progress: Progress | None = None
     if progress:
         progress.stage("Pre-processing data")
     meas_all = mark_once(_measurements(loaded, checked.sensors, str(options.sensors)),
-                         split_adsb=options.split_adsb, jumps=options.drop_jumps or options.quality)
+                         split_adsb=options.split_adsb)  # jumps always: each window counts its own
     meas, removed = apply_filters(meas_all, drop_jumps=options.drop_jumps, min_nic=options.min_nic,
                                   min_nacp=options.min_nacp)
     if progress:  # the thesis tool's stage names
@@ -479,7 +480,7 @@ def write_correlation(result: CorrelateResult, progress: Progress | None = None,
                 images[f"{label}: coefficient against lag"] = lag_figure(
                     w, out.with_name(f"{out.stem}_lags_{i + 1}.png"))
         png = out.with_name(out.stem + "_tracks.png")
-        track_figure(run, png)
+        track_figure(run, png, checked.sensors)
         write_report(run, out, figure_png=png, images=images)
         written["report"], written["figure"] = out, png
     return written
@@ -621,7 +622,7 @@ def _write_chunk(out: Path, cat: int, frame: pd.DataFrame, outputs: dict, writer
             notes.append(f"several categories: writing {outputs[cat]}")
     path = outputs[cat]
     if path.suffix.lower() == ".csv":
-        frame = frame.assign(timestamp=frame["timestamp"].dt.strftime("%Y-%m-%dT%H:%M:%S.%fZ"))
+        frame = guard_frame(frame.assign(timestamp=frame["timestamp"].dt.strftime("%Y-%m-%dT%H:%M:%S.%fZ")))
         frame.to_csv(path, mode="a" if cat in writers else "w", header=cat not in writers, index=False)
         writers[cat] = True
     else:

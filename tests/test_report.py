@@ -97,24 +97,33 @@ def _header_index(row: tuple) -> dict[str, int]:
     return {c.value: c.column for c in row if c.value is not None}
 
 
+def _block(ws, title_start: str) -> tuple[int, dict[str, int]]:
+    """Row of a Summary block's header and its column index by key (headers are keys with spaces)."""
+    row = next(c.row for c in ws["A"] if isinstance(c.value, str) and c.value.startswith(title_start))
+    return row + 1, {str(c.value).replace(" ", "_"): c.column for c in ws[row + 1] if c.value is not None}
+
+
 def test_sheets_headers_and_freeze(outputs: dict[str, Path]) -> None:
     wb = load_workbook(outputs["xlsx"])
-    assert wb.sheetnames == ["Summary", "Map", "Correlation", "Slots", "Quality", "Parameters"]
+    assert wb.sheetnames == ["Summary", "Map", "Lag charts", "Slot charts", "Correlation", "Slots", "Quality",
+                             "Parameters"]
     summary = wb["Summary"]
-    groups = [c.value for c in summary[1] if c.value]
-    assert groups == ["Window", "Table 6.1 counts", "Table 6.2 coefficients", "Added measures"]
-    headers = [c.value for c in summary[2]]
-    assert sorted(headers) == sorted(SUMMARY_KEYS)
-    assert headers[10:16] == [
-        "radar_before", "radar_after", "adsb_before", "adsb_after", "ncc0_lat", "ncc0_lon"]
-    assert all(c.font.b for c in summary[2])
-    assert summary.freeze_panes == "C3"
+    titles = [c.value for c in summary["A"] if isinstance(c.value, str) and c.font.b and " " in c.value]
+    assert [t.split(" ")[0] for t in titles[1:4]] == ["Windows", "Coefficients", "Separation"]
+    keys = set()
+    for start in ("Windows", "Coefficients", "Separation"):
+        row, col = _block(summary, start)
+        assert list(col)[:4] == ["callsign", "window", "start", "end"]  # every block names its window
+        assert all(summary.cell(row, c).font.b for c in col.values())
+        keys |= set(col)
+    assert keys == set(SUMMARY_KEYS) - {"start_tod", "end_tod"}  # clock times live in start/end
+    assert summary.freeze_panes == "C2"
     assert [c.value for c in wb["Correlation"][1]][:9] == [
         "window", "callsign", "address", "lag", "lag_s", "ncc_lat", "ncc_lon", "pearson_lat", "pearson_lon"]
     assert wb["Correlation"].freeze_panes == "D2"
     slot_headers = _header_index(wb["Slots"][1])
-    expected = {"slot", "time_utc", "time_of_day", "radar_lat", "adsb_lon", "radar_filled", "sep_m"}
-    assert expected <= set(slot_headers)
+    assert {"slot", "time_utc", "radar_lat", "adsb_lon", "radar_filled", "sep_m"} <= set(slot_headers)
+    assert "time_of_day" not in slot_headers  # never seconds of day: time_utc carries the time
     assert [c.value for c in wb["Quality"][1]] == ["sensor", "score", "when"]
     assert wb["Parameters"].freeze_panes == "A2"
     assert 6 <= summary.column_dimensions["A"].width <= 66
@@ -123,29 +132,33 @@ def test_sheets_headers_and_freeze(outputs: dict[str, Path]) -> None:
 def test_values_numbers_datetimes_and_blanks(outputs: dict[str, Path]) -> None:
     wb = load_workbook(outputs["xlsx"])
     summary = wb["Summary"]
-    col = _header_index(summary[2])
-    assert summary.cell(3, col["ncc0_lat"]).value == 0.99998
-    assert summary.cell(3, col["ncc0_lat"]).data_type == "n"
-    assert summary.cell(3, col["radar_after"]).value == 5
-    assert summary.cell(3, col["start"]).value == dt.datetime(2019, 3, 1, 10, 0, 0, 500000)
-    assert summary.cell(3, col["start"]).number_format == "yyyy-mm-dd hh:mm:ss.000"
-    assert summary.cell(3, col["end"]).value == dt.datetime(2019, 3, 1, 10, 0, 20, 500000)  # ISO text in
-    assert summary.cell(4, col["start"]).value is None  # NaT
-    assert summary.cell(4, col["pearson0_lat"]).value is None  # NaN
-    assert summary.cell(4, col["sep_rms_m"]).value == 12.5
-    assert summary.cell(4, col["ncc_peak_lag_lat"]).value == 1
+    row, col = _block(summary, "Coefficients")
+    assert summary.cell(row + 1, col["ncc0_lat"]).value == 0.99998
+    assert summary.cell(row + 1, col["ncc0_lat"]).data_type == "n"
+    assert summary.cell(row + 2, col["pearson0_lat"]).value is None  # NaN
+    assert summary.cell(row + 2, col["ncc_peak_lag_lat"]).value == 1
+    row, col = _block(summary, "Windows")
+    assert summary.cell(row + 1, col["radar_after"]).value == 5
+    assert summary.cell(row + 1, col["start"]).value == dt.datetime(2019, 3, 1, 10, 0, 0, 500000)
+    assert summary.cell(row + 1, col["start"]).number_format == "yyyy-mm-dd hh:mm:ss"
+    # the end was given as ISO text
+    assert summary.cell(row + 1, col["end"]).value == dt.datetime(2019, 3, 1, 10, 0, 20, 500000)
+    # window 2 has no date: its start is the clock time of start_tod 36100 s = 10:01:40, never 36100
+    assert summary.cell(row + 2, col["start"]).value == dt.timedelta(seconds=36100)
+    assert summary.cell(row + 2, col["start"]).number_format == "[hh]:mm:ss.000"
+    row, col = _block(summary, "Separation")
+    assert summary.cell(row + 2, col["sep_rms_m"]).value == 12.5
 
     slots = wb["Slots"]
     col = _header_index(slots[1])
-    assert slots.cell(2, col["time_utc"]).value == dt.datetime(2019, 3, 1, 10, 0, 0, 500000)
-    assert slots.cell(3, col["time_utc"]).value == dt.datetime(2019, 3, 1, 10, 0, 4, 500000)
-    assert slots.cell(2, col["time_of_day"]).value == 36000.5
+    # window 2 has no timestamps, so the whole column is clock times (one format per column)
+    assert slots.cell(2, col["time_utc"]).value == dt.timedelta(seconds=36000.5)
+    assert slots.cell(3, col["time_utc"]).value == dt.timedelta(seconds=36004.5)
     assert slots.cell(4, col["radar_lat"]).value is None  # NaN slot
     assert slots.cell(4, col["radar_filled"]).value is True
     assert slots.cell(4, col["adsb_lat"]).value == pytest.approx(1.32)
     assert slots.cell(8, col["callsign"]).value == EVIL  # first slot of window 2
-    assert slots.cell(8, col["time_utc"]).value is None  # timestamps unknown
-    assert slots.cell(8, col["time_of_day"]).value == 36000.5
+    assert slots.cell(8, col["time_utc"]).value == dt.timedelta(seconds=36000.5)
 
     corr = wb["Correlation"]
     col = _header_index(corr[1])
@@ -167,19 +180,151 @@ def test_values_numbers_datetimes_and_blanks(outputs: dict[str, Path]) -> None:
     assert params[("filters", "ground")] == 3
 
 
+def test_dated_slots_are_utc_datetimes(run: CorrelationRun, tmp_path: Path) -> None:
+    dated = CorrelationRun(windows=run.windows[:1], parameters=run.parameters)
+    write_report(dated, tmp_path / "dated.xlsx")
+    slots = load_workbook(tmp_path / "dated.xlsx")["Slots"]
+    col = _header_index(slots[1])
+    assert slots.cell(2, col["time_utc"]).value == dt.datetime(2019, 3, 1, 10, 0, 0, 500000)
+    assert slots.cell(3, col["time_utc"]).value == dt.datetime(2019, 3, 1, 10, 0, 4, 500000)
+    assert slots.cell(2, col["time_utc"]).number_format == "yyyy-mm-dd hh:mm:ss.000"
+
+
+def test_number_formats_follow_units(outputs: dict[str, Path]) -> None:
+    """Degrees to 4 decimals, coefficients to 6, metres to 1 (issue 9: one table of unit -> format)."""
+    wb = load_workbook(outputs["xlsx"])
+    slots = wb["Slots"]
+    col = _header_index(slots[1])
+    assert slots.cell(2, col["radar_lat"]).number_format == "0.0000"
+    assert slots.cell(2, col["sep_m"]).number_format == "0.0"
+    corr = wb["Correlation"]
+    col = _header_index(corr[1])
+    assert corr.cell(2, col["pearson_lat"]).number_format == "0.000000"
+    assert corr.cell(2, col["ncc_lon"]).number_format == "0.000000"
+    assert corr.cell(2, col["lag_s"]).number_format == "0.000"
+    summary = wb["Summary"]
+    row, col = _block(summary, "Separation")
+    assert summary.cell(row + 1, col["sep_mean_m"]).number_format == "0.0"
+
+
+def test_quality_tables_formats(tmp_path: Path) -> None:
+    """An azimuth bias of 0.0036 deg shows as 0.0036 (it printed 0.00), ppm to 0.1, seconds of day as
+    times."""
+    from pipeline.report.excel import write_tables
+
+    biases = pd.DataFrame({"radar": ["R"], "azimuth_bias_deg": [0.0036], "range_gain_ppm": [-27.0021],
+                           "range_bias_m": [6.26], "time_bias_s": [-0.0192], "gap_start_tod_s": [29401.25]})
+    write_tables({"Radar biases": biases}, tmp_path / "q.xlsx")
+    ws = load_workbook(tmp_path / "q.xlsx")["Radar biases"]
+    col = _header_index(ws[1])
+    assert ws.cell(2, col["azimuth_bias_deg"]).number_format == "0.0000"
+    assert ws.cell(2, col["range_gain_ppm"]).number_format == "0.0"
+    assert ws.cell(2, col["range_bias_m"]).number_format == "0.0"
+    assert ws.cell(2, col["time_bias_s"]).number_format == "0.000"
+    assert ws.cell(2, col["gap_start_tod_s"]).value == dt.timedelta(seconds=29401.25)  # 08:10:01.250
+    assert ws.print_title_rows == "$1:$1" and ws.page_setup.orientation == "landscape"
+
+
+def test_every_sheet_prints_landscape_fitted_with_titles(outputs: dict[str, Path]) -> None:
+    wb = load_workbook(outputs["xlsx"])
+    titles = {"Summary": "$1:$1", "Lag charts": "$1:$2", "Slot charts": "$1:$2", "Correlation": "$1:$1",
+              "Slots": "$1:$1", "Quality": "$1:$1", "Parameters": "$1:$1", "Map": None}
+    for ws in wb.worksheets:
+        assert ws.page_setup.orientation == "landscape", ws.title
+        assert ws.page_setup.paperSize == 9, ws.title  # A4
+        assert ws.sheet_properties.pageSetUpPr.fitToPage, ws.title
+        assert ws.page_setup.fitToWidth == 1, ws.title
+        assert ws.page_setup.fitToHeight == (1 if ws.title == "Map" else 0), ws.title
+        assert ws.print_title_rows == titles[ws.title], ws.title
+
+
+def _chart_boxes_cm(ws) -> list[tuple[float, float, float, float]]:
+    """(left, top, right, bottom) of every chart in cm, from its absolute anchor (EMU, 360000 per cm)."""
+    boxes = []
+    for chart in ws._charts:
+        pos, ext = chart.anchor.pos, chart.anchor.ext
+        boxes.append((pos.x / 360000, pos.y / 360000, (pos.x + ext.width) / 360000,
+                      (pos.y + ext.height) / 360000))
+    return boxes
+
+
+def _page_rows_cm(ws) -> float:
+    return ws.sheet_format.defaultRowHeight / 72 * 2.54
+
+
+def test_charts_on_their_own_grid(outputs: dict[str, Path]) -> None:
+    """Charts on a grid of 2 across, none overlapping another, each inside the printable width of an A4
+    landscape page and inside its grid slot; data sheets carry no chart."""
+    from pipeline.report.charts import CHART_HEADING_ROWS, CHART_SLOT_ROWS
+
+    wb = load_workbook(outputs["xlsx"])
+    assert len(wb["Lag charts"]._charts) == 2
+    assert len(wb["Slot charts"]._charts) == 4  # latitude and longitude for each window
+    assert not wb["Correlation"]._charts and not wb["Slots"]._charts  # data sheets stay data
+    for name in ("Lag charts", "Slot charts"):
+        ws = wb[name]
+        assert ws.sheet_format.customHeight and ws.sheet_format.defaultRowHeight == 15
+        row_cm = _page_rows_cm(ws)
+        boxes = _chart_boxes_cm(ws)
+        for i, a in enumerate(boxes):
+            for b in boxes[i + 1:]:
+                assert a[2] <= b[0] or b[2] <= a[0] or a[3] <= b[1] or b[3] <= a[1], (name, a, b)
+            assert a[0] >= 0 and a[2] <= 29.7 - 2 * 0.4 * 2.54  # inside the margins of landscape A4
+            slot = int((a[1] / row_cm - CHART_HEADING_ROWS) // CHART_SLOT_ROWS)
+            slot_top = (CHART_HEADING_ROWS + slot * CHART_SLOT_ROWS) * row_cm
+            assert slot_top <= a[1] and a[3] <= slot_top + CHART_SLOT_ROWS * row_cm  # inside its slot
+        lefts = sorted({round(b[0], 3) for b in boxes})
+        assert len(lefts) == 2  # two columns of charts
+    assert "Wider lags are left out" in wb["Lag charts"]["A2"].value
+
+
+def test_page_breaks_fall_between_chart_rows(tmp_path: Path) -> None:
+    """Seven windows: 7 lag charts, 4 rows of 2, 2 rows per page: one break, after the first page's
+    charts, and no chart crosses it."""
+    from pipeline.report.charts import CHART_HEADING_ROWS, CHART_ROWS_PER_PAGE, CHART_SLOT_ROWS
+
+    windows = [WindowResult(summary=_summary(callsign=f"C{i}", window=1, slots=5),
+                            slots=_slots(5, T0, 1.0, 100.0), lags=_lags(range(-4, 5))) for i in range(7)]
+    write_report(CorrelationRun(windows=windows), tmp_path / "seven.xlsx")
+    ws = load_workbook(tmp_path / "seven.xlsx")["Lag charts"]
+    assert len(ws._charts) == 7
+    breaks = [b.id for b in ws.row_breaks.brk]
+    assert breaks == [CHART_HEADING_ROWS + CHART_ROWS_PER_PAGE * CHART_SLOT_ROWS]  # after row 32
+    break_cm = breaks[0] * _page_rows_cm(ws)
+    boxes = _chart_boxes_cm(ws)
+    assert all(b[3] <= break_cm or b[1] >= break_cm for b in boxes)
+    assert sum(b[3] <= break_cm for b in boxes) == 4  # the first page holds 2 x 2 charts
+    # the page below the repeated heading rows is taller than its two chart rows
+    page_cm = (21.0 - 2 * 0.5 * 2.54) - CHART_HEADING_ROWS * _page_rows_cm(ws)
+    assert CHART_ROWS_PER_PAGE * CHART_SLOT_ROWS * _page_rows_cm(ws) < page_cm
+
+
+def test_lag_charts_cover_half_the_lags(outputs: dict[str, Path]) -> None:
+    """Window 1's lag table holds lags -2..2 (N = 3): its chart spans the rows of |lag| <= 1 only and its
+    x axis is fixed to +-1."""
+    wb = load_workbook(outputs["xlsx"])
+    chart = wb["Lag charts"]._charts[0]
+    assert chart.x_axis.scaling.min == -1 and chart.x_axis.scaling.max == 1  # N = 3, N // 2 = 1
+    refs = {s.xVal.numRef.f for s in chart.series}
+    assert refs == {"'Correlation'!$D$3:$D$5"}  # lags -1, 0, 1 of window 1 (rows 2..6 hold -2..2)
+    assert all(s.marker is not None and s.marker.symbol is None for s in chart.series)  # symbol "none"
+
+
 def test_formula_looking_text_stays_text(outputs: dict[str, Path]) -> None:
     wb = load_workbook(outputs["xlsx"])
     summary = wb["Summary"]
-    assert summary["A4"].value == EVIL and summary["A4"].data_type == "s"
-    assert summary["A4"].quotePrefix  # Excel keeps it text even when the cell is edited
+    row, _ = _block(summary, "Windows")
+    evil = summary.cell(row + 2, 1)
+    assert evil.value == EVIL and evil.data_type == "s"
+    assert evil.quotePrefix  # Excel keeps it text even when the cell is edited
     rows = list(summary.iter_rows())
     skip_header = next(i for i, r in enumerate(rows) if r[0].value == "Skipped windows (1)")
     skipped = rows[skip_header + 2]
-    assert skipped[0].value == "-1+1" and skipped[0].data_type == "s"
+    assert skipped[0].value == "-1+1" and skipped[0].data_type == "s" and skipped[0].quotePrefix
     assert skipped[1].value == "=HYPERLINK(\"http://x\")" and skipped[1].data_type == "s"
     assert skipped[4].value == "fewer than 10 slots"
     corr = wb["Correlation"]
-    assert any(c.value == EVIL and c.data_type == "s" for c in corr["B"])
+    assert any(c.value == EVIL and c.data_type == "s" and c.quotePrefix for c in corr["B"])
     with zipfile.ZipFile(outputs["xlsx"]) as zf:
         sheets = [n for n in zf.namelist() if n.startswith("xl/worksheets/sheet")]
         assert sheets
@@ -188,12 +333,8 @@ def test_formula_looking_text_stays_text(outputs: dict[str, Path]) -> None:
             assert "<f>" not in xml and "<f " not in xml
 
 
-def test_charts_and_image(outputs: dict[str, Path]) -> None:
-    wb = load_workbook(outputs["xlsx"])
-    assert len(wb["Correlation"]._charts) == 2
-    assert len(wb["Slots"]._charts) == 4  # latitude and longitude for each window
-    assert len(wb["Map"]._images) == 1
-    assert "NCC solid" in str(wb["Correlation"].cell(1, 11).value)
+def test_map_image(outputs: dict[str, Path]) -> None:
+    assert len(load_workbook(outputs["xlsx"])["Map"]._images) == 1
 
 
 def test_without_figure_there_is_no_map(run: CorrelationRun, tmp_path: Path) -> None:
@@ -205,7 +346,7 @@ def test_json_round_trip(outputs: dict[str, Path]) -> None:
     with open(outputs["json"], encoding="utf-8") as fh:
         data = json.load(fh)
     assert set(data) == {"windows", "skipped", "parameters", "inputs", "filters"}
-    assert [list(w) for w in data["windows"]] == [SUMMARY_KEYS, SUMMARY_KEYS]
+    assert [list(w) for w in data["windows"]] == [[*SUMMARY_KEYS, "note"]] * 2
     first, second = data["windows"]
     assert first["ncc0_lat"] == 0.99998 and first["radar_after"] == 5
     assert first["start"] == "2019-03-01T10:00:00.500000Z" and first["end"] == "2019-03-01T10:00:20.500Z"
@@ -224,12 +365,13 @@ def test_run_to_json_is_strict_json(run: CorrelationRun) -> None:
 def test_summary_table(run: CorrelationRun) -> None:
     text = summary_table(run)
     lines = text.splitlines()
-    assert len(lines) == 2 + len(run.windows) + 1
-    assert lines[0].split()[:4] == ["callsign", "window", "sensors", "start"]
-    assert "SIA321" in lines[2] and "0.9999800000" in lines[2]
-    assert "50.8" in lines[2] and "10:00:00.5" in lines[2]
-    assert EVIL in lines[3] and "-" in lines[3].split()
-    assert "1 skipped" in lines[-1]
+    assert len(lines) == 2 + len(run.windows) + 2  # header, rule, windows, count, one skipped window
+    assert lines[0].split()[:6] == ["call", "sign", "win", "sensors", "start", "(UTC)"]
+    assert "SIA321" in lines[2] and "0.999980" in lines[2] and "0.9999800000" not in lines[2]  # 6 decimals
+    assert "50.8" in lines[2] and "2019-03-01 10:00:00" in lines[2] and " 10:00:20 " in lines[2]
+    assert EVIL in lines[3] and "10:01:40" in lines[3] and "36100" not in lines[3]  # clock time, undated
+    assert "1 skipped" in lines[4]
+    assert lines[5] == "  skipped -1+1 10:16:40-10:16:50: fewer than 10 slots"
 
 
 def _assert_png(path: Path, min_bytes: int = 10_000) -> None:
@@ -249,8 +391,9 @@ def test_empty_run(tmp_path: Path) -> None:
     png = track_figure(empty, tmp_path / "empty.png")
     write_report(empty, tmp_path / "empty.xlsx", figure_png=png)
     wb = load_workbook(tmp_path / "empty.xlsx")
-    assert wb.sheetnames == ["Summary", "Map", "Correlation", "Slots", "Parameters"]
-    assert wb["Summary"]["A4"].value == "Skipped windows (0)"
+    assert wb.sheetnames == ["Summary", "Map", "Lag charts", "Slot charts", "Correlation", "Slots",
+                             "Parameters"]
+    assert any(c.value == "Skipped windows (0)" for c in wb["Summary"]["A"])
     assert run_to_json(empty)["windows"] == []
     assert summary_table(empty).splitlines()[-1] == "0 window(s) correlated, 0 skipped"
 
@@ -263,11 +406,29 @@ def test_sheet_names_are_valid_and_unique() -> None:
     assert sheet_name("history", taken) == "History_"
 
 
-def test_summary_clock_rounds_whole_time():
-    from pipeline.report.summary import _clock
+def test_summary_clock_text():
+    from pipeline.report.summary import clock_text
 
-    # 59.96 s rounds to 00:01:00.0 (not 00:00:60.0); 86400 + 3661.04 s is 01:01:01.0 on the next day
-    assert _clock(None, 59.96) == "00:01:00.0"
-    assert _clock(None, 86400 + 3661.04) == "01:01:01.0+1d"
-    assert _clock(None, 28802.984375) == "08:00:03.0"
-    assert _clock(None, None) == "-"
+    # undated: HH:MM:SS of the time of day (seconds cut, not rounded), +Nd past the first day
+    assert clock_text(None, 59.96) == "00:00:59"
+    assert clock_text(None, 86400 + 3661.04) == "01:01:01+1d"
+    assert clock_text(None, 28802.984375) == "08:00:02"
+    assert clock_text(None, None) == "-"
+    # dated: the UTC date-time wins over the time of day
+    assert clock_text("2019-03-01T08:00:02.984Z", 28802.984) == "2019-03-01 08:00:02"
+    assert clock_text(pd.Timestamp("2019-03-02 00:00:01", tz="UTC"), None, date=False) == "00:00:01"
+
+
+def test_wide_tables_span_pages_with_identity_repeated(tmp_path: Path) -> None:
+    """29 columns, 27 of them 22 characters wide (header + 2), are over 600 characters: far more than one
+    legible landscape page (170), so the sheet is fitted to the cap of 3 pages wide and repeats its leading
+    text columns (call sign, address) on each; a narrow sheet stays one page wide."""
+    from pipeline.report.excel import write_tables
+
+    wide = pd.DataFrame({"callsign": ["MAS72"], "address": ["750312"],
+                         **{f"interval_{i:02d}_median_s": [4.8] for i in range(27)}})
+    narrow = pd.DataFrame({"callsign": ["MAS72"], "interval_median_s": [4.8]})
+    write_tables({"Quality": wide, "Small": narrow}, tmp_path / "wide.xlsx")
+    wb = load_workbook(tmp_path / "wide.xlsx")
+    assert wb["Quality"].page_setup.fitToWidth == 3 and wb["Quality"].print_title_cols == "$A:$B"
+    assert wb["Small"].page_setup.fitToWidth == 1 and wb["Small"].print_title_cols is None

@@ -27,6 +27,7 @@ from pipeline.correlate.windows import in_window, overlap_windows, short_window_
 from pipeline.model.dedup import duplicate_mask, sort_by_time
 from pipeline.model.geodesy import distance_m
 from pipeline.model.time import is_dated, iso_utc, midnight, with_clock
+from pipeline.quality.jumps import detect_jumps
 
 PAIRS = ("radar-adsb", "radar-radar", "all")
 
@@ -136,7 +137,7 @@ def _none_if_nan(v):
 
 def _window_result(ac: Aircraft, number: int, start_s: float, end_s: float, radar: pd.DataFrame,
                    adsb: pd.DataFrame, dups: tuple[int, int], slot_s: float,
-                   reference: pd.Timestamp, sensors: dict[str, str]) -> WindowResult:
+                   reference: pd.Timestamp, sensors: dict[str, str], adsb_jumps: int = 0) -> WindowResult:
     """Slot, correlate and summarise one window."""
     rs, as_ = slot_window(radar, start_s, end_s, slot_s), slot_window(adsb, start_s, end_s, slot_s)
     tod = rs["time_of_day"].to_numpy()
@@ -166,13 +167,16 @@ def _window_result(ac: Aircraft, number: int, start_s: float, end_s: float, rada
         "start": at_seconds(reference, start_s), "end": at_seconds(reference, end_s), "slots": len(slots),
         "radar_before": len(radar), "radar_after": len(slots),
         "adsb_before": len(adsb), "adsb_after": len(slots),
-        "radar_duplicates": dups[0], "adsb_duplicates": dups[1],
+        "radar_duplicates": dups[0], "adsb_duplicates": dups[1], "adsb_jumps": adsb_jumps,
+        "radar_filled_slots": int(slots["radar_filled"].sum()),
+        "adsb_filled_slots": int(slots["adsb_filled"].sum()),
         "ncc0_lat": float(ncc_lat[zero]), "ncc0_lon": float(ncc_lon[zero]),
         "ncc_peak_lag_lat": peak_lag(lags, ncc_lat), "ncc_peak_lag_lon": peak_lag(lags, ncc_lon),
         "pearson0_lat": float(p_lat[zero]), "pearson0_lon": float(p_lon[zero]),
         "pearson_peak_lag_lat": peak_lag(lags, p_lat, pearson_max_lag(len(slots))),
         "pearson_peak_lag_lon": peak_lag(lags, p_lon, pearson_max_lag(len(slots))),
         **separation_stats(slots["sep_m"]),
+        "sep_median_m": float(np.median(slots["sep_m"])) if len(slots) else math.nan,
     }
     summary = {k: _none_if_nan(summary[k]) for k in SUMMARY_KEYS}
     return WindowResult(summary=summary, slots=slots[SLOT_COLUMNS], lags=lag_frame)
@@ -219,6 +223,8 @@ def _correlate_pair(ac: Aircraft, run: CorrelationRun, pair: tuple[str, pd.DataF
     r_dup, a_dup = duplicate_mask(radar).to_numpy(), duplicate_mask(adsb).to_numpy()
     r_dup_t, a_dup_t = radar["time_of_day"].to_numpy()[r_dup], adsb["time_of_day"].to_numpy()[a_dup]
     radar, adsb = radar[~r_dup].reset_index(drop=True), adsb[~a_dup].reset_index(drop=True)
+    is_adsb = len(adsb) and bool((adsb["sensor_kind"] == "adsb").all())  # jumps are an ADS-B notion
+    jump_t = adsb["time_of_day"].to_numpy()[detect_jumps(adsb).to_numpy()] if is_adsb else np.array([])
     windows = overlap_windows(radar["time_of_day"], adsb["time_of_day"], gap_s)
     sensors = {"radar_sensor": radar_id, "reference_sensor": ref_id}
     if not windows:
@@ -240,8 +246,9 @@ def _correlate_pair(ac: Aircraft, run: CorrelationRun, pair: tuple[str, pd.DataF
             continue
         number += 1
         dups = (int(in_window(r_dup_t, start_s, end_s).sum()), int(in_window(a_dup_t, start_s, end_s).sum()))
+        jumps = int(in_window(jump_t, start_s, end_s).sum())
         run.windows.append(_window_result(ac, number, start_s, end_s, r_in, a_in, dups, slot_s, reference,
-                                          sensors))
+                                          sensors, jumps))
     return None
 
 

@@ -15,6 +15,7 @@ from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 
+from pipeline.correlate.correlation import peak_lag, pearson_max_lag
 from pipeline.correlate.results import CorrelationRun, WindowResult
 from pipeline.report.summary import printable, slot_seconds
 
@@ -110,11 +111,82 @@ def _callsign_title(windows: list[WindowResult]) -> str:
     return shown + (f" +{more} more" if more > 0 else "")
 
 
-def track_figure(run: CorrelationRun, path_png: str | os.PathLike[str]) -> Path:
-    """Map of every window's slotted tracks: lon on x, lat on y, radar red, ADS-B yellow; returns the path."""
+RING_STEP_NM = 50.0
+_NM_M = 1852.0
+
+
+def range_ring(lat: float, lon: float, radius_nm: float, points: int = 181) -> tuple[np.ndarray, np.ndarray]:
+    """Longitudes and latitudes of a circle of ``radius_nm`` around a site on the WGS-84 ellipsoid."""
+    from pyproj import Geod
+
+    azimuths = np.linspace(0.0, 360.0, points)
+    lons, lats, _ = Geod(ellps="WGS84").fwd(np.full(points, lon), np.full(points, lat), azimuths,
+                                             np.full(points, radius_nm * _NM_M))
+    return np.asarray(lons), np.asarray(lats)
+
+
+def _draw_sites(ax: Axes, sensors: pd.DataFrame | None, lats: np.ndarray, lons: np.ndarray) -> None:
+    """Radar sites (triangle and name) and range rings every RING_STEP_NM out to the farthest slot."""
+    if sensors is None or sensors.empty:
+        return
+    from pyproj import Geod
+
+    geod = Geod(ellps="WGS84")
+    for row in sensors.itertuples(index=False):
+        lat, lon = float(row.latitude), float(row.longitude)
+        ok = np.isfinite(lats) & np.isfinite(lons)
+        far_nm = 0.0
+        if ok.any():
+            _, _, dist_m = geod.inv(np.full(ok.sum(), lon), np.full(ok.sum(), lat), lons[ok], lats[ok])
+            far_nm = float(np.max(dist_m)) / _NM_M
+        for k in range(1, max(1, math.ceil(far_nm / RING_STEP_NM)) + 1):
+            ring_lon, ring_lat = range_ring(lat, lon, k * RING_STEP_NM)
+            ax.plot(ring_lon, ring_lat, color="0.55", lw=0.7, ls=":", zorder=1)
+            ax.annotate(f"{k * RING_STEP_NM:g} NM", (ring_lon[0], ring_lat[0]), fontsize=7, color="0.4",
+                        ha="center", va="bottom", zorder=2)
+        ax.plot(lon, lat, marker="^", ms=10, color="black", mfc="#4d4d4d", ls="none", zorder=7)
+        ax.annotate(_text(getattr(row, "name", "radar")), (lon, lat), xytext=(6, -12),
+                    textcoords="offset points", fontsize=8, fontweight="bold", zorder=7)
+
+
+def _clock_label(slots: pd.DataFrame, k: int) -> str:
+    """HH:MM UTC of slot ``k`` (from the timestamp, else the time of day)."""
+    x, is_time = _time_axis(slots)
+    if is_time:
+        return pd.Timestamp(x[k]).strftime("%H:%M")
+    tod = float(x[k])
+    return f"{int(tod // 3600) % 24:02d}:{int(tod % 3600 // 60):02d}" if math.isfinite(tod) else ""
+
+
+def _direction_and_times(ax: Axes, window: WindowResult, label: bool) -> None:
+    """Arrows along the ADS-B slotted track (direction of flight) and the start and end times."""
+    s = window.slots
+    lon, lat = _floats(s, "adsb_lon"), _floats(s, "adsb_lat")
+    ok = np.flatnonzero(np.isfinite(lon) & np.isfinite(lat))
+    if ok.size < 2:
+        return
+    for frac in (0.35, 0.7):
+        i = ok[int(frac * (ok.size - 1))]
+        j = ok[min(np.searchsorted(ok, i) + 2, ok.size - 1)]
+        if i != j:
+            ax.annotate("", xy=(lon[j], lat[j]), xytext=(lon[i], lat[i]), zorder=6,
+                        arrowprops={"arrowstyle": "-|>", "color": "black", "lw": 1.0, "mutation_scale": 14})
+    bbox = {"boxstyle": "round,pad=0.2", "fc": "white", "ec": "0.6", "alpha": 0.85}
+    start = (f"{_window_label(window)} " if label else "") + _clock_label(s, ok[0])
+    ax.annotate(start, (lon[ok[0]], lat[ok[0]]), xytext=(5, 5), textcoords="offset points", fontsize=7,
+                zorder=6, bbox=bbox)
+    ax.annotate(_clock_label(s, ok[-1]), (lon[ok[-1]], lat[ok[-1]]), xytext=(5, -11),
+                textcoords="offset points", fontsize=7, zorder=6, color="0.25")
+
+
+def track_figure(run: CorrelationRun, path_png: str | os.PathLike[str],
+                 sensors: pd.DataFrame | None = None) -> Path:
+    """Map of every window's slotted tracks (radar red over ADS-B yellow) with direction arrows and start
+    and end times (UTC); with ``sensors``, the radar sites and range rings. Returns the path."""
     fig = new_figure(10, 7.5)
     ax = fig.add_subplot()
     lats: list[np.ndarray] = []
+    lons: list[np.ndarray] = []
     any_filled = False
     for w in run.windows:
         s = w.slots
@@ -124,20 +196,27 @@ def track_figure(run: CorrelationRun, path_png: str | os.PathLike[str]) -> Path:
             any_filled |= bool((filled & np.isfinite(lat)).any())
             _draw_sensor(ax, lon, lat, filled, sensor)
             lats.append(lat)
-        if len(run.windows) > 1 and len(run.windows) <= _MAX_TRACK_LABELS:
-            lon, lat = _floats(s, "adsb_lon"), _floats(s, "adsb_lat")
-            ok = np.flatnonzero(np.isfinite(lon) & np.isfinite(lat))
-            if ok.size:
-                ax.annotate(_window_label(w), (lon[ok[0]], lat[ok[0]]), xytext=(5, 5),
-                            textcoords="offset points", fontsize=7.5, zorder=6,
-                            bbox={"boxstyle": "round,pad=0.2", "fc": "white", "ec": "0.6", "alpha": 0.85})
+            lons.append(lon)
+        if len(run.windows) <= _MAX_TRACK_LABELS:
+            _direction_and_times(ax, w, label=len(run.windows) > 1)
     all_lat = np.concatenate(lats) if lats else np.array([])
-    all_lat = all_lat[np.isfinite(all_lat)]
-    if all_lat.size:
-        coslat = math.cos(math.radians(float(np.mean(all_lat))))
+    all_lon = np.concatenate(lons) if lons else np.array([])
+    if sensors is not None and len(sensors) and run.windows:
+        _draw_sites(ax, sensors, all_lat, all_lon)  # every site in the file: each tells where coverage is
+    finite_lat = all_lat[np.isfinite(all_lat)]
+    if finite_lat.size:
+        coslat = math.cos(math.radians(float(np.mean(finite_lat))))
         if coslat > 0.01:
             ax.set_aspect(1.0 / coslat, adjustable="datalim")
-        ax.legend(handles=_legend_handles(any_filled), loc="best", framealpha=0.9, fontsize=9)
+        handles = _legend_handles(any_filled)
+        if sensors is not None and len(sensors):
+            handles.append(Line2D([], [], marker="^", ms=9, color="black", mfc="#4d4d4d", ls="none",
+                                  label="radar site"))
+            handles.append(Line2D([], [], color="0.55", lw=0.7, ls=":",
+                                  label=f"range ring every {RING_STEP_NM:g} NM"))
+        handles.append(Line2D([], [], marker=r"$\rightarrow$", ms=10, color="black", ls="none",
+                              label="direction of flight; times UTC"))
+        ax.legend(handles=handles, loc="best", framealpha=0.9, fontsize=8)
     else:
         ax.text(0.5, 0.5, "No correlated windows", ha="center", va="center", transform=ax.transAxes,
                 fontsize=14, color="0.4")
@@ -148,35 +227,60 @@ def track_figure(run: CorrelationRun, path_png: str | os.PathLike[str]) -> Path:
     ax.set_xlabel("Longitude (deg, WGS-84)")
     ax.set_ylabel("Latitude (deg, WGS-84)")
     fig.suptitle(f"Slotted tracks: {_callsign_title(run.windows) or 'none'}", fontsize=13, fontweight="bold")
-    ax.set_title(f"radar (red) vs ADS-B (yellow), {len(run.windows)} window(s), equal-distance aspect",
+    ax.set_title(f"radar (red) over ADS-B (yellow), {len(run.windows)} window(s), equal-distance aspect",
                  fontsize=9, color="0.35")
     return save_png(fig, path_png)
 
 
+def figure_peak(lags, r, measure: str) -> int | None:
+    """Index of the peak the lag figure marks, by the rule of the summary numbers: NCC over every lag,
+    Pearson over |lag| <= N/2 only (``pearson_max_lag``); None when there is no finite value."""
+    lags = np.asarray(lags)
+    n_slots = (lags.size + 1) // 2
+    lag = peak_lag(lags, r, pearson_max_lag(n_slots) if measure == "pearson" else None)
+    return None if lag is None else int(np.flatnonzero(lags == lag)[0])
+
+
 def lag_figure(window: WindowResult, path: str | os.PathLike[str]) -> Path:
-    """NCC and Pearson coefficient against lag, latitude and longitude panels; returns the path."""
+    """NCC and Pearson coefficient against lag for |lag| <= N/2 (latitude and longitude panels), the peak
+    of each marked by the rule of the summary numbers; returns the path."""
     fig = new_figure(10, 4.2)
     lags = window.lags.sort_values("lag") if "lag" in window.lags.columns else window.lags
     x = _floats(lags, "lag")
+    half = pearson_max_lag((x.size + 1) // 2)
+    inside = np.abs(x) <= half
     for i, axis in enumerate(("lat", "lon")):
         ax = fig.add_subplot(1, 2, i + 1)
         ax.axvline(0, color="0.6", lw=0.8, zorder=1)
-        for measure, color, ls, marker in (("ncc", "#1f77b4", "-", "o"), ("pearson", "#2ca02c", "--", "s")):
+        shown: list[np.ndarray] = []
+        for measure, color, ls in (("ncc", "#1f77b4", "-"), ("pearson", "#2ca02c", "--")):
             y = _floats(lags, f"{measure}_{axis}")
             label = "NCC" if measure == "ncc" else "Pearson"
-            ax.plot(x, y, color=color, ls=ls, marker=marker, ms=3.5, lw=1.3, label=label, zorder=3)
-            if np.isfinite(y).any():
-                k = int(np.nanargmax(y))
-                ax.plot(x[k], y[k], marker="*", ms=11, color=color, mec="black", mew=0.6, ls="none", zorder=4)
+            ax.plot(x[inside], y[inside], color=color, ls=ls, lw=1.4, label=label, zorder=3)
+            shown.append(y[inside])
+            k = figure_peak(x, y, measure)
+            if k is not None and inside[k]:
+                ax.plot(x[k], y[k], marker="*", ms=12, color=color, mec="black", mew=0.6, ls="none", zorder=4)
+                ax.annotate(f"{int(x[k]):+d}", (x[k], y[k]), xytext=(4, 4), textcoords="offset points",
+                            fontsize=8, color=color)
+        values = np.concatenate(shown) if shown else np.array([])
+        values = values[np.isfinite(values)]
+        if values.size:
+            low, high = float(values.min()), float(values.max())
+            pad = max(0.02, 0.08 * (high - low))
+            ax.set_ylim(max(-1.05, low - pad), min(1.05, high + pad))
+        if half > 0:
+            ax.set_xlim(-half, half)
         ax.set_title("Latitude" if axis == "lat" else "Longitude", fontsize=10)
-        ax.set_xlabel("lag (slots)")
+        ax.set_xlabel(f"lag (slots), |lag| <= N/2 = {half}")
         ax.set_ylabel("coefficient")
         ax.ticklabel_format(axis="y", useOffset=False)
         ax.grid(True, color="0.88", lw=0.6)
-        ax.legend(fontsize=8, loc="best")
+        ax.legend(fontsize=8, loc="lower center")
     step = slot_seconds(window)
     note = f", 1 slot = {step:g} s" if math.isfinite(step) else ""
-    fig.suptitle(f"Correlation against lag: {_window_label(window)}{note} (star = peak)", fontsize=11)
+    fig.suptitle(f"Correlation against lag: {_window_label(window)}{note} (star = peak; wider lags, with "
+                 "less than half the slots overlapping, left out)", fontsize=10)
     return save_png(fig, path)
 
 

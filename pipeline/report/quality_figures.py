@@ -55,28 +55,46 @@ def _empty(ax: Axes, text: str) -> None:
     ax.text(0.5, 0.5, text, ha="center", va="center", transform=ax.transAxes, color="0.4", fontsize=12)
 
 
+def histogram_range_s(histogram: pd.DataFrame, share: float = 0.999) -> float:
+    """Upper end (s) of the bins holding ``share`` of one sensor's intervals: the linear axis shows the
+    bulk of the distribution, rare long intervals are counted in a note instead."""
+    counts = histogram["intervals"].to_numpy(float)
+    total = counts.sum()
+    if total <= 0:
+        return float(histogram["bin_end_s"].max()) if len(histogram) else 1.0
+    k = int(np.searchsorted(np.cumsum(counts), share * total))
+    return float(histogram["bin_end_s"].to_numpy(float)[min(k, len(counts) - 1)])
+
+
 def interval_histogram_figure(histogram: pd.DataFrame, path: str | os.PathLike[str]) -> Path:
-    """Update-interval histogram, one log-scaled panel per sensor ("Update intervals" of quality_tables)."""
+    """Update-interval histogram, one linear panel per sensor ("Update intervals" of quality_tables): bars
+    over the range holding 99.9 % of the intervals, each non-empty bar labelled with its count."""
     sensors = list(histogram.groupby(["sensor", "sac", "sic"], dropna=False, sort=True))
-    fig = new_figure(9, 2.6 * max(len(sensors), 1))
+    fig = new_figure(10, 2.7 * max(len(sensors), 1))
     if not sensors:
         _empty(fig.add_subplot(), "No update intervals")
         return save_png(fig, path)
     axes = fig.subplots(len(sensors), 1, squeeze=False)[:, 0]
     for ax, ((sensor, sac, sic), h) in zip(axes, sensors, strict=True):
-        used = h[h["intervals"] > 0]
-        top = float(used["bin_end_s"].max()) if len(used) else float(h["bin_end_s"].max())
+        top = histogram_range_s(h)
         shown = h[h["bin_start_s"] < top]
+        hidden = int(h.loc[h["bin_start_s"] >= top, "intervals"].sum())
         color = RADAR_COLOR if sensor == "radar" else ADSB_COLOR
-        ax.bar(shown["bin_start_s"], shown["intervals"], width=shown["bin_end_s"] - shown["bin_start_s"],
-               align="edge", color=color, edgecolor="0.25", lw=0.5)
-        ax.set_title(f"{_SENSOR_LABEL.get(sensor, sensor)} SAC {sac} SIC {sic}: "
-                     f"{int(h['intervals'].sum())} intervals", fontsize=10)
-        ax.set_yscale("log")
-        ax.set_ylabel("intervals (log)")
+        width = shown["bin_end_s"] - shown["bin_start_s"]
+        bars = ax.bar(shown["bin_start_s"], shown["intervals"], width=width, align="edge", color=color,
+                      edgecolor="0.25", lw=0.5)
+        labels = [f"{int(v)}" if v > 0 else "" for v in shown["intervals"]]
+        ax.bar_label(bars, labels=labels, fontsize=7, padding=1)
+        ax.set_xlim(0.0, top)
+        ax.set_ylim(0.0, float(shown["intervals"].max() or 1) * 1.18)
+        total = int(h["intervals"].sum())
+        beyond = f"; {hidden} longer than {top:g} s not shown" if hidden else ""
+        ax.set_title(f"{_SENSOR_LABEL.get(sensor, sensor)} SAC {sac} SIC {sic}: {total} intervals{beyond}",
+                     fontsize=10)
+        ax.set_ylabel("intervals")
+        ax.set_xlabel("update interval (s)")
         _grid(ax)
-    axes[-1].set_xlabel("update interval (s)")
-    fig.suptitle("Update intervals after de-duplication", fontsize=12)
+    fig.suptitle("Update intervals after de-duplication (bins as in the Update intervals sheet)", fontsize=12)
     return save_png(fig, path)
 
 

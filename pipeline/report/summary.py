@@ -16,6 +16,7 @@ import numpy as np
 import pandas as pd
 
 from pipeline.correlate.results import SUMMARY_KEYS, CorrelationRun, WindowResult
+from pipeline.report.formats import decimals
 
 SKIPPED_KEYS = ["callsign", "address", "start_tod", "end_tod", "reason"]
 # Parameter names (top level or under "options") that may hold the slot length in seconds
@@ -75,8 +76,11 @@ def json_value(value: Any) -> Any:
 
 
 def window_summary(window: WindowResult) -> dict[str, Any]:
-    """The window's summary restricted to SUMMARY_KEYS, in order, as JSON values (absent keys -> None)."""
-    return {key: json_value(window.summary.get(key)) for key in SUMMARY_KEYS}
+    """The window's summary restricted to SUMMARY_KEYS, in order, as JSON values (absent keys -> None),
+    then ``note`` (``window_note``, None when there is nothing to say)."""
+    summary = {key: json_value(window.summary.get(key)) for key in SUMMARY_KEYS}
+    summary["note"] = window_note(window.summary)
+    return summary
 
 
 def run_to_json(run: CorrelationRun) -> dict[str, Any]:
@@ -136,59 +140,104 @@ def printable(text: Any) -> str:
     return "".join(c if c.isprintable() else c.encode("unicode_escape").decode("ascii") for c in str(text))
 
 
-def _clock(timestamp: Any, tod: Any) -> str:
-    """HH:MM:SS.s UTC rounded to 0.1 s, from the time of day (+Nd past the first day), else the timestamp."""
-    seconds = None
-    if not is_missing(tod) and isinstance(tod, Real):
-        seconds = float(tod)
-    else:
-        try:
-            moment = utc_naive(timestamp)
-        except (TypeError, ValueError):
-            moment = None
-        if moment is not None:
-            seconds = moment.hour * 3600 + moment.minute * 60 + moment.second + moment.microsecond / 1e6
-    if seconds is None:
+SEP_DOMINATED_RATIO = 3.0  # sep_rms above this many times the median separation: a few slots dominate it
+
+
+def window_note(summary: Mapping[str, Any]) -> str | None:
+    """A plain-language note when the window's RMS separation is dominated by a few slots, else None.
+
+    The rule: ``sep_rms_m > SEP_DOMINATED_RATIO * sep_median_m``. The note names the ADS-B jumps found in the
+    window, the usual cause, and the option that removes them."""
+    rms, median = summary.get("sep_rms_m"), summary.get("sep_median_m")
+    if is_missing(rms) or is_missing(median) or not rms > SEP_DOMINATED_RATIO * median:
+        return None
+    head = f"sep RMS {float(rms):.1f} m > {SEP_DOMINATED_RATIO:g} x median {float(median):.1f} m"
+    jumps = summary.get("adsb_jumps")
+    if not is_missing(jumps) and int(jumps) > 0:
+        plural = "s" if int(jumps) != 1 else ""
+        return f"{int(jumps)} ADS-B position jump{plural} in this window; rerun with --drop-jumps ({head})"
+    return f"a few slots dominate the separation ({head}); see sep_m in the Slots sheet"
+
+
+def clock_text(timestamp: Any, tod: Any, *, date: bool = True) -> str:
+    """A window time for text output: UTC date-time (to the second) when the timestamp is known, else
+    HH:MM:SS from the time of day (+Nd past the first day); "-" when neither is known."""
+    try:
+        moment = utc_naive(timestamp) if isinstance(timestamp, str | pd.Timestamp | dt.datetime) else None
+    except (TypeError, ValueError):
+        moment = None
+    if moment is not None:
+        return moment.strftime("%Y-%m-%d %H:%M:%S" if date else "%H:%M:%S")
+    if is_missing(tod) or not isinstance(tod, Real) or not math.isfinite(float(tod)):
         return "-"
-    tenths = int(round(seconds * 10))
-    days, tenths = divmod(tenths, 864000)
-    hours, tenths = divmod(tenths, 36000)
-    minutes, tenths = divmod(tenths, 600)
-    text = f"{hours:02d}:{minutes:02d}:{tenths // 10:02d}.{tenths % 10}"
+    days, rem = divmod(int(float(tod) // 1), 86400)
+    text = f"{rem // 3600:02d}:{rem % 3600 // 60:02d}:{rem % 60:02d}"
     return text + (f"+{days}d" if days else "")
 
 
-def _num(value: Any, decimals: int) -> str:
+def _num(value: Any, key: str) -> str:
     if is_missing(value) or not isinstance(value, Real) or not math.isfinite(float(value)):
         return "-"
-    return f"{float(value):.{decimals}f}"
+    return f"{float(value):.{decimals(key)}f}"
 
 
 def _count(value: Any) -> str:
     return "-" if is_missing(value) or not isinstance(value, Real) else f"{int(value)}"
 
 
+# (header, summary key or None for a computed cell, right-aligned)
+_TABLE = [("call sign", "callsign", False), ("win", "window", True),
+          ("sensors", "sensors", False), ("start (UTC)", "start", False),
+          ("end", "end", False), ("slots", "slots", True), ("radar", "radar_before", True),
+          ("ADS-B", "adsb_before", True), ("filled r/a", None, True), ("jumps", "adsb_jumps", True),
+          ("NCC(0) lat", "ncc0_lat", True), ("NCC(0) lon", "ncc0_lon", True),
+          ("Pearson(0) lat", "pearson0_lat", True), ("Pearson(0) lon", "pearson0_lon", True),
+          ("sep median m", "sep_median_m", True), ("sep RMS m", "sep_rms_m", True)]
+
+
+def _table_row(s: Mapping[str, Any]) -> list[str]:
+    start = clock_text(s.get("start"), s.get("start_tod"))
+    end_full = clock_text(s.get("end"), s.get("end_tod"))
+    same_day = start[:10] == end_full[:10] and len(start) > 10 and len(end_full) > 10
+    end = clock_text(s.get("end"), s.get("end_tod"), date=not same_day)
+    cells = []
+    for _, key, _ in _TABLE:
+        if key is None:
+            cells.append(f"{_count(s.get('radar_filled_slots'))}/{_count(s.get('adsb_filled_slots'))}")
+        elif key == "callsign":
+            cells.append(printable(s.get("callsign")) or printable(s.get("address")) or "-")
+        elif key == "sensors":
+            pair = (printable(s.get("radar_sensor")) or "-", printable(s.get("reference_sensor")) or "-")
+            cells.append(" vs ".join(pair))
+        elif key == "start":
+            cells.append(start)
+        elif key == "end":
+            cells.append(end)
+        elif decimals(key, 0) == 0:
+            cells.append(_count(s.get(key)))
+        else:
+            cells.append(_num(s.get(key), key))
+    return cells
+
+
+def frame_text(frame: pd.DataFrame) -> str:
+    """A DataFrame as terminal text, each number to the decimals of its unit (``formats.decimals``)."""
+    shown = frame.copy()
+    for name in shown.columns:
+        column = shown[name]
+        if pd.api.types.is_float_dtype(column.dtype):
+            places = decimals(str(name))
+            shown[name] = [("-" if is_missing(v) else f"{v:.{places}f}") for v in column.tolist()]
+        elif column.isna().any():
+            shown[name] = ["-" if is_missing(v) else v for v in column.tolist()]
+    return shown.to_string(index=False)
+
+
 def summary_table(run: CorrelationRun) -> str:
-    """A fixed-width text table, one line per window, for printing after a run."""
-    header = ["callsign", "window", "sensors", "start", "end", "slots", "radar b>a", "adsb b>a",
-              "ncc0_lat", "ncc0_lon", "pearson0_lat", "pearson0_lon", "sep_rms_m"]
-    right = [False, True, False, True, True, True, True, True, True, True, True, True, True]
-    rows = []
-    for w in run.windows:
-        s = w.summary
-        rows.append([
-            printable(s.get("callsign")) or "-",
-            printable(s.get("window")) or "-",
-            f"{printable(s.get('radar_sensor')) or '-'} vs {printable(s.get('reference_sensor')) or '-'}",
-            _clock(s.get("start"), s.get("start_tod")),
-            _clock(s.get("end"), s.get("end_tod")),
-            _count(s.get("slots")),
-            f"{_count(s.get('radar_before'))}>{_count(s.get('radar_after'))}",
-            f"{_count(s.get('adsb_before'))}>{_count(s.get('adsb_after'))}",
-            _num(s.get("ncc0_lat"), 10), _num(s.get("ncc0_lon"), 10),
-            _num(s.get("pearson0_lat"), 6), _num(s.get("pearson0_lon"), 6),
-            _num(s.get("sep_rms_m"), 1),
-        ])
+    """A fixed-width text table, one line per window, then the windows' notes, for printing after a run."""
+    header = [h for h, _, _ in _TABLE]
+    right = [r for _, _, r in _TABLE]
+    rows = [_table_row(w.summary) for w in run.windows]
     widths = [max(len(r[i]) for r in [header, *rows]) for i in range(len(header))]
 
     def line(cells: list[str]) -> str:
@@ -197,4 +246,13 @@ def summary_table(run: CorrelationRun) -> str:
 
     lines = [line(header), "  ".join("-" * n for n in widths), *(line(r) for r in rows)]
     lines.append(f"{len(run.windows)} window(s) correlated, {len(run.skipped)} skipped")
+    for skipped in run.skipped:
+        who = printable(skipped.callsign) or printable(skipped.address) or "?"
+        span = f"{clock_text(None, skipped.start_tod)}-{clock_text(None, skipped.end_tod)}"
+        lines.append(f"  skipped {who} {span}: {printable(skipped.reason)}")
+    notes = [(w, window_note(w.summary)) for w in run.windows]
+    for w, note in notes:
+        if note:
+            who = printable(w.summary.get("callsign")) or printable(w.summary.get("address")) or "?"
+            lines.append(f"Note: {who} window {printable(w.summary.get('window'))}: {note}")
     return "\n".join(text.rstrip() for text in lines)

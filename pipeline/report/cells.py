@@ -1,0 +1,368 @@
+"""Cells, columns and page setup of msdc's write-only workbooks (shared by the report's sheets and charts).
+
+Cell rules: times are real Excel date-times in UTC (clock times when the date is unknown, never seconds of
+day), numbers are numbers (NaN -> empty cell) with the format of their unit (``pipeline.report.formats``),
+one style per column, all text is stored as text (never as a formula). Pages: A4 landscape, fitted to the
+page width, header rows repeated.
+"""
+
+from __future__ import annotations
+
+import datetime as dt
+import json
+import math
+import re
+from collections.abc import Iterable, Iterator, Mapping
+from dataclasses import dataclass
+from itertools import islice
+from numbers import Integral, Real
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pandas as pd
+from openpyxl.cell import WriteOnlyCell
+from openpyxl.cell.cell import ILLEGAL_CHARACTERS_RE
+from openpyxl.styles import Alignment, Border, Font, PatternFill, Side
+from openpyxl.utils import get_column_letter
+from openpyxl.worksheet._write_only import WriteOnlyWorksheet
+from openpyxl.xml import LXML
+
+from pipeline.report.formats import UNITS, column_unit, excel_format
+from pipeline.report.summary import (
+    is_missing,
+    json_value,
+    utc_naive,
+)
+from pipeline.report.textguard import FORMULA_START
+
+if not LXML:  # pragma: no cover - lxml is a dependency; OPENPYXL_LXML=False would halve the write speed
+    import warnings
+
+    warnings.warn("openpyxl is not using lxml (is OPENPYXL_LXML set?): workbooks will be written slowly",
+                  stacklevel=1)
+
+DATETIME_FORMAT = "yyyy-mm-dd hh:mm:ss.000"
+SUMMARY_DATETIME_FORMAT = "yyyy-mm-dd hh:mm:ss"
+DATE_FORMAT = "yyyy-mm-dd"
+TIME_FORMAT = "hh:mm:ss.000"
+CLOCK_FORMAT = UNITS["tod"].excel  # seconds of day shown as a clock time ([hh] runs past 24 h)
+MAX_CORRELATION_CHARTS = 20
+MAX_SLOT_CHART_WINDOWS = 10
+EXCEL_MAX_ROWS = 1_048_576
+EXCEL_MAX_TEXT = 32_767
+MIN_WIDTH, MAX_WIDTH = 6.0, 66.0
+_WIDTH_SAMPLE_ROWS = 5000
+_ISO_DATE = re.compile(r"\d{4}-\d{2}-\d{2}\Z")
+_ISO_DATETIME = re.compile(r"\d{4}-\d{2}-\d{2}[T ]\d{2}:\d{2}(:\d{2}(\.\d{1,9})?)?(Z|[+-]\d{2}:?\d{2})?\Z")
+_DATETIME_HEADERS = {"time_utc", "start", "end", "timestamp", "run_time"}
+
+BOLD = Font(bold=True)
+TITLE_FONT = Font(bold=True, size=12)
+NOTE_FONT = Font(italic=True, color="595959")
+HEADER_FILL = PatternFill("solid", fgColor="D9E1F2")
+_BLOCK_FILLS = ["EDEDED", "E2EFDA", "DDEBF7", "FCE4D6"]
+_HEADER_BORDER = Border(bottom=Side(style="thin", color="808080"))
+_HEADER_ALIGN = Alignment(vertical="center", wrap_text=True)
+
+# A4 landscape, margins, fixed row height: the page grid charts and figures are placed on
+PAPER_A4 = 9
+MARGIN_IN = 0.4
+ROW_HEIGHT_PT = 15.0
+
+
+# ----------------------------------------------------------------------------------------------- values
+
+def excel_value(value: Any) -> Any:
+    """A value openpyxl stores natively: None for missing, naive-UTC datetime, int, float, bool or text."""
+    if is_missing(value):
+        return None
+    if isinstance(value, bool | np.bool_):
+        return bool(value)
+    if isinstance(value, pd.Timestamp | dt.datetime | np.datetime64):
+        return utc_naive(value)
+    if isinstance(value, dt.date | dt.time):
+        return value
+    if isinstance(value, pd.Timedelta | dt.timedelta | np.timedelta64):  # before Integral: timedelta64 is one
+        return pd.Timedelta(value).total_seconds()
+    if isinstance(value, Integral):
+        return int(value)
+    if isinstance(value, Real):
+        number = float(value)
+        return number if math.isfinite(number) else ("inf" if number > 0 else "-inf")
+    if isinstance(value, str):
+        return iso_time(value) or clean_text(value)
+    if isinstance(value, Path):
+        return clean_text(str(value))
+    if isinstance(value, Mapping | list | tuple | set | frozenset | np.ndarray):
+        return clean_text(json.dumps(json_value(value), ensure_ascii=False))
+    return clean_text(str(value))
+
+
+def iso_time(text: str) -> dt.datetime | dt.date | None:
+    """A naive-UTC datetime (or a date) when ``text`` is an ISO 8601 date-time (or date), else None."""
+    if not (10 <= len(text) <= 40 and text[:1].isdigit()):
+        return None
+    try:
+        if _ISO_DATE.match(text):
+            return dt.date.fromisoformat(text)
+        if _ISO_DATETIME.match(text):
+            return utc_naive(pd.Timestamp(text))
+    except ValueError:
+        pass
+    return None
+
+
+def clean_text(text: str) -> str:
+    """Text Excel can hold: XML-illegal control characters replaced, cut at Excel's cell limit."""
+    return ILLEGAL_CHARACTERS_RE.sub("\ufffd", text)[:EXCEL_MAX_TEXT]
+
+
+def text_cell(ws: WriteOnlyWorksheet, text: str, *, font: Font | None = None,
+              fill: PatternFill | None = None) -> WriteOnlyCell:
+    """A string cell that can never become a formula (type "s"; quote prefix on formula-like text)."""
+    cell = WriteOnlyCell(ws, text)
+    cell.data_type = "s"
+    if text.startswith(FORMULA_START):
+        cell.quotePrefix = True
+    if font is not None:
+        cell.font = font
+    if fill is not None:
+        cell.fill = fill
+    return cell
+
+
+def is_number(value: Any) -> bool:
+    return isinstance(value, int | float) and not isinstance(value, bool)
+
+
+def cell_for(ws: WriteOnlyWorksheet, value: Any, number_format: str | None) -> Any:
+    """The cell (or plain value) for an excel_value() result under a column number format."""
+    if value is None or isinstance(value, bool):
+        return value
+    if isinstance(value, str):
+        return text_cell(ws, value)
+    if isinstance(value, dt.datetime):
+        number_format = DATETIME_FORMAT
+    elif isinstance(value, dt.date):
+        number_format = DATE_FORMAT
+    elif isinstance(value, dt.time):
+        number_format = TIME_FORMAT
+    elif number_format is None or (isinstance(value, int) and number_format == "0"):
+        return value
+    elif number_format == CLOCK_FORMAT:
+        value = value / 86400.0
+    cell = WriteOnlyCell(ws, value)
+    cell.number_format = number_format
+    return cell
+
+
+# ------------------------------------------------------------------------------------ column writing
+
+@dataclass
+class Column:
+    """One output column: its header, cell values (already Excel-ready) and, for numbers that need it, a
+    template cell carrying the column's number format, reused for every value (styling by column)."""
+
+    header: str
+    values: list[Any]
+    number_format: str | None
+    styled: WriteOnlyCell | None = None
+    text: bool = False  # values may hold text, which must be checked for formula-like starts
+
+
+def _datetime_serials(series: pd.Series) -> list[Any]:
+    """Excel serial days (UTC wall clock) of a datetime column, None where missing."""
+    stamps = series.dt.tz_convert("UTC").dt.tz_localize(None) if series.dt.tz is not None else series
+    days = (stamps - pd.Timestamp("1899-12-30")) / pd.Timedelta(days=1)
+    return [None if v != v else v for v in days.round(11).to_numpy(dtype=float, na_value=np.nan).tolist()]
+
+
+def column_values(series: pd.Series) -> list[Any]:
+    """excel_value() of every entry, with fast paths for plain float, integer and bool columns."""
+    dtype = series.dtype
+    if dtype.kind == "f" and isinstance(dtype, np.dtype):
+        values = series.to_numpy()
+        if np.isinf(values).any():
+            return [excel_value(v) for v in values.tolist()]
+        return [None if v != v else v for v in values.tolist()]  # v != v: NaN
+    if dtype.kind in "iub" and isinstance(dtype, np.dtype):
+        return series.to_numpy().tolist()
+    return [excel_value(v) for v in series.tolist()]
+
+
+def _fallback_format(values: Iterable[Any]) -> str | None:
+    numbers = [v for v in values if is_number(v)]
+    if not numbers or all(float(v).is_integer() for v in numbers):
+        return None
+    return "0.000000" if max(abs(v) for v in numbers) < 1 else "0.000"
+
+
+def number_format_for(name: str, values: Iterable[Any]) -> str | None:
+    """Number format of a column: from the unit table by name, else from sample values (None = General)."""
+    return excel_format(name) or _fallback_format(values)
+
+
+def make_column(ws: WriteOnlyWorksheet, header: str, data: pd.Series | list[Any], *,
+                general: bool = False) -> Column:
+    """A Column from a pandas Series (fast paths for numbers and datetimes) or a list of raw values.
+
+    Seconds-of-day columns become clock times; datetimes become Excel date-times; numbers take the format
+    of their unit. ``general`` keeps numbers in General format (columns mixing unrelated values)."""
+    series = data if isinstance(data, pd.Series) else pd.Series(list(data), dtype=object)
+    unit = None if general else column_unit(header)
+    if isinstance(series.dtype, pd.DatetimeTZDtype) or series.dtype.kind == "M":
+        column = Column(header, _datetime_serials(series), DATETIME_FORMAT)
+    else:
+        values = column_values(series)
+        if unit == "tod" and all(v is None or is_number(v) for v in values):
+            values = [None if v is None else v / 86400.0 for v in values]
+            column = Column(header, values, CLOCK_FORMAT)
+        else:
+            kinds = {type(v) for v in values[:_WIDTH_SAMPLE_ROWS] if v is not None}
+            mixed = bool(kinds - {int, float, bool})
+            fmt = None if general else number_format_for(header, values[:_WIDTH_SAMPLE_ROWS])
+            if mixed:  # text, dates, mixed types: one cell at a time
+                return Column(header, values, fmt, text=True)
+            if fmt == "0" and kinds <= {int, bool}:
+                fmt = None  # integers read the same in General
+            column = Column(header, values, fmt)
+    if column.number_format is not None:
+        column.styled = WriteOnlyCell(ws, 0.0)
+        column.styled.number_format = column.number_format
+    return column
+
+
+def table_rows(ws: WriteOnlyWorksheet, columns: list[Column], start: int = 0,
+          stop: int | None = None) -> Iterator[list[Any]]:
+    """Rows of cells for ws.append: plain values where General will do, the column's styled cell (value
+    swapped in) for formatted numbers, text cells for text."""
+    styled = [(j, c.styled) for j, c in enumerate(columns) if c.styled is not None and not c.text]
+    texts = [(j, c.number_format) for j, c in enumerate(columns) if c.text]
+    for row in islice(zip(*(c.values for c in columns), strict=True), start, stop):
+        out = list(row)
+        for j, cell in styled:
+            value = out[j]
+            if value is not None and value.__class__ is not bool:
+                cell.value = value
+                out[j] = cell
+        for j, fmt in texts:
+            value = out[j]
+            if value is not None and not (value.__class__ is str and not value.startswith(FORMULA_START)):
+                out[j] = cell_for(ws, value, fmt)
+        yield out
+
+
+def display_len(value: Any, number_format: str | None) -> int:
+    if value is None:
+        return len(SUMMARY_DATETIME_FORMAT) if number_format == SUMMARY_DATETIME_FORMAT else 0
+    if isinstance(value, str):
+        return max(len(line) for line in value.split("\n"))
+    if isinstance(value, bool):
+        return 5
+    if number_format == SUMMARY_DATETIME_FORMAT:
+        return len(SUMMARY_DATETIME_FORMAT)
+    if isinstance(value, dt.datetime) or number_format == DATETIME_FORMAT:
+        return len(DATETIME_FORMAT)
+    if isinstance(value, dt.date | dt.time) or number_format == CLOCK_FORMAT:
+        return 12
+    if number_format and "." in number_format:
+        return len(f"{value:,.{number_format.count('0', number_format.index('.'))}f}")
+    if number_format and number_format.startswith("#,"):
+        return len(f"{value:,.0f}")
+    if isinstance(value, float) and not number_format:
+        return min(len(repr(value)), 12)
+    return len(f"{value:.0f}") if isinstance(value, float) else len(str(value))
+
+
+def column_width(header: str, values: Iterable[Any], number_format: str | None) -> float:
+    longest = max([max(len(word) for word in header.split(" ")), *(display_len(v, number_format)
+                                                                   for v in values)])
+    if header in _DATETIME_HEADERS:
+        longest = max(longest, display_len(None, number_format) or len(DATETIME_FORMAT))
+    return min(MAX_WIDTH, max(MIN_WIDTH, longest + 2.0))
+
+
+def set_widths(ws: WriteOnlyWorksheet, widths: list[float]) -> None:
+    for i, width in enumerate(widths, start=1):
+        ws.column_dimensions[get_column_letter(i)].width = round(width, 1)
+
+
+def header_cells(ws: WriteOnlyWorksheet, headers: list[str], fill: PatternFill = HEADER_FILL) -> list[Any]:
+    cells = []
+    for header in headers:
+        cell = text_cell(ws, clean_text(str(header)), font=BOLD, fill=fill)
+        cell.border = _HEADER_BORDER
+        cell.alignment = _HEADER_ALIGN
+        cells.append(cell)
+    return cells
+
+
+def note_text_cell(ws: WriteOnlyWorksheet, text: str) -> WriteOnlyCell:
+    return text_cell(ws, clean_text(text), font=NOTE_FONT)
+
+
+def page_setup(ws: WriteOnlyWorksheet, title_rows: str | None = "1:1", *, fit_height: int = 0) -> None:
+    """A4 landscape, fitted to one page wide (``fit_height`` pages tall, 0 = as many as needed), narrow
+    margins, header rows repeated on every page, sheet name and page number in the footer."""
+    ws.page_setup.orientation = "landscape"
+    ws.page_setup.paperSize = PAPER_A4
+    ws.page_setup.fitToWidth = 1
+    ws.page_setup.fitToHeight = fit_height
+    ws.sheet_properties.pageSetUpPr.fitToPage = True
+    for side in ("left", "right"):
+        setattr(ws.page_margins, side, MARGIN_IN)
+    ws.page_margins.top = ws.page_margins.bottom = 0.5
+    ws.page_margins.header = ws.page_margins.footer = 0.25
+    if title_rows:
+        ws.print_title_rows = title_rows
+    ws.oddFooter.center.text = "&A, page &P of &N"
+
+
+PAGE_WIDTH_CHARS = 170  # characters of column width a landscape page shows legibly
+
+
+def wide_pages(ws: WriteOnlyWorksheet, widths: list[float], text: list[bool]) -> int:
+    """For a table wider than one legible landscape page: fit it to 2 or 3 pages wide instead of 1 and
+    repeat its leading text columns (identity: call sign, address, sensor) on every page. Returns the
+    number of pages wide."""
+    pages = min(3, math.ceil(sum(widths) / PAGE_WIDTH_CHARS)) if widths else 1
+    if pages > 1:
+        ws.page_setup.fitToWidth = pages
+        lead = 0
+        while lead < min(3, len(text)) and text[lead]:
+            lead += 1
+        if lead:
+            ws.print_title_cols = f"A:{get_column_letter(lead)}"
+    return max(pages, 1)
+
+
+def fixed_rows(ws: WriteOnlyWorksheet) -> None:
+    """Every row ROW_HEIGHT_PT high in Excel and LibreOffice alike (their defaults differ), so a grid of
+    charts or images lands on the same pages in both."""
+    ws.sheet_format.defaultRowHeight = ROW_HEIGHT_PT
+    ws.sheet_format.customHeight = True
+
+
+def write_table(ws: WriteOnlyWorksheet, columns: list[Column], *, freeze: str = "A2",
+                 note: str = "") -> int:
+    """Header row, the rows and an optional note under them; returns the number of rows kept."""
+    n_rows = len(columns[0].values) if columns else 0
+    sample = [c.values[:_WIDTH_SAMPLE_ROWS] for c in columns]
+    widths = [column_width(c.header, v, c.number_format) for c, v in zip(columns, sample, strict=True)]
+    set_widths(ws, widths)
+    ws.freeze_panes = freeze
+    page_setup(ws)
+    wide_pages(ws, widths, [c.text for c in columns])
+    kept = min(n_rows, EXCEL_MAX_ROWS - 1)
+    if kept < n_rows:
+        note = f"{note} Rows cut at Excel's limit: {kept} of {n_rows} written.".strip()
+    ws.append(header_cells(ws, [c.header for c in columns]))
+    for row in table_rows(ws, columns, 0, kept):
+        ws.append(row)
+    if note:  # below the table, so the printed width stays the table's
+        ws.append([])
+        ws.append([note_text_cell(ws, note)])
+    return kept
+
+

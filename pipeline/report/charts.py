@@ -1,0 +1,264 @@
+"""Chart sheets of the correlation workbook: coefficient against lag and slotted positions against time,
+native Excel scatter charts placed on a grid of whole printed pages (two across, two down)."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterable
+from typing import Any
+
+import numpy as np
+import pandas as pd
+from openpyxl import Workbook
+from openpyxl.chart import Reference, ScatterChart, Series
+from openpyxl.chart.marker import Marker
+from openpyxl.chart.shapes import GraphicalProperties
+from openpyxl.drawing.line import LineProperties
+from openpyxl.drawing.spreadsheet_drawing import AbsoluteAnchor
+from openpyxl.drawing.xdr import XDRPoint2D, XDRPositiveSize2D
+from openpyxl.utils import get_column_letter
+from openpyxl.utils.datetime import to_excel
+from openpyxl.utils.units import cm_to_EMU
+from openpyxl.worksheet._write_only import WriteOnlyWorksheet
+from openpyxl.worksheet.pagebreak import Break
+
+from pipeline.correlate.correlation import pearson_max_lag
+from pipeline.correlate.results import LAG_COLUMNS, SLOT_COLUMNS, CorrelationRun, WindowResult
+from pipeline.report.cells import (
+    EXCEL_MAX_ROWS,
+    ROW_HEIGHT_PT,
+    TITLE_FONT,
+    clean_text,
+    column_values,
+    excel_value,
+    fixed_rows,
+    is_number,
+    note_text_cell,
+    page_setup,
+    text_cell,
+)
+from pipeline.report.summary import utc_naive
+
+CORRELATION_HEADERS = ["window", "callsign", "address", "lag", "lag_s", *LAG_COLUMNS[1:]]
+SLOTS_HEADERS = ["window", "callsign", "address", "slot", "time_utc", *SLOT_COLUMNS[3:]]
+MAX_CORRELATION_CHARTS = 20
+MAX_SLOT_CHART_WINDOWS = 10
+RADAR_RGB, ADSB_RGB = "D62728", "E6B800"
+LAT_RGB, LON_RGB = "1F77B4", "2CA02C"
+
+CHART_HEADING_ROWS = 2  # rows 1-2 of a chart sheet: its heading, repeated on every printed page
+CHART_COL_WIDTH = 9.5  # characters; 7 columns per chart slot
+CHART_SLOT_COLS, CHART_SLOT_ROWS, CHARTS_PER_ROW, CHART_ROWS_PER_PAGE = 7, 15, 2, 2
+CHART_W_CM, CHART_H_CM = 12.6, 7.4
+CHART_SLOT_W_CM = 13.3  # two slots (26.6 cm) inside the 27.7 cm between A4 landscape margins
+
+
+def pt_to_EMU(points: float) -> int:
+    """Points (1/72 inch) to EMU (914400 per inch)."""
+    return int(round(points * 12700))
+
+
+def scatter_chart(title: str, x_title: str, y_title: str) -> ScatterChart:
+    chart = ScatterChart()
+    chart.title = clean_text(title)
+    chart.style = 2
+    chart.width, chart.height = CHART_W_CM, CHART_H_CM
+    chart.x_axis.title, chart.y_axis.title = x_title, y_title
+    chart.x_axis.delete = False  # openpyxl 3.1 hides axes unless told otherwise
+    chart.y_axis.delete = False
+    chart.x_axis.crosses = "min"  # axes on the lower-left edges, not through zero
+    chart.y_axis.crosses = "min"
+    chart.legend.position = "b"
+    return chart
+
+
+def xy_series(ws: WriteOnlyWorksheet, x_col: int, y_col: int, rows: tuple[int, int], title: str,
+               line_rgb: str, *, dash: str | None = None, width_pt: float = 1.5,
+               marker: str | None = None) -> Series:
+    xs = Reference(ws, min_col=x_col, min_row=rows[0], max_row=rows[1])
+    ys = Reference(ws, min_col=y_col, min_row=rows[0], max_row=rows[1])
+    series = Series(ys, xs, title=title)
+    series.graphicalProperties = GraphicalProperties(
+        ln=LineProperties(solidFill=line_rgb, w=int(width_pt * 12700), prstDash=dash))
+    if marker:
+        series.marker = Marker(symbol=marker, size=4, spPr=GraphicalProperties(
+            solidFill=line_rgb, ln=LineProperties(solidFill=line_rgb, w=6350)))
+    else:
+        series.marker = Marker(symbol="none")
+    series.smooth = False
+    return series
+
+
+def axis_limits(values: Iterable[Any], pad: float = 0.05) -> tuple[float, float] | None:
+    numbers = [v for v in values if is_number(v) and math.isfinite(v)]
+    if not numbers:
+        return None
+    low, high = min(numbers), max(numbers)
+    span = (high - low) or max(abs(high) * 1e-6, 1e-9)
+    return low - pad * span, high + pad * span
+
+
+def chart_anchor(index: int, chart: ScatterChart | None = None) -> AbsoluteAnchor:
+    """Where chart ``index`` sits on a chart sheet: CHARTS_PER_ROW across, CHART_SLOT_ROWS rows of
+    ROW_HEIGHT_PT each down, below the heading rows. Absolute (EMU from the sheet's corner), so the grid
+    does not depend on column widths, which differ between spreadsheet programs and their fonts."""
+    grid_row, grid_col = divmod(index, CHARTS_PER_ROW)
+    x_cm = grid_col * CHART_SLOT_W_CM
+    y_pt = (CHART_HEADING_ROWS + grid_row * CHART_SLOT_ROWS) * ROW_HEIGHT_PT + 4.0
+    width, height = (chart.width, chart.height) if chart is not None else (CHART_W_CM, CHART_H_CM)
+    return AbsoluteAnchor(pos=XDRPoint2D(cm_to_EMU(x_cm), pt_to_EMU(y_pt)),
+                          ext=XDRPositiveSize2D(cm_to_EMU(width), cm_to_EMU(height)))
+
+
+def chart_sheet(wb: Workbook, title: str, heading: tuple[str, str], n_charts: int) -> WriteOnlyWorksheet:
+    """A sheet for charts: column grid, two heading rows (repeated on every page), a page break every
+    CHART_ROWS_PER_PAGE rows of charts."""
+    ws = wb.create_sheet(title)
+    for i in range(CHART_SLOT_COLS * CHARTS_PER_ROW):
+        ws.column_dimensions[get_column_letter(i + 1)].width = CHART_COL_WIDTH
+    page_setup(ws, f"1:{CHART_HEADING_ROWS}")
+    fixed_rows(ws)
+    ws.append([text_cell(ws, clean_text(heading[0]), font=TITLE_FONT)])
+    ws.append([note_text_cell(ws, heading[1])])
+    grid_rows = math.ceil(n_charts / CHARTS_PER_ROW)
+    for page in range(1, math.ceil(grid_rows / CHART_ROWS_PER_PAGE)):
+        ws.row_breaks.append(Break(id=CHART_HEADING_ROWS + page * CHART_ROWS_PER_PAGE * CHART_SLOT_ROWS))
+    # rows under the charts exist (empty) so the print range covers every chart
+    for _ in range(grid_rows * CHART_SLOT_ROWS):
+        ws.append([])
+    return ws
+
+
+
+def window_id(window: WindowResult, index: int) -> Any:
+    value = excel_value(window.summary.get("window"))
+    return index if value is None else value
+
+
+def window_title(window: WindowResult, index: int) -> str:
+    summary = window.summary
+    callsign = excel_value(summary.get("callsign")) or excel_value(summary.get("address")) or "?"
+    return f"{callsign} window {window_id(window, index)}"
+
+
+def lag_frame(window: WindowResult) -> pd.DataFrame:
+    lags = window.lags
+    return lags.sort_values("lag", kind="stable") if "lag" in lags.columns else lags
+
+
+def write_lag_charts(wb: Workbook, run: CorrelationRun, data_sheet: str = "Correlation") -> None:
+    """One chart per window of coefficient against lag, |lag| <= N/2 only, on a page grid."""
+    frames = [lag_frame(w) for w in run.windows]
+    charted = [i for i, f in enumerate(frames) if len(f)]
+    shown = charted[:MAX_CORRELATION_CHARTS]
+    more = _first_of(len(shown), len(charted))
+    heading = ("Coefficient against lag for |lag| <= N/2 (at least half the slots overlap)",
+               "Wider lags are left out (all lags: Correlation sheet). NCC solid, Pearson dashed; "
+               f"latitude blue, longitude green{more}.")
+    ws = chart_sheet(wb, "Lag charts", heading, len(shown))
+    ref = _SheetRef(data_sheet)
+    starts = np.concatenate([[2], 2 + np.cumsum([len(f) for f in frames])]).astype(int)
+    col = {h: i + 1 for i, h in enumerate(CORRELATION_HEADERS)}
+    for n, i in enumerate(shown):
+        w, lags = run.windows[i], frames[i]
+        n_slots = (len(lags) + 1) // 2
+        half = pearson_max_lag(n_slots)
+        lag = pd.to_numeric(lags["lag"], errors="coerce").to_numpy(dtype=float)
+        inside = np.flatnonzero(np.abs(lag) <= half)
+        if inside.size == 0:
+            continue
+        first, last = int(starts[i] + inside[0]), int(starts[i] + inside[-1])
+        if last > EXCEL_MAX_ROWS:
+            break
+        chart = scatter_chart(f"{window_title(w, i)}, N = {n_slots}", f"lag (slots, |lag| <= {half})",
+                         "coefficient")
+        values = []
+        for name, rgb, dash, label in (("ncc_lat", LAT_RGB, None, "NCC lat"),
+                                       ("ncc_lon", LON_RGB, None, "NCC lon"),
+                                       ("pearson_lat", LAT_RGB, "dash", "Pearson lat"),
+                                       ("pearson_lon", LON_RGB, "dash", "Pearson lon")):
+            chart.series.append(xy_series(ref, col["lag"], col[name], (first, last), label, rgb, dash=dash,
+                                           width_pt=1.5))
+            if name in lags.columns:
+                values += pd.to_numeric(lags[name], errors="coerce").to_numpy(dtype=float)[inside].tolist()
+        chart.x_axis.scaling.min, chart.x_axis.scaling.max = -half, half
+        y_span = coefficient_axis(values)
+        chart.y_axis.scaling.min, chart.y_axis.scaling.max = y_span
+        chart.y_axis.number_format = "0.0"
+        chart.x_axis.number_format = "0"
+        ws.add_chart(chart, chart_anchor(n, chart))
+
+
+def coefficient_axis(values: Iterable[float]) -> tuple[float, float]:
+    """y range of a coefficient chart: 0.1 steps around the finite values, within [-1, 1]."""
+    finite = [v for v in values if v == v and math.isfinite(v)]
+    if not finite:
+        return -1.0, 1.0
+    low = max(-1.0, math.floor(min(finite) * 10 - 1e-9) / 10)
+    high = min(1.0, math.ceil(max(finite) * 10 + 1e-9) / 10)
+    return (low, high) if high > low else (low - 0.1, high + 0.1)
+
+
+def _first_of(shown: int, total: int) -> str:
+    return f"; charts for the first {shown} of {total} windows" if total > shown else ""
+
+
+class _SheetRef:
+    """Stands in for a worksheet in chart References (only its title is used)."""
+
+    def __init__(self, title: str):
+        self.title = title
+
+
+
+def write_slot_charts(wb: Workbook, run: CorrelationRun, data_sheet: str = "Slots") -> None:
+    lengths = [len(w.slots) for w in run.windows]
+    charted = [i for i, n in enumerate(lengths) if n]
+    shown = charted[:MAX_SLOT_CHART_WINDOWS]
+    more = _first_of(len(shown), len(charted))
+    heading = ("Slotted latitude and longitude against time (UTC)",
+               f"ADS-B yellow (solid, wide), radar red (dashed, on top); data on the Slots sheet{more}.")
+    ws = chart_sheet(wb, "Slot charts", heading, 2 * len(shown))
+    ref = _SheetRef(data_sheet)
+    starts = np.concatenate([[2], 2 + np.cumsum(lengths)]).astype(int)
+    col = {h: i + 1 for i, h in enumerate(SLOTS_HEADERS)}
+    dated = all("timestamp" in w.slots and w.slots["timestamp"].notna().all() for w in run.windows)
+    for n, i in enumerate(shown):
+        w = run.windows[i]
+        first, last = int(starts[i]), int(starts[i + 1]) - 1
+        if last > EXCEL_MAX_ROWS:
+            break
+        if dated:
+            times = [to_excel(utc_naive(t)) for t in w.slots["timestamp"]]
+        else:
+            times = [v / 86400.0 for v in pd.to_numeric(w.slots["time_of_day"], errors="coerce").tolist()]
+        x_span = axis_limits(times, pad=0.0)
+        markers = len(w.slots) <= 40
+        for k, (axis, name) in enumerate((("lat", "latitude"), ("lon", "longitude"))):
+            chart = scatter_chart(f"{window_title(w, i)}: {name}", "time (UTC)", f"{name} (deg)")
+            # LibreOffice draws the first series on top: radar first, so the wide ADS-B line never hides it
+            chart.series.append(xy_series(ref, col["time_utc"], col[f"radar_{axis}"], (first, last), "Radar",
+                                           RADAR_RGB, dash="dash", width_pt=1.5,
+                                           marker="triangle" if markers else None))
+            chart.series.append(xy_series(ref, col["time_utc"], col[f"adsb_{axis}"], (first, last), "ADS-B",
+                                           ADSB_RGB, width_pt=3.0, marker="circle" if markers else None))
+            chart.x_axis.number_format = "hh:mm"
+            chart.y_axis.number_format = "0.00"
+            if x_span:
+                chart.x_axis.scaling.min, chart.x_axis.scaling.max = x_span
+                chart.x_axis.majorUnit = _time_step_days(x_span[1] - x_span[0])
+            y_values = [*column_values(w.slots[f"radar_{axis}"]), *column_values(w.slots[f"adsb_{axis}"])]
+            y_span = axis_limits(y_values)
+            if y_span:
+                chart.y_axis.scaling.min, chart.y_axis.scaling.max = y_span
+            ws.add_chart(chart, chart_anchor(2 * n + k, chart))
+
+
+def _time_step_days(span_days: float) -> float:
+    """A round tick step (1 min .. 2 h) giving at most 6 ticks over ``span_days``."""
+    for minutes in (1, 2, 5, 10, 15, 30, 60, 120):
+        if span_days * 1440 / minutes <= 6:
+            return minutes / 1440
+    return 240 / 1440
+
+

@@ -1,0 +1,41 @@
+"""Formula-injection guard for text written to CSV files (OWASP "CSV injection").
+
+A spreadsheet opening a CSV runs a cell that begins with ``= + - @`` (or a tab or carriage return) as a
+formula. Such text is written with a leading apostrophe, which spreadsheets show as plain text. Only
+text columns are touched; numbers stay numbers.
+"""
+
+from __future__ import annotations
+
+import pandas as pd
+
+FORMULA_START = ("=", "+", "-", "@", "\t", "\r")
+
+
+def is_formula_like(text: str) -> bool:
+    """True when a spreadsheet would read ``text`` as a formula."""
+    return text.startswith(FORMULA_START)
+
+
+def neutralise(value: object) -> object:
+    """``value`` with an apostrophe in front when it is formula-like text; anything else unchanged."""
+    return "'" + value if isinstance(value, str) and is_formula_like(value) else value
+
+
+def guard_frame(frame: pd.DataFrame) -> pd.DataFrame:
+    """A copy of ``frame`` whose text columns (object, string, categorical) are neutralised."""
+    out = {}
+    for name in frame.columns:
+        column = frame[name]
+        kind = column.dtype
+        if isinstance(kind, pd.CategoricalDtype):
+            categories = [neutralise(c) for c in kind.categories]
+            if categories != list(kind.categories):
+                try:
+                    column = column.cat.rename_categories(categories)
+                except ValueError:  # "=x" and "'=x" both present: give up the categorical
+                    column = column.astype(object).map(neutralise, na_action="ignore")
+        elif pd.api.types.is_object_dtype(kind) or isinstance(kind, pd.StringDtype):
+            column = column.map(neutralise, na_action="ignore")
+        out[name] = column
+    return pd.DataFrame(out, index=frame.index)
