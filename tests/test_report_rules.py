@@ -191,3 +191,13 @@ def test_histogram_range_keeps_the_bulk():
                       "intervals": [0, 600, 399, 0, 1]})
     assert histogram_range_s(h) == 1.5  # 999 of 1000 intervals end by 1.5 s; the single 9.7 s one is a note
     assert histogram_range_s(h, share=1.0) == 10.0
+
+
+def test_slotting_panel_range_follows_the_radar():
+    """ADS-B jumps of degrees would flatten the track: the raw-report panels take the radar's range,
+    padded by 8 % of it, at least 0.01 deg."""
+    from pipeline.report.quality_figures import track_span
+
+    assert track_span(np.array([1.0, np.nan, 2.0])) == pytest.approx((0.92, 2.08))
+    assert track_span(np.array([5.0, 5.0])) == pytest.approx((4.99, 5.01))
+    assert track_span(np.array([np.nan])) is None

@@ -153,6 +153,17 @@ def _raw_in_window(window: WindowResult, meas: pd.DataFrame, other: pd.DataFrame
     return rows[in_window(rows["time_of_day"], s["start_tod"], s["end_tod"])]
 
 
+def track_span(values: np.ndarray, pad: float = 0.08) -> tuple[float, float] | None:
+    """y range of a coordinate panel: the radar reports' range, padded by ``pad`` of it (at least 0.01 deg);
+    None when there is no finite value."""
+    finite = values[np.isfinite(values)]
+    if finite.size == 0:
+        return None
+    low, high = float(finite.min()), float(finite.max())
+    margin = max(pad * (high - low), 0.01)
+    return low - margin, high + margin
+
+
 def slotting_figure(window: WindowResult, radar_meas: pd.DataFrame, adsb_meas: pd.DataFrame,
                     path: str | os.PathLike[str]) -> Path:
     """Latitude and longitude against time of one window: raw reports (left) and 10 s slots (right)."""
@@ -172,6 +183,14 @@ def slotting_figure(window: WindowResult, radar_meas: pd.DataFrame, adsb_meas: p
                               label=_SENSOR_LABEL[sensor])
             axes[row, 1].plot(t[filled], y[filled], "o", ms=4, mfc="white", mec=color, mew=0.9)
         axes[row, 0].set_ylabel(f"{name} (deg)")
+        span = track_span(raw["radar"][name].to_numpy(float))
+        if span is not None:  # ADS-B position jumps (up to degrees away) would flatten the track
+            axes[row, 0].set_ylim(*span)
+            y = raw["adsb"][name].to_numpy(float)
+            outside = int(((y < span[0]) | (y > span[1])).sum())
+            if outside:
+                axes[row, 0].text(0.01, 0.02, f"{outside} ADS-B report(s) off the axis (position jumps)",
+                                  transform=axes[row, 0].transAxes, fontsize=8, color="0.3")
         for ax in axes[row]:
             ax.ticklabel_format(axis="y", useOffset=False)
             _grid(ax)
