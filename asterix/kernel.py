@@ -168,7 +168,7 @@ K_KIND, K_SIZE, K_EXT_START, K_EXT_COUNT, K_SUB_START, K_SUB_COUNT, K_SLOT = ran
 
 
 @njit(cache=True, nogil=True)
-def scan(buf, blk_start, blk_len, P, ext_sizes, sub_parts, n_frn, n_slots, rel_off, rel_len, rec_off,
+def scan(buf, blk_start, blk_len, P, ext_sizes, ext_fx, sub_parts, n_frn, n_slots, rel_off, rel_len, rec_off,
          rec_blk):
     """Walk every block record by record, all or nothing per block, in one pass.
 
@@ -277,7 +277,8 @@ def scan(buf, blk_start, blk_len, P, ext_sizes, sub_parts, n_frn, n_slots, rel_o
                                 n += ext_sizes[P[sp, K_EXT_START] + gi]
                                 if pos + n > end:
                                     break
-                                if buf[pos + n - 1] & 1 == 0:
+                                # an octet-group without FX (I021/271 in 2.1) ends the item
+                                if ext_fx[P[sp, K_EXT_START] + gi] == 0 or buf[pos + n - 1] & 1 == 0:
                                     break
                                 g += 1
                         elif k == 3:

@@ -83,8 +83,8 @@ def _scan(buf, starts, lens, lay: Layout):
         rel_off = np.full((cap, slots), 0xFFFF, np.uint16)
         rel_len = np.zeros((cap, slots), np.uint16)
         rec_off, rec_blk = np.empty(cap, np.int64), np.empty(cap, np.int64)
-        counts, fail_at, n = kernel.scan(buf, starts, lens, lay.P, lay.ext_sizes, lay.sub_parts, lay.n_frn,
-                                         lay.n_slots, rel_off, rel_len, rec_off, rec_blk)
+        counts, fail_at, n = kernel.scan(buf, starts, lens, lay.P, lay.ext_sizes, lay.ext_fx, lay.sub_parts,
+                                         lay.n_frn, lay.n_slots, rel_off, rel_len, rec_off, rec_blk)
         if n >= 0:
             return counts, fail_at, rel_off, rel_len, rec_off, rec_blk, n
         cap *= 2
