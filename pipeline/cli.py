@@ -207,7 +207,8 @@ def _write_chunk(out: Path, cat: int, frame: pd.DataFrame, outputs: dict, writer
 
 def cmd_stats(args) -> int:
     loaded = _load(args, Progress())
-    print(format_stats(stats_tables(loaded.frames, loaded.errors)), end="")
+    other = [r.ignored for r in loaded.recordings]  # blocks of categories not decoded
+    print(format_stats(stats_tables(loaded.frames, loaded.errors, other)), end="")
     for rec in loaded.recordings:
         for cat, why in rec.edition_choice.items():
             print(f"{rec.path}: CAT{cat:03d} edition {why}")

@@ -21,8 +21,10 @@ def _clock(seconds: float) -> str:
     return f"{prefix}{int(h):02d}:{int(m):02d}:{s:06.3f}"
 
 
-def stats_tables(frames: dict[int, pd.DataFrame], errors: pd.DataFrame) -> dict[str, pd.DataFrame]:
-    """Tables: per category, per category and SAC/SIC, and skipped blocks grouped by reason."""
+def stats_tables(frames: dict[int, pd.DataFrame], errors: pd.DataFrame,
+                 ignored: pd.DataFrame | list[pd.DataFrame] | None = None) -> dict[str, pd.DataFrame]:
+    """Tables: per category, per category and SAC/SIC, skipped blocks grouped by reason, and blocks of
+    categories not decoded (``Recording.ignored``, one frame or one per input)."""
     per_cat, per_src = [], []
     for cat, f in sorted(frames.items()):
         start, end = _span(f)
@@ -39,14 +41,20 @@ def stats_tables(frames: dict[int, pd.DataFrame], errors: pd.DataFrame) -> dict[
                                                                       first_offset=("offset", "min"))
                .reset_index() if len(errors) else pd.DataFrame(
                    columns=["category", "reason", "blocks", "bytes", "first_offset"]))
-    return {"categories": pd.DataFrame(per_cat), "sources": pd.DataFrame(per_src), "skipped": reasons}
+    parts = [f for f in (ignored if isinstance(ignored, list) else [ignored]) if f is not None and len(f)]
+    other = (pd.concat(parts).groupby("category", as_index=False)[["blocks", "bytes"]].sum() if parts
+             else pd.DataFrame(columns=["category", "blocks", "bytes"]))
+    return {"categories": pd.DataFrame(per_cat), "sources": pd.DataFrame(per_src), "skipped": reasons,
+            "other": other}
 
 
 def format_stats(tables: dict[str, pd.DataFrame]) -> str:
     """The tables as plain text for the terminal."""
     parts = []
     for title, key in (("Records per category", "categories"), ("Records per SAC/SIC", "sources"),
-                       ("Skipped blocks", "skipped")):
+                       ("Skipped blocks", "skipped"), ("Blocks of categories not decoded", "other")):
+        if key not in tables:
+            continue
         t = tables[key]
         parts.append(f"{title}:\n" + ("  none" if t.empty else t.to_string(index=False)))
     return "\n\n".join(parts) + "\n"

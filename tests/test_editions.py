@@ -122,3 +122,32 @@ def test_every_edition_has_its_own_table():
     assert tables[21] == ["0.23", "0.24", "0.25", "0.26", *V2]
     assert tables[48] == ["1.27", "1.28", "1.29", "1.30", "1.31", "1.32"]
     assert resolve_edition(21, "2.2") == "2.2" and resolve_edition(48, "1.23") == "1.27"
+
+
+# --- editions={21: "auto"} chooses an edition, not a family ------------------------------------------
+
+def plain_2x(i: int) -> bytes:
+    """FSPEC FRNs 1, 3 (E0 would add 040; A0 = 1010 0000 = FRNs 1, 3): I021/010 00 01, I021/161 track i."""
+    return bytes([0xA0, 0x00, 0x01]) + (i & 0xFFF).to_bytes(2, "big")
+
+
+def test_auto_picks_2_1_from_a_block_with_odd_lw():
+    blocks = [block(21, plain_2x(i), plain_2x(i + 1)) for i in range(0, 40, 2)]
+    odd_at = sum(len(b) for b in blocks[:7])
+    blocks.insert(7, block(21, rec_271(0x05)))  # walks only under 2.1 (see above)
+    rec = decode_bytes(b"".join(blocks), editions={21: "auto"})
+    assert rec.editions[21] == "2.1" and rec.errors.empty
+    why = rec.edition_choice[21]
+    assert "editions walking every sampled block: 2.1;" in why
+    assert f"1 blocks told 2.1/2.2/2.3/2.4/2.5/2.6/2.7 apart: offset {odd_at} walks under 2.1)" in why
+    assert rec.frames[21].receiver_id.dropna().tolist() == [1]
+
+
+def test_auto_reports_when_no_edition_walks_every_block():
+    # block B: I021/271 = 01 51 50. 2.2+: 0x51 ends with FX=1, 0x50 with FX=0 -> 3 bytes, then 400 = 01.
+    # 2.1: 271 = 01 51 (no FX in octet 2), 400 = 0x50, then "01" starts a record whose FSPEC runs out.
+    rec_b = FSPEC_271_400 + bytes([0x00, 0x01, 0x01, 0x51, 0x50, 0x01])
+    data = block(21, rec_271(0x05)) + block(21, rec_b) + block(21, plain_2x(7))
+    rec = decode_bytes(data, editions={21: "auto"})
+    assert "no edition walks every sampled block" in rec.edition_choice[21]
+    assert len(rec.errors) == 1  # one of the two blocks is reported, never silently misread
