@@ -202,13 +202,13 @@ def _anchored(buf, r, stop, seen, base, nfrn, P, ext_sizes, ext_fx, sub_parts):
 
 
 @njit(cache=True, nogil=True)
-def _chained_inside(buf, q, end, base, nfrn, P, ext_sizes, ext_fx, sub_parts):
-    """A chain of blocks starting inside (q, end) reaches a decoded block that walks, all within end:
-    the block at q is then probably a false header swallowing real blocks."""
+def _chained_inside(buf, q, end, stop, base, nfrn, P, ext_sizes, ext_fx, sub_parts):
+    """A chain of blocks starting inside (q, end) reaches a decoded block that walks and starts before end
+    (it may run past end): the block at q is then probably a false header swallowing real blocks."""
     for r in range(q + 1, end - 2):
         x = r
         while x < end:
-            n = _header(buf, x, end)
+            n = _header(buf, x, stop)
             if n < 0:
                 break
             c = buf[x]
@@ -241,7 +241,7 @@ def _candidate(buf, r, stop, seen, base, nfrn, P, ext_sizes, ext_fx, sub_parts):
     n = _header(buf, r, stop)
     if n < 0 or not _anchored(buf, r, stop, seen, base, nfrn, P, ext_sizes, ext_fx, sub_parts):
         return False
-    return base[buf[r]] >= 0 or not _chained_inside(buf, r, r + n, base, nfrn, P, ext_sizes, ext_fx,
+    return base[buf[r]] >= 0 or not _chained_inside(buf, r, r + n, stop, base, nfrn, P, ext_sizes, ext_fx,
                                                      sub_parts)
 
 
@@ -342,15 +342,15 @@ def frame_blocks(buf, seg_start, seg_stop, exact, careful, base, nfrn, P, ext_si
                         # (and hides no walking chain: a damaged LEN that happens to land on a block)
                         ok = (q + n == stop or _anchored(buf, q + n, stop, seen, base, nfrn, P, ext_sizes,
                                                          ext_fx, sub_parts)) and not _chained_inside(
-                            buf, q, q + n, base, nfrn, P, ext_sizes, ext_fx, sub_parts)
+                            buf, q, q + n, stop, base, nfrn, P, ext_sizes, ext_fx, sub_parts)
                 elif seen[c] == 1:
                     ok = _next_ok(buf, q + n, stop, seen, base, nfrn, P, ext_sizes, ext_fx,
-                                  sub_parts) and not _chained_inside(buf, q, q + n, base, nfrn, P, ext_sizes,
-                                                                     ext_fx, sub_parts)
+                                  sub_parts) and not _chained_inside(buf, q, q + n, stop, base, nfrn, P,
+                                                                     ext_sizes, ext_fx, sub_parts)
                 else:  # a category not met yet: its chain must be anchored, and hide no real blocks
                     ok = (q + n == stop or _anchored(buf, q, stop, seen, base, nfrn, P, ext_sizes, ext_fx,
                                                      sub_parts)) and not (
-                        _chained_inside(buf, q, q + n, base, nfrn, P, ext_sizes, ext_fx, sub_parts))
+                        _chained_inside(buf, q, q + n, stop, base, nfrn, P, ext_sizes, ext_fx, sub_parts))
             if ok:
                 if nb == b_start.shape[0]:
                     b_start, b_len, b_seg, b_cat = _grow4(b_start, b_len, b_seg, b_cat)
