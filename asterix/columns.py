@@ -161,7 +161,13 @@ def markdown_schema() -> str:
              "`python -c 'from asterix.columns import markdown_schema; print(markdown_schema())'`.",
              "Every frame also has `day` (int64: days after the recording's first day), `timestamp` "
              "(datetime64[ns, UTC], NaT when the date is unknown), `block` (data block index in the file) "
-             "and `offset` (byte offset of the record in the file).", ""]
+             "and `offset` (byte offset of the record in the file).",
+             "",
+             "Identification text (`icao` columns: `callsign`) holds the 6-bit ICAO characters A-Z, space "
+             "and 0-9, trailing spaces stripped. All-zero codes (code 0 is no character) and all spaces are "
+             "absent (`<NA>`); any other code outside that set shows as `?`, never as a letter. Beside it, "
+             "`callsign_hex` (text, categorical) keeps the item's raw 48 bits as 12 upper-case hex digits "
+             "whenever the record carries the item.", ""]
     for family, cols in FAMILIES.items():
         lines += [f"## {family}", "", "| column | unit | dtype | source | meaning |", "|---|---|---|---|---|"]
         for c in cols:

@@ -146,9 +146,9 @@ def _layout(node: dict, prefix: tuple[str, ...]) -> Layout:
         return _fixed([node], prefix)
     if kind == "extended":
         groups = tuple(_fixed(g, prefix) for g in node["groups"])
-        fx = tuple(g.bits % 8 == 7 for g in groups)
+        fx = tuple(bool(f) for f in node["fx"])  # from the table: I021/271 in 2.1 ends without FX
         for i, g in enumerate(groups):
-            if g.bits % 8 not in (0, 7) or (not fx[i] and i != len(groups) - 1):
+            if (g.bits + fx[i]) % 8 or (not fx[i] and i != len(groups) - 1):
                 raise ValueError(f"extended octet group {i} of {g.bits} bits at {'/'.join(prefix)!r}")
         return Extended(groups, fx)
     if kind == "repetitive":

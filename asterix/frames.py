@@ -13,14 +13,21 @@ _ICAO[32] = " "
 _ICAO[48:58] = list("0123456789")
 
 
+_ALL_SPACES = int("100000" * 8, 2)
+
+
 def icao_text(raw: int) -> str:
-    """The 8-character ICAO 6-bit string of a 48-bit value, trailing spaces stripped."""
+    """The 8-character ICAO 6-bit string of a 48-bit value, trailing spaces stripped; "" (absent) for
+    all-zero codes (code 0 is no character) or all spaces. A code outside A-Z, space, 0-9 shows as '?'
+    (never a letter); the raw value stays in the ``*_hex`` column."""
+    if raw == 0 or raw == _ALL_SPACES:
+        return ""
     return "".join(_ICAO[(raw >> (42 - 6 * i)) & 63] for i in range(8)).rstrip()
 
 
-def _text_column(raw: np.ndarray, fmt) -> pd.Categorical:
+def _text_column(raw: np.ndarray, fmt, factorized=None) -> pd.Categorical:
     """Categorical text from raw ints (-1 = absent): each distinct value is formatted once."""
-    codes, uniques = pd.factorize(raw, sort=False)
+    codes, uniques = factorized if factorized is not None else pd.factorize(raw, sort=False)
     labels = [fmt(int(u)) for u in uniques]
     missing = [i for i, u in enumerate(uniques) if u < 0 or labels[i] == ""]
     if missing:
@@ -40,6 +47,7 @@ def _text_column(raw: np.ndarray, fmt) -> pd.Categorical:
 
 _FORMATS = {
     "hex": lambda v: f"{v:06X}",
+    "hex48": lambda v: f"{v:012X}",
     "octal": lambda v: f"{v:04o}",
     "icao": icao_text,
 }
@@ -54,6 +62,12 @@ def typed_column(col: Column, values: np.ndarray):
         return _text_column(values, _FORMATS[col.kind])
     dtype = _INT_DTYPES[col.kind]
     return pd.arrays.IntegerArray(values.astype(dtype), values < 0)
+
+
+def icao_columns(values: np.ndarray) -> tuple[pd.Categorical, pd.Categorical]:
+    """Identification text and its raw 48 bits as 12 hex digits (<NA> when absent), factorized once."""
+    factorized = pd.factorize(values, sort=False)
+    return _text_column(values, icao_text, factorized), _text_column(values, _FORMATS["hex48"], factorized)
 
 
 def empty_column(col: Column, n: int):

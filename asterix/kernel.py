@@ -1,6 +1,7 @@
 """The compiled record-walk kernel: frame data blocks, walk FSPECs and items, gather fields.
 
-Generic over the Layout arrays: ``frame_blocks`` finds data blocks in the payload segments;
+Generic over the Layout arrays: ``frame_blocks`` finds data blocks of every category in the payload
+segments (walking blocks only where the chain is broken);
 ``scan`` walks each block of one category (all or nothing), first to count records, then to
 note where each item of each record lies; ``gather`` reads every field into column arrays.
 """
@@ -23,60 +24,249 @@ E_GARBAGE = 9  # bytes between blocks that do not start a plausible data block
 E_EMPTY_BLOCK = 10  # a data block with no record
 
 
+# Columns of the packed part table P.
+K_KIND, K_SIZE, K_EXT_START, K_EXT_COUNT, K_SUB_START, K_SUB_COUNT, K_SLOT = range(7)
+LOOKAHEAD = 4  # blocks a resynchronisation candidate's chain is checked over
+
+
 @njit(cache=True, nogil=True)
-def _plausible(buf, q, stop, known):
-    """A data block header at q with a known category and a LEN that fits."""
-    if q + 3 > stop or known[buf[q]] == 0:
-        return False
+def _header(buf, q, stop):
+    """LEN of a complete data block header at q (category 1-255, 3 <= LEN, within the data), else -1."""
+    if q + 3 > stop or buf[q] == 0:
+        return np.int64(-1)
     n = (np.int64(buf[q + 1]) << 8) | buf[q + 2]
-    return n >= 3 and q + n <= stop
+    if n < 3 or q + n > stop:
+        return np.int64(-1)
+    return n
 
 
 @njit(cache=True, nogil=True)
-def _chain(buf, r, stop, known):
-    """What follows a block is the end, or a plausible header: of a known category (maybe cut
-    short by the end of the data), or of another category whose block is followed in turn by the
-    end or a known category."""
-    if r == stop:
-        return True
-    if r + 3 > stop:
-        return known[buf[r]] == 1
-    n = (np.int64(buf[r + 1]) << 8) | buf[r + 2]
-    if n < 3:
-        return False
-    if known[buf[r]] == 1:
-        return True
-    r2 = r + n
-    return r2 == stop or (r2 < stop and known[buf[r2]] == 1)
+def _part_len(buf, pos, end, sp, P, ext_sizes, ext_fx):
+    """Bytes of one non-compound part starting at pos, or -1 when it cannot be walked."""
+    k = P[sp, K_KIND]
+    n = np.int64(0)
+    if k == 1:
+        n = P[sp, K_SIZE]
+    elif k == 2:
+        g = 0
+        gcount = P[sp, K_EXT_COUNT]
+        while True:
+            gi = g if g < gcount else gcount - 1
+            n += ext_sizes[P[sp, K_EXT_START] + gi]
+            if pos + n > end:
+                return np.int64(-1)
+            if ext_fx[P[sp, K_EXT_START] + gi] == 0 or buf[pos + n - 1] & 1 == 0:
+                break
+            g += 1
+    elif k == 3:
+        if pos >= end:
+            return np.int64(-1)
+        n = 1 + np.int64(buf[pos]) * P[sp, K_SIZE]
+    elif k == 4:
+        while True:
+            n += P[sp, K_SIZE]
+            if pos + n > end:
+                return np.int64(-1)
+            if buf[pos + n - 1] & 1 == 0:
+                break
+    elif k == 6:
+        if pos >= end:
+            return np.int64(-1)
+        n = np.int64(buf[pos])
+        if n == 0:
+            return np.int64(-1)
+    else:
+        return np.int64(-1)
+    return n if pos + n <= end else np.int64(-1)
 
 
 @njit(cache=True, nogil=True)
-def _strong(buf, r, stop, known):
-    """A header at r that starts two plausible blocks in a row (or one that ends the data)."""
-    if not _plausible(buf, r, stop, known):
+def walks(buf, q, n, p0, n_frn, P, ext_sizes, ext_fx, sub_parts):
+    """True when the block at q (LEN n) walks record by record exactly to its end under the layout whose
+    parts start at row p0 of P (framing's consistency check; the decode itself is ``scan``)."""
+    pos = q + 3
+    end = q + n
+    if pos >= end:
         return False
-    r2 = r + ((np.int64(buf[r + 1]) << 8) | buf[r + 2])
-    if r2 == stop:
-        return True
-    if not _plausible(buf, r2, stop, known):
-        return False
-    return _chain(buf, r2 + ((np.int64(buf[r2 + 1]) << 8) | buf[r2 + 2]), stop, known)
+    while pos < end:
+        fs = pos
+        while True:
+            if pos >= end:
+                return False
+            pos += 1
+            if buf[pos - 1] & 1 == 0:
+                break
+        fs_end = pos
+        any_item = False
+        for fq in range(fs, fs_end):
+            byte = buf[fq]
+            for bit in range(7):
+                if byte & (0x80 >> bit) == 0:
+                    continue
+                any_item = True
+                f = (fq - fs) * 7 + bit
+                if f >= n_frn or P[p0 + f, K_KIND] == 0:
+                    return False
+                p = p0 + f
+                if P[p, K_KIND] != 5:
+                    m = _part_len(buf, pos, end, p, P, ext_sizes, ext_fx)
+                    if m < 0:
+                        return False
+                    pos += m
+                    continue
+                cs = pos
+                while True:
+                    if pos >= end:
+                        return False
+                    pos += 1
+                    if buf[pos - 1] & 1 == 0:
+                        break
+                for cq in range(cs, pos):
+                    cb = buf[cq]
+                    for cbit in range(7):
+                        if cb & (0x80 >> cbit) == 0:
+                            continue
+                        si = (cq - cs) * 7 + cbit
+                        if si >= P[p, K_SUB_COUNT] or sub_parts[P[p, K_SUB_START] + si] < 0:
+                            return False
+                        m = _part_len(buf, pos, end, sub_parts[P[p, K_SUB_START] + si], P, ext_sizes, ext_fx)
+                        if m < 0:
+                            return False
+                        pos += m
+        if not any_item:
+            return False
+    return pos == end
 
 
 @njit(cache=True, nogil=True)
-def _chained_inside(buf, q, end, stop, known):
-    """A strongly chained header starts inside [q+1, end): the LEN at q is probably damaged."""
-    for r in range(q + 1, end):
-        if _strong(buf, r, stop, known):
+def all_walk(buf, blk_start, blk_len, blk_cat, base, nfrn, P, ext_sizes, ext_fx, sub_parts):
+    """True when every block of a walked category walks exactly (no memory: for chunk planning)."""
+    for b in range(blk_start.shape[0]):
+        c = blk_cat[b]
+        if base[c] >= 0 and not walks(buf, blk_start[b], blk_len[b], base[c], nfrn[c], P, ext_sizes, ext_fx,
+                                      sub_parts):
+            return False
+    return True
+
+
+@njit(cache=True, nogil=True)
+def walk_flags(buf, blk_start, blk_len, p0, n_frn, P, ext_sizes, ext_fx, sub_parts):
+    """1 for each block that walks exactly under one layout (edition choice; no memory per record)."""
+    out = np.zeros(blk_start.shape[0], np.int8)
+    for b in range(blk_start.shape[0]):
+        out[b] = walks(buf, blk_start[b], blk_len[b], p0, n_frn, P, ext_sizes, ext_fx, sub_parts)
+    return out
+
+
+@njit(cache=True, nogil=True)
+def _cut_tail(buf, x, stop, seen, base):
+    """The data ends inside a block header or block at x of a category already met (a truncated file)."""
+    if seen[buf[x]] == 0:
+        return False
+    if x + 3 > stop:
+        return True
+    n = (np.int64(buf[x + 1]) << 8) | buf[x + 2]
+    return n >= 3 and x + n > stop
+
+
+@njit(cache=True, nogil=True)
+def _anchored(buf, r, stop, seen, base, nfrn, P, ext_sizes, ext_fx, sub_parts):
+    """The block chain from r holds for LOOKAHEAD blocks (or to the end of the data) and is anchored:
+    one of its blocks is of a decoded category and walks exactly, or all its categories were already
+    met, or it reaches the end in two blocks or more (one LEN landing on the end proves little).
+    Every decoded block in it must walk exactly."""
+    x = r
+    walked = False
+    all_seen = True
+    ended = False
+    k = 0
+    while k < LOOKAHEAD and x < stop:
+        n = _header(buf, x, stop)
+        if n < 0:
+            if k > 0 and _cut_tail(buf, x, stop, seen, base):
+                ended = True  # a truncated tail: the chain reaches the end of the data
+                break
+            return walked and k >= 2  # breaks again: two chained blocks, one walking, still anchor it
+        c = buf[x]
+        if base[c] >= 0:
+            if not walks(buf, x, n, base[c], nfrn[c], P, ext_sizes, ext_fx, sub_parts):
+                return False
+            walked = True
+        elif seen[c] == 0:
+            all_seen = False
+        x += n
+        k += 1
+    if k == 0:
+        return False
+    return walked or all_seen or (k >= 2 and (ended or x == stop))
+
+
+@njit(cache=True, nogil=True)
+def _chained_inside(buf, q, end, stop, base, nfrn, P, ext_sizes, ext_fx, sub_parts):
+    """A chain of blocks starting inside (q, end) reaches a decoded block that walks and starts before end
+    (it may run past end): the block at q is then probably a false header swallowing real blocks."""
+    for r in range(q + 1, end - 2):
+        x = r
+        while x < end:
+            n = _header(buf, x, stop)
+            if n < 0:
+                break
+            c = buf[x]
+            if base[c] >= 0:
+                if walks(buf, x, n, base[c], nfrn[c], P, ext_sizes, ext_fx, sub_parts):
+                    return True
+                break
+            x += n
+    return False
+
+
+@njit(cache=True, nogil=True)
+def _hides_decoded(buf, q, end, base, nfrn, P, ext_sizes, ext_fx, sub_parts):
+    """A block of a walked category that walks exactly lies inside (q, end): cheap check of a block of
+    another category before its LEN is trusted (a damaged LEN there can swallow real blocks)."""
+    for r in range(q + 1, end - 2):
+        c = buf[r]
+        if base[c] < 0:
+            continue
+        n = (np.int64(buf[r + 1]) << 8) | buf[r + 2]
+        if n >= 3 and r + n <= end and walks(buf, r, n, base[c], nfrn[c], P, ext_sizes, ext_fx, sub_parts):
             return True
     return False
 
 
 @njit(cache=True, nogil=True)
-def frame_blocks(buf, seg_start, seg_stop, exact, known):
-    """Split payload segments into data blocks; return block and error arrays.
+def _candidate(buf, r, stop, seen, base, nfrn, P, ext_sizes, ext_fx, sub_parts):
+    """Framing may resume at r: its chain is anchored, and a block of a category not walked hides no
+    walking chain (a false header there would swallow real blocks)."""
+    n = _header(buf, r, stop)
+    if n < 0 or not _anchored(buf, r, stop, seen, base, nfrn, P, ext_sizes, ext_fx, sub_parts):
+        return False
+    return base[buf[r]] >= 0 or not _chained_inside(buf, r, r + n, stop, base, nfrn, P, ext_sizes, ext_fx,
+                                                     sub_parts)
 
-    known[cat] is 1 for categories msdc decodes (resynchronisation looks for those only).
+
+@njit(cache=True, nogil=True)
+def _next_ok(buf, x, stop, seen, base, nfrn, P, ext_sizes, ext_fx, sub_parts):
+    """What follows a block that does not prove itself: the end, a truncated tail, a header of a decoded
+    or already met category, or an anchored chain."""
+    if x == stop:
+        return True
+    n = _header(buf, x, stop)
+    if n < 0:
+        return _cut_tail(buf, x, stop, seen, base)
+    c = buf[x]
+    return base[c] >= 0 or seen[c] == 1 or _anchored(buf, x, stop, seen, base, nfrn, P, ext_sizes, ext_fx,
+                                                      sub_parts)
+
+
+@njit(cache=True, nogil=True)
+def frame_blocks(buf, seg_start, seg_stop, exact, careful, base, nfrn, P, ext_sizes, ext_fx, sub_parts):
+    """Split payload segments into data blocks of any category; return block and error arrays.
+
+    A raw segment whose block chain runs from its start exactly to its end is taken as it is (no block
+    is walked). Otherwise, or with careful=True, it is framed carefully: a block is accepted when it is
+    consistent with what follows (decoded categories, those with base[cat] >= 0, must walk exactly),
+    and where the chain breaks, framing resumes at the next offset whose chain is anchored (_anchored).
     Returns (blk_start, blk_len, blk_cat, blk_seg, err_off, err_len, err_cat, err_code).
     """
     cap = 16
@@ -88,42 +278,24 @@ def frame_blocks(buf, seg_start, seg_stop, exact, known):
     e_len = np.empty(cap, np.int64)
     e_cat = np.empty(cap, np.int16)
     e_code = np.empty(cap, np.int16)
+    seen = np.zeros(256, np.uint8)
     nb = 0
     ne = 0
     for s in range(seg_start.shape[0]):
         start = seg_start[s]
         stop = seg_stop[s]
-        if exact:
-            # the payload must tile exactly into blocks, else it is skipped whole
+        if exact or not careful:
+            # follow the chain; a payload (exact) must tile into blocks, else it is skipped whole
             q = start
-            ok = True
+            nb0 = nb
             while q < stop:
-                if q + 3 > stop:
-                    ok = False
+                n = _header(buf, q, stop) if not exact else np.int64(-1)
+                if exact and q + 3 <= stop:
+                    n = (np.int64(buf[q + 1]) << 8) | buf[q + 2]
+                    if n < 3 or q + n > stop:
+                        n = -1
+                if n < 0:
                     break
-                n = (np.int64(buf[q + 1]) << 8) | buf[q + 2]
-                if n < 3 or q + n > stop:
-                    ok = False
-                    break
-                q += n
-            if not ok:
-                if ne == e_off.shape[0]:
-                    e_off, e_len, e_cat, e_code = _grow4(e_off, e_len, e_cat, e_code)
-                e_off[ne] = start
-                e_len[ne] = stop - start
-                e_cat[ne] = buf[start] if stop > start else -1
-                e_code[ne] = E_NO_FRAME
-                ne += 1
-                continue
-        q = start
-        while q < stop:
-            n = np.int64(0)
-            if q + 3 <= stop:
-                n = (np.int64(buf[q + 1]) << 8) | buf[q + 2]
-            # in a raw stream a header is trusted only when the next one is plausible too
-            if q + 3 <= stop and n >= 3 and q + n <= stop and (
-                    exact or _chain(buf, q + n, stop, known)
-                    or (known[buf[q]] == 1 and not _chained_inside(buf, q, q + n, stop, known))):
                 if nb == b_start.shape[0]:
                     b_start, b_len, b_seg, b_cat = _grow4(b_start, b_len, b_seg, b_cat)
                 b_start[nb] = q
@@ -132,17 +304,87 @@ def frame_blocks(buf, seg_start, seg_stop, exact, known):
                 b_seg[nb] = s
                 nb += 1
                 q += n
+            if q == stop and not exact:
+                # the chain holds; trust it unless a block of another category hides a walking block
+                hidden = False
+                for b in range(nb0, nb):
+                    if base[b_cat[b]] < 0 and _hides_decoded(buf, b_start[b], b_start[b] + b_len[b], base,
+                                                             nfrn, P, ext_sizes, ext_fx, sub_parts):
+                        hidden = True
+                        break
+                if not hidden:
+                    continue
+            elif q == stop:
                 continue
-            # bad header in a raw stream: skip to the next plausible block header
+            nb = nb0
+            if exact:
+                if ne == e_off.shape[0]:
+                    e_off, e_len, e_cat, e_code = _grow4(e_off, e_len, e_cat, e_code)
+                e_off[ne] = start
+                e_len[ne] = stop - start
+                e_cat[ne] = buf[start] if stop > start else -1
+                e_code[ne] = E_NO_FRAME
+                ne += 1
+                continue
+        # careful framing of a raw segment
+        seen[:] = 0
+        q = start
+        while q < stop:
+            n = _header(buf, q, stop)
+            ok = False
+            if n > 0:
+                c = buf[q]
+                if base[c] >= 0:
+                    if walks(buf, q, n, base[c], nfrn[c], P, ext_sizes, ext_fx, sub_parts):
+                        ok = True  # walking exactly to its LEN is the block's own evidence
+                    else:
+                        # a block that does not walk keeps its LEN only if what follows is anchored
+                        # (and hides no walking chain: a damaged LEN that happens to land on a block)
+                        ok = (q + n == stop or _anchored(buf, q + n, stop, seen, base, nfrn, P, ext_sizes,
+                                                         ext_fx, sub_parts)) and not _chained_inside(
+                            buf, q, q + n, stop, base, nfrn, P, ext_sizes, ext_fx, sub_parts)
+                elif seen[c] == 1:
+                    ok = _next_ok(buf, q + n, stop, seen, base, nfrn, P, ext_sizes, ext_fx,
+                                  sub_parts) and not _chained_inside(buf, q, q + n, stop, base, nfrn, P,
+                                                                     ext_sizes, ext_fx, sub_parts)
+                else:  # a category not met yet: its chain must be anchored, and hide no real blocks
+                    ok = (q + n == stop or _anchored(buf, q, stop, seen, base, nfrn, P, ext_sizes, ext_fx,
+                                                     sub_parts)) and not (
+                        _chained_inside(buf, q, q + n, stop, base, nfrn, P, ext_sizes, ext_fx, sub_parts))
+            if ok:
+                if nb == b_start.shape[0]:
+                    b_start, b_len, b_seg, b_cat = _grow4(b_start, b_len, b_seg, b_cat)
+                b_start[nb] = q
+                b_len[nb] = n
+                b_cat[nb] = buf[q]
+                b_seg[nb] = s
+                nb += 1
+                seen[buf[q]] = 1
+                q += n
+                continue
+            # the chain breaks here: resume at the next offset whose chain is anchored
             r = q + 1
-            while r < stop and not _strong(buf, r, stop, known):
+            while r < stop and not _candidate(buf, r, stop, seen, base, nfrn, P, ext_sizes, ext_fx,
+                                              sub_parts):
                 r += 1
+            if n > 0 and q + n < r:
+                # a complete block ends before the resumption point: keep it (a decoded one that does
+                # not walk is reported by the walk); only the bytes after it are unaccounted for
+                if nb == b_start.shape[0]:
+                    b_start, b_len, b_seg, b_cat = _grow4(b_start, b_len, b_seg, b_cat)
+                b_start[nb] = q
+                b_len[nb] = n
+                b_cat[nb] = buf[q]
+                b_seg[nb] = s
+                nb += 1
+                seen[buf[q]] = 1
+                q += n
             if ne == e_off.shape[0]:
                 e_off, e_len, e_cat, e_code = _grow4(e_off, e_len, e_cat, e_code)
             e_off[ne] = q
             e_len[ne] = r - q
             e_cat[ne] = buf[q]
-            e_code[ne] = E_BAD_LEN if q + 3 <= stop and known[buf[q]] == 1 else E_GARBAGE
+            e_code[ne] = E_BAD_LEN if q + 3 <= stop and (seen[buf[q]] or base[buf[q]] >= 0) else E_GARBAGE
             ne += 1
             q = r
     return (b_start[:nb], b_len[:nb], b_cat[:nb], b_seg[:nb], e_off[:ne], e_len[:ne], e_cat[:ne],
@@ -163,12 +405,8 @@ def _grow4(a, b, c, d):
     return a2, b2, c2, d2
 
 
-# Columns of the packed part table P.
-K_KIND, K_SIZE, K_EXT_START, K_EXT_COUNT, K_SUB_START, K_SUB_COUNT, K_SLOT = range(7)
-
-
 @njit(cache=True, nogil=True)
-def scan(buf, blk_start, blk_len, P, ext_sizes, sub_parts, n_frn, n_slots, rel_off, rel_len, rec_off,
+def scan(buf, blk_start, blk_len, P, ext_sizes, ext_fx, sub_parts, n_frn, n_slots, rel_off, rel_len, rec_off,
          rec_blk):
     """Walk every block record by record, all or nothing per block, in one pass.
 
@@ -277,7 +515,8 @@ def scan(buf, blk_start, blk_len, P, ext_sizes, sub_parts, n_frn, n_slots, rel_o
                                 n += ext_sizes[P[sp, K_EXT_START] + gi]
                                 if pos + n > end:
                                     break
-                                if buf[pos + n - 1] & 1 == 0:
+                                # an octet-group without FX (I021/271 in 2.1) ends the item
+                                if ext_fx[P[sp, K_EXT_START] + gi] == 0 or buf[pos + n - 1] & 1 == 0:
                                     break
                                 g += 1
                         elif k == 3:

@@ -40,6 +40,7 @@ class Layout:
     ext_start: np.ndarray  # int32 per part: index into ext_sizes
     ext_count: np.ndarray  # int32 per part
     ext_sizes: np.ndarray  # int32 octet-group sizes of extended parts
+    ext_fx: np.ndarray  # int8 per octet-group: 1 when it ends with an FX bit (I021/271 in 2.1: not the last)
     sub_start: np.ndarray  # int32 per part: index into sub_parts (compound)
     sub_count: np.ndarray  # int32 per part
     sub_parts: np.ndarray  # int32 part index of each compound subitem, -1 for a spare position
@@ -92,6 +93,14 @@ def _packed(lay: Layout, which: str) -> np.ndarray:
     return _PACKED[key]
 
 
+def _fx_flags(node: dict) -> list[bool]:
+    """Which octet-groups of an extended node end with an FX bit (from the table: never assumed)."""
+    fx = node.get("fx")
+    if fx is None or len(fx) != len(node["groups"]):
+        raise ValueError("extended item without per-group FX flags: regenerate the tables")
+    return [bool(f) for f in fx]
+
+
 def _locate(node: dict, path: tuple[str, ...]) -> tuple[int, dict] | None:
     """Bit offset and element node of a named field inside a fixed or extended node."""
     kind = node["kind"]
@@ -100,9 +109,10 @@ def _locate(node: dict, path: tuple[str, ...]) -> tuple[int, dict] | None:
     if kind == "element":
         return None
     if kind == "group":
-        children, fx_every = node["items"], None
+        children = node["items"]
     elif kind == "extended":
-        children, fx_every = [c for g in node["groups"] for c in g + [{"kind": "fx", "bits": 1}]], True
+        children = [c for g, fx in zip(node["groups"], _fx_flags(node), strict=True)
+                    for c in g + ([{"kind": "fx", "bits": 1}] if fx else [])]
     else:
         return None
     bit = 0
@@ -111,7 +121,6 @@ def _locate(node: dict, path: tuple[str, ...]) -> tuple[int, dict] | None:
             inner = _locate(child, path[1:]) if child["kind"] != "element" or len(path) > 1 else (0, child)
             return None if inner is None else (bit + inner[0], inner[1])
         bit += child["bits"]
-    del fx_every
     return None
 
 
@@ -126,6 +135,7 @@ def compile_layout(category: int, edition: str | None = None) -> Layout:
     n_frn = len(parts)
     kind, size, ext_start, ext_count, sub_start, sub_count = ([] for _ in range(6))
     ext_sizes: list[int] = []
+    ext_fx: list[int] = []
     sub_parts: list[int] = []
     i = 0
     while i < len(parts):
@@ -137,8 +147,9 @@ def compile_layout(category: int, edition: str | None = None) -> Layout:
                 k, s = FIXED, bits // 8
             elif nk == "extended":
                 k, es = EXTENDED, len(ext_sizes)
-                for g in node["groups"]:
-                    ext_sizes.append((sum(c["bits"] for c in g) + 1) // 8)
+                for g, fx in zip(node["groups"], _fx_flags(node), strict=True):
+                    ext_sizes.append((sum(c["bits"] for c in g) + fx) // 8)
+                    ext_fx.append(int(fx))
                 ec, s = len(node["groups"]), ext_sizes[es]
             elif nk == "repetitive":
                 bits = fixed_bits(node["item"])
@@ -215,7 +226,8 @@ def compile_layout(category: int, edition: str | None = None) -> Layout:
     return Layout(
         category, edition, columns,
         np.array(kind, np.int8), np.array(size, i32), np.array(ext_start, i32), np.array(ext_count, i32),
-        np.array(ext_sizes or [1], i32), np.array(sub_start, i32), np.array(sub_count, i32),
+        np.array(ext_sizes or [1], i32), np.array(ext_fx or [1], np.int8), np.array(sub_start, i32),
+        np.array(sub_count, i32),
         np.array(sub_parts or [-1], i32), np.array(slot, i32), n_frn, n_slots,
         np.array(f[0], i32), np.array(f[1], i32), np.array(f[2], i32), np.array(f[3], np.bool_),
         np.array(f[4], i32), np.array(f[5], i32), np.array(f[6], np.float64),

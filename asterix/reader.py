@@ -8,6 +8,7 @@ import os
 from collections.abc import Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass, field
+from functools import cache
 
 import numpy as np
 import pandas as pd
@@ -15,13 +16,13 @@ import pandas as pd
 from . import kernel
 from .containers import Segments, read_segments
 from .errors import REASONS, DecodeError, UnreadableInput
-from .frames import empty_column, typed_column
+from .frames import empty_column, icao_columns, typed_column
 from .layout import Layout, compile_layout
-from .tables import resolve_edition
+from .tables import available, resolve_edition
 from .timeline import assign_days, timestamp_index
 
 DECODABLE = (21, 48)
-AUTO_CANDIDATES = {21: ("2.7", "0.26", "0.23")}
+AUTO_SAMPLE_BLOCKS = 20_000  # blocks walked per candidate edition by editions={cat: "auto"}
 ERROR_COLUMNS = ["file", "offset", "length", "category", "reason"]
 
 
@@ -38,10 +39,19 @@ class Recording:
     size_bytes: int = 0
     container_bytes: int = 0
     decoded_bytes: int = 0
-    ignored_blocks: dict[int, int] = field(default_factory=dict)  # blocks of unselected categories
+    ignored_blocks: dict[int, int] = field(default_factory=dict)  # blocks per category not decoded
     ignored_bytes: int = 0
     edition_choice: dict[int, str] = field(default_factory=dict)  # how 'auto' chose, in words
     day0: int | None = None  # container day number of day 0: capture day (pcap), day byte (final); raw None
+    ignored_category_bytes: dict[int, int] = field(default_factory=dict)  # bytes per category not decoded
+
+    @property
+    def ignored(self) -> pd.DataFrame:
+        """Blocks of categories not decoded (other categories, or not selected): category, blocks, bytes."""
+        return pd.DataFrame({"category": list(self.ignored_blocks),
+                             "blocks": list(self.ignored_blocks.values()),
+                             "bytes": [self.ignored_category_bytes.get(c, 0) for c in self.ignored_blocks]},
+                            columns=["category", "blocks", "bytes"])
 
     def __getitem__(self, category: int) -> pd.DataFrame:
         return self.frames[category]
@@ -83,35 +93,65 @@ def _scan(buf, starts, lens, lay: Layout):
         rel_off = np.full((cap, slots), 0xFFFF, np.uint16)
         rel_len = np.zeros((cap, slots), np.uint16)
         rec_off, rec_blk = np.empty(cap, np.int64), np.empty(cap, np.int64)
-        counts, fail_at, n = kernel.scan(buf, starts, lens, lay.P, lay.ext_sizes, lay.sub_parts, lay.n_frn,
-                                         lay.n_slots, rel_off, rel_len, rec_off, rec_blk)
+        counts, fail_at, n = kernel.scan(buf, starts, lens, lay.P, lay.ext_sizes, lay.ext_fx, lay.sub_parts,
+                                         lay.n_frn, lay.n_slots, rel_off, rel_len, rec_off, rec_blk)
         if n >= 0:
             return counts, fail_at, rel_off, rel_len, rec_off, rec_blk, n
         cap *= 2
 
 
 def choose_edition(buf: np.ndarray, starts: np.ndarray, lens: np.ndarray, category: int,
-                   sample: int = 400) -> tuple[str, str]:
-    """Pick the edition family under which a sample of blocks walks exactly with plausible values."""
+                   sample: int = AUTO_SAMPLE_BLOCKS) -> tuple[str, str]:
+    """Pick the edition under which every sampled block walks exactly (the newest of those, as they read
+    the sample alike), values plausible; say which blocks told the editions apart, or that none walks all.
+
+    The sample is every block, or AUTO_SAMPLE_BLOCKS spread evenly over a longer recording: a walk costs
+    no memory, so rare blocks that tell editions apart (I021/271 with an odd LW) are seen.
+    """
     idx = np.unique(np.linspace(0, len(starts) - 1, min(sample, len(starts))).astype(np.int64))
     s, n = starts[idx], lens[idx]
-    scores = []
-    for ed in AUTO_CANDIDATES[category]:
-        lay = compile_layout(category, ed)
-        scanned = _scan(buf, s, n, lay)
-        counts = scanned[0]
-        good = counts > 0
-        plausible = 0.0
-        if good.any():
-            fl, _, _, _ = _extract(buf, scanned, lay)
-            cols = {nm: fl[i] for i, nm in enumerate(lay.out_names_float)}
-            lat, lon, tod = cols["latitude"], cols["longitude"], cols["time_of_day"]
-            ok = (np.abs(lat) <= 90) & (np.abs(lon) <= 180) & (tod >= 0) & (tod < 86400)
-            plausible = float(np.mean(ok)) if len(ok) else 0.0
-        scores.append((float(good.mean()) if len(good) else 0.0, plausible, ed))
-    best = max(scores, key=lambda t: (t[0], t[1]))
-    words = "; ".join(f"{ed}: {w:.0%} of sampled blocks walk, {p:.0%} plausible" for w, p, ed in scores)
-    return best[2], f"chose {best[2]} ({words})"
+    eds = sorted(available()[category], key=lambda e: tuple(int(x) for x in e.split(".")))
+    flags = {}
+    for ed in eds:
+        base, nfrn, P, ext_sizes, ext_fx, sub_parts = _framing_tables(((category, ed),))
+        flags[ed] = kernel.walk_flags(buf, s, n, base[category], nfrn[category], P, ext_sizes, ext_fx,
+                                      sub_parts)
+    share = {ed: float(f.mean()) for ed, f in flags.items()}
+    best = max(share.values())
+    tied = [ed for ed in eds if share[ed] == best]
+    plaus = {ed: _plausible_share(buf, s, n, category, ed) for ed in tied} if len(tied) > 1 else {}
+    top = max(plaus.values()) if plaus else None
+    chosen = [ed for ed in tied if not plaus or plaus[ed] == top][-1]
+    # blocks that told the contenders (editions walking at least half the sample) apart
+    contenders = [ed for ed in eds if share[ed] >= 0.5] or [chosen]
+    stack = np.array([flags[ed] for ed in contenders])
+    apart = np.flatnonzero(stack.min(axis=0) != stack.max(axis=0))
+    words = [f"{ed}: {share[ed]:.0%}" for ed in eds]
+    told = ", ".join(f"offset {int(s[j])} walks under {'/'.join(ed for ed in contenders if flags[ed][j])}"
+                     for j in apart[:3]) or "none"
+    if best < 1:
+        verdict = f"no edition walks every sampled block; best {chosen}"
+    else:
+        verdict = f"editions walking every sampled block: {', '.join(tied)}; newest {chosen}"
+    if plaus:
+        verdict += " (" + ", ".join(f"{ed} {p:.0%} plausible" for ed, p in plaus.items()) + ")"
+    return chosen, (f"chose {chosen} ({len(idx)} of {len(starts)} blocks sampled; blocks walking: "
+                    f"{'; '.join(words)}; {verdict}; "
+                    f"{len(apart)} blocks told {'/'.join(contenders)} apart: {told})")
+
+
+def _plausible_share(buf, s, n, category: int, ed: str, limit: int = 400) -> float:
+    """Share of records of up to ``limit`` sampled blocks with a plausible position and time of day."""
+    k = np.unique(np.linspace(0, len(s) - 1, min(limit, len(s))).astype(np.int64))
+    lay = compile_layout(category, ed)
+    scanned = _scan(buf, s[k], n[k], lay)
+    if not (scanned[0] > 0).any():
+        return 0.0
+    fl, _, _, _ = _extract(buf, scanned, lay)
+    cols = {nm: fl[i] for i, nm in enumerate(lay.out_names_float)}
+    lat, lon, tod = cols["latitude"], cols["longitude"], cols["time_of_day"]
+    ok = (np.abs(lat) <= 90) & (np.abs(lon) <= 180) & (tod >= 0) & (tod < 86400)
+    return float(np.mean(ok)) if len(ok) else 0.0
 
 
 def _extract(buf, scanned, lay: Layout):
@@ -135,8 +175,13 @@ def _columns(lay: Layout, fl, ints, rec_off, rec_blk) -> dict[str, object]:
     for col in lay.columns:
         if not any(src[0] in lay.item_frn for src in col.sources):
             data[col.name] = empty_column(col, n)
+            if col.kind == "icao":
+                data[f"{col.name}_hex"] = icao_columns(np.full(n, -1, np.int64))[1]
             continue
         matrix, row = where[col.name]
+        if col.kind == "icao":  # the raw identification beside its text (codes outside the ICAO set)
+            data[col.name], data[f"{col.name}_hex"] = icao_columns(matrix[row])
+            continue
         data[col.name] = matrix[row] if matrix is fl else typed_column(col, matrix[row])
     data["block"] = rec_blk
     data["offset"] = rec_off
@@ -153,41 +198,116 @@ def _build(cols: dict[str, object]) -> pd.DataFrame:
     return pd.DataFrame({c: cols[c] for c in order}, copy=False)
 
 
+@cache
+def _framing_tables(walked: tuple[tuple[int, str], ...]):
+    """The layouts framing walks blocks with, packed into one part table (base[cat] = first row, -1 if
+    the category is not walked), for kernel.frame_blocks."""
+    base = np.full(256, -1, np.int64)
+    nfrn = np.zeros(256, np.int64)
+    parts, ext_sizes, ext_fx, sub_parts = [np.zeros((1, 7), np.int64)], [], [], []
+    n_parts, n_ext, n_sub = 1, 0, 0  # row 0 is a dummy: P is never empty
+    for cat, ed in walked:
+        lay = compile_layout(cat, ed)
+        P = lay.P.copy()
+        P[:, kernel.K_EXT_START] += n_ext
+        P[:, kernel.K_SUB_START] += n_sub
+        sub = lay.sub_parts.astype(np.int64)
+        sub_parts.append(np.where(sub >= 0, sub + n_parts, -1))
+        ext_sizes.append(lay.ext_sizes.astype(np.int64))
+        ext_fx.append(lay.ext_fx.astype(np.int8))
+        base[cat], nfrn[cat] = n_parts, lay.n_frn
+        parts.append(P)
+        n_parts, n_ext, n_sub = n_parts + len(P), n_ext + len(lay.ext_sizes), n_sub + len(sub)
+    return (base, nfrn, np.ascontiguousarray(np.concatenate(parts)), _cat_or(ext_sizes, 1, np.int64),
+            _cat_or(ext_fx, 1, np.int8), _cat_or(sub_parts, -1, np.int64))
+
+
+def _cat_or(arrays: list[np.ndarray], fill: int, dtype) -> np.ndarray:
+    """The arrays end to end, or a one-element placeholder (numba wants no empty tables)."""
+    return np.concatenate(arrays) if arrays else np.array([fill], dtype)
+
+
+def frame(buf: np.ndarray, seg: Segments, walked: dict[int, str | None] | None = None,
+          careful: bool = False):
+    """Data blocks of every category in the segments (kernel.frame_blocks); ``walked`` gives the
+    categories (and editions) whose blocks must walk exactly where framing has to resynchronise."""
+    key = tuple(sorted((c, compile_layout(c, e).edition) for c, e in (walked or {}).items()))
+    return kernel.frame_blocks(buf, seg.start, seg.stop, seg.exact, careful, *_framing_tables(key))
+
+
+def _lone_category(b_cat: np.ndarray, walked: dict) -> bool:
+    """A category not walked that has a single block: a possible false header, worth careful framing."""
+    counts = np.bincount(b_cat.astype(np.int64), minlength=256)
+    counts[list(walked)] = 0
+    return bool((counts == 1).any())
+
+
+def walked_editions(editions: dict, categories) -> dict[int, str | None]:
+    """Categories whose blocks framing may walk, with their edition: the decoded ones and, when not
+    selected, CAT048 (1.32 walks every edition) and those whose edition is given; never 'auto' ones."""
+    return {c: editions.get(c) for c in DECODABLE
+            if (categories is None or c in set(categories) or c == 48 or c in editions)
+            and editions.get(c) != "auto"}
+
+
+def frame_checked(buf: np.ndarray, seg: Segments, walked: dict[int, str | None]):
+    """Framing as decode_buffer settles it, without decoding: the chain as it is when it holds and
+    every walked block walks, else careful framing (chunk planning for iter_read)."""
+    key = tuple(sorted((c, compile_layout(c, e).edition) for c, e in walked.items()))
+    tables = _framing_tables(key)
+    framed = kernel.frame_blocks(buf, seg.start, seg.stop, seg.exact, False, *tables)
+    if seg.exact or (not len(framed[4]) and not _lone_category(framed[2], walked)
+                     and kernel.all_walk(buf, framed[0], framed[1], framed[2], *tables)):
+        return framed
+    return kernel.frame_blocks(buf, seg.start, seg.stop, seg.exact, True, *tables)
+
+
 def decode_buffer(buf: np.ndarray, seg: Segments, *, path: str = "", editions: dict | None = None,
                   categories=None, date=None, strict: bool = False) -> Recording:
     """Decode an in-memory recording whose container segments are already known."""
     editions = dict(editions or {})
-    wanted = set(DECODABLE if categories is None else categories)
-    known = np.zeros(256, np.uint8)
-    known[list(DECODABLE)] = 1
-    b_start, b_len, b_cat, b_seg, e_off, e_len, e_cat, e_code = kernel.frame_blocks(
-        buf, seg.start, seg.stop, seg.exact, known)
+    decoded = [c for c in DECODABLE if categories is None or c in set(categories)]
+    walked = walked_editions(editions, categories)
+    choice: dict[int, str] = {}
+    # Framing first follows the block chain as it is. If it breaks, or a decoded block does not walk
+    # (a LEN may be damaged), the raw stream is framed again carefully, walking the decoded blocks.
+    for careful in (False, True):
+        b_start, b_len, b_cat, b_seg, e_off, e_len, e_cat, e_code = frame(buf, seg, walked, careful)
+        scans: dict[int, tuple] = {}
+        for cat in decoded:
+            sel = np.flatnonzero(b_cat == cat)
+            if not len(sel):
+                continue
+            starts, lens = b_start[sel], b_len[sel]
+            ed = editions.get(cat)
+            if ed == "auto" and cat not in choice:
+                ed, choice[cat] = choose_edition(buf, starts, lens, cat)
+                editions[cat] = ed
+            lay = compile_layout(cat, ed)
+            scans[cat] = (sel, lay, _scan(buf, starts, lens, lay))
+        if careful or seg.exact or not (any((sc[2][0] < 0).any() for sc in scans.values())
+                                        or _lone_category(b_cat, walked)):
+            break
+        walked = walked_editions(editions, categories)
     errors: list[tuple[int, int, int, str]] = [
         (int(o), int(n), int(c), REASONS[int(code)])
         for o, n, c, code in zip(e_off, e_len, e_cat, e_code, strict=True)]
     errors += [(o, n, -1, f"container: {why}") for o, n, why in seg.problems]
     columns: dict[int, dict] = {}
     chosen: dict[int, str] = {}
-    choice: dict[int, str] = {}
     ignored: dict[int, int] = {}
+    ignored_by_cat: dict[int, int] = {}
     decoded_bytes = ignored_bytes = 0
     for cat in (int(c) for c in np.unique(b_cat)):
-        sel = np.flatnonzero(b_cat == cat)
-        if cat not in DECODABLE:
-            errors += [(int(o), int(n), cat, f"unknown category {cat} (msdc decodes CAT021 and CAT048)")
-                       for o, n in zip(b_start[sel], b_len[sel], strict=True)]
+        if cat not in scans:  # a category not decoded: stepped over, accounted per category
+            sel = b_cat == cat
+            ignored[cat] = int(sel.sum())
+            ignored_by_cat[cat] = int(b_len[sel].sum())
+            ignored_bytes += ignored_by_cat[cat]
             continue
-        if cat not in wanted:
-            ignored[cat] = len(sel)
-            ignored_bytes += int(b_len[sel].sum())
-            continue
+        sel, lay, scanned = scans.pop(cat)
         starts, lens = b_start[sel], b_len[sel]
-        ed = editions.get(cat)
-        if ed == "auto":
-            ed, choice[cat] = choose_edition(buf, starts, lens, cat)
-        lay = compile_layout(cat, ed)
         chosen[cat] = lay.edition
-        scanned = _scan(buf, starts, lens, lay)
         counts, fail_at = scanned[0], scanned[1]
         for j in np.flatnonzero(counts < 0):
             reason = f"{REASONS[int(-counts[j])]} (record at offset {int(fail_at[j])})"
@@ -215,7 +335,7 @@ def decode_buffer(buf: np.ndarray, seg: Segments, *, path: str = "", editions: d
     err.insert(0, "file", path)
     err["category"] = err["category"].astype("Int16").where(err["category"] >= 0)
     return Recording(frames, err, chosen, path, seg.format, date, int(len(buf)), int(seg.container_bytes),
-                     decoded_bytes, ignored, ignored_bytes, choice, first_day)
+                     decoded_bytes, ignored, ignored_bytes, choice, first_day, ignored_by_cat)
 
 
 def _parse_editions(editions) -> dict[int, str]:
@@ -253,8 +373,6 @@ def categories_in(path, *, format: str | None = None) -> dict[int, int]:
     """Data blocks per category in a recording, from framing alone (fast: no record is walked)."""
     with _mapped(path) as buf:
         seg = read_segments(buf, format)
-        known = np.zeros(256, np.uint8)
-        known[list(DECODABLE)] = 1
-        cats = kernel.frame_blocks(buf, seg.start, seg.stop, seg.exact, known)[2]
+        cats = frame(buf, seg)[2]
         values, counts = np.unique(cats, return_counts=True)
         return {int(v): int(n) for v, n in zip(values, counts, strict=True)}

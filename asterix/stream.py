@@ -6,9 +6,16 @@ from collections.abc import Iterator
 
 import numpy as np
 
-from . import kernel
 from .containers import Segments, read_segments
-from .reader import DECODABLE, Recording, _mapped, _parse_date, _parse_editions, decode_buffer
+from .reader import (
+    Recording,
+    _mapped,
+    _parse_date,
+    _parse_editions,
+    decode_buffer,
+    frame_checked,
+    walked_editions,
+)
 from .timeline import restamp
 
 
@@ -21,7 +28,7 @@ def iter_read(path, *, chunk: int = 1_000_000, editions=None, date=None, categor
     eds = _parse_editions(editions)
     with _mapped(path) as buf:
         seg = read_segments(buf, format)
-        bounds = _chunk_bounds(buf, seg, chunk)
+        bounds = _chunk_bounds(buf, seg, chunk, eds, categories)
         carry_day = 0
         last_tod = np.nan
         first_date = _parse_date(date)
@@ -60,13 +67,11 @@ def _continue_days(rec: Recording, carry_day: int, last_tod: float, date) -> tup
     return int(day), float(tod)
 
 
-def _chunk_bounds(buf: np.ndarray, seg: Segments, chunk: int):
+def _chunk_bounds(buf: np.ndarray, seg: Segments, chunk: int, eds: dict, categories):
     """Split the segments into groups of about ``chunk`` bytes, cutting raw streams at block starts."""
     out = []
     if seg.format == "raw" and len(seg.start):
-        known = np.zeros(256, np.uint8)
-        known[list(DECODABLE)] = 1
-        b_start, _, _, _, _, _, _, _ = kernel.frame_blocks(buf, seg.start, seg.stop, False, known)
+        b_start = frame_checked(buf, seg, walked_editions(eds, categories))[0]
         cuts = [int(seg.start[0])]
         for s in b_start:
             if s - cuts[-1] >= chunk:

@@ -1,7 +1,8 @@
 """Decode speed and memory: records/s and peak RSS per category, and pyasteryx's rate when installed.
 
 Run by hand (never a timed test): ``python benchmarks/decode.py [--records 1000000]``.
-Recordings are built with msdc's own encoder and cached in --work. Each measurement runs in a fresh
+Recordings are built with msdc's own encoder and cached in --work; a third case is the CAT048 one with
+30 % of its bytes in blocks of other categories (stepped over by framing). Each measurement runs in a fresh
 process: one warm-up decode (numba's cached kernel loads, memory pages are touched once), then the
 best of --repeat timed decodes, file in page cache to DataFrame.
 """
@@ -72,6 +73,31 @@ def build(path: Path, category: int, n: int) -> None:
                                   prefer={"latitude": "130", "longitude": "130"} if category == 21 else None))
 
 
+def build_mixed(path: Path, cat048_path: Path, other_share: float = 0.30) -> None:
+    """The CAT048 recording with blocks of other categories (CAT001 plots, CAT002 sector messages; msdc
+    decodes neither) after each CAT048 block, so that other_share of the bytes are other categories."""
+    data = cat048_path.read_bytes()
+    out = bytearray()
+    owed = 0.0
+    pos = 0
+    i = 0
+    while pos < len(data):
+        n = int.from_bytes(data[pos + 1:pos + 3], "big")
+        out += data[pos:pos + n]
+        pos += n
+        owed += n * other_share / (1 - other_share)
+        while owed >= 200:
+            i += 1
+            if i % 2:  # CAT001: 40 records of FSPEC C0 (I001/010, I001/020), SAC/SIC, target descriptor
+                body = bytes([0xC0, 25, 201, 0x22]) * 40
+            else:  # CAT002: 40 sector crossings: FSPEC E0, I002/010, I002/000 = 2, I002/020 sector
+                body = b"".join(bytes([0xE0, 25, 201, 2, k]) for k in range(40))
+            blk = bytes([1 if i % 2 else 2]) + (len(body) + 3).to_bytes(2, "big") + body
+            out += blk
+            owed -= len(blk)
+    path.write_bytes(bytes(out))
+
+
 def measure(path: Path, repeat: int) -> dict:
     """In this (fresh) process: warm up on a prefix, then the peak-memory decode and best-of-repeat."""
     import gc
@@ -136,8 +162,17 @@ def main() -> int:
         return 0
     work = Path(args.work)
     work.mkdir(parents=True, exist_ok=True)
-    for cat in (48, 21):
-        path = work / f"cat{cat:03d}_{args.records}.ast"
+    for cat in (48, 21, "48+30% other"):
+        if cat == "48+30% other":
+            path = work / f"cat048_other30_{args.records}.ast"
+            if not path.exists():
+                build_mixed(path, work / f"cat048_{args.records}.ast")
+                print(f"built {path} ({path.stat().st_size / 1e6:.1f} MB): CAT048 + 30 % CAT001/CAT002 bytes")
+            cat = 48
+            label = "CAT048+30% other"
+        else:
+            path = work / f"cat{cat:03d}_{args.records}.ast"
+            label = f"CAT{cat:03d}"
         if not path.exists():
             t0 = time.perf_counter()
             build(path, cat, args.records)
@@ -146,9 +181,9 @@ def main() -> int:
         m = json.loads(subprocess.run(run + ["--measure", str(path)], check=True, capture_output=True,
                                       text=True).stdout)
         grow_mb = m["peak_rss_mb"] - m["rss_before_mb"]
-        print(f"CAT{cat:03d}: {m['records']:,} records in {m['best_s']:.3f} s = "
+        print(f"{label}: {m['records']:,} records in {m['best_s']:.3f} s = "
               f"{m['records_per_s']:,.0f} rec/s (first decode in a fresh process {m['first_s']:.3f} s)")
-        print(f"CAT{cat:03d}: peak RSS {m['peak_rss_mb']:.0f} MB, of which the decode added {grow_mb:.0f} MB"
+        print(f"{label}: peak RSS {m['peak_rss_mb']:.0f} MB, of which the decode added {grow_mb:.0f} MB"
               f" (imports and kernel before it: {m['rss_before_mb']:.0f} MB); frames {m['frame_mb']:.0f} MB,"
               f" file {m['file_mb']:.0f} MB;"
               f" added/(frames+file) = {grow_mb / (m['frame_mb'] + m['file_mb']):.2f}")
@@ -156,10 +191,10 @@ def main() -> int:
                                              str(args.pyasteryx_records)], check=True, capture_output=True,
                                       text=True).stdout)
         if p is None:
-            print(f"CAT{cat:03d}: pyasteryx not installed (pip install pyasteryx to compare)")
+            print(f"{label}: pyasteryx not installed (pip install pyasteryx to compare)")
         else:
             ratio = m["records_per_s"] / p["records_per_s"]
-            print(f"CAT{cat:03d}: pyasteryx {p['records']:,} records in {p['seconds']:.2f} s = "
+            print(f"{label}: pyasteryx {p['records']:,} records in {p['seconds']:.2f} s = "
                   f"{p['records_per_s']:,.0f} rec/s; msdc / pyasteryx = {ratio:.0f}x")
     return 0
 

@@ -554,7 +554,8 @@ def stats_job(options: StatsOptions, *, progress: Progress | None = None) -> Sta
     if progress:
         progress.stage("Processing data files")
     loaded = _load(options, checked, progress)
-    return StatsResult(stats_tables(loaded.frames, loaded.errors), loaded, checked.warnings)
+    other = [r.ignored for r in loaded.recordings]  # blocks of categories not decoded
+    return StatsResult(stats_tables(loaded.frames, loaded.errors, other), loaded, checked.warnings)
 
 
 @dataclass

@@ -71,8 +71,10 @@ def _aircraft(frame: pd.DataFrame, cat: int) -> list[dict]:
     return rows
 
 
-def stats_tables(frames: dict[int, pd.DataFrame], errors: pd.DataFrame) -> dict[str, pd.DataFrame]:
-    """Tables: per category, per category and SAC/SIC, aircraft per sensor, skipped blocks by reason."""
+def stats_tables(frames: dict[int, pd.DataFrame], errors: pd.DataFrame,
+                 ignored: pd.DataFrame | list[pd.DataFrame] | None = None) -> dict[str, pd.DataFrame]:
+    """Tables: per category, per category and SAC/SIC, aircraft per sensor, skipped blocks by reason, and
+    blocks of categories not decoded (``Recording.ignored``, one frame or one per input)."""
     per_cat, per_src, aircraft = [], [], []
     for cat, f in sorted(frames.items()):
         start, end, duration = _span(f)
@@ -92,8 +94,12 @@ def stats_tables(frames: dict[int, pd.DataFrame], errors: pd.DataFrame) -> dict[
                    .reset_index().sort_values(["blocks", "first_offset"], ascending=[False, True]))
     else:
         reasons = pd.DataFrame(columns=columns)
+    parts = [f for f in (ignored if isinstance(ignored, list) else [ignored]) if f is not None and len(f)]
+    other = (pd.concat(parts).groupby("category", as_index=False)[["blocks", "bytes"]].sum() if parts
+             else pd.DataFrame(columns=["category", "blocks", "bytes"]))
     return {"categories": pd.DataFrame(per_cat), "sources": pd.DataFrame(per_src),
-            "aircraft": pd.DataFrame(aircraft), "skipped": reasons[columns].reset_index(drop=True)}
+            "aircraft": pd.DataFrame(aircraft), "skipped": reasons[columns].reset_index(drop=True),
+            "other": other}
 
 
 def format_stats(tables: dict[str, pd.DataFrame]) -> str:
@@ -101,7 +107,10 @@ def format_stats(tables: dict[str, pd.DataFrame]) -> str:
     parts = []
     for title, key in (("Records per category", "categories"), ("Records per SAC/SIC", "sources"),
                        ("Aircraft per sensor (address, call signs, time span)", "aircraft"),
-                       ("Skipped blocks by reason", "skipped")):
-        t = tables.get(key, pd.DataFrame())
+                       ("Skipped blocks by reason", "skipped"),
+                       ("Blocks of categories not decoded", "other")):
+        if key not in tables:
+            continue
+        t = tables[key]
         parts.append(f"{title}:\n" + ("  none" if t.empty else t.to_string(index=False)))
     return "\n\n".join(parts) + "\n"

@@ -13,7 +13,11 @@ import numpy as np
 import asterix
 from asterix.containers import read_segments
 
-SHARED = Path(__file__).resolve().parents[1].parent / "shared"
+# ../shared beside the repository root (CI clones the repository next to it); a worktree one level
+# deeper (worktrees/<name>) finds it one level up.
+_ROOT = Path(__file__).resolve().parents[1]
+SHARED = next((d for d in (_ROOT.parent / "shared", _ROOT.parent.parent / "shared") if d.is_dir()),
+              _ROOT.parent / "shared")
 
 
 def fspec(*frns: int) -> bytes:

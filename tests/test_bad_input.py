@@ -63,14 +63,14 @@ def test_len_past_end_and_fspec_past_block():
     assert accounted(rec) == len(data)
 
 
-def test_unknown_category_is_reported_and_skipped():
+def test_other_category_is_stepped_over_and_accounted():
     data, starts = good_stream(3)
-    alien = block(62, bytes([0x80, 1, 2]))
+    alien = block(62, bytes([0x80, 1, 2]))  # 62 06 00 80 01 02: six bytes
     rec = decode_bytes(data[:starts[1]] + alien + data[starts[1]:])
-    assert len(rec.frames[48]) == 9
-    assert list(rec.errors.category) == [62]
-    assert "unknown category 62" in rec.errors.reason.iloc[0]
-    assert rec.errors.offset.iloc[0] == starts[1]
+    assert len(rec.frames[48]) == 9 and rec.errors.empty
+    assert rec.ignored_blocks == {62: 1} and rec.ignored_category_bytes == {62: 6}
+    assert rec.ignored.to_dict("records") == [{"category": 62, "blocks": 1, "bytes": 6}]
+    assert accounted(rec) == len(data) + 6
 
 
 def test_garbage_between_blocks_is_one_entry():

@@ -230,3 +230,30 @@ def test_column_docs_are_current():
 
     doc = Path(__file__).resolve().parents[1] / "docs" / "columns.md"
     assert doc.read_text().strip() == markdown_schema().strip(), "regenerate docs/columns.md"
+
+
+# --- identification text: code 0 is no character ---------------------------------------------------
+
+@pytest.mark.parametrize(("hex6", "text", "raw"), [
+    ("000000000000", None, "000000000000"),  # eight code-0 characters: absent, not '????????'
+    ("820820820820", None, "820820820820"),  # eight spaces (100000 x 8): absent
+    # "AB" then code 0 then "C" + 4 spaces: A=000001 B=000010 0=000000 C=000011 then 100000 x 4
+    # 000001 000010 000000 000011 100000 100000 100000 100000 = 04 20 03 82 08 20
+    ("042003820820", "AB?C", "042003820820"),
+])
+def test_identification_text_outside_icao_set(hex6, text, raw):
+    # I048/240 (FRN 9) and I021/170 (0.23 FRN 18) carry the same 6-bit text
+    r = one048((9, bytes.fromhex(hex6)))
+    assert (pd.isna(r.callsign) if text is None else r.callsign == text)
+    assert r.callsign_hex == raw
+    # CAT021 0.23: FSPEC FRN 1 (81) and FRN 18: 17 = 2*7 + 3 -> octet 2 bit 0x80 >> 3 = 0x10: 81 01 10
+    rec = decode_bytes(block(21, bytes.fromhex("810110") + bytes([0, 1]) + bytes.fromhex(hex6)),
+                       editions={21: "0.23"})
+    r21 = rec.frames[21].iloc[0]
+    assert (pd.isna(r21.callsign) if text is None else r21.callsign == text)
+    assert r21.callsign_hex == raw
+
+
+def test_callsign_hex_absent_without_the_item():
+    r = one048()
+    assert pd.isna(r.callsign) and pd.isna(r.callsign_hex)

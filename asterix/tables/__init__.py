@@ -9,9 +9,10 @@ from pathlib import Path
 HERE = Path(__file__).parent
 
 # Edition aliases: editions whose UAP and item layouts are those of a table we ship.
+# CAT048 1.21-1.26 share the UAP and item layouts of 1.27 (the printed specs start at 1.27).
 ALIASES: dict[int, dict[str, str]] = {
-    48: {**{f"1.{m}": "1.27" for m in range(21, 31)}, "1.x": "1.32"},
-    21: {"2.x": "2.7", "2.2": "2.1", "2.3": "2.1", "2.5": "2.4", "0.x": "0.26"},
+    48: {**{f"1.{m}": "1.27" for m in range(21, 27)}, "1.x": "1.32"},
+    21: {"2.x": "2.7", "0.x": "0.26"},
 }
 DEFAULT_EDITION = {48: "1.32", 21: "2.7"}
 

@@ -1,6 +1,7 @@
 """Convert the printed asterix-specs item layouts into msdc's JSON edition tables.
 
-Run by hand when an edition is added: ``python -m asterix.tables.build ../shared/specs``.
+Run by hand when an edition is added: ``python -m asterix.tables.build ../shared/specs [21 48 ...]``
+(category numbers, optional: build only those).
 The JSON files it writes are committed; the decoder never reads the printed specs.
 """
 
@@ -13,7 +14,9 @@ from pathlib import Path
 
 HERE = Path(__file__).parent
 
-_FRN = re.compile(r"^FRN (\d+): (?:I(\d{3})/(\w+): (.*)|\(spare FRN, no item\))$")
+# A spare FRN prints as "(spare FRN, no item)" or, in some printouts (CAT021 2.2, 2.3, 2.5), as a bare
+# "UapItem_<n>" placeholder with no layout below it: both are FRNs without an item.
+_FRN = re.compile(r"^FRN (\d+): (?:I(\d{3})/(\w+): (.*)|\(spare FRN, no item\)|UapItem_\d+)$")
 _ELEMENT = re.compile(r"^element (\d+) bits: (.*)$")
 _GROUP = re.compile(r"^group (\d+) bits$")
 _SPARE = re.compile(r"^spare (\d+) bits$")
@@ -66,11 +69,13 @@ def _node(ls: _Lines) -> dict:
         rep = None if m[1] == "None" else int(m[1])
         return {"kind": "repetitive", "rep_bytes": rep, "item": _node(ls)}
     if text == "extended (FX)":
-        groups = []
+        groups, fx = [], []
         while (p := ls.peek()) and p[0] > indent and _OCTET.match(p[1]):
             gi, _ = ls.next()
-            groups.append([c for c in _children(ls, gi) if c["kind"] != "fx"])
-        return {"kind": "extended", "groups": groups}
+            children = _children(ls, gi)
+            groups.append([c for c in children if c["kind"] != "fx"])
+            fx.append(any(c["kind"] == "fx" for c in children))  # I021/271 in 2.1 ends without FX
+        return {"kind": "extended", "groups": groups, "fx": fx}
     if text == "compound":
         subs: list[dict | None] = []
         while (p := ls.peek()) and p[0] > indent and (m := _SUB.match(p[1])):
@@ -148,7 +153,10 @@ def _patch(node: dict, name: str, patch: dict) -> None:
 
 def main(argv: list[str]) -> int:
     src = Path(argv[1] if len(argv) > 1 else "../shared/specs")
+    only = {int(c) for c in argv[2:]}  # optional category numbers: build only those
     for path in sorted(src.glob("Cat_*.txt")):
+        if only and int(path.name.split("_")[1]) not in only:
+            continue
         table = apply_errata(parse_spec(path.read_text()))
         out = HERE / f"cat{table['category']:03d}_{table['edition']}.json"
         out.write_text(json.dumps(table, indent=1) + "\n")
