@@ -20,7 +20,10 @@ from .layout import Layout, compile_layout
 from .tables import resolve_edition
 from .timeline import assign_days, timestamp_index
 
-DECODABLE = (21, 48)
+DECODABLE = (21, 34, 48)
+# Decoded when categories=None. CAT034 (service messages) is decoded on request (categories=DECODABLE):
+# until the pipeline handles its frames, its blocks are stepped over and counted as ignored.
+DEFAULT_CATEGORIES = (21, 48)
 AUTO_CANDIDATES = {21: ("2.7", "0.26", "0.23")}
 ERROR_COLUMNS = ["file", "offset", "length", "category", "reason"]
 
@@ -157,7 +160,7 @@ def decode_buffer(buf: np.ndarray, seg: Segments, *, path: str = "", editions: d
                   categories=None, date=None, strict: bool = False) -> Recording:
     """Decode an in-memory recording whose container segments are already known."""
     editions = dict(editions or {})
-    wanted = set(DECODABLE if categories is None else categories)
+    wanted = set(DEFAULT_CATEGORIES if categories is None else categories)
     known = np.zeros(256, np.uint8)
     known[list(DECODABLE)] = 1
     b_start, b_len, b_cat, b_seg, e_off, e_len, e_cat, e_code = kernel.frame_blocks(
@@ -174,7 +177,7 @@ def decode_buffer(buf: np.ndarray, seg: Segments, *, path: str = "", editions: d
     for cat in (int(c) for c in np.unique(b_cat)):
         sel = np.flatnonzero(b_cat == cat)
         if cat not in DECODABLE:
-            errors += [(int(o), int(n), cat, f"unknown category {cat} (msdc decodes CAT021 and CAT048)")
+            errors += [(int(o), int(n), cat, f"unknown category {cat} (msdc decodes CAT021, 034, 048)")
                        for o, n in zip(b_start[sel], b_len[sel], strict=True)]
             continue
         if cat not in wanted:

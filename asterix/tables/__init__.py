@@ -13,7 +13,7 @@ ALIASES: dict[int, dict[str, str]] = {
     48: {**{f"1.{m}": "1.27" for m in range(21, 31)}, "1.x": "1.32"},
     21: {"2.x": "2.7", "2.2": "2.1", "2.3": "2.1", "2.5": "2.4", "0.x": "0.26"},
 }
-DEFAULT_EDITION = {48: "1.32", 21: "2.7"}
+DEFAULT_EDITION = {48: "1.32", 21: "2.7", 34: "1.29"}
 
 
 def available() -> dict[int, list[str]]:

@@ -1,6 +1,6 @@
 """Convert the printed asterix-specs item layouts into msdc's JSON edition tables.
 
-Run by hand when an edition is added: ``python -m asterix.tables.build ../shared/specs``.
+Run by hand when an edition is added: ``python -m asterix.tables.build ../shared/specs [GLOB]``.
 The JSON files it writes are committed; the decoder never reads the printed specs.
 """
 
@@ -20,6 +20,7 @@ _SPARE = re.compile(r"^spare (\d+) bits$")
 _REP = re.compile(r"^repetitive \(rep bytes=(\w+)\)$")
 _OCTET = re.compile(r"^octet-group (\d+):$")
 _SUB = re.compile(r"^\[(\d+)\] (\w+): ?(.*)$")
+_NO_SUB = re.compile(r"^\[(\d+)\] \(none\)$")  # a compound position with no subitem (CAT034 I034/050)
 _NAMED = re.compile(r"^(\w+): ?(.*)$")
 _QTY = re.compile(r"^(signed|unsigned) quantity lsb=([-+0-9.e]+) ?(.*)$")
 
@@ -73,12 +74,12 @@ def _node(ls: _Lines) -> dict:
         return {"kind": "extended", "groups": groups}
     if text == "compound":
         subs: list[dict | None] = []
-        while (p := ls.peek()) and p[0] > indent and (m := _SUB.match(p[1])):
+        while (p := ls.peek()) and p[0] > indent and (m := _SUB.match(p[1]) or _NO_SUB.match(p[1])):
             ls.next()
             index = int(m[1])
             while len(subs) < index - 1:
                 subs.append(None)
-            subs.append({"name": m[2], "title": m[3], "node": _node(ls)})
+            subs.append({"name": m[2], "title": m[3], "node": _node(ls)} if m.re is _SUB else None)
         return {"kind": "compound", "subitems": subs}
     if text.startswith("explicit"):
         return {"kind": "explicit"}
@@ -147,8 +148,9 @@ def _patch(node: dict, name: str, patch: dict) -> None:
 
 
 def main(argv: list[str]) -> int:
+    """Convert every printed spec in a folder, or only those matching a glob: ``... specs 'Cat_034_*'``."""
     src = Path(argv[1] if len(argv) > 1 else "../shared/specs")
-    for path in sorted(src.glob("Cat_*.txt")):
+    for path in sorted(src.glob(argv[2] if len(argv) > 2 else "Cat_*.txt")):
         table = apply_errata(parse_spec(path.read_text()))
         out = HERE / f"cat{table['category']:03d}_{table['edition']}.json"
         out.write_text(json.dumps(table, indent=1) + "\n")
