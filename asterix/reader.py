@@ -238,7 +238,7 @@ def _parse_editions(editions) -> dict[int, str]:
 
 def read(path, *, editions=None, date=None, categories=None, format: str | None = None,
          strict: bool = False) -> Recording:
-    """Decode a recording file (raw blocks, pcap/pcapng or final) into typed frames by category."""
+    """Decode a recording file (raw, pcap/pcapng, final, gps or oradis) into typed frames by category."""
     eds = _parse_editions(editions)
     for cat, ed in eds.items():
         if ed != "auto":

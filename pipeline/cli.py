@@ -26,7 +26,7 @@ from .quality_run import quality_figures, quality_run
 from .sensors import read_sensors, sensor_toml_snippet
 from .stats import format_stats, stats_tables
 
-FORMATS = ["raw", "pcap", "pcapng", "final"]
+FORMATS = ["raw", "pcap", "pcapng", "final", "gps", "oradis"]
 
 
 def software_version() -> str:
