@@ -13,7 +13,6 @@ import datetime as dt
 
 import numpy as np
 import pandas as pd
-import pytest
 from asterix_bytes import block, fspec
 from hypothesis import given, settings
 from hypothesis import strategies as st
@@ -306,11 +305,20 @@ def test_raw_streams_stay_raw(blocks: list[tuple[int, bytes]]) -> None:
     assert detect_format(data) == "raw"
 
 
-@pytest.mark.parametrize("fmt", ["gps", "oradis"])
-def test_forced_format_on_garbage_reports_everything(tmp_path, fmt: str) -> None:
-    data = bytes(range(256)) * 12
-    rec = read(tmp_path, data, "garbage.bin", format=fmt)
-    assert not rec.frames or all(len(f) == 0 for f in rec.frames.values()) or not rec.errors.empty
+def test_forced_format_on_counting_bytes(tmp_path) -> None:
+    data = bytes(range(256)) * 12  # 3072 bytes 00 01 02 ... FF 00 01 ...
+    rec = read(tmp_path, data, "garbage.bin", format="gps")
+    # after the 2200-byte header, offset 2200 holds 2200 % 256 = 152: category 152, LEN 0x999A = 39322 runs
+    # past the end, and no later offset starts three chained frames
+    assert rec.container_bytes == 2200 and rec.frames == {}
+    assert rec.errors[["offset", "length"]].values.tolist() == [[2200, 872]]
+    assert "truncated" in rec.errors.reason.iloc[0]
+    rec = read(tmp_path, data, "garbage.bin", format="oradis")
+    # packet length 0x0001 = 1 at offset 0; a later offset holding k, k + 1 reads length 257k + 1 with its
+    # first block LEN 257(k + 7) + 1, longer than the payload (and from k = 12 on, 3085 bytes: past the end)
+    assert rec.container_bytes == 0 and rec.frames == {}
+    assert rec.errors[["offset", "length"]].values.tolist() == [[0, 3072]]
+    assert "below 9" in rec.errors.reason.iloc[0]
 
 
 # ---------------------------------------------------------------------------------------------------------
