@@ -339,14 +339,31 @@ def _oradis_packets(buf: np.ndarray, cats: np.ndarray):
     return start, stop, problems
 
 
+@njit(cache=True)
+def _block_starts(buf, start, stop):
+    """Offsets of the data blocks that tile the payloads [start, stop) (up to the first that does not)."""
+    out = []
+    for i in range(start.size):
+        q = start[i]
+        while stop[i] - q >= 3:
+            n = _be16(buf, q + 1)
+            if n < 3 or q + n > stop[i]:
+                break
+            out.append(q)
+            q += n
+    return np.array(out, np.int64)
+
+
 def read_oradis(buf: np.ndarray):
     """(start, stop, capture day, capture time of day, problems) of an ORADIS file's packet payloads.
 
-    The 4 header bytes after the length are not used: no public source gives their unit or epoch.
+    The 4 header bytes after the length are not used: no public source gives their unit or epoch. When
+    the file is damaged, a second walk resynchronises only on packets of the categories the first found.
     """
     start, stop, problems = _oradis_packets(buf, ANY_CATEGORY)
     if problems:
-        start, stop, problems = _oradis_packets(buf, categories_seen(buf, start))
+        blocks = _block_starts(buf, start, stop) if len(start) else np.zeros(0, np.int64)
+        start, stop, problems = _oradis_packets(buf, categories_seen(buf, blocks))
     return start, stop, np.full(len(start), -1, np.int64), np.full(len(start), np.nan), problems
 
 

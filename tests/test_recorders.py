@@ -249,6 +249,18 @@ def test_oradis_truncated_and_damaged_packets(tmp_path) -> None:
     assert list(rec.frames[48].sic) == [1, 2, 4]
 
 
+def test_oradis_resynchronises_on_packets_of_every_category_seen(tmp_path) -> None:
+    # CAT034 only ever second in its packet: 9 + 10 = 19-byte payloads, packets of 25 bytes
+    data, at = oradis_file([block(48, r048(i, 10.0 * i)) + block(34, r034(i, 10.0 * i + 5))
+                            for i in range(1, 9)])
+    assert at == [25 * i for i in range(8)]
+    buf = bytearray(data)
+    buf[at[2]:at[2] + 2] = b"\x00\x03"  # packet 3: length 3
+    rec = read(tmp_path, bytes(buf), "bad.oradis")
+    assert rec.errors[["offset", "length"]].values.tolist() == [[50, 25]]
+    assert list(rec.frames[48].sic) == [1, 2, 4, 5, 6, 7, 8] == list(rec.frames[34].sic)
+
+
 def test_oradis_forced_on_a_file_detection_would_miss(tmp_path) -> None:
     # second packet damaged: detection sees no ORADIS framing, forcing it recovers the rest
     data, at = oradis_file([block(48, r048(i, 10.0 * i)) for i in range(1, 5)])
