@@ -1,8 +1,8 @@
-"""ASTERIX decoding for msdc: CAT048 and CAT021 recordings into typed pandas frames.
+"""ASTERIX decoding for msdc: CAT048, CAT021 and CAT034 recordings into typed pandas frames.
 
-``read`` decodes a file (raw data blocks, pcap/pcapng or the "final" recorder format) into a
-Recording with one DataFrame per category and an account of what was skipped; ``iter_read``
-streams it in chunks; ``encode`` builds records and data blocks from column values.
+``read`` decodes a file (raw data blocks, pcap/pcapng, or the "final", GPS and ORADIS recorder
+formats) into a Recording with one DataFrame per category and an account of what was skipped;
+``iter_read`` streams it in chunks; ``encode`` builds records and data blocks from column values.
 """
 
 from .errors import AsterixError, DecodeError, UnreadableInput

@@ -140,17 +140,75 @@ CAT021_V0: list[Column] = [
 ]
 
 
+CAT034: list[Column] = [
+    *_COMMON_ID,
+    _c("time_of_day", "030", "", unit="s", doc="Time of day (UTC seconds since midnight) of the message"),
+    _c("message_type", "000", "", "int", doc="Message type: 1 north marker, 2 sector crossing, 3 geographical"
+       " filtering, 4 jamming strobe, 5 solar storm (1.28+), 6 SSR / 7 Mode S jamming strobe (1.29)"),
+    _c("sector_number", "020", "", "int", doc="Sector number: the 8 most significant bits of the antenna "
+       "azimuth (0-255)"),
+    _c("sector_azimuth_deg", "020", "", unit="deg", doc="The sector number as an azimuth (360/256 deg each)"),
+    _c("antenna_rotation_period_s", "041", "", unit="s",
+       doc="Antenna rotation period (I034/041 'Antenna Rotation Speed': time per revolution)"),
+    _c("nogo", "050", "COM/NOGO", "flag", doc="1: operational use of the system is inhibited"),
+    _c("rdpc", "050", "COM/RDPC", "flag", doc="Radar data processor chain selected: 0 RDPC-1, 1 RDPC-2"),
+    _c("rdp_reset", "050", "COM/RDPR", "flag", doc="1: reset/restart of the selected RDP chain"),
+    _c("rdp_overload", "050", "COM/OVLRDP", "flag", doc="1: radar data processor overload"),
+    _c("transmission_overload", "050", "COM/OVLXMT", "flag", doc="1: transmission subsystem overload"),
+    _c("monitoring_disconnected", "050", "COM/MSC", "flag", doc="1: monitoring system disconnected"),
+    _c("time_source_invalid", "050", "COM/TSV", "flag", doc="1: time source invalid"),
+    _c("psr_antenna", "050", "PSR/ANT", "flag", doc="PSR selected antenna: 0 antenna 1, 1 antenna 2"),
+    _c("psr_channels", "050", "PSR/CHAB", "int", doc="PSR channels: 0 none, 1 A, 2 B, 3 diversity A+B"),
+    _c("psr_overload", "050", "PSR/OVL", "flag", doc="1: PSR overload"),
+    _c("psr_monitoring_disconnected", "050", "PSR/MSC", "flag", doc="1: PSR monitoring system disconnected"),
+    _c("ssr_antenna", "050", "SSR/ANT", "flag", doc="SSR selected antenna: 0 antenna 1, 1 antenna 2"),
+    _c("ssr_channels", "050", "SSR/CHAB", "int", doc="SSR channels: 0 none, 1 A, 2 B, 3 invalid"),
+    _c("ssr_overload", "050", "SSR/OVL", "flag", doc="1: SSR overload"),
+    _c("ssr_monitoring_disconnected", "050", "SSR/MSC", "flag", doc="1: SSR monitoring system disconnected"),
+    _c("mds_antenna", "050", "MDS/ANT", "flag", doc="Mode S selected antenna: 0 antenna 1, 1 antenna 2"),
+    _c("mds_channels", "050", "MDS/CHAB", "int", doc="Mode S channels: 0 none, 1 A, 2 B, 3 illegal"),
+    _c("mds_overload", "050", "MDS/OVLSUR", "flag", doc="1: Mode S surveillance overload"),
+    _c("mds_monitoring_disconnected", "050", "MDS/MSC", "flag", doc="1: Mode S monitoring disconnected"),
+    _c("mds_scf_channel", "050", "MDS/SCF", "flag", doc="Surveillance co-ordination: 0 channel A, 1 B"),
+    _c("mds_dlf_channel", "050", "MDS/DLF", "flag", doc="Data link function: 0 channel A, 1 B"),
+    _c("mds_scf_overload", "050", "MDS/OVLSCF", "flag", doc="1: surveillance co-ordination overload"),
+    _c("mds_dlf_overload", "050", "MDS/OVLDLF", "flag", doc="1: data link function overload"),
+    _c("rdp_reduction_step", "060", "COM/REDRDP", "int", doc="RDP overload reduction step (0 none, 1-7)"),
+    _c("transmission_reduction_step", "060", "COM/REDXMT", "int",
+       doc="Transmission overload reduction step in use (0 none, 1-7)"),
+    _c("psr_circular_polarization", "060", "PSR/POL", "flag", doc="PSR polarization: 0 linear, 1 circular"),
+    _c("psr_reduction_step", "060", "PSR/REDRAD", "int", doc="PSR overload reduction step (0 none, 1-7)"),
+    _c("psr_stc_map", "060", "PSR/STC", "int", doc="PSR sensitivity time control map in use: 0-3 = map 1-4"),
+    _c("ssr_reduction_step", "060", "SSR/REDRAD", "int", doc="SSR overload reduction step (0 none, 1-7)"),
+    _c("mds_reduction_step", "060", "MDS/REDRAD", "int", doc="Mode S overload reduction step (0 none)"),
+    _c("mds_not_autonomous", "060", "MDS/CLU", "flag", doc="Mode S cluster: 0 autonomous, 1 not"),
+    _c("message_counters", "070", "", "count", doc="Message counters in I034/070 (not decoded)"),
+    _c("window_rho_start_nm", "100", "RHOST", unit="NM", doc="Generic polar window: range start"),
+    _c("window_rho_end_nm", "100", "RHOEND", unit="NM", doc="Generic polar window: range end"),
+    _c("window_theta_start_deg", "100", "THETAST", unit="deg", doc="Generic polar window: azimuth start"),
+    _c("window_theta_end_deg", "100", "THETAEND", unit="deg", doc="Generic polar window: azimuth end"),
+    _c("data_filter", "110", "", "int", doc="Data filter (1 weather, 2 jamming strobe, 3 PSR...)"),
+    _c("source_height_m", "120", "HGT", unit="m", doc="Height of the data source (WGS-84)"),
+    _c("source_latitude", "120", "LAT", unit="deg", doc="WGS-84 latitude of the data source"),
+    _c("source_longitude", "120", "LON", unit="deg", doc="WGS-84 longitude of the data source"),
+    _c("collimation_range_error_nm", "090", "RNG", unit="NM", doc="Collimation error: range"),
+    _c("collimation_azimuth_error_deg", "090", "AZM", unit="deg", doc="Collimation error: azimuth"),
+]
+
+
 def columns_for(category: int, edition: str) -> list[Column]:
     """The column list of a category edition."""
     if category == 48:
         return CAT048
     if category == 21:
         return CAT021_V0 if edition.startswith("0.") else CAT021_V2
+    if category == 34:
+        return CAT034
     raise KeyError(category)
 
 
 FAMILIES = {"CAT048 (all editions)": CAT048, "CAT021 2.x (2.1-2.7)": CAT021_V2,
-            "CAT021 0.2x (0.23-0.26)": CAT021_V0}
+            "CAT021 0.2x (0.23-0.26)": CAT021_V0, "CAT034 (1.27-1.29)": CAT034}
 KIND_DTYPES = {"float": "float64 (NaN if absent)", "int": "Int32", "flag": "Int8", "count": "Int16",
                "octal": "text (categorical)", "hex": "text (categorical)", "icao": "text (categorical)"}
 

@@ -1,4 +1,4 @@
-"""Container layer: find the ASTERIX payloads in raw, pcap, pcapng and IOSS "final" recordings.
+"""Container layer: find the ASTERIX payloads in raw, pcap, pcapng, IOSS "final", GPS and ORADIS recordings.
 
 Every input byte ends up in exactly one place: a payload range, ``container_bytes`` or a problem.
 """
@@ -11,7 +11,10 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit
 
-FORMATS = ("raw", "pcap", "pcapng", "final")
+from .recorders import detect_recorder, read_gps, read_oradis
+
+FORMATS = ("raw", "pcap", "pcapng", "final", "gps", "oradis")
+UNTIMED = ("raw", "oradis")  # no capture time: midnights are counted in file order from the reports' times
 DETECT_BYTES = 1 << 17  # two maximal final frames: enough head for detect_format
 SECONDS_PER_DAY = 86400
 FINAL_HEADER_BYTES = 8
@@ -46,10 +49,11 @@ _PCAPNG_REASONS = {1: "bad packet block", 2: "packet for unknown interface"}
 class Segments:
     """ASTERIX payload byte ranges of one recording, their capture times, and the byte accounting."""
 
-    format: str  # "raw" | "pcap" | "pcapng" | "final"
+    format: str  # "raw" | "pcap" | "pcapng" | "final" | "gps" | "oradis"
     start: np.ndarray  # int64 file offset of each ASTERIX payload
     stop: np.ndarray  # int64 exclusive end offset
-    capture_day: np.ndarray  # int64: days since 1970-01-01 UTC (pcap, pcapng), recording-day byte (final), -1
+    capture_day: np.ndarray  # int64: days since 1970-01-01 UTC (pcap, pcapng), recording-day byte (final),
+    #                          midnights counted in the recording times (gps), else -1
     capture_tod: np.ndarray  # float64 seconds since midnight of the capture; NaN when unknown
     dated: bool  # True when capture_day is a real calendar day (pcap, pcapng)
     exact: bool  # True when each payload must frame exactly into ASTERIX blocks
@@ -66,7 +70,7 @@ def detect_format(head: bytes) -> str:
         return "pcapng"
     first_bytes = _final_frame_bytes(head, 0)
     if first_bytes == 0:
-        return "raw"
+        return detect_recorder(head, whole=len(head) < DETECT_BYTES) or "raw"
     if len(head) - first_bytes < 2:  # a single frame, or the next one is out of sight
         return "final"
     # The first trailer is strong evidence; the next frame need only have a plausible length, so that a
@@ -90,6 +94,8 @@ def read_segments(data: bytes | memoryview | np.ndarray, fmt: str | None = None)
         return _read_pcap(buf)
     if fmt == "pcapng":
         return _read_pcapng(buf)
+    if fmt in ("gps", "oradis"):
+        return _segments(fmt, buf.size, *(read_gps(buf) if fmt == "gps" else read_oradis(buf)))
     return _read_final(buf)
 
 

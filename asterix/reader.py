@@ -21,7 +21,10 @@ from .layout import Layout, compile_layout
 from .tables import available, resolve_edition
 from .timeline import assign_days, timestamp_index
 
-DECODABLE = (21, 48)
+DECODABLE = (21, 34, 48)
+# Decoded when categories=None. CAT034 (service messages) is decoded on request (categories=DECODABLE):
+# until the pipeline handles its frames, its blocks are stepped over and counted as ignored.
+DEFAULT_CATEGORIES = (21, 48)
 AUTO_SAMPLE_BLOCKS = 20_000  # blocks walked per candidate edition by editions={cat: "auto"}
 ERROR_COLUMNS = ["file", "offset", "length", "category", "reason"]
 
@@ -245,8 +248,9 @@ def _lone_category(b_cat: np.ndarray, walked: dict) -> bool:
 def walked_editions(editions: dict, categories) -> dict[int, str | None]:
     """Categories whose blocks framing may walk, with their edition: the decoded ones and, when not
     selected, CAT048 (1.32 walks every edition) and those whose edition is given; never 'auto' ones."""
+    wanted = set(DEFAULT_CATEGORIES if categories is None else categories)
     return {c: editions.get(c) for c in DECODABLE
-            if (categories is None or c in set(categories) or c == 48 or c in editions)
+            if (c in wanted or c == 48 or c in editions)
             and editions.get(c) != "auto"}
 
 
@@ -266,7 +270,7 @@ def decode_buffer(buf: np.ndarray, seg: Segments, *, path: str = "", editions: d
                   categories=None, date=None, strict: bool = False) -> Recording:
     """Decode an in-memory recording whose container segments are already known."""
     editions = dict(editions or {})
-    decoded = [c for c in DECODABLE if categories is None or c in set(categories)]
+    decoded = [c for c in DECODABLE if c in set(DEFAULT_CATEGORIES if categories is None else categories)]
     walked = walked_editions(editions, categories)
     choice: dict[int, str] = {}
     # Framing first follows the block chain as it is. If it breaks, or a decoded block does not walk
@@ -355,7 +359,7 @@ def _parse_editions(editions) -> dict[int, str]:
 
 def read(path, *, editions=None, date=None, categories=None, format: str | None = None,
          strict: bool = False) -> Recording:
-    """Decode a recording file (raw blocks, pcap/pcapng or final) into typed frames by category."""
+    """Decode a recording file (raw, pcap/pcapng, final, gps or oradis) into typed frames by category."""
     eds = _parse_editions(editions)
     for cat, ed in eds.items():
         if ed != "auto":

@@ -6,7 +6,7 @@ from collections.abc import Iterator
 
 import numpy as np
 
-from .containers import Segments, read_segments
+from .containers import UNTIMED, Segments, read_segments
 from .reader import (
     Recording,
     _mapped,
@@ -36,7 +36,7 @@ def iter_read(path, *, chunk: int = 1_000_000, editions=None, date=None, categor
         for sub in bounds:
             rec = decode_buffer(buf, sub, path=str(path), editions=eds, categories=categories,
                                 date=first_date, strict=strict)
-            if seg.format == "raw":
+            if seg.format in UNTIMED:
                 carry_day, last_tod = _continue_days(rec, carry_day, last_tod, first_date)
             elif rec.day0 is not None and day0 is None:
                 day0, first_date = rec.day0, rec.date  # a dated container's date wins over date=

@@ -1,7 +1,7 @@
 """Days and timestamps: a recording's reports on one continuous time line, across midnight.
 
-Raw streams count midnights in file order (a drop of more than 12 h is a new day); dated
-containers put each report on the day nearest its capture time.
+Raw streams and ORADIS files count midnights in file order (a drop of more than 12 h is a new day);
+containers with capture times put each report on the day nearest its capture time.
 """
 
 from __future__ import annotations
@@ -11,7 +11,7 @@ import datetime as dt
 import numpy as np
 import pandas as pd
 
-from .containers import Segments
+from .containers import UNTIMED, Segments
 
 
 def assign_days(frames: dict[int, dict], seg: Segments, blk_seg: np.ndarray) -> int | None:
@@ -22,7 +22,7 @@ def assign_days(frames: dict[int, dict], seg: Segments, blk_seg: np.ndarray) -> 
         for f in frames.values():
             f["day"] = np.zeros(0, np.int64)
         return None
-    if seg.format in ("raw",) or not len(seg.start):
+    if seg.format in UNTIMED or not len(seg.start):
         # file order across categories; a drop of more than 12 h is a new day, a rise of more
         # than 12 h a late report from the day before
         off = np.concatenate([np.asarray(f["offset"]) for _, f in parts])

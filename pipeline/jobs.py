@@ -34,7 +34,7 @@ from pipeline.quality.jumps import JUMP_FLAG_COLUMNS, jump_flags
 from pipeline.quality.quality_run import QualityResult, quality_run
 from pipeline.report.textguard import guard_frame
 
-FORMATS = ("raw", "pcap", "pcapng", "final")
+FORMATS = ("raw", "pcap", "pcapng", "final", "gps", "oradis")
 SLOT_RANGE_S = (0.1, 3600.0)  # below 0.1 s the slot count and the lag tables explode
 GAP_RANGE_S = (0.1, 86400.0)
 INDICATOR_RANGE = (0, 11)  # NIC and NACp values

@@ -247,7 +247,7 @@ def test_multi_source_columns_cat021() -> None:
 
 
 def test_edition_aliases() -> None:
-    assert set(EDITIONS) == {21, 48}
+    assert set(EDITIONS) == {21, 34, 48}
     assert {"1.27", "1.31", "1.32"} <= set(EDITIONS[48])
     assert encode_item(48, "1.21", "020", {"TYP": 1}) == encode_item(48, "1.27", "020", {"TYP": 1})
     assert encode_record(21, {"sac": 1, "sic": 2}, "2.x") == encode_record(21, {"sac": 1, "sic": 2}, "2.7")
@@ -331,8 +331,10 @@ def reference_record(category: int, edition: str, values: dict) -> bytes:
                 continue
             key = "/".join(path)
             if key in known:
-                if col.kind == "count":
-                    by_item[item] = [bytes(8)] * int(v)  # type: ignore[assignment]
+                if col.kind == "count":  # zero repetitions of the item's element (8 bytes in I048/250)
+                    uap = load_table(category, edition)["uap"]
+                    node = next(e["node"] for e in uap if e and e["id"] == item)
+                    by_item[item] = [bytes(node["item"]["bits"] // 8)] * int(v)  # type: ignore[assignment]
                 else:
                     by_item.setdefault(item, {})[key] = v / col.scale if col.kind == "float" else v
                 break

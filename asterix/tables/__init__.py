@@ -14,7 +14,7 @@ ALIASES: dict[int, dict[str, str]] = {
     48: {**{f"1.{m}": "1.27" for m in range(21, 27)}, "1.x": "1.32"},
     21: {"2.x": "2.7", "0.x": "0.26"},
 }
-DEFAULT_EDITION = {48: "1.32", 21: "2.7"}
+DEFAULT_EDITION = {48: "1.32", 21: "2.7", 34: "1.29"}
 
 
 def available() -> dict[int, list[str]]:

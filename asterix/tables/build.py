@@ -23,6 +23,7 @@ _SPARE = re.compile(r"^spare (\d+) bits$")
 _REP = re.compile(r"^repetitive \(rep bytes=(\w+)\)$")
 _OCTET = re.compile(r"^octet-group (\d+):$")
 _SUB = re.compile(r"^\[(\d+)\] (\w+): ?(.*)$")
+_NO_SUB = re.compile(r"^\[(\d+)\] \(none\)$")  # a compound position with no subitem (CAT034 I034/050)
 _NAMED = re.compile(r"^(\w+): ?(.*)$")
 _QTY = re.compile(r"^(signed|unsigned) quantity lsb=([-+0-9.e]+) ?(.*)$")
 
@@ -78,12 +79,12 @@ def _node(ls: _Lines) -> dict:
         return {"kind": "extended", "groups": groups, "fx": fx}
     if text == "compound":
         subs: list[dict | None] = []
-        while (p := ls.peek()) and p[0] > indent and (m := _SUB.match(p[1])):
+        while (p := ls.peek()) and p[0] > indent and (m := _SUB.match(p[1]) or _NO_SUB.match(p[1])):
             ls.next()
             index = int(m[1])
             while len(subs) < index - 1:
                 subs.append(None)
-            subs.append({"name": m[2], "title": m[3], "node": _node(ls)})
+            subs.append({"name": m[2], "title": m[3], "node": _node(ls)} if m.re is _SUB else None)
         return {"kind": "compound", "subitems": subs}
     if text.startswith("explicit"):
         return {"kind": "explicit"}
@@ -152,6 +153,7 @@ def _patch(node: dict, name: str, patch: dict) -> None:
 
 
 def main(argv: list[str]) -> int:
+    """Convert every printed spec in a folder, or only those of the categories named: ``... specs 34``."""
     src = Path(argv[1] if len(argv) > 1 else "../shared/specs")
     only = {int(c) for c in argv[2:]}  # optional category numbers: build only those
     for path in sorted(src.glob("Cat_*.txt")):
