@@ -36,9 +36,11 @@ def load_real_adsb(min_span_s: float = 600.0) -> list[dict] | None:
         g = g.sort_values("t").drop_duplicates("t")
         if len(g) < 100 or g["t"].iloc[-1] - g["t"].iloc[0] < min_span_s:
             continue
-        plane = Plane(g["latitude"].iloc[0], g["longitude"].iloc[0])
+        plane = Plane.around(g["latitude"].to_numpy(), g["longitude"].to_numpy())
         e, n = plane.forward(g["latitude"].to_numpy(), g["longitude"].to_numpy())
         t, var = g["t"].to_numpy(), g["var"].to_numpy()
+        near = np.hypot(e, n) < 1_000_000.0  # a few reports carry garbage positions far away
+        t, e, n, var = t[near], e[near], n[near], var[near]
         # position jumps are not truth: drop what the tracker gates on the complete track
         run = filter_plane(TrackerConfig(), t, e, n, var, np.zeros(len(t)), var)
         ok = run.accepted & (run.segment == np.bincount(run.segment).argmax())

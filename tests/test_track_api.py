@@ -128,6 +128,34 @@ def test_predict_propagates_modes_and_uncertainty():
     assert p.mode_cv.iloc[-1] > 0.5
 
 
+def test_state_at_any_time_predicts_like_the_tracker():
+    rng = np.random.default_rng(10)
+    truth = fly((0, 0), 90.0, 200.0, [(60, 0, 0), (30, 3.0, 0), (60, 0, 0)])
+    m = _adsb(truth, np.arange(0.0, 150.0, 2.0), rng)
+    res = track(m, keep_states=True, step_s=1.0)
+    when = pd.Timestamp("2024-05-10T23:59:00Z") + pd.Timedelta(seconds=71)
+    state = res.state_at("A1", when)
+    assert state.time == pd.Timestamp("2024-05-10T23:59:00Z") + pd.Timedelta(seconds=70)
+    # one 1 s prediction cycle from the update at 70 s is the tracker's own coasted output at 71 s
+    p = predict(state, 1.0)
+    row = res.tracks[res.tracks.time == when].iloc[0]
+    assert row.coasted
+    assert (p.latitude.iloc[0], p.longitude.iloc[0]) == pytest.approx((row.latitude, row.longitude), abs=1e-9)
+    assert p.mode_turn_left.iloc[0] == pytest.approx(row.mode_turn_left, abs=1e-12)
+    with pytest.raises(KeyError, match="keep_states"):
+        track(m).state_at("A1", when)
+
+
+def test_garbage_position_far_away_is_counted_not_tracked():
+    rng = np.random.default_rng(11)
+    m = _adsb(fly((0, 0), 90.0, 200.0, [(60, 0, 0)]), np.arange(0.0, 60.0, 1.0), rng)
+    m.loc[m.index[0], ["latitude", "longitude"]] = (-66.26, -73.17)  # as in the real recording
+    res = track(m)
+    assert res.sensors.loc[0, "out_of_range"] == 1
+    assert res.aircraft.loc[0, "segments"] == 1 and res.aircraft.loc[0, "gated"] == 0
+    assert res.tracks.latitude.between(40.9, 41.1).all()
+
+
 def test_bad_input_is_named():
     with pytest.raises(ValueError, match="cov_nn_m2"):
         track(pd.DataFrame({"time": pd.to_datetime([], utc=True)}))

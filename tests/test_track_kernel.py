@@ -5,14 +5,14 @@ import pytest
 from scipy.linalg import expm
 from track_scenarios import polar_covariance
 
-from pipeline.track import Mode, TrackerConfig, nacp_covariance, radar_covariance
+from pipeline.track import Mode, TrackerConfig, nacp_covariance, parse_tpm, radar_covariance
 from pipeline.track.imm import CA, CT, CV, TPM_DYNAMIC, TPM_EXPM, TPM_FIXED, tpm_into, transition_into
 from pipeline.track.plane import estimate, filter_plane
 
 
-def _tpm(kind, param, dt, r):
+def _tpm(kind, param, dt, r, param2=None):
     out = np.empty((r, r))
-    tpm_into(kind, param, dt, r, out)
+    tpm_into(kind, param, param if param2 is None else param2, dt, r, out)
     return out
 
 
@@ -20,7 +20,7 @@ def _tpm(kind, param, dt, r):
                                   (12, 0.9419)])
 def test_dynamic_tpm_paper_values(T, p):
     # tracking.md 1.3 sample values and eq. 14's structure
-    pi = _tpm(TPM_DYNAMIC, 0.0, T, 3)
+    pi = _tpm(*parse_tpm("dynamic")[:2], T, 3, parse_tpm("dynamic")[2])
     expected = np.array([[p, (1 - p) / 2, (1 - p) / 2], [1 - p, p, 0], [1 - p, 0, p]])
     np.testing.assert_allclose(pi, expected, atol=5e-5)
 
@@ -39,6 +39,18 @@ def test_expm_tpm_is_the_matrix_exponential(r, dt):
     g[1:, 0] = 1.0 / tau  # each other mode returns to the base at rate 1/tau
     g -= np.diag(g.sum(axis=1))
     np.testing.assert_allclose(_tpm(TPM_EXPM, tau, dt, r), expm(g * dt), atol=1e-12)
+
+
+@pytest.mark.parametrize("r", [2, 3, 4])
+def test_expm_tpm_with_a_shorter_sojourn_in_the_other_modes(r):
+    tau0, tau1, dt = 200.0, 30.0, 7.5
+    g = np.zeros((r, r))
+    g[0, 1:] = 1.0 / (tau0 * (r - 1))
+    g[1:, 0] = 1.0 / tau1
+    g -= np.diag(g.sum(axis=1))
+    out = np.empty((r, r))
+    tpm_into(TPM_EXPM, tau0, tau1, dt, r, out)
+    np.testing.assert_allclose(out, expm(g * dt), atol=1e-12)
 
 
 def _fq(kind, omega, q, dt):
@@ -141,7 +153,7 @@ def test_imm_matches_textbook_reference(tpm):
     est = estimate(run, t)
 
     def pi_fn(dt):
-        return _tpm(ka["tpm_kind"], ka["tpm_param"], dt, 3)
+        return _tpm(ka["tpm_kind"], ka["tpm_param"], dt, 3, ka["tpm_param2"])
 
     ref_x, ref_mu = _reference_imm(t, z, R, [0.0, np.radians(3.0), -np.radians(3.0)], [0.09, 1.0, 1.0],
                                    pi_fn, ka["mu0"], 1e4)
@@ -234,6 +246,8 @@ def test_nacp_covariance():
 def test_config_errors_name_the_value():
     with pytest.raises(ValueError, match="'fixed:1.5'"):
         TrackerConfig(tpm="fixed:1.5")
+    assert parse_tpm("expm:200,30") == (TPM_EXPM, 200.0, 30.0)
+    assert parse_tpm("dynamic:0.99,0.006") == (TPM_DYNAMIC, 0.99, 0.006)
     with pytest.raises(ValueError, match="'expm:x'"):
         TrackerConfig(tpm="expm:x")
     with pytest.raises(ValueError, match="kind 'xx'"):

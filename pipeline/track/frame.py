@@ -21,6 +21,15 @@ class Plane:
         proj = f"+proj=stere +lat_0={self.lat0_deg!r} +lon_0={self.lon0_deg!r} +k=1 +ellps=WGS84 +units=m"
         self._fwd = Transformer.from_crs("EPSG:4326", proj, always_xy=True)
 
+    @classmethod
+    def around(cls, lat_deg, lon_deg) -> Plane:
+        """A plane centred on the median of the positions (an isolated garbage report cannot move it)."""
+        lat = np.asarray(lat_deg, float)
+        lon = np.asarray(lon_deg, float)
+        lon_rel = (lon - lon[0] + 180.0) % 360.0 - 180.0  # continuous across the antimeridian
+        lon0 = (float(np.median(lon_rel)) + lon[0] + 180.0) % 360.0 - 180.0
+        return cls(float(np.median(lat)), lon0)
+
     def forward(self, lat_deg, lon_deg) -> tuple[np.ndarray, np.ndarray]:
         e, n = self._fwd.transform(np.asarray(lon_deg, float), np.asarray(lat_deg, float))
         return np.asarray(e, float), np.asarray(n, float)

@@ -22,7 +22,7 @@ LOG_2PI = math.log(2.0 * math.pi)
 
 
 @njit(cache=True)
-def tpm_into(kind, param, dt, r, out):
+def tpm_into(kind, param, param2, dt, r, out):
     """Mode transition matrix for an update interval dt (s) into out[:r, :r]: mode 0 (CV) leaves to the
     others with equal probability, the others only return to mode 0 (the dynamic-TPM paper's eq. 14)."""
     for i in range(r):
@@ -33,19 +33,24 @@ def tpm_into(kind, param, dt, r, out):
         return
     m = r - 1
     if kind == TPM_EXPM:
-        e1 = math.exp(-dt / param)
-        e2 = math.exp(-2.0 * dt / param)
-        stay_base = 0.5 * (1.0 + e2)
+        # continuous-time chain: mode 0 left at rate a = 1/param (split evenly), the others left
+        # (back to mode 0) at rate b = 1/param2; closed form of expm(G dt) for this structure
+        a = 1.0 / param
+        b = 1.0 / param2
+        e_ab = math.exp(-(a + b) * dt)
+        e_b = math.exp(-b * dt)
+        stay_base = (b + a * e_ab) / (a + b)
+        to_base = b * (1.0 - e_ab) / (a + b)
         out[0, 0] = stay_base
         for j in range(1, r):
             out[0, j] = (1.0 - stay_base) / m
-            out[j, 0] = 0.5 * (1.0 - e2)
-            same = (stay_base + (m - 1) * e1) / m
+            out[j, 0] = to_base
+            same = (1.0 - to_base + (m - 1) * e_b) / m
             for k in range(1, r):
-                out[j, k] = same if k == j else same - e1
+                out[j, k] = same if k == j else same - e_b
         return
     if kind == TPM_DYNAMIC:
-        p = min(0.995, 1.0019 - 0.005 * dt)
+        p = min(0.995, param - param2 * dt)
         p = max(p, 0.0)
     else:
         p = param
@@ -181,11 +186,11 @@ def combine_into(w, x, P, r, xc, Pc):
 
 
 @njit(cache=True)
-def predict_into(kinds, omegas, qs, tpm_kind, tpm_param, dt, r, mu, x, P,
+def predict_into(kinds, omegas, qs, tpm_kind, tpm_param, tpm_param2, dt, r, mu, x, P,
                  PI, F, Q, tmp, cbar, x0, P0, xp, Pp):
     """One IMM prediction over dt: mixing with PI(dt), then each mode's F, Q (mode-conditioned xp, Pp);
     cbar = PI^T mu are the predicted mode probabilities."""
-    tpm_into(tpm_kind, tpm_param, dt, r, PI)
+    tpm_into(tpm_kind, tpm_param, tpm_param2, dt, r, PI)
     mix_into(PI, mu, x, P, r, cbar, x0, P0)
     for j in range(r):
         transition_into(kinds[j], omegas[j], qs[j], dt, F, Q)
@@ -216,7 +221,7 @@ def _init_state(r, ze, zn, ree, ren, rnn, ve, vn, var_v, var_a, mu0, mu, x, P):
 
 @njit(cache=True)
 def run_filter(t, ze, zn, ree, ren, rnn, ve0, vn0, var_v0, fl, kinds, omegas, qs, mu0,
-               tpm_kind, tpm_param, gate_d2, max_coast_s, restart_after, q_fl, var_fl,
+               tpm_kind, tpm_param, tpm_param2, gate_d2, max_coast_s, restart_after, q_fl, var_fl,
                status, nis, segment, t_state, mu_h, x_h, P_h, zv_h, Pv_h, keep):
     """Filter one aircraft's time-ordered measurements (plane coordinates, m; covariances m^2).
 
@@ -259,7 +264,7 @@ def run_filter(t, ze, zn, ree, ren, rnn, ve0, vn0, var_v0, fl, kinds, omegas, qs
         ok = True
         if not start:
             dt = t[i] - t_last
-            predict_into(kinds, omegas, qs, tpm_kind, tpm_param, dt, r, mu, x, P,
+            predict_into(kinds, omegas, qs, tpm_kind, tpm_param, tpm_param2, dt, r, mu, x, P,
                          PI, F, Q, tmp, cbar, x0, P0, xp, Pp)
             # NIS with the combined prediction (mixture moments of the position); the gate accepts a
             # report that any mode's own prediction accepts (a turn's onset is not an outlier)
@@ -405,10 +410,12 @@ def run_filter(t, ze, zn, ree, ren, rnn, ve0, vn0, var_v0, fl, kinds, omegas, qs
 
 
 @njit(cache=True)
-def predict_rows(gov, dt, kinds, omegas, qs, tpm_kind, tpm_param, q_fl, mu_h, x_h, P_h, zv_h, Pv_h,
-                 xc_out, Pc_out, mu_out, zv_out, Pv_out):
+def predict_rows(gov, dt, kinds, omegas, qs, tpm_kind, tpm_param, tpm_param2, q_fl, substep_s, mu_h,
+                 x_h, P_h, zv_h, Pv_h, xc_out, Pc_out, mu_out, zv_out, Pv_out):
     """Combined estimate at query q: the posterior of row gov[q] predicted dt[q] s ahead (dt 0: the
-    posterior itself), mode probabilities by the Markov chain, mixture covariance with the spread."""
+    posterior itself) by IMM cycles without measurement of at most substep_s each (mixing, mode-matched
+    prediction, mu <- PI^T mu), combined with the spread of the mode means. Consecutive queries with the
+    same governing row continue one chain, so a coasted gap costs one cycle per substep."""
     r = kinds.shape[0]
     m = gov.shape[0]
     cbar = np.empty(r)
@@ -420,6 +427,11 @@ def predict_rows(gov, dt, kinds, omegas, qs, tpm_kind, tpm_param, q_fl, mu_h, x_
     F = np.empty((NX, NX))
     Q = np.empty((NX, NX))
     tmp = np.empty((NX, NX))
+    mu_c = np.empty(r)
+    x_c = np.empty((r, NX))
+    P_c = np.empty((r, NX, NX))
+    g_c = -1
+    t_c = 0.0
     for q in range(m):
         g = gov[q]
         d = dt[q]
@@ -428,11 +440,29 @@ def predict_rows(gov, dt, kinds, omegas, qs, tpm_kind, tpm_param, q_fl, mu_h, x_
                 mu_out[q, j] = mu_h[g, j]
             combine_into(mu_h[g], x_h[g], P_h[g], r, xc_out[q], Pc_out[q])
         else:
-            predict_into(kinds, omegas, qs, tpm_kind, tpm_param, d, r, mu_h[g], x_h[g], P_h[g],
-                         PI, F, Q, tmp, cbar, x0, P0, xp, Pp)
+            if g != g_c or d < t_c:
+                g_c = g
+                t_c = 0.0
+                for j in range(r):
+                    mu_c[j] = mu_h[g, j]
+                    for a in range(NX):
+                        x_c[j, a] = x_h[g, j, a]
+                        for b in range(NX):
+                            P_c[j, a, b] = P_h[g, j, a, b]
+            while t_c < d:
+                h = min(substep_s, d - t_c)
+                predict_into(kinds, omegas, qs, tpm_kind, tpm_param, tpm_param2, h, r, mu_c, x_c, P_c,
+                             PI, F, Q, tmp, cbar, x0, P0, xp, Pp)
+                for j in range(r):
+                    mu_c[j] = cbar[j]
+                    for a in range(NX):
+                        x_c[j, a] = xp[j, a]
+                        for b in range(NX):
+                            P_c[j, a, b] = Pp[j, a, b]
+                t_c += h
             for j in range(r):
-                mu_out[q, j] = cbar[j]
-            combine_into(cbar, xp, Pp, r, xc_out[q], Pc_out[q])
+                mu_out[q, j] = mu_c[j]
+            combine_into(mu_c, x_c, P_c, r, xc_out[q], Pc_out[q])
         zv_out[q, 0] = zv_h[g, 0] + d * zv_h[g, 1]
         zv_out[q, 1] = zv_h[g, 1]
         Pv_out[q, 0, 0] = (Pv_h[g, 0, 0] + 2.0 * d * Pv_h[g, 0, 1] + d * d * Pv_h[g, 1, 1]
@@ -442,7 +472,7 @@ def predict_rows(gov, dt, kinds, omegas, qs, tpm_kind, tpm_param, q_fl, mu_h, x_
 
 
 @njit(cache=True)
-def propagate(kinds, omegas, qs, tpm_kind, tpm_param, mu, x, P, horizon_s, step_s,
+def propagate(kinds, omegas, qs, tpm_kind, tpm_param, tpm_param2, mu, x, P, horizon_s, step_s,
               mu_out, x_out, P_out, xc_out, Pc_out):
     """Repeated IMM prediction cycles without measurements (the conflict paper's trajectory
     prediction): steps of step_s up to horizon_s; writes per step the mode-conditioned states and the
@@ -462,7 +492,7 @@ def propagate(kinds, omegas, qs, tpm_kind, tpm_param, mu, x, P, horizon_s, step_
     done = 0.0
     for k in range(n):
         d = min(step_s, horizon_s - done)
-        predict_into(kinds, omegas, qs, tpm_kind, tpm_param, d, r, mu_c, x_c, P_c,
+        predict_into(kinds, omegas, qs, tpm_kind, tpm_param, tpm_param2, d, r, mu_c, x_c, P_c,
                      PI, F, Q, tmp, cbar, x0, P0, x_out[k], P_out[k])
         for j in range(r):
             mu_out[k, j] = cbar[j]

@@ -75,8 +75,8 @@ def filter_plane(config: TrackerConfig, t, ze, zn, cov_ee, cov_en, cov_nn, *, fl
     run_filter(t, col(ze, 0), col(zn, 0), col(cov_ee, 0), col(cov_en, 0), col(cov_nn, 0),
                col(ve0, 0.0), col(vn0, 0.0), col(var_v0, config.sigma_init_speed_mps ** 2),
                col(fl, np.nan), args["kinds"], args["omegas"], args["qs"], args["mu0"], args["tpm_kind"],
-               args["tpm_param"], args["gate_d2"], args["max_coast_s"], args["restart_after"],
-               args["q_fl"], args["var_fl"],
+               args["tpm_param"], args["tpm_param2"], args["gate_d2"], args["max_coast_s"],
+               args["restart_after"], args["q_fl"], args["var_fl"],
                status, nis, segment, t_state, mu, x, P, zv, Pv, True)
     return PlaneRun(config, t, status, nis, segment, t_state, mu, x, P, zv, Pv)
 
@@ -100,12 +100,13 @@ def estimate(run: PlaneRun, times, *, smooth: bool = False) -> Estimates:
     zv = np.empty((nq, 2))
     Pv = np.empty((nq, 2, 2))
     predict_rows(gov, dt, args["kinds"], args["omegas"], args["qs"], args["tpm_kind"], args["tpm_param"],
-                 args["q_fl"], run.mu, run.x, run.P, run.zv, run.Pv, xc, Pc, mu, zv, Pv)
+                 args["tpm_param2"], args["q_fl"], args["coast_substep_s"], run.mu, run.x, run.P, run.zv,
+                 run.Pv, xc, Pc, mu, zv, Pv)
     if smooth:
         xs = np.empty_like(xc)
         Ps = np.empty_like(Pc)
         smooth_rows(acc_t, run.segment[acc_idx], run.mu[acc_idx], run.x[acc_idx], run.P[acc_idx],
                     args["kinds"], args["omegas"], args["qs"], args["tpm_kind"], args["tpm_param"],
-                    k, dt, xc, Pc, xs, Ps)
+                    args["tpm_param2"],                    k, dt, xc, Pc, xs, Ps)
         xc, Pc = xs, Ps
     return Estimates(qt, xc, Pc, mu, zv, Pv, gov, dt)

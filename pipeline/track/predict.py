@@ -30,8 +30,8 @@ def predict(state: ImmState, horizon_s: float, *, step_s: float = 1.0) -> pd.Dat
     xc = np.empty((n, NX))
     Pc = np.empty((n, NX, NX))
     propagate(args["kinds"], args["omegas"], args["qs"], args["tpm_kind"], args["tpm_param"],
-              np.asarray(state.mu, float), np.asarray(state.x, float), np.asarray(state.P, float),
-              float(horizon_s), float(step_s), mu_out, x_out, P_out, xc, Pc)
+              args["tpm_param2"], np.asarray(state.mu, float), np.asarray(state.x, float),
+              np.asarray(state.P, float), float(horizon_s), float(step_s), mu_out, x_out, P_out, xc, Pc)
     ahead = np.minimum(np.arange(1, n + 1) * step_s, horizon_s)
     lat, lon = state.plane.inverse(xc[:, 0], xc[:, 3])
     out = {"time": state.time + pd.to_timedelta(ahead, unit="s"), "ahead_s": ahead,

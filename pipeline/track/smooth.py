@@ -100,7 +100,7 @@ def _apply_gain(C, Pbar_inv, xf, Pf, xs_next, Ps_next, xbar, Pbar, G, tmp, xs, P
 
 
 @njit(cache=True)
-def smooth_rows(acc_t, acc_seg, mu_a, x_a, P_a, kinds, omegas, qs, tpm_kind, tpm_param,
+def smooth_rows(acc_t, acc_seg, mu_a, x_a, P_a, kinds, omegas, qs, tpm_kind, tpm_param, tpm_param2,
                 q_acc, q_dt, xf_q, Pf_q, xs_q, Ps_q):
     """Smoothed combined estimate at every query q (q_acc: index of its governing accepted update,
     q_dt: time after it). Queries after a segment's last update keep their forward prediction."""
@@ -141,8 +141,8 @@ def smooth_rows(acc_t, acc_seg, mu_a, x_a, P_a, kinds, omegas, qs, tpm_kind, tpm
             xk[a] = xs[k, a]
             for b in range(NX):
                 Pk[a, b] = Ps[k, a, b]
-        _joint(kinds, omegas, qs, tpm_kind, tpm_param, acc_t[k + 1] - acc_t[k], r, mu_a[k], x_a[k],
-               P_a[k], xk, PI, cbar, x0, P0, xp, Pp, Ft, Qt, Cj, C, tmp, xbar, Pbar)
+        _joint(kinds, omegas, qs, tpm_kind, tpm_param, tpm_param2, acc_t[k + 1] - acc_t[k], r, mu_a[k],
+               x_a[k], P_a[k], xk, PI, cbar, x0, P0, xp, Pp, Ft, Qt, Cj, C, tmp, xbar, Pbar)
         _inverse(Pbar, Pbar_inv, work)
         _apply_gain(C, Pbar_inv, xk, Pk, xs[k + 1], Ps[k + 1], xbar, Pbar, G, tmp, xs[k], Ps[k])
     # queries
@@ -159,8 +159,8 @@ def smooth_rows(acc_t, acc_seg, mu_a, x_a, P_a, kinds, omegas, qs, tpm_kind, tpm
             continue
         t = acc_t[k + 1] - acc_t[k]
         combine_into(mu_a[k], x_a[k], P_a[k], r, xk, Pk)
-        _joint(kinds, omegas, qs, tpm_kind, tpm_param, t, r, mu_a[k], x_a[k], P_a[k], xk, PI, cbar,
-               x0, P0, xp, Pp, Ft, Qt, Cj, C, tmp, xbar, Pbar)
+        _joint(kinds, omegas, qs, tpm_kind, tpm_param, tpm_param2, t, r, mu_a[k], x_a[k], P_a[k], xk, PI,
+               cbar, x0, P0, xp, Pp, Ft, Qt, Cj, C, tmp, xbar, Pbar)
         # the output time's marginal and its cross-covariance with x_k+1, per target mode
         for j in range(r):
             transition_into(kinds[j], omegas[j], qs[j], a, Fa, Qa)
@@ -205,10 +205,10 @@ def smooth_rows(acc_t, acc_seg, mu_a, x_a, P_a, kinds, omegas, qs, tpm_kind, tpm
 
 
 @njit(cache=True)
-def _joint(kinds, omegas, qs, tpm_kind, tpm_param, dt, r, mu, x, P, xk, PI, cbar, x0, P0, xp, Pp,
+def _joint(kinds, omegas, qs, tpm_kind, tpm_param, tpm_param2, dt, r, mu, x, P, xk, PI, cbar, x0, P0, xp, Pp,
            F, Q, Cj, C, tmp, xbar, Pbar):
     """Predicted mixture (xbar, Pbar) over dt and its cross-covariance C with the current combined xk."""
-    tpm_into(tpm_kind, tpm_param, dt, r, PI)
+    tpm_into(tpm_kind, tpm_param, tpm_param2, dt, r, PI)
     mix_into(PI, mu, x, P, r, cbar, x0, P0)
     for a in range(NX):
         for b in range(NX):

@@ -34,6 +34,7 @@ REQUIRED = ("time", "sensor_id", "sensor_kind", "aircraft_id", "latitude", "long
             "cov_ee_m2", "cov_en_m2", "cov_nn_m2")
 M_PER_S_PER_KT = 1852.0 / 3600.0
 FT_PER_FL = 100.0
+MAX_RANGE_M = 3_000_000.0  # reports farther than this from the aircraft's median position are garbage
 
 
 @dataclass
@@ -60,6 +61,21 @@ class TrackResult:
     rejected: pd.DataFrame
     parameters: dict
     final_states: dict[str, ImmState] = field(default_factory=dict)
+    runs: dict[str, tuple] = field(default_factory=dict)  # with keep_states: (plane, PlaneRun, epoch)
+
+    def state_at(self, aircraft_id: str, time: pd.Timestamp) -> ImmState:
+        """The IMM posterior after the last accepted update at or before time (needs keep_states);
+        `predict(state, horizon)` then propagates it (its time is the update's, not `time`)."""
+        if aircraft_id not in self.runs:
+            raise KeyError(f"aircraft {aircraft_id!r}: no filter history (run track(..., keep_states=True))")
+        plane, run, epoch = self.runs[aircraft_id]
+        t = (pd.Timestamp(time) - epoch).total_seconds()
+        rows = np.flatnonzero(run.accepted & (run.t <= t))
+        if not len(rows):
+            raise ValueError(f"aircraft {aircraft_id!r}: no update at or before {time}")
+        i = rows[-1]
+        return ImmState(aircraft_id, epoch + pd.to_timedelta(run.t[i], unit="s"), plane, run.config,
+                        run.mu[i].copy(), run.x[i].copy(), run.P[i].copy())
 
 
 def _check(measurements: pd.DataFrame) -> None:
@@ -73,10 +89,11 @@ def _check(measurements: pd.DataFrame) -> None:
 
 def track(measurements: pd.DataFrame, *, step_s: float = 1.0, max_coast_s: float = 60.0,
           tpm: str | None = None, smooth: bool = False, config: TrackerConfig | None = None,
-          turn_rate_dps: float = 3.0, with_ca: bool = False) -> TrackResult:
+          turn_rate_dps: float = 3.0, with_ca: bool = False, keep_states: bool = False) -> TrackResult:
     """Track every aircraft: estimates on a regular grid of step_s (aligned to whole multiples of step_s
     since UTC midnight) and at every accepted report, coasted up to max_coast_s after the last update,
-    smoothed backwards when smooth. tpm: 'dynamic', 'fixed:P' or 'expm:TAU' (default: the config's)."""
+    smoothed backwards when smooth. tpm: 'dynamic', 'fixed:P' or 'expm:TAU[,TAU2]' (default: the
+    config's). keep_states keeps every aircraft's filter history for `TrackResult.state_at`."""
     _check(measurements)
     if not step_s > 0.0:
         raise ValueError(f"step_s {step_s!r}: must be > 0")
@@ -99,7 +116,7 @@ def track(measurements: pd.DataFrame, *, step_s: float = 1.0, max_coast_s: float
     if frame.empty:
         return empty
     epoch = frame["time"].min().floor("D")
-    tracks, sensors, aircraft, rejected, finals = [], [], [], [], {}
+    tracks, sensors, aircraft, rejected, finals, runs = [], [], [], [], {}, {}
     for aircraft_id, group in frame.groupby("aircraft_id", sort=True, observed=True):
         out = _track_one(str(aircraft_id), group, epoch, config, args, names, step_s, smooth)
         tracks.append(out["tracks"])
@@ -107,6 +124,8 @@ def track(measurements: pd.DataFrame, *, step_s: float = 1.0, max_coast_s: float
         aircraft.append(out["aircraft"])
         rejected.append(out["rejected"])
         finals[str(aircraft_id)] = out["final"]
+        if keep_states:
+            runs[str(aircraft_id)] = (out["plane"], out["run"], epoch)
     sensors_df = pd.concat(sensors, ignore_index=True)
     if len(invalid):
         inv = invalid.rename("invalid").reset_index()
@@ -117,7 +136,7 @@ def track(measurements: pd.DataFrame, *, step_s: float = 1.0, max_coast_s: float
         sensors_df["invalid"] = 0
     return TrackResult(pd.concat(tracks, ignore_index=True), sensors_df,
                        pd.DataFrame(aircraft), pd.concat(rejected, ignore_index=True),
-                       _parameters(config, step_s, smooth), finals)
+                       _parameters(config, step_s, smooth), finals, runs)
 
 
 def _parameters(config: TrackerConfig, step_s: float, smooth: bool) -> dict:
@@ -134,14 +153,26 @@ def _empty_tracks(names: list[str]) -> pd.DataFrame:
     return pd.DataFrame({c: [] for c in cols})
 
 
+def _sources_by_time(times: np.ndarray, sensors: np.ndarray) -> pd.Series:
+    """Comma-joined distinct sensors per time (times sorted); single-sensor times without a Python join."""
+    uniq, start, count = np.unique(times, return_index=True, return_counts=True)
+    out = sensors[start].astype(object)
+    for i in np.flatnonzero(count > 1):
+        out[i] = ",".join(sorted(set(sensors[start[i]:start[i] + count[i]])))
+    return pd.Series(out, index=uniq)
+
+
 def _track_one(aircraft_id, group, epoch, config, args, names, step_s, smooth) -> dict:
     g = group.assign(_t=(group["time"] - epoch).dt.total_seconds().to_numpy())
     g = g.sort_values(["_t", "sensor_id"], kind="stable")
     t = g["_t"].to_numpy(float)
+    plane = Plane.around(g["latitude"].to_numpy(float), g["longitude"].to_numpy(float))
+    ze, zn = plane.forward(g["latitude"].to_numpy(float), g["longitude"].to_numpy(float))
+    near = np.isfinite(ze) & np.isfinite(zn) & (np.hypot(ze, zn) < MAX_RANGE_M)
+    far = g.loc[~near, "sensor_id"].value_counts()
+    g, t, ze, zn = g[near], t[near], ze[near], zn[near]
     lat = g["latitude"].to_numpy(float)
     lon = g["longitude"].to_numpy(float)
-    plane = Plane(lat[0], lon[0])
-    ze, zn = plane.forward(lat, lon)
     m = plane.local_to_plane(lat, lon)
     cov = np.empty((len(g), 2, 2))
     cov[:, 0, 0] = g["cov_ee_m2"].to_numpy(float)
@@ -200,7 +231,7 @@ def _track_one(aircraft_id, group, epoch, config, args, names, step_s, smooth) -
     major = evecs[:, :, 1]
     times = epoch + pd.to_timedelta(qt, unit="s")
     acc_sensor = g["sensor_id"].to_numpy(str)[acc_idx]
-    src = pd.Series(acc_sensor).groupby(acc_t).agg(lambda s: ",".join(sorted(set(s))))
+    src = _sources_by_time(acc_t, acc_sensor)
     is_update = dt == 0.0
     sources = np.full(nq, "", dtype=object)
     sources[is_update] = src.reindex(qt[is_update]).to_numpy()
@@ -229,6 +260,7 @@ def _track_one(aircraft_id, group, epoch, config, args, names, step_s, smooth) -
         reports=("updated", "size"), updates=("updated", "sum"), gated=("gated", "sum"),
         segments_started=("started", "sum"), nis_mean=("nis", "mean")).reset_index()
     sensors.insert(0, "aircraft_id", aircraft_id)
+    sensors["out_of_range"] = sensors["sensor_id"].map(far).fillna(0).astype(int)
     gaps = np.diff(acc_t)
     same_seg = np.diff(acc_seg) == 0
     coasted_s = float(np.maximum(gaps[same_seg] - step_s, 0.0).sum() + (seg_end - seg_last).sum())
@@ -243,4 +275,4 @@ def _track_one(aircraft_id, group, epoch, config, args, names, step_s, smooth) -
     final = ImmState(aircraft_id, epoch + pd.to_timedelta(t[last], unit="s"), plane, config,
                      run.mu[last].copy(), run.x[last].copy(), run.P[last].copy())
     return {"tracks": tracks, "sensors": sensors, "aircraft": aircraft,
-            "rejected": rej.reset_index(drop=True), "final": final}
+            "rejected": rej.reset_index(drop=True), "final": final, "plane": plane, "run": run}
