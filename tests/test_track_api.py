@@ -156,6 +156,20 @@ def test_garbage_position_far_away_is_counted_not_tracked():
     assert res.tracks.latitude.between(40.9, 41.1).all()
 
 
+def test_ellipse_axes_against_eigen_decomposition():
+    from pipeline.track.tracker import _ellipse
+
+    rng = np.random.default_rng(12)
+    a = rng.normal(size=(50, 2, 2)) * 30.0
+    cov = a @ np.swapaxes(a, 1, 2)
+    major, minor, orientation = _ellipse(cov)
+    evals, evecs = np.linalg.eigh(cov)
+    np.testing.assert_allclose(major, np.sqrt(evals[:, 1]), rtol=1e-9)
+    np.testing.assert_allclose(minor, np.sqrt(evals[:, 0]), rtol=1e-7, atol=1e-9)
+    azimuth = np.degrees(np.arctan2(evecs[:, 0, 1], evecs[:, 1, 1])) % 180.0
+    np.testing.assert_allclose(np.cos(np.radians(2 * (orientation - azimuth))), 1.0, atol=1e-9)
+
+
 def test_bad_input_is_named():
     with pytest.raises(ValueError, match="cov_nn_m2"):
         track(pd.DataFrame({"time": pd.to_datetime([], utc=True)}))

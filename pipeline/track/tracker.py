@@ -27,7 +27,7 @@ import pandas as pd
 
 from .config import TrackerConfig, default_modes
 from .frame import Plane
-from .imm import STATUS_REJECTED, STATUS_STARTED, STATUS_UPDATED
+from .imm import STATUS_STARTED, STATUS_UPDATED
 from .plane import estimate, filter_plane
 
 REQUIRED = ("time", "sensor_id", "sensor_kind", "aircraft_id", "latitude", "longitude", "flight_level",
@@ -153,6 +153,30 @@ def _empty_tracks(names: list[str]) -> pd.DataFrame:
     return pd.DataFrame({c: [] for c in cols})
 
 
+def _inv2(m: np.ndarray) -> np.ndarray:
+    """Inverses of (n, 2, 2) matrices in closed form."""
+    det = m[:, 0, 0] * m[:, 1, 1] - m[:, 0, 1] * m[:, 1, 0]
+    out = np.empty_like(m)
+    out[:, 0, 0] = m[:, 1, 1] / det
+    out[:, 1, 1] = m[:, 0, 0] / det
+    out[:, 0, 1] = -m[:, 0, 1] / det
+    out[:, 1, 0] = -m[:, 1, 0] / det
+    return out
+
+
+def _ellipse(cov: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """1-sigma semi-axes and major-axis orientation (deg clockwise from north, 0-180) of (n, 2, 2)
+    east/north covariances, in closed form."""
+    a, b, c = cov[:, 0, 0], 0.5 * (cov[:, 0, 1] + cov[:, 1, 0]), cov[:, 1, 1]
+    mean = 0.5 * (a + c)
+    half = np.hypot(0.5 * (a - c), b)
+    major = np.sqrt(np.maximum(mean + half, 0.0))
+    minor = np.sqrt(np.maximum(mean - half, 0.0))
+    # the major axis angle from east is 0.5 atan2(2b, a - c); as an azimuth from north, 90 minus that
+    orientation = (90.0 - 0.5 * np.degrees(np.arctan2(2.0 * b, a - c))) % 180.0
+    return major, minor, orientation
+
+
 def _sources_by_time(times: np.ndarray, sensors: np.ndarray) -> pd.Series:
     """Comma-joined distinct sensors per time (times sorted); single-sensor times without a Python join."""
     uniq, start, count = np.unique(times, return_index=True, return_counts=True)
@@ -218,17 +242,16 @@ def _track_one(aircraft_id, group, epoch, config, args, names, step_s, smooth) -
     nq = len(qt)
 
     out_lat, out_lon = plane.inverse(xc[:, 0], xc[:, 3])
-    minv = np.linalg.inv(plane.local_to_plane(out_lat, out_lon))
+    minv = _inv2(plane.local_to_plane(out_lat, out_lon))
     v_loc = np.einsum("nij,nj->ni", minv, xc[:, [1, 4]])
     a_loc = np.einsum("nij,nj->ni", minv, xc[:, [2, 5]])
     pos = minv @ Pc[:, [0, 3]][:, :, [0, 3]] @ np.swapaxes(minv, 1, 2)
-    evals, evecs = np.linalg.eigh(pos)
+    sigma_major, sigma_minor, orientation = _ellipse(pos)
     speed = np.hypot(v_loc[:, 0], v_loc[:, 1])
     omegas = args["omegas"]
     with np.errstate(invalid="ignore", divide="ignore"):
         ccw = muq @ np.where(args["kinds"] == 1, omegas, 0.0) + np.where(
             speed > 1.0, (v_loc[:, 0] * a_loc[:, 1] - v_loc[:, 1] * a_loc[:, 0]) / speed**2, 0.0)
-    major = evecs[:, :, 1]
     times = epoch + pd.to_timedelta(qt, unit="s")
     acc_sensor = g["sensor_id"].to_numpy(str)[acc_idx]
     src = _sources_by_time(acc_t, acc_sensor)
@@ -242,9 +265,8 @@ def _track_one(aircraft_id, group, epoch, config, args, names, step_s, smooth) -
         "speed_kt": speed / M_PER_S_PER_KT,
         "track_deg": np.degrees(np.arctan2(v_loc[:, 0], v_loc[:, 1])) % 360,
         "turn_rate_dps": -np.degrees(ccw),
-        "sigma_major_m": np.sqrt(np.maximum(evals[:, 1], 0.0)),
-        "sigma_minor_m": np.sqrt(np.maximum(evals[:, 0], 0.0)),
-        "ellipse_orientation_deg": np.degrees(np.arctan2(major[:, 0], major[:, 1])) % 180,
+        "sigma_major_m": sigma_major, "sigma_minor_m": sigma_minor,
+        "ellipse_orientation_deg": orientation,
     }
     for j, name in enumerate(names):
         out[f"mode_{name}"] = muq[:, j]
@@ -252,13 +274,16 @@ def _track_one(aircraft_id, group, epoch, config, args, names, step_s, smooth) -
     tracks = pd.DataFrame(out)
 
     sensor = g["sensor_id"].to_numpy(str)
-    per = pd.DataFrame({"sensor_id": sensor, "sensor_kind": g["sensor_kind"].to_numpy(str),
-                        "updated": accepted, "gated": status == STATUS_REJECTED,
-                        "started": status == STATUS_STARTED,
-                        "nis": np.where(status == STATUS_UPDATED, nis, np.nan)})
-    sensors = per.groupby(["sensor_id", "sensor_kind"]).agg(
-        reports=("updated", "size"), updates=("updated", "sum"), gated=("gated", "sum"),
-        segments_started=("started", "sum"), nis_mean=("nis", "mean")).reset_index()
+    kinds = g["sensor_kind"].to_numpy(str)
+    updated = status == STATUS_UPDATED
+    rows = []
+    for sid in np.unique(sensor):
+        sel = sensor == sid
+        rows.append({"sensor_id": sid, "sensor_kind": kinds[sel][0], "reports": int(sel.sum()),
+                     "updates": int((accepted & sel).sum()), "gated": int((sel & ~accepted).sum()),
+                     "segments_started": int((sel & (status == STATUS_STARTED)).sum()),
+                     "nis_mean": float(nis[sel & updated].mean()) if (sel & updated).any() else np.nan})
+    sensors = pd.DataFrame(rows)
     sensors.insert(0, "aircraft_id", aircraft_id)
     sensors["out_of_range"] = sensors["sensor_id"].map(far).fillna(0).astype(int)
     gaps = np.diff(acc_t)
