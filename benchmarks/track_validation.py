@@ -1,13 +1,14 @@
 """Tracker validations against the published scenarios (../shared/tracking.md), full Monte Carlo.
 
-    python benchmarks/track_validation.py [tpm-sweep] [tpm-radars] [robust] [vts] [real] [--runs 100]
+    python benchmarks/track_validation.py [tpm-sweep] [tpm-radars] [robust] [vts] [real] [smoothing]
+        [--runs 100]
 
 tpm-sweep: dynamic-TPM paper (a), radar A alone, scan T 2..12 s, fixed p swept, optimal p vs T fitted.
 tpm-radars: (b), radars A, B, C; fixed 0.90/0.95/0.98 against dynamic and expm, overall and at the
 manoeuvre peaks. robust: robust-IMM paper's six cases, raw vs filtered error, then Poisson data loss,
 coasted estimate vs holding the last position per gap length. vts: CV Kalman, CA Kalman, IMM(CV, CV)
 and IMM(CV, CA) on a radar-only manoeuvring track. real: the real CAT021 recording, random 5-60 s
-stretches deleted and predicted through.
+stretches deleted and predicted through. smoothing: the RTS pass against the forward filter.
 """
 
 from __future__ import annotations
@@ -100,6 +101,27 @@ def tpm_radars(runs: int, rng) -> None:
             peaks = [smooth_t[(grid >= a) & (grid <= b + 30)].max() for a, b in sc.TPM_PAPER_MANOEUVRES_S]
             overall = np.sqrt(np.nanmean(d))
             print(f"  {s:12s} {overall:7.1f}  " + "  ".join(f"{v:13.1f}" for v in peaks))
+
+
+def smoothing(runs: int, rng) -> None:
+    """Forward filter against the RTS pass, on the 3-radar scenario (1 s grid) and the VTS track."""
+    truth = sc.tpm_paper_truth()
+    grid = np.arange(WARMUP_S, truth.t[-1] - 30.0, 1.0)
+    fwd, smo = [], []
+    for _ in range(runs):
+        plots = sc.merge(*[sc.rotating_radar(truth, site, period, phase, pd, 70.0, 0.08, rng, sensor=i)
+                           for i, (site, period, phase, pd) in enumerate(sc.TPM_PAPER_RADARS)])
+        run = _run(TrackerConfig(), plots)
+        e, n = truth.at(grid)
+        for out, smooth in ((fwd, False), (smo, True)):
+            est = estimate(run, grid, smooth=smooth)
+            out.append((est.x[:, 0] - e) ** 2 + (est.x[:, 3] - n) ** 2)
+    print(f"\nsmoothing, radars A, B, C, default tracker, {runs} runs: RMS position error (m) on a 1 s grid")
+    print("  pass        overall  " + "  ".join(f"peak {a}-{b}s" for a, b in sc.TPM_PAPER_MANOEUVRES_S))
+    for name, data in (("forward", fwd), ("RTS", smo)):
+        rms_t = np.sqrt(np.mean(data, axis=0))
+        peaks = [rms_t[(grid >= a) & (grid <= b + 30)].max() for a, b in sc.TPM_PAPER_MANOEUVRES_S]
+        print(f"  {name:10s} {np.sqrt(np.mean(data)):7.1f}  " + "  ".join(f"{v:13.1f}" for v in peaks))
 
 
 def _robust_truth(kind: str, region: str):
@@ -225,12 +247,14 @@ def real(runs: int, rng) -> None:
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("parts", nargs="*", default=["tpm-sweep", "tpm-radars", "robust", "vts", "real"])
+    parser.add_argument("parts", nargs="*",
+                        default=["tpm-sweep", "tpm-radars", "robust", "vts", "real", "smoothing"])
     parser.add_argument("--runs", type=int, default=100)
     parser.add_argument("--seed", type=int, default=2026)
     args = parser.parse_args()
     rng = np.random.default_rng(args.seed)
-    parts = {"tpm-sweep": tpm_sweep, "tpm-radars": tpm_radars, "robust": robust, "vts": vts, "real": real}
+    parts = {"tpm-sweep": tpm_sweep, "tpm-radars": tpm_radars, "robust": robust, "vts": vts, "real": real,
+             "smoothing": smoothing}
     for part in args.parts:
         parts[part](args.runs, rng)
 
