@@ -208,6 +208,23 @@ def test_gate_rejects_a_jump_and_keeps_the_track():
     assert run.segment.max() == 0
 
 
+def test_restart_after_gated_reports_takes_the_two_point_velocity():
+    # a CV-only filter cannot follow a sudden 90 degree heading change: three gated reports restart it,
+    # and the new segment's velocity comes from the last two reports (north at 100 m/s)
+    t = np.arange(40.0)
+    e = np.where(t < 20, 100.0 * t, 1900.0)
+    n = np.where(t < 20, 0.0, 100.0 * (t - 19))
+    var = np.full(40, 25.0)
+    cfg = TrackerConfig(modes=(Mode("cv", "cv", 0.05),))
+    run = filter_plane(cfg, t, e, n, var, 0 * t, var)
+    starts = np.flatnonzero(run.status == 2)
+    assert len(starts) == 2 and 20 < starts[1] <= 24
+    k = starts[1]
+    v = run.x[k, 0, [1, 4]]
+    np.testing.assert_allclose(v, [0.0, 100.0], atol=1e-9)
+    assert run.P[k, 0, 1, 1] == pytest.approx(25.0 + 25.0, rel=1e-9)  # Var(z_k - z_k-1) per axis, dt 1 s
+
+
 def test_segments_end_after_max_coast():
     t = np.array([0.0, 1, 2, 3, 70, 71, 72])
     var = np.full(7, 100.0)

@@ -258,9 +258,11 @@ def run_filter(t, ze, zn, ree, ren, rnn, ve0, vn0, var_v0, fl, kinds, omegas, qs
     t_last = -1e300
     seg = -1
     rejections = 0
+    last_rejected = -1
     accepted = 0
     for i in range(n):
         start = seg < 0 or t[i] - t_last > max_coast_s
+        restart = False
         ok = True
         if not start:
             dt = t[i] - t_last
@@ -300,9 +302,11 @@ def run_filter(t, ze, zn, ree, ren, rnn, ve0, vn0, var_v0, fl, kinds, omegas, qs
                 rejections += 1
                 if restart_after > 0 and rejections >= restart_after:
                     start = True
+                    restart = True
                 else:
                     ok = False
                     status[i] = STATUS_REJECTED
+                    last_rejected = i
             else:
                 rejections = 0
                 status[i] = STATUS_UPDATED
@@ -353,7 +357,16 @@ def run_filter(t, ze, zn, ree, ren, rnn, ve0, vn0, var_v0, fl, kinds, omegas, qs
         if start:
             seg += 1
             rejections = 0
-            _init_state(r, ze[i], zn[i], ree[i], ren[i], rnn[i], ve0[i], vn0[i], var_v0[i], var_a,
+            v_e, v_n, var_v = ve0[i], vn0[i], var_v0[i]
+            if restart and last_rejected >= 0 and t[i] - t[last_rejected] > 0.0:
+                # two-point start from the previous (gated) report when that is the sharper prior
+                d = t[i] - t[last_rejected]
+                var_2p = 0.5 * (ree[i] + rnn[i] + ree[last_rejected] + rnn[last_rejected]) / (d * d)
+                if var_2p < var_v:
+                    v_e = (ze[i] - ze[last_rejected]) / d
+                    v_n = (zn[i] - zn[last_rejected]) / d
+                    var_v = var_2p
+            _init_state(r, ze[i], zn[i], ree[i], ren[i], rnn[i], v_e, v_n, var_v, var_a,
                         mu0, mu, x, P)
             have_v = False
             status[i] = STATUS_STARTED
