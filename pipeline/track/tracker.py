@@ -92,8 +92,9 @@ def track(measurements: pd.DataFrame, *, step_s: float = 1.0, max_coast_s: float
           turn_rate_dps: float = 3.0, with_ca: bool = False, keep_states: bool = False) -> TrackResult:
     """Track every aircraft: estimates on a regular grid of step_s (aligned to whole multiples of step_s
     since UTC midnight) and at every accepted report, coasted up to max_coast_s after the last update,
-    smoothed backwards when smooth. tpm: 'dynamic', 'fixed:P' or 'expm:TAU[,TAU2]' (default: the
-    config's). keep_states keeps every aircraft's filter history for `TrackResult.state_at`."""
+    smoothed backwards when smooth. tpm: 'dynamic[:A,B]', 'fixed:P' or 'expm:TAU[,TAU2]' (default:
+    the config's; see `parse_tpm`). keep_states keeps every aircraft's filter history for
+    `TrackResult.state_at`."""
     _check(measurements)
     if not step_s > 0.0:
         raise ValueError(f"step_s {step_s!r}: must be > 0")
