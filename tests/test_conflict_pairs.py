@@ -104,7 +104,15 @@ def test_pair_probabilities_keep_every_pair_above_eps():
             "flight_level": rng.choice([330.0, 340.0, 335.0], n)}))
     pred = pd.concat(rows, ignore_index=True)
     got = pair_probabilities(pred, radius_nm=5.0, vertical_ft=1000.0, eps=1e-6)
-    got = got.set_index(["horizon_s", "aircraft_a", "aircraft_b"])["pc"]
+    # the same pairs when every pair is handed in (the closing-distance pre-filter's path)
+    i, j = np.triu_indices(n, 1)
+    everything = pd.DataFrame({"time": pred["time"].iloc[0], "aircraft_a": j, "aircraft_b": i})  # b < a
+    given = pair_probabilities(pred, radius_nm=5.0, vertical_ft=1000.0, eps=1e-6, pairs=everything)
+    key = ["horizon_s", "aircraft_a", "aircraft_b"]
+    pd.testing.assert_frame_equal(given.sort_values(key).reset_index(drop=True),
+                                  got.sort_values(key).reset_index(drop=True))
+    assert isinstance(got["time"].dtype, pd.DatetimeTZDtype)
+    got = got.set_index(key)["pc"]
     for h, g in pred.groupby("horizon_s"):
         i, j = np.triu_indices(n, 1)
         e, no, fl = g["east_m"].to_numpy(), g["north_m"].to_numpy(), g["flight_level"].to_numpy()

@@ -63,22 +63,31 @@ def pairs_per_step(tracks: pd.DataFrame, radius_nm: float = 5.0, vertical_ft: fl
     xyz = surface_ecef_m(frame["latitude"].to_numpy(float), frame["longitude"].to_numpy(float))
     alt = frame["flight_level"].to_numpy(float) * 100.0
     ids = frame["aircraft_id"].to_numpy()
-    times = frame["time"].to_numpy()
+    times = time_key(frame["time"])
     starts = np.flatnonzero(np.r_[True, times[1:] != times[:-1]])
     bounds = np.r_[starts, len(frame)]
     radius_m = (radius_nm + margin_nm) * M_PER_NM
     out_t, out_a, out_b = [], [], []
+    rows = np.arange(len(frame))
     for lo, hi in zip(bounds[:-1], bounds[1:], strict=True):
         found = candidate_pairs(xyz[lo:hi], alt[lo:hi], radius_m, vertical_ft + vertical_margin_ft)
         if len(found):
-            out_t.append(np.repeat(times[lo], len(found)))
+            out_t.append(np.repeat(rows[lo], len(found)))
             out_a.append(ids[lo:hi][found[:, 0]])
             out_b.append(ids[lo:hi][found[:, 1]])
     if not out_t:
         return pd.DataFrame({c: pd.Series(dtype=tracks[s].dtype) for c, s in
                              zip(PAIR_COLUMNS, ["time", "aircraft_id", "aircraft_id"], strict=True)})
-    return pd.DataFrame({"time": np.concatenate(out_t), "aircraft_a": np.concatenate(out_a),
+    return pd.DataFrame({"time": frame["time"].array.take(np.concatenate(out_t)),
+                         "aircraft_a": np.concatenate(out_a),
                          "aircraft_b": np.concatenate(out_b)})
+
+
+def time_key(times: pd.Series) -> np.ndarray:
+    """Times as int64 nanoseconds (datetimes, with or without time zone) or as they are (numbers), for
+    fast grouping; converting time-zone-aware datetimes with to_numpy() builds Python objects."""
+    array = times.array
+    return array.as_unit("ns").asi8 if hasattr(array, "asi8") else times.to_numpy()
 
 
 def _require(frame: pd.DataFrame, columns: list[str], name: str) -> None:
