@@ -78,8 +78,9 @@ def main() -> None:
         ref = polar_reference(np.array(m, float), p, d)
         row = methods(np.array(m, float), p, d)
         w, v = np.linalg.eigh(p)
-        ang = np.degrees(np.arctan2(v[1, 1], v[0, 1])) % 180
-        print(f"{str(m):>14} {np.sqrt(w[1]):7.3g},{np.sqrt(w[0]):<8.3g} {ang:5.0f} {d:3g} {ref:11.6f} "
+        isotropic = w[1] <= w[0] * (1 + 1e-9)
+        ang = "    -" if isotropic else f"{np.degrees(np.arctan2(v[1, 1], v[0, 1])) % 180:5.0f}"
+        print(f"{str(m):>14} {np.sqrt(w[1]):7.3g},{np.sqrt(w[0]):<8.3g} {ang} {d:3g} {ref:11.6f} "
               + " ".join(f"{row[h]:11.6f}" for h in head[1:]))
 
     print(f"\n2. {args.random} random cases: d = 1, major sigma 1e-3..30, axis ratio 1..3000, any angle, "

@@ -19,7 +19,7 @@ import numpy as np
 import pandas as pd
 
 from pipeline.conflict.geometry import FT_PER_FL, horizontal_distance_nm
-from pipeline.conflict.pairs import _require, pairs_per_step
+from pipeline.conflict.pairs import _require, pairs_per_step, time_key
 
 LOSS_COLUMNS = ["aircraft_a", "aircraft_b", "start", "end", "duration_s", "min_horizontal_nm",
                 "time_of_min", "vertical_at_min_ft", "min_vertical_ft"]
@@ -54,9 +54,9 @@ def losses_of_separation(tracks: pd.DataFrame, radius_nm: float = 5.0,
     sep = sep[(sep["horizontal_nm"] < radius_nm) & (sep["vertical_ft"] < vertical_ft)]
     if sep.empty:
         return _empty(LOSS_COLUMNS, tracks["time"].dtype, tracks["aircraft_id"].dtype)
-    grid = np.sort(tracks["time"].unique())
+    grid = np.unique(time_key(tracks["time"]))
     sep = sep.sort_values(["aircraft_a", "aircraft_b", "time"], kind="stable").reset_index(drop=True)
-    sep["run"] = _runs(sep, np.searchsorted(grid, sep["time"].to_numpy()), 1)
+    sep["run"] = _runs(sep, np.searchsorted(grid, time_key(sep["time"])), 1)
     at_min = sep.loc[sep.groupby("run")["horizontal_nm"].idxmin()].set_index("run")
     runs = sep.groupby("run").agg(aircraft_a=("aircraft_a", "first"), aircraft_b=("aircraft_b", "first"),
                                   start=("time", "min"), end=("time", "max"),
@@ -76,9 +76,7 @@ def alert_events(pc: pd.DataFrame, threshold: float = 0.2, step_s: float | None 
         raise ValueError(f"threshold: a probability in [0, 1) is needed, got {threshold!r}")
     pc = _ordered(pc)
     if step_s is None:
-        times = np.sort(pc["time"].unique())
-        gaps = np.diff(times) / np.timedelta64(1, "s") if len(times) > 1 else np.array([])
-        gaps = gaps[gaps > 0]
+        gaps = np.diff(np.unique(time_key(pc["time"]))) / 1e9
         step_s = float(gaps.min()) if len(gaps) else 1.0
     elif not step_s > 0:
         raise ValueError(f"step_s: must be positive, got {step_s!r}")
