@@ -1,0 +1,17 @@
+"""Conflict analysis: probability of conflict, pair pre-filter, losses of separation and alert scoring."""
+
+from pipeline.conflict.events import (
+    alert_events,
+    classify_alerts,
+    losses_of_separation,
+    separation,
+    warning_times,
+)
+from pipeline.conflict.geometry import horizontal_distance_nm, surface_ecef_m
+from pipeline.conflict.pairs import candidate_pairs, closing_margin_m, pairs_per_step
+from pipeline.conflict.pairs_pc import pair_probabilities
+from pipeline.conflict.probability import conflict_probability, pc_margin, pc_upper_bound
+
+__all__ = ["alert_events", "candidate_pairs", "classify_alerts", "closing_margin_m", "conflict_probability",
+           "horizontal_distance_nm", "losses_of_separation", "pair_probabilities", "pairs_per_step",
+           "pc_margin", "pc_upper_bound", "separation", "surface_ecef_m", "warning_times"]

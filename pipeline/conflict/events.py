@@ -1,0 +1,185 @@
+"""Losses of separation in tracked data, alert events from PC time series, and how well the alerts did.
+
+Schemas (times are pandas datetimes, UTC; a pair is always written with aircraft_a < aircraft_b):
+
+- tracks: `aircraft_id, time, latitude, longitude, flight_level`, one row per aircraft and time of a
+  common grid (the tracker's output).
+- losses: `aircraft_a, aircraft_b, start, end, duration_s, min_horizontal_nm, time_of_min,
+  vertical_at_min_ft, min_vertical_ft`, one row per uninterrupted run of grid times in loss (start and
+  end are the first and last such times).
+- pc: `time, aircraft_a, aircraft_b, horizon_s, pc`, PC computed at `time` for `time + horizon_s`;
+  pairs and times absent from it count as PC = 0.
+- alerts: `aircraft_a, aircraft_b, horizon_s, start, end, peak_pc, time_of_peak`, one row per run of
+  consecutive grid times with PC above the threshold.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+
+from pipeline.conflict.geometry import FT_PER_FL, horizontal_distance_nm
+from pipeline.conflict.pairs import _require, pairs_per_step, time_key
+
+LOSS_COLUMNS = ["aircraft_a", "aircraft_b", "start", "end", "duration_s", "min_horizontal_nm",
+                "time_of_min", "vertical_at_min_ft", "min_vertical_ft"]
+ALERT_COLUMNS = ["aircraft_a", "aircraft_b", "horizon_s", "start", "end", "peak_pc", "time_of_peak"]
+WARNING_COLUMNS = ["aircraft_a", "aircraft_b", "loss_start", "horizon_s", "alert_start", "warning_s"]
+
+
+def separation(tracks: pd.DataFrame, radius_nm: float = 5.0, vertical_ft: float = 1000.0) -> pd.DataFrame:
+    """Horizontal and vertical distance of every pair within radius_nm and vertical_ft at each time:
+    `time, aircraft_a, aircraft_b, horizontal_nm, vertical_ft`."""
+    _require(tracks, ["aircraft_id", "time", "latitude", "longitude", "flight_level"], "tracks")
+    pairs = pairs_per_step(tracks, radius_nm, vertical_ft)
+    pos = tracks.set_index(["time", "aircraft_id"])[["latitude", "longitude", "flight_level"]]
+    if pos.index.duplicated().any():
+        t, a = pos.index[pos.index.duplicated()][0]
+        raise ValueError(f"tracks: aircraft {a!r} has more than one row at {t}")
+    a = pos.reindex(pd.MultiIndex.from_arrays([pairs["time"], pairs["aircraft_a"]])).to_numpy(float)
+    b = pos.reindex(pd.MultiIndex.from_arrays([pairs["time"], pairs["aircraft_b"]])).to_numpy(float)
+    out = pairs.copy()
+    out["horizontal_nm"] = horizontal_distance_nm(a[:, 0], a[:, 1], b[:, 0], b[:, 1])
+    out["vertical_ft"] = np.abs(a[:, 2] - b[:, 2]) * FT_PER_FL
+    return out
+
+
+def losses_of_separation(tracks: pd.DataFrame, radius_nm: float = 5.0,
+                         vertical_ft: float = 1000.0) -> pd.DataFrame:
+    """Every loss of separation: horizontal distance below radius_nm and vertical below vertical_ft at
+    the same grid time (strictly: aircraft exactly 1000 ft apart are separated). A run ends at the
+    first grid time either aircraft is out of loss or absent."""
+    _check_positive(radius_nm=radius_nm, vertical_ft=vertical_ft)
+    sep = separation(tracks, radius_nm, vertical_ft)
+    sep = sep[(sep["horizontal_nm"] < radius_nm) & (sep["vertical_ft"] < vertical_ft)]
+    if sep.empty:
+        return _empty(LOSS_COLUMNS, tracks["time"].dtype, tracks["aircraft_id"].dtype)
+    grid = np.unique(time_key(tracks["time"]))
+    sep = sep.sort_values(["aircraft_a", "aircraft_b", "time"], kind="stable").reset_index(drop=True)
+    sep["run"] = _runs(sep, np.searchsorted(grid, time_key(sep["time"])), 1)
+    at_min = sep.loc[sep.groupby("run")["horizontal_nm"].idxmin()].set_index("run")
+    runs = sep.groupby("run").agg(aircraft_a=("aircraft_a", "first"), aircraft_b=("aircraft_b", "first"),
+                                  start=("time", "min"), end=("time", "max"),
+                                  min_vertical_ft=("vertical_ft", "min"))
+    runs["duration_s"] = (runs["end"] - runs["start"]).dt.total_seconds()
+    runs["min_horizontal_nm"] = at_min["horizontal_nm"]
+    runs["time_of_min"] = at_min["time"]
+    runs["vertical_at_min_ft"] = at_min["vertical_ft"]
+    return runs[LOSS_COLUMNS].sort_values(["start", "aircraft_a", "aircraft_b"]).reset_index(drop=True)
+
+
+def alert_events(pc: pd.DataFrame, threshold: float = 0.2, step_s: float | None = None) -> pd.DataFrame:
+    """Alert events: runs of PC above the threshold per pair and horizon. Samples more than step_s
+    apart (default: the smallest time step in pc) belong to different events."""
+    _require(pc, ["time", "aircraft_a", "aircraft_b", "horizon_s", "pc"], "pc")
+    if not 0.0 <= threshold < 1.0:
+        raise ValueError(f"threshold: a probability in [0, 1) is needed, got {threshold!r}")
+    pc = _ordered(pc)
+    if step_s is None:
+        gaps = np.diff(np.unique(time_key(pc["time"]))) / 1e9
+        step_s = float(gaps.min()) if len(gaps) else 1.0
+    elif not step_s > 0:
+        raise ValueError(f"step_s: must be positive, got {step_s!r}")
+    rows = pc.sort_values(["aircraft_a", "aircraft_b", "horizon_s", "time"], kind="stable")
+    rows = rows.reset_index(drop=True)
+    is_above = rows["pc"].to_numpy() > threshold
+    if not is_above.any():
+        return _empty(ALERT_COLUMNS, pc["time"].dtype, pc["aircraft_a"].dtype)
+    seconds = (rows["time"] - rows["time"].min()).dt.total_seconds().to_numpy()
+    # a run breaks at a new pair or horizon, a time gap above step_s, or a sample at or below threshold
+    rows["run"] = _runs(rows, seconds, step_s * (1 + 1e-9), extra="horizon_s", breaks=~is_above)
+    above = rows[is_above]
+    peak = above.loc[above.groupby("run")["pc"].idxmax()].set_index("run")
+    events = above.groupby("run").agg(aircraft_a=("aircraft_a", "first"), aircraft_b=("aircraft_b", "first"),
+                                      horizon_s=("horizon_s", "first"), start=("time", "min"),
+                                      end=("time", "max"))
+    events["peak_pc"] = peak["pc"]
+    events["time_of_peak"] = peak["time"]
+    return events[ALERT_COLUMNS].sort_values(["start", "aircraft_a", "aircraft_b", "horizon_s"]).reset_index(
+        drop=True)
+
+
+def classify_alerts(alerts: pd.DataFrame, losses: pd.DataFrame) -> pd.DataFrame:
+    """alerts with `loss_start` (the earliest loss of the pair during the alert or within its horizon
+    after the alert ended, NaT if none) and `false_alert` (no such loss)."""
+    _require(alerts, ALERT_COLUMNS, "alerts")
+    _require(losses, ["aircraft_a", "aircraft_b", "start", "end"], "losses")
+    matched = _matches(_ordered(alerts).reset_index(drop=True), _ordered(losses))
+    first = matched.groupby("alert")["loss_start"].min()
+    out = _ordered(alerts).reset_index(drop=True)
+    out["loss_start"] = first.reindex(out.index)
+    out["false_alert"] = out["loss_start"].isna()
+    return out
+
+
+def warning_times(losses: pd.DataFrame, alerts: pd.DataFrame, horizons_s=None) -> pd.DataFrame:
+    """For each loss and horizon, the earliest alert of the pair at that horizon that was on during the
+    loss or within the horizon before it, and the warning it gave: loss start - alert start in seconds
+    (negative: the alert came after the loss began; NaN: no alert, a missed loss)."""
+    _require(losses, ["aircraft_a", "aircraft_b", "start", "end"], "losses")
+    _require(alerts, ALERT_COLUMNS, "alerts")
+    horizons = sorted(set(alerts["horizon_s"]) if horizons_s is None else set(horizons_s))
+    losses = _ordered(losses).reset_index(drop=True)
+    grid = losses[["aircraft_a", "aircraft_b", "start"]].rename(columns={"start": "loss_start"})
+    grid = grid.merge(pd.DataFrame({"horizon_s": horizons}), how="cross")
+    matched = _matches(_ordered(alerts).reset_index(drop=True), losses)
+    first = matched.groupby(["aircraft_a", "aircraft_b", "loss_start", "horizon_s"], as_index=False)[
+        "alert_start"].min()
+    out = grid.merge(first, on=["aircraft_a", "aircraft_b", "loss_start", "horizon_s"], how="left")
+    if out.empty:
+        out["alert_start"] = pd.Series(dtype=losses["start"].dtype)
+    out["warning_s"] = (out["loss_start"] - out["alert_start"]).dt.total_seconds()
+    order = ["loss_start", "aircraft_a", "aircraft_b", "horizon_s"]
+    return out[WARNING_COLUMNS].sort_values(order).reset_index(drop=True)
+
+
+# --- helpers -------------------------------------------------------------------------------------
+
+
+def _matches(alerts: pd.DataFrame, losses: pd.DataFrame) -> pd.DataFrame:
+    """Alert-loss rows of the same aircraft pair where the loss overlaps [alert start, end + horizon]."""
+    both = alerts.reset_index(names="alert").merge(
+        losses[["aircraft_a", "aircraft_b", "start", "end"]].rename(columns={"start": "loss_start",
+                                                                            "end": "loss_end"}),
+        on=["aircraft_a", "aircraft_b"])
+    reach = both["end"] + pd.to_timedelta(both["horizon_s"], unit="s")
+    keep = (both["loss_start"] <= reach) & (both["loss_end"] >= both["start"])
+    return both[keep].rename(columns={"start": "alert_start"})
+
+
+def _runs(frame: pd.DataFrame, position, max_step, extra: str | None = None, breaks=None) -> np.ndarray:
+    """Run number per row of a frame sorted by pair (and `extra`) then time: a run breaks where the pair
+    changes, `position` advances by more than max_step, or after a row flagged in `breaks`."""
+    keys = ["aircraft_a", "aircraft_b"] + ([extra] if extra else [])
+    new_key = np.zeros(len(frame), dtype=bool)
+    for k in keys:
+        v = frame[k].to_numpy()
+        new_key[1:] |= v[1:] != v[:-1]
+    position = np.asarray(position, dtype=float)
+    new = np.r_[True, new_key[1:] | (np.diff(position) > max_step)]
+    if breaks is not None:
+        new[1:] |= np.asarray(breaks)[:-1]
+    return np.cumsum(new) - 1
+
+
+def _ordered(frame: pd.DataFrame) -> pd.DataFrame:
+    """The frame with each pair written as aircraft_a < aircraft_b."""
+    a, b = frame["aircraft_a"].to_numpy(), frame["aircraft_b"].to_numpy()
+    swap = b < a
+    if not swap.any():
+        return frame
+    out = frame.copy()
+    out.loc[swap, "aircraft_a"], out.loc[swap, "aircraft_b"] = b[swap], a[swap]
+    return out
+
+
+def _check_positive(**values) -> None:
+    for name, value in values.items():
+        if not np.isfinite(value) or value <= 0:
+            raise ValueError(f"{name}: must be a positive distance, got {value!r}")
+
+
+def _empty(columns: list[str], time_dtype, id_dtype) -> pd.DataFrame:
+    dtypes = {"aircraft_a": id_dtype, "aircraft_b": id_dtype, "start": time_dtype, "end": time_dtype,
+              "time_of_min": time_dtype, "time_of_peak": time_dtype}
+    return pd.DataFrame({c: pd.Series(dtype=dtypes.get(c, float)) for c in columns})

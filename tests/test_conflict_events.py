@@ -1,0 +1,105 @@
+"""Losses of separation, alert events, warning times and false alerts on hand-worked traffic."""
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from pipeline.conflict import alert_events, classify_alerts, losses_of_separation, warning_times
+
+A = 6378137.0
+T0 = pd.Timestamp("2024-05-01 10:00:00", tz="UTC")
+
+
+def lon_at(distance_nm):
+    """Longitude on the equator whose chord from (0, 0) is distance_nm: 2 A sin(dlon / 2) = d."""
+    return np.degrees(2 * np.arcsin(np.asarray(distance_nm) * 1852 / (2 * A)))
+
+
+def tracks_from(distances_nm, fl_b=355.0, extra=None):
+    """A fixed at (0, 0) FL350; B on the equator at the given distance from A, one per second."""
+    rows = []
+    for k, dist in enumerate(distances_nm):
+        t = T0 + pd.Timedelta(seconds=k)
+        rows.append(("A", t, 0.0, 0.0, 350.0))
+        if dist is not None:
+            rows.append(("B", t, 0.0, float(lon_at(dist)), fl_b))
+        if extra:
+            rows.extend((name, t, 0.0, lon, fl) for name, lon, fl in extra)
+    return pd.DataFrame(rows, columns=["aircraft_id", "time", "latitude", "longitude", "flight_level"])
+
+
+def test_one_loss_by_hand():
+    tracks = tracks_from([7, 6, 4.9, 3.0, 2.5, 4.0, 5.01, 6])  # in loss at 2..5 s, closest 2.5 NM at 4 s
+    losses = losses_of_separation(tracks)
+    assert len(losses) == 1
+    loss = losses.iloc[0]
+    assert (loss.aircraft_a, loss.aircraft_b) == ("A", "B")
+    assert loss.start == T0 + pd.Timedelta(seconds=2) and loss.end == T0 + pd.Timedelta(seconds=5)
+    assert loss.duration_s == 3.0
+    assert loss.min_horizontal_nm == pytest.approx(2.5, abs=1e-9)
+    assert loss.time_of_min == T0 + pd.Timedelta(seconds=4)
+    assert loss.min_vertical_ft == pytest.approx(500.0) and loss.vertical_at_min_ft == pytest.approx(500.0)
+
+
+def test_vertical_separation_of_1000_ft_is_kept_and_gaps_split_losses():
+    # C sits 1 NM east of A at FL360: exactly 1000 ft above A (separated), 500 ft above B (a loss
+    # whenever B is within 5 NM of C, i.e. B within 6 NM of A on the same side)
+    c_lon = float(lon_at(1.0))
+    tracks = tracks_from([3, 3, None, 3, 9], extra=[("C", c_lon, 360.0)])
+    losses = losses_of_separation(tracks)
+    got = [(r.aircraft_a, r.aircraft_b, (r.start - T0).seconds, (r.end - T0).seconds)
+           for r in losses.itertuples()]
+    # B absent at 2 s: each pair's loss splits in two; A-C never (1000 ft)
+    assert sorted(got) == [("A", "B", 0, 1), ("A", "B", 3, 3), ("B", "C", 0, 1), ("B", "C", 3, 3)]
+    bc = losses[losses.aircraft_a == "B"].iloc[0]
+    assert bc.min_horizontal_nm == pytest.approx(2.0, abs=1e-6)  # on the equator: 3 NM - 1 NM (to 1e-6)
+
+
+def test_no_loss_gives_typed_empty_frame():
+    losses = losses_of_separation(tracks_from([8, 7, 6]))
+    assert losses.empty and list(losses.columns)[:4] == ["aircraft_a", "aircraft_b", "start", "end"]
+
+
+def pc_frame(values, horizon=60, pair=("A", "B")):
+    rows = [(T0 + pd.Timedelta(seconds=k), pair[0], pair[1], horizon, v) for k, v in values if v is not None]
+    return pd.DataFrame(rows, columns=["time", "aircraft_a", "aircraft_b", "horizon_s", "pc"])
+
+
+def test_alert_events_by_hand():
+    pc = pd.concat([
+        pc_frame([(0, 0.1), (1, 0.3), (2, 0.5), (3, 0.15), (4, 0.25), (5, 0.21), (7, 0.4)]),
+        pc_frame([(1, 0.9)], horizon=20, pair=("B", "A")),  # written the other way round
+    ])
+    events = alert_events(pc, threshold=0.2)
+    got = [(r.aircraft_a, r.aircraft_b, r.horizon_s, (r.start - T0).seconds, (r.end - T0).seconds, r.peak_pc,
+            (r.time_of_peak - T0).seconds) for r in events.itertuples()]
+    # 60 s: above at 1-2 (peak 0.5 at 2), 4-5 (0.25 at 4), 7 (after a missing sample at 6: a new event)
+    assert got == [("A", "B", 20, 1, 1, 0.9, 1), ("A", "B", 60, 1, 2, 0.5, 2), ("A", "B", 60, 4, 5, 0.25, 4),
+                   ("A", "B", 60, 7, 7, 0.4, 7)]
+    assert len(alert_events(pc, threshold=0.2, step_s=2.0)) == 3  # gaps of 2 s bridged
+    with pytest.raises(ValueError, match="threshold: a probability in"):
+        alert_events(pc, threshold=1.5)
+    with pytest.raises(ValueError, match="pc: missing column"):
+        alert_events(pc.drop(columns="pc"))
+
+
+def test_warning_times_and_false_alerts_by_hand():
+    s = pd.Timedelta(seconds=1)
+    losses = pd.DataFrame({"aircraft_a": ["A", "C"], "aircraft_b": ["B", "D"],
+                           "start": [T0 + 100 * s, T0 + 300 * s], "end": [T0 + 130 * s, T0 + 310 * s]})
+    alerts = pd.DataFrame({
+        "aircraft_a": ["A", "A", "A", "A", "C", "E"], "aircraft_b": ["B", "B", "B", "B", "D", "F"],
+        "horizon_s": [60, 60, 120, 20, 60, 60],
+        "start": [T0 + 30 * s, T0 + 50 * s, T0 + 10 * s, T0 + 105 * s, T0 + 100 * s, T0 + 0 * s],
+        "end": [T0 + 35 * s, T0 + 95 * s, T0 + 20 * s, T0 + 110 * s, T0 + 120 * s, T0 + 10 * s],
+        "peak_pc": 0.5, "time_of_peak": T0})
+    classified = classify_alerts(alerts, losses)
+    # A-B at 60 s from 30-35 s reaches 95 s (< loss at 100 s): false; 50-95 s warns of the loss at 100 s;
+    # 120 s horizon, 10-20 s reaches 140 s: true; 20 s horizon during the loss: true (late);
+    # C-D 100-120 s reaches 180 s, before the loss at 300 s: false; E-F has no loss: false
+    assert classified["false_alert"].tolist() == [True, False, False, False, True, True]
+    assert classified["loss_start"].iloc[1] == T0 + 100 * s
+    warn = warning_times(losses, alerts, horizons_s=[20, 60, 120])
+    got = {(r.aircraft_a, r.horizon_s): r.warning_s for r in warn.itertuples()}
+    assert got[("A", 20)] == -5.0 and got[("A", 60)] == 50.0 and got[("A", 120)] == 90.0
+    assert all(np.isnan(got[("C", h)]) for h in (20, 60, 120))  # missed at every horizon
