@@ -1,0 +1,55 @@
+"""Measurement covariances in the local east/north frame at the report (m^2)."""
+
+from __future__ import annotations
+
+import numpy as np
+
+EARTH_RADIUS_M = 6371000.0
+# NACp 95 % horizontal position bounds (EPU), m, DO-260B; NACp 0 (unknown) has none
+NACP_EPU_M = {1: 18520.0, 2: 7408.0, 3: 3704.0, 4: 1852.0, 5: 926.0, 6: 555.6, 7: 185.2, 8: 92.6,
+              9: 30.0, 10: 10.0, 11: 3.0}
+SIGMA_PER_95_BOUND = 1.0 / 2.448  # a circular Gaussian holds 95 % within 2.448 sigma
+
+
+def radar_covariance(rho_m, theta_deg, target_height_m, site_height_m, sigma_range_m, sigma_azimuth_deg,
+                     convergence_deg=0.0, earth_radius_m: float = EARTH_RADIUS_M):
+    """(cov_ee_m2, cov_en_m2, cov_nn_m2) of a radar plot converted to a horizontal position.
+
+    The slant range rho is turned into the ground arc g by the spherical triangle of site and target
+    heights (tracking.md 5.1), east = g sin(theta), north = g cos(theta) with theta clockwise from north,
+    and R = J diag(sigma_range^2, sigma_azimuth^2) J^T with J the Jacobian of (east, north) by (rho,
+    theta). convergence_deg rotates the result from the radar's north into the report's local north
+    (the true azimuth of the line of sight at the target minus theta). A target height above the
+    reachable range gives NaN.
+    """
+    rho, theta, ht, hs, sr, sa, conv = np.broadcast_arrays(*(np.asarray(v, dtype=float) for v in (
+        rho_m, theta_deg, target_height_m, site_height_m, sigma_range_m, sigma_azimuth_deg,
+        convergence_deg)))
+    ra = earth_radius_m + hs
+    rb = earth_radius_m + np.where(np.isnan(ht), hs, ht)
+    cos_gamma = (ra * ra + rb * rb - rho * rho) / (2.0 * ra * rb)
+    with np.errstate(invalid="ignore"):
+        gamma = np.arccos(np.where(np.abs(cos_gamma) <= 1.0, cos_gamma, np.nan))
+        ground_m = earth_radius_m * gamma
+        # d(gamma)/d(rho) = rho / (ra rb sin gamma)
+        dg_drho = earth_radius_m * rho / (ra * rb * np.sin(gamma))
+    dg_drho = np.where(gamma > 0.0, dg_drho, 1.0)
+    az = np.radians(theta + conv)
+    s, c = np.sin(az), np.cos(az)
+    var_along = (dg_drho * sr) ** 2
+    var_cross = (ground_m * np.radians(sa)) ** 2
+    cov_ee = var_along * s * s + var_cross * c * c
+    cov_nn = var_along * c * c + var_cross * s * s
+    cov_en = (var_along - var_cross) * s * c
+    return cov_ee, cov_en, cov_nn
+
+
+def nacp_covariance(nacp, floor_sigma_m: float = 3.0):
+    """Isotropic ADS-B covariance (m^2) from NACp: (EPU / 2.448)^2, with sigma at least floor_sigma_m;
+    NaN where NACp is 0, missing or out of range."""
+    values = np.asarray(nacp, dtype=float)
+    epu = np.full(values.shape, np.nan)
+    for level, bound in NACP_EPU_M.items():
+        epu[values == level] = bound
+    sigma = np.maximum(epu * SIGMA_PER_95_BOUND, floor_sigma_m)
+    return sigma * sigma

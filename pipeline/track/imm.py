@@ -1,0 +1,504 @@
+"""The IMM kernel: numba, fixed 6-state [e, ve, ae, n, vn, an] per mode, no allocation per update.
+
+Modes are nearly-constant velocity (CV), coordinated turn at a fixed rate (CT, positive = left, i.e.
+counter-clockwise in the east-north plane) and constant acceleration (CA); CV and CT keep their
+acceleration states at exactly zero, so mixing with a CA mode is the zero-padded mixing of
+tracking.md section 2.2. Process noise is the discrete white-noise acceleration of the dynamic-TPM
+paper (Gamma sigma_a^2 Gamma^T, acceleration constant over one step); CA adds white jerk.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+NX = 6
+CV, CT, CA = 0, 1, 2
+TPM_FIXED, TPM_DYNAMIC, TPM_EXPM = 0, 1, 2
+STATUS_REJECTED, STATUS_UPDATED, STATUS_STARTED = 0, 1, 2
+LOG_2PI = math.log(2.0 * math.pi)
+
+
+@njit(cache=True)
+def tpm_into(kind, param, param2, dt, r, out):
+    """Mode transition matrix for an update interval dt (s) into out[:r, :r]: mode 0 (CV) leaves to the
+    others with equal probability, the others only return to mode 0 (the dynamic-TPM paper's eq. 14)."""
+    for i in range(r):
+        for j in range(r):
+            out[i, j] = 0.0
+    if r == 1:
+        out[0, 0] = 1.0
+        return
+    m = r - 1
+    if kind == TPM_EXPM:
+        # continuous-time chain: mode 0 left at rate a = 1/param (split evenly), the others left
+        # (back to mode 0) at rate b = 1/param2; closed form of expm(G dt) for this structure
+        a = 1.0 / param
+        b = 1.0 / param2
+        e_ab = math.exp(-(a + b) * dt)
+        e_b = math.exp(-b * dt)
+        stay_base = (b + a * e_ab) / (a + b)
+        to_base = b * (1.0 - e_ab) / (a + b)
+        out[0, 0] = stay_base
+        for j in range(1, r):
+            out[0, j] = (1.0 - stay_base) / m
+            out[j, 0] = to_base
+            same = (1.0 - to_base + (m - 1) * e_b) / m
+            for k in range(1, r):
+                out[j, k] = same if k == j else same - e_b
+        return
+    if kind == TPM_DYNAMIC:
+        p = min(0.995, param - param2 * dt)
+        p = max(p, 0.0)
+    else:
+        p = param
+    out[0, 0] = p
+    for j in range(1, r):
+        out[0, j] = (1.0 - p) / m
+        out[j, 0] = 1.0 - p
+        out[j, j] = p
+
+
+@njit(cache=True)
+def transition_into(kind, omega, q, dt, F, Q):
+    """State transition F and process noise Q of one mode over dt (s); omega in rad/s, q = sigma_a^2."""
+    for i in range(NX):
+        for j in range(NX):
+            F[i, j] = 0.0
+            Q[i, j] = 0.0
+    dt2 = dt * dt
+    if kind == CA:
+        g0, g1, g2 = 0.5 * dt2, dt, 1.0
+        for o in (0, 3):
+            F[o, o] = 1.0
+            F[o, o + 1] = dt
+            F[o, o + 2] = 0.5 * dt2
+            F[o + 1, o + 1] = 1.0
+            F[o + 1, o + 2] = dt
+            F[o + 2, o + 2] = 1.0
+            Q[o, o] = q * g0 * g0
+            Q[o, o + 1] = Q[o + 1, o] = q * g0 * g1
+            Q[o, o + 2] = Q[o + 2, o] = q * g0 * g2
+            Q[o + 1, o + 1] = q * g1 * g1
+            Q[o + 1, o + 2] = Q[o + 2, o + 1] = q * g1 * g2
+            Q[o + 2, o + 2] = q * g2 * g2
+        return
+    for o in (0, 3):
+        Q[o, o] = q * 0.25 * dt2 * dt2
+        Q[o, o + 1] = Q[o + 1, o] = q * 0.5 * dt2 * dt
+        Q[o + 1, o + 1] = q * dt2
+    wt = omega * dt
+    if kind == CT and abs(wt) > 1e-9:
+        s, c = math.sin(wt), math.cos(wt)
+        F[0, 0] = 1.0
+        F[0, 1] = s / omega
+        F[0, 4] = -(1.0 - c) / omega
+        F[1, 1] = c
+        F[1, 4] = -s
+        F[3, 1] = (1.0 - c) / omega
+        F[3, 3] = 1.0
+        F[3, 4] = s / omega
+        F[4, 1] = s
+        F[4, 4] = c
+    else:
+        for o in (0, 3):
+            F[o, o] = 1.0
+            F[o, o + 1] = dt
+            F[o + 1, o + 1] = 1.0
+
+
+@njit(cache=True)
+def _fpft_q(F, P, Q, tmp, out):
+    """out = F P F^T + Q (6x6), using tmp as scratch."""
+    for i in range(NX):
+        for j in range(NX):
+            acc = 0.0
+            for k in range(NX):
+                acc += F[i, k] * P[k, j]
+            tmp[i, j] = acc
+    for i in range(NX):
+        for j in range(i, NX):
+            acc = Q[i, j]
+            for k in range(NX):
+                acc += tmp[i, k] * F[j, k]
+            out[i, j] = acc
+            out[j, i] = acc
+
+
+@njit(cache=True)
+def _fx(F, x, out):
+    for i in range(NX):
+        acc = 0.0
+        for k in range(NX):
+            acc += F[i, k] * x[k]
+        out[i] = acc
+
+
+@njit(cache=True)
+def mix_into(PI, mu, x, P, r, cbar, x0, P0):
+    """IMM interaction: predicted mode probabilities cbar and mixed initial conditions x0, P0."""
+    for j in range(r):
+        acc = 0.0
+        for i in range(r):
+            acc += PI[i, j] * mu[i]
+        cbar[j] = acc
+    for j in range(r):
+        for a in range(NX):
+            x0[j, a] = 0.0
+            for b in range(NX):
+                P0[j, a, b] = 0.0
+        if cbar[j] <= 0.0:
+            for a in range(NX):
+                x0[j, a] = x[j, a]
+                for b in range(NX):
+                    P0[j, a, b] = P[j, a, b]
+            continue
+        for i in range(r):
+            w = PI[i, j] * mu[i] / cbar[j]
+            for a in range(NX):
+                x0[j, a] += w * x[i, a]
+        for i in range(r):
+            w = PI[i, j] * mu[i] / cbar[j]
+            if w == 0.0:
+                continue
+            for a in range(NX):
+                da = x[i, a] - x0[j, a]
+                for b in range(NX):
+                    P0[j, a, b] += w * (P[i, a, b] + da * (x[i, b] - x0[j, b]))
+
+
+@njit(cache=True)
+def combine_into(w, x, P, r, xc, Pc):
+    """Moment-matched mixture: xc = sum w_j x_j, Pc = sum w_j [P_j + (x_j - xc)(x_j - xc)^T]."""
+    for a in range(NX):
+        acc = 0.0
+        for j in range(r):
+            acc += w[j] * x[j, a]
+        xc[a] = acc
+    for a in range(NX):
+        for b in range(NX):
+            acc = 0.0
+            for j in range(r):
+                acc += w[j] * (P[j, a, b] + (x[j, a] - xc[a]) * (x[j, b] - xc[b]))
+            Pc[a, b] = acc
+
+
+@njit(cache=True)
+def predict_into(kinds, omegas, qs, tpm_kind, tpm_param, tpm_param2, dt, r, mu, x, P,
+                 PI, F, Q, tmp, cbar, x0, P0, xp, Pp):
+    """One IMM prediction over dt: mixing with PI(dt), then each mode's F, Q (mode-conditioned xp, Pp);
+    cbar = PI^T mu are the predicted mode probabilities."""
+    tpm_into(tpm_kind, tpm_param, tpm_param2, dt, r, PI)
+    mix_into(PI, mu, x, P, r, cbar, x0, P0)
+    for j in range(r):
+        transition_into(kinds[j], omegas[j], qs[j], dt, F, Q)
+        _fx(F, x0[j], xp[j])
+        _fpft_q(F, P0[j], Q, tmp, Pp[j])
+
+
+@njit(cache=True)
+def _init_state(r, ze, zn, ree, ren, rnn, ve, vn, var_v, var_a, mu0, mu, x, P):
+    for j in range(r):
+        mu[j] = mu0[j]
+        for a in range(NX):
+            x[j, a] = 0.0
+            for b in range(NX):
+                P[j, a, b] = 0.0
+        x[j, 0] = ze
+        x[j, 3] = zn
+        x[j, 1] = ve
+        x[j, 4] = vn
+        P[j, 0, 0] = ree
+        P[j, 0, 3] = P[j, 3, 0] = ren
+        P[j, 3, 3] = rnn
+        P[j, 1, 1] = var_v
+        P[j, 4, 4] = var_v
+        P[j, 2, 2] = var_a[j]
+        P[j, 5, 5] = var_a[j]
+
+
+@njit(cache=True)
+def run_filter(t, ze, zn, ree, ren, rnn, ve0, vn0, var_v0, fl, kinds, omegas, qs, mu0,
+               tpm_kind, tpm_param, tpm_param2, gate_d2, max_coast_s, restart_after, q_fl, var_fl,
+               status, nis, segment, t_state, mu_h, x_h, P_h, zv_h, Pv_h, keep):
+    """Filter one aircraft's time-ordered measurements (plane coordinates, m; covariances m^2).
+
+    Per measurement i it writes status (rejected/updated/started), nis (d^2 with the combined
+    predicted covariance; the gate takes the smallest mode-matched d^2), the segment number, t_state
+    (time of the state after i) and, when keep, the mode-conditioned posteriors (mu_h, x_h, P_h) and
+    the vertical state (zv_h, Pv_h). A segment starts at the first measurement, whenever the last
+    accepted update is older than max_coast_s, or at the restart_after-th consecutive gated report
+    (0: never). ve0/vn0/var_v0 initialise the velocity of a new segment (mean and per-axis variance).
+    Returns the number of accepted updates.
+    """
+    n = t.shape[0]
+    r = kinds.shape[0]
+    mu = np.empty(r)
+    x = np.empty((r, NX))
+    P = np.empty((r, NX, NX))
+    cbar = np.empty(r)
+    x0 = np.empty((r, NX))
+    P0 = np.empty((r, NX, NX))
+    xp = np.empty((r, NX))
+    Pp = np.empty((r, NX, NX))
+    PI = np.empty((r, r))
+    F = np.empty((NX, NX))
+    Q = np.empty((NX, NX))
+    tmp = np.empty((NX, NX))
+    loglik = np.empty(r)
+    var_a = np.empty(r)
+    for j in range(r):
+        var_a[j] = 25.0 if kinds[j] == CA else 0.0
+    zv = np.zeros(2)
+    Pv = np.zeros((2, 2))
+    tv = -1e300
+    have_v = False
+    t_last = -1e300
+    seg = -1
+    rejections = 0
+    accepted = 0
+    for i in range(n):
+        start = seg < 0 or t[i] - t_last > max_coast_s
+        ok = True
+        if not start:
+            dt = t[i] - t_last
+            predict_into(kinds, omegas, qs, tpm_kind, tpm_param, tpm_param2, dt, r, mu, x, P,
+                         PI, F, Q, tmp, cbar, x0, P0, xp, Pp)
+            # NIS with the combined prediction (mixture moments of the position); the gate accepts a
+            # report that any mode's own prediction accepts (a turn's onset is not an outlier)
+            me = 0.0
+            mn = 0.0
+            for j in range(r):
+                me += cbar[j] * xp[j, 0]
+                mn += cbar[j] * xp[j, 3]
+            s00 = ree[i]
+            s01 = ren[i]
+            s11 = rnn[i]
+            d2_min = np.inf
+            for j in range(r):
+                de = xp[j, 0] - me
+                dn = xp[j, 3] - mn
+                s00 += cbar[j] * (Pp[j, 0, 0] + de * de)
+                s01 += cbar[j] * (Pp[j, 0, 3] + de * dn)
+                s11 += cbar[j] * (Pp[j, 3, 3] + dn * dn)
+                a00 = Pp[j, 0, 0] + ree[i]
+                a01 = Pp[j, 0, 3] + ren[i]
+                a11 = Pp[j, 3, 3] + rnn[i]
+                ve = ze[i] - xp[j, 0]
+                vn = zn[i] - xp[j, 3]
+                d2j = (a11 * ve * ve - 2.0 * a01 * ve * vn + a00 * vn * vn) / (a00 * a11 - a01 * a01)
+                if d2j < d2_min:
+                    d2_min = d2j
+            det = s00 * s11 - s01 * s01
+            ne = ze[i] - me
+            nn = zn[i] - mn
+            d2 = (s11 * ne * ne - 2.0 * s01 * ne * nn + s00 * nn * nn) / det
+            nis[i] = d2
+            if not (d2_min <= gate_d2):
+                rejections += 1
+                if restart_after > 0 and rejections >= restart_after:
+                    start = True
+                else:
+                    ok = False
+                    status[i] = STATUS_REJECTED
+            else:
+                rejections = 0
+                status[i] = STATUS_UPDATED
+                best = -1e300
+                for j in range(r):
+                    # mode-matched update, Joseph form
+                    a00 = Pp[j, 0, 0] + ree[i]
+                    a01 = Pp[j, 0, 3] + ren[i]
+                    a11 = Pp[j, 3, 3] + rnn[i]
+                    dj = a00 * a11 - a01 * a01
+                    i00 = a11 / dj
+                    i01 = -a01 / dj
+                    i11 = a00 / dj
+                    ve = ze[i] - xp[j, 0]
+                    vn = zn[i] - xp[j, 3]
+                    loglik[j] = (-0.5 * (i00 * ve * ve + 2.0 * i01 * ve * vn + i11 * vn * vn)
+                                 - LOG_2PI - 0.5 * math.log(dj))
+                    if loglik[j] > best:
+                        best = loglik[j]
+                    # K = Pp H^T S^-1 (6x2), stored in tmp[:, 0:2]
+                    for a in range(NX):
+                        pa0 = Pp[j, a, 0]
+                        pa3 = Pp[j, a, 3]
+                        tmp[a, 0] = pa0 * i00 + pa3 * i01
+                        tmp[a, 1] = pa0 * i01 + pa3 * i11
+                    for a in range(NX):
+                        x[j, a] = xp[j, a] + tmp[a, 0] * ve + tmp[a, 1] * vn
+                    # A = I - K H; P = A Pp A^T + K R K^T; F is scratch for A Pp
+                    for a in range(NX):
+                        for b in range(NX):
+                            F[a, b] = Pp[j, a, b] - tmp[a, 0] * Pp[j, 0, b] - tmp[a, 1] * Pp[j, 3, b]
+                    for a in range(NX):
+                        ka0 = tmp[a, 0]
+                        ka1 = tmp[a, 1]
+                        for b in range(a, NX):
+                            kb0 = tmp[b, 0]
+                            kb1 = tmp[b, 1]
+                            v = F[a, b] - F[a, 0] * kb0 - F[a, 3] * kb1
+                            v += (ka0 * (ree[i] * kb0 + ren[i] * kb1) + ka1 * (ren[i] * kb0 + rnn[i] * kb1))
+                            P[j, a, b] = v
+                            P[j, b, a] = v
+                total = 0.0
+                for j in range(r):
+                    mu[j] = cbar[j] * math.exp(loglik[j] - best)
+                    total += mu[j]
+                for j in range(r):
+                    mu[j] /= total
+        if start:
+            seg += 1
+            rejections = 0
+            _init_state(r, ze[i], zn[i], ree[i], ren[i], rnn[i], ve0[i], vn0[i], var_v0[i], var_a,
+                        mu0, mu, x, P)
+            have_v = False
+            status[i] = STATUS_STARTED
+            nis[i] = np.nan
+        if ok:
+            t_last = t[i]
+            accepted += 1
+            # vertical: nearly-constant rate on flight level, updated by accepted reports only
+            if not math.isnan(fl[i]):
+                if not have_v:
+                    zv[0] = fl[i]
+                    zv[1] = 0.0
+                    Pv[0, 0] = var_fl
+                    Pv[0, 1] = Pv[1, 0] = 0.0
+                    Pv[1, 1] = 1.0  # (FL/s)^2: 6000 ft/min
+                    have_v = True
+                else:
+                    d = t[i] - tv
+                    zv[0] += d * zv[1]
+                    p00 = Pv[0, 0] + 2.0 * d * Pv[0, 1] + d * d * Pv[1, 1] + q_fl * 0.25 * d ** 4
+                    p01 = Pv[0, 1] + d * Pv[1, 1] + q_fl * 0.5 * d ** 3
+                    p11 = Pv[1, 1] + q_fl * d * d
+                    s = p00 + var_fl
+                    k0 = p00 / s
+                    k1 = p01 / s
+                    inn = fl[i] - zv[0]
+                    zv[0] += k0 * inn
+                    zv[1] += k1 * inn
+                    Pv[0, 0] = (1.0 - k0) * p00
+                    Pv[0, 1] = Pv[1, 0] = (1.0 - k0) * p01
+                    Pv[1, 1] = p11 - k1 * p01
+                tv = t[i]
+        segment[i] = seg
+        t_state[i] = t_last
+        if keep:
+            for j in range(r):
+                mu_h[i, j] = mu[j]
+                for a in range(NX):
+                    x_h[i, j, a] = x[j, a]
+                    for b in range(NX):
+                        P_h[i, j, a, b] = P[j, a, b]
+            if have_v:
+                # vertical state predicted to t_state so every row's states share one time
+                d = t_last - tv
+                zv_h[i, 0] = zv[0] + d * zv[1]
+                zv_h[i, 1] = zv[1]
+                Pv_h[i, 0, 0] = Pv[0, 0] + 2.0 * d * Pv[0, 1] + d * d * Pv[1, 1] + q_fl * 0.25 * d ** 4
+                Pv_h[i, 0, 1] = Pv_h[i, 1, 0] = Pv[0, 1] + d * Pv[1, 1] + q_fl * 0.5 * d ** 3
+                Pv_h[i, 1, 1] = Pv[1, 1] + q_fl * d * d
+            else:
+                zv_h[i, 0] = np.nan
+                zv_h[i, 1] = np.nan
+    return accepted
+
+
+@njit(cache=True)
+def predict_rows(gov, dt, kinds, omegas, qs, tpm_kind, tpm_param, tpm_param2, q_fl, substep_s, mu_h,
+                 x_h, P_h, zv_h, Pv_h, xc_out, Pc_out, mu_out, zv_out, Pv_out):
+    """Combined estimate at query q: the posterior of row gov[q] predicted dt[q] s ahead (dt 0: the
+    posterior itself) by IMM cycles without measurement of at most substep_s each (mixing, mode-matched
+    prediction, mu <- PI^T mu), combined with the spread of the mode means. Consecutive queries with the
+    same governing row continue one chain, so a coasted gap costs one cycle per substep."""
+    r = kinds.shape[0]
+    m = gov.shape[0]
+    cbar = np.empty(r)
+    x0 = np.empty((r, NX))
+    P0 = np.empty((r, NX, NX))
+    xp = np.empty((r, NX))
+    Pp = np.empty((r, NX, NX))
+    PI = np.empty((r, r))
+    F = np.empty((NX, NX))
+    Q = np.empty((NX, NX))
+    tmp = np.empty((NX, NX))
+    mu_c = np.empty(r)
+    x_c = np.empty((r, NX))
+    P_c = np.empty((r, NX, NX))
+    g_c = -1
+    t_c = 0.0
+    for q in range(m):
+        g = gov[q]
+        d = dt[q]
+        if d == 0.0:
+            for j in range(r):
+                mu_out[q, j] = mu_h[g, j]
+            combine_into(mu_h[g], x_h[g], P_h[g], r, xc_out[q], Pc_out[q])
+        else:
+            if g != g_c or d < t_c:
+                g_c = g
+                t_c = 0.0
+                for j in range(r):
+                    mu_c[j] = mu_h[g, j]
+                    for a in range(NX):
+                        x_c[j, a] = x_h[g, j, a]
+                        for b in range(NX):
+                            P_c[j, a, b] = P_h[g, j, a, b]
+            while t_c < d:
+                h = min(substep_s, d - t_c)
+                predict_into(kinds, omegas, qs, tpm_kind, tpm_param, tpm_param2, h, r, mu_c, x_c, P_c,
+                             PI, F, Q, tmp, cbar, x0, P0, xp, Pp)
+                for j in range(r):
+                    mu_c[j] = cbar[j]
+                    for a in range(NX):
+                        x_c[j, a] = xp[j, a]
+                        for b in range(NX):
+                            P_c[j, a, b] = Pp[j, a, b]
+                t_c += h
+            for j in range(r):
+                mu_out[q, j] = mu_c[j]
+            combine_into(mu_c, x_c, P_c, r, xc_out[q], Pc_out[q])
+        zv_out[q, 0] = zv_h[g, 0] + d * zv_h[g, 1]
+        zv_out[q, 1] = zv_h[g, 1]
+        Pv_out[q, 0, 0] = (Pv_h[g, 0, 0] + 2.0 * d * Pv_h[g, 0, 1] + d * d * Pv_h[g, 1, 1]
+                           + q_fl * 0.25 * d ** 4)
+        Pv_out[q, 0, 1] = Pv_out[q, 1, 0] = Pv_h[g, 0, 1] + d * Pv_h[g, 1, 1] + q_fl * 0.5 * d ** 3
+        Pv_out[q, 1, 1] = Pv_h[g, 1, 1] + q_fl * d * d
+
+
+@njit(cache=True)
+def propagate(kinds, omegas, qs, tpm_kind, tpm_param, tpm_param2, mu, x, P, horizon_s, step_s,
+              mu_out, x_out, P_out, xc_out, Pc_out):
+    """Repeated IMM prediction cycles without measurements (the conflict paper's trajectory
+    prediction): steps of step_s up to horizon_s; writes per step the mode-conditioned states and the
+    combined mean and mixture covariance. Returns the number of steps."""
+    r = kinds.shape[0]
+    cbar = np.empty(r)
+    x0 = np.empty((r, NX))
+    P0 = np.empty((r, NX, NX))
+    PI = np.empty((r, r))
+    F = np.empty((NX, NX))
+    Q = np.empty((NX, NX))
+    tmp = np.empty((NX, NX))
+    mu_c = mu.copy()
+    x_c = x.copy()
+    P_c = P.copy()
+    n = x_out.shape[0]
+    done = 0.0
+    for k in range(n):
+        d = min(step_s, horizon_s - done)
+        predict_into(kinds, omegas, qs, tpm_kind, tpm_param, tpm_param2, d, r, mu_c, x_c, P_c,
+                     PI, F, Q, tmp, cbar, x0, P0, x_out[k], P_out[k])
+        for j in range(r):
+            mu_out[k, j] = cbar[j]
+            mu_c[j] = cbar[j]
+        x_c[:] = x_out[k]
+        P_c[:] = P_out[k]
+        combine_into(cbar, x_out[k], P_out[k], r, xc_out[k], Pc_out[k])
+        done += d
+    return n

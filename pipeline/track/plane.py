@@ -1,0 +1,112 @@
+"""The tracker on plane coordinates: filter a time-ordered measurement sequence, then estimate (predict
+or smooth) at any set of times. The DataFrame front end and the validations both build on this."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .config import TrackerConfig
+from .imm import NX, STATUS_REJECTED, predict_rows, run_filter
+from .smooth import smooth_rows
+
+
+@dataclass
+class PlaneRun:
+    """Per measurement: status (0 gated, 1 updated, 2 segment start), nis, segment, t_state and the
+    mode-conditioned posterior (mu, x, P) and vertical state (zv, Pv) after it."""
+
+    config: TrackerConfig
+    t: np.ndarray
+    status: np.ndarray
+    nis: np.ndarray
+    segment: np.ndarray
+    t_state: np.ndarray
+    mu: np.ndarray
+    x: np.ndarray
+    P: np.ndarray
+    zv: np.ndarray
+    Pv: np.ndarray
+
+    @property
+    def accepted(self) -> np.ndarray:
+        return self.status != STATUS_REJECTED
+
+
+@dataclass
+class Estimates:
+    """Combined estimates at query times: x (n, 6) = [e, ve, ae, n, vn, an], P (n, 6, 6), mode
+    probabilities mu (n, r), vertical zv (n, 2) = [FL, FL/s], Pv, and per query the index of the
+    governing measurement row and the time since it (0: an update at that time)."""
+
+    t: np.ndarray
+    x: np.ndarray
+    P: np.ndarray
+    mu: np.ndarray
+    zv: np.ndarray
+    Pv: np.ndarray
+    row: np.ndarray
+    age_s: np.ndarray
+
+
+def filter_plane(config: TrackerConfig, t, ze, zn, cov_ee, cov_en, cov_nn, *, fl=None, ve0=None, vn0=None,
+                 var_v0=None) -> PlaneRun:
+    """Run the IMM over measurements sorted by time (s), positions and covariances in the plane."""
+    args = config.kernel_args()
+    t = np.ascontiguousarray(t, float)
+    n = len(t)
+    if n and np.any(np.diff(t) < 0):
+        raise ValueError("measurements must be sorted by time")
+    r = len(config.modes)
+
+    def col(v, default):
+        return np.full(n, default, float) if v is None else np.ascontiguousarray(v, float)
+
+    status = np.empty(n, np.int64)
+    nis = np.empty(n)
+    segment = np.empty(n, np.int64)
+    t_state = np.empty(n)
+    mu = np.empty((n, r))
+    x = np.empty((n, r, NX))
+    P = np.empty((n, r, NX, NX))
+    zv = np.empty((n, 2))
+    Pv = np.zeros((n, 2, 2))
+    run_filter(t, col(ze, 0), col(zn, 0), col(cov_ee, 0), col(cov_en, 0), col(cov_nn, 0),
+               col(ve0, 0.0), col(vn0, 0.0), col(var_v0, config.sigma_init_speed_mps ** 2),
+               col(fl, np.nan), args["kinds"], args["omegas"], args["qs"], args["mu0"], args["tpm_kind"],
+               args["tpm_param"], args["tpm_param2"], args["gate_d2"], args["max_coast_s"],
+               args["restart_after"], args["q_fl"], args["var_fl"],
+               status, nis, segment, t_state, mu, x, P, zv, Pv, True)
+    return PlaneRun(config, t, status, nis, segment, t_state, mu, x, P, zv, Pv)
+
+
+def estimate(run: PlaneRun, times, *, smooth: bool = False) -> Estimates:
+    """Combined estimates at sorted times (each at or after the first measurement): the last accepted
+    update at or before each time, predicted forward (or, when smooth, RTS-smoothed)."""
+    args = run.config.kernel_args()
+    qt = np.ascontiguousarray(times, float)
+    acc_idx = np.flatnonzero(run.accepted)
+    acc_t = run.t[acc_idx]
+    k = np.searchsorted(acc_t, qt, side="right") - 1
+    if np.any(k < 0):
+        raise ValueError("estimate: a time precedes the first measurement")
+    gov = acc_idx[k]
+    dt = qt - acc_t[k]
+    nq, r = len(qt), run.mu.shape[1]
+    xc = np.empty((nq, NX))
+    Pc = np.empty((nq, NX, NX))
+    mu = np.empty((nq, r))
+    zv = np.empty((nq, 2))
+    Pv = np.empty((nq, 2, 2))
+    predict_rows(gov, dt, args["kinds"], args["omegas"], args["qs"], args["tpm_kind"], args["tpm_param"],
+                 args["tpm_param2"], args["q_fl"], args["coast_substep_s"], run.mu, run.x, run.P, run.zv,
+                 run.Pv, xc, Pc, mu, zv, Pv)
+    if smooth:
+        xs = np.empty_like(xc)
+        Ps = np.empty_like(Pc)
+        smooth_rows(acc_t, run.segment[acc_idx], run.mu[acc_idx], run.x[acc_idx], run.P[acc_idx],
+                    args["kinds"], args["omegas"], args["qs"], args["tpm_kind"], args["tpm_param"],
+                    args["tpm_param2"],                    k, dt, xc, Pc, xs, Ps)
+        xc, Pc = xs, Ps
+    return Estimates(qt, xc, Pc, mu, zv, Pv, gov, dt)

@@ -1,0 +1,242 @@
+"""Backward pass: Rauch-Tung-Striebel smoothing of the combined IMM estimate.
+
+Between consecutive accepted updates k and k+1 the joint law of (x_k, x_k+1) is taken from the IMM's own
+prediction: mixing with PI(dt), then per target mode j, x_k ~ N(x0_j, P0_j) and x_k+1 = F_j x_k + w_j,
+so Cov(x_k, x_k+1) = sum_j cbar_j [P0_j F_j^T + (x0_j - x_k)(xp_j - xp)^T]. Output times between two
+updates are smoothed from the same joint law (the acceleration noise is constant over the interval, as
+in the filter's process model), which keeps every joint covariance positive semi-definite.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+from .imm import CA, NX, combine_into, mix_into, tpm_into, transition_into
+
+
+@njit(cache=True)
+def _inverse(A, out, work):
+    """out = A^-1 for a 6x6 covariance; exactly-zero variances (CV/CT acceleration states without a
+    CA mode) are replaced by 1, which leaves the gain's columns for them at zero."""
+    for i in range(NX):
+        for j in range(NX):
+            work[i, j] = A[i, j]
+            out[i, j] = 1.0 if i == j else 0.0
+        if work[i, i] <= 0.0:
+            for j in range(NX):
+                work[i, j] = 0.0
+                work[j, i] = 0.0
+            work[i, i] = 1.0
+    for c in range(NX):
+        p = c
+        for i in range(c + 1, NX):
+            if abs(work[i, c]) > abs(work[p, c]):
+                p = i
+        if p != c:
+            for j in range(NX):
+                work[c, j], work[p, j] = work[p, j], work[c, j]
+                out[c, j], out[p, j] = out[p, j], out[c, j]
+        d = work[c, c]
+        for j in range(NX):
+            work[c, j] /= d
+            out[c, j] /= d
+        for i in range(NX):
+            if i != c:
+                f = work[i, c]
+                if f != 0.0:
+                    for j in range(NX):
+                        work[i, j] -= f * work[c, j]
+                        out[i, j] -= f * out[c, j]
+
+
+@njit(cache=True)
+def _gamma_cross(kind, q, a, t, Qx):
+    """Cov(noise over [0, a], noise over [0, t]) for one constant acceleration (CA: jerk) per step."""
+    for i in range(NX):
+        for j in range(NX):
+            Qx[i, j] = 0.0
+    if kind == CA:
+        ga = (0.5 * a * a, a, 1.0)
+        gt = (0.5 * t * t, t, 1.0)
+        n = 3
+    else:
+        ga = (0.5 * a * a, a, 0.0)
+        gt = (0.5 * t * t, t, 0.0)
+        n = 2
+    for o in (0, 3):
+        for i in range(n):
+            for j in range(n):
+                Qx[o + i, o + j] = q * ga[i] * gt[j]
+
+
+@njit(cache=True)
+def _apply_gain(C, Pbar_inv, xf, Pf, xs_next, Ps_next, xbar, Pbar, G, tmp, xs, Ps):
+    """G = C Pbar^-1; xs = xf + G (xs_next - xbar); Ps = Pf + G (Ps_next - Pbar) G^T."""
+    for i in range(NX):
+        for j in range(NX):
+            acc = 0.0
+            for k in range(NX):
+                acc += C[i, k] * Pbar_inv[k, j]
+            G[i, j] = acc
+    for i in range(NX):
+        acc = xf[i]
+        for k in range(NX):
+            acc += G[i, k] * (xs_next[k] - xbar[k])
+        xs[i] = acc
+    for i in range(NX):
+        for j in range(NX):
+            acc = 0.0
+            for k in range(NX):
+                acc += G[i, k] * (Ps_next[k, j] - Pbar[k, j])
+            tmp[i, j] = acc
+    for i in range(NX):
+        for j in range(i, NX):
+            acc = Pf[i, j]
+            for k in range(NX):
+                acc += tmp[i, k] * G[j, k]
+            Ps[i, j] = acc
+            Ps[j, i] = acc
+
+
+@njit(cache=True)
+def smooth_rows(acc_t, acc_seg, mu_a, x_a, P_a, kinds, omegas, qs, tpm_kind, tpm_param, tpm_param2,
+                q_acc, q_dt, xf_q, Pf_q, xs_q, Ps_q):
+    """Smoothed combined estimate at every query q (q_acc: index of its governing accepted update,
+    q_dt: time after it). Queries after a segment's last update keep their forward prediction."""
+    na = acc_t.shape[0]
+    r = kinds.shape[0]
+    xs = np.empty((na, NX))
+    Ps = np.empty((na, NX, NX))
+    cbar = np.empty(r)
+    x0 = np.empty((r, NX))
+    P0 = np.empty((r, NX, NX))
+    xp = np.empty((r, NX))
+    Pp = np.empty((r, NX, NX))
+    PI = np.empty((r, r))
+    Fa = np.empty((NX, NX))
+    Qa = np.empty((NX, NX))
+    Ft = np.empty((NX, NX))
+    Qt = np.empty((NX, NX))
+    Cj = np.empty((NX, NX))
+    C = np.empty((NX, NX))
+    G = np.empty((NX, NX))
+    tmp = np.empty((NX, NX))
+    work = np.empty((NX, NX))
+    Pbar_inv = np.empty((NX, NX))
+    xbar = np.empty(NX)
+    Pbar = np.empty((NX, NX))
+    xk = np.empty(NX)
+    Pk = np.empty((NX, NX))
+    xt = np.empty((r, NX))
+    Pt = np.empty((r, NX, NX))
+    xtc = np.empty(NX)
+    Ptc = np.empty((NX, NX))
+    # backward pass over accepted updates
+    for k in range(na - 1, -1, -1):
+        combine_into(mu_a[k], x_a[k], P_a[k], r, xs[k], Ps[k])
+        if k == na - 1 or acc_seg[k + 1] != acc_seg[k]:
+            continue
+        for a in range(NX):
+            xk[a] = xs[k, a]
+            for b in range(NX):
+                Pk[a, b] = Ps[k, a, b]
+        _joint(kinds, omegas, qs, tpm_kind, tpm_param, tpm_param2, acc_t[k + 1] - acc_t[k], r, mu_a[k],
+               x_a[k], P_a[k], xk, PI, cbar, x0, P0, xp, Pp, Ft, Qt, Cj, C, tmp, xbar, Pbar)
+        _inverse(Pbar, Pbar_inv, work)
+        _apply_gain(C, Pbar_inv, xk, Pk, xs[k + 1], Ps[k + 1], xbar, Pbar, G, tmp, xs[k], Ps[k])
+    # queries
+    for q in range(q_acc.shape[0]):
+        k = q_acc[q]
+        a = q_dt[q]
+        if a == 0.0:
+            xs_q[q] = xs[k]
+            Ps_q[q] = Ps[k]
+            continue
+        if k == na - 1 or acc_seg[k + 1] != acc_seg[k]:
+            xs_q[q] = xf_q[q]
+            Ps_q[q] = Pf_q[q]
+            continue
+        t = acc_t[k + 1] - acc_t[k]
+        combine_into(mu_a[k], x_a[k], P_a[k], r, xk, Pk)
+        _joint(kinds, omegas, qs, tpm_kind, tpm_param, tpm_param2, t, r, mu_a[k], x_a[k], P_a[k], xk, PI,
+               cbar, x0, P0, xp, Pp, Ft, Qt, Cj, C, tmp, xbar, Pbar)
+        # the output time's marginal and its cross-covariance with x_k+1, per target mode
+        for j in range(r):
+            transition_into(kinds[j], omegas[j], qs[j], a, Fa, Qa)
+            transition_into(kinds[j], omegas[j], qs[j], t, Ft, Qt)
+            for i1 in range(NX):
+                acc = 0.0
+                for k1 in range(NX):
+                    acc += Fa[i1, k1] * x0[j, k1]
+                xt[j, i1] = acc
+                for j1 in range(NX):
+                    acc = 0.0
+                    for k1 in range(NX):
+                        acc += Fa[i1, k1] * P0[j, k1, j1]
+                    tmp[i1, j1] = acc
+            for i1 in range(NX):
+                for j1 in range(NX):
+                    acc_p = Qa[i1, j1]
+                    for k1 in range(NX):
+                        acc_p += tmp[i1, k1] * Fa[j1, k1]
+                    Pt[j, i1, j1] = acc_p
+            _gamma_cross(kinds[j], qs[j], a, t, Cj)
+            for i1 in range(NX):
+                for j1 in range(NX):
+                    acc = 0.0
+                    for k1 in range(NX):
+                        acc += tmp[i1, k1] * Ft[j1, k1]
+                    Cj[i1, j1] += acc
+            if j == 0:
+                for i1 in range(NX):
+                    for j1 in range(NX):
+                        C[i1, j1] = 0.0
+            for i1 in range(NX):
+                for j1 in range(NX):
+                    C[i1, j1] += cbar[j] * Cj[i1, j1]
+        combine_into(cbar, xt, Pt, r, xtc, Ptc)
+        for j in range(r):
+            for i1 in range(NX):
+                for j1 in range(NX):
+                    C[i1, j1] += cbar[j] * (xt[j, i1] - xtc[i1]) * (xp[j, j1] - xbar[j1])
+        _inverse(Pbar, Pbar_inv, work)
+        _apply_gain(C, Pbar_inv, xtc, Ptc, xs[k + 1], Ps[k + 1], xbar, Pbar, G, tmp, xs_q[q], Ps_q[q])
+
+
+@njit(cache=True)
+def _joint(kinds, omegas, qs, tpm_kind, tpm_param, tpm_param2, dt, r, mu, x, P, xk, PI, cbar, x0, P0, xp, Pp,
+           F, Q, Cj, C, tmp, xbar, Pbar):
+    """Predicted mixture (xbar, Pbar) over dt and its cross-covariance C with the current combined xk."""
+    tpm_into(tpm_kind, tpm_param, tpm_param2, dt, r, PI)
+    mix_into(PI, mu, x, P, r, cbar, x0, P0)
+    for a in range(NX):
+        for b in range(NX):
+            C[a, b] = 0.0
+    for j in range(r):
+        transition_into(kinds[j], omegas[j], qs[j], dt, F, Q)
+        for a in range(NX):
+            acc = 0.0
+            for k in range(NX):
+                acc += F[a, k] * x0[j, k]
+            xp[j, a] = acc
+        for a in range(NX):
+            for b in range(NX):
+                acc = 0.0
+                for k in range(NX):
+                    acc += P0[j, a, k] * F[b, k]
+                Cj[a, b] = acc  # P0 F^T
+        for a in range(NX):
+            for b in range(NX):
+                acc = Q[a, b]
+                for k in range(NX):
+                    acc += F[a, k] * Cj[k, b]
+                Pp[j, a, b] = acc
+        for a in range(NX):
+            for b in range(NX):
+                C[a, b] += cbar[j] * Cj[a, b]
+    combine_into(cbar, xp, Pp, r, xbar, Pbar)
+    for j in range(r):
+        for a in range(NX):
+            for b in range(NX):
+                C[a, b] += cbar[j] * (x0[j, a] - xk[a]) * (xp[j, b] - xbar[b])

@@ -1,0 +1,303 @@
+"""Fused tracks from a measurement frame: one IMM per aircraft, every sensor's reports in time order.
+
+Input, one row per report (the measurement model's schema):
+
+| column | meaning |
+|---|---|
+| `time` | tz-aware UTC datetime64 |
+| `sensor_id` | str, e.g. "048:25/201", "021:0/107" |
+| `sensor_kind` | "radar" or "adsb" |
+| `aircraft_id` | str; association is by this identity |
+| `latitude`, `longitude` | deg WGS-84 |
+| `flight_level` | FL, may be NaN |
+| `cov_ee_m2`, `cov_en_m2`, `cov_nn_m2` | horizontal position covariance (m^2), local east/north |
+
+Radar covariances come from `radar_covariance` (range/azimuth sigmas), ADS-B from `nacp_covariance`.
+| `ground_speed_kt`, `heading_deg` | optional; only used to start a segment's velocity |
+
+Rows without a finite position or covariance are counted (`invalid`) and skipped.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+import pandas as pd
+
+from .config import TrackerConfig, default_modes
+from .frame import Plane
+from .imm import STATUS_STARTED, STATUS_UPDATED
+from .plane import estimate, filter_plane
+
+REQUIRED = ("time", "sensor_id", "sensor_kind", "aircraft_id", "latitude", "longitude", "flight_level",
+            "cov_ee_m2", "cov_en_m2", "cov_nn_m2")
+M_PER_S_PER_KT = 1852.0 / 3600.0
+FT_PER_FL = 100.0
+MAX_RANGE_M = 3_000_000.0  # reports farther than this from the aircraft's median position are garbage
+
+
+@dataclass
+class ImmState:
+    """The mode-conditioned IMM posterior of one aircraft at one time, in its plane."""
+
+    aircraft_id: str
+    time: pd.Timestamp
+    plane: Plane
+    config: TrackerConfig
+    mu: np.ndarray  # (r,)
+    x: np.ndarray  # (r, 6): east_m, ve, ae, north_m, vn, an
+    P: np.ndarray  # (r, 6, 6)
+
+
+@dataclass
+class TrackResult:
+    """tracks: the estimates (see `track`); sensors: per aircraft and sensor, reports, updates, gated,
+    NIS mean; aircraft: per aircraft, segments, span, coasted time; rejected: every gated report."""
+
+    tracks: pd.DataFrame
+    sensors: pd.DataFrame
+    aircraft: pd.DataFrame
+    rejected: pd.DataFrame
+    parameters: dict
+    final_states: dict[str, ImmState] = field(default_factory=dict)
+    runs: dict[str, tuple] = field(default_factory=dict)  # with keep_states: (plane, PlaneRun, epoch)
+
+    def state_at(self, aircraft_id: str, time: pd.Timestamp) -> ImmState:
+        """The IMM posterior after the last accepted update at or before time (needs keep_states);
+        `predict(state, horizon)` then propagates it (its time is the update's, not `time`)."""
+        if aircraft_id not in self.runs:
+            raise KeyError(f"aircraft {aircraft_id!r}: no filter history (run track(..., keep_states=True))")
+        plane, run, epoch = self.runs[aircraft_id]
+        t = (pd.Timestamp(time) - epoch).total_seconds()
+        rows = np.flatnonzero(run.accepted & (run.t <= t))
+        if not len(rows):
+            raise ValueError(f"aircraft {aircraft_id!r}: no update at or before {time}")
+        i = rows[-1]
+        return ImmState(aircraft_id, epoch + pd.to_timedelta(run.t[i], unit="s"), plane, run.config,
+                        run.mu[i].copy(), run.x[i].copy(), run.P[i].copy())
+
+
+def _check(measurements: pd.DataFrame) -> None:
+    missing = [c for c in REQUIRED if c not in measurements.columns]
+    if missing:
+        raise ValueError(f"measurements: missing column(s) {', '.join(missing)}")
+    if not isinstance(measurements["time"].dtype, pd.DatetimeTZDtype):
+        raise ValueError(f"measurements: column 'time' must be tz-aware UTC datetime64, "
+                         f"not {measurements['time'].dtype}")
+
+
+def track(measurements: pd.DataFrame, *, step_s: float = 1.0, max_coast_s: float = 60.0,
+          tpm: str | None = None, smooth: bool = False, config: TrackerConfig | None = None,
+          turn_rate_dps: float = 3.0, with_ca: bool = False, keep_states: bool = False) -> TrackResult:
+    """Track every aircraft: estimates on a regular grid of step_s (aligned to whole multiples of step_s
+    since UTC midnight) and at every accepted report, coasted up to max_coast_s after the last update,
+    smoothed backwards when smooth. tpm: 'dynamic', 'fixed:P' or 'expm:TAU[,TAU2]' (default: the
+    config's). keep_states keeps every aircraft's filter history for `TrackResult.state_at`."""
+    _check(measurements)
+    if not step_s > 0.0:
+        raise ValueError(f"step_s {step_s!r}: must be > 0")
+    if config is None:
+        config = TrackerConfig(modes=default_modes(turn_rate_dps, with_ca=with_ca), max_coast_s=max_coast_s)
+    else:
+        config = TrackerConfig(**{**config.__dict__, "max_coast_s": max_coast_s})
+    if tpm is not None:
+        config = TrackerConfig(**{**config.__dict__, "tpm": tpm})
+    args = config.kernel_args()
+    names = [m.name for m in config.modes]
+
+    frame = measurements
+    finite = np.isfinite(frame[["latitude", "longitude", "cov_ee_m2", "cov_en_m2", "cov_nn_m2"]]
+                         .to_numpy(dtype=float)).all(axis=1)
+    invalid = frame.loc[~finite].groupby(["aircraft_id", "sensor_id"], observed=True).size()
+    frame = frame.loc[finite]
+    empty = TrackResult(_empty_tracks(names), pd.DataFrame(), pd.DataFrame(), pd.DataFrame(),
+                        _parameters(config, step_s, smooth))
+    if frame.empty:
+        return empty
+    epoch = frame["time"].min().floor("D")
+    tracks, sensors, aircraft, rejected, finals, runs = [], [], [], [], {}, {}
+    for aircraft_id, group in frame.groupby("aircraft_id", sort=True, observed=True):
+        out = _track_one(str(aircraft_id), group, epoch, config, args, names, step_s, smooth)
+        tracks.append(out["tracks"])
+        sensors.append(out["sensors"])
+        aircraft.append(out["aircraft"])
+        rejected.append(out["rejected"])
+        finals[str(aircraft_id)] = out["final"]
+        if keep_states:
+            runs[str(aircraft_id)] = (out["plane"], out["run"], epoch)
+    sensors_df = pd.concat(sensors, ignore_index=True)
+    if len(invalid):
+        inv = invalid.rename("invalid").reset_index()
+        inv["aircraft_id"] = inv["aircraft_id"].astype(str)
+        sensors_df = sensors_df.merge(inv, on=["aircraft_id", "sensor_id"], how="outer")
+        sensors_df["invalid"] = sensors_df["invalid"].fillna(0).astype(int)
+    else:
+        sensors_df["invalid"] = 0
+    return TrackResult(pd.concat(tracks, ignore_index=True), sensors_df,
+                       pd.DataFrame(aircraft), pd.concat(rejected, ignore_index=True),
+                       _parameters(config, step_s, smooth), finals, runs)
+
+
+def _parameters(config: TrackerConfig, step_s: float, smooth: bool) -> dict:
+    return {"step_s": step_s, "smooth": smooth, "max_coast_s": config.max_coast_s, "tpm": config.tpm,
+            "gate_probability": config.gate_probability,
+            "modes": [m.__dict__ for m in config.modes]}
+
+
+def _empty_tracks(names: list[str]) -> pd.DataFrame:
+    cols = ["aircraft_id", "segment", "time", "time_of_day", "latitude", "longitude", "flight_level",
+            "vertical_rate_fpm", "speed_kt", "track_deg", "turn_rate_dps", "sigma_major_m",
+            "sigma_minor_m", "ellipse_orientation_deg"] + [f"mode_{n}" for n in names] + [
+            "coasted", "age_s", "sources"]
+    return pd.DataFrame({c: [] for c in cols})
+
+
+def _inv2(m: np.ndarray) -> np.ndarray:
+    """Inverses of (n, 2, 2) matrices in closed form."""
+    det = m[:, 0, 0] * m[:, 1, 1] - m[:, 0, 1] * m[:, 1, 0]
+    out = np.empty_like(m)
+    out[:, 0, 0] = m[:, 1, 1] / det
+    out[:, 1, 1] = m[:, 0, 0] / det
+    out[:, 0, 1] = -m[:, 0, 1] / det
+    out[:, 1, 0] = -m[:, 1, 0] / det
+    return out
+
+
+def _ellipse(cov: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """1-sigma semi-axes and major-axis orientation (deg clockwise from north, 0-180) of (n, 2, 2)
+    east/north covariances, in closed form."""
+    a, b, c = cov[:, 0, 0], 0.5 * (cov[:, 0, 1] + cov[:, 1, 0]), cov[:, 1, 1]
+    mean = 0.5 * (a + c)
+    half = np.hypot(0.5 * (a - c), b)
+    major = np.sqrt(np.maximum(mean + half, 0.0))
+    minor = np.sqrt(np.maximum(mean - half, 0.0))
+    # the major axis angle from east is 0.5 atan2(2b, a - c); as an azimuth from north, 90 minus that
+    orientation = (90.0 - 0.5 * np.degrees(np.arctan2(2.0 * b, a - c))) % 180.0
+    return major, minor, orientation
+
+
+def _sources_by_time(times: np.ndarray, sensors: np.ndarray) -> pd.Series:
+    """Comma-joined distinct sensors per time (times sorted); single-sensor times without a Python join."""
+    uniq, start, count = np.unique(times, return_index=True, return_counts=True)
+    out = sensors[start].astype(object)
+    for i in np.flatnonzero(count > 1):
+        out[i] = ",".join(sorted(set(sensors[start[i]:start[i] + count[i]])))
+    return pd.Series(out, index=uniq)
+
+
+def _track_one(aircraft_id, group, epoch, config, args, names, step_s, smooth) -> dict:
+    g = group.assign(_t=(group["time"] - epoch).dt.total_seconds().to_numpy())
+    g = g.sort_values(["_t", "sensor_id"], kind="stable")
+    t = g["_t"].to_numpy(float)
+    plane = Plane.around(g["latitude"].to_numpy(float), g["longitude"].to_numpy(float))
+    ze, zn = plane.forward(g["latitude"].to_numpy(float), g["longitude"].to_numpy(float))
+    near = np.isfinite(ze) & np.isfinite(zn) & (np.hypot(ze, zn) < MAX_RANGE_M)
+    far = g.loc[~near, "sensor_id"].value_counts()
+    g, t, ze, zn = g[near], t[near], ze[near], zn[near]
+    lat = g["latitude"].to_numpy(float)
+    lon = g["longitude"].to_numpy(float)
+    m = plane.local_to_plane(lat, lon)
+    cov = np.empty((len(g), 2, 2))
+    cov[:, 0, 0] = g["cov_ee_m2"].to_numpy(float)
+    cov[:, 0, 1] = cov[:, 1, 0] = g["cov_en_m2"].to_numpy(float)
+    cov[:, 1, 1] = g["cov_nn_m2"].to_numpy(float)
+    cov = m @ cov @ np.swapaxes(m, 1, 2)
+    ve0 = np.zeros(len(g))
+    vn0 = np.zeros(len(g))
+    var_v0 = np.full(len(g), np.nan)
+    if {"ground_speed_kt", "heading_deg"} <= set(g.columns):
+        gs = g["ground_speed_kt"].to_numpy(float) * M_PER_S_PER_KT
+        hd = np.radians(g["heading_deg"].to_numpy(float))
+        ok = np.isfinite(gs) & np.isfinite(hd)
+        v = np.stack([gs * np.sin(hd), gs * np.cos(hd)], axis=-1)
+        vp = np.einsum("nij,nj->ni", m, v)
+        ve0[ok], vn0[ok] = vp[ok, 0], vp[ok, 1]
+        var_v0[ok] = config.sigma_reported_velocity_mps ** 2
+    var_v0[np.isnan(var_v0)] = config.sigma_init_speed_mps ** 2
+    n = len(g)
+    run = filter_plane(config, t, ze, zn, cov[:, 0, 0], cov[:, 0, 1], cov[:, 1, 1],
+                       fl=g["flight_level"].to_numpy(float), ve0=ve0, vn0=vn0, var_v0=var_v0)
+    status, nis, segment = run.status, run.nis, run.segment
+    accepted = run.accepted
+    acc_idx = np.flatnonzero(accepted)
+    acc_t = t[acc_idx]
+    acc_seg = segment[acc_idx]
+
+    # output times: the accepted update times and the grid, per segment up to max_coast_s after its end
+    queries = [np.unique(acc_t)]
+    seg_ids = np.unique(acc_seg)
+    seg_first = np.array([acc_t[acc_seg == s][0] for s in seg_ids])
+    seg_last = np.array([acc_t[acc_seg == s][-1] for s in seg_ids])
+    seg_end = seg_last + config.max_coast_s
+    seg_end[:-1] = np.minimum(seg_end[:-1], np.nextafter(seg_first[1:], -np.inf))
+    for first, end in zip(seg_first, seg_end, strict=True):
+        k0 = np.ceil(first / step_s)
+        k1 = np.floor(end / step_s)
+        if k1 >= k0:
+            queries.append(np.arange(k0, k1 + 1) * step_s)
+    qt = np.unique(np.concatenate(queries))
+    est = estimate(run, qt, smooth=smooth)
+    xc, Pc, muq, zv, gov, dt = est.x, est.P, est.mu, est.zv, est.row, est.age_s
+    nq = len(qt)
+
+    out_lat, out_lon = plane.inverse(xc[:, 0], xc[:, 3])
+    minv = _inv2(plane.local_to_plane(out_lat, out_lon))
+    v_loc = np.einsum("nij,nj->ni", minv, xc[:, [1, 4]])
+    a_loc = np.einsum("nij,nj->ni", minv, xc[:, [2, 5]])
+    pos = minv @ Pc[:, [0, 3]][:, :, [0, 3]] @ np.swapaxes(minv, 1, 2)
+    sigma_major, sigma_minor, orientation = _ellipse(pos)
+    speed = np.hypot(v_loc[:, 0], v_loc[:, 1])
+    omegas = args["omegas"]
+    with np.errstate(invalid="ignore", divide="ignore"):
+        ccw = muq @ np.where(args["kinds"] == 1, omegas, 0.0) + np.where(
+            speed > 1.0, (v_loc[:, 0] * a_loc[:, 1] - v_loc[:, 1] * a_loc[:, 0]) / speed**2, 0.0)
+    times = epoch + pd.to_timedelta(qt, unit="s")
+    acc_sensor = g["sensor_id"].to_numpy(str)[acc_idx]
+    src = _sources_by_time(acc_t, acc_sensor)
+    is_update = dt == 0.0
+    sources = np.full(nq, "", dtype=object)
+    sources[is_update] = src.reindex(qt[is_update]).to_numpy()
+    out = {
+        "aircraft_id": aircraft_id, "segment": segment[gov], "time": times, "time_of_day": qt,
+        "latitude": out_lat, "longitude": out_lon, "flight_level": zv[:, 0],
+        "vertical_rate_fpm": zv[:, 1] * FT_PER_FL * 60.0,
+        "speed_kt": speed / M_PER_S_PER_KT,
+        "track_deg": np.degrees(np.arctan2(v_loc[:, 0], v_loc[:, 1])) % 360,
+        "turn_rate_dps": -np.degrees(ccw),
+        "sigma_major_m": sigma_major, "sigma_minor_m": sigma_minor,
+        "ellipse_orientation_deg": orientation,
+    }
+    for j, name in enumerate(names):
+        out[f"mode_{name}"] = muq[:, j]
+    out.update({"coasted": ~is_update, "age_s": dt, "sources": sources})
+    tracks = pd.DataFrame(out)
+
+    sensor = g["sensor_id"].to_numpy(str)
+    kinds = g["sensor_kind"].to_numpy(str)
+    updated = status == STATUS_UPDATED
+    rows = []
+    for sid in np.unique(sensor):
+        sel = sensor == sid
+        rows.append({"sensor_id": sid, "sensor_kind": kinds[sel][0], "reports": int(sel.sum()),
+                     "updates": int((accepted & sel).sum()), "gated": int((sel & ~accepted).sum()),
+                     "segments_started": int((sel & (status == STATUS_STARTED)).sum()),
+                     "nis_mean": float(nis[sel & updated].mean()) if (sel & updated).any() else np.nan})
+    sensors = pd.DataFrame(rows)
+    sensors.insert(0, "aircraft_id", aircraft_id)
+    sensors["out_of_range"] = sensors["sensor_id"].map(far).fillna(0).astype(int)
+    gaps = np.diff(acc_t)
+    same_seg = np.diff(acc_seg) == 0
+    coasted_s = float(np.maximum(gaps[same_seg] - step_s, 0.0).sum() + (seg_end - seg_last).sum())
+    aircraft = {"aircraft_id": aircraft_id, "segments": len(seg_ids), "reports": n,
+                "updates": int(accepted.sum()), "gated": int((~accepted).sum()),
+                "start": epoch + pd.to_timedelta(seg_first[0], unit="s"),
+                "end": epoch + pd.to_timedelta(seg_end[-1], unit="s"),
+                "tracked_s": float((seg_end - seg_first).sum()), "coasted_s": coasted_s}
+    rej = g.loc[~accepted, ["time", "sensor_id", "latitude", "longitude"]].assign(nis=nis[~accepted])
+    rej.insert(0, "aircraft_id", aircraft_id)
+    last = acc_idx[-1]
+    final = ImmState(aircraft_id, epoch + pd.to_timedelta(t[last], unit="s"), plane, config,
+                     run.mu[last].copy(), run.x[last].copy(), run.P[last].copy())
+    return {"tracks": tracks, "sensors": sensors, "aircraft": aircraft,
+            "rejected": rej.reset_index(drop=True), "final": final, "plane": plane, "run": run}

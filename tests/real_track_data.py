@@ -1,0 +1,95 @@
+"""The real-data gap experiment: delete stretches of real ADS-B tracks, predict through them, score.
+
+Shared by tests/test_track_validation.py (small) and benchmarks/track_validation.py (full)."""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from pipeline.track import Plane, TrackerConfig, nacp_covariance
+from pipeline.track.plane import estimate, filter_plane
+
+# ../shared beside the checkout, as the other tests; MSDC_SHARED overrides it (worktrees elsewhere)
+SHARED = Path(os.environ.get("MSDC_SHARED", Path(__file__).resolve().parents[1].parent / "shared"))
+REAL = SHARED / "real" / "adsb_v023_160510-lebl-220001.ast"
+GAP_BINS = [(5, 15), (15, 30), (30, 45), (45, 60)]
+
+
+def load_real_adsb(min_span_s: float = 600.0) -> list[dict] | None:
+    """Airborne CAT021 tracks per address: t (s), plane e/n (m), isotropic variance from the 0.23 FOM
+    position accuracy read as NACp; None when the recording is absent."""
+    if not REAL.exists():
+        return None
+    import asterix
+
+    frame = asterix.read(REAL, editions={21: "0.23"}).frames[21]
+    frame = frame[(frame["gbs"] == 0) & frame["latitude"].notna() & frame["address"].notna()]
+    frame = frame.assign(t=frame["day"].astype(float) * 86400.0 + frame["time_of_day"].astype(float),
+                         var=nacp_covariance(frame["fom_pa"].astype(float)))
+    frame = frame[np.isfinite(frame["var"])]
+    tracks = []
+    for address, g in frame.groupby("address", observed=True):
+        g = g.sort_values("t").drop_duplicates("t")
+        if len(g) < 100 or g["t"].iloc[-1] - g["t"].iloc[0] < min_span_s:
+            continue
+        plane = Plane.around(g["latitude"].to_numpy(), g["longitude"].to_numpy())
+        e, n = plane.forward(g["latitude"].to_numpy(), g["longitude"].to_numpy())
+        t, var = g["t"].to_numpy(), g["var"].to_numpy()
+        near = np.hypot(e, n) < 1_000_000.0  # a few reports carry garbage positions far away
+        t, e, n, var = t[near], e[near], n[near], var[near]
+        # position jumps are not truth: drop what the tracker gates on the complete track
+        run = filter_plane(TrackerConfig(), t, e, n, var, np.zeros(len(t)), var)
+        ok = run.accepted & (run.segment == np.bincount(run.segment).argmax())
+        tracks.append({"address": str(address), "t": t[ok], "e": e[ok], "n": n[ok], "var": var[ok],
+                       "jumps": int((~run.accepted).sum())})
+    return tracks
+
+
+def gap_experiment(tracks, cfg: TrackerConfig, rng, repeats: int = 1, gaps_per_track: int = 6) -> dict:
+    """Mean error (m) at the deleted reports, per gap-length bin: the IMM's forward prediction, its smoothed
+    fill, holding the last report, and a straight line from the velocity over the last 10 s of reports."""
+    rows = []
+    for _ in range(repeats):
+        for tr in tracks:
+            t, e, n, var = tr["t"], tr["e"], tr["n"], tr["var"]
+            removed = np.zeros(len(t), bool)
+            gaps = []
+            for _ in range(gaps_per_track):
+                length = rng.uniform(5.0, 60.0)
+                start = rng.uniform(t[0] + 60.0, t[-1] - length - 10.0)
+                inside = (t >= start) & (t < start + length)
+                # keep gaps apart: at least 30 s of reports between two deleted stretches
+                near = (t >= start - 30.0) & (t < start + length + 30.0)
+                if removed[near].any() or inside.sum() == 0:
+                    continue
+                removed |= inside
+                gaps.append((start, length, inside))
+            keep = ~removed
+            run = filter_plane(cfg, t[keep], e[keep], n[keep], var[keep], np.zeros(keep.sum()), var[keep])
+            tk, ek, nk = t[keep], e[keep], n[keep]
+            for _, length, inside in gaps:
+                tm = t[inside]
+                fwd = estimate(run, tm)
+                smo = estimate(run, tm, smooth=True)
+                k = np.searchsorted(tk, tm[0]) - 1
+                j = np.searchsorted(tk, tk[k] - 10.0)
+                dt = max(tk[k] - tk[j], 1e-9)
+                v = (np.array([ek[k] - ek[j], nk[k] - nk[j]]) / dt) if k > j else np.zeros(2)
+                for i, ti in enumerate(tm):
+                    z = np.array([e[inside][i], n[inside][i]])
+                    rows.append({"gap_s": length,
+                                 "imm": np.hypot(*(fwd.x[i, [0, 3]] - z)),
+                                 "smoothed": np.hypot(*(smo.x[i, [0, 3]] - z)),
+                                 "hold": np.hypot(ek[k] - z[0], nk[k] - z[1]),
+                                 "line": np.hypot(*(np.array([ek[k], nk[k]]) + v * (ti - tk[k]) - z))})
+    df = pd.DataFrame(rows)
+    out = {}
+    for lo, hi in GAP_BINS:
+        sel = df[(df.gap_s >= lo) & (df.gap_s < hi)]
+        means = {c: sel[c].mean() for c in ("imm", "smoothed", "hold", "line")}
+        out[f"{lo}-{hi} s"] = {"n": len(sel), **means}
+    return out

@@ -1,0 +1,183 @@
+"""The DataFrame front end: schema, coasting, gating, sources, prediction, on simulated flights."""
+
+import numpy as np
+import pandas as pd
+import pytest
+from pyproj import Geod
+from track_scenarios import fly
+
+from pipeline.track import Plane, predict, track
+
+GEOD = Geod(ellps="WGS84")
+SITE = (41.0, 2.0)
+
+
+def test_plane_maps_local_vectors():
+    plane = Plane(*SITE)
+    lon, lat, _ = GEOD.fwd(SITE[1], SITE[0], 70.0, 300000.0)  # 300 km away
+    for az in (0.0, 90.0, 225.0):
+        lon2, lat2, _ = GEOD.fwd(lon, lat, az, 100.0)
+        e0, n0 = plane.forward(lat, lon)
+        e1, n1 = plane.forward(lat2, lon2)
+        local = 100.0 * np.array([np.sin(np.radians(az)), np.cos(np.radians(az))])
+        np.testing.assert_allclose(plane.local_to_plane(lat, lon) @ local, [e1 - e0, n1 - n0], atol=0.01)
+    lat_b, lon_b = plane.inverse(*plane.forward(lat, lon))
+    assert (lat_b, lon_b) == pytest.approx((lat, lon), abs=1e-9)
+
+
+def _geo(e, n):
+    """Geodetic position of plane offsets (e, n) from SITE, by the geodesic of that azimuth and length."""
+    k = np.ones(len(e))
+    lon, lat, _ = GEOD.fwd(SITE[1] * k, SITE[0] * k, np.degrees(np.arctan2(e, n)), np.hypot(e, n))
+    return lat, lon
+
+
+def _adsb(truth, t, rng, aircraft="A1", sigma=10.0):
+    e, n = truth.at(t)
+    lat, lon = _geo(e, n)
+    ang = rng.uniform(0, 360, len(t))
+    lon, lat, _ = GEOD.fwd(lon, lat, ang, np.abs(rng.normal(0, sigma, len(t))))
+    return pd.DataFrame({"time": pd.Timestamp("2024-05-10T23:59:00Z") + pd.to_timedelta(t, unit="s"),
+                         "sensor_id": "021:0/107", "sensor_kind": "adsb", "aircraft_id": aircraft,
+                         "latitude": lat, "longitude": lon, "flight_level": 350.0 - t / 60,
+                         "cov_ee_m2": sigma**2, "cov_en_m2": 0.0, "cov_nn_m2": sigma**2})
+
+
+def test_track_fuses_coasts_and_gates():
+    rng = np.random.default_rng(7)
+    truth = fly((0, 0), 60.0, 200.0, [(200, 0, 0), (30, -3.0, 0), (200, 0, 0)])
+    t = np.arange(0.0, 430.0, 1.0)
+    m = _adsb(truth, t, rng)
+    m.loc[m.index[50], "latitude"] += 0.2  # a jump
+    m = pd.concat([m, _adsb(truth, np.arange(0.5, 430.0, 5.0), rng, sigma=60.0).assign(
+        sensor_id="048:25/201", sensor_kind="radar", cov_ee_m2=3600.0, cov_nn_m2=3600.0)])
+    tm = (m.time - pd.Timestamp("2024-05-10T23:59:00Z")).dt.total_seconds()
+    m = m[~((tm > 100) & (tm < 125))]  # a 25 s dropout of both sensors
+    res = track(m, step_s=1.0, max_coast_s=60.0)
+    out = res.tracks
+    assert out["time"].is_monotonic_increasing and (out["time"].dt.tz is not None)
+    assert list(res.rejected["time"]) == [m.iloc[50]["time"]]
+    gap = out[(out.time_of_day > 86340 + 100.5) & (out.time_of_day < 86340 + 124.5)]
+    assert len(gap) > 20 and gap.coasted.all() and (gap.sources == "").all()
+    assert gap.sigma_major_m.is_monotonic_increasing or gap.sigma_major_m.iloc[-1] > gap.sigma_major_m.iloc[0]
+    both = out[out.sources == "021:0/107,048:25/201"]
+    assert len(both) == 0 or set(both.sources) == {"021:0/107,048:25/201"}
+    assert set(out.sources[~out.coasted]) <= {"021:0/107", "048:25/201", "021:0/107,048:25/201"}
+    # the estimate against truth: speed, track angle, position
+    tt = (out.time - pd.Timestamp("2024-05-10T23:59:00Z")).dt.total_seconds().to_numpy()
+    e, n = truth.at(tt)
+    ve, vn = truth.velocity_at(tt)
+    plane = Plane(*SITE)
+    pe, pn = plane.forward(out.latitude, out.longitude)
+    lat0, lon0 = _geo(e, n)
+    te, tn = plane.forward(lat0, lon0)
+    err = np.hypot(pe - te, pn - tn)
+    steady = (tt > 20) & ((tt < 95) | (tt > 160))
+    assert np.median(err[steady]) < 10.0
+    assert np.median(np.abs(out.speed_kt[steady] - 200 / 0.514444)) < 2.0
+    truth_track = np.degrees(np.arctan2(ve, vn)) % 360
+    assert np.median(np.abs((out.track_deg - truth_track + 180) % 360 - 180)[steady]) < 0.5
+    # right turn at 3 deg/s from 200 to 230 s: positive turn rate, turn_right mode dominant
+    turning = (tt > 208) & (tt < 228)
+    assert np.median(out.turn_rate_dps[turning]) > 2.0
+    assert np.median(out.mode_turn_right[turning]) > 0.5
+    assert np.median(out.flight_level[steady]) == pytest.approx(350 - 200 / 60, abs=3)
+    # crossing midnight: time_of_day keeps increasing past 86400
+    assert out.time_of_day.max() > 86400 + 400
+    s = res.sensors.set_index("sensor_id")
+    assert s.loc["021:0/107", "gated"] == 1 and s.loc["048:25/201", "gated"] == 0
+    assert 0.5 < s.loc["021:0/107", "nis_mean"] < 2.0
+    assert res.aircraft.loc[0, "segments"] == 1
+
+
+def test_smoothing_improves_and_segment_ends():
+    rng = np.random.default_rng(8)
+    truth = fly((0, 0), 0.0, 150.0, [(100, 0, 0), (30, 3.0, 0), (100, 0, 0)])
+    t = np.arange(0.0, 230.0, 4.0)
+    m = _adsb(truth, t, rng, sigma=50.0)
+    m = m[(t < 100) | (t > 180)]  # 80 s gap: beyond max_coast_s=60, the track segment ends
+    errs = {}
+    for smooth in (False, True):
+        res = track(m, max_coast_s=60.0, smooth=smooth)
+        out = res.tracks
+        tt = (out.time - pd.Timestamp("2024-05-10T23:59:00Z")).dt.total_seconds().to_numpy()
+        assert res.aircraft.loc[0, "segments"] == 2
+        assert not ((tt > 96 + 60.001) & (tt < 184)).any()
+        assert tt[(tt < 180)].max() == pytest.approx(156.0)
+        e, n = truth.at(tt)
+        lat0, lon0 = _geo(e, n)
+        _, _, d = GEOD.inv(out.longitude, out.latitude, lon0, lat0)
+        errs[smooth] = np.sqrt(np.mean(d[(tt > 10) & (tt < 96)] ** 2))
+    assert errs[True] < 0.8 * errs[False]
+
+
+def test_predict_propagates_modes_and_uncertainty():
+    rng = np.random.default_rng(9)
+    truth = fly((0, 0), 90.0, 200.0, [(120, 0, 0)])
+    res = track(_adsb(truth, np.arange(0.0, 120.0, 1.0), rng))
+    state = res.final_states["A1"]
+    p = predict(state, 30.0, step_s=1.0)
+    assert len(p) == 30 and p.ahead_s.iloc[-1] == 30.0
+    # straight flight: the predicted position is 200 m/s ahead, the covariance grows
+    lon, lat, _ = GEOD.fwd(SITE[1], SITE[0], 90.0, 200.0 * 149.0)
+    _, _, d = GEOD.inv(p.longitude.iloc[-1], p.latitude.iloc[-1], lon, lat)
+    assert d < 3.0 * np.sqrt(p.cov_ee_m2.iloc[-1] + p.cov_nn_m2.iloc[-1])
+    assert p.cov_nn_m2.is_monotonic_increasing
+    # mode probabilities follow the Markov chain towards its stationary law (1/2, 1/4, 1/4)
+    assert p.mode_cv.iloc[-1] < state.mu[0]
+    assert p.mode_cv.iloc[-1] > 0.5
+
+
+def test_state_at_any_time_predicts_like_the_tracker():
+    rng = np.random.default_rng(10)
+    truth = fly((0, 0), 90.0, 200.0, [(60, 0, 0), (30, 3.0, 0), (60, 0, 0)])
+    m = _adsb(truth, np.arange(0.0, 150.0, 2.0), rng)
+    res = track(m, keep_states=True, step_s=1.0)
+    when = pd.Timestamp("2024-05-10T23:59:00Z") + pd.Timedelta(seconds=71)
+    state = res.state_at("A1", when)
+    assert state.time == pd.Timestamp("2024-05-10T23:59:00Z") + pd.Timedelta(seconds=70)
+    # one 1 s prediction cycle from the update at 70 s is the tracker's own coasted output at 71 s
+    p = predict(state, 1.0)
+    row = res.tracks[res.tracks.time == when].iloc[0]
+    assert row.coasted
+    assert (p.latitude.iloc[0], p.longitude.iloc[0]) == pytest.approx((row.latitude, row.longitude), abs=1e-9)
+    assert p.mode_turn_left.iloc[0] == pytest.approx(row.mode_turn_left, abs=1e-12)
+    with pytest.raises(KeyError, match="keep_states"):
+        track(m).state_at("A1", when)
+
+
+def test_garbage_position_far_away_is_counted_not_tracked():
+    rng = np.random.default_rng(11)
+    m = _adsb(fly((0, 0), 90.0, 200.0, [(60, 0, 0)]), np.arange(0.0, 60.0, 1.0), rng)
+    m.loc[m.index[0], ["latitude", "longitude"]] = (-66.26, -73.17)  # as in the real recording
+    res = track(m)
+    assert res.sensors.loc[0, "out_of_range"] == 1
+    assert res.aircraft.loc[0, "segments"] == 1 and res.aircraft.loc[0, "gated"] == 0
+    assert res.tracks.latitude.between(40.9, 41.1).all()
+
+
+def test_ellipse_axes_against_eigen_decomposition():
+    from pipeline.track.tracker import _ellipse
+
+    rng = np.random.default_rng(12)
+    a = rng.normal(size=(50, 2, 2)) * 30.0
+    cov = a @ np.swapaxes(a, 1, 2)
+    major, minor, orientation = _ellipse(cov)
+    evals, evecs = np.linalg.eigh(cov)
+    np.testing.assert_allclose(major, np.sqrt(evals[:, 1]), rtol=1e-9)
+    np.testing.assert_allclose(minor, np.sqrt(evals[:, 0]), rtol=1e-7, atol=1e-9)
+    azimuth = np.degrees(np.arctan2(evecs[:, 0, 1], evecs[:, 1, 1])) % 180.0
+    np.testing.assert_allclose(np.cos(np.radians(2 * (orientation - azimuth))), 1.0, atol=1e-9)
+
+
+def test_bad_input_is_named():
+    with pytest.raises(ValueError, match="cov_nn_m2"):
+        track(pd.DataFrame({"time": pd.to_datetime([], utc=True)}))
+    rng = np.random.default_rng(1)
+    m = _adsb(fly((0, 0), 0, 100, [(10, 0, 0)]), np.arange(5.0), rng)
+    with pytest.raises(ValueError, match="tpm 'nope'"):
+        track(m, tpm="nope")
+    with pytest.raises(ValueError, match="'time' must be tz-aware"):
+        track(m.assign(time=m.time.dt.tz_localize(None)))
+    res = track(m.assign(cov_ee_m2=[np.nan, 1, 1, 1, 1]))
+    assert res.sensors.invalid.sum() == 1
