@@ -198,3 +198,24 @@ def test_plots_without_identity_join_by_track_number():
     assert (joined["aircraft_id"].iloc[stripped] == "750312").all()
     assert joined["aircraft_id"].isna().to_numpy()[orphan]
     assert joined["aircraft_id"].notna().sum() == len(meas) - 1
+
+
+def test_all_aircraft_gate_exactly_the_injected_jumps(tmp_path, capsys):
+    """--all: per aircraft, the ADS-B reports the gate rejects are exactly the simulator's injected
+    position jumps (truth.json), and the ADS-B NIS mean is what NACp's claimed sigma predicts for the
+    simulator's 5 m noise: 2 (5 / sigma)^2, sigma = NACp 95 % bound / 2.45."""
+    out = tmp_path / "s.json"
+    assert main(["track", *BASE, "--all", "--json", str(out)]) == 0
+    capsys.readouterr()
+    doc = json.loads(out.read_text())
+    jumps = pd.Series([j["callsign"] for j in TRUTH["jumps"]]).value_counts().to_dict()
+    spec = {a["callsign"]: a for a in TRUTH["aircraft"]}
+    assert sorted(a["callsign"] for a in doc["aircraft"]) == sorted(spec)
+    for ac in doc["aircraft"]:
+        adsb = next(s for s in ac["sensors"] if s["sensor_kind"] == "adsb")
+        assert adsb["gated"] == jumps[ac["callsign"]], ac["callsign"]
+        if ac["callsign"] == "SIA305":  # fixtures/scenario.py: NACp 8 (sigma 37.8 m): NIS far below 2
+            assert adsb["nis_mean"] < 0.1
+        else:  # NACp 9: sigma 30 / 2.45 = 12.2 m, the simulator's noise 5 m per axis
+            expected = 2.0 * (5.0 / (30.0 / 2.45)) ** 2
+            assert adsb["nis_mean"] == pytest.approx(expected, rel=0.25), ac["callsign"]
