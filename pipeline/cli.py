@@ -92,6 +92,9 @@ def build_parser() -> argparse.ArgumentParser:
     c.add_argument("--drop-jumps", action="store_true", help="remove detected ADS-B position jumps first")
     c.add_argument("--min-nic", type=int, help="drop ADS-B reports with NUCp/NIC below N")
     c.add_argument("--min-nacp", type=int, help="drop ADS-B reports with NACp below N")
+    c.add_argument("--fill", choices=["hold", "predict"], default="hold",
+                   help="empty slots: hold the previous slot (default, the thesis) or take the tracker's "
+                        "prediction")
     _decoding_options(c)
 
     q = sub.add_parser("quality", help="sensor data quality and radar accuracy against ADS-B")
@@ -99,7 +102,24 @@ def build_parser() -> argparse.ArgumentParser:
     q.add_argument("-o", "--output", help="Excel workbook (.xlsx); figures are written beside it")
     q.add_argument("--json", help="the tables as JSON")
     q.add_argument("--gap", type=float, default=180.0, help="gap in seconds reported as discontinuity")
+    q.add_argument("--reference", choices=["adsb", "track"], default="adsb",
+                   help="radar accuracy against ADS-B interpolated linearly (default) or against the "
+                        "smoothed ADS-B-only IMM track")
     _decoding_options(q)
+
+    t = sub.add_parser("track", help="fused IMM tracks per aircraft from every radar and ADS-B report")
+    _aircraft_options(t, "every aircraft")
+    t.add_argument("-o", "--output", help="track table: tracks.csv or tracks.parquet")
+    t.add_argument("--json", help="per-aircraft and per-sensor summary as JSON")
+    t.add_argument("--figures", metavar="DIR", help="one PNG per aircraft in this directory")
+    t.add_argument("--step", type=float, default=1.0, help="output grid in seconds (default 1)")
+    t.add_argument("--max-coast", type=float, default=60.0,
+                   help="seconds a track is predicted after its last report before it ends (default 60)")
+    t.add_argument("--smooth", action="store_true", help="backward (RTS) pass: reference trajectories")
+    t.add_argument("--tpm", help="mode transition law: fixed:P, dynamic, dynamic:A,B or expm:TAU[,TAU2] "
+                                 "(default expm:150,20)")
+    t.add_argument("--sources", default="radar,adsb", help="sensor kinds to fuse: radar, adsb or radar,adsb")
+    _decoding_options(t)
     return parser
 
 
@@ -168,7 +188,8 @@ def cmd_correlate(args) -> int:
     progress = Progress()
     options = jobs.CorrelateOptions(
         **_aircraft(args), slot_s=args.slot, pairs=args.pairs, split_adsb=args.split_adsb,
-        quality=args.quality, drop_jumps=args.drop_jumps, min_nic=args.min_nic, min_nacp=args.min_nacp)
+        quality=args.quality, drop_jumps=args.drop_jumps, min_nic=args.min_nic, min_nacp=args.min_nacp,
+        fill=args.fill)
     checked = jobs.validate(options)
     _warn("correlate", checked.warnings)
     seen = len(checked.warnings)
@@ -190,7 +211,7 @@ def cmd_correlate(args) -> int:
 
 
 def cmd_quality(args) -> int:
-    options = jobs.QualityOptions(**_aircraft(args))
+    options = jobs.QualityOptions(**_aircraft(args), reference=args.reference)
     checked = jobs.validate(options)
     _warn("quality", checked.warnings)
     seen = len(checked.warnings)
@@ -224,7 +245,42 @@ def _quality_text(result) -> str:
     return text + (f"\n\nNote: {note}" if note else "")
 
 
-COMMANDS = {"decode": cmd_decode, "stats": cmd_stats, "correlate": cmd_correlate, "quality": cmd_quality}
+def cmd_track(args) -> int:
+    from pipeline import jobs_track
+
+    options = jobs_track.TrackOptions(
+        **_decoding(args), sensors=args.sensors, callsign=args.callsign, address=args.address,
+        all_aircraft=args.all, output=args.output, json=args.json, figures=args.figures, step_s=args.step,
+        max_coast_s=args.max_coast, smooth=args.smooth, tpm=args.tpm, sources=args.sources)
+    checked = jobs_track.validate(options)
+    _warn("track", checked.warnings)
+    seen = len(checked.warnings)
+    result = jobs_track.track_job(options, progress=Progress(), checked=checked,
+                                  command=" ".join(sys.argv[1:]) or "track")
+    _warn("track", checked.warnings[seen:])
+    _report_skipped(result.loaded.errors)
+    print(_track_text(result))
+    for kind, path in jobs_track.write_tracks(result).items():
+        print(f"{kind}: {path}", file=sys.stderr)
+    return 0
+
+
+def _track_text(result) -> str:
+    """Per aircraft: span, updates, gated reports, coasted time; per sensor: updates, gated, NIS mean."""
+    res = result.result
+    if res.aircraft.empty:
+        return "no track: no report with a usable position and covariance"
+    ac = res.aircraft.merge(result.labels, on="aircraft_id", how="left")
+    cols = [c for c in ("aircraft_id", "callsign", "segments", "reports", "updates", "gated", "tracked_s",
+                        "coasted_s") if c in ac]
+    sens = res.sensors[[c for c in ("aircraft_id", "sensor_id", "reports", "updates", "gated", "nis_mean")
+                        if c in res.sensors]]
+    return ("Tracks:\n" + ac[cols].to_string(index=False, float_format=lambda v: f"{v:.1f}")
+            + "\n\nSensors:\n" + sens.to_string(index=False, float_format=lambda v: f"{v:.2f}"))
+
+
+COMMANDS = {"decode": cmd_decode, "stats": cmd_stats, "correlate": cmd_correlate, "quality": cmd_quality,
+            "track": cmd_track}
 
 
 def main(argv: list[str] | None = None) -> int:

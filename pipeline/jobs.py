@@ -216,11 +216,14 @@ class CorrelateOptions(AircraftOptions):
     drop_jumps: bool = False
     min_nic: int | None = None
     min_nacp: int | None = None
+    fill: str = "hold"  # empty slots: "hold" the previous slot (thesis) or "predict" by the tracker
 
 
 @dataclass(frozen=True)
 class QualityOptions(AircraftOptions):
     """Everything ``quality_job`` needs."""
+
+    reference: str = "adsb"  # radar accuracy against "adsb" (interpolated reports) or "track" (smoothed)
 
 
 @dataclass(frozen=True)
@@ -263,6 +266,10 @@ def validate(options) -> Checked:
                 raise OptionError(f"--pairs {options.pairs!r}: must be one of {', '.join(PAIRS)}")
             _integer("--min-nic", options.min_nic, *INDICATOR_RANGE)
             _integer("--min-nacp", options.min_nacp, *INDICATOR_RANGE)
+            if options.fill not in ("hold", "predict"):
+                raise OptionError(f"--fill {options.fill!r}: must be hold or predict")
+        if isinstance(options, QualityOptions) and options.reference not in ("adsb", "track"):
+            raise OptionError(f"--reference {options.reference!r}: must be adsb or track")
         checked.output = _output("-o", options.output, (".xlsx",))
         checked.json = _output("--json", options.json, (".json",))
         checked.sensors = _sensors(options.sensors)
@@ -368,7 +375,7 @@ def _quality(meas: pd.DataFrame, sensors: pd.DataFrame, options: AircraftOptions
 
     try:
         return quality_run(meas, sensors, callsign=options.callsign, address=options.address,
-                           gap_s=options.gap_s)
+                           gap_s=options.gap_s, reference=getattr(options, "reference", "adsb"))
     except NoSuchAircraft as exc:
         raise JobError(str(exc)) from exc
 
@@ -412,7 +419,7 @@ def correlate_job(options: CorrelateOptions, *, progress: Progress | None = None
     try:
         run = correlate(meas, callsign=options.callsign, address=options.address,
                         all_aircraft=options.all_aircraft, slot_s=options.slot_s, gap_s=options.gap_s,
-                        pairs=options.pairs, split_adsb=options.split_adsb)
+                        pairs=options.pairs, split_adsb=options.split_adsb, fill=options.fill)
     except (NoSuchAircraft, NoOverlap) as exc:
         raise JobError(str(exc)) from exc
     asked = {"jumps": options.drop_jumps, "nic_below_min": options.min_nic is not None,

@@ -137,9 +137,15 @@ def _none_if_nan(v):
 
 def _window_result(ac: Aircraft, number: int, start_s: float, end_s: float, radar: pd.DataFrame,
                    adsb: pd.DataFrame, dups: tuple[int, int], slot_s: float,
-                   reference: pd.Timestamp, sensors: dict[str, str], adsb_jumps: int = 0) -> WindowResult:
-    """Slot, correlate and summarise one window."""
+                   reference: pd.Timestamp, sensors: dict[str, str], adsb_jumps: int = 0,
+                   predictors: tuple = (None, None)) -> WindowResult:
+    """Slot, correlate and summarise one window; with predictors (``--fill predict``), empty slots take
+    the tracker's prediction (pipeline.correlate.fill) instead of the previous slot."""
     rs, as_ = slot_window(radar, start_s, end_s, slot_s), slot_window(adsb, start_s, end_s, slot_s)
+    if predictors[0] is not None or predictors[1] is not None:
+        from pipeline.correlate.fill import fill_predicted
+
+        rs, as_ = fill_predicted(rs, slot_s, predictors[0]), fill_predicted(as_, slot_s, predictors[1])
     tod = rs["time_of_day"].to_numpy()
     if not is_dated(reference):
         stamps = pd.Series(pd.NaT, index=rs.index, dtype="datetime64[ns, UTC]")
@@ -215,7 +221,8 @@ def sensor_pairs(ac: Aircraft, pairs: str = "radar-adsb", split_adsb: bool = Fal
 
 
 def _correlate_pair(ac: Aircraft, run: CorrelationRun, pair: tuple[str, pd.DataFrame, str, pd.DataFrame],
-                    slot_s: float, gap_s: float, reference: pd.Timestamp) -> NoOverlap | None:
+                    slot_s: float, gap_s: float, reference: pd.Timestamp, fill: str = "hold"
+                    ) -> NoOverlap | None:
     """Append the windows (or skipped windows) of one aircraft and sensor pair to ``run``; the NoOverlap
     when the two sensors never overlap."""
     radar_id, radar, ref_id, other = pair
@@ -234,6 +241,12 @@ def _correlate_pair(ac: Aircraft, run: CorrelationRun, pair: tuple[str, pd.DataF
                                          max(r_span[1], a_span[1]), str(NoOverlap(label, r_span, a_span)),
                                          **sensors))
         return NoOverlap(label, r_span, a_span, reference)
+    predictors = (None, None)
+    if fill == "predict":  # each side's own forward track, coasting across the longest gap a window has
+        from pipeline.correlate.fill import track_predictor
+
+        predictors = (track_predictor(radar, reference, max(gap_s, slot_s)),
+                      track_predictor(adsb, reference, max(gap_s, slot_s)))
     number = 0
     for start_s, end_s in windows:
         r_in = radar[in_window(radar["time_of_day"], start_s, end_s)]
@@ -248,21 +261,24 @@ def _correlate_pair(ac: Aircraft, run: CorrelationRun, pair: tuple[str, pd.DataF
         dups = (int(in_window(r_dup_t, start_s, end_s).sum()), int(in_window(a_dup_t, start_s, end_s).sum()))
         jumps = int(in_window(jump_t, start_s, end_s).sum())
         run.windows.append(_window_result(ac, number, start_s, end_s, r_in, a_in, dups, slot_s, reference,
-                                          sensors, jumps))
+                                          sensors, jumps, predictors))
     return None
 
 
 def correlate(meas: pd.DataFrame, *, callsign: str | None = None, address: str | None = None,
               all_aircraft: bool = False, slot_s: float = 10.0, gap_s: float = 180.0,
-              pairs: str = "radar-adsb", split_adsb: bool = False) -> CorrelationRun:
+              pairs: str = "radar-adsb", split_adsb: bool = False, fill: str = "hold") -> CorrelationRun:
     """Correlate per aircraft, sensor pair and overlap window (see the module docstring).
 
     ``meas`` is a measurement frame (pipeline.model.schema). Each radar is correlated on its own (plots
     of two radars are never mixed) against each ADS-B source and/or each other radar (``pairs``); ADS-B
     ground stations are one source unless ``split_adsb``. One aircraft by call sign and/or address
     (NoSuchAircraft, NoOverlap when no pair overlaps), or with ``all_aircraft`` every aircraft seen by a
-    pair. Times in the tables count seconds from midnight UTC of the earliest report.
+    pair. Times in the tables count seconds from midnight UTC of the earliest report. ``fill``: empty
+    slots take the previous slot ("hold", the thesis) or the tracker's prediction ("predict").
     """
+    if fill not in ("hold", "predict"):
+        raise ValueError(f"fill must be 'hold' or 'predict', got {fill!r}")
     if slot_s <= 0 or gap_s < 0:
         raise ValueError(f"slot_s must be > 0 and gap_s >= 0, got {slot_s} and {gap_s}")
     reference = midnight(meas["time"])
@@ -272,6 +288,7 @@ def correlate(meas: pd.DataFrame, *, callsign: str | None = None, address: str |
     run = CorrelationRun(parameters={
         "callsign": callsign, "address": address, "all_aircraft": all_aircraft, "slot_s": slot_s,
         "gap_s": gap_s, "pairs": pairs, "split_adsb": split_adsb,
+        **({"fill": fill} if fill != "hold" else {}),  # the thesis default leaves the parameters as they were
         "date": reference.date().isoformat() if is_dated(reference) else None})
     need_adsb = pairs == "radar-adsb"
     if all_aircraft:
@@ -283,7 +300,7 @@ def correlate(meas: pd.DataFrame, *, callsign: str | None = None, address: str |
         targets = [one_aircraft(meas, callsign, address, need_adsb=need_adsb)]
     paired = False
     for ac in targets:
-        found = [_correlate_pair(ac, run, pair, slot_s, gap_s, reference)
+        found = [_correlate_pair(ac, run, pair, slot_s, gap_s, reference, fill)
                  for pair in sensor_pairs(ac, pairs, split_adsb)]
         paired |= bool(found)
         if not all_aircraft and found and all(f is not None for f in found):

@@ -118,8 +118,10 @@ def _interpolate(track: pd.DataFrame, t_s: np.ndarray, max_gap_s: float) -> dict
     return out
 
 
-def _matched(meas: pd.DataFrame, max_gap_s: float, jump_kw: dict | None) -> pd.DataFrame:
-    """Radar reports (de-duplicated) with the interpolated ADS-B reference, for aircraft seen by both;
+def _matched(meas: pd.DataFrame, max_gap_s: float, jump_kw: dict | None, reference: str = "adsb"
+             ) -> pd.DataFrame:
+    """Radar reports (de-duplicated) with the interpolated ADS-B reference (or, with reference "track",
+    the smoothed ADS-B-only track: pipeline.quality.track_reference), for aircraft seen by both;
     ``radar_row`` is the report's row in ``meas``."""
     meas = with_clock(meas).assign(radar_row=np.arange(len(meas)))
     is_adsb = (meas["sensor_kind"] == "adsb").to_numpy(bool)
@@ -132,7 +134,12 @@ def _matched(meas: pd.DataFrame, max_gap_s: float, jump_kw: dict | None) -> pd.D
     for ac in all_aircraft(meas[~drop]):
         r, _ = deduplicate(ac.radar)
         a, _ = deduplicate(ac.adsb)
-        ref = _interpolate(_adsb_track(a), r["time_of_day"].to_numpy(float), max_gap_s)
+        if reference == "track":
+            from pipeline.quality.track_reference import track_reference
+
+            ref = track_reference(a, r["time_of_day"].to_numpy(float), max_gap_s)
+        else:
+            ref = _interpolate(_adsb_track(a), r["time_of_day"].to_numpy(float), max_gap_s)
         r = r.assign(callsign=ac.callsign or pd.NA, address=ac.address or pd.NA,
                      **{f"ref_{k}": v for k, v in ref.items()})
         parts.append(r[np.isfinite(ref["lat"])])
@@ -142,15 +149,16 @@ def _matched(meas: pd.DataFrame, max_gap_s: float, jump_kw: dict | None) -> pd.D
 
 
 def radar_errors(meas: pd.DataFrame, sensors: pd.DataFrame, *, max_gap_s: float = MAX_ADSB_GAP_S,
-                 jump_kw: dict | None = None) -> pd.DataFrame:
+                 jump_kw: dict | None = None, reference: str = "adsb") -> pd.DataFrame:
     """One row per radar report matched to ADS-B: range, azimuth, along/cross-track and horizontal error.
+    reference: "adsb" (reports interpolated linearly) or "track" (the smoothed ADS-B-only track).
 
     range_error_m = radar slant range - slant range from the site to the ADS-B reference; azimuth error
     wrapped to +-180 deg; along-track along the ADS-B ground track, cross-track positive to the right of
     it. Also the reference geometry (slant/ground range, azimuth, range rate, tangential speed) that
     ``estimate_biases`` regresses on.
     """
-    m = _matched(meas, max_gap_s, jump_kw)
+    m = _matched(meas, max_gap_s, jump_kw, reference)
     if m.empty:
         return pd.DataFrame(columns=ERROR_COLUMNS)
     site = sensor_sites(m, sensors)

@@ -33,11 +33,11 @@ def select_aircraft(meas: pd.DataFrame, *, callsign: str | None = None,
 
 def quality_run(meas: pd.DataFrame, sensors: pd.DataFrame, *, callsign: str | None = None,
                 address: str | None = None, gap_s: float = 180.0,
-                jump_kw: dict | None = None) -> QualityResult:
+                jump_kw: dict | None = None, reference: str = "adsb") -> QualityResult:
     """Quality tables per aircraft and sensor, radar error statistics and per-radar bias estimates."""
     meas = select_aircraft(meas, callsign=callsign, address=address)
     sheets = quality_tables(meas, gap_s=gap_s, jump_kw=jump_kw)
-    errors = radar_errors(meas, sensors, jump_kw=jump_kw)
+    errors = radar_errors(meas, sensors, jump_kw=jump_kw, reference=reference)
     sheets["Radar accuracy"] = error_stats(errors)
     biases = estimate_biases(errors)
     sheets["Radar biases"] = biases

@@ -1,0 +1,238 @@
+"""The track job: fused IMM tracks per aircraft from every radar and ADS-B report (``msdc track``).
+
+Options are validated before anything is decoded (``validate``: one-line ``OptionError`` naming the
+option); ``track_job`` decodes, builds the measurement model (radar covariances from the sensor file's
+sigmas, ADS-B from NACp), drops repeated reports, selects the aircraft and sources, and runs
+``pipeline.track.track``; ``write_tracks`` writes the table (CSV or Parquet), the JSON summary and the
+per-aircraft figures. It lives beside ``pipeline.jobs`` and reuses its helpers.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+import pandas as pd
+
+from pipeline import jobs
+from pipeline.jobs import Checked, DecodingOptions, JobError, OptionError
+from pipeline.progress import Progress
+
+SOURCES = ("radar", "adsb")
+STEP_RANGE_S = (1e-3, 3600.0)  # below 1 ms the grid explodes (a day would be 86 M rows per aircraft)
+MAX_COAST_RANGE_S = (0.0, 86400.0)
+# the columns of the track table, in order (issue 10); the tracker's other columns follow
+TRACK_COLUMNS = ["aircraft_id", "callsign", "address", "time", "time_of_day", "latitude", "longitude",
+                 "flight_level", "speed_kt", "track_deg", "turn_rate_dps", "sigma_major_m", "sigma_minor_m",
+                 "mode_cv", "mode_turn_left", "mode_turn_right", "coasted", "sources"]
+
+
+@dataclass(frozen=True)
+class TrackOptions(DecodingOptions):
+    """Everything ``track_job`` needs; see ``msdc track --help`` for the meaning of each option."""
+
+    sensors: str | None = None
+    callsign: str | None = None
+    address: str | None = None
+    all_aircraft: bool = False
+    output: str | None = None
+    json: str | None = None
+    figures: str | None = None  # directory for one PNG per aircraft
+    step_s: float = 1.0
+    max_coast_s: float = 60.0
+    smooth: bool = False
+    tpm: str | None = None  # None: the tracker's default (expm:150,20)
+    sources: tuple[str, ...] = SOURCES
+    gap_s: float = 180.0  # unused by tracking; keeps the aircraft checks of pipeline.jobs applicable
+
+
+def _sources(value) -> tuple[str, ...]:
+    items = tuple(value.split(",")) if isinstance(value, str) else tuple(value or ())
+    items = tuple(s.strip().lower() for s in items)
+    if not items or any(s not in SOURCES for s in items) or len(set(items)) != len(items):
+        raise OptionError(f"--sources {','.join(items) if items else value!r}: must be a comma-separated "
+                          f"subset of {','.join(SOURCES)} without repeats")
+    return items
+
+
+def validate(options: TrackOptions) -> Checked:
+    """Check every option, the sensor file and the output paths before any decoding; OptionError if bad."""
+    from pipeline.track import parse_tpm
+
+    warnings: list[str] = []
+    inputs, editions = jobs._check_decoding(options, warnings)
+    checked = Checked(inputs, editions, warnings=warnings)
+    jobs._check_aircraft(options)
+    step = options.step_s
+    if not isinstance(step, int | float) or not math.isfinite(step) or not step > 0.0:
+        raise OptionError(f"--step {step!r}: must be a finite number of seconds > 0")
+    jobs._number("--step", step, *STEP_RANGE_S, " s")
+    coast = options.max_coast_s
+    if not isinstance(coast, int | float) or not math.isfinite(coast) or coast < step:
+        raise OptionError(f"--max-coast {coast!r}: must be a finite number of seconds >= --step ({step:g})")
+    jobs._number("--max-coast", coast, *MAX_COAST_RANGE_S, " s")
+    if options.tpm is not None:
+        try:
+            parse_tpm(str(options.tpm))
+        except ValueError as exc:
+            raise OptionError(f"--tpm {options.tpm!r}: {str(exc).partition(': ')[2]}") from None
+    _sources(options.sources)
+    checked.output = jobs._output("-o", options.output, (".csv", ".parquet"))
+    checked.json = jobs._output("--json", options.json, (".json",))
+    if options.figures is not None:
+        d = Path(options.figures)
+        if d.exists() and not d.is_dir():
+            raise OptionError(f"--figures {d}: exists and is not a directory")
+        if not (d if d.exists() else (d.parent if str(d.parent) else Path("."))).is_dir():
+            raise OptionError(f"--figures {d}: directory {d.parent} does not exist")
+    if checked.output is None and checked.json is None and options.figures is None:
+        raise OptionError("give at least one output: -o tracks.csv|tracks.parquet, --json or --figures")
+    checked.sensors = jobs._sensors(options.sensors)
+    return checked
+
+
+@dataclass
+class TrackJobResult:
+    """The tracker's result, the measurements it was fed (one row per report), labels and parameters."""
+
+    options: TrackOptions
+    checked: Checked
+    result: object  # pipeline.track.TrackResult
+    tracks: pd.DataFrame  # TRACK_COLUMNS first, then the tracker's other columns
+    measurements: pd.DataFrame
+    labels: pd.DataFrame  # aircraft_id, callsign, address
+    parameters: dict
+    loaded: object
+
+
+def _measurements(loaded, checked: Checked, options: TrackOptions) -> pd.DataFrame:
+    """Measurements of the requested sources (one of them must be present), repeated reports dropped."""
+    from pipeline.model.dedup import duplicate_mask
+    from pipeline.model.measurements import build_measurements
+    from pipeline.model.sensors import UnknownRadar, sensor_toml_snippet
+
+    sources = _sources(options.sources)
+    radar = loaded.frames.get(48) if "radar" in sources else None
+    adsb = loaded.frames.get(21) if "adsb" in sources else None
+    radar = radar if radar is not None and len(radar) else None
+    adsb = adsb if adsb is not None and len(adsb) else None
+    if radar is None and adsb is None:
+        wanted = " or ".join({"radar": "radar (CAT048)", "adsb": "ADS-B (CAT021)"}[s] for s in sources)
+        raise JobError(f"no {wanted} records in the inputs (--sources {','.join(sources)})")
+    try:
+        meas = build_measurements(radar, adsb, checked.sensors, date=loaded.date)
+    except UnknownRadar as exc:
+        lines = "\n\n".join(sensor_toml_snippet(sac, sic) for sac, sic in exc.missing)
+        raise JobError(f"radar SAC/SIC {', '.join(f'{a}/{b}' for a, b in exc.missing)} not in "
+                       f"{options.sensors}; add its position:\n\n{lines}") from exc
+    from pipeline.track.associate import join_by_track_number
+
+    meas, joined = join_by_track_number(meas, max_gap_s=float(options.max_coast_s))
+    dup = duplicate_mask(meas.sort_values("time", kind="stable")).reindex(meas.index).to_numpy(bool)
+    out = meas[~dup & meas["aircraft_id"].notna().to_numpy(bool)].reset_index(drop=True)
+    out.attrs["joined_by_track_number"] = joined
+    return out
+
+
+def _select(meas: pd.DataFrame, options: TrackOptions) -> pd.DataFrame:
+    """The selected aircraft's reports; JobError naming the closest call signs / addresses present."""
+    import difflib
+
+    from pipeline.model.identity import normalise_address, normalise_callsign
+    from pipeline.model.measurements import select
+
+    if options.all_aircraft:
+        return meas
+    chosen = select(meas, options.callsign, options.address)
+    if len(chosen):
+        return chosen
+    column, wanted = (("callsign", normalise_callsign(options.callsign)) if options.callsign is not None
+                      else ("address", normalise_address(options.address)))
+    close = difflib.get_close_matches(wanted or "", sorted(set(meas[column].dropna())), n=5, cutoff=0.5)
+    hint = f"closest present: {', '.join(close)}" if close else "nothing similar is present"
+    raise JobError(f"{'call sign' if column == 'callsign' else 'address'} {wanted} not in the inputs; {hint}")
+
+
+def track_job(options: TrackOptions, *, progress: Progress | None = None, checked: Checked | None = None,
+              command: str = "track") -> TrackJobResult:
+    """Validate, decode, build measurements, select, track; nothing is written."""
+    from pipeline.model.identity import aircraft_labels
+    from pipeline.track import track
+
+    started = time.monotonic()
+    checked = checked or validate(options)
+    if progress:
+        progress.stage("Processing data files")
+    loaded = jobs._load(options, checked, progress)
+    if progress:
+        progress.stage("Tracking")
+    meas = _measurements(loaded, checked, options)
+    joined = int(meas.attrs.get("joined_by_track_number", 0))
+    meas = _select(meas, options)
+    result = track(meas, step_s=float(options.step_s), max_coast_s=float(options.max_coast_s),
+                   tpm=options.tpm, smooth=options.smooth)
+    labels = aircraft_labels(meas)
+    tracks = result.tracks.merge(labels, on="aircraft_id", how="left")
+    tracks[["callsign", "address"]] = tracks[["callsign", "address"]].fillna("")
+    tracks = tracks[TRACK_COLUMNS + [c for c in tracks.columns if c not in TRACK_COLUMNS]]
+    params = {**jobs._parameters(options, loaded, started, command), **result.parameters,
+              "sources": list(_sources(options.sources)), "callsign": options.callsign,
+              "address": options.address, "all": bool(options.all_aircraft),
+              "radar_plots_joined_by_track_number": joined}
+    return TrackJobResult(options, checked, result, tracks, meas, labels, params, loaded)
+
+
+def summary(result: TrackJobResult) -> dict:
+    """The JSON document: parameters, inputs, and per aircraft its span, coasted time and per-sensor
+    reports, updates, gated reports and NIS mean."""
+    from pipeline.report.summary import json_value
+
+    res = result.result
+    labels = result.labels.set_index("aircraft_id")
+    aircraft = []
+    for row in res.aircraft.to_dict("records"):
+        ident = row["aircraft_id"]
+        sens = res.sensors[res.sensors["aircraft_id"] == ident].drop(columns="aircraft_id")
+        aircraft.append({
+            "aircraft_id": ident, "callsign": labels.at[ident, "callsign"] if ident in labels.index else "",
+            "address": labels.at[ident, "address"] if ident in labels.index else "",
+            **{k: json_value(v) for k, v in row.items() if k != "aircraft_id"},
+            "sensors": [{k: json_value(v) for k, v in s.items()} for s in sens.to_dict("records")]})
+    return {"parameters": result.parameters, "inputs": result.loaded.inputs, "aircraft": aircraft}
+
+
+def write_tracks(result: TrackJobResult) -> dict[str, Path]:
+    """Write the track table (CSV: times as ISO 8601 UTC; Parquet: tz-aware timestamps), the JSON and
+    the figures, as the options ask; each file is written whole to a temporary name and then renamed,
+    so a failure leaves nothing behind. Returns what was written, by kind."""
+    written: dict[str, Path] = {}
+    out, js = result.checked.output, result.checked.json
+    if out is not None:
+        tmp = out.with_name(out.name + ".part")
+        try:
+            if out.suffix.lower() == ".csv":
+                result.tracks.assign(time=result.tracks["time"].dt.strftime("%Y-%m-%dT%H:%M:%S.%fZ")).to_csv(
+                    tmp, index=False)
+            else:
+                result.tracks.to_parquet(tmp, index=False)
+            tmp.replace(out)
+        finally:
+            tmp.unlink(missing_ok=True)
+        written["tracks"] = out
+    if js is not None:
+        js.write_text(json.dumps(summary(result), indent=1, default=str))
+        written["json"] = js
+    if result.options.figures is not None:
+        from pipeline.report.track_figures import track_figures
+
+        d = Path(result.options.figures)
+        d.mkdir(exist_ok=True)
+        written.update({f"figure {k}": p for k, p in track_figures(result, d).items()})
+    return written
+
+
+__all__ = ["TRACK_COLUMNS", "TrackJobResult", "TrackOptions", "summary", "track_job", "validate",
+           "write_tracks"]

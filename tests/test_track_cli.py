@@ -1,0 +1,221 @@
+"""``msdc track`` and its job on the bundled fixtures: options refused before decoding (one line, exit 2,
+nothing written), the table's columns, sources, the sensor file's sigmas, and the JSON against the
+simulator's truth."""
+
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from pipeline import jobs, jobs_track
+from pipeline.cli import main
+from pipeline.jobs import OptionError
+from pipeline.jobs_track import TRACK_COLUMNS, TrackOptions
+
+FIX = Path(__file__).resolve().parents[1] / "fixtures"
+RADAR, ADSB, SENSORS = str(FIX / "radar.ast"), str(FIX / "adsb.ast"), str(FIX / "sensors.toml")
+TRUTH = json.loads((FIX / "truth.json").read_text())
+BASE = [RADAR, ADSB, "--sensors", SENSORS, "--date", "2019-03-01"]
+
+
+def opts(**kw) -> TrackOptions:
+    base = {"inputs": (RADAR, ADSB), "sensors": SENSORS, "callsign": "MAS72", "output": "t.csv"}
+    return TrackOptions(**(base | kw))
+
+
+BAD = [
+    (opts(step_s=0.0), "--step 0.0"),
+    (opts(step_s=-1.0), "--step -1.0"),
+    (opts(step_s=math.nan), "--step nan"),
+    (opts(step_s=math.inf), "--step inf"),
+    (opts(step_s=5.0, max_coast_s=2.0), "--max-coast 2.0: must be a finite number of seconds >= --step (5)"),
+    (opts(max_coast_s=math.nan), "--max-coast nan"),
+    (opts(tpm="fixed:1.5"), "--tpm 'fixed:1.5'"),
+    (opts(tpm="expm:-3"), "--tpm 'expm:-3'"),
+    (opts(tpm="banana"), "--tpm 'banana'"),
+    (opts(sources=("radar", "mlat")), "--sources 'radar,mlat'"),
+    (opts(sources=()), "--sources"),
+    (opts(callsign=None), "exactly one of --callsign, --address or --all"),
+    (opts(callsign=None, address="XYZ"), "--address 'XYZ'"),
+    (opts(output="t.xlsx"), "-o t.xlsx: must end in .csv or .parquet"),
+    (opts(output=None), "give at least one output"),
+    (opts(json="t.txt"), "--json t.txt"),
+    (opts(sensors="/nonexistent/s.toml"), "--sensors /nonexistent/s.toml"),
+]
+
+
+@pytest.mark.parametrize(("options", "words"), BAD)
+def test_bad_options_refused_before_decoding(options, words, tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.setattr(jobs, "load", lambda *a, **k: pytest.fail("decoded before validating"))
+    with pytest.raises(OptionError) as info:
+        jobs_track.validate(options)
+    assert words in str(info.value) and "\n" not in str(info.value)
+    assert info.value.status == 2
+
+
+@pytest.mark.parametrize("argv", [
+    ["--step", "0"], ["--max-coast", "0.5"], ["--tpm", "fixed:0"], ["--sources", "radar,psr"],
+    ["--callsign", "NOSUCH1"]])
+def test_cli_failure_writes_nothing(argv, tmp_path, capsys):
+    args = ["track", *BASE, "-o", str(tmp_path / "t.csv"), "--json", str(tmp_path / "t.json")]
+    if "--callsign" not in argv:
+        args += ["--callsign", "MAS72"]
+    status = main(args + argv)
+    err = capsys.readouterr().err
+    assert status == (1 if "NOSUCH1" in argv else 2)
+    (last,) = [line for line in err.splitlines() if line.startswith("msdc track: ")]
+    assert "Traceback" not in err and len(last) > len("msdc track: ")
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_cli_unknown_callsign_names_the_closest(tmp_path, capsys):
+    assert main(["track", *BASE, "--callsign", "MAS73", "-o", str(tmp_path / "t.csv")]) == 1
+    err = capsys.readouterr().err
+    assert "MAS73 not in the inputs" in err and "MAS72" in err
+    assert list(tmp_path.iterdir()) == []
+
+
+@pytest.fixture(scope="module")
+def mas72(tmp_path_factory):
+    d = tmp_path_factory.mktemp("track")
+    assert main(["track", *BASE, "--callsign", "mas 72", "-o", str(d / "t.parquet"), "--json",
+                 str(d / "t.json"), "--figures", str(d / "figs")]) == 0
+    return pd.read_parquet(d / "t.parquet"), json.loads((d / "t.json").read_text()), d
+
+
+def test_columns_identity_and_times(mas72):
+    tracks, _, _ = mas72
+    assert list(tracks.columns[:len(TRACK_COLUMNS)]) == TRACK_COLUMNS
+    spec = next(a for a in TRUTH["aircraft"] if a["callsign"] == "MAS72")
+    assert set(tracks["callsign"]) == {"MAS72"} and set(tracks["address"]) == {spec["address"]}
+    assert str(tracks["time"].dt.tz) == "UTC"
+    assert (tracks["time"].dt.date == pd.Timestamp("2019-03-01").date()).all()
+    # time_of_day is the UTC time as seconds since midnight
+    tod = (tracks["time"] - pd.Timestamp("2019-03-01", tz="UTC")).dt.total_seconds()
+    assert np.allclose(tod, tracks["time_of_day"], atol=1e-6)
+    # the grid: every whole second from the first report to 60 s after the last one is present
+    grid = tracks.loc[tracks["time_of_day"] % 1.0 == 0.0, "time_of_day"]
+    assert np.all(np.diff(grid) == 1.0)
+    modes = tracks[["mode_cv", "mode_turn_left", "mode_turn_right"]].sum(axis=1)
+    assert np.allclose(modes, 1.0)
+    upd = ~tracks["coasted"]
+    assert (tracks.loc[upd, "sources"] != "").all() and (tracks.loc[~upd, "sources"] == "").all()
+    assert set(",".join(tracks.loc[upd, "sources"]).split(",")) == {"048:25/201", "021:0/1"}
+
+
+def test_json_counts_match_the_simulator(mas72):
+    _, doc, _ = mas72
+    (ac,) = doc["aircraft"]
+    assert ac["callsign"] == "MAS72"
+    # reports per sensor: the simulator's rows of MAS72 that are not injected repeats
+    from fixtures.simulate import simulate
+
+    tt = simulate().truth_tracks
+    rows = tt[(tt["callsign"] == "MAS72") & ~tt["duplicate"]].groupby("sensor").size()
+    reports = {s["sensor_id"]: s["reports"] for s in ac["sensors"]}
+    assert reports == {"048:25/201": rows["radar"], "021:0/1": rows["adsb"]}
+    assert sum(s["updates"] + s["gated"] for s in ac["sensors"]) == ac["reports"] == sum(rows)
+    # exactly the injected ADS-B position jumps of MAS72 (0.1-6 deg away) are gated, no radar plot is
+    jumps = [j for j in TRUTH["jumps"] if j["callsign"] == "MAS72"]
+    gated = {s["sensor_id"]: s["gated"] for s in ac["sensors"]}
+    assert gated == {"021:0/1": len(jumps), "048:25/201": 0} and len(jumps) > 0
+    assert 0.0 < ac["coasted_s"] < ac["tracked_s"]
+    for s in ac["sensors"]:
+        assert s["nis_mean"] > 0
+
+
+def test_figure_written(mas72):
+    _, _, d = mas72
+    (png,) = (d / "figs").iterdir()
+    assert png.name == "track_MAS72_750312.png" and png.read_bytes()[:4] == b"\x89PNG"
+
+
+def _radar_only(tmp_path, sensors_text: str) -> dict:
+    s = tmp_path / "s.toml"
+    s.write_text(sensors_text)
+    result = jobs_track.track_job(TrackOptions(inputs=(RADAR, ADSB), sensors=str(s), callsign="MAS72",
+                                               json=str(tmp_path / "t.json"), date=pd.Timestamp(
+                                                   "2019-03-01").date(), sources=("radar",)))
+    return result
+
+
+def test_radar_sigmas_from_the_sensor_file(tmp_path):
+    """The simulator's radar noise is 70 m / 0.08 deg: with those sigmas (the defaults) the radar's NIS
+    averages near 2 (chi-square, 2 degrees of freedom; a little less, as the manoeuvre modes' process
+    noise is spent on straight legs); a file claiming 10 times the noise (100 times the variance) makes
+    the NIS tens of times smaller and the track's ellipses wider."""
+    text = (FIX / "sensors.toml").read_text()
+    default = _radar_only(tmp_path, text)
+    loose = _radar_only(tmp_path, text + "sigma_range_m = 700.0\nsigma_azimuth_deg = 0.8\n")
+    assert set(default.tracks["sources"]) <= {"", "048:25/201"}
+    nis = float(default.result.sensors["nis_mean"].iloc[0])
+    nis_loose = float(loose.result.sensors["nis_mean"].iloc[0])
+    assert 1.2 < nis < 2.6
+    assert nis_loose < nis / 20
+    assert loose.tracks["sigma_major_m"].median() > 3 * default.tracks["sigma_major_m"].median()
+
+
+def test_sources_adsb_only(tmp_path):
+    out = tmp_path / "t.csv"
+    assert main(["track", *BASE, "--address", "750312", "--sources", "adsb", "-o", str(out),
+                 "--step", "5", "--max-coast", "30", "--tpm", "dynamic", "--smooth"]) == 0
+    t = pd.read_csv(out, dtype={"address": str, "sources": str})
+    assert set(t["sources"].dropna()) == {"021:0/1"}
+    assert t["time"].str.endswith("Z").all()
+    grid = t.loc[~t["coasted"], "time_of_day"]
+    assert len(grid) > 0
+    coast = t.loc[t["coasted"], "time_of_day"].to_numpy()
+    assert np.allclose(coast % 5.0, 0.0)
+
+
+def test_plots_without_identity_join_by_track_number():
+    """MAS72's radar plots stripped of address, call sign and Mode 3/A rejoin MAS72 by the radar track
+    number of its identified plots; a stripped plot whose track number is nowhere identified stays out."""
+    from pipeline.model.load import load
+    from pipeline.model.measurements import build_measurements
+    from pipeline.model.sensors import read_sensors
+    from pipeline.track.associate import join_by_track_number
+
+    data = load([RADAR], date="2019-03-01")
+    radar = data.frames[48].copy()
+    mas72 = np.flatnonzero((radar["callsign"] == "MAS72").to_numpy(bool))
+    stripped = mas72[::7]  # every 7th plot
+    for c in ("address", "callsign", "mode3a"):
+        radar[c] = radar[c].astype(object)
+        radar.iloc[stripped, radar.columns.get_loc(c)] = None
+    orphan = len(radar)
+    radar = pd.concat([radar, radar.iloc[[stripped[0]]].assign(track_number=9999)], ignore_index=True)
+    meas = build_measurements(radar, None, read_sensors(SENSORS), date=data.date)
+    assert meas["aircraft_id"].isna().sum() == len(stripped) + 1
+    joined, n = join_by_track_number(meas)
+    assert n == len(stripped)
+    assert (joined["aircraft_id"].iloc[stripped] == "750312").all()
+    assert joined["aircraft_id"].isna().to_numpy()[orphan]
+    assert joined["aircraft_id"].notna().sum() == len(meas) - 1
+
+
+def test_all_aircraft_gate_exactly_the_injected_jumps(tmp_path, capsys):
+    """--all: per aircraft, the ADS-B reports the gate rejects are exactly the simulator's injected
+    position jumps (truth.json), and the ADS-B NIS mean is what NACp's claimed sigma predicts for the
+    simulator's 5 m noise: 2 (5 / sigma)^2, sigma = NACp 95 % bound / 2.45."""
+    out = tmp_path / "s.json"
+    assert main(["track", *BASE, "--all", "--json", str(out)]) == 0
+    capsys.readouterr()
+    doc = json.loads(out.read_text())
+    jumps = pd.Series([j["callsign"] for j in TRUTH["jumps"]]).value_counts().to_dict()
+    spec = {a["callsign"]: a for a in TRUTH["aircraft"]}
+    assert sorted(a["callsign"] for a in doc["aircraft"]) == sorted(spec)
+    for ac in doc["aircraft"]:
+        adsb = next(s for s in ac["sensors"] if s["sensor_kind"] == "adsb")
+        assert adsb["gated"] == jumps[ac["callsign"]], ac["callsign"]
+        if ac["callsign"] == "SIA305":  # fixtures/scenario.py: NACp 8 (sigma 37.8 m): NIS far below 2
+            assert adsb["nis_mean"] < 0.1
+        else:  # NACp 9: sigma 30 / 2.45 = 12.2 m, the simulator's noise 5 m per axis
+            expected = 2.0 * (5.0 / (30.0 / 2.45)) ** 2
+            assert adsb["nis_mean"] == pytest.approx(expected, rel=0.25), ac["callsign"]
