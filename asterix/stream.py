@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Iterator
 
 import numpy as np
@@ -16,7 +17,7 @@ from .reader import (
     frame_checked,
     walked_editions,
 )
-from .timeline import restamp
+from .timeline import known_captures, restamp
 
 
 def iter_read(path, *, chunk: int = 1_000_000, editions=None, date=None, categories=None,
@@ -81,6 +82,9 @@ def _chunk_bounds(buf: np.ndarray, seg: Segments, chunk: int, eds: dict, categor
             sub = _sub_segments(seg, np.array([lo]), np.array([hi]), np.array([0]))
             out.append(sub)
         return out
+    day, tod = known_captures(seg)  # untimed packets (pcapng SPB) take their neighbour's capture time
+    if day is not None:
+        seg = dataclasses.replace(seg, capture_day=day, capture_tod=tod)
     sizes = np.cumsum(seg.stop - seg.start)
     group = (sizes // max(chunk, 1)).astype(np.int64)
     for g in np.unique(group):

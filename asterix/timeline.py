@@ -14,6 +14,23 @@ import pandas as pd
 from .containers import UNTIMED, Segments
 
 
+def known_captures(seg: Segments) -> tuple[np.ndarray | None, np.ndarray | None]:
+    """Capture day and time of each segment, an untimed one (pcapng Simple Packet Block) taking the
+    nearest timed segment before it in file order (after it when none is before); None when none is timed."""
+    known = (seg.capture_day >= 0) & np.isfinite(seg.capture_tod) if len(seg.start) else np.zeros(0, bool)
+    if not known.any():
+        return None, None
+    if known.all():
+        return seg.capture_day, seg.capture_tod
+    order = np.argsort(seg.start, kind="stable")
+    timed = known[order]
+    at = np.maximum.accumulate(np.where(timed, np.arange(len(order)), -1))  # last timed one so far
+    at[at < 0] = np.flatnonzero(timed)[0]
+    pick = np.empty_like(order)
+    pick[order] = order[at]
+    return seg.capture_day[pick], seg.capture_tod[pick]
+
+
 def assign_days(frames: dict[int, dict], seg: Segments, blk_seg: np.ndarray) -> int | None:
     """Add the ``day`` column (days after the first) to each category's columns; return the
     container's day number of day 0 (days since 1970 when ``seg.dated``), None for raw streams."""
@@ -22,7 +39,8 @@ def assign_days(frames: dict[int, dict], seg: Segments, blk_seg: np.ndarray) -> 
         for f in frames.values():
             f["day"] = np.zeros(0, np.int64)
         return None
-    if seg.format in UNTIMED or not len(seg.start):
+    capture_day, capture_tod = known_captures(seg)
+    if seg.format in UNTIMED or not len(seg.start) or capture_day is None:
         # file order across categories; a drop of more than 12 h is a new day, a rise of more
         # than 12 h a late report from the day before
         off = np.concatenate([np.asarray(f["offset"]) for _, f in parts])
@@ -45,7 +63,7 @@ def assign_days(frames: dict[int, dict], seg: Segments, blk_seg: np.ndarray) -> 
         all_days = []
         for _, f in parts:
             s = blk_seg[np.asarray(f["block"])]
-            cday, ctod = seg.capture_day[s], seg.capture_tod[s]
+            cday, ctod = capture_day[s], capture_tod[s]
             tod = np.asarray(f["time_of_day"])
             tod = np.where(np.isnan(tod), ctod, tod)
             all_days.append(cday + np.rint((ctod - tod) / 86400.0).astype(np.int64))

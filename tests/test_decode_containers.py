@@ -490,3 +490,30 @@ def test_auto_in_a_pcap_and_with_iter_read(tmp_path: Path) -> None:
     assert rec.editions[21] == "0.23" and len(rec.frames[21]) == 120 and rec.errors.empty
     parts = assert_chunks_equal_read(path, 400, editions={21: "auto"})
     assert {p.editions[21] for p in parts} == {"0.23"}
+
+
+def test_pcapng_simple_packet_blocks_without_capture_time(tmp_path: Path) -> None:
+    """A Simple Packet Block carries no timestamp: its reports take the day of the nearest timed packet
+    before it (after it when none is before); a file of SPBs only is ordered like a raw stream."""
+    from test_containers import png_epb, png_idb, png_shb, png_spb
+
+    # EPB at 2019-03-01 10:00:00 (microseconds) with a report at 36000 s; then an SPB with 36004.5 s
+    data = (png_shb("<") + png_idb("<", 1) + png_epb("<", 0, TS_10H * 10**6, udp_frame(cat048([36000.0])))
+            + png_spb("<", udp_frame(cat048([36004.5]))))
+    rec = asterix.read(write(tmp_path, "spb.pcapng", data))
+    assert rec.date == MARCH_1 and rec.errors.empty
+    assert rec.frames[48].timestamp.tolist() == [ts(MARCH_1, 36000.0), ts(MARCH_1, 36004.5)]
+    assert accounted(rec) == len(data)
+    # SPB first, then the timed EPB: the SPB takes the EPB's day
+    swapped = (png_shb("<") + png_idb("<", 1) + png_spb("<", udp_frame(cat048([35990.0])))
+               + png_epb("<", 0, TS_10H * 10**6, udp_frame(cat048([36000.0]))))
+    rec = asterix.read(write(tmp_path, "spb_first.pcapng", swapped))
+    assert rec.frames[48].timestamp.tolist() == [ts(MARCH_1, 35990.0), ts(MARCH_1, 36000.0)]
+    chunks = list(asterix.iter_read(tmp_path / "spb_first.pcapng", chunk=1))  # one packet per chunk
+    assert [t for c in chunks for t in c.frames[48].timestamp] == [ts(MARCH_1, 35990.0), ts(MARCH_1, 36000.0)]
+    # only SPBs: no capture time at all, so no date unless given, and days counted in file order
+    only = png_shb("<") + png_idb("<", 1) + png_spb("<", udp_frame(cat048([86399.5, 0.5])))
+    rec = asterix.read(write(tmp_path, "spb_only.pcapng", only), date="2019-03-01")
+    assert rec.frames[48].day.tolist() == [0, 1]
+    assert rec.frames[48].timestamp.tolist() == [ts(MARCH_1, 86399.5), ts(MARCH_1, 86400.5)]
+    assert accounted(rec) == len(only)
