@@ -43,8 +43,9 @@ VALUE_COUNT_COLUMNS = [*ID_KEYS, "indicator", "value", "reports", "share_pct"]
 
 
 def histogram_edges_s(gap_s: float) -> np.ndarray:
-    """Update-interval bin edges: 0.5 s up to 20 s, then 30, 60, 120 s, closed by gap_s."""
-    fine = np.arange(0.0, 20.0 + 1e-9, 0.5)
+    """Update-interval bin edges: 0.1 s up to 20 s (fine enough to show a radar's scan jitter and an ADS-B
+    station's spread), then 30, 60, 120 s, closed by gap_s."""
+    fine = np.round(np.arange(0.0, 20.0 + 1e-9, 0.1), 1)
     edges = np.concatenate([fine, [30.0, 60.0, 120.0]])
     return np.append(edges[edges < gap_s], gap_s)
 

@@ -68,7 +68,7 @@ def histogram_range_s(histogram: pd.DataFrame, share: float = 0.999) -> float:
 
 def interval_histogram_figure(histogram: pd.DataFrame, path: str | os.PathLike[str]) -> Path:
     """Update-interval histogram, one linear panel per sensor ("Update intervals" of quality_tables): bars
-    over the range holding 99.9 % of the intervals, each non-empty bar labelled with its count."""
+    from the first occupied bin over the range holding 99.9 % of the intervals, each labelled with its count."""
     sensors = list(histogram.groupby(["sensor", "sac", "sic"], dropna=False, sort=True))
     fig = new_figure(10, 2.7 * max(len(sensors), 1))
     if not sensors:
@@ -85,7 +85,10 @@ def interval_histogram_figure(histogram: pd.DataFrame, path: str | os.PathLike[s
                       edgecolor="0.25", lw=0.5)
         labels = [f"{int(v)}" if v > 0 else "" for v in shown["intervals"]]
         ax.bar_label(bars, labels=labels, fontsize=7, padding=1)
-        ax.set_xlim(0.0, top)
+        occupied = shown.loc[shown["intervals"] > 0, "bin_start_s"]
+        low = float(occupied.min()) if len(occupied) else 0.0
+        pad = max(0.15 * (top - low), 0.3)  # a radar's intervals sit in a few bins near its scan period
+        ax.set_xlim(max(0.0, low - pad), top + 0.3 * pad)
         ax.set_ylim(0.0, float(shown["intervals"].max() or 1) * 1.18)
         total = int(h["intervals"].sum())
         beyond = f"; {hidden} longer than {top:g} s not shown" if hidden else ""
