@@ -68,7 +68,7 @@ def histogram_range_s(histogram: pd.DataFrame, share: float = 0.999) -> float:
 
 def interval_histogram_figure(histogram: pd.DataFrame, path: str | os.PathLike[str]) -> Path:
     """Update-interval histogram, one linear panel per sensor ("Update intervals" of quality_tables): bars
-    from the first occupied bin over the range holding 99.9 % of the intervals, each labelled with its count."""
+    from the first occupied bin over the range holding 99.9 % of the intervals, each labelled by its count."""
     sensors = list(histogram.groupby(["sensor", "sac", "sic"], dropna=False, sort=True))
     fig = new_figure(10, 2.7 * max(len(sensors), 1))
     if not sensors:
