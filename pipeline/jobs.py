@@ -284,6 +284,10 @@ def validate(options) -> Checked:
         if isinstance(options, QualityOptions) and options.reference not in ("adsb", "track"):
             raise OptionError(f"--reference {options.reference!r}: must be adsb or track")
         checked.output = _output("-o", options.output, (".xlsx",))
+        if checked.output is not None and isinstance(options, CorrelateOptions):  # the figure beside it
+            png = checked.output.with_name(f"{checked.output.stem}_tracks.png")
+            if png.is_dir():
+                raise OptionError(f"-o {checked.output}: its track figure {png} is a directory")
         checked.json = _output("--json", options.json, (".json",))
         checked.sensors = _sensors(options.sensors)
         odd = checked.sensors[~checked.sensors["altitude_m"].between(*SITE_ALTITUDE_RANGE_M)]

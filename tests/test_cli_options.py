@@ -55,6 +55,8 @@ ERRORS = [
     ("edition-syntax", ["stats", "{R}", "--edition", "21"], 2, ["--edition", "CAT=EDITION"]),
     ("out-readonly-dir", CORR + ["-o", "{RO}/report.xlsx"], 2, ["-o", "not writable"]),
     ("out-is-directory", CORR + ["-o", "{O}/dir.xlsx"], 2, ["-o", "is a directory"]),
+    ("out-figure-is-directory", CORR + ["-o", "{O}/fig.xlsx"], 2,
+     ["-o", "fig_tracks.png is a directory"]),
     ("out-missing-dir", CORR + ["-o", "{O}/nowhere/report.xlsx"], 2, ["-o", "does not exist"]),
     ("out-txt", CORR + ["-o", "{O}/report.txt"], 2, ["-o", ".xlsx"]),
     ("out-no-suffix", CORR + ["-o", "{O}/report"], 2, ["-o", ".xlsx"]),
@@ -113,7 +115,7 @@ def paths(tmp_path):
     directory that cannot be written, a malformed sensor file."""
     out = tmp_path / "out"
     out.mkdir()
-    for name in ("dir.xlsx", "dir.json", "dir.csv"):
+    for name in ("dir.xlsx", "dir.json", "dir.csv", "fig_tracks.png"):
         (out / name).mkdir()
     ro = tmp_path / "readonly"
     ro.mkdir()
