@@ -138,9 +138,22 @@ def _output(name: str, path: str | Path | None, suffixes: tuple[str, ...]) -> Pa
     parent = p.parent if str(p.parent) else Path(".")
     if not parent.is_dir():
         raise OptionError(f"{name} {p}: directory {parent} does not exist")
-    if not os.access(parent, os.W_OK) or (p.exists() and not os.access(p, os.W_OK)):
-        raise OptionError(f"{name} {p}: not writable")
+    writable = os.access(parent, os.W_OK) and (not p.exists() or os.access(p, os.W_OK))
+    if not writable or not _can_create(parent):
+        raise OptionError(f"{name} {p}: not writable (directory {parent})")
     return p
+
+
+def _can_create(directory: Path) -> bool:
+    """Whether a file can really be created here (permission bits do not stop root; read-only mounts,
+    ACLs and pseudo file systems do): a temporary file is created and removed at once."""
+    import tempfile
+
+    try:
+        with tempfile.NamedTemporaryFile(dir=directory, prefix=".msdc-probe-"):
+            return True
+    except OSError:
+        return False
 
 
 def _sensors(path: str | Path | None) -> pd.DataFrame:
@@ -271,6 +284,10 @@ def validate(options) -> Checked:
         if isinstance(options, QualityOptions) and options.reference not in ("adsb", "track"):
             raise OptionError(f"--reference {options.reference!r}: must be adsb or track")
         checked.output = _output("-o", options.output, (".xlsx",))
+        if checked.output is not None and isinstance(options, CorrelateOptions):  # the figure beside it
+            png = checked.output.with_name(f"{checked.output.stem}_tracks.png")
+            if png.is_dir():
+                raise OptionError(f"-o {checked.output}: its track figure {png} is a directory")
         checked.json = _output("--json", options.json, (".json",))
         checked.sensors = _sensors(options.sensors)
         odd = checked.sensors[~checked.sensors["altitude_m"].between(*SITE_ALTITUDE_RANGE_M)]
@@ -396,6 +413,25 @@ class CorrelateResult:
     quality: QualityResult | None = None
 
 
+def _filtered_away(exc, meas_all: pd.DataFrame, options: CorrelateOptions) -> str | None:
+    """The message when the aircraft's ADS-B reports exist but the quality filters removed them all."""
+    from pipeline.model.measurements import select
+
+    asked = [f for f, on in ((f"--min-nic {options.min_nic}", options.min_nic is not None),
+                             (f"--min-nacp {options.min_nacp}", options.min_nacp is not None),
+                             ("--drop-jumps", options.drop_jumps)) if on]
+    if "ADS-B" not in exc.missing_in or not asked:
+        return None
+    chosen = select(meas_all, options.callsign, options.address)
+    n = int((chosen["sensor_kind"] == "adsb").sum())
+    if n == 0:
+        return None
+    removed = f"{' and '.join(asked)} removed all {n}"
+    text = (f"{removed} ADS-B reports of the inputs" if options.all_aircraft
+            else f"{exc.wanted}: {removed} of its ADS-B reports")
+    return f"{text}; lower the filter or leave it out"
+
+
 def correlate_job(options: CorrelateOptions, *, progress: Progress | None = None,
                   checked: Checked | None = None, command: str = "correlate") -> CorrelateResult:
     """Validate, decode, build measurements, filter, correlate (and assess quality); nothing is written."""
@@ -420,7 +456,9 @@ def correlate_job(options: CorrelateOptions, *, progress: Progress | None = None
         run = correlate(meas, callsign=options.callsign, address=options.address,
                         all_aircraft=options.all_aircraft, slot_s=options.slot_s, gap_s=options.gap_s,
                         pairs=options.pairs, split_adsb=options.split_adsb, fill=options.fill)
-    except (NoSuchAircraft, NoOverlap) as exc:
+    except NoSuchAircraft as exc:
+        raise JobError(_filtered_away(exc, meas_all, options) or str(exc)) from exc
+    except NoOverlap as exc:
         raise JobError(str(exc)) from exc
     asked = {"jumps": options.drop_jumps, "nic_below_min": options.min_nic is not None,
              "nic_missing_kept": options.min_nic is not None,

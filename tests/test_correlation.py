@@ -177,7 +177,8 @@ def test_no_overlap_gives_both_spans():
     adsb = frame("adsb", np.arange(1000.0, 1100.0, 5.0), 1.0, 103.0)
     with pytest.raises(NoOverlap) as info:
         corr(radar, adsb, callsign="MAS72")
-    assert "0-95 s" in str(info.value) and "1000-1095 s" in str(info.value)
+    # undated: clock times (95 s = 00:01:35, 1000 s = 00:16:40, 1095 s = 00:18:15), not seconds of day
+    assert "00:00:00 to 00:01:35" in str(info.value) and "00:16:40 to 00:18:15" in str(info.value)
 
 
 def test_all_aircraft_needs_both_sensors():

@@ -42,14 +42,22 @@ class NoOverlap(LookupError):
                  reference: pd.Timestamp | None = None):
         self.radar_span_s, self.adsb_span_s = radar_span_s, adsb_span_s
 
-        def span(s: tuple[float, float]) -> str:
-            text = f"{s[0]:g}-{s[1]:g} s"
-            if not is_dated(reference):
-                return text
-            return f"{text} ({at_seconds(reference, s[0])} to {at_seconds(reference, s[1])})"
+        def span(s: tuple[float, float]) -> str:  # UTC date-times when dated, else HH:MM:SS
+            if is_dated(reference):
+                return f"{at_seconds(reference, s[0])} to {at_seconds(reference, s[1])}"
+            return f"{_clock(s[0])} to {_clock(s[1])}"
 
         super().__init__(f"{aircraft}: radar ({span(radar_span_s)}) and ADS-B ({span(adsb_span_s)}) "
                          "tracks never overlap in time")
+
+
+def _clock(seconds: float) -> str:
+    """HH:MM:SS of seconds since midnight of the first day ("+Nd " past it), for undated recordings."""
+    if not np.isfinite(seconds):
+        return "-"
+    day, rem = divmod(int(seconds // 1), 86400)
+    text = f"{rem // 3600:02d}:{rem % 3600 // 60:02d}:{rem % 60:02d}"
+    return f"+{day}d {text}" if day else text
 
 
 def _lags(n: int) -> np.ndarray:
@@ -237,10 +245,10 @@ def _correlate_pair(ac: Aircraft, run: CorrelationRun, pair: tuple[str, pd.DataF
     if not windows:
         label = f"{ac.callsign or ac.address} ({radar_id} and {ref_id})"
         r_span, a_span = _span(radar["time_of_day"]), _span(adsb["time_of_day"])
+        gap = NoOverlap(label, r_span, a_span, reference)
         run.skipped.append(SkippedWindow(ac.callsign, ac.address, min(r_span[0], a_span[0]),
-                                         max(r_span[1], a_span[1]), str(NoOverlap(label, r_span, a_span)),
-                                         **sensors))
-        return NoOverlap(label, r_span, a_span, reference)
+                                         max(r_span[1], a_span[1]), str(gap), **sensors))
+        return gap
     predictors = (None, None)
     if fill == "predict":  # each side's own forward track, coasting across the longest gap a window has
         from pipeline.correlate.fill import track_predictor
