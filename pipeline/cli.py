@@ -293,6 +293,9 @@ def main(argv: list[str] | None = None) -> int:
     except AsterixError as exc:
         print(f"msdc {args.command}: {exc}", file=sys.stderr)
         return 2
+    except OSError as exc:  # writing outputs: disk full, permissions changed during the run
+        print(f"msdc {args.command}: {exc.filename or ''}: {exc.strerror or exc}", file=sys.stderr)
+        return 1
     except KeyboardInterrupt:
         return 130
 

@@ -18,6 +18,7 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 
+import numpy as np
 import pandas as pd
 
 from pipeline.correlate.correlation import PAIRS, correlate
@@ -32,6 +33,7 @@ from pipeline.progress import Progress
 from pipeline.quality.filters import apply_filters
 from pipeline.quality.jumps import JUMP_FLAG_COLUMNS, jump_flags
 from pipeline.quality.quality_run import QualityResult, quality_run
+from pipeline.report.outputs import all_or_nothing
 from pipeline.report.textguard import guard_frame
 
 FORMATS = ("raw", "pcap", "pcapng", "final", "gps", "oradis")
@@ -432,6 +434,36 @@ def _filtered_away(exc, meas_all: pd.DataFrame, options: CorrelateOptions) -> st
     return f"{text}; lower the filter or leave it out"
 
 
+FAR_SEPARATION_FACTOR = 10.0  # times a radar's own position sigma at its far plots
+SLOTTING_MARGIN_M = 1000.0  # what 10 s slots of a fast aircraft add to any separation
+
+
+def far_separations(run: CorrelationRun, meas: pd.DataFrame, sensors: pd.DataFrame,
+                    sensors_path: str) -> list[str]:
+    """Warnings for radars whose windows put the aircraft much further from ADS-B (median over windows of
+    the median slot separation) than the radar's accuracy allows: most likely a wrong site."""
+    rows = [w.summary for w in run.windows
+            if w.summary.get("sep_median_m") is not None
+            and str(w.summary.get("reference_sensor")).startswith("021")]
+    if not rows:
+        return []
+    warnings = []
+    for sensor_id, sep_m in pd.DataFrame(rows).groupby("radar_sensor")["sep_median_m"].median().items():
+        plots = meas[(meas["sensor_id"] == sensor_id).to_numpy(bool)]
+        site = sensors[(sensors["sac"] == plots["sac"].iloc[0]) & (sensors["sic"] == plots["sic"].iloc[0])]
+        rho = plots["rho_nm"].to_numpy(float)
+        if site.empty or not np.isfinite(rho).any():
+            continue
+        far_m = float(np.nanpercentile(rho, 95)) * 1852.0
+        sigma_m = math.hypot(float(site["sigma_range_m"].iloc[0]),
+                             far_m * math.radians(float(site["sigma_azimuth_deg"].iloc[0])))
+        if sep_m > FAR_SEPARATION_FACTOR * sigma_m + SLOTTING_MARGIN_M:
+            warnings.append(f"radar {sensor_id}: its plots lie a median {sep_m / 1000:.1f} km from ADS-B, "
+                            f"far beyond its accuracy ({sigma_m:.0f} m at {far_m / 1852:.0f} NM); check its "
+                            f"site in {sensors_path}")
+    return warnings
+
+
 def correlate_job(options: CorrelateOptions, *, progress: Progress | None = None,
                   checked: Checked | None = None, command: str = "correlate") -> CorrelateResult:
     """Validate, decode, build measurements, filter, correlate (and assess quality); nothing is written."""
@@ -469,6 +501,7 @@ def correlate_job(options: CorrelateOptions, *, progress: Progress | None = None
     run.parameters = {**run.parameters, **_parameters(options, loaded, started, command),
                       "filters": {"drop_jumps": options.drop_jumps, "min_nic": options.min_nic,
                                   "min_nacp": options.min_nacp, "removed": run.filters}}
+    checked.warnings += far_separations(run, meas, checked.sensors, str(options.sensors))
     result = CorrelateResult(options, checked, run, meas, loaded)
     if options.quality:
         if progress:
@@ -498,7 +531,13 @@ def quality_figures(result: QualityResult, out_dir: Path, stem: str) -> dict[str
 def write_correlation(result: CorrelateResult, progress: Progress | None = None,
                       max_windows: int = 6) -> dict[str, Path]:
     """Write what the options ask for: JSON summary, workbook with its track figure (and, with quality,
-    the quality and per-window figures). Returns what was written, by kind."""
+    the quality and per-window figures), all or nothing. Returns what was written, by kind."""
+    with all_or_nothing(result.checked.json, result.checked.output):
+        return _write_correlation(result, progress, max_windows)
+
+
+def _write_correlation(result: CorrelateResult, progress: Progress | None,
+                       max_windows: int) -> dict[str, Path]:
     from pipeline.report.excel import write_report
     from pipeline.report.figures import lag_figure, track_figure
     from pipeline.report.quality_figures import slotting_figure
@@ -560,7 +599,12 @@ def quality_job(options: QualityOptions, *, progress: Progress | None = None, ch
 
 
 def write_quality(result: QualityJobResult) -> dict[str, Path]:
-    """Write the JSON tables and/or the workbook with its figures, as the options ask."""
+    """Write the JSON tables and/or the workbook with its figures, as the options ask, all or nothing."""
+    with all_or_nothing(result.checked.json, result.checked.output):
+        return _write_quality(result)
+
+
+def _write_quality(result: QualityJobResult) -> dict[str, Path]:
     import json
 
     from pipeline.report.excel import write_tables

@@ -288,3 +288,34 @@ def test_spans_are_times_not_seconds_of_day(tmp_path, capsys):
     assert status == 1
     assert "08:0" in err and "08:3" in err  # radar ends 08:03, ADS-B starts 08:36
     assert not re.search(r"\d{5}(\.\d+)?-\d{5}", err), err  # no "28800.0-28999.0 s"
+
+
+def test_a_run_failing_while_writing_leaves_nothing(tmp_path: Path, monkeypatch, capsys) -> None:
+    """The JSON and the track figure are written before the workbook: if the workbook fails, they go too,
+    files that were there before stay, and the run ends with a one-line message, not a traceback."""
+    import pipeline.report.excel as excel
+
+    def disk_full(*args, **kwargs):
+        raise OSError(28, "No space left on device", str(tmp_path / "r.xlsx"))
+
+    monkeypatch.setattr(excel, "write_report", disk_full)
+    (tmp_path / "kept.txt").write_text("was here")
+    code = main(["correlate", str(FIX / "radar.ast"), str(FIX / "adsb.ast"), "--sensors",
+                 str(FIX / "sensors.toml"), "--callsign", "MAS72", "-o", str(tmp_path / "r.xlsx"),
+                 "--json", str(tmp_path / "r.json")])
+    err = capsys.readouterr().err
+    assert code == 1 and "Traceback" not in err and "No space left on device" in err
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["kept.txt"]
+
+
+def test_separations_far_beyond_the_radar_accuracy_warn_of_a_wrong_site(tmp_path: Path, capsys) -> None:
+    """A site 0.5 deg (about 55 km) north of the real one puts every plot tens of km from ADS-B: warned,
+    naming the radar and the sensor file; the true site gives median separations of a few hundred m."""
+    args = [str(FIX / "radar.ast"), str(FIX / "adsb.ast"), "--callsign", "MAS72"]
+    assert main(["correlate", *args, "--sensors", str(FIX / "sensors.toml")]) == 0
+    assert "check its site" not in capsys.readouterr().err
+    moved = tmp_path / "moved.toml"
+    moved.write_text((FIX / "sensors.toml").read_text().replace("latitude = 2.7456", "latitude = 3.2456"))
+    assert main(["correlate", *args, "--sensors", str(moved)]) == 0
+    err = capsys.readouterr().err
+    assert "radar 048:25/201" in err and "check its site in" in err and str(moved) in err
