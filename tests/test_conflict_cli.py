@@ -131,3 +131,16 @@ def test_crossing_loss_found_and_alerted_before_it_starts_at_60_s(crossing, caps
     assert list(alerts.columns) == ALERT_COLUMNS + ["loss_start", "false_alert"]
     assert not alerts["false_alert"].any()
     assert (alerts.loc[alerts["horizon_s"] == 60, "peak_pc"] > 0.5).all()
+
+
+def test_failed_run_after_decoding_writes_nothing(tmp_path, capsys):
+    # the radar of the recording (SAC/SIC 25/201) is not in this sensor file: a data error, exit 1
+    sensors = tmp_path / "other.toml"
+    sensors.write_text('[[sensor]]\nname = "Elsewhere"\nsac = 1\nsic = 1\nlatitude = 3.0\nlongitude = 101.0\n'
+                       'altitude_m = 10.0\n')
+    out = tmp_path / "c.csv"
+    code = main(["conflicts", RADAR, "--sensors", str(sensors), "--date", "2019-03-01", "-o", str(out),
+                 "--json", str(tmp_path / "c.json")])
+    err = capsys.readouterr().err
+    assert code == 1 and "25/201" in err and "Traceback" not in err
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["other.toml"]
