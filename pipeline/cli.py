@@ -120,6 +120,26 @@ def build_parser() -> argparse.ArgumentParser:
                                  "(default expm:150,20)")
     t.add_argument("--sources", default="radar,adsb", help="sensor kinds to fuse: radar, adsb or radar,adsb")
     _decoding_options(t)
+
+    k = sub.add_parser("conflicts", help="conflict probability from IMM-predicted tracks: alerts, losses of "
+                                         "separation, warning times, false alerts")
+    k.add_argument("inputs", nargs="+", metavar="INPUT")
+    k.add_argument("--sensors", required=True, help="sensor positions (TOML [[sensor]] tables)")
+    k.add_argument("-o", "--output", required=True,
+                   help="conflicts.csv (losses and warning times beside it) or conflicts.xlsx")
+    k.add_argument("--json", help="counts and the tables as JSON")
+    k.add_argument("--horizon", default="20,60,120", help="look-aheads in seconds (default 20,60,120)")
+    k.add_argument("--radius-nm", type=float, default=5.0, help="horizontal separation minimum (default 5)")
+    k.add_argument("--vertical-ft", type=float, default=1000.0,
+                   help="vertical separation minimum (default 1000)")
+    k.add_argument("--threshold", type=float, default=0.2,
+                   help="PC above which an alert is raised (default 0.2)")
+    k.add_argument("--method", default="exact", help="PC method: exact, one-block, blocks or midpoint")
+    k.add_argument("--step", type=float, default=1.0, help="output step in seconds (default 1)")
+    k.add_argument("--max-coast", type=float, default=60.0,
+                   help="seconds a track is predicted after its last report before it ends (default 60)")
+    k.add_argument("--tpm", help="mode transition law of the IMM (default expm:150,20)")
+    _decoding_options(k)
     return parser
 
 
@@ -279,8 +299,28 @@ def _track_text(result) -> str:
             + "\n\nSensors:\n" + sens.to_string(index=False, float_format=lambda v: f"{v:.2f}"))
 
 
+def cmd_conflicts(args) -> int:
+    from pipeline import jobs_conflict
+
+    options = jobs_conflict.ConflictOptions(
+        **_decoding(args), sensors=args.sensors, output=args.output, json=args.json, step_s=args.step,
+        max_coast_s=args.max_coast, tpm=args.tpm, horizons_s=args.horizon, radius_nm=args.radius_nm,
+        vertical_ft=args.vertical_ft, threshold=args.threshold, method=args.method)
+    checked = jobs_conflict.validate(options)
+    _warn("conflicts", checked.warnings)
+    seen = len(checked.warnings)
+    result = jobs_conflict.conflict_job(options, progress=Progress(), checked=checked,
+                                        command=" ".join(sys.argv[1:]) or "conflicts")
+    _warn("conflicts", checked.warnings[seen:])
+    _report_skipped(result.loaded.errors)
+    print(jobs_conflict.text(result))
+    for kind, path in jobs_conflict.write_conflicts(result).items():
+        print(f"{kind}: {path}", file=sys.stderr)
+    return 0
+
+
 COMMANDS = {"decode": cmd_decode, "stats": cmd_stats, "correlate": cmd_correlate, "quality": cmd_quality,
-            "track": cmd_track}
+            "track": cmd_track, "conflicts": cmd_conflicts}
 
 
 def main(argv: list[str] | None = None) -> int:

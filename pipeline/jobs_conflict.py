@@ -1,0 +1,246 @@
+"""The conflict job (``msdc conflicts``): post-event conflict analysis of recorded traffic.
+
+Options are validated before anything is decoded (``validate``: one-line ``OptionError`` naming the
+option). ``conflict_job`` decodes and builds the measurements as ``msdc track`` does, tracks every
+aircraft with the IMM, predicts each track at every output step and look-ahead
+(`pipeline.conflict.predict`), computes PC for every close pair, and derives the alert events, the
+actual losses of separation in the tracked data, the warning time per loss and horizon, and which alerts
+were false. ``write_conflicts`` writes CSV (alerts; losses and warning times in files named beside it)
+or an xlsx workbook, each file whole under a temporary name and then renamed.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import pandas as pd
+
+from pipeline import jobs
+from pipeline.jobs import Checked, JobError, OptionError
+from pipeline.jobs_track import STEP_RANGE_S, TrackOptions, _measurements
+from pipeline.progress import Progress
+
+METHODS = ("exact", "one-block", "blocks", "midpoint")
+HORIZON_RANGE_S = (1.0, 3600.0)
+RADIUS_RANGE_NM = (0.01, 100.0)
+VERTICAL_RANGE_FT = (1.0, 100_000.0)
+
+
+@dataclass(frozen=True)
+class ConflictOptions(TrackOptions):
+    """Everything ``conflict_job`` needs; see ``msdc conflicts --help``. Every aircraft is tracked."""
+
+    all_aircraft: bool = True
+    horizons_s: tuple[float, ...] = (20.0, 60.0, 120.0)
+    radius_nm: float = 5.0
+    vertical_ft: float = 1000.0
+    threshold: float = 0.2
+    method: str = "exact"
+
+
+def parse_horizons(value) -> tuple[float, ...]:
+    """'20,60,120' (seconds) -> (20.0, 60.0, 120.0); OptionError naming the bad item."""
+    items = value.split(",") if isinstance(value, str) else list(value or ())
+    out = []
+    for item in items:
+        try:
+            h = float(item)
+        except (TypeError, ValueError):
+            raise OptionError(f"--horizon {item!r}: not a number of seconds (e.g. 20,60,120)") from None
+        out.append(h)
+    if not out:
+        raise OptionError("--horizon: give at least one look-ahead in seconds, e.g. 20,60,120")
+    if len(set(out)) != len(out):
+        raise OptionError(f"--horizon {value!r}: a look-ahead is repeated")
+    return tuple(sorted(out))
+
+
+def validate(options: ConflictOptions) -> Checked:
+    """Check every option, the sensor file and the output paths before any decoding; OptionError if bad."""
+    from pipeline.track import parse_tpm
+
+    warnings: list[str] = []
+    inputs, editions = jobs._check_decoding(options, warnings)
+    checked = Checked(inputs, editions, warnings=warnings)
+    step = options.step_s
+    if not isinstance(step, int | float) or not math.isfinite(step) or not step > 0.0:
+        raise OptionError(f"--step {step!r}: must be a finite number of seconds > 0")
+    jobs._number("--step", step, *STEP_RANGE_S, " s")
+    horizons = parse_horizons(options.horizons_s)
+    for h in horizons:
+        jobs._number("--horizon", h, *HORIZON_RANGE_S, " s")
+        if abs(h / step - round(h / step)) > 1e-9:
+            raise OptionError(f"--horizon {h:g}: must be a whole multiple of --step ({step:g} s)")
+    jobs._number("--radius-nm", options.radius_nm, *RADIUS_RANGE_NM, " NM")
+    jobs._number("--vertical-ft", options.vertical_ft, *VERTICAL_RANGE_FT, " ft")
+    t = options.threshold
+    if not isinstance(t, int | float) or not math.isfinite(t) or not 0.0 < t < 1.0:
+        raise OptionError(f"--threshold {t!r}: must be a probability strictly between 0 and 1")
+    if options.method not in METHODS:
+        raise OptionError(f"--method {options.method!r}: must be one of {', '.join(METHODS)}")
+    coast = options.max_coast_s
+    if not isinstance(coast, int | float) or not math.isfinite(coast) or coast < step:
+        raise OptionError(f"--max-coast {coast!r}: must be a finite number of seconds >= --step ({step:g})")
+    if options.tpm is not None:
+        try:
+            parse_tpm(str(options.tpm))
+        except ValueError as exc:
+            raise OptionError(f"--tpm {options.tpm!r}: {str(exc).partition(': ')[2]}") from None
+    checked.output = jobs._output("-o", options.output, (".csv", ".xlsx"))
+    checked.json = jobs._output("--json", options.json, (".json",))
+    if checked.output is None:
+        raise OptionError("-o: give the output, conflicts.csv or conflicts.xlsx")
+    if checked.output.suffix.lower() == ".csv":
+        for extra in companion_paths(checked.output).values():
+            jobs._output("-o", extra, (".csv",))
+    checked.sensors = jobs._sensors(options.sensors)
+    return checked
+
+
+def companion_paths(csv: Path) -> dict[str, Path]:
+    """The files written beside a CSV output: losses and warning times."""
+    return {"losses": csv.with_name(csv.stem + "_losses.csv"),
+            "warnings": csv.with_name(csv.stem + "_warning_times.csv")}
+
+
+@dataclass
+class ConflictJobResult:
+    """Tracks, predictions' PC, and the derived tables of one run."""
+
+    options: ConflictOptions
+    checked: Checked
+    tracks: pd.DataFrame
+    pc: pd.DataFrame  # time, aircraft_a, aircraft_b, horizon_s, pc, horizontal_nm, vertical_ft
+    alerts: pd.DataFrame  # alert events with loss_start and false_alert
+    losses: pd.DataFrame
+    warnings: pd.DataFrame
+    parameters: dict
+    loaded: object
+    counts: dict = field(default_factory=dict)
+
+
+def conflict_job(options: ConflictOptions, *, progress: Progress | None = None,
+                 checked: Checked | None = None, command: str = "conflicts") -> ConflictJobResult:
+    """Validate, decode, track every aircraft, predict, PC per pair/step/horizon, events; writes nothing."""
+    from pipeline.conflict import (
+        alert_events,
+        classify_alerts,
+        losses_of_separation,
+        pair_probabilities,
+        warning_times,
+    )
+    from pipeline.conflict.predict import predict_tracks
+    from pipeline.track import track
+
+    started = time.monotonic()
+    checked = checked or validate(options)
+    horizons = parse_horizons(options.horizons_s)
+    step = float(options.step_s)
+    if progress:
+        progress.stage("Processing data files")
+    loaded = jobs._load(options, checked, progress)
+    if progress:
+        progress.stage("Tracking")
+    meas = _measurements(loaded, checked, options)
+    result = track(meas, step_s=step, max_coast_s=float(options.max_coast_s), tpm=options.tpm,
+                   keep_states=True)
+    tracks = result.tracks
+    tod = tracks["time_of_day"].to_numpy(float)
+    grid = tracks[abs(tod / step - (tod / step).round()) < 1e-6].reset_index(drop=True)
+    if progress:
+        progress.stage("Predicting and computing PC")
+    predictions = predict_tracks(result, horizons, step_s=step)
+    pc = pair_probabilities(predictions, options.radius_nm, options.vertical_ft, method=options.method)
+    losses = losses_of_separation(grid, options.radius_nm, options.vertical_ft)
+    events = alert_events(pc, options.threshold, step_s=step)
+    alerts = classify_alerts(events, losses)
+    warn = warning_times(losses, events, horizons)
+    counts = {"aircraft": int(grid["aircraft_id"].nunique()), "losses": len(losses),
+              "alerts": len(alerts), "false_alerts": int(alerts["false_alert"].sum()) if len(alerts) else 0,
+              "missed": {f"{h:g}": int(warn.loc[warn["horizon_s"] == h, "warning_s"].isna().sum())
+                         for h in horizons} if len(warn) else {f"{h:g}": 0 for h in horizons}}
+    params = {**jobs._parameters(options, loaded, started, command), **result.parameters,
+              "horizons_s": list(horizons), "radius_nm": options.radius_nm,
+              "vertical_ft": options.vertical_ft, "threshold": options.threshold, "method": options.method}
+    return ConflictJobResult(options, checked, grid, pc, alerts, losses, warn, params, loaded, counts)
+
+
+def summary(result: ConflictJobResult) -> dict:
+    """The JSON document: parameters, inputs, counts and the three tables as records."""
+    from pipeline.report.summary import json_value
+
+    def records(frame: pd.DataFrame) -> list[dict]:
+        return [{k: json_value(v) for k, v in row.items()} for row in frame.to_dict("records")]
+
+    return {"parameters": result.parameters, "inputs": result.loaded.inputs, "counts": result.counts,
+            "alerts": records(result.alerts), "losses": records(result.losses),
+            "warning_times": records(result.warnings)}
+
+
+def text(result: ConflictJobResult) -> str:
+    """What the run found, in a few lines (says so when there is no loss and no alert)."""
+    c = result.counts
+    lines = [f"{c['aircraft']} aircraft tracked; {c['losses']} loss(es) of separation "
+             f"(< {result.options.radius_nm:g} NM and < {result.options.vertical_ft:g} ft); "
+             f"{c['alerts']} alert event(s), {c['false_alerts']} false"]
+    if not c["losses"] and not c["alerts"]:
+        lines.append("no loss of separation and no alert: the tables are written empty, with their headers")
+    if len(result.warnings):
+        w = result.warnings.groupby("horizon_s")["warning_s"]
+        for h, s in w:
+            lines.append(f"horizon {h:g} s: {s.notna().sum()} of {len(s)} loss(es) alerted, "
+                         f"median warning {s.median():.0f} s" if s.notna().any()
+                         else f"horizon {h:g} s: no loss alerted")
+    return "\n".join(lines)
+
+
+def _csv(frame: pd.DataFrame, path: Path) -> None:
+    out = frame.copy()
+    for c in out.columns:
+        if isinstance(out[c].dtype, pd.DatetimeTZDtype):
+            out[c] = out[c].dt.strftime("%Y-%m-%dT%H:%M:%S.%fZ")
+    out.to_csv(path, index=False)
+
+
+def write_conflicts(result: ConflictJobResult) -> dict[str, Path]:
+    """Write the tables (CSV: alerts at -o, losses and warning times beside it; xlsx: one workbook) and
+    the JSON; all to temporary names first, renamed only when every file is complete."""
+    from pipeline.report.conflict_excel import write_conflict_workbook
+
+    out, js = result.checked.output, result.checked.json
+    targets: dict[str, Path] = {}
+    writers = []
+    if out.suffix.lower() == ".csv":
+        targets["alerts"] = out
+        writers.append((out, lambda p: _csv(result.alerts, p)))
+        extra = companion_paths(out)
+        targets.update(extra)
+        writers.append((extra["losses"], lambda p: _csv(result.losses, p)))
+        writers.append((extra["warnings"], lambda p: _csv(result.warnings, p)))
+    else:
+        targets["workbook"] = out
+        writers.append((out, lambda p: write_conflict_workbook(result.alerts, result.losses, result.warnings,
+                                                               result.parameters, p)))
+    if js is not None:
+        targets["json"] = js
+        writers.append((js, lambda p: p.write_text(json.dumps(summary(result), indent=1, default=str))))
+    parts = [(path, path.with_name(path.name + ".part")) for path, _ in writers]
+    try:
+        for (_, tmp), (_, write) in zip(parts, writers, strict=True):
+            write(tmp)
+        for path, tmp in parts:
+            tmp.replace(path)
+    except OSError as exc:
+        raise JobError(f"cannot write {exc.filename}: {exc.strerror}") from exc
+    finally:
+        for _, tmp in parts:
+            tmp.unlink(missing_ok=True)
+    return targets
+
+
+__all__ = ["ConflictJobResult", "ConflictOptions", "conflict_job", "parse_horizons", "summary",
+           "text", "validate", "write_conflicts"]

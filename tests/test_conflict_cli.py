@@ -1,0 +1,146 @@
+"""``msdc conflicts``: options refused before decoding (one line, exit 2, nothing written), the bundled
+fixtures (no loss: empty tables with headers), and a simulated crossing at the same level whose loss of
+separation starts when the hand-computed geometry says and is alerted before it at the 60 s horizon."""
+
+from __future__ import annotations
+
+import json
+from dataclasses import replace
+from pathlib import Path
+
+import pandas as pd
+import pytest
+from openpyxl import load_workbook
+
+from asterix.encode import encode_frame
+from fixtures.flight import Flight, Segment
+from fixtures.scenario import AircraftSpec, default_scenario
+from fixtures.simulate import sensors_toml, simulate
+from pipeline import jobs, jobs_conflict
+from pipeline.cli import main
+from pipeline.conflict.events import ALERT_COLUMNS, LOSS_COLUMNS, WARNING_COLUMNS
+from pipeline.jobs import OptionError
+from pipeline.jobs_conflict import ConflictOptions
+
+FIX = Path(__file__).resolve().parents[1] / "fixtures"
+RADAR, ADSB, SENSORS = str(FIX / "radar.ast"), str(FIX / "adsb.ast"), str(FIX / "sensors.toml")
+
+
+def opts(**kw) -> ConflictOptions:
+    return ConflictOptions(**({"inputs": (RADAR, ADSB), "sensors": SENSORS, "output": "c.csv"} | kw))
+
+
+BAD = [
+    (opts(horizons_s="20,x"), "--horizon 'x'"),
+    (opts(horizons_s="20,20"), "repeated"),
+    (opts(horizons_s="0"), "--horizon 0.0"),
+    (opts(horizons_s="15", step_s=10.0), "--horizon 15: must be a whole multiple of --step (10 s)"),
+    (opts(radius_nm=-5.0), "--radius-nm -5.0"),
+    (opts(vertical_ft=float("nan")), "--vertical-ft nan"),
+    (opts(threshold=1.0), "--threshold 1.0"),
+    (opts(threshold=0.0), "--threshold 0.0"),
+    (opts(method="montecarlo"), "--method 'montecarlo'"),
+    (opts(step_s=0.0), "--step 0.0"),
+    (opts(tpm="banana"), "--tpm 'banana'"),
+    (opts(output="c.parquet"), "-o c.parquet: must end in .csv or .xlsx"),
+    (opts(output=None), "-o: give the output"),
+    (opts(json="c.txt"), "--json c.txt"),
+    (opts(sensors="/nonexistent/s.toml"), "--sensors /nonexistent/s.toml"),
+]
+
+
+@pytest.mark.parametrize(("options", "words"), BAD)
+def test_bad_options_refused_before_decoding(options, words, tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.setattr(jobs, "load", lambda *a, **k: pytest.fail("decoded before validating"))
+    with pytest.raises(OptionError) as info:
+        jobs_conflict.validate(options)
+    assert words in str(info.value) and "\n" not in str(info.value)
+    assert info.value.status == 2
+
+
+def test_cli_bad_option_is_one_line_exit_2_and_writes_nothing(tmp_path, capsys):
+    out = tmp_path / "c.csv"
+    assert main(["conflicts", RADAR, ADSB, "--sensors", SENSORS, "--threshold", "2", "-o", str(out)]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.startswith("msdc conflicts: --threshold 2.0") and "\n" not in err
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_fixtures_without_loss_write_empty_tables_with_headers(tmp_path, capsys):
+    out = tmp_path / "c.xlsx"
+    code = main(["conflicts", RADAR, ADSB, "--sensors", SENSORS, "--date", "2019-03-01", "--step", "10",
+                 "-o", str(out), "--json", str(tmp_path / "c.json")])
+    assert code == 0
+    text = capsys.readouterr().out
+    assert "5 aircraft tracked; 0 loss(es)" in text and "written empty, with their headers" in text
+    wb = load_workbook(out, read_only=True)
+    assert wb.sheetnames == ["Alerts", "Losses", "Warning times", "Parameters"]
+    for sheet, columns in (("Alerts", ALERT_COLUMNS), ("Losses", LOSS_COLUMNS),
+                           ("Warning times", WARNING_COLUMNS)):
+        rows = list(wb[sheet].iter_rows(values_only=True))
+        assert list(rows[0])[:len(columns)] == columns and len(rows) == 1
+    doc = json.loads((tmp_path / "c.json").read_text())
+    assert doc["counts"]["losses"] == 0 and doc["parameters"]["horizons_s"] == [20.0, 60.0, 120.0]
+
+
+# two aircraft at FL350, 420 kt, one flying east from 40 NM west of the radar, one north from 40 NM south:
+# their distance is sqrt(2) |40 NM - v t|, below 5 NM from t = (40 - 5/sqrt(2)) / v
+SPEED_KT = 420.0
+LOSS_START_S = (40.0 - 5.0 / 2**0.5) / (SPEED_KT / 3600.0)  # 312.3 s
+CLOSEST_S = 40.0 / (SPEED_KT / 3600.0)  # 342.9 s
+
+
+@pytest.fixture(scope="module")
+def crossing(tmp_path_factory):
+    d = tmp_path_factory.mktemp("crossing")
+    east = AircraftSpec("CONA", 0x710001, "1001",
+                        flights=(Flight(0.0, -40.0, 0.0, 35000.0, SPEED_KT, 90.0, (Segment(600.0),)),))
+    north = AircraftSpec("CONB", 0x710002, "1002",
+                         flights=(Flight(0.0, 0.0, -40.0, 35000.0, SPEED_KT, 0.0, (Segment(600.0),)),))
+    sc = replace(default_scenario(), name="crossing", aircraft=(east, north), adsb_jump_fraction=0.0,
+                 adsb_long_dropouts=0, adsb_short_dropouts_per_hour=0.0, adsb_low_quality_episodes=0,
+                 radar_long_dropouts=0)
+    sim = simulate(sc, seed=7)
+    (d / "r.ast").write_bytes(encode_frame(48, sim.radar))
+    (d / "a.ast").write_bytes(encode_frame(21, sim.adsb))
+    (d / "s.toml").write_text(sensors_toml(sc.radar))
+    return d
+
+
+def test_crossing_loss_found_and_alerted_before_it_starts_at_60_s(crossing, capsys):
+    d = crossing
+    out = d / "c.csv"
+    assert main(["conflicts", str(d / "r.ast"), str(d / "a.ast"), "--sensors", str(d / "s.toml"),
+                 "--date", "2019-03-01", "-o", str(out)]) == 0
+    assert "1 loss(es) of separation" in capsys.readouterr().out
+    midnight = pd.Timestamp("2019-03-01", tz="UTC")
+    losses = pd.read_csv(d / "c_losses.csv", parse_dates=["start", "end", "time_of_min"],
+                         dtype={"aircraft_a": str, "aircraft_b": str})
+    assert len(losses) == 1
+    loss = losses.iloc[0]
+    assert (loss["aircraft_a"], loss["aircraft_b"]) == ("710001", "710002")
+    start_s = (loss["start"] - midnight).total_seconds()
+    assert abs(start_s - LOSS_START_S) <= 2.0
+    assert abs((loss["time_of_min"] - midnight).total_seconds() - CLOSEST_S) <= 2.0
+    assert loss["min_horizontal_nm"] < 0.2 and loss["min_vertical_ft"] < 100
+    warn = pd.read_csv(d / "c_warning_times.csv")
+    w60 = warn.loc[warn["horizon_s"] == 60, "warning_s"]
+    assert len(w60) == 1 and w60.iloc[0] > 0  # alerted before the loss started
+    alerts = pd.read_csv(d / "c.csv")
+    assert list(alerts.columns) == ALERT_COLUMNS + ["loss_start", "false_alert"]
+    assert not alerts["false_alert"].any()
+    assert (alerts.loc[alerts["horizon_s"] == 60, "peak_pc"] > 0.5).all()
+
+
+def test_failed_run_after_decoding_writes_nothing(tmp_path, capsys):
+    # the radar of the recording (SAC/SIC 25/201) is not in this sensor file: a data error, exit 1
+    sensors = tmp_path / "other.toml"
+    sensors.write_text('[[sensor]]\nname = "Elsewhere"\nsac = 1\nsic = 1\nlatitude = 3.0\nlongitude = 101.0\n'
+                       'altitude_m = 10.0\n')
+    out = tmp_path / "c.csv"
+    code = main(["conflicts", RADAR, "--sensors", str(sensors), "--date", "2019-03-01", "-o", str(out),
+                 "--json", str(tmp_path / "c.json")])
+    err = capsys.readouterr().err
+    assert code == 1 and "25/201" in err and "Traceback" not in err
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["other.toml"]
