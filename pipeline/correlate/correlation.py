@@ -63,30 +63,61 @@ def _pair(x, y) -> tuple[np.ndarray, np.ndarray]:
     return x, y
 
 
+def _xcorr(x: np.ndarray, y: np.ndarray) -> np.ndarray:
+    """Full cross-correlation sum_i x[i] y[i-d] for d = -(N-1)..N-1 by FFT, O(N log N)."""
+    n = x.size
+    if n == 0:
+        return np.zeros(0)
+    size = 1 << (2 * n - 1).bit_length()
+    full = np.fft.irfft(np.fft.rfft(x, size) * np.fft.rfft(y[::-1], size), size)
+    return full[: 2 * n - 1]  # index j holds lag j - (N - 1)
+
+
+def _constant_run(v: np.ndarray) -> int:
+    """Length of the longest run of equal values at the end of ``v`` (exact, no tolerance)."""
+    change = np.flatnonzero(v[1:] != v[:-1])
+    return v.size - (int(change[-1]) + 1 if change.size else 0)
+
+
 def ncc(x, y) -> tuple[np.ndarray, np.ndarray]:
     """Lags d = -(N-1)..N-1 and r(d) = sum_i x[i] y[i-d] / sqrt(sum x^2 sum y^2); not circular, mean kept."""
     x, y = _pair(x, y)
     norm = math.sqrt(float(x @ x) * float(y @ y))
-    num = np.correlate(x, y, mode="full")  # index j holds lag j - (N - 1)
+    num = _xcorr(x, y)
     return _lags(x.size), num / norm if norm > 0 else np.full(num.shape, np.nan)
 
 
 def pearson_by_lag(x, y) -> tuple[np.ndarray, np.ndarray]:
     """Lags and the Pearson coefficient of the overlapping pairs (x[i], y[i-d]), mean removed per overlap.
 
-    NaN where the overlap has fewer than 2 points or either side is constant.
+    NaN where the overlap has fewer than 2 points or either side is constant. O(N log N): the overlap
+    sums come from cumulative sums and the cross products from one FFT correlation.
     """
     x, y = _pair(x, y)
     n = x.size
     lags = _lags(n)
-    r = np.full(lags.size, np.nan)
-    for j, d in enumerate(lags):
-        a, b = (x[d:], y[: n - d]) if d >= 0 else (x[: n + d], y[-d:])
-        if a.size < 2 or np.ptp(a) == 0 or np.ptp(b) == 0:
-            continue
-        a, b = a - a.mean(), b - b.mean()
-        r[j] = np.clip((a @ b) / math.sqrt(float(a @ a) * float(b @ b)), -1.0, 1.0)
-    return lags, r
+    if n < 2:
+        return lags, np.full(lags.size, np.nan)
+    # exact constancy of a side (on the raw values): its overlap is a suffix or prefix of the series
+    x_tail, x_head = _constant_run(x), _constant_run(x[::-1])
+    y_tail, y_head = _constant_run(y), _constant_run(y[::-1])
+    x, y = x - x.mean(), y - y.mean()  # shifts leave r unchanged and keep the sums small
+    m = (n - np.abs(lags)).astype(float)  # overlap size
+    cx, cxx = np.concatenate([[0.0], np.cumsum(x)]), np.concatenate([[0.0], np.cumsum(x * x)])
+    cy, cyy = np.concatenate([[0.0], np.cumsum(y)]), np.concatenate([[0.0], np.cumsum(y * y)])
+    # d >= 0: x[d:], y[:n-d]; d < 0: x[:n+d], y[-d:]
+    x_lo, x_hi = np.maximum(lags, 0), np.minimum(n, n + lags)
+    y_lo, y_hi = np.maximum(-lags, 0), np.minimum(n, n - lags)
+    sx, sxx = cx[x_hi] - cx[x_lo], cxx[x_hi] - cxx[x_lo]
+    sy, syy = cy[y_hi] - cy[y_lo], cyy[y_hi] - cyy[y_lo]
+    sxy = _xcorr(x, y)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        vx, vy = sxx - sx * sx / m, syy - sy * sy / m
+        r = (sxy - sx * sy / m) / np.sqrt(vx * vy)
+    x_flat = np.where(lags >= 0, m <= x_tail, m <= x_head)
+    y_flat = np.where(lags >= 0, m <= y_head, m <= y_tail)
+    bad = (m < 2) | x_flat | y_flat | ~(vx > 0) | ~(vy > 0)
+    return lags, np.where(bad, np.nan, np.clip(r, -1.0, 1.0))
 
 
 def peak_lag(lags: np.ndarray, r: np.ndarray, max_abs_lag: int | None = None) -> int | None:
