@@ -400,7 +400,7 @@ def correlate_job(options: CorrelateOptions, *, progress: Progress | None = None
                   checked: Checked | None = None, command: str = "correlate") -> CorrelateResult:
     """Validate, decode, build measurements, filter, correlate (and assess quality); nothing is written."""
     from pipeline.correlate.aircraft import NoSuchAircraft
-    from pipeline.correlate.correlation import NoOverlap
+    from pipeline.correlate.correlation import NoOverlap, TooManySlots
 
     started = time.monotonic()
     checked = checked or validate(options)
@@ -422,6 +422,9 @@ def correlate_job(options: CorrelateOptions, *, progress: Progress | None = None
                         pairs=options.pairs, split_adsb=options.split_adsb, fill=options.fill)
     except (NoSuchAircraft, NoOverlap) as exc:
         raise JobError(str(exc)) from exc
+    except TooManySlots as exc:
+        raise OptionError(f"--slot {options.slot_s:g}: the overlap windows would need more than "
+                          f"{exc.limit:,} slots (at least {exc.slots:,}); use a longer --slot") from exc
     asked = {"jumps": options.drop_jumps, "nic_below_min": options.min_nic is not None,
              "nic_missing_kept": options.min_nic is not None,
              "nacp_below_min": options.min_nacp is not None,

@@ -274,3 +274,32 @@ def test_fft_correlations_scale_to_long_series():
     assert time.perf_counter() - t0 < 5.0
     assert peak_lag(lags, p, pearson_max_lag(x.size)) == 5
     assert p[lags == 5][0] == pytest.approx(1.0)
+
+
+def test_slot_count_cap_counts_every_window_slot(monkeypatch):
+    import pipeline.correlate.correlation as correlation
+
+    # one window 36000-36095 s; at 0.1 s it has floor(95 / 0.1) + 1 = 951 slots
+    t = np.arange(36000.0, 36100.0, 5.0)
+    radar, adsb = frame("radar", t, *weave(t)), frame("adsb", t, *weave(t))
+    monkeypatch.setattr(correlation, "MAX_SLOTS", 951)
+    (w,) = corr(radar, adsb, callsign="MAS72", slot_s=0.1).windows
+    assert w.summary["slots"] == 951
+    monkeypatch.setattr(correlation, "MAX_SLOTS", 950)
+    with pytest.raises(correlation.TooManySlots) as exc:
+        corr(radar, adsb, callsign="MAS72", slot_s=0.1)
+    assert exc.value.slots == 951
+
+
+def test_too_many_slots_is_one_line_naming_slot_and_writes_nothing(monkeypatch, tmp_path, capsys):
+    import pipeline.correlate.correlation as correlation
+    from pipeline.cli import main
+
+    monkeypatch.setattr(correlation, "MAX_SLOTS", 10)
+    out = tmp_path / "report.xlsx"
+    fx = "fixtures/"
+    status = main(["correlate", fx + "radar.ast", fx + "adsb.ast", "--sensors", fx + "sensors.toml",
+                   "--callsign", "MAS72", "--date", "2019-03-01", "--slot", "0.5", "-o", str(out)])
+    err = capsys.readouterr().err.strip().splitlines()[-1]  # after the progress stages
+    assert status == 2 and not out.exists() and list(tmp_path.iterdir()) == []
+    assert err.startswith("msdc correlate: --slot 0.5: ") and "more than 10 slots" in err

@@ -22,7 +22,7 @@ from pipeline.correlate.results import (
     SkippedWindow,
     WindowResult,
 )
-from pipeline.correlate.slots import slot_window
+from pipeline.correlate.slots import slot_count, slot_window
 from pipeline.correlate.windows import in_window, overlap_windows, short_window_reason
 from pipeline.model.dedup import duplicate_mask, sort_by_time
 from pipeline.model.geodesy import distance_m
@@ -30,9 +30,11 @@ from pipeline.model.time import is_dated, iso_utc, midnight, with_clock
 from pipeline.quality.jumps import detect_jumps
 
 PAIRS = ("radar-adsb", "radar-radar", "all")
+MAX_SLOTS = 1_000_000  # slots over all windows of one run: the lag table (2N - 1 rows a window)
+# already outgrows a workbook sheet (1,048,576 rows) well before; beyond, the work explodes
 
-__all__ = ["PAIRS", "NoOverlap", "NoSuchAircraft", "correlate", "ncc", "pearson_by_lag", "pearson_max_lag",
-           "peak_lag", "sensor_pairs", "separation_stats", "sources"]
+__all__ = ["MAX_SLOTS", "PAIRS", "NoOverlap", "NoSuchAircraft", "TooManySlots", "correlate", "ncc",
+           "pearson_by_lag", "pearson_max_lag", "peak_lag", "sensor_pairs", "separation_stats", "sources"]
 
 
 class NoOverlap(LookupError):
@@ -50,6 +52,15 @@ class NoOverlap(LookupError):
 
         super().__init__(f"{aircraft}: radar ({span(radar_span_s)}) and ADS-B ({span(adsb_span_s)}) "
                          "tracks never overlap in time")
+
+
+class TooManySlots(ValueError):
+    """The windows of a run need more than ``limit`` slots at ``slot_s``: refused before the work explodes."""
+
+    def __init__(self, slots: int, limit: int, slot_s: float):
+        self.slots, self.limit, self.slot_s = slots, limit, slot_s
+        super().__init__(f"slots of {slot_s:g} s need more than {limit:,} slots over the windows "
+                         f"(at least {slots:,}); use a longer slot")
 
 
 def _lags(n: int) -> np.ndarray:
@@ -252,10 +263,11 @@ def sensor_pairs(ac: Aircraft, pairs: str = "radar-adsb", split_adsb: bool = Fal
 
 
 def _correlate_pair(ac: Aircraft, run: CorrelationRun, pair: tuple[str, pd.DataFrame, str, pd.DataFrame],
-                    slot_s: float, gap_s: float, reference: pd.Timestamp, fill: str = "hold"
-                    ) -> NoOverlap | None:
+                    slot_s: float, gap_s: float, reference: pd.Timestamp, fill: str = "hold",
+                    budget: list[int] | None = None) -> NoOverlap | None:
     """Append the windows (or skipped windows) of one aircraft and sensor pair to ``run``; the NoOverlap
-    when the two sensors never overlap."""
+    when the two sensors never overlap. ``budget`` holds the slots used so far by the run (TooManySlots
+    past MAX_SLOTS, checked before any window of the pair is slotted)."""
     radar_id, radar, ref_id, other = pair
     radar, adsb = sort_by_time(radar), sort_by_time(other)
     r_dup, a_dup = duplicate_mask(radar).to_numpy(), duplicate_mask(adsb).to_numpy()
@@ -272,6 +284,10 @@ def _correlate_pair(ac: Aircraft, run: CorrelationRun, pair: tuple[str, pd.DataF
                                          max(r_span[1], a_span[1]), str(NoOverlap(label, r_span, a_span)),
                                          **sensors))
         return NoOverlap(label, r_span, a_span, reference)
+    if budget is not None:
+        budget[0] += sum(slot_count(a, b, slot_s) for a, b in windows if b - a >= slot_s)
+        if budget[0] > MAX_SLOTS:
+            raise TooManySlots(budget[0], MAX_SLOTS, slot_s)
     predictors = (None, None)
     if fill == "predict":  # each side's own forward track, coasting across the longest gap a window has
         from pipeline.correlate.fill import track_predictor
@@ -305,7 +321,8 @@ def correlate(meas: pd.DataFrame, *, callsign: str | None = None, address: str |
     of two radars are never mixed) against each ADS-B source and/or each other radar (``pairs``); ADS-B
     ground stations are one source unless ``split_adsb``. One aircraft by call sign and/or address
     (NoSuchAircraft, NoOverlap when no pair overlaps), or with ``all_aircraft`` every aircraft seen by a
-    pair. Times in the tables count seconds from midnight UTC of the earliest report. ``fill``: empty
+    pair (TooManySlots when the windows need more than MAX_SLOTS slots). Times in the tables count
+    seconds from midnight UTC of the earliest report. ``fill``: empty
     slots take the previous slot ("hold", the thesis) or the tracker's prediction ("predict").
     """
     if fill not in ("hold", "predict"):
@@ -329,9 +346,9 @@ def correlate(meas: pd.DataFrame, *, callsign: str | None = None, address: str |
                                  "no aircraft is seen by both radar and ADS-B")
     else:
         targets = [one_aircraft(meas, callsign, address, need_adsb=need_adsb)]
-    paired = False
+    paired, budget = False, [0]
     for ac in targets:
-        found = [_correlate_pair(ac, run, pair, slot_s, gap_s, reference, fill)
+        found = [_correlate_pair(ac, run, pair, slot_s, gap_s, reference, fill, budget)
                  for pair in sensor_pairs(ac, pairs, split_adsb)]
         paired |= bool(found)
         if not all_aircraft and found and all(f is not None for f in found):
