@@ -22,6 +22,7 @@ import pandas as pd
 
 from pipeline.correlate.correlation import PAIRS, correlate
 from pipeline.correlate.results import CorrelationRun
+from pipeline.meta import FORMATS, software_version
 from pipeline.model.dedup import DEDUP_KEYS, duplicate_mask
 from pipeline.model.identity import normalise_address, normalise_callsign
 from pipeline.model.load import Loaded, load
@@ -34,7 +35,6 @@ from pipeline.quality.jumps import JUMP_FLAG_COLUMNS, jump_flags
 from pipeline.quality.quality_run import QualityResult, quality_run
 from pipeline.report.textguard import guard_frame
 
-FORMATS = ("raw", "pcap", "pcapng", "final", "gps", "oradis")
 SLOT_RANGE_S = (0.1, 3600.0)  # below 0.1 s the slot count and the lag tables explode
 GAP_RANGE_S = (0.1, 86400.0)
 INDICATOR_RANGE = (0, 11)  # NIC and NACp values
@@ -351,15 +351,6 @@ def mark_once(meas: pd.DataFrame, *, split_adsb: bool = False, jumps: bool = Tru
                                     dropna=False).transform("first")
     flags["jump"] = flags["jump"].fillna(False).astype(bool) & adsb
     return meas.assign(duplicate=dup.to_numpy(bool), **{c: flags[c].to_numpy() for c in JUMP_FLAG_COLUMNS})
-
-
-def software_version() -> str:
-    from importlib.metadata import PackageNotFoundError, version
-
-    try:
-        return version("msdc")
-    except PackageNotFoundError:
-        return "unknown"
 
 
 def _parameters(options: AircraftOptions, loaded: Loaded, started: float, command: str) -> dict:
