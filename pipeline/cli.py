@@ -5,19 +5,32 @@ from __future__ import annotations
 
 import argparse
 import datetime as dt
+import importlib
 import sys
+from typing import TYPE_CHECKING
 
-import pandas as pd
-
-from asterix.errors import AsterixError, DecodeError
-from pipeline import jobs
+from pipeline.meta import FORMATS as _FORMATS
+from pipeline.meta import software_version
 from pipeline.progress import Progress
-from pipeline.stats import format_stats
 
-FORMATS = list(jobs.FORMATS)
+if TYPE_CHECKING:
+    import pandas as pd
 
 
-software_version = jobs.software_version
+class _Lazy:
+    """A module imported at its first attribute use, so ``msdc --help`` and each command import only what
+    they use (pandas, numba, scipy, openpyxl and matplotlib come in with the jobs that need them)."""
+
+    def __init__(self, name: str):
+        self._name = name
+
+    def __getattr__(self, attr: str):
+        return getattr(importlib.import_module(self._name), attr)
+
+
+jobs = _Lazy("pipeline.jobs")
+asterix_errors = _Lazy("asterix.errors")
+FORMATS = list(_FORMATS)
 
 
 class CliError(Exception):
@@ -170,7 +183,7 @@ def cmd_decode(args) -> int:
                                  strict=args.strict, chunk_mb=args.chunk_mb)
     try:
         result = jobs.decode_job(options, on_chunk=lambda done, size, name: progress.bar(done, size, name))
-    except DecodeError as exc:
+    except asterix_errors.DecodeError as exc:
         raise CliError(f"strict: {exc}") from exc
     _warn("decode", result.warnings)
     for note in result.notes:
@@ -192,6 +205,8 @@ def cmd_decode(args) -> int:
 
 
 def cmd_stats(args) -> int:
+    from pipeline.stats import format_stats
+
     result = jobs.stats_job(jobs.StatsOptions(**_decoding(args)), progress=Progress())
     _warn("stats", result.warnings)
     print(format_stats(result.tables), end="")
@@ -330,7 +345,7 @@ def main(argv: list[str] | None = None) -> int:
     except (CliError, jobs.OptionError, jobs.JobError) as exc:
         print(f"msdc {args.command}: {exc}", file=sys.stderr)
         return exc.status
-    except AsterixError as exc:
+    except asterix_errors.AsterixError as exc:
         print(f"msdc {args.command}: {exc}", file=sys.stderr)
         return 2
     except OSError as exc:  # writing outputs: disk full, permissions changed during the run

@@ -23,6 +23,7 @@ import pandas as pd
 
 from pipeline.correlate.correlation import PAIRS, correlate
 from pipeline.correlate.results import CorrelationRun
+from pipeline.meta import FORMATS, software_version
 from pipeline.model.dedup import DEDUP_KEYS, duplicate_mask
 from pipeline.model.identity import normalise_address, normalise_callsign
 from pipeline.model.load import Loaded, load
@@ -36,7 +37,6 @@ from pipeline.quality.quality_run import QualityResult, quality_run
 from pipeline.report.outputs import all_or_nothing
 from pipeline.report.textguard import guard_frame
 
-FORMATS = ("raw", "pcap", "pcapng", "final", "gps", "oradis")
 SLOT_RANGE_S = (0.1, 3600.0)  # below 0.1 s the slot count and the lag tables explode
 GAP_RANGE_S = (0.1, 86400.0)
 INDICATOR_RANGE = (0, 11)  # NIC and NACp values
@@ -372,15 +372,6 @@ def mark_once(meas: pd.DataFrame, *, split_adsb: bool = False, jumps: bool = Tru
     return meas.assign(duplicate=dup.to_numpy(bool), **{c: flags[c].to_numpy() for c in JUMP_FLAG_COLUMNS})
 
 
-def software_version() -> str:
-    from importlib.metadata import PackageNotFoundError, version
-
-    try:
-        return version("msdc")
-    except PackageNotFoundError:
-        return "unknown"
-
-
 def _parameters(options: AircraftOptions, loaded: Loaded, started: float, command: str) -> dict:
     return {"software": f"msdc {software_version()}", "command": command,
             "run_utc": dt.datetime.now(dt.UTC).strftime("%Y-%m-%dT%H:%M:%SZ"),
@@ -468,7 +459,7 @@ def correlate_job(options: CorrelateOptions, *, progress: Progress | None = None
                   checked: Checked | None = None, command: str = "correlate") -> CorrelateResult:
     """Validate, decode, build measurements, filter, correlate (and assess quality); nothing is written."""
     from pipeline.correlate.aircraft import NoSuchAircraft
-    from pipeline.correlate.correlation import NoOverlap
+    from pipeline.correlate.correlation import NoOverlap, TooManySlots
 
     started = time.monotonic()
     checked = checked or validate(options)
@@ -492,6 +483,9 @@ def correlate_job(options: CorrelateOptions, *, progress: Progress | None = None
         raise JobError(_filtered_away(exc, meas_all, options) or str(exc)) from exc
     except NoOverlap as exc:
         raise JobError(str(exc)) from exc
+    except TooManySlots as exc:
+        raise OptionError(f"--slot {options.slot_s:g}: the overlap windows would need more than "
+                          f"{exc.limit:,} slots (at least {exc.slots:,}); use a longer --slot") from exc
     asked = {"jumps": options.drop_jumps, "nic_below_min": options.min_nic is not None,
              "nic_missing_kept": options.min_nic is not None,
              "nacp_below_min": options.min_nacp is not None,

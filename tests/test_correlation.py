@@ -224,3 +224,83 @@ def test_ncc_and_pearson_match_their_definitions():
                 assert np.isnan(p_d)
             else:
                 assert p_d == pytest.approx(np.corrcoef(a, b)[0, 1])
+
+
+def _direct_by_lag(x, y):
+    """O(N^2) reference written from the definitions: NCC by the sum of products, Pearson by
+    np.corrcoef of each overlap (NaN for fewer than 2 pairs or a constant side)."""
+    n = len(x)
+    lags = np.arange(-(n - 1), n)
+    r, p = np.empty(lags.size), np.full(lags.size, np.nan)
+    norm = math.sqrt(np.sum(x**2) * np.sum(y**2))
+    for j, d in enumerate(lags):
+        idx = np.arange(max(d, 0), min(n, n + d))
+        a, b = x[idx], y[idx - d]
+        r[j] = np.sum(a * b) / norm
+        if a.size >= 2 and np.ptp(a) > 0 and np.ptp(b) > 0:
+            p[j] = np.corrcoef(a, b)[0, 1]
+    return lags, r, p
+
+
+@pytest.mark.parametrize("n", [3, 64, 257, 1000])
+def test_fft_correlations_match_a_direct_computation(n):
+    rng = np.random.default_rng(n)
+    # latitude-like series: a large offset and a small walk, the case where cancellation would hurt
+    x = 3.1 + 1e-3 * np.cumsum(rng.normal(size=n))
+    y = 3.1 + 1e-3 * np.cumsum(rng.normal(size=n))
+    # held (filled) slots give exactly constant runs at both ends: their short overlaps have no Pearson
+    k = max(1, n // 10)
+    x[:k], y[:k], y[-k:] = x[k], y[k], y[-k - 1]  # x prefix: lags < 0; y prefix: lags > 0
+    lags, r_ref, p_ref = _direct_by_lag(x, y)
+    got_lags, r = ncc(x, y)
+    _, p = pearson_by_lag(x, y)
+    assert got_lags.tolist() == lags.tolist()
+    np.testing.assert_allclose(r, r_ref, rtol=0, atol=1e-12)
+    assert np.array_equal(np.isnan(p), np.isnan(p_ref))
+    if n > 3:  # the constant ends do remove some lags, on both sides of zero
+        assert np.isnan(p[: k]).all() and np.isnan(p[-k:]).all() and not np.isnan(p[n - 1])
+    ok = ~np.isnan(p_ref) & (np.abs(lags) <= pearson_max_lag(n))  # where the peak is searched
+    np.testing.assert_allclose(p[ok], p_ref[ok], rtol=0, atol=1e-7)
+    assert peak_lag(lags, p, pearson_max_lag(n)) == peak_lag(lags, p_ref, pearson_max_lag(n))
+
+
+def test_fft_correlations_scale_to_long_series():
+    """10^5 slots: the O(N^2) loop took minutes; the FFT path is a fraction of a second."""
+    import time
+
+    s = np.cumsum(np.random.default_rng(3).normal(size=100_005))
+    x, y = s[:-5], s[5:]  # y[i - 5] = s[i] = x[i]: radar 5 slots behind
+    t0 = time.perf_counter()
+    lags, p = pearson_by_lag(x, y)
+    assert time.perf_counter() - t0 < 5.0
+    assert peak_lag(lags, p, pearson_max_lag(x.size)) == 5
+    assert p[lags == 5][0] == pytest.approx(1.0)
+
+
+def test_slot_count_cap_counts_every_window_slot(monkeypatch):
+    import pipeline.correlate.correlation as correlation
+
+    # one window 36000-36095 s; at 0.1 s it has floor(95 / 0.1) + 1 = 951 slots
+    t = np.arange(36000.0, 36100.0, 5.0)
+    radar, adsb = frame("radar", t, *weave(t)), frame("adsb", t, *weave(t))
+    monkeypatch.setattr(correlation, "MAX_SLOTS", 951)
+    (w,) = corr(radar, adsb, callsign="MAS72", slot_s=0.1).windows
+    assert w.summary["slots"] == 951
+    monkeypatch.setattr(correlation, "MAX_SLOTS", 950)
+    with pytest.raises(correlation.TooManySlots) as exc:
+        corr(radar, adsb, callsign="MAS72", slot_s=0.1)
+    assert exc.value.slots == 951
+
+
+def test_too_many_slots_is_one_line_naming_slot_and_writes_nothing(monkeypatch, tmp_path, capsys):
+    import pipeline.correlate.correlation as correlation
+    from pipeline.cli import main
+
+    monkeypatch.setattr(correlation, "MAX_SLOTS", 10)
+    out = tmp_path / "report.xlsx"
+    fx = "fixtures/"
+    status = main(["correlate", fx + "radar.ast", fx + "adsb.ast", "--sensors", fx + "sensors.toml",
+                   "--callsign", "MAS72", "--date", "2019-03-01", "--slot", "0.5", "-o", str(out)])
+    err = capsys.readouterr().err.strip().splitlines()[-1]  # after the progress stages
+    assert status == 2 and not out.exists() and list(tmp_path.iterdir()) == []
+    assert err.startswith("msdc correlate: --slot 0.5: ") and "more than 10 slots" in err

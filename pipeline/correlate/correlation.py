@@ -22,7 +22,7 @@ from pipeline.correlate.results import (
     SkippedWindow,
     WindowResult,
 )
-from pipeline.correlate.slots import slot_window
+from pipeline.correlate.slots import slot_count, slot_window
 from pipeline.correlate.windows import in_window, overlap_windows, short_window_reason
 from pipeline.model.dedup import duplicate_mask, sort_by_time
 from pipeline.model.geodesy import distance_m
@@ -30,9 +30,11 @@ from pipeline.model.time import is_dated, iso_utc, midnight, with_clock
 from pipeline.quality.jumps import detect_jumps
 
 PAIRS = ("radar-adsb", "radar-radar", "all")
+MAX_SLOTS = 1_000_000  # slots over all windows of one run: the lag table (2N - 1 rows a window)
+# already outgrows a workbook sheet (1,048,576 rows) well before; beyond, the work explodes
 
-__all__ = ["PAIRS", "NoOverlap", "NoSuchAircraft", "correlate", "ncc", "pearson_by_lag", "pearson_max_lag",
-           "peak_lag", "sensor_pairs", "separation_stats", "sources"]
+__all__ = ["MAX_SLOTS", "PAIRS", "NoOverlap", "NoSuchAircraft", "TooManySlots", "correlate", "ncc",
+           "pearson_by_lag", "pearson_max_lag", "peak_lag", "sensor_pairs", "separation_stats", "sources"]
 
 
 class NoOverlap(LookupError):
@@ -60,6 +62,15 @@ def _clock(seconds: float) -> str:
     return f"+{day}d {text}" if day else text
 
 
+class TooManySlots(ValueError):
+    """The windows of a run need more than ``limit`` slots at ``slot_s``: refused before the work explodes."""
+
+    def __init__(self, slots: int, limit: int, slot_s: float):
+        self.slots, self.limit, self.slot_s = slots, limit, slot_s
+        super().__init__(f"slots of {slot_s:g} s need more than {limit:,} slots over the windows "
+                         f"(at least {slots:,}); use a longer slot")
+
+
 def _lags(n: int) -> np.ndarray:
     return np.arange(-(n - 1), n)
 
@@ -71,30 +82,61 @@ def _pair(x, y) -> tuple[np.ndarray, np.ndarray]:
     return x, y
 
 
+def _xcorr(x: np.ndarray, y: np.ndarray) -> np.ndarray:
+    """Full cross-correlation sum_i x[i] y[i-d] for d = -(N-1)..N-1 by FFT, O(N log N)."""
+    n = x.size
+    if n == 0:
+        return np.zeros(0)
+    size = 1 << (2 * n - 1).bit_length()
+    full = np.fft.irfft(np.fft.rfft(x, size) * np.fft.rfft(y[::-1], size), size)
+    return full[: 2 * n - 1]  # index j holds lag j - (N - 1)
+
+
+def _constant_run(v: np.ndarray) -> int:
+    """Length of the longest run of equal values at the end of ``v`` (exact, no tolerance)."""
+    change = np.flatnonzero(v[1:] != v[:-1])
+    return v.size - (int(change[-1]) + 1 if change.size else 0)
+
+
 def ncc(x, y) -> tuple[np.ndarray, np.ndarray]:
     """Lags d = -(N-1)..N-1 and r(d) = sum_i x[i] y[i-d] / sqrt(sum x^2 sum y^2); not circular, mean kept."""
     x, y = _pair(x, y)
     norm = math.sqrt(float(x @ x) * float(y @ y))
-    num = np.correlate(x, y, mode="full")  # index j holds lag j - (N - 1)
+    num = _xcorr(x, y)
     return _lags(x.size), num / norm if norm > 0 else np.full(num.shape, np.nan)
 
 
 def pearson_by_lag(x, y) -> tuple[np.ndarray, np.ndarray]:
     """Lags and the Pearson coefficient of the overlapping pairs (x[i], y[i-d]), mean removed per overlap.
 
-    NaN where the overlap has fewer than 2 points or either side is constant.
+    NaN where the overlap has fewer than 2 points or either side is constant. O(N log N): the overlap
+    sums come from cumulative sums and the cross products from one FFT correlation.
     """
     x, y = _pair(x, y)
     n = x.size
     lags = _lags(n)
-    r = np.full(lags.size, np.nan)
-    for j, d in enumerate(lags):
-        a, b = (x[d:], y[: n - d]) if d >= 0 else (x[: n + d], y[-d:])
-        if a.size < 2 or np.ptp(a) == 0 or np.ptp(b) == 0:
-            continue
-        a, b = a - a.mean(), b - b.mean()
-        r[j] = np.clip((a @ b) / math.sqrt(float(a @ a) * float(b @ b)), -1.0, 1.0)
-    return lags, r
+    if n < 2:
+        return lags, np.full(lags.size, np.nan)
+    # exact constancy of a side (on the raw values): its overlap is a suffix or prefix of the series
+    x_tail, x_head = _constant_run(x), _constant_run(x[::-1])
+    y_tail, y_head = _constant_run(y), _constant_run(y[::-1])
+    x, y = x - x.mean(), y - y.mean()  # shifts leave r unchanged and keep the sums small
+    m = (n - np.abs(lags)).astype(float)  # overlap size
+    cx, cxx = np.concatenate([[0.0], np.cumsum(x)]), np.concatenate([[0.0], np.cumsum(x * x)])
+    cy, cyy = np.concatenate([[0.0], np.cumsum(y)]), np.concatenate([[0.0], np.cumsum(y * y)])
+    # d >= 0: x[d:], y[:n-d]; d < 0: x[:n+d], y[-d:]
+    x_lo, x_hi = np.maximum(lags, 0), np.minimum(n, n + lags)
+    y_lo, y_hi = np.maximum(-lags, 0), np.minimum(n, n - lags)
+    sx, sxx = cx[x_hi] - cx[x_lo], cxx[x_hi] - cxx[x_lo]
+    sy, syy = cy[y_hi] - cy[y_lo], cyy[y_hi] - cyy[y_lo]
+    sxy = _xcorr(x, y)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        vx, vy = sxx - sx * sx / m, syy - sy * sy / m
+        r = (sxy - sx * sy / m) / np.sqrt(vx * vy)
+    x_flat = np.where(lags >= 0, m <= x_tail, m <= x_head)
+    y_flat = np.where(lags >= 0, m <= y_head, m <= y_tail)
+    bad = (m < 2) | x_flat | y_flat | ~(vx > 0) | ~(vy > 0)
+    return lags, np.where(bad, np.nan, np.clip(r, -1.0, 1.0))
 
 
 def peak_lag(lags: np.ndarray, r: np.ndarray, max_abs_lag: int | None = None) -> int | None:
@@ -229,10 +271,11 @@ def sensor_pairs(ac: Aircraft, pairs: str = "radar-adsb", split_adsb: bool = Fal
 
 
 def _correlate_pair(ac: Aircraft, run: CorrelationRun, pair: tuple[str, pd.DataFrame, str, pd.DataFrame],
-                    slot_s: float, gap_s: float, reference: pd.Timestamp, fill: str = "hold"
-                    ) -> NoOverlap | None:
+                    slot_s: float, gap_s: float, reference: pd.Timestamp, fill: str = "hold",
+                    budget: list[int] | None = None) -> NoOverlap | None:
     """Append the windows (or skipped windows) of one aircraft and sensor pair to ``run``; the NoOverlap
-    when the two sensors never overlap."""
+    when the two sensors never overlap. ``budget`` holds the slots used so far by the run (TooManySlots
+    past MAX_SLOTS, checked before any window of the pair is slotted)."""
     radar_id, radar, ref_id, other = pair
     radar, adsb = sort_by_time(radar), sort_by_time(other)
     r_dup, a_dup = duplicate_mask(radar).to_numpy(), duplicate_mask(adsb).to_numpy()
@@ -249,6 +292,10 @@ def _correlate_pair(ac: Aircraft, run: CorrelationRun, pair: tuple[str, pd.DataF
         run.skipped.append(SkippedWindow(ac.callsign, ac.address, min(r_span[0], a_span[0]),
                                          max(r_span[1], a_span[1]), str(gap), **sensors))
         return gap
+    if budget is not None:
+        budget[0] += sum(slot_count(a, b, slot_s) for a, b in windows if b - a >= slot_s)
+        if budget[0] > MAX_SLOTS:
+            raise TooManySlots(budget[0], MAX_SLOTS, slot_s)
     predictors = (None, None)
     if fill == "predict":  # each side's own forward track, coasting across the longest gap a window has
         from pipeline.correlate.fill import track_predictor
@@ -282,7 +329,8 @@ def correlate(meas: pd.DataFrame, *, callsign: str | None = None, address: str |
     of two radars are never mixed) against each ADS-B source and/or each other radar (``pairs``); ADS-B
     ground stations are one source unless ``split_adsb``. One aircraft by call sign and/or address
     (NoSuchAircraft, NoOverlap when no pair overlaps), or with ``all_aircraft`` every aircraft seen by a
-    pair. Times in the tables count seconds from midnight UTC of the earliest report. ``fill``: empty
+    pair (TooManySlots when the windows need more than MAX_SLOTS slots). Times in the tables count
+    seconds from midnight UTC of the earliest report. ``fill``: empty
     slots take the previous slot ("hold", the thesis) or the tracker's prediction ("predict").
     """
     if fill not in ("hold", "predict"):
@@ -306,9 +354,9 @@ def correlate(meas: pd.DataFrame, *, callsign: str | None = None, address: str |
                                  "no aircraft is seen by both radar and ADS-B")
     else:
         targets = [one_aircraft(meas, callsign, address, need_adsb=need_adsb)]
-    paired = False
+    paired, budget = False, [0]
     for ac in targets:
-        found = [_correlate_pair(ac, run, pair, slot_s, gap_s, reference, fill)
+        found = [_correlate_pair(ac, run, pair, slot_s, gap_s, reference, fill, budget)
                  for pair in sensor_pairs(ac, pairs, split_adsb)]
         paired |= bool(found)
         if not all_aircraft and found and all(f is not None for f in found):
