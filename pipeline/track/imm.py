@@ -110,7 +110,7 @@ def transition_into(kind, omega, q, dt, F, Q):
 
 
 @njit(cache=True)
-def _fpft_q(F, P, Q, tmp, out):
+def fpft_q(F, P, Q, tmp, out):
     """out = F P F^T + Q (6x6), using tmp as scratch."""
     for i in range(NX):
         for j in range(NX):
@@ -195,7 +195,7 @@ def predict_into(kinds, omegas, qs, tpm_kind, tpm_param, tpm_param2, dt, r, mu, 
     for j in range(r):
         transition_into(kinds[j], omegas[j], qs[j], dt, F, Q)
         _fx(F, x0[j], xp[j])
-        _fpft_q(F, P0[j], Q, tmp, Pp[j])
+        fpft_q(F, P0[j], Q, tmp, Pp[j])
 
 
 @njit(cache=True)

@@ -12,7 +12,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from .imm import CA, NX, combine_into, mix_into, tpm_into, transition_into
+from .imm import CA, NX, combine_into, fpft_q, mix_into, tpm_into, transition_into
 
 
 @njit(cache=True)
@@ -72,7 +72,8 @@ def _gamma_cross(kind, q, a, t, Qx):
 
 @njit(cache=True)
 def _apply_gain(C, Pbar_inv, xf, Pf, xs_next, Ps_next, xbar, Pbar, G, tmp, xs, Ps):
-    """G = C Pbar^-1; xs = xf + G (xs_next - xbar); Ps = Pf + G (Ps_next - Pbar) G^T."""
+    """G = C Pbar^-1; xs = xf + G (xs_next - xbar); Ps = Pf + G (Ps_next - Pbar) G^T (Pbar is scratch: it
+    holds Ps_next - Pbar afterwards)."""
     for i in range(NX):
         for j in range(NX):
             acc = 0.0
@@ -86,17 +87,8 @@ def _apply_gain(C, Pbar_inv, xf, Pf, xs_next, Ps_next, xbar, Pbar, G, tmp, xs, P
         xs[i] = acc
     for i in range(NX):
         for j in range(NX):
-            acc = 0.0
-            for k in range(NX):
-                acc += G[i, k] * (Ps_next[k, j] - Pbar[k, j])
-            tmp[i, j] = acc
-    for i in range(NX):
-        for j in range(i, NX):
-            acc = Pf[i, j]
-            for k in range(NX):
-                acc += tmp[i, k] * G[j, k]
-            Ps[i, j] = acc
-            Ps[j, i] = acc
+            Pbar[i, j] = Ps_next[i, j] - Pbar[i, j]
+    fpft_q(G, Pbar, Pf, tmp, Ps)
 
 
 @njit(cache=True)
