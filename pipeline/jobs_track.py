@@ -18,7 +18,7 @@ from pathlib import Path
 import pandas as pd
 
 from pipeline import jobs
-from pipeline.jobs import Checked, DecodingOptions, JobError, OptionError
+from pipeline.jobs import AircraftOptions, Checked, JobError, OptionError
 from pipeline.progress import Progress
 
 SOURCES = ("radar", "adsb")
@@ -31,22 +31,16 @@ TRACK_COLUMNS = ["aircraft_id", "callsign", "address", "time", "time_of_day", "l
 
 
 @dataclass(frozen=True)
-class TrackOptions(DecodingOptions):
-    """Everything ``track_job`` needs; see ``msdc track --help`` for the meaning of each option."""
+class TrackOptions(AircraftOptions):
+    """Everything ``track_job`` needs; see ``msdc track --help`` for the meaning of each option. The
+    inputs, sensor file, aircraft selection and outputs are the other jobs' (``gap_s`` is unused here)."""
 
-    sensors: str | None = None
-    callsign: str | None = None
-    address: str | None = None
-    all_aircraft: bool = False
-    output: str | None = None
-    json: str | None = None
     figures: str | None = None  # directory for one PNG per aircraft
     step_s: float = 1.0
     max_coast_s: float = 60.0
     smooth: bool = False
     tpm: str | None = None  # None: the tracker's default (expm:150,20)
     sources: tuple[str, ...] = SOURCES
-    gap_s: float = 180.0  # unused by tracking; keeps the aircraft checks of pipeline.jobs applicable
 
 
 def _sources(value) -> tuple[str, ...]:
