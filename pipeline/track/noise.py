@@ -22,6 +22,7 @@ from scipy.stats import chi2
 
 from .config import TrackerConfig, default_modes
 from .frame import Plane
+from .plane import estimate, filter_plane
 
 CHI2_1_MEDIAN = float(chi2.median(1))  # median of a squared standard normal, 0.4549
 CHI2_2_MEDIAN = float(chi2.median(2))  # 2 ln 2
@@ -78,8 +79,6 @@ def variance_ratio(q: np.ndarray, dof: int) -> float:
 def plane_forms(run, ze, zn, cov_ee, cov_en, cov_nn, radial=None) -> np.ndarray:
     """`quadratic_forms` of every report of a plane-level run (pipeline.track.plane.filter_plane) against
     the smoothed estimate at its time, gated reports included (with C = R + H P_s H^T)."""
-    from .plane import estimate
-
     n = len(run.t)
     if not n:
         return np.empty((0, 2) if radial is not None else 0)
@@ -159,8 +158,6 @@ def _forms(meas: pd.DataFrame, cov: np.ndarray, radial: np.ndarray, config: Trac
         rows, ze, zn = rows[near], ze[near], zn[near]
         m = plane.local_to_plane(lat_all[rows], lon_all[rows])
         c = m @ cov[rows] @ np.swapaxes(m, 1, 2)
-        from .plane import filter_plane
-
         run = filter_plane(config, t_all[rows], ze, zn, c[:, 0, 0], c[:, 0, 1], c[:, 1, 1])
         site = np.isfinite(radial[rows, 0])
         u = np.einsum("nij,nj->ni", m, np.nan_to_num(radial[rows]))
