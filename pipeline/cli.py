@@ -132,6 +132,10 @@ def build_parser() -> argparse.ArgumentParser:
     t.add_argument("--tpm", help="mode transition law: fixed:P, dynamic, dynamic:A,B or expm:TAU[,TAU2] "
                                  "(default expm:150,20)")
     t.add_argument("--sources", default="radar,adsb", help="sensor kinds to fuse: radar, adsb or radar,adsb")
+    t.add_argument("--noise", default="estimate",
+                   help="measurement noise: estimate (default: each sensor's sigmas from the tracker's "
+                        "residuals, a few extra passes) or declared (the sensor file's sigmas, ADS-B "
+                        "from NACp)")
     _decoding_options(t)
 
     k = sub.add_parser("conflicts", help="conflict probability from IMM-predicted tracks: alerts, losses of "
@@ -286,7 +290,8 @@ def cmd_track(args) -> int:
     options = jobs_track.TrackOptions(
         **_decoding(args), sensors=args.sensors, callsign=args.callsign, address=args.address,
         all_aircraft=args.all, output=args.output, json=args.json, figures=args.figures, step_s=args.step,
-        max_coast_s=args.max_coast, smooth=args.smooth, tpm=args.tpm, sources=args.sources)
+        max_coast_s=args.max_coast, smooth=args.smooth, tpm=args.tpm, sources=args.sources,
+        noise=args.noise)
     checked = jobs_track.validate(options)
     _warn("track", checked.warnings)
     seen = len(checked.warnings)
@@ -310,8 +315,14 @@ def _track_text(result) -> str:
                         "coasted_s") if c in ac]
     sens = res.sensors[[c for c in ("aircraft_id", "sensor_id", "reports", "updates", "gated", "nis_mean")
                         if c in res.sensors]]
-    return ("Tracks:\n" + ac[cols].to_string(index=False, float_format=lambda v: f"{v:.1f}")
+    text = ("Tracks:\n" + ac[cols].to_string(index=False, float_format=lambda v: f"{v:.1f}")
             + "\n\nSensors:\n" + sens.to_string(index=False, float_format=lambda v: f"{v:.2f}"))
+    if result.noise is not None and len(result.noise):
+        cols = ["sensor_id", "component", "unit", "declared_sigma", "estimated_sigma", "residuals",
+                "estimated"]
+        text += (f"\n\nMeasurement noise estimated from the residuals ({result.noise.attrs.get('passes')} "
+                 "passes):\n" + result.noise[cols].to_string(index=False, float_format=lambda v: f"{v:.4g}"))
+    return text
 
 
 def cmd_conflicts(args) -> int:

@@ -22,6 +22,7 @@ from pipeline.jobs import AircraftOptions, Checked, JobError, OptionError
 from pipeline.progress import Progress
 
 SOURCES = ("radar", "adsb")
+NOISE = ("declared", "estimate")  # --noise: the sensor file's sigmas and NACp, or estimated from residuals
 STEP_RANGE_S = (1e-3, 3600.0)  # below 1 ms the grid explodes (a day would be 86 M rows per aircraft)
 MAX_COAST_RANGE_S = (0.0, 86400.0)
 # the columns of the track table, in order (issue 10); the tracker's other columns follow
@@ -41,6 +42,7 @@ class TrackOptions(AircraftOptions):
     smooth: bool = False
     tpm: str | None = None  # None: the tracker's default (expm:150,20)
     sources: tuple[str, ...] = SOURCES
+    noise: str = "estimate"  # per-sensor noise from residuals (pipeline.track.noise); "declared": as given
 
 
 def _sources(value) -> tuple[str, ...]:
@@ -74,6 +76,8 @@ def validate(options: TrackOptions) -> Checked:
         except ValueError as exc:
             raise OptionError(f"--tpm {options.tpm!r}: {str(exc).partition(': ')[2]}") from None
     _sources(options.sources)
+    if options.noise not in NOISE:
+        raise OptionError(f"--noise {options.noise!r}: must be one of {', '.join(NOISE)}")
     checked.output = jobs._output("-o", options.output, (".csv", ".parquet"))
     checked.json = jobs._output("--json", options.json, (".json",))
     if options.figures is not None:
@@ -100,6 +104,7 @@ class TrackJobResult:
     labels: pd.DataFrame  # aircraft_id, callsign, address
     parameters: dict
     loaded: object
+    noise: pd.DataFrame | None = None  # --noise estimate: per sensor and component, declared and estimated
 
 
 def _measurements(loaded, checked: Checked, options: TrackOptions) -> pd.DataFrame:
@@ -166,6 +171,9 @@ def track_job(options: TrackOptions, *, progress: Progress | None = None, checke
     meas = _measurements(loaded, checked, options)
     joined = int(meas.attrs.get("joined_by_track_number", 0))
     meas = _select(meas, options)
+    noise = None
+    if options.noise == "estimate":
+        meas, noise = _estimate_noise(meas, checked.sensors, options)
     result = track(meas, step_s=float(options.step_s), max_coast_s=float(options.max_coast_s),
                    tpm=options.tpm, smooth=options.smooth)
     labels = aircraft_labels(meas)
@@ -175,8 +183,33 @@ def track_job(options: TrackOptions, *, progress: Progress | None = None, checke
     params = {**jobs._parameters(options, loaded, started, command), **result.parameters,
               "sources": list(_sources(options.sources)), "callsign": options.callsign,
               "address": options.address, "all": bool(options.all_aircraft),
-              "radar_plots_joined_by_track_number": joined}
-    return TrackJobResult(options, checked, result, tracks, meas, labels, params, loaded)
+              "radar_plots_joined_by_track_number": joined, "noise": options.noise}
+    return TrackJobResult(options, checked, result, tracks, meas, labels, params, loaded, noise)
+
+
+def _estimate_noise(meas: pd.DataFrame, sensors: pd.DataFrame, options: TrackOptions):
+    """The measurements with each sensor's covariance rescaled to its residual scatter, and the table of
+    declared against estimated sigmas (radar range m and azimuth deg from the sensor file; ADS-B m per
+    NACp level)."""
+    from pipeline.model.measurements import sensor_id
+    from pipeline.track.noise import AZIMUTH, RANGE, estimate_noise
+
+    ids = sensor_id(48, sensors["sac"], sensors["sic"]).to_numpy()
+    sites = {str(i): (float(r.latitude), float(r.longitude))
+             for i, r in zip(ids, sensors.itertuples(), strict=True)}
+    est = estimate_noise(meas, sites=sites, max_coast_s=float(options.max_coast_s), tpm=options.tpm)
+    table = est.sensors.rename(columns={"declared_sigma_m": "declared_sigma",
+                                        "estimated_sigma_m": "estimated_sigma"})
+    table.insert(3, "unit", "m")
+    by_id = dict(zip(ids, sensors.itertuples(), strict=True))
+    for i, row in table.iterrows():
+        site = by_id.get(row["sensor_id"])
+        if site is not None and row["component"] in (RANGE, AZIMUTH):
+            declared = site.sigma_range_m if row["component"] == RANGE else site.sigma_azimuth_deg
+            table.loc[i, ["declared_sigma", "unit"]] = [declared, "m" if row["component"] == RANGE else "deg"]
+    table["estimated_sigma"] = table["declared_sigma"] * table["scale"]
+    table.attrs["passes"] = est.passes
+    return est.measurements, table
 
 
 def summary(result: TrackJobResult) -> dict:
@@ -195,7 +228,12 @@ def summary(result: TrackJobResult) -> dict:
             "address": labels.at[ident, "address"] if ident in labels.index else "",
             **{k: json_value(v) for k, v in row.items() if k != "aircraft_id"},
             "sensors": [{k: json_value(v) for k, v in s.items()} for s in sens.to_dict("records")]})
-    return {"parameters": result.parameters, "inputs": result.loaded.inputs, "aircraft": aircraft}
+    doc = {"parameters": result.parameters, "inputs": result.loaded.inputs, "aircraft": aircraft}
+    if result.noise is not None:
+        doc["noise"] = {"passes": result.noise.attrs.get("passes"),
+                        "sensors": [{k: json_value(v) for k, v in r.items()}
+                                    for r in result.noise.to_dict("records")]}
+    return doc
 
 
 def write_tracks(result: TrackJobResult) -> dict[str, Path]:

@@ -11,6 +11,7 @@ import numpy as np
 import pandas as pd
 
 from pipeline.track import Plane, TrackerConfig, nacp_covariance
+from pipeline.track.noise import plane_forms, variance_ratio
 from pipeline.track.plane import estimate, filter_plane
 
 # ../shared beside the checkout, as the other tests; MSDC_SHARED overrides it (worktrees elsewhere)
@@ -49,14 +50,20 @@ def load_real_adsb(min_span_s: float = 600.0) -> list[dict] | None:
     return tracks
 
 
-def gap_experiment(tracks, cfg: TrackerConfig, rng, repeats: int = 1, gaps_per_track: int = 6) -> dict:
+def gap_experiment(tracks, cfg: TrackerConfig, rng, repeats: int = 1, gaps_per_track: int = 6,
+                   noise: str = "declared", passes: int = 6) -> dict:
     """Mean (and `_median`) error (m) at the deleted reports, per gap-length bin: the IMM's forward
     prediction, its smoothed fill, holding the last report, and a straight line from the velocity over
-    the last 10 s of reports."""
+    the last 10 s of reports. noise "estimate": before the scored pass, the ADS-B sigma is rescaled per
+    declared (FOM) level, pooled over the tracks, from the residuals of the reports the tracker keeps
+    (pipeline.track.noise.variance_ratio, `passes` passes); the deleted reports are never used. The
+    factors per level are in the result under "scales"."""
     rows = []
+    scales_out = []
     for _ in range(repeats):
+        cut = []
         for tr in tracks:
-            t, e, n, var = tr["t"], tr["e"], tr["n"], tr["var"]
+            t = tr["t"]
             removed = np.zeros(len(t), bool)
             gaps = []
             for _ in range(gaps_per_track):
@@ -69,7 +76,27 @@ def gap_experiment(tracks, cfg: TrackerConfig, rng, repeats: int = 1, gaps_per_t
                     continue
                 removed |= inside
                 gaps.append((start, length, inside))
-            keep = ~removed
+            cut.append((tr, ~removed, gaps))
+        levels = np.unique(np.concatenate([tr["var"] for tr in tracks]))
+        scale = dict.fromkeys(levels.tolist(), 1.0)
+        if noise == "estimate":
+            for _ in range(passes):
+                q, lv = [], []
+                for tr, keep, _ in cut:
+                    var = tr["var"][keep] * np.array([scale[v] for v in tr["var"][keep]])
+                    zero = np.zeros(keep.sum())
+                    run = filter_plane(cfg, tr["t"][keep], tr["e"][keep], tr["n"][keep], var, zero, var)
+                    q.append(plane_forms(run, tr["e"][keep], tr["n"][keep], var, zero, var))
+                    lv.append(tr["var"][keep])
+                q, lv = np.concatenate(q), np.concatenate(lv)
+                for v in scale:
+                    sel = (lv == v) & np.isfinite(q)
+                    if sel.sum() >= 30:
+                        scale[v] *= variance_ratio(q[sel], 2)
+            scales_out.append({float(np.sqrt(v)): float(np.sqrt(s)) for v, s in scale.items()})
+        for tr, keep, gaps in cut:
+            t, e, n = tr["t"], tr["e"], tr["n"]
+            var = tr["var"] * np.array([scale[v] for v in tr["var"]])
             run = filter_plane(cfg, t[keep], e[keep], n[keep], var[keep], np.zeros(keep.sum()), var[keep])
             tk, ek, nk = t[keep], e[keep], n[keep]
             for _, length, inside in gaps:
@@ -94,4 +121,6 @@ def gap_experiment(tracks, cfg: TrackerConfig, rng, repeats: int = 1, gaps_per_t
         means = {c: sel[c].mean() for c in ("imm", "smoothed", "hold", "line")}
         medians = {f"{c}_median": sel[c].median() for c in ("imm", "smoothed", "hold", "line")}
         out[f"{lo}-{hi} s"] = {"n": len(sel), **means, **medians}
+    if scales_out:
+        out["scales"] = scales_out
     return out

@@ -100,6 +100,7 @@ ERRORS = [
     ("track-sources-unknown", TRACK + ["--sources", "radar,mlat"], 2, ["--sources", "radar,adsb"]),
     ("track-sources-repeat", TRACK + ["--sources", "radar,radar"], 2, ["--sources", "without repeats"]),
     ("track-sources-empty", TRACK + ["--sources", ""], 2, ["--sources"]),
+    ("track-noise-unknown", TRACK + ["--noise", "nacp"], 2, ["--noise", "declared, estimate"]),
     ("track-out-xlsx", TRACK + ["-o", "{O}/t.xlsx"], 2, ["-o", ".csv or .parquet"]),
     ("track-out-readonly", TRACK + ["-o", "{RO}/t.csv"], 2, ["-o", "not writable"]),
     ("track-json-dir", TRACK[:-2] + ["--json", "{O}/dir.json"], 2, ["--json", "is a directory"]),

@@ -136,12 +136,12 @@ def test_figure_written(mas72):
     assert png.name == "track_MAS72_750312.png" and png.read_bytes()[:4] == b"\x89PNG"
 
 
-def _radar_only(tmp_path, sensors_text: str) -> dict:
+def _radar_only(tmp_path, sensors_text: str, noise: str = "declared") -> dict:
     s = tmp_path / "s.toml"
     s.write_text(sensors_text)
     result = jobs_track.track_job(TrackOptions(inputs=(RADAR, ADSB), sensors=str(s), callsign="MAS72",
                                                json=str(tmp_path / "t.json"), date=pd.Timestamp(
-                                                   "2019-03-01").date(), sources=("radar",)))
+                                                   "2019-03-01").date(), sources=("radar",), noise=noise))
     return result
 
 
@@ -158,6 +158,12 @@ def test_radar_sigmas_from_the_sensor_file(tmp_path):
     nis_loose = float(loose.result.sensors["nis_mean"].iloc[0])
     assert 1.2 < nis < 2.6
     assert nis_loose < nis / 20
+    # --noise estimate (the default) takes the sigmas from the residuals: the loose file no longer matters
+    est = _radar_only(tmp_path, text + "sigma_range_m = 700.0\nsigma_azimuth_deg = 0.8\n", noise="estimate")
+    assert 1.5 < float(est.result.sensors["nis_mean"].iloc[0]) < 2.6
+    noise = est.noise.set_index("component")
+    assert noise.loc["range", "estimated_sigma"] == pytest.approx(70.0, rel=0.2)
+    assert noise.loc["azimuth", "estimated_sigma"] == pytest.approx(0.08, rel=0.2)
     assert loose.tracks["sigma_major_m"].median() > 3 * default.tracks["sigma_major_m"].median()
 
 
@@ -203,9 +209,9 @@ def test_plots_without_identity_join_by_track_number():
 def test_all_aircraft_gate_exactly_the_injected_jumps(tmp_path, capsys):
     """--all: per aircraft, the ADS-B reports the gate rejects are exactly the simulator's injected
     position jumps (truth.json), and the ADS-B NIS mean is what NACp's claimed sigma predicts for the
-    simulator's 5 m noise: 2 (5 / sigma)^2, sigma = NACp 95 % bound / 2.45."""
+    simulator's 5 m noise: 2 (5 / sigma)^2, sigma = NACp 95 % bound / 2.45 (--noise declared)."""
     out = tmp_path / "s.json"
-    assert main(["track", *BASE, "--all", "--json", str(out)]) == 0
+    assert main(["track", *BASE, "--all", "--json", str(out), "--noise", "declared"]) == 0
     capsys.readouterr()
     doc = json.loads(out.read_text())
     jumps = pd.Series([j["callsign"] for j in TRUTH["jumps"]]).value_counts().to_dict()
@@ -219,3 +225,19 @@ def test_all_aircraft_gate_exactly_the_injected_jumps(tmp_path, capsys):
         else:  # NACp 9: sigma 30 / 2.45 = 12.2 m, the simulator's noise 5 m per axis
             expected = 2.0 * (5.0 / (30.0 / 2.45)) ** 2
             assert adsb["nis_mean"] == pytest.approx(expected, rel=0.25), ac["callsign"]
+
+
+def test_all_aircraft_estimated_noise_gates_the_jumps_and_few_others(tmp_path, capsys):
+    """--noise estimate (default): the ADS-B sigma becomes the simulator's 5 m, so the NIS mean is near 2
+    for every aircraft; every injected jump is still gated, and the 99.9 % gate now also rejects about
+    1 in 1000 genuine reports (at most 0.3 % here)."""
+    out = tmp_path / "s.json"
+    assert main(["track", *BASE, "--all", "--json", str(out)]) == 0
+    capsys.readouterr()
+    doc = json.loads(out.read_text())
+    assert doc["parameters"]["noise"] == "estimate"
+    jumps = pd.Series([j["callsign"] for j in TRUTH["jumps"]]).value_counts().to_dict()
+    for ac in doc["aircraft"]:
+        adsb = next(s for s in ac["sensors"] if s["sensor_kind"] == "adsb")
+        assert jumps[ac["callsign"]] <= adsb["gated"] <= jumps[ac["callsign"]] + 0.003 * adsb["reports"]
+        assert 1.5 < adsb["nis_mean"] < 2.5, ac["callsign"]

@@ -35,6 +35,9 @@ REQUIRED = ("time", "sensor_id", "sensor_kind", "aircraft_id", "latitude", "long
 M_PER_S_PER_KT = 1852.0 / 3600.0
 FT_PER_FL = 100.0
 MAX_RANGE_M = 3_000_000.0  # reports farther than this from the aircraft's median position are garbage
+# smoothed turn rate: least-squares slope of the smoothed track angle over a centred 8 s window of output
+# rows; chosen on the simulator's turns (docs/tracker.md, "Turn rate")
+SMOOTH_TURN_RATE_WINDOW_S = 8.0
 
 
 @dataclass
@@ -187,6 +190,36 @@ def _sources_by_time(times: np.ndarray, sensors: np.ndarray) -> pd.Series:
     return pd.Series(out, index=uniq)
 
 
+def track_angle_rate(t: np.ndarray, track_deg: np.ndarray, segment: np.ndarray, window_s: float,
+                     centred: bool) -> np.ndarray:
+    """Rate of change of the track angle (deg/s, + = right turn) at each row: the least-squares slope of
+    the unwrapped angle over the rows of the same segment within [t - W, t] (or [t - W/2, t + W/2] when
+    centred); NaN where the window holds fewer than two distinct times. Rows sorted by time."""
+    out = np.full(len(t), np.nan)
+    for s in np.unique(segment):
+        i = np.flatnonzero(segment == s)
+        tt = t[i] - t[i[0]]
+        psi = np.degrees(np.unwrap(np.radians(track_deg[i])))
+        sums = [np.concatenate([[0.0], np.cumsum(v)]) for v in (np.ones(len(i)), tt, psi, tt * tt, tt * psi)]
+        back, ahead = (0.5 * window_s, 0.5 * window_s) if centred else (window_s, 0.0)
+        lo = np.searchsorted(tt, tt - back, side="left")
+        hi = np.searchsorted(tt, tt + ahead, side="right")
+        n, st, sp, stt, stp = (c[hi] - c[lo] for c in sums)
+        den = n * stt - st * st
+        with np.errstate(invalid="ignore", divide="ignore"):
+            out[i] = np.where(den > 1e-9 * np.maximum(n * stt, 1.0), (n * stp - st * sp) / den, np.nan)
+    return out
+
+
+def _smoothed_turn_rate(qt, v_loc, segment, mode_weighted_dps, speed) -> np.ndarray:
+    """The smoothed track angle's rate over a centred SMOOTH_TURN_RATE_WINDOW_S; the mode-probability-
+    weighted turn rate where the window holds one time or the aircraft is too slow (below 1 m/s the track
+    angle means nothing)."""
+    track = np.degrees(np.arctan2(v_loc[:, 0], v_loc[:, 1]))
+    rate = track_angle_rate(qt, track, segment, SMOOTH_TURN_RATE_WINDOW_S, centred=True)
+    return np.where(np.isfinite(rate) & (speed > 1.0), rate, mode_weighted_dps)
+
+
 def _track_one(aircraft_id, group, epoch, config, args, names, step_s, smooth) -> dict:
     g = group.assign(_t=(group["time"] - epoch).dt.total_seconds().to_numpy())
     g = g.sort_values(["_t", "sensor_id"], kind="stable")
@@ -265,7 +298,8 @@ def _track_one(aircraft_id, group, epoch, config, args, names, step_s, smooth) -
         "vertical_rate_fpm": zv[:, 1] * FT_PER_FL * 60.0,
         "speed_kt": speed / M_PER_S_PER_KT,
         "track_deg": np.degrees(np.arctan2(v_loc[:, 0], v_loc[:, 1])) % 360,
-        "turn_rate_dps": -np.degrees(ccw),
+        "turn_rate_dps": (_smoothed_turn_rate(qt, v_loc, segment[gov], -np.degrees(ccw), speed) if smooth
+                          else -np.degrees(ccw)),
         "sigma_major_m": sigma_major, "sigma_minor_m": sigma_minor,
         "ellipse_orientation_deg": orientation,
     }
