@@ -103,25 +103,56 @@ def tpm_radars(runs: int, rng) -> None:
             print(f"  {s:12s} {overall:7.1f}  " + "  ".join(f"{v:13.1f}" for v in peaks))
 
 
+VTS_LEGS = [(300, 0, 0), (20, 4.0, 0), (40, 0, 1.0), (20, -4.0, 0), (200, 0, 0)]
+VTS_MANOEUVRE_S = (300, 380)
+
+
+def vts_truth():
+    """The radar-only aircraft version of the VTS protocol (tracking.md 5.3 V3); our kinematics."""
+    return sc.fly((-20000.0, 25000.0), 90.0, 120.0, VTS_LEGS, dt=0.01)
+
+
 def smoothing(runs: int, rng) -> None:
-    """Forward filter against the RTS pass, on the 3-radar scenario (1 s grid) and the VTS track."""
-    truth = sc.tpm_paper_truth()
-    grid = np.arange(WARMUP_S, truth.t[-1] - 30.0, 1.0)
-    fwd, smo = [], []
-    for _ in range(runs):
-        plots = sc.merge(*[sc.rotating_radar(truth, site, period, phase, pd, 70.0, 0.08, rng, sensor=i)
-                           for i, (site, period, phase, pd) in enumerate(sc.TPM_PAPER_RADARS)])
-        run = _run(TrackerConfig(), plots)
+    """Forward filter, RTS on the combined estimate and the IMM (Kim) smoother, on the 3-radar scenario and
+    the VTS track (1 s grid), RMS straight / in the manoeuvres (+30 s) and the worst second."""
+    cases = {
+        "radars A, B, C, default tracker": (sc.tpm_paper_truth(), sc.TPM_PAPER_MANOEUVRES_S, TrackerConfig(),
+                                            lambda truth: sc.merge(*[
+                                                sc.rotating_radar(truth, site, period, phase, pd, 70.0, 0.08,
+                                                                  rng, sensor=i)
+                                                for i, (site, period, phase, pd) in
+                                                enumerate(sc.TPM_PAPER_RADARS)])),
+        "radars A, B, C, paper's filter (CV 0.1, CT 0.5)": (
+            sc.tpm_paper_truth(), sc.TPM_PAPER_MANOEUVRES_S, TrackerConfig(modes=PAPER_MODES), None),
+        "VTS track, IMM(CV 0.1, CA 3.0)": (
+            vts_truth(), [VTS_MANOEUVRE_S],
+            TrackerConfig(modes=(Mode("cv", "cv", 0.1), Mode("ca", "ca", 3.0)), tpm="expm:200"),
+            lambda truth: sc.rotating_radar(truth, (0.0, 0.0), 4.0, 0.0, 1.0, 70.0, 0.08, rng)),
+        "VTS track, default tracker": (vts_truth(), [VTS_MANOEUVRE_S], TrackerConfig(), None),
+    }
+    print(f"\nsmoothing, {runs} runs per case: RMS position error (m) on a 1 s grid, straight legs / "
+          "manoeuvres (+30 s) / worst second of the RMS curve")
+    last_plots = None
+    for label, (truth, manoeuvres, cfg, make) in cases.items():
+        grid = np.arange(WARMUP_S, truth.t[-1] - 30.0, 1.0)
+        man = np.zeros(len(grid), bool)
+        for a, b in manoeuvres:
+            man |= (grid >= a) & (grid <= b + 30)
         e, n = truth.at(grid)
-        for out, smooth in ((fwd, False), (smo, True)):
-            est = estimate(run, grid, smooth=smooth)
-            out.append((est.x[:, 0] - e) ** 2 + (est.x[:, 3] - n) ** 2)
-    print(f"\nsmoothing, radars A, B, C, default tracker, {runs} runs: RMS position error (m) on a 1 s grid")
-    print("  pass        overall  " + "  ".join(f"peak {a}-{b}s" for a, b in sc.TPM_PAPER_MANOEUVRES_S))
-    for name, data in (("forward", fwd), ("RTS", smo)):
-        rms_t = np.sqrt(np.mean(data, axis=0))
-        peaks = [rms_t[(grid >= a) & (grid <= b + 30)].max() for a, b in sc.TPM_PAPER_MANOEUVRES_S]
-        print(f"  {name:10s} {np.sqrt(np.mean(data)):7.1f}  " + "  ".join(f"{v:13.1f}" for v in peaks))
+        out = {"forward": [], "RTS": [], "IMM (Kim)": []}
+        plots = [make(truth) for _ in range(runs)] if make is not None else last_plots
+        last_plots = plots
+        for p in plots:
+            run = _run(cfg, p)
+            for name, kw in (("forward", {}), ("RTS", {"smooth": True}),
+                             ("IMM (Kim)", {"smooth": True, "smoother": "imm"})):
+                est = estimate(run, grid, **kw)
+                out[name].append((est.x[:, 0] - e) ** 2 + (est.x[:, 3] - n) ** 2)
+        print(f"  {label}")
+        for name, data in out.items():
+            d = np.array(data)
+            print(f"    {name:10s} straight {np.sqrt(d[:, ~man].mean()):7.1f}  manoeuvre "
+                  f"{np.sqrt(d[:, man].mean()):7.1f}  worst {np.sqrt(d.mean(axis=0)).max():7.1f}")
 
 
 def _robust_truth(kind: str, region: str):
@@ -197,9 +228,7 @@ def robust(runs: int, rng) -> None:
 
 
 def vts(runs: int, rng) -> None:
-    # radar-only aircraft version of the VTS protocol (tracking.md 5.3 V3); our kinematics
-    legs = [(300, 0, 0), (20, 4.0, 0), (40, 0, 1.0), (20, -4.0, 0), (200, 0, 0)]
-    truth = sc.fly((-20000.0, 25000.0), 90.0, 120.0, legs, dt=0.01)
+    truth = vts_truth()
     filters = {
         "CV Kalman": TrackerConfig(modes=(Mode("cv", "cv", 0.5),)),
         "CA Kalman": TrackerConfig(modes=(Mode("ca", "ca", 3.0),)),
@@ -207,7 +236,7 @@ def vts(runs: int, rng) -> None:
                                     tpm="expm:200"),
         "IMM(CV,CA)": TrackerConfig(modes=(Mode("cv", "cv", 0.1), Mode("ca", "ca", 3.0)), tpm="expm:200"),
     }
-    man = (300, 380)
+    man = VTS_MANOEUVRE_S
     stats = {k: {"straight": [], "man": [], "gated": 0, "restarts": 0} for k in filters}
     for _ in range(runs):
         p = sc.rotating_radar(truth, (0.0, 0.0), 4.0, 0.0, 1.0, 70.0, 0.08, rng)

@@ -39,6 +39,7 @@ class TrackOptions(AircraftOptions):
     step_s: float = 1.0
     max_coast_s: float = 60.0
     smooth: bool = False
+    smoother: str = "rts"  # with smooth: "rts" (combined estimate) or "imm" (Kim's IMM smoother)
     tpm: str | None = None  # None: the tracker's default (expm:150,20)
     sources: tuple[str, ...] = SOURCES
 
@@ -55,6 +56,7 @@ def _sources(value) -> tuple[str, ...]:
 def validate(options: TrackOptions) -> Checked:
     """Check every option, the sensor file and the output paths before any decoding; OptionError if bad."""
     from pipeline.track import parse_tpm
+    from pipeline.track.plane import SMOOTHERS
 
     warnings: list[str] = []
     inputs, editions = jobs._check_decoding(options, warnings)
@@ -73,6 +75,8 @@ def validate(options: TrackOptions) -> Checked:
             parse_tpm(str(options.tpm))
         except ValueError as exc:
             raise OptionError(f"--tpm {options.tpm!r}: {str(exc).partition(': ')[2]}") from None
+    if options.smoother not in SMOOTHERS:
+        raise OptionError(f"--smoother {options.smoother!r}: must be one of {', '.join(SMOOTHERS)}")
     _sources(options.sources)
     checked.output = jobs._output("-o", options.output, (".csv", ".parquet"))
     checked.json = jobs._output("--json", options.json, (".json",))
@@ -167,7 +171,7 @@ def track_job(options: TrackOptions, *, progress: Progress | None = None, checke
     joined = int(meas.attrs.get("joined_by_track_number", 0))
     meas = _select(meas, options)
     result = track(meas, step_s=float(options.step_s), max_coast_s=float(options.max_coast_s),
-                   tpm=options.tpm, smooth=options.smooth)
+                   tpm=options.tpm, smooth=options.smooth, smoother=options.smoother)
     labels = aircraft_labels(meas)
     tracks = result.tracks.merge(labels, on="aircraft_id", how="left")
     tracks[["callsign", "address"]] = tracks[["callsign", "address"]].fillna("")

@@ -232,3 +232,170 @@ def _joint(kinds, omegas, qs, tpm_kind, tpm_param, tpm_param2, dt, r, mu, x, P, 
         for a in range(NX):
             for b in range(NX):
                 C[a, b] += cbar[j] * (x0[j, a] - xk[a]) * (xp[j, b] - xbar[b])
+
+
+@njit(cache=True)
+def _pair_smooth(kind, omega, q, a, t, xi, Pi, xs_next, Ps_next, Fa, Qa, Ft, Qt, C, G, tmp, work,
+                 Pbar, Pbar_inv, xbar, xt, Pt, x_out, P_out):
+    """RTS step of one mode pair: the state a s after an update, given the state of mode i at the update
+    N(xi, Pi) moved by mode j's model (kind, omega, q) over the interval of t s, and mode j's smoothed
+    state (xs_next, Ps_next) at its end."""
+    transition_into(kind, omega, q, t, Ft, Qt)
+    for r in range(NX):
+        acc = 0.0
+        for c in range(NX):
+            acc += Ft[r, c] * xi[c]
+        xbar[r] = acc
+    fpft_q(Ft, Pi, Qt, tmp, Pbar)
+    if a == 0.0:
+        for r in range(NX):
+            xt[r] = xi[r]
+            for c in range(NX):
+                Pt[r, c] = Pi[r, c]
+                acc = 0.0
+                for k in range(NX):
+                    acc += Pi[r, k] * Ft[c, k]
+                C[r, c] = acc
+    else:
+        transition_into(kind, omega, q, a, Fa, Qa)
+        for r in range(NX):
+            acc = 0.0
+            for c in range(NX):
+                acc += Fa[r, c] * xi[c]
+            xt[r] = acc
+        fpft_q(Fa, Pi, Qa, tmp, Pt)
+        for r in range(NX):
+            for c in range(NX):
+                acc = 0.0
+                for k in range(NX):
+                    acc += Fa[r, k] * Pi[k, c]
+                tmp[r, c] = acc
+        _gamma_cross(kind, q, a, t, C)
+        for r in range(NX):
+            for c in range(NX):
+                acc = 0.0
+                for k in range(NX):
+                    acc += tmp[r, k] * Ft[c, k]
+                C[r, c] += acc
+    _inverse(Pbar, Pbar_inv, work)
+    _apply_gain(C, Pbar_inv, xt, Pt, xs_next, Ps_next, xbar, Pbar, G, tmp, x_out, P_out)
+
+
+@njit(cache=True)
+def imm_smooth_rows(acc_t, acc_seg, mu_a, x_a, P_a, kinds, omegas, qs, tpm_kind, tpm_param, tpm_param2,
+                    q_acc, q_dt, xf_q, Pf_q, muf_q, xs_q, Ps_q, mus_q):
+    """Fixed-interval IMM smoother (Kim 1994): smoothed mode probabilities and mode-conditioned states.
+
+    Between updates k and k+1 (interval t, transition matrix PI(t)), each pair (mode i at k, mode j over
+    the interval) has the smoothed probability w_ij = PI_ij mu_k^i mus_k+1^j / cbar_j (Kim's approximation:
+    the mode at k given the mode at k+1 does not depend on later data) and one RTS step from the
+    filtered x_k^i through mode j's model to mode j's smoothed state at k+1; mode i's smoothed state is
+    the moment-matched mixture of its pairs (weights w_ij / mus_k^i). Output times between updates use the
+    same pairs with the joint law of that time and k+1 (as `smooth_rows`); the mode over the interval is
+    the one at k+1, so their probabilities are those smoothed at k+1. With one mode this is exactly RTS.
+    Queries after a segment's last update keep their forward prediction (xf_q, Pf_q, muf_q)."""
+    na = acc_t.shape[0]
+    r = kinds.shape[0]
+    mus = np.empty((na, r))
+    xs = np.empty((na, r, NX))
+    Ps = np.empty((na, r, NX, NX))
+    PI = np.empty((r, r))
+    cbar = np.empty(r)
+    w = np.empty((r, r))
+    wq = np.empty(r * r)
+    xq = np.empty((r * r, NX))
+    Pq = np.empty((r * r, NX, NX))
+    Fa = np.empty((NX, NX))
+    Qa = np.empty((NX, NX))
+    Ft = np.empty((NX, NX))
+    Qt = np.empty((NX, NX))
+    C = np.empty((NX, NX))
+    G = np.empty((NX, NX))
+    tmp = np.empty((NX, NX))
+    work = np.empty((NX, NX))
+    Pbar = np.empty((NX, NX))
+    Pbar_inv = np.empty((NX, NX))
+    xbar = np.empty(NX)
+    xt = np.empty(NX)
+    Pt = np.empty((NX, NX))
+    for k in range(na - 1, -1, -1):
+        if k == na - 1 or acc_seg[k + 1] != acc_seg[k]:
+            for i in range(r):
+                mus[k, i] = mu_a[k, i]
+                for a in range(NX):
+                    xs[k, i, a] = x_a[k, i, a]
+                    for b in range(NX):
+                        Ps[k, i, a, b] = P_a[k, i, a, b]
+            continue
+        t = acc_t[k + 1] - acc_t[k]
+        _pair_weights(tpm_kind, tpm_param, tpm_param2, t, r, mu_a[k], mus[k + 1], PI, cbar, w)
+        for i in range(r):
+            mi = 0.0
+            for j in range(r):
+                mi += w[i, j]
+            mus[k, i] = mi
+            n = 0
+            for j in range(r):
+                if w[i, j] <= 0.0:
+                    continue
+                _pair_smooth(kinds[j], omegas[j], qs[j], 0.0, t, x_a[k, i], P_a[k, i], xs[k + 1, j],
+                             Ps[k + 1, j], Fa, Qa, Ft, Qt, C, G, tmp, work, Pbar, Pbar_inv, xbar, xt, Pt,
+                             xq[n], Pq[n])
+                wq[n] = w[i, j] / mi
+                n += 1
+            if n == 0:  # mode i has no probability left: keep its filtered state
+                for a in range(NX):
+                    xs[k, i, a] = x_a[k, i, a]
+                    for b in range(NX):
+                        Ps[k, i, a, b] = P_a[k, i, a, b]
+            else:
+                combine_into(wq, xq, Pq, n, xs[k, i], Ps[k, i])
+    for q in range(q_acc.shape[0]):
+        k = q_acc[q]
+        a = q_dt[q]
+        if a == 0.0:
+            for j in range(r):
+                mus_q[q, j] = mus[k, j]
+            combine_into(mus[k], xs[k], Ps[k], r, xs_q[q], Ps_q[q])
+            continue
+        if k == na - 1 or acc_seg[k + 1] != acc_seg[k]:
+            xs_q[q] = xf_q[q]
+            Ps_q[q] = Pf_q[q]
+            mus_q[q] = muf_q[q]
+            continue
+        t = acc_t[k + 1] - acc_t[k]
+        _pair_weights(tpm_kind, tpm_param, tpm_param2, t, r, mu_a[k], mus[k + 1], PI, cbar, w)
+        n = 0
+        for i in range(r):
+            for j in range(r):
+                if w[i, j] <= 0.0:
+                    continue
+                _pair_smooth(kinds[j], omegas[j], qs[j], a, t, x_a[k, i], P_a[k, i], xs[k + 1, j],
+                             Ps[k + 1, j], Fa, Qa, Ft, Qt, C, G, tmp, work, Pbar, Pbar_inv, xbar, xt, Pt,
+                             xq[n], Pq[n])
+                wq[n] = w[i, j]
+                n += 1
+        combine_into(wq, xq, Pq, n, xs_q[q], Ps_q[q])
+        for j in range(r):
+            mus_q[q, j] = mus[k + 1, j]
+
+
+@njit(cache=True)
+def _pair_weights(tpm_kind, tpm_param, tpm_param2, t, r, mu, mus_next, PI, cbar, w):
+    """w[i, j] = P(mode i at k, mode j at k+1 | all data) = PI_ij mu_i mus_next_j / cbar_j (Kim's
+    approximation: the mode at k given the mode at k+1 does not depend on later data)."""
+    tpm_into(tpm_kind, tpm_param, tpm_param2, t, r, PI)
+    for j in range(r):
+        acc = 0.0
+        for i in range(r):
+            acc += PI[i, j] * mu[i]
+        cbar[j] = acc
+    total = 0.0
+    for i in range(r):
+        for j in range(r):
+            v = PI[i, j] * mu[i] * mus_next[j] / cbar[j] if cbar[j] > 0.0 else 0.0
+            w[i, j] = v
+            total += v
+    for i in range(r):
+        for j in range(r):
+            w[i, j] /= total
