@@ -10,7 +10,7 @@ paper's six cases, raw vs filtered error, then Poisson data loss, coasted estima
 position per gap length. vts: CV Kalman, CA Kalman, IMM(CV, CV)
 and IMM(CV, CA) on a radar-only manoeuvring track. real: the real CAT021 recording, random 5-60 s
 stretches deleted and predicted through. smoothing: the forward filter, the RTS pass on the combined
-estimate and the IMM (Kim) smoother on the 3-radar scenario and the VTS track.
+estimate and the IMM (two-filter) smoother on the 3-radar scenario and the VTS track.
 """
 
 from __future__ import annotations
@@ -124,8 +124,8 @@ def vts_truth():
 
 
 def smoothing(runs: int, rng) -> None:
-    """Forward filter, RTS on the combined estimate and the IMM (Kim) smoother, on the 3-radar scenario and
-    the VTS track (1 s grid), RMS straight / in the manoeuvres (+30 s) and the worst second."""
+    """Forward filter, RTS on the combined estimate and the IMM (two-filter) smoother, on the 3-radar
+    scenario and the VTS track (1 s grid), RMS straight / in the manoeuvres (+30 s) and the worst second."""
     cases = {
         "radars A, B, C, default tracker": (sc.tpm_paper_truth(), sc.TPM_PAPER_MANOEUVRES_S, TrackerConfig(),
                                             lambda truth: sc.merge(*[
@@ -150,13 +150,13 @@ def smoothing(runs: int, rng) -> None:
         for a, b in manoeuvres:
             man |= (grid >= a) & (grid <= b + 30)
         e, n = truth.at(grid)
-        out = {"forward": [], "RTS": [], "IMM (Kim)": []}
+        out = {"forward": [], "RTS": [], "IMM": []}
         plots = [make(truth) for _ in range(runs)] if make is not None else last_plots
         last_plots = plots
         for p in plots:
             run = _run(cfg, p)
             for name, kw in (("forward", {}), ("RTS", {"smooth": True}),
-                             ("IMM (Kim)", {"smooth": True, "smoother": "imm"})):
+                             ("IMM", {"smooth": True, "smoother": "imm"})):
                 est = estimate(run, grid, **kw)
                 out[name].append((est.x[:, 0] - e) ** 2 + (est.x[:, 3] - n) ** 2)
         print(f"  {label}")

@@ -130,8 +130,9 @@ def build_parser() -> argparse.ArgumentParser:
                    help="seconds a track is predicted after its last report before it ends (default 60)")
     t.add_argument("--smooth", action="store_true", help="backward (RTS) pass: reference trajectories")
     t.add_argument("--smoother", choices=["rts", "imm"], default="rts",
-                   help="with --smooth: RTS on the combined estimate (default) or Kim's IMM smoother "
-                        "(smoothed mode probabilities too; less accurate in our validations)")
+                   help="with --smooth: RTS on the combined estimate (default) or the IMM smoother "
+                        "(smoothed mode probabilities too; better on straight legs, worse in most "
+                        "manoeuvres in our validations)")
     t.add_argument("--tpm", help="mode transition law: fixed:P, dynamic, dynamic:A,B or expm:TAU[,TAU2] "
                                  "(default expm:150,20)")
     t.add_argument("--sources", default="radar,adsb", help="sensor kinds to fuse: radar, adsb or radar,adsb")

@@ -39,7 +39,7 @@ class TrackOptions(AircraftOptions):
     step_s: float = 1.0
     max_coast_s: float = 60.0
     smooth: bool = False
-    smoother: str = "rts"  # with smooth: "rts" (combined estimate) or "imm" (Kim's IMM smoother)
+    smoother: str = "rts"  # with smooth: "rts" (combined estimate) or "imm" (two-filter IMM smoother)
     tpm: str | None = None  # None: the tracker's default (expm:150,20)
     sources: tuple[str, ...] = SOURCES
 

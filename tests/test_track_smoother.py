@@ -1,13 +1,14 @@
-"""The IMM (Kim) smoother against textbook numpy written here: with one mode it is the Rauch-Tung-Striebel
-smoother, with two modes Kim's backward recursion (pair weights, pairwise RTS, per-mode mixture); and
-the seeded comparison with the RTS pass on the combined estimate (tests/track_scenarios.py truth)."""
+"""The IMM (two-filter) smoother against textbook numpy written here: with one mode it is the
+Rauch-Tung-Striebel smoother, with two modes the backward recursion (Kim's pair probabilities, the later
+data's information per mode fused with each mode's filtered state, per-mode mixture); and the seeded
+comparison with the RTS pass on the combined estimate (tests/track_scenarios.py truth)."""
 
 import numpy as np
 import pandas as pd
 import pytest
 import track_scenarios as sc
 
-from pipeline.track import Mode, TrackerConfig, track
+from pipeline.track import Mode, TrackerConfig, default_modes, track
 from pipeline.track.plane import estimate, filter_plane
 
 IDX = [0, 1, 3, 4]  # e, ve, n, vn: CV and CT keep the acceleration states at exactly zero
@@ -58,7 +59,7 @@ def test_single_mode_is_exactly_rts():
                                estimate(run, grid, smooth=True).x, rtol=1e-9, atol=1e-6)
 
 
-def test_two_modes_follow_kims_recursion():
+def test_two_modes_follow_the_two_filter_recursion():
     t, e, n, var = _plots(2)
     omega = np.radians(3.0)
     sig = [0.5, 1.0]
@@ -75,22 +76,37 @@ def test_two_modes_follow_kims_recursion():
     for k in range(K - 2, -1, -1):
         dt = t[k + 1] - t[k]
         cbar = PI.T @ mu[k]
-        w = PI * mu[k][:, None] * mus[k + 1][None, :] / cbar[None, :]
+        w = PI * mu[k][:, None] * mus[k + 1][None, :] / cbar[None, :]  # Kim's pair probabilities
         mus[k] = w.sum(axis=1)
+        info = []
+        for j, om in enumerate((0.0, omega)):
+            m = PI[:, j] * mu[k] / cbar[j]  # the forward mixing for mode j
+            x0 = m @ x[k]
+            P0 = sum(m[i] * (P[k, i] + np.outer(x[k, i] - x0, x[k, i] - x0)) for i in range(r))
+            F, Q = _f(om, dt), _q(sig[j], dt)
+            xp, Pp = F @ x0, F @ P0 @ F.T + Q
+            # what the later data say about x_k+1 given mode j (smoothed over predicted), non-negative part
+            L = np.linalg.inv(Ps[k + 1, j]) - np.linalg.inv(Pp)
+            lv = np.linalg.inv(Ps[k + 1, j]) @ xs[k + 1, j] - np.linalg.inv(Pp) @ xp
+            lam, V = np.linalg.eigh(L)
+            keep = lam > 0
+            L = V[:, keep] @ np.diag(lam[keep]) @ V[:, keep].T
+            lv = V[:, keep] @ V[:, keep].T @ lv
+            # carried back to x_k through x_k+1 = F x_k + w, w ~ N(0, Q)
+            B = np.linalg.inv(np.eye(4) + Q @ L)
+            info.append((F.T @ L @ B @ F, F.T @ B.T @ lv))
         for i in range(r):
-            xij, Pij = [], []
-            for j, om in enumerate((0.0, omega)):
-                F = _f(om, dt)
-                Pp = F @ P[k, i] @ F.T + _q(sig[j], dt)
-                G = P[k, i] @ F.T @ np.linalg.inv(Pp)
-                xij.append(x[k, i] + G @ (xs[k + 1, j] - F @ x[k, i]))
-                Pij.append(P[k, i] + G @ (Ps[k + 1, j] - Pp) @ G.T)
+            xf, Pf = [], []
+            for Om, om_ in info:
+                A = np.linalg.inv(P[k, i]) + Om
+                Pf.append(np.linalg.inv(A))
+                xf.append(Pf[-1] @ (np.linalg.inv(P[k, i]) @ x[k, i] + om_))
             v = w[i] / mus[k, i]
-            xs[k, i] = v[0] * xij[0] + v[1] * xij[1]
-            Ps[k, i] = sum(v[j] * (Pij[j] + np.outer(xij[j] - xs[k, i], xij[j] - xs[k, i])) for j in range(r))
+            xs[k, i] = v[0] * xf[0] + v[1] * xf[1]
+            Ps[k, i] = sum(v[j] * (Pf[j] + np.outer(xf[j] - xs[k, i], xf[j] - xs[k, i])) for j in range(r))
     got = estimate(run, t, smooth=True, smoother="imm")
     np.testing.assert_allclose(got.mu, mus, atol=1e-9)
-    np.testing.assert_allclose(got.x[:, IDX], np.einsum("ki,kia->ka", mus, xs), rtol=1e-9, atol=1e-6)
+    np.testing.assert_allclose(got.x[:, IDX], np.einsum("ki,kia->ka", mus, xs), rtol=1e-8, atol=1e-5)
     spread = np.einsum("ki,kia,kib->kab", mus, xs, xs) - np.einsum(
         "ka,kb->kab", *(2 * [np.einsum("ki,kia->ka", mus, xs)]))
     np.testing.assert_allclose(got.P[:, IDX][:, :, IDX], np.einsum("ki,kiab->kab", mus, Ps) + spread,
@@ -98,9 +114,11 @@ def test_two_modes_follow_kims_recursion():
     assert (mus[:, 1] > 0.5).any() and (mus[:, 0] > 0.5).any()  # the case exercises both modes
 
 
-def test_rts_beats_kim_around_the_manoeuvres():
-    # three radars, the dynamic-TPM paper's truth, default tracker: both smoothers beat the forward filter;
-    # Kim's smoother is clearly worse than RTS on the combined estimate in the manoeuvres (benchmark: 20 %+)
+def test_compared_with_rts_on_three_radars():
+    # three radars, the dynamic-TPM paper's truth and filter (CV 0.1, CT 0.5; turns of 0.25-2.5 deg/s against
+    # the modes' 3 deg/s): both smoothers far better than the forward filter; the IMM smoother better on
+    # the straight legs and clearly worse in the manoeuvres (benchmark, 100 runs: 28.6 vs 31.5 m and 51.8
+    # vs 43.0 m)
     rng = np.random.default_rng(21)
     truth = sc.tpm_paper_truth()
     grid = np.arange(30.0, truth.t[-1] - 30.0, 1.0)
@@ -108,17 +126,21 @@ def test_rts_beats_kim_around_the_manoeuvres():
     for a, b in sc.TPM_PAPER_MANOEUVRES_S:
         man |= (grid >= a) & (grid <= b + 30)
     e, n = truth.at(grid)
+    cfg = TrackerConfig(modes=default_modes(3.0, sigma_cv_mps2=0.1, sigma_ct_mps2=0.5))
     err = {"fwd": [], "rts": [], "imm": []}
     for _ in range(4):
         p = sc.merge(*[sc.rotating_radar(truth, site, period, phase, pd, 70.0, 0.08, rng, sensor=i)
                        for i, (site, period, phase, pd) in enumerate(sc.TPM_PAPER_RADARS)])
-        run = filter_plane(TrackerConfig(), p.t, p.e, p.n, p.ree, p.ren, p.rnn)
+        run = filter_plane(cfg, p.t, p.e, p.n, p.ree, p.ren, p.rnn)
         for k, kw in (("fwd", {}), ("rts", {"smooth": True}), ("imm", {"smooth": True, "smoother": "imm"})):
             x = estimate(run, grid, **kw).x
             err[k].append((x[:, 0] - e) ** 2 + (x[:, 3] - n) ** 2)
-    rms = {k: np.sqrt(np.mean(np.array(v)[:, man])) for k, v in err.items()}
-    assert rms["rts"] < 0.6 * rms["fwd"] and rms["imm"] < 0.8 * rms["fwd"]
-    assert rms["rts"] < 0.9 * rms["imm"]
+    man_rms = {k: np.sqrt(np.mean(np.array(v)[:, man])) for k, v in err.items()}
+    straight = {k: np.sqrt(np.mean(np.array(v)[:, ~man])) for k, v in err.items()}
+    for k in ("rts", "imm"):
+        assert man_rms[k] < 0.6 * man_rms["fwd"] and straight[k] < 0.6 * straight["fwd"]
+    assert man_rms["rts"] < 0.9 * man_rms["imm"]
+    assert straight["imm"] < straight["rts"]
 
 
 def test_track_smoother_option():

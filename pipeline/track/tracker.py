@@ -94,9 +94,9 @@ def track(measurements: pd.DataFrame, *, step_s: float = 1.0, max_coast_s: float
     """Track every aircraft: estimates on a regular grid of step_s (aligned to whole multiples of step_s
     since UTC midnight) and at every accepted report, coasted up to max_coast_s after the last update,
     smoothed backwards when smooth. tpm: 'dynamic[:A,B]', 'fixed:P' or 'expm:TAU[,TAU2]' (default:
-    the config's; see `parse_tpm`). smoother: "rts" (RTS on the combined estimate) or "imm" (Kim's IMM
-    smoother; also smooths the mode probabilities). keep_states keeps every aircraft's filter history for
-    `TrackResult.state_at`."""
+    the config's; see `parse_tpm`). smoother: "rts" (RTS on the combined estimate) or "imm" (the IMM
+    smoother of `imm_smooth_rows`; also smooths the mode probabilities). keep_states keeps every
+    aircraft's filter history for `TrackResult.state_at`."""
     _check(measurements)
     if smoother not in SMOOTHERS:
         raise ValueError(f"smoother {smoother!r}: expected one of {', '.join(SMOOTHERS)}")
