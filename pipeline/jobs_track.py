@@ -40,6 +40,7 @@ class TrackOptions(AircraftOptions):
     step_s: float = 1.0
     max_coast_s: float = 60.0
     smooth: bool = False
+    smoother: str = "rts"  # with smooth: "rts" (combined estimate) or "imm" (two-filter IMM smoother)
     tpm: str | None = None  # None: the tracker's default (expm:150,20)
     sources: tuple[str, ...] = SOURCES
     noise: str = "estimate"  # per-sensor noise from residuals (pipeline.track.noise); "declared": as given
@@ -57,6 +58,7 @@ def _sources(value) -> tuple[str, ...]:
 def validate(options: TrackOptions) -> Checked:
     """Check every option, the sensor file and the output paths before any decoding; OptionError if bad."""
     from pipeline.track import parse_tpm
+    from pipeline.track.plane import SMOOTHERS
 
     warnings: list[str] = []
     inputs, editions = jobs._check_decoding(options, warnings)
@@ -75,6 +77,8 @@ def validate(options: TrackOptions) -> Checked:
             parse_tpm(str(options.tpm))
         except ValueError as exc:
             raise OptionError(f"--tpm {options.tpm!r}: {str(exc).partition(': ')[2]}") from None
+    if options.smoother not in SMOOTHERS:
+        raise OptionError(f"--smoother {options.smoother!r}: must be one of {', '.join(SMOOTHERS)}")
     _sources(options.sources)
     if options.noise not in NOISE:
         raise OptionError(f"--noise {options.noise!r}: must be one of {', '.join(NOISE)}")
@@ -175,7 +179,7 @@ def track_job(options: TrackOptions, *, progress: Progress | None = None, checke
     if options.noise == "estimate":
         meas, noise = _estimate_noise(meas, checked.sensors, options)
     result = track(meas, step_s=float(options.step_s), max_coast_s=float(options.max_coast_s),
-                   tpm=options.tpm, smooth=options.smooth)
+                   tpm=options.tpm, smooth=options.smooth, smoother=options.smoother)
     labels = aircraft_labels(meas)
     tracks = result.tracks.merge(labels, on="aircraft_id", how="left")
     tracks[["callsign", "address"]] = tracks[["callsign", "address"]].fillna("")

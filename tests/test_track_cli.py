@@ -38,6 +38,7 @@ BAD = [
     (opts(tpm="fixed:1.5"), "--tpm 'fixed:1.5'"),
     (opts(tpm="expm:-3"), "--tpm 'expm:-3'"),
     (opts(tpm="banana"), "--tpm 'banana'"),
+    (opts(smoother="two-filter"), "--smoother 'two-filter': must be one of rts, imm"),
     (opts(sources=("radar", "mlat")), "--sources 'radar,mlat'"),
     (opts(sources=()), "--sources"),
     (opts(callsign=None), "exactly one of --callsign, --address or --all"),

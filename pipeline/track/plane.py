@@ -9,7 +9,9 @@ import numpy as np
 
 from .config import TrackerConfig
 from .imm import NX, STATUS_REJECTED, predict_rows, run_filter
-from .smooth import smooth_rows
+from .smooth import imm_smooth_rows, smooth_rows
+
+SMOOTHERS = ("rts", "imm")
 
 
 @dataclass
@@ -81,9 +83,13 @@ def filter_plane(config: TrackerConfig, t, ze, zn, cov_ee, cov_en, cov_nn, *, fl
     return PlaneRun(config, t, status, nis, segment, t_state, mu, x, P, zv, Pv)
 
 
-def estimate(run: PlaneRun, times, *, smooth: bool = False) -> Estimates:
+def estimate(run: PlaneRun, times, *, smooth: bool = False, smoother: str = "rts") -> Estimates:
     """Combined estimates at sorted times (each at or after the first measurement): the last accepted
-    update at or before each time, predicted forward (or, when smooth, RTS-smoothed)."""
+    update at or before each time, predicted forward, or when smooth, smoothed: smoother "rts" (RTS on the
+    combined estimate; mode probabilities stay forward) or "imm" (IMM smoother, smoothed mode
+    probabilities too)."""
+    if smoother not in SMOOTHERS:
+        raise ValueError(f"smoother {smoother!r}: expected one of {', '.join(SMOOTHERS)}")
     args = run.config.kernel_args()
     qt = np.ascontiguousarray(times, float)
     acc_idx = np.flatnonzero(run.accepted)
@@ -105,8 +111,14 @@ def estimate(run: PlaneRun, times, *, smooth: bool = False) -> Estimates:
     if smooth:
         xs = np.empty_like(xc)
         Ps = np.empty_like(Pc)
-        smooth_rows(acc_t, run.segment[acc_idx], run.mu[acc_idx], run.x[acc_idx], run.P[acc_idx],
-                    args["kinds"], args["omegas"], args["qs"], args["tpm_kind"], args["tpm_param"],
-                    args["tpm_param2"],                    k, dt, xc, Pc, xs, Ps)
+        common = (acc_t, run.segment[acc_idx], run.mu[acc_idx], run.x[acc_idx], run.P[acc_idx],
+                  args["kinds"], args["omegas"], args["qs"], args["tpm_kind"], args["tpm_param"],
+                  args["tpm_param2"], k, dt, xc, Pc)
+        if smoother == "imm":
+            mus = np.empty_like(mu)
+            imm_smooth_rows(*common, mu, xs, Ps, mus)
+            mu = mus
+        else:
+            smooth_rows(*common, xs, Ps)
         xc, Pc = xs, Ps
     return Estimates(qt, xc, Pc, mu, zv, Pv, gov, dt)

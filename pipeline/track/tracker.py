@@ -28,7 +28,7 @@ import pandas as pd
 from .config import TrackerConfig, default_modes
 from .frame import Plane
 from .imm import STATUS_STARTED, STATUS_UPDATED
-from .plane import estimate, filter_plane
+from .plane import SMOOTHERS, estimate, filter_plane
 
 REQUIRED = ("time", "sensor_id", "sensor_kind", "aircraft_id", "latitude", "longitude", "flight_level",
             "cov_ee_m2", "cov_en_m2", "cov_nn_m2")
@@ -92,13 +92,17 @@ def _check(measurements: pd.DataFrame) -> None:
 
 def track(measurements: pd.DataFrame, *, step_s: float = 1.0, max_coast_s: float = 60.0,
           tpm: str | None = None, smooth: bool = False, config: TrackerConfig | None = None,
-          turn_rate_dps: float = 3.0, with_ca: bool = False, keep_states: bool = False) -> TrackResult:
+          turn_rate_dps: float = 3.0, with_ca: bool = False, keep_states: bool = False,
+          smoother: str = "rts") -> TrackResult:
     """Track every aircraft: estimates on a regular grid of step_s (aligned to whole multiples of step_s
     since UTC midnight) and at every accepted report, coasted up to max_coast_s after the last update,
     smoothed backwards when smooth. tpm: 'dynamic[:A,B]', 'fixed:P' or 'expm:TAU[,TAU2]' (default:
-    the config's; see `parse_tpm`). keep_states keeps every aircraft's filter history for
-    `TrackResult.state_at`."""
+    the config's; see `parse_tpm`). smoother: "rts" (RTS on the combined estimate) or "imm" (the IMM
+    smoother of `imm_smooth_rows`; also smooths the mode probabilities). keep_states keeps every
+    aircraft's filter history for `TrackResult.state_at`."""
     _check(measurements)
+    if smoother not in SMOOTHERS:
+        raise ValueError(f"smoother {smoother!r}: expected one of {', '.join(SMOOTHERS)}")
     if not step_s > 0.0:
         raise ValueError(f"step_s {step_s!r}: must be > 0")
     if config is None:
@@ -116,13 +120,13 @@ def track(measurements: pd.DataFrame, *, step_s: float = 1.0, max_coast_s: float
     invalid = frame.loc[~finite].groupby(["aircraft_id", "sensor_id"], observed=True).size()
     frame = frame.loc[finite]
     empty = TrackResult(_empty_tracks(names), pd.DataFrame(), pd.DataFrame(), pd.DataFrame(),
-                        _parameters(config, step_s, smooth))
+                        _parameters(config, step_s, smooth, smoother))
     if frame.empty:
         return empty
     epoch = frame["time"].min().floor("D")
     tracks, sensors, aircraft, rejected, finals, runs = [], [], [], [], {}, {}
     for aircraft_id, group in frame.groupby("aircraft_id", sort=True, observed=True):
-        out = _track_one(str(aircraft_id), group, epoch, config, args, names, step_s, smooth)
+        out = _track_one(str(aircraft_id), group, epoch, config, args, names, step_s, smooth, smoother)
         tracks.append(out["tracks"])
         sensors.append(out["sensors"])
         aircraft.append(out["aircraft"])
@@ -140,11 +144,12 @@ def track(measurements: pd.DataFrame, *, step_s: float = 1.0, max_coast_s: float
         sensors_df["invalid"] = 0
     return TrackResult(pd.concat(tracks, ignore_index=True), sensors_df,
                        pd.DataFrame(aircraft), pd.concat(rejected, ignore_index=True),
-                       _parameters(config, step_s, smooth), finals, runs)
+                       _parameters(config, step_s, smooth, smoother), finals, runs)
 
 
-def _parameters(config: TrackerConfig, step_s: float, smooth: bool) -> dict:
-    return {"step_s": step_s, "smooth": smooth, "max_coast_s": config.max_coast_s, "tpm": config.tpm,
+def _parameters(config: TrackerConfig, step_s: float, smooth: bool, smoother: str) -> dict:
+    return {"step_s": step_s, "smooth": smooth, "smoother": smoother, "max_coast_s": config.max_coast_s,
+            "tpm": config.tpm,
             "gate_probability": config.gate_probability,
             "modes": [m.__dict__ for m in config.modes]}
 
@@ -220,7 +225,7 @@ def _smoothed_turn_rate(qt, v_loc, segment, mode_weighted_dps, speed) -> np.ndar
     return np.where(np.isfinite(rate) & (speed > 1.0), rate, mode_weighted_dps)
 
 
-def _track_one(aircraft_id, group, epoch, config, args, names, step_s, smooth) -> dict:
+def _track_one(aircraft_id, group, epoch, config, args, names, step_s, smooth, smoother="rts") -> dict:
     g = group.assign(_t=(group["time"] - epoch).dt.total_seconds().to_numpy())
     g = g.sort_values(["_t", "sensor_id"], kind="stable")
     t = g["_t"].to_numpy(float)
@@ -271,7 +276,7 @@ def _track_one(aircraft_id, group, epoch, config, args, names, step_s, smooth) -
         if k1 >= k0:
             queries.append(np.arange(k0, k1 + 1) * step_s)
     qt = np.unique(np.concatenate(queries))
-    est = estimate(run, qt, smooth=smooth)
+    est = estimate(run, qt, smooth=smooth, smoother=smoother)
     xc, Pc, muq, zv, gov, dt = est.x, est.P, est.mu, est.zv, est.row, est.age_s
     nq = len(qt)
 
