@@ -62,6 +62,13 @@ def vertical_prediction(zv: np.ndarray, Pv: np.ndarray, coast_s, ahead_s, q_fl: 
     return fl, np.sqrt(np.maximum(var, 0.0)) * FT_PER_FL
 
 
+def _inv2(m: np.ndarray) -> np.ndarray:
+    """Inverses of (n, 2, 2) matrices in closed form."""
+    det = m[:, 0, 0] * m[:, 1, 1] - m[:, 0, 1] * m[:, 1, 0]
+    return np.stack([np.stack([m[:, 1, 1], -m[:, 0, 1]], -1), np.stack([-m[:, 1, 0], m[:, 0, 0]], -1)],
+                    -2) / det[:, None, None]
+
+
 def predict_tracks(result: TrackResult, horizons_s, *, step_s: float = 1.0,
                    plane: Plane | None = None, sigma_alt: bool = False) -> pd.DataFrame:
     """Predictions of every aircraft at every grid time of its track (multiples of step_s) and horizon.
@@ -99,7 +106,8 @@ def predict_tracks(result: TrackResult, horizons_s, *, step_s: float = 1.0,
         dt = np.maximum(t - run.t[gov], 0.0)
         order = np.lexsort((dt, gov))  # the kernel continues one coasting chain per governing update
         mean, cov = np.empty((len(t), n_h, NX)), np.empty((len(t), n_h, len(POSITION_PAIRS)))
-        mean[order], cov[order] = predict_states(run.config.kernel_args(), gov[order], dt[order], run.mu,
+        args = run.config.kernel_args()
+        mean[order], cov[order] = predict_states(args, gov[order], dt[order], run.mu,
                                                  run.x, run.P, horizons, step_s)
         e, n = mean[:, :, 0].ravel(), mean[:, :, 3].ravel()
         c2 = np.empty((len(e), 2, 2))
@@ -108,12 +116,16 @@ def predict_tracks(result: TrackResult, horizons_s, *, step_s: float = 1.0,
         c2[:, 1, 1] = cov[:, :, 2].ravel()
         lat, lon = own.inverse(e, n)
         east, north = plane.forward(lat, lon)
-        # plane vector = M_common @ local = M_common @ inv(M_own) @ own-plane vector
-        m = plane.local_to_plane(lat, lon) @ np.linalg.inv(own.local_to_plane(lat, lon))
+        # plane vector = M_common @ local = M_common @ inv(M_own) @ own-plane vector, taken at the track's
+        # position for all its horizons (over the 30 km of a 120 s prediction the two planes' relative
+        # rotation and scale change the variances by about 1e-4 of themselves)
+        lat_now, lon_now = rows["latitude"].to_numpy(float), rows["longitude"].to_numpy(float)
+        m = np.repeat(plane.local_to_plane(lat_now, lon_now) @ _inv2(own.local_to_plane(lat_now, lon_now)),
+                      n_h, axis=0)
         c2 = m @ c2 @ np.swapaxes(m, 1, 2)
         fl, sig = vertical_prediction(run.zv[np.repeat(gov, n_h)], run.Pv[np.repeat(gov, n_h)],
                                       np.repeat(dt, n_h), np.tile(horizons, len(t)),
-                                      run.config.kernel_args()["q_fl"], step_s)
+                                      args["q_fl"], step_s)
         frame = {"aircraft_id": np.repeat(str(aircraft_id), len(e)),
                  "time": rows["time"].array.take(np.repeat(np.arange(len(t)), n_h)),
                  "horizon_s": np.tile(horizons, len(t)), "east_m": east, "north_m": north,
