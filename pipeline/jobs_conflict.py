@@ -252,11 +252,17 @@ def write_conflicts(result: ConflictJobResult) -> dict[str, Path]:
         from pipeline.report.conflict_figures import alert_figure, figure_name
 
         d = Path(result.options.figures)
-        for i, alert in result.alerts.iterrows():
+        alerts = result.alerts
+        involved = set(alerts["aircraft_a"]) | set(alerts["aircraft_b"])
+        tracks = result.tracks[result.tracks["aircraft_id"].isin(involved)]
+        pred = result.predictions
+        pred = pred[pred["aircraft_id"].isin(involved) & pred["time"].isin(alerts["start"])]
+        pc = result.pc[result.pc["aircraft_a"].isin(involved)]
+        threshold = result.options.threshold
+        for i, alert in alerts.iterrows():
             path = d / figure_name(int(i), alert)
             targets[f"figure {path.stem}"] = path
-            writers.append((path, lambda p, a=alert: alert_figure(
-                a, result.tracks, result.predictions, result.pc, result.options.threshold, p)))
+            writers.append((path, lambda p, a=alert: alert_figure(a, tracks, pred, pc, threshold, p)))
     parts = [(path, path.with_name(path.name + ".part")) for path, _ in writers]
     done, moved = False, []
     try:

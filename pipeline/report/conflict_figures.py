@@ -39,7 +39,10 @@ def _nm(lat, lon, lat0: float, lon0: float) -> tuple[np.ndarray, np.ndarray]:
 
 def _ellipse(ax, e_nm: float, n_nm: float, var_e: float, cov_en: float, var_n: float, **style) -> None:
     """The 95 % ellipse of an east/north covariance (m^2) centred at (e_nm, n_nm)."""
-    vals, vecs = np.linalg.eigh(np.array([[var_e, cov_en], [cov_en, var_n]]))
+    cov = np.array([[var_e, cov_en], [cov_en, var_n]], dtype=float)
+    if not np.isfinite(cov).all() or not np.isfinite([e_nm, n_nm]).all():
+        return
+    vals, vecs = np.linalg.eigh(cov)
     width, height = 2.0 * np.sqrt(np.maximum(vals, 0.0) * CHI2_95_2D) / 1852.0
     angle = math.degrees(math.atan2(vecs[1, 0], vecs[0, 0]))
     ax.add_patch(Ellipse((e_nm, n_nm), width, height, angle=angle, fill=False, **style))
