@@ -102,13 +102,14 @@ def timed_inside(module, name: str, totals: dict, label: str) -> None:
     setattr(module, name, wrapper)
 
 
-def pipeline_stages(meas: pd.DataFrame, threshold: float) -> None:
+def pipeline_stages(meas: pd.DataFrame, threshold: float, sigma_alt: bool = False) -> None:
     clock = Clock()
     result = clock.run("track (IMM, 3 modes, keep_states)", track, meas, keep_states=True)
     tracks = result.tracks
     tod = tracks["time_of_day"].to_numpy(float)
     grid = tracks[np.abs(tod - np.round(tod)) < 1e-6].reset_index(drop=True)
-    pred = clock.run("predict_tracks (20, 60, 120 s at every second)", predict_tracks, result, HORIZONS_S)
+    pred = clock.run("predict_tracks (20, 60, 120 s at every second)", predict_tracks, result, HORIZONS_S,
+                     sigma_alt=sigma_alt)
     inside: dict[str, float] = {}
     timed_inside(pairs_pc, "_tree_pairs", inside, "pre-filter")
     timed_inside(pairs_pc, "conflict_probability", inside, "exact PC")
@@ -166,19 +167,22 @@ def main() -> None:
     parser.add_argument("--command-hours", type=float, default=1.0)
     parser.add_argument("--command-aircraft", type=int, default=30)
     parser.add_argument("--skip-command", action="store_true")
+    parser.add_argument("--vertical", choices=("gate", "gaussian"), default="gate",
+                        help="vertical proximity as msdc conflicts --vertical (default gate)")
     args = parser.parse_args()
     seconds = int(args.minutes * 60)
     t0 = time.perf_counter()
     meas = scenario(args.aircraft, seconds)
     print(f"scenario: {args.aircraft} aircraft x {seconds} s, {len(meas):,} ADS-B reports (built in "
           f"{time.perf_counter() - t0:.0f} s); horizons {HORIZONS_S} s, 5 NM, 1000 ft, exact PC, threshold "
-          f"{args.threshold:g}, {os.cpu_count()} CPUs, load {os.getloadavg()[0]:.2f}")
+          f"{args.threshold:g}, vertical {args.vertical}, {os.cpu_count()} CPUs, "
+          f"load {os.getloadavg()[0]:.2f}")
     t0 = time.perf_counter()
     early = meas["time"] < START + pd.Timedelta(minutes=5)
     warm = meas[meas["aircraft_id"].isin(["AC000", "AC001"]) & early]
     predict_tracks(track(warm, keep_states=True), HORIZONS_S)
     print(f"warm-up (numba compile or cache load): {time.perf_counter() - t0:.1f} s")
-    pipeline_stages(meas, args.threshold)
+    pipeline_stages(meas, args.threshold, sigma_alt=args.vertical == "gaussian")
     if not args.skip_command:
         whole_command(args.command_hours, args.command_aircraft, 1.0)
 

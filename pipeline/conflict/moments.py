@@ -21,7 +21,7 @@ from functools import lru_cache
 import numpy as np
 from numba import njit
 
-from pipeline.track.imm import NX, combine_into, predict_into, tpm_into, transition_into
+from pipeline.track.imm import NX, predict_into, tpm_into, transition_into
 
 POSITION_PAIRS = ((0, 0), (0, 3), (3, 3))  # east-east, east-north, north-north
 ALL_PAIRS = tuple((a, b) for a in range(NX) for b in range(NX))
@@ -96,14 +96,15 @@ def cached_horizon_matrices(args: dict, aheads_s, cycle_s: float, pairs=POSITION
 
 @njit(cache=True)
 def predict_batch(gov, dt, kinds, omegas, qs, tpm_kind, tpm_param, tpm_param2, cycle_s, mu_h, x_h, P_h,
-                  A, pair_a, pair_b, mean_out, cov_out):
+                  A_mean, cols_mean, A_moment, cols_moment, pair_a, pair_b, mean_out, cov_out):
     """For each query q: the posterior of row gov[q] (mu_h, x_h, P_h) coasted dt[q] s by IMM cycles of at
     most cycle_s (consecutive queries with the same row continue one chain, dt ascending), then every
-    horizon at once through A (from `horizon_matrices`): mean_out (m, H, NX), cov_out (m, H, K) the
-    mixture covariance of the K index pairs (pair_a[k], pair_b[k])."""
+    horizon at once: mean = A_mean[h] @ s[cols_mean], second moments = A_moment[h] @ s[cols_moment] (the
+    nonzero columns of `horizon_matrices`); mean_out (m, H, NX), cov_out (m, H, K) the mixture
+    covariance of the K index pairs (pair_a[k], pair_b[k])."""
     r = kinds.shape[0]
     m = gov.shape[0]
-    n_h = A.shape[0]
+    n_h = A_mean.shape[0]
     n_k = pair_a.shape[0]
     oy = r
     on = r + NX * r
@@ -119,9 +120,7 @@ def predict_batch(gov, dt, kinds, omegas, qs, tpm_kind, tpm_param, tpm_param2, c
     mu_c = np.empty(r)
     x_c = np.empty((r, NX))
     P_c = np.empty((r, NX, NX))
-    s = np.empty(A.shape[2])
-    xc = np.empty(NX)
-    Pc = np.empty((NX, NX))
+    s = np.empty(r * (1 + NX + NX * NX))
     mean = np.empty(NX)
     g_c = -1
     t_c = 0.0
@@ -148,9 +147,11 @@ def predict_batch(gov, dt, kinds, omegas, qs, tpm_kind, tpm_param, tpm_param2, c
                     for b in range(NX):
                         P_c[j, a, b] = Pp[j, a, b]
             t_c += h
-        combine_into(mu_c, x_c, P_c, r, xc, Pc)
-        ce = xc[0]
-        cn = xc[3]
+        ce = 0.0
+        cn = 0.0
+        for j in range(r):
+            ce += mu_c[j] * x_c[j, 0]
+            cn += mu_c[j] * x_c[j, 3]
         # mode-weighted moments, positions relative to the combined position
         for j in range(r):
             w = mu_c[j]
@@ -164,16 +165,13 @@ def predict_batch(gov, dt, kinds, omegas, qs, tpm_kind, tpm_param, tpm_param2, c
         for h in range(n_h):
             for a in range(NX):
                 acc = 0.0
-                for k in range(oy, on):
-                    acc += A[h, a, k] * s[k]
+                for k in range(cols_mean.shape[0]):
+                    acc += A_mean[h, a, k] * s[cols_mean[k]]
                 mean[a] = acc
             for k in range(n_k):
                 acc = 0.0
-                row = NX + k
-                for i in range(r):
-                    acc += A[h, row, i] * s[i]
-                for i in range(on, s.shape[0]):
-                    acc += A[h, row, i] * s[i]
+                for i in range(cols_moment.shape[0]):
+                    acc += A_moment[h, k, i] * s[cols_moment[i]]
                 cov_out[q, h, k] = acc - mean[pair_a[k]] * mean[pair_b[k]]
             for a in range(NX):
                 mean_out[q, h, a] = mean[a]
@@ -186,6 +184,11 @@ def predict_states(args: dict, gov, dt, mu_h, x_h, P_h, aheads_s, cycle_s: float
     """Mixture means (m, H, NX) and covariances of `pairs` (m, H, K) of the posteriors mu_h/x_h/P_h[gov]
     coasted dt s (ascending within each row) and predicted each ahead_s further, in cycles of cycle_s."""
     A = cached_horizon_matrices(args, aheads_s, cycle_s, pairs)
+    # only the columns some row uses (CV and turn modes never touch the acceleration moments)
+    cols_mean = np.flatnonzero((A[:, :NX] != 0).any(axis=(0, 1)))
+    cols_moment = np.flatnonzero((A[:, NX:] != 0).any(axis=(0, 1)))
+    A_mean = np.ascontiguousarray(A[:, :NX][:, :, cols_mean])
+    A_moment = np.ascontiguousarray(A[:, NX:][:, :, cols_moment])
     gov = np.ascontiguousarray(gov, np.int64)
     m = len(gov)
     mean = np.empty((m, A.shape[0], NX))
@@ -195,5 +198,6 @@ def predict_states(args: dict, gov, dt, mu_h, x_h, P_h, aheads_s, cycle_s: float
     predict_batch(gov, np.ascontiguousarray(dt, float), args["kinds"], args["omegas"], args["qs"],
                   args["tpm_kind"], args["tpm_param"], args["tpm_param2"], float(cycle_s),
                   np.ascontiguousarray(mu_h, float), np.ascontiguousarray(x_h, float),
-                  np.ascontiguousarray(P_h, float), A, pa, pb, mean, cov)
+                  np.ascontiguousarray(P_h, float), A_mean, cols_mean.astype(np.int64), A_moment,
+                  cols_moment.astype(np.int64), pa, pb, mean, cov)
     return mean, cov
