@@ -1,96 +1,162 @@
-"""Conflict monitoring speed: 300 aircraft, 1 hour at 1 s, horizons 20, 60 and 120 s, exact PC.
+"""Conflict analysis speed on the real path: 300 aircraft, 1 hour at 1 s, horizons 20, 60 and 120 s.
 
-Run from the repository root: `python benchmarks/conflicts.py [--aircraft 300] [--minutes 60]`.
+    python benchmarks/conflicts.py [--aircraft 300] [--minutes 60] [--command-hours 1 --command-aircraft 30]
 
-STAND-IN PREDICTION: until the IMM tracker (pipeline/track) lands, each aircraft's predicted position
-is the straight-line extrapolation of its true state, with a covariance that grows along and across
-track (initial 100 m, velocity error 2.5 m/s along and 1.5 m/s across, unmodelled acceleration
-0.05 m/s^2). Traffic: random straight flights at 380-500 kt over a 300 x 300 NM square around
-3N 101.5E, one in five climbing or descending at 1000-2500 ft/min, the others level on FL200-FL410;
-an aircraft leaving the square comes back on the opposite side as a new flight.
+Traffic (plane coordinates around 3N 101.5E, then latitude/longitude): each aircraft flies for the whole
+period at 200-250 m/s from a random point of a 300 x 300 km square, alternating straight legs of 2-7 min
+and turns of 10-40 s at 1.5 or 3 deg/s either way; four in five level on FL200-FL410 (whole thousands of
+feet), one in five climbing or descending at 1000-2500 ft/min between FL100 and FL450. Each is reported
+by 1 Hz ADS-B (irregular spacing, position error 20 +- 5 m, flight level in 25 ft steps). Then the stages
+of `msdc conflicts` after decoding, each timed on one core (NUMBA_NUM_THREADS=1): `track(...,
+keep_states=True)` of every aircraft (the real tracker, not synthetic states), `predict_tracks` (IMM
+prediction at every second and horizon), `pair_probabilities` (k-d tree on the predicted positions
+widened by the PC margin, cheap bound, exact PC), losses of separation in the tracked data, alert
+events, false alerts, closest approach and warning times. The numba kernels are compiled (or loaded from
+their cache) on a warm-up run first, not counted.
+
+Then the whole command (`python -m pipeline.cli conflicts`, a fresh interpreter, decoding included) on a
+smaller recording made by the project's simulator (benchmarks/pipeline.py's scenario: one radar pair and
+ADS-B), with its wall time and peak memory. Timings mean little on a loaded machine: the load is printed.
 """
 
 from __future__ import annotations
 
 import argparse
+import importlib.util
+import os
 import sys
+import tempfile
 import time
 from pathlib import Path
 
-import numpy as np
-import pandas as pd
+os.environ.setdefault("NUMBA_NUM_THREADS", "1")
+ROOT = Path(__file__).resolve().parents[1]
+sys.path[:0] = [str(ROOT), str(ROOT / "tests")]
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+import numpy as np  # noqa: E402
+import pandas as pd  # noqa: E402
+from track_scenarios import fly, position_sensor  # noqa: E402
 
-from pipeline.conflict import (  # noqa: E402
-    alert_events,
-    classify_alerts,
-    closing_margin_m,
-    losses_of_separation,
-    pair_probabilities,
-    pairs_per_step,
-    pc_margin,
-    warning_times,
-)
+import pipeline.conflict.pairs_pc as pairs_pc  # noqa: E402
+from pipeline.conflict import alert_events, classify_alerts, losses_of_separation, warning_times  # noqa: E402
+from pipeline.conflict.approach import closest_approach  # noqa: E402
+from pipeline.conflict.predict import predict_tracks  # noqa: E402
+from pipeline.track import Plane, track  # noqa: E402
 
-M_PER_NM = 1852.0
-KT = M_PER_NM / 3600.0
 LAT0, LON0 = 3.0, 101.5
-SIDE_M = 300 * M_PER_NM
-HORIZONS_S = (20, 60, 120)
-MAX_SPEED_KT, MAX_RATE_FPM = 500.0, 2500.0
-SIGMA0_M, SIGMA_V_ALONG, SIGMA_V_CROSS, SIGMA_ACC = 100.0, 2.5, 1.5, 0.05
+HORIZONS_S = (20.0, 60.0, 120.0)
+START = pd.Timestamp("2024-05-01 10:00", tz="UTC")
 
 
-def scenario(n: int, seconds: int, seed: int = 2026):
-    """True states at 1 s: east/north (m) in the square, velocity (m/s), flight level, flight ids."""
+def scenario(n: int, seconds: int, seed: int = 2026) -> pd.DataFrame:
+    """The ADS-B measurement frame (the tracker's input schema) of n aircraft over `seconds`."""
     rng = np.random.default_rng(seed)
-    t = np.arange(seconds, dtype=float)
-    heading = rng.uniform(0, 2 * np.pi, n)
-    speed = rng.uniform(380, 500, n) * KT
-    ve, vn = speed * np.sin(heading), speed * np.cos(heading)
-    raw_e = rng.uniform(0, SIDE_M, n)[None, :] + ve[None, :] * t[:, None]
-    raw_n = rng.uniform(0, SIDE_M, n)[None, :] + vn[None, :] * t[:, None]
-    laps = np.floor_divide(raw_e, SIDE_M) * 7 + np.floor_divide(raw_n, SIDE_M)  # new flight per wrap
-    east, north = np.mod(raw_e, SIDE_M), np.mod(raw_n, SIDE_M)
-    fl0 = rng.integers(200, 411, n).astype(float)
-    level = rng.random(n) >= 0.2
-    fl0[level] = np.round(fl0[level] / 10) * 10
-    rate_fl_s = np.where(level, 0.0, rng.uniform(1000, 2500, n) / 60 / 100 * rng.choice([-1, 1], n))
-    fl = np.clip(fl0[None, :] + rate_fl_s[None, :] * t[:, None], 100, 450)
-    vz = np.where((fl > 100) & (fl < 450), rate_fl_s[None, :], 0.0)
-    flight = np.char.add(np.char.add(np.array([f"AC{i:03d}" for i in range(n)])[None, :], "-"),
-                         laps.astype(int).astype(str))
-    return t, east, north, ve, vn, fl, vz, flight
+    plane = Plane(LAT0, LON0)
+    parts = []
+    for i in range(n):
+        legs = []
+        while sum(d for d, _, _ in legs) < seconds + 60:
+            legs.append((rng.uniform(120, 420), 0.0, 0.0))
+            legs.append((rng.uniform(10, 40), rng.choice([-3.0, -1.5, 1.5, 3.0]), 0.0))
+        truth = fly(rng.uniform(-150e3, 150e3, 2), rng.uniform(0, 360), rng.uniform(200, 250), legs, dt=0.5)
+        t = np.sort(rng.uniform(0, seconds, seconds))
+        plots = position_sensor(truth, t, 20.0, 5.0, rng)
+        if rng.random() < 0.8:
+            fl = np.full(len(t), float(rng.integers(20, 42)) * 10)
+        else:
+            rate = rng.uniform(1000, 2500) / 6000.0 * rng.choice([-1, 1])
+            fl = np.clip(rng.uniform(150, 400) + rate * t, 100, 450)
+        lat, lon = plane.inverse(plots.e, plots.n)
+        parts.append(pd.DataFrame({
+            "time": START + pd.to_timedelta(np.round(t, 3), unit="s"), "sensor_id": "021:0/1",
+            "sensor_kind": "adsb", "aircraft_id": f"AC{i:03d}", "latitude": lat, "longitude": lon,
+            "flight_level": np.round(fl * 4) / 4, "cov_ee_m2": plots.ree, "cov_en_m2": plots.ren,
+            "cov_nn_m2": plots.rnn}))
+    return pd.concat(parts, ignore_index=True)
 
 
-def to_latlon(east, north):
-    """Local equirectangular plane about (LAT0, LON0) to latitude/longitude (stand-in for the tracker's)."""
-    r_m = 6378137.0 * (1 - 0.0033528 * np.sin(np.radians(LAT0)) ** 2)
-    lat = LAT0 + np.degrees((north - SIDE_M / 2) / r_m)
-    lon = LON0 + np.degrees((east - SIDE_M / 2) / (r_m * np.cos(np.radians(LAT0))))
-    return lat, lon
+class Clock:
+    """Wall and CPU seconds per named stage."""
+
+    def __init__(self) -> None:
+        self.rows: list[tuple[str, float, float]] = []
+
+    def run(self, name: str, fn, *args, **kw):
+        w, c = time.perf_counter(), time.process_time()
+        out = fn(*args, **kw)
+        self.rows.append((name, time.perf_counter() - w, time.process_time() - c))
+        return out
 
 
-def predictions(t, east, north, ve, vn, fl, vz, flight):
-    """Straight-line predictions with growing along/cross-track covariance, every time and horizon."""
-    n_t, n = east.shape
-    start = pd.Timestamp("2024-05-01 10:00", tz="UTC")
-    times = np.repeat(start + pd.to_timedelta(t, unit="s"), n)
-    speed = np.hypot(ve, vn)
-    ue, un = ve / speed, vn / speed  # along-track unit vector
-    frames = []
+def timed_inside(module, name: str, totals: dict, label: str) -> None:
+    """Wrap module.name so that its wall time adds up in totals[label]."""
+    inner = getattr(module, name)
+
+    def wrapper(*args, **kw):
+        w = time.perf_counter()
+        try:
+            return inner(*args, **kw)
+        finally:
+            totals[label] = totals.get(label, 0.0) + time.perf_counter() - w
+
+    setattr(module, name, wrapper)
+
+
+def pipeline_stages(meas: pd.DataFrame, threshold: float, sigma_alt: bool = False) -> None:
+    clock = Clock()
+    result = clock.run("track (IMM, 3 modes, keep_states)", track, meas, keep_states=True)
+    tracks = result.tracks
+    tod = tracks["time_of_day"].to_numpy(float)
+    grid = tracks[np.abs(tod - np.round(tod)) < 1e-6].reset_index(drop=True)
+    pred = clock.run("predict_tracks (20, 60, 120 s at every second)", predict_tracks, result, HORIZONS_S,
+                     sigma_alt=sigma_alt)
+    inside: dict[str, float] = {}
+    timed_inside(pairs_pc, "_tree_pairs", inside, "pre-filter")
+    timed_inside(pairs_pc, "conflict_probability", inside, "exact PC")
+    pc = clock.run("pair_probabilities (pre-filter, bound, exact PC)", pairs_pc.pair_probabilities, pred,
+                   5.0, 1000.0, "exact")
+    losses = clock.run("losses of separation (tracked data)", losses_of_separation, grid)
+
+    def scoring():
+        events = alert_events(pc, threshold, step_s=1.0)
+        alerts = closest_approach(classify_alerts(events, losses), grid)
+        return alerts, warning_times(losses, events, HORIZONS_S)
+
+    alerts, warn = clock.run("alerts, false alerts, closest approach, warnings", scoring)
+    print(f"tracked: {grid['aircraft_id'].nunique()} aircraft, {len(grid):,} grid rows; predictions "
+          f"{len(pred):,} rows; pair-steps with PC > 1e-6: {len(pc):,}")
+    print(f"losses of separation: {len(losses)} (median duration {losses['duration_s'].median():.0f} s)")
     for h in HORIZONS_S:
-        along = SIGMA0_M**2 + (SIGMA_V_ALONG * h) ** 2 + (0.5 * SIGMA_ACC * h * h) ** 2
-        cross = SIGMA0_M**2 + (SIGMA_V_CROSS * h) ** 2 + (0.5 * SIGMA_ACC * h * h) ** 2
-        frames.append(pd.DataFrame({
-            "aircraft_id": flight.ravel(), "time": times, "horizon_s": h,
-            "east_m": (east + ve[None, :] * h).ravel(), "north_m": (north + vn[None, :] * h).ravel(),
-            "var_east_m2": np.tile(along * ue**2 + cross * un**2, n_t),
-            "cov_east_north_m2": np.tile((along - cross) * ue * un, n_t),
-            "var_north_m2": np.tile(along * un**2 + cross * ue**2, n_t),
-            "flight_level": np.clip(fl + vz * h, 100, 450).ravel()}))
-    return pd.concat(frames, ignore_index=True)
+        a = alerts[alerts["horizon_s"] == h]
+        w = warn[warn["horizon_s"] == h]["warning_s"]
+        print(f"horizon {h:>5.0f} s: {len(a):>4} alert events, {int(a['false_alert'].sum()):>4} false; "
+              f"losses alerted before they began {int((w > 0).sum())}/{len(w)}, median warning "
+              f"{w[w > 0].median():.0f} s")
+    print(f"timings on one core (load {os.getloadavg()[0]:.2f} now):")
+    print(f"  {'stage':<52} {'wall s':>8} {'CPU s':>8}")
+    for name, wall, cpu in clock.rows:
+        print(f"  {name:<52} {wall:8.2f} {cpu:8.2f}")
+        if name.startswith("pair_probabilities"):
+            for k, v in inside.items():
+                print(f"    of which {k:<42} {v:8.2f}")
+    print(f"  {'total':<52} {sum(r[1] for r in clock.rows):8.2f} {sum(r[2] for r in clock.rows):8.2f}")
+
+
+def whole_command(hours: float, n_aircraft: int, step: float) -> None:
+    spec = importlib.util.spec_from_file_location("bench_pipeline", ROOT / "benchmarks" / "pipeline.py")
+    bench = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(bench)
+    with tempfile.TemporaryDirectory() as tmp:
+        out = Path(tmp)
+        t0 = time.perf_counter()
+        inputs = bench.build(out, hours, n_aircraft, 2, 2019)
+        size = sum(p.stat().st_size for p in inputs)
+        built_s = time.perf_counter() - t0
+        print(f"\nwhole command: {hours:g} h, {n_aircraft} aircraft (flights of 40-90 min), 2 radars and "
+              f"ADS-B, {size / 1e6:.1f} MB in {len(inputs)} files (simulated in {built_s:.0f} s)")
+        bench.timed(f"msdc conflicts --step {step:g} -o c.csv",
+                    ["conflicts", *map(str, inputs), "--sensors", str(out / "sensors.toml"), "--date",
+                     bench.DATE, "--step", f"{step:g}", "-o", str(out / "c.csv")], ROOT)
 
 
 def main() -> None:
@@ -98,78 +164,27 @@ def main() -> None:
     parser.add_argument("--aircraft", type=int, default=300)
     parser.add_argument("--minutes", type=float, default=60)
     parser.add_argument("--threshold", type=float, default=0.2)
+    parser.add_argument("--command-hours", type=float, default=1.0)
+    parser.add_argument("--command-aircraft", type=int, default=30)
+    parser.add_argument("--skip-command", action="store_true")
+    parser.add_argument("--vertical", choices=("gate", "gaussian"), default="gate",
+                        help="vertical proximity as msdc conflicts --vertical (default gate)")
     args = parser.parse_args()
     seconds = int(args.minutes * 60)
-    print(f"Scenario: {args.aircraft} aircraft, {seconds} s at 1 s, horizons {HORIZONS_S} s, radius 5 NM, "
-          f"1000 ft, exact PC, one core")
-    print("NOTE: predictions are a STAND-IN (straight-line extrapolation of the true state with a growing "
-          "covariance), not the IMM prediction, which is not built yet.")
-    clock = {}
     t0 = time.perf_counter()
-    t, east, north, ve, vn, fl, vz, flight = scenario(args.aircraft, seconds)
-    pred = predictions(t, east, north, ve, vn, fl, vz, flight)
-    lat, lon = to_latlon(east, north)
-    tracks = pd.DataFrame({"aircraft_id": flight.ravel(), "time": pred["time"].iloc[:east.size].to_numpy(),
-                           "latitude": lat.ravel(), "longitude": lon.ravel(), "flight_level": fl.ravel()})
-    clock["scenario and stand-in predictions (not counted)"] = time.perf_counter() - t0
-
-    t1 = time.perf_counter()
-    pc = pair_probabilities(pred, radius_nm=5.0, vertical_ft=1000.0, method="exact")
-    clock["A: tree on predicted positions + PC margin, exact PC"] = time.perf_counter() - t1
-
-    # B, in 10-minute slices to bound memory: candidate pairs from current positions, radius widened by
-    # the largest closing distance within 120 s and the PC margin, then PC at every horizon
-    sigma_max = np.sqrt(2 * (SIGMA0_M**2 + (SIGMA_V_ALONG * 120) ** 2 + (0.5 * SIGMA_ACC * 120**2) ** 2))
-    margin_nm = (closing_margin_m(MAX_SPEED_KT, max(HORIZONS_S)) + float(pc_margin(sigma_max))) / M_PER_NM
-    vmargin_ft = 2 * MAX_RATE_FPM / 60 * max(HORIZONS_S)
-    n_candidates, parts, clock_pairs, clock_pc = 0, [], 0.0, 0.0
-    edges = np.unique(np.r_[np.arange(0, seconds, 600), seconds])
-    start = tracks["time"].iloc[0]
-    for lo, hi in zip(edges[:-1], edges[1:], strict=True):
-        window = (start + pd.Timedelta(seconds=int(lo)), start + pd.Timedelta(seconds=int(hi)))
-        t2 = time.perf_counter()
-        part = tracks[(tracks["time"] >= window[0]) & (tracks["time"] < window[1])]
-        candidates = pairs_per_step(part, 5.0, 1000.0, margin_nm=margin_nm, vertical_margin_ft=vmargin_ft)
-        t3 = time.perf_counter()
-        part_pred = pred[(pred["time"] >= window[0]) & (pred["time"] < window[1])]
-        parts.append(pair_probabilities(part_pred, 5.0, 1000.0, method="exact", pairs=candidates))
-        clock_pairs += t3 - t2
-        clock_pc += time.perf_counter() - t3
-        n_candidates += len(candidates)
-    pc_b = pd.concat(parts, ignore_index=True)
-    clock["B: tree on current positions + closing distance (pairs)"] = clock_pairs
-    clock["B: PC of those pairs at every horizon (bound, then exact)"] = clock_pc
-
-    t4 = time.perf_counter()
-    losses = losses_of_separation(tracks)
-    clock["losses of separation in the truth tracks"] = time.perf_counter() - t4
-    t5 = time.perf_counter()
-    alerts = alert_events(pc, threshold=args.threshold)
-    scored = classify_alerts(alerts, losses)
-    warn = warning_times(losses, alerts, HORIZONS_S)
-    clock["alert events, false alerts, warning times"] = time.perf_counter() - t5
-
-    key = ["time", "aircraft_a", "aircraft_b", "horizon_s"]
-    same = pc.set_index(key)["pc"].sort_index()
-    other = pc_b.set_index(key)["pc"].sort_index()
-    other = other[other > 1e-6]
-    print(f"pair-steps with PC > 1e-6: A {len(same):,}, B {len(other):,}; "
-          f"identical sets: {same.index.equals(other.index)}, max |PC_A - PC_B| "
-          f"{np.max(np.abs(same.to_numpy() - other.reindex(same.index).to_numpy())) if len(same) else 0:.1e}")
-    print(f"B: {n_candidates:,} candidate pair-steps from the closing-distance pre-filter "
-          f"(margin {margin_nm:.1f} NM, {vmargin_ft:.0f} ft)")
-    print(f"losses of separation: {len(losses)} (median duration {losses['duration_s'].median():.0f} s)")
-    for h in HORIZONS_S:
-        a = scored[scored["horizon_s"] == h]
-        w = warn[warn["horizon_s"] == h]["warning_s"]
-        print(f"horizon {h:>3} s: {len(a):>4} alert events, {int(a['false_alert'].sum()):>4} false; "
-              f"losses warned before they began {int((w > 0).sum())}/{len(w)}, median warning "
-              f"{w[w > 0].median():.0f} s")
-    print("timings (s):")
-    for name, sec in clock.items():
-        print(f"  {name:<58} {sec:7.2f}")
-    total = sum(v for k, v in clock.items() if "not counted" not in k and not k.startswith("B"))
-    print(f"  {'total, pre-filter A + losses + scoring':<58} {total:7.2f}")
+    meas = scenario(args.aircraft, seconds)
+    print(f"scenario: {args.aircraft} aircraft x {seconds} s, {len(meas):,} ADS-B reports (built in "
+          f"{time.perf_counter() - t0:.0f} s); horizons {HORIZONS_S} s, 5 NM, 1000 ft, exact PC, threshold "
+          f"{args.threshold:g}, vertical {args.vertical}, {os.cpu_count()} CPUs, "
+          f"load {os.getloadavg()[0]:.2f}")
+    t0 = time.perf_counter()
+    early = meas["time"] < START + pd.Timedelta(minutes=5)
+    warm = meas[meas["aircraft_id"].isin(["AC000", "AC001"]) & early]
+    predict_tracks(track(warm, keep_states=True), HORIZONS_S)
+    print(f"warm-up (numba compile or cache load): {time.perf_counter() - t0:.1f} s")
+    pipeline_stages(meas, args.threshold, sigma_alt=args.vertical == "gaussian")
+    if not args.skip_command:
+        whole_command(args.command_hours, args.command_aircraft, 1.0)
 
 
 if __name__ == "__main__":

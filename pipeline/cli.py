@@ -156,6 +156,10 @@ def build_parser() -> argparse.ArgumentParser:
     k.add_argument("--threshold", type=float, default=0.2,
                    help="PC above which an alert is raised (default 0.2)")
     k.add_argument("--method", default="exact", help="PC method: exact, one-block, blocks or midpoint")
+    k.add_argument("--vertical", default="gate",
+                   help="vertical proximity: gate (predicted levels closer than --vertical-ft, default) or "
+                        "gaussian (PC times the probability from the vertical filter's sigma)")
+    k.add_argument("--figures", metavar="DIR", help="one PNG per alert event in this directory")
     k.add_argument("--step", type=float, default=1.0, help="output step in seconds (default 1)")
     k.add_argument("--max-coast", type=float, default=60.0,
                    help="seconds a track is predicted after its last report before it ends (default 60)")
@@ -335,7 +339,8 @@ def cmd_conflicts(args) -> int:
     options = jobs_conflict.ConflictOptions(
         **_decoding(args), sensors=args.sensors, output=args.output, json=args.json, step_s=args.step,
         max_coast_s=args.max_coast, tpm=args.tpm, horizons_s=args.horizon, radius_nm=args.radius_nm,
-        vertical_ft=args.vertical_ft, threshold=args.threshold, method=args.method)
+        vertical_ft=args.vertical_ft, threshold=args.threshold, method=args.method, vertical=args.vertical,
+        figures=args.figures)
     checked = jobs_conflict.validate(options)
     _warn("conflicts", checked.warnings)
     seen = len(checked.warnings)

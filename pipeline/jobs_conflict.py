@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import json
 import math
+import os
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -25,6 +26,7 @@ from pipeline.jobs_track import STEP_RANGE_S, TrackOptions, _measurements
 from pipeline.progress import Progress
 
 METHODS = ("exact", "one-block", "blocks", "midpoint")
+VERTICAL_MODELS = ("gate", "gaussian")
 HORIZON_RANGE_S = (1.0, 3600.0)
 RADIUS_RANGE_NM = (0.01, 100.0)
 VERTICAL_RANGE_FT = (1.0, 100_000.0)
@@ -40,6 +42,7 @@ class ConflictOptions(TrackOptions):
     vertical_ft: float = 1000.0
     threshold: float = 0.2
     method: str = "exact"
+    vertical: str = "gate"  # "gaussian": PC times P(|dz| < vertical_ft) from the vertical filter's sigma
 
 
 def parse_horizons(value) -> tuple[float, ...]:
@@ -82,6 +85,8 @@ def validate(options: ConflictOptions) -> Checked:
         raise OptionError(f"--threshold {t!r}: must be a probability strictly between 0 and 1")
     if options.method not in METHODS:
         raise OptionError(f"--method {options.method!r}: must be one of {', '.join(METHODS)}")
+    if options.vertical not in VERTICAL_MODELS:
+        raise OptionError(f"--vertical {options.vertical!r}: must be one of {', '.join(VERTICAL_MODELS)}")
     coast = options.max_coast_s
     if not isinstance(coast, int | float) or not math.isfinite(coast) or coast < step:
         raise OptionError(f"--max-coast {coast!r}: must be a finite number of seconds >= --step ({step:g})")
@@ -97,6 +102,15 @@ def validate(options: ConflictOptions) -> Checked:
     if checked.output.suffix.lower() == ".csv":
         for extra in companion_paths(checked.output).values():
             jobs._output("-o", extra, (".csv",))
+    if options.figures is not None:
+        d = Path(options.figures)
+        if d.exists() and not d.is_dir():
+            raise OptionError(f"--figures {d}: exists and is not a directory")
+        parent = d if d.exists() else (d.parent if str(d.parent) else Path("."))
+        if not parent.is_dir():
+            raise OptionError(f"--figures {d}: directory {d.parent} does not exist")
+        if not os.access(parent, os.W_OK):
+            raise OptionError(f"--figures {d}: directory {parent} is not writable")
     checked.sensors = jobs._sensors(options.sensors)
     return checked
 
@@ -121,6 +135,7 @@ class ConflictJobResult:
     parameters: dict
     loaded: object
     counts: dict = field(default_factory=dict)
+    predictions: pd.DataFrame | None = None  # predict_tracks' frame (for the figures)
 
 
 def conflict_job(options: ConflictOptions, *, progress: Progress | None = None,
@@ -133,6 +148,7 @@ def conflict_job(options: ConflictOptions, *, progress: Progress | None = None,
         pair_probabilities,
         warning_times,
     )
+    from pipeline.conflict.approach import closest_approach
     from pipeline.conflict.predict import predict_tracks
     from pipeline.track import track
 
@@ -153,11 +169,11 @@ def conflict_job(options: ConflictOptions, *, progress: Progress | None = None,
     grid = tracks[abs(tod / step - (tod / step).round()) < 1e-6].reset_index(drop=True)
     if progress:
         progress.stage("Predicting and computing PC")
-    predictions = predict_tracks(result, horizons, step_s=step)
+    predictions = predict_tracks(result, horizons, step_s=step, sigma_alt=options.vertical == "gaussian")
     pc = pair_probabilities(predictions, options.radius_nm, options.vertical_ft, method=options.method)
     losses = losses_of_separation(grid, options.radius_nm, options.vertical_ft)
     events = alert_events(pc, options.threshold, step_s=step)
-    alerts = classify_alerts(events, losses)
+    alerts = closest_approach(classify_alerts(events, losses), grid)
     warn = warning_times(losses, events, horizons)
     counts = {"aircraft": int(grid["aircraft_id"].nunique()), "losses": len(losses),
               "alerts": len(alerts), "false_alerts": int(alerts["false_alert"].sum()) if len(alerts) else 0,
@@ -165,8 +181,10 @@ def conflict_job(options: ConflictOptions, *, progress: Progress | None = None,
                          for h in horizons} if len(warn) else {f"{h:g}": 0 for h in horizons}}
     params = {**jobs._parameters(options, loaded, started, command), **result.parameters,
               "horizons_s": list(horizons), "radius_nm": options.radius_nm,
-              "vertical_ft": options.vertical_ft, "threshold": options.threshold, "method": options.method}
-    return ConflictJobResult(options, checked, grid, pc, alerts, losses, warn, params, loaded, counts)
+              "vertical_ft": options.vertical_ft, "threshold": options.threshold, "method": options.method,
+              "vertical": options.vertical}
+    return ConflictJobResult(options, checked, grid, pc, alerts, losses, warn, params, loaded, counts,
+                             predictions)
 
 
 def summary(result: ConflictJobResult) -> dict:
@@ -207,8 +225,9 @@ def _csv(frame: pd.DataFrame, path: Path) -> None:
 
 
 def write_conflicts(result: ConflictJobResult) -> dict[str, Path]:
-    """Write the tables (CSV: alerts at -o, losses and warning times beside it; xlsx: one workbook) and
-    the JSON; all to temporary names first, renamed only when every file is complete."""
+    """Write the tables (CSV: alerts at -o, losses and warning times beside it; xlsx: one workbook), the
+    JSON and one figure per alert (--figures); all to temporary names first, renamed only when every file
+    is complete (a failure removes what this run renamed, and the figures' folder if it made it)."""
     from pipeline.report.conflict_excel import write_conflict_workbook
 
     out, js = result.checked.output, result.checked.json
@@ -228,17 +247,44 @@ def write_conflicts(result: ConflictJobResult) -> dict[str, Path]:
     if js is not None:
         targets["json"] = js
         writers.append((js, lambda p: p.write_text(json.dumps(summary(result), indent=1, default=str))))
+    made_dir = None
+    if result.options.figures is not None:
+        from pipeline.report.conflict_figures import alert_figure, figure_name
+
+        d = Path(result.options.figures)
+        alerts = result.alerts
+        involved = set(alerts["aircraft_a"]) | set(alerts["aircraft_b"])
+        tracks = result.tracks[result.tracks["aircraft_id"].isin(involved)]
+        pred = result.predictions
+        pred = pred[pred["aircraft_id"].isin(involved) & pred["time"].isin(alerts["start"])]
+        pc = result.pc[result.pc["aircraft_a"].isin(involved)]
+        threshold = result.options.threshold
+        for i, alert in alerts.iterrows():
+            path = d / figure_name(int(i), alert)
+            targets[f"figure {path.stem}"] = path
+            writers.append((path, lambda p, a=alert: alert_figure(a, tracks, pred, pc, threshold, p)))
     parts = [(path, path.with_name(path.name + ".part")) for path, _ in writers]
+    done, moved = False, []
     try:
+        if result.options.figures is not None and not Path(result.options.figures).exists():
+            made_dir = Path(result.options.figures)
+            made_dir.mkdir()
         for (_, tmp), (_, write) in zip(parts, writers, strict=True):
             write(tmp)
         for path, tmp in parts:
             tmp.replace(path)
+            moved.append(path)
+        done = True
     except OSError as exc:
         raise JobError(f"cannot write {exc.filename}: {exc.strerror}") from exc
     finally:
         for _, tmp in parts:
             tmp.unlink(missing_ok=True)
+        if not done:
+            for path in moved:
+                path.unlink(missing_ok=True)
+            if made_dir is not None and made_dir.is_dir() and not any(made_dir.iterdir()):
+                made_dir.rmdir()
     return targets
 
 

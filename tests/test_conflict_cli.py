@@ -18,6 +18,7 @@ from fixtures.scenario import AircraftSpec, default_scenario
 from fixtures.simulate import sensors_toml, simulate
 from pipeline import jobs, jobs_conflict
 from pipeline.cli import main
+from pipeline.conflict.approach import APPROACH_COLUMNS
 from pipeline.conflict.events import ALERT_COLUMNS, LOSS_COLUMNS, WARNING_COLUMNS
 from pipeline.jobs import OptionError
 from pipeline.jobs_conflict import ConflictOptions
@@ -46,6 +47,9 @@ BAD = [
     (opts(output=None), "-o: give the output"),
     (opts(json="c.txt"), "--json c.txt"),
     (opts(sensors="/nonexistent/s.toml"), "--sensors /nonexistent/s.toml"),
+    (opts(vertical="probable"), "--vertical 'probable'"),
+    (opts(figures="/nonexistent/dir/figs"), "--figures /nonexistent/dir/figs: directory /nonexistent/dir"),
+    (opts(figures=RADAR), "--figures " + RADAR + ": exists and is not a directory"),
 ]
 
 
@@ -112,7 +116,7 @@ def test_crossing_loss_found_and_alerted_before_it_starts_at_60_s(crossing, caps
     d = crossing
     out = d / "c.csv"
     assert main(["conflicts", str(d / "r.ast"), str(d / "a.ast"), "--sensors", str(d / "s.toml"),
-                 "--date", "2019-03-01", "-o", str(out)]) == 0
+                 "--date", "2019-03-01", "-o", str(out), "--figures", str(d / "figs")]) == 0
     assert "1 loss(es) of separation" in capsys.readouterr().out
     midnight = pd.Timestamp("2019-03-01", tz="UTC")
     losses = pd.read_csv(d / "c_losses.csv", parse_dates=["start", "end", "time_of_min"],
@@ -127,10 +131,20 @@ def test_crossing_loss_found_and_alerted_before_it_starts_at_60_s(crossing, caps
     warn = pd.read_csv(d / "c_warning_times.csv")
     w60 = warn.loc[warn["horizon_s"] == 60, "warning_s"]
     assert len(w60) == 1 and w60.iloc[0] > 0  # alerted before the loss started
-    alerts = pd.read_csv(d / "c.csv")
-    assert list(alerts.columns) == ALERT_COLUMNS + ["loss_start", "false_alert"]
+    alerts = pd.read_csv(d / "c.csv", parse_dates=["cpa_time"])
+    assert list(alerts.columns) == ALERT_COLUMNS + ["loss_start", "false_alert"] + APPROACH_COLUMNS
     assert not alerts["false_alert"].any()
     assert (alerts.loc[alerts["horizon_s"] == 60, "peak_pc"] > 0.5).all()
+    # the predicted closest approach: the geometry's, at 342.9 s, within a few seconds and 0.3 NM
+    for _, a in alerts.iterrows():
+        assert abs((a["cpa_time"] - midnight).total_seconds() - CLOSEST_S) < 5.0
+        assert a["cpa_horizontal_nm"] < 0.3 and a["cpa_vertical_ft"] < 100
+    # one figure per alert event, named by its row, pair and horizon
+    names = sorted(p.name for p in (d / "figs").iterdir())
+    assert names == sorted(f"alert_{i + 1:03d}_710001_710002_{h:g}s.png"
+                           for i, h in enumerate(alerts["horizon_s"]))
+    png = (d / "figs" / names[0]).read_bytes()
+    assert png.startswith(b"\x89PNG\r\n\x1a\n") and len(png) > 20_000
 
 
 def test_failed_run_after_decoding_writes_nothing(tmp_path, capsys):
@@ -144,3 +158,24 @@ def test_failed_run_after_decoding_writes_nothing(tmp_path, capsys):
     err = capsys.readouterr().err
     assert code == 1 and "25/201" in err and "Traceback" not in err
     assert sorted(p.name for p in tmp_path.iterdir()) == ["other.toml"]
+
+
+def test_failure_while_writing_figures_leaves_nothing(crossing, tmp_path, monkeypatch, capsys):
+    import pipeline.report.conflict_figures as figures
+
+    real, calls = figures.alert_figure, []
+
+    def second_fails(*args):
+        calls.append(args[-1])
+        if len(calls) == 2:
+            raise OSError(28, "No space left on device", str(args[-1]))
+        return real(*args)
+
+    monkeypatch.setattr(figures, "alert_figure", second_fails)
+    d = crossing
+    code = main(["conflicts", str(d / "r.ast"), str(d / "a.ast"), "--sensors", str(d / "s.toml"),
+                 "--date", "2019-03-01", "--step", "5", "-o", str(tmp_path / "c.xlsx"),
+                 "--json", str(tmp_path / "c.json"), "--figures", str(tmp_path / "figs")])
+    err = capsys.readouterr().err
+    assert code == 1 and "No space left on device" in err and "Traceback" not in err
+    assert len(calls) == 2 and list(tmp_path.iterdir()) == []

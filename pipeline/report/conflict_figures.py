@@ -1,0 +1,116 @@
+"""A PNG per alert event: both tracks around the event with their predicted positions and 95 % ellipses
+at every horizon from the alert's start, and the pair's PC against time per horizon (bare Agg figures)."""
+
+from __future__ import annotations
+
+import math
+import re
+from pathlib import Path
+
+import matplotlib.dates as mdates
+import numpy as np
+import pandas as pd
+from matplotlib.patches import Ellipse
+
+from pipeline.report.figures import new_figure, save_png
+
+CHI2_95_2D = 5.991464547107979  # 95 % quantile of chi-square with 2 degrees of freedom
+KM_PER_NM = 1.852
+COLORS = {"a": "#1f77b4", "b": "#d62728"}
+HORIZON_STYLES = ("-", "--", ":", "-.")
+BEFORE_S = 120.0  # track drawn from this long before the alert
+
+
+def figure_name(index: int, alert: pd.Series) -> str:
+    """alert_<n>_<a>_<b>_<horizon>s.png, n counting from 1 in the Alerts table's order."""
+    def safe(v: object) -> str:
+        return re.sub(r"[^A-Za-z0-9_.-]+", "_", str(v)).strip("_") or "x"
+
+    return f"alert_{index + 1:03d}_{safe(alert['aircraft_a'])}_{safe(alert['aircraft_b'])}_" \
+           f"{alert['horizon_s']:g}s.png"
+
+
+def _nm(lat, lon, lat0: float, lon0: float) -> tuple[np.ndarray, np.ndarray]:
+    """East and north in NM from (lat0, lon0), equirectangular (plenty for one event's picture)."""
+    k = 6371.0088 * math.pi / 180.0 / KM_PER_NM
+    dlon = (np.asarray(lon, float) - lon0 + 180.0) % 360.0 - 180.0
+    return dlon * k * math.cos(math.radians(lat0)), (np.asarray(lat, float) - lat0) * k
+
+
+def _ellipse(ax, e_nm: float, n_nm: float, var_e: float, cov_en: float, var_n: float, **style) -> None:
+    """The 95 % ellipse of an east/north covariance (m^2) centred at (e_nm, n_nm)."""
+    cov = np.array([[var_e, cov_en], [cov_en, var_n]], dtype=float)
+    if not np.isfinite(cov).all() or not np.isfinite([e_nm, n_nm]).all():
+        return
+    vals, vecs = np.linalg.eigh(cov)
+    width, height = 2.0 * np.sqrt(np.maximum(vals, 0.0) * CHI2_95_2D) / 1852.0
+    angle = math.degrees(math.atan2(vecs[1, 0], vecs[0, 0]))
+    ax.add_patch(Ellipse((e_nm, n_nm), width, height, angle=angle, fill=False, **style))
+
+
+def alert_figure(alert: pd.Series, tracks: pd.DataFrame, predictions: pd.DataFrame, pc: pd.DataFrame,
+                 threshold: float, path: str | Path, dpi: int = 110) -> Path:
+    """One alert event: map (NM from aircraft_a at the alert's start) above PC against time."""
+    a, b, start = alert["aircraft_a"], alert["aircraft_b"], alert["start"]
+    horizons = sorted(predictions["horizon_s"].unique())
+    t0 = start - pd.Timedelta(seconds=BEFORE_S)
+    t1 = max(alert["end"], start) + pd.Timedelta(seconds=float(max(horizons)))
+    fig = new_figure(7.5, 8.8, dpi=dpi)
+    ax, ax_pc = fig.subplots(2, 1, height_ratios=(2.4, 1.0))
+    at = tracks[(tracks["aircraft_id"] == a) & (tracks["time"] == start)]
+    lat0, lon0 = (float(at["latitude"].iloc[0]), float(at["longitude"].iloc[0])) if len(at) else (
+        float(tracks["latitude"].median()), float(tracks["longitude"].median()))
+    for key, ident in (("a", a), ("b", b)):
+        color = COLORS[key]
+        tr = tracks[(tracks["aircraft_id"] == ident) & (tracks["time"] >= t0) & (tracks["time"] <= t1)]
+        e, n = _nm(tr["latitude"], tr["longitude"], lat0, lon0)
+        ax.plot(e, n, color=color, lw=1.2, label=f"{ident} track")
+        now = (tr["time"] == start).to_numpy()
+        if now.any():
+            ax.plot(e[now], n[now], "o", color=color, ms=6, zorder=5)
+        pred = predictions[(predictions["aircraft_id"] == ident) & (predictions["time"] == start)]
+        for i, h in enumerate(horizons):
+            row = pred[pred["horizon_s"] == h]
+            if row.empty:
+                continue
+            row = row.iloc[0]
+            pe, pn = _nm(row["latitude"], row["longitude"], lat0, lon0)
+            ax.plot(pe, pn, "x", color=color, ms=6, zorder=5)
+            _ellipse(ax, float(pe), float(pn), row["var_east_m2"], row["cov_east_north_m2"],
+                     row["var_north_m2"], color=color, lw=1.4 if h == alert["horizon_s"] else 0.8,
+                     ls=HORIZON_STYLES[i % len(HORIZON_STYLES)])
+    for i, h in enumerate(horizons):
+        ax.plot([], [], color="#555555", ls=HORIZON_STYLES[i % len(HORIZON_STYLES)],
+                label=f"95 % ellipse of the prediction {h:g} s ahead")
+    ax.plot([], [], "o", color="#555555", label="position at the alert's start")
+    ax.plot([], [], "x", color="#555555", label="predicted positions (mean) from there")
+    ax.set_aspect("equal", adjustable="datalim")
+    ax.set_xlabel(f"east (NM) of {a} at the alert's start ({lat0:.3f}, {lon0:.3f})")
+    ax.set_ylabel("north (NM)")
+    ax.grid(True, lw=0.3)
+    ax.legend(fontsize=7, loc="best")
+    cpa = ""
+    if "cpa_horizontal_nm" in alert and pd.notna(alert.get("cpa_horizontal_nm")):
+        cpa = (f"; predicted closest approach in {alert['time_to_cpa_s']:.0f} s: "
+               f"{alert['cpa_horizontal_nm']:.2f} NM, {alert['cpa_vertical_ft']:.0f} ft")
+    ax.set_title(f"{a} / {b}: PC > {threshold:g} at the {alert['horizon_s']:g} s horizon from "
+                 f"{start:%H:%M:%S} to {alert['end']:%H:%M:%S} UTC, peak {alert['peak_pc']:.2f}{cpa}",
+                 fontsize=8.5, wrap=True)
+    series = pc[(pc["aircraft_a"] == a) & (pc["aircraft_b"] == b) & (pc["time"] >= t0) & (pc["time"] <= t1)]
+    for i, h in enumerate(horizons):
+        s = series[series["horizon_s"] == h].sort_values("time")
+        ax_pc.plot(s["time"].dt.tz_convert(None), s["pc"], ls=HORIZON_STYLES[i % len(HORIZON_STYLES)],
+                   lw=1.3 if h == alert["horizon_s"] else 0.9, label=f"PC, {h:g} s ahead")
+    ax_pc.axhline(threshold, color="#888888", lw=0.8, ls=":", label=f"threshold {threshold:g}")
+    ax_pc.axvline(start.tz_convert(None), color="#111111", lw=0.8, label="alert start")
+    if "loss_start" in alert and pd.notna(alert.get("loss_start")):
+        ax_pc.axvline(pd.Timestamp(alert["loss_start"]).tz_convert(None), color="#d62728", lw=0.8,
+                      ls="--", label="loss of separation starts")
+    ax_pc.set_xlim(t0.tz_convert(None), t1.tz_convert(None))
+    ax_pc.set_ylim(-0.02, 1.02)
+    ax_pc.xaxis.set_major_formatter(mdates.DateFormatter("%H:%M:%S"))
+    ax_pc.set_xlabel("time of the prediction (UTC)")
+    ax_pc.set_ylabel("probability of conflict")
+    ax_pc.grid(True, lw=0.3)
+    ax_pc.legend(fontsize=7, loc="upper left")
+    return save_png(fig, path)
