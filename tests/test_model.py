@@ -98,6 +98,18 @@ def test_radar_covariance_matches_a_numerical_jacobian():
     assert meas["sigma_major_m"].iloc[2] == pytest.approx(math.radians(0.08) * 150 * 1852, rel=0.01)
 
 
+def test_radar_plot_almost_overhead_has_no_horizontal_covariance():
+    """Over the site a range error moves the plot horizontally by r/g times itself (r slant, g ground):
+    at FL390 a 6.4 NM slant range leaves g ~ 380 m (r/g ~ 31 > 10: NaN, the tracker skips it); at 6.5 NM
+    g ~ 2.1 km (r/g ~ 5.6), and the radial sigma is 70 m x r/g, worked out here on a flat earth."""
+    meas = build_measurements(radar_frame([6.4, 6.5], [0.0, 0.0], [390.0, 390.0]), None, SENSORS)
+    assert meas[["cov_ee_m2", "cov_en_m2", "cov_nn_m2"]].iloc[0].isna().all()
+    dz = 390 * 100 * 0.3048 - 40.0
+    r = 6.5 * 1852.0
+    g = math.sqrt(r * r - dz * dz)
+    assert math.sqrt(meas["cov_nn_m2"].iloc[1]) == pytest.approx(70.0 * r / g, rel=0.02)  # due north: radial
+
+
 def test_adsb_sigma_from_nacp():
     # DO-260B bounds: NACp 8 < 92.6 m, 11 < 3 m; 0 (unknown) and absent give NaN
     got = nacp_sigma_m(pd.array([8, 11, 0, pd.NA], dtype="Int64"))

@@ -67,12 +67,19 @@ def _common(frame: pd.DataFrame, category: int, kind: str, date: dt.date | None)
     return out
 
 
+# Near the vertical over the site a slant-range error moves the plot horizontally by r / g times itself; past
+# 10x (elevation above 84.3 deg) the plot says almost nothing about its horizontal position along the
+# line of sight, and its covariance is too ill-conditioned to invert, so it is NaN (unknown).
+MAX_RANGE_STRETCH = 10.0
+
+
 def _radar_covariance(site: pd.DataFrame, lat, lon, h_m) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """East/north covariance (m^2) at each plot from the site's range and azimuth sigmas.
 
     The slant-range error moves the plot along the horizontal radial by sigma_r * r / g (r slant, g
     horizontal distance: the height is fixed by the flight level), the azimuth error across it by
-    g * sigma_theta; the radial direction is taken in the plot's own east/north frame.
+    g * sigma_theta; the radial direction is taken in the plot's own east/north frame. NaN where r / g
+    exceeds MAX_RANGE_STRETCH (almost overhead).
     """
     site_ecef = np.stack(geodetic_to_ecef(site["latitude"].to_numpy(float), site["longitude"].to_numpy(float),
                                           site["altitude_m"].to_numpy(float)), -1)
@@ -88,7 +95,8 @@ def _radar_covariance(site: pd.DataFrame, lat, lon, h_m) -> tuple[np.ndarray, np
         var_radial = (site["sigma_range_m"].to_numpy(float) * r / g) ** 2
         cov = (var_radial * sa**2 + var_tangential * ca**2, (var_radial - var_tangential) * sa * ca,
                var_radial * ca**2 + var_tangential * sa**2)
-    return tuple(np.where(g > 0, c, np.nan) for c in cov)
+    placeable = (g > 0) & (r <= MAX_RANGE_STRETCH * g)
+    return tuple(np.where(placeable, c, np.nan) for c in cov)
 
 
 def _sigma_major(cov_ee, cov_en, cov_nn) -> np.ndarray:

@@ -290,13 +290,15 @@ def run_filter(t, ze, zn, ree, ren, rnn, ve0, vn0, var_v0, fl, kinds, omegas, qs
                 a11 = Pp[j, 3, 3] + rnn[i]
                 ve = ze[i] - xp[j, 0]
                 vn = zn[i] - xp[j, 3]
-                d2j = (a11 * ve * ve - 2.0 * a01 * ve * vn + a00 * vn * vn) / (a00 * a11 - a01 * a01)
+                dj = a00 * a11 - a01 * a01
+                # a singular innovation covariance accepts nothing (d2j stays inf), rather than dividing by 0
+                d2j = (a11 * ve * ve - 2.0 * a01 * ve * vn + a00 * vn * vn) / dj if dj > 0.0 else np.inf
                 if d2j < d2_min:
                     d2_min = d2j
             det = s00 * s11 - s01 * s01
             ne = ze[i] - me
             nn = zn[i] - mn
-            d2 = (s11 * ne * ne - 2.0 * s01 * ne * nn + s00 * nn * nn) / det
+            d2 = (s11 * ne * ne - 2.0 * s01 * ne * nn + s00 * nn * nn) / det if det > 0.0 else np.inf
             nis[i] = d2
             if not (d2_min <= gate_d2):
                 rejections += 1
