@@ -55,3 +55,23 @@ def test_six_nm_crossing_keeps_separation_and_raises_no_20_s_alert(runs):
                    "(see docs/conflict.md)")
 def test_levelling_off_1000_ft_below_is_no_loss(runs):
     assert runs("levelling off 1000 ft below").losses.empty
+
+
+def test_nothing_trackable_is_one_line_exit_1_and_writes_nothing(tmp_path, capsys):
+    # NACp 0 (unknown) on every ADS-B report: no covariance, so no track (was a traceback)
+    from dataclasses import replace
+
+    from asterix.encode import encode_frame
+    from fixtures.scenario import default_scenario
+    from fixtures.simulate import sensors_toml, simulate
+    from pipeline.cli import main
+
+    sc = default_scenario()
+    sim = simulate(replace(sc, aircraft=sc.aircraft[:2]), seed=3)
+    (tmp_path / "a.ast").write_bytes(encode_frame(21, sim.adsb.assign(nacp=0)))
+    (tmp_path / "s.toml").write_text(sensors_toml(sc.radar))
+    code = main(["conflicts", str(tmp_path / "a.ast"), "--sensors", str(tmp_path / "s.toml"), "--date",
+                 "2019-03-01", "-o", str(tmp_path / "c.csv"), "--json", str(tmp_path / "c.json")])
+    err = capsys.readouterr().err
+    assert code == 1 and "no aircraft could be tracked" in err and "Traceback" not in err
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["a.ast", "s.toml"]
