@@ -62,6 +62,15 @@ def main() -> None:
     fresh = errors[errors["age_s"] <= 2.0]
     print("\n-- only starts within 2 s of an update")
     print(_show(coverage_table(fresh)))
+    print("\n-- by what the aircraft then did: reported course change over the horizon below 3 deg "
+          "(straight) or from 3 deg (manoeuvre); shares of the predictions")
+    for label, sel in (("straight", errors["course_change_deg"] < 3.0),
+                       ("manoeuvre", errors["course_change_deg"] >= 3.0)):
+        table = coverage_table(errors[sel])
+        share = sel.groupby(errors["horizon_s"]).mean()
+        table.insert(2, "share", table["horizon_s"].map(share))
+        print(f"{label}:")
+        print(_show(table))
     print("\n-- share of d2 beyond quantiles of chi2(2) (calibrated: 0.50 / 0.10 / 0.05 / 0.01)")
     for h, g in errors.groupby("horizon_s"):
         q = [(g["d2"] > -2.0 * np.log(p)).mean() for p in (0.5, 0.1, 0.05, 0.01)]

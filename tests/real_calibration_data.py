@@ -76,7 +76,8 @@ def prediction_errors(result, meas: pd.DataFrame, *, every_s: float = 10.0, warm
                       horizons_s=HORIZONS_S, args_for=None, max_gap_s: float = 5.0) -> pd.DataFrame:
     """One row per (aircraft, start time, horizon): the error of the predicted mean against the
     interpolated report (m), the predicted covariance, d2 (squared Mahalanobis distance), and the
-    age of the posterior (s since the last update). Start times: every every_s seconds, from warmup_s
+    age of the posterior (s since the last update), and the change of the reported course over the
+    horizon (deg: what the aircraft did). Start times: every every_s seconds, from warmup_s
     after the start of the track segment, at most max_coast_s after its last update. args_for(config)
     -> kernel args for the prediction (default: the tracker's own, `config.kernel_args()`)."""
     horizons = np.asarray(sorted(horizons_s), float)
@@ -105,11 +106,23 @@ def prediction_errors(result, meas: pd.DataFrame, *, every_s: float = 10.0, warm
             err = m[:, [0, 3]] - truth[have]
             cov = c[:, [[0, 0], [3, 3]], [[0, 3], [0, 3]]]
             d2 = mahalanobis2(err, cov)
+            turn = _course_change(t[same], e[same], n[same], s, s + horizons[have], max_gap_s)
             for k, h in enumerate(horizons[have]):
                 rows.append((aircraft_id, s, h, err[k, 0], err[k, 1], cov[k, 0, 0], cov[k, 0, 1],
-                             cov[k, 1, 1], d2[k], s - run.t[i]))
+                             cov[k, 1, 1], d2[k], s - run.t[i], turn[k]))
     return pd.DataFrame(rows, columns=["aircraft_id", "start_s", "horizon_s", "error_east_m", "error_north_m",
-                                       "var_east_m2", "cov_east_north_m2", "var_north_m2", "d2", "age_s"])
+                                       "var_east_m2", "cov_east_north_m2", "var_north_m2", "d2", "age_s",
+                                       "course_change_deg"])
+
+
+def _course_change(t, e, n, start_s: float, ends_s: np.ndarray, max_gap_s: float, base_s: float = 5.0):
+    """Absolute change (deg) of the reported course from start_s to each of ends_s, each course from the
+    reports interpolated base_s apart (NaN where they cannot be)."""
+    times = np.concatenate([[start_s - base_s, start_s], np.ravel([[x - base_s, x] for x in ends_s])])
+    p = interpolate_reports(t, e, n, times, max_gap_s)
+    d = p[1::2] - p[0::2]
+    course = np.degrees(np.arctan2(d[:, 0], d[:, 1]))
+    return np.abs((course[1:] - course[0] + 180.0) % 360.0 - 180.0)
 
 
 def coverage_table(errors: pd.DataFrame) -> pd.DataFrame:
