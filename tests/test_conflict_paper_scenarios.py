@@ -84,7 +84,7 @@ def test_scenario1_cv_over_estimates_in_the_turn_more_than_the_imm():
 def test_scenario1_paper_ordering_appears_with_a_large_ca_noise():
     # Reading the paper's 52-72 s as the predictions' target times (its plot is shifted +20 s): with CA
     # jerk noise 10 m/s^3 the CA-only predicted covariance is about 5 km wide at 20 s and spreads PC
-    # out of the 2 NM disc: CA under-estimates, the IMM over-estimates less than CV (benchmark, 3 seeds
+    # out of the 2 NM disc: CA under-estimates, the IMM over-estimates less than CV (benchmark, 5 seeds
     # at 420 kt: CV +0.074, IMM +0.043, CA -0.120). With CA at 1 m/s^3 CA over-estimates (+0.04).
     big = scenario1(standard(sigma_ca=10.0), 420.0, seed=1)
     bias = {k: big[k]["target_turn_bias"] for k in ("cv", "imm", "ca")}
