@@ -100,6 +100,13 @@ def encounters() -> list[Encounter]:
     return out
 
 
+def shifted(enc: Encounter, east_nm: float, north_nm: float) -> Encounter:
+    """The same encounter moved east_nm, north_nm (the geometry, so the loss window, is unchanged)."""
+    def move(f: Flight) -> Flight:
+        return replace(f, east_nm=f.east_nm + east_nm, north_nm=f.north_nm + north_nm)
+    return replace(enc, a=move(enc.a), b=move(enc.b))
+
+
 def write_encounter(enc: Encounter, directory: Path, seed: int = 11) -> dict[str, str]:
     """Simulate the encounter (radar + ADS-B, no dropouts, jumps or low-quality episodes, so that the
     encounter itself is what is scored) and write r.ast, a.ast and s.toml; returns their paths."""

@@ -75,3 +75,15 @@ def test_nothing_trackable_is_one_line_exit_1_and_writes_nothing(tmp_path, capsy
     err = capsys.readouterr().err
     assert code == 1 and "no aircraft could be tracked" in err and "Traceback" not in err
     assert sorted(p.name for p in tmp_path.iterdir()) == ["a.ast", "s.toml"]
+
+
+@pytest.mark.xfail(strict=True, raises=ZeroDivisionError,
+                   reason="over the radar, plots whose slant range is below the aircraft's height get a "
+                   "degenerate covariance (~1e31 m^2, determinant 0) from the measurement model, and the "
+                   "filter kernel divides by that determinant (pipeline/track/imm.py run_filter)")
+def test_climbing_encounter_over_the_radar_is_tracked(tmp_path):
+    from conflict_scenarios import shifted
+
+    enc = shifted(ENCOUNTERS["climbing through FL350"], -30.0, -20.0)  # crossing point over the radar
+    r = run_encounter(enc, tmp_path, seed=11)
+    assert len(r.losses) == 1
