@@ -28,10 +28,10 @@ HORIZONS_S = (20.0, 60.0, 120.0)
 D2_95 = chi2_2_ppf(0.95)  # 5.991
 
 
-def load_real_tracks(max_aircraft: int | None = None, min_reports: int = 300):
+def load_real_tracks(max_aircraft: int | None = None, min_reports: int = 300, sigma_m: float | None = None):
     """Track the airborne CAT021 reports of the real recording as the conflict job does; returns
     (TrackResult with states, measurements) or None when the recording is absent. max_aircraft keeps
-    the aircraft with the most airborne reports."""
+    the aircraft with the most airborne reports; sigma_m replaces every report's sigma per axis (m)."""
     if not REAL.exists():
         return None
     import asterix
@@ -47,6 +47,8 @@ def load_real_tracks(max_aircraft: int | None = None, min_reports: int = 300):
     meas.loc[missing, "cov_ee_m2"] = var[missing]
     meas.loc[missing, "cov_nn_m2"] = var[missing]
     meas.loc[missing, "cov_en_m2"] = np.where(np.isfinite(var[missing]), 0.0, np.nan)
+    if sigma_m is not None:
+        meas = meas.assign(cov_ee_m2=sigma_m**2, cov_en_m2=0.0, cov_nn_m2=sigma_m**2)
     finite = np.isfinite(meas[["cov_ee_m2", "cov_nn_m2"]].to_numpy(float)).all(axis=1)
     meas = meas[finite].drop_duplicates(["aircraft_id", "time"]).reset_index(drop=True)
     counts = meas["aircraft_id"].astype(str).value_counts()
