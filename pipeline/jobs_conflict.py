@@ -165,6 +165,9 @@ def conflict_job(options: ConflictOptions, *, progress: Progress | None = None,
     result = track(meas, step_s=step, max_coast_s=float(options.max_coast_s), tpm=options.tpm,
                    keep_states=True)
     tracks = result.tracks
+    if tracks.empty:
+        raise JobError("no aircraft could be tracked: no report has a usable position and covariance "
+                       "(ADS-B needs NACp, radar a site in --sensors)")
     tod = tracks["time_of_day"].to_numpy(float)
     grid = tracks[abs(tod / step - (tod / step).round()) < 1e-6].reset_index(drop=True)
     if progress:

@@ -1,0 +1,87 @@
+"""Simulated encounters through the conflict job (decode -> track -> predict -> PC -> events): the loss
+the tracked data shows starts when the hand geometry says and is alerted before it at the 60 s horizon;
+a 6 NM near miss shows no loss and no alert at 20 s. benchmarks/conflict_scenarios.py runs them all over
+several seeds (warning times, false alerts per horizon)."""
+
+from __future__ import annotations
+
+import pandas as pd
+import pytest
+from conflict_scenarios import DATE, encounters, run_encounter
+
+ENCOUNTERS = {e.name: e for e in encounters()}
+MIDNIGHT = pd.Timestamp(str(DATE), tz="UTC")
+
+
+@pytest.fixture(scope="module")
+def runs(tmp_path_factory):
+    cache = {}
+
+    def get(name):
+        if name not in cache:
+            cache[name] = run_encounter(ENCOUNTERS[name], tmp_path_factory.mktemp("enc"))
+        return cache[name]
+    return get
+
+
+@pytest.mark.parametrize("name", ["converging 30 deg", "climbing through FL350"])
+def test_loss_starts_as_the_geometry_says_and_is_alerted_before_it_at_60_s(runs, name):
+    enc = ENCOUNTERS[name]
+    r = runs(name)
+    assert len(r.losses) == 1
+    loss = r.losses.iloc[0]
+    start = (loss["start"] - MIDNIGHT).total_seconds()
+    end = (loss["end"] - MIDNIGHT).total_seconds()
+    # 1 s grid: the first grid time inside the loss is within 1 s of the geometry's start; 1 s more for
+    # the tracked (not true) positions and levels
+    assert abs(start - enc.loss_s[0]) <= 2.0, (start, enc.loss_s)
+    assert abs(end - enc.loss_s[1]) <= 2.0, (end, enc.loss_s)
+    warn = r.warnings.set_index("horizon_s")["warning_s"]
+    assert warn.loc[60.0] > 0.0  # alerted before the loss started
+    assert warn.loc[20.0] > 0.0
+    assert not r.alerts.loc[r.alerts["horizon_s"] <= 60.0, "false_alert"].any()
+
+
+def test_six_nm_crossing_keeps_separation_and_raises_no_20_s_alert(runs):
+    r = runs("crossing, 6 NM miss")
+    assert r.losses.empty
+    # at 20 s the predicted sigmas are a few hundred metres against a 1 NM margin: PC stays far below 0.2
+    assert (r.alerts["horizon_s"] == 20.0).sum() == 0
+    assert r.alerts["false_alert"].all()  # whatever the 60/120 s horizons raised is false
+
+
+@pytest.mark.xfail(strict=True, reason="aircraft level exactly 1000 ft apart: the tracked flight levels "
+                   "wobble a few feet below 1000 ft, and losses_of_separation counts that as a loss "
+                   "(see docs/conflict.md)")
+def test_levelling_off_1000_ft_below_is_no_loss(runs):
+    assert runs("levelling off 1000 ft below").losses.empty
+
+
+def test_nothing_trackable_is_one_line_exit_1_and_writes_nothing(tmp_path, capsys):
+    # NACp 0 (unknown) on every ADS-B report: no covariance, so no track (was a traceback)
+    from dataclasses import replace
+
+    from asterix.encode import encode_frame
+    from fixtures.scenario import default_scenario
+    from fixtures.simulate import sensors_toml, simulate
+    from pipeline.cli import main
+
+    sc = default_scenario()
+    sim = simulate(replace(sc, aircraft=sc.aircraft[:2]), seed=3)
+    (tmp_path / "a.ast").write_bytes(encode_frame(21, sim.adsb.assign(nacp=0)))
+    (tmp_path / "s.toml").write_text(sensors_toml(sc.radar))
+    code = main(["conflicts", str(tmp_path / "a.ast"), "--sensors", str(tmp_path / "s.toml"), "--date",
+                 "2019-03-01", "-o", str(tmp_path / "c.csv"), "--json", str(tmp_path / "c.json")])
+    err = capsys.readouterr().err
+    assert code == 1 and "no aircraft could be tracked" in err and "Traceback" not in err
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["a.ast", "s.toml"]
+
+
+def test_climbing_encounter_over_the_radar_is_tracked(tmp_path):
+    """Plots almost overhead have no usable horizontal covariance (NaN, skipped by the tracker); the
+    encounter is still tracked and its one loss found (this used to divide by a zero determinant)."""
+    from conflict_scenarios import shifted
+
+    enc = shifted(ENCOUNTERS["climbing through FL350"], -30.0, -20.0)  # crossing point over the radar
+    r = run_encounter(enc, tmp_path, seed=11)
+    assert len(r.losses) == 1
