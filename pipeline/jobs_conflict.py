@@ -22,7 +22,7 @@ import pandas as pd
 
 from pipeline import jobs
 from pipeline.jobs import Checked, JobError, OptionError
-from pipeline.jobs_track import STEP_RANGE_S, TrackOptions, _measurements
+from pipeline.jobs_track import STEP_RANGE_S, TrackOptions, _measurements, untrackable
 from pipeline.progress import Progress
 
 METHODS = ("exact", "one-block", "blocks", "midpoint")
@@ -166,8 +166,7 @@ def conflict_job(options: ConflictOptions, *, progress: Progress | None = None,
                    keep_states=True)
     tracks = result.tracks
     if tracks.empty:
-        raise JobError("no aircraft could be tracked: no report has a usable position and covariance "
-                       "(ADS-B needs NACp, radar a site in --sensors)")
+        raise JobError(untrackable(meas))
     tod = tracks["time_of_day"].to_numpy(float)
     grid = tracks[abs(tod / step - (tod / step).round()) < 1e-6].reset_index(drop=True)
     if progress:

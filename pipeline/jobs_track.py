@@ -15,6 +15,7 @@ import time
 from dataclasses import dataclass
 from pathlib import Path
 
+import numpy as np
 import pandas as pd
 
 from pipeline import jobs
@@ -180,6 +181,8 @@ def track_job(options: TrackOptions, *, progress: Progress | None = None, checke
         meas, noise = _estimate_noise(meas, checked.sensors, options)
     result = track(meas, step_s=float(options.step_s), max_coast_s=float(options.max_coast_s),
                    tpm=options.tpm, smooth=options.smooth, smoother=options.smoother)
+    if result.tracks.empty:
+        raise JobError(untrackable(meas))
     labels = aircraft_labels(meas)
     tracks = result.tracks.merge(labels, on="aircraft_id", how="left")
     tracks[["callsign", "address"]] = tracks[["callsign", "address"]].fillna("")
@@ -189,6 +192,28 @@ def track_job(options: TrackOptions, *, progress: Progress | None = None, checke
               "address": options.address, "all": bool(options.all_aircraft),
               "radar_plots_joined_by_track_number": joined, "noise": options.noise}
     return TrackJobResult(options, checked, result, tracks, meas, labels, params, loaded, noise)
+
+
+def untrackable(meas: pd.DataFrame) -> str:
+    """Why no aircraft could be tracked: the reports without a usable position or covariance, by kind."""
+    cov = meas[["latitude", "longitude", "cov_ee_m2", "cov_en_m2", "cov_nn_m2"]].to_numpy(dtype=float)
+    bad = ~np.isfinite(cov).all(axis=1)
+    kind = meas["sensor_kind"].astype(str).to_numpy()
+    parts = []
+    n_adsb, n_radar = int((bad & (kind == "adsb")).sum()), int((bad & (kind == "radar")).sum())
+    if n_adsb:
+        no_nacp = int((bad & (kind == "adsb") & meas["nacp"].isna().to_numpy()).sum())
+        why = [f"{no_nacp} carry no NACp, as in CAT021 0.2x, whose figure of merit msdc does not turn into "
+               "a sigma"] if no_nacp else []
+        if n_adsb > no_nacp:
+            why.append(f"{n_adsb - no_nacp} have NACp 0 (unknown) or no position")
+        parts.append(f"{n_adsb} of {int((kind == 'adsb').sum())} ADS-B reports have no usable accuracy "
+                     f"({'; '.join(why)})")
+    if n_radar:
+        parts.append(f"{n_radar} of {int((kind == 'radar').sum())} radar plots have no position or "
+                     "covariance (no range/azimuth, no flight level, or almost overhead)")
+    detail = "; ".join(parts) if parts else f"{len(meas)} reports, none long enough to start a track"
+    return f"no aircraft could be tracked: {detail}"
 
 
 def _estimate_noise(meas: pd.DataFrame, sensors: pd.DataFrame, options: TrackOptions):

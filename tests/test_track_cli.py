@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import json
 import math
+import re
 from pathlib import Path
 
 import numpy as np
@@ -242,3 +243,29 @@ def test_all_aircraft_estimated_noise_gates_the_jumps_and_few_others(tmp_path, c
         adsb = next(s for s in ac["sensors"] if s["sensor_kind"] == "adsb")
         assert jumps[ac["callsign"]] <= adsb["gated"] <= jumps[ac["callsign"]] + 0.003 * adsb["reports"]
         assert 1.5 < adsb["nis_mean"] < 2.5, ac["callsign"]
+
+
+@pytest.mark.parametrize("noise", ["estimate", "declared"])
+def test_nothing_trackable_says_why_exit_1_and_writes_nothing(tmp_path, capsys, noise):
+    """Every ADS-B report with NACp 0 (unknown accuracy): no covariance, so no track. One line naming the
+    count and the reason, exit 1, no file (was an empty table with exit 0, or a traceback)."""
+    from dataclasses import replace
+
+    from asterix.encode import encode_frame
+    from fixtures.scenario import default_scenario
+    from fixtures.simulate import sensors_toml, simulate
+    from pipeline.cli import main
+
+    sc = default_scenario()
+    sim = simulate(replace(sc, aircraft=sc.aircraft[:2]), seed=3)
+    (tmp_path / "a.ast").write_bytes(encode_frame(21, sim.adsb.assign(nacp=0)))
+    (tmp_path / "s.toml").write_text(sensors_toml(sc.radar))
+    code = main(["track", str(tmp_path / "a.ast"), "--sensors", str(tmp_path / "s.toml"), "--all",
+                 "--noise", noise, "-o", str(tmp_path / "t.csv"), "--json", str(tmp_path / "t.json")])
+    err = capsys.readouterr().err
+    assert code == 1 and "Traceback" not in err
+    # every report left after deduplication (the simulator injects a few duplicates) is named
+    found = re.search(r"no aircraft could be tracked: (\d+) of (\d+) ADS-B reports have no usable accuracy "
+                      r"\((\d+) have NACp 0", err)
+    assert found and found[1] == found[2] == found[3] and 0.9 * len(sim.adsb) < int(found[1]) <= len(sim.adsb)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["a.ast", "s.toml"]
