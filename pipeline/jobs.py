@@ -27,7 +27,7 @@ from pipeline.meta import FORMATS, software_version
 from pipeline.model.dedup import DEDUP_KEYS, duplicate_mask
 from pipeline.model.identity import normalise_address, normalise_callsign
 from pipeline.model.load import Loaded, load
-from pipeline.model.measurements import build_measurements
+from pipeline.model.measurements import DECODED_COLUMNS, build_measurements
 from pipeline.model.sensors import read_sensors
 from pipeline.model.time import absolute_time
 from pipeline.progress import Progress
@@ -314,11 +314,12 @@ def validate(options) -> Checked:
 
 
 def _load(options: DecodingOptions, checked: Checked, progress: Progress | None) -> Loaded:
+    """Decode the inputs for measurements: only the columns build_measurements reads are decoded."""
     from asterix.errors import UnreadableInput
 
     try:
         loaded = load(checked.inputs, editions=checked.editions or None, date=options.date,
-                      format=options.format, progress=progress)
+                      format=options.format, columns=DECODED_COLUMNS, progress=progress)
     except UnreadableInput as exc:
         raise JobError(str(exc), 2) from exc
     spans = [_time_spans(rec.frames, loaded.date) for rec in loaded.recordings]
@@ -673,7 +674,7 @@ def stats_job(options: StatsOptions, *, progress: Progress | None = None) -> Sta
     import asterix
     from asterix.errors import UnreadableInput
     from pipeline.model.time import UNDATED_DAY
-    from pipeline.stats import StatsAccumulator
+    from pipeline.stats import STATS_COLUMNS, StatsAccumulator
 
     checked = validate(options)
     if progress:
@@ -690,7 +691,7 @@ def stats_job(options: StatsOptions, *, progress: Progress | None = None) -> Sta
         by_cat: dict[int, Span] = {}
         try:
             for rec in asterix.iter_read(path, chunk=chunk, editions=checked.editions or None,
-                                         date=options.date, format=options.format):
+                                         date=options.date, format=options.format, columns=STATS_COLUMNS):
                 acc.add(rec.frames, rec.errors, rec.ignored)
                 info["bytes"], info["format"] = rec.size_bytes, rec.format
                 info["date"] = info["date"] or rec.date

@@ -17,6 +17,7 @@ import pandas as pd
 _OFFSET = re.compile(r"\s*\((?:record )?at offset (?:0x[0-9a-fA-F]+|\d+)\)"
                      r"|\s*\bat offset (?:0x[0-9a-fA-F]+|\d+)")
 
+STATS_COLUMNS = ("address", "callsign")  # decoded columns the tables need besides SAC/SIC and times
 # The groupings of the tables: key columns, and whether rows with a missing key are left out
 _LEVELS = {"categories": ["category"], "sources": ["category", "sac", "sic"],
            "aircraft": ["category", "sac", "sic", "key"]}  # aircraft: rows without SAC/SIC or key left out

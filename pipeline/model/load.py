@@ -58,8 +58,9 @@ def _concat(parts: list[pd.DataFrame]) -> pd.DataFrame:
 
 
 def load(paths: list[str | Path], *, editions=None, date=None, format: str | None = None,
-         categories=None, progress: Progress | None = None) -> Loaded:
-    """Decode every input into one frame per category, each row tagged with its file.
+         categories=None, columns=None, progress: Progress | None = None) -> Loaded:
+    """Decode every input into one frame per category, each row tagged with its file (``columns``: only
+    those decoded columns, see asterix.read).
 
     Records keep their own ``timestamp``; ``Loaded.date`` (the earliest known date) dates the records of
     inputs that have none (pipeline.model.time.absolute_time).
@@ -70,7 +71,8 @@ def load(paths: list[str | Path], *, editions=None, date=None, format: str | Non
         p = Path(p)
         if progress:
             progress.step(f"{p.name} ({i + 1}/{len(paths)})")
-        rec = asterix.read(p, editions=editions, date=date, format=format, categories=categories)
+        rec = asterix.read(p, editions=editions, date=date, format=format, categories=categories,
+                           columns=columns)
         recs.append(rec)
         inputs.append({"path": str(p), "sha256": sha256(p), "bytes": rec.size_bytes, "format": rec.format,
                        "records": {int(c): len(f) for c, f in rec.frames.items()},
