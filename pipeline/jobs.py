@@ -500,8 +500,10 @@ def correlate_job(options: CorrelateOptions, *, progress: Progress | None = None
     loaded = _load(options, checked, progress)
     if progress:
         progress.stage("Pre-processing data")
-    meas_all = mark_once(_measurements(loaded, checked.sensors, str(options.sensors)),
-                         split_adsb=options.split_adsb)  # jumps always: each window counts its own
+    meas = _measurements(loaded, checked.sensors, str(options.sensors))
+    loaded.drop_frames()  # the measurements hold what the job needs: free the decoded frames first
+    meas_all = mark_once(meas, split_adsb=options.split_adsb)  # jumps always: each window counts its own
+    del meas
     meas, removed = apply_filters(meas_all, drop_jumps=options.drop_jumps, min_nic=options.min_nic,
                                   min_nacp=options.min_nacp)
     if progress:  # the thesis tool's stage names
@@ -617,7 +619,9 @@ def quality_job(options: QualityOptions, *, progress: Progress | None = None, ch
     loaded = _load(options, checked, progress)
     if progress:
         progress.stage("Analysing data quality")
-    meas = mark_once(_measurements(loaded, checked.sensors, str(options.sensors)))
+    meas = _measurements(loaded, checked.sensors, str(options.sensors))
+    loaded.drop_frames()  # the measurements hold what the job needs: free the decoded frames first
+    meas = mark_once(meas)
     quality = _quality(meas, checked.sensors, options)
     params = {**_parameters(options, loaded, started, command), "callsign": options.callsign,
               "address": options.address, "gap_s": options.gap_s}

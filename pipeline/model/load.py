@@ -29,6 +29,13 @@ class Loaded:
         frames = [r.errors for r in self.recordings if len(r.errors)]
         return pd.concat(frames, ignore_index=True) if frames else self.recordings[0].errors.iloc[:0]
 
+    def drop_frames(self) -> None:
+        """Free the decoded frames (each input's and their concatenation) once the measurements are built
+        from them; the inputs, errors, editions and date stay."""
+        self.frames = {}
+        for rec in self.recordings:
+            rec.frames = {}
+
     @property
     def editions(self) -> dict[int, str]:
         out: dict[int, str] = {}
