@@ -26,13 +26,13 @@ from pipeline.correlate.results import CorrelationRun
 from pipeline.meta import FORMATS, software_version
 from pipeline.model.dedup import DEDUP_KEYS, duplicate_mask
 from pipeline.model.identity import normalise_address, normalise_callsign
+from pipeline.model.jumps import JUMP_FLAG_COLUMNS, jump_flags
 from pipeline.model.load import Loaded, load
 from pipeline.model.measurements import DECODED_COLUMNS, build_measurements
 from pipeline.model.sensors import read_sensors
 from pipeline.model.time import absolute_time
 from pipeline.progress import Progress
 from pipeline.quality.filters import apply_filters
-from pipeline.quality.jumps import JUMP_FLAG_COLUMNS, jump_flags
 from pipeline.quality.quality_run import QualityResult, quality_run
 from pipeline.report.outputs import all_or_nothing
 from pipeline.report.textguard import guard_frame
@@ -413,7 +413,7 @@ def _parameters(options: AircraftOptions, loaded: Loaded, started: float, comman
 
 
 def _quality(meas: pd.DataFrame, sensors: pd.DataFrame, options: AircraftOptions) -> QualityResult:
-    from pipeline.correlate.aircraft import NoSuchAircraft
+    from pipeline.model.aircraft import NoSuchAircraft
 
     try:
         return quality_run(meas, sensors, callsign=options.callsign, address=options.address,
@@ -490,8 +490,8 @@ def far_separations(run: CorrelationRun, meas: pd.DataFrame, sensors: pd.DataFra
 def correlate_job(options: CorrelateOptions, *, progress: Progress | None = None,
                   checked: Checked | None = None, command: str = "correlate") -> CorrelateResult:
     """Validate, decode, build measurements, filter, correlate (and assess quality); nothing is written."""
-    from pipeline.correlate.aircraft import NoSuchAircraft
     from pipeline.correlate.correlation import NoOverlap, TooManySlots
+    from pipeline.model.aircraft import NoSuchAircraft
 
     started = time.monotonic()
     checked = checked or validate(options)

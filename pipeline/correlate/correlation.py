@@ -12,8 +12,6 @@ import math
 import numpy as np
 import pandas as pd
 
-from pipeline.correlate.aircraft import Aircraft, NoSuchAircraft, one_aircraft
-from pipeline.correlate.aircraft import all_aircraft as every_aircraft
 from pipeline.correlate.results import (
     LAG_COLUMNS,
     SLOT_COLUMNS,
@@ -24,10 +22,12 @@ from pipeline.correlate.results import (
 )
 from pipeline.correlate.slots import slot_count, slot_window
 from pipeline.correlate.windows import in_window, overlap_windows, short_window_reason
+from pipeline.model.aircraft import Aircraft, NoSuchAircraft, one_aircraft
+from pipeline.model.aircraft import all_aircraft as every_aircraft
 from pipeline.model.dedup import duplicate_mask, sort_by_time
 from pipeline.model.geodesy import distance_m
+from pipeline.model.jumps import detect_jumps
 from pipeline.model.time import is_dated, iso_utc, midnight, with_clock
-from pipeline.quality.jumps import detect_jumps
 
 PAIRS = ("radar-adsb", "radar-radar", "all")
 MAX_SLOTS = 1_000_000  # slots over all windows of one run: the lag table (2N - 1 rows a window)
