@@ -46,7 +46,7 @@ class NoOverlap(LookupError):
 
         def span(s: tuple[float, float]) -> str:  # UTC date-times when dated, else HH:MM:SS
             if is_dated(reference):
-                return f"{at_seconds(reference, s[0])} to {at_seconds(reference, s[1])}"
+                return f"{iso_utc(at_seconds(reference, s[0]))} to {iso_utc(at_seconds(reference, s[1]))}"
             return f"{_clock(s[0])} to {_clock(s[1])}"
 
         super().__init__(f"{aircraft}: radar ({span(radar_span_s)}) and ADS-B ({span(adsb_span_s)}) "
@@ -168,11 +168,13 @@ def separation_stats(sep_m) -> dict[str, float]:
             "sep_p95_m": float(np.percentile(sep_m, 95)), "sep_max_m": float(sep_m.max())}
 
 
-def at_seconds(reference: pd.Timestamp | None, seconds: float) -> str | None:
-    """ISO 8601 UTC text of the instant ``seconds`` after ``reference`` (None when undated or not finite)."""
+def at_seconds(reference: pd.Timestamp | None, seconds: float) -> pd.Timestamp | None:
+    """The UTC instant (tz-aware) ``seconds`` after ``reference``; None when undated or not finite. Reports
+    take it as it is (a workbook writes it as a date-time, JSON as ISO 8601 text)."""
     if reference is None or not np.isfinite(seconds):
         return None
-    return iso_utc(reference + pd.to_timedelta(seconds, unit="s"))
+    instant = reference + pd.to_timedelta(seconds, unit="s")
+    return instant if is_dated(instant) else None
 
 
 def _unwrapped_lon(radar_lon: np.ndarray, adsb_lon: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
