@@ -58,6 +58,7 @@ class Layout:
     out_names_int: tuple[str, ...]
     out_names_wide: tuple[str, ...]
     item_frn: dict  # item id -> FRN (1-based)
+    selected: tuple[str, ...] | None = None  # the columns compiled (None: all of the edition's)
 
     @property
     def P(self) -> np.ndarray:
@@ -80,11 +81,11 @@ def _fallback(lay: Layout) -> np.ndarray:
     return out
 
 
-_PACKED: dict[tuple[int, str, str], np.ndarray] = {}
+_PACKED: dict[tuple, np.ndarray] = {}
 
 
 def _packed(lay: Layout, which: str) -> np.ndarray:
-    key = (lay.category, lay.edition, which)
+    key = (lay.category, lay.edition, lay.selected, which)
     if key not in _PACKED:
         cols = ((lay.kind, lay.size, lay.ext_start, lay.ext_count, lay.sub_start, lay.sub_count, lay.slot)
                 if which == "parts" else
@@ -124,12 +125,20 @@ def _locate(node: dict, path: tuple[str, ...]) -> tuple[int, dict] | None:
     return None
 
 
+# Always decoded, whatever the selection: the identity and time every frame is built on
+REQUIRED_COLUMNS = ("sac", "sic", "time_of_day")
+
+
 @cache
-def compile_layout(category: int, edition: str | None = None) -> Layout:
-    """Build the kernel arrays for a category edition (cached)."""
+def compile_layout(category: int, edition: str | None = None,
+                   selected: tuple[str, ...] | None = None) -> Layout:
+    """Build the kernel arrays for a category edition (cached); ``selected`` (sorted column names)
+    compiles only those columns and ``REQUIRED_COLUMNS``: the walker then records only their items and
+    the gather fills only their rows, so memory follows the columns a job needs."""
     edition = resolve_edition(category, edition)
     table = load_table(category, edition)
-    columns = tuple(columns_for(category, edition))
+    columns = tuple(c for c in columns_for(category, edition)
+                    if selected is None or c.name in selected or c.name in REQUIRED_COLUMNS)
     uap = table["uap"]
     parts: list[dict | None] = [u["node"] if u else None for u in uap]
     n_frn = len(parts)
@@ -231,5 +240,5 @@ def compile_layout(category: int, edition: str | None = None) -> Layout:
         np.array(sub_parts or [-1], i32), np.array(slot, i32), n_frn, n_slots,
         np.array(f[0], i32), np.array(f[1], i32), np.array(f[2], i32), np.array(f[3], np.bool_),
         np.array(f[4], i32), np.array(f[5], i32), np.array(f[6], np.float64),
-        tuple(names_float), tuple(names_int), tuple(names_wide), item_frn,
+        tuple(names_float), tuple(names_int), tuple(names_wide), item_frn, selected,
     )

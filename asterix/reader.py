@@ -14,6 +14,7 @@ import numpy as np
 import pandas as pd
 
 from . import kernel
+from .columns import FAMILIES
 from .containers import Segments, read_segments
 from .errors import REASONS, DecodeError, UnreadableInput
 from .frames import empty_column, icao_columns, typed_column
@@ -60,6 +61,25 @@ class Recording:
         return self.frames[category]
 
 
+_ALWAYS = ("day", "timestamp", "block", "offset")  # built for every frame
+
+
+def selected_columns(columns) -> tuple[str, ...] | None:
+    """Decoded column names to compile (sorted; ``NAME_hex`` asks for ``NAME``), or None for all;
+    ValueError naming a column no category has."""
+    if columns is None:
+        return None
+    known = {c.name for family in FAMILIES.values() for c in family}
+    names = set()
+    for name in ([columns] if isinstance(columns, str) else columns):
+        base = name[:-4] if name.endswith("_hex") and name[:-4] in known else name
+        if base not in known and base not in _ALWAYS:
+            raise ValueError(f"columns: no decoded column is named {name!r} (see docs/columns.md)")
+        if base not in _ALWAYS:
+            names.add(base)
+    return tuple(sorted(names))
+
+
 def _parse_date(date) -> dt.date | None:
     if date is None or isinstance(date, dt.date):
         return date
@@ -85,6 +105,18 @@ def _mapped(path) -> Iterator[np.ndarray]:
                 mm.close()
             except BufferError:  # frames still view the map: the OS unmaps it when they go
                 pass
+
+
+def release_pages(buf: np.ndarray, start: int, stop: int) -> None:
+    """Drop the pages of a memory-mapped file between two offsets from this process (the data stay in the
+    page cache and fault back in if read again), so a file read in chunks is not held in memory whole."""
+    mm = getattr(getattr(buf, "base", None), "obj", None)
+    if not isinstance(mm, mmap.mmap) or not hasattr(mmap, "MADV_DONTNEED") or stop <= start:
+        return
+    lo = start // mmap.PAGESIZE * mmap.PAGESIZE
+    hi = min(stop, len(mm))
+    if hi > lo:
+        mm.madvise(mmap.MADV_DONTNEED, lo, hi - lo)
 
 
 def _scan(buf, starts, lens, lay: Layout):
@@ -267,9 +299,11 @@ def frame_checked(buf: np.ndarray, seg: Segments, walked: dict[int, str | None])
 
 
 def decode_buffer(buf: np.ndarray, seg: Segments, *, path: str = "", editions: dict | None = None,
-                  categories=None, date=None, strict: bool = False) -> Recording:
-    """Decode an in-memory recording whose container segments are already known."""
+                  categories=None, date=None, strict: bool = False, columns=None) -> Recording:
+    """Decode an in-memory recording whose container segments are already known (``columns``: see
+    ``read``)."""
     editions = dict(editions or {})
+    selected = selected_columns(columns)
     decoded = [c for c in DECODABLE if c in set(DEFAULT_CATEGORIES if categories is None else categories)]
     walked = walked_editions(editions, categories)
     choice: dict[int, str] = {}
@@ -287,7 +321,7 @@ def decode_buffer(buf: np.ndarray, seg: Segments, *, path: str = "", editions: d
             if ed == "auto" and cat not in choice:
                 ed, choice[cat] = choose_edition(buf, starts, lens, cat)
                 editions[cat] = ed
-            lay = compile_layout(cat, ed)
+            lay = compile_layout(cat, ed, selected)
             scans[cat] = (sel, lay, _scan(buf, starts, lens, lay))
         if careful or seg.exact or not (any((sc[2][0] < 0).any() for sc in scans.values())
                                         or _lone_category(b_cat, walked)):
@@ -358,9 +392,15 @@ def _parse_editions(editions) -> dict[int, str]:
 
 
 def read(path, *, editions=None, date=None, categories=None, format: str | None = None,
-         strict: bool = False) -> Recording:
-    """Decode a recording file (raw, pcap/pcapng, final, gps or oradis) into typed frames by category."""
+         strict: bool = False, columns=None) -> Recording:
+    """Decode a recording file (raw, pcap/pcapng, final, gps or oradis) into typed frames by category.
+
+    ``columns`` (names, any category) decodes only those columns besides ``sac``, ``sic``,
+    ``time_of_day``, ``day``, ``timestamp``, ``block`` and ``offset``: a job that needs a few columns
+    of a large recording holds only them. Every block is still walked and accounted alike.
+    """
     eds = _parse_editions(editions)
+    selected_columns(columns)
     for cat, ed in eds.items():
         if ed != "auto":
             resolve_edition(cat, ed)
@@ -370,7 +410,7 @@ def read(path, *, editions=None, date=None, categories=None, format: str | None 
         except ValueError as exc:
             raise UnreadableInput(f"{path}: {exc}") from exc
         return decode_buffer(buf, seg, path=str(path), editions=eds, categories=categories, date=date,
-                             strict=strict)
+                             strict=strict, columns=columns)
 
 
 def categories_in(path, *, format: str | None = None) -> dict[int, int]:

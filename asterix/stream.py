@@ -15,28 +15,33 @@ from .reader import (
     _parse_editions,
     decode_buffer,
     frame_checked,
+    release_pages,
+    selected_columns,
     walked_editions,
 )
 from .timeline import known_captures, restamp
 
 
 def iter_read(path, *, chunk: int = 1_000_000, editions=None, date=None, categories=None,
-              format: str | None = None, strict: bool = False) -> Iterator[Recording]:
-    """Stream a recording in chunks of about ``chunk`` bytes of payload, yielding a Recording each.
+              format: str | None = None, strict: bool = False, columns=None) -> Iterator[Recording]:
+    """Stream a recording in chunks of about ``chunk`` bytes of payload, yielding a Recording each
+    (``columns``: only those decoded columns, as in ``read``).
 
     Days and timestamps continue across chunks; memory stays bounded by the chunk size.
     """
     eds = _parse_editions(editions)
+    selected_columns(columns)
     with _mapped(path) as buf:
         seg = read_segments(buf, format)
         bounds = _chunk_bounds(buf, seg, chunk, eds, categories)
+        release_pages(buf, 0, len(buf))  # planning the chunks read the whole file
         carry_day = 0
         last_tod = np.nan
         first_date = _parse_date(date)
         day0 = None  # container day number of the first chunk's day 0
         for sub in bounds:
             rec = decode_buffer(buf, sub, path=str(path), editions=eds, categories=categories,
-                                date=first_date, strict=strict)
+                                date=first_date, strict=strict, columns=columns)
             if seg.format in UNTIMED:
                 carry_day, last_tod = _continue_days(rec, carry_day, last_tod, first_date)
             elif rec.day0 is not None and day0 is None:
@@ -48,6 +53,8 @@ def iter_read(path, *, chunk: int = 1_000_000, editions=None, date=None, categor
                 restamp(rec.frames, first_date)
                 rec.date, rec.day0 = first_date, day0
             eds = {**eds, **{c: e for c, e in rec.editions.items() if eds.get(c) == "auto"}}
+            if len(sub.start):
+                release_pages(buf, int(sub.start.min()), int(sub.stop.max()))
             yield rec
 
 

@@ -88,6 +88,8 @@ def build_parser() -> argparse.ArgumentParser:
 
     s = sub.add_parser("stats", help="what the recordings hold")
     s.add_argument("inputs", nargs="+", metavar="INPUT")
+    s.add_argument("--chunk-mb", type=float, default=64.0,
+                   help="streaming chunk size (MB); memory follows it, not the file")
     _decoding_options(s)
 
     c = sub.add_parser("correlate", help="correlate radar against ADS-B per aircraft (thesis algorithm)")
@@ -219,13 +221,13 @@ def cmd_decode(args) -> int:
 def cmd_stats(args) -> int:
     from pipeline.stats import format_stats
 
-    result = jobs.stats_job(jobs.StatsOptions(**_decoding(args)), progress=Progress())
+    result = jobs.stats_job(jobs.StatsOptions(**_decoding(args), chunk_mb=args.chunk_mb), progress=Progress())
     _warn("stats", result.warnings)
     print(format_stats(result.tables), end="")
-    for rec in result.loaded.recordings:
-        for cat, why in rec.edition_choice.items():
-            print(f"{rec.path}: CAT{cat:03d} edition {why}")
-    if not any(len(f) for f in result.loaded.frames.values()):
+    for info in result.inputs:
+        for cat, why in info["edition_choice"].items():
+            print(f"{info['path']}: CAT{cat:03d} edition {why}")
+    if not result.records:
         print("msdc: nothing could be decoded", file=sys.stderr)
         return 1
     return 0

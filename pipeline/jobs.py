@@ -26,13 +26,13 @@ from pipeline.correlate.results import CorrelationRun
 from pipeline.meta import FORMATS, software_version
 from pipeline.model.dedup import DEDUP_KEYS, duplicate_mask
 from pipeline.model.identity import normalise_address, normalise_callsign
+from pipeline.model.jumps import JUMP_FLAG_COLUMNS, jump_flags
 from pipeline.model.load import Loaded, load
-from pipeline.model.measurements import build_measurements
+from pipeline.model.measurements import DECODED_COLUMNS, build_measurements
 from pipeline.model.sensors import read_sensors
 from pipeline.model.time import absolute_time
 from pipeline.progress import Progress
 from pipeline.quality.filters import apply_filters
-from pipeline.quality.jumps import JUMP_FLAG_COLUMNS, jump_flags
 from pipeline.quality.quality_run import QualityResult, quality_run
 from pipeline.report.outputs import all_or_nothing
 from pipeline.report.textguard import guard_frame
@@ -245,6 +245,8 @@ class QualityOptions(AircraftOptions):
 class StatsOptions(DecodingOptions):
     """Everything ``stats_job`` needs."""
 
+    chunk_mb: float = 64.0  # streaming chunk: peak memory follows it, not the file size
+
 
 @dataclass(frozen=True)
 class DecodeOptions(DecodingOptions):
@@ -297,9 +299,10 @@ def validate(options) -> Checked:
         warnings += [f"--sensors {options.sensors}: {row.name!r} altitude_m = {row.altitude_m:g} is "
                      f"implausible for a radar site (expected {lo:g} to {hi:g} m)"
                      for row in odd.itertuples()]
+    if isinstance(options, DecodeOptions | StatsOptions):
+        _number("--chunk-mb", options.chunk_mb, *CHUNK_RANGE_MB, " MB")
     if isinstance(options, DecodeOptions):
         checked.output = _output("-o", options.output, (".csv", ".parquet"))
-        _number("--chunk-mb", options.chunk_mb, *CHUNK_RANGE_MB, " MB")
         bad = [c for c in options.categories if c not in (21, 48)]
         if bad:
             raise OptionError(f"--category {bad[0]}: must be 21 or 48")
@@ -311,29 +314,58 @@ def validate(options) -> Checked:
 
 
 def _load(options: DecodingOptions, checked: Checked, progress: Progress | None) -> Loaded:
+    """Decode the inputs for measurements: only the columns build_measurements reads are decoded."""
     from asterix.errors import UnreadableInput
 
     try:
         loaded = load(checked.inputs, editions=checked.editions or None, date=options.date,
-                      format=options.format, progress=progress)
+                      format=options.format, columns=DECODED_COLUMNS, progress=progress)
     except UnreadableInput as exc:
         raise JobError(str(exc), 2) from exc
-    last: dict[int, tuple[pd.Timestamp, str]] = {}
-    for path, rec in zip(checked.inputs, loaded.recordings, strict=True):
-        for cat, frame in sorted(rec.frames.items()):
-            times = absolute_time(frame, loaded.date).dropna()
-            if times.empty:
-                continue
-            if cat in last and times.min() < last[cat][0]:
-                checked.warnings.append(f"{path}: CAT{cat:03d} starts at {times.min()}, before the end of "
-                                        f"{last[cat][1]} ({last[cat][0]}): inputs run backwards in time")
-            last[cat] = (times.max(), str(path))
-    if options.date is not None:
-        for info in loaded.inputs:
-            if info["format"] in ("pcap", "pcapng"):
-                checked.warnings.append(f"{info['path']}: --date ignored, the capture time dates a "
-                                        f"{info['format']} file")
+    spans = [_time_spans(rec.frames, loaded.date) for rec in loaded.recordings]
+    checked.warnings += _order_warnings(checked.inputs, spans)
+    checked.warnings += _date_ignored(options, loaded.inputs)
     return loaded
+
+
+Span = tuple[pd.Timestamp, pd.Timestamp]
+
+
+def _time_spans(frames: dict[int, pd.DataFrame], date: dt.date | None) -> dict[int, Span]:
+    """Earliest and latest UTC instant per category of one input (``date`` dates undated records)."""
+    out = {}
+    for cat, frame in frames.items():
+        times = absolute_time(frame, date).dropna()
+        if len(times):
+            out[cat] = (times.min(), times.max())
+    return out
+
+
+def _widen(spans: dict[int, Span], more: dict[int, Span]) -> dict[int, Span]:
+    """The spans of two chunks of one input, per category."""
+    out = dict(spans)
+    for cat, (lo, hi) in more.items():
+        out[cat] = (min(lo, out[cat][0]), max(hi, out[cat][1])) if cat in out else (lo, hi)
+    return out
+
+
+def _order_warnings(paths: list[Path], spans: list[dict[int, Span]]) -> list[str]:
+    """A warning for each input whose records of a category start before the previous input's end."""
+    warnings, last = [], {}
+    for path, by_cat in zip(paths, spans, strict=True):
+        for cat, (lo, hi) in sorted(by_cat.items()):
+            if cat in last and lo < last[cat][0]:
+                warnings.append(f"{path}: CAT{cat:03d} starts at {lo}, before the end of {last[cat][1]} "
+                                f"({last[cat][0]}): inputs run backwards in time")
+            last[cat] = (hi, str(path))
+    return warnings
+
+
+def _date_ignored(options: DecodingOptions, inputs: list[dict]) -> list[str]:
+    if options.date is None:
+        return []
+    return [f"{info['path']}: --date ignored, the capture time dates a {info['format']} file"
+            for info in inputs if info["format"] in ("pcap", "pcapng")]
 
 
 def _measurements(loaded: Loaded, sensors: pd.DataFrame, sensors_path: str) -> pd.DataFrame:
@@ -381,7 +413,7 @@ def _parameters(options: AircraftOptions, loaded: Loaded, started: float, comman
 
 
 def _quality(meas: pd.DataFrame, sensors: pd.DataFrame, options: AircraftOptions) -> QualityResult:
-    from pipeline.correlate.aircraft import NoSuchAircraft
+    from pipeline.model.aircraft import NoSuchAircraft
 
     try:
         return quality_run(meas, sensors, callsign=options.callsign, address=options.address,
@@ -458,8 +490,8 @@ def far_separations(run: CorrelationRun, meas: pd.DataFrame, sensors: pd.DataFra
 def correlate_job(options: CorrelateOptions, *, progress: Progress | None = None,
                   checked: Checked | None = None, command: str = "correlate") -> CorrelateResult:
     """Validate, decode, build measurements, filter, correlate (and assess quality); nothing is written."""
-    from pipeline.correlate.aircraft import NoSuchAircraft
     from pipeline.correlate.correlation import NoOverlap, TooManySlots
+    from pipeline.model.aircraft import NoSuchAircraft
 
     started = time.monotonic()
     checked = checked or validate(options)
@@ -468,8 +500,10 @@ def correlate_job(options: CorrelateOptions, *, progress: Progress | None = None
     loaded = _load(options, checked, progress)
     if progress:
         progress.stage("Pre-processing data")
-    meas_all = mark_once(_measurements(loaded, checked.sensors, str(options.sensors)),
-                         split_adsb=options.split_adsb)  # jumps always: each window counts its own
+    meas = _measurements(loaded, checked.sensors, str(options.sensors))
+    loaded.drop_frames()  # the measurements hold what the job needs: free the decoded frames first
+    meas_all = mark_once(meas, split_adsb=options.split_adsb)  # jumps always: each window counts its own
+    del meas
     meas, removed = apply_filters(meas_all, drop_jumps=options.drop_jumps, min_nic=options.min_nic,
                                   min_nacp=options.min_nacp)
     if progress:  # the thesis tool's stage names
@@ -585,7 +619,9 @@ def quality_job(options: QualityOptions, *, progress: Progress | None = None, ch
     loaded = _load(options, checked, progress)
     if progress:
         progress.stage("Analysing data quality")
-    meas = mark_once(_measurements(loaded, checked.sensors, str(options.sensors)))
+    meas = _measurements(loaded, checked.sensors, str(options.sensors))
+    loaded.drop_frames()  # the measurements hold what the job needs: free the decoded frames first
+    meas = mark_once(meas)
     quality = _quality(meas, checked.sensors, options)
     params = {**_parameters(options, loaded, started, command), "callsign": options.callsign,
               "address": options.address, "gap_s": options.gap_s}
@@ -622,23 +658,65 @@ def _write_quality(result: QualityJobResult) -> dict[str, Path]:
 
 @dataclass
 class StatsResult:
-    """What the recordings hold: the stats tables and the edition choices."""
+    """What the recordings hold: the stats tables, and per input its format, records per category, skipped
+    blocks, editions and how an 'auto' edition was chosen (``edition_choice``)."""
 
     tables: dict[str, pd.DataFrame]
-    loaded: Loaded
+    inputs: list[dict]
     warnings: list[str]
+
+    @property
+    def records(self) -> int:
+        """Records decoded over every input and category."""
+        return sum(n for info in self.inputs for n in info["records"].values())
 
 
 def stats_job(options: StatsOptions, *, progress: Progress | None = None) -> StatsResult:
-    """Validate and decode the inputs and tabulate records, sources and skipped blocks."""
-    from pipeline.stats import stats_tables
+    """Validate, then stream every input in chunks of ``chunk_mb`` (asterix.iter_read) and fold the tables of
+    records, sources, aircraft and skipped blocks chunk by chunk: memory is bounded by the chunk, not
+    the file."""
+    import asterix
+    from asterix.errors import UnreadableInput
+    from pipeline.model.time import UNDATED_DAY
+    from pipeline.stats import STATS_COLUMNS, StatsAccumulator
 
     checked = validate(options)
     if progress:
         progress.stage("Processing data files")
-    loaded = _load(options, checked, progress)
-    other = [r.ignored for r in loaded.recordings]  # blocks of categories not decoded
-    return StatsResult(stats_tables(loaded.frames, loaded.errors, other), loaded, checked.warnings)
+    acc = StatsAccumulator()
+    inputs: list[dict] = []
+    spans: list[dict[int, Span]] = []
+    chunk = max(int(options.chunk_mb * 1e6), 1)
+    for i, path in enumerate(checked.inputs):
+        if progress:
+            progress.step(f"{path.name} ({i + 1}/{len(checked.inputs)})")
+        info = {"path": str(path), "bytes": 0, "format": None, "records": {}, "skipped_blocks": 0,
+                "editions": {}, "edition_choice": {}, "date": None}
+        by_cat: dict[int, Span] = {}
+        try:
+            for rec in asterix.iter_read(path, chunk=chunk, editions=checked.editions or None,
+                                         date=options.date, format=options.format, columns=STATS_COLUMNS):
+                acc.add(rec.frames, rec.errors, rec.ignored)
+                info["bytes"], info["format"] = rec.size_bytes, rec.format
+                info["date"] = info["date"] or rec.date
+                for cat, frame in rec.frames.items():
+                    info["records"][cat] = info["records"].get(cat, 0) + len(frame)
+                info["skipped_blocks"] += len(rec.errors)
+                info["editions"].update(rec.editions)
+                info["edition_choice"] = {**rec.edition_choice, **info["edition_choice"]}
+                by_cat = _widen(by_cat, _time_spans(rec.frames, rec.date))
+        except UnreadableInput as exc:
+            raise JobError(str(exc), 2) from exc
+        inputs.append(info)
+        spans.append(by_cat)
+    dates = [info["date"] for info in inputs if info["date"] is not None]
+    if dates:  # undated inputs are dated by the earliest known date, as load() does
+        shift = pd.Timestamp(min(dates), tz="UTC") - UNDATED_DAY
+        spans = [s if info["date"] else {c: (lo + shift, hi + shift) for c, (lo, hi) in s.items()}
+                 for info, s in zip(inputs, spans, strict=True)]
+    checked.warnings += _order_warnings(checked.inputs, spans)
+    checked.warnings += _date_ignored(options, inputs)
+    return StatsResult(acc.tables(), inputs, checked.warnings)
 
 
 @dataclass

@@ -1,7 +1,9 @@
 """What a recording holds: records per category and SAC/SIC, time spans, aircraft per sensor, skipped blocks.
 
 Times are UTC date-times when the recording's date is known (timestamps present), HH:MM:SS otherwise
-(``+Nd`` past the first day); never seconds of day.
+(``+Nd`` past the first day); never seconds of day. ``StatsAccumulator`` folds the tables chunk by chunk
+(``asterix.iter_read``), so memory is bounded by the chunk size, not the file; ``stats_tables`` is the
+same fold over one whole decoded recording.
 """
 
 from __future__ import annotations
@@ -15,15 +17,17 @@ import pandas as pd
 _OFFSET = re.compile(r"\s*\((?:record )?at offset (?:0x[0-9a-fA-F]+|\d+)\)"
                      r"|\s*\bat offset (?:0x[0-9a-fA-F]+|\d+)")
 
+STATS_COLUMNS = ("address", "callsign")  # decoded columns the tables need besides SAC/SIC and times
+# The groupings of the tables: key columns, and whether rows with a missing key are left out
+_LEVELS = {"categories": ["category"], "sources": ["category", "sac", "sic"],
+           "aircraft": ["category", "sac", "sic", "key"]}  # aircraft: rows without SAC/SIC or key left out
+_SPAN = ["t_min", "stamp_min", "t_max", "stamp_max"]
+_SKIPPED = ["category", "reason", "blocks", "bytes", "first_offset"]
+
 
 def reason_kind(reason: str) -> str:
     """A skipped block's reason without the offset embedded in it, so equal reasons group together."""
     return _OFFSET.sub("", str(reason)).strip()
-
-
-def _seconds(frame: pd.DataFrame) -> np.ndarray:
-    t = frame["day"].to_numpy(dtype=float, na_value=np.nan) * 86400.0
-    return t + frame["time_of_day"].to_numpy(dtype=float, na_value=np.nan)
 
 
 def clock(seconds: float) -> str:
@@ -35,71 +39,216 @@ def clock(seconds: float) -> str:
     return f"+{day}d {text}" if day else text
 
 
-def _span(frame: pd.DataFrame) -> tuple[str, str, float]:
-    """Start and end as text (UTC date-time when timestamps are known, else HH:MM:SS) and the duration."""
-    t = _seconds(frame)
-    ok = np.isfinite(t)
-    if not ok.any():
+def _span_text(t_min: float, stamp_min, t_max: float, stamp_max) -> tuple[str, str, float]:
+    """Start and end as text (UTC date-time when both timestamps are known, else HH:MM:SS), duration (s)."""
+    if not np.isfinite(t_min):
         return "-", "-", float("nan")
-    first, last = int(np.argmin(np.where(ok, t, np.inf))), int(np.argmax(np.where(ok, t, -np.inf)))
-    duration = float(t[last] - t[first])
-    stamps = frame["timestamp"] if "timestamp" in frame.columns else None
-    if stamps is not None and stamps.notna().iloc[[first, last]].all():
-        start, end = stamps.iloc[first], stamps.iloc[last]
+    duration = float(t_max - t_min)
+    if pd.notna(stamp_min) and pd.notna(stamp_max):
         fmt = "%Y-%m-%d %H:%M:%S"
-        end_text = end.strftime("%H:%M:%S" if end.date() == start.date() else fmt)
-        return start.strftime(fmt), end_text, duration
-    return clock(t[first]), clock(t[last]), duration
+        end_text = stamp_max.strftime("%H:%M:%S" if stamp_max.date() == stamp_min.date() else fmt)
+        return stamp_min.strftime(fmt), end_text, duration
+    return clock(t_min), clock(t_max), duration
 
 
-def _aircraft(frame: pd.DataFrame, cat: int) -> list[dict]:
-    """One row per sensor and aircraft (address, else call sign): call sign(s), reports and time span."""
-    if frame.empty:
-        return []
-    address = frame["address"].astype(object)
-    key = address.where(address.notna(), "cs:" + frame["callsign"].astype(object))
-    rows = []
-    for (sac, sic, _), g in frame.assign(_key=key).groupby(["sac", "sic", "_key"], dropna=True, observed=True,
-                                                          sort=True):
-        start, end, duration = _span(g)
-        callsigns = sorted({str(c).strip() for c in g["callsign"].dropna().unique()})
-        address = g["address"].dropna()
-        rows.append({"category": cat, "sac": sac, "sic": sic,
-                     "address": str(address.iloc[0]) if len(address) else "-",
-                     "callsign": ", ".join(callsigns) or "-", "records": len(g), "start": start, "end": end,
-                     "duration_min": round(duration / 60.0, 1)})
-    return rows
+def _codes(column: pd.Series) -> tuple[np.ndarray, np.ndarray]:
+    """Integer codes (-1 where missing) and the labels of a text column (categorical or not)."""
+    if isinstance(column.dtype, pd.CategoricalDtype):
+        return column.cat.codes.to_numpy(np.int64), np.asarray(column.cat.categories, object)
+    codes, labels = pd.factorize(column.astype(object))
+    return codes.astype(np.int64), np.asarray(labels, object)
+
+
+def _first_rows(ids: np.ndarray, n_groups: int, rows: np.ndarray) -> np.ndarray:
+    """For each group, the first of ``rows`` (ascending row numbers) that belongs to it; -1 if none."""
+    out = np.full(n_groups, -1, np.int64)
+    found, first = np.unique(ids[rows], return_index=True)
+    out[found] = rows[first]
+    return out
+
+
+def _group_spans(stamps, t: np.ndarray, ids: np.ndarray, n_groups: int, keys: dict) -> pd.DataFrame:
+    """Records and the first earliest / first latest record (as a whole-file argmin/argmax finds them)
+    per group of one frame; ``ids`` numbers the groups (-1: left out), ``keys`` gives their key columns."""
+    finite = np.flatnonzero((ids >= 0) & np.isfinite(t))
+    t_min, t_max = np.full(n_groups, np.inf), np.full(n_groups, -np.inf)
+    np.minimum.at(t_min, ids[finite], t[finite])
+    np.maximum.at(t_max, ids[finite], t[finite])
+    at_min = _first_rows(ids, n_groups, finite[t[finite] == t_min[ids[finite]]])
+    at_max = _first_rows(ids, n_groups, finite[t[finite] == t_max[ids[finite]]])
+    out = pd.DataFrame(keys)
+    out["records"] = np.bincount(ids[ids >= 0], minlength=n_groups)
+    out["t_min"] = np.where(at_min >= 0, t_min, np.nan)
+    out["stamp_min"] = stamps.take(at_min, allow_fill=True)
+    out["t_max"] = np.where(at_max >= 0, t_max, np.nan)
+    out["stamp_max"] = stamps.take(at_max, allow_fill=True)
+    return out
+
+
+def _chunk_tables(cat: int, frame: pd.DataFrame) -> dict[str, tuple[pd.DataFrame, dict[str, pd.DataFrame]]]:
+    """One decoded frame's partial tables per level: spans per group, and the distinct addresses and call
+    signs per group. Grouping works on integer codes, so a chunk of millions of records stays cheap."""
+    n = len(frame)
+    t = frame["day"].to_numpy(dtype=float, na_value=np.nan) * 86400.0
+    t = t + frame["time_of_day"].to_numpy(dtype=float, na_value=np.nan)
+    stamps = (frame["timestamp"].array if "timestamp" in frame.columns
+              else pd.array(np.full(n, np.datetime64("NaT", "ns"))).tz_localize("UTC"))
+    addr, addr_labels = _codes(frame["address"])
+    cs, cs_labels = _codes(frame["callsign"])
+    sac = frame["sac"].to_numpy(np.int64, na_value=-1)
+    sic = frame["sic"].to_numpy(np.int64, na_value=-1)
+    # the aircraft key: its address, else its call sign (numbered after the addresses), else none (-1)
+    key = np.where(addr >= 0, addr, np.where(cs >= 0, len(addr_labels) + cs, -1))
+    key_labels = np.array([*addr_labels, *("cs:" + str(c) for c in cs_labels)], object)
+    source = (sac + 1) * (1 << 32) + (sic + 1)  # every SAC/SIC pair, a missing one (-1) included
+    aircraft = np.where((sac >= 0) & (sic >= 0) & (key >= 0), source * (len(key_labels) + 1) + key, -1)
+    out = {}
+    for level, combined in (("categories", np.zeros(n, np.int64)), ("sources", source),
+                            ("aircraft", aircraft)):
+        keep = np.flatnonzero(combined >= 0)
+        ids = np.full(n, -1, np.int64)
+        ids[keep], uniques = pd.factorize(combined[keep])
+        groups = len(uniques)
+        first = _first_rows(ids, groups, keep)
+        keys: dict[str, object] = {"category": np.full(groups, cat, np.int64)}
+        if level != "categories":
+            keys["sac"], keys["sic"] = frame["sac"].array.take(first), frame["sic"].array.take(first)
+        if level == "aircraft":
+            keys["key"] = key_labels[key[first]]
+        distinct = {}
+        for value, codes, labels in (("address", addr, addr_labels), ("callsign", cs, cs_labels)):
+            rows = keep[codes[keep] >= 0]
+            group, code = np.divmod(np.unique(ids[rows] * (len(labels) + 1) + codes[rows]), len(labels) + 1)
+            found = pd.DataFrame({k: v.take(group) for k, v in keys.items()})
+            found[value] = labels[code]
+            distinct[value] = found
+        out[level] = (_group_spans(stamps, t, ids, groups, keys), distinct)
+    return out
+
+
+def _extremes(rows: pd.DataFrame, keys: list[str], how: str) -> pd.DataFrame:
+    """Per group, the first row (in row order) with the smallest (``how="min"``) or largest finite time,
+    with its timestamp."""
+    t, stamp = f"t_{how}", f"stamp_{how}"
+    finite = rows[np.isfinite(rows[t].to_numpy(float))]
+    grouped = finite.groupby(keys, dropna=False, sort=False)[t]
+    at = grouped.idxmin() if how == "min" else grouped.idxmax()
+    return finite.loc[at.to_numpy(), [*keys, t, stamp]]
+
+
+def _fold(rows: pd.DataFrame, keys: list[str]) -> pd.DataFrame:
+    """Partial spans of successive chunks (earlier chunks first) folded into one row per group."""
+    counts = rows.groupby(keys, dropna=False, sort=False)["records"].sum().reset_index()
+    return (counts.merge(_extremes(rows, keys, "min"), on=keys, how="left")
+            .merge(_extremes(rows, keys, "max"), on=keys, how="left"))
+
+
+class StatsAccumulator:
+    """The stats tables folded chunk by chunk: per group only the record count, the earliest and latest
+    record and the distinct addresses and call signs are kept, so memory does not grow with the file."""
+
+    def __init__(self) -> None:
+        self.categories: set[int] = set()
+        self._spans: dict[str, pd.DataFrame] = {}
+        self._distinct: dict[tuple[str, str], pd.DataFrame] = {}
+        self._skipped: pd.DataFrame | None = None
+        self._other: pd.DataFrame | None = None
+
+    def add(self, frames: dict[int, pd.DataFrame], errors: pd.DataFrame | None = None,
+            ignored: pd.DataFrame | list[pd.DataFrame] | None = None) -> None:
+        """Fold in one chunk: decoded frames by category, its skipped-bytes account, its ignored blocks."""
+        self.categories |= set(frames)
+        for cat, frame in sorted(frames.items()):
+            for level, (new, distinct) in _chunk_tables(cat, frame).items():
+                old = self._spans.get(level)
+                self._spans[level] = new if old is None else _fold(pd.concat([old, new], ignore_index=True),
+                                                                   _LEVELS[level])
+                for value, seen in distinct.items():
+                    prev = self._distinct.get((level, value))
+                    if prev is not None:
+                        seen = pd.concat([prev, seen], ignore_index=True).drop_duplicates(ignore_index=True)
+                    self._distinct[(level, value)] = seen
+        if errors is not None and len(errors):
+            kinds = errors.assign(reason=errors["reason"].map(reason_kind))
+            new = (kinds.groupby(["category", "reason"], dropna=False)
+                   .agg(blocks=("offset", "size"), bytes=("length", "sum"), first_offset=("offset", "min"))
+                   .reset_index())
+            if self._skipped is not None:
+                new = (pd.concat([self._skipped, new], ignore_index=True)
+                       .groupby(["category", "reason"], dropna=False)
+                       .agg(blocks=("blocks", "sum"), bytes=("bytes", "sum"),
+                            first_offset=("first_offset", "min")).reset_index())
+            self._skipped = new
+        other = [f for f in (ignored if isinstance(ignored, list) else [ignored]) if f is not None and len(f)]
+        if other:
+            if self._other is not None:
+                other.insert(0, self._other)
+            self._other = pd.concat(other).groupby("category", as_index=False)[["blocks", "bytes"]].sum()
+
+    def _table(self, level: str) -> pd.DataFrame:
+        """A level's groups in key order (missing keys last), with their distinct addresses and call signs:
+        counted, or for aircraft the call signs (stripped) listed."""
+        keys = _LEVELS[level]
+        spans = self._spans[level].sort_values(keys, na_position="last", kind="stable", ignore_index=True)
+        for value in ("address", "callsign"):
+            seen = self._distinct[(level, value)]
+            if level == "aircraft":
+                text = seen.assign(**{value: seen[value].map(lambda c: str(c).strip())}).drop_duplicates()
+                found = text.groupby(keys, dropna=False, sort=False)[value].agg(
+                    lambda v: ", ".join(sorted(v)))
+            else:
+                found = seen.groupby(keys, dropna=False, sort=False)[value].nunique()
+            spans = spans.merge(found.rename(f"seen_{value}").reset_index(), on=keys, how="left")
+        return spans
+
+    def tables(self) -> dict[str, pd.DataFrame]:
+        """Tables: per category, per category and SAC/SIC, aircraft per sensor, skipped blocks by reason,
+        and blocks of categories not decoded."""
+        per_cat, per_src, aircraft = [], [], []
+        if self._spans:
+            cats = self._table("categories").set_index("category")
+            for cat in sorted(self.categories):
+                r = cats.loc[cat]
+                start, end, duration = _span_text(r.t_min, r.stamp_min, r.t_max, r.stamp_max)
+                per_cat.append({"category": cat, "records": int(r.records), "start": start, "end": end,
+                                "duration_min": round(duration / 60.0, 1),
+                                "addresses": _count(r.seen_address), "callsigns": _count(r.seen_callsign)})
+            for r in self._table("sources").itertuples(index=False):
+                start, end, _ = _span_text(r.t_min, r.stamp_min, r.t_max, r.stamp_max)
+                per_src.append({"category": r.category, "sac": r.sac, "sic": r.sic, "records": int(r.records),
+                                "start": start, "end": end, "addresses": _count(r.seen_address),
+                                "callsigns": _count(r.seen_callsign)})
+            for r in self._table("aircraft").itertuples(index=False):
+                start, end, duration = _span_text(r.t_min, r.stamp_min, r.t_max, r.stamp_max)
+                callsigns = r.seen_callsign if isinstance(r.seen_callsign, str) and r.seen_callsign else "-"
+                aircraft.append({"category": r.category, "sac": r.sac, "sic": r.sic,
+                                 "address": "-" if r.key.startswith("cs:") else r.key, "callsign": callsigns,
+                                 "records": int(r.records), "start": start, "end": end,
+                                 "duration_min": round(duration / 60.0, 1)})
+        if self._skipped is not None:
+            skipped = self._skipped.sort_values(["blocks", "first_offset"], ascending=[False, True])
+            skipped = skipped[_SKIPPED].reset_index(drop=True)
+        else:
+            skipped = pd.DataFrame(columns=_SKIPPED)
+        other = self._other if self._other is not None else pd.DataFrame(columns=["category", "blocks",
+                                                                                   "bytes"])
+        return {"categories": pd.DataFrame(per_cat), "sources": pd.DataFrame(per_src),
+                "aircraft": pd.DataFrame(aircraft), "skipped": skipped, "other": other}
+
+
+def _count(value) -> int:
+    """A distinct count from a left merge: NaN (no value seen) is 0."""
+    return 0 if pd.isna(value) else int(value)
 
 
 def stats_tables(frames: dict[int, pd.DataFrame], errors: pd.DataFrame,
                  ignored: pd.DataFrame | list[pd.DataFrame] | None = None) -> dict[str, pd.DataFrame]:
-    """Tables: per category, per category and SAC/SIC, aircraft per sensor, skipped blocks by reason, and
-    blocks of categories not decoded (``Recording.ignored``, one frame or one per input)."""
-    per_cat, per_src, aircraft = [], [], []
-    for cat, f in sorted(frames.items()):
-        start, end, duration = _span(f)
-        per_cat.append({"category": cat, "records": len(f), "start": start, "end": end,
-                        "duration_min": round(duration / 60.0, 1), "addresses": f["address"].nunique(),
-                        "callsigns": f["callsign"].nunique()})
-        for (sac, sic), g in f.groupby(["sac", "sic"], dropna=False, observed=True):
-            s, e, _ = _span(g)
-            per_src.append({"category": cat, "sac": sac, "sic": sic, "records": len(g), "start": s, "end": e,
-                            "addresses": g["address"].nunique(), "callsigns": g["callsign"].nunique()})
-        aircraft += _aircraft(f, cat)
-    columns = ["category", "reason", "blocks", "bytes", "first_offset"]
-    if len(errors):
-        kinds = errors.assign(reason=errors["reason"].map(reason_kind))
-        reasons = (kinds.groupby(["category", "reason"], dropna=False)
-                   .agg(blocks=("offset", "size"), bytes=("length", "sum"), first_offset=("offset", "min"))
-                   .reset_index().sort_values(["blocks", "first_offset"], ascending=[False, True]))
-    else:
-        reasons = pd.DataFrame(columns=columns)
-    parts = [f for f in (ignored if isinstance(ignored, list) else [ignored]) if f is not None and len(f)]
-    other = (pd.concat(parts).groupby("category", as_index=False)[["blocks", "bytes"]].sum() if parts
-             else pd.DataFrame(columns=["category", "blocks", "bytes"]))
-    return {"categories": pd.DataFrame(per_cat), "sources": pd.DataFrame(per_src),
-            "aircraft": pd.DataFrame(aircraft), "skipped": reasons[columns].reset_index(drop=True),
-            "other": other}
+    """Tables of whole decoded frames (one chunk of ``StatsAccumulator``): per category, per category and
+    SAC/SIC, aircraft per sensor, skipped blocks by reason, and blocks of categories not decoded
+    (``Recording.ignored``, one frame or one per input)."""
+    acc = StatsAccumulator()
+    acc.add(frames, errors, ignored)
+    return acc.tables()
 
 
 def format_stats(tables: dict[str, pd.DataFrame]) -> str:

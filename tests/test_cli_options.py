@@ -75,6 +75,8 @@ ERRORS = [
     ("chunk-zero", ["decode", "{R}", "--chunk-mb", "0"], 2, ["--chunk-mb", "0.1 to 4096"]),
     ("chunk-nan", ["decode", "{R}", "--chunk-mb", "nan"], 2, ["--chunk-mb", "finite"]),
     ("chunk-negative", ["decode", "{R}", "--chunk-mb", "-1"], 2, ["--chunk-mb", "0.1 to 4096"]),
+    ("stats-chunk-zero", ["stats", "{R}", "--chunk-mb", "0"], 2, ["--chunk-mb", "0.1 to 4096"]),
+    ("stats-chunk-inf", ["stats", "{R}", "--chunk-mb", "inf"], 2, ["--chunk-mb", "finite"]),
     ("address-xyz", CORR[:-2] + ["--address", "XYZ"], 2, ["--address", "hex"]),
     ("address-7-digits", CORR[:-2] + ["--address", "1234567"], 2, ["--address", "6 hex digits"]),
     ("callsign-punctuation", CORR[:-2] + ["--callsign", "MAS-72"], 2, ["--callsign", "letters and digits"]),

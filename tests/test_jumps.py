@@ -13,8 +13,8 @@ from fixtures.scenario import default_scenario
 from fixtures.simulate import simulate
 from pipeline.model.geodesy import distance_m, ecef_to_geodetic, enu_to_ecef
 from pipeline.model.identity import assign_aircraft_id
+from pipeline.model.jumps import JUMP_COLUMNS, detect_jumps, jump_table
 from pipeline.model.measurements import adsb_measurements
-from pipeline.quality.jumps import JUMP_COLUMNS, detect_jumps, jump_table
 
 LAT0, LON0 = 3.0, 101.5
 

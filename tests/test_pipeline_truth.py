@@ -661,9 +661,11 @@ def test_midnight_windows_span_the_day_change(midnight):
     assert len(spanning) >= 3
     for res in spanning:
         w, s = res.summary, res.slots
-        assert w["start"].startswith(f"{DAY0}T23:") and w["end"].startswith("2019-07-01T00:")
-        span = (pd.Timestamp(w["end"]) - pd.Timestamp(w["start"])).total_seconds()
-        assert span == pytest.approx(w["end_tod"] - w["start_tod"], abs=1e-3)  # ISO text to the millisecond
+        assert str(w["start"].tz) == str(w["end"].tz) == "UTC"  # real UTC date-times, not text
+        assert w["start"].strftime("%Y-%m-%dT%H") == f"{DAY0}T23"
+        assert w["end"].strftime("%Y-%m-%dT%H") == "2019-07-01T00"
+        span = (w["end"] - w["start"]).total_seconds()
+        assert span == pytest.approx(w["end_tod"] - w["start_tod"], abs=1e-6)
         assert (np.diff(s["time_of_day"]) == SLOT_S).all()
         k = int(slot_index(86400.0, w["start_tod"], SLOT_S))
         near = s.iloc[max(k - 2, 0): k + 3]

@@ -140,7 +140,7 @@ def test_values_numbers_datetimes_and_blanks(outputs: dict[str, Path]) -> None:
     row, col = _block(summary, "Windows")
     assert summary.cell(row + 1, col["radar_after"]).value == 5
     assert summary.cell(row + 1, col["start"]).value == dt.datetime(2019, 3, 1, 10, 0, 0, 500000)
-    assert summary.cell(row + 1, col["start"]).number_format == "yyyy-mm-dd hh:mm:ss"
+    assert summary.cell(row + 1, col["start"]).number_format == 'yyyy-mm-dd hh:mm:ss "UTC"'
     # the end was given as ISO text
     assert summary.cell(row + 1, col["end"]).value == dt.datetime(2019, 3, 1, 10, 0, 20, 500000)
     # window 2 has no date: its start is the clock time of start_tod 36100 s = 10:01:40, never 36100
@@ -349,7 +349,7 @@ def test_json_round_trip(outputs: dict[str, Path]) -> None:
     assert [list(w) for w in data["windows"]] == [[*SUMMARY_KEYS, "note"]] * 2
     first, second = data["windows"]
     assert first["ncc0_lat"] == 0.99998 and first["radar_after"] == 5
-    assert first["start"] == "2019-03-01T10:00:00.500000Z" and first["end"] == "2019-03-01T10:00:20.500Z"
+    assert first["start"] == "2019-03-01T10:00:00.500Z" and first["end"] == "2019-03-01T10:00:20.500Z"
     assert second["pearson0_lat"] is None and second["start"] is None and second["end"] is None
     assert second["callsign"] == EVIL and second["ncc_peak_lag_lat"] == 1
     assert data["skipped"] == [{"callsign": "-1+1", "address": "=HYPERLINK(\"http://x\")",
@@ -432,3 +432,27 @@ def test_wide_tables_span_pages_with_identity_repeated(tmp_path: Path) -> None:
     wb = load_workbook(tmp_path / "wide.xlsx")
     assert wb["Quality"].page_setup.fitToWidth == 3 and wb["Quality"].print_title_cols == "$A:$B"
     assert wb["Small"].page_setup.fitToWidth == 1 and wb["Small"].print_title_cols is None
+
+
+def test_window_start_is_a_utc_date_in_the_workbook(tmp_path: Path) -> None:
+    """On the fixtures, MAS72's first window starts where the simulator's truth says (its first overlap of
+    radar and ADS-B reports, ToD to one LSB): the workbook cell read back is that UTC date-time, a real
+    Excel date labelled UTC, and the JSON keeps ISO text."""
+    from pipeline import jobs
+
+    root = Path(__file__).resolve().parents[1]
+    truth = json.loads((root / "fixtures" / "truth.json").read_text())
+    first = min((w for w in truth["overlap_windows"] if w["callsign"] == "MAS72"), key=lambda w: w["start_s"])
+    want = dt.datetime(2019, 3, 1) + dt.timedelta(seconds=first["start_s"])  # truth: UTC s since midnight
+    result = jobs.correlate_job(jobs.CorrelateOptions(
+        inputs=(str(root / "fixtures" / "radar.ast"), str(root / "fixtures" / "adsb.ast")),
+        sensors=str(root / "fixtures" / "sensors.toml"), callsign="MAS72", date=dt.date(2019, 3, 1)))
+    write_report(result.run, tmp_path / "r.xlsx")
+    summary = load_workbook(tmp_path / "r.xlsx")["Summary"]
+    row, col = _block(summary, "Windows")
+    cell = summary.cell(row + 1, col["start"])
+    assert isinstance(cell.value, dt.datetime) and cell.is_date
+    assert abs((cell.value - want).total_seconds()) <= 1 / 128
+    assert cell.number_format.endswith('"UTC"')
+    text = run_to_json(result.run)["windows"][0]["start"]
+    assert text.endswith("Z") and abs(pd.Timestamp(text).tz_localize(None) - want).total_seconds() <= 1 / 128

@@ -12,8 +12,6 @@ import math
 import numpy as np
 import pandas as pd
 
-from pipeline.correlate.aircraft import Aircraft, NoSuchAircraft, one_aircraft
-from pipeline.correlate.aircraft import all_aircraft as every_aircraft
 from pipeline.correlate.results import (
     LAG_COLUMNS,
     SLOT_COLUMNS,
@@ -24,10 +22,12 @@ from pipeline.correlate.results import (
 )
 from pipeline.correlate.slots import slot_count, slot_window
 from pipeline.correlate.windows import in_window, overlap_windows, short_window_reason
+from pipeline.model.aircraft import Aircraft, NoSuchAircraft, one_aircraft
+from pipeline.model.aircraft import all_aircraft as every_aircraft
 from pipeline.model.dedup import duplicate_mask, sort_by_time
 from pipeline.model.geodesy import distance_m
+from pipeline.model.jumps import detect_jumps
 from pipeline.model.time import is_dated, iso_utc, midnight, with_clock
-from pipeline.quality.jumps import detect_jumps
 
 PAIRS = ("radar-adsb", "radar-radar", "all")
 MAX_SLOTS = 1_000_000  # slots over all windows of one run: the lag table (2N - 1 rows a window)
@@ -46,7 +46,7 @@ class NoOverlap(LookupError):
 
         def span(s: tuple[float, float]) -> str:  # UTC date-times when dated, else HH:MM:SS
             if is_dated(reference):
-                return f"{at_seconds(reference, s[0])} to {at_seconds(reference, s[1])}"
+                return f"{iso_utc(at_seconds(reference, s[0]))} to {iso_utc(at_seconds(reference, s[1]))}"
             return f"{_clock(s[0])} to {_clock(s[1])}"
 
         super().__init__(f"{aircraft}: radar ({span(radar_span_s)}) and ADS-B ({span(adsb_span_s)}) "
@@ -168,11 +168,13 @@ def separation_stats(sep_m) -> dict[str, float]:
             "sep_p95_m": float(np.percentile(sep_m, 95)), "sep_max_m": float(sep_m.max())}
 
 
-def at_seconds(reference: pd.Timestamp | None, seconds: float) -> str | None:
-    """ISO 8601 UTC text of the instant ``seconds`` after ``reference`` (None when undated or not finite)."""
+def at_seconds(reference: pd.Timestamp | None, seconds: float) -> pd.Timestamp | None:
+    """The UTC instant (tz-aware) ``seconds`` after ``reference``; None when undated or not finite. Reports
+    take it as it is (a workbook writes it as a date-time, JSON as ISO 8601 text)."""
     if reference is None or not np.isfinite(seconds):
         return None
-    return iso_utc(reference + pd.to_timedelta(seconds, unit="s"))
+    instant = reference + pd.to_timedelta(seconds, unit="s")
+    return instant if is_dated(instant) else None
 
 
 def _unwrapped_lon(radar_lon: np.ndarray, adsb_lon: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

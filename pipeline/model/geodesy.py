@@ -2,9 +2,17 @@
 
 All functions are vectorised over numpy arrays (scalars broadcast). Angles are in degrees, lengths in
 metres unless the name says otherwise (``rho_nm``).
+
+Geodesic distances go through pyproj (Geod.inv). The geodetic/ECEF/ENU conversions stay hand-written:
+measured against pyproj's on 10^6 points (benchmarks/geodesy.py, 2-core machine under load 6), both
+agree within 2 um, but pyproj took 1.43 x as long for geodetic -> ECEF and 0.88 x for ECEF -> geodetic,
+and its ENU (0.23 x, one origin per transformer) cannot take the per-point origins these functions
+accept; the gains do not pay for a second code path.
 """
 
 from __future__ import annotations
+
+from functools import cache
 
 import numpy as np
 
@@ -174,40 +182,28 @@ def slant_range_azimuth(site_lat_deg, site_lon_deg, site_alt_m, lat_deg, lon_deg
     return rho_m / M_PER_NM, azimuth, np.degrees(np.arctan2(u_m, np.hypot(e_m, n_m)))
 
 
-def distance_m(lat1_deg, lon1_deg, lat2_deg, lon2_deg, max_iter: int = 50):
-    """Geodesic distance (m) on the WGS-84 ellipsoid by Vincenty's inverse method (sub-mm accuracy).
+def distance_m(lat1_deg, lon1_deg, lat2_deg, lon2_deg):
+    """Geodesic distance (m) on the WGS-84 ellipsoid: pyproj.Geod.inv (Karney's method, converging for
+    every pair, nearly antipodal ones included); arrays broadcast, NaN inputs give NaN.
 
-    Nearly antipodal pairs, where the iteration may not converge, return the last iterate
-    (never the case for radar/ADS-B separations). NaN inputs give NaN.
+    Measured against the Vincenty inverse this replaces (benchmarks/geodesy.py, 10^6 pairs up to 3 deg
+    apart, 2-core machine under load 6): same speed (2.84 s against 2.88 s), largest difference 2 um.
     """
-    lat1, lat2 = np.radians(np.asarray(lat1_deg, float)), np.radians(np.asarray(lat2_deg, float))
-    dlon = np.radians((np.asarray(lon2_deg, float) - np.asarray(lon1_deg, float) + 180.0) % 360.0 - 180.0)
-    lat1, lat2, dlon = np.broadcast_arrays(lat1, lat2, dlon)
-    u1, u2 = np.arctan((1.0 - F) * np.tan(lat1)), np.arctan((1.0 - F) * np.tan(lat2))
-    su1, cu1, su2, cu2 = np.sin(u1), np.cos(u1), np.sin(u2), np.cos(u2)
-    lam = dlon.copy()
-    with np.errstate(invalid="ignore", divide="ignore"):
-        for _ in range(max_iter):
-            sl, cl = np.sin(lam), np.cos(lam)
-            sin_sig = np.hypot(cu2 * sl, cu1 * su2 - su1 * cu2 * cl)
-            cos_sig = su1 * su2 + cu1 * cu2 * cl
-            sig = np.arctan2(sin_sig, cos_sig)
-            sin_alpha = np.where(sin_sig > 0, cu1 * cu2 * sl / sin_sig, 0.0)
-            cos2_alpha = 1.0 - sin_alpha**2
-            cos_2sm = np.where(cos2_alpha > 0, cos_sig - 2.0 * su1 * su2 / cos2_alpha, 0.0)
-            c = F / 16.0 * cos2_alpha * (4.0 + F * (4.0 - 3.0 * cos2_alpha))
-            lam_prev = lam
-            lam = dlon + (1.0 - c) * F * sin_alpha * (
-                sig + c * sin_sig * (cos_2sm + c * cos_sig * (-1.0 + 2.0 * cos_2sm**2)))
-            if np.all(~np.isfinite(lam) | (np.abs(lam - lam_prev) < 1e-12)):
-                break
-        u_sq = cos2_alpha * EP2
-        big_a = 1.0 + u_sq / 16384.0 * (4096.0 + u_sq * (-768.0 + u_sq * (320.0 - 175.0 * u_sq)))
-        big_b = u_sq / 1024.0 * (256.0 + u_sq * (-128.0 + u_sq * (74.0 - 47.0 * u_sq)))
-        d_sig = big_b * sin_sig * (cos_2sm + big_b / 4.0 * (
-            cos_sig * (-1.0 + 2.0 * cos_2sm**2)
-            - big_b / 6.0 * cos_2sm * (-3.0 + 4.0 * sin_sig**2) * (-3.0 + 4.0 * cos_2sm**2)))
-    return B_M * big_a * (sig - d_sig)
+    lat1, lon1, lat2, lon2 = np.broadcast_arrays(*(np.asarray(v, float) for v in (lat1_deg, lon1_deg,
+                                                                                  lat2_deg, lon2_deg)))
+    shape = lat1.shape
+    if not lat1.size:
+        return np.zeros(shape)
+    flat = [np.ascontiguousarray(v).ravel() for v in (lon1, lat1, lon2, lat2)]
+    dist = _geod().inv(*flat)[2]
+    return np.asarray(dist, float).reshape(shape) if shape else float(np.asarray(dist).ravel()[0])
+
+
+@cache
+def _geod():
+    from pyproj import Geod
+
+    return Geod(ellps="WGS84")
 
 
 def wrap180(deg):

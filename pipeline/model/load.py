@@ -29,6 +29,13 @@ class Loaded:
         frames = [r.errors for r in self.recordings if len(r.errors)]
         return pd.concat(frames, ignore_index=True) if frames else self.recordings[0].errors.iloc[:0]
 
+    def drop_frames(self) -> None:
+        """Free the decoded frames (each input's and their concatenation) once the measurements are built
+        from them; the inputs, errors, editions and date stay."""
+        self.frames = {}
+        for rec in self.recordings:
+            rec.frames = {}
+
     @property
     def editions(self) -> dict[int, str]:
         out: dict[int, str] = {}
@@ -58,8 +65,9 @@ def _concat(parts: list[pd.DataFrame]) -> pd.DataFrame:
 
 
 def load(paths: list[str | Path], *, editions=None, date=None, format: str | None = None,
-         categories=None, progress: Progress | None = None) -> Loaded:
-    """Decode every input into one frame per category, each row tagged with its file.
+         categories=None, columns=None, progress: Progress | None = None) -> Loaded:
+    """Decode every input into one frame per category, each row tagged with its file (``columns``: only
+    those decoded columns, see asterix.read).
 
     Records keep their own ``timestamp``; ``Loaded.date`` (the earliest known date) dates the records of
     inputs that have none (pipeline.model.time.absolute_time).
@@ -70,7 +78,8 @@ def load(paths: list[str | Path], *, editions=None, date=None, format: str | Non
         p = Path(p)
         if progress:
             progress.step(f"{p.name} ({i + 1}/{len(paths)})")
-        rec = asterix.read(p, editions=editions, date=date, format=format, categories=categories)
+        rec = asterix.read(p, editions=editions, date=date, format=format, categories=categories,
+                           columns=columns)
         recs.append(rec)
         inputs.append({"path": str(p), "sha256": sha256(p), "bytes": rec.size_bytes, "format": rec.format,
                        "records": {int(c): len(f) for c, f in rec.frames.items()},

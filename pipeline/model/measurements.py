@@ -25,8 +25,16 @@ from pipeline.model.schema import conform, empty_measurements, validate
 from pipeline.model.sensors import UnknownRadar, sensor_sites
 from pipeline.model.time import absolute_time
 
-__all__ = ["NACP_95_M", "UnknownRadar", "adsb_measurements", "build_measurements", "nacp_sigma_m",
-           "normalise_address", "normalise_callsign", "radar_measurements", "select", "sensor_id"]
+__all__ = ["DECODED_COLUMNS", "NACP_95_M", "UnknownRadar", "adsb_measurements", "build_measurements",
+           "nacp_sigma_m", "normalise_address", "normalise_callsign", "radar_measurements", "select",
+           "sensor_id"]
+
+# The decoded CAT048/CAT021 columns build_measurements reads (besides sac, sic, time_of_day, day, timestamp
+# and offset, which every decoded frame has): jobs decode only these (asterix.read(columns=...))
+DECODED_COLUMNS = ("flight_level", "ground_speed_kt", "callsign", "address", "mode3a", "track_number",
+                   "heading_deg", "rho_nm", "theta_deg", "x_nm", "y_nm", "track_angle_deg", "latitude",
+                   "longitude", "nucp_nic", "fom_pa", "nacp", "nucr_nacv", "sil", "mops_version",
+                   "geometric_height_ft")
 
 # DO-260B NACp: 95 % horizontal position accuracy bound (EPU) in metres; 0 = unknown
 NACP_95_M = {11: 3.0, 10: 10.0, 9: 30.0, 8: 92.6, 7: 185.2, 6: 555.6, 5: 926.0, 4: 1852.0, 3: 3704.0,

@@ -16,7 +16,7 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
-from pipeline.correlate.aircraft import all_aircraft
+from pipeline.model.aircraft import all_aircraft
 from pipeline.model.dedup import deduplicate
 from pipeline.model.geodesy import (
     M_PER_NM,
@@ -29,10 +29,10 @@ from pipeline.model.geodesy import (
     slant_range_azimuth,
     wrap180,
 )
+from pipeline.model.jumps import KT_TO_MS, detect_jumps
 from pipeline.model.measurements import NACP_95_M
 from pipeline.model.sensors import sensor_sites
 from pipeline.model.time import with_clock
-from pipeline.quality.jumps import KT_TO_MS, detect_jumps
 
 MAX_ADSB_GAP_S = 10.0
 ERROR_COLUMNS = [

@@ -12,7 +12,7 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
-from pipeline.quality.jumps import detect_jumps
+from pipeline.model.jumps import detect_jumps
 
 FILTER_KEYS = ["jumps", "nic_below_min", "nacp_below_min", "nic_missing_kept", "nacp_missing_kept"]
 

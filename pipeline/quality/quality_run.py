@@ -8,7 +8,7 @@ from pathlib import Path
 
 import pandas as pd
 
-from pipeline.correlate.aircraft import one_aircraft
+from pipeline.model.aircraft import one_aircraft
 from pipeline.quality.accuracy import error_stats, estimate_biases, radar_errors
 from pipeline.quality.tables import quality_tables
 

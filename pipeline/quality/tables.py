@@ -14,8 +14,8 @@ import pandas as pd
 
 from pipeline.model.dedup import deduplicate
 from pipeline.model.identity import aircraft_labels
+from pipeline.model.jumps import jump_table
 from pipeline.model.time import iso_utc, with_clock
-from pipeline.quality.jumps import jump_table
 
 ALL = "(all)"
 REAPPEARANCE_S = 3600.0

@@ -43,7 +43,7 @@ if not LXML:  # pragma: no cover - lxml is a dependency; OPENPYXL_LXML=False wou
                   stacklevel=1)
 
 DATETIME_FORMAT = "yyyy-mm-dd hh:mm:ss.000"
-SUMMARY_DATETIME_FORMAT = "yyyy-mm-dd hh:mm:ss"
+SUMMARY_DATETIME_FORMAT = 'yyyy-mm-dd hh:mm:ss "UTC"'  # a window's start/end: an Excel date, labelled
 DATE_FORMAT = "yyyy-mm-dd"
 TIME_FORMAT = "hh:mm:ss.000"
 CLOCK_FORMAT = UNITS["tod"].excel  # seconds of day shown as a clock time ([hh] runs past 24 h)

@@ -65,7 +65,7 @@ from pipeline.report.summary import (
 )
 
 DATETIME_FORMAT = "yyyy-mm-dd hh:mm:ss.000"
-SUMMARY_DATETIME_FORMAT = "yyyy-mm-dd hh:mm:ss"
+SUMMARY_DATETIME_FORMAT = 'yyyy-mm-dd hh:mm:ss "UTC"'  # a window's start/end: an Excel date, labelled
 DATE_FORMAT = "yyyy-mm-dd"
 TIME_FORMAT = "hh:mm:ss.000"
 CLOCK_FORMAT = UNITS["tod"].excel  # seconds of day shown as a clock time ([hh] runs past 24 h)

@@ -16,6 +16,7 @@ import numpy as np
 import pandas as pd
 
 from pipeline.correlate.results import SUMMARY_KEYS, CorrelationRun, WindowResult
+from pipeline.model.time import iso_utc
 from pipeline.report.formats import decimals
 
 SKIPPED_KEYS = ["callsign", "address", "start_tod", "end_tod", "reason"]
@@ -79,6 +80,10 @@ def window_summary(window: WindowResult) -> dict[str, Any]:
     """The window's summary restricted to SUMMARY_KEYS, in order, as JSON values (absent keys -> None),
     then ``note`` (``window_note``, None when there is nothing to say)."""
     summary = {key: json_value(window.summary.get(key)) for key in SUMMARY_KEYS}
+    for key in ("start", "end"):  # ISO 8601 UTC to the millisecond, as every time in the JSON
+        value = window.summary.get(key)
+        if isinstance(value, pd.Timestamp | dt.datetime):
+            summary[key] = iso_utc(value)
     summary["note"] = window_note(window.summary)
     return summary
 
