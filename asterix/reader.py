@@ -175,6 +175,19 @@ def choose_edition(buf: np.ndarray, starts: np.ndarray, lens: np.ndarray, catego
                     f"{len(apart)} blocks told {'/'.join(contenders)} apart: {told})")
 
 
+def framing_edition(buf: np.ndarray, seg: Segments, walked: dict, category: int) -> str:
+    """For an 'auto' category of a stream whose block chain breaks: the edition under which careful
+    framing loses the fewest bytes (most of its blocks found on a tie, then the newest). Framing cannot
+    walk a category without an edition, and would otherwise lose every block of it after the damage."""
+    best: tuple | None = None
+    for ed in sorted(available()[category], key=lambda e: tuple(int(x) for x in e.split("."))):
+        framed = frame(buf, seg, {**walked, category: ed}, True)
+        key = (int(framed[5].sum()), -int((framed[2] == category).sum()))
+        if best is None or key <= best[0]:
+            best = (key, ed)
+    return best[1]
+
+
 def _plausible_share(buf, s, n, category: int, ed: str, limit: int = 400) -> float:
     """Share of records of up to ``limit`` sampled blocks with a plausible position and time of day."""
     k = np.unique(np.linspace(0, len(s) - 1, min(limit, len(s))).astype(np.int64))
@@ -286,6 +299,18 @@ def walked_editions(editions: dict, categories) -> dict[int, str | None]:
             and editions.get(c) != "auto"}
 
 
+def framing_walk(buf: np.ndarray, seg: Segments, editions: dict, categories) -> dict[int, str | None]:
+    """walked_editions, plus, on a stream whose block chain breaks, each decoded 'auto' category with the
+    edition framing_edition finds for it (its blocks are found before its edition is chosen)."""
+    walked = walked_editions(editions, categories)
+    wanted = set(DEFAULT_CATEGORIES if categories is None else categories)
+    auto = [c for c in DECODABLE if c in wanted and editions.get(c) == "auto"]
+    if auto and not seg.exact and len(frame(buf, seg, walked, False)[4]):
+        for cat in auto:
+            walked[cat] = framing_edition(buf, seg, walked, cat)
+    return walked
+
+
 def frame_checked(buf: np.ndarray, seg: Segments, walked: dict[int, str | None]):
     """Framing as decode_buffer settles it, without decoding: the chain as it is when it holds and
     every walked block walks, else careful framing (chunk planning for iter_read)."""
@@ -305,7 +330,7 @@ def decode_buffer(buf: np.ndarray, seg: Segments, *, path: str = "", editions: d
     editions = dict(editions or {})
     selected = selected_columns(columns)
     decoded = [c for c in DECODABLE if c in set(DEFAULT_CATEGORIES if categories is None else categories)]
-    walked = walked_editions(editions, categories)
+    walked = framing_walk(buf, seg, editions, categories)
     choice: dict[int, str] = {}
     # Framing first follows the block chain as it is. If it breaks, or a decoded block does not walk
     # (a LEN may be damaged), the raw stream is framed again carefully, walking the decoded blocks.

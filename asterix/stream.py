@@ -15,9 +15,9 @@ from .reader import (
     _parse_editions,
     decode_buffer,
     frame_checked,
+    framing_walk,
     release_pages,
     selected_columns,
-    walked_editions,
 )
 from .timeline import known_captures, restamp
 
@@ -79,7 +79,7 @@ def _chunk_bounds(buf: np.ndarray, seg: Segments, chunk: int, eds: dict, categor
     """Split the segments into groups of about ``chunk`` bytes, cutting raw streams at block starts."""
     out = []
     if seg.format == "raw" and len(seg.start):
-        b_start = frame_checked(buf, seg, walked_editions(eds, categories))[0]
+        b_start = frame_checked(buf, seg, framing_walk(buf, seg, eds, categories))[0]
         cuts = [int(seg.start[0])]
         for s in b_start:
             if s - cuts[-1] >= chunk:

@@ -492,6 +492,24 @@ def test_auto_in_a_pcap_and_with_iter_read(tmp_path: Path) -> None:
     assert {p.editions[21] for p in parts} == {"0.23"}
 
 
+def test_auto_on_a_damaged_stream_loses_no_block_of_the_auto_category(tmp_path: Path) -> None:
+    """CAT048 blocks, junk, CAT021 2.1 blocks, junk, CAT048: framing cannot walk a category whose edition
+    is still to be chosen, and used to lose every CAT021 block after the first junk. Each CAT021 record of
+    the clean prefix (decoded alone, undamaged) must come back, at its offset shifted by what precedes it."""
+    root = Path(__file__).resolve().parents[1] / "fixtures"
+    radar, adsb = (root / "radar.ast").read_bytes(), (root / "adsb.ast").read_bytes()
+    junk = bytes([0x15, 0x00, 0x02]) + bytes(range(200, 234))  # a CAT021 header with LEN 2, then noise
+    cut = 40000
+    clean = asterix.read(write(tmp_path, "clean.ast", adsb[:cut]), editions={21: "2.1"})
+    damaged = write(tmp_path, "d.ast", radar[:30000] + junk + adsb[:cut] + junk + radar[30000:60000])
+    rec = asterix.read(damaged, editions={21: "auto"})
+    assert rec.editions[21].startswith("2.")
+    shift = 30000 + len(junk)
+    assert rec.frames[21]["offset"].tolist() == (clean.frames[21]["offset"] + shift).tolist()
+    assert len(rec.frames[48]) == len(asterix.read(damaged, editions={21: "2.1"}).frames[48])
+    assert_chunks_equal_read(damaged, 10_000, editions={21: "auto"})  # chunk planning frames the same way
+
+
 def test_pcapng_simple_packet_blocks_without_capture_time(tmp_path: Path) -> None:
     """A Simple Packet Block carries no timestamp: its reports take the day of the nearest timed packet
     before it (after it when none is before); a file of SPBs only is ordered like a raw stream."""
