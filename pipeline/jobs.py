@@ -24,7 +24,7 @@ import pandas as pd
 from pipeline.correlate.correlation import PAIRS, correlate
 from pipeline.correlate.results import CorrelationRun
 from pipeline.meta import FORMATS, software_version
-from pipeline.model.dedup import DEDUP_KEYS, duplicate_mask
+from pipeline.model.dedup import DEDUP_KEYS, duplicate_mask, repeat_groups
 from pipeline.model.identity import normalise_address, normalise_callsign
 from pipeline.model.load import Loaded, load
 from pipeline.model.measurements import build_measurements
@@ -361,15 +361,32 @@ def mark_once(meas: pd.DataFrame, *, split_adsb: bool = False, jumps: bool = Tru
     dup = duplicate_mask(meas.sort_values("time", kind="stable"), split_adsb=split_adsb).reindex(meas.index)
     if not jumps:
         return meas.assign(duplicate=dup.to_numpy(bool))
+    dup = dup.to_numpy(bool)
     adsb = (meas["sensor_kind"] == "adsb").to_numpy(bool)
-    flags = jump_flags(meas[adsb & ~dup.to_numpy(bool)]).reindex(meas.index)  # judged without repeats
-    # a repeated report shares the verdict of the report it repeats
-    keys = meas[[k for k in DEDUP_KEYS if k in meas]].astype("object").where(meas.notna(), "<NA>")
+    judged = jump_flags(meas[adsb & ~dup])  # judged without repeats
+    # a repeated report shares the verdict of the report it repeats: per group of ADS-B rows equal in
+    # every dedup key, each column takes its first non-missing value in frame order
+    rows = np.flatnonzero(adsb)
+    order, group = repeat_groups(meas.iloc[rows], [k for k in DEDUP_KEYS if k in meas])
+    at = np.full(len(meas), -1)  # position of each judged row within the judged frame
+    at[np.flatnonzero(adsb & ~dup)] = np.arange(len(judged))
+    out = {}
     for c in JUMP_FLAG_COLUMNS:
-        flags[c] = flags[c].groupby([meas["sensor_kind"].astype("object"), *(keys[k] for k in keys)],
-                                    dropna=False).transform("first")
-    flags["jump"] = flags["jump"].fillna(False).astype(bool) & adsb
-    return meas.assign(duplicate=dup.to_numpy(bool), **{c: flags[c].to_numpy() for c in JUMP_FLAG_COLUMNS})
+        values = judged[c].to_numpy(dtype=bool if c == "jump" else float)
+        pos = at[rows[order]]  # in key order
+        known = pos >= 0
+        if values.dtype.kind == "f":
+            known[known] = ~np.isnan(values[pos[known]])
+        first = np.full(int(group[-1]) + 1 if group.size else 0, -1)
+        first_rows = np.flatnonzero(known)
+        g = group[first_rows]
+        lead = np.concatenate([[True], g[1:] != g[:-1]]) if g.size else np.zeros(0, bool)
+        first[g[lead]] = pos[first_rows[lead]]
+        src = first[group]
+        column = np.zeros(len(meas), bool) if c == "jump" else np.full(len(meas), np.nan)
+        column[rows[order[src >= 0]]] = values[src[src >= 0]]
+        out[c] = column
+    return meas.assign(duplicate=dup, **out)
 
 
 def _parameters(options: AircraftOptions, loaded: Loaded, started: float, command: str) -> dict:
