@@ -35,6 +35,7 @@ from pipeline.quality.filters import apply_filters
 from pipeline.quality.jumps import JUMP_FLAG_COLUMNS, jump_flags
 from pipeline.quality.quality_run import QualityResult, quality_run
 from pipeline.report.outputs import all_or_nothing
+from pipeline.report.tables import TABLE_FILES, TABLE_MODES, parquet_path
 from pipeline.report.textguard import guard_frame
 
 SLOT_RANGE_S = (0.1, 3600.0)  # below 0.1 s the slot count and the lag tables explode
@@ -232,6 +233,7 @@ class CorrelateOptions(AircraftOptions):
     min_nic: int | None = None
     min_nacp: int | None = None
     fill: str = "hold"  # empty slots: "hold" the previous slot (thesis) or "predict" by the tracker
+    tables: str = "auto"  # slot and lag tables: in the workbook ("xlsx"), as Parquet beside it, or "auto"
 
 
 @dataclass(frozen=True)
@@ -283,6 +285,10 @@ def validate(options) -> Checked:
             _integer("--min-nacp", options.min_nacp, *INDICATOR_RANGE)
             if options.fill not in ("hold", "predict"):
                 raise OptionError(f"--fill {options.fill!r}: must be hold or predict")
+            if options.tables not in TABLE_MODES:
+                raise OptionError(f"--tables {options.tables!r}: must be one of {', '.join(TABLE_MODES)}")
+            if options.tables == "parquet" and options.output is None:
+                raise OptionError("--tables parquet: needs -o (the tables are written beside the workbook)")
         if isinstance(options, QualityOptions) and options.reference not in ("adsb", "track"):
             raise OptionError(f"--reference {options.reference!r}: must be adsb or track")
         checked.output = _output("-o", options.output, (".xlsx",))
@@ -290,6 +296,13 @@ def validate(options) -> Checked:
             png = checked.output.with_name(f"{checked.output.stem}_tracks.png")
             if png.is_dir():
                 raise OptionError(f"-o {checked.output}: its track figure {png} is a directory")
+            if options.tables != "xlsx":  # the tables that may go to Parquet beside it
+                for name in TABLE_FILES:
+                    table = parquet_path(checked.output, name)
+                    if table.is_dir():
+                        raise OptionError(f"-o {checked.output}: its {name} table {table} is a directory")
+                    if table.exists() and not os.access(table, os.W_OK):
+                        raise OptionError(f"-o {checked.output}: its {name} table {table} is not writable")
         checked.json = _output("--json", options.json, (".json",))
         checked.sensors = _sensors(options.sensors)
         odd = checked.sensors[~checked.sensors["altitude_m"].between(*SITE_ALTITUDE_RANGE_M)]
@@ -576,8 +589,9 @@ def _write_correlation(result: CorrelateResult, progress: Progress | None,
                     w, out.with_name(f"{out.stem}_lags_{i + 1}.png"))
         png = out.with_name(out.stem + "_tracks.png")
         track_figure(run, png, checked.sensors)
-        write_report(run, out, figure_png=png, images=images)
+        tables = write_report(run, out, figure_png=png, images=images, tables=result.options.tables)
         written["report"], written["figure"] = out, png
+        written.update((f"table {p.stem.removeprefix(out.stem + '_')}", p) for p in tables)
     return written
 
 
