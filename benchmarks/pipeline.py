@@ -74,17 +74,18 @@ def build(out: Path, hours: float, n_aircraft: int, radars: int, seed: int) -> l
 
 
 def timed(label: str, argv: list[str], cwd: Path) -> None:
-    """Run ``python -m pipeline.cli ARGV`` in a fresh interpreter; print wall time, peak RSS and load."""
-    cmd = ["/usr/bin/time", "-f", "%e %M", sys.executable, "-m", "pipeline.cli", *argv]
+    """Run ``python -m pipeline.cli ARGV`` in a fresh interpreter; print wall time, CPU time (user + system:
+    steadier than wall time on a shared machine), peak RSS and load."""
+    cmd = ["/usr/bin/time", "-f", "%e %M %U %S", sys.executable, "-m", "pipeline.cli", *argv]
     load = os.getloadavg()[0]
     done = subprocess.run(cmd, cwd=cwd, capture_output=True, text=True,
                           env={**os.environ, "PYTHONPATH": str(ROOT)})
     lines = done.stderr.strip().splitlines()
-    wall_s, rss_kb = lines[-1].split()
+    wall_s, rss_kb, user_s, sys_s = lines[-1].split()
     why = lines[-2] if len(lines) > 1 else ""
     status = "" if done.returncode == 0 else f"  EXIT {done.returncode}: {why}"
-    print(f"{label:34s} {float(wall_s):7.2f} s  peak RSS {int(rss_kb) / 1024:7.0f} MB  "
-          f"(load {load:.2f} before){status}", flush=True)
+    print(f"{label:34s} {float(wall_s):7.2f} s  CPU {float(user_s) + float(sys_s):7.2f} s  "
+          f"peak RSS {int(rss_kb) / 1024:7.0f} MB  (load {load:.2f} before){status}", flush=True)
 
 
 def main() -> None:
