@@ -167,7 +167,8 @@ def _adsb_value_counts(adsb: pd.DataFrame) -> pd.DataFrame:
 
 
 def _adsb_over_time(adsb: pd.DataFrame) -> pd.DataFrame:
-    """Median of each indicator and the integrity shares per 10-minute bin, per aircraft and pooled."""
+    """Median of each indicator and the integrity shares per 10-minute bin, per aircraft and pooled
+    (grouped once, aggregated column by column: a day holds thousands of bins)."""
     indicators = _indicators(adsb)
     columns = [*ID_KEYS, "bin_start_tod_s", "bin_start_utc", "reports", *[f"{c}_median" for c in indicators],
                *SHARE_COLUMNS]
@@ -175,17 +176,46 @@ def _adsb_over_time(adsb: pd.DataFrame) -> pd.DataFrame:
         return pd.DataFrame(columns=columns)
     frame = pd.concat([adsb, adsb.assign(callsign=ALL, address="")], ignore_index=True)
     frame["bin_start_tod_s"] = np.floor(frame["time_of_day"].to_numpy(float) / QUALITY_BIN_S) * QUALITY_BIN_S
-    rows = []
-    for keys, g in frame.groupby([*ID_KEYS, "bin_start_tod_s"], dropna=False, sort=True):
-        row = dict(zip([*ID_KEYS, "bin_start_tod_s"], keys, strict=True))
-        first = g["timestamp"].iloc[0] if "timestamp" in g else pd.NaT
-        start = None if pd.isna(first) else first - pd.to_timedelta(g["time_of_day"].iloc[0]
-                                                                    - row["bin_start_tod_s"], unit="s")
-        row |= {"bin_start_utc": iso_utc(start), "reports": len(g)}
-        row |= {f"{c}_median": pd.to_numeric(g[c], errors="coerce").median() for c in indicators}
-        shares = integrity_shares(g)
-        rows.append(row | {k: shares[k] for k in SHARE_COLUMNS})
-    return pd.DataFrame(rows, columns=columns)
+    keys = [*ID_KEYS, "bin_start_tod_s"]
+    ids = frame.groupby(keys, dropna=False, sort=True).ngroup().to_numpy()
+    n = int(ids.max()) + 1
+    first = np.full(n, -1)
+    first[ids[::-1]] = np.arange(len(frame))[::-1]  # each group's first row in frame order
+    out = {k: frame[k].to_numpy()[first] for k in keys}
+    tod0 = frame["time_of_day"].to_numpy(float)[first]
+    if "timestamp" in frame:
+        start = frame["timestamp"].iloc[first].reset_index(drop=True) - pd.to_timedelta(
+            tod0 - out["bin_start_tod_s"], unit="s")
+        out["bin_start_utc"] = [iso_utc(t) for t in start]
+    else:
+        out["bin_start_utc"] = [None] * n
+    out["reports"] = np.bincount(ids, minlength=n)
+    for c in indicators:
+        values = pd.Series(pd.to_numeric(frame[c], errors="coerce").to_numpy(dtype=float, na_value=np.nan))
+        out[f"{c}_median"] = values.groupby(ids).median().reindex(range(n)).to_numpy()
+    out |= _integrity_shares_by(frame, ids, n)
+    return pd.DataFrame({c: out[c] for c in columns}, columns=columns)
+
+
+def _integrity_shares_by(adsb: pd.DataFrame, ids: np.ndarray, n: int) -> dict[str, np.ndarray]:
+    """SHARE_COLUMNS of integrity_shares() for every group ``ids`` at once."""
+    v = (pd.to_numeric(adsb["nucp_nic"], errors="coerce").to_numpy(dtype=float, na_value=np.nan)
+         if "nucp_nic" in adsb else np.full(len(adsb), np.nan))
+    known = ~np.isnan(v)
+
+    def pct(hit: np.ndarray, of: np.ndarray) -> np.ndarray:
+        total = np.bincount(ids, of.astype(float), minlength=n)
+        count = np.bincount(ids, (hit & of).astype(float), minlength=n)
+        with np.errstate(invalid="ignore", divide="ignore"):
+            return np.where(total > 0, 100.0 * count / total, np.nan)
+
+    out = {"nucp_below_5_pct": pct(v < NUCP_MIN, known), "nic_below_6_pct": pct(v < NIC_MIN, known),
+           "low_integrity_pct": np.full(n, np.nan)}
+    if "mops_version" in adsb:
+        mops = pd.to_numeric(adsb["mops_version"], errors="coerce").to_numpy(dtype=float, na_value=np.nan)
+        both = known & ~np.isnan(mops)
+        out["low_integrity_pct"] = pct(np.where(mops == 0, v < NUCP_MIN, v < NIC_MIN), both)
+    return out
 
 
 def quality_tables(meas: pd.DataFrame, *, gap_s: float = 180.0,
