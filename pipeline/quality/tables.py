@@ -12,7 +12,7 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
-from pipeline.model.dedup import deduplicate
+from pipeline.model.dedup import DEDUP_KEYS, deduplicate
 from pipeline.model.identity import aircraft_labels
 from pipeline.model.time import iso_utc, with_clock
 from pipeline.quality.jumps import jump_table
@@ -155,7 +155,8 @@ def _adsb_value_counts(adsb: pd.DataFrame) -> pd.DataFrame:
     indicators = _indicators(adsb)
     if adsb.empty or not indicators:
         return pd.DataFrame(columns=VALUE_COUNT_COLUMNS)
-    pooled = adsb.assign(callsign=ALL, address="", aircraft=ALL)
+    adsb = adsb[[*ID_KEYS, *indicators]]  # melt only what is counted: the frame is wide
+    pooled = adsb.assign(callsign=ALL, address="")
     long = pd.concat([adsb, pooled], ignore_index=True).melt(
         id_vars=ID_KEYS, value_vars=indicators, var_name="indicator", value_name="value")
     long["value"] = pd.to_numeric(long["value"], errors="coerce").astype("Int64")
@@ -174,6 +175,8 @@ def _adsb_over_time(adsb: pd.DataFrame) -> pd.DataFrame:
                *SHARE_COLUMNS]
     if adsb.empty:
         return pd.DataFrame(columns=columns)
+    adsb = adsb[[c for c in dict.fromkeys([*ID_KEYS, "time_of_day", "timestamp", *indicators, "nucp_nic",
+                                           "mops_version"]) if c in adsb]]  # the frame is wide
     frame = pd.concat([adsb, adsb.assign(callsign=ALL, address="")], ignore_index=True)
     frame["bin_start_tod_s"] = np.floor(frame["time_of_day"].to_numpy(float) / QUALITY_BIN_S) * QUALITY_BIN_S
     keys = [*ID_KEYS, "bin_start_tod_s"]
@@ -235,7 +238,10 @@ def quality_tables(meas: pd.DataFrame, *, gap_s: float = 180.0,
 
     summary, gaps, hist = [], [], []
     edges = histogram_edges_s(gap_s)
-    for sensor_id, s in both.groupby(SENSOR_KEYS, dropna=False, sort=True):
+    needed = [*ID_KEYS, "aircraft", "time", "time_of_day", "timestamp", "ground_speed_kt", "nucp_nic",
+              "mops_version", "duplicate", "sensor_kind", "sensor_id", *DEDUP_KEYS]
+    narrow = both[[c for c in dict.fromkeys(needed) if c in both]]  # the groups are copied: keep them narrow
+    for sensor_id, s in narrow.groupby(SENSOR_KEYS, dropna=False, sort=True):
         rows, intervals, clean = [], [], []
         for _, g in s.groupby(["callsign", "address", "aircraft"], dropna=False, sort=True):
             row, within, g_gaps, g_clean = _group_rows(g, gap_s, jumps_by_aircraft)
