@@ -156,3 +156,21 @@ def test_failure_leaves_nothing(result, tmp_path, monkeypatch):
     with pytest.raises(OSError):
         _write(result, tmp_path / "f.xlsx", "parquet")
     assert sorted(p.name for p in tmp_path.iterdir()) == ["kept.txt"]
+
+
+def test_track_map_of_many_slots_draws_lines_only(result, tmp_path, monkeypatch):
+    """Past MAX_MARKED_SLOTS the map keeps one line per sensor kind and says markers were left out."""
+    from matplotlib.figure import Figure
+
+    import pipeline.report.figures as figures
+
+    drawn = {}
+    monkeypatch.setattr(figures, "MAX_MARKED_SLOTS", 10)
+    monkeypatch.setattr(figures, "save_png", lambda fig, path: drawn.setdefault("fig", fig) and Path(path))
+    figures.track_figure(result.run, tmp_path / "t.png", result.checked.sensors)
+    fig: Figure = drawn["fig"]
+    ax = fig.axes[0]
+    assert "lines only" in ax.get_title()
+    tracks = [line for line in ax.lines if line.get_linestyle() == "-" and len(line.get_xdata()) > 10]
+    assert len(tracks) == 2  # radar and ADS-B, every window in one line each
+    assert not [line for line in ax.lines if line.get_marker() == "o" and len(line.get_xdata()) > 10]
