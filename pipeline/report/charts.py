@@ -161,12 +161,13 @@ def write_lag_charts(wb: Workbook, run: CorrelationRun, data_sheet: str = "Corre
     window's rows as ``data_sheet`` holds them, in order under ``headers`` (default: every lag of every
     window, CORRELATION_HEADERS)."""
     full = [lag_frame(w) for w in run.windows]
+    where = "Correlation sheet" if frames is None else "the Parquet file the Correlation sheet names"
     frames = full if frames is None else frames
     charted = [i for i, f in enumerate(full) if len(f)]
     shown = charted[:MAX_CORRELATION_CHARTS]
     more = _first_of(len(shown), len(charted))
     heading = ("Coefficient against lag for |lag| <= N/2 (at least half the slots overlap)",
-               "Wider lags are left out (all lags: Correlation sheet). NCC solid, Pearson dashed; "
+               f"Wider lags are left out (all lags: {where}). NCC solid, Pearson dashed; "
                f"latitude blue, longitude green{more}.")
     ws = chart_sheet(wb, "Lag charts", heading, len(shown))
     ref = _SheetRef(data_sheet)
@@ -235,7 +236,8 @@ def write_slot_charts(wb: Workbook, run: CorrelationRun, data_sheet: str = "Slot
     shown = charted[:MAX_SLOT_CHART_WINDOWS]
     more = _first_of(len(shown), len(charted))
     heading = ("Slotted latitude and longitude against time (UTC)",
-               f"ADS-B yellow (solid, wide), radar red (dashed, on top); data on the Slots sheet{more}.")
+               f"ADS-B yellow (solid, wide), radar red (dashed, on top); data on the {data_sheet} "
+               f"sheet{more}.")
     ws = chart_sheet(wb, "Slot charts", heading, 2 * len(shown))
     ref = _SheetRef(data_sheet)
     starts = np.concatenate([[2], 2 + np.cumsum(lengths)]).astype(int)
