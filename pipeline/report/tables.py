@@ -87,14 +87,15 @@ def slot_table(run: CorrelationRun) -> pd.DataFrame:
     for i, w in enumerate(run.windows):
         n = len(w.slots)
         piece = {**_ident(w, i, n), "slot": w.slots["slot"].to_numpy() if "slot" in w.slots else np.arange(n)}
-        if dated:
-            piece["time_utc"] = pd.to_datetime(w.slots["timestamp"], utc=True).array
+        if dated:  # int64 ns, a datetime column again in _concat
+            stamps = pd.DatetimeIndex(pd.to_datetime(w.slots["timestamp"], utc=True))
+            piece["time_utc"] = stamps.as_unit("ns").asi8
         else:
             tod = w.slots["time_of_day"] if "time_of_day" in w.slots else pd.Series(np.nan, w.slots.index)
             piece["time_of_day"] = pd.to_numeric(tod, errors="coerce").to_numpy(dtype=float)
         for c in values:
             piece[c] = w.slots[c].to_numpy() if c in w.slots else np.full(n, None, dtype=object)
-        pieces.append(pd.DataFrame(piece))
+        pieces.append(piece)
     columns = [*IDENT_COLUMNS, "slot", "time_utc" if dated else "time_of_day", *values]
     return _concat(pieces, columns, {"time_utc": "datetime64[ns, UTC]"} if dated else {})
 
@@ -111,7 +112,7 @@ def correlation_table(run: CorrelationRun) -> pd.DataFrame:
                  "lag_s": (lag.to_numpy(dtype=float) * slot_seconds(w, run.parameters))}
         for c in [*LAG_COLUMNS[1:], *extra]:
             piece[c] = lags[c].to_numpy() if c in lags else np.full(n, None, dtype=object)
-        pieces.append(pd.DataFrame(piece))
+        pieces.append(piece)
     return _concat(pieces, [*IDENT_COLUMNS, "lag", "lag_s", *LAG_COLUMNS[1:], *extra], {})
 
 
@@ -121,10 +122,14 @@ def lag_frame(window: WindowResult) -> pd.DataFrame:
     return lags.sort_values("lag", kind="stable") if "lag" in lags.columns else lags
 
 
-def _concat(pieces: list[pd.DataFrame], columns: list[str], dtypes: dict[str, str]) -> pd.DataFrame:
+def _concat(pieces: list[dict[str, np.ndarray]], columns: list[str], dtypes: dict[str, str]) -> pd.DataFrame:
+    """One frame from the windows' column arrays (one concatenation per column, not a frame per window)."""
     if not pieces:
         return pd.DataFrame({c: pd.Series([], dtype=dtypes.get(c, object)) for c in columns})
-    return pd.concat(pieces, ignore_index=True)[columns]
+    data = {c: np.concatenate([p[c] for p in pieces]) for c in columns}
+    if "time_utc" in data:
+        data["time_utc"] = pd.to_datetime(data["time_utc"], unit="ns", utc=True).array
+    return pd.DataFrame(data, columns=columns)
 
 
 def to_parquet(run: CorrelationRun, mode: str) -> dict[str, pd.DataFrame]:
