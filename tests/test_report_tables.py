@@ -174,3 +174,34 @@ def test_track_map_of_many_slots_draws_lines_only(result, tmp_path, monkeypatch)
     tracks = [line for line in ax.lines if line.get_linestyle() == "-" and len(line.get_xdata()) > 10]
     assert len(tracks) == 2  # radar and ADS-B, every window in one line each
     assert not [line for line in ax.lines if line.get_marker() == "o" and len(line.get_xdata()) > 10]
+
+
+@pytest.mark.parametrize("tables", ["xlsx", "parquet"])
+def test_chart_series_read_the_columns_they_name(result, tmp_path, tables):
+    """Every chart series' x and y references point at the data sheet's columns of that name (lag and a
+    coefficient; slot time and a position), rows of the charted window."""
+    from openpyxl.utils import column_index_from_string
+
+    written = _write(result, tmp_path / "c.xlsx", tables)
+    wb = load_workbook(written["report"])
+    wanted = {"Lag charts": ("lag", {"NCC lat": "ncc_lat", "NCC lon": "ncc_lon", "Pearson lat": "pearson_lat",
+                                     "Pearson lon": "pearson_lon"}),
+              "Slot charts": ("time_utc", None)}
+    for sheet, (x_name, y_names) in wanted.items():
+        charts = wb[sheet]._charts
+        assert charts
+        for chart in charts:
+            for series in chart.series:
+                refs = {}
+                for axis, ref in (("x", series.xVal.numRef.f), ("y", series.yVal.numRef.f)):
+                    data, cells = ref.rsplit("!", 1)
+                    ws = wb[data.strip("'")]
+                    col = column_index_from_string(cells.split("$")[1])
+                    refs[axis] = ws.cell(row=1, column=col).value
+                assert refs["x"] == x_name, (sheet, refs)
+                title = series.tx.strRef.f if series.tx.strRef is not None else series.tx.v
+                if y_names is not None:
+                    assert refs["y"] == y_names[title], (title, refs)
+                else:
+                    axis = "lat" if "latitude" in chart.title.tx.rich.p[0].r[0].t else "lon"
+                    assert refs["y"] == f"{'radar' if title == 'Radar' else 'adsb'}_{axis}", (title, refs)

@@ -324,8 +324,8 @@ def _write_tables(wb: Workbook, run: CorrelationRun, parquet: dict[str, tuple[pd
     if "slots" in parquet:
         slot_run = _excerpt(run, charted_windows(run, "slots"), _slot_excerpt)
         slot_frames, slot_data = [w.slots for w in slot_run.windows], "Slot chart data"
-    write_lag_charts(wb, run, lag_data, lag_frames, LAG_CHART_HEADERS)
-    write_slot_charts(wb, run, slot_data, slot_frames, SLOT_CHART_HEADERS)
+    write_lag_charts(wb, run, lag_data, lag_frames, None if lag_frames is None else LAG_CHART_HEADERS)
+    write_slot_charts(wb, run, slot_data, slot_frames, None if slot_frames is None else SLOT_CHART_HEADERS)
     excerpt_note = ("Excerpt for the charts: every k-th row (at most {n} a chart) of the charted windows; "
                     "the whole table: {file}.")
     if "correlation" in parquet:
