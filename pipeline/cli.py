@@ -110,6 +110,9 @@ def build_parser() -> argparse.ArgumentParser:
     c.add_argument("--fill", choices=["hold", "predict"], default="hold",
                    help="empty slots: hold the previous slot (default, the thesis) or take the tracker's "
                         "prediction")
+    c.add_argument("--tables", choices=["auto", "xlsx", "parquet"], default="auto",
+                   help="slot and lag tables: in the workbook (xlsx), as STEM_slots.parquet and "
+                        "STEM_correlation.parquet beside it (parquet), or Parquet past 5,000 rows (auto)")
     _decoding_options(c)
 
     q = sub.add_parser("quality", help="sensor data quality and radar accuracy against ADS-B")
@@ -238,7 +241,7 @@ def cmd_correlate(args) -> int:
     options = jobs.CorrelateOptions(
         **_aircraft(args), slot_s=args.slot, pairs=args.pairs, split_adsb=args.split_adsb,
         quality=args.quality, drop_jumps=args.drop_jumps, min_nic=args.min_nic, min_nacp=args.min_nacp,
-        fill=args.fill)
+        fill=args.fill, tables=args.tables)
     checked = jobs.validate(options)
     _warn("correlate", checked.warnings)
     seen = len(checked.warnings)
@@ -256,6 +259,9 @@ def cmd_correlate(args) -> int:
         print(f"JSON summary: {written['json']}", file=sys.stderr)
     if "report" in written:
         print(f"Report: {written['report']}\nTrack figure: {written['figure']}", file=sys.stderr)
+    for kind, path in written.items():
+        if kind.startswith("table "):
+            print(f"{kind.capitalize()} (Parquet): {path}", file=sys.stderr)
     return 0
 
 

@@ -24,7 +24,7 @@ import pandas as pd
 from pipeline.correlate.correlation import PAIRS, correlate
 from pipeline.correlate.results import CorrelationRun
 from pipeline.meta import FORMATS, software_version
-from pipeline.model.dedup import DEDUP_KEYS, duplicate_mask
+from pipeline.model.dedup import DEDUP_KEYS, duplicate_mask, repeat_groups
 from pipeline.model.identity import normalise_address, normalise_callsign
 from pipeline.model.jumps import JUMP_FLAG_COLUMNS, jump_flags
 from pipeline.model.load import Loaded, load
@@ -35,6 +35,7 @@ from pipeline.progress import Progress
 from pipeline.quality.filters import apply_filters
 from pipeline.quality.quality_run import QualityResult, quality_run
 from pipeline.report.outputs import all_or_nothing
+from pipeline.report.tables import TABLE_FILES, TABLE_MODES, parquet_path
 from pipeline.report.textguard import guard_frame
 
 SLOT_RANGE_S = (0.1, 3600.0)  # below 0.1 s the slot count and the lag tables explode
@@ -232,6 +233,7 @@ class CorrelateOptions(AircraftOptions):
     min_nic: int | None = None
     min_nacp: int | None = None
     fill: str = "hold"  # empty slots: "hold" the previous slot (thesis) or "predict" by the tracker
+    tables: str = "auto"  # slot and lag tables: in the workbook ("xlsx"), as Parquet beside it, or "auto"
 
 
 @dataclass(frozen=True)
@@ -285,6 +287,10 @@ def validate(options) -> Checked:
             _integer("--min-nacp", options.min_nacp, *INDICATOR_RANGE)
             if options.fill not in ("hold", "predict"):
                 raise OptionError(f"--fill {options.fill!r}: must be hold or predict")
+            if options.tables not in TABLE_MODES:
+                raise OptionError(f"--tables {options.tables!r}: must be one of {', '.join(TABLE_MODES)}")
+            if options.tables == "parquet" and options.output is None:
+                raise OptionError("--tables parquet: needs -o (the tables are written beside the workbook)")
         if isinstance(options, QualityOptions) and options.reference not in ("adsb", "track"):
             raise OptionError(f"--reference {options.reference!r}: must be adsb or track")
         checked.output = _output("-o", options.output, (".xlsx",))
@@ -292,6 +298,13 @@ def validate(options) -> Checked:
             png = checked.output.with_name(f"{checked.output.stem}_tracks.png")
             if png.is_dir():
                 raise OptionError(f"-o {checked.output}: its track figure {png} is a directory")
+            if options.tables != "xlsx":  # the tables that may go to Parquet beside it
+                for name in TABLE_FILES:
+                    table = parquet_path(checked.output, name)
+                    if table.is_dir():
+                        raise OptionError(f"-o {checked.output}: its {name} table {table} is a directory")
+                    if table.exists() and not os.access(table, os.W_OK):
+                        raise OptionError(f"-o {checked.output}: its {name} table {table} is not writable")
         checked.json = _output("--json", options.json, (".json",))
         checked.sensors = _sensors(options.sensors)
         odd = checked.sensors[~checked.sensors["altitude_m"].between(*SITE_ALTITUDE_RANGE_M)]
@@ -393,15 +406,32 @@ def mark_once(meas: pd.DataFrame, *, split_adsb: bool = False, jumps: bool = Tru
     dup = duplicate_mask(meas.sort_values("time", kind="stable"), split_adsb=split_adsb).reindex(meas.index)
     if not jumps:
         return meas.assign(duplicate=dup.to_numpy(bool))
+    dup = dup.to_numpy(bool)
     adsb = (meas["sensor_kind"] == "adsb").to_numpy(bool)
-    flags = jump_flags(meas[adsb & ~dup.to_numpy(bool)]).reindex(meas.index)  # judged without repeats
-    # a repeated report shares the verdict of the report it repeats
-    keys = meas[[k for k in DEDUP_KEYS if k in meas]].astype("object").where(meas.notna(), "<NA>")
+    judged = jump_flags(meas[adsb & ~dup])  # judged without repeats
+    # a repeated report shares the verdict of the report it repeats: per group of ADS-B rows equal in
+    # every dedup key, each column takes its first non-missing value in frame order
+    rows = np.flatnonzero(adsb)
+    order, group = repeat_groups(meas.iloc[rows], [k for k in DEDUP_KEYS if k in meas])
+    at = np.full(len(meas), -1)  # position of each judged row within the judged frame
+    at[np.flatnonzero(adsb & ~dup)] = np.arange(len(judged))
+    out = {}
     for c in JUMP_FLAG_COLUMNS:
-        flags[c] = flags[c].groupby([meas["sensor_kind"].astype("object"), *(keys[k] for k in keys)],
-                                    dropna=False).transform("first")
-    flags["jump"] = flags["jump"].fillna(False).astype(bool) & adsb
-    return meas.assign(duplicate=dup.to_numpy(bool), **{c: flags[c].to_numpy() for c in JUMP_FLAG_COLUMNS})
+        values = judged[c].to_numpy(dtype=bool if c == "jump" else float)
+        pos = at[rows[order]]  # in key order
+        known = pos >= 0
+        if values.dtype.kind == "f":
+            known[known] = ~np.isnan(values[pos[known]])
+        first = np.full(int(group[-1]) + 1 if group.size else 0, -1)
+        first_rows = np.flatnonzero(known)
+        g = group[first_rows]
+        lead = np.concatenate([[True], g[1:] != g[:-1]]) if g.size else np.zeros(0, bool)
+        first[g[lead]] = pos[first_rows[lead]]
+        src = first[group]
+        column = np.zeros(len(meas), bool) if c == "jump" else np.full(len(meas), np.nan)
+        column[rows[order[src >= 0]]] = values[src[src >= 0]]
+        out[c] = column
+    return meas.assign(duplicate=dup, **out)
 
 
 def _parameters(options: AircraftOptions, loaded: Loaded, started: float, command: str) -> dict:
@@ -593,8 +623,9 @@ def _write_correlation(result: CorrelateResult, progress: Progress | None,
                     w, out.with_name(f"{out.stem}_lags_{i + 1}.png"))
         png = out.with_name(out.stem + "_tracks.png")
         track_figure(run, png, checked.sensors)
-        write_report(run, out, figure_png=png, images=images)
+        tables = write_report(run, out, figure_png=png, images=images, tables=result.options.tables)
         written["report"], written["figure"] = out, png
+        written.update((f"table {p.stem.removeprefix(out.stem + '_')}", p) for p in tables)
     return written
 
 

@@ -58,6 +58,11 @@ ERRORS = [
     ("out-figure-is-directory", CORR + ["-o", "{O}/fig.xlsx"], 2,
      ["-o", "fig_tracks.png is a directory"]),
     ("out-missing-dir", CORR + ["-o", "{O}/nowhere/report.xlsx"], 2, ["-o", "does not exist"]),
+    ("out-table-is-directory", CORR + ["-o", "{O}/tab.xlsx"], 2, ["-o", "tab_slots.parquet is a directory"]),
+    ("out-table-is-directory-parquet", CORR + ["-o", "{O}/tab.xlsx", "--tables", "parquet"], 2,
+     ["-o", "tab_slots.parquet is a directory"]),
+    ("tables-unknown", CORR + ["--tables", "csv"], 2, ["--tables", "auto"]),
+    ("tables-parquet-no-output", CORR + ["--tables", "parquet"], 2, ["--tables parquet", "needs -o"]),
     ("out-txt", CORR + ["-o", "{O}/report.txt"], 2, ["-o", ".xlsx"]),
     ("out-no-suffix", CORR + ["-o", "{O}/report"], 2, ["-o", ".xlsx"]),
     ("json-readonly-dir", CORR + ["--json", "{RO}/s.json"], 2, ["--json", "not writable"]),
@@ -118,7 +123,7 @@ def paths(tmp_path):
     directory that cannot be written, a malformed sensor file."""
     out = tmp_path / "out"
     out.mkdir()
-    for name in ("dir.xlsx", "dir.json", "dir.csv", "fig_tracks.png"):
+    for name in ("dir.xlsx", "dir.json", "dir.csv", "fig_tracks.png", "tab_slots.parquet"):
         (out / name).mkdir()
     ro = tmp_path / "readonly"
     ro.mkdir()

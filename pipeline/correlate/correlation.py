@@ -26,10 +26,15 @@ from pipeline.model.aircraft import Aircraft, NoSuchAircraft, one_aircraft
 from pipeline.model.aircraft import all_aircraft as every_aircraft
 from pipeline.model.dedup import duplicate_mask, sort_by_time
 from pipeline.model.geodesy import distance_m
-from pipeline.model.jumps import detect_jumps
+from pipeline.model.jumps import JUMP_FLAG_COLUMNS, detect_jumps
 from pipeline.model.time import is_dated, iso_utc, midnight, with_clock
 
 PAIRS = ("radar-adsb", "radar-radar", "all")
+# the measurement columns correlate() reads (identity, time, position, dedup keys, job-wide flags); the
+# tracker behind --fill predict reads more
+CORRELATION_INPUTS = ["time", "time_of_day", "sensor_id", "sensor_kind", "aircraft_id", "callsign",
+                      "address", "latitude", "longitude", "ground_speed_kt", "heading_deg", "duplicate",
+                      *JUMP_FLAG_COLUMNS]
 MAX_SLOTS = 1_000_000  # slots over all windows of one run: the lag table (2N - 1 rows a window)
 # already outgrows a workbook sheet (1,048,576 rows) well before; beyond, the work explodes
 
@@ -343,6 +348,8 @@ def correlate(meas: pd.DataFrame, *, callsign: str | None = None, address: str |
     if reference is None:
         raise NoSuchAircraft("any aircraft", ["radar", "ADS-B"], [], "there are no measurements")
     meas = with_clock(meas, reference)
+    if fill == "hold":  # the steps below read these columns only; each window copies its rows
+        meas = meas[[c for c in dict.fromkeys(CORRELATION_INPUTS) if c in meas]]
     run = CorrelationRun(parameters={
         "callsign": callsign, "address": address, "all_aircraft": all_aircraft, "slot_s": slot_s,
         "gap_s": gap_s, "pairs": pairs, "split_adsb": split_adsb,

@@ -43,10 +43,17 @@ def slot_window(meas: pd.DataFrame, start_s: float, end_s: float, slot_s: float 
         ref = lon[0] if lon.size else 0.0
         rel = wrap180(lon - ref)
         lon_mean = np.bincount(k, rel, minlength=n)[:n] / count + ref
-    frame = pd.DataFrame({"slot": np.arange(n), "time_of_day": start_s + np.arange(n) * slot_s,
-                          "latitude": lat_mean, "longitude": lon_mean})
-    frame[["latitude", "longitude"]] = frame[["latitude", "longitude"]].ffill().bfill()
-    frame["longitude"] = wrap180(frame["longitude"].to_numpy())
-    frame["count"] = count.astype(np.int64)
-    frame["filled"] = count == 0
-    return frame[SLOTTED_COLUMNS]
+    lat_mean, lon_mean = _fill(lat_mean), wrap180(_fill(lon_mean))
+    return pd.DataFrame({"slot": np.arange(n), "time_of_day": start_s + np.arange(n) * slot_s,
+                         "latitude": lat_mean, "longitude": lon_mean, "count": count.astype(np.int64),
+                         "filled": count == 0}, columns=SLOTTED_COLUMNS)
+
+
+def _fill(values: np.ndarray) -> np.ndarray:
+    """NaN entries take the previous value, leading ones the first value (forward, then backward fill)."""
+    valid = ~np.isnan(values)
+    if valid.all() or not valid.any():
+        return values
+    index = np.maximum.accumulate(np.where(valid, np.arange(values.size), -1))
+    index[index < 0] = int(np.argmax(valid))
+    return values[index]

@@ -78,9 +78,11 @@ def all_aircraft(meas: pd.DataFrame, *, need_adsb: bool = True) -> list[Aircraft
     radar, adsb = _split(meas)
     labels = aircraft_labels(meas).set_index("aircraft_id")
     out = []
-    ids = set(radar["aircraft_id"].dropna())
-    for ident in sorted(ids & set(adsb["aircraft_id"].dropna()) if need_adsb else ids):
-        r = radar[(radar["aircraft_id"] == ident).to_numpy(bool)].reset_index(drop=True)
-        a = adsb[(adsb["aircraft_id"] == ident).to_numpy(bool)].reset_index(drop=True)
+    rows = {kind: frame.groupby("aircraft_id", sort=False, observed=True).indices  # positions, in order
+            for kind, frame in (("radar", radar), ("adsb", adsb))}
+    ids = set(rows["radar"])
+    for ident in sorted(ids & set(rows["adsb"]) if need_adsb else ids):
+        r = radar.iloc[rows["radar"][ident]].reset_index(drop=True)
+        a = adsb.iloc[rows["adsb"].get(ident, [])].reset_index(drop=True)
         out.append(Aircraft(labels.at[ident, "callsign"], labels.at[ident, "address"], r, a, ident))
     return sorted(out, key=lambda ac: (ac.callsign, ac.address))

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import numpy as np
 import pandas as pd
 
 DEDUP_KEYS = ["time", "latitude", "longitude", "ground_speed_kt", "heading_deg"]
@@ -38,3 +39,29 @@ def deduplicate(meas: pd.DataFrame) -> tuple[pd.DataFrame, int]:
     ordered = sort_by_time(meas)
     dup = duplicate_mask(ordered)
     return ordered[~dup].reset_index(drop=True), int(dup.sum())
+
+
+def _key_array(column: pd.Series) -> np.ndarray:
+    """A column as numbers that compare like the dedup key: datetimes as int64 ns (NaT one value),
+    everything else as float with NaN for missing (NaN is made equal to NaN by the caller)."""
+    if isinstance(column.dtype, pd.DatetimeTZDtype) or column.dtype.kind == "M":
+        return pd.DatetimeIndex(column).asi8
+    return column.to_numpy(dtype=float, na_value=np.nan)
+
+
+def repeat_groups(meas: pd.DataFrame, keys: list[str]) -> tuple[np.ndarray, np.ndarray]:
+    """Rows in key order and the group number of each of them: rows equal in every key column (NaN equals
+    NaN, -0.0 equals 0.0) share a group; within a group rows keep their frame order (stable sort).
+    Numeric and datetime key columns only (what ``DEDUP_KEYS`` holds)."""
+    arrays = [_key_array(meas[k]) for k in keys]
+    order = np.lexsort(arrays[::-1]) if arrays else np.arange(len(meas))
+    new = np.zeros(order.size, dtype=bool)
+    if order.size:
+        new[0] = True
+    for a in arrays:
+        s = a[order]
+        same = s[1:] == s[:-1]
+        if s.dtype.kind == "f":
+            same |= np.isnan(s[1:]) & np.isnan(s[:-1])
+        new[1:] |= ~same
+    return order, np.cumsum(new) - 1

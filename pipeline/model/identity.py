@@ -56,20 +56,28 @@ def assign_aircraft_id(meas: pd.DataFrame) -> pd.Series:
 
 def aircraft_labels(meas: pd.DataFrame) -> pd.DataFrame:
     """Per aircraft_id, the labels shown in reports: the most frequent call sign and address (ADS-B first,
-    as it always transmits identity), "" when none."""
-    rows = []
-    for ident, g in meas.dropna(subset=["aircraft_id"]).groupby("aircraft_id", sort=True):
-        adsb = g[g["sensor_kind"] == "adsb"]
-        labels = {"aircraft_id": ident}
-        for column in ("callsign", "address"):
-            labels[column] = _most_common(adsb[column]) or _most_common(g[column])
-        rows.append(labels)
-    return pd.DataFrame(rows, columns=["aircraft_id", "callsign", "address"])
+    as it always transmits identity; the smallest of equally frequent values), "" when none."""
+    cols = meas[["aircraft_id", "sensor_kind", "callsign", "address"]]
+    known = cols[cols["aircraft_id"].notna().to_numpy(bool)]
+    out = pd.DataFrame({"aircraft_id": pd.Series(sorted(str(a) for a in known["aircraft_id"].unique()),
+                                                 dtype=object)})
+    adsb = known[(known["sensor_kind"] == "adsb").to_numpy(bool)]
+    for column in ("callsign", "address"):
+        first, second = _most_common_by(adsb, column), _most_common_by(known, column)
+        label = out["aircraft_id"].map(first)
+        out[column] = label.where(label.notna() & (label != ""), out["aircraft_id"].map(second)).fillna("")
+    columns = ["aircraft_id", "callsign", "address"]  # built from lists: the dtypes pandas infers for text
+    return pd.DataFrame({c: out[c].tolist() for c in columns}, columns=columns)
 
 
-def _most_common(values: pd.Series) -> str:
-    counts = values.dropna().value_counts(sort=True)
-    if not len(counts):
-        return ""
-    top = counts[counts == counts.iloc[0]].index
-    return str(sorted(top)[0])
+def _most_common_by(meas: pd.DataFrame, column: str) -> pd.Series:
+    """Per aircraft_id, its most frequent non-missing ``column`` value (the smallest on ties), as text."""
+    pairs = meas[["aircraft_id", column]].dropna()
+    if pairs.empty:
+        return pd.Series(dtype=object)
+    counts = pairs.groupby(["aircraft_id", column], sort=False, observed=True).size()
+    counts = counts.rename("n").reset_index()
+    counts = counts.sort_values(["aircraft_id", "n", column], ascending=[True, False, True], kind="stable")
+    top = counts.drop_duplicates("aircraft_id")
+    return pd.Series(top[column].map(str).to_numpy(dtype=object),
+                     index=top["aircraft_id"].map(str).to_numpy())

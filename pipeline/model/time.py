@@ -61,9 +61,10 @@ def is_dated(instant: pd.Timestamp | None) -> bool:
 
 def dated_or_nat(times: pd.Series) -> pd.Series:
     """The instants where the recording was dated, NaT where it was not (for reports)."""
-    ns = pd.DatetimeIndex(times).asi8
-    keep = ns >= _UNDATED_END.value
-    return pd.Series(times.to_numpy(), index=times.index).where(keep).astype(UTC_DTYPE)
+    t = pd.DatetimeIndex(times)
+    t = t.tz_localize("UTC") if t.tz is None else t.tz_convert("UTC")
+    keep = t.asi8 >= _UNDATED_END.value  # NaT is the smallest int64: dropped too
+    return pd.Series(t.array, index=times.index).where(keep).astype(UTC_DTYPE)
 
 
 def iso_utc(instant) -> str | None:

@@ -12,7 +12,7 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
-from pipeline.model.dedup import deduplicate
+from pipeline.model.dedup import DEDUP_KEYS, deduplicate
 from pipeline.model.identity import aircraft_labels
 from pipeline.model.jumps import jump_table
 from pipeline.model.time import iso_utc, with_clock
@@ -155,7 +155,8 @@ def _adsb_value_counts(adsb: pd.DataFrame) -> pd.DataFrame:
     indicators = _indicators(adsb)
     if adsb.empty or not indicators:
         return pd.DataFrame(columns=VALUE_COUNT_COLUMNS)
-    pooled = adsb.assign(callsign=ALL, address="", aircraft=ALL)
+    adsb = adsb[[*ID_KEYS, *indicators]]  # melt only what is counted: the frame is wide
+    pooled = adsb.assign(callsign=ALL, address="")
     long = pd.concat([adsb, pooled], ignore_index=True).melt(
         id_vars=ID_KEYS, value_vars=indicators, var_name="indicator", value_name="value")
     long["value"] = pd.to_numeric(long["value"], errors="coerce").astype("Int64")
@@ -167,25 +168,57 @@ def _adsb_value_counts(adsb: pd.DataFrame) -> pd.DataFrame:
 
 
 def _adsb_over_time(adsb: pd.DataFrame) -> pd.DataFrame:
-    """Median of each indicator and the integrity shares per 10-minute bin, per aircraft and pooled."""
+    """Median of each indicator and the integrity shares per 10-minute bin, per aircraft and pooled
+    (grouped once, aggregated column by column: a day holds thousands of bins)."""
     indicators = _indicators(adsb)
     columns = [*ID_KEYS, "bin_start_tod_s", "bin_start_utc", "reports", *[f"{c}_median" for c in indicators],
                *SHARE_COLUMNS]
     if adsb.empty:
         return pd.DataFrame(columns=columns)
+    adsb = adsb[[c for c in dict.fromkeys([*ID_KEYS, "time_of_day", "timestamp", *indicators, "nucp_nic",
+                                           "mops_version"]) if c in adsb]]  # the frame is wide
     frame = pd.concat([adsb, adsb.assign(callsign=ALL, address="")], ignore_index=True)
     frame["bin_start_tod_s"] = np.floor(frame["time_of_day"].to_numpy(float) / QUALITY_BIN_S) * QUALITY_BIN_S
-    rows = []
-    for keys, g in frame.groupby([*ID_KEYS, "bin_start_tod_s"], dropna=False, sort=True):
-        row = dict(zip([*ID_KEYS, "bin_start_tod_s"], keys, strict=True))
-        first = g["timestamp"].iloc[0] if "timestamp" in g else pd.NaT
-        start = None if pd.isna(first) else first - pd.to_timedelta(g["time_of_day"].iloc[0]
-                                                                    - row["bin_start_tod_s"], unit="s")
-        row |= {"bin_start_utc": iso_utc(start), "reports": len(g)}
-        row |= {f"{c}_median": pd.to_numeric(g[c], errors="coerce").median() for c in indicators}
-        shares = integrity_shares(g)
-        rows.append(row | {k: shares[k] for k in SHARE_COLUMNS})
-    return pd.DataFrame(rows, columns=columns)
+    keys = [*ID_KEYS, "bin_start_tod_s"]
+    ids = frame.groupby(keys, dropna=False, sort=True).ngroup().to_numpy()
+    n = int(ids.max()) + 1
+    first = np.full(n, -1)
+    first[ids[::-1]] = np.arange(len(frame))[::-1]  # each group's first row in frame order
+    out = {k: frame[k].to_numpy()[first] for k in keys}
+    tod0 = frame["time_of_day"].to_numpy(float)[first]
+    if "timestamp" in frame:
+        start = frame["timestamp"].iloc[first].reset_index(drop=True) - pd.to_timedelta(
+            tod0 - out["bin_start_tod_s"], unit="s")
+        out["bin_start_utc"] = [iso_utc(t) for t in start]
+    else:
+        out["bin_start_utc"] = [None] * n
+    out["reports"] = np.bincount(ids, minlength=n)
+    for c in indicators:
+        values = pd.Series(pd.to_numeric(frame[c], errors="coerce").to_numpy(dtype=float, na_value=np.nan))
+        out[f"{c}_median"] = values.groupby(ids).median().reindex(range(n)).to_numpy()
+    out |= _integrity_shares_by(frame, ids, n)
+    return pd.DataFrame({c: out[c] for c in columns}, columns=columns)
+
+
+def _integrity_shares_by(adsb: pd.DataFrame, ids: np.ndarray, n: int) -> dict[str, np.ndarray]:
+    """SHARE_COLUMNS of integrity_shares() for every group ``ids`` at once."""
+    v = (pd.to_numeric(adsb["nucp_nic"], errors="coerce").to_numpy(dtype=float, na_value=np.nan)
+         if "nucp_nic" in adsb else np.full(len(adsb), np.nan))
+    known = ~np.isnan(v)
+
+    def pct(hit: np.ndarray, of: np.ndarray) -> np.ndarray:
+        total = np.bincount(ids, of.astype(float), minlength=n)
+        count = np.bincount(ids, (hit & of).astype(float), minlength=n)
+        with np.errstate(invalid="ignore", divide="ignore"):
+            return np.where(total > 0, 100.0 * count / total, np.nan)
+
+    out = {"nucp_below_5_pct": pct(v < NUCP_MIN, known), "nic_below_6_pct": pct(v < NIC_MIN, known),
+           "low_integrity_pct": np.full(n, np.nan)}
+    if "mops_version" in adsb:
+        mops = pd.to_numeric(adsb["mops_version"], errors="coerce").to_numpy(dtype=float, na_value=np.nan)
+        both = known & ~np.isnan(mops)
+        out["low_integrity_pct"] = pct(np.where(mops == 0, v < NUCP_MIN, v < NIC_MIN), both)
+    return out
 
 
 def quality_tables(meas: pd.DataFrame, *, gap_s: float = 180.0,
@@ -205,7 +238,10 @@ def quality_tables(meas: pd.DataFrame, *, gap_s: float = 180.0,
 
     summary, gaps, hist = [], [], []
     edges = histogram_edges_s(gap_s)
-    for sensor_id, s in both.groupby(SENSOR_KEYS, dropna=False, sort=True):
+    needed = [*ID_KEYS, "aircraft", "time", "time_of_day", "timestamp", "ground_speed_kt", "nucp_nic",
+              "mops_version", "duplicate", "sensor_kind", "sensor_id", *DEDUP_KEYS]
+    narrow = both[[c for c in dict.fromkeys(needed) if c in both]]  # the groups are copied: keep them narrow
+    for sensor_id, s in narrow.groupby(SENSOR_KEYS, dropna=False, sort=True):
         rows, intervals, clean = [], [], []
         for _, g in s.groupby(["callsign", "address", "aircraft"], dropna=False, sort=True):
             row, within, g_gaps, g_clean = _group_rows(g, gap_s, jumps_by_aircraft)

@@ -38,9 +38,15 @@ from pipeline.report.cells import (
     text_cell,
 )
 from pipeline.report.summary import utc_naive
+from pipeline.report.tables import lag_frame
 
 CORRELATION_HEADERS = ["window", "callsign", "address", "lag", "lag_s", *LAG_COLUMNS[1:]]
 SLOTS_HEADERS = ["window", "callsign", "address", "slot", "time_utc", *SLOT_COLUMNS[3:]]
+# the columns of the excerpts a workbook keeps for its charts when the tables went to Parquet
+LAG_CHART_HEADERS = ["window", "callsign", "address", "lag", "ncc_lat", "ncc_lon", "pearson_lat",
+                     "pearson_lon"]
+SLOT_CHART_HEADERS = ["window", "callsign", "address", "time_utc", "radar_lat", "radar_lon", "adsb_lat",
+                      "adsb_lon"]
 MAX_CORRELATION_CHARTS = 20
 MAX_SLOT_CHART_WINDOWS = 10
 RADAR_RGB, ADSB_RGB = "D62728", "E6B800"
@@ -141,27 +147,35 @@ def window_title(window: WindowResult, index: int) -> str:
     return f"{callsign} window {window_id(window, index)}"
 
 
-def lag_frame(window: WindowResult) -> pd.DataFrame:
-    lags = window.lags
-    return lags.sort_values("lag", kind="stable") if "lag" in lags.columns else lags
+def charted_windows(run: CorrelationRun, kind: str) -> list[int]:
+    """Indices of the windows that get charts: the first MAX_CORRELATION_CHARTS with lags (``lags``) or
+    the first MAX_SLOT_CHART_WINDOWS with slots (``slots``)."""
+    if kind == "lags":
+        return [i for i, w in enumerate(run.windows) if len(w.lags)][:MAX_CORRELATION_CHARTS]
+    return [i for i, w in enumerate(run.windows) if len(w.slots)][:MAX_SLOT_CHART_WINDOWS]
 
 
-def write_lag_charts(wb: Workbook, run: CorrelationRun, data_sheet: str = "Correlation") -> None:
-    """One chart per window of coefficient against lag, |lag| <= N/2 only, on a page grid."""
-    frames = [lag_frame(w) for w in run.windows]
-    charted = [i for i, f in enumerate(frames) if len(f)]
+def write_lag_charts(wb: Workbook, run: CorrelationRun, data_sheet: str = "Correlation",
+                     frames: list[pd.DataFrame] | None = None, headers: list[str] | None = None) -> None:
+    """One chart per window of coefficient against lag, |lag| <= N/2 only, on a page grid. ``frames``: each
+    window's rows as ``data_sheet`` holds them, in order under ``headers`` (default: every lag of every
+    window, CORRELATION_HEADERS)."""
+    full = [lag_frame(w) for w in run.windows]
+    where = "Correlation sheet" if frames is None else "the Parquet file the Correlation sheet names"
+    frames = full if frames is None else frames
+    charted = [i for i, f in enumerate(full) if len(f)]
     shown = charted[:MAX_CORRELATION_CHARTS]
     more = _first_of(len(shown), len(charted))
     heading = ("Coefficient against lag for |lag| <= N/2 (at least half the slots overlap)",
-               "Wider lags are left out (all lags: Correlation sheet). NCC solid, Pearson dashed; "
+               f"Wider lags are left out (all lags: {where}). NCC solid, Pearson dashed; "
                f"latitude blue, longitude green{more}.")
     ws = chart_sheet(wb, "Lag charts", heading, len(shown))
     ref = _SheetRef(data_sheet)
     starts = np.concatenate([[2], 2 + np.cumsum([len(f) for f in frames])]).astype(int)
-    col = {h: i + 1 for i, h in enumerate(CORRELATION_HEADERS)}
+    col = {h: i + 1 for i, h in enumerate(headers or CORRELATION_HEADERS)}
     for n, i in enumerate(shown):
         w, lags = run.windows[i], frames[i]
-        n_slots = (len(lags) + 1) // 2
+        n_slots = (len(full[i]) + 1) // 2
         half = pearson_max_lag(n_slots)
         lag = pd.to_numeric(lags["lag"], errors="coerce").to_numpy(dtype=float)
         inside = np.flatnonzero(np.abs(lag) <= half)
@@ -211,29 +225,35 @@ class _SheetRef:
 
 
 
-def write_slot_charts(wb: Workbook, run: CorrelationRun, data_sheet: str = "Slots") -> None:
-    lengths = [len(w.slots) for w in run.windows]
-    charted = [i for i, n in enumerate(lengths) if n]
+def write_slot_charts(wb: Workbook, run: CorrelationRun, data_sheet: str = "Slots",
+                      frames: list[pd.DataFrame] | None = None, headers: list[str] | None = None) -> None:
+    """Two charts per window (latitude, longitude against time). ``frames``: each window's slots as
+    ``data_sheet`` holds them, in order under ``headers`` (default: every slot of every window,
+    SLOTS_HEADERS)."""
+    frames = [w.slots for w in run.windows] if frames is None else frames
+    lengths = [len(f) for f in frames]
+    charted = [i for i, w in enumerate(run.windows) if len(w.slots)]
     shown = charted[:MAX_SLOT_CHART_WINDOWS]
     more = _first_of(len(shown), len(charted))
     heading = ("Slotted latitude and longitude against time (UTC)",
-               f"ADS-B yellow (solid, wide), radar red (dashed, on top); data on the Slots sheet{more}.")
+               f"ADS-B yellow (solid, wide), radar red (dashed, on top); data on the {data_sheet} "
+               f"sheet{more}.")
     ws = chart_sheet(wb, "Slot charts", heading, 2 * len(shown))
     ref = _SheetRef(data_sheet)
     starts = np.concatenate([[2], 2 + np.cumsum(lengths)]).astype(int)
-    col = {h: i + 1 for i, h in enumerate(SLOTS_HEADERS)}
+    col = {h: i + 1 for i, h in enumerate(headers or SLOTS_HEADERS)}
     dated = all("timestamp" in w.slots and w.slots["timestamp"].notna().all() for w in run.windows)
     for n, i in enumerate(shown):
-        w = run.windows[i]
+        w, slots = run.windows[i], frames[i]
         first, last = int(starts[i]), int(starts[i + 1]) - 1
-        if last > EXCEL_MAX_ROWS:
+        if last > EXCEL_MAX_ROWS or last < first:
             break
         if dated:
-            times = [to_excel(utc_naive(t)) for t in w.slots["timestamp"]]
+            times = [to_excel(utc_naive(t)) for t in slots["timestamp"]]
         else:
-            times = [v / 86400.0 for v in pd.to_numeric(w.slots["time_of_day"], errors="coerce").tolist()]
+            times = [v / 86400.0 for v in pd.to_numeric(slots["time_of_day"], errors="coerce").tolist()]
         x_span = axis_limits(times, pad=0.0)
-        markers = len(w.slots) <= 40
+        markers = len(slots) <= 40
         for k, (axis, name) in enumerate((("lat", "latitude"), ("lon", "longitude"))):
             chart = scatter_chart(f"{window_title(w, i)}: {name}", "time (UTC)", f"{name} (deg)")
             # LibreOffice draws the first series on top: radar first, so the wide ADS-B line never hides it
@@ -247,7 +267,7 @@ def write_slot_charts(wb: Workbook, run: CorrelationRun, data_sheet: str = "Slot
             if x_span:
                 chart.x_axis.scaling.min, chart.x_axis.scaling.max = x_span
                 chart.x_axis.majorUnit = _time_step_days(x_span[1] - x_span[0])
-            y_values = [*column_values(w.slots[f"radar_{axis}"]), *column_values(w.slots[f"adsb_{axis}"])]
+            y_values = [*column_values(slots[f"radar_{axis}"]), *column_values(slots[f"adsb_{axis}"])]
             y_span = axis_limits(y_values)
             if y_span:
                 chart.y_axis.scaling.min, chart.y_axis.scaling.max = y_span

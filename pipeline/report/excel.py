@@ -15,10 +15,10 @@ from __future__ import annotations
 import datetime as dt
 import os
 import re
-from collections.abc import Iterable, Iterator, Mapping
+from collections.abc import Iterator, Mapping
+from pathlib import Path
 from typing import Any
 
-import numpy as np
 import pandas as pd
 from openpyxl import Workbook
 from openpyxl.cell import WriteOnlyCell
@@ -27,7 +27,8 @@ from openpyxl.styles import Alignment, PatternFill
 from openpyxl.worksheet._write_only import WriteOnlyWorksheet
 from openpyxl.worksheet.pagebreak import Break
 
-from pipeline.correlate.results import LAG_COLUMNS, SLOT_COLUMNS, SUMMARY_KEYS, CorrelationRun, WindowResult
+from pipeline.correlate.correlation import pearson_max_lag
+from pipeline.correlate.results import SUMMARY_KEYS, CorrelationRun, WindowResult
 from pipeline.report.cells import (
     BOLD,
     ROW_HEIGHT_PT,
@@ -50,18 +51,30 @@ from pipeline.report.cells import (
 )
 from pipeline.report.charts import (
     CORRELATION_HEADERS,
+    LAG_CHART_HEADERS,
+    SLOT_CHART_HEADERS,
     SLOTS_HEADERS,
-    lag_frame,
-    window_id,
+    charted_windows,
     write_lag_charts,
     write_slot_charts,
 )
 from pipeline.report.formats import UNITS
 from pipeline.report.summary import (
     SKIPPED_KEYS,
-    slot_seconds,
     window_note,
     write_atomically,
+)
+from pipeline.report.tables import (
+    AUTO_MAX_ROWS,
+    CHART_MAX_POINTS,
+    COLUMN_NOTES,
+    IDENT_COLUMNS,
+    correlation_table,
+    lag_frame,
+    parquet_path,
+    slot_table,
+    to_parquet,
+    write_parquet,
 )
 
 DATETIME_FORMAT = "yyyy-mm-dd hh:mm:ss.000"
@@ -217,84 +230,118 @@ def _write_map(wb: Workbook, figure_png: str | os.PathLike[str]) -> None:
 
 
 
-def _concat_columns(ws: WriteOnlyWorksheet, headers: list[str],
-                    per_window: list[dict[str, pd.Series | list[Any]]]) -> list[Column]:
-    """Columns built from each window's pieces, concatenated (one Column per header)."""
+def _sheet_columns(ws: WriteOnlyWorksheet, frame: pd.DataFrame, headers: list[str]) -> list[Column]:
+    """Columns of a Slots or Correlation sheet from its table (pipeline.report.tables): the sheet's
+    headers in order, undated slot times as clock times under ``time_utc``."""
     columns = []
     for h in headers:
-        parts = [p[h] for p in per_window]
-        if parts and all(isinstance(p, pd.Series) for p in parts):
-            data = pd.concat(parts, ignore_index=True) if len(parts) > 1 else parts[0].reset_index(drop=True)
+        if h == "time_utc" and "time_utc" not in frame:
+            seconds = frame["time_of_day"].to_numpy(dtype=float)
+            column = Column("time_utc", [None if v != v else v / 86400.0 for v in seconds.tolist()],
+                            CLOCK_FORMAT, WriteOnlyCell(ws, 0.0))
+            column.styled.number_format = CLOCK_FORMAT
+            columns.append(column)
         else:
-            data = pd.Series([v for p in parts for v in (p.tolist() if isinstance(p, pd.Series) else p)],
-                             dtype=object)
-        columns.append(make_column(ws, h, data))
+            columns.append(make_column(ws, h, frame[h].reset_index(drop=True)))
     return columns
 
 
-def _ident(window: WindowResult, index: int, n: int) -> dict[str, list[Any]]:
-    return {"window": [window_id(window, index)] * n,
-            "callsign": [excel_value(window.summary.get("callsign"))] * n,
-            "address": [excel_value(window.summary.get("address"))] * n}
+def _write_correlation(wb: Workbook, run: CorrelationRun, title: str = "Correlation", note: str = "",
+                       headers: list[str] | None = None) -> None:
+    ws = wb.create_sheet(title)
+    frame = correlation_table(run)
+    headers = headers or CORRELATION_HEADERS + [c for c in frame.columns if c not in CORRELATION_HEADERS
+                                                and c not in IDENT_COLUMNS]
+    write_table(ws, _sheet_columns(ws, frame, headers), freeze="D2", note=note or
+                "All lags d = -(N-1)..N-1 of every window; charts of |d| <= N/2: Lag charts sheet.")
 
 
-def _write_correlation(wb: Workbook, run: CorrelationRun) -> None:
-    ws = wb.create_sheet("Correlation")
-    extra = _extra_columns((w.lags for w in run.windows), LAG_COLUMNS)
-    headers = CORRELATION_HEADERS + extra
-    pieces = []
-    for i, w in enumerate(run.windows):
-        lags = lag_frame(w)
-        piece: dict[str, Any] = _ident(w, i, len(lags))
-        for c in [*LAG_COLUMNS, *extra]:
-            piece[c] = lags[c] if c in lags.columns else [None] * len(lags)
-        lag = pd.to_numeric(lags["lag"], errors="coerce") if "lag" in lags.columns else pd.Series(
-            [np.nan] * len(lags))
-        piece["lag_s"] = (lag * slot_seconds(w, run.parameters)).astype(float)
-        pieces.append(piece)
-    write_table(ws, _concat_columns(ws, headers, pieces), freeze="D2",
-                 note="All lags d = -(N-1)..N-1 of every window; charts of |d| <= N/2: Lag charts sheet.")
+def _write_slots(wb: Workbook, run: CorrelationRun, title: str = "Slots", note: str = "",
+                 headers: list[str] | None = None) -> None:
+    ws = wb.create_sheet(title)
+    frame = slot_table(run)
+    dated = "time_utc" in frame
+    headers = headers or SLOTS_HEADERS + [c for c in frame.columns if c not in SLOTS_HEADERS
+                                          and c not in IDENT_COLUMNS and c != "time_of_day"]
+    write_table(ws, _sheet_columns(ws, frame, headers), freeze="D2", note=note or
+                "time_utc: slot start, UTC" + ("" if dated else " clock time (date unknown)")
+                + "; charts on the Slot charts sheet.")
 
 
+def _write_parquet_note(wb: Workbook, title: str, frame: pd.DataFrame, path: Path, mode: str,
+                        chart_sheet: str) -> None:
+    """The sheet of a table written to Parquet: the file, its rows and columns, where the charts' data is."""
+    ws = wb.create_sheet(title)
+    set_widths(ws, [20.0, 12.0, 60.0])
+    page_setup(ws)
+    why = (f"it has more than {AUTO_MAX_ROWS:,} rows (--tables auto; --tables xlsx keeps it in the workbook)"
+           if mode == "auto" else "--tables parquet")
+    ws.append([text_cell(ws, f"{title}: {len(frame):,} rows in {path.name}, beside this workbook",
+                         font=TITLE_FONT)])
+    ws.append([note_text_cell(ws, f"Written as Parquet because {why}. The charts use an excerpt of it: "
+                                  f"{chart_sheet} sheet.")])
+    ws.append([])
+    ws.append(header_cells(ws, ["column", "type", "meaning"]))
+    import pyarrow as pa
 
-def _extra_columns(frames: Iterable[pd.DataFrame], known: list[str]) -> list[str]:
-    extra: dict[str, None] = {}
-    for frame in frames:
-        extra.update((str(c), None) for c in frame.columns if c not in known and str(c) not in extra)
-    return [c for c in extra if c not in known]
+    for field in pa.Schema.from_pandas(frame, preserve_index=False):
+        ws.append([text_cell(ws, field.name), text_cell(ws, str(field.type)),
+                   text_cell(ws, COLUMN_NOTES.get(field.name, ""))])
 
 
-def _slot_times(window: WindowResult) -> pd.Series:
-    """The slots' UTC times (all known: the caller checked)."""
-    return pd.to_datetime(window.slots["timestamp"], utc=True).reset_index(drop=True)
+def _excerpt(run: CorrelationRun, shown: list[int], rows) -> CorrelationRun:
+    """The run with only the charted windows' rows kept (``rows(window)`` gives the kept window)."""
+    windows = [rows(w) if i in shown else WindowResult(w.summary, w.slots.iloc[:0], w.lags.iloc[:0])
+               for i, w in enumerate(run.windows)]
+    return CorrelationRun(windows=windows, parameters=run.parameters)
 
 
-def _write_slots(wb: Workbook, run: CorrelationRun) -> None:
-    ws = wb.create_sheet("Slots")
-    extra = _extra_columns((w.slots for w in run.windows), SLOT_COLUMNS)
-    headers = SLOTS_HEADERS + extra
-    pieces = []
-    dated = all("timestamp" in w.slots and w.slots["timestamp"].notna().all() for w in run.windows)
-    for i, w in enumerate(run.windows):
-        piece: dict[str, Any] = _ident(w, i, len(w.slots))
-        for c in [h for h in headers[3:] if h != "time_utc"]:
-            piece[c] = w.slots[c].reset_index(drop=True) if c in w.slots.columns else [None] * len(w.slots)
-        if dated:
-            piece["time_utc"] = _slot_times(w)
-        else:  # clock times for every window, so the column has one format
-            tod = w.slots["time_of_day"] if "time_of_day" in w.slots else pd.Series([np.nan] * len(w.slots))
-            piece["time_utc"] = pd.to_numeric(tod, errors="coerce").reset_index(drop=True)
-        pieces.append(piece)
-    columns = _concat_columns(ws, headers, pieces)
-    if not dated:
-        index = headers.index("time_utc")
-        values = [None if v is None else v / 86400.0 for v in columns[index].values]
-        columns[index] = Column("time_utc", values, CLOCK_FORMAT, WriteOnlyCell(ws, 0.0))
-        columns[index].styled.number_format = CLOCK_FORMAT
-    write_table(ws, columns, freeze="D2",
-                 note="time_utc: slot start, UTC" + ("" if dated else " clock time (date unknown)")
-                 + "; charts on the Slot charts sheet.")
+def _step(n: int) -> int:
+    return max(1, -(-n // CHART_MAX_POINTS))
 
+
+def _slot_excerpt(window: WindowResult) -> WindowResult:
+    return WindowResult(window.summary, window.slots.iloc[::_step(len(window.slots))], window.lags.iloc[:0])
+
+
+def _lag_excerpt(window: WindowResult) -> WindowResult:
+    lags = lag_frame(window)
+    half = pearson_max_lag((len(lags) + 1) // 2)
+    inside = lags[(pd.to_numeric(lags["lag"], errors="coerce").abs() <= half).to_numpy(bool)]
+    return WindowResult(window.summary, window.slots, inside.iloc[::_step(len(inside))])
+
+
+def _write_tables(wb: Workbook, run: CorrelationRun, parquet: dict[str, tuple[pd.DataFrame, Path]],
+                  mode: str) -> None:
+    """Lag and slot charts, then the Correlation and Slots sheets: the tables themselves, or for a table
+    written to Parquet a sheet naming the file and a sheet of the charts' excerpt (every k-th row of the
+    charted windows, at most CHART_MAX_POINTS per chart)."""
+    lag_frames = slot_frames = None
+    lag_data, slot_data = "Correlation", "Slots"
+    if "correlation" in parquet:
+        lag_run = _excerpt(run, charted_windows(run, "lags"), _lag_excerpt)
+        lag_frames, lag_data = [lag_frame(w) for w in lag_run.windows], "Lag chart data"
+    if "slots" in parquet:
+        slot_run = _excerpt(run, charted_windows(run, "slots"), _slot_excerpt)
+        slot_frames, slot_data = [w.slots for w in slot_run.windows], "Slot chart data"
+    write_lag_charts(wb, run, lag_data, lag_frames, None if lag_frames is None else LAG_CHART_HEADERS)
+    write_slot_charts(wb, run, slot_data, slot_frames, None if slot_frames is None else SLOT_CHART_HEADERS)
+    excerpt_note = ("Excerpt for the charts: every k-th row (at most {n} a chart) of the charted windows; "
+                    "the whole table: {file}.")
+    if "correlation" in parquet:
+        frame, path = parquet["correlation"]
+        _write_parquet_note(wb, "Correlation", frame, path, mode, lag_data)
+        _write_correlation(wb, lag_run, lag_data, excerpt_note.format(n=CHART_MAX_POINTS, file=path.name),
+                           LAG_CHART_HEADERS)
+    else:
+        _write_correlation(wb, run)
+    if "slots" in parquet:
+        frame, path = parquet["slots"]
+        _write_parquet_note(wb, "Slots", frame, path, mode, slot_data)
+        _write_slots(wb, slot_run, slot_data, excerpt_note.format(n=CHART_MAX_POINTS, file=path.name),
+                     SLOT_CHART_HEADERS)
+    else:
+        _write_slots(wb, run)
 
 
 def _flatten(prefix: str, value: Any) -> Iterator[tuple[str, Any]]:
@@ -374,24 +421,27 @@ def _write_figures(wb: Workbook, title: str, images: dict[str, str | os.PathLike
 
 def write_report(run: CorrelationRun, path_xlsx: str | os.PathLike[str], *,
                  figure_png: str | os.PathLike[str] | None = None,
-                 images: dict[str, str | os.PathLike[str]] | None = None) -> None:
+                 images: dict[str, str | os.PathLike[str]] | None = None, tables: str = "auto") -> list[Path]:
     """Write the run's workbook to ``path_xlsx``; embed ``figure_png`` on a Map sheet when given and
-    further ``images`` (caption -> PNG) on a Figures sheet."""
+    further ``images`` (caption -> PNG) on a Figures sheet. The slot and lag tables go to Parquet beside
+    it as ``tables`` says (pipeline.report.tables); returns the Parquet files written."""
+    parquet = {name: (frame, parquet_path(path_xlsx, name))
+               for name, frame in to_parquet(run, tables).items()}
+    for frame, path in parquet.values():
+        write_parquet(frame, path)
     wb = Workbook(write_only=True)
     taken = {name.lower() for name in _CORE_SHEETS}
     _write_summary(wb, run)
     if figure_png is not None:
         _write_map(wb, figure_png)
-    write_lag_charts(wb, run)
-    write_slot_charts(wb, run)
-    _write_correlation(wb, run)
-    _write_slots(wb, run)
+    _write_tables(wb, run, parquet, tables)
     for name, frame in run.extra_sheets.items():
         _write_frame(wb, sheet_name(name, taken), frame)
     if images:
         _write_figures(wb, sheet_name("Figures", taken), images)
     _write_parameters(wb, run)
     write_atomically(path_xlsx, wb.save)
+    return [path for _, path in parquet.values()]
 
 
 def write_tables(tables: dict[str, pd.DataFrame], path_xlsx: str | os.PathLike[str], *,

@@ -29,6 +29,7 @@ _STYLE = {
 _LABEL = {"radar": "Radar (CAT048)", "adsb": "ADS-B (CAT021)"}
 _MAX_TITLE_CALLSIGNS = 6
 _MAX_TRACK_LABELS = 30
+MAX_MARKED_SLOTS = 20_000  # past this many slots the map shows lines only: markers would only overplot
 
 
 def new_figure(width: float, height: float, dpi: int = 130) -> Figure:
@@ -72,12 +73,15 @@ def _time_axis(slots: pd.DataFrame) -> tuple[np.ndarray, bool]:
     return _floats(slots, "time_of_day"), False
 
 
-def _draw_sensor(ax: Axes, x: np.ndarray, y: np.ndarray, filled: np.ndarray, sensor: str) -> None:
+def _draw_sensor(ax: Axes, x: np.ndarray, y: np.ndarray, filled: np.ndarray, sensor: str,
+                 markers: bool = True) -> None:
     """One slotted track: a line through every slot, solid markers at measured slots, hollow at filled."""
     st = _STYLE[sensor]
     effects = [patheffects.Stroke(linewidth=st["lw"] + 1.6, foreground=ADSB_EDGE), patheffects.Normal()]
     ax.plot(x, y, color=st["line"], lw=st["lw"], zorder=st["z"],
             path_effects=effects if sensor == "adsb" else None)
+    if not markers:
+        return
     finite = np.isfinite(y)
     measured, held = finite & ~filled, finite & filled
     ax.plot(x[measured], y[measured], ls="none", marker="o", ms=st["ms"], mfc=st["face"], mec=st["edge"],
@@ -188,17 +192,28 @@ def track_figure(run: CorrelationRun, path_png: str | os.PathLike[str],
     lats: list[np.ndarray] = []
     lons: list[np.ndarray] = []
     any_filled = False
+    # every window's track of one sensor kind in one line (NaN between windows breaks it) and one set of
+    # markers: the same picture as one artist per window (z-order sets the layers), far fewer artists
+    tracks: dict[str, list[np.ndarray]] = {"adsb": [], "radar": []}
+    gap = np.array([np.nan])
     for w in run.windows:
         s = w.slots
         for sensor in ("adsb", "radar"):  # radar on top so both stay visible where they overlap
             lon, lat = _floats(s, f"{sensor}_lon"), _floats(s, f"{sensor}_lat")
             filled = _flags(s, f"{sensor}_filled")
             any_filled |= bool((filled & np.isfinite(lat)).any())
-            _draw_sensor(ax, lon, lat, filled, sensor)
+            tracks[sensor].append(np.stack([np.concatenate([lon, gap]), np.concatenate([lat, gap]),
+                                            np.concatenate([filled, [False]])]))
             lats.append(lat)
             lons.append(lon)
         if len(run.windows) <= _MAX_TRACK_LABELS:
             _direction_and_times(ax, w, label=len(run.windows) > 1)
+    n_slots = sum(len(w.slots) for w in run.windows)
+    markers = n_slots <= MAX_MARKED_SLOTS
+    for sensor, parts in tracks.items():
+        if parts:
+            lon, lat, filled = np.concatenate(parts, axis=1)
+            _draw_sensor(ax, lon, lat, filled.astype(bool), sensor, markers)
     all_lat = np.concatenate(lats) if lats else np.array([])
     all_lon = np.concatenate(lons) if lons else np.array([])
     if sensors is not None and len(sensors) and run.windows:
@@ -227,8 +242,9 @@ def track_figure(run: CorrelationRun, path_png: str | os.PathLike[str],
     ax.set_xlabel("Longitude (deg, WGS-84)")
     ax.set_ylabel("Latitude (deg, WGS-84)")
     fig.suptitle(f"Slotted tracks: {_callsign_title(run.windows) or 'none'}", fontsize=13, fontweight="bold")
-    ax.set_title(f"radar (red) over ADS-B (yellow), {len(run.windows)} window(s), equal-distance aspect",
-                 fontsize=9, color="0.35")
+    unmarked = "" if markers else f"; {n_slots:,} slots: lines only, no slot markers"
+    ax.set_title(f"radar (red) over ADS-B (yellow), {len(run.windows)} window(s), equal-distance aspect"
+                 f"{unmarked}", fontsize=9, color="0.35")
     return save_png(fig, path_png)
 
 

@@ -24,6 +24,15 @@ RADAR_COLOR = "#d62728"
 ADSB_COLOR = "#e6b800"
 _SENSOR_LABEL = {"radar": "Radar (CAT048)", "adsb": "ADS-B (CAT021)"}
 _TICK_STEPS_S = (10, 30, 60, 120, 300, 600, 900, 1800, 3600, 7200, 14400)
+MAX_ERROR_POINTS = 50_000  # reports drawn per radar error figure: more only overplot, and cost seconds
+MAX_LEGEND_AIRCRAFT = 20  # aircraft named in the radar error legend; past it, colours only
+
+
+def plt_cycle() -> list[str]:
+    """The colours of matplotlib's default property cycle (C0, C1, ...)."""
+    from matplotlib import rcParams
+
+    return rcParams["axes.prop_cycle"].by_key()["color"]
 
 
 def _clock(seconds: float, _pos=None) -> str:
@@ -112,13 +121,22 @@ def radar_error_figure(errors: pd.DataFrame, path: str | os.PathLike[str],
             _empty(ax, "No matched reports")
         return save_png(fig, path)
     range_nm = errors["slant_range_m"].to_numpy(float) / 1852.0
-    for label, g in errors.groupby(errors["callsign"].fillna(errors["address"]).fillna("?"), sort=True):
-        idx = g.index.to_numpy()
-        pos = errors.index.get_indexer(idx)
+    step = max(1, -(-len(errors) // MAX_ERROR_POINTS))  # every step-th report of each aircraft is drawn
+    groups = list(errors.groupby(errors["callsign"].fillna(errors["address"]).fillna("?"), sort=True))
+    labelled = len(groups) <= MAX_LEGEND_AIRCRAFT
+    colours = len(plt_cycle())
+    # aircraft i takes colour i of the cycle; past the legend's limit, aircraft sharing a colour are drawn
+    # together (a day's hundreds of aircraft would otherwise cost one artist per aircraft and panel)
+    sets = ([(i % colours, [g]) for i, g in enumerate(groups)] if labelled
+            else [(c, groups[c::colours]) for c in range(min(colours, len(groups)))])
+    for c, mine in sets:
+        pos = np.concatenate([errors.index.get_indexer(g.index.to_numpy())[::step] for _, g in mine])
+        label = str(mine[0][0]) if labelled else None
         for row, metric in enumerate(("range_error_m", "azimuth_error_deg")):
-            y = g[metric].to_numpy(float)
-            axes[row, 0].plot(range_nm[pos], y, ".", ms=2.5, alpha=0.7, label=str(label))
-            axes[row, 1].plot(g["time_of_day"].to_numpy(float), y, ".", ms=2.5, alpha=0.7)
+            y = errors[metric].to_numpy(float)[pos]
+            axes[row, 0].plot(range_nm[pos], y, ".", ms=2.5, alpha=0.7, color=f"C{c}", label=label)
+            axes[row, 1].plot(errors["time_of_day"].to_numpy(float)[pos], y, ".", ms=2.5, alpha=0.7,
+                              color=f"C{c}")
     if biases is not None and len(biases):
         b = biases.iloc[0]
         r = np.linspace(np.nanmin(range_nm), np.nanmax(range_nm), 50)
@@ -136,7 +154,9 @@ def radar_error_figure(errors: pd.DataFrame, path: str | os.PathLike[str],
     axes[0, 1].set_xlabel("")
     axes[0, 0].legend(fontsize=7, markerscale=3, ncol=2, loc="best")
     radars = ", ".join(str(r) for r in errors["radar"].dropna().unique()[:3])
-    fig.suptitle(f"Radar errors against ADS-B: {radars} ({len(errors)} reports)", fontsize=12)
+    shown = f", 1 in {step} drawn" if step > 1 else ""
+    who = "" if labelled else f", {len(groups)} aircraft (colours repeat)"
+    fig.suptitle(f"Radar errors against ADS-B: {radars} ({len(errors)} reports{shown}{who})", fontsize=12)
     return save_png(fig, path)
 
 

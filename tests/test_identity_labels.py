@@ -1,0 +1,23 @@
+"""aircraft_labels (pipeline.model.identity): the most frequent call sign and address per aircraft, ADS-B
+first, the smallest of equally frequent values, "" when none; worked out by hand."""
+
+from __future__ import annotations
+
+import pandas as pd
+
+from pipeline.model.identity import aircraft_labels
+
+
+def test_labels_by_hand():
+    rows = [  # aircraft_id, sensor_kind, callsign, address
+        ("A", "adsb", "BBB", "AAAAAA"), ("A", "adsb", "AAA", "AAAAAA"), ("A", "adsb", "BBB", None),
+        ("A", "adsb", "AAA", None), ("A", "radar", "ZZZ", None), ("A", "radar", "ZZZ", None),
+        ("A", "radar", "ZZZ", None),  # radar's more frequent ZZZ loses to ADS-B's tie AAA/BBB -> AAA
+        ("B", "radar", "RAD", "BBBBBB"), ("B", "radar", "QQQ", None), ("B", "radar", "RAD", None),
+        ("C", "adsb", None, None), ("C", "radar", None, "CCCCCC"),
+        (None, "adsb", "NONE", "DDDDDD"),  # unidentified rows carry no label
+    ]
+    meas = pd.DataFrame(rows, columns=["aircraft_id", "sensor_kind", "callsign", "address"]).astype("string")
+    got = aircraft_labels(meas)
+    assert got.to_dict("list") == {"aircraft_id": ["A", "B", "C"], "callsign": ["AAA", "RAD", ""],
+                                   "address": ["AAAAAA", "BBBBBB", "CCCCCC"]}
