@@ -158,6 +158,9 @@ def build_parser() -> argparse.ArgumentParser:
     k.add_argument("--radius-nm", type=float, default=5.0, help="horizontal separation minimum (default 5)")
     k.add_argument("--vertical-ft", type=float, default=1000.0,
                    help="vertical separation minimum (default 1000)")
+    k.add_argument("--vertical-tolerance-ft", type=float, default=25.0,
+                   help="levels closer than --vertical-ft by at most this are separated: the 25 ft quantum "
+                        "of reported levels (default 25)")
     k.add_argument("--threshold", type=float, default=0.2,
                    help="PC above which an alert is raised (default 0.2)")
     k.add_argument("--method", default="exact", help="PC method: exact, one-block, blocks or midpoint")
@@ -347,7 +350,8 @@ def cmd_conflicts(args) -> int:
     options = jobs_conflict.ConflictOptions(
         **_decoding(args), sensors=args.sensors, output=args.output, json=args.json, step_s=args.step,
         max_coast_s=args.max_coast, tpm=args.tpm, horizons_s=args.horizon, radius_nm=args.radius_nm,
-        vertical_ft=args.vertical_ft, threshold=args.threshold, method=args.method, vertical=args.vertical,
+        vertical_ft=args.vertical_ft, vertical_tolerance_ft=args.vertical_tolerance_ft,
+        threshold=args.threshold, method=args.method, vertical=args.vertical,
         figures=args.figures)
     checked = jobs_conflict.validate(options)
     _warn("conflicts", checked.warnings)

@@ -30,6 +30,7 @@ VERTICAL_MODELS = ("gate", "gaussian")
 HORIZON_RANGE_S = (1.0, 3600.0)
 RADIUS_RANGE_NM = (0.01, 100.0)
 VERTICAL_RANGE_FT = (1.0, 100_000.0)
+VERTICAL_TOLERANCE_RANGE_FT = (0.0, 500.0)
 
 
 @dataclass(frozen=True)
@@ -40,6 +41,7 @@ class ConflictOptions(TrackOptions):
     horizons_s: tuple[float, ...] = (20.0, 60.0, 120.0)
     radius_nm: float = 5.0
     vertical_ft: float = 1000.0
+    vertical_tolerance_ft: float = 25.0  # levels closer than vertical_ft by at most this are separated
     threshold: float = 0.2
     method: str = "exact"
     vertical: str = "gate"  # "gaussian": PC times P(|dz| < vertical_ft) from the vertical filter's sigma
@@ -80,6 +82,11 @@ def validate(options: ConflictOptions) -> Checked:
             raise OptionError(f"--horizon {h:g}: must be a whole multiple of --step ({step:g} s)")
     jobs._number("--radius-nm", options.radius_nm, *RADIUS_RANGE_NM, " NM")
     jobs._number("--vertical-ft", options.vertical_ft, *VERTICAL_RANGE_FT, " ft")
+    tol = options.vertical_tolerance_ft
+    jobs._number("--vertical-tolerance-ft", tol, *VERTICAL_TOLERANCE_RANGE_FT, " ft")
+    if not tol < options.vertical_ft:
+        raise OptionError(f"--vertical-tolerance-ft {tol!r}: must be less than --vertical-ft "
+                          f"({options.vertical_ft:g})")
     t = options.threshold
     if not isinstance(t, int | float) or not math.isfinite(t) or not 0.0 < t < 1.0:
         raise OptionError(f"--threshold {t!r}: must be a probability strictly between 0 and 1")
@@ -172,8 +179,10 @@ def conflict_job(options: ConflictOptions, *, progress: Progress | None = None,
     if progress:
         progress.stage("Predicting and computing PC")
     predictions = predict_tracks(result, horizons, step_s=step, sigma_alt=options.vertical == "gaussian")
-    pc = pair_probabilities(predictions, options.radius_nm, options.vertical_ft, method=options.method)
-    losses = losses_of_separation(grid, options.radius_nm, options.vertical_ft)
+    tol = options.vertical_tolerance_ft
+    pc = pair_probabilities(predictions, options.radius_nm, options.vertical_ft, method=options.method,
+                            vertical_tolerance_ft=tol)
+    losses = losses_of_separation(grid, options.radius_nm, options.vertical_ft, tol)
     events = alert_events(pc, options.threshold, step_s=step)
     alerts = closest_approach(classify_alerts(events, losses), grid)
     warn = warning_times(losses, events, horizons)
@@ -183,7 +192,8 @@ def conflict_job(options: ConflictOptions, *, progress: Progress | None = None,
                          for h in horizons} if len(warn) else {f"{h:g}": 0 for h in horizons}}
     params = {**jobs._parameters(options, loaded, started, command), **result.parameters,
               "horizons_s": list(horizons), "radius_nm": options.radius_nm,
-              "vertical_ft": options.vertical_ft, "threshold": options.threshold, "method": options.method,
+              "vertical_ft": options.vertical_ft, "vertical_tolerance_ft": tol,
+              "threshold": options.threshold, "method": options.method,
               "vertical": options.vertical}
     return ConflictJobResult(options, checked, grid, pc, alerts, losses, warn, params, loaded, counts,
                              predictions)
@@ -205,7 +215,8 @@ def text(result: ConflictJobResult) -> str:
     """What the run found, in a few lines (says so when there is no loss and no alert)."""
     c = result.counts
     lines = [f"{c['aircraft']} aircraft tracked; {c['losses']} loss(es) of separation "
-             f"(< {result.options.radius_nm:g} NM and < {result.options.vertical_ft:g} ft); "
+             f"(< {result.options.radius_nm:g} NM and < {result.options.vertical_ft:g} ft less "
+             f"{result.options.vertical_tolerance_ft:g} ft); "
              f"{c['alerts']} alert event(s), {c['false_alerts']} false"]
     if not c["losses"] and not c["alerts"]:
         lines.append("no loss of separation and no alert: the tables are written empty, with their headers")

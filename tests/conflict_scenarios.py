@@ -71,14 +71,15 @@ def encounters() -> list[Encounter]:
                          ((10 - math.sqrt(21)) / dv, (10 + math.sqrt(21)) / dv),
                          "FL350, 480 kt overtaking 400 kt, 2 NM abeam"))
     # 90 deg crossing at 420 kt over the origin at T_C: horizontal |r| = sqrt(2) 420 |t - T_C| < 5 NM for
-    # |t - T_C| < 30.3 s. B climbs (descends) at 2000 fpm from 330 s: 1000 ft from A's FL350 at
-    # 330 + 60 = 390 s, 1000 ft beyond it at 450 s; the loss is (390, T_C + 30.3)
+    # |t - T_C| < 30.3 s. B climbs (descends) at 2000 fpm from 330 s: closer than 1000 ft less the
+    # 25 ft tolerance to A's FL350 from 330 + (3000 - 975) / (2000 / 60) = 390.75 s to 449.25 s; the
+    # loss is (390.75, T_C + 30.3)
     half = 5.0 / (math.sqrt(2) * 420.0 / 3600.0)
     for name, alt0, rate in (("climbing through FL350", 32000.0, 2000.0),
                              ("descending through FL350", 38000.0, -2000.0)):
         b = _straight((0, 0), 0.0, 420.0, alt0,
                       segments=(Segment(330.0), Segment(120.0, vertical_rate_fpm=rate), Segment(150.0)))
-        out.append(Encounter(name, _straight((0, 0), 90.0, 420.0, 35000.0), b, (390.0, T_C + half),
+        out.append(Encounter(name, _straight((0, 0), 90.0, 420.0, 35000.0), b, (390.75, T_C + half),
                              "90 deg crossing at 420 kt over the same point at 400 s; "
                              f"B from FL{alt0 / 100:.0f} at {rate:+.0f} fpm from 330 s"))
     # near misses. 90 deg crossing, B passing 6 NM from A at T_C: at T_C, r = B - A is perpendicular to

@@ -38,6 +38,10 @@ BAD = [
     (opts(horizons_s="15", step_s=10.0), "--horizon 15: must be a whole multiple of --step (10 s)"),
     (opts(radius_nm=-5.0), "--radius-nm -5.0"),
     (opts(vertical_ft=float("nan")), "--vertical-ft nan"),
+    (opts(vertical_tolerance_ft=-5.0), "--vertical-tolerance-ft -5.0"),
+    (opts(vertical_tolerance_ft=float("inf")), "--vertical-tolerance-ft inf"),
+    (opts(vertical_ft=100.0, vertical_tolerance_ft=100.0),
+     "--vertical-tolerance-ft 100.0: must be less than --vertical-ft (100)"),
     (opts(threshold=1.0), "--threshold 1.0"),
     (opts(threshold=0.0), "--threshold 0.0"),
     (opts(method="montecarlo"), "--method 'montecarlo'"),
@@ -68,6 +72,15 @@ def test_cli_bad_option_is_one_line_exit_2_and_writes_nothing(tmp_path, capsys):
     assert main(["conflicts", RADAR, ADSB, "--sensors", SENSORS, "--threshold", "2", "-o", str(out)]) == 2
     err = capsys.readouterr().err.strip()
     assert err.startswith("msdc conflicts: --threshold 2.0") and "\n" not in err
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_cli_bad_vertical_tolerance_is_one_line_exit_2_and_writes_nothing(tmp_path, capsys):
+    out = tmp_path / "c.csv"
+    code = main(["conflicts", RADAR, ADSB, "--sensors", SENSORS, "--vertical-tolerance-ft", "-1",
+                 "-o", str(out)])
+    err = capsys.readouterr().err.strip()
+    assert code == 2 and err.startswith("msdc conflicts: --vertical-tolerance-ft -1.0") and "\n" not in err
     assert list(tmp_path.iterdir()) == []
 
 

@@ -55,6 +55,27 @@ def test_vertical_separation_of_1000_ft_is_kept_and_gaps_split_losses():
     assert bc.min_horizontal_nm == pytest.approx(2.0, abs=1e-6)  # on the equator: 3 NM - 1 NM (to 1e-6)
 
 
+def test_vertical_tolerance_boundary_by_hand():
+    # B 3 NM from A; reported levels are quantised to 25 ft, so with the default 25 ft tolerance a loss
+    # needs a vertical distance below 1000 - 25 = 975 ft
+    def loss_at(fl_b, dist_nm=3.0, **kw):
+        return not losses_of_separation(tracks_from([dist_nm], fl_b=fl_b), **kw).empty
+
+    assert not loss_at(359.999)  # 999.9 ft: within the quantum of 1000 ft, separated
+    assert loss_at(359.999, vertical_tolerance_ft=0.0)  # the strict rule counts it
+    assert not loss_at(359.75)  # 975 ft exactly: the edge of the quantum, separated
+    assert loss_at(359.74)  # 974 ft
+    assert not loss_at(359.74, vertical_tolerance_ft=50.0)  # 974 ft >= 1000 - 50
+    assert not loss_at(360.0, 4.9)  # 1000 ft apart at 4.9 NM: separated vertically
+    assert loss_at(359.0, 4.9)  # 900 ft at 4.9 NM
+    loss = losses_of_separation(tracks_from([4.9], fl_b=359.0)).iloc[0]
+    assert loss.min_horizontal_nm == pytest.approx(4.9, abs=1e-9)
+    assert loss.vertical_at_min_ft == pytest.approx(900.0)
+    for bad in (-1.0, 1000.0, float("nan")):
+        with pytest.raises(ValueError, match="vertical_tolerance_ft: must be from 0"):
+            losses_of_separation(tracks_from([3.0]), vertical_tolerance_ft=bad)
+
+
 def test_no_loss_gives_typed_empty_frame():
     losses = losses_of_separation(tracks_from([8, 7, 6]))
     assert losses.empty and list(losses.columns)[:4] == ["aircraft_a", "aircraft_b", "start", "end"]

@@ -1,5 +1,7 @@
 """Pair pre-filter against brute force over every pair, and the separation geometry against closed forms."""
 
+import math
+
 import numpy as np
 import pandas as pd
 import pytest
@@ -132,9 +134,28 @@ def test_pair_probabilities_vertical_probability():
     base = dict(time=pd.Timestamp("2024-05-01", tz="UTC"), horizon_s=60, east_m=[0.0, 1000.0], north_m=0.0,
                 var_east_m2=1e6, cov_east_north_m2=0.0, var_north_m2=1e6, flight_level=[350.0, 360.0])
     pred = pd.DataFrame({"aircraft_id": ["A", "B"], **base, "sigma_alt_ft": [300.0, 400.0]})
-    got = pair_probabilities(pred)
+    got = pair_probabilities(pred, vertical_tolerance_ft=0.0)
     horizontal = conflict_probability((-1000.0, 0.0), 2e6 * np.eye(2), 5 * 1852.0)
     # altitude difference N(-1000, 500^2): P(|dz| < 1000) = Phi(4) - Phi(0)
     assert got["pc"].item() == pytest.approx(horizontal * (0.99996832875816688 - 0.5), rel=1e-9)
+    # with the default 25 ft tolerance, P(|dz| < 975) = Phi(1975 / 500) - Phi(25 / 500)
+    phi = [0.5 * (1.0 + math.erf(x / math.sqrt(2.0))) for x in (3.95, 0.05)]
+    assert pair_probabilities(pred)["pc"].item() == pytest.approx(horizontal * (phi[0] - phi[1]), rel=1e-9)
     hard = pair_probabilities(pred.drop(columns="sigma_alt_ft"))
     assert hard.empty  # exactly 1000 ft apart: separated
+
+
+def test_pair_probabilities_vertical_gate_tolerance():
+    # two predictions 1 km apart: the gate passes levels closer than 1000 ft less the tolerance
+    def pc_at(fl_b, **kw):
+        pred = pd.DataFrame({"aircraft_id": ["A", "B"], "time": pd.Timestamp("2024-05-01", tz="UTC"),
+                             "horizon_s": 60, "east_m": [0.0, 1000.0], "north_m": 0.0, "var_east_m2": 1e6,
+                             "cov_east_north_m2": 0.0, "var_north_m2": 1e6, "flight_level": [350.0, fl_b]})
+        return pair_probabilities(pred, **kw)["pc"].sum()
+
+    horizontal = conflict_probability((-1000.0, 0.0), 2e6 * np.eye(2), 5 * 1852.0)
+    assert pc_at(359.9) == 0.0  # 990 ft: within the 25 ft quantum of the minimum
+    assert pc_at(359.9, vertical_tolerance_ft=0.0) == pytest.approx(horizontal, rel=1e-12)
+    assert pc_at(359.74) == pytest.approx(horizontal, rel=1e-12)  # 974 ft
+    with pytest.raises(ValueError, match="vertical_tolerance_ft"):
+        pc_at(359.74, vertical_tolerance_ft=-1.0)

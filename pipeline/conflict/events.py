@@ -18,7 +18,12 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
-from pipeline.conflict.geometry import FT_PER_FL, horizontal_distance_nm
+from pipeline.conflict.geometry import (
+    FT_PER_FL,
+    VERTICAL_TOLERANCE_FT,
+    horizontal_distance_nm,
+    vertical_limit_ft,
+)
 from pipeline.conflict.pairs import _require, pairs_per_step, time_key
 
 LOSS_COLUMNS = ["aircraft_a", "aircraft_b", "start", "end", "duration_s", "min_horizontal_nm",
@@ -44,14 +49,15 @@ def separation(tracks: pd.DataFrame, radius_nm: float = 5.0, vertical_ft: float 
     return out
 
 
-def losses_of_separation(tracks: pd.DataFrame, radius_nm: float = 5.0,
-                         vertical_ft: float = 1000.0) -> pd.DataFrame:
-    """Every loss of separation: horizontal distance below radius_nm and vertical below vertical_ft at
-    the same grid time (strictly: aircraft exactly 1000 ft apart are separated). A run ends at the
-    first grid time either aircraft is out of loss or absent."""
+def losses_of_separation(tracks: pd.DataFrame, radius_nm: float = 5.0, vertical_ft: float = 1000.0,
+                         vertical_tolerance_ft: float = VERTICAL_TOLERANCE_FT) -> pd.DataFrame:
+    """Every loss of separation: horizontal distance below radius_nm and vertical below vertical_ft less
+    vertical_tolerance_ft (the level quantum: tracked levels 1000 ft apart wobble a few feet) at the same
+    grid time. A run ends at the first grid time either aircraft is out of loss or absent."""
     _check_positive(radius_nm=radius_nm, vertical_ft=vertical_ft)
+    limit_ft = vertical_limit_ft(vertical_ft, vertical_tolerance_ft)
     sep = separation(tracks, radius_nm, vertical_ft)
-    sep = sep[(sep["horizontal_nm"] < radius_nm) & (sep["vertical_ft"] < vertical_ft)]
+    sep = sep[(sep["horizontal_nm"] < radius_nm) & (sep["vertical_ft"] < limit_ft)]
     if sep.empty:
         return _empty(LOSS_COLUMNS, tracks["time"].dtype, tracks["aircraft_id"].dtype)
     grid = np.unique(time_key(tracks["time"]))

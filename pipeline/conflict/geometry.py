@@ -13,6 +13,18 @@ F = 1.0 / 298.257223563  # WGS-84 flattening
 E2 = F * (2.0 - F)
 M_PER_NM = 1852.0
 FT_PER_FL = 100.0
+# reported levels are quantised (Mode S and ADS-B 25 ft, Mode C 100 ft): a vertical distance within the
+# finer quantum of the minimum is separation (aircraft at assigned levels 1000 ft apart), not a loss
+VERTICAL_TOLERANCE_FT = 25.0
+
+
+def vertical_limit_ft(vertical_ft: float, tolerance_ft: float) -> float:
+    """The vertical distance below which aircraft are in proximity: the minimum less the tolerance;
+    ValueError unless 0 <= tolerance_ft < vertical_ft."""
+    if not (np.isfinite(tolerance_ft) and 0.0 <= tolerance_ft < vertical_ft):
+        raise ValueError(f"vertical_tolerance_ft: must be from 0 to less than vertical_ft ({vertical_ft!r}), "
+                         f"got {tolerance_ft!r}")
+    return float(vertical_ft - tolerance_ft)
 
 
 def surface_ecef_m(lat_deg, lon_deg) -> np.ndarray:

@@ -14,7 +14,7 @@ import numpy as np
 import pandas as pd
 from scipy.special import ndtr
 
-from pipeline.conflict.geometry import FT_PER_FL, M_PER_NM
+from pipeline.conflict.geometry import FT_PER_FL, M_PER_NM, VERTICAL_TOLERANCE_FT, vertical_limit_ft
 from pipeline.conflict.pairs import _require, candidate_pairs, time_key
 from pipeline.conflict.probability import conflict_probability, pc_margin, pc_upper_bound
 
@@ -25,19 +25,21 @@ _CHUNK = 20_000
 
 
 def pair_probabilities(predictions: pd.DataFrame, radius_nm: float = 5.0, vertical_ft: float = 1000.0,
-                       method: str = "exact", eps: float = 1e-6, pairs: pd.DataFrame | None = None
-                       ) -> pd.DataFrame:
+                       method: str = "exact", eps: float = 1e-6, pairs: pd.DataFrame | None = None,
+                       vertical_tolerance_ft: float = VERTICAL_TOLERANCE_FT) -> pd.DataFrame:
     """PC of every pair at every (time, horizon) whose PC can exceed eps.
 
     Pairs come from a k-d tree on the predicted positions, the radius widened by `pc_margin`; or, given
     `pairs` (`time, aircraft_a, aircraft_b`, e.g. from `pairs_per_step` on current positions with the
     closing distance as margin), exactly those pairs at every horizon.
 
-    Horizontally, PC against a disc of radius_nm. Vertically, with `sigma_alt_ft`, PC is multiplied by
-    the probability that the altitude difference is below vertical_ft (independent Gaussian errors);
-    without it, a pair counts only when its predicted altitudes differ by less than vertical_ft.
+    Horizontally, PC against a disc of radius_nm. Vertically, against vertical_ft less
+    vertical_tolerance_ft (as `losses_of_separation`): with `sigma_alt_ft`, PC is multiplied by the
+    probability that the altitude difference is below it (independent Gaussian errors); without it, a
+    pair counts only when its predicted altitudes differ by less.
     """
     _require(predictions, PREDICTION_COLUMNS, "predictions")
+    vertical_ft = vertical_limit_ft(vertical_ft, vertical_tolerance_ft)
     frame = predictions.sort_values(["horizon_s", "time", "aircraft_id"], kind="stable")
     east, north = frame["east_m"].to_numpy(float), frame["north_m"].to_numpy(float)
     cov = np.empty((len(frame), 2, 2))
