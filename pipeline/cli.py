@@ -72,6 +72,15 @@ def _aircraft_options(p: argparse.ArgumentParser, all_help: str) -> None:
     who.add_argument("--all", action="store_true", help=all_help)
 
 
+def _adsb_sigma_option(p: argparse.ArgumentParser, used: str) -> None:
+    """--adsb-sigma: the accuracy the user declares for ADS-B reports that carry no NACp."""
+    p.add_argument("--adsb-sigma", type=float, metavar="M",
+                   help="1-sigma position error per axis (m, 0.5-20000) declared for ADS-B reports without "
+                        f"NACp (CAT021 0.2x: its figure of merit is not read as NACp){used}; reports with "
+                        "NACp keep theirs, NACp 0 (unknown) stays untracked. Without it such reports are "
+                        "not tracked")
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="msdc", description="Multi-Sensor Data Correlator: ASTERIX "
                                      "CAT048/CAT021 decoding and radar/ADS-B correlation.")
@@ -113,6 +122,7 @@ def build_parser() -> argparse.ArgumentParser:
     c.add_argument("--tables", choices=["auto", "xlsx", "parquet"], default="auto",
                    help="slot and lag tables: in the workbook (xlsx), as STEM_slots.parquet and "
                         "STEM_correlation.parquet beside it (parquet), or Parquet past 5,000 rows (auto)")
+    _adsb_sigma_option(c, "; used by --fill predict")
     _decoding_options(c)
 
     q = sub.add_parser("quality", help="sensor data quality and radar accuracy against ADS-B")
@@ -123,6 +133,7 @@ def build_parser() -> argparse.ArgumentParser:
     q.add_argument("--reference", choices=["adsb", "track"], default="adsb",
                    help="radar accuracy against ADS-B interpolated linearly (default) or against the "
                         "smoothed ADS-B-only IMM track")
+    _adsb_sigma_option(q, "; used by --reference track")
     _decoding_options(q)
 
     t = sub.add_parser("track", help="fused IMM tracks per aircraft from every radar and ADS-B report")
@@ -145,6 +156,7 @@ def build_parser() -> argparse.ArgumentParser:
                    help="measurement noise: estimate (default: each sensor's sigmas from the tracker's "
                         "residuals, a few extra passes) or declared (the sensor file's sigmas, ADS-B "
                         "from NACp)")
+    _adsb_sigma_option(t, "; with --noise estimate it is then refined from the residuals")
     _decoding_options(t)
 
     k = sub.add_parser("conflicts", help="conflict probability from IMM-predicted tracks: alerts, losses of "
@@ -172,6 +184,11 @@ def build_parser() -> argparse.ArgumentParser:
     k.add_argument("--max-coast", type=float, default=60.0,
                    help="seconds a track is predicted after its last report before it ends (default 60)")
     k.add_argument("--tpm", help="mode transition law of the IMM (default expm:150,20)")
+    k.add_argument("--noise", default="declared",
+                   help="measurement noise: declared (default: the sensor file's sigmas, ADS-B from NACp "
+                        "or --adsb-sigma; what the conflict validations used) or estimate (each sensor's "
+                        "sigmas from the tracker's residuals first, as msdc track)")
+    _adsb_sigma_option(k, "; with --noise estimate it is then refined from the residuals")
     _decoding_options(k)
     return parser
 
@@ -183,7 +200,8 @@ def _decoding(args) -> dict:
 
 def _aircraft(args) -> dict:
     return {**_decoding(args), "sensors": args.sensors, "callsign": args.callsign, "address": args.address,
-            "all_aircraft": args.all, "output": args.output, "json": args.json, "gap_s": args.gap}
+            "all_aircraft": args.all, "output": args.output, "json": args.json, "gap_s": args.gap,
+            "adsb_sigma_m": args.adsb_sigma}
 
 
 def _warn(command: str, warnings: list[str]) -> None:
@@ -310,7 +328,7 @@ def cmd_track(args) -> int:
         **_decoding(args), sensors=args.sensors, callsign=args.callsign, address=args.address,
         all_aircraft=args.all, output=args.output, json=args.json, figures=args.figures, step_s=args.step,
         max_coast_s=args.max_coast, smooth=args.smooth, smoother=args.smoother, tpm=args.tpm,
-        sources=args.sources, noise=args.noise)
+        sources=args.sources, noise=args.noise, adsb_sigma_m=args.adsb_sigma)
     checked = jobs_track.validate(options)
     _warn("track", checked.warnings)
     seen = len(checked.warnings)
@@ -336,12 +354,17 @@ def _track_text(result) -> str:
                         if c in res.sensors]]
     text = ("Tracks:\n" + ac[cols].to_string(index=False, float_format=lambda v: f"{v:.1f}")
             + "\n\nSensors:\n" + sens.to_string(index=False, float_format=lambda v: f"{v:.2f}"))
-    if result.noise is not None and len(result.noise):
-        cols = ["sensor_id", "component", "unit", "declared_sigma", "estimated_sigma", "residuals",
-                "estimated"]
-        text += (f"\n\nMeasurement noise estimated from the residuals ({result.noise.attrs.get('passes')} "
-                 "passes):\n" + result.noise[cols].to_string(index=False, float_format=lambda v: f"{v:.4g}"))
-    return text
+    return text + _noise_text(result.noise)
+
+
+def _noise_text(noise) -> str:
+    """The declared and estimated sigmas of --noise estimate, or nothing."""
+    if noise is None or not len(noise):
+        return ""
+    cols = ["sensor_id", "component", "unit", "declared_from", "declared_sigma", "estimated_sigma",
+            "residuals", "estimated"]
+    return (f"\n\nMeasurement noise estimated from the residuals ({noise.attrs.get('passes')} passes):\n"
+            + noise[cols].to_string(index=False, float_format=lambda v: f"{v:.4g}"))
 
 
 def cmd_conflicts(args) -> int:
@@ -352,7 +375,7 @@ def cmd_conflicts(args) -> int:
         max_coast_s=args.max_coast, tpm=args.tpm, horizons_s=args.horizon, radius_nm=args.radius_nm,
         vertical_ft=args.vertical_ft, vertical_tolerance_ft=args.vertical_tolerance_ft,
         threshold=args.threshold, method=args.method, vertical=args.vertical,
-        figures=args.figures)
+        figures=args.figures, noise=args.noise, adsb_sigma_m=args.adsb_sigma)
     checked = jobs_conflict.validate(options)
     _warn("conflicts", checked.warnings)
     seen = len(checked.warnings)
@@ -360,7 +383,7 @@ def cmd_conflicts(args) -> int:
                                         command=" ".join(sys.argv[1:]) or "conflicts")
     _warn("conflicts", checked.warnings[seen:])
     _report_skipped(result.loaded.errors)
-    print(jobs_conflict.text(result))
+    print(jobs_conflict.text(result) + _noise_text(result.noise))
     for kind, path in jobs_conflict.write_conflicts(result).items():
         print(f"{kind}: {path}", file=sys.stderr)
     return 0

@@ -40,6 +40,8 @@ from pipeline.report.textguard import guard_frame
 
 SLOT_RANGE_S = (0.1, 3600.0)  # below 0.1 s the slot count and the lag tables explode
 GAP_RANGE_S = (0.1, 86400.0)
+# --adsb-sigma: 1-sigma error per axis declared for ADS-B reports without NACp (CAT021 0.2x)
+ADSB_SIGMA_RANGE_M = (0.5, 20000.0)
 INDICATOR_RANGE = (0, 11)  # NIC and NACp values
 CHUNK_RANGE_MB = (0.1, 4096.0)
 SITE_ALTITUDE_RANGE_M = (-500.0, 6000.0)  # outside: almost certainly a wrong sensor file entry
@@ -206,6 +208,7 @@ class AircraftOptions(DecodingOptions):
     output: str | None = None
     json: str | None = None
     gap_s: float = 180.0
+    adsb_sigma_m: float | None = None  # declared sigma (m per axis) for ADS-B reports without NACp
 
 
 def _check_aircraft(o: AircraftOptions) -> None:
@@ -219,6 +222,7 @@ def _check_aircraft(o: AircraftOptions) -> None:
         if len(text) != 6 or any(c not in "0123456789ABCDEF" for c in text):
             raise OptionError(f"--address {o.address!r}: must be a 24-bit hex address (up to 6 hex digits)")
     _number("--gap", o.gap_s, *GAP_RANGE_S, " s")
+    _number("--adsb-sigma", o.adsb_sigma_m, *ADSB_SIGMA_RANGE_M, " m")
 
 
 @dataclass(frozen=True)
@@ -381,7 +385,8 @@ def _date_ignored(options: DecodingOptions, inputs: list[dict]) -> list[str]:
             for info in inputs if info["format"] in ("pcap", "pcapng")]
 
 
-def _measurements(loaded: Loaded, sensors: pd.DataFrame, sensors_path: str) -> pd.DataFrame:
+def _measurements(loaded: Loaded, sensors: pd.DataFrame, sensors_path: str,
+                  adsb_sigma_m: float | None = None) -> pd.DataFrame:
     """Radar and ADS-B measurements, with the user-facing errors for missing data and sensors."""
     from pipeline.model.sensors import UnknownRadar, sensor_toml_snippet
 
@@ -390,7 +395,8 @@ def _measurements(loaded: Loaded, sensors: pd.DataFrame, sensors_path: str) -> p
     if 21 not in loaded.frames or loaded.frames[21].empty:
         raise JobError("no ADS-B (CAT021) records in the inputs")
     try:
-        return build_measurements(loaded.frames[48], loaded.frames[21], sensors, date=loaded.date)
+        return build_measurements(loaded.frames[48], loaded.frames[21], sensors, date=loaded.date,
+                                  adsb_sigma_m=adsb_sigma_m)
     except UnknownRadar as exc:
         lines = "\n\n".join(sensor_toml_snippet(sac, sic) for sac, sic in exc.missing)
         raise JobError(f"radar SAC/SIC {', '.join(f'{a}/{b}' for a, b in exc.missing)} not in "
@@ -439,7 +445,8 @@ def _parameters(options: AircraftOptions, loaded: Loaded, started: float, comman
             "run_utc": dt.datetime.now(dt.UTC).strftime("%Y-%m-%dT%H:%M:%SZ"),
             "run_time_s": round(time.monotonic() - started, 3), "editions": {
                 f"CAT{c:03d}": e for c, e in sorted(loaded.editions.items())},
-            "sensors": str(options.sensors), "date": loaded.date.isoformat() if loaded.date else None}
+            "sensors": str(options.sensors), "date": loaded.date.isoformat() if loaded.date else None,
+            "adsb_sigma_m": options.adsb_sigma_m}
 
 
 def _quality(meas: pd.DataFrame, sensors: pd.DataFrame, options: AircraftOptions) -> QualityResult:
@@ -530,7 +537,7 @@ def correlate_job(options: CorrelateOptions, *, progress: Progress | None = None
     loaded = _load(options, checked, progress)
     if progress:
         progress.stage("Pre-processing data")
-    meas = _measurements(loaded, checked.sensors, str(options.sensors))
+    meas = _measurements(loaded, checked.sensors, str(options.sensors), options.adsb_sigma_m)
     loaded.drop_frames()  # the measurements hold what the job needs: free the decoded frames first
     meas_all = mark_once(meas, split_adsb=options.split_adsb)  # jumps always: each window counts its own
     del meas
@@ -650,7 +657,7 @@ def quality_job(options: QualityOptions, *, progress: Progress | None = None, ch
     loaded = _load(options, checked, progress)
     if progress:
         progress.stage("Analysing data quality")
-    meas = _measurements(loaded, checked.sensors, str(options.sensors))
+    meas = _measurements(loaded, checked.sensors, str(options.sensors), options.adsb_sigma_m)
     loaded.drop_frames()  # the measurements hold what the job needs: free the decoded frames first
     meas = mark_once(meas)
     quality = _quality(meas, checked.sensors, options)

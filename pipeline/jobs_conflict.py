@@ -22,7 +22,7 @@ import pandas as pd
 
 from pipeline import jobs
 from pipeline.jobs import Checked, JobError, OptionError
-from pipeline.jobs_track import STEP_RANGE_S, TrackOptions, _measurements, untrackable
+from pipeline.jobs_track import NOISE, STEP_RANGE_S, TrackOptions, _estimate_noise, _measurements, untrackable
 from pipeline.progress import Progress
 
 METHODS = ("exact", "one-block", "blocks", "midpoint")
@@ -38,6 +38,7 @@ class ConflictOptions(TrackOptions):
     """Everything ``conflict_job`` needs; see ``msdc conflicts --help``. Every aircraft is tracked."""
 
     all_aircraft: bool = True
+    noise: str = "declared"  # the conflict validations used declared noise; "estimate" as msdc track
     horizons_s: tuple[float, ...] = (20.0, 60.0, 120.0)
     radius_nm: float = 5.0
     vertical_ft: float = 1000.0
@@ -102,6 +103,9 @@ def validate(options: ConflictOptions) -> Checked:
             parse_tpm(str(options.tpm))
         except ValueError as exc:
             raise OptionError(f"--tpm {options.tpm!r}: {str(exc).partition(': ')[2]}") from None
+    if options.noise not in NOISE:
+        raise OptionError(f"--noise {options.noise!r}: must be one of {', '.join(NOISE)}")
+    jobs._number("--adsb-sigma", options.adsb_sigma_m, *jobs.ADSB_SIGMA_RANGE_M, " m")
     checked.output = jobs._output("-o", options.output, (".csv", ".xlsx"))
     checked.json = jobs._output("--json", options.json, (".json",))
     if checked.output is None:
@@ -143,6 +147,7 @@ class ConflictJobResult:
     loaded: object
     counts: dict = field(default_factory=dict)
     predictions: pd.DataFrame | None = None  # predict_tracks' frame (for the figures)
+    noise: pd.DataFrame | None = None  # --noise estimate: per sensor, declared and estimated sigmas
 
 
 def conflict_job(options: ConflictOptions, *, progress: Progress | None = None,
@@ -169,6 +174,9 @@ def conflict_job(options: ConflictOptions, *, progress: Progress | None = None,
     if progress:
         progress.stage("Tracking")
     meas = _measurements(loaded, checked, options)
+    noise = None
+    if options.noise == "estimate":
+        meas, noise = _estimate_noise(meas, checked.sensors, options)
     result = track(meas, step_s=step, max_coast_s=float(options.max_coast_s), tpm=options.tpm,
                    keep_states=True)
     tracks = result.tracks
@@ -194,9 +202,9 @@ def conflict_job(options: ConflictOptions, *, progress: Progress | None = None,
               "horizons_s": list(horizons), "radius_nm": options.radius_nm,
               "vertical_ft": options.vertical_ft, "vertical_tolerance_ft": tol,
               "threshold": options.threshold, "method": options.method,
-              "vertical": options.vertical}
+              "vertical": options.vertical, "noise": options.noise}
     return ConflictJobResult(options, checked, grid, pc, alerts, losses, warn, params, loaded, counts,
-                             predictions)
+                             predictions, noise)
 
 
 def summary(result: ConflictJobResult) -> dict:
@@ -206,9 +214,12 @@ def summary(result: ConflictJobResult) -> dict:
     def records(frame: pd.DataFrame) -> list[dict]:
         return [{k: json_value(v) for k, v in row.items()} for row in frame.to_dict("records")]
 
-    return {"parameters": result.parameters, "inputs": result.loaded.inputs, "counts": result.counts,
-            "alerts": records(result.alerts), "losses": records(result.losses),
-            "warning_times": records(result.warnings)}
+    doc = {"parameters": result.parameters, "inputs": result.loaded.inputs, "counts": result.counts,
+           "alerts": records(result.alerts), "losses": records(result.losses),
+           "warning_times": records(result.warnings)}
+    if result.noise is not None:
+        doc["noise"] = {"passes": result.noise.attrs.get("passes"), "sensors": records(result.noise)}
+    return doc
 
 
 def text(result: ConflictJobResult) -> str:

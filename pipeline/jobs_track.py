@@ -127,7 +127,8 @@ def _measurements(loaded, checked: Checked, options: TrackOptions) -> pd.DataFra
         wanted = " or ".join({"radar": "radar (CAT048)", "adsb": "ADS-B (CAT021)"}[s] for s in sources)
         raise JobError(f"no {wanted} records in the inputs (--sources {','.join(sources)})")
     try:
-        meas = build_measurements(radar, adsb, checked.sensors, date=loaded.date)
+        meas = build_measurements(radar, adsb, checked.sensors, date=loaded.date,
+                                  adsb_sigma_m=options.adsb_sigma_m)
     except UnknownRadar as exc:
         lines = "\n\n".join(sensor_toml_snippet(sac, sic) for sac, sic in exc.missing)
         raise JobError(f"radar SAC/SIC {', '.join(f'{a}/{b}' for a, b in exc.missing)} not in "
@@ -204,7 +205,8 @@ def untrackable(meas: pd.DataFrame) -> str:
     if n_adsb:
         no_nacp = int((bad & (kind == "adsb") & meas["nacp"].isna().to_numpy()).sum())
         why = [f"{no_nacp} carry no NACp, as in CAT021 0.2x, whose figure of merit msdc does not turn into "
-               "a sigma"] if no_nacp else []
+               "a sigma: declare their accuracy with --adsb-sigma M (1-sigma metres per axis)"]
+        why = why if no_nacp else []
         if n_adsb > no_nacp:
             why.append(f"{n_adsb - no_nacp} have NACp 0 (unknown) or no position")
         parts.append(f"{n_adsb} of {int((kind == 'adsb').sum())} ADS-B reports have no usable accuracy "

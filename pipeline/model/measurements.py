@@ -152,8 +152,10 @@ def nacp_sigma_m(nacp) -> np.ndarray:
     return values.map(NACP_95_M).astype("float64").to_numpy() / CIRCULAR_95_PER_SIGMA
 
 
-def _adsb_rows(cat021: pd.DataFrame, date: dt.date | None) -> pd.DataFrame:
-    """ADS-B reports with a position and a time (heading = track angle)."""
+def _adsb_rows(cat021: pd.DataFrame, date: dt.date | None, adsb_sigma_m: float | None = None) -> pd.DataFrame:
+    """ADS-B reports with a position and a time (heading = track angle). A report without NACp (CAT021
+    0.2x) gets the caller's ``adsb_sigma_m`` per axis when given, else no covariance; NACp 0 ("unknown
+    or >= 10 NM") gets none either way: it states a poor accuracy, it does not leave it out."""
     out = _common(cat021, 21, "adsb", date)
     out["heading_deg"] = _column(cat021, "track_angle_deg")
     out["latitude"] = _column(cat021, "latitude")
@@ -169,16 +171,20 @@ def _adsb_rows(cat021: pd.DataFrame, date: dt.date | None) -> pd.DataFrame:
     out["height_source"] = np.where(np.isfinite(geometric_m), "geometric",
                                     np.where(np.isfinite(fl_m), "flight_level", "none"))
     var = nacp_sigma_m(out["nacp"]) ** 2
+    if adsb_sigma_m is not None:
+        var = np.where(out["nacp"].isna().to_numpy(bool), float(adsb_sigma_m) ** 2, var)
     out["cov_ee_m2"], out["cov_en_m2"], out["cov_nn_m2"] = var, np.where(np.isnan(var), np.nan, 0.0), var
     keep = out[["time", "latitude", "longitude"]].notna().all(axis=1)
     return out[keep]
 
 
 def build_measurements(cat048: pd.DataFrame | None = None, cat021: pd.DataFrame | None = None,
-                       sensors: pd.DataFrame | None = None, *, date: dt.date | None = None) -> pd.DataFrame:
+                       sensors: pd.DataFrame | None = None, *, date: dt.date | None = None,
+                       adsb_sigma_m: float | None = None) -> pd.DataFrame:
     """Every radar and ADS-B report as one validated measurement frame, identity assigned over both.
 
     ``date`` dates records that carry no timestamp of their own (see pipeline.model.time.absolute_time).
+    ``adsb_sigma_m``: the 1-sigma error per axis (m) declared for ADS-B reports without NACp.
     Rows are in input order, radar first.
     """
     parts = []
@@ -187,7 +193,7 @@ def build_measurements(cat048: pd.DataFrame | None = None, cat021: pd.DataFrame 
             raise ValueError("radar measurements need the sensor table (radar sites)")
         parts.append(_radar_rows(cat048, sensors, date))
     if cat021 is not None and len(cat021):
-        parts.append(_adsb_rows(cat021, date))
+        parts.append(_adsb_rows(cat021, date, adsb_sigma_m))
     parts = [conform(p) for p in parts if len(p)]
     if not parts:
         return empty_measurements()

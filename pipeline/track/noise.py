@@ -98,7 +98,8 @@ class NoiseEstimate:
     """measurements: the input with its covariances rescaled; sensors: one row per sensor and component
     (sensor_id, sensor_kind, component "position" | "range" | "azimuth", declared_sigma_m for ADS-B
     classes, scale = estimated / declared sigma, residuals used, estimated: False when too few
-    residuals, so the declared sigma was kept, estimated_sigma_m); passes run."""
+    residuals, so the declared sigma was kept, declared_from "nacp" | "declared" (ADS-B without NACp)
+    | "sensor" (radar), estimated_sigma_m); passes run."""
 
     measurements: pd.DataFrame
     sensors: pd.DataFrame
@@ -125,18 +126,22 @@ def _radials(meas: pd.DataFrame, sites: dict[str, tuple[float, float]] | None) -
 
 
 def _classes(meas: pd.DataFrame, radial: np.ndarray) -> tuple[np.ndarray, list[tuple]]:
-    """Class number per row and the class keys (sensor_id, kind, has_site, declared variance or NaN):
-    ADS-B by source and declared variance (NACp level), radars by sensor (with a site: separate range
-    and azimuth factors; without: one isotropic factor)."""
+    """Class number per row and the class keys (sensor_id, kind, has_site, declared variance or NaN,
+    declared_from): ADS-B by source, NACp level and whether the sigma came from NACp ("nacp") or was
+    declared for reports without it ("declared"; also every ADS-B row of a frame without a nacp
+    column), so a declared sigma equal to a NACp level's is still its own class; radars ("sensor") by
+    sensor (with a site: separate range and azimuth factors; without: one isotropic factor)."""
     sid = meas["sensor_id"].astype(str).to_numpy()
     kind = meas["sensor_kind"].astype(str).to_numpy()
     has_site = np.isfinite(radial[:, 0])
     declared = np.where(kind == "adsb", np.round(meas["cov_ee_m2"].to_numpy(float), 3), np.nan)
+    has_nacp = meas["nacp"].notna().to_numpy(bool) if "nacp" in meas else np.zeros(len(meas), bool)
+    source = np.where(kind == "adsb", np.where(has_nacp, "nacp", "declared"), "sensor")
     label = (pd.Series(sid, dtype=object) + "|" + kind + "|" + has_site.astype(str) + "|"
-             + declared.astype(str))
+             + declared.astype(str) + "|" + source)
     codes, uniques = pd.factorize(label, sort=True)
     first = [int(np.flatnonzero(codes == c)[0]) for c in range(len(uniques))]
-    return codes, [(sid[i], kind[i], bool(has_site[i]), float(declared[i])) for i in first]
+    return codes, [(sid[i], kind[i], bool(has_site[i]), float(declared[i]), str(source[i])) for i in first]
 
 
 def _forms(meas: pd.DataFrame, cov: np.ndarray, radial: np.ndarray, config: TrackerConfig) -> np.ndarray:
@@ -226,9 +231,9 @@ def estimate_noise(measurements: pd.DataFrame, *, sites: dict[str, tuple[float, 
         if moved <= tol:
             break
     rows = []
-    for c, (s, kind, has_site, var) in enumerate(keys):
+    for c, (s, kind, has_site, var, source) in enumerate(keys):
         base = {"sensor_id": s, "sensor_kind": kind, "residuals": int(used[c]),
-                "estimated": bool(estimated[c])}
+                "estimated": bool(estimated[c]), "declared_from": source}
         if has_site:
             for component, k in ((RANGE, k_along[c]), (AZIMUTH, k_across[c])):
                 rows.append({**base, "component": component, "declared_sigma_m": np.nan, "scale": float(k)})
@@ -236,7 +241,7 @@ def estimate_noise(measurements: pd.DataFrame, *, sites: dict[str, tuple[float, 
             rows.append({**base, "component": POSITION, "declared_sigma_m": float(np.sqrt(var)),
                          "scale": float(k_along[c])})
     sensors = pd.DataFrame(rows, columns=["sensor_id", "sensor_kind", "component", "declared_sigma_m",
-                                          "scale", "residuals", "estimated"])
+                                          "scale", "residuals", "estimated", "declared_from"])
     sensors["estimated_sigma_m"] = sensors["declared_sigma_m"] * sensors["scale"]
     out = meas.assign(cov_ee_m2=cov[:, 0, 0], cov_en_m2=cov[:, 0, 1], cov_nn_m2=cov[:, 1, 1])
     return NoiseEstimate(out.set_axis(measurements.index), sensors, done)

@@ -1,0 +1,174 @@
+"""--adsb-sigma: a declared accuracy for ADS-B reports without NACp (CAT021 0.2x), on track and conflicts.
+
+The references are the simulator's: the per-axis sigma it injected, and the declared value itself (the
+covariance must be exactly sigma^2). The recording is encoded in CAT021 edition 0.23, which has no
+NACp, as the real recording; its figure of merit is never read as NACp."""
+
+from __future__ import annotations
+
+import datetime
+import math
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
+import pytest
+from real_track_data import REAL
+
+from asterix.encode import encode_frame
+from pipeline import jobs
+from pipeline.cli import main
+from pipeline.jobs_conflict import ConflictOptions, conflict_job
+from pipeline.jobs_track import TrackOptions, track_job
+
+INJECTED_M = 20.0  # the simulator's ADS-B position sigma per axis for this recording
+DECLARED_M = 50.0
+# what CAT021 0.23 can carry of the simulator's columns (no I021/090 quality indicators: no NACp)
+V023 = ["sac", "sic", "time_of_day", "latitude", "longitude", "address", "callsign", "flight_level",
+        "ground_speed_kt", "track_angle_deg"]
+DATE = "2019-03-01"
+DAY = datetime.date(2019, 3, 1)
+
+
+@pytest.fixture(scope="module")
+def recording(tmp_path_factory):
+    """Two aircraft, ADS-B only, 20 m per axis, no low-quality episode; as 0.23 (no NACp) and as the
+    current edition with NACp 0 on every report."""
+    from fixtures.scenario import default_scenario
+    from fixtures.simulate import sensors_toml, simulate
+
+    sc = replace(default_scenario(), adsb_sigma_position_m=INJECTED_M, adsb_low_quality_episodes=0)
+    sc = replace(sc, aircraft=sc.aircraft[:2])
+    sim = simulate(sc, seed=5)
+    d = tmp_path_factory.mktemp("adsb_sigma")
+    (d / "v023.ast").write_bytes(encode_frame(21, sim.adsb[V023], edition="0.23"))
+    (d / "nacp0.ast").write_bytes(encode_frame(21, sim.adsb.assign(nacp=0)))
+    (d / "s.toml").write_text(sensors_toml(sc.radar))
+    return d
+
+
+def _track(d, **kw):
+    return track_job(TrackOptions(inputs=(str(d / "v023.ast"),), editions=("21=0.23",), date=DAY,
+                                  sensors=str(d / "s.toml"), all_aircraft=True, output=str(d / "t.csv"),
+                                  **kw))
+
+
+def test_declared_noise_uses_exactly_the_declared_sigma(recording):
+    r = _track(recording, adsb_sigma_m=DECLARED_M, noise="declared")
+    m = r.measurements
+    assert len(m) > 1000 and (m["sensor_kind"] == "adsb").all() and m["nacp"].isna().all()
+    np.testing.assert_array_equal(m["cov_ee_m2"], DECLARED_M**2)  # 2500 m^2 per axis
+    np.testing.assert_array_equal(m["cov_nn_m2"], DECLARED_M**2)
+    np.testing.assert_array_equal(m["cov_en_m2"], 0.0)
+    assert r.tracks["aircraft_id"].nunique() == 2
+    assert r.parameters["adsb_sigma_m"] == DECLARED_M and r.parameters["noise"] == "declared"
+
+
+def test_estimate_recovers_the_injected_sigma_from_the_declared_one(recording):
+    r = _track(recording, adsb_sigma_m=DECLARED_M, noise="estimate")
+    row = r.noise[r.noise["sensor_kind"] == "adsb"]
+    assert len(row) == 1 and row["declared_from"].iloc[0] == "declared" and bool(row["estimated"].iloc[0])
+    assert row["declared_sigma"].iloc[0] == DECLARED_M
+    # ~5900 reports: the sample sigma is within ~1 % of 20 m; 5 % is the residual method's bound against
+    # the sample's RMS in test_track_noise (19.87 m on 2026-11-22), the injected jumps cut as gross errors
+    assert row["estimated_sigma"].iloc[0] == pytest.approx(INJECTED_M, rel=0.05)
+    m = r.measurements
+    np.testing.assert_allclose(m["cov_ee_m2"], row["estimated_sigma"].iloc[0] ** 2, rtol=1e-9)
+
+
+def test_noise_classes_keep_declared_apart_from_the_same_nacp_sigma():
+    """A declared sigma equal to a NACp level's (NACp 9: 30 / 2.45 m) is still its own class."""
+    import pandas as pd
+
+    from pipeline.model.measurements import nacp_sigma_m
+    from pipeline.track.noise import _classes
+
+    var = float(nacp_sigma_m([9])[0]) ** 2
+    meas = pd.DataFrame({"sensor_id": ["021:0/1"] * 3, "sensor_kind": ["adsb"] * 3,
+                         "cov_ee_m2": [var] * 3, "nacp": pd.array([9, pd.NA, 9], dtype="Int64")})
+    codes, keys = _classes(meas, np.full((3, 2), np.nan))
+    assert codes[0] == codes[2] != codes[1]
+    assert sorted(k[4] for k in keys) == ["declared", "nacp"]
+
+
+def test_nacp_0_is_not_given_the_declared_sigma(recording, capsys):
+    """NACp 0 says "unknown or >= 10 NM": a statement of poor accuracy, not a missing one."""
+    d = recording
+    code = main(["track", str(d / "nacp0.ast"), "--sensors", str(d / "s.toml"), "--all", "--adsb-sigma", "50",
+                 "-o", str(d / "n.csv")])
+    err = capsys.readouterr().err
+    assert code == 1 and "no aircraft could be tracked" in err and "have NACp 0" in err
+    assert not (d / "n.csv").exists()
+
+
+def test_without_the_option_the_message_suggests_it(recording, capsys):
+    d = recording
+    code = main(["track", str(d / "v023.ast"), "--edition", "21=0.23", "--date", DATE, "--sensors",
+                 str(d / "s.toml"), "--all", "-o", str(d / "m.csv")])
+    err = capsys.readouterr().err
+    assert code == 1 and "carry no NACp" in err and "--adsb-sigma" in err
+    assert len([line for line in err.splitlines() if line.startswith("msdc track:")]) == 1
+    assert not (d / "m.csv").exists()
+
+
+def test_conflicts_record_declared_noise_and_the_sigma(recording):
+    d = recording
+    base = {"inputs": (str(d / "v023.ast"),), "editions": ("21=0.23",), "date": DAY,
+            "sensors": str(d / "s.toml"), "output": str(d / "c.csv"), "adsb_sigma_m": DECLARED_M}
+    declared = conflict_job(ConflictOptions(**base))
+    assert declared.parameters["noise"] == "declared" and declared.noise is None
+    assert declared.parameters["adsb_sigma_m"] == DECLARED_M and declared.counts["aircraft"] == 2
+    estimated = conflict_job(ConflictOptions(**base, noise="estimate"))
+    row = estimated.noise[estimated.noise["sensor_kind"] == "adsb"]
+    assert estimated.parameters["noise"] == "estimate"
+    assert row["estimated_sigma"].iloc[0] == pytest.approx(INJECTED_M, rel=0.05)
+
+
+TRACK = ["track", "{A}", "--sensors", "{S}", "--all", "-o", "{O}/t.csv"]
+CONFLICTS = ["conflicts", "{A}", "--sensors", "{S}", "-o", "{O}/c.csv"]
+# (id, argv, words the one-line message must contain)
+BAD = [
+    (f"{cmd[0]}-{name}", cmd + extra, words)
+    for cmd in (TRACK, CONFLICTS)
+    for name, extra, words in [
+        ("zero", ["--adsb-sigma", "0"], ["--adsb-sigma 0.0", "0.5 to 20000 m"]),
+        ("small", ["--adsb-sigma", "0.4"], ["--adsb-sigma 0.4", "0.5 to 20000 m"]),
+        ("negative", ["--adsb-sigma", "-30"], ["--adsb-sigma -30.0", "0.5 to 20000 m"]),
+        ("huge", ["--adsb-sigma", "20001"], ["--adsb-sigma 20001.0", "0.5 to 20000 m"]),
+        ("nan", ["--adsb-sigma", "nan"], ["--adsb-sigma nan", "finite"]),
+        ("inf", ["--adsb-sigma", "inf"], ["--adsb-sigma inf", "finite"]),
+        ("text", ["--adsb-sigma", "thirty"], ["--adsb-sigma", "float"]),
+    ]
+] + [("conflicts-noise", CONFLICTS + ["--noise", "guess"], ["--noise 'guess'", "declared, estimate"])]
+
+
+@pytest.mark.parametrize(("argv", "words"), [pytest.param(a, w, id=i) for i, a, w in BAD])
+def test_bad_options_refused_before_decoding(argv, words, recording, tmp_path, monkeypatch, capsys):
+    monkeypatch.setattr(jobs, "load", lambda *a, **k: pytest.fail("decoded before validating"))
+    subst = {"{A}": str(recording / "v023.ast"), "{S}": str(recording / "s.toml"), "{O}": str(tmp_path)}
+    argv = [subst.get(a, a.replace("{O}", str(tmp_path))) for a in argv]
+    try:
+        code = main(argv)
+    except SystemExit as exc:  # argparse: not a number
+        code = exc.code
+    err = capsys.readouterr().err.strip()
+    assert code == 2 and all(w in err for w in words), err
+    assert "Traceback" not in err and (len(err.splitlines()) == 1 or "usage:" in err)
+    assert list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.skipif(not REAL.exists(), reason=f"real recording {REAL} not present (../shared/real)")
+def test_real_v023_recording_is_tracked_with_a_declared_sigma(tmp_path):
+    sensors = str(Path(__file__).resolve().parents[1] / "fixtures" / "sensors.toml")
+    r = track_job(TrackOptions(inputs=(str(REAL),), editions=("21=0.23",), sensors=sensors, all_aircraft=True,
+                               output=str(tmp_path / "t.csv"), adsb_sigma_m=30.0, noise="estimate"))
+    assert r.tracks["aircraft_id"].nunique() >= 40  # 47 on 2026-11-22; 0 without --adsb-sigma
+    row = r.noise[r.noise["sensor_kind"] == "adsb"]
+    assert len(row) == 1 and row["declared_from"].iloc[0] == "declared"
+    # One class for the whole file. The last session's estimate per FOM level (PA read as NACp, the 22
+    # airborne tracks only) was 11.2-11.7 m for the level holding most reports and 5.5-5.8 m for the
+    # better one; pooled, with the surface traffic (small residuals at taxi speed), the estimate must sit
+    # near or between them: 4-13 m. 6.3 m on 2026-11-22. A sigma near the declared 30 m would mean the
+    # residuals were not used.
+    assert 4.0 < row["estimated_sigma"].iloc[0] < 13.0
+    assert math.isfinite(r.parameters["adsb_sigma_m"]) and r.parameters["adsb_sigma_m"] == 30.0
