@@ -21,7 +21,7 @@ from functools import lru_cache
 import numpy as np
 from numba import njit
 
-from pipeline.track.imm import NX, predict_into, tpm_into, transition_into
+from pipeline.track.imm import NX, coast_chain, cycle_scratch, tpm_into, transition_into
 
 POSITION_PAIRS = ((0, 0), (0, 3), (3, 3))  # east-east, east-north, north-north
 ALL_PAIRS = tuple((a, b) for a in range(NX) for b in range(NX))
@@ -108,15 +108,7 @@ def predict_batch(gov, dt, kinds, omegas, qs, tpm_kind, tpm_param, tpm_param2, c
     n_k = pair_a.shape[0]
     oy = r
     on = r + NX * r
-    cbar = np.empty(r)
-    x0 = np.empty((r, NX))
-    P0 = np.empty((r, NX, NX))
-    xp = np.empty((r, NX))
-    Pp = np.empty((r, NX, NX))
-    PI = np.empty((r, r))
-    F = np.empty((NX, NX))
-    Q = np.empty((NX, NX))
-    tmp = np.empty((NX, NX))
+    PI, F, Q, tmp, cbar, x0, P0, xp, Pp = cycle_scratch(r)
     mu_c = np.empty(r)
     x_c = np.empty((r, NX))
     P_c = np.empty((r, NX, NX))
@@ -127,26 +119,8 @@ def predict_batch(gov, dt, kinds, omegas, qs, tpm_kind, tpm_param, tpm_param2, c
     for q in range(m):
         g = gov[q]
         d = dt[q]
-        if g != g_c or d < t_c:
-            g_c = g
-            t_c = 0.0
-            for j in range(r):
-                mu_c[j] = mu_h[g, j]
-                for a in range(NX):
-                    x_c[j, a] = x_h[g, j, a]
-                    for b in range(NX):
-                        P_c[j, a, b] = P_h[g, j, a, b]
-        while t_c < d - 1e-9:
-            h = min(cycle_s, d - t_c)
-            predict_into(kinds, omegas, qs, tpm_kind, tpm_param, tpm_param2, h, r, mu_c, x_c, P_c,
-                         PI, F, Q, tmp, cbar, x0, P0, xp, Pp)
-            for j in range(r):
-                mu_c[j] = cbar[j]
-                for a in range(NX):
-                    x_c[j, a] = xp[j, a]
-                    for b in range(NX):
-                        P_c[j, a, b] = Pp[j, a, b]
-            t_c += h
+        g_c, t_c = coast_chain(g, d, g_c, t_c, cycle_s, 1e-9, mu_h, x_h, P_h, kinds, omegas, qs, tpm_kind,
+                               tpm_param, tpm_param2, r, mu_c, x_c, P_c, PI, F, Q, tmp, cbar, x0, P0, xp, Pp)
         ce = 0.0
         cn = 0.0
         for j in range(r):

@@ -199,6 +199,42 @@ def predict_into(kinds, omegas, qs, tpm_kind, tpm_param, tpm_param2, dt, r, mu, 
 
 
 @njit(cache=True)
+def cycle_scratch(r):
+    """Scratch for predict_into, allocated once per kernel call: PI, F, Q, tmp, cbar, x0, P0, xp, Pp."""
+    return (np.empty((r, r)), np.empty((NX, NX)), np.empty((NX, NX)), np.empty((NX, NX)), np.empty(r),
+            np.empty((r, NX)), np.empty((r, NX, NX)), np.empty((r, NX)), np.empty((r, NX, NX)))
+
+
+@njit(cache=True)
+def coast_chain(g, d, g_c, t_c, cycle_s, tol, mu_h, x_h, P_h, kinds, omegas, qs, tpm_kind, tpm_param,
+                tpm_param2, r, mu_c, x_c, P_c, PI, F, Q, tmp, cbar, x0, P0, xp, Pp):
+    """Carry the chain (mu_c, x_c, P_c), now t_c s after posterior g_c, to d s after posterior g by IMM
+    cycles without measurement of at most cycle_s (restarting from posterior g when it is another row or
+    d is behind); returns the new (g_c, t_c). Consecutive queries of one row thus cost one cycle a step."""
+    if g != g_c or d < t_c:
+        g_c = g
+        t_c = 0.0
+        for j in range(r):
+            mu_c[j] = mu_h[g, j]
+            for a in range(NX):
+                x_c[j, a] = x_h[g, j, a]
+                for b in range(NX):
+                    P_c[j, a, b] = P_h[g, j, a, b]
+    while t_c < d - tol:
+        h = min(cycle_s, d - t_c)
+        predict_into(kinds, omegas, qs, tpm_kind, tpm_param, tpm_param2, h, r, mu_c, x_c, P_c,
+                     PI, F, Q, tmp, cbar, x0, P0, xp, Pp)
+        for j in range(r):
+            mu_c[j] = cbar[j]
+            for a in range(NX):
+                x_c[j, a] = xp[j, a]
+                for b in range(NX):
+                    P_c[j, a, b] = Pp[j, a, b]
+        t_c += h
+    return g_c, t_c
+
+
+@njit(cache=True)
 def _init_state(r, ze, zn, ree, ren, rnn, ve, vn, var_v, var_a, mu0, mu, x, P):
     for j in range(r):
         mu[j] = mu0[j]
@@ -238,15 +274,7 @@ def run_filter(t, ze, zn, ree, ren, rnn, ve0, vn0, var_v0, fl, kinds, omegas, qs
     mu = np.empty(r)
     x = np.empty((r, NX))
     P = np.empty((r, NX, NX))
-    cbar = np.empty(r)
-    x0 = np.empty((r, NX))
-    P0 = np.empty((r, NX, NX))
-    xp = np.empty((r, NX))
-    Pp = np.empty((r, NX, NX))
-    PI = np.empty((r, r))
-    F = np.empty((NX, NX))
-    Q = np.empty((NX, NX))
-    tmp = np.empty((NX, NX))
+    PI, F, Q, tmp, cbar, x0, P0, xp, Pp = cycle_scratch(r)
     loglik = np.empty(r)
     var_a = np.empty(r)
     for j in range(r):
@@ -433,15 +461,7 @@ def predict_rows(gov, dt, kinds, omegas, qs, tpm_kind, tpm_param, tpm_param2, q_
     same governing row continue one chain, so a coasted gap costs one cycle per substep."""
     r = kinds.shape[0]
     m = gov.shape[0]
-    cbar = np.empty(r)
-    x0 = np.empty((r, NX))
-    P0 = np.empty((r, NX, NX))
-    xp = np.empty((r, NX))
-    Pp = np.empty((r, NX, NX))
-    PI = np.empty((r, r))
-    F = np.empty((NX, NX))
-    Q = np.empty((NX, NX))
-    tmp = np.empty((NX, NX))
+    PI, F, Q, tmp, cbar, x0, P0, xp, Pp = cycle_scratch(r)
     mu_c = np.empty(r)
     x_c = np.empty((r, NX))
     P_c = np.empty((r, NX, NX))
@@ -455,26 +475,9 @@ def predict_rows(gov, dt, kinds, omegas, qs, tpm_kind, tpm_param, tpm_param2, q_
                 mu_out[q, j] = mu_h[g, j]
             combine_into(mu_h[g], x_h[g], P_h[g], r, xc_out[q], Pc_out[q])
         else:
-            if g != g_c or d < t_c:
-                g_c = g
-                t_c = 0.0
-                for j in range(r):
-                    mu_c[j] = mu_h[g, j]
-                    for a in range(NX):
-                        x_c[j, a] = x_h[g, j, a]
-                        for b in range(NX):
-                            P_c[j, a, b] = P_h[g, j, a, b]
-            while t_c < d:
-                h = min(substep_s, d - t_c)
-                predict_into(kinds, omegas, qs, tpm_kind, tpm_param, tpm_param2, h, r, mu_c, x_c, P_c,
-                             PI, F, Q, tmp, cbar, x0, P0, xp, Pp)
-                for j in range(r):
-                    mu_c[j] = cbar[j]
-                    for a in range(NX):
-                        x_c[j, a] = xp[j, a]
-                        for b in range(NX):
-                            P_c[j, a, b] = Pp[j, a, b]
-                t_c += h
+            g_c, t_c = coast_chain(g, d, g_c, t_c, substep_s, 0.0, mu_h, x_h, P_h, kinds, omegas, qs,
+                                   tpm_kind, tpm_param, tpm_param2, r, mu_c, x_c, P_c,
+                                   PI, F, Q, tmp, cbar, x0, P0, xp, Pp)
             for j in range(r):
                 mu_out[q, j] = mu_c[j]
             combine_into(mu_c, x_c, P_c, r, xc_out[q], Pc_out[q])
