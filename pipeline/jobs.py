@@ -39,6 +39,7 @@ from pipeline.report.tables import TABLE_FILES, TABLE_MODES, parquet_path
 from pipeline.report.textguard import guard_frame
 
 SLOT_RANGE_S = (0.1, 3600.0)  # below 0.1 s the slot count and the lag tables explode
+FIGURE_WINDOWS = 6  # correlate --quality: slotting and lag figures of the first windows only
 GAP_RANGE_S = (0.1, 86400.0)
 # --adsb-sigma: 1-sigma error per axis declared for ADS-B reports without NACp (CAT021 0.2x)
 ADSB_SIGMA_RANGE_M = (0.5, 20000.0)
@@ -311,6 +312,10 @@ def validate(options) -> Checked:
                         raise OptionError(f"-o {checked.output}: its {name} table {table} is not writable")
         checked.json = _output("--json", options.json, (".json",))
         checked.sensors = _sensors(options.sensors)
+        if checked.output is not None:
+            for png in _figures_beside(checked.output, options, checked.sensors):
+                if png.is_dir():
+                    raise OptionError(f"-o {checked.output}: its figure {png} is a directory")
         odd = checked.sensors[~checked.sensors["altitude_m"].between(*SITE_ALTITUDE_RANGE_M)]
         lo, hi = SITE_ALTITUDE_RANGE_M
         warnings += [f"--sensors {options.sensors}: {row.name!r} altitude_m = {row.altitude_m:g} is "
@@ -576,6 +581,19 @@ def correlate_job(options: CorrelateOptions, *, progress: Progress | None = None
     return result
 
 
+def _figures_beside(out: Path, options, sensors: pd.DataFrame) -> list[Path]:
+    """The quality figures a run may write beside its workbook: the update intervals, each declared radar's
+    errors and, for correlate --quality, the first FIGURE_WINDOWS windows' slotting and lag figures."""
+    if not (isinstance(options, QualityOptions) or getattr(options, "quality", False)):
+        return []
+    names = [f"{out.stem}_intervals.png"] + [f"{out.stem}_radar_errors_{sac}_{sic}.png"
+                                             for sac, sic in zip(sensors["sac"], sensors["sic"], strict=True)]
+    if isinstance(options, CorrelateOptions):
+        names += [f"{out.stem}_{kind}_{i + 1}.png" for kind in ("slotting", "lags")
+                  for i in range(FIGURE_WINDOWS)]
+    return [out.with_name(n) for n in names]
+
+
 def quality_figures(result: QualityResult, out_dir: Path, stem: str) -> dict[str, Path]:
     """Update-interval histogram and, per radar, range/azimuth error against range and time (PNG)."""
     from pipeline.report.quality_figures import interval_histogram_figure, radar_error_figure
@@ -594,7 +612,7 @@ def quality_figures(result: QualityResult, out_dir: Path, stem: str) -> dict[str
 
 
 def write_correlation(result: CorrelateResult, progress: Progress | None = None,
-                      max_windows: int = 6) -> dict[str, Path]:
+                      max_windows: int = FIGURE_WINDOWS) -> dict[str, Path]:
     """Write what the options ask for: JSON summary, workbook with its track figure (and, with quality,
     the quality and per-window figures), all or nothing. Returns what was written, by kind."""
     with all_or_nothing(result.checked.json, result.checked.output):

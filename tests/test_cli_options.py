@@ -58,6 +58,13 @@ ERRORS = [
     ("out-figure-is-directory", CORR + ["-o", "{O}/fig.xlsx"], 2,
      ["-o", "fig_tracks.png is a directory"]),
     ("out-missing-dir", CORR + ["-o", "{O}/nowhere/report.xlsx"], 2, ["-o", "does not exist"]),
+    # figures written beside the workbook: the sensor file's radar 25/201, and the first six windows
+    ("quality-radar-figure-is-directory", QUAL + ["-o", "{O}/q.xlsx"], 2,
+     ["-o", "q_radar_errors_25_201.png is a directory"]),
+    ("quality-intervals-figure-is-directory", QUAL + ["-o", "{O}/i.xlsx"], 2,
+     ["-o", "i_intervals.png is a directory"]),
+    ("correlate-quality-lag-figure-is-directory", CORR + ["--quality", "-o", "{O}/c.xlsx"], 2,
+     ["-o", "c_lags_3.png is a directory"]),
     ("out-table-is-directory", CORR + ["-o", "{O}/tab.xlsx"], 2, ["-o", "tab_slots.parquet is a directory"]),
     ("out-table-is-directory-parquet", CORR + ["-o", "{O}/tab.xlsx", "--tables", "parquet"], 2,
      ["-o", "tab_slots.parquet is a directory"]),
@@ -123,7 +130,8 @@ def paths(tmp_path):
     directory that cannot be written, a malformed sensor file."""
     out = tmp_path / "out"
     out.mkdir()
-    for name in ("dir.xlsx", "dir.json", "dir.csv", "fig_tracks.png", "tab_slots.parquet"):
+    for name in ("dir.xlsx", "dir.json", "dir.csv", "fig_tracks.png", "tab_slots.parquet",
+                 "q_radar_errors_25_201.png", "i_intervals.png", "c_lags_3.png"):
         (out / name).mkdir()
     ro = tmp_path / "readonly"
     ro.mkdir()
