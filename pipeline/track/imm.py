@@ -128,7 +128,8 @@ def fpft_q(F, P, Q, tmp, out):
 
 
 @njit(cache=True)
-def _fx(F, x, out):
+def fx_into(F, x, out):
+    """out = F x (6-vector)."""
     for i in range(NX):
         acc = 0.0
         for k in range(NX):
@@ -194,7 +195,7 @@ def predict_into(kinds, omegas, qs, tpm_kind, tpm_param, tpm_param2, dt, r, mu, 
     mix_into(PI, mu, x, P, r, cbar, x0, P0)
     for j in range(r):
         transition_into(kinds[j], omegas[j], qs[j], dt, F, Q)
-        _fx(F, x0[j], xp[j])
+        fx_into(F, x0[j], xp[j])
         fpft_q(F, P0[j], Q, tmp, Pp[j])
 
 

@@ -16,7 +16,7 @@ import math
 import numpy as np
 from numba import njit
 
-from .imm import CA, NX, combine_into, fpft_q, mix_into, tpm_into, transition_into
+from .imm import CA, NX, combine_into, fpft_q, fx_into, mix_into, tpm_into, transition_into
 
 
 @njit(cache=True)
@@ -245,11 +245,7 @@ def _pair_smooth(kind, omega, q, a, t, xi, Pi, xs_next, Ps_next, Fa, Qa, Ft, Qt,
     moved by this mode's model over the interval of t s and this mode's smoothed state (xs_next, Ps_next)
     at its end."""
     transition_into(kind, omega, q, t, Ft, Qt)
-    for r in range(NX):
-        acc = 0.0
-        for c in range(NX):
-            acc += Ft[r, c] * xi[c]
-        xbar[r] = acc
+    fx_into(Ft, xi, xbar)
     fpft_q(Ft, Pi, Qt, tmp, Pbar)
     if a == 0.0:
         for r in range(NX):
@@ -262,11 +258,7 @@ def _pair_smooth(kind, omega, q, a, t, xi, Pi, xs_next, Ps_next, Fa, Qa, Ft, Qt,
                 C[r, c] = acc
     else:
         transition_into(kind, omega, q, a, Fa, Qa)
-        for r in range(NX):
-            acc = 0.0
-            for c in range(NX):
-                acc += Fa[r, c] * xi[c]
-            xt[r] = acc
+        fx_into(Fa, xi, xt)
         fpft_q(Fa, Pi, Qa, tmp, Pt)
         for r in range(NX):
             for c in range(NX):
