@@ -694,13 +694,12 @@ def _write_quality(result: QualityJobResult) -> dict[str, Path]:
     import json
 
     from pipeline.report.excel import write_tables
-    from pipeline.report.summary import json_value
+    from pipeline.report.summary import table_records
 
     written: dict[str, Path] = {}
     if result.checked.json:
         doc = {"parameters": result.parameters, "inputs": result.loaded.inputs,
-               "tables": {name: [{k: json_value(v) for k, v in row.items()} for row in t.to_dict("records")]
-                          for name, t in result.quality.sheets.items()}}
+               "tables": {name: table_records(t) for name, t in result.quality.sheets.items()}}
         result.checked.json.write_text(json.dumps(doc, indent=1, default=str))
         written["json"] = result.checked.json
     if result.checked.output:

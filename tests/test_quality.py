@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import datetime as dt
 from dataclasses import asdict
 
 import numpy as np
@@ -20,7 +21,6 @@ from pipeline.quality.tables import (
     VALUE_COUNT_COLUMNS,
     histogram_edges_s,
     integrity_shares,
-    iso_utc,
     quality_tables,
 )
 from pipeline.report.quality_figures import interval_histogram_figure, slotting_figure
@@ -94,7 +94,8 @@ def test_counts_duplicates_and_update_intervals_equal_the_emitted_reports(sim, t
         assert row["interval_median_s"] == pytest.approx(np.median(dt))
         assert row["interval_p95_s"] == pytest.approx(np.percentile(dt, 95))
         assert row["first_tod_s"] == originals["t_s"].min() and row["last_tod_s"] == originals["t_s"].max()
-        assert row["first_utc"] == iso_utc(DAY0 + pd.to_timedelta(originals["t_s"].min(), unit="s"))
+        assert row["first_utc"] == DAY0 + pd.to_timedelta(originals["t_s"].min(), unit="s")
+        assert row["last_utc"] == DAY0 + pd.to_timedelta(originals["t_s"].max(), unit="s")
     pooled = row_of(q, "(all)", sensor)
     every = np.concatenate([expected_intervals(sim, sensor, a.spec.callsign) for a in sim.aircraft])
     assert pooled["reports_after_dedup"] == len(emitted(sim, sensor))
@@ -141,9 +142,11 @@ def test_gaps_and_reappearance(sim, tables):
         assert got["reappeared_after_1h"].tolist() == (want["duration_s"] > 3600).tolist()
     back = gaps[gaps["reappeared_after_1h"]]
     assert set(back["callsign"]) == {"MAS136"} and set(back["sensor"]) == {"radar", "adsb"}
-    first = back.iloc[0]
-    assert first["gap_start_utc"] == iso_utc(DAY0 + pd.to_timedelta(first["gap_start_tod_s"], unit="s"))
-    assert first["gap_end_utc"].endswith("Z")
+    assert str(gaps["gap_start_utc"].dtype) == str(gaps["gap_end_utc"].dtype) == "datetime64[ns, UTC]"
+    want = pd.DataFrame(sim.truth["radar_gaps"]).query("callsign == 'MAS136'").sort_values("start_s").iloc[0]
+    got = back[back["sensor"] == "radar"].sort_values("gap_start_tod_s").iloc[0]
+    assert got["gap_start_utc"] == DAY0 + pd.to_timedelta(want["start_s"], unit="s")
+    assert got["gap_end_utc"] == DAY0 + pd.to_timedelta(want["end_s"], unit="s")
     q = tables["Quality"]
     assert row_of(q, "MAS136", "radar")["reappearances"] == 1
     assert row_of(q, "(all)", "adsb")["gaps"] == len(sim.truth["adsb_gaps"])
@@ -158,7 +161,9 @@ def test_jumps_per_aircraft(sim, tables):
     jumps = tables["Jumps"]
     np.testing.assert_array_equal(np.sort(jumps["time_of_day"]), np.sort(injected["t_s"]))
     assert (jumps["jump_size_m"] > 10_000).all()
-    assert jumps["utc"].str.endswith("Z").all()
+    assert str(jumps["utc"].dtype) == "datetime64[ns, UTC]"
+    want = (DAY0 + pd.to_timedelta(np.sort(injected["t_s"].to_numpy()), unit="s")).tolist()
+    assert sorted(jumps["utc"]) == want
 
 
 def test_adsb_quality_indicators(sim, tables):
@@ -184,8 +189,11 @@ def test_adsb_quality_indicators(sim, tables):
     whole = over_time[over_time["callsign"] == "(all)"]
     assert whole["reports"].sum() == len(originals)
     assert (whole["bin_start_tod_s"] % 600 == 0).all()
-    assert whole["bin_start_utc"].iloc[0] == iso_utc(DAY0 + pd.to_timedelta(whole["bin_start_tod_s"].iloc[0],
-                                                                           unit="s"))
+    starts = DAY0 + pd.to_timedelta(np.floor(originals["time_of_day"] / 600) * 600, unit="s")
+    assert str(whole["bin_start_utc"].dtype) == "datetime64[ns, UTC]"  # the bin start, within float rounding
+    starts = pd.Series(starts.drop_duplicates().sort_values().array)
+    error = whole["bin_start_utc"].reset_index(drop=True) - starts
+    assert error.abs().max() <= pd.Timedelta(1, "us")
     assert set(whole["nacp_median"]) <= {8.0, 8.5, 9.0}
 
 
@@ -214,6 +222,8 @@ def test_without_timestamps_identities_or_optional_columns(sim):
     anon = q[(q["callsign"] == "") & (q["address"] == "")]
     assert len(anon) == 1 and anon["reports"].iloc[0] == 50
     assert q["first_utc"].isna().all() and t["Gaps"]["gap_start_utc"].isna().all()
+    assert str(q["first_utc"].dtype) == str(t["Gaps"]["gap_end_utc"].dtype) == "datetime64[ns, UTC]"
+    assert t["Jumps"]["utc"].isna().all() and t["ADS-B quality over time"]["bin_start_utc"].isna().all()
     assert set(t["ADS-B quality"]["indicator"]) == {"nucp_nic", "nacp"}
     assert np.isnan(row_of(q, "(all)", "adsb")["low_integrity_pct"])
     assert row_of(q, "(all)", "radar")["reports"] == len(radar)
@@ -229,7 +239,9 @@ def test_intervals_across_midnight():
         assert row["first_tod_s"] < 86400.0 < row["last_tod_s"]
         assert row["interval_max_s"] <= GAP_RULE_S
         assert row["gaps"] == len(sim.truth[f"{sensor}_gaps"])
-    assert row_of(q, "(all)", "radar")["last_utc"].startswith("2019-06-15T00:")
+    last = row_of(q, "(all)", "radar")
+    assert last["last_utc"].date() == dt.date(2019, 6, 15) and last["last_utc"].hour == 0  # the next day
+    assert last["last_utc"] == DAY0 + pd.to_timedelta(last["last_tod_s"], unit="s")
 
 
 def test_quality_figures(sim, frames, tables, tmp_path):
@@ -241,3 +253,90 @@ def test_quality_figures(sim, frames, tables, tmp_path):
     assert png.exists() and png.stat().st_size > 10_000
     empty = interval_histogram_figure(tables["Update intervals"].iloc[:0], tmp_path / "none.png")
     assert empty.exists()
+
+
+def _sheet(ws) -> pd.DataFrame:
+    """A workbook sheet read back by openpyxl: header row, then the cells' values as openpyxl reads them."""
+    rows = list(ws.iter_rows(values_only=True))
+    return pd.DataFrame(rows[1:], columns=rows[0], dtype=object)
+
+
+def _formats(ws, header: str) -> set[str]:
+    col = [c.value for c in ws[1]].index(header)
+    return {row[col].number_format for row in ws.iter_rows(min_row=2) if row[col].value is not None}
+
+
+def test_workbook_times_are_excel_dates_of_the_truth(sim, tables, tmp_path):
+    """Gap and jump instants read back by openpyxl are datetimes at the simulator's emission times on DAY0
+    (openpyxl reads to the millisecond: within half of one), formatted as UTC date-times."""
+    import openpyxl
+
+    from pipeline.report.excel import write_tables
+    write_tables(tables, tmp_path / "q.xlsx")
+    wb = openpyxl.load_workbook(tmp_path / "q.xlsx")
+    half_ms = dt.timedelta(microseconds=500)
+    day0 = dt.datetime(2019, 6, 14)  # Excel dates carry no zone: the UTC wall clock
+    gaps = _sheet(wb["Gaps"])
+    want = pd.DataFrame(sim.truth["radar_gaps"] + sim.truth["adsb_gaps"])
+    assert len(gaps) == len(want)
+    got = sorted(zip(gaps["callsign"], gaps["gap_start_utc"], gaps["gap_end_utc"], strict=True))
+    want = want.sort_values(["callsign", "start_s"])
+    for (cs, start, end), (_, w) in zip(got, want.iterrows(), strict=True):
+        assert cs == w["callsign"]
+        assert abs(start - (day0 + dt.timedelta(seconds=w["start_s"]))) <= half_ms
+        assert abs(end - (day0 + dt.timedelta(seconds=w["end_s"]))) <= half_ms
+    assert all(isinstance(v, dt.datetime) for v in gaps["gap_start_utc"])
+    assert _formats(wb["Gaps"], "gap_start_utc") == {"yyyy-mm-dd hh:mm:ss.000"}
+    jumps = sorted(_sheet(wb["Jumps"])["utc"])
+    injected = sorted(day0 + dt.timedelta(seconds=s) for s in pd.DataFrame(sim.truth["jumps"])["t_s"])
+    assert len(jumps) == len(injected)
+    assert all(abs(a - b) <= half_ms for a, b in zip(jumps, injected, strict=True))
+    quality = _sheet(wb["Quality"])
+    first = quality[(quality["callsign"] == "MAS72") & (quality["sensor"] == "adsb")]["first_utc"].iloc[0]
+    t0 = emitted(sim, "adsb", "MAS72")["t_s"].min()
+    assert isinstance(first, dt.datetime) and abs(first - (day0 + dt.timedelta(seconds=t0))) <= half_ms
+    bins = _sheet(wb["ADS-B quality over time"])["bin_start_utc"]
+    assert bins.map(lambda v: v.minute % 10 == 0 and v.second == 0 and v.microsecond == 0).all()
+
+
+def test_undated_workbook_shows_time_of_day_only(sim, tmp_path):
+    """Without a date the instants are empty cells and the time of day is a clock time, as before."""
+    import openpyxl
+
+    from pipeline.report.excel import write_tables
+    sensors = pd.DataFrame([asdict(sim.scenario.radar)])[SENSOR_COLUMNS]
+    t = quality_tables(build_measurements(sim.radar, sim.adsb, sensors))
+    write_tables(t, tmp_path / "u.xlsx")
+    wb = openpyxl.load_workbook(tmp_path / "u.xlsx")
+    for sheet, clock, instant in (("Quality", "first_tod_s", "first_utc"), ("Gaps", "gap_start_tod_s",
+                                  "gap_start_utc"), ("Jumps", "time_of_day", "utc")):
+        frame = _sheet(wb[sheet])
+        assert frame[instant].isna().all(), sheet
+        assert _formats(wb[sheet], clock) == {"[hh]:mm:ss.000"}
+    gaps = _sheet(wb["Gaps"])
+    want = sorted(pd.DataFrame(sim.truth["radar_gaps"] + sim.truth["adsb_gaps"])["start_s"])
+    got = sorted(v.total_seconds() for v in gaps["gap_start_tod_s"])  # a clock time reads as a timedelta
+    np.testing.assert_allclose(got, want, atol=5e-4)
+
+
+def test_json_times_are_iso_text_to_the_millisecond(sim, tables):
+    """The JSON rows keep ISO 8601 UTC text, cut to the millisecond, worked out here from the truth times."""
+    from pipeline.report.summary import table_records
+
+    def iso(seconds: float) -> str:
+        ms = int(np.floor(seconds * 1000 + 1e-6))
+        h, rest = divmod(ms, 3_600_000)
+        return f"2019-06-14T{h:02d}:{rest // 60_000:02d}:{rest // 1000 % 60:02d}.{ms % 1000:03d}Z"
+
+    gaps = table_records(tables["Gaps"])
+    want = pd.DataFrame(sim.truth["radar_gaps"] + sim.truth["adsb_gaps"])
+    assert sorted((g["callsign"], g["gap_start_utc"], g["gap_end_utc"]) for g in gaps) == sorted(
+        (w["callsign"], iso(w["start_s"]), iso(w["end_s"])) for _, w in want.iterrows())
+    jumps = table_records(tables["Jumps"])
+    assert sorted(j["utc"] for j in jumps) == sorted(iso(s) for s in pd.DataFrame(sim.truth["jumps"])["t_s"])
+    assert all(isinstance(j["time_of_day"], float) for j in jumps)
+    bins = table_records(tables["ADS-B quality over time"])
+    assert all(b["bin_start_utc"] == iso(b["bin_start_tod_s"]) for b in bins)
+    undated = table_records(pd.DataFrame({"t_utc": pd.Series([pd.NaT, pd.Timestamp("1970-01-01 08:00",
+                                                                                   tz="UTC")])}))
+    assert undated == [{"t_utc": None}, {"t_utc": None}]

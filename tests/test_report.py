@@ -59,7 +59,7 @@ def run() -> CorrelationRun:
     slots1.loc[2, "radar_filled"] = True
     w1 = WindowResult(
         summary=_summary(callsign="SIA321", address="76CD01", window=0, start_tod=36000.5, end_tod=36020.5,
-                         start=T0, end="2019-03-01T10:00:20.500Z", slots=6, radar_before=7, radar_after=5,
+                         start=T0, end=T0 + pd.Timedelta(seconds=20), slots=6, radar_before=7, radar_after=5,
                          adsb_before=13, adsb_after=6, radar_duplicates=0, adsb_duplicates=1,
                          ncc0_lat=0.99998, ncc0_lon=0.9999, ncc_peak_lag_lat=0, ncc_peak_lag_lon=0,
                          pearson0_lat=0.98, pearson0_lon=0.97, pearson_peak_lag_lat=0, pearson_peak_lag_lon=0,
@@ -141,7 +141,6 @@ def test_values_numbers_datetimes_and_blanks(outputs: dict[str, Path]) -> None:
     assert summary.cell(row + 1, col["radar_after"]).value == 5
     assert summary.cell(row + 1, col["start"]).value == dt.datetime(2019, 3, 1, 10, 0, 0, 500000)
     assert summary.cell(row + 1, col["start"]).number_format == 'yyyy-mm-dd hh:mm:ss "UTC"'
-    # the end was given as ISO text
     assert summary.cell(row + 1, col["end"]).value == dt.datetime(2019, 3, 1, 10, 0, 20, 500000)
     # window 2 has no date: its start is the clock time of start_tod 36100 s = 10:01:40, never 36100
     assert summary.cell(row + 2, col["start"]).value == dt.timedelta(seconds=36100)
@@ -456,3 +455,13 @@ def test_window_start_is_a_utc_date_in_the_workbook(tmp_path: Path) -> None:
     assert cell.number_format.endswith('"UTC"')
     text = run_to_json(result.run)["windows"][0]["start"]
     assert text.endswith("Z") and abs(pd.Timestamp(text).tz_localize(None) - want).total_seconds() <= 1 / 128
+
+
+def test_text_that_looks_like_a_date_stays_text() -> None:
+    """Times reach the workbook as datetimes; text is never parsed back into a date (a call sign, file name
+    or parameter that happens to read as ISO 8601 stays what it was)."""
+    from pipeline.report.cells import excel_value
+
+    assert excel_value("2019-03-01T10:00:20.500Z") == "2019-03-01T10:00:20.500Z"
+    assert excel_value("2024-05-01") == "2024-05-01"
+    assert excel_value(T0) == dt.datetime(2019, 3, 1, 10, 0, 0, 500000)

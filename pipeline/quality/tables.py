@@ -5,6 +5,8 @@ sensor (radar or ADS-B, with its SAC/SIC). Everything after the duplicate count 
 de-duplicated reports (``pipeline.model.dedup``, per aircraft and sensor). Update intervals are the time
 differences between consecutive reports of one aircraft from one sensor of at most ``gap_s``; longer
 ones are gaps (listed with their start and end; "reappeared_after_1h" when longer than an hour).
+Columns ending ``_utc`` (and the jumps' ``utc``) are instants, datetime64[ns, UTC], NaT when the
+recording is undated (its ``*_tod_s`` columns then give the time of day); JSON writes them as ISO 8601.
 """
 
 from __future__ import annotations
@@ -15,7 +17,7 @@ import pandas as pd
 from pipeline.model.dedup import DEDUP_KEYS, deduplicate
 from pipeline.model.identity import aircraft_labels
 from pipeline.model.jumps import jump_table
-from pipeline.model.time import iso_utc, with_clock
+from pipeline.model.time import UTC_DTYPE, dated_or_nat, with_clock
 
 ALL = "(all)"
 REAPPEARANCE_S = 3600.0
@@ -108,13 +110,14 @@ def _group_rows(group: pd.DataFrame, gap_s: float,
     dt = np.diff(t)
     within, gap = dt[dt <= gap_s], np.flatnonzero(dt > gap_s)
     stamps = clean["timestamp"] if "timestamp" in clean else pd.Series(pd.NaT, index=clean.index)
+    stamps = dated_or_nat(stamps)
     gaps = [{**ident, "gap_start_tod_s": t[i], "gap_end_tod_s": t[i + 1],
-             "gap_start_utc": iso_utc(stamps.iloc[i]), "gap_end_utc": iso_utc(stamps.iloc[i + 1]),
+             "gap_start_utc": stamps.iloc[i], "gap_end_utc": stamps.iloc[i + 1],
              "gap_duration_s": t[i + 1] - t[i], "reappeared_after_1h": bool(t[i + 1] - t[i] > REAPPEARANCE_S)}
             for i in gap]
     row = {**ident, "reports": len(group), "duplicates_removed": dups, "reports_after_dedup": len(clean),
-           "first_tod_s": t[0], "last_tod_s": t[-1], "first_utc": iso_utc(stamps.iloc[0]),
-           "last_utc": iso_utc(stamps.iloc[-1]), **_interval_stats(within), "gaps": len(gaps),
+           "first_tod_s": t[0], "last_tod_s": t[-1], "first_utc": stamps.iloc[0],
+           "last_utc": stamps.iloc[-1], **_interval_stats(within), "gaps": len(gaps),
            "longest_gap_s": float(dt[gap].max()) if gap.size else np.nan,
            "reappearances": sum(g["reappeared_after_1h"] for g in gaps),
            **_speed_stats(clean["ground_speed_kt"])}
@@ -187,11 +190,11 @@ def _adsb_over_time(adsb: pd.DataFrame) -> pd.DataFrame:
     out = {k: frame[k].to_numpy()[first] for k in keys}
     tod0 = frame["time_of_day"].to_numpy(float)[first]
     if "timestamp" in frame:
-        start = frame["timestamp"].iloc[first].reset_index(drop=True) - pd.to_timedelta(
+        start = dated_or_nat(frame["timestamp"].iloc[first].reset_index(drop=True)) - pd.to_timedelta(
             tod0 - out["bin_start_tod_s"], unit="s")
-        out["bin_start_utc"] = [iso_utc(t) for t in start]
+        out["bin_start_utc"] = start.array
     else:
-        out["bin_start_utc"] = [None] * n
+        out["bin_start_utc"] = pd.array([pd.NaT] * n, dtype=UTC_DTYPE)
     out["reports"] = np.bincount(ids, minlength=n)
     for c in indicators:
         values = pd.Series(pd.to_numeric(frame[c], errors="coerce").to_numpy(dtype=float, na_value=np.nan))
@@ -219,6 +222,11 @@ def _integrity_shares_by(adsb: pd.DataFrame, ids: np.ndarray, n: int) -> dict[st
         both = known & ~np.isnan(mops)
         out["low_integrity_pct"] = pct(np.where(mops == 0, v < NUCP_MIN, v < NIC_MIN), both)
     return out
+
+
+def _as_utc(frame: pd.DataFrame, columns: list[str]) -> pd.DataFrame:
+    """``frame`` with ``columns`` as datetime64[ns, UTC] (an all-NaT column is built naive)."""
+    return frame.assign(**{c: pd.to_datetime(frame[c], utc=True).astype(UTC_DTYPE) for c in columns})
 
 
 def quality_tables(meas: pd.DataFrame, *, gap_s: float = 180.0,
@@ -254,17 +262,19 @@ def quality_tables(meas: pd.DataFrame, *, gap_s: float = 180.0,
         hist.append(pd.DataFrame({**dict(zip(SENSOR_KEYS, sensor_id, strict=True)), "bin_start_s": edges[:-1],
                                   "bin_end_s": edges[1:], "intervals": counts}))
 
+    jump_stamps = jumps["timestamp"] if len(jumps) else pd.Series([], dtype=UTC_DTYPE)
     jump_sheet = pd.DataFrame({k: jump_rows[k].to_numpy() for k in ID_KEYS} | {
         "time_of_day": jumps["time_of_day"].to_numpy(float),
-        "utc": [iso_utc(ts) for ts in jumps["timestamp"]] if len(jumps) else [],
+        "utc": dated_or_nat(jump_stamps.reset_index(drop=True)).array,
         **{c: jumps[c].to_numpy(float) for c in ("latitude", "longitude", "fit_latitude", "fit_longitude",
                                                   "jump_size_m")}}, columns=JUMP_COLUMNS)
-    quality = pd.DataFrame(summary, columns=QUALITY_COLUMNS).astype({"jumps": "Int64"})
+    quality = _as_utc(pd.DataFrame(summary, columns=QUALITY_COLUMNS).astype({"jumps": "Int64"}),
+                      ["first_utc", "last_utc"])
     return {
         "Quality": quality,
         "Update intervals": (pd.concat(hist, ignore_index=True) if hist
                              else pd.DataFrame(columns=HISTOGRAM_COLUMNS)),
-        "Gaps": pd.DataFrame(gaps, columns=GAP_COLUMNS),
+        "Gaps": _as_utc(pd.DataFrame(gaps, columns=GAP_COLUMNS), ["gap_start_utc", "gap_end_utc"]),
         "Jumps": jump_sheet,
         "ADS-B quality": _adsb_value_counts(adsb),
         "ADS-B quality over time": _adsb_over_time(adsb),

@@ -91,7 +91,7 @@ def excel_value(value: Any) -> Any:
         number = float(value)
         return number if math.isfinite(number) else ("inf" if number > 0 else "-inf")
     if isinstance(value, str):
-        return iso_time(value) or clean_text(value)
+        return clean_text(value)
     if isinstance(value, Path):
         return clean_text(str(value))
     if isinstance(value, Mapping | list | tuple | set | frozenset | np.ndarray):
@@ -100,7 +100,9 @@ def excel_value(value: Any) -> Any:
 
 
 def iso_time(text: str) -> dt.datetime | dt.date | None:
-    """A naive-UTC datetime (or a date) when ``text`` is an ISO 8601 date-time (or date), else None."""
+    """A naive-UTC datetime (or a date) when ``text`` is an ISO 8601 date-time (or date), else None. Only for
+    the Parameters sheet, whose values arrive as the JSON's text (``run_utc``, ``date``); tables carry
+    datetimes and their text is never parsed."""
     if not (10 <= len(text) <= 40 and text[:1].isdigit()):
         return None
     try:

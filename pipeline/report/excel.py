@@ -41,6 +41,7 @@ from pipeline.report.cells import (
     fixed_rows,
     header_cells,
     is_number,
+    iso_time,
     make_column,
     note_text_cell,
     number_format_for,
@@ -353,7 +354,8 @@ def _flatten(prefix: str, value: Any) -> Iterator[tuple[str, Any]]:
 
 
 def parameter_rows(run: CorrelationRun) -> list[list[Any]]:
-    """Key/value rows of the Parameters sheet: section, key, value."""
+    """Key/value rows of the Parameters sheet: section, key, value (ISO 8601 text, as the JSON has it, shown
+    as an Excel date)."""
     rows: list[list[Any]] = []
     for i, item in enumerate(run.inputs, start=1):
         order = ["path", "format", "bytes", "sha256"]
@@ -366,7 +368,7 @@ def parameter_rows(run: CorrelationRun) -> list[list[Any]]:
             rows.append(["parameters", str(key), value])
     rows += [["filters", str(k), v] for k, v in run.filters.items()]
     rows += [["report", "windows", len(run.windows)], ["report", "skipped windows", len(run.skipped)]]
-    return [[excel_value(v) for v in row] for row in rows]
+    return [[(iso_time(v) if isinstance(v, str) else None) or excel_value(v) for v in row] for row in rows]
 
 
 def _write_parameters(wb: Workbook, run: CorrelationRun) -> None:

@@ -76,6 +76,17 @@ def json_value(value: Any) -> Any:
     return str(value)
 
 
+def table_records(frame: pd.DataFrame) -> list[dict[str, Any]]:
+    """A table's rows as JSON values; datetime columns as ISO 8601 UTC to the millisecond (``iso_utc``,
+    None where undated), as every time in the JSON."""
+    times = {c for c, dtype in frame.dtypes.items() if dtype.kind == "M"}  # naive or tz-aware datetimes
+    rows = frame.to_dict("records")
+    for row in rows:
+        for key, value in row.items():
+            row[key] = iso_utc(value) if key in times else json_value(value)
+    return rows
+
+
 def window_summary(window: WindowResult) -> dict[str, Any]:
     """The window's summary restricted to SUMMARY_KEYS, in order, as JSON values (absent keys -> None),
     then ``note`` (``window_note``, None when there is nothing to say)."""
