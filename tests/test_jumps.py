@@ -211,3 +211,59 @@ def test_duplicate_index_labels():
     assert detect_jumps(t).sum() == 1
     table = jump_table(t)
     assert table["row"].tolist() == [40] and table["jump_size_m"].iloc[0] == pytest.approx(55_300, rel=0.01)
+
+
+def test_theil_sen_kernel_matches_a_plain_median_of_pairwise_slopes():
+    """The compiled fit against statistics.median over the neighbours' pairwise slopes, with missing
+    neighbours (-1) and repeated times (pairs of equal time give no slope)."""
+    import statistics
+
+    from pipeline.model.jumps import _theil_sen
+
+    rng = np.random.default_rng(8)
+    n = 200
+    t = np.round(rng.uniform(0, 60, n))  # rounded: many equal times
+    lat, lon = rng.normal(40, 0.1, n), rng.normal(2, 0.1, n)
+    idx = rng.integers(0, n, (n, 6))
+    idx[rng.random((n, 6)) < 0.3] = -1
+    rows = np.arange(n)
+    fit_lat, fit_lon, dt_b, dt_a, far, count = _theil_sen(t, lat, lon, idx, rows)
+    for i in range(n):
+        j = [k for k in idx[i] if k >= 0]
+        assert count[i] == len(j)
+        dts = [t[k] - t[i] for k in j]
+        before, after = [-d for d in dts if d < 0], [d for d in dts if d > 0]
+        assert dt_b[i] == (min(before) if before else np.nan) or (not before and np.isnan(dt_b[i]))
+        assert dt_a[i] == (min(after) if after else np.nan) or (not after and np.isnan(dt_a[i]))
+        for y, fitted in ((lat, fit_lat), (lon, fit_lon)):
+            slopes = [(y[b] - y[a]) / (t[b] - t[a])
+                      for p, a in enumerate(j) for b in j[p + 1:] if t[b] != t[a]]
+            slope = statistics.median(slopes) if slopes else 0.0
+            expect = statistics.median([y[k] - slope * (t[k] - t[i]) for k in j]) if j else np.nan
+            assert fitted[i] == pytest.approx(expect, rel=1e-12, abs=1e-12, nan_ok=True)
+
+
+def test_refitting_only_changed_neighbourhoods_equals_refitting_everything():
+    """The search re-fits only reports whose neighbours changed; forcing a full re-fit every pass must give
+    the same jumps and fits (a run of jumps needs several passes)."""
+    from pipeline.model import jumps
+
+    meas = pd.concat([track(np.arange(0, 600, 4.0), seed=s, address=f"75000{s}", callsign=f"T{s}")
+                      for s in range(3)], ignore_index=True)
+    meas.loc[[20, 21, 22, 90, 200, 201, 300], "latitude"] += [0.1, 0.12, -0.1, 0.2, 0.05, -0.05, 0.3]
+    meas["aircraft_id"] = assign_aircraft_id(meas)
+    incremental = jumps.jump_flags(meas)
+
+    full = jumps._Tracks.fit
+
+    def fit_all(self, idx, threshold_m):
+        self._fit = None
+        return full(self, idx, threshold_m)
+
+    jumps._Tracks.fit = fit_all
+    try:
+        everything = jumps.jump_flags(meas)
+    finally:
+        jumps._Tracks.fit = full
+    assert incremental["jump"].sum() >= 5
+    pd.testing.assert_frame_equal(incremental, everything, check_exact=True)

@@ -19,11 +19,9 @@ jump never condemns its good neighbours and runs of 2-3 consecutive jumps are pe
 
 from __future__ import annotations
 
-import itertools
-import warnings
-
 import numpy as np
 import pandas as pd
+from numba import njit
 
 from pipeline.model.geodesy import distance_m, wrap180
 from pipeline.model.time import midnight, seconds_since, with_clock
@@ -39,6 +37,68 @@ JUMP_COLUMNS = ["row", "callsign", "address", "sac", "sic", "time_of_day", "time
                 "longitude", "fit_latitude", "fit_longitude", "jump_size_m"]
 
 
+@njit(cache=True)
+def _median_sorted(values: np.ndarray, k: int) -> float:
+    """Median of the first k values (sorted in place, no allocation); NaN when k is 0. Mean of the two
+    middle values when k is even, as numpy's median."""
+    if k == 0:
+        return np.nan
+    for a in range(1, k):
+        x = values[a]
+        b = a - 1
+        while b >= 0 and values[b] > x:
+            values[b + 1] = values[b]
+            b -= 1
+        values[b + 1] = x
+    h = k // 2
+    low = values[h] if k % 2 == 1 else values[h - 1]
+    return (low + values[h]) / 2.0
+
+
+@njit(cache=True)
+def _theil_sen(t, lat, lon, idx, rows):
+    """Per report ``rows[r]``, from its neighbours ``idx[r]`` (-1: none): Theil-Sen fitted latitude and
+    longitude at its time (median pairwise slope; slope 0 when no pair spans time), nearest time gap
+    before and after (NaN: none), farthest gap and the neighbour count."""
+    n, width = idx.shape
+    fit_lat, fit_lon = np.full(n, np.nan), np.full(n, np.nan)
+    dt_b, dt_a, far = np.full(n, np.nan), np.full(n, np.nan), np.full(n, np.nan)
+    count = np.zeros(n, np.int64)
+    tj, dt, buf = np.empty(width), np.empty(width), np.empty(max(width, width * (width - 1) // 2))
+    yj = np.empty((2, width))
+    for i in range(n):
+        k = 0
+        for c in range(width):
+            j = idx[i, c]
+            if j >= 0:
+                tj[k], yj[0, k], yj[1, k] = t[j], lat[j], lon[j]
+                dt[k] = t[j] - t[rows[i]]
+                k += 1
+        count[i] = k
+        for c in range(k):
+            d = dt[c]
+            if d < 0 and not (-d >= dt_b[i]):
+                dt_b[i] = -d
+            elif d > 0 and not (d >= dt_a[i]):
+                dt_a[i] = d
+            if not (abs(d) <= far[i]):
+                far[i] = abs(d)
+        for axis in range(2):
+            y = yj[axis]
+            m = 0
+            for a in range(k):
+                for b in range(a + 1, k):
+                    span = tj[b] - tj[a]
+                    if span != 0:
+                        buf[m] = (y[b] - y[a]) / span
+                        m += 1
+            slope = _median_sorted(buf, m)
+            if not np.isfinite(slope):
+                slope = 0.0
+            for c in range(k):
+                buf[c] = y[c] - slope * dt[c]
+            (fit_lat if axis == 0 else fit_lon)[i] = _median_sorted(buf, k)
+    return fit_lat, fit_lon, dt_b, dt_a, far, count
 
 
 _EARTH_RADIUS_M = 6371008.8
@@ -64,6 +124,7 @@ class _Tracks:
         size = np.diff(np.r_[first, self.n])
         self.seg_lo = np.repeat(first, size)
         self.seg_hi = self.seg_lo + np.repeat(size, size)
+        self._idx, self._fit = None, None  # the last fit's neighbours and its per-report results
 
     def _accepted_ranges(self, acc: np.ndarray):
         """Per report: accepted positions before it (left), up to and including it (right), and the
@@ -85,30 +146,21 @@ class _Tracks:
         return np.where(v < last[:, None], safe, -1)
 
     def fit(self, idx: np.ndarray, threshold_m: float):
-        """Theil-Sen prediction of each report from its neighbours; score = distance / allowed distance."""
-        valid = idx >= 0
-        safe = np.where(valid, idx, 0)
-        tj = np.where(valid, self.t[safe], np.nan)
-        dt = tj - self.t[:, None]  # neighbour time relative to the report
-        pairs = np.array(list(itertools.combinations(range(idx.shape[1]), 2)))
-        a, b = pairs[:, 0], pairs[:, 1]
-        with np.errstate(invalid="ignore", divide="ignore"), warnings.catch_warnings():
-            warnings.simplefilter("ignore", RuntimeWarning)
-            span = tj[:, b] - tj[:, a]
-            span = np.where(span != 0, span, np.nan)
-            fitted = []
-            for y in (self.lat, self.lon):
-                yj = np.where(valid, y[safe], np.nan)
-                slope = np.nanmedian((yj[:, b] - yj[:, a]) / span, axis=1)
-                slope = np.where(np.isfinite(slope), slope, 0.0)
-                fitted.append(np.nanmedian(yj - slope[:, None] * dt, axis=1))
-            dt_b = np.nanmin(np.where(dt < 0, -dt, np.nan), axis=1)
-            dt_a = np.nanmin(np.where(dt > 0, dt, np.nan), axis=1)
-            far = np.nanmax(np.abs(dt), axis=1)
+        """Theil-Sen prediction of each report from its neighbours; score = distance / allowed distance.
+        Only reports whose neighbours changed since the previous call are re-fitted."""
+        if self._fit is None:
+            self._fit = _theil_sen(self.t, self.lat, self.lon, idx, np.arange(self.n))
+        else:
+            rows = np.flatnonzero((idx != self._idx).any(axis=1))
+            part = _theil_sen(self.t, self.lat, self.lon, idx[rows], rows)
+            for whole, new in zip(self._fit, part, strict=True):
+                whole[rows] = new
+        self._idx = idx
+        fit_lat, fit_lon, dt_b, dt_a, far, count = self._fit
         tau2 = np.where(np.isfinite(dt_b) & np.isfinite(dt_a), dt_b * dt_a, np.fmin(dt_b, dt_a) * far)
-        enough = valid.sum(axis=1) >= MIN_FIT_NEIGHBOURS
-        fit_lat = np.where(enough, fitted[0], np.nan)
-        fit_lon = np.where(enough, fitted[1], np.nan)
+        enough = count >= MIN_FIT_NEIGHBOURS
+        fit_lat = np.where(enough, fit_lat, np.nan)
+        fit_lon = np.where(enough, fit_lon, np.nan)
         allowed = threshold_m + 0.5 * TURN_ACCEL_MS2 * np.nan_to_num(tau2)
         return np.nan_to_num(_flat_m(self.lat, self.lon, fit_lat, fit_lon) / allowed), fit_lat, fit_lon
 
