@@ -22,7 +22,13 @@ import pandas as pd
 
 from pipeline import jobs
 from pipeline.jobs import Checked, JobError, OptionError
-from pipeline.jobs_track import NOISE, STEP_RANGE_S, TrackOptions, _estimate_noise, _measurements, untrackable
+from pipeline.jobs_track import (
+    TrackOptions,
+    _estimate_noise,
+    _measurements,
+    check_tracking,
+    untrackable,
+)
 from pipeline.progress import Progress
 
 METHODS = ("exact", "one-block", "blocks", "midpoint")
@@ -67,15 +73,10 @@ def parse_horizons(value) -> tuple[float, ...]:
 
 def validate(options: ConflictOptions) -> Checked:
     """Check every option, the sensor file and the output paths before any decoding; OptionError if bad."""
-    from pipeline.track import parse_tpm
-
     warnings: list[str] = []
     inputs, editions = jobs._check_decoding(options, warnings)
     checked = Checked(inputs, editions, warnings=warnings)
-    step = options.step_s
-    if not isinstance(step, int | float) or not math.isfinite(step) or not step > 0.0:
-        raise OptionError(f"--step {step!r}: must be a finite number of seconds > 0")
-    jobs._number("--step", step, *STEP_RANGE_S, " s")
+    step = check_tracking(options)
     horizons = parse_horizons(options.horizons_s)
     for h in horizons:
         jobs._number("--horizon", h, *HORIZON_RANGE_S, " s")
@@ -95,16 +96,6 @@ def validate(options: ConflictOptions) -> Checked:
         raise OptionError(f"--method {options.method!r}: must be one of {', '.join(METHODS)}")
     if options.vertical not in VERTICAL_MODELS:
         raise OptionError(f"--vertical {options.vertical!r}: must be one of {', '.join(VERTICAL_MODELS)}")
-    coast = options.max_coast_s
-    if not isinstance(coast, int | float) or not math.isfinite(coast) or coast < step:
-        raise OptionError(f"--max-coast {coast!r}: must be a finite number of seconds >= --step ({step:g})")
-    if options.tpm is not None:
-        try:
-            parse_tpm(str(options.tpm))
-        except ValueError as exc:
-            raise OptionError(f"--tpm {options.tpm!r}: {str(exc).partition(': ')[2]}") from None
-    if options.noise not in NOISE:
-        raise OptionError(f"--noise {options.noise!r}: must be one of {', '.join(NOISE)}")
     jobs._number("--adsb-sigma", options.adsb_sigma_m, *jobs.ADSB_SIGMA_RANGE_M, " m")
     checked.output = jobs._output("-o", options.output, (".csv", ".xlsx"))
     checked.json = jobs._output("--json", options.json, (".json",))

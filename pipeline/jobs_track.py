@@ -56,15 +56,11 @@ def _sources(value) -> tuple[str, ...]:
     return items
 
 
-def validate(options: TrackOptions) -> Checked:
-    """Check every option, the sensor file and the output paths before any decoding; OptionError if bad."""
+def check_tracking(options: TrackOptions) -> float:
+    """The tracker's options shared by track and conflicts (--step, --max-coast, --tpm, --noise); OptionError
+    if bad, else the step (s)."""
     from pipeline.track import parse_tpm
-    from pipeline.track.plane import SMOOTHERS
 
-    warnings: list[str] = []
-    inputs, editions = jobs._check_decoding(options, warnings)
-    checked = Checked(inputs, editions, warnings=warnings)
-    jobs._check_aircraft(options)
     step = options.step_s
     if not isinstance(step, int | float) or not math.isfinite(step) or not step > 0.0:
         raise OptionError(f"--step {step!r}: must be a finite number of seconds > 0")
@@ -78,11 +74,23 @@ def validate(options: TrackOptions) -> Checked:
             parse_tpm(str(options.tpm))
         except ValueError as exc:
             raise OptionError(f"--tpm {options.tpm!r}: {str(exc).partition(': ')[2]}") from None
+    if options.noise not in NOISE:
+        raise OptionError(f"--noise {options.noise!r}: must be one of {', '.join(NOISE)}")
+    return step
+
+
+def validate(options: TrackOptions) -> Checked:
+    """Check every option, the sensor file and the output paths before any decoding; OptionError if bad."""
+    from pipeline.track.plane import SMOOTHERS
+
+    warnings: list[str] = []
+    inputs, editions = jobs._check_decoding(options, warnings)
+    checked = Checked(inputs, editions, warnings=warnings)
+    jobs._check_aircraft(options)
+    check_tracking(options)
     if options.smoother not in SMOOTHERS:
         raise OptionError(f"--smoother {options.smoother!r}: must be one of {', '.join(SMOOTHERS)}")
     _sources(options.sources)
-    if options.noise not in NOISE:
-        raise OptionError(f"--noise {options.noise!r}: must be one of {', '.join(NOISE)}")
     checked.output = jobs._output("-o", options.output, (".csv", ".parquet"))
     checked.json = jobs._output("--json", options.json, (".json",))
     if options.figures is not None:
