@@ -529,6 +529,15 @@ def far_separations(run: CorrelationRun, meas: pd.DataFrame, sensors: pd.DataFra
     return warnings
 
 
+def _marked_measurements(loaded: Loaded, checked: Checked, options: AircraftOptions, *,
+                         split_adsb: bool = False) -> pd.DataFrame:
+    """The measurements with their duplicate and jump flags (once per job; correlate counts each window's
+    jumps); the decoded frames are freed as soon as the measurements hold what the job needs."""
+    meas = _measurements(loaded, checked.sensors, str(options.sensors), options.adsb_sigma_m)
+    loaded.drop_frames()
+    return mark_once(meas, split_adsb=split_adsb)
+
+
 def correlate_job(options: CorrelateOptions, *, progress: Progress | None = None,
                   checked: Checked | None = None, command: str = "correlate") -> CorrelateResult:
     """Validate, decode, build measurements, filter, correlate (and assess quality); nothing is written."""
@@ -542,10 +551,7 @@ def correlate_job(options: CorrelateOptions, *, progress: Progress | None = None
     loaded = _load(options, checked, progress)
     if progress:
         progress.stage("Pre-processing data")
-    meas = _measurements(loaded, checked.sensors, str(options.sensors), options.adsb_sigma_m)
-    loaded.drop_frames()  # the measurements hold what the job needs: free the decoded frames first
-    meas_all = mark_once(meas, split_adsb=options.split_adsb)  # jumps always: each window counts its own
-    del meas
+    meas_all = _marked_measurements(loaded, checked, options, split_adsb=options.split_adsb)
     meas, removed = apply_filters(meas_all, drop_jumps=options.drop_jumps, min_nic=options.min_nic,
                                   min_nacp=options.min_nacp)
     if progress:  # the thesis tool's stage names
@@ -675,9 +681,7 @@ def quality_job(options: QualityOptions, *, progress: Progress | None = None, ch
     loaded = _load(options, checked, progress)
     if progress:
         progress.stage("Analysing data quality")
-    meas = _measurements(loaded, checked.sensors, str(options.sensors), options.adsb_sigma_m)
-    loaded.drop_frames()  # the measurements hold what the job needs: free the decoded frames first
-    meas = mark_once(meas)
+    meas = _marked_measurements(loaded, checked, options)
     quality = _quality(meas, checked.sensors, options)
     params = {**_parameters(options, loaded, started, command), "callsign": options.callsign,
               "address": options.address, "gap_s": options.gap_s}
