@@ -263,13 +263,7 @@ def cmd_correlate(args) -> int:
         **_aircraft(args), slot_s=args.slot, pairs=args.pairs, split_adsb=args.split_adsb,
         quality=args.quality, drop_jumps=args.drop_jumps, min_nic=args.min_nic, min_nacp=args.min_nacp,
         fill=args.fill, tables=args.tables)
-    checked = jobs.validate(options)
-    _warn("correlate", checked.warnings)
-    seen = len(checked.warnings)
-    result = jobs.correlate_job(options, progress=progress, checked=checked,
-                                command=" ".join(sys.argv[1:]) or "correlate")
-    _warn("correlate", checked.warnings[seen:])
-    _report_skipped(result.loaded.errors)
+    result = _run_job("correlate", jobs.validate, jobs.correlate_job, options, progress)
     for name, n in result.run.filters.items():
         print(f"filter {name}: {n} of the input's ADS-B reports", file=sys.stderr)
     from pipeline.report.summary import summary_table
@@ -288,13 +282,7 @@ def cmd_correlate(args) -> int:
 
 def cmd_quality(args) -> int:
     options = jobs.QualityOptions(**_aircraft(args), reference=args.reference)
-    checked = jobs.validate(options)
-    _warn("quality", checked.warnings)
-    seen = len(checked.warnings)
-    result = jobs.quality_job(options, progress=Progress(), checked=checked,
-                              command=" ".join(sys.argv[1:]) or "quality")
-    _warn("quality", checked.warnings[seen:])
-    _report_skipped(result.loaded.errors)
+    result = _run_job("quality", jobs.validate, jobs.quality_job, options, Progress())
     print(_quality_text(result.quality))
     written = jobs.write_quality(result)
     if "json" in written:
@@ -329,13 +317,7 @@ def cmd_track(args) -> int:
         all_aircraft=args.all, output=args.output, json=args.json, figures=args.figures, step_s=args.step,
         max_coast_s=args.max_coast, smooth=args.smooth, smoother=args.smoother, tpm=args.tpm,
         sources=args.sources, noise=args.noise, adsb_sigma_m=args.adsb_sigma)
-    checked = jobs_track.validate(options)
-    _warn("track", checked.warnings)
-    seen = len(checked.warnings)
-    result = jobs_track.track_job(options, progress=Progress(), checked=checked,
-                                  command=" ".join(sys.argv[1:]) or "track")
-    _warn("track", checked.warnings[seen:])
-    _report_skipped(result.loaded.errors)
+    result = _run_job("track", jobs_track.validate, jobs_track.track_job, options, Progress())
     print(_track_text(result))
     for kind, path in jobs_track.write_tracks(result).items():
         print(f"{kind}: {path}", file=sys.stderr)
@@ -376,17 +358,22 @@ def cmd_conflicts(args) -> int:
         vertical_ft=args.vertical_ft, vertical_tolerance_ft=args.vertical_tolerance_ft,
         threshold=args.threshold, method=args.method, vertical=args.vertical,
         figures=args.figures, noise=args.noise, adsb_sigma_m=args.adsb_sigma)
-    checked = jobs_conflict.validate(options)
-    _warn("conflicts", checked.warnings)
-    seen = len(checked.warnings)
-    result = jobs_conflict.conflict_job(options, progress=Progress(), checked=checked,
-                                        command=" ".join(sys.argv[1:]) or "conflicts")
-    _warn("conflicts", checked.warnings[seen:])
-    _report_skipped(result.loaded.errors)
+    result = _run_job("conflicts", jobs_conflict.validate, jobs_conflict.conflict_job, options, Progress())
     print(jobs_conflict.text(result) + _noise_text(result.noise))
     for kind, path in jobs_conflict.write_conflicts(result).items():
         print(f"{kind}: {path}", file=sys.stderr)
     return 0
+
+
+def _run_job(name: str, validate, job, options, progress: Progress):
+    """Validate (warnings first), run the job, then print its later warnings and the skipped blocks."""
+    checked = validate(options)
+    _warn(name, checked.warnings)
+    seen = len(checked.warnings)
+    result = job(options, progress=progress, checked=checked, command=" ".join(sys.argv[1:]) or name)
+    _warn(name, checked.warnings[seen:])
+    _report_skipped(result.loaded.errors)
+    return result
 
 
 COMMANDS = {"decode": cmd_decode, "stats": cmd_stats, "correlate": cmd_correlate, "quality": cmd_quality,
