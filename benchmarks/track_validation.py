@@ -6,8 +6,9 @@
 tpm-sweep: dynamic-TPM paper (a), radar A alone, scan T 2..12 s, fixed p swept, optimal p vs T fitted.
 tpm-radars: (b), radars A, B, C; fixed 0.90/0.95/0.98 against dynamic and expm, overall, at the
 manoeuvre peaks (maximum of the Monte Carlo RMS curve) and over each manoeuvre. robust: robust-IMM
-paper's six cases, raw vs filtered error, then Poisson data loss, coasted estimate vs holding the last
-position per gap length. vts: CV Kalman, CA Kalman, IMM(CV, CV)
+paper's six cases under four readings of what it leaves open (ROBUST_READINGS), raw vs filtered with
+and without Poisson data loss, then coasted estimate vs holding the last report by time since it.
+vts: CV Kalman, CA Kalman, IMM(CV, CV)
 and IMM(CV, CA) on a radar-only manoeuvring track. real: the real CAT021 recording, random 5-60 s
 stretches deleted and predicted through. smoothing: the forward filter, the RTS pass on the combined
 estimate and the IMM (two-filter) smoother on the 3-radar scenario and the VTS track.
@@ -169,7 +170,7 @@ def smoothing(runs: int, rng) -> None:
 # kinematics (speed m/s, along-track acceleration m/s^2, turn rate deg/s): ours, the paper gives none
 KIN_AIRPORT = (40.0, 1.0, 3.0)
 KIN_10NM = (90.0, 1.0, 3.0)
-KIN_ENROUTE = (220.0, 0.5, 1.5)  # a rate-one turn at 430 kt needs ~38 deg of bank: airliners turn ~1.5 deg/s
+KIN_ENROUTE = (220.0, 0.5, 1.5)  # rate one at 430 kt needs ~50 deg of bank; at 25-30 deg: 1.2-1.5 deg/s
 KIN_TAXI = (10.0, 0.5, 3.0)  # 20 kt straight taxi; +0.5 m/s^2 for 10 s ends at 29 kt, still a taxi speed
 
 
