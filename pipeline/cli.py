@@ -362,6 +362,8 @@ def cmd_conflicts(args) -> int:
     print(jobs_conflict.text(result) + _noise_text(result.noise))
     for kind, path in jobs_conflict.write_conflicts(result).items():
         print(f"{kind}: {path}", file=sys.stderr)
+    if args.figures is not None and not len(result.alerts):
+        print(f"figures: none (no alert events), {args.figures} left as it was", file=sys.stderr)
     return 0
 
 

@@ -281,8 +281,9 @@ def write_conflicts(result: ConflictJobResult) -> dict[str, Path]:
     parts = [(path, path.with_name(path.name + ".part")) for path, _ in writers]
     done, moved = False, []
     try:
-        if result.options.figures is not None and not Path(result.options.figures).exists():
-            made_dir = Path(result.options.figures)
+        figures = result.options.figures  # made only when there is a figure to put in it
+        if figures is not None and len(result.alerts) and not Path(figures).exists():
+            made_dir = Path(figures)
             made_dir.mkdir()
         for (_, tmp), (_, write) in zip(parts, writers, strict=True):
             write(tmp)

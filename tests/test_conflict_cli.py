@@ -192,3 +192,14 @@ def test_failure_while_writing_figures_leaves_nothing(crossing, tmp_path, monkey
     err = capsys.readouterr().err
     assert code == 1 and "No space left on device" in err and "Traceback" not in err
     assert len(calls) == 2 and list(tmp_path.iterdir()) == []
+
+
+
+def test_no_alert_makes_no_figures_folder(tmp_path, capsys):
+    # the fixtures have no alert event (the test above reads the empty Alerts sheet): --figures makes no
+    # empty folder, and says why
+    figs = tmp_path / "figs"
+    assert main(["conflicts", RADAR, ADSB, "--sensors", SENSORS, "--date", "2019-03-01", "--step", "10",
+                 "-o", str(tmp_path / "c.csv"), "--figures", str(figs)]) == 0
+    assert pd.read_csv(tmp_path / "c.csv").empty
+    assert not figs.exists() and "figures: none (no alert events)" in capsys.readouterr().err

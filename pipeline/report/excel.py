@@ -31,7 +31,9 @@ from pipeline.correlate.correlation import pearson_max_lag
 from pipeline.correlate.results import SUMMARY_KEYS, CorrelationRun, WindowResult
 from pipeline.report.cells import (
     BOLD,
+    CLOCK_FORMAT,
     ROW_HEIGHT_PT,
+    SUMMARY_DATETIME_FORMAT,
     TITLE_FONT,
     Column,
     cell_for,
@@ -59,7 +61,6 @@ from pipeline.report.charts import (
     write_lag_charts,
     write_slot_charts,
 )
-from pipeline.report.formats import UNITS
 from pipeline.report.summary import (
     SKIPPED_KEYS,
     window_note,
@@ -77,13 +78,6 @@ from pipeline.report.tables import (
     to_parquet,
     write_parquet,
 )
-
-DATETIME_FORMAT = "yyyy-mm-dd hh:mm:ss.000"
-SUMMARY_DATETIME_FORMAT = 'yyyy-mm-dd hh:mm:ss "UTC"'  # a window's start/end: an Excel date, labelled
-DATE_FORMAT = "yyyy-mm-dd"
-TIME_FORMAT = "hh:mm:ss.000"
-CLOCK_FORMAT = UNITS["tod"].excel  # seconds of day shown as a clock time ([hh] runs past 24 h)
-MAX_WIDTH = 66.0
 
 # Summary: stacked blocks that each fit a landscape page; every block starts with call sign and window
 SUMMARY_BLOCKS: list[tuple[str, list[str]]] = [
