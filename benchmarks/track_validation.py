@@ -405,8 +405,11 @@ def tpm_real(runs: int, rng) -> None:
         res = gap_experiment(tracks, TrackerConfig(tpm=spec), np.random.default_rng(seed), repeats=repeats,
                              noise="estimate")
         res.pop("scales", None)
-        print(f"  {spec:12s} " + "  ".join(f"{label} {row['imm']:6.1f} ({row['imm_median']:5.1f}) | "
+        print(f"  {spec:13s} " + "  ".join(f"{label} {row['imm']:6.1f} ({row['imm_median']:5.1f}) | "
                                            f"{row['smoothed']:5.1f}" for label, row in res.items()))
+    # the baselines do not depend on the law (the same deleted stretches)
+    print("  straight line " + "  ".join(f"{label} {row['line']:6.1f} ({row['line_median']:5.1f}) |      "
+                                          for label, row in res.items()))
 
 
 def main() -> None:
