@@ -57,6 +57,62 @@ def test_three_radars_default_tpm_not_worse_than_fixed():
     assert default <= 1.02 * fixed
 
 
+def _binned_sq_errors(tpm, plots, truth, n_bins):
+    """Per run: squared position errors of the filtered estimate at the plots after 30 s, summed per 1 s bin
+    (the benchmark's Monte Carlo RMS curve before pooling), and the plot count per bin."""
+    sq, count = np.zeros((len(plots), n_bins)), np.zeros((len(plots), n_bins))
+    cfg = TrackerConfig(modes=PAPER_MODES, tpm=tpm, gate_probability=1.0)
+    for k, p in enumerate(plots):
+        est = estimate(_run(cfg, p), p.t)
+        keep = p.t >= 30.0
+        e, n = truth.at(p.t[keep])
+        idx = np.round(p.t[keep] - 30.0).astype(int)
+        np.add.at(sq[k], idx, (est.x[keep, 0] - e) ** 2 + (est.x[keep, 3] - n) ** 2)
+        np.add.at(count[k], idx, 1.0)
+    return sq, count
+
+
+def _overall_and_peaks(weights, sq, count, windows):
+    """Per row of run weights: overall RMS and the maximum of the pooled RMS curve in each window."""
+    s, c = weights @ sq, weights @ count
+    curve = np.sqrt(np.where(c > 0, s / np.maximum(c, 1e-12), np.nan))
+    return np.column_stack([np.sqrt(s.sum(1) / c.sum(1))] + [np.nanmax(curve[:, w], axis=1) for w in windows])
+
+
+def test_three_radars_expm_ties_fixed_095_at_every_manoeuvre_peak():
+    # dynamic-TPM paper (b) at the peaks, in small (40 runs, the paper's filter, no gate): expm:82,45 (chosen
+    # on the benchmark's seeds 1 and 2) is within 2 paired-bootstrap SEs of fixed 0.95 (the best fixed p
+    # overall) at the peak of every manoeuvre, and within 1 % overall (benchmark, 400 runs: +0.13 +- 0.03 m,
+    # a real 0.2 % loss; its SE here is about 0.1 m). The paper's law and fixed 0.98, which switch into a turn
+    # less often, lose the 840 s peak by more than 2 SE (benchmark: +24 m); so does the default expm:150,20
+    # (here +10.9 m against 2 SE = 5.3 m; benchmark +12.9 m), which is why it is not the law tested here
+    rng = np.random.default_rng(17)
+    truth = sc.tpm_paper_truth()
+    runs, n_bins = 40, int(truth.t[-1] - 30.0) + 1
+    radars = sc.TPM_PAPER_RADARS
+    plots = [sc.merge(*[sc.rotating_radar(truth, site, period, phase, pd, 70.0, 0.08, rng, sensor=i)
+                        for i, (site, period, phase, pd) in enumerate(radars)]) for _ in range(runs)]
+    bins = 30.0 + np.arange(n_bins)
+    windows = [(bins >= a) & (bins <= b + 30) for a, b in sc.TPM_PAPER_MANOEUVRES_S]
+    resample = rng.multinomial(runs, np.full(runs, 1.0 / runs), size=400).astype(float)
+    every = np.ones((1, runs))
+    ref = _binned_sq_errors("fixed:0.95", plots, truth, n_bins)
+    ref_value = _overall_and_peaks(every, *ref, windows)[0]
+    ref_boot = _overall_and_peaks(resample, *ref, windows)
+
+    def minus_ref(tpm):
+        data = _binned_sq_errors(tpm, plots, truth, n_bins)
+        diff = _overall_and_peaks(every, *data, windows)[0] - ref_value
+        return diff, (_overall_and_peaks(resample, *data, windows) - ref_boot).std(axis=0)
+
+    diff, se = minus_ref("expm:82,45")
+    assert diff[0] <= 0.01 * ref_value[0]
+    assert (diff[1:] <= 2 * se[1:]).all(), (diff, se)
+    for slow in ("dynamic", "fixed:0.98"):
+        diff, se = minus_ref(slow)
+        assert diff[4] > 2 * se[4], (slow, diff, se)
+
+
 def test_robust_imm_filters_and_coasts():
     # robust-IMM paper: 1 Hz ADS-B-like sensor (error magnitude 30.21 +- 6.4 m), filtered error 10-45 % lower
     rng = np.random.default_rng(13)
