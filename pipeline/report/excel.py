@@ -12,6 +12,7 @@ rows repeated; charts sit on their own sheets, on a grid of whole pages.
 
 from __future__ import annotations
 
+import contextlib
 import datetime as dt
 import os
 import re
@@ -437,19 +438,31 @@ def write_report(run: CorrelationRun, path_xlsx: str | os.PathLike[str], *,
     wb = Workbook(write_only=True)
     taken = {name.lower() for name in _CORE_SHEETS}
     _write_summary(wb, run)
-    map_sheet = _write_map(wb) if figure_png is not None else None
-    _write_tables(wb, run, parquet, tables)
-    for name, frame in run.extra_sheets.items():
-        _write_frame(wb, sheet_name(name, taken), frame)
-    if images:
-        _write_figures(wb, sheet_name("Figures", taken), images)
-    _write_parameters(wb, run)
-    if map_sheet is not None:
-        if figure_ready is not None:
-            figure_ready()
-        map_sheet.add_image(_scaled_image(figure_png), "A2")
+    try:
+        map_sheet = _write_map(wb) if figure_png is not None else None
+        _write_tables(wb, run, parquet, tables)
+        for name, frame in run.extra_sheets.items():
+            _write_frame(wb, sheet_name(name, taken), frame)
+        if images:
+            _write_figures(wb, sheet_name("Figures", taken), images)
+        _write_parameters(wb, run)
+        if map_sheet is not None:
+            if figure_ready is not None:
+                figure_ready()
+            map_sheet.add_image(_scaled_image(figure_png), "A2")
+    except BaseException:
+        _discard(wb)
+        raise
     write_atomically(path_xlsx, wb.save)
     return [path for _, path in parquet.values()]
+
+
+def _discard(wb: Workbook) -> None:
+    """End the streamed sheets of a workbook that will not be saved, so their writers close cleanly
+    (otherwise they complain on stderr when collected)."""
+    for ws in wb.worksheets:
+        with contextlib.suppress(Exception):
+            ws.close()
 
 
 def write_tables(tables: dict[str, pd.DataFrame], path_xlsx: str | os.PathLike[str], *,
