@@ -142,3 +142,35 @@ def test_a_figure_process_dying_leaves_nothing(tmp_path, monkeypatch, capsys):
     assert err.strip().splitlines()[-1].startswith("msdc correlate: ")  # the last line, and the only error
     assert err.count("msdc correlate: ") == 1
     assert sorted(p.name for p in tmp_path.iterdir()) == ["kept.txt"]
+
+
+@forking
+def test_cancel_after_an_interrupted_wait_closes_nothing_twice(tmp_path, monkeypatch):
+    job = Background(_sleep_then_write, tmp_path / "late.txt")
+    with monkeypatch.context() as m:
+        m.setattr(os, "fdopen", lambda fd, *a, **k: _Interrupting(fd))
+        with pytest.raises(KeyboardInterrupt):
+            job.wait()
+    spare = os.open(os.devnull, os.O_RDONLY)  # may reuse the pipe's number: cancel() must leave it open
+    try:
+        job.cancel()
+        os.fstat(spare)  # still open
+    finally:
+        os.close(spare)
+    assert not (tmp_path / "late.txt").exists()
+
+
+class _Interrupting:
+    """A pipe reader interrupted (Ctrl-C) while waiting; closes the descriptor as a real one would."""
+
+    def __init__(self, fd: int):
+        self.fd = fd
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        os.close(self.fd)
+
+    def read(self):
+        raise KeyboardInterrupt

@@ -42,8 +42,9 @@ class Background:
         if not (FORK_OK and hasattr(os, "fork")):
             fn(*args)
             return
-        sys.stdout.flush()  # the child must not write this process's buffered text a second time
-        sys.stderr.flush()
+        with contextlib.suppress(OSError, ValueError):  # a closed pipe stays this process's business
+            sys.stdout.flush()  # the child leaves by os._exit and never writes what was buffered here;
+            sys.stderr.flush()  # flushed anyway, so nothing buffered can come out twice
         read, write = os.pipe()
         pid = os.fork()
         if pid == 0:  # pragma: no cover - the child (coverage does not follow it)
@@ -66,8 +67,11 @@ class Background:
         """Wait for the child; raise its error (BackgroundFailed when it died without one)."""
         if not self._pid:
             return
-        with os.fdopen(self._read, "rb") as pipe:
-            message = pipe.read()
+        try:
+            with os.fdopen(self._read, "rb") as pipe:
+                message = pipe.read()
+        finally:  # closed, even when interrupted: cancel() must not close it again
+            self._read = -1
         _, status = os.waitpid(self._pid, 0)
         self._pid = 0
         if message:
@@ -83,8 +87,9 @@ class Background:
         with contextlib.suppress(ProcessLookupError):
             os.kill(self._pid, signal.SIGKILL)
         os.waitpid(self._pid, 0)
-        os.close(self._read)
-        self._pid = 0
+        if self._read >= 0:
+            os.close(self._read)
+        self._pid, self._read = 0, -1
 
 
 FORK_OK = sys.platform.startswith("linux")  # macOS: fork is unsafe with system frameworks; Windows: none
