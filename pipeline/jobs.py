@@ -34,7 +34,7 @@ from pipeline.model.time import absolute_time
 from pipeline.progress import Progress
 from pipeline.quality.filters import apply_filters
 from pipeline.quality.quality_run import QualityResult, quality_run
-from pipeline.report.outputs import all_or_nothing
+from pipeline.report.outputs import Background, BackgroundFailed, all_or_nothing
 from pipeline.report.tables import TABLE_FILES, TABLE_MODES, parquet_path
 from pipeline.report.textguard import guard_frame
 
@@ -617,6 +617,20 @@ def quality_figures(result: QualityResult, out_dir: Path, stem: str) -> dict[str
     return figs
 
 
+def _track_figure(run: CorrelationRun, png: Path, sensors: pd.DataFrame) -> None:
+    from pipeline.report.figures import track_figure  # matplotlib: only where a figure is drawn
+
+    track_figure(run, png, sensors)
+
+
+def _drawn(drawing: Background, png: Path) -> None:
+    """Wait for a figure drawn in the background; its failure as a JobError naming the file."""
+    try:
+        drawing.wait()
+    except BackgroundFailed as exc:
+        raise JobError(f"{png}: the figure was not drawn ({exc})") from exc
+
+
 def write_correlation(result: CorrelateResult, progress: Progress | None = None,
                       max_windows: int = FIGURE_WINDOWS) -> dict[str, Path]:
     """Write what the options ask for: JSON summary, workbook with its track figure (and, with quality,
@@ -628,8 +642,6 @@ def write_correlation(result: CorrelateResult, progress: Progress | None = None,
 def _write_correlation(result: CorrelateResult, progress: Progress | None,
                        max_windows: int) -> dict[str, Path]:
     from pipeline.report.excel import write_report
-    from pipeline.report.figures import lag_figure, track_figure
-    from pipeline.report.quality_figures import slotting_figure
     from pipeline.report.summary import write_json
 
     written: dict[str, Path] = {}
@@ -643,6 +655,9 @@ def _write_correlation(result: CorrelateResult, progress: Progress | None,
         out = checked.output
         images = None
         if result.quality is not None:
+            from pipeline.report.figures import lag_figure
+            from pipeline.report.quality_figures import slotting_figure
+
             images = dict(quality_figures(result.quality, out.parent, out.stem))
             is_radar = (result.measurements["sensor_kind"] == "radar").to_numpy(bool)
             radar, adsb = result.measurements[is_radar], result.measurements[~is_radar]
@@ -653,8 +668,12 @@ def _write_correlation(result: CorrelateResult, progress: Progress | None,
                 images[f"{label}: coefficient against lag"] = lag_figure(
                     w, out.with_name(f"{out.stem}_lags_{i + 1}.png"))
         png = out.with_name(out.stem + "_tracks.png")
-        track_figure(run, png, checked.sensors)
-        tables = write_report(run, out, figure_png=png, images=images, tables=result.options.tables)
+        drawing = Background(_track_figure, run, png, checked.sensors)  # on the other core meanwhile
+        try:
+            tables = write_report(run, out, figure_png=png, images=images, tables=result.options.tables,
+                                  figure_ready=lambda: _drawn(drawing, png))
+        finally:
+            drawing.cancel()  # only still running when writing the workbook failed
         written["report"], written["figure"] = out, png
         written.update((f"table {p.stem.removeprefix(out.stem + '_')}", p) for p in tables)
     return written

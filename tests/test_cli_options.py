@@ -307,8 +307,8 @@ def test_spans_are_times_not_seconds_of_day(tmp_path, capsys):
 
 
 def test_a_run_failing_while_writing_leaves_nothing(tmp_path: Path, monkeypatch, capsys) -> None:
-    """The JSON and the track figure are written before the workbook: if the workbook fails, they go too,
-    files that were there before stay, and the run ends with a one-line message, not a traceback."""
+    """The JSON is written before the workbook, the track figure meanwhile: if the workbook fails, they go
+    too, files that were there before stay, and the run ends with a one-line message, not a traceback."""
     import pipeline.report.excel as excel
 
     def disk_full(*args, **kwargs):

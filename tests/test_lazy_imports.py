@@ -8,13 +8,14 @@ ROOT = Path(__file__).resolve().parent.parent
 HEAVY = ("pandas", "numba", "scipy", "openpyxl", "matplotlib")
 
 _SCRIPT = """
-import runpy, sys
+import atexit, runpy, sys
 sys.argv = ["msdc", *{argv!r}]
+# an exit handler: pipeline.cli's run() ends the process with os._exit once the handlers have run
+atexit.register(lambda: print(",".join(m for m in {heavy!r} if m in sys.modules), file=sys.stderr))
 try:
     runpy.run_module("pipeline.cli", run_name="__main__")
 except SystemExit:
     pass
-print(",".join(m for m in {heavy!r} if m in sys.modules), file=sys.stderr)
 """
 
 

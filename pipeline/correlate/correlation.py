@@ -14,13 +14,12 @@ import pandas as pd
 
 from pipeline.correlate.results import (
     LAG_COLUMNS,
-    SLOT_COLUMNS,
     SUMMARY_KEYS,
     CorrelationRun,
     SkippedWindow,
     WindowResult,
 )
-from pipeline.correlate.slots import slot_count, slot_window
+from pipeline.correlate.slots import SLOTTED_COLUMNS, slot_arrays, slot_count
 from pipeline.correlate.windows import in_window, overlap_windows, short_window_reason
 from pipeline.model.aircraft import Aircraft, NoSuchAircraft, one_aircraft
 from pipeline.model.aircraft import all_aircraft as every_aircraft
@@ -198,29 +197,30 @@ def _window_result(ac: Aircraft, number: int, start_s: float, end_s: float, rada
                    predictors: tuple = (None, None)) -> WindowResult:
     """Slot, correlate and summarise one window; with predictors (``--fill predict``), empty slots take
     the tracker's prediction (pipeline.correlate.fill) instead of the previous slot."""
-    rs, as_ = slot_window(radar, start_s, end_s, slot_s), slot_window(adsb, start_s, end_s, slot_s)
+    rs, as_ = slot_arrays(radar, start_s, end_s, slot_s), slot_arrays(adsb, start_s, end_s, slot_s)
     if predictors[0] is not None or predictors[1] is not None:
         from pipeline.correlate.fill import fill_predicted
 
-        rs, as_ = fill_predicted(rs, slot_s, predictors[0]), fill_predicted(as_, slot_s, predictors[1])
-    tod = rs["time_of_day"].to_numpy()
+        rs, as_ = ({c: f[c].to_numpy() for c in SLOTTED_COLUMNS} for f in (
+            fill_predicted(pd.DataFrame(rs), slot_s, predictors[0]),
+            fill_predicted(pd.DataFrame(as_), slot_s, predictors[1])))
+    tod = rs["time_of_day"]
     if not is_dated(reference):
-        stamps = pd.Series(pd.NaT, index=rs.index, dtype="datetime64[ns, UTC]")
+        stamps = pd.Series(pd.NaT, index=pd.RangeIndex(len(tod)), dtype="datetime64[ns, UTC]")
     else:
         stamps = (reference + pd.to_timedelta(tod, unit="s")).astype("datetime64[ns, UTC]")
-    slots = pd.DataFrame({
+    slots = pd.DataFrame({  # columns as arrays, in SLOT_COLUMNS order: one frame, no alignment
         "slot": rs["slot"], "time_of_day": tod, "timestamp": stamps,
         "radar_lat": rs["latitude"], "radar_lon": rs["longitude"],
         "adsb_lat": as_["latitude"], "adsb_lon": as_["longitude"],
         "radar_count": rs["count"], "adsb_count": as_["count"],
         "radar_filled": rs["filled"], "adsb_filled": as_["filled"],
+        "sep_m": distance_m(rs["latitude"], rs["longitude"], as_["latitude"], as_["longitude"]),
     })
-    slots["sep_m"] = distance_m(slots["radar_lat"].to_numpy(), slots["radar_lon"].to_numpy(),
-                                slots["adsb_lat"].to_numpy(), slots["adsb_lon"].to_numpy())
-    x_lon, y_lon = _unwrapped_lon(slots["radar_lon"].to_numpy(), slots["adsb_lon"].to_numpy())
-    lags, ncc_lat = ncc(slots["radar_lat"], slots["adsb_lat"])
+    x_lon, y_lon = _unwrapped_lon(rs["longitude"], as_["longitude"])
+    lags, ncc_lat = ncc(rs["latitude"], as_["latitude"])
     _, ncc_lon = ncc(x_lon, y_lon)
-    _, p_lat = pearson_by_lag(slots["radar_lat"], slots["adsb_lat"])
+    _, p_lat = pearson_by_lag(rs["latitude"], as_["latitude"])
     _, p_lon = pearson_by_lag(x_lon, y_lon)
     lag_frame = pd.DataFrame(dict(zip(LAG_COLUMNS, [lags, ncc_lat, ncc_lon, p_lat, p_lon], strict=True)))
     zero = len(slots) - 1
@@ -231,18 +231,18 @@ def _window_result(ac: Aircraft, number: int, start_s: float, end_s: float, rada
         "radar_before": len(radar), "radar_after": len(slots),
         "adsb_before": len(adsb), "adsb_after": len(slots),
         "radar_duplicates": dups[0], "adsb_duplicates": dups[1], "adsb_jumps": adsb_jumps,
-        "radar_filled_slots": int(slots["radar_filled"].sum()),
-        "adsb_filled_slots": int(slots["adsb_filled"].sum()),
+        "radar_filled_slots": int(rs["filled"].sum()),
+        "adsb_filled_slots": int(as_["filled"].sum()),
         "ncc0_lat": float(ncc_lat[zero]), "ncc0_lon": float(ncc_lon[zero]),
         "ncc_peak_lag_lat": peak_lag(lags, ncc_lat), "ncc_peak_lag_lon": peak_lag(lags, ncc_lon),
         "pearson0_lat": float(p_lat[zero]), "pearson0_lon": float(p_lon[zero]),
         "pearson_peak_lag_lat": peak_lag(lags, p_lat, pearson_max_lag(len(slots))),
         "pearson_peak_lag_lon": peak_lag(lags, p_lon, pearson_max_lag(len(slots))),
-        **separation_stats(slots["sep_m"]),
-        "sep_median_m": float(np.median(slots["sep_m"])) if len(slots) else math.nan,
+        **separation_stats(slots["sep_m"].to_numpy()),
+        "sep_median_m": float(np.median(slots["sep_m"].to_numpy())) if len(slots) else math.nan,
     }
     summary = {k: _none_if_nan(summary[k]) for k in SUMMARY_KEYS}
-    return WindowResult(summary=summary, slots=slots[SLOT_COLUMNS], lags=lag_frame)
+    return WindowResult(summary=summary, slots=slots, lags=lag_frame)
 
 
 def _span(times: pd.Series) -> tuple[float, float]:
@@ -310,9 +310,12 @@ def _correlate_pair(ac: Aircraft, run: CorrelationRun, pair: tuple[str, pd.DataF
         predictors = (track_predictor(radar, reference, max(gap_s, slot_s)),
                       track_predictor(adsb, reference, max(gap_s, slot_s)))
     number = 0
+    slotted = ["time_of_day", "latitude", "longitude"]  # all a window reads of its reports
+    radar_xy, adsb_xy = radar[slotted], adsb[slotted]
+    r_t, a_t = radar_xy["time_of_day"].to_numpy(), adsb_xy["time_of_day"].to_numpy()
     for start_s, end_s in windows:
-        r_in = radar[in_window(radar["time_of_day"], start_s, end_s)]
-        a_in = adsb[in_window(adsb["time_of_day"], start_s, end_s)]
+        r_in = radar_xy[in_window(r_t, start_s, end_s)]
+        a_in = adsb_xy[in_window(a_t, start_s, end_s)]
         reason = short_window_reason(start_s, end_s, slot_s)
         if reason is None and (r_in.empty or a_in.empty):
             reason = f"no {radar_id if r_in.empty else ref_id} measurement inside the window"

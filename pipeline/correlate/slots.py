@@ -31,6 +31,12 @@ def slot_window(meas: pd.DataFrame, start_s: float, end_s: float, slot_s: float 
     average correctly; results are wrapped into [-180, 180). Columns: SLOTTED_COLUMNS, where
     time_of_day is the slot start and ``filled`` marks slots that had no measurement.
     """
+    return pd.DataFrame(slot_arrays(meas, start_s, end_s, slot_s), columns=SLOTTED_COLUMNS)
+
+
+def slot_arrays(meas: pd.DataFrame, start_s: float, end_s: float,
+                slot_s: float = 10.0) -> dict[str, np.ndarray]:
+    """slot_window's columns as arrays (no frame: the correlation builds its own per window)."""
     n = slot_count(start_s, end_s, slot_s)
     t = meas["time_of_day"].to_numpy(float)
     inside = (t >= start_s) & (t <= end_s)
@@ -44,9 +50,8 @@ def slot_window(meas: pd.DataFrame, start_s: float, end_s: float, slot_s: float 
         rel = wrap180(lon - ref)
         lon_mean = np.bincount(k, rel, minlength=n)[:n] / count + ref
     lat_mean, lon_mean = _fill(lat_mean), wrap180(_fill(lon_mean))
-    return pd.DataFrame({"slot": np.arange(n), "time_of_day": start_s + np.arange(n) * slot_s,
-                         "latitude": lat_mean, "longitude": lon_mean, "count": count.astype(np.int64),
-                         "filled": count == 0}, columns=SLOTTED_COLUMNS)
+    return {"slot": np.arange(n), "time_of_day": start_s + np.arange(n) * slot_s, "latitude": lat_mean,
+            "longitude": lon_mean, "count": count.astype(np.int64), "filled": count == 0}
 
 
 def _fill(values: np.ndarray) -> np.ndarray:

@@ -18,6 +18,7 @@ import pandas as pd
 UTC_DTYPE = "datetime64[ns, UTC]"
 UNDATED_DAY = pd.Timestamp("1970-01-01", tz="UTC")
 _UNDATED_END = pd.Timestamp("1971-01-01", tz="UTC")  # an undated recording spans days, never a year
+NAT_NS = np.iinfo("int64").min  # NaT as int64 nanoseconds
 
 
 def absolute_time(frame: pd.DataFrame, fallback_date: dt.date | None = None) -> pd.Series:
@@ -28,15 +29,12 @@ def absolute_time(frame: pd.DataFrame, fallback_date: dt.date | None = None) -> 
     base = UNDATED_DAY if fallback_date is None else pd.Timestamp(fallback_date, tz="UTC")
     seconds = day * 86400.0 + tod
     ok = np.isfinite(seconds)
-    ns = np.zeros(len(frame), dtype="int64")
+    ns = np.full(len(frame), NAT_NS, dtype="int64")
     ns[ok] = np.rint(seconds[ok] * 1e9).astype("int64") + base.value
-    out = pd.Series(pd.DatetimeIndex(ns.astype("datetime64[ns]")).tz_localize("UTC"), index=frame.index)
-    out[~ok] = pd.NaT
-    if "timestamp" in frame:
-        stamps = pd.Series(frame["timestamp"].to_numpy(), index=frame.index)
-        stamps = pd.to_datetime(stamps, utc=True)
-        out = stamps.where(stamps.notna(), out)
-    return out.astype(UTC_DTYPE)
+    if "timestamp" in frame:  # int64 nanoseconds throughout: no object array of Timestamps
+        stamps = pd.DatetimeIndex(pd.to_datetime(frame["timestamp"], utc=True)).as_unit("ns").asi8
+        ns = np.where(stamps != NAT_NS, stamps, ns)
+    return pd.Series(pd.DatetimeIndex(ns.view("datetime64[ns]")).tz_localize("UTC"), index=frame.index)
 
 
 def midnight(times: pd.Series) -> pd.Timestamp | None:

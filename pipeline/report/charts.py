@@ -248,8 +248,9 @@ def write_slot_charts(wb: Workbook, run: CorrelationRun, data_sheet: str = "Slot
         first, last = int(starts[i]), int(starts[i + 1]) - 1
         if last > EXCEL_MAX_ROWS or last < first:
             break
-        if dated:
-            times = [to_excel(utc_naive(t)) for t in slots["timestamp"]]
+        if dated:  # only the axis limits are needed: the first and last instant, converted as cells are
+            stamps = slots["timestamp"]
+            times = [to_excel(utc_naive(t)) for t in (stamps.min(), stamps.max())] if len(stamps) else []
         else:
             times = [v / 86400.0 for v in pd.to_numeric(slots["time_of_day"], errors="coerce").tolist()]
         x_span = axis_limits(times, pad=0.0)

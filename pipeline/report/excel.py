@@ -12,10 +12,11 @@ rows repeated; charts sit on their own sheets, on a grid of whole pages.
 
 from __future__ import annotations
 
+import contextlib
 import datetime as dt
 import os
 import re
-from collections.abc import Iterator, Mapping
+from collections.abc import Callable, Iterator, Mapping
 from pathlib import Path
 from typing import Any
 
@@ -215,13 +216,14 @@ def _scaled_image(png: str | os.PathLike[str]) -> Image:
     return image
 
 
-def _write_map(wb: Workbook, figure_png: str | os.PathLike[str]) -> None:
+def _write_map(wb: Workbook) -> WriteOnlyWorksheet:
+    """The Map sheet's title; its figure is added just before saving (it may still be being drawn)."""
     ws = wb.create_sheet("Map")
     page_setup(ws, None, fit_height=1)
     fixed_rows(ws)
     ws.append([text_cell(ws, "Slotted tracks: radar (red) and ADS-B (yellow), every correlated window",
                          font=TITLE_FONT)])
-    ws.add_image(_scaled_image(figure_png), "A2")
+    return ws
 
 
 
@@ -417,10 +419,12 @@ def _write_figures(wb: Workbook, title: str, images: dict[str, str | os.PathLike
 
 def write_report(run: CorrelationRun, path_xlsx: str | os.PathLike[str], *,
                  figure_png: str | os.PathLike[str] | None = None,
-                 images: dict[str, str | os.PathLike[str]] | None = None, tables: str = "auto") -> list[Path]:
+                 images: dict[str, str | os.PathLike[str]] | None = None, tables: str = "auto",
+                 figure_ready: Callable[[], object] | None = None) -> list[Path]:
     """Write the run's workbook to ``path_xlsx``; embed ``figure_png`` on a Map sheet when given and
     further ``images`` (caption -> PNG) on a Figures sheet. The slot and lag tables go to Parquet beside
-    it as ``tables`` says (pipeline.report.tables); returns the Parquet files written."""
+    it as ``tables`` says (pipeline.report.tables); returns the Parquet files written. ``figure_ready``
+    is called before ``figure_png`` is first read (the figure may be drawn meanwhile elsewhere)."""
     parquet = {name: (frame, parquet_path(path_xlsx, name))
                for name, frame in to_parquet(run, tables).items()}
     for frame, path in parquet.values():
@@ -428,16 +432,31 @@ def write_report(run: CorrelationRun, path_xlsx: str | os.PathLike[str], *,
     wb = Workbook(write_only=True)
     taken = {name.lower() for name in _CORE_SHEETS}
     _write_summary(wb, run)
-    if figure_png is not None:
-        _write_map(wb, figure_png)
-    _write_tables(wb, run, parquet, tables)
-    for name, frame in run.extra_sheets.items():
-        _write_frame(wb, sheet_name(name, taken), frame)
-    if images:
-        _write_figures(wb, sheet_name("Figures", taken), images)
-    _write_parameters(wb, run)
+    try:
+        map_sheet = _write_map(wb) if figure_png is not None else None
+        _write_tables(wb, run, parquet, tables)
+        for name, frame in run.extra_sheets.items():
+            _write_frame(wb, sheet_name(name, taken), frame)
+        if images:
+            _write_figures(wb, sheet_name("Figures", taken), images)
+        _write_parameters(wb, run)
+        if map_sheet is not None:
+            if figure_ready is not None:
+                figure_ready()
+            map_sheet.add_image(_scaled_image(figure_png), "A2")
+    except BaseException:
+        _discard(wb)
+        raise
     write_atomically(path_xlsx, wb.save)
     return [path for _, path in parquet.values()]
+
+
+def _discard(wb: Workbook) -> None:
+    """End the streamed sheets of a workbook that will not be saved, so their writers close cleanly
+    (otherwise they complain on stderr when collected)."""
+    for ws in wb.worksheets:
+        with contextlib.suppress(Exception):
+            ws.close()
 
 
 def write_tables(tables: dict[str, pd.DataFrame], path_xlsx: str | os.PathLike[str], *,

@@ -3,7 +3,11 @@
 from __future__ import annotations
 
 import contextlib
-from collections.abc import Iterator
+import os
+import pickle
+import signal
+import sys
+from collections.abc import Callable, Iterator
 from pathlib import Path
 
 
@@ -21,3 +25,81 @@ def all_or_nothing(*paths: Path | str | None) -> Iterator[None]:
                 if new.is_file():
                     new.unlink(missing_ok=True)
         raise
+
+
+class BackgroundFailed(RuntimeError):
+    """A background writer ended without saying why (killed, or its error could not be sent back)."""
+
+
+class Background:
+    """``fn(*args)`` run in a forked child process, so an output is written on the other core while this
+    process writes another; ``wait()`` re-raises the child's error here. Where fork is not available
+    (or not safe: only Linux is trusted) it runs at once, in this process. Call ``wait()`` or
+    ``cancel()`` before leaving an ``all_or_nothing`` block, so no file appears after its clean-up."""
+
+    def __init__(self, fn: Callable[..., object], *args: object):
+        self._pid = 0
+        if not (FORK_OK and hasattr(os, "fork")):
+            fn(*args)
+            return
+        with contextlib.suppress(OSError, ValueError):  # a closed pipe stays this process's business
+            sys.stdout.flush()  # the child leaves by os._exit and never writes what was buffered here;
+            sys.stderr.flush()  # flushed anyway, so nothing buffered can come out twice
+        read, write = os.pipe()
+        pid = os.fork()
+        if pid == 0:  # pragma: no cover - the child (coverage does not follow it)
+            status = 1
+            try:
+                os.close(read)
+                try:
+                    fn(*args)
+                    message, status = b"", 0
+                except BaseException as exc:  # noqa: BLE001 - sent back to be raised in the parent
+                    message = _pickled(exc)
+                with os.fdopen(write, "wb") as out:
+                    out.write(message)
+            finally:
+                os._exit(status)
+        os.close(write)
+        self._pid, self._read = pid, read
+
+    def wait(self) -> None:
+        """Wait for the child; raise its error (BackgroundFailed when it died without one)."""
+        if not self._pid:
+            return
+        try:
+            with os.fdopen(self._read, "rb") as pipe:
+                message = pipe.read()
+        finally:  # closed, even when interrupted: cancel() must not close it again
+            self._read = -1
+        _, status = os.waitpid(self._pid, 0)
+        self._pid = 0
+        if message:
+            raise pickle.loads(message)
+        if status:
+            code = os.waitstatus_to_exitcode(status)
+            raise BackgroundFailed(f"killed by signal {-code}" if code < 0 else f"exit status {code}")
+
+    def cancel(self) -> None:
+        """Stop the child if it still runs (this process failed) and reap it."""
+        if not self._pid:
+            return
+        with contextlib.suppress(ProcessLookupError):
+            os.kill(self._pid, signal.SIGKILL)
+        os.waitpid(self._pid, 0)
+        if self._read >= 0:
+            os.close(self._read)
+        self._pid, self._read = 0, -1
+
+
+FORK_OK = sys.platform.startswith("linux")  # macOS: fork is unsafe with system frameworks; Windows: none
+
+
+def _pickled(exc: BaseException) -> bytes:
+    """The exception, pickled; its type and text as a BackgroundFailed when it does not pickle."""
+    try:
+        data = pickle.dumps(exc)
+        pickle.loads(data)
+        return data
+    except Exception:  # noqa: BLE001 - any exception type may fail to round-trip
+        return pickle.dumps(BackgroundFailed(f"{type(exc).__name__}: {exc}"))

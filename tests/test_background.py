@@ -1,0 +1,176 @@
+"""pipeline.report.outputs.Background: an output written in a forked child while the parent writes another;
+the child's error is raised in the parent, a child that dies says so, cancel() stops it, and without fork
+the work runs at once in the process. With msdc correlate: a figure failing in the child ends the run
+with one line and leaves nothing written."""
+
+from __future__ import annotations
+
+import os
+import signal
+import time
+from pathlib import Path
+
+import pytest
+
+from pipeline import jobs
+from pipeline.cli import main
+from pipeline.report import outputs
+from pipeline.report.outputs import Background, BackgroundFailed, all_or_nothing
+
+FIX = Path(__file__).resolve().parents[1] / "fixtures"
+forking = pytest.mark.skipif(not (outputs.FORK_OK and hasattr(os, "fork")),
+                             reason="Background forks only on Linux; elsewhere it runs in the process")
+
+
+def _write(path: Path, text: str) -> None:
+    path.write_text(text)
+
+
+def _fail(path: Path) -> None:
+    raise OSError(28, "No space left on device", str(path))
+
+
+def _die() -> None:
+    os.kill(os.getpid(), signal.SIGKILL)
+
+
+def _sleep_then_write(path: Path) -> None:
+    time.sleep(30)
+    path.write_text("late")
+
+
+def _unpicklable() -> None:
+    class Local(Exception):  # a local class cannot be pickled
+        pass
+
+    raise Local("drawn badly")
+
+
+@forking
+def test_the_child_writes_and_wait_returns(tmp_path):
+    job = Background(_write, tmp_path / "a.txt", "drawn elsewhere")
+    job.wait()
+    assert (tmp_path / "a.txt").read_text() == "drawn elsewhere"
+    job.wait()  # a second wait has nothing left to wait for
+
+
+@forking
+def test_the_child_runs_in_another_process(tmp_path):
+    job = Background(lambda p: p.write_text(str(os.getpid())), tmp_path / "pid.txt")
+    job.wait()
+    assert int((tmp_path / "pid.txt").read_text()) != os.getpid()
+
+
+@forking
+def test_the_childs_error_is_raised_in_the_parent(tmp_path):
+    job = Background(_fail, tmp_path / "x.png")
+    with pytest.raises(OSError) as err:
+        job.wait()
+    assert err.value.errno == 28 and err.value.filename == str(tmp_path / "x.png")
+
+
+@forking
+def test_an_error_that_does_not_pickle_comes_back_as_its_type_and_text():
+    job = Background(_unpicklable)
+    with pytest.raises(BackgroundFailed, match="Local: drawn badly"):
+        job.wait()
+
+
+@forking
+def test_a_child_killed_without_a_word_is_reported():
+    job = Background(_die)
+    with pytest.raises(BackgroundFailed, match=f"signal {int(signal.SIGKILL)}"):
+        job.wait()
+
+
+@forking
+def test_cancel_stops_the_child_before_it_writes(tmp_path):
+    start = time.monotonic()
+    job = Background(_sleep_then_write, tmp_path / "late.txt")
+    job.cancel()
+    assert time.monotonic() - start < 20  # killed, not waited for 30 s
+    assert not (tmp_path / "late.txt").exists()
+    job.wait()  # nothing left
+
+
+def test_without_fork_the_work_runs_at_once(tmp_path, monkeypatch):
+    monkeypatch.setattr(outputs, "FORK_OK", False)
+    seen = []
+    job = Background(lambda: seen.append(os.getpid()))
+    assert seen == [os.getpid()]  # done before wait(), in this process
+    job.wait()
+    job.cancel()
+    with pytest.raises(OSError):  # its error comes straight away
+        Background(_fail, tmp_path / "x.png")
+
+
+@forking
+def test_all_or_nothing_with_a_cancelled_child_leaves_nothing(tmp_path):
+    with pytest.raises(RuntimeError), all_or_nothing(tmp_path / "out.xlsx"):
+        job = Background(_write, tmp_path / "fig.png", "partial")
+        try:
+            raise RuntimeError("the workbook failed")
+        finally:
+            job.cancel()
+    assert list(tmp_path.iterdir()) == []
+
+
+def _correlate(tmp_path: Path, capsys) -> tuple[int, str]:
+    (tmp_path / "kept.txt").write_text("was here")
+    code = main(["correlate", str(FIX / "radar.ast"), str(FIX / "adsb.ast"), "--sensors",
+                 str(FIX / "sensors.toml"), "--callsign", "MAS72", "-o", str(tmp_path / "r.xlsx"),
+                 "--json", str(tmp_path / "r.json")])
+    return code, capsys.readouterr().err
+
+
+@pytest.mark.parametrize("fork", [True, False])
+def test_a_figure_failing_leaves_nothing(tmp_path, monkeypatch, capsys, fork):
+    monkeypatch.setattr(outputs, "FORK_OK", fork and outputs.FORK_OK)
+    monkeypatch.setattr(jobs, "_track_figure", lambda run, png, sensors: _fail(png))
+    code, err = _correlate(tmp_path, capsys)
+    assert code == 1 and "Traceback" not in err and "No space left on device" in err and "r_tracks.png" in err
+    assert err.count("msdc correlate: ") == 1 and "Exception ignored" not in err
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["kept.txt"]
+
+
+@forking
+def test_a_figure_process_dying_leaves_nothing(tmp_path, monkeypatch, capsys):
+    monkeypatch.setattr(jobs, "_track_figure", lambda run, png, sensors: _die())
+    code, err = _correlate(tmp_path, capsys)
+    assert code == 1 and "Traceback" not in err
+    assert "r_tracks.png: the figure was not drawn (killed by signal 9)" in err
+    assert err.strip().splitlines()[-1].startswith("msdc correlate: ")  # the last line, and the only error
+    assert err.count("msdc correlate: ") == 1
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["kept.txt"]
+
+
+@forking
+def test_cancel_after_an_interrupted_wait_closes_nothing_twice(tmp_path, monkeypatch):
+    job = Background(_sleep_then_write, tmp_path / "late.txt")
+    with monkeypatch.context() as m:
+        m.setattr(os, "fdopen", lambda fd, *a, **k: _Interrupting(fd))
+        with pytest.raises(KeyboardInterrupt):
+            job.wait()
+    spare = os.open(os.devnull, os.O_RDONLY)  # may reuse the pipe's number: cancel() must leave it open
+    try:
+        job.cancel()
+        os.fstat(spare)  # still open
+    finally:
+        os.close(spare)
+    assert not (tmp_path / "late.txt").exists()
+
+
+class _Interrupting:
+    """A pipe reader interrupted (Ctrl-C) while waiting; closes the descriptor as a real one would."""
+
+    def __init__(self, fd: int):
+        self.fd = fd
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        os.close(self.fd)
+
+    def read(self):
+        raise KeyboardInterrupt
