@@ -14,16 +14,16 @@ try:
     runpy.run_module("pipeline.cli", run_name="__main__")
 except SystemExit:
     pass
-print(",".join(m for m in {heavy!r} if m in sys.modules), file=sys.stderr)
+print("loaded:" + ",".join(m for m in {heavy!r} if m in sys.modules), file=sys.stderr)
 """
 
 
-def _loaded(*argv: str) -> tuple[str, list[str]]:
-    """stdout of ``python -m pipeline.cli ARGV`` in a fresh interpreter, and the heavy modules it loaded."""
-    done = subprocess.run([sys.executable, "-c", _SCRIPT.format(argv=list(argv), heavy=HEAVY)], cwd=ROOT,
+def _loaded(*argv: str, heavy: tuple[str, ...] = HEAVY) -> tuple[str, list[str]]:
+    """stdout of ``python -m pipeline.cli ARGV`` in a fresh interpreter, and which of ``heavy`` it loaded."""
+    done = subprocess.run([sys.executable, "-c", _SCRIPT.format(argv=list(argv), heavy=heavy)], cwd=ROOT,
                           capture_output=True, text=True, timeout=120)
-    last = done.stderr.strip().splitlines()[-1] if done.stderr.strip() else ""
-    return done.stdout, [m for m in last.split(",") if m]
+    last = [line for line in done.stderr.splitlines() if line.startswith("loaded:")][-1]
+    return done.stdout, [m for m in last.removeprefix("loaded:").split(",") if m]
 
 
 def test_help_imports_no_heavy_library():
@@ -42,3 +42,22 @@ def test_the_check_sees_a_heavy_import():
     """The same probe reports pandas once a command really uses it (so the tests above can fail)."""
     out, loaded = _loaded("stats", "fixtures/radar.ast")
     assert "Records per category" in out and "pandas" in loaded
+
+
+# what msdc stats does not use: the correlate, quality and report steps and the libraries behind them
+NOT_FOR_STATS = ("matplotlib", "openpyxl", "pipeline.correlate.correlation", "pipeline.model.jumps",
+                 "pipeline.model.measurements", "pipeline.quality.quality_run", "pipeline.report.excel",
+                 "pipeline.report.tables", "pipeline.model.sensors")
+
+
+def test_stats_imports_only_the_stats_path():
+    out, loaded = _loaded("stats", "fixtures/radar.ast", heavy=NOT_FOR_STATS)
+    assert "Records per category" in out
+    assert loaded == []
+
+
+def test_the_stats_check_sees_a_step_import():
+    """The same probe reports the correlate steps once a command uses them (so the test above can fail)."""
+    out, loaded = _loaded("correlate", "fixtures/radar.ast", "fixtures/adsb.ast", "--sensors",
+                          "fixtures/sensors.toml", "--callsign", "MAS72", heavy=NOT_FOR_STATS)
+    assert "MAS72" in out and "pipeline.correlate.correlation" in loaded and "pipeline.model.jumps" in loaded
