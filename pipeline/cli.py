@@ -41,6 +41,19 @@ class CliError(Exception):
         self.status = status
 
 
+class _Version(argparse.Action):
+    """--version: the installed version is looked up only when asked (importlib.metadata costs every command
+    about 30 ms)."""
+
+    def __init__(self, option_strings, dest=argparse.SUPPRESS, default=argparse.SUPPRESS):
+        super().__init__(option_strings, dest=dest, default=default, nargs=0,
+                         help="show the version and exit")
+
+    def __call__(self, parser, namespace, values, option_string=None):
+        print(f"msdc {software_version()}")
+        parser.exit()
+
+
 def _date(text: str) -> dt.date:
     try:
         return dt.date.fromisoformat(text)
@@ -84,7 +97,7 @@ def _adsb_sigma_option(p: argparse.ArgumentParser, used: str) -> None:
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="msdc", description="Multi-Sensor Data Correlator: ASTERIX "
                                      "CAT048/CAT021 decoding and radar/ADS-B correlation.")
-    parser.add_argument("--version", action="version", version=f"msdc {software_version()}")
+    parser.add_argument("--version", action=_Version)
     sub = parser.add_subparsers(dest="command", required=True)
 
     d = sub.add_parser("decode", help="decode recordings to CSV or Parquet")

@@ -118,6 +118,15 @@ def test_correlate_unreadable_input(capsys):
     assert "/nonexistent/x.ast" in capsys.readouterr().err
 
 
+def test_version(capsys):
+    """--version prints the version (looked up only when asked) and exits 0."""
+    with pytest.raises(SystemExit) as done:
+        main(["--version"])
+    assert done.value.code in (0, None)
+    out = capsys.readouterr().out
+    assert out.startswith("msdc ") and out.strip() != "msdc"
+
+
 @pytest.mark.skipif(shutil.which("msdc") is None, reason="console script not installed")
 def test_console_script():
     out = subprocess.run(["msdc", "--version"], capture_output=True, text=True, check=True)
