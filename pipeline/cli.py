@@ -229,7 +229,27 @@ def _report_skipped(loaded_errors: pd.DataFrame) -> None:
               "'msdc stats' lists them", file=sys.stderr)
 
 
+def _numba_without_scipy() -> None:
+    """Start numba's CPU target (its first kernel would) without importing scipy.linalg: numba imports
+    scipy.linalg.cython_blas at start-up only to choose BLAS or a loop for np.correlate and np.convolve,
+    which no msdc kernel calls, and that import costs 0.1-0.3 s (scipy clones numpy's namespace, importing
+    numpy.f2py). Hidden while numba starts, numba takes the loop; np.dot imports it when compiled."""
+    if "scipy.linalg" in sys.modules:
+        return
+    from numba.core.registry import cpu_target
+
+    sys.modules["scipy.linalg.cython_blas"] = None  # importing it now raises ImportError
+    try:
+        cpu_target.target_context.refresh()
+    except ImportError:
+        pass  # a numba that wants BLAS at start-up: started normally below
+    finally:
+        del sys.modules["scipy.linalg.cython_blas"]
+    cpu_target.target_context.refresh()  # nothing left to do when the first call succeeded
+
+
 def cmd_decode(args) -> int:
+    _numba_without_scipy()
     progress = Progress()
     options = jobs.DecodeOptions(**_decoding(args), output=args.output, categories=tuple(args.category or ()),
                                  strict=args.strict, chunk_mb=args.chunk_mb)
@@ -259,6 +279,7 @@ def cmd_decode(args) -> int:
 def cmd_stats(args) -> int:
     from pipeline.stats import format_stats
 
+    _numba_without_scipy()
     result = jobs.stats_job(jobs.StatsOptions(**_decoding(args), chunk_mb=args.chunk_mb), progress=Progress())
     _warn("stats", result.warnings)
     print(format_stats(result.tables), end="")

@@ -47,7 +47,7 @@ def test_the_check_sees_a_heavy_import():
 # what msdc stats does not use: the correlate, quality and report steps and the libraries behind them
 NOT_FOR_STATS = ("matplotlib", "openpyxl", "pipeline.correlate.correlation", "pipeline.model.jumps",
                  "pipeline.model.measurements", "pipeline.quality.quality_run", "pipeline.report.excel",
-                 "pipeline.report.tables", "pipeline.model.sensors")
+                 "pipeline.report.tables", "pipeline.model.sensors", "scipy.linalg")
 
 
 def test_stats_imports_only_the_stats_path():
@@ -61,3 +61,27 @@ def test_the_stats_check_sees_a_step_import():
     out, loaded = _loaded("correlate", "fixtures/radar.ast", "fixtures/adsb.ast", "--sensors",
                           "fixtures/sensors.toml", "--callsign", "MAS72", heavy=NOT_FOR_STATS)
     assert "MAS72" in out and "pipeline.correlate.correlation" in loaded and "pipeline.model.jumps" in loaded
+
+
+_NUMBA_AFTER = """
+import numpy as np
+from numba import njit
+from pipeline.cli import _numba_without_scipy
+
+_numba_without_scipy()
+assert "scipy.linalg" not in __import__("sys").modules
+a, b = np.arange(1.0, 6.0), np.array([2.0, -1.0, 0.5])
+dot = njit(lambda x, y: np.dot(x, y))(a, a)  # BLAS: imports scipy.linalg.cython_blas when compiled
+conv = njit(lambda x, y: np.convolve(x, y))(a, b)  # the loop numba takes without BLAS
+print(dot, *conv)
+"""
+
+
+def test_numba_started_without_scipy_still_compiles_blas_and_convolve():
+    """Numba started without scipy.linalg (msdc stats) still compiles np.dot (it imports BLAS then) and
+    np.convolve; values worked by hand: 1+4+9+16+25 = 55, and (1..5) * (2, -1, 0.5) in full."""
+    done = subprocess.run([sys.executable, "-c", _NUMBA_AFTER], cwd=ROOT, capture_output=True, text=True,
+                          timeout=300)
+    assert done.returncode == 0, done.stderr
+    values = [float(v) for v in done.stdout.split()]
+    assert values == [55.0, 2.0, 3.0, 4.5, 6.0, 7.5, -3.0, 2.5]
