@@ -57,10 +57,11 @@ def test_stats_imports_only_the_stats_path():
 
 
 def test_the_stats_check_sees_a_step_import():
-    """The same probe reports the correlate steps once a command uses them (so the test above can fail)."""
-    out, loaded = _loaded("correlate", "fixtures/radar.ast", "fixtures/adsb.ast", "--sensors",
-                          "fixtures/sensors.toml", "--callsign", "MAS72", heavy=NOT_FOR_STATS)
-    assert "MAS72" in out and "pipeline.correlate.correlation" in loaded and "pipeline.model.jumps" in loaded
+    """The same probe reports the correlate steps once a command imports them (so the test above can fail):
+    correlate validates --slot after importing its step, and refuses 0.01 s before decoding."""
+    _, loaded = _loaded("correlate", "fixtures/radar.ast", "fixtures/adsb.ast", "--sensors",
+                        "fixtures/sensors.toml", "--all", "--slot", "0.01", heavy=NOT_FOR_STATS)
+    assert "pipeline.correlate.correlation" in loaded and "pipeline.model.jumps" in loaded
 
 
 _NUMBA_AFTER = """
