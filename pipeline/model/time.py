@@ -33,8 +33,9 @@ def absolute_time(frame: pd.DataFrame, fallback_date: dt.date | None = None) -> 
     out = pd.Series(pd.DatetimeIndex(ns.astype("datetime64[ns]")).tz_localize("UTC"), index=frame.index)
     out[~ok] = pd.NaT
     if "timestamp" in frame:
-        stamps = pd.Series(frame["timestamp"].to_numpy(), index=frame.index)
-        stamps = pd.to_datetime(stamps, utc=True)
+        # converted as a datetime column: to_numpy() would make one Timestamp object per record (0.17 s
+        # for 60,000 records)
+        stamps = pd.to_datetime(frame["timestamp"], utc=True).rename(None)
         out = stamps.where(stamps.notna(), out)
     return out.astype(UTC_DTYPE)
 
