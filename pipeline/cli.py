@@ -43,6 +43,19 @@ class CliError(Exception):
         self.status = status
 
 
+class _Version(argparse.Action):
+    """--version: the installed version is looked up only when asked (importlib.metadata costs every command
+    about 30 ms)."""
+
+    def __init__(self, option_strings, dest=argparse.SUPPRESS, default=argparse.SUPPRESS):
+        super().__init__(option_strings, dest=dest, default=default, nargs=0,
+                         help="show the version and exit")
+
+    def __call__(self, parser, namespace, values, option_string=None):
+        print(f"msdc {software_version()}")
+        parser.exit()
+
+
 def _date(text: str) -> dt.date:
     try:
         return dt.date.fromisoformat(text)
@@ -86,7 +99,7 @@ def _adsb_sigma_option(p: argparse.ArgumentParser, used: str) -> None:
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="msdc", description="Multi-Sensor Data Correlator: ASTERIX "
                                      "CAT048/CAT021 decoding and radar/ADS-B correlation.")
-    parser.add_argument("--version", action="version", version=f"msdc {software_version()}")
+    parser.add_argument("--version", action=_Version)
     sub = parser.add_subparsers(dest="command", required=True)
 
     d = sub.add_parser("decode", help="decode recordings to CSV or Parquet")
@@ -217,7 +230,31 @@ def _report_skipped(loaded_errors: pd.DataFrame) -> None:
               "'msdc stats' lists them", file=sys.stderr)
 
 
+def _numba_without_scipy() -> None:
+    """Start numba's CPU target (its first kernel would) without importing scipy.linalg: numba imports
+    scipy.linalg.cython_blas at start-up only to choose BLAS or a loop for np.correlate and np.convolve,
+    which no msdc kernel calls, and that import costs 0.1-0.3 s (scipy clones numpy's namespace, importing
+    numpy.f2py). Hidden while numba starts, numba takes the loop; np.dot imports it when compiled."""
+    if "scipy.linalg" in sys.modules:
+        return
+    try:
+        from numba.core.registry import cpu_target
+
+        context = cpu_target.target_context
+    except (ImportError, AttributeError):  # numba's internals moved: it starts the usual way, on first use
+        return
+    sys.modules["scipy.linalg.cython_blas"] = None  # importing it now raises ImportError
+    try:
+        context.refresh()
+    except ImportError:
+        pass  # a numba that wants BLAS at start-up: started normally below
+    finally:
+        del sys.modules["scipy.linalg.cython_blas"]
+    context.refresh()  # nothing left to do when the first call succeeded
+
+
 def cmd_decode(args) -> int:
+    _numba_without_scipy()
     progress = Progress()
     options = jobs.DecodeOptions(**_decoding(args), output=args.output, categories=tuple(args.category or ()),
                                  strict=args.strict, chunk_mb=args.chunk_mb)
@@ -247,6 +284,7 @@ def cmd_decode(args) -> int:
 def cmd_stats(args) -> int:
     from pipeline.stats import format_stats
 
+    _numba_without_scipy()
     result = jobs.stats_job(jobs.StatsOptions(**_decoding(args), chunk_mb=args.chunk_mb), progress=Progress())
     _warn("stats", result.warnings)
     print(format_stats(result.tables), end="")

@@ -17,26 +17,22 @@ import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 import pandas as pd
 
-from pipeline.correlate.correlation import PAIRS, correlate
-from pipeline.correlate.results import CorrelationRun
 from pipeline.meta import FORMATS, software_version
-from pipeline.model.dedup import DEDUP_KEYS, duplicate_mask, repeat_groups
 from pipeline.model.identity import normalise_address, normalise_callsign
-from pipeline.model.jumps import JUMP_FLAG_COLUMNS, jump_flags
 from pipeline.model.load import Loaded, load
-from pipeline.model.measurements import DECODED_COLUMNS, build_measurements
-from pipeline.model.sensors import read_sensors
 from pipeline.model.time import absolute_time
 from pipeline.progress import Progress
-from pipeline.quality.filters import apply_filters
-from pipeline.quality.quality_run import QualityResult, quality_run
 from pipeline.report.outputs import Background, BackgroundFailed, all_or_nothing
-from pipeline.report.tables import TABLE_FILES, TABLE_MODES, parquet_path
 from pipeline.report.textguard import guard_frame
+
+if TYPE_CHECKING:  # the steps are imported by the jobs that run them: msdc stats imports none of them
+    from pipeline.correlate.results import CorrelationRun
+    from pipeline.quality.quality_run import QualityResult
 
 SLOT_RANGE_S = (0.1, 3600.0)  # below 0.1 s the slot count and the lag tables explode
 FIGURE_WINDOWS = 6  # correlate --quality: slotting and lag figures of the first windows only
@@ -165,6 +161,8 @@ def _can_create(directory: Path) -> bool:
 def _sensors(path: str | Path | None) -> pd.DataFrame:
     if path is None:
         raise OptionError("--sensors: the sensor file (TOML [[sensor]] tables) is required")
+    from pipeline.model.sensors import read_sensors
+
     p = Path(path)
     if not p.is_file():
         raise OptionError(f"--sensors {p}: file does not exist")
@@ -285,6 +283,9 @@ def validate(options) -> Checked:
     if isinstance(options, AircraftOptions):
         _check_aircraft(options)
         if isinstance(options, CorrelateOptions):
+            from pipeline.correlate.correlation import PAIRS
+            from pipeline.report.tables import TABLE_FILES, TABLE_MODES, parquet_path
+
             _number("--slot", options.slot_s, *SLOT_RANGE_S, " s")
             if options.pairs not in PAIRS:
                 raise OptionError(f"--pairs {options.pairs!r}: must be one of {', '.join(PAIRS)}")
@@ -338,6 +339,7 @@ def validate(options) -> Checked:
 def _load(options: DecodingOptions, checked: Checked, progress: Progress | None) -> Loaded:
     """Decode the inputs for measurements: only the columns build_measurements reads are decoded."""
     from asterix.errors import UnreadableInput
+    from pipeline.model.measurements import DECODED_COLUMNS
 
     try:
         loaded = load(checked.inputs, editions=checked.editions or None, date=options.date,
@@ -393,6 +395,7 @@ def _date_ignored(options: DecodingOptions, inputs: list[dict]) -> list[str]:
 def _measurements(loaded: Loaded, sensors: pd.DataFrame, sensors_path: str,
                   adsb_sigma_m: float | None = None) -> pd.DataFrame:
     """Radar and ADS-B measurements, with the user-facing errors for missing data and sensors."""
+    from pipeline.model.measurements import build_measurements
     from pipeline.model.sensors import UnknownRadar, sensor_toml_snippet
 
     if 48 not in loaded.frames or loaded.frames[48].empty:
@@ -413,6 +416,9 @@ def mark_once(meas: pd.DataFrame, *, split_adsb: bool = False, jumps: bool = Tru
     ``fit_latitude``, ``fit_longitude``) computed once for the whole job; deduplication, filters, quality
     and accuracy reuse them instead of recomputing. ``jumps=False`` skips the jump search (a job that
     neither filters jumps nor assesses quality does not need it)."""
+    from pipeline.model.dedup import DEDUP_KEYS, duplicate_mask, repeat_groups
+    from pipeline.model.jumps import JUMP_FLAG_COLUMNS, jump_flags
+
     meas = meas.drop(columns=[c for c in ("duplicate", *JUMP_FLAG_COLUMNS) if c in meas])
     dup = duplicate_mask(meas.sort_values("time", kind="stable"), split_adsb=split_adsb).reindex(meas.index)
     if not jumps:
@@ -456,6 +462,7 @@ def _parameters(options: AircraftOptions, loaded: Loaded, started: float, comman
 
 def _quality(meas: pd.DataFrame, sensors: pd.DataFrame, options: AircraftOptions) -> QualityResult:
     from pipeline.model.aircraft import NoSuchAircraft
+    from pipeline.quality.quality_run import quality_run
 
     try:
         return quality_run(meas, sensors, callsign=options.callsign, address=options.address,
@@ -541,8 +548,9 @@ def _marked_measurements(loaded: Loaded, checked: Checked, options: AircraftOpti
 def correlate_job(options: CorrelateOptions, *, progress: Progress | None = None,
                   checked: Checked | None = None, command: str = "correlate") -> CorrelateResult:
     """Validate, decode, build measurements, filter, correlate (and assess quality); nothing is written."""
-    from pipeline.correlate.correlation import NoOverlap, TooManySlots
+    from pipeline.correlate.correlation import NoOverlap, TooManySlots, correlate
     from pipeline.model.aircraft import NoSuchAircraft
+    from pipeline.quality.filters import apply_filters
 
     started = time.monotonic()
     checked = checked or validate(options)

@@ -118,6 +118,28 @@ def test_correlate_unreadable_input(capsys):
     assert "/nonexistent/x.ast" in capsys.readouterr().err
 
 
+def test_version(capsys):
+    """--version prints the version (looked up only when asked) and exits 0."""
+    with pytest.raises(SystemExit) as done:
+        main(["--version"])
+    assert done.value.code in (0, None)
+    out = capsys.readouterr().out
+    assert out.startswith("msdc ") and out.strip() != "msdc"
+
+
+def test_program_exit_status_and_output():
+    """``python -m pipeline.cli`` (the console entry point) prints everything and exits with main's status."""
+    def msdc_stats(path: str) -> subprocess.CompletedProcess:
+        return subprocess.run([sys.executable, "-m", "pipeline.cli", "stats", path], capture_output=True,
+                              text=True, cwd=FIX.parent, timeout=300)
+
+    done = msdc_stats(str(RADAR))
+    assert done.returncode == 0
+    assert done.stdout.startswith("Records per category") and done.stdout.endswith("\n")
+    done = msdc_stats("/nonexistent/x.ast")
+    assert done.returncode == 2 and "/nonexistent/x.ast" in done.stderr and done.stdout == ""
+
+
 @pytest.mark.skipif(shutil.which("msdc") is None, reason="console script not installed")
 def test_console_script():
     out = subprocess.run(["msdc", "--version"], capture_output=True, text=True, check=True)

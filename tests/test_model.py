@@ -59,6 +59,13 @@ def test_absolute_time_dated_undated_and_midnight():
     stamped = frame.assign(timestamp=pd.to_datetime(["2020-01-01 00:00:01", None], utc=True))
     assert absolute_time(stamped, pd.Timestamp("2019-03-01").date()).iloc[0] == pd.Timestamp(
         "2020-01-01 00:00:01", tz="UTC")
+    # a timestamp in another zone is the same instant in UTC (12:00:01 CET is 11:00:01 UTC); a missing one
+    # falls back to day and time of day
+    paris = frame.assign(timestamp=pd.to_datetime(["2020-01-01 12:00:01", None]).tz_localize("Europe/Paris"))
+    got = absolute_time(paris, pd.Timestamp("2019-03-01").date())
+    assert str(got.dtype) == "datetime64[ns, UTC]" and got.name is None
+    assert got.tolist() == [pd.Timestamp("2020-01-01 11:00:01", tz="UTC"),
+                            pd.Timestamp("2019-03-02 00:00:00.5", tz="UTC")]
 
 
 def test_identity_rule():

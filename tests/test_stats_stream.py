@@ -118,3 +118,33 @@ def test_stats_job_streams_with_its_chunk_size():
     assert small.tables["categories"]["records"].tolist() == [n21, n48]
     with pytest.raises(jobs.OptionError, match="--chunk-mb"):
         jobs.stats_job(jobs.StatsOptions(inputs=(RADAR,), chunk_mb=0.0))
+
+
+def test_category_whose_every_block_is_skipped(tmp_path, capsys):
+    """A CAT048 block whose only record is cut short (I048/140 needs 3 bytes, 1 is left) decodes no record:
+    stats lists no category and the skipped block, says nothing could be decoded, and never traces back.
+    A good block of the same category in another chunk is counted as usual."""
+    from pipeline.cli import main
+
+    bad = block(48, fspec(1, 2) + bytes([25, 201, 0]))
+    path = tmp_path / "bad.ast"
+    path.write_bytes(bad)
+    assert len(asterix.read(path).frames[48]) == 0  # the category is there, with no record
+    assert main(["stats", str(path)]) == 1
+    captured = capsys.readouterr()
+    assert "Records per category:\n  none" in captured.out and "Records per SAC/SIC:\n  none" in captured.out
+    assert "nothing could be decoded" in captured.err and "Traceback" not in captured.err
+    tables = _streamed_any(path)
+    assert tables["categories"].empty
+    assert tables["skipped"][["blocks", "bytes"]].values.tolist() == [[1, len(bad)]]
+    good = _plot(201, 100.0, 0x4840D6, "KLM1")
+    path.write_bytes(bad + good)
+    tables = _streamed_any(path, chunk=1)
+    assert tables["categories"][["category", "records"]].values.tolist() == [[48, 1]]
+
+
+def _streamed_any(path, chunk: int = 1 << 20) -> dict[str, pd.DataFrame]:
+    acc = StatsAccumulator()
+    for rec in asterix.iter_read(path, chunk=chunk):
+        acc.add(rec.frames, rec.errors, rec.ignored)
+    return acc.tables()
