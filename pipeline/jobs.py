@@ -121,6 +121,9 @@ def _inputs(paths: list[str | Path], warnings: list[str]) -> list[Path]:
             raise OptionError(f"{p}: input file does not exist")
         if p.is_dir():
             raise OptionError(f"{p}: input is a directory, not a recording")
+        if not p.is_file():  # reading a FIFO blocks, and its bytes could be read only once
+            raise OptionError(f"{p}: input is not a regular file (a FIFO, socket or device); "
+                              "give a recording file")
         if not os.access(p, os.R_OK):
             raise OptionError(f"{p}: input file is not readable")
         digest = _sha256(p)
