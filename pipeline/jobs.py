@@ -153,6 +153,19 @@ def _output(name: str, path: str | Path | None, suffixes: tuple[str, ...]) -> Pa
     return p
 
 
+def spare_inputs(inputs, outputs: list[tuple[str, Path | None]]) -> None:
+    """OptionError when an output (a ``(what, path)`` pair: the option and the file it writes) is one of the
+    inputs, by any path or link: writing it would destroy the recording before or while it is read."""
+    given = [Path(p) for p in inputs if Path(p).is_file()]
+    for what, out in outputs:
+        if out is None or not Path(out).is_file():
+            continue
+        for p in given:
+            if os.path.samefile(out, p):
+                also = "" if what.endswith(str(out)) else f" (it writes {out})"
+                raise OptionError(f"{what}{also}: is the input {p}; writing it would destroy the recording")
+
+
 def _can_create(directory: Path) -> bool:
     """Whether a file can really be created here (permission bits do not stop root; read-only mounts,
     ACLs and pseudo file systems do): a temporary file is created and removed at once."""
@@ -319,6 +332,12 @@ def validate(options) -> Checked:
             for png in _figures_beside(checked.output, options, checked.sensors):
                 if png.is_dir():
                     raise OptionError(f"-o {checked.output}: its figure {png} is a directory")
+        if checked.output is not None:
+            out = checked.output
+            beside = [out.with_name(f"{out.stem}_tracks.png"), *(parquet_path(out, n) for n in TABLE_FILES),
+                      *_figures_beside(out, options, checked.sensors)]
+            spare_inputs(options.inputs, [(f"-o {out}", out)] + [(f"-o {out}", p) for p in beside])
+        spare_inputs(options.inputs, [(f"--json {checked.json}", checked.json)])
         odd = checked.sensors[~checked.sensors["altitude_m"].between(*SITE_ALTITUDE_RANGE_M)]
         lo, hi = SITE_ALTITUDE_RANGE_M
         warnings += [f"--sensors {options.sensors}: {row.name!r} altitude_m = {row.altitude_m:g} is "
@@ -328,6 +347,10 @@ def validate(options) -> Checked:
         _number("--chunk-mb", options.chunk_mb, *CHUNK_RANGE_MB, " MB")
     if isinstance(options, DecodeOptions):
         checked.output = _output("-o", options.output, (".csv", ".parquet"))
+        if checked.output is not None:
+            out = checked.output
+            spare_inputs(options.inputs, [(f"-o {out}", p) for p in (
+                out, *(out.with_name(f"{out.stem}_cat{c:03d}{out.suffix}") for c in (21, 48)))])
         bad = [c for c in options.categories if c not in (21, 48)]
         if bad:
             raise OptionError(f"--category {bad[0]}: must be 21 or 48")
