@@ -28,7 +28,7 @@ from pipeline.model.dedup import DEDUP_KEYS, duplicate_mask, repeat_groups
 from pipeline.model.identity import normalise_address, normalise_callsign
 from pipeline.model.jumps import JUMP_FLAG_COLUMNS, jump_flags
 from pipeline.model.load import Loaded, load
-from pipeline.model.measurements import DECODED_COLUMNS, build_measurements
+from pipeline.model.measurements import DECODED_COLUMNS, build_measurements, impossible_positions
 from pipeline.model.sensors import read_sensors
 from pipeline.model.time import absolute_time
 from pipeline.progress import Progress
@@ -373,6 +373,7 @@ def _load(options: DecodingOptions, checked: Checked, progress: Progress | None)
     spans = [_time_spans(rec.frames, loaded.date) for rec in loaded.recordings]
     checked.warnings += _order_warnings(checked.inputs, spans)
     checked.warnings += _date_ignored(options, loaded.inputs)
+    checked.warnings += impossible_positions(loaded.frames.get(21))
     return loaded
 
 

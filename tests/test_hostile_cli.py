@@ -99,3 +99,53 @@ def test_an_output_linked_to_an_input_is_refused(tmp_path, capsys):
     status, _, err = _run(["decode", recording, "-o", tmp_path / "out.csv"], capsys)
     assert status == 2 and f"is the input {recording}" in err
     assert recording.read_bytes() == RADAR.read_bytes()
+
+
+def _mas72(tmp_path: Path, cat: int, latitude_of_row: dict[int, float] | None = None) -> Path:
+    """The fixture's MAS72 reports of one category from 08:00 to 08:10 as a raw file, with the latitudes
+    of some rows (by position) replaced."""
+    import asterix
+    from asterix.encode import encode_frame
+
+    f = asterix.read(RADAR if cat == 48 else ADSB).frames[cat]
+    f = f[(f.callsign == "MAS72") & f.time_of_day.between(28800, 29400)].copy()
+    for row, lat in (latitude_of_row or {}).items():
+        f.iloc[row, f.columns.get_loc("latitude")] = lat
+    p = tmp_path / f"cat{cat:03d}.ast"
+    p.write_bytes(encode_frame(cat, f))
+    return p
+
+
+@pytest.mark.parametrize("command", ["correlate", "quality", "track", "conflicts"])
+def test_an_adsb_position_off_the_earth_is_named_and_left_out(command, tmp_path, capsys):
+    """I021/131 encodes latitudes up to 360 deg: a damaged report may carry one. The run goes on without
+    it and a warning names the file, the count, the first report's offset and value."""
+    import asterix
+
+    radar, adsb = _mas72(tmp_path, 48), _mas72(tmp_path, 21, {5: 120.0, 9: -95.0})
+    frame = asterix.read(adsb).frames[21]
+    assert frame["latitude"].iloc[5] == pytest.approx(120.0, abs=1e-6)  # the damage is in the file
+    out = tmp_path / "out"
+    out.mkdir()
+    argv = [command, radar, adsb, "--sensors", SENSORS, "--date", "2019-03-01"]
+    argv += {"correlate": ["--callsign", "MAS72", "--json", out / "c.json"],
+             "quality": ["--callsign", "MAS72", "--json", out / "q.json"],
+             "track": ["--callsign", "MAS72", "--json", out / "t.json", "--noise", "declared"],
+             "conflicts": ["-o", out / "k.csv", "--step", "10"]}[command]
+    status, _, err = _run(argv, capsys)
+    assert status == 0, err
+    assert "Traceback" not in err
+    assert (f"msdc {command}: warning: cat021.ast: 2 CAT021 report(s) with a position off the Earth "
+            f"(first at offset {int(frame['offset'].iloc[5])}: latitude 120.0000, longitude "
+            f"{frame['longitude'].iloc[5]:.4f}): damaged data, left out of the measurements") in err
+
+
+def test_measurements_leave_out_adsb_positions_off_the_earth(tmp_path):
+    import asterix
+    from pipeline.model.measurements import build_measurements
+
+    frame = asterix.read(_mas72(tmp_path, 21, {3: 91.0})).frames[21]
+    frame.loc[7, "longitude"] = -180.5
+    meas = build_measurements(None, frame, date=None)
+    assert len(meas) == len(frame) - 2
+    assert set(meas["offset"]) == set(frame["offset"]) - {frame["offset"].iloc[3], frame["offset"].iloc[7]}
