@@ -17,8 +17,11 @@ SENSOR_COLUMNS = [*REQUIRED_COLUMNS, *OPTIONAL_DEFAULTS]
 _NUMBER = (int, float)
 _TYPES = {"name": (str,), "sac": (int,), "sic": (int,), "latitude": _NUMBER, "longitude": _NUMBER,
           "altitude_m": _NUMBER, "sigma_range_m": _NUMBER, "sigma_azimuth_deg": _NUMBER}
+# altitude_m: the geometry needs a finite height; past +-100 km it is no radar site (a plausible range,
+# -500 to 6000 m, only warns: pipeline.jobs)
 _RANGES = {"sac": (0, 255), "sic": (0, 255), "latitude": (-90.0, 90.0), "longitude": (-180.0, 180.0),
-           "sigma_range_m": (0.001, 10_000.0), "sigma_azimuth_deg": (0.0001, 10.0)}
+           "altitude_m": (-100_000.0, 100_000.0), "sigma_range_m": (0.001, 10_000.0),
+           "sigma_azimuth_deg": (0.0001, 10.0)}
 
 
 class UnknownRadar(ValueError):
