@@ -162,3 +162,14 @@ def test_a_sensor_altitude_that_is_no_height_is_refused_by_name(altitude, tmp_pa
     value = repr(float(altitude))
     assert err.strip() == (f"msdc correlate: {sensors}: [[sensor]] entry 1: altitude_m = {value} is outside "
                            "-100000.0..100000.0")
+
+
+def test_a_sensor_file_that_is_not_utf8_is_named(tmp_path, capsys):
+    """TOML is UTF-8: a Latin-1 file (a site name with an accent) is refused naming the file and byte."""
+    sensors = tmp_path / "s.toml"
+    sensors.write_bytes(SENSORS.read_bytes().replace(b"KLIA MSSR", b"Barcelona Montseny \xe9"))
+    status, _, err = _run(["correlate", RADAR, ADSB, "--sensors", sensors, "--callsign", "MAS72"], capsys)
+    at = SENSORS.read_bytes().index(b"KLIA MSSR") + len(b"Barcelona Montseny ")
+    assert status == 1
+    assert err.strip() == (f"msdc correlate: {sensors}: not valid TOML: byte {at} is not UTF-8 "
+                           "(invalid continuation byte)")

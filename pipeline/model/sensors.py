@@ -65,6 +65,8 @@ def read_sensors(path: str | Path) -> pd.DataFrame:
             doc = tomllib.load(fh)
     except tomllib.TOMLDecodeError as exc:
         raise ValueError(f"{path}: not valid TOML: {exc}") from exc
+    except UnicodeDecodeError as exc:
+        raise ValueError(f"{path}: not valid TOML: byte {exc.start} is not UTF-8 ({exc.reason})") from exc
     entries = doc.get("sensor")
     if not isinstance(entries, list) or not entries:
         raise ValueError(f"{path}: no [[sensor]] tables found")
