@@ -173,3 +173,17 @@ def test_a_sensor_file_that_is_not_utf8_is_named(tmp_path, capsys):
     assert status == 1
     assert err.strip() == (f"msdc correlate: {sensors}: not valid TOML: byte {at} is not UTF-8 "
                            "(invalid continuation byte)")
+
+
+def test_a_misspelt_sensor_key_is_refused_not_ignored(tmp_path, capsys):
+    """``sigma_range = 30`` (without _m) used to be ignored, leaving the 70 m default in every covariance
+    without a word; an unknown key is refused with the nearest allowed one."""
+    sensors = tmp_path / "s.toml"
+    sensors.write_text(SENSORS.read_text() + "sigma_range = 30.0\n")
+    argv = ["track", RADAR, ADSB, "--sensors", sensors, "--all", "--json", tmp_path / "t.json"]
+    status, _, err = _run(argv, capsys)
+    assert status == 1
+    assert err.strip() == (f"msdc track: {sensors}: [[sensor]] entry 1: unknown key 'sigma_range' (did you "
+                           "mean sigma_range_m? allowed: name, sac, sic, latitude, longitude, altitude_m, "
+                           "sigma_range_m, sigma_azimuth_deg)")
+    assert not (tmp_path / "t.json").exists()

@@ -38,6 +38,13 @@ def _check_entry(path: Path, i: int, entry: object) -> dict:
     where = f"{path}: [[sensor]] entry {i + 1}"
     if not isinstance(entry, dict):
         raise ValueError(f"{where} is not a table")
+    unknown = [k for k in entry if k not in SENSOR_COLUMNS]
+    if unknown:  # a misspelt optional key would silently leave its default in place
+        import difflib
+
+        near = difflib.get_close_matches(unknown[0], SENSOR_COLUMNS, n=1)
+        hint = f"did you mean {near[0]}? " if near else ""
+        raise ValueError(f"{where}: unknown key {unknown[0]!r} ({hint}allowed: {', '.join(SENSOR_COLUMNS)})")
     missing = [k for k in REQUIRED_COLUMNS if k not in entry]
     if missing:
         raise ValueError(f"{where} lacks {', '.join(missing)} (needs {', '.join(REQUIRED_COLUMNS)})")
