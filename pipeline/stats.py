@@ -157,7 +157,7 @@ class StatsAccumulator:
     def add(self, frames: dict[int, pd.DataFrame], errors: pd.DataFrame | None = None,
             ignored: pd.DataFrame | list[pd.DataFrame] | None = None) -> None:
         """Fold in one chunk: decoded frames by category, its skipped-bytes account, its ignored blocks."""
-        self.categories |= set(frames)
+        self.categories |= {cat for cat, frame in frames.items() if len(frame)}  # none: nothing to list
         for cat, frame in sorted(frames.items()):
             for level, (new, distinct) in _chunk_tables(cat, frame).items():
                 old = self._spans.get(level)

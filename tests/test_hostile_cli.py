@@ -187,3 +187,18 @@ def test_a_misspelt_sensor_key_is_refused_not_ignored(tmp_path, capsys):
                            "mean sigma_range_m? allowed: name, sac, sic, latitude, longitude, altitude_m, "
                            "sigma_range_m, sigma_azimuth_deg)")
     assert not (tmp_path / "t.json").exists()
+
+
+def test_stats_with_a_category_whose_every_block_failed(capsys):
+    """The fixture's CAT021 is edition 2.7; pinned to 0.26 none of its blocks walks. stats lists the radar
+    and the skipped blocks (a KeyError traceback before); alone, the ADS-B file decodes nothing: exit 1."""
+    status, out, err = _run(["stats", RADAR, ADSB, "--edition", "21=0.26"], capsys)
+    assert status == 0, err
+    assert "Traceback" not in err
+    cats = out.split("Records per category:")[1].split("\n\n")[0]
+    assert "48" in cats and "21" not in cats
+    skipped = out.split("Skipped blocks by reason:")[1].split("\n\n")[0]
+    assert "none" not in skipped and "21" in skipped
+    status, out, err = _run(["stats", ADSB, "--edition", "21=0.26"], capsys)
+    assert status == 1 and "Traceback" not in err
+    assert err.strip().endswith("msdc: nothing could be decoded")
