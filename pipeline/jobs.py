@@ -99,6 +99,9 @@ def _editions(editions: list[str] | dict | None) -> dict[int, str]:
                 resolve_edition(cat, ed)
             except ValueError as exc:
                 raise OptionError(f"--edition {cat}={ed}: {exc}") from None
+        if out.get(cat, ed) != ed:
+            raise OptionError(f"--edition {cat}={ed}: CAT{cat:03d} is already pinned to {out[cat]}; give one "
+                              "edition per category")
         out[cat] = ed
     return out
 

@@ -202,3 +202,14 @@ def test_stats_with_a_category_whose_every_block_failed(capsys):
     status, out, err = _run(["stats", ADSB, "--edition", "21=0.26"], capsys)
     assert status == 1 and "Traceback" not in err
     assert err.strip().endswith("msdc: nothing could be decoded")
+
+
+def test_two_different_pins_of_one_category_are_refused(tmp_path, capsys):
+    """The last of two pins used to win silently; the same pin twice is harmless."""
+    status, _, err = _run(["decode", RADAR, "--edition", "21=0.26", "--edition", "21=2.7",
+                           "-o", tmp_path / "o.csv"], capsys)
+    assert status == 2
+    assert err.strip() == ("msdc decode: --edition 21=2.7: CAT021 is already pinned to 0.26; give one "
+                           "edition per category")
+    assert not list(tmp_path.iterdir())
+    assert _run(["decode", RADAR, "--edition", "48=1.27", "--edition", "48=1.27"], capsys)[0] == 0
