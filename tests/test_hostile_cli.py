@@ -8,6 +8,7 @@ import os
 import threading
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from pipeline import jobs
@@ -213,3 +214,27 @@ def test_two_different_pins_of_one_category_are_refused(tmp_path, capsys):
                            "edition per category")
     assert not list(tmp_path.iterdir())
     assert _run(["decode", RADAR, "--edition", "48=1.27", "--edition", "48=1.27"], capsys)[0] == 0
+
+
+@pytest.mark.parametrize("bad_tod", [120000.0, 86400.0, 131071.0])
+def test_one_time_of_day_past_midnight_moves_no_other_report(bad_tod, tmp_path, capsys):
+    """A raw recording counts midnights from its times of day in file order. One damaged I048/140 of
+    120000 s (the 24-bit field reaches 131072 s) in an 08:00-11:20 recording used to look like a jump
+    back of a day and forth again, and put every other report on the next day."""
+    import asterix
+    from asterix.encode import encode_frame
+
+    frame = asterix.read(RADAR).frames[48]
+    i = len(frame) // 2
+    damaged = frame.copy()
+    damaged.iloc[i, damaged.columns.get_loc("time_of_day")] = bad_tod
+    path = tmp_path / "r.ast"
+    path.write_bytes(encode_frame(48, damaged))
+    good = asterix.read(RADAR, date="2019-03-01").frames[48]["timestamp"]
+    got = asterix.read(path, date="2019-03-01").frames[48]
+    others = np.arange(len(frame)) != i
+    assert (got["day"].to_numpy()[others] == 0).all()
+    assert (got["timestamp"][others] == good[others]).all()
+    status, out, _ = _run(["stats", path, "--date", "2019-03-01"], capsys)
+    assert status == 0
+    assert "2019-03-01 08:00:02" in out.split("Records per SAC/SIC")[0]
