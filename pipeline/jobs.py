@@ -425,10 +425,9 @@ def _measurements(loaded: Loaded, sensors: pd.DataFrame, sensors_path: str,
     """Radar and ADS-B measurements, with the user-facing errors for missing data and sensors."""
     from pipeline.model.sensors import UnknownRadar, sensor_toml_snippet
 
-    if 48 not in loaded.frames or loaded.frames[48].empty:
-        raise JobError("no radar (CAT048) records in the inputs")
-    if 21 not in loaded.frames or loaded.frames[21].empty:
-        raise JobError("no ADS-B (CAT021) records in the inputs")
+    for cat, name in ((48, "radar"), (21, "ADS-B")):
+        if cat not in loaded.frames or loaded.frames[cat].empty:
+            raise JobError(f"no {name} (CAT{cat:03d}) records in the inputs{_all_failed(loaded, cat)}")
     try:
         return build_measurements(loaded.frames[48], loaded.frames[21], sensors, date=loaded.date,
                                   adsb_sigma_m=adsb_sigma_m)
@@ -436,6 +435,19 @@ def _measurements(loaded: Loaded, sensors: pd.DataFrame, sensors_path: str,
         lines = "\n\n".join(sensor_toml_snippet(sac, sic) for sac, sic in exc.missing)
         raise JobError(f"radar SAC/SIC {', '.join(f'{a}/{b}' for a, b in exc.missing)} not in "
                        f"{sensors_path}; add its position:\n\n{lines}") from exc
+
+
+def _all_failed(loaded: Loaded, cat: int) -> str:
+    """What to add when a category has no record: how many of its blocks failed, and under which edition
+    (a wrong pin fails every block: nothing on the wire says which CAT021 edition a stream uses)."""
+    errors = loaded.errors
+    failed = int((errors["category"] == cat).sum()) if "category" in errors else 0
+    if not failed:
+        return ""
+    edition = loaded.editions.get(cat)
+    hint = (f" under edition {edition}; if that edition is wrong, pin the right one or try --edition 21=auto"
+            if cat == 21 and edition else f" under edition {edition}" if edition else "")
+    return f": {failed} CAT{cat:03d} block(s) could not be decoded{hint} ('msdc stats' lists them)"
 
 
 def mark_once(meas: pd.DataFrame, *, split_adsb: bool = False, jumps: bool = True) -> pd.DataFrame:

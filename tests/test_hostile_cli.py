@@ -238,3 +238,14 @@ def test_one_time_of_day_past_midnight_moves_no_other_report(bad_tod, tmp_path, 
     status, out, _ = _run(["stats", path, "--date", "2019-03-01"], capsys)
     assert status == 0
     assert "2019-03-01 08:00:02" in out.split("Records per SAC/SIC")[0]
+
+
+def test_a_wrong_edition_pin_is_suggested_when_no_adsb_record_decodes(capsys):
+    """The fixture's CAT021 is edition 2.7: pinned to 0.26, no block walks. The message said only 'no ADS-B
+    records'; it now says the blocks failed under that edition and what to try."""
+    status, _, err = _run(["correlate", RADAR, ADSB, "--sensors", SENSORS, "--callsign", "MAS72",
+                           "--edition", "21=0.26"], capsys)
+    assert status == 1
+    assert ("msdc correlate: no ADS-B (CAT021) records in the inputs: 2 CAT021 block(s) could not be decoded "
+            "under edition 0.26; if that edition is wrong, pin the right one or try --edition 21=auto "
+            "('msdc stats' lists them)") in err
