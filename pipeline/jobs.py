@@ -114,10 +114,18 @@ def _sha256(path: Path, chunk: int = 1 << 20) -> str:
     return h.hexdigest()
 
 
+def nonempty_path(name: str, value) -> None:
+    """OptionError for an empty path (an unset shell variable): Path("") is the current directory."""
+    if value is not None and not str(value).strip():
+        raise OptionError(f"{name} {str(value)!r}: an empty path")
+
+
 def _inputs(paths: list[str | Path], warnings: list[str]) -> list[Path]:
     """Readable input files; the same content given twice is skipped with a warning."""
     if not paths:
         raise OptionError("no input file given")
+    for p in paths:
+        nonempty_path("input", p)
     out, seen = [], {}
     for p in map(Path, paths):
         if not p.exists():
@@ -142,6 +150,7 @@ def _output(name: str, path: str | Path | None, suffixes: tuple[str, ...]) -> Pa
     """An output path with an allowed suffix, not a directory, in a writable directory."""
     if path is None:
         return None
+    nonempty_path(name, path)
     p = Path(path)
     if p.suffix.lower() not in suffixes:
         raise OptionError(f"{name} {p}: must end in {' or '.join(suffixes)}")
@@ -184,6 +193,7 @@ def _can_create(directory: Path) -> bool:
 def _sensors(path: str | Path | None) -> pd.DataFrame:
     if path is None:
         raise OptionError("--sensors: the sensor file (TOML [[sensor]] tables) is required")
+    nonempty_path("--sensors", path)
     p = Path(path)
     if not p.is_file():
         raise OptionError(f"--sensors {p}: file does not exist")

@@ -108,6 +108,7 @@ def validate(options: ConflictOptions) -> Checked:
     jobs.spare_inputs(options.inputs, [(f"-o {checked.output}", p) for p in (checked.output, *beside)]
                       + [(f"--json {checked.json}", checked.json)])
     if options.figures is not None:
+        jobs.nonempty_path("--figures", options.figures)
         d = Path(options.figures)
         if d.exists() and not d.is_dir():
             raise OptionError(f"--figures {d}: exists and is not a directory")

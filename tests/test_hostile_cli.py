@@ -249,3 +249,22 @@ def test_a_wrong_edition_pin_is_suggested_when_no_adsb_record_decodes(capsys):
     assert ("msdc correlate: no ADS-B (CAT021) records in the inputs: 2 CAT021 block(s) could not be decoded "
             "under edition 0.26; if that edition is wrong, pin the right one or try --edition 21=auto "
             "('msdc stats' lists them)") in err
+
+
+@pytest.mark.parametrize(("argv", "option"), [
+    (["stats", ""], "input"),
+    (["correlate", RADAR, ADSB, "--sensors", "", "--all"], "--sensors"),
+    (["correlate", RADAR, ADSB, "--sensors", SENSORS, "--all", "-o", ""], "-o"),
+    (["quality", RADAR, ADSB, "--sensors", SENSORS, "--all", "--json", " "], "--json"),
+    (["track", RADAR, ADSB, "--sensors", SENSORS, "--all", "--figures", ""], "--figures"),
+    (["conflicts", RADAR, ADSB, "--sensors", SENSORS, "-o", "c.csv", "--figures", ""], "--figures"),
+], ids=["input", "sensors", "output", "json", "track-figures", "conflicts-figures"])
+def test_an_empty_path_is_named_as_empty(argv, option, tmp_path, monkeypatch, capsys):
+    """An unset shell variable gives an empty path, which Path() reads as '.': messages said '-o .: must
+    end in .xlsx' or '.: input is a directory', and --figures '' drew into the current directory."""
+    monkeypatch.chdir(tmp_path)
+    status, _, err = _run(argv, capsys)
+    assert status == 2
+    value = argv[argv.index(option) + 1] if option != "input" else ""
+    assert err.strip() == f"msdc {argv[0]}: {option} {value!r}: an empty path"
+    assert not list(tmp_path.iterdir())
