@@ -46,7 +46,10 @@ def assign_days(frames: dict[int, dict], seg: Segments, blk_seg: np.ndarray) -> 
         off = np.concatenate([np.asarray(f["offset"]) for _, f in parts])
         tod = np.concatenate([np.asarray(f["time_of_day"]) for _, f in parts])
         order = np.argsort(off, kind="stable")
-        t = pd.Series(tod[order]).ffill().bfill().to_numpy()
+        t = tod[order]
+        # a time of day outside 0-86400 s (damaged: I048/140 and I021/071-073 reach 131072 s) is no
+        # evidence of a midnight; left in, one such report put every other report on another day
+        t = pd.Series(np.where((t >= 0.0) & (t < 86400.0), t, np.nan)).ffill().bfill().to_numpy()
         d = np.diff(t, prepend=t[:1] if len(t) else t)
         day_sorted = np.cumsum(d < -43200) - np.cumsum(d > 43200)
         day = np.empty_like(day_sorted)

@@ -95,6 +95,9 @@ def _editions(editions: list[str] | dict | None) -> dict[int, str]:
                 resolve_edition(cat, ed)
             except ValueError as exc:
                 raise OptionError(f"--edition {cat}={ed}: {exc}") from None
+        if out.get(cat, ed) != ed:
+            raise OptionError(f"--edition {cat}={ed}: CAT{cat:03d} is already pinned to {out[cat]}; give one "
+                              "edition per category")
         out[cat] = ed
     return out
 
@@ -107,16 +110,27 @@ def _sha256(path: Path, chunk: int = 1 << 20) -> str:
     return h.hexdigest()
 
 
+def nonempty_path(name: str, value) -> None:
+    """OptionError for an empty path (an unset shell variable): Path("") is the current directory."""
+    if value is not None and not str(value).strip():
+        raise OptionError(f"{name} {str(value)!r}: an empty path")
+
+
 def _inputs(paths: list[str | Path], warnings: list[str]) -> list[Path]:
     """Readable input files; the same content given twice is skipped with a warning."""
     if not paths:
         raise OptionError("no input file given")
+    for p in paths:
+        nonempty_path("input", p)
     out, seen = [], {}
     for p in map(Path, paths):
         if not p.exists():
             raise OptionError(f"{p}: input file does not exist")
         if p.is_dir():
             raise OptionError(f"{p}: input is a directory, not a recording")
+        if not p.is_file():  # reading a FIFO blocks, and its bytes could be read only once
+            raise OptionError(f"{p}: input is not a regular file (a FIFO, socket or device); "
+                              "give a recording file")
         if not os.access(p, os.R_OK):
             raise OptionError(f"{p}: input file is not readable")
         digest = _sha256(p)
@@ -132,6 +146,7 @@ def _output(name: str, path: str | Path | None, suffixes: tuple[str, ...]) -> Pa
     """An output path with an allowed suffix, not a directory, in a writable directory."""
     if path is None:
         return None
+    nonempty_path(name, path)
     p = Path(path)
     if p.suffix.lower() not in suffixes:
         raise OptionError(f"{name} {p}: must end in {' or '.join(suffixes)}")
@@ -144,6 +159,19 @@ def _output(name: str, path: str | Path | None, suffixes: tuple[str, ...]) -> Pa
     if not writable or not _can_create(parent):
         raise OptionError(f"{name} {p}: not writable (directory {parent})")
     return p
+
+
+def spare_inputs(inputs, outputs: list[tuple[str, Path | None]]) -> None:
+    """OptionError when an output (a ``(what, path)`` pair: the option and the file it writes) is one of the
+    inputs, by any path or link: writing it would destroy the recording before or while it is read."""
+    given = [Path(p) for p in inputs if Path(p).is_file()]
+    for what, out in outputs:
+        if out is None or not Path(out).is_file():
+            continue
+        for p in given:
+            if os.path.samefile(out, p):
+                also = "" if what.endswith(str(out)) else f" (it writes {out})"
+                raise OptionError(f"{what}{also}: is the input {p}; writing it would destroy the recording")
 
 
 def _can_create(directory: Path) -> bool:
@@ -161,6 +189,7 @@ def _can_create(directory: Path) -> bool:
 def _sensors(path: str | Path | None) -> pd.DataFrame:
     if path is None:
         raise OptionError("--sensors: the sensor file (TOML [[sensor]] tables) is required")
+    nonempty_path("--sensors", path)
     from pipeline.model.sensors import read_sensors
 
     p = Path(path)
@@ -281,10 +310,11 @@ def validate(options) -> Checked:
     inputs, editions = _check_decoding(options, warnings)
     checked = Checked(inputs, editions, warnings=warnings)
     if isinstance(options, AircraftOptions):
+        from pipeline.report.tables import TABLE_FILES, TABLE_MODES, parquet_path
+
         _check_aircraft(options)
         if isinstance(options, CorrelateOptions):
             from pipeline.correlate.correlation import PAIRS
-            from pipeline.report.tables import TABLE_FILES, TABLE_MODES, parquet_path
 
             _number("--slot", options.slot_s, *SLOT_RANGE_S, " s")
             if options.pairs not in PAIRS:
@@ -317,6 +347,12 @@ def validate(options) -> Checked:
             for png in _figures_beside(checked.output, options, checked.sensors):
                 if png.is_dir():
                     raise OptionError(f"-o {checked.output}: its figure {png} is a directory")
+        if checked.output is not None:
+            out = checked.output
+            beside = [out.with_name(f"{out.stem}_tracks.png"), *(parquet_path(out, n) for n in TABLE_FILES),
+                      *_figures_beside(out, options, checked.sensors)]
+            spare_inputs(options.inputs, [(f"-o {out}", out)] + [(f"-o {out}", p) for p in beside])
+        spare_inputs(options.inputs, [(f"--json {checked.json}", checked.json)])
         odd = checked.sensors[~checked.sensors["altitude_m"].between(*SITE_ALTITUDE_RANGE_M)]
         lo, hi = SITE_ALTITUDE_RANGE_M
         warnings += [f"--sensors {options.sensors}: {row.name!r} altitude_m = {row.altitude_m:g} is "
@@ -326,6 +362,10 @@ def validate(options) -> Checked:
         _number("--chunk-mb", options.chunk_mb, *CHUNK_RANGE_MB, " MB")
     if isinstance(options, DecodeOptions):
         checked.output = _output("-o", options.output, (".csv", ".parquet"))
+        if checked.output is not None:
+            out = checked.output
+            spare_inputs(options.inputs, [(f"-o {out}", p) for p in (
+                out, *(out.with_name(f"{out.stem}_cat{c:03d}{out.suffix}") for c in (21, 48)))])
         bad = [c for c in options.categories if c not in (21, 48)]
         if bad:
             raise OptionError(f"--category {bad[0]}: must be 21 or 48")
@@ -339,7 +379,7 @@ def validate(options) -> Checked:
 def _load(options: DecodingOptions, checked: Checked, progress: Progress | None) -> Loaded:
     """Decode the inputs for measurements: only the columns build_measurements reads are decoded."""
     from asterix.errors import UnreadableInput
-    from pipeline.model.measurements import DECODED_COLUMNS
+    from pipeline.model.measurements import DECODED_COLUMNS, impossible_positions
 
     try:
         loaded = load(checked.inputs, editions=checked.editions or None, date=options.date,
@@ -349,6 +389,7 @@ def _load(options: DecodingOptions, checked: Checked, progress: Progress | None)
     spans = [_time_spans(rec.frames, loaded.date) for rec in loaded.recordings]
     checked.warnings += _order_warnings(checked.inputs, spans)
     checked.warnings += _date_ignored(options, loaded.inputs)
+    checked.warnings += impossible_positions(loaded.frames.get(21))
     return loaded
 
 
@@ -398,10 +439,9 @@ def _measurements(loaded: Loaded, sensors: pd.DataFrame, sensors_path: str,
     from pipeline.model.measurements import build_measurements
     from pipeline.model.sensors import UnknownRadar, sensor_toml_snippet
 
-    if 48 not in loaded.frames or loaded.frames[48].empty:
-        raise JobError("no radar (CAT048) records in the inputs")
-    if 21 not in loaded.frames or loaded.frames[21].empty:
-        raise JobError("no ADS-B (CAT021) records in the inputs")
+    for cat, name in ((48, "radar"), (21, "ADS-B")):
+        if cat not in loaded.frames or loaded.frames[cat].empty:
+            raise JobError(f"no {name} (CAT{cat:03d}) records in the inputs{_all_failed(loaded, cat)}")
     try:
         return build_measurements(loaded.frames[48], loaded.frames[21], sensors, date=loaded.date,
                                   adsb_sigma_m=adsb_sigma_m)
@@ -409,6 +449,19 @@ def _measurements(loaded: Loaded, sensors: pd.DataFrame, sensors_path: str,
         lines = "\n\n".join(sensor_toml_snippet(sac, sic) for sac, sic in exc.missing)
         raise JobError(f"radar SAC/SIC {', '.join(f'{a}/{b}' for a, b in exc.missing)} not in "
                        f"{sensors_path}; add its position:\n\n{lines}") from exc
+
+
+def _all_failed(loaded: Loaded, cat: int) -> str:
+    """What to add when a category has no record: how many of its blocks failed, and under which edition
+    (a wrong pin fails every block: nothing on the wire says which CAT021 edition a stream uses)."""
+    errors = loaded.errors
+    failed = int((errors["category"] == cat).sum()) if "category" in errors else 0
+    if not failed:
+        return ""
+    edition = loaded.editions.get(cat)
+    hint = (f" under edition {edition}; if that edition is wrong, pin the right one or try --edition 21=auto"
+            if cat == 21 and edition else f" under edition {edition}" if edition else "")
+    return f": {failed} CAT{cat:03d} block(s) could not be decoded{hint} ('msdc stats' lists them)"
 
 
 def mark_once(meas: pd.DataFrame, *, split_adsb: bool = False, jumps: bool = True) -> pd.DataFrame:

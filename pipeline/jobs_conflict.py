@@ -104,7 +104,11 @@ def validate(options: ConflictOptions) -> Checked:
     if checked.output.suffix.lower() == ".csv":
         for extra in companion_paths(checked.output).values():
             jobs._output("-o", extra, (".csv",))
+    beside = companion_paths(checked.output).values() if checked.output.suffix.lower() == ".csv" else ()
+    jobs.spare_inputs(options.inputs, [(f"-o {checked.output}", p) for p in (checked.output, *beside)]
+                      + [(f"--json {checked.json}", checked.json)])
     if options.figures is not None:
+        jobs.nonempty_path("--figures", options.figures)
         d = Path(options.figures)
         if d.exists() and not d.is_dir():
             raise OptionError(f"--figures {d}: exists and is not a directory")

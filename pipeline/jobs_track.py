@@ -93,7 +93,10 @@ def validate(options: TrackOptions) -> Checked:
     _sources(options.sources)
     checked.output = jobs._output("-o", options.output, (".csv", ".parquet"))
     checked.json = jobs._output("--json", options.json, (".json",))
+    jobs.spare_inputs(options.inputs, [(f"-o {checked.output}", checked.output),
+                                       (f"--json {checked.json}", checked.json)])
     if options.figures is not None:
+        jobs.nonempty_path("--figures", options.figures)
         d = Path(options.figures)
         if d.exists() and not d.is_dir():
             raise OptionError(f"--figures {d}: exists and is not a directory")

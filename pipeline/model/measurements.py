@@ -3,7 +3,8 @@
 Radar slant range and azimuth (I048/040, else x/y of I048/042) become WGS-84 positions from the radar site
 at the height of the flight level; ADS-B positions come from I021/131 or /130. Each row gets its absolute
 UTC ``time``, its sensor, its aircraft identity (pipeline.model.identity) and its horizontal position
-covariance. Rows without a position or a time are dropped.
+covariance. Rows without a position or a time are dropped, and so are ADS-B positions no aircraft can have
+(latitude beyond 90 deg or longitude beyond 180 deg: damaged bytes; ``impossible_positions`` names them).
 """
 
 from __future__ import annotations
@@ -26,8 +27,8 @@ from pipeline.model.sensors import UnknownRadar, sensor_sites
 from pipeline.model.time import absolute_time
 
 __all__ = ["DECODED_COLUMNS", "NACP_95_M", "UnknownRadar", "adsb_measurements", "build_measurements",
-           "nacp_sigma_m", "normalise_address", "normalise_callsign", "radar_measurements", "select",
-           "sensor_id"]
+           "impossible_positions", "nacp_sigma_m", "normalise_address", "normalise_callsign",
+           "radar_measurements", "select", "sensor_id"]
 
 # The decoded CAT048/CAT021 columns build_measurements reads (besides sac, sic, time_of_day, day, timestamp
 # and offset, which every decoded frame has): jobs decode only these (asterix.read(columns=...))
@@ -174,8 +175,30 @@ def _adsb_rows(cat021: pd.DataFrame, date: dt.date | None, adsb_sigma_m: float |
     if adsb_sigma_m is not None:
         var = np.where(out["nacp"].isna().to_numpy(bool), float(adsb_sigma_m) ** 2, var)
     out["cov_ee_m2"], out["cov_en_m2"], out["cov_nn_m2"] = var, np.where(np.isnan(var), np.nan, 0.0), var
-    keep = out[["time", "latitude", "longitude"]].notna().all(axis=1)
+    keep = out[["time", "latitude", "longitude"]].notna().all(axis=1) & _on_earth(out)
     return out[keep]
+
+
+def _on_earth(frame: pd.DataFrame) -> pd.Series:
+    """Whether each row's latitude is within +-90 deg and its longitude within +-180 deg (False if absent)."""
+    return frame["latitude"].abs().le(90.0) & frame["longitude"].abs().le(180.0)
+
+
+def impossible_positions(cat021: pd.DataFrame | None) -> list[str]:
+    """One warning per input file whose CAT021 reports carry a position off the Earth (I021/130 and /131
+    can encode latitudes up to 180 and 360 deg): how many, and the first one's offset and value."""
+    if cat021 is None or not {"latitude", "longitude"} <= set(cat021):
+        return []
+    present = cat021["latitude"].notna() & cat021["longitude"].notna()
+    bad = cat021[(present & ~_on_earth(cat021)).to_numpy(bool)]
+    files = bad["file"] if "file" in bad else pd.Series("input", index=bad.index)
+    out = []
+    for name, rows in bad.groupby(files.astype(str).to_numpy(), sort=False):
+        first = rows.iloc[0]
+        out.append(f"{name}: {len(rows)} CAT021 report(s) with a position off the Earth (first at offset "
+                   f"{first['offset']}: latitude {first['latitude']:.4f}, longitude "
+                   f"{first['longitude']:.4f}): damaged data, left out of the measurements")
+    return out
 
 
 def build_measurements(cat048: pd.DataFrame | None = None, cat021: pd.DataFrame | None = None,

@@ -17,8 +17,11 @@ SENSOR_COLUMNS = [*REQUIRED_COLUMNS, *OPTIONAL_DEFAULTS]
 _NUMBER = (int, float)
 _TYPES = {"name": (str,), "sac": (int,), "sic": (int,), "latitude": _NUMBER, "longitude": _NUMBER,
           "altitude_m": _NUMBER, "sigma_range_m": _NUMBER, "sigma_azimuth_deg": _NUMBER}
+# altitude_m: the geometry needs a finite height; past +-100 km it is no radar site (a plausible range,
+# -500 to 6000 m, only warns: pipeline.jobs)
 _RANGES = {"sac": (0, 255), "sic": (0, 255), "latitude": (-90.0, 90.0), "longitude": (-180.0, 180.0),
-           "sigma_range_m": (0.001, 10_000.0), "sigma_azimuth_deg": (0.0001, 10.0)}
+           "altitude_m": (-100_000.0, 100_000.0), "sigma_range_m": (0.001, 10_000.0),
+           "sigma_azimuth_deg": (0.0001, 10.0)}
 
 
 class UnknownRadar(ValueError):
@@ -35,6 +38,13 @@ def _check_entry(path: Path, i: int, entry: object) -> dict:
     where = f"{path}: [[sensor]] entry {i + 1}"
     if not isinstance(entry, dict):
         raise ValueError(f"{where} is not a table")
+    unknown = [k for k in entry if k not in SENSOR_COLUMNS]
+    if unknown:  # a misspelt optional key would silently leave its default in place
+        import difflib
+
+        near = difflib.get_close_matches(unknown[0], SENSOR_COLUMNS, n=1)
+        hint = f"did you mean {near[0]}? " if near else ""
+        raise ValueError(f"{where}: unknown key {unknown[0]!r} ({hint}allowed: {', '.join(SENSOR_COLUMNS)})")
     missing = [k for k in REQUIRED_COLUMNS if k not in entry]
     if missing:
         raise ValueError(f"{where} lacks {', '.join(missing)} (needs {', '.join(REQUIRED_COLUMNS)})")
@@ -62,6 +72,8 @@ def read_sensors(path: str | Path) -> pd.DataFrame:
             doc = tomllib.load(fh)
     except tomllib.TOMLDecodeError as exc:
         raise ValueError(f"{path}: not valid TOML: {exc}") from exc
+    except UnicodeDecodeError as exc:
+        raise ValueError(f"{path}: not valid TOML: byte {exc.start} is not UTF-8 ({exc.reason})") from exc
     entries = doc.get("sensor")
     if not isinstance(entries, list) or not entries:
         raise ValueError(f"{path}: no [[sensor]] tables found")

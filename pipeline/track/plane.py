@@ -30,6 +30,7 @@ class PlaneRun:
     P: np.ndarray
     zv: np.ndarray
     Pv: np.ndarray
+    t_fl: np.ndarray | None = None  # time of the last accepted flight level behind each row (NaN: none)
 
     @property
     def accepted(self) -> np.ndarray:
@@ -80,7 +81,27 @@ def filter_plane(config: TrackerConfig, t, ze, zn, cov_ee, cov_en, cov_nn, *, fl
                args["tpm_param"], args["tpm_param2"], args["gate_d2"], args["max_coast_s"],
                args["restart_after"], args["q_fl"], args["var_fl"],
                status, nis, segment, t_state, mu, x, P, zv, Pv, True)
-    return PlaneRun(config, t, status, nis, segment, t_state, mu, x, P, zv, Pv)
+    t_fl = _last_level_time(t, status != STATUS_REJECTED, col(fl, np.nan), segment)
+    _forget_stale_levels(t_state, t_fl, config.max_coast_s, zv, Pv)
+    return PlaneRun(config, t, status, nis, segment, t_state, mu, x, P, zv, Pv, t_fl)
+
+
+def _last_level_time(t, accepted, fl, segment) -> np.ndarray:
+    """Per row, the time of the last accepted report with a flight level in its segment up to it (NaN if
+    none): the vertical filter has seen nothing newer."""
+    has = accepted & np.isfinite(fl)
+    last = np.maximum.accumulate(np.where(has, np.arange(len(t)), -1)) if len(t) else np.zeros(0, int)
+    ok = (last >= 0) & (segment[np.maximum(last, 0)] == segment)
+    return np.where(ok, t[np.maximum(last, 0)], np.nan)
+
+
+def _forget_stale_levels(t, t_fl, max_coast_s: float, zv, Pv) -> None:
+    """The flight level is extrapolated at most max_coast_s past its last report, like the position: past
+    that (an aircraft that stopped reporting its level, e.g. on the surface) it is unknown (NaN), not the
+    last vertical rate flown on for minutes."""
+    stale = (t - t_fl) > max_coast_s
+    zv[stale] = np.nan
+    Pv[stale] = np.nan
 
 
 def estimate(run: PlaneRun, times, *, smooth: bool = False, smoother: str = "rts") -> Estimates:
@@ -108,6 +129,8 @@ def estimate(run: PlaneRun, times, *, smooth: bool = False, smoother: str = "rts
     predict_rows(gov, dt, args["kinds"], args["omegas"], args["qs"], args["tpm_kind"], args["tpm_param"],
                  args["tpm_param2"], args["q_fl"], args["coast_substep_s"], run.mu, run.x, run.P, run.zv,
                  run.Pv, xc, Pc, mu, zv, Pv)
+    if run.t_fl is not None:
+        _forget_stale_levels(qt, run.t_fl[gov], run.config.max_coast_s, zv, Pv)
     if smooth:
         xs = np.empty_like(xc)
         Ps = np.empty_like(Pc)

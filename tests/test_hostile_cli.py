@@ -1,0 +1,270 @@
+"""A user's hostile inputs on the command line: special files, outputs that are inputs, damaged positions,
+odd sensor files. Each run either works or fails with one line naming the file or option and the reason,
+with no traceback, and a failed run writes nothing."""
+
+from __future__ import annotations
+
+import os
+import threading
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from pipeline import jobs
+from pipeline.cli import main
+
+FIX = Path(__file__).resolve().parents[1] / "fixtures"
+RADAR, ADSB, SENSORS = FIX / "radar.ast", FIX / "adsb.ast", FIX / "sensors.toml"
+
+
+def _run(argv: list[str], capsys) -> tuple[int, str, str]:
+    try:
+        status = main([str(a) for a in argv])
+    except SystemExit as exc:  # argparse's usage errors
+        status = exc.code
+    out, err = capsys.readouterr()
+    return status, out, err
+
+
+@pytest.mark.skipif(not hasattr(os, "mkfifo"), reason="no FIFOs on this system")
+def test_a_fifo_input_is_refused_not_read(tmp_path):
+    """A FIFO's bytes can be read once only (the digest that spots repeated inputs would eat them) and
+    opening one blocks until a writer comes: it is refused by name. A writer is provided so that a
+    version that reads it does not hang the test but passes validation, which fails the test."""
+    fifo = tmp_path / "live.ast"
+    os.mkfifo(fifo)
+
+    def writer():
+        with open(fifo, "wb") as fh:
+            fh.write(RADAR.read_bytes())
+
+    threading.Thread(target=writer, daemon=True).start()
+    try:
+        with pytest.raises(jobs.OptionError, match="live.ast: input is not a regular file"):
+            jobs.validate(jobs.StatsOptions(inputs=(str(fifo),)))
+    finally:  # release the writer if it is still waiting for a reader
+        fd = os.open(fifo, os.O_RDONLY | os.O_NONBLOCK)
+        os.close(fd)
+
+
+@pytest.mark.skipif(not Path("/dev/null").exists(), reason="no /dev/null")
+def test_a_device_input_is_refused_by_name(capsys):
+    status, _, err = _run(["stats", "/dev/null"], capsys)
+    assert status == 2
+    assert err.strip() == "msdc stats: /dev/null: input is not a regular file (a FIFO, socket or device); " \
+                          "give a recording file"
+
+
+# (id, the input's name in tmp_path (a copy of the radar fixture), argv after the command's own words,
+#  the option that names it); {IN} is the copied input, {D} the directory
+CORR = ["correlate", "{IN}", "{A}", "--sensors", "{S}", "--callsign", "MAS72"]
+SPARE = [
+    ("decode-o", "rec.csv", ["decode", "{IN}", "{A}", "-o", "{IN}"], "-o {IN}"),
+    ("decode-category-file", "out_cat048.csv", ["decode", "{IN}", "{A}", "-o", "{D}/out.csv"],
+     "-o {D}/out.csv"),
+    ("correlate-json", "rec.json", [*CORR, "--json", "{IN}"], "--json {IN}"),
+    ("correlate-figure", "r_tracks.png", [*CORR, "-o", "{D}/r.xlsx"], "-o {D}/r.xlsx"),
+    ("quality-o", "rec.xlsx", ["quality", "{IN}", "{A}", "--sensors", "{S}", "--all", "-o", "{IN}"],
+     "-o {IN}"),
+    ("track-o", "rec.parquet", ["track", "{IN}", "{A}", "--sensors", "{S}", "--all", "-o", "{IN}"],
+     "-o {IN}"),
+    ("conflicts-o", "rec.csv", ["conflicts", "{IN}", "{A}", "--sensors", "{S}", "-o", "{IN}"], "-o {IN}"),
+    ("conflicts-companion", "c_losses.csv", ["conflicts", "{IN}", "{A}", "--sensors", "{S}",
+                                             "-o", "{D}/c.csv"], "-o {D}/c.csv"),
+]
+
+
+@pytest.mark.parametrize(("name", "argv", "option"), [c[1:] for c in SPARE], ids=[c[0] for c in SPARE])
+def test_an_output_that_is_an_input_is_refused_and_the_input_kept(name, argv, option, tmp_path, capsys):
+    """Recordings may carry any name: an output (or a file written beside it) that is one of the inputs
+    would overwrite the recording. It is refused before anything is read or written."""
+    recording = tmp_path / name
+    recording.write_bytes(RADAR.read_bytes())
+    values = {"IN": recording, "A": ADSB, "S": SENSORS, "D": tmp_path}
+    status, _, err = _run([a.format(**values) for a in argv], capsys)
+    assert status == 2, err
+    lines = err.strip().splitlines()
+    assert len(lines) == 1 and "Traceback" not in err
+    assert lines[0].startswith(f"msdc {argv[0]}: {option.format(**values)}")
+    assert lines[0].endswith(f"is the input {recording}; writing it would destroy the recording")
+    assert recording.read_bytes() == RADAR.read_bytes()
+    assert sorted(p.name for p in tmp_path.iterdir()) == [name]
+
+
+def test_an_output_linked_to_an_input_is_refused(tmp_path, capsys):
+    """The same file under another name (a hard link) is still the input."""
+    recording = tmp_path / "rec.ast"
+    recording.write_bytes(RADAR.read_bytes())
+    os.link(recording, tmp_path / "out.csv")
+    status, _, err = _run(["decode", recording, "-o", tmp_path / "out.csv"], capsys)
+    assert status == 2 and f"is the input {recording}" in err
+    assert recording.read_bytes() == RADAR.read_bytes()
+
+
+def _mas72(tmp_path: Path, cat: int, latitude_of_row: dict[int, float] | None = None) -> Path:
+    """The fixture's MAS72 reports of one category from 08:00 to 08:10 as a raw file, with the latitudes
+    of some rows (by position) replaced."""
+    import asterix
+    from asterix.encode import encode_frame
+
+    f = asterix.read(RADAR if cat == 48 else ADSB).frames[cat]
+    f = f[(f.callsign == "MAS72") & f.time_of_day.between(28800, 29400)].copy()
+    for row, lat in (latitude_of_row or {}).items():
+        f.iloc[row, f.columns.get_loc("latitude")] = lat
+    p = tmp_path / f"cat{cat:03d}.ast"
+    p.write_bytes(encode_frame(cat, f))
+    return p
+
+
+@pytest.mark.parametrize("command", ["correlate", "quality", "track", "conflicts"])
+def test_an_adsb_position_off_the_earth_is_named_and_left_out(command, tmp_path, capsys):
+    """I021/131 encodes latitudes up to 360 deg: a damaged report may carry one. The run goes on without
+    it and a warning names the file, the count, the first report's offset and value."""
+    import asterix
+
+    radar, adsb = _mas72(tmp_path, 48), _mas72(tmp_path, 21, {5: 120.0, 9: -95.0})
+    frame = asterix.read(adsb).frames[21]
+    assert frame["latitude"].iloc[5] == pytest.approx(120.0, abs=1e-6)  # the damage is in the file
+    out = tmp_path / "out"
+    out.mkdir()
+    argv = [command, radar, adsb, "--sensors", SENSORS, "--date", "2019-03-01"]
+    argv += {"correlate": ["--callsign", "MAS72", "--json", out / "c.json"],
+             "quality": ["--callsign", "MAS72", "--json", out / "q.json"],
+             "track": ["--callsign", "MAS72", "--json", out / "t.json", "--noise", "declared"],
+             "conflicts": ["-o", out / "k.csv", "--step", "10"]}[command]
+    status, _, err = _run(argv, capsys)
+    assert status == 0, err
+    assert "Traceback" not in err
+    assert (f"msdc {command}: warning: cat021.ast: 2 CAT021 report(s) with a position off the Earth "
+            f"(first at offset {int(frame['offset'].iloc[5])}: latitude 120.0000, longitude "
+            f"{frame['longitude'].iloc[5]:.4f}): damaged data, left out of the measurements") in err
+
+
+def test_measurements_leave_out_adsb_positions_off_the_earth(tmp_path):
+    import asterix
+    from pipeline.model.measurements import build_measurements
+
+    frame = asterix.read(_mas72(tmp_path, 21, {3: 91.0})).frames[21]
+    frame.loc[7, "longitude"] = -180.5
+    meas = build_measurements(None, frame, date=None)
+    assert len(meas) == len(frame) - 2
+    assert set(meas["offset"]) == set(frame["offset"]) - {frame["offset"].iloc[3], frame["offset"].iloc[7]}
+
+
+@pytest.mark.parametrize("altitude", ["nan", "inf", "-inf", "1e300", "-100001.0"])
+def test_a_sensor_altitude_that_is_no_height_is_refused_by_name(altitude, tmp_path, capsys):
+    """A NaN, infinite or absurd antenna height used to put every plot at NaN and end in a traceback after
+    decoding; it is refused with the file, the entry and the value before anything is decoded."""
+    sensors = tmp_path / "s.toml"
+    sensors.write_text(SENSORS.read_text().replace("altitude_m = 40.0", f"altitude_m = {altitude}"))
+    status, _, err = _run(["correlate", RADAR, ADSB, "--sensors", sensors, "--callsign", "MAS72"], capsys)
+    assert status == 1
+    value = repr(float(altitude))
+    assert err.strip() == (f"msdc correlate: {sensors}: [[sensor]] entry 1: altitude_m = {value} is outside "
+                           "-100000.0..100000.0")
+
+
+def test_a_sensor_file_that_is_not_utf8_is_named(tmp_path, capsys):
+    """TOML is UTF-8: a Latin-1 file (a site name with an accent) is refused naming the file and byte."""
+    sensors = tmp_path / "s.toml"
+    sensors.write_bytes(SENSORS.read_bytes().replace(b"KLIA MSSR", b"Barcelona Montseny \xe9"))
+    status, _, err = _run(["correlate", RADAR, ADSB, "--sensors", sensors, "--callsign", "MAS72"], capsys)
+    at = SENSORS.read_bytes().index(b"KLIA MSSR") + len(b"Barcelona Montseny ")
+    assert status == 1
+    assert err.strip() == (f"msdc correlate: {sensors}: not valid TOML: byte {at} is not UTF-8 "
+                           "(invalid continuation byte)")
+
+
+def test_a_misspelt_sensor_key_is_refused_not_ignored(tmp_path, capsys):
+    """``sigma_range = 30`` (without _m) used to be ignored, leaving the 70 m default in every covariance
+    without a word; an unknown key is refused with the nearest allowed one."""
+    sensors = tmp_path / "s.toml"
+    sensors.write_text(SENSORS.read_text() + "sigma_range = 30.0\n")
+    argv = ["track", RADAR, ADSB, "--sensors", sensors, "--all", "--json", tmp_path / "t.json"]
+    status, _, err = _run(argv, capsys)
+    assert status == 1
+    assert err.strip() == (f"msdc track: {sensors}: [[sensor]] entry 1: unknown key 'sigma_range' (did you "
+                           "mean sigma_range_m? allowed: name, sac, sic, latitude, longitude, altitude_m, "
+                           "sigma_range_m, sigma_azimuth_deg)")
+    assert not (tmp_path / "t.json").exists()
+
+
+def test_stats_with_a_category_whose_every_block_failed(capsys):
+    """The fixture's CAT021 is edition 2.7; pinned to 0.26 none of its blocks walks. stats lists the radar
+    and the skipped blocks (a KeyError traceback before); alone, the ADS-B file decodes nothing: exit 1."""
+    status, out, err = _run(["stats", RADAR, ADSB, "--edition", "21=0.26"], capsys)
+    assert status == 0, err
+    assert "Traceback" not in err
+    cats = out.split("Records per category:")[1].split("\n\n")[0]
+    assert "48" in cats and "21" not in cats
+    skipped = out.split("Skipped blocks by reason:")[1].split("\n\n")[0]
+    assert "none" not in skipped and "21" in skipped
+    status, out, err = _run(["stats", ADSB, "--edition", "21=0.26"], capsys)
+    assert status == 1 and "Traceback" not in err
+    assert err.strip().endswith("msdc: nothing could be decoded")
+
+
+def test_two_different_pins_of_one_category_are_refused(tmp_path, capsys):
+    """The last of two pins used to win silently; the same pin twice is harmless."""
+    status, _, err = _run(["decode", RADAR, "--edition", "21=0.26", "--edition", "21=2.7",
+                           "-o", tmp_path / "o.csv"], capsys)
+    assert status == 2
+    assert err.strip() == ("msdc decode: --edition 21=2.7: CAT021 is already pinned to 0.26; give one "
+                           "edition per category")
+    assert not list(tmp_path.iterdir())
+    assert _run(["decode", RADAR, "--edition", "48=1.27", "--edition", "48=1.27"], capsys)[0] == 0
+
+
+@pytest.mark.parametrize("bad_tod", [120000.0, 86400.0, 131071.0])
+def test_one_time_of_day_past_midnight_moves_no_other_report(bad_tod, tmp_path, capsys):
+    """A raw recording counts midnights from its times of day in file order. One damaged I048/140 of
+    120000 s (the 24-bit field reaches 131072 s) in an 08:00-11:20 recording used to look like a jump
+    back of a day and forth again, and put every other report on the next day."""
+    import asterix
+    from asterix.encode import encode_frame
+
+    frame = asterix.read(RADAR).frames[48]
+    i = len(frame) // 2
+    damaged = frame.copy()
+    damaged.iloc[i, damaged.columns.get_loc("time_of_day")] = bad_tod
+    path = tmp_path / "r.ast"
+    path.write_bytes(encode_frame(48, damaged))
+    good = asterix.read(RADAR, date="2019-03-01").frames[48]["timestamp"]
+    got = asterix.read(path, date="2019-03-01").frames[48]
+    others = np.arange(len(frame)) != i
+    assert (got["day"].to_numpy()[others] == 0).all()
+    assert (got["timestamp"][others] == good[others]).all()
+    status, out, _ = _run(["stats", path, "--date", "2019-03-01"], capsys)
+    assert status == 0
+    assert "2019-03-01 08:00:02" in out.split("Records per SAC/SIC")[0]
+
+
+def test_a_wrong_edition_pin_is_suggested_when_no_adsb_record_decodes(capsys):
+    """The fixture's CAT021 is edition 2.7: pinned to 0.26, no block walks. The message said only 'no ADS-B
+    records'; it now says the blocks failed under that edition and what to try."""
+    status, _, err = _run(["correlate", RADAR, ADSB, "--sensors", SENSORS, "--callsign", "MAS72",
+                           "--edition", "21=0.26"], capsys)
+    assert status == 1
+    assert ("msdc correlate: no ADS-B (CAT021) records in the inputs: 2 CAT021 block(s) could not be decoded "
+            "under edition 0.26; if that edition is wrong, pin the right one or try --edition 21=auto "
+            "('msdc stats' lists them)") in err
+
+
+@pytest.mark.parametrize(("argv", "option"), [
+    (["stats", ""], "input"),
+    (["correlate", RADAR, ADSB, "--sensors", "", "--all"], "--sensors"),
+    (["correlate", RADAR, ADSB, "--sensors", SENSORS, "--all", "-o", ""], "-o"),
+    (["quality", RADAR, ADSB, "--sensors", SENSORS, "--all", "--json", " "], "--json"),
+    (["track", RADAR, ADSB, "--sensors", SENSORS, "--all", "--figures", ""], "--figures"),
+    (["conflicts", RADAR, ADSB, "--sensors", SENSORS, "-o", "c.csv", "--figures", ""], "--figures"),
+], ids=["input", "sensors", "output", "json", "track-figures", "conflicts-figures"])
+def test_an_empty_path_is_named_as_empty(argv, option, tmp_path, monkeypatch, capsys):
+    """An unset shell variable gives an empty path, which Path() reads as '.': messages said '-o .: must
+    end in .xlsx' or '.: input is a directory', and --figures '' drew into the current directory."""
+    monkeypatch.chdir(tmp_path)
+    status, _, err = _run(argv, capsys)
+    assert status == 2
+    value = argv[argv.index(option) + 1] if option != "input" else ""
+    assert err.strip() == f"msdc {argv[0]}: {option} {value!r}: an empty path"
+    assert not list(tmp_path.iterdir())
