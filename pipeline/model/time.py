@@ -33,8 +33,11 @@ def absolute_time(frame: pd.DataFrame, fallback_date: dt.date | None = None) -> 
     out = pd.Series(pd.DatetimeIndex(ns.astype("datetime64[ns]")).tz_localize("UTC"), index=frame.index)
     out[~ok] = pd.NaT
     if "timestamp" in frame:
-        stamps = pd.Series(frame["timestamp"].to_numpy(), index=frame.index)
-        stamps = pd.to_datetime(stamps, utc=True)
+        stamps = frame["timestamp"]
+        if isinstance(stamps.dtype, pd.DatetimeTZDtype):  # decoded frames: no per-row objects
+            stamps = stamps.dt.tz_convert("UTC")
+        else:
+            stamps = pd.to_datetime(pd.Series(stamps.to_numpy(), index=frame.index), utc=True)
         out = stamps.where(stamps.notna(), out)
     return out.astype(UTC_DTYPE)
 
