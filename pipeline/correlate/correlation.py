@@ -7,6 +7,7 @@ y[i - d]. A positive peak lag d means the radar series repeats the ADS-B series 
 
 from __future__ import annotations
 
+import itertools
 import math
 
 import numpy as np
@@ -22,8 +23,7 @@ from pipeline.correlate.results import (
 )
 from pipeline.correlate.slots import slot_count, slot_window
 from pipeline.correlate.windows import in_window, overlap_windows, short_window_reason
-from pipeline.model.aircraft import Aircraft, NoSuchAircraft, one_aircraft
-from pipeline.model.aircraft import all_aircraft as every_aircraft
+from pipeline.model.aircraft import Aircraft, NoSuchAircraft, iter_aircraft, one_aircraft
 from pipeline.model.dedup import duplicate_mask, sort_by_time
 from pipeline.model.geodesy import distance_m
 from pipeline.model.jumps import JUMP_FLAG_COLUMNS, detect_jumps
@@ -356,13 +356,16 @@ def correlate(meas: pd.DataFrame, *, callsign: str | None = None, address: str |
         **({"fill": fill} if fill != "hold" else {}),  # the thesis default leaves the parameters as they were
         "date": reference.date().isoformat() if is_dated(reference) else None})
     need_adsb = pairs == "radar-adsb"
-    if all_aircraft:
-        targets = every_aircraft(meas, need_adsb=need_adsb)
-        if not targets:
+    if all_aircraft:  # one aircraft's rows at a time (iter_aircraft), not a second copy of the run
+        targets = iter_aircraft(meas, need_adsb=need_adsb)
+        first = next(targets, None)
+        if first is None:
             raise NoSuchAircraft("any aircraft", ["radar", "ADS-B"], [],
                                  "no aircraft is seen by both radar and ADS-B")
+        targets = itertools.chain([first], targets)
+        del first
     else:
-        targets = [one_aircraft(meas, callsign, address, need_adsb=need_adsb)]
+        targets = iter([one_aircraft(meas, callsign, address, need_adsb=need_adsb)])
     paired, budget = False, [0]
     for ac in targets:
         found = [_correlate_pair(ac, run, pair, slot_s, gap_s, reference, fill, budget)
