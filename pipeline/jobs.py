@@ -27,7 +27,15 @@ from pipeline.meta import FORMATS, software_version
 from pipeline.model.dedup import DEDUP_KEYS, duplicate_mask, repeat_groups
 from pipeline.model.identity import normalise_address, normalise_callsign
 from pipeline.model.jumps import JUMP_FLAG_COLUMNS, JUMP_INPUTS, jump_flags
-from pipeline.model.load import Loaded, NoRecords, load, load_measurements, time_spans, widen_spans
+from pipeline.model.load import (
+    Loaded,
+    NoRecords,
+    load,
+    load_measurements,
+    release_free_memory,
+    time_spans,
+    widen_spans,
+)
 from pipeline.model.measurements import DECODED_COLUMNS
 from pipeline.model.sensors import read_sensors
 from pipeline.progress import Progress
@@ -539,7 +547,9 @@ def _marked_measurements(options: AircraftOptions, checked: Checked, progress: P
     each window's jumps); decoded columns are held one chunk at a time (see _load_measurements).
     ``stage`` is the progress stage shown once the inputs are read."""
     loaded, meas = _load_measurements(options, checked, progress, stage)
-    return loaded, mark_once(meas, split_adsb=split_adsb)
+    meas = mark_once(meas, split_adsb=split_adsb)
+    release_free_memory()
+    return loaded, meas
 
 
 def correlate_job(options: CorrelateOptions, *, progress: Progress | None = None,

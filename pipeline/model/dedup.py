@@ -6,6 +6,7 @@ import numpy as np
 import pandas as pd
 
 DEDUP_KEYS = ["time", "latitude", "longitude", "ground_speed_kt", "heading_deg"]
+DEDUP_BLOCK_ROWS = 500_000  # rows hashed at once by duplicate_mask (whole time values per block)
 
 
 def sort_by_time(meas: pd.DataFrame) -> pd.DataFrame:
@@ -33,7 +34,23 @@ def duplicate_mask(meas: pd.DataFrame, *, split_adsb: bool = False) -> pd.Series
             source = np.where(apart, np.where(sid >= 0, sid + len(kinds), -1), kind)
         meas = meas[keys].assign(_source=source)
         keys = ["_source", *keys]
-    return meas.duplicated(subset=keys, keep="first")
+    if "time" not in keys or len(meas) <= DEDUP_BLOCK_ROWS:
+        return meas.duplicated(subset=keys, keep="first")
+    # rows at different times are never repeats: look for them among blocks of whole time values, so
+    # the hashing works on one block at a time (bounded memory), each block in frame order
+    t = pd.DatetimeIndex(meas["time"]).asi8
+    by_time = np.argsort(t, kind="stable")
+    t_sorted = t[by_time]
+    cuts = [0]
+    while cuts[-1] + DEDUP_BLOCK_ROWS < len(t):
+        cuts.append(int(np.searchsorted(t_sorted, t_sorted[cuts[-1] + DEDUP_BLOCK_ROWS], side="right")))
+    cuts.append(len(t))
+    dup = np.zeros(len(meas), bool)
+    for a, b in zip(cuts[:-1], cuts[1:], strict=True):
+        if b > a:
+            rows = np.sort(by_time[a:b])
+            dup[rows] = meas.iloc[rows].duplicated(subset=keys, keep="first").to_numpy(bool)
+    return pd.Series(dup, index=meas.index)
 
 
 def deduplicate(meas: pd.DataFrame) -> tuple[pd.DataFrame, int]:
