@@ -27,7 +27,7 @@ from pipeline.model.aircraft import Aircraft, NoSuchAircraft, iter_aircraft, one
 from pipeline.model.dedup import duplicate_mask, sort_by_time
 from pipeline.model.geodesy import distance_m
 from pipeline.model.jumps import JUMP_FLAG_COLUMNS, detect_jumps
-from pipeline.model.time import is_dated, iso_utc, midnight, with_clock
+from pipeline.model.time import is_dated, iso_utc, midnight, seconds_since, with_clock
 
 PAIRS = ("radar-adsb", "radar-radar", "all")
 # the measurement columns correlate() reads (identity, time, position, dedup keys, job-wide flags); the
@@ -347,9 +347,12 @@ def correlate(meas: pd.DataFrame, *, callsign: str | None = None, address: str |
     reference = midnight(meas["time"])
     if reference is None:
         raise NoSuchAircraft("any aircraft", ["radar", "ADS-B"], [], "there are no measurements")
-    meas = with_clock(meas, reference)
-    if fill == "hold":  # the steps below read these columns only; each window copies its rows
-        meas = meas[[c for c in dict.fromkeys(CORRELATION_INPUTS) if c in meas]]
+    if fill == "hold":  # the steps below read these columns only (time_of_day, not timestamp); each window
+        # copies its rows
+        columns = [c for c in dict.fromkeys(CORRELATION_INPUTS) if c in meas or c == "time_of_day"]
+        meas = meas.assign(time_of_day=seconds_since(meas["time"], reference))[columns]
+    else:
+        meas = with_clock(meas, reference)
     run = CorrelationRun(parameters={
         "callsign": callsign, "address": address, "all_aircraft": all_aircraft, "slot_s": slot_s,
         "gap_s": gap_s, "pairs": pairs, "split_adsb": split_adsb,

@@ -251,14 +251,14 @@ def _detect(adsb_meas: pd.DataFrame, max_speed_kt: float, robust_window: int,
     unwrapped = np.unwrap(lon, period=360.0)
     starts = np.flatnonzero(np.r_[True, seg[1:] != seg[:-1]])
     cuts = starts[np.r_[True, np.diff(starts // JUMP_BATCH_REPORTS) > 0]]
-    jump, fit_lat, fit_lon = np.zeros(pos.size, bool), np.full(pos.size, np.nan), np.full(pos.size, np.nan)
     for a, b in zip(cuts, np.r_[cuts[1:], pos.size], strict=True):
         tracks = _Tracks(t[a:b], lat[a:b], unwrapped[a:b], seg[a:b], (robust_window - 1) // 2)
-        jump[a:b], fit_lat[a:b], fit_lon[a:b] = tracks.search(max_speed_kt * KT_TO_MS, robust_threshold_m)
+        jump, fit_lat, fit_lon = tracks.search(max_speed_kt * KT_TO_MS, robust_threshold_m)
         del tracks
-    cols["jump"][pos], cols["fit_latitude"][pos], cols["fit_longitude"][pos] = jump, fit_lat, fit_lon
-    cols["jump_size_m"][pos] = distance_m(lat, lon, fit_lat, fit_lon)
-    return pd.DataFrame(cols, index=adsb_meas.index)
+        at = pos[a:b]
+        cols["jump"][at], cols["fit_latitude"][at], cols["fit_longitude"][at] = jump, fit_lat, fit_lon
+        cols["jump_size_m"][at] = distance_m(lat[a:b], lon[a:b], fit_lat, fit_lon)
+    return pd.DataFrame(cols, index=adsb_meas.index, copy=False)
 
 
 _DEFAULTS = (1000.0, 7, 2000.0)
