@@ -432,16 +432,20 @@ def mark_once(meas: pd.DataFrame, *, split_adsb: bool = False, jumps: bool = Tru
     dup = dup.to_numpy(bool)
     adsb = (meas["sensor_kind"] == "adsb").to_numpy(bool)
     judged = jump_flags(meas[[c for c in JUMP_INPUTS if c in meas]][adsb & ~dup])  # judged without repeats
+    release_free_memory()  # the search's batches leave freed heap pages behind
     # a repeated report shares the verdict of the report it repeats: per group of ADS-B rows equal in
     # every dedup key, each column takes its first non-missing value in frame order
     rows = np.flatnonzero(adsb)
     order, group = repeat_groups(meas, keys, rows)
     at = np.full(len(meas), -1)  # position of each judged row within the judged frame
     at[np.flatnonzero(adsb & ~dup)] = np.arange(len(judged))
+    in_key_order = rows[order]
+    pos_all = at[in_key_order]  # judged position of each ADS-B row, in key order
+    del at, rows
     out = {}
     for c in JUMP_FLAG_COLUMNS:
         values = judged[c].to_numpy(dtype=bool if c == "jump" else float)
-        pos = at[rows[order]]  # in key order
+        pos = pos_all
         known = pos >= 0
         if values.dtype.kind == "f":
             known[known] = ~np.isnan(values[pos[known]])
@@ -451,9 +455,12 @@ def mark_once(meas: pd.DataFrame, *, split_adsb: bool = False, jumps: bool = Tru
         lead = np.concatenate([[True], g[1:] != g[:-1]]) if g.size else np.zeros(0, bool)
         first[g[lead]] = pos[first_rows[lead]]
         src = first[group]
+        del first, first_rows, g, lead, known
         column = np.zeros(len(meas), bool) if c == "jump" else np.full(len(meas), np.nan)
-        column[rows[order[src >= 0]]] = values[src[src >= 0]]
+        has = src >= 0
+        column[in_key_order[has]] = values[src[has]]
         out[c] = column
+        del src, has, values
     return meas.assign(duplicate=dup, **out)
 
 

@@ -66,9 +66,13 @@ def assign_aircraft_id(meas: pd.DataFrame) -> pd.Series:
     together anywhere in the run, so it is worked out once per distinct combination of the three."""
     parts = [text_categorical(meas[c]) for c in ("address", "callsign", "mode3a")]
     key = np.zeros(len(meas), np.int64)
-    for part in parts:  # codes -1..n-1 of each column, packed into one integer per row
-        key = key * (len(part.cat.categories) + 1) + (part.cat.codes.to_numpy(np.int64) + 1)
-    _, first, row_combo = np.unique(key, return_index=True, return_inverse=True)
+    for part in parts:  # codes -1..n-1 of each column, packed into one integer per row (in place)
+        key *= len(part.cat.categories) + 1
+        key += part.cat.codes.to_numpy(np.int64)
+        key += 1
+    row_combo, _ = pd.factorize(key)  # combinations in order of first appearance (hashing: few of them)
+    first = np.flatnonzero(~pd.Series(key).duplicated().to_numpy())  # the row where each first appears
+    del key
     triples = pd.DataFrame({c: p.iloc[first].astype("string").reset_index(drop=True)
                             for c, p in zip(("address", "callsign", "mode3a"), parts, strict=True)})
     ident = triples["address"].fillna(_unique_address(triples, "callsign"))

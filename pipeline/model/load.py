@@ -205,6 +205,7 @@ def load_measurements(paths: list[str | Path], sensors: pd.DataFrame, *, edition
     parts = [part for _, part in radar + adsb]
     radar.clear()
     adsb.clear()
+    release_free_memory()  # what the chunks' decoding freed, before the join needs room
     meas = finish_measurements(parts)
     release_free_memory()
     return Loaded({}, recs, inputs, first_date, spans), meas
