@@ -8,6 +8,7 @@ from collections.abc import Iterator
 import numpy as np
 
 from .containers import UNTIMED, Segments, read_segments
+from .errors import UnreadableInput
 from .reader import (
     Recording,
     _mapped,
@@ -32,7 +33,10 @@ def iter_read(path, *, chunk: int = 1_000_000, editions=None, date=None, categor
     eds = _parse_editions(editions)
     selected_columns(columns)
     with _mapped(path) as buf:
-        seg = read_segments(buf, format)
+        try:
+            seg = read_segments(buf, format)
+        except ValueError as exc:  # as read() says it
+            raise UnreadableInput(f"{path}: {exc}") from exc
         bounds = _chunk_bounds(buf, seg, chunk, eds, categories)
         release_pages(buf, 0, len(buf))  # planning the chunks read the whole file
         carry_day = 0

@@ -24,8 +24,15 @@ import pandas as pd
 
 from pipeline.meta import FORMATS, software_version
 from pipeline.model.identity import normalise_address, normalise_callsign
-from pipeline.model.load import Loaded, load
-from pipeline.model.time import absolute_time
+from pipeline.model.load import (
+    Loaded,
+    NoRecords,
+    load,
+    load_measurements,
+    release_free_memory,
+    time_spans,
+    widen_spans,
+)
 from pipeline.progress import Progress
 from pipeline.report.outputs import Background, BackgroundFailed, all_or_nothing
 from pipeline.report.textguard import guard_frame
@@ -386,35 +393,15 @@ def _load(options: DecodingOptions, checked: Checked, progress: Progress | None)
                       format=options.format, columns=DECODED_COLUMNS, progress=progress)
     except UnreadableInput as exc:
         raise JobError(str(exc), 2) from exc
-    spans = [_time_spans(rec.frames, loaded.date) for rec in loaded.recordings]
+    spans = [time_spans(rec.frames, loaded.date) for rec in loaded.recordings]
     checked.warnings += _order_warnings(checked.inputs, spans)
     checked.warnings += _date_ignored(options, loaded.inputs)
     checked.warnings += impossible_positions(loaded.frames.get(21))
     return loaded
 
 
-Span = tuple[pd.Timestamp, pd.Timestamp]
-
-
-def _time_spans(frames: dict[int, pd.DataFrame], date: dt.date | None) -> dict[int, Span]:
-    """Earliest and latest UTC instant per category of one input (``date`` dates undated records)."""
-    out = {}
-    for cat, frame in frames.items():
-        times = absolute_time(frame, date).dropna()
-        if len(times):
-            out[cat] = (times.min(), times.max())
-    return out
-
-
-def _widen(spans: dict[int, Span], more: dict[int, Span]) -> dict[int, Span]:
-    """The spans of two chunks of one input, per category."""
-    out = dict(spans)
-    for cat, (lo, hi) in more.items():
-        out[cat] = (min(lo, out[cat][0]), max(hi, out[cat][1])) if cat in out else (lo, hi)
-    return out
-
-
-def _order_warnings(paths: list[Path], spans: list[dict[int, Span]]) -> list[str]:
+def _order_warnings(paths: list[Path], spans: list[dict[int, tuple[pd.Timestamp, pd.Timestamp]]]
+                    ) -> list[str]:
     """A warning for each input whose records of a category start before the previous input's end."""
     warnings, last = [], {}
     for path, by_cat in zip(paths, spans, strict=True):
@@ -433,22 +420,44 @@ def _date_ignored(options: DecodingOptions, inputs: list[dict]) -> list[str]:
             for info in inputs if info["format"] in ("pcap", "pcapng")]
 
 
-def _measurements(loaded: Loaded, sensors: pd.DataFrame, sensors_path: str,
-                  adsb_sigma_m: float | None = None) -> pd.DataFrame:
-    """Radar and ADS-B measurements, with the user-facing errors for missing data and sensors."""
-    from pipeline.model.measurements import build_measurements
-    from pipeline.model.sensors import UnknownRadar, sensor_toml_snippet
+def _load_measurements(options: AircraftOptions, checked: Checked, progress: Progress | None,
+                       stage: str) -> tuple[Loaded, pd.DataFrame]:
+    """Decode the inputs chunk by chunk straight into radar and ADS-B measurements (load_measurements),
+    with the user-facing errors for unreadable inputs, missing data and sensors. ``stage`` is the progress
+    stage shown once the inputs are read (before a missing-data or missing-sensor error too)."""
+    from asterix.errors import UnreadableInput
+    from pipeline.model.sensors import UnknownRadar
 
-    for cat, name in ((48, "radar"), (21, "ADS-B")):
-        if cat not in loaded.frames or loaded.frames[cat].empty:
-            raise JobError(f"no {name} (CAT{cat:03d}) records in the inputs{_all_failed(loaded, cat)}")
     try:
-        return build_measurements(loaded.frames[48], loaded.frames[21], sensors, date=loaded.date,
-                                  adsb_sigma_m=adsb_sigma_m)
-    except UnknownRadar as exc:
-        lines = "\n\n".join(sensor_toml_snippet(sac, sic) for sac, sic in exc.missing)
-        raise JobError(f"radar SAC/SIC {', '.join(f'{a}/{b}' for a, b in exc.missing)} not in "
-                       f"{sensors_path}; add its position:\n\n{lines}") from exc
+        loaded, meas = load_measurements(checked.inputs, checked.sensors, editions=checked.editions or None,
+                                         date=options.date, format=options.format,
+                                         adsb_sigma_m=options.adsb_sigma_m, progress=progress)
+    except UnreadableInput as exc:
+        raise JobError(str(exc), 2) from exc
+    except (NoRecords, UnknownRadar) as exc:
+        if progress:
+            progress.stage(stage)
+        raise _data_error(exc, options.sensors) from exc
+    if progress:
+        progress.stage(stage)
+    checked.warnings += _order_warnings(checked.inputs, loaded.spans)
+    checked.warnings += _date_ignored(options, loaded.inputs)
+    checked.warnings += loaded.warnings
+    return loaded, meas
+
+
+def _data_error(exc: Exception, sensors_path) -> JobError:
+    """The user-facing error for inputs without radar or ADS-B records, or with a radar not in the sensor
+    file (with the TOML lines to add)."""
+    from pipeline.model.sensors import sensor_toml_snippet
+
+    if isinstance(exc, NoRecords):
+        kind = "radar" if exc.category == 48 else "ADS-B"
+        return JobError(f"no {kind} (CAT{exc.category:03d}) records in the inputs"
+                        f"{_all_failed(exc.loaded, exc.category)}")
+    lines = "\n\n".join(sensor_toml_snippet(sac, sic) for sac, sic in exc.missing)
+    return JobError(f"radar SAC/SIC {', '.join(f'{a}/{b}' for a, b in exc.missing)} not in "
+                    f"{sensors_path}; add its position:\n\n{lines}")
 
 
 def _all_failed(loaded: Loaded, cat: int) -> str:
@@ -470,25 +479,34 @@ def mark_once(meas: pd.DataFrame, *, split_adsb: bool = False, jumps: bool = Tru
     and accuracy reuse them instead of recomputing. ``jumps=False`` skips the jump search (a job that
     neither filters jumps nor assesses quality does not need it)."""
     from pipeline.model.dedup import DEDUP_KEYS, duplicate_mask, repeat_groups
-    from pipeline.model.jumps import JUMP_FLAG_COLUMNS, jump_flags
+    from pipeline.model.jumps import JUMP_FLAG_COLUMNS, JUMP_INPUTS, jump_flags
 
     meas = meas.drop(columns=[c for c in ("duplicate", *JUMP_FLAG_COLUMNS) if c in meas])
-    dup = duplicate_mask(meas.sort_values("time", kind="stable"), split_adsb=split_adsb).reindex(meas.index)
+    keys = [k for k in DEDUP_KEYS if k in meas]
+    # rows equal in every key have the same time, so the first in time order is the first in frame order:
+    # no sorted copy is needed. Only the columns each step reads are selected, never the whole frame.
+    narrow = meas[[*keys, *(c for c in ("sensor_kind", "sensor_id") if c in meas and c not in keys)]]
+    dup = duplicate_mask(narrow, split_adsb=split_adsb)
+    del narrow
     if not jumps:
         return meas.assign(duplicate=dup.to_numpy(bool))
     dup = dup.to_numpy(bool)
     adsb = (meas["sensor_kind"] == "adsb").to_numpy(bool)
-    judged = jump_flags(meas[adsb & ~dup])  # judged without repeats
+    judged = jump_flags(meas[[c for c in JUMP_INPUTS if c in meas]][adsb & ~dup])  # judged without repeats
+    release_free_memory()  # the search's batches leave freed heap pages behind
     # a repeated report shares the verdict of the report it repeats: per group of ADS-B rows equal in
     # every dedup key, each column takes its first non-missing value in frame order
     rows = np.flatnonzero(adsb)
-    order, group = repeat_groups(meas.iloc[rows], [k for k in DEDUP_KEYS if k in meas])
+    order, group = repeat_groups(meas, keys, rows)
     at = np.full(len(meas), -1)  # position of each judged row within the judged frame
     at[np.flatnonzero(adsb & ~dup)] = np.arange(len(judged))
+    in_key_order = rows[order]
+    pos_all = at[in_key_order]  # judged position of each ADS-B row, in key order
+    del at, rows
     out = {}
     for c in JUMP_FLAG_COLUMNS:
         values = judged[c].to_numpy(dtype=bool if c == "jump" else float)
-        pos = at[rows[order]]  # in key order
+        pos = pos_all
         known = pos >= 0
         if values.dtype.kind == "f":
             known[known] = ~np.isnan(values[pos[known]])
@@ -498,9 +516,12 @@ def mark_once(meas: pd.DataFrame, *, split_adsb: bool = False, jumps: bool = Tru
         lead = np.concatenate([[True], g[1:] != g[:-1]]) if g.size else np.zeros(0, bool)
         first[g[lead]] = pos[first_rows[lead]]
         src = first[group]
+        del first, first_rows, g, lead, known
         column = np.zeros(len(meas), bool) if c == "jump" else np.full(len(meas), np.nan)
-        column[rows[order[src >= 0]]] = values[src[src >= 0]]
+        has = src >= 0
+        column[in_key_order[has]] = values[src[has]]
         out[c] = column
+        del src, has, values
     return meas.assign(duplicate=dup, **out)
 
 
@@ -589,13 +610,15 @@ def far_separations(run: CorrelationRun, meas: pd.DataFrame, sensors: pd.DataFra
     return warnings
 
 
-def _marked_measurements(loaded: Loaded, checked: Checked, options: AircraftOptions, *,
-                         split_adsb: bool = False) -> pd.DataFrame:
-    """The measurements with their duplicate and jump flags (once per job; correlate counts each window's
-    jumps); the decoded frames are freed as soon as the measurements hold what the job needs."""
-    meas = _measurements(loaded, checked.sensors, str(options.sensors), options.adsb_sigma_m)
-    loaded.drop_frames()
-    return mark_once(meas, split_adsb=split_adsb)
+def _marked_measurements(options: AircraftOptions, checked: Checked, progress: Progress | None, stage: str,
+                         *, split_adsb: bool = False) -> tuple[Loaded, pd.DataFrame]:
+    """The inputs and their measurements with the duplicate and jump flags (once per job; correlate counts
+    each window's jumps); decoded columns are held one chunk at a time (see _load_measurements).
+    ``stage`` is the progress stage shown once the inputs are read."""
+    loaded, meas = _load_measurements(options, checked, progress, stage)
+    meas = mark_once(meas, split_adsb=split_adsb)
+    release_free_memory()
+    return loaded, meas
 
 
 def correlate_job(options: CorrelateOptions, *, progress: Progress | None = None,
@@ -609,10 +632,8 @@ def correlate_job(options: CorrelateOptions, *, progress: Progress | None = None
     checked = checked or validate(options)
     if progress:
         progress.stage("Processing data files")
-    loaded = _load(options, checked, progress)
-    if progress:
-        progress.stage("Pre-processing data")
-    meas_all = _marked_measurements(loaded, checked, options, split_adsb=options.split_adsb)
+    loaded, meas_all = _marked_measurements(options, checked, progress, "Pre-processing data",
+                                            split_adsb=options.split_adsb)
     meas, removed = apply_filters(meas_all, drop_jumps=options.drop_jumps, min_nic=options.min_nic,
                                   min_nacp=options.min_nacp)
     if progress:  # the thesis tool's stage names
@@ -758,10 +779,7 @@ def quality_job(options: QualityOptions, *, progress: Progress | None = None, ch
     checked = checked or validate(options)
     if progress:
         progress.stage("Processing data files")
-    loaded = _load(options, checked, progress)
-    if progress:
-        progress.stage("Analysing data quality")
-    meas = _marked_measurements(loaded, checked, options)
+    loaded, meas = _marked_measurements(options, checked, progress, "Analysing data quality")
     quality = _quality(meas, checked.sensors, options)
     params = {**_parameters(options, loaded, started, command), "callsign": options.callsign,
               "address": options.address, "gap_s": options.gap_s}
@@ -824,14 +842,14 @@ def stats_job(options: StatsOptions, *, progress: Progress | None = None) -> Sta
         progress.stage("Processing data files")
     acc = StatsAccumulator()
     inputs: list[dict] = []
-    spans: list[dict[int, Span]] = []
+    spans: list[dict[int, tuple[pd.Timestamp, pd.Timestamp]]] = []
     chunk = max(int(options.chunk_mb * 1e6), 1)
     for i, path in enumerate(checked.inputs):
         if progress:
             progress.step(f"{path.name} ({i + 1}/{len(checked.inputs)})")
         info = {"path": str(path), "bytes": 0, "format": None, "records": {}, "skipped_blocks": 0,
                 "editions": {}, "edition_choice": {}, "date": None}
-        by_cat: dict[int, Span] = {}
+        by_cat: dict[int, tuple[pd.Timestamp, pd.Timestamp]] = {}
         try:
             for rec in asterix.iter_read(path, chunk=chunk, editions=checked.editions or None,
                                          date=options.date, format=options.format, columns=STATS_COLUMNS):
@@ -843,7 +861,7 @@ def stats_job(options: StatsOptions, *, progress: Progress | None = None) -> Sta
                 info["skipped_blocks"] += len(rec.errors)
                 info["editions"].update(rec.editions)
                 info["edition_choice"] = {**rec.edition_choice, **info["edition_choice"]}
-                by_cat = _widen(by_cat, _time_spans(rec.frames, rec.date))
+                by_cat = widen_spans(by_cat, time_spans(rec.frames, rec.date))
         except UnreadableInput as exc:
             raise JobError(str(exc), 2) from exc
         inputs.append(info)

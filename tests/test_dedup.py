@@ -52,3 +52,22 @@ def test_midnight_crossing_sorts_after():
     meas = frame([("late", 1 * 86400 + 5.0, 1, 2, 3, 4), ("early", 0 * 86400 + 86399.0, 1, 2, 3, 4)])
     out, _ = deduplicate(meas)
     assert out["id"].tolist() == ["early", "late"]
+
+
+def test_duplicate_mask_in_time_blocks_equals_one_hashing_of_every_row(monkeypatch):
+    # repeats only ever share a time, so hashing blocks of whole time values must flag exactly what
+    # pandas' duplicated over all rows flags (NaN and NaT equal, -0.0 equal 0.0, first in frame order)
+    from pipeline.model import dedup
+
+    rng = np.random.default_rng(1)
+    n = 20_000
+    t = pd.Series(pd.to_datetime(rng.integers(0, 500, n) * 10**9, utc=True)).where(rng.random(n) > 0.01)
+    frame = pd.DataFrame({
+        "time": t, "latitude": rng.integers(0, 3, n) * 0.5,
+        "longitude": np.where(rng.random(n) < 0.1, np.nan, rng.integers(0, 2, n) * 1.0),
+        "ground_speed_kt": rng.choice([0.0, -0.0, 1.0], n), "heading_deg": 1.0,
+        "sensor_kind": pd.Categorical(rng.choice(["radar", "adsb"], n))})
+    expected = frame.duplicated(keep="first")
+    monkeypatch.setattr(dedup, "DEDUP_BLOCK_ROWS", 700)
+    got = dedup.duplicate_mask(frame)
+    assert got.sum() > 1000 and got.equals(expected)

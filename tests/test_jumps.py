@@ -11,9 +11,10 @@ from measurement_frames import meas_frame
 
 from fixtures.scenario import default_scenario
 from fixtures.simulate import simulate
+from pipeline.model import jumps
 from pipeline.model.geodesy import distance_m, ecef_to_geodetic, enu_to_ecef
 from pipeline.model.identity import assign_aircraft_id
-from pipeline.model.jumps import JUMP_COLUMNS, detect_jumps, jump_table
+from pipeline.model.jumps import JUMP_COLUMNS, detect_jumps, jump_flags, jump_table
 from pipeline.model.measurements import adsb_measurements
 
 LAT0, LON0 = 3.0, 101.5
@@ -176,6 +177,25 @@ def test_aircraft_are_judged_separately_and_index_is_kept():
     # without addresses the call sign groups the reports (identity rule)
     anonymous = both.assign(address=pd.NA)
     assert detect_jumps(anonymous.assign(aircraft_id=assign_aircraft_id(anonymous))).sum() == 1
+
+
+def test_segments_are_judged_alone_whatever_the_batching(monkeypatch):
+    # A ends with a jump and B (sorted next to it) starts with a bigger one: each aircraft's verdicts and
+    # fits are those it gets alone, and searching segment by segment (batches of one segment) or all at
+    # once gives the same columns
+    a = shift(track(np.arange(0.0, 60.0), address="750001", callsign="A1"), [58], 12_000.0, 0.0)
+    b = track(np.arange(0.0, 60.0), address="750002", callsign="B2", turn_dps=2.0)
+    b = shift(b, [1], -40_000.0, 30_000.0)
+    c = track(np.arange(0.0, 300.0, 1.0), address="750003", callsign="C3", noise_m=40.0, seed=7)
+    c = c[(c["time_of_day"] < 100) | (c["time_of_day"] > 250)]  # two segments (gap over 120 s)
+    c = shift(c.reset_index(drop=True), [99, 100], 9_000.0, -9_000.0)
+    both = pd.concat([a, b, c], ignore_index=True)
+    whole = jump_flags(both)
+    monkeypatch.setattr(jumps, "JUMP_BATCH_REPORTS", 1)
+    pd.testing.assert_frame_equal(jump_flags(both), whole)
+    alone = pd.concat([jump_flags(a), jump_flags(b), jump_flags(c)], ignore_index=True)
+    pd.testing.assert_frame_equal(alone, whole)
+    assert whole["jump"].sum() >= 3 and bool(whole["jump"].iloc[58]) and bool(whole["jump"].iloc[61])
 
 
 def test_unidentified_rows_are_not_judged_and_duplicates_do_no_harm():

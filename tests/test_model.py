@@ -10,7 +10,14 @@ import pytest
 from pipeline.model.geodesy import ecef_to_enu, geodetic_to_ecef, polar_to_geodetic
 from pipeline.model.identity import assign_aircraft_id
 from pipeline.model.measurements import build_measurements, nacp_sigma_m
-from pipeline.model.schema import MEASUREMENT_COLUMNS, SchemaError, empty_measurements, markdown, validate
+from pipeline.model.schema import (
+    MEASUREMENT_COLUMNS,
+    SchemaError,
+    conform,
+    empty_measurements,
+    markdown,
+    validate,
+)
 from pipeline.model.time import UNDATED_DAY, absolute_time, is_dated, iso_utc, midnight, seconds_since
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -40,9 +47,26 @@ def test_validate_names_the_offending_column():
     with pytest.raises(SchemaError, match="'latitude' has dtype object"):
         validate(meas.assign(latitude=meas["latitude"].astype(object)))
     with pytest.raises(SchemaError, match="'sensor_kind'.*allowed: radar, adsb"):
-        validate(meas.assign(sensor_kind=pd.Series(["radar", "lidar"], dtype="string")))
+        validate(meas.assign(sensor_kind=pd.Series(["radar", "lidar"], dtype="string").astype("category")))
+    with pytest.raises(SchemaError, match="'sensor_kind' has dtype string, the schema says category"):
+        validate(meas.assign(sensor_kind=pd.Series(["radar", "radar"], dtype="string")))
+    unsorted = pd.Categorical(["radar", "radar"], categories=pd.Index(["radar", "adsb"], dtype="string"))
+    with pytest.raises(SchemaError, match="'sensor_kind': its categories must be text .* in sorted order"):
+        validate(meas.assign(sensor_kind=unsorted))
     with pytest.raises(SchemaError, match="'longitude'"):
         validate(meas.assign(longitude=[200.0, 0.0]))
+
+
+def test_narrow_dtypes_refuse_values_they_cannot_hold():
+    # SAC is an 8-bit field: 300 cannot come from ASTERIX, and Int16 holds it; a NACp of 200 would wrap
+    # to -56 in Int8, so conform refuses it, naming the column
+    frame = pd.DataFrame({"sac": pd.array([300, None], dtype="Int64"),
+                          "nacp": pd.array([11, 200], dtype="Int64")})
+    with pytest.raises(SchemaError, match="'nacp' has values outside -128..127"):
+        conform(frame)
+    out = conform(frame.assign(nacp=pd.array([11, None], dtype="Int64")))
+    assert out["sac"].dtype == "Int16" and out["sac"].tolist()[0] == 300 and out["nacp"].tolist()[0] == 11
+    assert out["callsign"].dtype == "category" and out["callsign"].isna().all()
 
 
 def test_absolute_time_dated_undated_and_midnight():

@@ -126,7 +126,8 @@ def test_radar_radar_pairs_and_split_adsb(two):
     assert len(both.windows) == len(rr.windows) + len(correlate(meas, all_aircraft=True).windows)
     # two ground stations: one source by default, apart with split_adsb
     adsb = meas["sensor_kind"] == "adsb"
-    half = meas.assign(sensor_id=meas["sensor_id"].where(~adsb | (meas.index % 2 == 0), "021:0/2"))
+    station = meas["sensor_id"].astype("string").where(~adsb | (meas.index % 2 == 0), "021:0/2")
+    half = meas.assign(sensor_id=station.astype("category"))
     merged = correlate(half, callsign="MAS72")
     assert {w.summary["reference_sensor"] for w in merged.windows} == {"021:0/1+021:0/2"}
     split = correlate(half, callsign="MAS72", split_adsb=True)

@@ -7,6 +7,7 @@ y[i - d]. A positive peak lag d means the radar series repeats the ADS-B series 
 
 from __future__ import annotations
 
+import itertools
 import math
 
 import numpy as np
@@ -21,12 +22,11 @@ from pipeline.correlate.results import (
 )
 from pipeline.correlate.slots import SLOTTED_COLUMNS, slot_arrays, slot_count
 from pipeline.correlate.windows import in_window, overlap_windows, short_window_reason
-from pipeline.model.aircraft import Aircraft, NoSuchAircraft, one_aircraft
-from pipeline.model.aircraft import all_aircraft as every_aircraft
+from pipeline.model.aircraft import Aircraft, NoSuchAircraft, iter_aircraft, one_aircraft
 from pipeline.model.dedup import duplicate_mask, sort_by_time
 from pipeline.model.geodesy import distance_m
 from pipeline.model.jumps import JUMP_FLAG_COLUMNS, detect_jumps
-from pipeline.model.time import is_dated, iso_utc, midnight, with_clock
+from pipeline.model.time import is_dated, iso_utc, midnight, seconds_since, with_clock
 
 PAIRS = ("radar-adsb", "radar-radar", "all")
 # the measurement columns correlate() reads (identity, time, position, dedup keys, job-wide flags); the
@@ -350,22 +350,28 @@ def correlate(meas: pd.DataFrame, *, callsign: str | None = None, address: str |
     reference = midnight(meas["time"])
     if reference is None:
         raise NoSuchAircraft("any aircraft", ["radar", "ADS-B"], [], "there are no measurements")
-    meas = with_clock(meas, reference)
-    if fill == "hold":  # the steps below read these columns only; each window copies its rows
-        meas = meas[[c for c in dict.fromkeys(CORRELATION_INPUTS) if c in meas]]
+    if fill == "hold":  # the steps below read these columns only (time_of_day, not timestamp); each window
+        # copies its rows
+        columns = [c for c in dict.fromkeys(CORRELATION_INPUTS) if c in meas or c == "time_of_day"]
+        meas = meas.assign(time_of_day=seconds_since(meas["time"], reference))[columns]
+    else:
+        meas = with_clock(meas, reference)
     run = CorrelationRun(parameters={
         "callsign": callsign, "address": address, "all_aircraft": all_aircraft, "slot_s": slot_s,
         "gap_s": gap_s, "pairs": pairs, "split_adsb": split_adsb,
         **({"fill": fill} if fill != "hold" else {}),  # the thesis default leaves the parameters as they were
         "date": reference.date().isoformat() if is_dated(reference) else None})
     need_adsb = pairs == "radar-adsb"
-    if all_aircraft:
-        targets = every_aircraft(meas, need_adsb=need_adsb)
-        if not targets:
+    if all_aircraft:  # one aircraft's rows at a time (iter_aircraft), not a second copy of the run
+        targets = iter_aircraft(meas, need_adsb=need_adsb)
+        first = next(targets, None)
+        if first is None:
             raise NoSuchAircraft("any aircraft", ["radar", "ADS-B"], [],
                                  "no aircraft is seen by both radar and ADS-B")
+        targets = itertools.chain([first], targets)
+        del first
     else:
-        targets = [one_aircraft(meas, callsign, address, need_adsb=need_adsb)]
+        targets = iter([one_aircraft(meas, callsign, address, need_adsb=need_adsb)])
     paired, budget = False, [0]
     for ac in targets:
         found = [_correlate_pair(ac, run, pair, slot_s, gap_s, reference, fill, budget)

@@ -6,8 +6,10 @@ Aircraft are told apart by ``aircraft_id`` only (assigned once, pipeline.model.i
 from __future__ import annotations
 
 import difflib
+from collections.abc import Iterator
 from dataclasses import dataclass
 
+import numpy as np
 import pandas as pd
 
 from pipeline.model.identity import aircraft_labels, normalise_address, normalise_callsign
@@ -75,14 +77,21 @@ def one_aircraft(meas: pd.DataFrame, callsign: str | None = None, address: str |
 
 def all_aircraft(meas: pd.DataFrame, *, need_adsb: bool = True) -> list[Aircraft]:
     """Every aircraft seen by radar and (when ``need_adsb``) ADS-B, sorted by call sign, then address."""
-    radar, adsb = _split(meas)
+    return list(iter_aircraft(meas, need_adsb=need_adsb))
+
+
+def iter_aircraft(meas: pd.DataFrame, *, need_adsb: bool = True) -> Iterator[Aircraft]:
+    """``all_aircraft`` one at a time: each aircraft's rows are copied out of ``meas`` only when it comes,
+    so the whole run is never held twice."""
+    radar = (meas["sensor_kind"] == "radar").to_numpy(bool)
+    ident = meas["aircraft_id"]
+    rows = {kind: ident[mask].groupby(ident[mask], sort=False, observed=True).indices  # positions in mask
+            for kind, mask in (("radar", radar), ("adsb", ~radar))}
+    at = {"radar": np.flatnonzero(radar), "adsb": np.flatnonzero(~radar)}  # mask position -> row
     labels = aircraft_labels(meas).set_index("aircraft_id")
-    out = []
-    rows = {kind: frame.groupby("aircraft_id", sort=False, observed=True).indices  # positions, in order
-            for kind, frame in (("radar", radar), ("adsb", adsb))}
     ids = set(rows["radar"])
-    for ident in sorted(ids & set(rows["adsb"]) if need_adsb else ids):
-        r = radar.iloc[rows["radar"][ident]].reset_index(drop=True)
-        a = adsb.iloc[rows["adsb"].get(ident, [])].reset_index(drop=True)
-        out.append(Aircraft(labels.at[ident, "callsign"], labels.at[ident, "address"], r, a, ident))
-    return sorted(out, key=lambda ac: (ac.callsign, ac.address))
+    chosen = sorted(ids & set(rows["adsb"]) if need_adsb else ids)
+    for ident in sorted(chosen, key=lambda i: (labels.at[i, "callsign"], labels.at[i, "address"])):
+        r = meas.iloc[at["radar"][rows["radar"][ident]]].reset_index(drop=True)
+        a = meas.iloc[at["adsb"][rows["adsb"].get(ident, np.zeros(0, np.int64))]].reset_index(drop=True)
+        yield Aircraft(labels.at[ident, "callsign"], labels.at[ident, "address"], r, a, ident)

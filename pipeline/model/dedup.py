@@ -6,6 +6,7 @@ import numpy as np
 import pandas as pd
 
 DEDUP_KEYS = ["time", "latitude", "longitude", "ground_speed_kt", "heading_deg"]
+DEDUP_BLOCK_ROWS = 500_000  # rows hashed at once by duplicate_mask (whole time values per block)
 
 
 def sort_by_time(meas: pd.DataFrame) -> pd.DataFrame:
@@ -24,14 +25,32 @@ def duplicate_mask(meas: pd.DataFrame, *, split_adsb: bool = False) -> pd.Series
     if "duplicate" in meas:
         return meas["duplicate"].astype(bool)
     keys = [k for k in DEDUP_KEYS if k in meas]
-    if "sensor_kind" in meas:
-        source = meas["sensor_kind"].astype("object")
+    if "sensor_kind" in meas:  # the source as an integer: its kind, or its sensor id (-1: missing)
+        kind, kinds = pd.factorize(meas["sensor_kind"])
+        source = kind
         if "sensor_id" in meas:  # radars are told apart; ADS-B ground stations are one source
-            apart = (source != "adsb") | split_adsb
-            source = source.where(~apart, meas["sensor_id"].astype("object"))
-        meas = meas[keys].assign(_source=source.to_numpy())
+            apart = (meas["sensor_kind"] != "adsb").to_numpy(bool) | split_adsb
+            sid = pd.factorize(meas["sensor_id"])[0]
+            source = np.where(apart, np.where(sid >= 0, sid + len(kinds), -1), kind)
+        meas = meas[keys].assign(_source=source)
         keys = ["_source", *keys]
-    return meas.duplicated(subset=keys, keep="first")
+    if "time" not in keys or len(meas) <= DEDUP_BLOCK_ROWS:
+        return meas.duplicated(subset=keys, keep="first")
+    # rows at different times are never repeats: look for them among blocks of whole time values, so
+    # the hashing works on one block at a time (bounded memory), each block in frame order
+    t = pd.DatetimeIndex(meas["time"]).asi8
+    by_time = np.argsort(t, kind="stable")
+    t_sorted = t[by_time]
+    cuts = [0]
+    while cuts[-1] + DEDUP_BLOCK_ROWS < len(t):
+        cuts.append(int(np.searchsorted(t_sorted, t_sorted[cuts[-1] + DEDUP_BLOCK_ROWS], side="right")))
+    cuts.append(len(t))
+    dup = np.zeros(len(meas), bool)
+    for a, b in zip(cuts[:-1], cuts[1:], strict=True):
+        if b > a:
+            rows = np.sort(by_time[a:b])
+            dup[rows] = meas.iloc[rows].duplicated(subset=keys, keep="first").to_numpy(bool)
+    return pd.Series(dup, index=meas.index)
 
 
 def deduplicate(meas: pd.DataFrame) -> tuple[pd.DataFrame, int]:
@@ -49,12 +68,14 @@ def _key_array(column: pd.Series) -> np.ndarray:
     return column.to_numpy(dtype=float, na_value=np.nan)
 
 
-def repeat_groups(meas: pd.DataFrame, keys: list[str]) -> tuple[np.ndarray, np.ndarray]:
+def repeat_groups(meas: pd.DataFrame, keys: list[str], rows: np.ndarray | None = None
+                  ) -> tuple[np.ndarray, np.ndarray]:
     """Rows in key order and the group number of each of them: rows equal in every key column (NaN equals
     NaN, -0.0 equals 0.0) share a group; within a group rows keep their frame order (stable sort).
-    Numeric and datetime key columns only (what ``DEDUP_KEYS`` holds)."""
-    arrays = [_key_array(meas[k]) for k in keys]
-    order = np.lexsort(arrays[::-1]) if arrays else np.arange(len(meas))
+    Numeric and datetime key columns only (what ``DEDUP_KEYS`` holds). ``rows``: only these positions
+    (the result then counts positions within ``rows``), without copying the frame first."""
+    arrays = [_key_array(meas[k]) if rows is None else _key_array(meas[k])[rows] for k in keys]
+    order = np.lexsort(arrays[::-1]) if arrays else np.arange(len(meas) if rows is None else len(rows))
     new = np.zeros(order.size, dtype=bool)
     if order.size:
         new[0] = True

@@ -11,11 +11,24 @@ Correlation, quality, jump detection and everything after group by this ``aircra
 
 from __future__ import annotations
 
+import numpy as np
 import pandas as pd
+
+from pipeline.model.schema import coded_text, text_categorical
+
+
+def _per_label(s: pd.Series, normalise) -> pd.Series:
+    """A categorical Series normalised once per distinct label (categorical out, labels merged)."""
+    labels = normalise(pd.Series(s.cat.categories, dtype="string"))
+    return pd.Series(coded_text(s.cat.codes.to_numpy(), labels.to_numpy(dtype=object, na_value=None)),
+                     index=s.index, name=s.name)
 
 
 def normalise_callsign(s):
-    """Upper-case call sign with spaces removed ("mas 72" -> "MAS72"); Series in, Series out; NA kept."""
+    """Upper-case call sign with spaces removed ("mas 72" -> "MAS72"); Series in, Series out (categorical
+    in, categorical out); NA kept."""
+    if isinstance(s, pd.Series) and isinstance(s.dtype, pd.CategoricalDtype):
+        return _per_label(s, normalise_callsign)
     if isinstance(s, pd.Series):
         out = s.astype("string").str.upper().str.replace(" ", "", regex=False)
         return out.where(out.str.len() > 0)
@@ -26,7 +39,10 @@ def normalise_callsign(s):
 
 
 def normalise_address(s):
-    """Upper-case 6-hex-digit address ("0x76cd41" -> "76CD41"); Series in, Series out; NA kept."""
+    """Upper-case 6-hex-digit address ("0x76cd41" -> "76CD41"); Series in, Series out (categorical in,
+    categorical out); NA kept."""
+    if isinstance(s, pd.Series) and isinstance(s.dtype, pd.CategoricalDtype):
+        return _per_label(s, normalise_address)
     if isinstance(s, pd.Series):
         out = s.astype("string").str.strip().str.upper().str.removeprefix("0X").str.zfill(6)
         return out.where(out.str.len() > 0)
@@ -45,13 +61,25 @@ def _unique_address(meas: pd.DataFrame, column: str) -> pd.Series:
 
 
 def assign_aircraft_id(meas: pd.DataFrame) -> pd.Series:
-    """The ``aircraft_id`` of every row by the module's rule (string dtype, <NA> when unidentified)."""
-    address = meas["address"].astype("string")
-    callsign = meas["callsign"].astype("string")
-    mode3a = meas["mode3a"].astype("string")
-    ident = address.fillna(_unique_address(meas, "callsign")).fillna("CS:" + callsign)
-    ident = ident.fillna(_unique_address(meas, "mode3a")).fillna("M3A:" + mode3a)
-    return ident.astype("string")
+    """The ``aircraft_id`` of every row by the module's rule (the schema's categorical text, <NA> when
+    unidentified). The rule reads a row's address, call sign and Mode 3/A code and which of them occur
+    together anywhere in the run, so it is worked out once per distinct combination of the three."""
+    parts = [text_categorical(meas[c]) for c in ("address", "callsign", "mode3a")]
+    key = np.zeros(len(meas), np.int64)
+    for part in parts:  # codes -1..n-1 of each column, packed into one integer per row (in place)
+        key *= len(part.cat.categories) + 1
+        key += part.cat.codes.to_numpy(np.int64)
+        key += 1
+    row_combo, _ = pd.factorize(key)  # combinations in order of first appearance (hashing: few of them)
+    first = np.flatnonzero(~pd.Series(key).duplicated().to_numpy())  # the row where each first appears
+    del key
+    triples = pd.DataFrame({c: p.iloc[first].astype("string").reset_index(drop=True)
+                            for c, p in zip(("address", "callsign", "mode3a"), parts, strict=True)})
+    ident = triples["address"].fillna(_unique_address(triples, "callsign"))
+    ident = ident.fillna("CS:" + triples["callsign"])
+    ident = ident.fillna(_unique_address(triples, "mode3a")).fillna("M3A:" + triples["mode3a"])
+    return pd.Series(coded_text(row_combo, ident.to_numpy(dtype=object, na_value=None)), index=meas.index,
+                     name="aircraft_id")
 
 
 def aircraft_labels(meas: pd.DataFrame) -> pd.DataFrame:

@@ -12,7 +12,8 @@ reports currently accepted around it (itself excluded):
   ``TURN_ACCEL_MS2 * tau^2 / 2`` for the fit's curvature error when the neighbours are far away in time
   (tau^2 = dt_before * dt_after between neighbours, dt * (dt + span) when they are all on one side).
 
-The search is iterative: each pass rejects only the worst offender within +-robust_window/2 reports, then
+The search is iterative: each pass rejects only the worst offender within +-robust_window/2 reports of its
+segment (segments never hold each other back, so they are searched in batches of whole segments), then
 re-fits without it, and reinstates rejected reports that agree with the final accepted track, so one
 jump never condemns its good neighbours and runs of 2-3 consecutive jumps are peeled off one by one.
 """
@@ -32,6 +33,7 @@ TURN_ACCEL_MS2 = 15.0  # lateral acceleration bound (3.5 deg/s at 480 kt) for th
 SEGMENT_GAP_S = 120.0  # neighbours are never taken across a longer gap
 MIN_FIT_NEIGHBOURS = 4  # fewer accepted neighbours: the fit test is not applied (speed test only)
 _MAX_PASSES = 40
+JUMP_BATCH_REPORTS = 250_000  # reports searched at once (whole segments): the search's memory follows it
 
 JUMP_COLUMNS = ["row", "callsign", "address", "sac", "sic", "time_of_day", "timestamp", "latitude",
                 "longitude", "fit_latitude", "fit_longitude", "jump_size_m"]
@@ -184,6 +186,16 @@ class _Tracks:
                              np.where(ok_p2 & ~ok_n1, np.minimum(s_p1, s_p2), 0.0))
         return np.where(ok_p1 & ok_n1, np.minimum(s_p1, s_n1), one_sided)
 
+    def _local_max(self, live: np.ndarray) -> np.ndarray:
+        """Per report, the largest ``live`` within +-half reports of it in its own segment (never across
+        segments: another aircraft's or another stretch's offenders do not hold a report back)."""
+        out = live.copy()
+        i = np.arange(self.n)
+        for d in range(1, self.half + 1):
+            out = np.where(i - d >= self.seg_lo, np.maximum(out, live[np.maximum(i - d, 0)]), out)
+            out = np.where(i + d < self.seg_hi, np.maximum(out, live[np.minimum(i + d, self.n - 1)]), out)
+        return out
+
     def search(self, v_max_ms: float, threshold_m: float):
         """Reject the worst offender per neighbourhood and reinstate what fits, until stable; the jump
         mask and each report's fitted position against the final accepted reports."""
@@ -194,9 +206,7 @@ class _Tracks:
             fit_score, fit_lat, fit_lon = self.fit(self.neighbours(acc, *ranges), threshold_m)
             score = np.fmax(fit_score, self.speed(acc, *ranges, v_max_ms))
             live = np.where(accepted, score, -np.inf)
-            pad = np.pad(live, self.half, constant_values=-np.inf)
-            local_max = np.lib.stride_tricks.sliding_window_view(pad, 2 * self.half + 1).max(axis=1)
-            reject = accepted & (score > 1.0) & (live >= local_max)
+            reject = accepted & (score > 1.0) & (live >= self._local_max(live))
             reinstate = ~accepted & (score <= 1.0)
             if not reject.any() and not reinstate.any():
                 break
@@ -205,6 +215,7 @@ class _Tracks:
 
 
 JUMP_FLAG_COLUMNS = ["jump", "jump_size_m", "fit_latitude", "fit_longitude"]
+JUMP_INPUTS = ["time", "aircraft_id", "latitude", "longitude"]  # the measurement columns the search reads
 
 
 def _detect(adsb_meas: pd.DataFrame, max_speed_kt: float, robust_window: int,
@@ -222,27 +233,44 @@ def _detect(adsb_meas: pd.DataFrame, max_speed_kt: float, robust_window: int,
     cols = {"jump": np.zeros(n, bool), "jump_size_m": np.full(n, np.nan), "fit_latitude": np.full(n, np.nan),
             "fit_longitude": np.full(n, np.nan)}
     reference = midnight(adsb_meas["time"])
-    frame = pd.DataFrame({"key": adsb_meas["aircraft_id"].astype("object").to_numpy(),
-                          "t": seconds_since(adsb_meas["time"], reference) if reference is not None
-                          else np.full(n, np.nan),
-                          "lat": adsb_meas["latitude"].to_numpy(float),
-                          "lon": adsb_meas["longitude"].to_numpy(float), "pos": np.arange(n)})
-    frame = frame[frame["key"].notna() & frame[["t", "lat", "lon"]].notna().all(axis=1)]
-    frame = frame.sort_values(["key", "t"], kind="stable")
-    seg = ((frame["key"] != frame["key"].shift()) | (frame["t"].diff() > SEGMENT_GAP_S)).cumsum()
-    frame = frame[seg.map(seg.value_counts()).to_numpy() >= 3]  # shorter segments are not judged
-    if frame.empty:
+    key = _sorted_codes(adsb_meas["aircraft_id"])
+    t = seconds_since(adsb_meas["time"], reference) if reference is not None else np.full(n, np.nan)
+    lat, lon = adsb_meas["latitude"].to_numpy(float), adsb_meas["longitude"].to_numpy(float)
+    pos = np.flatnonzero((key >= 0) & ~np.isnan(t) & ~np.isnan(lat) & ~np.isnan(lon))
+    pos = pos[np.lexsort((t[pos], key[pos]))]  # by aircraft, then time (stable)
+    key, t, lat, lon = key[pos], t[pos], lat[pos], lon[pos]
+    seg = np.cumsum(np.r_[True, (key[1:] != key[:-1]) | (np.diff(t) > SEGMENT_GAP_S)])
+    del key
+    size = np.bincount(seg)[seg]
+    judged = size >= 3  # shorter segments are not judged
+    if not judged.any():
         return pd.DataFrame(cols, index=adsb_meas.index)
-    tracks = _Tracks(frame["t"].to_numpy(), frame["lat"].to_numpy(), frame["lon"].to_numpy(),
-                     seg[frame.index].to_numpy(), (robust_window - 1) // 2)
-    jump, fit_lat, fit_lon = tracks.search(max_speed_kt * KT_TO_MS, robust_threshold_m)
-    pos, lat, lon = frame["pos"].to_numpy(), frame["lat"].to_numpy(), frame["lon"].to_numpy()
-    cols["jump"][pos], cols["fit_latitude"][pos], cols["fit_longitude"][pos] = jump, fit_lat, fit_lon
-    cols["jump_size_m"][pos] = distance_m(lat, lon, fit_lat, fit_lon)
-    return pd.DataFrame(cols, index=adsb_meas.index)
+    pos, t, lat, lon, seg = pos[judged], t[judged], lat[judged], lon[judged], seg[judged]
+    # segments are judged independently: the search runs over batches of whole segments (bounded memory)
+    # on longitudes unwrapped over all of them, as one run over every segment would see them
+    unwrapped = np.unwrap(lon, period=360.0)
+    starts = np.flatnonzero(np.r_[True, seg[1:] != seg[:-1]])
+    cuts = starts[np.r_[True, np.diff(starts // JUMP_BATCH_REPORTS) > 0]]
+    for a, b in zip(cuts, np.r_[cuts[1:], pos.size], strict=True):
+        tracks = _Tracks(t[a:b], lat[a:b], unwrapped[a:b], seg[a:b], (robust_window - 1) // 2)
+        jump, fit_lat, fit_lon = tracks.search(max_speed_kt * KT_TO_MS, robust_threshold_m)
+        del tracks
+        at = pos[a:b]
+        cols["jump"][at], cols["fit_latitude"][at], cols["fit_longitude"][at] = jump, fit_lat, fit_lon
+        cols["jump_size_m"][at] = distance_m(lat[a:b], lon[a:b], fit_lat, fit_lon)
+    return pd.DataFrame(cols, index=adsb_meas.index, copy=False)
 
 
 _DEFAULTS = (1000.0, 7, 2000.0)
+
+
+def _sorted_codes(ident: pd.Series) -> np.ndarray:
+    """Integer codes of the aircraft identities, ordered as the texts sort (-1: none), so sorting by
+    them sorts by identity without a Python object per row."""
+    if isinstance(ident.dtype, pd.CategoricalDtype) and ident.cat.categories.is_monotonic_increasing:
+        return ident.cat.codes.to_numpy(np.int64)
+    codes, _ = pd.factorize(ident.astype("string"), sort=True)
+    return codes.astype(np.int64)
 
 
 def jump_flags(adsb_meas: pd.DataFrame) -> pd.DataFrame:

@@ -2,16 +2,26 @@
 
 from __future__ import annotations
 
+import ctypes
 import datetime as dt
 import hashlib
 from dataclasses import dataclass, field
 from pathlib import Path
 
+import numpy as np
 import pandas as pd
 
 import asterix
 from asterix.reader import Recording
+from pipeline.model.time import UNDATED_DAY, absolute_time
 from pipeline.progress import Progress
+
+# Measurement jobs decode their inputs in chunks of about this many bytes: the decoded columns of one chunk
+# are turned into measurement rows and dropped before the next is read, so a recording of any size never
+# has all its decoded columns in memory at once (a file up to this size is decoded in one piece).
+MEASUREMENT_CHUNK_BYTES = 32_000_000
+
+Span = tuple[pd.Timestamp, pd.Timestamp]
 
 
 @dataclass
@@ -22,6 +32,8 @@ class Loaded:
     recordings: list[Recording]
     inputs: list[dict] = field(default_factory=list)
     date: dt.date | None = None
+    spans: list[dict[int, Span]] | None = None  # per input: earliest and latest instant per category
+    warnings: list[str] = field(default_factory=list)  # about the data, e.g. reports left out as damaged
 
     @property
     def errors(self) -> pd.DataFrame:
@@ -93,3 +105,141 @@ def load(paths: list[str | Path], *, editions=None, date=None, format: str | Non
             by_cat.setdefault(cat, []).append(frame)
     frames = {cat: _concat(parts) for cat, parts in by_cat.items()}
     return Loaded(frames, recs, inputs, first)
+
+
+def time_spans(frames: dict[int, pd.DataFrame], date: dt.date | None) -> dict[int, Span]:
+    """Earliest and latest UTC instant per category of one input (``date`` dates undated records)."""
+    out = {}
+    for cat, frame in frames.items():
+        times = absolute_time(frame, date).dropna()
+        if len(times):
+            out[cat] = (times.min(), times.max())
+    return out
+
+
+def widen_spans(spans: dict[int, Span], more: dict[int, Span]) -> dict[int, Span]:
+    """The spans of two chunks of one input, per category."""
+    out = dict(spans)
+    for cat, (lo, hi) in more.items():
+        out[cat] = (min(lo, out[cat][0]), max(hi, out[cat][1])) if cat in out else (lo, hi)
+    return out
+
+
+class NoRecords(LookupError):
+    """The inputs hold no record of a category the job needs."""
+
+    def __init__(self, category: int, loaded: Loaded):
+        self.category, self.loaded = category, loaded  # what was read: its skipped blocks and editions
+        super().__init__(f"no CAT{category:03d} records in the inputs")
+
+
+def load_measurements(paths: list[str | Path], sensors: pd.DataFrame, *, editions=None, date=None,
+                      format: str | None = None, adsb_sigma_m: float | None = None,
+                      chunk: int = MEASUREMENT_CHUNK_BYTES,
+                      progress: Progress | None = None) -> tuple[Loaded, pd.DataFrame]:
+    """Decode every input in chunks (asterix.iter_read, only DECODED_COLUMNS) straight into measurement
+    rows, and join them into one validated measurement frame (rows as build_measurements orders them:
+    every input's radar rows, then every input's ADS-B rows). The Loaded has no frames but the inputs,
+    errors, editions, date and time spans that ``load`` gives.
+
+    NoRecords when the inputs hold no CAT048 or no CAT021 record; UnknownRadar (every radar the sensor
+    table lacks, over all inputs) when a radar's site is missing. Records without a timestamp of their
+    own are dated by ``Loaded.date``, as with ``load``.
+    """
+    from pipeline.model.measurements import DECODED_COLUMNS, finish_measurements, impossible_positions
+    from pipeline.model.sensors import UnknownRadar
+
+    recs: list[Recording] = []
+    inputs: list[dict] = []
+    off_earth: list[pd.DataFrame] = []  # the CAT021 reports with a position off the Earth (damaged bytes)
+    spans: list[dict[int, Span]] = []
+    dates: list[dt.date | None] = []
+    radar: list[tuple[int, pd.DataFrame]] = []  # (input number, rows)
+    adsb: list[tuple[int, pd.DataFrame]] = []
+    missing: set[tuple] = set()
+    for i, p in enumerate(paths):
+        p = Path(p)
+        if progress:
+            progress.step(f"{p.name} ({i + 1}/{len(paths)})")
+        info = {"path": str(p), "sha256": sha256(p), "bytes": 0, "format": None, "records": {},
+                "skipped_blocks": 0, "editions": {}}
+        by_cat: dict[int, Span] = {}
+        first = True
+        for rec in asterix.iter_read(p, chunk=chunk, editions=editions, date=date, format=format,
+                                     columns=DECODED_COLUMNS):
+            if first:
+                dates.append(rec.date)
+                first = False
+            info["bytes"], info["format"] = rec.size_bytes, rec.format
+            for cat, frame in rec.frames.items():
+                info["records"][int(cat)] = info["records"].get(int(cat), 0) + len(frame)
+            info["skipped_blocks"] += len(rec.errors)
+            info["editions"].update(rec.editions)
+            # undated records are placed on UNDATED_DAY here and moved to Loaded.date below
+            by_cat = widen_spans(by_cat, time_spans(rec.frames, None))
+            frames, rec.frames = rec.frames, {}
+            r, a = _rows(frames, p.name, sensors, adsb_sigma_m, missing, off_earth)
+            del frames
+            radar += [(i, r)] if r is not None else []
+            adsb += [(i, a)] if a is not None else []
+            recs.append(rec)
+        if first:  # nothing at all in the file: iter_read yields no chunk
+            dates.append(None)
+        info["records"] = dict(sorted(info["records"].items()))
+        info["editions"] = dict(sorted(info["editions"].items()))
+        inputs.append(info)
+        spans.append(by_cat)
+    known = [d for d in dates if d is not None]
+    first_date = min(known) if known else None
+    if first_date is not None:  # undated inputs are dated by the earliest known date
+        shift = pd.Timestamp(first_date, tz="UTC") - UNDATED_DAY
+        undated = {i for i, d in enumerate(dates) if d is None}
+        for i, part in radar + adsb:
+            if i in undated:
+                part["time"] = part["time"] + shift
+        spans = [{c: (lo + shift, hi + shift) for c, (lo, hi) in s.items()} if i in undated else s
+                 for i, s in enumerate(spans)]
+    for cat in (48, 21):
+        if not any(info["records"].get(cat) for info in inputs):
+            raise NoRecords(cat, Loaded({}, recs, inputs, first_date, spans))
+    if missing:
+        raise UnknownRadar(sorted(missing, key=lambda pair: tuple((pd.isna(v), 0 if pd.isna(v) else v)
+                                                                   for v in pair)))
+    parts = [part for _, part in radar + adsb]
+    radar.clear()
+    adsb.clear()
+    release_free_memory()  # what the chunks' decoding freed, before the join needs room
+    meas = finish_measurements(parts)
+    release_free_memory()
+    warnings = impossible_positions(pd.concat(off_earth, ignore_index=True)) if off_earth else []
+    return Loaded({}, recs, inputs, first_date, spans, warnings), meas
+
+
+def release_free_memory() -> None:
+    """Give the heap pages freed so far back to the operating system (glibc's malloc_trim; nothing on
+    other C libraries): the chunks' freed columns would otherwise stay counted in the process's memory."""
+    try:
+        ctypes.CDLL("libc.so.6").malloc_trim(0)
+    except (OSError, AttributeError):
+        pass
+
+
+def _rows(frames: dict[int, pd.DataFrame], name: str, sensors: pd.DataFrame, adsb_sigma_m: float | None,
+          missing: set[tuple], off_earth: list[pd.DataFrame]
+          ) -> tuple[pd.DataFrame | None, pd.DataFrame | None]:
+    """Measurement rows of one decoded chunk, undated records on UNDATED_DAY; radars the sensor table
+    lacks are added to ``missing`` (the ADS-B rows are still built), CAT021 reports with a position off the
+    Earth (left out of the rows) to ``off_earth``."""
+    from pipeline.model.measurements import measurement_rows, off_earth_rows
+    from pipeline.model.sensors import UnknownRadar
+
+    for frame in frames.values():
+        frame["file"] = pd.Categorical.from_codes(np.zeros(len(frame), np.int8), [name])
+    bad = off_earth_rows(frames.get(21))
+    if len(bad):
+        off_earth.append(bad)
+    try:
+        return measurement_rows(frames.get(48), frames.get(21), sensors, adsb_sigma_m=adsb_sigma_m)
+    except UnknownRadar as exc:  # listed over every input at the end
+        missing |= set(exc.missing)
+        return None, measurement_rows(None, frames.get(21), adsb_sigma_m=adsb_sigma_m)[1]

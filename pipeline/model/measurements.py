@@ -22,13 +22,21 @@ from pipeline.model.geodesy import (
     polar_to_geodetic,
 )
 from pipeline.model.identity import assign_aircraft_id, normalise_address, normalise_callsign
-from pipeline.model.schema import conform, empty_measurements, validate
+from pipeline.model.schema import (
+    coded_text,
+    concat_columns,
+    conform,
+    empty_measurements,
+    text_categorical,
+    validate,
+)
 from pipeline.model.sensors import UnknownRadar, sensor_sites
 from pipeline.model.time import absolute_time
 
 __all__ = ["DECODED_COLUMNS", "NACP_95_M", "UnknownRadar", "adsb_measurements", "build_measurements",
-           "impossible_positions", "nacp_sigma_m", "normalise_address", "normalise_callsign",
-           "radar_measurements", "select", "sensor_id"]
+           "finish_measurements", "impossible_positions", "measurement_rows", "nacp_sigma_m",
+           "normalise_address", "normalise_callsign", "off_earth_rows", "radar_measurements", "select",
+           "sensor_id"]
 
 # The decoded CAT048/CAT021 columns build_measurements reads (besides sac, sic, time_of_day, day, timestamp
 # and offset, which every decoded frame has): jobs decode only these (asterix.read(columns=...))
@@ -45,10 +53,27 @@ CIRCULAR_95_PER_SIGMA = 2.45
 
 
 def sensor_id(category: int, sac, sic) -> pd.Series:
-    """Sensor ids "CCC:SAC/SIC" (e.g. "048:25/201"); SAC/SIC missing shows as "?"."""
-    sac = pd.Series(sac).astype("Int64").astype("string")
-    sic = pd.Series(sic).astype("Int64").astype("string")
-    return (f"{category:03d}:" + sac.fillna("?") + "/" + sic.fillna("?")).astype("string")
+    """Sensor ids "CCC:SAC/SIC" (e.g. "048:25/201"; SAC/SIC missing shows as "?") as the schema's
+    categorical text, formatted once per distinct pair."""
+    sac, sic = pd.Series(sac).astype("Int64"), pd.Series(sic).astype("Int64")
+    pairs = pd.DataFrame({"sac": sac.to_numpy(), "sic": sic.to_numpy()})
+    row_pair = pairs.groupby(["sac", "sic"], dropna=False, sort=False).ngroup().to_numpy()
+    first = pairs.drop_duplicates()
+    labels = [f"{category:03d}:{'?' if pd.isna(a) else a}/{'?' if pd.isna(b) else b}"
+              for a, b in zip(first["sac"], first["sic"], strict=True)]
+    return pd.Series(coded_text(row_pair, labels), index=sac.index)
+
+
+def _text(frame: pd.DataFrame, name: str) -> pd.Series:
+    """A decoded text column as the schema's categorical (all <NA> when the frame lacks it)."""
+    if name in frame:
+        return text_categorical(frame[name])
+    return pd.Series(coded_text(np.full(len(frame), -1), []), index=frame.index)
+
+
+def _labels(choice: np.ndarray, labels: list[str], index: pd.Index) -> pd.Series:
+    """Per row, ``labels[choice]`` as categorical text (one of a few fixed labels)."""
+    return pd.Series(coded_text(choice, labels), index=index)
 
 
 def _column(frame: pd.DataFrame, name: str, dtype: str = "float64") -> pd.Series:
@@ -62,16 +87,15 @@ def _common(frame: pd.DataFrame, category: int, kind: str, date: dt.date | None)
     out = pd.DataFrame(index=frame.index)
     out["time"] = absolute_time(frame, date)
     out["sac"], out["sic"] = _column(frame, "sac", "Int64"), _column(frame, "sic", "Int64")
-    out["sensor_id"] = sensor_id(category, out["sac"], out["sic"]).to_numpy()
-    out["sensor_kind"] = kind
+    out["sensor_id"] = sensor_id(category, out["sac"], out["sic"])
+    out["sensor_kind"] = _labels(np.zeros(len(frame), np.int64), [kind], frame.index)
     out["flight_level"] = _column(frame, "flight_level")
     out["ground_speed_kt"] = _column(frame, "ground_speed_kt")
     for name, norm in (("callsign", normalise_callsign), ("address", normalise_address)):
-        out[name] = (norm(frame[name]) if name in frame
-                     else pd.Series(pd.NA, index=frame.index, dtype="string"))
-    out["mode3a"] = _column(frame, "mode3a", "string")
+        out[name] = norm(text_categorical(frame[name])) if name in frame else _text(frame, name)
+    out["mode3a"] = _text(frame, "mode3a")
     out["track_number"] = _column(frame, "track_number", "Int64")
-    out["file"] = _column(frame, "file", "string")
+    out["file"] = _text(frame, "file")
     out["offset"] = _column(frame, "offset", "Int64")
     return out
 
@@ -141,8 +165,8 @@ def _radar_rows(cat048: pd.DataFrame, sensors: pd.DataFrame, date: dt.date | Non
     out["latitude"], out["longitude"] = lat, lon
     known = np.isfinite(alt_m)
     out["height_m"] = np.where(known, h, np.nan)
-    out["height_source"] = np.where(known, "flight_level", "none")
-    out["position_item"] = np.where(polar, "040", "042")
+    out["height_source"] = _labels(np.where(known, 0, 1), ["flight_level", "none"], out.index)
+    out["position_item"] = _labels(np.where(polar, 0, 1), ["040", "042"], out.index)
     out["cov_ee_m2"], out["cov_en_m2"], out["cov_nn_m2"] = _radar_covariance(site, lat, lon, h)
     return out
 
@@ -169,8 +193,8 @@ def _adsb_rows(cat021: pd.DataFrame, date: dt.date | None, adsb_sigma_m: float |
     geometric_m = _column(cat021, "geometric_height_ft").to_numpy() * 0.3048
     fl_m = flight_level_to_m(out["flight_level"].to_numpy())
     out["height_m"] = np.where(np.isfinite(geometric_m), geometric_m, fl_m)
-    out["height_source"] = np.where(np.isfinite(geometric_m), "geometric",
-                                    np.where(np.isfinite(fl_m), "flight_level", "none"))
+    out["height_source"] = _labels(np.where(np.isfinite(geometric_m), 0, np.where(np.isfinite(fl_m), 1, 2)),
+                                   ["geometric", "flight_level", "none"], out.index)
     var = nacp_sigma_m(out["nacp"]) ** 2
     if adsb_sigma_m is not None:
         var = np.where(out["nacp"].isna().to_numpy(bool), float(adsb_sigma_m) ** 2, var)
@@ -184,13 +208,19 @@ def _on_earth(frame: pd.DataFrame) -> pd.Series:
     return frame["latitude"].abs().le(90.0) & frame["longitude"].abs().le(180.0)
 
 
+def off_earth_rows(cat021: pd.DataFrame | None) -> pd.DataFrame:
+    """The CAT021 reports whose position is present but off the Earth (file, offset, latitude, longitude)."""
+    cols = [c for c in ("file", "offset", "latitude", "longitude") if cat021 is not None and c in cat021]
+    if cat021 is None or not {"latitude", "longitude"} <= set(cat021):
+        return pd.DataFrame(columns=cols)
+    present = cat021["latitude"].notna() & cat021["longitude"].notna()
+    return cat021.loc[(present & ~_on_earth(cat021)).to_numpy(bool), cols]
+
+
 def impossible_positions(cat021: pd.DataFrame | None) -> list[str]:
     """One warning per input file whose CAT021 reports carry a position off the Earth (I021/130 and /131
     can encode latitudes up to 180 and 360 deg): how many, and the first one's offset and value."""
-    if cat021 is None or not {"latitude", "longitude"} <= set(cat021):
-        return []
-    present = cat021["latitude"].notna() & cat021["longitude"].notna()
-    bad = cat021[(present & ~_on_earth(cat021)).to_numpy(bool)]
+    bad = off_earth_rows(cat021)
     files = bad["file"] if "file" in bad else pd.Series("input", index=bad.index)
     out = []
     for name, rows in bad.groupby(files.astype(str).to_numpy(), sort=False):
@@ -199,6 +229,35 @@ def impossible_positions(cat021: pd.DataFrame | None) -> list[str]:
                    f"{first['offset']}: latitude {first['latitude']:.4f}, longitude "
                    f"{first['longitude']:.4f}): damaged data, left out of the measurements")
     return out
+
+
+def measurement_rows(cat048: pd.DataFrame | None = None, cat021: pd.DataFrame | None = None,
+                     sensors: pd.DataFrame | None = None, *, date: dt.date | None = None,
+                     adsb_sigma_m: float | None = None) -> tuple[pd.DataFrame | None, pd.DataFrame | None]:
+    """The radar rows and the ADS-B rows of decoded frames (None where there are none) at the schema's
+    dtypes, without the columns worked out over the whole run (``aircraft_id``, ``sigma_major_m``):
+    a recording read in chunks builds these per chunk and joins them with ``finish_measurements``."""
+    radar = adsb = None
+    if cat048 is not None and len(cat048):
+        if sensors is None:
+            raise ValueError("radar measurements need the sensor table (radar sites)")
+        radar = conform(_radar_rows(cat048, sensors, date))
+    if cat021 is not None and len(cat021):
+        adsb = conform(_adsb_rows(cat021, date, adsb_sigma_m))
+    return (radar if radar is not None and len(radar) else None,
+            adsb if adsb is not None and len(adsb) else None)
+
+
+def finish_measurements(parts: list[pd.DataFrame]) -> pd.DataFrame:
+    """Parts from ``measurement_rows`` joined in order (column by column, see schema.concat_columns), with
+    the identity rule applied over all of them and each row's error-ellipse major axis; validated."""
+    if not parts:
+        return empty_measurements()
+    meas = concat_columns(parts)
+    meas["aircraft_id"] = assign_aircraft_id(meas)
+    meas["sigma_major_m"] = _sigma_major(meas["cov_ee_m2"].to_numpy(), meas["cov_en_m2"].to_numpy(),
+                                         meas["cov_nn_m2"].to_numpy())
+    return validate(meas)
 
 
 def build_measurements(cat048: pd.DataFrame | None = None, cat021: pd.DataFrame | None = None,
@@ -210,21 +269,8 @@ def build_measurements(cat048: pd.DataFrame | None = None, cat021: pd.DataFrame 
     ``adsb_sigma_m``: the 1-sigma error per axis (m) declared for ADS-B reports without NACp.
     Rows are in input order, radar first.
     """
-    parts = []
-    if cat048 is not None and len(cat048):
-        if sensors is None:
-            raise ValueError("radar measurements need the sensor table (radar sites)")
-        parts.append(_radar_rows(cat048, sensors, date))
-    if cat021 is not None and len(cat021):
-        parts.append(_adsb_rows(cat021, date, adsb_sigma_m))
-    parts = [conform(p) for p in parts if len(p)]
-    if not parts:
-        return empty_measurements()
-    meas = pd.concat(parts, ignore_index=True) if len(parts) > 1 else parts[0].reset_index(drop=True)
-    meas["aircraft_id"] = assign_aircraft_id(meas)
-    meas["sigma_major_m"] = _sigma_major(meas["cov_ee_m2"].to_numpy(), meas["cov_en_m2"].to_numpy(),
-                                         meas["cov_nn_m2"].to_numpy())
-    return validate(meas)
+    parts = measurement_rows(cat048, cat021, sensors, date=date, adsb_sigma_m=adsb_sigma_m)
+    return finish_measurements([p for p in parts if p is not None])
 
 
 def radar_measurements(cat048: pd.DataFrame, sensors: pd.DataFrame, *, date: dt.date | None = None):

@@ -9,7 +9,9 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import numpy as np
 import pandas as pd
+from pandas.api.types import union_categoricals
 
 
 @dataclass(frozen=True)
@@ -22,7 +24,16 @@ class Column:
     description: str
 
 
-_TEXT = "string"  # pandas string dtype, <NA> where absent
+# Text columns are categorical: each distinct text is stored once and every row holds a small integer code
+# (a week of recordings repeats a few sensors and thousands of aircraft over millions of rows). Categories
+# are the distinct texts in sorted order, so sorting and grouping by the codes is sorting by the text.
+_TEXT = "category"  # <NA> where absent
+LABEL_DTYPE = pd.StringDtype()  # the dtype of every text column's categories ("string", <NA> semantics)
+# Small nullable integers, sized to the widest field the ASTERIX items carry (SAC/SIC 8 bits, track number
+# 12 bits, NIC/NACp/NUCr/SIL/MOPS version at most 4 bits). Arithmetic in these dtypes can overflow: widen
+# first (``.astype("Int64")``). ``conform`` refuses values outside the dtype's range instead of wrapping.
+_SMALL = "Int8"
+_SHORT = "Int16"
 
 MEASUREMENT_SCHEMA: tuple[Column, ...] = (
     Column("time", "datetime64[ns, UTC]", "UTC",
@@ -31,8 +42,8 @@ MEASUREMENT_SCHEMA: tuple[Column, ...] = (
     Column("sensor_id", _TEXT, "",
            "Sensor: category, SAC and SIC as \"CCC:SAC/SIC\" (e.g. 048:25/201, 021:0/107)"),
     Column("sensor_kind", _TEXT, "", "\"radar\" (CAT048) or \"adsb\" (CAT021)"),
-    Column("sac", "Int64", "", "System area code of the sensor"),
-    Column("sic", "Int64", "", "System identification code of the sensor"),
+    Column("sac", _SHORT, "", "System area code of the sensor"),
+    Column("sic", _SHORT, "", "System identification code of the sensor"),
     Column("aircraft_id", _TEXT, "",
            "Aircraft identity assigned once (pipeline.model.identity): the 24-bit address, else "
            "\"CS:\" call sign, else \"M3A:\" Mode 3/A code; <NA> when the report has none"),
@@ -50,16 +61,16 @@ MEASUREMENT_SCHEMA: tuple[Column, ...] = (
     Column("address", _TEXT, "", "24-bit ICAO aircraft address, 6 upper-case hex digits"),
     Column("callsign", _TEXT, "", "Call sign (target identification), upper case without spaces"),
     Column("mode3a", _TEXT, "", "Mode 3/A code, 4 octal digits"),
-    Column("track_number", "Int64", "", "Sensor track number"),
+    Column("track_number", _SHORT, "", "Sensor track number"),
     Column("rho_nm", "float64", "NM", "Radar slant range (I048/040); NaN for ADS-B"),
     Column("theta_deg", "float64", "deg", "Radar azimuth clockwise from north (I048/040); NaN for ADS-B"),
     Column("position_item", _TEXT, "",
            "Source item of a radar position: \"040\" polar or \"042\" cartesian; <NA> for ADS-B"),
-    Column("nucp_nic", "Int64", "", "ADS-B NUCp (MOPS version 0) or NIC (versions 1, 2)"),
-    Column("nacp", "Int64", "", "ADS-B navigation accuracy category for position"),
-    Column("nucr_nacv", "Int64", "", "ADS-B NUCr or NACv"),
-    Column("sil", "Int64", "", "ADS-B source integrity level"),
-    Column("mops_version", "Int64", "", "ADS-B MOPS version (0, 1, 2)"),
+    Column("nucp_nic", _SMALL, "", "ADS-B NUCp (MOPS version 0) or NIC (versions 1, 2)"),
+    Column("nacp", _SMALL, "", "ADS-B navigation accuracy category for position"),
+    Column("nucr_nacv", _SMALL, "", "ADS-B NUCr or NACv"),
+    Column("sil", _SMALL, "", "ADS-B source integrity level"),
+    Column("mops_version", _SMALL, "", "ADS-B MOPS version (0, 1, 2)"),
     Column("cov_ee_m2", "float64", "m^2",
            "Horizontal position covariance, east-east, in the local east/north frame at the report; radar: "
            "from the sensor's range and azimuth sigmas with the slant-range geometry; ADS-B: "
@@ -81,7 +92,47 @@ class SchemaError(ValueError):
 
 def empty_measurements() -> pd.DataFrame:
     """A measurement frame with no rows and every column at its schema dtype."""
-    return pd.DataFrame({c.name: pd.Series(dtype=c.dtype) for c in MEASUREMENT_SCHEMA})
+    return conform(pd.DataFrame(index=pd.RangeIndex(0)))
+
+
+_INT_RANGES = {"Int8": (-(2**7), 2**7 - 1), "Int16": (-(2**15), 2**15 - 1)}
+
+
+def as_dtype(values: pd.Series, column: Column) -> pd.Series:
+    """``values`` cast to the column's dtype: text to sorted categories, small integers only when every
+    value fits (SchemaError naming the column otherwise: a cast would wrap silently)."""
+    if column.dtype == _TEXT:
+        return text_categorical(values)
+    if column.dtype in _INT_RANGES and str(values.dtype) != column.dtype:
+        lo, hi = _INT_RANGES[column.dtype]
+        numbers = pd.to_numeric(values, errors="coerce") if values.dtype == object else values
+        if len(values) and ((numbers < lo) | (numbers > hi)).fillna(False).to_numpy(bool).any():
+            raise SchemaError(f"measurement column {column.name!r} has values outside {lo}..{hi} "
+                              f"(its dtype is {column.dtype})")
+    return values.astype(column.dtype)
+
+
+def coded_text(codes, labels) -> pd.Categorical:
+    """Text from integer ``codes`` into ``labels`` (-1, or a missing label: <NA>) as the schema's
+    categorical: equal labels merged, categories sorted."""
+    labels = [None if lab is None or pd.isna(lab) else str(lab) for lab in labels]
+    texts = sorted({lab for lab in labels if lab is not None})
+    at = {t: k for k, t in enumerate(texts)}
+    remap = np.array([-1 if lab is None else at[lab] for lab in labels] + [-1], np.int64)
+    codes = np.asarray(codes, np.int64)
+    return pd.Categorical.from_codes(remap[np.where(codes >= 0, codes, len(labels))],
+                                     categories=pd.Index(texts, dtype=LABEL_DTYPE))
+
+
+def text_categorical(values: pd.Series) -> pd.Series:
+    """Text as the schema's categorical: categories of the pandas string dtype, in sorted order."""
+    if isinstance(values.dtype, pd.CategoricalDtype):
+        labels = values.cat.categories
+        if labels.dtype == LABEL_DTYPE and labels.is_monotonic_increasing:
+            return values
+        if pd.api.types.is_string_dtype(labels):  # same texts, recoded in sorted order
+            return values.cat.set_categories(pd.Index(sorted(labels), dtype=LABEL_DTYPE))
+    return values.astype(LABEL_DTYPE).astype(_TEXT)
 
 
 def conform(frame: pd.DataFrame) -> pd.DataFrame:
@@ -89,11 +140,34 @@ def conform(frame: pd.DataFrame) -> pd.DataFrame:
     out = {}
     for c in MEASUREMENT_SCHEMA:
         if c.name in frame:
-            out[c.name] = frame[c.name].astype(c.dtype)
+            out[c.name] = as_dtype(frame[c.name], c)
+        elif c.dtype == _TEXT:
+            out[c.name] = pd.Series(coded_text(np.full(len(frame), -1), []), index=frame.index)
         else:
-            out[c.name] = pd.Series(pd.NA if c.dtype in ("Int64", _TEXT) else float("nan"),
+            out[c.name] = pd.Series(pd.NA if c.dtype.startswith("Int") else float("nan"),
                                     index=frame.index).astype(c.dtype)
-    return pd.DataFrame(out, index=frame.index)
+    # a block per column (no consolidating copy): concat_columns frees them one by one
+    return pd.DataFrame(out, index=frame.index, copy=False)
+
+
+def concat_columns(parts: list[pd.DataFrame]) -> pd.DataFrame:
+    """Frames with the same columns end to end (index reset), built column by column and emptying the
+    parts as it goes (each part loses a column once it is copied), so the join never holds the parts and
+    the result whole at once. Categorical text keeps one sorted set of categories (pd.concat would turn
+    differing categories into objects)."""
+    if len(parts) == 1:
+        return parts[0].reset_index(drop=True)
+    out = {}
+    for name in list(parts[0].columns):
+        columns = [p[name] for p in parts]
+        if isinstance(columns[0].dtype, pd.CategoricalDtype):
+            out[name] = pd.Series(union_categoricals(columns, sort_categories=True))
+        else:
+            out[name] = pd.concat(columns, ignore_index=True)
+        del columns
+        for p in parts:
+            del p[name]
+    return pd.DataFrame(out, copy=False)
 
 
 def validate(frame: pd.DataFrame) -> pd.DataFrame:
@@ -105,6 +179,11 @@ def validate(frame: pd.DataFrame) -> pd.DataFrame:
         if str(frame[c.name].dtype) != c.dtype:
             raise SchemaError(f"measurement column {c.name!r} has dtype {frame[c.name].dtype}, "
                               f"the schema says {c.dtype}")
+        if c.dtype == _TEXT:
+            labels = frame[c.name].cat.categories
+            if len(labels) and not (labels.dtype == LABEL_DTYPE and labels.is_monotonic_increasing):
+                raise SchemaError(f"measurement column {c.name!r}: its categories must be text (string "
+                                  f"dtype, not {labels.dtype}) in sorted order")
     if frame["time"].isna().any():
         raise SchemaError("measurement column 'time' has missing values")
     kinds = set(frame["sensor_kind"].dropna().unique()) - {"radar", "adsb"}
@@ -131,6 +210,12 @@ def markdown() -> str:
         "One row per report of every sensor, radar and ADS-B alike; `validate(frame)` checks a frame against",
         "it. Derived for the thesis tables (not stored): `time_of_day`, seconds since midnight UTC of the",
         "run's first day (above 86400 after midnight), from `pipeline.model.time.with_clock`.",
+        "",
+        "Dtypes: `category` columns hold text as categories of the pandas string dtype in sorted order",
+        "(each distinct text stored once, a small integer code per row; sorting or grouping by the codes",
+        "is sorting by the text), `<NA>` where absent. `Int8`/`Int16` are nullable integers sized to the",
+        "ASTERIX field (SAC/SIC 8 bits, track number 12 bits, quality indicators 4 bits): widen them",
+        "before arithmetic that could overflow. Positions, heights, speeds and covariances are float64.",
         "",
         "| column | dtype | unit | description |",
         "|---|---|---|---|",

@@ -12,7 +12,7 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
-from pipeline.model.jumps import detect_jumps
+from pipeline.model.jumps import JUMP_FLAG_COLUMNS, JUMP_INPUTS, detect_jumps
 
 FILTER_KEYS = ["jumps", "nic_below_min", "nacp_below_min", "nic_missing_kept", "nacp_missing_kept"]
 
@@ -32,10 +32,13 @@ def apply_filters(meas: pd.DataFrame, *, drop_jumps: bool = False, min_nic: int 
     """Measurements with the ADS-B reports that fail the chosen filters removed (radar rows untouched,
     order kept, index reset), and the count per key of FILTER_KEYS."""
     is_adsb = (meas["sensor_kind"] == "adsb").to_numpy(bool)
-    kept, removed = _filter_adsb(meas[is_adsb], drop_jumps, min_nic, min_nacp, jump_kw)
+    if not drop_jumps and min_nic is None and min_nacp is None:  # nothing to remove: no copy
+        return meas.reset_index(drop=True), dict.fromkeys(FILTER_KEYS, 0)
+    read = [c for c in (*JUMP_INPUTS, *JUMP_FLAG_COLUMNS, "nucp_nic", "nacp") if c in meas]
+    kept, removed = _filter_adsb(meas[read][is_adsb], drop_jumps, min_nic, min_nacp, jump_kw)
     keep = ~is_adsb
     keep[np.flatnonzero(is_adsb)[kept]] = True
-    return meas[keep].reset_index(drop=True), removed
+    return (meas.reset_index(drop=True) if keep.all() else meas[keep].reset_index(drop=True)), removed
 
 
 def _filter_adsb(adsb_meas: pd.DataFrame, drop_jumps: bool, min_nic: int | None, min_nacp: int | None,
