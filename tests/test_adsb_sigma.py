@@ -168,18 +168,18 @@ def test_real_v023_recording_is_tracked_with_a_declared_sigma(tmp_path):
     assert r.tracks["aircraft_id"].nunique() >= 40  # 47 on 2026-11-22; 0 without --adsb-sigma
     rows = r.noise[r.noise["sensor_kind"] == "adsb"].set_index("motion")
     assert sorted(rows.index) == ["airborne", "surface"] and (rows["declared_from"] == "declared").all()
-    # Airborne and surface reports are separate classes. The last session's estimate per FOM level (PA
-    # read as NACp, on the 22 airborne tracks only, the ground bit of the decoded frame; benchmarks
-    # track_validation real) was 11.2-11.7 m for the level holding most reports and 5.5-5.8 m for the
-    # better one: the airborne class must sit near them, 5-15 m (10.9 m on 2026-11-23). Pooled with the
-    # surface reports it was 6.3 m and gated good airborne reports. A sigma near the declared 30 m would
-    # mean the residuals were not used.
+    # Airborne and surface reports are separate classes. The mean of the airborne residuals alone gives
+    # 10.9 m (2026-11-23), near the last session's 11.2-11.7 m per FOM level on the 22 airborne tracks
+    # (the decoded ground bit; benchmarks track_validation real); its heavy tail (time stamps 0.5-0.9 s
+    # late) then put 2 % of the reports beyond the 99.9 % gate, so the sigma is raised until 1 % is:
+    # above 10.9 m, and well below the declared 30 m (which would mean the residuals were not used).
+    # 19.4 m on 2026-11-23. Pooled with the surface reports it was 6.3 m.
     airborne, surface = rows.loc["airborne"], rows.loc["surface"]
-    assert 5.0 < airborne["estimated_sigma"] < 15.0 and airborne["residuals"] > 25_000
-    # taxiing and parked aircraft: residuals of a metre or two (1.4 m on 2026-11-23), far below airborne
+    assert 10.9 < airborne["estimated_sigma"] < 25.0 and airborne["residuals"] > 25_000
+    # taxiing and parked aircraft: residuals of a metre or two (2.8 m on 2026-11-23), far below airborne
     assert surface["estimated_sigma"] < airborne["estimated_sigma"] / 3 and surface["residuals"] > 15_000
-    # the pooled estimate gated 1,339 reports and broke the tracks into 365 segments (VLG7821's smooth
-    # approach into 112); --noise declared (30 m) 194 and 106
+    # the pooled estimate gated 1,339 reports and broke the tracks into 365 segments, VLG7821's smooth
+    # 1 Hz approach into 112 (--noise declared, 30 m: 194 and 106); 556 and 195 on 2026-11-23, VLG7821 4
     ac = r.result.aircraft.set_index("aircraft_id")
-    assert ac["gated"].sum() < 1000 and ac["segments"].sum() < 300
+    assert ac["gated"].sum() < 700 and ac["segments"].sum() < 250 and ac.loc["344282", "segments"] <= 10
     assert math.isfinite(r.parameters["adsb_sigma_m"]) and r.parameters["adsb_sigma_m"] == 30.0
