@@ -383,8 +383,8 @@ def _noise_text(noise) -> str:
     """The declared and estimated sigmas of --noise estimate, or nothing."""
     if noise is None or not len(noise):
         return ""
-    cols = ["sensor_id", "component", "unit", "declared_from", "declared_sigma", "estimated_sigma",
-            "residuals", "estimated"]
+    cols = [c for c in ("sensor_id", "component", "motion", "unit", "declared_from", "declared_sigma",
+                        "estimated_sigma", "residuals", "estimated") if c in noise]
     return (f"\n\nMeasurement noise estimated from the residuals ({noise.attrs.get('passes')} passes):\n"
             + noise[cols].to_string(index=False, float_format=lambda v: f"{v:.4g}"))
 

@@ -86,9 +86,12 @@ def test_noise_classes_keep_declared_apart_from_the_same_nacp_sigma():
     var = float(nacp_sigma_m([9])[0]) ** 2
     meas = pd.DataFrame({"sensor_id": ["021:0/1"] * 3, "sensor_kind": ["adsb"] * 3,
                          "cov_ee_m2": [var] * 3, "nacp": pd.array([9, pd.NA, 9], dtype="Int64")})
-    codes, keys = _classes(meas, np.full((3, 2), np.nan))
+    codes, keys = _classes(meas, np.full((3, 2), np.nan), np.zeros(3, bool))
     assert codes[0] == codes[2] != codes[1]
     assert sorted(k[4] for k in keys) == ["declared", "nacp"]
+    # the same report on the surface is a class of its own too
+    codes, keys = _classes(meas, np.full((3, 2), np.nan), np.array([False, False, True]))
+    assert len(set(codes)) == 3 and sorted(k[5] for k in keys) == ["airborne", "airborne", "surface"]
 
 
 def test_nacp_0_is_not_given_the_declared_sigma(recording, capsys):
@@ -163,12 +166,20 @@ def test_real_v023_recording_is_tracked_with_a_declared_sigma(tmp_path):
     r = track_job(TrackOptions(inputs=(str(REAL),), editions=("21=0.23",), sensors=sensors, all_aircraft=True,
                                output=str(tmp_path / "t.csv"), adsb_sigma_m=30.0, noise="estimate"))
     assert r.tracks["aircraft_id"].nunique() >= 40  # 47 on 2026-11-22; 0 without --adsb-sigma
-    row = r.noise[r.noise["sensor_kind"] == "adsb"]
-    assert len(row) == 1 and row["declared_from"].iloc[0] == "declared"
-    # One class for the whole file. The last session's estimate per FOM level (PA read as NACp, the 22
-    # airborne tracks only) was 11.2-11.7 m for the level holding most reports and 5.5-5.8 m for the
-    # better one; pooled, with the surface traffic (small residuals at taxi speed), the estimate must sit
-    # near or between them: 4-13 m. 6.3 m on 2026-11-22. A sigma near the declared 30 m would mean the
-    # residuals were not used.
-    assert 4.0 < row["estimated_sigma"].iloc[0] < 13.0
+    rows = r.noise[r.noise["sensor_kind"] == "adsb"].set_index("motion")
+    assert sorted(rows.index) == ["airborne", "surface"] and (rows["declared_from"] == "declared").all()
+    # Airborne and surface reports are separate classes. The mean of the airborne residuals alone gives
+    # 10.9 m (2026-11-23), near the last session's 11.2-11.7 m per FOM level on the 22 airborne tracks
+    # (the decoded ground bit; benchmarks track_validation real); its heavy tail (time stamps 0.5-0.9 s
+    # late) then put 2 % of the reports beyond the 99.9 % gate, so the sigma is raised until 1 % is:
+    # above 10.9 m, and well below the declared 30 m (which would mean the residuals were not used).
+    # 19.4 m on 2026-11-23. Pooled with the surface reports it was 6.3 m.
+    airborne, surface = rows.loc["airborne"], rows.loc["surface"]
+    assert 10.9 < airborne["estimated_sigma"] < 25.0 and airborne["residuals"] > 25_000
+    # taxiing and parked aircraft: residuals of a metre or two (2.8 m on 2026-11-23), far below airborne
+    assert surface["estimated_sigma"] < airborne["estimated_sigma"] / 3 and surface["residuals"] > 15_000
+    # the pooled estimate gated 1,339 reports and broke the tracks into 365 segments, VLG7821's smooth
+    # 1 Hz approach into 112 (--noise declared, 30 m: 194 and 106); 556 and 195 on 2026-11-23, VLG7821 4
+    ac = r.result.aircraft.set_index("aircraft_id")
+    assert ac["gated"].sum() < 700 and ac["segments"].sum() < 250 and ac.loc["344282", "segments"] <= 10
     assert math.isfinite(r.parameters["adsb_sigma_m"]) and r.parameters["adsb_sigma_m"] == 30.0
