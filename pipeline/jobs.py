@@ -42,6 +42,15 @@ ADSB_SIGMA_RANGE_M = (0.5, 20000.0)
 INDICATOR_RANGE = (0, 11)  # NIC and NACp values
 CHUNK_RANGE_MB = (0.1, 4096.0)
 SITE_ALTITUDE_RANGE_M = (-500.0, 6000.0)  # outside: almost certainly a wrong sensor file entry
+# A SAC/SIC not in the sensor file is taken for damage (its records left out, with a warning) when it has
+# fewer than max(STRAY_RADAR_RECORDS, STRAY_RADAR_SHARE x the CAT048 records) records: one damaged byte of
+# I048/010 makes one such record, and a second hit landing on the same wrong pair is rare (a flipped bit
+# gives one of 16 pairs), so 1-2 records are damage at any size; heavy damage spreads its phantoms over
+# many pairs, each well under 0.1 % of the records. A real radar turns in 4-12 s, so one aircraft in its
+# cover for a minute already makes 5-15 plots, and radars recorded together share the traffic, each
+# holding a large part of the plots: such a radar still stops the run with the sensor-file lines to add.
+STRAY_RADAR_RECORDS = 3
+STRAY_RADAR_SHARE = 0.001
 
 
 class OptionError(ValueError):
@@ -433,22 +442,67 @@ def _date_ignored(options: DecodingOptions, inputs: list[dict]) -> list[str]:
             for info in inputs if info["format"] in ("pcap", "pcapng")]
 
 
+def unknown_radar_error(missing: list[tuple[int, int]], sensors_path: str) -> JobError:
+    """The error for radars the sensor file lacks, with the TOML lines to add."""
+    from pipeline.model.sensors import sensor_toml_snippet
+
+    lines = "\n\n".join(sensor_toml_snippet(sac, sic) for sac, sic in missing)
+    return JobError(f"radar SAC/SIC {', '.join(f'{a}/{b}' for a, b in missing)} not in "
+                    f"{sensors_path}; add its position:\n\n{lines}")
+
+
+def declared_radar(cat048: pd.DataFrame | None, sensors: pd.DataFrame, sensors_path: str,
+                   warnings: list[str]) -> pd.DataFrame | None:
+    """The CAT048 records of radars the sensor file lists. Records of a SAC/SIC it lacks are left out with
+    a warning (file, SAC/SIC, count, first offset) when they are too few to be a radar (STRAY_RADAR_*) or
+    carry no SAC/SIC at all (no sensor entry could place them); a JobError with the TOML lines otherwise."""
+    from pipeline.model.sensors import undeclared_radars
+
+    if cat048 is None or cat048.empty:
+        return cat048
+    stray = undeclared_radars(cat048, sensors)
+    if stray.empty:
+        return cat048
+    limit = max(STRAY_RADAR_RECORDS, math.ceil(STRAY_RADAR_SHARE * len(cat048)))
+    per_pair = stray.groupby(["sac", "sic"], dropna=False, sort=False)["records"].transform("sum")
+    no_pair = (stray["sac"].isna() | stray["sic"].isna()).to_numpy(bool)
+    real = stray[~no_pair & (per_pair >= limit).to_numpy(bool)]
+    if len(real):
+        pairs = real[["sac", "sic"]].drop_duplicates().sort_values(["sac", "sic"])
+        raise unknown_radar_error([(int(a), int(b)) for a, b in pairs.itertuples(index=False)], sensors_path)
+    for row in stray.itertuples(index=False):
+        name = row.file if pd.notna(row.file) else "input"
+        if pd.isna(row.sac) or pd.isna(row.sic):
+            why = "carry no SAC/SIC (I048/010), so no sensor entry can place them"
+            pair = "without SAC/SIC"
+        else:
+            pair = f"from SAC/SIC {row.sac}/{row.sic}"
+            why = (f"not in {sensors_path} and too few for a radar (fewer than {limit}: the larger of "
+                   f"{STRAY_RADAR_RECORDS} and {STRAY_RADAR_SHARE:.1%} of the {len(cat048)} CAT048 records), "
+                   "taken for damaged data")
+        warnings.append(f"{name}: {row.records} CAT048 record(s) {pair} (first at offset {row.offset}) "
+                        f"{why}, left out of the measurements")
+    keys = pd.MultiIndex.from_arrays([cat048["sac"].astype("Int64"), cat048["sic"].astype("Int64")])
+    known = keys.isin(pd.MultiIndex.from_frame(sensors[["sac", "sic"]].astype("Int64")))
+    return cat048[known]
+
+
 def _measurements(loaded: Loaded, sensors: pd.DataFrame, sensors_path: str,
-                  adsb_sigma_m: float | None = None) -> pd.DataFrame:
-    """Radar and ADS-B measurements, with the user-facing errors for missing data and sensors."""
+                  adsb_sigma_m: float | None = None, warnings: list[str] | None = None) -> pd.DataFrame:
+    """Radar and ADS-B measurements, with the user-facing errors for missing data and sensors (stray radar
+    records are left out with a warning: declared_radar)."""
     from pipeline.model.measurements import build_measurements
-    from pipeline.model.sensors import UnknownRadar, sensor_toml_snippet
+    from pipeline.model.sensors import UnknownRadar
 
     for cat, name in ((48, "radar"), (21, "ADS-B")):
         if cat not in loaded.frames or loaded.frames[cat].empty:
             raise JobError(f"no {name} (CAT{cat:03d}) records in the inputs{_all_failed(loaded, cat)}")
+    radar = declared_radar(loaded.frames[48], sensors, sensors_path, warnings if warnings is not None else [])
     try:
-        return build_measurements(loaded.frames[48], loaded.frames[21], sensors, date=loaded.date,
+        return build_measurements(radar, loaded.frames[21], sensors, date=loaded.date,
                                   adsb_sigma_m=adsb_sigma_m)
     except UnknownRadar as exc:
-        lines = "\n\n".join(sensor_toml_snippet(sac, sic) for sac, sic in exc.missing)
-        raise JobError(f"radar SAC/SIC {', '.join(f'{a}/{b}' for a, b in exc.missing)} not in "
-                       f"{sensors_path}; add its position:\n\n{lines}") from exc
+        raise unknown_radar_error(exc.missing, sensors_path) from exc
 
 
 def _all_failed(loaded: Loaded, cat: int) -> str:
@@ -593,7 +647,8 @@ def _marked_measurements(loaded: Loaded, checked: Checked, options: AircraftOpti
                          split_adsb: bool = False) -> pd.DataFrame:
     """The measurements with their duplicate and jump flags (once per job; correlate counts each window's
     jumps); the decoded frames are freed as soon as the measurements hold what the job needs."""
-    meas = _measurements(loaded, checked.sensors, str(options.sensors), options.adsb_sigma_m)
+    meas = _measurements(loaded, checked.sensors, str(options.sensors), options.adsb_sigma_m,
+                         checked.warnings)
     loaded.drop_frames()
     return mark_once(meas, split_adsb=split_adsb)
 

@@ -127,7 +127,7 @@ def _measurements(loaded, checked: Checked, options: TrackOptions) -> pd.DataFra
     """Measurements of the requested sources (one of them must be present), repeated reports dropped."""
     from pipeline.model.dedup import duplicate_mask
     from pipeline.model.measurements import build_measurements
-    from pipeline.model.sensors import UnknownRadar, sensor_toml_snippet
+    from pipeline.model.sensors import UnknownRadar
 
     sources = _sources(options.sources)
     radar = loaded.frames.get(48) if "radar" in sources else None
@@ -137,13 +137,12 @@ def _measurements(loaded, checked: Checked, options: TrackOptions) -> pd.DataFra
     if radar is None and adsb is None:
         wanted = " or ".join({"radar": "radar (CAT048)", "adsb": "ADS-B (CAT021)"}[s] for s in sources)
         raise JobError(f"no {wanted} records in the inputs (--sources {','.join(sources)})")
+    radar = jobs.declared_radar(radar, checked.sensors, str(options.sensors), checked.warnings)
     try:
         meas = build_measurements(radar, adsb, checked.sensors, date=loaded.date,
                                   adsb_sigma_m=options.adsb_sigma_m)
     except UnknownRadar as exc:
-        lines = "\n\n".join(sensor_toml_snippet(sac, sic) for sac, sic in exc.missing)
-        raise JobError(f"radar SAC/SIC {', '.join(f'{a}/{b}' for a, b in exc.missing)} not in "
-                       f"{options.sensors}; add its position:\n\n{lines}") from exc
+        raise jobs.unknown_radar_error(exc.missing, str(options.sensors)) from exc
     from pipeline.track.associate import join_by_track_number
 
     meas, joined = join_by_track_number(meas, max_gap_s=float(options.max_coast_s))
