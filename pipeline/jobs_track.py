@@ -59,7 +59,7 @@ def _sources(value) -> tuple[str, ...]:
 def check_tracking(options: TrackOptions) -> float:
     """The tracker's options shared by track and conflicts (--step, --max-coast, --tpm, --noise); OptionError
     if bad, else the step (s)."""
-    from pipeline.track import parse_tpm
+    from pipeline.track import check_tpm
 
     step = options.step_s
     if not isinstance(step, int | float) or not math.isfinite(step) or not step > 0.0:
@@ -69,9 +69,9 @@ def check_tracking(options: TrackOptions) -> float:
     if not isinstance(coast, int | float) or not math.isfinite(coast) or coast < step:
         raise OptionError(f"--max-coast {coast!r}: must be a finite number of seconds >= --step ({step:g})")
     jobs._number("--max-coast", coast, *MAX_COAST_RANGE_S, " s")
-    if options.tpm is not None:
+    if options.tpm is not None:  # every update interval in use: up to --max-coast, coasting cycles of 1 s
         try:
-            parse_tpm(str(options.tpm))
+            check_tpm(str(options.tpm), max(float(coast), float(step), 1.0))
         except ValueError as exc:
             raise OptionError(f"--tpm {options.tpm!r}: {str(exc).partition(': ')[2]}") from None
     if options.noise not in NOISE:

@@ -47,6 +47,7 @@ BAD = [
     (opts(method="montecarlo"), "--method 'montecarlo'"),
     (opts(step_s=0.0), "--step 0.0"),
     (opts(tpm="banana"), "--tpm 'banana'"),
+    (opts(tpm="dynamic:-1,2"), "--tpm 'dynamic:-1,2': p(T) = min(0.995, -1 - 2 T) is -1 at T = 0 s"),
     (opts(output="c.parquet"), "-o c.parquet: must end in .csv or .xlsx"),
     (opts(output=None), "-o: give the output"),
     (opts(json="c.txt"), "--json c.txt"),

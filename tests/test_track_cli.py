@@ -39,6 +39,13 @@ BAD = [
     (opts(tpm="fixed:1.5"), "--tpm 'fixed:1.5'"),
     (opts(tpm="expm:-3"), "--tpm 'expm:-3'"),
     (opts(tpm="banana"), "--tpm 'banana'"),
+    # p(T) = min(0.995, A - B T) must be a probability above 0 at every interval up to --max-coast: -1 at
+    # T = 0 here, and 1 - 0.02 x 60 = -0.2 at the default --max-coast (the kernel clamped both to 0)
+    (opts(tpm="dynamic:-1,2"), "--tpm 'dynamic:-1,2': p(T) = min(0.995, -1 - 2 T) is -1 at T = 0 s"),
+    (opts(tpm="dynamic:1,0.02"), "is -0.2 at T = 60 s; it must stay above 0"),
+    (opts(tpm="dynamic", max_coast_s=300.0), "at T = 300 s"),  # the paper's law ends at 200.4 s
+    (opts(tpm="expm:0.001"), "sojourn times from 0.01 to 10,000,000 seconds"),
+    (opts(tpm="expm:150,1e-320"), "--tpm 'expm:150,1e-320'"),  # 1/TAU overflows: NaN probabilities
     (opts(smoother="two-filter"), "--smoother 'two-filter': must be one of rts, imm"),
     (opts(sources=("radar", "mlat")), "--sources 'radar,mlat'"),
     (opts(sources=()), "--sources"),
