@@ -26,6 +26,7 @@ from pipeline.jobs_track import (
     TrackOptions,
     _estimate_noise,
     _measurements,
+    check_track_rows,
     check_tracking,
     untrackable,
 )
@@ -169,6 +170,7 @@ def conflict_job(options: ConflictOptions, *, progress: Progress | None = None,
     if progress:
         progress.stage("Tracking")
     meas = _measurements(loaded, checked, options)
+    check_track_rows(meas, options, len(horizons), f"predictions ({len(horizons)} horizon(s) a track row)")
     noise = None
     if options.noise == "estimate":
         meas, noise = _estimate_noise(meas, checked.sensors, options)

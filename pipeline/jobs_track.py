@@ -26,6 +26,12 @@ SOURCES = ("radar", "adsb")
 NOISE = ("declared", "estimate")  # --noise: the sensor file's sigmas and NACp, or estimated from residuals
 STEP_RANGE_S = (1e-3, 3600.0)  # below 1 ms the grid explodes (a day would be 86 M rows per aircraft)
 MAX_COAST_RANGE_S = (0.0, 86400.0)
+# Rows the tracker may put out (grid samples plus report times) in one run: each costs about 570 bytes
+# through estimation and the table (measured: fixtures --all, 33 k rows at --step 1 against 177 k at 0.1:
+# +82 MB), so 4 M rows hold about 2.3 GB; 300 aircraft for an hour at 1 s make 1.1 M. --step alone cannot
+# bound this (the same step is harmless on one aircraft and huge on a day of traffic), so it is counted
+# after decoding, before tracking.
+MAX_TRACK_ROWS = 4_000_000
 # the columns of the track table, in order (issue 10); the tracker's other columns follow
 TRACK_COLUMNS = ["aircraft_id", "callsign", "address", "time", "time_of_day", "latitude", "longitude",
                  "flight_level", "speed_kt", "track_deg", "turn_rate_dps", "sigma_major_m", "sigma_minor_m",
@@ -77,6 +83,31 @@ def check_tracking(options: TrackOptions) -> float:
     if options.noise not in NOISE:
         raise OptionError(f"--noise {options.noise!r}: must be one of {', '.join(NOISE)}")
     return step
+
+
+def track_rows(meas: pd.DataFrame, step_s: float, max_coast_s: float) -> int:
+    """An upper bound on the rows ``track`` will put out: per aircraft, the grid of step_s over the time its
+    reports cover (each gap up to max_coast_s, and max_coast_s after the last), plus one row per report."""
+    if meas.empty:
+        return 0
+    t = meas["time"].dt.as_unit("ns").astype("int64").to_numpy() / 1e9
+    ids = pd.factorize(meas["aircraft_id"])[0]
+    order = np.lexsort((t, ids))
+    t, ids = t[order], ids[order]
+    gap = np.diff(t)
+    same = ids[1:] == ids[:-1]
+    covered = float(np.minimum(gap[same], max_coast_s).sum()) + max_coast_s * (int(ids.max()) + 1)
+    return int(covered / step_s) + 2 * (int(ids.max()) + 1) + len(meas)
+
+
+def check_track_rows(meas: pd.DataFrame, options: TrackOptions, per_row: int = 1, what: str = "") -> None:
+    """OptionError naming --step when the run would put out more than MAX_TRACK_ROWS rows (``per_row``
+    rows for each track row, e.g. one prediction per horizon)."""
+    rows = track_rows(meas, float(options.step_s), float(options.max_coast_s)) * per_row
+    if rows > MAX_TRACK_ROWS:
+        raise OptionError(f"--step {options.step_s:g}: the tracks of these {meas['aircraft_id'].nunique()} "
+                          f"aircraft would need about {rows:,} {what or 'output rows'}, more than "
+                          f"{MAX_TRACK_ROWS:,}; use a longer --step or fewer aircraft")
 
 
 def validate(options: TrackOptions) -> Checked:
@@ -187,6 +218,7 @@ def track_job(options: TrackOptions, *, progress: Progress | None = None, checke
     meas = _measurements(loaded, checked, options)
     joined = int(meas.attrs.get("joined_by_track_number", 0))
     meas = _select(meas, options)
+    check_track_rows(meas, options)
     noise = None
     if options.noise == "estimate":
         meas, noise = _estimate_noise(meas, checked.sensors, options)
