@@ -32,7 +32,8 @@ def opts(**kw) -> ConflictOptions:
 
 
 BAD = [
-    (opts(horizons_s="20,x"), "--horizon 'x'"),
+    (opts(horizons_s="20,x"), "--horizon '20,x': item 2 'x' is not a number"),
+    (opts(horizons_s="20,,60"), "--horizon '20,,60': item 2 is empty"),  # named '' before
     (opts(horizons_s="20,20"), "repeated"),
     (opts(horizons_s="0"), "--horizon 0.0"),
     (opts(horizons_s="15", step_s=10.0), "--horizon 15: must be a whole multiple of --step (10 s)"),
