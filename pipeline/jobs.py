@@ -922,6 +922,16 @@ class DecodeResult:
     skipped: list[tuple[str, int, str]]
     warnings: list[str]
     notes: list[str] = field(default_factory=list)
+    held: dict[str, dict[int, int]] = field(default_factory=dict)  # per input: data blocks per category
+
+    def nothing_decoded(self, categories: tuple[int, ...] = ()) -> str:
+        """Why no record decoded, naming what each input holds (a --category the inputs lack, most often)."""
+        asked = f" with --category {','.join(str(c) for c in categories)}" if categories else ""
+        def listed(cats: dict[int, int]) -> str:
+            return ", ".join(f"CAT{c:03d} ({n} block(s))" for c, n in sorted(cats.items())) or "no data block"
+
+        holds = "; ".join(f"{path} holds {listed(cats)}" for path, cats in self.held.items())
+        return f"nothing could be decoded{asked}" + (f": {holds}" if holds else "")
 
 
 def decode_job(options: DecodeOptions, *, on_chunk: Callable[[int, int, str], None] | None = None
@@ -941,10 +951,12 @@ def decode_job(options: DecodeOptions, *, on_chunk: Callable[[int, int, str], No
     skipped: list[tuple[str, int, str]] = []
     notes: list[str] = []
     cats = list(options.categories) or None
+    held: dict[str, dict[int, int]] = {}
     try:
         present: set[int] = set()
         for path in checked.inputs:
-            present |= set(categories_in(path, format=options.format)) & {21, 48}
+            held[str(path)] = categories_in(path, format=options.format)
+            present |= set(held[str(path)]) & {21, 48}
         several = len(present & set(cats or present)) > 1
         for path in checked.inputs:
             size = path.stat().st_size
@@ -966,7 +978,7 @@ def decode_job(options: DecodeOptions, *, on_chunk: Callable[[int, int, str], No
         for w in writers.values():
             if hasattr(w, "close"):
                 w.close()
-    return DecodeResult(counts, outputs, skipped, checked.warnings, notes)
+    return DecodeResult(counts, outputs, skipped, checked.warnings, notes, held)
 
 
 def _write_chunk(out: Path, cat: int, frame: pd.DataFrame, outputs: dict, writers: dict, several: bool,

@@ -272,6 +272,24 @@ def test_nothing_decoded_writes_no_csv(tmp_path, capsys):
     assert _contents(out) == set()
 
 
+def test_a_category_the_input_lacks_is_named_with_what_it_holds(tmp_path, capsys):
+    """decode <radar file> --category 21 said only 'nothing could be decoded'; it names what the file holds,
+    its blocks counted here by walking the raw headers (CAT, 2-byte LEN) independently of the decoder."""
+    radar = Path(__file__).resolve().parents[1] / "fixtures" / "radar.ast"
+    data, at, blocks = radar.read_bytes(), 0, 0
+    while at < len(data):
+        assert data[at] == 48
+        at += int.from_bytes(data[at + 1:at + 3], "big")
+        blocks += 1
+    out = tmp_path / "out"
+    out.mkdir()
+    status, _, err = _run(["decode", str(radar), "--category", "21", "-o", str(out / "x.csv")], capsys)
+    assert status == 1 and "Traceback" not in err
+    assert (f"msdc: nothing could be decoded with --category 21: {radar} holds CAT048 ({blocks} block(s))"
+            in err)
+    assert _contents(out) == set()
+
+
 def test_filter_removing_every_report_says_so(tmp_path, capsys):
     # --min-nacp 11: no fixture ADS-B report reaches NACp 11 (the simulator's NACp is 8 to 10)
     out = tmp_path / "out"
