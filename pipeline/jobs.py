@@ -487,19 +487,32 @@ def declared_radar(cat048: pd.DataFrame | None, sensors: pd.DataFrame, sensors_p
     return cat048[known]
 
 
+# What a quality run without one of the categories cannot fill (the others need only the sensor's own reports)
+_WITHOUT = {48: "the Radar accuracy and Radar biases sheets are empty",
+            21: "the ADS-B quality sheets are empty, and so are Radar accuracy and Radar biases (ADS-B is "
+                "their reference)"}
+
+
 def _measurements(loaded: Loaded, sensors: pd.DataFrame, sensors_path: str,
-                  adsb_sigma_m: float | None = None, warnings: list[str] | None = None) -> pd.DataFrame:
+                  adsb_sigma_m: float | None = None, warnings: list[str] | None = None, *,
+                  either: bool = False) -> pd.DataFrame:
     """Radar and ADS-B measurements, with the user-facing errors for missing data and sensors (stray radar
-    records are left out with a warning: declared_radar)."""
+    records are left out with a warning: declared_radar). ``either`` (quality): one category is enough,
+    the other's absence is a warning saying which sheets stay empty."""
     from pipeline.model.measurements import build_measurements
     from pipeline.model.sensors import UnknownRadar
 
-    for cat, name in ((48, "radar"), (21, "ADS-B")):
-        if cat not in loaded.frames or loaded.frames[cat].empty:
-            raise JobError(f"no {name} (CAT{cat:03d}) records in the inputs{_all_failed(loaded, cat)}")
-    radar = declared_radar(loaded.frames[48], sensors, sensors_path, warnings if warnings is not None else [])
+    warnings = warnings if warnings is not None else []
+    names = {48: "radar", 21: "ADS-B"}
+    absent = [cat for cat in names if cat not in loaded.frames or loaded.frames[cat].empty]
+    if absent and not (either and len(absent) == 1):
+        cat = absent[0]
+        raise JobError(f"no {names[cat]} (CAT{cat:03d}) records in the inputs{_all_failed(loaded, cat)}")
+    warnings += [f"no {names[cat]} (CAT{cat:03d}) records in the inputs{_all_failed(loaded, cat)}: "
+                 f"{_WITHOUT[cat]}" for cat in absent]
+    radar = declared_radar(loaded.frames.get(48), sensors, sensors_path, warnings)
     try:
-        return build_measurements(radar, loaded.frames[21], sensors, date=loaded.date,
+        return build_measurements(radar, loaded.frames.get(21), sensors, date=loaded.date,
                                   adsb_sigma_m=adsb_sigma_m)
     except UnknownRadar as exc:
         raise unknown_radar_error(exc.missing, sensors_path) from exc
@@ -644,11 +657,11 @@ def far_separations(run: CorrelationRun, meas: pd.DataFrame, sensors: pd.DataFra
 
 
 def _marked_measurements(loaded: Loaded, checked: Checked, options: AircraftOptions, *,
-                         split_adsb: bool = False) -> pd.DataFrame:
+                         split_adsb: bool = False, either: bool = False) -> pd.DataFrame:
     """The measurements with their duplicate and jump flags (once per job; correlate counts each window's
     jumps); the decoded frames are freed as soon as the measurements hold what the job needs."""
     meas = _measurements(loaded, checked.sensors, str(options.sensors), options.adsb_sigma_m,
-                         checked.warnings)
+                         checked.warnings, either=either)
     loaded.drop_frames()
     return mark_once(meas, split_adsb=split_adsb)
 
@@ -816,10 +829,12 @@ def quality_job(options: QualityOptions, *, progress: Progress | None = None, ch
     loaded = _load(options, checked, progress)
     if progress:
         progress.stage("Analysing data quality")
-    meas = _marked_measurements(loaded, checked, options)
+    absent = [cat for cat in _WITHOUT if cat not in loaded.frames or loaded.frames[cat].empty]
+    meas = _marked_measurements(loaded, checked, options, either=True)
     quality = _quality(meas, checked.sensors, options)
     params = {**_parameters(options, loaded, started, command), "callsign": options.callsign,
-              "address": options.address, "gap_s": options.gap_s}
+              "address": options.address, "gap_s": options.gap_s,
+              "notes": [f"no CAT{cat:03d} records in the inputs: {_WITHOUT[cat]}" for cat in absent]}
     return QualityJobResult(options, checked, quality, params, loaded)
 
 
