@@ -276,7 +276,7 @@ def cmd_decode(args) -> int:
     if result.skipped:
         print(f"msdc: {len(result.skipped)} block(s) skipped", file=sys.stderr)
     if sum(result.counts.values()) == 0:
-        print("msdc: nothing could be decoded", file=sys.stderr)
+        print(f"msdc: {result.nothing_decoded(options.categories)}", file=sys.stderr)
         return 1
     return 0
 

@@ -49,6 +49,15 @@ ADSB_SIGMA_RANGE_M = (0.5, 20000.0)
 INDICATOR_RANGE = (0, 11)  # NIC and NACp values
 CHUNK_RANGE_MB = (0.1, 4096.0)
 SITE_ALTITUDE_RANGE_M = (-500.0, 6000.0)  # outside: almost certainly a wrong sensor file entry
+# A SAC/SIC not in the sensor file is taken for damage (its records left out, with a warning) when it has
+# fewer than max(STRAY_RADAR_RECORDS, STRAY_RADAR_SHARE x the CAT048 records) records: one damaged byte of
+# I048/010 makes one such record, and a second hit landing on the same wrong pair is rare (a flipped bit
+# gives one of 16 pairs), so 1-2 records are damage at any size; heavy damage spreads its phantoms over
+# many pairs, each well under 0.1 % of the records. A real radar turns in 4-12 s, so one aircraft in its
+# cover for a minute already makes 5-15 plots, and radars recorded together share the traffic, each
+# holding a large part of the plots: such a radar still stops the run with the sensor-file lines to add.
+STRAY_RADAR_RECORDS = 3
+STRAY_RADAR_SHARE = 0.001
 
 
 class OptionError(ValueError):
@@ -421,43 +430,106 @@ def _date_ignored(options: DecodingOptions, inputs: list[dict]) -> list[str]:
 
 
 def _load_measurements(options: AircraftOptions, checked: Checked, progress: Progress | None,
-                       stage: str) -> tuple[Loaded, pd.DataFrame]:
+                       stage: str, *, either: bool = False) -> tuple[Loaded, pd.DataFrame]:
     """Decode the inputs chunk by chunk straight into radar and ADS-B measurements (load_measurements),
-    with the user-facing errors for unreadable inputs, missing data and sensors. ``stage`` is the progress
-    stage shown once the inputs are read (before a missing-data or missing-sensor error too)."""
+    with the user-facing errors for unreadable inputs, missing data and sensors (stray radar records are
+    left out with a warning: _stray_verdict). ``stage`` is the progress stage shown once the inputs are
+    read (before a missing-data or missing-sensor error too). ``either`` (quality): one category is
+    enough, the other's absence is a warning saying which sheets stay empty."""
     from asterix.errors import UnreadableInput
-    from pipeline.model.sensors import UnknownRadar
 
     try:
         loaded, meas = load_measurements(checked.inputs, checked.sensors, editions=checked.editions or None,
                                          date=options.date, format=options.format,
-                                         adsb_sigma_m=options.adsb_sigma_m, progress=progress)
+                                         adsb_sigma_m=options.adsb_sigma_m, progress=progress, either=either)
     except UnreadableInput as exc:
         raise JobError(str(exc), 2) from exc
-    except (NoRecords, UnknownRadar) as exc:
+    except NoRecords as exc:
         if progress:
             progress.stage(stage)
-        raise _data_error(exc, options.sensors) from exc
+        raise _no_records(exc) from exc
     if progress:
         progress.stage(stage)
+    if len(loaded.stray_radar):
+        n_cat048 = sum(info["records"].get(48, 0) for info in loaded.inputs)
+        _stray_verdict(loaded.stray_radar, n_cat048, str(options.sensors), checked.warnings)
+    checked.warnings += [f"no {name} (CAT{cat:03d}) records in the inputs{_all_failed(loaded, cat)}: "
+                         f"{_WITHOUT[cat]}" for cat, name in ((48, "radar"), (21, "ADS-B"))
+                         if cat in absent_categories(loaded)]
     checked.warnings += _order_warnings(checked.inputs, loaded.spans)
     checked.warnings += _date_ignored(options, loaded.inputs)
     checked.warnings += loaded.warnings
     return loaded, meas
 
 
-def _data_error(exc: Exception, sensors_path) -> JobError:
-    """The user-facing error for inputs without radar or ADS-B records, or with a radar not in the sensor
-    file (with the TOML lines to add)."""
+def _no_records(exc: NoRecords) -> JobError:
+    """The user-facing error for inputs without radar or ADS-B records."""
+    kind = "radar" if exc.category == 48 else "ADS-B"
+    return JobError(f"no {kind} (CAT{exc.category:03d}) records in the inputs"
+                    f"{_all_failed(exc.loaded, exc.category)}")
+
+
+def absent_categories(loaded: Loaded) -> list[int]:
+    """Which of CAT048 and CAT021 no input holds a record of."""
+    return [cat for cat in (48, 21) if not any(info["records"].get(cat) for info in loaded.inputs)]
+
+
+def unknown_radar_error(missing: list[tuple[int, int]], sensors_path: str) -> JobError:
+    """The error for radars the sensor file lacks, with the TOML lines to add."""
     from pipeline.model.sensors import sensor_toml_snippet
 
-    if isinstance(exc, NoRecords):
-        kind = "radar" if exc.category == 48 else "ADS-B"
-        return JobError(f"no {kind} (CAT{exc.category:03d}) records in the inputs"
-                        f"{_all_failed(exc.loaded, exc.category)}")
-    lines = "\n\n".join(sensor_toml_snippet(sac, sic) for sac, sic in exc.missing)
-    return JobError(f"radar SAC/SIC {', '.join(f'{a}/{b}' for a, b in exc.missing)} not in "
+    lines = "\n\n".join(sensor_toml_snippet(sac, sic) for sac, sic in missing)
+    return JobError(f"radar SAC/SIC {', '.join(f'{a}/{b}' for a, b in missing)} not in "
                     f"{sensors_path}; add its position:\n\n{lines}")
+
+
+def declared_radar(cat048: pd.DataFrame | None, sensors: pd.DataFrame, sensors_path: str,
+                   warnings: list[str]) -> pd.DataFrame | None:
+    """The CAT048 records of radars the sensor file lists. Records of a SAC/SIC it lacks are left out with
+    a warning (file, SAC/SIC, count, first offset) when they are too few to be a radar (STRAY_RADAR_*) or
+    carry no SAC/SIC at all (no sensor entry could place them); a JobError with the TOML lines otherwise."""
+    from pipeline.model.sensors import undeclared_radars
+
+    if cat048 is None or cat048.empty:
+        return cat048
+    stray = undeclared_radars(cat048, sensors)
+    if stray.empty:
+        return cat048
+    _stray_verdict(stray, len(cat048), sensors_path, warnings)
+    keys = pd.MultiIndex.from_arrays([cat048["sac"].astype("Int64"), cat048["sic"].astype("Int64")])
+    known = keys.isin(pd.MultiIndex.from_frame(sensors[["sac", "sic"]].astype("Int64")))
+    return cat048[known]
+
+
+def _stray_verdict(stray: pd.DataFrame, n_cat048: int, sensors_path: str, warnings: list[str]) -> None:
+    """Judge the records of SAC/SIC pairs the sensor file lacks (undeclared_radars' table, over the run's
+    n_cat048 CAT048 records): a JobError with the TOML lines for a pair with enough records to be a radar,
+    else one warning per pair and file, the records being left out."""
+    limit = max(STRAY_RADAR_RECORDS, math.ceil(STRAY_RADAR_SHARE * n_cat048))
+    per_pair = stray.groupby(["sac", "sic"], dropna=False, sort=False)["records"].transform("sum")
+    no_pair = (stray["sac"].isna() | stray["sic"].isna()).to_numpy(bool)
+    real = stray[~no_pair & (per_pair >= limit).to_numpy(bool)]
+    if len(real):
+        pairs = real[["sac", "sic"]].drop_duplicates().sort_values(["sac", "sic"])
+        raise unknown_radar_error([(int(a), int(b)) for a, b in pairs.itertuples(index=False)], sensors_path)
+    for row in stray.itertuples(index=False):
+        name = row.file if pd.notna(row.file) else "input"
+        if pd.isna(row.sac) or pd.isna(row.sic):
+            why = "carry no SAC/SIC (I048/010), so no sensor entry can place them"
+            pair = "without SAC/SIC"
+        else:
+            pair = f"from SAC/SIC {row.sac}/{row.sic}"
+            why = (f"not in {sensors_path} and too few for a radar (fewer than {limit}: the larger of "
+                   f"{STRAY_RADAR_RECORDS} and {STRAY_RADAR_SHARE:.1%} of the {n_cat048} CAT048 records), "
+                   "taken for damaged data")
+        warnings.append(f"{name}: {row.records} CAT048 record(s) {pair} (first at offset {row.offset}) "
+                        f"{why}, left out of the measurements")
+
+
+# What a quality run without one of the categories cannot fill (the others need only the sensor's own reports)
+_WITHOUT = {48: "the Radar accuracy and Radar biases sheets are empty",
+            21: "the ADS-B quality sheets are empty, and so are Radar accuracy and Radar biases (ADS-B is "
+                "their reference)"}
 
 
 def _all_failed(loaded: Loaded, cat: int) -> str:
@@ -611,11 +683,11 @@ def far_separations(run: CorrelationRun, meas: pd.DataFrame, sensors: pd.DataFra
 
 
 def _marked_measurements(options: AircraftOptions, checked: Checked, progress: Progress | None, stage: str,
-                         *, split_adsb: bool = False) -> tuple[Loaded, pd.DataFrame]:
+                         *, split_adsb: bool = False, either: bool = False) -> tuple[Loaded, pd.DataFrame]:
     """The inputs and their measurements with the duplicate and jump flags (once per job; correlate counts
     each window's jumps); decoded columns are held one chunk at a time (see _load_measurements).
     ``stage`` is the progress stage shown once the inputs are read."""
-    loaded, meas = _load_measurements(options, checked, progress, stage)
+    loaded, meas = _load_measurements(options, checked, progress, stage, either=either)
     meas = mark_once(meas, split_adsb=split_adsb)
     release_free_memory()
     return loaded, meas
@@ -779,10 +851,12 @@ def quality_job(options: QualityOptions, *, progress: Progress | None = None, ch
     checked = checked or validate(options)
     if progress:
         progress.stage("Processing data files")
-    loaded, meas = _marked_measurements(options, checked, progress, "Analysing data quality")
+    loaded, meas = _marked_measurements(options, checked, progress, "Analysing data quality", either=True)
+    absent = absent_categories(loaded)
     quality = _quality(meas, checked.sensors, options)
     params = {**_parameters(options, loaded, started, command), "callsign": options.callsign,
-              "address": options.address, "gap_s": options.gap_s}
+              "address": options.address, "gap_s": options.gap_s,
+              "notes": [f"no CAT{cat:03d} records in the inputs: {_WITHOUT[cat]}" for cat in absent]}
     return QualityJobResult(options, checked, quality, params, loaded)
 
 
@@ -885,6 +959,16 @@ class DecodeResult:
     skipped: list[tuple[str, int, str]]
     warnings: list[str]
     notes: list[str] = field(default_factory=list)
+    held: dict[str, dict[int, int]] = field(default_factory=dict)  # per input: data blocks per category
+
+    def nothing_decoded(self, categories: tuple[int, ...] = ()) -> str:
+        """Why no record decoded, naming what each input holds (a --category the inputs lack, most often)."""
+        asked = f" with --category {','.join(str(c) for c in categories)}" if categories else ""
+        def listed(cats: dict[int, int]) -> str:
+            return ", ".join(f"CAT{c:03d} ({n} block(s))" for c, n in sorted(cats.items())) or "no data block"
+
+        holds = "; ".join(f"{path} holds {listed(cats)}" for path, cats in self.held.items())
+        return f"nothing could be decoded{asked}" + (f": {holds}" if holds else "")
 
 
 def decode_job(options: DecodeOptions, *, on_chunk: Callable[[int, int, str], None] | None = None
@@ -904,10 +988,12 @@ def decode_job(options: DecodeOptions, *, on_chunk: Callable[[int, int, str], No
     skipped: list[tuple[str, int, str]] = []
     notes: list[str] = []
     cats = list(options.categories) or None
+    held: dict[str, dict[int, int]] = {}
     try:
         present: set[int] = set()
         for path in checked.inputs:
-            present |= set(categories_in(path, format=options.format)) & {21, 48}
+            held[str(path)] = categories_in(path, format=options.format)
+            present |= set(held[str(path)]) & {21, 48}
         several = len(present & set(cats or present)) > 1
         for path in checked.inputs:
             size = path.stat().st_size
@@ -929,7 +1015,7 @@ def decode_job(options: DecodeOptions, *, on_chunk: Callable[[int, int, str], No
         for w in writers.values():
             if hasattr(w, "close"):
                 w.close()
-    return DecodeResult(counts, outputs, skipped, checked.warnings, notes)
+    return DecodeResult(counts, outputs, skipped, checked.warnings, notes, held)
 
 
 def _write_chunk(out: Path, cat: int, frame: pd.DataFrame, outputs: dict, writers: dict, several: bool,

@@ -26,6 +26,7 @@ from pipeline.jobs_track import (
     TrackOptions,
     _estimate_noise,
     _measurements,
+    check_track_rows,
     check_tracking,
     untrackable,
 )
@@ -57,12 +58,16 @@ class ConflictOptions(TrackOptions):
 def parse_horizons(value) -> tuple[float, ...]:
     """'20,60,120' (seconds) -> (20.0, 60.0, 120.0); OptionError naming the bad item."""
     items = value.split(",") if isinstance(value, str) else list(value or ())
+    whole = value if isinstance(value, str) else ",".join(str(v) for v in items)
     out = []
-    for item in items:
+    for i, item in enumerate(items):
         try:
             h = float(item)
         except (TypeError, ValueError):
-            raise OptionError(f"--horizon {item!r}: not a number of seconds (e.g. 20,60,120)") from None
+            which = f"item {i + 1} " if len(items) > 1 else ""
+            text = "is empty" if not str(item).strip() else f"{str(item).strip()!r} is not a number"
+            raise OptionError(f"--horizon {whole!r}: {which}{text}; give look-aheads in seconds, "
+                              "e.g. 20,60,120") from None
         out.append(h)
     if not out:
         raise OptionError("--horizon: give at least one look-ahead in seconds, e.g. 20,60,120")
@@ -169,6 +174,7 @@ def conflict_job(options: ConflictOptions, *, progress: Progress | None = None,
     if progress:
         progress.stage("Tracking")
     meas = _measurements(loaded, checked, options)
+    check_track_rows(meas, options, len(horizons), f"predictions ({len(horizons)} horizon(s) a track row)")
     noise = None
     if options.noise == "estimate":
         meas, noise = _estimate_noise(meas, checked.sensors, options)

@@ -26,6 +26,12 @@ SOURCES = ("radar", "adsb")
 NOISE = ("declared", "estimate")  # --noise: the sensor file's sigmas and NACp, or estimated from residuals
 STEP_RANGE_S = (1e-3, 3600.0)  # below 1 ms the grid explodes (a day would be 86 M rows per aircraft)
 MAX_COAST_RANGE_S = (0.0, 86400.0)
+# Rows the tracker may put out (grid samples plus report times) in one run: each costs about 570 bytes
+# through estimation and the table (measured: fixtures --all, 33 k rows at --step 1 against 177 k at 0.1:
+# +82 MB), so 4 M rows hold about 2.3 GB; 300 aircraft for an hour at 1 s make 1.1 M. --step alone cannot
+# bound this (the same step is harmless on one aircraft and huge on a day of traffic), so it is counted
+# after decoding, before tracking.
+MAX_TRACK_ROWS = 4_000_000
 # the columns of the track table, in order (issue 10); the tracker's other columns follow
 TRACK_COLUMNS = ["aircraft_id", "callsign", "address", "time", "time_of_day", "latitude", "longitude",
                  "flight_level", "speed_kt", "track_deg", "turn_rate_dps", "sigma_major_m", "sigma_minor_m",
@@ -59,7 +65,7 @@ def _sources(value) -> tuple[str, ...]:
 def check_tracking(options: TrackOptions) -> float:
     """The tracker's options shared by track and conflicts (--step, --max-coast, --tpm, --noise); OptionError
     if bad, else the step (s)."""
-    from pipeline.track import parse_tpm
+    from pipeline.track import check_tpm
 
     step = options.step_s
     if not isinstance(step, int | float) or not math.isfinite(step) or not step > 0.0:
@@ -69,14 +75,39 @@ def check_tracking(options: TrackOptions) -> float:
     if not isinstance(coast, int | float) or not math.isfinite(coast) or coast < step:
         raise OptionError(f"--max-coast {coast!r}: must be a finite number of seconds >= --step ({step:g})")
     jobs._number("--max-coast", coast, *MAX_COAST_RANGE_S, " s")
-    if options.tpm is not None:
+    if options.tpm is not None:  # every update interval in use: up to --max-coast, coasting cycles of 1 s
         try:
-            parse_tpm(str(options.tpm))
+            check_tpm(str(options.tpm), max(float(coast), float(step), 1.0))
         except ValueError as exc:
             raise OptionError(f"--tpm {options.tpm!r}: {str(exc).partition(': ')[2]}") from None
     if options.noise not in NOISE:
         raise OptionError(f"--noise {options.noise!r}: must be one of {', '.join(NOISE)}")
     return step
+
+
+def track_rows(meas: pd.DataFrame, step_s: float, max_coast_s: float) -> int:
+    """An upper bound on the rows ``track`` will put out: per aircraft, the grid of step_s over the time its
+    reports cover (each gap up to max_coast_s, and max_coast_s after the last), plus one row per report."""
+    if meas.empty:
+        return 0
+    t = meas["time"].dt.as_unit("ns").astype("int64").to_numpy() / 1e9
+    ids = pd.factorize(meas["aircraft_id"])[0]
+    order = np.lexsort((t, ids))
+    t, ids = t[order], ids[order]
+    gap = np.diff(t)
+    same = ids[1:] == ids[:-1]
+    covered = float(np.minimum(gap[same], max_coast_s).sum()) + max_coast_s * (int(ids.max()) + 1)
+    return int(covered / step_s) + 2 * (int(ids.max()) + 1) + len(meas)
+
+
+def check_track_rows(meas: pd.DataFrame, options: TrackOptions, per_row: int = 1, what: str = "") -> None:
+    """OptionError naming --step when the run would put out more than MAX_TRACK_ROWS rows (``per_row``
+    rows for each track row, e.g. one prediction per horizon)."""
+    rows = track_rows(meas, float(options.step_s), float(options.max_coast_s)) * per_row
+    if rows > MAX_TRACK_ROWS:
+        raise OptionError(f"--step {options.step_s:g}: the tracks of these {meas['aircraft_id'].nunique()} "
+                          f"aircraft would need about {rows:,} {what or 'output rows'}, more than "
+                          f"{MAX_TRACK_ROWS:,}; use a longer --step or fewer aircraft")
 
 
 def validate(options: TrackOptions) -> Checked:
@@ -127,7 +158,7 @@ def _measurements(loaded, checked: Checked, options: TrackOptions) -> pd.DataFra
     """Measurements of the requested sources (one of them must be present), repeated reports dropped."""
     from pipeline.model.dedup import duplicate_mask
     from pipeline.model.measurements import build_measurements
-    from pipeline.model.sensors import UnknownRadar, sensor_toml_snippet
+    from pipeline.model.sensors import UnknownRadar
 
     sources = _sources(options.sources)
     radar = loaded.frames.get(48) if "radar" in sources else None
@@ -137,13 +168,12 @@ def _measurements(loaded, checked: Checked, options: TrackOptions) -> pd.DataFra
     if radar is None and adsb is None:
         wanted = " or ".join({"radar": "radar (CAT048)", "adsb": "ADS-B (CAT021)"}[s] for s in sources)
         raise JobError(f"no {wanted} records in the inputs (--sources {','.join(sources)})")
+    radar = jobs.declared_radar(radar, checked.sensors, str(options.sensors), checked.warnings)
     try:
         meas = build_measurements(radar, adsb, checked.sensors, date=loaded.date,
                                   adsb_sigma_m=options.adsb_sigma_m)
     except UnknownRadar as exc:
-        lines = "\n\n".join(sensor_toml_snippet(sac, sic) for sac, sic in exc.missing)
-        raise JobError(f"radar SAC/SIC {', '.join(f'{a}/{b}' for a, b in exc.missing)} not in "
-                       f"{options.sensors}; add its position:\n\n{lines}") from exc
+        raise jobs.unknown_radar_error(exc.missing, str(options.sensors)) from exc
     from pipeline.track.associate import join_by_track_number
 
     meas, joined = join_by_track_number(meas, max_gap_s=float(options.max_coast_s))
@@ -188,6 +218,7 @@ def track_job(options: TrackOptions, *, progress: Progress | None = None, checke
     meas = _measurements(loaded, checked, options)
     joined = int(meas.attrs.get("joined_by_track_number", 0))
     meas = _select(meas, options)
+    check_track_rows(meas, options)
     noise = None
     if options.noise == "estimate":
         meas, noise = _estimate_noise(meas, checked.sensors, options)

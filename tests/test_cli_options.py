@@ -272,6 +272,24 @@ def test_nothing_decoded_writes_no_csv(tmp_path, capsys):
     assert _contents(out) == set()
 
 
+def test_a_category_the_input_lacks_is_named_with_what_it_holds(tmp_path, capsys):
+    """decode <radar file> --category 21 said only 'nothing could be decoded'; it names what the file holds,
+    its blocks counted here by walking the raw headers (CAT, 2-byte LEN) independently of the decoder."""
+    radar = Path(__file__).resolve().parents[1] / "fixtures" / "radar.ast"
+    data, at, blocks = radar.read_bytes(), 0, 0
+    while at < len(data):
+        assert data[at] == 48
+        at += int.from_bytes(data[at + 1:at + 3], "big")
+        blocks += 1
+    out = tmp_path / "out"
+    out.mkdir()
+    status, _, err = _run(["decode", str(radar), "--category", "21", "-o", str(out / "x.csv")], capsys)
+    assert status == 1 and "Traceback" not in err
+    assert (f"msdc: nothing could be decoded with --category 21: {radar} holds CAT048 ({blocks} block(s))"
+            in err)
+    assert _contents(out) == set()
+
+
 def test_filter_removing_every_report_says_so(tmp_path, capsys):
     # --min-nacp 11: no fixture ADS-B report reaches NACp 11 (the simulator's NACp is 8 to 10)
     out = tmp_path / "out"
@@ -335,3 +353,35 @@ def test_separations_far_beyond_the_radar_accuracy_warn_of_a_wrong_site(tmp_path
     assert main(["correlate", *args, "--sensors", str(moved)]) == 0
     err = capsys.readouterr().err
     assert "radar 048:25/201" in err and "check its site in" in err and str(moved) in err
+
+
+@pytest.mark.parametrize("only", ["adsb", "radar"])
+def test_quality_on_one_kind_of_sensor_fills_the_sheets_it_can(only, tmp_path, capsys):
+    """quality refused ADS-B-only input ('no radar (CAT048) records') though the intervals, gaps, jumps and
+    ADS-B quality sheets need no radar. With one kind of sensor it fills its own sheets, says which stay
+    empty (radar accuracy needs both), and exits 0. Counts from the decoder: 14,986 ADS-B reports of 5
+    aircraft, 3,266 radar plots."""
+    import json
+
+    import asterix
+
+    path, cat = (ADSB, 21) if only == "adsb" else (RADAR, 48)
+    frame = asterix.read(path).frames[cat]
+    out = tmp_path / "out"
+    out.mkdir()
+    status, _, err = _run(["quality", str(path), "--sensors", str(SENSORS), "--all",
+                           "--json", str(out / "q.json"), "-o", str(out / "q.xlsx")], capsys)
+    assert status == 0, err
+    assert "Traceback" not in err
+    missing = "radar (CAT048)" if only == "adsb" else "ADS-B (CAT021)"
+    assert f"warning: no {missing} records in the inputs: " in err
+    doc = json.loads((out / "q.json").read_text())
+    quality = doc["tables"]["Quality"]
+    assert {row["sensor"] for row in quality} == {only}
+    (total,) = [row for row in quality if row["callsign"] == "(all)"]
+    assert total["reports"] == len(frame)
+    assert len(quality) == 1 + frame["callsign"].nunique()
+    assert doc["tables"]["Radar accuracy"] == [] and doc["tables"]["Radar biases"] == []
+    assert (len(doc["tables"]["ADS-B quality"]) > 0) == (only == "adsb")
+    assert doc["parameters"]["notes"] and f"CAT{cat ^ 21 ^ 48:03d}" in doc["parameters"]["notes"][0]
+    assert (out / "q.xlsx").is_file()

@@ -32,7 +32,8 @@ def opts(**kw) -> ConflictOptions:
 
 
 BAD = [
-    (opts(horizons_s="20,x"), "--horizon 'x'"),
+    (opts(horizons_s="20,x"), "--horizon '20,x': item 2 'x' is not a number"),
+    (opts(horizons_s="20,,60"), "--horizon '20,,60': item 2 is empty"),  # named '' before
     (opts(horizons_s="20,20"), "repeated"),
     (opts(horizons_s="0"), "--horizon 0.0"),
     (opts(horizons_s="15", step_s=10.0), "--horizon 15: must be a whole multiple of --step (10 s)"),
@@ -47,6 +48,7 @@ BAD = [
     (opts(method="montecarlo"), "--method 'montecarlo'"),
     (opts(step_s=0.0), "--step 0.0"),
     (opts(tpm="banana"), "--tpm 'banana'"),
+    (opts(tpm="dynamic:-1,2"), "--tpm 'dynamic:-1,2': p(T) = min(0.995, -1 - 2 T) is -1 at T = 0 s"),
     (opts(output="c.parquet"), "-o c.parquet: must end in .csv or .xlsx"),
     (opts(output=None), "-o: give the output"),
     (opts(json="c.txt"), "--json c.txt"),
@@ -203,3 +205,16 @@ def test_no_alert_makes_no_figures_folder(tmp_path, capsys):
                  "-o", str(tmp_path / "c.csv"), "--figures", str(figs)]) == 0
     assert pd.read_csv(tmp_path / "c.csv").empty
     assert not figs.exists() and "figures: none (no alert events)" in capsys.readouterr().err
+
+
+def test_a_tiny_step_is_refused_by_the_predictions_it_would_make(tmp_path, capsys):
+    """--step 0.01 with three horizons: about 1.6 M track rows on the fixtures, 4.8 M predictions, over the
+    4 M bound: refused naming --step after decoding, before tracking; nothing written."""
+    out = tmp_path / "c.csv"
+    code = main(["conflicts", RADAR, ADSB, "--sensors", SENSORS, "--date", "2019-03-01", "--step", "0.01",
+                 "-o", str(out), "--json", str(tmp_path / "c.json")])
+    err = capsys.readouterr().err
+    assert code == 2 and "Traceback" not in err
+    assert "--step 0.01: the tracks of these 5 aircraft would need about 4," in err
+    assert "predictions (3 horizon(s) a track row), more than 4,000,000; use a longer --step" in err
+    assert list(tmp_path.iterdir()) == []

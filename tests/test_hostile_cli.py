@@ -36,8 +36,11 @@ def test_a_fifo_input_is_refused_not_read(tmp_path):
     os.mkfifo(fifo)
 
     def writer():
-        with open(fifo, "wb") as fh:
-            fh.write(RADAR.read_bytes())
+        try:
+            with open(fifo, "wb") as fh:
+                fh.write(RADAR.read_bytes())
+        except BrokenPipeError:  # the reader below closes without reading: what a refusal does
+            pass
 
     threading.Thread(target=writer, daemon=True).start()
     try:
@@ -268,3 +271,76 @@ def test_an_empty_path_is_named_as_empty(argv, option, tmp_path, monkeypatch, ca
     value = argv[argv.index(option) + 1] if option != "input" else ""
     assert err.strip() == f"msdc {argv[0]}: {option} {value!r}: an empty path"
     assert not list(tmp_path.iterdir())
+
+
+def _with_sic(tmp_path: Path, rows: list[int], sic: int = 202) -> tuple[Path, list[int]]:
+    """The fixture's MAS72 radar plots from 08:00 to 08:10 with the SIC of some rows (by position) damaged,
+    and the offsets those rows get in the file."""
+    import asterix
+    from asterix.encode import encode_frame
+
+    good = _mas72(tmp_path, 48)
+    f = asterix.read(good).frames[48]
+    f.iloc[rows, f.columns.get_loc("sic")] = sic
+    p = tmp_path / "damaged048.ast"
+    p.write_bytes(encode_frame(48, f))
+    decoded = asterix.read(p).frames[48]
+    assert (decoded["sic"].iloc[rows] == sic).all()  # the damage is in the file
+    return p, [int(decoded["offset"].iloc[r]) for r in rows]
+
+
+_SELECT = {"correlate": ["--callsign", "MAS72"], "quality": ["--callsign", "MAS72"],
+           "track": ["--callsign", "MAS72", "--noise", "declared"], "conflicts": ["--step", "10"]}
+
+
+@pytest.mark.parametrize("command", ["correlate", "quality", "track", "conflicts"])
+def test_a_phantom_radar_of_two_damaged_records_is_left_out_with_a_warning(command, tmp_path, capsys):
+    """One damaged I048/010 used to stop the whole run with 'not in the sensor table'. Two records of a
+    SAC/SIC the sensor file lacks are fewer than 3 (the floor of the stray-radar rule): the run goes on
+    without them, and a warning names the file, the pair, the count and the first offset."""
+    radar, offsets = _with_sic(tmp_path, [4, 20])
+    adsb = _mas72(tmp_path, 21)
+    out = tmp_path / "out"
+    out.mkdir()
+    written = out / ("k.csv" if command == "conflicts" else "r.json")
+    argv = [command, radar, adsb, "--sensors", SENSORS, "--date", "2019-03-01", *_SELECT[command],
+            "-o" if command == "conflicts" else "--json", written]
+    status, _, err = _run(argv, capsys)
+    assert status == 0, err
+    assert "Traceback" not in err
+    assert (f"warning: damaged048.ast: 2 CAT048 record(s) from SAC/SIC 25/202 (first at offset {offsets[0]}) "
+            f"not in {SENSORS} and too few for a radar (fewer than 3") in err
+    assert written.is_file()
+
+
+def test_the_phantom_records_are_the_only_ones_left_out(tmp_path):
+    """The stray rule drops exactly the records of the undeclared pair, nothing else."""
+    import asterix
+    from pipeline.model.sensors import read_sensors
+
+    radar, offsets = _with_sic(tmp_path, [4, 20])
+    frame = asterix.read(radar).frames[48].assign(file="damaged048.ast")
+    warnings: list[str] = []
+    kept = jobs.declared_radar(frame, read_sensors(SENSORS), str(SENSORS), warnings)
+    assert len(warnings) == 1
+    assert sorted(set(frame["offset"]) - set(kept["offset"])) == offsets
+    assert len(kept) == len(frame) - 2
+
+
+@pytest.mark.parametrize("command", ["correlate", "quality", "track", "conflicts"])
+def test_an_undeclared_radar_with_enough_records_still_stops_the_run(command, tmp_path, capsys):
+    """Three records of one undeclared pair reach the floor: that may be a real radar, whose plots cannot be
+    placed without its site, so the run stops with the sensor-file lines to add and writes nothing."""
+    radar, _ = _with_sic(tmp_path, [4, 20, 30])
+    adsb = _mas72(tmp_path, 21)
+    out = tmp_path / "out"
+    out.mkdir()
+    written = out / ("k.csv" if command == "conflicts" else "r.json")
+    argv = [command, radar, adsb, "--sensors", SENSORS, "--date", "2019-03-01", *_SELECT[command],
+            "-o" if command == "conflicts" else "--json", written]
+    status, _, err = _run(argv, capsys)
+    assert status == 1
+    assert "Traceback" not in err
+    assert f"radar SAC/SIC 25/202 not in {SENSORS}; add its position:" in err
+    assert "sic = 202" in err
+    assert list(out.iterdir()) == []

@@ -39,6 +39,13 @@ BAD = [
     (opts(tpm="fixed:1.5"), "--tpm 'fixed:1.5'"),
     (opts(tpm="expm:-3"), "--tpm 'expm:-3'"),
     (opts(tpm="banana"), "--tpm 'banana'"),
+    # p(T) = min(0.995, A - B T) must be a probability above 0 at every interval up to --max-coast: -1 at
+    # T = 0 here, and 1 - 0.02 x 60 = -0.2 at the default --max-coast (the kernel clamped both to 0)
+    (opts(tpm="dynamic:-1,2"), "--tpm 'dynamic:-1,2': p(T) = min(0.995, -1 - 2 T) is -1 at T = 0 s"),
+    (opts(tpm="dynamic:1,0.02"), "is -0.2 at T = 60 s; it must stay above 0"),
+    (opts(tpm="dynamic", max_coast_s=300.0), "at T = 300 s"),  # the paper's law ends at 200.4 s
+    (opts(tpm="expm:0.001"), "sojourn times from 0.01 to 10,000,000 seconds"),
+    (opts(tpm="expm:150,1e-320"), "--tpm 'expm:150,1e-320'"),  # 1/TAU overflows: NaN probabilities
     (opts(smoother="two-filter"), "--smoother 'two-filter': must be one of rts, imm"),
     (opts(sources=("radar", "mlat")), "--sources 'radar,mlat'"),
     (opts(sources=()), "--sources"),
@@ -269,3 +276,27 @@ def test_nothing_trackable_says_why_exit_1_and_writes_nothing(tmp_path, capsys, 
                       r"\((\d+) have NACp 0", err)
     assert found and found[1] == found[2] == found[3] and 0.9 * len(sim.adsb) < int(found[1]) <= len(sim.adsb)
     assert sorted(p.name for p in tmp_path.iterdir()) == ["a.ast", "s.toml"]
+
+
+def test_track_rows_bound_one_aircraft_by_hand():
+    """Reports at 0, 10 and 100 s, --max-coast 60, --step 1: the first segment's grid runs 0..70 s (71
+    samples), the second 100..160 s (61): 132 rows. The bound counts 10 + 60 + 60 = 130 s of cover, one
+    sample more at each of the segment's ends and one row per report: 135."""
+    t0 = pd.Timestamp("2019-03-01T08:00:00Z")
+    times = [t0 + pd.Timedelta(seconds=s) for s in (0, 10, 100)]
+    meas = pd.DataFrame({"aircraft_id": ["A"] * 3, "time": times})
+    assert jobs_track.track_rows(meas, 1.0, 60.0) == 135
+    assert jobs_track.track_rows(meas, 0.1, 60.0) == 1300 + 2 + 3
+
+
+def test_a_tiny_step_is_refused_after_decoding_with_the_rows_it_would_make(tmp_path, capsys):
+    """--step 0.001 on the fixtures' 5 aircraft would put out about 16 M rows (65 min of tracks at 1 ms):
+    refused by name before tracking, exit 2, nothing written (at --step 1 they make 33 k rows)."""
+    out = tmp_path / "t.csv"
+    status = main(["track", *BASE, "--all", "--noise", "declared", "-o", str(out), "--step", "0.001"])
+    err = capsys.readouterr().err
+    assert status == 2 and "Traceback" not in err
+    (last,) = [line for line in err.splitlines() if line.startswith("msdc track: ")]
+    assert re.search(r"--step 0.001: the tracks of these 5 aircraft would need about 1[56],\d{3},\d{3} "
+                     r"output rows, more than 4,000,000; use a longer --step", last), last
+    assert list(tmp_path.iterdir()) == []

@@ -267,5 +267,9 @@ def test_config_errors_name_the_value():
     assert parse_tpm("dynamic:0.99,0.006") == (TPM_DYNAMIC, 0.99, 0.006)
     with pytest.raises(ValueError, match="'expm:x'"):
         TrackerConfig(tpm="expm:x")
+    # the paper's p(T) = 1.0019 - 0.005 T is 0.0019 at 200 s and below 0 after 200.38 s
+    assert TrackerConfig(tpm="dynamic", max_coast_s=200.0).max_coast_s == 200.0
+    with pytest.raises(ValueError, match="at T = 201 s"):
+        TrackerConfig(tpm="dynamic", max_coast_s=201.0)
     with pytest.raises(ValueError, match="kind 'xx'"):
         TrackerConfig(modes=(Mode("a", "xx", 1.0),))

@@ -34,6 +34,8 @@ class Loaded:
     date: dt.date | None = None
     spans: list[dict[int, Span]] | None = None  # per input: earliest and latest instant per category
     warnings: list[str] = field(default_factory=list)  # about the data, e.g. reports left out as damaged
+    # CAT048 records of SAC/SIC pairs the sensor table lacks, left out (sensors.undeclared_radars' table)
+    stray_radar: pd.DataFrame = field(default_factory=pd.DataFrame)
 
     @property
     def errors(self) -> pd.DataFrame:
@@ -135,19 +137,19 @@ class NoRecords(LookupError):
 
 def load_measurements(paths: list[str | Path], sensors: pd.DataFrame, *, editions=None, date=None,
                       format: str | None = None, adsb_sigma_m: float | None = None,
-                      chunk: int = MEASUREMENT_CHUNK_BYTES,
-                      progress: Progress | None = None) -> tuple[Loaded, pd.DataFrame]:
+                      chunk: int = MEASUREMENT_CHUNK_BYTES, progress: Progress | None = None,
+                      either: bool = False) -> tuple[Loaded, pd.DataFrame]:
     """Decode every input in chunks (asterix.iter_read, only DECODED_COLUMNS) straight into measurement
     rows, and join them into one validated measurement frame (rows as build_measurements orders them:
     every input's radar rows, then every input's ADS-B rows). The Loaded has no frames but the inputs,
     errors, editions, date and time spans that ``load`` gives.
 
-    NoRecords when the inputs hold no CAT048 or no CAT021 record; UnknownRadar (every radar the sensor
-    table lacks, over all inputs) when a radar's site is missing. Records without a timestamp of their
-    own are dated by ``Loaded.date``, as with ``load``.
+    NoRecords when the inputs hold no CAT048 or no CAT021 record (with ``either``, only when they hold
+    neither). Records of a radar the sensor table lacks are left out and listed in
+    ``Loaded.stray_radar`` (per pair and file: records, first offset), for the job to judge. Records
+    without a timestamp of their own are dated by ``Loaded.date``, as with ``load``.
     """
     from pipeline.model.measurements import DECODED_COLUMNS, finish_measurements, impossible_positions
-    from pipeline.model.sensors import UnknownRadar
 
     recs: list[Recording] = []
     inputs: list[dict] = []
@@ -156,7 +158,7 @@ def load_measurements(paths: list[str | Path], sensors: pd.DataFrame, *, edition
     dates: list[dt.date | None] = []
     radar: list[tuple[int, pd.DataFrame]] = []  # (input number, rows)
     adsb: list[tuple[int, pd.DataFrame]] = []
-    missing: set[tuple] = set()
+    stray: list[pd.DataFrame] = []  # undeclared_radars' table per chunk
     for i, p in enumerate(paths):
         p = Path(p)
         if progress:
@@ -178,7 +180,7 @@ def load_measurements(paths: list[str | Path], sensors: pd.DataFrame, *, edition
             # undated records are placed on UNDATED_DAY here and moved to Loaded.date below
             by_cat = widen_spans(by_cat, time_spans(rec.frames, None))
             frames, rec.frames = rec.frames, {}
-            r, a = _rows(frames, p.name, sensors, adsb_sigma_m, missing, off_earth)
+            r, a = _rows(frames, p.name, sensors, adsb_sigma_m, stray, off_earth)
             del frames
             radar += [(i, r)] if r is not None else []
             adsb += [(i, a)] if a is not None else []
@@ -199,12 +201,9 @@ def load_measurements(paths: list[str | Path], sensors: pd.DataFrame, *, edition
                 part["time"] = part["time"] + shift
         spans = [{c: (lo + shift, hi + shift) for c, (lo, hi) in s.items()} if i in undated else s
                  for i, s in enumerate(spans)]
-    for cat in (48, 21):
-        if not any(info["records"].get(cat) for info in inputs):
-            raise NoRecords(cat, Loaded({}, recs, inputs, first_date, spans))
-    if missing:
-        raise UnknownRadar(sorted(missing, key=lambda pair: tuple((pd.isna(v), 0 if pd.isna(v) else v)
-                                                                   for v in pair)))
+    absent = [cat for cat in (48, 21) if not any(info["records"].get(cat) for info in inputs)]
+    if absent and not (either and len(absent) == 1):
+        raise NoRecords(absent[0], Loaded({}, recs, inputs, first_date, spans))
     parts = [part for _, part in radar + adsb]
     radar.clear()
     adsb.clear()
@@ -212,7 +211,18 @@ def load_measurements(paths: list[str | Path], sensors: pd.DataFrame, *, edition
     meas = finish_measurements(parts)
     release_free_memory()
     warnings = impossible_positions(pd.concat(off_earth, ignore_index=True)) if off_earth else []
-    return Loaded({}, recs, inputs, first_date, spans, warnings), meas
+    stray_radar = _stray_table(stray)
+    return Loaded({}, recs, inputs, first_date, spans, warnings, stray_radar), meas
+
+
+def _stray_table(parts: list[pd.DataFrame]) -> pd.DataFrame:
+    """The chunks' undeclared_radars tables as one: per SAC/SIC pair and file, records summed and the first
+    offset, in order of first appearance."""
+    if not parts:
+        return pd.DataFrame(columns=["sac", "sic", "file", "records", "offset"])
+    table = pd.concat(parts, ignore_index=True)
+    groups = table.groupby(["sac", "sic", "file"], dropna=False, sort=False)
+    return groups.agg(records=("records", "sum"), offset=("offset", "first")).reset_index()
 
 
 def release_free_memory() -> None:
@@ -225,21 +235,24 @@ def release_free_memory() -> None:
 
 
 def _rows(frames: dict[int, pd.DataFrame], name: str, sensors: pd.DataFrame, adsb_sigma_m: float | None,
-          missing: set[tuple], off_earth: list[pd.DataFrame]
+          stray: list[pd.DataFrame], off_earth: list[pd.DataFrame]
           ) -> tuple[pd.DataFrame | None, pd.DataFrame | None]:
-    """Measurement rows of one decoded chunk, undated records on UNDATED_DAY; radars the sensor table
-    lacks are added to ``missing`` (the ADS-B rows are still built), CAT021 reports with a position off the
-    Earth (left out of the rows) to ``off_earth``."""
+    """Measurement rows of one decoded chunk, undated records on UNDATED_DAY; the records of radars the
+    sensor table lacks are left out and their undeclared_radars table added to ``stray``, CAT021 reports
+    with a position off the Earth (left out of the rows) to ``off_earth``."""
     from pipeline.model.measurements import measurement_rows, off_earth_rows
-    from pipeline.model.sensors import UnknownRadar
+    from pipeline.model.sensors import undeclared_radars
 
     for frame in frames.values():
         frame["file"] = pd.Categorical.from_codes(np.zeros(len(frame), np.int8), [name])
     bad = off_earth_rows(frames.get(21))
     if len(bad):
         off_earth.append(bad)
-    try:
-        return measurement_rows(frames.get(48), frames.get(21), sensors, adsb_sigma_m=adsb_sigma_m)
-    except UnknownRadar as exc:  # listed over every input at the end
-        missing |= set(exc.missing)
-        return None, measurement_rows(None, frames.get(21), adsb_sigma_m=adsb_sigma_m)[1]
+    cat048 = frames.get(48)
+    if cat048 is not None and len(cat048):
+        unknown = undeclared_radars(cat048, sensors)
+        if len(unknown):
+            stray.append(unknown)
+            keys = pd.MultiIndex.from_arrays([cat048["sac"].astype("Int64"), cat048["sic"].astype("Int64")])
+            cat048 = cat048[keys.isin(pd.MultiIndex.from_frame(sensors[["sac", "sic"]].astype("Int64")))]
+    return measurement_rows(cat048, frames.get(21), sensors, adsb_sigma_m=adsb_sigma_m)

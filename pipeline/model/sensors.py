@@ -107,6 +107,24 @@ def sensor_sites(reports: pd.DataFrame, sensors: pd.DataFrame) -> pd.DataFrame:
     return site
 
 
+def undeclared_radars(reports: pd.DataFrame, sensors: pd.DataFrame) -> pd.DataFrame:
+    """Per SAC/SIC pair (and file) of ``reports`` that ``sensors`` does not list: sac, sic, file, records and
+    the first record's offset, in file order of first appearance; SAC/SIC missing shows as <NA>."""
+    keys = pd.DataFrame({"sac": reports["sac"].astype("Int64").to_numpy(),
+                         "sic": reports["sic"].astype("Int64").to_numpy(),
+                         "file": (reports["file"].astype("string").to_numpy() if "file" in reports
+                                  else pd.array([pd.NA] * len(reports), dtype="string")),
+                         "offset": (reports["offset"].astype("Int64").to_numpy() if "offset" in reports
+                                    else pd.array([pd.NA] * len(reports), dtype="Int64"))})
+    declared = pd.MultiIndex.from_frame(sensors[["sac", "sic"]].astype("Int64"))
+    unknown = keys[~pd.MultiIndex.from_frame(keys[["sac", "sic"]]).isin(declared)]
+    columns = ["sac", "sic", "file", "records", "offset"]
+    if unknown.empty:
+        return pd.DataFrame(columns=columns)
+    groups = unknown.groupby(["sac", "sic", "file"], dropna=False, sort=False)
+    return groups.agg(records=("offset", "size"), offset=("offset", "first")).reset_index()[columns]
+
+
 def sensor_toml_snippet(sac: int, sic: int) -> str:
     """The ``[[sensor]]`` lines to add to the sensor file for a radar that is not in it."""
     return (

@@ -6,11 +6,11 @@ IMM state without measurements; `radar_covariance` and `nacp_covariance` build m
 The input schema is in `pipeline.track.tracker`.
 """
 
-from .config import Mode, TrackerConfig, default_modes, parse_tpm
+from .config import Mode, TrackerConfig, check_tpm, default_modes, parse_tpm
 from .covariance import nacp_covariance, radar_covariance
 from .frame import Plane
 from .predict import predict
 from .tracker import ImmState, TrackResult, track
 
-__all__ = ["ImmState", "Mode", "Plane", "TrackResult", "TrackerConfig", "default_modes",
+__all__ = ["ImmState", "Mode", "Plane", "TrackResult", "TrackerConfig", "check_tpm", "default_modes",
            "nacp_covariance", "parse_tpm", "predict", "radar_covariance", "track"]

@@ -11,6 +11,9 @@ from scipy.stats import chi2
 from .imm import CA, CT, CV, TPM_DYNAMIC, TPM_EXPM, TPM_FIXED
 
 _KINDS = {"cv": CV, "ct": CT, "ca": CA}
+# expm sojourn times: from about the ASTERIX time quantum (1/128 s: a shorter mean stay cannot be observed;
+# near 0, 1/TAU overflows and the closed form gives NaN) to 1e7 s (116 days: never left within a recording)
+EXPM_SOJOURN_RANGE_S = (0.01, 1e7)
 
 
 @dataclass(frozen=True)
@@ -53,11 +56,25 @@ def parse_tpm(spec: str) -> tuple[int, float, float]:
         return TPM_FIXED, numbers[0], 0.0
     if kind == "dynamic" and len(numbers) == 2 and all(math.isfinite(v) for v in numbers):
         return TPM_DYNAMIC, numbers[0], numbers[1]
-    if (kind == "expm" and len(numbers) in (1, 2)
-            and all(v > 0.0 and math.isfinite(v) for v in numbers)):
+    lo, hi = EXPM_SOJOURN_RANGE_S
+    if kind == "expm" and len(numbers) in (1, 2) and all(lo <= v <= hi for v in numbers):
         return TPM_EXPM, numbers[0], numbers[-1]
     raise ValueError(f"tpm {spec!r}: expected 'dynamic', 'dynamic:A,B', 'fixed:P' with 0 < P <= 1, or "
-                     "'expm:TAU' / 'expm:TAU,TAU2' with sojourn times > 0 seconds")
+                     f"'expm:TAU' / 'expm:TAU,TAU2' with sojourn times from {lo:g} to {hi:,.0f} seconds")
+
+
+def check_tpm(spec: str, max_dt_s: float) -> tuple[int, float, float]:
+    """parse_tpm, and for 'dynamic:A,B' that p(T) = min(0.995, A - B T) is a probability above 0 for every
+    update interval T from 0 to max_dt_s (p is linear in T, so both ends suffice; the kernel would clamp a
+    p <= 0 to 0: the modes would switch at every update); a ValueError names the value otherwise."""
+    kind, a, b = parse_tpm(spec)
+    if kind == TPM_DYNAMIC:
+        for t in (0.0, float(max_dt_s)):
+            p = min(0.995, a - b * t)
+            if not p > 0.0:
+                raise ValueError(f"tpm {spec!r}: p(T) = min(0.995, {a:g} - {b:g} T) is {p:g} at T = {t:g} s; "
+                                 f"it must stay above 0 for every update interval from 0 to {max_dt_s:g} s")
+    return kind, a, b
 
 
 @dataclass(frozen=True)
@@ -76,7 +93,7 @@ class TrackerConfig:
     sigma_reported_velocity_mps: float = 10.0  # velocity prior from a reported ground speed and heading
 
     def __post_init__(self) -> None:
-        parse_tpm(self.tpm)
+        check_tpm(self.tpm, max(self.max_coast_s, self.coast_substep_s))
         if not self.modes:
             raise ValueError("modes: at least one mode is needed")
         for m in self.modes:
