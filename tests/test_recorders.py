@@ -338,7 +338,8 @@ def test_forced_format_on_counting_bytes(tmp_path) -> None:
 # Mutations: any one damage keeps the byte account exact and loses only the frames near it
 
 
-def mutate(data: bytes, draw) -> tuple[bytes, int, str]:
+def mutate(data: bytes, draw) -> tuple[bytes, int, int, str]:
+    """One damage: (damaged bytes, first and last original byte it touches, kind)."""
     buf = bytearray(data)
     pos = draw(st.integers(0, len(buf) - 1))
     action = draw(st.sampled_from(["flip", "truncate", "insert", "delete"]))
@@ -349,8 +350,10 @@ def mutate(data: bytes, draw) -> tuple[bytes, int, str]:
     elif action == "insert":
         buf[pos:pos] = draw(st.binary(min_size=1, max_size=8))
     else:
-        del buf[pos:pos + draw(st.integers(1, 8))]
-    return bytes(buf), pos, action
+        n = draw(st.integers(1, 8))
+        del buf[pos:pos + n]
+        return bytes(buf), pos, min(pos + n, len(data)) - 1, action  # a deletion may span two frames
+    return bytes(buf), pos, pos, action
 
 
 def survivors(rec: asterix.Recording) -> set[int]:
@@ -367,7 +370,7 @@ def numbered(i: int) -> bytes:
 def test_mutated_gps_accounted_and_far_frames_survive(tmp_path_factory, data) -> None:
     frames = [(numbered(i), 100.5 + i) for i in range(1, 9)]
     good, at = gps_file(frames)
-    bad, pos, action = mutate(good, data.draw)
+    bad, pos, last, action = mutate(good, data.draw)
     path = tmp_path_factory.mktemp("gps") / "m.gps"
     path.write_bytes(bad)
     rec = asterix.read(path, format="gps")
@@ -375,28 +378,30 @@ def test_mutated_gps_accounted_and_far_frames_survive(tmp_path_factory, data) ->
         == len(bad)
     if pos < at[0]:
         return  # damage in the file header shifts every frame: only the account is promised
-    hit = max(i for i, a in enumerate(at) if a <= pos)  # frame index 0-7 holding the damage
+    hit = max(i for i, a in enumerate(at) if a <= pos)  # frame index 0-7 holding the damage's first byte
+    end = max(i for i, a in enumerate(at) if a <= last)  # and its last (a deletion can reach the next)
     kept = survivors(rec)
     assert set(range(1, hit)) <= kept  # every frame before the damaged one (and its predecessor) decodes
     if action != "truncate":
-        assert set(range(hit + 3, 9)) <= kept  # and every frame from the second after it
+        assert set(range(end + 3, 9)) <= kept  # and every frame from the second after the last damaged
 
 
 @settings(max_examples=150, deadline=None)
 @given(st.data())
 def test_mutated_oradis_accounted_and_far_packets_survive(tmp_path_factory, data) -> None:
     good, at = oradis_file([numbered(i) for i in range(1, 9)])
-    bad, pos, action = mutate(good, data.draw)
+    bad, pos, last, action = mutate(good, data.draw)
     path = tmp_path_factory.mktemp("oradis") / "m.oradis"
     path.write_bytes(bad)
     rec = asterix.read(path, format="oradis")
     assert rec.decoded_bytes + int(rec.errors.length.sum()) + rec.container_bytes + rec.ignored_bytes \
         == len(bad)
     hit = max(i for i, a in enumerate(at) if a <= pos)
+    end = max(i for i, a in enumerate(at) if a <= last)
     kept = survivors(rec)
     assert set(range(1, hit)) <= kept
     if action != "truncate":
-        assert set(range(hit + 3, 9)) <= kept
+        assert set(range(end + 3, 9)) <= kept
 
 
 def test_cli_reads_recorder_files(tmp_path, capsys) -> None:
