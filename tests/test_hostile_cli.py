@@ -293,12 +293,9 @@ _SELECT = {"correlate": ["--callsign", "MAS72"], "quality": ["--callsign", "MAS7
            "track": ["--callsign", "MAS72", "--noise", "declared"], "conflicts": ["--step", "10"]}
 
 
-@pytest.mark.parametrize("command", ["correlate", "quality", "track", "conflicts"])
-def test_a_phantom_radar_of_two_damaged_records_is_left_out_with_a_warning(command, tmp_path, capsys):
-    """One damaged I048/010 used to stop the whole run with 'not in the sensor table'. Two records of a
-    SAC/SIC the sensor file lacks are fewer than 3 (the floor of the stray-radar rule): the run goes on
-    without them, and a warning names the file, the pair, the count and the first offset."""
-    radar, offsets = _with_sic(tmp_path, [4, 20])
+def _run_with_radar(command: str, radar, tmp_path, capsys):
+    """Run ``command`` on ``radar`` and MAS72's ADS-B, writing its JSON (conflicts: its CSV) into a fresh
+    folder: (status, stderr, the path written)."""
     adsb = _mas72(tmp_path, 21)
     out = tmp_path / "out"
     out.mkdir()
@@ -306,6 +303,16 @@ def test_a_phantom_radar_of_two_damaged_records_is_left_out_with_a_warning(comma
     argv = [command, radar, adsb, "--sensors", SENSORS, "--date", "2019-03-01", *_SELECT[command],
             "-o" if command == "conflicts" else "--json", written]
     status, _, err = _run(argv, capsys)
+    return status, err, written
+
+
+@pytest.mark.parametrize("command", ["correlate", "quality", "track", "conflicts"])
+def test_a_phantom_radar_of_two_damaged_records_is_left_out_with_a_warning(command, tmp_path, capsys):
+    """One damaged I048/010 used to stop the whole run with 'not in the sensor table'. Two records of a
+    SAC/SIC the sensor file lacks are fewer than 3 (the floor of the stray-radar rule): the run goes on
+    without them, and a warning names the file, the pair, the count and the first offset."""
+    radar, offsets = _with_sic(tmp_path, [4, 20])
+    status, err, written = _run_with_radar(command, radar, tmp_path, capsys)
     assert status == 0, err
     assert "Traceback" not in err
     assert (f"warning: damaged048.ast: 2 CAT048 record(s) from SAC/SIC 25/202 (first at offset {offsets[0]}) "
@@ -332,15 +339,9 @@ def test_an_undeclared_radar_with_enough_records_still_stops_the_run(command, tm
     """Three records of one undeclared pair reach the floor: that may be a real radar, whose plots cannot be
     placed without its site, so the run stops with the sensor-file lines to add and writes nothing."""
     radar, _ = _with_sic(tmp_path, [4, 20, 30])
-    adsb = _mas72(tmp_path, 21)
-    out = tmp_path / "out"
-    out.mkdir()
-    written = out / ("k.csv" if command == "conflicts" else "r.json")
-    argv = [command, radar, adsb, "--sensors", SENSORS, "--date", "2019-03-01", *_SELECT[command],
-            "-o" if command == "conflicts" else "--json", written]
-    status, _, err = _run(argv, capsys)
+    status, err, written = _run_with_radar(command, radar, tmp_path, capsys)
     assert status == 1
     assert "Traceback" not in err
     assert f"radar SAC/SIC 25/202 not in {SENSORS}; add its position:" in err
     assert "sic = 202" in err
-    assert list(out.iterdir()) == []
+    assert list(written.parent.iterdir()) == []
