@@ -309,6 +309,8 @@ def cmd_correlate(args) -> int:
     from pipeline.report.summary import summary_table
 
     print(summary_table(result.run))
+    if not options.quality:  # only --quality's figures read the measurements again; the other writers
+        result.measurements = result.measurements.iloc[:0]  # need the run alone: the frame goes first
     written = jobs.write_correlation(result, progress)
     if "json" in written:
         print(f"JSON summary: {written['json']}", file=sys.stderr)

@@ -789,6 +789,7 @@ def write_correlation(result: CorrelateResult, progress: Progress | None = None,
                       max_windows: int = FIGURE_WINDOWS) -> dict[str, Path]:
     """Write what the options ask for: JSON summary, workbook with its track figure (and, with quality,
     the quality and per-window figures), all or nothing. Returns what was written, by kind."""
+    release_free_memory()  # what the job freed (the CLI lets go of the measurements), before the tables
     with all_or_nothing(result.checked.json, result.checked.output):
         return _write_correlation(result, progress, max_windows)
 

@@ -293,6 +293,22 @@ def test_slot_count_cap_counts_every_window_slot(monkeypatch):
     assert exc.value.slots == 951
 
 
+def test_slot_limit_is_the_table_budget_over_measured_row_sizes():
+    """MAX_SLOTS is the table budget over what a slot costs in memory: its slot row plus two lag rows,
+    measured here on a real window's tables (pandas' own byte count, no index)."""
+    import pipeline.correlate.correlation as correlation
+
+    t = np.arange(36000.0, 36100.0, 5.0)
+    radar, adsb = frame("radar", t, *weave(t)), frame("adsb", t, *weave(t))
+    (w,) = corr(radar, adsb, callsign="MAS72", slot_s=1.0).windows
+    n = len(w.slots)  # 96 slots, 191 lag rows
+    slot_row = w.slots.memory_usage(index=False).sum() / n
+    lag_row = w.lags.memory_usage(index=False).sum() / (2 * n - 1)
+    assert (slot_row, lag_row) == (correlation.SLOT_ROW_BYTES, correlation.LAG_ROW_BYTES) == (82, 40)
+    assert correlation.MAX_SLOTS == 512 * 2**20 // 162 == 3_314_017
+    assert correlation.MAX_SLOTS * 162 <= 512 * 2**20
+
+
 def test_too_many_slots_is_one_line_naming_slot_and_writes_nothing(monkeypatch, tmp_path, capsys):
     import pipeline.correlate.correlation as correlation
     from pipeline.cli import main

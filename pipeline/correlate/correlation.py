@@ -34,8 +34,15 @@ PAIRS = ("radar-adsb", "radar-radar", "all")
 CORRELATION_INPUTS = ["time", "time_of_day", "sensor_id", "sensor_kind", "aircraft_id", "callsign",
                       "address", "latitude", "longitude", "ground_speed_kt", "heading_deg", "duplicate",
                       *JUMP_FLAG_COLUMNS]
-MAX_SLOTS = 1_000_000  # slots over all windows of one run: the lag table (2N - 1 rows a window)
-# already outgrows a workbook sheet (1,048,576 rows) well before; beyond, the work explodes
+# A run holds every window's slot table (one row a slot) and lag table (2N - 1 rows for N slots) until
+# its writers are done, so the slots of all windows together are capped by the memory those tables take:
+# a slot row is 82 bytes (ten 8-byte columns, two 1-byte flags), a lag row 40 (five 8-byte columns), so
+# a slot costs 162 bytes with its two lag rows. 512 MiB of tables allows 3.3 M slots: the
+# README week (292 MB, 7.4 M reports) at the default 10 s slot (1.0 M) or 5 s (2.0 M); --slot 0.1
+# over its day (14 M) is refused.
+SLOT_ROW_BYTES, LAG_ROW_BYTES = 82, 40
+TABLE_BUDGET_BYTES = 512 * 2**20
+MAX_SLOTS = TABLE_BUDGET_BYTES // (SLOT_ROW_BYTES + 2 * LAG_ROW_BYTES)  # 3,314,017 over all windows of a run
 
 __all__ = ["MAX_SLOTS", "PAIRS", "NoOverlap", "NoSuchAircraft", "TooManySlots", "correlate", "ncc",
            "pearson_by_lag", "pearson_max_lag", "peak_lag", "sensor_pairs", "separation_stats", "sources"]

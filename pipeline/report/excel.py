@@ -72,11 +72,12 @@ from pipeline.report.tables import (
     CHART_MAX_POINTS,
     COLUMN_NOTES,
     IDENT_COLUMNS,
+    TABLE_BUILDERS,
     correlation_table,
     lag_frame,
     parquet_path,
+    parquet_tables,
     slot_table,
-    to_parquet,
     write_parquet,
 )
 
@@ -265,7 +266,7 @@ def _write_slots(wb: Workbook, run: CorrelationRun, title: str = "Slots", note: 
                 + "; charts on the Slot charts sheet.")
 
 
-def _write_parquet_note(wb: Workbook, title: str, frame: pd.DataFrame, path: Path, mode: str,
+def _write_parquet_note(wb: Workbook, title: str, rows: int, schema, path: Path, mode: str,
                         chart_sheet: str) -> None:
     """The sheet of a table written to Parquet: the file, its rows and columns, where the charts' data is."""
     ws = wb.create_sheet(title)
@@ -273,15 +274,13 @@ def _write_parquet_note(wb: Workbook, title: str, frame: pd.DataFrame, path: Pat
     page_setup(ws)
     why = (f"it has more than {AUTO_MAX_ROWS:,} rows (--tables auto; --tables xlsx keeps it in the workbook)"
            if mode == "auto" else "--tables parquet")
-    ws.append([text_cell(ws, f"{title}: {len(frame):,} rows in {path.name}, beside this workbook",
+    ws.append([text_cell(ws, f"{title}: {rows:,} rows in {path.name}, beside this workbook",
                          font=TITLE_FONT)])
     ws.append([note_text_cell(ws, f"Written as Parquet because {why}. The charts use an excerpt of it: "
                                   f"{chart_sheet} sheet.")])
     ws.append([])
     ws.append(header_cells(ws, ["column", "type", "meaning"]))
-    import pyarrow as pa
-
-    for field in pa.Schema.from_pandas(frame, preserve_index=False):
+    for field in schema:
         ws.append([text_cell(ws, field.name), text_cell(ws, str(field.type)),
                    text_cell(ws, COLUMN_NOTES.get(field.name, ""))])
 
@@ -308,7 +307,14 @@ def _lag_excerpt(window: WindowResult) -> WindowResult:
     return WindowResult(window.summary, window.slots, inside.iloc[::_step(len(inside))])
 
 
-def _write_tables(wb: Workbook, run: CorrelationRun, parquet: dict[str, tuple[pd.DataFrame, Path]],
+def pa_schema(frame: pd.DataFrame):
+    """The Parquet columns and types of a table (pyarrow's reading of the frame)."""
+    import pyarrow as pa
+
+    return pa.Schema.from_pandas(frame, preserve_index=False)
+
+
+def _write_tables(wb: Workbook, run: CorrelationRun, parquet: dict[str, tuple[int, object, Path]],
                   mode: str) -> None:
     """Lag and slot charts, then the Correlation and Slots sheets: the tables themselves, or for a table
     written to Parquet a sheet naming the file and a sheet of the charts' excerpt (every k-th row of the
@@ -326,15 +332,15 @@ def _write_tables(wb: Workbook, run: CorrelationRun, parquet: dict[str, tuple[pd
     excerpt_note = ("Excerpt for the charts: every k-th row (at most {n} a chart) of the charted windows; "
                     "the whole table: {file}.")
     if "correlation" in parquet:
-        frame, path = parquet["correlation"]
-        _write_parquet_note(wb, "Correlation", frame, path, mode, lag_data)
+        rows, schema, path = parquet["correlation"]
+        _write_parquet_note(wb, "Correlation", rows, schema, path, mode, lag_data)
         _write_correlation(wb, lag_run, lag_data, excerpt_note.format(n=CHART_MAX_POINTS, file=path.name),
                            LAG_CHART_HEADERS)
     else:
         _write_correlation(wb, run)
     if "slots" in parquet:
-        frame, path = parquet["slots"]
-        _write_parquet_note(wb, "Slots", frame, path, mode, slot_data)
+        rows, schema, path = parquet["slots"]
+        _write_parquet_note(wb, "Slots", rows, schema, path, mode, slot_data)
         _write_slots(wb, slot_run, slot_data, excerpt_note.format(n=CHART_MAX_POINTS, file=path.name),
                      SLOT_CHART_HEADERS)
     else:
@@ -425,10 +431,12 @@ def write_report(run: CorrelationRun, path_xlsx: str | os.PathLike[str], *,
     further ``images`` (caption -> PNG) on a Figures sheet. The slot and lag tables go to Parquet beside
     it as ``tables`` says (pipeline.report.tables); returns the Parquet files written. ``figure_ready``
     is called before ``figure_png`` is first read (the figure may be drawn meanwhile elsewhere)."""
-    parquet = {name: (frame, parquet_path(path_xlsx, name))
-               for name, frame in to_parquet(run, tables).items()}
-    for frame, path in parquet.values():
+    parquet = {}
+    for name in parquet_tables(run, tables):  # one table whole at a time: built, written, dropped
+        frame, path = TABLE_BUILDERS[name](run), parquet_path(path_xlsx, name)
         write_parquet(frame, path)
+        parquet[name] = (len(frame), pa_schema(frame), path)
+        del frame
     wb = Workbook(write_only=True)
     taken = {name.lower() for name in _CORE_SHEETS}
     _write_summary(wb, run)
@@ -448,7 +456,7 @@ def write_report(run: CorrelationRun, path_xlsx: str | os.PathLike[str], *,
         _discard(wb)
         raise
     write_atomically(path_xlsx, wb.save)
-    return [path for _, path in parquet.values()]
+    return [path for _, _, path in parquet.values()]
 
 
 def _discard(wb: Workbook) -> None:

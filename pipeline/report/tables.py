@@ -116,6 +116,9 @@ def correlation_table(run: CorrelationRun) -> pd.DataFrame:
     return _concat(pieces, [*IDENT_COLUMNS, "lag", "lag_s", *LAG_COLUMNS[1:], *extra], {})
 
 
+TABLE_BUILDERS = {"slots": slot_table, "correlation": correlation_table}
+
+
 def lag_frame(window: WindowResult) -> pd.DataFrame:
     """A window's lag table in increasing lag."""
     lags = window.lags
@@ -126,22 +129,29 @@ def _concat(pieces: list[dict[str, np.ndarray]], columns: list[str], dtypes: dic
     """One frame from the windows' column arrays (one concatenation per column, not a frame per window)."""
     if not pieces:
         return pd.DataFrame({c: pd.Series([], dtype=dtypes.get(c, object)) for c in columns})
-    data = {c: np.concatenate([p[c] for p in pieces]) for c in columns}
+    data = {}
+    for c in columns:  # each window's array is dropped once joined: the pieces and the result never
+        data[c] = np.concatenate([p.pop(c) for p in pieces])  # both whole at once
     if "time_utc" in data:
         data["time_utc"] = pd.to_datetime(data["time_utc"], unit="ns", utc=True).array
-    return pd.DataFrame(data, columns=columns)
+    return pd.DataFrame(data, columns=columns, copy=False)  # the joined arrays as they are, not a copy
 
 
 def to_parquet(run: CorrelationRun, mode: str) -> dict[str, pd.DataFrame]:
     """The tables (by file suffix: ``slots``, ``correlation``) that go to Parquet under ``mode``."""
+    return {name: TABLE_BUILDERS[name](run) for name in parquet_tables(run, mode)}
+
+
+def parquet_tables(run: CorrelationRun, mode: str) -> list[str]:
+    """The names of the tables (``slots``, ``correlation``) that go to Parquet under ``mode``, unbuilt: a
+    writer can build, write and drop them one at a time."""
     if mode not in TABLE_MODES:
         raise ValueError(f"tables must be one of {', '.join(TABLE_MODES)}, got {mode!r}")
     if mode == "xlsx":
-        return {}
+        return []
     rows = {"slots": sum(len(w.slots) for w in run.windows),
             "correlation": sum(len(w.lags) for w in run.windows)}
-    build = {"slots": slot_table, "correlation": correlation_table}
-    return {name: build[name](run) for name, n in rows.items() if mode == "parquet" or n > AUTO_MAX_ROWS}
+    return [name for name, n in rows.items() if mode == "parquet" or n > AUTO_MAX_ROWS]
 
 
 def parquet_path(workbook: str | os.PathLike[str], name: str) -> Path:
