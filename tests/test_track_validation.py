@@ -113,14 +113,19 @@ def test_three_radars_expm_ties_fixed_095_at_every_manoeuvre_peak():
         assert diff[4] > 2 * se[4], (slow, diff, se)
 
 
+def _robust_case():
+    """The robust-IMM paper's ADS-B leg sequence at 90 m/s (1 m/s^2, 3 deg/s), 1 Hz for 100 s, and its
+    filter (the default modes plus CA): (truth, sample times, tracker configuration)."""
+    legs = [(10, 0, 0), (10, 0, 1), (10, 0, -1), (10, 3, 0), (10, 0, 1), (10, 0, -1), (10, -3, 0),
+            (10, 0, 0), (10, 0, 1), (10, 0, -1)]
+    return (sc.fly((0.0, 0.0), 90.0, 90.0, legs), np.arange(0.0, 100.0, 1.0),
+            TrackerConfig(modes=default_modes(with_ca=True)))
+
+
 def test_robust_imm_filters_and_coasts():
     # robust-IMM paper: 1 Hz ADS-B-like sensor (error magnitude 30.21 +- 6.4 m), filtered error 10-45 % lower
     rng = np.random.default_rng(13)
-    legs = [(10, 0, 0), (10, 0, 1), (10, 0, -1), (10, 3, 0), (10, 0, 1), (10, 0, -1), (10, -3, 0),
-            (10, 0, 0), (10, 0, 1), (10, 0, -1)]
-    truth = sc.fly((0.0, 0.0), 90.0, 90.0, legs)
-    t = np.arange(0.0, 100.0, 1.0)
-    cfg = TrackerConfig(modes=default_modes(with_ca=True))
+    truth, t, cfg = _robust_case()
     raw, filt, coast, hold = [], [], [], []
     for _ in range(10):
         p = sc.position_sensor(truth, t, 30.21, 6.4, rng)
@@ -146,11 +151,7 @@ def test_robust_imm_gain_grows_with_the_sensors_noise():
     # why MLAT near the airport cannot gain the most with one filter: same kinematics and filter, the
     # relative improvement rises with the error (benchmark: 16.5 % at 2 m ... 50.3 % at 100 m)
     rng = np.random.default_rng(16)
-    legs = [(10, 0, 0), (10, 0, 1), (10, 0, -1), (10, 3, 0), (10, 0, 1), (10, 0, -1), (10, -3, 0),
-            (10, 0, 0), (10, 0, 1), (10, 0, -1)]
-    truth = sc.fly((0.0, 0.0), 90.0, 90.0, legs)
-    t = np.arange(0.0, 100.0, 1.0)
-    cfg = TrackerConfig(modes=default_modes(with_ca=True))
+    truth, t, cfg = _robust_case()
     gain = []
     for mean in (4.3, 48.18):  # MLAT near the airport, WAM (tracking.md Table 2)
         raw, filt = [], []
