@@ -14,40 +14,14 @@ import warnings
 from pathlib import Path
 
 import numpy as np
-from scipy import integrate
 from scipy.stats import ncx2
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+ROOT = Path(__file__).resolve().parents[1]
+sys.path[:0] = [str(ROOT), str(ROOT / "tests")]
+
+from conflict_reference import polar_reference, rotated  # noqa: E402
 
 from pipeline.conflict import conflict_probability  # noqa: E402
-
-
-def polar_reference(m, p, d):
-    """Adaptive quadrature of the Gaussian density over the disc, polar coordinates about the origin."""
-    p_inv = np.linalg.inv(p)
-    norm = 1 / (2 * np.pi * np.sqrt(np.linalg.det(p)))
-    s_max = np.sqrt(np.linalg.eigvalsh(p)[-1])
-    r_m, a_m = np.hypot(*m), np.arctan2(m[1], m[0])
-    r_lo, r_hi = max(0.0, r_m - 10 * s_max), min(d, r_m + 10 * s_max)
-    if r_hi <= r_lo:
-        return 0.0
-    half = np.arcsin(min(1.0, 10 * s_max / r_m)) if r_m > 10 * s_max else np.pi
-
-    def density(r, a):
-        v = np.array([r * np.cos(a) - m[0], r * np.sin(a) - m[1]])
-        return norm * np.exp(-0.5 * v @ p_inv @ v) * r
-
-    def ring(a):
-        return integrate.quad(density, r_lo, r_hi, args=(a,), epsabs=1e-13, epsrel=1e-11, limit=400)[0]
-
-    return integrate.quad(ring, a_m - half, a_m + half, points=[a_m], epsabs=1e-12, epsrel=1e-10,
-                          limit=400)[0]
-
-
-def rotated(s_major, s_minor, angle):
-    c, s = np.cos(angle), np.sin(angle)
-    u = np.array([[c, -s], [s, c]])
-    return u @ np.diag([s_major**2, s_minor**2]) @ u.T
 
 
 def methods(m, p, d):

@@ -4,41 +4,10 @@ polar coordinates, Monte Carlo with a stated error, and the reference rows of tr
 
 import numpy as np
 import pytest
-from scipy import integrate
+from conflict_reference import polar_reference, rotated
 from scipy.stats import ncx2
 
 from pipeline.conflict import conflict_probability, pc_margin, pc_upper_bound
-
-
-def polar_reference(m, p, d):
-    """Adaptive quadrature (QUADPACK) of the Gaussian density over the disc, in polar coordinates about
-    the origin, the angle restricted to where the density is not negligible (10 sigma)."""
-    m, p = np.asarray(m, float), np.asarray(p, float)
-    p_inv = np.linalg.inv(p)
-    norm = 1 / (2 * np.pi * np.sqrt(np.linalg.det(p)))
-    s_max = np.sqrt(np.linalg.eigvalsh(p)[-1])
-    r_m, a_m = np.hypot(*m), np.arctan2(m[1], m[0])
-    r_lo, r_hi = max(0.0, r_m - 10 * s_max), min(d, r_m + 10 * s_max)
-    if r_hi <= r_lo:
-        return 0.0
-    half = np.arcsin(min(1.0, 10 * s_max / r_m)) if r_m > 10 * s_max else np.pi
-
-    def density(r, a):
-        v = np.array([r * np.cos(a) - m[0], r * np.sin(a) - m[1]])
-        return norm * np.exp(-0.5 * v @ p_inv @ v) * r
-
-    def ring(a):
-        return integrate.quad(density, r_lo, r_hi, args=(a,), epsabs=1e-13, epsrel=1e-11, limit=400)[0]
-
-    return integrate.quad(ring, a_m - half, a_m + half, points=[a_m], epsabs=1e-12, epsrel=1e-10,
-                          limit=400)[0]
-
-
-def rotated(sigma_major, sigma_minor, angle):
-    c, s = np.cos(angle), np.sin(angle)
-    u = np.array([[c, -s], [s, c]])
-    return u @ np.diag([sigma_major**2, sigma_minor**2]) @ u.T
-
 
 # mean, covariance, radius: isotropic and anisotropic, on and off the axes, covariance small and large
 # against the zone, mean inside, on the edge and outside
