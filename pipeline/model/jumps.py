@@ -219,14 +219,14 @@ JUMP_INPUTS = ["time", "aircraft_id", "latitude", "longitude"]  # the measuremen
 
 
 def _detect(adsb_meas: pd.DataFrame, max_speed_kt: float, robust_window: int,
-            robust_threshold_m: float) -> pd.DataFrame:
-    """Per row (original index): jump flag, distance from the robust fit (m) and the fitted lat/lon; taken
-    as they are when the frame already carries them (computed once per job, pipeline.jobs.mark_once)."""
+            robust_threshold_m: float, need: list[str] = JUMP_FLAG_COLUMNS) -> pd.DataFrame:
+    """Per row (original index): jump flag, distance from the robust fit (m) and the fitted lat/lon; the
+    ``need`` columns taken as they are when the frame already carries them (computed once per job,
+    pipeline.jobs.mark_once)."""
     if robust_window < 3:
         raise ValueError(f"robust_window must be at least 3, got {robust_window}")
-    if all(c in adsb_meas for c in JUMP_FLAG_COLUMNS) and (max_speed_kt, robust_window,
-                                                           robust_threshold_m) == _DEFAULTS:
-        found = adsb_meas[JUMP_FLAG_COLUMNS].copy()
+    if all(c in adsb_meas for c in need) and (max_speed_kt, robust_window, robust_threshold_m) == _DEFAULTS:
+        found = adsb_meas[need].copy()
         found["jump"] = found["jump"].fillna(False).astype(bool)
         return found
     n = len(adsb_meas)
@@ -281,7 +281,8 @@ def jump_flags(adsb_meas: pd.DataFrame) -> pd.DataFrame:
 def detect_jumps(adsb_meas: pd.DataFrame, *, max_speed_kt: float = 1000.0, robust_window: int = 7,
                  robust_threshold_m: float = 2000.0) -> pd.Series:
     """True for ADS-B reports that are position jumps (see the module docstring); indexed like the input."""
-    return _detect(adsb_meas, max_speed_kt, robust_window, robust_threshold_m)["jump"].rename("jump")
+    found = _detect(adsb_meas, max_speed_kt, robust_window, robust_threshold_m, ["jump"])
+    return found["jump"].rename("jump")
 
 
 def jump_table(adsb_meas: pd.DataFrame, *, max_speed_kt: float = 1000.0, robust_window: int = 7,
