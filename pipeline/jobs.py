@@ -430,7 +430,7 @@ def _date_ignored(options: DecodingOptions, inputs: list[dict]) -> list[str]:
 
 
 def _load_measurements(options: AircraftOptions, checked: Checked, progress: Progress | None,
-                       stage: str, *, either: bool = False) -> tuple[Loaded, pd.DataFrame]:
+                       stage: str, *, either: bool = False, columns=None) -> tuple[Loaded, pd.DataFrame]:
     """Decode the inputs chunk by chunk straight into radar and ADS-B measurements (load_measurements),
     with the user-facing errors for unreadable inputs, missing data and sensors (stray radar records are
     left out with a warning: _stray_verdict). ``stage`` is the progress stage shown once the inputs are
@@ -441,7 +441,8 @@ def _load_measurements(options: AircraftOptions, checked: Checked, progress: Pro
     try:
         loaded, meas = load_measurements(checked.inputs, checked.sensors, editions=checked.editions or None,
                                          date=options.date, format=options.format,
-                                         adsb_sigma_m=options.adsb_sigma_m, progress=progress, either=either)
+                                         adsb_sigma_m=options.adsb_sigma_m, progress=progress, either=either,
+                                         columns=columns)
     except UnreadableInput as exc:
         raise JobError(str(exc), 2) from exc
     except NoRecords as exc:
@@ -545,15 +546,18 @@ def _all_failed(loaded: Loaded, cat: int) -> str:
     return f": {failed} CAT{cat:03d} block(s) could not be decoded{hint} ('msdc stats' lists them)"
 
 
-def mark_once(meas: pd.DataFrame, *, split_adsb: bool = False, jumps: bool = True) -> pd.DataFrame:
+def mark_once(meas: pd.DataFrame, *, split_adsb: bool = False, jumps: bool = True,
+              flags: list[str] | None = None) -> pd.DataFrame:
     """The measurements with the ``duplicate`` flag and the ADS-B jump columns (``jump``, ``jump_size_m``,
     ``fit_latitude``, ``fit_longitude``) computed once for the whole job; deduplication, filters, quality
     and accuracy reuse them instead of recomputing. ``jumps=False`` skips the jump search (a job that
-    neither filters jumps nor assesses quality does not need it)."""
+    neither filters jumps nor assesses quality does not need it); ``flags``: only these jump columns
+    (``["jump"]`` for a job that counts or drops jumps but never reads the fit)."""
     from pipeline.model.dedup import DEDUP_KEYS, duplicate_mask, repeat_groups
     from pipeline.model.jumps import JUMP_FLAG_COLUMNS, JUMP_INPUTS, jump_flags
 
     meas = meas.drop(columns=[c for c in ("duplicate", *JUMP_FLAG_COLUMNS) if c in meas])
+    judged_columns = JUMP_FLAG_COLUMNS if flags is None else [c for c in JUMP_FLAG_COLUMNS if c in flags]
     keys = [k for k in DEDUP_KEYS if k in meas]
     # rows equal in every key have the same time, so the first in time order is the first in frame order:
     # no sorted copy is needed. Only the columns each step reads are selected, never the whole frame.
@@ -576,7 +580,7 @@ def mark_once(meas: pd.DataFrame, *, split_adsb: bool = False, jumps: bool = Tru
     pos_all = at[in_key_order]  # judged position of each ADS-B row, in key order
     del at, rows
     out = {}
-    for c in JUMP_FLAG_COLUMNS:
+    for c in judged_columns:
         values = judged[c].to_numpy(dtype=bool if c == "jump" else float)
         pos = pos_all
         known = pos >= 0
@@ -623,7 +627,8 @@ def _quality(meas: pd.DataFrame, sensors: pd.DataFrame, options: AircraftOptions
 
 @dataclass
 class CorrelateResult:
-    """A correlation run, the measurements it used, the quality result (with ``quality``) and warnings."""
+    """A correlation run, the measurements it used (the columns ``correlate_columns`` names), the quality
+    result (with ``quality``) and warnings."""
 
     options: CorrelateOptions
     checked: Checked
@@ -683,14 +688,38 @@ def far_separations(run: CorrelationRun, meas: pd.DataFrame, sensors: pd.DataFra
 
 
 def _marked_measurements(options: AircraftOptions, checked: Checked, progress: Progress | None, stage: str,
-                         *, split_adsb: bool = False, either: bool = False) -> tuple[Loaded, pd.DataFrame]:
+                         *, split_adsb: bool = False, either: bool = False, columns=None,
+                         flags: list[str] | None = None) -> tuple[Loaded, pd.DataFrame]:
     """The inputs and their measurements with the duplicate and jump flags (once per job; correlate counts
     each window's jumps); decoded columns are held one chunk at a time (see _load_measurements).
-    ``stage`` is the progress stage shown once the inputs are read."""
-    loaded, meas = _load_measurements(options, checked, progress, stage, either=either)
-    meas = mark_once(meas, split_adsb=split_adsb)
+    ``stage`` is the progress stage shown once the inputs are read; ``columns`` and ``flags``: only those
+    measurement columns and jump columns (every one when None)."""
+    loaded, meas = _load_measurements(options, checked, progress, stage, either=either, columns=columns)
+    meas = mark_once(meas, split_adsb=split_adsb, flags=flags)
     release_free_memory()
     return loaded, meas
+
+
+# the measurement columns far_separations reads
+FAR_SEPARATION_INPUTS = ["sensor_id", "sac", "sic", "rho_nm"]
+
+
+def correlate_columns(options: CorrelateOptions) -> list[str] | None:
+    """The measurement columns a correlate job builds, in schema order: what correlate, mark_once, the
+    filters asked for and far_separations read; None (every column) with ``quality`` or ``fill
+    predict``, whose steps read most of the model. Half the bytes of a row on a large recording."""
+    from pipeline.correlate.correlation import CORRELATION_INPUTS
+    from pipeline.model.dedup import DEDUP_KEYS
+    from pipeline.model.jumps import JUMP_INPUTS
+    from pipeline.model.schema import MEASUREMENT_COLUMNS, column_names
+
+    if options.quality or options.fill != "hold":
+        return None
+    need = {*CORRELATION_INPUTS, *DEDUP_KEYS, "sensor_kind", "sensor_id", *JUMP_INPUTS,
+            *FAR_SEPARATION_INPUTS}
+    need |= {"nucp_nic"} if options.min_nic is not None else set()
+    need |= {"nacp"} if options.min_nacp is not None else set()
+    return column_names(need & set(MEASUREMENT_COLUMNS))  # the job-wide flags are added by mark_once
 
 
 def correlate_job(options: CorrelateOptions, *, progress: Progress | None = None,
@@ -704,8 +733,10 @@ def correlate_job(options: CorrelateOptions, *, progress: Progress | None = None
     checked = checked or validate(options)
     if progress:
         progress.stage("Processing data files")
+    columns = correlate_columns(options)
     loaded, meas_all = _marked_measurements(options, checked, progress, "Pre-processing data",
-                                            split_adsb=options.split_adsb)
+                                            split_adsb=options.split_adsb, columns=columns,
+                                            flags=None if columns is None else ["jump"])
     meas, removed = apply_filters(meas_all, drop_jumps=options.drop_jumps, min_nic=options.min_nic,
                                   min_nacp=options.min_nacp)
     if progress:  # the thesis tool's stage names

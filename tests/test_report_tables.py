@@ -205,3 +205,24 @@ def test_chart_series_read_the_columns_they_name(result, tmp_path, tables):
                 else:
                     axis = "lat" if "latitude" in chart.title.tx.rich.p[0].r[0].t else "lon"
                     assert refs["y"] == f"{'radar' if title == 'Radar' else 'adsb'}_{axis}", (title, refs)
+
+
+@pytest.mark.parametrize("name", ["slots", "correlation"])
+def test_parquet_written_in_batches_equals_the_whole_table(result, tmp_path, name):
+    """A long table is built and written a few windows at a time (bounded memory): the file holds the same
+    columns, types, pandas metadata and rows as the whole table written at once."""
+    import pyarrow.parquet as pq
+
+    run = result.run
+    parts = tables_mod._batches(run, name, 300)
+    length = [len(w.slots if name == "slots" else w.lags) for w in run.windows]
+    sizes = [[length[i] for i in p] for p in parts]
+    assert len(parts) > 2 and [i for p in parts for i in p] == list(range(len(run.windows)))
+    assert all(sum(s) <= 300 or len(s) == 1 for s in sizes)  # whole windows, one alone when longer
+    whole = tables_mod.write_parquet(tables_mod.TABLE_BUILDERS[name](run), tmp_path / "whole.parquet")
+    rows, schema = tables_mod.write_table_parquet(run, name, tmp_path / "batched.parquet", batch_rows=300)
+    a, b = pq.read_table(whole), pq.read_table(tmp_path / "batched.parquet")
+    assert pq.ParquetFile(tmp_path / "batched.parquet").metadata.num_row_groups == len(parts)
+    assert rows == a.num_rows == b.num_rows == sum(map(sum, sizes))
+    assert b.equals(a, check_metadata=True) and schema.equals(a.schema, check_metadata=True)
+    pd.testing.assert_frame_equal(b.to_pandas(), a.to_pandas())

@@ -219,14 +219,14 @@ JUMP_INPUTS = ["time", "aircraft_id", "latitude", "longitude"]  # the measuremen
 
 
 def _detect(adsb_meas: pd.DataFrame, max_speed_kt: float, robust_window: int,
-            robust_threshold_m: float) -> pd.DataFrame:
-    """Per row (original index): jump flag, distance from the robust fit (m) and the fitted lat/lon; taken
-    as they are when the frame already carries them (computed once per job, pipeline.jobs.mark_once)."""
+            robust_threshold_m: float, need: list[str] = JUMP_FLAG_COLUMNS) -> pd.DataFrame:
+    """Per row (original index): jump flag, distance from the robust fit (m) and the fitted lat/lon; the
+    ``need`` columns taken as they are when the frame already carries them (computed once per job,
+    pipeline.jobs.mark_once)."""
     if robust_window < 3:
         raise ValueError(f"robust_window must be at least 3, got {robust_window}")
-    if all(c in adsb_meas for c in JUMP_FLAG_COLUMNS) and (max_speed_kt, robust_window,
-                                                           robust_threshold_m) == _DEFAULTS:
-        found = adsb_meas[JUMP_FLAG_COLUMNS].copy()
+    if all(c in adsb_meas for c in need) and (max_speed_kt, robust_window, robust_threshold_m) == _DEFAULTS:
+        found = adsb_meas[need].copy()
         found["jump"] = found["jump"].fillna(False).astype(bool)
         return found
     n = len(adsb_meas)
@@ -236,16 +236,20 @@ def _detect(adsb_meas: pd.DataFrame, max_speed_kt: float, robust_window: int,
     key = _sorted_codes(adsb_meas["aircraft_id"])
     t = seconds_since(adsb_meas["time"], reference) if reference is not None else np.full(n, np.nan)
     lat, lon = adsb_meas["latitude"].to_numpy(float), adsb_meas["longitude"].to_numpy(float)
-    pos = np.flatnonzero((key >= 0) & ~np.isnan(t) & ~np.isnan(lat) & ~np.isnan(lon))
+    # int32 positions and segment numbers (a frame of up to 2**31 rows): the search's full-length arrays are
+    # the largest memory of a job on a long recording
+    index = np.int32 if n < 2**31 else np.int64
+    pos = np.flatnonzero((key >= 0) & ~np.isnan(t) & ~np.isnan(lat) & ~np.isnan(lon)).astype(index)
     pos = pos[np.lexsort((t[pos], key[pos]))]  # by aircraft, then time (stable)
     key, t, lat, lon = key[pos], t[pos], lat[pos], lon[pos]
-    seg = np.cumsum(np.r_[True, (key[1:] != key[:-1]) | (np.diff(t) > SEGMENT_GAP_S)])
+    seg = np.cumsum(np.r_[True, (key[1:] != key[:-1]) | (np.diff(t) > SEGMENT_GAP_S)], dtype=index)
     del key
-    size = np.bincount(seg)[seg]
-    judged = size >= 3  # shorter segments are not judged
+    judged = (np.bincount(seg) >= 3)[seg]  # shorter segments are not judged
     if not judged.any():
         return pd.DataFrame(cols, index=adsb_meas.index)
-    pos, t, lat, lon, seg = pos[judged], t[judged], lat[judged], lon[judged], seg[judged]
+    if not judged.all():  # (copies only when some segment is left out)
+        pos, t, lat, lon, seg = pos[judged], t[judged], lat[judged], lon[judged], seg[judged]
+    del judged
     # segments are judged independently: the search runs over batches of whole segments (bounded memory)
     # on longitudes unwrapped over all of them, as one run over every segment would see them
     unwrapped = np.unwrap(lon, period=360.0)
@@ -268,9 +272,9 @@ def _sorted_codes(ident: pd.Series) -> np.ndarray:
     """Integer codes of the aircraft identities, ordered as the texts sort (-1: none), so sorting by
     them sorts by identity without a Python object per row."""
     if isinstance(ident.dtype, pd.CategoricalDtype) and ident.cat.categories.is_monotonic_increasing:
-        return ident.cat.codes.to_numpy(np.int64)
+        return ident.cat.codes.to_numpy(np.int32)
     codes, _ = pd.factorize(ident.astype("string"), sort=True)
-    return codes.astype(np.int64)
+    return codes.astype(np.int32)
 
 
 def jump_flags(adsb_meas: pd.DataFrame) -> pd.DataFrame:
@@ -281,7 +285,8 @@ def jump_flags(adsb_meas: pd.DataFrame) -> pd.DataFrame:
 def detect_jumps(adsb_meas: pd.DataFrame, *, max_speed_kt: float = 1000.0, robust_window: int = 7,
                  robust_threshold_m: float = 2000.0) -> pd.Series:
     """True for ADS-B reports that are position jumps (see the module docstring); indexed like the input."""
-    return _detect(adsb_meas, max_speed_kt, robust_window, robust_threshold_m)["jump"].rename("jump")
+    found = _detect(adsb_meas, max_speed_kt, robust_window, robust_threshold_m, ["jump"])
+    return found["jump"].rename("jump")
 
 
 def jump_table(adsb_meas: pd.DataFrame, *, max_speed_kt: float = 1000.0, robust_window: int = 7,

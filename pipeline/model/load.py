@@ -138,11 +138,13 @@ class NoRecords(LookupError):
 def load_measurements(paths: list[str | Path], sensors: pd.DataFrame, *, editions=None, date=None,
                       format: str | None = None, adsb_sigma_m: float | None = None,
                       chunk: int = MEASUREMENT_CHUNK_BYTES, progress: Progress | None = None,
-                      either: bool = False) -> tuple[Loaded, pd.DataFrame]:
+                      either: bool = False, columns=None) -> tuple[Loaded, pd.DataFrame]:
     """Decode every input in chunks (asterix.iter_read, only DECODED_COLUMNS) straight into measurement
     rows, and join them into one validated measurement frame (rows as build_measurements orders them:
     every input's radar rows, then every input's ADS-B rows). The Loaded has no frames but the inputs,
-    errors, editions, date and time spans that ``load`` gives.
+    errors, editions, date and time spans that ``load`` gives. ``columns``: only those measurement
+    columns (a job's narrower frame, see pipeline.model.schema.validate), each chunk's rows keeping only
+    what they need; every column when None.
 
     NoRecords when the inputs hold no CAT048 or no CAT021 record (with ``either``, only when they hold
     neither). Records of a radar the sensor table lacks are left out and listed in
@@ -180,7 +182,7 @@ def load_measurements(paths: list[str | Path], sensors: pd.DataFrame, *, edition
             # undated records are placed on UNDATED_DAY here and moved to Loaded.date below
             by_cat = widen_spans(by_cat, time_spans(rec.frames, None))
             frames, rec.frames = rec.frames, {}
-            r, a = _rows(frames, p.name, sensors, adsb_sigma_m, stray, off_earth)
+            r, a = _rows(frames, p.name, sensors, adsb_sigma_m, stray, off_earth, columns)
             del frames
             radar += [(i, r)] if r is not None else []
             adsb += [(i, a)] if a is not None else []
@@ -197,7 +199,7 @@ def load_measurements(paths: list[str | Path], sensors: pd.DataFrame, *, edition
         shift = pd.Timestamp(first_date, tz="UTC") - UNDATED_DAY
         undated = {i for i, d in enumerate(dates) if d is None}
         for i, part in radar + adsb:
-            if i in undated:
+            if i in undated and "time" in part:
                 part["time"] = part["time"] + shift
         spans = [{c: (lo + shift, hi + shift) for c, (lo, hi) in s.items()} if i in undated else s
                  for i, s in enumerate(spans)]
@@ -208,7 +210,7 @@ def load_measurements(paths: list[str | Path], sensors: pd.DataFrame, *, edition
     radar.clear()
     adsb.clear()
     release_free_memory()  # what the chunks' decoding freed, before the join needs room
-    meas = finish_measurements(parts)
+    meas = finish_measurements(parts, columns)
     release_free_memory()
     warnings = impossible_positions(pd.concat(off_earth, ignore_index=True)) if off_earth else []
     stray_radar = _stray_table(stray)
@@ -235,7 +237,7 @@ def release_free_memory() -> None:
 
 
 def _rows(frames: dict[int, pd.DataFrame], name: str, sensors: pd.DataFrame, adsb_sigma_m: float | None,
-          stray: list[pd.DataFrame], off_earth: list[pd.DataFrame]
+          stray: list[pd.DataFrame], off_earth: list[pd.DataFrame], columns=None
           ) -> tuple[pd.DataFrame | None, pd.DataFrame | None]:
     """Measurement rows of one decoded chunk, undated records on UNDATED_DAY; the records of radars the
     sensor table lacks are left out and their undeclared_radars table added to ``stray``, CAT021 reports
@@ -255,4 +257,4 @@ def _rows(frames: dict[int, pd.DataFrame], name: str, sensors: pd.DataFrame, ads
             stray.append(unknown)
             keys = pd.MultiIndex.from_arrays([cat048["sac"].astype("Int64"), cat048["sic"].astype("Int64")])
             cat048 = cat048[keys.isin(pd.MultiIndex.from_frame(sensors[["sac", "sic"]].astype("Int64")))]
-    return measurement_rows(cat048, frames.get(21), sensors, adsb_sigma_m=adsb_sigma_m)
+    return measurement_rows(cat048, frames.get(21), sensors, adsb_sigma_m=adsb_sigma_m, columns=columns)

@@ -24,6 +24,7 @@ from pipeline.model.geodesy import (
 from pipeline.model.identity import assign_aircraft_id, normalise_address, normalise_callsign
 from pipeline.model.schema import (
     coded_text,
+    column_names,
     concat_columns,
     conform,
     empty_measurements,
@@ -44,6 +45,10 @@ DECODED_COLUMNS = ("flight_level", "ground_speed_kt", "callsign", "address", "mo
                    "heading_deg", "rho_nm", "theta_deg", "x_nm", "y_nm", "track_angle_deg", "latitude",
                    "longitude", "nucp_nic", "fom_pa", "nacp", "nucr_nacv", "sil", "mops_version",
                    "geometric_height_ft")
+
+# Columns worked out over the whole run by finish_measurements, and the built columns each is made from
+DERIVED_INPUTS = {"aircraft_id": ("address", "callsign", "mode3a"),
+                  "sigma_major_m": ("cov_ee_m2", "cov_en_m2", "cov_nn_m2")}
 
 # DO-260B NACp: 95 % horizontal position accuracy bound (EPU) in metres; 0 = unknown
 NACP_95_M = {11: 3.0, 10: 10.0, 9: 30.0, 8: 92.6, 7: 185.2, 6: 555.6, 5: 926.0, 4: 1852.0, 3: 3704.0,
@@ -231,33 +236,55 @@ def impossible_positions(cat021: pd.DataFrame | None) -> list[str]:
     return out
 
 
+def row_columns(columns=None) -> list[str] | None:
+    """The columns ``measurement_rows`` keeps so that ``finish_measurements`` can give ``columns`` (None:
+    every column): those named, less the derived ones, plus what the derived ones named are made from."""
+    if columns is None:
+        return None
+    wanted = set(column_names(columns))
+    for derived, inputs in DERIVED_INPUTS.items():
+        if derived in wanted:
+            wanted.discard(derived)
+            wanted.update(inputs)
+    return column_names(wanted)
+
+
 def measurement_rows(cat048: pd.DataFrame | None = None, cat021: pd.DataFrame | None = None,
                      sensors: pd.DataFrame | None = None, *, date: dt.date | None = None,
-                     adsb_sigma_m: float | None = None) -> tuple[pd.DataFrame | None, pd.DataFrame | None]:
+                     adsb_sigma_m: float | None = None, columns=None
+                     ) -> tuple[pd.DataFrame | None, pd.DataFrame | None]:
     """The radar rows and the ADS-B rows of decoded frames (None where there are none) at the schema's
     dtypes, without the columns worked out over the whole run (``aircraft_id``, ``sigma_major_m``):
-    a recording read in chunks builds these per chunk and joins them with ``finish_measurements``."""
+    a recording read in chunks builds these per chunk and joins them with ``finish_measurements``.
+    ``columns``: only what those measurement columns need (``row_columns``), not every column."""
     radar = adsb = None
+    keep = row_columns(columns)
     if cat048 is not None and len(cat048):
         if sensors is None:
             raise ValueError("radar measurements need the sensor table (radar sites)")
-        radar = conform(_radar_rows(cat048, sensors, date))
+        radar = conform(_radar_rows(cat048, sensors, date), keep)
     if cat021 is not None and len(cat021):
-        adsb = conform(_adsb_rows(cat021, date, adsb_sigma_m))
+        adsb = conform(_adsb_rows(cat021, date, adsb_sigma_m), keep)
     return (radar if radar is not None and len(radar) else None,
             adsb if adsb is not None and len(adsb) else None)
 
 
-def finish_measurements(parts: list[pd.DataFrame]) -> pd.DataFrame:
+def finish_measurements(parts: list[pd.DataFrame], columns=None) -> pd.DataFrame:
     """Parts from ``measurement_rows`` joined in order (column by column, see schema.concat_columns), with
-    the identity rule applied over all of them and each row's error-ellipse major axis; validated."""
+    the identity rule applied over all of them and each row's error-ellipse major axis; validated.
+    ``columns`` (as given to ``measurement_rows``): only those columns, in schema order."""
     if not parts:
-        return empty_measurements()
+        return empty_measurements(columns)
     meas = concat_columns(parts)
-    meas["aircraft_id"] = assign_aircraft_id(meas)
-    meas["sigma_major_m"] = _sigma_major(meas["cov_ee_m2"].to_numpy(), meas["cov_en_m2"].to_numpy(),
-                                         meas["cov_nn_m2"].to_numpy())
-    return validate(meas)
+    wanted = column_names(columns)
+    if "aircraft_id" in wanted:
+        meas["aircraft_id"] = assign_aircraft_id(meas)
+    if "sigma_major_m" in wanted:
+        meas["sigma_major_m"] = _sigma_major(meas["cov_ee_m2"].to_numpy(), meas["cov_en_m2"].to_numpy(),
+                                             meas["cov_nn_m2"].to_numpy())
+    if columns is not None:  # the derived columns' inputs go, the rest in schema order (no copy)
+        meas = pd.DataFrame({c: meas[c] for c in wanted}, copy=False)
+    return validate(meas, columns)
 
 
 def build_measurements(cat048: pd.DataFrame | None = None, cat021: pd.DataFrame | None = None,

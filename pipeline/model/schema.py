@@ -90,9 +90,26 @@ class SchemaError(ValueError):
     """A frame does not follow the measurement schema; names the column."""
 
 
-def empty_measurements() -> pd.DataFrame:
-    """A measurement frame with no rows and every column at its schema dtype."""
-    return conform(pd.DataFrame(index=pd.RangeIndex(0)))
+def schema_columns(names=None) -> list[Column]:
+    """The schema's columns named in ``names`` (every column when None), in schema order: how a job asks
+    for the part of the model it reads. SchemaError for a name the schema does not have."""
+    if names is None:
+        return list(MEASUREMENT_SCHEMA)
+    names = set(names)
+    unknown = sorted(names - _BY_NAME.keys())
+    if unknown:
+        raise SchemaError(f"{unknown[0]!r} is not a measurement column (see pipeline.model.schema)")
+    return [c for c in MEASUREMENT_SCHEMA if c.name in names]
+
+
+def column_names(names=None) -> list[str]:
+    """The names of ``schema_columns(names)``: ``names`` checked against the schema, in schema order."""
+    return [c.name for c in schema_columns(names)]
+
+
+def empty_measurements(columns=None) -> pd.DataFrame:
+    """A measurement frame with no rows and every column (or the ``columns`` named) at its schema dtype."""
+    return conform(pd.DataFrame(index=pd.RangeIndex(0)), columns)
 
 
 _INT_RANGES = {"Int8": (-(2**7), 2**7 - 1), "Int16": (-(2**15), 2**15 - 1)}
@@ -135,10 +152,11 @@ def text_categorical(values: pd.Series) -> pd.Series:
     return values.astype(LABEL_DTYPE).astype(_TEXT)
 
 
-def conform(frame: pd.DataFrame) -> pd.DataFrame:
-    """The schema columns of ``frame`` in schema order, each cast to its dtype (missing ones all NA)."""
+def conform(frame: pd.DataFrame, columns=None) -> pd.DataFrame:
+    """The schema columns of ``frame`` (all, or the ``columns`` named) in schema order, each cast to its
+    dtype (missing ones all NA)."""
     out = {}
-    for c in MEASUREMENT_SCHEMA:
+    for c in schema_columns(columns):
         if c.name in frame:
             out[c.name] = as_dtype(frame[c.name], c)
         elif c.dtype == _TEXT:
@@ -170,10 +188,11 @@ def concat_columns(parts: list[pd.DataFrame]) -> pd.DataFrame:
     return pd.DataFrame(out, copy=False)
 
 
-def validate(frame: pd.DataFrame) -> pd.DataFrame:
-    """``frame`` unchanged if it has every schema column with its dtype and sane values; else SchemaError
-    naming the first offending column."""
-    for c in MEASUREMENT_SCHEMA:
+def validate(frame: pd.DataFrame, columns=None) -> pd.DataFrame:
+    """``frame`` unchanged if it has every schema column (or every one of the ``columns`` named: a job's
+    narrower frame) with its dtype and sane values; else SchemaError naming the first offending column."""
+    wanted = schema_columns(columns)
+    for c in wanted:
         if c.name not in frame:
             raise SchemaError(f"measurement column {c.name!r} is missing ({c.description})")
         if str(frame[c.name].dtype) != c.dtype:
@@ -184,18 +203,19 @@ def validate(frame: pd.DataFrame) -> pd.DataFrame:
             if len(labels) and not (labels.dtype == LABEL_DTYPE and labels.is_monotonic_increasing):
                 raise SchemaError(f"measurement column {c.name!r}: its categories must be text (string "
                                   f"dtype, not {labels.dtype}) in sorted order")
-    if frame["time"].isna().any():
+    names = {c.name for c in wanted}
+    if "time" in names and frame["time"].isna().any():
         raise SchemaError("measurement column 'time' has missing values")
-    kinds = set(frame["sensor_kind"].dropna().unique()) - {"radar", "adsb"}
-    if kinds or frame["sensor_kind"].isna().any():
+    kinds = set(frame["sensor_kind"].dropna().unique()) - {"radar", "adsb"} if "sensor_kind" in names else ()
+    if kinds or ("sensor_kind" in names and frame["sensor_kind"].isna().any()):
         raise SchemaError(f"measurement column 'sensor_kind' holds {sorted(kinds) or ['<NA>']}; "
                           "allowed: radar, adsb")
     for name, lo, hi in (("latitude", -90.0, 90.0), ("longitude", -180.0, 180.0)):
-        v = frame[name]
-        if v.isna().any() or ((v < lo) | (v > hi)).any():
+        v = frame[name] if name in names else None
+        if v is not None and (v.isna().any() or ((v < lo) | (v > hi)).any()):
             raise SchemaError(f"measurement column {name!r} has values missing or outside {lo:g}..{hi:g}")
     for name in ("cov_ee_m2", "cov_nn_m2", "sigma_major_m"):
-        if (frame[name] < 0).any():
+        if name in names and (frame[name] < 0).any():
             raise SchemaError(f"measurement column {name!r} has negative values")
     return frame
 
@@ -208,8 +228,11 @@ def markdown() -> str:
         "Generated from `pipeline/model/schema.py`",
         "(`python -m pipeline.model.schema > docs/measurements.md`).",
         "One row per report of every sensor, radar and ADS-B alike; `validate(frame)` checks a frame against",
-        "it. Derived for the thesis tables (not stored): `time_of_day`, seconds since midnight UTC of the",
-        "run's first day (above 86400 after midnight), from `pipeline.model.time.with_clock`.",
+        "it. A job that reads only some columns may ask for those alone (`schema_columns`, `validate(frame,",
+        "columns)`): `msdc correlate` without `--quality` or `--fill predict` builds the columns listed by",
+        "`pipeline.jobs.correlate_columns`. Derived for the thesis tables (not stored): `time_of_day`,",
+        "seconds since midnight UTC of the run's first day (above 86400 after midnight), from",
+        "`pipeline.model.time.with_clock`.",
         "",
         "Dtypes: `category` columns hold text as categories of the pandas string dtype in sorted order",
         "(each distinct text stored once, a small integer code per row; sorting or grouping by the codes",

@@ -72,13 +72,12 @@ from pipeline.report.tables import (
     CHART_MAX_POINTS,
     COLUMN_NOTES,
     IDENT_COLUMNS,
-    TABLE_BUILDERS,
     correlation_table,
     lag_frame,
     parquet_path,
     parquet_tables,
     slot_table,
-    write_parquet,
+    write_table_parquet,
 )
 
 # Summary: stacked blocks that each fit a landscape page; every block starts with call sign and window
@@ -307,13 +306,6 @@ def _lag_excerpt(window: WindowResult) -> WindowResult:
     return WindowResult(window.summary, window.slots, inside.iloc[::_step(len(inside))])
 
 
-def pa_schema(frame: pd.DataFrame):
-    """The Parquet columns and types of a table (pyarrow's reading of the frame)."""
-    import pyarrow as pa
-
-    return pa.Schema.from_pandas(frame, preserve_index=False)
-
-
 def _write_tables(wb: Workbook, run: CorrelationRun, parquet: dict[str, tuple[int, object, Path]],
                   mode: str) -> None:
     """Lag and slot charts, then the Correlation and Slots sheets: the tables themselves, or for a table
@@ -432,11 +424,9 @@ def write_report(run: CorrelationRun, path_xlsx: str | os.PathLike[str], *,
     it as ``tables`` says (pipeline.report.tables); returns the Parquet files written. ``figure_ready``
     is called before ``figure_png`` is first read (the figure may be drawn meanwhile elsewhere)."""
     parquet = {}
-    for name in parquet_tables(run, tables):  # one table whole at a time: built, written, dropped
-        frame, path = TABLE_BUILDERS[name](run), parquet_path(path_xlsx, name)
-        write_parquet(frame, path)
-        parquet[name] = (len(frame), pa_schema(frame), path)
-        del frame
+    for name in parquet_tables(run, tables):  # one table at a time, built and written in batches of windows
+        path = parquet_path(path_xlsx, name)
+        parquet[name] = (*write_table_parquet(run, name, path), path)
     wb = Workbook(write_only=True)
     taken = {name.lower() for name in _CORE_SHEETS}
     _write_summary(wb, run)

@@ -78,13 +78,15 @@ def is_dated(run: CorrelationRun) -> bool:
     return all("timestamp" in w.slots and w.slots["timestamp"].notna().all() for w in run.windows)
 
 
-def slot_table(run: CorrelationRun) -> pd.DataFrame:
-    """Every window's slots, windows in run order (module docstring for the columns)."""
+def slot_table(run: CorrelationRun, part: range | None = None) -> pd.DataFrame:
+    """Every window's slots, windows in run order (module docstring for the columns); ``part``: only the
+    windows at these positions, with the columns and types of the whole table."""
     dated = is_dated(run)
     extra = _extra([w.slots for w in run.windows], SLOT_COLUMNS)
     values = SLOT_COLUMNS[3:] + extra
     pieces = []
-    for i, w in enumerate(run.windows):
+    for i in range(len(run.windows)) if part is None else part:
+        w = run.windows[i]
         n = len(w.slots)
         piece = {**_ident(w, i, n), "slot": w.slots["slot"].to_numpy() if "slot" in w.slots else np.arange(n)}
         if dated:  # int64 ns, a datetime column again in _concat
@@ -100,11 +102,13 @@ def slot_table(run: CorrelationRun) -> pd.DataFrame:
     return _concat(pieces, columns, {"time_utc": "datetime64[ns, UTC]"} if dated else {})
 
 
-def correlation_table(run: CorrelationRun) -> pd.DataFrame:
-    """Every window's lags d = -(N-1)..N-1 in increasing order, with the lag in seconds."""
+def correlation_table(run: CorrelationRun, part: range | None = None) -> pd.DataFrame:
+    """Every window's lags d = -(N-1)..N-1 in increasing order, with the lag in seconds; ``part`` as for
+    slot_table."""
     extra = _extra([w.lags for w in run.windows], LAG_COLUMNS)
     pieces = []
-    for i, w in enumerate(run.windows):
+    for i in range(len(run.windows)) if part is None else part:
+        w = run.windows[i]
         lags = lag_frame(w)
         n = len(lags)
         lag = pd.to_numeric(lags["lag"], errors="coerce") if "lag" in lags else pd.Series(np.nan, lags.index)
@@ -117,6 +121,10 @@ def correlation_table(run: CorrelationRun) -> pd.DataFrame:
 
 
 TABLE_BUILDERS = {"slots": slot_table, "correlation": correlation_table}
+# A long table goes to Parquet built this many rows (whole windows) at a time, so a run of millions of slots
+# never holds its whole table (about 150 bytes a row, and more while pandas builds its text columns); a
+# table up to this size is written in one piece, as before
+TABLE_BATCH_ROWS = 262_144
 
 
 def lag_frame(window: WindowResult) -> pd.DataFrame:
@@ -158,6 +166,57 @@ def parquet_path(workbook: str | os.PathLike[str], name: str) -> Path:
     """Where table ``name`` (``slots``, ``correlation``) goes beside the workbook: STEM_NAME.parquet."""
     workbook = Path(workbook)
     return workbook.with_name(f"{workbook.stem}_{name}.parquet")
+
+
+def _batches(run: CorrelationRun, name: str, batch_rows: int) -> list[range]:
+    """Window positions in runs of whole windows of at most ``batch_rows`` rows of table ``name`` (a window
+    longer than that on its own)."""
+    sizes = [len(w.slots) if name == "slots" else len(w.lags) for w in run.windows]
+    out, start, rows = [], 0, 0
+    for i, n in enumerate(sizes):
+        if rows and rows + n > batch_rows:
+            out.append(range(start, i))
+            start, rows = i, 0
+        rows += n
+    return [*out, range(start, len(sizes))]
+
+
+def write_table_parquet(run: CorrelationRun, name: str, path: str | os.PathLike[str],
+                        batch_rows: int = TABLE_BATCH_ROWS):
+    """Table ``name`` (``slots``, ``correlation``) of the run written to ``path`` as Parquet, built and
+    written ``batch_rows`` rows of whole windows at a time through one writer: the same columns, types and
+    rows as ``write_parquet`` of the whole table. Returns its row count and its pyarrow schema."""
+    import pyarrow as pa
+    import pyarrow.parquet as pq
+
+    build = TABLE_BUILDERS[name]
+    extra = _extra([w.slots if name == "slots" else w.lags for w in run.windows],
+                   SLOT_COLUMNS if name == "slots" else LAG_COLUMNS)
+    parts = _batches(run, name, batch_rows)
+    if len(parts) == 1 or extra:  # extra columns may be all None in one part: their type needs every row
+        frame = build(run)
+        write_parquet(frame, path)
+        return len(frame), pa.Schema.from_pandas(frame, preserve_index=False)
+    found: dict[str, object] = {"rows": 0}
+
+    def write(tmp: Path) -> None:
+        writer = None
+        try:
+            for part in parts:
+                frame = build(run, part)
+                table = pa.Table.from_pandas(frame, preserve_index=False)
+                if writer is None:
+                    found["schema"] = pa.Schema.from_pandas(frame, preserve_index=False)
+                    writer = pq.ParquetWriter(tmp, table.schema)
+                writer.write_table(table)
+                found["rows"] += len(frame)
+                del frame, table
+        finally:
+            if writer is not None:
+                writer.close()
+
+    write_atomically(path, write)
+    return found["rows"], found["schema"]
 
 
 def write_parquet(frame: pd.DataFrame, path: str | os.PathLike[str]) -> Path:

@@ -1,0 +1,102 @@
+"""Per-job column selection: a job builds only the measurement columns it reads (pipeline.model.schema
+schema_columns / validate(frame, columns), pipeline.jobs.correlate_columns), and gets the same results as
+from the whole frame."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from pipeline import jobs
+from pipeline.jobs import CorrelateOptions, correlate_columns, mark_once
+from pipeline.model.load import load_measurements
+from pipeline.model.schema import MEASUREMENT_COLUMNS, SchemaError, column_names, validate
+from pipeline.model.sensors import read_sensors
+
+FIX = Path(__file__).resolve().parents[1] / "fixtures"
+INPUTS = [FIX / "radar.ast", FIX / "adsb.ast"]
+
+
+@pytest.fixture(scope="module")
+def sensors() -> pd.DataFrame:
+    return read_sensors(FIX / "sensors.toml")
+
+
+def corr(**kw) -> CorrelateOptions:
+    return CorrelateOptions(**({"inputs": tuple(map(str, INPUTS)), "sensors": str(FIX / "sensors.toml"),
+                                "all_aircraft": True} | kw))
+
+
+def test_column_names_are_checked_and_in_schema_order():
+    assert column_names(["longitude", "time", "latitude"]) == ["time", "latitude", "longitude"]
+    assert column_names(None) == MEASUREMENT_COLUMNS
+    with pytest.raises(SchemaError, match="'speed' is not a measurement column"):
+        column_names(["time", "speed"])
+
+
+def test_a_narrow_frame_is_validated_on_its_own_columns(sensors):
+    columns = ["time", "sensor_kind", "aircraft_id", "latitude", "longitude"]
+    _, narrow = load_measurements(INPUTS, sensors, columns=columns)
+    assert list(narrow.columns) == columns
+    assert validate(narrow, columns) is narrow
+    with pytest.raises(SchemaError, match="'sensor_id' is missing"):  # not the whole model
+        validate(narrow)
+    with pytest.raises(SchemaError, match="'latitude' is missing"):
+        validate(narrow.drop(columns="latitude"), columns)
+    with pytest.raises(SchemaError, match="'longitude' has values missing or outside"):  # still checked
+        validate(narrow.assign(longitude=200.0), columns)
+    with pytest.raises(SchemaError, match="'sensor_kind'.*allowed: radar, adsb"):
+        validate(narrow.assign(sensor_kind=pd.Series("lidar", index=narrow.index, dtype="string")
+                               .astype("category")), columns)
+
+
+def test_narrow_measurements_are_the_full_ones_columns(sensors):
+    """The identity rule reads address, call sign and Mode 3/A, and sigma_major_m the covariance: asked
+    for alone, they come out as in the whole frame, without their inputs."""
+    _, full = load_measurements(INPUTS, sensors)
+    for columns in (["time", "aircraft_id", "sigma_major_m"], ["sensor_id", "rho_nm", "nacp"]):
+        _, narrow = load_measurements(INPUTS, sensors, columns=columns, chunk=40_000)  # many chunks joined
+        pd.testing.assert_frame_equal(narrow, full[columns])
+
+
+def test_correlate_columns_follow_the_options():
+    plain = correlate_columns(corr())
+    assert plain == column_names(plain) and "aircraft_id" in plain and "rho_nm" in plain
+    assert not {"cov_ee_m2", "sigma_major_m", "nucp_nic", "nacp", "mode3a", "file"} & set(plain)
+    assert {"nucp_nic", "nacp"} <= set(correlate_columns(corr(min_nic=5, min_nacp=7)))
+    assert correlate_columns(corr(quality=True)) is None  # quality reads most of the model
+    assert correlate_columns(corr(fill="predict")) is None  # the tracker reads the covariance
+
+
+def _windows(run) -> list:
+    return [(w.summary, w.slots, w.lags) for w in run.windows]
+
+
+@pytest.mark.parametrize("kw", [{}, {"drop_jumps": True, "min_nic": 5, "min_nacp": 7},
+                                {"pairs": "all", "split_adsb": True}])
+def test_correlation_on_the_narrow_frame_equals_the_full_frame(kw, monkeypatch):
+    narrow = jobs.correlate_job(corr(**kw))
+    assert "cov_ee_m2" not in narrow.measurements and "fit_latitude" not in narrow.measurements
+    monkeypatch.setattr(jobs, "correlate_columns", lambda options: None)
+    full = jobs.correlate_job(corr(**kw))
+    assert "cov_ee_m2" in full.measurements and "fit_latitude" in full.measurements
+    assert len(narrow.run.windows) == len(full.run.windows) > 0
+    for (s_n, slots_n, lags_n), (s_f, slots_f, lags_f) in zip(_windows(narrow.run), _windows(full.run),
+                                                                 strict=True):
+        assert s_n == s_f
+        pd.testing.assert_frame_equal(slots_n, slots_f)
+        pd.testing.assert_frame_equal(lags_n, lags_f)
+    assert narrow.run.skipped == full.run.skipped and narrow.run.filters == full.run.filters
+    if kw.get("drop_jumps"):
+        assert narrow.run.filters["jumps"] > 0
+
+
+def test_mark_once_with_the_jump_flag_alone(sensors):
+    _, meas = load_measurements(INPUTS, sensors)
+    full, flag = mark_once(meas), mark_once(meas, flags=["jump"])
+    assert "jump" in flag and not {"jump_size_m", "fit_latitude", "fit_longitude"} & set(flag)
+    assert np.array_equal(flag["jump"].to_numpy(), full["jump"].to_numpy()) and flag["jump"].any()
+    pd.testing.assert_frame_equal(flag, full.drop(columns=["jump_size_m", "fit_latitude", "fit_longitude"]))
