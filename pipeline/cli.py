@@ -298,6 +298,7 @@ def cmd_stats(args) -> int:
 
 
 def cmd_correlate(args) -> int:
+    _numba_without_scipy()
     progress = Progress()
     options = jobs.CorrelateOptions(
         **_aircraft(args), slot_s=args.slot, pairs=args.pairs, split_adsb=args.split_adsb,
@@ -323,6 +324,7 @@ def cmd_correlate(args) -> int:
 
 
 def cmd_quality(args) -> int:
+    _numba_without_scipy()
     options = jobs.QualityOptions(**_aircraft(args), reference=args.reference)
     result = _run_job("quality", jobs.validate, jobs.quality_job, options, Progress())
     print(_quality_text(result.quality))
