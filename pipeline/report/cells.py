@@ -190,7 +190,18 @@ def column_values(series: pd.Series) -> list[Any]:
         return [None if v != v else v for v in values.tolist()]  # v != v: NaN
     if dtype.kind in "iub" and isinstance(dtype, np.dtype):
         return series.to_numpy().tolist()
-    return [excel_value(v) for v in series.tolist()]
+    return memo_values(series.tolist())
+
+
+def memo_values(values: list[Any]) -> list[Any]:
+    """excel_value() of every entry, worked out once per distinct value (identity columns repeat a few
+    values over thousands of rows); keyed by type and value, so 1, 1.0 and True stay apart."""
+    try:
+        keys = list(zip(map(type, values), values, strict=True))
+        memo = {key: excel_value(key[1]) for key in set(keys)}
+    except TypeError:  # an unhashable value (a list or a dict): one at a time
+        return [excel_value(v) for v in values]
+    return [memo[key] for key in keys]
 
 
 def _fallback_format(values: Iterable[Any]) -> str | None:
@@ -277,9 +288,40 @@ def display_len(value: Any, number_format: str | None) -> int:
     return len(f"{value:.0f}") if isinstance(value, float) else len(str(value))
 
 
+def _widest(values: Iterable[Any], number_format: str | None) -> list[Any]:
+    """The values among ``values`` whose display_len() can be the longest: every distinct value, except
+    that of the ints, and of the floats under a number format, only the largest and the most negative
+    (their text grows with the magnitude, a minus sign included, -0.0's too): a column's width costs a
+    few format calls instead of one per cell."""
+    ints, floats, rest = [], [], {}
+    for value in values:
+        kind = value.__class__
+        if kind is int:
+            ints.append(value)
+        elif kind is float and number_format is not None:
+            floats.append(value)
+        else:
+            try:
+                rest[(kind, value)] = value
+            except TypeError:  # unhashable: kept as it is
+                rest[(kind, id(value))] = value
+    widest = list(rest.values())
+    if ints:
+        widest += [max(ints), min(ints)]
+    if floats:
+        array = np.asarray(floats, dtype=float)
+        negative, nan = np.signbit(array), np.isnan(array)
+        for part in (array[~negative & ~nan], array[negative & ~nan]):
+            if part.size:
+                widest += [float(part.max()), float(part.min())]
+        if nan.any():
+            widest.append(math.nan)
+    return widest
+
+
 def column_width(header: str, values: Iterable[Any], number_format: str | None) -> float:
-    longest = max([max(len(word) for word in header.split(" ")), *(display_len(v, number_format)
-                                                                   for v in values)])
+    longest = max([max(len(word) for word in header.split(" ")),
+                   *(display_len(v, number_format) for v in _widest(values, number_format))])
     if header in _DATETIME_HEADERS:
         longest = max(longest, display_len(None, number_format) or len(DATETIME_FORMAT))
     return min(MAX_WIDTH, max(MIN_WIDTH, longest + 2.0))
