@@ -34,7 +34,7 @@ from pipeline.model.load import (
     widen_spans,
 )
 from pipeline.progress import Progress
-from pipeline.report.outputs import Background, BackgroundFailed, all_or_nothing
+from pipeline.report.outputs import Background, BackgroundFailed, Prepared, all_or_nothing
 from pipeline.report.textguard import guard_frame
 
 if TYPE_CHECKING:  # the steps are imported by the jobs that run them: msdc stats imports none of them
@@ -777,6 +777,27 @@ def _track_figure(run: CorrelationRun, png: Path, sensors: pd.DataFrame) -> None
     track_figure(run, png, sensors)
 
 
+def _warm_track_figure() -> None:
+    """What drawing the track figure first needs: matplotlib, pyproj's ellipsoid and a drawn text (fonts)."""
+    import io
+
+    from pipeline.model.geodesy import _geod
+    from pipeline.report.figures import new_figure, save_png
+
+    _geod()
+    fig = new_figure(1.0, 1.0, dpi=10)
+    fig.text(0.5, 0.5, "0")
+    with io.BytesIO() as sink:
+        save_png(fig, sink)
+
+
+def prepare_correlation_writers(options: CorrelateOptions) -> Prepared | None:
+    """When the run writes a workbook, a child that gets ready now to draw its track figure (imports
+    matplotlib on the other core while this process decodes and correlates); pass it to
+    write_correlation, or close() it when the run ends without writing."""
+    return Prepared(_track_figure, warm=_warm_track_figure) if options.output else None
+
+
 def _drawn(drawing: Background, png: Path) -> None:
     """Wait for a figure drawn in the background; its failure as a JobError naming the file."""
     try:
@@ -786,16 +807,29 @@ def _drawn(drawing: Background, png: Path) -> None:
 
 
 def write_correlation(result: CorrelateResult, progress: Progress | None = None,
-                      max_windows: int = FIGURE_WINDOWS) -> dict[str, Path]:
+                      max_windows: int = FIGURE_WINDOWS, prepared: Prepared | None = None) -> dict[str, Path]:
     """Write what the options ask for: JSON summary, workbook with its track figure (and, with quality,
-    the quality and per-window figures), all or nothing. Returns what was written, by kind."""
+    the quality and per-window figures), all or nothing. Returns what was written, by kind. ``prepared``
+    (prepare_correlation_writers) draws the track figure; it is used up or closed here."""
     release_free_memory()  # what the job freed (the CLI lets go of the measurements), before the tables
-    with all_or_nothing(result.checked.json, result.checked.output):
-        return _write_correlation(result, progress, max_windows)
+    try:
+        with all_or_nothing(result.checked.json, result.checked.output):
+            return _write_correlation(result, progress, max_windows, prepared)
+    finally:
+        if prepared is not None:
+            prepared.close()  # a no-op once started
+
+
+def _track_run(run: CorrelationRun) -> CorrelationRun:
+    """What the track figure reads of a run (summaries, slots, parameters), without the lag tables."""
+    from pipeline.correlate.results import CorrelationRun, WindowResult
+
+    return CorrelationRun(windows=[WindowResult(w.summary, w.slots, w.lags.iloc[:0]) for w in run.windows],
+                          parameters=run.parameters)
 
 
 def _write_correlation(result: CorrelateResult, progress: Progress | None,
-                       max_windows: int) -> dict[str, Path]:
+                       max_windows: int, prepared: Prepared | None = None) -> dict[str, Path]:
     from pipeline.report.excel import write_report
     from pipeline.report.summary import write_json
 
@@ -823,7 +857,9 @@ def _write_correlation(result: CorrelateResult, progress: Progress | None,
                 images[f"{label}: coefficient against lag"] = lag_figure(
                     w, out.with_name(f"{out.stem}_lags_{i + 1}.png"))
         png = out.with_name(out.stem + "_tracks.png")
-        drawing = Background(_track_figure, run, png, checked.sensors)  # on the other core meanwhile
+        figure_args = (_track_run(run), png, checked.sensors)
+        drawing = prepared.start(*figure_args) if prepared is not None else Background(_track_figure,
+                                                                                        *figure_args)
         try:
             tables = write_report(run, out, figure_png=png, images=images, tables=result.options.tables,
                                   figure_ready=lambda: _drawn(drawing, png))

@@ -92,6 +92,101 @@ class Background:
         self._pid, self._read = 0, -1
 
 
+class Prepared:
+    """A child forked now, while this process still has work to do, that gets ready on the other core
+    (``warm()``: imports, caches) and then runs ``fn(*args)`` once start(*args) sends the arguments: a
+    Background without its start-up on the critical path. ``fn`` is taken at fork time (only the
+    arguments travel, pickled through an unnamed file); where fork is not available start() runs the
+    work at once, as Background does. close() stops a child that was never started."""
+
+    def __init__(self, fn: Callable[..., object], *, warm: Callable[[], object] | None = None):
+        self._fn, self._pid = fn, 0
+        if not (FORK_OK and hasattr(os, "fork") and hasattr(os, "memfd_create")):
+            return
+        with contextlib.suppress(OSError, ValueError):
+            sys.stdout.flush()
+            sys.stderr.flush()
+        data = os.memfd_create("msdc-args", os.MFD_CLOEXEC)
+        go_read, go_write = os.pipe()
+        done_read, done_write = os.pipe()
+        pid = os.fork()
+        if pid == 0:  # pragma: no cover - the child (coverage does not follow it)
+            status = 1
+            try:
+                os.close(go_write)
+                os.close(done_read)
+                if warm is not None:
+                    with contextlib.suppress(Exception):  # fn meets the same trouble and reports it
+                        warm()
+                size = int.from_bytes(os.read(go_read, 8) or b"\0", "little")
+                if size:
+                    try:
+                        fn(*pickle.loads(_read_all(data, size)))
+                        message, status = b"", 0
+                    except BaseException as exc:  # noqa: BLE001 - sent back to be raised in the parent
+                        message = _pickled(exc)
+                    with os.fdopen(done_write, "wb") as out:
+                        out.write(message)
+                else:
+                    status = 0  # closed unused
+            finally:
+                os._exit(status)
+        os.close(go_read)
+        os.close(done_write)
+        self._pid, self._data, self._go, self._done = pid, data, go_write, done_read
+
+    def start(self, *args: object) -> Background:
+        """Send ``args`` to the child, which runs ``fn(*args)``; wait() on the result re-raises its error.
+        Without a child (or with arguments that do not pickle) a Background does the work instead."""
+        if not self._pid:
+            return Background(self._fn, *args)
+        try:
+            payload = pickle.dumps(args, protocol=pickle.HIGHEST_PROTOCOL)
+        except Exception:  # noqa: BLE001 - e.g. a lambda: the work is done the usual way
+            self.close()
+            return Background(self._fn, *args)
+        job = Background.__new__(Background)
+        job._pid, job._read = self._pid, self._done
+        try:
+            view = memoryview(payload)
+            while view:
+                view = view[os.write(self._data, view):]
+            os.write(self._go, len(payload).to_bytes(8, "little"))
+        except BaseException:
+            job.cancel()
+            raise
+        finally:
+            self._release()
+        return job
+
+    def close(self) -> None:
+        """Stop and reap a child that was never started."""
+        if not self._pid:
+            return
+        with contextlib.suppress(ProcessLookupError):
+            os.kill(self._pid, signal.SIGKILL)
+        os.waitpid(self._pid, 0)
+        os.close(self._done)
+        self._release()
+
+    def _release(self) -> None:
+        os.close(self._go)
+        os.close(self._data)
+        self._pid = 0
+
+
+def _read_all(fd: int, size: int) -> bytes:
+    """``size`` bytes of ``fd`` from its start (pread: the offset the parent's writes moved is not used)."""
+    chunks, offset = [], 0
+    while offset < size:
+        chunk = os.pread(fd, min(size - offset, 1 << 30), offset)
+        if not chunk:
+            break
+        chunks.append(chunk)
+        offset += len(chunk)
+    return b"".join(chunks)
+
+
 FORK_OK = sys.platform.startswith("linux")  # macOS: fork is unsafe with system frameworks; Windows: none
 
 
