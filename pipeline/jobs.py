@@ -777,10 +777,25 @@ def _track_figure(run: CorrelationRun, png: Path, sensors: pd.DataFrame) -> None
     track_figure(run, png, sensors)
 
 
+def _track_figure_and_tables(run: CorrelationRun, png: Path, sensors: pd.DataFrame, out: Path,
+                             tables: str) -> dict:
+    """The workbook's outputs written beside it, in a child while the workbook is written: the Parquet
+    tables (pipeline.report.excel.write_parquet_tables, whose result goes back) and the track figure."""
+    from pipeline.report.excel import write_parquet_tables
+
+    parquet = write_parquet_tables(run, out, tables)
+    _track_figure(run, png, sensors)
+    return parquet
+
+
 def _warm_track_figure() -> None:
-    """What drawing the track figure first needs: matplotlib, pyproj's ellipsoid and a drawn text (fonts)."""
+    """What the track figure and the Parquet tables first need: matplotlib, pyarrow's Parquet writer,
+    pyproj's ellipsoid and a drawn text (fonts)."""
     import io
 
+    import pyarrow.parquet  # noqa: F401 - imported now, used by write_parquet_tables
+
+    import pipeline.report.excel  # noqa: F401
     from pipeline.model.geodesy import _geod
     from pipeline.report.figures import new_figure, save_png
 
@@ -792,17 +807,21 @@ def _warm_track_figure() -> None:
 
 
 def prepare_correlation_writers(options: CorrelateOptions) -> Prepared | None:
-    """When the run writes a workbook, a child that gets ready now to draw its track figure (imports
-    matplotlib on the other core while this process decodes and correlates); pass it to
-    write_correlation, or close() it when the run ends without writing."""
-    return Prepared(_track_figure, warm=_warm_track_figure) if options.output else None
+    """When the run writes a workbook, a child that gets ready now to write its Parquet tables and draw its
+    track figure (imports matplotlib and pyarrow on the other core while this process decodes and
+    correlates); pass it to write_correlation, or close() it when the run ends without writing."""
+    return Prepared(_track_figure_and_tables, warm=_warm_track_figure) if options.output else None
 
 
-def _drawn(drawing: Background, png: Path) -> None:
-    """Wait for a figure drawn in the background; its failure as a JobError naming the file."""
+def _drawn(drawing: Background, png: Path, tables: list[Path] = ()) -> dict:
+    """Wait for the figure (and Parquet tables) written in the background and return the tables' rows and
+    columns; a child that died as a JobError naming the files."""
     try:
-        drawing.wait()
+        return drawing.wait()
     except BackgroundFailed as exc:
+        if tables:
+            names = ", ".join(str(p) for p in [*tables, png])
+            raise JobError(f"{names}: the tables and figure were not written ({exc})") from exc
         raise JobError(f"{png}: the figure was not drawn ({exc})") from exc
 
 
@@ -832,6 +851,7 @@ def _write_correlation(result: CorrelateResult, progress: Progress | None,
                        max_windows: int, prepared: Prepared | None = None) -> dict[str, Path]:
     from pipeline.report.excel import write_report
     from pipeline.report.summary import write_json
+    from pipeline.report.tables import parquet_path, parquet_tables
 
     written: dict[str, Path] = {}
     run, checked = result.run, result.checked
@@ -857,12 +877,15 @@ def _write_correlation(result: CorrelateResult, progress: Progress | None,
                 images[f"{label}: coefficient against lag"] = lag_figure(
                     w, out.with_name(f"{out.stem}_lags_{i + 1}.png"))
         png = out.with_name(out.stem + "_tracks.png")
-        figure_args = (_track_run(run), png, checked.sensors)
-        drawing = prepared.start(*figure_args) if prepared is not None else Background(_track_figure,
-                                                                                        *figure_args)
+        mode = result.options.tables
+        in_child = [parquet_path(out, name) for name in parquet_tables(run, mode)]
+        args = (run if in_child else _track_run(run), png, checked.sensors, out, mode)
+        drawing = prepared.start(*args) if prepared is not None else Background(_track_figure_and_tables,
+                                                                                 *args)
         try:
-            tables = write_report(run, out, figure_png=png, images=images, tables=result.options.tables,
-                                  figure_ready=lambda: _drawn(drawing, png))
+            tables = write_report(run, out, figure_png=png, images=images, tables=mode,
+                                  figure_ready=lambda: _drawn(drawing, png, in_child),
+                                  tables_written=lambda: _drawn(drawing, png, in_child))
         finally:
             drawing.cancel()  # only still running when writing the workbook failed
         written["report"], written["figure"] = out, png

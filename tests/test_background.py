@@ -237,3 +237,50 @@ def test_a_run_refused_after_the_figure_child_was_prepared_leaves_no_child(tmp_p
     with pytest.raises(ChildProcessError):  # the prepared child was stopped and reaped
         os.waitpid(-1, os.WNOHANG)
     assert list(tmp_path.iterdir()) == []
+
+
+def _answer(x: int) -> dict:
+    return {"twice": 2 * x, "pid": os.getpid()}
+
+
+@pytest.mark.parametrize("fork", [True, False])
+def test_the_childs_result_comes_back(monkeypatch, fork):
+    monkeypatch.setattr(outputs, "FORK_OK", fork and outputs.FORK_OK)
+    for job in (Background(_answer, 21), outputs.Prepared(_answer).start(21)):
+        got = job.wait()
+        assert got["twice"] == 42 and (got["pid"] != os.getpid()) == (fork and outputs.FORK_OK)
+        assert job.wait() == got  # asked again: the same answer
+
+
+def _correlate_parquet(tmp_path: Path, capsys) -> tuple[int, str]:
+    (tmp_path / "kept.txt").write_text("was here")
+    code = main(["correlate", str(FIX / "radar.ast"), str(FIX / "adsb.ast"), "--sensors",
+                 str(FIX / "sensors.toml"), "--all", "--tables", "parquet", "-o", str(tmp_path / "r.xlsx")])
+    return code, capsys.readouterr().err
+
+
+@pytest.mark.parametrize("fork", [True, False])
+def test_a_parquet_table_failing_beside_the_workbook_leaves_nothing(tmp_path, monkeypatch, capsys, fork):
+    """The Parquet tables are written with the figure (in the child where fork is used): a full disk there
+    ends the run with one line naming the table, and nothing is left."""
+    from pipeline.report import excel
+
+    monkeypatch.setattr(outputs, "FORK_OK", fork and outputs.FORK_OK)
+    monkeypatch.setattr(excel, "write_parquet", lambda frame, path: _fail(path))
+    code, err = _correlate_parquet(tmp_path, capsys)
+    assert code == 1 and "Traceback" not in err and "No space left on device" in err
+    assert "r_slots.parquet" in err and err.count("msdc correlate: ") == 1
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["kept.txt"]
+
+
+@forking
+def test_the_table_and_figure_process_dying_names_every_file(tmp_path, monkeypatch, capsys):
+    from pipeline.report import excel
+
+    monkeypatch.setattr(excel, "write_parquet", lambda frame, path: _die())
+    code, err = _correlate_parquet(tmp_path, capsys)
+    assert code == 1 and "Traceback" not in err
+    last = err.strip().splitlines()[-1]
+    assert last.startswith("msdc correlate: ") and "killed by signal 9" in last
+    assert all(name in last for name in ("r_slots.parquet", "r_correlation.parquet", "r_tracks.png"))
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["kept.txt"]
