@@ -797,13 +797,13 @@ def _warm_track_figure() -> None:
 
     import pipeline.report.excel  # noqa: F401
     from pipeline.model.geodesy import _geod
-    from pipeline.report.figures import new_figure, save_png
+    from pipeline.report.figures import new_figure
 
     _geod()
     fig = new_figure(1.0, 1.0, dpi=10)
-    fig.text(0.5, 0.5, "0")
+    fig.text(0.5, 0.5, "0", fontweight="bold")
     with io.BytesIO() as sink:
-        save_png(fig, sink)
+        fig.savefig(sink, format="png")
 
 
 def prepare_correlation_writers(options: CorrelateOptions) -> Prepared | None:

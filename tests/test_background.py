@@ -284,3 +284,9 @@ def test_the_table_and_figure_process_dying_names_every_file(tmp_path, monkeypat
     assert last.startswith("msdc correlate: ") and "killed by signal 9" in last
     assert all(name in last for name in ("r_slots.parquet", "r_correlation.parquet", "r_tracks.png"))
     assert sorted(p.name for p in tmp_path.iterdir()) == ["kept.txt"]
+
+
+def test_the_figure_child_warms_up_without_error():
+    """The prepared child's warm-up is silent about its errors (the real work reports them), so it is run
+    here where an error shows: it must get as far as drawing and encoding a PNG."""
+    jobs._warm_track_figure()
