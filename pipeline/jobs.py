@@ -849,47 +849,59 @@ def _track_run(run: CorrelationRun) -> CorrelationRun:
 
 def _write_correlation(result: CorrelateResult, progress: Progress | None,
                        max_windows: int, prepared: Prepared | None = None) -> dict[str, Path]:
-    from pipeline.report.excel import write_report
-    from pipeline.report.summary import write_json
     from pipeline.report.tables import parquet_path, parquet_tables
 
     written: dict[str, Path] = {}
     run, checked = result.run, result.checked
-    if checked.json:
-        write_json(run, checked.json)
-        written["json"] = checked.json
-    if checked.output:
-        if progress:
-            progress.stage("Writing report")
-        out = checked.output
-        images = None
-        if result.quality is not None:
-            from pipeline.report.figures import lag_figure
-            from pipeline.report.quality_figures import slotting_figure
-
-            images = dict(quality_figures(result.quality, out.parent, out.stem))
-            is_radar = (result.measurements["sensor_kind"] == "radar").to_numpy(bool)
-            radar, adsb = result.measurements[is_radar], result.measurements[~is_radar]
-            for i, w in enumerate(run.windows[:max_windows]):
-                label = f"{w.summary['callsign'] or w.summary['address']} window {w.summary['window']}"
-                images[f"{label}: latitude and longitude before and after slotting"] = slotting_figure(
-                    w, radar, adsb, out.with_name(f"{out.stem}_slotting_{i + 1}.png"))
-                images[f"{label}: coefficient against lag"] = lag_figure(
-                    w, out.with_name(f"{out.stem}_lags_{i + 1}.png"))
+    drawing = None
+    if checked.output:  # the child starts first: the Parquet tables and the map take it longest
+        out, mode = checked.output, result.options.tables
         png = out.with_name(out.stem + "_tracks.png")
-        mode = result.options.tables
         in_child = [parquet_path(out, name) for name in parquet_tables(run, mode)]
         args = (run if in_child else _track_run(run), png, checked.sensors, out, mode)
         drawing = prepared.start(*args) if prepared is not None else Background(_track_figure_and_tables,
                                                                                  *args)
-        try:
-            tables = write_report(run, out, figure_png=png, images=images, tables=mode,
-                                  figure_ready=lambda: _drawn(drawing, png, in_child),
-                                  tables_written=lambda: _drawn(drawing, png, in_child))
-        finally:
-            drawing.cancel()  # only still running when writing the workbook failed
-        written["report"], written["figure"] = out, png
-        written.update((f"table {p.stem.removeprefix(out.stem + '_')}", p) for p in tables)
+    try:
+        from pipeline.report.summary import write_json
+
+        if checked.json:
+            write_json(run, checked.json)
+            written["json"] = checked.json
+        if drawing is not None:
+            written.update(_write_workbook(result, progress, max_windows, drawing, png, in_child))
+    finally:
+        if drawing is not None:
+            drawing.cancel()  # only still running when writing failed
+    return written
+
+
+def _write_workbook(result: CorrelateResult, progress: Progress | None, max_windows: int,
+                    drawing: Background, png: Path, in_child: list[Path]) -> dict[str, Path]:
+    """The workbook (and with quality its figures) while ``drawing`` writes the map and Parquet tables."""
+    from pipeline.report.excel import write_report
+
+    run, out = result.run, result.checked.output
+    if progress:
+        progress.stage("Writing report")
+    images = None
+    if result.quality is not None:
+        from pipeline.report.figures import lag_figure
+        from pipeline.report.quality_figures import slotting_figure
+
+        images = dict(quality_figures(result.quality, out.parent, out.stem))
+        is_radar = (result.measurements["sensor_kind"] == "radar").to_numpy(bool)
+        radar, adsb = result.measurements[is_radar], result.measurements[~is_radar]
+        for i, w in enumerate(run.windows[:max_windows]):
+            label = f"{w.summary['callsign'] or w.summary['address']} window {w.summary['window']}"
+            images[f"{label}: latitude and longitude before and after slotting"] = slotting_figure(
+                w, radar, adsb, out.with_name(f"{out.stem}_slotting_{i + 1}.png"))
+            images[f"{label}: coefficient against lag"] = lag_figure(
+                w, out.with_name(f"{out.stem}_lags_{i + 1}.png"))
+    tables = write_report(run, out, figure_png=png, images=images, tables=result.options.tables,
+                          figure_ready=lambda: _drawn(drawing, png, in_child),
+                          tables_written=lambda: _drawn(drawing, png, in_child))
+    written = {"report": out, "figure": png}
+    written.update((f"table {p.stem.removeprefix(out.stem + '_')}", p) for p in tables)
     return written
 
 
