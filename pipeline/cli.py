@@ -303,6 +303,16 @@ def cmd_correlate(args) -> int:
         **_aircraft(args), slot_s=args.slot, pairs=args.pairs, split_adsb=args.split_adsb,
         quality=args.quality, drop_jumps=args.drop_jumps, min_nic=args.min_nic, min_nacp=args.min_nacp,
         fill=args.fill, tables=args.tables)
+    prepared = jobs.prepare_correlation_writers(options)  # gets ready on the other core meanwhile
+    try:
+        return _correlate(options, progress, prepared)
+    finally:
+        if prepared is not None:
+            prepared.close()
+
+
+def _correlate(options, progress: Progress, prepared) -> int:
+    _numba_without_scipy()
     result = _run_job("correlate", jobs.validate, jobs.correlate_job, options, progress)
     for name, n in result.run.filters.items():
         print(f"filter {name}: {n} of the input's ADS-B reports", file=sys.stderr)
@@ -311,7 +321,7 @@ def cmd_correlate(args) -> int:
     print(summary_table(result.run))
     if not options.quality:  # only --quality's figures read the measurements again; the other writers
         result.measurements = result.measurements.iloc[:0]  # need the run alone: the frame goes first
-    written = jobs.write_correlation(result, progress)
+    written = jobs.write_correlation(result, progress, prepared=prepared)
     if "json" in written:
         print(f"JSON summary: {written['json']}", file=sys.stderr)
     if "report" in written:
@@ -323,6 +333,7 @@ def cmd_correlate(args) -> int:
 
 
 def cmd_quality(args) -> int:
+    _numba_without_scipy()
     options = jobs.QualityOptions(**_aircraft(args), reference=args.reference)
     result = _run_job("quality", jobs.validate, jobs.quality_job, options, Progress())
     print(_quality_text(result.quality))

@@ -34,7 +34,7 @@ from pipeline.model.load import (
     widen_spans,
 )
 from pipeline.progress import Progress
-from pipeline.report.outputs import Background, BackgroundFailed, all_or_nothing
+from pipeline.report.outputs import Background, BackgroundFailed, Prepared, all_or_nothing
 from pipeline.report.textguard import guard_frame
 
 if TYPE_CHECKING:  # the steps are imported by the jobs that run them: msdc stats imports none of them
@@ -808,60 +808,131 @@ def _track_figure(run: CorrelationRun, png: Path, sensors: pd.DataFrame) -> None
     track_figure(run, png, sensors)
 
 
-def _drawn(drawing: Background, png: Path) -> None:
-    """Wait for a figure drawn in the background; its failure as a JobError naming the file."""
+def _track_figure_and_tables(run: CorrelationRun, png: Path, sensors: pd.DataFrame, out: Path,
+                             tables: str) -> dict:
+    """The workbook's outputs written beside it, in a child while the workbook is written: the Parquet
+    tables (pipeline.report.excel.write_parquet_tables, whose result goes back) and the track figure."""
+    from pipeline.report.excel import write_parquet_tables
+
+    parquet = write_parquet_tables(run, out, tables)
+    _track_figure(run, png, sensors)
+    return parquet
+
+
+def _warm_track_figure() -> None:
+    """What the track figure and the Parquet tables first need: matplotlib, pyarrow's Parquet writer,
+    pyproj's ellipsoid and a drawn text (fonts)."""
+    import io
+
+    import pyarrow.parquet  # noqa: F401 - imported now, used by write_parquet_tables
+
+    import pipeline.report.excel  # noqa: F401
+    from pipeline.model.geodesy import _geod
+    from pipeline.report.figures import new_figure
+
+    _geod()
+    fig = new_figure(1.0, 1.0, dpi=10)
+    fig.text(0.5, 0.5, "0", fontweight="bold")
+    with io.BytesIO() as sink:
+        fig.savefig(sink, format="png")
+
+
+def prepare_correlation_writers(options: CorrelateOptions) -> Prepared | None:
+    """When the run writes a workbook, a child that gets ready now to write its Parquet tables and draw its
+    track figure (imports matplotlib and pyarrow on the other core while this process decodes and
+    correlates); pass it to write_correlation, or close() it when the run ends without writing."""
+    return Prepared(_track_figure_and_tables, warm=_warm_track_figure) if options.output else None
+
+
+def _drawn(drawing: Background, png: Path, tables: list[Path] = ()) -> dict:
+    """Wait for the figure (and Parquet tables) written in the background and return the tables' rows and
+    columns; a child that died as a JobError naming the files."""
     try:
-        drawing.wait()
+        return drawing.wait()
     except BackgroundFailed as exc:
+        if tables:
+            names = ", ".join(str(p) for p in [*tables, png])
+            raise JobError(f"{names}: the tables and figure were not written ({exc})") from exc
         raise JobError(f"{png}: the figure was not drawn ({exc})") from exc
 
 
 def write_correlation(result: CorrelateResult, progress: Progress | None = None,
-                      max_windows: int = FIGURE_WINDOWS) -> dict[str, Path]:
+                      max_windows: int = FIGURE_WINDOWS, prepared: Prepared | None = None) -> dict[str, Path]:
     """Write what the options ask for: JSON summary, workbook with its track figure (and, with quality,
-    the quality and per-window figures), all or nothing. Returns what was written, by kind."""
+    the quality and per-window figures), all or nothing. Returns what was written, by kind. ``prepared``
+    (prepare_correlation_writers) draws the track figure; it is used up or closed here."""
     release_free_memory()  # what the job freed (the CLI lets go of the measurements), before the tables
-    with all_or_nothing(result.checked.json, result.checked.output):
-        return _write_correlation(result, progress, max_windows)
+    try:
+        with all_or_nothing(result.checked.json, result.checked.output):
+            return _write_correlation(result, progress, max_windows, prepared)
+    finally:
+        if prepared is not None:
+            prepared.close()  # a no-op once started
+
+
+def _track_run(run: CorrelationRun) -> CorrelationRun:
+    """What the track figure reads of a run (summaries, slots, parameters), without the lag tables."""
+    from pipeline.correlate.results import CorrelationRun, WindowResult
+
+    return CorrelationRun(windows=[WindowResult(w.summary, w.slots, w.lags.iloc[:0]) for w in run.windows],
+                          parameters=run.parameters)
 
 
 def _write_correlation(result: CorrelateResult, progress: Progress | None,
-                       max_windows: int) -> dict[str, Path]:
-    from pipeline.report.excel import write_report
-    from pipeline.report.summary import write_json
+                       max_windows: int, prepared: Prepared | None = None) -> dict[str, Path]:
+    from pipeline.report.tables import parquet_path, parquet_tables
 
     written: dict[str, Path] = {}
     run, checked = result.run, result.checked
-    if checked.json:
-        write_json(run, checked.json)
-        written["json"] = checked.json
-    if checked.output:
-        if progress:
-            progress.stage("Writing report")
-        out = checked.output
-        images = None
-        if result.quality is not None:
-            from pipeline.report.figures import lag_figure
-            from pipeline.report.quality_figures import slotting_figure
-
-            images = dict(quality_figures(result.quality, out.parent, out.stem))
-            is_radar = (result.measurements["sensor_kind"] == "radar").to_numpy(bool)
-            radar, adsb = result.measurements[is_radar], result.measurements[~is_radar]
-            for i, w in enumerate(run.windows[:max_windows]):
-                label = f"{w.summary['callsign'] or w.summary['address']} window {w.summary['window']}"
-                images[f"{label}: latitude and longitude before and after slotting"] = slotting_figure(
-                    w, radar, adsb, out.with_name(f"{out.stem}_slotting_{i + 1}.png"))
-                images[f"{label}: coefficient against lag"] = lag_figure(
-                    w, out.with_name(f"{out.stem}_lags_{i + 1}.png"))
+    drawing = None
+    if checked.output:  # the child starts first: the Parquet tables and the map take it longest
+        out, mode = checked.output, result.options.tables
         png = out.with_name(out.stem + "_tracks.png")
-        drawing = Background(_track_figure, run, png, checked.sensors)  # on the other core meanwhile
-        try:
-            tables = write_report(run, out, figure_png=png, images=images, tables=result.options.tables,
-                                  figure_ready=lambda: _drawn(drawing, png))
-        finally:
-            drawing.cancel()  # only still running when writing the workbook failed
-        written["report"], written["figure"] = out, png
-        written.update((f"table {p.stem.removeprefix(out.stem + '_')}", p) for p in tables)
+        in_child = [parquet_path(out, name) for name in parquet_tables(run, mode)]
+        args = (run if in_child else _track_run(run), png, checked.sensors, out, mode)
+        drawing = prepared.start(*args) if prepared is not None else Background(_track_figure_and_tables,
+                                                                                 *args)
+    try:
+        from pipeline.report.summary import write_json
+
+        if checked.json:
+            write_json(run, checked.json)
+            written["json"] = checked.json
+        if drawing is not None:
+            written.update(_write_workbook(result, progress, max_windows, drawing, png, in_child))
+    finally:
+        if drawing is not None:
+            drawing.cancel()  # only still running when writing failed
+    return written
+
+
+def _write_workbook(result: CorrelateResult, progress: Progress | None, max_windows: int,
+                    drawing: Background, png: Path, in_child: list[Path]) -> dict[str, Path]:
+    """The workbook (and with quality its figures) while ``drawing`` writes the map and Parquet tables."""
+    from pipeline.report.excel import write_report
+
+    run, out = result.run, result.checked.output
+    if progress:
+        progress.stage("Writing report")
+    images = None
+    if result.quality is not None:
+        from pipeline.report.figures import lag_figure
+        from pipeline.report.quality_figures import slotting_figure
+
+        images = dict(quality_figures(result.quality, out.parent, out.stem))
+        is_radar = (result.measurements["sensor_kind"] == "radar").to_numpy(bool)
+        radar, adsb = result.measurements[is_radar], result.measurements[~is_radar]
+        for i, w in enumerate(run.windows[:max_windows]):
+            label = f"{w.summary['callsign'] or w.summary['address']} window {w.summary['window']}"
+            images[f"{label}: latitude and longitude before and after slotting"] = slotting_figure(
+                w, radar, adsb, out.with_name(f"{out.stem}_slotting_{i + 1}.png"))
+            images[f"{label}: coefficient against lag"] = lag_figure(
+                w, out.with_name(f"{out.stem}_lags_{i + 1}.png"))
+    tables = write_report(run, out, figure_png=png, images=images, tables=result.options.tables,
+                          figure_ready=lambda: _drawn(drawing, png, in_child),
+                          tables_written=lambda: _drawn(drawing, png, in_child))
+    written = {"report": out, "figure": png}
+    written.update((f"table {p.stem.removeprefix(out.stem + '_')}", p) for p in tables)
     return written
 
 

@@ -174,3 +174,119 @@ class _Interrupting:
 
     def read(self):
         raise KeyboardInterrupt
+
+
+# Prepared: the child forked early, warmed, then given its arguments
+
+def _write_pid_and_warm(path: Path, warmed: Path) -> None:
+    path.write_text(f"{os.getpid()} {warmed.exists()}")
+
+
+@forking
+def test_prepared_child_warms_first_then_runs_the_arguments_sent_later(tmp_path):
+    warmed = tmp_path / "warm.txt"
+    prepared = outputs.Prepared(_write_pid_and_warm, warm=lambda: warmed.write_text("ready"))
+    big = "x" * 300_000  # more than a pipe holds: the arguments must not block the parent
+    job = prepared.start(tmp_path / "out.txt", warmed)
+    job.wait()
+    pid, was_warm = (tmp_path / "out.txt").read_text().split()
+    assert int(pid) != os.getpid() and was_warm == "True"
+    job2 = outputs.Prepared(_write).start(tmp_path / "big.txt", big)
+    job2.wait()
+    assert (tmp_path / "big.txt").read_text() == big
+    prepared.close()  # already used: nothing to do
+
+
+@forking
+def test_prepared_childs_error_and_death_reach_the_parent(tmp_path):
+    with pytest.raises(OSError) as err:
+        outputs.Prepared(_fail).start(tmp_path / "x.png").wait()
+    assert err.value.errno == 28 and err.value.filename == str(tmp_path / "x.png")
+    with pytest.raises(BackgroundFailed, match=f"signal {int(signal.SIGKILL)}"):
+        outputs.Prepared(_die).start().wait()
+    assert list(tmp_path.iterdir()) == []
+
+
+@forking
+def test_prepared_child_closed_unused_is_stopped_and_writes_nothing(tmp_path):
+    start = time.monotonic()
+    prepared = outputs.Prepared(_write, warm=lambda: time.sleep(30))
+    prepared.close()
+    assert time.monotonic() - start < 20  # killed, not waited for
+    prepared.close()
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_prepared_without_fork_or_with_unpicklable_arguments_works_the_usual_way(tmp_path, monkeypatch):
+    seen = []
+    job = outputs.Prepared(lambda f: seen.append((os.getpid(), f()))).start(lambda: "local")  # no pickle
+    job.wait()
+    if outputs.FORK_OK:
+        assert seen == []  # it ran in a forked child (a Background), not here
+    monkeypatch.setattr(outputs, "FORK_OK", False)
+    job = outputs.Prepared(lambda f: seen.append((os.getpid(), f()))).start(lambda: "here")
+    assert seen[-1] == (os.getpid(), "here")  # at once, in this process
+    job.wait()
+
+
+@forking
+def test_a_run_refused_after_the_figure_child_was_prepared_leaves_no_child(tmp_path, capsys):
+    code = main(["correlate", str(FIX / "radar.ast"), str(FIX / "adsb.ast"), "--sensors",
+                 str(FIX / "sensors.toml"), "--all", "--slot", "0.01", "-o", str(tmp_path / "r.xlsx")])
+    assert code != 0 and "--slot" in capsys.readouterr().err
+    with pytest.raises(ChildProcessError):  # the prepared child was stopped and reaped
+        os.waitpid(-1, os.WNOHANG)
+    assert list(tmp_path.iterdir()) == []
+
+
+def _answer(x: int) -> dict:
+    return {"twice": 2 * x, "pid": os.getpid()}
+
+
+@pytest.mark.parametrize("fork", [True, False])
+def test_the_childs_result_comes_back(monkeypatch, fork):
+    monkeypatch.setattr(outputs, "FORK_OK", fork and outputs.FORK_OK)
+    for job in (Background(_answer, 21), outputs.Prepared(_answer).start(21)):
+        got = job.wait()
+        assert got["twice"] == 42 and (got["pid"] != os.getpid()) == (fork and outputs.FORK_OK)
+        assert job.wait() == got  # asked again: the same answer
+
+
+def _correlate_parquet(tmp_path: Path, capsys) -> tuple[int, str]:
+    (tmp_path / "kept.txt").write_text("was here")
+    code = main(["correlate", str(FIX / "radar.ast"), str(FIX / "adsb.ast"), "--sensors",
+                 str(FIX / "sensors.toml"), "--all", "--tables", "parquet", "-o", str(tmp_path / "r.xlsx")])
+    return code, capsys.readouterr().err
+
+
+@pytest.mark.parametrize("fork", [True, False])
+def test_a_parquet_table_failing_beside_the_workbook_leaves_nothing(tmp_path, monkeypatch, capsys, fork):
+    """The Parquet tables are written with the figure (in the child where fork is used): a full disk there
+    ends the run with one line naming the table, and nothing is left."""
+    from pipeline.report import excel
+
+    monkeypatch.setattr(outputs, "FORK_OK", fork and outputs.FORK_OK)
+    monkeypatch.setattr(excel, "write_parquet", lambda frame, path: _fail(path))
+    code, err = _correlate_parquet(tmp_path, capsys)
+    assert code == 1 and "Traceback" not in err and "No space left on device" in err
+    assert "r_slots.parquet" in err and err.count("msdc correlate: ") == 1
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["kept.txt"]
+
+
+@forking
+def test_the_table_and_figure_process_dying_names_every_file(tmp_path, monkeypatch, capsys):
+    from pipeline.report import excel
+
+    monkeypatch.setattr(excel, "write_parquet", lambda frame, path: _die())
+    code, err = _correlate_parquet(tmp_path, capsys)
+    assert code == 1 and "Traceback" not in err
+    last = err.strip().splitlines()[-1]
+    assert last.startswith("msdc correlate: ") and "killed by signal 9" in last
+    assert all(name in last for name in ("r_slots.parquet", "r_correlation.parquet", "r_tracks.png"))
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["kept.txt"]
+
+
+def test_the_figure_child_warms_up_without_error():
+    """The prepared child's warm-up is silent about its errors (the real work reports them), so it is run
+    here where an error shows: it must get as far as drawing and encoding a PNG."""
+    jobs._warm_track_figure()

@@ -88,3 +88,13 @@ def test_numba_started_without_scipy_still_compiles_blas_and_convolve():
     assert done.returncode == 0, done.stderr
     values = [float(v) for v in done.stdout.split()]
     assert values == [55.0, 2.0, 3.0, 4.5, 6.0, 7.5, -3.0, 2.5]
+
+
+def test_correlate_and_quality_start_numba_without_scipy(tmp_path):
+    """correlate and quality use no BLAS kernel: numba starts without scipy.linalg for them too (the probe
+    sees scipy.linalg once imported: test_numba_started_without_scipy_still_compiles_blas_and_convolve)."""
+    inputs = ("fixtures/radar.ast", "fixtures/adsb.ast", "--sensors", "fixtures/sensors.toml", "--all")
+    out, loaded = _loaded("correlate", *inputs, "-o", str(tmp_path / "r.xlsx"), heavy=("scipy.linalg",))
+    assert "MAS72" in out and loaded == []
+    out, loaded = _loaded("quality", *inputs, heavy=("scipy.linalg",))
+    assert out and loaded == []

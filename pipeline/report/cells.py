@@ -29,6 +29,7 @@ from openpyxl.worksheet._write_only import WriteOnlyWorksheet
 from openpyxl.xml import LXML
 
 from pipeline.report.formats import UNITS, column_unit, excel_format
+from pipeline.report.rows import RawRow, RowStyles, install
 from pipeline.report.summary import (
     is_missing,
     json_value,
@@ -53,6 +54,7 @@ EXCEL_MAX_ROWS = 1_048_576
 EXCEL_MAX_TEXT = 32_767
 MIN_WIDTH, MAX_WIDTH = 6.0, 66.0
 _WIDTH_SAMPLE_ROWS = 5000
+FAST_ROWS = True  # table rows through pipeline.report.rows (False: openpyxl's append, cell by cell)
 _ISO_DATE = re.compile(r"\d{4}-\d{2}-\d{2}\Z")
 _ISO_DATETIME = re.compile(r"\d{4}-\d{2}-\d{2}[T ]\d{2}:\d{2}(:\d{2}(\.\d{1,9})?)?(Z|[+-]\d{2}:?\d{2})?\Z")
 _DATETIME_HEADERS = {"time_utc", "start", "end", "timestamp", "run_time"}
@@ -190,7 +192,18 @@ def column_values(series: pd.Series) -> list[Any]:
         return [None if v != v else v for v in values.tolist()]  # v != v: NaN
     if dtype.kind in "iub" and isinstance(dtype, np.dtype):
         return series.to_numpy().tolist()
-    return [excel_value(v) for v in series.tolist()]
+    return memo_values(series.tolist())
+
+
+def memo_values(values: list[Any]) -> list[Any]:
+    """excel_value() of every entry, worked out once per distinct value (identity columns repeat a few
+    values over thousands of rows); keyed by type and value, so 1, 1.0 and True stay apart."""
+    try:
+        keys = list(zip(map(type, values), values, strict=True))
+        memo = {key: excel_value(key[1]) for key in set(keys)}
+    except TypeError:  # an unhashable value (a list or a dict): one at a time
+        return [excel_value(v) for v in values]
+    return [memo[key] for key in keys]
 
 
 def _fallback_format(values: Iterable[Any]) -> str | None:
@@ -255,6 +268,20 @@ def table_rows(ws: WriteOnlyWorksheet, columns: list[Column], start: int = 0,
         yield out
 
 
+def raw_rows(ws: WriteOnlyWorksheet, columns: list[Column], start: int = 0,
+             stop: int | None = None) -> Iterator[RawRow]:
+    """Rows for a sheet set up by rows.install: values as they are (the writer gives numbers their
+    column's style), text columns' formula-like text and other values as cells, as table_rows does."""
+    texts = [(j, c.number_format) for j, c in enumerate(columns) if c.text]
+    for row in islice(zip(*(c.values for c in columns), strict=True), start, stop):
+        out = RawRow(row)
+        for j, fmt in texts:
+            value = out[j]
+            if value is not None and not (value.__class__ is str and not value.startswith(FORMULA_START)):
+                out[j] = cell_for(ws, value, fmt)
+        yield out
+
+
 def display_len(value: Any, number_format: str | None) -> int:
     if value is None:
         return len(SUMMARY_DATETIME_FORMAT) if number_format == SUMMARY_DATETIME_FORMAT else 0
@@ -277,9 +304,40 @@ def display_len(value: Any, number_format: str | None) -> int:
     return len(f"{value:.0f}") if isinstance(value, float) else len(str(value))
 
 
+def _widest(values: Iterable[Any], number_format: str | None) -> list[Any]:
+    """The values among ``values`` whose display_len() can be the longest: every distinct value, except
+    that of the ints, and of the floats under a number format, only the largest and the most negative
+    (their text grows with the magnitude, a minus sign included, -0.0's too): a column's width costs a
+    few format calls instead of one per cell."""
+    ints, floats, rest = [], [], {}
+    for value in values:
+        kind = value.__class__
+        if kind is int:
+            ints.append(value)
+        elif kind is float and number_format is not None:
+            floats.append(value)
+        else:
+            try:
+                rest[(kind, value)] = value
+            except TypeError:  # unhashable: kept as it is
+                rest[(kind, id(value))] = value
+    widest = list(rest.values())
+    if ints:
+        widest += [max(ints), min(ints)]
+    if floats:
+        array = np.asarray(floats, dtype=float)
+        negative, nan = np.signbit(array), np.isnan(array)
+        for part in (array[~negative & ~nan], array[negative & ~nan]):
+            if part.size:
+                widest += [float(part.max()), float(part.min())]
+        if nan.any():
+            widest.append(math.nan)
+    return widest
+
+
 def column_width(header: str, values: Iterable[Any], number_format: str | None) -> float:
-    longest = max([max(len(word) for word in header.split(" ")), *(display_len(v, number_format)
-                                                                   for v in values)])
+    longest = max([max(len(word) for word in header.split(" ")),
+                   *(display_len(v, number_format) for v in _widest(values, number_format))])
     if header in _DATETIME_HEADERS:
         longest = max(longest, display_len(None, number_format) or len(DATETIME_FORMAT))
     return min(MAX_WIDTH, max(MIN_WIDTH, longest + 2.0))
@@ -360,8 +418,13 @@ def write_table(ws: WriteOnlyWorksheet, columns: list[Column], *, freeze: str = 
     if kept < n_rows:
         note = f"{note} Rows cut at Excel's limit: {kept} of {n_rows} written.".strip()
     ws.append(header_cells(ws, [c.header for c in columns]))
-    for row in table_rows(ws, columns, 0, kept):
-        ws.append(row)
+    styles = RowStyles(ws, [None if c.styled is None or c.text else c.number_format for c in columns])
+    if FAST_ROWS and install(ws, styles):
+        for row in raw_rows(ws, columns, 0, kept):
+            ws.append(row)
+    else:  # openpyxl's public path: a styled cell per formatted number
+        for row in table_rows(ws, columns, 0, kept):
+            ws.append(row)
     if note:  # below the table, so the printed width stays the table's
         ws.append([])
         ws.append([note_text_cell(ws, note)])

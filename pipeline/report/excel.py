@@ -266,8 +266,9 @@ def _write_slots(wb: Workbook, run: CorrelationRun, title: str = "Slots", note: 
 
 
 def _write_parquet_note(wb: Workbook, title: str, rows: int, schema, path: Path, mode: str,
-                        chart_sheet: str) -> None:
-    """The sheet of a table written to Parquet: the file, its rows and columns, where the charts' data is."""
+                        chart_sheet: str) -> WriteOnlyWorksheet:
+    """The sheet of a table written to Parquet: the file, its rows and columns, where the charts' data is.
+    With ``schema`` None the column rows are left for _parquet_columns (the table is written elsewhere)."""
     ws = wb.create_sheet(title)
     set_widths(ws, [20.0, 12.0, 60.0])
     page_setup(ws)
@@ -279,6 +280,13 @@ def _write_parquet_note(wb: Workbook, title: str, rows: int, schema, path: Path,
                                   f"{chart_sheet} sheet.")])
     ws.append([])
     ws.append(header_cells(ws, ["column", "type", "meaning"]))
+    if schema is not None:
+        _parquet_columns(ws, schema)
+    return ws
+
+
+def _parquet_columns(ws: WriteOnlyWorksheet, schema) -> None:
+    """A Parquet table's columns, one row each: name, type, meaning."""
     for field in schema:
         ws.append([text_cell(ws, field.name), text_cell(ws, str(field.type)),
                    text_cell(ws, COLUMN_NOTES.get(field.name, ""))])
@@ -307,10 +315,12 @@ def _lag_excerpt(window: WindowResult) -> WindowResult:
 
 
 def _write_tables(wb: Workbook, run: CorrelationRun, parquet: dict[str, tuple[int, object, Path]],
-                  mode: str) -> None:
+                  mode: str) -> dict[str, WriteOnlyWorksheet]:
     """Lag and slot charts, then the Correlation and Slots sheets: the tables themselves, or for a table
     written to Parquet a sheet naming the file and a sheet of the charts' excerpt (every k-th row of the
-    charted windows, at most CHART_MAX_POINTS per chart)."""
+    charted windows, at most CHART_MAX_POINTS per chart). Returns the Parquet sheets still waiting for
+    their column rows (schema None: the table is being written elsewhere)."""
+    waiting = {}
     lag_frames = slot_frames = None
     lag_data, slot_data = "Correlation", "Slots"
     if "correlation" in parquet:
@@ -325,18 +335,19 @@ def _write_tables(wb: Workbook, run: CorrelationRun, parquet: dict[str, tuple[in
                     "the whole table: {file}.")
     if "correlation" in parquet:
         rows, schema, path = parquet["correlation"]
-        _write_parquet_note(wb, "Correlation", rows, schema, path, mode, lag_data)
+        waiting["correlation"] = _write_parquet_note(wb, "Correlation", rows, schema, path, mode, lag_data)
         _write_correlation(wb, lag_run, lag_data, excerpt_note.format(n=CHART_MAX_POINTS, file=path.name),
                            LAG_CHART_HEADERS)
     else:
         _write_correlation(wb, run)
     if "slots" in parquet:
         rows, schema, path = parquet["slots"]
-        _write_parquet_note(wb, "Slots", rows, schema, path, mode, slot_data)
+        waiting["slots"] = _write_parquet_note(wb, "Slots", rows, schema, path, mode, slot_data)
         _write_slots(wb, slot_run, slot_data, excerpt_note.format(n=CHART_MAX_POINTS, file=path.name),
                      SLOT_CHART_HEADERS)
     else:
         _write_slots(wb, run)
+    return {name: ws for name, ws in waiting.items() if parquet[name][1] is None}
 
 
 def _flatten(prefix: str, value: Any) -> Iterator[tuple[str, Any]]:
@@ -415,29 +426,55 @@ def _write_figures(wb: Workbook, title: str, images: dict[str, str | os.PathLike
         ws.row_breaks.append(Break(id=row - 1))
 
 
-def write_report(run: CorrelationRun, path_xlsx: str | os.PathLike[str], *,
-                 figure_png: str | os.PathLike[str] | None = None,
-                 images: dict[str, str | os.PathLike[str]] | None = None, tables: str = "auto",
-                 figure_ready: Callable[[], object] | None = None) -> list[Path]:
-    """Write the run's workbook to ``path_xlsx``; embed ``figure_png`` on a Map sheet when given and
-    further ``images`` (caption -> PNG) on a Figures sheet. The slot and lag tables go to Parquet beside
-    it as ``tables`` says (pipeline.report.tables); returns the Parquet files written. ``figure_ready``
-    is called before ``figure_png`` is first read (the figure may be drawn meanwhile elsewhere)."""
+def write_parquet_tables(run: CorrelationRun, path_xlsx: str | os.PathLike[str],
+                         tables: str = "auto") -> dict[str, tuple[int, object, Path]]:
+    """The run's tables that go to Parquet under ``tables`` (pipeline.report.tables), written beside the
+    workbook one table at a time, in batches of whole windows (write_table_parquet): name -> (rows,
+    schema, path)."""
     parquet = {}
     for name in parquet_tables(run, tables):  # one table at a time, built and written in batches of windows
         path = parquet_path(path_xlsx, name)
         parquet[name] = (*write_table_parquet(run, name, path), path)
+    return parquet
+
+
+def _table_rows(run: CorrelationRun, name: str) -> int:
+    """Rows of table ``name`` (a slot a row, resp. a lag a row), counted without building it."""
+    return sum(len(w.slots) if name == "slots" else len(w.lags) for w in run.windows)
+
+
+def write_report(run: CorrelationRun, path_xlsx: str | os.PathLike[str], *,
+                 figure_png: str | os.PathLike[str] | None = None,
+                 images: dict[str, str | os.PathLike[str]] | None = None, tables: str = "auto",
+                 figure_ready: Callable[[], object] | None = None,
+                 tables_written: Callable[[], dict[str, tuple[int, object, Path]]] | None = None
+                 ) -> list[Path]:
+    """Write the run's workbook to ``path_xlsx``; embed ``figure_png`` on a Map sheet when given and
+    further ``images`` (caption -> PNG) on a Figures sheet. The slot and lag tables go to Parquet beside
+    it as ``tables`` says (pipeline.report.tables); returns the Parquet files written. ``figure_ready``
+    is called before ``figure_png`` is first read (the figure may be drawn meanwhile elsewhere). With
+    ``tables_written`` the Parquet tables are being written elsewhere (write_parquet_tables in another
+    process): it is called before the workbook is saved and returns what write_parquet_tables returned."""
+    if tables_written is None:
+        parquet = write_parquet_tables(run, path_xlsx, tables)
+    else:  # the sheets name the file and its rows now, its columns once written
+        parquet = {name: (_table_rows(run, name), None, parquet_path(path_xlsx, name))
+                   for name in parquet_tables(run, tables)}
     wb = Workbook(write_only=True)
     taken = {name.lower() for name in _CORE_SHEETS}
     _write_summary(wb, run)
     try:
         map_sheet = _write_map(wb) if figure_png is not None else None
-        _write_tables(wb, run, parquet, tables)
+        waiting = _write_tables(wb, run, parquet, tables)
         for name, frame in run.extra_sheets.items():
             _write_frame(wb, sheet_name(name, taken), frame)
         if images:
             _write_figures(wb, sheet_name("Figures", taken), images)
         _write_parameters(wb, run)
+        if tables_written is not None:
+            parquet = tables_written()
+            for name, ws in waiting.items():
+                _parquet_columns(ws, parquet[name][1])
         if map_sheet is not None:
             if figure_ready is not None:
                 figure_ready()

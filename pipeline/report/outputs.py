@@ -33,14 +33,15 @@ class BackgroundFailed(RuntimeError):
 
 class Background:
     """``fn(*args)`` run in a forked child process, so an output is written on the other core while this
-    process writes another; ``wait()`` re-raises the child's error here. Where fork is not available
+    process writes another; ``wait()`` returns what ``fn`` returned or re-raises the child's error here
+    (the result must pickle). Where fork is not available
     (or not safe: only Linux is trusted) it runs at once, in this process. Call ``wait()`` or
     ``cancel()`` before leaving an ``all_or_nothing`` block, so no file appears after its clean-up."""
 
     def __init__(self, fn: Callable[..., object], *args: object):
-        self._pid = 0
+        self._pid, self._value = 0, None
         if not (FORK_OK and hasattr(os, "fork")):
-            fn(*args)
+            self._value = fn(*args)
             return
         with contextlib.suppress(OSError, ValueError):  # a closed pipe stays this process's business
             sys.stdout.flush()  # the child leaves by os._exit and never writes what was buffered here;
@@ -52,8 +53,7 @@ class Background:
             try:
                 os.close(read)
                 try:
-                    fn(*args)
-                    message, status = b"", 0
+                    message, status = _returned(fn(*args)), 0
                 except BaseException as exc:  # noqa: BLE001 - sent back to be raised in the parent
                     message = _pickled(exc)
                 with os.fdopen(write, "wb") as out:
@@ -63,10 +63,11 @@ class Background:
         os.close(write)
         self._pid, self._read = pid, read
 
-    def wait(self) -> None:
-        """Wait for the child; raise its error (BackgroundFailed when it died without one)."""
+    def wait(self) -> object:
+        """Wait for the child and return what ``fn`` returned; raise its error (BackgroundFailed when it
+        died without one)."""
         if not self._pid:
-            return
+            return self._value
         try:
             with os.fdopen(self._read, "rb") as pipe:
                 message = pipe.read()
@@ -74,11 +75,18 @@ class Background:
             self._read = -1
         _, status = os.waitpid(self._pid, 0)
         self._pid = 0
-        if message:
-            raise pickle.loads(message)
-        if status:
+        try:
+            sent = pickle.loads(message) if message else None
+        except Exception:  # noqa: BLE001 - cut short: the child died while sending
+            sent = None
+        if isinstance(sent, BaseException):
+            raise sent
+        if status or not isinstance(sent, _Returned):
             code = os.waitstatus_to_exitcode(status)
-            raise BackgroundFailed(f"killed by signal {-code}" if code < 0 else f"exit status {code}")
+            raise BackgroundFailed(f"killed by signal {-code}" if code < 0 else
+                                   f"exit status {code}" if code else "ended without a result")
+        self._value = sent.value
+        return self._value
 
     def cancel(self) -> None:
         """Stop the child if it still runs (this process failed) and reap it."""
@@ -92,7 +100,119 @@ class Background:
         self._pid, self._read = 0, -1
 
 
+class Prepared:
+    """A child forked now, while this process still has work to do, that gets ready on the other core
+    (``warm()``: imports, caches) and then runs ``fn(*args)`` once start(*args) sends the arguments: a
+    Background without its start-up on the critical path. ``fn`` is taken at fork time (only the
+    arguments travel, pickled through an unnamed file); where fork is not available start() runs the
+    work at once, as Background does. close() stops a child that was never started."""
+
+    def __init__(self, fn: Callable[..., object], *, warm: Callable[[], object] | None = None):
+        self._fn, self._pid = fn, 0
+        if not (FORK_OK and hasattr(os, "fork") and hasattr(os, "memfd_create")):
+            return
+        with contextlib.suppress(OSError, ValueError):
+            sys.stdout.flush()
+            sys.stderr.flush()
+        data = os.memfd_create("msdc-args", os.MFD_CLOEXEC)
+        go_read, go_write = os.pipe()
+        done_read, done_write = os.pipe()
+        pid = os.fork()
+        if pid == 0:  # pragma: no cover - the child (coverage does not follow it)
+            status = 1
+            try:
+                os.close(go_write)
+                os.close(done_read)
+                if warm is not None:
+                    with contextlib.suppress(Exception):  # fn meets the same trouble and reports it
+                        warm()
+                size = int.from_bytes(os.read(go_read, 8) or b"\0", "little")
+                if size:
+                    try:
+                        args = pickle.loads(_read_all(data, size))
+                        os.close(data)  # its pages go once the parent has closed it too
+                        message, status = _returned(fn(*args)), 0
+                    except BaseException as exc:  # noqa: BLE001 - sent back to be raised in the parent
+                        message = _pickled(exc)
+                    with os.fdopen(done_write, "wb") as out:
+                        out.write(message)
+                else:
+                    status = 0  # closed unused
+            finally:
+                os._exit(status)
+        os.close(go_read)
+        os.close(done_write)
+        self._pid, self._data, self._go, self._done = pid, data, go_write, done_read
+
+    def start(self, *args: object) -> Background:
+        """Send ``args`` to the child, which runs ``fn(*args)``; wait() on the result re-raises its error.
+        Without a child (or with arguments that do not pickle) a Background does the work instead."""
+        if not self._pid:
+            return Background(self._fn, *args)
+        try:  # streamed into the unnamed file: no second copy of a large run in memory
+            with os.fdopen(os.dup(self._data), "wb") as sink:
+                sink.seek(0)
+                sink.truncate()
+                pickle.dump(args, sink, protocol=pickle.HIGHEST_PROTOCOL)
+                size = sink.tell()
+        except Exception:  # noqa: BLE001 - e.g. a lambda: the work is done the usual way
+            self.close()
+            return Background(self._fn, *args)
+        job = Background.__new__(Background)
+        job._pid, job._read, job._value = self._pid, self._done, None
+        try:
+            os.write(self._go, size.to_bytes(8, "little"))
+        except BaseException:
+            job.cancel()
+            raise
+        finally:
+            self._release()
+        return job
+
+    def close(self) -> None:
+        """Stop and reap a child that was never started."""
+        if not self._pid:
+            return
+        with contextlib.suppress(ProcessLookupError):
+            os.kill(self._pid, signal.SIGKILL)
+        os.waitpid(self._pid, 0)
+        os.close(self._done)
+        self._release()
+
+    def _release(self) -> None:
+        os.close(self._go)
+        os.close(self._data)
+        self._pid = 0
+
+
+def _read_all(fd: int, size: int) -> bytes:
+    """``size`` bytes of ``fd`` from its start (pread: the offset the parent's writes moved is not used)."""
+    chunks, offset = [], 0
+    while offset < size:
+        chunk = os.pread(fd, min(size - offset, 1 << 30), offset)
+        if not chunk:
+            break
+        chunks.append(chunk)
+        offset += len(chunk)
+    return b"".join(chunks)
+
+
 FORK_OK = sys.platform.startswith("linux")  # macOS: fork is unsafe with system frameworks; Windows: none
+
+
+class _Returned:
+    """What a child's ``fn`` returned, as sent back (an exception sent back is raised instead)."""
+
+    def __init__(self, value: object):
+        self.value = value
+
+
+def _returned(value: object) -> bytes:
+    """The child's result, pickled; a result that does not pickle is an error of its own."""
+    try:
+        return pickle.dumps(_Returned(value), protocol=pickle.HIGHEST_PROTOCOL)
+    except Exception as exc:  # noqa: BLE001 - reported like any other failure of the child
+        return _pickled(exc)
 
 
 def _pickled(exc: BaseException) -> bytes:
