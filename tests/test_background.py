@@ -266,7 +266,7 @@ def test_a_parquet_table_failing_beside_the_workbook_leaves_nothing(tmp_path, mo
     from pipeline.report import excel
 
     monkeypatch.setattr(outputs, "FORK_OK", fork and outputs.FORK_OK)
-    monkeypatch.setattr(excel, "write_parquet", lambda frame, path: _fail(path))
+    monkeypatch.setattr(excel, "write_table_parquet", lambda run, name, path: _fail(path))
     code, err = _correlate_parquet(tmp_path, capsys)
     assert code == 1 and "Traceback" not in err and "No space left on device" in err
     assert "r_slots.parquet" in err and err.count("msdc correlate: ") == 1
@@ -277,7 +277,7 @@ def test_a_parquet_table_failing_beside_the_workbook_leaves_nothing(tmp_path, mo
 def test_the_table_and_figure_process_dying_names_every_file(tmp_path, monkeypatch, capsys):
     from pipeline.report import excel
 
-    monkeypatch.setattr(excel, "write_parquet", lambda frame, path: _die())
+    monkeypatch.setattr(excel, "write_table_parquet", lambda run, name, path: _die())
     code, err = _correlate_parquet(tmp_path, capsys)
     assert code == 1 and "Traceback" not in err
     last = err.strip().splitlines()[-1]
