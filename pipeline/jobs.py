@@ -870,6 +870,16 @@ def write_correlation(result: CorrelateResult, progress: Progress | None = None,
             prepared.close()  # a no-op once started
 
 
+# The Parquet tables go to the figure's child (pickled there whole, then built again) only up to this many
+# rows of slots and lags: the day's 0.5 M rows, not the week's 3.3 M (the child would hold another 0.6 GB)
+CHILD_MAX_TABLE_ROWS = 1_000_000
+
+
+def _table_rows(run: CorrelationRun) -> int:
+    """Rows of the run's slot and lag tables together."""
+    return sum(len(w.slots) + len(w.lags) for w in run.windows)
+
+
 def _track_run(run: CorrelationRun) -> CorrelationRun:
     """What the track figure reads of a run (summaries, slots, parameters), without the lag tables."""
     from pipeline.correlate.results import CorrelationRun, WindowResult
@@ -889,7 +899,10 @@ def _write_correlation(result: CorrelateResult, progress: Progress | None,
         out, mode = checked.output, result.options.tables
         png = out.with_name(out.stem + "_tracks.png")
         in_child = [parquet_path(out, name) for name in parquet_tables(run, mode)]
-        args = (run if in_child else _track_run(run), png, checked.sensors, out, mode)
+        if _table_rows(run) > CHILD_MAX_TABLE_ROWS:  # a long run's tables are written here, in batches
+            in_child = []
+        args = ((run, png, checked.sensors, out, mode) if in_child
+                else (_track_run(run), png, checked.sensors, out, "xlsx"))  # "xlsx": the child writes none
         drawing = prepared.start(*args) if prepared is not None else Background(_track_figure_and_tables,
                                                                                  *args)
     try:
@@ -930,7 +943,7 @@ def _write_workbook(result: CorrelateResult, progress: Progress | None, max_wind
                 w, out.with_name(f"{out.stem}_lags_{i + 1}.png"))
     tables = write_report(run, out, figure_png=png, images=images, tables=result.options.tables,
                           figure_ready=lambda: _drawn(drawing, png, in_child),
-                          tables_written=lambda: _drawn(drawing, png, in_child))
+                          tables_written=(lambda: _drawn(drawing, png, in_child)) if in_child else None)
     written = {"report": out, "figure": png}
     written.update((f"table {p.stem.removeprefix(out.stem + '_')}", p) for p in tables)
     return written

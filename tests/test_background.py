@@ -290,3 +290,43 @@ def test_the_figure_child_warms_up_without_error():
     """The prepared child's warm-up is silent about its errors (the real work reports them), so it is run
     here where an error shows: it must get as far as drawing and encoding a PNG."""
     jobs._warm_track_figure()
+
+
+@forking
+@pytest.mark.parametrize("limit", [0, 1_000_000_000])
+def test_long_tables_are_written_by_this_process_and_come_out_the_same(tmp_path, monkeypatch, capsys, limit):
+    """Over CHILD_MAX_TABLE_ROWS the Parquet tables are written here, not in the figure's child (which then
+    gets no tables to hold); under it in the child. The files are the same either way."""
+    import pandas as pd
+
+    from pipeline.report import excel
+
+    writers = tmp_path / "writers.txt"
+    real = excel.write_table_parquet
+
+    def recorded(run, name, path):
+        with open(writers, "a") as f:
+            f.write(f"{name} {os.getpid()}\n")
+        return real(run, name, path)
+
+    monkeypatch.setattr(jobs, "CHILD_MAX_TABLE_ROWS", limit)
+    monkeypatch.setattr(excel, "write_table_parquet", recorded)
+    out = tmp_path / "run"
+    out.mkdir()
+    code = main(["correlate", str(FIX / "radar.ast"), str(FIX / "adsb.ast"), "--sensors",
+                 str(FIX / "sensors.toml"), "--all", "--tables", "parquet", "-o", str(out / "r.xlsx")])
+    capsys.readouterr()
+    assert code == 0
+    pids = {line.split()[0]: int(line.split()[1]) for line in writers.read_text().splitlines()}
+    assert set(pids) == {"slots", "correlation"}
+    assert all((pid == os.getpid()) == (limit == 0) for pid in pids.values())
+    got = {name: pd.read_parquet(out / f"r_{name}.parquet") for name in pids}
+    if limit == 0:  # compared with the child's files of a second run under the default limit
+        monkeypatch.setattr(jobs, "CHILD_MAX_TABLE_ROWS", 1_000_000_000)
+        other = tmp_path / "other"
+        other.mkdir()
+        assert main(["correlate", str(FIX / "radar.ast"), str(FIX / "adsb.ast"), "--sensors",
+                     str(FIX / "sensors.toml"), "--all", "--tables", "parquet", "-o",
+                     str(other / "r.xlsx")]) == 0
+        for name, frame in got.items():
+            pd.testing.assert_frame_equal(frame, pd.read_parquet(other / f"r_{name}.parquet"))
