@@ -52,12 +52,7 @@ class Background:
             status = 1
             try:
                 os.close(read)
-                try:
-                    message, status = _returned(fn(*args)), 0
-                except BaseException as exc:  # noqa: BLE001 - sent back to be raised in the parent
-                    message = _pickled(exc)
-                with os.fdopen(write, "wb") as out:
-                    out.write(message)
+                status = _run_and_send(fn, args, write)
             finally:
                 os._exit(status)
         os.close(write)
@@ -92,9 +87,7 @@ class Background:
         """Stop the child if it still runs (this process failed) and reap it."""
         if not self._pid:
             return
-        with contextlib.suppress(ProcessLookupError):
-            os.kill(self._pid, signal.SIGKILL)
-        os.waitpid(self._pid, 0)
+        _stop(self._pid)
         if self._read >= 0:
             os.close(self._read)
         self._pid, self._read = 0, -1
@@ -128,14 +121,7 @@ class Prepared:
                         warm()
                 size = int.from_bytes(os.read(go_read, 8) or b"\0", "little")
                 if size:
-                    try:
-                        args = pickle.loads(_read_all(data, size))
-                        os.close(data)  # its pages go once the parent has closed it too
-                        message, status = _returned(fn(*args)), 0
-                    except BaseException as exc:  # noqa: BLE001 - sent back to be raised in the parent
-                        message = _pickled(exc)
-                    with os.fdopen(done_write, "wb") as out:
-                        out.write(message)
+                    status = _run_and_send(lambda: fn(*_received(data, size)), (), done_write)
                 else:
                     status = 0  # closed unused
             finally:
@@ -173,9 +159,7 @@ class Prepared:
         """Stop and reap a child that was never started."""
         if not self._pid:
             return
-        with contextlib.suppress(ProcessLookupError):
-            os.kill(self._pid, signal.SIGKILL)
-        os.waitpid(self._pid, 0)
+        _stop(self._pid)
         os.close(self._done)
         self._release()
 
@@ -183,6 +167,33 @@ class Prepared:
         os.close(self._go)
         os.close(self._data)
         self._pid = 0
+
+
+def _run_and_send(fn: Callable[..., object], args: tuple, fd: int) -> int:
+    """In a child: run ``fn(*args)`` and send what it returned, or its error, through ``fd``; the child's
+    exit status (1: it failed)."""
+    try:
+        message, status = _returned(fn(*args)), 0
+    except BaseException as exc:  # noqa: BLE001 - sent back to be raised in the parent
+        message, status = _pickled(exc), 1
+    with os.fdopen(fd, "wb") as out:
+        out.write(message)
+    return status
+
+
+def _stop(pid: int) -> None:
+    """Kill a child and reap it."""
+    with contextlib.suppress(ProcessLookupError):
+        os.kill(pid, signal.SIGKILL)
+    os.waitpid(pid, 0)
+
+
+def _received(data: int, size: int) -> tuple:
+    """The arguments the parent pickled into the unnamed file ``data``; the file is closed (its pages go
+    once the parent has closed it too)."""
+    args = pickle.loads(_read_all(data, size))
+    os.close(data)
+    return args
 
 
 def _read_all(fd: int, size: int) -> bytes:
