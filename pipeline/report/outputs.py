@@ -43,9 +43,7 @@ class Background:
         if not (FORK_OK and hasattr(os, "fork")):
             self._value = fn(*args)
             return
-        with contextlib.suppress(OSError, ValueError):  # a closed pipe stays this process's business
-            sys.stdout.flush()  # the child leaves by os._exit and never writes what was buffered here;
-            sys.stderr.flush()  # flushed anyway, so nothing buffered can come out twice
+        _flush()
         read, write = os.pipe()
         pid = os.fork()
         if pid == 0:  # pragma: no cover - the child (coverage does not follow it)
@@ -104,9 +102,7 @@ class Prepared:
         self._fn, self._pid = fn, 0
         if not (FORK_OK and hasattr(os, "fork") and hasattr(os, "memfd_create")):
             return
-        with contextlib.suppress(OSError, ValueError):
-            sys.stdout.flush()
-            sys.stderr.flush()
+        _flush()
         data = os.memfd_create("msdc-args", os.MFD_CLOEXEC)
         go_read, go_write = os.pipe()
         done_read, done_write = os.pipe()
@@ -167,6 +163,14 @@ class Prepared:
         os.close(self._go)
         os.close(self._data)
         self._pid = 0
+
+
+def _flush() -> None:
+    """Before a fork: the child leaves by os._exit and never writes what was buffered here; flushed
+    anyway, so nothing buffered can come out twice (a closed pipe stays this process's business)."""
+    with contextlib.suppress(OSError, ValueError):
+        sys.stdout.flush()
+        sys.stderr.flush()
 
 
 def _run_and_send(fn: Callable[..., object], args: tuple, fd: int) -> int:
