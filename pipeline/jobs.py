@@ -875,11 +875,6 @@ def write_correlation(result: CorrelateResult, progress: Progress | None = None,
 CHILD_MAX_TABLE_ROWS = 1_000_000
 
 
-def _table_rows(run: CorrelationRun) -> int:
-    """Rows of the run's slot and lag tables together."""
-    return sum(len(w.slots) + len(w.lags) for w in run.windows)
-
-
 def _track_run(run: CorrelationRun) -> CorrelationRun:
     """What the track figure reads of a run (summaries, slots, parameters), without the lag tables."""
     from pipeline.correlate.results import CorrelationRun, WindowResult
@@ -890,7 +885,7 @@ def _track_run(run: CorrelationRun) -> CorrelationRun:
 
 def _write_correlation(result: CorrelateResult, progress: Progress | None,
                        max_windows: int, prepared: Prepared | None = None) -> dict[str, Path]:
-    from pipeline.report.tables import parquet_path, parquet_tables
+    from pipeline.report.tables import parquet_path, parquet_tables, table_length
 
     written: dict[str, Path] = {}
     run, checked = result.run, result.checked
@@ -899,7 +894,8 @@ def _write_correlation(result: CorrelateResult, progress: Progress | None,
         out, mode = checked.output, result.options.tables
         png = out.with_name(out.stem + "_tracks.png")
         in_child = [parquet_path(out, name) for name in parquet_tables(run, mode)]
-        if _table_rows(run) > CHILD_MAX_TABLE_ROWS:  # a long run's tables are written here, in batches
+        rows = table_length(run, "slots") + table_length(run, "correlation")
+        if rows > CHILD_MAX_TABLE_ROWS:  # a long run's tables are written here, in batches
             in_child = []
         args = ((run, png, checked.sensors, out, mode) if in_child
                 else (_track_run(run), png, checked.sensors, out, "xlsx"))  # "xlsx": the child writes none

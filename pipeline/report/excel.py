@@ -77,6 +77,7 @@ from pipeline.report.tables import (
     parquet_path,
     parquet_tables,
     slot_table,
+    table_length,
     write_table_parquet,
 )
 
@@ -438,11 +439,6 @@ def write_parquet_tables(run: CorrelationRun, path_xlsx: str | os.PathLike[str],
     return parquet
 
 
-def _table_rows(run: CorrelationRun, name: str) -> int:
-    """Rows of table ``name`` (a slot a row, resp. a lag a row), counted without building it."""
-    return sum(len(w.slots) if name == "slots" else len(w.lags) for w in run.windows)
-
-
 def write_report(run: CorrelationRun, path_xlsx: str | os.PathLike[str], *,
                  figure_png: str | os.PathLike[str] | None = None,
                  images: dict[str, str | os.PathLike[str]] | None = None, tables: str = "auto",
@@ -458,7 +454,7 @@ def write_report(run: CorrelationRun, path_xlsx: str | os.PathLike[str], *,
     if tables_written is None:
         parquet = write_parquet_tables(run, path_xlsx, tables)
     else:  # the sheets name the file and its rows now, its columns once written
-        parquet = {name: (_table_rows(run, name), None, parquet_path(path_xlsx, name))
+        parquet = {name: (table_length(run, name), None, parquet_path(path_xlsx, name))
                    for name in parquet_tables(run, tables)}
     wb = Workbook(write_only=True)
     taken = {name.lower() for name in _CORE_SHEETS}

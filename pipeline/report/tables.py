@@ -157,9 +157,19 @@ def parquet_tables(run: CorrelationRun, mode: str) -> list[str]:
         raise ValueError(f"tables must be one of {', '.join(TABLE_MODES)}, got {mode!r}")
     if mode == "xlsx":
         return []
-    rows = {"slots": sum(len(w.slots) for w in run.windows),
-            "correlation": sum(len(w.lags) for w in run.windows)}
+    rows = {name: table_length(run, name) for name in ("slots", "correlation")}
     return [name for name, n in rows.items() if mode == "parquet" or n > AUTO_MAX_ROWS]
+
+
+def window_rows(run: CorrelationRun, name: str) -> list[int]:
+    """The rows each window gives table ``name`` (``slots``: a slot a row; ``correlation``: a lag a row),
+    counted without building it."""
+    return [len(w.slots) if name == "slots" else len(w.lags) for w in run.windows]
+
+
+def table_length(run: CorrelationRun, name: str) -> int:
+    """The rows of table ``name`` (window_rows), counted without building it."""
+    return sum(window_rows(run, name))
 
 
 def parquet_path(workbook: str | os.PathLike[str], name: str) -> Path:
@@ -171,7 +181,7 @@ def parquet_path(workbook: str | os.PathLike[str], name: str) -> Path:
 def _batches(run: CorrelationRun, name: str, batch_rows: int) -> list[range]:
     """Window positions in runs of whole windows of at most ``batch_rows`` rows of table ``name`` (a window
     longer than that on its own)."""
-    sizes = [len(w.slots) if name == "slots" else len(w.lags) for w in run.windows]
+    sizes = window_rows(run, name)
     out, start, rows = [], 0, 0
     for i, n in enumerate(sizes):
         if rows and rows + n > batch_rows:
