@@ -409,16 +409,18 @@ def _load(options: DecodingOptions, checked: Checked, progress: Progress | None)
     return loaded
 
 
-def _order_warnings(paths: list[Path], spans: list[dict[int, tuple[pd.Timestamp, pd.Timestamp]]]
+def _order_warnings(paths: list[Path], spans: list[dict[str, tuple[pd.Timestamp, pd.Timestamp]]]
                     ) -> list[str]:
-    """A warning for each input whose records of a category start before the previous input's end."""
+    """A warning for each input whose records of a data source (category, SAC, SIC) start before the end
+    of that source in an earlier input: one sensor's recording given out of order. Two sensors recorded
+    side by side (two radars' files) overlap in time as they should."""
     warnings, last = [], {}
-    for path, by_cat in zip(paths, spans, strict=True):
-        for cat, (lo, hi) in sorted(by_cat.items()):
-            if cat in last and lo < last[cat][0]:
-                warnings.append(f"{path}: CAT{cat:03d} starts at {lo}, before the end of {last[cat][1]} "
-                                f"({last[cat][0]}): inputs run backwards in time")
-            last[cat] = (hi, str(path))
+    for path, by_source in zip(paths, spans, strict=True):
+        for source, (lo, hi) in sorted(by_source.items()):
+            if source in last and lo < last[source][0]:
+                warnings.append(f"{path}: {source} starts at {lo}, before the end of its records in "
+                                f"{last[source][1]} ({last[source][0]}): inputs run backwards in time")
+            last[source] = (hi, str(path))
     return warnings
 
 
@@ -1035,7 +1037,7 @@ def stats_job(options: StatsOptions, *, progress: Progress | None = None) -> Sta
             progress.step(f"{path.name} ({i + 1}/{len(checked.inputs)})")
         info = {"path": str(path), "bytes": 0, "format": None, "records": {}, "skipped_blocks": 0,
                 "editions": {}, "edition_choice": {}, "date": None}
-        by_cat: dict[int, tuple[pd.Timestamp, pd.Timestamp]] = {}
+        by_source: dict[str, tuple[pd.Timestamp, pd.Timestamp]] = {}
         try:
             for rec in asterix.iter_read(path, chunk=chunk, editions=checked.editions or None,
                                          date=options.date, format=options.format, columns=STATS_COLUMNS):
@@ -1047,11 +1049,11 @@ def stats_job(options: StatsOptions, *, progress: Progress | None = None) -> Sta
                 info["skipped_blocks"] += len(rec.errors)
                 info["editions"].update(rec.editions)
                 info["edition_choice"] = {**rec.edition_choice, **info["edition_choice"]}
-                by_cat = widen_spans(by_cat, time_spans(rec.frames, rec.date))
+                by_source = widen_spans(by_source, time_spans(rec.frames, rec.date))
         except UnreadableInput as exc:
             raise JobError(str(exc), 2) from exc
         inputs.append(info)
-        spans.append(by_cat)
+        spans.append(by_source)
     dates = [info["date"] for info in inputs if info["date"] is not None]
     if dates:  # undated inputs are dated by the earliest known date, as load() does
         shift = pd.Timestamp(min(dates), tz="UTC") - UNDATED_DAY

@@ -130,3 +130,27 @@ def test_warnings_implausible_site_height_and_time_running_backwards(tmp_path):
     assert any("runs backwards" in w or "run backwards" in w for w in result.checked.warnings)
     ordered = jobs.correlate_job(corr(inputs=(str(early), str(late), ADSB)))
     assert not any("backwards" in w for w in ordered.checked.warnings)
+
+
+def test_order_warning_is_per_data_source():
+    """Two radars recorded side by side overlap in time and say nothing; one radar's later file given first
+    does. Spans are worked out per SAC/SIC from hand-made records (10:00-11:00 and 09:00-10:30 UTC)."""
+    import datetime as dt
+
+    import pandas as pd
+
+    from pipeline.model.load import time_spans
+
+    def frame(sic: int, start_h: float, end_h: float) -> dict[int, pd.DataFrame]:
+        return {48: pd.DataFrame({"sac": [25, 25], "sic": [sic, sic], "day": [0, 0],
+                                  "time_of_day": [start_h * 3600, end_h * 3600]})}
+
+    day = dt.date(2019, 3, 1)
+    first, other_radar = time_spans(frame(201, 10, 11), day), time_spans(frame(202, 9, 10.5), day)
+    assert first == {"048:25/201": (pd.Timestamp("2019-03-01 10:00", tz="UTC"),
+                                    pd.Timestamp("2019-03-01 11:00", tz="UTC"))}
+    assert jobs._order_warnings([Path("a.ast"), Path("b.ast")], [first, other_radar]) == []
+    same_radar = time_spans(frame(201, 9, 10.5), day)
+    (warning,) = jobs._order_warnings([Path("a.ast"), Path("b.ast")], [first, same_radar])
+    assert warning.startswith("b.ast: 048:25/201 starts at 2019-03-01 09:00:00+00:00, before the end of its "
+                              "records in a.ast (2019-03-01 11:00:00+00:00)")

@@ -32,7 +32,7 @@ class Loaded:
     recordings: list[Recording]
     inputs: list[dict] = field(default_factory=list)
     date: dt.date | None = None
-    spans: list[dict[int, Span]] | None = None  # per input: earliest and latest instant per category
+    spans: list[dict[str, Span]] | None = None  # per input: earliest and latest instant per data source
     warnings: list[str] = field(default_factory=list)  # about the data, e.g. reports left out as damaged
     # CAT048 records of SAC/SIC pairs the sensor table lacks, left out (sensors.undeclared_radars' table)
     stray_radar: pd.DataFrame = field(default_factory=pd.DataFrame)
@@ -109,21 +109,29 @@ def load(paths: list[str | Path], *, editions=None, date=None, format: str | Non
     return Loaded(frames, recs, inputs, first)
 
 
-def time_spans(frames: dict[int, pd.DataFrame], date: dt.date | None) -> dict[int, Span]:
-    """Earliest and latest UTC instant per category of one input (``date`` dates undated records)."""
+def time_spans(frames: dict[int, pd.DataFrame], date: dt.date | None) -> dict[str, Span]:
+    """Earliest and latest UTC instant per data source ("048:25/201", as the measurements' sensor_id) of
+    one input (``date`` dates undated records)."""
     out = {}
     for cat, frame in frames.items():
-        times = absolute_time(frame, date).dropna()
-        if len(times):
-            out[cat] = (times.min(), times.max())
+        times = absolute_time(frame, date)
+        ok = times.notna().to_numpy()
+        if not ok.any():
+            continue
+        none = pd.Series(pd.NA, index=frame.index)
+        pairs = pd.DataFrame({c: frame.get(c, none).astype("Int64").array[ok] for c in ("sac", "sic")})
+        pairs["t"] = times.to_numpy("datetime64[ns]")[ok]
+        for (sac, sic), t in pairs.groupby(["sac", "sic"], dropna=False, sort=True)["t"]:
+            source = f"{cat:03d}:{'?' if pd.isna(sac) else sac}/{'?' if pd.isna(sic) else sic}"
+            out[source] = (pd.Timestamp(t.min(), tz="UTC"), pd.Timestamp(t.max(), tz="UTC"))
     return out
 
 
-def widen_spans(spans: dict[int, Span], more: dict[int, Span]) -> dict[int, Span]:
-    """The spans of two chunks of one input, per category."""
+def widen_spans(spans: dict[str, Span], more: dict[str, Span]) -> dict[str, Span]:
+    """The spans of two chunks of one input, per data source."""
     out = dict(spans)
-    for cat, (lo, hi) in more.items():
-        out[cat] = (min(lo, out[cat][0]), max(hi, out[cat][1])) if cat in out else (lo, hi)
+    for source, (lo, hi) in more.items():
+        out[source] = (min(lo, out[source][0]), max(hi, out[source][1])) if source in out else (lo, hi)
     return out
 
 
@@ -156,7 +164,7 @@ def load_measurements(paths: list[str | Path], sensors: pd.DataFrame, *, edition
     recs: list[Recording] = []
     inputs: list[dict] = []
     off_earth: list[pd.DataFrame] = []  # the CAT021 reports with a position off the Earth (damaged bytes)
-    spans: list[dict[int, Span]] = []
+    spans: list[dict[str, Span]] = []
     dates: list[dt.date | None] = []
     radar: list[tuple[int, pd.DataFrame]] = []  # (input number, rows)
     adsb: list[tuple[int, pd.DataFrame]] = []
@@ -167,7 +175,7 @@ def load_measurements(paths: list[str | Path], sensors: pd.DataFrame, *, edition
             progress.step(f"{p.name} ({i + 1}/{len(paths)})")
         info = {"path": str(p), "sha256": sha256(p), "bytes": 0, "format": None, "records": {},
                 "skipped_blocks": 0, "editions": {}}
-        by_cat: dict[int, Span] = {}
+        by_source: dict[str, Span] = {}
         first = True
         for rec in asterix.iter_read(p, chunk=chunk, editions=editions, date=date, format=format,
                                      columns=DECODED_COLUMNS):
@@ -180,7 +188,7 @@ def load_measurements(paths: list[str | Path], sensors: pd.DataFrame, *, edition
             info["skipped_blocks"] += len(rec.errors)
             info["editions"].update(rec.editions)
             # undated records are placed on UNDATED_DAY here and moved to Loaded.date below
-            by_cat = widen_spans(by_cat, time_spans(rec.frames, None))
+            by_source = widen_spans(by_source, time_spans(rec.frames, None))
             frames, rec.frames = rec.frames, {}
             r, a = _rows(frames, p.name, sensors, adsb_sigma_m, stray, off_earth, columns)
             del frames
@@ -192,7 +200,7 @@ def load_measurements(paths: list[str | Path], sensors: pd.DataFrame, *, edition
         info["records"] = dict(sorted(info["records"].items()))
         info["editions"] = dict(sorted(info["editions"].items()))
         inputs.append(info)
-        spans.append(by_cat)
+        spans.append(by_source)
     known = [d for d in dates if d is not None]
     first_date = min(known) if known else None
     if first_date is not None:  # undated inputs are dated by the earliest known date
