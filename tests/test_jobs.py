@@ -154,3 +154,19 @@ def test_order_warning_is_per_data_source():
     (warning,) = jobs._order_warnings([Path("a.ast"), Path("b.ast")], [first, same_radar])
     assert warning.startswith("b.ast: 048:25/201 starts at 2019-03-01 09:00:00+00:00, before the end of its "
                               "records in a.ast (2019-03-01 11:00:00+00:00)")
+
+
+def test_time_spans_sources_without_sac_or_sic():
+    """Records missing SAC or SIC form sources of their own, shown with "?" as sensor_id shows them."""
+    import datetime as dt
+
+    import pandas as pd
+
+    from pipeline.model.load import time_spans
+
+    frame = pd.DataFrame({"sac": pd.array([25, None, 25, 25], "Int64"),
+                          "sic": pd.array([None, 7, 201, 201], "Int64"),
+                          "time_of_day": [3600.0, 7200.0, 10800.0, 14400.0], "day": [0, 0, 0, 0]})
+    spans = time_spans({21: frame}, dt.date(2019, 3, 1))
+    at = {h: pd.Timestamp(f"2019-03-01 {h:02d}:00", tz="UTC") for h in (1, 2, 3, 4)}
+    assert spans == {"021:25/?": (at[1], at[1]), "021:?/7": (at[2], at[2]), "021:25/201": (at[3], at[4])}

@@ -13,7 +13,7 @@ import pandas as pd
 
 import asterix
 from asterix.reader import Recording
-from pipeline.model.time import UNDATED_DAY, absolute_time
+from pipeline.model.time import NAT_NS, UNDATED_DAY, absolute_time
 from pipeline.progress import Progress
 
 # Measurement jobs decode their inputs in chunks of about this many bytes: the decoded columns of one chunk
@@ -114,16 +114,20 @@ def time_spans(frames: dict[int, pd.DataFrame], date: dt.date | None) -> dict[st
     one input (``date`` dates undated records)."""
     out = {}
     for cat, frame in frames.items():
-        times = absolute_time(frame, date)
-        ok = times.notna().to_numpy()
+        ns = absolute_time(frame, date).to_numpy("datetime64[ns]").view("int64")
+        ok = ns != NAT_NS
         if not ok.any():
             continue
-        none = pd.Series(pd.NA, index=frame.index)
-        pairs = pd.DataFrame({c: frame.get(c, none).astype("Int64").array[ok] for c in ("sac", "sic")})
-        pairs["t"] = times.to_numpy("datetime64[ns]")[ok]
-        for (sac, sic), t in pairs.groupby(["sac", "sic"], dropna=False, sort=True)["t"]:
-            source = f"{cat:03d}:{'?' if pd.isna(sac) else sac}/{'?' if pd.isna(sic) else sic}"
-            out[source] = (pd.Timestamp(t.min(), tz="UTC"), pd.Timestamp(t.max(), tz="UTC"))
+        sac, sic = (frame[c].astype("Int64").fillna(-1).to_numpy(np.int64)[ok] if c in frame
+                    else np.full(int(ok.sum()), -1) for c in ("sac", "sic"))
+        pairs, which = np.unique((sac + 1) * 65536 + sic + 1, return_inverse=True)  # one byte each; -1: none
+        lo, hi = np.full(len(pairs), np.iinfo(np.int64).max), np.full(len(pairs), np.iinfo(np.int64).min)
+        np.minimum.at(lo, which, ns[ok])
+        np.maximum.at(hi, which, ns[ok])
+        for pair, first, last in zip(pairs, lo, hi, strict=True):
+            a, b = (v - 1 for v in divmod(int(pair), 65536))
+            source = f"{cat:03d}:{'?' if a < 0 else a}/{'?' if b < 0 else b}"
+            out[source] = (pd.Timestamp(first, tz="UTC"), pd.Timestamp(last, tz="UTC"))
     return out
 
 
