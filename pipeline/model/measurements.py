@@ -87,10 +87,10 @@ def _column(frame: pd.DataFrame, name: str, dtype: str = "float64") -> pd.Series
     return pd.Series(np.nan, index=frame.index).astype(dtype)
 
 
-def _common(frame: pd.DataFrame, category: int, kind: str, date: dt.date | None) -> pd.DataFrame:
-    """The time, sensor, identity, kinematics and provenance columns of both sensors."""
-    out = pd.DataFrame(index=frame.index)
-    out["time"] = absolute_time(frame, date)
+def _common(frame: pd.DataFrame, category: int, kind: str, date: dt.date | None) -> dict[str, pd.Series]:
+    """The time, sensor, identity, kinematics and provenance columns of both sensors, by name (one frame is
+    made of them at the end: adding columns to a frame one by one costs more than the columns)."""
+    out = {"time": absolute_time(frame, date)}
     out["sac"], out["sic"] = _column(frame, "sac", "Int64"), _column(frame, "sic", "Int64")
     out["sensor_id"] = sensor_id(category, out["sac"], out["sic"])
     out["sensor_kind"] = _labels(np.zeros(len(frame), np.int64), [kind], frame.index)
@@ -103,6 +103,11 @@ def _common(frame: pd.DataFrame, category: int, kind: str, date: dt.date | None)
     out["file"] = _text(frame, "file")
     out["offset"] = _column(frame, "offset", "Int64")
     return out
+
+
+def _rows_of(columns: dict[str, pd.Series], keep: np.ndarray) -> dict[str, pd.Series]:
+    """The ``keep`` rows of each column."""
+    return {name: values[keep] for name, values in columns.items()}
 
 
 # Near the vertical over the site a slant-range error moves the plot horizontally by r / g times itself; past
@@ -153,13 +158,14 @@ def _radar_rows(cat048: pd.DataFrame, sensors: pd.DataFrame, date: dt.date | Non
     polar = (out["rho_nm"].notna() & out["theta_deg"].notna()).to_numpy()
     plane = ~polar & (x_nm.notna() & y_nm.notna()).to_numpy()
     keep = (polar | plane) & out["time"].notna().to_numpy()
-    out, polar, plane = out[keep], polar[keep], plane[keep]
+    out, polar, plane = _rows_of(out, keep), polar[keep], plane[keep]
+    index = cat048.index[keep]
     x_nm, y_nm = x_nm[keep].to_numpy(), y_nm[keep].to_numpy()
 
-    site = sensor_sites(out, sensors)
+    site = sensor_sites(pd.DataFrame({"sac": out["sac"], "sic": out["sic"]}, copy=False), sensors)
     site_lat, site_lon, site_alt = (site[c].to_numpy(float) for c in ("latitude", "longitude", "altitude_m"))
     alt_m = flight_level_to_m(out["flight_level"].to_numpy())
-    lat, lon, h = (np.full(len(out), np.nan) for _ in range(3))
+    lat, lon, h = (np.full(len(index), np.nan) for _ in range(3))
     if polar.any():
         lat[polar], lon[polar], h[polar] = polar_to_geodetic(
             site_lat[polar], site_lon[polar], site_alt[polar], out["rho_nm"].to_numpy()[polar],
@@ -167,13 +173,14 @@ def _radar_rows(cat048: pd.DataFrame, sensors: pd.DataFrame, date: dt.date | Non
     if plane.any():
         lat[plane], lon[plane], h[plane] = plane_to_geodetic(
             site_lat[plane], site_lon[plane], site_alt[plane], x_nm[plane], y_nm[plane], alt_m[plane])
-    out["latitude"], out["longitude"] = lat, lon
     known = np.isfinite(alt_m)
-    out["height_m"] = np.where(known, h, np.nan)
-    out["height_source"] = _labels(np.where(known, 0, 1), ["flight_level", "none"], out.index)
-    out["position_item"] = _labels(np.where(polar, 0, 1), ["040", "042"], out.index)
-    out["cov_ee_m2"], out["cov_en_m2"], out["cov_nn_m2"] = _radar_covariance(site, lat, lon, h)
-    return out
+    cov = _radar_covariance(site, lat, lon, h)
+    arrays = {"latitude": lat, "longitude": lon, "height_m": np.where(known, h, np.nan),
+              "height_source": _labels(np.where(known, 0, 1), ["flight_level", "none"], index),
+              "position_item": _labels(np.where(polar, 0, 1), ["040", "042"], index),
+              "cov_ee_m2": cov[0], "cov_en_m2": cov[1], "cov_nn_m2": cov[2]}
+    out.update((k, pd.Series(v, index=index, copy=False)) for k, v in arrays.items())
+    return pd.DataFrame(out, copy=False)
 
 
 def nacp_sigma_m(nacp) -> np.ndarray:
@@ -197,15 +204,19 @@ def _adsb_rows(cat021: pd.DataFrame, date: dt.date | None, adsb_sigma_m: float |
         out[name] = _column(cat021, name, "Int64")
     geometric_m = _column(cat021, "geometric_height_ft").to_numpy() * 0.3048
     fl_m = flight_level_to_m(out["flight_level"].to_numpy())
-    out["height_m"] = np.where(np.isfinite(geometric_m), geometric_m, fl_m)
+    index = cat021.index
+    out["height_m"] = pd.Series(np.where(np.isfinite(geometric_m), geometric_m, fl_m), index=index)
     out["height_source"] = _labels(np.where(np.isfinite(geometric_m), 0, np.where(np.isfinite(fl_m), 1, 2)),
-                                   ["geometric", "flight_level", "none"], out.index)
+                                   ["geometric", "flight_level", "none"], index)
     var = nacp_sigma_m(out["nacp"]) ** 2
     if adsb_sigma_m is not None:
         var = np.where(out["nacp"].isna().to_numpy(bool), float(adsb_sigma_m) ** 2, var)
-    out["cov_ee_m2"], out["cov_en_m2"], out["cov_nn_m2"] = var, np.where(np.isnan(var), np.nan, 0.0), var
-    keep = out[["time", "latitude", "longitude"]].notna().all(axis=1) & _on_earth(out)
-    return out[keep]
+    for name, values in (("cov_ee_m2", var), ("cov_en_m2", np.where(np.isnan(var), np.nan, 0.0)),
+                         ("cov_nn_m2", var)):
+        out[name] = pd.Series(values, index=index)
+    keep = (out["time"].notna() & out["latitude"].notna() & out["longitude"].notna()
+            & out["latitude"].abs().le(90.0) & out["longitude"].abs().le(180.0)).to_numpy(bool)
+    return pd.DataFrame(_rows_of(out, keep), copy=False)
 
 
 def _on_earth(frame: pd.DataFrame) -> pd.Series:
