@@ -6,6 +6,7 @@ from __future__ import annotations
 import tomllib
 from pathlib import Path
 
+import numpy as np
 import pandas as pd
 
 REQUIRED_COLUMNS = ["name", "sac", "sic", "latitude", "longitude", "altitude_m"]
@@ -107,21 +108,28 @@ def sensor_sites(reports: pd.DataFrame, sensors: pd.DataFrame) -> pd.DataFrame:
     return site
 
 
+def _pair_codes(sac, sic) -> np.ndarray:
+    """One integer per SAC/SIC pair (each one byte; a missing one counts as -1)."""
+    sac, sic = (pd.Series(v).astype("Int64").fillna(-1).to_numpy(np.int64) for v in (sac, sic))
+    return (sac + 1) * 65536 + sic + 1
+
+
 def undeclared_radars(reports: pd.DataFrame, sensors: pd.DataFrame) -> pd.DataFrame:
     """Per SAC/SIC pair (and file) of ``reports`` that ``sensors`` does not list: sac, sic, file, records and
     the first record's offset, in file order of first appearance; SAC/SIC missing shows as <NA>."""
+    columns = ["sac", "sic", "file", "records", "offset"]
+    declared = _pair_codes(sensors["sac"], sensors["sic"])
+    unknown = ~np.isin(_pair_codes(reports["sac"], reports["sic"]), declared)
+    if not unknown.any():
+        return pd.DataFrame(columns=columns)
+    reports = reports[unknown]
     keys = pd.DataFrame({"sac": reports["sac"].astype("Int64").to_numpy(),
                          "sic": reports["sic"].astype("Int64").to_numpy(),
                          "file": (reports["file"].astype("string").to_numpy() if "file" in reports
                                   else pd.array([pd.NA] * len(reports), dtype="string")),
                          "offset": (reports["offset"].astype("Int64").to_numpy() if "offset" in reports
                                     else pd.array([pd.NA] * len(reports), dtype="Int64"))})
-    declared = pd.MultiIndex.from_frame(sensors[["sac", "sic"]].astype("Int64"))
-    unknown = keys[~pd.MultiIndex.from_frame(keys[["sac", "sic"]]).isin(declared)]
-    columns = ["sac", "sic", "file", "records", "offset"]
-    if unknown.empty:
-        return pd.DataFrame(columns=columns)
-    groups = unknown.groupby(["sac", "sic", "file"], dropna=False, sort=False)
+    groups = keys.groupby(["sac", "sic", "file"], dropna=False, sort=False)
     return groups.agg(records=("offset", "size"), offset=("offset", "first")).reset_index()[columns]
 
 
