@@ -97,15 +97,16 @@ def sensor_sites(reports: pd.DataFrame, sensors: pd.DataFrame) -> pd.DataFrame:
         raise ValueError("sensor table lists a SAC/SIC pair twice")
     table = sensors.assign(**{k: sensors[k] if k in sensors else v for k, v in OPTIONAL_DEFAULTS.items()})
     table = table.astype({"sac": "Int64", "sic": "Int64"})[SENSOR_COLUMNS]
-    keys = pd.DataFrame({"sac": reports["sac"].astype("Int64").to_numpy(),
-                         "sic": reports["sic"].astype("Int64").to_numpy()})
-    site = keys.merge(table, on=["sac", "sic"], how="left")
-    unknown = site["latitude"].isna().to_numpy()
+    codes, declared = _pair_codes(reports["sac"], reports["sic"]), _pair_codes(table["sac"], table["sic"])
+    order = np.argsort(declared, kind="stable")
+    at = order[np.minimum(np.searchsorted(declared[order], codes), len(order) - 1)] if len(order) else None
+    unknown = declared[at] != codes if at is not None else np.ones(len(codes), bool)
     if unknown.any():
-        pairs = site.loc[unknown, ["sac", "sic"]].drop_duplicates().sort_values(["sac", "sic"])
+        pairs = pd.DataFrame({c: reports[c].astype("Int64").to_numpy()[unknown] for c in ("sac", "sic")})
+        pairs = pairs.drop_duplicates().sort_values(["sac", "sic"])
         raise UnknownRadar([(int(a) if pd.notna(a) else pd.NA, int(b) if pd.notna(b) else pd.NA)
                             for a, b in pairs.itertuples(index=False)])
-    return site
+    return table.iloc[at].reset_index(drop=True)
 
 
 def _pair_codes(sac, sic) -> np.ndarray:
