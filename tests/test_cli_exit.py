@@ -4,6 +4,7 @@ still run (openpyxl removes its temporary sheet files in one)."""
 
 from __future__ import annotations
 
+import ast
 import subprocess
 import sys
 from pathlib import Path
@@ -45,3 +46,17 @@ def test_exit_handlers_run_and_status_is_kept():
     done = subprocess.run([sys.executable, "-c", code], cwd=ROOT, capture_output=True, text=True, timeout=300)
     assert done.stdout == "handler ran\n"  # the handler ran; nothing after run()
     assert done.returncode == 2 and "no-such-file.ast" in done.stderr
+
+
+def test_the_command_collects_garbage_rarely():
+    """run() raises the first generation's threshold to a million (Python's default is 700) before the
+    command runs; importing pipeline.cli leaves it as it was (a notebook's interpreter keeps its own)."""
+    code = ("import gc\n"
+            "from pipeline import cli\n"
+            "before = gc.get_threshold()\n"
+            "cli.main = lambda: print(before, gc.get_threshold(), sep='\\n', flush=True) or 0\n"
+            "cli.run()\n")
+    done = subprocess.run([sys.executable, "-c", code], cwd=ROOT, capture_output=True, text=True, timeout=300)
+    assert done.returncode == 0, done.stderr
+    before, after = (ast.literal_eval(line) for line in done.stdout.splitlines())
+    assert before[0] < 10_000 and after == (1_000_000, *before[1:])
