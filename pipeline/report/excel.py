@@ -16,7 +16,7 @@ import contextlib
 import datetime as dt
 import os
 import re
-from collections.abc import Callable, Iterator, Mapping
+from collections.abc import Callable, Collection, Iterator, Mapping
 from pathlib import Path
 from typing import Any
 
@@ -427,13 +427,13 @@ def _write_figures(wb: Workbook, title: str, images: dict[str, str | os.PathLike
         ws.row_breaks.append(Break(id=row - 1))
 
 
-def write_parquet_tables(run: CorrelationRun, path_xlsx: str | os.PathLike[str],
-                         tables: str = "auto") -> dict[str, tuple[int, object, Path]]:
-    """The run's tables that go to Parquet under ``tables`` (pipeline.report.tables), written beside the
-    workbook one table at a time, in batches of whole windows (write_table_parquet): name -> (rows,
-    schema, path)."""
+def write_parquet_tables(run: CorrelationRun, path_xlsx: str | os.PathLike[str], tables: str = "auto",
+                         names: Collection[str] | None = None) -> dict[str, tuple[int, object, Path]]:
+    """The run's tables that go to Parquet under ``tables`` (pipeline.report.tables), or those ``names``,
+    written beside the workbook one table at a time, in batches of whole windows (write_table_parquet):
+    name -> (rows, schema, path)."""
     parquet = {}
-    for name in parquet_tables(run, tables):  # one table at a time, built and written in batches of windows
+    for name in parquet_tables(run, tables) if names is None else names:  # built and written one at a time
         path = parquet_path(path_xlsx, name)
         parquet[name] = (*write_table_parquet(run, name, path), path)
     return parquet
@@ -443,19 +443,21 @@ def write_report(run: CorrelationRun, path_xlsx: str | os.PathLike[str], *,
                  figure_png: str | os.PathLike[str] | None = None,
                  images: dict[str, str | os.PathLike[str]] | None = None, tables: str = "auto",
                  figure_ready: Callable[[], object] | None = None,
-                 tables_written: Callable[[], dict[str, tuple[int, object, Path]]] | None = None
-                 ) -> list[Path]:
+                 tables_written: Callable[[], dict[str, tuple[int, object, Path]]] | None = None,
+                 elsewhere: Collection[str] | None = None) -> list[Path]:
     """Write the run's workbook to ``path_xlsx``; embed ``figure_png`` on a Map sheet when given and
     further ``images`` (caption -> PNG) on a Figures sheet. The slot and lag tables go to Parquet beside
     it as ``tables`` says (pipeline.report.tables); returns the Parquet files written. ``figure_ready``
     is called before ``figure_png`` is first read (the figure may be drawn meanwhile elsewhere). With
-    ``tables_written`` the Parquet tables are being written elsewhere (write_parquet_tables in another
-    process): it is called before the workbook is saved and returns what write_parquet_tables returned."""
-    if tables_written is None:
-        parquet = write_parquet_tables(run, path_xlsx, tables)
-    else:  # the sheets name the file and its rows now, its columns once written
-        parquet = {name: (table_length(run, name), None, parquet_path(path_xlsx, name))
-                   for name in parquet_tables(run, tables)}
+    ``tables_written`` the Parquet tables named in ``elsewhere`` (all of them when None) are being written
+    elsewhere (write_parquet_tables in another process), the others here first: it is called before the
+    workbook is saved and returns what write_parquet_tables returned for them."""
+    names = parquet_tables(run, tables)
+    away = [] if tables_written is None else [n for n in names if elsewhere is None or n in elsewhere]
+    parquet = write_parquet_tables(run, path_xlsx, names=[n for n in names if n not in away])
+    for name in away:  # the sheets name the file and its rows now, its columns once written
+        parquet[name] = (table_length(run, name), None, parquet_path(path_xlsx, name))
+    parquet = {name: parquet[name] for name in names}  # in table order, wherever written
     wb = Workbook(write_only=True)
     taken = {name.lower() for name in _CORE_SHEETS}
     _write_summary(wb, run)
@@ -467,8 +469,8 @@ def write_report(run: CorrelationRun, path_xlsx: str | os.PathLike[str], *,
         if images:
             _write_figures(wb, sheet_name("Figures", taken), images)
         _write_parameters(wb, run)
-        if tables_written is not None:
-            parquet = tables_written()
+        if away:
+            parquet.update(tables_written())
             for name, ws in waiting.items():
                 _parquet_columns(ws, parquet[name][1])
         if map_sheet is not None:
