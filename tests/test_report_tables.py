@@ -166,7 +166,8 @@ def test_track_map_of_many_slots_draws_lines_only(result, tmp_path, monkeypatch)
 
     drawn = {}
     monkeypatch.setattr(figures, "MAX_MARKED_SLOTS", 10)
-    monkeypatch.setattr(figures, "save_png", lambda fig, path: drawn.setdefault("fig", fig) and Path(path))
+    monkeypatch.setattr(figures, "save_png",
+                        lambda fig, path, *level: drawn.setdefault("fig", fig) and Path(path))
     figures.track_figure(result.run, tmp_path / "t.png", result.checked.sensors)
     fig: Figure = drawn["fig"]
     ax = fig.axes[0]
@@ -174,6 +175,52 @@ def test_track_map_of_many_slots_draws_lines_only(result, tmp_path, monkeypatch)
     tracks = [line for line in ax.lines if line.get_linestyle() == "-" and len(line.get_xdata()) > 10]
     assert len(tracks) == 2  # radar and ADS-B, every window in one line each
     assert not [line for line in ax.lines if line.get_marker() == "o" and len(line.get_xdata()) > 10]
+
+
+def test_track_map_legend_lies_inside_the_axes(result, tmp_path, monkeypatch):
+    """The map's legend ("best" place) is drawn inside the axes, so leaving it out of the constrained layout
+    cannot move anything."""
+    import pipeline.report.figures as figures
+
+    drawn = {}
+    real = figures.save_png
+    monkeypatch.setattr(figures, "save_png", lambda fig, path, *level: drawn.setdefault("fig", fig)
+                        and real(fig, path, *level))
+    figures.track_figure(result.run, tmp_path / "t.png", result.checked.sensors)
+    ax = drawn["fig"].axes[0]
+    legend, box = ax.get_legend().get_window_extent(), ax.get_window_extent()
+    assert box.x0 <= legend.x0 < legend.x1 <= box.x1 and box.y0 <= legend.y0 < legend.y1 <= box.y1
+
+
+def test_track_map_png_has_the_pixels_of_the_default_encoding(result, tmp_path, monkeypatch):
+    """The map is encoded at a faster zlib level than Pillow's default: the same pixels, decoded."""
+    from PIL import Image
+
+    import pipeline.report.figures as figures
+
+    fast = figures.track_figure(result.run, tmp_path / "fast.png", result.checked.sensors)
+    monkeypatch.setattr(figures, "TRACK_PNG_COMPRESS_LEVEL", None)
+    default = figures.track_figure(result.run, tmp_path / "default.png", result.checked.sensors)
+    a, b = (np.asarray(Image.open(p).convert("RGBA")) for p in (fast, default))
+    assert a.shape == b.shape and (a == b).all()
+
+
+def test_farthest_point_is_the_largest_geodesic_distance():
+    """farthest_m equals the largest WGS-84 distance measured to every point (pyproj), including points
+    that all lie near one range in every direction, where the sphere and the ellipsoid rank them apart."""
+    from pyproj import Geod
+
+    from pipeline.report.figures import farthest_m
+
+    geod, rng = Geod(ellps="WGS84"), np.random.default_rng(7)
+    site_lat, site_lon = 52.0, 4.5
+    for ranges_m in (rng.uniform(0, 400e3, 3000), 300e3 + rng.uniform(-500, 500, 3000)):
+        azimuths = rng.uniform(0, 360, ranges_m.size)
+        lons, lats, _ = geod.fwd(np.full(ranges_m.size, site_lon), np.full(ranges_m.size, site_lat), azimuths,
+                                 ranges_m)
+        _, _, every_m = geod.inv(np.full(lats.size, site_lon), np.full(lats.size, site_lat), lons, lats)
+        assert farthest_m(geod, site_lat, site_lon, lats, lons) == float(np.max(every_m))
+    assert farthest_m(geod, site_lat, site_lon, np.array([]), np.array([])) == 0.0
 
 
 @pytest.mark.parametrize("tables", ["xlsx", "parquet"])
