@@ -273,3 +273,17 @@ def test_parquet_written_in_batches_equals_the_whole_table(result, tmp_path, nam
     assert rows == a.num_rows == b.num_rows == sum(map(sum, sizes))
     assert b.equals(a, check_metadata=True) and schema.equals(a.schema, check_metadata=True)
     pd.testing.assert_frame_equal(b.to_pandas(), a.to_pandas())
+
+
+def test_lag_frame_is_in_increasing_lag_whatever_the_order_given():
+    """A window's lag table in increasing lag, ties kept in the order given; one already in order is used
+    as it is (no copy)."""
+    from pipeline.correlate.results import WindowResult
+
+    shuffled = pd.DataFrame({"lag": [1, -1, 0, 1], "ncc_lat": [0.1, 0.2, 0.3, 0.4]})
+    got = tables_mod.lag_frame(WindowResult({}, pd.DataFrame(), shuffled))
+    assert got["lag"].tolist() == [-1, 0, 1, 1] and got["ncc_lat"].tolist() == [0.2, 0.3, 0.1, 0.4]
+    ordered = pd.DataFrame({"lag": [-2, 0, 0, 3], "ncc_lat": [1.0, 2.0, 3.0, 4.0]})
+    assert tables_mod.lag_frame(WindowResult({}, pd.DataFrame(), ordered)) is ordered
+    no_lag = pd.DataFrame({"ncc_lat": [1.0]})
+    assert tables_mod.lag_frame(WindowResult({}, pd.DataFrame(), no_lag)) is no_lag
