@@ -287,3 +287,23 @@ def test_lag_frame_is_in_increasing_lag_whatever_the_order_given():
     assert tables_mod.lag_frame(WindowResult({}, pd.DataFrame(), ordered)) is ordered
     no_lag = pd.DataFrame({"ncc_lat": [1.0]})
     assert tables_mod.lag_frame(WindowResult({}, pd.DataFrame(), no_lag)) is no_lag
+
+
+def test_charts_sharing_their_parts_come_out_alike_and_as_described(result, tmp_path):
+    """Chart parts made once and shared (axis titles, lines, markers) give the same chart XML in a second
+    workbook written by this process, and each lag chart's series look as its sheet says: NCC solid,
+    Pearson dashed; latitude blue (1F77B4), longitude green (2CA02C)."""
+    import re
+    import zipfile
+
+    (tmp_path / "a").mkdir()
+    (tmp_path / "b").mkdir()
+    first, second = (_write(result, tmp_path / d / "r.xlsx", "xlsx") for d in "ab")
+    a, b = zipfile.ZipFile(first["report"]), zipfile.ZipFile(second["report"])
+    charts = [n for n in a.namelist() if n.startswith("xl/charts/chart")]
+    assert charts and all(a.read(n) == b.read(n) for n in charts)
+    xml = a.read("xl/charts/chart1.xml").decode()
+    series = re.findall(r"<ser>.*?</ser>", xml, flags=re.S)
+    looks = [(re.search(r'<a:srgbClr val="(\w+)"', s).group(1), 'prstDash val="dash"' in s) for s in series]
+    assert looks == [("1F77B4", False), ("2CA02C", False), ("1F77B4", True), ("2CA02C", True)]
+    assert all('<symbol val="none"/>' in s for s in series)
