@@ -62,6 +62,7 @@ from pipeline.report.charts import (
     write_lag_charts,
     write_slot_charts,
 )
+from pipeline.report.saving import get_ready, save
 from pipeline.report.summary import (
     SKIPPED_KEYS,
     window_note,
@@ -475,12 +476,13 @@ def write_report(run: CorrelationRun, path_xlsx: str | os.PathLike[str], *,
                 _parquet_columns(ws, parquet[name][1])
         if map_sheet is not None:
             if figure_ready is not None:
+                get_ready(wb)  # while the figure may still be drawn
                 figure_ready()
             map_sheet.add_image(_scaled_image(figure_png), "A2")
     except BaseException:
         _discard(wb)
         raise
-    write_atomically(path_xlsx, wb.save)
+    write_atomically(path_xlsx, lambda tmp: save(wb, tmp))
     return [path for _, _, path in parquet.values()]
 
 
@@ -504,5 +506,5 @@ def write_tables(tables: dict[str, pd.DataFrame], path_xlsx: str | os.PathLike[s
         _write_figures(wb, sheet_name("Figures", taken), images)
     if parameters is not None:
         _write_parameters(wb, CorrelationRun(parameters=parameters))
-    write_atomically(path_xlsx, wb.save)
+    write_atomically(path_xlsx, lambda tmp: save(wb, tmp))
 
