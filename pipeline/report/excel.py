@@ -470,13 +470,13 @@ def write_report(run: CorrelationRun, path_xlsx: str | os.PathLike[str], *,
         if images:
             _write_figures(wb, sheet_name("Figures", taken), images)
         _write_parameters(wb, run)
+        get_ready(wb)  # while the tables and the figure may still be written elsewhere
         if away:
             parquet.update(tables_written())
             for name, ws in waiting.items():
                 _parquet_columns(ws, parquet[name][1])
         if map_sheet is not None:
             if figure_ready is not None:
-                get_ready(wb)  # while the figure may still be drawn
                 figure_ready()
             map_sheet.add_image(_scaled_image(figure_png), "A2")
     except BaseException:
