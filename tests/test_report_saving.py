@@ -30,10 +30,10 @@ def _workbook(png: Path) -> Workbook:
 
 
 def test_saved_parts_are_openpyxls_with_the_image_stored(tmp_path):
-    from PIL import Image as PILImage
+    from matplotlib.image import imsave
 
     png = tmp_path / "noise.png"
-    PILImage.fromarray(np.random.default_rng(1).integers(0, 255, (40, 60, 3), dtype=np.uint8)).save(png)
+    imsave(png, np.random.default_rng(1).integers(0, 255, (40, 60, 3), dtype=np.uint8))
     _workbook(png).save(tmp_path / "openpyxl.xlsx")
     ours = _workbook(png)
     saving.get_ready(ours)  # the charts' XML built before the save

@@ -27,9 +27,10 @@ def get_ready(wb: Workbook) -> None:
     """What saving ``wb`` needs that its last rows and images do not change, done now: each chart's XML
     tree built (openpyxl builds it from a hundred validated objects; the save then only serialises it) and
     Pillow's image plugins loaded (an image's first opening)."""
-    from PIL import Image as PILImage
+    from openpyxl.drawing import image
 
-    PILImage.preinit()
+    if image.PILImage:  # Pillow as openpyxl imported it (matplotlib's dependency too)
+        image.PILImage.preinit()
     for ws in wb.worksheets:
         for chart in getattr(ws, "_charts", ()):
             tree = chart._write()
