@@ -101,11 +101,17 @@ _BLOCK_FILLS = ["EDEDED", "E2EFDA", "DDEBF7", "FCE4D6"]
 IMAGE_MAX_W_PX, IMAGE_MAX_H_PX = 1000, 620  # one figure per printed page
 
 
-def _summary_value(window: WindowResult, key: str) -> Any:
-    """A Summary cell value; start/end fall back to the clock time (seconds of day) when undated."""
-    value = excel_value(window.summary.get(key))
+def _summary_values(run: CorrelationRun) -> list[dict[str, Any]]:
+    """Each window's summary as Excel values (excel_value), worked out once for the Summary's passes."""
+    return [{key: excel_value(value) for key, value in w.summary.items()} for w in run.windows]
+
+
+def _summary_value(values: dict[str, Any], key: str) -> Any:
+    """A Summary cell value from a window's _summary_values; start/end fall back to the clock time (seconds
+    of day) when undated."""
+    value = values.get(key)
     if value is None and key in ("start", "end"):
-        tod = excel_value(window.summary.get(f"{key}_tod"))
+        tod = values.get(f"{key}_tod")
         return ("tod", tod) if is_number(tod) else None
     return value
 
@@ -129,15 +135,15 @@ def _summary_time_cell(ws: WriteOnlyWorksheet, value: Any) -> Any:
     return cell_for(ws, value, None)
 
 
-def _summary_block(ws: WriteOnlyWorksheet, run: CorrelationRun, title: str, keys: list[str],
+def _summary_block(ws: WriteOnlyWorksheet, summaries: list[dict[str, Any]], title: str, keys: list[str],
                    fill: str, row: int) -> int:
-    """One Summary block (title, header, one row per window, blank) from sheet row ``row``; returns the
-    next free row."""
+    """One Summary block (title, header, one row per window of ``summaries``, _summary_values, blank) from
+    sheet row ``row``; returns the next free row."""
     keys = [k for k in keys if k in SUMMARY_KEYS]
     ws.append([text_cell(ws, title, font=BOLD)])
     ws.row_dimensions[row + 1].height = 3 * ROW_HEIGHT_PT  # "radar filled slots" wraps onto 3 lines
     ws.append(header_cells(ws, [summary_header(k) for k in keys], PatternFill("solid", fgColor=fill)))
-    rows = [[_summary_value(w, k) for k in keys] for w in run.windows]
+    rows = [[_summary_value(values, k) for k in keys] for values in summaries]
     formats = [number_format_for(k, [r[j] for r in rows]) for j, k in enumerate(keys)]
     for values in rows:
         cells = []
@@ -159,6 +165,7 @@ def _summary_block(ws: WriteOnlyWorksheet, run: CorrelationRun, title: str, keys
 
 def _write_summary(wb: Workbook, run: CorrelationRun) -> None:
     ws = wb.create_sheet("Summary")
+    summaries = _summary_values(run)
     skipped = [[excel_value(getattr(s, k)) for k in SKIPPED_KEYS] for s in run.skipped]
     widths: dict[int, float] = {}
 
@@ -169,7 +176,7 @@ def _write_summary(wb: Workbook, run: CorrelationRun) -> None:
 
     for _title, keys in SUMMARY_BLOCKS:  # widths first: write-only sheets take them before any row
         keys = [k for k in keys if k in SUMMARY_KEYS]
-        rows = [[excel_value(w.summary.get(k)) for k in keys] for w in run.windows]
+        rows = [[values.get(k) for k in keys] for values in summaries]
         formats = [SUMMARY_DATETIME_FORMAT if k in ("start", "end") else
                    number_format_for(k, [r[j] for r in rows]) for j, k in enumerate(keys)]
         widen([summary_header(k) for k in keys], rows, formats)
@@ -182,17 +189,17 @@ def _write_summary(wb: Workbook, run: CorrelationRun) -> None:
                          + (f", {date} UTC" if date else ", date unknown (clock times)"), font=TITLE_FONT)])
     row = 2
     for (title, keys), fill in zip(SUMMARY_BLOCKS, _BLOCK_FILLS, strict=False):
-        row = _summary_block(ws, run, title, keys, fill, row)
+        row = _summary_block(ws, summaries, title, keys, fill, row)
 
-    notes = [(w, window_note(w.summary)) for w in run.windows]
-    notes = [(w, n) for w, n in notes if n]
+    notes = [(values, window_note(w.summary)) for w, values in zip(run.windows, summaries, strict=True)]
+    notes = [(values, n) for values, n in notes if n]
     ws.append([text_cell(ws, f"Notes ({len(notes)})", font=BOLD)])
-    for w, note in notes:
-        start = _summary_value(w, "start")
+    for values, note in notes:
+        start = _summary_value(values, "start")
         note_cell = note_text_cell(ws, note)
         note_cell.alignment = _INDENT
-        ws.append([cell_for(ws, excel_value(w.summary.get("callsign")), None),
-                   cell_for(ws, excel_value(w.summary.get("window")), None),
+        ws.append([cell_for(ws, values.get("callsign"), None),
+                   cell_for(ws, values.get("window"), None),
                    _summary_time_cell(ws, start), note_cell])
     if not notes:
         ws.append([note_text_cell(ws, "none: in every window the RMS separation is within 3 x the median")])
