@@ -811,12 +811,13 @@ def _track_figure(run: CorrelationRun, png: Path, sensors: pd.DataFrame) -> None
 
 
 def _track_figure_and_tables(run: CorrelationRun, png: Path, sensors: pd.DataFrame, out: Path,
-                             tables: str) -> dict:
-    """The workbook's outputs written beside it, in a child while the workbook is written: the Parquet
-    tables (pipeline.report.excel.write_parquet_tables, whose result goes back) and the track figure."""
+                             tables: list[str]) -> dict:
+    """The outputs written beside the workbook in a child while the workbook is written: the Parquet
+    tables named in ``tables`` (pipeline.report.excel.write_parquet_tables, whose result goes back) and the
+    track figure."""
     from pipeline.report.excel import write_parquet_tables
 
-    parquet = write_parquet_tables(run, out, tables)
+    parquet = write_parquet_tables(run, out, names=tables)
     _track_figure(run, png, sensors)
     return parquet
 
@@ -847,14 +848,15 @@ def prepare_correlation_writers(options: CorrelateOptions) -> Prepared | None:
 
 
 def _drawn(drawing: Background, png: Path, tables: list[Path] = ()) -> dict:
-    """Wait for the figure (and Parquet tables) written in the background and return the tables' rows and
-    columns; a child that died as a JobError naming the files."""
+    """Wait for the figure (and Parquet tables, their paths ``tables``) written in the background and return
+    the tables' rows and columns; a child that died as a JobError naming the files."""
     try:
         return drawing.wait()
     except BackgroundFailed as exc:
         if tables:
             names = ", ".join(str(p) for p in [*tables, png])
-            raise JobError(f"{names}: the tables and figure were not written ({exc})") from exc
+            what = "table" if len(tables) == 1 else "tables"
+            raise JobError(f"{names}: the {what} and figure were not written ({exc})") from exc
         raise JobError(f"{png}: the figure was not drawn ({exc})") from exc
 
 
@@ -872,9 +874,11 @@ def write_correlation(result: CorrelateResult, progress: Progress | None = None,
             prepared.close()  # a no-op once started
 
 
-# The Parquet tables go to the figure's child (pickled there whole, then built again) only up to this many
-# rows of slots and lags: the day's 0.5 M rows, not the week's 3.3 M (the child would hold another 0.6 GB)
+# The figure's child gets the run's slots (what the map reads) and writes the slot table beside the workbook
+# (the lag table is written here meanwhile) only up to this many rows of slots and lags: the day's 0.5 M
+# rows, not the week's 3.3 M (the child would build another 0.3 GB): then both are written here, in batches
 CHILD_MAX_TABLE_ROWS = 1_000_000
+CHILD_TABLES = ("slots",)  # the tables the child can write from the slots it is sent
 
 
 def _track_run(run: CorrelationRun) -> CorrelationRun:
@@ -887,20 +891,19 @@ def _track_run(run: CorrelationRun) -> CorrelationRun:
 
 def _write_correlation(result: CorrelateResult, progress: Progress | None,
                        max_windows: int, prepared: Prepared | None = None) -> dict[str, Path]:
-    from pipeline.report.tables import parquet_path, parquet_tables, table_length
+    from pipeline.report.tables import parquet_tables, table_length
 
     written: dict[str, Path] = {}
     run, checked = result.run, result.checked
     drawing = None
-    if checked.output:  # the child starts first: the Parquet tables and the map take it longest
+    if checked.output:  # the child starts first: the map takes it longest
         out, mode = checked.output, result.options.tables
         png = out.with_name(out.stem + "_tracks.png")
-        in_child = [parquet_path(out, name) for name in parquet_tables(run, mode)]
+        in_child = [name for name in parquet_tables(run, mode) if name in CHILD_TABLES]
         rows = table_length(run, "slots") + table_length(run, "correlation")
         if rows > CHILD_MAX_TABLE_ROWS:  # a long run's tables are written here, in batches
             in_child = []
-        args = ((run, png, checked.sensors, out, mode) if in_child
-                else (_track_run(run), png, checked.sensors, out, "xlsx"))  # "xlsx": the child writes none
+        args = (_track_run(run), png, checked.sensors, out, in_child)
         drawing = prepared.start(*args) if prepared is not None else Background(_track_figure_and_tables,
                                                                                  *args)
     try:
@@ -918,9 +921,11 @@ def _write_correlation(result: CorrelateResult, progress: Progress | None,
 
 
 def _write_workbook(result: CorrelateResult, progress: Progress | None, max_windows: int,
-                    drawing: Background, png: Path, in_child: list[Path]) -> dict[str, Path]:
-    """The workbook (and with quality its figures) while ``drawing`` writes the map and Parquet tables."""
+                    drawing: Background, png: Path, in_child: list[str]) -> dict[str, Path]:
+    """The workbook (and with quality its figures) while ``drawing`` writes the map and the Parquet tables
+    ``in_child``; the other Parquet tables are written here."""
     from pipeline.report.excel import write_report
+    from pipeline.report.tables import parquet_path
 
     run, out = result.run, result.checked.output
     if progress:
@@ -939,9 +944,11 @@ def _write_workbook(result: CorrelateResult, progress: Progress | None, max_wind
                 w, radar, adsb, out.with_name(f"{out.stem}_slotting_{i + 1}.png"))
             images[f"{label}: coefficient against lag"] = lag_figure(
                 w, out.with_name(f"{out.stem}_lags_{i + 1}.png"))
+    files = [parquet_path(out, name) for name in in_child]
     tables = write_report(run, out, figure_png=png, images=images, tables=result.options.tables,
-                          figure_ready=lambda: _drawn(drawing, png, in_child),
-                          tables_written=(lambda: _drawn(drawing, png, in_child)) if in_child else None)
+                          figure_ready=lambda: _drawn(drawing, png, files),
+                          tables_written=(lambda: _drawn(drawing, png, files)) if in_child else None,
+                          elsewhere=in_child)
     written = {"report": out, "figure": png}
     written.update((f"table {p.stem.removeprefix(out.stem + '_')}", p) for p in tables)
     return written

@@ -197,6 +197,23 @@ def test_prepared_child_warms_first_then_runs_the_arguments_sent_later(tmp_path)
     prepared.close()  # already used: nothing to do
 
 
+def _frozen_objects() -> int:
+    import gc
+
+    return gc.get_freeze_count()
+
+
+@forking
+def test_prepared_childs_warmed_heap_is_left_out_of_garbage_collection():
+    """The objects the child holds when its work arrives (imports, warm-up) are frozen, so no collection
+    walks them; the parent's garbage collection is left as it was."""
+    import gc
+
+    before = gc.get_freeze_count()
+    frozen = outputs.Prepared(_frozen_objects, warm=lambda: None).start().wait()
+    assert frozen > 1000 and gc.get_freeze_count() == before
+
+
 @forking
 def test_prepared_childs_error_and_death_reach_the_parent(tmp_path):
     with pytest.raises(OSError) as err:
@@ -259,31 +276,64 @@ def _correlate_parquet(tmp_path: Path, capsys) -> tuple[int, str]:
     return code, capsys.readouterr().err
 
 
+@pytest.mark.parametrize("failing", ["slots", "correlation"])
 @pytest.mark.parametrize("fork", [True, False])
-def test_a_parquet_table_failing_beside_the_workbook_leaves_nothing(tmp_path, monkeypatch, capsys, fork):
-    """The Parquet tables are written with the figure (in the child where fork is used): a full disk there
-    ends the run with one line naming the table, and nothing is left."""
+def test_a_parquet_table_failing_beside_the_workbook_leaves_nothing(tmp_path, monkeypatch, capsys, fork,
+                                                                   failing):
+    """The slot table is written with the figure (in the child where fork is used), the lag table here: a
+    full disk for either ends the run with one line naming that table, and nothing is left."""
     from pipeline.report import excel
 
+    real = excel.write_table_parquet
     monkeypatch.setattr(outputs, "FORK_OK", fork and outputs.FORK_OK)
-    monkeypatch.setattr(excel, "write_table_parquet", lambda run, name, path: _fail(path))
+    monkeypatch.setattr(excel, "write_table_parquet",
+                        lambda run, name, path: _fail(path) if name == failing else real(run, name, path))
     code, err = _correlate_parquet(tmp_path, capsys)
     assert code == 1 and "Traceback" not in err and "No space left on device" in err
-    assert "r_slots.parquet" in err and err.count("msdc correlate: ") == 1
+    assert f"r_{failing}.parquet" in err and err.count("msdc correlate: ") == 1
     assert sorted(p.name for p in tmp_path.iterdir()) == ["kept.txt"]
 
 
 @forking
-def test_the_table_and_figure_process_dying_names_every_file(tmp_path, monkeypatch, capsys):
+def test_the_table_and_figure_process_dying_names_its_files(tmp_path, monkeypatch, capsys):
+    """The child (slot table and map) killed: one line naming the files it was writing; the lag table this
+    process wrote meanwhile is removed with everything else."""
     from pipeline.report import excel
 
-    monkeypatch.setattr(excel, "write_table_parquet", lambda run, name, path: _die())
+    parent, real = os.getpid(), excel.write_table_parquet
+    monkeypatch.setattr(excel, "write_table_parquet",
+                        lambda run, name, path: real(run, name, path) if os.getpid() == parent else _die())
     code, err = _correlate_parquet(tmp_path, capsys)
     assert code == 1 and "Traceback" not in err
     last = err.strip().splitlines()[-1]
     assert last.startswith("msdc correlate: ") and "killed by signal 9" in last
-    assert all(name in last for name in ("r_slots.parquet", "r_correlation.parquet", "r_tracks.png"))
+    assert all(name in last for name in ("r_slots.parquet", "r_tracks.png"))
+    assert "the table and figure were not written" in last and "r_correlation.parquet" not in last
     assert sorted(p.name for p in tmp_path.iterdir()) == ["kept.txt"]
+
+
+@forking
+def test_the_figure_child_is_sent_the_slots_and_not_the_lags(tmp_path, monkeypatch, capsys):
+    """The child draws the map from the slots alone: the lag tables (twice the slots' rows) stay here."""
+    seen, real = tmp_path / "seen.txt", jobs._track_figure
+
+    def recorded(run, png, sensors):
+        seen.write_text(f"{os.getpid()} {sum(len(w.slots) for w in run.windows)} "
+                        f"{sum(len(w.lags) for w in run.windows)}")
+        real(run, png, sensors)
+
+    monkeypatch.setattr(jobs, "_track_figure", recorded)
+    out = tmp_path / "run"
+    out.mkdir()
+    assert main(["correlate", str(FIX / "radar.ast"), str(FIX / "adsb.ast"), "--sensors",
+                 str(FIX / "sensors.toml"), "--all", "--json", str(out / "r.json"),
+                 "-o", str(out / "r.xlsx")]) == 0
+    capsys.readouterr()
+    pid, slots, lags = map(int, seen.read_text().split())
+    import json
+
+    windows = json.loads((out / "r.json").read_text())["windows"]
+    assert pid != os.getpid() and slots == sum(w["slots"] for w in windows) > 0 and lags == 0
 
 
 def test_the_figure_child_warms_up_without_error():
@@ -296,7 +346,8 @@ def test_the_figure_child_warms_up_without_error():
 @pytest.mark.parametrize("limit", [0, 1_000_000_000])
 def test_long_tables_are_written_by_this_process_and_come_out_the_same(tmp_path, monkeypatch, capsys, limit):
     """Over CHILD_MAX_TABLE_ROWS the Parquet tables are written here, not in the figure's child (which then
-    gets no tables to hold); under it in the child. The files are the same either way."""
+    writes no table); under it the slot table in the child (which has the slots for the map), the lag
+    table here. The files are the same either way."""
     import pandas as pd
 
     from pipeline.report import excel
@@ -319,7 +370,8 @@ def test_long_tables_are_written_by_this_process_and_come_out_the_same(tmp_path,
     assert code == 0
     pids = {line.split()[0]: int(line.split()[1]) for line in writers.read_text().splitlines()}
     assert set(pids) == {"slots", "correlation"}
-    assert all((pid == os.getpid()) == (limit == 0) for pid in pids.values())
+    assert pids["correlation"] == os.getpid()
+    assert (pids["slots"] == os.getpid()) == (limit == 0)
     got = {name: pd.read_parquet(out / f"r_{name}.parquet") for name in pids}
     if limit == 0:  # compared with the child's files of a second run under the default limit
         monkeypatch.setattr(jobs, "CHILD_MAX_TABLE_ROWS", 1_000_000_000)

@@ -104,6 +104,50 @@ def test_raw_rows_write_the_cells_openpyxl_writes(tmp_path, monkeypatch):
     assert by_header["flag"][0][:2] == (True, "b")
 
 
+def _sheet_xml(tmp_path, name: str, monkeypatch, many: bool) -> bytes:
+    """The T sheet's XML with the TRICKY rows appended at once (RawRows, 3 rows parsed a time) or one by one
+    (RawRow), row 5 given its own height (openpyxl writes it)."""
+    import zipfile
+
+    import pandas as pd
+    from openpyxl import Workbook
+
+    from pipeline.report import cells, rows
+
+    monkeypatch.setattr(rows, "CHUNK_ROWS", 3)
+    wb = Workbook(write_only=True)
+    ws = wb.create_sheet("T")
+    ws.row_dimensions[5].height = 30
+    frame = pd.DataFrame({k: pd.Series(v, dtype=object if k == "callsign" else None)
+                          for k, v in TRICKY.items()})
+    columns = [cells.make_column(ws, h, frame[h]) for h in frame.columns]
+    styles = rows.RowStyles(ws, [None if c.styled is None or c.text else c.number_format for c in columns])
+    assert rows.install(ws, styles)
+    ws.append(["header"])
+    if many:
+        rows.append_rows(ws, cells.raw_rows(ws, columns), len(frame))
+    else:
+        for row in cells.raw_rows(ws, columns):
+            ws.append(row)
+    ws.append(["after"])
+    wb.save(tmp_path / name)
+    return zipfile.ZipFile(tmp_path / name).read("xl/worksheets/sheet1.xml")
+
+
+def test_rows_appended_at_once_are_the_rows_appended_one_by_one(tmp_path, monkeypatch):
+    """Rows written together, parsed in chunks, with rows openpyxl writes among them (formula-like text,
+    a date, infinity, a row with its own height), make the same sheet, byte for byte, row numbers
+    included."""
+    import re
+
+    together = _sheet_xml(tmp_path, "many.xlsx", monkeypatch, True)
+    one_by_one = _sheet_xml(tmp_path, "one.xlsx", monkeypatch, False)
+    assert together == one_by_one
+    numbers = [int(n) for n in re.findall(rb'<row r="(\d+)"', together)]
+    assert numbers == list(range(1, len(TRICKY["n"]) + 3))  # header, 11 rows, the row after
+    assert b'<row r="5" ht="30" customHeight="1">' in together
+
+
 def test_install_declines_a_sheet_without_the_expected_internals():
     from pipeline.report.rows import RowStyles, install
 

@@ -166,7 +166,8 @@ def test_track_map_of_many_slots_draws_lines_only(result, tmp_path, monkeypatch)
 
     drawn = {}
     monkeypatch.setattr(figures, "MAX_MARKED_SLOTS", 10)
-    monkeypatch.setattr(figures, "save_png", lambda fig, path: drawn.setdefault("fig", fig) and Path(path))
+    monkeypatch.setattr(figures, "save_png",
+                        lambda fig, path, *level: drawn.setdefault("fig", fig) and Path(path))
     figures.track_figure(result.run, tmp_path / "t.png", result.checked.sensors)
     fig: Figure = drawn["fig"]
     ax = fig.axes[0]
@@ -174,6 +175,52 @@ def test_track_map_of_many_slots_draws_lines_only(result, tmp_path, monkeypatch)
     tracks = [line for line in ax.lines if line.get_linestyle() == "-" and len(line.get_xdata()) > 10]
     assert len(tracks) == 2  # radar and ADS-B, every window in one line each
     assert not [line for line in ax.lines if line.get_marker() == "o" and len(line.get_xdata()) > 10]
+
+
+def test_track_map_legend_lies_inside_the_axes(result, tmp_path, monkeypatch):
+    """The map's legend ("best" place) is drawn inside the axes, so leaving it out of the constrained layout
+    cannot move anything."""
+    import pipeline.report.figures as figures
+
+    drawn = {}
+    real = figures.save_png
+    monkeypatch.setattr(figures, "save_png", lambda fig, path, *level: drawn.setdefault("fig", fig)
+                        and real(fig, path, *level))
+    figures.track_figure(result.run, tmp_path / "t.png", result.checked.sensors)
+    ax = drawn["fig"].axes[0]
+    legend, box = ax.get_legend().get_window_extent(), ax.get_window_extent()
+    assert box.x0 <= legend.x0 < legend.x1 <= box.x1 and box.y0 <= legend.y0 < legend.y1 <= box.y1
+
+
+def test_track_map_png_has_the_pixels_of_the_default_encoding(result, tmp_path, monkeypatch):
+    """The map is encoded at a faster zlib level than Pillow's default: the same pixels, decoded."""
+    from matplotlib.image import imread
+
+    import pipeline.report.figures as figures
+
+    fast = figures.track_figure(result.run, tmp_path / "fast.png", result.checked.sensors)
+    monkeypatch.setattr(figures, "TRACK_PNG_COMPRESS_LEVEL", None)
+    default = figures.track_figure(result.run, tmp_path / "default.png", result.checked.sensors)
+    a, b = (imread(p) for p in (fast, default))
+    assert a.shape == b.shape and (a == b).all()
+
+
+def test_farthest_point_is_the_largest_geodesic_distance():
+    """farthest_m equals the largest WGS-84 distance measured to every point (pyproj), including points
+    that all lie near one range in every direction, where the sphere and the ellipsoid rank them apart."""
+    from pyproj import Geod
+
+    from pipeline.report.figures import farthest_m
+
+    geod, rng = Geod(ellps="WGS84"), np.random.default_rng(7)
+    site_lat, site_lon = 52.0, 4.5
+    for ranges_m in (rng.uniform(0, 400e3, 3000), 300e3 + rng.uniform(-500, 500, 3000)):
+        azimuths = rng.uniform(0, 360, ranges_m.size)
+        lons, lats, _ = geod.fwd(np.full(ranges_m.size, site_lon), np.full(ranges_m.size, site_lat), azimuths,
+                                 ranges_m)
+        _, _, every_m = geod.inv(np.full(lats.size, site_lon), np.full(lats.size, site_lat), lons, lats)
+        assert farthest_m(geod, site_lat, site_lon, lats, lons) == float(np.max(every_m))
+    assert farthest_m(geod, site_lat, site_lon, np.array([]), np.array([])) == 0.0
 
 
 @pytest.mark.parametrize("tables", ["xlsx", "parquet"])
@@ -226,3 +273,37 @@ def test_parquet_written_in_batches_equals_the_whole_table(result, tmp_path, nam
     assert rows == a.num_rows == b.num_rows == sum(map(sum, sizes))
     assert b.equals(a, check_metadata=True) and schema.equals(a.schema, check_metadata=True)
     pd.testing.assert_frame_equal(b.to_pandas(), a.to_pandas())
+
+
+def test_lag_frame_is_in_increasing_lag_whatever_the_order_given():
+    """A window's lag table in increasing lag, ties kept in the order given; one already in order is used
+    as it is (no copy)."""
+    from pipeline.correlate.results import WindowResult
+
+    shuffled = pd.DataFrame({"lag": [1, -1, 0, 1], "ncc_lat": [0.1, 0.2, 0.3, 0.4]})
+    got = tables_mod.lag_frame(WindowResult({}, pd.DataFrame(), shuffled))
+    assert got["lag"].tolist() == [-1, 0, 1, 1] and got["ncc_lat"].tolist() == [0.2, 0.3, 0.1, 0.4]
+    ordered = pd.DataFrame({"lag": [-2, 0, 0, 3], "ncc_lat": [1.0, 2.0, 3.0, 4.0]})
+    assert tables_mod.lag_frame(WindowResult({}, pd.DataFrame(), ordered)) is ordered
+    no_lag = pd.DataFrame({"ncc_lat": [1.0]})
+    assert tables_mod.lag_frame(WindowResult({}, pd.DataFrame(), no_lag)) is no_lag
+
+
+def test_charts_sharing_their_parts_come_out_alike_and_as_described(result, tmp_path):
+    """Chart parts made once and shared (axis titles, lines, markers) give the same chart XML in a second
+    workbook written by this process, and each lag chart's series look as its sheet says: NCC solid,
+    Pearson dashed; latitude blue (1F77B4), longitude green (2CA02C)."""
+    import re
+    import zipfile
+
+    (tmp_path / "a").mkdir()
+    (tmp_path / "b").mkdir()
+    first, second = (_write(result, tmp_path / d / "r.xlsx", "xlsx") for d in "ab")
+    a, b = zipfile.ZipFile(first["report"]), zipfile.ZipFile(second["report"])
+    charts = [n for n in a.namelist() if n.startswith("xl/charts/chart")]
+    assert charts and all(a.read(n) == b.read(n) for n in charts)
+    xml = a.read("xl/charts/chart1.xml").decode()
+    series = re.findall(r"<ser>.*?</ser>", xml, flags=re.S)
+    looks = [(re.search(r'<a:srgbClr val="(\w+)"', s).group(1), 'prstDash val="dash"' in s) for s in series]
+    assert looks == [("1F77B4", False), ("2CA02C", False), ("1F77B4", True), ("2CA02C", True)]
+    assert all('<symbol val="none"/>' in s for s in series)

@@ -29,7 +29,7 @@ from openpyxl.worksheet._write_only import WriteOnlyWorksheet
 from openpyxl.xml import LXML
 
 from pipeline.report.formats import UNITS, column_unit, excel_format
-from pipeline.report.rows import RawRow, RowStyles, install
+from pipeline.report.rows import RawRow, RowStyles, append_rows, install
 from pipeline.report.summary import (
     is_missing,
     json_value,
@@ -420,8 +420,7 @@ def write_table(ws: WriteOnlyWorksheet, columns: list[Column], *, freeze: str = 
     ws.append(header_cells(ws, [c.header for c in columns]))
     styles = RowStyles(ws, [None if c.styled is None or c.text else c.number_format for c in columns])
     if FAST_ROWS and install(ws, styles):
-        for row in raw_rows(ws, columns, 0, kept):
-            ws.append(row)
+        append_rows(ws, raw_rows(ws, columns, 0, kept), kept)
     else:  # openpyxl's public path: a styled cell per formatted number
         for row in table_rows(ws, columns, 0, kept):
             ws.append(row)

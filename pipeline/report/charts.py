@@ -3,6 +3,7 @@ native Excel scatter charts placed on a grid of whole printed pages (two across,
 
 from __future__ import annotations
 
+import functools
 import math
 from collections.abc import Iterable
 from typing import Any
@@ -13,6 +14,7 @@ from openpyxl import Workbook
 from openpyxl.chart import Reference, ScatterChart, Series
 from openpyxl.chart.marker import Marker
 from openpyxl.chart.shapes import GraphicalProperties
+from openpyxl.chart.title import Title, title_maker
 from openpyxl.drawing.line import LineProperties
 from openpyxl.drawing.spreadsheet_drawing import AbsoluteAnchor
 from openpyxl.drawing.xdr import XDRPoint2D, XDRPositiveSize2D
@@ -64,12 +66,34 @@ def pt_to_EMU(points: float) -> int:
     return int(round(points * 12700))
 
 
+@functools.lru_cache(maxsize=64)
+def _axis_title(text: str) -> Title:
+    """An axis title, made once per text: the same titles recur on every chart of a sheet (openpyxl builds
+    each from text through a dozen validated objects); charts only read them."""
+    return title_maker(text)
+
+
+@functools.lru_cache(maxsize=64)
+def _line(rgb: str, width_emu: int, dash: str | None) -> GraphicalProperties:
+    """A series' line, made once per look and shared by the series that have it (read, never changed)."""
+    return GraphicalProperties(ln=LineProperties(solidFill=rgb, w=width_emu, prstDash=dash))
+
+
+@functools.lru_cache(maxsize=64)
+def _marker(symbol: str | None, rgb: str) -> Marker:
+    """A series' markers (``symbol`` None: none), made once per look and shared like _line."""
+    if symbol is None:
+        return Marker(symbol="none")
+    return Marker(symbol=symbol, size=4, spPr=GraphicalProperties(solidFill=rgb,
+                                                                  ln=LineProperties(solidFill=rgb, w=6350)))
+
+
 def scatter_chart(title: str, x_title: str, y_title: str) -> ScatterChart:
     chart = ScatterChart()
     chart.title = clean_text(title)
     chart.style = 2
     chart.width, chart.height = CHART_W_CM, CHART_H_CM
-    chart.x_axis.title, chart.y_axis.title = x_title, y_title
+    chart.x_axis.title, chart.y_axis.title = _axis_title(x_title), _axis_title(y_title)
     chart.x_axis.delete = False  # openpyxl 3.1 hides axes unless told otherwise
     chart.y_axis.delete = False
     chart.x_axis.crosses = "min"  # axes on the lower-left edges, not through zero
@@ -84,13 +108,8 @@ def xy_series(ws: WriteOnlyWorksheet, x_col: int, y_col: int, rows: tuple[int, i
     xs = Reference(ws, min_col=x_col, min_row=rows[0], max_row=rows[1])
     ys = Reference(ws, min_col=y_col, min_row=rows[0], max_row=rows[1])
     series = Series(ys, xs, title=title)
-    series.graphicalProperties = GraphicalProperties(
-        ln=LineProperties(solidFill=line_rgb, w=int(width_pt * 12700), prstDash=dash))
-    if marker:
-        series.marker = Marker(symbol=marker, size=4, spPr=GraphicalProperties(
-            solidFill=line_rgb, ln=LineProperties(solidFill=line_rgb, w=6350)))
-    else:
-        series.marker = Marker(symbol="none")
+    series.graphicalProperties = _line(line_rgb, int(width_pt * 12700), dash)
+    series.marker = _marker(marker, line_rgb)
     series.smooth = False
     return series
 

@@ -16,7 +16,7 @@ import contextlib
 import datetime as dt
 import os
 import re
-from collections.abc import Callable, Iterator, Mapping
+from collections.abc import Callable, Collection, Iterator, Mapping
 from pathlib import Path
 from typing import Any
 
@@ -62,6 +62,7 @@ from pipeline.report.charts import (
     write_lag_charts,
     write_slot_charts,
 )
+from pipeline.report.saving import get_ready, save
 from pipeline.report.summary import (
     SKIPPED_KEYS,
     window_note,
@@ -100,11 +101,17 @@ _BLOCK_FILLS = ["EDEDED", "E2EFDA", "DDEBF7", "FCE4D6"]
 IMAGE_MAX_W_PX, IMAGE_MAX_H_PX = 1000, 620  # one figure per printed page
 
 
-def _summary_value(window: WindowResult, key: str) -> Any:
-    """A Summary cell value; start/end fall back to the clock time (seconds of day) when undated."""
-    value = excel_value(window.summary.get(key))
+def _summary_values(run: CorrelationRun) -> list[dict[str, Any]]:
+    """Each window's summary as Excel values (excel_value), worked out once for the Summary's passes."""
+    return [{key: excel_value(value) for key, value in w.summary.items()} for w in run.windows]
+
+
+def _summary_value(values: dict[str, Any], key: str) -> Any:
+    """A Summary cell value from a window's _summary_values; start/end fall back to the clock time (seconds
+    of day) when undated."""
+    value = values.get(key)
     if value is None and key in ("start", "end"):
-        tod = excel_value(window.summary.get(f"{key}_tod"))
+        tod = values.get(f"{key}_tod")
         return ("tod", tod) if is_number(tod) else None
     return value
 
@@ -128,15 +135,15 @@ def _summary_time_cell(ws: WriteOnlyWorksheet, value: Any) -> Any:
     return cell_for(ws, value, None)
 
 
-def _summary_block(ws: WriteOnlyWorksheet, run: CorrelationRun, title: str, keys: list[str],
+def _summary_block(ws: WriteOnlyWorksheet, summaries: list[dict[str, Any]], title: str, keys: list[str],
                    fill: str, row: int) -> int:
-    """One Summary block (title, header, one row per window, blank) from sheet row ``row``; returns the
-    next free row."""
+    """One Summary block (title, header, one row per window of ``summaries``, _summary_values, blank) from
+    sheet row ``row``; returns the next free row."""
     keys = [k for k in keys if k in SUMMARY_KEYS]
     ws.append([text_cell(ws, title, font=BOLD)])
     ws.row_dimensions[row + 1].height = 3 * ROW_HEIGHT_PT  # "radar filled slots" wraps onto 3 lines
     ws.append(header_cells(ws, [summary_header(k) for k in keys], PatternFill("solid", fgColor=fill)))
-    rows = [[_summary_value(w, k) for k in keys] for w in run.windows]
+    rows = [[_summary_value(values, k) for k in keys] for values in summaries]
     formats = [number_format_for(k, [r[j] for r in rows]) for j, k in enumerate(keys)]
     for values in rows:
         cells = []
@@ -158,6 +165,7 @@ def _summary_block(ws: WriteOnlyWorksheet, run: CorrelationRun, title: str, keys
 
 def _write_summary(wb: Workbook, run: CorrelationRun) -> None:
     ws = wb.create_sheet("Summary")
+    summaries = _summary_values(run)
     skipped = [[excel_value(getattr(s, k)) for k in SKIPPED_KEYS] for s in run.skipped]
     widths: dict[int, float] = {}
 
@@ -168,7 +176,7 @@ def _write_summary(wb: Workbook, run: CorrelationRun) -> None:
 
     for _title, keys in SUMMARY_BLOCKS:  # widths first: write-only sheets take them before any row
         keys = [k for k in keys if k in SUMMARY_KEYS]
-        rows = [[excel_value(w.summary.get(k)) for k in keys] for w in run.windows]
+        rows = [[values.get(k) for k in keys] for values in summaries]
         formats = [SUMMARY_DATETIME_FORMAT if k in ("start", "end") else
                    number_format_for(k, [r[j] for r in rows]) for j, k in enumerate(keys)]
         widen([summary_header(k) for k in keys], rows, formats)
@@ -181,17 +189,17 @@ def _write_summary(wb: Workbook, run: CorrelationRun) -> None:
                          + (f", {date} UTC" if date else ", date unknown (clock times)"), font=TITLE_FONT)])
     row = 2
     for (title, keys), fill in zip(SUMMARY_BLOCKS, _BLOCK_FILLS, strict=False):
-        row = _summary_block(ws, run, title, keys, fill, row)
+        row = _summary_block(ws, summaries, title, keys, fill, row)
 
-    notes = [(w, window_note(w.summary)) for w in run.windows]
-    notes = [(w, n) for w, n in notes if n]
+    notes = [(values, window_note(w.summary)) for w, values in zip(run.windows, summaries, strict=True)]
+    notes = [(values, n) for values, n in notes if n]
     ws.append([text_cell(ws, f"Notes ({len(notes)})", font=BOLD)])
-    for w, note in notes:
-        start = _summary_value(w, "start")
+    for values, note in notes:
+        start = _summary_value(values, "start")
         note_cell = note_text_cell(ws, note)
         note_cell.alignment = _INDENT
-        ws.append([cell_for(ws, excel_value(w.summary.get("callsign")), None),
-                   cell_for(ws, excel_value(w.summary.get("window")), None),
+        ws.append([cell_for(ws, values.get("callsign"), None),
+                   cell_for(ws, values.get("window"), None),
                    _summary_time_cell(ws, start), note_cell])
     if not notes:
         ws.append([note_text_cell(ws, "none: in every window the RMS separation is within 3 x the median")])
@@ -427,13 +435,13 @@ def _write_figures(wb: Workbook, title: str, images: dict[str, str | os.PathLike
         ws.row_breaks.append(Break(id=row - 1))
 
 
-def write_parquet_tables(run: CorrelationRun, path_xlsx: str | os.PathLike[str],
-                         tables: str = "auto") -> dict[str, tuple[int, object, Path]]:
-    """The run's tables that go to Parquet under ``tables`` (pipeline.report.tables), written beside the
-    workbook one table at a time, in batches of whole windows (write_table_parquet): name -> (rows,
-    schema, path)."""
+def write_parquet_tables(run: CorrelationRun, path_xlsx: str | os.PathLike[str], tables: str = "auto",
+                         names: Collection[str] | None = None) -> dict[str, tuple[int, object, Path]]:
+    """The run's tables that go to Parquet under ``tables`` (pipeline.report.tables), or those ``names``,
+    written beside the workbook one table at a time, in batches of whole windows (write_table_parquet):
+    name -> (rows, schema, path)."""
     parquet = {}
-    for name in parquet_tables(run, tables):  # one table at a time, built and written in batches of windows
+    for name in parquet_tables(run, tables) if names is None else names:  # built and written one at a time
         path = parquet_path(path_xlsx, name)
         parquet[name] = (*write_table_parquet(run, name, path), path)
     return parquet
@@ -443,19 +451,21 @@ def write_report(run: CorrelationRun, path_xlsx: str | os.PathLike[str], *,
                  figure_png: str | os.PathLike[str] | None = None,
                  images: dict[str, str | os.PathLike[str]] | None = None, tables: str = "auto",
                  figure_ready: Callable[[], object] | None = None,
-                 tables_written: Callable[[], dict[str, tuple[int, object, Path]]] | None = None
-                 ) -> list[Path]:
+                 tables_written: Callable[[], dict[str, tuple[int, object, Path]]] | None = None,
+                 elsewhere: Collection[str] | None = None) -> list[Path]:
     """Write the run's workbook to ``path_xlsx``; embed ``figure_png`` on a Map sheet when given and
     further ``images`` (caption -> PNG) on a Figures sheet. The slot and lag tables go to Parquet beside
     it as ``tables`` says (pipeline.report.tables); returns the Parquet files written. ``figure_ready``
     is called before ``figure_png`` is first read (the figure may be drawn meanwhile elsewhere). With
-    ``tables_written`` the Parquet tables are being written elsewhere (write_parquet_tables in another
-    process): it is called before the workbook is saved and returns what write_parquet_tables returned."""
-    if tables_written is None:
-        parquet = write_parquet_tables(run, path_xlsx, tables)
-    else:  # the sheets name the file and its rows now, its columns once written
-        parquet = {name: (table_length(run, name), None, parquet_path(path_xlsx, name))
-                   for name in parquet_tables(run, tables)}
+    ``tables_written`` the Parquet tables named in ``elsewhere`` (all of them when None) are being written
+    elsewhere (write_parquet_tables in another process), the others here first: it is called before the
+    workbook is saved and returns what write_parquet_tables returned for them."""
+    names = parquet_tables(run, tables)
+    away = [] if tables_written is None else [n for n in names if elsewhere is None or n in elsewhere]
+    parquet = write_parquet_tables(run, path_xlsx, names=[n for n in names if n not in away])
+    for name in away:  # the sheets name the file and its rows now, its columns once written
+        parquet[name] = (table_length(run, name), None, parquet_path(path_xlsx, name))
+    parquet = {name: parquet[name] for name in names}  # in table order, wherever written
     wb = Workbook(write_only=True)
     taken = {name.lower() for name in _CORE_SHEETS}
     _write_summary(wb, run)
@@ -467,8 +477,9 @@ def write_report(run: CorrelationRun, path_xlsx: str | os.PathLike[str], *,
         if images:
             _write_figures(wb, sheet_name("Figures", taken), images)
         _write_parameters(wb, run)
-        if tables_written is not None:
-            parquet = tables_written()
+        get_ready(wb)  # while the tables and the figure may still be written elsewhere
+        if away:
+            parquet.update(tables_written())
             for name, ws in waiting.items():
                 _parquet_columns(ws, parquet[name][1])
         if map_sheet is not None:
@@ -478,7 +489,7 @@ def write_report(run: CorrelationRun, path_xlsx: str | os.PathLike[str], *,
     except BaseException:
         _discard(wb)
         raise
-    write_atomically(path_xlsx, wb.save)
+    write_atomically(path_xlsx, lambda tmp: save(wb, tmp))
     return [path for _, _, path in parquet.values()]
 
 
@@ -502,5 +513,5 @@ def write_tables(tables: dict[str, pd.DataFrame], path_xlsx: str | os.PathLike[s
         _write_figures(wb, sheet_name("Figures", taken), images)
     if parameters is not None:
         _write_parameters(wb, CorrelationRun(parameters=parameters))
-    write_atomically(path_xlsx, wb.save)
+    write_atomically(path_xlsx, lambda tmp: save(wb, tmp))
 

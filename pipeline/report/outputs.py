@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import contextlib
+import gc
 import os
 import pickle
 import signal
@@ -96,7 +97,9 @@ class Prepared:
     (``warm()``: imports, caches) and then runs ``fn(*args)`` once start(*args) sends the arguments: a
     Background without its start-up on the critical path. ``fn`` is taken at fork time (only the
     arguments travel, pickled through an unnamed file); where fork is not available start() runs the
-    work at once, as Background does. close() stops a child that was never started."""
+    work at once, as Background does. close() stops a child that was never started. The child's heap as
+    warmed is frozen (gc.freeze): a full collection walking it, copying every page it touches from the
+    parent's, cost 0.06-0.16 s of the 3 h run's critical path."""
 
     def __init__(self, fn: Callable[..., object], *, warm: Callable[[], object] | None = None):
         self._fn, self._pid = fn, 0
@@ -115,6 +118,7 @@ class Prepared:
                 if warm is not None:
                     with contextlib.suppress(Exception):  # fn meets the same trouble and reports it
                         warm()
+                gc.freeze()  # what is here now stays: no collection walks (and copies) the forked heap
                 size = int.from_bytes(os.read(go_read, 8) or b"\0", "little")
                 if size:
                     status = _run_and_send(lambda: fn(*_received(data, size)), (), done_write)

@@ -12,7 +12,7 @@ two private openpyxl attributes (``WriteOnlyWorksheet._values_to_row`` and the s
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Iterable, Sequence
 from typing import Any
 
 from lxml.etree import XMLParser, fromstring
@@ -64,27 +64,91 @@ def install(ws, styles: RowStyles) -> bool:
         return False
 
     def values_to_row(values, row_idx):
-        return values if values.__class__ is RawRow else to_row(values, row_idx)
+        return values if values.__class__ in _RAW else to_row(values, row_idx)
 
     def raw_write_row(xf, row, row_idx):
-        if row.__class__ is RawRow:
+        kind = row.__class__
+        if kind is RawRow:
             _write(xf, ws, row, row_idx, styles, to_row, write_row)
-        else:
+        elif kind is RawRows:
+            _write_many(xf, ws, row, row_idx, styles, to_row, write_row)
+        elif kind is not _Skip:
             write_row(xf, row, row_idx)
 
     ws._values_to_row, writer.write_row = values_to_row, raw_write_row
     return True
 
 
+class RawRows(list):
+    """``count`` rows (RawRow, from ``rows``) appended as one, for a sheet set up by install(): written
+    together, CHUNK_ROWS parsed at a time; append() it, then append SKIP count - 1 times, which only moves
+    openpyxl's row counter on past them (append_rows does both)."""
+
+    def __init__(self, rows: Iterable[RawRow], count: int):
+        super().__init__()
+        self.rows, self.count = rows, count
+
+
+class _Skip(list):
+    pass
+
+
+SKIP = _Skip()
+_RAW = (RawRow, RawRows, _Skip)
+CHUNK_ROWS = 2048  # rows parsed in one go: one parse instead of one a row, a bounded string
+
+
+def append_rows(ws, rows: Iterable[RawRow], count: int) -> None:
+    """Append ``count`` rows to a sheet set up by install(): the same cells as appending each RawRow."""
+    if count:
+        ws.append(RawRows(rows, count))
+        for _ in range(count - 1):
+            ws.append(SKIP)
+
+
+def _write_many(xf, ws, block: RawRows, row_idx: int, styles: RowStyles, to_row, write_row) -> None:
+    """The rows of ``block`` from sheet row ``row_idx`` on, as _write writes each one, parsed CHUNK_ROWS at a
+    time (a row that openpyxl writes goes between, in order)."""
+    pending: list[str] = []
+
+    def flush() -> None:
+        if pending:
+            for element in fromstring(f"<rows>{''.join(pending)}</rows>", _PARSER):
+                xf.write(element)
+            pending.clear()
+
+    idx = row_idx
+    for values in block.rows:
+        text = None if ws.row_dimensions.get(idx) else _row_text(values, idx, styles)
+        if text is None:
+            flush()
+            write_row(xf, to_row(openpyxl_values(ws, values, styles.formats), idx), idx)
+        else:
+            pending.append(text)
+            if len(pending) >= CHUNK_ROWS:
+                flush()
+        idx += 1
+    flush()
+    if idx - row_idx != block.count:
+        raise ValueError(f"{idx - row_idx} rows given for {block.count}")
+
+
 def _write(xf, ws, values: RawRow, row_idx: int, styles: RowStyles, to_row, write_row) -> None:
     """One row as one element, parsed from its text (cheaper than an element per cell); a row holding
     anything but finite numbers, booleans and plain text goes through openpyxl whole (formula-like
     text as cells made elsewhere, dates, illegal text: its own errors)."""
-    r = f"{row_idx}"
     dims = ws.row_dimensions.get(row_idx)
-    if dims:  # a row with its own height or style: openpyxl's own way
+    text = None if dims else _row_text(values, row_idx, styles)
+    if text is None:  # a row with its own height or style, or a cell only openpyxl writes: its own way
         write_row(xf, to_row(openpyxl_values(ws, values, styles.formats), row_idx), row_idx)
         return
+    xf.write(fromstring(text, _PARSER))
+
+
+def _row_text(values: RawRow, row_idx: int, styles: RowStyles) -> str | None:
+    """The row's XML as openpyxl writes it, or None when a cell needs openpyxl (not a finite number, a
+    boolean or plain text)."""
+    r = f"{row_idx}"
     formats = styles.formats
     parts = [f'<row r="{r}">']
     for j, value in enumerate(values):
@@ -107,10 +171,9 @@ def _write(xf, ws, values: RawRow, row_idx: int, styles: RowStyles, to_row, writ
                 parts.append(f'<c r="{styles.letter(j)}{r}" t="inlineStr"><is><t{space}>'
                              f'{value.translate(_ESCAPE)}</t></is></c>')
         else:
-            write_row(xf, to_row(openpyxl_values(ws, values, formats), row_idx), row_idx)
-            return
+            return None
     parts.append("</row>")
-    xf.write(fromstring("".join(parts), _PARSER))
+    return "".join(parts)
 
 
 _ESCAPE = str.maketrans({"&": "&amp;", "<": "&lt;", ">": "&gt;", "\r": "&#13;"})

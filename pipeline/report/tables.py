@@ -128,9 +128,12 @@ TABLE_BATCH_ROWS = 262_144
 
 
 def lag_frame(window: WindowResult) -> pd.DataFrame:
-    """A window's lag table in increasing lag."""
+    """A window's lag table in increasing lag (the table itself when already in that order, as correlate
+    gives it: the writers ask for it several times a window)."""
     lags = window.lags
-    return lags.sort_values("lag", kind="stable") if "lag" in lags.columns else lags
+    if "lag" not in lags.columns or lags["lag"].is_monotonic_increasing:
+        return lags
+    return lags.sort_values("lag", kind="stable")
 
 
 def _concat(pieces: list[dict[str, np.ndarray]], columns: list[str], dtypes: dict[str, str]) -> pd.DataFrame:
