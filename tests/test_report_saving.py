@@ -48,3 +48,22 @@ def test_saved_parts_are_openpyxls_with_the_image_stored(tmp_path):
     kinds = {info.filename: info.compress_type for info in b.infolist()}
     assert kinds.pop("xl/media/image1.png") == zipfile.ZIP_STORED
     assert set(kinds.values()) == {zipfile.ZIP_DEFLATED}
+
+
+def test_without_the_chart_hook_the_save_builds_the_charts_itself(tmp_path, monkeypatch):
+    """An openpyxl whose charts lack ``_write`` leaves get_ready with nothing built; the save still writes
+    the chart (built by openpyxl at save time) as openpyxl's own save does."""
+    from matplotlib.image import imsave
+    from openpyxl.chart._chart import ChartBase
+
+    png = tmp_path / "noise.png"
+    imsave(png, np.random.default_rng(2).integers(0, 255, (10, 10, 3), dtype=np.uint8))
+    _workbook(png).save(tmp_path / "openpyxl.xlsx")
+    ours = _workbook(png)
+    with monkeypatch.context() as patch:
+        patch.setattr(ChartBase, "_write", None)
+        saving.get_ready(ours)
+    assert "_write" not in vars(ours.worksheets[0]._charts[0])  # nothing pre-built on the chart
+    saving.save(ours, tmp_path / "ours.xlsx")
+    a, b = zipfile.ZipFile(tmp_path / "openpyxl.xlsx"), zipfile.ZipFile(tmp_path / "ours.xlsx")
+    assert a.read("xl/charts/chart1.xml") == b.read("xl/charts/chart1.xml")

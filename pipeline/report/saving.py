@@ -33,14 +33,20 @@ def get_ready(wb: Workbook) -> None:
         image.PILImage.preinit()
     for ws in wb.worksheets:
         for chart in getattr(ws, "_charts", ()):
-            tree = chart._write()
+            build = getattr(chart, "_write", None)
+            if not callable(build):  # an openpyxl without this hook: its save builds the charts as usual
+                return
+            tree = build()
             chart._write = lambda tree=tree: tree  # what the save calls, answered from the tree built now
 
 
 def save(wb: Workbook, path: str | os.PathLike[str]) -> None:
     """Save ``wb`` to ``path`` as Workbook.save does (the same parts and content), images stored."""
-    from openpyxl.writer.excel import ExcelWriter
-
+    try:
+        from openpyxl.writer.excel import ExcelWriter
+    except ImportError:  # an openpyxl that moved its writer: its own save, the PNG deflated again
+        wb.save(path)
+        return
     archive = _Archive(path, "w", ZIP_DEFLATED, allowZip64=True)
     wb.properties.modified = dt.datetime.now(tz=dt.UTC).replace(tzinfo=None)
     ExcelWriter(wb, archive).save()
