@@ -287,3 +287,20 @@ def test_refitting_only_changed_neighbourhoods_equals_refitting_everything():
         jumps._Tracks.fit = full
     assert incremental["jump"].sum() >= 5
     pd.testing.assert_frame_equal(incremental, everything, check_exact=True)
+
+
+def test_jump_flags_of_some_columns_equal_those_of_all():
+    """A job that reads only the jump verdict asks for that column alone (the fit distances are then not
+    worked out); the verdicts and fits it gets are those of the full call."""
+    from pipeline.model import jumps
+
+    meas = track(np.arange(0, 600, 4.0), seed=3, address="750003", callsign="T3")
+    meas.loc[[20, 21, 90], "latitude"] += [0.1, 0.12, 0.2]
+    meas["aircraft_id"] = assign_aircraft_id(meas)
+    full = jumps.jump_flags(meas)
+    assert full["jump"].sum() >= 3
+    for columns in (["jump"], ["fit_latitude", "jump"], []):
+        got = jumps.jump_flags(meas, columns=columns)
+        want = [c for c in jumps.JUMP_FLAG_COLUMNS if c in columns]
+        assert list(got.columns) == want
+        pd.testing.assert_frame_equal(got, full[want], check_exact=True)

@@ -222,7 +222,7 @@ def _detect(adsb_meas: pd.DataFrame, max_speed_kt: float, robust_window: int,
             robust_threshold_m: float, need: list[str] = JUMP_FLAG_COLUMNS) -> pd.DataFrame:
     """Per row (original index): jump flag, distance from the robust fit (m) and the fitted lat/lon; the
     ``need`` columns taken as they are when the frame already carries them (computed once per job,
-    pipeline.jobs.mark_once)."""
+    pipeline.jobs.mark_once). The distance is worked out only when ``need`` names it."""
     if robust_window < 3:
         raise ValueError(f"robust_window must be at least 3, got {robust_window}")
     if all(c in adsb_meas for c in need) and (max_speed_kt, robust_window, robust_threshold_m) == _DEFAULTS:
@@ -261,7 +261,8 @@ def _detect(adsb_meas: pd.DataFrame, max_speed_kt: float, robust_window: int,
         del tracks
         at = pos[a:b]
         cols["jump"][at], cols["fit_latitude"][at], cols["fit_longitude"][at] = jump, fit_lat, fit_lon
-        cols["jump_size_m"][at] = distance_m(lat[a:b], lon[a:b], fit_lat, fit_lon)
+        if "jump_size_m" in need:
+            cols["jump_size_m"][at] = distance_m(lat[a:b], lon[a:b], fit_lat, fit_lon)
     return pd.DataFrame(cols, index=adsb_meas.index, copy=False)
 
 
@@ -277,9 +278,13 @@ def _sorted_codes(ident: pd.Series) -> np.ndarray:
     return codes.astype(np.int32)
 
 
-def jump_flags(adsb_meas: pd.DataFrame) -> pd.DataFrame:
-    """JUMP_FLAG_COLUMNS per row (index kept) with the default parameters: what a job computes once."""
-    return _detect(adsb_meas.drop(columns=[c for c in JUMP_FLAG_COLUMNS if c in adsb_meas]), *_DEFAULTS)
+def jump_flags(adsb_meas: pd.DataFrame, columns: list[str] = JUMP_FLAG_COLUMNS) -> pd.DataFrame:
+    """JUMP_FLAG_COLUMNS (or only ``columns`` of them) per row (index kept) with the default parameters:
+    what a job computes once."""
+    need = [c for c in JUMP_FLAG_COLUMNS if c in columns]
+    found = _detect(adsb_meas.drop(columns=[c for c in JUMP_FLAG_COLUMNS if c in adsb_meas]), *_DEFAULTS,
+                    need=need or ["jump"])
+    return found if need == JUMP_FLAG_COLUMNS else found[need]
 
 
 def detect_jumps(adsb_meas: pd.DataFrame, *, max_speed_kt: float = 1000.0, robust_window: int = 7,
