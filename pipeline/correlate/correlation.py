@@ -294,21 +294,25 @@ class _Columns:
 
     def __init__(self, meas: pd.DataFrame):
         self.meas = meas
-        time_ns = pd.DatetimeIndex(meas["time"]).asi8
-        # sort key of sort_by_time: stable by time, NaT last
-        self.time_key = np.where(pd.isna(meas["time"]).to_numpy(bool), np.iinfo(np.int64).max, time_ns)
+        self.time_ns = meas["time"].array.asi8  # (a view: nothing of the run's size is copied but flags)
         self.tod = meas["time_of_day"].to_numpy(float)
         self.lat, self.lon = meas["latitude"].to_numpy(float), meas["longitude"].to_numpy(float)
         self.is_adsb = (meas["sensor_kind"] == "adsb").to_numpy(bool)
         sid = meas["sensor_id"]
         if isinstance(sid.dtype, pd.CategoricalDtype):  # grouped in category order, as groupby does
-            self.sensor = sid.cat.codes.to_numpy(np.int64)
+            self.sensor = sid.cat.codes.to_numpy()
             self.names = [str(c) for c in sid.cat.categories]
         else:
             codes, uniques = pd.factorize(sid, sort=True)
-            self.sensor, self.names = codes.astype(np.int64), [str(u) for u in uniques]
+            self.sensor, self.names = codes, [str(u) for u in uniques]
         self.dup = meas["duplicate"].astype(bool).to_numpy() if "duplicate" in meas else None
         self.jump = meas["jump"].fillna(False).astype(bool).to_numpy() if "jump" in meas else None
+
+    def time_order(self, rows: np.ndarray) -> np.ndarray:
+        """``rows`` in sort_by_time's order: stable by time, NaT last."""
+        key = self.time_ns[rows]
+        key = np.where(key == np.iinfo(np.int64).min, np.iinfo(np.int64).max, key)  # NaT: the smallest
+        return rows[np.argsort(key, kind="stable")]
 
     def by_sensor(self, rows: np.ndarray) -> dict[str, np.ndarray]:
         """Rows (ascending positions) grouped by sensor_id in groupby order; rows without one are left out."""
@@ -333,7 +337,7 @@ class _Source:
     ``--fill predict``) its reports as a frame."""
 
     def __init__(self, cols: _Columns, rows: np.ndarray, frame: bool = False):
-        order = rows[np.argsort(cols.time_key[rows], kind="stable")]
+        order = cols.time_order(rows)
         meas = cols.meas
         if cols.dup is not None:
             dup = cols.dup[order]
