@@ -555,7 +555,7 @@ def mark_once(meas: pd.DataFrame, *, split_adsb: bool = False, jumps: bool = Tru
     and accuracy reuse them instead of recomputing. ``jumps=False`` skips the jump search (a job that
     neither filters jumps nor assesses quality does not need it); ``flags``: only these jump columns
     (``["jump"]`` for a job that counts or drops jumps but never reads the fit)."""
-    from pipeline.model.dedup import DEDUP_KEYS, duplicate_mask, repeat_groups
+    from pipeline.model.dedup import DEDUP_KEYS, duplicate_mask, repeat_groups, shared_rows
     from pipeline.model.jumps import JUMP_FLAG_COLUMNS, JUMP_INPUTS, jump_flags
 
     meas = meas.drop(columns=[c for c in ("duplicate", *JUMP_FLAG_COLUMNS) if c in meas])
@@ -570,16 +570,22 @@ def mark_once(meas: pd.DataFrame, *, split_adsb: bool = False, jumps: bool = Tru
         return meas.assign(duplicate=dup.to_numpy(bool))
     dup = dup.to_numpy(bool)
     adsb = (meas["sensor_kind"] == "adsb").to_numpy(bool)
-    judged = jump_flags(meas[[c for c in JUMP_INPUTS if c in meas]][adsb & ~dup])  # judged without repeats
+    judged = jump_flags(meas[[c for c in JUMP_INPUTS if c in meas]][adsb & ~dup],  # judged without repeats
+                        columns=judged_columns)
     release_free_memory()  # the search's batches leave freed heap pages behind
     # a repeated report shares the verdict of the report it repeats: per group of ADS-B rows equal in
-    # every dedup key, each column takes its first non-missing value in frame order
+    # every dedup key, each column takes its first non-missing value in frame order. Only rows sharing
+    # their time and latitude with another ADS-B row can be in a group of several; the others keep their own
     rows = np.flatnonzero(adsb)
+    shared = shared_rows(meas, rows)
+    alone = np.zeros(0, np.int64) if shared is None else np.setdiff1d(rows, shared, assume_unique=True)
+    rows = rows if shared is None else shared
     order, group = repeat_groups(meas, keys, rows)
     at = np.full(len(meas), -1)  # position of each judged row within the judged frame
     at[np.flatnonzero(adsb & ~dup)] = np.arange(len(judged))
     in_key_order = rows[order]
     pos_all = at[in_key_order]  # judged position of each ADS-B row, in key order
+    alone_pos = at[alone]  # (never repeats: judged themselves)
     del at, rows
     out = {}
     for c in judged_columns:
@@ -598,6 +604,7 @@ def mark_once(meas: pd.DataFrame, *, split_adsb: bool = False, jumps: bool = Tru
         column = np.zeros(len(meas), bool) if c == "jump" else np.full(len(meas), np.nan)
         has = src >= 0
         column[in_key_order[has]] = values[src[has]]
+        column[alone] = values[alone_pos]
         out[c] = column
         del src, has, values
     return meas.assign(duplicate=dup, **out)

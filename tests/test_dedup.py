@@ -71,3 +71,35 @@ def test_duplicate_mask_in_time_blocks_equals_one_hashing_of_every_row(monkeypat
     monkeypatch.setattr(dedup, "DEDUP_BLOCK_ROWS", 700)
     got = dedup.duplicate_mask(frame)
     assert got.sum() > 1000 and got.equals(expected)
+
+
+def test_duplicate_mask_equals_hashing_every_row_with_awkward_keys():
+    """duplicate_mask hashes only rows sharing their time and latitude with another row; with times and
+    latitudes that are NaT, NaN, -0.0 or 0.0 (NaN equals NaN, -0.0 equals 0.0 as keys), it must flag exactly
+    what pandas' duplicated over every row flags, in one hashing and in time blocks."""
+    from pipeline.model import dedup
+
+    rng = np.random.default_rng(7)
+    n = 5_000
+    t = pd.Series(pd.to_datetime(rng.integers(0, 200, n) * 10**9, utc=True)).where(rng.random(n) > 0.02)
+    frame = pd.DataFrame({
+        "time": t, "latitude": rng.choice([0.0, -0.0, np.nan, 1.5], n),
+        "longitude": rng.choice([0.0, -0.0, np.nan], n), "ground_speed_kt": rng.choice([1.0, 2.0], n),
+        "heading_deg": 3.0})
+    expected = frame.duplicated(keep="first")
+    assert expected.sum() > 1000
+    assert dedup.duplicate_mask(frame).equals(expected)
+    by_time = frame.assign(time=frame["time"].dt.tz_localize(None))  # naive times too
+    assert dedup.duplicate_mask(by_time).equals(expected)
+
+
+def test_shared_rows_are_the_rows_that_share_time_and_latitude():
+    from pipeline.model.dedup import shared_rows
+
+    day = pd.Timestamp("2019-03-01", tz="UTC")
+    frame = pd.DataFrame({"time": day + pd.to_timedelta([1, 1, 1, 2, 2, np.nan, np.nan, 3], unit="s"),
+                          "latitude": [0.0, -0.0, 1.0, np.nan, np.nan, 5.0, 5.0, 1.0]})
+    # rows 0 and 1 (0.0 and -0.0 at 1 s), 3 and 4 (NaN at 2 s), 5 and 6 (5.0 at NaT); 2 and 7 alone
+    assert shared_rows(frame).tolist() == [0, 1, 3, 4, 5, 6]
+    assert shared_rows(frame, np.array([1, 2, 4, 5, 6, 7])).tolist() == [5, 6]
+    assert shared_rows(frame.drop(columns="latitude")) is None

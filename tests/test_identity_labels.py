@@ -4,11 +4,13 @@ first, the smallest of equally frequent values, "" when none; worked out by hand
 from __future__ import annotations
 
 import pandas as pd
+import pytest
 
 from pipeline.model.identity import aircraft_labels
 
 
-def test_labels_by_hand():
+@pytest.mark.parametrize("dtype", ["string", "category"])
+def test_labels_by_hand(dtype):
     rows = [  # aircraft_id, sensor_kind, callsign, address
         ("A", "adsb", "BBB", "AAAAAA"), ("A", "adsb", "AAA", "AAAAAA"), ("A", "adsb", "BBB", None),
         ("A", "adsb", "AAA", None), ("A", "radar", "ZZZ", None), ("A", "radar", "ZZZ", None),
@@ -17,7 +19,7 @@ def test_labels_by_hand():
         ("C", "adsb", None, None), ("C", "radar", None, "CCCCCC"),
         (None, "adsb", "NONE", "DDDDDD"),  # unidentified rows carry no label
     ]
-    meas = pd.DataFrame(rows, columns=["aircraft_id", "sensor_kind", "callsign", "address"]).astype("string")
+    meas = pd.DataFrame(rows, columns=["aircraft_id", "sensor_kind", "callsign", "address"]).astype(dtype)
     got = aircraft_labels(meas)
     assert got.to_dict("list") == {"aircraft_id": ["A", "B", "C"], "callsign": ["AAA", "RAD", ""],
                                    "address": ["AAAAAA", "BBBBBB", "CCCCCC"]}

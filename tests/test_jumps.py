@@ -263,27 +263,67 @@ def test_theil_sen_kernel_matches_a_plain_median_of_pairwise_slopes():
             assert fitted[i] == pytest.approx(expect, rel=1e-12, abs=1e-12, nan_ok=True)
 
 
-def test_refitting_only_changed_neighbourhoods_equals_refitting_everything():
-    """The search re-fits only reports whose neighbours changed; forcing a full re-fit every pass must give
-    the same jumps and fits (a run of jumps needs several passes)."""
+def test_refitting_only_changed_neighbourhoods_equals_refitting_everything(monkeypatch):
+    """After its first pass the search scores again only the reports near a flipped one, and re-fits only
+    those whose neighbours changed; scoring and re-fitting every report every pass must give the same jumps
+    and fits (runs of jumps need several passes; a rejected report is reinstated)."""
     from pipeline.model import jumps
 
     meas = pd.concat([track(np.arange(0, 600, 4.0), seed=s, address=f"75000{s}", callsign=f"T{s}")
                       for s in range(3)], ignore_index=True)
     meas.loc[[20, 21, 22, 90, 200, 201, 300], "latitude"] += [0.1, 0.12, -0.1, 0.2, 0.05, -0.05, 0.3]
+    # 40 more reports moved 1-5 km at random: with this seed one rejected report is reinstated
+    rng = np.random.default_rng(15)
+    hit = rng.choice(len(meas), 40, replace=False)
+    meas.loc[hit, "latitude"] += rng.choice([-1, 1], 40) * rng.uniform(0.01, 0.05, 40)
     meas["aircraft_id"] = assign_aircraft_id(meas)
+    passes, reinstated = [], []
+    search, rejected = jumps._Tracks.search, jumps._Tracks._rejected
+
+    def counted(self, *args):
+        calls = []
+        rescore = self.rescore
+        self.rescore = lambda accepted, rows, *a: (calls.append(rows.size), rescore(accepted, rows, *a))
+        out = search(self, *args)
+        passes.append(calls)
+        return out
+
+    def rejected_and_reinstated(self, accepted):
+        reinstated.append(int((~accepted & (self.score <= 1.0)).sum()))
+        return rejected(self, accepted)
+
+    monkeypatch.setattr(jumps._Tracks, "search", counted)
+    monkeypatch.setattr(jumps._Tracks, "_rejected", rejected_and_reinstated)
     incremental = jumps.jump_flags(meas)
+    first, *later = passes[0]  # later passes score fewer reports, the last a few
+    assert len(later) >= 2 and max(later) < first and later[-1] < first / 4
+    assert sum(reinstated) >= 1
 
-    full = jumps._Tracks.fit
+    fit = jumps._Tracks.fit
 
-    def fit_all(self, idx, threshold_m):
+    def fit_all(self, i, idx, threshold_m):
         self._fit = None
-        return full(self, idx, threshold_m)
+        return fit(self, i, idx, threshold_m)
 
-    jumps._Tracks.fit = fit_all
-    try:
-        everything = jumps.jump_flags(meas)
-    finally:
-        jumps._Tracks.fit = full
+    monkeypatch.setattr(jumps._Tracks, "fit", fit_all)
+    monkeypatch.setattr(jumps._Tracks, "affected", lambda self, kept, changed: np.arange(self.n))
+    everything = jumps.jump_flags(meas)
     assert incremental["jump"].sum() >= 5
     pd.testing.assert_frame_equal(incremental, everything, check_exact=True)
+
+
+def test_jump_flags_of_some_columns_equal_those_of_all():
+    """A job that reads only the jump verdict asks for that column alone (the fit distances are then not
+    worked out); the verdicts and fits it gets are those of the full call."""
+    from pipeline.model import jumps
+
+    meas = track(np.arange(0, 600, 4.0), seed=3, address="750003", callsign="T3")
+    meas.loc[[20, 21, 90], "latitude"] += [0.1, 0.12, 0.2]
+    meas["aircraft_id"] = assign_aircraft_id(meas)
+    full = jumps.jump_flags(meas)
+    assert full["jump"].sum() >= 3
+    for columns in (["jump"], ["fit_latitude", "jump"], []):
+        got = jumps.jump_flags(meas, columns=columns)
+        want = [c for c in jumps.JUMP_FLAG_COLUMNS if c in columns]
+        assert list(got.columns) == want
+        pd.testing.assert_frame_equal(got, full[want], check_exact=True)

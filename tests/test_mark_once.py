@@ -112,3 +112,18 @@ def test_two_radar_scenario_matches_reference(tmp_path):
     meas = build_measurements(radar, m.sim.adsb, sensors, date=pd.Timestamp("2019-03-01").date())
     got = _check(meas)
     assert got["duplicate"].any() and got["jump"].any()
+
+
+def test_only_the_jump_flag_when_asked(fixture_meas):
+    """flags=["jump"] (what correlate without --quality asks for): the duplicate and jump columns of the
+    documented rule, with repeats sharing the verdict, and no fit columns."""
+    first = mark_once(fixture_meas)
+    jumps = fixture_meas[first["jump"].to_numpy()]
+    meas = pd.concat([fixture_meas, jumps.assign(sensor_id="021:0/9"), jumps.iloc[::-1]], ignore_index=True)
+    for split in (False, True):
+        got = mark_once(meas, split_adsb=split, flags=["jump"])
+        want = reference(meas, split)
+        assert not {"jump_size_m", "fit_latitude", "fit_longitude"} & set(got.columns)
+        for c in ("duplicate", "jump"):
+            np.testing.assert_array_equal(got[c].to_numpy(), want[c].to_numpy(), err_msg=c)
+        assert got["jump"].iloc[len(fixture_meas):].all()

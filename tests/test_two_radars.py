@@ -134,3 +134,38 @@ def test_radar_radar_pairs_and_split_adsb(two):
     assert {w.summary["reference_sensor"] for w in split.windows} == {"021:0/1", "021:0/2"}
     with pytest.raises(ValueError, match="pairs must be one of"):
         correlate(meas, all_aircraft=True, pairs="adsb-adsb")
+
+
+def _same_runs(a, b) -> None:
+    assert [w.summary for w in a.windows] == [w.summary for w in b.windows]
+    for x, y in zip(a.windows, b.windows, strict=True):
+        pd.testing.assert_frame_equal(x.slots, y.slots, check_exact=True)
+        pd.testing.assert_frame_equal(x.lags, y.lags, check_exact=True)
+    assert a.skipped == b.skipped
+
+
+@pytest.mark.parametrize("split", [False, True])
+def test_job_wide_flags_give_the_windows_of_flags_worked_out_per_source(two, split):
+    """correlate() reads the duplicate and jump flags mark_once computed once for the job when the frame
+    carries them, else works them out per sensor source; with a second ground station relaying every third
+    ADS-B report and jumps put into the ADS-B track, both must give the same windows, counts and tables."""
+    from pipeline.jobs import mark_once
+
+    _, meas = two
+    adsb = (meas["sensor_kind"] == "adsb").to_numpy()
+    relay = meas[adsb & (np.arange(len(meas)) % 3 == 0)].assign(sensor_id="021:0/2")
+    both = pd.concat([meas, relay], ignore_index=True).sort_values("time", kind="stable")
+    both = both.assign(sensor_id=both["sensor_id"].astype("string").astype("category")).reset_index(drop=True)
+    hit = np.flatnonzero((both["sensor_kind"] == "adsb").to_numpy())[100::997]
+    both.loc[hit, "latitude"] += 0.1  # about 11 km off the track
+    per_source = correlate(both, all_aircraft=True, pairs="all", split_adsb=split)
+    job_wide = correlate(mark_once(both, split_adsb=split, flags=["jump"]), all_aircraft=True, pairs="all",
+                         split_adsb=split)
+    _same_runs(per_source, job_wide)
+    summaries = [w.summary for w in job_wide.windows if w.summary["reference_sensor"].startswith("021")]
+    assert sum(s["adsb_jumps"] for s in summaries) >= len(hit) // 2
+    if split:  # each station a source of its own
+        assert {s["reference_sensor"] for s in summaries} == {ADSB, "021:0/2"}
+    else:  # one source, where every third ADS-B report is a repeat of the other station's
+        assert {s["reference_sensor"] for s in summaries} == {ADSB + "+021:0/2"}
+        assert sum(s["adsb_duplicates"] for s in summaries) > len(relay) // 2

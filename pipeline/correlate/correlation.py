@@ -20,10 +20,10 @@ from pipeline.correlate.results import (
     SkippedWindow,
     WindowResult,
 )
-from pipeline.correlate.slots import SLOTTED_COLUMNS, slot_arrays, slot_count
+from pipeline.correlate.slots import SLOTTED_COLUMNS, slot_count, slot_series
 from pipeline.correlate.windows import in_window, overlap_windows, short_window_reason
-from pipeline.model.aircraft import Aircraft, NoSuchAircraft, iter_aircraft, one_aircraft
-from pipeline.model.dedup import duplicate_mask, sort_by_time
+from pipeline.model.aircraft import Aircraft, NoSuchAircraft, aircraft_rows, one_aircraft
+from pipeline.model.dedup import duplicate_mask
 from pipeline.model.geodesy import distance_m
 from pipeline.model.jumps import JUMP_FLAG_COLUMNS, detect_jumps
 from pipeline.model.time import is_dated, iso_utc, midnight, seconds_since, with_clock
@@ -198,13 +198,14 @@ def _none_if_nan(v):
     return None if isinstance(v, float) and math.isnan(v) else v
 
 
-def _window_result(ac: Aircraft, number: int, start_s: float, end_s: float, radar: pd.DataFrame,
-                   adsb: pd.DataFrame, dups: tuple[int, int], slot_s: float,
-                   reference: pd.Timestamp, sensors: dict[str, str], adsb_jumps: int = 0,
-                   predictors: tuple = (None, None)) -> WindowResult:
-    """Slot, correlate and summarise one window; with predictors (``--fill predict``), empty slots take
-    the tracker's prediction (pipeline.correlate.fill) instead of the previous slot."""
-    rs, as_ = slot_arrays(radar, start_s, end_s, slot_s), slot_arrays(adsb, start_s, end_s, slot_s)
+def _window_result(ac: tuple[str, str], number: int, start_s: float, end_s: float,
+                   radar: tuple[np.ndarray, ...], adsb: tuple[np.ndarray, ...],
+                   dups: tuple[int, int], slot_s: float, reference: pd.Timestamp, sensors: dict[str, str],
+                   adsb_jumps: int = 0, predictors: tuple = (None, None)) -> WindowResult:
+    """Slot, correlate and summarise one window of one aircraft (call sign, address) from each side's
+    reports in it (time of day, latitude, longitude arrays); with predictors (``--fill predict``), empty
+    slots take the tracker's prediction (pipeline.correlate.fill) instead of the previous slot."""
+    rs, as_ = slot_series(*radar, start_s, end_s, slot_s), slot_series(*adsb, start_s, end_s, slot_s)
     if predictors[0] is not None or predictors[1] is not None:
         from pipeline.correlate.fill import fill_predicted
 
@@ -232,11 +233,11 @@ def _window_result(ac: Aircraft, number: int, start_s: float, end_s: float, rada
     lag_frame = pd.DataFrame(dict(zip(LAG_COLUMNS, [lags, ncc_lat, ncc_lon, p_lat, p_lon], strict=True)))
     zero = len(slots) - 1
     summary = {
-        "callsign": ac.callsign, "address": ac.address, "window": number, **sensors,
+        "callsign": ac[0], "address": ac[1], "window": number, **sensors,
         "start_tod": float(start_s), "end_tod": float(end_s),
         "start": at_seconds(reference, start_s), "end": at_seconds(reference, end_s), "slots": len(slots),
-        "radar_before": len(radar), "radar_after": len(slots),
-        "adsb_before": len(adsb), "adsb_after": len(slots),
+        "radar_before": len(radar[0]), "radar_after": len(slots),
+        "adsb_before": len(adsb[0]), "adsb_after": len(slots),
         "radar_duplicates": dups[0], "adsb_duplicates": dups[1], "adsb_jumps": adsb_jumps,
         "radar_filled_slots": int(rs["filled"].sum()),
         "adsb_filled_slots": int(as_["filled"].sum()),
@@ -252,8 +253,10 @@ def _window_result(ac: Aircraft, number: int, start_s: float, end_s: float, rada
     return WindowResult(summary=summary, slots=slots, lags=lag_frame)
 
 
-def _span(times: pd.Series) -> tuple[float, float]:
-    return float(times.min()), float(times.max())
+def _span(times: np.ndarray) -> tuple[float, float]:
+    """Earliest and latest time, NaN ignored (NaN when there is none)."""
+    t = times[~np.isnan(times)]
+    return (float(t.min()), float(t.max())) if t.size else (math.nan, math.nan)
 
 
 def sources(meas: pd.DataFrame, kind: str, split_adsb: bool = False) -> dict[str, pd.DataFrame]:
@@ -284,26 +287,119 @@ def sensor_pairs(ac: Aircraft, pairs: str = "radar-adsb", split_adsb: bool = Fal
     return out
 
 
-def _correlate_pair(ac: Aircraft, run: CorrelationRun, pair: tuple[str, pd.DataFrame, str, pd.DataFrame],
+class _Columns:
+    """The columns correlate() reads, as arrays over the rows of a measurement frame (read once per run,
+    not per aircraft or sensor pair); ``dup`` and ``jump`` are None when the frame does not carry the
+    job-wide flags (pipeline.jobs.mark_once), which are then worked out per source as before."""
+
+    def __init__(self, meas: pd.DataFrame):
+        self.meas = meas
+        self.time_ns = meas["time"].array.asi8  # (a view: nothing of the run's size is copied but flags)
+        self.tod = meas["time_of_day"].to_numpy(float)
+        self.lat, self.lon = meas["latitude"].to_numpy(float), meas["longitude"].to_numpy(float)
+        self.is_adsb = (meas["sensor_kind"] == "adsb").to_numpy(bool)
+        sid = meas["sensor_id"]
+        if isinstance(sid.dtype, pd.CategoricalDtype):  # grouped in category order, as groupby does
+            self.sensor = sid.cat.codes.to_numpy()
+            self.names = [str(c) for c in sid.cat.categories]
+        else:
+            codes, uniques = pd.factorize(sid, sort=True)
+            self.sensor, self.names = codes, [str(u) for u in uniques]
+        self.dup = meas["duplicate"].astype(bool).to_numpy() if "duplicate" in meas else None
+        self.jump = meas["jump"].fillna(False).astype(bool).to_numpy() if "jump" in meas else None
+
+    def time_order(self, rows: np.ndarray) -> np.ndarray:
+        """``rows`` in sort_by_time's order: stable by time, NaT last."""
+        key = self.time_ns[rows]
+        key = np.where(key == np.iinfo(np.int64).min, np.iinfo(np.int64).max, key)  # NaT: the smallest
+        return rows[np.argsort(key, kind="stable")]
+
+    def by_sensor(self, rows: np.ndarray) -> dict[str, np.ndarray]:
+        """Rows (ascending positions) grouped by sensor_id in groupby order; rows without one are left out."""
+        codes = self.sensor[rows]
+        return {self.names[c]: rows[codes == c] for c in np.unique(codes[codes >= 0])}
+
+    def sources(self, radar_rows: np.ndarray, other_rows: np.ndarray, split_adsb: bool
+                ) -> tuple[dict[str, np.ndarray], dict[str, np.ndarray]]:
+        """One aircraft's radar sources and ADS-B sources (rows of each), as ``sources`` gives them."""
+        adsb = other_rows[self.is_adsb[other_rows]]
+        if not adsb.size:
+            return self.by_sensor(radar_rows), {}
+        if split_adsb:
+            return self.by_sensor(radar_rows), self.by_sensor(adsb)
+        codes = np.unique(self.sensor[adsb])
+        return self.by_sensor(radar_rows), {"+".join(sorted(self.names[c] for c in codes if c >= 0)): adsb}
+
+
+class _Source:
+    """One sensor source of one aircraft, ready for windows: its reports in time order without repeats
+    (time of day, latitude, longitude), the times of its repeats and of its ADS-B jumps, and (for
+    ``--fill predict``) its reports as a frame."""
+
+    def __init__(self, cols: _Columns, rows: np.ndarray, frame: bool = False):
+        order = cols.time_order(rows)
+        meas = cols.meas
+        if cols.dup is not None:
+            dup = cols.dup[order]
+        else:  # per source, as duplicate_mask reads it
+            dup = duplicate_mask(meas.iloc[order].reset_index(drop=True)).to_numpy(bool)
+        kept = order[~dup]
+        self.dup_t = cols.tod[order[dup]]
+        self.t, self.lat, self.lon = cols.tod[kept], cols.lat[kept], cols.lon[kept]
+        self.jump_t = np.array([])
+        if kept.size and cols.is_adsb[kept].all():  # jumps are an ADS-B notion
+            if cols.jump is not None:
+                jump = cols.jump[kept]
+            else:
+                jump = detect_jumps(meas.iloc[kept].reset_index(drop=True)).to_numpy(bool)
+            self.jump_t = self.t[jump]
+        self.frame = meas.iloc[kept].reset_index(drop=True) if frame else None
+
+    def inside(self, start_s: float, end_s: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Its reports inside [start, end]."""
+        keep = in_window(self.t, start_s, end_s)
+        return self.t[keep], self.lat[keep], self.lon[keep]
+
+
+def _aircraft_pairs(cols: _Columns, radar_rows: np.ndarray, other_rows: np.ndarray, pairs: str,
+                    split_adsb: bool, fill: str) -> list[tuple[str, _Source, str, _Source]]:
+    """``sensor_pairs`` of one aircraft given by its rows, each source prepared once for all its pairs."""
+    if pairs not in PAIRS:
+        raise ValueError(f"pairs must be one of {', '.join(PAIRS)}, got {pairs!r}")
+    radars, adsb = cols.sources(radar_rows, other_rows, split_adsb)
+    made: dict[tuple[str, str], _Source] = {}
+
+    def source(kind: str, name: str, rows: np.ndarray) -> _Source:
+        if (kind, name) not in made:
+            made[kind, name] = _Source(cols, rows, frame=fill == "predict")
+        return made[kind, name]
+
+    out = []
+    if pairs in ("radar-adsb", "all"):
+        out += [(r, source("radar", r, rr), a, source("adsb", a, ar))
+                for r, rr in radars.items() for a, ar in adsb.items()]
+    if pairs in ("radar-radar", "all"):
+        ids = sorted(radars)
+        out += [(a, source("radar", a, radars[a]), b, source("radar", b, radars[b]))
+                for i, a in enumerate(ids) for b in ids[i + 1:]]
+    return out
+
+
+def _correlate_pair(ac: tuple[str, str], run: CorrelationRun, pair: tuple[str, _Source, str, _Source],
                     slot_s: float, gap_s: float, reference: pd.Timestamp, fill: str = "hold",
                     budget: list[int] | None = None) -> NoOverlap | None:
-    """Append the windows (or skipped windows) of one aircraft and sensor pair to ``run``; the NoOverlap
-    when the two sensors never overlap. ``budget`` holds the slots used so far by the run (TooManySlots
-    past MAX_SLOTS, checked before any window of the pair is slotted)."""
-    radar_id, radar, ref_id, other = pair
-    radar, adsb = sort_by_time(radar), sort_by_time(other)
-    r_dup, a_dup = duplicate_mask(radar).to_numpy(), duplicate_mask(adsb).to_numpy()
-    r_dup_t, a_dup_t = radar["time_of_day"].to_numpy()[r_dup], adsb["time_of_day"].to_numpy()[a_dup]
-    radar, adsb = radar[~r_dup].reset_index(drop=True), adsb[~a_dup].reset_index(drop=True)
-    is_adsb = len(adsb) and bool((adsb["sensor_kind"] == "adsb").all())  # jumps are an ADS-B notion
-    jump_t = adsb["time_of_day"].to_numpy()[detect_jumps(adsb).to_numpy()] if is_adsb else np.array([])
-    windows = overlap_windows(radar["time_of_day"], adsb["time_of_day"], gap_s)
+    """Append the windows (or skipped windows) of one aircraft (call sign, address) and sensor pair to
+    ``run``; the NoOverlap when the two sensors never overlap. ``budget`` holds the slots used so far by
+    the run (TooManySlots past MAX_SLOTS, checked before any window of the pair is slotted)."""
+    radar_id, radar, ref_id, adsb = pair
+    callsign, address = ac
+    windows = overlap_windows(radar.t, adsb.t, gap_s)
     sensors = {"radar_sensor": radar_id, "reference_sensor": ref_id}
     if not windows:
-        label = f"{ac.callsign or ac.address} ({radar_id} and {ref_id})"
-        r_span, a_span = _span(radar["time_of_day"]), _span(adsb["time_of_day"])
+        label = f"{callsign or address} ({radar_id} and {ref_id})"
+        r_span, a_span = _span(radar.t), _span(adsb.t)
         gap = NoOverlap(label, r_span, a_span, reference)
-        run.skipped.append(SkippedWindow(ac.callsign, ac.address, min(r_span[0], a_span[0]),
+        run.skipped.append(SkippedWindow(callsign, address, min(r_span[0], a_span[0]),
                                          max(r_span[1], a_span[1]), str(gap), **sensors))
         return gap
     if budget is not None:
@@ -314,24 +410,21 @@ def _correlate_pair(ac: Aircraft, run: CorrelationRun, pair: tuple[str, pd.DataF
     if fill == "predict":  # each side's own forward track, coasting across the longest gap a window has
         from pipeline.correlate.fill import track_predictor
 
-        predictors = (track_predictor(radar, reference, max(gap_s, slot_s)),
-                      track_predictor(adsb, reference, max(gap_s, slot_s)))
+        predictors = (track_predictor(radar.frame, reference, max(gap_s, slot_s)),
+                      track_predictor(adsb.frame, reference, max(gap_s, slot_s)))
     number = 0
-    slotted = ["time_of_day", "latitude", "longitude"]  # all a window reads of its reports
-    radar_xy, adsb_xy = radar[slotted], adsb[slotted]
-    r_t, a_t = radar_xy["time_of_day"].to_numpy(), adsb_xy["time_of_day"].to_numpy()
     for start_s, end_s in windows:
-        r_in = radar_xy[in_window(r_t, start_s, end_s)]
-        a_in = adsb_xy[in_window(a_t, start_s, end_s)]
+        r_in, a_in = radar.inside(start_s, end_s), adsb.inside(start_s, end_s)
         reason = short_window_reason(start_s, end_s, slot_s)
-        if reason is None and (r_in.empty or a_in.empty):
-            reason = f"no {radar_id if r_in.empty else ref_id} measurement inside the window"
+        if reason is None and (not r_in[0].size or not a_in[0].size):
+            reason = f"no {radar_id if not r_in[0].size else ref_id} measurement inside the window"
         if reason:
-            run.skipped.append(SkippedWindow(ac.callsign, ac.address, start_s, end_s, reason, **sensors))
+            run.skipped.append(SkippedWindow(callsign, address, start_s, end_s, reason, **sensors))
             continue
         number += 1
-        dups = (int(in_window(r_dup_t, start_s, end_s).sum()), int(in_window(a_dup_t, start_s, end_s).sum()))
-        jumps = int(in_window(jump_t, start_s, end_s).sum())
+        dups = (int(in_window(radar.dup_t, start_s, end_s).sum()),
+                int(in_window(adsb.dup_t, start_s, end_s).sum()))
+        jumps = int(in_window(adsb.jump_t, start_s, end_s).sum())
         run.windows.append(_window_result(ac, number, start_s, end_s, r_in, a_in, dups, slot_s, reference,
                                           sensors, jumps, predictors))
     return None
@@ -369,8 +462,9 @@ def correlate(meas: pd.DataFrame, *, callsign: str | None = None, address: str |
         **({"fill": fill} if fill != "hold" else {}),  # the thesis default leaves the parameters as they were
         "date": reference.date().isoformat() if is_dated(reference) else None})
     need_adsb = pairs == "radar-adsb"
-    if all_aircraft:  # one aircraft's rows at a time (iter_aircraft), not a second copy of the run
-        targets = iter_aircraft(meas, need_adsb=need_adsb)
+    if all_aircraft:  # one aircraft's rows at a time (aircraft_rows), not a second copy of the run
+        cols = _Columns(meas)
+        targets = aircraft_rows(meas, need_adsb=need_adsb)
         first = next(targets, None)
         if first is None:
             raise NoSuchAircraft("any aircraft", ["radar", "ADS-B"], [],
@@ -378,11 +472,16 @@ def correlate(meas: pd.DataFrame, *, callsign: str | None = None, address: str |
         targets = itertools.chain([first], targets)
         del first
     else:
-        targets = iter([one_aircraft(meas, callsign, address, need_adsb=need_adsb)])
+        ac = one_aircraft(meas, callsign, address, need_adsb=need_adsb)
+        cols = _Columns(pd.concat([ac.radar, ac.adsb], ignore_index=True))
+        targets = iter([(ac.callsign, ac.address, ac.aircraft_id, np.arange(len(ac.radar)),
+                         np.arange(len(ac.radar), len(ac.radar) + len(ac.adsb)))])
+        del ac
     paired, budget = False, [0]
-    for ac in targets:
-        found = [_correlate_pair(ac, run, pair, slot_s, gap_s, reference, fill, budget)
-                 for pair in sensor_pairs(ac, pairs, split_adsb)]
+    for callsign_label, address_label, _, radar_rows, other_rows in targets:
+        found = [_correlate_pair((callsign_label, address_label), run, pair, slot_s, gap_s, reference, fill,
+                                 budget)
+                 for pair in _aircraft_pairs(cols, radar_rows, other_rows, pairs, split_adsb, fill)]
         paired |= bool(found)
         if not all_aircraft and found and all(f is not None for f in found):
             raise found[0]

@@ -37,11 +37,16 @@ def slot_window(meas: pd.DataFrame, start_s: float, end_s: float, slot_s: float 
 def slot_arrays(meas: pd.DataFrame, start_s: float, end_s: float,
                 slot_s: float = 10.0) -> dict[str, np.ndarray]:
     """slot_window's columns as arrays (no frame: the correlation builds its own per window)."""
+    return slot_series(meas["time_of_day"].to_numpy(float), meas["latitude"].to_numpy(float),
+                       meas["longitude"].to_numpy(float), start_s, end_s, slot_s)
+
+
+def slot_series(t: np.ndarray, lat: np.ndarray, lon: np.ndarray, start_s: float, end_s: float,
+                slot_s: float = 10.0) -> dict[str, np.ndarray]:
+    """slot_arrays of reports given as arrays of time of day (s), latitude and longitude (deg)."""
     n = slot_count(start_s, end_s, slot_s)
-    t = meas["time_of_day"].to_numpy(float)
     inside = (t >= start_s) & (t <= end_s)
-    lat = meas["latitude"].to_numpy(float)[inside]
-    lon = meas["longitude"].to_numpy(float)[inside]
+    lat, lon = lat[inside], lon[inside]
     k = slot_index(t[inside], start_s, slot_s)
     count = np.bincount(k, minlength=n)[:n]
     with np.errstate(invalid="ignore", divide="ignore"):

@@ -83,6 +83,15 @@ def all_aircraft(meas: pd.DataFrame, *, need_adsb: bool = True) -> list[Aircraft
 def iter_aircraft(meas: pd.DataFrame, *, need_adsb: bool = True) -> Iterator[Aircraft]:
     """``all_aircraft`` one at a time: each aircraft's rows are copied out of ``meas`` only when it comes,
     so the whole run is never held twice."""
+    for callsign, address, ident, radar, other in aircraft_rows(meas, need_adsb=need_adsb):
+        yield Aircraft(callsign, address, meas.iloc[radar].reset_index(drop=True),
+                       meas.iloc[other].reset_index(drop=True), ident)
+
+
+def aircraft_rows(meas: pd.DataFrame, *, need_adsb: bool = True
+                  ) -> Iterator[tuple[str, str, str, np.ndarray, np.ndarray]]:
+    """Per aircraft, in ``all_aircraft`` order: its call sign and address labels, its ``aircraft_id``, and the
+    positions in ``meas`` (ascending) of its radar rows and of its other rows; no row is copied."""
     radar = (meas["sensor_kind"] == "radar").to_numpy(bool)
     ident = meas["aircraft_id"]
     rows = {kind: ident[mask].groupby(ident[mask], sort=False, observed=True).indices  # positions in mask
@@ -92,6 +101,5 @@ def iter_aircraft(meas: pd.DataFrame, *, need_adsb: bool = True) -> Iterator[Air
     ids = set(rows["radar"])
     chosen = sorted(ids & set(rows["adsb"]) if need_adsb else ids)
     for ident in sorted(chosen, key=lambda i: (labels.at[i, "callsign"], labels.at[i, "address"])):
-        r = meas.iloc[at["radar"][rows["radar"][ident]]].reset_index(drop=True)
-        a = meas.iloc[at["adsb"][rows["adsb"].get(ident, np.zeros(0, np.int64))]].reset_index(drop=True)
-        yield Aircraft(labels.at[ident, "callsign"], labels.at[ident, "address"], r, a, ident)
+        yield (labels.at[ident, "callsign"], labels.at[ident, "address"], ident,
+               at["radar"][rows["radar"][ident]], at["adsb"][rows["adsb"].get(ident, np.zeros(0, np.int64))])

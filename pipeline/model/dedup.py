@@ -35,7 +35,7 @@ def duplicate_mask(meas: pd.DataFrame, *, split_adsb: bool = False) -> pd.Series
         meas = meas[keys].assign(_source=source)
         keys = ["_source", *keys]
     if "time" not in keys or len(meas) <= DEDUP_BLOCK_ROWS:
-        return meas.duplicated(subset=keys, keep="first")
+        return pd.Series(_duplicated(meas, keys), index=meas.index)
     # rows at different times are never repeats: look for them among blocks of whole time values, so
     # the hashing works on one block at a time (bounded memory), each block in frame order
     t = pd.DatetimeIndex(meas["time"]).asi8
@@ -49,8 +49,36 @@ def duplicate_mask(meas: pd.DataFrame, *, split_adsb: bool = False) -> pd.Series
     for a, b in zip(cuts[:-1], cuts[1:], strict=True):
         if b > a:
             rows = np.sort(by_time[a:b])
-            dup[rows] = meas.iloc[rows].duplicated(subset=keys, keep="first").to_numpy(bool)
+            dup[rows] = _duplicated(meas.iloc[rows], keys)
     return pd.Series(dup, index=meas.index)
+
+
+def _duplicated(meas: pd.DataFrame, keys: list[str]) -> np.ndarray:
+    """pandas' duplicated (first kept) over ``keys``, hashing only the rows that share their time and
+    latitude with another row: a repeat shares every key, and most rows share neither."""
+    rows = shared_rows(meas)
+    dup = np.zeros(len(meas), bool)
+    if rows is None:
+        return meas.duplicated(subset=keys, keep="first").to_numpy(bool)
+    if rows.size:
+        dup[rows] = meas.iloc[rows].duplicated(subset=keys, keep="first").to_numpy(bool)
+    return dup
+
+
+def shared_rows(meas: pd.DataFrame, rows: np.ndarray | None = None) -> np.ndarray | None:
+    """Positions (ascending; among ``rows`` when given, counted in the frame) of the rows whose time and
+    latitude both equal those of another of these rows (NaN equals NaN, NaT equals NaT, -0.0 equals 0.0):
+    the only rows that can repeat or be repeated. None when the frame lacks either column."""
+    if "time" not in meas or "latitude" not in meas:
+        return None
+    try:
+        t, lat = (_bits(_key_array(meas[c]) if rows is None else _key_array(meas[c])[rows])
+                  for c in ("time", "latitude"))
+    except (TypeError, ValueError):  # not numbers or times: every row is hashed
+        return None
+    key = pd.Series(t * np.int64(-7046029254386353131) ^ lat)  # rows equal in both: equal key
+    shared = np.flatnonzero(key.duplicated(keep=False).to_numpy(bool))
+    return shared if rows is None else rows[shared]
 
 
 def deduplicate(meas: pd.DataFrame) -> tuple[pd.DataFrame, int]:
@@ -66,6 +94,14 @@ def _key_array(column: pd.Series) -> np.ndarray:
     if isinstance(column.dtype, pd.DatetimeTZDtype) or column.dtype.kind == "M":
         return pd.DatetimeIndex(column).asi8
     return column.to_numpy(dtype=float, na_value=np.nan)
+
+
+def _bits(values: np.ndarray) -> np.ndarray:
+    """int64 numbers equal exactly when the values are equal as keys: floats by their bits, with one NaN
+    and -0.0 made 0.0; datetimes (int64 ns) as they are."""
+    if values.dtype.kind == "f":
+        values = np.where(np.isnan(values), np.nan, values.astype(float) + 0.0).view(np.int64)
+    return values.astype(np.int64, copy=False)
 
 
 def repeat_groups(meas: pd.DataFrame, keys: list[str], rows: np.ndarray | None = None

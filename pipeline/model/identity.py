@@ -100,6 +100,9 @@ def aircraft_labels(meas: pd.DataFrame) -> pd.DataFrame:
 
 def _most_common_by(meas: pd.DataFrame, column: str) -> pd.Series:
     """Per aircraft_id, its most frequent non-missing ``column`` value (the smallest on ties), as text."""
+    ident, values = meas["aircraft_id"], meas[column]
+    if isinstance(ident.dtype, pd.CategoricalDtype) and isinstance(values.dtype, pd.CategoricalDtype):
+        return _most_common_codes(ident, values)
     pairs = meas[["aircraft_id", column]].dropna()
     if pairs.empty:
         return pd.Series(dtype=object)
@@ -109,3 +112,19 @@ def _most_common_by(meas: pd.DataFrame, column: str) -> pd.Series:
     top = counts.drop_duplicates("aircraft_id")
     return pd.Series(top[column].map(str).to_numpy(dtype=object),
                      index=top["aircraft_id"].map(str).to_numpy())
+
+
+def _most_common_codes(ident: pd.Series, values: pd.Series) -> pd.Series:
+    """_most_common_by for categorical columns, on their codes (the smallest in category order on ties, as
+    sorting the categorical does); no per-row object is made."""
+    a, c = ident.cat.codes.to_numpy(np.int64), values.cat.codes.to_numpy(np.int64)
+    both = (a >= 0) & (c >= 0)
+    if not both.any():
+        return pd.Series(dtype=object)
+    n_values = len(values.cat.categories)
+    pair, count = np.unique(a[both] * n_values + c[both], return_counts=True)
+    pa, pc = pair // n_values, pair % n_values
+    order = np.lexsort((pc, -count, pa))  # per aircraft: most frequent first, then the smallest code
+    top = order[np.r_[True, pa[order][1:] != pa[order][:-1]]]
+    return pd.Series([str(v) for v in values.cat.categories[pc[top]]],
+                     index=[str(v) for v in ident.cat.categories[pa[top]]], dtype=object)

@@ -126,20 +126,25 @@ class _Tracks:
         size = np.diff(np.r_[first, self.n])
         self.seg_lo = np.repeat(first, size)
         self.seg_hi = self.seg_lo + np.repeat(size, size)
-        self._idx, self._fit = None, None  # the last fit's neighbours and its per-report results
+        self.width = 2 * half
+        # per report, from the last pass that re-scored it: its neighbours, the Theil-Sen results
+        # (_theil_sen's six arrays), the fitted position (NaN with too few neighbours) and the score
+        self.idx = np.full((self.n, self.width), -1, dtype=np.int64)
+        self._fit = None
+        self.fit_lat, self.fit_lon = np.full(self.n, np.nan), np.full(self.n, np.nan)
+        self.score = np.zeros(self.n)
 
-    def _accepted_ranges(self, acc: np.ndarray):
-        """Per report: accepted positions before it (left), up to and including it (right), and the
+    def _accepted_ranges(self, acc: np.ndarray, i: np.ndarray):
+        """Per report ``i``: accepted positions before it (left), up to and including it (right), and the
         accepted range [lo, hi) of its segment, all as indices into ``acc``."""
-        i = np.arange(self.n)
         return (np.searchsorted(acc, i, side="left"), np.searchsorted(acc, i, side="right"),
-                np.searchsorted(acc, self.seg_lo, side="left"),
-                np.searchsorted(acc, self.seg_hi, side="left"))
+                np.searchsorted(acc, self.seg_lo[i], side="left"),
+                np.searchsorted(acc, self.seg_hi[i], side="left"))
 
     def neighbours(self, acc: np.ndarray, left, right, lo, hi) -> np.ndarray:
         """Indices (n, 2*half) of the nearest accepted reports of its segment, itself excluded (-1: none)."""
         excl = right - left
-        width = 2 * self.half
+        width = self.width
         last = hi - excl  # one past the last index of the virtual list acc[lo:left] + acc[right:hi]
         start = np.minimum(np.maximum(left - self.half, lo), np.maximum(lo, last - width))
         v = start[:, None] + np.arange(width)[None, :]
@@ -147,71 +152,98 @@ class _Tracks:
         safe = acc[np.clip(pos, 0, acc.size - 1)] if acc.size else np.zeros_like(pos)
         return np.where(v < last[:, None], safe, -1)
 
-    def fit(self, idx: np.ndarray, threshold_m: float):
-        """Theil-Sen prediction of each report from its neighbours; score = distance / allowed distance.
-        Only reports whose neighbours changed since the previous call are re-fitted."""
-        if self._fit is None:
-            self._fit = _theil_sen(self.t, self.lat, self.lon, idx, np.arange(self.n))
+    def fit(self, i: np.ndarray, idx: np.ndarray, threshold_m: float):
+        """Theil-Sen prediction of reports ``i`` from their neighbours ``idx``; score = distance / allowed
+        distance. Only reports whose neighbours changed since they were last fitted are re-fitted."""
+        if self._fit is None:  # (the first pass fits every report)
+            self._fit = _theil_sen(self.t, self.lat, self.lon, idx, i)
         else:
-            rows = np.flatnonzero((idx != self._idx).any(axis=1))
-            part = _theil_sen(self.t, self.lat, self.lon, idx[rows], rows)
-            for whole, new in zip(self._fit, part, strict=True):
-                whole[rows] = new
-        self._idx = idx
-        fit_lat, fit_lon, dt_b, dt_a, far, count = self._fit
+            new = (idx != self.idx[i]).any(axis=1)
+            part = _theil_sen(self.t, self.lat, self.lon, idx[new], i[new])
+            for whole, values in zip(self._fit, part, strict=True):
+                whole[i[new]] = values
+        self.idx[i] = idx
+        fit_lat, fit_lon, dt_b, dt_a, far, count = (a[i] for a in self._fit)
         tau2 = np.where(np.isfinite(dt_b) & np.isfinite(dt_a), dt_b * dt_a, np.fmin(dt_b, dt_a) * far)
         enough = count >= MIN_FIT_NEIGHBOURS
         fit_lat = np.where(enough, fit_lat, np.nan)
         fit_lon = np.where(enough, fit_lon, np.nan)
         allowed = threshold_m + 0.5 * TURN_ACCEL_MS2 * np.nan_to_num(tau2)
-        return np.nan_to_num(_flat_m(self.lat, self.lon, fit_lat, fit_lon) / allowed), fit_lat, fit_lon
+        return np.nan_to_num(_flat_m(self.lat[i], self.lon[i], fit_lat, fit_lon) / allowed), fit_lat, fit_lon
 
-    def _pair_score(self, j: np.ndarray, ok: np.ndarray, v_max_ms: float) -> np.ndarray:
-        """Distance / (max speed * dt + slack) from each report to report j (0 where ok is False)."""
+    def _pair_score(self, i: np.ndarray, j: np.ndarray, ok: np.ndarray, v_max_ms: float) -> np.ndarray:
+        """Distance / (max speed * dt + slack) from each report i to report j (0 where ok is False)."""
         jj = np.where(ok, j, 0)
-        allowed = v_max_ms * np.abs(self.t - self.t[jj]) + SPEED_SLACK_M
-        return np.where(ok, _flat_m(self.lat, self.lon, self.lat[jj], self.lon[jj]) / allowed, 0.0)
+        allowed = v_max_ms * np.abs(self.t[i] - self.t[jj]) + SPEED_SLACK_M
+        return np.where(ok, _flat_m(self.lat[i], self.lon[i], self.lat[jj], self.lon[jj]) / allowed, 0.0)
 
-    def speed(self, acc: np.ndarray, left, right, lo, hi, v_max_ms: float) -> np.ndarray:
-        """Speed-test score: min over both sides, or over the two nearest reports on the only side."""
+    def speed(self, i: np.ndarray, acc: np.ndarray, left, right, lo, hi, v_max_ms: float) -> np.ndarray:
+        """Speed-test score of reports ``i``: min over both sides, or over the two nearest reports on the
+        only side."""
         def at(k: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
             ok = (k >= lo) & (k < hi)
             return (acc[np.clip(k, 0, acc.size - 1)] if acc.size else np.zeros_like(k)), ok
 
         (p1, ok_p1), (p2, ok_p2) = at(left - 1), at(left - 2)
         (n1, ok_n1), (n2, ok_n2) = at(right), at(right + 1)
-        s_p1, s_p2 = self._pair_score(p1, ok_p1, v_max_ms), self._pair_score(p2, ok_p2, v_max_ms)
-        s_n1, s_n2 = self._pair_score(n1, ok_n1, v_max_ms), self._pair_score(n2, ok_n2, v_max_ms)
+        s_p1, s_p2 = self._pair_score(i, p1, ok_p1, v_max_ms), self._pair_score(i, p2, ok_p2, v_max_ms)
+        s_n1, s_n2 = self._pair_score(i, n1, ok_n1, v_max_ms), self._pair_score(i, n2, ok_n2, v_max_ms)
         one_sided = np.where(ok_n2 & ~ok_p1, np.minimum(s_n1, s_n2),
                              np.where(ok_p2 & ~ok_n1, np.minimum(s_p1, s_p2), 0.0))
         return np.where(ok_p1 & ok_n1, np.minimum(s_p1, s_n1), one_sided)
 
-    def _local_max(self, live: np.ndarray) -> np.ndarray:
-        """Per report, the largest ``live`` within +-half reports of it in its own segment (never across
-        segments: another aircraft's or another stretch's offenders do not hold a report back)."""
-        out = live.copy()
-        i = np.arange(self.n)
+    def rescore(self, accepted: np.ndarray, i: np.ndarray, v_max_ms: float, threshold_m: float) -> None:
+        """Score reports ``i`` (ascending) against the accepted reports: the larger of the fit and speed
+        scores, and the fitted position."""
+        acc = np.flatnonzero(accepted)
+        ranges = self._accepted_ranges(acc, i)
+        fit_score, self.fit_lat[i], self.fit_lon[i] = self.fit(i, self.neighbours(acc, *ranges), threshold_m)
+        self.score[i] = np.fmax(fit_score, self.speed(i, acc, *ranges, v_max_ms))
+
+    def affected(self, kept: np.ndarray, changed: np.ndarray) -> np.ndarray:
+        """Reports (ascending) whose neighbours or speed-test reports may differ once the ``changed``
+        reports flip: the changed reports and those of their segment with fewer than 2*half + 1 ``kept``
+        reports (accepted before and after the flip) between them (a report reads at most 2*half accepted
+        reports on either side, and the speed test two)."""
+        stable = np.concatenate([[0], np.cumsum(kept)])  # stable[k]: kept reports before k
+        reach = self.width + 1
+        hi = np.minimum(np.searchsorted(stable, stable[changed + 1] + reach, side="left") - 1,
+                        self.seg_hi[changed] - 1)
+        lo = np.maximum(np.searchsorted(stable, stable[changed] - reach, side="right") - 1,
+                        self.seg_lo[changed])
+        edges = np.zeros(self.n + 1, np.int64)
+        np.add.at(edges, lo, 1)
+        np.add.at(edges, hi + 1, -1)
+        return np.flatnonzero(np.cumsum(edges[:-1]) > 0)
+
+    def _rejected(self, accepted: np.ndarray) -> np.ndarray:
+        """Accepted reports scoring above 1 that score at least as high as every accepted report within
+        +-half reports of them in their own segment (never across segments: another aircraft's or another
+        stretch's offenders do not hold a report back)."""
+        live = np.where(accepted, self.score, -np.inf)
+        c = np.flatnonzero(live > 1.0)
+        most = live[c]
         for d in range(1, self.half + 1):
-            out = np.where(i - d >= self.seg_lo, np.maximum(out, live[np.maximum(i - d, 0)]), out)
-            out = np.where(i + d < self.seg_hi, np.maximum(out, live[np.minimum(i + d, self.n - 1)]), out)
-        return out
+            for j, inside in ((c - d, c - d >= self.seg_lo[c]), (c + d, c + d < self.seg_hi[c])):
+                most = np.where(inside, np.maximum(most, live[np.clip(j, 0, self.n - 1)]), most)
+        return c[live[c] >= most]
 
     def search(self, v_max_ms: float, threshold_m: float):
         """Reject the worst offender per neighbourhood and reinstate what fits, until stable; the jump
-        mask and each report's fitted position against the final accepted reports."""
+        mask and each report's fitted position against the final accepted reports. After the first pass
+        only the reports near a flipped one are scored again."""
         accepted = np.ones(self.n, dtype=bool)
+        rows = np.arange(self.n)
         for _ in range(_MAX_PASSES):
-            acc = np.flatnonzero(accepted)
-            ranges = self._accepted_ranges(acc)
-            fit_score, fit_lat, fit_lon = self.fit(self.neighbours(acc, *ranges), threshold_m)
-            score = np.fmax(fit_score, self.speed(acc, *ranges, v_max_ms))
-            live = np.where(accepted, score, -np.inf)
-            reject = accepted & (score > 1.0) & (live >= self._local_max(live))
-            reinstate = ~accepted & (score <= 1.0)
-            if not reject.any() and not reinstate.any():
+            self.rescore(accepted, rows, v_max_ms, threshold_m)
+            reject = self._rejected(accepted)
+            reinstate = np.flatnonzero(~accepted & (self.score <= 1.0))
+            if not reject.size and not reinstate.size:
                 break
-            accepted = (accepted & ~reject) | reinstate
-        return ~accepted, fit_lat, wrap180(fit_lon)
+            accepted[reject] = False
+            rows = self.affected(accepted, np.union1d(reject, reinstate))  # accepted: kept before and after
+            accepted[reinstate] = True
+        return ~accepted, self.fit_lat.copy(), wrap180(self.fit_lon)
 
 
 JUMP_FLAG_COLUMNS = ["jump", "jump_size_m", "fit_latitude", "fit_longitude"]
@@ -222,7 +254,7 @@ def _detect(adsb_meas: pd.DataFrame, max_speed_kt: float, robust_window: int,
             robust_threshold_m: float, need: list[str] = JUMP_FLAG_COLUMNS) -> pd.DataFrame:
     """Per row (original index): jump flag, distance from the robust fit (m) and the fitted lat/lon; the
     ``need`` columns taken as they are when the frame already carries them (computed once per job,
-    pipeline.jobs.mark_once)."""
+    pipeline.jobs.mark_once). The distance is worked out only when ``need`` names it."""
     if robust_window < 3:
         raise ValueError(f"robust_window must be at least 3, got {robust_window}")
     if all(c in adsb_meas for c in need) and (max_speed_kt, robust_window, robust_threshold_m) == _DEFAULTS:
@@ -261,7 +293,8 @@ def _detect(adsb_meas: pd.DataFrame, max_speed_kt: float, robust_window: int,
         del tracks
         at = pos[a:b]
         cols["jump"][at], cols["fit_latitude"][at], cols["fit_longitude"][at] = jump, fit_lat, fit_lon
-        cols["jump_size_m"][at] = distance_m(lat[a:b], lon[a:b], fit_lat, fit_lon)
+        if "jump_size_m" in need:
+            cols["jump_size_m"][at] = distance_m(lat[a:b], lon[a:b], fit_lat, fit_lon)
     return pd.DataFrame(cols, index=adsb_meas.index, copy=False)
 
 
@@ -277,9 +310,13 @@ def _sorted_codes(ident: pd.Series) -> np.ndarray:
     return codes.astype(np.int32)
 
 
-def jump_flags(adsb_meas: pd.DataFrame) -> pd.DataFrame:
-    """JUMP_FLAG_COLUMNS per row (index kept) with the default parameters: what a job computes once."""
-    return _detect(adsb_meas.drop(columns=[c for c in JUMP_FLAG_COLUMNS if c in adsb_meas]), *_DEFAULTS)
+def jump_flags(adsb_meas: pd.DataFrame, columns: list[str] = JUMP_FLAG_COLUMNS) -> pd.DataFrame:
+    """JUMP_FLAG_COLUMNS (or only ``columns`` of them) per row (index kept) with the default parameters:
+    what a job computes once."""
+    need = [c for c in JUMP_FLAG_COLUMNS if c in columns]
+    found = _detect(adsb_meas.drop(columns=[c for c in JUMP_FLAG_COLUMNS if c in adsb_meas]), *_DEFAULTS,
+                    need=need or ["jump"])
+    return found if need == JUMP_FLAG_COLUMNS else found[need]
 
 
 def detect_jumps(adsb_meas: pd.DataFrame, *, max_speed_kt: float = 1000.0, robust_window: int = 7,
