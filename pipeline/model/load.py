@@ -13,6 +13,7 @@ import pandas as pd
 
 import asterix
 from asterix.reader import Recording
+from pipeline.model.sources import pair_codes, pair_of, source_id
 from pipeline.model.time import NAT_NS, UNDATED_DAY, absolute_time
 from pipeline.progress import Progress
 
@@ -118,16 +119,15 @@ def time_spans(frames: dict[int, pd.DataFrame], date: dt.date | None) -> dict[st
         ok = ns != NAT_NS
         if not ok.any():
             continue
-        sac, sic = (frame[c].astype("Int64").fillna(-1).to_numpy(np.int64)[ok] if c in frame
-                    else np.full(int(ok.sum()), -1) for c in ("sac", "sic"))
-        pairs, which = np.unique((sac + 1) * 65536 + sic + 1, return_inverse=True)  # one byte each; -1: none
+        none = pd.Series(pd.NA, index=frame.index)
+        codes = pair_codes(frame.get("sac", none), frame.get("sic", none))[ok]
+        pairs, which = np.unique(codes, return_inverse=True)
         lo, hi = np.full(len(pairs), np.iinfo(np.int64).max), np.full(len(pairs), np.iinfo(np.int64).min)
         np.minimum.at(lo, which, ns[ok])
         np.maximum.at(hi, which, ns[ok])
         for pair, first, last in zip(pairs, lo, hi, strict=True):
-            a, b = (v - 1 for v in divmod(int(pair), 65536))
-            source = f"{cat:03d}:{'?' if a < 0 else a}/{'?' if b < 0 else b}"
-            out[source] = (pd.Timestamp(first, tz="UTC"), pd.Timestamp(last, tz="UTC"))
+            out[source_id(cat, *pair_of(pair))] = (pd.Timestamp(first, tz="UTC"),
+                                                   pd.Timestamp(last, tz="UTC"))
     return out
 
 

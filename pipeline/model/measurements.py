@@ -32,6 +32,7 @@ from pipeline.model.schema import (
     validate,
 )
 from pipeline.model.sensors import UnknownRadar, sensor_sites
+from pipeline.model.sources import source_id
 from pipeline.model.time import absolute_time
 
 __all__ = ["DECODED_COLUMNS", "NACP_95_M", "UnknownRadar", "adsb_measurements", "build_measurements",
@@ -64,8 +65,7 @@ def sensor_id(category: int, sac, sic) -> pd.Series:
     pairs = pd.DataFrame({"sac": sac.to_numpy(), "sic": sic.to_numpy()})
     row_pair = pairs.groupby(["sac", "sic"], dropna=False, sort=False).ngroup().to_numpy()
     first = pairs.drop_duplicates()
-    labels = [f"{category:03d}:{'?' if pd.isna(a) else a}/{'?' if pd.isna(b) else b}"
-              for a, b in zip(first["sac"], first["sic"], strict=True)]
+    labels = [source_id(category, a, b) for a, b in zip(first["sac"], first["sic"], strict=True)]
     return pd.Series(coded_text(row_pair, labels), index=sac.index)
 
 

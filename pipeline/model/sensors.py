@@ -9,6 +9,8 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from pipeline.model.sources import pair_codes
+
 REQUIRED_COLUMNS = ["name", "sac", "sic", "latitude", "longitude", "altitude_m"]
 # Optional per-radar measurement noise (1 sigma), used for the position covariance of its plots.
 DEFAULT_SIGMA_RANGE_M = 70.0
@@ -97,7 +99,7 @@ def sensor_sites(reports: pd.DataFrame, sensors: pd.DataFrame) -> pd.DataFrame:
         raise ValueError("sensor table lists a SAC/SIC pair twice")
     table = sensors.assign(**{k: sensors[k] if k in sensors else v for k, v in OPTIONAL_DEFAULTS.items()})
     table = table.astype({"sac": "Int64", "sic": "Int64"})[SENSOR_COLUMNS]
-    codes, declared = _pair_codes(reports["sac"], reports["sic"]), _pair_codes(table["sac"], table["sic"])
+    codes, declared = pair_codes(reports["sac"], reports["sic"]), pair_codes(table["sac"], table["sic"])
     order = np.argsort(declared, kind="stable")
     at = order[np.minimum(np.searchsorted(declared[order], codes), len(order) - 1)] if len(order) else None
     unknown = declared[at] != codes if at is not None else np.ones(len(codes), bool)
@@ -109,18 +111,12 @@ def sensor_sites(reports: pd.DataFrame, sensors: pd.DataFrame) -> pd.DataFrame:
     return table.iloc[at].reset_index(drop=True)
 
 
-def _pair_codes(sac, sic) -> np.ndarray:
-    """One integer per SAC/SIC pair (each one byte; a missing one counts as -1)."""
-    sac, sic = (pd.Series(v).astype("Int64").fillna(-1).to_numpy(np.int64) for v in (sac, sic))
-    return (sac + 1) * 65536 + sic + 1
-
-
 def undeclared_radars(reports: pd.DataFrame, sensors: pd.DataFrame) -> pd.DataFrame:
     """Per SAC/SIC pair (and file) of ``reports`` that ``sensors`` does not list: sac, sic, file, records and
     the first record's offset, in file order of first appearance; SAC/SIC missing shows as <NA>."""
     columns = ["sac", "sic", "file", "records", "offset"]
-    declared = _pair_codes(sensors["sac"], sensors["sic"])
-    unknown = ~np.isin(_pair_codes(reports["sac"], reports["sic"]), declared)
+    declared = pair_codes(sensors["sac"], sensors["sic"])
+    unknown = ~np.isin(pair_codes(reports["sac"], reports["sic"]), declared)
     if not unknown.any():
         return pd.DataFrame(columns=columns)
     reports = reports[unknown]

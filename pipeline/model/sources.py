@@ -1,0 +1,24 @@
+"""Data sources: a sensor's SAC/SIC pair as one integer code, and its id as the measurements show it."""
+
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+
+
+def pair_codes(sac, sic) -> np.ndarray:
+    """One integer per SAC/SIC pair (each one byte; a missing one counts as -1): pair_of turns it back."""
+    sac, sic = (pd.Series(v).astype("Int64").fillna(-1).to_numpy(np.int64) for v in (sac, sic))
+    return (sac + 1) * 65536 + sic + 1
+
+
+def pair_of(code: int) -> tuple[int | None, int | None]:
+    """The SAC and SIC of a pair_codes code (None where missing)."""
+    sac, sic = (v - 1 for v in divmod(int(code), 65536))
+    return (sac if sac >= 0 else None), (sic if sic >= 0 else None)
+
+
+def source_id(category: int, sac, sic) -> str:
+    """"CCC:SAC/SIC" (e.g. "048:25/201"), "?" for a missing SAC or SIC: the measurements' sensor_id."""
+    sac, sic = ("?" if v is None or pd.isna(v) else v for v in (sac, sic))
+    return f"{category:03d}:{sac}/{sic}"
