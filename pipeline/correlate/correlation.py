@@ -22,7 +22,7 @@ from pipeline.correlate.results import (
 )
 from pipeline.correlate.slots import SLOTTED_COLUMNS, slot_count, slot_series
 from pipeline.correlate.windows import in_window, overlap_windows, short_window_reason
-from pipeline.model.aircraft import Aircraft, NoSuchAircraft, aircraft_rows, one_aircraft
+from pipeline.model.aircraft import NoSuchAircraft, aircraft_rows, one_aircraft
 from pipeline.model.dedup import duplicate_mask
 from pipeline.model.geodesy import distance_m
 from pipeline.model.jumps import JUMP_FLAG_COLUMNS, detect_jumps
@@ -45,7 +45,7 @@ TABLE_BUDGET_BYTES = 512 * 2**20
 MAX_SLOTS = TABLE_BUDGET_BYTES // (SLOT_ROW_BYTES + 2 * LAG_ROW_BYTES)  # 3,314,017 over all windows of a run
 
 __all__ = ["MAX_SLOTS", "PAIRS", "NoOverlap", "NoSuchAircraft", "TooManySlots", "correlate", "ncc",
-           "pearson_by_lag", "pearson_max_lag", "peak_lag", "sensor_pairs", "separation_stats", "sources"]
+           "pearson_by_lag", "pearson_max_lag", "peak_lag", "separation_stats"]
 
 
 class NoOverlap(LookupError):
@@ -259,34 +259,6 @@ def _span(times: np.ndarray) -> tuple[float, float]:
     return (float(t.min()), float(t.max())) if t.size else (math.nan, math.nan)
 
 
-def sources(meas: pd.DataFrame, kind: str, split_adsb: bool = False) -> dict[str, pd.DataFrame]:
-    """One aircraft's reports of one kind by source: each radar (``sensor_id``) on its own; ADS-B one
-    source named by its ground stations joined with "+", or each station apart with ``split_adsb``."""
-    rows = meas[(meas["sensor_kind"] == kind).to_numpy(bool)]
-    if rows.empty:
-        return {}
-    if kind == "adsb" and not split_adsb:
-        return {"+".join(sorted(rows["sensor_id"].dropna().unique())): rows}
-    return {str(k): g for k, g in rows.groupby("sensor_id", sort=True)}
-
-
-def sensor_pairs(ac: Aircraft, pairs: str = "radar-adsb", split_adsb: bool = False
-                 ) -> list[tuple[str, pd.DataFrame, str, pd.DataFrame]]:
-    """(radar id, its reports, reference id, its reports) to correlate for one aircraft: every radar
-    against every ADS-B source ("radar-adsb"), every two radars ("radar-radar"), or both ("all")."""
-    if pairs not in PAIRS:
-        raise ValueError(f"pairs must be one of {', '.join(PAIRS)}, got {pairs!r}")
-    radars = sources(ac.radar, "radar")
-    out = []
-    if pairs in ("radar-adsb", "all"):
-        out += [(r, rf, a, af) for r, rf in radars.items()
-                for a, af in sources(ac.adsb, "adsb", split_adsb).items()]
-    if pairs in ("radar-radar", "all"):
-        ids = sorted(radars)
-        out += [(a, radars[a], b, radars[b]) for i, a in enumerate(ids) for b in ids[i + 1:]]
-    return out
-
-
 class _Columns:
     """The columns correlate() reads, as arrays over the rows of a measurement frame (read once per run,
     not per aircraft or sensor pair); ``dup`` and ``jump`` are None when the frame does not carry the
@@ -321,7 +293,8 @@ class _Columns:
 
     def sources(self, radar_rows: np.ndarray, other_rows: np.ndarray, split_adsb: bool
                 ) -> tuple[dict[str, np.ndarray], dict[str, np.ndarray]]:
-        """One aircraft's radar sources and ADS-B sources (rows of each), as ``sources`` gives them."""
+        """One aircraft's radar sources and ADS-B sources (rows of each): each radar (``sensor_id``) on
+        its own; ADS-B one source named by its ground stations joined with "+" (apart: ``split_adsb``)."""
         adsb = other_rows[self.is_adsb[other_rows]]
         if not adsb.size:
             return self.by_sensor(radar_rows), {}
@@ -363,7 +336,9 @@ class _Source:
 
 def _aircraft_pairs(cols: _Columns, radar_rows: np.ndarray, other_rows: np.ndarray, pairs: str,
                     split_adsb: bool, fill: str) -> list[tuple[str, _Source, str, _Source]]:
-    """``sensor_pairs`` of one aircraft given by its rows, each source prepared once for all its pairs."""
+    """(radar id, its source, reference id, its source) to correlate for one aircraft given by its rows:
+    every radar against every ADS-B source ("radar-adsb"), every two radars ("radar-radar"), or both
+    ("all"); each source prepared once for all its pairs."""
     if pairs not in PAIRS:
         raise ValueError(f"pairs must be one of {', '.join(PAIRS)}, got {pairs!r}")
     radars, adsb = cols.sources(radar_rows, other_rows, split_adsb)
