@@ -209,3 +209,21 @@ def test_adsb_0_2x_figure_of_merit_feeds_nucp():
                           "fom_pa": pd.array([7, pd.NA], dtype="Int64")})
     out = adsb_measurements(frame)
     assert out["nucp_nic"].iloc[0] == 7 and pd.isna(out["nucp_nic"].iloc[1])
+
+
+def test_unknown_radar_without_sac_or_sic_gets_no_invalid_toml(tmp_path):
+    """A record missing its SAC cannot be declared: the message explains that instead of offering the
+    non-TOML line ``sac = <NA>``; a complete unknown pair still gets its [[sensor]] lines."""
+    import tomllib
+
+    sensors = read_sensors(write(tmp_path, GOOD))
+    frame = cat048(time_of_day=np.array([1.0, 2.0]), rho_nm=np.full(2, 50.0), theta_deg=np.full(2, 10.0),
+                   sac=pd.array([None, 7], dtype="Int32"), sic=pd.array([3, 9], dtype="Int32"))
+    with pytest.raises(UnknownRadar) as info:
+        radar_measurements(frame, sensors)
+    text = str(info.value)
+    assert "<NA>\n" not in text and "sac = <NA>" not in text
+    assert "SAC <NA> SIC 3: records without a complete data source identifier (I048/010)" in text
+    snippet = text[text.index("add:\n") + len("add:\n"):]
+    assert tomllib.loads(snippet)["sensor"] == [{"name": "radar SAC 7 SIC 9", "sac": 7, "sic": 9,
+                                                "latitude": 0.0, "longitude": 0.0, "altitude_m": 0.0}]

@@ -131,7 +131,11 @@ def undeclared_radars(reports: pd.DataFrame, sensors: pd.DataFrame) -> pd.DataFr
 
 
 def sensor_toml_snippet(sac: int, sic: int) -> str:
-    """The ``[[sensor]]`` lines to add to the sensor file for a radar that is not in it."""
+    """The ``[[sensor]]`` lines to add to the sensor file for a radar that is not in it; for records missing
+    their SAC or SIC, a comment saying that no entry can place them (``sac = <NA>`` is not TOML)."""
+    if pd.isna(sac) or pd.isna(sic):
+        return (f"# SAC {sac} SIC {sic}: records without a complete data source identifier (I048/010)\n"
+                "# match no [[sensor]] entry; leave them out (msdc's commands do, with a warning)\n")
     return (
         "[[sensor]]\n"
         f'name = "radar SAC {sac} SIC {sic}"\n'
