@@ -44,16 +44,8 @@ class Background:
         if not (FORK_OK and hasattr(os, "fork")):
             self._value = fn(*args)
             return
-        _flush()
         read, write = os.pipe()
-        pid = os.fork()
-        if pid == 0:  # pragma: no cover - the child (coverage does not follow it)
-            status = 1
-            try:
-                os.close(read)
-                status = _run_and_send(fn, args, write)
-            finally:
-                os._exit(status)
+        pid = _fork(lambda: _run_and_send(fn, args, write), close=(read,))
         os.close(write)
         self._pid, self._read = pid, read
 
@@ -105,27 +97,21 @@ class Prepared:
         self._fn, self._pid = fn, 0
         if not (FORK_OK and hasattr(os, "fork") and hasattr(os, "memfd_create")):
             return
-        _flush()
         data = os.memfd_create("msdc-args", os.MFD_CLOEXEC)
         go_read, go_write = os.pipe()
         done_read, done_write = os.pipe()
-        pid = os.fork()
-        if pid == 0:  # pragma: no cover - the child (coverage does not follow it)
-            status = 1
-            try:
-                os.close(go_write)
-                os.close(done_read)
-                if warm is not None:
-                    with contextlib.suppress(Exception):  # fn meets the same trouble and reports it
-                        warm()
-                gc.freeze()  # what is here now stays: no collection walks (and copies) the forked heap
-                size = int.from_bytes(os.read(go_read, 8) or b"\0", "little")
-                if size:
-                    status = _run_and_send(lambda: fn(*_received(data, size)), (), done_write)
-                else:
-                    status = 0  # closed unused
-            finally:
-                os._exit(status)
+
+        def child() -> int:
+            if warm is not None:
+                with contextlib.suppress(Exception):  # fn meets the same trouble and reports it
+                    warm()
+            gc.freeze()  # what is here now stays: no collection walks (and copies) the forked heap
+            size = int.from_bytes(os.read(go_read, 8) or b"\0", "little")
+            if not size:
+                return 0  # closed unused
+            return _run_and_send(lambda: fn(*_received(data, size)), (), done_write)
+
+        pid = _fork(child, close=(go_write, done_read))
         os.close(go_read)
         os.close(done_write)
         self._pid, self._data, self._go, self._done = pid, data, go_write, done_read
@@ -175,6 +161,22 @@ def _flush() -> None:
     with contextlib.suppress(OSError, ValueError):
         sys.stdout.flush()
         sys.stderr.flush()
+
+
+def _fork(child: Callable[[], int], close: tuple[int, ...] = ()) -> int:
+    """Fork (output flushed first); the child closes the parent's ends ``close``, runs ``child`` and leaves
+    by os._exit with its status (1 if it raised); the parent gets the child's pid."""
+    _flush()
+    pid = os.fork()
+    if pid == 0:  # pragma: no cover - the child (coverage does not follow it)
+        status = 1
+        try:
+            for fd in close:
+                os.close(fd)
+            status = child()
+        finally:
+            os._exit(status)
+    return pid
 
 
 def _run_and_send(fn: Callable[..., object], args: tuple, fd: int) -> int:
