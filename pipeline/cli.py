@@ -78,10 +78,16 @@ def _decoding_options(p: argparse.ArgumentParser) -> None:
     p.add_argument("--format", choices=FORMATS, help="container format (default: detected)")
 
 
-def _aircraft_options(p: argparse.ArgumentParser, all_help: str) -> None:
-    """Inputs, the sensor file and the aircraft selection shared by correlate and quality."""
+SENSORS_HELP = "sensor positions (TOML [[sensor]] tables)"
+SENSORS_OPTIONAL_HELP = ("sensor positions (TOML [[sensor]] tables); needed when radar plots are used, "
+                         "not for ADS-B alone")
+
+
+def _aircraft_options(p: argparse.ArgumentParser, all_help: str, *, sensors_required: bool = True) -> None:
+    """Inputs, the sensor file and the aircraft selection shared by correlate, quality and track."""
     p.add_argument("inputs", nargs="+", metavar="INPUT")
-    p.add_argument("--sensors", required=True, help="sensor positions (TOML [[sensor]] tables)")
+    p.add_argument("--sensors", required=sensors_required,
+                   help=SENSORS_HELP if sensors_required else SENSORS_OPTIONAL_HELP)
     who = p.add_mutually_exclusive_group(required=True)
     who.add_argument("--callsign", help="call sign (case and spaces ignored)")
     who.add_argument("--address", help="24-bit aircraft address in hex")
@@ -95,6 +101,11 @@ def _adsb_sigma_option(p: argparse.ArgumentParser, used: str) -> None:
                         f"NACp (CAT021 0.2x: its figure of merit is not read as NACp){used}; reports with "
                         "NACp keep theirs, NACp 0 (unknown) stays untracked. Without it such reports are "
                         "not tracked")
+
+
+def _sources_option(p: argparse.ArgumentParser) -> None:
+    """--sources: the sensor kinds the tracker fuses (track and conflicts)."""
+    p.add_argument("--sources", default="radar,adsb", help="sensor kinds to fuse: radar, adsb or radar,adsb")
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -153,7 +164,7 @@ def build_parser() -> argparse.ArgumentParser:
     _decoding_options(q)
 
     t = sub.add_parser("track", help="fused IMM tracks per aircraft from every radar and ADS-B report")
-    _aircraft_options(t, "every aircraft")
+    _aircraft_options(t, "every aircraft", sensors_required=False)
     t.add_argument("-o", "--output", help="track table: tracks.csv or tracks.parquet")
     t.add_argument("--json", help="per-aircraft and per-sensor summary as JSON")
     t.add_argument("--figures", metavar="DIR", help="one PNG per aircraft in this directory")
@@ -167,7 +178,7 @@ def build_parser() -> argparse.ArgumentParser:
                         "manoeuvres in our validations)")
     t.add_argument("--tpm", help="mode transition law: fixed:P, dynamic, dynamic:A,B or expm:TAU[,TAU2] "
                                  "(default expm:150,20)")
-    t.add_argument("--sources", default="radar,adsb", help="sensor kinds to fuse: radar, adsb or radar,adsb")
+    _sources_option(t)
     t.add_argument("--noise", default="estimate",
                    help="measurement noise: estimate (default: each sensor's sigmas from the tracker's "
                         "residuals, a few extra passes) or declared (the sensor file's sigmas, ADS-B "
@@ -178,7 +189,7 @@ def build_parser() -> argparse.ArgumentParser:
     k = sub.add_parser("conflicts", help="conflict probability from IMM-predicted tracks: alerts, losses of "
                                          "separation, warning times, false alerts")
     k.add_argument("inputs", nargs="+", metavar="INPUT")
-    k.add_argument("--sensors", required=True, help="sensor positions (TOML [[sensor]] tables)")
+    k.add_argument("--sensors", help=SENSORS_OPTIONAL_HELP)
     k.add_argument("-o", "--output", required=True,
                    help="conflicts.csv (losses and warning times beside it) or conflicts.xlsx")
     k.add_argument("--json", help="counts and the tables as JSON")
@@ -200,6 +211,7 @@ def build_parser() -> argparse.ArgumentParser:
     k.add_argument("--max-coast", type=float, default=60.0,
                    help="seconds a track is predicted after its last report before it ends (default 60)")
     k.add_argument("--tpm", help="mode transition law of the IMM (default expm:150,20)")
+    _sources_option(k)
     k.add_argument("--noise", default="declared",
                    help="measurement noise: declared (default: the sensor file's sigmas, ADS-B from NACp "
                         "or --adsb-sigma; what the conflict validations used) or estimate (each sensor's "
@@ -411,7 +423,7 @@ def cmd_conflicts(args) -> int:
         max_coast_s=args.max_coast, tpm=args.tpm, horizons_s=args.horizon, radius_nm=args.radius_nm,
         vertical_ft=args.vertical_ft, vertical_tolerance_ft=args.vertical_tolerance_ft,
         threshold=args.threshold, method=args.method, vertical=args.vertical,
-        figures=args.figures, noise=args.noise, adsb_sigma_m=args.adsb_sigma)
+        figures=args.figures, noise=args.noise, adsb_sigma_m=args.adsb_sigma, sources=args.sources)
     result = _run_job("conflicts", jobs_conflict.validate, jobs_conflict.conflict_job, options, Progress())
     print(jobs_conflict.text(result) + _noise_text(result.noise))
     for kind, path in jobs_conflict.write_conflicts(result).items():

@@ -202,7 +202,13 @@ def _can_create(directory: Path) -> bool:
         return False
 
 
-def _sensors(path: str | Path | None) -> pd.DataFrame:
+def _sensors(path: str | Path | None, *, required: bool = True) -> pd.DataFrame:
+    """The sensor table of --sensors; without the option an empty table where it is optional (track and
+    conflicts on ADS-B alone: a radar plot then stops the run naming --sensors), else an OptionError."""
+    if path is None and not required:
+        from pipeline.model.sensors import no_sensors
+
+        return no_sensors()
     if path is None:
         raise OptionError("--sensors: the sensor file (TOML [[sensor]] tables) is required")
     nonempty_path("--sensors", path)
@@ -477,16 +483,25 @@ def absent_categories(loaded: Loaded) -> list[int]:
     return [cat for cat in (48, 21) if not any(info["records"].get(cat) for info in loaded.inputs)]
 
 
-def unknown_radar_error(missing: list[tuple[int, int]], sensors_path: str) -> JobError:
-    """The error for radars the sensor file lacks, with the TOML lines to add."""
+def sensors_path(options: AircraftOptions) -> str | None:
+    """--sensors as text for messages and the JSON, None when it was not given (track, conflicts)."""
+    return None if options.sensors is None else str(options.sensors)
+
+
+def unknown_radar_error(missing: list[tuple[int, int]], sensors_path: str | None) -> JobError:
+    """The error for radars the sensor file lacks (or with no sensor file given), with the TOML lines."""
     from pipeline.model.sensors import sensor_toml_snippet
 
     lines = "\n\n".join(sensor_toml_snippet(sac, sic) for sac, sic in missing)
-    return JobError(f"radar SAC/SIC {', '.join(f'{a}/{b}' for a, b in missing)} not in "
-                    f"{sensors_path}; add its position:\n\n{lines}")
+    pairs = ", ".join(f"{a}/{b}" for a, b in missing)
+    if sensors_path is None:
+        return JobError(f"radar plots from SAC/SIC {pairs} need the radar's position, and no --sensors file "
+                        "was given: give --sensors S.toml with these lines, or leave the radars out with "
+                        f"--sources adsb:\n\n{lines}")
+    return JobError(f"radar SAC/SIC {pairs} not in {sensors_path}; add its position:\n\n{lines}")
 
 
-def declared_radar(cat048: pd.DataFrame | None, sensors: pd.DataFrame, sensors_path: str,
+def declared_radar(cat048: pd.DataFrame | None, sensors: pd.DataFrame, sensors_path: str | None,
                    warnings: list[str]) -> pd.DataFrame | None:
     """The CAT048 records of radars the sensor file lists. Records of a SAC/SIC it lacks are left out with
     a warning (file, SAC/SIC, count, first offset) when they are too few to be a radar (STRAY_RADAR_*) or
@@ -504,7 +519,7 @@ def declared_radar(cat048: pd.DataFrame | None, sensors: pd.DataFrame, sensors_p
     return cat048[known]
 
 
-def _stray_verdict(stray: pd.DataFrame, n_cat048: int, sensors_path: str, warnings: list[str]) -> None:
+def _stray_verdict(stray: pd.DataFrame, n_cat048: int, sensors_path: str | None, warnings: list[str]) -> None:
     """Judge the records of SAC/SIC pairs the sensor file lacks (undeclared_radars' table, over the run's
     n_cat048 CAT048 records): a JobError with the TOML lines for a pair with enough records to be a radar,
     else one warning per pair and file, the records being left out."""
@@ -522,7 +537,8 @@ def _stray_verdict(stray: pd.DataFrame, n_cat048: int, sensors_path: str, warnin
             pair = "without SAC/SIC"
         else:
             pair = f"from SAC/SIC {row.sac}/{row.sic}"
-            why = (f"not in {sensors_path} and too few for a radar (fewer than {limit}: the larger of "
+            where = sensors_path if sensors_path is not None else "a sensor file (no --sensors given)"
+            why = (f"not in {where} and too few for a radar (fewer than {limit}: the larger of "
                    f"{STRAY_RADAR_RECORDS} and {STRAY_RADAR_SHARE:.1%} of the {n_cat048} CAT048 records), "
                    "taken for damaged data")
         warnings.append(f"{name}: {row.records} CAT048 record(s) {pair} (first at offset {row.offset}) "
@@ -615,7 +631,7 @@ def _parameters(options: AircraftOptions, loaded: Loaded, started: float, comman
             "run_utc": dt.datetime.now(dt.UTC).strftime("%Y-%m-%dT%H:%M:%SZ"),
             "run_time_s": round(time.monotonic() - started, 3), "editions": {
                 f"CAT{c:03d}": e for c, e in sorted(loaded.editions.items())},
-            "sensors": str(options.sensors), "date": loaded.date.isoformat() if loaded.date else None,
+            "sensors": sensors_path(options), "date": loaded.date.isoformat() if loaded.date else None,
             "adsb_sigma_m": options.adsb_sigma_m}
 
 

@@ -26,6 +26,7 @@ from pipeline.jobs_track import (
     TrackOptions,
     _estimate_noise,
     _measurements,
+    _sources,
     check_track_rows,
     check_tracking,
     untrackable,
@@ -97,6 +98,7 @@ def validate(options: ConflictOptions) -> Checked:
     t = options.threshold
     if not isinstance(t, int | float) or not math.isfinite(t) or not 0.0 < t < 1.0:
         raise OptionError(f"--threshold {t!r}: must be a probability strictly between 0 and 1")
+    _sources(options.sources)
     if options.method not in METHODS:
         raise OptionError(f"--method {options.method!r}: must be one of {', '.join(METHODS)}")
     if options.vertical not in VERTICAL_MODELS:
@@ -122,7 +124,7 @@ def validate(options: ConflictOptions) -> Checked:
             raise OptionError(f"--figures {d}: directory {d.parent} does not exist")
         if not os.access(parent, os.W_OK):
             raise OptionError(f"--figures {d}: directory {parent} is not writable")
-    checked.sensors = jobs._sensors(options.sensors)
+    checked.sensors = jobs._sensors(options.sensors, required=False)
     return checked
 
 
@@ -203,7 +205,8 @@ def conflict_job(options: ConflictOptions, *, progress: Progress | None = None,
               "horizons_s": list(horizons), "radius_nm": options.radius_nm,
               "vertical_ft": options.vertical_ft, "vertical_tolerance_ft": tol,
               "threshold": options.threshold, "method": options.method,
-              "vertical": options.vertical, "noise": options.noise}
+              "vertical": options.vertical, "noise": options.noise,
+              "sources": list(_sources(options.sources))}
     return ConflictJobResult(options, checked, grid, pc, alerts, losses, warn, params, loaded, counts,
                              predictions, noise)
 

@@ -135,7 +135,7 @@ def validate(options: TrackOptions) -> Checked:
             raise OptionError(f"--figures {d}: directory {d.parent} does not exist")
     if checked.output is None and checked.json is None and options.figures is None:
         raise OptionError("give at least one output: -o tracks.csv|tracks.parquet, --json or --figures")
-    checked.sensors = jobs._sensors(options.sensors)
+    checked.sensors = jobs._sensors(options.sensors, required=False)
     return checked
 
 
@@ -168,12 +168,12 @@ def _measurements(loaded, checked: Checked, options: TrackOptions) -> pd.DataFra
     if radar is None and adsb is None:
         wanted = " or ".join({"radar": "radar (CAT048)", "adsb": "ADS-B (CAT021)"}[s] for s in sources)
         raise JobError(f"no {wanted} records in the inputs (--sources {','.join(sources)})")
-    radar = jobs.declared_radar(radar, checked.sensors, str(options.sensors), checked.warnings)
+    radar = jobs.declared_radar(radar, checked.sensors, jobs.sensors_path(options), checked.warnings)
     try:
         meas = build_measurements(radar, adsb, checked.sensors, date=loaded.date,
                                   adsb_sigma_m=options.adsb_sigma_m)
     except UnknownRadar as exc:
-        raise jobs.unknown_radar_error(exc.missing, str(options.sensors)) from exc
+        raise jobs.unknown_radar_error(exc.missing, jobs.sensors_path(options)) from exc
     from pipeline.track.associate import join_by_track_number
 
     meas, joined = join_by_track_number(meas, max_gap_s=float(options.max_coast_s))

@@ -300,3 +300,36 @@ def test_a_tiny_step_is_refused_after_decoding_with_the_rows_it_would_make(tmp_p
     assert re.search(r"--step 0.001: the tracks of these 5 aircraft would need about 1[56],\d{3},\d{3} "
                      r"output rows, more than 4,000,000; use a longer --step", last), last
     assert list(tmp_path.iterdir()) == []
+
+
+def test_adsb_alone_needs_no_sensor_file(tmp_path, capsys):
+    """An ADS-B recording is tracked without --sensors (no radar to place): the same table as with the
+    sensor file, whose radar entries ADS-B never uses, and the JSON records no sensor file."""
+    with_file, without = tmp_path / "with.csv", tmp_path / "without.csv"
+    common = [ADSB, "--date", "2019-03-01", "--all", "--noise", "declared"]
+    assert main(["track", *common, "--sensors", SENSORS, "-o", str(with_file)]) == 0
+    assert main(["track", *common, "-o", str(without), "--json", str(tmp_path / "t.json")]) == 0
+    assert "Traceback" not in capsys.readouterr().err
+    pd.testing.assert_frame_equal(pd.read_csv(with_file), pd.read_csv(without))
+    assert json.loads((tmp_path / "t.json").read_text())["parameters"]["sensors"] is None
+
+
+@pytest.mark.parametrize("command", [["track", "--all", "-o", "t.csv"], ["conflicts", "-o", "t.csv"]])
+def test_radar_plots_without_a_sensor_file_name_the_option_and_write_nothing(tmp_path, capsys, command):
+    """Radar plots with no --sensors: exit 1 naming the radar's SAC/SIC (25/201 in the fixtures' sensor
+    file), --sensors and --sources adsb, with the TOML lines to add; nothing is written. With --sources
+    adsb the same inputs are tracked."""
+    argv = [command[0], RADAR, ADSB, "--date", "2019-03-01", *command[1:]]
+    argv[argv.index("t.csv")] = str(tmp_path / "t.csv")
+    assert main(argv) == 1
+    err = capsys.readouterr().err
+    assert "Traceback" not in err
+    assert "radar plots from SAC/SIC 25/201 need the radar's position, and no --sensors file was given" in err
+    assert "--sources adsb" in err
+    assert '[[sensor]]\nname = "radar SAC 25 SIC 201"\nsac = 25\nsic = 201' in err
+    assert list(tmp_path.iterdir()) == []
+    assert main([*argv, "--sources", "adsb", "--noise", "declared", "--json", str(tmp_path / "t.json")]) == 0
+    assert json.loads((tmp_path / "t.json").read_text())["parameters"]["sources"] == ["adsb"]
+    if command[0] == "track":
+        used = pd.read_csv(tmp_path / "t.csv")["sources"].dropna().str.split(",").explode()
+        assert set(used) == {"021:0/1"}

@@ -92,6 +92,13 @@ def read_sensors(path: str | Path) -> pd.DataFrame:
     return frame.astype({"sac": "int64", "sic": "int64"} | dict.fromkeys(SENSOR_COLUMNS[3:], "float64"))
 
 
+def no_sensors() -> pd.DataFrame:
+    """An empty sensor table (SENSOR_COLUMNS, typed as read_sensors types them): no radar is placed."""
+    frame = pd.DataFrame({c: [] for c in SENSOR_COLUMNS})
+    return frame.astype({"name": "object", "sac": "int64", "sic": "int64"}
+                        | dict.fromkeys(SENSOR_COLUMNS[3:], "float64"))
+
+
 def sensor_sites(reports: pd.DataFrame, sensors: pd.DataFrame) -> pd.DataFrame:
     """The sensor-table row (SENSOR_COLUMNS) of each report's SAC/SIC, aligned with ``reports`` by position;
     UnknownRadar for pairs the table lacks. Sigma columns missing from ``sensors`` take their defaults."""
