@@ -391,17 +391,20 @@ def cmd_track(args) -> int:
 
 
 def _track_text(result) -> str:
-    """Per aircraft: span, updates, gated reports, coasted time; per sensor: updates, gated, NIS mean."""
+    """Per aircraft: span, updates, gated reports, coasted time; per sensor over every aircraft: aircraft,
+    reports, updates, gated, NIS mean (the per-aircraft split is in the JSON: a day of traffic would print
+    thousands of lines)."""
+    from pipeline import jobs_track
+
     res = result.result
     if res.aircraft.empty:
         return "no track: no report with a usable position and covariance"
     ac = res.aircraft.merge(result.labels, on="aircraft_id", how="left")
     cols = [c for c in ("aircraft_id", "callsign", "segments", "reports", "updates", "gated", "tracked_s",
                         "coasted_s") if c in ac]
-    sens = res.sensors[[c for c in ("aircraft_id", "sensor_id", "reports", "updates", "gated", "nis_mean")
-                        if c in res.sensors]]
     text = ("Tracks:\n" + ac[cols].to_string(index=False, float_format=lambda v: f"{v:.1f}")
-            + "\n\nSensors:\n" + sens.to_string(index=False, float_format=lambda v: f"{v:.2f}"))
+            + "\n\nSensors:\n" + jobs_track.sensor_totals(res.sensors).to_string(
+                index=False, float_format=lambda v: f"{v:.2f}"))
     return text + _noise_text(result.noise)
 
 

@@ -309,6 +309,18 @@ def summary(result: TrackJobResult) -> dict:
     return doc
 
 
+def sensor_totals(sensors: pd.DataFrame) -> pd.DataFrame:
+    """The tracker's per-aircraft sensor table summed per sensor: aircraft, reports, updates, gated, and the
+    NIS mean over every update (each aircraft's mean weighted by its updates)."""
+    s = sensors.assign(nis_sum=sensors["nis_mean"].fillna(0.0) * sensors["updates"])
+    out = s.groupby("sensor_id", sort=True).agg(
+        aircraft=("aircraft_id", "nunique"), reports=("reports", "sum"), updates=("updates", "sum"),
+        gated=("gated", "sum"), nis_sum=("nis_sum", "sum")).reset_index()
+    with np.errstate(invalid="ignore", divide="ignore"):
+        nis = out["nis_sum"].to_numpy(float) / out["updates"].to_numpy(float)
+    return out.drop(columns="nis_sum").assign(nis_mean=np.where(out["updates"] > 0, nis, np.nan))
+
+
 def write_tracks(result: TrackJobResult) -> dict[str, Path]:
     """Write the track table (CSV: times as ISO 8601 UTC; Parquet: tz-aware timestamps), the JSON and
     the figures, as the options ask; each file is written whole to a temporary name and then renamed,
@@ -339,5 +351,5 @@ def write_tracks(result: TrackJobResult) -> dict[str, Path]:
     return written
 
 
-__all__ = ["TRACK_COLUMNS", "TrackJobResult", "TrackOptions", "summary", "track_job", "validate",
-           "write_tracks"]
+__all__ = ["TRACK_COLUMNS", "TrackJobResult", "TrackOptions", "sensor_totals", "summary", "track_job",
+           "validate", "write_tracks"]

@@ -333,3 +333,36 @@ def test_radar_plots_without_a_sensor_file_name_the_option_and_write_nothing(tmp
     if command[0] == "track":
         used = pd.read_csv(tmp_path / "t.csv")["sources"].dropna().str.split(",").explode()
         assert set(used) == {"021:0/1"}
+
+
+def test_sensor_totals_by_hand():
+    """Radar R: aircraft A with 2 updates at NIS mean 1.0 and B with 6 at 3.0 pool to (2 + 18) / 8 = 2.5 over
+    8 updates; ADS-B S: one aircraft whose 4 reports were all gated has no NIS mean."""
+    sensors = pd.DataFrame({"aircraft_id": ["A", "B", "A"], "sensor_id": ["R", "R", "S"],
+                            "reports": [3, 7, 4], "updates": [2, 6, 0], "gated": [1, 1, 4],
+                            "nis_mean": [1.0, 3.0, np.nan]})
+    out = jobs_track.sensor_totals(sensors).set_index("sensor_id")
+    assert out.loc["R", ["aircraft", "reports", "updates", "gated"]].tolist() == [2, 10, 8, 2]
+    assert out.loc["R", "nis_mean"] == pytest.approx(2.5)
+    assert out.loc["S", ["aircraft", "reports", "updates", "gated"]].tolist() == [1, 4, 0, 4]
+    assert np.isnan(out.loc["S", "nis_mean"])
+
+
+def test_stdout_sums_each_sensor_over_the_aircraft(tmp_path, capsys):
+    """--all prints one Sensors line per sensor, whose reports, updates and gated are the sums of the JSON's
+    per-aircraft entries (the fixtures: 5 aircraft, ADS-B and one radar)."""
+    js = tmp_path / "t.json"
+    assert main(["track", *BASE, "--all", "--noise", "declared", "--json", str(js)]) == 0
+    out = capsys.readouterr().out
+    block = out.split("Sensors:\n")[1].split("\n\n")[0].splitlines()
+    rows = {line.split()[0]: [int(v) for v in line.split()[1:5]] for line in block[1:]}
+    doc = json.loads(js.read_text())
+    expected: dict[str, list[int]] = {}
+    for ac in doc["aircraft"]:
+        for s in ac["sensors"]:
+            e = expected.setdefault(s["sensor_id"], [0, 0, 0, 0])
+            e[0] += 1
+            e[1] += s["reports"]
+            e[2] += s["updates"]
+            e[3] += s["gated"]
+    assert rows == expected and set(rows) == {"021:0/1", "048:25/201"}
