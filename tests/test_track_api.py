@@ -181,3 +181,23 @@ def test_bad_input_is_named():
         track(m.assign(time=m.time.dt.tz_localize(None)))
     res = track(m.assign(cov_ee_m2=[np.nan, 1, 1, 1, 1]))
     assert res.sensors.invalid.sum() == 1
+
+
+def test_segment_start_velocity_sigma_from_nucr_nacv():
+    """A segment starts with the reported ground velocity; its per-axis variance is (95 % bound / 2.448)^2
+    with DO-260B's NACv bounds (4: 0.3 m/s -> 0.01502, 1: 10 m/s -> 16.687 (m/s)^2), and the configured
+    10 m/s sigma (100) for NACv 0 (unknown) or none."""
+    t0 = pd.Timestamp("2019-03-01T08:00:00Z")
+    rows = [dict(time=t0 + pd.Timedelta(seconds=k), sensor_id="021:0/1", sensor_kind="adsb", aircraft_id=aid,
+                 latitude=3.0 + 0.001 * k, longitude=101.0, flight_level=300.0, cov_ee_m2=100.0,
+                 cov_en_m2=0.0, cov_nn_m2=100.0, ground_speed_kt=200.0, heading_deg=0.0, nucr_nacv=nac)
+            for aid, nac in (("A", 4), ("B", 1), ("C", 0), ("D", None)) for k in range(3)]
+    meas = pd.DataFrame(rows).astype({"nucr_nacv": "Int64"})
+    result = track(meas, keep_states=True)
+    expected = {"A": (0.3 / 2.448) ** 2, "B": (10.0 / 2.448) ** 2, "C": 100.0, "D": 100.0}
+    for aid, var in expected.items():
+        _, run, _ = result.runs[aid]
+        assert run.status[0] == 2  # the segment's start
+        for mode in range(run.P.shape[1]):  # east and north velocity variances of every mode
+            assert run.P[0, mode, 1, 1] == pytest.approx(var, rel=1e-9)
+            assert run.P[0, mode, 4, 4] == pytest.approx(var, rel=1e-9)

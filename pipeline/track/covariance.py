@@ -8,6 +8,9 @@ EARTH_RADIUS_M = 6371000.0
 # NACp 95 % horizontal position bounds (EPU), m, DO-260B; NACp 0 (unknown) has none
 NACP_EPU_M = {1: 18520.0, 2: 7408.0, 3: 3704.0, 4: 1852.0, 5: 926.0, 6: 555.6, 7: 185.2, 8: 92.6,
               9: 30.0, 10: 10.0, 11: 3.0}
+# NACv (DO-260B) and NUCr (DO-260/260A, the same levels): 95 % horizontal velocity error bounds, m/s;
+# level 0 is "unknown or >= 10 m/s" and bounds nothing
+NACV_95_M_S = {1: 10.0, 2: 3.0, 3: 1.0, 4: 0.3}
 SIGMA_PER_95_BOUND = 1.0 / 2.448  # a circular Gaussian holds 95 % within 2.448 sigma
 
 
@@ -53,3 +56,13 @@ def nacp_covariance(nacp, floor_sigma_m: float = 3.0):
         epu[values == level] = bound
     sigma = np.maximum(epu * SIGMA_PER_95_BOUND, floor_sigma_m)
     return sigma * sigma
+
+
+def nacv_variance(nucr_nacv):
+    """Per-axis variance ((m/s)^2) of a reported ADS-B velocity from NUCr / NACv: (bound / 2.448)^2; NaN
+    where the level is 0 (unknown), missing or out of range."""
+    values = np.asarray(nucr_nacv, dtype=float)
+    bound = np.full(values.shape, np.nan)
+    for level, b in NACV_95_M_S.items():
+        bound[values == level] = b
+    return (bound * SIGMA_PER_95_BOUND) ** 2

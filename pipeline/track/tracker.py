@@ -11,9 +11,10 @@ Input, one row per report (the measurement model's schema):
 | `latitude`, `longitude` | deg WGS-84 |
 | `flight_level` | FL, may be NaN |
 | `cov_ee_m2`, `cov_en_m2`, `cov_nn_m2` | horizontal position covariance (m^2), local east/north |
+| `ground_speed_kt`, `heading_deg` | optional; only used to start a segment's velocity |
+| `nucr_nacv` | optional; NUCr / NACv of ADS-B reports: that velocity's sigma (bound / 2.448; else 10 m/s) |
 
 Radar covariances come from `radar_covariance` (range/azimuth sigmas), ADS-B from `nacp_covariance`.
-| `ground_speed_kt`, `heading_deg` | optional; only used to start a segment's velocity |
 
 Rows without a finite position or covariance are counted (`invalid`) and skipped.
 """
@@ -26,6 +27,7 @@ import numpy as np
 import pandas as pd
 
 from .config import TrackerConfig, default_modes
+from .covariance import nacv_variance
 from .frame import Plane
 from .imm import STATUS_STARTED, STATUS_UPDATED
 from .plane import SMOOTHERS, estimate, filter_plane
@@ -253,6 +255,10 @@ def _track_one(aircraft_id, group, epoch, config, args, names, step_s, smooth, s
         vp = np.einsum("nij,nj->ni", m, v)
         ve0[ok], vn0[ok] = vp[ok, 0], vp[ok, 1]
         var_v0[ok] = config.sigma_reported_velocity_mps ** 2
+        if "nucr_nacv" in g.columns:  # ADS-B with NUCr / NACv: the velocity's own accuracy
+            var_nac = nacv_variance(g["nucr_nacv"].to_numpy(float, na_value=np.nan))
+            nac = ok & np.isfinite(var_nac)
+            var_v0[nac] = var_nac[nac]
     var_v0[np.isnan(var_v0)] = config.sigma_init_speed_mps ** 2
     n = len(g)
     run = filter_plane(config, t, ze, zn, cov[:, 0, 0], cov[:, 0, 1], cov[:, 1, 1],
