@@ -176,6 +176,7 @@ def conflict_job(options: ConflictOptions, *, progress: Progress | None = None,
     if progress:
         progress.stage("Tracking")
     meas = _measurements(loaded, checked, options)
+    loaded.drop_frames()  # the measurements hold what tracking needs
     check_track_rows(meas, options, len(horizons), f"predictions ({len(horizons)} horizon(s) a track row)")
     noise = None
     if options.noise == "estimate":

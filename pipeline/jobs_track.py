@@ -32,6 +32,7 @@ MAX_COAST_RANGE_S = (0.0, 86400.0)
 # bound this (the same step is harmless on one aircraft and huge on a day of traffic), so it is counted
 # after decoding, before tracking.
 MAX_TRACK_ROWS = 4_000_000
+PARQUET_SLICE_ROWS = 262_144  # rows converted to Arrow at a time when writing the table (about 50 MB)
 # the columns of the track table, in order (issue 10); the tracker's other columns follow
 TRACK_COLUMNS = ["aircraft_id", "callsign", "address", "time", "time_of_day", "latitude", "longitude",
                  "flight_level", "speed_kt", "track_deg", "turn_rate_dps", "sigma_major_m", "sigma_minor_m",
@@ -150,7 +151,7 @@ class TrackJobResult:
     measurements: pd.DataFrame
     labels: pd.DataFrame  # aircraft_id, callsign, address
     parameters: dict
-    loaded: object
+    loaded: object  # the inputs, editions and date; its decoded frames are freed once measurements are built
     noise: pd.DataFrame | None = None  # --noise estimate: per sensor and component, declared and estimated
 
 
@@ -216,6 +217,7 @@ def track_job(options: TrackOptions, *, progress: Progress | None = None, checke
     if progress:
         progress.stage("Tracking")
     meas = _measurements(loaded, checked, options)
+    loaded.drop_frames()  # the measurements hold what tracking needs: a day's decoded frames are ~0.5 GB
     joined = int(meas.attrs.get("joined_by_track_number", 0))
     meas = _select(meas, options)
     check_track_rows(meas, options)
@@ -227,14 +229,21 @@ def track_job(options: TrackOptions, *, progress: Progress | None = None, checke
     if result.tracks.empty:
         raise JobError(untrackable(meas))
     labels = aircraft_labels(meas)
-    tracks = result.tracks.merge(labels, on="aircraft_id", how="left")
-    tracks[["callsign", "address"]] = tracks[["callsign", "address"]].fillna("")
-    tracks = tracks[TRACK_COLUMNS + [c for c in tracks.columns if c not in TRACK_COLUMNS]]
+    tracks = with_labels(result.tracks, labels)
     params = {**jobs._parameters(options, loaded, started, command), **result.parameters,
               "sources": list(_sources(options.sources)), "callsign": options.callsign,
               "address": options.address, "all": bool(options.all_aircraft),
               "radar_plots_joined_by_track_number": joined, "noise": options.noise}
     return TrackJobResult(options, checked, result, tracks, meas, labels, params, loaded, noise)
+
+
+def with_labels(tracks: pd.DataFrame, labels: pd.DataFrame) -> pd.DataFrame:
+    """The tracker's table with each aircraft's call sign and address ("" when none), TRACK_COLUMNS first;
+    the other columns are not copied (a day's table is ~0.35 GB)."""
+    by_id = labels.set_index("aircraft_id")
+    named = {c: tracks["aircraft_id"].map(by_id[c]).fillna("") for c in ("callsign", "address")}
+    out = tracks.assign(**named)
+    return out[TRACK_COLUMNS + [c for c in out.columns if c not in TRACK_COLUMNS]]
 
 
 def untrackable(meas: pd.DataFrame) -> str:
@@ -321,6 +330,19 @@ def sensor_totals(sensors: pd.DataFrame) -> pd.DataFrame:
     return out.drop(columns="nis_sum").assign(nis_mean=np.where(out["updates"] > 0, nis, np.nan))
 
 
+def write_parquet_slices(frame: pd.DataFrame, path: Path, rows: int = PARQUET_SLICE_ROWS) -> None:
+    """The table as Parquet, converted to Arrow `rows` rows at a time under one schema (that of the whole
+    frame's columns): the same file content as `to_parquet` without a second copy of a day's table."""
+    import pyarrow as pa
+    import pyarrow.parquet as pq
+
+    schema = pa.Schema.from_pandas(frame.iloc[:0], preserve_index=False)
+    with pq.ParquetWriter(path, schema) as writer:
+        for start in range(0, len(frame), rows):
+            writer.write_table(pa.Table.from_pandas(frame.iloc[start:start + rows], schema=schema,
+                                                    preserve_index=False))
+
+
 def write_tracks(result: TrackJobResult) -> dict[str, Path]:
     """Write the track table (CSV: times as ISO 8601 UTC; Parquet: tz-aware timestamps), the JSON and
     the figures, as the options ask; each file is written whole to a temporary name and then renamed,
@@ -334,7 +356,7 @@ def write_tracks(result: TrackJobResult) -> dict[str, Path]:
                 result.tracks.assign(time=result.tracks["time"].dt.strftime("%Y-%m-%dT%H:%M:%S.%fZ")).to_csv(
                     tmp, index=False)
             else:
-                result.tracks.to_parquet(tmp, index=False)
+                write_parquet_slices(result.tracks, tmp)
             tmp.replace(out)
         finally:
             tmp.unlink(missing_ok=True)

@@ -144,7 +144,7 @@ def track(measurements: pd.DataFrame, *, step_s: float = 1.0, max_coast_s: float
         sensors_df["invalid"] = sensors_df["invalid"].fillna(0).astype(int)
     else:
         sensors_df["invalid"] = 0
-    return TrackResult(pd.concat(tracks, ignore_index=True), sensors_df,
+    return TrackResult(_concat_by_column(tracks), sensors_df,
                        pd.DataFrame(aircraft), pd.concat(rejected, ignore_index=True),
                        _parameters(config, step_s, smooth, smoother), finals, runs)
 
@@ -154,6 +154,17 @@ def _parameters(config: TrackerConfig, step_s: float, smooth: bool, smoother: st
             "tpm": config.tpm,
             "gate_probability": config.gate_probability,
             "modes": [m.__dict__ for m in config.modes]}
+
+
+def _concat_by_column(frames: list[pd.DataFrame]) -> pd.DataFrame:
+    """pd.concat of the aircraft's tables, joined one column at a time and each part's column dropped once
+    joined, so the peak holds one extra column instead of a second copy of the whole table."""
+    columns = {}
+    for name in list(frames[0].columns):
+        columns[name] = pd.concat([f[name] for f in frames], ignore_index=True)
+        for f in frames:
+            del f[name]
+    return pd.DataFrame(columns, copy=False)
 
 
 def _empty_tracks(names: list[str]) -> pd.DataFrame:
@@ -317,7 +328,7 @@ def _track_one(aircraft_id, group, epoch, config, args, names, step_s, smooth, s
     for j, name in enumerate(names):
         out[f"mode_{name}"] = muq[:, j]
     out.update({"coasted": ~is_update, "age_s": dt, "sources": sources})
-    tracks = pd.DataFrame(out)
+    tracks = pd.DataFrame(out, copy=False)  # one block per column: `_concat_by_column` frees them one by one
 
     sensor = g["sensor_id"].to_numpy(str)
     kinds = g["sensor_kind"].to_numpy(str)
