@@ -23,6 +23,7 @@ import pandas as pd
 from pipeline import jobs
 from pipeline.jobs import Checked, JobError, OptionError
 from pipeline.jobs_track import (
+    ESTIMATED,
     TrackOptions,
     _estimate_noise,
     _measurements,
@@ -147,7 +148,7 @@ class ConflictJobResult:
     loaded: object
     counts: dict = field(default_factory=dict)
     predictions: pd.DataFrame | None = None  # predict_tracks' frame (for the figures)
-    noise: pd.DataFrame | None = None  # --noise estimate: per sensor, declared and estimated sigmas
+    noise: pd.DataFrame | None = None  # --noise estimate or isotropic: declared and estimated sigmas
 
 
 def conflict_job(options: ConflictOptions, *, progress: Progress | None = None,
@@ -176,7 +177,7 @@ def conflict_job(options: ConflictOptions, *, progress: Progress | None = None,
     meas = _measurements(loaded, checked, options)
     check_track_rows(meas, options, len(horizons), f"predictions ({len(horizons)} horizon(s) a track row)")
     noise = None
-    if options.noise == "estimate":
+    if options.noise in ESTIMATED:
         meas, noise = _estimate_noise(meas, checked.sensors, options)
     result = track(meas, step_s=step, max_coast_s=float(options.max_coast_s), tpm=options.tpm,
                    keep_states=True)
