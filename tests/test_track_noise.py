@@ -197,6 +197,16 @@ def test_real_adsb_sigma_estimate_far_below_the_fom_bound():
             assert 5.0 < declared * factor < 35.0
     for row in res.values():
         assert row["imm"] < row["hold"] and row["smoothed"] < row["hold"]
+    # with the timing term the position sigma is the across-track scatter's, a few metres (benchmark, 22
+    # tracks: 2.3-2.5 m and 0.23-0.24 s on 2026-11-23), sigma_t between the robust jitter (~0.05 s) and
+    # the late reports (0.5-0.9 s)
+    res = gap_experiment(tracks, TrackerConfig(), np.random.default_rng(15), noise="estimate", timing=True)
+    (scales,), (sigma_t,) = res.pop("scales"), res.pop("timing")
+    for declared, factor in scales.items():
+        if declared < 100.0:
+            assert 1.0 < declared * factor < 10.0 and 0.05 < sigma_t[declared] < 0.5
+    for row in res.values():
+        assert row["imm"] < row["hold"] and row["smoothed"] < row["hold"]
 
 
 def _surface_and_jittered_airborne(rng) -> tuple[pd.DataFrame, float, float]:
