@@ -33,7 +33,7 @@ from pipeline.track.noise import (
 
 FIX = Path(__file__).resolve().parents[1] / "fixtures"
 TRUTH = json.loads((FIX / "truth.json").read_text())["parameters"]
-SITES = {d.R1: (2.7456, 101.7099), d.R2: (3.7754, 103.2094)}
+SITES = d.SITES
 INJECTED = {d.R1: (70.0, 0.08), d.R2: (120.0, 0.15)}  # fixtures.scenario / fixtures.multiradar defaults
 _GEOD = Geod(ellps="WGS84")
 
