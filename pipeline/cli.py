@@ -170,9 +170,8 @@ def build_parser() -> argparse.ArgumentParser:
     t.add_argument("--sources", default="radar,adsb", help="sensor kinds to fuse: radar, adsb or radar,adsb")
     t.add_argument("--noise", default="estimate",
                    help="measurement noise: estimate (default: each sensor's sigmas from the tracker's "
-                        "residuals, a few extra passes; ADS-B with an along-track timing sigma), "
-                        "isotropic (the same, one ADS-B sigma without the timing term) or declared (the "
-                        "sensor file's sigmas, ADS-B from NACp)")
+                        "residuals, a few extra passes), timing (the same, and an ADS-B along-track "
+                        "time-stamp sigma) or declared (the sensor file's sigmas, ADS-B from NACp)")
     _adsb_sigma_option(t, "; with --noise estimate it is then refined from the residuals")
     _decoding_options(t)
 
@@ -203,7 +202,7 @@ def build_parser() -> argparse.ArgumentParser:
     k.add_argument("--tpm", help="mode transition law of the IMM (default expm:150,20)")
     k.add_argument("--noise", default="declared",
                    help="measurement noise: declared (default: the sensor file's sigmas, ADS-B from NACp "
-                        "or --adsb-sigma; what the conflict validations used), estimate or isotropic "
+                        "or --adsb-sigma; what the conflict validations used), estimate or timing "
                         "(each sensor's sigmas from the tracker's residuals first, as msdc track)")
     _adsb_sigma_option(k, "; with --noise estimate it is then refined from the residuals")
     _decoding_options(k)

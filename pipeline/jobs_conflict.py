@@ -148,7 +148,7 @@ class ConflictJobResult:
     loaded: object
     counts: dict = field(default_factory=dict)
     predictions: pd.DataFrame | None = None  # predict_tracks' frame (for the figures)
-    noise: pd.DataFrame | None = None  # --noise estimate or isotropic: declared and estimated sigmas
+    noise: pd.DataFrame | None = None  # --noise estimate or timing: declared and estimated sigmas
 
 
 def conflict_job(options: ConflictOptions, *, progress: Progress | None = None,

@@ -23,10 +23,11 @@ from pipeline.jobs import AircraftOptions, Checked, JobError, OptionError
 from pipeline.progress import Progress
 
 SOURCES = ("radar", "adsb")
-# --noise: the sensor file's sigmas and NACp; estimated from residuals (ADS-B with its along-track timing
-# term); estimated with one isotropic ADS-B sigma per class (the estimate before the timing term)
-NOISE = ("declared", "estimate", "isotropic")
-ESTIMATED = ("estimate", "isotropic")
+# --noise: the sensor file's sigmas and NACp; estimated from residuals (one isotropic ADS-B sigma per
+# class); estimated with an ADS-B along-track timing term as well (docs/tracker.md: fewer gated reports
+# and track segments on the real recording, predictions through gaps no better on the mean)
+NOISE = ("declared", "estimate", "timing")
+ESTIMATED = ("estimate", "timing")
 STEP_RANGE_S = (1e-3, 3600.0)  # below 1 ms the grid explodes (a day would be 86 M rows per aircraft)
 MAX_COAST_RANGE_S = (0.0, 86400.0)
 # Rows the tracker may put out (grid samples plus report times) in one run: each costs about 570 bytes
@@ -274,7 +275,7 @@ def _estimate_noise(meas: pd.DataFrame, sensors: pd.DataFrame, options: TrackOpt
     sites = {str(i): (float(r.latitude), float(r.longitude))
              for i, r in zip(ids, sensors.itertuples(), strict=True)}
     est = estimate_noise(meas, sites=sites, max_coast_s=float(options.max_coast_s), tpm=options.tpm,
-                         timing=options.noise == "estimate")
+                         timing=options.noise == "timing")
     table = est.sensors.rename(columns={"declared_sigma_m": "declared_sigma",
                                         "estimated_sigma_m": "estimated_sigma"})
     table.insert(3, "unit", "m")

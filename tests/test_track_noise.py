@@ -176,11 +176,8 @@ def test_cli_noise_estimate_reports_each_sensors_sigma(tmp_path, capsys):
     assert a["unit"] == "deg" and a["estimated_sigma"] == pytest.approx(TRUTH["sigma_azimuth_deg"], rel=0.2)
     adsb = [v for (sid, c), v in rows.items() if sid.startswith("021:") and v["residuals"] > 1000]
     assert adsb and all(v["estimated_sigma"] == pytest.approx(TRUTH["adsb_sigma_position_m"], rel=0.15)
-                        for v in adsb if v["component"] == "position")
-    # the fixtures' ADS-B times are only quantised (1/128 s: 2.3 ms RMS), so the timing sigma is near 0
-    timing = [v for v in adsb if v["component"] == "timing"]
-    assert timing and all(v["unit"] == "s" and v["declared_sigma"] == 0.0 and v["estimated"]
-                          and 0.0 <= v["estimated_sigma"] < 0.02 for v in timing)
+                        for v in adsb)
+    assert {v["component"] for v in adsb} == {"position"}  # the timing term only with --noise timing
 
 
 @pytest.mark.skipif(not REAL.exists(), reason=f"real recording {REAL} not present (../shared/real)")
@@ -245,11 +242,12 @@ def test_surface_reports_do_not_shrink_the_airborne_sigma():
 
     meas, surface_m, airborne_m = _surface_and_jittered_airborne(np.random.default_rng(7))
     est = estimate_noise(meas)
-    # no track angle in the frame: no ground vector, so no timing term (its rows say 0 s, not estimated)
-    timing = est.sensors[est.sensors["component"] == "timing"]
-    assert len(timing) == 2 and (timing["estimated_sigma_s"] == 0.0).all() and not timing["estimated"].any()
-    s = est.sensors[est.sensors["component"] == "position"].set_index("motion")
+    s = est.sensors.set_index("motion")
     assert sorted(s.index) == ["airborne", "surface"]
+    # asked for, the timing term needs the track angle, which this frame lacks: rows of 0 s, not estimated
+    timing = estimate_noise(meas, timing=True).sensors
+    timing = timing[timing["component"] == "timing"]
+    assert len(timing) == 2 and (timing["estimated_sigma_s"] == 0.0).all() and not timing["estimated"].any()
     assert s.loc["surface", "estimated_sigma_m"] == pytest.approx(surface_m, rel=0.1)
     assert s.loc["airborne", "estimated_sigma_m"] == pytest.approx(airborne_m, rel=0.15)
     res = track(est.measurements)
@@ -306,7 +304,7 @@ def test_surface_and_airborne_with_ground_vectors_separate_timing_from_position(
     meas, surface_m, _ = _surface_and_jittered_airborne(np.random.default_rng(7))
     k = meas["aircraft_id"].str[2:].astype(int)
     meas["heading_deg"] = np.where(k >= 4, (40.0 + 70.0 * k) % 360.0, 0.0)
-    est = estimate_noise(meas)
+    est = estimate_noise(meas, timing=True)
     s = est.sensors.set_index(["motion", "component"])
     assert s.loc[("airborne", "position"), "estimated_sigma_m"] == pytest.approx(5.0, rel=0.1)
     assert s.loc[("airborne", "timing"), "estimated_sigma_s"] == pytest.approx(0.1, rel=0.1)
@@ -356,7 +354,7 @@ def test_estimate_recovers_injected_time_stamp_jitter(small_e2e, tmp_path):
     # delta) within 10 %; the isotropic estimate can only inflate (far above 5 m), and its fused track
     # is no better
     meas, delta = _time_jittered(small_e2e, 0.2, np.random.default_rng(5), tmp_path)
-    est = estimate_noise(meas, sites=SITES)
+    est = estimate_noise(meas, sites=SITES, timing=True)
     s = est.sensors[(est.sensors["sensor_id"] == d.ADSB) & (est.sensors["residuals"] > 1000)]
     s = s.set_index("component")
     assert s.loc["position", "estimated_sigma_m"] == pytest.approx(TRUTH["adsb_sigma_position_m"], rel=0.1)
@@ -374,7 +372,7 @@ def test_without_jitter_the_timing_sigma_is_near_zero_and_the_track_unchanged(sm
     # no jitter injected (times quantised to 1/128 s only: 2.3 ms RMS, 0.4 m along track): sigma_t under
     # 0.02 s (4 m along track at 180 m/s, below the 5 m noise), and the fused track's RMS against truth
     # forward and smoothed within 1 % of the isotropic estimate's
-    est = estimate_noise(small_e2e.measurements, sites=SITES)
+    est = estimate_noise(small_e2e.measurements, sites=SITES, timing=True)
     s = est.sensors[(est.sensors["sensor_id"] == d.ADSB) & (est.sensors["residuals"] > 1000)]
     assert s.set_index("component").loc["timing", "estimated_sigma_s"] < 0.02
     iso = estimate_noise(small_e2e.measurements, sites=SITES, timing=False)
@@ -383,17 +381,22 @@ def test_without_jitter_the_timing_sigma_is_near_zero_and_the_track_unchanged(sm
         assert a == pytest.approx(b, rel=0.01)
 
 
-def test_cli_noise_isotropic_has_no_timing_row_and_bad_choices_are_named(tmp_path, capsys):
+def test_cli_noise_timing_reports_the_timing_sigma_and_bad_choices_are_named(tmp_path, capsys):
     out = tmp_path / "t.json"
     args = ["track", str(FIX / "radar.ast"), str(FIX / "adsb.ast"), "--sensors", str(FIX / "sensors.toml"),
             "--callsign", "SIA305", "--date", "2019-03-01", "--json", str(out)]
-    assert main(args + ["--noise", "isotropic"]) == 0
+    assert main(args + ["--noise", "timing"]) == 0
     doc = json.loads(out.read_text())
-    assert doc["parameters"]["noise"] == "isotropic"
-    components = {r["component"] for r in doc["noise"]["sensors"]}
-    assert "position" in components and "timing" not in components
+    assert doc["parameters"]["noise"] == "timing"
+    rows = [r for r in doc["noise"]["sensors"] if r["sensor_id"].startswith("021:") and r["residuals"] > 1000]
+    # the fixtures' ADS-B times are only quantised (1/128 s: 2.3 ms RMS, 0.4 m at 180 m/s): near 0 s
+    timing = [r for r in rows if r["component"] == "timing"]
+    assert timing and all(r["unit"] == "s" and r["declared_sigma"] == 0.0 and r["estimated"]
+                          and 0.0 <= r["estimated_sigma"] < 0.02 for r in timing)
+    assert all(r["estimated_sigma"] == pytest.approx(TRUTH["adsb_sigma_position_m"], rel=0.15)
+               for r in rows if r["component"] == "position")
     out.unlink()
     capsys.readouterr()
-    assert main(args + ["--noise", "timing"]) != 0
+    assert main(args + ["--noise", "isotropic"]) != 0
     err = capsys.readouterr().err
-    assert "--noise 'timing'" in err and "isotropic" in err and not out.exists()
+    assert "--noise 'isotropic'" in err and "timing" in err and not out.exists()

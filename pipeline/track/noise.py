@@ -356,15 +356,15 @@ def surface_mask(meas: pd.DataFrame, speed_m_s: np.ndarray) -> np.ndarray:
 def estimate_noise(measurements: pd.DataFrame, *, sites: dict[str, tuple[float, float]] | None = None,
                    config: TrackerConfig | None = None, tpm: str | None = None, max_coast_s: float = 60.0,
                    passes: int = 6, min_residuals: int = 30, tol: float = 0.01,
-                   timing: bool = True) -> NoiseEstimate:
+                   timing: bool = False) -> NoiseEstimate:
     """Rescale each sensor's covariances to its residual scatter (see the module docstring).
 
     sites: radar sensor_id -> (latitude, longitude) of its site, for separate range and azimuth factors
     (a radar without one gets a single factor). A class with fewer than min_residuals residuals takes its
     sensor's pooled factor; a sensor with fewer keeps its declared covariance. timing: ADS-B classes with
     at least min_residuals reports faster than SURFACE_SPEED_KT also get an along-track timing term
-    sigma_t^2 v v^T (fit_timing; v from ground_velocity); False: isotropic only. Stops after `passes`
-    passes, or once no sigma moves by more than tol. config / tpm / max_coast_s as for `track`."""
+    sigma_t^2 v v^T (fit_timing; v from ground_velocity); False (default): isotropic only. Stops after
+    `passes` passes, or once no sigma moves by more than tol. config / tpm / max_coast_s as for `track`."""
     if passes < 1:
         raise ValueError(f"passes {passes!r}: must be >= 1")
     config = TrackerConfig(**{**(config or TrackerConfig(modes=default_modes())).__dict__,
