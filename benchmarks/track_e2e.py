@@ -1,9 +1,10 @@
 """End-to-end tracking validation against the simulator's truth: the default scenario (five aircraft,
 65 min) with its second radar (fixtures.multiradar), forward and smoothed. Prints the RMS errors of each
 sensor's reports and of the tracks built from several source sets; with --figures DIR also writes a
-track figure per aircraft and the error of each track against time.
+track figure per aircraft and the error of each track against time. --noise estimate|timing first
+rescales the covariances as msdc track does (pipeline.track.noise; timing: with the ADS-B timing term).
 
-    python benchmarks/track_e2e.py [--seed 2019] [--figures DIR]
+    python benchmarks/track_e2e.py [--seed 2019] [--figures DIR] [--noise declared|estimate|timing]
 """
 
 from __future__ import annotations
@@ -42,9 +43,18 @@ def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--seed", type=int, default=2019)
     ap.add_argument("--figures", type=Path)
+    ap.add_argument("--noise", choices=("declared", "estimate", "timing"), default="declared")
     args = ap.parse_args()
     t0 = time.monotonic()
     e = d.build(seed=args.seed)
+    if args.noise != "declared":
+        from pipeline.track.noise import estimate_noise
+
+        est = estimate_noise(e.measurements, sites=d.SITES, timing=args.noise == "timing")
+        e.measurements = est.measurements
+        table = est.sensors.drop(columns=["sensor_kind"])
+        print(f"noise {args.noise} ({est.passes} passes):\n"
+              + table.to_string(index=False, float_format=lambda v: f"{v:.4g}"))
     n = e.measurements["sensor_id"].value_counts()
     print(f"default scenario + second radar, seed {args.seed}: {len(e.measurements)} reports "
           f"({', '.join(f'{k} {v}' for k, v in sorted(n.items()))}), "

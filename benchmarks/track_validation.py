@@ -11,7 +11,8 @@ paper's six cases under four readings of what it leaves open (ROBUST_READINGS), 
 and without Poisson data loss, then coasted estimate vs holding the last report by time since it.
 vts: CV Kalman, CA Kalman, IMM(CV, CV)
 and IMM(CV, CA) on a radar-only manoeuvring track. real: the real CAT021 recording, random 5-60 s
-stretches deleted and predicted through. smoothing: the forward filter, the RTS pass on the combined
+stretches deleted and predicted through (ADS-B noise declared, estimated isotropic, estimated with the
+along-track timing term). smoothing: the forward filter, the RTS pass on the combined
 estimate and the IMM (two-filter) smoother on the 3-radar scenario and the VTS track. tpm-real: the real
 recording's gap experiment for a few transition laws.
 """
@@ -458,15 +459,17 @@ def real(runs: int, rng) -> None:
     print(f"\nreal CAT021 (0.23) recording: {len(tracks)} airborne tracks; random 5-60 s stretches deleted, "
           "predicted through, scored against the deleted reports (m)")
     seed = int(rng.integers(2**32))
-    for noise in ("declared", "estimate"):
-        # the same deleted stretches for both (the noise estimate draws no random numbers)
+    for noise, timing in (("declared", False), ("estimate", False), ("estimate", True)):
+        # the same deleted stretches for each (the noise estimate draws no random numbers)
         res = gap_experiment(tracks, TrackerConfig(), np.random.default_rng(seed), repeats=runs // 10 + 1,
-                             noise=noise)
+                             noise=noise, timing=timing)
         scales = res.pop("scales", None)
-        print(f"  noise {noise}" + ("" if scales is None else
-                                    ": declared sigma (m) -> estimated, per repeat: "
-                                    + "; ".join(", ".join(f"{s:.1f} -> {s * k:.1f}" for s, k in d.items())
-                                                for d in scales)))
+        sigma_t = res.pop("timing", None)
+        print(f"  noise {noise}" + (" with the timing term" if timing else "") + (
+            "" if scales is None else ": declared sigma (m) -> estimated, per repeat: "
+            + "; ".join(", ".join(f"{s:.1f} -> {s * k:.1f}" + (f" m, {t[s]:.3f} s" if t else "")
+                                  for s, k in d.items())
+                        for d, t in zip(scales, sigma_t or [None] * len(scales), strict=True))))
         print("  gap length   reports   mean (median): IMM predicted   IMM smoothed     hold last        "
               "straight line")
         for label, row in res.items():

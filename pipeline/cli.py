@@ -181,8 +181,8 @@ def build_parser() -> argparse.ArgumentParser:
     _sources_option(t)
     t.add_argument("--noise", default="estimate",
                    help="measurement noise: estimate (default: each sensor's sigmas from the tracker's "
-                        "residuals, a few extra passes) or declared (the sensor file's sigmas, ADS-B "
-                        "from NACp)")
+                        "residuals, a few extra passes), timing (the same, and an ADS-B along-track "
+                        "time-stamp sigma) or declared (the sensor file's sigmas, ADS-B from NACp)")
     _adsb_sigma_option(t, "; with --noise estimate it is then refined from the residuals")
     _decoding_options(t)
 
@@ -214,8 +214,8 @@ def build_parser() -> argparse.ArgumentParser:
     _sources_option(k)
     k.add_argument("--noise", default="declared",
                    help="measurement noise: declared (default: the sensor file's sigmas, ADS-B from NACp "
-                        "or --adsb-sigma; what the conflict validations used) or estimate (each sensor's "
-                        "sigmas from the tracker's residuals first, as msdc track)")
+                        "or --adsb-sigma; what the conflict validations used), estimate or timing "
+                        "(each sensor's sigmas from the tracker's residuals first, as msdc track)")
     _adsb_sigma_option(k, "; with --noise estimate it is then refined from the residuals")
     _decoding_options(k)
     return parser

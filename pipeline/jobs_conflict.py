@@ -23,6 +23,7 @@ import pandas as pd
 from pipeline import jobs
 from pipeline.jobs import Checked, JobError, OptionError
 from pipeline.jobs_track import (
+    ESTIMATED,
     TrackOptions,
     _estimate_noise,
     _measurements,
@@ -149,7 +150,7 @@ class ConflictJobResult:
     loaded: object
     counts: dict = field(default_factory=dict)
     predictions: pd.DataFrame | None = None  # predict_tracks' frame (for the figures)
-    noise: pd.DataFrame | None = None  # --noise estimate: per sensor, declared and estimated sigmas
+    noise: pd.DataFrame | None = None  # --noise estimate or timing: declared and estimated sigmas
 
 
 def conflict_job(options: ConflictOptions, *, progress: Progress | None = None,
@@ -179,7 +180,7 @@ def conflict_job(options: ConflictOptions, *, progress: Progress | None = None,
     loaded.drop_frames()  # the measurements hold what tracking needs
     check_track_rows(meas, options, len(horizons), f"predictions ({len(horizons)} horizon(s) a track row)")
     noise = None
-    if options.noise == "estimate":
+    if options.noise in ESTIMATED:
         meas, noise = _estimate_noise(meas, checked.sensors, options)
     result = track(meas, step_s=step, max_coast_s=float(options.max_coast_s), tpm=options.tpm,
                    keep_states=True)

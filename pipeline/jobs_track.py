@@ -23,7 +23,11 @@ from pipeline.jobs import AircraftOptions, Checked, JobError, OptionError
 from pipeline.progress import Progress
 
 SOURCES = ("radar", "adsb")
-NOISE = ("declared", "estimate")  # --noise: the sensor file's sigmas and NACp, or estimated from residuals
+# --noise: the sensor file's sigmas and NACp; estimated from residuals (one isotropic ADS-B sigma per
+# class); estimated with an ADS-B along-track timing term as well (docs/tracker.md: fewer gated reports
+# and track segments on the real recording, predictions through gaps no better on the mean)
+NOISE = ("declared", "estimate", "timing")
+ESTIMATED = ("estimate", "timing")
 STEP_RANGE_S = (1e-3, 3600.0)  # below 1 ms the grid explodes (a day would be 86 M rows per aircraft)
 MAX_COAST_RANGE_S = (0.0, 86400.0)
 # Rows the tracker may put out (grid samples plus report times) in one run: each costs about 570 bytes
@@ -51,7 +55,7 @@ class TrackOptions(AircraftOptions):
     smoother: str = "rts"  # with smooth: "rts" (combined estimate) or "imm" (two-filter IMM smoother)
     tpm: str | None = None  # None: the tracker's default (expm:150,20)
     sources: tuple[str, ...] = SOURCES
-    noise: str = "estimate"  # per-sensor noise from residuals (pipeline.track.noise); "declared": as given
+    noise: str = "estimate"  # one of NOISE (pipeline.track.noise estimates; "declared": as given)
 
 
 def _sources(value) -> tuple[str, ...]:
@@ -222,7 +226,7 @@ def track_job(options: TrackOptions, *, progress: Progress | None = None, checke
     meas = _select(meas, options)
     check_track_rows(meas, options)
     noise = None
-    if options.noise == "estimate":
+    if options.noise in ESTIMATED:
         meas, noise = _estimate_noise(meas, checked.sensors, options)
     result = track(meas, step_s=float(options.step_s), max_coast_s=float(options.max_coast_s),
                    tpm=options.tpm, smooth=options.smooth, smoother=options.smoother)
@@ -272,14 +276,15 @@ def untrackable(meas: pd.DataFrame) -> str:
 def _estimate_noise(meas: pd.DataFrame, sensors: pd.DataFrame, options: TrackOptions):
     """The measurements with each sensor's covariance rescaled to its residual scatter, and the table of
     declared against estimated sigmas (radar range m and azimuth deg from the sensor file; ADS-B m per
-    NACp level)."""
+    NACp level, and its along-track timing sigma s, declared 0)."""
     from pipeline.model.measurements import sensor_id
-    from pipeline.track.noise import AZIMUTH, RANGE, estimate_noise
+    from pipeline.track.noise import AZIMUTH, RANGE, TIMING, estimate_noise
 
     ids = sensor_id(48, sensors["sac"], sensors["sic"]).to_numpy()
     sites = {str(i): (float(r.latitude), float(r.longitude))
              for i, r in zip(ids, sensors.itertuples(), strict=True)}
-    est = estimate_noise(meas, sites=sites, max_coast_s=float(options.max_coast_s), tpm=options.tpm)
+    est = estimate_noise(meas, sites=sites, max_coast_s=float(options.max_coast_s), tpm=options.tpm,
+                         timing=options.noise == "timing")
     table = est.sensors.rename(columns={"declared_sigma_m": "declared_sigma",
                                         "estimated_sigma_m": "estimated_sigma"})
     table.insert(3, "unit", "m")
@@ -290,6 +295,10 @@ def _estimate_noise(meas: pd.DataFrame, sensors: pd.DataFrame, options: TrackOpt
             declared = site.sigma_range_m if row["component"] == RANGE else site.sigma_azimuth_deg
             table.loc[i, ["declared_sigma", "unit"]] = [declared, "m" if row["component"] == RANGE else "deg"]
     table["estimated_sigma"] = table["declared_sigma"] * table["scale"]
+    timing = table["component"] == TIMING  # the ADS-B along-track time-stamp sigma, declared as none
+    table.loc[timing, ["unit", "declared_sigma"]] = ["s", 0.0]
+    table.loc[timing, "estimated_sigma"] = table.loc[timing, "estimated_sigma_s"]
+    table = table.drop(columns="estimated_sigma_s")
     table.attrs["passes"] = est.passes
     return est.measurements, table
 

@@ -11,7 +11,16 @@ import numpy as np
 import pandas as pd
 
 from pipeline.track import Plane, TrackerConfig, nacp_covariance
-from pipeline.track.noise import plane_forms, variance_ratio
+from pipeline.track.noise import (
+    KT_PER_M_S,
+    SURFACE_SPEED_KT,
+    along_across,
+    fit_timing,
+    ground_velocity,
+    plane_forms,
+    plane_residuals,
+    variance_ratio,
+)
 from pipeline.track.plane import estimate, filter_plane
 
 # ../shared beside the checkout, as the other tests; MSDC_SHARED overrides it (worktrees elsewhere)
@@ -22,7 +31,8 @@ GAP_BINS = [(5, 15), (15, 30), (30, 45), (45, 60)]
 
 def load_real_adsb(min_span_s: float = 600.0) -> list[dict] | None:
     """Airborne CAT021 tracks per address: t (s), plane e/n (m), isotropic variance from the 0.23 FOM
-    position accuracy read as NACp; None when the recording is absent."""
+    position accuracy read as NACp, and the reported ground vector in the plane (ve, vn m/s; NaN where
+    the report has none); None when the recording is absent."""
     if not REAL.exists():
         return None
     import asterix
@@ -40,26 +50,47 @@ def load_real_adsb(min_span_s: float = 600.0) -> list[dict] | None:
         plane = Plane.around(g["latitude"].to_numpy(), g["longitude"].to_numpy())
         e, n = plane.forward(g["latitude"].to_numpy(), g["longitude"].to_numpy())
         t, var = g["t"].to_numpy(), g["var"].to_numpy()
+        speed = g["ground_speed_kt"].to_numpy(float) / KT_PER_M_S
+        angle = np.radians(g["track_angle_deg"].to_numpy(float))
+        m = plane.local_to_plane(g["latitude"].to_numpy(), g["longitude"].to_numpy())
+        v = np.einsum("nij,nj->ni", m, np.stack([speed * np.sin(angle), speed * np.cos(angle)], -1))
         near = np.hypot(e, n) < 1_000_000.0  # a few reports carry garbage positions far away
-        t, e, n, var = t[near], e[near], n[near], var[near]
+        t, e, n, var, v = t[near], e[near], n[near], var[near], v[near]
         # position jumps are not truth: drop what the tracker gates on the complete track
         run = filter_plane(TrackerConfig(), t, e, n, var, np.zeros(len(t)), var)
         ok = run.accepted & (run.segment == np.bincount(run.segment).argmax())
         tracks.append({"address": str(address), "t": t[ok], "e": e[ok], "n": n[ok], "var": var[ok],
-                       "jumps": int((~run.accepted).sum())})
+                       "ve": v[ok, 0], "vn": v[ok, 1], "jumps": int((~run.accepted).sum())})
     return tracks
 
 
+def _velocity(t, ve, vn) -> np.ndarray:
+    """Each report's ground vector, else the last one at most VELOCITY_HOLD_S earlier, else zero
+    (pipeline.track.noise.ground_velocity on one track's plane vectors)."""
+    frame = pd.DataFrame({"time": pd.to_datetime(t, unit="s", utc=True), "sensor_id": "adsb",
+                          "sensor_kind": "adsb", "aircraft_id": "a",
+                          "ground_speed_kt": np.hypot(ve, vn) * KT_PER_M_S,
+                          "heading_deg": np.degrees(np.arctan2(ve, vn))})
+    return ground_velocity(frame)
+
+
+def _covariances(var, var_t, v) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """cov_ee, cov_en, cov_nn of R = var I + var_t v v^T."""
+    return var + var_t * v[:, 0] ** 2, var_t * v[:, 0] * v[:, 1], var + var_t * v[:, 1] ** 2
+
+
 def gap_experiment(tracks, cfg: TrackerConfig, rng, repeats: int = 1, gaps_per_track: int = 6,
-                   noise: str = "declared", passes: int = 6) -> dict:
+                   noise: str = "declared", passes: int = 6, timing: bool = False) -> dict:
     """Mean (and `_median`) error (m) at the deleted reports, per gap-length bin: the IMM's forward
     prediction, its smoothed fill, holding the last report, and a straight line from the velocity over
     the last 10 s of reports. noise "estimate": before the scored pass, the ADS-B sigma is rescaled per
     declared (FOM) level, pooled over the tracks, from the residuals of the reports the tracker keeps
     (pipeline.track.noise.variance_ratio, `passes` passes); the deleted reports are never used. The
-    factors per level are in the result under "scales"."""
+    factors per level are in the result under "scales". timing: also an along-track timing term per
+    level (pipeline.track.noise.fit_timing, ground vectors as ground_velocity from the kept reports),
+    its sigma_t (s) per level under "timing"."""
     rows = []
-    scales_out = []
+    scales_out, timing_out = [], []
     for _ in range(repeats):
         cut = []
         for tr in tracks:
@@ -76,28 +107,49 @@ def gap_experiment(tracks, cfg: TrackerConfig, rng, repeats: int = 1, gaps_per_t
                     continue
                 removed |= inside
                 gaps.append((start, length, inside))
-            cut.append((tr, ~removed, gaps))
+            keep = ~removed
+            velocity = (_velocity(t[keep], tr["ve"][keep], tr["vn"][keep]) if timing
+                        else np.zeros((keep.sum(), 2)))
+            cut.append((tr, keep, gaps, velocity))
         levels = np.unique(np.concatenate([tr["var"] for tr in tracks]))
         scale = dict.fromkeys(levels.tolist(), 1.0)
+        var_t = dict.fromkeys(levels.tolist(), 0.0)
         if noise == "estimate":
+            timed = None
             for _ in range(passes):
-                q, lv = [], []
-                for tr, keep, _ in cut:
-                    var = tr["var"][keep] * np.array([scale[v] for v in tr["var"][keep]])
-                    zero = np.zeros(keep.sum())
-                    run = filter_plane(cfg, tr["t"][keep], tr["e"][keep], tr["n"][keep], var, zero, var)
-                    q.append(plane_forms(run, tr["e"][keep], tr["n"][keep], var, zero, var))
-                    lv.append(tr["var"][keep])
-                q, lv = np.concatenate(q), np.concatenate(lv)
+                q, lv, res_uw, hph_uw, speed = [], [], [], [], []
+                for tr, keep, _, vk in cut:
+                    lk = tr["var"][keep]
+                    var = lk * np.array([scale[v] for v in lk])
+                    cov = _covariances(var, np.array([var_t[v] for v in lk]), vk)
+                    run = filter_plane(cfg, tr["t"][keep], tr["e"][keep], tr["n"][keep], *cov)
+                    res, hph = plane_residuals(run, tr["e"][keep], tr["n"][keep])
+                    q.append(plane_forms(run, tr["e"][keep], tr["n"][keep], *cov))
+                    rot = along_across(vk)
+                    res_uw.append(np.einsum("nij,nj->ni", rot, res))
+                    hph_uw.append(rot @ hph @ np.swapaxes(rot, 1, 2))
+                    speed.append(np.hypot(vk[:, 0], vk[:, 1]))
+                    lv.append(lk)
+                q, lv, speed = np.concatenate(q), np.concatenate(lv), np.concatenate(speed)
+                res_uw, hph_uw = np.concatenate(res_uw), np.concatenate(hph_uw)
+                fast = speed * KT_PER_M_S >= SURFACE_SPEED_KT
+                if timed is None:
+                    timed = {v: timing and (fast & (lv == v) & np.isfinite(q)).sum() >= 30 for v in scale}
                 for v in scale:
                     sel = (lv == v) & np.isfinite(q)
-                    if sel.sum() >= 30:
+                    if timed[v]:
+                        s2, var_t[v] = fit_timing(res_uw[sel], hph_uw[sel], speed[sel], scale[v] * v,
+                                                  var_t[v])
+                        scale[v] = s2 / v
+                    elif sel.sum() >= 30:
                         scale[v] *= variance_ratio(q[sel], 2)
             scales_out.append({float(np.sqrt(v)): float(np.sqrt(s)) for v, s in scale.items()})
-        for tr, keep, gaps in cut:
+            timing_out.append({float(np.sqrt(v)): float(np.sqrt(s)) for v, s in var_t.items()})
+        for tr, keep, gaps, vk in cut:
             t, e, n = tr["t"], tr["e"], tr["n"]
-            var = tr["var"] * np.array([scale[v] for v in tr["var"]])
-            run = filter_plane(cfg, t[keep], e[keep], n[keep], var[keep], np.zeros(keep.sum()), var[keep])
+            lk = tr["var"][keep]
+            cov = _covariances(lk * np.array([scale[v] for v in lk]), np.array([var_t[v] for v in lk]), vk)
+            run = filter_plane(cfg, t[keep], e[keep], n[keep], *cov)
             tk, ek, nk = t[keep], e[keep], n[keep]
             for _, length, inside in gaps:
                 tm = t[inside]
@@ -123,4 +175,6 @@ def gap_experiment(tracks, cfg: TrackerConfig, rng, repeats: int = 1, gaps_per_t
         out[f"{lo}-{hi} s"] = {"n": len(sel), **means, **medians}
     if scales_out:
         out["scales"] = scales_out
+    if timing_out and timing:
+        out["timing"] = timing_out
     return out

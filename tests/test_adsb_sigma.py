@@ -65,15 +65,25 @@ def test_declared_noise_uses_exactly_the_declared_sigma(recording):
 
 
 def test_estimate_recovers_the_injected_sigma_from_the_declared_one(recording):
-    r = _track(recording, adsb_sigma_m=DECLARED_M, noise="estimate")
-    row = r.noise[r.noise["sensor_kind"] == "adsb"]
-    assert len(row) == 1 and row["declared_from"].iloc[0] == "declared" and bool(row["estimated"].iloc[0])
-    assert row["declared_sigma"].iloc[0] == DECLARED_M
-    # ~5900 reports: the sample sigma is within ~1 % of 20 m; 5 % is the residual method's bound against
-    # the sample's RMS in test_track_noise (19.87 m on 2026-11-22), the injected jumps cut as gross errors
-    assert row["estimated_sigma"].iloc[0] == pytest.approx(INJECTED_M, rel=0.05)
-    m = r.measurements
-    np.testing.assert_allclose(m["cov_ee_m2"], row["estimated_sigma"].iloc[0] ** 2, rtol=1e-9)
+    for noise in ("estimate", "timing"):
+        r = _track(recording, adsb_sigma_m=DECLARED_M, noise=noise)
+        rows = r.noise[r.noise["sensor_kind"] == "adsb"].set_index("component")
+        row = rows.loc["position"]
+        assert row["declared_from"] == "declared" and bool(row["estimated"])
+        assert row["declared_sigma"] == DECLARED_M
+        # ~5900 reports: the sample sigma is within ~1 % of 20 m; 5 % is the residual method's bound against
+        # the sample's RMS in test_track_noise (19.87 m on 2026-11-22), the injected jumps cut as gross errors
+        assert row["estimated_sigma"] == pytest.approx(INJECTED_M, rel=0.05)
+        m = r.measurements
+        if noise == "estimate":
+            assert "timing" not in rows.index
+            np.testing.assert_allclose(m["cov_ee_m2"], row["estimated_sigma"] ** 2, rtol=1e-9)
+        else:
+            # no time-stamp jitter injected (times quantised to 1/128 s: 2.3 ms RMS, 0.5 m at 200 m/s,
+            # nothing against 20 m): the timing term stays near 0 and the covariance near 20^2 I
+            assert rows.loc["timing", "unit"] == "s" and 0.0 <= rows.loc["timing", "estimated_sigma"] < 0.05
+            np.testing.assert_allclose(m["cov_ee_m2"], row["estimated_sigma"] ** 2, rtol=0.05)
+            np.testing.assert_allclose(m["cov_nn_m2"], row["estimated_sigma"] ** 2, rtol=0.05)
 
 
 def test_noise_classes_keep_declared_apart_from_the_same_nacp_sigma():
@@ -183,3 +193,30 @@ def test_real_v023_recording_is_tracked_with_a_declared_sigma(tmp_path):
     ac = r.result.aircraft.set_index("aircraft_id")
     assert ac["gated"].sum() < 700 and ac["segments"].sum() < 250 and ac.loc["344282", "segments"] <= 10
     assert math.isfinite(r.parameters["adsb_sigma_m"]) and r.parameters["adsb_sigma_m"] == 30.0
+
+
+@pytest.mark.skipif(not REAL.exists(), reason=f"real recording {REAL} not present (../shared/real)")
+def test_real_v023_timing_term_splits_the_airborne_scatter(tmp_path):
+    sensors = str(Path(__file__).resolve().parents[1] / "fixtures" / "sensors.toml")
+    r = track_job(TrackOptions(inputs=(str(REAL),), editions=("21=0.23",), sensors=sensors, all_aircraft=True,
+                               output=str(tmp_path / "t.csv"), adsb_sigma_m=30.0, noise="timing"))
+    adsb = r.noise[r.noise["sensor_kind"] == "adsb"]
+    rows = adsb[adsb["component"] == "position"].set_index("motion")
+    timing = adsb[adsb["component"] == "timing"].set_index("motion")
+    assert sorted(rows.index) == sorted(timing.index) == ["airborne", "surface"]
+    # Across track the airborne residuals are ~2 m at every speed, along track they grow with speed
+    # (time stamps off by ~0.05 s robustly, with a tail 0.5-0.9 s late). With the timing term the
+    # airborne position sigma is the across-track scatter's (3.5 m on 2026-11-23, where one isotropic
+    # sigma is raised to 19.4 m) and sigma_t lies between the robust jitter and the late tail (0.24 s,
+    # raised by the gate-share guard from the mean's 0.12 s)
+    airborne, surface = rows.loc["airborne"], rows.loc["surface"]
+    assert 1.0 < airborne["estimated_sigma"] < 10.0 and airborne["residuals"] > 25_000
+    assert timing.loc["airborne", "unit"] == "s" and 0.05 < timing.loc["airborne", "estimated_sigma"] < 0.5
+    # taxiing and parked aircraft (2.6 m on 2026-11-23) are too slow for a timing term (under 26 m/s,
+    # 0.1 s is under 3 m): kept at 0 and said so
+    assert surface["estimated_sigma"] < 5.0 and surface["residuals"] > 15_000
+    assert timing.loc["surface", "estimated_sigma"] == 0.0 and not timing.loc["surface", "estimated"]
+    # isotropic per class: 556 gated reports, 195 segments, VLG7821 4; with the timing term 424, 150 and
+    # 3 on 2026-11-23
+    ac = r.result.aircraft.set_index("aircraft_id")
+    assert ac["gated"].sum() < 500 and ac["segments"].sum() < 180 and ac.loc["344282", "segments"] <= 4

@@ -14,17 +14,26 @@ import pytest
 import track_e2e_data as d
 from pyproj import Geod
 from real_track_data import REAL, gap_experiment, load_real_adsb
+from scipy.stats import chi2
 
 from pipeline.cli import main
 from pipeline.model.dedup import duplicate_mask
 from pipeline.model.measurements import build_measurements
 from pipeline.model.sensors import read_sensors
 from pipeline.track import TrackerConfig
-from pipeline.track.noise import CHI2_1_MEDIAN, estimate_noise, quadratic_forms, rescale, variance_ratio
+from pipeline.track.noise import (
+    CHI2_1_MEDIAN,
+    estimate_noise,
+    fit_timing,
+    quadratic_forms,
+    rescale,
+    timing_forms,
+    variance_ratio,
+)
 
 FIX = Path(__file__).resolve().parents[1] / "fixtures"
 TRUTH = json.loads((FIX / "truth.json").read_text())["parameters"]
-SITES = {d.R1: (2.7456, 101.7099), d.R2: (3.7754, 103.2094)}
+SITES = d.SITES
 INJECTED = {d.R1: (70.0, 0.08), d.R2: (120.0, 0.15)}  # fixtures.scenario / fixtures.multiradar defaults
 _GEOD = Geod(ellps="WGS84")
 
@@ -165,9 +174,10 @@ def test_cli_noise_estimate_reports_each_sensors_sigma(tmp_path, capsys):
     assert r["estimated_sigma"] == pytest.approx(TRUTH["sigma_range_m"], rel=0.2)
     a = rows[("048:25/201", "azimuth")]
     assert a["unit"] == "deg" and a["estimated_sigma"] == pytest.approx(TRUTH["sigma_azimuth_deg"], rel=0.2)
-    adsb = [v for (sid, _), v in rows.items() if sid.startswith("021:") and v["residuals"] > 1000]
+    adsb = [v for (sid, c), v in rows.items() if sid.startswith("021:") and v["residuals"] > 1000]
     assert adsb and all(v["estimated_sigma"] == pytest.approx(TRUTH["adsb_sigma_position_m"], rel=0.15)
                         for v in adsb)
+    assert {v["component"] for v in adsb} == {"position"}  # the timing term only with --noise timing
 
 
 @pytest.mark.skipif(not REAL.exists(), reason=f"real recording {REAL} not present (../shared/real)")
@@ -182,6 +192,16 @@ def test_real_adsb_sigma_estimate_far_below_the_fom_bound():
     for declared, factor in scales.items():
         if declared < 100.0:
             assert 5.0 < declared * factor < 35.0
+    for row in res.values():
+        assert row["imm"] < row["hold"] and row["smoothed"] < row["hold"]
+    # with the timing term the position sigma is the across-track scatter's, a few metres (benchmark, 22
+    # tracks: 2.3-2.5 m and 0.23-0.24 s on 2026-11-23), sigma_t between the robust jitter (~0.05 s) and
+    # the late reports (0.5-0.9 s)
+    res = gap_experiment(tracks, TrackerConfig(), np.random.default_rng(15), noise="estimate", timing=True)
+    (scales,), (sigma_t,) = res.pop("scales"), res.pop("timing")
+    for declared, factor in scales.items():
+        if declared < 100.0:
+            assert 1.0 < declared * factor < 10.0 and 0.05 < sigma_t[declared] < 0.5
     for row in res.values():
         assert row["imm"] < row["hold"] and row["smoothed"] < row["hold"]
 
@@ -224,6 +244,10 @@ def test_surface_reports_do_not_shrink_the_airborne_sigma():
     est = estimate_noise(meas)
     s = est.sensors.set_index("motion")
     assert sorted(s.index) == ["airborne", "surface"]
+    # asked for, the timing term needs the track angle, which this frame lacks: rows of 0 s, not estimated
+    timing = estimate_noise(meas, timing=True).sensors
+    timing = timing[timing["component"] == "timing"]
+    assert len(timing) == 2 and (timing["estimated_sigma_s"] == 0.0).all() and not timing["estimated"].any()
     assert s.loc["surface", "estimated_sigma_m"] == pytest.approx(surface_m, rel=0.1)
     assert s.loc["airborne", "estimated_sigma_m"] == pytest.approx(airborne_m, rel=0.15)
     res = track(est.measurements)
@@ -231,3 +255,148 @@ def test_surface_reports_do_not_shrink_the_airborne_sigma():
     # isotropic 11.7 m against 15.8 m along track: ~0.6 % beyond the gate; 2 % leaves room
     assert airborne["gated"].sum() < 0.02 * airborne["reports"].sum()
     assert (res.aircraft.set_index("aircraft_id").loc[[f"AC{k}" for k in range(4, 8)], "segments"] == 1).all()
+
+
+def test_fit_timing_recovers_the_two_terms_from_residuals_by_hand():
+    # Residuals drawn directly (no smoother: H P_s H^T = 0), speeds 0-250 m/s: along N(0, s^2 + (v t)^2),
+    # across N(0, s^2). The fit must return the drawn s and t (200,000 draws: ~0.5 % sd); from a start
+    # far off (30 m, 0 s) one update lands there, the weights only change the efficiency.
+    rng = np.random.default_rng(11)
+    n = 200_000
+    speed = rng.uniform(0.0, 250.0, n)
+    zero = np.zeros((n, 2, 2))
+    for s_m, t_s in ((3.0, 0.1), (3.0, 0.0)):
+        res = np.stack([rng.normal(0.0, np.sqrt(s_m**2 + (t_s * speed) ** 2)), rng.normal(0.0, s_m, n)], -1)
+        var_m2, var_t = 900.0, 0.0
+        for _ in range(3):
+            var_m2, var_t = fit_timing(res, zero, speed, var_m2, var_t)
+        assert np.sqrt(var_m2) == pytest.approx(s_m, rel=0.02)
+        assert np.sqrt(var_t) == pytest.approx(t_s, abs=0.002)
+        # Gaussian: the gate's 0.1 % is far under the guard's 1 %; nothing raised
+        assert np.mean(timing_forms(res, zero, speed, var_m2, var_t) > chi2.ppf(0.999, 2)) < 0.002
+
+
+def test_fit_timing_gate_share_guard_raises_the_along_term_for_late_reports():
+    # 3 % of the reports 0.7 s late at 150 m/s (105 m along, far beyond a 3 m / 0.05 s gate): the mean
+    # fit alone leaves more than 1 % beyond the 99.9 % gate; the guard raises sigma_t until 1 % (counted
+    # here directly from the forms with the returned variances) and leaves sigma (no tail across) alone
+    rng = np.random.default_rng(12)
+    n = 100_000
+    speed = np.full(n, 150.0)
+    zero = np.zeros((n, 2, 2))
+    late = rng.random(n) < 0.03
+    res = np.stack([rng.normal(0.0, np.hypot(3.0, 0.05 * 150.0), n) + np.where(late, 0.7 * 150.0, 0.0),
+                    rng.normal(0.0, 3.0, n)], -1)
+    var_m2, var_t = fit_timing(res, zero, speed, 9.0, 0.05**2)
+    gate = chi2.ppf(0.999, 2)
+    assert np.mean(timing_forms(res, zero, speed, var_m2, var_t) > gate) == pytest.approx(0.01, abs=0.0005)
+    assert np.sqrt(var_m2) == pytest.approx(3.0, rel=0.03)
+    # the late reports' own contribution: the mean fit gives t^2 = 0.05^2 + 0.03 * 0.97 * 0.7^2 (their
+    # variance) plus the guard's raise on top
+    assert np.sqrt(var_t) > np.sqrt(0.05**2 + 0.03 * 0.97 * 0.7**2)
+
+
+def test_surface_and_airborne_with_ground_vectors_separate_timing_from_position():
+    # the same frame with each report's track angle: the airborne class splits its 11.7 m into the 5 m
+    # position noise and the injected 0.1 s; the parked reports keep sigma_t = 0 (too slow to separate)
+    from pipeline.track import track
+
+    meas, surface_m, _ = _surface_and_jittered_airborne(np.random.default_rng(7))
+    k = meas["aircraft_id"].str[2:].astype(int)
+    meas["heading_deg"] = np.where(k >= 4, (40.0 + 70.0 * k) % 360.0, 0.0)
+    est = estimate_noise(meas, timing=True)
+    s = est.sensors.set_index(["motion", "component"])
+    assert s.loc[("airborne", "position"), "estimated_sigma_m"] == pytest.approx(5.0, rel=0.1)
+    assert s.loc[("airborne", "timing"), "estimated_sigma_s"] == pytest.approx(0.1, rel=0.1)
+    assert s.loc[("surface", "position"), "estimated_sigma_m"] == pytest.approx(surface_m, rel=0.1)
+    assert s.loc[("surface", "timing"), "estimated_sigma_s"] == 0.0
+    assert not s.loc[("surface", "timing"), "estimated"]
+    res = track(est.measurements)
+    airborne = res.sensors[res.sensors["aircraft_id"].isin([f"AC{k}" for k in range(4, 8)])]
+    assert airborne["gated"].sum() < 0.005 * airborne["reports"].sum()  # isotropic: up to 2 % (above)
+    assert (res.aircraft.set_index("aircraft_id").loc[[f"AC{k}" for k in range(4, 8)], "segments"] == 1).all()
+
+
+def _time_jittered(e: d.E2E, sigma_t_s: float, rng, tmp: Path) -> tuple[pd.DataFrame, np.ndarray]:
+    """The simulator's frames with each ADS-B report moved along its aircraft's true path by delta ~ N(0,
+    sigma_t_s) (the position at t + delta, stamped t), as measurements; and the deltas drawn."""
+    adsb = e.sim.sim.adsb.copy()
+    delta = rng.normal(0.0, sigma_t_s, len(adsb))
+    tod = adsb["time_of_day"].to_numpy(float)
+    address = adsb["address"].astype(str).to_numpy()
+    for ac in e.sim.sim.aircraft:
+        sel = address == ac.spec.address_hex
+        now, then = ac.truth(tod[sel]), ac.truth(tod[sel] + delta[sel])
+        adsb.loc[sel, "latitude"] += np.nan_to_num(then.latitude - now.latitude)
+        adsb.loc[sel, "longitude"] += np.nan_to_num(then.longitude - now.longitude)
+    toml = tmp / "sensors.toml"
+    toml.write_text(e.sim.sensors_toml())
+    meas = build_measurements(pd.concat([e.sim.sim.radar, e.sim.radar2], ignore_index=True), adsb,
+                              read_sensors(toml), date=d.DATE)
+    dup = duplicate_mask(meas.sort_values("time", kind="stable")).reindex(meas.index).to_numpy(bool)
+    return meas[~dup].reset_index(drop=True), delta
+
+
+def _fused_rms(e: d.E2E, meas: pd.DataFrame) -> tuple[float, float]:
+    from pipeline.track import track
+
+    return tuple(d.rms(e.truth_error_m(track(meas, smooth=smooth).tracks)) for smooth in (False, True))
+
+
+@pytest.fixture(scope="module")
+def small_e2e(tmp_path_factory):
+    return d.build(d.small_scenario(), tmp=tmp_path_factory.mktemp("timing"))
+
+
+def test_estimate_recovers_injected_time_stamp_jitter(small_e2e, tmp_path):
+    # the small two-radar scenario (~180 m/s) with 0.2 s of time-stamp jitter on ADS-B: the NACp 9 class
+    # (~2,000 reports) gives back the 5 m position noise and the 0.2 s (and the sample's realised RMS
+    # delta) within 10 %; the isotropic estimate can only inflate (far above 5 m), and its fused track
+    # is no better
+    meas, delta = _time_jittered(small_e2e, 0.2, np.random.default_rng(5), tmp_path)
+    est = estimate_noise(meas, sites=SITES, timing=True)
+    s = est.sensors[(est.sensors["sensor_id"] == d.ADSB) & (est.sensors["residuals"] > 1000)]
+    s = s.set_index("component")
+    assert s.loc["position", "estimated_sigma_m"] == pytest.approx(TRUTH["adsb_sigma_position_m"], rel=0.1)
+    assert s.loc["timing", "estimated_sigma_s"] == pytest.approx(0.2, rel=0.1)
+    assert s.loc["timing", "estimated_sigma_s"] == pytest.approx(np.sqrt(np.mean(delta**2)), rel=0.1)
+    iso = estimate_noise(meas, sites=SITES, timing=False)
+    assert "timing" not in set(iso.sensors["component"])
+    big = iso.sensors[(iso.sensors["sensor_id"] == d.ADSB) & (iso.sensors["residuals"] > 1000)]
+    assert big["estimated_sigma_m"].iloc[0] > 3 * TRUTH["adsb_sigma_position_m"]
+    with_timing, isotropic = _fused_rms(small_e2e, est.measurements), _fused_rms(small_e2e, iso.measurements)
+    assert with_timing[0] <= 1.01 * isotropic[0] and with_timing[1] <= 1.01 * isotropic[1]
+
+
+def test_without_jitter_the_timing_sigma_is_near_zero_and_the_track_unchanged(small_e2e):
+    # no jitter injected (times quantised to 1/128 s only: 2.3 ms RMS, 0.4 m along track): sigma_t under
+    # 0.02 s (4 m along track at 180 m/s, below the 5 m noise), and the fused track's RMS against truth
+    # forward and smoothed within 1 % of the isotropic estimate's
+    est = estimate_noise(small_e2e.measurements, sites=SITES, timing=True)
+    s = est.sensors[(est.sensors["sensor_id"] == d.ADSB) & (est.sensors["residuals"] > 1000)]
+    assert s.set_index("component").loc["timing", "estimated_sigma_s"] < 0.02
+    iso = estimate_noise(small_e2e.measurements, sites=SITES, timing=False)
+    for a, b in zip(_fused_rms(small_e2e, est.measurements), _fused_rms(small_e2e, iso.measurements),
+                    strict=True):
+        assert a == pytest.approx(b, rel=0.01)
+
+
+def test_cli_noise_timing_reports_the_timing_sigma_and_bad_choices_are_named(tmp_path, capsys):
+    out = tmp_path / "t.json"
+    args = ["track", str(FIX / "radar.ast"), str(FIX / "adsb.ast"), "--sensors", str(FIX / "sensors.toml"),
+            "--callsign", "SIA305", "--date", "2019-03-01", "--json", str(out)]
+    assert main(args + ["--noise", "timing"]) == 0
+    doc = json.loads(out.read_text())
+    assert doc["parameters"]["noise"] == "timing"
+    rows = [r for r in doc["noise"]["sensors"] if r["sensor_id"].startswith("021:") and r["residuals"] > 1000]
+    # the fixtures' ADS-B times are only quantised (1/128 s: 2.3 ms RMS, 0.4 m at 180 m/s): near 0 s
+    timing = [r for r in rows if r["component"] == "timing"]
+    assert timing and all(r["unit"] == "s" and r["declared_sigma"] == 0.0 and r["estimated"]
+                          and 0.0 <= r["estimated_sigma"] < 0.02 for r in timing)
+    assert all(r["estimated_sigma"] == pytest.approx(TRUTH["adsb_sigma_position_m"], rel=0.15)
+               for r in rows if r["component"] == "position")
+    out.unlink()
+    capsys.readouterr()
+    assert main(args + ["--noise", "isotropic"]) != 0
+    err = capsys.readouterr().err
+    assert "--noise 'isotropic'" in err and "timing" in err and not out.exists()

@@ -21,6 +21,7 @@ from pipeline.model.sensors import read_sensors
 DATE = dt.date(2019, 3, 1)
 MIDNIGHT = pd.Timestamp(DATE, tz="UTC")
 R1, R2, ADSB = "048:25/201", "048:25/202", "021:0/1"
+SITES = {R1: (2.7456, 101.7099), R2: (3.7754, 103.2094)}  # the two radars' sites (fixtures.multiradar)
 _GEOD = Geod(ellps="WGS84")
 
 

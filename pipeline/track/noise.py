@@ -12,11 +12,15 @@ real data (a smaller sigma gates more of the tail, which gives a smaller sigma).
 (the smoothed covariance depends on the R in use). ADS-B on the surface (ground speed below
 SURFACE_SPEED_KT: the reported one, else the first pass's smoothed speed) and airborne are separate
 classes: pooled, the many near-stationary surface reports pulled the sigma far below the airborne scatter.
+An ADS-B class fast enough gets R = sigma^2 I + sigma_t^2 v v^T, v the report's ground vector: time-stamp
+errors move the reported position along the motion by v times the error, so the along-track scatter grows
+with speed while the across-track one does not (fit_timing fits both from the residuals along and across).
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
 import pandas as pd
@@ -46,6 +50,13 @@ SCALE_LIMITS = (0.02, 50.0)  # sigma factors are clipped to this per pass
 # nominal share) lie beyond the gate.
 GATE_PROBABILITY = 0.999
 GATE_SHARE_MAX = 0.01
+# The timing term of an ADS-B class, R = sigma^2 I + sigma_t^2 v v^T: v is the report's own ground vector
+# (ground speed and track angle), else the last one of the same aircraft and source at most
+# VELOCITY_HOLD_S earlier (never a later report, never the smoother's), else none (no timing term).
+# sigma_t is fitted only in classes with at least min_residuals reports moving faster than
+# SURFACE_SPEED_KT: slower, 0.1 s of jitter is under 3 m along track, inseparable from the position noise.
+TIMING = "timing"
+VELOCITY_HOLD_S = 5.0
 
 
 def quadratic_forms(res: np.ndarray, R: np.ndarray, HPH: np.ndarray, radial: np.ndarray | None = None):
@@ -96,31 +107,117 @@ def variance_ratio(q: np.ndarray, dof: int) -> float:
     return float(max(np.mean(q / dof), tail))
 
 
+def plane_residuals(run, ze, zn) -> tuple[np.ndarray, np.ndarray]:
+    """Every report's residual z - H x_s (n, 2) against the smoothed estimate of a plane-level run
+    (pipeline.track.plane.filter_plane) at its time, and H P_s H^T (n, 2, 2) signed for quadratic_forms:
+    negated for a gated report (C = R + H P_s H^T)."""
+    est = estimate(run, run.t, smooth=True)
+    res = np.stack([np.asarray(ze, float) - est.x[:, 0], np.asarray(zn, float) - est.x[:, 3]], -1)
+    hph = est.P[:, [0, 3]][:, :, [0, 3]]
+    return res, np.where(run.accepted[:, None, None], hph, -hph)
+
+
 def plane_forms(run, ze, zn, cov_ee, cov_en, cov_nn, radial=None) -> np.ndarray:
     """`quadratic_forms` of every report of a plane-level run (pipeline.track.plane.filter_plane) against
     the smoothed estimate at its time, gated reports included (with C = R + H P_s H^T)."""
     n = len(run.t)
     if not n:
         return np.empty((0, 2) if radial is not None else 0)
-    est = estimate(run, run.t, smooth=True)
-    res = np.stack([np.asarray(ze, float) - est.x[:, 0], np.asarray(zn, float) - est.x[:, 3]], -1)
-    R = np.empty((n, 2, 2))
+    res, hph = plane_residuals(run, ze, zn)
+    return quadratic_forms(res, _matrices(cov_ee, cov_en, cov_nn), hph, radial)
+
+
+def _matrices(cov_ee, cov_en, cov_nn) -> np.ndarray:
+    """(n, 2, 2) symmetric matrices from their three components."""
+    cov_ee = np.asarray(cov_ee, float)
+    R = np.empty((len(cov_ee), 2, 2))
     R[:, 0, 0] = cov_ee
     R[:, 0, 1] = R[:, 1, 0] = cov_en
     R[:, 1, 1] = cov_nn
-    hph = est.P[:, [0, 3]][:, :, [0, 3]]
-    hph = np.where(run.accepted[:, None, None], hph, -hph)
-    return quadratic_forms(res, R, hph, radial)
+    return R
+
+
+def along_across(vectors: np.ndarray) -> np.ndarray:
+    """Rotations Q (n, 2, 2) whose rows are the unit vector along each velocity and the one across it
+    (to its left); east and north where the velocity is zero."""
+    speed = np.hypot(vectors[:, 0], vectors[:, 1])
+    moving = speed > 0
+    u = np.where(moving[:, None], vectors / np.where(moving, speed, 1.0)[:, None], [1.0, 0.0])
+    return np.stack([u, np.stack([-u[:, 1], u[:, 0]], -1)], 1)
+
+
+def timing_forms(res_uw: np.ndarray, hph_uw: np.ndarray, speed_m_s: np.ndarray, var_m2: float,
+                 var_t_s2: float) -> np.ndarray:
+    """r^T C^-1 r (2 dof) with R = var_m2 I + var_t_s2 v v^T, everything along and across the motion:
+    res_uw (n, 2), signed hph_uw (n, 2, 2) as for quadratic_forms, speed_m_s (n,)."""
+    R = np.zeros((len(res_uw), 2, 2))
+    R[:, 0, 0] = var_m2 + var_t_s2 * speed_m_s**2
+    R[:, 1, 1] = var_m2
+    return quadratic_forms(res_uw, R, hph_uw)
+
+
+def fit_timing(res_uw: np.ndarray, hph_uw: np.ndarray, speed_m_s: np.ndarray, var_m2: float,
+               var_t_s2: float) -> tuple[float, float]:
+    """One update of an ADS-B class's (sigma^2 m^2, sigma_t^2 s^2), R = sigma^2 I + sigma_t^2 v v^T, from its
+    residuals along and across the motion (arguments as for timing_forms, at the current values).
+
+    Below the gross-error cut (on the 2-dof form, as variance_ratio), each report's 1-dof forms along and
+    across the motion rescale the current variances there (R_aa q_along, R_ww q_across: the two-term form
+    of variance_ratio's mean update); across = sigma^2 and along = sigma^2 + sigma_t^2 v^2 are fitted to
+    them by least squares weighted by 1 / R^2 (their variance is 2 R^2), sigma_t^2 >= 0. The gate-share
+    guard then raises each term where needed, the reports' forms rescaled to the new variances: sigma^2
+    until at most half of GATE_SHARE_MAX lie beyond the gate across the motion alone (the across-track
+    tail: turns), then sigma_t^2 until at most GATE_SHARE_MAX do along and across (the late reports);
+    sigma^2 alone against GATE_SHARE_MAX where sigma_t is 0."""
+    q = timing_forms(res_uw, hph_uw, speed_m_s, var_m2, var_t_s2)
+    ok = np.isfinite(q)
+    level = np.median(q[ok] / 2) / (CHI2_2_MEDIAN / 2)
+    ok &= q / 2 <= GROSS_SIGMAS**2 * level
+    r, h, v2 = res_uw[ok], hph_uw[ok], speed_m_s[ok] ** 2
+    along = var_m2 + var_t_s2 * v2
+    with np.errstate(invalid="ignore", divide="ignore"):
+        q_along, q_across = r[:, 0] ** 2 / (along - h[:, 0, 0]), r[:, 1] ** 2 / (var_m2 - h[:, 1, 1])
+    fine = np.isfinite(q_along) & np.isfinite(q_across) & (q_along >= 0) & (q_across >= 0)
+    y_along, y_across, along, v2 = along[fine] * q_along[fine], var_m2 * q_across[fine], along[fine], v2[fine]
+    w_along, w_across = 1.0 / along**2, np.full(len(v2), 1.0 / var_m2**2)
+    a = np.array([[w_across.sum() + w_along.sum(), (w_along * v2).sum()],
+                  [(w_along * v2).sum(), (w_along * v2**2).sum()]])
+    b = np.array([(w_across * y_across).sum() + (w_along * y_along).sum(), (w_along * y_along * v2).sum()])
+    s2, t2 = np.linalg.solve(a, b)
+    if t2 <= 0.0:
+        s2, t2 = b[0] / a[0, 0], 0.0
+    s2 = max(float(s2), 1e-6 * var_m2)
+    gate = chi2.ppf(GATE_PROBABILITY, 2)
+    if t2 == 0.0:
+        return _smallest_factor(lambda g: float(np.mean((y_along + y_across) / (g * s2) > gate)),
+                                GATE_SHARE_MAX) * s2, 0.0
+    g_s = _smallest_factor(lambda g: float(np.mean(y_across / (g * s2) > gate)), GATE_SHARE_MAX / 2)
+    g_t = _smallest_factor(lambda g: float(np.mean(y_along / (g_s * s2 + g * t2 * v2) + y_across / (g_s * s2)
+                                                   > gate)), GATE_SHARE_MAX)
+    return g_s * s2, g_t * float(t2)
+
+
+def _smallest_factor(share, share_max: float, top: float = 1e4) -> float:
+    """The smallest factor g in [1, top] with share(g) <= share_max (bisection on log g, to ~1e-5
+    relative; share decreases with g); top where none is."""
+    if share(1.0) <= share_max:
+        return 1.0
+    lo, hi = 0.0, np.log(top)
+    for _ in range(40):
+        mid = 0.5 * (lo + hi)
+        lo, hi = (mid, hi) if share(np.exp(mid)) > share_max else (lo, mid)
+    return float(np.exp(hi))
 
 
 @dataclass
 class NoiseEstimate:
     """measurements: the input with its covariances rescaled; sensors: one row per sensor and component
-    (sensor_id, sensor_kind, component "position" | "range" | "azimuth", motion "surface" | "airborne"
-    for ADS-B ("" for radars: see SURFACE_SPEED_KT), declared_sigma_m for ADS-B
-    classes, scale = estimated / declared sigma, residuals used, estimated: False when too few
-    residuals, so the declared sigma was kept, declared_from "nacp" | "declared" (ADS-B without NACp)
-    | "sensor" (radar), estimated_sigma_m); passes run."""
+    (sensor_id, sensor_kind, component "position" | "timing" | "range" | "azimuth", motion "surface" |
+    "airborne" for ADS-B ("" for radars: see SURFACE_SPEED_KT), declared_sigma_m for ADS-B position
+    rows, scale = estimated / declared sigma, residuals used, estimated: False when too few residuals,
+    so the declared sigma was kept (timing: no term fitted, 0 s), declared_from "nacp" | "declared"
+    (ADS-B without NACp) | "sensor" (radar), estimated_sigma_m, estimated_sigma_s: the timing row's
+    sigma_t (s), NaN on the others); passes run."""
 
     measurements: pd.DataFrame
     sensors: pd.DataFrame
@@ -168,13 +265,27 @@ def _classes(meas: pd.DataFrame, radial: np.ndarray, surface: np.ndarray) -> tup
                    for i in first]
 
 
-def _forms(meas: pd.DataFrame, cov: np.ndarray, radial: np.ndarray,
-           config: TrackerConfig) -> tuple[np.ndarray, np.ndarray]:
-    """Per row, (along, across) quadratic forms for radars with a site, (q, q) for the others (2 dof),
-    from one filter-and-smooth pass per aircraft in its own plane, and the smoothed speed (m/s; NaN for
-    rows not tracked)."""
-    out = np.full((len(meas), 2), np.nan)
-    speed_m_s = np.full(len(meas), np.nan)
+class _Pass(NamedTuple):
+    """One estimation pass, per row: q (along, across) quadratic forms for radars with a site, (q, q) for
+    the others (2 dof); the smoothed speed (m/s; NaN for rows not tracked); the residual (n, 2) and signed
+    H P_s H^T (n, 2, 2) along and across the row's ground velocity `velocity` (east, north where it is
+    zero), and that velocity's speed in the plane (m/s)."""
+
+    q: np.ndarray
+    smoothed_speed_m_s: np.ndarray
+    res_uw: np.ndarray
+    hph_uw: np.ndarray
+    speed_m_s: np.ndarray
+
+
+def _forms(meas: pd.DataFrame, cov: np.ndarray, radial: np.ndarray, velocity: np.ndarray,
+           config: TrackerConfig) -> _Pass:
+    """One filter-and-smooth pass per aircraft in its own plane (see _Pass)."""
+    n_rows = len(meas)
+    out = np.full((n_rows, 2), np.nan)
+    speed_m_s = np.full(n_rows, np.nan)
+    res_uw, hph_uw = np.full((n_rows, 2), np.nan), np.full((n_rows, 2, 2), np.nan)
+    plane_speed = np.zeros(n_rows)
     t_all = (meas["time"] - meas["time"].min()).dt.total_seconds().to_numpy(float)
     lat_all, lon_all = meas["latitude"].to_numpy(float), meas["longitude"].to_numpy(float)
     order = np.lexsort((meas["sensor_id"].astype(str).to_numpy(), t_all))
@@ -194,12 +305,42 @@ def _forms(meas: pd.DataFrame, cov: np.ndarray, radial: np.ndarray,
         site = np.isfinite(radial[rows, 0])
         u = np.einsum("nij,nj->ni", m, np.nan_to_num(radial[rows]))
         u /= np.maximum(np.hypot(u[:, 0], u[:, 1]), 1e-12)[:, None]
-        q_iso = plane_forms(run, ze, zn, c[:, 0, 0], c[:, 0, 1], c[:, 1, 1])
-        q_rad = plane_forms(run, ze, zn, c[:, 0, 0], c[:, 0, 1], c[:, 1, 1], u)
+        res, hph = plane_residuals(run, ze, zn)
+        q_iso = quadratic_forms(res, c, hph)
+        q_rad = quadratic_forms(res, c, hph, u)
         out[rows] = np.where(site[:, None], q_rad, np.stack([q_iso, q_iso], -1))
         x = estimate(run, run.t, smooth=True).x
         speed_m_s[rows] = np.hypot(x[:, 1], x[:, 4])
-    return out, speed_m_s
+        v = np.einsum("nij,nj->ni", m, velocity[rows])
+        rot = along_across(v)
+        res_uw[rows] = np.einsum("nij,nj->ni", rot, res)
+        hph_uw[rows] = rot @ hph @ np.swapaxes(rot, 1, 2)
+        plane_speed[rows] = np.hypot(v[:, 0], v[:, 1])
+    return _Pass(out, speed_m_s, res_uw, hph_uw, plane_speed)
+
+
+def ground_velocity(meas: pd.DataFrame, hold_s: float = VELOCITY_HOLD_S) -> np.ndarray:
+    """Local (east, north) ground velocity (m/s) of each ADS-B report from its own ground speed and
+    heading (the track angle), else the last one reported by the same aircraft and source at most hold_s
+    earlier; zero for other rows and where there is none. Never a later report: the tracker's forward
+    estimate at a report must not depend on what comes after it."""
+    out = np.zeros((len(meas), 2))
+    if not {"ground_speed_kt", "heading_deg"} <= set(meas.columns) or not len(meas):
+        return out
+    speed = meas["ground_speed_kt"].to_numpy(float) / KT_PER_M_S
+    angle = np.radians(meas["heading_deg"].to_numpy(float))
+    t = (meas["time"] - meas["time"].min()).dt.total_seconds().to_numpy(float)
+    have = ((meas["sensor_kind"].astype(str) == "adsb").to_numpy() & np.isfinite(speed)
+            & np.isfinite(angle))
+    group = pd.factorize(meas["aircraft_id"].astype(str) + "|" + meas["sensor_id"].astype(str))[0]
+    known = pd.DataFrame({"group": group, "t": np.where(have, t, np.nan),
+                          "e": np.where(have, speed * np.sin(angle), np.nan),
+                          "n": np.where(have, speed * np.cos(angle), np.nan)})
+    order = np.lexsort((~have, t, group))  # at equal times a report's own vector first
+    filled = known.iloc[order].groupby("group")[["t", "e", "n"]].ffill().to_numpy()
+    ok = (t[order] - filled[:, 0] <= hold_s) & (meas["sensor_kind"].astype(str) == "adsb").to_numpy()[order]
+    out[order[ok]] = filled[ok, 1:]
+    return out
 
 
 def surface_mask(meas: pd.DataFrame, speed_m_s: np.ndarray) -> np.ndarray:
@@ -214,36 +355,44 @@ def surface_mask(meas: pd.DataFrame, speed_m_s: np.ndarray) -> np.ndarray:
 
 def estimate_noise(measurements: pd.DataFrame, *, sites: dict[str, tuple[float, float]] | None = None,
                    config: TrackerConfig | None = None, tpm: str | None = None, max_coast_s: float = 60.0,
-                   passes: int = 6, min_residuals: int = 30, tol: float = 0.01) -> NoiseEstimate:
+                   passes: int = 6, min_residuals: int = 30, tol: float = 0.01,
+                   timing: bool = False) -> NoiseEstimate:
     """Rescale each sensor's covariances to its residual scatter (see the module docstring).
 
     sites: radar sensor_id -> (latitude, longitude) of its site, for separate range and azimuth factors
     (a radar without one gets a single factor). A class with fewer than min_residuals residuals takes its
-    sensor's pooled factor; a sensor with fewer keeps its declared covariance. Stops after `passes`
-    passes, or once no factor moves by more than tol. config / tpm / max_coast_s as for `track`."""
+    sensor's pooled factor; a sensor with fewer keeps its declared covariance. timing: ADS-B classes with
+    at least min_residuals reports faster than SURFACE_SPEED_KT also get an along-track timing term
+    sigma_t^2 v v^T (fit_timing; v from ground_velocity); False (default): isotropic only. Stops after
+    `passes` passes, or once no sigma moves by more than tol. config / tpm / max_coast_s as for `track`."""
     if passes < 1:
         raise ValueError(f"passes {passes!r}: must be >= 1")
     config = TrackerConfig(**{**(config or TrackerConfig(modes=default_modes())).__dict__,
                               "max_coast_s": max_coast_s, **({"tpm": tpm} if tpm else {})})
     meas = measurements.reset_index(drop=True)
-    cov0 = np.empty((len(meas), 2, 2))
-    cov0[:, 0, 0] = meas["cov_ee_m2"].to_numpy(float)
-    cov0[:, 0, 1] = cov0[:, 1, 0] = meas["cov_en_m2"].to_numpy(float)
-    cov0[:, 1, 1] = meas["cov_nn_m2"].to_numpy(float)
+    cov0 = _matrices(meas["cov_ee_m2"], meas["cov_en_m2"], meas["cov_nn_m2"])
     radial = _radials(meas, sites)
     site = np.isfinite(radial[:, 0])
     sid = meas["sensor_id"].astype(str).to_numpy()
+    velocity = ground_velocity(meas)
+    vv = np.einsum("ni,nj->nij", velocity, velocity)
     codes = keys = None
     cov = cov0
     done = 0
     for _ in range(passes):
-        q, speed_m_s = _forms(meas, cov, radial, config)
+        fp = _forms(meas, cov, radial, velocity, config)
+        q = fp.q
         done += 1
         if codes is None:  # the classes need a speed: the first pass's smoothed one where none is reported
-            codes, keys = _classes(meas, radial, surface_mask(meas, speed_m_s))
+            codes, keys = _classes(meas, radial, surface_mask(meas, fp.smoothed_speed_m_s))
             k_along, k_across = np.ones(len(keys)), np.ones(len(keys))
+            var_t = np.zeros(len(keys))
             used = np.zeros(len(keys), int)
             estimated = np.zeros(len(keys), bool)
+            fast = fp.speed_m_s * KT_PER_M_S >= SURFACE_SPEED_KT
+            timed = np.array([timing and key[1] == "adsb" and not key[2]
+                              and (fast & (codes == c) & np.isfinite(q[:, 0])).sum() >= min_residuals
+                              for c, key in enumerate(keys)], bool)
         dof = np.where(site, 1, 2)
         pooled = {}
         for s in np.unique(sid):
@@ -255,6 +404,16 @@ def estimate_noise(measurements: pd.DataFrame, *, sites: dict[str, tuple[float, 
         for c, key in enumerate(keys):
             sel = (codes == c) & np.isfinite(q[:, 0])
             used[c] = int(sel.sum())
+            if timed[c]:
+                v_ref = float(np.median(fp.speed_m_s[sel & fast]))  # convergence measured at this speed
+                before = np.sqrt([k_along[c] ** 2 * key[3], k_along[c] ** 2 * key[3] + var_t[c] * v_ref**2])
+                var_m2, var_t[c] = fit_timing(fp.res_uw[sel], fp.hph_uw[sel], fp.speed_m_s[sel],
+                                              k_along[c] ** 2 * key[3], var_t[c])
+                k_along[c] = k_across[c] = np.clip(np.sqrt(var_m2 / key[3]), *SCALE_LIMITS)
+                after = np.sqrt([k_along[c] ** 2 * key[3], k_along[c] ** 2 * key[3] + var_t[c] * v_ref**2])
+                moved = max(moved, float(np.max(np.abs(after / before - 1.0))))
+                estimated[c] = True
+                continue
             if used[c] >= min_residuals:
                 d = int(dof[sel][0])
                 ratio = (variance_ratio(q[sel, 0], d), variance_ratio(q[sel, 1], d))
@@ -267,7 +426,7 @@ def estimate_noise(measurements: pd.DataFrame, *, sites: dict[str, tuple[float, 
             new_across = np.clip(k_across[c] * np.sqrt(ratio[1]), *SCALE_LIMITS)
             moved = max(moved, abs(new_along / k_along[c] - 1.0), abs(new_across / k_across[c] - 1.0))
             k_along[c], k_across[c] = new_along, new_across
-        cov = rescale(cov0, k_along[codes], k_across[codes], None)
+        cov = rescale(cov0, k_along[codes], k_across[codes], None) + var_t[codes][:, None, None] * vv
         cov[site] = rescale(cov0[site], k_along[codes][site], k_across[codes][site], radial[site])
         if moved <= tol:
             break
@@ -281,9 +440,14 @@ def estimate_noise(measurements: pd.DataFrame, *, sites: dict[str, tuple[float, 
         else:
             rows.append({**base, "component": POSITION, "declared_sigma_m": float(np.sqrt(var)),
                          "scale": float(k_along[c])})
+        if kind == "adsb" and not has_site and timing:
+            rows.append({**base, "component": TIMING, "declared_sigma_m": np.nan, "scale": np.nan,
+                         "estimated": bool(timed[c]), "sigma_s": float(np.sqrt(var_t[c]))})
     sensors = pd.DataFrame(rows, columns=["sensor_id", "sensor_kind", "component", "motion",
                                           "declared_sigma_m", "scale", "residuals", "estimated",
-                                          "declared_from"])
+                                          "declared_from", "sigma_s"])
     sensors["estimated_sigma_m"] = sensors["declared_sigma_m"] * sensors["scale"]
+    sensors = sensors.rename(columns={"sigma_s": "estimated_sigma_s"})
+    sensors = sensors[[c for c in sensors.columns if c != "estimated_sigma_s"] + ["estimated_sigma_s"]]
     out = meas.assign(cov_ee_m2=cov[:, 0, 0], cov_en_m2=cov[:, 0, 1], cov_nn_m2=cov[:, 1, 1])
     return NoiseEstimate(out.set_axis(measurements.index), sensors, done)
