@@ -107,11 +107,11 @@ def variance_ratio(q: np.ndarray, dof: int) -> float:
     return float(max(np.mean(q / dof), tail))
 
 
-def plane_residuals(run, ze, zn) -> tuple[np.ndarray, np.ndarray]:
+def plane_residuals(run, ze, zn, est=None) -> tuple[np.ndarray, np.ndarray]:
     """Every report's residual z - H x_s (n, 2) against the smoothed estimate of a plane-level run
     (pipeline.track.plane.filter_plane) at its time, and H P_s H^T (n, 2, 2) signed for quadratic_forms:
-    negated for a gated report (C = R + H P_s H^T)."""
-    est = estimate(run, run.t, smooth=True)
+    negated for a gated report (C = R + H P_s H^T). est: that smoothed estimate, if already computed."""
+    est = estimate(run, run.t, smooth=True) if est is None else est
     res = np.stack([np.asarray(ze, float) - est.x[:, 0], np.asarray(zn, float) - est.x[:, 3]], -1)
     hph = est.P[:, [0, 3]][:, :, [0, 3]]
     return res, np.where(run.accepted[:, None, None], hph, -hph)
@@ -278,20 +278,35 @@ class _Pass(NamedTuple):
     speed_m_s: np.ndarray
 
 
-def _forms(meas: pd.DataFrame, cov: np.ndarray, radial: np.ndarray, velocity: np.ndarray,
-           config: TrackerConfig) -> _Pass:
-    """One filter-and-smooth pass per aircraft in its own plane (see _Pass)."""
-    n_rows = len(meas)
-    out = np.full((n_rows, 2), np.nan)
-    speed_m_s = np.full(n_rows, np.nan)
-    res_uw, hph_uw = np.full((n_rows, 2), np.nan), np.full((n_rows, 2, 2), np.nan)
-    plane_speed = np.zeros(n_rows)
+class _Aircraft(NamedTuple):
+    """What every pass of one aircraft shares (the covariances aside): its rows in time order (sensor id
+    on ties), times (s), plane positions (m), local-to-plane matrices, line of sight in the plane (radar
+    plots with a site), the ground-velocity frame (along, across) and that velocity's plane speed."""
+
+    rows: np.ndarray
+    t: np.ndarray
+    ze: np.ndarray
+    zn: np.ndarray
+    m: np.ndarray
+    u: np.ndarray
+    site: np.ndarray
+    rot: np.ndarray
+    speed_m_s: np.ndarray
+
+
+def _aircraft(meas: pd.DataFrame, cov: np.ndarray, radial: np.ndarray,
+              velocity: np.ndarray) -> list[_Aircraft]:
+    """Each aircraft's rows with a finite position and covariance (the passes rescale covariances by
+    finite factors, so the set does not change), within 3000 km of its median, in its own plane."""
     t_all = (meas["time"] - meas["time"].min()).dt.total_seconds().to_numpy(float)
     lat_all, lon_all = meas["latitude"].to_numpy(float), meas["longitude"].to_numpy(float)
-    order = np.lexsort((meas["sensor_id"].astype(str).to_numpy(), t_all))
-    ident = meas["aircraft_id"].astype(str).to_numpy()[order]
-    for a in np.unique(ident):
-        rows = order[ident == a]
+    sensor_codes = pd.factorize(meas["sensor_id"].astype(str), sort=True)[0]
+    ident = pd.factorize(meas["aircraft_id"].astype(str), sort=True)[0]
+    order = np.lexsort((sensor_codes, t_all))
+    order = order[np.argsort(ident[order], kind="stable")]  # by aircraft, each in time order
+    bounds = np.flatnonzero(np.diff(ident[order])) + 1
+    out = []
+    for rows in np.split(order, bounds):
         rows = rows[np.isfinite(cov[rows]).all(axis=(1, 2)) & np.isfinite(lat_all[rows])]
         if len(rows) < 2:
             continue
@@ -300,22 +315,32 @@ def _forms(meas: pd.DataFrame, cov: np.ndarray, radial: np.ndarray, velocity: np
         near = np.isfinite(ze) & (np.hypot(ze, zn) < 3_000_000.0)
         rows, ze, zn = rows[near], ze[near], zn[near]
         m = plane.local_to_plane(lat_all[rows], lon_all[rows])
-        c = m @ cov[rows] @ np.swapaxes(m, 1, 2)
-        run = filter_plane(config, t_all[rows], ze, zn, c[:, 0, 0], c[:, 0, 1], c[:, 1, 1])
-        site = np.isfinite(radial[rows, 0])
         u = np.einsum("nij,nj->ni", m, np.nan_to_num(radial[rows]))
         u /= np.maximum(np.hypot(u[:, 0], u[:, 1]), 1e-12)[:, None]
-        res, hph = plane_residuals(run, ze, zn)
-        q_iso = quadratic_forms(res, c, hph)
-        q_rad = quadratic_forms(res, c, hph, u)
-        out[rows] = np.where(site[:, None], q_rad, np.stack([q_iso, q_iso], -1))
-        x = estimate(run, run.t, smooth=True).x
-        speed_m_s[rows] = np.hypot(x[:, 1], x[:, 4])
         v = np.einsum("nij,nj->ni", m, velocity[rows])
-        rot = along_across(v)
-        res_uw[rows] = np.einsum("nij,nj->ni", rot, res)
-        hph_uw[rows] = rot @ hph @ np.swapaxes(rot, 1, 2)
-        plane_speed[rows] = np.hypot(v[:, 0], v[:, 1])
+        out.append(_Aircraft(rows, t_all[rows], ze, zn, m, u, np.isfinite(radial[rows, 0]), along_across(v),
+                             np.hypot(v[:, 0], v[:, 1])))
+    return out
+
+
+def _forms(aircraft: list[_Aircraft], n_rows: int, cov: np.ndarray, config: TrackerConfig) -> _Pass:
+    """One filter-and-smooth pass per aircraft in its own plane (see _Pass)."""
+    out = np.full((n_rows, 2), np.nan)
+    speed_m_s = np.full(n_rows, np.nan)
+    res_uw, hph_uw = np.full((n_rows, 2), np.nan), np.full((n_rows, 2, 2), np.nan)
+    plane_speed = np.zeros(n_rows)
+    for a in aircraft:
+        c = a.m @ cov[a.rows] @ np.swapaxes(a.m, 1, 2)
+        run = filter_plane(config, a.t, a.ze, a.zn, c[:, 0, 0], c[:, 0, 1], c[:, 1, 1])
+        est = estimate(run, run.t, smooth=True)
+        res, hph = plane_residuals(run, a.ze, a.zn, est)
+        q_iso = quadratic_forms(res, c, hph)
+        q_rad = quadratic_forms(res, c, hph, a.u)
+        out[a.rows] = np.where(a.site[:, None], q_rad, np.stack([q_iso, q_iso], -1))
+        speed_m_s[a.rows] = np.hypot(est.x[:, 1], est.x[:, 4])
+        res_uw[a.rows] = np.einsum("nij,nj->ni", a.rot, res)
+        hph_uw[a.rows] = a.rot @ hph @ np.swapaxes(a.rot, 1, 2)
+        plane_speed[a.rows] = a.speed_m_s
     return _Pass(out, speed_m_s, res_uw, hph_uw, plane_speed)
 
 
@@ -378,9 +403,10 @@ def estimate_noise(measurements: pd.DataFrame, *, sites: dict[str, tuple[float, 
     vv = np.einsum("ni,nj->nij", velocity, velocity)
     codes = keys = None
     cov = cov0
+    aircraft = _aircraft(meas, cov0, radial, velocity)
     done = 0
     for _ in range(passes):
-        fp = _forms(meas, cov, radial, velocity, config)
+        fp = _forms(aircraft, len(meas), cov, config)
         q = fp.q
         done += 1
         if codes is None:  # the classes need a speed: the first pass's smoothed one where none is reported
