@@ -201,3 +201,35 @@ def test_segment_start_velocity_sigma_from_nucr_nacv():
         for mode in range(run.P.shape[1]):  # east and north velocity variances of every mode
             assert run.P[0, mode, 1, 1] == pytest.approx(var, rel=1e-9)
             assert run.P[0, mode, 4, 4] == pytest.approx(var, rel=1e-9)
+
+
+def test_a_position_jump_never_starts_a_segment():
+    """1 Hz reports (sigma 5 m) of an aircraft flying east at 200 m/s; from 100 s on every report is 3 km
+    north of the predicted track (gated; the third in a row restarts the track), and the report at 102 s
+    is 600 km east instead (an ADS-B jump). The jump is 600 km from the gated report a second before it
+    and the report after it 600 km from the jump: neither restarts (600 m/s + 4 sigma); 104 s does, 3 km
+    north. Without the check the track restarted on the jump, 600 km off, and coasted there."""
+    rng = np.random.default_rng(3)
+    t0 = pd.Timestamp("2019-03-01T08:00:00Z")
+    secs = np.arange(200.0)
+    east = 200.0 * secs + rng.normal(0, 5.0, len(secs))
+    north = np.where(secs >= 100, 3000.0, 0.0) + rng.normal(0, 5.0, len(secs))
+    east[secs == 102] += 600_000.0
+    lat0, lon0 = 40.0, 2.0
+    geod = Geod(ellps="WGS84")
+    lon, lat, _ = geod.fwd(np.full(len(secs), lon0), np.full(len(secs), lat0),
+                           np.degrees(np.arctan2(east, north)), np.hypot(east, north))
+    meas = pd.DataFrame({"time": t0 + pd.to_timedelta(secs, unit="s"), "sensor_id": "021:0/1",
+                         "sensor_kind": "adsb", "aircraft_id": "A", "latitude": lat, "longitude": lon,
+                         "flight_level": 300.0, "cov_ee_m2": 25.0, "cov_en_m2": 0.0, "cov_nn_m2": 25.0})
+    res = track(meas, keep_states=True)
+    _, run, _ = res.runs["A"]
+    assert list(run.status[100:105]) == [0, 0, 0, 0, 2]  # gated x 4 (the jump and the one after), start
+    assert list(res.rejected["time"]) == list(t0 + pd.to_timedelta([100.0, 101, 102, 103], unit="s"))
+    # every output within 4 km of the true path (3 km north after 100 s), none near the jump
+    az, _, d = geod.inv(np.full(len(res.tracks), lon0), np.full(len(res.tracks), lat0),
+                        res.tracks["longitude"].to_numpy(), res.tracks["latitude"].to_numpy())
+    s = (res.tracks["time"] - t0).dt.total_seconds().to_numpy()
+    off_east = d * np.sin(np.radians(az)) - 200.0 * s
+    off_north = d * np.cos(np.radians(az)) - np.where(s >= 100, 3000.0, 0.0)
+    assert np.hypot(off_east, off_north).max() < 4000.0

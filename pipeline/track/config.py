@@ -87,6 +87,9 @@ class TrackerConfig:
     max_coast_s: float = 60.0
     coast_substep_s: float = 1.0  # longest IMM prediction cycle for estimates between updates
     restart_after: int = 3  # consecutive gated reports that restart the track at the last one (0: never)
+    # ... if that one lies within this speed of the gated report before it (+ 4 sigma of their noise): a
+    # position jump (an ADS-B report hundreds of km off) never starts a segment; 600 m/s is ~1,170 kt
+    max_speed_mps: float = 600.0
     sigma_fl: float = 0.3  # flight-level measurement sigma (FL): 100 ft Mode C quantisation
     sigma_vertical_fl_s2: float = 0.03  # vertical white-noise acceleration, FL/s^2 (about 1 m/s^2)
     sigma_init_speed_mps: float = 200.0  # velocity prior of a new segment without reported velocity
@@ -105,6 +108,8 @@ class TrackerConfig:
             raise ValueError(f"gate_probability {self.gate_probability!r}: must be in (0, 1]")
         if not self.coast_substep_s > 0.0:
             raise ValueError(f"coast_substep_s {self.coast_substep_s!r}: must be > 0")
+        if not self.max_speed_mps > 0.0:
+            raise ValueError(f"max_speed_mps {self.max_speed_mps!r}: must be > 0")
         if not self.max_coast_s > 0.0:
             raise ValueError(f"max_coast_s {self.max_coast_s!r}: must be > 0")
 
@@ -124,6 +129,7 @@ class TrackerConfig:
             "mu0": mu0, "tpm_kind": tpm_kind, "tpm_param": tpm_param,
             "tpm_param2": tpm_param2, "gate_d2": gate,
             "max_coast_s": float(self.max_coast_s), "restart_after": int(self.restart_after),
+            "max_speed_mps": float(self.max_speed_mps),
             "coast_substep_s": float(self.coast_substep_s),
             "q_fl": self.sigma_vertical_fl_s2 ** 2,
             "var_fl": self.sigma_fl ** 2,

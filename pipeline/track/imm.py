@@ -257,8 +257,18 @@ def _init_state(r, ze, zn, ree, ren, rnn, ve, vn, var_v, var_a, mu0, mu, x, P):
 
 
 @njit(cache=True)
+def _reachable(i, k, t, ze, zn, ree, rnn, max_speed):
+    """Report i lies within max_speed (m/s) of report k (k < 0: no report to compare, True), allowing
+    4 sigma of the two reports' noise."""
+    if k < 0:
+        return True
+    reach = max_speed * (t[i] - t[k]) + 4.0 * math.sqrt(ree[i] + rnn[i] + ree[k] + rnn[k])
+    return math.hypot(ze[i] - ze[k], zn[i] - zn[k]) <= reach
+
+
+@njit(cache=True)
 def run_filter(t, ze, zn, ree, ren, rnn, ve0, vn0, var_v0, fl, kinds, omegas, qs, mu0,
-               tpm_kind, tpm_param, tpm_param2, gate_d2, max_coast_s, restart_after, q_fl, var_fl,
+               tpm_kind, tpm_param, tpm_param2, gate_d2, max_coast_s, restart_after, max_speed, q_fl, var_fl,
                status, nis, segment, t_state, mu_h, x_h, P_h, zv_h, Pv_h, keep):
     """Filter one aircraft's time-ordered measurements (plane coordinates, m; covariances m^2).
 
@@ -267,7 +277,9 @@ def run_filter(t, ze, zn, ree, ren, rnn, ve0, vn0, var_v0, fl, kinds, omegas, qs
     (time of the state after i) and, when keep, the mode-conditioned posteriors (mu_h, x_h, P_h) and
     the vertical state (zv_h, Pv_h). A segment starts at the first measurement, whenever the last
     accepted update is older than max_coast_s, or at the restart_after-th consecutive gated report
-    (0: never). ve0/vn0/var_v0 initialise the velocity of a new segment (mean and per-axis variance).
+    (0: never) when it lies within max_speed (m/s) of the gated report before it, plus 4 sigma of their
+    noise (else it stays gated: an ADS-B position jump never starts a segment). ve0/vn0/var_v0
+    initialise the velocity of a new segment (mean and per-axis variance).
     Returns the number of accepted updates.
     """
     n = t.shape[0]
@@ -331,7 +343,8 @@ def run_filter(t, ze, zn, ree, ren, rnn, ve0, vn0, var_v0, fl, kinds, omegas, qs
             nis[i] = d2
             if not (d2_min <= gate_d2):
                 rejections += 1
-                if restart_after > 0 and rejections >= restart_after:
+                if restart_after > 0 and rejections >= restart_after and _reachable(
+                        i, last_rejected, t, ze, zn, ree, rnn, max_speed):
                     start = True
                     restart = True
                 else:

@@ -79,7 +79,7 @@ def filter_plane(config: TrackerConfig, t, ze, zn, cov_ee, cov_en, cov_nn, *, fl
                col(ve0, 0.0), col(vn0, 0.0), col(var_v0, config.sigma_init_speed_mps ** 2),
                col(fl, np.nan), args["kinds"], args["omegas"], args["qs"], args["mu0"], args["tpm_kind"],
                args["tpm_param"], args["tpm_param2"], args["gate_d2"], args["max_coast_s"],
-               args["restart_after"], args["q_fl"], args["var_fl"],
+               args["restart_after"], args["max_speed_mps"], args["q_fl"], args["var_fl"],
                status, nis, segment, t_state, mu, x, P, zv, Pv, True)
     t_fl = _last_level_time(t, status != STATUS_REJECTED, col(fl, np.nan), segment)
     _forget_stale_levels(t_state, t_fl, config.max_coast_s, zv, Pv)
