@@ -233,3 +233,37 @@ def test_a_position_jump_never_starts_a_segment():
     off_east = d * np.sin(np.radians(az)) - 200.0 * s
     off_north = d * np.cos(np.radians(az)) - np.where(s >= 100, 3000.0, 0.0)
     assert np.hypot(off_east, off_north).max() < 4000.0
+
+
+@pytest.mark.parametrize("jump_at_s", [0.0, 150.0])
+def test_a_segment_started_by_a_jump_is_withdrawn(jump_at_s):
+    """The same straight 200 m/s path at 1 Hz (sigma 5 m); the aircraft's first report (0 s), or its first
+    after a 70 s gap in the reports (150 s, past --max-coast 60), is 600 km east: it starts a segment, the
+    next two reports are gated against it, and the third restarts the track. That restart is out of reach
+    of the jump (600 km in 3 s), so the jump's segment is withdrawn: its report counts as gated, the
+    segments are numbered on without a hole, and no output lies near the jump."""
+    rng = np.random.default_rng(4)
+    t0 = pd.Timestamp("2019-03-01T08:00:00Z")
+    secs = np.arange(220.0)
+    secs = secs[(secs < 80) | (secs >= 150)]
+    east = 200.0 * secs + rng.normal(0, 5.0, len(secs))
+    north = rng.normal(0, 5.0, len(secs))
+    east[secs == jump_at_s] += 600_000.0
+    lat0, lon0 = 40.0, 2.0
+    geod = Geod(ellps="WGS84")
+    lon, lat, _ = geod.fwd(np.full(len(secs), lon0), np.full(len(secs), lat0),
+                           np.degrees(np.arctan2(east, north)), np.hypot(east, north))
+    meas = pd.DataFrame({"time": t0 + pd.to_timedelta(secs, unit="s"), "sensor_id": "021:0/1",
+                         "sensor_kind": "adsb", "aircraft_id": "A", "latitude": lat, "longitude": lon,
+                         "flight_level": 300.0, "cov_ee_m2": 25.0, "cov_en_m2": 0.0, "cov_nn_m2": 25.0})
+    res = track(meas, keep_states=True)
+    _, run, _ = res.runs["A"]
+    j = int(np.flatnonzero(secs == jump_at_s)[0])
+    assert list(run.status[j:j + 5]) == [0, 0, 0, 2, 1]  # jump withdrawn, two gated, restart, update
+    assert list(res.rejected["time"]) == list(t0 + pd.to_timedelta(secs[j:j + 3], unit="s"))
+    assert res.aircraft["segments"].iloc[0] == 2 and sorted(res.tracks["segment"].unique()) == [0, 1]
+    assert int(res.sensors["gated"].iloc[0]) == 3 and int(res.sensors["updates"].iloc[0]) == len(secs) - 3
+    az, _, d = geod.inv(np.full(len(res.tracks), lon0), np.full(len(res.tracks), lat0),
+                        res.tracks["longitude"].to_numpy(), res.tracks["latitude"].to_numpy())
+    s = (res.tracks["time"] - t0).dt.total_seconds().to_numpy()
+    assert np.hypot(d * np.sin(np.radians(az)) - 200.0 * s, d * np.cos(np.radians(az))).max() < 2000.0

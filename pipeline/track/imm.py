@@ -278,7 +278,9 @@ def run_filter(t, ze, zn, ree, ren, rnn, ve0, vn0, var_v0, fl, kinds, omegas, qs
     the vertical state (zv_h, Pv_h). A segment starts at the first measurement, whenever the last
     accepted update is older than max_coast_s, or at the restart_after-th consecutive gated report
     (0: never) when it lies within max_speed (m/s) of the gated report before it, plus 4 sigma of their
-    noise (else it stays gated: an ADS-B position jump never starts a segment). ve0/vn0/var_v0
+    noise (else it stays gated: an ADS-B position jump never starts a segment). A segment restarted
+    after its first report alone, where that report is out of reach of the restarting one (a jump after
+    a gap or at the start), is withdrawn: its report becomes a rejected one. ve0/vn0/var_v0
     initialise the velocity of a new segment (mean and per-axis variance).
     Returns the number of accepted updates.
     """
@@ -301,6 +303,8 @@ def run_filter(t, ze, zn, ree, ren, rnn, ve0, vn0, var_v0, fl, kinds, omegas, qs
     rejections = 0
     last_rejected = -1
     accepted = 0
+    seg_first = -1  # the report that started the current segment
+    seg_updates = 0  # accepted reports in the current segment
     for i in range(n):
         start = seg < 0 or t[i] - t_last > max_coast_s
         restart = False
@@ -399,7 +403,15 @@ def run_filter(t, ze, zn, ree, ren, rnn, ve0, vn0, var_v0, fl, kinds, omegas, qs
                 for j in range(r):
                     mu[j] /= total
         if start:
+            if restart and seg_updates == 1 and not _reachable(i, seg_first, t, ze, zn, ree, rnn, max_speed):
+                # the segment's only report is out of reach of the reports that followed it (a position
+                # jump started it): withdrawn, counted as gated, and its number reused
+                status[seg_first] = STATUS_REJECTED
+                accepted -= 1
+                seg -= 1
             seg += 1
+            seg_first = i
+            seg_updates = 0
             rejections = 0
             v_e, v_n, var_v = ve0[i], vn0[i], var_v0[i]
             if restart and last_rejected >= 0 and t[i] - t[last_rejected] > 0.0:
@@ -418,6 +430,7 @@ def run_filter(t, ze, zn, ree, ren, rnn, ve0, vn0, var_v0, fl, kinds, omegas, qs
         if ok:
             t_last = t[i]
             accepted += 1
+            seg_updates += 1
             # vertical: nearly-constant rate on flight level, updated by accepted reports only
             if not math.isnan(fl[i]):
                 if not have_v:

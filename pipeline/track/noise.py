@@ -107,13 +107,27 @@ def variance_ratio(q: np.ndarray, dof: int) -> float:
     return float(max(np.mean(q / dof), tail))
 
 
-def plane_residuals(run, ze, zn, est=None) -> tuple[np.ndarray, np.ndarray]:
+def smoothed_at_reports(run) -> tuple[np.ndarray, np.ndarray]:
+    """The smoothed state x_s (n, 6) and covariance P_s (n, 6, 6) of a plane-level run at every report's
+    time; NaN for reports before its first accepted one (gated reports after a withdrawn start)."""
+    n = len(run.t)
+    x, P = np.full((n, 6), np.nan), np.full((n, 6, 6), np.nan)
+    accepted = run.accepted
+    if accepted.any():
+        ok = run.t >= run.t[accepted][0]
+        est = estimate(run, run.t[ok], smooth=True)
+        x[ok], P[ok] = est.x, est.P
+    return x, P
+
+
+def plane_residuals(run, ze, zn, smoothed=None) -> tuple[np.ndarray, np.ndarray]:
     """Every report's residual z - H x_s (n, 2) against the smoothed estimate of a plane-level run
     (pipeline.track.plane.filter_plane) at its time, and H P_s H^T (n, 2, 2) signed for quadratic_forms:
-    negated for a gated report (C = R + H P_s H^T). est: that smoothed estimate, if already computed."""
-    est = estimate(run, run.t, smooth=True) if est is None else est
-    res = np.stack([np.asarray(ze, float) - est.x[:, 0], np.asarray(zn, float) - est.x[:, 3]], -1)
-    hph = est.P[:, [0, 3]][:, :, [0, 3]]
+    negated for a gated report (C = R + H P_s H^T); NaN before the first accepted report. smoothed: the
+    (x_s, P_s) of `smoothed_at_reports`, if already computed."""
+    x, P = smoothed_at_reports(run) if smoothed is None else smoothed
+    res = np.stack([np.asarray(ze, float) - x[:, 0], np.asarray(zn, float) - x[:, 3]], -1)
+    hph = P[:, [0, 3]][:, :, [0, 3]]
     return res, np.where(run.accepted[:, None, None], hph, -hph)
 
 
@@ -332,12 +346,12 @@ def _forms(aircraft: list[_Aircraft], n_rows: int, cov: np.ndarray, config: Trac
     for a in aircraft:
         c = a.m @ cov[a.rows] @ np.swapaxes(a.m, 1, 2)
         run = filter_plane(config, a.t, a.ze, a.zn, c[:, 0, 0], c[:, 0, 1], c[:, 1, 1])
-        est = estimate(run, run.t, smooth=True)
-        res, hph = plane_residuals(run, a.ze, a.zn, est)
+        smoothed = smoothed_at_reports(run)
+        res, hph = plane_residuals(run, a.ze, a.zn, smoothed)
         q_iso = quadratic_forms(res, c, hph)
         q_rad = quadratic_forms(res, c, hph, a.u)
         out[a.rows] = np.where(a.site[:, None], q_rad, np.stack([q_iso, q_iso], -1))
-        speed_m_s[a.rows] = np.hypot(est.x[:, 1], est.x[:, 4])
+        speed_m_s[a.rows] = np.hypot(smoothed[0][:, 1], smoothed[0][:, 4])
         res_uw[a.rows] = np.einsum("nij,nj->ni", a.rot, res)
         hph_uw[a.rows] = a.rot @ hph @ np.swapaxes(a.rot, 1, 2)
         plane_speed[a.rows] = a.speed_m_s
