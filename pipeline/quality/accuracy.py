@@ -191,6 +191,7 @@ def radar_errors(meas: pd.DataFrame, sensors: pd.DataFrame, *, max_gap_s: float 
     vs_e, vs_n, vs_u = ((v_ecef * b).sum(-1) for b in (s_east, s_north, s_up))
     range_rate = (e * vs_e + n * vs_n + u * vs_u) / slant_m
     tangential = (n * vs_e - e * vs_n) / ground_m
+    del east, north, up, v_ecef, s_east, s_north, s_up  # (n, 3) arrays: gone before the plots' own geometry
 
     # the radar plot in its own terms; cartesian-only plots get them from their position
     rho_nm, theta = m["rho_nm"].to_numpy(float), m["theta_deg"].to_numpy(float)
