@@ -747,6 +747,23 @@ def correlate_columns(options: CorrelateOptions) -> list[str] | None:
     return column_names(need & set(MEASUREMENT_COLUMNS))  # the job-wide flags are added by mark_once
 
 
+def quality_columns(options: QualityOptions) -> list[str] | None:
+    """The measurement columns a quality job builds, in schema order: what the quality tables, the radar
+    errors against the ADS-B reference, mark_once and the aircraft selection read; None (every column)
+    with ``reference="track"``, whose tracker reads most of the model. Two thirds of the bytes of a row."""
+    from pipeline.model.dedup import DEDUP_KEYS
+    from pipeline.model.jumps import JUMP_INPUTS
+    from pipeline.model.schema import MEASUREMENT_COLUMNS, column_names
+    from pipeline.quality.accuracy import ACCURACY_INPUTS
+    from pipeline.quality.tables import QUALITY_INPUTS
+
+    if options.reference != "adsb":
+        return None
+    need = {*QUALITY_INPUTS, *ACCURACY_INPUTS, *DEDUP_KEYS, *JUMP_INPUTS, "sensor_kind", "sensor_id",
+            "aircraft_id", "callsign", "address"}
+    return column_names(need & set(MEASUREMENT_COLUMNS))  # the job-wide flags are added by mark_once
+
+
 def correlate_job(options: CorrelateOptions, *, progress: Progress | None = None,
                   checked: Checked | None = None, command: str = "correlate") -> CorrelateResult:
     """Validate, decode, build measurements, filter, correlate (and assess quality); nothing is written."""
@@ -995,7 +1012,8 @@ def quality_job(options: QualityOptions, *, progress: Progress | None = None, ch
     checked = checked or validate(options)
     if progress:
         progress.stage("Processing data files")
-    loaded, meas = _marked_measurements(options, checked, progress, "Analysing data quality", either=True)
+    loaded, meas = _marked_measurements(options, checked, progress, "Analysing data quality", either=True,
+                                        columns=quality_columns(options))
     absent = absent_categories(loaded)
     quality = _quality(meas, checked.sensors, options)
     params = {**_parameters(options, loaded, started, command), "callsign": options.callsign,

@@ -11,7 +11,7 @@ import pandas as pd
 import pytest
 
 from pipeline import jobs
-from pipeline.jobs import CorrelateOptions, correlate_columns, mark_once
+from pipeline.jobs import CorrelateOptions, QualityOptions, correlate_columns, mark_once, quality_columns
 from pipeline.model.load import load_measurements
 from pipeline.model.schema import MEASUREMENT_COLUMNS, SchemaError, column_names, validate
 from pipeline.model.sensors import read_sensors
@@ -100,3 +100,36 @@ def test_mark_once_with_the_jump_flag_alone(sensors):
     assert "jump" in flag and not {"jump_size_m", "fit_latitude", "fit_longitude"} & set(flag)
     assert np.array_equal(flag["jump"].to_numpy(), full["jump"].to_numpy()) and flag["jump"].any()
     pd.testing.assert_frame_equal(flag, full.drop(columns=["jump_size_m", "fit_latitude", "fit_longitude"]))
+
+
+def quality(**kw) -> QualityOptions:
+    return QualityOptions(**({"inputs": tuple(map(str, INPUTS)), "sensors": str(FIX / "sensors.toml"),
+                              "all_aircraft": True} | kw))
+
+
+def test_quality_columns_follow_the_reference():
+    plain = quality_columns(quality())
+    assert plain == column_names(plain) and {"aircraft_id", "rho_nm", "nacp", "mops_version"} <= set(plain)
+    assert not {"cov_ee_m2", "sigma_major_m", "height_m", "mode3a", "track_number", "file"} & set(plain)
+    assert quality_columns(quality(reference="track")) is None  # the tracker reads the covariance
+
+
+@pytest.mark.parametrize("kw", [{}, {"all_aircraft": False, "callsign": "MAS72", "gap_s": 30.0}])
+def test_quality_on_the_narrow_frame_equals_the_full_frame(kw, monkeypatch):
+    seen = []
+    measured = jobs._quality
+
+    def spy(meas, sensors, options):
+        seen.append(set(meas.columns))
+        return measured(meas, sensors, options)
+
+    monkeypatch.setattr(jobs, "_quality", spy)
+    narrow = jobs.quality_job(quality(**kw))
+    monkeypatch.setattr(jobs, "quality_columns", lambda options: None)
+    full = jobs.quality_job(quality(**kw))
+    assert "cov_ee_m2" not in seen[0] and "rho_nm" in seen[0] and "cov_ee_m2" in seen[1]
+    assert list(narrow.quality.sheets) == list(full.quality.sheets)
+    for name, table in full.quality.sheets.items():
+        pd.testing.assert_frame_equal(narrow.quality.sheets[name], table, check_exact=True)
+    assert len(narrow.quality.errors) > 0 and len(narrow.quality.sheets["Jumps"]) > 0
+    pd.testing.assert_frame_equal(narrow.quality.errors, full.quality.errors, check_exact=True)

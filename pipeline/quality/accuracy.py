@@ -16,8 +16,8 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
-from pipeline.model.aircraft import all_aircraft
-from pipeline.model.dedup import deduplicate
+from pipeline.model.aircraft import aircraft_rows
+from pipeline.model.dedup import DEDUP_KEYS, deduplicate
 from pipeline.model.geodesy import (
     M_PER_NM,
     distance_m,
@@ -29,10 +29,10 @@ from pipeline.model.geodesy import (
     slant_range_azimuth,
     wrap180,
 )
-from pipeline.model.jumps import KT_TO_MS, detect_jumps
+from pipeline.model.jumps import JUMP_INPUTS, KT_TO_MS, detect_jumps
 from pipeline.model.measurements import NACP_95_M
 from pipeline.model.sensors import sensor_sites
-from pipeline.model.time import with_clock
+from pipeline.model.time import midnight, with_clock
 
 MAX_ADSB_GAP_S = 10.0
 ERROR_COLUMNS = [
@@ -49,6 +49,12 @@ BIAS_COLUMNS = [
     "time_bias_se_s", "range_residual_rms_m", "azimuth_residual_rms_deg", "adsb_nacp_median",
     "adsb_nacp_95_m", "note",
 ]
+# The measurement columns the ADS-B reference and the errors read (with mark_once's duplicate and jump flags
+# when the frame carries them); --reference track hands the tracker every column
+ACCURACY_INPUTS = list(dict.fromkeys([
+    *DEDUP_KEYS, *JUMP_INPUTS, "sensor_id", "sensor_kind", "sac", "sic", "address", "callsign",
+    "flight_level", "rho_nm", "theta_deg", "nacp"]))
+AIRCRAFT_COLUMNS = ["sensor_kind", "aircraft_id", "callsign", "address"]  # what aircraft_rows reads
 MIN_BIAS_REPORTS = 20
 LIMITATION_NOTE = ("ADS-B is the reference but carries its own position error, bounded at 95 % by its NACp "
                    "(DO-260B: NACp 8 < 92.6 m, 9 < 30 m, 10 < 10 m, 11 < 3 m); radar errors below that level "
@@ -118,33 +124,43 @@ def _interpolate(track: pd.DataFrame, t_s: np.ndarray, max_gap_s: float) -> dict
     return out
 
 
+def _clocked(meas: pd.DataFrame, rows: np.ndarray, midnight_utc: pd.Timestamp | None) -> pd.DataFrame:
+    """The reports at positions ``rows`` with the thesis clock counted from ``midnight_utc`` (that of the
+    whole frame) and their ``radar_row``."""
+    return with_clock(meas.iloc[rows].reset_index(drop=True), midnight_utc).assign(radar_row=rows)
+
+
 def _matched(meas: pd.DataFrame, max_gap_s: float, jump_kw: dict | None, reference: str = "adsb"
              ) -> pd.DataFrame:
     """Radar reports (de-duplicated) with the interpolated ADS-B reference (or, with reference "track",
     the smoothed ADS-B-only track: pipeline.quality.track_reference), for aircraft seen by both;
-    ``radar_row`` is the report's row in ``meas``."""
-    meas = with_clock(meas).assign(radar_row=np.arange(len(meas)))
+    ``radar_row`` is the report's row in ``meas``. One aircraft's reports are copied at a time (and with
+    the ADS-B reference only ACCURACY_INPUTS of them)."""
+    if reference == "adsb":  # the smoothed track reads more of the model
+        meas = meas[[c for c in meas if c in ACCURACY_INPUTS or c in ("duplicate", "jump")]]
     is_adsb = (meas["sensor_kind"] == "adsb").to_numpy(bool)
-    adsb = meas[is_adsb]
+    adsb = meas[[c for c in meas if c in (*JUMP_INPUTS, "jump")]][is_adsb]
     jumps = detect_jumps(adsb, **(jump_kw or {})).to_numpy() if len(adsb) else np.zeros(0, bool)
+    del adsb
     drop = np.zeros(len(meas), bool)
     drop[np.flatnonzero(is_adsb)[jumps]] = True
-    radar = meas[~is_adsb]
+    keep = np.flatnonzero(~drop)
+    start = midnight(meas["time"])
     parts = []
-    for ac in all_aircraft(meas[~drop]):
-        r, _ = deduplicate(ac.radar)
-        a, _ = deduplicate(ac.adsb)
+    for callsign, address, _, radar, other in aircraft_rows(meas[AIRCRAFT_COLUMNS].iloc[keep]):
+        r, _ = deduplicate(_clocked(meas, keep[radar], start))
+        a, _ = deduplicate(_clocked(meas, keep[other], start))
         if reference == "track":
             from pipeline.quality.track_reference import track_reference
 
             ref = track_reference(a, r["time_of_day"].to_numpy(float), max_gap_s)
         else:
             ref = _interpolate(_adsb_track(a), r["time_of_day"].to_numpy(float), max_gap_s)
-        r = r.assign(callsign=ac.callsign or pd.NA, address=ac.address or pd.NA,
+        r = r.assign(callsign=callsign or pd.NA, address=address or pd.NA,
                      **{f"ref_{k}": v for k, v in ref.items()})
         parts.append(r[np.isfinite(ref["lat"])])
     if not parts:
-        return pd.DataFrame(columns=[*radar.columns, "ref_lat"])
+        return pd.DataFrame(columns=[*meas.columns, "time_of_day", "timestamp", "radar_row", "ref_lat"])
     return pd.concat(parts, ignore_index=True)
 
 
@@ -175,6 +191,7 @@ def radar_errors(meas: pd.DataFrame, sensors: pd.DataFrame, *, max_gap_s: float 
     vs_e, vs_n, vs_u = ((v_ecef * b).sum(-1) for b in (s_east, s_north, s_up))
     range_rate = (e * vs_e + n * vs_n + u * vs_u) / slant_m
     tangential = (n * vs_e - e * vs_n) / ground_m
+    del east, north, up, v_ecef, s_east, s_north, s_up  # (n, 3) arrays: gone before the plots' own geometry
 
     # the radar plot in its own terms; cartesian-only plots get them from their position
     rho_nm, theta = m["rho_nm"].to_numpy(float), m["theta_deg"].to_numpy(float)

@@ -11,12 +11,14 @@ recording is undated (its ``*_tod_s`` columns then give the time of day); JSON w
 
 from __future__ import annotations
 
+from collections.abc import Iterator
+
 import numpy as np
 import pandas as pd
 
 from pipeline.model.dedup import DEDUP_KEYS, deduplicate
 from pipeline.model.identity import aircraft_labels
-from pipeline.model.jumps import jump_table
+from pipeline.model.jumps import JUMP_FLAG_COLUMNS, JUMP_INPUTS, jump_table
 from pipeline.model.time import UTC_DTYPE, dated_or_nat, with_clock
 
 ALL = "(all)"
@@ -42,6 +44,14 @@ GAP_COLUMNS = [*ID_KEYS, "gap_start_tod_s", "gap_end_tod_s", "gap_start_utc", "g
 JUMP_COLUMNS = [*ID_KEYS, "time_of_day", "utc", "latitude", "longitude", "fit_latitude", "fit_longitude",
                 "jump_size_m"]
 VALUE_COUNT_COLUMNS = [*ID_KEYS, "indicator", "value", "reports", "share_pct"]
+# The measurement columns quality_tables reads, and the flags of pipeline.jobs.mark_once it reuses when the
+# frame carries them; every other column is left out of its working copies (a day holds a million reports)
+QUALITY_INPUTS = list(dict.fromkeys([
+    *DEDUP_KEYS, *JUMP_INPUTS, "sensor_id", "sensor_kind", "sac", "sic", "address", "callsign",
+    *ADSB_INDICATORS, "mops_version"]))
+QUALITY_FLAGS = ["duplicate", *JUMP_FLAG_COLUMNS]
+DEDUP_COLUMNS = [*DEDUP_KEYS, "sensor_kind", "sensor_id", "duplicate"]  # what deduplicate reads
+ADSB_UNREAD = ["sensor_kind", "sensor_id", "ground_speed_kt", "heading_deg", "duplicate"]  # once deduplicated
 
 
 def histogram_edges_s(gap_s: float) -> np.ndarray:
@@ -53,15 +63,29 @@ def histogram_edges_s(gap_s: float) -> np.ndarray:
 
 
 def _aircraft_labels(meas: pd.DataFrame) -> pd.DataFrame:
-    """Reports with the thesis clock, an ``aircraft`` key ("?" when unidentified), ``sensor`` (the kind)
-    and each aircraft's call-sign/address labels in place of the per-report values."""
-    both = with_clock(meas)
+    """Reports (their QUALITY_INPUTS and QUALITY_FLAGS) with the thesis clock, an ``aircraft`` key ("?" when
+    unidentified), ``sensor`` (the kind) and each aircraft's call-sign/address labels in place of the
+    per-report values."""
+    both = with_clock(meas[[c for c in meas if c in QUALITY_INPUTS or c in QUALITY_FLAGS]])
     both["sensor"] = both["sensor_kind"].astype("object")
     both["aircraft"] = both["aircraft_id"].astype("object").fillna("?")
     labels = aircraft_labels(meas).set_index("aircraft_id")
+    codes, aircraft = pd.factorize(both["aircraft"])  # labels looked up once per aircraft, not per report
     for column in ("callsign", "address"):
-        both[column] = both["aircraft"].map(labels[column]).fillna("").astype("object")
+        per_aircraft = pd.Series(aircraft).map(labels[column]).fillna("").astype("object").to_numpy()
+        both[column] = pd.Series(per_aircraft[codes], index=both.index, dtype=object)
     return both
+
+
+def _deduplicated_rows(frame: pd.DataFrame, by: list[str]) -> np.ndarray:
+    """Positions in ``frame`` of the rows ``deduplicate`` keeps of each group of ``by`` (groups in order of
+    first appearance, each in time order without repeats): the rows are then taken once, not copied per
+    group and joined."""
+    keys = frame[[c for c in DEDUP_COLUMNS if c in frame]]
+    keys = keys.assign(_row=np.arange(len(frame)))
+    groups = keys.groupby([frame[c] for c in by], dropna=False, sort=False)
+    rows = [deduplicate(g)[0]["_row"].to_numpy() for _, g in groups]
+    return np.concatenate(rows) if rows else np.zeros(0, np.int64)
 
 
 def _interval_stats(intervals_s: np.ndarray) -> dict:
@@ -127,6 +151,23 @@ def _group_rows(group: pd.DataFrame, gap_s: float,
     return row, within, gaps, clean
 
 
+def _sensor_groups(narrow: pd.DataFrame) -> Iterator[tuple[tuple, list[pd.DataFrame]]]:
+    """Per sensor (SENSOR_KEYS, sorted) its reports of each aircraft (sorted by call sign, address and
+    aircraft), as a grouping by sensor then by aircraft gives them; one grouping over both, so no sensor's
+    reports are copied whole (the ADS-B sensor holds most of a run's)."""
+    sensor = narrow.groupby(SENSOR_KEYS, dropna=False, sort=True).ngroup().to_numpy()  # sorted as the keys
+    current, sensor_id, groups = None, (), []
+    for key, g in narrow.groupby([sensor, *SENSOR_KEYS, "callsign", "address", "aircraft"], dropna=False,
+                                 sort=True):
+        if key[0] != current and groups:
+            yield sensor_id, groups
+            groups = []
+        current, sensor_id = key[0], key[1:1 + len(SENSOR_KEYS)]
+        groups.append(g)
+    if groups:
+        yield sensor_id, groups
+
+
 def _pooled_row(rows: list[dict], intervals: list[np.ndarray], sensor_id: tuple,
                 clean: list[pd.DataFrame]) -> dict:
     """The "(all)" summary row of one sensor from its per-aircraft rows, intervals and reports."""
@@ -153,18 +194,45 @@ def _indicators(adsb: pd.DataFrame) -> list[str]:
     return [c for c in ADSB_INDICATORS if c in adsb and adsb[c].notna().any()]
 
 
+def _first_rows(ids: np.ndarray, n: int) -> np.ndarray:
+    """Each of the ``n`` groups' first row (in ``ids``, the group of each row)."""
+    first = np.full(n, -1)
+    first[ids[::-1]] = np.arange(len(ids))[::-1]
+    return first
+
+
+def _key_groups(adsb: pd.DataFrame) -> tuple[np.ndarray, np.ndarray, pd.DataFrame]:
+    """Each report's group of ID_KEYS (its aircraft and sensor) and its sensor's pooled ("(all)") group,
+    numbered as a sorted grouping over ID_KEYS orders them (equal keys: one group), and the keys of every
+    group (row g: group g). The reports are grouped once; the tables work on these numbers, not on texts."""
+    own = adsb.groupby(ID_KEYS, dropna=False, sort=False).ngroup().to_numpy()
+    first = _first_rows(own, int(own.max()) + 1)
+    keys = adsb[ID_KEYS].iloc[first]
+    keys = pd.concat([keys, keys.assign(callsign=ALL, address="")], ignore_index=True)
+    rank = keys.groupby(ID_KEYS, dropna=False, sort=True).ngroup().to_numpy()
+    table = keys.iloc[_first_rows(rank, int(rank.max()) + 1)].reset_index(drop=True)
+    return rank[own], rank[own + len(first)], table
+
+
 def _adsb_value_counts(adsb: pd.DataFrame) -> pd.DataFrame:
-    """Value counts of each ADS-B quality indicator present, per aircraft and pooled per ADS-B sensor."""
+    """Value counts of each ADS-B quality indicator present, per aircraft and pooled per ADS-B sensor
+    (counted on group numbers, then keyed and sorted as one grouping over the key columns)."""
     indicators = _indicators(adsb)
     if adsb.empty or not indicators:
         return pd.DataFrame(columns=VALUE_COUNT_COLUMNS)
-    adsb = adsb[[*ID_KEYS, *indicators]]  # melt only what is counted: the frame is wide
-    pooled = adsb.assign(callsign=ALL, address="")
-    long = pd.concat([adsb, pooled], ignore_index=True).melt(
-        id_vars=ID_KEYS, value_vars=indicators, var_name="indicator", value_name="value")
-    long["value"] = pd.to_numeric(long["value"], errors="coerce").astype("Int64")
+    own, pooled, keys = _key_groups(adsb)
+    group = np.concatenate([own, pooled])  # every report counts for its aircraft and for its sensor
+    parts = []
+    for c in indicators:
+        value = pd.to_numeric(adsb[c], errors="coerce").astype("Int64")
+        pairs = pd.DataFrame({"group": group, "value": pd.concat([value, value], ignore_index=True)})
+        size = pairs.groupby(["group", "value"], dropna=False, sort=False).size()
+        parts.append(size.rename("reports").reset_index().assign(indicator=c))
+    part = pd.concat(parts, ignore_index=True)
+    counted = keys.iloc[part["group"].to_numpy()].reset_index(drop=True).assign(
+        indicator=part["indicator"], value=part["value"], reports=part["reports"])
     keys = [*ID_KEYS, "indicator"]
-    counts = long.groupby([*keys, "value"], dropna=False, sort=True).size().rename("reports").reset_index()
+    counts = counted.groupby([*keys, "value"], dropna=False, sort=True)["reports"].sum().reset_index()
     totals = counts.groupby(keys, dropna=False)["reports"].transform("sum")
     counts["share_pct"] = 100.0 * counts["reports"] / totals
     return counts[VALUE_COUNT_COLUMNS]
@@ -172,22 +240,24 @@ def _adsb_value_counts(adsb: pd.DataFrame) -> pd.DataFrame:
 
 def _adsb_over_time(adsb: pd.DataFrame) -> pd.DataFrame:
     """Median of each indicator and the integrity shares per 10-minute bin, per aircraft and pooled
-    (grouped once, aggregated column by column: a day holds thousands of bins)."""
+    (grouped once, on group numbers and bins, aggregated column by column: a day holds thousands of bins)."""
     indicators = _indicators(adsb)
     columns = [*ID_KEYS, "bin_start_tod_s", "bin_start_utc", "reports", *[f"{c}_median" for c in indicators],
                *SHARE_COLUMNS]
     if adsb.empty:
         return pd.DataFrame(columns=columns)
-    adsb = adsb[[c for c in dict.fromkeys([*ID_KEYS, "time_of_day", "timestamp", *indicators, "nucp_nic",
+    own, pooled, keys = _key_groups(adsb)
+    adsb = adsb[[c for c in dict.fromkeys(["time_of_day", "timestamp", *indicators, "nucp_nic",
                                            "mops_version"]) if c in adsb]]  # the frame is wide
-    frame = pd.concat([adsb, adsb.assign(callsign=ALL, address="")], ignore_index=True)
+    frame = pd.concat([adsb, adsb], ignore_index=True)  # each report: its aircraft's row, then its sensor's
+    frame["group"] = np.concatenate([own, pooled])
     frame["bin_start_tod_s"] = np.floor(frame["time_of_day"].to_numpy(float) / QUALITY_BIN_S) * QUALITY_BIN_S
-    keys = [*ID_KEYS, "bin_start_tod_s"]
-    ids = frame.groupby(keys, dropna=False, sort=True).ngroup().to_numpy()
+    ids = frame.groupby(["group", "bin_start_tod_s"], dropna=False, sort=True).ngroup().to_numpy()
     n = int(ids.max()) + 1
-    first = np.full(n, -1)
-    first[ids[::-1]] = np.arange(len(frame))[::-1]  # each group's first row in frame order
-    out = {k: frame[k].to_numpy()[first] for k in keys}
+    first = _first_rows(ids, n)  # each group's first row in frame order
+    group = frame["group"].to_numpy()[first]
+    out = {k: keys[k].to_numpy()[group] for k in ID_KEYS}
+    out["bin_start_tod_s"] = frame["bin_start_tod_s"].to_numpy()[first]
     tod0 = frame["time_of_day"].to_numpy(float)[first]
     if "timestamp" in frame:
         start = dated_or_nat(frame["timestamp"].iloc[first].reset_index(drop=True)) - pd.to_timedelta(
@@ -236,26 +306,29 @@ def quality_tables(meas: pd.DataFrame, *, gap_s: float = 180.0,
     both = _aircraft_labels(meas)
     adsb_rows = both["sensor"] == "adsb"
 
-    clean_adsb = []
-    for _, g in both[adsb_rows].groupby(["aircraft", "sac", "sic"], dropna=False, sort=False):
-        clean_adsb.append(deduplicate(g)[0])
-    adsb = pd.concat(clean_adsb, ignore_index=True) if clean_adsb else both[adsb_rows].iloc[:0]
+    by = ["aircraft", "sac", "sic"]
+    at = np.flatnonzero(adsb_rows.to_numpy(bool))
+    at = at[_deduplicated_rows(both[[*by, *(c for c in DEDUP_COLUMNS if c in both)]].iloc[at], by)]
+    adsb = both[[c for c in both if c not in ADSB_UNREAD]].iloc[at].reset_index(drop=True)  # taken once
     jumps = jump_table(adsb, **(jump_kw or {}))
     jump_rows = adsb.loc[jumps["row"].to_numpy()] if len(jumps) else adsb.iloc[:0]
     jumps_by_aircraft = jump_rows["aircraft"].value_counts()
+    adsb_quality, adsb_over_time = _adsb_value_counts(adsb), _adsb_over_time(adsb)
+    del adsb
 
     summary, gaps, hist = [], [], []
     edges = histogram_edges_s(gap_s)
     needed = [*ID_KEYS, "aircraft", "time", "time_of_day", "timestamp", "ground_speed_kt", "nucp_nic",
               "mops_version", "duplicate", "sensor_kind", "sensor_id", *DEDUP_KEYS]
     narrow = both[[c for c in dict.fromkeys(needed) if c in both]]  # the groups are copied: keep them narrow
-    for sensor_id, s in narrow.groupby(SENSOR_KEYS, dropna=False, sort=True):
+    del both
+    for sensor_id, groups in _sensor_groups(narrow):
         rows, intervals, clean = [], [], []
-        for _, g in s.groupby(["callsign", "address", "aircraft"], dropna=False, sort=True):
+        for g in groups:
             row, within, g_gaps, g_clean = _group_rows(g, gap_s, jumps_by_aircraft)
             rows.append(row)
             intervals.append(within)
-            clean.append(g_clean)
+            clean.append(g_clean[[c for c in ("nucp_nic", "mops_version") if c in g_clean]])  # for the pool
             gaps += g_gaps
         summary += [_pooled_row(rows, intervals, sensor_id, clean), *rows]
         counts, _ = np.histogram(np.concatenate(intervals), bins=edges)
@@ -276,6 +349,6 @@ def quality_tables(meas: pd.DataFrame, *, gap_s: float = 180.0,
                              else pd.DataFrame(columns=HISTOGRAM_COLUMNS)),
         "Gaps": _as_utc(pd.DataFrame(gaps, columns=GAP_COLUMNS), ["gap_start_utc", "gap_end_utc"]),
         "Jumps": jump_sheet,
-        "ADS-B quality": _adsb_value_counts(adsb),
-        "ADS-B quality over time": _adsb_over_time(adsb),
+        "ADS-B quality": adsb_quality,
+        "ADS-B quality over time": adsb_over_time,
     }
