@@ -18,6 +18,7 @@ import time
 from dataclasses import dataclass, field
 from pathlib import Path
 
+import numpy as np
 import pandas as pd
 
 from pipeline import jobs
@@ -35,6 +36,9 @@ from pipeline.jobs_track import (
 from pipeline.progress import Progress
 
 METHODS = ("exact", "one-block", "blocks", "midpoint")
+# aircraft are tracked again for their predictions in batches of about this many reports, each batch's
+# filter histories (~1.4 kB a report) held at a time: ~0.35 GB
+PREDICTION_BATCH_REPORTS = 250_000
 VERTICAL_MODELS = ("gate", "gaussian")
 HORIZON_RANGE_S = (1.0, 3600.0)
 RADIUS_RANGE_NM = (0.01, 100.0)
@@ -164,7 +168,6 @@ def conflict_job(options: ConflictOptions, *, progress: Progress | None = None,
         warning_times,
     )
     from pipeline.conflict.approach import closest_approach
-    from pipeline.conflict.predict import predict_tracks
     from pipeline.track import track
 
     started = time.monotonic()
@@ -178,12 +181,13 @@ def conflict_job(options: ConflictOptions, *, progress: Progress | None = None,
         progress.stage("Tracking")
     meas = _measurements(loaded, checked, options)
     loaded.drop_frames()  # the measurements hold what tracking needs
-    check_track_rows(meas, options, len(horizons), f"predictions ({len(horizons)} horizon(s) a track row)")
+    check_track_rows(meas, options)
+    check_track_rows(meas, options, len(horizons), f"predictions ({len(horizons)} horizon(s) a grid row)",
+                     grid_only=True)  # predictions start from the grid rows only, not from the report times
     noise = None
     if options.noise in ESTIMATED:
         meas, noise = _estimate_noise(meas, checked.sensors, options)
-    result = track(meas, step_s=step, max_coast_s=float(options.max_coast_s), tpm=options.tpm,
-                   keep_states=True)
+    result = track(meas, step_s=step, max_coast_s=float(options.max_coast_s), tpm=options.tpm)
     tracks = result.tracks
     if tracks.empty:
         raise JobError(untrackable(meas))
@@ -191,7 +195,9 @@ def conflict_job(options: ConflictOptions, *, progress: Progress | None = None,
     grid = tracks[abs(tod / step - (tod / step).round()) < 1e-6].reset_index(drop=True)
     if progress:
         progress.stage("Predicting and computing PC")
-    predictions = predict_tracks(result, horizons, step_s=step, sigma_alt=options.vertical == "gaussian")
+    predictions = _predictions(meas, result, horizons, options)
+    tracker_parameters = result.parameters
+    del result, tracks, tod  # the grid rows are what follows needs: ~0.35 GB freed on a day at 1 s
     tol = options.vertical_tolerance_ft
     pc = pair_probabilities(predictions, options.radius_nm, options.vertical_ft, method=options.method,
                             vertical_tolerance_ft=tol)
@@ -203,7 +209,7 @@ def conflict_job(options: ConflictOptions, *, progress: Progress | None = None,
               "alerts": len(alerts), "false_alerts": int(alerts["false_alert"].sum()) if len(alerts) else 0,
               "missed": {f"{h:g}": int(warn.loc[warn["horizon_s"] == h, "warning_s"].isna().sum())
                          for h in horizons} if len(warn) else {f"{h:g}": 0 for h in horizons}}
-    params = {**jobs._parameters(options, loaded, started, command), **result.parameters,
+    params = {**jobs._parameters(options, loaded, started, command), **tracker_parameters,
               "horizons_s": list(horizons), "radius_nm": options.radius_nm,
               "vertical_ft": options.vertical_ft, "vertical_tolerance_ft": tol,
               "threshold": options.threshold, "method": options.method,
@@ -211,6 +217,30 @@ def conflict_job(options: ConflictOptions, *, progress: Progress | None = None,
               "sources": list(_sources(options.sources))}
     return ConflictJobResult(options, checked, grid, pc, alerts, losses, warn, params, loaded, counts,
                              predictions, noise)
+
+
+def _predictions(meas: pd.DataFrame, result, horizons: tuple[float, ...],
+                 options: ConflictOptions) -> pd.DataFrame:
+    """predict_tracks for every aircraft of `result` (tracked without filter histories), in batches of
+    aircraft tracked again with their histories kept (about 1.4 kB a report: 1.4 GB for a day of traffic
+    at once), one batch's at a time; the same predictions, in the same plane and order."""
+    from pipeline.conflict.predict import predict_tracks
+    from pipeline.track import Plane, track
+
+    tracks = result.tracks
+    plane = Plane.around(tracks["latitude"].to_numpy(float), tracks["longitude"].to_numpy(float))
+    per_aircraft = meas.groupby("aircraft_id", sort=True, observed=True).size()
+    batch = np.cumsum(per_aircraft.to_numpy()) // PREDICTION_BATCH_REPORTS
+    parts = []
+    for b in np.unique(batch):
+        ids = per_aircraft.index[batch == b]
+        sub = meas[meas["aircraft_id"].isin(ids).to_numpy(bool)]
+        run = track(sub, step_s=float(options.step_s), max_coast_s=float(options.max_coast_s),
+                    tpm=options.tpm, keep_states=True, epoch=result.epoch)
+        parts.append(predict_tracks(run, horizons, step_s=float(options.step_s), plane=plane,
+                                    sigma_alt=options.vertical == "gaussian"))
+        del run
+    return pd.concat(parts, ignore_index=True)
 
 
 def summary(result: ConflictJobResult) -> dict:

@@ -90,9 +90,10 @@ def check_tracking(options: TrackOptions) -> float:
     return step
 
 
-def track_rows(meas: pd.DataFrame, step_s: float, max_coast_s: float) -> int:
+def track_rows(meas: pd.DataFrame, step_s: float, max_coast_s: float, *, grid_only: bool = False) -> int:
     """An upper bound on the rows ``track`` will put out: per aircraft, the grid of step_s over the time its
-    reports cover (each gap up to max_coast_s, and max_coast_s after the last), plus one row per report."""
+    reports cover (each gap up to max_coast_s, and max_coast_s after the last), plus one row per report
+    (grid_only: the grid rows alone)."""
     if meas.empty:
         return 0
     t = meas["time"].dt.as_unit("ns").astype("int64").to_numpy() / 1e9
@@ -102,13 +103,14 @@ def track_rows(meas: pd.DataFrame, step_s: float, max_coast_s: float) -> int:
     gap = np.diff(t)
     same = ids[1:] == ids[:-1]
     covered = float(np.minimum(gap[same], max_coast_s).sum()) + max_coast_s * (int(ids.max()) + 1)
-    return int(covered / step_s) + 2 * (int(ids.max()) + 1) + len(meas)
+    return int(covered / step_s) + 2 * (int(ids.max()) + 1) + (0 if grid_only else len(meas))
 
 
-def check_track_rows(meas: pd.DataFrame, options: TrackOptions, per_row: int = 1, what: str = "") -> None:
+def check_track_rows(meas: pd.DataFrame, options: TrackOptions, per_row: int = 1, what: str = "", *,
+                     grid_only: bool = False) -> None:
     """OptionError naming --step when the run would put out more than MAX_TRACK_ROWS rows (``per_row``
-    rows for each track row, e.g. one prediction per horizon)."""
-    rows = track_rows(meas, float(options.step_s), float(options.max_coast_s)) * per_row
+    rows for each track row, e.g. one prediction per horizon; grid_only: for each grid row)."""
+    rows = track_rows(meas, float(options.step_s), float(options.max_coast_s), grid_only=grid_only) * per_row
     if rows > MAX_TRACK_ROWS:
         raise OptionError(f"--step {options.step_s:g}: the tracks of these {meas['aircraft_id'].nunique()} "
                           f"aircraft would need about {rows:,} {what or 'output rows'}, more than "

@@ -4,6 +4,7 @@ separation starts when the hand-computed geometry says and is alerted before it 
 
 from __future__ import annotations
 
+import datetime as dt
 import json
 from dataclasses import replace
 from pathlib import Path
@@ -217,5 +218,22 @@ def test_a_tiny_step_is_refused_by_the_predictions_it_would_make(tmp_path, capsy
     err = capsys.readouterr().err
     assert code == 2 and "Traceback" not in err
     assert "--step 0.01: the tracks of these 5 aircraft would need about 4," in err
-    assert "predictions (3 horizon(s) a track row), more than 4,000,000; use a longer --step" in err
+    assert "predictions (3 horizon(s) a grid row), more than 4,000,000; use a longer --step" in err
     assert list(tmp_path.iterdir()) == []
+
+
+def test_predictions_in_batches_equal_those_of_one_batch(crossing, monkeypatch):
+    """The aircraft are tracked again with their filter histories for the predictions, a batch of them at a
+    time: batches of ~600 reports (one aircraft each on the crossing pair, several on the fixtures) give the
+    same predictions, PC, alerts, losses and warning times, bit for bit, as one batch of every aircraft."""
+    d = crossing
+    cases = [ConflictOptions(inputs=(str(d / "r.ast"), str(d / "a.ast")), sensors=str(d / "s.toml"),
+                             output="c.csv", date=dt.date(2019, 3, 1)), opts(date=dt.date(2019, 3, 1))]
+    for options in cases:
+        whole = jobs_conflict.conflict_job(options)
+        monkeypatch.setattr(jobs_conflict, "PREDICTION_BATCH_REPORTS", 600)
+        parts = jobs_conflict.conflict_job(options)
+        monkeypatch.undo()
+        assert parts.predictions["aircraft_id"].nunique() == whole.predictions["aircraft_id"].nunique() >= 2
+        for name in ("predictions", "pc", "alerts", "losses", "warnings", "tracks"):
+            pd.testing.assert_frame_equal(getattr(parts, name), getattr(whole, name), check_exact=True)

@@ -385,3 +385,11 @@ def test_parquet_in_slices_is_the_whole_table(tmp_path):
     assert pq.ParquetFile(sliced).metadata.num_row_groups == 3
     assert pq.read_schema(sliced).equals(pq.read_schema(whole), check_metadata=True)
     pd.testing.assert_frame_equal(pd.read_parquet(sliced), pd.read_parquet(whole))
+
+
+def test_grid_rows_bound_by_hand():
+    """The same reports at 0, 10 and 100 s: the grid rows alone, without one row per report: 135 - 3."""
+    t0 = pd.Timestamp("2019-03-01T08:00:00Z")
+    meas = pd.DataFrame({"aircraft_id": ["A"] * 3,
+                         "time": [t0 + pd.Timedelta(seconds=s) for s in (0, 10, 100)]})
+    assert jobs_track.track_rows(meas, 1.0, 60.0, grid_only=True) == 132

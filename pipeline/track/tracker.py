@@ -67,6 +67,7 @@ class TrackResult:
     parameters: dict
     final_states: dict[str, ImmState] = field(default_factory=dict)
     runs: dict[str, tuple] = field(default_factory=dict)  # with keep_states: (plane, PlaneRun, epoch)
+    epoch: pd.Timestamp | None = None  # the UTC midnight the filter's seconds count from
 
     def state_at(self, aircraft_id: str, time: pd.Timestamp) -> ImmState:
         """The IMM posterior after the last accepted update at or before time (needs keep_states);
@@ -95,13 +96,15 @@ def _check(measurements: pd.DataFrame) -> None:
 def track(measurements: pd.DataFrame, *, step_s: float = 1.0, max_coast_s: float = 60.0,
           tpm: str | None = None, smooth: bool = False, config: TrackerConfig | None = None,
           turn_rate_dps: float = 3.0, with_ca: bool = False, keep_states: bool = False,
-          smoother: str = "rts") -> TrackResult:
+          smoother: str = "rts", epoch: pd.Timestamp | None = None) -> TrackResult:
     """Track every aircraft: estimates on a regular grid of step_s (aligned to whole multiples of step_s
     since UTC midnight) and at every accepted report, coasted up to max_coast_s after the last update,
     smoothed backwards when smooth. tpm: 'dynamic[:A,B]', 'fixed:P' or 'expm:TAU[,TAU2]' (default:
     the config's; see `parse_tpm`). smoother: "rts" (RTS on the combined estimate) or "imm" (the IMM
     smoother of `imm_smooth_rows`; also smooths the mode probabilities). keep_states keeps every
-    aircraft's filter history for `TrackResult.state_at`."""
+    aircraft's filter history for `TrackResult.state_at`. epoch: the UTC midnight the filter counts its
+    seconds from (default: that of the earliest usable report; `TrackResult.epoch`), so that a subset of
+    the aircraft tracked again gives the same numbers."""
     _check(measurements)
     if smoother not in SMOOTHERS:
         raise ValueError(f"smoother {smoother!r}: expected one of {', '.join(SMOOTHERS)}")
@@ -125,7 +128,7 @@ def track(measurements: pd.DataFrame, *, step_s: float = 1.0, max_coast_s: float
                         _parameters(config, step_s, smooth, smoother))
     if frame.empty:
         return empty
-    epoch = frame["time"].min().floor("D")
+    epoch = frame["time"].min().floor("D") if epoch is None else pd.Timestamp(epoch)
     tracks, sensors, aircraft, rejected, finals, runs = [], [], [], [], {}, {}
     for aircraft_id, group in frame.groupby("aircraft_id", sort=True, observed=True):
         out = _track_one(str(aircraft_id), group, epoch, config, args, names, step_s, smooth, smoother)
@@ -146,7 +149,7 @@ def track(measurements: pd.DataFrame, *, step_s: float = 1.0, max_coast_s: float
         sensors_df["invalid"] = 0
     return TrackResult(_concat_by_column(tracks), sensors_df,
                        pd.DataFrame(aircraft), pd.concat(rejected, ignore_index=True),
-                       _parameters(config, step_s, smooth, smoother), finals, runs)
+                       _parameters(config, step_s, smooth, smoother), finals, runs, epoch)
 
 
 def _parameters(config: TrackerConfig, step_s: float, smooth: bool, smoother: str) -> dict:
