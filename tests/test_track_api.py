@@ -203,6 +203,30 @@ def test_segment_start_velocity_sigma_from_nucr_nacv():
             assert run.P[0, mode, 4, 4] == pytest.approx(var, rel=1e-9)
 
 
+JUMP_T0 = pd.Timestamp("2019-03-01T08:00:00Z")
+JUMP_ORIGIN = (40.0, 2.0)  # latitude, longitude of the plane's (0, 0)
+
+
+def _reports_at(secs, east_m, north_m) -> pd.DataFrame:
+    """One aircraft's ADS-B reports (sigma 5 m) at JUMP_T0 + secs, at the given metres east and north of
+    JUMP_ORIGIN."""
+    lat0, lon0 = JUMP_ORIGIN
+    lon, lat, _ = Geod(ellps="WGS84").fwd(np.full(len(secs), lon0), np.full(len(secs), lat0),
+                                          np.degrees(np.arctan2(east_m, north_m)), np.hypot(east_m, north_m))
+    return pd.DataFrame({"time": JUMP_T0 + pd.to_timedelta(secs, unit="s"), "sensor_id": "021:0/1",
+                         "sensor_kind": "adsb", "aircraft_id": "A", "latitude": lat, "longitude": lon,
+                         "flight_level": 300.0, "cov_ee_m2": 25.0, "cov_en_m2": 0.0, "cov_nn_m2": 25.0})
+
+
+def _offsets(tracks: pd.DataFrame, north_m) -> np.ndarray:
+    """Each output's distance (m) from the path east at 200 m/s, north_m(seconds since JUMP_T0) north."""
+    lat0, lon0 = JUMP_ORIGIN
+    az, _, d = Geod(ellps="WGS84").inv(np.full(len(tracks), lon0), np.full(len(tracks), lat0),
+                                       tracks["longitude"].to_numpy(), tracks["latitude"].to_numpy())
+    s = (tracks["time"] - JUMP_T0).dt.total_seconds().to_numpy()
+    return np.hypot(d * np.sin(np.radians(az)) - 200.0 * s, d * np.cos(np.radians(az)) - north_m(s))
+
+
 def test_a_position_jump_never_starts_a_segment():
     """1 Hz reports (sigma 5 m) of an aircraft flying east at 200 m/s; from 100 s on every report is 3 km
     north of the predicted track (gated; the third in a row restarts the track), and the report at 102 s
@@ -210,29 +234,16 @@ def test_a_position_jump_never_starts_a_segment():
     and the report after it 600 km from the jump: neither restarts (600 m/s + 4 sigma); 104 s does, 3 km
     north. Without the check the track restarted on the jump, 600 km off, and coasted there."""
     rng = np.random.default_rng(3)
-    t0 = pd.Timestamp("2019-03-01T08:00:00Z")
     secs = np.arange(200.0)
     east = 200.0 * secs + rng.normal(0, 5.0, len(secs))
     north = np.where(secs >= 100, 3000.0, 0.0) + rng.normal(0, 5.0, len(secs))
     east[secs == 102] += 600_000.0
-    lat0, lon0 = 40.0, 2.0
-    geod = Geod(ellps="WGS84")
-    lon, lat, _ = geod.fwd(np.full(len(secs), lon0), np.full(len(secs), lat0),
-                           np.degrees(np.arctan2(east, north)), np.hypot(east, north))
-    meas = pd.DataFrame({"time": t0 + pd.to_timedelta(secs, unit="s"), "sensor_id": "021:0/1",
-                         "sensor_kind": "adsb", "aircraft_id": "A", "latitude": lat, "longitude": lon,
-                         "flight_level": 300.0, "cov_ee_m2": 25.0, "cov_en_m2": 0.0, "cov_nn_m2": 25.0})
-    res = track(meas, keep_states=True)
+    res = track(_reports_at(secs, east, north), keep_states=True)
     _, run, _ = res.runs["A"]
     assert list(run.status[100:105]) == [0, 0, 0, 0, 2]  # gated x 4 (the jump and the one after), start
-    assert list(res.rejected["time"]) == list(t0 + pd.to_timedelta([100.0, 101, 102, 103], unit="s"))
+    assert list(res.rejected["time"]) == list(JUMP_T0 + pd.to_timedelta([100.0, 101, 102, 103], unit="s"))
     # every output within 4 km of the true path (3 km north after 100 s), none near the jump
-    az, _, d = geod.inv(np.full(len(res.tracks), lon0), np.full(len(res.tracks), lat0),
-                        res.tracks["longitude"].to_numpy(), res.tracks["latitude"].to_numpy())
-    s = (res.tracks["time"] - t0).dt.total_seconds().to_numpy()
-    off_east = d * np.sin(np.radians(az)) - 200.0 * s
-    off_north = d * np.cos(np.radians(az)) - np.where(s >= 100, 3000.0, 0.0)
-    assert np.hypot(off_east, off_north).max() < 4000.0
+    assert _offsets(res.tracks, lambda s: np.where(s >= 100, 3000.0, 0.0)).max() < 4000.0
 
 
 @pytest.mark.parametrize("jump_at_s", [0.0, 150.0])
@@ -243,27 +254,16 @@ def test_a_segment_started_by_a_jump_is_withdrawn(jump_at_s):
     of the jump (600 km in 3 s), so the jump's segment is withdrawn: its report counts as gated, the
     segments are numbered on without a hole, and no output lies near the jump."""
     rng = np.random.default_rng(4)
-    t0 = pd.Timestamp("2019-03-01T08:00:00Z")
     secs = np.arange(220.0)
     secs = secs[(secs < 80) | (secs >= 150)]
     east = 200.0 * secs + rng.normal(0, 5.0, len(secs))
     north = rng.normal(0, 5.0, len(secs))
     east[secs == jump_at_s] += 600_000.0
-    lat0, lon0 = 40.0, 2.0
-    geod = Geod(ellps="WGS84")
-    lon, lat, _ = geod.fwd(np.full(len(secs), lon0), np.full(len(secs), lat0),
-                           np.degrees(np.arctan2(east, north)), np.hypot(east, north))
-    meas = pd.DataFrame({"time": t0 + pd.to_timedelta(secs, unit="s"), "sensor_id": "021:0/1",
-                         "sensor_kind": "adsb", "aircraft_id": "A", "latitude": lat, "longitude": lon,
-                         "flight_level": 300.0, "cov_ee_m2": 25.0, "cov_en_m2": 0.0, "cov_nn_m2": 25.0})
-    res = track(meas, keep_states=True)
+    res = track(_reports_at(secs, east, north), keep_states=True)
     _, run, _ = res.runs["A"]
     j = int(np.flatnonzero(secs == jump_at_s)[0])
     assert list(run.status[j:j + 5]) == [0, 0, 0, 2, 1]  # jump withdrawn, two gated, restart, update
-    assert list(res.rejected["time"]) == list(t0 + pd.to_timedelta(secs[j:j + 3], unit="s"))
+    assert list(res.rejected["time"]) == list(JUMP_T0 + pd.to_timedelta(secs[j:j + 3], unit="s"))
     assert res.aircraft["segments"].iloc[0] == 2 and sorted(res.tracks["segment"].unique()) == [0, 1]
     assert int(res.sensors["gated"].iloc[0]) == 3 and int(res.sensors["updates"].iloc[0]) == len(secs) - 3
-    az, _, d = geod.inv(np.full(len(res.tracks), lon0), np.full(len(res.tracks), lat0),
-                        res.tracks["longitude"].to_numpy(), res.tracks["latitude"].to_numpy())
-    s = (res.tracks["time"] - t0).dt.total_seconds().to_numpy()
-    assert np.hypot(d * np.sin(np.radians(az)) - 200.0 * s, d * np.cos(np.radians(az))).max() < 2000.0
+    assert _offsets(res.tracks, lambda s: 0.0 * s).max() < 2000.0
