@@ -237,8 +237,9 @@ def _predictions(meas: pd.DataFrame, result, horizons: tuple[float, ...],
         sub = meas[meas["aircraft_id"].isin(ids).to_numpy(bool)]
         run = track(sub, step_s=float(options.step_s), max_coast_s=float(options.max_coast_s),
                     tpm=options.tpm, keep_states=True, epoch=result.epoch)
-        parts.append(predict_tracks(run, horizons, step_s=float(options.step_s), plane=plane,
-                                    sigma_alt=options.vertical == "gaussian"))
+        if not run.tracks.empty:  # a batch of untrackable aircraft (no usable covariance) predicts nothing
+            parts.append(predict_tracks(run, horizons, step_s=float(options.step_s), plane=plane,
+                                        sigma_alt=options.vertical == "gaussian"))
         del run
     return pd.concat(parts, ignore_index=True)
 

@@ -9,6 +9,7 @@ import json
 from dataclasses import replace
 from pathlib import Path
 
+import numpy as np
 import pandas as pd
 import pytest
 from openpyxl import load_workbook
@@ -237,3 +238,26 @@ def test_predictions_in_batches_equal_those_of_one_batch(crossing, monkeypatch):
         assert parts.predictions["aircraft_id"].nunique() == whole.predictions["aircraft_id"].nunique() >= 2
         for name in ("predictions", "pc", "alerts", "losses", "warnings", "tracks"):
             pd.testing.assert_frame_equal(getattr(parts, name), getattr(whole, name), check_exact=True)
+
+
+def test_a_batch_of_untrackable_aircraft_predicts_nothing(monkeypatch):
+    """Aircraft "A" flies east at 200 m/s with 1 Hz reports; "Z" has reports without a usable covariance
+    (NaN, as for NACp 0). In batches of 50 reports, Z is a batch of its own: it adds no prediction, and
+    the predictions (their UTC times included) are those of one batch."""
+    from pipeline.track import track
+
+    t0 = pd.Timestamp("2019-03-01T08:00:00Z")
+    secs = np.arange(60.0)
+    rows = {"time": t0 + pd.to_timedelta(np.concatenate([secs, secs]), unit="s"), "sensor_id": "021:0/1",
+            "sensor_kind": "adsb", "aircraft_id": ["A"] * 60 + ["Z"] * 60,
+            "latitude": 40.0, "longitude": np.concatenate([2.0 + secs * 200.0 / 85_390.0, 3.0 + 0 * secs]),
+            "flight_level": 300.0, "cov_ee_m2": [25.0] * 60 + [np.nan] * 60, "cov_en_m2": 0.0,
+            "cov_nn_m2": [25.0] * 60 + [np.nan] * 60}
+    meas = pd.DataFrame(rows)
+    options = ConflictOptions(output="c.csv")
+    result = track(meas, step_s=1.0, max_coast_s=60.0)
+    whole = jobs_conflict._predictions(meas, result, (20.0, 60.0), options)
+    monkeypatch.setattr(jobs_conflict, "PREDICTION_BATCH_REPORTS", 50)
+    parts = jobs_conflict._predictions(meas, result, (20.0, 60.0), options)
+    assert set(parts["aircraft_id"]) == {"A"} and isinstance(parts["time"].dtype, pd.DatetimeTZDtype)
+    pd.testing.assert_frame_equal(parts, whole, check_exact=True)
