@@ -160,13 +160,17 @@ def _parameters(config: TrackerConfig, step_s: float, smooth: bool, smoother: st
 
 
 def _concat_by_column(frames: list[pd.DataFrame]) -> pd.DataFrame:
-    """pd.concat of the aircraft's tables, joined one column at a time and each part's column dropped once
-    joined, so the peak holds one extra column instead of a second copy of the whole table."""
+    """pd.concat of the aircraft's tables (each one block per column), joined one column at a time and each
+    part's column released once joined, so the peak holds one extra column instead of a second copy of the
+    whole table; one table is returned as it is."""
+    if len(frames) == 1:
+        return frames[0]
+    names = list(frames[0].columns)
+    parts = [{name: f[name] for name in names} for f in frames]  # the columns' blocks, without the frames
+    frames.clear()
     columns = {}
-    for name in list(frames[0].columns):
-        columns[name] = pd.concat([f[name] for f in frames], ignore_index=True)
-        for f in frames:
-            del f[name]
+    for name in names:
+        columns[name] = pd.concat([p.pop(name) for p in parts], ignore_index=True)
     return pd.DataFrame(columns, copy=False)
 
 
