@@ -36,7 +36,6 @@ MAX_COAST_RANGE_S = (0.0, 86400.0)
 # bound this (the same step is harmless on one aircraft and huge on a day of traffic), so it is counted
 # after decoding, before tracking.
 MAX_TRACK_ROWS = 4_000_000
-PARQUET_SLICE_ROWS = 262_144  # rows converted to Arrow at a time when writing the table (about 50 MB)
 # the columns of the track table, in order (issue 10); the tracker's other columns follow
 TRACK_COLUMNS = ["aircraft_id", "callsign", "address", "time", "time_of_day", "latitude", "longitude",
                  "flight_level", "speed_kt", "track_deg", "turn_rate_dps", "sigma_major_m", "sigma_minor_m",
@@ -341,19 +340,6 @@ def sensor_totals(sensors: pd.DataFrame) -> pd.DataFrame:
     return out.drop(columns="nis_sum").assign(nis_mean=np.where(out["updates"] > 0, nis, np.nan))
 
 
-def write_parquet_slices(frame: pd.DataFrame, path: Path, rows: int = PARQUET_SLICE_ROWS) -> None:
-    """The table as Parquet, converted to Arrow `rows` rows at a time under one schema (that of the whole
-    frame's columns): the same file content as `to_parquet` without a second copy of a day's table."""
-    import pyarrow as pa
-    import pyarrow.parquet as pq
-
-    schema = pa.Schema.from_pandas(frame.iloc[:0], preserve_index=False)
-    with pq.ParquetWriter(path, schema) as writer:
-        for start in range(0, len(frame), rows):
-            writer.write_table(pa.Table.from_pandas(frame.iloc[start:start + rows], schema=schema,
-                                                    preserve_index=False))
-
-
 def write_tracks(result: TrackJobResult) -> dict[str, Path]:
     """Write the track table (CSV: times as ISO 8601 UTC; Parquet: tz-aware timestamps), the JSON and
     the figures, as the options ask; each file is written whole to a temporary name and then renamed,
@@ -361,16 +347,14 @@ def write_tracks(result: TrackJobResult) -> dict[str, Path]:
     written: dict[str, Path] = {}
     out, js = result.checked.output, result.checked.json
     if out is not None:
-        tmp = out.with_name(out.name + ".part")
-        try:
-            if out.suffix.lower() == ".csv":
-                result.tracks.assign(time=result.tracks["time"].dt.strftime("%Y-%m-%dT%H:%M:%S.%fZ")).to_csv(
-                    tmp, index=False)
-            else:
-                write_parquet_slices(result.tracks, tmp)
-            tmp.replace(out)
-        finally:
-            tmp.unlink(missing_ok=True)
+        from pipeline.report.summary import write_atomically
+        from pipeline.report.tables import write_parquet
+
+        if out.suffix.lower() == ".csv":
+            times = result.tracks["time"].dt.strftime("%Y-%m-%dT%H:%M:%S.%fZ")
+            write_atomically(out, lambda tmp: result.tracks.assign(time=times).to_csv(tmp, index=False))
+        else:
+            write_parquet(result.tracks, out)
         written["tracks"] = out
     if js is not None:
         js.write_text(json.dumps(summary(result), indent=1, default=str))

@@ -369,9 +369,12 @@ def test_stdout_sums_each_sensor_over_the_aircraft(tmp_path, capsys):
 
 
 def test_parquet_in_slices_is_the_whole_table(tmp_path):
-    """Written 3 rows at a time, a table whose text column is empty in a whole slice, with NaN, booleans and
-    UTC times, reads back equal to `to_parquet` of the whole frame, under the same schema and metadata."""
+    """`pipeline.report.tables.write_parquet` (the track and correlation tables' writer) 3 rows at a time: a
+    table whose text column is empty in a whole slice, an object column all None in the first slice, NaN,
+    booleans and UTC times reads back equal to `to_parquet` of the whole frame, same schema and metadata."""
     import pyarrow.parquet as pq
+
+    from pipeline.report.tables import write_parquet
 
     frame = pd.DataFrame({"aircraft_id": ["A"] * 4 + ["B"] * 3,
                           "time": pd.date_range("2019-03-01T08:00:00Z", periods=7, freq="s"),
@@ -379,9 +382,10 @@ def test_parquet_in_slices_is_the_whole_table(tmp_path):
                           "coasted": [False, True, False, False, True, True, False],
                           "sources": ["021:0/1", "", "048:25/201", "", "", "", "021:0/1,048:25/201"]})
     frame["sources"] = frame["sources"].astype("str")
+    frame["note"] = pd.Series([None, None, None, "jump", None, "gap", None], dtype=object)
     whole, sliced = tmp_path / "whole.parquet", tmp_path / "sliced.parquet"
     frame.to_parquet(whole, index=False)
-    jobs_track.write_parquet_slices(frame, sliced, rows=3)
+    write_parquet(frame, sliced, slice_rows=3)
     assert pq.ParquetFile(sliced).metadata.num_row_groups == 3
     assert pq.read_schema(sliced).equals(pq.read_schema(whole), check_metadata=True)
     pd.testing.assert_frame_equal(pd.read_parquet(sliced), pd.read_parquet(whole))
