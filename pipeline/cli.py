@@ -78,6 +78,7 @@ def _decoding_options(p: argparse.ArgumentParser) -> None:
     p.add_argument("--format", choices=FORMATS, help="container format (default: detected)")
 
 
+RAISED_SHOWN = 10  # aircraft listed on stdout whose sigma the per-aircraft guard raised; the JSON has all
 SENSORS_HELP = "sensor positions (TOML [[sensor]] tables)"
 SENSORS_OPTIONAL_HELP = ("sensor positions (TOML [[sensor]] tables); needed when radar plots are used, "
                          "not for ADS-B alone")
@@ -414,8 +415,19 @@ def _noise_text(noise) -> str:
         return ""
     cols = [c for c in ("sensor_id", "component", "motion", "unit", "declared_from", "declared_sigma",
                         "estimated_sigma", "residuals", "estimated") if c in noise]
-    return (f"\n\nMeasurement noise estimated from the residuals ({noise.attrs.get('passes')} passes):\n"
+    text = (f"\n\nMeasurement noise estimated from the residuals ({noise.attrs.get('passes')} passes):\n"
             + noise[cols].to_string(index=False, float_format=lambda v: f"{v:.4g}"))
+    import pandas as pd
+
+    raised = pd.DataFrame(noise.attrs.get("aircraft", []))
+    if len(raised):
+        shown = raised.sort_values("estimated_sigma_m", ascending=False).head(RAISED_SHOWN)
+        more = len(raised) - len(shown)
+        text += (f"\n\nSigma raised for {len(raised)} aircraft: at its class's sigma over 1 % of the "
+                 "aircraft's own residuals lay beyond the gate:\n"
+                 + shown.to_string(index=False, float_format=lambda v: f"{v:.4g}")
+                 + (f"\n... and {more} more in the JSON summary" if more else ""))
+    return text
 
 
 def cmd_conflicts(args) -> int:

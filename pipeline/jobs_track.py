@@ -301,6 +301,7 @@ def _estimate_noise(meas: pd.DataFrame, sensors: pd.DataFrame, options: TrackOpt
     table.loc[timing, "estimated_sigma"] = table.loc[timing, "estimated_sigma_s"]
     table = table.drop(columns="estimated_sigma_s")
     table.attrs["passes"] = est.passes
+    table.attrs["aircraft"] = est.aircraft.to_dict("records")  # the per-aircraft guard's raises
     return est.measurements, table
 
 
@@ -324,7 +325,9 @@ def summary(result: TrackJobResult) -> dict:
     if result.noise is not None:
         doc["noise"] = {"passes": result.noise.attrs.get("passes"),
                         "sensors": [{k: json_value(v) for k, v in r.items()}
-                                    for r in result.noise.to_dict("records")]}
+                                    for r in result.noise.to_dict("records")],
+                        "aircraft_raised": [{k: json_value(v) for k, v in r.items()}
+                                            for r in result.noise.attrs.get("aircraft", [])]}
     return doc
 
 

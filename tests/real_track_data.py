@@ -13,7 +13,9 @@ import pandas as pd
 from pipeline.track import Plane, TrackerConfig, nacp_covariance
 from pipeline.track.noise import (
     KT_PER_M_S,
+    MIN_AIRCRAFT_RESIDUALS,
     SURFACE_SPEED_KT,
+    aircraft_tail,
     along_across,
     fit_timing,
     ground_velocity,
@@ -80,7 +82,8 @@ def _covariances(var, var_t, v) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
 
 
 def gap_experiment(tracks, cfg: TrackerConfig, rng, repeats: int = 1, gaps_per_track: int = 6,
-                   noise: str = "declared", passes: int = 6, timing: bool = False) -> dict:
+                   noise: str = "declared", passes: int = 6, timing: bool = False,
+                   per_aircraft: bool = False) -> dict:
     """Mean (and `_median`) error (m) at the deleted reports, per gap-length bin: the IMM's forward
     prediction, its smoothed fill, holding the last report, and a straight line from the velocity over
     the last 10 s of reports. noise "estimate": before the scored pass, the ADS-B sigma is rescaled per
@@ -88,9 +91,11 @@ def gap_experiment(tracks, cfg: TrackerConfig, rng, repeats: int = 1, gaps_per_t
     (pipeline.track.noise.variance_ratio, `passes` passes); the deleted reports are never used. The
     factors per level are in the result under "scales". timing: also an along-track timing term per
     level (pipeline.track.noise.fit_timing, ground vectors as ground_velocity from the kept reports),
-    its sigma_t (s) per level under "timing"."""
+    its sigma_t (s) per level under "timing". per_aircraft (with "estimate", isotropic): then the
+    per-aircraft gate-share guard of pipeline.track.noise per track (MIN_AIRCRAFT_RESIDUALS), its sigma
+    factors under "raised"."""
     rows = []
-    scales_out, timing_out = [], []
+    scales_out, timing_out, raised_out = [], [], []
     for _ in range(repeats):
         cut = []
         for tr in tracks:
@@ -145,10 +150,26 @@ def gap_experiment(tracks, cfg: TrackerConfig, rng, repeats: int = 1, gaps_per_t
                         scale[v] *= variance_ratio(q[sel], 2)
             scales_out.append({float(np.sqrt(v)): float(np.sqrt(s)) for v, s in scale.items()})
             timing_out.append({float(np.sqrt(v)): float(np.sqrt(s)) for v, s in var_t.items()})
-        for tr, keep, gaps, vk in cut:
+        raised = np.ones(len(cut))
+        if noise == "estimate" and per_aircraft and not timing:
+            for _ in range(passes):
+                moved = 0.0
+                for i, (tr, keep, _, _) in enumerate(cut):
+                    var = tr["var"][keep] * np.array([scale[v] for v in tr["var"][keep]]) * raised[i] ** 2
+                    zeros = np.zeros(len(var))
+                    run = filter_plane(cfg, tr["t"][keep], tr["e"][keep], tr["n"][keep], var, zeros, var)
+                    q = plane_forms(run, tr["e"][keep], tr["n"][keep], var, zeros, var)
+                    if np.isfinite(q).sum() >= MIN_AIRCRAFT_RESIDUALS:
+                        new = max(raised[i], raised[i] * np.sqrt(aircraft_tail(q, 2)))
+                        moved, raised[i] = max(moved, new / raised[i] - 1.0), new
+                if moved <= 0.01:
+                    break
+            raised_out.append(raised.copy())
+        for (tr, keep, gaps, vk), k in zip(cut, raised, strict=True):
             t, e, n = tr["t"], tr["e"], tr["n"]
             lk = tr["var"][keep]
-            cov = _covariances(lk * np.array([scale[v] for v in lk]), np.array([var_t[v] for v in lk]), vk)
+            cov = _covariances(lk * np.array([scale[v] for v in lk]) * k**2, np.array([var_t[v] for v in lk]),
+                               vk)
             run = filter_plane(cfg, t[keep], e[keep], n[keep], *cov)
             tk, ek, nk = t[keep], e[keep], n[keep]
             for _, length, inside in gaps:
@@ -177,4 +198,6 @@ def gap_experiment(tracks, cfg: TrackerConfig, rng, repeats: int = 1, gaps_per_t
         out["scales"] = scales_out
     if timing_out and timing:
         out["timing"] = timing_out
+    if raised_out:
+        out["raised"] = raised_out
     return out

@@ -12,6 +12,7 @@ from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
+import pandas as pd
 import pytest
 from real_track_data import REAL
 
@@ -19,7 +20,7 @@ from asterix.encode import encode_frame
 from pipeline import jobs
 from pipeline.cli import main
 from pipeline.jobs_conflict import ConflictOptions, conflict_job
-from pipeline.jobs_track import TrackOptions, track_job
+from pipeline.jobs_track import TrackOptions, summary, track_job
 
 INJECTED_M = 20.0  # the simulator's ADS-B position sigma per axis for this recording
 DECLARED_M = 50.0
@@ -192,6 +193,14 @@ def test_real_v023_recording_is_tracked_with_a_declared_sigma(tmp_path):
     # 1 Hz approach into 112 (--noise declared, 30 m: 194 and 106); 556 and 195 on 2026-11-23, VLG7821 4
     ac = r.result.aircraft.set_index("aircraft_id")
     assert ac["gated"].sum() < 700 and ac["segments"].sum() < 250 and ac.loc["344282", "segments"] <= 10
+    # VLG7782 (344441) taxis with positions that jump 15-17 m back and forth (0.6 % of the surface class's
+    # reports): at the class's 2.8 m its track broke into 33 segments, 155 reports gated (2026-11-23). The
+    # per-aircraft guard raises its surface sigma alone (5.7 m on 2026-11-23): 1 segment, 1 gated report
+    raised = pd.DataFrame(r.noise.attrs["aircraft"])
+    assert raised["aircraft_id"].tolist() == ["344441"] and raised["motion"].tolist() == ["surface"]
+    assert surface["estimated_sigma"] < raised["estimated_sigma_m"].iloc[0] < airborne["estimated_sigma"]
+    assert ac.loc["344441", "segments"] <= 3 and ac.loc["344441", "gated"] <= 20
+    assert [a["aircraft_id"] for a in summary(r)["noise"]["aircraft_raised"]] == ["344441"]
     assert math.isfinite(r.parameters["adsb_sigma_m"]) and r.parameters["adsb_sigma_m"] == 30.0
 
 

@@ -19,7 +19,7 @@ with speed while the across-track one does not (fit_timing fits both from the re
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import NamedTuple
 
 import numpy as np
@@ -57,6 +57,14 @@ GATE_SHARE_MAX = 0.01
 # SURFACE_SPEED_KT: slower, 0.1 s of jitter is under 3 m along track, inseparable from the position noise.
 TIMING = "timing"
 VELOCITY_HOLD_S = 5.0
+# The gate-share guard also per aircraft within an isotropic ADS-B class: restarts happen per aircraft, and
+# the position error is the avionics' (on the real 0.23 recording a few taxiing aircraft report positions
+# that jump 15-17 m back and forth, in a surface class whose many parked aircraft scatter ~1 m). Only
+# aircraft with this many residuals in the class: fewer cannot place a 1 % tail.
+MIN_AIRCRAFT_RESIDUALS = 100
+AIRCRAFT_GUARD = ("surface",)
+AIRCRAFT_COLUMNS = ["aircraft_id", "sensor_id", "motion", "declared_sigma_m", "class_sigma_m",
+                    "estimated_sigma_m", "residuals"]
 
 
 def quadratic_forms(res: np.ndarray, R: np.ndarray, HPH: np.ndarray, radial: np.ndarray | None = None):
@@ -100,11 +108,26 @@ def variance_ratio(q: np.ndarray, dof: int) -> float:
     """The factor by which the variance in use should be multiplied: the mean of q / dof after the
     gross-error cut (q / dof above GROSS_SIGMAS^2 times its robust level), raised where needed so that
     at most GATE_SHARE_MAX of the q kept lie beyond the GATE_PROBABILITY quantile of chi-square(dof)."""
+    q = _below_gross(q, dof)
+    return float(max(np.mean(q / dof), _tail(q, dof)))
+
+
+def _below_gross(q: np.ndarray, dof: int) -> np.ndarray:
+    """The finite q whose q / dof lies within GROSS_SIGMAS^2 times its robust (median-based) level."""
     q = q[np.isfinite(q)]
     level = np.median(q / dof) / (float(chi2.median(dof)) / dof)
-    q = q[q / dof <= GROSS_SIGMAS**2 * level]
-    tail = np.quantile(q, 1.0 - GATE_SHARE_MAX) / float(chi2.ppf(GATE_PROBABILITY, dof))
-    return float(max(np.mean(q / dof), tail))
+    return q[q / dof <= GROSS_SIGMAS**2 * level]
+
+
+def _tail(q: np.ndarray, dof: int) -> float:
+    """The factor on the variance that leaves GATE_SHARE_MAX of q beyond the GATE_PROBABILITY quantile
+    of chi-square(dof) (below 1 where fewer lie beyond it already)."""
+    return float(np.quantile(q, 1.0 - GATE_SHARE_MAX) / float(chi2.ppf(GATE_PROBABILITY, dof)))
+
+
+def aircraft_tail(q: np.ndarray, dof: int) -> float:
+    """The gate-share factor of one aircraft's q in a class: `_tail` below the gross-error cut."""
+    return _tail(_below_gross(q, dof), dof)
 
 
 def smoothed_at_reports(run) -> tuple[np.ndarray, np.ndarray]:
@@ -223,6 +246,32 @@ def _smallest_factor(share, share_max: float, top: float = 1e4) -> float:
     return float(np.exp(hi))
 
 
+def _scaled(cov0, k_along, k_across, var_t, vv, site, radial) -> np.ndarray:
+    """The covariances in use: cov0 rescaled per row (radars with a site along and across the line of
+    sight, the rest isotropically) plus the ADS-B timing term var_t v v^T."""
+    cov = rescale(cov0, k_along, k_across, None) + var_t[:, None, None] * vv
+    cov[site] = rescale(cov0[site], k_along[site], k_across[site], radial[site])
+    return cov
+
+
+def _raise_aircraft(q: np.ndarray, sel: np.ndarray, ident: np.ndarray, raised: np.ndarray,
+                    min_rows: int) -> float:
+    """Raise (in place) the sigma factor over its class of each aircraft in `sel` with at least min_rows
+    residuals so that at most GATE_SHARE_MAX of its own lie beyond the gate (never below 1: the class's
+    factor). Returns the largest relative move."""
+    rows = np.flatnonzero(sel)
+    order = rows[np.argsort(ident[rows], kind="stable")]
+    moved = 0.0
+    for part in np.split(order, np.flatnonzero(np.diff(ident[order])) + 1):
+        if len(part) < min_rows:
+            continue
+        old = raised[part[0]]
+        new = max(old, old * np.sqrt(aircraft_tail(q[part], 2)))
+        raised[part] = new
+        moved = max(moved, abs(new / old - 1.0))
+    return moved
+
+
 @dataclass
 class NoiseEstimate:
     """measurements: the input with its covariances rescaled; sensors: one row per sensor and component
@@ -231,11 +280,14 @@ class NoiseEstimate:
     rows, scale = estimated / declared sigma, residuals used, estimated: False when too few residuals,
     so the declared sigma was kept (timing: no term fitted, 0 s), declared_from "nacp" | "declared"
     (ADS-B without NACp) | "sensor" (radar), estimated_sigma_m, estimated_sigma_s: the timing row's
-    sigma_t (s), NaN on the others); passes run."""
+    sigma_t (s), NaN on the others); passes run; aircraft: one row per aircraft and class whose sigma the
+    per-aircraft guard raised (aircraft_id, sensor_id, motion, declared_sigma_m, class_sigma_m,
+    estimated_sigma_m, residuals)."""
 
     measurements: pd.DataFrame
     sensors: pd.DataFrame
     passes: int
+    aircraft: pd.DataFrame = field(default_factory=lambda: pd.DataFrame(columns=AIRCRAFT_COLUMNS))
 
 
 def _radials(meas: pd.DataFrame, sites: dict[str, tuple[float, float]] | None) -> np.ndarray:
@@ -395,7 +447,8 @@ def surface_mask(meas: pd.DataFrame, speed_m_s: np.ndarray) -> np.ndarray:
 def estimate_noise(measurements: pd.DataFrame, *, sites: dict[str, tuple[float, float]] | None = None,
                    config: TrackerConfig | None = None, tpm: str | None = None, max_coast_s: float = 60.0,
                    passes: int = 6, min_residuals: int = 30, tol: float = 0.01,
-                   timing: bool = False) -> NoiseEstimate:
+                   timing: bool = False, aircraft_guard: tuple[str, ...] = AIRCRAFT_GUARD,
+                   min_aircraft_residuals: int = MIN_AIRCRAFT_RESIDUALS) -> NoiseEstimate:
     """Rescale each sensor's covariances to its residual scatter (see the module docstring).
 
     sites: radar sensor_id -> (latitude, longitude) of its site, for separate range and azimuth factors
@@ -418,6 +471,8 @@ def estimate_noise(measurements: pd.DataFrame, *, sites: dict[str, tuple[float, 
     codes = keys = None
     cov = cov0
     aircraft = _aircraft(meas, cov0, radial, velocity)
+    ident = pd.factorize(meas["aircraft_id"].astype(str), sort=True)[0]
+    raised = np.ones(len(meas))  # per row: an aircraft's sigma factor over its ADS-B class's (>= 1)
     done = 0
     for _ in range(passes):
         fp = _forms(aircraft, len(meas), cov, config)
@@ -466,8 +521,21 @@ def estimate_noise(measurements: pd.DataFrame, *, sites: dict[str, tuple[float, 
             new_across = np.clip(k_across[c] * np.sqrt(ratio[1]), *SCALE_LIMITS)
             moved = max(moved, abs(new_along / k_along[c] - 1.0), abs(new_across / k_across[c] - 1.0))
             k_along[c], k_across[c] = new_along, new_across
-        cov = rescale(cov0, k_along[codes], k_across[codes], None) + var_t[codes][:, None, None] * vv
-        cov[site] = rescale(cov0[site], k_along[codes][site], k_across[codes][site], radial[site])
+        cov = _scaled(cov0, k_along[codes] * raised, k_across[codes], var_t[codes], vv, site, radial)
+        if moved <= tol:
+            break
+    own = [c for c, key in enumerate(keys) if key[1] == "adsb" and not key[2] and key[5] in aircraft_guard
+           and not timed[c] and used[c] >= min_residuals]
+    used_rows = np.zeros(len(meas), bool)
+    in_own = np.bincount(ident[np.isin(codes, own)], minlength=ident.max(initial=0) + 1)
+    guarded = [a for a in aircraft if in_own[ident[a.rows[0]]] >= min_aircraft_residuals]
+    for _ in range(passes if guarded else 0):  # the per-aircraft guard, on the converged class factors
+        q = _forms(guarded, len(meas), cov, config).q
+        used_rows = np.isfinite(q[:, 0])
+        done += 1
+        moved = max(_raise_aircraft(q[:, 0], (codes == c) & np.isfinite(q[:, 0]), ident, raised,
+                                    min_aircraft_residuals) for c in own)
+        cov = _scaled(cov0, k_along[codes] * raised, k_across[codes], var_t[codes], vv, site, radial)
         if moved <= tol:
             break
     rows = []
@@ -490,4 +558,23 @@ def estimate_noise(measurements: pd.DataFrame, *, sites: dict[str, tuple[float, 
     sensors = sensors.rename(columns={"sigma_s": "estimated_sigma_s"})
     sensors = sensors[[c for c in sensors.columns if c != "estimated_sigma_s"] + ["estimated_sigma_s"]]
     out = meas.assign(cov_ee_m2=cov[:, 0, 0], cov_en_m2=cov[:, 0, 1], cov_nn_m2=cov[:, 1, 1])
-    return NoiseEstimate(out.set_axis(measurements.index), sensors, done)
+    return NoiseEstimate(out.set_axis(measurements.index), sensors, done,
+                         _raised_table(meas, codes, keys, k_along, raised, used_rows))
+
+
+def _raised_table(meas: pd.DataFrame, codes, keys, k_along, raised, used_rows) -> pd.DataFrame:
+    """NoiseEstimate.aircraft: the aircraft and classes the per-aircraft guard raised."""
+    sel = raised > 1.0
+    if not sel.any():
+        return pd.DataFrame(columns=AIRCRAFT_COLUMNS)
+    frame = pd.DataFrame({"aircraft_id": meas["aircraft_id"].astype(str).to_numpy()[sel], "code": codes[sel],
+                          "raised": raised[sel], "used": used_rows[sel]})
+    out = frame.groupby(["aircraft_id", "code"], sort=True).agg(raised=("raised", "first"),
+                                                               residuals=("used", "sum")).reset_index()
+    key = [keys[c] for c in out["code"]]
+    declared = np.sqrt([k[3] for k in key])
+    out["class_sigma_m"] = declared * k_along[out["code"].to_numpy()]
+    out = out.assign(sensor_id=[k[0] for k in key], motion=[k[5] for k in key], declared_sigma_m=declared,
+                     estimated_sigma_m=out["class_sigma_m"] * out["raised"],
+                     residuals=out["residuals"].astype(int))
+    return out[AIRCRAFT_COLUMNS]
