@@ -57,10 +57,12 @@ GATE_SHARE_MAX = 0.01
 # SURFACE_SPEED_KT: slower, 0.1 s of jitter is under 3 m along track, inseparable from the position noise.
 TIMING = "timing"
 VELOCITY_HOLD_S = 5.0
-# The gate-share guard also per aircraft within an isotropic ADS-B class: restarts happen per aircraft, and
-# the position error is the avionics' (on the real 0.23 recording a few taxiing aircraft report positions
-# that jump 15-17 m back and forth, in a surface class whose many parked aircraft scatter ~1 m). Only
-# aircraft with this many residuals in the class: fewer cannot place a 1 % tail.
+# The gate-share guard also per aircraft in the surface ADS-B classes (AIRCRAFT_GUARD): restarts happen per
+# aircraft, and the position error is the avionics' (on the real 0.23 recording a taxiing aircraft reports
+# positions that jump 15-17 m back and forth, in a surface class whose many parked aircraft scatter ~1 m).
+# Not airborne: there the heavy tail is late time stamps, and raising an isotropic sigma for them made
+# predictions through gaps worse (docs/tracker.md). Only aircraft with at least MIN_AIRCRAFT_RESIDUALS
+# residuals in the class: fewer cannot place a 1 % tail.
 MIN_AIRCRAFT_RESIDUALS = 100
 AIRCRAFT_GUARD = ("surface",)
 AIRCRAFT_COLUMNS = ["aircraft_id", "sensor_id", "motion", "declared_sigma_m", "class_sigma_m",
@@ -254,19 +256,21 @@ def _scaled(cov0, k_along, k_across, var_t, vv, site, radial) -> np.ndarray:
     return cov
 
 
-def _raise_aircraft(q: np.ndarray, sel: np.ndarray, ident: np.ndarray, raised: np.ndarray,
+def _raise_aircraft(q: np.ndarray, in_class: np.ndarray, ident: np.ndarray, raised: np.ndarray,
                     min_rows: int) -> float:
-    """Raise (in place) the sigma factor over its class of each aircraft in `sel` with at least min_rows
-    residuals so that at most GATE_SHARE_MAX of its own lie beyond the gate (never below 1: the class's
-    factor). Returns the largest relative move."""
-    rows = np.flatnonzero(sel)
+    """Raise (in place) the sigma factor over the class of each aircraft's rows in `in_class` whose finite
+    q number at least min_rows, so that at most GATE_SHARE_MAX of them lie beyond the gate; the factor
+    never falls (recomputed from scratch it flipped between two values as gating decisions changed).
+    Returns the largest relative move."""
+    rows = np.flatnonzero(in_class)
     order = rows[np.argsort(ident[rows], kind="stable")]
     moved = 0.0
     for part in np.split(order, np.flatnonzero(np.diff(ident[order])) + 1):
-        if len(part) < min_rows:
+        own = q[part]
+        if np.isfinite(own).sum() < min_rows:
             continue
         old = raised[part[0]]
-        new = max(old, old * np.sqrt(aircraft_tail(q[part], 2)))
+        new = max(old, old * np.sqrt(aircraft_tail(own, 2)))
         raised[part] = new
         moved = max(moved, abs(new / old - 1.0))
     return moved
@@ -456,7 +460,10 @@ def estimate_noise(measurements: pd.DataFrame, *, sites: dict[str, tuple[float, 
     sensor's pooled factor; a sensor with fewer keeps its declared covariance. timing: ADS-B classes with
     at least min_residuals reports faster than SURFACE_SPEED_KT also get an along-track timing term
     sigma_t^2 v v^T (fit_timing; v from ground_velocity); False (default): isotropic only. Stops after
-    `passes` passes, or once no sigma moves by more than tol. config / tpm / max_coast_s as for `track`."""
+    `passes` passes, or once no sigma moves by more than tol. aircraft_guard: the ADS-B motions ("surface",
+    "airborne") whose isotropic classes then get the per-aircraft gate-share guard, for aircraft with at
+    least min_aircraft_residuals residuals in the class (up to `passes` more passes; () turns it off).
+    config / tpm / max_coast_s as for `track`."""
     if passes < 1:
         raise ValueError(f"passes {passes!r}: must be >= 1")
     config = TrackerConfig(**{**(config or TrackerConfig(modes=default_modes())).__dict__,
@@ -521,7 +528,7 @@ def estimate_noise(measurements: pd.DataFrame, *, sites: dict[str, tuple[float, 
             new_across = np.clip(k_across[c] * np.sqrt(ratio[1]), *SCALE_LIMITS)
             moved = max(moved, abs(new_along / k_along[c] - 1.0), abs(new_across / k_across[c] - 1.0))
             k_along[c], k_across[c] = new_along, new_across
-        cov = _scaled(cov0, k_along[codes] * raised, k_across[codes], var_t[codes], vv, site, radial)
+        cov = _scaled(cov0, k_along[codes], k_across[codes], var_t[codes], vv, site, radial)
         if moved <= tol:
             break
     own = [c for c, key in enumerate(keys) if key[1] == "adsb" and not key[2] and key[5] in aircraft_guard
@@ -533,8 +540,7 @@ def estimate_noise(measurements: pd.DataFrame, *, sites: dict[str, tuple[float, 
         q = _forms(guarded, len(meas), cov, config).q
         used_rows = np.isfinite(q[:, 0])
         done += 1
-        moved = max(_raise_aircraft(q[:, 0], (codes == c) & np.isfinite(q[:, 0]), ident, raised,
-                                    min_aircraft_residuals) for c in own)
+        moved = max(_raise_aircraft(q[:, 0], codes == c, ident, raised, min_aircraft_residuals) for c in own)
         cov = _scaled(cov0, k_along[codes] * raised, k_across[codes], var_t[codes], vv, site, radial)
         if moved <= tol:
             break
