@@ -314,6 +314,10 @@ def test_per_aircraft_guard_raises_only_the_jittery_surface_aircraft():
     np.testing.assert_allclose(np.sqrt(est.measurements.loc[jit, "cov_ee_m2"]), raised)
     np.testing.assert_allclose(est.measurements.loc[~jit, "cov_ee_m2"],
                                without.measurements.loc[~jit, "cov_ee_m2"])
+    # alone in its class, JIT is the class: the class's own guard raises it, and no aircraft is listed
+    alone = estimate_noise(meas[jit])
+    assert alone.aircraft.empty
+    assert 0.8 * 16.0 / np.sqrt(chi2.ppf(0.999, 2)) < alone.sensors["estimated_sigma_m"].iloc[0] < 1.5 * 4.5
     guarded, fragmented = (track(e.measurements).aircraft.set_index("aircraft_id").loc["JIT"]
                            for e in (est, without))
     assert fragmented["segments"] > 5

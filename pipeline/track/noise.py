@@ -257,10 +257,11 @@ def _scaled(cov0, k_along, k_across, var_t, vv, site, radial) -> np.ndarray:
 
 
 def _raise_aircraft(q: np.ndarray, in_class: np.ndarray, ident: np.ndarray, raised: np.ndarray,
-                    min_rows: int) -> float:
+                    min_rows: int, tol: float) -> float:
     """Raise (in place) the sigma factor over the class of each aircraft's rows in `in_class` whose finite
     q number at least min_rows, so that at most GATE_SHARE_MAX of them lie beyond the gate; the factor
-    never falls (recomputed from scratch it flipped between two values as gating decisions changed).
+    never falls (recomputed from scratch it flipped between two values as gating decisions changed), and
+    a raise of tol or less is none (an aircraft alone in its class already meets the class's guard).
     Returns the largest relative move."""
     rows = np.flatnonzero(in_class)
     order = rows[np.argsort(ident[rows], kind="stable")]
@@ -270,7 +271,8 @@ def _raise_aircraft(q: np.ndarray, in_class: np.ndarray, ident: np.ndarray, rais
         if np.isfinite(own).sum() < min_rows:
             continue
         old = raised[part[0]]
-        new = max(old, old * np.sqrt(aircraft_tail(own, 2)))
+        factor = np.sqrt(aircraft_tail(own, 2))
+        new = old * factor if factor > 1.0 + tol else old
         raised[part] = new
         moved = max(moved, abs(new / old - 1.0))
     return moved
@@ -540,7 +542,8 @@ def estimate_noise(measurements: pd.DataFrame, *, sites: dict[str, tuple[float, 
         q = _forms(guarded, len(meas), cov, config).q
         used_rows = np.isfinite(q[:, 0])
         done += 1
-        moved = max(_raise_aircraft(q[:, 0], codes == c, ident, raised, min_aircraft_residuals) for c in own)
+        moved = max(_raise_aircraft(q[:, 0], codes == c, ident, raised, min_aircraft_residuals, tol)
+                    for c in own)
         cov = _scaled(cov0, k_along[codes] * raised, k_across[codes], var_t[codes], vv, site, radial)
         if moved <= tol:
             break
