@@ -30,7 +30,7 @@ from .config import TrackerConfig, default_modes
 from .covariance import nacv_variance
 from .frame import Plane
 from .imm import STATUS_STARTED, STATUS_UPDATED
-from .plane import SMOOTHERS, estimate, filter_plane
+from .plane import SMOOTHERS, PlaneRun, estimate, filter_plane
 
 REQUIRED = ("time", "sensor_id", "sensor_kind", "aircraft_id", "latitude", "longitude", "flight_level",
             "cov_ee_m2", "cov_en_m2", "cov_nn_m2")
@@ -245,7 +245,21 @@ def _smoothed_turn_rate(qt, v_loc, segment, mode_weighted_dps, speed) -> np.ndar
     return np.where(np.isfinite(rate) & (speed > 1.0), rate, mode_weighted_dps)
 
 
-def _track_one(aircraft_id, group, epoch, config, args, names, step_s, smooth, smoother="rts") -> dict:
+@dataclass
+class FilteredReports:
+    """One aircraft's reports as the filter saw them: the rows kept (sorted by time, then sensor), their
+    seconds since the epoch, the plane, the filter's run over them, and per sensor the rows out of range."""
+
+    rows: pd.DataFrame
+    t: np.ndarray
+    plane: Plane
+    run: PlaneRun
+    far: pd.Series
+
+
+def filter_reports(group: pd.DataFrame, epoch: pd.Timestamp, config: TrackerConfig) -> FilteredReports:
+    """Run the IMM forward over one aircraft's reports (finite positions and covariances; ``track``'s
+    schema), in the plane around their median, counting seconds from ``epoch``."""
     g = group.assign(_t=(group["time"] - epoch).dt.total_seconds().to_numpy())
     g = g.sort_values(["_t", "sensor_id"], kind="stable")
     t = g["_t"].to_numpy(float)
@@ -278,9 +292,15 @@ def _track_one(aircraft_id, group, epoch, config, args, names, step_s, smooth, s
             nac = ok & np.isfinite(var_nac)
             var_v0[nac] = var_nac[nac]
     var_v0[np.isnan(var_v0)] = config.sigma_init_speed_mps ** 2
-    n = len(g)
     run = filter_plane(config, t, ze, zn, cov[:, 0, 0], cov[:, 0, 1], cov[:, 1, 1],
                        fl=g["flight_level"].to_numpy(float), ve0=ve0, vn0=vn0, var_v0=var_v0)
+    return FilteredReports(g, t, plane, run, far)
+
+
+def _track_one(aircraft_id, group, epoch, config, args, names, step_s, smooth, smoother="rts") -> dict:
+    filtered = filter_reports(group, epoch, config)
+    g, t, plane, run, far = filtered.rows, filtered.t, filtered.plane, filtered.run, filtered.far
+    n = len(g)
     status, nis, segment = run.status, run.nis, run.segment
     accepted = run.accepted
     acc_idx = np.flatnonzero(accepted)
