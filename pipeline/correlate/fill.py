@@ -20,37 +20,46 @@ FILLS = ("hold", "predict")
 Predictor = Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]]
 
 
+COVARIANCE = ["cov_ee_m2", "cov_en_m2", "cov_nn_m2"]
+
+
 def track_predictor(reports: pd.DataFrame, reference: pd.Timestamp, max_coast_s: float) -> Predictor | None:
     """Predicted (latitude, longitude) at times given as seconds after ``reference`` (NaN where no
-    prediction exists); None when the reports cannot be tracked (no usable covariance)."""
-    from pipeline.track import predict, track
+    prediction exists); None when the reports cannot be tracked (no usable covariance). The numbers of
+    ``track(reports, max_coast_s=...)`` then ``predict(state_at(t), ahead)``, without the track table or
+    a frame per prediction: the filter runs once, every prediction of a call in one kernel call."""
+    from pipeline.track import TrackerConfig, default_modes
+    from pipeline.track.predict import predict_ends
+    from pipeline.track.tracker import filter_reports
 
-    rows = reports.assign(aircraft_id="A").dropna(subset=["cov_ee_m2", "cov_en_m2", "cov_nn_m2"])
+    finite = np.isfinite(reports[["latitude", "longitude", *COVARIANCE]].to_numpy(dtype=float)).all(axis=1)
+    rows = reports.loc[finite]
     if rows.empty:
         return None
-    result = track(rows, max_coast_s=max_coast_s, keep_states=True)
-    if result.tracks.empty:
-        return None
+    config = TrackerConfig(modes=default_modes(), max_coast_s=max_coast_s)  # track()'s defaults
+    epoch = rows["time"].min().floor("D")  # as track() counts its seconds
+    filtered = filter_reports(rows, epoch, config)
+    run, plane = filtered.run, filtered.plane
+    accepted = np.flatnonzero(run.accepted)
+    acc_t = run.t[accepted]
+    acc_time = epoch + pd.to_timedelta(acc_t, unit="s")  # each update's instant, as state_at gives it
 
     def at(seconds: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        seconds = np.asarray(seconds, float)
+        seconds = np.asarray(seconds, float).reshape(-1)
         lat, lon = np.full(seconds.shape, np.nan), np.full(seconds.shape, np.nan)
-        for i, s in enumerate(seconds):
-            when = reference + pd.to_timedelta(s, unit="s")
-            try:
-                state = result.state_at("A", when)
-            except ValueError:  # before the first report
-                continue
-            ahead = (when - state.time).total_seconds()
-            if ahead > max_coast_s:
-                continue
-            if ahead <= 1e-9:
-                la, lo = state.plane.inverse(np.array([state.mu @ state.x[:, 0]]),
-                                             np.array([state.mu @ state.x[:, 3]]))
-                lat[i], lon[i] = la[0], lo[0]
-                continue
-            p = predict(state, ahead, step_s=min(1.0, ahead))
-            lat[i], lon[i] = p["latitude"].iloc[-1], p["longitude"].iloc[-1]
+        when = reference + pd.to_timedelta(seconds, unit="s")
+        k = np.searchsorted(acc_t, (when - epoch).total_seconds().to_numpy(), side="right") - 1
+        known = k >= 0  # none before the first report
+        ahead = np.full(k.shape, np.inf)
+        ahead[known] = (when[known] - acc_time[k[known]]).total_seconds().to_numpy()
+        coast = known & (ahead > 1e-9) & ~(ahead > max_coast_s)
+        if coast.any():
+            xc, _ = predict_ends(run, accepted[k[coast]], ahead[coast])
+            lat[coast], lon[coast] = plane.inverse(xc[:, 0], xc[:, 3])
+        for i in np.flatnonzero(known & (ahead <= 1e-9)):  # at an update: its posterior, combined
+            mu, x = run.mu[accepted[k[i]]], run.x[accepted[k[i]]]
+            la, lo = plane.inverse(np.array([mu @ x[:, 0]]), np.array([mu @ x[:, 3]]))
+            lat[i], lon[i] = la[0], lo[0]
         return lat, lon
 
     return at
