@@ -65,20 +65,23 @@ def track_predictor(reports: pd.DataFrame, reference: pd.Timestamp, max_coast_s:
     return at
 
 
-def fill_predicted(slotted: pd.DataFrame, slot_s: float, predictor: Predictor | None) -> pd.DataFrame:
-    """The slotted frame (pipeline.correlate.slots.SLOTTED_COLUMNS) with its filled slots after the first
-    non-empty one replaced by the prediction at the slot centre where one exists."""
+def fill_predicted(slotted: dict[str, np.ndarray], slot_s: float, predictor: Predictor | None
+                   ) -> dict[str, np.ndarray]:
+    """The slotted arrays (pipeline.correlate.slots.slot_series) with their filled slots after the first
+    non-empty one replaced by the prediction at the slot centre where one exists (new latitude and
+    longitude arrays; the input is not changed)."""
     if predictor is None:
         return slotted
-    counts = slotted["count"].to_numpy()
+    counts = np.asarray(slotted["count"])
     first = int(np.argmax(counts > 0)) if (counts > 0).any() else len(counts)
-    todo = np.flatnonzero(slotted["filled"].to_numpy(bool) & (np.arange(len(slotted)) > first))
+    todo = np.flatnonzero(np.asarray(slotted["filled"], bool) & (np.arange(len(counts)) > first))
     if not len(todo):
         return slotted
-    centre = slotted["time_of_day"].to_numpy(float)[todo] + 0.5 * slot_s
+    centre = np.asarray(slotted["time_of_day"], float)[todo] + 0.5 * slot_s
     lat, lon = predictor(centre)
     ok = np.isfinite(lat) & np.isfinite(lon)
-    out = slotted.copy()
-    out.loc[out.index[todo[ok]], "latitude"] = lat[ok]
-    out.loc[out.index[todo[ok]], "longitude"] = lon[ok]
+    out = dict(slotted)
+    for name, values in (("latitude", lat), ("longitude", lon)):
+        out[name] = np.array(slotted[name], float)
+        out[name][todo[ok]] = values[ok]
     return out

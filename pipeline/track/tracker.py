@@ -34,6 +34,9 @@ from .plane import SMOOTHERS, PlaneRun, estimate, filter_plane
 
 REQUIRED = ("time", "sensor_id", "sensor_kind", "aircraft_id", "latitude", "longitude", "flight_level",
             "cov_ee_m2", "cov_en_m2", "cov_nn_m2")
+# the columns filter_reports reads (the last three optional)
+FILTER_INPUTS = ("time", "sensor_id", "latitude", "longitude", "flight_level", "cov_ee_m2", "cov_en_m2",
+                 "cov_nn_m2", "ground_speed_kt", "heading_deg", "nucr_nacv")
 M_PER_S_PER_KT = 1852.0 / 3600.0
 FT_PER_FL = 100.0
 MAX_RANGE_M = 3_000_000.0  # reports farther than this from the aircraft's median position are garbage
