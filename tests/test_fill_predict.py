@@ -150,13 +150,19 @@ def _frame(seed: int = 3) -> pd.DataFrame:
     return frame
 
 
-def test_fast_predictor_equals_track_then_predict():
+@pytest.mark.parametrize("sensors", ["categories", "reversed categories", "text"])
+def test_fast_predictor_equals_track_then_predict(sensors):
     """Bit for bit against the old route, at slot-like centres, at every third report time (an update
     exactly: its posterior), just after one, through the dropout up to and past max_coast_s, before the
-    first report; for a reference on the filter's own midnight and one a day earlier."""
+    first report; for a reference on the filter's own midnight and one a day earlier. Reports of the two
+    stations at one instant go in track()'s order: by the sensor's category order, or alphabetically."""
     from pipeline.correlate.fill import track_predictor
 
     frame = _frame()
+    if sensors == "reversed categories":
+        frame["sensor_id"] = frame["sensor_id"].cat.reorder_categories(["021:0/108", "021:0/107"])
+    elif sensors == "text":
+        frame["sensor_id"] = frame["sensor_id"].astype(str)
     max_coast_s = 45.0
     for reference in (T0.floor("D"), T0.floor("D") - pd.Timedelta(days=1)):
         off = (T0 - reference).total_seconds()

@@ -30,16 +30,26 @@ def track_predictor(reports: pd.DataFrame, reference: pd.Timestamp, max_coast_s:
     a frame per prediction: the filter runs once, every prediction of a call in one kernel call."""
     from pipeline.track import TrackerConfig, default_modes
     from pipeline.track.predict import predict_ends
-    from pipeline.track.tracker import filter_reports
+    from pipeline.track.tracker import filter_columns
 
     finite = np.isfinite(reports[["latitude", "longitude", *COVARIANCE]].to_numpy(dtype=float)).all(axis=1)
-    rows = reports.loc[finite]
-    if rows.empty:
+    if not finite.any():
         return None
     config = TrackerConfig(modes=default_modes(), max_coast_s=max_coast_s)  # track()'s defaults
-    epoch = rows["time"].min().floor("D")  # as track() counts its seconds
-    filtered = filter_reports(rows, epoch, config)
-    run, plane = filtered.run, filtered.plane
+    time = reports["time"][finite]
+    epoch = time.min().floor("D")  # as track() counts its seconds
+    t = (time - epoch).dt.total_seconds().to_numpy()
+    order = _track_order(t, reports["sensor_id"][finite])
+
+    def column(name: str) -> np.ndarray:
+        return reports[name][finite].to_numpy(float, na_value=np.nan)[order]  # (nucr_nacv: nullable)
+
+    velocity = {"ground_speed_kt", "heading_deg"} <= set(reports.columns)
+    plane, _, run = filter_columns(
+        config, t[order], *(column(c) for c in ("latitude", "longitude", *COVARIANCE, "flight_level")),
+        ground_speed_kt=column("ground_speed_kt") if velocity else None,
+        heading_deg=column("heading_deg") if velocity else None,
+        nucr_nacv=column("nucr_nacv") if velocity and "nucr_nacv" in reports.columns else None)
     accepted = np.flatnonzero(run.accepted)
     acc_t = run.t[accepted]
     acc_time = epoch + pd.to_timedelta(acc_t, unit="s")  # each update's instant, as state_at gives it
@@ -63,6 +73,18 @@ def track_predictor(reports: pd.DataFrame, reference: pd.Timestamp, max_coast_s:
         return lat, lon
 
     return at
+
+
+def _track_order(t: np.ndarray, sensor: pd.Series) -> np.ndarray:
+    """The order ``track`` filters reports in (its stable sort by time, then sensor_id: a categorical by its
+    categories' order, text alphabetically; missing times and sensors last), by two stable argsorts."""
+    if isinstance(sensor.dtype, pd.CategoricalDtype):
+        key = sensor.cat.codes.to_numpy().astype(np.int64)
+    else:
+        key = pd.factorize(sensor, sort=True)[0].astype(np.int64)
+    key[key < 0] = np.iinfo(np.int64).max
+    by_sensor = np.argsort(key, kind="stable")
+    return by_sensor[np.argsort(t[by_sensor], kind="stable")]
 
 
 def fill_predicted(slotted: dict[str, np.ndarray], slot_s: float, predictor: Predictor | None
