@@ -36,17 +36,17 @@ def track_predictor(reports: pd.DataFrame, reference: pd.Timestamp, max_coast_s:
     if not finite.any():
         return None
     config = TrackerConfig(modes=default_modes(), max_coast_s=max_coast_s)  # track()'s defaults
-    time = reports["time"][finite]
-    epoch = time.min().floor("D")  # as track() counts its seconds
-    t = (time - epoch).dt.total_seconds().to_numpy()
-    order = _track_order(t, reports["sensor_id"][finite])
+    epoch = reports["time"][finite].min().floor("D")  # as track() counts its seconds
+    t = (reports["time"] - epoch).dt.total_seconds().to_numpy()
+    rows = np.flatnonzero(finite)[_track_order(t[finite], reports["sensor_id"][finite])]
 
     def column(name: str) -> np.ndarray:
-        return reports[name][finite].to_numpy(float, na_value=np.nan)[order]  # (nucr_nacv: nullable)
+        return reports[name].to_numpy(float, na_value=np.nan)[rows]  # (nucr_nacv: nullable)
 
     velocity = {"ground_speed_kt", "heading_deg"} <= set(reports.columns)
     plane, _, run = filter_columns(
-        config, t[order], *(column(c) for c in ("latitude", "longitude", *COVARIANCE, "flight_level")),
+        config, t[rows],
+        *(column(c) for c in ("latitude", "longitude", *COVARIANCE, "flight_level")),
         ground_speed_kt=column("ground_speed_kt") if velocity else None,
         heading_deg=column("heading_deg") if velocity else None,
         nucr_nacv=column("nucr_nacv") if velocity and "nucr_nacv" in reports.columns else None)
