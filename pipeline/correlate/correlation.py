@@ -280,11 +280,11 @@ class _Columns:
         self.jump = meas["jump"].fillna(False).astype(bool).to_numpy() if "jump" in meas else None
 
     @functools.cached_property
-    def track_frame(self) -> pd.DataFrame:
-        """The columns the tracker reads (``--fill predict``): a selection, not a copy of their data."""
-        from pipeline.track.tracker import FILTER_INPUTS
+    def track_inputs(self):
+        """The columns the tracker reads (``--fill predict``) as arrays, read on first use."""
+        from pipeline.correlate.fill import TrackInputs
 
-        return self.meas[[c for c in FILTER_INPUTS if c in self.meas]]
+        return TrackInputs(self.meas)
 
     def time_order(self, rows: np.ndarray) -> np.ndarray:
         """``rows`` in sort_by_time's order: stable by time, NaT last."""
@@ -313,9 +313,9 @@ class _Columns:
 class _Source:
     """One sensor source of one aircraft, ready for windows: its reports in time order without repeats
     (time of day, latitude, longitude), the times of its repeats and of its ADS-B jumps, and (for
-    ``--fill predict``) its reports as a frame."""
+    ``--fill predict``) its track predictor."""
 
-    def __init__(self, cols: _Columns, rows: np.ndarray, frame: bool = False):
+    def __init__(self, cols: _Columns, rows: np.ndarray, track: bool = False):
         order = cols.time_order(rows)
         meas = cols.meas
         if cols.dup is not None:
@@ -332,17 +332,18 @@ class _Source:
             else:
                 jump = detect_jumps(meas.iloc[kept].reset_index(drop=True)).to_numpy(bool)
             self.jump_t = self.t[jump]
-        self.frame = cols.track_frame.iloc[kept].reset_index(drop=True) if frame else None
+        self._track = (cols, kept) if track else None
         self._predictor: tuple | None = None
 
     def predictor(self, reference: pd.Timestamp, max_coast_s: float):
         """Its track predictor (``--fill predict``; pipeline.correlate.fill), built on first use and
-        shared by all its pairs (the same arguments in one run); its frame is let go of then."""
+        shared by all its pairs (the same arguments in one run)."""
         if self._predictor is None:
-            from pipeline.correlate.fill import track_predictor
+            from pipeline.correlate.fill import rows_predictor
 
-            self._predictor = (track_predictor(self.frame, reference, max_coast_s),)
-            self.frame = None
+            cols, kept = self._track
+            self._predictor = (rows_predictor(cols.track_inputs, kept, reference, max_coast_s),)
+            self._track = None
         return self._predictor[0]
 
     def inside(self, start_s: float, end_s: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -363,7 +364,7 @@ def _aircraft_pairs(cols: _Columns, radar_rows: np.ndarray, other_rows: np.ndarr
 
     def source(kind: str, name: str, rows: np.ndarray) -> _Source:
         if (kind, name) not in made:
-            made[kind, name] = _Source(cols, rows, frame=fill == "predict")
+            made[kind, name] = _Source(cols, rows, track=fill == "predict")
         return made[kind, name]
 
     out = []

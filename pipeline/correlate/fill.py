@@ -21,6 +21,34 @@ Predictor = Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]]
 
 
 COVARIANCE = ["cov_ee_m2", "cov_en_m2", "cov_nn_m2"]
+_NAT = np.iinfo(np.int64).min
+
+
+class TrackInputs:
+    """The columns the tracker reads, as arrays over the rows of a measurement frame, read once per run
+    (each source then takes its rows by position): time in ns (NaT as numpy's), the sensor's sort key in
+    track()'s order (categorical: its categories' order; text: alphabetical; missing: last), floats."""
+
+    def __init__(self, frame: pd.DataFrame):
+        self.time_ns = frame["time"].dt.as_unit("ns").array.asi8
+        sensor = frame["sensor_id"]
+        if isinstance(sensor.dtype, pd.CategoricalDtype):
+            key = sensor.cat.codes.to_numpy().astype(np.int64)
+        else:
+            key = pd.factorize(sensor, sort=True)[0].astype(np.int64)
+        key[key < 0] = np.iinfo(np.int64).max
+        self.sensor_key = key
+        names = ["latitude", "longitude", *COVARIANCE, "flight_level"]
+        if {"ground_speed_kt", "heading_deg"} <= set(frame.columns):  # (NACv only with a velocity)
+            names += [c for c in ("ground_speed_kt", "heading_deg", "nucr_nacv") if c in frame.columns]
+        self.values = {n: _floats(frame[n]) for n in names}
+
+
+def _floats(values: pd.Series) -> np.ndarray:
+    """A column as float64 (a view where it is one already; nullable integers with NaN for <NA>)."""
+    if values.dtype == np.float64:
+        return values.to_numpy()
+    return values.to_numpy(float, na_value=np.nan)
 
 
 def track_predictor(reports: pd.DataFrame, reference: pd.Timestamp, max_coast_s: float) -> Predictor | None:
@@ -28,28 +56,34 @@ def track_predictor(reports: pd.DataFrame, reference: pd.Timestamp, max_coast_s:
     prediction exists); None when the reports cannot be tracked (no usable covariance). The numbers of
     ``track(reports, max_coast_s=...)`` then ``predict(state_at(t), ahead)``, without the track table or
     a frame per prediction: the filter runs once, every prediction of a call in one kernel call."""
+    return rows_predictor(TrackInputs(reports), np.arange(len(reports)), reference, max_coast_s)
+
+
+def rows_predictor(inputs: TrackInputs, rows: np.ndarray, reference: pd.Timestamp, max_coast_s: float
+                   ) -> Predictor | None:
+    """``track_predictor`` of the reports at positions ``rows`` (in time order) of a run's inputs."""
     from pipeline.track import TrackerConfig, default_modes
     from pipeline.track.predict import predict_ends
     from pipeline.track.tracker import filter_columns
 
-    finite = np.isfinite(reports[["latitude", "longitude", *COVARIANCE]].to_numpy(dtype=float)).all(axis=1)
-    if not finite.any():
+    v = inputs.values
+    finite = np.ones(len(rows), bool)
+    for name in ("latitude", "longitude", *COVARIANCE):
+        finite &= np.isfinite(v[name][rows])
+    rows = rows[finite]
+    time_ns = inputs.time_ns[rows]
+    dated = time_ns != _NAT
+    if not dated.any():
         return None
     config = TrackerConfig(modes=default_modes(), max_coast_s=max_coast_s)  # track()'s defaults
-    epoch = reports["time"][finite].min().floor("D")  # as track() counts its seconds
-    t = (reports["time"] - epoch).dt.total_seconds().to_numpy()
-    rows = np.flatnonzero(finite)[_track_order(t[finite], reports["sensor_id"][finite])]
-
-    def column(name: str) -> np.ndarray:
-        return reports[name].to_numpy(float, na_value=np.nan)[rows]  # (nucr_nacv: nullable)
-
-    velocity = {"ground_speed_kt", "heading_deg"} <= set(reports.columns)
+    epoch = pd.Timestamp(time_ns[dated].min(), unit="ns", tz="UTC").floor("D")  # as track() counts seconds
+    t = np.full(len(rows), np.nan)
+    t[dated] = pd.to_timedelta(time_ns[dated] - epoch.value, unit="ns").total_seconds().to_numpy()
+    order = _track_order(t, inputs.sensor_key[rows])
+    rows, t = rows[order], t[order]
     plane, _, run = filter_columns(
-        config, t[rows],
-        *(column(c) for c in ("latitude", "longitude", *COVARIANCE, "flight_level")),
-        ground_speed_kt=column("ground_speed_kt") if velocity else None,
-        heading_deg=column("heading_deg") if velocity else None,
-        nucr_nacv=column("nucr_nacv") if velocity and "nucr_nacv" in reports.columns else None)
+        config, t, *(v[c][rows] for c in ("latitude", "longitude", *COVARIANCE, "flight_level")),
+        **{c: v[c][rows] for c in ("ground_speed_kt", "heading_deg", "nucr_nacv") if c in v})
     accepted = np.flatnonzero(run.accepted)
     acc_t = run.t[accepted]
     acc_time = epoch + pd.to_timedelta(acc_t, unit="s")  # each update's instant, as state_at gives it
@@ -75,14 +109,9 @@ def track_predictor(reports: pd.DataFrame, reference: pd.Timestamp, max_coast_s:
     return at
 
 
-def _track_order(t: np.ndarray, sensor: pd.Series) -> np.ndarray:
-    """The order ``track`` filters reports in (its stable sort by time, then sensor_id: a categorical by its
-    categories' order, text alphabetically; missing times and sensors last), by two stable argsorts."""
-    if isinstance(sensor.dtype, pd.CategoricalDtype):
-        key = sensor.cat.codes.to_numpy().astype(np.int64)
-    else:
-        key = pd.factorize(sensor, sort=True)[0].astype(np.int64)
-    key[key < 0] = np.iinfo(np.int64).max
+def _track_order(t: np.ndarray, key: np.ndarray) -> np.ndarray:
+    """The order ``track`` filters reports in (its stable sort by time, then sensor; missing times last),
+    by two stable argsorts."""
     by_sensor = np.argsort(key, kind="stable")
     return by_sensor[np.argsort(t[by_sensor], kind="stable")]
 
