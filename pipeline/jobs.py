@@ -731,17 +731,22 @@ FAR_SEPARATION_INPUTS = ["sensor_id", "sac", "sic", "rho_nm"]
 
 def correlate_columns(options: CorrelateOptions) -> list[str] | None:
     """The measurement columns a correlate job builds, in schema order: what correlate, mark_once, the
-    filters asked for and far_separations read; None (every column) with ``quality`` or ``fill
-    predict``, whose steps read most of the model. Half the bytes of a row on a large recording."""
+    filters asked for and far_separations read, and with ``fill`` "predict" what the tracker reads; None
+    (every column) with ``quality``, whose steps read most of the model. Half the bytes of a row on a
+    large recording."""
     from pipeline.correlate.correlation import CORRELATION_INPUTS
     from pipeline.model.dedup import DEDUP_KEYS
     from pipeline.model.jumps import JUMP_INPUTS
     from pipeline.model.schema import MEASUREMENT_COLUMNS, column_names
 
-    if options.quality or options.fill != "hold":
+    if options.quality:
         return None
     need = {*CORRELATION_INPUTS, *DEDUP_KEYS, "sensor_kind", "sensor_id", *JUMP_INPUTS,
             *FAR_SEPARATION_INPUTS}
+    if options.fill == "predict":
+        from pipeline.track.tracker import FILTER_INPUTS
+
+        need |= set(FILTER_INPUTS)
     need |= {"nucp_nic"} if options.min_nic is not None else set()
     need |= {"nacp"} if options.min_nacp is not None else set()
     return column_names(need & set(MEASUREMENT_COLUMNS))  # the job-wide flags are added by mark_once

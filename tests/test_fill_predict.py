@@ -8,6 +8,7 @@ import json
 from pathlib import Path
 
 import numpy as np
+import pandas as pd
 import pytest
 from pyproj import Geod
 
@@ -90,3 +91,113 @@ def test_predicted_fills_are_closer_to_truth_in_dropouts(runs):
     assert np.median(err_hold) > 1000.0
     assert np.median(err_pred) < 0.2 * np.median(err_hold)
     assert np.mean(err_pred < err_hold) > 0.9
+
+
+# --- the fast predictor against the tracker's own route (track(), state_at, predict) ---------------------
+
+T0 = pd.Timestamp("2024-05-10T23:58:00Z")  # the flight crosses midnight: the filter's epoch is the 10th
+
+
+def _old_route(reports: pd.DataFrame, reference: pd.Timestamp, max_coast_s: float, seconds: np.ndarray):
+    """What --fill predict computed before: the full track() with filter histories, then per time the state
+    after the last update at or before it, propagated by predict() (1 s steps) and read at its last row."""
+    from pipeline.track import predict, track
+
+    result = track(reports.assign(aircraft_id="A"), max_coast_s=max_coast_s, keep_states=True)
+    lat, lon = np.full(len(seconds), np.nan), np.full(len(seconds), np.nan)
+    for i, s in enumerate(seconds):
+        when = reference + pd.to_timedelta(s, unit="s")
+        try:
+            state = result.state_at("A", when)
+        except ValueError:
+            continue
+        ahead = (when - state.time).total_seconds()
+        if ahead > max_coast_s:
+            continue
+        if ahead <= 1e-9:
+            la, lo = state.plane.inverse(np.array([state.mu @ state.x[:, 0]]),
+                                         np.array([state.mu @ state.x[:, 3]]))
+        else:
+            p = predict(state, ahead, step_s=min(1.0, ahead))
+            la, lo = p["latitude"].to_numpy()[-1:], p["longitude"].to_numpy()[-1:]
+        lat[i], lon[i] = la[0], lo[0]
+    return lat, lon
+
+
+def _frame(seed: int = 3) -> pd.DataFrame:
+    from track_scenarios import fly
+
+    rng = np.random.default_rng(seed)
+    truth = fly((0.0, 0.0), 60.0, 210.0, [(120, 0, 0), (40, -3.0, 0), (100, 0, 0), (80, 0, -1.0), (60, 0, 0)])
+    t = np.concatenate([np.arange(0.25, 250.0, 1.0), np.arange(320.5, 399.0, 1.0)])  # 70 s dropout
+    station = np.where(rng.random(len(t)) < 0.5, "021:0/108", "021:0/107")
+    both = rng.choice(len(t), 40, replace=False)  # the other station at the same instant
+    t = np.concatenate([t, t[both]])
+    station = np.concatenate([station, np.where(station[both] == "021:0/107", "021:0/108", "021:0/107")])
+    e, n = truth.at(t)
+    e, n = e + rng.normal(0, 15.0, len(t)), n + rng.normal(0, 15.0, len(t))
+    ve, vn = truth.velocity_at(t)
+    k = np.ones(len(t))
+    lon, lat, _ = GEOD.fwd(2.0 * k, 41.0 * k, np.degrees(np.arctan2(e, n)), np.hypot(e, n))
+    frame = pd.DataFrame({
+        "time": T0 + pd.to_timedelta(t, unit="s"), "sensor_id": pd.Categorical(station),
+        "sensor_kind": "adsb", "latitude": lat, "longitude": lon, "flight_level": 350.0 - t / 60.0,
+        "cov_ee_m2": 225.0, "cov_en_m2": 0.0, "cov_nn_m2": 225.0,
+        "ground_speed_kt": np.hypot(ve, vn) / 0.514444, "heading_deg": np.degrees(np.arctan2(ve, vn)) % 360.0,
+        "nucr_nacv": pd.array(rng.integers(0, 4, len(t)), dtype="Int8")})
+    frame.loc[frame.index[100], "latitude"] += 0.2  # a jump the gate rejects
+    frame.loc[frame.index[[5, 200]], "cov_nn_m2"] = np.nan  # untracked
+    return frame
+
+
+@pytest.mark.parametrize("sensors", ["categories", "reversed categories", "text"])
+def test_fast_predictor_equals_track_then_predict(sensors):
+    """Bit for bit against the old route, at slot-like centres, at every third report time (an update
+    exactly: its posterior), just after one, through the dropout up to and past max_coast_s, before the
+    first report; for a reference on the filter's own midnight and one a day earlier. Reports of the two
+    stations at one instant go in track()'s order: by the sensor's category order, or alphabetically."""
+    from pipeline.correlate.fill import track_predictor
+
+    frame = _frame()
+    if sensors == "reversed categories":
+        frame["sensor_id"] = frame["sensor_id"].cat.reorder_categories(["021:0/108", "021:0/107"])
+    elif sensors == "text":
+        frame["sensor_id"] = frame["sensor_id"].astype(str)
+    max_coast_s = 45.0
+    for reference in (T0.floor("D"), T0.floor("D") - pd.Timedelta(days=1)):
+        off = (T0 - reference).total_seconds()
+        first = off + 0.25
+        seconds = np.concatenate([
+            off + np.arange(-20.0, 420.0, 10.0) + 5.0,  # slot centres, some before the first report
+            off + np.sort(np.unique((frame["time"] - T0).dt.total_seconds().to_numpy()))[::3],
+            off + np.array([0.25 + 1e-6, 249.25, 249.25 + 44.0, 249.25 + 45.0, 249.25 + 45.5, 300.0,
+                            249.25 + 0.4, 249.25 + 7.9999999, 249.25 + 8.0, 249.25 + 8.0000000004]),
+            [first - 1e-3, first]])
+        new = track_predictor(frame, reference, max_coast_s)(seconds)
+        old = _old_route(frame, reference, max_coast_s, seconds)
+        for a, b in zip(new, old, strict=True):
+            assert np.array_equal(a, b, equal_nan=True), seconds[~((a == b) | (np.isnan(a) & np.isnan(b)))]
+        lat = new[0]
+        assert np.isnan(lat[seconds < first]).all() and np.isfinite(lat[seconds == first]).all()
+        gap = (seconds > off + 249.25 + 45.0) & (seconds < off + 320.5)
+        assert gap.any() and np.isnan(lat[gap]).all()  # past max_coast_s after the last update
+        assert np.isfinite(lat[(seconds > off + 249.25) & (seconds <= off + 249.25 + 45.0)]).sum() >= 5
+
+
+def test_fast_predictor_in_any_order_and_without_covariances():
+    """The kernel continues one chain of 1 s steps between queries; queries out of order, repeated or of
+    another row restart it and must give the same numbers as the sorted ones."""
+    from pipeline.correlate.fill import track_predictor
+
+    frame = _frame(seed=5)
+    reference = T0.floor("D")
+    off = (T0 - reference).total_seconds()
+    seconds = off + np.array([260.0, 259.0, 255.5, 280.25, 255.5, 30.2, 262.0, 31.0, 250.0, 290.0, 10.7])
+    at = track_predictor(frame, reference, 60.0)
+    order = np.argsort(seconds, kind="stable")
+    lat, lon = at(seconds)
+    lat_s, lon_s = at(seconds[order])
+    assert np.array_equal(lat[order], lat_s) and np.array_equal(lon[order], lon_s)
+    assert np.array_equal(np.stack(at(seconds)), np.stack(_old_route(frame, reference, 60.0, seconds)),
+                          equal_nan=True)
+    assert track_predictor(frame.assign(cov_ee_m2=np.nan), reference, 60.0) is None

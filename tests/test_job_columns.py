@@ -68,7 +68,8 @@ def test_correlate_columns_follow_the_options():
     assert not {"cov_ee_m2", "sigma_major_m", "nucp_nic", "nacp", "mode3a", "file"} & set(plain)
     assert {"nucp_nic", "nacp"} <= set(correlate_columns(corr(min_nic=5, min_nacp=7)))
     assert correlate_columns(corr(quality=True)) is None  # quality reads most of the model
-    assert correlate_columns(corr(fill="predict")) is None  # the tracker reads the covariance
+    predict = set(correlate_columns(corr(fill="predict")))  # the tracker reads the covariance
+    assert predict - set(plain) == {"cov_ee_m2", "cov_en_m2", "cov_nn_m2", "nucr_nacv", "flight_level"}
 
 
 def _windows(run) -> list:
@@ -76,10 +77,11 @@ def _windows(run) -> list:
 
 
 @pytest.mark.parametrize("kw", [{}, {"drop_jumps": True, "min_nic": 5, "min_nacp": 7},
-                                {"pairs": "all", "split_adsb": True}])
+                                {"pairs": "all", "split_adsb": True}, {"fill": "predict"}])
 def test_correlation_on_the_narrow_frame_equals_the_full_frame(kw, monkeypatch):
     narrow = jobs.correlate_job(corr(**kw))
-    assert "cov_ee_m2" not in narrow.measurements and "fit_latitude" not in narrow.measurements
+    assert ("cov_ee_m2" in narrow.measurements) == (kw.get("fill") == "predict")
+    assert "fit_latitude" not in narrow.measurements and "mode3a" not in narrow.measurements
     monkeypatch.setattr(jobs, "correlate_columns", lambda options: None)
     full = jobs.correlate_job(corr(**kw))
     assert "cov_ee_m2" in full.measurements and "fit_latitude" in full.measurements

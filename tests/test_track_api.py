@@ -6,7 +6,7 @@ import pytest
 from pyproj import Geod
 from track_scenarios import fly
 
-from pipeline.track import Plane, predict, track
+from pipeline.track import ImmState, Plane, predict, track
 
 GEOD = Geod(ellps="WGS84")
 SITE = (41.0, 2.0)
@@ -144,6 +144,31 @@ def test_state_at_any_time_predicts_like_the_tracker():
     assert p.mode_turn_left.iloc[0] == pytest.approx(row.mode_turn_left, abs=1e-12)
     with pytest.raises(KeyError, match="keep_states"):
         track(m).state_at("A1", when)
+
+
+def test_predict_ends_is_predicts_last_row():
+    """predict_ends (all look-aheads in one kernel call, 1 s steps shared between them) against predict()
+    called once per look-ahead: the same cycles, so the same bits, for horizons under a second, whole,
+    a hair over or under a whole number, and rows in any order."""
+    from pipeline.track.predict import predict_ends
+
+    rng = np.random.default_rng(12)
+    truth = fly((0, 0), 90.0, 200.0, [(60, 0, 0), (30, 3.0, 0), (60, 0, 0)])
+    res = track(_adsb(truth, np.arange(0.0, 150.0, 2.0), rng), keep_states=True)
+    plane, run, epoch = res.runs["A1"]
+    rows = np.array([40, 40, 40, 40, 40, 40, 40, 41, 40, 10, 10, 74, 40])
+    horizon = np.array([0.3, 1.0, 1.0000000001, 2.5, 7.0, 7.0000000005, 7.9999999995, 3.0, 3.5, 30.0, 0.999,
+                        12.25, 2.0])
+    xc, Pc = predict_ends(run, rows, horizon)
+    for i, (row, h) in enumerate(zip(rows, horizon, strict=True)):
+        state = ImmState("A1", epoch, plane, run.config, run.mu[row], run.x[row], run.P[row])
+        p = predict(state, h, step_s=min(1.0, h))
+        assert (xc[i, 0], xc[i, 3], xc[i, 1], xc[i, 4]) == tuple(
+            p[["east_m", "north_m", "ve_mps", "vn_mps"]].to_numpy()[-1]), (row, h)
+        assert (Pc[i, 0, 0], Pc[i, 0, 3], Pc[i, 3, 3]) == tuple(
+            p[["cov_ee_m2", "cov_en_m2", "cov_nn_m2"]].to_numpy()[-1]), (row, h)
+    with pytest.raises(ValueError, match="horizon_s must be > 0"):
+        predict_ends(run, rows[:1], np.array([0.0]))
 
 
 def test_garbage_position_far_away_is_counted_not_tracked():

@@ -273,3 +273,15 @@ def test_config_errors_name_the_value():
         TrackerConfig(tpm="dynamic", max_coast_s=201.0)
     with pytest.raises(ValueError, match="kind 'xx'"):
         TrackerConfig(modes=(Mode("a", "xx", 1.0),))
+
+
+@pytest.mark.parametrize("p", [0.5, 0.95, 0.99, 0.9973, 0.999, 0.999999])
+def test_gate_is_the_chi_square_quantile_with_two_degrees_of_freedom(p):
+    """The gate (Mahalanobis d^2) is chi2.ppf(p, 2) to the bit (it was computed by it), and for 2 degrees
+    of freedom the quantile is -2 ln(1 - p) in closed form."""
+    from scipy.stats import chi2
+
+    gate = TrackerConfig(gate_probability=p).kernel_args()["gate_d2"]
+    assert gate == float(chi2.ppf(p, 2))
+    assert gate == pytest.approx(-2.0 * np.log1p(-p), rel=1e-12)
+    assert TrackerConfig(gate_probability=1.0).kernel_args()["gate_d2"] == np.inf

@@ -7,6 +7,7 @@ y[i - d]. A positive peak lag d means the radar series repeats the ADS-B series 
 
 from __future__ import annotations
 
+import functools
 import itertools
 import math
 
@@ -20,7 +21,7 @@ from pipeline.correlate.results import (
     SkippedWindow,
     WindowResult,
 )
-from pipeline.correlate.slots import SLOTTED_COLUMNS, slot_count, slot_series
+from pipeline.correlate.slots import slot_count, slot_series
 from pipeline.correlate.windows import in_window, overlap_windows, short_window_reason
 from pipeline.model.aircraft import NoSuchAircraft, aircraft_rows, one_aircraft
 from pipeline.model.dedup import duplicate_mask
@@ -209,9 +210,7 @@ def _window_result(ac: tuple[str, str], number: int, start_s: float, end_s: floa
     if predictors[0] is not None or predictors[1] is not None:
         from pipeline.correlate.fill import fill_predicted
 
-        rs, as_ = ({c: f[c].to_numpy() for c in SLOTTED_COLUMNS} for f in (
-            fill_predicted(pd.DataFrame(rs), slot_s, predictors[0]),
-            fill_predicted(pd.DataFrame(as_), slot_s, predictors[1])))
+        rs, as_ = fill_predicted(rs, slot_s, predictors[0]), fill_predicted(as_, slot_s, predictors[1])
     tod = rs["time_of_day"]
     if not is_dated(reference):
         stamps = pd.Series(pd.NaT, index=pd.RangeIndex(len(tod)), dtype="datetime64[ns, UTC]")
@@ -280,6 +279,13 @@ class _Columns:
         self.dup = meas["duplicate"].astype(bool).to_numpy() if "duplicate" in meas else None
         self.jump = meas["jump"].fillna(False).astype(bool).to_numpy() if "jump" in meas else None
 
+    @functools.cached_property
+    def track_inputs(self):
+        """The columns the tracker reads (``--fill predict``) as arrays, read on first use."""
+        from pipeline.correlate.fill import TrackInputs
+
+        return TrackInputs(self.meas)
+
     def time_order(self, rows: np.ndarray) -> np.ndarray:
         """``rows`` in sort_by_time's order: stable by time, NaT last."""
         key = self.time_ns[rows]
@@ -307,9 +313,9 @@ class _Columns:
 class _Source:
     """One sensor source of one aircraft, ready for windows: its reports in time order without repeats
     (time of day, latitude, longitude), the times of its repeats and of its ADS-B jumps, and (for
-    ``--fill predict``) its reports as a frame."""
+    ``--fill predict``) its track predictor."""
 
-    def __init__(self, cols: _Columns, rows: np.ndarray, frame: bool = False):
+    def __init__(self, cols: _Columns, rows: np.ndarray, track: bool = False):
         order = cols.time_order(rows)
         meas = cols.meas
         if cols.dup is not None:
@@ -326,7 +332,19 @@ class _Source:
             else:
                 jump = detect_jumps(meas.iloc[kept].reset_index(drop=True)).to_numpy(bool)
             self.jump_t = self.t[jump]
-        self.frame = meas.iloc[kept].reset_index(drop=True) if frame else None
+        self._track = (cols, kept) if track else None
+        self._predictor: tuple | None = None
+
+    def predictor(self, reference: pd.Timestamp, max_coast_s: float):
+        """Its track predictor (``--fill predict``; pipeline.correlate.fill), built on first use and
+        shared by all its pairs (the same arguments in one run)."""
+        if self._predictor is None:
+            from pipeline.correlate.fill import rows_predictor
+
+            cols, kept = self._track
+            self._predictor = (rows_predictor(cols.track_inputs, kept, reference, max_coast_s),)
+            self._track = None
+        return self._predictor[0]
 
     def inside(self, start_s: float, end_s: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Its reports inside [start, end]."""
@@ -346,7 +364,7 @@ def _aircraft_pairs(cols: _Columns, radar_rows: np.ndarray, other_rows: np.ndarr
 
     def source(kind: str, name: str, rows: np.ndarray) -> _Source:
         if (kind, name) not in made:
-            made[kind, name] = _Source(cols, rows, frame=fill == "predict")
+            made[kind, name] = _Source(cols, rows, track=fill == "predict")
         return made[kind, name]
 
     out = []
@@ -383,10 +401,8 @@ def _correlate_pair(ac: tuple[str, str], run: CorrelationRun, pair: tuple[str, _
             raise TooManySlots(budget[0], MAX_SLOTS, slot_s)
     predictors = (None, None)
     if fill == "predict":  # each side's own forward track, coasting across the longest gap a window has
-        from pipeline.correlate.fill import track_predictor
-
-        predictors = (track_predictor(radar.frame, reference, max(gap_s, slot_s)),
-                      track_predictor(adsb.frame, reference, max(gap_s, slot_s)))
+        coast_s = max(gap_s, slot_s)
+        predictors = (radar.predictor(reference, coast_s), adsb.predictor(reference, coast_s))
     number = 0
     for start_s, end_s in windows:
         r_in, a_in = radar.inside(start_s, end_s), adsb.inside(start_s, end_s)

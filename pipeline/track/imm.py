@@ -517,6 +517,50 @@ def predict_rows(gov, dt, kinds, omegas, qs, tpm_kind, tpm_param, tpm_param2, q_
 
 
 @njit(cache=True)
+def propagate_ends(gov, horizon, kinds, omegas, qs, tpm_kind, tpm_param, tpm_param2, mu_h, x_h, P_h,
+                   xc_out, Pc_out):
+    """For query q, the combined estimate ``propagate`` ends at from the posterior of row gov[q] over
+    horizon[q] > 0 s in steps of min(1, horizon[q]) (``predict``'s default), bit for bit: the same cycles
+    in the same order. The unit steps before a query's last one continue those of the previous query of
+    the same row, so queries sorted by row, then horizon, cost about one cycle per second of look-ahead."""
+    r = kinds.shape[0]
+    PI, F, Q, tmp, cbar, x0, P0, xp, Pp = cycle_scratch(r)
+    mu_c = np.empty(r)
+    x_c = np.empty((r, NX))
+    P_c = np.empty((r, NX, NX))
+    g_c = -1
+    done_c = 0  # unit steps the chain (mu_c, x_c, P_c) has made from posterior g_c
+    for q in range(gov.shape[0]):
+        g = gov[q]
+        h = horizon[q]
+        step = min(1.0, h)
+        full = math.ceil(h / step - 1e-9) - 1  # steps before the last: each exactly 1 s (propagate's min)
+        if g != g_c or done_c > full:
+            g_c = g
+            done_c = 0
+            for j in range(r):
+                mu_c[j] = mu_h[g, j]
+                for a in range(NX):
+                    x_c[j, a] = x_h[g, j, a]
+                    for b in range(NX):
+                        P_c[j, a, b] = P_h[g, j, a, b]
+        while done_c < full:
+            predict_into(kinds, omegas, qs, tpm_kind, tpm_param, tpm_param2, 1.0, r, mu_c, x_c, P_c,
+                         PI, F, Q, tmp, cbar, x0, P0, xp, Pp)
+            for j in range(r):
+                mu_c[j] = cbar[j]
+                for a in range(NX):
+                    x_c[j, a] = xp[j, a]
+                    for b in range(NX):
+                        P_c[j, a, b] = Pp[j, a, b]
+            done_c += 1
+        d = min(step, h - float(full))
+        predict_into(kinds, omegas, qs, tpm_kind, tpm_param, tpm_param2, d, r, mu_c, x_c, P_c,
+                     PI, F, Q, tmp, cbar, x0, P0, xp, Pp)
+        combine_into(cbar, xp, Pp, r, xc_out[q], Pc_out[q])
+
+
+@njit(cache=True)
 def propagate(kinds, omegas, qs, tpm_kind, tpm_param, tpm_param2, mu, x, P, horizon_s, step_s,
               mu_out, x_out, P_out, xc_out, Pc_out):
     """Repeated IMM prediction cycles without measurements (the conflict paper's trajectory

@@ -12,7 +12,8 @@ import math
 import numpy as np
 import pandas as pd
 
-from .imm import NX, propagate
+from .imm import NX, propagate, propagate_ends
+from .plane import PlaneRun
 from .tracker import ImmState
 
 
@@ -41,3 +42,21 @@ def predict(state: ImmState, horizon_s: float, *, step_s: float = 1.0) -> pd.Dat
     for j, mode in enumerate(state.config.modes):
         out[f"mode_{mode.name}"] = mu_out[:, j]
     return pd.DataFrame(out)
+
+
+def predict_ends(run: PlaneRun, rows: np.ndarray, horizon_s: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Combined states (n, 6) and covariances (n, 6, 6) that ``predict`` ends at (its last row, default
+    step) from the posterior after each run row ``rows[i]``, ``horizon_s[i]`` > 0 s ahead, all in one
+    kernel call without a frame per prediction; sorted by row, then horizon, is the cheapest order."""
+    rows = np.ascontiguousarray(rows, np.int64)
+    horizon = np.ascontiguousarray(horizon_s, float)
+    if rows.shape != horizon.shape:
+        raise ValueError(f"rows {rows.shape} and horizon_s {horizon.shape} must have the same shape")
+    if not (horizon > 0.0).all():
+        raise ValueError("horizon_s must be > 0")
+    args = run.config.kernel_args()
+    xc = np.empty((len(rows), NX))
+    Pc = np.empty((len(rows), NX, NX))
+    propagate_ends(rows, horizon, args["kinds"], args["omegas"], args["qs"], args["tpm_kind"],
+                   args["tpm_param"], args["tpm_param2"], run.mu, run.x, run.P, xc, Pc)
+    return xc, Pc

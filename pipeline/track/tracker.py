@@ -30,10 +30,13 @@ from .config import TrackerConfig, default_modes
 from .covariance import nacv_variance
 from .frame import Plane
 from .imm import STATUS_STARTED, STATUS_UPDATED
-from .plane import SMOOTHERS, estimate, filter_plane
+from .plane import SMOOTHERS, PlaneRun, estimate, filter_plane
 
 REQUIRED = ("time", "sensor_id", "sensor_kind", "aircraft_id", "latitude", "longitude", "flight_level",
             "cov_ee_m2", "cov_en_m2", "cov_nn_m2")
+# the columns filter_reports reads (the last three optional)
+FILTER_INPUTS = ("time", "sensor_id", "latitude", "longitude", "flight_level", "cov_ee_m2", "cov_en_m2",
+                 "cov_nn_m2", "ground_speed_kt", "heading_deg", "nucr_nacv")
 M_PER_S_PER_KT = 1852.0 / 3600.0
 FT_PER_FL = 100.0
 MAX_RANGE_M = 3_000_000.0  # reports farther than this from the aircraft's median position are garbage
@@ -245,42 +248,78 @@ def _smoothed_turn_rate(qt, v_loc, segment, mode_weighted_dps, speed) -> np.ndar
     return np.where(np.isfinite(rate) & (speed > 1.0), rate, mode_weighted_dps)
 
 
-def _track_one(aircraft_id, group, epoch, config, args, names, step_s, smooth, smoother="rts") -> dict:
+@dataclass
+class FilteredReports:
+    """One aircraft's reports as the filter saw them: the rows kept (sorted by time, then sensor), their
+    seconds since the epoch, the plane, the filter's run over them, and per sensor the rows out of range."""
+
+    rows: pd.DataFrame
+    t: np.ndarray
+    plane: Plane
+    run: PlaneRun
+    far: pd.Series
+
+
+def filter_reports(group: pd.DataFrame, epoch: pd.Timestamp, config: TrackerConfig) -> FilteredReports:
+    """Run the IMM forward over one aircraft's reports (finite positions and covariances; ``track``'s
+    schema), in the plane around their median, counting seconds from ``epoch``."""
     g = group.assign(_t=(group["time"] - epoch).dt.total_seconds().to_numpy())
     g = g.sort_values(["_t", "sensor_id"], kind="stable")
     t = g["_t"].to_numpy(float)
-    plane = Plane.around(g["latitude"].to_numpy(float), g["longitude"].to_numpy(float))
-    ze, zn = plane.forward(g["latitude"].to_numpy(float), g["longitude"].to_numpy(float))
-    near = np.isfinite(ze) & np.isfinite(zn) & (np.hypot(ze, zn) < MAX_RANGE_M)
+    velocity = {"ground_speed_kt", "heading_deg"} <= set(g.columns)
+    plane, near, run = filter_columns(
+        config, t, *(g[c].to_numpy(float) for c in ("latitude", "longitude", "cov_ee_m2", "cov_en_m2",
+                                                     "cov_nn_m2", "flight_level")),
+        ground_speed_kt=g["ground_speed_kt"].to_numpy(float) if velocity else None,
+        heading_deg=g["heading_deg"].to_numpy(float) if velocity else None,
+        nucr_nacv=(g["nucr_nacv"].to_numpy(float, na_value=np.nan) if velocity and "nucr_nacv" in g.columns
+                   else None))
     far = g.loc[~near, "sensor_id"].value_counts()
-    g, t, ze, zn = g[near], t[near], ze[near], zn[near]
-    lat = g["latitude"].to_numpy(float)
-    lon = g["longitude"].to_numpy(float)
+    return FilteredReports(g[near], t[near], plane, run, far)
+
+
+def filter_columns(config: TrackerConfig, t, lat, lon, cov_ee, cov_en, cov_nn, fl, *, ground_speed_kt=None,
+                   heading_deg=None, nucr_nacv=None) -> tuple[Plane, np.ndarray, PlaneRun]:
+    """``filter_reports`` on arrays of reports already in its order (time, then sensor): the plane, which
+    reports lie within MAX_RANGE_M of it (the filter sees only those), and the filter's run over them.
+    The start velocity comes from ground speed and heading where both are given (NUCr / NACv: its sigma)."""
+    plane = Plane.around(lat, lon)
+    ze, zn = plane.forward(lat, lon)
+    near = np.isfinite(ze) & np.isfinite(zn) & (np.hypot(ze, zn) < MAX_RANGE_M)
+    t, ze, zn = t[near], ze[near], zn[near]
+    lat = lat[near]
+    lon = lon[near]
     m = plane.local_to_plane(lat, lon)
-    cov = np.empty((len(g), 2, 2))
-    cov[:, 0, 0] = g["cov_ee_m2"].to_numpy(float)
-    cov[:, 0, 1] = cov[:, 1, 0] = g["cov_en_m2"].to_numpy(float)
-    cov[:, 1, 1] = g["cov_nn_m2"].to_numpy(float)
+    cov = np.empty((len(t), 2, 2))
+    cov[:, 0, 0] = cov_ee[near]
+    cov[:, 0, 1] = cov[:, 1, 0] = cov_en[near]
+    cov[:, 1, 1] = cov_nn[near]
     cov = m @ cov @ np.swapaxes(m, 1, 2)
-    ve0 = np.zeros(len(g))
-    vn0 = np.zeros(len(g))
-    var_v0 = np.full(len(g), np.nan)
-    if {"ground_speed_kt", "heading_deg"} <= set(g.columns):
-        gs = g["ground_speed_kt"].to_numpy(float) * M_PER_S_PER_KT
-        hd = np.radians(g["heading_deg"].to_numpy(float))
+    ve0 = np.zeros(len(t))
+    vn0 = np.zeros(len(t))
+    var_v0 = np.full(len(t), np.nan)
+    if ground_speed_kt is not None and heading_deg is not None:
+        gs = ground_speed_kt[near] * M_PER_S_PER_KT
+        hd = np.radians(heading_deg[near])
         ok = np.isfinite(gs) & np.isfinite(hd)
         v = np.stack([gs * np.sin(hd), gs * np.cos(hd)], axis=-1)
         vp = np.einsum("nij,nj->ni", m, v)
         ve0[ok], vn0[ok] = vp[ok, 0], vp[ok, 1]
         var_v0[ok] = config.sigma_reported_velocity_mps ** 2
-        if "nucr_nacv" in g.columns:  # ADS-B with NUCr / NACv: the velocity's own accuracy
-            var_nac = nacv_variance(g["nucr_nacv"].to_numpy(float, na_value=np.nan))
+        if nucr_nacv is not None:  # ADS-B with NUCr / NACv: the velocity's own accuracy
+            var_nac = nacv_variance(nucr_nacv[near])
             nac = ok & np.isfinite(var_nac)
             var_v0[nac] = var_nac[nac]
     var_v0[np.isnan(var_v0)] = config.sigma_init_speed_mps ** 2
-    n = len(g)
     run = filter_plane(config, t, ze, zn, cov[:, 0, 0], cov[:, 0, 1], cov[:, 1, 1],
-                       fl=g["flight_level"].to_numpy(float), ve0=ve0, vn0=vn0, var_v0=var_v0)
+                       fl=fl[near], ve0=ve0, vn0=vn0, var_v0=var_v0)
+    return plane, near, run
+
+
+def _track_one(aircraft_id, group, epoch, config, args, names, step_s, smooth, smoother="rts") -> dict:
+    filtered = filter_reports(group, epoch, config)
+    g, t, plane, run, far = filtered.rows, filtered.t, filtered.plane, filtered.run, filtered.far
+    n = len(g)
     status, nis, segment = run.status, run.nis, run.segment
     accepted = run.accepted
     acc_idx = np.flatnonzero(accepted)
