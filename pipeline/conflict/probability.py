@@ -209,6 +209,13 @@ def _exact(d, mu1, mu2, sig1, sig2):
     w0 = sig2 / d
     span = np.maximum(t_hi - t_lo, 1e-300)
     levels = int(np.clip(np.ceil(np.log(np.max(span / w0)) / np.log(_GRADING)) + 1, 1, _MAX_LEVELS))
+    out[ok] = _exact_panels(levels, d, mu1, mu2, sig1, sig2, t_lo, t_hi, t_star, w0, span)
+    return out
+
+
+def _exact_panels(levels: int, d, mu1, mu2, sig1, sig2, t_lo, t_hi, t_star, w0, span):
+    """The strip integral of `_exact` on its uniform panels and `levels` graded ones either side of each
+    edge angle (the most any pair of the call needs), clipped to each pair's support."""
     steps = w0[:, None] * _GRADING ** np.arange(levels)[None, :] - w0[:, None]  # 0, 3w0, 15w0, ...
     graded = np.concatenate([t_star[:, None] + steps, t_star[:, None] - steps[:, 1:],
                              -t_star[:, None] + steps[:, 1:], -t_star[:, None] - steps[:, 1:]], axis=1)
@@ -225,5 +232,4 @@ def _exact(d, mu1, mu2, sig1, sig2):
     s2 = sig2[:, None, None]
     m2 = mu2[:, None, None]
     inside = _prob_between((-top - m2) / s2, (top - m2) / s2)
-    out[ok] = (weight * top * density * inside).sum(axis=(1, 2))
-    return out
+    return (weight * top * density * inside).sum(axis=(1, 2))
