@@ -36,6 +36,7 @@ _UNIFORM_PANELS = 8  # panels over the support of the major-axis density
 _GRADING = 4.0  # ratio of successive graded panels
 _GL_NODES = 10  # Gauss-Legendre nodes per panel
 _MAX_LEVELS = 40
+_EXACT_NODES = 1 << 19  # quadrature nodes (pairs x panels x nodes) evaluated at once: 4 MB an array
 
 
 def conflict_probability(mean, cov, radius, method: str = "exact", n: int | None = None):
@@ -209,7 +210,13 @@ def _exact(d, mu1, mu2, sig1, sig2):
     w0 = sig2 / d
     span = np.maximum(t_hi - t_lo, 1e-300)
     levels = int(np.clip(np.ceil(np.log(np.max(span / w0)) / np.log(_GRADING)) + 1, 1, _MAX_LEVELS))
-    out[ok] = _exact_panels(levels, d, mu1, mu2, sig1, sig2, t_lo, t_hi, t_star, w0, span)
+    # a few thousand pairs at a time: each array over (pairs, panels, nodes) is then a few MB
+    per_pair = (4 * levels + _UNIFORM_PANELS - 3) * _GL_NODES
+    block = max(_EXACT_NODES // per_pair, 1)
+    parts = [_exact_panels(levels, *(v[s:s + block] for v in (d, mu1, mu2, sig1, sig2, t_lo, t_hi, t_star,
+                                                               w0, span)))
+             for s in range(0, len(d), block)]
+    out[ok] = np.concatenate(parts)
     return out
 
 
