@@ -168,7 +168,7 @@ def conflict_job(options: ConflictOptions, *, progress: Progress | None = None,
         warning_times,
     )
     from pipeline.conflict.approach import closest_approach
-    from pipeline.track import track
+    from pipeline.track import Plane, track
 
     started = time.monotonic()
     checked = checked or validate(options)
@@ -193,11 +193,12 @@ def conflict_job(options: ConflictOptions, *, progress: Progress | None = None,
         raise JobError(untrackable(meas))
     tod = tracks["time_of_day"].to_numpy(float)
     grid = tracks[abs(tod / step - (tod / step).round()) < 1e-6].reset_index(drop=True)
+    plane = Plane.around(tracks["latitude"].to_numpy(float), tracks["longitude"].to_numpy(float))
+    epoch, tracker_parameters = result.epoch, result.parameters
+    del result, tracks, tod  # the grid rows are what follows needs: ~0.35 GB freed on a day at 1 s
     if progress:
         progress.stage("Predicting and computing PC")
-    predictions = _predictions(meas, result, horizons, options)
-    tracker_parameters = result.parameters
-    del result, tracks, tod  # the grid rows are what follows needs: ~0.35 GB freed on a day at 1 s
+    predictions = _predictions(meas, epoch, plane, horizons, options)
     tol = options.vertical_tolerance_ft
     pc = pair_probabilities(predictions, options.radius_nm, options.vertical_ft, method=options.method,
                             vertical_tolerance_ft=tol)
@@ -219,16 +220,14 @@ def conflict_job(options: ConflictOptions, *, progress: Progress | None = None,
                              predictions, noise)
 
 
-def _predictions(meas: pd.DataFrame, result, horizons: tuple[float, ...],
+def _predictions(meas: pd.DataFrame, epoch: pd.Timestamp, plane, horizons: tuple[float, ...],
                  options: ConflictOptions) -> pd.DataFrame:
-    """predict_tracks for every aircraft of `result` (tracked without filter histories), in batches of
-    aircraft tracked again with their histories kept (about 1.4 kB a report: 1.4 GB for a day of traffic
-    at once), one batch's at a time; the same predictions, in the same plane and order."""
+    """predict_tracks for every aircraft of `meas`, in `plane`, in batches of aircraft tracked with their
+    filter histories kept (about 1.4 kB a report: 1.4 GB for a day of traffic at once), one batch's at a
+    time, with the `epoch` of the run without histories: the same predictions, in the same order."""
     from pipeline.conflict.predict import predict_tracks
-    from pipeline.track import Plane, track
+    from pipeline.track import track
 
-    tracks = result.tracks
-    plane = Plane.around(tracks["latitude"].to_numpy(float), tracks["longitude"].to_numpy(float))
     per_aircraft = meas.groupby("aircraft_id", sort=True, observed=True).size()
     batch = np.cumsum(per_aircraft.to_numpy()) // PREDICTION_BATCH_REPORTS
     parts = []
@@ -236,7 +235,7 @@ def _predictions(meas: pd.DataFrame, result, horizons: tuple[float, ...],
         ids = per_aircraft.index[batch == b]
         sub = meas[meas["aircraft_id"].isin(ids).to_numpy(bool)]
         run = track(sub, step_s=float(options.step_s), max_coast_s=float(options.max_coast_s),
-                    tpm=options.tpm, keep_states=True, epoch=result.epoch)
+                    tpm=options.tpm, keep_states=True, epoch=epoch)
         if not run.tracks.empty:  # a batch of untrackable aircraft (no usable covariance) predicts nothing
             parts.append(predict_tracks(run, horizons, step_s=float(options.step_s), plane=plane,
                                         sigma_alt=options.vertical == "gaussian"))
