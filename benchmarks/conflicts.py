@@ -111,7 +111,7 @@ def pipeline_stages(meas: pd.DataFrame, threshold: float, sigma_alt: bool = Fals
     pred = clock.run("predict_tracks (20, 60, 120 s at every second)", predict_tracks, result, HORIZONS_S,
                      sigma_alt=sigma_alt)
     inside: dict[str, float] = {}
-    timed_inside(pairs_pc, "_tree_pairs", inside, "pre-filter")
+    timed_inside(pairs_pc, "_chunk_pairs", inside, "pre-filter")
     timed_inside(pairs_pc, "conflict_probability", inside, "exact PC")
     pc = clock.run("pair_probabilities (pre-filter, bound, exact PC)", pairs_pc.pair_probabilities, pred,
                    5.0, 1000.0, "exact")

@@ -168,7 +168,7 @@ def conflict_job(options: ConflictOptions, *, progress: Progress | None = None,
         warning_times,
     )
     from pipeline.conflict.approach import closest_approach
-    from pipeline.track import track
+    from pipeline.track import Plane, track
 
     started = time.monotonic()
     checked = checked or validate(options)
@@ -192,12 +192,16 @@ def conflict_job(options: ConflictOptions, *, progress: Progress | None = None,
     if tracks.empty:
         raise JobError(untrackable(meas))
     tod = tracks["time_of_day"].to_numpy(float)
-    grid = tracks[abs(tod / step - (tod / step).round()) < 1e-6].reset_index(drop=True)
+    on_grid = np.flatnonzero(abs(tod / step - (tod / step).round()) < 1e-6)
+    plane = Plane.around(tracks["latitude"].to_numpy(float), tracks["longitude"].to_numpy(float))
+    epoch, tracker_parameters = result.epoch, result.parameters
+    del result, tod
+    # the grid rows are what follows needs: the full table (~0.35 GB on a day at 1 s) freed as they are taken
+    grid = _take_rows(tracks, on_grid)
+    del tracks, on_grid
     if progress:
         progress.stage("Predicting and computing PC")
-    predictions = _predictions(meas, result, horizons, options)
-    tracker_parameters = result.parameters
-    del result, tracks, tod  # the grid rows are what follows needs: ~0.35 GB freed on a day at 1 s
+    predictions = _predictions(meas, epoch, plane, horizons, options)
     tol = options.vertical_tolerance_ft
     pc = pair_probabilities(predictions, options.radius_nm, options.vertical_ft, method=options.method,
                             vertical_tolerance_ft=tol)
@@ -219,16 +223,22 @@ def conflict_job(options: ConflictOptions, *, progress: Progress | None = None,
                              predictions, noise)
 
 
-def _predictions(meas: pd.DataFrame, result, horizons: tuple[float, ...],
-                 options: ConflictOptions) -> pd.DataFrame:
-    """predict_tracks for every aircraft of `result` (tracked without filter histories), in batches of
-    aircraft tracked again with their histories kept (about 1.4 kB a report: 1.4 GB for a day of traffic
-    at once), one batch's at a time; the same predictions, in the same plane and order."""
-    from pipeline.conflict.predict import predict_tracks
-    from pipeline.track import Plane, track
+def _take_rows(frame: pd.DataFrame, rows: np.ndarray) -> pd.DataFrame:
+    """frame.take(rows) with a new range index, a column at a time, each column dropped from frame once
+    taken (frame ends empty): with one block per column, as the tracker's tables, the whole and the part
+    are not held at once."""
+    out = {c: frame.pop(c).take(rows).reset_index(drop=True) for c in list(frame.columns)}
+    return pd.DataFrame(out, copy=False)
 
-    tracks = result.tracks
-    plane = Plane.around(tracks["latitude"].to_numpy(float), tracks["longitude"].to_numpy(float))
+
+def _predictions(meas: pd.DataFrame, epoch: pd.Timestamp, plane, horizons: tuple[float, ...],
+                 options: ConflictOptions) -> pd.DataFrame:
+    """predict_tracks for every aircraft of `meas`, in `plane`, in batches of aircraft tracked with their
+    filter histories kept (about 1.4 kB a report: 1.4 GB for a day of traffic at once), one batch's at a
+    time, with the `epoch` of the run without histories: the same predictions, in the same order."""
+    from pipeline.conflict.predict import predict_tracks
+    from pipeline.track import track
+
     per_aircraft = meas.groupby("aircraft_id", sort=True, observed=True).size()
     batch = np.cumsum(per_aircraft.to_numpy()) // PREDICTION_BATCH_REPORTS
     parts = []
@@ -236,12 +246,33 @@ def _predictions(meas: pd.DataFrame, result, horizons: tuple[float, ...],
         ids = per_aircraft.index[batch == b]
         sub = meas[meas["aircraft_id"].isin(ids).to_numpy(bool)]
         run = track(sub, step_s=float(options.step_s), max_coast_s=float(options.max_coast_s),
-                    tpm=options.tpm, keep_states=True, epoch=result.epoch)
+                    tpm=options.tpm, keep_states=True, epoch=epoch)
         if not run.tracks.empty:  # a batch of untrackable aircraft (no usable covariance) predicts nothing
-            parts.append(predict_tracks(run, horizons, step_s=float(options.step_s), plane=plane,
-                                        sigma_alt=options.vertical == "gaussian"))
-        del run
-    return pd.concat(parts, ignore_index=True)
+            parts.append(_own_columns(predict_tracks(run, horizons, step_s=float(options.step_s), plane=plane,
+                                                     sigma_alt=options.vertical == "gaussian")))
+        del run, sub
+    return _concat_columns(parts)
+
+
+def _own_columns(frame: pd.DataFrame) -> dict[str, pd.Series]:
+    """The frame's columns, each in an array of its own (a float column copied out of the frame's shared
+    block), so that `_concat_columns` can free them one by one."""
+    own = {}
+    for c in frame.columns:
+        column = frame[c]
+        own[c] = pd.Series(column.to_numpy(copy=True) if isinstance(column.dtype, np.dtype) else column.array,
+                           copy=False)
+    return own
+
+
+def _concat_columns(parts: list[dict[str, pd.Series]]) -> pd.DataFrame:
+    """pd.concat of the parts' columns (the same dtypes and values), a column at a time, each part's
+    column dropped as soon as it is copied: the parts and the whole are not held at once (a day's
+    predictions at 1 s are 0.23 GB)."""
+    out = {}
+    for c in list(parts[0]):
+        out[c] = pd.concat([p.pop(c) for p in parts], ignore_index=True)
+    return pd.DataFrame(out, copy=False)
 
 
 def summary(result: ConflictJobResult) -> dict:

@@ -244,7 +244,7 @@ def test_a_batch_of_untrackable_aircraft_predicts_nothing(monkeypatch):
     """Aircraft "A" flies east at 200 m/s with 1 Hz reports; "Z" has reports without a usable covariance
     (NaN, as for NACp 0). In batches of 50 reports, Z is a batch of its own: it adds no prediction, and
     the predictions (their UTC times included) are those of one batch."""
-    from pipeline.track import track
+    from pipeline.track import Plane, track
 
     t0 = pd.Timestamp("2019-03-01T08:00:00Z")
     secs = np.arange(60.0)
@@ -256,8 +256,9 @@ def test_a_batch_of_untrackable_aircraft_predicts_nothing(monkeypatch):
     meas = pd.DataFrame(rows)
     options = ConflictOptions(output="c.csv")
     result = track(meas, step_s=1.0, max_coast_s=60.0)
-    whole = jobs_conflict._predictions(meas, result, (20.0, 60.0), options)
+    plane = Plane.around(result.tracks["latitude"], result.tracks["longitude"])
+    whole = jobs_conflict._predictions(meas, result.epoch, plane, (20.0, 60.0), options)
     monkeypatch.setattr(jobs_conflict, "PREDICTION_BATCH_REPORTS", 50)
-    parts = jobs_conflict._predictions(meas, result, (20.0, 60.0), options)
+    parts = jobs_conflict._predictions(meas, result.epoch, plane, (20.0, 60.0), options)
     assert set(parts["aircraft_id"]) == {"A"} and isinstance(parts["time"].dtype, pd.DatetimeTZDtype)
     pd.testing.assert_frame_equal(parts, whole, check_exact=True)

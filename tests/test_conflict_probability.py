@@ -7,7 +7,7 @@ import pytest
 from conflict_reference import polar_reference, rotated
 from scipy.stats import ncx2
 
-from pipeline.conflict import conflict_probability, pc_margin, pc_upper_bound
+from pipeline.conflict import conflict_probability, pc_margin, pc_upper_bound, probability
 
 # mean, covariance, radius: isotropic and anisotropic, on and off the axes, covariance small and large
 # against the zone, mean inside, on the edge and outside
@@ -73,6 +73,26 @@ def test_exact_matches_adaptive_quadrature(references):
     got = conflict_probability(m, p, d)
     assert np.max(np.abs(got - references)) < 1e-8
     assert references.min() < 1e-3 and references.max() > 0.9  # the cases span the range of PC
+
+
+def test_exact_in_blocks_of_a_few_pairs_equals_one_pass_bit_for_bit(references, monkeypatch):
+    """The quadrature is evaluated a few thousand pairs at a time to bound its memory, with the graded
+    levels of the whole call: with blocks of 1 and 3 pairs every PC is the one of a single pass, bit for
+    bit (computed alone, with its own levels, some pairs differ in the last digits: what the blocks must
+    not do), and the reference cases stay within 1e-8 of the reference quadrature."""
+    rng = np.random.default_rng(3)
+    k = 60
+    sig1 = rng.uniform(10, 3000, k)
+    cov = np.array([rotated(a, a * 10 ** rng.uniform(-4, 0), rng.uniform(0, np.pi)) for a in sig1])
+    mean = rng.normal(0, 8000, (k, 2))
+    whole = conflict_probability(mean, cov, 9260.0)
+    alone = np.array([conflict_probability(mean[i], cov[i], 9260.0) for i in range(k)])
+    assert (alone != whole).any() and np.abs(alone - whole).max() < 1e-9
+    m, p, d = batch()
+    for nodes in (1, 3 * 200):  # a pair takes at least (4 + 5) x 10 nodes: blocks of 1 and 3 pairs
+        monkeypatch.setattr(probability, "_EXACT_NODES", nodes)
+        assert conflict_probability(mean, cov, 9260.0).tobytes() == whole.tobytes()
+        assert np.max(np.abs(conflict_probability(m, p, d) - references)) < 1e-8
 
 
 def test_blocks_bound_and_converge_from_above(references):

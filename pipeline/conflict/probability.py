@@ -36,6 +36,7 @@ _UNIFORM_PANELS = 8  # panels over the support of the major-axis density
 _GRADING = 4.0  # ratio of successive graded panels
 _GL_NODES = 10  # Gauss-Legendre nodes per panel
 _MAX_LEVELS = 40
+_EXACT_NODES = 1 << 19  # quadrature nodes (pairs x panels x nodes) evaluated at once: 4 MB an array
 
 
 def conflict_probability(mean, cov, radius, method: str = "exact", n: int | None = None):
@@ -209,6 +210,19 @@ def _exact(d, mu1, mu2, sig1, sig2):
     w0 = sig2 / d
     span = np.maximum(t_hi - t_lo, 1e-300)
     levels = int(np.clip(np.ceil(np.log(np.max(span / w0)) / np.log(_GRADING)) + 1, 1, _MAX_LEVELS))
+    # a few thousand pairs at a time: each array over (pairs, panels, nodes) is then a few MB
+    per_pair = (4 * levels + _UNIFORM_PANELS - 3) * _GL_NODES
+    block = max(_EXACT_NODES // per_pair, 1)
+    parts = [_exact_panels(levels, *(v[s:s + block] for v in (d, mu1, mu2, sig1, sig2, t_lo, t_hi, t_star,
+                                                               w0, span)))
+             for s in range(0, len(d), block)]
+    out[ok] = np.concatenate(parts)
+    return out
+
+
+def _exact_panels(levels: int, d, mu1, mu2, sig1, sig2, t_lo, t_hi, t_star, w0, span):
+    """The strip integral of `_exact` on its uniform panels and `levels` graded ones either side of each
+    edge angle (the most any pair of the call needs), clipped to each pair's support."""
     steps = w0[:, None] * _GRADING ** np.arange(levels)[None, :] - w0[:, None]  # 0, 3w0, 15w0, ...
     graded = np.concatenate([t_star[:, None] + steps, t_star[:, None] - steps[:, 1:],
                              -t_star[:, None] + steps[:, 1:], -t_star[:, None] - steps[:, 1:]], axis=1)
@@ -225,5 +239,4 @@ def _exact(d, mu1, mu2, sig1, sig2):
     s2 = sig2[:, None, None]
     m2 = mu2[:, None, None]
     inside = _prob_between((-top - m2) / s2, (top - m2) / s2)
-    out[ok] = (weight * top * density * inside).sum(axis=(1, 2))
-    return out
+    return (weight * top * density * inside).sum(axis=(1, 2))
