@@ -207,6 +207,17 @@ def cycle_scratch(r):
 
 
 @njit(cache=True)
+def copy_chain(r, mu, x, P, mu_c, x_c, P_c):
+    """Copy mode probabilities (r,), states (r, NX) and covariances (r, NX, NX) into a chain's arrays."""
+    for j in range(r):
+        mu_c[j] = mu[j]
+        for a in range(NX):
+            x_c[j, a] = x[j, a]
+            for b in range(NX):
+                P_c[j, a, b] = P[j, a, b]
+
+
+@njit(cache=True)
 def coast_chain(g, d, g_c, t_c, cycle_s, tol, mu_h, x_h, P_h, kinds, omegas, qs, tpm_kind, tpm_param,
                 tpm_param2, r, mu_c, x_c, P_c, PI, F, Q, tmp, cbar, x0, P0, xp, Pp):
     """Carry the chain (mu_c, x_c, P_c), now t_c s after posterior g_c, to d s after posterior g by IMM
@@ -215,22 +226,12 @@ def coast_chain(g, d, g_c, t_c, cycle_s, tol, mu_h, x_h, P_h, kinds, omegas, qs,
     if g != g_c or d < t_c:
         g_c = g
         t_c = 0.0
-        for j in range(r):
-            mu_c[j] = mu_h[g, j]
-            for a in range(NX):
-                x_c[j, a] = x_h[g, j, a]
-                for b in range(NX):
-                    P_c[j, a, b] = P_h[g, j, a, b]
+        copy_chain(r, mu_h[g], x_h[g], P_h[g], mu_c, x_c, P_c)
     while t_c < d - tol:
         h = min(cycle_s, d - t_c)
         predict_into(kinds, omegas, qs, tpm_kind, tpm_param, tpm_param2, h, r, mu_c, x_c, P_c,
                      PI, F, Q, tmp, cbar, x0, P0, xp, Pp)
-        for j in range(r):
-            mu_c[j] = cbar[j]
-            for a in range(NX):
-                x_c[j, a] = xp[j, a]
-                for b in range(NX):
-                    P_c[j, a, b] = Pp[j, a, b]
+        copy_chain(r, cbar, xp, Pp, mu_c, x_c, P_c)
         t_c += h
     return g_c, t_c
 
@@ -538,21 +539,11 @@ def propagate_ends(gov, horizon, kinds, omegas, qs, tpm_kind, tpm_param, tpm_par
         if g != g_c or done_c > full:
             g_c = g
             done_c = 0
-            for j in range(r):
-                mu_c[j] = mu_h[g, j]
-                for a in range(NX):
-                    x_c[j, a] = x_h[g, j, a]
-                    for b in range(NX):
-                        P_c[j, a, b] = P_h[g, j, a, b]
+            copy_chain(r, mu_h[g], x_h[g], P_h[g], mu_c, x_c, P_c)
         while done_c < full:
             predict_into(kinds, omegas, qs, tpm_kind, tpm_param, tpm_param2, 1.0, r, mu_c, x_c, P_c,
                          PI, F, Q, tmp, cbar, x0, P0, xp, Pp)
-            for j in range(r):
-                mu_c[j] = cbar[j]
-                for a in range(NX):
-                    x_c[j, a] = xp[j, a]
-                    for b in range(NX):
-                        P_c[j, a, b] = Pp[j, a, b]
+            copy_chain(r, cbar, xp, Pp, mu_c, x_c, P_c)
             done_c += 1
         d = min(step, h - float(full))
         predict_into(kinds, omegas, qs, tpm_kind, tpm_param, tpm_param2, d, r, mu_c, x_c, P_c,
