@@ -238,6 +238,7 @@ def _predictions(meas: pd.DataFrame, epoch: pd.Timestamp, plane, horizons: tuple
     time, with the `epoch` of the run without histories: the same predictions, in the same order."""
     from pipeline.conflict.predict import predict_tracks
     from pipeline.track import track
+    from pipeline.track.tracker import concat_columns
 
     per_aircraft = meas.groupby("aircraft_id", sort=True, observed=True).size()
     batch = np.cumsum(per_aircraft.to_numpy()) // PREDICTION_BATCH_REPORTS
@@ -251,28 +252,18 @@ def _predictions(meas: pd.DataFrame, epoch: pd.Timestamp, plane, horizons: tuple
             parts.append(_own_columns(predict_tracks(run, horizons, step_s=float(options.step_s), plane=plane,
                                                      sigma_alt=options.vertical == "gaussian")))
         del run, sub
-    return _concat_columns(parts)
+    return concat_columns(parts)  # a day's predictions at 1 s are 0.23 GB: not held twice
 
 
 def _own_columns(frame: pd.DataFrame) -> dict[str, pd.Series]:
     """The frame's columns, each in an array of its own (a float column copied out of the frame's shared
-    block), so that `_concat_columns` can free them one by one."""
+    block), so that `concat_columns` can free them one by one."""
     own = {}
     for c in frame.columns:
         column = frame[c]
         own[c] = pd.Series(column.to_numpy(copy=True) if isinstance(column.dtype, np.dtype) else column.array,
                            copy=False)
     return own
-
-
-def _concat_columns(parts: list[dict[str, pd.Series]]) -> pd.DataFrame:
-    """pd.concat of the parts' columns (the same dtypes and values), a column at a time, each part's
-    column dropped as soon as it is copied: the parts and the whole are not held at once (a day's
-    predictions at 1 s are 0.23 GB)."""
-    out = {}
-    for c in list(parts[0]):
-        out[c] = pd.concat([p.pop(c) for p in parts], ignore_index=True)
-    return pd.DataFrame(out, copy=False)
 
 
 def summary(result: ConflictJobResult) -> dict:

@@ -171,8 +171,15 @@ def _concat_by_column(frames: list[pd.DataFrame]) -> pd.DataFrame:
     names = list(frames[0].columns)
     parts = [{name: f[name] for name in names} for f in frames]  # the columns' blocks, without the frames
     frames.clear()
+    return concat_columns(parts)
+
+
+def concat_columns(parts: list[dict[str, pd.Series]]) -> pd.DataFrame:
+    """pd.concat of the parts' columns (every part has the first's names), a column at a time, each part's
+    column dropped (popped from its dict) as soon as it is joined: the parts and the whole are not held at
+    once."""
     columns = {}
-    for name in names:
+    for name in list(parts[0]):
         columns[name] = pd.concat([p.pop(name) for p in parts], ignore_index=True)
     return pd.DataFrame(columns, copy=False)
 
