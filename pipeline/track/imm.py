@@ -207,6 +207,12 @@ def cycle_scratch(r):
 
 
 @njit(cache=True)
+def chain_scratch(r):
+    """A coasting chain's mode probabilities (r,), states (r, NX) and covariances (r, NX, NX)."""
+    return np.empty(r), np.empty((r, NX)), np.empty((r, NX, NX))
+
+
+@njit(cache=True)
 def copy_chain(r, mu, x, P, mu_c, x_c, P_c):
     """Copy mode probabilities (r,), states (r, NX) and covariances (r, NX, NX) into a chain's arrays."""
     for j in range(r):
@@ -490,9 +496,7 @@ def predict_rows(gov, dt, kinds, omegas, qs, tpm_kind, tpm_param, tpm_param2, q_
     r = kinds.shape[0]
     m = gov.shape[0]
     PI, F, Q, tmp, cbar, x0, P0, xp, Pp = cycle_scratch(r)
-    mu_c = np.empty(r)
-    x_c = np.empty((r, NX))
-    P_c = np.empty((r, NX, NX))
+    mu_c, x_c, P_c = chain_scratch(r)
     g_c = -1
     t_c = 0.0
     for q in range(m):
@@ -526,9 +530,7 @@ def propagate_ends(gov, horizon, kinds, omegas, qs, tpm_kind, tpm_param, tpm_par
     the same row, so queries sorted by row, then horizon, cost about one cycle per second of look-ahead."""
     r = kinds.shape[0]
     PI, F, Q, tmp, cbar, x0, P0, xp, Pp = cycle_scratch(r)
-    mu_c = np.empty(r)
-    x_c = np.empty((r, NX))
-    P_c = np.empty((r, NX, NX))
+    mu_c, x_c, P_c = chain_scratch(r)
     g_c = -1
     done_c = 0  # unit steps the chain (mu_c, x_c, P_c) has made from posterior g_c
     for q in range(gov.shape[0]):
