@@ -1,0 +1,64 @@
+"""The track figure's surface zoom: which rows are a surface movement worth a panel, and the panels drawn."""
+
+import numpy as np
+import pandas as pd
+
+from pipeline.report.track_figures import surface_parts, track_figure
+
+KM_PER_DEG = 6371.0088 * np.pi / 180.0
+
+
+def _flight(taxi_s: int = 300, air_s: int = 240, arrival_taxi_s: int = 0) -> pd.DataFrame:
+    """A track table by hand: taxi at 10 kt east along the equator, fly east at 250 kt, maybe taxi again."""
+    speeds = np.r_[np.full(taxi_s, 10.0), np.full(air_s, 250.0), np.full(arrival_taxi_s, 12.0)]
+    east_km = np.cumsum(speeds * 1.852 / 3600.0)  # 1 s rows
+    n = len(speeds)
+    return pd.DataFrame({
+        "aircraft_id": "ABC123",
+        "time": pd.Timestamp("2026-01-01", tz="UTC") + pd.to_timedelta(np.arange(n), "s"),
+        "latitude": 0.001 * np.sin(np.arange(n) / 50.0), "longitude": east_km / KM_PER_DEG,
+        "speed_kt": speeds, "coasted": np.arange(n) % 4 == 3, "segment": 0,
+        "sigma_major_m": 20.0, "sigma_minor_m": 10.0, "ellipse_orientation_deg": 0.0,
+        "mode_cv": 0.9, "mode_turn_left": 0.05, "mode_turn_right": 0.05})
+
+
+def _parts(t: pd.DataFrame) -> list[np.ndarray]:
+    e = t["longitude"].to_numpy() * KM_PER_DEG
+    nn = t["latitude"].to_numpy() * KM_PER_DEG
+    span = max(np.ptp(e), np.ptp(nn))
+    return surface_parts(t["speed_kt"].to_numpy(), t["coasted"].to_numpy(), e, nn, span)
+
+
+def test_a_taxi_before_a_flight_is_one_part_of_exactly_its_rows():
+    # 300 s at 10 kt is 1.54 km, the flight 240 s at 250 kt 30.9 km: the taxi is 5 % of the map
+    (part,) = _parts(_flight())
+    assert part.tolist() == list(range(300))
+
+
+def test_departure_and_arrival_taxis_far_apart_are_two_parts_in_time_order():
+    first, second = _parts(_flight(arrival_taxi_s=200))
+    assert first.tolist() == list(range(300)) and second.tolist() == list(range(540, 740))
+
+
+def test_no_zoom_for_a_big_taxi_a_lone_coasted_report_or_a_parked_aircraft():
+    assert _parts(_flight(taxi_s=3000, air_s=60)) == []  # the taxi (15 km) is most of the map
+    t = _flight(taxi_s=40)
+    t["coasted"] = np.arange(len(t)) > 0  # one report, then 39 s coasted at 10 kt: no taxi seen
+    assert _parts(t) == []
+    assert _parts(_flight(taxi_s=600, air_s=0)) == []  # parked or taxiing only: the map is the taxi
+
+
+def test_the_figure_zooms_on_the_taxi_and_marks_it_on_the_map():
+    t = _flight()
+    reports = pd.DataFrame({"sensor_id": "021:0/1", "sensor_kind": "adsb", "time": t["time"],
+                            "latitude": t["latitude"], "longitude": t["longitude"]})
+    fig = track_figure(t, reports, "ABC123")
+    ax, zoom, _ = fig.axes
+    e = (t["longitude"] - t["longitude"].median()).to_numpy() * KM_PER_DEG
+    taxi = slice(0, 300)
+    x0, x1 = zoom.get_xlim()
+    assert x0 < e[taxi].min() and e[taxi].max() < x1 and (x1 - x0) < 0.1 * np.ptp(e)
+    mx0, mx1 = ax.get_xlim()
+    assert mx0 < e.min() and e.max() < mx1
+    assert [p.get_width() for p in ax.patches if type(p).__name__ == "Rectangle"] == [x1 - x0]
+    assert len(track_figure(_flight(taxi_s=0), reports.iloc[300:], "ABC123").axes) == 2
