@@ -1,10 +1,9 @@
 """Pair pre-filter: which aircraft are close enough, horizontally and vertically, to need a closer look.
 
-A sort and sweep (`pipeline.conflict.sweep`, all times in one kernel call) finds the pairs without testing
-all n(n-1)/2 of a time. Callers
-widen the radius by a margin: the largest closing distance within the look-ahead when the tree holds
-current positions (`closing_margin_m`), or a probability bound when it holds predicted positions
-(`pipeline.conflict.pc_margin`).
+A sort and sweep (`pipeline.conflict.sweep`: the times of a chunk in one kernel call) finds the pairs
+without testing all n(n-1)/2 of a time. Callers widen the radius by a margin: the largest closing
+distance within the look-ahead for current positions (`closing_margin_m`), or a probability bound for
+predicted positions (`pipeline.conflict.pc_margin`).
 """
 
 from __future__ import annotations
