@@ -25,18 +25,17 @@ def grouped_box_pairs(coords: np.ndarray, edges: np.ndarray, half_width: np.ndar
     order = np.lexsort((coords[:, 0], group))  # by group, then along the first coordinate
     ordered = np.ascontiguousarray(coords[order])
     found = np.empty((len(coords) + 1024, 2), dtype=np.int64)  # room for most calls' pairs
-    count = _sweep(ordered, edges, half_width, found)
+    count = _sweep(ordered, order, edges, half_width, found)
     if count > len(found):  # counted but not all written: again with room for them all
         found = np.empty((count, 2), dtype=np.int64)
-        _sweep(ordered, edges, half_width, found)
-    found = found[:count]
-    i, j = order[found[:, 0]], order[found[:, 1]]
-    return np.column_stack([np.minimum(i, j), np.maximum(i, j)])
+        _sweep(ordered, order, edges, half_width, found)
+    return found[:count]
 
 
 @njit(cache=True)
-def _sweep(coords, edges, half_width, out):
-    """Number of box pairs of the sorted coords, the first len(out) of them written into out."""
+def _sweep(coords, order, edges, half_width, out):
+    """Number of box pairs of the sorted coords, the first len(out) of them written into out as rows of
+    the unsorted ones (coords[k] is row order[k]), the smaller first."""
     room = out.shape[0]
     n_dim = coords.shape[1]
     k = 0
@@ -53,7 +52,7 @@ def _sweep(coords, edges, half_width, out):
                         break
                 if inside:
                     if k < room:
-                        out[k, 0] = i
-                        out[k, 1] = j
+                        out[k, 0] = min(order[i], order[j])
+                        out[k, 1] = max(order[i], order[j])
                     k += 1
     return k
