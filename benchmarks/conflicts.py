@@ -9,7 +9,7 @@ feet), one in five climbing or descending at 1000-2500 ft/min between FL100 and 
 by 1 Hz ADS-B (irregular spacing, position error 20 +- 5 m, flight level in 25 ft steps). Then the stages
 of `msdc conflicts` after decoding, each timed on one core (NUMBA_NUM_THREADS=1): `track(...,
 keep_states=True)` of every aircraft (the real tracker, not synthetic states), `predict_tracks` (IMM
-prediction at every second and horizon), `pair_probabilities` (k-d tree on the predicted positions
+prediction at every second and horizon), `pair_probabilities` (sort and sweep of the predicted positions
 widened by the PC margin, cheap bound, exact PC), losses of separation in the tracked data, alert
 events, false alerts, closest approach and warning times. The numba kernels are compiled (or loaded from
 their cache) on a warm-up run first, not counted.

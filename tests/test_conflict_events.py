@@ -124,3 +124,63 @@ def test_warning_times_and_false_alerts_by_hand():
     got = {(r.aircraft_a, r.horizon_s): r.warning_s for r in warn.itertuples()}
     assert got[("A", 20)] == -5.0 and got[("A", 60)] == 50.0 and got[("A", 120)] == 90.0
     assert all(np.isnan(got[("C", h)]) for h in (20, 60, 120))  # missed at every horizon
+
+
+def chord_nm(lat1, lon1, lat2, lon2):
+    """Straight line between two points on the WGS-84 surface, from the ellipsoid's own formulas."""
+    e2 = (1 / 298.257223563) * (2 - 1 / 298.257223563)
+
+    def ecef(lat, lon):
+        la, lo = np.radians(lat), np.radians(lon)
+        n = A / np.sqrt(1 - e2 * np.sin(la) ** 2)
+        return np.array([n * np.cos(la) * np.cos(lo), n * np.cos(la) * np.sin(lo), n * (1 - e2) * np.sin(la)])
+
+    return float(np.linalg.norm(ecef(lat1, lon1) - ecef(lat2, lon2))) / 1852.0
+
+
+def test_losses_of_separation_equal_brute_force():
+    """Every pair at every time tested (O(n^2)), the runs walked grid time by grid time."""
+    rng = np.random.default_rng(11)
+    n_aircraft, n_steps = 14, 30
+    lat = rng.uniform(-0.15, 0.15, n_aircraft)
+    lon = rng.uniform(-0.15, 0.15, n_aircraft)
+    rows = []
+    for k in range(n_steps):
+        lat, lon = lat + rng.normal(0, 0.004, n_aircraft), lon + rng.normal(0, 0.004, n_aircraft)
+        fl = rng.choice([330.0, 339.8, 340.0, 340.2, 350.0], n_aircraft)  # 1000 ft apart, or wobbling
+        for a in range(n_aircraft):
+            if rng.random() > 0.1:  # some aircraft absent at some times
+                rows.append((f"AC{a:02d}", T0 + pd.Timedelta(seconds=k), lat[a], lon[a], fl[a]))
+    tracks = pd.DataFrame(rows, columns=["aircraft_id", "time", "latitude", "longitude", "flight_level"])
+    tracks = tracks.sample(frac=1.0, random_state=3).reset_index(drop=True)  # any row order
+    got = losses_of_separation(tracks, 5.0, 1000.0, 25.0)
+
+    grid = sorted(tracks["time"].unique())
+    at = {(r.time, r.aircraft_id): r for r in tracks.itertuples()}
+    ids = sorted(tracks["aircraft_id"].unique())
+    expected = []
+    for ia, a in enumerate(ids):
+        for b in ids[ia + 1:]:
+            run = []
+            for t in grid + [None]:
+                ra, rb = at.get((t, a)), at.get((t, b))
+                inside = False
+                if ra is not None and rb is not None:
+                    h = chord_nm(ra.latitude, ra.longitude, rb.latitude, rb.longitude)
+                    v = abs(ra.flight_level - rb.flight_level) * 100
+                    inside = h < 5.0 and v < 975.0
+                if inside:
+                    run.append((t, h, v))
+                elif run:
+                    t_min, h_min, v_min = min(run, key=lambda s: s[1])
+                    expected.append((a, b, run[0][0], run[-1][0], (run[-1][0] - run[0][0]).total_seconds(),
+                                     h_min, t_min, v_min, min(s[2] for s in run)))
+                    run = []
+    expected.sort(key=lambda e: (e[2], e[0], e[1]))
+    assert len(expected) >= 10 and any(e[4] > 0 for e in expected)  # several losses, some lasting
+    assert len(got) == len(expected)
+    for row, exp in zip(got.itertuples(index=False), expected, strict=True):
+        assert (row.aircraft_a, row.aircraft_b, row.start, row.end, row.duration_s) == exp[:5]
+        assert row.min_horizontal_nm == pytest.approx(exp[5], rel=1e-9) and row.time_of_min == exp[6]
+        assert row.vertical_at_min_ft == pytest.approx(exp[7], rel=1e-9)
+        assert row.min_vertical_ft == pytest.approx(exp[8], rel=1e-9)

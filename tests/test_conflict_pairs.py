@@ -93,6 +93,8 @@ def test_pairs_per_step_equal_brute_force():
         ok &= np.abs(fl[i] - fl[j]) * 100 <= 1000
         expected |= {(t, ids[a], ids[b]) for a, b in zip(i[ok], j[ok], strict=True)}
     assert len(expected) > 20 and found == expected
+    for rows in (1, 70):  # a time per chunk, chunks of a few whole times: the same pairs in the same order
+        pd.testing.assert_frame_equal(pairs_per_step(tracks, 10.0, 1000.0, chunk_rows=rows), got)
 
 
 def test_pair_probabilities_keep_every_pair_above_eps():

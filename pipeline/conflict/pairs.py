@@ -1,20 +1,21 @@
 """Pair pre-filter: which aircraft are close enough, horizontally and vertically, to need a closer look.
 
-A k-d tree (scipy's cKDTree) finds the pairs in O(n log n) rather than testing all n(n-1)/2. Callers
-widen the radius by a margin: the largest closing distance within the look-ahead when the tree holds
-current positions (`closing_margin_m`), or a probability bound when it holds predicted positions
-(`pipeline.conflict.pc_margin`).
+A sort and sweep (`pipeline.conflict.sweep`: the times of a chunk in one kernel call) finds the pairs
+without testing all n(n-1)/2 of a time. Callers widen the radius by a margin: the largest closing
+distance within the look-ahead for current positions (`closing_margin_m`), or a probability bound for
+predicted positions (`pipeline.conflict.pc_margin`).
 """
 
 from __future__ import annotations
 
 import numpy as np
 import pandas as pd
-from scipy.spatial import cKDTree
 
 from pipeline.conflict.geometry import M_PER_NM, surface_ecef_m
+from pipeline.conflict.sweep import grouped_box_pairs
 
 PAIR_COLUMNS = ["time", "aircraft_a", "aircraft_b"]
+CHUNK_ROWS = 1 << 16  # track rows searched for pairs at once (whole times)
 
 
 def candidate_pairs(position_m, altitude_ft, radius_m: float, vertical_ft: float) -> np.ndarray:
@@ -26,21 +27,31 @@ def candidate_pairs(position_m, altitude_ft, radius_m: float, vertical_ft: float
         raise ValueError(f"position_m: expected shape (n, 2) or (n, 3), got {pos.shape}")
     if alt.shape != (len(pos),):
         raise ValueError(f"altitude_ft: expected shape ({len(pos)},) to match position_m, got {alt.shape}")
+    _check_limits(radius_m, vertical_ft)
+    return _grouped_pairs(pos, alt, np.array([0, len(pos)]), radius_m, vertical_ft)
+
+
+def _check_limits(radius_m: float, vertical_ft: float) -> None:
     for name, value in (("radius_m", radius_m), ("vertical_ft", vertical_ft)):
         if not np.isfinite(value) or value < 0:
             raise ValueError(f"{name}: must be a finite non-negative distance, got {value!r}")
-    finite = np.isfinite(pos).all(axis=1) & np.isfinite(alt)
-    if len(pos) < 2 or not finite.any():
+
+
+def _grouped_pairs(pos: np.ndarray, alt: np.ndarray, edges: np.ndarray, radius_m: float,
+                   vertical_ft: float) -> np.ndarray:
+    """`candidate_pairs` of each group of rows [edges[g], edges[g + 1]) at once: row pairs (i, j), i < j,
+    sorted, rows with a non-finite coordinate left out."""
+    keep = np.flatnonzero(np.isfinite(pos).all(axis=1) & np.isfinite(alt))
+    if len(keep) < 2:
         return np.empty((0, 2), dtype=np.int64)
-    keep = np.flatnonzero(finite)
-    # the box |dx|, |dy|, |dz| <= radius, |d alt| <= vertical (altitude scaled to the radius) holds
-    # every wanted pair; the exact cylinder test follows
-    scale = radius_m / vertical_ft if vertical_ft > 0 else 1e12
-    points = np.column_stack([pos[keep], alt[keep] * scale])
-    found = cKDTree(points).query_pairs(radius_m * (1 + 1e-12), p=np.inf, output_type="ndarray")
+    # the box |dx|, |dy|, |dz| <= radius, |d alt| <= vertical, a little wider, holds every wanted pair;
+    # the exact cylinder test follows
+    box = np.array([radius_m] * pos.shape[1] + [vertical_ft]) * (1 + 1e-9)
+    found = grouped_box_pairs(np.column_stack([pos[keep], alt[keep]]), np.searchsorted(keep, edges),
+                              np.broadcast_to(box, (len(edges) - 1, len(box))))
     i, j = keep[found[:, 0]], keep[found[:, 1]]
     near = (((pos[i] - pos[j]) ** 2).sum(axis=1) <= radius_m**2) & (np.abs(alt[i] - alt[j]) <= vertical_ft)
-    pairs = np.column_stack([np.minimum(i, j), np.maximum(i, j)])[near]
+    pairs = np.column_stack([i, j])[near]
     return pairs[np.lexsort((pairs[:, 1], pairs[:, 0]))]
 
 
@@ -51,36 +62,39 @@ def closing_margin_m(max_speed_kt: float, horizon_s: float) -> float:
 
 
 def pairs_per_step(tracks: pd.DataFrame, radius_nm: float = 5.0, vertical_ft: float = 1000.0,
-                   margin_nm: float = 0.0, vertical_margin_ft: float = 0.0) -> pd.DataFrame:
+                   margin_nm: float = 0.0, vertical_margin_ft: float = 0.0,
+                   chunk_rows: int = CHUNK_ROWS) -> pd.DataFrame:
     """Candidate pairs at each time of a track frame: `time, aircraft_a, aircraft_b` (a < b).
 
     tracks: `aircraft_id, time, latitude, longitude, flight_level` (one row per aircraft and time).
     Horizontal distance is the chord between the points on the WGS-84 surface (never more than the
-    geodesic), so no pair within radius_nm + margin_nm of each other is missed.
+    geodesic), so no pair within radius_nm + margin_nm of each other is missed. The times are searched
+    in chunks of whole times of about chunk_rows rows (memory only: the result does not depend on it).
     """
     _require(tracks, ["aircraft_id", "time", "latitude", "longitude", "flight_level"], "tracks")
     frame = tracks.sort_values(["time", "aircraft_id"], kind="stable")
+    radius_m = (radius_nm + margin_nm) * M_PER_NM
+    if len(frame):
+        _check_limits(radius_m, vertical_ft + vertical_margin_ft)
     xyz = surface_ecef_m(frame["latitude"].to_numpy(float), frame["longitude"].to_numpy(float))
     alt = frame["flight_level"].to_numpy(float) * 100.0
     ids = frame["aircraft_id"].to_numpy()
     times = time_key(frame["time"])
-    starts = np.flatnonzero(np.r_[True, times[1:] != times[:-1]])
-    bounds = np.r_[starts, len(frame)]
-    radius_m = (radius_nm + margin_nm) * M_PER_NM
-    out_t, out_a, out_b = [], [], []
-    rows = np.arange(len(frame))
-    for lo, hi in zip(bounds[:-1], bounds[1:], strict=True):
-        found = candidate_pairs(xyz[lo:hi], alt[lo:hi], radius_m, vertical_ft + vertical_margin_ft)
-        if len(found):
-            out_t.append(np.repeat(rows[lo], len(found)))
-            out_a.append(ids[lo:hi][found[:, 0]])
-            out_b.append(ids[lo:hi][found[:, 1]])
-    if not out_t:
+    bounds = np.r_[np.flatnonzero(np.r_[True, times[1:] != times[:-1]]), len(frame)]
+    found = []
+    g0 = 0
+    while g0 < len(bounds) - 1:  # chunks of whole times
+        g1 = max(int(np.searchsorted(bounds, bounds[g0] + max(int(chunk_rows), 1), side="right")) - 1, g0 + 1)
+        lo, hi = int(bounds[g0]), int(bounds[g1])
+        found.append(_grouped_pairs(xyz[lo:hi], alt[lo:hi], bounds[g0:g1 + 1] - lo, radius_m,
+                                    vertical_ft + vertical_margin_ft) + lo)
+        g0 = g1
+    pairs = np.concatenate(found) if found else np.empty((0, 2), dtype=np.int64)
+    if not len(pairs):
         return pd.DataFrame({c: pd.Series(dtype=tracks[s].dtype) for c, s in
                              zip(PAIR_COLUMNS, ["time", "aircraft_id", "aircraft_id"], strict=True)})
-    return pd.DataFrame({"time": frame["time"].array.take(np.concatenate(out_t)),
-                         "aircraft_a": np.concatenate(out_a),
-                         "aircraft_b": np.concatenate(out_b)})
+    return pd.DataFrame({"time": frame["time"].array.take(pairs[:, 0]), "aircraft_a": ids[pairs[:, 0]],
+                         "aircraft_b": ids[pairs[:, 1]]})
 
 
 def time_key(times: pd.Series) -> np.ndarray:

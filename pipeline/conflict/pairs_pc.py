@@ -20,19 +20,19 @@ from collections.abc import Iterator
 
 import numpy as np
 import pandas as pd
-from scipy.spatial import cKDTree
 from scipy.special import ndtr
 
 from pipeline.conflict.geometry import FT_PER_FL, M_PER_NM, VERTICAL_TOLERANCE_FT, vertical_limit_ft
 from pipeline.conflict.pairs import _require, time_key
 from pipeline.conflict.probability import conflict_probability, pc_margin, pc_upper_bound
+from pipeline.conflict.sweep import grouped_box_pairs
 
 PREDICTION_COLUMNS = ["aircraft_id", "time", "horizon_s", "east_m", "north_m", "var_east_m2",
                       "cov_east_north_m2", "var_north_m2", "flight_level"]
 PC_COLUMNS = ["time", "aircraft_a", "aircraft_b", "horizon_s", "pc", "horizontal_nm", "vertical_ft"]
 CHUNK_ROWS = 1 << 18  # prediction rows searched for pairs at once (whole (horizon, time) groups)
 _CHUNK = 20_000  # pairs whose exact PC is computed at once
-_SLACK = 1e-6  # the k-d tree's box, in radii, is this much wider than the exact test that follows
+_SLACK = 1e-6  # the sweep's box is this much wider (relatively) than the exact test that follows
 
 
 def pair_probabilities(predictions: pd.DataFrame, radius_nm: float = 5.0, vertical_ft: float = 1000.0,
@@ -41,7 +41,7 @@ def pair_probabilities(predictions: pd.DataFrame, radius_nm: float = 5.0, vertic
                        chunk_rows: int = CHUNK_ROWS) -> pd.DataFrame:
     """PC of every pair at every (time, horizon) whose PC can exceed eps.
 
-    Pairs come from a k-d tree on the predicted positions, the radius widened by `pc_margin`; or, given
+    Pairs come from a sort and sweep of the predicted positions, the radius widened by `pc_margin`; or, given
     `pairs` (`time, aircraft_a, aircraft_b`, e.g. from `pairs_per_step` on current positions with the
     closing distance as margin), exactly those pairs at every horizon.
 
@@ -66,7 +66,7 @@ def pair_probabilities(predictions: pd.DataFrame, radius_nm: float = 5.0, vertic
         key_h, key_t = ordered["horizon_s"].to_numpy(), time_key(ordered["time"])
         bounds = np.r_[np.flatnonzero(np.r_[True, (key_h[1:] != key_h[:-1]) | (key_t[1:] != key_t[:-1])]),
                        len(order)]
-        found = _tree_pairs(cols, order, bounds, radius_m, vertical_ft, eps, max(int(chunk_rows), 1))
+        found = _near_pairs(cols, order, bounds, radius_m, vertical_ft, eps, max(int(chunk_rows), 1))
         del key_h, key_t
     del keys, ordered
 
@@ -152,7 +152,7 @@ def _exact_batches(pending: list[tuple], last: bool, radius_m: float, method: st
         if n < len(number) else []
 
 
-def _tree_pairs(cols: _Columns, order: np.ndarray, bounds: np.ndarray, radius_m: float, vertical_ft: float,
+def _near_pairs(cols: _Columns, order: np.ndarray, bounds: np.ndarray, radius_m: float, vertical_ft: float,
                 eps: float, chunk_rows: int) -> Iterator[np.ndarray]:
     """Pairs of sorted positions within one (horizon, time) group whose PC can exceed eps, sorted, in
     chunks of whole groups of about chunk_rows rows: those `candidate_pairs` finds group by group within
@@ -190,13 +190,12 @@ def _chunk_pairs(cols: _Columns, rows: np.ndarray, edges: np.ndarray, radius_m: 
     x, y, alt = cols.east[r], cols.north[r], cols.fl[r] * FT_PER_FL
     finite = np.isfinite(x) & np.isfinite(y) & np.isfinite(alt)
     local, gid, x, y, alt = local[finite], gid[finite], x[finite], y[finite], alt[finite]
-    rg, vg = group_r[gid], group_v[gid]
-    # the box |dx|, |dy| <= radius, |d alt| <= vertical, in radii (a zero radius: in metres), holds every
-    # wanted pair; groups 4 apart along a fourth axis never meet; the exact cylinder test follows
-    unit = np.where(rg > 0, rg, 1.0)
-    scale = np.where(vg > 0, rg / np.where(vg > 0, vg, 1.0), 1e12)
-    points = np.column_stack([x / unit, y / unit, alt * scale / unit, 4.0 * gid])
-    found = cKDTree(points).query_pairs(1.0 + _SLACK, p=np.inf, output_type="ndarray")
+    vg = group_v[gid]
+    # the box |dx|, |dy| <= radius, |d alt| <= vertical, a little wider, holds every wanted pair; the exact
+    # cylinder test follows
+    edges_kept = np.searchsorted(gid, np.arange(len(multi) + 1))
+    box = np.column_stack([group_r, group_r, group_v]) * (1.0 + _SLACK)
+    found = grouped_box_pairs(np.column_stack([x, y, alt]), edges_kept, box)
     i, j = found[:, 0], found[:, 1]
     r2 = np.array([float(v) ** 2 for v in group_r])[gid[i]]  # as candidate_pairs: radius_m**2
     near = ((x[i] - x[j]) ** 2 + (y[i] - y[j]) ** 2 <= r2) & (np.abs(alt[i] - alt[j]) <= vg[i])
