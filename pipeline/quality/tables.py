@@ -11,6 +11,7 @@ recording is undated (its ``*_tod_s`` columns then give the time of day); JSON w
 
 from __future__ import annotations
 
+import itertools
 from collections.abc import Iterator
 
 import numpy as np
@@ -151,21 +152,18 @@ def _group_rows(group: pd.DataFrame, gap_s: float,
     return row, within, gaps, clean
 
 
-def _sensor_groups(narrow: pd.DataFrame) -> Iterator[tuple[tuple, list[pd.DataFrame]]]:
-    """Per sensor (SENSOR_KEYS, sorted) its reports of each aircraft (sorted by call sign, address and
-    aircraft), as a grouping by sensor then by aircraft gives them; one grouping over both, so no sensor's
-    reports are copied whole (the ADS-B sensor holds most of a run's)."""
+def _aircraft_groups(narrow: pd.DataFrame) -> Iterator[tuple[tuple, pd.DataFrame]]:
+    """Each aircraft's reports of each sensor with its key (the sensor's number, SENSOR_KEYS, call sign,
+    address, aircraft), sorted and keyed as iterating a grouping over those gives them, each taken only
+    when asked for: the grouping's sorted copy of every report is never made."""
     sensor = narrow.groupby(SENSOR_KEYS, dropna=False, sort=True).ngroup().to_numpy()  # sorted as the keys
-    current, sensor_id, groups = None, (), []
-    for key, g in narrow.groupby([sensor, *SENSOR_KEYS, "callsign", "address", "aircraft"], dropna=False,
-                                 sort=True):
-        if key[0] != current and groups:
-            yield sensor_id, groups
-            groups = []
-        current, sensor_id = key[0], key[1:1 + len(SENSOR_KEYS)]
-        groups.append(g)
-    if groups:
-        yield sensor_id, groups
+    by = narrow.groupby([sensor, *SENSOR_KEYS, "callsign", "address", "aircraft"], dropna=False, sort=True)
+    ids, keys = by.ngroup().to_numpy(), by.size().index
+    order = np.argsort(ids, kind="stable")  # each group's rows in frame order, as the grouping takes them
+    bounds = np.searchsorted(ids[order], np.arange(len(keys) + 1))
+    del by, ids, sensor
+    for i, key in enumerate(keys):
+        yield key, narrow.take(order[bounds[i]:bounds[i + 1]])
 
 
 def _pooled_row(rows: list[dict], intervals: list[np.ndarray], sensor_id: tuple,
@@ -342,9 +340,10 @@ def quality_tables(meas: pd.DataFrame, *, gap_s: float = 180.0,
               "mops_version", "duplicate", "sensor_kind", "sensor_id", *DEDUP_KEYS]
     narrow = both[[c for c in dict.fromkeys(needed) if c in both]]  # the groups are copied: keep them narrow
     del both
-    for sensor_id, groups in _sensor_groups(narrow):
+    for _, groups in itertools.groupby(_aircraft_groups(narrow), key=lambda group: group[0][0]):  # per sensor
         rows, intervals, clean = [], [], []
-        for g in groups:
+        for key, g in groups:
+            sensor_id = key[1:1 + len(SENSOR_KEYS)]
             row, within, g_gaps, g_clean = _group_rows(g, gap_s, jumps_by_aircraft)
             rows.append(row)
             intervals.append(within)
