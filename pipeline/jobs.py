@@ -996,8 +996,10 @@ def _write_workbook(result: CorrelateResult, progress: Progress | None, max_wind
         from pipeline.report.quality_figures import slotting_figure
 
         images = dict(quality_figures(result.quality, out.parent, out.stem))
-        is_radar = (result.measurements["sensor_kind"] == "radar").to_numpy(bool)
-        radar, adsb = result.measurements[is_radar], result.measurements[~is_radar]
+        shown = result.measurements[SLOTTING_FIGURE_INPUTS]  # what the figures read, not every column copied
+        is_radar = (shown["sensor_kind"] == "radar").to_numpy(bool)
+        radar, adsb = shown[is_radar], shown[~is_radar]
+        del shown
         for i, w in enumerate(run.windows[:max_windows]):
             label = f"{w.summary['callsign'] or w.summary['address']} window {w.summary['window']}"
             images[f"{label}: latitude and longitude before and after slotting"] = slotting_figure(
