@@ -727,20 +727,21 @@ def _marked_measurements(options: AircraftOptions, checked: Checked, progress: P
 
 # the measurement columns far_separations reads
 FAR_SEPARATION_INPUTS = ["sensor_id", "sac", "sic", "rho_nm"]
+# the measurement columns correlate --quality's slotting figures read (pipeline.report.quality_figures)
+SLOTTING_FIGURE_INPUTS = ["time", "sensor_kind", "aircraft_id", "callsign", "address", "latitude",
+                          "longitude"]
 
 
-def correlate_columns(options: CorrelateOptions) -> list[str] | None:
+def correlate_columns(options: CorrelateOptions) -> list[str]:
     """The measurement columns a correlate job builds, in schema order: what correlate, mark_once, the
-    filters asked for and far_separations read, and with ``fill`` "predict" what the tracker reads; None
-    (every column) with ``quality``, whose steps read most of the model. Half the bytes of a row on a
-    large recording."""
+    filters asked for and far_separations read, with ``fill`` "predict" what the tracker reads, and with
+    ``quality`` what the quality step (``quality_columns``) and its slotting figures read. Half the bytes
+    of a row on a large recording."""
     from pipeline.correlate.correlation import CORRELATION_INPUTS
     from pipeline.model.dedup import DEDUP_KEYS
     from pipeline.model.jumps import JUMP_INPUTS
     from pipeline.model.schema import MEASUREMENT_COLUMNS, column_names
 
-    if options.quality:
-        return None
     need = {*CORRELATION_INPUTS, *DEDUP_KEYS, "sensor_kind", "sensor_id", *JUMP_INPUTS,
             *FAR_SEPARATION_INPUTS}
     if options.fill == "predict":
@@ -749,23 +750,37 @@ def correlate_columns(options: CorrelateOptions) -> list[str] | None:
         need |= set(FILTER_INPUTS)
     need |= {"nucp_nic"} if options.min_nic is not None else set()
     need |= {"nacp"} if options.min_nacp is not None else set()
+    if options.quality:  # (the ADS-B reference: correlate has no --reference)
+        need |= set(_quality_inputs("adsb")) | set(SLOTTING_FIGURE_INPUTS)
     return column_names(need & set(MEASUREMENT_COLUMNS))  # the job-wide flags are added by mark_once
 
 
-def quality_columns(options: QualityOptions) -> list[str] | None:
-    """The measurement columns a quality job builds, in schema order: what the quality tables, the radar
-    errors against the ADS-B reference, mark_once and the aircraft selection read; None (every column)
-    with ``reference="track"``, whose tracker reads most of the model. Two thirds of the bytes of a row."""
+def _quality_inputs(reference: str) -> list[str]:
+    """The measurement columns the quality step reads: the quality tables, the radar errors against the
+    ``reference`` ("adsb" or "track": the tracker's and track_reference's inputs as well), the aircraft
+    selection and mark_once."""
     from pipeline.model.dedup import DEDUP_KEYS
     from pipeline.model.jumps import JUMP_INPUTS
-    from pipeline.model.schema import MEASUREMENT_COLUMNS, column_names
     from pipeline.quality.accuracy import ACCURACY_INPUTS
     from pipeline.quality.tables import QUALITY_INPUTS
 
-    if options.reference != "adsb":
-        return None
-    need = {*QUALITY_INPUTS, *ACCURACY_INPUTS, *DEDUP_KEYS, *JUMP_INPUTS, "sensor_kind", "sensor_id",
-            "aircraft_id", "callsign", "address"}
+    need = [*QUALITY_INPUTS, *ACCURACY_INPUTS, *DEDUP_KEYS, *JUMP_INPUTS, "sensor_kind", "sensor_id",
+            "aircraft_id", "callsign", "address"]
+    if reference == "track":
+        from pipeline.quality.track_reference import TRACK_REFERENCE_INPUTS
+        from pipeline.track.tracker import FILTER_INPUTS, REQUIRED
+
+        need += [*REQUIRED, *FILTER_INPUTS, *TRACK_REFERENCE_INPUTS]  # the tracker's optional ones too
+    return need
+
+
+def quality_columns(options: QualityOptions) -> list[str]:
+    """The measurement columns a quality job builds, in schema order: what the quality tables, the radar
+    errors against the reference (with ``reference="track"`` the tracker's inputs), mark_once and the
+    aircraft selection read. Two thirds of the bytes of a row with the ADS-B reference."""
+    from pipeline.model.schema import MEASUREMENT_COLUMNS, column_names
+
+    need = set(_quality_inputs(options.reference))
     return column_names(need & set(MEASUREMENT_COLUMNS))  # the job-wide flags are added by mark_once
 
 
@@ -783,7 +798,7 @@ def correlate_job(options: CorrelateOptions, *, progress: Progress | None = None
     columns = correlate_columns(options)
     loaded, meas_all = _marked_measurements(options, checked, progress, "Pre-processing data",
                                             split_adsb=options.split_adsb, columns=columns,
-                                            flags=None if columns is None else ["jump"])
+                                            flags=None if options.quality or columns is None else ["jump"])
     meas, removed = apply_filters(meas_all, drop_jumps=options.drop_jumps, min_nic=options.min_nic,
                                   min_nacp=options.min_nacp)
     if progress:  # the thesis tool's stage names
@@ -981,8 +996,10 @@ def _write_workbook(result: CorrelateResult, progress: Progress | None, max_wind
         from pipeline.report.quality_figures import slotting_figure
 
         images = dict(quality_figures(result.quality, out.parent, out.stem))
-        is_radar = (result.measurements["sensor_kind"] == "radar").to_numpy(bool)
-        radar, adsb = result.measurements[is_radar], result.measurements[~is_radar]
+        shown = result.measurements[SLOTTING_FIGURE_INPUTS]  # what the figures read, not every column copied
+        is_radar = (shown["sensor_kind"] == "radar").to_numpy(bool)
+        radar, adsb = shown[is_radar], shown[~is_radar]
+        del shown
         for i, w in enumerate(run.windows[:max_windows]):
             label = f"{w.summary['callsign'] or w.summary['address']} window {w.summary['window']}"
             images[f"{label}: latitude and longitude before and after slotting"] = slotting_figure(

@@ -15,6 +15,7 @@ from pipeline.jobs import CorrelateOptions, QualityOptions, correlate_columns, m
 from pipeline.model.load import load_measurements
 from pipeline.model.schema import MEASUREMENT_COLUMNS, SchemaError, column_names, validate
 from pipeline.model.sensors import read_sensors
+from pipeline.track.tracker import FILTER_INPUTS, REQUIRED
 
 FIX = Path(__file__).resolve().parents[1] / "fixtures"
 INPUTS = [FIX / "radar.ast", FIX / "adsb.ast"]
@@ -67,7 +68,10 @@ def test_correlate_columns_follow_the_options():
     assert plain == column_names(plain) and "aircraft_id" in plain and "rho_nm" in plain
     assert not {"cov_ee_m2", "sigma_major_m", "nucp_nic", "nacp", "mode3a", "file"} & set(plain)
     assert {"nucp_nic", "nacp"} <= set(correlate_columns(corr(min_nic=5, min_nacp=7)))
-    assert correlate_columns(corr(quality=True)) is None  # quality reads most of the model
+    with_quality = set(correlate_columns(corr(quality=True)))  # what quality and its figures read too
+    assert with_quality == set(plain) | set(quality_columns(quality())) | set(jobs.SLOTTING_FIGURE_INPUTS)
+    assert {"nacp", "mops_version", "theta_deg"} <= with_quality
+    assert not {"cov_ee_m2", "sigma_major_m", "mode3a", "file"} & with_quality
     predict = set(correlate_columns(corr(fill="predict")))  # the tracker reads the covariance
     assert predict - set(plain) == {"cov_ee_m2", "cov_en_m2", "cov_nn_m2", "nucr_nacv", "flight_level"}
 
@@ -113,10 +117,14 @@ def test_quality_columns_follow_the_reference():
     plain = quality_columns(quality())
     assert plain == column_names(plain) and {"aircraft_id", "rho_nm", "nacp", "mops_version"} <= set(plain)
     assert not {"cov_ee_m2", "sigma_major_m", "height_m", "mode3a", "track_number", "file"} & set(plain)
-    assert quality_columns(quality(reference="track")) is None  # the tracker reads the covariance
+    track = quality_columns(quality(reference="track"))  # the tracker reads the covariance and NACv
+    assert set(track) - set(plain) == {"cov_ee_m2", "cov_en_m2", "cov_nn_m2"}
+    assert set(REQUIRED) | set(FILTER_INPUTS) | {"nacp"} <= set(track)
+    assert not {"sigma_major_m", "height_m", "mode3a", "track_number", "file"} & set(track)
 
 
-@pytest.mark.parametrize("kw", [{}, {"all_aircraft": False, "callsign": "MAS72", "gap_s": 30.0}])
+@pytest.mark.parametrize("kw", [{}, {"all_aircraft": False, "callsign": "MAS72", "gap_s": 30.0},
+                                {"reference": "track"}])
 def test_quality_on_the_narrow_frame_equals_the_full_frame(kw, monkeypatch):
     seen = []
     measured = jobs._quality
@@ -129,9 +137,34 @@ def test_quality_on_the_narrow_frame_equals_the_full_frame(kw, monkeypatch):
     narrow = jobs.quality_job(quality(**kw))
     monkeypatch.setattr(jobs, "quality_columns", lambda options: None)
     full = jobs.quality_job(quality(**kw))
-    assert "cov_ee_m2" not in seen[0] and "rho_nm" in seen[0] and "cov_ee_m2" in seen[1]
+    track = kw.get("reference") == "track"
+    assert ("cov_ee_m2" in seen[0]) == track and "rho_nm" in seen[0] and "mode3a" not in seen[0]
+    assert "cov_ee_m2" in seen[1] and "mode3a" in seen[1]
     assert list(narrow.quality.sheets) == list(full.quality.sheets)
     for name, table in full.quality.sheets.items():
         pd.testing.assert_frame_equal(narrow.quality.sheets[name], table, check_exact=True)
     assert len(narrow.quality.errors) > 0 and len(narrow.quality.sheets["Jumps"]) > 0
     pd.testing.assert_frame_equal(narrow.quality.errors, full.quality.errors, check_exact=True)
+
+
+def test_correlate_quality_on_the_narrow_frame_equals_the_full_frame(monkeypatch):
+    """correlate --quality builds the columns correlate and quality read (and every jump column), not the
+    whole frame: the same windows, quality sheets and radar errors."""
+    narrow = jobs.correlate_job(corr(quality=True))
+    assert "fit_latitude" in narrow.measurements and "nacp" in narrow.measurements
+    assert "cov_ee_m2" not in narrow.measurements and "mode3a" not in narrow.measurements
+    monkeypatch.setattr(jobs, "correlate_columns", lambda options: None)
+    full = jobs.correlate_job(corr(quality=True))
+    assert "cov_ee_m2" in full.measurements
+    assert len(narrow.run.windows) == len(full.run.windows) > 0
+    for (s_n, slots_n, lags_n), (s_f, slots_f, lags_f) in zip(_windows(narrow.run), _windows(full.run),
+                                                                 strict=True):
+        assert s_n == s_f
+        pd.testing.assert_frame_equal(slots_n, slots_f)
+        pd.testing.assert_frame_equal(lags_n, lags_f)
+    assert list(narrow.quality.sheets) == list(full.quality.sheets) and "Jumps" in full.quality.sheets
+    for name, table in full.quality.sheets.items():
+        pd.testing.assert_frame_equal(narrow.quality.sheets[name], table, check_exact=True)
+    assert len(narrow.quality.errors) > 0 and len(narrow.quality.sheets["Jumps"]) > 0
+    pd.testing.assert_frame_equal(narrow.quality.errors, full.quality.errors, check_exact=True)
+    assert narrow.run.extra_sheets.keys() == full.run.extra_sheets.keys()

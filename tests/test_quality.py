@@ -255,6 +255,28 @@ def test_quality_figures(sim, frames, tables, tmp_path):
     assert empty.exists()
 
 
+def test_slotting_figure_rows_equal_a_selection_over_both_sensors_joined(frames):
+    """The figure's raw reports of one sensor are found without joining both sensors' frames: the same
+    rows, values and clock as select() over the two joined (also with one sensor empty)."""
+    from pipeline.correlate.windows import in_window
+    from pipeline.model.measurements import select
+    from pipeline.model.time import midnight, with_clock
+    from pipeline.report.quality_figures import _raw_in_window
+
+    radar, adsb = frames[frames["sensor_kind"] == "radar"], frames[frames["sensor_kind"] == "adsb"]
+    window = correlate(frames, callsign="MAS72").windows[0]
+    s = window.summary
+    for meas, other in ((radar, adsb), (adsb, radar), (radar.iloc[:0], adsb)):
+        both = pd.concat([meas, other], ignore_index=True)
+        want = with_clock(select(both, s["callsign"], s["address"]), midnight(both["time"]))
+        if len(meas):
+            want = want[(want["sensor_kind"] == meas["sensor_kind"].iloc[0]).to_numpy(bool)]
+        want = want[in_window(want["time_of_day"], s["start_tod"], s["end_tod"])]
+        got = _raw_in_window(window, meas, other)
+        assert len(got) > 0
+        pd.testing.assert_frame_equal(got, want, check_exact=True)
+
+
 def _sheet(ws) -> pd.DataFrame:
     """A workbook sheet read back by openpyxl: header row, then the cells' values as openpyxl reads them."""
     rows = list(ws.iter_rows(values_only=True))

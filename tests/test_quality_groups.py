@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import numpy as np
 import pandas as pd
+import pytest
 
 from pipeline.quality.tables import ALL, ID_KEYS, QUALITY_BIN_S, _adsb_over_time, _adsb_value_counts
 
@@ -43,8 +44,13 @@ def _with_pooled(adsb: pd.DataFrame) -> pd.DataFrame:
     return pd.concat([adsb, adsb.assign(callsign=ALL, address="")], ignore_index=True)
 
 
-def test_value_counts_equal_a_grouping_over_the_key_texts():
+@pytest.mark.parametrize("spelled_all", [False, True])
+def test_value_counts_equal_a_grouping_over_the_key_texts(spelled_all):
+    """Counted once per aircraft and once per sensor, then summed: an aircraft spelling a pooled group's
+    keys adds to its counts."""
     adsb = _reports()
+    if spelled_all:
+        adsb.loc[adsb.index[::50], ["callsign", "address"]] = [ALL, ""]
     got = _adsb_value_counts(adsb)
     long = _with_pooled(adsb).melt(id_vars=ID_KEYS, value_vars=["nucp_nic", "nacp", "nucr_nacv", "sil"],
                                    var_name="indicator", value_name="value")
@@ -59,8 +65,13 @@ def test_value_counts_equal_a_grouping_over_the_key_texts():
     assert np.allclose(got["share_pct"], 100.0 * got["reports"] / totals)
 
 
-def test_over_time_equals_a_grouping_over_the_key_texts_and_bins():
+@pytest.mark.parametrize("spelled_all", [False, True])
+def test_over_time_equals_a_grouping_over_the_key_texts_and_bins(spelled_all):
+    """Each report counts for its aircraft and its sensor, the two halves numbered apart; an aircraft
+    whose keys spell a pooled group's (not decodable, but possible in a frame) joins that group."""
     adsb = _reports()
+    if spelled_all:
+        adsb.loc[adsb.index[::50], ["callsign", "address"]] = [ALL, ""]
     got = _adsb_over_time(adsb)
     frame = _with_pooled(adsb).assign(
         bin_start_tod_s=lambda f: np.floor(f["time_of_day"] / QUALITY_BIN_S) * QUALITY_BIN_S)
@@ -72,7 +83,8 @@ def test_over_time_equals_a_grouping_over_the_key_texts_and_bins():
     assert got["bin_start_tod_s"].tolist() == [k[-1] for k in want.index]
     assert got["callsign"].tolist() == [k[0] for k in want.index]
     assert got["sic"].isna().tolist() == [pd.isna(k[4]) for k in want.index]
-    np.testing.assert_allclose(got["nacp_median"], want["nacp_median"], equal_nan=True)
-    np.testing.assert_allclose(got["sil_median"], want["sil_median"], equal_nan=True)
+    assert (got["callsign"] == ALL).sum() == 3 * 4  # pooled: two stations and one without SAC/SIC, 4 bins
+    np.testing.assert_array_equal(got["nacp_median"], want["nacp_median"])  # medians of whole numbers
+    np.testing.assert_array_equal(got["sil_median"], want["sil_median"])
     start = (got["bin_start_utc"] - pd.Timestamp("2019-03-01", tz="UTC")).dt.total_seconds()
     np.testing.assert_allclose(start, got["bin_start_tod_s"], atol=1e-6)

@@ -327,9 +327,22 @@ def select(meas: pd.DataFrame, callsign: str | None = None, address: str | None 
     Call signs match case- and space-insensitively, addresses as hex in any case; a radar plot without
     I048/240 belongs to the aircraft when its identity rule linked it there.
     """
-    ids = set(meas["aircraft_id"].dropna())
-    if callsign is not None:
-        ids &= set(meas.loc[meas["callsign"] == normalise_callsign(callsign), "aircraft_id"].dropna())
-    if address is not None:
-        ids &= set(meas.loc[meas["address"] == normalise_address(address), "aircraft_id"].dropna())
+    ids = matching_aircraft([meas], callsign, address)
     return meas[meas["aircraft_id"].isin(ids).fillna(False).to_numpy(bool)].reset_index(drop=True)
+
+
+def matching_aircraft(frames: list[pd.DataFrame], callsign: str | None = None,
+                      address: str | None = None) -> set:
+    """The aircraft ids ``select`` picks from these frames joined (seen in any of them with this call sign
+    and/or address), without joining them."""
+
+    def seen(column: str | None = None, value: str | None = None) -> set:
+        return set().union(*(set((f["aircraft_id"] if column is None else
+                                  f.loc[f[column] == value, "aircraft_id"]).dropna()) for f in frames))
+
+    ids = seen()
+    if callsign is not None:
+        ids &= seen("callsign", normalise_callsign(callsign))
+    if address is not None:
+        ids &= seen("address", normalise_address(address))
+    return ids

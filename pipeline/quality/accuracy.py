@@ -205,7 +205,7 @@ def radar_errors(meas: pd.DataFrame, sensors: pd.DataFrame, *, max_gap_s: float 
     de, dn, _ = ecef_to_enu(*geodetic_to_ecef(p_lat, p_lon, p_h), lat, lon, h)
     trk = np.arctan2(ve, vn)
 
-    out = pd.DataFrame({
+    columns = {
         "radar": site["name"].to_numpy(), "sac": m["sac"].astype("Int64").to_numpy(),
         "sic": m["sic"].astype("Int64").to_numpy(), "callsign": m["callsign"].to_numpy(),
         "address": m["address"].to_numpy(), "time_of_day": m["time_of_day"].to_numpy(float),
@@ -220,8 +220,13 @@ def radar_errors(meas: pd.DataFrame, sensors: pd.DataFrame, *, max_gap_s: float 
         "along_track_m": de * np.sin(trk) + dn * np.cos(trk),
         "cross_track_m": de * np.cos(trk) - dn * np.sin(trk),
         "horizontal_error_m": distance_m(lat, lon, p_lat, p_lon),
-    })
-    return out[ERROR_COLUMNS].sort_values(["sac", "sic", "time_of_day"], kind="stable").reset_index(drop=True)
+    }
+    # sorted by radar and time: the order found on the three key columns alone, then each column taken in
+    # it, so that the table is built once and not copied (selected, sorted, re-indexed) as a whole
+    keys = pd.DataFrame({k: columns[k] for k in ("sac", "sic", "time_of_day")})
+    order = keys.sort_values(["sac", "sic", "time_of_day"], kind="stable").index.to_numpy()
+    del keys, m, site
+    return pd.DataFrame({k: columns.pop(k)[order] for k in ERROR_COLUMNS}, columns=ERROR_COLUMNS, copy=False)
 
 
 def _moments(values: pd.Series, base: str, unit: str) -> dict[str, float]:

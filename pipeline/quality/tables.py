@@ -11,6 +11,7 @@ recording is undated (its ``*_tod_s`` columns then give the time of day); JSON w
 
 from __future__ import annotations
 
+import itertools
 from collections.abc import Iterator
 
 import numpy as np
@@ -151,21 +152,18 @@ def _group_rows(group: pd.DataFrame, gap_s: float,
     return row, within, gaps, clean
 
 
-def _sensor_groups(narrow: pd.DataFrame) -> Iterator[tuple[tuple, list[pd.DataFrame]]]:
-    """Per sensor (SENSOR_KEYS, sorted) its reports of each aircraft (sorted by call sign, address and
-    aircraft), as a grouping by sensor then by aircraft gives them; one grouping over both, so no sensor's
-    reports are copied whole (the ADS-B sensor holds most of a run's)."""
+def _aircraft_groups(narrow: pd.DataFrame) -> Iterator[tuple[tuple, pd.DataFrame]]:
+    """Each aircraft's reports of each sensor with its key (the sensor's number, SENSOR_KEYS, call sign,
+    address, aircraft), sorted and keyed as iterating a grouping over those gives them, each taken only
+    when asked for: the grouping's sorted copy of every report is never made."""
     sensor = narrow.groupby(SENSOR_KEYS, dropna=False, sort=True).ngroup().to_numpy()  # sorted as the keys
-    current, sensor_id, groups = None, (), []
-    for key, g in narrow.groupby([sensor, *SENSOR_KEYS, "callsign", "address", "aircraft"], dropna=False,
-                                 sort=True):
-        if key[0] != current and groups:
-            yield sensor_id, groups
-            groups = []
-        current, sensor_id = key[0], key[1:1 + len(SENSOR_KEYS)]
-        groups.append(g)
-    if groups:
-        yield sensor_id, groups
+    by = narrow.groupby([sensor, *SENSOR_KEYS, "callsign", "address", "aircraft"], dropna=False, sort=True)
+    ids, keys = by.ngroup().to_numpy(), by.size().index
+    order = np.argsort(ids, kind="stable")  # each group's rows in frame order, as the grouping takes them
+    bounds = np.searchsorted(ids[order], np.arange(len(keys) + 1))
+    del by, ids, sensor
+    for i, key in enumerate(keys):
+        yield key, narrow.take(order[bounds[i]:bounds[i + 1]])
 
 
 def _pooled_row(rows: list[dict], intervals: list[np.ndarray], sensor_id: tuple,
@@ -216,18 +214,19 @@ def _key_groups(adsb: pd.DataFrame) -> tuple[np.ndarray, np.ndarray, pd.DataFram
 
 def _adsb_value_counts(adsb: pd.DataFrame) -> pd.DataFrame:
     """Value counts of each ADS-B quality indicator present, per aircraft and pooled per ADS-B sensor
-    (counted on group numbers, then keyed and sorted as one grouping over the key columns)."""
+    (counted on group numbers, each report once for its aircraft and once for its sensor without copying
+    the reports, then keyed, summed and sorted as one grouping over the key columns)."""
     indicators = _indicators(adsb)
     if adsb.empty or not indicators:
         return pd.DataFrame(columns=VALUE_COUNT_COLUMNS)
     own, pooled, keys = _key_groups(adsb)
-    group = np.concatenate([own, pooled])  # every report counts for its aircraft and for its sensor
     parts = []
     for c in indicators:
-        value = pd.to_numeric(adsb[c], errors="coerce").astype("Int64")
-        pairs = pd.DataFrame({"group": group, "value": pd.concat([value, value], ignore_index=True)})
-        size = pairs.groupby(["group", "value"], dropna=False, sort=False).size()
-        parts.append(size.rename("reports").reset_index().assign(indicator=c))
+        value = pd.to_numeric(adsb[c], errors="coerce").astype("Int64").array
+        for group in (own, pooled):  # every report counts for its aircraft and for its sensor (summed below)
+            size = pd.DataFrame({"group": group, "value": value}).groupby(["group", "value"], dropna=False,
+                                                                          sort=False).size()
+            parts.append(size.rename("reports").reset_index().assign(indicator=c))
     part = pd.concat(parts, ignore_index=True)
     counted = keys.iloc[part["group"].to_numpy()].reset_index(drop=True).assign(
         indicator=part["indicator"], value=part["value"], reports=part["reports"])
@@ -240,48 +239,67 @@ def _adsb_value_counts(adsb: pd.DataFrame) -> pd.DataFrame:
 
 def _adsb_over_time(adsb: pd.DataFrame) -> pd.DataFrame:
     """Median of each indicator and the integrity shares per 10-minute bin, per aircraft and pooled
-    (grouped once, on group numbers and bins, aggregated column by column: a day holds thousands of bins)."""
+    (grouped once, on group numbers and bins, aggregated column by column: a day holds thousands of bins).
+    Each report counts for its aircraft's group and its sensor's; the reports are not copied for that:
+    each half is numbered and aggregated on its own (integer counts add up exactly, and an aircraft's
+    group is never a pooled one, whose call sign "(all)" no decoded call sign can spell; if one were, that
+    group's medians would be taken over both halves together, as one group)."""
     indicators = _indicators(adsb)
     columns = [*ID_KEYS, "bin_start_tod_s", "bin_start_utc", "reports", *[f"{c}_median" for c in indicators],
                *SHARE_COLUMNS]
     if adsb.empty:
         return pd.DataFrame(columns=columns)
     own, pooled, keys = _key_groups(adsb)
-    adsb = adsb[[c for c in dict.fromkeys(["time_of_day", "timestamp", *indicators, "nucp_nic",
-                                           "mops_version"]) if c in adsb]]  # the frame is wide
-    frame = pd.concat([adsb, adsb], ignore_index=True)  # each report: its aircraft's row, then its sensor's
-    frame["group"] = np.concatenate([own, pooled])
-    frame["bin_start_tod_s"] = np.floor(frame["time_of_day"].to_numpy(float) / QUALITY_BIN_S) * QUALITY_BIN_S
-    ids = frame.groupby(["group", "bin_start_tod_s"], dropna=False, sort=True).ngroup().to_numpy()
-    n = int(ids.max()) + 1
-    first = _first_rows(ids, n)  # each group's first row in frame order
-    group = frame["group"].to_numpy()[first]
+    rows = len(adsb)
+    bin_start = np.floor(adsb["time_of_day"].to_numpy(float) / QUALITY_BIN_S) * QUALITY_BIN_S
+    bins, bin_code = np.unique(bin_start, return_inverse=True)  # sorted, a missing time (NaN) last
+    # (group, bin) numbered in sorted order, as a sorted grouping over both columns would: an aircraft's
+    # row, then its sensor's
+    halves = [own * len(bins) + bin_code, pooled * len(bins) + bin_code]
+    del own, pooled, bin_code
+    pairs = np.unique(np.concatenate(halves))
+    ids = [np.searchsorted(pairs, h) for h in halves]
+    del halves
+    n = len(pairs)
+    first = _first_rows(np.concatenate(ids), n) % rows  # each group's first report (aircraft rows first)
+    group = pairs // len(bins)
     out = {k: keys[k].to_numpy()[group] for k in ID_KEYS}
-    out["bin_start_tod_s"] = frame["bin_start_tod_s"].to_numpy()[first]
-    tod0 = frame["time_of_day"].to_numpy(float)[first]
-    if "timestamp" in frame:
-        start = dated_or_nat(frame["timestamp"].iloc[first].reset_index(drop=True)) - pd.to_timedelta(
+    out["bin_start_tod_s"] = bins[pairs % len(bins)]
+    del pairs, group
+    tod0 = adsb["time_of_day"].to_numpy(float)[first]
+    if "timestamp" in adsb:
+        start = dated_or_nat(adsb["timestamp"].iloc[first].reset_index(drop=True)) - pd.to_timedelta(
             tod0 - out["bin_start_tod_s"], unit="s")
         out["bin_start_utc"] = start.array
     else:
         out["bin_start_utc"] = pd.array([pd.NaT] * n, dtype=UTC_DTYPE)
-    out["reports"] = np.bincount(ids, minlength=n)
+    out["reports"] = sum(np.bincount(i, minlength=n) for i in ids)
+    apart = np.intersect1d(ids[0], ids[1]).size == 0  # no group in both halves
     for c in indicators:
-        values = pd.Series(pd.to_numeric(frame[c], errors="coerce").to_numpy(dtype=float, na_value=np.nan))
-        out[f"{c}_median"] = values.groupby(ids).median().reindex(range(n)).to_numpy()
-    out |= _integrity_shares_by(frame, ids, n)
+        values = pd.to_numeric(adsb[c], errors="coerce").to_numpy(dtype=float, na_value=np.nan)
+        median = np.full(n, np.nan)
+        if apart:
+            for i in ids:
+                by = pd.Series(values).groupby(i).median()
+                median[by.index.to_numpy()] = by.to_numpy()
+        else:
+            by = pd.Series(np.concatenate([values, values])).groupby(np.concatenate(ids)).median()
+            median = by.reindex(range(n)).to_numpy()
+        out[f"{c}_median"] = median
+    out |= _integrity_shares_by(adsb, ids, n)
     return pd.DataFrame({c: out[c] for c in columns}, columns=columns)
 
 
-def _integrity_shares_by(adsb: pd.DataFrame, ids: np.ndarray, n: int) -> dict[str, np.ndarray]:
-    """SHARE_COLUMNS of integrity_shares() for every group ``ids`` at once."""
+def _integrity_shares_by(adsb: pd.DataFrame, ids: list[np.ndarray], n: int) -> dict[str, np.ndarray]:
+    """SHARE_COLUMNS of integrity_shares() for every group at once; each report of ``adsb`` counts for its
+    group in each array of ``ids``."""
     v = (pd.to_numeric(adsb["nucp_nic"], errors="coerce").to_numpy(dtype=float, na_value=np.nan)
          if "nucp_nic" in adsb else np.full(len(adsb), np.nan))
     known = ~np.isnan(v)
 
     def pct(hit: np.ndarray, of: np.ndarray) -> np.ndarray:
-        total = np.bincount(ids, of.astype(float), minlength=n)
-        count = np.bincount(ids, (hit & of).astype(float), minlength=n)
+        total = sum(np.bincount(i, of.astype(float), minlength=n) for i in ids)  # whole numbers: exact sums
+        count = sum(np.bincount(i, (hit & of).astype(float), minlength=n) for i in ids)
         with np.errstate(invalid="ignore", divide="ignore"):
             return np.where(total > 0, 100.0 * count / total, np.nan)
 
@@ -322,9 +340,10 @@ def quality_tables(meas: pd.DataFrame, *, gap_s: float = 180.0,
               "mops_version", "duplicate", "sensor_kind", "sensor_id", *DEDUP_KEYS]
     narrow = both[[c for c in dict.fromkeys(needed) if c in both]]  # the groups are copied: keep them narrow
     del both
-    for sensor_id, groups in _sensor_groups(narrow):
+    for _, groups in itertools.groupby(_aircraft_groups(narrow), key=lambda group: group[0][0]):  # per sensor
         rows, intervals, clean = [], [], []
-        for g in groups:
+        for key, g in groups:
+            sensor_id = key[1:1 + len(SENSOR_KEYS)]
             row, within, g_gaps, g_clean = _group_rows(g, gap_s, jumps_by_aircraft)
             rows.append(row)
             intervals.append(within)

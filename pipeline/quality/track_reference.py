@@ -15,6 +15,8 @@ import pandas as pd
 from pipeline.model.geodesy import M_PER_FT, wrap180
 
 STEP_S = 0.5
+# the measurement columns read here besides the tracker's (pipeline.track.tracker REQUIRED and FILTER_INPUTS)
+TRACK_REFERENCE_INPUTS = ["time", "nacp"]
 _FPM_TO_MS = M_PER_FT / 60.0
 _KT_TO_MS = 1852.0 / 3600.0
 

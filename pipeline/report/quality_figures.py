@@ -16,7 +16,7 @@ from matplotlib.ticker import FuncFormatter, MultipleLocator
 
 from pipeline.correlate.results import WindowResult
 from pipeline.correlate.windows import in_window
-from pipeline.model.measurements import select
+from pipeline.model.measurements import matching_aircraft
 from pipeline.model.time import midnight, with_clock
 from pipeline.report.figures import new_figure, save_png
 
@@ -170,8 +170,12 @@ def _raw_in_window(window: WindowResult, meas: pd.DataFrame, other: pd.DataFrame
     cs, addr = _none_if_blank(s.get("callsign")), _none_if_blank(s.get("address"))
     if cs is None and addr is None:
         return meas.iloc[:0]
-    both = pd.concat([meas, other], ignore_index=True)
-    rows = with_clock(select(both, cs, addr), midnight(both["time"]))
+    # select() over both frames joined, without joining them whole: the aircraft matched over both, then
+    # only their rows joined
+    ids = matching_aircraft([meas, other], cs, addr)
+    chosen = [f[f["aircraft_id"].isin(ids).fillna(False).to_numpy(bool)] for f in (meas, other)]
+    start = midnight(pd.concat([meas["time"], other["time"]], ignore_index=True))
+    rows = with_clock(pd.concat(chosen, ignore_index=True), start)
     rows = rows[(rows["sensor_kind"] == meas["sensor_kind"].iloc[0]).to_numpy(bool)] if len(meas) else rows
     return rows[in_window(rows["time_of_day"], s["start_tod"], s["end_tod"])]
 
