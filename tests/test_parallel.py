@@ -1,5 +1,5 @@
-"""Per-aircraft threads: results in order, lazily taken, errors raised; the tracker and the noise estimate
-give the same numbers, bit for bit, on one thread and on several."""
+"""Per-aircraft threads: results in order, lazily taken, errors raised; the tracker, the noise estimate and
+the conflict predictions give the same numbers, bit for bit, on one thread and on two."""
 
 from __future__ import annotations
 
@@ -12,6 +12,7 @@ import pytest
 import track_e2e_data as d
 
 import pipeline.parallel as parallel
+from pipeline.conflict.predict import predict_tracks
 from pipeline.parallel import map_ordered
 from pipeline.track import track
 from pipeline.track.noise import estimate_noise
@@ -61,15 +62,15 @@ def measurements(tmp_path_factory):
     return d.build(d.small_scenario(), tmp=tmp_path_factory.mktemp("par")).measurements
 
 
-def test_tracker_and_noise_estimate_are_the_same_on_two_threads(measurements, monkeypatch):
+def test_tracker_noise_estimate_and_predictions_are_the_same_on_two_threads(measurements, monkeypatch):
     def run(n: int):
         monkeypatch.setattr(parallel, "thread_count", lambda: n)
         est = estimate_noise(measurements, sites=d.SITES)
-        res = track(est.measurements, smooth=True)
-        return est, res
+        res = track(est.measurements, smooth=True, keep_states=True)
+        return est, res, predict_tracks(res, [30.0, 90.0], step_s=5.0, sigma_alt=True)
 
-    est1, one = run(1)
-    estn, many = run(2)
+    est1, one, pred1 = run(1)
+    estn, many, predn = run(2)
     assert measurements["aircraft_id"].nunique() == 2  # both threads have an aircraft to do
     pd.testing.assert_frame_equal(est1.sensors, estn.sensors, check_exact=True)
     np.testing.assert_array_equal(est1.measurements[["cov_ee_m2", "cov_en_m2", "cov_nn_m2"]].to_numpy(),
@@ -77,3 +78,5 @@ def test_tracker_and_noise_estimate_are_the_same_on_two_threads(measurements, mo
     pd.testing.assert_frame_equal(one.tracks, many.tracks, check_exact=True)
     pd.testing.assert_frame_equal(one.sensors, many.sensors, check_exact=True)
     pd.testing.assert_frame_equal(one.rejected, many.rejected, check_exact=True)
+    assert len(pred1) > 1000
+    pd.testing.assert_frame_equal(pred1, predn, check_exact=True)
