@@ -7,7 +7,8 @@ period at 200-250 m/s from a random point of a 300 x 300 km square, alternating 
 and turns of 10-40 s at 1.5 or 3 deg/s either way; four in five level on FL200-FL410 (whole thousands of
 feet), one in five climbing or descending at 1000-2500 ft/min between FL100 and FL450. Each is reported
 by 1 Hz ADS-B (irregular spacing, position error 20 +- 5 m, flight level in 25 ft steps). Then the stages
-of `msdc conflicts` after decoding, each timed on one core (NUMBA_NUM_THREADS=1): `track(...,
+of `msdc conflicts` after decoding, each timed on `--cpus` cores (default 1: the process is pinned to its
+first CPU, so msdc's per-aircraft threads are one; NUMBA_NUM_THREADS=1): `track(...,
 keep_states=True)` of every aircraft (the real tracker, not synthetic states), `predict_tracks` (IMM
 prediction at every second and horizon), `pair_probabilities` (sort and sweep of the predicted positions
 widened by the PC margin, cheap bound, exact PC), losses of separation in the tracked data, alert
@@ -41,6 +42,7 @@ import pipeline.conflict.pairs_pc as pairs_pc  # noqa: E402
 from pipeline.conflict import alert_events, classify_alerts, losses_of_separation, warning_times  # noqa: E402
 from pipeline.conflict.approach import closest_approach  # noqa: E402
 from pipeline.conflict.predict import predict_tracks  # noqa: E402
+from pipeline.parallel import thread_count  # noqa: E402
 from pipeline.track import Plane, track  # noqa: E402
 
 LAT0, LON0 = 3.0, 101.5
@@ -132,7 +134,7 @@ def pipeline_stages(meas: pd.DataFrame, threshold: float, sigma_alt: bool = Fals
         print(f"horizon {h:>5.0f} s: {len(a):>4} alert events, {int(a['false_alert'].sum()):>4} false; "
               f"losses alerted before they began {int((w > 0).sum())}/{len(w)}, median warning "
               f"{w[w > 0].median():.0f} s")
-    print(f"timings on one core (load {os.getloadavg()[0]:.2f} now):")
+    print(f"timings on {thread_count()} CPU(s) (load {os.getloadavg()[0]:.2f} now):")
     print(f"  {'stage':<52} {'wall s':>8} {'CPU s':>8}")
     for name, wall, cpu in clock.rows:
         print(f"  {name:<52} {wall:8.2f} {cpu:8.2f}")
@@ -167,9 +169,13 @@ def main() -> None:
     parser.add_argument("--command-hours", type=float, default=1.0)
     parser.add_argument("--command-aircraft", type=int, default=30)
     parser.add_argument("--skip-command", action="store_true")
+    parser.add_argument("--cpus", type=int, default=1,
+                        help="pin the benchmark (and the command it runs) to this many CPUs (default 1)")
     parser.add_argument("--vertical", choices=("gate", "gaussian"), default="gate",
                         help="vertical proximity as msdc conflicts --vertical (default gate)")
     args = parser.parse_args()
+    if hasattr(os, "sched_setaffinity"):
+        os.sched_setaffinity(0, sorted(os.sched_getaffinity(0))[:max(args.cpus, 1)])
     seconds = int(args.minutes * 60)
     t0 = time.perf_counter()
     meas = scenario(args.aircraft, seconds)

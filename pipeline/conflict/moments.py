@@ -94,7 +94,7 @@ def cached_horizon_matrices(args: dict, aheads_s, cycle_s: float, pairs=POSITION
     return _cached(key, tuple(float(a) for a in aheads_s), float(cycle_s), tuple(pairs))
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def predict_batch(gov, dt, kinds, omegas, qs, tpm_kind, tpm_param, tpm_param2, cycle_s, mu_h, x_h, P_h,
                   A_mean, cols_mean, A_moment, cols_moment, pair_a, pair_b, mean_out, cov_out):
     """For each query q: the posterior of row gov[q] (mu_h, x_h, P_h) coasted dt[q] s by IMM cycles of at

@@ -16,6 +16,7 @@ import numpy as np
 import pandas as pd
 
 from pipeline.conflict.moments import ALL_PAIRS, POSITION_PAIRS, predict_states
+from pipeline.parallel import map_ordered
 from pipeline.track.frame import Plane
 from pipeline.track.imm import NX
 from pipeline.track.tracker import ImmState, TrackResult
@@ -85,8 +86,9 @@ def predict_tracks(result: TrackResult, horizons_s, *, step_s: float = 1.0,
     if plane is None and len(tracks):
         plane = Plane.around(tracks["latitude"].to_numpy(float), tracks["longitude"].to_numpy(float))
     n_h = len(horizons)
-    out = []
-    for aircraft_id, rows in tracks.groupby("aircraft_id", sort=True, observed=True):
+
+    def one(item: tuple) -> pd.DataFrame | None:  # one aircraft's predictions, none without grid rows
+        aircraft_id, rows = item
         if str(aircraft_id) not in result.runs:
             raise KeyError(f"aircraft {aircraft_id!r}: no filter history (run track(..., keep_states=True))")
         own, run, epoch = result.runs[str(aircraft_id)]
@@ -94,14 +96,14 @@ def predict_tracks(result: TrackResult, horizons_s, *, step_s: float = 1.0,
         on_grid = np.abs(tod / step_s - np.round(tod / step_s)) < 1e-6
         rows = rows.loc[on_grid & np.isfinite(rows["latitude"].to_numpy(float))]
         if rows.empty:
-            continue
+            return None
         t = (rows["time"] - epoch).dt.total_seconds().to_numpy(float)
         upd = np.flatnonzero(run.accepted)
         which = np.searchsorted(run.t[upd], t + 1e-9, side="right") - 1
         keep = which >= 0
         rows, t, which = rows.loc[keep], t[keep], which[keep]
         if rows.empty:
-            continue
+            return None
         gov = upd[which]
         dt = np.maximum(t - run.t[gov], 0.0)
         order = np.lexsort((dt, gov))  # the kernel continues one coasting chain per governing update
@@ -133,7 +135,10 @@ def predict_tracks(result: TrackResult, horizons_s, *, step_s: float = 1.0,
                  "flight_level": fl, "latitude": lat, "longitude": lon}
         if sigma_alt:
             frame["sigma_alt_ft"] = sig
-        out.append(pd.DataFrame(frame))
+        return pd.DataFrame(frame)
+
+    groups = tracks.groupby("aircraft_id", sort=True, observed=True)
+    out = [f for f in map_ordered(one, groups) if f is not None]
     columns = ["aircraft_id", "time", "horizon_s", "east_m", "north_m", "var_east_m2", "cov_east_north_m2",
                "var_north_m2", "flight_level", "latitude", "longitude"]
     columns += ["sigma_alt_ft"] if sigma_alt else []

@@ -21,7 +21,7 @@ STATUS_REJECTED, STATUS_UPDATED, STATUS_STARTED = 0, 1, 2
 LOG_2PI = math.log(2.0 * math.pi)
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def tpm_into(kind, param, param2, dt, r, out):
     """Mode transition matrix for an update interval dt (s) into out[:r, :r]: mode 0 (CV) leaves to the
     others with equal probability, the others only return to mode 0 (the dynamic-TPM paper's eq. 14)."""
@@ -61,7 +61,7 @@ def tpm_into(kind, param, param2, dt, r, out):
         out[j, j] = p
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def transition_into(kind, omega, q, dt, F, Q):
     """State transition F and process noise Q of one mode over dt (s); omega in rad/s, q = sigma_a^2."""
     for i in range(NX):
@@ -109,7 +109,7 @@ def transition_into(kind, omega, q, dt, F, Q):
             F[o + 1, o + 1] = 1.0
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def fpft_q(F, P, Q, tmp, out):
     """out = F P F^T + Q (6x6), using tmp as scratch."""
     for i in range(NX):
@@ -127,7 +127,7 @@ def fpft_q(F, P, Q, tmp, out):
             out[j, i] = acc
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def fx_into(F, x, out):
     """out = F x (6-vector)."""
     for i in range(NX):
@@ -137,7 +137,7 @@ def fx_into(F, x, out):
         out[i] = acc
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def mix_into(PI, mu, x, P, r, cbar, x0, P0):
     """IMM interaction: predicted mode probabilities cbar and mixed initial conditions x0, P0."""
     for j in range(r):
@@ -170,7 +170,7 @@ def mix_into(PI, mu, x, P, r, cbar, x0, P0):
                     P0[j, a, b] += w * (P[i, a, b] + da * (x[i, b] - x0[j, b]))
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def combine_into(w, x, P, r, xc, Pc):
     """Moment-matched mixture: xc = sum w_j x_j, Pc = sum w_j [P_j + (x_j - xc)(x_j - xc)^T]."""
     for a in range(NX):
@@ -186,7 +186,7 @@ def combine_into(w, x, P, r, xc, Pc):
             Pc[a, b] = acc
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def predict_into(kinds, omegas, qs, tpm_kind, tpm_param, tpm_param2, dt, r, mu, x, P,
                  PI, F, Q, tmp, cbar, x0, P0, xp, Pp):
     """One IMM prediction over dt: mixing with PI(dt), then each mode's F, Q (mode-conditioned xp, Pp);
@@ -199,20 +199,20 @@ def predict_into(kinds, omegas, qs, tpm_kind, tpm_param, tpm_param2, dt, r, mu, 
         fpft_q(F, P0[j], Q, tmp, Pp[j])
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def cycle_scratch(r):
     """Scratch for predict_into, allocated once per kernel call: PI, F, Q, tmp, cbar, x0, P0, xp, Pp."""
     return (np.empty((r, r)), np.empty((NX, NX)), np.empty((NX, NX)), np.empty((NX, NX)), np.empty(r),
             np.empty((r, NX)), np.empty((r, NX, NX)), np.empty((r, NX)), np.empty((r, NX, NX)))
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def chain_scratch(r):
     """A coasting chain's mode probabilities (r,), states (r, NX) and covariances (r, NX, NX)."""
     return np.empty(r), np.empty((r, NX)), np.empty((r, NX, NX))
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def copy_chain(r, mu, x, P, mu_c, x_c, P_c):
     """Copy mode probabilities (r,), states (r, NX) and covariances (r, NX, NX) into a chain's arrays."""
     for j in range(r):
@@ -223,7 +223,7 @@ def copy_chain(r, mu, x, P, mu_c, x_c, P_c):
                 P_c[j, a, b] = P[j, a, b]
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def coast_chain(g, d, g_c, t_c, cycle_s, tol, mu_h, x_h, P_h, kinds, omegas, qs, tpm_kind, tpm_param,
                 tpm_param2, r, mu_c, x_c, P_c, PI, F, Q, tmp, cbar, x0, P0, xp, Pp):
     """Carry the chain (mu_c, x_c, P_c), now t_c s after posterior g_c, to d s after posterior g by IMM
@@ -242,7 +242,7 @@ def coast_chain(g, d, g_c, t_c, cycle_s, tol, mu_h, x_h, P_h, kinds, omegas, qs,
     return g_c, t_c
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def _init_state(r, ze, zn, ree, ren, rnn, ve, vn, var_v, var_a, mu0, mu, x, P):
     for j in range(r):
         mu[j] = mu0[j]
@@ -263,7 +263,7 @@ def _init_state(r, ze, zn, ree, ren, rnn, ve, vn, var_v, var_a, mu0, mu, x, P):
         P[j, 5, 5] = var_a[j]
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def _reachable(i, k, t, ze, zn, ree, rnn, max_speed):
     """Report i lies within max_speed (m/s) of report k (k < 0: no report to compare, True), allowing
     4 sigma of the two reports' noise."""
@@ -273,7 +273,7 @@ def _reachable(i, k, t, ze, zn, ree, rnn, max_speed):
     return math.hypot(ze[i] - ze[k], zn[i] - zn[k]) <= reach
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def run_filter(t, ze, zn, ree, ren, rnn, ve0, vn0, var_v0, fl, kinds, omegas, qs, mu0,
                tpm_kind, tpm_param, tpm_param2, gate_d2, max_coast_s, restart_after, max_speed, q_fl, var_fl,
                status, nis, segment, t_state, mu_h, x_h, P_h, zv_h, Pv_h, keep):
@@ -486,7 +486,7 @@ def run_filter(t, ze, zn, ree, ren, rnn, ve0, vn0, var_v0, fl, kinds, omegas, qs
     return accepted
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def predict_rows(gov, dt, kinds, omegas, qs, tpm_kind, tpm_param, tpm_param2, q_fl, substep_s, mu_h,
                  x_h, P_h, zv_h, Pv_h, xc_out, Pc_out, mu_out, zv_out, Pv_out):
     """Combined estimate at query q: the posterior of row gov[q] predicted dt[q] s ahead (dt 0: the
@@ -521,7 +521,7 @@ def predict_rows(gov, dt, kinds, omegas, qs, tpm_kind, tpm_param, tpm_param2, q_
         Pv_out[q, 1, 1] = Pv_h[g, 1, 1] + q_fl * d * d
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def propagate_ends(gov, horizon, kinds, omegas, qs, tpm_kind, tpm_param, tpm_param2, mu_h, x_h, P_h,
                    xc_out, Pc_out):
     """For query q, the combined estimate ``propagate`` ends at from the posterior of row gov[q] over
@@ -553,7 +553,7 @@ def propagate_ends(gov, horizon, kinds, omegas, qs, tpm_kind, tpm_param, tpm_par
         combine_into(cbar, xp, Pp, r, xc_out[q], Pc_out[q])
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def propagate(kinds, omegas, qs, tpm_kind, tpm_param, tpm_param2, mu, x, P, horizon_s, step_s,
               mu_out, x_out, P_out, xc_out, Pc_out):
     """Repeated IMM prediction cycles without measurements (the conflict paper's trajectory

@@ -26,6 +26,8 @@ import numpy as np
 import pandas as pd
 from scipy.stats import chi2
 
+from pipeline.parallel import map_ordered
+
 from .config import TrackerConfig, default_modes
 from .frame import Plane
 from .plane import estimate, filter_plane
@@ -401,7 +403,7 @@ def _forms(aircraft: list[_Aircraft], n_rows: int, cov: np.ndarray, config: Trac
     speed_m_s = np.full(n_rows, np.nan)
     res_uw, hph_uw = np.full((n_rows, 2), np.nan), np.full((n_rows, 2, 2), np.nan)
     plane_speed = np.zeros(n_rows)
-    for a in aircraft:
+    def one(a: _Aircraft) -> None:  # writes only the aircraft's own rows
         c = a.m @ cov[a.rows] @ np.swapaxes(a.m, 1, 2)
         run = filter_plane(config, a.t, a.ze, a.zn, c[:, 0, 0], c[:, 0, 1], c[:, 1, 1])
         smoothed = smoothed_at_reports(run)
@@ -413,6 +415,9 @@ def _forms(aircraft: list[_Aircraft], n_rows: int, cov: np.ndarray, config: Trac
         res_uw[a.rows] = np.einsum("nij,nj->ni", a.rot, res)
         hph_uw[a.rows] = a.rot @ hph @ np.swapaxes(a.rot, 1, 2)
         plane_speed[a.rows] = a.speed_m_s
+
+    for _ in map_ordered(one, aircraft):
+        pass
     return _Pass(out, speed_m_s, res_uw, hph_uw, plane_speed)
 
 

@@ -19,7 +19,7 @@ from numba import njit
 from .imm import CA, NX, combine_into, fpft_q, fx_into, mix_into, tpm_into, transition_into
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def _inverse(A, out, work):
     """out = A^-1 for a 6x6 covariance; exactly-zero variances (CV/CT acceleration states without a
     CA mode) are replaced by 1, which leaves the gain's columns for them at zero."""
@@ -54,7 +54,7 @@ def _inverse(A, out, work):
                         out[i, j] -= f * out[c, j]
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def _gamma_cross(kind, q, a, t, Qx):
     """Cov(noise over [0, a], noise over [0, t]) for one constant acceleration (CA: jerk) per step."""
     for i in range(NX):
@@ -74,7 +74,7 @@ def _gamma_cross(kind, q, a, t, Qx):
                 Qx[o + i, o + j] = q * ga[i] * gt[j]
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def _apply_gain(C, Pbar_inv, xf, Pf, xs_next, Ps_next, xbar, Pbar, G, tmp, xs, Ps):
     """G = C Pbar^-1; xs = xf + G (xs_next - xbar); Ps = Pf + G (Ps_next - Pbar) G^T (Pbar is scratch: it
     holds Ps_next - Pbar afterwards)."""
@@ -95,7 +95,7 @@ def _apply_gain(C, Pbar_inv, xf, Pf, xs_next, Ps_next, xbar, Pbar, G, tmp, xs, P
     fpft_q(G, Pbar, Pf, tmp, Ps)
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def smooth_rows(acc_t, acc_seg, mu_a, x_a, P_a, kinds, omegas, qs, tpm_kind, tpm_param, tpm_param2,
                 q_acc, q_dt, xf_q, Pf_q, xs_q, Ps_q):
     """Smoothed combined estimate at every query q (q_acc: index of its governing accepted update,
@@ -200,7 +200,7 @@ def smooth_rows(acc_t, acc_seg, mu_a, x_a, P_a, kinds, omegas, qs, tpm_kind, tpm
         _apply_gain(C, Pbar_inv, xtc, Ptc, xs[k + 1], Ps[k + 1], xbar, Pbar, G, tmp, xs_q[q], Ps_q[q])
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def _joint(kinds, omegas, qs, tpm_kind, tpm_param, tpm_param2, dt, r, mu, x, P, xk, PI, cbar, x0, P0, xp, Pp,
            F, Q, Cj, C, tmp, xbar, Pbar):
     """Predicted mixture (xbar, Pbar) over dt and its cross-covariance C with the current combined xk."""
@@ -238,7 +238,7 @@ def _joint(kinds, omegas, qs, tpm_kind, tpm_param, tpm_param2, dt, r, mu, x, P, 
                 C[a, b] += cbar[j] * (x0[j, a] - xk[a]) * (xp[j, b] - xbar[b])
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def _pair_smooth(kind, omega, q, a, t, xi, Pi, xs_next, Ps_next, Fa, Qa, Ft, Qt, C, G, tmp, work,
                  Pbar, Pbar_inv, xbar, xt, Pt, x_out, P_out):
     """One mode-matched RTS step: the state a s after an update, given the state at the update N(xi, Pi)
@@ -277,7 +277,7 @@ def _pair_smooth(kind, omega, q, a, t, xi, Pi, xs_next, Ps_next, Fa, Qa, Ft, Qt,
     _apply_gain(C, Pbar_inv, xt, Pt, xs_next, Ps_next, xbar, Pbar, G, tmp, x_out, P_out)
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def _psd_project(L, lv, D, V):
     """Keep the non-negative part of the symmetric information L (Jacobi eigen-decomposition, D and V
     scratch) and lv's part in its span: the later data cannot make the state less certain."""
@@ -345,7 +345,7 @@ def _psd_project(L, lv, D, V):
         lv[r] = acc
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def _backward_information(kind, omega, q, t, x0, P0, xs_next, Ps_next, F, Q, work, xp, Pp, inv_p, inv_s, L,
                           M, Minv, lv, Om, om):
     """Information the data after an update carry on the state at it, given the mode over the next
@@ -404,7 +404,7 @@ def _backward_information(kind, omega, q, t, x0, P0, xs_next, Ps_next, F, Q, wor
             Om[c, r] = acc
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def _fuse(x, P, Om, om, work, A, Ainv, b, x_out, P_out):
     """N(x, P) times the backward information (Om, om), conditioned on the dimensions P holds exactly
     (zero variance: a CV or CT mode's acceleration) keeping their value: x_out = A^-1 b, P_out = A^-1."""
@@ -448,7 +448,7 @@ def _fuse(x, P, Om, om, work, A, Ainv, b, x_out, P_out):
             P_out[r, c] = Ainv[r, c] if P[c, c] > 0.0 else 0.0
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def imm_smooth_rows(acc_t, acc_seg, mu_a, x_a, P_a, kinds, omegas, qs, tpm_kind, tpm_param, tpm_param2,
                     q_acc, q_dt, xf_q, Pf_q, muf_q, xs_q, Ps_q, mus_q):
     """Fixed-interval IMM smoother in two-filter form (after Lopez & Danes): smoothed mode probabilities and
@@ -548,7 +548,7 @@ def imm_smooth_rows(acc_t, acc_seg, mu_a, x_a, P_a, kinds, omegas, qs, tpm_kind,
         combine_into(mus[k + 1], xq, Pq, r, xs_q[q], Ps_q[q])
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def _pair_weights(tpm_kind, tpm_param, tpm_param2, t, r, mu, mus_next, PI, cbar, w):
     """w[i, j] = P(mode i at k, mode j at k+1 | all data) = PI_ij mu_i mus_next_j / cbar_j (Kim's
     approximation: the mode at k given the mode at k+1 does not depend on later data)."""

@@ -26,6 +26,8 @@ from dataclasses import dataclass, field
 import numpy as np
 import pandas as pd
 
+from pipeline.parallel import map_ordered
+
 from .config import TrackerConfig, default_modes
 from .covariance import nacv_variance
 from .frame import Plane
@@ -133,8 +135,10 @@ def track(measurements: pd.DataFrame, *, step_s: float = 1.0, max_coast_s: float
         return empty
     epoch = frame["time"].min().floor("D") if epoch is None else pd.Timestamp(epoch)
     tracks, sensors, aircraft, rejected, finals, runs = [], [], [], [], {}, {}
-    for aircraft_id, group in frame.groupby("aircraft_id", sort=True, observed=True):
-        out = _track_one(str(aircraft_id), group, epoch, config, args, names, step_s, smooth, smoother)
+    groups = frame.groupby("aircraft_id", sort=True, observed=True)
+    outs = map_ordered(lambda item: (item[0], _track_one(str(item[0]), item[1], epoch, config, args, names,
+                                                         step_s, smooth, smoother)), groups)
+    for aircraft_id, out in outs:
         tracks.append(out["tracks"])
         sensors.append(out["sensors"])
         aircraft.append(out["aircraft"])

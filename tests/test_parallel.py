@@ -1,0 +1,82 @@
+"""Per-aircraft threads: results in order, lazily taken, errors raised; the tracker, the noise estimate and
+the conflict predictions give the same numbers, bit for bit, on one thread and on two."""
+
+from __future__ import annotations
+
+import threading
+import time
+
+import numpy as np
+import pandas as pd
+import pytest
+import track_e2e_data as d
+
+import pipeline.parallel as parallel
+from pipeline.conflict.predict import predict_tracks
+from pipeline.parallel import map_ordered
+from pipeline.track import track
+from pipeline.track.noise import estimate_noise
+
+
+def test_results_come_in_order_from_several_threads():
+    names = set()
+
+    def slow(i: int) -> int:
+        names.add(threading.current_thread().name)
+        time.sleep(0.002 * ((7 * i) % 5))  # later items often finish first
+        return i * i
+
+    assert list(map_ordered(slow, range(40), threads=4)) == [i * i for i in range(40)]
+    assert len(names) > 1 and all(n.startswith("msdc") for n in names)
+    assert list(map_ordered(slow, range(5), threads=1)) == [0, 1, 4, 9, 16]
+
+
+def test_items_are_taken_at_most_two_per_thread_ahead():
+    taken = []
+
+    def items():
+        for i in range(100):
+            taken.append(i)
+            yield i
+
+    results = map_ordered(lambda i: i, items(), threads=3)
+    assert next(results) == 0
+    assert len(taken) <= 2 * 3 + 1
+
+
+def test_an_error_in_one_item_is_raised_in_order():
+    def fail_at_7(i: int) -> int:
+        if i == 7:
+            raise ValueError("item 7")
+        return i
+
+    got = []
+    with pytest.raises(ValueError, match="item 7"):
+        for r in map_ordered(fail_at_7, range(20), threads=4):
+            got.append(r)
+    assert got == list(range(7))
+
+
+@pytest.fixture(scope="module")
+def measurements(tmp_path_factory):
+    return d.build(d.small_scenario(), tmp=tmp_path_factory.mktemp("par")).measurements
+
+
+def test_tracker_noise_estimate_and_predictions_are_the_same_on_two_threads(measurements, monkeypatch):
+    def run(n: int):
+        monkeypatch.setattr(parallel, "thread_count", lambda: n)
+        est = estimate_noise(measurements, sites=d.SITES)
+        res = track(est.measurements, smooth=True, keep_states=True)
+        return est, res, predict_tracks(res, [30.0, 90.0], step_s=5.0, sigma_alt=True)
+
+    est1, one, pred1 = run(1)
+    estn, many, predn = run(2)
+    assert measurements["aircraft_id"].nunique() == 2  # both threads have an aircraft to do
+    pd.testing.assert_frame_equal(est1.sensors, estn.sensors, check_exact=True)
+    np.testing.assert_array_equal(est1.measurements[["cov_ee_m2", "cov_en_m2", "cov_nn_m2"]].to_numpy(),
+                                  estn.measurements[["cov_ee_m2", "cov_en_m2", "cov_nn_m2"]].to_numpy())
+    pd.testing.assert_frame_equal(one.tracks, many.tracks, check_exact=True)
+    pd.testing.assert_frame_equal(one.sensors, many.sensors, check_exact=True)
+    pd.testing.assert_frame_equal(one.rejected, many.rejected, check_exact=True)
+    assert len(pred1) > 1000
+    pd.testing.assert_frame_equal(pred1, predn, check_exact=True)
