@@ -80,6 +80,15 @@ def _windows(run) -> list:
     return [(w.summary, w.slots, w.lags) for w in run.windows]
 
 
+def _assert_same_windows(narrow, full) -> None:
+    """The two runs have the same windows: summaries, slots and lags."""
+    assert len(narrow.windows) == len(full.windows) > 0
+    for (s_n, slots_n, lags_n), (s_f, slots_f, lags_f) in zip(_windows(narrow), _windows(full), strict=True):
+        assert s_n == s_f
+        pd.testing.assert_frame_equal(slots_n, slots_f)
+        pd.testing.assert_frame_equal(lags_n, lags_f)
+
+
 @pytest.mark.parametrize("kw", [{}, {"drop_jumps": True, "min_nic": 5, "min_nacp": 7},
                                 {"pairs": "all", "split_adsb": True}, {"fill": "predict"}])
 def test_correlation_on_the_narrow_frame_equals_the_full_frame(kw, monkeypatch):
@@ -89,12 +98,7 @@ def test_correlation_on_the_narrow_frame_equals_the_full_frame(kw, monkeypatch):
     monkeypatch.setattr(jobs, "correlate_columns", lambda options: None)
     full = jobs.correlate_job(corr(**kw))
     assert "cov_ee_m2" in full.measurements and "fit_latitude" in full.measurements
-    assert len(narrow.run.windows) == len(full.run.windows) > 0
-    for (s_n, slots_n, lags_n), (s_f, slots_f, lags_f) in zip(_windows(narrow.run), _windows(full.run),
-                                                                 strict=True):
-        assert s_n == s_f
-        pd.testing.assert_frame_equal(slots_n, slots_f)
-        pd.testing.assert_frame_equal(lags_n, lags_f)
+    _assert_same_windows(narrow.run, full.run)
     assert narrow.run.skipped == full.run.skipped and narrow.run.filters == full.run.filters
     if kw.get("drop_jumps"):
         assert narrow.run.filters["jumps"] > 0
@@ -156,12 +160,7 @@ def test_correlate_quality_on_the_narrow_frame_equals_the_full_frame(monkeypatch
     monkeypatch.setattr(jobs, "correlate_columns", lambda options: None)
     full = jobs.correlate_job(corr(quality=True))
     assert "cov_ee_m2" in full.measurements
-    assert len(narrow.run.windows) == len(full.run.windows) > 0
-    for (s_n, slots_n, lags_n), (s_f, slots_f, lags_f) in zip(_windows(narrow.run), _windows(full.run),
-                                                                 strict=True):
-        assert s_n == s_f
-        pd.testing.assert_frame_equal(slots_n, slots_f)
-        pd.testing.assert_frame_equal(lags_n, lags_f)
+    _assert_same_windows(narrow.run, full.run)
     assert list(narrow.quality.sheets) == list(full.quality.sheets) and "Jumps" in full.quality.sheets
     for name, table in full.quality.sheets.items():
         pd.testing.assert_frame_equal(narrow.quality.sheets[name], table, check_exact=True)
