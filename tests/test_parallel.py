@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import threading
 import time
+from dataclasses import asdict
 
 import numpy as np
 import pandas as pd
@@ -57,6 +58,20 @@ def test_an_error_in_one_item_is_raised_in_order():
     assert got == list(range(7))
 
 
+def test_work_mapped_from_a_pool_thread_stays_in_that_thread():
+    def inner(i: int) -> tuple[int, int]:
+        return i, threading.get_ident()
+
+    def outer(i: int) -> tuple[int, list[tuple[int, int]]]:
+        return threading.get_ident(), list(map_ordered(inner, range(3), threads=4))
+
+    results = list(map_ordered(outer, range(6), threads=2))
+    assert len(results) == 6
+    for ident, rows in results:
+        assert [k for k, _ in rows] == [0, 1, 2]
+        assert {i for _, i in rows} == {ident}  # no pool inside the pool: the outer item's own thread
+
+
 @pytest.fixture(scope="module")
 def measurements(tmp_path_factory):
     return d.build(d.small_scenario(), tmp=tmp_path_factory.mktemp("par")).measurements
@@ -80,3 +95,24 @@ def test_tracker_noise_estimate_and_predictions_are_the_same_on_two_threads(meas
     pd.testing.assert_frame_equal(one.rejected, many.rejected, check_exact=True)
     assert len(pred1) > 1000
     pd.testing.assert_frame_equal(pred1, predn, check_exact=True)
+
+
+def test_radar_errors_against_the_track_are_the_same_on_two_threads(monkeypatch):
+    from test_quality_track_reference import FLEET
+
+    from fixtures.scenario import Scenario
+    from fixtures.simulate import simulate
+    from pipeline.model.measurements import build_measurements
+    from pipeline.model.sensors import REQUIRED_COLUMNS
+    from pipeline.quality.accuracy import radar_errors
+
+    sc = Scenario(name="threads", aircraft=FLEET[:4])
+    sim = simulate(sc, seed=7)
+    sensors = pd.DataFrame([asdict(sc.radar)])[REQUIRED_COLUMNS]
+    meas = build_measurements(sim.radar, sim.adsb, sensors)
+    errors = []
+    for n in (1, 2):
+        monkeypatch.setattr(parallel, "thread_count", lambda n=n: n)
+        errors.append(radar_errors(meas, sensors, reference="track"))
+    assert errors[0]["callsign"].nunique() >= 2 and len(errors[0]) > 100
+    pd.testing.assert_frame_equal(errors[0], errors[1], check_exact=True)

@@ -33,6 +33,7 @@ from pipeline.model.jumps import JUMP_INPUTS, KT_TO_MS, detect_jumps
 from pipeline.model.measurements import NACP_95_M
 from pipeline.model.sensors import sensor_sites
 from pipeline.model.time import midnight, with_clock
+from pipeline.parallel import map_ordered
 
 MAX_ADSB_GAP_S = 10.0
 ERROR_COLUMNS = [
@@ -146,8 +147,9 @@ def _matched(meas: pd.DataFrame, max_gap_s: float, jump_kw: dict | None, referen
     drop[np.flatnonzero(is_adsb)[jumps]] = True
     keep = np.flatnonzero(~drop)
     start = midnight(meas["time"])
-    parts = []
-    for callsign, address, _, radar, other in aircraft_rows(meas[AIRCRAFT_COLUMNS].iloc[keep]):
+
+    def one(item: tuple) -> pd.DataFrame:  # one aircraft's radar reports with their reference
+        callsign, address, _, radar, other = item
         r, _ = deduplicate(_clocked(meas, keep[radar], start))
         a, _ = deduplicate(_clocked(meas, keep[other], start))
         if reference == "track":
@@ -158,7 +160,11 @@ def _matched(meas: pd.DataFrame, max_gap_s: float, jump_kw: dict | None, referen
             ref = _interpolate(_adsb_track(a), r["time_of_day"].to_numpy(float), max_gap_s)
         r = r.assign(callsign=callsign or pd.NA, address=address or pd.NA,
                      **{f"ref_{k}": v for k, v in ref.items()})
-        parts.append(r[np.isfinite(ref["lat"])])
+        return r[np.isfinite(ref["lat"])]
+
+    # the smoothed tracks overlap on threads (their kernels release the lock); interpolation is pandas alone
+    parts = list(map_ordered(one, aircraft_rows(meas[AIRCRAFT_COLUMNS].iloc[keep]),
+                             threads=None if reference == "track" else 1))
     if not parts:
         return pd.DataFrame(columns=[*meas.columns, "time_of_day", "timestamp", "radar_row", "ref_lat"])
     return pd.concat(parts, ignore_index=True)
