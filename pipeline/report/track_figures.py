@@ -164,9 +164,10 @@ def track_figure(tracks: pd.DataFrame, reports: pd.DataFrame, title: str = "") -
     ax.set_ylim(n0, n1)
     _draw_ellipses(ax, tracks, e_t, n_t, span)
     t = tracks["time"].dt.tz_convert(None)
+    if parts:  # the reports' map positions, once for every panel
+        re_, rn = _local_km(reports["latitude"].to_numpy(), reports["longitude"].to_numpy(), lat0, lon0)
     for k, (part, zax) in enumerate(zip(parts, zoom_axes, strict=True), start=1):
         z0, z1, w0, w1 = _zoom_box(e_t[part], n_t[part])
-        re_, rn = _local_km(reports["latitude"].to_numpy(), reports["longitude"].to_numpy(), lat0, lon0)
         inside = (re_ >= z0) & (re_ <= z1) & (rn >= w0) & (rn <= w1)
         _draw_reports(zax, reports[inside], lat0, lon0, big=True)
         _draw_track(zax, e_t, n_t, coasted, seg)
