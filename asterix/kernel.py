@@ -444,6 +444,7 @@ def scan(buf, blk_start, blk_len, P, ext_sizes, ext_fx, sub_parts, n_frn, n_slot
                 if buf[pos - 1] & 1 == 0:
                     break
             if err:
+                fail_at[b] = rec_start  # the FSPEC itself runs past the end of the block
                 break
             fs_end = pos
             any_item = False

@@ -63,6 +63,18 @@ def test_len_past_end_and_fspec_past_block():
     assert accounted(rec) == len(data)
 
 
+def test_an_fspec_past_the_end_names_its_record():
+    """A block ending inside a record's FSPEC (an FX bit set on its last byte) names that record: it said
+    'record at offset -1' before."""
+    data, starts = good_stream(2)
+    cut = block(48, rec048(1), b"\x01")  # record 2 is one FSPEC byte with FX set, then the block ends
+    rec = decode_bytes(data + cut)
+    assert list(rec.errors.offset) == [len(data)]
+    first_record_end = len(data) + 3 + len(rec048(1))
+    assert rec.errors.reason.iloc[0] == ("an FSPEC or item runs past the end of its data block "
+                                         f"(record at offset {first_record_end})")
+
+
 def test_other_category_is_stepped_over_and_accounted():
     data, starts = good_stream(3)
     alien = block(62, bytes([0x80, 1, 2]))  # 62 06 00 80 01 02: six bytes
