@@ -26,6 +26,7 @@ DECODABLE = (21, 34, 48)
 # Decoded when categories=None. CAT034 (service messages) is decoded on request (categories=DECODABLE):
 # until the pipeline handles its frames, its blocks are stepped over and counted as ignored.
 DEFAULT_CATEGORIES = (21, 48)
+WRONG_EDITION_MIN_BLOCKS = 10  # failed blocks, all walking under another edition, proving the edition wrong
 AUTO_SAMPLE_BLOCKS = 20_000  # blocks walked per candidate edition by editions={cat: "auto"}
 ERROR_COLUMNS = ["file", "offset", "length", "category", "reason"]
 
@@ -48,6 +49,9 @@ class Recording:
     edition_choice: dict[int, str] = field(default_factory=dict)  # how 'auto' chose, in words
     day0: int | None = None  # container day number of day 0: capture day (pcap), day byte (final); raw None
     ignored_category_bytes: dict[int, int] = field(default_factory=dict)  # bytes per category not decoded
+    # a category most of whose blocks fail under its edition: the other editions under which every one
+    # of them sampled walks (a likely wrong edition; it is said, not switched: nothing on the wire says)
+    edition_fits: dict[int, tuple[str, ...]] = field(default_factory=dict)
 
     @property
     def ignored(self) -> pd.DataFrame:
@@ -173,6 +177,23 @@ def choose_edition(buf: np.ndarray, starts: np.ndarray, lens: np.ndarray, catego
     return chosen, (f"chose {chosen} ({len(idx)} of {len(starts)} blocks sampled; blocks walking: "
                     f"{'; '.join(words)}; {verdict}; "
                     f"{len(apart)} blocks told {'/'.join(contenders)} apart: {told})")
+
+
+def walking_editions(buf: np.ndarray, starts: np.ndarray, lens: np.ndarray, category: int, *,
+                     besides: str = "", sample: int = AUTO_SAMPLE_BLOCKS) -> tuple[str, ...]:
+    """The editions (oldest first, ``besides`` left out) under which every one of these blocks walks
+    exactly, or of ``sample`` of them spread evenly over a longer list."""
+    idx = np.unique(np.linspace(0, len(starts) - 1, min(sample, len(starts))).astype(np.int64))
+    s, n = starts[idx], lens[idx]
+    out = []
+    for ed in sorted(available()[category], key=lambda e: tuple(int(x) for x in e.split("."))):
+        if ed == besides:
+            continue
+        base, nfrn, P, ext_sizes, ext_fx, sub_parts = _framing_tables(((category, ed),))
+        flags = kernel.walk_flags(buf, s, n, base[category], nfrn[category], P, ext_sizes, ext_fx, sub_parts)
+        if flags.all():
+            out.append(ed)
+    return tuple(out)
 
 
 def framing_edition(buf: np.ndarray, seg: Segments, walked: dict, category: int) -> str:
@@ -311,16 +332,57 @@ def framing_walk(buf: np.ndarray, seg: Segments, editions: dict, categories) -> 
     return walked
 
 
-def frame_checked(buf: np.ndarray, seg: Segments, walked: dict[int, str | None]):
-    """Framing as decode_buffer settles it, without decoding: the chain as it is when it holds and
-    every walked block walks, else careful framing (chunk planning for iter_read)."""
+def _walking_bytes(buf: np.ndarray, framed, tables) -> int:
+    """Bytes in the framed blocks of walked categories that walk exactly (kernel.walk_flags)."""
+    base, nfrn, P, ext_sizes, ext_fx, sub_parts = tables
+    b_start, b_len, b_cat = framed[:3]
+    total = 0
+    for cat in np.unique(b_cat):
+        if base[cat] < 0:
+            continue
+        sel = b_cat == cat
+        ok = kernel.walk_flags(buf, b_start[sel], b_len[sel], base[cat], nfrn[cat], P, ext_sizes, ext_fx,
+                               sub_parts)
+        total += int(b_len[sel][ok].sum())
+    return total
+
+
+def frame_checked(buf: np.ndarray, seg: Segments, walked: dict[int, str | None], plain=None):
+    """Framing as decode_buffer settles it: the chain as it is (``plain``, framed here when not given)
+    when it holds and every walked block walks, else careful framing; but a chain that holds from end
+    to end is kept when careful framing walks no more bytes (blocks that do not walk are then of another
+    edition, not damaged: cutting them up would lose the blocks and misreport them as framing errors)."""
     key = tuple(sorted((c, compile_layout(c, e).edition) for c, e in walked.items()))
     tables = _framing_tables(key)
-    framed = kernel.frame_blocks(buf, seg.start, seg.stop, seg.exact, False, *tables)
+    framed = plain if plain is not None else kernel.frame_blocks(buf, seg.start, seg.stop, seg.exact, False,
+                                                                 *tables)
     if seg.exact or (not len(framed[4]) and not _lone_category(framed[2], walked)
                      and kernel.all_walk(buf, framed[0], framed[1], framed[2], *tables)):
         return framed
-    return kernel.frame_blocks(buf, seg.start, seg.stop, seg.exact, True, *tables)
+    careful = kernel.frame_blocks(buf, seg.start, seg.stop, seg.exact, True, *tables)
+    if not len(framed[4]) and _walking_bytes(buf, careful, tables) <= _walking_bytes(buf, framed, tables):
+        return framed
+    return careful
+
+
+def _scan_decoded(buf: np.ndarray, framed, decoded: list[int], editions: dict, choice: dict,
+                  selected) -> dict[int, tuple]:
+    """Walk the framed blocks of each decoded category: {cat: (block indices, layout, scan)}; an 'auto'
+    edition is chosen on its first framing (``editions`` and ``choice`` are updated)."""
+    b_start, b_len, b_cat = framed[:3]
+    scans: dict[int, tuple] = {}
+    for cat in decoded:
+        sel = np.flatnonzero(b_cat == cat)
+        if not len(sel):
+            continue
+        starts, lens = b_start[sel], b_len[sel]
+        ed = editions.get(cat)
+        if ed == "auto" and cat not in choice:
+            ed, choice[cat] = choose_edition(buf, starts, lens, cat)
+            editions[cat] = ed
+        lay = compile_layout(cat, ed, selected)
+        scans[cat] = (sel, lay, _scan(buf, starts, lens, lay))
+    return scans
 
 
 def decode_buffer(buf: np.ndarray, seg: Segments, *, path: str = "", editions: dict | None = None,
@@ -333,31 +395,24 @@ def decode_buffer(buf: np.ndarray, seg: Segments, *, path: str = "", editions: d
     walked = framing_walk(buf, seg, editions, categories)
     choice: dict[int, str] = {}
     # Framing first follows the block chain as it is. If it breaks, or a decoded block does not walk
-    # (a LEN may be damaged), the raw stream is framed again carefully, walking the decoded blocks.
-    for careful in (False, True):
-        b_start, b_len, b_cat, b_seg, e_off, e_len, e_cat, e_code = frame(buf, seg, walked, careful)
-        scans: dict[int, tuple] = {}
-        for cat in decoded:
-            sel = np.flatnonzero(b_cat == cat)
-            if not len(sel):
-                continue
-            starts, lens = b_start[sel], b_len[sel]
-            ed = editions.get(cat)
-            if ed == "auto" and cat not in choice:
-                ed, choice[cat] = choose_edition(buf, starts, lens, cat)
-                editions[cat] = ed
-            lay = compile_layout(cat, ed, selected)
-            scans[cat] = (sel, lay, _scan(buf, starts, lens, lay))
-        if careful or seg.exact or not (any((sc[2][0] < 0).any() for sc in scans.values())
-                                        or _lone_category(b_cat, walked)):
-            break
-        walked = walked_editions(editions, categories)
+    # (a LEN may be damaged), the raw stream is framed again carefully, walking the decoded blocks, and
+    # frame_checked settles which framing stands.
+    framed = frame(buf, seg, walked, False)
+    scans = _scan_decoded(buf, framed, decoded, editions, choice, selected)
+    failed = any((sc[2][0] < 0).any() for sc in scans.values())
+    if not seg.exact and (failed or _lone_category(framed[2], walked)):
+        settled = frame_checked(buf, seg, walked_editions(editions, categories), plain=framed)
+        if settled is not framed:
+            framed = settled
+            scans = _scan_decoded(buf, framed, decoded, editions, choice, selected)
+    b_start, b_len, b_cat, b_seg, e_off, e_len, e_cat, e_code = framed
     errors: list[tuple[int, int, int, str]] = [
         (int(o), int(n), int(c), REASONS[int(code)])
         for o, n, c, code in zip(e_off, e_len, e_cat, e_code, strict=True)]
     errors += [(o, n, -1, f"container: {why}") for o, n, why in seg.problems]
     columns: dict[int, dict] = {}
     chosen: dict[int, str] = {}
+    fits: dict[int, tuple[str, ...]] = {}
     ignored: dict[int, int] = {}
     ignored_by_cat: dict[int, int] = {}
     decoded_bytes = ignored_bytes = 0
@@ -375,6 +430,17 @@ def decode_buffer(buf: np.ndarray, seg: Segments, *, path: str = "", editions: d
         for j in np.flatnonzero(counts < 0):
             reason = f"{REASONS[int(-counts[j])]} (record at offset {int(fail_at[j])})"
             errors.append((int(starts[j]), int(lens[j]), cat, reason))
+        failed = counts < 0
+        if failed.any() and 2 * int(failed.sum()) >= len(counts):
+            fits[cat] = walking_editions(buf, starts[failed], lens[failed], cat, besides=lay.edition)
+            if fits[cat] and failed.sum() >= WRONG_EDITION_MIN_BLOCKS:
+                # the edition is wrong: blocks that walk under it anyway would give wrong values
+                others = " or ".join(fits[cat])
+                why = (f"walks under edition {lay.edition}, but most CAT{cat:03d} blocks do not and every "
+                       f"one of those sampled walks under {others}: withheld (a wrong edition)")
+                errors += [(int(starts[j]), int(lens[j]), cat, why) for j in np.flatnonzero(~failed)]
+                scanned = (*scanned[:-1], 0)
+                counts = np.full_like(counts, -1)
         decoded_bytes += int(lens[counts > 0].sum())
         fl, ints, rec_off, rec_blk = _extract(buf, scanned, lay)
         del scanned
@@ -398,7 +464,7 @@ def decode_buffer(buf: np.ndarray, seg: Segments, *, path: str = "", editions: d
     err.insert(0, "file", path)
     err["category"] = err["category"].astype("Int16").where(err["category"] >= 0)
     return Recording(frames, err, chosen, path, seg.format, date, int(len(buf)), int(seg.container_bytes),
-                     decoded_bytes, ignored, ignored_bytes, choice, first_day, ignored_by_cat)
+                     decoded_bytes, ignored, ignored_bytes, choice, first_day, ignored_by_cat, fits)
 
 
 def _parse_editions(editions) -> dict[int, str]:

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import numpy as np
+import pandas as pd
 import pytest
 from asterix_bytes import block, decode_bytes, fspec
 from hypothesis import HealthCheck, given, settings
@@ -73,6 +74,57 @@ def test_an_fspec_past_the_end_names_its_record():
     first_record_end = len(data) + 3 + len(rec048(1))
     assert rec.errors.reason.iloc[0] == ("an FSPEC or item runs past the end of its data block "
                                          f"(record at offset {first_record_end})")
+
+
+def adsb_blocks(n: int, edition: str) -> bytes:
+    """n CAT021 blocks of one record each (position, time, address, call sign) in the given edition."""
+    from asterix.encode import encode_frame
+
+    frame = pd.DataFrame({"sac": 0, "sic": 107, "time_of_day": 79200 + 0.5 * np.arange(n),
+                          "latitude": 41.3 + 1e-4 * np.arange(n), "longitude": 2.08 + 1e-4 * np.arange(n),
+                          "address": 0x3443D2, "callsign": "VLG836M"})
+    return encode_frame(21, frame, edition=edition, records_per_block=1)
+
+
+def test_a_wrong_edition_keeps_a_chain_that_holds(tmp_path):
+    """Blocks whose chain tiles the file but that do not walk under the edition asked for are of another
+    edition, not damaged: each is reported at its own offset as a walk error. Careful framing used to
+    cut them up and report bytes of valid blocks as framing errors ('data block LEN below 3')."""
+    n = 40
+    data = adsb_blocks(n, "0.23")
+    starts, q = [], 0
+    while q < len(data):  # the block starts, from the LEN fields
+        starts.append(q)
+        q += int.from_bytes(data[q + 1:q + 3], "big")
+    assert len(decode_bytes(data, editions={21: "0.23"}).frames[21]) == n
+    rec = decode_bytes(data, editions={21: "2.7"})
+    assert list(rec.errors.offset) == starts
+    assert (rec.errors.category == 21).all()
+    assert not rec.errors.reason.str.contains("data block LEN|plausible").any()
+    assert accounted(rec) == len(data)
+    # I021/130 is 6 bytes in 0.23 and 8 from 0.24 (specs): no other edition walks these blocks
+    assert rec.edition_fits == {21: ("0.23",)}
+    path = tmp_path / "adsb.ast"  # read in chunks (msdc stats, decode and the jobs): cut at the same blocks
+    path.write_bytes(data)
+    chunks = list(asterix.iter_read(path, editions={21: "2.7"}, chunk=200))
+    assert len(chunks) > 1
+    assert [int(o) for c in chunks for o in c.errors.offset] == starts
+
+
+@pytest.mark.parametrize(("n_wrong", "withheld"), [(12, True), (9, False)])
+def test_blocks_that_walk_under_a_wrong_edition_are_withheld(n_wrong, withheld):
+    """Most blocks fail under 2.7 and every one of them walks under 0.23: the edition is wrong, and a block
+    that walks under 2.7 anyway would give wrong values, so it is withheld and reported (from 10 failed
+    blocks on; fewer prove too little, and the block is decoded, the likely edition still named)."""
+    good = adsb_blocks(1, "2.7")
+    data = adsb_blocks(n_wrong, "0.23") + good
+    rec = decode_bytes(data, editions={21: "2.7"})
+    assert rec.edition_fits == {21: ("0.23",)}
+    assert len(rec.errors) == n_wrong + withheld
+    assert len(rec.frames[21]) == (0 if withheld else 1)
+    last = rec.errors.iloc[-1]
+    assert (last.offset == len(data) - len(good) and "withheld" in last.reason) == withheld
+    assert accounted(rec) == len(data)
 
 
 def test_other_category_is_stepped_over_and_accounted():

@@ -68,3 +68,17 @@ def test_midnight_crossing_counts_a_day():
 def test_auto_chooses_0_23_and_says_why():
     rec = asterix.read(REAL / "adsb_v023_160510-lebl-220001.ast", editions={21: "auto"})
     assert rec.editions[21] == "0.23" and "0.23" in rec.edition_choice[21]
+
+
+def test_unpinned_0_23_names_its_edition_and_decodes_no_wrong_value():
+    """The ADS-B recording is edition 0.23 (README); read as the default 2.x, most blocks fail and the rest
+    walk by chance into wrong values (latitudes past 90 deg, times past 24 h). Every block is reported at
+    its own offset (careful framing cut the holding chain into bogus 'LEN' errors before), none decoded,
+    and 0.23 is named as the edition they all walk under."""
+    path = REAL / "adsb_v023_160510-lebl-220001.ast"
+    pinned = asterix.read(path, editions={21: "0.23"})
+    rec = asterix.read(path)
+    assert len(rec.frames[21]) == 0
+    assert rec.edition_fits == {21: ("0.23",)}
+    assert sorted(rec.errors.offset) == sorted(pinned.frames[21].offset - 3)  # one record per block
+    assert rec.errors.length.sum() == rec.size_bytes
