@@ -267,6 +267,9 @@ def _numba_without_scipy() -> None:
     context.refresh()  # nothing left to do when the first call succeeded
 
 
+SKIPPED_SHOWN = 20  # skipped blocks decode lists one per line, per input; the rest are counted
+
+
 def cmd_decode(args) -> int:
     _numba_without_scipy()
     progress = Progress()
@@ -276,11 +279,18 @@ def cmd_decode(args) -> int:
         result = jobs.decode_job(options, on_chunk=lambda done, size, name: progress.bar(done, size, name))
     except asterix_errors.DecodeError as exc:
         raise CliError(f"strict: {exc}") from exc
-    _warn("decode", result.warnings)
     for note in result.notes:
         print(f"msdc: {note}", file=sys.stderr)
+    shown: dict[str, int] = {}
     for path, offset, reason in result.skipped:
-        print(f"msdc: {path}: offset {offset}: {reason}", file=sys.stderr)
+        shown[path] = shown.get(path, 0) + 1
+        if shown[path] <= SKIPPED_SHOWN:
+            print(f"msdc: {path}: offset {offset}: {reason}", file=sys.stderr)
+    for path, n in shown.items():
+        if n > SKIPPED_SHOWN:
+            print(f"msdc: {path}: {n - SKIPPED_SHOWN} more skipped block(s) ('msdc stats' groups them by "
+                  "reason)", file=sys.stderr)
+    _warn("decode", result.warnings)  # after the skipped blocks: a wrong edition's advice stays in view
     if not result.outputs:
         for cat, n in sorted(result.counts.items()):
             print(f"CAT{cat:03d}: {n} records")

@@ -23,6 +23,7 @@ import numpy as np
 import pandas as pd
 
 from pipeline.meta import FORMATS, software_version
+from pipeline.model import editions as edition_notes
 from pipeline.model.identity import normalise_address, normalise_callsign
 from pipeline.model.load import (
     Loaded,
@@ -409,6 +410,7 @@ def _load(options: DecodingOptions, checked: Checked, progress: Progress | None)
     except UnreadableInput as exc:
         raise JobError(str(exc), 2) from exc
     spans = [time_spans(rec.frames, loaded.date) for rec in loaded.recordings]
+    checked.warnings += _wrong_editions(loaded)
     checked.warnings += _order_warnings(checked.inputs, spans)
     checked.warnings += _date_ignored(options, loaded.inputs)
     checked.warnings += impossible_positions(loaded.frames.get(21))
@@ -462,6 +464,7 @@ def _load_measurements(options: AircraftOptions, checked: Checked, progress: Pro
     if len(loaded.stray_radar):
         n_cat048 = sum(info["records"].get(48, 0) for info in loaded.inputs)
         _stray_verdict(loaded.stray_radar, n_cat048, str(options.sensors), checked.warnings)
+    checked.warnings += _wrong_editions(loaded, but=absent_categories(loaded))
     checked.warnings += [f"no {name} (CAT{cat:03d}) records in the inputs{_all_failed(loaded, cat)}: "
                          f"{_WITHOUT[cat]}" for cat, name in ((48, "radar"), (21, "ADS-B"))
                          if cat in absent_categories(loaded)]
@@ -551,6 +554,13 @@ _WITHOUT = {48: "the Radar accuracy and Radar biases sheets are empty",
                 "their reference)"}
 
 
+def _wrong_editions(loaded: Loaded, but: list[int] | tuple[int, ...] = ()) -> list[str]:
+    """A warning per input and category whose blocks mostly failed under a wrong edition, but for the
+    categories in ``but`` (those whose own message says so: _all_failed)."""
+    notes = edition_notes.notes_of(loaded.recordings)
+    return edition_notes.warnings({key: note for key, note in notes.items() if key[1] not in but})
+
+
 def _all_failed(loaded: Loaded, cat: int) -> str:
     """What to add when a category has no record: how many of its blocks failed, and under which edition
     (a wrong pin fails every block: nothing on the wire says which CAT021 edition a stream uses)."""
@@ -559,7 +569,9 @@ def _all_failed(loaded: Loaded, cat: int) -> str:
     if not failed:
         return ""
     edition = loaded.editions.get(cat)
-    hint = (f" under edition {edition}; if that edition is wrong, pin the right one or try --edition 21=auto"
+    fits = edition_notes.fits_of(edition_notes.notes_of(loaded.recordings), cat)
+    hint = (f" under edition {edition}{edition_notes.advice(cat, fits)}" if fits else
+            f" under edition {edition}; if that edition is wrong, pin the right one or try --edition 21=auto"
             if cat == 21 and edition else f" under edition {edition}" if edition else "")
     return f": {failed} CAT{cat:03d} block(s) could not be decoded{hint} ('msdc stats' lists them)"
 
@@ -1099,6 +1111,7 @@ def stats_job(options: StatsOptions, *, progress: Progress | None = None) -> Sta
     if progress:
         progress.stage("Processing data files")
     acc = StatsAccumulator()
+    failed: dict[tuple[str, int], edition_notes.Failed] = {}
     inputs: list[dict] = []
     spans: list[dict[int, tuple[pd.Timestamp, pd.Timestamp]]] = []
     chunk = max(int(options.chunk_mb * 1e6), 1)
@@ -1112,6 +1125,7 @@ def stats_job(options: StatsOptions, *, progress: Progress | None = None) -> Sta
             for rec in asterix.iter_read(path, chunk=chunk, editions=checked.editions or None,
                                          date=options.date, format=options.format, columns=STATS_COLUMNS):
                 acc.add(rec.frames, rec.errors, rec.ignored)
+                edition_notes.fold(failed, rec)
                 info["bytes"], info["format"] = rec.size_bytes, rec.format
                 info["date"] = info["date"] or rec.date
                 for cat, frame in rec.frames.items():
@@ -1129,6 +1143,7 @@ def stats_job(options: StatsOptions, *, progress: Progress | None = None) -> Sta
         shift = pd.Timestamp(min(dates), tz="UTC") - UNDATED_DAY
         spans = [s if info["date"] else {c: (lo + shift, hi + shift) for c, (lo, hi) in s.items()}
                  for info, s in zip(inputs, spans, strict=True)]
+    checked.warnings += edition_notes.warnings(failed)
     checked.warnings += _order_warnings(checked.inputs, spans)
     checked.warnings += _date_ignored(options, inputs)
     return StatsResult(acc.tables(), inputs, checked.warnings)
@@ -1170,6 +1185,7 @@ def decode_job(options: DecodeOptions, *, on_chunk: Callable[[int, int, str], No
     outputs: dict[int, Path] = {}
     writers: dict[int, object] = {}
     skipped: list[tuple[str, int, str]] = []
+    failed: dict[tuple[str, int], edition_notes.Failed] = {}
     notes: list[str] = []
     cats = list(options.categories) or None
     held: dict[str, dict[int, int]] = {}
@@ -1186,6 +1202,7 @@ def decode_job(options: DecodeOptions, *, on_chunk: Callable[[int, int, str], No
                                          date=options.date, format=options.format, categories=cats,
                                          strict=options.strict):
                 skipped += [(str(path), int(e.offset), str(e.reason)) for e in rec.errors.itertuples()]
+                edition_notes.fold(failed, rec)
                 for cat, frame in rec.frames.items():
                     counts[cat] = counts.get(cat, 0) + len(frame)
                     if out is not None and len(frame):
@@ -1199,7 +1216,8 @@ def decode_job(options: DecodeOptions, *, on_chunk: Callable[[int, int, str], No
         for w in writers.values():
             if hasattr(w, "close"):
                 w.close()
-    return DecodeResult(counts, outputs, skipped, checked.warnings, notes, held)
+    warnings = checked.warnings + edition_notes.warnings(failed)
+    return DecodeResult(counts, outputs, skipped, warnings, notes, held)
 
 
 def _write_chunk(out: Path, cat: int, frame: pd.DataFrame, outputs: dict, writers: dict, several: bool,

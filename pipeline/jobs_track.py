@@ -173,7 +173,10 @@ def _measurements(loaded, checked: Checked, options: TrackOptions) -> pd.DataFra
     adsb = adsb if adsb is not None and len(adsb) else None
     if radar is None and adsb is None:
         wanted = " or ".join({"radar": "radar (CAT048)", "adsb": "ADS-B (CAT021)"}[s] for s in sources)
-        raise JobError(f"no {wanted} records in the inputs (--sources {','.join(sources)})")
+        failed = "; ".join(why[2:] for cat in ({"radar": 48, "adsb": 21}[s] for s in sources)
+                           if (why := jobs._all_failed(loaded, cat)))
+        raise JobError(f"no {wanted} records in the inputs (--sources {','.join(sources)})"
+                       + (f": {failed}" if failed else ""))
     radar = jobs.declared_radar(radar, checked.sensors, jobs.sensors_path(options), checked.warnings)
     try:
         meas = build_measurements(radar, adsb, checked.sensors, date=loaded.date,

@@ -245,7 +245,8 @@ def test_one_time_of_day_past_midnight_moves_no_other_report(bad_tod, tmp_path, 
 
 def test_a_wrong_edition_pin_is_suggested_when_no_adsb_record_decodes(capsys):
     """The fixture's CAT021 is edition 2.7: pinned to 0.26, no block walks. The message said only 'no ADS-B
-    records'; it now says the blocks failed under that edition and what to try. Every block is
+    records'; it now says the blocks failed under that edition, and the editions they walk under: every
+    2.x edition (the fixture's items are laid out alike in all of them, ../shared/specs). Every block is
     counted (2 before: careful framing cut the holding chain of blocks that were of another edition)."""
     data = Path(ADSB).read_bytes()
     blocks, q = 0, 0
@@ -255,8 +256,8 @@ def test_a_wrong_edition_pin_is_suggested_when_no_adsb_record_decodes(capsys):
                            "--edition", "21=0.26"], capsys)
     assert status == 1
     assert (f"msdc correlate: no ADS-B (CAT021) records in the inputs: {blocks} CAT021 block(s) could not be "
-            "decoded under edition 0.26; if that edition is wrong, pin the right one or try --edition "
-            "21=auto ('msdc stats' lists them)") in err
+            "decoded under edition 0.26; every one sampled decodes under 2.1, 2.2, 2.3, 2.4, 2.5, 2.6, 2.7: "
+            "pin the right one or try --edition 21=auto ('msdc stats' lists them)") in err
 
 
 @pytest.mark.parametrize(("argv", "option"), [
@@ -350,3 +351,48 @@ def test_an_undeclared_radar_with_enough_records_still_stops_the_run(command, tm
     assert f"radar SAC/SIC 25/202 not in {SENSORS}; add its position:" in err
     assert "sic = 202" in err
     assert list(written.parent.iterdir()) == []
+
+
+@pytest.fixture(scope="module")
+def adsb_0_23(tmp_path_factory) -> Path:
+    """The fixture's ADS-B reports written as edition 0.23, one record per block (what the real LEBL
+    ground station records): nothing on the wire says which edition it is."""
+    import asterix
+    from asterix.encode import encode_frame
+
+    columns = ["sac", "sic", "time_of_day", "latitude", "longitude", "address", "callsign", "flight_level"]
+    frame = asterix.read(ADSB).frames[21][columns].iloc[:400]
+    path = tmp_path_factory.mktemp("e023") / "adsb023.ast"
+    path.write_bytes(encode_frame(21, frame, edition="0.23", records_per_block=1))
+    return path
+
+
+def test_an_unpinned_0_23_recording_is_named_in_every_job(adsb_0_23, tmp_path, capsys):
+    """Read as the default 2.x, the 0.23 blocks fail: each job names the edition to pin (I021/130 is 6 bytes
+    in 0.23 and 8 from 0.24 on, so 0.23 alone walks them), writes nothing, and pinned it works."""
+    advice = "400 CAT021 block(s) could not be decoded under edition 2.7; every one sampled decodes under " \
+             "0.23: pin it with --edition 21=0.23"
+    status, _, err = _run(["stats", adsb_0_23], capsys)
+    assert status == 1 and f"msdc stats: warning: adsb023.ast: {advice}" in err
+    status, _, err = _run(["decode", adsb_0_23, "-o", tmp_path / "d.csv"], capsys)
+    assert status == 1 and f"msdc decode: warning: adsb023.ast: {advice}" in err
+    # one line per skipped block for the first 20, then a count
+    assert err.count(f"msdc: {adsb_0_23}: offset ") == 20
+    assert f"msdc: {adsb_0_23}: 380 more skipped block(s)" in err
+    status, _, err = _run(["track", adsb_0_23, "--all", "-o", tmp_path / "t.parquet"], capsys)
+    assert status == 1 and f"records in the inputs (--sources radar,adsb): {advice} ('msdc stats'" in err
+    status, _, err = _run(["correlate", RADAR, adsb_0_23, "--sensors", SENSORS, "--all", "--date",
+                           "2019-03-01", "-o", tmp_path / "r.xlsx"], capsys)
+    assert status == 1 and f"no ADS-B (CAT021) records in the inputs: {advice} ('msdc stats'" in err
+    assert not list(tmp_path.iterdir())
+    status, _, err = _run(["stats", adsb_0_23, "--edition", "21=0.23"], capsys)
+    assert status == 0 and "warning" not in err
+
+
+def test_a_0_23_recording_beside_a_2_7_one_is_named_alone(adsb_0_23, capsys):
+    """Two ADS-B inputs of different editions: the 2.7 one decodes, the 0.23 one is named with its
+    edition (a warning: the run goes on with what decoded)."""
+    status, _, err = _run(["stats", ADSB, adsb_0_23], capsys)
+    assert status == 0
+    warned = [line for line in err.splitlines() if "warning" in line]
+    assert len(warned) == 1 and "adsb023.ast: 400 CAT021 block(s)" in warned[0] and "21=0.23" in warned[0]
