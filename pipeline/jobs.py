@@ -696,6 +696,7 @@ def _filtered_away(exc, meas_all: pd.DataFrame, options: CorrelateOptions) -> st
 
 FAR_SEPARATION_FACTOR = 10.0  # times a radar's own position sigma at its far plots
 SLOTTING_MARGIN_M = 1000.0  # what 10 s slots of a fast aircraft add to any separation
+FAST_AIRCRAFT_MPS = 300.0  # ground speed no airliner exceeds (580 kt)
 
 
 def far_separations(run: CorrelationRun, meas: pd.DataFrame, sensors: pd.DataFrame,
@@ -709,19 +710,42 @@ def far_separations(run: CorrelationRun, meas: pd.DataFrame, sensors: pd.DataFra
         return []
     warnings = []
     for sensor_id, sep_m in pd.DataFrame(rows).groupby("radar_sensor")["sep_median_m"].median().items():
-        plots = meas[(meas["sensor_id"] == sensor_id).to_numpy(bool)]
-        site = sensors[(sensors["sac"] == plots["sac"].iloc[0]) & (sensors["sic"] == plots["sic"].iloc[0])]
-        rho = plots["rho_nm"].to_numpy(float)
-        if site.empty or not np.isfinite(rho).any():
-            continue
-        far_m = float(np.nanpercentile(rho, 95)) * 1852.0
-        sigma_m = math.hypot(float(site["sigma_range_m"].iloc[0]),
-                             far_m * math.radians(float(site["sigma_azimuth_deg"].iloc[0])))
-        if sep_m > FAR_SEPARATION_FACTOR * sigma_m + SLOTTING_MARGIN_M:
-            warnings.append(f"radar {sensor_id}: its plots lie a median {sep_m / 1000:.1f} km from ADS-B, "
-                            f"far beyond its accuracy ({sigma_m:.0f} m at {far_m / 1852:.0f} NM); check its "
-                            f"site in {sensors_path}")
+        rho = meas.loc[(meas["sensor_id"] == sensor_id).to_numpy(bool), "rho_nm"].to_numpy(float)
+        if np.isfinite(rho).any():
+            warnings += _far_site(str(sensor_id), float(sep_m), float(np.nanpercentile(rho, 95)), sensors,
+                                  sensors_path, SLOTTING_MARGIN_M)
     return warnings
+
+
+def site_warnings(meas: pd.DataFrame, sensors: pd.DataFrame, sensors_path: str) -> list[str]:
+    """far_separations for the jobs without correlation windows (quality, track, conflicts): each radar's
+    plots against the same aircraft's ADS-B report nearest in time (pipeline.model.site_check)."""
+    from pipeline.model.site_check import MATCH_TOLERANCE_S, radar_offsets
+
+    margin_m = MATCH_TOLERANCE_S * FAST_AIRCRAFT_MPS  # how far an aircraft flies between plot and report
+    return [w for row in radar_offsets(meas).itertuples() if np.isfinite(row.rho_p95_nm)
+            for w in _far_site(str(row.sensor_id), float(row.offset_median_m), float(row.rho_p95_nm), sensors,
+                               sensors_path, margin_m)]
+
+
+def _far_site(sensor_id: str, sep_m: float, far_nm: float, sensors: pd.DataFrame, sensors_path: str,
+              margin_m: float) -> list[str]:
+    """The wrong-site warning when a radar's median separation from ADS-B exceeds FAR_SEPARATION_FACTOR
+    times its position sigma at ``far_nm`` (its far plots) plus ``margin_m``; [] otherwise."""
+    try:
+        sac, sic = (int(x) for x in sensor_id.split(":")[1].split("/"))
+    except (IndexError, ValueError):  # a radar without SAC/SIC ("048:?/?") has no site to check
+        return []
+    site = sensors[(sensors["sac"] == sac) & (sensors["sic"] == sic)]
+    if site.empty:
+        return []
+    far_m = far_nm * 1852.0
+    sigma_m = math.hypot(float(site["sigma_range_m"].iloc[0]),
+                         far_m * math.radians(float(site["sigma_azimuth_deg"].iloc[0])))
+    if sep_m <= FAR_SEPARATION_FACTOR * sigma_m + margin_m:
+        return []
+    return [f"radar {sensor_id}: its plots lie a median {sep_m / 1000:.1f} km from ADS-B, far beyond its "
+            f"accuracy ({sigma_m:.0f} m at {far_nm:.0f} NM); check its site in {sensors_path}"]
 
 
 def _marked_measurements(options: AircraftOptions, checked: Checked, progress: Progress | None, stage: str,
@@ -791,8 +815,9 @@ def quality_columns(options: QualityOptions) -> list[str]:
     errors against the reference (with ``reference="track"`` the tracker's inputs), mark_once and the
     aircraft selection read. Two thirds of the bytes of a row with the ADS-B reference."""
     from pipeline.model.schema import MEASUREMENT_COLUMNS, column_names
+    from pipeline.model.site_check import SITE_CHECK_INPUTS
 
-    need = set(_quality_inputs(options.reference))
+    need = set(_quality_inputs(options.reference)) | set(SITE_CHECK_INPUTS)
     return column_names(need & set(MEASUREMENT_COLUMNS))  # the job-wide flags are added by mark_once
 
 
@@ -1049,6 +1074,7 @@ def quality_job(options: QualityOptions, *, progress: Progress | None = None, ch
     loaded, meas = _marked_measurements(options, checked, progress, "Analysing data quality", either=True,
                                         columns=quality_columns(options))
     absent = absent_categories(loaded)
+    checked.warnings += site_warnings(meas, checked.sensors, str(sensors_path(options)))
     quality = _quality(meas, checked.sensors, options)
     params = {**_parameters(options, loaded, started, command), "callsign": options.callsign,
               "address": options.address, "gap_s": options.gap_s,

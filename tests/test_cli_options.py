@@ -355,6 +355,25 @@ def test_separations_far_beyond_the_radar_accuracy_warn_of_a_wrong_site(tmp_path
     assert "radar 048:25/201" in err and "check its site in" in err and str(moved) in err
 
 
+@pytest.mark.parametrize("command", [["quality", "--all"], ["track", "--callsign", "MAS72"],
+                                     ["conflicts", "--date", "2019-03-01", "--step", "5"]])
+def test_quality_track_and_conflicts_warn_of_a_wrong_site_too(command, tmp_path: Path, capsys) -> None:
+    """quality printed range and azimuth biases of km and degrees, track gated most plots, with no word
+    of the cause: the plots are matched to the same aircraft's ADS-B report within 1 s, and a site 0.5 deg
+    (about 55 km) north puts their median tens of km away; the true site, a few hundred m at most."""
+    args = [command[0], str(FIX / "radar.ast"), str(FIX / "adsb.ast"), *command[1:], "-o",
+            str(tmp_path / ("out.xlsx" if command[0] == "quality" else "out.csv"))]
+    assert main([*args, "--sensors", str(FIX / "sensors.toml")]) == 0
+    assert "check its site" not in capsys.readouterr().err
+    moved = tmp_path / "moved.toml"
+    moved.write_text((FIX / "sensors.toml").read_text().replace("latitude = 2.7456", "latitude = 3.2456"))
+    main([*args, "--sensors", str(moved)])
+    err = capsys.readouterr().err
+    assert "radar 048:25/201: its plots lie a median" in err and f"check its site in {moved}" in err
+    km = float(err.split("its plots lie a median ")[1].split(" km")[0])
+    assert 50 < km < 60  # 0.5 deg of latitude is 55.5 km; the plots, placed from the moved site, follow it
+
+
 @pytest.mark.parametrize("only", ["adsb", "radar"])
 def test_quality_on_one_kind_of_sensor_fills_the_sheets_it_can(only, tmp_path, capsys):
     """quality refused ADS-B-only input ('no radar (CAT048) records') though the intervals, gaps, jumps and

@@ -227,3 +227,29 @@ def test_unknown_radar_without_sac_or_sic_gets_no_invalid_toml(tmp_path):
     snippet = text[text.index("add:\n") + len("add:\n"):]
     assert tomllib.loads(snippet)["sensor"] == [{"name": "radar SAC 7 SIC 9", "sac": 7, "sic": 9,
                                                 "latitude": 0.0, "longitude": 0.0, "altitude_m": 0.0}]
+
+
+def test_radar_offsets_match_the_same_aircraft_within_a_second():
+    """30 plots each 0.4 s from an ADS-B report of the same address 0.01 deg of latitude north (1112 m on
+    WGS-84 at 41 deg: Geod), and another aircraft's report at the very instant 0.1 deg away: the median
+    offset is 1112 m; reports 2 s away are not matched, so 19 plots (below 20) give no row."""
+    from pyproj import Geod
+
+    from pipeline.model.site_check import radar_offsets
+
+    t0 = pd.Timestamp("2019-03-01T08:00:00Z")
+    n = 30
+    times = t0 + pd.to_timedelta(10.0 * np.arange(n), unit="s")
+    plots = pd.DataFrame({"time": times, "sensor_kind": "radar", "sensor_id": "048:25/201",
+                          "address": "750123", "latitude": 41.0, "longitude": 2.0,
+                          "rho_nm": np.linspace(10.0, 40.0, n)})
+    mine = pd.DataFrame({"time": times + pd.Timedelta(seconds=0.4), "sensor_kind": "adsb",
+                         "sensor_id": "021:0/107", "address": "750123", "latitude": 41.01, "longitude": 2.0,
+                         "rho_nm": np.nan})
+    other = mine.assign(time=times, address="4CA5F7", latitude=41.1)
+    got = radar_offsets(pd.concat([plots, mine, other], ignore_index=True))
+    expected_m = Geod(ellps="WGS84").inv(2.0, 41.0, 2.0, 41.01)[2]
+    assert list(got["sensor_id"]) == ["048:25/201"] and int(got["matched_plots"].iloc[0]) == n
+    assert abs(float(got["offset_median_m"].iloc[0]) - expected_m) < 0.5
+    late = mine.assign(time=np.where(np.arange(n) < 11, times + pd.Timedelta(seconds=2), mine["time"]))
+    assert radar_offsets(pd.concat([plots, late, other], ignore_index=True)).empty
