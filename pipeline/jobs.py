@@ -417,6 +417,15 @@ def _load(options: DecodingOptions, checked: Checked, progress: Progress | None)
     return loaded
 
 
+def undated_warning(loaded: Loaded, outputs: str) -> list[str]:
+    """A warning when no input carries a date and --date was not given: ``outputs`` then place their times
+    on 1970-01-01 (pipeline.model.time.UNDATED_DAY); the times of day are right."""
+    if loaded.date is not None:
+        return []
+    return [f"the inputs carry no date and --date was not given: {outputs} are placed on 1970-01-01 (the "
+            "times of day are right); give --date YYYY-MM-DD"]
+
+
 def _order_warnings(paths: list[Path], spans: list[dict[str, tuple[pd.Timestamp, pd.Timestamp]]]
                     ) -> list[str]:
     """A warning for each input whose records of a data source (category, SAC, SIC) start before the end

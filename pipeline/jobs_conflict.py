@@ -181,6 +181,7 @@ def conflict_job(options: ConflictOptions, *, progress: Progress | None = None,
         progress.stage("Tracking")
     meas = _measurements(loaded, checked, options)
     checked.warnings += jobs.site_warnings(meas, checked.sensors, str(jobs.sensors_path(options)))
+    checked.warnings += jobs.undated_warning(loaded, "the times of the alerts, losses and tracks")
     loaded.drop_frames()  # the measurements hold what tracking needs
     check_track_rows(meas, options)
     check_track_rows(meas, options, len(horizons), f"predictions ({len(horizons)} horizon(s) a grid row)",

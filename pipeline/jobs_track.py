@@ -226,6 +226,7 @@ def track_job(options: TrackOptions, *, progress: Progress | None = None, checke
         progress.stage("Tracking")
     meas = _measurements(loaded, checked, options)
     checked.warnings += jobs.site_warnings(meas, checked.sensors, str(jobs.sensors_path(options)))
+    checked.warnings += jobs.undated_warning(loaded, "the tracks' times")
     loaded.drop_frames()  # the measurements hold what tracking needs: a day's decoded frames are ~0.5 GB
     joined = int(meas.attrs.get("joined_by_track_number", 0))
     meas = _select(meas, options)

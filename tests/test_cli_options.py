@@ -404,3 +404,15 @@ def test_quality_on_one_kind_of_sensor_fills_the_sheets_it_can(only, tmp_path, c
     assert (len(doc["tables"]["ADS-B quality"]) > 0) == (only == "adsb")
     assert doc["parameters"]["notes"] and f"CAT{cat ^ 21 ^ 48:03d}" in doc["parameters"]["notes"][0]
     assert (out / "q.xlsx").is_file()
+
+
+@pytest.mark.parametrize("command", ["track", "conflicts"])
+def test_track_and_conflicts_say_when_their_times_are_on_1970(command, tmp_path: Path, capsys) -> None:
+    """Raw recordings carry no date: without --date the tracks' times were written on 1970-01-01 with no
+    word; now a warning says so and how to fix it, and with --date there is none."""
+    args = [command, str(FIX / "radar.ast"), str(FIX / "adsb.ast"), "--sensors", str(FIX / "sensors.toml"),
+            "--callsign" if command == "track" else "--step", "MAS72" if command == "track" else "5"]
+    assert main([*args, "-o", str(tmp_path / "a.csv")]) == 0
+    assert "the inputs carry no date and --date was not given" in capsys.readouterr().err
+    assert main([*args, "-o", str(tmp_path / "b.csv"), "--date", "2019-03-01"]) == 0
+    assert "--date was not given" not in capsys.readouterr().err
