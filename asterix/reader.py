@@ -342,7 +342,7 @@ def _walking_bytes(buf: np.ndarray, framed, tables) -> int:
             continue
         sel = b_cat == cat
         ok = kernel.walk_flags(buf, b_start[sel], b_len[sel], base[cat], nfrn[cat], P, ext_sizes, ext_fx,
-                               sub_parts)
+                               sub_parts).astype(bool)  # 0/1 flags: as a mask, not as indices
         total += int(b_len[sel][ok].sum())
     return total
 

@@ -127,6 +127,15 @@ def test_blocks_that_walk_under_a_wrong_edition_are_withheld(n_wrong, withheld):
     assert accounted(rec) == len(data)
 
 
+def test_one_block_of_another_category_beside_one_plot():
+    """A lone block of a category not decoded makes framing check the chain carefully; comparing what
+    each framing walks read the 0/1 walk flags as indices (IndexError on these two blocks)."""
+    plot = fspec(1, 2) + bytes([7, 1]) + (128).to_bytes(3, "big")  # I048/010 and I048/140 (1 s)
+    rec = decode_bytes(block(48, plot) + block(34, bytes([0x80, 25, 201])))
+    assert len(rec.frames[48]) == 1 and rec.frames[48]["time_of_day"].iloc[0] == 1.0
+    assert rec.errors.empty and rec.ignored_blocks == {34: 1}
+
+
 def test_other_category_is_stepped_over_and_accounted():
     data, starts = good_stream(3)
     alien = block(62, bytes([0x80, 1, 2]))  # 62 06 00 80 01 02: six bytes
