@@ -214,13 +214,23 @@ def test_without_timestamps_identities_or_optional_columns(sim):
     for c in ("callsign", "address", "mode3a"):  # plots with no identity at all
         radar[c] = radar[c].astype(object)
         radar.loc[radar.index[:50], c] = None
+    # and plots known by a Mode 3/A code alone, one no other report carries
+    radar.loc[radar.index[50:60], ["callsign", "address"]] = None
+    radar.loc[radar.index[50:60], "mode3a"] = "7777"
     # no nucr_nacv / sil / mops_version, no date
     meas = build_measurements(radar, sim.adsb.drop(columns=["nucr_nacv", "sil", "mops_version"],
                                                    errors="ignore"), sensors)
     t = quality_tables(meas)
     q = t["Quality"]
-    anon = q[(q["callsign"] == "") & (q["address"] == "")]
+    anon = q[(q["callsign"] == "(no identity)") & (q["address"] == "")]
     assert len(anon) == 1 and anon["reports"].iloc[0] == 50
+    assert row_of(q, "M3A:7777", "radar")["reports"] == 10  # labelled with its code, not left blank
+    # many targets: no intervals or gaps of theirs, here or in the pooled row and histogram
+    assert anon["intervals"].iloc[0] == 0 and np.isnan(anon["gaps"].iloc[0])
+    radar_rows = q[(q["sensor"] == "radar") & (q["callsign"] != "(all)")]
+    assert row_of(q, "(all)", "radar")["intervals"] == radar_rows["intervals"].sum()
+    hist = t["Update intervals"]
+    assert hist.loc[hist["sensor"] == "radar", "intervals"].sum() == radar_rows["intervals"].sum()
     assert q["first_utc"].isna().all() and t["Gaps"]["gap_start_utc"].isna().all()
     assert str(q["first_utc"].dtype) == str(t["Gaps"]["gap_end_utc"].dtype) == "datetime64[ns, UTC]"
     assert t["Jumps"]["utc"].isna().all() and t["ADS-B quality over time"]["bin_start_utc"].isna().all()

@@ -4,7 +4,10 @@ Rows are per aircraft (``aircraft_id``, pipeline.model.identity; "(all)" pools e
 sensor (radar or ADS-B, with its SAC/SIC). Everything after the duplicate count is computed on
 de-duplicated reports (``pipeline.model.dedup``, per aircraft and sensor). Update intervals are the time
 differences between consecutive reports of one aircraft from one sensor of at most ``gap_s``; longer
-ones are gaps (listed with their start and end; "reappeared_after_1h" when longer than an hour).
+ones are gaps (listed with their start and end; "reappeared_after_1h" when longer than an hour). An
+aircraft known by its Mode 3/A code alone is labelled with it ("M3A:7052"); reports of no aircraft (no
+address, call sign or Mode 3/A) get one row per sensor labelled "(no identity)", counted but with no
+intervals or gaps: they are many targets, and time between them measures nothing.
 Columns ending ``_utc`` (and the jumps' ``utc``) are instants, datetime64[ns, UTC], NaT when the
 recording is undated (its ``*_tod_s`` columns then give the time of day); JSON writes them as ISO 8601.
 """
@@ -23,6 +26,8 @@ from pipeline.model.jumps import JUMP_FLAG_COLUMNS, JUMP_INPUTS, jump_table
 from pipeline.model.time import UTC_DTYPE, dated_or_nat, with_clock
 
 ALL = "(all)"
+UNIDENTIFIED = "?"  # the aircraft key of reports that belong to no aircraft (aircraft_id <NA>)
+NO_IDENTITY = "(no identity)"  # their call-sign label: no address, call sign or Mode 3/A code
 REAPPEARANCE_S = 3600.0
 QUALITY_BIN_S = 600.0
 NUCP_MIN = 5  # NUCp below this is low integrity (MOPS version 0)
@@ -69,12 +74,18 @@ def _aircraft_labels(meas: pd.DataFrame) -> pd.DataFrame:
     per-report values."""
     both = with_clock(meas[[c for c in meas if c in QUALITY_INPUTS or c in QUALITY_FLAGS]])
     both["sensor"] = both["sensor_kind"].astype("object")
-    both["aircraft"] = both["aircraft_id"].astype("object").fillna("?")
+    both["aircraft"] = both["aircraft_id"].astype("object").fillna(UNIDENTIFIED)
     labels = aircraft_labels(meas).set_index("aircraft_id")
     codes, aircraft = pd.factorize(both["aircraft"])  # labels looked up once per aircraft, not per report
-    for column in ("callsign", "address"):
-        per_aircraft = pd.Series(aircraft).map(labels[column]).fillna("").astype("object").to_numpy()
-        both[column] = pd.Series(per_aircraft[codes], index=both.index, dtype=object)
+    per_aircraft = {column: pd.Series(aircraft).map(labels[column]).fillna("").astype("object").to_numpy()
+                    for column in ("callsign", "address")}
+    # an aircraft known by its Mode 3/A code alone shows it ("M3A:7052"); reports of no aircraft say so
+    unlabelled = (per_aircraft["callsign"] == "") & (per_aircraft["address"] == "")
+    keys = np.asarray(aircraft, dtype=object)
+    per_aircraft["callsign"] = np.where(unlabelled, np.where(keys == UNIDENTIFIED, NO_IDENTITY, keys),
+                                        per_aircraft["callsign"])
+    for column, values in per_aircraft.items():
+        both[column] = pd.Series(values[codes], index=both.index, dtype=object)
     return both
 
 
@@ -345,6 +356,9 @@ def quality_tables(meas: pd.DataFrame, *, gap_s: float = 180.0,
         for key, g in groups:
             sensor_id = key[1:1 + len(SENSOR_KEYS)]
             row, within, g_gaps, g_clean = _group_rows(g, gap_s, jumps_by_aircraft)
+            if key[-1] == UNIDENTIFIED:  # reports of many targets: no interval or gap between them means much
+                within, g_gaps = within[:0], []
+                row |= _interval_stats(within) | {"gaps": np.nan, "longest_gap_s": np.nan, "reappearances": 0}
             rows.append(row)
             intervals.append(within)
             clean.append(g_clean[[c for c in ("nucp_nic", "mops_version") if c in g_clean]])  # for the pool
