@@ -187,8 +187,10 @@ def _measurements(loaded, checked: Checked, options: TrackOptions) -> pd.DataFra
 
     meas, joined = join_by_track_number(meas, max_gap_s=float(options.max_coast_s))
     dup = duplicate_mask(meas.sort_values("time", kind="stable")).reindex(meas.index).to_numpy(bool)
-    out = meas[~dup & meas["aircraft_id"].notna().to_numpy(bool)].reset_index(drop=True)
+    known = meas["aircraft_id"].notna().to_numpy(bool)
+    out = meas[~dup & known].reset_index(drop=True)
     out.attrs["joined_by_track_number"] = joined
+    out.attrs["unidentified"] = int((~dup & ~known).sum())
     return out
 
 
@@ -229,6 +231,11 @@ def track_job(options: TrackOptions, *, progress: Progress | None = None, checke
     checked.warnings += jobs.undated_warning(loaded, "the tracks' times")
     loaded.drop_frames()  # the measurements hold what tracking needs: a day's decoded frames are ~0.5 GB
     joined = int(meas.attrs.get("joined_by_track_number", 0))
+    unidentified = int(meas.attrs.get("unidentified", 0))
+    if unidentified and options.all_aircraft:
+        checked.warnings.append(f"{unidentified} report(s) with no identity (no address, call sign or "
+                                "Mode 3/A code, nor a radar track number joining them to an aircraft), "
+                                "not tracked")
     meas = _select(meas, options)
     check_track_rows(meas, options)
     noise = None
@@ -243,7 +250,8 @@ def track_job(options: TrackOptions, *, progress: Progress | None = None, checke
     params = {**jobs._parameters(options, loaded, started, command), **result.parameters,
               "sources": list(_sources(options.sources)), "callsign": options.callsign,
               "address": options.address, "all": bool(options.all_aircraft),
-              "radar_plots_joined_by_track_number": joined, "noise": options.noise}
+              "radar_plots_joined_by_track_number": joined, "unidentified_reports_not_tracked": unidentified,
+              "noise": options.noise}
     return TrackJobResult(options, checked, result, tracks, meas, labels, params, loaded, noise)
 
 

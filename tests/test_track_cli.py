@@ -397,3 +397,29 @@ def test_grid_rows_bound_by_hand():
     meas = pd.DataFrame({"aircraft_id": ["A"] * 3,
                          "time": [t0 + pd.Timedelta(seconds=s) for s in (0, 10, 100)]})
     assert jobs_track.track_rows(meas, 1.0, 60.0, grid_only=True) == 132
+
+
+def test_reports_with_no_identity_are_counted_not_dropped_silently(tmp_path, capsys):
+    """25 of MAS72's radar plots (each the only plot at its time) stripped of address, call sign, Mode 3/A
+    and track number belong to no aircraft: --all tracks the rest and says how many it left out, in the
+    warnings and the JSON, where it used to drop them without a word."""
+    import asterix
+    from asterix.encode import encode_frame
+
+    radar = asterix.read(RADAR).frames[48]
+    lone = ~radar["time_of_day"].duplicated(keep=False).to_numpy(bool)
+    mas72 = np.flatnonzero((radar["callsign"] == "MAS72").to_numpy(bool) & lone)
+    stripped = mas72[::7][:25]
+    assert len(stripped) == 25
+    radar = radar.copy()
+    for c in ("address", "callsign", "mode3a", "mode3a_v", "mode3a_g", "mode3a_l", "track_number"):
+        radar[c] = radar[c].astype(object)  # no I048/070 at all (its flags alone would encode code 0000)
+        radar.iloc[stripped, radar.columns.get_loc(c)] = None
+    path = tmp_path / "radar.ast"
+    path.write_bytes(encode_frame(48, radar))
+    summary = tmp_path / "t.json"
+    assert main(["track", str(path), ADSB, "--sensors", SENSORS, "--date", "2019-03-01", "--all", "--json",
+                 str(summary)]) == 0
+    err = capsys.readouterr().err
+    assert "25 report(s) with no identity" in err
+    assert json.loads(summary.read_text())["parameters"]["unidentified_reports_not_tracked"] == 25
