@@ -81,10 +81,11 @@ def test_hand_built_recording_counted_by_hand(tmp_path):
                                                                                       [25, 202, 1, 1, 1]]
     assert src[["start", "end"]].values.tolist() == [["2019-03-01 23:53:20", "2019-03-02 00:00:10"],
                                                      ["2019-03-01 23:59:51", "23:59:51"]]
-    ac = tables["aircraft"]  # the plot with neither address nor call sign is no aircraft
+    ac = tables["aircraft"]  # the plot with neither address nor call sign is no aircraft: its own last row
     assert ac[["sic", "address", "callsign", "records", "start", "end", "duration_min"]].values.tolist() == [
         [201, "4840D6", "KLM1", 4, "2019-03-01 23:59:50", "2019-03-02 00:00:10", round(20 / 60, 1)],
         [201, "-", "CS9", 2, "2019-03-01 23:53:20", "23:55:00", round(100 / 60, 1)],
+        [201, "(none)", "-", 1, "2019-03-01 23:56:40", "23:56:40", 0.0],
         [202, "4840D6", "KLM1", 1, "2019-03-01 23:59:51", "23:59:51", 0.0]]
     skipped = tables["skipped"]
     assert skipped[["blocks", "bytes", "first_offset"]].values.tolist() == [[1, len(GARBAGE), garbage_at]]
