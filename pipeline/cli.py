@@ -154,7 +154,7 @@ def build_parser() -> argparse.ArgumentParser:
     _decoding_options(c)
 
     q = sub.add_parser("quality", help="sensor data quality and radar accuracy against ADS-B")
-    _aircraft_options(q, "every aircraft")
+    _aircraft_options(q, "every aircraft", sensors_required=False)
     q.add_argument("-o", "--output", help="Excel workbook (.xlsx); figures are written beside it")
     q.add_argument("--json", help="the tables as JSON")
     q.add_argument("--gap", type=float, default=180.0, help="gap in seconds reported as discontinuity")

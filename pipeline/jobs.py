@@ -365,7 +365,7 @@ def validate(options) -> Checked:
                     if table.exists() and not os.access(table, os.W_OK):
                         raise OptionError(f"-o {checked.output}: its {name} table {table} is not writable")
         checked.json = _output("--json", options.json, (".json",))
-        checked.sensors = _sensors(options.sensors)
+        checked.sensors = _sensors(options.sensors, required=not isinstance(options, QualityOptions))
         if checked.output is not None:
             for png in _figures_beside(checked.output, options, checked.sensors):
                 if png.is_dir():
@@ -472,7 +472,8 @@ def _load_measurements(options: AircraftOptions, checked: Checked, progress: Pro
         progress.stage(stage)
     if len(loaded.stray_radar):
         n_cat048 = sum(info["records"].get(48, 0) for info in loaded.inputs)
-        _stray_verdict(loaded.stray_radar, n_cat048, str(options.sensors), checked.warnings)
+        _stray_verdict(loaded.stray_radar, n_cat048, sensors_path(options), checked.warnings,
+                       leave_out="by giving the ADS-B recordings alone")
     checked.warnings += _wrong_editions(loaded, but=absent_categories(loaded))
     checked.warnings += [f"no {name} (CAT{cat:03d}) records in the inputs{_all_failed(loaded, cat)}: "
                          f"{_WITHOUT[cat]}" for cat, name in ((48, "radar"), (21, "ADS-B"))
@@ -500,16 +501,18 @@ def sensors_path(options: AircraftOptions) -> str | None:
     return None if options.sensors is None else str(options.sensors)
 
 
-def unknown_radar_error(missing: list[tuple[int, int]], sensors_path: str | None) -> JobError:
-    """The error for radars the sensor file lacks (or with no sensor file given), with the TOML lines."""
+def unknown_radar_error(missing: list[tuple[int, int]], sensors_path: str | None, *,
+                        leave_out: str = "with --sources adsb") -> JobError:
+    """The error for radars the sensor file lacks (or with no sensor file given, saying how to ``leave_out``
+    the radars), with the TOML lines."""
     from pipeline.model.sensors import sensor_toml_snippet
 
     lines = "\n\n".join(sensor_toml_snippet(sac, sic) for sac, sic in missing)
     pairs = ", ".join(f"{a}/{b}" for a, b in missing)
     if sensors_path is None:
         return JobError(f"radar plots from SAC/SIC {pairs} need the radar's position, and no --sensors file "
-                        "was given: give --sensors S.toml with these lines, or leave the radars out with "
-                        f"--sources adsb:\n\n{lines}")
+                        f"was given: give --sensors S.toml with these lines, or leave the radars out "
+                        f"{leave_out}:\n\n{lines}")
     return JobError(f"radar SAC/SIC {pairs} not in {sensors_path}; add its position:\n\n{lines}")
 
 
@@ -531,7 +534,8 @@ def declared_radar(cat048: pd.DataFrame | None, sensors: pd.DataFrame, sensors_p
     return cat048[known]
 
 
-def _stray_verdict(stray: pd.DataFrame, n_cat048: int, sensors_path: str | None, warnings: list[str]) -> None:
+def _stray_verdict(stray: pd.DataFrame, n_cat048: int, sensors_path: str | None, warnings: list[str], *,
+                   leave_out: str = "with --sources adsb") -> None:
     """Judge the records of SAC/SIC pairs the sensor file lacks (undeclared_radars' table, over the run's
     n_cat048 CAT048 records): a JobError with the TOML lines for a pair with enough records to be a radar,
     else one warning per pair and file, the records being left out."""
@@ -541,7 +545,8 @@ def _stray_verdict(stray: pd.DataFrame, n_cat048: int, sensors_path: str | None,
     real = stray[~no_pair & (per_pair >= limit).to_numpy(bool)]
     if len(real):
         pairs = real[["sac", "sic"]].drop_duplicates().sort_values(["sac", "sic"])
-        raise unknown_radar_error([(int(a), int(b)) for a, b in pairs.itertuples(index=False)], sensors_path)
+        raise unknown_radar_error([(int(a), int(b)) for a, b in pairs.itertuples(index=False)], sensors_path,
+                                  leave_out=leave_out)
     for row in stray.itertuples(index=False):
         name = row.file if pd.notna(row.file) else "input"
         if pd.isna(row.sac) or pd.isna(row.sic):

@@ -416,3 +416,20 @@ def test_track_and_conflicts_say_when_their_times_are_on_1970(command, tmp_path:
     assert "the inputs carry no date and --date was not given" in capsys.readouterr().err
     assert main([*args, "-o", str(tmp_path / "b.csv"), "--date", "2019-03-01"]) == 0
     assert "--date was not given" not in capsys.readouterr().err
+
+
+def test_quality_of_adsb_alone_needs_no_sensor_file(tmp_path: Path, capsys) -> None:
+    """quality refused ADS-B input without --sensors, which ADS-B never uses; radar plots without it stop
+    the run naming their SAC/SIC (it said 'not in None'), and nothing is written."""
+    out = tmp_path / "q.xlsx"
+    assert main(["quality", str(FIX / "adsb.ast"), "--all", "--date", "2019-03-01", "-o", str(out)]) == 0
+    assert out.exists()
+    out.unlink()
+    for png in tmp_path.iterdir():
+        png.unlink()
+    capsys.readouterr()
+    assert main(["quality", str(FIX / "radar.ast"), str(FIX / "adsb.ast"), "--all", "-o", str(out)]) == 1
+    err = capsys.readouterr().err
+    assert "radar plots from SAC/SIC 25/201 need the radar's position, and no --sensors file was given" in err
+    assert "ADS-B recordings alone" in err and "None" not in err
+    assert list(tmp_path.iterdir()) == []
