@@ -62,3 +62,26 @@ def test_the_figure_zooms_on_the_taxi_and_marks_it_on_the_map():
     assert mx0 < e.min() and e.max() < mx1
     assert [p.get_width() for p in ax.patches if type(p).__name__ == "Rectangle"] == [x1 - x0]
     assert len(track_figure(_flight(taxi_s=0), reports.iloc[300:], "ABC123").axes) == 2
+
+
+def test_mode_lines_break_between_segments_and_short_tracks_tick_seconds():
+    """Two segments 4 min apart: each mode is drawn as one line per segment, none across the gap; tick labels
+    never repeat, and a 150 s track's carry seconds (minutes alone repeated '22:03' on short tracks)."""
+    t = _flight(taxi_s=240, air_s=0, arrival_taxi_s=0)
+    second = t.assign(time=t["time"] + pd.Timedelta(minutes=8), segment=1)
+    t = pd.concat([t, second], ignore_index=True)
+    reports = pd.DataFrame({"sensor_id": "021:0/1", "sensor_kind": "adsb", "time": t["time"],
+                            "latitude": t["latitude"], "longitude": t["longitude"]})
+    fig = track_figure(t, reports, "ABC123")
+    mode_ax = fig.axes[-1]
+    cv = [line for line in mode_ax.get_lines() if line.get_color() == "#444444"]
+    assert len(cv) == 2 and [len(line.get_xdata()) for line in cv] == [240, 240]
+    fig.canvas.draw()
+    labels = [tick.get_text() for tick in mode_ax.get_xticklabels() if tick.get_text()]
+    assert labels and len(set(labels)) == len(labels)
+    short = _flight(taxi_s=100, air_s=50)  # 150 s: ticks less than a minute apart show their seconds
+    fig = track_figure(short, reports.iloc[:150], "ABC123")
+    fig.canvas.draw()
+    labels = [tick.get_text() for tick in fig.axes[-1].get_xticklabels() if tick.get_text()]
+    assert len(labels) > 1 and len(set(labels)) == len(labels)
+    assert all(len(text) == 8 and text.count(":") == 2 for text in labels)  # HH:MM:SS

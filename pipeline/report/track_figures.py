@@ -4,6 +4,7 @@ against time (bare Agg figures)."""
 
 from __future__ import annotations
 
+import itertools
 import math
 import re
 from pathlib import Path
@@ -191,11 +192,20 @@ def track_figure(tracks: pd.DataFrame, reports: pd.DataFrame, title: str = "") -
     ax.grid(True, lw=0.3)
     ax.legend(fontsize=7, loc="best")
     ax.set_title(title or str(tracks["aircraft_id"].iloc[0]), fontsize=10)
+    # one line per track segment: the mode probabilities are not drawn across the time between segments
+    bounds = [*np.flatnonzero(np.r_[True, seg[1:] != seg[:-1]]), len(seg)]
     for col, label, color in (("mode_cv", "CV", "#444444"), ("mode_turn_left", "turn left", "#1f77b4"),
                               ("mode_turn_right", "turn right", "#d62728"), ("mode_ca", "CA", "#2ca02c")):
         if col in tracks:
-            ax_mode.plot(t, tracks[col].to_numpy(float), color=color, lw=0.9, label=label)
-    ax_mode.xaxis.set_major_formatter(mdates.DateFormatter("%H:%M"))
+            y = tracks[col].to_numpy(float)
+            for k, (a, b) in enumerate(itertools.pairwise(bounds)):
+                ax_mode.plot(t.iloc[a:b], y[a:b], color=color, lw=0.9, label=label if k == 0 else None)
+    # minutes, or seconds where the ticks are less than a minute apart (a short track's minutes repeat)
+    locator = mdates.AutoDateLocator()
+    ticks = mdates.AutoDateFormatter(locator)
+    ticks.scaled = {1.0: "%m-%d %H:%M", 1 / 24: "%H:%M", 1 / 1440: "%H:%M", 1 / 86400: "%H:%M:%S"}
+    ax_mode.xaxis.set_major_locator(locator)
+    ax_mode.xaxis.set_major_formatter(ticks)
     ax_mode.set_ylim(-0.02, 1.02)
     ax_mode.set_ylabel("mode probability")
     ax_mode.set_xlabel("time (UTC)")
