@@ -265,6 +265,29 @@ def test_quality_figures(sim, frames, tables, tmp_path):
     assert empty.exists()
 
 
+def test_interval_labels_never_overlap_and_the_largest_count_is_labelled():
+    """A radar's intervals fill 30 neighbouring 0.1 s bins near its 4 s scan (real CAT048: the counts ran
+    into one another): the labels left visible do not overlap on the canvas, the largest count is one of
+    them, and a lone bin far away keeps its own."""
+    from pipeline.quality.tables import histogram_edges_s
+    from pipeline.report.quality_figures import interval_histogram
+
+    edges = histogram_edges_s(180.0)
+    counts = np.zeros(len(edges) - 1, np.int64)
+    near = (edges[:-1] >= 3.0) & (edges[:-1] < 6.0)
+    counts[near] = np.arange(1, near.sum() + 1) * 37
+    counts[np.flatnonzero(np.isclose(edges[:-1], 15.0))] = 300
+    hist = pd.DataFrame({"sensor": "radar", "sac": 20, "sic": 129, "bin_start_s": edges[:-1],
+                         "bin_end_s": edges[1:], "intervals": counts})
+    fig = interval_histogram(hist)
+    renderer = fig.canvas.get_renderer()
+    shown = [t for t in fig.axes[0].texts if t.get_visible() and t.get_text()]
+    boxes = [t.get_window_extent(renderer) for t in shown]
+    assert all(not a.overlaps(b) for i, a in enumerate(boxes) for b in boxes[i + 1:])
+    texts = {t.get_text() for t in shown}
+    assert str(counts.max()) in texts and "300" in texts and 2 < len(shown) < near.sum()
+
+
 def test_slotting_figure_rows_equal_a_selection_over_both_sensors_joined(frames):
     """The figure's raw reports of one sensor are found without joining both sensors' frames: the same
     rows, values and clock as select() over the two joined (also with one sensor empty)."""

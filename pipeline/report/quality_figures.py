@@ -12,6 +12,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 from matplotlib.axes import Axes
+from matplotlib.figure import Figure
 from matplotlib.ticker import FuncFormatter, MultipleLocator
 
 from pipeline.correlate.results import WindowResult
@@ -76,14 +77,21 @@ def histogram_range_s(histogram: pd.DataFrame, share: float = 0.999) -> float:
 
 
 def interval_histogram_figure(histogram: pd.DataFrame, path: str | os.PathLike[str]) -> Path:
+    """interval_histogram written as PNG."""
+    return save_png(interval_histogram(histogram), path)
+
+
+def interval_histogram(histogram: pd.DataFrame) -> Figure:
     """Update-interval histogram, one linear panel per sensor ("Update intervals" of quality_tables): bars
-    from the first occupied bin over the range holding 99.9 % of the intervals, each labelled by its count."""
+    from the first occupied bin over the range holding 99.9 % of the intervals, labelled by their counts
+    where the labels leave room."""
     sensors = list(histogram.groupby(["sensor", "sac", "sic"], dropna=False, sort=True))
     fig = new_figure(10, 2.7 * max(len(sensors), 1))
     if not sensors:
         _empty(fig.add_subplot(), "No update intervals")
-        return save_png(fig, path)
+        return fig
     axes = fig.subplots(len(sensors), 1, squeeze=False)[:, 0]
+    placed = []
     for ax, ((sensor, sac, sic), h) in zip(axes, sensors, strict=True):
         top = histogram_range_s(h)
         shown = h[h["bin_start_s"] < top]
@@ -93,7 +101,8 @@ def interval_histogram_figure(histogram: pd.DataFrame, path: str | os.PathLike[s
         bars = ax.bar(shown["bin_start_s"], shown["intervals"], width=width, align="edge", color=color,
                       edgecolor="0.25", lw=0.5)
         labels = [f"{int(v)}" if v > 0 else "" for v in shown["intervals"]]
-        ax.bar_label(bars, labels=labels, fontsize=7, padding=1)
+        texts = ax.bar_label(bars, labels=labels, fontsize=7, padding=1)
+        placed.append((texts, shown["intervals"].to_numpy()))
         occupied = shown.loc[shown["intervals"] > 0, "bin_start_s"]
         low = float(occupied.min()) if len(occupied) else 0.0
         pad = max(0.15 * (top - low), 0.3)  # a radar's intervals sit in a few bins near its scan period
@@ -107,7 +116,25 @@ def interval_histogram_figure(histogram: pd.DataFrame, path: str | os.PathLike[s
         ax.set_xlabel("update interval (s)")
         _grid(ax)
     fig.suptitle("Update intervals after de-duplication (bins as in the Update intervals sheet)", fontsize=12)
-    return save_png(fig, path)
+    for texts, counts in placed:
+        _drop_overlapping(fig, texts, counts)
+    return fig
+
+
+def _drop_overlapping(fig: Figure, texts: list, counts: np.ndarray) -> None:
+    """Hide the bar labels that would overlap the label of a larger count (a radar's few bins near its
+    scan period, a 0.1 s apart: their counts ran into one another); the sheet gives every count."""
+    fig.draw_without_rendering()  # the constrained layout settled: the labels' extents are final
+    renderer = fig.canvas.get_renderer()
+    kept = []
+    for i in np.argsort(-counts, kind="stable"):
+        if not texts[i].get_text():
+            continue
+        box = texts[i].get_window_extent(renderer)
+        if any(box.overlaps(k) for k in kept):
+            texts[i].set_visible(False)
+        else:
+            kept.append(box)
 
 
 def radar_error_figure(errors: pd.DataFrame, path: str | os.PathLike[str],
