@@ -410,6 +410,7 @@ def _load(options: DecodingOptions, checked: Checked, progress: Progress | None)
     except UnreadableInput as exc:
         raise JobError(str(exc), 2) from exc
     spans = [time_spans(rec.frames, loaded.date) for rec in loaded.recordings]
+    checked.warnings += _empty_inputs(loaded)
     checked.warnings += _wrong_editions(loaded)
     checked.warnings += _order_warnings(checked.inputs, spans)
     checked.warnings += _date_ignored(options, loaded.inputs)
@@ -474,6 +475,7 @@ def _load_measurements(options: AircraftOptions, checked: Checked, progress: Pro
         n_cat048 = sum(info["records"].get(48, 0) for info in loaded.inputs)
         _stray_verdict(loaded.stray_radar, n_cat048, sensors_path(options), checked.warnings,
                        leave_out="by giving the ADS-B recordings alone")
+    checked.warnings += _empty_inputs(loaded)
     checked.warnings += _wrong_editions(loaded, but=absent_categories(loaded))
     checked.warnings += [f"no {name} (CAT{cat:03d}) records in the inputs{_all_failed(loaded, cat)}: "
                          f"{_WITHOUT[cat]}" for cat, name in ((48, "radar"), (21, "ADS-B"))
@@ -566,6 +568,14 @@ def _stray_verdict(stray: pd.DataFrame, n_cat048: int, sensors_path: str | None,
 _WITHOUT = {48: "the Radar accuracy and Radar biases sheets are empty",
             21: "the ADS-B quality sheets are empty, and so are Radar accuracy and Radar biases (ADS-B is "
                 "their reference)"}
+
+
+def _empty_inputs(loaded: Loaded) -> list[str]:
+    """A warning for each input of which no record decoded (a file that is not a recording, or another
+    category): the run goes on with the others, but it should not be silent."""
+    return [f"{info['path']}: no record decoded ({info['skipped_blocks']} block(s) skipped; 'msdc stats' "
+            "lists them)" if info["skipped_blocks"] else f"{info['path']}: no CAT021 or CAT048 record in it"
+            for info in loaded.inputs if not any(info["records"].values())]
 
 
 def _wrong_editions(loaded: Loaded, but: list[int] | tuple[int, ...] = ()) -> list[str]:

@@ -433,3 +433,18 @@ def test_quality_of_adsb_alone_needs_no_sensor_file(tmp_path: Path, capsys) -> N
     assert "radar plots from SAC/SIC 25/201 need the radar's position, and no --sensors file was given" in err
     assert "ADS-B recordings alone" in err and "None" not in err
     assert list(tmp_path.iterdir()) == []
+
+
+def test_an_input_that_decodes_nothing_is_named(tmp_path: Path, capsys) -> None:
+    """A text file given by mistake beside a recording: the run goes on with the recording, and a warning
+    names the file (it was silent); an empty file likewise."""
+    text = tmp_path / "notes.txt"
+    text.write_text("Two real ASTERIX recordings from public repositories.\n" * 20)
+    empty = tmp_path / "empty.ast"
+    empty.write_bytes(b"")
+    args = [str(text), str(empty), str(FIX / "adsb.ast"), "--all", "--date", "2019-03-01"]
+    assert main(["quality", *args, "-o", str(tmp_path / "q.xlsx")]) == 0
+    err = capsys.readouterr().err
+    assert f"{text}: no record decoded (" in err and f"{empty}: no CAT021 or CAT048 record in it" in err
+    assert main(["track", *args, "-o", str(tmp_path / "t.csv")]) == 0
+    assert f"{text}: no record decoded (" in capsys.readouterr().err
