@@ -18,6 +18,7 @@ _OFFSET = re.compile(r"\s*\((?:record )?at offset (?:0x[0-9a-fA-F]+|\d+)\)"
                      r"|\s*\bat offset (?:0x[0-9a-fA-F]+|\d+)")
 
 NO_IDENTITY = "(none)"  # the aircraft table's address for records with neither address nor call sign
+NONE_KEY = "~"  # their aircraft key: text (a chunk of them alone merges with others), sorted after the rest
 STATS_COLUMNS = ("address", "callsign")  # decoded columns the tables need besides SAC/SIC and times
 # The groupings of the tables: key columns, and whether rows with a missing key are left out
 _LEVELS = {"categories": ["category"], "sources": ["category", "sac", "sic"],
@@ -102,7 +103,7 @@ def _chunk_tables(cat: int, frame: pd.DataFrame) -> dict[str, tuple[pd.DataFrame
     # (numbered last: the records of no aircraft, one row per sensor, so that the table accounts for all)
     none = len(addr_labels) + len(cs_labels)
     key = np.where(addr >= 0, addr, np.where(cs >= 0, len(addr_labels) + cs, none))
-    key_labels = np.array([*addr_labels, *("cs:" + str(c) for c in cs_labels), None], object)  # None last
+    key_labels = np.array([*addr_labels, *("cs:" + str(c) for c in cs_labels), NONE_KEY], object)
     source = (sac + 1) * (1 << 32) + (sic + 1)  # every SAC/SIC pair, a missing one (-1) included
     aircraft = np.where((sac >= 0) & (sic >= 0), source * (len(key_labels) + 1) + key, -1)
     out = {}
@@ -224,8 +225,7 @@ class StatsAccumulator:
             for r in self._table("aircraft").itertuples(index=False):
                 start, end, duration = _span_text(r.t_min, r.stamp_min, r.t_max, r.stamp_max)
                 callsigns = r.seen_callsign if isinstance(r.seen_callsign, str) and r.seen_callsign else "-"
-                address = (NO_IDENTITY if not isinstance(r.key, str) else "-" if r.key.startswith("cs:")
-                           else r.key)
+                address = NO_IDENTITY if r.key == NONE_KEY else "-" if r.key.startswith("cs:") else r.key
                 aircraft.append({"category": r.category, "sac": r.sac, "sic": r.sic, "address": address,
                                  "callsign": callsigns,
                                  "records": int(r.records), "start": start, "end": end,
