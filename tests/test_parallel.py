@@ -116,3 +116,21 @@ def test_radar_errors_against_the_track_are_the_same_on_two_threads(monkeypatch)
         errors.append(radar_errors(meas, sensors, reference="track"))
     assert errors[0]["callsign"].nunique() >= 2 and len(errors[0]) > 100
     pd.testing.assert_frame_equal(errors[0], errors[1], check_exact=True)
+
+
+def test_fill_predict_is_the_same_on_two_threads(measurements, monkeypatch):
+    """correlate --fill predict builds each aircraft's predictors on the threads: every window's slots,
+    lags and summary equal those of one thread, bit for bit, in the same order."""
+    from pipeline.correlate.correlation import correlate
+
+    def run(n: int):
+        monkeypatch.setattr(parallel, "thread_count", lambda: n)
+        return correlate(measurements, all_aircraft=True, fill="predict")
+
+    one, two = run(1), run(2)
+    assert len({w.summary["address"] for w in one.windows}) == 2  # both threads had an aircraft
+    assert [w.summary for w in one.windows] == [w.summary for w in two.windows]
+    for a, b in zip(one.windows, two.windows, strict=True):
+        pd.testing.assert_frame_equal(a.slots, b.slots, check_exact=True)
+        pd.testing.assert_frame_equal(a.lags, b.lags, check_exact=True)
+    assert [s.reason for s in one.skipped] == [s.reason for s in two.skipped]

@@ -28,6 +28,7 @@ from pipeline.model.dedup import duplicate_mask
 from pipeline.model.geodesy import distance_m
 from pipeline.model.jumps import JUMP_FLAG_COLUMNS, detect_jumps
 from pipeline.model.time import is_dated, iso_utc, midnight, seconds_since, with_clock
+from pipeline.parallel import map_ordered
 
 PAIRS = ("radar-adsb", "radar-radar", "all")
 # the measurement columns correlate() reads (identity, time, position, dedup keys, job-wide flags); the
@@ -378,6 +379,22 @@ def _aircraft_pairs(cols: _Columns, radar_rows: np.ndarray, other_rows: np.ndarr
     return out
 
 
+def _prepared_pairs(cols: _Columns, pairs: str, split_adsb: bool, fill: str, reference: pd.Timestamp,
+                    slot_s: float, gap_s: float, target: tuple) -> tuple[tuple[str, str], list]:
+    """One aircraft's (call sign, address) labels and sensor pairs (_aircraft_pairs); with ``fill``
+    "predict" the predictors of the pairs that overlap are built now (each pair's _correlate_pair then
+    finds them built)."""
+    callsign, address, _, radar_rows, other_rows = target
+    found = _aircraft_pairs(cols, radar_rows, other_rows, pairs, split_adsb, fill)
+    if fill == "predict":
+        coast_s = max(gap_s, slot_s)
+        for _, radar, _, adsb in found:
+            if overlap_windows(radar.t, adsb.t, gap_s):
+                radar.predictor(reference, coast_s)
+                adsb.predictor(reference, coast_s)
+    return (callsign, address), found
+
+
 def _correlate_pair(ac: tuple[str, str], run: CorrelationRun, pair: tuple[str, _Source, str, _Source],
                     slot_s: float, gap_s: float, reference: pd.Timestamp, fill: str = "hold",
                     budget: list[int] | None = None) -> NoOverlap | None:
@@ -469,10 +486,16 @@ def correlate(meas: pd.DataFrame, *, callsign: str | None = None, address: str |
                          np.arange(len(ac.radar), len(ac.radar) + len(ac.adsb)))])
         del ac
     paired, budget = False, [0]
-    for callsign_label, address_label, _, radar_rows, other_rows in targets:
+    prepare = functools.partial(_prepared_pairs, cols, pairs, split_adsb, fill, reference, slot_s, gap_s)
+    if fill == "predict":
+        _ = cols.track_inputs  # read here once, not by the threads
+    # --fill predict builds each aircraft's predictors on the per-aircraft threads (their filter kernels
+    # release the GIL); the windows are then correlated here, in aircraft order, as before
+    for (callsign_label, address_label), aircraft_pairs in map_ordered(
+            prepare, targets, threads=None if fill == "predict" else 1):
         found = [_correlate_pair((callsign_label, address_label), run, pair, slot_s, gap_s, reference, fill,
                                  budget)
-                 for pair in _aircraft_pairs(cols, radar_rows, other_rows, pairs, split_adsb, fill)]
+                 for pair in aircraft_pairs]
         paired |= bool(found)
         if not all_aircraft and found and all(f is not None for f in found):
             raise found[0]
