@@ -49,15 +49,29 @@ def separation(tracks: pd.DataFrame, radius_nm: float = 5.0, vertical_ft: float 
     return out
 
 
+LOSS_PAIRS = ("all", "airborne", "surface")
+
+
 def losses_of_separation(tracks: pd.DataFrame, radius_nm: float = 5.0, vertical_ft: float = 1000.0,
-                         vertical_tolerance_ft: float = VERTICAL_TOLERANCE_FT) -> pd.DataFrame:
+                         vertical_tolerance_ft: float = VERTICAL_TOLERANCE_FT, *, pairs: str = "all"
+                         ) -> pd.DataFrame:
     """Every loss of separation: horizontal distance below radius_nm and vertical below vertical_ft less
     vertical_tolerance_ft (the level quantum: tracked levels 1000 ft apart wobble a few feet) at the same
-    grid time. A run ends at the first grid time either aircraft is out of loss or absent."""
+    grid time. A run ends at the first grid time either aircraft is out of loss or absent. pairs: "all"
+    samples, "airborne" (neither aircraft on the surface by the tracks' boolean `on_surface`) or "surface"
+    (one or both on it); a run also ends where its samples stop being of that kind."""
     _check_positive(radius_nm=radius_nm, vertical_ft=vertical_ft)
+    if pairs not in LOSS_PAIRS:
+        raise ValueError(f"pairs {pairs!r}: expected one of {', '.join(LOSS_PAIRS)}")
     limit_ft = vertical_limit_ft(vertical_ft, vertical_tolerance_ft)
     sep = separation(tracks, radius_nm, vertical_ft)
     sep = sep[(sep["horizontal_nm"] < radius_nm) & (sep["vertical_ft"] < limit_ft)]
+    if pairs != "all":
+        from pipeline.conflict.surface import surface_pairs
+
+        _require(tracks, ["on_surface"], "tracks")
+        surface = surface_pairs(sep, tracks)
+        sep = sep[surface if pairs == "surface" else ~surface]
     if sep.empty:
         return _empty(LOSS_COLUMNS, tracks["time"].dtype, tracks["aircraft_id"].dtype)
     grid = np.unique(time_key(tracks["time"]))
