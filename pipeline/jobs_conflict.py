@@ -164,14 +164,9 @@ class ConflictJobResult:
 def conflict_job(options: ConflictOptions, *, progress: Progress | None = None,
                  checked: Checked | None = None, command: str = "conflicts") -> ConflictJobResult:
     """Validate, decode, track every aircraft, predict, PC per pair/step/horizon, events; writes nothing."""
-    from pipeline.conflict import (
-        alert_events,
-        classify_alerts,
-        losses_of_separation,
-        pair_probabilities,
-        warning_times,
-    )
+    from pipeline.conflict import alert_events, classify_alerts, pair_probabilities, warning_times
     from pipeline.conflict.approach import closest_approach
+    from pipeline.conflict.events import losses_by_pairs
     from pipeline.conflict.surface import on_surface, surface_pairs
     from pipeline.track import Plane, track
     from pipeline.track.noise import SURFACE_SPEED_KT
@@ -213,8 +208,9 @@ def conflict_job(options: ConflictOptions, *, progress: Progress | None = None,
                             vertical_tolerance_ft=tol)
     grid["on_surface"], by_speed = on_surface(grid)
     exclude = options.surface == "exclude"
-    losses = losses_of_separation(grid, options.radius_nm, options.vertical_ft, tol,
-                                  pairs="airborne" if exclude else "all")
+    kept = "airborne" if exclude else "all"
+    lost = losses_by_pairs(grid, options.radius_nm, options.vertical_ft, tol, kinds=(kept, "surface"))
+    losses = lost[kept]
     at_surface = surface_pairs(pc, grid)
     events = alert_events(pc[~at_surface] if exclude else pc, options.threshold, step_s=step)
     alerts = closest_approach(classify_alerts(events, losses), grid)
@@ -223,7 +219,7 @@ def conflict_job(options: ConflictOptions, *, progress: Progress | None = None,
               "alerts": len(alerts), "false_alerts": int(alerts["false_alert"].sum()) if len(alerts) else 0,
               "missed": {f"{h:g}": int(warn.loc[warn["horizon_s"] == h, "warning_s"].isna().sum())
                          for h in horizons} if len(warn) else {f"{h:g}": 0 for h in horizons},
-              "surface": _surface_counts(grid, by_speed, at_surface, options, pc)}
+              "surface": _surface_counts(grid, by_speed, at_surface, lost["surface"], options, pc)}
     params = {**jobs._parameters(options, loaded, started, command), **tracker_parameters,
               "horizons_s": list(horizons), "radius_nm": options.radius_nm,
               "vertical_ft": options.vertical_ft, "vertical_tolerance_ft": tol,
@@ -235,16 +231,14 @@ def conflict_job(options: ConflictOptions, *, progress: Progress | None = None,
                              predictions, noise)
 
 
-def _surface_counts(grid: pd.DataFrame, by_speed: np.ndarray, at_surface: np.ndarray,
+def _surface_counts(grid: pd.DataFrame, by_speed: np.ndarray, at_surface: np.ndarray, lost: pd.DataFrame,
                     options: ConflictOptions, pc: pd.DataFrame) -> dict:
     """What the surface rule touched: grid rows and aircraft on the surface (by the reports, by speed alone),
-    and the losses and alert events found among pair samples with an aircraft on the surface (left out of
-    the tables with --surface exclude, within them with include)."""
-    from pipeline.conflict import alert_events, losses_of_separation
+    and the losses (``lost``) and alert events found among pair samples with an aircraft on the surface
+    (left out of the tables with --surface exclude, within them with include)."""
+    from pipeline.conflict import alert_events
 
     surface = grid["on_surface"].to_numpy(bool)
-    lost = losses_of_separation(grid, options.radius_nm, options.vertical_ft, options.vertical_tolerance_ft,
-                                pairs="surface")
     events = alert_events(pc[at_surface], options.threshold, step_s=float(options.step_s))
     return {"excluded": options.surface == "exclude", "rows": int(surface.sum()),
             "rows_by_speed": int(by_speed.sum()),

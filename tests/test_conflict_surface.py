@@ -16,6 +16,7 @@ from pyproj import Geod
 from asterix.encode import encode_frame
 from pipeline.cli import main
 from pipeline.conflict import losses_of_separation
+from pipeline.conflict.events import losses_by_pairs
 from pipeline.conflict.surface import on_surface, surface_pairs
 
 GEOD = Geod(ellps="WGS84")
@@ -70,6 +71,9 @@ def test_losses_split_by_surface_pairs():
     pc = pd.DataFrame({"time": [T0, T0 + pd.Timedelta(seconds=1), T0 + pd.Timedelta(seconds=1)],
                        "aircraft_a": ["A", "A", "C"], "aircraft_b": ["B", "C", "B"]})
     assert surface_pairs(pc, tracks).tolist() == [False, True, True]
+    both = losses_by_pairs(tracks, kinds=("all", "airborne", "surface"))  # one pair search, the same runs
+    for kind, alone in (("all", every), ("airborne", airborne), ("surface", surface)):
+        pd.testing.assert_frame_equal(both[kind], alone)
     with pytest.raises(ValueError, match="on_surface"):
         losses_of_separation(tracks.drop(columns="on_surface"), pairs="airborne")
 
