@@ -207,6 +207,10 @@ def build_parser() -> argparse.ArgumentParser:
     k.add_argument("--vertical", default="gate",
                    help="vertical proximity: gate (predicted levels closer than --vertical-ft, default) or "
                         "gaussian (PC times the probability from the vertical filter's sigma)")
+    k.add_argument("--surface", default="exclude",
+                   help="pairs with an aircraft on the aerodrome surface (as its reports say, else below "
+                        "50 kt): exclude (default: separation minima apply between airborne aircraft) or "
+                        "include them in the losses and alerts; counted either way")
     k.add_argument("--figures", metavar="DIR", help="one PNG per alert event in this directory")
     k.add_argument("--step", type=float, default=1.0, help="output step in seconds (default 1)")
     k.add_argument("--max-coast", type=float, default=60.0,
@@ -448,7 +452,8 @@ def cmd_conflicts(args) -> int:
         max_coast_s=args.max_coast, tpm=args.tpm, horizons_s=args.horizon, radius_nm=args.radius_nm,
         vertical_ft=args.vertical_ft, vertical_tolerance_ft=args.vertical_tolerance_ft,
         threshold=args.threshold, method=args.method, vertical=args.vertical,
-        figures=args.figures, noise=args.noise, adsb_sigma_m=args.adsb_sigma, sources=args.sources)
+        surface=args.surface, figures=args.figures, noise=args.noise, adsb_sigma_m=args.adsb_sigma,
+        sources=args.sources)
     result = _run_job("conflicts", jobs_conflict.validate, jobs_conflict.conflict_job, options, Progress())
     print(jobs_conflict.text(result) + _noise_text(result.noise))
     for kind, path in jobs_conflict.write_conflicts(result).items():

@@ -40,6 +40,7 @@ METHODS = ("exact", "one-block", "blocks", "midpoint")
 # filter histories (~1.4 kB a report) held at a time: ~0.35 GB
 PREDICTION_BATCH_REPORTS = 250_000
 VERTICAL_MODELS = ("gate", "gaussian")
+SURFACE_MODES = ("exclude", "include")  # pairs with an aircraft on the surface (pipeline.conflict.surface)
 HORIZON_RANGE_S = (1.0, 3600.0)
 RADIUS_RANGE_NM = (0.01, 100.0)
 VERTICAL_RANGE_FT = (1.0, 100_000.0)
@@ -59,6 +60,7 @@ class ConflictOptions(TrackOptions):
     threshold: float = 0.2
     method: str = "exact"
     vertical: str = "gate"  # "gaussian": PC times P(|dz| < vertical_ft) from the vertical filter's sigma
+    surface: str = "exclude"  # pairs with an aircraft on the surface out of losses and alerts; or "include"
 
 
 def parse_horizons(value) -> tuple[float, ...]:
@@ -108,6 +110,8 @@ def validate(options: ConflictOptions) -> Checked:
         raise OptionError(f"--method {options.method!r}: must be one of {', '.join(METHODS)}")
     if options.vertical not in VERTICAL_MODELS:
         raise OptionError(f"--vertical {options.vertical!r}: must be one of {', '.join(VERTICAL_MODELS)}")
+    if options.surface not in SURFACE_MODES:
+        raise OptionError(f"--surface {options.surface!r}: must be one of {', '.join(SURFACE_MODES)}")
     jobs._number("--adsb-sigma", options.adsb_sigma_m, *jobs.ADSB_SIGMA_RANGE_M, " m")
     checked.output = jobs._output("-o", options.output, (".csv", ".xlsx"))
     checked.json = jobs._output("--json", options.json, (".json",))
@@ -160,15 +164,12 @@ class ConflictJobResult:
 def conflict_job(options: ConflictOptions, *, progress: Progress | None = None,
                  checked: Checked | None = None, command: str = "conflicts") -> ConflictJobResult:
     """Validate, decode, track every aircraft, predict, PC per pair/step/horizon, events; writes nothing."""
-    from pipeline.conflict import (
-        alert_events,
-        classify_alerts,
-        losses_of_separation,
-        pair_probabilities,
-        warning_times,
-    )
+    from pipeline.conflict import alert_events, classify_alerts, pair_probabilities, warning_times
     from pipeline.conflict.approach import closest_approach
+    from pipeline.conflict.events import losses_by_pairs
+    from pipeline.conflict.surface import on_surface, surface_pairs
     from pipeline.track import Plane, track
+    from pipeline.track.noise import SURFACE_SPEED_KT
 
     started = time.monotonic()
     checked = checked or validate(options)
@@ -207,22 +208,44 @@ def conflict_job(options: ConflictOptions, *, progress: Progress | None = None,
     tol = options.vertical_tolerance_ft
     pc = pair_probabilities(predictions, options.radius_nm, options.vertical_ft, method=options.method,
                             vertical_tolerance_ft=tol)
-    losses = losses_of_separation(grid, options.radius_nm, options.vertical_ft, tol)
-    events = alert_events(pc, options.threshold, step_s=step)
+    grid["on_surface"], by_speed = on_surface(grid)
+    exclude = options.surface == "exclude"
+    kept = "airborne" if exclude else "all"
+    lost = losses_by_pairs(grid, options.radius_nm, options.vertical_ft, tol, kinds=(kept, "surface"))
+    losses = lost[kept]
+    at_surface = surface_pairs(pc, grid)
+    events = alert_events(pc[~at_surface] if exclude else pc, options.threshold, step_s=step)
     alerts = closest_approach(classify_alerts(events, losses), grid)
     warn = warning_times(losses, events, horizons)
     counts = {"aircraft": int(grid["aircraft_id"].nunique()), "losses": len(losses),
               "alerts": len(alerts), "false_alerts": int(alerts["false_alert"].sum()) if len(alerts) else 0,
               "missed": {f"{h:g}": int(warn.loc[warn["horizon_s"] == h, "warning_s"].isna().sum())
-                         for h in horizons} if len(warn) else {f"{h:g}": 0 for h in horizons}}
+                         for h in horizons} if len(warn) else {f"{h:g}": 0 for h in horizons},
+              "surface": _surface_counts(grid, by_speed, at_surface, lost["surface"], options, pc)}
     params = {**jobs._parameters(options, loaded, started, command), **tracker_parameters,
               "horizons_s": list(horizons), "radius_nm": options.radius_nm,
               "vertical_ft": options.vertical_ft, "vertical_tolerance_ft": tol,
               "threshold": options.threshold, "method": options.method,
-              "vertical": options.vertical, "noise": options.noise,
+              "vertical": options.vertical, "noise": options.noise, "surface": options.surface,
+              "surface_speed_kt": SURFACE_SPEED_KT,
               "sources": list(_sources(options.sources))}
     return ConflictJobResult(options, checked, grid, pc, alerts, losses, warn, params, loaded, counts,
                              predictions, noise)
+
+
+def _surface_counts(grid: pd.DataFrame, by_speed: np.ndarray, at_surface: np.ndarray, lost: pd.DataFrame,
+                    options: ConflictOptions, pc: pd.DataFrame) -> dict:
+    """What the surface rule touched: grid rows and aircraft on the surface (by the reports, by speed alone),
+    and the losses (``lost``) and alert events found among pair samples with an aircraft on the surface
+    (left out of the tables with --surface exclude, within them with include)."""
+    from pipeline.conflict import alert_events
+
+    surface = grid["on_surface"].to_numpy(bool)
+    events = alert_events(pc[at_surface], options.threshold, step_s=float(options.step_s))
+    return {"excluded": options.surface == "exclude", "rows": int(surface.sum()),
+            "rows_by_speed": int(by_speed.sum()),
+            "aircraft": int(grid.loc[surface, "aircraft_id"].nunique()),
+            "losses": len(lost), "alerts": len(events), "pc_samples": int(at_surface.sum())}
 
 
 def _take_rows(frame: pd.DataFrame, rows: np.ndarray) -> pd.DataFrame:
@@ -286,10 +309,19 @@ def summary(result: ConflictJobResult) -> dict:
 def text(result: ConflictJobResult) -> str:
     """What the run found, in a few lines (says so when there is no loss and no alert)."""
     c = result.counts
+    speed_kt = result.parameters["surface_speed_kt"]
     lines = [f"{c['aircraft']} aircraft tracked; {c['losses']} loss(es) of separation "
              f"(< {result.options.radius_nm:g} NM and < {result.options.vertical_ft:g} ft less "
              f"{result.options.vertical_tolerance_ft:g} ft); "
              f"{c['alerts']} alert event(s), {c['false_alerts']} false"]
+    g = c["surface"]
+    if g["rows"]:
+        lines.append(f"on the surface: {g['aircraft']} aircraft in {g['rows']} track sample(s) "
+                     f"({g['rows_by_speed']} by a speed below {speed_kt:g} kt alone, the others as their "
+                     f"reports said); pairs with an aircraft on the surface: {g['losses']} loss(es), "
+                     f"{g['alerts']} alert event(s), "
+                     + ("left out of the tables (--surface include keeps them)" if g["excluded"]
+                        else "kept in the tables (--surface include)"))
     if not c["losses"] and not c["alerts"]:
         lines.append("no loss of separation and no alert: the tables are written empty, with their headers")
     if len(result.warnings):

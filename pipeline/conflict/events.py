@@ -49,15 +49,43 @@ def separation(tracks: pd.DataFrame, radius_nm: float = 5.0, vertical_ft: float 
     return out
 
 
+LOSS_PAIRS = ("all", "airborne", "surface")
+
+
 def losses_of_separation(tracks: pd.DataFrame, radius_nm: float = 5.0, vertical_ft: float = 1000.0,
-                         vertical_tolerance_ft: float = VERTICAL_TOLERANCE_FT) -> pd.DataFrame:
+                         vertical_tolerance_ft: float = VERTICAL_TOLERANCE_FT, *, pairs: str = "all"
+                         ) -> pd.DataFrame:
     """Every loss of separation: horizontal distance below radius_nm and vertical below vertical_ft less
     vertical_tolerance_ft (the level quantum: tracked levels 1000 ft apart wobble a few feet) at the same
-    grid time. A run ends at the first grid time either aircraft is out of loss or absent."""
+    grid time. A run ends at the first grid time either aircraft is out of loss or absent. pairs: "all"
+    samples, "airborne" (neither aircraft on the surface by the tracks' boolean `on_surface`) or "surface"
+    (one or both on it); a run also ends where its samples stop being of that kind."""
+    return losses_by_pairs(tracks, radius_nm, vertical_ft, vertical_tolerance_ft, kinds=(pairs,))[pairs]
+
+
+def losses_by_pairs(tracks: pd.DataFrame, radius_nm: float = 5.0, vertical_ft: float = 1000.0,
+                    vertical_tolerance_ft: float = VERTICAL_TOLERANCE_FT, *,
+                    kinds: tuple[str, ...] = ("airborne", "surface")) -> dict[str, pd.DataFrame]:
+    """``losses_of_separation`` for each kind of pairs in ``kinds`` (LOSS_PAIRS), from one pair search."""
     _check_positive(radius_nm=radius_nm, vertical_ft=vertical_ft)
+    for kind in kinds:
+        if kind not in LOSS_PAIRS:
+            raise ValueError(f"pairs {kind!r}: expected one of {', '.join(LOSS_PAIRS)}")
     limit_ft = vertical_limit_ft(vertical_ft, vertical_tolerance_ft)
     sep = separation(tracks, radius_nm, vertical_ft)
     sep = sep[(sep["horizontal_nm"] < radius_nm) & (sep["vertical_ft"] < limit_ft)]
+    surface = None
+    if set(kinds) - {"all"}:
+        from pipeline.conflict.surface import surface_pairs
+
+        _require(tracks, ["on_surface"], "tracks")
+        surface = surface_pairs(sep, tracks)
+    picks = {"all": slice(None), "airborne": ~surface if surface is not None else None, "surface": surface}
+    return {kind: _loss_runs(sep[picks[kind]], tracks) for kind in kinds}
+
+
+def _loss_runs(sep: pd.DataFrame, tracks: pd.DataFrame) -> pd.DataFrame:
+    """The runs of consecutive grid times of the separation samples in loss, one row per run."""
     if sep.empty:
         return _empty(LOSS_COLUMNS, tracks["time"].dtype, tracks["aircraft_id"].dtype)
     grid = np.unique(time_key(tracks["time"]))

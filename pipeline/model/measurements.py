@@ -37,19 +37,24 @@ from pipeline.model.time import absolute_time
 
 __all__ = ["DECODED_COLUMNS", "NACP_95_M", "UnknownRadar", "adsb_measurements", "build_measurements",
            "finish_measurements", "impossible_positions", "measurement_rows", "nacp_sigma_m",
-           "normalise_address", "normalise_callsign", "off_earth_rows", "radar_measurements", "select",
-           "sensor_id"]
+           "normalise_address", "normalise_callsign", "off_earth_rows", "on_ground", "radar_measurements",
+           "select", "sensor_id"]
 
 # The decoded CAT048/CAT021 columns build_measurements reads (besides sac, sic, time_of_day, day, timestamp
 # and offset, which every decoded frame has): jobs decode only these (asterix.read(columns=...))
 DECODED_COLUMNS = ("flight_level", "ground_speed_kt", "callsign", "address", "mode3a", "track_number",
                    "heading_deg", "rho_nm", "theta_deg", "x_nm", "y_nm", "track_angle_deg", "latitude",
                    "longitude", "nucp_nic", "fom_pa", "nacp", "nucr_nacv", "sil", "mops_version",
-                   "geometric_height_ft")
+                   "geometric_height_ft", "gbs", "flight_status", "rab")
 
 # Columns worked out over the whole run by finish_measurements, and the built columns each is made from
 DERIVED_INPUTS = {"aircraft_id": ("address", "callsign", "mode3a"),
                   "sigma_major_m": ("cov_ee_m2", "cov_en_m2", "cov_nn_m2")}
+
+# I048/230 STAT codes (CAT048 1.27-1.32 alike): 0 and 2 "aircraft airborne", 1 and 3 "aircraft on ground";
+# 4 and 5 "airborne or on ground", 6 unassigned, 7 "unknown" say nothing
+STAT_AIRBORNE = (0, 2)
+STAT_ON_GROUND = (1, 3)
 
 # DO-260B NACp: 95 % horizontal position accuracy bound (EPU) in metres; 0 = unknown
 NACP_95_M = {11: 3.0, 10: 10.0, 9: 30.0, 8: 92.6, 7: 185.2, 6: 555.6, 5: 926.0, 4: 1852.0, 3: 3704.0,
@@ -96,6 +101,7 @@ def _common(frame: pd.DataFrame, category: int, kind: str, date: dt.date | None)
     out["sensor_kind"] = _labels(np.zeros(len(frame), np.int64), [kind], frame.index)
     out["flight_level"] = _column(frame, "flight_level")
     out["ground_speed_kt"] = _column(frame, "ground_speed_kt")
+    out["on_ground"] = on_ground(frame, category)
     for name, norm in (("callsign", normalise_callsign), ("address", normalise_address)):
         out[name] = norm(text_categorical(frame[name])) if name in frame else _text(frame, name)
     out["mode3a"] = _text(frame, "mode3a")
@@ -103,6 +109,22 @@ def _common(frame: pd.DataFrame, category: int, kind: str, date: dt.date | None)
     out["file"] = _text(frame, "file")
     out["offset"] = _column(frame, "offset", "Int64")
     return out
+
+
+def on_ground(frame: pd.DataFrame, category: int) -> pd.Series:
+    """Whether each decoded report says the aircraft is on the surface (nullable boolean): CAT021 by I021/040
+    GBS (set: on ground), CAT048 by I048/230 STAT (STAT_ON_GROUND / STAT_AIRBORNE); a field monitor (RAB
+    set: a fixed transponder) is on the ground whatever they say; <NA> where the report says nothing."""
+    said = pd.Series(pd.NA, index=frame.index, dtype="boolean")
+    if category == 21 and "gbs" in frame:
+        said = frame["gbs"].astype("Int64").eq(1)
+    elif category == 48 and "flight_status" in frame:
+        stat = frame["flight_status"].astype("Int64")
+        said = stat.isin(STAT_ON_GROUND).astype("boolean").mask(~stat.isin(STAT_ON_GROUND + STAT_AIRBORNE)
+                                                              .fillna(False))
+    if "rab" in frame:
+        said = said.mask(frame["rab"].astype("Int64").eq(1).fillna(False), True)
+    return said.astype("boolean")
 
 
 def _rows_of(columns: dict[str, pd.Series], keep: np.ndarray) -> dict[str, pd.Series]:

@@ -56,6 +56,11 @@ MEASUREMENT_SCHEMA: tuple[Column, ...] = (
            "\"none\" (radar plot without FL: placed at zero elevation)"),
     Column("flight_level", "float64", "FL", "Flight level (pressure altitude / 100 ft)"),
     Column("ground_speed_kt", "float64", "kt", "Ground speed"),
+    Column("on_ground", "boolean", "",
+           "The report says the aircraft is on the surface: CAT021 I021/040 GBS set, CAT048 I048/230 STAT "
+           "1 or 3 (on ground), or either's RAB set (a field monitor: a fixed transponder); False for GBS "
+           "clear or STAT 0 or 2 (airborne); <NA> when the report does not say (no such item, STAT 4, 5 "
+           "or 7)"),
     Column("heading_deg", "float64", "deg",
            "Direction of motion, clockwise from true north (radar I048/200 heading, ADS-B track angle)"),
     Column("address", _TEXT, "", "24-bit ICAO aircraft address, 6 upper-case hex digits"),

@@ -274,7 +274,7 @@ def _reachable(i, k, t, ze, zn, ree, rnn, max_speed):
 
 
 @njit(cache=True, nogil=True)
-def run_filter(t, ze, zn, ree, ren, rnn, ve0, vn0, var_v0, fl, kinds, omegas, qs, mu0,
+def run_filter(t, ze, zn, ree, ren, rnn, ve0, vn0, var_v0, fl, ground, kinds, omegas, qs, mu0,
                tpm_kind, tpm_param, tpm_param2, gate_d2, max_coast_s, restart_after, max_speed, q_fl, var_fl,
                status, nis, segment, t_state, mu_h, x_h, P_h, zv_h, Pv_h, keep):
     """Filter one aircraft's time-ordered measurements (plane coordinates, m; covariances m^2).
@@ -288,7 +288,9 @@ def run_filter(t, ze, zn, ree, ren, rnn, ve0, vn0, var_v0, fl, kinds, omegas, qs
     noise (else it stays gated: an ADS-B position jump never starts a segment). A segment restarted
     after its first report alone, where that report is out of reach of the restarting one (a jump after
     a gap or at the start), is withdrawn: its report becomes a rejected one. ve0/vn0/var_v0
-    initialise the velocity of a new segment (mean and per-axis variance).
+    initialise the velocity of a new segment (mean and per-axis variance). ground: 1 where the report says
+    the aircraft is on the surface (else 0 or NaN): an accepted one sets the vertical rate to 0, so the
+    level is held at its estimate at the last level report, not flown on below the ground.
     Returns the number of accepted updates.
     """
     n = t.shape[0]
@@ -463,6 +465,10 @@ def run_filter(t, ze, zn, ree, ren, rnn, ve0, vn0, var_v0, fl, kinds, omegas, qs
                     Pv[0, 1] = Pv[1, 0] = (1.0 - k0) * p01
                     Pv[1, 1] = p11 - k1 * p01
                 tv = t[i]
+            if have_v and ground[i] == 1.0:
+                # on the surface: the level is held (a landing roll does not descend on at the approach's
+                # rate); the covariance is kept, so the rate is learnt again on the climb-out
+                zv[1] = 0.0
         segment[i] = seg
         t_state[i] = t_last
         if keep:

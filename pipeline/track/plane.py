@@ -54,8 +54,9 @@ class Estimates:
 
 
 def filter_plane(config: TrackerConfig, t, ze, zn, cov_ee, cov_en, cov_nn, *, fl=None, ve0=None, vn0=None,
-                 var_v0=None) -> PlaneRun:
-    """Run the IMM over measurements sorted by time (s), positions and covariances in the plane."""
+                 var_v0=None, on_ground=None) -> PlaneRun:
+    """Run the IMM over measurements sorted by time (s), positions and covariances in the plane. on_ground:
+    1 where a report says the aircraft is on the surface (its level is then held, not extrapolated)."""
     args = config.kernel_args()
     t = np.ascontiguousarray(t, float)
     n = len(t)
@@ -77,9 +78,10 @@ def filter_plane(config: TrackerConfig, t, ze, zn, cov_ee, cov_en, cov_nn, *, fl
     Pv = np.zeros((n, 2, 2))
     run_filter(t, col(ze, 0), col(zn, 0), col(cov_ee, 0), col(cov_en, 0), col(cov_nn, 0),
                col(ve0, 0.0), col(vn0, 0.0), col(var_v0, config.sigma_init_speed_mps ** 2),
-               col(fl, np.nan), args["kinds"], args["omegas"], args["qs"], args["mu0"], args["tpm_kind"],
-               args["tpm_param"], args["tpm_param2"], args["gate_d2"], args["max_coast_s"],
-               args["restart_after"], args["max_speed_mps"], args["q_fl"], args["var_fl"],
+               col(fl, np.nan), col(on_ground, np.nan), args["kinds"], args["omegas"], args["qs"],
+               args["mu0"], args["tpm_kind"], args["tpm_param"], args["tpm_param2"], args["gate_d2"],
+               args["max_coast_s"], args["restart_after"], args["max_speed_mps"], args["q_fl"],
+               args["var_fl"],
                status, nis, segment, t_state, mu, x, P, zv, Pv, True)
     t_fl = _last_level_time(t, status != STATUS_REJECTED, col(fl, np.nan), segment)
     _forget_stale_levels(t_state, t_fl, config.max_coast_s, zv, Pv)

@@ -13,6 +13,7 @@ Input, one row per report (the measurement model's schema):
 | `cov_ee_m2`, `cov_en_m2`, `cov_nn_m2` | horizontal position covariance (m^2), local east/north |
 | `ground_speed_kt`, `heading_deg` | optional; only used to start a segment's velocity |
 | `nucr_nacv` | optional; NUCr / NACv of ADS-B reports: that velocity's sigma (bound / 2.448; else 10 m/s) |
+| `on_ground` | optional; the report says the aircraft is on the surface (True), airborne (False) or not |
 
 Radar covariances come from `radar_covariance` (range/azimuth sigmas), ADS-B from `nacp_covariance`.
 
@@ -36,7 +37,9 @@ from .plane import SMOOTHERS, PlaneRun, estimate, filter_plane
 
 REQUIRED = ("time", "sensor_id", "sensor_kind", "aircraft_id", "latitude", "longitude", "flight_level",
             "cov_ee_m2", "cov_en_m2", "cov_nn_m2")
-# the columns filter_reports reads (the last three optional)
+# the columns filter_reports reads for the horizontal track (the last three optional); `on_ground`, when
+# present, holds the flight level on the surface (the vertical output only, which correlate --fill predict
+# and quality --reference track do not use)
 FILTER_INPUTS = ("time", "sensor_id", "latitude", "longitude", "flight_level", "cov_ee_m2", "cov_en_m2",
                  "cov_nn_m2", "ground_speed_kt", "heading_deg", "nucr_nacv")
 M_PER_S_PER_KT = 1852.0 / 3600.0
@@ -193,7 +196,22 @@ def _empty_tracks(names: list[str]) -> pd.DataFrame:
             "vertical_rate_fpm", "speed_kt", "track_deg", "turn_rate_dps", "sigma_major_m",
             "sigma_minor_m", "ellipse_orientation_deg"] + [f"mode_{n}" for n in names] + [
             "coasted", "age_s", "sources"]
-    return pd.DataFrame({c: [] for c in cols})
+    out = pd.DataFrame({c: [] for c in cols})
+    out["on_ground"] = pd.Series(dtype="boolean")
+    return out
+
+
+def _ground_at(said: np.ndarray | None, accepted: np.ndarray, segment: np.ndarray,
+               gov: np.ndarray) -> pd.api.extensions.ExtensionArray:
+    """Per output row, what the last accepted report of its segment (up to the row's governing report)
+    that said anything said about the surface: True (on the ground), False (airborne), <NA> (none said)."""
+    if said is None:
+        said = np.full(len(accepted), np.nan)
+    known = accepted & np.isfinite(said)
+    last = np.maximum.accumulate(np.where(known, np.arange(len(said)), -1)) if len(said) else np.zeros(0, int)
+    ok = (last >= 0) & (segment[np.maximum(last, 0)] == segment)
+    value = np.where(ok, said[np.maximum(last, 0)], np.nan)[gov]
+    return pd.arrays.BooleanArray(value == 1.0, ~np.isfinite(value))
 
 
 def _inv2(m: np.ndarray) -> np.ndarray:
@@ -284,16 +302,26 @@ def filter_reports(group: pd.DataFrame, epoch: pd.Timestamp, config: TrackerConf
         ground_speed_kt=g["ground_speed_kt"].to_numpy(float) if velocity else None,
         heading_deg=g["heading_deg"].to_numpy(float) if velocity else None,
         nucr_nacv=(g["nucr_nacv"].to_numpy(float, na_value=np.nan) if velocity and "nucr_nacv" in g.columns
-                   else None))
+                   else None),
+        on_ground=ground_said(g))
     far = g.loc[~near, "sensor_id"].value_counts()
     return FilteredReports(g[near], t[near], plane, run, far)
 
 
+def ground_said(reports: pd.DataFrame) -> np.ndarray | None:
+    """Per report 1.0 (says on the surface), 0.0 (says airborne) or NaN (says nothing), from the optional
+    ``on_ground`` column; None without it."""
+    if "on_ground" not in reports.columns:
+        return None
+    return reports["on_ground"].astype("boolean").astype("Float64").to_numpy(float, na_value=np.nan)
+
+
 def filter_columns(config: TrackerConfig, t, lat, lon, cov_ee, cov_en, cov_nn, fl, *, ground_speed_kt=None,
-                   heading_deg=None, nucr_nacv=None) -> tuple[Plane, np.ndarray, PlaneRun]:
+                   heading_deg=None, nucr_nacv=None, on_ground=None) -> tuple[Plane, np.ndarray, PlaneRun]:
     """``filter_reports`` on arrays of reports already in its order (time, then sensor): the plane, which
     reports lie within MAX_RANGE_M of it (the filter sees only those), and the filter's run over them.
-    The start velocity comes from ground speed and heading where both are given (NUCr / NACv: its sigma)."""
+    The start velocity comes from ground speed and heading where both are given (NUCr / NACv: its sigma);
+    on_ground (1 on the surface, 0 airborne, NaN unknown) holds the level on the surface."""
     plane = Plane.around(lat, lon)
     ze, zn = plane.forward(lat, lon)
     near = np.isfinite(ze) & np.isfinite(zn) & (np.hypot(ze, zn) < MAX_RANGE_M)
@@ -323,7 +351,8 @@ def filter_columns(config: TrackerConfig, t, lat, lon, cov_ee, cov_en, cov_nn, f
             var_v0[nac] = var_nac[nac]
     var_v0[np.isnan(var_v0)] = config.sigma_init_speed_mps ** 2
     run = filter_plane(config, t, ze, zn, cov[:, 0, 0], cov[:, 0, 1], cov[:, 1, 1],
-                       fl=fl[near], ve0=ve0, vn0=vn0, var_v0=var_v0)
+                       fl=fl[near], ve0=ve0, vn0=vn0, var_v0=var_v0,
+                       on_ground=None if on_ground is None else on_ground[near])
     return plane, near, run
 
 
@@ -384,7 +413,8 @@ def _track_one(aircraft_id, group, epoch, config, args, names, step_s, smooth, s
     }
     for j, name in enumerate(names):
         out[f"mode_{name}"] = muq[:, j]
-    out.update({"coasted": ~is_update, "age_s": dt, "sources": sources})
+    out.update({"coasted": ~is_update, "age_s": dt, "sources": sources,
+                "on_ground": _ground_at(ground_said(g), accepted, segment, gov)})
     tracks = pd.DataFrame(out, copy=False)  # one block per column: `_concat_by_column` frees them one by one
 
     sensor = g["sensor_id"].to_numpy(str)
