@@ -343,7 +343,7 @@ def _walking_bytes(buf: np.ndarray, framed, tables) -> int:
         sel = b_cat == cat
         ok = kernel.walk_flags(buf, b_start[sel], b_len[sel], base[cat], nfrn[cat], P, ext_sizes, ext_fx,
                                sub_parts)
-        total += int(b_len[sel][ok].sum())
+        total += int(b_len[sel][ok.astype(bool)].sum())  # 0/1 flags, not indices
     return total
 
 
