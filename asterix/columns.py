@@ -218,7 +218,8 @@ def markdown_schema() -> str:
     lines = ["# Frame columns", "", "Generated from `asterix/columns.py` by "
              "`python -c 'from asterix.columns import markdown_schema; print(markdown_schema())'`.",
              "Every frame also has `day` (int64: days after the recording's first day), `timestamp` "
-             "(datetime64[ns, UTC], NaT when the date is unknown), `block` (data block index in the file) "
+             "(datetime64[ns, UTC], NaT when the date is unknown), `block` (data block index in the file: "
+             "blocks of every category counted from 0, whatever the chunk size `iter_read` decodes in) "
              "and `offset` (byte offset of the record in the file).",
              "",
              "Identification text (`icao` columns: `callsign`) holds the 6-bit ICAO characters A-Z, space "

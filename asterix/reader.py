@@ -52,6 +52,7 @@ class Recording:
     # a category most of whose blocks fail under its edition: the other editions under which every one
     # of them sampled walks (a likely wrong edition; it is said, not switched: nothing on the wire says)
     edition_fits: dict[int, tuple[str, ...]] = field(default_factory=dict)
+    blocks: int = 0  # data blocks framed, of every category (the ``block`` column numbers them)
 
     @property
     def ignored(self) -> pd.DataFrame:
@@ -407,7 +408,7 @@ def decode_buffer(buf: np.ndarray, seg: Segments, *, path: str = "", editions: d
             scans = _scan_decoded(buf, framed, decoded, editions, choice, selected)
     b_start, b_len, b_cat, b_seg, e_off, e_len, e_cat, e_code = framed
     errors: list[tuple[int, int, int, str]] = [
-        (int(o), int(n), int(c), REASONS[int(code)])
+        (int(o), int(n), int(c), framing_reason(buf, seg, int(o), int(code)))
         for o, n, c, code in zip(e_off, e_len, e_cat, e_code, strict=True)]
     errors += [(o, n, -1, f"container: {why}") for o, n, why in seg.problems]
     columns: dict[int, dict] = {}
@@ -464,7 +465,23 @@ def decode_buffer(buf: np.ndarray, seg: Segments, *, path: str = "", editions: d
     err.insert(0, "file", path)
     err["category"] = err["category"].astype("Int16").where(err["category"] >= 0)
     return Recording(frames, err, chosen, path, seg.format, date, int(len(buf)), int(seg.container_bytes),
-                     decoded_bytes, ignored, ignored_bytes, choice, first_day, ignored_by_cat, fits)
+                     decoded_bytes, ignored, ignored_bytes, choice, first_day, ignored_by_cat, fits,
+                     int(len(b_start)))
+
+
+def framing_reason(buf: np.ndarray, seg: Segments, offset: int, code: int) -> str:
+    """A framing error's reason; for a bad data block LEN, which way it is bad, its numbers in a trailing
+    parenthesis (``msdc stats`` groups the reasons without them)."""
+    if code != kernel.E_BAD_LEN or offset + 3 > len(buf):
+        return REASONS[code]
+    n = int(buf[offset + 1]) << 8 | int(buf[offset + 2])
+    i = int(np.searchsorted(seg.start, offset, side="right")) - 1
+    end = int(seg.stop[i]) if i >= 0 else len(buf)  # the end of the payload the block is in
+    if n < 3:
+        return f"data block LEN below 3 (LEN {n})"
+    if offset + n > end:
+        return f"data block runs past the end of the data (LEN {n}, {offset + n - end} bytes past the end)"
+    return f"data block LEN does not fit the block chain (LEN {n})"
 
 
 def _parse_editions(editions) -> dict[int, str]:

@@ -28,7 +28,8 @@ def iter_read(path, *, chunk: int = 1_000_000, editions=None, date=None, categor
     """Stream a recording in chunks of about ``chunk`` bytes of payload, yielding a Recording each
     (``columns``: only those decoded columns, as in ``read``).
 
-    Days and timestamps continue across chunks; memory stays bounded by the chunk size.
+    Days, timestamps and the ``block`` index continue across chunks; memory stays bounded by the chunk
+    size.
     """
     eds = _parse_editions(editions)
     selected_columns(columns)
@@ -43,9 +44,13 @@ def iter_read(path, *, chunk: int = 1_000_000, editions=None, date=None, categor
         last_tod = np.nan
         first_date = _parse_date(date)
         day0 = None  # container day number of the first chunk's day 0
+        blocks = 0  # data blocks framed in the chunks before: each chunk numbers its own from 0
         for sub in bounds:
             rec = decode_buffer(buf, sub, path=str(path), editions=eds, categories=categories,
                                 date=first_date, strict=strict, columns=columns)
+            for f in rec.frames.values():
+                f["block"] += blocks
+            blocks += rec.blocks
             if seg.format in UNTIMED:
                 carry_day, last_tod = _continue_days(rec, carry_day, last_tod, first_date)
             elif rec.day0 is not None and day0 is None:

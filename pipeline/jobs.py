@@ -385,13 +385,20 @@ def validate(options) -> Checked:
         _number("--chunk-mb", options.chunk_mb, *CHUNK_RANGE_MB, " MB")
     if isinstance(options, DecodeOptions):
         checked.output = _output("-o", options.output, (".csv", ".parquet"))
-        if checked.output is not None:
-            out = checked.output
-            spare_inputs(options.inputs, [(f"-o {out}", p) for p in (
-                out, *(out.with_name(f"{out.stem}_cat{c:03d}{out.suffix}") for c in (21, 48)))])
         bad = [c for c in options.categories if c not in (21, 48)]
         if bad:
             raise OptionError(f"--category {bad[0]}: must be 21 or 48")
+        if checked.output is not None:
+            out = checked.output
+            spare_inputs(options.inputs, [(f"-o {out}", p) for p in (
+                out, *(category_output(out, c) for c in (21, 48)))])
+            cats = sorted(set(options.categories or (21, 48)))
+            for cat in cats if len(cats) > 1 else ():  # written when several categories decode
+                each = category_output(out, cat)
+                if each.is_dir():
+                    raise OptionError(f"-o {out}: its CAT{cat:03d} file {each} is a directory")
+                if each.exists() and not os.access(each, os.W_OK):
+                    raise OptionError(f"-o {out}: its CAT{cat:03d} file {each} is not writable")
     return checked
 
 
@@ -1222,63 +1229,73 @@ class DecodeResult:
 
 def decode_job(options: DecodeOptions, *, on_chunk: Callable[[int, int, str], None] | None = None
                ) -> DecodeResult:
-    """Stream every input in chunks and write CSV or Parquet (one file per category when several are
-    present); nothing is written when nothing decodes. ``on_chunk(done_bytes, size, name)`` reports
-    progress. Raises asterix DecodeError in strict mode, JobError for unreadable input."""
+    """Stream every input in chunks and write CSV or Parquet: one file, or one per category when records
+    of several categories decoded (decided from what decoded, at the end). Each output is written to a
+    temporary file beside it and moved into place only when the whole run succeeded: a failed or
+    interrupted run writes nothing, nor does a run in which nothing decodes. ``on_chunk(done_bytes, size,
+    name)`` reports progress. Raises asterix DecodeError in strict mode, JobError for unreadable input."""
     import asterix
     from asterix.errors import UnreadableInput
     from asterix.reader import categories_in
+    from pipeline.report.outputs import Staging
 
     checked = validate(options)
     out = checked.output
     counts: dict[int, int] = {}
     outputs: dict[int, Path] = {}
-    writers: dict[int, object] = {}
     skipped: list[tuple[str, int, str]] = []
     failed: dict[tuple[str, int], edition_notes.Failed] = {}
     notes: list[str] = []
     cats = list(options.categories) or None
-    held: dict[str, dict[int, int]] = {}
-    try:
-        present: set[int] = set()
-        for path in checked.inputs:
-            held[str(path)] = categories_in(path, format=options.format)
-            present |= set(held[str(path)]) & {21, 48}
-        several = len(present & set(cats or present)) > 1
-        for path in checked.inputs:
-            size = path.stat().st_size
-            chunk = max(int(options.chunk_mb * 1e6), 1)
-            for rec in asterix.iter_read(path, chunk=chunk, editions=checked.editions or None,
-                                         date=options.date, format=options.format, categories=cats,
-                                         strict=options.strict):
-                skipped += [(str(path), int(e.offset), str(e.reason)) for e in rec.errors.itertuples()]
-                edition_notes.fold(failed, rec)
-                for cat, frame in rec.frames.items():
-                    counts[cat] = counts.get(cat, 0) + len(frame)
-                    if out is not None and len(frame):
-                        _write_chunk(out, cat, frame.assign(file=path.name), outputs, writers, several, notes)
-                done = max((int(f["offset"].max()) for f in rec.frames.values() if len(f)), default=0)
-                if on_chunk:
-                    on_chunk(done, size, path.name)
-    except UnreadableInput as exc:
-        raise JobError(str(exc), 2) from exc
-    finally:
-        for w in writers.values():
-            if hasattr(w, "close"):
-                w.close()
+    csv = out is not None and out.suffix.lower() == ".csv"
+    with Staging() as staging:
+        staged: dict[int, Path] = {}  # category -> its temporary file
+        writers: dict[int, object] = {}
+        try:
+            for path in checked.inputs:
+                size = path.stat().st_size
+                chunk = max(int(options.chunk_mb * 1e6), 1)
+                for rec in asterix.iter_read(path, chunk=chunk, editions=checked.editions or None,
+                                             date=options.date, format=options.format, categories=cats,
+                                             strict=options.strict):
+                    skipped += [(str(path), int(e.offset), str(e.reason)) for e in rec.errors.itertuples()]
+                    edition_notes.fold(failed, rec)
+                    for cat, frame in rec.frames.items():
+                        counts[cat] = counts.get(cat, 0) + len(frame)
+                        if out is not None and len(frame):
+                            if cat not in staged:
+                                staged[cat] = staging.temporary(category_output(out, cat))
+                            _write_chunk(staged[cat], cat, frame.assign(file=path.name), writers, csv)
+                    done = max((int(f["offset"].max()) for f in rec.frames.values() if len(f)), default=0)
+                    if on_chunk:
+                        on_chunk(done, size, path.name)
+        except UnreadableInput as exc:
+            raise JobError(str(exc), 2) from exc
+        finally:
+            for w in writers.values():
+                if hasattr(w, "close"):
+                    w.close()
+        several = len(staged) > 1
+        for cat in sorted(staged):
+            outputs[cat] = category_output(out, cat) if several else out
+            if several:
+                notes.append(f"several categories: writing {outputs[cat]}")
+        staging.commit({staged[cat]: outputs[cat] for cat in staged})
+    held = {} if sum(counts.values()) else {str(p): categories_in(p, format=options.format)
+                                              for p in checked.inputs}
     warnings = checked.warnings + edition_notes.warnings(failed)
     return DecodeResult(counts, outputs, skipped, warnings, notes, held)
 
 
-def _write_chunk(out: Path, cat: int, frame: pd.DataFrame, outputs: dict, writers: dict, several: bool,
-                 notes: list[str]) -> None:
-    """Append one chunk of a category to its output (CSV or Parquet), opening it on first use."""
-    if cat not in outputs:
-        outputs[cat] = out.with_name(f"{out.stem}_cat{cat:03d}{out.suffix}") if several else out
-        if several:
-            notes.append(f"several categories: writing {outputs[cat]}")
-    path = outputs[cat]
-    if path.suffix.lower() == ".csv":
+def category_output(out: Path, cat: int) -> Path:
+    """Where decode writes one category's records when several decode: ``OUT_cat048.csv`` beside ``OUT``."""
+    return out.with_name(f"{out.stem}_cat{cat:03d}{out.suffix}")
+
+
+def _write_chunk(path: Path, cat: int, frame: pd.DataFrame, writers: dict, csv: bool) -> None:
+    """Append one chunk of a category to its (temporary) output file, CSV or Parquet, opening it on first
+    use."""
+    if csv:
         frame = guard_frame(frame.assign(timestamp=frame["timestamp"].dt.strftime("%Y-%m-%dT%H:%M:%S.%fZ")))
         frame.to_csv(path, mode="a" if cat in writers else "w", header=cat not in writers, index=False)
         writers[cat] = True

@@ -9,13 +9,16 @@ same fold over one whole decoded recording.
 from __future__ import annotations
 
 import re
+from pathlib import Path
 
 import numpy as np
 import pandas as pd
 
-# "(record at offset 1234)", "at offset 0x1f": the place, not the reason
+# "(record at offset 1234)", "at offset 0x1f": the place, not the reason; "(LEN 40, 36 bytes past the
+# end)": a bad data block LEN's numbers
 _OFFSET = re.compile(r"\s*\((?:record )?at offset (?:0x[0-9a-fA-F]+|\d+)\)"
-                     r"|\s*\bat offset (?:0x[0-9a-fA-F]+|\d+)")
+                     r"|\s*\bat offset (?:0x[0-9a-fA-F]+|\d+)"
+                     r"|\s*\(LEN \d+(?:, \d+ bytes? past the end)?\)")
 
 NO_IDENTITY = "(none)"  # the aircraft table's address for records with neither address nor call sign
 NONE_KEY = "~"  # their aircraft key: text (a chunk of them alone merges with others), sorted after the rest
@@ -24,11 +27,12 @@ STATS_COLUMNS = ("address", "callsign")  # decoded columns the tables need besid
 _LEVELS = {"categories": ["category"], "sources": ["category", "sac", "sic"],
            "aircraft": ["category", "sac", "sic", "key"]}  # aircraft: rows without SAC/SIC or key left out
 _SPAN = ["t_min", "stamp_min", "t_max", "stamp_max"]
-_SKIPPED = ["category", "reason", "blocks", "bytes", "first_offset"]
+_SKIPPED = ["file", "category", "reason", "blocks", "bytes", "first_offset"]
 
 
 def reason_kind(reason: str) -> str:
-    """A skipped block's reason without the offset embedded in it, so equal reasons group together."""
+    """A skipped block's reason without the offset or LEN numbers embedded in it, so equal reasons group
+    together."""
     return _OFFSET.sub("", str(reason)).strip()
 
 
@@ -156,6 +160,7 @@ class StatsAccumulator:
         self._spans: dict[str, pd.DataFrame] = {}
         self._distinct: dict[tuple[str, str], pd.DataFrame] = {}
         self._skipped: pd.DataFrame | None = None
+        self._files: dict[str, int] = {}  # files with skipped blocks, in the order met
         self._other: pd.DataFrame | None = None
 
     def add(self, frames: dict[int, pd.DataFrame], errors: pd.DataFrame | None = None,
@@ -173,13 +178,16 @@ class StatsAccumulator:
                         seen = pd.concat([prev, seen], ignore_index=True).drop_duplicates(ignore_index=True)
                     self._distinct[(level, value)] = seen
         if errors is not None and len(errors):
-            kinds = errors.assign(reason=errors["reason"].map(reason_kind))
-            new = (kinds.groupby(["category", "reason"], dropna=False)
+            kinds = errors.assign(reason=errors["reason"].map(reason_kind),
+                                  file=errors["file"].astype(str) if "file" in errors else "")
+            for name in kinds["file"].unique():  # input order, for the rows of one reason
+                self._files.setdefault(name, len(self._files))
+            new = (kinds.groupby(["file", "category", "reason"], dropna=False)
                    .agg(blocks=("offset", "size"), bytes=("length", "sum"), first_offset=("offset", "min"))
                    .reset_index())
             if self._skipped is not None:
                 new = (pd.concat([self._skipped, new], ignore_index=True)
-                       .groupby(["category", "reason"], dropna=False)
+                       .groupby(["file", "category", "reason"], dropna=False)
                        .agg(blocks=("blocks", "sum"), bytes=("bytes", "sum"),
                             first_offset=("first_offset", "min")).reset_index())
             self._skipped = new
@@ -231,14 +239,31 @@ class StatsAccumulator:
                                  "records": int(r.records), "start": start, "end": end,
                                  "duration_min": round(duration / 60.0, 1)})
         if self._skipped is not None:
-            skipped = self._skipped.sort_values(["blocks", "first_offset"], ascending=[False, True])
-            skipped = skipped[_SKIPPED].reset_index(drop=True)
+            skipped = _by_reason(self._skipped, self._files)
         else:
             skipped = pd.DataFrame(columns=_SKIPPED)
         other = self._other if self._other is not None else pd.DataFrame(columns=["category", "blocks",
                                                                                    "bytes"])
         return {"categories": pd.DataFrame(per_cat), "sources": pd.DataFrame(per_src),
                 "aircraft": pd.DataFrame(aircraft), "skipped": skipped, "other": other}
+
+
+def _by_reason(skipped: pd.DataFrame, files: dict[str, int]) -> pd.DataFrame:
+    """The skipped blocks per file, category and reason, grouped by reason: the reasons with the most
+    blocks over every file first (then the earliest), each reason's files in input order; a file shown by
+    its name, or by its path where two inputs share a name."""
+    key = ["category", "reason"]
+    groups = skipped.groupby(key, dropna=False)
+    order = pd.DataFrame({"total": -groups["blocks"].transform("sum"),
+                          "first": groups["first_offset"].transform("min"),
+                          "category": skipped["category"], "reason": skipped["reason"],
+                          "file": skipped["file"].map(files)})
+    skipped = skipped.loc[order.sort_values(["total", "first", "category", "reason", "file"],
+                                            kind="stable").index]
+    names = {f: Path(f).name for f in files}
+    shared = {n for n in names.values() if list(names.values()).count(n) > 1}
+    skipped = skipped.assign(file=skipped["file"].map(lambda f: f if names[f] in shared else names[f]))
+    return skipped[_SKIPPED].reset_index(drop=True)
 
 
 def _count(value) -> int:

@@ -348,8 +348,8 @@ def test_format_detection_and_override(tmp_path: Path) -> None:
 
 
 def _plain(frame: pd.DataFrame) -> pd.DataFrame:
-    """A frame with categoricals as objects (chunks have their own categories) and no block index."""
-    out = frame.drop(columns=["block"]).reset_index(drop=True)
+    """A frame with categoricals as objects (chunks have their own categories)."""
+    out = frame.reset_index(drop=True)
     for name in out.columns:
         if isinstance(out[name].dtype, pd.CategoricalDtype):
             out[name] = out[name].astype(object).where(out[name].notna(), None)

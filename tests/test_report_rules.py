@@ -156,9 +156,10 @@ def test_skipped_blocks_group_by_reason_without_offset():
                                       "unknown category"]})
     skipped = stats_tables({}, errors)["skipped"]
     assert skipped.to_dict("records") == [
-        {"category": 48, "reason": "an FSPEC or item runs past the end of its data block", "blocks": 2,
-         "bytes": 12, "first_offset": 10},
-        {"category": 48, "reason": "unknown category", "blocks": 1, "bytes": 3, "first_offset": 90}]
+        {"file": "f", "category": 48, "reason": "an FSPEC or item runs past the end of its data block",
+         "blocks": 2, "bytes": 12, "first_offset": 10},
+        {"file": "f", "category": 48, "reason": "unknown category", "blocks": 1, "bytes": 3,
+         "first_offset": 90}]
 
 
 def test_stats_lists_aircraft_with_utc_spans(capsys):

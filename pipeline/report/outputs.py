@@ -8,7 +8,8 @@ import os
 import pickle
 import signal
 import sys
-from collections.abc import Callable, Iterator
+import uuid
+from collections.abc import Callable, Iterator, Mapping
 from pathlib import Path
 
 
@@ -26,6 +27,53 @@ def all_or_nothing(*paths: Path | str | None) -> Iterator[None]:
                 if new.is_file():
                     new.unlink(missing_ok=True)
         raise
+
+
+class Staging:
+    """Outputs written under temporary names beside where they go, moved into place together by ``commit``
+    once the whole run has succeeded; leaving the ``with`` block removes every temporary file still there
+    (a failed or interrupted run writes nothing). ``write_atomically`` is its one-file case."""
+
+    def __init__(self) -> None:
+        self._made: list[Path] = []
+
+    def __enter__(self) -> Staging:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        for tmp in self._made:
+            tmp.unlink(missing_ok=True)
+
+    def temporary(self, path: Path | str) -> Path:
+        """A new hidden temporary name beside ``path`` (the same file system: the move is a rename)."""
+        path = Path(path)
+        tmp = path.with_name(f".{path.name}.{os.getpid()}.{uuid.uuid4().hex[:8]}.tmp")
+        self._made.append(tmp)
+        return tmp
+
+    def commit(self, moves: Mapping[Path, Path]) -> None:
+        """Move each temporary file over its output; if one move fails, the outputs already moved by this
+        call are removed and the error raised (their earlier content was replaced already)."""
+        done: list[Path] = []
+        try:
+            for tmp, final in moves.items():
+                os.replace(tmp, final)
+                done.append(Path(final))
+        except BaseException:
+            for final in done:
+                final.unlink(missing_ok=True)
+            raise
+
+
+def write_atomically(path: str | os.PathLike[str], write: Callable[[Path], object]) -> Path:
+    """Call ``write(tmp)`` on a sibling temporary file, then move it over ``path``; returns ``path``."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    with Staging() as staging:
+        tmp = staging.temporary(path)
+        write(tmp)
+        staging.commit({tmp: path})
+    return path
 
 
 class BackgroundFailed(RuntimeError):

@@ -6,8 +6,7 @@ import datetime as dt
 import json
 import math
 import os
-import uuid
-from collections.abc import Callable, Mapping
+from collections.abc import Mapping
 from numbers import Integral, Real
 from pathlib import Path
 from typing import Any
@@ -18,6 +17,7 @@ import pandas as pd
 from pipeline.correlate.results import SUMMARY_KEYS, CorrelationRun, WindowResult
 from pipeline.model.time import iso_utc
 from pipeline.report.formats import decimals
+from pipeline.report.outputs import write_atomically
 
 SKIPPED_KEYS = ["callsign", "address", "start_tod", "end_tod", "reason"]
 # Parameter names (top level or under "options") that may hold the slot length in seconds
@@ -108,19 +108,6 @@ def run_to_json(run: CorrelationRun) -> dict[str, Any]:
         "inputs": json_value(run.inputs),
         "filters": json_value(run.filters),
     }
-
-
-def write_atomically(path: str | os.PathLike[str], write: Callable[[Path], object]) -> Path:
-    """Call ``write(tmp)`` on a sibling temporary file, then move it over ``path``; returns ``path``."""
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_name(f".{path.name}.{os.getpid()}.{uuid.uuid4().hex[:8]}.tmp")
-    try:
-        write(tmp)
-        os.replace(tmp, path)
-    finally:
-        tmp.unlink(missing_ok=True)
-    return path
 
 
 def write_json(run: CorrelationRun, path: str | os.PathLike[str]) -> Path:
