@@ -601,9 +601,15 @@ def _all_failed(loaded: Loaded, cat: int) -> str:
         return ""
     edition = loaded.editions.get(cat)
     fits = edition_notes.fits_of(edition_notes.notes_of(loaded.recordings), cat)
-    hint = (f" under edition {edition}{edition_notes.advice(cat, fits)}" if fits else
-            f" under edition {edition}; if that edition is wrong, pin the right one or try --edition 21=auto"
-            if cat == 21 and edition else f" under edition {edition}" if edition else "")
+    if not edition:
+        hint = ""
+    elif fits:  # the editions every failed block walks under
+        hint = f" under edition {edition}{edition_notes.advice(cat, fits)}"
+    elif cat == 21:
+        hint = (f" under edition {edition}; if that edition is wrong, pin the right one or try "
+                "--edition 21=auto")
+    else:
+        hint = f" under edition {edition}"
     return f": {failed} CAT{cat:03d} block(s) could not be decoded{hint} ('msdc stats' lists them)"
 
 
