@@ -140,6 +140,23 @@ def _scan(buf, starts, lens, lay: Layout):
         cap *= 2
 
 
+def _editions_oldest_first(category: int) -> list[str]:
+    """The category's editions in version order."""
+    return sorted(available()[category], key=lambda e: tuple(int(x) for x in e.split(".")))
+
+
+def _spread(n: int, sample: int) -> np.ndarray:
+    """Positions of ``sample`` of ``n`` items spread evenly (all of them when there are no more)."""
+    return np.unique(np.linspace(0, n - 1, min(sample, n)).astype(np.int64))
+
+
+def _walk_flags(buf: np.ndarray, starts: np.ndarray, lens: np.ndarray, category: int, ed: str) -> np.ndarray:
+    """For each block, whether it walks exactly under one edition of the category (kernel.walk_flags)."""
+    base, nfrn, P, ext_sizes, ext_fx, sub_parts = _framing_tables(((category, ed),))
+    return kernel.walk_flags(buf, starts, lens, base[category], nfrn[category], P, ext_sizes, ext_fx,
+                             sub_parts).astype(bool)
+
+
 def choose_edition(buf: np.ndarray, starts: np.ndarray, lens: np.ndarray, category: int,
                    sample: int = AUTO_SAMPLE_BLOCKS) -> tuple[str, str]:
     """Pick the edition under which every sampled block walks exactly (the newest of those, as they read
@@ -148,14 +165,10 @@ def choose_edition(buf: np.ndarray, starts: np.ndarray, lens: np.ndarray, catego
     The sample is every block, or AUTO_SAMPLE_BLOCKS spread evenly over a longer recording: a walk costs
     no memory, so rare blocks that tell editions apart (I021/271 with an odd LW) are seen.
     """
-    idx = np.unique(np.linspace(0, len(starts) - 1, min(sample, len(starts))).astype(np.int64))
+    idx = _spread(len(starts), sample)
     s, n = starts[idx], lens[idx]
-    eds = sorted(available()[category], key=lambda e: tuple(int(x) for x in e.split(".")))
-    flags = {}
-    for ed in eds:
-        base, nfrn, P, ext_sizes, ext_fx, sub_parts = _framing_tables(((category, ed),))
-        flags[ed] = kernel.walk_flags(buf, s, n, base[category], nfrn[category], P, ext_sizes, ext_fx,
-                                      sub_parts)
+    eds = _editions_oldest_first(category)
+    flags = {ed: _walk_flags(buf, s, n, category, ed) for ed in eds}
     share = {ed: float(f.mean()) for ed, f in flags.items()}
     best = max(share.values())
     tied = [ed for ed in eds if share[ed] == best]
@@ -184,17 +197,10 @@ def walking_editions(buf: np.ndarray, starts: np.ndarray, lens: np.ndarray, cate
                      besides: str = "", sample: int = AUTO_SAMPLE_BLOCKS) -> tuple[str, ...]:
     """The editions (oldest first, ``besides`` left out) under which every one of these blocks walks
     exactly, or of ``sample`` of them spread evenly over a longer list."""
-    idx = np.unique(np.linspace(0, len(starts) - 1, min(sample, len(starts))).astype(np.int64))
+    idx = _spread(len(starts), sample)
     s, n = starts[idx], lens[idx]
-    out = []
-    for ed in sorted(available()[category], key=lambda e: tuple(int(x) for x in e.split("."))):
-        if ed == besides:
-            continue
-        base, nfrn, P, ext_sizes, ext_fx, sub_parts = _framing_tables(((category, ed),))
-        flags = kernel.walk_flags(buf, s, n, base[category], nfrn[category], P, ext_sizes, ext_fx, sub_parts)
-        if flags.all():
-            out.append(ed)
-    return tuple(out)
+    return tuple(ed for ed in _editions_oldest_first(category)
+                 if ed != besides and _walk_flags(buf, s, n, category, ed).all())
 
 
 def framing_edition(buf: np.ndarray, seg: Segments, walked: dict, category: int) -> str:
@@ -202,7 +208,7 @@ def framing_edition(buf: np.ndarray, seg: Segments, walked: dict, category: int)
     framing loses the fewest bytes (most of its blocks found on a tie, then the newest). Framing cannot
     walk a category without an edition, and would otherwise lose every block of it after the damage."""
     best: tuple | None = None
-    for ed in sorted(available()[category], key=lambda e: tuple(int(x) for x in e.split("."))):
+    for ed in _editions_oldest_first(category):
         framed = frame(buf, seg, {**walked, category: ed}, True)
         key = (int(framed[5].sum()), -int((framed[2] == category).sum()))
         if best is None or key <= best[0]:
@@ -212,7 +218,7 @@ def framing_edition(buf: np.ndarray, seg: Segments, walked: dict, category: int)
 
 def _plausible_share(buf, s, n, category: int, ed: str, limit: int = 400) -> float:
     """Share of records of up to ``limit`` sampled blocks with a plausible position and time of day."""
-    k = np.unique(np.linspace(0, len(s) - 1, min(limit, len(s))).astype(np.int64))
+    k = _spread(len(s), limit)
     lay = compile_layout(category, ed)
     scanned = _scan(buf, s[k], n[k], lay)
     if not (scanned[0] > 0).any():
