@@ -116,25 +116,26 @@ def interval_histogram(histogram: pd.DataFrame) -> Figure:
         ax.set_xlabel("update interval (s)")
         _grid(ax)
     fig.suptitle("Update intervals after de-duplication (bins as in the Update intervals sheet)", fontsize=12)
-    for texts, counts in placed:
-        _drop_overlapping(fig, texts, counts)
+    _drop_overlapping(fig, placed)
     return fig
 
 
-def _drop_overlapping(fig: Figure, texts: list, counts: np.ndarray) -> None:
-    """Hide the bar labels that would overlap the label of a larger count (a radar's few bins near its
-    scan period, a 0.1 s apart: their counts ran into one another); the sheet gives every count."""
-    fig.draw_without_rendering()  # the constrained layout settled: the labels' extents are final
+def _drop_overlapping(fig: Figure, placed: list[tuple[list, np.ndarray]]) -> None:
+    """In each panel (its bar labels and counts), hide the labels that would overlap the label of a larger
+    count (a radar's few bins near its scan period, 0.1 s apart: their counts ran into one another); the
+    sheet gives every count."""
+    fig.draw_without_rendering()  # once: the constrained layout settled, the labels' extents are final
     renderer = fig.canvas.get_renderer()
-    kept = []
-    for i in np.argsort(-counts, kind="stable"):
-        if not texts[i].get_text():
-            continue
-        box = texts[i].get_window_extent(renderer)
-        if any(box.overlaps(k) for k in kept):
-            texts[i].set_visible(False)
-        else:
-            kept.append(box)
+    for texts, counts in placed:
+        kept = []
+        for i in np.argsort(-counts, kind="stable"):
+            if not texts[i].get_text():
+                continue
+            box = texts[i].get_window_extent(renderer)
+            if any(box.overlaps(k) for k in kept):
+                texts[i].set_visible(False)
+            else:
+                kept.append(box)
 
 
 def radar_error_figure(errors: pd.DataFrame, path: str | os.PathLike[str],
