@@ -20,7 +20,7 @@ from .reader import (
     release_pages,
     selected_columns,
 )
-from .timeline import known_captures, restamp
+from .timeline import file_order_days, known_captures, restamp
 
 
 def iter_read(path, *, chunk: int = 1_000_000, editions=None, date=None, categories=None,
@@ -40,8 +40,7 @@ def iter_read(path, *, chunk: int = 1_000_000, editions=None, date=None, categor
             raise UnreadableInput(f"{path}: {exc}") from exc
         bounds = _chunk_bounds(buf, seg, chunk, eds, categories)
         release_pages(buf, 0, len(buf))  # planning the chunks read the whole file
-        carry_day = 0
-        last_tod = np.nan
+        clock = (0, np.nan)  # a raw stream's day and time of day at the end of the chunks before
         first_date = _parse_date(date)
         day0 = None  # container day number of the first chunk's day 0
         blocks = 0  # data blocks framed in the chunks before: each chunk numbers its own from 0
@@ -52,7 +51,8 @@ def iter_read(path, *, chunk: int = 1_000_000, editions=None, date=None, categor
                 f["block"] += blocks
             blocks += rec.blocks
             if seg.format in UNTIMED:
-                carry_day, last_tod = _continue_days(rec, carry_day, last_tod, first_date)
+                clock = file_order_days(rec.frames, *clock)
+                restamp(rec.frames, first_date)
             elif rec.day0 is not None and day0 is None:
                 day0, first_date = rec.day0, rec.date  # a dated container's date wins over date=
             elif rec.day0 is not None and rec.day0 != day0:
@@ -65,23 +65,6 @@ def iter_read(path, *, chunk: int = 1_000_000, editions=None, date=None, categor
             if len(sub.start):
                 release_pages(buf, int(sub.start.min()), int(sub.stop.max()))
             yield rec
-
-
-def _continue_days(rec: Recording, carry_day: int, last_tod: float, date) -> tuple[int, float]:
-    """Carry the midnight count of a raw stream from one chunk to the next."""
-    firsts = [(f["offset"].iloc[0], f["time_of_day"].iloc[0]) for f in rec.frames.values() if len(f)]
-    if not firsts:
-        return carry_day, last_tod
-    first_tod = min(firsts)[1]
-    if not np.isnan(last_tod) and not np.isnan(first_tod) and first_tod < last_tod - 43200:
-        carry_day += 1
-    for f in rec.frames.values():
-        f["day"] += carry_day
-    restamp(rec.frames, date)
-    lasts = [(f["offset"].iloc[-1], f["time_of_day"].iloc[-1], f["day"].iloc[-1])
-             for f in rec.frames.values() if len(f)]
-    _, tod, day = max(lasts)
-    return int(day), float(tod)
 
 
 def _chunk_bounds(buf: np.ndarray, seg: Segments, chunk: int, eds: dict, categories):

@@ -32,8 +32,9 @@ def known_captures(seg: Segments) -> tuple[np.ndarray | None, np.ndarray | None]
 
 
 def assign_days(frames: dict[int, dict], seg: Segments, blk_seg: np.ndarray) -> int | None:
-    """Add the ``day`` column (days after the first) to each category's columns; return the
-    container's day number of day 0 (days since 1970 when ``seg.dated``), None for raw streams."""
+    """Add the ``day`` column to each category's columns: days after the first report's in file order
+    (raw streams), after the earliest report's (containers with capture times); return the container's
+    day number of day 0 (days since 1970 when ``seg.dated``), None for raw streams."""
     parts = [(c, f) for c, f in frames.items() if len(f["offset"])]
     if not parts:
         for f in frames.values():
@@ -41,25 +42,7 @@ def assign_days(frames: dict[int, dict], seg: Segments, blk_seg: np.ndarray) -> 
         return None
     capture_day, capture_tod = known_captures(seg)
     if seg.format in UNTIMED or not len(seg.start) or capture_day is None:
-        # file order across categories; a drop of more than 12 h is a new day, a rise of more
-        # than 12 h a late report from the day before
-        off = np.concatenate([np.asarray(f["offset"]) for _, f in parts])
-        tod = np.concatenate([np.asarray(f["time_of_day"]) for _, f in parts])
-        order = np.argsort(off, kind="stable")
-        t = tod[order]
-        # a time of day outside 0-86400 s (damaged: I048/140 and I021/071-073 reach 131072 s) is no
-        # evidence of a midnight; left in, one such report put every other report on another day
-        t = pd.Series(np.where((t >= 0.0) & (t < 86400.0), t, np.nan)).ffill().bfill().to_numpy()
-        d = np.diff(t, prepend=t[:1] if len(t) else t)
-        day_sorted = np.cumsum(d < -43200) - np.cumsum(d > 43200)
-        day = np.empty_like(day_sorted)
-        day[order] = day_sorted
-        first = int(day.min())
-        i = 0
-        for _, f in parts:
-            n = len(f["offset"])
-            f["day"] = (day[i:i + n] - first).astype(np.int64)
-            i += n
+        file_order_days(frames)
         first_day = None
     else:
         # container capture time: the day that puts the report nearest its capture
@@ -77,6 +60,33 @@ def assign_days(frames: dict[int, dict], seg: Segments, blk_seg: np.ndarray) -> 
         if "day" not in f:
             f["day"] = np.zeros(len(f["offset"]), np.int64)
     return first_day
+
+
+def file_order_days(frames: dict[int, dict], day: int = 0, last_tod: float = np.nan) -> tuple[int, float]:
+    """Set each category's ``day`` by counting midnights in file order from the clock ``(day, last_tod)``
+    the reports before them left (a drop of more than 12 h is a new day, a rise of more than 12 h a late
+    report from the day before); return the clock after them, so that chunks continue it exactly."""
+    parts = [f for f in frames.values() if len(f["offset"])]
+    if not parts:
+        return day, last_tod
+    off = np.concatenate([np.asarray(f["offset"]) for f in parts])
+    tod = np.concatenate([np.asarray(f["time_of_day"], dtype=float) for f in parts])
+    order = np.argsort(off, kind="stable")
+    t = tod[order]
+    # a time of day outside 0-86400 s (damaged: I048/140 and I021/071-073 reach 131072 s) is no
+    # evidence of a midnight; left in, one such report put every other report on another day
+    t = np.concatenate([[last_tod], np.where((t >= 0.0) & (t < 86400.0), t, np.nan)])
+    t = pd.Series(t).ffill().bfill().to_numpy()
+    d = np.diff(t)
+    day_sorted = day + np.cumsum(d < -43200) - np.cumsum(d > 43200)
+    days = np.empty_like(day_sorted)
+    days[order] = day_sorted
+    i = 0
+    for f in parts:
+        n = len(f["offset"])
+        f["day"] = days[i:i + n].astype(np.int64)
+        i += n
+    return int(day_sorted[-1]), float(t[-1])
 
 
 def timestamp_index(day, tod, date: dt.date | None) -> pd.DatetimeIndex:

@@ -356,7 +356,8 @@ def _plain(frame: pd.DataFrame) -> pd.DataFrame:
     return out
 
 
-def assert_chunks_equal_read(path: Path, chunk: int, min_chunks: int = 2, **kw) -> list[asterix.Recording]:
+def assert_chunks_equal_read(path: Path, chunk: int, min_chunks: int = 2, in_order: bool = True,
+                             **kw) -> list[asterix.Recording]:
     whole = asterix.read(path, **kw)
     parts = list(asterix.iter_read(path, chunk=chunk, **kw))
     assert len(parts) >= min_chunks
@@ -364,7 +365,7 @@ def assert_chunks_equal_read(path: Path, chunk: int, min_chunks: int = 2, **kw) 
         pieces = [p.frames[cat] for p in parts if cat in p.frames]
         joined = pd.concat(pieces, ignore_index=True)
         pd.testing.assert_frame_equal(_plain(joined), _plain(frame), check_dtype=False)
-        assert joined.timestamp.isna().all() or joined.timestamp.is_monotonic_increasing
+        assert not in_order or joined.timestamp.isna().all() or joined.timestamp.is_monotonic_increasing
     assert {c for p in parts for c, f in p.frames.items() if len(f)} == {
         c for c, f in whole.frames.items() if len(f)}
     errors = pd.concat([p.errors for p in parts], ignore_index=True).sort_values("offset", ignore_index=True)
@@ -393,6 +394,30 @@ def test_iter_read_raw_across_midnight(tmp_path: Path) -> None:
     after = next(p for p in parts if min(int(f.offset.min()) for f in p.frames.values()) == cut + 3)
     assert (after.frames[48].day == 1).all()
 
+
+
+def test_raw_late_reports_give_the_same_days_for_every_chunk(tmp_path: Path) -> None:
+    # a raw daily recording: two plots stamped just before midnight, then the day after with late plots
+    # (23:59:59.5) sent after reports of 00:00 and 00:03. Worked by hand: day 0 is the first report's day,
+    # so the two first plots and every late one are on day 0 and the rest on day 1, whatever the chunks
+    # (a late plot at a chunk's start had put the rest of the file a day later).
+    tods = [86399.0, 86399.25] + [0.5 + i for i in range(40)] + [86399.5] + [41.0 + i for i in range(40)]
+    late = {0, 1, 42}
+    path = write(tmp_path, "daily.ast", b"".join(cat048([t], first_track=i) for i, t in enumerate(tods)))
+    want = [0 if i in late else 1 for i in range(len(tods))]
+    assert asterix.read(path).frames[48].day.tolist() == want
+    for chunk in (9, 40, 100, 380, 390, 400):
+        parts = assert_chunks_equal_read(path, chunk, in_order=False, date="2019-03-01")
+        assert pd.concat([p.frames[48] for p in parts]).day.tolist() == want
+    # a late plot after reports of the new day, before any midnight in the file: the day before day 0
+    path = write(tmp_path, "late.ast", b"".join(cat048([t], first_track=i)
+                                                for i, t in enumerate([0.5, 1.5, 86399.75, 2.5])))
+    f48 = asterix.read(path, date="2019-03-02").frames[48]
+    assert f48.day.tolist() == [0, 0, -1, 0]
+    assert f48.timestamp.iloc[2] == pd.Timestamp("2019-03-01 23:59:59.75", tz="UTC")
+    assert f48.timestamp.iloc[3] == pd.Timestamp("2019-03-02 00:00:02.5", tz="UTC")
+    for chunk in (9, 20, 30):
+        assert_chunks_equal_read(path, chunk, in_order=False, date="2019-03-02")
 
 def test_iter_read_pcap(tmp_path: Path) -> None:
     data, _ = mixed_pcap()
