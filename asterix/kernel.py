@@ -383,8 +383,9 @@ def frame_blocks(buf, seg_start, seg_stop, exact, careful, base, nfrn, P, ext_si
                 e_off, e_len, e_cat, e_code = _grow4(e_off, e_len, e_cat, e_code)
             e_off[ne] = q
             e_len[ne] = r - q
-            e_cat[ne] = buf[q]
-            e_code[ne] = E_BAD_LEN if q + 3 <= stop and (seen[buf[q]] or base[buf[q]] >= 0) else E_GARBAGE
+            bad_len = q + 3 <= stop and (seen[buf[q]] or base[buf[q]] >= 0)
+            e_cat[ne] = buf[q] if bad_len else -1  # garbage: its first byte names no category
+            e_code[ne] = E_BAD_LEN if bad_len else E_GARBAGE
             ne += 1
             q = r
     return (b_start[:nb], b_len[:nb], b_cat[:nb], b_seg[:nb], e_off[:ne], e_len[:ne], e_cat[:ne],

@@ -291,5 +291,7 @@ def format_stats(tables: dict[str, pd.DataFrame]) -> str:
         if key not in tables:
             continue
         t = tables[key]
+        if "category" in t:  # bytes that name no category (garbage) show '-', not <NA>
+            t = t.assign(category=t["category"].astype(object).where(t["category"].notna(), "-"))
         parts.append(f"{title}:\n" + ("  none" if t.empty else t.to_string(index=False)))
     return "\n\n".join(parts) + "\n"

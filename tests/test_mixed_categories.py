@@ -98,7 +98,16 @@ def test_garbage_between_other_category_blocks():
     rec = decode_bytes(data[:at] + junk + data[at:])
     assert list(rec.frames[48].track_number) == list(range(1, 13))
     assert rec.errors[["offset", "length"]].values.tolist() == [[at, 5]]
+    assert rec.errors["category"].isna().all()  # garbage names no category (its first byte is 0x00)
     assert accounted(rec) == len(data) + 5
+
+
+def test_text_is_garbage_of_no_category():
+    text = b"# msdc\n\nNot a recording: a README.\n" * 20  # '#' is 35, a category byte if read as one
+    rec = decode_bytes(text)
+    assert not rec.frames or all(f.empty for f in rec.frames.values())
+    assert rec.errors["length"].sum() == len(text) and rec.errors["category"].isna().all()
+    assert set(rec.errors["reason"]) == {"bytes that do not start a plausible ASTERIX data block"}
 
 
 def test_cut_inside_an_other_category_block_keeps_the_decoded_ones():
