@@ -422,6 +422,7 @@ def _load(options: DecodingOptions, checked: Checked, progress: Progress | None)
     checked.warnings += _order_warnings(checked.inputs, spans)
     checked.warnings += _date_ignored(options, loaded.inputs)
     checked.warnings += impossible_positions(loaded.frames.get(21))
+    checked.warnings += loaded.warnings
     return loaded
 
 
@@ -1167,7 +1168,7 @@ def stats_job(options: StatsOptions, *, progress: Progress | None = None) -> Sta
     the file."""
     import asterix
     from asterix.errors import UnreadableInput
-    from pipeline.model.time import UNDATED_DAY
+    from pipeline.model.time import UNDATED_DAY, FirstDayTally
     from pipeline.stats import STATS_COLUMNS, StatsAccumulator
 
     checked = validate(options)
@@ -1178,16 +1179,19 @@ def stats_job(options: StatsOptions, *, progress: Progress | None = None) -> Sta
     inputs: list[dict] = []
     spans: list[dict[int, tuple[pd.Timestamp, pd.Timestamp]]] = []
     chunk = max(int(options.chunk_mb * 1e6), 1)
+    early_start: list[str] = []  # FirstDayTally's warnings
     for i, path in enumerate(checked.inputs):
         if progress:
             progress.step(f"{path.name} ({i + 1}/{len(checked.inputs)})")
         info = {"path": str(path), "bytes": 0, "format": None, "records": {}, "skipped_blocks": 0,
                 "editions": {}, "edition_choice": {}, "date": None}
         by_source: dict[str, tuple[pd.Timestamp, pd.Timestamp]] = {}
+        tally = FirstDayTally()
         try:
             for rec in asterix.iter_read(path, chunk=chunk, editions=checked.editions or None,
                                          date=options.date, format=options.format, columns=STATS_COLUMNS):
                 acc.add(rec.frames, rec.errors, rec.ignored)
+                tally.add(rec.frames)
                 edition_notes.fold(failed, rec)
                 info["bytes"], info["format"] = rec.size_bytes, rec.format
                 info["date"] = info["date"] or rec.date
@@ -1199,6 +1203,7 @@ def stats_job(options: StatsOptions, *, progress: Progress | None = None) -> Sta
                 by_source = widen_spans(by_source, time_spans(rec.frames, rec.date))
         except UnreadableInput as exc:
             raise JobError(str(exc), 2) from exc
+        early_start += tally.warning(path.name, info["date"], info["format"])
         inputs.append(info)
         spans.append(by_source)
     dates = [info["date"] for info in inputs if info["date"] is not None]
@@ -1209,6 +1214,7 @@ def stats_job(options: StatsOptions, *, progress: Progress | None = None) -> Sta
     checked.warnings += edition_notes.warnings(failed)
     checked.warnings += _order_warnings(checked.inputs, spans)
     checked.warnings += _date_ignored(options, inputs)
+    checked.warnings += early_start
     return StatsResult(acc.tables(), inputs, checked.warnings)
 
 
@@ -1243,10 +1249,12 @@ def decode_job(options: DecodeOptions, *, on_chunk: Callable[[int, int, str], No
     import asterix
     from asterix.errors import UnreadableInput
     from asterix.reader import categories_in
+    from pipeline.model.time import FirstDayTally
     from pipeline.report.outputs import Staging
 
     checked = validate(options)
     out = checked.output
+    early_start: list[str] = []  # FirstDayTally's warnings
     counts: dict[int, int] = {}
     outputs: dict[int, Path] = {}
     skipped: list[tuple[str, int, str]] = []
@@ -1261,9 +1269,12 @@ def decode_job(options: DecodeOptions, *, on_chunk: Callable[[int, int, str], No
             for path in checked.inputs:
                 size = path.stat().st_size
                 chunk = max(int(options.chunk_mb * 1e6), 1)
+                tally, date, fmt = FirstDayTally(), None, None
                 for rec in asterix.iter_read(path, chunk=chunk, editions=checked.editions or None,
                                              date=options.date, format=options.format, categories=cats,
                                              strict=options.strict):
+                    tally.add(rec.frames)
+                    date, fmt = date or rec.date, rec.format
                     skipped += [(str(path), int(e.offset), str(e.reason)) for e in rec.errors.itertuples()]
                     edition_notes.fold(failed, rec)
                     for cat, frame in rec.frames.items():
@@ -1275,6 +1286,7 @@ def decode_job(options: DecodeOptions, *, on_chunk: Callable[[int, int, str], No
                     done = max((int(f["offset"].max()) for f in rec.frames.values() if len(f)), default=0)
                     if on_chunk:
                         on_chunk(done, size, path.name)
+                early_start += tally.warning(path.name, date, fmt)
         except UnreadableInput as exc:
             raise JobError(str(exc), 2) from exc
         finally:
@@ -1289,7 +1301,7 @@ def decode_job(options: DecodeOptions, *, on_chunk: Callable[[int, int, str], No
         staging.commit({staged[cat]: outputs[cat] for cat in staged})
     held = {} if sum(counts.values()) else {str(p): categories_in(p, format=options.format)
                                               for p in checked.inputs}
-    warnings = checked.warnings + edition_notes.warnings(failed)
+    warnings = checked.warnings + early_start + edition_notes.warnings(failed)
     return DecodeResult(counts, outputs, skipped, warnings, notes, held)
 
 

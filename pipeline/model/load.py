@@ -14,7 +14,7 @@ import pandas as pd
 import asterix
 from asterix.reader import Recording
 from pipeline.model.sources import pair_codes, pair_of, source_id
-from pipeline.model.time import NAT_NS, UNDATED_DAY, absolute_time
+from pipeline.model.time import NAT_NS, UNDATED_DAY, FirstDayTally, absolute_time
 from pipeline.progress import Progress
 
 # Measurement jobs decode their inputs in chunks of about this many bytes: the decoded columns of one chunk
@@ -89,6 +89,7 @@ def load(paths: list[str | Path], *, editions=None, date=None, format: str | Non
     """
     recs: list[Recording] = []
     inputs: list[dict] = []
+    warnings: list[str] = []
     for i, p in enumerate(paths):
         p = Path(p)
         if progress:
@@ -96,6 +97,9 @@ def load(paths: list[str | Path], *, editions=None, date=None, format: str | Non
         rec = asterix.read(p, editions=editions, date=date, format=format, categories=categories,
                            columns=columns)
         recs.append(rec)
+        tally = FirstDayTally()
+        tally.add(rec.frames)
+        warnings += tally.warning(p.name, rec.date, rec.format)
         inputs.append({"path": str(p), "sha256": sha256(p), "bytes": rec.size_bytes, "format": rec.format,
                        "records": {int(c): len(f) for c, f in rec.frames.items()},
                        "skipped_blocks": len(rec.errors), "editions": dict(rec.editions)})
@@ -107,7 +111,7 @@ def load(paths: list[str | Path], *, editions=None, date=None, format: str | Non
             frame = frame.assign(file=pd.Categorical([Path(p).name] * len(frame)))
             by_cat.setdefault(cat, []).append(frame)
     frames = {cat: _concat(parts) for cat, parts in by_cat.items()}
-    return Loaded(frames, recs, inputs, first)
+    return Loaded(frames, recs, inputs, first, warnings=warnings)
 
 
 def time_spans(frames: dict[int, pd.DataFrame], date: dt.date | None) -> dict[str, Span]:
@@ -173,6 +177,7 @@ def load_measurements(paths: list[str | Path], sensors: pd.DataFrame, *, edition
     radar: list[tuple[int, pd.DataFrame]] = []  # (input number, rows)
     adsb: list[tuple[int, pd.DataFrame]] = []
     stray: list[pd.DataFrame] = []  # undeclared_radars' table per chunk
+    early_start: list[str] = []  # FirstDayTally's warnings
     for i, p in enumerate(paths):
         p = Path(p)
         if progress:
@@ -181,11 +186,13 @@ def load_measurements(paths: list[str | Path], sensors: pd.DataFrame, *, edition
                 "skipped_blocks": 0, "editions": {}}
         by_source: dict[str, Span] = {}
         first = True
+        tally = FirstDayTally()
         for rec in asterix.iter_read(p, chunk=chunk, editions=editions, date=date, format=format,
                                      columns=DECODED_COLUMNS):
             if first:
                 dates.append(rec.date)
                 first = False
+            tally.add(rec.frames)
             info["bytes"], info["format"] = rec.size_bytes, rec.format
             for cat, frame in rec.frames.items():
                 info["records"][int(cat)] = info["records"].get(int(cat), 0) + len(frame)
@@ -201,6 +208,7 @@ def load_measurements(paths: list[str | Path], sensors: pd.DataFrame, *, edition
             recs.append(rec)
         if first:  # nothing at all in the file: iter_read yields no chunk
             dates.append(None)
+        early_start += tally.warning(p.name, dates[-1], info["format"])
         info["records"] = dict(sorted(info["records"].items()))
         info["editions"] = dict(sorted(info["editions"].items()))
         inputs.append(info)
@@ -224,7 +232,8 @@ def load_measurements(paths: list[str | Path], sensors: pd.DataFrame, *, edition
     release_free_memory()  # what the chunks' decoding freed, before the join needs room
     meas = finish_measurements(parts, columns)
     release_free_memory()
-    warnings = impossible_positions(pd.concat(off_earth, ignore_index=True)) if off_earth else []
+    damaged = pd.concat(off_earth, ignore_index=True) if off_earth else None
+    warnings = early_start + impossible_positions(damaged)
     stray_radar = _stray_table(stray)
     return Loaded({}, recs, inputs, first_date, spans, warnings, stray_radar), meas
 

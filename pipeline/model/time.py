@@ -11,6 +11,7 @@ here, exactly for times that are multiples of 1/128 s (the ASTERIX time LSB).
 from __future__ import annotations
 
 import datetime as dt
+from dataclasses import dataclass
 
 import numpy as np
 import pandas as pd
@@ -82,3 +83,46 @@ def with_clock(meas: pd.DataFrame, reference: pd.Timestamp | None = None) -> pd.
     ref = reference if reference is not None else midnight(meas["time"])
     tod = seconds_since(meas["time"], ref) if ref is not None else np.full(len(meas), np.nan)
     return meas.assign(time_of_day=tod, timestamp=dated_or_nat(meas["time"]))
+
+
+# A raw stream's day 0 is its first report's day (asterix.timeline): a recording started at midnight whose
+# first few plots are stamped just before it starts the day before, and --date then names that day.
+EARLY_START_S = 300.0  # reports before the file's first midnight all within this of it
+EARLY_START_SHARE = 0.01  # and at most this share of the input's reports
+
+
+@dataclass
+class FirstDayTally:
+    """Per input, chunk by chunk: the reports before the file's first midnight (day <= 0), the earliest
+    time of day among them, and the reports after it, to tell a day 0 that is only a few late plots."""
+
+    before: int = 0
+    earliest_tod_s: float = np.inf
+    after: int = 0
+
+    def add(self, frames: dict) -> None:
+        for frame in frames.values():
+            if not len(frame) or "day" not in frame:
+                continue
+            day = np.asarray(frame["day"])
+            tod = np.asarray(frame["time_of_day"], dtype=float)
+            first = day <= 0
+            self.before += int(first.sum())
+            self.after += int((~first).sum())
+            if first.any():
+                self.earliest_tod_s = min(self.earliest_tod_s, float(np.nanmin(tod[first], initial=np.inf)))
+
+    def warning(self, name: str, date: dt.date | None, fmt: str | None) -> list[str]:
+        """A warning when ``date`` (given for a raw stream or ORADIS file) names a first day that holds only
+        a few plots stamped in the last minutes before midnight, the rest of the recording the day after."""
+        if date is None or fmt not in ("raw", "oradis") or not self.before or not self.after:
+            return []
+        if self.earliest_tod_s < 86400.0 - EARLY_START_S or self.before > EARLY_START_SHARE * (
+                self.before + self.after):
+            return []
+        t = int(self.earliest_tod_s)
+        hms = f"{t // 3600:02d}:{t % 3600 // 60:02d}:{t % 60:02d}"
+        return [f"{name}: its first {self.before} report(s) are stamped from {hms} to midnight and the other "
+                f"{self.after} follow it: --date {date} names the day of a raw stream's first report, so the "
+                f"rest are on {date + dt.timedelta(days=1)}; if the recording is of {date}, give --date "
+                f"{date - dt.timedelta(days=1)}"]
