@@ -217,7 +217,9 @@ def markdown_schema() -> str:
     """The column reference (docs/columns.md), generated from the tables above."""
     lines = ["# Frame columns", "", "Generated from `asterix/columns.py` by "
              "`python -c 'from asterix.columns import markdown_schema; print(markdown_schema())'`.",
-             "Every frame also has `day` (int64: days after the recording's first day), `timestamp` "
+             "Every frame also has `day` (int64: days after the recording's first day; in raw streams the "
+             "first report's day in file order, -1 for a late report before the file's first midnight), "
+             "`timestamp` "
              "(datetime64[ns, UTC], NaT when the date is unknown), `block` (data block index in the file: "
              "blocks of every category counted from 0, whatever the chunk size `iter_read` decodes in) "
              "and `offset` (byte offset of the record in the file).",
