@@ -491,6 +491,7 @@ def _load_measurements(options: AircraftOptions, checked: Checked, progress: Pro
     checked.warnings += _order_warnings(checked.inputs, loaded.spans)
     checked.warnings += _date_ignored(options, loaded.inputs)
     checked.warnings += loaded.warnings
+    checked.warnings += list(meas.attrs.get("coverage_warnings", ()))
     return loaded, meas
 
 

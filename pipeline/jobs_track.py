@@ -183,6 +183,7 @@ def _measurements(loaded, checked: Checked, options: TrackOptions) -> pd.DataFra
                                   adsb_sigma_m=options.adsb_sigma_m)
     except UnknownRadar as exc:
         raise jobs.unknown_radar_error(exc.missing, jobs.sensors_path(options)) from exc
+    checked.warnings += list(meas.attrs.get("coverage_warnings", ()))
     from pipeline.track.associate import join_by_track_number
 
     meas, joined = join_by_track_number(meas, max_gap_s=float(options.max_coast_s))

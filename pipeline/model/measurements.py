@@ -14,6 +14,7 @@ import datetime as dt
 import numpy as np
 import pandas as pd
 
+from pipeline.model.coverage import coverage_warnings, out_of_coverage
 from pipeline.model.geodesy import (
     enu_basis,
     flight_level_to_m,
@@ -309,6 +310,9 @@ def finish_measurements(parts: list[pd.DataFrame], columns=None) -> pd.DataFrame
     if not parts:
         return empty_measurements(columns)
     meas = concat_columns(parts)
+    far, beyond = out_of_coverage(meas)
+    if far.any():
+        meas = meas[~far].reset_index(drop=True)
     wanted = column_names(columns)
     if "aircraft_id" in wanted:
         meas["aircraft_id"] = assign_aircraft_id(meas)
@@ -317,7 +321,10 @@ def finish_measurements(parts: list[pd.DataFrame], columns=None) -> pd.DataFrame
                                              meas["cov_nn_m2"].to_numpy())
     if columns is not None:  # the derived columns' inputs go, the rest in schema order (no copy)
         meas = pd.DataFrame({c: meas[c] for c in wanted}, copy=False)
-    return validate(meas, columns)
+    meas = validate(meas, columns)
+    if len(beyond):  # in words: a table in attrs would break pandas' attrs comparison in concat
+        meas.attrs["coverage_warnings"] = tuple(coverage_warnings(beyond))
+    return meas
 
 
 def build_measurements(cat048: pd.DataFrame | None = None, cat021: pd.DataFrame | None = None,
