@@ -1,0 +1,101 @@
+"""track()'s arguments: times in any zone read as UTC, bad numbers and covariances named, every report
+counted (audit findings A4, A7, A-C1, A-B2/B9)."""
+
+import warnings
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from pipeline.track import track
+
+T0 = pd.Timestamp("2024-05-10T07:00:00.25Z")
+
+
+def _adsb(n=120, sensor="021:0/107", aircraft="A1", dt=1.0):
+    """An aircraft flying north at 100 m/s (0.000904 deg of latitude a second, near 41 N) with no noise."""
+    t = np.arange(n) * dt
+    return pd.DataFrame({"time": T0 + pd.to_timedelta(t, unit="s"), "sensor_id": sensor,
+                         "sensor_kind": "adsb", "aircraft_id": aircraft,
+                         "latitude": 41.0 + t * 100.0 / 111_000.0, "longitude": 2.0,
+                         "flight_level": 300.0, "cov_ee_m2": 100.0, "cov_en_m2": 0.0, "cov_nn_m2": 100.0})
+
+
+def test_a_time_column_in_another_zone_is_read_as_utc():
+    m = _adsb()
+    local = m.assign(time=m["time"].dt.tz_convert("Asia/Kuala_Lumpur"))
+    got = track(local, step_s=7.0).tracks
+    assert str(got["time"].dt.tz) == "UTC"
+    # 07:00:00.25 UTC is 25200.25 s after UTC midnight (15:00 in Kuala Lumpur, UTC+8)
+    assert got["time_of_day"].iloc[0] == pytest.approx(25200.25)
+    grid = got[got["coasted"]]
+    since_midnight = (grid["time"] - pd.Timestamp("2024-05-10T00:00Z")).dt.total_seconds()
+    assert len(grid) > 10 and np.allclose(since_midnight % 7.0, 0.0)
+    pd.testing.assert_frame_equal(got, track(m, step_s=7.0).tracks)
+
+
+def test_naive_times_are_refused_with_the_fix():
+    m = _adsb()
+    with pytest.raises(ValueError, match=r"naive times have no zone.*tz_localize\('UTC'\)"):
+        track(m.assign(time=m["time"].dt.tz_localize(None)))
+    res = track(m, keep_states=True)
+    with pytest.raises(ValueError, match="time '2024-05-10 07:01': a naive time"):
+        res.state_at("A1", "2024-05-10 07:01")
+    # an aware time in another zone is the same instant: 15:01 in Kuala Lumpur is 07:01 UTC
+    kl = res.state_at("A1", pd.Timestamp("2024-05-10 15:01", tz="Asia/Kuala_Lumpur"))
+    assert kl.time == pd.Timestamp("2024-05-10T07:00:59.25Z")
+    with pytest.raises(KeyError, match="'NOPE': not tracked in this result \\(1 aircraft: 'A1'\\)"):
+        res.state_at("NOPE", T0)
+    with pytest.raises(KeyError, match="keep_states=True"):
+        track(m).state_at("A1", T0)
+
+
+@pytest.mark.parametrize("kwargs, error, message", [
+    ({"step_s": "1"}, TypeError, "step_s '1': must be a number of seconds, not str"),
+    ({"step_s": True}, TypeError, "step_s True"),
+    ({"step_s": np.nan}, ValueError, "step_s nan: must be a finite number"),
+    ({"step_s": 10.0, "max_coast_s": 5.0}, ValueError, r"max_coast_s 5.0: .* >= step_s \(10\)"),
+    ({"max_coast_s": -1}, ValueError, "max_coast_s -1"),
+    ({"epoch": "2024-05-10"}, ValueError, "epoch '2024-05-10': a naive time"),
+])
+def test_bad_numbers_are_named(kwargs, error, message):
+    with pytest.raises(error, match=message):
+        track(_adsb(10), **kwargs)
+
+
+def test_a_covariance_that_is_not_positive_definite_is_refused():
+    m = _adsb(10)
+    m.loc[3, "cov_ee_m2"] = -100.0
+    with pytest.raises(ValueError, match=r"1 row\(s\) with a covariance that is not positive definite.*"
+                                         r"index 3: cov_ee_m2 -100"):
+        track(m)
+    m.loc[3, ["cov_ee_m2", "cov_en_m2"]] = (100.0, 100.0)  # correlation 1: singular
+    with pytest.raises(ValueError, match="index 3"):
+        track(m)
+
+
+def test_every_report_is_counted():
+    adsb = _adsb(120)
+    radar = _adsb(30, sensor="048:25/201", dt=4.0).assign(sensor_kind="radar", cov_ee_m2=np.nan)
+    far = _adsb(2).assign(latitude=-41.0)  # 9000 km from the others: out of range
+    bad = _adsb(3).assign(latitude=95.0)  # no such latitude: invalid
+    anon = _adsb(5, sensor="048:25/201").assign(sensor_kind="radar", aircraft_id=None)
+    m = pd.concat([adsb, radar, far, bad, anon], ignore_index=True)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        res = track(m)
+    said = "5 report(s) without an aircraft_id not tracked (048:25/201: 5"
+    assert any(said in str(w.message) for w in caught)
+    assert res.parameters["unidentified_reports"] == {"048:25/201": 5}
+    s = res.sensors.set_index("sensor_id")
+    assert s.loc["048:25/201", ["reports", "updates", "gated", "invalid", "out_of_range"]].tolist() == [
+        30, 0, 0, 30, 0]
+    assert s.loc["048:25/201", "sensor_kind"] == "radar"
+    assert s.loc["021:0/107", ["reports", "updates", "invalid", "out_of_range"]].tolist() == [125, 120, 3, 2]
+    counts = res.sensors[["updates", "gated", "invalid", "out_of_range"]].sum(axis=1)
+    assert (res.sensors["reports"] == counts).all()
+    a = res.aircraft.iloc[0]
+    assert (a["reports"], a["invalid"], a["out_of_range"]) == (155, 33, 2)
+    none = track(radar)
+    assert none.tracks.empty
+    assert none.sensors[["reports", "invalid", "updates"]].values.tolist() == [[30, 30, 0]]
