@@ -99,3 +99,34 @@ def test_every_report_is_counted():
     none = track(radar)
     assert none.tracks.empty
     assert none.sensors[["reports", "invalid", "updates"]].values.tolist() == [[30, 30, 0]]
+
+
+def _with_radar():
+    radar = _adsb(30, sensor="048:25/201", dt=4.0).assign(sensor_kind="radar")
+    return pd.concat([_adsb(120), radar], ignore_index=True)
+
+
+@pytest.mark.parametrize("sites, message", [
+    ({"048:25/202": (41.2, 2.1)}, r"'048:25/202' not a radar of the measurements, while '048:25/201' has no "
+                                  r"site \(a misspelt key\?\)"),
+    ({"048:25/201": (2.1, 101.7)}, r"latitude 2.1 / longitude 101.7|km from its plots"),
+    ({"048:25/201": (101.7, 2.1)}, r"sites\['048:25/201'\] \(101.7, 2.1\): latitude 101.7 / longitude 2.1 "
+                                   r"out of range"),
+    ({"048:25/201": (2.0, 41.2)}, r"sites\['048:25/201'\] \(2.0, 41.2\): 5,8[0-9]{2} km from its plots"),
+    ({"048:25/201": 41.2}, r"sites\['048:25/201'\] 41.2: expected \(latitude, longitude\)"),
+])
+def test_bad_radar_sites_are_named(sites, message):
+    """estimate_noise dropped a misspelt key or a (longitude, latitude) site and gave the radar one isotropic
+    factor without a word (audit A10); (2.0, 41.2) is the site (41.2, 2.0) swapped: 5,850 km from the
+    plots by the haversine (R 6371 km)."""
+    from pipeline.track.noise import estimate_noise
+
+    with pytest.raises(ValueError, match=message):
+        estimate_noise(_with_radar(), sites=sites)
+
+
+def test_a_sensor_file_radar_absent_from_the_measurements_is_left_out():
+    from pipeline.track.noise import check_sites
+
+    sites = {"048:25/201": (41.2, 2.1), "048:25/999": (40.0, 3.0)}
+    assert check_sites(_with_radar(), sites) == {"048:25/201": (41.2, 2.1)}
