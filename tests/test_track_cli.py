@@ -218,7 +218,7 @@ def test_plots_without_identity_join_by_track_number():
 def test_all_aircraft_gate_exactly_the_injected_jumps(tmp_path, capsys):
     """--all: per aircraft, the ADS-B reports the gate rejects are exactly the simulator's injected
     position jumps (truth.json), and the ADS-B NIS mean is what NACp's claimed sigma predicts for the
-    simulator's 5 m noise: 2 (5 / sigma)^2, sigma = NACp 95 % bound / 2.45 (--noise declared)."""
+    simulator's 5 m noise: 2 (5 / sigma)^2, sigma = NACp 95 % bound / 2.4477 (--noise declared)."""
     out = tmp_path / "s.json"
     assert main(["track", *BASE, "--all", "--json", str(out), "--noise", "declared"]) == 0
     capsys.readouterr()
@@ -231,8 +231,8 @@ def test_all_aircraft_gate_exactly_the_injected_jumps(tmp_path, capsys):
         assert adsb["gated"] == jumps[ac["callsign"]], ac["callsign"]
         if ac["callsign"] == "SIA305":  # fixtures/scenario.py: NACp 8 (sigma 37.8 m): NIS far below 2
             assert adsb["nis_mean"] < 0.1
-        else:  # NACp 9: sigma 30 / 2.45 = 12.2 m, the simulator's noise 5 m per axis
-            expected = 2.0 * (5.0 / (30.0 / 2.45)) ** 2
+        else:  # NACp 9: sigma 30 / 2.4477 = 12.3 m, the simulator's noise 5 m per axis
+            expected = 2.0 * (5.0 / (30.0 / 2.4477)) ** 2
             assert adsb["nis_mean"] == pytest.approx(expected, rel=0.25), ac["callsign"]
 
 

@@ -12,7 +12,7 @@ Input, one row per report (the measurement model's schema):
 | `flight_level` | FL, may be NaN |
 | `cov_ee_m2`, `cov_en_m2`, `cov_nn_m2` | horizontal position covariance (m^2), local east/north |
 | `ground_speed_kt`, `heading_deg` | optional; only used to start a segment's velocity |
-| `nucr_nacv` | optional; NUCr / NACv of ADS-B reports: that velocity's sigma (bound / 2.448; else 10 m/s) |
+| `nucr_nacv` | optional; NUCr / NACv of ADS-B reports: that velocity's sigma (bound / 2.4477; else 10 m/s) |
 | `on_ground` | optional; the report says the aircraft is on the surface (True), airborne (False) or not |
 
 Radar covariances come from `radar_covariance` (range/azimuth sigmas), ADS-B from `nacp_covariance`.
