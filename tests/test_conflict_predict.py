@@ -148,7 +148,7 @@ def test_switching_cv_and_turn_modes_match_monte_carlo_of_the_jump_system():
     Pa = np.diag([900.0, 9.0, 0.0, 400.0, 16.0, 0.0])
     Pa[0, 3] = Pa[3, 0] = 200.0
     Pb = np.diag([400.0, 25.0, 0.0, 900.0, 4.0, 0.0])
-    state = _state([Mode("cv", "cv", 0.5), Mode("left", "ct", 1.5, 3.0)], mu, [xa, xb], [Pa, Pb],
+    state = _state([Mode("cv", "cv", 0.5), Mode("left", "ct", 1.5, -3.0)], mu, [xa, xb], [Pa, Pb],
                    tpm="fixed:0.98")
     means, covs = propagate_state(state, np.array([20.0]), 1.0)
     n = 60_000

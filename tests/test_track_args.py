@@ -130,3 +130,28 @@ def test_a_sensor_file_radar_absent_from_the_measurements_is_left_out():
 
     sites = {"048:25/201": (41.2, 2.1), "048:25/999": (40.0, 3.0)}
     assert check_sites(_with_radar(), sites) == {"048:25/201": (41.2, 2.1)}
+
+
+def test_a_turn_rate_means_the_same_sign_in_the_modes_and_the_table():
+    """Positive turn_rate_dps = right turn (track angle increasing) in the table, in Mode and in the
+    parameters (the JSON said turn_left +3, turn_right -3 against the table's right = + (audit B7))."""
+    from pipeline.track import default_modes
+
+    modes = {m.name: m.turn_rate_dps for m in default_modes(3.0)}
+    assert modes["turn_left"] == -3.0 and modes["turn_right"] == 3.0
+    # a clockwise circle: heading 3t deg (north, then east), 100 m/s, 1 Hz reports
+    t = np.arange(0.0, 90.0)
+    psi = np.radians(np.where(t < 30, 0.0, 3.0 * (t - 30)))
+    e, n = np.cumsum(100.0 * np.sin(psi)), np.cumsum(100.0 * np.cos(psi))
+    m = _adsb(90).assign(latitude=41.0 + n / 111_000.0,
+                         longitude=2.0 + e / (111_000.0 * np.cos(np.radians(41.0))))
+    res = track(m)
+    params = {p["name"]: p["turn_rate_dps"] for p in res.parameters["modes"]}
+    assert params["turn_left"] == -3.0 and params["turn_right"] == 3.0
+    turning = res.tracks[(res.tracks.time_of_day > 25200.25 + 45) & (res.tracks.time_of_day < 25200.25 + 88)]
+    assert (turning["mode_turn_right"] > 0.8).mean() > 0.8
+    assert turning["turn_rate_dps"].median() > 2.0
+    # the mode that dominates turns the way the table's turn rate says
+    dominant = turning[["mode_turn_left", "mode_turn_right"]].idxmax(axis=1).str.removeprefix("mode_")
+    dominant = dominant.map(params)
+    assert (np.sign(dominant) == np.sign(turning["turn_rate_dps"])).mean() > 0.9

@@ -145,7 +145,7 @@ def _measurements(seed, n=60):
 @pytest.mark.parametrize("tpm", ["fixed:0.95", "dynamic", "expm:200"])
 def test_imm_matches_textbook_reference(tpm):
     t, z, R = _measurements(3)
-    modes = (Mode("cv", "cv", 0.3), Mode("turn_left", "ct", 1.0, 3.0), Mode("turn_right", "ct", 1.0, -3.0))
+    modes = (Mode("cv", "cv", 0.3), Mode("turn_left", "ct", 1.0, -3.0), Mode("turn_right", "ct", 1.0, 3.0))
     cfg = TrackerConfig(modes=modes, tpm=tpm, gate_probability=1.0)
     ka = cfg.kernel_args()
     R3 = np.array([[m[0, 0], m[0, 1], m[1, 1]] for m in R])
