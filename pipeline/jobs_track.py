@@ -42,6 +42,15 @@ TRACK_COLUMNS = ["aircraft_id", "callsign", "address", "time", "time_of_day", "l
                  "mode_cv", "mode_turn_left", "mode_turn_right", "coasted", "sources"]
 
 
+# printed under the terminal's table of tracks: what its columns mean
+TRACK_LEGEND = (
+    "reports = updates + gated + invalid (no usable position or covariance) + out_of_range (3000 km off)\n"
+    "tracked_s: first to last update of each segment, summed; update_interval_s: the slowest sensor's\n"
+    "median interval between its updates; coasted_s: time without any update beyond that interval, in gaps\n"
+    "longer than 1.5 intervals (a missed 4 s scan counts 4 s); after its last update a segment is coasted\n"
+    "--max-coast s more, counted in neither")
+
+
 @dataclass(frozen=True)
 class TrackOptions(AircraftOptions):
     """Everything ``track_job`` needs; see ``msdc track --help`` for the meaning of each option. The
@@ -345,12 +354,13 @@ def summary(result: TrackJobResult) -> dict:
 
 
 def sensor_totals(sensors: pd.DataFrame) -> pd.DataFrame:
-    """The tracker's per-aircraft sensor table summed per sensor: aircraft, reports, updates, gated, and the
-    NIS mean over every update (each aircraft's mean weighted by its updates)."""
+    """The tracker's per-aircraft sensor table summed per sensor: aircraft, reports, updates, gated, invalid,
+    out_of_range, and the NIS mean over every update (each aircraft's mean weighted by its updates)."""
     s = sensors.assign(nis_sum=sensors["nis_mean"].fillna(0.0) * sensors["updates"])
     out = s.groupby("sensor_id", sort=True).agg(
         aircraft=("aircraft_id", "nunique"), reports=("reports", "sum"), updates=("updates", "sum"),
-        gated=("gated", "sum"), nis_sum=("nis_sum", "sum")).reset_index()
+        gated=("gated", "sum"), invalid=("invalid", "sum"), out_of_range=("out_of_range", "sum"),
+        nis_sum=("nis_sum", "sum")).reset_index()
     with np.errstate(invalid="ignore", divide="ignore"):
         nis = out["nis_sum"].to_numpy(float) / out["updates"].to_numpy(float)
     return out.drop(columns="nis_sum").assign(nis_mean=np.where(out["updates"] > 0, nis, np.nan))

@@ -155,3 +155,32 @@ def test_a_turn_rate_means_the_same_sign_in_the_modes_and_the_table():
     dominant = turning[["mode_turn_left", "mode_turn_right"]].idxmax(axis=1).str.removeprefix("mode_")
     dominant = dominant.map(params)
     assert (np.sign(dominant) == np.sign(turning["turn_rate_dps"])).mean() > 0.9
+
+
+def test_coasted_time_is_time_beyond_the_update_interval():
+    """tracked_s spans first to last update; coasted_s is the time without any update beyond the slowest
+    sensor's interval (audit B10: a radar-only track at 4 s read ~75 % coasted with no scan missed, and a
+    one-report track 'tracked 60, coasted 60')."""
+    from pipeline.track.tracker import coasted_time
+
+    t = np.array([0.0, 4.0, 8.0, 16.0, 20.0])  # the 12 s scan missed: 4 s coasted
+    assert coasted_time(t, np.zeros(5, int), np.full(5, "r")) == (4.0, 4.0)
+    # ADS-B each second from 0 to 40 s but 10-29 s; a 4 s radar throughout but 20-35 s
+    adsb = np.r_[np.arange(0.0, 10.0), np.arange(30.0, 41.0)]
+    radar = np.r_[np.arange(0.0, 20.0, 4.0), np.arange(36.0, 41.0, 4.0)]
+    times = np.r_[adsb, radar]
+    order = np.argsort(times, kind="stable")
+    sensors = np.r_[np.full(len(adsb), "a"), np.full(len(radar), "r")][order]
+    # gaps without any update: 16 -> 30 s (14 s, 10 beyond the radar's 4 s), all others <= 4 s
+    assert coasted_time(times[order], np.zeros(len(times), int), sensors) == (4.0, 10.0)
+    # a 60 s gap that ends a segment is not coasting
+    two = coasted_time(np.array([0.0, 4.0, 64.0, 68.0]), np.array([0, 0, 1, 1]), np.full(4, "r"))
+    assert two == (4.0, 0.0)
+    assert np.isnan(coasted_time(np.array([5.0]), np.zeros(1, int), np.array(["a"]))[0])
+
+    radar = _adsb(30, sensor="048:25/201", dt=4.0).assign(sensor_kind="radar")
+    radar = radar.drop(index=[10, 11])  # two scans missed: 40 and 44 s
+    one = _adsb(1, aircraft="B")
+    a = track(pd.concat([radar, one], ignore_index=True), max_coast_s=60.0).aircraft.set_index("aircraft_id")
+    assert a.loc["A1", ["tracked_s", "update_interval_s", "coasted_s"]].tolist() == [116.0, 4.0, 8.0]
+    assert a.loc["B", ["tracked_s", "coasted_s"]].tolist() == [0.0, 0.0]

@@ -134,7 +134,14 @@ def test_json_counts_match_the_simulator(mas72):
     jumps = [j for j in TRUTH["jumps"] if j["callsign"] == "MAS72"]
     gated = {s["sensor_id"]: s["gated"] for s in ac["sensors"]}
     assert gated == {"021:0/1": len(jumps), "048:25/201": 0} and len(jumps) > 0
-    assert 0.0 < ac["coasted_s"] < ac["tracked_s"]
+    # tracked: the simulator's first to last good report (one segment); its radar scans every 4.8 s and
+    # no gap between MAS72's good reports is longer than 1.5 scans, so nothing is coasted
+    good = tt[(tt["callsign"] == "MAS72") & ~tt["duplicate"] & ~tt["jump"]].sort_values("t_s")
+    assert ac["segments"] == 1
+    assert ac["tracked_s"] == pytest.approx(good["t_s"].iloc[-1] - good["t_s"].iloc[0], abs=1e-6)
+    radar_t = good.loc[good["sensor"] == "radar", "t_s"].to_numpy()
+    assert ac["update_interval_s"] == pytest.approx(np.median(np.diff(radar_t)), abs=1e-6)
+    assert np.diff(good["t_s"].to_numpy()).max() <= 1.5 * ac["update_interval_s"] and ac["coasted_s"] == 0.0
     for s in ac["sensors"]:
         assert s["nis_mean"] > 0
 
@@ -339,10 +346,12 @@ def test_sensor_totals_by_hand():
     """Radar R: aircraft A with 2 updates at NIS mean 1.0 and B with 6 at 3.0 pool to (2 + 18) / 8 = 2.5 over
     8 updates; ADS-B S: one aircraft whose 4 reports were all gated has no NIS mean."""
     sensors = pd.DataFrame({"aircraft_id": ["A", "B", "A"], "sensor_id": ["R", "R", "S"],
-                            "reports": [3, 7, 4], "updates": [2, 6, 0], "gated": [1, 1, 4],
+                            "reports": [3, 9, 4], "updates": [2, 6, 0], "gated": [1, 1, 4],
+                            "invalid": [0, 1, 0], "out_of_range": [0, 1, 0],
                             "nis_mean": [1.0, 3.0, np.nan]})
     out = jobs_track.sensor_totals(sensors).set_index("sensor_id")
-    assert out.loc["R", ["aircraft", "reports", "updates", "gated"]].tolist() == [2, 10, 8, 2]
+    assert out.loc["R", ["aircraft", "reports", "updates", "gated", "invalid", "out_of_range"]].tolist() == [
+        2, 12, 8, 2, 1, 1]
     assert out.loc["R", "nis_mean"] == pytest.approx(2.5)
     assert out.loc["S", ["aircraft", "reports", "updates", "gated"]].tolist() == [1, 4, 0, 4]
     assert np.isnan(out.loc["S", "nis_mean"])
@@ -366,6 +375,15 @@ def test_stdout_sums_each_sensor_over_the_aircraft(tmp_path, capsys):
             e[2] += s["updates"]
             e[3] += s["gated"]
     assert rows == expected and set(rows) == {"021:0/1", "048:25/201"}
+    # every report shows: the sensors' and the aircraft's tables count the unusable and far ones too, and
+    # the aircraft table's time columns are defined under it
+    assert block[0].split() == ["sensor_id", "aircraft", "reports", "updates", "gated", "invalid",
+                                "out_of_range", "nis_mean"]
+    tracks = out.split("Tracks:\n")[1]
+    assert tracks.splitlines()[0].split()[6:] == ["invalid", "out_of_range", "tracked_s", "update_interval_s",
+                                                  "coasted_s"]
+    assert "tracked_s: first to last update of each segment" in tracks
+    assert "coasted_s: time without any update beyond that interval" in tracks
 
 
 def test_parquet_in_slices_is_the_whole_table(tmp_path):

@@ -392,6 +392,33 @@ def _smoothed_turn_rate(qt, v_loc, segment, mode_weighted_dps, speed) -> np.ndar
     return np.where(np.isfinite(rate) & (speed > 1.0), rate, mode_weighted_dps)
 
 
+# a gap between updates counts as coasting once it exceeds this many update intervals (a missed radar scan
+# doubles the interval; scan-to-scan jitter of a few percent never reaches it)
+MISSED_UPDATE_FACTOR = 1.5
+
+
+def coasted_time(t: np.ndarray, segment: np.ndarray, sensor: np.ndarray) -> tuple[float, float]:
+    """The track's expected update interval and its coasted time, from its accepted updates (times sorted,
+    their segments and sensors). The interval is the slowest sensor's median interval between its own
+    consecutive updates in a segment (a 4 s radar fused with 1 s ADS-B: 4 s; NaN with no such pair). Coasted
+    is the time without any update beyond that interval, summed over the gaps within segments that exceed
+    MISSED_UPDATE_FACTOR intervals: a missed 4 s scan counts 4 s, a regular scan 0; the coast after a
+    segment's last update is not counted (nor in tracked_s)."""
+    medians = []
+    for s in np.unique(sensor):
+        i = sensor == s
+        d = np.diff(t[i])[np.diff(segment[i]) == 0]
+        d = d[d > 0.0]
+        if len(d):
+            medians.append(float(np.median(d)))
+    if not medians:
+        return math.nan, 0.0
+    interval = max(medians)
+    gaps = np.diff(t)[np.diff(segment) == 0]
+    missed = gaps > MISSED_UPDATE_FACTOR * interval
+    return interval, float((gaps[missed] - interval).sum())
+
+
 @dataclass
 class FilteredReports:
     """One aircraft's reports as the filter saw them: the rows kept (sorted by time, then sensor), their
@@ -548,14 +575,13 @@ def _track_one(aircraft_id, group, epoch, config, args, names, step_s, smooth, s
                      "out_of_range": n_far})
     sensors = pd.DataFrame(rows)
     sensors.insert(0, "aircraft_id", aircraft_id)
-    gaps = np.diff(acc_t)
-    same_seg = np.diff(acc_seg) == 0
-    coasted_s = float(np.maximum(gaps[same_seg] - step_s, 0.0).sum() + (seg_end - seg_last).sum())
+    interval_s, coasted_s = coasted_time(acc_t, acc_seg, acc_sensor)
     aircraft = {"aircraft_id": aircraft_id, "segments": len(seg_ids), "reports": n,
                 "updates": int(accepted.sum()), "gated": int((~accepted).sum()),
                 "start": epoch + pd.to_timedelta(seg_first[0], unit="s"),
                 "end": epoch + pd.to_timedelta(seg_end[-1], unit="s"),
-                "tracked_s": float((seg_end - seg_first).sum()), "coasted_s": coasted_s}
+                "tracked_s": float((seg_last - seg_first).sum()), "coasted_s": coasted_s,
+                "update_interval_s": interval_s}
     rej = g.loc[~accepted, ["time", "sensor_id", "latitude", "longitude"]].assign(nis=nis[~accepted])
     rej.insert(0, "aircraft_id", aircraft_id)
     last = acc_idx[-1]
