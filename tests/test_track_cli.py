@@ -441,3 +441,26 @@ def test_reports_with_no_identity_are_counted_not_dropped_silently(tmp_path, cap
     err = capsys.readouterr().err
     assert "25 report(s) with no identity" in err
     assert json.loads(summary.read_text())["parameters"]["unidentified_reports_not_tracked"] == 25
+
+
+def test_csv_floats_at_the_documented_precision(mas72, tmp_path):
+    """The CSV rounds each float column to its documented decimals (no 1.7e-17 turn rates, no 17-digit
+    floats; audit B14), within half a unit of the last decimal of the Parquet table's full precision."""
+    decimals = {"time_of_day": 6, "latitude": 7, "longitude": 7, "flight_level": 2, "vertical_rate_fpm": 1,
+                "speed_kt": 2, "track_deg": 3, "turn_rate_dps": 4, "sigma_major_m": 2, "sigma_minor_m": 2,
+                "ellipse_orientation_deg": 2, "age_s": 6, "mode_cv": 4, "mode_turn_left": 4,
+                "mode_turn_right": 4}
+    full, _, _ = mas72
+    out = tmp_path / "t.csv"
+    assert main(["track", *BASE, "--callsign", "mas 72", "-o", str(out)]) == 0
+    text = pd.read_csv(out, dtype=str, keep_default_na=False)
+    got = pd.read_csv(out, dtype={"address": str, "sources": str})
+    assert len(got) == len(full)
+    for name, places in decimals.items():
+        cells = text[name][text[name] != ""]
+        assert not cells.str.contains("e", case=False).any(), name
+        assert (cells.str.partition(".")[2].str.len() <= places).all(), name
+        assert not cells.str.fullmatch(r"-0\.?0*").any(), name
+        both = np.isfinite(full[name].to_numpy(float))
+        diff = np.abs(got[name].to_numpy(float)[both] - full[name].to_numpy(float)[both])
+        assert diff.max() <= 0.5 * 10.0 ** -places + 1e-9, name
