@@ -415,9 +415,10 @@ def _track_text(result) -> str:
     if res.aircraft.empty:
         return "no track: no report with a usable position and covariance"
     ac = res.aircraft.merge(result.labels, on="aircraft_id", how="left")
-    cols = [c for c in ("aircraft_id", "callsign", "segments", "reports", "updates", "gated", "tracked_s",
-                        "coasted_s") if c in ac]
+    cols = [c for c in ("aircraft_id", "callsign", "segments", "reports", "updates", "gated", "invalid",
+                        "out_of_range", "tracked_s", "update_interval_s", "coasted_s") if c in ac]
     text = ("Tracks:\n" + ac[cols].to_string(index=False, float_format=lambda v: f"{v:.1f}")
+            + "\n" + jobs_track.TRACK_LEGEND
             + "\n\nSensors:\n" + jobs_track.sensor_totals(res.sensors).to_string(
                 index=False, float_format=lambda v: f"{v:.2f}"))
     return text + _noise_text(result.noise)

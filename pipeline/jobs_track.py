@@ -42,6 +42,42 @@ TRACK_COLUMNS = ["aircraft_id", "callsign", "address", "time", "time_of_day", "l
                  "mode_cv", "mode_turn_left", "mode_turn_right", "coasted", "sources"]
 
 
+# decimals of the track CSV's float columns (Parquet keeps full precision): below what any sensor resolves
+# (1e-7 deg is 1.1 cm; 1 us; 0.01 ft of level, 0.01 kt, 1e-4 deg/s), so that the filter's round-off
+# (turn rates of 1.7e-17) and 17-digit floats do not reach the file; mode_* columns take MODE_DECIMALS
+CSV_DECIMALS = {"time_of_day": 6, "latitude": 7, "longitude": 7, "flight_level": 2, "vertical_rate_fpm": 1,
+                "speed_kt": 2, "track_deg": 3, "turn_rate_dps": 4, "sigma_major_m": 2, "sigma_minor_m": 2,
+                "ellipse_orientation_deg": 2, "age_s": 6}
+MODE_DECIMALS = 4
+
+
+def csv_rounded(tracks: pd.DataFrame) -> pd.DataFrame:
+    """The track table with its float columns rounded to CSV_DECIMALS (mode probabilities to MODE_DECIMALS),
+    a negative zero written as 0, values below 1e-4 as fixed-point text; the other columns as they are (not
+    copied)."""
+    rounded = {}
+    for name in tracks.columns:
+        places = CSV_DECIMALS.get(name, MODE_DECIMALS if name.startswith("mode_") else None)
+        if places is not None and tracks[name].dtype.kind == "f":
+            # + 0.0: a negative zero becomes 0.0
+            values = np.round(tracks[name].to_numpy(float, na_value=np.nan), places) + 0.0
+            tiny = (values != 0.0) & (np.abs(values) < 1e-4)  # Python writes these as 4.48e-05: fixed instead
+            if tiny.any():
+                values = values.astype(object)
+                values[tiny] = [f"{v:.{places}f}" for v in values[tiny]]
+            rounded[name] = values
+    return tracks.assign(**rounded)
+
+
+# printed under the terminal's table of tracks: what its columns mean
+TRACK_LEGEND = (
+    "reports = updates + gated + invalid (no usable position or covariance) + out_of_range (3000 km off)\n"
+    "tracked_s: first to last update of each segment, summed; update_interval_s: the slowest sensor's\n"
+    "median interval between its updates; coasted_s: time without any update beyond that interval, in gaps\n"
+    "longer than 1.5 intervals (a missed 4 s scan counts 4 s); after its last update a segment is coasted\n"
+    "--max-coast s more, counted in neither")
+
+
 @dataclass(frozen=True)
 class TrackOptions(AircraftOptions):
     """Everything ``track_job`` needs; see ``msdc track --help`` for the meaning of each option. The
@@ -346,12 +382,13 @@ def summary(result: TrackJobResult) -> dict:
 
 
 def sensor_totals(sensors: pd.DataFrame) -> pd.DataFrame:
-    """The tracker's per-aircraft sensor table summed per sensor: aircraft, reports, updates, gated, and the
-    NIS mean over every update (each aircraft's mean weighted by its updates)."""
+    """The tracker's per-aircraft sensor table summed per sensor: aircraft, reports, updates, gated, invalid,
+    out_of_range, and the NIS mean over every update (each aircraft's mean weighted by its updates)."""
     s = sensors.assign(nis_sum=sensors["nis_mean"].fillna(0.0) * sensors["updates"])
     out = s.groupby("sensor_id", sort=True).agg(
         aircraft=("aircraft_id", "nunique"), reports=("reports", "sum"), updates=("updates", "sum"),
-        gated=("gated", "sum"), nis_sum=("nis_sum", "sum")).reset_index()
+        gated=("gated", "sum"), invalid=("invalid", "sum"), out_of_range=("out_of_range", "sum"),
+        nis_sum=("nis_sum", "sum")).reset_index()
     with np.errstate(invalid="ignore", divide="ignore"):
         nis = out["nis_sum"].to_numpy(float) / out["updates"].to_numpy(float)
     return out.drop(columns="nis_sum").assign(nis_mean=np.where(out["updates"] > 0, nis, np.nan))
@@ -369,7 +406,8 @@ def write_tracks(result: TrackJobResult) -> dict[str, Path]:
 
         if out.suffix.lower() == ".csv":
             times = result.tracks["time"].dt.strftime("%Y-%m-%dT%H:%M:%S.%fZ")
-            write_atomically(out, lambda tmp: result.tracks.assign(time=times).to_csv(tmp, index=False))
+            table = csv_rounded(result.tracks).assign(time=times)
+            write_atomically(out, lambda tmp: table.to_csv(tmp, index=False))
         else:
             write_parquet(result.tracks, out)
         written["tracks"] = out

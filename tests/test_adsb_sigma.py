@@ -88,7 +88,7 @@ def test_estimate_recovers_the_injected_sigma_from_the_declared_one(recording):
 
 
 def test_noise_classes_keep_declared_apart_from_the_same_nacp_sigma():
-    """A declared sigma equal to a NACp level's (NACp 9: 30 / 2.45 m) is still its own class."""
+    """A declared sigma equal to a NACp level's (NACp 9: 30 / 2.4477 m) is still its own class."""
     import pandas as pd
 
     from pipeline.model.measurements import nacp_sigma_m

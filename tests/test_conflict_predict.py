@@ -148,7 +148,7 @@ def test_switching_cv_and_turn_modes_match_monte_carlo_of_the_jump_system():
     Pa = np.diag([900.0, 9.0, 0.0, 400.0, 16.0, 0.0])
     Pa[0, 3] = Pa[3, 0] = 200.0
     Pb = np.diag([400.0, 25.0, 0.0, 900.0, 4.0, 0.0])
-    state = _state([Mode("cv", "cv", 0.5), Mode("left", "ct", 1.5, 3.0)], mu, [xa, xb], [Pa, Pb],
+    state = _state([Mode("cv", "cv", 0.5), Mode("left", "ct", 1.5, -3.0)], mu, [xa, xb], [Pa, Pb],
                    tpm="fixed:0.98")
     means, covs = propagate_state(state, np.array([20.0]), 1.0)
     n = 60_000
@@ -216,3 +216,20 @@ def test_probabilistic_vertical_pc_is_horizontal_pc_times_the_gaussian_level_pro
     assert 0.05 < p_vertical < 0.99
     h = hard.set_index(["time", "aircraft_a", "aircraft_b", "horizon_s"])["pc"]
     assert row["pc"] == pytest.approx(h.loc[(row["time"], "A", "B", 60.0)] * p_vertical, rel=1e-9)
+
+
+def test_a_prediction_step_off_the_tracks_grid_is_refused():
+    """On a 5 s track a 3 s step met the grid only every 15 s (audit A13): refused, naming both steps;
+    a whole multiple of the track's step predicts every one of its times."""
+    reports = _straight_reports("X", 50.0, 5.0, 200.0, 0.0, 350.0, 120)
+    result = track(reports, step_s=5.0, keep_states=True)
+    for bad in (3.0, 1.0, 7.5):
+        with pytest.raises(ValueError, match=rf"step_s {bad!r}: .* every 5 s \(track\(step_s=5\)\); give a "
+                                             r"whole multiple of 5 s"):
+            predict_tracks(result, [21], step_s=bad)
+    pred = predict_tracks(result, [20], step_s=10.0)
+    seconds = (pred["time"] - T0.floor("D")).dt.total_seconds()
+    # the reports run 0-119 s after T0 and coast 60 s more: every multiple of 10 s in that span
+    first = np.ceil((T0 - T0.floor("D")).total_seconds() / 10.0) * 10.0
+    assert np.allclose(seconds % 10.0, 0.0) and seconds.min() == first
+    assert (np.diff(np.sort(seconds.to_numpy())) == 10.0).all()

@@ -174,10 +174,14 @@ def test_adsb_measurements():
     assert meas["heading_deg"].tolist() == [45.0, 47.0]
     assert meas["callsign"].tolist() == ["MAS72", "MAS72"]
     assert (meas["sensor_kind"] == "adsb").all() and (meas["sensor_id"] == "021:0/9").all()
-    # NACp 9: 95 % within 30 m, so sigma = 30 / 2.45 per axis, isotropic
-    assert meas["cov_ee_m2"].tolist() == pytest.approx([(30 / 2.45) ** 2] * 2)
+    # NACp 9: 95 % within 30 m, so sigma = 30 / 2.4477 per axis, isotropic (the 95th percentile of the
+    # radius of a circular 2-D Gaussian: the Rayleigh distribution's, by scipy)
+    from scipy.stats import rayleigh
+
+    k95 = rayleigh.ppf(0.95)
+    assert meas["cov_ee_m2"].tolist() == pytest.approx([(30 / k95) ** 2] * 2)
     assert meas["cov_nn_m2"].tolist() == meas["cov_ee_m2"].tolist() and (meas["cov_en_m2"] == 0).all()
-    assert meas["sigma_major_m"].tolist() == pytest.approx([30 / 2.45] * 2)
+    assert meas["sigma_major_m"].tolist() == pytest.approx([30 / k95] * 2)
     assert meas["height_source"].tolist() == ["flight_level"] * 2
 
 

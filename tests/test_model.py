@@ -144,4 +144,7 @@ def test_radar_plot_almost_overhead_has_no_horizontal_covariance():
 def test_adsb_sigma_from_nacp():
     # DO-260B bounds: NACp 8 < 92.6 m, 11 < 3 m; 0 (unknown) and absent give NaN
     got = nacp_sigma_m(pd.array([8, 11, 0, pd.NA], dtype="Int64"))
-    assert got[:2].tolist() == pytest.approx([92.6 / 2.45, 3.0 / 2.45]) and np.isnan(got[2:]).all()
+    from scipy.stats import rayleigh
+
+    k95 = rayleigh.ppf(0.95)  # a circular 2-D Gaussian's radius holds 95 % within 2.4477 sigma
+    assert got[:2].tolist() == pytest.approx([92.6 / k95, 3.0 / k95]) and np.isnan(got[2:]).all()

@@ -209,7 +209,7 @@ def test_bad_input_is_named():
 
 
 def test_segment_start_velocity_sigma_from_nucr_nacv():
-    """A segment starts with the reported ground velocity; its per-axis variance is (95 % bound / 2.448)^2
+    """A segment starts with the reported ground velocity; its per-axis variance is (95 % bound / 2.4477)^2
     with DO-260B's NACv bounds (4: 0.3 m/s -> 0.01502, 1: 10 m/s -> 16.687 (m/s)^2), and the configured
     10 m/s sigma (100) for NACv 0 (unknown) or none."""
     t0 = pd.Timestamp("2019-03-01T08:00:00Z")
@@ -219,7 +219,10 @@ def test_segment_start_velocity_sigma_from_nucr_nacv():
             for aid, nac in (("A", 4), ("B", 1), ("C", 0), ("D", None)) for k in range(3)]
     meas = pd.DataFrame(rows).astype({"nucr_nacv": "Int64"})
     result = track(meas, keep_states=True)
-    expected = {"A": (0.3 / 2.448) ** 2, "B": (10.0 / 2.448) ** 2, "C": 100.0, "D": 100.0}
+    from scipy.stats import rayleigh
+
+    k95 = rayleigh.ppf(0.95)  # 2.4477: a circular Gaussian's 95 % radius
+    expected = {"A": (0.3 / k95) ** 2, "B": (10.0 / k95) ** 2, "C": 100.0, "D": 100.0}
     for aid, var in expected.items():
         _, run, _ = result.runs[aid]
         assert run.status[0] == 2  # the segment's start

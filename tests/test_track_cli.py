@@ -134,7 +134,14 @@ def test_json_counts_match_the_simulator(mas72):
     jumps = [j for j in TRUTH["jumps"] if j["callsign"] == "MAS72"]
     gated = {s["sensor_id"]: s["gated"] for s in ac["sensors"]}
     assert gated == {"021:0/1": len(jumps), "048:25/201": 0} and len(jumps) > 0
-    assert 0.0 < ac["coasted_s"] < ac["tracked_s"]
+    # tracked: the simulator's first to last good report (one segment); its radar scans every 4.8 s and
+    # no gap between MAS72's good reports is longer than 1.5 scans, so nothing is coasted
+    good = tt[(tt["callsign"] == "MAS72") & ~tt["duplicate"] & ~tt["jump"]].sort_values("t_s")
+    assert ac["segments"] == 1
+    assert ac["tracked_s"] == pytest.approx(good["t_s"].iloc[-1] - good["t_s"].iloc[0], abs=1e-6)
+    radar_t = good.loc[good["sensor"] == "radar", "t_s"].to_numpy()
+    assert ac["update_interval_s"] == pytest.approx(np.median(np.diff(radar_t)), abs=1e-6)
+    assert np.diff(good["t_s"].to_numpy()).max() <= 1.5 * ac["update_interval_s"] and ac["coasted_s"] == 0.0
     for s in ac["sensors"]:
         assert s["nis_mean"] > 0
 
@@ -218,7 +225,7 @@ def test_plots_without_identity_join_by_track_number():
 def test_all_aircraft_gate_exactly_the_injected_jumps(tmp_path, capsys):
     """--all: per aircraft, the ADS-B reports the gate rejects are exactly the simulator's injected
     position jumps (truth.json), and the ADS-B NIS mean is what NACp's claimed sigma predicts for the
-    simulator's 5 m noise: 2 (5 / sigma)^2, sigma = NACp 95 % bound / 2.45 (--noise declared)."""
+    simulator's 5 m noise: 2 (5 / sigma)^2, sigma = NACp 95 % bound / 2.4477 (--noise declared)."""
     out = tmp_path / "s.json"
     assert main(["track", *BASE, "--all", "--json", str(out), "--noise", "declared"]) == 0
     capsys.readouterr()
@@ -231,8 +238,8 @@ def test_all_aircraft_gate_exactly_the_injected_jumps(tmp_path, capsys):
         assert adsb["gated"] == jumps[ac["callsign"]], ac["callsign"]
         if ac["callsign"] == "SIA305":  # fixtures/scenario.py: NACp 8 (sigma 37.8 m): NIS far below 2
             assert adsb["nis_mean"] < 0.1
-        else:  # NACp 9: sigma 30 / 2.45 = 12.2 m, the simulator's noise 5 m per axis
-            expected = 2.0 * (5.0 / (30.0 / 2.45)) ** 2
+        else:  # NACp 9: sigma 30 / 2.4477 = 12.3 m, the simulator's noise 5 m per axis
+            expected = 2.0 * (5.0 / (30.0 / 2.4477)) ** 2
             assert adsb["nis_mean"] == pytest.approx(expected, rel=0.25), ac["callsign"]
 
 
@@ -339,10 +346,12 @@ def test_sensor_totals_by_hand():
     """Radar R: aircraft A with 2 updates at NIS mean 1.0 and B with 6 at 3.0 pool to (2 + 18) / 8 = 2.5 over
     8 updates; ADS-B S: one aircraft whose 4 reports were all gated has no NIS mean."""
     sensors = pd.DataFrame({"aircraft_id": ["A", "B", "A"], "sensor_id": ["R", "R", "S"],
-                            "reports": [3, 7, 4], "updates": [2, 6, 0], "gated": [1, 1, 4],
+                            "reports": [3, 9, 4], "updates": [2, 6, 0], "gated": [1, 1, 4],
+                            "invalid": [0, 1, 0], "out_of_range": [0, 1, 0],
                             "nis_mean": [1.0, 3.0, np.nan]})
     out = jobs_track.sensor_totals(sensors).set_index("sensor_id")
-    assert out.loc["R", ["aircraft", "reports", "updates", "gated"]].tolist() == [2, 10, 8, 2]
+    assert out.loc["R", ["aircraft", "reports", "updates", "gated", "invalid", "out_of_range"]].tolist() == [
+        2, 12, 8, 2, 1, 1]
     assert out.loc["R", "nis_mean"] == pytest.approx(2.5)
     assert out.loc["S", ["aircraft", "reports", "updates", "gated"]].tolist() == [1, 4, 0, 4]
     assert np.isnan(out.loc["S", "nis_mean"])
@@ -366,6 +375,15 @@ def test_stdout_sums_each_sensor_over_the_aircraft(tmp_path, capsys):
             e[2] += s["updates"]
             e[3] += s["gated"]
     assert rows == expected and set(rows) == {"021:0/1", "048:25/201"}
+    # every report shows: the sensors' and the aircraft's tables count the unusable and far ones too, and
+    # the aircraft table's time columns are defined under it
+    assert block[0].split() == ["sensor_id", "aircraft", "reports", "updates", "gated", "invalid",
+                                "out_of_range", "nis_mean"]
+    tracks = out.split("Tracks:\n")[1]
+    assert tracks.splitlines()[0].split()[6:] == ["invalid", "out_of_range", "tracked_s", "update_interval_s",
+                                                  "coasted_s"]
+    assert "tracked_s: first to last update of each segment" in tracks
+    assert "coasted_s: time without any update beyond that interval" in tracks
 
 
 def test_parquet_in_slices_is_the_whole_table(tmp_path):
@@ -423,3 +441,26 @@ def test_reports_with_no_identity_are_counted_not_dropped_silently(tmp_path, cap
     err = capsys.readouterr().err
     assert "25 report(s) with no identity" in err
     assert json.loads(summary.read_text())["parameters"]["unidentified_reports_not_tracked"] == 25
+
+
+def test_csv_floats_at_the_documented_precision(mas72, tmp_path):
+    """The CSV rounds each float column to its documented decimals (no 1.7e-17 turn rates, no 17-digit
+    floats; audit B14), within half a unit of the last decimal of the Parquet table's full precision."""
+    decimals = {"time_of_day": 6, "latitude": 7, "longitude": 7, "flight_level": 2, "vertical_rate_fpm": 1,
+                "speed_kt": 2, "track_deg": 3, "turn_rate_dps": 4, "sigma_major_m": 2, "sigma_minor_m": 2,
+                "ellipse_orientation_deg": 2, "age_s": 6, "mode_cv": 4, "mode_turn_left": 4,
+                "mode_turn_right": 4}
+    full, _, _ = mas72
+    out = tmp_path / "t.csv"
+    assert main(["track", *BASE, "--callsign", "mas 72", "-o", str(out)]) == 0
+    text = pd.read_csv(out, dtype=str, keep_default_na=False)
+    got = pd.read_csv(out, dtype={"address": str, "sources": str})
+    assert len(got) == len(full)
+    for name, places in decimals.items():
+        cells = text[name][text[name] != ""]
+        assert not cells.str.contains("e", case=False).any(), name
+        assert (cells.str.partition(".")[2].str.len() <= places).all(), name
+        assert not cells.str.fullmatch(r"-0\.?0*").any(), name
+        both = np.isfinite(full[name].to_numpy(float))
+        diff = np.abs(got[name].to_numpy(float)[both] - full[name].to_numpy(float)[both])
+        assert diff.max() <= 0.5 * 10.0 ** -places + 1e-9, name

@@ -145,7 +145,7 @@ def _measurements(seed, n=60):
 @pytest.mark.parametrize("tpm", ["fixed:0.95", "dynamic", "expm:200"])
 def test_imm_matches_textbook_reference(tpm):
     t, z, R = _measurements(3)
-    modes = (Mode("cv", "cv", 0.3), Mode("turn_left", "ct", 1.0, 3.0), Mode("turn_right", "ct", 1.0, -3.0))
+    modes = (Mode("cv", "cv", 0.3), Mode("turn_left", "ct", 1.0, -3.0), Mode("turn_right", "ct", 1.0, 3.0))
     cfg = TrackerConfig(modes=modes, tpm=tpm, gate_probability=1.0)
     ka = cfg.kernel_args()
     R3 = np.array([[m[0, 0], m[0, 1], m[1, 1]] for m in R])
@@ -255,9 +255,19 @@ def test_radar_covariance_flat_limit_and_curvature():
 
 
 def test_nacp_covariance():
+    """(EPU / k)^2 with k the Rayleigh 95th percentile (2.4477, scipy), no floor: NACp 11 (3 m) gives
+    1.502 m^2 (the 3 m floor gave 9 m^2), the measurement model's cov_ee_m2 for the same level."""
+    from scipy.stats import rayleigh
+
+    from pipeline.model.measurements import nacp_sigma_m
+
+    k95 = rayleigh.ppf(0.95)
     got = nacp_covariance([9, 11, 0, np.nan, 7])
-    np.testing.assert_allclose(got[[0, 1, 4]], [(30 / 2.448) ** 2, 9.0, (185.2 / 2.448) ** 2])
+    np.testing.assert_allclose(got[[0, 1, 4]], [(30 / k95) ** 2, (3 / k95) ** 2, (185.2 / k95) ** 2],
+                               rtol=1e-12)
+    assert got[1] == pytest.approx(1.5021, abs=1e-4)
     assert np.isnan(got[2]) and np.isnan(got[3])
+    np.testing.assert_allclose(got[[0, 1, 4]], nacp_sigma_m([9, 11, 7]) ** 2, rtol=1e-12)
 
 
 def test_config_errors_name_the_value():

@@ -64,7 +64,7 @@ def test_two_modes_follow_the_two_filter_recursion():
     omega = np.radians(3.0)
     sig = [0.5, 1.0]
     p = 0.9
-    cfg = TrackerConfig(modes=(Mode("cv", "cv", sig[0]), Mode("left", "ct", sig[1], 3.0)), tpm=f"fixed:{p}",
+    cfg = TrackerConfig(modes=(Mode("cv", "cv", sig[0]), Mode("left", "ct", sig[1], -3.0)), tpm=f"fixed:{p}",
                         gate_probability=1.0)
     run = filter_plane(cfg, t, e, n, var, 0 * var, var)
     PI = np.array([[p, 1 - p], [1 - p, p]])

@@ -77,11 +77,20 @@ def predict_tracks(result: TrackResult, horizons_s, *, step_s: float = 1.0,
     result: from `track(..., keep_states=True)`. Returns `aircraft_id, time, horizon_s, east_m, north_m,
     var_east_m2, cov_east_north_m2, var_north_m2, flight_level` in `plane` (default: around the median
     track position), plus `latitude, longitude` of the predicted mean, and with sigma_alt the predicted
-    flight level's sigma `sigma_alt_ft` (from the vertical filter's covariance).
+    flight level's sigma `sigma_alt_ft` (from the vertical filter's covariance). step_s must be a whole
+    multiple of the tracks' own step (ValueError otherwise: only the rows both grids share would be
+    predicted).
     """
     horizons = np.array(sorted({float(h) for h in horizons_s}))
     if not len(horizons) or not (horizons > 0).all() or not step_s > 0:
         raise ValueError(f"horizons_s {list(horizons_s)!r} and step_s {step_s!r}: must be > 0")
+    grid_s = float(result.parameters.get("step_s", step_s))
+    ratio = float(step_s) / grid_s
+    if abs(ratio - round(ratio)) > 1e-9 * max(ratio, 1.0) or round(ratio) < 1:
+        # a step off the tracks' grid would predict only where the two grids meet (every 15 s for 3 s on 5 s)
+        raise ValueError(f"step_s {step_s!r}: predictions start from the tracks' grid rows, every "
+                         f"{grid_s:g} s (track(step_s={grid_s:g})); give a whole multiple of {grid_s:g} s, "
+                         f"or track with step_s={step_s!r}")
     tracks = result.tracks
     if plane is None and len(tracks):
         plane = Plane.around(tracks["latitude"].to_numpy(float), tracks["longitude"].to_numpy(float))

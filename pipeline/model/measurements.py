@@ -10,6 +10,7 @@ covariance. Rows without a position or a time are dropped, and so are ADS-B posi
 from __future__ import annotations
 
 import datetime as dt
+import math
 
 import numpy as np
 import pandas as pd
@@ -60,8 +61,9 @@ STAT_ON_GROUND = (1, 3)
 # DO-260B NACp: 95 % horizontal position accuracy bound (EPU) in metres; 0 = unknown
 NACP_95_M = {11: 3.0, 10: 10.0, 9: 30.0, 8: 92.6, 7: 185.2, 6: 555.6, 5: 926.0, 4: 1852.0, 3: 3704.0,
              2: 7408.0, 1: 18520.0}
-# 95 % of a circular 2-D Gaussian lies within sqrt(-2 ln 0.05) = 2.4477 sigma
-CIRCULAR_95_PER_SIGMA = 2.45
+# 95 % of a circular 2-D Gaussian lies within sqrt(-2 ln 0.05) = 2.4477 sigma (the Rayleigh 95th percentile);
+# every 95 % bound (NACp, NACv / NUCr) becomes a per-axis sigma by it, here and in pipeline.track.covariance
+CIRCULAR_95_PER_SIGMA = math.sqrt(-2.0 * math.log(0.05))
 
 
 def sensor_id(category: int, sac, sic) -> pd.Series:
@@ -207,7 +209,7 @@ def _radar_rows(cat048: pd.DataFrame, sensors: pd.DataFrame, date: dt.date | Non
 
 
 def nacp_sigma_m(nacp) -> np.ndarray:
-    """1-sigma horizontal error per axis (m) from NACp: its 95 % bound / 2.45; NaN when absent or 0."""
+    """1-sigma horizontal error per axis (m) from NACp: its 95 % bound / 2.4477; NaN when absent or 0."""
     values = pd.Series(nacp).astype("Int64")
     return values.map(NACP_95_M).astype("float64").to_numpy() / CIRCULAR_95_PER_SIGMA
 

@@ -79,7 +79,8 @@ MEASUREMENT_SCHEMA: tuple[Column, ...] = (
     Column("cov_ee_m2", "float64", "m^2",
            "Horizontal position covariance, east-east, in the local east/north frame at the report; radar: "
            "from the sensor's range and azimuth sigmas with the slant-range geometry; ADS-B: "
-           "(NACp 95 % bound / 2.45)^2; NaN when unknown, and for radar plots almost overhead "
+           "(NACp 95 % bound / 2.4477)^2 (2.4477 = sqrt(-2 ln 0.05), the 95 % radius of a circular "
+           "Gaussian; NACp 11: 1.50 m^2); NaN when unknown, and for radar plots almost overhead "
            "(slant range over 10 x ground distance from the site)"),
     Column("cov_en_m2", "float64", "m^2", "Horizontal position covariance, east-north"),
     Column("cov_nn_m2", "float64", "m^2", "Horizontal position covariance, north-north"),

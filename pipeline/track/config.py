@@ -18,8 +18,9 @@ EXPM_SOJOURN_RANGE_S = (0.01, 1e7)
 
 @dataclass(frozen=True)
 class Mode:
-    """One motion model: kind "cv" | "ct" | "ca", turn rate (deg/s, positive = left/counter-clockwise,
-    CT only) and the white-noise acceleration sigma (m/s^2; jerk, m/s^3, for CA)."""
+    """One motion model: kind "cv" | "ct" | "ca", turn rate (deg/s, positive = right turn: clockwise seen
+    from above, track angle increasing, as the track table's turn_rate_dps; CT only) and the white-noise
+    acceleration sigma (m/s^2; jerk, m/s^3, for CA)."""
 
     name: str
     kind: str
@@ -31,8 +32,8 @@ def default_modes(turn_rate_dps: float = 3.0, *, sigma_cv_mps2: float = 0.5, sig
                   with_ca: bool = False, sigma_ca_mps3: float = 1.0) -> tuple[Mode, ...]:
     """CV plus coordinated turns at +-turn_rate_dps (the dynamic-TPM paper's set), optionally CA. The
     sigmas are set for real traffic (the paper's 0.1 and 0.5 m/s^2 lag real decelerations)."""
-    modes = [Mode("cv", "cv", sigma_cv_mps2), Mode("turn_left", "ct", sigma_ct_mps2, turn_rate_dps),
-             Mode("turn_right", "ct", sigma_ct_mps2, -turn_rate_dps)]
+    modes = [Mode("cv", "cv", sigma_cv_mps2), Mode("turn_left", "ct", sigma_ct_mps2, -turn_rate_dps),
+             Mode("turn_right", "ct", sigma_ct_mps2, turn_rate_dps)]
     if with_ca:
         modes.append(Mode("ca", "ca", sigma_ca_mps3))
     return tuple(modes)
@@ -127,7 +128,8 @@ class TrackerConfig:
         gate = math.inf if p >= 1.0 else float(2.0 * gammaincinv(1.0, p))
         return {
             "kinds": np.array([_KINDS[m.kind] for m in self.modes], dtype=np.int64),
-            "omegas": np.radians(np.array([m.turn_rate_dps for m in self.modes], dtype=float)),
+            # the kernel turns counter-clockwise (east/north plane, mathematical sense) for omega > 0
+            "omegas": -np.radians(np.array([m.turn_rate_dps for m in self.modes], dtype=float)),
             "qs": np.array([m.sigma_a_mps2 for m in self.modes], dtype=float) ** 2,
             "mu0": mu0, "tpm_kind": tpm_kind, "tpm_param": tpm_param,
             "tpm_param2": tpm_param2, "gate_d2": gate,

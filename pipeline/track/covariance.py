@@ -4,14 +4,17 @@ from __future__ import annotations
 
 import numpy as np
 
+from pipeline.model.measurements import CIRCULAR_95_PER_SIGMA, NACP_95_M
+
 EARTH_RADIUS_M = 6371000.0
-# NACp 95 % horizontal position bounds (EPU), m, DO-260B; NACp 0 (unknown) has none
-NACP_EPU_M = {1: 18520.0, 2: 7408.0, 3: 3704.0, 4: 1852.0, 5: 926.0, 6: 555.6, 7: 185.2, 8: 92.6,
-              9: 30.0, 10: 10.0, 11: 3.0}
+# NACp 95 % horizontal position bounds (EPU), m, DO-260B (NACp 0, unknown, has none): the measurement model's
+# table, so that the tracker and the model give one covariance per level
+NACP_EPU_M = dict(sorted(NACP_95_M.items()))
 # NACv (DO-260B) and NUCr (DO-260/260A, the same levels): 95 % horizontal velocity error bounds, m/s;
 # level 0 is "unknown or >= 10 m/s" and bounds nothing
 NACV_95_M_S = {1: 10.0, 2: 3.0, 3: 1.0, 4: 0.3}
-SIGMA_PER_95_BOUND = 1.0 / 2.448  # a circular Gaussian holds 95 % within 2.448 sigma
+# a circular Gaussian holds 95 % within sqrt(-2 ln 0.05) = 2.4477 sigma (the model's constant)
+SIGMA_PER_95_BOUND = 1.0 / CIRCULAR_95_PER_SIGMA
 
 
 def radar_covariance(rho_m, theta_deg, target_height_m, site_height_m, sigma_range_m, sigma_azimuth_deg,
@@ -47,19 +50,19 @@ def radar_covariance(rho_m, theta_deg, target_height_m, site_height_m, sigma_ran
     return cov_ee, cov_en, cov_nn
 
 
-def nacp_covariance(nacp, floor_sigma_m: float = 3.0):
-    """Isotropic ADS-B covariance (m^2) from NACp: (EPU / 2.448)^2, with sigma at least floor_sigma_m;
-    NaN where NACp is 0, missing or out of range."""
+def nacp_covariance(nacp):
+    """Isotropic ADS-B covariance (m^2) per axis from NACp: (EPU / 2.4477)^2, as the measurement model's
+    cov_ee_m2 / cov_nn_m2 (NACp 11: 1.50 m^2); NaN where NACp is 0, missing or out of range."""
     values = np.asarray(nacp, dtype=float)
     epu = np.full(values.shape, np.nan)
     for level, bound in NACP_EPU_M.items():
         epu[values == level] = bound
-    sigma = np.maximum(epu * SIGMA_PER_95_BOUND, floor_sigma_m)
+    sigma = epu * SIGMA_PER_95_BOUND
     return sigma * sigma
 
 
 def nacv_variance(nucr_nacv):
-    """Per-axis variance ((m/s)^2) of a reported ADS-B velocity from NUCr / NACv: (bound / 2.448)^2; NaN
+    """Per-axis variance ((m/s)^2) of a reported ADS-B velocity from NUCr / NACv: (bound / 2.4477)^2; NaN
     where the level is 0 (unknown), missing or out of range."""
     values = np.asarray(nucr_nacv, dtype=float)
     bound = np.full(values.shape, np.nan)

@@ -298,6 +298,56 @@ class NoiseEstimate:
     aircraft: pd.DataFrame = field(default_factory=lambda: pd.DataFrame(columns=AIRCRAFT_COLUMNS))
 
 
+# a radar's plots lie within its range (MSSR: 256 NM, 474 km) of its site: a site whose plots' median position
+# is farther than this is not that radar's (latitude and longitude swapped, a wrong sensor)
+MAX_SITE_DISTANCE_M = 1_000_000.0
+
+
+def check_sites(meas: pd.DataFrame, sites) -> dict[str, tuple[float, float]]:
+    """sites as {radar sensor_id: (latitude, longitude)} floats for the radars of meas; a ValueError naming
+    the key and the value for a value that is not a (latitude, longitude) pair of finite degrees within
+    range, a site farther than MAX_SITE_DISTANCE_M from its plots' median position, or keys that are not
+    radars of meas while some of its radars have no site (a misspelt key; a radar of a sensor file that is
+    not in these measurements is otherwise left out: a subset of the aircraft need not see every radar)."""
+    from pyproj import Geod
+
+    if sites is None:
+        return {}
+    if not isinstance(sites, dict):
+        raise TypeError(f"sites: expected a dict of radar sensor_id -> (latitude, longitude), "
+                        f"not {type(sites).__name__}")
+    radar = meas["sensor_kind"].astype(str).to_numpy() == "radar"
+    sid = meas["sensor_id"].astype(str).to_numpy()
+    radars = sorted(set(sid[radar]))
+    out = {}
+    unknown = [str(k) for k in sites if str(k) not in radars]
+    without = [r for r in radars if r not in {str(k) for k in sites}]
+    if unknown and without:
+        raise ValueError(f"sites: {', '.join(map(repr, unknown))} not a radar of the measurements, while "
+                         f"{', '.join(map(repr, without))} has no site (a misspelt key?)")
+    for key, value in sites.items():
+        if str(key) not in radars:
+            continue
+        try:
+            lat, lon = (float(v) for v in value)
+        except (TypeError, ValueError):
+            raise ValueError(f"sites[{key!r}] {value!r}: expected (latitude, longitude) in degrees") from None
+        if not (np.isfinite(lat) and np.isfinite(lon) and -90.0 <= lat <= 90.0 and -180.0 <= lon <= 360.0):
+            raise ValueError(f"sites[{key!r}] {value!r}: latitude {lat:g} / longitude {lon:g} out of range "
+                             "(expected (latitude, longitude): latitude within +-90 deg)")
+        i = radar & (sid == str(key))
+        plat, plon = meas.loc[i, "latitude"].to_numpy(float), meas.loc[i, "longitude"].to_numpy(float)
+        ok = np.isfinite(plat) & np.isfinite(plon)
+        if ok.any():
+            centre = float(np.median(plon[ok])), float(np.median(plat[ok]))
+            _, _, dist = Geod(ellps="WGS84").inv(lon, lat, *centre)
+            if dist > MAX_SITE_DISTANCE_M:
+                raise ValueError(f"sites[{key!r}] {value!r}: {dist / 1000.0:,.0f} km from its plots' median "
+                                 f"position, beyond any radar's range (expected (latitude, longitude))")
+        out[str(key)] = (lat, lon)
+    return out
+
+
 def _radials(meas: pd.DataFrame, sites: dict[str, tuple[float, float]] | None) -> np.ndarray:
     """Unit line-of-sight vectors (local east, north) at each radar plot, outward from its site; NaN
     for other rows and radars without a site."""
@@ -463,8 +513,10 @@ def estimate_noise(measurements: pd.DataFrame, *, sites: dict[str, tuple[float, 
     """Rescale each sensor's covariances to its residual scatter (see the module docstring).
 
     sites: radar sensor_id -> (latitude, longitude) of its site, for separate range and azimuth factors
-    (a radar without one gets a single factor). A class with fewer than min_residuals residuals takes its
-    sensor's pooled factor; a sensor with fewer keeps its declared covariance. timing: ADS-B classes with
+    (a radar without one gets a single factor); a site out of range or far from its plots, or a key that is
+    not a radar of the measurements while one of them has none, is a ValueError (`check_sites`). A
+    class with fewer than min_residuals residuals takes its sensor's pooled factor; a sensor with fewer keeps
+    its declared covariance. timing: ADS-B classes with
     at least min_residuals reports faster than SURFACE_SPEED_KT also get an along-track timing term
     sigma_t^2 v v^T (fit_timing; v from ground_velocity); False (default): isotropic only. Stops after
     `passes` passes, or once no sigma moves by more than tol. aircraft_guard: the ADS-B motions ("surface",
@@ -476,6 +528,7 @@ def estimate_noise(measurements: pd.DataFrame, *, sites: dict[str, tuple[float, 
     config = TrackerConfig(**{**(config or TrackerConfig(modes=default_modes())).__dict__,
                               "max_coast_s": max_coast_s, **({"tpm": tpm} if tpm else {})})
     meas = measurements.reset_index(drop=True)
+    sites = check_sites(meas, sites)
     cov0 = _matrices(meas["cov_ee_m2"], meas["cov_en_m2"], meas["cov_nn_m2"])
     radial = _radials(meas, sites)
     site = np.isfinite(radial[:, 0])

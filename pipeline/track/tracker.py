@@ -12,7 +12,7 @@ Input, one row per report (the measurement model's schema):
 | `flight_level` | FL, may be NaN |
 | `cov_ee_m2`, `cov_en_m2`, `cov_nn_m2` | horizontal position covariance (m^2), local east/north |
 | `ground_speed_kt`, `heading_deg` | optional; only used to start a segment's velocity |
-| `nucr_nacv` | optional; NUCr / NACv of ADS-B reports: that velocity's sigma (bound / 2.448; else 10 m/s) |
+| `nucr_nacv` | optional; NUCr / NACv of ADS-B reports: that velocity's sigma (bound / 2.4477; else 10 m/s) |
 | `on_ground` | optional; the report says the aircraft is on the surface (True), airborne (False) or not |
 
 Radar covariances come from `radar_covariance` (range/azimuth sigmas), ADS-B from `nacp_covariance`.
@@ -22,6 +22,7 @@ Rows without a finite position or covariance are counted (`invalid`) and skipped
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -81,9 +82,14 @@ class TrackResult:
         """The IMM posterior after the last accepted update at or before time (needs keep_states);
         `predict(state, horizon)` then propagates it (its time is the update's, not `time`)."""
         if aircraft_id not in self.runs:
+            if aircraft_id not in self.final_states:
+                known = sorted(self.final_states)
+                listed = ", ".join(map(repr, known[:5])) + (", ..." if len(known) > 5 else "")
+                raise KeyError(f"aircraft {aircraft_id!r}: not tracked in this result "
+                               f"({len(known)} aircraft: {listed or 'none'})")
             raise KeyError(f"aircraft {aircraft_id!r}: no filter history (run track(..., keep_states=True))")
         plane, run, epoch = self.runs[aircraft_id]
-        t = (pd.Timestamp(time) - epoch).total_seconds()
+        t = (utc_timestamp("time", time) - epoch).total_seconds()
         rows = np.flatnonzero(run.accepted & (run.t <= t))
         if not len(rows):
             raise ValueError(f"aircraft {aircraft_id!r}: no update at or before {time}")
@@ -92,13 +98,55 @@ class TrackResult:
                         run.mu[i].copy(), run.x[i].copy(), run.P[i].copy())
 
 
-def _check(measurements: pd.DataFrame) -> None:
+def utc_timestamp(name: str, value) -> pd.Timestamp:
+    """value as a UTC Timestamp (an aware time in another zone converted, which is exact); a ValueError
+    naming the argument for a naive time, whose zone nobody knows, or one that is not a time."""
+    try:
+        stamp = pd.Timestamp(value)
+    except (TypeError, ValueError) as exc:
+        raise ValueError(f"{name} {value!r}: not a time ({exc})") from None
+    if stamp is pd.NaT:
+        raise ValueError(f"{name} {value!r}: not a time")
+    if stamp.tzinfo is None:
+        raise ValueError(f"{name} {value!r}: a naive time (no zone); give a tz-aware time, e.g. "
+                         f"pd.Timestamp({str(stamp)!r}, tz='UTC') if it is UTC")
+    return stamp.tz_convert("UTC")
+
+
+def utc_times(measurements: pd.DataFrame) -> pd.DataFrame:
+    """The frame with its `time` column in UTC: an aware column in another zone is converted (exact: the
+    instants do not change, only the clock they are written in, and the outputs' time_of_day and grid
+    count from UTC midnight); a naive column is refused, naming its dtype."""
+    dtype = measurements["time"].dtype
+    if not isinstance(dtype, pd.DatetimeTZDtype):
+        raise ValueError(f"measurements: column 'time' must be tz-aware datetime64 (UTC, or a zone converted "
+                         f"to UTC), not {dtype}; naive times have no zone: if they are UTC, "
+                         f"use .dt.tz_localize('UTC')")
+    if str(dtype.tz) == "UTC":
+        return measurements
+    return measurements.assign(time=measurements["time"].dt.tz_convert("UTC"))
+
+
+def _seconds(name: str, value, minimum: float = 0.0) -> float:
+    """A finite number of seconds above minimum (or, minimum 0, above 0); TypeError / ValueError naming the
+    argument otherwise."""
+    if isinstance(value, bool) or not isinstance(value, int | float | np.integer | np.floating):
+        raise TypeError(f"{name} {value!r}: must be a number of seconds, not {type(value).__name__}")
+    v = float(value)
+    if not math.isfinite(v) or not v > 0.0 or v < minimum:
+        raise ValueError(f"{name} {value!r}: must be a finite number of seconds > 0"
+                         + (f" and >= step_s ({minimum:g})" if minimum > 0.0 else ""))
+    return v
+
+
+def _check(measurements: pd.DataFrame) -> pd.DataFrame:
+    """The frame with UTC times, after checking its columns; ValueError naming what is wrong."""
+    if not isinstance(measurements, pd.DataFrame):
+        raise TypeError(f"measurements: expected a pandas DataFrame, not {type(measurements).__name__}")
     missing = [c for c in REQUIRED if c not in measurements.columns]
     if missing:
         raise ValueError(f"measurements: missing column(s) {', '.join(missing)}")
-    if not isinstance(measurements["time"].dtype, pd.DatetimeTZDtype):
-        raise ValueError(f"measurements: column 'time' must be tz-aware UTC datetime64, "
-                         f"not {measurements['time'].dtype}")
+    return utc_times(measurements)
 
 
 def track(measurements: pd.DataFrame, *, step_s: float = 1.0, max_coast_s: float = 60.0,
@@ -113,11 +161,12 @@ def track(measurements: pd.DataFrame, *, step_s: float = 1.0, max_coast_s: float
     aircraft's filter history for `TrackResult.state_at`. epoch: the UTC midnight the filter counts its
     seconds from (default: that of the earliest usable report; `TrackResult.epoch`), so that a subset of
     the aircraft tracked again gives the same numbers."""
-    _check(measurements)
+    measurements = _check(measurements)
     if smoother not in SMOOTHERS:
         raise ValueError(f"smoother {smoother!r}: expected one of {', '.join(SMOOTHERS)}")
-    if not step_s > 0.0:
-        raise ValueError(f"step_s {step_s!r}: must be > 0")
+    step_s = _seconds("step_s", step_s)
+    # coasting less than one step would end every gap before the next grid time (the CLI's --max-coast rule)
+    max_coast_s = _seconds("max_coast_s", max_coast_s, step_s)
     if config is None:
         config = TrackerConfig(modes=default_modes(turn_rate_dps, with_ca=with_ca), max_coast_s=max_coast_s)
     else:
@@ -127,16 +176,18 @@ def track(measurements: pd.DataFrame, *, step_s: float = 1.0, max_coast_s: float
     args = config.kernel_args()
     names = [m.name for m in config.modes]
 
-    frame = measurements
-    finite = np.isfinite(frame[["latitude", "longitude", "cov_ee_m2", "cov_en_m2", "cov_nn_m2"]]
-                         .to_numpy(dtype=float)).all(axis=1)
-    invalid = frame.loc[~finite].groupby(["aircraft_id", "sensor_id"], observed=True).size()
+    if epoch is not None:
+        epoch = utc_timestamp("epoch", epoch)
+    frame, unidentified = _identified(measurements)
+    finite = usable_rows(frame)
+    invalid = frame.loc[~finite].groupby(["aircraft_id", "sensor_id", "sensor_kind"], observed=True).size()
     frame = frame.loc[finite]
-    empty = TrackResult(_empty_tracks(names), pd.DataFrame(), pd.DataFrame(), pd.DataFrame(),
-                        _parameters(config, step_s, smooth, smoother))
+    parameters = {**_parameters(config, step_s, smooth, smoother), "unidentified_reports": unidentified}
+    empty = TrackResult(_empty_tracks(names), _empty_sensors(invalid), pd.DataFrame(), pd.DataFrame(),
+                        parameters)
     if frame.empty:
         return empty
-    epoch = frame["time"].min().floor("D") if epoch is None else pd.Timestamp(epoch)
+    epoch = frame["time"].min().floor("D") if epoch is None else epoch
     tracks, sensors, aircraft, rejected, finals, runs = [], [], [], [], {}, {}
     groups = frame.groupby("aircraft_id", sort=True, observed=True)
     outs = map_ordered(lambda item: (item[0], _track_one(str(item[0]), item[1], epoch, config, args, names,
@@ -149,17 +200,81 @@ def track(measurements: pd.DataFrame, *, step_s: float = 1.0, max_coast_s: float
         finals[str(aircraft_id)] = out["final"]
         if keep_states:
             runs[str(aircraft_id)] = (out["plane"], out["run"], epoch)
-    sensors_df = pd.concat(sensors, ignore_index=True)
-    if len(invalid):
-        inv = invalid.rename("invalid").reset_index()
-        inv["aircraft_id"] = inv["aircraft_id"].astype(str)
-        sensors_df = sensors_df.merge(inv, on=["aircraft_id", "sensor_id"], how="outer")
-        sensors_df["invalid"] = sensors_df["invalid"].fillna(0).astype(int)
-    else:
-        sensors_df["invalid"] = 0
-    return TrackResult(_concat_by_column(tracks), sensors_df,
-                       pd.DataFrame(aircraft), pd.concat(rejected, ignore_index=True),
-                       _parameters(config, step_s, smooth, smoother), finals, runs, epoch)
+    sensors_df = _with_invalid(pd.concat(sensors, ignore_index=True), invalid)
+    aircraft_df = pd.DataFrame(aircraft)
+    counts = sensors_df.groupby("aircraft_id", sort=False)[["reports", "invalid", "out_of_range"]].sum()
+    aircraft_df["reports"] = aircraft_df["aircraft_id"].map(counts["reports"]).astype(int)
+    for c in ("invalid", "out_of_range"):
+        aircraft_df.insert(aircraft_df.columns.get_loc("gated") + 1, c,
+                           aircraft_df["aircraft_id"].map(counts[c]).astype(int))
+    return TrackResult(_concat_by_column(tracks), sensors_df, aircraft_df,
+                       pd.concat(rejected, ignore_index=True), parameters, finals, runs, epoch)
+
+
+SENSOR_COUNTS = ("reports", "updates", "gated", "segments_started", "invalid", "out_of_range")
+
+
+def _identified(measurements: pd.DataFrame) -> tuple[pd.DataFrame, dict[str, int]]:
+    """The rows with an aircraft_id, and per sensor the count of those without one (they cannot be
+    associated, so they are not tracked; a UserWarning says how many)."""
+    missing = measurements["aircraft_id"].isna().to_numpy(bool)
+    if not missing.any():
+        return measurements, {}
+    counts = measurements.loc[missing, "sensor_id"].astype(str).value_counts().sort_index()
+    unidentified = {str(k): int(v) for k, v in counts.items()}
+    import warnings
+
+    warnings.warn(f"measurements: {int(missing.sum())} report(s) without an aircraft_id not tracked ("
+                  + ", ".join(f"{k}: {v}" for k, v in unidentified.items())
+                  + "; TrackResult.parameters['unidentified_reports'])", UserWarning, stacklevel=3)
+    return measurements.loc[~missing], unidentified
+
+
+def usable_rows(frame: pd.DataFrame) -> np.ndarray:
+    """Rows with a usable position (finite, latitude within +-90 deg) and a finite covariance; a finite
+    covariance that is not positive definite is a ValueError naming the first such row (no measurement
+    model makes one: it is a sign error or a corrupted column, and the gate would silently reject the row)."""
+    lat, lon, ee, en, nn = (frame[c].to_numpy(dtype=float, na_value=np.nan) for c in (
+        "latitude", "longitude", "cov_ee_m2", "cov_en_m2", "cov_nn_m2"))
+    cov_finite = np.isfinite(ee) & np.isfinite(en) & np.isfinite(nn)
+    with np.errstate(invalid="ignore"):
+        not_pd = cov_finite & ~((ee > 0.0) & (nn > 0.0) & (ee * nn - en * en > 0.0))
+    if not_pd.any():
+        i = int(np.flatnonzero(not_pd)[0])
+        raise ValueError(f"measurements: {int(not_pd.sum())} row(s) with a covariance that is not positive "
+                         f"definite (cov_ee_m2 > 0, cov_nn_m2 > 0 and cov_ee_m2 cov_nn_m2 > cov_en_m2^2 "
+                         f"needed), the first at index {frame.index[i]}: cov_ee_m2 {ee[i]:g}, "
+                         f"cov_en_m2 {en[i]:g}, cov_nn_m2 {nn[i]:g}")
+    with np.errstate(invalid="ignore"):
+        return cov_finite & np.isfinite(lon) & (np.abs(lat) <= 90.0)
+
+
+def _with_invalid(sensors: pd.DataFrame, invalid: pd.Series) -> pd.DataFrame:
+    """The per aircraft and sensor table with the unusable rows counted: `invalid`, and in `reports` (so
+    that reports = updates + gated + invalid + out_of_range); a sensor with only unusable rows gets a row
+    of zeros besides."""
+    if not len(invalid):
+        return sensors.assign(invalid=0)
+    inv = invalid.rename("invalid").reset_index()
+    inv["aircraft_id"] = inv["aircraft_id"].astype(str)
+    inv["sensor_kind"] = inv["sensor_kind"].astype(str)
+    out = sensors.merge(inv, on=["aircraft_id", "sensor_id"], how="outer", suffixes=("", "_invalid"))
+    if "sensor_kind_invalid" in out:
+        out["sensor_kind"] = out["sensor_kind"].fillna(out.pop("sensor_kind_invalid"))
+    for c in SENSOR_COUNTS:
+        out[c] = out[c].fillna(0).astype(int)
+    out["reports"] = out["reports"] + out["invalid"]
+    return out
+
+
+def _empty_sensors(invalid: pd.Series) -> pd.DataFrame:
+    """The sensor table of a run where no row was usable: every row counted as invalid."""
+    base = pd.DataFrame({"aircraft_id": pd.Series(dtype=object), "sensor_id": pd.Series(dtype=object),
+                         "sensor_kind": pd.Series(dtype=object), "nis_mean": pd.Series(dtype=float),
+                         **{c: pd.Series(dtype=int) for c in SENSOR_COUNTS if c != "invalid"}})
+    out = _with_invalid(base, invalid)
+    return out[["aircraft_id", "sensor_id", "sensor_kind", "reports", "updates", "gated", "segments_started",
+                "nis_mean", "out_of_range", "invalid"]]
 
 
 def _parameters(config: TrackerConfig, step_s: float, smooth: bool, smoother: str) -> dict:
@@ -275,6 +390,33 @@ def _smoothed_turn_rate(qt, v_loc, segment, mode_weighted_dps, speed) -> np.ndar
     track = np.degrees(np.arctan2(v_loc[:, 0], v_loc[:, 1]))
     rate = track_angle_rate(qt, track, segment, SMOOTH_TURN_RATE_WINDOW_S, centred=True)
     return np.where(np.isfinite(rate) & (speed > 1.0), rate, mode_weighted_dps)
+
+
+# a gap between updates counts as coasting once it exceeds this many update intervals (a missed radar scan
+# doubles the interval; scan-to-scan jitter of a few percent never reaches it)
+MISSED_UPDATE_FACTOR = 1.5
+
+
+def coasted_time(t: np.ndarray, segment: np.ndarray, sensor: np.ndarray) -> tuple[float, float]:
+    """The track's expected update interval and its coasted time, from its accepted updates (times sorted,
+    their segments and sensors). The interval is the slowest sensor's median interval between its own
+    consecutive updates in a segment (a 4 s radar fused with 1 s ADS-B: 4 s; NaN with no such pair). Coasted
+    is the time without any update beyond that interval, summed over the gaps within segments that exceed
+    MISSED_UPDATE_FACTOR intervals: a missed 4 s scan counts 4 s, a regular scan 0; the coast after a
+    segment's last update is not counted (nor in tracked_s)."""
+    medians = []
+    for s in np.unique(sensor):
+        i = sensor == s
+        d = np.diff(t[i])[np.diff(segment[i]) == 0]
+        d = d[d > 0.0]
+        if len(d):
+            medians.append(float(np.median(d)))
+    if not medians:
+        return math.nan, 0.0
+    interval = max(medians)
+    gaps = np.diff(t)[np.diff(segment) == 0]
+    missed = gaps > MISSED_UPDATE_FACTOR * interval
+    return interval, float((gaps[missed] - interval).sum())
 
 
 @dataclass
@@ -418,26 +560,28 @@ def _track_one(aircraft_id, group, epoch, config, args, names, step_s, smooth, s
     tracks = pd.DataFrame(out, copy=False)  # one block per column: `_concat_by_column` frees them one by one
 
     sensor = g["sensor_id"].to_numpy(str)
-    kinds = g["sensor_kind"].to_numpy(str)
+    all_sensors = group["sensor_id"].to_numpy(str)
+    all_kinds = group["sensor_kind"].to_numpy(str)
     updated = status == STATUS_UPDATED
     rows = []
-    for sid in np.unique(sensor):
+    for sid in np.unique(all_sensors):
         sel = sensor == sid
-        rows.append({"sensor_id": sid, "sensor_kind": kinds[sel][0], "reports": int(sel.sum()),
+        n_far = int(far.get(sid, 0))
+        rows.append({"sensor_id": sid, "sensor_kind": all_kinds[all_sensors == sid][0],
+                     "reports": int(sel.sum()) + n_far,
                      "updates": int((accepted & sel).sum()), "gated": int((sel & ~accepted).sum()),
                      "segments_started": int((sel & (status == STATUS_STARTED)).sum()),
-                     "nis_mean": float(nis[sel & updated].mean()) if (sel & updated).any() else np.nan})
+                     "nis_mean": float(nis[sel & updated].mean()) if (sel & updated).any() else np.nan,
+                     "out_of_range": n_far})
     sensors = pd.DataFrame(rows)
     sensors.insert(0, "aircraft_id", aircraft_id)
-    sensors["out_of_range"] = sensors["sensor_id"].map(far).fillna(0).astype(int)
-    gaps = np.diff(acc_t)
-    same_seg = np.diff(acc_seg) == 0
-    coasted_s = float(np.maximum(gaps[same_seg] - step_s, 0.0).sum() + (seg_end - seg_last).sum())
+    interval_s, coasted_s = coasted_time(acc_t, acc_seg, acc_sensor)
     aircraft = {"aircraft_id": aircraft_id, "segments": len(seg_ids), "reports": n,
                 "updates": int(accepted.sum()), "gated": int((~accepted).sum()),
                 "start": epoch + pd.to_timedelta(seg_first[0], unit="s"),
                 "end": epoch + pd.to_timedelta(seg_end[-1], unit="s"),
-                "tracked_s": float((seg_end - seg_first).sum()), "coasted_s": coasted_s}
+                "tracked_s": float((seg_last - seg_first).sum()), "coasted_s": coasted_s,
+                "update_interval_s": interval_s}
     rej = g.loc[~accepted, ["time", "sensor_id", "latitude", "longitude"]].assign(nis=nis[~accepted])
     rej.insert(0, "aircraft_id", aircraft_id)
     last = acc_idx[-1]
