@@ -45,9 +45,9 @@ ERROR_COLUMNS = [
 ]
 ERROR_METRICS = ["range_error_m", "azimuth_error_deg", "along_track_m", "cross_track_m", "horizontal_error_m"]
 BIAS_COLUMNS = [
-    "radar", "sac", "sic", "n_reports", "n_rejected", "aircraft", "range_bias_m", "range_bias_se_m",
-    "range_gain_ppm", "range_gain_se_ppm", "azimuth_bias_deg", "azimuth_bias_se_deg", "time_bias_s",
-    "time_bias_se_s", "range_residual_rms_m", "azimuth_residual_rms_deg", "adsb_nacp_median",
+    "radar", "sac", "sic", "n_reports", "n_rejected", "n_overhead", "aircraft", "range_bias_m",
+    "range_bias_se_m", "range_gain_ppm", "range_gain_se_ppm", "azimuth_bias_deg", "azimuth_bias_se_deg",
+    "time_bias_s", "time_bias_se_s", "range_residual_rms_m", "azimuth_residual_rms_deg", "adsb_nacp_median",
     "adsb_nacp_95_m", "note",
 ]
 # The measurement columns the ADS-B reference and the errors read (with mark_once's duplicate and jump flags
@@ -61,6 +61,11 @@ LIMITATION_NOTE = ("ADS-B is the reference but carries its own position error, b
                    "(DO-260B: NACp 8 < 92.6 m, 9 < 30 m, 10 < 10 m, 11 < 3 m); radar errors below that level "
                    "cannot be attributed to the radar (thesis limitation).")
 CLIP_SIGMAS = 5.0  # rows further than this many robust sigmas from the fit are rejected
+# Above this elevation seen from the site (the radar's cone of silence, or a target nearly overhead) the
+# azimuth means nothing: a few metres across the line of sight are degrees, at azimuth rates of tens of
+# degrees per second, so one such plot would decide the azimuth and time biases. Their azimuth rows are
+# left out of the fit (their range rows stay) and counted as n_overhead.
+MAX_AZIMUTH_ELEVATION_DEG = 45.0
 _FIT_PASSES = 6
 
 
@@ -267,10 +272,27 @@ def _robust_sigma(r: np.ndarray) -> float:
     return float(1.4826 * np.median(np.abs(r - np.median(r)))) if r.size else float("nan")
 
 
+def elevation_deg(errors: pd.DataFrame) -> np.ndarray:
+    """Elevation of the ADS-B reference seen from the site (deg, flat-earth from slant and ground range)."""
+    slant, ground = errors["slant_range_m"].to_numpy(float), errors["ground_range_m"].to_numpy(float)
+    return np.degrees(np.arctan2(np.sqrt(np.maximum(slant**2 - ground**2, 0.0)), ground))
+
+
+def _robust_cov(xw: np.ndarray, rw: np.ndarray, cov: np.ndarray) -> np.ndarray:
+    """HC3 sandwich covariance of a weighted fit (rows xw, weighted residuals rw, (Xw'Xw)^-1 = cov): each
+    residual inflated by its leverage, so a parameter one plot decides gets the error of leaving it out."""
+    leverage = np.einsum("ij,jk,ik->i", xw, cov, xw)
+    u = rw / np.maximum(1.0 - leverage, 1e-9)
+    meat = (xw * (u**2)[:, None]).T @ xw
+    return cov @ meat @ cov
+
+
 def fit_biases(errors: pd.DataFrame) -> dict:
     """Joint weighted least squares of one radar's errors: range rows [1, R, 0, -range_rate] (R in Mm,
     giving ppm) and azimuth rows [0, 0, 1, -azimuth_rate] in degrees, weighted by the inverse residual
-    variance of each row type, re-weighted and clipped at CLIP_SIGMAS robust sigmas until stable."""
+    variance of each row type, re-weighted and clipped at CLIP_SIGMAS robust sigmas until stable. Azimuth
+    rows above MAX_AZIMUTH_ELEVATION_DEG are left out (``n_overhead``). Standard errors are the larger of
+    the model's and the leverage-robust (HC3) ones, so a fit decided by a few plots does not look precise."""
     ok = errors[["range_error_m", "azimuth_error_deg", "slant_range_m", "ground_range_m", "range_rate_ms",
                  "tangential_speed_ms"]].notna().all(axis=1).to_numpy()
     e = errors[ok]
@@ -281,12 +303,13 @@ def fit_biases(errors: pd.DataFrame) -> dict:
     x[n:, 2], x[n:, 3] = 1.0, -az_rate_dps
     y = np.concatenate([e["range_error_m"].to_numpy(), e["azimuth_error_deg"].to_numpy()])
     is_range = np.arange(2 * n) < n
-    result = {"n_reports": n, "n_rejected": 0, "params": np.full(4, np.nan), "se": np.full(4, np.nan),
-              "rms": (np.nan, np.nan)}
-    if n < MIN_BIAS_REPORTS or np.linalg.matrix_rank(x) < 4:
+    usable = np.concatenate([np.ones(n, bool), elevation_deg(e) <= MAX_AZIMUTH_ELEVATION_DEG])
+    result = {"n_reports": n, "n_rejected": 0, "n_overhead": int(n - usable[n:].sum()),
+              "params": np.full(4, np.nan), "se": np.full(4, np.nan), "rms": (np.nan, np.nan)}
+    if n < MIN_BIAS_REPORTS or np.linalg.matrix_rank(x[usable]) < 4:
         return result
-    keep = np.ones(2 * n, dtype=bool)
-    sig = np.array([_robust_sigma(y[is_range]), _robust_sigma(y[~is_range])])
+    keep = usable.copy()
+    sig = np.array([_robust_sigma(y[is_range]), _robust_sigma(y[~is_range & usable])])
     sig = np.where(sig > 0, sig, 1.0)
     for _ in range(_FIT_PASSES):
         w = np.where(is_range, 1.0 / sig[0], 1.0 / sig[1])
@@ -295,7 +318,7 @@ def fit_biases(errors: pd.DataFrame) -> dict:
         beta, *_ = np.linalg.lstsq(x[keep] * w[keep, None], y[keep] * w[keep], rcond=None)
         res = y - x @ beta
         robust = np.array([_robust_sigma(res[is_range & keep]), _robust_sigma(res[~is_range & keep])])
-        new_keep = np.abs(res) <= CLIP_SIGMAS * np.where(is_range, robust[0], robust[1])
+        new_keep = usable & (np.abs(res) <= CLIP_SIGMAS * np.where(is_range, robust[0], robust[1]))
         new_sig = np.array([np.std(res[is_range & new_keep]), np.std(res[~is_range & new_keep])])
         stable = np.array_equal(new_keep, keep) and np.allclose(new_sig, sig, rtol=1e-3)
         keep, sig = new_keep, np.where(new_sig > 0, new_sig, 1.0)
@@ -306,7 +329,9 @@ def fit_biases(errors: pd.DataFrame) -> dict:
     beta, *_ = np.linalg.lstsq(xw, y[keep] * w[keep], rcond=None)
     res = y - x @ beta
     cov = np.linalg.inv(xw.T @ xw)
-    result.update(params=beta, se=np.sqrt(np.diag(cov)), n_rejected=int((~keep).sum()),
+    robust_cov = _robust_cov(xw, res[keep] * w[keep], cov)
+    se = np.sqrt(np.maximum(np.diag(cov), np.diag(robust_cov)))
+    result.update(params=beta, se=se, n_rejected=int((usable & ~keep).sum()),
                   rms=(float(np.sqrt(np.mean(res[is_range & keep] ** 2))),
                        float(np.sqrt(np.mean(res[~is_range & keep] ** 2)))))
     return result
@@ -335,7 +360,7 @@ def estimate_biases(errors: pd.DataFrame) -> pd.DataFrame:
             note = (f"too few reports (< {MIN_BIAS_REPORTS}) or too little geometry diversity to separate "
                     "range bias, gain, azimuth bias and time bias. ") + note
         rows.append({"radar": name, "sac": sac, "sic": sic, "n_reports": fit["n_reports"],
-                     "n_rejected": fit["n_rejected"],
+                     "n_rejected": fit["n_rejected"], "n_overhead": fit["n_overhead"],
                      "aircraft": len(g[["callsign", "address"]].drop_duplicates()),
                      "range_bias_m": b_r, "range_bias_se_m": se_r, "range_gain_ppm": gain,
                      "range_gain_se_ppm": se_g, "azimuth_bias_deg": b_a, "azimuth_bias_se_deg": se_a,
