@@ -395,3 +395,23 @@ def test_json_times_are_iso_text_to_the_millisecond(sim, tables):
     undated = table_records(pd.DataFrame({"t_utc": pd.Series([pd.NaT, pd.Timestamp("1970-01-01 08:00",
                                                                                    tz="UTC")])}))
     assert undated == [{"t_utc": None}, {"t_utc": None}]
+
+
+def test_0_2x_figure_of_merit_is_its_own_indicator():
+    # CAT021 0.23 reports with PA 0, 6, 7, 7 (I021/090) and no NUCp/NIC: the ADS-B quality sheets count PA as
+    # fom_pa, and the NUCp/NIC shares are unknown, not PA's
+    from pipeline.model.measurements import adsb_measurements
+
+    frame = pd.DataFrame({"time_of_day": [1.0, 2.0, 3.0, 4.0], "day": 0,
+                          "latitude": [1.0, 1.001, 1.002, 1.003], "longitude": 100.0, "sac": 0, "sic": 1,
+                          "address": "ABC123", "callsign": "ABC1",
+                          "fom_pa": pd.array([0, 6, 7, 7], dtype="Int64")})
+    t = quality_tables(adsb_measurements(frame, date=DAY0.date()))
+    counts = t["ADS-B quality"]
+    pooled = counts[counts["callsign"] == "(all)"]
+    assert set(pooled["indicator"]) == {"fom_pa"}
+    assert dict(zip(pooled["value"], pooled["reports"], strict=True)) == {0: 1, 6: 1, 7: 2}
+    q = t["Quality"]
+    assert q[["nucp_below_5_pct", "nic_below_6_pct"]].isna().all().all()
+    over_time = t["ADS-B quality over time"]
+    assert "fom_pa_median" in over_time and "nucp_nic_median" not in over_time
