@@ -328,3 +328,58 @@ def test_a_high_leverage_plot_gets_an_honest_standard_error():
     shift = abs(b["time_bias_s"] - estimate_biases(errors.iloc[:-1]).iloc[0]["time_bias_s"])
     assert shift > 0.05
     assert b["time_bias_se_s"] > 0.5 * shift
+
+
+# ---------------------------------------------------------------------------------------------------------
+# Bad arguments: a clear error naming the argument and the value, before any work
+
+
+def _hand_meas() -> pd.DataFrame:
+    adsb = adsb_track(np.arange(0.0, 21.0), 90.0)
+    row = adsb[adsb["time_of_day"] == 10.0].iloc[0]
+    radar, _ = radar_plot(10.0, row["latitude"], row["longitude"], 100.0, 50.0)
+    return meas_frame(pd.concat([radar, adsb], ignore_index=True))
+
+
+@pytest.mark.parametrize(("kw", "error", "words"), [
+    ({"reference": "trak"}, ValueError, ["reference", "'trak'", "'adsb', 'track'"]),
+    ({"reference": "TRACK"}, ValueError, ["reference", "'TRACK'"]),
+    ({"reference": None}, ValueError, ["reference", "None"]),
+    ({"max_gap_s": -1}, ValueError, ["max_gap_s", "-1", "above 0"]),
+    ({"max_gap_s": 0.0}, ValueError, ["max_gap_s", "above 0"]),
+    ({"max_gap_s": float("nan")}, ValueError, ["max_gap_s", "nan", "finite"]),
+    ({"max_gap_s": "10"}, TypeError, ["max_gap_s", "'10'"]),
+    ({"jump_kw": 3}, TypeError, ["jump_kw", "int"]),
+])
+def test_radar_errors_rejects_bad_arguments(kw, error, words):
+    meas = _hand_meas()
+    with pytest.raises(error) as exc:
+        radar_errors(meas, SENSORS, **kw)
+    assert all(w in str(exc.value) for w in words), str(exc.value)
+
+
+def test_radar_errors_needs_the_sensor_table_for_radar_reports():
+    meas = _hand_meas()
+    with pytest.raises(TypeError, match="sensors: expected the sensor table .* got NoneType"):
+        radar_errors(meas, None)
+    with pytest.raises(TypeError, match="meas: expected a pandas DataFrame, got list"):
+        radar_errors([], SENSORS)
+    with pytest.raises(ValueError, match="meas: lacks the column.s. flight_level"):
+        radar_errors(meas.drop(columns="flight_level"), SENSORS)
+    adsb_only = meas[meas["sensor_kind"] == "adsb"]
+    assert radar_errors(adsb_only, None).empty  # ADS-B alone needs no sensor table
+    assert len(radar_errors(meas, SENSORS, max_gap_s=1)) == 1  # the reports are 1 s apart
+
+
+def test_quality_run_rejects_bad_arguments_before_the_tables():
+    from pipeline.quality.quality_run import quality_run
+
+    meas = _hand_meas()
+    with pytest.raises(ValueError, match="reference: 'TRACK' is not one of 'adsb', 'track'"):
+        quality_run(meas, SENSORS, reference="TRACK")
+    with pytest.raises(ValueError, match="gap_s: -5 s must be"):
+        quality_run(meas, SENSORS, gap_s=-5)
+    with pytest.raises(TypeError, match="errors: expected a pandas DataFrame, got NoneType"):
+        estimate_biases(None)
+    with pytest.raises(ValueError, match="errors: lacks the column.s. radar"):
+        error_stats(pd.DataFrame({"x": [1]}))

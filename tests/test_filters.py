@@ -99,3 +99,16 @@ def test_min_nic_does_not_filter_on_the_0_2x_figure_of_merit():
     assert len(warnings) == 2 and warnings[0].startswith("--min-nic 6: 2 ADS-B report(s) carry no NUCp/NIC")
     assert "figure of merit PA" in warnings[0] and warnings[1].startswith("--min-nacp 7: 2 ")
     assert filter_warnings(removed, None, None) == []
+
+
+@pytest.mark.parametrize(("kw", "error", "words"), [
+    ({"min_nic": 5.5}, TypeError, ["min_nic", "5.5"]),
+    ({"min_nic": -1}, ValueError, ["min_nic", "-1", "0 to 15"]),
+    ({"min_nacp": True}, TypeError, ["min_nacp", "True"]), ({"jump_kw": "x"}, TypeError, ["jump_kw", "str"]),
+])
+def test_bad_arguments_are_named(adsb, kw, error, words):
+    with pytest.raises(error) as exc:
+        apply_filters(adsb, **kw)
+    assert all(w in str(exc.value) for w in words), str(exc.value)
+    with pytest.raises(TypeError, match="meas: expected a pandas DataFrame, got NoneType"):
+        apply_filters(None)

@@ -415,3 +415,10 @@ def test_0_2x_figure_of_merit_is_its_own_indicator():
     assert q[["nucp_below_5_pct", "nic_below_6_pct"]].isna().all().all()
     over_time = t["ADS-B quality over time"]
     assert "fom_pa_median" in over_time and "nucp_nic_median" not in over_time
+
+
+@pytest.mark.parametrize(("gap_s", "error"), [(-1.0, ValueError), (0, ValueError), (float("inf"), ValueError),
+                                              (None, TypeError)])
+def test_quality_tables_reject_a_bad_gap(gap_s, error):
+    with pytest.raises(error, match=f"gap_s: .*{gap_s!r}"):
+        quality_tables(pd.DataFrame({"sensor_kind": [], "time": []}), gap_s=gap_s)

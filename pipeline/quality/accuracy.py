@@ -34,6 +34,7 @@ from pipeline.model.measurements import NACP_95_M
 from pipeline.model.sensors import sensor_sites
 from pipeline.model.time import midnight, with_clock
 from pipeline.parallel import map_ordered
+from pipeline.quality.checks import check_frame, check_options, check_reference, check_seconds, check_sensors
 
 MAX_ADSB_GAP_S = 10.0
 ERROR_COLUMNS = [
@@ -55,6 +56,8 @@ BIAS_COLUMNS = [
 ACCURACY_INPUTS = list(dict.fromkeys([
     *DEDUP_KEYS, *JUMP_INPUTS, "sensor_id", "sensor_kind", "sac", "sic", "address", "callsign",
     "flight_level", "rho_nm", "theta_deg", "nacp"]))
+# what radar_errors cannot do without (the rest of ACCURACY_INPUTS is read where present)
+MEASUREMENT_INPUTS = ("sensor_kind", "time", "sac", "sic", "latitude", "longitude", "flight_level")
 AIRCRAFT_COLUMNS = ["sensor_kind", "aircraft_id", "callsign", "address"]  # what aircraft_rows reads
 MIN_BIAS_REPORTS = 20
 LIMITATION_NOTE = ("ADS-B is the reference but carries its own position error, bounded at 95 % by its NACp "
@@ -185,6 +188,11 @@ def radar_errors(meas: pd.DataFrame, sensors: pd.DataFrame, *, max_gap_s: float 
     it. Also the reference geometry (slant/ground range, azimuth, range rate, tangential speed) that
     ``estimate_biases`` regresses on.
     """
+    check_frame("meas", meas, MEASUREMENT_INPUTS)
+    check_sensors(sensors, meas)
+    check_seconds("max_gap_s", max_gap_s)
+    check_options("jump_kw", jump_kw)
+    check_reference(reference)
     m = _matched(meas, max_gap_s, jump_kw, reference)
     if m.empty:
         return pd.DataFrame(columns=ERROR_COLUMNS)
@@ -251,6 +259,7 @@ def _moments(values: pd.Series, base: str, unit: str) -> dict[str, float]:
 
 def error_stats(errors: pd.DataFrame) -> pd.DataFrame:
     """Mean, standard deviation and RMS of each error per radar, for all aircraft ("(all)") and each one."""
+    check_frame("errors", errors, ("radar", "sac", "sic", "callsign", "address", *ERROR_METRICS))
     rows = []
     for (name, sac, sic), g in errors.groupby(["radar", "sac", "sic"], sort=True, dropna=False):
         parts = [("(all)", "", g)] + [(cs, addr, a) for (cs, addr), a in
@@ -349,6 +358,7 @@ def estimate_biases(errors: pd.DataFrame) -> pd.DataFrame:
     """Per radar: range bias (m), range gain (ppm), azimuth bias (deg) and time bias (s, radar time minus
     true time) over all aircraft by ``fit_biases``, with standard errors, counts, residual RMS and the
     ADS-B accuracy note (also in ``attrs["note"]``)."""
+    check_frame("errors", errors, ("radar", "sac", "sic"))
     rows = []
     for (name, sac, sic), g in errors.groupby(["radar", "sac", "sic"], sort=True, dropna=False):
         fit = fit_biases(g)

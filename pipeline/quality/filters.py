@@ -15,6 +15,7 @@ import numpy as np
 import pandas as pd
 
 from pipeline.model.jumps import JUMP_FLAG_COLUMNS, JUMP_INPUTS, detect_jumps
+from pipeline.quality.checks import check_frame, check_indicator, check_options
 
 FILTER_KEYS = ["jumps", "nic_below_min", "nacp_below_min", "nic_missing_kept", "nacp_missing_kept"]
 
@@ -33,6 +34,10 @@ def apply_filters(meas: pd.DataFrame, *, drop_jumps: bool = False, min_nic: int 
                   jump_kw: dict | None = None) -> tuple[pd.DataFrame, dict[str, int]]:
     """Measurements with the ADS-B reports that fail the chosen filters removed (radar rows untouched,
     order kept, index reset), and the count per key of FILTER_KEYS."""
+    check_frame("meas", meas, ("sensor_kind",))
+    check_indicator("min_nic", min_nic)
+    check_indicator("min_nacp", min_nacp)
+    check_options("jump_kw", jump_kw)
     is_adsb = (meas["sensor_kind"] == "adsb").to_numpy(bool)
     if not drop_jumps and min_nic is None and min_nacp is None:  # nothing to remove: no copy
         return meas.reset_index(drop=True), dict.fromkeys(FILTER_KEYS, 0)

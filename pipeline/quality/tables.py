@@ -24,6 +24,7 @@ from pipeline.model.dedup import DEDUP_KEYS, deduplicate
 from pipeline.model.identity import aircraft_labels
 from pipeline.model.jumps import JUMP_FLAG_COLUMNS, JUMP_INPUTS, jump_table
 from pipeline.model.time import UTC_DTYPE, dated_or_nat, with_clock
+from pipeline.quality.checks import check_frame, check_options, check_seconds
 
 ALL = "(all)"
 UNIDENTIFIED = "?"  # the aircraft key of reports that belong to no aircraft (aircraft_id <NA>)
@@ -332,6 +333,9 @@ def quality_tables(meas: pd.DataFrame, *, gap_s: float = 180.0,
                    jump_kw: dict | None = None) -> dict[str, pd.DataFrame]:
     """Sheets "Quality", "Update intervals", "Gaps", "Jumps", "ADS-B quality" and "ADS-B quality over time"
     (see the module docstring) of a measurement frame holding radar and/or ADS-B."""
+    check_frame("meas", meas, ("sensor_kind", "time"))
+    check_seconds("gap_s", gap_s)
+    check_options("jump_kw", jump_kw)
     both = _aircraft_labels(meas)
     adsb_rows = both["sensor"] == "adsb"
 
