@@ -93,7 +93,7 @@ def test_counts_duplicates_and_update_intervals_equal_the_emitted_reports(sim, t
         assert row["interval_min_s"] == dt.min() and row["interval_max_s"] == dt.max()
         assert row["interval_median_s"] == pytest.approx(np.median(dt))
         assert row["interval_p95_s"] == pytest.approx(np.percentile(dt, 95))
-        assert row["first_tod_s"] == originals["t_s"].min() and row["last_tod_s"] == originals["t_s"].max()
+        assert row["first_tod"] == originals["t_s"].min() and row["last_tod"] == originals["t_s"].max()
         assert row["first_utc"] == DAY0 + pd.to_timedelta(originals["t_s"].min(), unit="s")
         assert row["last_utc"] == DAY0 + pd.to_timedelta(originals["t_s"].max(), unit="s")
     pooled = row_of(q, "(all)", sensor)
@@ -133,18 +133,18 @@ def test_missing_and_zero_radar_speeds_equal_the_injected_flags(sim, tables):
 def test_gaps_and_reappearance(sim, tables):
     gaps = tables["Gaps"]
     for sensor, key in (("adsb", "adsb_gaps"), ("radar", "radar_gaps")):
-        got = gaps[gaps["sensor"] == sensor].sort_values(["callsign", "gap_start_tod_s"])
+        got = gaps[gaps["sensor"] == sensor].sort_values(["callsign", "gap_start_tod"])
         want = pd.DataFrame(sim.truth[key]).sort_values(["callsign", "start_s"])
         assert got["callsign"].tolist() == want["callsign"].tolist()
-        np.testing.assert_array_equal(got["gap_start_tod_s"], want["start_s"])
-        np.testing.assert_array_equal(got["gap_end_tod_s"], want["end_s"])
+        np.testing.assert_array_equal(got["gap_start_tod"], want["start_s"])
+        np.testing.assert_array_equal(got["gap_end_tod"], want["end_s"])
         np.testing.assert_allclose(got["gap_duration_s"], want["duration_s"])
         assert got["reappeared_after_1h"].tolist() == (want["duration_s"] > 3600).tolist()
     back = gaps[gaps["reappeared_after_1h"]]
     assert set(back["callsign"]) == {"MAS136"} and set(back["sensor"]) == {"radar", "adsb"}
     assert str(gaps["gap_start_utc"].dtype) == str(gaps["gap_end_utc"].dtype) == "datetime64[ns, UTC]"
     want = pd.DataFrame(sim.truth["radar_gaps"]).query("callsign == 'MAS136'").sort_values("start_s").iloc[0]
-    got = back[back["sensor"] == "radar"].sort_values("gap_start_tod_s").iloc[0]
+    got = back[back["sensor"] == "radar"].sort_values("gap_start_tod").iloc[0]
     assert got["gap_start_utc"] == DAY0 + pd.to_timedelta(want["start_s"], unit="s")
     assert got["gap_end_utc"] == DAY0 + pd.to_timedelta(want["end_s"], unit="s")
     q = tables["Quality"]
@@ -188,7 +188,7 @@ def test_adsb_quality_indicators(sim, tables):
     over_time = tables["ADS-B quality over time"]
     whole = over_time[over_time["callsign"] == "(all)"]
     assert whole["reports"].sum() == len(originals)
-    assert (whole["bin_start_tod_s"] % 600 == 0).all()
+    assert (whole["bin_start_tod"] % 600 == 0).all()
     starts = DAY0 + pd.to_timedelta(np.floor(originals["time_of_day"] / 600) * 600, unit="s")
     assert str(whole["bin_start_utc"].dtype) == "datetime64[ns, UTC]"  # the bin start, within float rounding
     starts = pd.Series(starts.drop_duplicates().sort_values().array)
@@ -246,12 +246,12 @@ def test_intervals_across_midnight():
     q = quality_tables(measurements(sim))["Quality"]
     for sensor in ("radar", "adsb"):
         row = row_of(q, "(all)", sensor)
-        assert row["first_tod_s"] < 86400.0 < row["last_tod_s"]
+        assert row["first_tod"] < 86400.0 < row["last_tod"]
         assert row["interval_max_s"] <= GAP_RULE_S
         assert row["gaps"] == len(sim.truth[f"{sensor}_gaps"])
     last = row_of(q, "(all)", "radar")
     assert last["last_utc"].date() == dt.date(2019, 6, 15) and last["last_utc"].hour == 0  # the next day
-    assert last["last_utc"] == DAY0 + pd.to_timedelta(last["last_tod_s"], unit="s")
+    assert last["last_utc"] == DAY0 + pd.to_timedelta(last["last_tod"], unit="s")
 
 
 def test_quality_figures(sim, frames, tables, tmp_path):
@@ -363,14 +363,14 @@ def test_undated_workbook_shows_time_of_day_only(sim, tmp_path):
     t = quality_tables(build_measurements(sim.radar, sim.adsb, sensors))
     write_tables(t, tmp_path / "u.xlsx")
     wb = openpyxl.load_workbook(tmp_path / "u.xlsx")
-    for sheet, clock, instant in (("Quality", "first_tod_s", "first_utc"), ("Gaps", "gap_start_tod_s",
+    for sheet, clock, instant in (("Quality", "first_tod", "first_utc"), ("Gaps", "gap_start_tod",
                                   "gap_start_utc"), ("Jumps", "time_of_day", "utc")):
         frame = _sheet(wb[sheet])
         assert frame[instant].isna().all(), sheet
         assert _formats(wb[sheet], clock) == {"[hh]:mm:ss.000"}
     gaps = _sheet(wb["Gaps"])
     want = sorted(pd.DataFrame(sim.truth["radar_gaps"] + sim.truth["adsb_gaps"])["start_s"])
-    got = sorted(v.total_seconds() for v in gaps["gap_start_tod_s"])  # a clock time reads as a timedelta
+    got = sorted(v.total_seconds() for v in gaps["gap_start_tod"])  # a clock time reads as a timedelta
     np.testing.assert_allclose(got, want, atol=5e-4)
 
 
@@ -391,7 +391,7 @@ def test_json_times_are_iso_text_to_the_millisecond(sim, tables):
     assert sorted(j["utc"] for j in jumps) == sorted(iso(s) for s in pd.DataFrame(sim.truth["jumps"])["t_s"])
     assert all(isinstance(j["time_of_day"], float) for j in jumps)
     bins = table_records(tables["ADS-B quality over time"])
-    assert all(b["bin_start_utc"] == iso(b["bin_start_tod_s"]) for b in bins)
+    assert all(b["bin_start_utc"] == iso(b["bin_start_tod"]) for b in bins)
     undated = table_records(pd.DataFrame({"t_utc": pd.Series([pd.NaT, pd.Timestamp("1970-01-01 08:00",
                                                                                    tz="UTC")])}))
     assert undated == [{"t_utc": None}, {"t_utc": None}]
@@ -422,3 +422,41 @@ def test_0_2x_figure_of_merit_is_its_own_indicator():
 def test_quality_tables_reject_a_bad_gap(gap_s, error):
     with pytest.raises(error, match=f"gap_s: .*{gap_s!r}"):
         quality_tables(pd.DataFrame({"sensor_kind": [], "time": []}), gap_s=gap_s)
+
+
+def test_workbook_headers_say_the_unit_the_cells_show(tables, tmp_path):
+    """A column shown as a clock time (hh:mm:ss) is not named in seconds (first_tod_s showed 08:00:00)."""
+    import openpyxl
+
+    from pipeline.report.excel import write_tables
+    write_tables(tables, tmp_path / "q.xlsx")
+    wb = openpyxl.load_workbook(tmp_path / "q.xlsx")
+    clocks = {(ws.title, h) for ws in wb.worksheets for h in (c.value for c in ws[1]) if h and ws.max_row > 1
+              and "[hh]:mm:ss.000" in _formats(ws, h)}
+    assert ("Quality", "first_tod") in clocks and ("Gaps", "gap_start_tod") in clocks
+    assert ("ADS-B quality over time", "bin_start_tod") in clocks
+    assert not [h for _, h in clocks if h.endswith("_s")]
+
+
+def test_a_wide_sheet_note_is_printed_whole(tmp_path):
+    """A note under a table wider than a page is cut into lines that fit the first page beside the columns
+    every page repeats (one cell in column A ran across the page edge: "ADS-B is the r")."""
+    import openpyxl
+
+    from pipeline.quality.accuracy import LIMITATION_NOTE
+    from pipeline.report.cells import PAGE_WIDTH_CHARS
+    from pipeline.report.excel import write_tables
+
+    frame = pd.DataFrame({"radar": ["KLIA MSSR"], **{f"quantity_number_{i:02d}_m": [1.0] for i in range(24)}})
+    frame.attrs["note"] = LIMITATION_NOTE
+    write_tables({"Wide": frame}, tmp_path / "w.xlsx")
+    ws = openpyxl.load_workbook(tmp_path / "w.xlsx")["Wide"]
+    pages = ws.page_setup.fitToWidth
+    assert pages in (2, 3) and ws.print_title_cols == "$A:$A"
+    rows = [r for r in ws.iter_rows(min_row=3, values_only=True) if any(v is not None for v in r)]
+    assert all(r[0] is None and r[1] for r in rows)  # not in the repeated column A
+    assert " ".join(r[1] for r in rows) == LIMITATION_NOTE
+    widths = [ws.column_dimensions[openpyxl.utils.get_column_letter(i)].width for i in range(1, 26)]
+    # one printed page holds the repeated column A and a pages-th of the rest, about PAGE_WIDTH_CHARS
+    room = sum(widths[1:]) / pages
+    assert len(rows) > 1 and max(len(r[1]) for r in rows) <= min(room, PAGE_WIDTH_CHARS)

@@ -61,8 +61,9 @@ MEASUREMENT_INPUTS = ("sensor_kind", "time", "sac", "sic", "latitude", "longitud
 AIRCRAFT_COLUMNS = ["sensor_kind", "aircraft_id", "callsign", "address"]  # what aircraft_rows reads
 MIN_BIAS_REPORTS = 20
 LIMITATION_NOTE = ("ADS-B is the reference but carries its own position error, bounded at 95 % by its NACp "
-                   "(DO-260B: NACp 8 < 92.6 m, 9 < 30 m, 10 < 10 m, 11 < 3 m); radar errors below that level "
-                   "cannot be attributed to the radar (thesis limitation).")
+                   "(DO-260B: NACp 8 < 92.6 m, 9 < 30 m, 10 < 10 m, 11 < 3 m); radar errors below that "
+                   "level cannot be attributed to the radar (thesis limitation). ADS-B height is pressure "
+                   "altitude.")
 CLIP_SIGMAS = 5.0  # rows further than this many robust sigmas from the fit are rejected
 # Above this elevation seen from the site (the radar's cone of silence, or a target nearly overhead) the
 # azimuth means nothing: a few metres across the line of sight are degrees, at azimuth rates of tens of
@@ -347,11 +348,10 @@ def fit_biases(errors: pd.DataFrame) -> dict:
 
 
 def _note(nacp_median: float) -> str:
+    """The radar's own ADS-B accuracy level (the general limitation is LIMITATION_NOTE, once per table)."""
     bound = nacp_bound_m(nacp_median)
-    level = (f"median NACp {nacp_median:g}: 95 % of ADS-B positions within {bound:g} m (DO-260B)"
-             if np.isfinite(bound) else "ADS-B NACp unknown")
-    return (f"ADS-B is the reference but has its own position error ({level}); radar errors below that "
-            "level cannot be attributed to the radar (thesis limitation). ADS-B height is pressure altitude.")
+    return (f"median NACp {nacp_median:g}: 95 % of ADS-B positions within {bound:g} m (DO-260B)"
+            if np.isfinite(bound) else "ADS-B NACp unknown")
 
 
 def estimate_biases(errors: pd.DataFrame) -> pd.DataFrame:
@@ -368,7 +368,7 @@ def estimate_biases(errors: pd.DataFrame) -> pd.DataFrame:
         note = _note(nacp_median)
         if not np.isfinite(b_r):
             note = (f"too few reports (< {MIN_BIAS_REPORTS}) or too little geometry diversity to separate "
-                    "range bias, gain, azimuth bias and time bias. ") + note
+                    "range bias, gain, azimuth bias and time bias; ") + note
         rows.append({"radar": name, "sac": sac, "sic": sic, "n_reports": fit["n_reports"],
                      "n_rejected": fit["n_rejected"], "n_overhead": fit["n_overhead"],
                      "aircraft": len(g[["callsign", "address"]].drop_duplicates()),
