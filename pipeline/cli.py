@@ -380,8 +380,9 @@ def _quality_text(result) -> str:
     keep = [c for c in ("callsign", "address", "sensor", "sac", "sic", "reports", "duplicates_removed",
                         "interval_median_s",
                         "interval_p95_s", "speed_missing_or_zero_pct", "gaps", "jumps") if c in q]
-    bias_cols = [c for c in ("radar", "n_reports", "range_bias_m", "range_gain_ppm", "azimuth_bias_deg",
-                             "time_bias_s") if c in b]
+    bias_cols = [c for c in ("radar", "n_reports", "n_rejected", "n_overhead", "range_bias_m",
+                             "range_bias_se_m", "range_gain_ppm", "range_gain_se_ppm", "azimuth_bias_deg",
+                             "azimuth_bias_se_deg", "time_bias_s", "time_bias_se_s") if c in b]
     from pipeline.report.summary import frame_text
 
     text = "Quality:\n" + frame_text(q[keep]) + "\n\nRadar biases:\n"

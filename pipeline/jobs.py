@@ -865,7 +865,7 @@ def correlate_job(options: CorrelateOptions, *, progress: Progress | None = None
     """Validate, decode, build measurements, filter, correlate (and assess quality); nothing is written."""
     from pipeline.correlate.correlation import NoOverlap, TooManySlots, correlate
     from pipeline.model.aircraft import NoSuchAircraft
-    from pipeline.quality.filters import apply_filters
+    from pipeline.quality.filters import apply_filters, filter_warnings
 
     started = time.monotonic()
     checked = checked or validate(options)
@@ -897,6 +897,7 @@ def correlate_job(options: CorrelateOptions, *, progress: Progress | None = None
              "nacp_missing_kept": options.min_nacp is not None}
     run.inputs = loaded.inputs
     run.filters = {k: v for k, v in removed.items() if asked.get(k, True)}
+    checked.warnings += filter_warnings(removed, options.min_nic, options.min_nacp)
     run.parameters = {**run.parameters, **_parameters(options, loaded, started, command),
                       "filters": {"drop_jumps": options.drop_jumps, "min_nic": options.min_nic,
                                   "min_nacp": options.min_nacp, "removed": run.filters}}

@@ -41,8 +41,8 @@ def load_real_tracks(max_aircraft: int | None = None, min_reports: int = 300, si
     frame = frame[(frame["gbs"] == 0) & frame["latitude"].notna() & frame["address"].notna()]
     meas = adsb_measurements(frame, date=dt.date(2016, 5, 10))
     # edition 0.23 carries no NACp: msdc gives such reports no covariance, so `msdc track` drops them.
-    # As tests/real_track_data.py does, read the 0.23 figure of merit (PA, in nucp_nic) as NACp.
-    var = nacp_sigma_m(meas["nucp_nic"]) ** 2
+    # As tests/real_track_data.py does, read the 0.23 figure of merit (PA, fom_pa) as NACp.
+    var = nacp_sigma_m(meas["fom_pa"]) ** 2
     missing = ~np.isfinite(meas["cov_ee_m2"].to_numpy(float))
     meas.loc[missing, "cov_ee_m2"] = var[missing]
     meas.loc[missing, "cov_nn_m2"] = var[missing]

@@ -278,3 +278,108 @@ def test_cartesian_plots_are_evaluated_from_their_position():
     for c in ("range_error_m", "along_track_m", "cross_track_m", "horizontal_error_m"):
         assert cart[c] == pytest.approx(polar[c], abs=0.01), c
     assert cart["azimuth_error_deg"] == pytest.approx(polar["azimuth_error_deg"], abs=1e-6)
+
+
+# ---------------------------------------------------------------------------------------------------------
+# Plots that decide a bias alone: nearly overhead (cone of silence), or a high-leverage azimuth row
+
+
+def _unbiased_errors(n: int = 400, seed: int = 7) -> pd.DataFrame:
+    """Errors of an unbiased radar (70 m, 0.08 deg noise) at 20-200 km ground range and FL330."""
+    rng = np.random.default_rng(seed)
+    ground = rng.uniform(20e3, 200e3, n)
+    return pd.DataFrame({
+        "radar": "R", "sac": 1, "sic": 2, "callsign": "A", "address": "000001", "adsb_nacp": 9,
+        "ground_range_m": ground, "slant_range_m": np.hypot(ground, 10e3),
+        "range_rate_ms": rng.uniform(-200.0, 200.0, n), "tangential_speed_ms": rng.uniform(-200.0, 200.0, n),
+        "range_error_m": rng.normal(0.0, 70.0, n), "azimuth_error_deg": rng.normal(0.0, 0.08, n)})
+
+
+def _with_plot(errors: pd.DataFrame, ground_m: float, height_m: float, tangential_ms: float,
+               azimuth_error_deg: float) -> pd.DataFrame:
+    row = errors.iloc[[0]].assign(ground_range_m=ground_m, slant_range_m=np.hypot(ground_m, height_m),
+                                  range_rate_ms=0.0, tangential_speed_ms=tangential_ms, range_error_m=0.0,
+                                  azimuth_error_deg=azimuth_error_deg)
+    return pd.concat([errors, row], ignore_index=True)
+
+
+def test_a_plot_overhead_does_not_decide_the_time_bias():
+    # the audit's plot: 119 m from the site at 10.36 km, -157.75 m/s across the line of sight (azimuth
+    # rate -75.9 deg/s), 3.34 deg azimuth error: alone it is fitted exactly by a 3.34/75.9 = 0.044 s time bias
+    errors = _with_plot(_unbiased_errors(), 119.0, 10360.0, -157.75, 3.34)
+    b = estimate_biases(errors).iloc[0]
+    assert b["n_overhead"] == 1 and b["n_rejected"] == 0
+    # the truth is no bias: the estimate is within 3 of its standard errors of it and the SE is that of
+    # the 400 ordinary plots (0.08 deg / ~0.1 deg/s azimuth rates: centiseconds, not milliseconds)
+    assert abs(b["time_bias_s"]) < 3 * b["time_bias_se_s"]
+    assert b["time_bias_se_s"] > 0.01
+    alone = estimate_biases(errors.iloc[:-1]).iloc[0]
+    assert b["time_bias_s"] == pytest.approx(alone["time_bias_s"], abs=1e-3)
+
+
+def test_a_high_leverage_plot_gets_an_honest_standard_error():
+    # a low plot (16.7 deg elevation, outside the cone) 1 km from the site crossing at 200 m/s: 11.5 deg/s
+    # of azimuth rate against ~0.1 deg/s for the rest, with 17 m across the line of sight (1 deg)
+    errors = _with_plot(_unbiased_errors(), 1000.0, 300.0, 200.0, 1.0)
+    b = estimate_biases(errors).iloc[0]
+    assert b["n_overhead"] == 0
+    # leaving that plot out moves the time bias by about the plot's own pull; the SE must be of that size
+    # (the textbook SE of the weighted fit is a few times smaller: the plot looks like information)
+    shift = abs(b["time_bias_s"] - estimate_biases(errors.iloc[:-1]).iloc[0]["time_bias_s"])
+    assert shift > 0.05
+    assert b["time_bias_se_s"] > 0.5 * shift
+
+
+# ---------------------------------------------------------------------------------------------------------
+# Bad arguments: a clear error naming the argument and the value, before any work
+
+
+def _hand_meas() -> pd.DataFrame:
+    adsb = adsb_track(np.arange(0.0, 21.0), 90.0)
+    row = adsb[adsb["time_of_day"] == 10.0].iloc[0]
+    radar, _ = radar_plot(10.0, row["latitude"], row["longitude"], 100.0, 50.0)
+    return meas_frame(pd.concat([radar, adsb], ignore_index=True))
+
+
+@pytest.mark.parametrize(("kw", "error", "words"), [
+    ({"reference": "trak"}, ValueError, ["reference", "'trak'", "'adsb', 'track'"]),
+    ({"reference": "TRACK"}, ValueError, ["reference", "'TRACK'"]),
+    ({"reference": None}, ValueError, ["reference", "None"]),
+    ({"max_gap_s": -1}, ValueError, ["max_gap_s", "-1", "above 0"]),
+    ({"max_gap_s": 0.0}, ValueError, ["max_gap_s", "above 0"]),
+    ({"max_gap_s": float("nan")}, ValueError, ["max_gap_s", "nan", "finite"]),
+    ({"max_gap_s": "10"}, TypeError, ["max_gap_s", "'10'"]),
+    ({"jump_kw": 3}, TypeError, ["jump_kw", "int"]),
+])
+def test_radar_errors_rejects_bad_arguments(kw, error, words):
+    meas = _hand_meas()
+    with pytest.raises(error) as exc:
+        radar_errors(meas, SENSORS, **kw)
+    assert all(w in str(exc.value) for w in words), str(exc.value)
+
+
+def test_radar_errors_needs_the_sensor_table_for_radar_reports():
+    meas = _hand_meas()
+    with pytest.raises(TypeError, match="sensors: expected the sensor table .* got NoneType"):
+        radar_errors(meas, None)
+    with pytest.raises(TypeError, match="meas: expected a pandas DataFrame, got list"):
+        radar_errors([], SENSORS)
+    with pytest.raises(ValueError, match="meas: lacks the column.s. flight_level"):
+        radar_errors(meas.drop(columns="flight_level"), SENSORS)
+    adsb_only = meas[meas["sensor_kind"] == "adsb"]
+    assert radar_errors(adsb_only, None).empty  # ADS-B alone needs no sensor table
+    assert len(radar_errors(meas, SENSORS, max_gap_s=1)) == 1  # the reports are 1 s apart
+
+
+def test_quality_run_rejects_bad_arguments_before_the_tables():
+    from pipeline.quality.quality_run import quality_run
+
+    meas = _hand_meas()
+    with pytest.raises(ValueError, match="reference: 'TRACK' is not one of 'adsb', 'track'"):
+        quality_run(meas, SENSORS, reference="TRACK")
+    with pytest.raises(ValueError, match="gap_s: -5 s must be"):
+        quality_run(meas, SENSORS, gap_s=-5)
+    with pytest.raises(TypeError, match="errors: expected a pandas DataFrame, got NoneType"):
+        estimate_biases(None)
+    with pytest.raises(ValueError, match="errors: lacks the column.s. radar"):
+        error_stats(pd.DataFrame({"x": [1]}))

@@ -154,6 +154,8 @@ def test_quality_command(tmp_path, capsys):
                  "-o", str(xlsx), "--json", str(js)]) == 0
     out = capsys.readouterr().out
     assert "Radar biases" in out and "NACp" in out
+    assert all(f"{name}_se_{unit}" in out
+               for name, unit in (("range_bias", "m"), ("azimuth_bias", "deg"), ("time_bias", "s")))
     wb = openpyxl.load_workbook(xlsx)
     assert {"Quality", "Update intervals", "Gaps", "Jumps", "ADS-B quality", "Radar accuracy", "Radar biases",
             "Figures", "Parameters"} <= set(wb.sheetnames)

@@ -7,7 +7,7 @@ import pytest
 
 from fixtures.simulate import simulate
 from pipeline.model.measurements import adsb_measurements
-from pipeline.quality.filters import FILTER_KEYS, apply_filters
+from pipeline.quality.filters import FILTER_KEYS, apply_filters, filter_warnings
 
 
 @pytest.fixture(scope="module")
@@ -84,3 +84,31 @@ def test_empty_and_missing_columns(adsb):
     no_nacp = adsb.drop(columns="nacp")
     kept, removed = apply_filters(no_nacp, min_nacp=7)
     assert len(kept) == len(adsb) and removed["nacp_missing_kept"] == len(adsb)
+
+
+def test_min_nic_does_not_filter_on_the_0_2x_figure_of_merit():
+    # CAT021 0.23 reports: I021/090 PA 3 and 7, no NUCp/NIC and no NACp (spec: AC/MN/DC/PA only); PA is not
+    # documented on NUCp's scale, so --min-nic 6 and --min-nacp 7 keep both and say why
+    frame = pd.DataFrame({"time_of_day": [1.0, 2.0], "day": [0, 0], "latitude": [1.0, 1.1],
+                          "longitude": [100.0, 100.1], "sac": [0, 0], "sic": [1, 1],
+                          "fom_pa": pd.array([3, 7], dtype="Int64")})
+    kept, removed = apply_filters(adsb_measurements(frame), min_nic=6, min_nacp=7)
+    assert len(kept) == 2 and removed["nic_below_min"] == 0 and removed["nic_missing_kept"] == 2
+    assert removed["nacp_missing_kept"] == 2
+    warnings = filter_warnings(removed, 6, 7)
+    assert len(warnings) == 2 and warnings[0].startswith("--min-nic 6: 2 ADS-B report(s) carry no NUCp/NIC")
+    assert "figure of merit PA" in warnings[0] and warnings[1].startswith("--min-nacp 7: 2 ")
+    assert filter_warnings(removed, None, None) == []
+
+
+@pytest.mark.parametrize(("kw", "error", "words"), [
+    ({"min_nic": 5.5}, TypeError, ["min_nic", "5.5"]),
+    ({"min_nic": -1}, ValueError, ["min_nic", "-1", "0 to 15"]),
+    ({"min_nacp": True}, TypeError, ["min_nacp", "True"]), ({"jump_kw": "x"}, TypeError, ["jump_kw", "str"]),
+])
+def test_bad_arguments_are_named(adsb, kw, error, words):
+    with pytest.raises(error) as exc:
+        apply_filters(adsb, **kw)
+    assert all(w in str(exc.value) for w in words), str(exc.value)
+    with pytest.raises(TypeError, match="meas: expected a pandas DataFrame, got NoneType"):
+        apply_filters(None)

@@ -204,15 +204,17 @@ def test_select_by_callsign_and_address():
     assert select(both, address="abcdef")["i"].tolist() == [0, 1]
 
 
-def test_adsb_0_2x_figure_of_merit_feeds_nucp():
-    # 0.2x frames have no nucp_nic column; I021/090 PA (fom_pa) is the NUCp-like figure
+def test_adsb_0_2x_figure_of_merit_is_not_nucp():
+    # 0.2x frames have no nucp_nic column; I021/090 PA (fom_pa) is a figure of merit of its own whose scale
+    # no spec gives as NUCp's, NIC's or NACp's: it is carried as fom_pa and fills none of them
     from pipeline.model.measurements import adsb_measurements
 
     frame = pd.DataFrame({"time_of_day": [1.0, 2.0], "day": [0, 0], "latitude": [1.0, 1.1],
                           "longitude": [100.0, 100.1], "sac": [0, 0], "sic": [1, 1],
                           "fom_pa": pd.array([7, pd.NA], dtype="Int64")})
     out = adsb_measurements(frame)
-    assert out["nucp_nic"].iloc[0] == 7 and pd.isna(out["nucp_nic"].iloc[1])
+    assert out["nucp_nic"].isna().all() and out["nacp"].isna().all()
+    assert out["fom_pa"].iloc[0] == 7 and pd.isna(out["fom_pa"].iloc[1])
 
 
 def test_unknown_radar_without_sac_or_sic_gets_no_invalid_toml(tmp_path):

@@ -74,17 +74,17 @@ def test_over_time_equals_a_grouping_over_the_key_texts_and_bins(spelled_all):
         adsb.loc[adsb.index[::50], ["callsign", "address"]] = [ALL, ""]
     got = _adsb_over_time(adsb)
     frame = _with_pooled(adsb).assign(
-        bin_start_tod_s=lambda f: np.floor(f["time_of_day"] / QUALITY_BIN_S) * QUALITY_BIN_S)
-    groups = frame.groupby([*ID_KEYS, "bin_start_tod_s"], dropna=False, sort=True)
+        bin_start_tod=lambda f: np.floor(f["time_of_day"] / QUALITY_BIN_S) * QUALITY_BIN_S)
+    groups = frame.groupby([*ID_KEYS, "bin_start_tod"], dropna=False, sort=True)
     want = groups.agg(reports=("nacp", "size"), first_tod=("time_of_day", "first"),
                       nacp_median=("nacp", lambda v: v.astype(float).median()),
                       sil_median=("sil", lambda v: v.astype(float).median()))
     assert len(got) == len(want) and got["reports"].tolist() == want["reports"].tolist()
-    assert got["bin_start_tod_s"].tolist() == [k[-1] for k in want.index]
+    assert got["bin_start_tod"].tolist() == [k[-1] for k in want.index]
     assert got["callsign"].tolist() == [k[0] for k in want.index]
     assert got["sic"].isna().tolist() == [pd.isna(k[4]) for k in want.index]
     assert (got["callsign"] == ALL).sum() == 3 * 4  # pooled: two stations and one without SAC/SIC, 4 bins
     np.testing.assert_array_equal(got["nacp_median"], want["nacp_median"])  # medians of whole numbers
     np.testing.assert_array_equal(got["sil_median"], want["sil_median"])
     start = (got["bin_start_utc"] - pd.Timestamp("2019-03-01", tz="UTC")).dt.total_seconds()
-    np.testing.assert_allclose(start, got["bin_start_tod_s"], atol=1e-6)
+    np.testing.assert_allclose(start, got["bin_start_tod"], atol=1e-6)

@@ -212,7 +212,7 @@ def test_quality_tables_formats(tmp_path: Path) -> None:
     from pipeline.report.excel import write_tables
 
     biases = pd.DataFrame({"radar": ["R"], "azimuth_bias_deg": [0.0036], "range_gain_ppm": [-27.0021],
-                           "range_bias_m": [6.26], "time_bias_s": [-0.0192], "gap_start_tod_s": [29401.25]})
+                           "range_bias_m": [6.26], "time_bias_s": [-0.0192], "gap_start_tod": [29401.25]})
     write_tables({"Radar biases": biases}, tmp_path / "q.xlsx")
     ws = load_workbook(tmp_path / "q.xlsx")["Radar biases"]
     col = _header_index(ws[1])
@@ -220,7 +220,7 @@ def test_quality_tables_formats(tmp_path: Path) -> None:
     assert ws.cell(2, col["range_gain_ppm"]).number_format == "0.0"
     assert ws.cell(2, col["range_bias_m"]).number_format == "0.0"
     assert ws.cell(2, col["time_bias_s"]).number_format == "0.000"
-    assert ws.cell(2, col["gap_start_tod_s"]).value == dt.timedelta(seconds=29401.25)  # 08:10:01.250
+    assert ws.cell(2, col["gap_start_tod"]).value == dt.timedelta(seconds=29401.25)  # 08:10:01.250
     assert ws.print_title_rows == "$1:$1" and ws.page_setup.orientation == "landscape"
 
 

@@ -223,9 +223,8 @@ def _adsb_rows(cat021: pd.DataFrame, date: dt.date | None, adsb_sigma_m: float |
     out["latitude"] = _column(cat021, "latitude")
     out["longitude"] = _column(cat021, "longitude")
     out["nucp_nic"] = _column(cat021, "nucp_nic", "Int64")
-    if "fom_pa" in cat021:  # 0.2x editions carry the NUCp-like figure as I021/090 PA
-        out["nucp_nic"] = out["nucp_nic"].fillna(_column(cat021, "fom_pa", "Int64"))
-    for name in ("nacp", "nucr_nacv", "sil", "mops_version"):
+    # 0.2x editions carry I021/090 PA instead, on a scale not documented as NUCp's: kept under its own name
+    for name in ("nacp", "nucr_nacv", "sil", "mops_version", "fom_pa"):
         out[name] = _column(cat021, name, "Int64")
     geometric_m = _column(cat021, "geometric_height_ft").to_numpy() * 0.3048
     fl_m = flight_level_to_m(out["flight_level"].to_numpy())

@@ -76,6 +76,9 @@ MEASUREMENT_SCHEMA: tuple[Column, ...] = (
     Column("nucr_nacv", _SMALL, "", "ADS-B NUCr or NACv"),
     Column("sil", _SMALL, "", "ADS-B source integrity level"),
     Column("mops_version", _SMALL, "", "ADS-B MOPS version (0, 1, 2)"),
+    Column("fom_pa", _SMALL, "",
+           "CAT021 0.2x figure of merit I021/090 PA (position accuracy); not NUCp, NIC or NACp (their scales "
+           "are not documented as the same), so not read as any of them; <NA> for 2.x reports"),
     Column("cov_ee_m2", "float64", "m^2",
            "Horizontal position covariance, east-east, in the local east/north frame at the report; radar: "
            "from the sensor's range and azimuth sigmas with the slant-range geometry; ADS-B: "

@@ -34,6 +34,7 @@ from pipeline.model.measurements import NACP_95_M
 from pipeline.model.sensors import sensor_sites
 from pipeline.model.time import midnight, with_clock
 from pipeline.parallel import map_ordered
+from pipeline.quality.checks import check_frame, check_options, check_reference, check_seconds, check_sensors
 
 MAX_ADSB_GAP_S = 10.0
 ERROR_COLUMNS = [
@@ -45,9 +46,9 @@ ERROR_COLUMNS = [
 ]
 ERROR_METRICS = ["range_error_m", "azimuth_error_deg", "along_track_m", "cross_track_m", "horizontal_error_m"]
 BIAS_COLUMNS = [
-    "radar", "sac", "sic", "n_reports", "n_rejected", "aircraft", "range_bias_m", "range_bias_se_m",
-    "range_gain_ppm", "range_gain_se_ppm", "azimuth_bias_deg", "azimuth_bias_se_deg", "time_bias_s",
-    "time_bias_se_s", "range_residual_rms_m", "azimuth_residual_rms_deg", "adsb_nacp_median",
+    "radar", "sac", "sic", "n_reports", "n_rejected", "n_overhead", "aircraft", "range_bias_m",
+    "range_bias_se_m", "range_gain_ppm", "range_gain_se_ppm", "azimuth_bias_deg", "azimuth_bias_se_deg",
+    "time_bias_s", "time_bias_se_s", "range_residual_rms_m", "azimuth_residual_rms_deg", "adsb_nacp_median",
     "adsb_nacp_95_m", "note",
 ]
 # The measurement columns the ADS-B reference and the errors read (with mark_once's duplicate and jump flags
@@ -55,12 +56,20 @@ BIAS_COLUMNS = [
 ACCURACY_INPUTS = list(dict.fromkeys([
     *DEDUP_KEYS, *JUMP_INPUTS, "sensor_id", "sensor_kind", "sac", "sic", "address", "callsign",
     "flight_level", "rho_nm", "theta_deg", "nacp"]))
+# what radar_errors cannot do without (the rest of ACCURACY_INPUTS is read where present)
+MEASUREMENT_INPUTS = ("sensor_kind", "time", "sac", "sic", "latitude", "longitude", "flight_level")
 AIRCRAFT_COLUMNS = ["sensor_kind", "aircraft_id", "callsign", "address"]  # what aircraft_rows reads
 MIN_BIAS_REPORTS = 20
 LIMITATION_NOTE = ("ADS-B is the reference but carries its own position error, bounded at 95 % by its NACp "
-                   "(DO-260B: NACp 8 < 92.6 m, 9 < 30 m, 10 < 10 m, 11 < 3 m); radar errors below that level "
-                   "cannot be attributed to the radar (thesis limitation).")
+                   "(DO-260B: NACp 8 < 92.6 m, 9 < 30 m, 10 < 10 m, 11 < 3 m); radar errors below that "
+                   "level cannot be attributed to the radar (thesis limitation). ADS-B height is pressure "
+                   "altitude.")
 CLIP_SIGMAS = 5.0  # rows further than this many robust sigmas from the fit are rejected
+# Above this elevation seen from the site (the radar's cone of silence, or a target nearly overhead) the
+# azimuth means nothing: a few metres across the line of sight are degrees, at azimuth rates of tens of
+# degrees per second, so one such plot would decide the azimuth and time biases. Their azimuth rows are
+# left out of the fit (their range rows stay) and counted as n_overhead.
+MAX_AZIMUTH_ELEVATION_DEG = 45.0
 _FIT_PASSES = 6
 
 
@@ -180,6 +189,11 @@ def radar_errors(meas: pd.DataFrame, sensors: pd.DataFrame, *, max_gap_s: float 
     it. Also the reference geometry (slant/ground range, azimuth, range rate, tangential speed) that
     ``estimate_biases`` regresses on.
     """
+    check_frame("meas", meas, MEASUREMENT_INPUTS)
+    check_sensors(sensors, meas)
+    check_seconds("max_gap_s", max_gap_s)
+    check_options("jump_kw", jump_kw)
+    check_reference(reference)
     m = _matched(meas, max_gap_s, jump_kw, reference)
     if m.empty:
         return pd.DataFrame(columns=ERROR_COLUMNS)
@@ -246,6 +260,7 @@ def _moments(values: pd.Series, base: str, unit: str) -> dict[str, float]:
 
 def error_stats(errors: pd.DataFrame) -> pd.DataFrame:
     """Mean, standard deviation and RMS of each error per radar, for all aircraft ("(all)") and each one."""
+    check_frame("errors", errors, ("radar", "sac", "sic", "callsign", "address", *ERROR_METRICS))
     rows = []
     for (name, sac, sic), g in errors.groupby(["radar", "sac", "sic"], sort=True, dropna=False):
         parts = [("(all)", "", g)] + [(cs, addr, a) for (cs, addr), a in
@@ -267,10 +282,27 @@ def _robust_sigma(r: np.ndarray) -> float:
     return float(1.4826 * np.median(np.abs(r - np.median(r)))) if r.size else float("nan")
 
 
+def elevation_deg(errors: pd.DataFrame) -> np.ndarray:
+    """Elevation of the ADS-B reference seen from the site (deg, flat-earth from slant and ground range)."""
+    slant, ground = errors["slant_range_m"].to_numpy(float), errors["ground_range_m"].to_numpy(float)
+    return np.degrees(np.arctan2(np.sqrt(np.maximum(slant**2 - ground**2, 0.0)), ground))
+
+
+def _robust_cov(xw: np.ndarray, rw: np.ndarray, cov: np.ndarray) -> np.ndarray:
+    """HC3 sandwich covariance of a weighted fit (rows xw, weighted residuals rw, (Xw'Xw)^-1 = cov): each
+    residual inflated by its leverage, so a parameter one plot decides gets the error of leaving it out."""
+    leverage = np.einsum("ij,jk,ik->i", xw, cov, xw)
+    u = rw / np.maximum(1.0 - leverage, 1e-9)
+    meat = (xw * (u**2)[:, None]).T @ xw
+    return cov @ meat @ cov
+
+
 def fit_biases(errors: pd.DataFrame) -> dict:
     """Joint weighted least squares of one radar's errors: range rows [1, R, 0, -range_rate] (R in Mm,
     giving ppm) and azimuth rows [0, 0, 1, -azimuth_rate] in degrees, weighted by the inverse residual
-    variance of each row type, re-weighted and clipped at CLIP_SIGMAS robust sigmas until stable."""
+    variance of each row type, re-weighted and clipped at CLIP_SIGMAS robust sigmas until stable. Azimuth
+    rows above MAX_AZIMUTH_ELEVATION_DEG are left out (``n_overhead``). Standard errors are the larger of
+    the model's and the leverage-robust (HC3) ones, so a fit decided by a few plots does not look precise."""
     ok = errors[["range_error_m", "azimuth_error_deg", "slant_range_m", "ground_range_m", "range_rate_ms",
                  "tangential_speed_ms"]].notna().all(axis=1).to_numpy()
     e = errors[ok]
@@ -281,12 +313,13 @@ def fit_biases(errors: pd.DataFrame) -> dict:
     x[n:, 2], x[n:, 3] = 1.0, -az_rate_dps
     y = np.concatenate([e["range_error_m"].to_numpy(), e["azimuth_error_deg"].to_numpy()])
     is_range = np.arange(2 * n) < n
-    result = {"n_reports": n, "n_rejected": 0, "params": np.full(4, np.nan), "se": np.full(4, np.nan),
-              "rms": (np.nan, np.nan)}
-    if n < MIN_BIAS_REPORTS or np.linalg.matrix_rank(x) < 4:
+    usable = np.concatenate([np.ones(n, bool), elevation_deg(e) <= MAX_AZIMUTH_ELEVATION_DEG])
+    result = {"n_reports": n, "n_rejected": 0, "n_overhead": int(n - usable[n:].sum()),
+              "params": np.full(4, np.nan), "se": np.full(4, np.nan), "rms": (np.nan, np.nan)}
+    if n < MIN_BIAS_REPORTS or np.linalg.matrix_rank(x[usable]) < 4:
         return result
-    keep = np.ones(2 * n, dtype=bool)
-    sig = np.array([_robust_sigma(y[is_range]), _robust_sigma(y[~is_range])])
+    keep = usable.copy()
+    sig = np.array([_robust_sigma(y[is_range]), _robust_sigma(y[~is_range & usable])])
     sig = np.where(sig > 0, sig, 1.0)
     for _ in range(_FIT_PASSES):
         w = np.where(is_range, 1.0 / sig[0], 1.0 / sig[1])
@@ -295,7 +328,7 @@ def fit_biases(errors: pd.DataFrame) -> dict:
         beta, *_ = np.linalg.lstsq(x[keep] * w[keep, None], y[keep] * w[keep], rcond=None)
         res = y - x @ beta
         robust = np.array([_robust_sigma(res[is_range & keep]), _robust_sigma(res[~is_range & keep])])
-        new_keep = np.abs(res) <= CLIP_SIGMAS * np.where(is_range, robust[0], robust[1])
+        new_keep = usable & (np.abs(res) <= CLIP_SIGMAS * np.where(is_range, robust[0], robust[1]))
         new_sig = np.array([np.std(res[is_range & new_keep]), np.std(res[~is_range & new_keep])])
         stable = np.array_equal(new_keep, keep) and np.allclose(new_sig, sig, rtol=1e-3)
         keep, sig = new_keep, np.where(new_sig > 0, new_sig, 1.0)
@@ -306,24 +339,26 @@ def fit_biases(errors: pd.DataFrame) -> dict:
     beta, *_ = np.linalg.lstsq(xw, y[keep] * w[keep], rcond=None)
     res = y - x @ beta
     cov = np.linalg.inv(xw.T @ xw)
-    result.update(params=beta, se=np.sqrt(np.diag(cov)), n_rejected=int((~keep).sum()),
+    robust_cov = _robust_cov(xw, res[keep] * w[keep], cov)
+    se = np.sqrt(np.maximum(np.diag(cov), np.diag(robust_cov)))
+    result.update(params=beta, se=se, n_rejected=int((usable & ~keep).sum()),
                   rms=(float(np.sqrt(np.mean(res[is_range & keep] ** 2))),
                        float(np.sqrt(np.mean(res[~is_range & keep] ** 2)))))
     return result
 
 
 def _note(nacp_median: float) -> str:
+    """The radar's own ADS-B accuracy level (the general limitation is LIMITATION_NOTE, once per table)."""
     bound = nacp_bound_m(nacp_median)
-    level = (f"median NACp {nacp_median:g}: 95 % of ADS-B positions within {bound:g} m (DO-260B)"
-             if np.isfinite(bound) else "ADS-B NACp unknown")
-    return (f"ADS-B is the reference but has its own position error ({level}); radar errors below that "
-            "level cannot be attributed to the radar (thesis limitation). ADS-B height is pressure altitude.")
+    return (f"median NACp {nacp_median:g}: 95 % of ADS-B positions within {bound:g} m (DO-260B)"
+            if np.isfinite(bound) else "ADS-B NACp unknown")
 
 
 def estimate_biases(errors: pd.DataFrame) -> pd.DataFrame:
     """Per radar: range bias (m), range gain (ppm), azimuth bias (deg) and time bias (s, radar time minus
     true time) over all aircraft by ``fit_biases``, with standard errors, counts, residual RMS and the
     ADS-B accuracy note (also in ``attrs["note"]``)."""
+    check_frame("errors", errors, ("radar", "sac", "sic"))
     rows = []
     for (name, sac, sic), g in errors.groupby(["radar", "sac", "sic"], sort=True, dropna=False):
         fit = fit_biases(g)
@@ -333,9 +368,9 @@ def estimate_biases(errors: pd.DataFrame) -> pd.DataFrame:
         note = _note(nacp_median)
         if not np.isfinite(b_r):
             note = (f"too few reports (< {MIN_BIAS_REPORTS}) or too little geometry diversity to separate "
-                    "range bias, gain, azimuth bias and time bias. ") + note
+                    "range bias, gain, azimuth bias and time bias; ") + note
         rows.append({"radar": name, "sac": sac, "sic": sic, "n_reports": fit["n_reports"],
-                     "n_rejected": fit["n_rejected"],
+                     "n_rejected": fit["n_rejected"], "n_overhead": fit["n_overhead"],
                      "aircraft": len(g[["callsign", "address"]].drop_duplicates()),
                      "range_bias_m": b_r, "range_bias_se_m": se_r, "range_gain_ppm": gain,
                      "range_gain_se_ppm": se_g, "azimuth_bias_deg": b_a, "azimuth_bias_se_deg": se_a,

@@ -4,7 +4,9 @@ Filters run in a fixed order (jumps, then NIC, then NACp), each on what the prev
 is counted once, by the first filter that removes it. NIC uses ``nucp_nic``, which holds NUCp for MOPS
 version 0 reports and NIC for versions 1/2: choose ``min_nic`` for the version in the data. Reports whose
 NIC (or NACp) is missing are kept, and counted under ``nic_missing_kept`` (``nacp_missing_kept``) when that
-minimum is set, among the reports that reach that filter.
+minimum is set, among the reports that reach that filter. CAT021 0.2x reports carry neither: their figure of
+merit PA (``fom_pa``) is on a scale not documented as NUCp's or NACp's, so no filter reads it and they are
+kept (``filter_warnings`` says so).
 """
 
 from __future__ import annotations
@@ -13,6 +15,7 @@ import numpy as np
 import pandas as pd
 
 from pipeline.model.jumps import JUMP_FLAG_COLUMNS, JUMP_INPUTS, detect_jumps
+from pipeline.quality.checks import check_frame, check_indicator, check_options
 
 FILTER_KEYS = ["jumps", "nic_below_min", "nacp_below_min", "nic_missing_kept", "nacp_missing_kept"]
 
@@ -31,6 +34,10 @@ def apply_filters(meas: pd.DataFrame, *, drop_jumps: bool = False, min_nic: int 
                   jump_kw: dict | None = None) -> tuple[pd.DataFrame, dict[str, int]]:
     """Measurements with the ADS-B reports that fail the chosen filters removed (radar rows untouched,
     order kept, index reset), and the count per key of FILTER_KEYS."""
+    check_frame("meas", meas, ("sensor_kind",))
+    check_indicator("min_nic", min_nic)
+    check_indicator("min_nacp", min_nacp)
+    check_options("jump_kw", jump_kw)
     is_adsb = (meas["sensor_kind"] == "adsb").to_numpy(bool)
     if not drop_jumps and min_nic is None and min_nacp is None:  # nothing to remove: no copy
         return meas.reset_index(drop=True), dict.fromkeys(FILTER_KEYS, 0)
@@ -59,3 +66,15 @@ def _filter_adsb(adsb_meas: pd.DataFrame, drop_jumps: bool, min_nic: int | None,
     passed = np.zeros(len(adsb_meas), bool)
     passed[kept.index.to_numpy()] = True
     return passed, removed
+
+
+def filter_warnings(removed: dict[str, int], min_nic: int | None, min_nacp: int | None) -> list[str]:
+    """One warning per minimum that kept reports for want of the indicator (``apply_filters``' counts)."""
+    out = []
+    for option, minimum, key, name in (("--min-nic", min_nic, "nic_missing_kept", "NUCp/NIC"),
+                                       ("--min-nacp", min_nacp, "nacp_missing_kept", "NACp")):
+        if minimum is not None and removed.get(key, 0):
+            out.append(f"{option} {minimum}: {removed[key]} ADS-B report(s) carry no {name} and were kept "
+                       "(CAT021 0.2x reports carry only the figure of merit PA, whose scale is not "
+                       f"documented as {name}'s, so it is not filtered on)")
+    return out

@@ -9,7 +9,8 @@ from pathlib import Path
 import pandas as pd
 
 from pipeline.model.aircraft import one_aircraft
-from pipeline.quality.accuracy import error_stats, estimate_biases, radar_errors
+from pipeline.quality.accuracy import MEASUREMENT_INPUTS, error_stats, estimate_biases, radar_errors
+from pipeline.quality.checks import check_frame, check_options, check_reference, check_seconds, check_sensors
 from pipeline.quality.tables import quality_tables
 
 
@@ -35,6 +36,11 @@ def quality_run(meas: pd.DataFrame, sensors: pd.DataFrame, *, callsign: str | No
                 address: str | None = None, gap_s: float = 180.0,
                 jump_kw: dict | None = None, reference: str = "adsb") -> QualityResult:
     """Quality tables per aircraft and sensor, radar error statistics and per-radar bias estimates."""
+    check_frame("meas", meas, MEASUREMENT_INPUTS)  # all checked before the tables are worked out
+    check_sensors(sensors, meas)
+    check_seconds("gap_s", gap_s)
+    check_options("jump_kw", jump_kw)
+    check_reference(reference)
     meas = select_aircraft(meas, callsign=callsign, address=address)
     sheets = quality_tables(meas, gap_s=gap_s, jump_kw=jump_kw)
     errors = radar_errors(meas, sensors, jump_kw=jump_kw, reference=reference)

@@ -9,7 +9,9 @@ aircraft known by its Mode 3/A code alone is labelled with it ("M3A:7052"); repo
 address, call sign or Mode 3/A) get one row per sensor labelled "(no identity)", counted but with no
 intervals or gaps: they are many targets, and time between them measures nothing.
 Columns ending ``_utc`` (and the jumps' ``utc``) are instants, datetime64[ns, UTC], NaT when the
-recording is undated (its ``*_tod_s`` columns then give the time of day); JSON writes them as ISO 8601.
+recording is undated (its ``*_tod`` columns then give the time of day); JSON writes them as ISO 8601.
+Columns ending ``_tod`` are times of day in seconds since midnight UTC, like ``time_of_day``; the workbook
+shows them as clock times (hh:mm:ss.000), hence no ``_s`` in their names.
 """
 
 from __future__ import annotations
@@ -24,6 +26,7 @@ from pipeline.model.dedup import DEDUP_KEYS, deduplicate
 from pipeline.model.identity import aircraft_labels
 from pipeline.model.jumps import JUMP_FLAG_COLUMNS, JUMP_INPUTS, jump_table
 from pipeline.model.time import UTC_DTYPE, dated_or_nat, with_clock
+from pipeline.quality.checks import check_frame, check_options, check_seconds
 
 ALL = "(all)"
 UNIDENTIFIED = "?"  # the aircraft key of reports that belong to no aircraft (aircraft_id <NA>)
@@ -32,20 +35,20 @@ REAPPEARANCE_S = 3600.0
 QUALITY_BIN_S = 600.0
 NUCP_MIN = 5  # NUCp below this is low integrity (MOPS version 0)
 NIC_MIN = 6  # NIC below this is low integrity (MOPS versions 1 and 2)
-ADSB_INDICATORS = ["nucp_nic", "nacp", "nucr_nacv", "sil"]
+ADSB_INDICATORS = ["nucp_nic", "nacp", "nucr_nacv", "sil", "fom_pa"]  # fom_pa: the 0.2x figure of merit PA
 SENSOR_KEYS = ["sensor", "sac", "sic"]
 SHARE_COLUMNS = ["nucp_below_5_pct", "nic_below_6_pct", "low_integrity_pct"]
 ID_KEYS = ["callsign", "address", *SENSOR_KEYS]
 
 QUALITY_COLUMNS = [
-    *ID_KEYS, "reports", "duplicates_removed", "reports_after_dedup", "first_tod_s", "last_tod_s",
+    *ID_KEYS, "reports", "duplicates_removed", "reports_after_dedup", "first_tod", "last_tod",
     "first_utc", "last_utc", "intervals", "interval_min_s", "interval_median_s", "interval_p95_s",
     "interval_max_s", "gaps", "longest_gap_s", "reappearances", "speed_missing", "speed_zero",
     "speed_missing_or_zero", "speed_missing_or_zero_pct", "jumps", "nucp_below_5_pct", "nic_below_6_pct",
     "low_integrity_pct", "mops_versions",
 ]
 HISTOGRAM_COLUMNS = [*SENSOR_KEYS, "bin_start_s", "bin_end_s", "intervals"]
-GAP_COLUMNS = [*ID_KEYS, "gap_start_tod_s", "gap_end_tod_s", "gap_start_utc", "gap_end_utc", "gap_duration_s",
+GAP_COLUMNS = [*ID_KEYS, "gap_start_tod", "gap_end_tod", "gap_start_utc", "gap_end_utc", "gap_duration_s",
                "reappeared_after_1h"]
 JUMP_COLUMNS = [*ID_KEYS, "time_of_day", "utc", "latitude", "longitude", "fit_latitude", "fit_longitude",
                 "jump_size_m"]
@@ -147,12 +150,12 @@ def _group_rows(group: pd.DataFrame, gap_s: float,
     within, gap = dt[dt <= gap_s], np.flatnonzero(dt > gap_s)
     stamps = clean["timestamp"] if "timestamp" in clean else pd.Series(pd.NaT, index=clean.index)
     stamps = dated_or_nat(stamps)
-    gaps = [{**ident, "gap_start_tod_s": t[i], "gap_end_tod_s": t[i + 1],
+    gaps = [{**ident, "gap_start_tod": t[i], "gap_end_tod": t[i + 1],
              "gap_start_utc": stamps.iloc[i], "gap_end_utc": stamps.iloc[i + 1],
              "gap_duration_s": t[i + 1] - t[i], "reappeared_after_1h": bool(t[i + 1] - t[i] > REAPPEARANCE_S)}
             for i in gap]
     row = {**ident, "reports": len(group), "duplicates_removed": dups, "reports_after_dedup": len(clean),
-           "first_tod_s": t[0], "last_tod_s": t[-1], "first_utc": stamps.iloc[0],
+           "first_tod": t[0], "last_tod": t[-1], "first_utc": stamps.iloc[0],
            "last_utc": stamps.iloc[-1], **_interval_stats(within), "gaps": len(gaps),
            "longest_gap_s": float(dt[gap].max()) if gap.size else np.nan,
            "reappearances": sum(g["reappeared_after_1h"] for g in gaps),
@@ -185,8 +188,8 @@ def _pooled_row(rows: list[dict], intervals: list[np.ndarray], sensor_id: tuple,
     for c in ("reports", "duplicates_removed", "reports_after_dedup", "gaps", "reappearances",
               "speed_missing", "speed_zero", "speed_missing_or_zero"):
         row[c] = int(frame[c].sum())
-    row["first_tod_s"], row["last_tod_s"] = frame["first_tod_s"].min(), frame["last_tod_s"].max()
-    first, last = frame["first_tod_s"].idxmin(), frame["last_tod_s"].idxmax()
+    row["first_tod"], row["last_tod"] = frame["first_tod"].min(), frame["last_tod"].max()
+    first, last = frame["first_tod"].idxmin(), frame["last_tod"].idxmax()
     row["first_utc"], row["last_utc"] = frame.loc[first, "first_utc"], frame.loc[last, "last_utc"]
     row |= _interval_stats(np.concatenate(intervals) if intervals else np.array([]))
     row["longest_gap_s"] = frame["longest_gap_s"].max()
@@ -256,7 +259,7 @@ def _adsb_over_time(adsb: pd.DataFrame) -> pd.DataFrame:
     group is never a pooled one, whose call sign "(all)" no decoded call sign can spell; if one were, that
     group's medians would be taken over both halves together, as one group)."""
     indicators = _indicators(adsb)
-    columns = [*ID_KEYS, "bin_start_tod_s", "bin_start_utc", "reports", *[f"{c}_median" for c in indicators],
+    columns = [*ID_KEYS, "bin_start_tod", "bin_start_utc", "reports", *[f"{c}_median" for c in indicators],
                *SHARE_COLUMNS]
     if adsb.empty:
         return pd.DataFrame(columns=columns)
@@ -275,12 +278,12 @@ def _adsb_over_time(adsb: pd.DataFrame) -> pd.DataFrame:
     first = _first_rows(np.concatenate(ids), n) % rows  # each group's first report (aircraft rows first)
     group = pairs // len(bins)
     out = {k: keys[k].to_numpy()[group] for k in ID_KEYS}
-    out["bin_start_tod_s"] = bins[pairs % len(bins)]
+    out["bin_start_tod"] = bins[pairs % len(bins)]
     del pairs, group
     tod0 = adsb["time_of_day"].to_numpy(float)[first]
     if "timestamp" in adsb:
         start = dated_or_nat(adsb["timestamp"].iloc[first].reset_index(drop=True)) - pd.to_timedelta(
-            tod0 - out["bin_start_tod_s"], unit="s")
+            tod0 - out["bin_start_tod"], unit="s")
         out["bin_start_utc"] = start.array
     else:
         out["bin_start_utc"] = pd.array([pd.NaT] * n, dtype=UTC_DTYPE)
@@ -332,6 +335,9 @@ def quality_tables(meas: pd.DataFrame, *, gap_s: float = 180.0,
                    jump_kw: dict | None = None) -> dict[str, pd.DataFrame]:
     """Sheets "Quality", "Update intervals", "Gaps", "Jumps", "ADS-B quality" and "ADS-B quality over time"
     (see the module docstring) of a measurement frame holding radar and/or ADS-B."""
+    check_frame("meas", meas, ("sensor_kind", "time"))
+    check_seconds("gap_s", gap_s)
+    check_options("jump_kw", jump_kw)
     both = _aircraft_labels(meas)
     adsb_rows = both["sensor"] == "adsb"
 

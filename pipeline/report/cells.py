@@ -12,6 +12,7 @@ import datetime as dt
 import json
 import math
 import re
+import textwrap
 from collections.abc import Iterable, Iterator, Mapping
 from dataclasses import dataclass
 from itertools import islice
@@ -386,15 +387,26 @@ def wide_pages(ws: WriteOnlyWorksheet, widths: list[float], text: list[bool]) ->
     """For a table wider than one legible landscape page: fit it to 2 or 3 pages wide instead of 1 and
     repeat its leading text columns (identity: call sign, address, sensor) on every page. Returns the
     number of pages wide."""
-    pages = min(3, math.ceil(sum(widths) / PAGE_WIDTH_CHARS)) if widths else 1
+    pages = page_count(widths)
     if pages > 1:
         ws.page_setup.fitToWidth = pages
-        lead = 0
-        while lead < min(3, len(text)) and text[lead]:
-            lead += 1
+        lead = lead_columns(text)
         if lead:
             ws.print_title_cols = f"A:{get_column_letter(lead)}"
-    return max(pages, 1)
+    return pages
+
+
+def page_count(widths: list[float]) -> int:
+    """How many landscape pages wide a table of these column widths prints (1 to 3)."""
+    return max(1, min(3, math.ceil(sum(widths) / PAGE_WIDTH_CHARS))) if widths else 1
+
+
+def lead_columns(text: list[bool]) -> int:
+    """The leading text columns (up to 3) a table wider than a page repeats on every page."""
+    lead = 0
+    while lead < min(3, len(text)) and text[lead]:
+        lead += 1
+    return lead
 
 
 def fixed_rows(ws: WriteOnlyWorksheet) -> None:
@@ -426,7 +438,20 @@ def write_table(ws: WriteOnlyWorksheet, columns: list[Column], *, freeze: str = 
             ws.append(row)
     if note:  # below the table, so the printed width stays the table's
         ws.append([])
-        ws.append([note_text_cell(ws, note)])
+        lead, lines = note_lines(note, widths, [c.text for c in columns])
+        for line in lines:
+            ws.append([None] * lead + [note_text_cell(ws, line)])
     return kept
+
+
+def note_lines(note: str, widths: list[float], text: list[bool]) -> tuple[int, list[str]]:
+    """Where a table's note starts (the first column after those repeated on every page, where a table
+    prints wider than a page) and the note cut at spaces into lines that fit the rest of the first page,
+    so that no page shows a line cut off."""
+    pages = page_count(widths)
+    lead = lead_columns(text) if pages > 1 else 0
+    lead_w = sum(widths[:lead])
+    page_w = (sum(widths) + (pages - 1) * lead_w) / pages if pages > 1 else max(sum(widths), 100.0)
+    return lead, textwrap.wrap(note, width=int(max(40.0, 0.85 * (page_w - lead_w)))) or [note]
 
 

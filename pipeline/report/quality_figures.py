@@ -13,12 +13,13 @@ import numpy as np
 import pandas as pd
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
-from matplotlib.ticker import FuncFormatter, MultipleLocator
+from matplotlib.ticker import FuncFormatter, MultipleLocator, NullFormatter
 
 from pipeline.correlate.results import WindowResult
 from pipeline.correlate.windows import in_window
 from pipeline.model.measurements import matching_aircraft
 from pipeline.model.time import midnight, with_clock
+from pipeline.quality.accuracy import MAX_AZIMUTH_ELEVATION_DEG, elevation_deg
 from pipeline.report.figures import new_figure, save_png
 
 RADAR_COLOR = "#d62728"
@@ -81,58 +82,90 @@ def interval_histogram_figure(histogram: pd.DataFrame, path: str | os.PathLike[s
     return save_png(interval_histogram(histogram), path)
 
 
+BULK_SHARE = 0.99  # the left panel of an update-interval figure: the range holding this share of them
+
+
 def interval_histogram(histogram: pd.DataFrame) -> Figure:
-    """Update-interval histogram, one linear panel per sensor ("Update intervals" of quality_tables): bars
-    from the first occupied bin over the range holding 99.9 % of the intervals, labelled by their counts
-    where the labels leave room."""
+    """Update-interval histogram ("Update intervals" of quality_tables), one row per sensor: at the left
+    the bulk (the range holding 99 % of the intervals, linear), at the right every interval on log-log
+    axes (the rare long ones, a few against tens of thousands, stay visible); bars labelled by their
+    counts where the labels leave room."""
     sensors = list(histogram.groupby(["sensor", "sac", "sic"], dropna=False, sort=True))
-    fig = new_figure(10, 2.7 * max(len(sensors), 1))
+    fig = new_figure(11, 2.7 * max(len(sensors), 1))
     if not sensors:
         _empty(fig.add_subplot(), "No update intervals")
         return fig
-    axes = fig.subplots(len(sensors), 1, squeeze=False)[:, 0]
+    axes = fig.subplots(len(sensors), 2, squeeze=False, width_ratios=[3, 2])
     placed = []
-    for ax, ((sensor, sac, sic), h) in zip(axes, sensors, strict=True):
-        top = histogram_range_s(h)
+    for (bulk_ax, all_ax), ((sensor, sac, sic), h) in zip(axes, sensors, strict=True):
+        color = RADAR_COLOR if sensor == "radar" else ADSB_COLOR
+        top = histogram_range_s(h, BULK_SHARE)
         shown = h[h["bin_start_s"] < top]
         hidden = int(h.loc[h["bin_start_s"] >= top, "intervals"].sum())
-        color = RADAR_COLOR if sensor == "radar" else ADSB_COLOR
-        width = shown["bin_end_s"] - shown["bin_start_s"]
-        bars = ax.bar(shown["bin_start_s"], shown["intervals"], width=width, align="edge", color=color,
-                      edgecolor="0.25", lw=0.5)
-        labels = [f"{int(v)}" if v > 0 else "" for v in shown["intervals"]]
-        texts = ax.bar_label(bars, labels=labels, fontsize=7, padding=1)
-        placed.append((texts, shown["intervals"].to_numpy()))
+        placed.append(_bars(bulk_ax, shown, color))
         occupied = shown.loc[shown["intervals"] > 0, "bin_start_s"]
         low = float(occupied.min()) if len(occupied) else 0.0
         pad = max(0.15 * (top - low), 0.3)  # a radar's intervals sit in a few bins near its scan period
-        ax.set_xlim(max(0.0, low - pad), top + 0.3 * pad)
-        ax.set_ylim(0.0, float(shown["intervals"].max() or 1) * 1.18)
+        bulk_ax.set_xlim(max(0.0, low - pad), top + 0.3 * pad)
+        bulk_ax.set_ylim(0.0, float(shown["intervals"].max() or 1) * 1.18)
         total = int(h["intervals"].sum())
-        beyond = f"; {hidden} longer than {top:g} s not shown" if hidden else ""
-        ax.set_title(f"{_SENSOR_LABEL.get(sensor, sensor)} SAC {sac} SIC {sic}: {total} intervals{beyond}",
-                     fontsize=10)
-        ax.set_ylabel("intervals")
-        ax.set_xlabel("update interval (s)")
-        _grid(ax)
+        beyond = f"; {hidden} longer than {top:g} s (right)" if hidden else ""
+        label = _SENSOR_LABEL.get(sensor, sensor)
+        bulk_ax.set_title(f"{label} SAC {sac} SIC {sic}: {total} intervals{beyond}", fontsize=10)
+        bulk_ax.set_ylabel("intervals")
+        bulk_ax.set_xlabel("update interval (s)")
+        nonzero = h[h["intervals"] > 0]
+        if len(nonzero):
+            placed.append(_bars(all_ax, nonzero, color, lw=0.0))  # 0.1 s bins at 10 s: edges only
+            all_ax.set_xscale("log")  # 0.1 s bins near the bulk and the 30-180 s ones alike visible
+            all_ax.set_yscale("log")
+            first = float(nonzero["bin_start_s"].min())
+            all_ax.set_xlim(max(first, 0.05) / 1.3, float(nonzero["bin_end_s"].max()) * 1.3)
+            all_ax.set_ylim(0.7, float(nonzero["intervals"].max()) * 4.0)
+            plain = FuncFormatter(lambda v, _pos: f"{v:g}")  # 4, 5, 6 s, not 4 x 10^0
+            all_ax.xaxis.set_major_formatter(plain)
+            all_ax.xaxis.set_minor_formatter(plain if all_ax.get_xlim()[1] / all_ax.get_xlim()[0] < 20
+                                             else NullFormatter())
+        else:
+            _empty(all_ax, "No update intervals")
+        all_ax.set_title("every interval (log-log)", fontsize=10)
+        all_ax.set_xlabel("update interval (s)")
+        for ax in (bulk_ax, all_ax):
+            _grid(ax)
     fig.suptitle("Update intervals after de-duplication (bins as in the Update intervals sheet)", fontsize=12)
     _drop_overlapping(fig, placed)
     return fig
 
 
-def _drop_overlapping(fig: Figure, placed: list[tuple[list, np.ndarray]]) -> None:
-    """In each panel (its bar labels and counts), hide the labels that would overlap the label of a larger
-    count (a radar's few bins near its scan period, 0.1 s apart: their counts ran into one another); the
-    sheet gives every count."""
+def _bars(ax: Axes, bins: pd.DataFrame, color: str, lw: float = 0.5) -> tuple:
+    """The bins as bars labelled with their counts; (labels, counts, bars) for _drop_overlapping."""
+    bars = ax.bar(bins["bin_start_s"], bins["intervals"], width=bins["bin_end_s"] - bins["bin_start_s"],
+                  align="edge", color=color, edgecolor="0.25" if lw else color, lw=lw)
+    labels = [f"{int(v)}" if v > 0 else "" for v in bins["intervals"]]
+    return ax.bar_label(bars, labels=labels, fontsize=7, padding=1), bins["intervals"].to_numpy(), bars
+
+
+LABEL_MARGIN_PX = 2.0  # room kept around a bar label
+
+
+def _drop_overlapping(fig: Figure, placed: list[tuple]) -> None:
+    """In each panel (its bar labels, counts and bars), hide the labels that would overlap the label of a
+    larger count or a bar other than their own (a radar's few bins near its scan period, 0.1 s apart: their
+    counts ran into one another, or sat on the taller bar beside); the sheet gives every count."""
     fig.draw_without_rendering()  # once: the constrained layout settled, the labels' extents are final
     renderer = fig.canvas.get_renderer()
-    for texts, counts in placed:
-        kept = []
+    for texts, counts, bars in placed:
+        edges = np.array([b.get_window_extent(renderer).extents for b in bars]).reshape(-1, 4)
+        kept: list[np.ndarray] = []
         for i in np.argsort(-counts, kind="stable"):
             if not texts[i].get_text():
                 continue
-            box = texts[i].get_window_extent(renderer)
-            if any(box.overlaps(k) for k in kept):
+            box = texts[i].get_window_extent(renderer).extents + np.array([-1, -1, 1, 1]) * LABEL_MARGIN_PX
+            on_bar = ((edges[:, 0] < box[2]) & (edges[:, 2] > box[0]) & (edges[:, 1] < box[3])
+                      & (edges[:, 3] > box[1]))
+            on_bar[i] = False
+            on_label = any(k[0] < box[2] and k[2] > box[0] and k[1] < box[3] and k[3] > box[1] for k in kept)
+            if on_label or on_bar.any():
                 texts[i].set_visible(False)
             else:
                 kept.append(box)
@@ -165,6 +198,11 @@ def radar_error_figure(errors: pd.DataFrame, path: str | os.PathLike[str],
             axes[row, 0].plot(range_nm[pos], y, ".", ms=2.5, alpha=0.7, color=f"C{c}", label=label)
             axes[row, 1].plot(errors["time_of_day"].to_numpy(float)[pos], y, ".", ms=2.5, alpha=0.7,
                               color=f"C{c}")
+    overhead = elevation_deg(errors) > MAX_AZIMUTH_ELEVATION_DEG
+    if overhead.any():  # their azimuth is left out of the bias fit: marked, so that none is read as a bias
+        for ax, x in ((axes[1, 0], range_nm), (axes[1, 1], errors["time_of_day"].to_numpy(float))):
+            ax.plot(x[overhead], errors["azimuth_error_deg"].to_numpy(float)[overhead], "x", ms=4, color="k",
+                    label=f"above {MAX_AZIMUTH_ELEVATION_DEG:g} deg elevation (not fitted)")
     if biases is not None and len(biases):
         b = biases.iloc[0]
         r = np.linspace(np.nanmin(range_nm), np.nanmax(range_nm), 50)
@@ -180,7 +218,12 @@ def radar_error_figure(errors: pd.DataFrame, path: str | os.PathLike[str],
     for ax in axes[:, 1]:
         _time_axis(ax, errors["time_of_day"])
     axes[0, 1].set_xlabel("")
-    axes[0, 0].legend(fontsize=7, markerscale=3, ncol=2, loc="best")
+    handles = {}  # outside the panels, so that it covers no point: aircraft, then the fitted lines
+    for ax in (axes[0, 0], axes[1, 0]):
+        handles |= dict(zip(*reversed(ax.get_legend_handles_labels()), strict=True))
+    if handles:
+        fig.legend(list(handles.values()), list(handles), loc="outside right upper", fontsize=7,
+                   markerscale=2)
     radars = ", ".join(str(r) for r in errors["radar"].dropna().unique()[:3])
     shown = f", 1 in {step} drawn" if step > 1 else ""
     who = "" if labelled else f", {len(groups)} aircraft (colours repeat)"
