@@ -243,9 +243,17 @@ class DecodingOptions:
 def _check_decoding(o: DecodingOptions, warnings: list[str]) -> tuple[list[Path], dict[int, str]]:
     if o.format is not None and o.format not in FORMATS:
         raise OptionError(f"--format {o.format!r}: must be one of {', '.join(FORMATS)}")
-    if o.date is not None and not isinstance(o.date, dt.date):
-        raise OptionError(f"--date {o.date!r}: must be a date (YYYY-MM-DD)")
-    return _inputs(list(o.inputs), warnings), _editions(list(o.editions))
+    if o.date is not None:
+        from asterix.reader import parse_date  # the rule asterix.read and load apply to date=
+
+        try:
+            parse_date(o.date, "--date")
+        except (TypeError, ValueError) as exc:
+            raise OptionError(str(exc)) from None
+    inputs = [o.inputs] if isinstance(o.inputs, str | Path) else list(o.inputs)  # one path is one input
+    editions = o.editions if isinstance(o.editions, dict) else [o.editions] if isinstance(
+        o.editions, str) else list(o.editions)  # {21: "0.26"} as asterix.read takes it, or "21=0.26"
+    return _inputs(inputs, warnings), _editions(editions)
 
 
 @dataclass(frozen=True)
@@ -408,12 +416,16 @@ def validate(options) -> Checked:
 
 def _load(options: DecodingOptions, checked: Checked, progress: Progress | None) -> Loaded:
     """Decode the inputs for measurements: only the columns build_measurements reads are decoded."""
-    from asterix.errors import UnreadableInput
+    import warnings as python_warnings
+
+    from asterix.errors import EditionWarning, UnreadableInput
     from pipeline.model.measurements import DECODED_COLUMNS, impossible_positions
 
     try:
-        loaded = load(checked.inputs, editions=checked.editions or None, date=options.date,
-                      format=options.format, columns=DECODED_COLUMNS, progress=progress)
+        with python_warnings.catch_warnings():  # a wrong edition is said below, with its --edition
+            python_warnings.simplefilter("ignore", EditionWarning)
+            loaded = load(checked.inputs, editions=checked.editions or None, date=options.date,
+                          format=options.format, columns=DECODED_COLUMNS, progress=progress)
     except UnreadableInput as exc:
         raise JobError(str(exc), 2) from exc
     spans = [time_spans(rec.frames, loaded.date) for rec in loaded.recordings]
