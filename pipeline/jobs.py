@@ -170,6 +170,8 @@ def _output(name: str, path: str | Path | None, suffixes: tuple[str, ...]) -> Pa
     if p.is_dir():
         raise OptionError(f"{name} {p}: is a directory")
     parent = p.parent if str(p.parent) else Path(".")
+    if parent.exists() and not parent.is_dir():
+        raise OptionError(f"{name} {p}: {parent} is a file, not a directory")
     if not parent.is_dir():
         raise OptionError(f"{name} {p}: directory {parent} does not exist")
     writable = os.access(parent, os.W_OK) and (not p.exists() or os.access(p, os.W_OK))

@@ -78,7 +78,9 @@ def check_tracking(options: TrackOptions) -> float:
     coast = options.max_coast_s
     if not isinstance(coast, int | float) or not math.isfinite(coast) or coast < step:
         raise OptionError(f"--max-coast {coast!r}: must be a finite number of seconds >= --step ({step:g})")
-    jobs._number("--max-coast", coast, *MAX_COAST_RANGE_S, " s")
+    if coast > MAX_COAST_RANGE_S[1]:  # the lower bound is --step, checked above
+        raise OptionError(f"--max-coast {coast!r}: must be a finite number of seconds from --step ({step:g}) "
+                          f"to {MAX_COAST_RANGE_S[1]:g}")
     if options.tpm is not None:  # every update interval in use: up to --max-coast, coasting cycles of 1 s
         try:
             check_tpm(str(options.tpm), max(float(coast), float(step), 1.0))

@@ -261,3 +261,47 @@ def test_the_jobs_say_a_wrong_edition_once_in_their_terms(adsb_0_23):
         jobs._load(options, checked, None)
     assert not [w for w in caught if issubclass(w.category, asterix.EditionWarning)]
     assert sum("pin it with --edition 21=0.23" in w for w in checked.warnings) == 1
+
+
+def test_output_under_a_file_says_it_is_a_file(tmp_path):
+    afile = tmp_path / "afile"
+    afile.write_text("x")
+    with pytest.raises(OptionError) as info:
+        jobs._output("-o", afile / "r.xlsx", (".xlsx",))
+    assert str(info.value) == f"-o {afile / 'r.xlsx'}: {afile} is a file, not a directory"
+
+
+def test_max_coast_names_its_real_bounds(tmp_path):
+    """0 is refused by the --step bound, so 'from 0 to 86400 s' misled."""
+    base = {"inputs": (ADSB,), "callsign": "MAS72", "output": str(tmp_path / "t.csv")}
+    for coast in (1e12, 0.0):
+        with pytest.raises(OptionError) as info:
+            jobs_track.validate(TrackOptions(**base, max_coast_s=coast))
+        assert "from 0 " not in str(info.value) and "--step (1)" in str(info.value)
+
+
+def test_stats_times_are_labelled_utc():
+    from pipeline.stats import format_stats, stats_tables
+
+    rec = asterix.read(ADSB, date="2019-03-01")
+    text = format_stats(stats_tables(rec.frames, rec.errors))
+    header = text.splitlines()[1]
+    assert "start (UTC)" in header and "end (UTC)" in header
+
+
+def test_sensor_type_message_grammar(tmp_path):
+    path = tmp_path / "s.toml"
+    path.write_text('[[sensor]]\nname = "r"\nsac = "25"\nsic = 1\nlatitude = 0.0\nlongitude = 0.0\n'
+                    "altitude_m = 0.0\n")
+    with pytest.raises(ValueError, match="sac = '25' should be an integer$"):
+        read_sensors(path)
+
+
+def test_readme_marks_cat021_track_number_as_2x(adsb_0_23):
+    """0.2x editions have no I021/161: their frames have no track_number, and the README's table says so."""
+    assert "track_number" not in asterix.read(adsb_0_23, editions={21: "0.23"}).frames[21]
+    assert "track_number" in asterix.read(ADSB).frames[21]  # the fixture is 2.x
+    readme = (Path(__file__).resolve().parents[1] / "README.md").read_text()
+    (row,) = [line for line in readme.splitlines() if line.startswith("| identity |")]
+    cat021 = row.split("|")[3]
+    assert "`track_number` (2.x)" in cat021
