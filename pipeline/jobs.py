@@ -183,6 +183,7 @@ def _output(name: str, path: str | Path | None, suffixes: tuple[str, ...]) -> Pa
 def spare_inputs(inputs, outputs: list[tuple[str, Path | None]]) -> None:
     """OptionError when an output (a ``(what, path)`` pair: the option and the file it writes) is one of the
     inputs, by any path or link: writing it would destroy the recording before or while it is read."""
+    inputs = [inputs] if isinstance(inputs, str | Path) else inputs  # one path is one input
     given = [Path(p) for p in inputs if Path(p).is_file()]
     for what, out in outputs:
         if out is None or not Path(out).is_file():

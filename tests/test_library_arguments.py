@@ -305,3 +305,12 @@ def test_readme_marks_cat021_track_number_as_2x(adsb_0_23):
     (row,) = [line for line in readme.splitlines() if line.startswith("| identity |")]
     cat021 = row.split("|")[3]
     assert "`track_number` (2.x)" in cat021
+
+
+def test_an_output_that_is_the_one_input_is_refused(tmp_path):
+    """inputs given as one path: the check that an output is not an input read it letter by letter, so
+    -o naming the input itself was let through (writing it would destroy the recording)."""
+    rec = tmp_path / "t.csv"
+    rec.write_bytes(Path(ADSB).read_bytes())
+    with pytest.raises(OptionError, match="is the input"):
+        jobs_track.validate(TrackOptions(inputs=str(rec), callsign="MAS72", output=str(rec)))
