@@ -5,12 +5,12 @@ formats) into a Recording with one DataFrame per category and an account of what
 ``iter_read`` streams it in chunks; ``encode`` builds records and data blocks from column values.
 """
 
-from .errors import AsterixError, DecodeError, UnreadableInput
-from .reader import Recording, decode_buffer, read
+from .errors import AsterixError, DecodeError, EditionWarning, UnreadableInput
+from .reader import Recording, decode_buffer, parse_date, read
 from .stream import iter_read
 from .tables import available as available_editions
 
 __all__ = [
-    "AsterixError", "DecodeError", "Recording", "UnreadableInput", "available_editions", "decode_buffer",
-    "iter_read", "read",
+    "AsterixError", "DecodeError", "EditionWarning", "Recording", "UnreadableInput", "available_editions",
+    "decode_buffer", "iter_read", "parse_date", "read",
 ]

@@ -22,6 +22,11 @@ class AsterixError(Exception):
     """Base class of msdc decoding errors."""
 
 
+class EditionWarning(UserWarning):
+    """``read`` found most blocks of a category failing under its edition, every one sampled walking under
+    another: a likely wrong edition (said, never switched: nothing on the wire says which edition)."""
+
+
 class DecodeError(AsterixError):
     """Raised in strict mode for the first bad block: names the file, the offset and the reason."""
 

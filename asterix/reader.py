@@ -5,6 +5,7 @@ from __future__ import annotations
 import datetime as dt
 import mmap
 import os
+import warnings
 from collections.abc import Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass, field
@@ -16,7 +17,7 @@ import pandas as pd
 from . import kernel
 from .columns import FAMILIES
 from .containers import Segments, read_segments
-from .errors import REASONS, DecodeError, UnreadableInput
+from .errors import REASONS, DecodeError, EditionWarning, UnreadableInput
 from .frames import empty_column, icao_columns, typed_column
 from .layout import Layout, compile_layout
 from .tables import available, resolve_edition
@@ -85,10 +86,65 @@ def selected_columns(columns) -> tuple[str, ...] | None:
     return tuple(sorted(names))
 
 
-def _parse_date(date) -> dt.date | None:
-    if date is None or isinstance(date, dt.date):
+def parse_date(date, name: str = "date") -> dt.date | None:
+    """The UTC calendar day ``date`` names: a datetime.date, an ISO text ("2019-03-01"), or a datetime or
+    pandas Timestamp at midnight (naive or UTC). One with a time of day or another time zone would shift
+    every timestamp, so it is refused (ValueError), and so is an integer (nanoseconds or YYYYMMDD?: it
+    says neither) or any other type (TypeError); ``name`` is the argument the message names."""
+    if date is None:
+        return None
+    if isinstance(date, np.datetime64):
+        date = pd.Timestamp(date)
+    if isinstance(date, str):
+        text = date.strip()
+        try:
+            return dt.date.fromisoformat(text)
+        except ValueError:
+            try:
+                date = dt.datetime.fromisoformat(text)
+            except ValueError:
+                raise ValueError(f"{name} {date!r}: not a date; give the UTC day as YYYY-MM-DD") from None
+    if isinstance(date, dt.datetime):
+        if pd.isna(date):
+            raise ValueError(f"{name} {date!r}: not a date; give the UTC day as YYYY-MM-DD")
+        offset = date.utcoffset()
+        if offset is not None and offset != dt.timedelta(0):
+            raise ValueError(f"{name} {date!s}: a time in zone {date.tzname()}, not a UTC calendar day; "
+                             f"ASTERIX times are UTC: give the UTC day as YYYY-MM-DD")
+        if date.time() != dt.time(0):
+            raise ValueError(f"{name} {date!s}: carries a time of day ({date.time()}), which would shift "
+                             f"every timestamp; give the UTC day alone (YYYY-MM-DD)")
+        return date.date()
+    if isinstance(date, dt.date):
         return date
-    return dt.date.fromisoformat(str(date))
+    why = ("an integer says neither YYYYMMDD nor nanoseconds" if isinstance(date, int | np.integer)
+           else f"{type(date).__name__} is not a date type")
+    raise TypeError(f"{name} {date!r}: {why}; give the UTC day as a 'YYYY-MM-DD' text or a datetime.date")
+
+
+_parse_date = parse_date  # the name asterix.stream imports
+
+
+def check_categories(categories) -> tuple[int, ...] | None:
+    """``categories`` as a tuple of the categories msdc decodes (one int is one category; None: the
+    default); TypeError for what is not an int or a sequence of ints, ValueError for a category msdc does
+    not decode (asking for it would return no frame, silently)."""
+    if categories is None:
+        return None
+    items = (categories,) if isinstance(categories, int | np.integer) else categories
+    if isinstance(items, str | bytes) or not hasattr(items, "__iter__"):
+        raise TypeError(f"categories {categories!r}: give a category number or a sequence of them, "
+                        f"e.g. (21, 48)")
+    out = []
+    for c in items:
+        if isinstance(c, bool) or not isinstance(c, int | np.integer):
+            raise TypeError(f"categories {categories!r}: {c!r} is not a category number (an int)")
+        if int(c) not in DECODABLE:
+            raise ValueError(f"categories {categories!r}: msdc does not decode CAT{int(c):03d}; it decodes "
+                             f"{', '.join(f'CAT{d:03d}' for d in DECODABLE)} (other categories' blocks are "
+                             f"counted in Recording.ignored)")
+        out.append(int(c))
+    return tuple(out)
 
 
 @contextmanager
@@ -398,6 +454,8 @@ def decode_buffer(buf: np.ndarray, seg: Segments, *, path: str = "", editions: d
     ``read``)."""
     editions = dict(editions or {})
     selected = selected_columns(columns)
+    date = parse_date(date)
+    categories = check_categories(categories)
     decoded = [c for c in DECODABLE if c in set(DEFAULT_CATEGORIES if categories is None else categories)]
     walked = framing_walk(buf, seg, editions, categories)
     choice: dict[int, str] = {}
@@ -457,7 +515,6 @@ def decode_buffer(buf: np.ndarray, seg: Segments, *, path: str = "", editions: d
     if strict and errors:
         o, _, c, why = errors[0]
         raise DecodeError(path, o, why, c)
-    date = _parse_date(date)
     first_day = assign_days(columns, seg, b_seg)
     if first_day is not None and seg.dated:
         date = dt.date(1970, 1, 1) + dt.timedelta(days=first_day)
@@ -515,6 +572,7 @@ def read(path, *, editions=None, date=None, categories=None, format: str | None 
     """
     eds = _parse_editions(editions)
     selected_columns(columns)
+    date, categories = parse_date(date), check_categories(categories)
     for cat, ed in eds.items():
         if ed != "auto":
             resolve_edition(cat, ed)
@@ -523,8 +581,26 @@ def read(path, *, editions=None, date=None, categories=None, format: str | None 
             seg = read_segments(buf, format)
         except ValueError as exc:
             raise UnreadableInput(f"{path}: {exc}") from exc
-        return decode_buffer(buf, seg, path=str(path), editions=eds, categories=categories, date=date,
-                             strict=strict, columns=columns)
+        rec = decode_buffer(buf, seg, path=str(path), editions=eds, categories=categories, date=date,
+                            strict=strict, columns=columns)
+    for text in edition_advice(rec):
+        warnings.warn(text, EditionWarning, stacklevel=2)
+    return rec
+
+
+def edition_advice(rec: Recording) -> list[str]:
+    """Per category whose blocks mostly failed under its edition (``Recording.edition_fits``): how many, and
+    the edition(s) every one sampled walks under, as ``read``'s ``editions=`` argument."""
+    out = []
+    for cat, fits in rec.edition_fits.items():
+        if not fits:
+            continue
+        failed = int((rec.errors["category"] == cat).sum())
+        pin = (f"pin it with editions={{{cat}: {fits[0]!r}}}" if len(fits) == 1 else
+               f"pin the right one, or try editions={{{cat}: 'auto'}}")
+        out.append(f"{rec.path}: {failed} CAT{cat:03d} block(s) could not be decoded under edition "
+                   f"{rec.editions.get(cat)}; every one sampled decodes under {', '.join(fits)}: {pin}")
+    return out
 
 
 def categories_in(path, *, format: str | None = None) -> dict[int, int]:

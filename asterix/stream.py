@@ -14,6 +14,7 @@ from .reader import (
     _mapped,
     _parse_date,
     _parse_editions,
+    check_categories,
     decode_buffer,
     frame_checked,
     framing_walk,
@@ -31,8 +32,14 @@ def iter_read(path, *, chunk: int = 1_000_000, editions=None, date=None, categor
     Days, timestamps and the ``block`` index continue across chunks; memory stays bounded by the chunk
     size.
     """
+    if isinstance(chunk, bool) or not isinstance(chunk, int | np.integer):
+        raise TypeError(f"chunk {chunk!r}: must be a whole number of bytes (an int), not a "
+                        f"{type(chunk).__name__}")
+    if chunk <= 0:
+        raise ValueError(f"chunk {chunk!r}: must be a positive number of bytes")
     eds = _parse_editions(editions)
     selected_columns(columns)
+    first_date, categories = _parse_date(date), check_categories(categories)
     with _mapped(path) as buf:
         try:
             seg = read_segments(buf, format)
@@ -41,7 +48,6 @@ def iter_read(path, *, chunk: int = 1_000_000, editions=None, date=None, categor
         bounds = _chunk_bounds(buf, seg, chunk, eds, categories)
         release_pages(buf, 0, len(buf))  # planning the chunks read the whole file
         clock = (0, np.nan)  # a raw stream's day and time of day at the end of the chunks before
-        first_date = _parse_date(date)
         day0 = None  # container day number of the first chunk's day 0
         blocks = 0  # data blocks framed in the chunks before: each chunk numbers its own from 0
         for sub in bounds:

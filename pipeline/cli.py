@@ -399,7 +399,8 @@ def cmd_track(args) -> int:
         all_aircraft=args.all, output=args.output, json=args.json, figures=args.figures, step_s=args.step,
         max_coast_s=args.max_coast, smooth=args.smooth, smoother=args.smoother, tpm=args.tpm,
         sources=args.sources, noise=args.noise, adsb_sigma_m=args.adsb_sigma)
-    result = _run_job("track", jobs_track.validate, jobs_track.track_job, options, Progress())
+    result = _run_job("track", lambda o: jobs_track.validate(o, require_output=True), jobs_track.track_job,
+                      options, Progress())
     print(_track_text(result))
     for kind, path in jobs_track.write_tracks(result).items():
         print(f"{kind}: {path}", file=sys.stderr)

@@ -170,6 +170,8 @@ def _output(name: str, path: str | Path | None, suffixes: tuple[str, ...]) -> Pa
     if p.is_dir():
         raise OptionError(f"{name} {p}: is a directory")
     parent = p.parent if str(p.parent) else Path(".")
+    if parent.exists() and not parent.is_dir():
+        raise OptionError(f"{name} {p}: {parent} is a file, not a directory")
     if not parent.is_dir():
         raise OptionError(f"{name} {p}: directory {parent} does not exist")
     writable = os.access(parent, os.W_OK) and (not p.exists() or os.access(p, os.W_OK))
@@ -181,6 +183,7 @@ def _output(name: str, path: str | Path | None, suffixes: tuple[str, ...]) -> Pa
 def spare_inputs(inputs, outputs: list[tuple[str, Path | None]]) -> None:
     """OptionError when an output (a ``(what, path)`` pair: the option and the file it writes) is one of the
     inputs, by any path or link: writing it would destroy the recording before or while it is read."""
+    inputs = [inputs] if isinstance(inputs, str | Path) else inputs  # one path is one input
     given = [Path(p) for p in inputs if Path(p).is_file()]
     for what, out in outputs:
         if out is None or not Path(out).is_file():
@@ -243,9 +246,17 @@ class DecodingOptions:
 def _check_decoding(o: DecodingOptions, warnings: list[str]) -> tuple[list[Path], dict[int, str]]:
     if o.format is not None and o.format not in FORMATS:
         raise OptionError(f"--format {o.format!r}: must be one of {', '.join(FORMATS)}")
-    if o.date is not None and not isinstance(o.date, dt.date):
-        raise OptionError(f"--date {o.date!r}: must be a date (YYYY-MM-DD)")
-    return _inputs(list(o.inputs), warnings), _editions(list(o.editions))
+    if o.date is not None:
+        from asterix.reader import parse_date  # the rule asterix.read and load apply to date=
+
+        try:
+            parse_date(o.date, "--date")
+        except (TypeError, ValueError) as exc:
+            raise OptionError(str(exc)) from None
+    inputs = [o.inputs] if isinstance(o.inputs, str | Path) else list(o.inputs)  # one path is one input
+    editions = o.editions if isinstance(o.editions, dict) else [o.editions] if isinstance(
+        o.editions, str) else list(o.editions)  # {21: "0.26"} as asterix.read takes it, or "21=0.26"
+    return _inputs(inputs, warnings), _editions(editions)
 
 
 @dataclass(frozen=True)
@@ -408,12 +419,16 @@ def validate(options) -> Checked:
 
 def _load(options: DecodingOptions, checked: Checked, progress: Progress | None) -> Loaded:
     """Decode the inputs for measurements: only the columns build_measurements reads are decoded."""
-    from asterix.errors import UnreadableInput
+    import warnings as python_warnings
+
+    from asterix.errors import EditionWarning, UnreadableInput
     from pipeline.model.measurements import DECODED_COLUMNS, impossible_positions
 
     try:
-        loaded = load(checked.inputs, editions=checked.editions or None, date=options.date,
-                      format=options.format, columns=DECODED_COLUMNS, progress=progress)
+        with python_warnings.catch_warnings():  # a wrong edition is said below, with its --edition
+            python_warnings.simplefilter("ignore", EditionWarning)
+            loaded = load(checked.inputs, editions=checked.editions or None, date=options.date,
+                          format=options.format, columns=DECODED_COLUMNS, progress=progress)
     except UnreadableInput as exc:
         raise JobError(str(exc), 2) from exc
     spans = [time_spans(rec.frames, loaded.date) for rec in loaded.recordings]

@@ -114,7 +114,9 @@ def check_tracking(options: TrackOptions) -> float:
     coast = options.max_coast_s
     if not isinstance(coast, int | float) or not math.isfinite(coast) or coast < step:
         raise OptionError(f"--max-coast {coast!r}: must be a finite number of seconds >= --step ({step:g})")
-    jobs._number("--max-coast", coast, *MAX_COAST_RANGE_S, " s")
+    if coast > MAX_COAST_RANGE_S[1]:  # the lower bound is --step, checked above
+        raise OptionError(f"--max-coast {coast!r}: must be a finite number of seconds from --step ({step:g}) "
+                          f"to {MAX_COAST_RANGE_S[1]:g}")
     if options.tpm is not None:  # every update interval in use: up to --max-coast, coasting cycles of 1 s
         try:
             check_tpm(str(options.tpm), max(float(coast), float(step), 1.0))
@@ -152,8 +154,10 @@ def check_track_rows(meas: pd.DataFrame, options: TrackOptions, per_row: int = 1
                           f"{MAX_TRACK_ROWS:,}; use a longer --step or fewer aircraft")
 
 
-def validate(options: TrackOptions) -> Checked:
-    """Check every option, the sensor file and the output paths before any decoding; OptionError if bad."""
+def validate(options: TrackOptions, *, require_output: bool = False) -> Checked:
+    """Check every option, the sensor file and the output paths before any decoding; OptionError if bad.
+    ``require_output`` (the command): at least one of -o, --json and --figures; track_job returns the table
+    whatever is written."""
     from pipeline.track.plane import SMOOTHERS
 
     warnings: list[str] = []
@@ -175,7 +179,7 @@ def validate(options: TrackOptions) -> Checked:
             raise OptionError(f"--figures {d}: exists and is not a directory")
         if not (d if d.exists() else (d.parent if str(d.parent) else Path("."))).is_dir():
             raise OptionError(f"--figures {d}: directory {d.parent} does not exist")
-    if checked.output is None and checked.json is None and options.figures is None:
+    if require_output and checked.output is None and checked.json is None and options.figures is None:
         raise OptionError("give at least one output: -o tracks.csv|tracks.parquet, --json or --figures")
     checked.sensors = jobs._sensors(options.sensors, required=False)
     return checked
@@ -198,8 +202,10 @@ class TrackJobResult:
 
 def _measurements(loaded, checked: Checked, options: TrackOptions) -> pd.DataFrame:
     """Measurements of the requested sources (one of them must be present), repeated reports dropped."""
+    import warnings as python_warnings
+
     from pipeline.model.dedup import duplicate_mask
-    from pipeline.model.measurements import build_measurements
+    from pipeline.model.measurements import OffEarthWarning, build_measurements
     from pipeline.model.sensors import UnknownRadar
 
     sources = _sources(options.sources)
@@ -215,8 +221,10 @@ def _measurements(loaded, checked: Checked, options: TrackOptions) -> pd.DataFra
                        + (f": {failed}" if failed else ""))
     radar = jobs.declared_radar(radar, checked.sensors, jobs.sensors_path(options), checked.warnings)
     try:
-        meas = build_measurements(radar, adsb, checked.sensors, date=loaded.date,
-                                  adsb_sigma_m=options.adsb_sigma_m)
+        with python_warnings.catch_warnings():  # jobs._load has said it, naming each file
+            python_warnings.simplefilter("ignore", OffEarthWarning)
+            meas = build_measurements(radar, adsb, checked.sensors, date=loaded.date,
+                                      adsb_sigma_m=options.adsb_sigma_m)
     except UnknownRadar as exc:
         raise jobs.unknown_radar_error(exc.missing, jobs.sensors_path(options)) from exc
     checked.warnings += list(meas.attrs.get("coverage_warnings", ()))

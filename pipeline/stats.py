@@ -293,5 +293,7 @@ def format_stats(tables: dict[str, pd.DataFrame]) -> str:
         t = tables[key]
         if "category" in t:  # bytes that name no category (garbage) show '-', not <NA>
             t = t.assign(category=t["category"].astype(object).where(t["category"].notna(), "-"))
+        # ASTERIX times are UTC, dated or not (HH:MM:SS is the UTC time of day)
+        t = t.rename(columns={"start": "start (UTC)", "end": "end (UTC)"})
         parts.append(f"{title}:\n" + ("  none" if t.empty else t.to_string(index=False)))
     return "\n\n".join(parts) + "\n"

@@ -63,7 +63,7 @@ def test_bad_options_refused_before_decoding(options, words, tmp_path, monkeypat
     monkeypatch.chdir(tmp_path)
     monkeypatch.setattr(jobs, "load", lambda *a, **k: pytest.fail("decoded before validating"))
     with pytest.raises(OptionError) as info:
-        jobs_track.validate(options)
+        jobs_track.validate(options, require_output=True)  # as the command validates
     assert words in str(info.value) and "\n" not in str(info.value)
     assert info.value.status == 2
 

@@ -79,19 +79,50 @@ def _concat(parts: list[pd.DataFrame]) -> pd.DataFrame:
     return pd.concat(parts, ignore_index=True)
 
 
-def load(paths: list[str | Path], *, editions=None, date=None, format: str | None = None,
+def input_paths(paths) -> list[Path]:
+    """The input paths as a list: one str or Path is one input (not a sequence of characters); TypeError for
+    what is neither a path nor a sequence of paths."""
+    if isinstance(paths, str | Path):
+        return [Path(paths)]
+    if not hasattr(paths, "__iter__") or isinstance(paths, bytes):
+        raise TypeError(f"paths {paths!r}: give a recording's path or a list of paths")
+    out = []
+    for p in paths:
+        if not isinstance(p, str | Path):
+            raise TypeError(f"paths: {p!r} is not a path (str or pathlib.Path)")
+        out.append(Path(p))
+    return out
+
+
+def _digests(paths: list[Path]) -> list[str]:
+    """Each input's SHA-256; ValueError when two inputs hold the same content (its records would count
+    twice: every report a duplicate, every rate doubled)."""
+    digests, seen = [], {}
+    for p in paths:
+        digest = sha256(p)
+        if digest in seen:
+            raise ValueError(f"paths: {p} has the same content as {seen[digest]} (SHA-256); give each "
+                             "recording once")
+        seen[digest] = p
+        digests.append(digest)
+    return digests
+
+
+def load(paths: list[str | Path] | str | Path, *, editions=None, date=None, format: str | None = None,
          categories=None, columns=None, progress: Progress | None = None) -> Loaded:
     """Decode every input into one frame per category, each row tagged with its file (``columns``: only
-    those decoded columns, see asterix.read).
+    those decoded columns, see asterix.read). ``paths``: one path or a list; ValueError when two hold the
+    same content. A likely wrong edition is said by asterix.read's ``asterix.EditionWarning``.
 
     Records keep their own ``timestamp``; ``Loaded.date`` (the earliest known date) dates the records of
     inputs that have none (pipeline.model.time.absolute_time).
     """
+    paths = input_paths(paths)
     recs: list[Recording] = []
     inputs: list[dict] = []
     warnings: list[str] = []
+    digests = _digests(paths)
     for i, p in enumerate(paths):
-        p = Path(p)
         if progress:
             progress.step(f"{p.name} ({i + 1}/{len(paths)})")
         rec = asterix.read(p, editions=editions, date=date, format=format, categories=categories,
@@ -100,7 +131,7 @@ def load(paths: list[str | Path], *, editions=None, date=None, format: str | Non
         tally = FirstDayTally()
         tally.add(rec.frames)
         warnings += tally.warning(p.name, rec.date, rec.format)
-        inputs.append({"path": str(p), "sha256": sha256(p), "bytes": rec.size_bytes, "format": rec.format,
+        inputs.append({"path": str(p), "sha256": digests[i], "bytes": rec.size_bytes, "format": rec.format,
                        "records": {int(c): len(f) for c, f in rec.frames.items()},
                        "skipped_blocks": len(rec.errors), "editions": dict(rec.editions)})
     dates = [r.date for r in recs if r.date is not None]
@@ -108,7 +139,7 @@ def load(paths: list[str | Path], *, editions=None, date=None, format: str | Non
     by_cat: dict[int, list[pd.DataFrame]] = {}
     for p, rec in zip(paths, recs, strict=True):
         for cat, frame in rec.frames.items():
-            frame = frame.assign(file=pd.Categorical([Path(p).name] * len(frame)))
+            frame = frame.assign(file=pd.Categorical([p.name] * len(frame)))
             by_cat.setdefault(cat, []).append(frame)
     frames = {cat: _concat(parts) for cat, parts in by_cat.items()}
     return Loaded(frames, recs, inputs, first, warnings=warnings)
@@ -178,11 +209,12 @@ def load_measurements(paths: list[str | Path], sensors: pd.DataFrame, *, edition
     adsb: list[tuple[int, pd.DataFrame]] = []
     stray: list[pd.DataFrame] = []  # undeclared_radars' table per chunk
     early_start: list[str] = []  # FirstDayTally's warnings
+    paths = input_paths(paths)
+    digests = _digests(paths)
     for i, p in enumerate(paths):
-        p = Path(p)
         if progress:
             progress.step(f"{p.name} ({i + 1}/{len(paths)})")
-        info = {"path": str(p), "sha256": sha256(p), "bytes": 0, "format": None, "records": {},
+        info = {"path": str(p), "sha256": digests[i], "bytes": 0, "format": None, "records": {},
                 "skipped_blocks": 0, "editions": {}}
         by_source: dict[str, Span] = {}
         first = True

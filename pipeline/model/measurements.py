@@ -11,10 +11,13 @@ from __future__ import annotations
 
 import datetime as dt
 import math
+import warnings
+from pathlib import Path
 
 import numpy as np
 import pandas as pd
 
+from asterix.reader import parse_date
 from pipeline.model.coverage import coverage_warnings, out_of_coverage
 from pipeline.model.geodesy import (
     enu_basis,
@@ -33,14 +36,14 @@ from pipeline.model.schema import (
     text_categorical,
     validate,
 )
-from pipeline.model.sensors import UnknownRadar, sensor_sites
+from pipeline.model.sensors import REQUIRED_COLUMNS, UnknownRadar, read_sensors, sensor_sites
 from pipeline.model.sources import source_id
 from pipeline.model.time import absolute_time
 
-__all__ = ["DECODED_COLUMNS", "NACP_95_M", "UnknownRadar", "adsb_measurements", "build_measurements",
-           "finish_measurements", "impossible_positions", "measurement_rows", "nacp_sigma_m",
-           "normalise_address", "normalise_callsign", "off_earth_rows", "on_ground", "radar_measurements",
-           "select", "sensor_id"]
+__all__ = ["DECODED_COLUMNS", "NACP_95_M", "OffEarthWarning", "UnknownRadar", "adsb_measurements",
+           "build_measurements", "finish_measurements", "impossible_positions", "measurement_rows",
+           "nacp_sigma_m", "normalise_address", "normalise_callsign", "off_earth_rows", "on_ground",
+           "radar_measurements", "select", "sensor_id"]
 
 # The decoded CAT048/CAT021 columns build_measurements reads (besides sac, sic, time_of_day, day, timestamp
 # and offset, which every decoded frame has): jobs decode only these (asterix.read(columns=...))
@@ -52,6 +55,18 @@ DECODED_COLUMNS = ("flight_level", "ground_speed_kt", "callsign", "address", "mo
 # Columns worked out over the whole run by finish_measurements, and the built columns each is made from
 DERIVED_INPUTS = {"aircraft_id": ("address", "callsign", "mode3a"),
                   "sigma_major_m": ("cov_ee_m2", "cov_en_m2", "cov_nn_m2")}
+
+class OffEarthWarning(UserWarning):
+    """build_measurements left out ADS-B reports whose position is off the Earth (damaged bytes)."""
+
+
+# adsb_sigma_m: a declared 1-sigma ADS-B error per axis below 0.5 m or above 20 km is no receiver's (the
+# commands' --adsb-sigma takes the same range)
+ADSB_SIGMA_RANGE_M = (0.5, 20000.0)
+
+# What each category's frame must have for any row to be built: a time, and a position
+_TIME_COLUMNS = ("time_of_day", "timestamp")  # either
+_POSITION_COLUMNS = {48: (("rho_nm", "theta_deg"), ("x_nm", "y_nm")), 21: (("latitude", "longitude"),)}
 
 # I048/230 STAT codes (CAT048 1.27-1.32 alike): 0 and 2 "aircraft airborne", 1 and 3 "aircraft on ground";
 # 4 and 5 "airborne or on ground", 6 unassigned, 7 "unknown" say nothing
@@ -261,12 +276,13 @@ def impossible_positions(cat021: pd.DataFrame | None) -> list[str]:
     """One warning per input file whose CAT021 reports carry a position off the Earth (I021/130 and /131
     can encode latitudes up to 180 and 360 deg): how many, and the first one's offset and value."""
     bad = off_earth_rows(cat021)
-    files = bad["file"] if "file" in bad else pd.Series("input", index=bad.index)
+    files = bad["file"] if "file" in bad else pd.Series("cat021", index=bad.index)
     out = []
     for name, rows in bad.groupby(files.astype(str).to_numpy(), sort=False):
         first = rows.iloc[0]
+        offset = rows["offset"].iloc[0] if "offset" in rows else None
         out.append(f"{name}: {len(rows)} CAT021 report(s) with a position off the Earth (first at offset "
-                   f"{first['offset']}: latitude {first['latitude']:.4f}, longitude "
+                   f"{offset}: latitude {first['latitude']:.4f}, longitude "
                    f"{first['longitude']:.4f}): damaged data, left out of the measurements")
     return out
 
@@ -294,14 +310,59 @@ def measurement_rows(cat048: pd.DataFrame | None = None, cat021: pd.DataFrame | 
     ``columns``: only what those measurement columns need (``row_columns``), not every column."""
     radar = adsb = None
     keep = row_columns(columns)
+    date = parse_date(date)
+    _check_sigma(adsb_sigma_m)
+    _check_frame(cat048, 48, "cat048")
+    _check_frame(cat021, 21, "cat021")
     if cat048 is not None and len(cat048):
         if sensors is None:
             raise ValueError("radar measurements need the sensor table (radar sites)")
+        if not isinstance(sensors, pd.DataFrame):
+            raise TypeError(f"sensors: a {type(sensors).__name__}, not the sensor table; give "
+                            "read_sensors(path)'s DataFrame or the TOML file's path")
+        lacking = [c for c in REQUIRED_COLUMNS[1:] if c not in sensors]
+        if lacking:
+            raise ValueError(f"sensors: the table lacks {', '.join(lacking)} (read it with read_sensors)")
         radar = conform(_radar_rows(cat048, sensors, date), keep)
     if cat021 is not None and len(cat021):
         adsb = conform(_adsb_rows(cat021, date, adsb_sigma_m), keep)
     return (radar if radar is not None and len(radar) else None,
             adsb if adsb is not None and len(adsb) else None)
+
+
+def _check_sigma(adsb_sigma_m) -> None:
+    """TypeError/ValueError for a declared ADS-B sigma that is not a number in ADSB_SIGMA_RANGE_M."""
+    if adsb_sigma_m is None:
+        return
+    lo, hi = ADSB_SIGMA_RANGE_M
+    if isinstance(adsb_sigma_m, bool) or not isinstance(adsb_sigma_m, int | float | np.integer | np.floating):
+        raise TypeError(f"adsb_sigma_m {adsb_sigma_m!r}: must be a number of metres")
+    if not (math.isfinite(adsb_sigma_m) and lo <= adsb_sigma_m <= hi):
+        raise ValueError(f"adsb_sigma_m {adsb_sigma_m!r}: must be from {lo:g} to {hi:g} m (a 1-sigma error "
+                         "per axis; a variance is its square)")
+
+
+def _check_frame(frame, category: int, name: str) -> None:
+    """TypeError when ``frame`` is not a DataFrame, ValueError when it lacks the columns every row needs
+    (a time and a position): rows without them would be dropped, every one, without a word."""
+    if frame is None:
+        return
+    if not isinstance(frame, pd.DataFrame):
+        raise TypeError(f"{name}: a {type(frame).__name__}, not a decoded CAT{category:03d} frame "
+                        f"(asterix.read(...).frames[{category}])")
+    if not len(frame):  # no row to build: an empty frame stands for none
+        return
+    lacking = []
+    if not any(c in frame for c in _TIME_COLUMNS):
+        lacking.append(" or ".join(_TIME_COLUMNS))
+    if not any(all(c in frame for c in group) for group in _POSITION_COLUMNS[category]):
+        lacking.append(" or ".join("/".join(g) for g in _POSITION_COLUMNS[category]))
+    if category == 48:
+        lacking += [c for c in ("sac", "sic") if c not in frame]
+    if lacking:
+        raise ValueError(f"{name}: the frame lacks {'; '.join(lacking)}, so no row could be built: is it "
+                         f"a CAT{category:03d} frame (asterix.read(...).frames[{category}]), decoded with "
+                         f"those columns? (build_measurements(cat048, cat021, sensors))")
 
 
 def finish_measurements(parts: list[pd.DataFrame], columns=None) -> pd.DataFrame:
@@ -329,15 +390,21 @@ def finish_measurements(parts: list[pd.DataFrame], columns=None) -> pd.DataFrame
 
 
 def build_measurements(cat048: pd.DataFrame | None = None, cat021: pd.DataFrame | None = None,
-                       sensors: pd.DataFrame | None = None, *, date: dt.date | None = None,
+                       sensors: pd.DataFrame | str | Path | None = None, *, date: dt.date | str | None = None,
                        adsb_sigma_m: float | None = None) -> pd.DataFrame:
     """Every radar and ADS-B report as one validated measurement frame, identity assigned over both.
 
-    ``date`` dates records that carry no timestamp of their own (see pipeline.model.time.absolute_time).
-    ``adsb_sigma_m``: the 1-sigma error per axis (m) declared for ADS-B reports without NACp.
-    Rows are in input order, radar first.
+    ``sensors``: the sensor table (read_sensors) or its TOML file's path. ``date`` (the UTC day, as
+    asterix.read takes it) dates records that carry no timestamp of their own (see
+    pipeline.model.time.absolute_time). ``adsb_sigma_m``: the 1-sigma error per axis (m, 0.5 to 20,000)
+    declared for ADS-B reports without NACp. Rows are in input order, radar first. ADS-B reports with a
+    position off the Earth (damaged bytes) are left out with an OffEarthWarning saying how many.
     """
+    if isinstance(sensors, str | Path):
+        sensors = read_sensors(sensors)
     parts = measurement_rows(cat048, cat021, sensors, date=date, adsb_sigma_m=adsb_sigma_m)
+    for text in impossible_positions(cat021):
+        warnings.warn(text, OffEarthWarning, stacklevel=2)
     return finish_measurements([p for p in parts if p is not None])
 
 

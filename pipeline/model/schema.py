@@ -104,7 +104,7 @@ def schema_columns(names=None) -> list[Column]:
     for the part of the model it reads. SchemaError for a name the schema does not have."""
     if names is None:
         return list(MEASUREMENT_SCHEMA)
-    names = set(names)
+    names = {names} if isinstance(names, str) else set(names)  # one name is one column, not its letters
     unknown = sorted(names - _BY_NAME.keys())
     if unknown:
         raise SchemaError(f"{unknown[0]!r} is not a measurement column (see pipeline.model.schema)")

@@ -56,7 +56,8 @@ def _check_entry(path: Path, i: int, entry: object) -> dict:
         value = entry[key]
         if isinstance(value, bool) or not isinstance(value, types):
             kind = " or ".join("integer" if t is int else "float" if t is float else "string" for t in types)
-            raise ValueError(f"{where}: {key} = {value!r} should be a {kind}")
+            article = "an" if kind[0] in "aeiou" else "a"
+            raise ValueError(f"{where}: {key} = {value!r} should be {article} {kind}")
     for key, (lo, hi) in _RANGES.items():
         if not lo <= entry[key] <= hi:
             raise ValueError(f"{where}: {key} = {entry[key]!r} is outside {lo}..{hi}")
