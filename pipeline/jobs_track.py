@@ -205,7 +205,7 @@ def _measurements(loaded, checked: Checked, options: TrackOptions) -> pd.DataFra
     import warnings as python_warnings
 
     from pipeline.model.dedup import duplicate_mask
-    from pipeline.model.measurements import OffEarthWarning, build_measurements
+    from pipeline.model.measurements import OffEarthWarning, OutOfCoverageWarning, build_measurements
     from pipeline.model.sensors import UnknownRadar
 
     sources = _sources(options.sources)
@@ -223,6 +223,7 @@ def _measurements(loaded, checked: Checked, options: TrackOptions) -> pd.DataFra
     try:
         with python_warnings.catch_warnings():  # jobs._load has said it, naming each file
             python_warnings.simplefilter("ignore", OffEarthWarning)
+            python_warnings.simplefilter("ignore", OutOfCoverageWarning)  # said below, from attrs
             meas = build_measurements(radar, adsb, checked.sensors, date=loaded.date,
                                       adsb_sigma_m=options.adsb_sigma_m)
     except UnknownRadar as exc:

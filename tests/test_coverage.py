@@ -15,7 +15,7 @@ import asterix
 from asterix.encode import encode_frame
 from pipeline.model.coverage import out_of_coverage
 from pipeline.model.jumps import detect_jumps
-from pipeline.model.measurements import build_measurements
+from pipeline.model.measurements import OutOfCoverageWarning, build_measurements
 
 GEOD = Geod(ellps="WGS84")
 SITE = (41.30, 2.08)
@@ -47,7 +47,8 @@ def test_reports_beyond_reach_are_left_out_and_said():
     lon_far, lat_far, _ = GEOD.fwd([SITE[1]] * 3, [SITE[0]] * 3, [200.0] * 3, [1200 * 1852.0] * 3)
     lat_ok, lon_ok = _around(rng, 3, *SITE, 60.0)
     odd = _cat021(np.r_[lat_far, lat_ok], np.r_[lon_far, lon_ok], "06414F", t0=31000.0)
-    meas = _measure([near, odd])
+    with pytest.warns(OutOfCoverageWarning, match="3 report"):
+        meas = _measure([near, odd])
     assert len(meas) == 403  # 406 less the 3 far ones
     kept = meas[meas["address"] == "06414F"]
     np.testing.assert_allclose(kept["latitude"], lat_ok, atol=1e-4)
@@ -76,7 +77,8 @@ def test_real_recording_far_positions_and_jumps():
     _, _, d = GEOD.inv(np.full(len(cat021), lon0), np.full(len(cat021), lat0), cat021["longitude"],
                        cat021["latitude"])
     expected_far = int((d / 1852.0 > 500.0).sum())
-    meas = build_measurements(None, cat021, adsb_sigma_m=30.0)
+    with pytest.warns(OutOfCoverageWarning):
+        meas = build_measurements(None, cat021, adsb_sigma_m=30.0)
     assert expected_far == 30 and len(meas) == len(cat021) - expected_far
     # ARA102 (06414F): 6 reports about 1066 NM away, then 5 about 75 NM from the station: the 5 are kept and
     # none is a jump any more (before, the far six were taken as the track and the good five as jumps)

@@ -40,7 +40,8 @@ from pipeline.model.sensors import REQUIRED_COLUMNS, UnknownRadar, read_sensors,
 from pipeline.model.sources import source_id
 from pipeline.model.time import absolute_time
 
-__all__ = ["DECODED_COLUMNS", "NACP_95_M", "OffEarthWarning", "UnknownRadar", "adsb_measurements",
+__all__ = ["DECODED_COLUMNS", "NACP_95_M", "OffEarthWarning", "OutOfCoverageWarning",
+           "UnknownRadar", "adsb_measurements",
            "build_measurements", "finish_measurements", "impossible_positions", "measurement_rows",
            "nacp_sigma_m", "normalise_address", "normalise_callsign", "off_earth_rows", "on_ground",
            "radar_measurements", "select", "sensor_id"]
@@ -58,6 +59,10 @@ DERIVED_INPUTS = {"aircraft_id": ("address", "callsign", "mode3a"),
 
 class OffEarthWarning(UserWarning):
     """build_measurements left out ADS-B reports whose position is off the Earth (damaged bytes)."""
+
+
+class OutOfCoverageWarning(UserWarning):
+    """build_measurements left out ADS-B reports beyond any ground station's reach (model.coverage)."""
 
 
 # adsb_sigma_m: a declared 1-sigma ADS-B error per axis below 0.5 m or above 20 km is no receiver's (the
@@ -398,14 +403,19 @@ def build_measurements(cat048: pd.DataFrame | None = None, cat021: pd.DataFrame 
     asterix.read takes it) dates records that carry no timestamp of their own (see
     pipeline.model.time.absolute_time). ``adsb_sigma_m``: the 1-sigma error per axis (m, 0.5 to 20,000)
     declared for ADS-B reports without NACp. Rows are in input order, radar first. ADS-B reports with a
-    position off the Earth (damaged bytes) are left out with an OffEarthWarning saying how many.
+    position off the Earth (damaged bytes) are left out with an OffEarthWarning saying how many, those
+    beyond any ground station's reach with an OutOfCoverageWarning (its words also in
+    ``attrs["coverage_warnings"]``).
     """
     if isinstance(sensors, str | Path):
         sensors = read_sensors(sensors)
     parts = measurement_rows(cat048, cat021, sensors, date=date, adsb_sigma_m=adsb_sigma_m)
     for text in impossible_positions(cat021):
         warnings.warn(text, OffEarthWarning, stacklevel=2)
-    return finish_measurements([p for p in parts if p is not None])
+    meas = finish_measurements([p for p in parts if p is not None])
+    for text in meas.attrs.get("coverage_warnings", ()):
+        warnings.warn(text, OutOfCoverageWarning, stacklevel=2)
+    return meas
 
 
 def radar_measurements(cat048: pd.DataFrame, sensors: pd.DataFrame, *, date: dt.date | None = None):
