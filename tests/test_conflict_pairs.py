@@ -263,3 +263,31 @@ def test_pair_probabilities_given_pairs_in_chunks_and_a_nan_variance():
     bad.loc[30, "var_north_m2"] = np.nan  # a group's margin is then not a distance: refused as before
     with pytest.raises(ValueError, match="radius_m: must be a finite non-negative distance, got nan"):
         pair_probabilities(bad, chunk_rows=1)
+
+
+def test_closing_margin_refuses_negative_speed_or_horizon():
+    with pytest.raises(ValueError, match=r"max_speed_kt: must be finite and not negative, got -500"):
+        closing_margin_m(-500, 60)
+    with pytest.raises(ValueError, match=r"horizon_s: must be finite and not negative, got -60"):
+        closing_margin_m(500, -60)
+    assert closing_margin_m(500, 0) == 0.0
+
+
+def _two_predictions(east_b_m: float) -> pd.DataFrame:
+    return pd.DataFrame({"aircraft_id": ["A", "B"], "time": pd.Timestamp("2024-05-01", tz="UTC"),
+                         "horizon_s": 60, "east_m": [0.0, east_b_m], "north_m": 0.0, "var_east_m2": 1e4,
+                         "cov_east_north_m2": 0.0, "var_north_m2": 1e4, "flight_level": 350.0})
+
+
+@pytest.mark.parametrize("radius", [0, 0.0, -5.0, float("nan"), "5"])
+def test_pair_probabilities_refuse_a_radius_that_is_not_positive(radius):
+    with pytest.raises(ValueError, match=r"radius_nm: must be a positive finite distance, got"):
+        pair_probabilities(_two_predictions(1000.0), radius_nm=radius)
+
+
+def test_pair_probabilities_given_pairs_all_ruled_out_give_an_empty_frame():
+    # B 100 km from A with 100 m sigmas: the bound leaves nothing to compute exactly
+    pairs = pd.DataFrame({"time": [pd.Timestamp("2024-05-01", tz="UTC")], "aircraft_a": ["A"],
+                          "aircraft_b": ["B"]})
+    got = pair_probabilities(_two_predictions(100_000.0), pairs=pairs)
+    assert got.empty and list(got.columns) == list(pairs_pc.PC_COLUMNS)

@@ -52,6 +52,8 @@ def pair_probabilities(predictions: pd.DataFrame, radius_nm: float = 5.0, vertic
     at once (memory only: the result does not depend on it).
     """
     _require(predictions, PREDICTION_COLUMNS, "predictions")
+    if not (isinstance(radius_nm, int | float | np.number) and np.isfinite(radius_nm) and radius_nm > 0):
+        raise ValueError(f"radius_nm: must be a positive finite distance, got {radius_nm!r}")
     vertical_ft = vertical_limit_ft(vertical_ft, vertical_tolerance_ft)
     radius_m = radius_nm * M_PER_NM
     cols = _Columns(predictions)
@@ -90,7 +92,7 @@ def pair_probabilities(predictions: pd.DataFrame, radius_nm: float = 5.0, vertic
             pending = _exact_batches(pending, False, radius_m, method, eps, kept)
     if pending:
         _exact_batches(pending, True, radius_m, method, eps, kept)
-    if not any_pair:
+    if not any_pair or not kept:
         return pd.DataFrame({c: pd.Series(dtype=_dtype(c, predictions)) for c in PC_COLUMNS})
     number, a, b, pc, rel, dz = (np.concatenate(p) for p in zip(*kept, strict=True))
     first = np.argsort(number, kind="stable")
