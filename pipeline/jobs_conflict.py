@@ -167,6 +167,7 @@ def conflict_job(options: ConflictOptions, *, progress: Progress | None = None,
     from pipeline.conflict import alert_events, classify_alerts, pair_probabilities, warning_times
     from pipeline.conflict.approach import closest_approach
     from pipeline.conflict.events import losses_by_pairs
+    from pipeline.conflict.grid import on_grid
     from pipeline.conflict.surface import on_surface, surface_pairs
     from pipeline.track import Plane, track
     from pipeline.track.noise import SURFACE_SPEED_KT
@@ -194,14 +195,13 @@ def conflict_job(options: ConflictOptions, *, progress: Progress | None = None,
     tracks = result.tracks
     if tracks.empty:
         raise JobError(untrackable(meas))
-    tod = tracks["time_of_day"].to_numpy(float)
-    on_grid = np.flatnonzero(abs(tod / step - (tod / step).round()) < 1e-6)
+    grid_at = np.flatnonzero(on_grid(tracks, step))  # the tracker's report-time rows are not the grid
     plane = Plane.around(tracks["latitude"].to_numpy(float), tracks["longitude"].to_numpy(float))
     epoch, tracker_parameters = result.epoch, result.parameters
-    del result, tod
+    del result
     # the grid rows are what follows needs: the full table (~0.35 GB on a day at 1 s) freed as they are taken
-    grid = _take_rows(tracks, on_grid)
-    del tracks, on_grid
+    grid = _take_rows(tracks, grid_at)
+    del tracks, grid_at
     if progress:
         progress.stage("Predicting and computing PC")
     predictions = _predictions(meas, epoch, plane, horizons, options)
@@ -211,7 +211,8 @@ def conflict_job(options: ConflictOptions, *, progress: Progress | None = None,
     grid["on_surface"], by_speed = on_surface(grid)
     exclude = options.surface == "exclude"
     kept = "airborne" if exclude else "all"
-    lost = losses_by_pairs(grid, options.radius_nm, options.vertical_ft, tol, kinds=(kept, "surface"))
+    lost = losses_by_pairs(grid, options.radius_nm, options.vertical_ft, tol, kinds=(kept, "surface"),
+                           step_s=step)
     losses = lost[kept]
     at_surface = surface_pairs(pc, grid)
     events = alert_events(pc[~at_surface] if exclude else pc, options.threshold, step_s=step)
