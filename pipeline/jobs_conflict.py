@@ -376,11 +376,16 @@ def write_conflicts(result: ConflictJobResult) -> dict[str, Path]:
         pred = result.predictions
         pred = pred[pred["aircraft_id"].isin(involved) & pred["time"].isin(alerts["start"])]
         pc = result.pc[result.pc["aircraft_a"].isin(involved)]
-        threshold = result.options.threshold
+        if result.options.surface == "exclude":  # the samples the events were found in
+            from pipeline.conflict.surface import surface_pairs
+
+            pc = pc[~surface_pairs(pc, result.tracks)]
+        threshold, step = result.options.threshold, float(result.options.step_s)
         for i, alert in alerts.iterrows():
             path = d / figure_name(int(i), alert)
             targets[f"figure {path.stem}"] = path
-            writers.append((path, lambda p, a=alert: alert_figure(a, tracks, pred, pc, threshold, p)))
+            writers.append((path, lambda p, a=alert: alert_figure(a, tracks, pred, pc, threshold, p,
+                                                                  step_s=step)))
     parts = [(path, path.with_name(path.name + ".part")) for path, _ in writers]
     done, moved = False, []
     try:
