@@ -39,7 +39,7 @@ import pandas as pd  # noqa: E402
 from track_scenarios import fly, position_sensor  # noqa: E402
 
 import pipeline.conflict.pairs_pc as pairs_pc  # noqa: E402
-from pipeline.conflict import alert_events, classify_alerts, losses_of_separation, warning_times  # noqa: E402
+from pipeline.conflict import alert_events, classify_alerts, grid_rows, losses_of_separation, warning_times  # noqa: E402
 from pipeline.conflict.approach import closest_approach  # noqa: E402
 from pipeline.conflict.predict import predict_tracks  # noqa: E402
 from pipeline.parallel import thread_count  # noqa: E402
@@ -108,8 +108,7 @@ def pipeline_stages(meas: pd.DataFrame, threshold: float, sigma_alt: bool = Fals
     clock = Clock()
     result = clock.run("track (IMM, 3 modes, keep_states)", track, meas, keep_states=True)
     tracks = result.tracks
-    tod = tracks["time_of_day"].to_numpy(float)
-    grid = tracks[np.abs(tod - np.round(tod)) < 1e-6].reset_index(drop=True)
+    grid = grid_rows(tracks, 1.0).reset_index(drop=True)
     pred = clock.run("predict_tracks (20, 60, 120 s at every second)", predict_tracks, result, HORIZONS_S,
                      sigma_alt=sigma_alt)
     inside: dict[str, float] = {}

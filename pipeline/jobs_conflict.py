@@ -167,6 +167,7 @@ def conflict_job(options: ConflictOptions, *, progress: Progress | None = None,
     from pipeline.conflict import alert_events, classify_alerts, pair_probabilities, warning_times
     from pipeline.conflict.approach import closest_approach
     from pipeline.conflict.events import losses_by_pairs
+    from pipeline.conflict.grid import on_grid
     from pipeline.conflict.surface import on_surface, surface_pairs
     from pipeline.track import Plane, track
     from pipeline.track.noise import SURFACE_SPEED_KT
@@ -194,14 +195,13 @@ def conflict_job(options: ConflictOptions, *, progress: Progress | None = None,
     tracks = result.tracks
     if tracks.empty:
         raise JobError(untrackable(meas))
-    tod = tracks["time_of_day"].to_numpy(float)
-    on_grid = np.flatnonzero(abs(tod / step - (tod / step).round()) < 1e-6)
+    grid_at = np.flatnonzero(on_grid(tracks, step))  # the tracker's report-time rows are not the grid
     plane = Plane.around(tracks["latitude"].to_numpy(float), tracks["longitude"].to_numpy(float))
     epoch, tracker_parameters = result.epoch, result.parameters
-    del result, tod
+    del result
     # the grid rows are what follows needs: the full table (~0.35 GB on a day at 1 s) freed as they are taken
-    grid = _take_rows(tracks, on_grid)
-    del tracks, on_grid
+    grid = _take_rows(tracks, grid_at)
+    del tracks, grid_at
     if progress:
         progress.stage("Predicting and computing PC")
     predictions = _predictions(meas, epoch, plane, horizons, options)
@@ -211,17 +211,21 @@ def conflict_job(options: ConflictOptions, *, progress: Progress | None = None,
     grid["on_surface"], by_speed = on_surface(grid)
     exclude = options.surface == "exclude"
     kept = "airborne" if exclude else "all"
-    lost = losses_by_pairs(grid, options.radius_nm, options.vertical_ft, tol, kinds=(kept, "surface"))
+    # both modes' tables are counted, so that the terminal can say what the other would give
+    lost = losses_by_pairs(grid, options.radius_nm, options.vertical_ft, tol,
+                           kinds=("airborne", "all", "surface"), step_s=step)
     losses = lost[kept]
     at_surface = surface_pairs(pc, grid)
-    events = alert_events(pc[~at_surface] if exclude else pc, options.threshold, step_s=step)
+    both = {"airborne": alert_events(pc[~at_surface], options.threshold, step_s=step),
+            "all": alert_events(pc, options.threshold, step_s=step)}
+    events = both[kept]
     alerts = closest_approach(classify_alerts(events, losses), grid)
     warn = warning_times(losses, events, horizons)
     counts = {"aircraft": int(grid["aircraft_id"].nunique()), "losses": len(losses),
               "alerts": len(alerts), "false_alerts": int(alerts["false_alert"].sum()) if len(alerts) else 0,
               "missed": {f"{h:g}": int(warn.loc[warn["horizon_s"] == h, "warning_s"].isna().sum())
                          for h in horizons} if len(warn) else {f"{h:g}": 0 for h in horizons},
-              "surface": _surface_counts(grid, by_speed, at_surface, lost["surface"], options, pc)}
+              "surface": _surface_counts(grid, by_speed, at_surface, lost, both, options, pc)}
     params = {**jobs._parameters(options, loaded, started, command), **tracker_parameters,
               "horizons_s": list(horizons), "radius_nm": options.radius_nm,
               "vertical_ft": options.vertical_ft, "vertical_tolerance_ft": tol,
@@ -233,19 +237,23 @@ def conflict_job(options: ConflictOptions, *, progress: Progress | None = None,
                              predictions, noise)
 
 
-def _surface_counts(grid: pd.DataFrame, by_speed: np.ndarray, at_surface: np.ndarray, lost: pd.DataFrame,
-                    options: ConflictOptions, pc: pd.DataFrame) -> dict:
-    """What the surface rule touched: grid rows and aircraft on the surface (by the reports, by speed alone),
-    and the losses (``lost``) and alert events found among pair samples with an aircraft on the surface
-    (left out of the tables with --surface exclude, within them with include)."""
+def _surface_counts(grid: pd.DataFrame, by_speed: np.ndarray, at_surface: np.ndarray, lost: dict,
+                    events: dict, options: ConflictOptions, pc: pd.DataFrame) -> dict:
+    """What the surface rule touched: grid rows and aircraft on the surface (by the reports, by speed alone);
+    the losses and alert events found among pair samples with an aircraft on the surface alone; and the
+    losses and alert events the tables hold with --surface exclude and with include (a run that goes on
+    from airborne samples to surface ones is one run with include, and one on each side in the first two
+    counts: these do not add up to include's)."""
     from pipeline.conflict import alert_events
 
     surface = grid["on_surface"].to_numpy(bool)
-    events = alert_events(pc[at_surface], options.threshold, step_s=float(options.step_s))
+    alone = alert_events(pc[at_surface], options.threshold, step_s=float(options.step_s))
     return {"excluded": options.surface == "exclude", "rows": int(surface.sum()),
             "rows_by_speed": int(by_speed.sum()),
             "aircraft": int(grid.loc[surface, "aircraft_id"].nunique()),
-            "losses": len(lost), "alerts": len(events), "pc_samples": int(at_surface.sum())}
+            "losses": len(lost["surface"]), "alerts": len(alone), "pc_samples": int(at_surface.sum()),
+            "exclude": {"losses": len(lost["airborne"]), "alerts": len(events["airborne"])},
+            "include": {"losses": len(lost["all"]), "alerts": len(events["all"])}}
 
 
 def _take_rows(frame: pd.DataFrame, rows: np.ndarray) -> pd.DataFrame:
@@ -316,19 +324,25 @@ def text(result: ConflictJobResult) -> str:
              f"{c['alerts']} alert event(s), {c['false_alerts']} false"]
     g = c["surface"]
     if g["rows"]:
+        other = "include" if g["excluded"] else "exclude"
+        where = "left out of the tables" if g["excluded"] else "kept in the tables (--surface include)"
         lines.append(f"on the surface: {g['aircraft']} aircraft in {g['rows']} track sample(s) "
                      f"({g['rows_by_speed']} by a speed below {speed_kt:g} kt alone, the others as their "
-                     f"reports said); pairs with an aircraft on the surface: {g['losses']} loss(es), "
-                     f"{g['alerts']} alert event(s), "
-                     + ("left out of the tables (--surface include keeps them)" if g["excluded"]
-                        else "kept in the tables (--surface include)"))
+                     f"reports said); pairs with an aircraft on the surface are {where}: --surface {other} "
+                     f"would give {g[other]['losses']} loss(es) and {g[other]['alerts']} alert event(s) "
+                     f"instead of {c['losses']} and {c['alerts']} ({g['losses']} loss(es) and {g['alerts']} "
+                     "alert event(s) among the surface pairs' samples alone; a run going on between airborne "
+                     "and surface samples is one with include)")
     if not c["losses"] and not c["alerts"]:
         lines.append("no loss of separation and no alert: the tables are written empty, with their headers")
     if len(result.warnings):
         w = result.warnings.groupby("horizon_s")["warning_s"]
         for h, s in w:
-            lines.append(f"horizon {h:g} s: {s.notna().sum()} of {len(s)} loss(es) alerted, "
-                         f"median warning {s.median():.0f} s" if s.notna().any()
+            ahead = int((s > 0).sum())
+            lines.append(f"horizon {h:g} s: {ahead} of {len(s)} loss(es) alerted in advance "
+                         f"(warning > 0 s), {int((s <= 0).sum())} at or after the loss's start, "
+                         f"{int(s.isna().sum())} missed; median warning of the alerted "
+                         f"{float(s.median()):g} s" if s.notna().any()
                          else f"horizon {h:g} s: no loss alerted")
     return "\n".join(lines)
 
@@ -375,11 +389,16 @@ def write_conflicts(result: ConflictJobResult) -> dict[str, Path]:
         pred = result.predictions
         pred = pred[pred["aircraft_id"].isin(involved) & pred["time"].isin(alerts["start"])]
         pc = result.pc[result.pc["aircraft_a"].isin(involved)]
-        threshold = result.options.threshold
+        if result.options.surface == "exclude":  # the samples the events were found in
+            from pipeline.conflict.surface import surface_pairs
+
+            pc = pc[~surface_pairs(pc, result.tracks)]
+        threshold, step = result.options.threshold, float(result.options.step_s)
         for i, alert in alerts.iterrows():
             path = d / figure_name(int(i), alert)
             targets[f"figure {path.stem}"] = path
-            writers.append((path, lambda p, a=alert: alert_figure(a, tracks, pred, pc, threshold, p)))
+            writers.append((path, lambda p, a=alert: alert_figure(a, tracks, pred, pc, threshold, p,
+                                                                  step_s=step)))
     parts = [(path, path.with_name(path.name + ".part")) for path, _ in writers]
     done, moved = False, []
     try:

@@ -183,11 +183,11 @@ def test_failure_while_writing_figures_leaves_nothing(crossing, tmp_path, monkey
 
     real, calls = figures.alert_figure, []
 
-    def second_fails(*args):
+    def second_fails(*args, **kwargs):
         calls.append(args[-1])
         if len(calls) == 2:
             raise OSError(28, "No space left on device", str(args[-1]))
-        return real(*args)
+        return real(*args, **kwargs)
 
     monkeypatch.setattr(figures, "alert_figure", second_fails)
     d = crossing

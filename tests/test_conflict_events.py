@@ -184,3 +184,97 @@ def test_losses_of_separation_equal_brute_force():
         assert row.min_horizontal_nm == pytest.approx(exp[5], rel=1e-9) and row.time_of_min == exp[6]
         assert row.vertical_at_min_ft == pytest.approx(exp[7], rel=1e-9)
         assert row.min_vertical_ft == pytest.approx(exp[8], rel=1e-9)
+
+
+def _grid_and_report_rows(offset_a_s: float, offset_b_s: float) -> pd.DataFrame:
+    """track()-like output: A fixed at (0, 0), B on the equator |10 - 0.2 t| NM from it, each with a row
+    at every whole second (the grid) and one at a report time offset_s after it."""
+    rows = []
+    for k in range(101):
+        for name, offset in (("A", offset_a_s), ("B", offset_b_s)):
+            for t in (k, k + offset):
+                lon = 0.0 if name == "A" else float(lon_at(abs(10 - 0.2 * t)))
+                rows.append((name, T0 + pd.Timedelta(seconds=t), 0.0, lon, 350.0))
+    return pd.DataFrame(rows, columns=["aircraft_id", "time", "latitude", "longitude", "flight_level"])
+
+
+@pytest.mark.parametrize("offsets", [(0.3, 0.55), (0.25, 0.5)])  # not multiples; multiples, seldom 0.25 apart
+def test_report_rows_off_the_grid_are_refused_or_left_out(offsets):
+    from pipeline.conflict import grid_rows
+
+    tracks = _grid_and_report_rows(*offsets)
+    with pytest.raises(ValueError, match=r"tracks: the rows are not on one common time grid .*grid_rows"):
+        losses_of_separation(tracks)
+    # by hand: |10 - 0.2 t| < 5 for 25 < t < 75: grid times 26..74, closest (0 NM) at 50 s
+    for losses in (losses_of_separation(tracks, step_s=1.0), losses_of_separation(grid_rows(tracks, 1.0))):
+        assert len(losses) == 1
+        loss = losses.iloc[0]
+        assert (loss.start - T0).total_seconds() == 26 and (loss.end - T0).total_seconds() == 74
+        assert loss.duration_s == 48.0 and loss.time_of_min == T0 + pd.Timedelta(seconds=50)
+        assert loss.min_horizontal_nm == pytest.approx(0.0, abs=1e-9)
+
+
+def test_aircraft_at_different_steps_are_refused():
+    # C and D every second, A and B every 5 s: a loss run of A-B would end at every second
+    tracks = tracks_from([3.0] * 30, extra=[("C", 1.0, 200.0), ("D", 1.0, 200.0)])
+    tracks = tracks[tracks["aircraft_id"].isin(["C", "D"]) | ((tracks["time"] - T0).dt.seconds % 5 == 0)]
+    with pytest.raises(ValueError, match=r"aircraft 'A' is never 1 s \(the smallest step\)"):
+        losses_of_separation(tracks)
+    losses = losses_of_separation(tracks, step_s=5.0)  # the 5 s grid: one run each, 0..25 s
+    assert sorted(zip(losses.aircraft_a, losses.aircraft_b, losses.duration_s, strict=True)) == [
+        ("A", "B", 25.0), ("C", "D", 25.0)]
+
+
+def test_alert_events_step_is_each_pair_and_horizons_own():
+    t = pd.date_range(T0, periods=301, freq="1s")
+    a = pd.DataFrame({"aircraft_a": "A", "aircraft_b": "B", "horizon_s": 60, "time": t[0:300:5], "pc": 0.5})
+    other_pair = pd.DataFrame({"aircraft_a": "C", "aircraft_b": "D", "horizon_s": 60, "time": t[0:2],
+                               "pc": 0.0})
+    other_horizon = a.assign(horizon_s=20, time=t[:60])
+    assert len(alert_events(a)) == 1  # 5 s samples, PC 0.5 throughout: one event
+    assert len(alert_events(pd.concat([a, other_pair]))) == 1
+    events = alert_events(pd.concat([a, other_horizon]))
+    assert events[["horizon_s", "start", "end"]].values.tolist() == [[20, t[0], t[59]], [60, t[0], t[295]]]
+    assert len(alert_events(a, step_s=1.0)) == 60  # a step given is used as given
+
+
+def test_classifying_twice_and_chaining_give_the_same_tables():
+    s = pd.Timedelta(seconds=1)
+    losses = pd.DataFrame({"aircraft_a": ["A"], "aircraft_b": ["B"], "start": [T0 + 100 * s],
+                           "end": [T0 + 130 * s]})
+    alerts = pd.DataFrame({"aircraft_a": ["A", "B"], "aircraft_b": ["B", "A"], "horizon_s": [60, 60],
+                           "start": [T0 + 50 * s, T0 + 200 * s], "end": [T0 + 95 * s, T0 + 210 * s],
+                           "peak_pc": 0.5, "time_of_peak": T0})
+    once = classify_alerts(alerts, losses)
+    assert once["false_alert"].tolist() == [False, True]  # 50-95 s reaches 155 s; 200-210 s is after the loss
+    pd.testing.assert_frame_equal(classify_alerts(once, losses), once)
+    warn = warning_times(losses, once)
+    pd.testing.assert_frame_equal(warn, warning_times(losses, alerts))
+    assert warn["warning_s"].tolist() == [50.0]
+
+
+def test_times_must_be_time_zone_aware_and_are_compared_in_utc():
+    s = pd.Timedelta(seconds=1)
+    losses = pd.DataFrame({"aircraft_a": ["A"], "aircraft_b": ["B"], "start": [T0 + 100 * s],
+                           "end": [T0 + 130 * s]})
+    alerts = pd.DataFrame({"aircraft_a": ["A"], "aircraft_b": ["B"], "horizon_s": [60],
+                           "start": [T0 + 50 * s], "end": [T0 + 95 * s], "peak_pc": 0.5, "time_of_peak": T0})
+    naive = alerts.assign(start=alerts["start"].dt.tz_localize(None),
+                          end=alerts["end"].dt.tz_localize(None))
+    with pytest.raises(TypeError, match=r"alerts: column 'start' must hold time-zone-aware UTC datetimes, "
+                                        r"got naive datetimes"):
+        classify_alerts(naive, losses)
+    with pytest.raises(TypeError, match=r"alerts: column 'start'"):
+        warning_times(losses, naive)
+    pc = pc_frame([(0, 0.5), (1, 0.5)])
+    with pytest.raises(TypeError, match=r"pc: column 'time' .* dtype (object|str): convert"):
+        alert_events(pc.assign(time=pc["time"].astype(str)))
+    with pytest.raises(TypeError, match=r"tracks: column 'time' .* naive"):
+        losses_of_separation(tracks_from([3.0, 3.0]).assign(time=lambda f: f["time"].dt.tz_localize(None)))
+    # 12:00 in Madrid (CEST, UTC+2) is 10:00 UTC: the same loss and the same warning, in UTC
+    madrid = losses.assign(start=losses["start"].dt.tz_convert("Europe/Madrid"),
+                           end=losses["end"].dt.tz_convert("Europe/Madrid"))
+    assert classify_alerts(alerts, madrid)["loss_start"].tolist() == [T0 + 100 * s]
+    assert warning_times(madrid, alerts)["warning_s"].tolist() == [50.0]
+    events = alert_events(pc.assign(time=pc["time"].dt.tz_convert("Europe/Madrid")))
+    assert events["start"].tolist() == [T0] and str(events["start"].dt.tz) == "UTC"

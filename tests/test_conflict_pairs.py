@@ -263,3 +263,47 @@ def test_pair_probabilities_given_pairs_in_chunks_and_a_nan_variance():
     bad.loc[30, "var_north_m2"] = np.nan  # a group's margin is then not a distance: refused as before
     with pytest.raises(ValueError, match="radius_m: must be a finite non-negative distance, got nan"):
         pair_probabilities(bad, chunk_rows=1)
+
+
+def test_closing_margin_refuses_negative_speed_or_horizon():
+    with pytest.raises(ValueError, match=r"max_speed_kt: must be finite and not negative, got -500"):
+        closing_margin_m(-500, 60)
+    with pytest.raises(ValueError, match=r"horizon_s: must be finite and not negative, got -60"):
+        closing_margin_m(500, -60)
+    assert closing_margin_m(500, 0) == 0.0
+
+
+def _two_predictions(east_b_m: float) -> pd.DataFrame:
+    return pd.DataFrame({"aircraft_id": ["A", "B"], "time": pd.Timestamp("2024-05-01", tz="UTC"),
+                         "horizon_s": 60, "east_m": [0.0, east_b_m], "north_m": 0.0, "var_east_m2": 1e4,
+                         "cov_east_north_m2": 0.0, "var_north_m2": 1e4, "flight_level": 350.0})
+
+
+@pytest.mark.parametrize("radius", [0, 0.0, -5.0, float("nan"), "5"])
+def test_pair_probabilities_refuse_a_radius_that_is_not_positive(radius):
+    with pytest.raises(ValueError, match=r"radius_nm: must be a positive finite distance, got"):
+        pair_probabilities(_two_predictions(1000.0), radius_nm=radius)
+
+
+def test_pair_probabilities_given_pairs_all_ruled_out_give_an_empty_frame():
+    # B 100 km from A with 100 m sigmas: the bound leaves nothing to compute exactly
+    pairs = pd.DataFrame({"time": [pd.Timestamp("2024-05-01", tz="UTC")], "aircraft_a": ["A"],
+                          "aircraft_b": ["B"]})
+    got = pair_probabilities(_two_predictions(100_000.0), pairs=pairs)
+    assert got.empty and list(got.columns) == list(pairs_pc.PC_COLUMNS)
+
+
+def test_pair_probabilities_gaussian_vertical_with_an_aircraft_without_level():
+    # an aircraft with no level (and so no level sigma) at the same time is never paired, and does not
+    # stop the others' PC (it made the group's vertical limit NaN: "vertical_ft: ... got nan")
+    base = dict(time=pd.Timestamp("2024-05-01", tz="UTC"), horizon_s=60, north_m=0.0, var_east_m2=1e6,
+                cov_east_north_m2=0.0, var_north_m2=1e6)
+    pred = pd.DataFrame({"aircraft_id": ["A", "B", "C"], **base, "east_m": [0.0, 1000.0, 500.0],
+                         "flight_level": [350.0, 360.0, np.nan], "sigma_alt_ft": [300.0, 400.0, np.nan]})
+    got = pair_probabilities(pred, vertical_tolerance_ft=0.0)
+    horizontal = conflict_probability((-1000.0, 0.0), 2e6 * np.eye(2), 5 * 1852.0)
+    # altitude difference N(-1000, 500^2): P(|dz| < 1000) = Phi(4) - Phi(0)
+    assert got[["aircraft_a", "aircraft_b"]].values.tolist() == [["A", "B"]]
+    assert got["pc"].item() == pytest.approx(horizontal * (0.99996832875816688 - 0.5), rel=1e-9)
+    with pytest.raises(ValueError, match=r"predictions: sigma_alt_ft nan at a flight level \(aircraft 'B'"):
+        pair_probabilities(pred.assign(sigma_alt_ft=[300.0, np.nan, np.nan]))

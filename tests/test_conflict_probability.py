@@ -177,3 +177,18 @@ def test_upper_bound_and_margin_hold():
 def test_bad_input_is_named(kwargs, match):
     with pytest.raises(ValueError, match=match):
         conflict_probability(**kwargs)
+
+
+@pytest.mark.parametrize("method", ["exact", "one-block", "blocks", "midpoint"])
+def test_no_pairs_give_an_empty_result(method):
+    assert conflict_probability(np.zeros((0, 2)), np.zeros((0, 2, 2)), 1.0, method=method).shape == (0,)
+    assert conflict_probability(np.zeros((0, 3, 2)), np.eye(2), 1.0, method=method).shape == (0, 3)
+    assert pc_upper_bound(np.zeros((0, 2)), np.zeros((0, 2, 2)), 1.0).shape == (0,)
+
+
+def test_pc_margin_refuses_a_negative_sigma():
+    with pytest.raises(ValueError, match=r"sigma_max: .* must not be negative, got -1.0"):
+        pc_margin(-1.0)
+    with pytest.raises(ValueError, match=r"sigma_max: .* got -2.0"):
+        pc_margin([3.0, -2.0])
+    assert pc_margin(0.0) == 0.0

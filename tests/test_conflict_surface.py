@@ -164,7 +164,13 @@ def test_surface_pairs_are_left_out_of_losses_and_alerts_and_counted(surface_fil
     assert surface["aircraft"] == 3 and surface["rows_by_speed"] == 0  # every report says
     assert surface["alerts"] >= 3  # the parked pair alone alerts at every horizon
     assert doc["counts"]["losses"] == 1 and doc["parameters"]["surface"] == "exclude"
-    assert "pairs with an aircraft on the surface: 3 loss(es)" in text and "left out" in text
+    # what --surface include would give: the four losses of the test below; this run's own tables
+    assert surface["include"]["losses"] == 4
+    assert surface["exclude"] == {"losses": 1, "alerts": len(alerts)}
+    n_include, n_alone = surface["include"]["alerts"], surface["alerts"]
+    assert ("pairs with an aircraft on the surface are left out of the tables: --surface include would "
+            f"give 4 loss(es) and {n_include} alert event(s) instead of 1 and {len(alerts)} "
+            f"(3 loss(es) and {n_alone} alert event(s) among the surface pairs' samples alone") in text
 
 
 def test_surface_include_keeps_them(surface_file, tmp_path, capsys):
@@ -183,6 +189,18 @@ def test_surface_include_keeps_them(surface_file, tmp_path, capsys):
     assert sorted(parked_alerts["horizon_s"]) == [20.0, 60.0, 120.0]
     assert doc["counts"]["losses"] == 4 and doc["counts"]["surface"]["losses"] == 3
     assert doc["counts"]["surface"]["excluded"] is False and "kept in the tables" in capsys.readouterr().out
+    assert doc["counts"]["surface"]["include"] == {"losses": 4, "alerts": len(alerts)}
+    assert doc["counts"]["surface"]["exclude"]["losses"] == 1
+
+
+def test_surface_counts_reconcile_between_the_two_modes(surface_file, tmp_path):
+    """Each run says what the other mode's tables hold: the other run's table sizes."""
+    (tmp_path / "x").mkdir()
+    (tmp_path / "i").mkdir()
+    lx, ax, dx, _ = _run(surface_file, tmp_path / "x")
+    li, ai, di, _ = _run(surface_file, tmp_path / "i", "--surface", "include")
+    assert dx["counts"]["surface"]["include"] == {"losses": len(li), "alerts": len(ai)}
+    assert di["counts"]["surface"]["exclude"] == {"losses": len(lx), "alerts": len(ax)}
 
 
 def test_bad_surface_option_is_refused(surface_file, tmp_path, capsys):

@@ -8,10 +8,11 @@ from pipeline.conflict.events import (
     warning_times,
 )
 from pipeline.conflict.geometry import horizontal_distance_nm, surface_ecef_m
+from pipeline.conflict.grid import grid_rows, on_grid
 from pipeline.conflict.pairs import candidate_pairs, closing_margin_m, pairs_per_step
 from pipeline.conflict.pairs_pc import pair_probabilities
 from pipeline.conflict.probability import conflict_probability, pc_margin, pc_upper_bound
 
 __all__ = ["alert_events", "candidate_pairs", "classify_alerts", "closing_margin_m", "conflict_probability",
-           "horizontal_distance_nm", "losses_of_separation", "pair_probabilities", "pairs_per_step",
-           "pc_margin", "pc_upper_bound", "separation", "surface_ecef_m", "warning_times"]
+           "grid_rows", "horizontal_distance_nm", "losses_of_separation", "on_grid", "pair_probabilities",
+           "pairs_per_step", "pc_margin", "pc_upper_bound", "separation", "surface_ecef_m", "warning_times"]

@@ -3,12 +3,14 @@
 Schemas (times are pandas datetimes, UTC; a pair is always written with aircraft_a < aircraft_b):
 
 - tracks: `aircraft_id, time, latitude, longitude, flight_level`, one row per aircraft and time of a
-  common grid (the tracker's output).
+  common grid: the grid rows of the tracker's output (`step_s=` or `grid_rows` selects them; a frame
+  not on one grid is refused, `pipeline.conflict.grid`).
 - losses: `aircraft_a, aircraft_b, start, end, duration_s, min_horizontal_nm, time_of_min,
   vertical_at_min_ft, min_vertical_ft`, one row per uninterrupted run of grid times in loss (start and
   end are the first and last such times).
 - pc: `time, aircraft_a, aircraft_b, horizon_s, pc`, PC computed at `time` for `time + horizon_s`;
   pairs and times absent from it count as PC = 0.
+- Every time is a time-zone-aware datetime (converted to UTC; naive ones, strings or numbers are refused).
 - alerts: `aircraft_a, aircraft_b, horizon_s, start, end, peak_pc, time_of_peak`, one row per run of
   consecutive grid times with PC above the threshold.
 """
@@ -24,6 +26,7 @@ from pipeline.conflict.geometry import (
     horizontal_distance_nm,
     vertical_limit_ft,
 )
+from pipeline.conflict.grid import grid_rows, grid_step_s, utc_times
 from pipeline.conflict.pairs import _require, pairs_per_step, time_key
 
 LOSS_COLUMNS = ["aircraft_a", "aircraft_b", "start", "end", "duration_s", "min_horizontal_nm",
@@ -36,6 +39,7 @@ def separation(tracks: pd.DataFrame, radius_nm: float = 5.0, vertical_ft: float 
     """Horizontal and vertical distance of every pair within radius_nm and vertical_ft at each time:
     `time, aircraft_a, aircraft_b, horizontal_nm, vertical_ft`."""
     _require(tracks, ["aircraft_id", "time", "latitude", "longitude", "flight_level"], "tracks")
+    tracks = utc_times(tracks, ["time"], "tracks")
     pairs = pairs_per_step(tracks, radius_nm, vertical_ft)
     pos = tracks.set_index(["time", "aircraft_id"])[["latitude", "longitude", "flight_level"]]
     if pos.index.duplicated().any():
@@ -53,25 +57,35 @@ LOSS_PAIRS = ("all", "airborne", "surface")
 
 
 def losses_of_separation(tracks: pd.DataFrame, radius_nm: float = 5.0, vertical_ft: float = 1000.0,
-                         vertical_tolerance_ft: float = VERTICAL_TOLERANCE_FT, *, pairs: str = "all"
-                         ) -> pd.DataFrame:
+                         vertical_tolerance_ft: float = VERTICAL_TOLERANCE_FT, *, pairs: str = "all",
+                         step_s: float | None = None) -> pd.DataFrame:
     """Every loss of separation: horizontal distance below radius_nm and vertical below vertical_ft less
     vertical_tolerance_ft (the level quantum: tracked levels 1000 ft apart wobble a few feet) at the same
     grid time. A run ends at the first grid time either aircraft is out of loss or absent. pairs: "all"
     samples, "airborne" (neither aircraft on the surface by the tracks' boolean `on_surface`) or "surface"
-    (one or both on it); a run also ends where its samples stop being of that kind."""
-    return losses_by_pairs(tracks, radius_nm, vertical_ft, vertical_tolerance_ft, kinds=(pairs,))[pairs]
+    (one or both on it); a run also ends where its samples stop being of that kind. step_s: the grid (the
+    rows at whole multiples of it since UTC midnight are used, e.g. the grid rows of `track()` output);
+    None: every row, which must then lie on one common grid (ValueError otherwise)."""
+    return losses_by_pairs(tracks, radius_nm, vertical_ft, vertical_tolerance_ft, kinds=(pairs,),
+                           step_s=step_s)[pairs]
 
 
 def losses_by_pairs(tracks: pd.DataFrame, radius_nm: float = 5.0, vertical_ft: float = 1000.0,
                     vertical_tolerance_ft: float = VERTICAL_TOLERANCE_FT, *,
-                    kinds: tuple[str, ...] = ("airborne", "surface")) -> dict[str, pd.DataFrame]:
+                    kinds: tuple[str, ...] = ("airborne", "surface"), step_s: float | None = None
+                    ) -> dict[str, pd.DataFrame]:
     """``losses_of_separation`` for each kind of pairs in ``kinds`` (LOSS_PAIRS), from one pair search."""
     _check_positive(radius_nm=radius_nm, vertical_ft=vertical_ft)
     for kind in kinds:
         if kind not in LOSS_PAIRS:
             raise ValueError(f"pairs {kind!r}: expected one of {', '.join(LOSS_PAIRS)}")
     limit_ft = vertical_limit_ft(vertical_ft, vertical_tolerance_ft)
+    _require(tracks, ["aircraft_id", "time"], "tracks")
+    tracks = utc_times(tracks, ["time"], "tracks")
+    if step_s is None:
+        step_s = grid_step_s(tracks)
+    else:
+        tracks = grid_rows(tracks, step_s)
     sep = separation(tracks, radius_nm, vertical_ft)
     sep = sep[(sep["horizontal_nm"] < radius_nm) & (sep["vertical_ft"] < limit_ft)]
     surface = None
@@ -81,16 +95,16 @@ def losses_by_pairs(tracks: pd.DataFrame, radius_nm: float = 5.0, vertical_ft: f
         _require(tracks, ["on_surface"], "tracks")
         surface = surface_pairs(sep, tracks)
     picks = {"all": slice(None), "airborne": ~surface if surface is not None else None, "surface": surface}
-    return {kind: _loss_runs(sep[picks[kind]], tracks) for kind in kinds}
+    return {kind: _loss_runs(sep[picks[kind]], tracks, float(step_s)) for kind in kinds}
 
 
-def _loss_runs(sep: pd.DataFrame, tracks: pd.DataFrame) -> pd.DataFrame:
-    """The runs of consecutive grid times of the separation samples in loss, one row per run."""
+def _loss_runs(sep: pd.DataFrame, tracks: pd.DataFrame, step_s: float) -> pd.DataFrame:
+    """The runs of consecutive grid times (step_s apart) of the separation samples in loss, one row a run."""
     if sep.empty:
         return _empty(LOSS_COLUMNS, tracks["time"].dtype, tracks["aircraft_id"].dtype)
-    grid = np.unique(time_key(tracks["time"]))
     sep = sep.sort_values(["aircraft_a", "aircraft_b", "time"], kind="stable").reset_index(drop=True)
-    sep["run"] = _runs(sep, np.searchsorted(grid, time_key(sep["time"])), 1)
+    ns = time_key(sep["time"])
+    sep["run"] = _runs(sep, np.round((ns - ns.min()) / (step_s * 1e9)), 1)
     at_min = sep.loc[sep.groupby("run")["horizontal_nm"].idxmin()].set_index("run")
     runs = sep.groupby("run").agg(aircraft_a=("aircraft_a", "first"), aircraft_b=("aircraft_b", "first"),
                                   start=("time", "min"), end=("time", "max"),
@@ -104,24 +118,29 @@ def _loss_runs(sep: pd.DataFrame, tracks: pd.DataFrame) -> pd.DataFrame:
 
 def alert_events(pc: pd.DataFrame, threshold: float = 0.2, step_s: float | None = None) -> pd.DataFrame:
     """Alert events: runs of PC above the threshold per pair and horizon. Samples more than step_s
-    apart (default: the smallest time step in pc) belong to different events."""
+    apart belong to different events (default: per pair and horizon, the smallest step between its own
+    samples; give the step the PC was computed at when a pair's samples may all be gaps apart)."""
     _require(pc, ["time", "aircraft_a", "aircraft_b", "horizon_s", "pc"], "pc")
     if not 0.0 <= threshold < 1.0:
         raise ValueError(f"threshold: a probability in [0, 1) is needed, got {threshold!r}")
-    pc = _ordered(pc)
-    if step_s is None:
-        gaps = np.diff(np.unique(time_key(pc["time"]))) / 1e9
-        step_s = float(gaps.min()) if len(gaps) else 1.0
-    elif not step_s > 0:
-        raise ValueError(f"step_s: must be positive, got {step_s!r}")
+    if step_s is not None and not (isinstance(step_s, int | float | np.number) and np.isfinite(step_s)
+                                   and step_s > 0):
+        raise ValueError(f"step_s: must be a positive finite number of seconds, got {step_s!r}")
+    pc = _ordered(utc_times(pc, ["time"], "pc"))
     rows = pc.sort_values(["aircraft_a", "aircraft_b", "horizon_s", "time"], kind="stable")
     rows = rows.reset_index(drop=True)
     is_above = rows["pc"].to_numpy() > threshold
     if not is_above.any():
         return _empty(ALERT_COLUMNS, pc["time"].dtype, pc["aircraft_a"].dtype)
     seconds = (rows["time"] - rows["time"].min()).dt.total_seconds().to_numpy()
-    # a run breaks at a new pair or horizon, a time gap above step_s, or a sample at or below threshold
-    rows["run"] = _runs(rows, seconds, step_s * (1 + 1e-9), extra="horizon_s", breaks=~is_above)
+    group = _runs(rows, np.zeros(len(rows)), 0.0, extra="horizon_s")  # pair and horizon number per row
+    if step_s is None:  # each pair and horizon's own smallest step (a lone sample: any)
+        step = np.r_[np.nan, np.where(group[1:] == group[:-1], np.diff(seconds), np.nan)]
+        max_step = pd.Series(step).groupby(group).transform("min").to_numpy()
+    else:
+        max_step = np.full(len(rows), float(step_s))
+    # a run breaks at a new pair or horizon, a time gap above the step, or a sample at or below threshold
+    rows["run"] = _runs(rows, seconds, max_step * (1 + 1e-9), extra="horizon_s", breaks=~is_above)
     above = rows[is_above]
     peak = above.loc[above.groupby("run")["pc"].idxmax()].set_index("run")
     events = above.groupby("run").agg(aircraft_a=("aircraft_a", "first"), aircraft_b=("aircraft_b", "first"),
@@ -138,9 +157,11 @@ def classify_alerts(alerts: pd.DataFrame, losses: pd.DataFrame) -> pd.DataFrame:
     after the alert ended, NaT if none) and `false_alert` (no such loss)."""
     _require(alerts, ALERT_COLUMNS, "alerts")
     _require(losses, ["aircraft_a", "aircraft_b", "start", "end"], "losses")
+    alerts = utc_times(alerts, ["start", "end"], "alerts")
+    losses = utc_times(losses, ["start", "end"], "losses")
     matched = _matches(_ordered(alerts).reset_index(drop=True), _ordered(losses))
     first = matched.groupby("alert")["loss_start"].min()
-    out = _ordered(alerts).reset_index(drop=True)
+    out = _ordered(alerts).reset_index(drop=True)  # a classified table classified again: its columns replaced
     out["loss_start"] = first.reindex(out.index)
     out["false_alert"] = out["loss_start"].isna()
     return out
@@ -152,6 +173,8 @@ def warning_times(losses: pd.DataFrame, alerts: pd.DataFrame, horizons_s=None) -
     (negative: the alert came after the loss began; NaN: no alert, a missed loss)."""
     _require(losses, ["aircraft_a", "aircraft_b", "start", "end"], "losses")
     _require(alerts, ALERT_COLUMNS, "alerts")
+    alerts = utc_times(alerts, ["start", "end"], "alerts")
+    losses = utc_times(losses, ["start", "end"], "losses")
     horizons = sorted(set(alerts["horizon_s"]) if horizons_s is None else set(horizons_s))
     losses = _ordered(losses).reset_index(drop=True)
     grid = losses[["aircraft_a", "aircraft_b", "start"]].rename(columns={"start": "loss_start"})
@@ -171,8 +194,9 @@ def warning_times(losses: pd.DataFrame, alerts: pd.DataFrame, horizons_s=None) -
 
 
 def _matches(alerts: pd.DataFrame, losses: pd.DataFrame) -> pd.DataFrame:
-    """Alert-loss rows of the same aircraft pair where the loss overlaps [alert start, end + horizon]."""
-    both = alerts.reset_index(names="alert").merge(
+    """Alert-loss rows of the same aircraft pair where the loss overlaps [alert start, end + horizon]
+    (the alerts' own columns only: a classified table's loss_start is not the one matched here)."""
+    both = alerts[ALERT_COLUMNS].reset_index(names="alert").merge(
         losses[["aircraft_a", "aircraft_b", "start", "end"]].rename(columns={"start": "loss_start",
                                                                             "end": "loss_end"}),
         on=["aircraft_a", "aircraft_b"])
@@ -183,14 +207,16 @@ def _matches(alerts: pd.DataFrame, losses: pd.DataFrame) -> pd.DataFrame:
 
 def _runs(frame: pd.DataFrame, position, max_step, extra: str | None = None, breaks=None) -> np.ndarray:
     """Run number per row of a frame sorted by pair (and `extra`) then time: a run breaks where the pair
-    changes, `position` advances by more than max_step, or after a row flagged in `breaks`."""
+    changes, `position` advances by more than max_step (a number, or one per row), or after a row flagged
+    in `breaks`."""
     keys = ["aircraft_a", "aircraft_b"] + ([extra] if extra else [])
     new_key = np.zeros(len(frame), dtype=bool)
     for k in keys:
         v = frame[k].to_numpy()
         new_key[1:] |= v[1:] != v[:-1]
     position = np.asarray(position, dtype=float)
-    new = np.r_[True, new_key[1:] | (np.diff(position) > max_step)]
+    max_step = np.asarray(max_step, dtype=float)  # one for all rows, or each row's from the previous
+    new = np.r_[True, new_key[1:] | (np.diff(position) > (max_step[1:] if max_step.ndim else max_step))]
     if breaks is not None:
         new[1:] |= np.asarray(breaks)[:-1]
     return np.cumsum(new) - 1

@@ -58,6 +58,9 @@ def _grouped_pairs(pos: np.ndarray, alt: np.ndarray, edges: np.ndarray, radius_m
 def closing_margin_m(max_speed_kt: float, horizon_s: float) -> float:
     """Largest possible decrease of the distance between two aircraft within the horizon: both flying
     head-on at the largest speed."""
+    for name, value in (("max_speed_kt", max_speed_kt), ("horizon_s", horizon_s)):
+        if not np.isfinite(value) or value < 0:
+            raise ValueError(f"{name}: must be finite and not negative, got {value!r}")
     return 2.0 * max_speed_kt * M_PER_NM / 3600.0 * horizon_s
 
 

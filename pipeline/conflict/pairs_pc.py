@@ -52,6 +52,8 @@ def pair_probabilities(predictions: pd.DataFrame, radius_nm: float = 5.0, vertic
     at once (memory only: the result does not depend on it).
     """
     _require(predictions, PREDICTION_COLUMNS, "predictions")
+    if not (isinstance(radius_nm, int | float | np.number) and np.isfinite(radius_nm) and radius_nm > 0):
+        raise ValueError(f"radius_nm: must be a positive finite distance, got {radius_nm!r}")
     vertical_ft = vertical_limit_ft(vertical_ft, vertical_tolerance_ft)
     radius_m = radius_nm * M_PER_NM
     cols = _Columns(predictions)
@@ -90,7 +92,7 @@ def pair_probabilities(predictions: pd.DataFrame, radius_nm: float = 5.0, vertic
             pending = _exact_batches(pending, False, radius_m, method, eps, kept)
     if pending:
         _exact_batches(pending, True, radius_m, method, eps, kept)
-    if not any_pair:
+    if not any_pair or not kept:
         return pd.DataFrame({c: pd.Series(dtype=_dtype(c, predictions)) for c in PC_COLUMNS})
     number, a, b, pc, rel, dz = (np.concatenate(p) for p in zip(*kept, strict=True))
     first = np.argsort(number, kind="stable")
@@ -113,6 +115,14 @@ class _Columns:
         self.var_n = frame["var_north_m2"].to_numpy(float)
         self.fl = frame["flight_level"].to_numpy(float)
         self.sig_alt = frame["sigma_alt_ft"].to_numpy(float) if "sigma_alt_ft" in frame.columns else None
+        if self.sig_alt is not None:
+            bad = np.isfinite(self.fl) & ~(np.isfinite(self.sig_alt) & (self.sig_alt >= 0))
+            if bad.any():
+                k = int(np.flatnonzero(bad)[0])
+                raise ValueError(f"predictions: sigma_alt_ft {float(self.sig_alt[k])!r} at a flight level "
+                                 f"(aircraft {frame['aircraft_id'].iloc[k]!r}, {frame['time'].iloc[k]}, "
+                                 f"horizon {frame['horizon_s'].iloc[k]!r} s): must be a finite non-negative "
+                                 "sigma")
 
     def cov(self, rows: np.ndarray) -> np.ndarray:
         out = np.empty((len(rows), 2, 2))
@@ -180,7 +190,9 @@ def _chunk_pairs(cols: _Columns, rows: np.ndarray, edges: np.ndarray, radius_m: 
     if cols.sig_alt is None:
         group_v = np.full(len(multi), vertical_ft)
     else:
-        sig_max = np.maximum.reduceat(cols.sig_alt[rows], edges[:-1])[multi]
+        # a row without a level (NaN, no sigma either) is never paired: it widens no group's limit
+        sig = np.where(np.isfinite(cols.fl[rows]), cols.sig_alt[rows], 0.0)
+        sig_max = np.maximum.reduceat(sig, edges[:-1])[multi]
         group_v = vertical_ft + pc_margin(np.sqrt(2.0) * sig_max, eps)
     _check_limits(group_r, group_v)
     # the groups' rows: group number, radius and vertical limit of each

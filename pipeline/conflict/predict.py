@@ -15,6 +15,7 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
+from pipeline.conflict.grid import on_grid
 from pipeline.conflict.moments import ALL_PAIRS, POSITION_PAIRS, predict_states
 from pipeline.parallel import map_ordered
 from pipeline.track.frame import Plane
@@ -101,9 +102,7 @@ def predict_tracks(result: TrackResult, horizons_s, *, step_s: float = 1.0,
         if str(aircraft_id) not in result.runs:
             raise KeyError(f"aircraft {aircraft_id!r}: no filter history (run track(..., keep_states=True))")
         own, run, epoch = result.runs[str(aircraft_id)]
-        tod = rows["time_of_day"].to_numpy(float)
-        on_grid = np.abs(tod / step_s - np.round(tod / step_s)) < 1e-6
-        rows = rows.loc[on_grid & np.isfinite(rows["latitude"].to_numpy(float))]
+        rows = rows.loc[on_grid(rows, step_s) & np.isfinite(rows["latitude"].to_numpy(float))]
         if rows.empty:
             return None
         t = (rows["time"] - epoch).dt.total_seconds().to_numpy(float)

@@ -85,7 +85,11 @@ def pc_margin(sigma_max, eps: float = 1e-6):
     standard deviation is ``sigma_max`` (same unit): sqrt(2 ln(1/eps)) * sigma_max."""
     if not 0.0 < eps < 1.0:
         raise ValueError(f"eps: must lie strictly between 0 and 1, got {eps!r}")
-    return np.sqrt(2.0 * np.log(1.0 / eps)) * np.asarray(sigma_max, dtype=float)
+    sigma = np.asarray(sigma_max, dtype=float)
+    if (sigma < 0).any():  # NaN passes, for the caller to name (pair_probabilities: a NaN variance)
+        bad = float(sigma[sigma < 0].flat[0])
+        raise ValueError(f"sigma_max: a standard deviation must not be negative, got {bad!r}")
+    return np.sqrt(2.0 * np.log(1.0 / eps)) * sigma
 
 
 # --- input checks --------------------------------------------------------------------------------
@@ -109,7 +113,7 @@ def _checked(mean, cov, radius):
     p = np.broadcast_to(p, shape + (2, 2)).reshape(-1, 2, 2)
     d = np.broadcast_to(d, shape).reshape(-1)
     for name, arr in (("mean", m), ("cov", p), ("radius", d)):
-        bad = ~np.isfinite(arr.reshape(len(arr), -1)).all(axis=1)
+        bad = ~np.isfinite(arr).all(axis=tuple(range(1, arr.ndim)))  # reshape(-1) fails on no pairs
         if bad.any():
             i = int(np.flatnonzero(bad)[0])
             raise ValueError(f"{name}: not finite at pair {i}: {arr[i].tolist()}")

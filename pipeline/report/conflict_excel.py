@@ -1,17 +1,58 @@
-"""Conflict workbook: sheets Alerts, Losses, Warning times and Parameters (the shared write-only table
-writer of `pipeline.report.excel`, written atomically)."""
+"""Conflict workbook: sheets Alerts, Losses, Warning times and Parameters (the shared cell and table rules
+of `pipeline.report.cells`, written atomically).
+
+Times are Excel date-times in UTC, each labelled "UTC" by its number format (the CSV and JSON write them
+with a Z); horizons, warnings and durations, whole multiples of the step, in General format (120, 2.5, -5,
+not 120.000); an empty table fits one page wide."""
 
 from __future__ import annotations
 
 import os
 
 import pandas as pd
+from openpyxl import Workbook
 
-from pipeline.report.excel import write_tables
+from pipeline.correlate.results import CorrelationRun
+from pipeline.report.cells import make_column, write_table
+from pipeline.report.excel import parameter_rows
+from pipeline.report.outputs import write_atomically
+from pipeline.report.saving import save
+
+UTC_FORMAT = 'yyyy-mm-dd hh:mm:ss "UTC"'
+UTC_FRACTION_FORMAT = 'yyyy-mm-dd hh:mm:ss.000 "UTC"'  # when a time has a fraction of a second
+GENERAL_COLUMNS = {"horizon_s", "warning_s", "duration_s"}
+TIME_TO_CPA_FORMAT = "0.0"
 
 
 def write_conflict_workbook(alerts: pd.DataFrame, losses: pd.DataFrame, warnings: pd.DataFrame,
                             parameters: dict, path_xlsx: str | os.PathLike[str]) -> None:
-    """One sheet per table (times as Excel date-times in UTC, headers even when a table is empty)."""
-    write_tables({"Alerts": alerts, "Losses": losses, "Warning times": warnings}, path_xlsx,
-                 parameters=parameters)
+    """One sheet per table (headers even when a table is empty) and the Parameters sheet."""
+    wb = Workbook(write_only=True)
+    for name, frame in (("Alerts", alerts), ("Losses", losses), ("Warning times", warnings)):
+        ws = wb.create_sheet(name)
+        write_table(ws, [_column(ws, str(c), frame[c]) for c in frame.columns])
+        if frame.empty:  # a header row alone: one page, not the width the data would need
+            ws.page_setup.fitToWidth = 1
+            ws.print_title_cols = None
+    ws = wb.create_sheet("Parameters")
+    # the correlation report's rows (report windows, skipped windows) do not belong here
+    rows = [r for r in parameter_rows(CorrelationRun(parameters=parameters)) if r[0] != "report"]
+    write_table(ws, [make_column(ws, h, [r[j] for r in rows], general=True)
+                     for j, h in enumerate(["section", "key", "value"])])
+    write_atomically(path_xlsx, lambda tmp: save(wb, tmp))
+
+
+def _column(ws, header: str, series: pd.Series):
+    """A table column: times labelled UTC, the step-multiple seconds in General format."""
+    column = make_column(ws, header, series, general=header in GENERAL_COLUMNS)
+    fmt = None
+    if isinstance(series.dtype, pd.DatetimeTZDtype) or series.dtype.kind == "M":
+        whole = series.dropna().dt.microsecond.eq(0).all() and series.dropna().dt.nanosecond.eq(0).all()
+        fmt = UTC_FORMAT if whole else UTC_FRACTION_FORMAT
+    elif header == "time_to_cpa_s":
+        fmt = TIME_TO_CPA_FORMAT
+    if fmt is not None:
+        column.number_format = fmt
+        if column.styled is not None:
+            column.styled.number_format = fmt
+    return column

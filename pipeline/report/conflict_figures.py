@@ -48,9 +48,33 @@ def _ellipse(ax, e_nm: float, n_nm: float, var_e: float, cov_en: float, var_n: f
     ax.add_patch(Ellipse((e_nm, n_nm), width, height, angle=angle, fill=False, **style))
 
 
+def pc_line(times: pd.Series, values, step_s: float) -> tuple[np.ndarray, np.ndarray]:
+    """Times (naive UTC) and values of one PC series with a NaN after each sample whose next one is more
+    than step_s later: the line breaks where the pair has no PC sample (PC below eps, predicted levels
+    apart, a track absent), as the alert events do, instead of joining across the gap."""
+    t = pd.to_datetime(times).dt.tz_convert(None).to_numpy()
+    v = np.asarray(values, dtype=float)
+    gaps = np.flatnonzero(np.diff(t) / np.timedelta64(1, "s") > step_s * (1 + 1e-9)) + 1
+    return np.insert(t, gaps, np.datetime64("NaT")), np.insert(v, gaps, np.nan)
+
+
+def pc_window(sample_times: pd.Series, alert: pd.Series, step_s: float, t0: pd.Timestamp,
+              t1: pd.Timestamp) -> tuple[pd.Timestamp, pd.Timestamp]:
+    """The PC panel's time range: the pair's samples, the alert and its loss start, a step (or 5 %) either
+    side, within [t0, t1]; not the whole window of the map, which may hold only a few seconds of PC."""
+    marks = [alert["start"], alert["end"]]
+    if "loss_start" in alert and pd.notna(alert.get("loss_start")):
+        marks.append(pd.Timestamp(alert["loss_start"]))
+    lo = min([sample_times.min(), *marks]) if len(sample_times) else min(marks)
+    hi = max([sample_times.max(), *marks]) if len(sample_times) else max(marks)
+    pad = pd.Timedelta(seconds=max(step_s, 0.05 * (hi - lo).total_seconds()))
+    return max(lo - pad, t0), min(hi + pad, t1)
+
+
 def alert_figure(alert: pd.Series, tracks: pd.DataFrame, predictions: pd.DataFrame, pc: pd.DataFrame,
-                 threshold: float, path: str | Path, dpi: int = 110) -> Path:
-    """One alert event: map (NM from aircraft_a at the alert's start) above PC against time."""
+                 threshold: float, path: str | Path, dpi: int = 110, step_s: float | None = None) -> Path:
+    """One alert event: map (NM from aircraft_a at the alert's start) above PC against time (pc: the
+    samples the alert events were found in; step_s: their step, default the smallest in the pair's)."""
     a, b, start = alert["aircraft_a"], alert["aircraft_b"], alert["start"]
     horizons = sorted(predictions["horizon_s"].unique())
     t0 = start - pd.Timedelta(seconds=BEFORE_S)
@@ -97,19 +121,25 @@ def alert_figure(alert: pd.Series, tracks: pd.DataFrame, predictions: pd.DataFra
                  f"{start:%H:%M:%S} to {alert['end']:%H:%M:%S} UTC, peak {alert['peak_pc']:.2f}{cpa}",
                  fontsize=8.5, wrap=True)
     series = pc[(pc["aircraft_a"] == a) & (pc["aircraft_b"] == b) & (pc["time"] >= t0) & (pc["time"] <= t1)]
+    if step_s is None:
+        gaps = np.diff(np.unique(series["time"].to_numpy())) / np.timedelta64(1, "s")
+        step_s = float(gaps.min()) if len(gaps) else 1.0
     for i, h in enumerate(horizons):
         s = series[series["horizon_s"] == h].sort_values("time")
-        ax_pc.plot(s["time"].dt.tz_convert(None), s["pc"], ls=HORIZON_STYLES[i % len(HORIZON_STYLES)],
-                   lw=1.3 if h == alert["horizon_s"] else 0.9, label=f"PC, {h:g} s ahead")
+        ax_pc.plot(*pc_line(s["time"], s["pc"], step_s), ls=HORIZON_STYLES[i % len(HORIZON_STYLES)],
+                   marker="o", ms=2.5, lw=1.3 if h == alert["horizon_s"] else 0.9, label=f"PC, {h:g} s ahead")
     ax_pc.axhline(threshold, color="#888888", lw=0.8, ls=":", label=f"threshold {threshold:g}")
     ax_pc.axvline(start.tz_convert(None), color="#111111", lw=0.8, label="alert start")
     if "loss_start" in alert and pd.notna(alert.get("loss_start")):
         ax_pc.axvline(pd.Timestamp(alert["loss_start"]).tz_convert(None), color="#d62728", lw=0.8,
                       ls="--", label="loss of separation starts")
-    ax_pc.set_xlim(t0.tz_convert(None), t1.tz_convert(None))
+    lo, hi = pc_window(series["time"], alert, step_s, t0, t1)
+    ax_pc.set_xlim(lo.tz_convert(None), hi.tz_convert(None))
     ax_pc.set_ylim(-0.02, 1.02)
     ax_pc.xaxis.set_major_formatter(mdates.DateFormatter("%H:%M:%S"))
-    ax_pc.set_xlabel("time of the prediction (UTC)")
+    ax_pc.set_xlabel("time of the prediction (UTC)\na gap in a line: no PC sample there, counted as 0 "
+                     "(PC below 1e-6, predicted levels apart, an aircraft on the surface or untracked)",
+                     fontsize=7.5)
     ax_pc.set_ylabel("probability of conflict")
     ax_pc.grid(True, lw=0.3)
     ax_pc.legend(fontsize=7, loc="upper left")
