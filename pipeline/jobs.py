@@ -802,8 +802,8 @@ def _marked_measurements(options: AircraftOptions, checked: Checked, progress: P
 # the measurement columns far_separations reads
 FAR_SEPARATION_INPUTS = ["sensor_id", "sac", "sic", "rho_nm"]
 # the measurement columns correlate --quality's slotting figures read (pipeline.report.quality_figures)
-SLOTTING_FIGURE_INPUTS = ["time", "sensor_kind", "aircraft_id", "callsign", "address", "latitude",
-                          "longitude"]
+SLOTTING_FIGURE_INPUTS = ["time", "sensor_kind", "sensor_id", "aircraft_id", "callsign", "address",
+                          "latitude", "longitude"]
 
 
 def correlate_columns(options: CorrelateOptions) -> list[str]:
@@ -1069,6 +1069,7 @@ def _write_workbook(result: CorrelateResult, progress: Progress | None, max_wind
     if result.quality is not None:
         from pipeline.report.figures import lag_figure
         from pipeline.report.quality_figures import slotting_figure
+        from pipeline.report.summary import window_label
 
         images = dict(quality_figures(result.quality, out.parent, out.stem))
         shown = result.measurements[SLOTTING_FIGURE_INPUTS]  # what the figures read, not every column copied
@@ -1076,7 +1077,7 @@ def _write_workbook(result: CorrelateResult, progress: Progress | None, max_wind
         radar, adsb = shown[is_radar], shown[~is_radar]
         del shown
         for i, w in enumerate(run.windows[:max_windows]):
-            label = f"{w.summary['callsign'] or w.summary['address']} window {w.summary['window']}"
+            label = window_label(w.summary)
             images[f"{label}: latitude and longitude before and after slotting"] = slotting_figure(
                 w, radar, adsb, out.with_name(f"{out.stem}_slotting_{i + 1}.png"))
             images[f"{label}: coefficient against lag"] = lag_figure(

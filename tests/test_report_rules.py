@@ -93,7 +93,8 @@ def test_note_in_json_and_stdout_from_the_fixtures(tmp_path, capsys):
     first = json.loads(out.read_text())["windows"][0]
     assert first["sep_rms_m"] > SEP_DOMINATED_RATIO * first["sep_median_m"]
     assert first["adsb_jumps"] >= 1 and "rerun with --drop-jumps" in first["note"]
-    assert f"Note: MAS72 window 1: {first['adsb_jumps']} ADS-B position jump" in stdout
+    pair = "048:25/201 vs 021:0/1"
+    assert f"Note: MAS72 window 1 ({pair}): {first['adsb_jumps']} ADS-B position jump" in stdout
     assert first["radar_filled_slots"] + first["radar_after"] >= first["slots"]
 
 

@@ -47,7 +47,7 @@ TABLE_BUDGET_BYTES = 512 * 2**20
 MAX_SLOTS = TABLE_BUDGET_BYTES // (SLOT_ROW_BYTES + 2 * LAG_ROW_BYTES)  # 3,314,017 over all windows of a run
 
 __all__ = ["MAX_SLOTS", "PAIRS", "NoOverlap", "NoSuchAircraft", "TooManySlots", "correlate", "ncc",
-           "pearson_by_lag", "pearson_max_lag", "peak_lag", "separation_stats"]
+           "pearson_by_lag", "pearson_max_lag", "peak_lag", "separation_stats", "separation_summary"]
 
 
 class NoOverlap(LookupError):
@@ -181,6 +181,19 @@ def separation_stats(sep_m) -> dict[str, float]:
             "sep_p95_m": float(np.percentile(sep_m, 95)), "sep_max_m": float(sep_m.max())}
 
 
+def separation_summary(sep_m: np.ndarray, radar_filled: np.ndarray, adsb_filled: np.ndarray
+                       ) -> dict[str, float | int]:
+    """A window's separation statistics over the slots where both sensors reported (``sep_slots`` of
+    them): a filled slot holds a position the sensor did not report then, so its distance says how far
+    the aircraft moved, not how far the sensors disagree. ``sep_rms_all_m`` is the RMS over every slot."""
+    sep_m = np.asarray(sep_m, dtype=float)
+    both = ~np.asarray(radar_filled, dtype=bool) & ~np.asarray(adsb_filled, dtype=bool)
+    used = sep_m[both]
+    return {**separation_stats(used), "sep_median_m": float(np.median(used)) if used.size else math.nan,
+            "sep_slots": int(both.sum()),
+            "sep_rms_all_m": float(np.sqrt(np.mean(sep_m**2))) if sep_m.size else math.nan}
+
+
 def at_seconds(reference: pd.Timestamp | None, seconds: float) -> pd.Timestamp | None:
     """The UTC instant (tz-aware) ``seconds`` after ``reference``; None when undated or not finite. Reports
     take it as it is (a workbook writes it as a date-time, JSON as ISO 8601 text)."""
@@ -246,8 +259,7 @@ def _window_result(ac: tuple[str, str], number: int, start_s: float, end_s: floa
         "pearson0_lat": float(p_lat[zero]), "pearson0_lon": float(p_lon[zero]),
         "pearson_peak_lag_lat": peak_lag(lags, p_lat, pearson_max_lag(len(slots))),
         "pearson_peak_lag_lon": peak_lag(lags, p_lon, pearson_max_lag(len(slots))),
-        **separation_stats(slots["sep_m"].to_numpy()),
-        "sep_median_m": float(np.median(slots["sep_m"].to_numpy())) if len(slots) else math.nan,
+        **separation_summary(slots["sep_m"].to_numpy(), rs["filled"], as_["filled"]),
     }
     summary = {k: _none_if_nan(summary[k]) for k in SUMMARY_KEYS}
     return WindowResult(summary=summary, slots=slots, lags=lag_frame)

@@ -39,16 +39,16 @@ from pipeline.report.cells import (
     page_setup,
     text_cell,
 )
-from pipeline.report.summary import utc_naive
+from pipeline.report.summary import utc_naive, window_label
 from pipeline.report.tables import lag_frame
 
-CORRELATION_HEADERS = ["window", "callsign", "address", "lag", "lag_s", *LAG_COLUMNS[1:]]
-SLOTS_HEADERS = ["window", "callsign", "address", "slot", "time_utc", *SLOT_COLUMNS[3:]]
+# every row names its window: number, aircraft and sensor pair (numbers restart for every pair)
+WINDOW_HEADERS = ["window", "callsign", "address", "radar_sensor", "reference_sensor"]
+CORRELATION_HEADERS = [*WINDOW_HEADERS, "lag", "lag_s", *LAG_COLUMNS[1:]]
+SLOTS_HEADERS = [*WINDOW_HEADERS, "slot", "time_utc", *SLOT_COLUMNS[3:]]
 # the columns of the excerpts a workbook keeps for its charts when the tables went to Parquet
-LAG_CHART_HEADERS = ["window", "callsign", "address", "lag", "ncc_lat", "ncc_lon", "pearson_lat",
-                     "pearson_lon"]
-SLOT_CHART_HEADERS = ["window", "callsign", "address", "time_utc", "radar_lat", "radar_lon", "adsb_lat",
-                      "adsb_lon"]
+LAG_CHART_HEADERS = [*WINDOW_HEADERS, "lag", "ncc_lat", "ncc_lon", "pearson_lat", "pearson_lon"]
+SLOT_CHART_HEADERS = [*WINDOW_HEADERS, "time_utc", "radar_lat", "radar_lon", "adsb_lat", "adsb_lon"]
 MAX_CORRELATION_CHARTS = 20
 MAX_SLOT_CHART_WINDOWS = 10
 RADAR_RGB, ADSB_RGB = "D62728", "E6B800"
@@ -161,9 +161,8 @@ def window_id(window: WindowResult, index: int) -> Any:
 
 
 def window_title(window: WindowResult, index: int) -> str:
-    summary = window.summary
-    callsign = excel_value(summary.get("callsign")) or excel_value(summary.get("address")) or "?"
-    return f"{callsign} window {window_id(window, index)}"
+    """Call sign (else address), window number and sensor pair (summary.window_label)."""
+    return window_label({**window.summary, "window": window_id(window, index)})
 
 
 def charted_windows(run: CorrelationRun, kind: str) -> list[int]:

@@ -17,7 +17,7 @@ from matplotlib.lines import Line2D
 
 from pipeline.correlate.correlation import peak_lag, pearson_max_lag
 from pipeline.correlate.results import CorrelationRun, WindowResult
-from pipeline.report.summary import printable, slot_seconds
+from pipeline.report.summary import printable, slot_seconds, window_label
 
 RADAR_COLOR = "#d62728"
 ADSB_COLOR = "#ffd400"
@@ -320,8 +320,8 @@ def lag_figure(window: WindowResult, path: str | os.PathLike[str]) -> Path:
         ax.legend(fontsize=8, loc="lower center")
     step = slot_seconds(window)
     note = f", 1 slot = {step:g} s" if math.isfinite(step) else ""
-    fig.suptitle(f"Correlation against lag: {_window_label(window)}{note} (star = peak; wider lags, with "
-                 "less than half the slots overlapping, left out)", fontsize=10)
+    fig.suptitle(f"Correlation against lag: {window_label(window.summary)}{note}\n(star = peak; wider lags, "
+                 "with less than half the slots overlapping, left out)", fontsize=10)
     return save_png(fig, path)
 
 
@@ -347,5 +347,5 @@ def latlon_time_figure(window: WindowResult, path: str | os.PathLike[str]) -> Pa
         axes[1].set_xlabel("time (UTC)")
     else:
         axes[1].set_xlabel("time of day (s)")
-    fig.suptitle(f"Latitude and longitude against time: {_window_label(window)}", fontsize=11)
+    fig.suptitle(f"Latitude and longitude against time: {window_label(window.summary)}", fontsize=11)
     return save_png(fig, path)

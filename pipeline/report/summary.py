@@ -19,7 +19,7 @@ from pipeline.model.time import iso_utc
 from pipeline.report.formats import decimals
 from pipeline.report.outputs import write_atomically
 
-SKIPPED_KEYS = ["callsign", "address", "start_tod", "end_tod", "reason"]
+SKIPPED_KEYS = ["callsign", "address", "radar_sensor", "reference_sensor", "start_tod", "end_tod", "reason"]
 # Parameter names (top level or under "options") that may hold the slot length in seconds
 _SLOT_PARAMETER_KEYS = ("slot_s", "slot_seconds", "slot_duration_s", "slot_length_s", "slot_size_s")
 
@@ -143,6 +143,21 @@ def printable(text: Any) -> str:
     return "".join(c if c.isprintable() else c.encode("unicode_escape").decode("ascii") for c in str(text))
 
 
+def sensor_pair(summary: Mapping[str, Any]) -> str:
+    """A window's sensors as "radar vs reference" (``048:25/201 vs 021:0/1``); "" when it names none."""
+    radar, reference = printable(summary.get("radar_sensor")), printable(summary.get("reference_sensor"))
+    return f"{radar or '-'} vs {reference or '-'}" if radar or reference else ""
+
+
+def window_label(summary: Mapping[str, Any]) -> str:
+    """A window as people read it: call sign (else address), number and sensor pair, e.g. ``TST0000 window 1
+    (048:25/201 vs 021:0/1)``: window numbers restart for every sensor pair of an aircraft."""
+    who = printable(summary.get("callsign")) or printable(summary.get("address")) or "?"
+    pair = sensor_pair(summary)
+    return f"{who} window {printable(summary.get('window'))}" + (f" ({pair})" if pair else "")
+
+
+SEP_SLOTS_TEXT = "sep: separations over the slots where both sensors reported (filled slots left out)"
 SEP_DOMINATED_RATIO = 3.0  # sep_rms above this many times the median separation: a few slots dominate it
 
 
@@ -210,8 +225,7 @@ def _table_row(s: Mapping[str, Any]) -> list[str]:
         elif key == "callsign":
             cells.append(printable(s.get("callsign")) or printable(s.get("address")) or "-")
         elif key == "sensors":
-            pair = (printable(s.get("radar_sensor")) or "-", printable(s.get("reference_sensor")) or "-")
-            cells.append(" vs ".join(pair))
+            cells.append(sensor_pair(s) or "- vs -")
         elif key == "start":
             cells.append(start)
         elif key == "end":
@@ -251,11 +265,13 @@ def summary_table(run: CorrelationRun) -> str:
     lines.append(f"{len(run.windows)} window(s) correlated, {len(run.skipped)} skipped")
     for skipped in run.skipped:
         who = printable(skipped.callsign) or printable(skipped.address) or "?"
+        pair = sensor_pair(vars(skipped))
         span = f"{clock_text(None, skipped.start_tod)}-{clock_text(None, skipped.end_tod)}"
-        lines.append(f"  skipped {who} {span}: {printable(skipped.reason)}")
+        lines.append(f"  skipped {who}{f' ({pair})' if pair else ''} {span}: {printable(skipped.reason)}")
+    if run.windows:
+        lines.append(SEP_SLOTS_TEXT)
     notes = [(w, window_note(w.summary)) for w in run.windows]
     for w, note in notes:
         if note:
-            who = printable(w.summary.get("callsign")) or printable(w.summary.get("address")) or "?"
-            lines.append(f"Note: {who} window {printable(w.summary.get('window'))}: {note}")
+            lines.append(f"Note: {window_label(w.summary)}: {note}")
     return "\n".join(text.rstrip() for text in lines)

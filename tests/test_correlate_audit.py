@@ -1,0 +1,109 @@
+"""Audit findings on correlation: what the separation, lag and window numbers mean, checked against values
+worked out by hand or with pyproj (never read back from the code under test)."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pandas as pd
+import pytest
+from measurement_frames import meas_frame
+from pyproj import Geod
+
+from pipeline.correlate.correlation import correlate, separation_summary
+
+WGS84 = Geod(ellps="WGS84")
+
+
+def _frame(kind: str, t, lat, lon, sic: int = 2) -> pd.DataFrame:
+    n = len(t)
+    return pd.DataFrame({
+        "sensor": kind, "time_of_day": np.asarray(t, float), "latitude": np.asarray(lat, float),
+        "longitude": np.asarray(lon, float), "flight_level": 350.0, "ground_speed_kt": 450.0,
+        "heading_deg": 0.0, "callsign": pd.Series(["MAS72"] * n, dtype="str"),
+        "address": pd.Series(["750123"] * n, dtype="str"),
+        "sac": pd.array([1] * n, dtype="Int64"), "sic": pd.array([sic if kind == "radar" else 0] * n,
+                                                                  dtype="Int64"),
+    })
+
+
+def test_separation_summary_by_hand():
+    # slots 3, 4, 100, 5 m; the third slot's ADS-B position is a held one: left out of the statistics
+    sep = np.array([3.0, 4.0, 100.0, 5.0])
+    out = separation_summary(sep, np.zeros(4, bool), np.array([False, False, True, False]))
+    assert out["sep_slots"] == 3
+    assert out["sep_mean_m"] == pytest.approx(4.0) and out["sep_median_m"] == pytest.approx(4.0)
+    assert out["sep_rms_m"] == pytest.approx(math.sqrt((9 + 16 + 25) / 3))
+    assert out["sep_max_m"] == pytest.approx(5.0)
+    assert out["sep_p95_m"] == pytest.approx(4.0 + 0.9 * 1.0)  # linear interpolation between 4 and 5
+    assert out["sep_rms_all_m"] == pytest.approx(math.sqrt((9 + 16 + 10000 + 25) / 4))
+    # no slot where both reported: no statistic, not a 0
+    none = separation_summary(sep, np.ones(4, bool), np.zeros(4, bool))
+    assert none["sep_slots"] == 0 and math.isnan(none["sep_rms_m"]) and math.isnan(none["sep_median_m"])
+
+
+def test_separation_leaves_out_slots_holding_a_stale_position():
+    # one report per 10 s slot at its start, flying north 0.01 deg a slot; ADS-B 0.001 deg east of the
+    # radar, and silent in slots 5 and 6 (they hold slot 4's position, up to 2.2 km behind)
+    t = np.arange(36000.0, 36200.0, 10.0)
+    lat = 2.0 + 0.001 * (t - 36000.0)
+    radar = _frame("radar", t, lat, np.full(t.size, 101.0))
+    keep = ~np.isin(np.arange(t.size), [5, 6])
+    adsb = _frame("adsb", t[keep], lat[keep], np.full(keep.sum(), 101.001))
+    (w,) = correlate(meas_frame(pd.concat([radar, adsb], ignore_index=True), day="2019-03-01"),
+                     callsign="MAS72").windows
+    s = w.summary
+    _, _, dist = WGS84.inv(np.full(t.size, 101.0), lat, np.full(t.size, 101.001), lat)
+    assert s["slots"] == 20 and s["adsb_filled_slots"] == 2 and s["sep_slots"] == 18
+    assert s["sep_rms_m"] == pytest.approx(math.sqrt(np.mean(dist[keep] ** 2)), abs=0.01)
+    assert s["sep_max_m"] == pytest.approx(dist[keep].max(), abs=0.01)
+    assert s["sep_median_m"] == pytest.approx(np.median(dist[keep]), abs=0.01)
+    # every slot: the held slots 5 and 6 sit 0.01 and 0.02 deg behind the radar
+    _, _, held = WGS84.inv([101.0, 101.0], lat[[5, 6]], [101.001, 101.001], lat[[4, 4]])
+    all_slots = np.concatenate([dist[keep], held])
+    assert s["sep_rms_all_m"] == pytest.approx(math.sqrt(np.mean(all_slots ** 2)), abs=0.01)
+    assert s["sep_rms_all_m"] > 5 * s["sep_rms_m"]
+
+
+def _two_radars_run():
+    """MAS72 seen by radars 1/2 and 1/3 and ADS-B over the same 200 s, one ADS-B report 0.5 deg off (a jump:
+    its windows get a note); --pairs all: three windows numbered 1, one per sensor pair."""
+    t = np.arange(36000.0, 36200.0, 10.0)
+    lat, lon = 2.0 + 0.001 * (t - 36000.0), np.full(t.size, 101.0)
+    adsb_lon = lon.copy()
+    adsb_lon[7] += 0.5
+    frames = [_frame("radar", t, lat, lon, sic=2), _frame("radar", t, lat, lon + 0.0005, sic=3),
+              _frame("adsb", t, lat, adsb_lon)]
+    meas = meas_frame(pd.concat(frames, ignore_index=True), day="2019-03-01")
+    return correlate(meas, callsign="MAS72", pairs="all")
+
+
+def test_every_window_names_its_sensor_pair(tmp_path):
+    from openpyxl import load_workbook
+
+    from pipeline.report.excel import write_report
+    from pipeline.report.summary import summary_table
+
+    run = _two_radars_run()
+    pairs = [(w.summary["radar_sensor"], w.summary["reference_sensor"], w.summary["window"])
+             for w in run.windows]
+    assert sorted(pairs) == [("048:1/2", "021:1/0", 1), ("048:1/2", "048:1/3", 1), ("048:1/3", "021:1/0", 1)]
+    text = summary_table(run)
+    notes = [line for line in text.splitlines() if line.startswith("Note:")]
+    assert [n.split(": 1 ADS-B position jump in this window")[0] for n in sorted(notes)] == [
+        f"Note: MAS72 window 1 ({r} vs 021:1/0)" for r in ("048:1/2", "048:1/3")]
+    write_report(run, tmp_path / "r.xlsx", tables="xlsx")
+    wb = load_workbook(tmp_path / "r.xlsx")
+    for sheet, per_window in (("Slots", 20), ("Correlation", 39)):
+        rows = list(wb[sheet].iter_rows(values_only=True))
+        head = rows[0]
+        body = [dict(zip(head, r, strict=True)) for r in rows[1:] if isinstance(r[0], int)]
+        counts = pd.Series([(r["radar_sensor"], r["reference_sensor"]) for r in body]).value_counts()
+        assert counts.to_dict() == {(r, ref): per_window for r, ref, _ in pairs}, sheet
+    titles = [c.title.tx.rich.p[0].r[0].t for c in wb["Lag charts"]._charts]
+    assert sorted(titles) == sorted(f"MAS72 window 1 ({r} vs {ref}), N = 20" for r, ref, _ in pairs)
+    summary = list(wb["Summary"].iter_rows(values_only=True))
+    header = next(i for i, r in enumerate(summary) if r[:3] == ("callsign", "window", "sensors"))
+    assert sorted(r[2] for r in summary[header + 1: header + 4]) == sorted(f"{r} vs {ref}"
+                                                                          for r, ref, _ in pairs)
