@@ -90,7 +90,7 @@ def test_every_window_names_its_sensor_pair(tmp_path):
              for w in run.windows]
     assert sorted(pairs) == [("048:1/2", "021:1/0", 1), ("048:1/2", "048:1/3", 1), ("048:1/3", "021:1/0", 1)]
     text = summary_table(run)
-    notes = [line for line in text.splitlines() if line.startswith("Note:")]
+    notes = [line for line in text.splitlines() if line.startswith("Note:") and "jump" in line]
     assert [n.split(": 1 ADS-B position jump in this window")[0] for n in sorted(notes)] == [
         f"Note: MAS72 window 1 ({r} vs 021:1/0)" for r in ("048:1/2", "048:1/3")]
     write_report(run, tmp_path / "r.xlsx", tables="xlsx")
@@ -107,3 +107,71 @@ def test_every_window_names_its_sensor_pair(tmp_path):
     header = next(i for i, r in enumerate(summary) if r[:3] == ("callsign", "window", "sensors"))
     assert sorted(r[2] for r in summary[header + 1: header + 4]) == sorted(f"{r} vs {ref}"
                                                                           for r, ref, _ in pairs)
+
+
+def _weave(t):
+    w = 2 * np.pi * (t - 36000.0)
+    return (1.3 + 0.02 * np.sin(w / 2900.0) + 0.01 * np.sin(w / 1300.0 + 1.0),
+            103.8 + 0.03 * np.cos(w / 3100.0) + 0.01 * np.sin(w / 1100.0))
+
+
+def _delayed(delay_s: float, span_s: float = 200.0):
+    """One window of span_s / 10 slots: ADS-B on the weave every 2 s, radar the same track delay_s late."""
+    t = np.arange(36000.0, 36000.0 + span_s, 2.0)
+    frames = [_frame("radar", t, *_weave(t - delay_s)), _frame("adsb", t, *_weave(t))]
+    meas = meas_frame(pd.concat(frames, ignore_index=True), day="2019-03-01")
+    (w,) = correlate(meas, callsign="MAS72").windows
+    return w
+
+
+def _scipy_pearson(w, axis: str) -> dict[int, float]:
+    """Pearson of the slotted series at every lag with at least 2 pairs, by scipy on the overlap."""
+    from scipy.stats import pearsonr
+
+    x, y = w.slots[f"radar_{axis}"].to_numpy(), w.slots[f"adsb_{axis}"].to_numpy()
+    n = x.size
+    out = {}
+    for d in range(-(n - 2), n - 1):
+        xs, ys = (x[d:], y[:n - d]) if d >= 0 else (x[:n + d], y[-d:])
+        out[d] = float(pearsonr(xs, ys).statistic)
+    return out
+
+
+def test_pearson_is_shown_only_where_ten_slots_overlap():
+    # 20 slots: lags with fewer than 10 slot pairs (|lag| > 10) have no coefficient, not the +-1 of 2 pairs
+    w = _delayed(30.0)
+    ref = _scipy_pearson(w, "lat")
+    assert abs(ref[18]) == pytest.approx(1.0)  # what a 2-pair overlap gives
+    lags = w.lags.set_index("lag")["pearson_lat"]
+    for d, r in ref.items():
+        if abs(d) <= 10:
+            assert lags[d] == pytest.approx(r, abs=1e-9), d
+        else:
+            assert np.isnan(lags[d]), d
+    assert np.isnan(lags[19]) and np.isnan(lags[-19])
+    # a 30 s delay = +3 slots, inside the search
+    best = max((d for d in ref if abs(d) <= 10), key=lambda d: ref[d])
+    assert w.summary["pearson_peak_lag_lat"] == best == 3
+    assert w.summary["pearson_peak_at_limit_lat"] is False
+
+
+def test_a_pearson_peak_at_the_search_limit_is_no_lag_estimate():
+    # radar 150 s (15 slots) late in a 20-slot window: the search stops at
+    # |lag| = min(20 // 2, 20 - 10) = 10, where scipy's coefficient is still the largest: flagged, no lag
+    # given, and said in the note
+    w = _delayed(150.0)
+    ref = _scipy_pearson(w, "lat")
+    assert max((d for d in ref if abs(d) <= 10), key=lambda d: ref[d]) == 10
+    s = w.summary
+    assert s["pearson_peak_lag_lat"] is None and s["pearson_peak_at_limit_lat"] is True
+    from pipeline.report.summary import window_note
+
+    assert "Pearson latitude" in window_note(s) and "edge of the lags searched |lag| = 10" in window_note(s)
+
+
+def test_pearson_min_overlap_is_checked():
+    from pipeline.correlate.correlation import pearson_by_lag
+
+    for bad in (1, 2.5, True, "10"):
+        with pytest.raises(ValueError, match="min_overlap"):
+            pearson_by_lag([1.0, 2.0, 3.0], [1.0, 2.0, 4.0], bad)

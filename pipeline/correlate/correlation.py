@@ -31,6 +31,11 @@ from pipeline.model.time import is_dated, iso_utc, midnight, seconds_since, with
 from pipeline.parallel import map_ordered
 
 PAIRS = ("radar-adsb", "radar-radar", "all")
+# A Pearson coefficient is shown where at least this many slot pairs overlap: of m pairs of independent
+# noise, |r| exceeds 0.997 by chance 5 % of the time at m = 3, 0.878 at m = 5 and 0.632 at m = 10 (r = +-1
+# always at m = 2), and slotted tracks are smooth, so short overlaps say nothing; 10 slots are 100 s at
+# the default 10 s slot, 8-25 radar scans.
+PEARSON_MIN_OVERLAP = 10
 # the measurement columns correlate() reads (identity, time, position, dedup keys, job-wide flags); the
 # tracker behind --fill predict reads more
 CORRELATION_INPUTS = ["time", "time_of_day", "sensor_id", "sensor_kind", "aircraft_id", "callsign",
@@ -46,8 +51,9 @@ SLOT_ROW_BYTES, LAG_ROW_BYTES = 82, 40
 TABLE_BUDGET_BYTES = 512 * 2**20
 MAX_SLOTS = TABLE_BUDGET_BYTES // (SLOT_ROW_BYTES + 2 * LAG_ROW_BYTES)  # 3,314,017 over all windows of a run
 
-__all__ = ["MAX_SLOTS", "PAIRS", "NoOverlap", "NoSuchAircraft", "TooManySlots", "correlate", "ncc",
-           "pearson_by_lag", "pearson_max_lag", "peak_lag", "separation_stats", "separation_summary"]
+__all__ = ["MAX_SLOTS", "PAIRS", "PEARSON_MIN_OVERLAP", "NoOverlap", "NoSuchAircraft", "TooManySlots",
+           "correlate", "ncc", "pearson_by_lag", "pearson_max_lag", "pearson_peak", "pearson_search_limit",
+           "peak_lag", "separation_stats", "separation_summary"]
 
 
 class NoOverlap(LookupError):
@@ -119,12 +125,16 @@ def ncc(x, y) -> tuple[np.ndarray, np.ndarray]:
     return _lags(x.size), num / norm if norm > 0 else np.full(num.shape, np.nan)
 
 
-def pearson_by_lag(x, y) -> tuple[np.ndarray, np.ndarray]:
+def pearson_by_lag(x, y, min_overlap: int = 2) -> tuple[np.ndarray, np.ndarray]:
     """Lags and the Pearson coefficient of the overlapping pairs (x[i], y[i-d]), mean removed per overlap.
 
-    NaN where the overlap has fewer than 2 points or either side is constant. O(N log N): the overlap
-    sums come from cumulative sums and the cross products from one FFT correlation.
+    NaN where the overlap has fewer than ``min_overlap`` (at least 2) points or either side is constant;
+    correlate() asks for PEARSON_MIN_OVERLAP. O(N log N): the overlap sums come from cumulative sums and the
+    cross products from one FFT correlation.
     """
+    if isinstance(min_overlap, bool) or not isinstance(min_overlap, int | np.integer) or min_overlap < 2:
+        raise ValueError(f"min_overlap must be an integer >= 2 (a coefficient needs two pairs), "
+                         f"got {min_overlap!r}")
     x, y = _pair(x, y)
     n = x.size
     lags = _lags(n)
@@ -148,7 +158,7 @@ def pearson_by_lag(x, y) -> tuple[np.ndarray, np.ndarray]:
         r = (sxy - sx * sy / m) / np.sqrt(vx * vy)
     x_flat = np.where(lags >= 0, m <= x_tail, m <= x_head)
     y_flat = np.where(lags >= 0, m <= y_head, m <= y_tail)
-    bad = (m < 2) | x_flat | y_flat | ~(vx > 0) | ~(vy > 0)
+    bad = (m < min_overlap) | x_flat | y_flat | ~(vx > 0) | ~(vy > 0)
     return lags, np.where(bad, np.nan, np.clip(r, -1.0, 1.0))
 
 
@@ -170,6 +180,24 @@ def pearson_max_lag(n_slots: int) -> int:
     Short overlaps are degenerate (any 2-point overlap has r = +-1), so the peak is not searched there.
     """
     return n_slots // 2
+
+
+def pearson_search_limit(n_slots: int) -> int:
+    """Largest |lag| the Pearson peak is searched over in an N-slot window: at least half the slots and
+    at least PEARSON_MIN_OVERLAP of them overlap (0: no lag can be estimated)."""
+    return max(0, min(pearson_max_lag(n_slots), n_slots - PEARSON_MIN_OVERLAP))
+
+
+def pearson_peak(lags: np.ndarray, r: np.ndarray, n_slots: int) -> tuple[int | None, bool]:
+    """The Pearson peak lag of an N-slot window and whether it sits at the search limit: there the
+    coefficient still rises towards lags that are not searched, so it is no lag estimate (None, True)."""
+    limit = pearson_search_limit(n_slots)
+    if limit < 1:
+        return None, False
+    lag = peak_lag(lags, r, limit)
+    if lag is not None and abs(lag) == limit:
+        return None, True
+    return lag, False
 
 
 def separation_stats(sep_m) -> dict[str, float]:
@@ -241,8 +269,9 @@ def _window_result(ac: tuple[str, str], number: int, start_s: float, end_s: floa
     x_lon, y_lon = _unwrapped_lon(rs["longitude"], as_["longitude"])
     lags, ncc_lat = ncc(rs["latitude"], as_["latitude"])
     _, ncc_lon = ncc(x_lon, y_lon)
-    _, p_lat = pearson_by_lag(rs["latitude"], as_["latitude"])
-    _, p_lon = pearson_by_lag(x_lon, y_lon)
+    _, p_lat = pearson_by_lag(rs["latitude"], as_["latitude"], PEARSON_MIN_OVERLAP)
+    _, p_lon = pearson_by_lag(x_lon, y_lon, PEARSON_MIN_OVERLAP)
+    (peak_lat, limit_lat), (peak_lon, limit_lon) = (pearson_peak(lags, p, len(slots)) for p in (p_lat, p_lon))
     lag_frame = pd.DataFrame(dict(zip(LAG_COLUMNS, [lags, ncc_lat, ncc_lon, p_lat, p_lon], strict=True)))
     zero = len(slots) - 1
     summary = {
@@ -257,8 +286,8 @@ def _window_result(ac: tuple[str, str], number: int, start_s: float, end_s: floa
         "ncc0_lat": float(ncc_lat[zero]), "ncc0_lon": float(ncc_lon[zero]),
         "ncc_peak_lag_lat": peak_lag(lags, ncc_lat), "ncc_peak_lag_lon": peak_lag(lags, ncc_lon),
         "pearson0_lat": float(p_lat[zero]), "pearson0_lon": float(p_lon[zero]),
-        "pearson_peak_lag_lat": peak_lag(lags, p_lat, pearson_max_lag(len(slots))),
-        "pearson_peak_lag_lon": peak_lag(lags, p_lon, pearson_max_lag(len(slots))),
+        "pearson_peak_lag_lat": peak_lat, "pearson_peak_lag_lon": peak_lon,
+        "pearson_peak_at_limit_lat": limit_lat, "pearson_peak_at_limit_lon": limit_lon,
         **separation_summary(slots["sep_m"].to_numpy(), rs["filled"], as_["filled"]),
     }
     summary = {k: _none_if_nan(summary[k]) for k in SUMMARY_KEYS}

@@ -28,7 +28,7 @@ from openpyxl.styles import Alignment, PatternFill
 from openpyxl.worksheet._write_only import WriteOnlyWorksheet
 from openpyxl.worksheet.pagebreak import Break
 
-from pipeline.correlate.correlation import pearson_max_lag
+from pipeline.correlate.correlation import PEARSON_MIN_OVERLAP, pearson_max_lag
 from pipeline.correlate.results import SUMMARY_KEYS, CorrelationRun, WindowResult
 from pipeline.report.cells import (
     BOLD,
@@ -89,9 +89,11 @@ SUMMARY_BLOCKS: list[tuple[str, list[str]]] = [
      ["callsign", "window", "sensors", "start", "end", "address", "slots",
       "radar_before", "radar_after", "adsb_before", "adsb_after", "radar_duplicates", "adsb_duplicates",
       "adsb_jumps", "radar_filled_slots", "adsb_filled_slots"]),
-    ("Coefficients (thesis table 6.2: r(0) by NCC; Pearson peak searched over |lag| <= N/2)",
+    (f"Coefficients (thesis table 6.2: r(0) by NCC; Pearson where at least {PEARSON_MIN_OVERLAP} slots "
+     "overlap, its peak searched over |lag| <= N/2; a peak at that limit is no lag estimate)",
      ["callsign", "window", "sensors", "start", "end", "ncc0_lat", "ncc0_lon", "ncc_peak_lag_lat",
-      "ncc_peak_lag_lon", "pearson0_lat", "pearson0_lon", "pearson_peak_lag_lat", "pearson_peak_lag_lon"]),
+      "ncc_peak_lag_lon", "pearson0_lat", "pearson0_lon", "pearson_peak_lag_lat", "pearson_peak_lag_lon",
+      "pearson_peak_at_limit_lat", "pearson_peak_at_limit_lon"]),
     ("Separation between slotted radar and ADS-B positions (m) over the slots where both reported "
      "(sep slots; a filled slot holds an earlier position); sep rms all m: every slot",
      ["callsign", "window", "sensors", "start", "end", "sep_mean_m", "sep_median_m", "sep_rms_m", "sep_p95_m",
@@ -208,7 +210,8 @@ def _write_summary(wb: Workbook, run: CorrelationRun) -> None:
                    cell_for(ws, values.get("window"), None), cell_for(ws, values.get("sensors"), None),
                    _summary_time_cell(ws, start), note_cell])
     if not notes:
-        ws.append([note_text_cell(ws, "none: in every window the RMS separation is within 3 x the median")])
+        ws.append([note_text_cell(ws, "none: in every window the RMS separation is within 3 x the median and "
+                                      "no Pearson peak needs a warning")])
     ws.append([])
     ws.append([text_cell(ws, f"Skipped windows ({len(skipped)})", font=BOLD)])
     if skipped:

@@ -15,7 +15,7 @@ from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 
-from pipeline.correlate.correlation import peak_lag, pearson_max_lag
+from pipeline.correlate.correlation import peak_lag, pearson_max_lag, pearson_search_limit
 from pipeline.correlate.results import CorrelationRun, WindowResult
 from pipeline.report.summary import printable, slot_seconds, window_label
 
@@ -273,13 +273,19 @@ def track_figure(run: CorrelationRun, path_png: str | os.PathLike[str],
     return save_png(fig, path_png, TRACK_PNG_COMPRESS_LEVEL)
 
 
-def figure_peak(lags, r, measure: str) -> int | None:
-    """Index of the peak the lag figure marks, by the rule of the summary numbers: NCC over every lag,
-    Pearson over |lag| <= N/2 only (``pearson_max_lag``); None when there is no finite value."""
+def figure_peak(lags, r, measure: str) -> tuple[int | None, bool]:
+    """Index of the peak the lag figure marks, by the rule of the summary numbers (NCC over every lag,
+    Pearson over |lag| <= pearson_search_limit), and whether it sits at the search limit (then no lag
+    estimate: marked hollow); None when there is no finite value."""
     lags = np.asarray(lags)
     n_slots = (lags.size + 1) // 2
-    lag = peak_lag(lags, r, pearson_max_lag(n_slots) if measure == "pearson" else None)
-    return None if lag is None else int(np.flatnonzero(lags == lag)[0])
+    if measure != "pearson":
+        lag, at_limit = peak_lag(lags, r), False
+    else:
+        limit = pearson_search_limit(n_slots)
+        lag = peak_lag(lags, r, limit) if limit >= 1 else None
+        at_limit = lag is not None and abs(lag) == limit
+    return (None if lag is None else int(np.flatnonzero(lags == lag)[0])), at_limit
 
 
 def lag_figure(window: WindowResult, path: str | os.PathLike[str]) -> Path:
@@ -299,19 +305,28 @@ def lag_figure(window: WindowResult, path: str | os.PathLike[str]) -> Path:
             label = "NCC" if measure == "ncc" else "Pearson"
             ax.plot(x[inside], y[inside], color=color, ls=ls, lw=1.4, label=label, zorder=3)
             shown.append(y[inside])
-            k = figure_peak(x, y, measure)
+            k, at_limit = figure_peak(x, y, measure)
             if k is not None and inside[k]:
-                ax.plot(x[k], y[k], marker="*", ms=12, color=color, mec="black", mew=0.6, ls="none", zorder=4)
-                ax.annotate(f"{int(x[k]):+d}", (x[k], y[k]), xytext=(4, 4), textcoords="offset points",
-                            fontsize=8, color=color)
+                # the label on the side towards the middle, so a peak at the edge keeps it inside the axes
+                right = x[k] <= 0
+                if at_limit:  # no lag estimate: a hollow mark, said in words
+                    ax.plot(x[k], y[k], marker="o", ms=9, mfc="white", mec=color, mew=1.4, ls="none",
+                            zorder=4, clip_on=False)
+                    text = f"{int(x[k]):+d}: search limit, no estimate"
+                else:
+                    ax.plot(x[k], y[k], marker="*", ms=12, color=color, mec="black", mew=0.6, ls="none",
+                            zorder=4, clip_on=False)
+                    text = f"{int(x[k]):+d}"
+                ax.annotate(text, (x[k], y[k]), xytext=(7 if right else -7, 4), textcoords="offset points",
+                            ha="left" if right else "right", fontsize=8, color=color, zorder=5)
         values = np.concatenate(shown) if shown else np.array([])
         values = values[np.isfinite(values)]
         if values.size:
             low, high = float(values.min()), float(values.max())
             pad = max(0.02, 0.08 * (high - low))
             ax.set_ylim(max(-1.05, low - pad), min(1.05, high + pad))
-        if half > 0:
-            ax.set_xlim(-half, half)
+        if half > 0:  # a little room beyond the limits, so a mark there is drawn whole
+            ax.set_xlim(-half - 0.03 * half - 0.5, half + 0.03 * half + 0.5)
         ax.set_title("Latitude" if axis == "lat" else "Longitude", fontsize=10)
         ax.set_xlabel(f"lag (slots), |lag| <= N/2 = {half}")
         ax.set_ylabel("coefficient")
@@ -320,8 +335,9 @@ def lag_figure(window: WindowResult, path: str | os.PathLike[str]) -> Path:
         ax.legend(fontsize=8, loc="lower center")
     step = slot_seconds(window)
     note = f", 1 slot = {step:g} s" if math.isfinite(step) else ""
-    fig.suptitle(f"Correlation against lag: {window_label(window.summary)}{note}\n(star = peak; wider lags, "
-                 "with less than half the slots overlapping, left out)", fontsize=10)
+    fig.suptitle(f"Correlation against lag: {window_label(window.summary)}{note}\n(star = peak, hollow = "
+                 "peak at the search limit; wider lags, with less than half the slots overlapping, left out)",
+                 fontsize=10)
     return save_png(fig, path)
 
 

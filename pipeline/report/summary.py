@@ -14,6 +14,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
+from pipeline.correlate.correlation import pearson_search_limit
 from pipeline.correlate.results import SUMMARY_KEYS, CorrelationRun, WindowResult
 from pipeline.model.time import iso_utc
 from pipeline.report.formats import decimals
@@ -162,19 +163,46 @@ SEP_DOMINATED_RATIO = 3.0  # sep_rms above this many times the median separation
 
 
 def window_note(summary: Mapping[str, Any]) -> str | None:
-    """A plain-language note when the window's RMS separation is dominated by a few slots, else None.
+    """Plain-language notes on a window, "; "-joined, else None: its RMS separation is dominated by a few
+    slots (``sep_rms_m > SEP_DOMINATED_RATIO * sep_median_m``; the ADS-B jumps found, the usual cause, and
+    the option that removes them), a Pearson peak at the search limit (no lag estimate), or Pearson peak
+    lags read in a window with ADS-B jumps (a jump leaving the overlap moves the peak)."""
+    notes = [n for n in (_separation_note(summary), _pearson_note(summary)) if n]
+    return "; ".join(notes) if notes else None
 
-    The rule: ``sep_rms_m > SEP_DOMINATED_RATIO * sep_median_m``. The note names the ADS-B jumps found in the
-    window, the usual cause, and the option that removes them."""
+
+def _jumps(summary: Mapping[str, Any]) -> int:
+    jumps = summary.get("adsb_jumps")
+    return 0 if is_missing(jumps) else int(jumps)
+
+
+def _separation_note(summary: Mapping[str, Any]) -> str | None:
     rms, median = summary.get("sep_rms_m"), summary.get("sep_median_m")
     if is_missing(rms) or is_missing(median) or not rms > SEP_DOMINATED_RATIO * median:
         return None
     head = f"sep RMS {float(rms):.1f} m > {SEP_DOMINATED_RATIO:g} x median {float(median):.1f} m"
-    jumps = summary.get("adsb_jumps")
-    if not is_missing(jumps) and int(jumps) > 0:
-        plural = "s" if int(jumps) != 1 else ""
-        return f"{int(jumps)} ADS-B position jump{plural} in this window; rerun with --drop-jumps ({head})"
+    jumps = _jumps(summary)
+    if jumps > 0:
+        plural = "s" if jumps != 1 else ""
+        return f"{jumps} ADS-B position jump{plural} in this window; rerun with --drop-jumps ({head})"
     return f"a few slots dominate the separation ({head}); see sep_m in the Slots sheet"
+
+
+def _pearson_note(summary: Mapping[str, Any]) -> str | None:
+    at_limit = [name for axis, name in (("lat", "latitude"), ("lon", "longitude"))
+                if summary.get(f"pearson_peak_at_limit_{axis}") is True]
+    notes = []
+    if at_limit:
+        slots = summary.get("slots")
+        edge = f" |lag| = {pearson_search_limit(int(slots))}" if isinstance(slots, Real) else ""
+        notes.append(f"Pearson {' and '.join(at_limit)} peak at the edge of the lags searched{edge}: "
+                     "no lag estimate")
+    lags = [(axis, summary.get(f"pearson_peak_lag_{axis}")) for axis in ("lat", "lon")]
+    moved = [f"{axis} {int(lag):+d}" for axis, lag in lags if not is_missing(lag) and int(lag) != 0]
+    if moved and _jumps(summary) > 0:
+        notes.append(f"Pearson peak lags ({', '.join(moved)}) in a window with ADS-B position jumps: read "
+                     "them after --drop-jumps")
+    return "; ".join(notes) if notes else None
 
 
 def clock_text(timestamp: Any, tod: Any, *, date: bool = True) -> str:
