@@ -922,6 +922,16 @@ def _figures_beside(out: Path, options, sensors: pd.DataFrame) -> list[Path]:
     return [out.with_name(n) for n in names]
 
 
+def figure_windows_note(n_windows: int, max_windows: int | None = None) -> str | None:
+    """What correlate --quality leaves out of its per-window figures (said on the Figures sheet and the
+    terminal), None when every window has its figures; ``max_windows`` FIGURE_WINDOWS unless given."""
+    max_windows = FIGURE_WINDOWS if max_windows is None else max_windows
+    if n_windows <= max_windows:
+        return None
+    return (f"slotting and lag figures for the first {max_windows} of {n_windows} windows only (the Lag "
+            "charts and Slot charts sheets chart more)")
+
+
 def quality_figures(result: QualityResult, out_dir: Path, stem: str) -> dict[str, Path]:
     """Update-interval histogram and, per radar, range/azimuth error against range and time (PNG)."""
     from pipeline.report.quality_figures import interval_histogram_figure, radar_error_figure
@@ -996,14 +1006,15 @@ def _drawn(drawing: Background, png: Path, tables: list[Path] = ()) -> dict:
 
 
 def write_correlation(result: CorrelateResult, progress: Progress | None = None,
-                      max_windows: int = FIGURE_WINDOWS, prepared: Prepared | None = None) -> dict[str, Path]:
+                      max_windows: int | None = None, prepared: Prepared | None = None) -> dict[str, Path]:
     """Write what the options ask for: JSON summary, workbook with its track figure (and, with quality,
     the quality and per-window figures), all or nothing. Returns what was written, by kind. ``prepared``
     (prepare_correlation_writers) draws the track figure; it is used up or closed here."""
     release_free_memory()  # what the job freed (the CLI lets go of the measurements), before the tables
     try:
         with all_or_nothing(result.checked.json, result.checked.output):
-            return _write_correlation(result, progress, max_windows, prepared)
+            shown = FIGURE_WINDOWS if max_windows is None else max_windows
+            return _write_correlation(result, progress, shown, prepared)
     finally:
         if prepared is not None:
             prepared.close()  # a no-op once started
@@ -1083,7 +1094,9 @@ def _write_workbook(result: CorrelateResult, progress: Progress | None, max_wind
             images[f"{label}: coefficient against lag"] = lag_figure(
                 w, out.with_name(f"{out.stem}_lags_{i + 1}.png"))
     files = [parquet_path(out, name) for name in in_child]
-    tables = write_report(run, out, figure_png=png, images=images, tables=result.options.tables,
+    note = figure_windows_note(len(run.windows), max_windows) if images is not None else None
+    tables = write_report(run, out, figure_png=png, images=images, images_note=note or "",
+                          tables=result.options.tables,
                           figure_ready=lambda: _drawn(drawing, png, files),
                           tables_written=(lambda: _drawn(drawing, png, files)) if in_child else None,
                           elsewhere=in_child)

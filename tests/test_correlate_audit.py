@@ -175,3 +175,26 @@ def test_pearson_min_overlap_is_checked():
     for bad in (1, 2.5, True, "10"):
         with pytest.raises(ValueError, match="min_overlap"):
             pearson_by_lag([1.0, 2.0, 3.0], [1.0, 2.0, 4.0], bad)
+
+
+def test_quality_figures_say_which_windows_they_cover(tmp_path, monkeypatch, capsys):
+    """correlate --quality draws per-window figures for the first FIGURE_WINDOWS windows only: the Figures
+    sheet and the terminal say so (here 1 of MAS72's 2 windows on the fixtures)."""
+    from pathlib import Path
+
+    from openpyxl import load_workbook
+
+    import pipeline.jobs as jobs
+    from pipeline.cli import main
+
+    fix = Path(__file__).resolve().parents[1] / "fixtures"
+    monkeypatch.setattr(jobs, "FIGURE_WINDOWS", 1)
+    out = tmp_path / "c.xlsx"
+    assert main(["correlate", str(fix / "radar.ast"), str(fix / "adsb.ast"), "--sensors",
+                 str(fix / "sensors.toml"), "--callsign", "MAS72", "--quality", "-o", str(out)]) == 0
+    err = capsys.readouterr().err
+    assert "Figures: slotting and lag figures for the first 1 of 2 windows only" in err
+    first = load_workbook(out)["Figures"]["A1"].value
+    assert first.startswith("Slotting and lag figures for the first 1 of 2 windows only")
+    drawn = [p.name for p in tmp_path.glob("c_*.png") if "_slotting_" in p.name or "_lags_" in p.name]
+    assert sorted(drawn) == ["c_lags_1.png", "c_slotting_1.png"]

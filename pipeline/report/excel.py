@@ -426,12 +426,17 @@ def _write_frame(wb: Workbook, title: str, frame: pd.DataFrame | pd.Series) -> N
     write_table(ws, columns, note=note)
 
 
-def _write_figures(wb: Workbook, title: str, images: dict[str, str | os.PathLike[str]]) -> None:
-    """A sheet of PNG figures, one per printed page, each under its caption."""
+def _write_figures(wb: Workbook, title: str, images: dict[str, str | os.PathLike[str]],
+                   note: str = "") -> None:
+    """A sheet of PNG figures, one per printed page, each under its caption; ``note`` (what the figures
+    leave out) on the first row."""
     ws = wb.create_sheet(title)
     page_setup(ws, None)
     fixed_rows(ws)
     row = 1
+    if note:
+        ws.append([text_cell(ws, clean_text(note[:1].upper() + note[1:]), font=BOLD)])
+        row += 1
     rows_per_page = int((IMAGE_MAX_H_PX + 40) / (ROW_HEIGHT_PT * 4 / 3)) + 2
     for caption, png in images.items():
         image = _scaled_image(png)
@@ -457,12 +462,14 @@ def write_parquet_tables(run: CorrelationRun, path_xlsx: str | os.PathLike[str],
 
 def write_report(run: CorrelationRun, path_xlsx: str | os.PathLike[str], *,
                  figure_png: str | os.PathLike[str] | None = None,
-                 images: dict[str, str | os.PathLike[str]] | None = None, tables: str = "auto",
+                 images: dict[str, str | os.PathLike[str]] | None = None, images_note: str = "",
+                 tables: str = "auto",
                  figure_ready: Callable[[], object] | None = None,
                  tables_written: Callable[[], dict[str, tuple[int, object, Path]]] | None = None,
                  elsewhere: Collection[str] | None = None) -> list[Path]:
     """Write the run's workbook to ``path_xlsx``; embed ``figure_png`` on a Map sheet when given and
-    further ``images`` (caption -> PNG) on a Figures sheet. The slot and lag tables go to Parquet beside
+    further ``images`` (caption -> PNG) on a Figures sheet, under ``images_note`` (what they leave out).
+    The slot and lag tables go to Parquet beside
     it as ``tables`` says (pipeline.report.tables); returns the Parquet files written. ``figure_ready``
     is called before ``figure_png`` is first read (the figure may be drawn meanwhile elsewhere). With
     ``tables_written`` the Parquet tables named in ``elsewhere`` (all of them when None) are being written
@@ -483,7 +490,7 @@ def write_report(run: CorrelationRun, path_xlsx: str | os.PathLike[str], *,
         for name, frame in run.extra_sheets.items():
             _write_frame(wb, sheet_name(name, taken), frame)
         if images:
-            _write_figures(wb, sheet_name("Figures", taken), images)
+            _write_figures(wb, sheet_name("Figures", taken), images, images_note)
         _write_parameters(wb, run)
         get_ready(wb)  # while the tables and the figure may still be written elsewhere
         if away:
