@@ -198,3 +198,40 @@ def test_quality_figures_say_which_windows_they_cover(tmp_path, monkeypatch, cap
     assert first.startswith("Slotting and lag figures for the first 1 of 2 windows only")
     drawn = [p.name for p in tmp_path.glob("c_*.png") if "_slotting_" in p.name or "_lags_" in p.name]
     assert sorted(drawn) == ["c_lags_1.png", "c_slotting_1.png"]
+
+
+def _meas_one_window():
+    t = np.arange(28800.0, 29000.0, 2.0)  # 08:00:00-08:03:18 UTC
+    frames = [_frame("radar", t, *_weave(t)), _frame("adsb", t, *_weave(t))]
+    return meas_frame(pd.concat(frames, ignore_index=True), day="2019-03-01")
+
+
+def test_times_in_another_zone_are_taken_as_the_same_instants():
+    meas = _meas_one_window()
+    (utc,) = correlate(meas, callsign="MAS72").windows
+    kl = meas.assign(time=meas["time"].dt.tz_convert("Asia/Kuala_Lumpur"))  # 16:00 local, UTC+8
+    (local,) = correlate(kl, callsign="MAS72").windows
+    assert utc.summary["start_tod"] == local.summary["start_tod"] == 28800.0  # 08:00:00 UTC
+    assert local.summary["start"] == pd.Timestamp("2019-03-01T08:00:00", tz="UTC")
+    us = meas.assign(time=meas["time"].dt.as_unit("us"))  # another resolution: the same seconds
+    assert correlate(us, callsign="MAS72").windows[0].summary["end_tod"] == utc.summary["end_tod"]
+    pd.testing.assert_frame_equal(local.slots, utc.slots)
+
+
+def test_naive_times_and_contradicting_arguments_are_refused():
+    meas = _meas_one_window()
+    naive = meas.assign(time=meas["time"].dt.tz_localize(None))
+    with pytest.raises(ValueError, match=r"meas\['time'\] is timezone-naive .*tz_localize\('UTC'\)"):
+        correlate(naive, callsign="MAS72")
+    with pytest.raises(TypeError, match=r"meas\['time'\] must hold tz-aware datetimes.*float64"):
+        correlate(meas.assign(time=1.0), callsign="MAS72")
+    with pytest.raises(ValueError, match=r"all_aircraft=True .* not both \(got callsign='MAS72'\)"):
+        correlate(meas, all_aircraft=True, callsign="MAS72")
+    with pytest.raises(ValueError, match=r"not both \(got address='750123'\)"):
+        correlate(meas, all_aircraft=True, address="750123")
+    for name, value in (("slot_s", 0.0), ("slot_s", float("nan")), ("slot_s", "10"), ("gap_s", -1.0),
+                        ("gap_s", float("inf"))):
+        with pytest.raises(ValueError, match=f"{name} must be a finite number of seconds.*{value!r}"[:60]):
+            correlate(meas, callsign="MAS72", **{name: value})
+    with pytest.raises(ValueError, match="pairs must be one of"):
+        correlate(meas, callsign="MAS72", pairs="radar")

@@ -90,6 +90,18 @@ class TooManySlots(ValueError):
                          f"(at least {slots:,}); use a longer slot")
 
 
+def utc_times(times: pd.Series) -> pd.Series:
+    """``times`` as UTC instants in nanoseconds: tz-aware times of any zone are converted exactly (the same
+    instants); naive times are refused, as their zone is unknown (seconds of day count from UTC midnight)."""
+    dtype = times.dtype
+    if isinstance(dtype, pd.DatetimeTZDtype):
+        return times.dt.tz_convert("UTC").dt.as_unit("ns") if str(dtype) != "datetime64[ns, UTC]" else times
+    if pd.api.types.is_datetime64_dtype(dtype):
+        raise ValueError(f"meas['time'] is timezone-naive ({dtype}): correlate needs UTC instants; if the "
+                         "times are UTC, pass meas.assign(time=meas['time'].dt.tz_localize('UTC'))")
+    raise TypeError(f"meas['time'] must hold tz-aware datetimes (datetime64[ns, UTC]), got dtype {dtype}")
+
+
 def _lags(n: int) -> np.ndarray:
     return np.arange(-(n - 1), n)
 
@@ -494,8 +506,21 @@ def correlate(meas: pd.DataFrame, *, callsign: str | None = None, address: str |
     """
     if fill not in ("hold", "predict"):
         raise ValueError(f"fill must be 'hold' or 'predict', got {fill!r}")
-    if slot_s <= 0 or gap_s < 0:
-        raise ValueError(f"slot_s must be > 0 and gap_s >= 0, got {slot_s} and {gap_s}")
+    for name, value, low in (("slot_s", slot_s, "> 0"), ("gap_s", gap_s, ">= 0")):
+        if isinstance(value, bool) or not isinstance(value, int | float | np.integer | np.floating) \
+                or not math.isfinite(value) or (value <= 0 if low == "> 0" else value < 0):
+            raise ValueError(f"{name} must be a finite number of seconds {low}, got {value!r}")
+    if pairs not in PAIRS:
+        raise ValueError(f"pairs must be one of {', '.join(PAIRS)}, got {pairs!r}")
+    if all_aircraft and (callsign is not None or address is not None):
+        given = ", ".join(f"{k}={v!r}" for k, v in (("callsign", callsign), ("address", address))
+                          if v is not None)
+        raise ValueError(f"all_aircraft=True correlates every aircraft: give it or callsign/address, not "
+                         f"both (got {given})")
+    if not isinstance(meas, pd.DataFrame) or "time" not in meas:
+        raise TypeError("meas must be a measurement frame (pipeline.model.schema) with a 'time' column, got "
+                        + (type(meas).__name__ if not isinstance(meas, pd.DataFrame) else "no 'time' column"))
+    meas = meas.assign(time=utc_times(meas["time"]))
     reference = midnight(meas["time"])
     if reference is None:
         raise NoSuchAircraft("any aircraft", ["radar", "ADS-B"], [], "there are no measurements")
