@@ -900,6 +900,7 @@ def correlate_job(options: CorrelateOptions, *, progress: Progress | None = None
                       "filters": {"drop_jumps": options.drop_jumps, "min_nic": options.min_nic,
                                   "min_nacp": options.min_nacp, "removed": run.filters}}
     checked.warnings += far_separations(run, meas, checked.sensors, str(options.sensors))
+    checked.warnings += _nothing_correlated(run, options)
     result = CorrelateResult(options, checked, run, meas, loaded)
     if options.quality:
         if progress:
@@ -907,6 +908,18 @@ def correlate_job(options: CorrelateOptions, *, progress: Progress | None = None
         result.quality = _quality(meas_all, checked.sensors, options)
         run.extra_sheets.update(result.quality.sheets)
     return result
+
+
+def _nothing_correlated(run: CorrelationRun, options: CorrelateOptions) -> list[str]:
+    """A warning when every window was skipped (the run still reports them, and exits 0 as a run of --all
+    without overlap does): with the cause when every one is shorter than a slot."""
+    if run.windows:
+        return []
+    short = bool(run.skipped) and all("shorter than one slot" in s.reason for s in run.skipped)
+    why = (f": every one is shorter than one slot (--slot {options.slot_s:g}); use a shorter --slot"
+           if short else "")
+    return [f"no window correlated, {len(run.skipped)} skipped{why} (the reasons are listed with the "
+            "skipped windows)"]
 
 
 def _figures_beside(out: Path, options, sensors: pd.DataFrame) -> list[Path]:

@@ -235,3 +235,23 @@ def test_naive_times_and_contradicting_arguments_are_refused():
             correlate(meas, callsign="MAS72", **{name: value})
     with pytest.raises(ValueError, match="pairs must be one of"):
         correlate(meas, callsign="MAS72", pairs="radar")
+
+
+def test_a_run_whose_every_window_is_skipped_says_so(tmp_path, capsys):
+    """--slot 3600 on MAS72 (windows of 344 s and 2771 s): nothing correlated. Exit 0 as for --all without
+    overlap (the report lists the skipped windows and why), with a warning naming the cause."""
+    from pathlib import Path
+
+    from openpyxl import load_workbook
+
+    from pipeline.cli import main
+
+    fix = Path(__file__).resolve().parents[1] / "fixtures"
+    out = tmp_path / "s.xlsx"
+    assert main(["correlate", str(fix / "radar.ast"), str(fix / "adsb.ast"), "--sensors",
+                 str(fix / "sensors.toml"), "--callsign", "MAS72", "--slot", "3600", "-o", str(out)]) == 0
+    captured = capsys.readouterr()
+    assert ("warning: no window correlated, 2 skipped: every one is shorter than one slot (--slot 3600); "
+            "use a shorter --slot") in captured.err
+    assert "0 window(s) correlated, 2 skipped" in captured.out
+    assert load_workbook(out)["Summary"]["A1"].value.startswith("Correlation summary: 0 window(s), 2 skipped")
