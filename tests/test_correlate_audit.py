@@ -255,3 +255,44 @@ def test_a_run_whose_every_window_is_skipped_says_so(tmp_path, capsys):
             "use a shorter --slot") in captured.err
     assert "0 window(s) correlated, 2 skipped" in captured.out
     assert load_workbook(out)["Summary"]["A1"].value.startswith("Correlation summary: 0 window(s), 2 skipped")
+
+
+def _visible_label_boxes(fig, ax):
+    from matplotlib.text import Text
+
+    fig.draw_without_rendering()
+    renderer = fig.canvas.get_renderer()
+    shown = [t for t in ax.texts if t.get_visible() and t.get_text()]
+    return shown, [Text.get_window_extent(t, renderer) for t in shown], ax.get_window_extent(renderer)
+
+
+def test_map_labels_do_not_overlap_and_stay_inside():
+    """Three sensor pairs of one aircraft start at one place with the same window number and time, beside a
+    radar site: each text once, no two labels overlapping, all inside the axes."""
+    from pipeline.report.figures import track_map
+
+    run = _two_radars_run()
+    sensors = pd.DataFrame({"name": ["Site A", "Site B"], "sac": [1, 1], "sic": [2, 3],
+                            "latitude": [2.0, 2.01], "longitude": [101.0, 101.0]})
+    fig = track_map(run, sensors)
+    ax = fig.axes[0]
+    shown, boxes, inside = _visible_label_boxes(fig, ax)
+    texts = [t.get_text() for t in shown]
+    assert texts.count("MAS72 #1 10:00") == 1 and {"Site A", "Site B"} <= set(texts)
+    assert all(not a.overlaps(b) for i, a in enumerate(boxes) for b in boxes[i + 1:]), texts
+    assert all(inside.x0 <= b.x0 and b.x1 <= inside.x1 and inside.y0 <= b.y0 and b.y1 <= inside.y1
+               for b in boxes), texts
+
+
+def test_a_lag_peak_at_the_edge_keeps_its_label_inside(monkeypatch):
+    from pipeline.report import figures
+
+    w = _delayed(150.0)  # the latitude peak sits at the search limit, lag +10
+    drawn = {}
+    monkeypatch.setattr(figures, "save_png", lambda fig, path, *a: drawn.setdefault("fig", fig))
+    figures.lag_figure(w, "unused.png")
+    fig = drawn["fig"]
+    ax = fig.axes[0]
+    shown, boxes, inside = _visible_label_boxes(fig, ax)
+    (edge,) = [(t, b) for t, b in zip(shown, boxes, strict=True) if "search limit" in t.get_text()]
+    assert edge[0].get_text().startswith("+10") and inside.x0 <= edge[1].x0 and edge[1].x1 <= inside.x1
