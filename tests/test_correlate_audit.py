@@ -296,3 +296,22 @@ def test_a_lag_peak_at_the_edge_keeps_its_label_inside(monkeypatch):
     shown, boxes, inside = _visible_label_boxes(fig, ax)
     (edge,) = [(t, b) for t, b in zip(shown, boxes, strict=True) if "search limit" in t.get_text()]
     assert edge[0].get_text().startswith("+10") and inside.x0 <= edge[1].x0 and edge[1].x1 <= inside.x1
+
+
+def test_summary_gives_each_note_its_own_row(tmp_path):
+    """A window with a separation note and a Pearson note: two Summary rows, so no row runs far past the
+    tables (LibreOffice fits the page to the widest row: the fixtures' Summary had shrunk to half size)."""
+    from openpyxl import load_workbook
+
+    from pipeline.report.excel import write_report
+    from pipeline.report.summary import window_note, window_notes
+
+    run = _two_radars_run()
+    expected = [n for w in run.windows for n in window_notes(w.summary)]
+    assert any("; " in (window_note(w.summary) or "").replace("; rerun", "") for w in run.windows)
+    write_report(run, tmp_path / "r.xlsx", tables="xlsx")
+    rows = list(load_workbook(tmp_path / "r.xlsx")["Summary"].iter_rows(values_only=True))
+    start = next(i for i, r in enumerate(rows) if isinstance(r[0], str) and r[0].startswith("Notes ("))
+    assert rows[start][0] == f"Notes ({len(expected)})"
+    shown = [r[4] for r in rows[start + 1: start + 1 + len(expected)]]
+    assert shown == expected and all(n.count("Pearson") <= 1 for n in shown)

@@ -65,7 +65,7 @@ from pipeline.report.charts import (
 from pipeline.report.saving import get_ready, save
 from pipeline.report.summary import (
     sensor_pair,
-    window_note,
+    window_notes,
     write_atomically,
 )
 from pipeline.report.tables import (
@@ -199,16 +199,18 @@ def _write_summary(wb: Workbook, run: CorrelationRun) -> None:
     for (title, keys), fill in zip(SUMMARY_BLOCKS, _BLOCK_FILLS, strict=False):
         row = _summary_block(ws, summaries, title, keys, fill, row)
 
-    notes = [(values, window_note(w.summary)) for w, values in zip(run.windows, summaries, strict=True)]
-    notes = [(values, n) for values, n in notes if n]
+    # one row per note, so that no row runs far past the tables (the page is fitted to its widest row)
+    notes = [(values, n) for w, values in zip(run.windows, summaries, strict=True)
+             for n in window_notes(w.summary)]
     ws.append([text_cell(ws, f"Notes ({len(notes)})", font=BOLD)])
     for values, note in notes:
         start = _summary_value(values, "start")
         note_cell = note_text_cell(ws, note)
         note_cell.alignment = _INDENT
+        pair = cell_for(ws, values.get("sensors"), None)
+        pair.alignment = _INDENT
         ws.append([cell_for(ws, values.get("callsign"), None),
-                   cell_for(ws, values.get("window"), None), cell_for(ws, values.get("sensors"), None),
-                   _summary_time_cell(ws, start), note_cell])
+                   cell_for(ws, values.get("window"), None), pair, _summary_time_cell(ws, start), note_cell])
     if not notes:
         ws.append([note_text_cell(ws, "none: in every window the RMS separation is within 3 x the median and "
                                       "no Pearson peak needs a warning")])

@@ -167,8 +167,13 @@ def window_note(summary: Mapping[str, Any]) -> str | None:
     slots (``sep_rms_m > SEP_DOMINATED_RATIO * sep_median_m``; the ADS-B jumps found, the usual cause, and
     the option that removes them), a Pearson peak at the search limit (no lag estimate), or Pearson peak
     lags read in a window with ADS-B jumps (a jump leaving the overlap moves the peak)."""
-    notes = [n for n in (_separation_note(summary), _pearson_note(summary)) if n]
+    notes = window_notes(summary)
     return "; ".join(notes) if notes else None
+
+
+def window_notes(summary: Mapping[str, Any]) -> list[str]:
+    """window_note's notes one by one (the Summary sheet gives each its own row)."""
+    return [n for n in (_separation_note(summary), *_pearson_notes(summary)) if n]
 
 
 def _jumps(summary: Mapping[str, Any]) -> int:
@@ -188,7 +193,7 @@ def _separation_note(summary: Mapping[str, Any]) -> str | None:
     return f"a few slots dominate the separation ({head}); see sep_m in the Slots sheet"
 
 
-def _pearson_note(summary: Mapping[str, Any]) -> str | None:
+def _pearson_notes(summary: Mapping[str, Any]) -> list[str]:
     at_limit = [name for axis, name in (("lat", "latitude"), ("lon", "longitude"))
                 if summary.get(f"pearson_peak_at_limit_{axis}") is True]
     notes = []
@@ -202,7 +207,7 @@ def _pearson_note(summary: Mapping[str, Any]) -> str | None:
     if moved and _jumps(summary) > 0:
         notes.append(f"Pearson peak lags ({', '.join(moved)}) in a window with ADS-B position jumps: read "
                      "them after --drop-jumps")
-    return "; ".join(notes) if notes else None
+    return notes
 
 
 def clock_text(timestamp: Any, tod: Any, *, date: bool = True) -> str:
