@@ -315,3 +315,19 @@ def test_summary_gives_each_note_its_own_row(tmp_path):
     assert rows[start][0] == f"Notes ({len(expected)})"
     shown = [r[4] for r in rows[start + 1: start + 1 + len(expected)]]
     assert shown == expected and all(n.count("Pearson") <= 1 for n in shown)
+
+
+def test_chart_titles_are_small_enough_for_one_line(tmp_path):
+    """A window's chart title names its sensor pair: at 10 pt bold it stays on one line of the 12.6 cm
+    chart (Excel's default 14 pt wrapped it onto three, squashing the plot)."""
+    from openpyxl import load_workbook
+
+    from pipeline.report.excel import write_report
+
+    write_report(_two_radars_run(), tmp_path / "r.xlsx", tables="xlsx")
+    wb = load_workbook(tmp_path / "r.xlsx")
+    for sheet in ("Lag charts", "Slot charts"):
+        for chart in wb[sheet]._charts:
+            (paragraph,) = chart.title.tx.rich.p
+            assert paragraph.pPr.defRPr.sz == 1000 and paragraph.pPr.defRPr.b
+            assert len(paragraph.r[0].t) <= 55, paragraph.r[0].t  # ~6 pt a character: 330 pt of 357
