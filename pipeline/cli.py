@@ -354,6 +354,9 @@ def _correlate(options, progress: Progress, prepared) -> int:
         print(f"JSON summary: {written['json']}", file=sys.stderr)
     if "report" in written:
         print(f"Report: {written['report']}\nTrack figure: {written['figure']}", file=sys.stderr)
+        note = jobs.figure_windows_note(len(result.run.windows)) if options.quality else None
+        if note:
+            print(f"Figures: {note}", file=sys.stderr)
     for kind, path in written.items():
         if kind.startswith("table "):
             print(f"{kind.capitalize()} (Parquet): {path}", file=sys.stderr)

@@ -818,8 +818,8 @@ def _marked_measurements(options: AircraftOptions, checked: Checked, progress: P
 # the measurement columns far_separations reads
 FAR_SEPARATION_INPUTS = ["sensor_id", "sac", "sic", "rho_nm"]
 # the measurement columns correlate --quality's slotting figures read (pipeline.report.quality_figures)
-SLOTTING_FIGURE_INPUTS = ["time", "sensor_kind", "aircraft_id", "callsign", "address", "latitude",
-                          "longitude"]
+SLOTTING_FIGURE_INPUTS = ["time", "sensor_kind", "sensor_id", "aircraft_id", "callsign", "address",
+                          "latitude", "longitude"]
 
 
 def correlate_columns(options: CorrelateOptions) -> list[str]:
@@ -917,6 +917,7 @@ def correlate_job(options: CorrelateOptions, *, progress: Progress | None = None
                       "filters": {"drop_jumps": options.drop_jumps, "min_nic": options.min_nic,
                                   "min_nacp": options.min_nacp, "removed": run.filters}}
     checked.warnings += far_separations(run, meas, checked.sensors, str(options.sensors))
+    checked.warnings += _nothing_correlated(run, options)
     result = CorrelateResult(options, checked, run, meas, loaded)
     if options.quality:
         if progress:
@@ -924,6 +925,18 @@ def correlate_job(options: CorrelateOptions, *, progress: Progress | None = None
         result.quality = _quality(meas_all, checked.sensors, options)
         run.extra_sheets.update(result.quality.sheets)
     return result
+
+
+def _nothing_correlated(run: CorrelationRun, options: CorrelateOptions) -> list[str]:
+    """A warning when every window was skipped (the run still reports them, and exits 0 as a run of --all
+    without overlap does): with the cause when every one is shorter than a slot."""
+    if run.windows:
+        return []
+    short = bool(run.skipped) and all("shorter than one slot" in s.reason for s in run.skipped)
+    why = (f": every one is shorter than one slot (--slot {options.slot_s:g}); use a shorter --slot"
+           if short else "")
+    return [f"no window correlated, {len(run.skipped)} skipped{why} (the reasons are listed with the "
+            "skipped windows)"]
 
 
 def _figures_beside(out: Path, options, sensors: pd.DataFrame) -> list[Path]:
@@ -937,6 +950,16 @@ def _figures_beside(out: Path, options, sensors: pd.DataFrame) -> list[Path]:
         names += [f"{out.stem}_{kind}_{i + 1}.png" for kind in ("slotting", "lags")
                   for i in range(FIGURE_WINDOWS)]
     return [out.with_name(n) for n in names]
+
+
+def figure_windows_note(n_windows: int, max_windows: int | None = None) -> str | None:
+    """What correlate --quality leaves out of its per-window figures (said on the Figures sheet and the
+    terminal), None when every window has its figures; ``max_windows`` FIGURE_WINDOWS unless given."""
+    max_windows = FIGURE_WINDOWS if max_windows is None else max_windows
+    if n_windows <= max_windows:
+        return None
+    return (f"slotting and lag figures for the first {max_windows} of {n_windows} windows only (the Lag "
+            "charts and Slot charts sheets chart more)")
 
 
 def quality_figures(result: QualityResult, out_dir: Path, stem: str) -> dict[str, Path]:
@@ -1013,14 +1036,15 @@ def _drawn(drawing: Background, png: Path, tables: list[Path] = ()) -> dict:
 
 
 def write_correlation(result: CorrelateResult, progress: Progress | None = None,
-                      max_windows: int = FIGURE_WINDOWS, prepared: Prepared | None = None) -> dict[str, Path]:
+                      max_windows: int | None = None, prepared: Prepared | None = None) -> dict[str, Path]:
     """Write what the options ask for: JSON summary, workbook with its track figure (and, with quality,
     the quality and per-window figures), all or nothing. Returns what was written, by kind. ``prepared``
     (prepare_correlation_writers) draws the track figure; it is used up or closed here."""
     release_free_memory()  # what the job freed (the CLI lets go of the measurements), before the tables
     try:
         with all_or_nothing(result.checked.json, result.checked.output):
-            return _write_correlation(result, progress, max_windows, prepared)
+            shown = FIGURE_WINDOWS if max_windows is None else max_windows
+            return _write_correlation(result, progress, shown, prepared)
     finally:
         if prepared is not None:
             prepared.close()  # a no-op once started
@@ -1086,6 +1110,7 @@ def _write_workbook(result: CorrelateResult, progress: Progress | None, max_wind
     if result.quality is not None:
         from pipeline.report.figures import lag_figure
         from pipeline.report.quality_figures import slotting_figure
+        from pipeline.report.summary import window_label
 
         images = dict(quality_figures(result.quality, out.parent, out.stem))
         shown = result.measurements[SLOTTING_FIGURE_INPUTS]  # what the figures read, not every column copied
@@ -1093,13 +1118,15 @@ def _write_workbook(result: CorrelateResult, progress: Progress | None, max_wind
         radar, adsb = shown[is_radar], shown[~is_radar]
         del shown
         for i, w in enumerate(run.windows[:max_windows]):
-            label = f"{w.summary['callsign'] or w.summary['address']} window {w.summary['window']}"
+            label = window_label(w.summary)
             images[f"{label}: latitude and longitude before and after slotting"] = slotting_figure(
                 w, radar, adsb, out.with_name(f"{out.stem}_slotting_{i + 1}.png"))
             images[f"{label}: coefficient against lag"] = lag_figure(
                 w, out.with_name(f"{out.stem}_lags_{i + 1}.png"))
     files = [parquet_path(out, name) for name in in_child]
-    tables = write_report(run, out, figure_png=png, images=images, tables=result.options.tables,
+    note = figure_windows_note(len(run.windows), max_windows) if images is not None else None
+    tables = write_report(run, out, figure_png=png, images=images, images_note=note or "",
+                          tables=result.options.tables,
                           figure_ready=lambda: _drawn(drawing, png, files),
                           tables_written=(lambda: _drawn(drawing, png, files)) if in_child else None,
                           elsewhere=in_child)

@@ -113,14 +113,18 @@ def test_sheets_headers_and_freeze(outputs: dict[str, Path]) -> None:
     keys = set()
     for start in ("Windows", "Coefficients", "Separation"):
         row, col = _block(summary, start)
-        assert list(col)[:4] == ["callsign", "window", "start", "end"]  # every block names its window
+        # every block names its window: aircraft, number and sensor pair (numbers restart for every pair)
+        assert list(col)[:5] == ["callsign", "window", "sensors", "start", "end"]
         assert all(summary.cell(row, c).font.b for c in col.values())
         keys |= set(col)
-    assert keys == set(SUMMARY_KEYS) - {"start_tod", "end_tod"}  # clock times live in start/end
+    # clock times live in start/end, the sensor pair in "sensors"
+    assert keys == (set(SUMMARY_KEYS) - {"start_tod", "end_tod", "radar_sensor", "reference_sensor"}) | {
+        "sensors"}
     assert summary.freeze_panes == "C2"
-    assert [c.value for c in wb["Correlation"][1]][:9] == [
-        "window", "callsign", "address", "lag", "lag_s", "ncc_lat", "ncc_lon", "pearson_lat", "pearson_lon"]
-    assert wb["Correlation"].freeze_panes == "D2"
+    assert [c.value for c in wb["Correlation"][1]][:11] == [
+        "window", "callsign", "address", "radar_sensor", "reference_sensor", "lag", "lag_s", "ncc_lat",
+        "ncc_lon", "pearson_lat", "pearson_lon"]
+    assert wb["Correlation"].freeze_panes == "F2"
     slot_headers = _header_index(wb["Slots"][1])
     assert {"slot", "time_utc", "radar_lat", "adsb_lon", "radar_filled", "sep_m"} <= set(slot_headers)
     assert "time_of_day" not in slot_headers  # never seconds of day: time_utc carries the time
@@ -232,7 +236,8 @@ def test_every_sheet_prints_landscape_fitted_with_titles(outputs: dict[str, Path
         assert ws.page_setup.orientation == "landscape", ws.title
         assert ws.page_setup.paperSize == 9, ws.title  # A4
         assert ws.sheet_properties.pageSetUpPr.fitToPage, ws.title
-        assert ws.page_setup.fitToWidth == 1, ws.title
+        # the Slots sheet's 17 columns (its window named by number, aircraft and sensor pair) print 2 wide
+        assert ws.page_setup.fitToWidth == (2 if ws.title == "Slots" else 1), ws.title
         assert ws.page_setup.fitToHeight == (1 if ws.title == "Map" else 0), ws.title
         assert ws.print_title_rows == titles[ws.title], ws.title
 
@@ -305,7 +310,7 @@ def test_lag_charts_cover_half_the_lags(outputs: dict[str, Path]) -> None:
     chart = wb["Lag charts"]._charts[0]
     assert chart.x_axis.scaling.min == -1 and chart.x_axis.scaling.max == 1  # N = 3, N // 2 = 1
     refs = {s.xVal.numRef.f for s in chart.series}
-    assert refs == {"'Correlation'!$D$3:$D$5"}  # lags -1, 0, 1 of window 1 (rows 2..6 hold -2..2)
+    assert refs == {"'Correlation'!$F$3:$F$5"}  # lags -1, 0, 1 of window 1 (rows 2..6 hold -2..2)
     assert all(s.marker is not None and s.marker.symbol is None for s in chart.series)  # symbol "none"
 
 
@@ -321,7 +326,7 @@ def test_formula_looking_text_stays_text(outputs: dict[str, Path]) -> None:
     skipped = rows[skip_header + 2]
     assert skipped[0].value == "-1+1" and skipped[0].data_type == "s" and skipped[0].quotePrefix
     assert skipped[1].value == "=HYPERLINK(\"http://x\")" and skipped[1].data_type == "s"
-    assert skipped[4].value == "fewer than 10 slots"
+    assert skipped[5].value == "fewer than 10 slots"
     corr = wb["Correlation"]
     assert any(c.value == EVIL and c.data_type == "s" and c.quotePrefix for c in corr["B"])
     with zipfile.ZipFile(outputs["xlsx"]) as zf:
@@ -352,7 +357,8 @@ def test_json_round_trip(outputs: dict[str, Path]) -> None:
     assert second["pearson0_lat"] is None and second["start"] is None and second["end"] is None
     assert second["callsign"] == EVIL and second["ncc_peak_lag_lat"] == 1
     assert data["skipped"] == [{"callsign": "-1+1", "address": "=HYPERLINK(\"http://x\")",
-                                "start_tod": 37000.0, "end_tod": 37010.0, "reason": "fewer than 10 slots"}]
+                                "radar_sensor": "", "reference_sensor": "", "start_tod": 37000.0,
+                                "end_tod": 37010.0, "reason": "fewer than 10 slots"}]
     assert data["parameters"]["run_time"] == "2024-05-01T12:00:00Z"
     assert data["inputs"][0]["bytes"] == 12345 and data["filters"]["ground"] == 3
 
@@ -364,13 +370,15 @@ def test_run_to_json_is_strict_json(run: CorrelationRun) -> None:
 def test_summary_table(run: CorrelationRun) -> None:
     text = summary_table(run)
     lines = text.splitlines()
-    assert len(lines) == 2 + len(run.windows) + 2  # header, rule, windows, count, one skipped window
+    # header, rule, windows, count, one skipped window, what the separations are taken over
+    assert len(lines) == 2 + len(run.windows) + 3
     assert lines[0].split()[:6] == ["call", "sign", "win", "sensors", "start", "(UTC)"]
     assert "SIA321" in lines[2] and "0.999980" in lines[2] and "0.9999800000" not in lines[2]  # 6 decimals
     assert "50.8" in lines[2] and "2019-03-01 10:00:00" in lines[2] and " 10:00:20 " in lines[2]
     assert EVIL in lines[3] and "10:01:40" in lines[3] and "36100" not in lines[3]  # clock time, undated
     assert "1 skipped" in lines[4]
     assert lines[5] == "  skipped -1+1 10:16:40-10:16:50: fewer than 10 slots"
+    assert lines[6].startswith("sep: ") and "both sensors reported" in lines[6]
 
 
 def _assert_png(path: Path, min_bytes: int = 10_000) -> None:

@@ -24,38 +24,57 @@ FIX = Path(__file__).resolve().parents[1] / "fixtures"
 
 # ------------------------------------------------------------------------------------- figure peak rule
 
-LAGS = np.arange(-3, 4)  # N = 4 slots, so the Pearson peak is searched over |lag| <= 4 // 2 = 2
-R = np.array([0.99, 0.2, 0.5, 0.4, 0.6, 0.1, 0.95])
+LAGS = np.arange(-23, 24)  # N = 24 slots: Pearson peak searched over |lag| <= min(24 // 2, 24 - 10) = 12
+
+
+def _r(values: dict[int, float]) -> np.ndarray:
+    """A coefficient per lag of LAGS: 0 but at the lags given."""
+    r = np.zeros(LAGS.size)
+    for lag, v in values.items():
+        r[lag + 23] = v
+    return r
+
+
+R = _r({-20: 0.99, -2: 0.5, 1: 0.6, 20: 0.95})
 
 
 def test_pearson_peak_ignores_lags_beyond_half():
-    # lags -3 and +3 (0.99, 0.95) overlap on one slot only; among -2..2 the largest is 0.6 at lag +1
-    assert figure_peak(LAGS, R, "pearson") == 4
-    assert LAGS[figure_peak(LAGS, R, "pearson")] == 1
+    # lags -20 and +20 (0.99, 0.95) overlap on 4 slots only; among -12..12 the largest is 0.6 at lag +1
+    k, at_limit = figure_peak(LAGS, R, "pearson")
+    assert LAGS[k] == 1 and not at_limit
 
 
 def test_ncc_peak_searches_every_lag():
-    assert figure_peak(LAGS, R, "ncc") == 0  # 0.99 at lag -3
+    assert LAGS[figure_peak(LAGS, R, "ncc")[0]] == -20
 
 
 def test_peak_ties_nan_and_empty():
-    tie = np.array([0.1, 0.7, 0.2, 0.7, 0.3, 0.0, 0.0])
-    assert figure_peak(LAGS, tie, "pearson") == 1  # first of the equal maxima: lag -2
-    only_outside = np.array([0.9, np.nan, np.nan, np.nan, np.nan, np.nan, 0.8])
-    assert figure_peak(LAGS, only_outside, "pearson") is None
-    assert figure_peak(LAGS, only_outside, "ncc") == 0
+    tie = _r({-2: 0.7, 2: 0.7})
+    assert LAGS[figure_peak(LAGS, tie, "pearson")[0]] == -2  # first of the equal maxima
+    only_outside = _r({-20: 0.9, 20: 0.8})
+    only_outside[np.abs(LAGS) <= 12] = np.nan
+    assert figure_peak(LAGS, only_outside, "pearson") == (None, False)
+    assert LAGS[figure_peak(LAGS, only_outside, "ncc")[0]] == -20
+
+
+def test_a_peak_at_the_search_limit_is_marked_as_such():
+    k, at_limit = figure_peak(LAGS, _r({-12: 0.9, 0: 0.5}), "pearson")
+    assert LAGS[k] == -12 and at_limit
+    # a window of 10 slots: only lag 0 has 10 slots overlapping, no lag can be estimated; of 11, lag +-1
+    assert figure_peak(np.arange(-9, 10), np.linspace(0, 1, 19), "pearson") == (None, False)
+    assert figure_peak(np.arange(-10, 11), np.linspace(0, 1, 21), "pearson") == (11, True)
 
 
 def test_peak_matches_the_summary_rule():
     """The lag the figure marks is the summary's pearson_peak_lag for a window built by correlate."""
-    from pipeline.correlate.correlation import peak_lag, pearson_by_lag, pearson_max_lag
+    from pipeline.correlate.correlation import PEARSON_MIN_OVERLAP, pearson_by_lag, pearson_peak
 
     t = np.arange(40.0)
     x = np.sin(t / 5.0)
     y = np.roll(x, -3) + 0.01 * np.cos(t)
-    lags, r = pearson_by_lag(x, y)
-    expected = peak_lag(lags, r, pearson_max_lag(40))
-    assert lags[figure_peak(lags, r, "pearson")] == expected
+    lags, r = pearson_by_lag(x, y, PEARSON_MIN_OVERLAP)
+    expected, _ = pearson_peak(lags, r, 40)
+    assert expected is not None and lags[figure_peak(lags, r, "pearson")[0]] == expected
 
 
 # ------------------------------------------------------------------------------------------ window note
@@ -93,7 +112,8 @@ def test_note_in_json_and_stdout_from_the_fixtures(tmp_path, capsys):
     first = json.loads(out.read_text())["windows"][0]
     assert first["sep_rms_m"] > SEP_DOMINATED_RATIO * first["sep_median_m"]
     assert first["adsb_jumps"] >= 1 and "rerun with --drop-jumps" in first["note"]
-    assert f"Note: MAS72 window 1: {first['adsb_jumps']} ADS-B position jump" in stdout
+    pair = "048:25/201 vs 021:0/1"
+    assert f"Note: MAS72 window 1 ({pair}): {first['adsb_jumps']} ADS-B position jump" in stdout
     assert first["radar_filled_slots"] + first["radar_after"] >= first["slots"]
 
 

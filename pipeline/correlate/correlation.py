@@ -31,6 +31,11 @@ from pipeline.model.time import is_dated, iso_utc, midnight, seconds_since, with
 from pipeline.parallel import map_ordered
 
 PAIRS = ("radar-adsb", "radar-radar", "all")
+# A Pearson coefficient is shown where at least this many slot pairs overlap: of m pairs of independent
+# noise, |r| exceeds 0.997 by chance 5 % of the time at m = 3, 0.878 at m = 5 and 0.632 at m = 10 (r = +-1
+# always at m = 2), and slotted tracks are smooth, so short overlaps say nothing; 10 slots are 100 s at
+# the default 10 s slot, 8-25 radar scans.
+PEARSON_MIN_OVERLAP = 10
 # the measurement columns correlate() reads (identity, time, position, dedup keys, job-wide flags); the
 # tracker behind --fill predict reads more
 CORRELATION_INPUTS = ["time", "time_of_day", "sensor_id", "sensor_kind", "aircraft_id", "callsign",
@@ -46,8 +51,9 @@ SLOT_ROW_BYTES, LAG_ROW_BYTES = 82, 40
 TABLE_BUDGET_BYTES = 512 * 2**20
 MAX_SLOTS = TABLE_BUDGET_BYTES // (SLOT_ROW_BYTES + 2 * LAG_ROW_BYTES)  # 3,314,017 over all windows of a run
 
-__all__ = ["MAX_SLOTS", "PAIRS", "NoOverlap", "NoSuchAircraft", "TooManySlots", "correlate", "ncc",
-           "pearson_by_lag", "pearson_max_lag", "peak_lag", "separation_stats"]
+__all__ = ["MAX_SLOTS", "PAIRS", "PEARSON_MIN_OVERLAP", "NoOverlap", "NoSuchAircraft", "TooManySlots",
+           "correlate", "ncc", "pearson_by_lag", "pearson_max_lag", "pearson_peak", "pearson_search_limit",
+           "peak_lag", "separation_stats", "separation_summary"]
 
 
 class NoOverlap(LookupError):
@@ -82,6 +88,18 @@ class TooManySlots(ValueError):
         self.slots, self.limit, self.slot_s = slots, limit, slot_s
         super().__init__(f"slots of {slot_s:g} s need more than {limit:,} slots over the windows "
                          f"(at least {slots:,}); use a longer slot")
+
+
+def utc_times(times: pd.Series) -> pd.Series:
+    """``times`` as UTC instants in nanoseconds: tz-aware times of any zone are converted exactly (the same
+    instants); naive times are refused, as their zone is unknown (seconds of day count from UTC midnight)."""
+    dtype = times.dtype
+    if isinstance(dtype, pd.DatetimeTZDtype):
+        return times.dt.tz_convert("UTC").dt.as_unit("ns") if str(dtype) != "datetime64[ns, UTC]" else times
+    if pd.api.types.is_datetime64_dtype(dtype):
+        raise ValueError(f"meas['time'] is timezone-naive ({dtype}): correlate needs UTC instants; if the "
+                         "times are UTC, pass meas.assign(time=meas['time'].dt.tz_localize('UTC'))")
+    raise TypeError(f"meas['time'] must hold tz-aware datetimes (datetime64[ns, UTC]), got dtype {dtype}")
 
 
 def _lags(n: int) -> np.ndarray:
@@ -119,12 +137,16 @@ def ncc(x, y) -> tuple[np.ndarray, np.ndarray]:
     return _lags(x.size), num / norm if norm > 0 else np.full(num.shape, np.nan)
 
 
-def pearson_by_lag(x, y) -> tuple[np.ndarray, np.ndarray]:
+def pearson_by_lag(x, y, min_overlap: int = 2) -> tuple[np.ndarray, np.ndarray]:
     """Lags and the Pearson coefficient of the overlapping pairs (x[i], y[i-d]), mean removed per overlap.
 
-    NaN where the overlap has fewer than 2 points or either side is constant. O(N log N): the overlap
-    sums come from cumulative sums and the cross products from one FFT correlation.
+    NaN where the overlap has fewer than ``min_overlap`` (at least 2) points or either side is constant;
+    correlate() asks for PEARSON_MIN_OVERLAP. O(N log N): the overlap sums come from cumulative sums and the
+    cross products from one FFT correlation.
     """
+    if isinstance(min_overlap, bool) or not isinstance(min_overlap, int | np.integer) or min_overlap < 2:
+        raise ValueError(f"min_overlap must be an integer >= 2 (a coefficient needs two pairs), "
+                         f"got {min_overlap!r}")
     x, y = _pair(x, y)
     n = x.size
     lags = _lags(n)
@@ -148,7 +170,7 @@ def pearson_by_lag(x, y) -> tuple[np.ndarray, np.ndarray]:
         r = (sxy - sx * sy / m) / np.sqrt(vx * vy)
     x_flat = np.where(lags >= 0, m <= x_tail, m <= x_head)
     y_flat = np.where(lags >= 0, m <= y_head, m <= y_tail)
-    bad = (m < 2) | x_flat | y_flat | ~(vx > 0) | ~(vy > 0)
+    bad = (m < min_overlap) | x_flat | y_flat | ~(vx > 0) | ~(vy > 0)
     return lags, np.where(bad, np.nan, np.clip(r, -1.0, 1.0))
 
 
@@ -172,6 +194,24 @@ def pearson_max_lag(n_slots: int) -> int:
     return n_slots // 2
 
 
+def pearson_search_limit(n_slots: int) -> int:
+    """Largest |lag| the Pearson peak is searched over in an N-slot window: at least half the slots and
+    at least PEARSON_MIN_OVERLAP of them overlap (0: no lag can be estimated)."""
+    return max(0, min(pearson_max_lag(n_slots), n_slots - PEARSON_MIN_OVERLAP))
+
+
+def pearson_peak(lags: np.ndarray, r: np.ndarray, n_slots: int) -> tuple[int | None, bool]:
+    """The Pearson peak lag of an N-slot window and whether it sits at the search limit: there the
+    coefficient still rises towards lags that are not searched, so it is no lag estimate (None, True)."""
+    limit = pearson_search_limit(n_slots)
+    if limit < 1:
+        return None, False
+    lag = peak_lag(lags, r, limit)
+    if lag is not None and abs(lag) == limit:
+        return None, True
+    return lag, False
+
+
 def separation_stats(sep_m) -> dict[str, float]:
     """Mean, RMS, 95th percentile (linear interpolation) and maximum of separations in metres."""
     sep_m = np.asarray(sep_m, dtype=float)
@@ -179,6 +219,19 @@ def separation_stats(sep_m) -> dict[str, float]:
         return dict.fromkeys(["sep_mean_m", "sep_rms_m", "sep_p95_m", "sep_max_m"], math.nan)
     return {"sep_mean_m": float(sep_m.mean()), "sep_rms_m": float(np.sqrt(np.mean(sep_m**2))),
             "sep_p95_m": float(np.percentile(sep_m, 95)), "sep_max_m": float(sep_m.max())}
+
+
+def separation_summary(sep_m: np.ndarray, radar_filled: np.ndarray, adsb_filled: np.ndarray
+                       ) -> dict[str, float | int]:
+    """A window's separation statistics over the slots where both sensors reported (``sep_slots`` of
+    them): a filled slot holds a position the sensor did not report then, so its distance says how far
+    the aircraft moved, not how far the sensors disagree. ``sep_rms_all_m`` is the RMS over every slot."""
+    sep_m = np.asarray(sep_m, dtype=float)
+    both = ~np.asarray(radar_filled, dtype=bool) & ~np.asarray(adsb_filled, dtype=bool)
+    used = sep_m[both]
+    return {**separation_stats(used), "sep_median_m": float(np.median(used)) if used.size else math.nan,
+            "sep_slots": int(both.sum()),
+            "sep_rms_all_m": float(np.sqrt(np.mean(sep_m**2))) if sep_m.size else math.nan}
 
 
 def at_seconds(reference: pd.Timestamp | None, seconds: float) -> pd.Timestamp | None:
@@ -228,8 +281,9 @@ def _window_result(ac: tuple[str, str], number: int, start_s: float, end_s: floa
     x_lon, y_lon = _unwrapped_lon(rs["longitude"], as_["longitude"])
     lags, ncc_lat = ncc(rs["latitude"], as_["latitude"])
     _, ncc_lon = ncc(x_lon, y_lon)
-    _, p_lat = pearson_by_lag(rs["latitude"], as_["latitude"])
-    _, p_lon = pearson_by_lag(x_lon, y_lon)
+    _, p_lat = pearson_by_lag(rs["latitude"], as_["latitude"], PEARSON_MIN_OVERLAP)
+    _, p_lon = pearson_by_lag(x_lon, y_lon, PEARSON_MIN_OVERLAP)
+    (peak_lat, limit_lat), (peak_lon, limit_lon) = (pearson_peak(lags, p, len(slots)) for p in (p_lat, p_lon))
     lag_frame = pd.DataFrame(dict(zip(LAG_COLUMNS, [lags, ncc_lat, ncc_lon, p_lat, p_lon], strict=True)))
     zero = len(slots) - 1
     summary = {
@@ -244,10 +298,9 @@ def _window_result(ac: tuple[str, str], number: int, start_s: float, end_s: floa
         "ncc0_lat": float(ncc_lat[zero]), "ncc0_lon": float(ncc_lon[zero]),
         "ncc_peak_lag_lat": peak_lag(lags, ncc_lat), "ncc_peak_lag_lon": peak_lag(lags, ncc_lon),
         "pearson0_lat": float(p_lat[zero]), "pearson0_lon": float(p_lon[zero]),
-        "pearson_peak_lag_lat": peak_lag(lags, p_lat, pearson_max_lag(len(slots))),
-        "pearson_peak_lag_lon": peak_lag(lags, p_lon, pearson_max_lag(len(slots))),
-        **separation_stats(slots["sep_m"].to_numpy()),
-        "sep_median_m": float(np.median(slots["sep_m"].to_numpy())) if len(slots) else math.nan,
+        "pearson_peak_lag_lat": peak_lat, "pearson_peak_lag_lon": peak_lon,
+        "pearson_peak_at_limit_lat": limit_lat, "pearson_peak_at_limit_lon": limit_lon,
+        **separation_summary(slots["sep_m"].to_numpy(), rs["filled"], as_["filled"]),
     }
     summary = {k: _none_if_nan(summary[k]) for k in SUMMARY_KEYS}
     return WindowResult(summary=summary, slots=slots, lags=lag_frame)
@@ -453,8 +506,21 @@ def correlate(meas: pd.DataFrame, *, callsign: str | None = None, address: str |
     """
     if fill not in ("hold", "predict"):
         raise ValueError(f"fill must be 'hold' or 'predict', got {fill!r}")
-    if slot_s <= 0 or gap_s < 0:
-        raise ValueError(f"slot_s must be > 0 and gap_s >= 0, got {slot_s} and {gap_s}")
+    for name, value, low in (("slot_s", slot_s, "> 0"), ("gap_s", gap_s, ">= 0")):
+        if isinstance(value, bool) or not isinstance(value, int | float | np.integer | np.floating) \
+                or not math.isfinite(value) or (value <= 0 if low == "> 0" else value < 0):
+            raise ValueError(f"{name} must be a finite number of seconds {low}, got {value!r}")
+    if pairs not in PAIRS:
+        raise ValueError(f"pairs must be one of {', '.join(PAIRS)}, got {pairs!r}")
+    if all_aircraft and (callsign is not None or address is not None):
+        given = ", ".join(f"{k}={v!r}" for k, v in (("callsign", callsign), ("address", address))
+                          if v is not None)
+        raise ValueError(f"all_aircraft=True correlates every aircraft: give it or callsign/address, not "
+                         f"both (got {given})")
+    if not isinstance(meas, pd.DataFrame) or "time" not in meas:
+        raise TypeError("meas must be a measurement frame (pipeline.model.schema) with a 'time' column, got "
+                        + (type(meas).__name__ if not isinstance(meas, pd.DataFrame) else "no 'time' column"))
+    meas = meas.assign(time=utc_times(meas["time"]))
     reference = midnight(meas["time"])
     if reference is None:
         raise NoSuchAircraft("any aircraft", ["radar", "ADS-B"], [], "there are no measurements")

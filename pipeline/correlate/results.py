@@ -30,7 +30,8 @@ SUMMARY_KEYS = [
     "adsb_jumps", "radar_filled_slots", "adsb_filled_slots",
     "ncc0_lat", "ncc0_lon", "ncc_peak_lag_lat", "ncc_peak_lag_lon",
     "pearson0_lat", "pearson0_lon", "pearson_peak_lag_lat", "pearson_peak_lag_lon",
-    "sep_mean_m", "sep_median_m", "sep_rms_m", "sep_p95_m", "sep_max_m",
+    "pearson_peak_at_limit_lat", "pearson_peak_at_limit_lon",
+    "sep_mean_m", "sep_median_m", "sep_rms_m", "sep_p95_m", "sep_max_m", "sep_slots", "sep_rms_all_m",
 ]
 
 

@@ -14,9 +14,12 @@ from openpyxl import Workbook
 from openpyxl.chart import Reference, ScatterChart, Series
 from openpyxl.chart.marker import Marker
 from openpyxl.chart.shapes import GraphicalProperties
+from openpyxl.chart.text import RichText
+from openpyxl.chart.text import Text as ChartText
 from openpyxl.chart.title import Title, title_maker
 from openpyxl.drawing.line import LineProperties
 from openpyxl.drawing.spreadsheet_drawing import AbsoluteAnchor
+from openpyxl.drawing.text import CharacterProperties, Paragraph, ParagraphProperties, RegularTextRun
 from openpyxl.drawing.xdr import XDRPoint2D, XDRPositiveSize2D
 from openpyxl.utils import get_column_letter
 from openpyxl.utils.datetime import to_excel
@@ -39,19 +42,20 @@ from pipeline.report.cells import (
     page_setup,
     text_cell,
 )
-from pipeline.report.summary import utc_naive
+from pipeline.report.summary import utc_naive, window_label
 from pipeline.report.tables import lag_frame
 
-CORRELATION_HEADERS = ["window", "callsign", "address", "lag", "lag_s", *LAG_COLUMNS[1:]]
-SLOTS_HEADERS = ["window", "callsign", "address", "slot", "time_utc", *SLOT_COLUMNS[3:]]
+# every row names its window: number, aircraft and sensor pair (numbers restart for every pair)
+WINDOW_HEADERS = ["window", "callsign", "address", "radar_sensor", "reference_sensor"]
+CORRELATION_HEADERS = [*WINDOW_HEADERS, "lag", "lag_s", *LAG_COLUMNS[1:]]
+SLOTS_HEADERS = [*WINDOW_HEADERS, "slot", "time_utc", *SLOT_COLUMNS[3:]]
 # the columns of the excerpts a workbook keeps for its charts when the tables went to Parquet
-LAG_CHART_HEADERS = ["window", "callsign", "address", "lag", "ncc_lat", "ncc_lon", "pearson_lat",
-                     "pearson_lon"]
-SLOT_CHART_HEADERS = ["window", "callsign", "address", "time_utc", "radar_lat", "radar_lon", "adsb_lat",
-                      "adsb_lon"]
+LAG_CHART_HEADERS = [*WINDOW_HEADERS, "lag", "ncc_lat", "ncc_lon", "pearson_lat", "pearson_lon"]
+SLOT_CHART_HEADERS = [*WINDOW_HEADERS, "time_utc", "radar_lat", "radar_lon", "adsb_lat", "adsb_lon"]
 MAX_CORRELATION_CHARTS = 20
 MAX_SLOT_CHART_WINDOWS = 10
 RADAR_RGB, ADSB_RGB = "D62728", "E6B800"
+CHART_TITLE_PT = 10.0
 LAT_RGB, LON_RGB = "1F77B4", "2CA02C"
 
 CHART_HEADING_ROWS = 2  # rows 1-2 of a chart sheet: its heading, repeated on every printed page
@@ -88,9 +92,17 @@ def _marker(symbol: str | None, rgb: str) -> Marker:
                                                                   ln=LineProperties(solidFill=rgb, w=6350)))
 
 
+def chart_title(text: str, size_pt: float = CHART_TITLE_PT) -> Title:
+    """A bold chart title of ``size_pt`` points: a window's title (call sign, number, sensor pair, N) stays
+    on one line above the plot instead of three at Excel's default 14 pt."""
+    font = CharacterProperties(sz=int(size_pt * 100), b=True)
+    paragraph = Paragraph(pPr=ParagraphProperties(defRPr=font), r=[RegularTextRun(rPr=font, t=text)])
+    return Title(tx=ChartText(rich=RichText(p=[paragraph])), overlay=False)
+
+
 def scatter_chart(title: str, x_title: str, y_title: str) -> ScatterChart:
     chart = ScatterChart()
-    chart.title = clean_text(title)
+    chart.title = chart_title(clean_text(title))
     chart.style = 2
     chart.width, chart.height = CHART_W_CM, CHART_H_CM
     chart.x_axis.title, chart.y_axis.title = _axis_title(x_title), _axis_title(y_title)
@@ -161,9 +173,8 @@ def window_id(window: WindowResult, index: int) -> Any:
 
 
 def window_title(window: WindowResult, index: int) -> str:
-    summary = window.summary
-    callsign = excel_value(summary.get("callsign")) or excel_value(summary.get("address")) or "?"
-    return f"{callsign} window {window_id(window, index)}"
+    """Call sign (else address), window number and sensor pair (summary.window_label)."""
+    return window_label({**window.summary, "window": window_id(window, index)})
 
 
 def charted_windows(run: CorrelationRun, kind: str) -> list[int]:

@@ -28,7 +28,7 @@ from openpyxl.styles import Alignment, PatternFill
 from openpyxl.worksheet._write_only import WriteOnlyWorksheet
 from openpyxl.worksheet.pagebreak import Break
 
-from pipeline.correlate.correlation import pearson_max_lag
+from pipeline.correlate.correlation import PEARSON_MIN_OVERLAP, pearson_max_lag
 from pipeline.correlate.results import SUMMARY_KEYS, CorrelationRun, WindowResult
 from pipeline.report.cells import (
     BOLD,
@@ -64,8 +64,8 @@ from pipeline.report.charts import (
 )
 from pipeline.report.saving import get_ready, save
 from pipeline.report.summary import (
-    SKIPPED_KEYS,
-    window_note,
+    sensor_pair,
+    window_notes,
     write_atomically,
 )
 from pipeline.report.tables import (
@@ -82,19 +82,24 @@ from pipeline.report.tables import (
     write_table_parquet,
 )
 
-# Summary: stacked blocks that each fit a landscape page; every block starts with call sign and window
+# Summary: stacked blocks that each fit a landscape page; every block starts with call sign, window and sensor
+# pair ("048:25/201 vs 021:0/1": window numbers restart for every pair of an aircraft)
 SUMMARY_BLOCKS: list[tuple[str, list[str]]] = [
     ("Windows and measurements (thesis table 6.1: before = reports in the window, after = slots)",
-     ["callsign", "window", "start", "end", "address", "radar_sensor", "reference_sensor", "slots",
+     ["callsign", "window", "sensors", "start", "end", "address", "slots",
       "radar_before", "radar_after", "adsb_before", "adsb_after", "radar_duplicates", "adsb_duplicates",
       "adsb_jumps", "radar_filled_slots", "adsb_filled_slots"]),
-    ("Coefficients (thesis table 6.2: r(0) by NCC; Pearson peak searched over |lag| <= N/2)",
-     ["callsign", "window", "start", "end", "ncc0_lat", "ncc0_lon", "ncc_peak_lag_lat", "ncc_peak_lag_lon",
-      "pearson0_lat", "pearson0_lon", "pearson_peak_lag_lat", "pearson_peak_lag_lon"]),
-    ("Separation between slotted radar and ADS-B positions (m)",
-     ["callsign", "window", "start", "end", "sep_mean_m", "sep_median_m", "sep_rms_m", "sep_p95_m",
-      "sep_max_m"]),
+    (f"Coefficients (thesis table 6.2: r(0) by NCC; Pearson where at least {PEARSON_MIN_OVERLAP} slots "
+     "overlap, its peak searched over |lag| <= N/2; a peak at that limit is no lag estimate)",
+     ["callsign", "window", "sensors", "start", "end", "ncc0_lat", "ncc0_lon", "ncc_peak_lag_lat",
+      "ncc_peak_lag_lon", "pearson0_lat", "pearson0_lon", "pearson_peak_lag_lat", "pearson_peak_lag_lon",
+      "pearson_peak_at_limit_lat", "pearson_peak_at_limit_lon"]),
+    ("Separation between slotted radar and ADS-B positions (m) over the slots where both reported "
+     "(sep slots; a filled slot holds an earlier position); sep rms all m: every slot",
+     ["callsign", "window", "sensors", "start", "end", "sep_mean_m", "sep_median_m", "sep_rms_m", "sep_p95_m",
+      "sep_max_m", "sep_slots", "sep_rms_all_m"]),
 ]
+SKIPPED_HEADERS = ["callsign", "address", "sensors", "start", "end", "reason"]
 SUMMARY_TITLE_ROWS = "1:1"
 _CORE_SHEETS = ("Summary", "Map", "Lag charts", "Slot charts", "Correlation", "Slots", "Parameters")
 _BLOCK_FILLS = ["EDEDED", "E2EFDA", "DDEBF7", "FCE4D6"]
@@ -103,7 +108,8 @@ IMAGE_MAX_W_PX, IMAGE_MAX_H_PX = 1000, 620  # one figure per printed page
 
 def _summary_values(run: CorrelationRun) -> list[dict[str, Any]]:
     """Each window's summary as Excel values (excel_value), worked out once for the Summary's passes."""
-    return [{key: excel_value(value) for key, value in w.summary.items()} for w in run.windows]
+    return [{**{key: excel_value(value) for key, value in w.summary.items()},
+             "sensors": sensor_pair(w.summary) or None} for w in run.windows]
 
 
 def _summary_value(values: dict[str, Any], key: str) -> Any:
@@ -139,7 +145,7 @@ def _summary_block(ws: WriteOnlyWorksheet, summaries: list[dict[str, Any]], titl
                    fill: str, row: int) -> int:
     """One Summary block (title, header, one row per window of ``summaries``, _summary_values, blank) from
     sheet row ``row``; returns the next free row."""
-    keys = [k for k in keys if k in SUMMARY_KEYS]
+    keys = [k for k in keys if k in SUMMARY_KEYS or k == "sensors"]
     ws.append([text_cell(ws, title, font=BOLD)])
     ws.row_dimensions[row + 1].height = 3 * ROW_HEIGHT_PT  # "radar filled slots" wraps onto 3 lines
     ws.append(header_cells(ws, [summary_header(k) for k in keys], PatternFill("solid", fgColor=fill)))
@@ -166,7 +172,8 @@ def _summary_block(ws: WriteOnlyWorksheet, summaries: list[dict[str, Any]], titl
 def _write_summary(wb: Workbook, run: CorrelationRun) -> None:
     ws = wb.create_sheet("Summary")
     summaries = _summary_values(run)
-    skipped = [[excel_value(getattr(s, k)) for k in SKIPPED_KEYS] for s in run.skipped]
+    skipped = [[excel_value(s.callsign), excel_value(s.address), sensor_pair(vars(s)) or None,
+                excel_value(s.start_tod), excel_value(s.end_tod), excel_value(s.reason)] for s in run.skipped]
     widths: dict[int, float] = {}
 
     def widen(headers: list[str], rows: list[list[Any]], formats: list[str | None]) -> None:
@@ -175,12 +182,13 @@ def _write_summary(wb: Workbook, run: CorrelationRun) -> None:
             widths[j] = max(widths.get(j, 0.0), column_width(header, values, formats[j]))
 
     for _title, keys in SUMMARY_BLOCKS:  # widths first: write-only sheets take them before any row
-        keys = [k for k in keys if k in SUMMARY_KEYS]
+        keys = [k for k in keys if k in SUMMARY_KEYS or k == "sensors"]
         rows = [[values.get(k) for k in keys] for values in summaries]
         formats = [SUMMARY_DATETIME_FORMAT if k in ("start", "end") else
                    number_format_for(k, [r[j] for r in rows]) for j, k in enumerate(keys)]
         widen([summary_header(k) for k in keys], rows, formats)
-    widen(SKIPPED_KEYS[:-1], [r[:-1] for r in skipped], [CLOCK_FORMAT] * 4)  # the reason overflows
+    widen(SKIPPED_HEADERS[:-1], [r[:-1] for r in skipped], [None, None, None, CLOCK_FORMAT, CLOCK_FORMAT])
+    # (the reason overflows)
     set_widths(ws, [widths[j] for j in sorted(widths)])
     ws.freeze_panes = "C2"
     page_setup(ws, SUMMARY_TITLE_ROWS)
@@ -191,27 +199,29 @@ def _write_summary(wb: Workbook, run: CorrelationRun) -> None:
     for (title, keys), fill in zip(SUMMARY_BLOCKS, _BLOCK_FILLS, strict=False):
         row = _summary_block(ws, summaries, title, keys, fill, row)
 
-    notes = [(values, window_note(w.summary)) for w, values in zip(run.windows, summaries, strict=True)]
-    notes = [(values, n) for values, n in notes if n]
+    # one row per note, so that no row runs far past the tables (the page is fitted to its widest row)
+    notes = [(values, n) for w, values in zip(run.windows, summaries, strict=True)
+             for n in window_notes(w.summary)]
     ws.append([text_cell(ws, f"Notes ({len(notes)})", font=BOLD)])
     for values, note in notes:
         start = _summary_value(values, "start")
         note_cell = note_text_cell(ws, note)
         note_cell.alignment = _INDENT
+        pair = cell_for(ws, values.get("sensors"), None)
+        pair.alignment = _INDENT
         ws.append([cell_for(ws, values.get("callsign"), None),
-                   cell_for(ws, values.get("window"), None),
-                   _summary_time_cell(ws, start), note_cell])
+                   cell_for(ws, values.get("window"), None), pair, _summary_time_cell(ws, start), note_cell])
     if not notes:
-        ws.append([note_text_cell(ws, "none: in every window the RMS separation is within 3 x the median")])
+        ws.append([note_text_cell(ws, "none: in every window the RMS separation is within 3 x the median and "
+                                      "no Pearson peak needs a warning")])
     ws.append([])
     ws.append([text_cell(ws, f"Skipped windows ({len(skipped)})", font=BOLD)])
     if skipped:
-        ws.append(header_cells(ws, ["callsign", "address", "start", "end", "reason"],
-                                PatternFill("solid", fgColor=_BLOCK_FILLS[3])))
+        ws.append(header_cells(ws, SKIPPED_HEADERS, PatternFill("solid", fgColor=_BLOCK_FILLS[3])))
         for row in skipped:
-            ws.append([cell_for(ws, row[0], None), cell_for(ws, row[1], None),
-                       *(cell_for(ws, v, CLOCK_FORMAT if is_number(v) else None) for v in row[2:4]),
-                       cell_for(ws, row[4], None)])
+            ws.append([*(cell_for(ws, v, None) for v in row[:3]),
+                       *(cell_for(ws, v, CLOCK_FORMAT if is_number(v) else None) for v in row[3:5]),
+                       cell_for(ws, row[5], None)])
     else:
         ws.append([note_text_cell(ws, "none")])
 
@@ -258,7 +268,7 @@ def _write_correlation(wb: Workbook, run: CorrelationRun, title: str = "Correlat
     frame = correlation_table(run)
     headers = headers or CORRELATION_HEADERS + [c for c in frame.columns if c not in CORRELATION_HEADERS
                                                 and c not in IDENT_COLUMNS]
-    write_table(ws, _sheet_columns(ws, frame, headers), freeze="D2", note=note or
+    write_table(ws, _sheet_columns(ws, frame, headers), freeze="F2", note=note or
                 "All lags d = -(N-1)..N-1 of every window; charts of |d| <= N/2: Lag charts sheet.")
 
 
@@ -269,7 +279,7 @@ def _write_slots(wb: Workbook, run: CorrelationRun, title: str = "Slots", note: 
     dated = "time_utc" in frame
     headers = headers or SLOTS_HEADERS + [c for c in frame.columns if c not in SLOTS_HEADERS
                                           and c not in IDENT_COLUMNS and c != "time_of_day"]
-    write_table(ws, _sheet_columns(ws, frame, headers), freeze="D2", note=note or
+    write_table(ws, _sheet_columns(ws, frame, headers), freeze="F2", note=note or
                 "time_utc: slot start, UTC" + ("" if dated else " clock time (date unknown)")
                 + "; charts on the Slot charts sheet.")
 
@@ -418,12 +428,17 @@ def _write_frame(wb: Workbook, title: str, frame: pd.DataFrame | pd.Series) -> N
     write_table(ws, columns, note=note)
 
 
-def _write_figures(wb: Workbook, title: str, images: dict[str, str | os.PathLike[str]]) -> None:
-    """A sheet of PNG figures, one per printed page, each under its caption."""
+def _write_figures(wb: Workbook, title: str, images: dict[str, str | os.PathLike[str]],
+                   note: str = "") -> None:
+    """A sheet of PNG figures, one per printed page, each under its caption; ``note`` (what the figures
+    leave out) on the first row."""
     ws = wb.create_sheet(title)
     page_setup(ws, None)
     fixed_rows(ws)
     row = 1
+    if note:
+        ws.append([text_cell(ws, clean_text(note[:1].upper() + note[1:]), font=BOLD)])
+        row += 1
     rows_per_page = int((IMAGE_MAX_H_PX + 40) / (ROW_HEIGHT_PT * 4 / 3)) + 2
     for caption, png in images.items():
         image = _scaled_image(png)
@@ -449,12 +464,14 @@ def write_parquet_tables(run: CorrelationRun, path_xlsx: str | os.PathLike[str],
 
 def write_report(run: CorrelationRun, path_xlsx: str | os.PathLike[str], *,
                  figure_png: str | os.PathLike[str] | None = None,
-                 images: dict[str, str | os.PathLike[str]] | None = None, tables: str = "auto",
+                 images: dict[str, str | os.PathLike[str]] | None = None, images_note: str = "",
+                 tables: str = "auto",
                  figure_ready: Callable[[], object] | None = None,
                  tables_written: Callable[[], dict[str, tuple[int, object, Path]]] | None = None,
                  elsewhere: Collection[str] | None = None) -> list[Path]:
     """Write the run's workbook to ``path_xlsx``; embed ``figure_png`` on a Map sheet when given and
-    further ``images`` (caption -> PNG) on a Figures sheet. The slot and lag tables go to Parquet beside
+    further ``images`` (caption -> PNG) on a Figures sheet, under ``images_note`` (what they leave out).
+    The slot and lag tables go to Parquet beside
     it as ``tables`` says (pipeline.report.tables); returns the Parquet files written. ``figure_ready``
     is called before ``figure_png`` is first read (the figure may be drawn meanwhile elsewhere). With
     ``tables_written`` the Parquet tables named in ``elsewhere`` (all of them when None) are being written
@@ -475,7 +492,7 @@ def write_report(run: CorrelationRun, path_xlsx: str | os.PathLike[str], *,
         for name, frame in run.extra_sheets.items():
             _write_frame(wb, sheet_name(name, taken), frame)
         if images:
-            _write_figures(wb, sheet_name("Figures", taken), images)
+            _write_figures(wb, sheet_name("Figures", taken), images, images_note)
         _write_parameters(wb, run)
         get_ready(wb)  # while the tables and the figure may still be written elsewhere
         if away:

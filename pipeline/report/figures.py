@@ -14,10 +14,11 @@ from matplotlib.axes import Axes
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
+from matplotlib.text import Text
 
-from pipeline.correlate.correlation import peak_lag, pearson_max_lag
+from pipeline.correlate.correlation import peak_lag, pearson_max_lag, pearson_search_limit
 from pipeline.correlate.results import CorrelationRun, WindowResult
-from pipeline.report.summary import printable, slot_seconds
+from pipeline.report.summary import printable, slot_seconds, window_label
 
 RADAR_COLOR = "#d62728"
 ADSB_COLOR = "#ffd400"
@@ -169,11 +170,11 @@ def _draw_sites(ax: Axes, sensors: pd.DataFrame | None, lats: np.ndarray, lons: 
         for k in range(1, max(1, math.ceil(far_nm / RING_STEP_NM)) + 1):
             ring_lon, ring_lat = range_ring(lat, lon, k * RING_STEP_NM)
             ax.plot(ring_lon, ring_lat, color="0.55", lw=0.7, ls=":", zorder=1)
-            ax.annotate(f"{k * RING_STEP_NM:g} NM", (ring_lon[0], ring_lat[0]), fontsize=7, color="0.4",
-                        ha="center", va="bottom", zorder=2)
+            _label(ax, f"{k * RING_STEP_NM:g} NM", (ring_lon[0], ring_lat[0]), fontsize=7, color="0.4",
+                   zorder=2, gid=_RING_LABEL)
         ax.plot(lon, lat, marker="^", ms=10, color="black", mfc="#4d4d4d", ls="none", zorder=7)
-        ax.annotate(_text(getattr(row, "name", "radar")), (lon, lat), xytext=(6, -12),
-                    textcoords="offset points", fontsize=8, fontweight="bold", zorder=7)
+        _label(ax, _text(getattr(row, "name", "radar")), (lon, lat), fontsize=8, fontweight="bold", zorder=7,
+               gid=_SITE_LABEL)
 
 
 def _clock_label(slots: pd.DataFrame, k: int) -> str:
@@ -200,16 +201,76 @@ def _direction_and_times(ax: Axes, window: WindowResult, label: bool) -> None:
                         arrowprops={"arrowstyle": "-|>", "color": "black", "lw": 1.0, "mutation_scale": 14})
     bbox = {"boxstyle": "round,pad=0.2", "fc": "white", "ec": "0.6", "alpha": 0.85}
     start = (f"{_window_label(window)} " if label else "") + _clock_label(s, ok[0])
-    ax.annotate(start, (lon[ok[0]], lat[ok[0]]), xytext=(5, 5), textcoords="offset points", fontsize=7,
-                zorder=6, bbox=bbox)
-    ax.annotate(_clock_label(s, ok[-1]), (lon[ok[-1]], lat[ok[-1]]), xytext=(5, -11),
-                textcoords="offset points", fontsize=7, zorder=6, color="0.25")
+    _label(ax, start, (lon[ok[0]], lat[ok[0]]), fontsize=7, zorder=6, bbox=bbox, gid=_START_LABEL,
+           arrowprops={"arrowstyle": "-", "color": "0.35", "lw": 0.6, "shrinkA": 0, "shrinkB": 0})
+    _label(ax, _clock_label(s, ok[-1]), (lon[ok[-1]], lat[ok[-1]]), fontsize=7, zorder=6, color="0.25",
+           gid=_END_LABEL)
+
+
+# Map labels, placed after everything else is drawn (place_labels) in this order: site names, window starts,
+# window ends, ring distances; each takes the first of LABEL_OFFSETS_PT where it overlaps no label already
+# placed and stays inside the axes, else it is left out (the same text at the same point only once)
+_SITE_LABEL, _START_LABEL, _END_LABEL, _RING_LABEL = "site", "start", "end", "ring"
+_LABEL_ORDER = (_SITE_LABEL, _START_LABEL, _END_LABEL, _RING_LABEL)
+LABEL_OFFSETS_PT = ((5, 5), (5, -13), (-5, 5), (-5, -13), (5, 16), (-5, 16), (5, -24), (-5, -24), (14, -4),
+                    (-14, -4), (5, 28), (-5, 28), (5, -36), (-5, -36), (30, 30), (-30, 30), (30, -40),
+                    (-30, -40), (45, 0), (-45, 0), (10, 45), (-10, 45), (10, -55), (-10, -55), (60, 30),
+                    (-60, 30), (60, -40), (-60, -40))
+
+
+def _label(ax: Axes, text: str, xy: tuple[float, float], **style) -> None:
+    """A map label at ``xy`` (data), its place chosen later by place_labels (``gid``: its kind)."""
+    ann = ax.annotate(text, xy, xytext=LABEL_OFFSETS_PT[0], textcoords="offset points", **style)
+    ann.set_in_layout(False)  # placing it never moves the layout the other labels were placed in
+
+
+def place_labels(fig: Figure, ax: Axes) -> int:
+    """Move each map label to the first offset where it overlaps no label placed before it (nor the legend)
+    and stays inside the axes; hide it when none does, or when the same text at the same point is shown.
+    Returns the number of window start labels left out for want of room."""
+    labels = [a for a in ax.texts if a.get_gid() in _LABEL_ORDER]
+    missed = 0
+    if not any(a.get_gid() == _START_LABEL for a in labels):  # a long run's map (no window labels): sites
+        return missed  # and rings as they are, without the extra draw of every track
+    fig.draw_without_rendering()  # once: the layout and the legend's place are final
+    renderer = fig.canvas.get_renderer()
+    inside = ax.get_window_extent(renderer)
+    legend = ax.get_legend()
+    kept = [legend.get_window_extent(renderer)] if legend is not None else []
+    seen: set[tuple] = set()
+    for ann in sorted(labels, key=lambda a: _LABEL_ORDER.index(a.get_gid())):
+        # a window start names its aircraft, number and time: one label, whichever sensor pair (numbers
+        # restart per pair, and each pair's slots sit a little apart); other labels once per text and place
+        where = () if ann.get_gid() == _START_LABEL else tuple(np.round(np.asarray(ann.xy, dtype=float), 2))
+        key = (ann.get_gid(), ann.get_text(), *where)
+        if key in seen:
+            ann.set_visible(False)
+            continue
+        seen.add(key)
+        for dx, dy in LABEL_OFFSETS_PT:
+            ann.xyann = (dx, dy)
+            ann.set_horizontalalignment("left" if dx >= 0 else "right")
+            box = Text.get_window_extent(ann, renderer).padded(2)  # the text and its box, not the leader
+            if (box.x0 >= inside.x0 and box.x1 <= inside.x1 and box.y0 >= inside.y0 and box.y1 <= inside.y1
+                    and not any(box.overlaps(k) for k in kept)):
+                kept.append(box)
+                break
+        else:
+            ann.set_visible(False)
+            missed += ann.get_gid() == _START_LABEL
+    return missed
 
 
 def track_figure(run: CorrelationRun, path_png: str | os.PathLike[str],
                  sensors: pd.DataFrame | None = None) -> Path:
+    """Map of every window's slotted tracks (track_map) written as PNG; returns the path."""
+    return save_png(track_map(run, sensors), path_png, TRACK_PNG_COMPRESS_LEVEL)
+
+
+def track_map(run: CorrelationRun, sensors: pd.DataFrame | None = None) -> Figure:
     """Map of every window's slotted tracks (radar red over ADS-B yellow) with direction arrows and start
-    and end times (UTC); with ``sensors``, the radar sites and range rings. Returns the path."""
+    and end times (UTC), labels placed apart (place_labels); with ``sensors``, the radar sites and range
+    rings."""
     fig = new_figure(10, 7.5)
     ax = fig.add_subplot()
     lats: list[np.ndarray] = []
@@ -221,12 +282,15 @@ def track_figure(run: CorrelationRun, path_png: str | os.PathLike[str],
     gap = np.array([np.nan])
     for w in run.windows:
         s = w.slots
+        # a radar-radar window's reference is a radar: drawn as one, never as ADS-B
+        second_radar = str(w.summary.get("reference_sensor") or "").startswith("048:")
         for sensor in ("adsb", "radar"):  # radar on top so both stay visible where they overlap
             lon, lat = _floats(s, f"{sensor}_lon"), _floats(s, f"{sensor}_lat")
             filled = _flags(s, f"{sensor}_filled")
             any_filled |= bool((filled & np.isfinite(lat)).any())
-            tracks[sensor].append(np.stack([np.concatenate([lon, gap]), np.concatenate([lat, gap]),
-                                            np.concatenate([filled, [False]])]))
+            kind = "radar" if second_radar else sensor
+            tracks[kind].append(np.stack([np.concatenate([lon, gap]), np.concatenate([lat, gap]),
+                                          np.concatenate([filled, [False]])]))
             lats.append(lat)
             lons.append(lon)
         if len(run.windows) <= _MAX_TRACK_LABELS:
@@ -270,16 +334,26 @@ def track_figure(run: CorrelationRun, path_png: str | os.PathLike[str],
     unmarked = "" if markers else f"; {n_slots:,} slots: lines only, no slot markers"
     ax.set_title(f"radar (red) over ADS-B (yellow), {len(run.windows)} window(s), equal-distance aspect"
                  f"{unmarked}", fontsize=9, color="0.35")
-    return save_png(fig, path_png, TRACK_PNG_COMPRESS_LEVEL)
+    missed = place_labels(fig, ax)
+    if missed:  # said, not hidden silently
+        ax.set_title(f"{ax.get_title()}; {missed} window label(s) left out for want of room", fontsize=9,
+                     color="0.35")
+    return fig
 
 
-def figure_peak(lags, r, measure: str) -> int | None:
-    """Index of the peak the lag figure marks, by the rule of the summary numbers: NCC over every lag,
-    Pearson over |lag| <= N/2 only (``pearson_max_lag``); None when there is no finite value."""
+def figure_peak(lags, r, measure: str) -> tuple[int | None, bool]:
+    """Index of the peak the lag figure marks, by the rule of the summary numbers (NCC over every lag,
+    Pearson over |lag| <= pearson_search_limit), and whether it sits at the search limit (then no lag
+    estimate: marked hollow); None when there is no finite value."""
     lags = np.asarray(lags)
     n_slots = (lags.size + 1) // 2
-    lag = peak_lag(lags, r, pearson_max_lag(n_slots) if measure == "pearson" else None)
-    return None if lag is None else int(np.flatnonzero(lags == lag)[0])
+    if measure != "pearson":
+        lag, at_limit = peak_lag(lags, r), False
+    else:
+        limit = pearson_search_limit(n_slots)
+        lag = peak_lag(lags, r, limit) if limit >= 1 else None
+        at_limit = lag is not None and abs(lag) == limit
+    return (None if lag is None else int(np.flatnonzero(lags == lag)[0])), at_limit
 
 
 def lag_figure(window: WindowResult, path: str | os.PathLike[str]) -> Path:
@@ -299,19 +373,28 @@ def lag_figure(window: WindowResult, path: str | os.PathLike[str]) -> Path:
             label = "NCC" if measure == "ncc" else "Pearson"
             ax.plot(x[inside], y[inside], color=color, ls=ls, lw=1.4, label=label, zorder=3)
             shown.append(y[inside])
-            k = figure_peak(x, y, measure)
+            k, at_limit = figure_peak(x, y, measure)
             if k is not None and inside[k]:
-                ax.plot(x[k], y[k], marker="*", ms=12, color=color, mec="black", mew=0.6, ls="none", zorder=4)
-                ax.annotate(f"{int(x[k]):+d}", (x[k], y[k]), xytext=(4, 4), textcoords="offset points",
-                            fontsize=8, color=color)
+                # the label on the side towards the middle, so a peak at the edge keeps it inside the axes
+                right = x[k] <= 0
+                if at_limit:  # no lag estimate: a hollow mark, said in words
+                    ax.plot(x[k], y[k], marker="o", ms=9, mfc="white", mec=color, mew=1.4, ls="none",
+                            zorder=4, clip_on=False)
+                    text = f"{int(x[k]):+d}: search limit, no estimate"
+                else:
+                    ax.plot(x[k], y[k], marker="*", ms=12, color=color, mec="black", mew=0.6, ls="none",
+                            zorder=4, clip_on=False)
+                    text = f"{int(x[k]):+d}"
+                ax.annotate(text, (x[k], y[k]), xytext=(7 if right else -7, 4), textcoords="offset points",
+                            ha="left" if right else "right", fontsize=8, color=color, zorder=5)
         values = np.concatenate(shown) if shown else np.array([])
         values = values[np.isfinite(values)]
         if values.size:
             low, high = float(values.min()), float(values.max())
             pad = max(0.02, 0.08 * (high - low))
             ax.set_ylim(max(-1.05, low - pad), min(1.05, high + pad))
-        if half > 0:
-            ax.set_xlim(-half, half)
+        if half > 0:  # a little room beyond the limits, so a mark there is drawn whole
+            ax.set_xlim(-half - 0.03 * half - 0.5, half + 0.03 * half + 0.5)
         ax.set_title("Latitude" if axis == "lat" else "Longitude", fontsize=10)
         ax.set_xlabel(f"lag (slots), |lag| <= N/2 = {half}")
         ax.set_ylabel("coefficient")
@@ -320,8 +403,9 @@ def lag_figure(window: WindowResult, path: str | os.PathLike[str]) -> Path:
         ax.legend(fontsize=8, loc="lower center")
     step = slot_seconds(window)
     note = f", 1 slot = {step:g} s" if math.isfinite(step) else ""
-    fig.suptitle(f"Correlation against lag: {_window_label(window)}{note} (star = peak; wider lags, with "
-                 "less than half the slots overlapping, left out)", fontsize=10)
+    fig.suptitle(f"Correlation against lag: {window_label(window.summary)}{note}\n(star = peak, hollow = "
+                 "peak at the search limit; wider lags, with less than half the slots overlapping, left out)",
+                 fontsize=10)
     return save_png(fig, path)
 
 
@@ -347,5 +431,5 @@ def latlon_time_figure(window: WindowResult, path: str | os.PathLike[str]) -> Pa
         axes[1].set_xlabel("time (UTC)")
     else:
         axes[1].set_xlabel("time of day (s)")
-    fig.suptitle(f"Latitude and longitude against time: {_window_label(window)}", fontsize=11)
+    fig.suptitle(f"Latitude and longitude against time: {window_label(window.summary)}", fontsize=11)
     return save_png(fig, path)

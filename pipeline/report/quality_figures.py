@@ -21,6 +21,7 @@ from pipeline.model.measurements import matching_aircraft
 from pipeline.model.time import midnight, with_clock
 from pipeline.quality.accuracy import MAX_AZIMUTH_ELEVATION_DEG, elevation_deg
 from pipeline.report.figures import new_figure, save_png
+from pipeline.report.summary import window_label
 
 RADAR_COLOR = "#d62728"
 ADSB_COLOR = "#e6b800"
@@ -251,6 +252,14 @@ def _raw_in_window(window: WindowResult, meas: pd.DataFrame, other: pd.DataFrame
     return rows[in_window(rows["time_of_day"], s["start_tod"], s["end_tod"])]
 
 
+def _of_sensors(rows: pd.DataFrame, sensors: str) -> pd.DataFrame:
+    """The rows of the window's sensor ``sensors`` (a sensor_id, ADS-B ground stations joined by "+"): with
+    several radars, a window's pair is one radar against one reference; all rows when either is unknown."""
+    if not sensors or "sensor_id" not in rows:
+        return rows
+    return rows[rows["sensor_id"].astype(str).isin(sensors.split("+")).to_numpy(bool)]
+
+
 def track_span(values: np.ndarray, pad: float = 0.08) -> tuple[float, float] | None:
     """y range of a coordinate panel: the radar reports' range, padded by ``pad`` of it (at least 0.01 deg);
     None when there is no finite value."""
@@ -267,18 +276,25 @@ def slotting_figure(window: WindowResult, radar_meas: pd.DataFrame, adsb_meas: p
     """Latitude and longitude against time of one window: raw reports (left) and 10 s slots (right)."""
     fig = new_figure(12, 6.5)
     axes = fig.subplots(2, 2, sharex=True, sharey="row")
-    raw = {"radar": _raw_in_window(window, radar_meas, adsb_meas),
-           "adsb": _raw_in_window(window, adsb_meas, radar_meas)}
+    s = window.summary
+    radar_id, reference = str(s.get("radar_sensor") or ""), str(s.get("reference_sensor") or "")
+    reference_is_radar = reference.startswith("048:")  # --pairs radar-radar: the second radar
+    raw = {"radar": _of_sensors(_raw_in_window(window, radar_meas, adsb_meas), radar_id),
+           "adsb": _of_sensors(_raw_in_window(window, *((radar_meas, adsb_meas) if reference_is_radar
+                                                         else (adsb_meas, radar_meas))), reference)}
+    labels = {"radar": f"Radar {radar_id}" if radar_id else _SENSOR_LABEL["radar"],
+              "adsb": f"{'Radar' if reference_is_radar else 'ADS-B'} {reference}" if reference
+              else _SENSOR_LABEL["adsb"]}
     slots = window.slots
     for row, (axis, name) in enumerate((("lat", "latitude"), ("lon", "longitude"))):
         for sensor, color in (("adsb", ADSB_COLOR), ("radar", RADAR_COLOR)):
             r = raw[sensor]
-            axes[row, 0].plot(r["time_of_day"], r[name], ".", ms=3, color=color, label=_SENSOR_LABEL[sensor])
+            axes[row, 0].plot(r["time_of_day"], r[name], ".", ms=3, color=color, label=labels[sensor])
             filled = slots[f"{sensor}_filled"].fillna(False).astype(bool).to_numpy()
             t, y = slots["time_of_day"].to_numpy(float), slots[f"{sensor}_{axis}"].to_numpy(float)
             axes[row, 1].plot(t, y, "-", color=color, lw=1.2)
             axes[row, 1].plot(t[~filled], y[~filled], "o", ms=4, color=color, mec="0.2", mew=0.5,
-                              label=_SENSOR_LABEL[sensor])
+                              label=labels[sensor])
             axes[row, 1].plot(t[filled], y[filled], "o", ms=4, mfc="white", mec=color, mew=0.9)
         axes[row, 0].set_ylabel(f"{name} (deg)")
         span = track_span(raw["radar"][name].to_numpy(float))
@@ -297,7 +313,5 @@ def slotting_figure(window: WindowResult, radar_meas: pd.DataFrame, adsb_meas: p
     axes[0, 0].legend(fontsize=8, markerscale=2)
     for ax in axes[1]:
         _time_axis(ax, slots["time_of_day"])
-    s = window.summary
-    fig.suptitle(f"Latitude and longitude before and after slotting: {s.get('callsign') or s.get('address')} "
-                 f"window {s.get('window')}", fontsize=12)
+    fig.suptitle(f"Latitude and longitude before and after slotting: {window_label(s)}", fontsize=12)
     return save_png(fig, path)

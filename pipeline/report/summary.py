@@ -14,12 +14,13 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
+from pipeline.correlate.correlation import pearson_search_limit
 from pipeline.correlate.results import SUMMARY_KEYS, CorrelationRun, WindowResult
 from pipeline.model.time import iso_utc
 from pipeline.report.formats import decimals
 from pipeline.report.outputs import write_atomically
 
-SKIPPED_KEYS = ["callsign", "address", "start_tod", "end_tod", "reason"]
+SKIPPED_KEYS = ["callsign", "address", "radar_sensor", "reference_sensor", "start_tod", "end_tod", "reason"]
 # Parameter names (top level or under "options") that may hold the slot length in seconds
 _SLOT_PARAMETER_KEYS = ("slot_s", "slot_seconds", "slot_duration_s", "slot_length_s", "slot_size_s")
 
@@ -143,23 +144,70 @@ def printable(text: Any) -> str:
     return "".join(c if c.isprintable() else c.encode("unicode_escape").decode("ascii") for c in str(text))
 
 
+def sensor_pair(summary: Mapping[str, Any]) -> str:
+    """A window's sensors as "radar vs reference" (``048:25/201 vs 021:0/1``); "" when it names none."""
+    radar, reference = printable(summary.get("radar_sensor")), printable(summary.get("reference_sensor"))
+    return f"{radar or '-'} vs {reference or '-'}" if radar or reference else ""
+
+
+def window_label(summary: Mapping[str, Any]) -> str:
+    """A window as people read it: call sign (else address), number and sensor pair, e.g. ``TST0000 window 1
+    (048:25/201 vs 021:0/1)``: window numbers restart for every sensor pair of an aircraft."""
+    who = printable(summary.get("callsign")) or printable(summary.get("address")) or "?"
+    pair = sensor_pair(summary)
+    return f"{who} window {printable(summary.get('window'))}" + (f" ({pair})" if pair else "")
+
+
+SEP_SLOTS_TEXT = "sep: separations over the slots where both sensors reported (filled slots left out)"
 SEP_DOMINATED_RATIO = 3.0  # sep_rms above this many times the median separation: a few slots dominate it
 
 
 def window_note(summary: Mapping[str, Any]) -> str | None:
-    """A plain-language note when the window's RMS separation is dominated by a few slots, else None.
+    """Plain-language notes on a window, "; "-joined, else None: its RMS separation is dominated by a few
+    slots (``sep_rms_m > SEP_DOMINATED_RATIO * sep_median_m``; the ADS-B jumps found, the usual cause, and
+    the option that removes them), a Pearson peak at the search limit (no lag estimate), or Pearson peak
+    lags read in a window with ADS-B jumps (a jump leaving the overlap moves the peak)."""
+    notes = window_notes(summary)
+    return "; ".join(notes) if notes else None
 
-    The rule: ``sep_rms_m > SEP_DOMINATED_RATIO * sep_median_m``. The note names the ADS-B jumps found in the
-    window, the usual cause, and the option that removes them."""
+
+def window_notes(summary: Mapping[str, Any]) -> list[str]:
+    """window_note's notes one by one (the Summary sheet gives each its own row)."""
+    return [n for n in (_separation_note(summary), *_pearson_notes(summary)) if n]
+
+
+def _jumps(summary: Mapping[str, Any]) -> int:
+    jumps = summary.get("adsb_jumps")
+    return 0 if is_missing(jumps) else int(jumps)
+
+
+def _separation_note(summary: Mapping[str, Any]) -> str | None:
     rms, median = summary.get("sep_rms_m"), summary.get("sep_median_m")
     if is_missing(rms) or is_missing(median) or not rms > SEP_DOMINATED_RATIO * median:
         return None
     head = f"sep RMS {float(rms):.1f} m > {SEP_DOMINATED_RATIO:g} x median {float(median):.1f} m"
-    jumps = summary.get("adsb_jumps")
-    if not is_missing(jumps) and int(jumps) > 0:
-        plural = "s" if int(jumps) != 1 else ""
-        return f"{int(jumps)} ADS-B position jump{plural} in this window; rerun with --drop-jumps ({head})"
+    jumps = _jumps(summary)
+    if jumps > 0:
+        plural = "s" if jumps != 1 else ""
+        return f"{jumps} ADS-B position jump{plural} in this window; rerun with --drop-jumps ({head})"
     return f"a few slots dominate the separation ({head}); see sep_m in the Slots sheet"
+
+
+def _pearson_notes(summary: Mapping[str, Any]) -> list[str]:
+    at_limit = [name for axis, name in (("lat", "latitude"), ("lon", "longitude"))
+                if summary.get(f"pearson_peak_at_limit_{axis}") is True]
+    notes = []
+    if at_limit:
+        slots = summary.get("slots")
+        edge = f" |lag| = {pearson_search_limit(int(slots))}" if isinstance(slots, Real) else ""
+        notes.append(f"Pearson {' and '.join(at_limit)} peak at the edge of the lags searched{edge}: "
+                     "no lag estimate")
+    lags = [(axis, summary.get(f"pearson_peak_lag_{axis}")) for axis in ("lat", "lon")]
+    moved = [f"{axis} {int(lag):+d}" for axis, lag in lags if not is_missing(lag) and int(lag) != 0]
+    if moved and _jumps(summary) > 0:
+        notes.append(f"Pearson peak lags ({', '.join(moved)}) in a window with ADS-B position jumps: read "
+                     "them after --drop-jumps")
+    return notes
 
 
 def clock_text(timestamp: Any, tod: Any, *, date: bool = True) -> str:
@@ -210,8 +258,7 @@ def _table_row(s: Mapping[str, Any]) -> list[str]:
         elif key == "callsign":
             cells.append(printable(s.get("callsign")) or printable(s.get("address")) or "-")
         elif key == "sensors":
-            pair = (printable(s.get("radar_sensor")) or "-", printable(s.get("reference_sensor")) or "-")
-            cells.append(" vs ".join(pair))
+            cells.append(sensor_pair(s) or "- vs -")
         elif key == "start":
             cells.append(start)
         elif key == "end":
@@ -251,11 +298,13 @@ def summary_table(run: CorrelationRun) -> str:
     lines.append(f"{len(run.windows)} window(s) correlated, {len(run.skipped)} skipped")
     for skipped in run.skipped:
         who = printable(skipped.callsign) or printable(skipped.address) or "?"
+        pair = sensor_pair(vars(skipped))
         span = f"{clock_text(None, skipped.start_tod)}-{clock_text(None, skipped.end_tod)}"
-        lines.append(f"  skipped {who} {span}: {printable(skipped.reason)}")
+        lines.append(f"  skipped {who}{f' ({pair})' if pair else ''} {span}: {printable(skipped.reason)}")
+    if run.windows:
+        lines.append(SEP_SLOTS_TEXT)
     notes = [(w, window_note(w.summary)) for w in run.windows]
     for w, note in notes:
         if note:
-            who = printable(w.summary.get("callsign")) or printable(w.summary.get("address")) or "?"
-            lines.append(f"Note: {who} window {printable(w.summary.get('window'))}: {note}")
+            lines.append(f"Note: {window_label(w.summary)}: {note}")
     return "\n".join(text.rstrip() for text in lines)

@@ -10,7 +10,7 @@ its rows and columns. Columns (one row per slot, resp. per window and lag):
   undated), then ``radar_lat`` .. ``sep_m`` (pipeline.correlate.results.SLOT_COLUMNS);
 * Correlation: ``lag`` (slots), ``lag_s``, ``ncc_lat``, ``ncc_lon``, ``pearson_lat``, ``pearson_lon``.
 
-The sheets leave out the two sensor columns (the Summary sheet names each window's sensors).
+The sheets have the same window columns: window numbers restart for every sensor pair of an aircraft.
 """
 
 from __future__ import annotations
