@@ -473,3 +473,14 @@ def test_text_that_looks_like_a_date_stays_text() -> None:
     assert excel_value("2019-03-01T10:00:20.500Z") == "2019-03-01T10:00:20.500Z"
     assert excel_value("2024-05-01") == "2024-05-01"
     assert excel_value(T0) == dt.datetime(2019, 3, 1, 10, 0, 0, 500000)
+
+
+def test_plain_tables_parameters_have_no_correlation_window_rows(tmp_path):
+    # the quality workbook's Parameters: its own parameters, not the correlation report's window counts
+    from openpyxl import load_workbook
+
+    from pipeline.report.excel import write_tables
+
+    write_tables({"T": pd.DataFrame({"a": [1, 2]})}, tmp_path / "q.xlsx", parameters={"gap_s": 180})
+    rows = list(load_workbook(tmp_path / "q.xlsx")["Parameters"].iter_rows(min_row=2, values_only=True))
+    assert [r[:3] for r in rows] == [("parameters", "gap_s", 180)]

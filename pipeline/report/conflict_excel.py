@@ -35,8 +35,7 @@ def write_conflict_workbook(alerts: pd.DataFrame, losses: pd.DataFrame, warnings
             ws.page_setup.fitToWidth = 1
             ws.print_title_cols = None
     ws = wb.create_sheet("Parameters")
-    # the correlation report's rows (report windows, skipped windows) do not belong here
-    rows = [r for r in parameter_rows(CorrelationRun(parameters=parameters)) if r[0] != "report"]
+    rows = parameter_rows(CorrelationRun(parameters=parameters), windows=False)
     write_table(ws, [make_column(ws, h, [r[j] for r in rows], general=True)
                      for j, h in enumerate(["section", "key", "value"])])
     write_atomically(path_xlsx, lambda tmp: save(wb, tmp))

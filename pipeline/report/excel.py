@@ -377,9 +377,9 @@ def _flatten(prefix: str, value: Any) -> Iterator[tuple[str, Any]]:
         yield prefix, value
 
 
-def parameter_rows(run: CorrelationRun) -> list[list[Any]]:
+def parameter_rows(run: CorrelationRun, windows: bool = True) -> list[list[Any]]:
     """Key/value rows of the Parameters sheet: section, key, value (ISO 8601 text, as the JSON has it, shown
-    as an Excel date)."""
+    as an Excel date); ``windows``: with the correlation report's window counts."""
     rows: list[list[Any]] = []
     for i, item in enumerate(run.inputs, start=1):
         order = ["path", "format", "bytes", "sha256"]
@@ -391,13 +391,14 @@ def parameter_rows(run: CorrelationRun) -> list[list[Any]]:
         else:
             rows.append(["parameters", str(key), value])
     rows += [["filters", str(k), v] for k, v in run.filters.items()]
-    rows += [["report", "windows", len(run.windows)], ["report", "skipped windows", len(run.skipped)]]
+    if windows:
+        rows += [["report", "windows", len(run.windows)], ["report", "skipped windows", len(run.skipped)]]
     return [[(iso_time(v) if isinstance(v, str) else None) or excel_value(v) for v in row] for row in rows]
 
 
-def _write_parameters(wb: Workbook, run: CorrelationRun) -> None:
+def _write_parameters(wb: Workbook, run: CorrelationRun, windows: bool = True) -> None:
     ws = wb.create_sheet("Parameters")
-    rows = parameter_rows(run)
+    rows = parameter_rows(run, windows)
     headers = ["section", "key", "value"]
     columns = [make_column(ws, h, [r[j] for r in rows], general=True) for j, h in enumerate(headers)]
     write_table(ws, columns)
@@ -529,6 +530,6 @@ def write_tables(tables: dict[str, pd.DataFrame], path_xlsx: str | os.PathLike[s
     if images:
         _write_figures(wb, sheet_name("Figures", taken), images)
     if parameters is not None:
-        _write_parameters(wb, CorrelationRun(parameters=parameters))
+        _write_parameters(wb, CorrelationRun(parameters=parameters), windows=False)  # not a correlation
     write_atomically(path_xlsx, lambda tmp: save(wb, tmp))
 
