@@ -122,8 +122,6 @@ def parse_date(date, name: str = "date") -> dt.date | None:
     raise TypeError(f"{name} {date!r}: {why}; give the UTC day as a 'YYYY-MM-DD' text or a datetime.date")
 
 
-_parse_date = parse_date  # the name asterix.stream imports
-
 
 def check_categories(categories) -> tuple[int, ...] | None:
     """``categories`` as a tuple of the categories msdc decodes (one int is one category; None: the

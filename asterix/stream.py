@@ -12,12 +12,12 @@ from .errors import UnreadableInput
 from .reader import (
     Recording,
     _mapped,
-    _parse_date,
     _parse_editions,
     check_categories,
     decode_buffer,
     frame_checked,
     framing_walk,
+    parse_date,
     release_pages,
     selected_columns,
 )
@@ -39,7 +39,7 @@ def iter_read(path, *, chunk: int = 1_000_000, editions=None, date=None, categor
         raise ValueError(f"chunk {chunk!r}: must be a positive number of bytes")
     eds = _parse_editions(editions)
     selected_columns(columns)
-    first_date, categories = _parse_date(date), check_categories(categories)
+    first_date, categories = parse_date(date), check_categories(categories)
     with _mapped(path) as buf:
         try:
             seg = read_segments(buf, format)
