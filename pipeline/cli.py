@@ -110,6 +110,7 @@ def _sources_option(p: argparse.ArgumentParser) -> None:
 
 
 def build_parser() -> argparse.ArgumentParser:
+    """The msdc argument parser: one subcommand per job, options as the README lists them."""
     parser = argparse.ArgumentParser(prog="msdc", description="Multi-Sensor Data Correlator: ASTERIX "
                                      "CAT048/CAT021 decoding and radar/ADS-B correlation.")
     parser.add_argument("--version", action=_Version)
@@ -275,6 +276,7 @@ SKIPPED_SHOWN = 20  # skipped blocks decode lists one per line, per input; the r
 
 
 def cmd_decode(args) -> int:
+    """msdc decode: decode the inputs to CSV or Parquet, listing skipped blocks; the exit status."""
     _numba_without_scipy()
     progress = Progress()
     options = jobs.DecodeOptions(**_decoding(args), output=args.output, categories=tuple(args.category or ()),
@@ -310,6 +312,7 @@ def cmd_decode(args) -> int:
 
 
 def cmd_stats(args) -> int:
+    """msdc stats: what the inputs hold, printed as tables; the exit status."""
     from pipeline.stats import format_stats
 
     _numba_without_scipy()
@@ -326,6 +329,7 @@ def cmd_stats(args) -> int:
 
 
 def cmd_correlate(args) -> int:
+    """msdc correlate: correlate radar against ADS-B and write the report; the exit status."""
     progress = Progress()
     options = jobs.CorrelateOptions(
         **_aircraft(args), slot_s=args.slot, pairs=args.pairs, split_adsb=args.split_adsb,
@@ -364,6 +368,7 @@ def _correlate(options, progress: Progress, prepared) -> int:
 
 
 def cmd_quality(args) -> int:
+    """msdc quality: sensor quality and radar accuracy and biases, written as a workbook; the exit status."""
     _numba_without_scipy()
     options = jobs.QualityOptions(**_aircraft(args), reference=args.reference)
     result = _run_job("quality", jobs.validate, jobs.quality_job, options, Progress())
@@ -395,6 +400,7 @@ def _quality_text(result) -> str:
 
 
 def cmd_track(args) -> int:
+    """msdc track: fused tracks of the selected aircraft, written as Parquet or CSV; the exit status."""
     from pipeline import jobs_track
 
     options = jobs_track.TrackOptions(
@@ -451,6 +457,7 @@ def _noise_text(noise) -> str:
 
 
 def cmd_conflicts(args) -> int:
+    """msdc conflicts: losses of separation and conflict alerts from the fused tracks; the exit status."""
     from pipeline import jobs_conflict
 
     options = jobs_conflict.ConflictOptions(
@@ -485,6 +492,7 @@ COMMANDS = {"decode": cmd_decode, "stats": cmd_stats, "correlate": cmd_correlate
 
 
 def main(argv: list[str] | None = None) -> int:
+    """Run msdc with argv (the process's when None) and return the exit status; never a traceback."""
     args = build_parser().parse_args(argv)
     try:
         return COMMANDS[args.command](args)

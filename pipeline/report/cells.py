@@ -138,6 +138,7 @@ def text_cell(ws: WriteOnlyWorksheet, text: str, *, font: Font | None = None,
 
 
 def is_number(value: Any) -> bool:
+    """A real int or float (not a bool): the values a numeric cell format applies to."""
     return isinstance(value, int | float) and not isinstance(value, bool)
 
 
@@ -284,6 +285,7 @@ def raw_rows(ws: WriteOnlyWorksheet, columns: list[Column], start: int = 0,
 
 
 def display_len(value: Any, number_format: str | None) -> int:
+    """Characters the value takes shown under number_format: what a column's width must hold."""
     if value is None:
         return len(SUMMARY_DATETIME_FORMAT) if number_format == SUMMARY_DATETIME_FORMAT else 0
     if isinstance(value, str):
@@ -337,6 +339,7 @@ def _widest(values: Iterable[Any], number_format: str | None) -> list[Any]:
 
 
 def column_width(header: str, values: Iterable[Any], number_format: str | None) -> float:
+    """Column width (characters) fitting the header's longest word and the widest values, within limits."""
     longest = max([max(len(word) for word in header.split(" ")),
                    *(display_len(v, number_format) for v in _widest(values, number_format))])
     if header in _DATETIME_HEADERS:
@@ -345,11 +348,13 @@ def column_width(header: str, values: Iterable[Any], number_format: str | None) 
 
 
 def set_widths(ws: WriteOnlyWorksheet, widths: list[float]) -> None:
+    """Set the sheet's column widths in order (before any row is written, as write-only sheets need)."""
     for i, width in enumerate(widths, start=1):
         ws.column_dimensions[get_column_letter(i)].width = round(width, 1)
 
 
 def header_cells(ws: WriteOnlyWorksheet, headers: list[str], fill: PatternFill = HEADER_FILL) -> list[Any]:
+    """Bold, filled, bordered and wrapped header cells."""
     cells = []
     for header in headers:
         cell = text_cell(ws, clean_text(str(header)), font=BOLD, fill=fill)
@@ -360,6 +365,7 @@ def header_cells(ws: WriteOnlyWorksheet, headers: list[str], fill: PatternFill =
 
 
 def note_text_cell(ws: WriteOnlyWorksheet, text: str) -> WriteOnlyCell:
+    """A note's cell: its text cleaned for Excel, in the note font."""
     return text_cell(ws, clean_text(text), font=NOTE_FONT)
 
 

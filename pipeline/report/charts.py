@@ -101,6 +101,7 @@ def chart_title(text: str, size_pt: float = CHART_TITLE_PT) -> Title:
 
 
 def scatter_chart(title: str, x_title: str, y_title: str) -> ScatterChart:
+    """An empty Excel scatter chart with its title, axis titles and the report's size and axes."""
     chart = ScatterChart()
     chart.title = chart_title(clean_text(title))
     chart.style = 2
@@ -117,6 +118,7 @@ def scatter_chart(title: str, x_title: str, y_title: str) -> ScatterChart:
 def xy_series(ws: WriteOnlyWorksheet, x_col: int, y_col: int, rows: tuple[int, int], title: str,
                line_rgb: str, *, dash: str | None = None, width_pt: float = 1.5,
                marker: str | None = None) -> Series:
+    """A line series of sheet columns x_col / y_col over rows (first, last), drawn in line_rgb."""
     xs = Reference(ws, min_col=x_col, min_row=rows[0], max_row=rows[1])
     ys = Reference(ws, min_col=y_col, min_row=rows[0], max_row=rows[1])
     series = Series(ys, xs, title=title)
@@ -127,6 +129,7 @@ def xy_series(ws: WriteOnlyWorksheet, x_col: int, y_col: int, rows: tuple[int, i
 
 
 def axis_limits(values: Iterable[Any], pad: float = 0.05) -> tuple[float, float] | None:
+    """Axis minimum and maximum padded by pad of the span of the finite numbers; None if there are none."""
     numbers = [v for v in values if is_number(v) and math.isfinite(v)]
     if not numbers:
         return None
@@ -168,6 +171,7 @@ def chart_sheet(wb: Workbook, title: str, heading: tuple[str, str], n_charts: in
 
 
 def window_id(window: WindowResult, index: int) -> Any:
+    """The window's number as its summary gives it, else its position in the run."""
     value = excel_value(window.summary.get("window"))
     return index if value is None else value
 
