@@ -73,3 +73,18 @@ def test_converging_at_50_north_and_a_diverging_pair():
     # a pair without a track at the alert's start: NaN, not a guess
     row = closest_approach(_alert("A", "D"), tracks).iloc[0]
     assert np.isnan(row["time_to_cpa_s"]) and np.isnan(row["cpa_horizontal_nm"])
+
+
+def test_times_in_another_zone_match_and_naive_ones_are_refused():
+    # an alert time in Kuala Lumpur time is the same instant as the tracks' UTC time: the same approach
+    lat_b, lon_b = _offset(0.0, 0.0, 20.0, 3.0)
+    tracks = _tracks([
+        {"aircraft_id": "A", "latitude": 0.0, "longitude": 0.0, "flight_level": 350.0, "speed_kt": 360.0,
+         "track_deg": 90.0, "vertical_rate_fpm": 0.0},
+        {"aircraft_id": "B", "latitude": lat_b, "longitude": lon_b, "flight_level": 370.0, "speed_kt": 360.0,
+         "track_deg": 270.0, "vertical_rate_fpm": 0.0}])
+    alert = _alert().assign(start=[T.tz_convert("Asia/Kuala_Lumpur")])
+    row = closest_approach(alert, tracks).iloc[0]
+    assert row["time_to_cpa_s"] == pytest.approx(100.0, abs=0.2)
+    with pytest.raises(TypeError, match=r"alerts: column 'start' must hold time-zone-aware UTC datetimes"):
+        closest_approach(_alert().assign(start=[T.tz_localize(None)]), tracks)

@@ -233,3 +233,14 @@ def test_a_prediction_step_off_the_tracks_grid_is_refused():
     first = np.ceil((T0 - T0.floor("D")).total_seconds() / 10.0) * 10.0
     assert np.allclose(seconds % 10.0, 0.0) and seconds.min() == first
     assert (np.diff(np.sort(seconds.to_numpy())) == 10.0).all()
+
+
+def test_prediction_arguments_of_the_wrong_type_are_named():
+    reports = _straight_reports("X", 50.0, 5.0, 200.0, 0.0, 350.0, 30)
+    result = track(reports, step_s=5.0, keep_states=True)
+    with pytest.raises(TypeError, match=r"step_s '5': give the prediction step as a finite number"):
+        predict_tracks(result, [20], step_s="5")
+    with pytest.raises(TypeError, match=r"horizons_s \['a'\]: give the horizons as numbers of seconds"):
+        predict_tracks(result, ["a"], step_s=5.0)
+    one = predict_tracks(result, 20, step_s=5.0)  # one horizon as a number: the same as (20,)
+    pd.testing.assert_frame_equal(one, predict_tracks(result, [20], step_s=5.0))

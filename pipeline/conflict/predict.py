@@ -82,7 +82,15 @@ def predict_tracks(result: TrackResult, horizons_s, *, step_s: float = 1.0,
     multiple of the tracks' own step (ValueError otherwise: only the rows both grids share would be
     predicted).
     """
-    horizons = np.array(sorted({float(h) for h in horizons_s}))
+    if not isinstance(step_s, int | float | np.number) or isinstance(step_s, bool) or not np.isfinite(step_s):
+        raise TypeError(f"step_s {step_s!r}: give the prediction step as a finite number of seconds")
+    if isinstance(horizons_s, int | float | np.number):
+        horizons_s = (horizons_s,)  # one horizon
+    try:
+        horizons = np.array(sorted({float(h) for h in horizons_s}))
+    except (TypeError, ValueError):
+        raise TypeError(f"horizons_s {horizons_s!r}: give the horizons as numbers of seconds, "
+                        "e.g. (20, 60, 120)") from None
     if not len(horizons) or not (horizons > 0).all() or not step_s > 0:
         raise ValueError(f"horizons_s {list(horizons_s)!r} and step_s {step_s!r}: must be > 0")
     grid_s = float(result.parameters.get("step_s", step_s))
