@@ -12,8 +12,8 @@ import numpy as np
 import pandas as pd
 
 from pipeline.conflict.geometry import FT_PER_FL, M_PER_NM, surface_ecef_m
-from pipeline.conflict.grid import utc_times
 from pipeline.conflict.pairs import _require
+from pipeline.model.time import utc_frame
 
 APPROACH_COLUMNS = ["time_to_cpa_s", "cpa_time", "cpa_horizontal_nm", "cpa_vertical_ft"]
 TRACK_COLUMNS = ["aircraft_id", "time", "latitude", "longitude", "flight_level", "speed_kt", "track_deg",
@@ -25,7 +25,7 @@ def closest_approach(alerts: pd.DataFrame, tracks: pd.DataFrame) -> pd.DataFrame
     """alerts (`aircraft_a, aircraft_b, start`, ...) with the predicted closest approach columns."""
     _require(alerts, ["aircraft_a", "aircraft_b", "start"], "alerts")
     _require(tracks, TRACK_COLUMNS, "tracks")
-    alerts, tracks = utc_times(alerts, ["start"], "alerts"), utc_times(tracks, ["time"], "tracks")
+    alerts, tracks = utc_frame(alerts, ["start"], "alerts"), utc_frame(tracks, ["time"], "tracks")
     state = tracks[TRACK_COLUMNS].drop_duplicates(["aircraft_id", "time"]).set_index(["aircraft_id", "time"])
     a = state.reindex(pd.MultiIndex.from_arrays([alerts["aircraft_a"], alerts["start"]]))
     b = state.reindex(pd.MultiIndex.from_arrays([alerts["aircraft_b"], alerts["start"]]))

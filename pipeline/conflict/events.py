@@ -26,8 +26,9 @@ from pipeline.conflict.geometry import (
     horizontal_distance_nm,
     vertical_limit_ft,
 )
-from pipeline.conflict.grid import grid_rows, grid_step_s, utc_times
+from pipeline.conflict.grid import grid_rows, grid_step_s
 from pipeline.conflict.pairs import _require, pairs_per_step, time_key
+from pipeline.model.time import utc_frame
 
 LOSS_COLUMNS = ["aircraft_a", "aircraft_b", "start", "end", "duration_s", "min_horizontal_nm",
                 "time_of_min", "vertical_at_min_ft", "min_vertical_ft"]
@@ -39,7 +40,7 @@ def separation(tracks: pd.DataFrame, radius_nm: float = 5.0, vertical_ft: float 
     """Horizontal and vertical distance of every pair within radius_nm and vertical_ft at each time:
     `time, aircraft_a, aircraft_b, horizontal_nm, vertical_ft`."""
     _require(tracks, ["aircraft_id", "time", "latitude", "longitude", "flight_level"], "tracks")
-    tracks = utc_times(tracks, ["time"], "tracks")
+    tracks = utc_frame(tracks, ["time"], "tracks")
     pairs = pairs_per_step(tracks, radius_nm, vertical_ft)
     pos = tracks.set_index(["time", "aircraft_id"])[["latitude", "longitude", "flight_level"]]
     if pos.index.duplicated().any():
@@ -81,7 +82,7 @@ def losses_by_pairs(tracks: pd.DataFrame, radius_nm: float = 5.0, vertical_ft: f
             raise ValueError(f"pairs {kind!r}: expected one of {', '.join(LOSS_PAIRS)}")
     limit_ft = vertical_limit_ft(vertical_ft, vertical_tolerance_ft)
     _require(tracks, ["aircraft_id", "time"], "tracks")
-    tracks = utc_times(tracks, ["time"], "tracks")
+    tracks = utc_frame(tracks, ["time"], "tracks")
     if step_s is None:
         step_s = grid_step_s(tracks)
     else:
@@ -126,7 +127,7 @@ def alert_events(pc: pd.DataFrame, threshold: float = 0.2, step_s: float | None 
     if step_s is not None and not (isinstance(step_s, int | float | np.number) and np.isfinite(step_s)
                                    and step_s > 0):
         raise ValueError(f"step_s: must be a positive finite number of seconds, got {step_s!r}")
-    pc = _ordered(utc_times(pc, ["time"], "pc"))
+    pc = _ordered(utc_frame(pc, ["time"], "pc"))
     rows = pc.sort_values(["aircraft_a", "aircraft_b", "horizon_s", "time"], kind="stable")
     rows = rows.reset_index(drop=True)
     is_above = rows["pc"].to_numpy() > threshold
@@ -157,8 +158,8 @@ def classify_alerts(alerts: pd.DataFrame, losses: pd.DataFrame) -> pd.DataFrame:
     after the alert ended, NaT if none) and `false_alert` (no such loss)."""
     _require(alerts, ALERT_COLUMNS, "alerts")
     _require(losses, ["aircraft_a", "aircraft_b", "start", "end"], "losses")
-    alerts = utc_times(alerts, ["start", "end"], "alerts")
-    losses = utc_times(losses, ["start", "end"], "losses")
+    alerts = utc_frame(alerts, ["start", "end"], "alerts")
+    losses = utc_frame(losses, ["start", "end"], "losses")
     matched = _matches(_ordered(alerts).reset_index(drop=True), _ordered(losses))
     first = matched.groupby("alert")["loss_start"].min()
     out = _ordered(alerts).reset_index(drop=True)  # a classified table classified again: its columns replaced
@@ -173,8 +174,8 @@ def warning_times(losses: pd.DataFrame, alerts: pd.DataFrame, horizons_s=None) -
     (negative: the alert came after the loss began; NaN: no alert, a missed loss)."""
     _require(losses, ["aircraft_a", "aircraft_b", "start", "end"], "losses")
     _require(alerts, ALERT_COLUMNS, "alerts")
-    alerts = utc_times(alerts, ["start", "end"], "alerts")
-    losses = utc_times(losses, ["start", "end"], "losses")
+    alerts = utc_frame(alerts, ["start", "end"], "alerts")
+    losses = utc_frame(losses, ["start", "end"], "losses")
     horizons = sorted(set(alerts["horizon_s"]) if horizons_s is None else set(horizons_s))
     losses = _ordered(losses).reset_index(drop=True)
     grid = losses[["aircraft_a", "aircraft_b", "start"]].rename(columns={"start": "loss_start"})

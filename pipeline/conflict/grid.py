@@ -76,22 +76,3 @@ def grid_step_s(tracks: pd.DataFrame, name: str = "tracks") -> float:
 def _nanoseconds(times: pd.Series) -> np.ndarray:
     array = times.array
     return array.as_unit("ns").asi8 if hasattr(array, "asi8") else np.asarray(times)
-
-
-def utc_times(frame: pd.DataFrame, columns: list[str], name: str) -> pd.DataFrame:
-    """The frame with its time columns in UTC: time-zone-aware datetimes converted exactly, an empty
-    column as it is; TypeError naming the frame and column for anything else (naive datetimes, strings,
-    numbers), which cannot be compared with the UTC times of the other tables."""
-    out = frame
-    for c in columns:
-        dtype = frame[c].dtype
-        if isinstance(dtype, pd.DatetimeTZDtype):
-            if str(dtype.tz) != "UTC":
-                out = out.copy() if out is frame else out
-                out[c] = frame[c].dt.tz_convert("UTC")
-        elif len(frame):
-            naive = pd.api.types.is_datetime64_dtype(dtype)
-            hint = ("naive datetimes: localise them, .dt.tz_localize('UTC')" if naive
-                    else f"dtype {dtype}: convert with pd.to_datetime(..., utc=True)")
-            raise TypeError(f"{name}: column {c!r} must hold time-zone-aware UTC datetimes, got {hint}")
-    return out

@@ -126,3 +126,22 @@ class FirstDayTally:
                 f"{self.after} follow it: --date {date} names the day of a raw stream's first report, so the "
                 f"rest are on {date + dt.timedelta(days=1)}; if the recording is of {date}, give --date "
                 f"{date - dt.timedelta(days=1)}"]
+
+
+def utc_frame(frame: pd.DataFrame, columns: list[str], name: str) -> pd.DataFrame:
+    """The frame with its time columns in UTC: time-zone-aware datetimes converted exactly, an empty
+    column as it is; TypeError naming the frame and column for anything else (naive datetimes, strings,
+    numbers), which cannot be compared with the UTC times of the other tables."""
+    out = frame
+    for c in columns:
+        dtype = frame[c].dtype
+        if isinstance(dtype, pd.DatetimeTZDtype):
+            if str(dtype.tz) != "UTC":
+                out = out.copy() if out is frame else out
+                out[c] = frame[c].dt.tz_convert("UTC")
+        elif len(frame):
+            naive = pd.api.types.is_datetime64_dtype(dtype)
+            hint = ("naive datetimes: localise them, .dt.tz_localize('UTC')" if naive
+                    else f"dtype {dtype}: convert with pd.to_datetime(..., utc=True)")
+            raise TypeError(f"{name}: column {c!r} must hold time-zone-aware UTC datetimes, got {hint}")
+    return out
