@@ -221,9 +221,11 @@ def test_times_in_another_zone_are_taken_as_the_same_instants():
 def test_naive_times_and_contradicting_arguments_are_refused():
     meas = _meas_one_window()
     naive = meas.assign(time=meas["time"].dt.tz_localize(None))
-    with pytest.raises(ValueError, match=r"meas\['time'\] is timezone-naive .*tz_localize\('UTC'\)"):
+    with pytest.raises(TypeError, match=r"meas: column 'time' must hold time-zone-aware UTC datetimes, got "
+                                        r"naive datetimes: localise them, \.dt\.tz_localize\('UTC'\)"):
         correlate(naive, callsign="MAS72")
-    with pytest.raises(TypeError, match=r"meas\['time'\] must hold tz-aware datetimes.*float64"):
+    with pytest.raises(TypeError, match=r"meas: column 'time' must hold time-zone-aware UTC datetimes, got "
+                                        r"dtype float64"):
         correlate(meas.assign(time=1.0), callsign="MAS72")
     with pytest.raises(ValueError, match=r"all_aircraft=True .* not both \(got callsign='MAS72'\)"):
         correlate(meas, all_aircraft=True, callsign="MAS72")

@@ -202,7 +202,7 @@ def test_bad_input_is_named():
     m = _adsb(fly((0, 0), 0, 100, [(10, 0, 0)]), np.arange(5.0), rng)
     with pytest.raises(ValueError, match="tpm 'nope'"):
         track(m, tpm="nope")
-    with pytest.raises(ValueError, match="'time' must be tz-aware"):
+    with pytest.raises(TypeError, match="'time' must hold time-zone-aware UTC datetimes"):
         track(m.assign(time=m.time.dt.tz_localize(None)))
     res = track(m.assign(cov_ee_m2=[np.nan, 1, 1, 1, 1]))
     assert res.sensors.invalid.sum() == 1

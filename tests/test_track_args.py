@@ -36,7 +36,9 @@ def test_a_time_column_in_another_zone_is_read_as_utc():
 
 def test_naive_times_are_refused_with_the_fix():
     m = _adsb()
-    with pytest.raises(ValueError, match=r"naive times have no zone.*tz_localize\('UTC'\)"):
+    with pytest.raises(TypeError, match=r"measurements: column 'time' must hold time-zone-aware UTC "
+                                        r"datetimes, got naive datetimes: localise them, "
+                                        r"\.dt\.tz_localize\('UTC'\)"):
         track(m.assign(time=m["time"].dt.tz_localize(None)))
     res = track(m, keep_states=True)
     with pytest.raises(ValueError, match="time '2024-05-10 07:01': a naive time"):

@@ -27,7 +27,7 @@ from pipeline.model.aircraft import NoSuchAircraft, aircraft_rows, one_aircraft
 from pipeline.model.dedup import duplicate_mask
 from pipeline.model.geodesy import distance_m
 from pipeline.model.jumps import JUMP_FLAG_COLUMNS, detect_jumps
-from pipeline.model.time import is_dated, iso_utc, midnight, seconds_since, with_clock
+from pipeline.model.time import is_dated, iso_utc, midnight, seconds_since, utc_frame, with_clock
 from pipeline.parallel import map_ordered
 
 PAIRS = ("radar-adsb", "radar-radar", "all")
@@ -88,18 +88,6 @@ class TooManySlots(ValueError):
         self.slots, self.limit, self.slot_s = slots, limit, slot_s
         super().__init__(f"slots of {slot_s:g} s need more than {limit:,} slots over the windows "
                          f"(at least {slots:,}); use a longer slot")
-
-
-def utc_times(times: pd.Series) -> pd.Series:
-    """``times`` as UTC instants in nanoseconds: tz-aware times of any zone are converted exactly (the same
-    instants); naive times are refused, as their zone is unknown (seconds of day count from UTC midnight)."""
-    dtype = times.dtype
-    if isinstance(dtype, pd.DatetimeTZDtype):
-        return times.dt.tz_convert("UTC").dt.as_unit("ns") if str(dtype) != "datetime64[ns, UTC]" else times
-    if pd.api.types.is_datetime64_dtype(dtype):
-        raise ValueError(f"meas['time'] is timezone-naive ({dtype}): correlate needs UTC instants; if the "
-                         "times are UTC, pass meas.assign(time=meas['time'].dt.tz_localize('UTC'))")
-    raise TypeError(f"meas['time'] must hold tz-aware datetimes (datetime64[ns, UTC]), got dtype {dtype}")
 
 
 def _lags(n: int) -> np.ndarray:
@@ -520,7 +508,9 @@ def correlate(meas: pd.DataFrame, *, callsign: str | None = None, address: str |
     if not isinstance(meas, pd.DataFrame) or "time" not in meas:
         raise TypeError("meas must be a measurement frame (pipeline.model.schema) with a 'time' column, got "
                         + (type(meas).__name__ if not isinstance(meas, pd.DataFrame) else "no 'time' column"))
-    meas = meas.assign(time=utc_times(meas["time"]))
+    meas = utc_frame(meas, ["time"], "meas")  # aware times of any zone as UTC; naive ones refused
+    if str(meas["time"].dtype) != "datetime64[ns, UTC]":
+        meas = meas.assign(time=meas["time"].dt.as_unit("ns"))
     reference = midnight(meas["time"])
     if reference is None:
         raise NoSuchAircraft("any aircraft", ["radar", "ADS-B"], [], "there are no measurements")

@@ -28,6 +28,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import pandas as pd
 
+from pipeline.model.time import utc_frame
 from pipeline.parallel import map_ordered
 
 from .config import TrackerConfig, default_modes
@@ -113,20 +114,6 @@ def utc_timestamp(name: str, value) -> pd.Timestamp:
     return stamp.tz_convert("UTC")
 
 
-def utc_times(measurements: pd.DataFrame) -> pd.DataFrame:
-    """The frame with its `time` column in UTC: an aware column in another zone is converted (exact: the
-    instants do not change, only the clock they are written in, and the outputs' time_of_day and grid
-    count from UTC midnight); a naive column is refused, naming its dtype."""
-    dtype = measurements["time"].dtype
-    if not isinstance(dtype, pd.DatetimeTZDtype):
-        raise ValueError(f"measurements: column 'time' must be tz-aware datetime64 (UTC, or a zone converted "
-                         f"to UTC), not {dtype}; naive times have no zone: if they are UTC, "
-                         f"use .dt.tz_localize('UTC')")
-    if str(dtype.tz) == "UTC":
-        return measurements
-    return measurements.assign(time=measurements["time"].dt.tz_convert("UTC"))
-
-
 def _seconds(name: str, value, minimum: float = 0.0) -> float:
     """A finite number of seconds above minimum (or, minimum 0, above 0); TypeError / ValueError naming the
     argument otherwise."""
@@ -146,7 +133,7 @@ def _check(measurements: pd.DataFrame) -> pd.DataFrame:
     missing = [c for c in REQUIRED if c not in measurements.columns]
     if missing:
         raise ValueError(f"measurements: missing column(s) {', '.join(missing)}")
-    return utc_times(measurements)
+    return utc_frame(measurements, ["time"], "measurements")  # aware times of any zone as UTC
 
 
 def track(measurements: pd.DataFrame, *, step_s: float = 1.0, max_coast_s: float = 60.0,
