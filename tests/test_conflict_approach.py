@@ -25,6 +25,16 @@ def _tracks(rows):
     return pd.DataFrame([{"time": T, **r} for r in rows])
 
 
+def _head_on(b_vertical_rate_fpm: float) -> pd.DataFrame:
+    """A east at 360 kt at FL350 from (0, 0); B 20 NM east and 3 NM north at FL370, west at 360 kt."""
+    lat_b, lon_b = _offset(0.0, 0.0, 20.0, 3.0)
+    return _tracks([
+        {"aircraft_id": "A", "latitude": 0.0, "longitude": 0.0, "flight_level": 350.0, "speed_kt": 360.0,
+         "track_deg": 90.0, "vertical_rate_fpm": 0.0},
+        {"aircraft_id": "B", "latitude": lat_b, "longitude": lon_b, "flight_level": 370.0, "speed_kt": 360.0,
+         "track_deg": 270.0, "vertical_rate_fpm": b_vertical_rate_fpm}])
+
+
 def _alert(a="A", b="B"):
     return pd.DataFrame({"aircraft_a": [a], "aircraft_b": [b], "horizon_s": [60.0], "start": [T]})
 
@@ -32,12 +42,7 @@ def _alert(a="A", b="B"):
 def test_head_on_offset_pair_closes_in_100_s_at_3_nm_and_1000_ft():
     # A flies east at 360 kt; B, 20 NM east and 3 NM north, flies west at 360 kt: closing at 0.2 NM/s,
     # closest after 20 / 0.2 = 100 s at 3 NM; B descends at 600 ft/min from FL370 to 36,000 ft by then
-    lat_b, lon_b = _offset(0.0, 0.0, 20.0, 3.0)
-    tracks = _tracks([
-        {"aircraft_id": "A", "latitude": 0.0, "longitude": 0.0, "flight_level": 350.0, "speed_kt": 360.0,
-         "track_deg": 90.0, "vertical_rate_fpm": 0.0},
-        {"aircraft_id": "B", "latitude": lat_b, "longitude": lon_b, "flight_level": 370.0, "speed_kt": 360.0,
-         "track_deg": 270.0, "vertical_rate_fpm": -600.0}])
+    tracks = _head_on(-600.0)
     out = closest_approach(_alert(), tracks)
     assert list(out.columns[-4:]) == APPROACH_COLUMNS
     row = out.iloc[0]
@@ -77,12 +82,7 @@ def test_converging_at_50_north_and_a_diverging_pair():
 
 def test_times_in_another_zone_match_and_naive_ones_are_refused():
     # an alert time in Kuala Lumpur time is the same instant as the tracks' UTC time: the same approach
-    lat_b, lon_b = _offset(0.0, 0.0, 20.0, 3.0)
-    tracks = _tracks([
-        {"aircraft_id": "A", "latitude": 0.0, "longitude": 0.0, "flight_level": 350.0, "speed_kt": 360.0,
-         "track_deg": 90.0, "vertical_rate_fpm": 0.0},
-        {"aircraft_id": "B", "latitude": lat_b, "longitude": lon_b, "flight_level": 370.0, "speed_kt": 360.0,
-         "track_deg": 270.0, "vertical_rate_fpm": 0.0}])
+    tracks = _head_on(0.0)
     alert = _alert().assign(start=[T.tz_convert("Asia/Kuala_Lumpur")])
     row = closest_approach(alert, tracks).iloc[0]
     assert row["time_to_cpa_s"] == pytest.approx(100.0, abs=0.2)
