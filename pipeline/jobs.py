@@ -1185,7 +1185,12 @@ def _write_quality(result: QualityJobResult) -> dict[str, Path]:
     if result.checked.output:
         out = result.checked.output
         images = quality_figures(result.quality, out.parent, out.stem)
-        write_tables(result.quality.sheets, out, images=images,
+        # the sheet lists the bins that hold intervals (every 0.1 s bin up to the longest interval printed
+        # 18 pages on the real radar); the DataFrame and the JSON keep every bin
+        sheets = dict(result.quality.sheets)
+        bins = sheets["Update intervals"]
+        sheets["Update intervals"] = bins[bins["intervals"] > 0] if "intervals" in bins else bins
+        write_tables(sheets, out, images=images,
                      parameters={**result.parameters, "inputs": result.loaded.inputs})
         written["report"] = out
     return written

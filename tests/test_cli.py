@@ -163,6 +163,14 @@ def test_quality_command(tmp_path, capsys):
     jumps = [j for j in TRUTH["jumps"] if j["callsign"] == "MAS72"]
     assert len(tables["Jumps"]) == len(jumps)
     assert (tmp_path / "quality_intervals.png").exists()
+    # the sheet lists the bins that hold intervals; the JSON every bin, with the same total per sensor
+    ws = wb["Update intervals"]
+    header = [c.value for c in ws[1]]
+    sheet = pd.DataFrame(list(ws.iter_rows(min_row=2, values_only=True)), columns=header)
+    every = pd.DataFrame(tables["Update intervals"])
+    assert (sheet["intervals"] > 0).all() and (every["intervals"] == 0).any()
+    assert sheet.groupby("sensor")["intervals"].sum().to_dict() == every.groupby("sensor")["intervals"].sum(
+        ).to_dict()
 
 
 def test_correlate_filters_and_quality_sheets(tmp_path, capsys):
