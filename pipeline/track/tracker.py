@@ -28,6 +28,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import pandas as pd
 
+from pipeline.model.arguments import finite_number
 from pipeline.model.time import utc_frame
 from pipeline.parallel import map_ordered
 
@@ -114,18 +115,6 @@ def utc_timestamp(name: str, value) -> pd.Timestamp:
     return stamp.tz_convert("UTC")
 
 
-def _seconds(name: str, value, minimum: float = 0.0) -> float:
-    """A finite number of seconds above minimum (or, minimum 0, above 0); TypeError / ValueError naming the
-    argument otherwise."""
-    if isinstance(value, bool) or not isinstance(value, int | float | np.integer | np.floating):
-        raise TypeError(f"{name} {value!r}: must be a number of seconds, not {type(value).__name__}")
-    v = float(value)
-    if not math.isfinite(v) or not v > 0.0 or v < minimum:
-        raise ValueError(f"{name} {value!r}: must be a finite number of seconds > 0"
-                         + (f" and >= step_s ({minimum:g})" if minimum > 0.0 else ""))
-    return v
-
-
 def _check(measurements: pd.DataFrame) -> pd.DataFrame:
     """The frame with UTC times, after checking its columns; ValueError naming what is wrong."""
     if not isinstance(measurements, pd.DataFrame):
@@ -151,9 +140,9 @@ def track(measurements: pd.DataFrame, *, step_s: float = 1.0, max_coast_s: float
     measurements = _check(measurements)
     if smoother not in SMOOTHERS:
         raise ValueError(f"smoother {smoother!r}: expected one of {', '.join(SMOOTHERS)}")
-    step_s = _seconds("step_s", step_s)
+    step_s = finite_number("step_s", step_s)
     # coasting less than one step would end every gap before the next grid time (the CLI's --max-coast rule)
-    max_coast_s = _seconds("max_coast_s", max_coast_s, step_s)
+    max_coast_s = finite_number("max_coast_s", max_coast_s, at_least=step_s, at_least_name="step_s")
     if config is None:
         config = TrackerConfig(modes=default_modes(turn_rate_dps, with_ca=with_ca), max_coast_s=max_coast_s)
     else:
