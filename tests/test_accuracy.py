@@ -345,8 +345,8 @@ def _hand_meas() -> pd.DataFrame:
     ({"reference": "trak"}, ValueError, ["reference", "'trak'", "'adsb', 'track'"]),
     ({"reference": "TRACK"}, ValueError, ["reference", "'TRACK'"]),
     ({"reference": None}, ValueError, ["reference", "None"]),
-    ({"max_gap_s": -1}, ValueError, ["max_gap_s", "-1", "above 0"]),
-    ({"max_gap_s": 0.0}, ValueError, ["max_gap_s", "above 0"]),
+    ({"max_gap_s": -1}, ValueError, ["max_gap_s", "-1", "> 0"]),
+    ({"max_gap_s": 0.0}, ValueError, ["max_gap_s", "> 0"]),
     ({"max_gap_s": float("nan")}, ValueError, ["max_gap_s", "nan", "finite"]),
     ({"max_gap_s": "10"}, TypeError, ["max_gap_s", "'10'"]),
     ({"jump_kw": 3}, TypeError, ["jump_kw", "int"]),
@@ -377,7 +377,7 @@ def test_quality_run_rejects_bad_arguments_before_the_tables():
     meas = _hand_meas()
     with pytest.raises(ValueError, match="reference: 'TRACK' is not one of 'adsb', 'track'"):
         quality_run(meas, SENSORS, reference="TRACK")
-    with pytest.raises(ValueError, match="gap_s: -5 s must be"):
+    with pytest.raises(ValueError, match="gap_s -5: must be a finite number of seconds > 0"):
         quality_run(meas, SENSORS, gap_s=-5)
     with pytest.raises(TypeError, match="errors: expected a pandas DataFrame, got NoneType"):
         estimate_biases(None)

@@ -281,7 +281,9 @@ def _two_predictions(east_b_m: float) -> pd.DataFrame:
 
 @pytest.mark.parametrize("radius", [0, 0.0, -5.0, float("nan"), "5"])
 def test_pair_probabilities_refuse_a_radius_that_is_not_positive(radius):
-    with pytest.raises(ValueError, match=r"radius_nm: must be a positive finite distance, got"):
+    error, words = ((TypeError, "must be a number of NM, not str") if isinstance(radius, str)
+                    else (ValueError, "must be a finite number of NM > 0"))
+    with pytest.raises(error, match=rf"radius_nm {radius!r}: {words}"):
         pair_probabilities(_two_predictions(1000.0), radius_nm=radius)
 
 

@@ -238,7 +238,7 @@ def test_a_prediction_step_off_the_tracks_grid_is_refused():
 def test_prediction_arguments_of_the_wrong_type_are_named():
     reports = _straight_reports("X", 50.0, 5.0, 200.0, 0.0, 350.0, 30)
     result = track(reports, step_s=5.0, keep_states=True)
-    with pytest.raises(TypeError, match=r"step_s '5': give the prediction step as a finite number"):
+    with pytest.raises(TypeError, match=r"step_s '5': must be a number of seconds, not str"):
         predict_tracks(result, [20], step_s="5")
     with pytest.raises(TypeError, match=r"horizons_s \['a'\]: give the horizons as numbers of seconds"):
         predict_tracks(result, ["a"], step_s=5.0)

@@ -421,7 +421,7 @@ def test_0_2x_figure_of_merit_is_its_own_indicator():
 @pytest.mark.parametrize(("gap_s", "error"), [(-1.0, ValueError), (0, ValueError), (float("inf"), ValueError),
                                               (None, TypeError)])
 def test_quality_tables_reject_a_bad_gap(gap_s, error):
-    with pytest.raises(error, match=f"gap_s: .*{gap_s!r}"):
+    with pytest.raises(error, match=f"gap_s {gap_s!r}: must be a "):
         quality_tables(pd.DataFrame({"sensor_kind": [], "time": []}), gap_s=gap_s)
 
 

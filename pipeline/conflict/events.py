@@ -28,6 +28,7 @@ from pipeline.conflict.geometry import (
 )
 from pipeline.conflict.grid import grid_rows, grid_step_s
 from pipeline.conflict.pairs import _require, pairs_per_step, time_key
+from pipeline.model.arguments import finite_number
 from pipeline.model.time import utc_frame
 
 LOSS_COLUMNS = ["aircraft_a", "aircraft_b", "start", "end", "duration_s", "min_horizontal_nm",
@@ -76,7 +77,8 @@ def losses_by_pairs(tracks: pd.DataFrame, radius_nm: float = 5.0, vertical_ft: f
                     kinds: tuple[str, ...] = ("airborne", "surface"), step_s: float | None = None
                     ) -> dict[str, pd.DataFrame]:
     """``losses_of_separation`` for each kind of pairs in ``kinds`` (LOSS_PAIRS), from one pair search."""
-    _check_positive(radius_nm=radius_nm, vertical_ft=vertical_ft)
+    finite_number("radius_nm", radius_nm, "NM")
+    finite_number("vertical_ft", vertical_ft, "ft")
     for kind in kinds:
         if kind not in LOSS_PAIRS:
             raise ValueError(f"pairs {kind!r}: expected one of {', '.join(LOSS_PAIRS)}")
@@ -124,9 +126,8 @@ def alert_events(pc: pd.DataFrame, threshold: float = 0.2, step_s: float | None 
     _require(pc, ["time", "aircraft_a", "aircraft_b", "horizon_s", "pc"], "pc")
     if not 0.0 <= threshold < 1.0:
         raise ValueError(f"threshold: a probability in [0, 1) is needed, got {threshold!r}")
-    if step_s is not None and not (isinstance(step_s, int | float | np.number) and np.isfinite(step_s)
-                                   and step_s > 0):
-        raise ValueError(f"step_s: must be a positive finite number of seconds, got {step_s!r}")
+    if step_s is not None:
+        finite_number("step_s", step_s)
     pc = _ordered(utc_frame(pc, ["time"], "pc"))
     rows = pc.sort_values(["aircraft_a", "aircraft_b", "horizon_s", "time"], kind="stable")
     rows = rows.reset_index(drop=True)
@@ -232,12 +233,6 @@ def _ordered(frame: pd.DataFrame) -> pd.DataFrame:
     out = frame.copy()
     out.loc[swap, "aircraft_a"], out.loc[swap, "aircraft_b"] = b[swap], a[swap]
     return out
-
-
-def _check_positive(**values) -> None:
-    for name, value in values.items():
-        if not np.isfinite(value) or value <= 0:
-            raise ValueError(f"{name}: must be a positive distance, got {value!r}")
 
 
 def _empty(columns: list[str], time_dtype, id_dtype) -> pd.DataFrame:

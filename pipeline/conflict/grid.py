@@ -11,15 +11,15 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
+from pipeline.model.arguments import finite_number
+
 _TOLERANCE_S = 1e-6  # the tracker's times are whole nanoseconds of a float time of day
 
 
 def on_grid(tracks: pd.DataFrame, step_s: float) -> np.ndarray:
     """True for the rows at a whole multiple of step_s since UTC midnight (to a millionth of a step): by
     the tracker's `time_of_day` when the frame has it, else by `time` from midnight of its earliest day."""
-    if not (isinstance(step_s, int | float | np.number) and not isinstance(step_s, bool)
-            and np.isfinite(step_s) and step_s > 0):
-        raise ValueError(f"step_s: must be a positive finite number of seconds, got {step_s!r}")
+    finite_number("step_s", step_s)
     if "time_of_day" in tracks.columns:
         seconds = tracks["time_of_day"].to_numpy(float)
     else:

@@ -26,6 +26,7 @@ from pipeline.conflict.geometry import FT_PER_FL, M_PER_NM, VERTICAL_TOLERANCE_F
 from pipeline.conflict.pairs import _require, time_key
 from pipeline.conflict.probability import conflict_probability, pc_margin, pc_upper_bound
 from pipeline.conflict.sweep import grouped_box_pairs
+from pipeline.model.arguments import finite_number
 
 PREDICTION_COLUMNS = ["aircraft_id", "time", "horizon_s", "east_m", "north_m", "var_east_m2",
                       "cov_east_north_m2", "var_north_m2", "flight_level"]
@@ -52,8 +53,7 @@ def pair_probabilities(predictions: pd.DataFrame, radius_nm: float = 5.0, vertic
     at once (memory only: the result does not depend on it).
     """
     _require(predictions, PREDICTION_COLUMNS, "predictions")
-    if not (isinstance(radius_nm, int | float | np.number) and np.isfinite(radius_nm) and radius_nm > 0):
-        raise ValueError(f"radius_nm: must be a positive finite distance, got {radius_nm!r}")
+    finite_number("radius_nm", radius_nm, "NM")
     vertical_ft = vertical_limit_ft(vertical_ft, vertical_tolerance_ft)
     radius_m = radius_nm * M_PER_NM
     cols = _Columns(predictions)

@@ -17,6 +17,7 @@ import pandas as pd
 
 from pipeline.conflict.grid import on_grid
 from pipeline.conflict.moments import ALL_PAIRS, POSITION_PAIRS, predict_states
+from pipeline.model.arguments import finite_number
 from pipeline.parallel import map_ordered
 from pipeline.track.frame import Plane
 from pipeline.track.imm import NX
@@ -82,8 +83,7 @@ def predict_tracks(result: TrackResult, horizons_s, *, step_s: float = 1.0,
     multiple of the tracks' own step (ValueError otherwise: only the rows both grids share would be
     predicted).
     """
-    if not isinstance(step_s, int | float | np.number) or isinstance(step_s, bool) or not np.isfinite(step_s):
-        raise TypeError(f"step_s {step_s!r}: give the prediction step as a finite number of seconds")
+    step_s = finite_number("step_s", step_s)
     if isinstance(horizons_s, int | float | np.number):
         horizons_s = (horizons_s,)  # one horizon
     try:
@@ -91,8 +91,8 @@ def predict_tracks(result: TrackResult, horizons_s, *, step_s: float = 1.0,
     except (TypeError, ValueError):
         raise TypeError(f"horizons_s {horizons_s!r}: give the horizons as numbers of seconds, "
                         "e.g. (20, 60, 120)") from None
-    if not len(horizons) or not (horizons > 0).all() or not step_s > 0:
-        raise ValueError(f"horizons_s {list(horizons_s)!r} and step_s {step_s!r}: must be > 0")
+    if not len(horizons) or not (horizons > 0).all():
+        raise ValueError(f"horizons_s {list(horizons_s)!r}: must be > 0")
     grid_s = float(result.parameters.get("step_s", step_s))
     ratio = float(step_s) / grid_s
     if abs(ratio - round(ratio)) > 1e-9 * max(ratio, 1.0) or round(ratio) < 1:

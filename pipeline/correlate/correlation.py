@@ -24,6 +24,7 @@ from pipeline.correlate.results import (
 from pipeline.correlate.slots import slot_count, slot_series
 from pipeline.correlate.windows import in_window, overlap_windows, short_window_reason
 from pipeline.model.aircraft import NoSuchAircraft, aircraft_rows, one_aircraft
+from pipeline.model.arguments import finite_number
 from pipeline.model.dedup import duplicate_mask
 from pipeline.model.geodesy import distance_m
 from pipeline.model.jumps import JUMP_FLAG_COLUMNS, detect_jumps
@@ -494,10 +495,8 @@ def correlate(meas: pd.DataFrame, *, callsign: str | None = None, address: str |
     """
     if fill not in ("hold", "predict"):
         raise ValueError(f"fill must be 'hold' or 'predict', got {fill!r}")
-    for name, value, low in (("slot_s", slot_s, "> 0"), ("gap_s", gap_s, ">= 0")):
-        if isinstance(value, bool) or not isinstance(value, int | float | np.integer | np.floating) \
-                or not math.isfinite(value) or (value <= 0 if low == "> 0" else value < 0):
-            raise ValueError(f"{name} must be a finite number of seconds {low}, got {value!r}")
+    finite_number("slot_s", slot_s)
+    finite_number("gap_s", gap_s, above=None, at_least=0.0)
     if pairs not in PAIRS:
         raise ValueError(f"pairs must be one of {', '.join(PAIRS)}, got {pairs!r}")
     if all_aircraft and (callsign is not None or address is not None):

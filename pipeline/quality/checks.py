@@ -3,10 +3,9 @@ and the reason, before any work (never a deep pandas traceback or a silently emp
 
 from __future__ import annotations
 
-import math
-from numbers import Real
-
 import pandas as pd
+
+from pipeline.model.arguments import finite_number
 
 REFERENCES = ("adsb", "track")  # what radar accuracy is measured against
 
@@ -27,11 +26,8 @@ def check_reference(reference: object) -> None:
 
 
 def check_seconds(name: str, value: object) -> None:
-    """``value`` is a finite, positive number of seconds."""
-    if isinstance(value, bool) or not isinstance(value, Real):
-        raise TypeError(f"{name}: expected a number of seconds, got {value!r}")
-    if not math.isfinite(value) or value <= 0:
-        raise ValueError(f"{name}: {value!r} s must be a finite number of seconds above 0")
+    """``value`` is a finite, positive number of seconds (model.arguments.finite_number)."""
+    finite_number(name, value)
 
 
 def check_options(name: str, value: object) -> None:
