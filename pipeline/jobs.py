@@ -1335,6 +1335,8 @@ def decode_job(options: DecodeOptions, *, on_chunk: Callable[[int, int, str], No
                     done = max((int(f["offset"].max()) for f in rec.frames.values() if len(f)), default=0)
                     if on_chunk:
                         on_chunk(done, size, path.name)
+                if on_chunk:  # the last record's offset is not the file's end: close the bar at 100 %
+                    on_chunk(size, size, path.name)
                 early_start += tally.warning(path.name, date, fmt)
         except UnreadableInput as exc:
             raise JobError(str(exc), 2) from exc
