@@ -1318,12 +1318,12 @@ def decode_job(options: DecodeOptions, *, on_chunk: Callable[[int, int, str], No
             for path in checked.inputs:
                 size = path.stat().st_size
                 chunk = max(int(options.chunk_mb * 1e6), 1)
-                tally, date, fmt = FirstDayTally(), None, None
+                tally, date, fmt, chosen = FirstDayTally(), None, None, {}
                 for rec in asterix.iter_read(path, chunk=chunk, editions=checked.editions or None,
                                              date=options.date, format=options.format, categories=cats,
                                              strict=options.strict):
                     tally.add(rec.frames)
-                    date, fmt = date or rec.date, rec.format
+                    date, fmt, chosen = date or rec.date, rec.format, {**rec.edition_choice, **chosen}
                     skipped += [(str(path), int(e.offset), str(e.reason)) for e in rec.errors.itertuples()]
                     edition_notes.fold(failed, rec)
                     for cat, frame in rec.frames.items():
@@ -1338,6 +1338,7 @@ def decode_job(options: DecodeOptions, *, on_chunk: Callable[[int, int, str], No
                 if on_chunk:  # the last record's offset is not the file's end: close the bar at 100 %
                     on_chunk(size, size, path.name)
                 early_start += tally.warning(path.name, date, fmt)
+                notes += [f"{path}: CAT{cat:03d} --edition auto {why}" for cat, why in sorted(chosen.items())]
         except UnreadableInput as exc:
             raise JobError(str(exc), 2) from exc
         finally:

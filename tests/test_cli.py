@@ -230,3 +230,12 @@ def test_correlate_names_the_sensors_and_pairs(tmp_path, capsys):
     assert main(["correlate", str(RADAR), str(ADSB), "--sensors", str(SENSORS), "--all",
                  "--pairs", "radar-radar"]) == 1
     assert "seen by two radars" in capsys.readouterr().err
+
+
+def test_decode_says_which_edition_auto_chose(tmp_path, capsys):
+    """--edition 21=auto: decode names the edition it walked (the simulator writes the newest, 2.7), as
+    stats does; the 0.2x and 2.x families read I021/130 and /131 differently."""
+    assert main(["decode", str(ADSB), "--edition", "21=auto", "-o", str(tmp_path / "a.csv")]) == 0
+    err = capsys.readouterr().err
+    assert f"{ADSB}: CAT021 --edition auto chose 2.7 (" in err
+    assert "none needed telling apart" in err or "apart:" in err
