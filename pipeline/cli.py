@@ -17,6 +17,8 @@ from pipeline.meta import software_version
 from pipeline.progress import Progress
 
 if TYPE_CHECKING:
+    from pathlib import Path
+
     import pandas as pd
 
 
@@ -359,6 +361,7 @@ def _correlate(options, progress: Progress, prepared) -> int:
     if "report" in written:
         print(f"Report: {written['report']}\nTrack figure: {written['figure']}", file=sys.stderr)
         note = jobs.figure_windows_note(len(result.run.windows)) if options.quality else None
+        _print_images(written)
         if note:
             print(f"Figures: {note}", file=sys.stderr)
     for kind, path in written.items():
@@ -378,7 +381,17 @@ def cmd_quality(args) -> int:
         print(f"JSON: {written['json']}", file=sys.stderr)
     if "report" in written:
         print(f"Report: {written['report']}", file=sys.stderr)
+        _print_images(written)
     return 0
+
+
+def _print_images(written: dict[str, Path]) -> None:
+    """The PNG files written beside a workbook (also on its Figures sheet), one line each."""
+    images = [path for kind, path in written.items() if kind.startswith("image ")]
+    if images:
+        print(f"Figures ({len(images)} PNG beside the report):", file=sys.stderr)
+        for path in images:
+            print(f"  {path}", file=sys.stderr)
 
 
 def _quality_text(result) -> str:

@@ -1131,6 +1131,7 @@ def _write_workbook(result: CorrelateResult, progress: Progress | None, max_wind
                           tables_written=(lambda: _drawn(drawing, png, files)) if in_child else None,
                           elsewhere=in_child)
     written = {"report": out, "figure": png}
+    written.update((f"image {name}", Path(path)) for name, path in (images or {}).items())
     written.update((f"table {p.stem.removeprefix(out.stem + '_')}", p) for p in tables)
     return written
 
@@ -1193,6 +1194,7 @@ def _write_quality(result: QualityJobResult) -> dict[str, Path]:
         write_tables(sheets, out, images=images,
                      parameters={**result.parameters, "inputs": result.loaded.inputs})
         written["report"] = out
+        written.update((f"image {name}", Path(path)) for name, path in images.items())
     return written
 
 
