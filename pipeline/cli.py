@@ -76,7 +76,8 @@ def _edition(text: str) -> str:
 def _decoding_options(p: argparse.ArgumentParser) -> None:
     p.add_argument("--edition", action="append", type=_edition, default=[], metavar="CAT=ED",
                    help="pin a category edition, e.g. 21=0.26, 48=1.27, or 21=auto (repeatable)")
-    p.add_argument("--date", type=_date, help="UTC date of a raw or final recording (YYYY-MM-DD)")
+    p.add_argument("--date", type=_date,
+                   help="UTC day (YYYY-MM-DD) of a recording that carries no date (raw, final, gps, oradis)")
     p.add_argument("--format", choices=FORMATS, help="container format (default: detected)")
 
 
@@ -143,7 +144,9 @@ def build_parser() -> argparse.ArgumentParser:
                         "two radars, or both; plots of two radars are never mixed")
     c.add_argument("--split-adsb", action="store_true",
                    help="keep ADS-B ground stations apart (default: one ADS-B source per aircraft)")
-    c.add_argument("--quality", action="store_true", help="add the Quality and Radar accuracy sheets")
+    c.add_argument("--quality", action="store_true",
+                   help="add the quality sheets (Quality, Update intervals, Gaps, Jumps, ADS-B quality, "
+                        "Radar accuracy, Radar biases, Figures) and their PNGs")
     c.add_argument("--drop-jumps", action="store_true", help="remove detected ADS-B position jumps first")
     c.add_argument("--min-nic", type=int, help="drop ADS-B reports with NUCp/NIC below N")
     c.add_argument("--min-nacp", type=int, help="drop ADS-B reports with NACp below N")
@@ -160,7 +163,8 @@ def build_parser() -> argparse.ArgumentParser:
     _aircraft_options(q, "every aircraft", sensors_required=False)
     q.add_argument("-o", "--output", help="Excel workbook (.xlsx); figures are written beside it")
     q.add_argument("--json", help="the tables as JSON")
-    q.add_argument("--gap", type=float, default=180.0, help="gap in seconds reported as discontinuity")
+    q.add_argument("--gap", type=float, default=180.0,
+                   help="gap in seconds reported as a discontinuity (180)")
     q.add_argument("--reference", choices=["adsb", "track"], default="adsb",
                    help="radar accuracy against ADS-B interpolated linearly (default) or against the "
                         "smoothed ADS-B-only IMM track")
@@ -206,7 +210,8 @@ def build_parser() -> argparse.ArgumentParser:
                         "of reported levels (default 25)")
     k.add_argument("--threshold", type=float, default=0.2,
                    help="PC above which an alert is raised (default 0.2)")
-    k.add_argument("--method", default="exact", help="PC method: exact, one-block, blocks or midpoint")
+    k.add_argument("--method", default="exact",
+                   help="PC method: exact (default), one-block, blocks or midpoint")
     k.add_argument("--vertical", default="gate",
                    help="vertical proximity: gate (predicted levels closer than --vertical-ft, default) or "
                         "gaussian (PC times the probability from the vertical filter's sigma)")
