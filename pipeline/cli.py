@@ -180,8 +180,8 @@ def build_parser() -> argparse.ArgumentParser:
     t.add_argument("--max-coast", type=float, default=60.0,
                    help="seconds a track is predicted after its last report before it ends (default 60)")
     t.add_argument("--smooth", action="store_true", help="backward (RTS) pass: reference trajectories")
-    t.add_argument("--smoother", choices=["rts", "imm"], default="rts",
-                   help="with --smooth: RTS on the combined estimate (default) or the IMM smoother "
+    t.add_argument("--smoother", choices=["rts", "imm"],
+                   help="implies --smooth: RTS on the combined estimate (default) or the IMM smoother "
                         "(smoothed mode probabilities too; better on straight legs, worse in most "
                         "manoeuvres in our validations)")
     t.add_argument("--tpm", help="mode transition law: fixed:P, dynamic, dynamic:A,B or expm:TAU[,TAU2] "
@@ -424,8 +424,9 @@ def cmd_track(args) -> int:
     options = jobs_track.TrackOptions(
         **_decoding(args), sensors=args.sensors, callsign=args.callsign, address=args.address,
         all_aircraft=args.all, output=args.output, json=args.json, figures=args.figures, step_s=args.step,
-        max_coast_s=args.max_coast, smooth=args.smooth, smoother=args.smoother, tpm=args.tpm,
-        sources=args.sources, noise=args.noise, adsb_sigma_m=args.adsb_sigma)
+        max_coast_s=args.max_coast, smooth=args.smooth or args.smoother is not None,
+        smoother=args.smoother or "rts", tpm=args.tpm, sources=args.sources, noise=args.noise,
+        adsb_sigma_m=args.adsb_sigma)
     result = _run_job("track", lambda o: jobs_track.validate(o, require_output=True), jobs_track.track_job,
                       options, Progress())
     print(_track_text(result))

@@ -133,6 +133,18 @@ def nonempty_path(name: str, value) -> None:
         raise OptionError(f"{name} {str(value)!r}: an empty path")
 
 
+def _not_a_file(p: Path, noun: str, thing: str) -> str | None:
+    """Why ``p`` cannot be read as a file (missing, a directory, a FIFO or device), None when it can:
+    ``noun`` names it ("input"), ``thing`` what it should be ("a recording file")."""
+    if not p.exists():
+        return f"{noun} file does not exist"
+    if p.is_dir():
+        return f"{noun} is a directory, not {thing}"
+    if not p.is_file():  # reading a FIFO blocks, and its bytes could be read only once
+        return f"{noun} is not a regular file (a FIFO, socket or device); give {thing}"
+    return None
+
+
 def _inputs(paths: list[str | Path], warnings: list[str]) -> list[Path]:
     """Readable input files; the same content given twice is skipped with a warning."""
     if not paths:
@@ -141,13 +153,9 @@ def _inputs(paths: list[str | Path], warnings: list[str]) -> list[Path]:
         nonempty_path("input", p)
     out, seen = [], {}
     for p in map(Path, paths):
-        if not p.exists():
-            raise OptionError(f"{p}: input file does not exist")
-        if p.is_dir():
-            raise OptionError(f"{p}: input is a directory, not a recording")
-        if not p.is_file():  # reading a FIFO blocks, and its bytes could be read only once
-            raise OptionError(f"{p}: input is not a regular file (a FIFO, socket or device); "
-                              "give a recording file")
+        problem = _not_a_file(p, "input", "a recording file")
+        if problem:
+            raise OptionError(f"{p}: {problem}")
         if not os.access(p, os.R_OK):
             raise OptionError(f"{p}: input file is not readable")
         digest = _sha256(p)
@@ -219,8 +227,9 @@ def _sensors(path: str | Path | None, *, required: bool = True) -> pd.DataFrame:
     from pipeline.model.sensors import read_sensors
 
     p = Path(path)
-    if not p.is_file():
-        raise OptionError(f"--sensors {p}: file does not exist")
+    problem = _not_a_file(p, "sensor", "a TOML sensor file")
+    if problem:
+        raise OptionError(f"--sensors {p}: {problem}")
     try:
         return read_sensors(p)
     except OSError as exc:
