@@ -242,9 +242,10 @@ def choose_edition(buf: np.ndarray, starts: np.ndarray, lens: np.ndarray, catego
         verdict = f"editions walking every sampled block: {', '.join(tied)}; newest {chosen}"
     if plaus:
         verdict += " (" + ", ".join(f"{ed} {p:.0%} plausible" for ed, p in plaus.items()) + ")"
+    apart_words = (f"{len(apart)} blocks told {'/'.join(contenders)} apart: {told}" if len(contenders) > 1
+                   else "no other edition walks half the sample, so none needed telling apart")
     return chosen, (f"chose {chosen} ({len(idx)} of {len(starts)} blocks sampled; blocks walking: "
-                    f"{'; '.join(words)}; {verdict}; "
-                    f"{len(apart)} blocks told {'/'.join(contenders)} apart: {told})")
+                    f"{'; '.join(words)}; {verdict}; {apart_words})")
 
 
 def walking_editions(buf: np.ndarray, starts: np.ndarray, lens: np.ndarray, category: int, *,

@@ -17,6 +17,8 @@ from pipeline.meta import software_version
 from pipeline.progress import Progress
 
 if TYPE_CHECKING:
+    from pathlib import Path
+
     import pandas as pd
 
 
@@ -74,7 +76,8 @@ def _edition(text: str) -> str:
 def _decoding_options(p: argparse.ArgumentParser) -> None:
     p.add_argument("--edition", action="append", type=_edition, default=[], metavar="CAT=ED",
                    help="pin a category edition, e.g. 21=0.26, 48=1.27, or 21=auto (repeatable)")
-    p.add_argument("--date", type=_date, help="UTC date of a raw or final recording (YYYY-MM-DD)")
+    p.add_argument("--date", type=_date,
+                   help="UTC day (YYYY-MM-DD) of a recording that carries no date (raw, final, gps, oradis)")
     p.add_argument("--format", choices=FORMATS, help="container format (default: detected)")
 
 
@@ -141,7 +144,9 @@ def build_parser() -> argparse.ArgumentParser:
                         "two radars, or both; plots of two radars are never mixed")
     c.add_argument("--split-adsb", action="store_true",
                    help="keep ADS-B ground stations apart (default: one ADS-B source per aircraft)")
-    c.add_argument("--quality", action="store_true", help="add the Quality and Radar accuracy sheets")
+    c.add_argument("--quality", action="store_true",
+                   help="add the quality sheets (Quality, Update intervals, Gaps, Jumps, ADS-B quality, "
+                        "Radar accuracy, Radar biases, Figures) and their PNGs")
     c.add_argument("--drop-jumps", action="store_true", help="remove detected ADS-B position jumps first")
     c.add_argument("--min-nic", type=int, help="drop ADS-B reports with NUCp/NIC below N")
     c.add_argument("--min-nacp", type=int, help="drop ADS-B reports with NACp below N")
@@ -158,7 +163,8 @@ def build_parser() -> argparse.ArgumentParser:
     _aircraft_options(q, "every aircraft", sensors_required=False)
     q.add_argument("-o", "--output", help="Excel workbook (.xlsx); figures are written beside it")
     q.add_argument("--json", help="the tables as JSON")
-    q.add_argument("--gap", type=float, default=180.0, help="gap in seconds reported as discontinuity")
+    q.add_argument("--gap", type=float, default=180.0,
+                   help="gap in seconds reported as a discontinuity (180)")
     q.add_argument("--reference", choices=["adsb", "track"], default="adsb",
                    help="radar accuracy against ADS-B interpolated linearly (default) or against the "
                         "smoothed ADS-B-only IMM track")
@@ -174,8 +180,8 @@ def build_parser() -> argparse.ArgumentParser:
     t.add_argument("--max-coast", type=float, default=60.0,
                    help="seconds a track is predicted after its last report before it ends (default 60)")
     t.add_argument("--smooth", action="store_true", help="backward (RTS) pass: reference trajectories")
-    t.add_argument("--smoother", choices=["rts", "imm"], default="rts",
-                   help="with --smooth: RTS on the combined estimate (default) or the IMM smoother "
+    t.add_argument("--smoother", choices=["rts", "imm"],
+                   help="implies --smooth: RTS on the combined estimate (default) or the IMM smoother "
                         "(smoothed mode probabilities too; better on straight legs, worse in most "
                         "manoeuvres in our validations)")
     t.add_argument("--tpm", help="mode transition law: fixed:P, dynamic, dynamic:A,B or expm:TAU[,TAU2] "
@@ -204,7 +210,8 @@ def build_parser() -> argparse.ArgumentParser:
                         "of reported levels (default 25)")
     k.add_argument("--threshold", type=float, default=0.2,
                    help="PC above which an alert is raised (default 0.2)")
-    k.add_argument("--method", default="exact", help="PC method: exact, one-block, blocks or midpoint")
+    k.add_argument("--method", default="exact",
+                   help="PC method: exact (default), one-block, blocks or midpoint")
     k.add_argument("--vertical", default="gate",
                    help="vertical proximity: gate (predicted levels closer than --vertical-ft, default) or "
                         "gaussian (PC times the probability from the vertical filter's sigma)")
@@ -321,7 +328,7 @@ def cmd_stats(args) -> int:
     print(format_stats(result.tables), end="")
     for info in result.inputs:
         for cat, why in info["edition_choice"].items():
-            print(f"{info['path']}: CAT{cat:03d} edition {why}")
+            print(f"{info['path']}: CAT{cat:03d} --edition auto {why}")
     if not result.records:
         print("msdc: nothing could be decoded", file=sys.stderr)
         return 1
@@ -359,6 +366,7 @@ def _correlate(options, progress: Progress, prepared) -> int:
     if "report" in written:
         print(f"Report: {written['report']}\nTrack figure: {written['figure']}", file=sys.stderr)
         note = jobs.figure_windows_note(len(result.run.windows)) if options.quality else None
+        _print_images(written)
         if note:
             print(f"Figures: {note}", file=sys.stderr)
     for kind, path in written.items():
@@ -378,7 +386,17 @@ def cmd_quality(args) -> int:
         print(f"JSON: {written['json']}", file=sys.stderr)
     if "report" in written:
         print(f"Report: {written['report']}", file=sys.stderr)
+        _print_images(written)
     return 0
+
+
+def _print_images(written: dict[str, Path]) -> None:
+    """The PNG files written beside a workbook (also on its Figures sheet), one line each."""
+    images = [path for kind, path in written.items() if kind.startswith("image ")]
+    if images:
+        print(f"Figures ({len(images)} PNG beside the report):", file=sys.stderr)
+        for path in images:
+            print(f"  {path}", file=sys.stderr)
 
 
 def _quality_text(result) -> str:
@@ -406,8 +424,9 @@ def cmd_track(args) -> int:
     options = jobs_track.TrackOptions(
         **_decoding(args), sensors=args.sensors, callsign=args.callsign, address=args.address,
         all_aircraft=args.all, output=args.output, json=args.json, figures=args.figures, step_s=args.step,
-        max_coast_s=args.max_coast, smooth=args.smooth, smoother=args.smoother, tpm=args.tpm,
-        sources=args.sources, noise=args.noise, adsb_sigma_m=args.adsb_sigma)
+        max_coast_s=args.max_coast, smooth=args.smooth or args.smoother is not None,
+        smoother=args.smoother or "rts", tpm=args.tpm, sources=args.sources, noise=args.noise,
+        adsb_sigma_m=args.adsb_sigma)
     result = _run_job("track", lambda o: jobs_track.validate(o, require_output=True), jobs_track.track_job,
                       options, Progress())
     print(_track_text(result))
@@ -507,6 +526,21 @@ def main(argv: list[str] | None = None) -> int:
         return 1
     except KeyboardInterrupt:
         return 130
+    except Exception as exc:  # Ctrl-C inside numba's cache loader surfaces as its SystemError
+        if _interrupted(exc):
+            return 130
+        raise
+
+
+def _interrupted(exc: BaseException) -> bool:
+    """Whether a KeyboardInterrupt is among the exceptions that caused or preceded ``exc``."""
+    seen: set[int] = set()
+    while exc is not None and id(exc) not in seen:
+        if isinstance(exc, KeyboardInterrupt):
+            return True
+        seen.add(id(exc))
+        exc = exc.__cause__ or exc.__context__
+    return False
 
 
 # The command's automatic garbage collection waits for this many new container objects instead of Python's

@@ -133,6 +133,18 @@ def nonempty_path(name: str, value) -> None:
         raise OptionError(f"{name} {str(value)!r}: an empty path")
 
 
+def _not_a_file(p: Path, noun: str, thing: str) -> str | None:
+    """Why ``p`` cannot be read as a file (missing, a directory, a FIFO or device), None when it can:
+    ``noun`` names it ("input"), ``thing`` what it should be ("a recording file")."""
+    if not p.exists():
+        return f"{noun} file does not exist"
+    if p.is_dir():
+        return f"{noun} is a directory, not {thing}"
+    if not p.is_file():  # reading a FIFO blocks, and its bytes could be read only once
+        return f"{noun} is not a regular file (a FIFO, socket or device); give {thing}"
+    return None
+
+
 def _inputs(paths: list[str | Path], warnings: list[str]) -> list[Path]:
     """Readable input files; the same content given twice is skipped with a warning."""
     if not paths:
@@ -141,13 +153,9 @@ def _inputs(paths: list[str | Path], warnings: list[str]) -> list[Path]:
         nonempty_path("input", p)
     out, seen = [], {}
     for p in map(Path, paths):
-        if not p.exists():
-            raise OptionError(f"{p}: input file does not exist")
-        if p.is_dir():
-            raise OptionError(f"{p}: input is a directory, not a recording")
-        if not p.is_file():  # reading a FIFO blocks, and its bytes could be read only once
-            raise OptionError(f"{p}: input is not a regular file (a FIFO, socket or device); "
-                              "give a recording file")
+        problem = _not_a_file(p, "input", "a recording file")
+        if problem:
+            raise OptionError(f"{p}: {problem}")
         if not os.access(p, os.R_OK):
             raise OptionError(f"{p}: input file is not readable")
         digest = _sha256(p)
@@ -219,8 +227,9 @@ def _sensors(path: str | Path | None, *, required: bool = True) -> pd.DataFrame:
     from pipeline.model.sensors import read_sensors
 
     p = Path(path)
-    if not p.is_file():
-        raise OptionError(f"--sensors {p}: file does not exist")
+    problem = _not_a_file(p, "sensor", "a TOML sensor file")
+    if problem:
+        raise OptionError(f"--sensors {p}: {problem}")
     try:
         return read_sensors(p)
     except OSError as exc:
@@ -1131,6 +1140,7 @@ def _write_workbook(result: CorrelateResult, progress: Progress | None, max_wind
                           tables_written=(lambda: _drawn(drawing, png, files)) if in_child else None,
                           elsewhere=in_child)
     written = {"report": out, "figure": png}
+    written.update((f"image {name}", Path(path)) for name, path in (images or {}).items())
     written.update((f"table {p.stem.removeprefix(out.stem + '_')}", p) for p in tables)
     return written
 
@@ -1193,6 +1203,7 @@ def _write_quality(result: QualityJobResult) -> dict[str, Path]:
         write_tables(sheets, out, images=images,
                      parameters={**result.parameters, "inputs": result.loaded.inputs})
         written["report"] = out
+        written.update((f"image {name}", Path(path)) for name, path in images.items())
     return written
 
 
@@ -1318,12 +1329,12 @@ def decode_job(options: DecodeOptions, *, on_chunk: Callable[[int, int, str], No
             for path in checked.inputs:
                 size = path.stat().st_size
                 chunk = max(int(options.chunk_mb * 1e6), 1)
-                tally, date, fmt = FirstDayTally(), None, None
+                tally, date, fmt, chosen = FirstDayTally(), None, None, {}
                 for rec in asterix.iter_read(path, chunk=chunk, editions=checked.editions or None,
                                              date=options.date, format=options.format, categories=cats,
                                              strict=options.strict):
                     tally.add(rec.frames)
-                    date, fmt = date or rec.date, rec.format
+                    date, fmt, chosen = date or rec.date, rec.format, {**rec.edition_choice, **chosen}
                     skipped += [(str(path), int(e.offset), str(e.reason)) for e in rec.errors.itertuples()]
                     edition_notes.fold(failed, rec)
                     for cat, frame in rec.frames.items():
@@ -1335,7 +1346,10 @@ def decode_job(options: DecodeOptions, *, on_chunk: Callable[[int, int, str], No
                     done = max((int(f["offset"].max()) for f in rec.frames.values() if len(f)), default=0)
                     if on_chunk:
                         on_chunk(done, size, path.name)
+                if on_chunk:  # the last record's offset is not the file's end: close the bar at 100 %
+                    on_chunk(size, size, path.name)
                 early_start += tally.warning(path.name, date, fmt)
+                notes += [f"{path}: CAT{cat:03d} --edition auto {why}" for cat, why in sorted(chosen.items())]
         except UnreadableInput as exc:
             raise JobError(str(exc), 2) from exc
         finally:

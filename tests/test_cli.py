@@ -152,8 +152,13 @@ def test_quality_command(tmp_path, capsys):
     xlsx, js = tmp_path / "quality.xlsx", tmp_path / "q.json"
     assert main(["quality", str(RADAR), str(ADSB), "--sensors", str(SENSORS), "--callsign", "MAS72",
                  "-o", str(xlsx), "--json", str(js)]) == 0
-    out = capsys.readouterr().out
+    captured = capsys.readouterr()
+    out = captured.out
     assert "Radar biases" in out and "NACp" in out
+    # every PNG written beside the workbook is named on the terminal, and nothing else is there
+    pngs = sorted(tmp_path.glob("*.png"))
+    assert pngs and f"Figures ({len(pngs)} PNG beside the report):" in captured.err
+    assert all(f"  {p}" in captured.err for p in pngs)
     assert all(f"{name}_se_{unit}" in out
                for name, unit in (("range_bias", "m"), ("azimuth_bias", "deg"), ("time_bias", "s")))
     wb = openpyxl.load_workbook(xlsx)
@@ -178,6 +183,9 @@ def test_correlate_filters_and_quality_sheets(tmp_path, capsys):
     assert main(["correlate", str(RADAR), str(ADSB), "--sensors", str(SENSORS), "--callsign", "MAS72",
                  "--drop-jumps", "--quality", "-o", str(xlsx), "--json", str(js)]) == 0
     err = capsys.readouterr().err
+    pngs = sorted(set(tmp_path.glob("*.png")) - {tmp_path / "c_tracks.png"})  # the map has its own line
+    assert {p.name for p in pngs} >= {"c_intervals.png", "c_lags_1.png", "c_slotting_1.png"}
+    assert f"Figures ({len(pngs)} PNG beside the report):" in err and all(f"  {p}" in err for p in pngs)
     n_jumps = len(TRUTH["jumps"])  # filters run over all the input's ADS-B reports, before selection
     assert f"filter jumps: {n_jumps} of the input's ADS-B reports" in err
     doc = json.loads(js.read_text())
@@ -230,3 +238,12 @@ def test_correlate_names_the_sensors_and_pairs(tmp_path, capsys):
     assert main(["correlate", str(RADAR), str(ADSB), "--sensors", str(SENSORS), "--all",
                  "--pairs", "radar-radar"]) == 1
     assert "seen by two radars" in capsys.readouterr().err
+
+
+def test_decode_says_which_edition_auto_chose(tmp_path, capsys):
+    """--edition 21=auto: decode names the edition it walked (the simulator writes the newest, 2.7), as
+    stats does; the 0.2x and 2.x families read I021/130 and /131 differently."""
+    assert main(["decode", str(ADSB), "--edition", "21=auto", "-o", str(tmp_path / "a.csv")]) == 0
+    err = capsys.readouterr().err
+    assert f"{ADSB}: CAT021 --edition auto chose 2.7 (" in err
+    assert "none needed telling apart" in err or "apart:" in err

@@ -139,20 +139,31 @@ def test_a_category_output_that_is_a_directory_is_refused_before_decoding(tmp_pa
     assert _files(tmp_path) == ["o.csv", "o_cat048.csv"]
 
 
-@pytest.mark.parametrize("failure", [KeyboardInterrupt, OSError])
+def _ctrl_c_in_numba():
+    """What numba raises when Ctrl-C lands while it loads a cached kernel: a SystemError during the
+    handling of the KeyboardInterrupt."""
+    try:
+        raise KeyboardInterrupt
+    except KeyboardInterrupt:
+        raise SystemError("<built-in function ...> returned a result with an exception set")  # noqa: B904
+
+
+@pytest.mark.parametrize("failure", [KeyboardInterrupt, OSError, SystemError])
 def test_an_interrupted_or_failing_run_leaves_no_file(tmp_path, capsys, monkeypatch, failure):
-    """The second input's first chunk is interrupted (Ctrl-C, or a write that fails): the first input's
-    records were already written to their temporary file, which goes too."""
+    """The second input's first chunk is interrupted (Ctrl-C, also as numba's SystemError, or a write that
+    fails): the first input's records were already written to their temporary file, which goes too."""
     real = asterix.iter_read
 
     def iter_read(path, **kw):
         if Path(path) == ADSB:
+            if failure is SystemError:
+                _ctrl_c_in_numba()
             raise failure(28, "No space left on device") if failure is OSError else failure()
         yield from real(path, **kw)
 
     monkeypatch.setattr(asterix, "iter_read", iter_read)
     status = main(["decode", str(RADAR), str(ADSB), "-o", str(tmp_path / "o.parquet")])
-    assert status == (130 if failure is KeyboardInterrupt else 1)
+    assert status == (1 if failure is OSError else 130)
     assert "Traceback" not in capsys.readouterr().err
     assert _files(tmp_path) == []
 
@@ -297,3 +308,15 @@ def test_stats_names_the_file_of_each_skipped_block(tmp_path, capsys):
     both = (str(tmp_path / "r_late.ast"), str(tmp_path / "b" / "r_late.ast"))
     skipped = jobs.stats_job(jobs.StatsOptions(inputs=both)).tables["skipped"]
     assert skipped[["file", "first_offset"]].values.tolist() == [[both[0], r50], [both[1], r30]]
+
+
+def test_an_error_that_is_no_interrupt_still_surfaces(monkeypatch):
+    """Only an exception raised while a KeyboardInterrupt was being handled counts as Ctrl-C: a plain
+    SystemError is a defect and must not be hidden as exit 130."""
+    def iter_read(path, **kw):
+        raise SystemError("a defect")
+        yield
+
+    monkeypatch.setattr(asterix, "iter_read", iter_read)
+    with pytest.raises(SystemError, match="a defect"):
+        main(["decode", str(RADAR)])

@@ -170,3 +170,16 @@ def test_time_spans_sources_without_sac_or_sic():
     spans = time_spans({21: frame}, dt.date(2019, 3, 1))
     at = {h: pd.Timestamp(f"2019-03-01 {h:02d}:00", tz="UTC") for h in (1, 2, 3, 4)}
     assert spans == {"021:25/?": (at[1], at[1]), "021:?/7": (at[2], at[2]), "021:25/201": (at[3], at[4])}
+
+
+def test_decode_progress_ends_at_the_file_size(tmp_path):
+    """The bar is fed byte offsets: its last call for a file must be the file's size, or it stops short of
+    100 % and never ends its line (the last record's offset is a record length before the end)."""
+    calls = []
+    jobs.decode_job(DecodeOptions(inputs=(RADAR, ADSB), output=str(tmp_path / "d.csv"), chunk_mb=0.1),
+                    on_chunk=lambda done, size, name: calls.append((name, done, size)))
+    for path in (RADAR, ADSB):
+        name, size = Path(path).name, Path(path).stat().st_size
+        mine = [c for c in calls if c[0] == name]
+        assert len(mine) >= 2 and mine[-1] == (name, size, size)
+        assert all(done <= size for _, done, _ in mine)

@@ -464,3 +464,16 @@ def test_csv_floats_at_the_documented_precision(mas72, tmp_path):
         both = np.isfinite(full[name].to_numpy(float))
         diff = np.abs(got[name].to_numpy(float)[both] - full[name].to_numpy(float)[both])
         assert diff.max() <= 0.5 * 10.0 ** -places + 1e-9, name
+
+
+def test_smoother_implies_smooth(tmp_path):
+    """--smoother names the backward pass, so it asks for one: it was accepted and silently ignored
+    without --smooth."""
+    out, js = tmp_path / "s.csv", tmp_path / "s.json"
+    assert main(["track", *BASE, "--address", "750312", "--smoother", "imm", "--step", "5",
+                 "-o", str(out), "--json", str(js)]) == 0
+    params = json.loads(js.read_text())["parameters"]
+    assert params["smooth"] is True and params["smoother"] == "imm"
+    assert main(["track", *BASE, "--address", "750312", "--step", "5", "-o", str(out),
+                 "--json", str(js)]) == 0
+    assert json.loads(js.read_text())["parameters"]["smooth"] is False
