@@ -309,15 +309,17 @@ def _cluster_cov(xw: np.ndarray, yw: np.ndarray, beta: np.ndarray, groups: np.nd
     (G-1)/G times the sum over the G groups of (fit without the group - beta)^2, so an error shared by all
     of one aircraft's plots counts once and an aircraft that decides a parameter gives it the error of
     leaving it out. NaN with fewer than two groups or when a fit without one group is singular."""
-    codes = np.unique(groups, return_inverse=True)[1]
-    n_groups, n_par = (int(codes.max()) + 1 if codes.size else 0), xw.shape[1]
+    codes, uniques = pd.factorize(groups)
+    n_groups, n_par = len(uniques), xw.shape[1]
     nan = np.full((n_par, n_par), np.nan)
     if n_groups < 2:
         return nan
-    a_g = np.zeros((n_groups, n_par, n_par))
-    np.add.at(a_g, codes, xw[:, :, None] * xw[:, None, :])
-    c_g = np.zeros((n_groups, n_par))
-    np.add.at(c_g, codes, xw * yw[:, None])
+    # per-group X'X and X'y by bincount: no (rows, K, K) array on millions of plots
+    a_g = np.empty((n_groups, n_par, n_par))
+    for i in range(n_par):
+        for j in range(i, n_par):
+            a_g[:, i, j] = a_g[:, j, i] = np.bincount(codes, xw[:, i] * xw[:, j], n_groups)
+    c_g = np.stack([np.bincount(codes, xw[:, i] * yw, n_groups) for i in range(n_par)], axis=1)
     a_out, c_out = a_g.sum(0) - a_g, c_g.sum(0) - c_g
     if (np.linalg.matrix_rank(a_out) < n_par).any():
         return nan
