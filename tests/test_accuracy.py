@@ -27,6 +27,7 @@ from pipeline.quality.accuracy import (
     BIAS_COLUMNS,
     ERROR_COLUMNS,
     LIMITATION_NOTE,
+    _cluster_cov,
     error_stats,
     estimate_biases,
     nacp_bound_m,
@@ -328,6 +329,88 @@ def test_a_high_leverage_plot_gets_an_honest_standard_error():
     shift = abs(b["time_bias_s"] - estimate_biases(errors.iloc[:-1]).iloc[0]["time_bias_s"])
     assert shift > 0.05
     assert b["time_bias_se_s"] > 0.5 * shift
+
+
+# ---------------------------------------------------------------------------------------------------------
+# Errors shared by all plots of an aircraft (transponder reply delay: Mode S +-0.25 us = +-37 m of range;
+# an aircraft's ADS-B offset): the standard errors count aircraft, not plots
+
+
+def test_delete_one_aircraft_covariance_by_hand():
+    # the mean of three aircraft's plots {1, 1}, {3, 3}, {5, 5}: 3; without each aircraft 4, 3, 2, so the
+    # jackknife variance is (3 - 1) / 3 * (1 + 0 + 1) = 4/3
+    x, y = np.ones((6, 1)), np.array([1.0, 1.0, 3.0, 3.0, 5.0, 5.0])
+    cov = _cluster_cov(x, y, np.array([3.0]), np.array([7, 7, 2, 2, 9, 9]))
+    assert cov[0, 0] == pytest.approx(4.0 / 3.0)
+    assert np.isnan(_cluster_cov(x, y, np.array([3.0]), np.zeros(6))).all()  # one aircraft: no estimate
+
+
+def _fleet_errors(rng: np.random.Generator, n_aircraft: int, sd_aircraft_m: float, n_plots: int = 60
+                  ) -> pd.DataFrame:
+    """Errors of a radar without bias (70 m, 0.08 deg plot noise), each aircraft at its own range band and
+    velocity, every plot of an aircraft offset in range by the same N(0, sd_aircraft_m) draw."""
+    parts = []
+    for k in range(n_aircraft):
+        ground = rng.uniform(20e3, 200e3) + rng.uniform(-10e3, 10e3, n_plots)
+        parts.append(pd.DataFrame({
+            "radar": "R", "sac": 1, "sic": 2, "callsign": f"A{k}", "address": f"{k:06X}", "adsb_nacp": 9,
+            "ground_range_m": ground, "slant_range_m": np.hypot(ground, 10e3),
+            "range_rate_ms": rng.uniform(-200.0, 200.0) + rng.normal(0.0, 20.0, n_plots),
+            "tangential_speed_ms": rng.uniform(-200.0, 200.0) + rng.normal(0.0, 20.0, n_plots),
+            "range_error_m": rng.normal(0.0, 70.0, n_plots) + rng.normal(0.0, sd_aircraft_m),
+            "azimuth_error_deg": rng.normal(0.0, 0.08, n_plots)}))
+    return pd.concat(parts, ignore_index=True)
+
+
+def _coverage(n_aircraft: int, sd_aircraft_m: float, runs: int) -> dict[str, tuple[float, float]]:
+    """Per bias: the share of runs whose +-1.96 SE interval holds the truth (0), and sd(estimate)/mean SE."""
+    rows = [estimate_biases(_fleet_errors(np.random.default_rng(seed), n_aircraft, sd_aircraft_m)).iloc[0]
+            for seed in range(runs)]
+    b = pd.DataFrame(rows)
+    return {key: (float(np.mean(np.abs(b[key]) < 1.96 * b[_se_name(key)])),
+                  float(b[key].std() / b[_se_name(key)].mean())) for key in INJECTED}
+
+
+def test_standard_errors_hold_under_errors_shared_by_an_aircraft():
+    # 20 aircraft with a 40 m range offset each: the range bias's true sd is about 40 / sqrt(20) = 9 m,
+    # against 70 / sqrt(1200) = 2 m if the 1200 plots were independent (the old SE: about 30 % coverage)
+    result = _coverage(20, 40.0, 100)
+    for key in ("range_bias_m", "range_gain_ppm", "azimuth_bias_deg", "time_bias_s"):
+        covered, ratio = result[key]
+        assert covered >= 0.88, (key, result[key])
+        assert 0.75 < ratio < 1.25, (key, result[key])
+
+
+def test_standard_errors_of_independent_plots_stay_right_or_conservative():
+    result = _coverage(12, 0.0, 60)
+    for key, (covered, ratio) in result.items():
+        assert covered >= 0.88, (key, covered)
+        assert 0.7 < ratio < 1.15, (key, ratio)
+
+
+def test_few_aircraft_are_named_in_the_note():
+    b = estimate_biases(_fleet_errors(np.random.default_rng(1), 8, 40.0)).iloc[0]
+    assert "rest on 8 aircraft" in b["note"] and "+-2.36 standard errors" in b["note"]
+    # also under the table (sheet and terminal): 2.36 is t(0.975) with 7 degrees of freedom
+    assert estimate_biases(_fleet_errors(np.random.default_rng(1), 8, 40.0)).attrs["note"].endswith(
+        "R: the standard errors rest on 8 aircraft (fewer than 10): for a 95 % interval use +-2.36 standard "
+        "errors (Student t, 7 degrees of freedom).")
+    one = estimate_biases(_unbiased_errors()).iloc[0]
+    assert "rest on one aircraft" in one["note"]
+    many = estimate_biases(_fleet_errors(np.random.default_rng(1), 10, 40.0)).iloc[0]
+    assert "rest on" not in many["note"]
+
+
+def test_adsb_latency_enters_the_time_bias_with_the_opposite_sign():
+    # a perfect radar, ADS-B stamped 1 s after its time of applicability: radar time - ADS-B time = -1 s
+    fleet = FLEET[:6]
+    sc = Scenario(name="latency", aircraft=fleet, adsb_jump_fraction=0.0, adsb_low_quality_episodes=0)
+    sim = simulate(sc, seed=11)
+    adsb = sim.adsb.assign(time_of_day=sim.adsb["time_of_day"] + 1.0)
+    sensors = pd.DataFrame([asdict(sc.radar)])[SENSOR_COLUMNS]
+    b = estimate_biases(radar_errors(build_measurements(sim.radar, adsb, sensors), sensors)).iloc[0]
+    assert b["time_bias_s"] == pytest.approx(-1.0, abs=max(0.05, 3 * b["time_bias_se_s"]))
+    assert "radar time minus ADS-B time" in LIMITATION_NOTE and "opposite sign" in LIMITATION_NOTE
 
 
 # ---------------------------------------------------------------------------------------------------------

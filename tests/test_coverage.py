@@ -85,3 +85,26 @@ def test_real_recording_far_positions_and_jumps():
     ara = meas[meas["address"] == "06414F"]
     assert len(ara) == 5 and ara["latitude"].between(41.0, 41.3).all()
     assert not detect_jumps(meas)[ara.index].any()
+
+
+def test_a_job_that_builds_some_columns_names_the_file_and_offset(tmp_path):
+    # quality builds only jobs.quality_columns (no file, no offset); its warning still names the first far
+    # report's file and byte offset, as one built with every column does, and the two columns go after it
+    from pipeline import jobs
+    from pipeline.model.load import load_measurements
+
+    rng = np.random.default_rng(5)
+    lat, lon = _around(rng, 400, *SITE, 150.0)
+    near = _cat021(lat, lon, [f"4CA{i % 8:03d}" for i in range(400)])
+    lon_far, lat_far, _ = GEOD.fwd([SITE[1]] * 3, [SITE[0]] * 3, [200.0] * 3, [1200 * 1852.0] * 3)
+    odd = _cat021(lat_far, lon_far, "06414F", t0=31000.0)
+    data = b"".join(encode_frame(21, f) for f in (near, odd))
+    path = tmp_path / "far.ast"
+    path.write_bytes(data)
+    first_far = int(decode_bytes(data).frames[21]["offset"].iloc[400])  # the decoder's own byte offset
+    columns = jobs.quality_columns(jobs.QualityOptions(inputs=(str(path),), all_aircraft=True))
+    assert not {"file", "offset"} & set(columns)
+    _, meas = load_measurements([path], None, date="2019-03-01", columns=columns, either=True)  # job warns
+    (text,) = meas.attrs["coverage_warnings"]
+    assert f"the first: far.ast, offset {first_far}, latitude" in text
+    assert list(meas.columns) == columns and len(meas) == 400

@@ -57,6 +57,11 @@ DECODED_COLUMNS = ("flight_level", "ground_speed_kt", "callsign", "address", "mo
 DERIVED_INPUTS = {"aircraft_id": ("address", "callsign", "mode3a"),
                   "sigma_major_m": ("cov_ee_m2", "cov_en_m2", "cov_nn_m2")}
 
+# Where a report came from: finish_measurements names them in its out-of-coverage warning, so a job that
+# builds only some columns keeps these until then (row_columns) and drops them after
+COVERAGE_PLACE = ("file", "offset")
+
+
 class OffEarthWarning(UserWarning):
     """build_measurements left out ADS-B reports whose position is off the Earth (damaged bytes)."""
 
@@ -294,10 +299,13 @@ def impossible_positions(cat021: pd.DataFrame | None) -> list[str]:
 
 def row_columns(columns=None) -> list[str] | None:
     """The columns ``measurement_rows`` keeps so that ``finish_measurements`` can give ``columns`` (None:
-    every column): those named, less the derived ones, plus what the derived ones named are made from."""
+    every column): those named, less the derived ones, plus what the derived ones named are made from, and
+    COVERAGE_PLACE where the coverage check can run (finish_measurements drops it unless named)."""
     if columns is None:
         return None
     wanted = set(column_names(columns))
+    if {"sensor_kind", "sensor_id", "latitude", "longitude"} <= wanted:
+        wanted.update(COVERAGE_PLACE)  # named by the out-of-coverage warning, then dropped if not asked for
     for derived, inputs in DERIVED_INPUTS.items():
         if derived in wanted:
             wanted.discard(derived)

@@ -60,10 +60,17 @@ ACCURACY_INPUTS = list(dict.fromkeys([
 MEASUREMENT_INPUTS = ("sensor_kind", "time", "sac", "sic", "latitude", "longitude", "flight_level")
 AIRCRAFT_COLUMNS = ["sensor_kind", "aircraft_id", "callsign", "address"]  # what aircraft_rows reads
 MIN_BIAS_REPORTS = 20
+# Below this many aircraft the aircraft-clustered standard errors (fit_biases) rest on few independent
+# pieces and are themselves uncertain: the note says so
+MIN_SE_AIRCRAFT = 10
+# Student t 97.5 % quantiles for 1-9 degrees of freedom (any t table): the 95 % interval with G aircraft
+T975 = {1: 12.71, 2: 4.30, 3: 3.18, 4: 2.78, 5: 2.57, 6: 2.45, 7: 2.36, 8: 2.31, 9: 2.26}
 LIMITATION_NOTE = ("ADS-B is the reference but carries its own position error, bounded at 95 % by its NACp "
                    "(DO-260B: NACp 8 < 92.6 m, 9 < 30 m, 10 < 10 m, 11 < 3 m); radar errors below that "
                    "level cannot be attributed to the radar (thesis limitation). ADS-B height is pressure "
-                   "altitude.")
+                   "altitude. All four biases are relative to ADS-B: the time bias is radar time minus "
+                   "ADS-B time (positive: the radar stamps its plots late), so an ADS-B latency (time of "
+                   "applicability stamped late) enters it with the opposite sign.")
 CLIP_SIGMAS = 5.0  # rows further than this many robust sigmas from the fit are rejected
 # Above this elevation seen from the site (the radar's cone of silence, or a target nearly overhead) the
 # azimuth means nothing: a few metres across the line of sight are degrees, at azimuth rates of tens of
@@ -297,16 +304,51 @@ def _robust_cov(xw: np.ndarray, rw: np.ndarray, cov: np.ndarray) -> np.ndarray:
     return cov @ meat @ cov
 
 
+def _cluster_cov(xw: np.ndarray, yw: np.ndarray, beta: np.ndarray, groups: np.ndarray) -> np.ndarray:
+    """Delete-one-aircraft jackknife covariance (CR3) of a weighted fit (rows xw, yw, estimate beta):
+    (G-1)/G times the sum over the G groups of (fit without the group - beta)^2, so an error shared by all
+    of one aircraft's plots counts once and an aircraft that decides a parameter gives it the error of
+    leaving it out. NaN with fewer than two groups or when a fit without one group is singular."""
+    codes, uniques = pd.factorize(groups)
+    n_groups, n_par = len(uniques), xw.shape[1]
+    nan = np.full((n_par, n_par), np.nan)
+    if n_groups < 2:
+        return nan
+    # per-group X'X and X'y by bincount: no (rows, K, K) array on millions of plots
+    a_g = np.empty((n_groups, n_par, n_par))
+    for i in range(n_par):
+        for j in range(i, n_par):
+            a_g[:, i, j] = a_g[:, j, i] = np.bincount(codes, xw[:, i] * xw[:, j], n_groups)
+    c_g = np.stack([np.bincount(codes, xw[:, i] * yw, n_groups) for i in range(n_par)], axis=1)
+    a_out, c_out = a_g.sum(0) - a_g, c_g.sum(0) - c_g
+    if (np.linalg.matrix_rank(a_out) < n_par).any():
+        return nan
+    d = np.linalg.solve(a_out, c_out[:, :, None])[:, :, 0] - beta
+    return (n_groups - 1) / n_groups * d.T @ d
+
+
+def aircraft_codes(errors: pd.DataFrame) -> np.ndarray:
+    """One integer per aircraft (callsign and address; a missing one is a value of its own) per row."""
+    if not {"callsign", "address"} <= set(errors.columns):
+        return np.zeros(len(errors), np.int64)
+    callsign = pd.factorize(errors["callsign"], use_na_sentinel=False)[0].astype(np.int64)
+    address = pd.factorize(errors["address"], use_na_sentinel=False)[0].astype(np.int64)
+    return callsign * (int(address.max(initial=0)) + 1) + address
+
+
 def fit_biases(errors: pd.DataFrame) -> dict:
     """Joint weighted least squares of one radar's errors: range rows [1, R, 0, -range_rate] (R in Mm,
     giving ppm) and azimuth rows [0, 0, 1, -azimuth_rate] in degrees, weighted by the inverse residual
     variance of each row type, re-weighted and clipped at CLIP_SIGMAS robust sigmas until stable. Azimuth
-    rows above MAX_AZIMUTH_ELEVATION_DEG are left out (``n_overhead``). Standard errors are the larger of
-    the model's and the leverage-robust (HC3) ones, so a fit decided by a few plots does not look precise."""
+    rows above MAX_AZIMUTH_ELEVATION_DEG are left out (``n_overhead``). Standard errors are the largest of
+    the model's, the leverage-robust (HC3) and the aircraft-clustered (CR1) ones, so a fit decided by a few
+    plots, or errors shared by all plots of an aircraft (transponder delay, ADS-B offset), do not look
+    precise; ``aircraft`` counts the aircraft with fitted rows."""
     ok = errors[["range_error_m", "azimuth_error_deg", "slant_range_m", "ground_range_m", "range_rate_ms",
                  "tangential_speed_ms"]].notna().all(axis=1).to_numpy()
     e = errors[ok]
     n = len(e)
+    aircraft = np.tile(aircraft_codes(e), 2)  # a plot's range and azimuth rows are of one aircraft
     az_rate_dps = np.degrees(e["tangential_speed_ms"].to_numpy() / e["ground_range_m"].to_numpy())
     x = np.zeros((2 * n, 4))
     x[:n, 0], x[:n, 1], x[:n, 3] = 1.0, e["slant_range_m"].to_numpy() * 1e-6, -e["range_rate_ms"].to_numpy()
@@ -315,7 +357,7 @@ def fit_biases(errors: pd.DataFrame) -> dict:
     is_range = np.arange(2 * n) < n
     usable = np.concatenate([np.ones(n, bool), elevation_deg(e) <= MAX_AZIMUTH_ELEVATION_DEG])
     result = {"n_reports": n, "n_rejected": 0, "n_overhead": int(n - usable[n:].sum()),
-              "params": np.full(4, np.nan), "se": np.full(4, np.nan), "rms": (np.nan, np.nan)}
+              "params": np.full(4, np.nan), "se": np.full(4, np.nan), "rms": (np.nan, np.nan), "aircraft": 0}
     if n < MIN_BIAS_REPORTS or np.linalg.matrix_rank(x[usable]) < 4:
         return result
     keep = usable.copy()
@@ -340,8 +382,10 @@ def fit_biases(errors: pd.DataFrame) -> dict:
     res = y - x @ beta
     cov = np.linalg.inv(xw.T @ xw)
     robust_cov = _robust_cov(xw, res[keep] * w[keep], cov)
-    se = np.sqrt(np.maximum(np.diag(cov), np.diag(robust_cov)))
+    cluster_cov = _cluster_cov(xw, y[keep] * w[keep], beta, aircraft[keep])
+    se = np.sqrt(np.fmax(np.maximum(np.diag(cov), np.diag(robust_cov)), np.diag(cluster_cov)))
     result.update(params=beta, se=se, n_rejected=int((usable & ~keep).sum()),
+                  aircraft=int(np.unique(aircraft[keep]).size),
                   rms=(float(np.sqrt(np.mean(res[is_range & keep] ** 2))),
                        float(np.sqrt(np.mean(res[~is_range & keep] ** 2)))))
     return result
@@ -354,19 +398,38 @@ def _note(nacp_median: float) -> str:
             if np.isfinite(bound) else "ADS-B NACp unknown")
 
 
+def _few_aircraft_note(n_aircraft: int) -> str:
+    """What the standard errors are worth when they rest on fewer than MIN_SE_AIRCRAFT aircraft."""
+    if n_aircraft >= MIN_SE_AIRCRAFT:
+        return ""
+    if n_aircraft < 2:
+        return ("the standard errors rest on one aircraft: an error shared by all its plots (transponder "
+                "delay, ADS-B offset or latency) is not in them; ")
+    return (f"the standard errors rest on {n_aircraft} aircraft (fewer than {MIN_SE_AIRCRAFT}): for a 95 % "
+            f"interval use +-{T975[n_aircraft - 1]:.2f} standard errors (Student t, {n_aircraft - 1} "
+            "degrees of freedom); ")
+
+
 def estimate_biases(errors: pd.DataFrame) -> pd.DataFrame:
     """Per radar: range bias (m), range gain (ppm), azimuth bias (deg) and time bias (s, radar time minus
-    true time) over all aircraft by ``fit_biases``, with standard errors, counts, residual RMS and the
-    ADS-B accuracy note (also in ``attrs["note"]``)."""
+    ADS-B time: positive when the radar stamps late, and an ADS-B latency enters with the opposite sign)
+    over all aircraft by ``fit_biases``, with standard errors, counts, residual RMS and the ADS-B accuracy
+    note (the general limitation, and radars whose standard errors rest on few aircraft, in
+    ``attrs["note"]``)."""
     check_frame("errors", errors, ("radar", "sac", "sic"))
-    rows = []
+    rows, few_notes = [], []
     for (name, sac, sic), g in errors.groupby(["radar", "sac", "sic"], sort=True, dropna=False):
         fit = fit_biases(g)
         nacp = pd.to_numeric(g["adsb_nacp"], errors="coerce").dropna()
         nacp_median = float(np.floor(nacp.median())) if len(nacp) else float("nan")
         (b_r, gain, b_a, dt), (se_r, se_g, se_a, se_t) = fit["params"], fit["se"]
         note = _note(nacp_median)
-        if not np.isfinite(b_r):
+        if np.isfinite(b_r):
+            few = _few_aircraft_note(fit["aircraft"])
+            note = few + note
+            if few:
+                few_notes.append(f"{name}: {few.rstrip('; ')}.")
+        else:
             note = (f"too few reports (< {MIN_BIAS_REPORTS}) or too little geometry diversity to separate "
                     "range bias, gain, azimuth bias and time bias; ") + note
         rows.append({"radar": name, "sac": sac, "sic": sic, "n_reports": fit["n_reports"],
@@ -378,5 +441,5 @@ def estimate_biases(errors: pd.DataFrame) -> pd.DataFrame:
                      "azimuth_residual_rms_deg": fit["rms"][1], "adsb_nacp_median": nacp_median,
                      "adsb_nacp_95_m": nacp_bound_m(nacp_median), "note": note})
     out = pd.DataFrame(rows, columns=BIAS_COLUMNS)
-    out.attrs["note"] = LIMITATION_NOTE
+    out.attrs["note"] = " ".join([LIMITATION_NOTE, *few_notes])
     return out
