@@ -341,7 +341,7 @@ def fit_biases(errors: pd.DataFrame) -> dict:
     giving ppm) and azimuth rows [0, 0, 1, -azimuth_rate] in degrees, weighted by the inverse residual
     variance of each row type, re-weighted and clipped at CLIP_SIGMAS robust sigmas until stable. Azimuth
     rows above MAX_AZIMUTH_ELEVATION_DEG are left out (``n_overhead``). Standard errors are the largest of
-    the model's, the leverage-robust (HC3) and the aircraft-clustered (CR1) ones, so a fit decided by a few
+    the model's, the leverage-robust (HC3) and the delete-one-aircraft (CR3) ones, so a fit decided by a few
     plots, or errors shared by all plots of an aircraft (transponder delay, ADS-B offset), do not look
     precise; ``aircraft`` counts the aircraft with fitted rows."""
     ok = errors[["range_error_m", "azimuth_error_deg", "slant_range_m", "ground_range_m", "range_rate_ms",
