@@ -507,6 +507,7 @@ def _load_measurements(options: AircraftOptions, checked: Checked, progress: Pro
     checked.warnings += _date_ignored(options, loaded.inputs)
     checked.warnings += loaded.warnings
     checked.warnings += list(meas.attrs.get("coverage_warnings", ()))
+    checked.warnings += list(meas.attrs.get("identity_warnings", ()))
     return loaded, meas
 
 

@@ -45,8 +45,10 @@ MEASUREMENT_SCHEMA: tuple[Column, ...] = (
     Column("sac", _SHORT, "", "System area code of the sensor"),
     Column("sic", _SHORT, "", "System identification code of the sensor"),
     Column("aircraft_id", _TEXT, "",
-           "Aircraft identity assigned once (pipeline.model.identity): the 24-bit address, else "
-           "\"CS:\" call sign, else \"M3A:\" Mode 3/A code; <NA> when the report has none"),
+           "Aircraft identity assigned once (pipeline.model.identity): the 24-bit address, else the "
+           "address the call sign is uniquely seen with, else \"CS:\" call sign, else the address the Mode "
+           "3/A code is uniquely seen with (if within reach), else \"M3A:\" Mode 3/A code; <NA> when the "
+           "report has none"),
     Column("latitude", "float64", "deg", "WGS-84 latitude"),
     Column("longitude", "float64", "deg", "WGS-84 longitude, -180..180"),
     Column("height_m", "float64", "m",
