@@ -512,10 +512,15 @@ def _load_measurements(options: AircraftOptions, checked: Checked, progress: Pro
 
 
 def _no_records(exc: NoRecords) -> JobError:
-    """The user-facing error for inputs without radar or ADS-B records."""
-    kind = "radar" if exc.category == 48 else "ADS-B"
-    return JobError(f"no {kind} (CAT{exc.category:03d}) records in the inputs"
-                    f"{_all_failed(exc.loaded, exc.category)}")
+    """The user-facing error for inputs without radar or ADS-B records: every absent category, those whose
+    blocks failed to decode first, with how many failed and the edition to pin (an ADS-B recording under a
+    wrong edition is why there is no record at all, not a missing radar)."""
+    absent = absent_categories(exc.loaded) or [exc.category]
+    failed = {cat: why[2:] for cat in absent if (why := _all_failed(exc.loaded, cat))}
+    absent.sort(key=lambda cat: cat not in failed)
+    names = " or ".join(f"{'radar' if cat == 48 else 'ADS-B'} (CAT{cat:03d})" for cat in absent)
+    why = f": {'; '.join(failed.values())}" if failed else ""
+    return JobError(f"no {names} records in the inputs{why}")
 
 
 def absent_categories(loaded: Loaded) -> list[int]:
