@@ -1223,6 +1223,7 @@ def stats_job(options: StatsOptions, *, progress: Progress | None = None) -> Sta
     the file."""
     import asterix
     from asterix.errors import UnreadableInput
+    from pipeline.model.sources import file_labels
     from pipeline.model.time import UNDATED_DAY, FirstDayTally
     from pipeline.stats import STATS_COLUMNS, StatsAccumulator
 
@@ -1235,6 +1236,7 @@ def stats_job(options: StatsOptions, *, progress: Progress | None = None) -> Sta
     spans: list[dict[int, tuple[pd.Timestamp, pd.Timestamp]]] = []
     chunk = max(int(options.chunk_mb * 1e6), 1)
     early_start: list[str] = []  # FirstDayTally's warnings
+    labels = file_labels(checked.inputs)
     for i, path in enumerate(checked.inputs):
         if progress:
             progress.step(f"{path.name} ({i + 1}/{len(checked.inputs)})")
@@ -1258,7 +1260,7 @@ def stats_job(options: StatsOptions, *, progress: Progress | None = None) -> Sta
                 by_source = widen_spans(by_source, time_spans(rec.frames, rec.date))
         except UnreadableInput as exc:
             raise JobError(str(exc), 2) from exc
-        early_start += tally.warning(path.name, info["date"], info["format"])
+        early_start += tally.warning(labels[i], info["date"], info["format"])
         inputs.append(info)
         spans.append(by_source)
     dates = [info["date"] for info in inputs if info["date"] is not None]
@@ -1304,6 +1306,7 @@ def decode_job(options: DecodeOptions, *, on_chunk: Callable[[int, int, str], No
     import asterix
     from asterix.errors import UnreadableInput
     from asterix.reader import categories_in
+    from pipeline.model.sources import file_labels
     from pipeline.model.time import FirstDayTally
     from pipeline.report.outputs import Staging
 
@@ -1321,7 +1324,7 @@ def decode_job(options: DecodeOptions, *, on_chunk: Callable[[int, int, str], No
         staged: dict[int, Path] = {}  # category -> its temporary file
         writers: dict[int, object] = {}
         try:
-            for path in checked.inputs:
+            for path, label in zip(checked.inputs, file_labels(checked.inputs), strict=True):
                 size = path.stat().st_size
                 chunk = max(int(options.chunk_mb * 1e6), 1)
                 tally, date, fmt = FirstDayTally(), None, None
@@ -1337,11 +1340,11 @@ def decode_job(options: DecodeOptions, *, on_chunk: Callable[[int, int, str], No
                         if out is not None and len(frame):
                             if cat not in staged:
                                 staged[cat] = staging.temporary(category_output(out, cat))
-                            _write_chunk(staged[cat], cat, frame.assign(file=path.name), writers, csv)
+                            _write_chunk(staged[cat], cat, frame.assign(file=label), writers, csv)
                     done = max((int(f["offset"].max()) for f in rec.frames.values() if len(f)), default=0)
                     if on_chunk:
                         on_chunk(done, size, path.name)
-                early_start += tally.warning(path.name, date, fmt)
+                early_start += tally.warning(label, date, fmt)
         except UnreadableInput as exc:
             raise JobError(str(exc), 2) from exc
         finally:

@@ -90,7 +90,8 @@ MEASUREMENT_SCHEMA: tuple[Column, ...] = (
     Column("cov_en_m2", "float64", "m^2", "Horizontal position covariance, east-north"),
     Column("cov_nn_m2", "float64", "m^2", "Horizontal position covariance, north-north"),
     Column("sigma_major_m", "float64", "m", "Standard deviation along the error ellipse's major axis"),
-    Column("file", _TEXT, "", "Input file name the report came from"),
+    Column("file", _TEXT, "", "Input file the report came from: its name, or its path as given when two "
+           "inputs share a name"),
     Column("offset", "Int64", "B", "Byte offset of the record in that file"),
 )
 MEASUREMENT_COLUMNS = [c.name for c in MEASUREMENT_SCHEMA]
