@@ -516,14 +516,20 @@ def _load_measurements(options: AircraftOptions, checked: Checked, progress: Pro
     checked.warnings += _date_ignored(options, loaded.inputs)
     checked.warnings += loaded.warnings
     checked.warnings += list(meas.attrs.get("coverage_warnings", ()))
+    checked.warnings += list(meas.attrs.get("identity_warnings", ()))
     return loaded, meas
 
 
 def _no_records(exc: NoRecords) -> JobError:
-    """The user-facing error for inputs without radar or ADS-B records."""
-    kind = "radar" if exc.category == 48 else "ADS-B"
-    return JobError(f"no {kind} (CAT{exc.category:03d}) records in the inputs"
-                    f"{_all_failed(exc.loaded, exc.category)}")
+    """The user-facing error for inputs without radar or ADS-B records: every absent category, those whose
+    blocks failed to decode first, with how many failed and the edition to pin (an ADS-B recording under a
+    wrong edition is why there is no record at all, not a missing radar)."""
+    absent = absent_categories(exc.loaded) or [exc.category]
+    failed = {cat: why[2:] for cat in absent if (why := _all_failed(exc.loaded, cat))}
+    absent.sort(key=lambda cat: cat not in failed)
+    names = " or ".join(f"{'radar' if cat == 48 else 'ADS-B'} (CAT{cat:03d})" for cat in absent)
+    why = f": {'; '.join(failed.values())}" if failed else ""
+    return JobError(f"no {names} records in the inputs{why}")
 
 
 def absent_categories(loaded: Loaded) -> list[int]:
@@ -1228,6 +1234,7 @@ def stats_job(options: StatsOptions, *, progress: Progress | None = None) -> Sta
     the file."""
     import asterix
     from asterix.errors import UnreadableInput
+    from pipeline.model.sources import file_labels
     from pipeline.model.time import UNDATED_DAY, FirstDayTally
     from pipeline.stats import STATS_COLUMNS, StatsAccumulator
 
@@ -1240,6 +1247,7 @@ def stats_job(options: StatsOptions, *, progress: Progress | None = None) -> Sta
     spans: list[dict[int, tuple[pd.Timestamp, pd.Timestamp]]] = []
     chunk = max(int(options.chunk_mb * 1e6), 1)
     early_start: list[str] = []  # FirstDayTally's warnings
+    labels = file_labels(checked.inputs)
     for i, path in enumerate(checked.inputs):
         if progress:
             progress.step(f"{path.name} ({i + 1}/{len(checked.inputs)})")
@@ -1263,7 +1271,7 @@ def stats_job(options: StatsOptions, *, progress: Progress | None = None) -> Sta
                 by_source = widen_spans(by_source, time_spans(rec.frames, rec.date))
         except UnreadableInput as exc:
             raise JobError(str(exc), 2) from exc
-        early_start += tally.warning(path.name, info["date"], info["format"])
+        early_start += tally.warning(labels[i], info["date"], info["format"])
         inputs.append(info)
         spans.append(by_source)
     dates = [info["date"] for info in inputs if info["date"] is not None]
@@ -1309,6 +1317,7 @@ def decode_job(options: DecodeOptions, *, on_chunk: Callable[[int, int, str], No
     import asterix
     from asterix.errors import UnreadableInput
     from asterix.reader import categories_in
+    from pipeline.model.sources import file_labels
     from pipeline.model.time import FirstDayTally
     from pipeline.report.outputs import Staging
 
@@ -1326,7 +1335,7 @@ def decode_job(options: DecodeOptions, *, on_chunk: Callable[[int, int, str], No
         staged: dict[int, Path] = {}  # category -> its temporary file
         writers: dict[int, object] = {}
         try:
-            for path in checked.inputs:
+            for path, label in zip(checked.inputs, file_labels(checked.inputs), strict=True):
                 size = path.stat().st_size
                 chunk = max(int(options.chunk_mb * 1e6), 1)
                 tally, date, fmt, chosen = FirstDayTally(), None, None, {}
@@ -1342,13 +1351,13 @@ def decode_job(options: DecodeOptions, *, on_chunk: Callable[[int, int, str], No
                         if out is not None and len(frame):
                             if cat not in staged:
                                 staged[cat] = staging.temporary(category_output(out, cat))
-                            _write_chunk(staged[cat], cat, frame.assign(file=path.name), writers, csv)
+                            _write_chunk(staged[cat], cat, frame.assign(file=label), writers, csv)
                     done = max((int(f["offset"].max()) for f in rec.frames.values() if len(f)), default=0)
                     if on_chunk:
                         on_chunk(done, size, path.name)
                 if on_chunk:  # the last record's offset is not the file's end: close the bar at 100 %
                     on_chunk(size, size, path.name)
-                early_start += tally.warning(path.name, date, fmt)
+                early_start += tally.warning(label, date, fmt)
                 notes += [f"{path}: CAT{cat:03d} --edition auto {why}" for cat, why in sorted(chosen.items())]
         except UnreadableInput as exc:
             raise JobError(str(exc), 2) from exc

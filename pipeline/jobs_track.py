@@ -205,7 +205,12 @@ def _measurements(loaded, checked: Checked, options: TrackOptions) -> pd.DataFra
     import warnings as python_warnings
 
     from pipeline.model.dedup import duplicate_mask
-    from pipeline.model.measurements import OffEarthWarning, OutOfCoverageWarning, build_measurements
+    from pipeline.model.measurements import (
+        IdentityWarning,
+        OffEarthWarning,
+        OutOfCoverageWarning,
+        build_measurements,
+    )
     from pipeline.model.sensors import UnknownRadar
 
     sources = _sources(options.sources)
@@ -224,11 +229,13 @@ def _measurements(loaded, checked: Checked, options: TrackOptions) -> pd.DataFra
         with python_warnings.catch_warnings():  # jobs._load has said it, naming each file
             python_warnings.simplefilter("ignore", OffEarthWarning)
             python_warnings.simplefilter("ignore", OutOfCoverageWarning)  # said below, from attrs
+            python_warnings.simplefilter("ignore", IdentityWarning)  # said below, from attrs
             meas = build_measurements(radar, adsb, checked.sensors, date=loaded.date,
                                       adsb_sigma_m=options.adsb_sigma_m)
     except UnknownRadar as exc:
         raise jobs.unknown_radar_error(exc.missing, jobs.sensors_path(options)) from exc
     checked.warnings += list(meas.attrs.get("coverage_warnings", ()))
+    checked.warnings += list(meas.attrs.get("identity_warnings", ()))
     from pipeline.track.associate import join_by_track_number
 
     meas, joined = join_by_track_number(meas, max_gap_s=float(options.max_coast_s))

@@ -9,10 +9,11 @@ same fold over one whole decoded recording.
 from __future__ import annotations
 
 import re
-from pathlib import Path
 
 import numpy as np
 import pandas as pd
+
+from pipeline.model.sources import file_labels
 
 # "(record at offset 1234)", "at offset 0x1f": the place, not the reason; "(LEN 40, 36 bytes past the
 # end)": a bad data block LEN's numbers
@@ -260,9 +261,8 @@ def _by_reason(skipped: pd.DataFrame, files: dict[str, int]) -> pd.DataFrame:
                           "file": skipped["file"].map(files)})
     skipped = skipped.loc[order.sort_values(["total", "first", "category", "reason", "file"],
                                             kind="stable").index]
-    names = {f: Path(f).name for f in files}
-    shared = {n for n in names.values() if list(names.values()).count(n) > 1}
-    skipped = skipped.assign(file=skipped["file"].map(lambda f: f if names[f] in shared else names[f]))
+    labels = dict(zip(files, file_labels(list(files)), strict=True))
+    skipped = skipped.assign(file=skipped["file"].map(labels))
     return skipped[_SKIPPED].reset_index(drop=True)
 
 

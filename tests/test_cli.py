@@ -92,11 +92,27 @@ def test_correlate_unknown_callsign_lists_closest(capsys):
 
 def test_correlate_missing_radar_prints_toml(tmp_path, capsys):
     other = tmp_path / "sensors.toml"
-    other.write_text('[[sensor]]\nname = "Other"\nsac = 1\nsic = 2\nlatitude = 0.0\nlongitude = 0.0\n'
+    other.write_text('[[sensor]]\nname = "Other"\nsac = 1\nsic = 2\nlatitude = 1.0\nlongitude = 1.0\n'
                      'altitude_m = 0.0\n')
     assert main(["correlate", str(RADAR), str(ADSB), "--sensors", str(other), "--callsign", "MAS72"]) == 1
     err = capsys.readouterr().err
     assert "25/201" in err and "[[sensor]]" in err and "sac = 25" in err and "sic = 201" in err
+
+
+def test_printed_sensor_template_pasted_unedited_is_refused(tmp_path, capsys):
+    # the lines msdc prints for a radar without a site, pasted as they are, would put every plot at 0 N 0 E
+    assert main(["quality", str(RADAR), "--all", "-o", str(tmp_path / "first.xlsx")]) == 1
+    err = capsys.readouterr().err
+    template = err[err.index("[[sensor]]"):]
+    assert "latitude = 0.0" in template and "longitude = 0.0" in template
+    sensors = tmp_path / "todo.toml"
+    sensors.write_text(template)
+    out = tmp_path / "q.xlsx"
+    assert main(["quality", str(RADAR), "--sensors", str(sensors), "--all", "-o", str(out)]) == 1
+    err = capsys.readouterr().err
+    assert f"{sensors}: [[sensor]] entry 1 ('radar SAC 25 SIC 201', SAC 25 SIC 201)" in err
+    assert "latitude 0, longitude 0 is no radar site" in err and "Traceback" not in err
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["todo.toml"]  # nothing written
 
 
 def test_correlate_no_overlap_gives_spans(tmp_path, capsys):

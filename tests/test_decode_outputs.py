@@ -320,3 +320,37 @@ def test_an_error_that_is_no_interrupt_still_surfaces(monkeypatch):
     monkeypatch.setattr(asterix, "iter_read", iter_read)
     with pytest.raises(SystemError, match="a defect"):
         main(["decode", str(RADAR)])
+
+
+def _same_name_inputs(tmp_path: Path) -> tuple[Path, Path]:
+    """Two different CAT048 recordings both named x.ast, in folders a/ and b/: the fixture's 3266 plots,
+    and its first 10 plots written again."""
+    a, b = tmp_path / "a" / "x.ast", tmp_path / "b" / "x.ast"
+    a.parent.mkdir()
+    b.parent.mkdir()
+    a.write_bytes(RADAR.read_bytes())
+    b.write_bytes(encode_frame(48, asterix.read(RADAR).frames[48].head(10)))
+    return a, b
+
+
+def test_file_column_names_the_path_when_two_inputs_share_a_name(tmp_path):
+    """The `file` column held the base name only, so (file, offset) named two records; stats already
+    shows a shared name by its path, and the `file` column follows that rule."""
+    from pipeline.model.load import load_measurements
+    from pipeline.model.sensors import read_sensors
+    from pipeline.model.sources import file_labels
+
+    assert file_labels(["a/x.ast", "b/x.ast", "c/y.ast"]) == ["a/x.ast", "b/x.ast", "y.ast"]
+    a, b = _same_name_inputs(tmp_path)
+    out = tmp_path / "d.csv"
+    assert main(["decode", str(a), str(b), "-o", str(out)]) == 0
+    decoded = pd.read_csv(out, usecols=["file", "offset"])
+    assert decoded["file"].value_counts().to_dict() == {str(a): 3266, str(b): 10}
+    assert not decoded.duplicated().any()
+    _, meas = load_measurements([a, b], read_sensors(FIX / "sensors.toml"), either=True)
+    files = meas["file"].astype(str)
+    assert set(files) == {str(a), str(b)} and (files == str(b)).sum() == 10
+    assert not meas[["file", "offset"]].duplicated().any()
+    # a name no other input shares stays the bare name
+    _, meas = load_measurements([a, ADSB], read_sensors(FIX / "sensors.toml"))
+    assert set(meas["file"].astype(str)) == {"x.ast", "adsb.ast"}

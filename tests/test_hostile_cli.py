@@ -389,6 +389,21 @@ def test_an_unpinned_0_23_recording_is_named_in_every_job(adsb_0_23, tmp_path, c
     assert status == 0 and "warning" not in err
 
 
+def test_an_unpinned_0_23_recording_alone_is_why_quality_and_correlate_have_no_records(adsb_0_23, tmp_path,
+                                                                                         capsys):
+    """quality needs only one kind of sensor: given the 0.23 recording alone, unpinned, it said "no radar
+    (CAT048) records", sending the user for a radar file; the failed CAT021 blocks and the edition come
+    first. correlate (which needs both) names them too."""
+    advice = "400 CAT021 block(s) could not be decoded under edition 2.7; every one sampled decodes under " \
+             "0.23: pin it with --edition 21=0.23 ('msdc stats' lists them)"
+    for job in (["quality", adsb_0_23, "--all", "-o", tmp_path / "q.xlsx"],
+                ["correlate", adsb_0_23, "--sensors", SENSORS, "--all", "-o", tmp_path / "r.xlsx"]):
+        status, _, err = _run(job, capsys)
+        assert status == 1 and "Traceback" not in err
+        assert f"msdc {job[0]}: no ADS-B (CAT021) or radar (CAT048) records in the inputs: {advice}" in err
+    assert not list(tmp_path.iterdir())
+
+
 def test_a_0_23_recording_beside_a_2_7_one_is_named_alone(adsb_0_23, capsys):
     """Two ADS-B inputs of different editions: the 2.7 one decodes, the 0.23 one is named with its
     edition (a warning: the run goes on with what decoded)."""

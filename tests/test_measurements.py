@@ -27,7 +27,7 @@ name = "Equator"
 sac = 1
 sic = 2
 latitude = 0.0
-longitude = 0
+longitude = 10
 altitude_m = 0.0
 
 [[sensor]]
@@ -70,6 +70,8 @@ def test_read_sensors(tmp_path):
     (GOOD.replace("altitude_m = 20", "altitude_m = 20\nsigma_range_m = 0"), ["sigma_range_m", "outside"]),
     (GOOD.replace("altitude_m = 20", "altitude_m = 20\nsigma_azimuth_deg = 'x'"),
      ["sigma_azimuth_deg", "float"]),
+    (GOOD.replace("longitude = 10\n", "longitude = 0.0\n", 1),
+     ["entry 1", "'Equator'", "SAC 1 SIC 2", "latitude 0", "longitude 0", "no radar site", "template"]),
     ("[[sensor]\n", ["not valid TOML"]),
     ("title = 'x'\n", ["no [[sensor]]"]),
 ])
@@ -129,11 +131,12 @@ def test_radar_measurements_positions_and_schema(tmp_path):
     assert seconds_since(meas["time"], UNDATED_DAY).tolist() == [86399.0, 86405.0]
     assert (meas["sensor_kind"] == "radar").all() and (meas["sensor_id"] == "048:1/2").all()
     assert (meas["aircraft_id"] == "750123").all()
-    # polar, site (0, 0, 0), due east, 100 NM, FL 0: chord of the equator, lon = 2 asin(185200 / 2a)
+    # polar, site (0, 10, 0), due east, 100 NM, FL 0: chord of the equator, lon = 10 + 2 asin(185200 / 2a)
     assert meas.loc[0, "latitude"] == pytest.approx(0.0, abs=1e-9)
-    assert meas.loc[0, "longitude"] == pytest.approx(math.degrees(2 * math.asin(185200 / (2 * A))), abs=1e-8)
+    assert meas.loc[0, "longitude"] == pytest.approx(10 + math.degrees(2 * math.asin(185200 / (2 * A))),
+                                                     abs=1e-8)
     # cartesian (0, 0): straight above the site
-    assert (meas.loc[1, "latitude"], meas.loc[1, "longitude"]) == pytest.approx((0.0, 0.0), abs=1e-9)
+    assert (meas.loc[1, "latitude"], meas.loc[1, "longitude"]) == pytest.approx((0.0, 10.0), abs=1e-9)
     assert meas["position_item"].tolist() == ["040", "042"]
     assert meas["callsign"].tolist() == ["MAS72", "MAS72"]
 

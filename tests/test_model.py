@@ -1,6 +1,7 @@
 """The measurement model: schema and validate, generated docs, absolute time, identity rule, covariance."""
 
 import math
+import re
 from pathlib import Path
 
 import numpy as np
@@ -8,8 +9,8 @@ import pandas as pd
 import pytest
 
 from pipeline.model.geodesy import ecef_to_enu, geodetic_to_ecef, polar_to_geodetic
-from pipeline.model.identity import assign_aircraft_id
-from pipeline.model.measurements import build_measurements, nacp_sigma_m
+from pipeline.model.identity import assign_aircraft_id, identify
+from pipeline.model.measurements import IdentityWarning, build_measurements, nacp_sigma_m
 from pipeline.model.schema import (
     MEASUREMENT_COLUMNS,
     SchemaError,
@@ -102,6 +103,51 @@ def test_identity_rule():
     # address; call sign linked to its unique address; call sign alone; Mode 3/A linked to its unique
     # address; Mode 3/A alone; nothing; address; call sign seen with one address
     assert got == ["750001", "750001", "CS:SIA1", "750002", "M3A:7777", pd.NA, "750002", "750002"]
+
+
+MEAN_EARTH_NM = 6371008.8 / 1852.0  # a meridian arc of d degrees is MEAN_EARTH_NM * radians(d) on the sphere
+
+
+def test_mode3a_join_needs_the_aircraft_within_reach():
+    # 750001 (code 1234) at 0 N 100 E at t = 0, 4, 8 s; five plots with only code 1234, north of it
+    north_deg = [0.0, 0.0, 0.0, 0.645, 1 / 60, 10 / 60, 25 / 60]
+    t_s = [0.0, 4.0, 8.0, 4.0, 5.0, 68.0, 68.0]
+    meas = pd.DataFrame({
+        "address": ["750001"] * 3 + [None] * 4, "callsign": [None] * 7, "mode3a": ["1234"] * 7,
+        "time": UNDATED_DAY + pd.to_timedelta(t_s, unit="s"), "latitude": north_deg, "longitude": 100.0,
+    }).astype({"address": "string", "callsign": "string", "mode3a": "string"})
+    ids, refused = identify(meas)
+    # 38.7 NM at the same instant: refused (limit 3 NM); 1 NM 1 s later: joined; 60 s after the last report
+    # 1000 kt reach 16.67 NM + 3 NM = 19.67 NM: 10 NM joined, 25 NM refused
+    assert ids.tolist() == ["750001"] * 3 + ["M3A:1234", "750001", "750001", "M3A:1234"]
+    assert refused["row"].tolist() == [3, 6]
+    assert refused["mode3a"].tolist() == ["1234", "1234"] and refused["address"].tolist() == ["750001"] * 2
+    assert refused["distance_nm"].to_numpy() == pytest.approx(
+        [MEAN_EARTH_NM * math.radians(0.645), MEAN_EARTH_NM * math.radians(25 / 60)], rel=1e-9)
+    assert refused["seconds"].tolist() == [0.0, 60.0]
+    assert refused["limit_nm"].to_numpy() == pytest.approx([3.0, 1000.0 * 60 / 3600 + 3.0])
+    # without times and positions the gate cannot apply: the code alone joins
+    assert assign_aircraft_id(meas[["address", "callsign", "mode3a"]]).tolist()[3:] == ["750001"] * 4
+
+
+def test_build_measurements_warns_of_a_plot_out_of_reach():
+    # the radar at 2.7456 N 101.7099 E sees 750001 (code 4445) due east at 20 NM; a plot with only 4445 at
+    # the same instant due west, about 40 NM from it (FL 0: slant range is ground range within 0.1 %), is a
+    # false plot: it keeps its code, and the warning says so
+    frame = radar_frame([20.0, 20.0, 20.0], [90.0, 90.0, 270.0], [0.0, 0.0, 0.0],
+                        tod=np.array([0.0, 4.0, 4.0]))
+    frame = frame.assign(address=["750001", "750001", None], mode3a=["4445"] * 3, file="r.ast")
+    with pytest.warns(IdentityWarning) as caught:
+        meas = build_measurements(frame, None, SENSORS)
+    assert meas["aircraft_id"].tolist() == ["750001", "750001", "M3A:4445"]
+    (text,) = meas.attrs["identity_warnings"]
+    assert str(caught[0].message) == text
+    assert text.startswith("1 report(s) without an address were not joined")
+    assert "4445 -> 750001 (1)" in text
+    assert "the first: 048:25/201 r.ast, offset 20, at 00:00:04.000, 4445, " in text
+    assert "750001's report 0.0 s apart (limit 3.0 NM)" in text
+    distance_nm = float(re.search(r"4445, ([0-9.]+) NM", text).group(1))
+    assert distance_nm == pytest.approx(40.0, abs=0.15)  # the sphere vs the ellipsoid: within 0.3 %
 
 
 def test_radar_covariance_matches_a_numerical_jacobian():

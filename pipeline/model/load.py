@@ -13,7 +13,7 @@ import pandas as pd
 
 import asterix
 from asterix.reader import Recording
-from pipeline.model.sources import pair_codes, pair_of, source_id
+from pipeline.model.sources import file_labels, pair_codes, pair_of, source_id
 from pipeline.model.time import NAT_NS, UNDATED_DAY, FirstDayTally, absolute_time
 from pipeline.progress import Progress
 
@@ -122,6 +122,7 @@ def load(paths: list[str | Path] | str | Path, *, editions=None, date=None, form
     inputs: list[dict] = []
     warnings: list[str] = []
     digests = _digests(paths)
+    labels = file_labels(paths)
     for i, p in enumerate(paths):
         if progress:
             progress.step(f"{p.name} ({i + 1}/{len(paths)})")
@@ -130,16 +131,16 @@ def load(paths: list[str | Path] | str | Path, *, editions=None, date=None, form
         recs.append(rec)
         tally = FirstDayTally()
         tally.add(rec.frames)
-        warnings += tally.warning(p.name, rec.date, rec.format)
+        warnings += tally.warning(labels[i], rec.date, rec.format)
         inputs.append({"path": str(p), "sha256": digests[i], "bytes": rec.size_bytes, "format": rec.format,
                        "records": {int(c): len(f) for c, f in rec.frames.items()},
                        "skipped_blocks": len(rec.errors), "editions": dict(rec.editions)})
     dates = [r.date for r in recs if r.date is not None]
     first = min(dates) if dates else None
     by_cat: dict[int, list[pd.DataFrame]] = {}
-    for p, rec in zip(paths, recs, strict=True):
+    for label, rec in zip(labels, recs, strict=True):
         for cat, frame in rec.frames.items():
-            frame = frame.assign(file=pd.Categorical([p.name] * len(frame)))
+            frame = frame.assign(file=pd.Categorical([label] * len(frame)))
             by_cat.setdefault(cat, []).append(frame)
     frames = {cat: _concat(parts) for cat, parts in by_cat.items()}
     return Loaded(frames, recs, inputs, first, warnings=warnings)
@@ -211,6 +212,7 @@ def load_measurements(paths: list[str | Path], sensors: pd.DataFrame, *, edition
     early_start: list[str] = []  # FirstDayTally's warnings
     paths = input_paths(paths)
     digests = _digests(paths)
+    labels = file_labels(paths)
     for i, p in enumerate(paths):
         if progress:
             progress.step(f"{p.name} ({i + 1}/{len(paths)})")
@@ -233,14 +235,14 @@ def load_measurements(paths: list[str | Path], sensors: pd.DataFrame, *, edition
             # undated records are placed on UNDATED_DAY here and moved to Loaded.date below
             by_source = widen_spans(by_source, time_spans(rec.frames, None))
             frames, rec.frames = rec.frames, {}
-            r, a = _rows(frames, p.name, sensors, adsb_sigma_m, stray, off_earth, columns)
+            r, a = _rows(frames, labels[i], sensors, adsb_sigma_m, stray, off_earth, columns)
             del frames
             radar += [(i, r)] if r is not None else []
             adsb += [(i, a)] if a is not None else []
             recs.append(rec)
         if first:  # nothing at all in the file: iter_read yields no chunk
             dates.append(None)
-        early_start += tally.warning(p.name, dates[-1], info["format"])
+        early_start += tally.warning(labels[i], dates[-1], info["format"])
         info["records"] = dict(sorted(info["records"].items()))
         info["editions"] = dict(sorted(info["editions"].items()))
         inputs.append(info)

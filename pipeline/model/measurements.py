@@ -26,7 +26,7 @@ from pipeline.model.geodesy import (
     plane_to_geodetic,
     polar_to_geodetic,
 )
-from pipeline.model.identity import assign_aircraft_id, normalise_address, normalise_callsign
+from pipeline.model.identity import identify, normalise_address, normalise_callsign, refused_warnings
 from pipeline.model.schema import (
     coded_text,
     column_names,
@@ -40,7 +40,7 @@ from pipeline.model.sensors import REQUIRED_COLUMNS, UnknownRadar, read_sensors,
 from pipeline.model.sources import source_id
 from pipeline.model.time import absolute_time
 
-__all__ = ["DECODED_COLUMNS", "NACP_95_M", "OffEarthWarning", "OutOfCoverageWarning",
+__all__ = ["DECODED_COLUMNS", "IdentityWarning", "NACP_95_M", "OffEarthWarning", "OutOfCoverageWarning",
            "UnknownRadar", "adsb_measurements",
            "build_measurements", "finish_measurements", "impossible_positions", "measurement_rows",
            "nacp_sigma_m", "normalise_address", "normalise_callsign", "off_earth_rows", "on_ground",
@@ -54,7 +54,7 @@ DECODED_COLUMNS = ("flight_level", "ground_speed_kt", "callsign", "address", "mo
                    "geometric_height_ft", "gbs", "flight_status", "rab")
 
 # Columns worked out over the whole run by finish_measurements, and the built columns each is made from
-DERIVED_INPUTS = {"aircraft_id": ("address", "callsign", "mode3a"),
+DERIVED_INPUTS = {"aircraft_id": ("address", "callsign", "mode3a", "time", "latitude", "longitude"),
                   "sigma_major_m": ("cov_ee_m2", "cov_en_m2", "cov_nn_m2")}
 
 # Where a report came from: finish_measurements names them in its out-of-coverage warning, so a job that
@@ -68,6 +68,11 @@ class OffEarthWarning(UserWarning):
 
 class OutOfCoverageWarning(UserWarning):
     """build_measurements left out ADS-B reports beyond any ground station's reach (model.coverage)."""
+
+
+class IdentityWarning(UserWarning):
+    """build_measurements kept reports from the aircraft their Mode 3/A code names: beyond its reach
+    (model.identity, rule 4)."""
 
 
 # adsb_sigma_m: a declared 1-sigma ADS-B error per axis below 0.5 m or above 20 km is no receiver's (the
@@ -389,8 +394,10 @@ def finish_measurements(parts: list[pd.DataFrame], columns=None) -> pd.DataFrame
     if far.any():
         meas = meas[~far].reset_index(drop=True)
     wanted = column_names(columns)
+    refused: list[str] = []
     if "aircraft_id" in wanted:
-        meas["aircraft_id"] = assign_aircraft_id(meas)
+        meas["aircraft_id"], table = identify(meas)
+        refused = refused_warnings(table, meas)
     if "sigma_major_m" in wanted:
         meas["sigma_major_m"] = _sigma_major(meas["cov_ee_m2"].to_numpy(), meas["cov_en_m2"].to_numpy(),
                                              meas["cov_nn_m2"].to_numpy())
@@ -399,6 +406,8 @@ def finish_measurements(parts: list[pd.DataFrame], columns=None) -> pd.DataFrame
     meas = validate(meas, columns)
     if len(beyond):  # in words: a table in attrs would break pandas' attrs comparison in concat
         meas.attrs["coverage_warnings"] = tuple(coverage_warnings(beyond))
+    if refused:
+        meas.attrs["identity_warnings"] = tuple(refused)
     return meas
 
 
@@ -413,7 +422,8 @@ def build_measurements(cat048: pd.DataFrame | None = None, cat021: pd.DataFrame 
     declared for ADS-B reports without NACp. Rows are in input order, radar first. ADS-B reports with a
     position off the Earth (damaged bytes) are left out with an OffEarthWarning saying how many, those
     beyond any ground station's reach with an OutOfCoverageWarning (its words also in
-    ``attrs["coverage_warnings"]``).
+    ``attrs["coverage_warnings"]``); reports the identity rule's reach gate kept from the aircraft their
+    Mode 3/A code names give an IdentityWarning (also in ``attrs["identity_warnings"]``).
     """
     if isinstance(sensors, str | Path):
         sensors = read_sensors(sensors)
@@ -423,6 +433,8 @@ def build_measurements(cat048: pd.DataFrame | None = None, cat021: pd.DataFrame 
     meas = finish_measurements([p for p in parts if p is not None])
     for text in meas.attrs.get("coverage_warnings", ()):
         warnings.warn(text, OutOfCoverageWarning, stacklevel=2)
+    for text in meas.attrs.get("identity_warnings", ()):
+        warnings.warn(text, IdentityWarning, stacklevel=2)
     return meas
 
 

@@ -45,8 +45,10 @@ MEASUREMENT_SCHEMA: tuple[Column, ...] = (
     Column("sac", _SHORT, "", "System area code of the sensor"),
     Column("sic", _SHORT, "", "System identification code of the sensor"),
     Column("aircraft_id", _TEXT, "",
-           "Aircraft identity assigned once (pipeline.model.identity): the 24-bit address, else "
-           "\"CS:\" call sign, else \"M3A:\" Mode 3/A code; <NA> when the report has none"),
+           "Aircraft identity assigned once (pipeline.model.identity): the 24-bit address, else the "
+           "address the call sign is uniquely seen with, else \"CS:\" call sign, else the address the Mode "
+           "3/A code is uniquely seen with (if within reach), else \"M3A:\" Mode 3/A code; <NA> when the "
+           "report has none"),
     Column("latitude", "float64", "deg", "WGS-84 latitude"),
     Column("longitude", "float64", "deg", "WGS-84 longitude, -180..180"),
     Column("height_m", "float64", "m",
@@ -88,7 +90,8 @@ MEASUREMENT_SCHEMA: tuple[Column, ...] = (
     Column("cov_en_m2", "float64", "m^2", "Horizontal position covariance, east-north"),
     Column("cov_nn_m2", "float64", "m^2", "Horizontal position covariance, north-north"),
     Column("sigma_major_m", "float64", "m", "Standard deviation along the error ellipse's major axis"),
-    Column("file", _TEXT, "", "Input file name the report came from"),
+    Column("file", _TEXT, "", "Input file the report came from: its name, or its path as given when two "
+           "inputs share a name"),
     Column("offset", "Int64", "B", "Byte offset of the record in that file"),
 )
 MEASUREMENT_COLUMNS = [c.name for c in MEASUREMENT_SCHEMA]

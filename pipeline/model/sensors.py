@@ -61,14 +61,20 @@ def _check_entry(path: Path, i: int, entry: object) -> dict:
     for key, (lo, hi) in _RANGES.items():
         if not lo <= entry[key] <= hi:
             raise ValueError(f"{where}: {key} = {entry[key]!r} is outside {lo}..{hi}")
+    if entry["latitude"] == 0 and entry["longitude"] == 0:
+        raise ValueError(f"{where} ({entry['name']!r}, SAC {entry['sac']} SIC {entry['sic']}): latitude 0, "
+                         "longitude 0 is no radar site (it is the TODO template msdc prints for a missing "
+                         "radar, or a missing value; every plot would land at 0 N 0 E): give the antenna's "
+                         "WGS-84 position")
     return {k: entry[k] for k in SENSOR_COLUMNS}
 
 
 def read_sensors(path: str | Path) -> pd.DataFrame:
     """The sensor table (SENSOR_COLUMNS) of a TOML file; ValueError naming the file and entry if bad.
 
-    Latitude/longitude are WGS-84 degrees, altitude_m the antenna height above the WGS-84 ellipsoid;
-    sigma_range_m and sigma_azimuth_deg (optional, defaults 70 m and 0.08 deg) the 1-sigma plot noise.
+    Latitude/longitude are WGS-84 degrees (exactly 0 N 0 E, the printed template's value, is refused),
+    altitude_m the antenna height above the WGS-84 ellipsoid; sigma_range_m and sigma_azimuth_deg (optional,
+    defaults 70 m and 0.08 deg) the 1-sigma plot noise.
     """
     path = Path(path)
     try:
@@ -139,13 +145,14 @@ def undeclared_radars(reports: pd.DataFrame, sensors: pd.DataFrame) -> pd.DataFr
 
 
 def sensor_toml_snippet(sac: int, sic: int) -> str:
-    """The ``[[sensor]]`` lines to add to the sensor file for a radar that is not in it; for records missing
-    their SAC or SIC, a comment saying that no entry can place them (``sac = <NA>`` is not TOML)."""
+    """The ``[[sensor]]`` lines to add to the sensor file for a radar that is not in it (read_sensors refuses
+    their 0 N 0 E placeholder site until it is edited); for records missing their SAC or SIC, a comment saying
+    that no entry can place them (``sac = <NA>`` is not TOML)."""
     if pd.isna(sac) or pd.isna(sic):
         return (f"# SAC {sac} SIC {sic}: records without a complete data source identifier (I048/010)\n"
                 "# match no [[sensor]] entry; leave them out (msdc's commands do, with a warning)\n")
     return (
-        "[[sensor]]\n"
+        "[[sensor]]  # replace the three TODO values: msdc refuses a site at latitude 0, longitude 0\n"
         f'name = "radar SAC {sac} SIC {sic}"\n'
         f"sac = {sac}\n"
         f"sic = {sic}\n"

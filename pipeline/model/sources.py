@@ -1,9 +1,21 @@
-"""Data sources: a sensor's SAC/SIC pair as one integer code, and its id as the measurements show it."""
+"""Data sources: a sensor's SAC/SIC pair as one integer code, its id as the measurements show it, and an
+input file's label."""
 
 from __future__ import annotations
 
+from collections import Counter
+from pathlib import Path
+
 import numpy as np
 import pandas as pd
+
+
+def file_labels(paths) -> list[str]:
+    """Each input's label in the ``file`` column and in messages: its name, or its path as given where two
+    inputs share a name (so that ``file`` and ``offset`` always identify a record)."""
+    names = [Path(p).name for p in paths]
+    shared = {n for n, k in Counter(names).items() if k > 1}
+    return [str(p) if n in shared else n for p, n in zip(paths, names, strict=True)]
 
 
 def pair_codes(sac, sic) -> np.ndarray:
