@@ -2,7 +2,8 @@
 
 Each column lists one or more sources ``(item, field path)``; the first source present in a record
 wins (I021/131 before I021/130, for instance). Bit positions, LSBs and signedness come from the
-edition table, so one column definition serves every edition in which the field exists.
+edition table, so one column definition serves every edition in which the field exists; "int" and "flag"
+columns are the raw bits, never sign-extended (I021/090 PA, printed signed in 0.2x, reads 0-15).
 """
 
 from __future__ import annotations
@@ -76,6 +77,9 @@ CAT048: list[Column] = [
     _c("flight_status", "230", "STAT", "flag", doc="Flight status (alert, SPI, on ground)"),
 ]
 
+_PRIORITY_CODES = ("0 no emergency / not reported, 1 general emergency, 2 lifeguard / medical, "
+                   "3 minimum fuel, 4 no communications, 5 unlawful interference")
+
 _CAT021_SHARED = [
     _c("address", "080", "", "hex", doc="24-bit target address, 6 upper-case hex digits"),
     _c("callsign", "170", "", "icao", doc="Target identification, trailing spaces stripped"),
@@ -118,6 +122,12 @@ CAT021_V2: list[Column] = [
     _c("receiver_id", "400", "", "int", doc="Receiver ID"),
     _c("baro_vertical_rate_ftmin", "155", "BVR", unit="ft/min", doc="Barometric vertical rate"),
     _c("geo_vertical_rate_ftmin", "157", "GVR", unit="ft/min", doc="Geometric vertical rate"),
+    _c("priority_status", "200", "PS", "int", doc="I021/200 PS: " + _PRIORITY_CODES + ", 6 downed aircraft"),
+    _c("surveillance_status", "200", "SS", "int", doc="I021/200 SS: 0 no condition, 1 permanent alert "
+       "(emergency), 2 temporary alert (Mode 3/A change other than emergency), 3 SPI set"),
+    _c("icf", "200", "ICF", "flag", doc="I021/200 ICF: 1 intent change flag raised"),
+    _c("lnav_not_engaged", "200", "LNAV", "flag", doc="I021/200 LNAV: 1 LNAV mode not engaged, 0 engaged"),
+    _c("me", "200", "ME", "flag", doc="I021/200 ME: 1 military emergency (2.2 on; a spare bit in 2.1)"),
 ]
 
 CAT021_V0: list[Column] = [
@@ -132,7 +142,9 @@ CAT021_V0: list[Column] = [
     _c("fom_ac", "090", "AC", "int", doc="Figure of merit: ACAS capabilities"),
     _c("fom_mn", "090", "MN", "int", doc="Figure of merit: multiple navigation aids"),
     _c("fom_dc", "090", "DC", "int", doc="Figure of merit: differential correction"),
-    _c("fom_pa", "090", "PA", "int", doc="Figure of merit: position accuracy (NUCp-like, 0-15)"),
+    _c("fom_pa", "090", "PA", "int", doc="Figure of merit: position accuracy, the raw 4 bits 0-15 (the "
+       "0.2x specs print a signed quantity: an erratum, see README Editions)"),
+    _c("priority_status", "200", "", "int", doc="I021/200 Target Status: " + _PRIORITY_CODES),
     _c("signal_amplitude", "131", "", "int", doc="Signal amplitude (0.26 only)"),
     _c("true_airspeed_kt", "151", "", unit="kt", doc="True airspeed"),
     _c("baro_vertical_rate_ftmin", "155", "", unit="ft/min", doc="Barometric vertical rate"),

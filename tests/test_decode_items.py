@@ -257,3 +257,42 @@ def test_identification_text_outside_icao_set(hex6, text, raw):
 def test_callsign_hex_absent_without_the_item():
     r = one048()
     assert pd.isna(r.callsign) and pd.isna(r.callsign_hex)
+
+
+def test_021_0_2x_position_accuracy_is_the_raw_four_bits():
+    # 0.23 I021/090 (FRN 7): AC=MN=DC=0, spare, PA bits 1100 -> 0x00 0x0C. The 0.2x specs print PA as a
+    # "signed quantity", which would read -4; a negative accuracy category means nothing, so msdc keeps the
+    # raw bits (README, Editions: the documented errata): 12, and 1111 -> 15
+    for edition in ("0.23", "0.24", "0.25", "0.26"):
+        for pa_bits, raw in ((0x0C, 12), (0x0F, 15), (0x08, 8)):
+            r = decode_bytes(block(21, fspec(1, 7) + bytes([0, 1, 0x00, pa_bits])),
+                             editions={21: edition}).frames[21].iloc[0]
+            assert r.fom_pa == raw, (edition, pa_bits)
+
+
+@pytest.mark.parametrize("edition", ["2.2", "2.5", "2.7"])
+def test_021_2x_target_status(edition):
+    # I021/200 (FRN 23): ICF=1 LNAV=0 ME=1 PS=101 (5, unlawful interference) SS=10 (2, temporary alert)
+    # -> 1 0 1 101 10 = 0xB6; then ICF=0 LNAV=1 ME=0 PS=001 (general emergency) SS=01 -> 0100 0101 = 0x45
+    f = decode_bytes(block(21, fspec(1, 23) + bytes([0, 1, 0xB6]), fspec(1, 23) + bytes([0, 1, 0x45])),
+                     editions={21: edition}).frames[21]
+    got = f[["icf", "lnav_not_engaged", "me", "priority_status", "surveillance_status"]].astype(int)
+    assert got.values.tolist() == [[1, 0, 1, 5, 2], [0, 1, 0, 1, 1]]
+    absent = decode_bytes(block(21, fspec(1) + bytes([0, 1])), editions={21: edition}).frames[21].iloc[0]
+    assert pd.isna(absent.priority_status) and pd.isna(absent.me)
+
+
+def test_021_2_1_target_status_has_no_military_emergency():
+    # 2.1 prints the third bit of I021/200 as spare: even set, it is no ME (<NA>); PS and SS as in 2.2
+    r = decode_bytes(block(21, fspec(1, 23) + bytes([0, 1, 0xB6])), editions={21: "2.1"}).frames[21].iloc[0]
+    assert (r.icf, r.lnav_not_engaged, r.priority_status, r.surveillance_status) == (1, 0, 5, 2)
+    assert pd.isna(r.me)
+
+
+@pytest.mark.parametrize("edition", ["0.23", "0.24", "0.25", "0.26"])
+def test_021_0_2x_target_status_is_one_code(edition):
+    # 0.2x I021/200 (FRN 21) is one 8-bit code, with 2.x PS's table: 1 general emergency, 4 no communications
+    f = decode_bytes(block(21, fspec(1, 21) + bytes([0, 1, 0x01]), fspec(1, 21) + bytes([0, 1, 0x04])),
+                     editions={21: edition}).frames[21]
+    assert f["priority_status"].tolist() == [1, 4]
+    assert "surveillance_status" not in f and "me" not in f

@@ -82,3 +82,27 @@ def test_unpinned_0_23_names_its_edition_and_decodes_no_wrong_value():
     assert rec.edition_fits == {21: ("0.23",)}
     assert sorted(rec.errors.offset) == sorted(pinned.frames[21].offset - 3)  # one record per block
     assert rec.errors.length.sum() == rec.size_bytes
+
+
+def _fspec_has(data: bytes, offset: int, frn: int) -> bool:
+    """Whether the record at offset announces FRN frn, read from its FSPEC bytes (independent of msdc)."""
+    octet, bit = divmod(frn - 1, 7)
+    for k in range(octet):
+        if not data[offset + k] & 1:  # the FSPEC ends before that octet
+            return False
+    return bool(data[offset + octet] & (0x80 >> bit))
+
+
+def test_target_status_emergency_of_eth501():
+    """I021/200 (0.23 FRN 21) is in 5 records only, all of ETH501 (04004B) at FL380 around 22:23, each
+    'General emergency' (code 1): found by the radar audit's own parser (findings F3); the presence is
+    checked here from the FSPEC bytes of every record."""
+    path = REAL / "adsb_v023_160510-lebl-220001.ast"
+    f = asterix.read(path, editions={21: "0.23"}).frames[21]
+    data = path.read_bytes()
+    announced = [o for o in f["offset"].tolist() if _fspec_has(data, o, 21)]
+    assert announced == [1174092, 1181592, 1183178, 1183997, 1184903]
+    present = f[f["priority_status"].notna()]
+    assert present["offset"].tolist() == announced
+    assert present["priority_status"].tolist() == [1] * 5
+    assert set(present["callsign"]) == {"ETH501"} and set(present["address"]) == {"04004B"}
