@@ -19,7 +19,7 @@ class Column:
 
     name: str
     sources: tuple[tuple[str, tuple[str, ...]], ...]
-    kind: str = "float"  # float (LSB-scaled) | int | flag | octal | icao | hex | count
+    kind: str = "float"  # float (LSB-scaled) | int | flag | octal | icao | hex | count | codes
     scale: float = 1.0  # applied after the LSB, for unit conversion (NM/s -> kt)
     unit: str = ""
     doc: str = ""
@@ -73,6 +73,10 @@ CAT048: list[Column] = [
                     "gho": "GHO", "sup": "SUP", "tcc": "TCC"}, "Track status"),
     _c("height_3d_ft", "110", "3DH", unit="ft", doc="Height measured by a 3D radar"),
     _c("doppler_speed_ms", "120", "CAL/CAL", unit="m/s", doc="Calculated radial Doppler speed"),
+    _c("warning_codes", "030", "", "codes",
+       doc="I048/030 warning/error conditions: every 7-bit code the plot carries, in wire order, joined by "
+       "',' ('3' split plot, '1,3'); codes include 1 multipath reply (reflection), 2 sidelobe reply, "
+       "3 split plot, 4 second time around reply, 5 angel, 7 fixed PSR plot (the edition's table lists all)"),
     _c("com", "230", "COM", "flag", doc="Transponder communications capability"),
     _c("flight_status", "230", "STAT", "flag", doc="Flight status (alert, SPI, on ground)"),
 ]
@@ -222,7 +226,8 @@ def columns_for(category: int, edition: str) -> list[Column]:
 FAMILIES = {"CAT048 (all editions)": CAT048, "CAT021 2.x (2.1-2.7)": CAT021_V2,
             "CAT021 0.2x (0.23-0.26)": CAT021_V0, "CAT034 (1.27-1.29)": CAT034}
 KIND_DTYPES = {"float": "float64 (NaN if absent)", "int": "Int32", "flag": "Int8", "count": "Int16",
-               "octal": "text (categorical)", "hex": "text (categorical)", "icao": "text (categorical)"}
+               "octal": "text (categorical)", "hex": "text (categorical)", "icao": "text (categorical)",
+               "codes": "text (categorical)"}
 
 
 def markdown_schema() -> str:
@@ -240,7 +245,14 @@ def markdown_schema() -> str:
              "and 0-9, trailing spaces stripped. All-zero codes (code 0 is no character) and all spaces are "
              "absent (`<NA>`); any other code outside that set shows as `?`, never as a letter. Beside it, "
              "`callsign_hex` (text, categorical) keeps the item's raw 48 bits as 12 upper-case hex digits "
-             "whenever the record carries the item.", ""]
+             "whenever the record carries the item.", "",
+             "Code lists (`codes` columns: `warning_codes`, I048/030) hold every code of a repetitive item "
+             "in wire order, as decimal numbers joined by `,` (`3`, `1,3`), `<NA>` when the record lacks the "
+             "item. A first code and a count would drop the codes after the first; text keeps them all and "
+             "filters in one line: `f.warning_codes.str.contains(r\"(?:^|,)3(?:,|$)\", na=False)` selects "
+             "the plots carrying code 3 (split plot), `f.warning_codes.str.split(\",\").explode()` gives one "
+             "row per code. Its cost is small: a presence check over the records (about 10 ms per million "
+             "records), then one reading per distinct item.", ""]
     for family, cols in FAMILIES.items():
         lines += [f"## {family}", "", "| column | unit | dtype | source | meaning |", "|---|---|---|---|---|"]
         for c in cols:

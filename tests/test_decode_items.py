@@ -296,3 +296,32 @@ def test_021_0_2x_target_status_is_one_code(edition):
                      editions={21: edition}).frames[21]
     assert f["priority_status"].tolist() == [1, 4]
     assert "surveillance_status" not in f and "me" not in f
+
+
+@pytest.mark.parametrize("edition", ["1.27", "1.31", "1.32"])
+def test_048_warning_codes_every_code_in_wire_order(edition):
+    # I048/030 (FRN 16): 7-bit codes, each followed by FX. 0x06 = 0000011 0 -> [3] (split plot);
+    # 0x03 0x06 = 0000001 1, 0000011 0 -> [1, 3]; 0x19 0xFF 0x00 -> [12 (FX), 127 (FX), 0] in that order
+    rows = [one048((16, bytes([0x06])), editions={48: edition}),
+            one048((16, bytes([0x03, 0x06])), editions={48: edition}),
+            one048((16, bytes([0x19, 0xFF, 0x00])), editions={48: edition}),
+            one048(editions={48: edition})]
+    assert [r.warning_codes for r in rows[:3]] == ["3", "1,3", "12,127,0"]
+    assert pd.isna(rows[3].warning_codes)
+
+
+def test_048_warning_codes_do_not_shift_the_items_after_them():
+    # FRN 16 (030, two codes) then FRN 21 (230 COM=1 STAT=2 -> 001 010 00 = 0x28, second byte 0)
+    r = one048((16, bytes([0x03, 0x06])), (21, bytes([0x28, 0x00])))
+    assert r.warning_codes == "1,3" and (r.com, r.flight_status) == (1, 2)
+
+
+def test_048_warning_codes_of_many_records_of_any_length():
+    # one block: [3], [1, 3], [3, 0] (0x07 0x00: the trailing code 0 is not padding), none, and
+    # nine codes 1..9 (over 8 bytes): 0x03 0x05 ... 0x11 with FX, then 0x12 (code 9, FX 0)
+    nine = bytes([(c << 1) | 1 for c in range(1, 9)]) + bytes([9 << 1])
+    items = [bytes([0x06]), bytes([0x03, 0x06]), bytes([0x07, 0x00]), None, nine, bytes([0x06])]
+    recs = [cat048((1, I010), (2, I140), *([(16, it)] if it else [])) for it in items]
+    f = decode_bytes(block(48, *recs)).frames[48]
+    got = f["warning_codes"].astype(object).where(f["warning_codes"].notna(), None).tolist()
+    assert got == ["3", "1,3", "3,0", None, "1,2,3,4,5,6,7,8,9", "3"]

@@ -331,7 +331,9 @@ def reference_record(category: int, edition: str, values: dict) -> bytes:
                 continue
             key = "/".join(path)
             if key in known:
-                if col.kind == "count":  # zero repetitions of the item's element (8 bytes in I048/250)
+                if col.kind == "codes":  # '1,3': the repetitions' codes (I048/030)
+                    by_item[item] = [int(c) for c in str(v).split(",")]  # type: ignore[assignment]
+                elif col.kind == "count":  # zero repetitions of the item's element (8 bytes in I048/250)
                     uap = load_table(category, edition)["uap"]
                     node = next(e["node"] for e in uap if e and e["id"] == item)
                     by_item[item] = [bytes(node["item"]["bits"] // 8)] * int(v)  # type: ignore[assignment]
@@ -343,7 +345,8 @@ def reference_record(category: int, edition: str, values: dict) -> bytes:
 
 
 def _sample(kind: str, bits_lsb: float) -> object:
-    samples = {"int": 1, "flag": 1, "count": 2, "octal": "7106", "icao": "DLH65A", "hex": "3C660C"}
+    samples = {"int": 1, "flag": 1, "count": 2, "octal": "7106", "icao": "DLH65A", "hex": "3C660C",
+               "codes": "1,3"}
     return samples.get(kind, bits_lsb)
 
 
