@@ -637,8 +637,8 @@ def _code_lists(name: str, node: Any, present: np.ndarray, vals: np.ndarray) -> 
         v = vals[i]
         parts = v.split(",") if isinstance(v, str) else list(v) if isinstance(v, list | tuple) else [v]
         try:
-            codes = [int(str(c).strip()) for c in parts]
-        except ValueError:
+            codes = [_one_code(c) for c in parts]
+        except (TypeError, ValueError):
             raise ValueError(f"column {name!r} row {i}: {v!r} is not a list of codes such as '3' or "
                              f"'1,3'") from None
         if not codes or any(not 0 <= c <= hi for c in codes):
@@ -650,6 +650,15 @@ def _code_lists(name: str, node: Any, present: np.ndarray, vals: np.ndarray) -> 
         counts[i] = len(codes)
         mat[i, :len(codes)] = codes
     return counts, mat
+
+
+def _one_code(value: Any) -> int:
+    """One code of a code list: '3', 3 or 3.0 (a column read back as numbers); ValueError otherwise."""
+    if isinstance(value, str):
+        return int(value.strip())
+    if isinstance(value, bool) or float(value) != int(value):
+        raise ValueError(value)
+    return int(value)
 
 
 def _assign(category: int, edition: str, data: Mapping[str, np.ndarray], n: int,

@@ -485,3 +485,15 @@ def test_conformance_cat048_record() -> None:
     assert len(rebuilt) == len(raw)
     assert rebuilt[:start + 1] == raw[:start + 1] and rebuilt[start + 1:start + 9] == bytes(8)
     assert rebuilt[start + 9:-1] == raw[start + 9:-1] and rebuilt[-1:] == b"\x00"
+
+
+def test_warning_codes_are_written_as_their_repetitions():
+    # I048/030 (FRN 16): '1,3' -> 0000001 1, 0000011 0 = 0x03 0x06; a column read back as numbers (3.0) is
+    # the one code 3 -> 0x06. FSPEC: FRN 1 and 16 -> 1000 0001, 0000 0001, 0100 0000 = 0x81 0x01 0x40
+    assert encode_record(48, {"sac": 1, "sic": 2, "warning_codes": "1,3"}) == bytes([0x81, 0x01, 0x40, 1, 2,
+                                                                                     0x03, 0x06])
+    assert encode_record(48, {"sac": 1, "sic": 2, "warning_codes": 3.0}).endswith(bytes([0x40, 1, 2, 0x06]))
+    for bad, why in (("", "not a list of codes"), ("1,,3", "not a list of codes"), ("128", "0-127"),
+                     (2.5, "not a list of codes"), ("3;4", "not a list of codes")):
+        with pytest.raises(ValueError, match=f"warning_codes.*{why}"):
+            encode_record(48, {"sac": 1, "warning_codes": bad})
