@@ -2,7 +2,8 @@
 
 Each column lists one or more sources ``(item, field path)``; the first source present in a record
 wins (I021/131 before I021/130, for instance). Bit positions, LSBs and signedness come from the
-edition table, so one column definition serves every edition in which the field exists.
+edition table, so one column definition serves every edition in which the field exists; "int" and "flag"
+columns are the raw bits, never sign-extended (I021/090 PA, printed signed in 0.2x, reads 0-15).
 """
 
 from __future__ import annotations
@@ -18,7 +19,7 @@ class Column:
 
     name: str
     sources: tuple[tuple[str, tuple[str, ...]], ...]
-    kind: str = "float"  # float (LSB-scaled) | int | flag | octal | icao | hex | count
+    kind: str = "float"  # float (LSB-scaled) | int | flag | octal | icao | hex | count | codes
     scale: float = 1.0  # applied after the LSB, for unit conversion (NM/s -> kt)
     unit: str = ""
     doc: str = ""
@@ -72,9 +73,16 @@ CAT048: list[Column] = [
                     "gho": "GHO", "sup": "SUP", "tcc": "TCC"}, "Track status"),
     _c("height_3d_ft", "110", "3DH", unit="ft", doc="Height measured by a 3D radar"),
     _c("doppler_speed_ms", "120", "CAL/CAL", unit="m/s", doc="Calculated radial Doppler speed"),
+    _c("warning_codes", "030", "", "codes",
+       doc="I048/030 warning/error conditions: every 7-bit code the plot carries, in wire order, joined by "
+       "',' ('3' split plot, '1,3'); codes include 1 multipath reply (reflection), 2 sidelobe reply, "
+       "3 split plot, 4 second time around reply, 5 angel, 7 fixed PSR plot (the edition's table lists all)"),
     _c("com", "230", "COM", "flag", doc="Transponder communications capability"),
     _c("flight_status", "230", "STAT", "flag", doc="Flight status (alert, SPI, on ground)"),
 ]
+
+_PRIORITY_CODES = ("0 no emergency / not reported, 1 general emergency, 2 lifeguard / medical, "
+                   "3 minimum fuel, 4 no communications, 5 unlawful interference")
 
 _CAT021_SHARED = [
     _c("address", "080", "", "hex", doc="24-bit target address, 6 upper-case hex digits"),
@@ -118,6 +126,12 @@ CAT021_V2: list[Column] = [
     _c("receiver_id", "400", "", "int", doc="Receiver ID"),
     _c("baro_vertical_rate_ftmin", "155", "BVR", unit="ft/min", doc="Barometric vertical rate"),
     _c("geo_vertical_rate_ftmin", "157", "GVR", unit="ft/min", doc="Geometric vertical rate"),
+    _c("priority_status", "200", "PS", "int", doc="I021/200 PS: " + _PRIORITY_CODES + ", 6 downed aircraft"),
+    _c("surveillance_status", "200", "SS", "int", doc="I021/200 SS: 0 no condition, 1 permanent alert "
+       "(emergency), 2 temporary alert (Mode 3/A change other than emergency), 3 SPI set"),
+    _c("icf", "200", "ICF", "flag", doc="I021/200 ICF: 1 intent change flag raised"),
+    _c("lnav_not_engaged", "200", "LNAV", "flag", doc="I021/200 LNAV: 1 LNAV mode not engaged, 0 engaged"),
+    _c("me", "200", "ME", "flag", doc="I021/200 ME: 1 military emergency (2.2 on; a spare bit in 2.1)"),
 ]
 
 CAT021_V0: list[Column] = [
@@ -132,7 +146,9 @@ CAT021_V0: list[Column] = [
     _c("fom_ac", "090", "AC", "int", doc="Figure of merit: ACAS capabilities"),
     _c("fom_mn", "090", "MN", "int", doc="Figure of merit: multiple navigation aids"),
     _c("fom_dc", "090", "DC", "int", doc="Figure of merit: differential correction"),
-    _c("fom_pa", "090", "PA", "int", doc="Figure of merit: position accuracy (NUCp-like, 0-15)"),
+    _c("fom_pa", "090", "PA", "int", doc="Figure of merit: position accuracy, the raw 4 bits 0-15 (the "
+       "0.2x specs print a signed quantity: an erratum, see README Editions)"),
+    _c("priority_status", "200", "", "int", doc="I021/200 Target Status: " + _PRIORITY_CODES),
     _c("signal_amplitude", "131", "", "int", doc="Signal amplitude (0.26 only)"),
     _c("true_airspeed_kt", "151", "", unit="kt", doc="True airspeed"),
     _c("baro_vertical_rate_ftmin", "155", "", unit="ft/min", doc="Barometric vertical rate"),
@@ -210,7 +226,8 @@ def columns_for(category: int, edition: str) -> list[Column]:
 FAMILIES = {"CAT048 (all editions)": CAT048, "CAT021 2.x (2.1-2.7)": CAT021_V2,
             "CAT021 0.2x (0.23-0.26)": CAT021_V0, "CAT034 (1.27-1.29)": CAT034}
 KIND_DTYPES = {"float": "float64 (NaN if absent)", "int": "Int32", "flag": "Int8", "count": "Int16",
-               "octal": "text (categorical)", "hex": "text (categorical)", "icao": "text (categorical)"}
+               "octal": "text (categorical)", "hex": "text (categorical)", "icao": "text (categorical)",
+               "codes": "text (categorical)"}
 
 
 def markdown_schema() -> str:
@@ -228,7 +245,14 @@ def markdown_schema() -> str:
              "and 0-9, trailing spaces stripped. All-zero codes (code 0 is no character) and all spaces are "
              "absent (`<NA>`); any other code outside that set shows as `?`, never as a letter. Beside it, "
              "`callsign_hex` (text, categorical) keeps the item's raw 48 bits as 12 upper-case hex digits "
-             "whenever the record carries the item.", ""]
+             "whenever the record carries the item.", "",
+             "Code lists (`codes` columns: `warning_codes`, I048/030) hold every code of a repetitive item "
+             "in wire order, as decimal numbers joined by `,` (`3`, `1,3`), `<NA>` when the record lacks the "
+             "item. A first code and a count would drop the codes after the first; text keeps them all and "
+             "filters in one line: `f.warning_codes.str.contains(r\"(?:^|,)3(?:,|$)\", na=False)` selects "
+             "the plots carrying code 3 (split plot), `f.warning_codes.str.split(\",\").explode()` gives one "
+             "row per code. Its cost is small: a presence check over the records (about 10 ms per million "
+             "records), then one reading per distinct item.", ""]
     for family, cols in FAMILIES.items():
         lines += [f"## {family}", "", "| column | unit | dtype | source | meaning |", "|---|---|---|---|---|"]
         for c in cols:

@@ -610,6 +610,9 @@ def _node_part(layout: Layout, assigned: _Assigned, n: int, where: str) -> _Part
         if layout.rep_bytes is None:  # zero elements, FX set on all but the last
             for k in range(int(count.max(initial=0)) - 1):
                 mat[:, size * k + size - 1] = (k < count - 1).astype(np.uint8)
+        if layout.path + _CODES in assigned and layout.rep_bytes is None and size == 1:  # one-byte codes
+            codes = assigned[layout.path + _CODES][1]
+            mat[:, :codes.shape[1]] |= (codes << 1).astype(np.uint8)
         return present, head + size * count, mat
     if isinstance(layout, Compound):
         subs = [_node_part(s[1], assigned, n, f"{where} {s[0]}") if s else None for s in layout.subs]
@@ -618,6 +621,44 @@ def _node_part(layout: Layout, assigned: _Assigned, n: int, where: str) -> _Part
         length, mat = _concat([fspec, *(s for s in subs if s)], n)
         return fspec[0], length, mat
     raise ValueError(f"{where}: explicit items cannot be encoded from columns (pass them in `extra`)")
+
+
+_CODES = "[codes]"  # suffix of an assigned path that holds a repetitive item's element values
+
+
+def _code_lists(name: str, node: Any, present: np.ndarray, vals: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Repetition counts and code matrix (rows padded with 0) of a "codes" column: text such as '3' or
+    '1,3' (or a list of ints), each code fitting the repeated element."""
+    if not isinstance(node, Repetitive) or node.rep_bytes is not None or node.inner.bits != 7:
+        raise ValueError(f"column {name!r}: its item is not a list of 7-bit codes with FX")
+    hi = (1 << node.inner.bits) - 1
+    lists: list[list[int]] = []
+    for i in np.flatnonzero(present):
+        v = vals[i]
+        parts = v.split(",") if isinstance(v, str) else list(v) if isinstance(v, list | tuple) else [v]
+        try:
+            codes = [_one_code(c) for c in parts]
+        except (TypeError, ValueError):
+            raise ValueError(f"column {name!r} row {i}: {v!r} is not a list of codes such as '3' or "
+                             f"'1,3'") from None
+        if not codes or any(not 0 <= c <= hi for c in codes):
+            raise ValueError(f"column {name!r} row {i}: {v!r}: each code must be 0-{hi}")
+        lists.append(codes)
+    counts = np.zeros(len(vals), np.int64)
+    mat = np.zeros((len(vals), max((len(c) for c in lists), default=0)), np.int64)
+    for i, codes in zip(np.flatnonzero(present), lists, strict=True):
+        counts[i] = len(codes)
+        mat[i, :len(codes)] = codes
+    return counts, mat
+
+
+def _one_code(value: Any) -> int:
+    """One code of a code list: '3', 3 or 3.0 (a column read back as numbers); ValueError otherwise."""
+    if isinstance(value, str):
+        return int(value.strip())
+    if isinstance(value, bool) or float(value) != int(value):
+        raise ValueError(value)
+    return int(value)
 
 
 def _assign(category: int, edition: str, data: Mapping[str, np.ndarray], n: int,
@@ -663,6 +704,11 @@ def _assign(category: int, edition: str, data: Mapping[str, np.ndarray], n: int,
         ts = targets[name]
         if not ts:
             raise ValueError(f"column {name!r} has no item in CAT{category:03d} edition {edition}")
+        if cols[name].kind == "codes":  # the repetitions themselves, beside their count
+            counts, codes = _code_lists(name, ts[0].node, present, vals)
+            put(name, ts[0], present, counts)
+            assigned[ts[0].item][ts[0].path + _CODES] = (present, codes)
+            continue
         if name in prefer:
             want = prefer[name].rsplit("/", 1)[-1].removeprefix("I")
             chosen = [t for t in ts if t.item == want]

@@ -74,4 +74,43 @@ def empty_column(col: Column, n: int):
     """An all-absent column of the right dtype, for fields the edition does not have."""
     if col.kind == "float":
         return np.full(n, np.nan)
+    if col.kind == "codes":
+        return pd.Categorical.from_codes(np.full(n, -1), categories=pd.Index([], dtype=object))
     return typed_column(col, np.full(n, -1, np.int64))
+
+
+def code_list_column(buf: np.ndarray, rec_off: np.ndarray, rel_off: np.ndarray, rel_len: np.ndarray
+                     ) -> pd.Categorical:
+    """Text of an FX-repetitive item of one-byte repetitions (7-bit code, FX): its codes in wire order
+    joined by ',' ('3', '1,3'); <NA> where the record lacks the item. Each distinct item is read once."""
+    n = rec_off.shape[0]
+    codes = np.full(n, -1, np.int64)
+    present = np.flatnonzero(rel_off != 0xFFFF)
+    labels: list[str] = []
+    if len(present):
+        lens = rel_len[present].astype(np.int64)
+        width = int(lens.max())
+        cols = np.arange(width)
+        inside = cols[None, :] < lens[:, None]
+        at = (rec_off[present] + rel_off[present].astype(np.int64))[:, None] + cols[None, :]
+        mat = np.zeros((len(present), max(width, 8)), np.uint8)
+        mat[:, :width] = np.where(inside, buf[np.where(inside, at, 0)], 0)
+        if width <= 8:  # up to 8 codes (nearly always): each item as one integer, hashed
+            inverse, uniq = pd.factorize(mat.view(">u8").ravel().astype(np.uint64))
+            labels = [_code_text(int(u).to_bytes(8, "big")) for u in uniq]
+        else:
+            rows = mat.view(np.dtype((np.void, mat.shape[1]))).ravel()
+            uniq, inverse = np.unique(rows, return_inverse=True)
+            labels = [_code_text(bytes(u)) for u in uniq]
+        codes[present] = np.asarray(inverse).ravel()
+    return pd.Categorical.from_codes(codes, categories=pd.Index(labels, dtype=object))
+
+
+def _code_text(item: bytes) -> str:
+    """'3,12' from the bytes of one item (each 7-bit code then FX; bytes after the last FX=0 are padding)."""
+    out = []
+    for b in item:
+        out.append(str(b >> 1))
+        if not b & 1:
+            break
+    return ",".join(out)

@@ -59,6 +59,7 @@ class Layout:
     out_names_wide: tuple[str, ...]
     item_frn: dict  # item id -> FRN (1-based)
     selected: tuple[str, ...] | None = None  # the columns compiled (None: all of the edition's)
+    code_slots: tuple[tuple[str, int], ...] = ()  # "codes" columns: (name, slot of their repetitive item)
 
     @property
     def P(self) -> np.ndarray:
@@ -196,7 +197,15 @@ def compile_layout(category: int, edition: str | None = None,
     names_float: list[str] = []
     names_int: list[str] = []
     names_wide: list[str] = []
+    code_slots: list[tuple[str, int]] = []
     for col in columns:
+        if col.kind == "codes":  # read from the item's bytes after the gather (reader), not by a field
+            p = _code_item(category, edition, col, item_frn, parts)
+            if p is not None:
+                if slot[p] < 0:
+                    slot[p] = max(slot) + 1 if max(slot) >= 0 else 0
+                code_slots.append((col.name, slot[p]))
+            continue
         is_float = col.kind == "float"
         out_kind = OUT_FLOAT if is_float else OUT_WIDE if col.kind == "icao" else OUT_INT
         names = {OUT_FLOAT: names_float, OUT_INT: names_int, OUT_WIDE: names_wide}[out_kind]
@@ -240,5 +249,20 @@ def compile_layout(category: int, edition: str | None = None,
         np.array(sub_parts or [-1], i32), np.array(slot, i32), n_frn, n_slots,
         np.array(f[0], i32), np.array(f[1], i32), np.array(f[2], i32), np.array(f[3], np.bool_),
         np.array(f[4], i32), np.array(f[5], i32), np.array(f[6], np.float64),
-        tuple(names_float), tuple(names_int), tuple(names_wide), item_frn, selected,
+        tuple(names_float), tuple(names_int), tuple(names_wide), item_frn, selected, tuple(code_slots),
     )
+
+
+def _code_item(category: int, edition: str, col: Column, item_frn: dict, parts: list) -> int | None:
+    """The part of a "codes" column's item: an FX-repetitive item of one-byte repetitions (7-bit code and
+    FX), such as I048/030; None when the edition has no such item."""
+    for item_id, _ in col.sources:
+        if item_id not in item_frn:
+            continue
+        p = item_frn[item_id] - 1
+        node = parts[p]
+        if node["kind"] != "repetitive" or node["rep_bytes"] is not None or node["item"].get("bits") != 7:
+            raise ValueError(f"CAT{category:03d} {edition} I{item_id}: column {col.name!r} needs repeated "
+                             f"7-bit codes with FX")
+        return p
+    return None

@@ -18,7 +18,7 @@ from . import kernel
 from .columns import FAMILIES
 from .containers import Segments, read_segments
 from .errors import REASONS, DecodeError, EditionWarning, UnreadableInput
-from .frames import empty_column, icao_columns, typed_column
+from .frames import code_list_column, empty_column, icao_columns, typed_column
 from .layout import Layout, compile_layout
 from .tables import available, resolve_edition
 from .timeline import assign_days, timestamp_index
@@ -292,13 +292,15 @@ def _extract(buf, scanned, lay: Layout):
     it = np.full((len(lay.out_names_int), n), -1, np.int32)
     wd = np.full((len(lay.out_names_wide), n), -1, np.int64)
     kernel.gather(buf, rec_off[:n], rel_off[:n], rel_len[:n], lay.F, lay.f_mult, fl, it, wd)
-    return fl, (it, wd), rec_off[:n].copy(), rec_blk[:n].copy()
+    texts = {name: code_list_column(buf, rec_off[:n], rel_off[:n, s], rel_len[:n, s])
+             for name, s in lay.code_slots}
+    return fl, (it, wd, texts), rec_off[:n].copy(), rec_blk[:n].copy()
 
 
 def _columns(lay: Layout, fl, ints, rec_off, rec_blk) -> dict[str, object]:
     """The typed columns of one category from kernel arrays, in schema order."""
     n = rec_off.shape[0]
-    it, wd = ints
+    it, wd, texts = ints
     where = {nm: (fl, i) for i, nm in enumerate(lay.out_names_float)}
     where |= {nm: (it, i) for i, nm in enumerate(lay.out_names_int)}
     where |= {nm: (wd, i) for i, nm in enumerate(lay.out_names_wide)}
@@ -308,6 +310,9 @@ def _columns(lay: Layout, fl, ints, rec_off, rec_blk) -> dict[str, object]:
             data[col.name] = empty_column(col, n)
             if col.kind == "icao":
                 data[f"{col.name}_hex"] = icao_columns(np.full(n, -1, np.int64))[1]
+            continue
+        if col.kind == "codes":
+            data[col.name] = texts[col.name]
             continue
         matrix, row = where[col.name]
         if col.kind == "icao":  # the raw identification beside its text (codes outside the ICAO set)

@@ -37,7 +37,9 @@ MAP = {
          ("I140", "geometric_height"): "geometric_height_ft", ("I090", "NUCr_or_NACv"): "nucr_nacv",
          ("I090", "NUCp_or_NIC"): "nucp_nic", ("I210", "VN"): "mops_version",
          ("I210", "LTT"): "link_technology", ("I070", "Mode3A"): "mode3a", ("I145", "FL"): "flight_level",
-         ("I170", "TId"): "callsign", ("I020", "ECAT"): "emitter_category"},
+         ("I170", "TId"): "callsign", ("I020", "ECAT"): "emitter_category",
+         ("I200", "ICF"): "icf", ("I200", "LNAV"): "lnav_not_engaged", ("I200", "PS"): "priority_status",
+         ("I200", "SS"): "surveillance_status"},
 }
 
 

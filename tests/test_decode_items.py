@@ -257,3 +257,71 @@ def test_identification_text_outside_icao_set(hex6, text, raw):
 def test_callsign_hex_absent_without_the_item():
     r = one048()
     assert pd.isna(r.callsign) and pd.isna(r.callsign_hex)
+
+
+def test_021_0_2x_position_accuracy_is_the_raw_four_bits():
+    # 0.23 I021/090 (FRN 7): AC=MN=DC=0, spare, PA bits 1100 -> 0x00 0x0C. The 0.2x specs print PA as a
+    # "signed quantity", which would read -4; a negative accuracy category means nothing, so msdc keeps the
+    # raw bits (README, Editions: the documented errata): 12, and 1111 -> 15
+    for edition in ("0.23", "0.24", "0.25", "0.26"):
+        for pa_bits, raw in ((0x0C, 12), (0x0F, 15), (0x08, 8)):
+            r = decode_bytes(block(21, fspec(1, 7) + bytes([0, 1, 0x00, pa_bits])),
+                             editions={21: edition}).frames[21].iloc[0]
+            assert r.fom_pa == raw, (edition, pa_bits)
+
+
+@pytest.mark.parametrize("edition", ["2.2", "2.5", "2.7"])
+def test_021_2x_target_status(edition):
+    # I021/200 (FRN 23): ICF=1 LNAV=0 ME=1 PS=101 (5, unlawful interference) SS=10 (2, temporary alert)
+    # -> 1 0 1 101 10 = 0xB6; then ICF=0 LNAV=1 ME=0 PS=001 (general emergency) SS=01 -> 0100 0101 = 0x45
+    f = decode_bytes(block(21, fspec(1, 23) + bytes([0, 1, 0xB6]), fspec(1, 23) + bytes([0, 1, 0x45])),
+                     editions={21: edition}).frames[21]
+    got = f[["icf", "lnav_not_engaged", "me", "priority_status", "surveillance_status"]].astype(int)
+    assert got.values.tolist() == [[1, 0, 1, 5, 2], [0, 1, 0, 1, 1]]
+    absent = decode_bytes(block(21, fspec(1) + bytes([0, 1])), editions={21: edition}).frames[21].iloc[0]
+    assert pd.isna(absent.priority_status) and pd.isna(absent.me)
+
+
+def test_021_2_1_target_status_has_no_military_emergency():
+    # 2.1 prints the third bit of I021/200 as spare: even set, it is no ME (<NA>); PS and SS as in 2.2
+    r = decode_bytes(block(21, fspec(1, 23) + bytes([0, 1, 0xB6])), editions={21: "2.1"}).frames[21].iloc[0]
+    assert (r.icf, r.lnav_not_engaged, r.priority_status, r.surveillance_status) == (1, 0, 5, 2)
+    assert pd.isna(r.me)
+
+
+@pytest.mark.parametrize("edition", ["0.23", "0.24", "0.25", "0.26"])
+def test_021_0_2x_target_status_is_one_code(edition):
+    # 0.2x I021/200 (FRN 21) is one 8-bit code, with 2.x PS's table: 1 general emergency, 4 no communications
+    f = decode_bytes(block(21, fspec(1, 21) + bytes([0, 1, 0x01]), fspec(1, 21) + bytes([0, 1, 0x04])),
+                     editions={21: edition}).frames[21]
+    assert f["priority_status"].tolist() == [1, 4]
+    assert "surveillance_status" not in f and "me" not in f
+
+
+@pytest.mark.parametrize("edition", ["1.27", "1.31", "1.32"])
+def test_048_warning_codes_every_code_in_wire_order(edition):
+    # I048/030 (FRN 16): 7-bit codes, each followed by FX. 0x06 = 0000011 0 -> [3] (split plot);
+    # 0x03 0x06 = 0000001 1, 0000011 0 -> [1, 3]; 0x19 0xFF 0x00 -> [12 (FX), 127 (FX), 0] in that order
+    rows = [one048((16, bytes([0x06])), editions={48: edition}),
+            one048((16, bytes([0x03, 0x06])), editions={48: edition}),
+            one048((16, bytes([0x19, 0xFF, 0x00])), editions={48: edition}),
+            one048(editions={48: edition})]
+    assert [r.warning_codes for r in rows[:3]] == ["3", "1,3", "12,127,0"]
+    assert pd.isna(rows[3].warning_codes)
+
+
+def test_048_warning_codes_do_not_shift_the_items_after_them():
+    # FRN 16 (030, two codes) then FRN 21 (230 COM=1 STAT=2 -> 001 010 00 = 0x28, second byte 0)
+    r = one048((16, bytes([0x03, 0x06])), (21, bytes([0x28, 0x00])))
+    assert r.warning_codes == "1,3" and (r.com, r.flight_status) == (1, 2)
+
+
+def test_048_warning_codes_of_many_records_of_any_length():
+    # one block: [3], [1, 3], [3, 0] (0x07 0x00: the trailing code 0 is not padding), none, and
+    # nine codes 1..9 (over 8 bytes): 0x03 0x05 ... 0x11 with FX, then 0x12 (code 9, FX 0)
+    nine = bytes([(c << 1) | 1 for c in range(1, 9)]) + bytes([9 << 1])
+    items = [bytes([0x06]), bytes([0x03, 0x06]), bytes([0x07, 0x00]), None, nine, bytes([0x06])]
+    recs = [cat048((1, I010), (2, I140), *([(16, it)] if it else [])) for it in items]
+    f = decode_bytes(block(48, *recs)).frames[48]
+    got = f["warning_codes"].astype(object).where(f["warning_codes"].notna(), None).tolist()
+    assert got == ["3", "1,3", "3,0", None, "1,2,3,4,5,6,7,8,9", "3"]

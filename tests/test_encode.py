@@ -331,7 +331,9 @@ def reference_record(category: int, edition: str, values: dict) -> bytes:
                 continue
             key = "/".join(path)
             if key in known:
-                if col.kind == "count":  # zero repetitions of the item's element (8 bytes in I048/250)
+                if col.kind == "codes":  # '1,3': the repetitions' codes (I048/030)
+                    by_item[item] = [int(c) for c in str(v).split(",")]  # type: ignore[assignment]
+                elif col.kind == "count":  # zero repetitions of the item's element (8 bytes in I048/250)
                     uap = load_table(category, edition)["uap"]
                     node = next(e["node"] for e in uap if e and e["id"] == item)
                     by_item[item] = [bytes(node["item"]["bits"] // 8)] * int(v)  # type: ignore[assignment]
@@ -343,7 +345,8 @@ def reference_record(category: int, edition: str, values: dict) -> bytes:
 
 
 def _sample(kind: str, bits_lsb: float) -> object:
-    samples = {"int": 1, "flag": 1, "count": 2, "octal": "7106", "icao": "DLH65A", "hex": "3C660C"}
+    samples = {"int": 1, "flag": 1, "count": 2, "octal": "7106", "icao": "DLH65A", "hex": "3C660C",
+               "codes": "1,3"}
     return samples.get(kind, bits_lsb)
 
 
@@ -368,8 +371,9 @@ def test_every_edition_encodes_every_mapped_column(category: int, edition: str) 
         lsb = _field_lsb(items[src[0]]["node"], src[1].split("/") if src[1] else [])
         values[col.name] = _sample(col.kind, lsb * col.scale)
     # columns whose item/field is not in this edition (0.23-0.25 have no I021/070 or signal amplitude;
-    # I021/151 is a group (RE, TAS) in 2.x while the column addresses a bare element)
-    assert set(unmapped) <= {"mode3a", "signal_amplitude", "true_airspeed_kt"}
+    # I021/151 is a group (RE, TAS) in 2.x while the column addresses a bare element; I021/200 ME is a spare
+    # bit in 2.1)
+    assert set(unmapped) <= {"mode3a", "signal_amplitude", "true_airspeed_kt", "me"}
     for name in unmapped:
         with pytest.raises(ValueError, match=name):
             encode_record(category, {name: 1.0}, edition)
@@ -481,3 +485,15 @@ def test_conformance_cat048_record() -> None:
     assert len(rebuilt) == len(raw)
     assert rebuilt[:start + 1] == raw[:start + 1] and rebuilt[start + 1:start + 9] == bytes(8)
     assert rebuilt[start + 9:-1] == raw[start + 9:-1] and rebuilt[-1:] == b"\x00"
+
+
+def test_warning_codes_are_written_as_their_repetitions():
+    # I048/030 (FRN 16): '1,3' -> 0000001 1, 0000011 0 = 0x03 0x06; a column read back as numbers (3.0) is
+    # the one code 3 -> 0x06. FSPEC: FRN 1 and 16 -> 1000 0001, 0000 0001, 0100 0000 = 0x81 0x01 0x40
+    assert encode_record(48, {"sac": 1, "sic": 2, "warning_codes": "1,3"}) == bytes([0x81, 0x01, 0x40, 1, 2,
+                                                                                     0x03, 0x06])
+    assert encode_record(48, {"sac": 1, "sic": 2, "warning_codes": 3.0}).endswith(bytes([0x40, 1, 2, 0x06]))
+    for bad, why in (("", "not a list of codes"), ("1,,3", "not a list of codes"), ("128", "0-127"),
+                     (2.5, "not a list of codes"), ("3;4", "not a list of codes")):
+        with pytest.raises(ValueError, match=f"warning_codes.*{why}"):
+            encode_record(48, {"sac": 1, "warning_codes": bad})

@@ -82,3 +82,44 @@ def test_unpinned_0_23_names_its_edition_and_decodes_no_wrong_value():
     assert rec.edition_fits == {21: ("0.23",)}
     assert sorted(rec.errors.offset) == sorted(pinned.frames[21].offset - 3)  # one record per block
     assert rec.errors.length.sum() == rec.size_bytes
+
+
+def _fspec_has(data: bytes, offset: int, frn: int) -> bool:
+    """Whether the record at offset announces FRN frn, read from its FSPEC bytes (independent of msdc)."""
+    octet, bit = divmod(frn - 1, 7)
+    for k in range(octet):
+        if not data[offset + k] & 1:  # the FSPEC ends before that octet
+            return False
+    return bool(data[offset + octet] & (0x80 >> bit))
+
+
+def test_target_status_emergency_of_eth501():
+    """I021/200 (0.23 FRN 21) is in 5 records only, all of ETH501 (04004B) at FL380 around 22:23, each
+    'General emergency' (code 1): found by the radar audit's own parser (findings F3); the presence is
+    checked here from the FSPEC bytes of every record."""
+    path = REAL / "adsb_v023_160510-lebl-220001.ast"
+    f = asterix.read(path, editions={21: "0.23"}).frames[21]
+    data = path.read_bytes()
+    announced = [o for o in f["offset"].tolist() if _fspec_has(data, o, 21)]
+    assert announced == [1174092, 1181592, 1183178, 1183997, 1184903]
+    present = f[f["priority_status"].notna()]
+    assert present["offset"].tolist() == announced
+    assert present["priority_status"].tolist() == [1] * 5
+    assert set(present["callsign"]) == {"ETH501"} and set(present["address"]) == {"04004B"}
+
+
+def test_warning_codes_of_the_radar_plots():
+    """I048/030 (FRN 16) is in 66 plots: 65 carry the one code 3 (split plot), one the code 12 (the radar
+    audit's own parser, findings F3). Presence is checked here from each record's FSPEC bytes, and the
+    code-12 record by hand: FSPEC ff f7 42 (FRN 1-11, 13, 14, 16, 21), then 010 14 81, 140 38 6b ef,
+    020 a0, 040 08 85 78 dd, 070 0a 9b, 090 05 79, 130 e0 + 3 bytes, 220 40 70 ea, 240 (6 bytes),
+    250 03 + 3 x 8 bytes, 161 07 89, 200 08 75 7a d9, 170 46, then 030 = 0x18: code 0x18 >> 1 = 12, FX 0."""
+    path = REAL / "230502-est-080001_BCN_60MN_08_09.ast"
+    f = asterix.read(path).frames[48]
+    data = path.read_bytes()
+    announced = [o for o in f["offset"].tolist() if _fspec_has(data, o, 16)]
+    assert len(announced) == 66
+    assert f.loc[f["warning_codes"].notna(), "offset"].tolist() == announced
+    assert f["warning_codes"].value_counts().to_dict() == {"3": 65, "12": 1}
+    assert data[54962:54965] == bytes([0xFF, 0xF7, 0x42])
+    assert f.loc[f["offset"] == 54962, "warning_codes"].tolist() == ["12"]
