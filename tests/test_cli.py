@@ -229,4 +229,16 @@ def test_correlate_names_the_sensors_and_pairs(tmp_path, capsys):
     # one radar: no radar pair to correlate, said plainly
     assert main(["correlate", str(RADAR), str(ADSB), "--sensors", str(SENSORS), "--all",
                  "--pairs", "radar-radar"]) == 1
-    assert "seen by two radars" in capsys.readouterr().err
+    assert "no aircraft is seen by two radars" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("who", [["--callsign", "MAS72"], ["--address", "750312"]])
+def test_correlate_radar_radar_names_the_one_radar(tmp_path, capsys, who):
+    """The fixtures hold one radar (048:25/201, fixtures/sensors.toml): MAS72 is NOT seen by two radars, and
+    the message names it and the radar it was seen by; nothing is written."""
+    out = tmp_path / "rr.json"
+    assert main(["correlate", str(RADAR), str(ADSB), "--sensors", str(SENSORS), *who,
+                 "--pairs", "radar-radar", "--json", str(out)]) == 1
+    expected = "MAS72 (address 750312) is not seen by two radars (only by 048:25/201) (--pairs radar-radar)"
+    assert expected in capsys.readouterr().err
+    assert not out.exists()

@@ -312,6 +312,7 @@ class _Columns:
         self.tod = meas["time_of_day"].to_numpy(float)
         self.lat, self.lon = meas["latitude"].to_numpy(float), meas["longitude"].to_numpy(float)
         self.is_adsb = (meas["sensor_kind"] == "adsb").to_numpy(bool)
+        self.is_radar = (meas["sensor_kind"] == "radar").to_numpy(bool)
         sid = meas["sensor_id"]
         if isinstance(sid.dtype, pd.CategoricalDtype):  # grouped in category order, as groupby does
             self.sensor = sid.cat.codes.to_numpy()
@@ -555,6 +556,21 @@ def correlate(meas: pd.DataFrame, *, callsign: str | None = None, address: str |
         if not all_aircraft and found and all(f is not None for f in found):
             raise found[0]
     if not paired:
-        what = "the aircraft is" if not all_aircraft else "no aircraft is"
-        raise NoSuchAircraft("a sensor pair", ["radar"], [], f"{what} seen by two radars (--pairs {pairs})")
+        seen_by = None if all_aircraft else (callsign_label, address_label, sorted(cols.by_sensor(
+            np.flatnonzero(cols.is_radar))))
+        raise NoSuchAircraft("a sensor pair", ["radar"], [], _unpaired_message(pairs, seen_by))
     return run
+
+
+def _unpaired_message(pairs: str, aircraft: tuple[str, str, list[str]] | None) -> str:
+    """Why no sensor pair was found: for every aircraft (``aircraft`` None), or for the one asked for
+    (call sign, address, the radars that saw it)."""
+    wanted = {"radar-radar": "two radars", "radar-adsb": "radar and ADS-B"}.get(
+        pairs, "two radars nor by radar and ADS-B")
+    if aircraft is None:
+        wanted = wanted.replace(" nor ", " or ")
+        return f"no aircraft is seen by {wanted} (--pairs {pairs})"
+    callsign, address, radars = aircraft
+    who = " ".join(part for part in (callsign, f"(address {address})" if address else "") if part)
+    seen = f"only by {', '.join(radars)}" if radars else "by no radar"
+    return f"{who or 'the aircraft'} is not seen by {wanted} ({seen}) (--pairs {pairs})"
