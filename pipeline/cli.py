@@ -496,11 +496,17 @@ def cmd_conflicts(args) -> int:
 
 
 def _run_job(name: str, validate, job, options, progress: Progress):
-    """Validate (warnings first), run the job, then print its later warnings and the skipped blocks."""
+    """Validate (warnings first), run the job, then print its later warnings and the skipped blocks. A job
+    that fails prints the warnings it collected before its error: one may name the cause (a first day of
+    plots before midnight explains "never overlap in time")."""
     checked = validate(options)
     _warn(name, checked.warnings)
     seen = len(checked.warnings)
-    result = job(options, progress=progress, checked=checked, command=" ".join(sys.argv[1:]) or name)
+    try:
+        result = job(options, progress=progress, checked=checked, command=" ".join(sys.argv[1:]) or name)
+    except (CliError, jobs.OptionError, jobs.JobError, asterix_errors.AsterixError, OSError):
+        _warn(name, checked.warnings[seen:])  # main() prints the error after them
+        raise
     _warn(name, checked.warnings[seen:])
     _report_skipped(result.loaded.errors)
     return result

@@ -253,7 +253,7 @@ def test_correlate_names_the_sensors_and_pairs(tmp_path, capsys):
     # one radar: no radar pair to correlate, said plainly
     assert main(["correlate", str(RADAR), str(ADSB), "--sensors", str(SENSORS), "--all",
                  "--pairs", "radar-radar"]) == 1
-    assert "seen by two radars" in capsys.readouterr().err
+    assert "no aircraft is seen by two radars" in capsys.readouterr().err
 
 
 def test_decode_says_which_edition_auto_chose(tmp_path, capsys):
@@ -263,3 +263,34 @@ def test_decode_says_which_edition_auto_chose(tmp_path, capsys):
     err = capsys.readouterr().err
     assert f"{ADSB}: CAT021 --edition auto chose 2.7 (" in err
     assert "none needed telling apart" in err or "apart:" in err
+
+
+@pytest.mark.parametrize("who", [["--callsign", "MAS72"], ["--address", "750312"]])
+def test_correlate_radar_radar_names_the_one_radar(tmp_path, capsys, who):
+    """The fixtures hold one radar (048:25/201, fixtures/sensors.toml): MAS72 is NOT seen by two radars, and
+    the message names it and the radar it was seen by; nothing is written."""
+    out = tmp_path / "rr.json"
+    assert main(["correlate", str(RADAR), str(ADSB), "--sensors", str(SENSORS), *who,
+                 "--pairs", "radar-radar", "--json", str(out)]) == 1
+    expected = "MAS72 (address 750312) is not seen by two radars (only by 048:25/201) (--pairs radar-radar)"
+    assert expected in capsys.readouterr().err
+    assert not out.exists()
+
+
+def test_failing_job_prints_the_warning_that_explains_it(tmp_path, capsys):
+    """Two plots stamped 23:59:59 and 23:59:59.5 ahead of the fixtures' radar recording (08:00-09:00): with
+    --date 2019-03-01 the rest fall on 2019-03-02, an hour's radar a day after the ADS-B, so correlate fails
+    with "never overlap in time"; the warning that names the fix (--date 2019-02-28) comes before the error,
+    and nothing is written."""
+    early = asterix.read(str(RADAR)).frames[48].head(2).copy()
+    early["time_of_day"] = [86399.0, 86399.5]
+    radar = tmp_path / "early.ast"
+    radar.write_bytes(encode_frame(48, early) + RADAR.read_bytes())
+    out = tmp_path / "e.json"
+    assert main(["correlate", str(radar), str(ADSB), "--sensors", str(SENSORS), "--date", "2019-03-01",
+                 "--callsign", "MAS72", "--json", str(out)]) == 1
+    err = capsys.readouterr().err
+    warning, error = err.find("early.ast: its first 2 report(s)"), err.find("never overlap in time")
+    assert 0 <= warning < error
+    assert "give --date 2019-02-28" in err[warning:error]
+    assert not out.exists()

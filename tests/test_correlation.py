@@ -11,6 +11,7 @@ from pipeline.correlate.correlation import (
     NoOverlap,
     NoSuchAircraft,
     correlate,
+    lag_signal,
     ncc,
     peak_lag,
     pearson_by_lag,
@@ -18,6 +19,7 @@ from pipeline.correlate.correlation import (
     separation_stats,
 )
 from pipeline.correlate.results import LAG_COLUMNS, SLOT_COLUMNS, SUMMARY_KEYS
+from pipeline.report.summary import window_note
 
 
 def test_ncc_hand_computed_three_elements():
@@ -321,3 +323,74 @@ def test_too_many_slots_is_one_line_naming_slot_and_writes_nothing(monkeypatch, 
     err = capsys.readouterr().err.strip().splitlines()[-1]  # after the progress stages
     assert status == 2 and not out.exists() and list(tmp_path.iterdir()) == []
     assert err.startswith("msdc correlate: --slot 0.5: ") and "more than 10 slots" in err
+
+
+M_PER_DEG = 111_195.0  # metres per degree of a great circle on the 6,371 km sphere (flat enough over 30 min)
+
+
+def flight(t, turning: bool):
+    """Latitude and longitude at times t (s) of an aircraft at 230 m/s near the equator: a straight leg at
+    heading 045, or one whose heading swings +-60 deg about 045 with a 900 s period (integrated by hand)."""
+    v, t0 = 230.0, 36000.0
+    if turning:  # heading h(t) = 45 + 60 sin(w s); position = integral of v (sin h, cos h), by fine sums
+        fine = np.arange(t0, t.max() + 1.0, 0.5)
+        h = np.radians(45.0 + 60.0 * np.sin(2 * np.pi * (fine - t0) / 900.0))
+        east, north = np.cumsum(v * np.sin(h)) * 0.5, np.cumsum(v * np.cos(h)) * 0.5
+        east, north = np.interp(t, fine, east), np.interp(t, fine, north)
+    else:
+        east = north = v * math.sqrt(0.5) * (t - t0)
+    return 1.0 + north / M_PER_DEG, 103.0 + east / M_PER_DEG
+
+
+def noisy_pair(seed: int, turning: bool, late_s: float = 30.0):
+    """Radar plots every 4.7 s with 150 m noise per axis, reporting the position of late_s earlier; ADS-B
+    every 1 s with 10 m noise; 30 min."""
+    rng = np.random.default_rng(seed)
+    tr, ta = np.arange(36000.0, 37800.0, 4.7), np.arange(36000.0, 37800.0, 1.0)
+    lat_r, lon_r = flight(tr - late_s, turning)
+    lat_a, lon_a = flight(ta, turning)
+    radar = frame("radar", tr, lat_r + rng.normal(0, 150.0, tr.size) / M_PER_DEG,
+                  lon_r + rng.normal(0, 150.0, tr.size) / M_PER_DEG)
+    adsb = frame("adsb", ta, lat_a + rng.normal(0, 10.0, ta.size) / M_PER_DEG,
+                 lon_a + rng.normal(0, 10.0, ta.size) / M_PER_DEG)
+    return radar, adsb
+
+
+@pytest.mark.parametrize("seed", range(5))
+def test_pearson_lag_is_recovered_on_a_turning_leg(seed):
+    """Radar 30 s late = +3 slots of 10 s; the heading swings +-60 deg, so the series are far from straight
+    lines and the lag is identified on both axes."""
+    (w,) = corr(*noisy_pair(seed, turning=True), address="750123").windows
+    s = w.summary
+    assert (s["pearson_peak_lag_lat"], s["pearson_peak_lag_lon"]) == (3, 3)
+    assert (s["pearson_lag_unidentified_lat"], s["pearson_lag_unidentified_lon"]) == (False, False)
+
+
+@pytest.mark.parametrize("seed", range(5))
+def test_pearson_lag_is_withheld_on_a_straight_leg(seed):
+    """The same radar delay on a straight constant-speed leg: a delayed line is the line plus a constant,
+    which Pearson removes, so the curve is flat within noise and its peak says nothing: no lag (null), a
+    flag and a note."""
+    (w,) = corr(*noisy_pair(seed, turning=False), address="750123").windows
+    s = w.summary
+    assert (s["pearson_peak_lag_lat"], s["pearson_peak_lag_lon"]) == (None, None)
+    assert (s["pearson_lag_unidentified_lat"], s["pearson_lag_unidentified_lon"]) == (True, True)
+    assert s["pearson_peak_at_limit_lat"] is False
+    note = window_note(s)
+    assert "Pearson latitude and longitude peak lag not identified" in note
+
+
+def test_lag_signal_of_a_line_is_zero_and_its_noise_is_the_added_noise():
+    """A straight, evenly stepped reference has no manoeuvre energy (its steps are all equal); white noise
+    of sigma 2.0 added to the radar side is read back by the third differences (20 sigma^2) within 5 %."""
+    rng = np.random.default_rng(7)
+    y = 5.0 + 0.25 * np.arange(20000)
+    signal, sigma = lag_signal(y + rng.normal(0.0, 2.0, y.size), y)
+    assert signal == 0.0
+    assert sigma == pytest.approx(2.0, rel=0.05)
+    # a parabola: steps 2 a i + const, so E1 = sum (2 a (i - mean i))^2 over the N - 1 steps
+    n, a = 50, 0.3
+    par = a * np.arange(n, dtype=float) ** 2
+    steps = np.arange(n - 1, dtype=float)
+    expected = math.sqrt(np.sum((2 * a * (steps - steps.mean())) ** 2))
+    assert lag_signal(par, par)[0] == pytest.approx(expected, rel=1e-9)

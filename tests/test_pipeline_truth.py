@@ -396,8 +396,10 @@ def test_lag_tables_follow_the_formulas(late_radar):
 
 def test_pearson_peaks_at_zero_where_the_track_curves(quiet):
     """Pearson (mean removed) peaks at lag 0 for lat and lon in every clean window of >= 30 slots whose
-    track turns by >= 30 deg, and r(0) > 0.99 along every axis the aircraft moves along by >= 5 km RMS
-    (expected r(0) ~ 1 - (sigma_slot / sigma_motion)^2 with sigma_slot <~ 400 m: >= 0.9936)."""
+    track turns by >= 30 deg, where the lag is identified (an axis whose velocity barely changes in the
+    turn may leave it unidentified: null, never another lag), and r(0) > 0.99 along every axis the aircraft
+    moves along by >= 5 km RMS (expected r(0) ~ 1 - (sigma_slot / sigma_motion)^2 with sigma_slot <~ 400 m:
+    >= 0.9936)."""
     checked_lag = checked_r0 = 0
     for case in quiet:
         for res in case.results():
@@ -406,8 +408,12 @@ def test_pearson_peaks_at_zero_where_the_track_curves(quiet):
                 continue
             track = case.track(w["callsign"], "radar", w["start_tod"], w["end_tod"])
             if turn_deg(track) >= 30.0:
-                assert w["pearson_peak_lag_lat"] == 0 and w["pearson_peak_lag_lon"] == 0, w
-                checked_lag += 1
+                for ax in ("lat", "lon"):
+                    if w[f"pearson_lag_unidentified_{ax}"]:
+                        assert w[f"pearson_peak_lag_{ax}"] is None, w
+                    else:
+                        assert w[f"pearson_peak_lag_{ax}"] == 0, w
+                        checked_lag += 1
             centre = case.sim.aircraft_by_callsign(w["callsign"]).truth(res.slots["time_of_day"] + SLOT_S / 2)
             motion_m = {"lat": np.std(centre.latitude) * math.radians(1) * geo.WGS84_A_M,
                         "lon": np.std(centre.longitude) * math.radians(1) * geo.WGS84_A_M
@@ -416,7 +422,7 @@ def test_pearson_peaks_at_zero_where_the_track_curves(quiet):
                 if m >= 5000.0:
                     assert w[f"pearson0_{ax}"] > 0.99, (w, ax, m)
                     checked_r0 += 1
-    assert checked_lag >= 10 and checked_r0 >= 30
+    assert checked_lag >= 20 and checked_r0 >= 30  # axes with the lag identified, of 16 turning windows
 
 
 def test_pearson_lag_is_not_identifiable_on_straight_legs(quiet):

@@ -53,7 +53,8 @@ TABLE_BUDGET_BYTES = 512 * 2**20
 MAX_SLOTS = TABLE_BUDGET_BYTES // (SLOT_ROW_BYTES + 2 * LAG_ROW_BYTES)  # 3,314,017 over all windows of a run
 
 __all__ = ["MAX_SLOTS", "PAIRS", "PEARSON_MIN_OVERLAP", "NoOverlap", "NoSuchAircraft", "TooManySlots",
-           "correlate", "ncc", "pearson_by_lag", "pearson_max_lag", "pearson_peak", "pearson_search_limit",
+           "correlate", "lag_identifiable", "lag_signal", "ncc", "pearson_by_lag", "pearson_max_lag",
+           "pearson_peak", "pearson_search_limit",
            "peak_lag", "separation_stats", "separation_summary"]
 
 
@@ -201,6 +202,67 @@ def pearson_peak(lags: np.ndarray, r: np.ndarray, n_slots: int) -> tuple[int | N
     return lag, False
 
 
+# A lag is told from its neighbours when a one-slot error costs more than the noise can hide (README
+# Correlation): sqrt(E1) >= 2 z sigma with z = 2 (two standard deviations), see lag_identifiable
+LAG_SIGNAL_Z = 2.0
+# a slot covering a share f of its interval has its mean time (1 - f) / 2 slot off the centre: at 3/4 an
+# eighth of a slot (310 m at 250 m/s and 10 s slots, about the radar's per-slot noise)
+FULL_SLOT_SHARE = 0.75
+_MAD_TO_SIGMA = 1.4826  # a normal variable's standard deviation from its median absolute value
+
+
+def _noise_sigma(v: np.ndarray) -> float:
+    """Per-slot white-noise standard deviation of a smooth series, from its third differences (a track's
+    constant velocity and acceleration cancel in them; white noise gives variance 20 sigma^2), by their
+    median absolute value so that a few jumps or turns do not inflate it."""
+    d3 = np.diff(v, 3)
+    return _MAD_TO_SIGMA * float(np.median(np.abs(d3))) / math.sqrt(20.0) if d3.size else math.nan
+
+
+def lag_signal(x, y, y_count=None) -> tuple[float, float]:
+    """A window's manoeuvre signal sqrt(E1) and noise sigma for the Pearson lag, in the series' units.
+
+    E1 = sum (dy - mean dy)^2 over the reference series' slot-to-slot steps dy between two full slots,
+    less their expected noise 2 sigma_y^2 a step: what a one-slot lag error adds to the squared mismatch
+    of the two series (zero on a straight, constant-speed leg, where a time shift is a constant offset).
+    A slot with fewer than FULL_SLOT_SHARE of the median reports (``y_count``; 0: filled) covers part of
+    its interval, so its mean sits off the centre by more than an eighth of a slot of flight, a step no
+    radar repeats: its steps are left out. sigma: the per-slot noise of x - y (_noise_sigma; the common
+    motion cancels)."""
+    x, y = _pair(x, y)
+    if x.size < 4:
+        return math.nan, math.nan
+    count = np.ones(y.size) if y_count is None else np.asarray(y_count, dtype=float)
+    reported = count[count > 0]
+    full = count >= FULL_SLOT_SHARE * np.median(reported) if reported.size else np.zeros(y.size, bool)
+    dy = np.diff(y)[full[1:] & full[:-1]]
+    if dy.size < 2:
+        return math.nan, math.nan
+    energy = float(np.sum((dy - dy.mean()) ** 2)) - 2.0 * dy.size * _noise_sigma(y[full]) ** 2
+    return math.sqrt(max(energy, 0.0)), _noise_sigma(x - y)
+
+
+def lag_identifiable(x, y, lag: int, y_count=None) -> bool:
+    """Whether the Pearson peak ``lag`` of radar x against reference y can be told from its neighbours,
+    judged on the manoeuvre in the slots that overlap at that lag (x[i] with y[i - lag]) against the
+    noise of all slots.
+
+    Moving the lag one slot from the true one adds E1 (lag_signal) to the expected squared mismatch, while
+    the noise moves that difference by 2 sigma sqrt(E1) (one standard deviation): the lag is identified
+    when E1 >= LAG_SIGNAL_Z * 2 sigma sqrt(E1), i.e. sqrt(E1) >= 2 LAG_SIGNAL_Z sigma. Lags further off
+    cost more (about k^2 E1 at k slots), so the neighbours decide. A peak whose overlap leaves the
+    manoeuvre out has no E1 there and is no estimate either."""
+    x, y = _pair(x, y)
+    n = x.size
+    count = np.ones(n) if y_count is None else np.asarray(y_count, dtype=float)
+    xs, ys = (slice(lag, n), slice(0, n - lag)) if lag >= 0 else (slice(0, n + lag), slice(-lag, n))
+    signal, _ = lag_signal(x[xs], y[ys], count[ys])
+    sigma = _noise_sigma(x - y)  # the sensors' noise, from every slot (a short overlap's estimate varies)
+    if not math.isfinite(signal) or not math.isfinite(sigma):
+        return False
+    return signal > 0.0 and signal >= 2.0 * LAG_SIGNAL_Z * sigma
+
+
 def separation_stats(sep_m) -> dict[str, float]:
     """Mean, RMS, 95th percentile (linear interpolation) and maximum of separations in metres."""
     sep_m = np.asarray(sep_m, dtype=float)
@@ -273,6 +335,11 @@ def _window_result(ac: tuple[str, str], number: int, start_s: float, end_s: floa
     _, p_lat = pearson_by_lag(rs["latitude"], as_["latitude"], PEARSON_MIN_OVERLAP)
     _, p_lon = pearson_by_lag(x_lon, y_lon, PEARSON_MIN_OVERLAP)
     (peak_lat, limit_lat), (peak_lon, limit_lon) = (pearson_peak(lags, p, len(slots)) for p in (p_lat, p_lon))
+    # a straight, constant-speed window leaves the Pearson curve flat within noise: no lag estimate
+    flat_lat = peak_lat is not None and not lag_identifiable(rs["latitude"], as_["latitude"], peak_lat,
+                                                             as_["count"])
+    flat_lon = peak_lon is not None and not lag_identifiable(x_lon, y_lon, peak_lon, as_["count"])
+    peak_lat, peak_lon = (None if flat_lat else peak_lat), (None if flat_lon else peak_lon)
     lag_frame = pd.DataFrame(dict(zip(LAG_COLUMNS, [lags, ncc_lat, ncc_lon, p_lat, p_lon], strict=True)))
     zero = len(slots) - 1
     summary = {
@@ -289,6 +356,7 @@ def _window_result(ac: tuple[str, str], number: int, start_s: float, end_s: floa
         "pearson0_lat": float(p_lat[zero]), "pearson0_lon": float(p_lon[zero]),
         "pearson_peak_lag_lat": peak_lat, "pearson_peak_lag_lon": peak_lon,
         "pearson_peak_at_limit_lat": limit_lat, "pearson_peak_at_limit_lon": limit_lon,
+        "pearson_lag_unidentified_lat": flat_lat, "pearson_lag_unidentified_lon": flat_lon,
         **separation_summary(slots["sep_m"].to_numpy(), rs["filled"], as_["filled"]),
     }
     summary = {k: _none_if_nan(summary[k]) for k in SUMMARY_KEYS}
@@ -312,6 +380,7 @@ class _Columns:
         self.tod = meas["time_of_day"].to_numpy(float)
         self.lat, self.lon = meas["latitude"].to_numpy(float), meas["longitude"].to_numpy(float)
         self.is_adsb = (meas["sensor_kind"] == "adsb").to_numpy(bool)
+        self.is_radar = (meas["sensor_kind"] == "radar").to_numpy(bool)
         sid = meas["sensor_id"]
         if isinstance(sid.dtype, pd.CategoricalDtype):  # grouped in category order, as groupby does
             self.sensor = sid.cat.codes.to_numpy()
@@ -555,6 +624,21 @@ def correlate(meas: pd.DataFrame, *, callsign: str | None = None, address: str |
         if not all_aircraft and found and all(f is not None for f in found):
             raise found[0]
     if not paired:
-        what = "the aircraft is" if not all_aircraft else "no aircraft is"
-        raise NoSuchAircraft("a sensor pair", ["radar"], [], f"{what} seen by two radars (--pairs {pairs})")
+        seen_by = None if all_aircraft else (callsign_label, address_label, sorted(cols.by_sensor(
+            np.flatnonzero(cols.is_radar))))
+        raise NoSuchAircraft("a sensor pair", ["radar"], [], _unpaired_message(pairs, seen_by))
     return run
+
+
+def _unpaired_message(pairs: str, aircraft: tuple[str, str, list[str]] | None) -> str:
+    """Why no sensor pair was found: for every aircraft (``aircraft`` None), or for the one asked for
+    (call sign, address, the radars that saw it)."""
+    wanted = {"radar-radar": "two radars", "radar-adsb": "radar and ADS-B"}.get(
+        pairs, "two radars nor by radar and ADS-B")
+    if aircraft is None:
+        wanted = wanted.replace(" nor ", " or ")
+        return f"no aircraft is seen by {wanted} (--pairs {pairs})"
+    callsign, address, radars = aircraft
+    who = " ".join(part for part in (callsign, f"(address {address})" if address else "") if part)
+    seen = f"only by {', '.join(radars)}" if radars else "by no radar"
+    return f"{who or 'the aircraft'} is not seen by {wanted} ({seen}) (--pairs {pairs})"

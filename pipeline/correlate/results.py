@@ -31,6 +31,7 @@ SUMMARY_KEYS = [
     "ncc0_lat", "ncc0_lon", "ncc_peak_lag_lat", "ncc_peak_lag_lon",
     "pearson0_lat", "pearson0_lon", "pearson_peak_lag_lat", "pearson_peak_lag_lon",
     "pearson_peak_at_limit_lat", "pearson_peak_at_limit_lon",
+    "pearson_lag_unidentified_lat", "pearson_lag_unidentified_lon",
     "sep_mean_m", "sep_median_m", "sep_rms_m", "sep_p95_m", "sep_max_m", "sep_slots", "sep_rms_all_m",
 ]
 

@@ -90,10 +90,12 @@ SUMMARY_BLOCKS: list[tuple[str, list[str]]] = [
       "radar_before", "radar_after", "adsb_before", "adsb_after", "radar_duplicates", "adsb_duplicates",
       "adsb_jumps", "radar_filled_slots", "adsb_filled_slots"]),
     (f"Coefficients (thesis table 6.2: r(0) by NCC; Pearson where at least {PEARSON_MIN_OVERLAP} slots "
-     "overlap, its peak searched over |lag| <= N/2; a peak at that limit is no lag estimate)",
+     "overlap, its peak searched over |lag| <= N/2; a peak at that limit, or not identified on a "
+     "near-straight leg, is no lag estimate)",
      ["callsign", "window", "sensors", "start", "end", "ncc0_lat", "ncc0_lon", "ncc_peak_lag_lat",
       "ncc_peak_lag_lon", "pearson0_lat", "pearson0_lon", "pearson_peak_lag_lat", "pearson_peak_lag_lon",
-      "pearson_peak_at_limit_lat", "pearson_peak_at_limit_lon"]),
+      "pearson_peak_at_limit_lat", "pearson_peak_at_limit_lon", "pearson_lag_unidentified_lat",
+      "pearson_lag_unidentified_lon"]),
     ("Separation between slotted radar and ADS-B positions (m) over the slots where both reported "
      "(sep slots; a filled slot holds an earlier position); sep rms all m: every slot",
      ["callsign", "window", "sensors", "start", "end", "sep_mean_m", "sep_median_m", "sep_rms_m", "sep_p95_m",

@@ -374,13 +374,15 @@ def lag_figure(window: WindowResult, path: str | os.PathLike[str]) -> Path:
             ax.plot(x[inside], y[inside], color=color, ls=ls, lw=1.4, label=label, zorder=3)
             shown.append(y[inside])
             k, at_limit = figure_peak(x, y, measure)
+            flat = measure == "pearson" and window.summary.get(f"pearson_lag_unidentified_{axis}") is True
             if k is not None and inside[k]:
                 # the label on the side towards the middle, so a peak at the edge keeps it inside the axes
                 right = x[k] <= 0
-                if at_limit:  # no lag estimate: a hollow mark, said in words
+                if at_limit or flat:  # no lag estimate: a hollow mark, said in words
                     ax.plot(x[k], y[k], marker="o", ms=9, mfc="white", mec=color, mew=1.4, ls="none",
                             zorder=4, clip_on=False)
-                    text = f"{int(x[k]):+d}: search limit, no estimate"
+                    why = "search limit" if at_limit else "straight leg, not identified"
+                    text = f"{int(x[k]):+d}: {why}, no estimate"
                 else:
                     ax.plot(x[k], y[k], marker="*", ms=12, color=color, mec="black", mew=0.6, ls="none",
                             zorder=4, clip_on=False)

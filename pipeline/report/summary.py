@@ -165,8 +165,9 @@ SEP_DOMINATED_RATIO = 3.0  # sep_rms above this many times the median separation
 def window_note(summary: Mapping[str, Any]) -> str | None:
     """Plain-language notes on a window, "; "-joined, else None: its RMS separation is dominated by a few
     slots (``sep_rms_m > SEP_DOMINATED_RATIO * sep_median_m``; the ADS-B jumps found, the usual cause, and
-    the option that removes them), a Pearson peak at the search limit (no lag estimate), or Pearson peak
-    lags read in a window with ADS-B jumps (a jump leaving the overlap moves the peak)."""
+    the option that removes them), a Pearson peak at the search limit or not identified (no lag estimate:
+    correlation.lag_identifiable), or Pearson peak lags read in a window with ADS-B jumps (a jump leaving
+    the overlap moves the peak)."""
     notes = window_notes(summary)
     return "; ".join(notes) if notes else None
 
@@ -202,6 +203,12 @@ def _pearson_notes(summary: Mapping[str, Any]) -> list[str]:
         edge = f" |lag| = {pearson_search_limit(int(slots))}" if isinstance(slots, Real) else ""
         notes.append(f"Pearson {' and '.join(at_limit)} peak at the edge of the lags searched{edge}: "
                      "no lag estimate")
+    flat = [name for axis, name in (("lat", "latitude"), ("lon", "longitude"))
+            if summary.get(f"pearson_lag_unidentified_{axis}") is True]
+    if flat:
+        notes.append(f"Pearson {' and '.join(flat)} peak lag not identified: the window is too close to a "
+                     "straight, constant-speed leg, where a time shift is a constant offset that Pearson "
+                     "removes (no lag estimate)")
     lags = [(axis, summary.get(f"pearson_peak_lag_{axis}")) for axis in ("lat", "lon")]
     moved = [f"{axis} {int(lag):+d}" for axis, lag in lags if not is_missing(lag) and int(lag) != 0]
     if moved and _jumps(summary) > 0:
