@@ -12,7 +12,7 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit
 
-from .recorders import detect_recorder, read_gps, read_oradis
+from .recorders import GPS_HEADER_BYTES, ORADIS_HEADER_BYTES, detect_recorder, read_gps, read_oradis
 
 FORMATS = ("raw", "pcap", "pcapng", "final", "gps", "oradis")
 UNTIMED = ("raw", "oradis")  # no capture time: midnights are counted in file order from the reports' times
@@ -105,6 +105,26 @@ def read_segments(data: bytes | memoryview | np.ndarray, fmt: str | None = None)
     if fmt in ("gps", "oradis"):
         return _segments(fmt, buf.size, *(read_gps(buf) if fmt == "gps" else read_oradis(buf)))
     return _read_final(buf)
+
+
+def recorder_hint(head: bytes) -> str | None:
+    """The recorder format (final, gps, oradis) a head that detection took for raw would be detected as but
+    for its first frame: read as that format it gives at least 4 payloads and no problem but one before the
+    first payload (and the last frame cut by the end of the head), and detection takes it without the first
+    frame. None otherwise, as for any raw stream (which detection keeps raw wherever it starts)."""
+    head = bytes(head[:DETECT_BYTES])
+    cut = len(head) == DETECT_BYTES
+    for fmt in ("final", "gps", "oradis"):
+        seg = read_segments(head, fmt)
+        problems = [(at, n) for at, n, _ in seg.problems if not (cut and at + n == len(head))]
+        if len(seg.start) < 4 or len(problems) > 1 or (problems and problems[0][0] >= seg.start[0]):
+            continue
+        second = int(seg.start[1])  # where the second frame starts (its data, for gps: the trailer follows)
+        rest = {"final": head[second - FINAL_HEADER_BYTES:], "oradis": head[second - ORADIS_HEADER_BYTES:],
+                "gps": head[:GPS_HEADER_BYTES] + head[second:]}[fmt]
+        if detect_format(rest) == fmt:
+            return fmt
+    return None
 
 
 def _final_frame_bytes(head: bytes, pos: int) -> int:
