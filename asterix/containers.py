@@ -5,13 +5,14 @@ Every input byte ends up in exactly one place: a payload range, ``container_byte
 
 from __future__ import annotations
 
+import datetime as dt
 import struct
 from dataclasses import dataclass
 
 import numpy as np
 from numba import njit
 
-from .recorders import detect_recorder, read_gps, read_oradis
+from .recorders import GPS_HEADER_BYTES, ORADIS_HEADER_BYTES, detect_recorder, read_gps, read_oradis
 
 FORMATS = ("raw", "pcap", "pcapng", "final", "gps", "oradis")
 UNTIMED = ("raw", "oradis")  # no capture time: midnights are counted in file order from the reports' times
@@ -21,6 +22,10 @@ FINAL_HEADER_BYTES = 8
 FINAL_TRAILER = b"\xa5\xa5\xa5\xa5"
 FINAL_MIN_FRAME_BYTES = FINAL_HEADER_BYTES + len(FINAL_TRAILER)
 FINAL_TOD_UNIT_S = 0.01
+# A capture time further than this from most of the packets around it is damage: from 12 h on, it would put
+# its reports on another day (each goes on the day nearest its capture) and could re-date the recording.
+CAPTURE_JUMP_S = 43200
+CAPTURE_NEIGHBOURS = 8  # packets on each side that judge a capture time
 
 _PCAP_MAGICS = {  # first four file bytes -> (big endian, nanosecond timestamps)
     b"\xd4\xc3\xb2\xa1": (False, False),
@@ -33,7 +38,7 @@ _PCAPNG_SHB = b"\x0a\x0d\x0d\x0a"
 _PCAPNG_BYTE_ORDERS = {b"\x1a\x2b\x3c\x4d": ">", b"\x4d\x3c\x2b\x1a": "<"}
 
 # Packet classes returned by _classify; codes >= 2 are problems.
-_PKT_IGNORED, _PKT_UDP = 0, 1
+_PKT_IGNORED, _PKT_UDP, _PKT_LINK, _PKT_FAMILY = 0, 1, 7, 8
 _PKT_REASONS = {
     2: "IPv4 fragment (not reassembled)",
     3: "bad IPv4 header",
@@ -41,6 +46,8 @@ _PKT_REASONS = {
     5: "truncated UDP header",
     6: "bad UDP length",
 }
+_LINKS_READ = "Ethernet 1, Linux SLL 113, Linux SLL2 276, raw IP 12, 101, 228, BSD loopback 0, 108"
+_LOOPBACK_FAMILIES = (2, 10, 24, 28, 30)  # AF_INET; AF_INET6 of Linux, NetBSD/OpenBSD, FreeBSD, macOS
 _FINAL_REASONS = {1: "impossible frame length", 2: "bad frame trailer"}
 _PCAPNG_REASONS = {1: "bad packet block", 2: "packet for unknown interface"}
 
@@ -53,7 +60,8 @@ class Segments:
     start: np.ndarray  # int64 file offset of each ASTERIX payload
     stop: np.ndarray  # int64 exclusive end offset
     capture_day: np.ndarray  # int64: days since 1970-01-01 UTC (pcap, pcapng), recording-day byte (final),
-    #                          midnights counted in the recording times (gps), else -1
+    #                          midnights counted in the recording times (gps), else -1 (also for a pcap/pcapng
+    #                          capture time reported as implausible, so that its neighbours date it)
     capture_tod: np.ndarray  # float64 seconds since midnight of the capture; NaN when unknown
     dated: bool  # True when capture_day is a real calendar day (pcap, pcapng)
     exact: bool  # True when each payload must frame exactly into ASTERIX blocks
@@ -97,6 +105,26 @@ def read_segments(data: bytes | memoryview | np.ndarray, fmt: str | None = None)
     if fmt in ("gps", "oradis"):
         return _segments(fmt, buf.size, *(read_gps(buf) if fmt == "gps" else read_oradis(buf)))
     return _read_final(buf)
+
+
+def recorder_hint(head: bytes) -> str | None:
+    """The recorder format (final, gps, oradis) a head that detection took for raw would be detected as but
+    for its first frame: read as that format it gives at least 4 payloads and no problem but one before the
+    first payload (and the last frame cut by the end of the head), and detection takes it without the first
+    frame. None otherwise, as for any raw stream (which detection keeps raw wherever it starts)."""
+    head = bytes(head[:DETECT_BYTES])
+    cut = len(head) == DETECT_BYTES
+    for fmt in ("final", "gps", "oradis"):
+        seg = read_segments(head, fmt)
+        problems = [(at, n) for at, n, _ in seg.problems if not (cut and at + n == len(head))]
+        if len(seg.start) < 4 or len(problems) > 1 or (problems and problems[0][0] >= seg.start[0]):
+            continue
+        second = int(seg.start[1])  # where the second frame starts (its data, for gps: the trailer follows)
+        rest = {"final": head[second - FINAL_HEADER_BYTES:], "oradis": head[second - ORADIS_HEADER_BYTES:],
+                "gps": head[:GPS_HEADER_BYTES] + head[second:]}[fmt]
+        if detect_format(rest) == fmt:
+            return fmt
+    return None
 
 
 def _final_frame_bytes(head: bytes, pos: int) -> int:
@@ -153,7 +181,8 @@ def _u32(buf, pos, big):
 
 @njit(cache=True)
 def _ipv4_offset(buf, start, stop, link):
-    """File offset of the IPv4 header inside a link-layer packet, or -1 if it carries no IPv4."""
+    """File offset of the IPv4 header inside a link-layer packet; -1 if it carries no IPv4, -2 for a link type
+    msdc does not read, -3 for a loopback header whose address family is none of _LOOPBACK_FAMILIES."""
     if link == 1:  # Ethernet
         pos, type_pos = start + 14, start + 12
     elif link == 113:  # Linux cooked SLL
@@ -165,11 +194,17 @@ def _ipv4_offset(buf, start, stop, link):
     elif link == 101 or link == 12:  # raw IP: v4 or v6
         return start if stop > start and buf[start] >> 4 == 4 else -1
     elif link == 0 or link == 108:  # BSD loopback: 4-byte address family, AF_INET = 2 in either order
-        if stop - start >= 4 and (_u32(buf, start, False) == 2 or _u32(buf, start, True) == 2):
+        if stop - start < 4:
+            return -1
+        little, big = _u32(buf, start, False), _u32(buf, start, True)
+        if little == 2 or big == 2:
             return start + 4
-        return -1
+        for family in _LOOPBACK_FAMILIES:
+            if little == family or big == family:
+                return -1
+        return -3
     else:
-        return -1
+        return -2
     if pos > stop:
         return -1
     ethertype = _be16(buf, type_pos)
@@ -183,6 +218,10 @@ def _ipv4_offset(buf, start, stop, link):
 def _classify_packet(buf, start, stop, link):
     """(class, payload start, payload stop) of one captured packet; see _PKT_REASONS."""
     ip = _ipv4_offset(buf, start, stop, link) if stop > start else -1
+    if ip == -2:
+        return _PKT_LINK, 0, 0
+    if ip == -3:
+        return _PKT_FAMILY, 0, 0
     if ip < 0:
         return _PKT_IGNORED, 0, 0
     if stop - ip < 20:
@@ -295,13 +334,63 @@ def _walk_final(buf, fill, seg_start, seg_stop, seg_day, seg_tod, bad_start, bad
 def _packet_segments(fmt: str, buf: np.ndarray, pkt_start: np.ndarray, pkt_stop: np.ndarray,
                      link: np.ndarray, day: np.ndarray, tod: np.ndarray,
                      problems: list[tuple[int, int, str]]) -> Segments:
-    """Extract IPv4/UDP payloads from captured packets; problem packets are reported whole."""
+    """Extract IPv4/UDP payloads from captured packets; problem packets are reported whole.
+
+    A payload's packet whose capture time is implausible (``implausible_captures``) keeps its payload, loses
+    its capture time (its reports are dated by the packets around it) and is reported at its timestamp field,
+    the 8 bytes before the 8 that precede the packet data in both a pcap record and a pcapng packet block.
+    """
     kind, pay_start, pay_stop = _classify(buf, pkt_start, pkt_stop, link)
     for code, reason in _PKT_REASONS.items():
         for i in np.flatnonzero(kind == code):
             problems.append((int(pkt_start[i]), int(pkt_stop[i] - pkt_start[i]), reason))
+    for i in np.flatnonzero((kind == _PKT_LINK) | (kind == _PKT_FAMILY)):
+        why = _link_reason(int(link[i]), int(kind[i]))
+        problems.append((int(pkt_start[i]), int(pkt_stop[i] - pkt_start[i]), why))
     keep = (kind == _PKT_UDP) & (pay_stop > pay_start)
+    timed = (day >= 0) & np.isfinite(tod)
+    bad_time = np.zeros(len(day), bool)
+    bad_time[timed] = implausible_captures(day[timed], tod[timed])
+    day, tod = day.copy(), tod.astype(np.float64)
+    for i in np.flatnonzero(bad_time & keep):
+        why = ("implausible capture time, more than 12 h from most packets around it: its reports are dated "
+               f"by theirs (capture time {_stamp(day[i], tod[i])})")
+        problems.append((int(pkt_start[i]) - 16, 8, why))
+        day[i], tod[i] = -1, np.nan
     return _segments(fmt, buf.size, pay_start[keep], pay_stop[keep], day[keep], tod[keep], problems)
+
+
+def _link_reason(link: int, kind: int) -> str:
+    """Why a packet of a link type msdc does not read, or a loopback packet of no known family, is skipped."""
+    if kind == _PKT_LINK:
+        return f"packet of link type {link}, which msdc does not read (it reads {_LINKS_READ})"
+    return (f"packet of link type {link} (BSD loopback) whose address family is neither IPv4 nor IPv6: "
+            "a wrong link type or a damaged packet")
+
+
+def implausible_captures(day: np.ndarray, tod: np.ndarray,
+                         neighbours: int = CAPTURE_NEIGHBOURS) -> np.ndarray:
+    """True for each capture time (in file order) further than CAPTURE_JUMP_S from more than half of itself
+    and its ``neighbours`` packets on each side: a damaged time. A clock step that lasts longer than
+    ``neighbours`` packets keeps a majority on each side, so is never flagged."""
+    seconds = day.astype(np.float64) * SECONDS_PER_DAY + tod
+    agree = np.ones(len(seconds), np.int64)
+    window = np.ones(len(seconds), np.int64)
+    for shift in range(1, min(neighbours, len(seconds) - 1) + 1):
+        close = np.abs(seconds[shift:] - seconds[:-shift]) <= CAPTURE_JUMP_S
+        agree[shift:] += close
+        agree[:-shift] += close
+        window[shift:] += 1
+        window[:-shift] += 1
+    return 2 * agree < window
+
+
+def _stamp(day: int, tod: float) -> str:
+    """A capture time as an ISO UTC date-time, or as days and seconds when it is past the calendar's range."""
+    try:
+        return (dt.datetime(1970, 1, 1) + dt.timedelta(days=int(day), seconds=float(tod))).isoformat(" ")
+    except OverflowError:
+        return f"day {int(day)} after 1970-01-01, {float(tod):.6f} s"
 
 
 def _day_tod(ts_s: np.ndarray, ts_frac: np.ndarray, units_per_s: int) -> tuple[np.ndarray, np.ndarray]:

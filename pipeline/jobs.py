@@ -445,6 +445,7 @@ def _load(options: DecodingOptions, checked: Checked, progress: Progress | None)
     checked.warnings += _wrong_editions(loaded)
     checked.warnings += _order_warnings(checked.inputs, spans)
     checked.warnings += _date_ignored(options, loaded.inputs)
+    checked.warnings += _format_hints(options, loaded.inputs)
     checked.warnings += impossible_positions(loaded.frames.get(21))
     checked.warnings += loaded.warnings
     return loaded
@@ -472,6 +473,30 @@ def _order_warnings(paths: list[Path], spans: list[dict[str, tuple[pd.Timestamp,
                                 f"{last[source][1]} ({last[source][0]}): inputs run backwards in time")
             last[source] = (hi, str(path))
     return warnings
+
+
+def _format_hints(options: DecodingOptions, inputs: list[dict]) -> list[str]:
+    """format_hint for each input, unless --format was given."""
+    if options.format is not None:
+        return []
+    hints = (format_hint(info["path"], info["format"], info["skipped_blocks"]) for info in inputs)
+    return [hint for hint in hints if hint]
+
+
+def format_hint(path, fmt: str | None, skipped_blocks: int) -> str:
+    """A hint to give --format when detection read a file as raw, blocks were skipped, and the file reads as a
+    recorder file (final, gps, oradis) but for its first frame (asterix.containers.recorder_hint); else ''."""
+    from asterix.containers import DETECT_BYTES, recorder_hint
+
+    if fmt != "raw" or not skipped_blocks:
+        return ""
+    with open(path, "rb") as file:
+        guess = recorder_hint(file.read(DETECT_BYTES))
+    if guess is None:
+        return ""
+    return (f"{path}: read as a raw ASTERIX stream ({skipped_blocks} block(s) skipped), but past its first "
+            f"frame it reads as a {guess} recording (its first frame damaged?): if it is one, give "
+            f"--format {guess}")
 
 
 def _date_ignored(options: DecodingOptions, inputs: list[dict]) -> list[str]:
@@ -514,6 +539,7 @@ def _load_measurements(options: AircraftOptions, checked: Checked, progress: Pro
                          if cat in absent_categories(loaded)]
     checked.warnings += _order_warnings(checked.inputs, loaded.spans)
     checked.warnings += _date_ignored(options, loaded.inputs)
+    checked.warnings += _format_hints(options, loaded.inputs)
     checked.warnings += loaded.warnings
     checked.warnings += list(meas.attrs.get("coverage_warnings", ()))
     checked.warnings += list(meas.attrs.get("identity_warnings", ()))
@@ -1282,6 +1308,7 @@ def stats_job(options: StatsOptions, *, progress: Progress | None = None) -> Sta
     checked.warnings += edition_notes.warnings(failed)
     checked.warnings += _order_warnings(checked.inputs, spans)
     checked.warnings += _date_ignored(options, inputs)
+    checked.warnings += _format_hints(options, inputs)
     checked.warnings += early_start
     return StatsResult(acc.tables(), inputs, checked.warnings)
 
@@ -1359,6 +1386,9 @@ def decode_job(options: DecodeOptions, *, on_chunk: Callable[[int, int, str], No
                     on_chunk(size, size, path.name)
                 early_start += tally.warning(label, date, fmt)
                 notes += [f"{path}: CAT{cat:03d} --edition auto {why}" for cat, why in sorted(chosen.items())]
+                if options.format is None:
+                    hint = format_hint(path, fmt, sum(1 for p, _, _ in skipped if p == str(path)))
+                    early_start += [hint] if hint else []
         except UnreadableInput as exc:
             raise JobError(str(exc), 2) from exc
         finally:

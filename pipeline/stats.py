@@ -16,10 +16,11 @@ import pandas as pd
 from pipeline.model.sources import file_labels
 
 # "(record at offset 1234)", "at offset 0x1f": the place, not the reason; "(LEN 40, 36 bytes past the
-# end)": a bad data block LEN's numbers
+# end)": a bad data block LEN's numbers; "(capture time 1989-04-23 02:22:56)": a damaged capture time's value
 _OFFSET = re.compile(r"\s*\((?:record )?at offset (?:0x[0-9a-fA-F]+|\d+)\)"
                      r"|\s*\bat offset (?:0x[0-9a-fA-F]+|\d+)"
-                     r"|\s*\(LEN \d+(?:, \d+ bytes? past the end)?\)")
+                     r"|\s*\(LEN \d+(?:, \d+ bytes? past the end)?\)"
+                     r"|\s*\(capture time [^()]*\)")
 
 NO_IDENTITY = "(none)"  # the aircraft table's address for records with neither address nor call sign
 NONE_KEY = "~"  # their aircraft key: text (a chunk of them alone merges with others), sorted after the rest

@@ -10,7 +10,7 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from asterix.containers import FORMATS, Segments, detect_format, read_segments
+from asterix.containers import FORMATS, Segments, detect_format, implausible_captures, read_segments
 
 # 2023-11-14 22:13:20 UTC: 1700000000 // 86400 = 19675 days, remainder 80000 s (22*3600 + 13*60 + 20).
 TS_S, DAY, TOD_S = 1_700_000_000, 19675, 80000.0
@@ -225,6 +225,104 @@ def test_pcap_forced_on_wrong_magic_and_short_header() -> None:
     assert seg.problems == [] and seg.container_bytes == 24 and len(seg.start) == 0
 
 
+def test_pcap_capture_time_far_from_its_neighbours_is_damage() -> None:
+    # 20 packets one second apart; packet 5's ts_sec loses bit 30 (one bit flip): 1700000005 - 2^30 =
+    # 626258181 s = day 7248 (6940 days to 1989-01-01, + 308: 5 November) + 30981 s (08:36:21)
+    packet = eth(0x0800, ipv4(17, udp(P1)))  # 14 + 20 + 8 + 6 = 48 bytes: each record is 16 + 48 = 64
+    records = [(TS_S + i, 0, packet) for i in range(20)]
+    records[5] = (TS_S + 5 - 2**30, 0, packet)
+    data = pcap(records)
+    seg = read_segments(data)
+    assert len(seg.start) == 20 and payloads(data, seg) == [P1] * 20  # the payload is kept
+    assert seg.capture_day.tolist() == [DAY] * 5 + [-1] + [DAY] * 14  # dated by its neighbours
+    assert math.isnan(seg.capture_tod[5])
+    assert seg.capture_tod[6] == TOD_S + 6
+    assert seg.problems == [(24 + 5 * 64, 8, "implausible capture time, more than 12 h from most packets "
+                             "around it: its reports are dated by theirs (capture time 1989-11-05 08:36:21)")]
+    assert_accounted(seg, len(data))
+
+
+def test_capture_time_steps_and_ambiguous_pairs_are_kept() -> None:
+    packet = eth(0x0800, ipv4(17, udp(P1)))
+    # a clock step of 3 days after 9 packets (more than the 8 neighbours that judge): no damage
+    later = TS_S + 3 * 86400
+    step = pcap([(TS_S + i, 0, packet) for i in range(9)] + [(later + i, 0, packet) for i in range(9)])
+    seg = read_segments(step)
+    assert seg.problems == [] and seg.capture_day.tolist() == [DAY] * 9 + [DAY + 3] * 9
+    # two packets days apart: neither is outvoted, both kept
+    pair = read_segments(pcap([(TS_S, 0, packet), (TS_S + 5 * 86400, 0, packet)]))
+    assert pair.problems == [] and pair.capture_day.tolist() == [DAY, DAY + 5]
+    # three: the odd one out, 43203 and 43201 s from the others, is outvoted 2 to 1
+    three = read_segments(pcap([(TS_S, 0, packet), (TS_S + 43203, 0, packet), (TS_S + 2, 0, packet)]))
+    assert three.capture_day.tolist() == [DAY, -1, DAY] and len(three.problems) == 1
+    # 12 h exactly is still plausible
+    edge = read_segments(pcap([(TS_S, 0, packet), (TS_S + 43200, 0, packet), (TS_S + 2, 0, packet)]))
+    assert edge.problems == []
+
+
+def test_implausible_captures_window() -> None:
+    tod = np.arange(30, dtype=float)
+    day = np.full(30, 100)
+    day[[0, 14, 15, 29]] = [90, 300, 300, 101]  # the first, two in a row, the last (1 day = 86400 s off)
+    assert np.flatnonzero(implausible_captures(day, tod)).tolist() == [0, 14, 15, 29]
+    assert not implausible_captures(np.zeros(0, np.int64), np.zeros(0)).any()
+    assert implausible_captures(np.array([5]), np.array([0.0])).tolist() == [False]
+
+
+def test_pcapng_capture_time_far_from_its_neighbours() -> None:
+    packet = eth(0x0800, ipv4(17, udp(P1)))
+    epbs = [png_epb("<", 0, (TS_S + i) * 10**6, packet) for i in range(5)]
+    epbs[2] = png_epb("<", 0, (TS_S + 2 + 40 * 86400) * 10**6, packet)
+    head = png_shb("<") + png_idb("<", 1)
+    data = head + b"".join(epbs)
+    seg = read_segments(data)
+    assert seg.capture_day.tolist() == [DAY, DAY, -1, DAY, DAY]
+    # the timestamp of an enhanced packet block: 12 bytes into the block (type, length, interface id)
+    stamp = "2023-12-24 22:13:22"  # 2023-11-14 + 40 days: 16 days left in November, then 24 December
+    why = ("implausible capture time, more than 12 h from most packets around it: its reports are dated by "
+           f"theirs (capture time {stamp})")
+    assert seg.problems == [(len(head) + 2 * len(epbs[0]) + 12, 8, why)]
+    assert_accounted(seg, len(data))
+
+
+LINKS_READ = "Ethernet 1, Linux SLL 113, Linux SLL2 276, raw IP 12, 101, 228, BSD loopback 0, 108"
+
+
+@pytest.mark.parametrize("link", [147, 3, 0xFFFF])
+def test_pcap_link_type_not_read_is_reported(link: int) -> None:
+    packet = eth(0x0800, ipv4(17, udp(P1)))  # 48 bytes, at 24 + 16 and 24 + 64 + 16
+    data = pcap([(TS_S, 0, packet), (TS_S + 1, 0, packet)], link=link)
+    seg = read_segments(data)
+    why = f"packet of link type {link}, which msdc does not read (it reads {LINKS_READ})"
+    assert len(seg.start) == 0 and seg.problems == [(40, 48, why), (104, 48, why)]
+    assert seg.container_bytes == len(data) - 96
+    assert_accounted(seg, len(data))
+
+
+def test_ethernet_read_as_loopback_is_reported() -> None:
+    # link type 1 flipped to 0: the first 4 bytes (destination MAC 02:02:02:02) are no address family
+    packet = eth(0x0800, ipv4(17, udp(P1)))
+    loop_v6 = struct.pack("<I", 30) + bytes(40)  # AF_INET6 of macOS: not IPv4, ignored as ever
+    data = pcap([(TS_S, 0, packet), (TS_S, 0, loop_v6)], link=0)
+    seg = read_segments(data)
+    assert seg.problems == [(40, 48, "packet of link type 0 (BSD loopback) whose address family is neither "
+                                     "IPv4 nor IPv6: a wrong link type or a damaged packet")]
+    assert seg.container_bytes == len(data) - 48
+    assert_accounted(seg, len(data))
+
+
+def test_pcapng_interface_of_a_link_type_not_read() -> None:
+    packet = eth(0x0800, ipv4(17, udp(P1)))
+    head = png_shb("<") + png_idb("<", 1) + png_idb("<", 147)
+    data = head + png_epb("<", 0, TS_S * 10**6, packet) + png_epb("<", 1, TS_S * 10**6, packet)
+    seg = read_segments(data)
+    assert payloads(data, seg) == [P1]
+    second = len(head) + len(png_epb("<", 0, 0, packet)) + 28
+    why = f"packet of link type 147, which msdc does not read (it reads {LINKS_READ})"
+    assert seg.problems == [(second, len(packet), why)]
+    assert_accounted(seg, len(data))
+
+
 # ---------------------------------------------------------------- pcapng
 
 @pytest.mark.parametrize("order", ["<", ">"])
@@ -238,7 +336,7 @@ def test_pcapng_blocks(order: str) -> None:
         png_idb(order, 101),  # interface 1: raw IP, default microseconds
         png_epb(order, 0, ts_ns, packet_1),
         png_block(order, 5, struct.pack(order + "IIIHH", 0, 0, 0, 0, 0)),  # interface statistics: skipped
-        png_epb(order, 1, (TS_S + 86400) * 10**6 + 2, ipv4(17, udp(P2))),
+        png_epb(order, 1, (TS_S + 7200) * 10**6 + 2, ipv4(17, udp(P2))),  # past midnight: 80000 + 7200 s
         png_spb(order, packet_2),
         png_epb(order, 0, ts_ns, ARP),
     ]
@@ -253,7 +351,7 @@ def test_pcapng_blocks(order: str) -> None:
     assert payloads(data, seg) == [P1, P2, P2]
     assert seg.capture_day.tolist() == [DAY, DAY + 1, -1]
     assert seg.capture_tod[0] == pytest.approx(TOD_S + 0.123456789, abs=1e-9)
-    assert seg.capture_tod[1] == pytest.approx(TOD_S + 2e-6, abs=1e-9)
+    assert seg.capture_tod[1] == pytest.approx(7200 - (86400 - TOD_S) + 2e-6, abs=1e-9)
     assert math.isnan(seg.capture_tod[2])
     assert seg.problems == []
     assert seg.container_bytes == len(data) - 2 * len(P2) - len(P1)

@@ -17,6 +17,7 @@ import pytest
 
 import asterix
 from asterix.encode import encode_frame
+from pipeline.stats import reason_kind
 
 UTC = dt.UTC
 # 2019-03-01 10:00:00 UTC, worked by hand: 17956 days * 86400 = 1551398400 (2019-03-01 00:00:00);
@@ -231,6 +232,43 @@ def test_pcap_starting_after_midnight_with_a_late_report(tmp_path: Path) -> None
     rec = asterix.read(write(tmp_path, "late.pcap", data))
     assert rec.date == MARCH_1 and rec.frames[48].day.tolist() == [0, 1]
     assert rec.frames[48].timestamp.is_monotonic_increasing
+
+
+def test_pcap_one_damaged_capture_time_dates_nothing(tmp_path: Path) -> None:
+    # 12 packets, one CAT048 report each, 10:00:00 + i s; packet 0's ts_sec loses bit 30 (2^30 s, 34 years)
+    packets = [(TS_10H + i, 0, udp_frame(cat048([36000.0 + i], first_track=i))) for i in range(12)]
+    packets[0] = (TS_10H - 2**30, 0, packets[0][2])
+    data, _ = pcap_file(packets)
+    path = write(tmp_path, "flipped.pcap", data)
+    rec = asterix.read(path)
+    f48 = rec.frames[48]
+    assert rec.date == MARCH_1 and f48.day.tolist() == [0] * 12
+    # every report at 2019-03-01 10:00:00 + i s, exactly (no float day * 86400 at 1e9 s)
+    assert f48.timestamp.tolist() == [pd.Timestamp("2019-03-01 10:00:00", tz="UTC") + pd.Timedelta(seconds=i)
+                                      for i in range(12)]
+    assert len(rec.errors) == 1
+    err = rec.errors.iloc[0]
+    # 1551434400 - 1073741824 = 477692576 s = day 5528 (15 years with 4 leap days = 5479 days to 1985-01-01;
+    # + 49: 31 of January, then 19 February) + 73376 s (20:22:56)
+    assert err.offset == PCAP_HEADER and err.length == 8 and err.file == str(path)
+    assert err.reason.endswith("(capture time 1985-02-19 20:22:56)")
+    kind = "container: implausible capture time, more than 12 h from most packets around it: its reports are "
+    assert reason_kind(err.reason) == kind + "dated by theirs"  # the value left out: stats groups them
+    assert accounted(rec) == len(data)
+    assert_chunks_equal_read(path, 60)
+    with pytest.raises(asterix.DecodeError) as exc:
+        asterix.read(path, strict=True)
+    assert exc.value.offset == PCAP_HEADER
+
+
+def test_pcap_link_type_not_read_names_it(tmp_path: Path) -> None:
+    data, _ = pcap_file([(TS_10H, 0, udp_frame(cat048([36000.0])))])
+    data = data[:20] + struct.pack("<I", 147) + data[24:]  # LINKTYPE_USER0
+    rec = asterix.read(write(tmp_path, "user0.pcap", data))
+    assert rec.frames == {} and len(rec.errors) == 1
+    assert rec.errors.offset.iloc[0] == PCAP_HEADER + PCAP_RECORD
+    assert "link type 147, which msdc does not read" in rec.errors.reason.iloc[0]
+    assert accounted(rec) == len(data)
 
 
 # ---------------------------------------------------------------------------------------------------------

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import datetime as dt
 import re
+import struct
 
 import numpy as np
 import pandas as pd
@@ -19,7 +20,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 import asterix
-from asterix.containers import DETECT_BYTES, detect_format, read_segments
+from asterix.containers import DETECT_BYTES, detect_format, read_segments, recorder_hint
+from pipeline.cli import main
 
 ALL = [21, 34, 48]
 DAY = dt.date(2019, 3, 1)
@@ -422,3 +424,40 @@ def test_cli_reads_recorder_files(tmp_path, capsys) -> None:
     assert main(["decode", str(opath), "-o", str(tmp_path / "out.csv")]) == 0
     assert (tmp_path / "out_cat048.csv").exists() and (tmp_path / "out_cat021.csv").exists()
     assert pd.read_csv(tmp_path / "out_cat048.csv").sic.tolist() == [1, 2, 3]
+
+
+# ---------------------------------------------------------------- a damaged first frame: detection says raw
+
+def damaged_first_frames() -> dict[str, bytes]:
+    """Eight CAT048 blocks (9 bytes each) as a final, gps and oradis file, each with a damaged first frame."""
+    blocks = [block(48, r048(i, 3600.0 + i)) for i in range(1, 9)]
+    headers = [struct.pack(">HBBB", 8 + 9 + 4, 3, 1, 0) + (360000 + 100 * i).to_bytes(3, "big")  # ToD 10 ms
+               for i in range(len(blocks))]
+    final = bytearray(b"".join(h + data + b"\xa5" * 4 for h, data in zip(headers, blocks, strict=True)))
+    final[1] ^= 1  # frame length 21 -> 20: its trailer is not where the length says
+    gps, at = gps_file([(data, 3600.5 + i) for i, data in enumerate(blocks)])
+    gps = bytearray(gps)
+    gps[at[0] + 9 + 6:at[0] + 9 + 9] = b"\xff\xff\xff"  # frame 1's recording time past 24 h
+    oradis = bytearray(oradis_file(blocks)[0])
+    oradis[0] ^= 1  # packet length 15 -> 271: does not lead to the next packet
+    return {"final": bytes(final), "gps": bytes(gps), "oradis": bytes(oradis)}
+
+
+def test_recorder_hint_names_the_format_of_a_damaged_start() -> None:
+    for fmt, data in damaged_first_frames().items():
+        assert detect_format(data) == "raw"  # the limit README "Containers" states
+        assert recorder_hint(data) == fmt
+    # a raw stream, damaged or not, is no recorder file
+    raw = b"".join(block(48, r048(i, 3600.0 + i)) for i in range(1, 40))
+    assert recorder_hint(raw) is None and recorder_hint(raw[:100] + b"\x00" + raw[101:]) is None
+
+
+def test_stats_hints_at_format_for_a_damaged_start(tmp_path, capsys) -> None:
+    for fmt, data in damaged_first_frames().items():
+        path = tmp_path / f"damaged.{fmt}"
+        path.write_bytes(data)
+        main(["stats", str(path), "--date", "2019-03-01"])
+        err = capsys.readouterr().err
+        assert f"{path}: read as a raw ASTERIX stream" in err and f"give --format {fmt}" in err
+        assert main(["stats", str(path), "--date", "2019-03-01", "--format", fmt]) == 0
+        assert "give --format" not in capsys.readouterr().err
