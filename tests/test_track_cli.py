@@ -333,7 +333,8 @@ def test_radar_plots_without_a_sensor_file_name_the_option_and_write_nothing(tmp
     assert "Traceback" not in err
     assert "radar plots from SAC/SIC 25/201 need the radar's position, and no --sensors file was given" in err
     assert "--sources adsb" in err
-    assert '[[sensor]]\nname = "radar SAC 25 SIC 201"\nsac = 25\nsic = 201' in err
+    assert '[[sensor]]  # replace the three TODO values' in err
+    assert '\nname = "radar SAC 25 SIC 201"\nsac = 25\nsic = 201\n' in err
     assert list(tmp_path.iterdir()) == []
     assert main([*argv, "--sources", "adsb", "--noise", "declared", "--json", str(tmp_path / "t.json")]) == 0
     assert json.loads((tmp_path / "t.json").read_text())["parameters"]["sources"] == ["adsb"]
