@@ -86,11 +86,26 @@ def selected_columns(columns) -> tuple[str, ...] | None:
     return tuple(sorted(names))
 
 
+# Timestamps are datetime64[ns] (1677-09-21 .. 2262-04-11): a day outside these years, or its
+# neighbours (late reports from the day before, a recording past midnight), would wrap silently.
+FIRST_DATE, LAST_DATE = dt.date(1678, 1, 1), dt.date(2261, 12, 31)
+
+
 def parse_date(date, name: str = "date") -> dt.date | None:
-    """The UTC calendar day ``date`` names: a datetime.date, an ISO text ("2019-03-01"), or a datetime or
-    pandas Timestamp at midnight (naive or UTC). One with a time of day or another time zone would shift
-    every timestamp, so it is refused (ValueError), and so is an integer (nanoseconds or YYYYMMDD?: it
+    """The UTC calendar day ``date`` names (FIRST_DATE .. LAST_DATE): a datetime.date, an ISO text
+    ("2019-03-01"), or a datetime or pandas Timestamp at midnight (naive or UTC). One with a time of day
+    or another time zone would shift every timestamp, and a day outside the nanosecond timestamps' span
+    would wrap them, so they are refused (ValueError), and so is an integer (nanoseconds or YYYYMMDD?: it
     says neither) or any other type (TypeError); ``name`` is the argument the message names."""
+    day = _calendar_day(date, name)
+    if day is not None and not FIRST_DATE <= day <= LAST_DATE:
+        raise ValueError(f"{name} {day.isoformat()}: outside the days msdc can time ({FIRST_DATE} to "
+                         f"{LAST_DATE}: nanosecond UTC timestamps); give the UTC day of the recording")
+    return day
+
+
+def _calendar_day(date, name: str) -> dt.date | None:
+    """The day ``date`` names, any year (parse_date's rules but the range)."""
     if date is None:
         return None
     if isinstance(date, np.datetime64):

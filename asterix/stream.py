@@ -21,7 +21,9 @@ from .reader import (
     release_pages,
     selected_columns,
 )
-from .timeline import file_order_days, known_captures, restamp
+from .timeline import ANCHOR_REPORTS, file_order_days, first_report_day, known_captures, restamp, valid_times
+
+HOLD_BYTES = 1 << 22  # a raw stream's first chunks held at most until day 0 is anchored (payload bytes)
 
 
 def iter_read(path, *, chunk: int = 1_000_000, editions=None, date=None, categories=None,
@@ -47,7 +49,10 @@ def iter_read(path, *, chunk: int = 1_000_000, editions=None, date=None, categor
             raise UnreadableInput(f"{path}: {exc}") from exc
         bounds = _chunk_bounds(buf, seg, chunk, eds, categories)
         release_pages(buf, 0, len(buf))  # planning the chunks read the whole file
-        clock = (0, np.nan)  # a raw stream's day and time of day at the end of the chunks before
+        clock = None  # a raw stream's (day, time of day) at the end of the chunks before; None: not anchored
+        pending: list[Recording] = []  # a raw stream's first chunks, held until day 0 is anchored
+        seen = np.zeros(0)  # their valid times of day in file order (the first ANCHOR_REPORTS)
+        held = 0  # their payload bytes
         day0 = None  # container day number of the first chunk's day 0
         blocks = 0  # data blocks framed in the chunks before: each chunk numbers its own from 0
         for sub in bounds:
@@ -56,6 +61,22 @@ def iter_read(path, *, chunk: int = 1_000_000, editions=None, date=None, categor
             for f in rec.frames.values():
                 f["block"] += blocks
             blocks += rec.blocks
+            eds = {**eds, **{c: e for c, e in rec.editions.items() if eds.get(c) == "auto"}}
+            if len(sub.start):
+                release_pages(buf, int(sub.start.min()), int(sub.stop.max()))
+            if seg.format in UNTIMED and clock is None:
+                pending.append(rec)
+                seen = np.concatenate([seen, valid_times(rec.frames)])[:ANCHOR_REPORTS]
+                held += int((sub.stop - sub.start).sum())
+                if len(seen) < ANCHOR_REPORTS and held < HOLD_BYTES:
+                    continue
+                clock = (first_report_day(seen), np.nan)
+                for held_rec in pending:
+                    clock = file_order_days(held_rec.frames, *clock)
+                    restamp(held_rec.frames, first_date)
+                    yield held_rec
+                pending = []
+                continue
             if seg.format in UNTIMED:
                 clock = file_order_days(rec.frames, *clock)
                 restamp(rec.frames, first_date)
@@ -67,10 +88,12 @@ def iter_read(path, *, chunk: int = 1_000_000, editions=None, date=None, categor
                     f["day"] += rec.day0 - day0
                 restamp(rec.frames, first_date)
                 rec.date, rec.day0 = first_date, day0
-            eds = {**eds, **{c: e for c, e in rec.editions.items() if eds.get(c) == "auto"}}
-            if len(sub.start):
-                release_pages(buf, int(sub.start.min()), int(sub.stop.max()))
             yield rec
+        clock = (first_report_day(seen), np.nan)
+        for held_rec in pending:  # a short file: fewer valid times of day than settle day 0
+            clock = file_order_days(held_rec.frames, *clock)
+            restamp(held_rec.frames, first_date)
+            yield held_rec
 
 
 def _chunk_bounds(buf: np.ndarray, seg: Segments, chunk: int, eds: dict, categories):

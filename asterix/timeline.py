@@ -62,21 +62,62 @@ def assign_days(frames: dict[int, dict], seg: Segments, blk_seg: np.ndarray) -> 
     return first_day
 
 
-def file_order_days(frames: dict[int, dict], day: int = 0, last_tod: float = np.nan) -> tuple[int, float]:
-    """Set each category's ``day`` by counting midnights in file order from the clock ``(day, last_tod)``
-    the reports before them left (a drop of more than 12 h is a new day, a rise of more than 12 h a late
-    report from the day before); return the clock after them, so that chunks continue it exactly."""
-    parts = [f for f in frames.values() if len(f["offset"])]
-    if not parts:
-        return day, last_tod
+# Day 0 of a raw stream is the day of its first report that agrees with the reports after it: a first
+# report whose time of day was damaged (one bit of I048/140 moves it by 65536 s) re-dated all the others.
+ANCHOR_AGREE_S = 3600.0  # agreeing: within this on the 24 h clock (86398 s and 2 s are 4 s apart)
+ANCHOR_FOLLOWERS = 8  # of the next this many valid times of day, at least half
+ANCHOR_CANDIDATES = 16  # the first this many are tried; none agreeing: the first report is day 0
+ANCHOR_REPORTS = ANCHOR_CANDIDATES + ANCHOR_FOLLOWERS  # valid times of day that settle it
+
+
+def _file_order(parts: list[dict]) -> tuple[np.ndarray, np.ndarray]:
+    """The reports' order by offset, and their times of day in that order (NaN outside 0-86400 s)."""
     off = np.concatenate([np.asarray(f["offset"]) for f in parts])
     tod = np.concatenate([np.asarray(f["time_of_day"], dtype=float) for f in parts])
     order = np.argsort(off, kind="stable")
     t = tod[order]
     # a time of day outside 0-86400 s (damaged: I048/140 and I021/071-073 reach 131072 s) is no
     # evidence of a midnight; left in, one such report put every other report on another day
-    t = np.concatenate([[last_tod], np.where((t >= 0.0) & (t < 86400.0), t, np.nan)])
-    t = pd.Series(t).ffill().bfill().to_numpy()
+    return order, np.where((t >= 0.0) & (t < 86400.0), t, np.nan)
+
+
+def valid_times(frames: dict[int, dict]) -> np.ndarray:
+    """The reports' times of day in file order, those within 0-86400 s only (what anchors day 0)."""
+    parts = [f for f in frames.values() if len(f["offset"])]
+    if not parts:
+        return np.zeros(0)
+    t = _file_order(parts)[1]
+    return t[np.isfinite(t)]
+
+
+def first_report_day(tod_s: np.ndarray) -> int:
+    """The day of the first of these valid times of day (file order) that puts on day 0 the first one
+    within ANCHOR_AGREE_S (24 h clock) of at least half its next ANCHOR_FOLLOWERS; 0 when none is."""
+    head = np.asarray(tod_s, dtype=float)[:ANCHOR_REPORTS]
+    anchor = 0  # the last report has no follower to agree with: never chosen over the first
+    for i in range(min(ANCHOR_CANDIDATES, len(head) - 1)):
+        after = head[i + 1:i + 1 + ANCHOR_FOLLOWERS]
+        apart = np.abs((after - head[i] + 43200.0) % 86400.0 - 43200.0)
+        if 2 * int((apart <= ANCHOR_AGREE_S).sum()) >= len(after):
+            anchor = i
+            break
+    d = np.diff(head[:anchor + 1])
+    return -int((d < -43200).sum() - (d > 43200).sum())
+
+
+def file_order_days(frames: dict[int, dict], day: int | None = None,
+                    last_tod: float = np.nan) -> tuple[int, float]:
+    """Set each category's ``day`` by counting midnights in file order from the clock ``(day, last_tod)``
+    the reports before them left (a drop of more than 12 h is a new day, a rise of more than 12 h a late
+    report from the day before); return the clock after them, so that chunks continue it exactly.
+    ``day`` None: these are the whole file's first reports, day 0 anchored by ``first_report_day``."""
+    parts = [f for f in frames.values() if len(f["offset"])]
+    if not parts:
+        return (0 if day is None else day), last_tod
+    order, t = _file_order(parts)
+    if day is None:
+        day = first_report_day(t[np.isfinite(t)])
+    t = pd.Series(np.concatenate([[last_tod], t])).ffill().bfill().to_numpy()
     d = np.diff(t)
     day_sorted = day + np.cumsum(d < -43200) - np.cumsum(d > 43200)
     days = np.empty_like(day_sorted)

@@ -411,3 +411,20 @@ def test_a_0_23_recording_beside_a_2_7_one_is_named_alone(adsb_0_23, capsys):
     assert status == 0
     warned = [line for line in err.splitlines() if "warning" in line]
     assert len(warned) == 1 and "adsb023.ast: 400 CAT021 block(s)" in warned[0] and "21=0.23" in warned[0]
+
+
+@pytest.mark.parametrize(("command", "date"), [("decode", "9999-12-31"), ("stats", "0001-01-01"),
+                                               ("correlate", "1000-01-01"), ("decode", "2262-04-11")])
+def test_a_date_nanosecond_timestamps_cannot_hold_is_refused(command, date, tmp_path, capsys):
+    """9999-12-31 wrapped decode's timestamps to 1816 and 1000-01-01 correlate's window to 2169 (exit 0);
+    stats raised an OverflowError traceback. Now: one line naming --date, the value and the range."""
+    out = tmp_path / "out"
+    out.mkdir()
+    argv = {"decode": ["decode", RADAR, "-o", out / "d.csv"], "stats": ["stats", RADAR],
+            "correlate": ["correlate", RADAR, ADSB, "--sensors", SENSORS, "--callsign", "MAS72",
+                          "-o", out / "c.xlsx"]}[command]
+    status, stdout, err = _run([*argv, "--date", date], capsys)
+    assert status == 2 and "Traceback" not in err and stdout == ""
+    assert err.strip() == (f"msdc {command}: --date {date}: outside the days msdc can time (1678-01-01 to "
+                           f"2261-12-31: nanosecond UTC timestamps); give the UTC day of the recording")
+    assert list(out.iterdir()) == []

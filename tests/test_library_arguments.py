@@ -67,6 +67,41 @@ def test_a_midnight_is_its_day_everywhere(date, adsb):
     assert build_measurements(None, undated, date=date)["time"].iloc[0] == want
 
 
+# datetime64[ns] holds 1677-09-21 00:12:43 .. 2262-04-11 23:47:16 (pandas' Timestamp.min/max): a day
+# outside it, or so near its ends that the day before or after does not fit, wrapped every timestamp
+OUT_OF_RANGE = ["9999-12-31", "1000-01-01", "0001-01-01", "2262-04-12", "2262-04-11", "1677-09-21",
+                "1677-09-22", dt.date(2300, 1, 1), pd.Timestamp("1677-12-31")]
+
+
+@pytest.mark.parametrize("date", OUT_OF_RANGE, ids=str)
+def test_a_date_outside_the_nanosecond_span_is_refused_everywhere(date, adsb, tmp_path):
+    """9999-12-31 put the first report in 1816 and 1000-01-01 in 2169 (int64 wrap), silently."""
+    undated = adsb.drop(columns="timestamp")
+    calls = [lambda: asterix.read(ADSB, date=date), lambda: list(asterix.iter_read(ADSB, date=date)),
+             lambda: load([ADSB], date=date), lambda: build_measurements(None, undated, date=date)]
+    day = pd.Timestamp(date).date().isoformat()
+    for call in calls:
+        with pytest.raises(ValueError) as info:
+            call()
+        text = str(info.value)
+        assert text.startswith(f"date {day}: outside the days") and "1678-01-01 to 2261-12-31" in text
+    with pytest.raises(OptionError) as info:
+        jobs_track.validate(TrackOptions(inputs=(ADSB,), callsign="MAS72", date=date,
+                                         output=str(tmp_path / "t.csv")))
+    assert str(info.value).startswith(f"--date {day}: outside the days")
+
+
+@pytest.mark.parametrize("date", ["1678-01-01", "2261-12-31"])
+def test_the_first_and_last_day_allowed_keep_exact_timestamps(date, adsb):
+    """The range's ends: their neighbour days fit datetime64[ns] (checked against pandas' own limits) and
+    the first report is that day plus its own time of day."""
+    day = pd.Timestamp(date, tz="UTC")
+    assert pd.Timestamp.min.tz_localize("UTC") < day - pd.Timedelta(days=1)
+    assert day + pd.Timedelta(days=2) < pd.Timestamp.max.tz_localize("UTC")
+    want = day + pd.to_timedelta(float(adsb["time_of_day"].iloc[0]), "s")
+    assert asterix.read(ADSB, date=date).frames[21]["timestamp"].iloc[0] == want
+
+
 @pytest.mark.parametrize(("date", "words"), SHIFTED + NOT_DATES, ids=repr)
 def test_a_date_that_would_shift_the_times_is_refused_everywhere(date, words, adsb, tmp_path):
     """A time of day or another zone would move every timestamp (12:00 put the first report at 20:00, and
