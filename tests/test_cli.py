@@ -278,14 +278,15 @@ def test_correlate_radar_radar_names_the_one_radar(tmp_path, capsys, who):
 
 
 def test_failing_job_prints_the_warning_that_explains_it(tmp_path, capsys):
-    """Two plots stamped 23:59:59 and 23:59:59.5 ahead of the fixtures' radar recording (08:00-09:00): with
-    --date 2019-03-01 the rest fall on 2019-03-02, an hour's radar a day after the ADS-B, so correlate fails
-    with "never overlap in time"; the warning that names the fix (--date 2019-02-28) comes before the error,
-    and nothing is written."""
-    early = asterix.read(str(RADAR)).frames[48].head(2).copy()
-    early["time_of_day"] = [86399.0, 86399.5]
+    """The fixtures' radar hour moved to start just after midnight (00:00:00.5), behind two plots stamped
+    23:59:59 and 23:59:59.5: with --date 2019-03-01 the hour falls on 2019-03-02, a day after the ADS-B
+    (08:00-09:00), so correlate fails with "never overlap in time"; the warning that names the fix (--date
+    2019-02-28) comes before the error, and nothing is written."""
+    plots = asterix.read(str(RADAR)).frames[48]
+    plots = plots.assign(time_of_day=plots["time_of_day"] - plots["time_of_day"].min() + 0.5)
+    early = plots.head(2).assign(time_of_day=[86399.0, 86399.5])
     radar = tmp_path / "early.ast"
-    radar.write_bytes(encode_frame(48, early) + RADAR.read_bytes())
+    radar.write_bytes(encode_frame(48, early) + encode_frame(48, plots))
     out = tmp_path / "e.json"
     assert main(["correlate", str(radar), str(ADSB), "--sensors", str(SENSORS), "--date", "2019-03-01",
                  "--callsign", "MAS72", "--json", str(out)]) == 1
