@@ -12,7 +12,7 @@ Correlation, quality, jump detection and everything after group by this ``aircra
 The reach gate of rule 4: a Mode 3/A code says little (4096 codes, reused over a day; false plots such as
 reflections repeat a transponder's reply elsewhere), so a report joins the address only if it lies within
 M3A_REACH_SPEED_KT x the time to, plus M3A_REACH_MARGIN_NM of, the address's addressed report just before or
-just after it. The real LEBL radar recording has a plot 38.7 NM from its aircraft's simultaneous plot.
+just after it. The real Barcelona radar recording has a plot 38.7 NM from its aircraft's simultaneous plot.
 Refused reports keep "M3A:" + code; ``identify`` lists them. Without time, latitude and longitude columns
 the gate cannot apply.
 """
@@ -22,7 +22,7 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
-from pipeline.model.coverage import _great_circle_nm
+from pipeline.model.geodesy import great_circle_nm
 from pipeline.model.schema import coded_text, text_categorical
 from pipeline.model.time import iso_utc
 
@@ -161,7 +161,7 @@ def _out_of_reach(meas: pd.DataFrame, address: pd.Series, row_combo: np.ndarray,
     after = _anchors_before(own[anchors], t[anchors], target[rows], t[rows])  # index of the anchor after
     for near in (np.clip(after - 1, start, stop - 1), np.clip(after, start, stop - 1)):
         at = anchors[near]
-        d_nm = _great_circle_nm(lat[at], lon[at], lat[rows], lon[rows])
+        d_nm = great_circle_nm(lat[at], lon[at], lat[rows], lon[rows])
         dt_s = np.abs(t[rows] - t[at])
         ok |= d_nm <= M3A_REACH_SPEED_KT * dt_s / 3600.0 + M3A_REACH_MARGIN_NM
         closer = ~(dt_s >= best[1])  # NaN (first pass) or nearer in time
