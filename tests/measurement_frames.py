@@ -23,8 +23,11 @@ def meas_frame(frame: pd.DataFrame, kind: str | None = None, day: str | None = N
         cat = f["sensor_kind"].map({"radar": 48, "adsb": 21})
         sac = f["sac"] if "sac" in f else pd.Series(0, index=f.index)
         sic = f["sic"] if "sic" in f else pd.Series(0, index=f.index)
-        f = f.assign(sensor_id=[sensor_id(c, [a], [b]).iloc[0]
-                                for c, a, b in zip(cat, sac, sic, strict=True)])
+        ids = pd.Series(None, index=f.index, dtype=object)
+        for c in cat.dropna().unique():  # one call per category: per row it took 7 s for 2,000 reports
+            rows = (cat == c).to_numpy(bool)
+            ids[rows] = sensor_id(int(c), sac[rows].to_numpy(), sic[rows].to_numpy()).astype(str).to_numpy()
+        f = f.assign(sensor_id=ids)
     out = conform(f)
     out["aircraft_id"] = assign_aircraft_id(out)
     extra = f[[c for c in f.columns if c not in out.columns]]
