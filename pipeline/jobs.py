@@ -1386,9 +1386,8 @@ def decode_job(options: DecodeOptions, *, on_chunk: Callable[[int, int, str], No
                     on_chunk(size, size, path.name)
                 early_start += tally.warning(label, date, fmt)
                 notes += [f"{path}: CAT{cat:03d} --edition auto {why}" for cat, why in sorted(chosen.items())]
-                if options.format is None:
-                    hint = format_hint(path, fmt, sum(1 for p, _, _ in skipped if p == str(path)))
-                    early_start += [hint] if hint else []
+                early_start += _format_hints(options, [{"path": path, "format": fmt, "skipped_blocks": sum(
+                    1 for p, _, _ in skipped if p == str(path))}])
         except UnreadableInput as exc:
             raise JobError(str(exc), 2) from exc
         finally:
