@@ -16,8 +16,8 @@ import numpy as np
 import pandas as pd
 from bitstring import BitArray, Bits, pack
 
-from asterix.columns import Column, columns_for
-from asterix.tables import available, load_table, resolve_edition
+from msdc.asterix.columns import Column, columns_for
+from msdc.asterix.tables import available, load_table, resolve_edition
 
 __all__ = [
     "EDITIONS", "load_table", "encode_item", "encode_record", "encode_block", "encode_frame", "item_fields",

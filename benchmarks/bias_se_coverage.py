@@ -25,10 +25,10 @@ import pandas as pd  # noqa: E402
 
 from fixtures.scenario import AircraftSpec, Scenario  # noqa: E402
 from fixtures.simulate import simulate  # noqa: E402
-from pipeline.model.geodesy import M_PER_NM  # noqa: E402
-from pipeline.model.measurements import build_measurements  # noqa: E402
-from pipeline.model.sensors import REQUIRED_COLUMNS as SENSOR_COLUMNS  # noqa: E402
-from pipeline.quality.accuracy import MIN_SE_AIRCRAFT, T975, estimate_biases, radar_errors  # noqa: E402
+from msdc.pipeline.model.geodesy import M_PER_NM  # noqa: E402
+from msdc.pipeline.model.measurements import build_measurements  # noqa: E402
+from msdc.pipeline.model.sensors import REQUIRED_COLUMNS as SENSOR_COLUMNS  # noqa: E402
+from msdc.pipeline.quality.accuracy import MIN_SE_AIRCRAFT, T975, estimate_biases, radar_errors  # noqa: E402
 
 TRUTH = {"range_bias_m": 150.0, "range_gain_ppm": 0.0, "azimuth_bias_deg": 0.0, "time_bias_s": 0.0}
 

@@ -15,10 +15,10 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from pipeline.conflict import conflict_probability  # noqa: E402
-from pipeline.conflict.predict import propagate_state  # noqa: E402
-from pipeline.track import ImmState, Mode, Plane, TrackerConfig  # noqa: E402
-from pipeline.track.plane import filter_plane  # noqa: E402
+from msdc.pipeline.conflict import conflict_probability  # noqa: E402
+from msdc.pipeline.conflict.predict import propagate_state  # noqa: E402
+from msdc.pipeline.track import ImmState, Mode, Plane, TrackerConfig  # noqa: E402
+from msdc.pipeline.track.plane import filter_plane  # noqa: E402
 
 NM = 1852.0
 KT = NM / 3600.0

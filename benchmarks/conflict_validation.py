@@ -21,7 +21,7 @@ sys.path[:0] = [str(ROOT), str(ROOT / "tests")]
 
 from conflict_reference import polar_reference, rotated  # noqa: E402
 
-from pipeline.conflict import conflict_probability  # noqa: E402
+from msdc.pipeline.conflict import conflict_probability  # noqa: E402
 
 
 def methods(m, p, d):

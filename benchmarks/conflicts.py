@@ -38,12 +38,18 @@ import numpy as np  # noqa: E402
 import pandas as pd  # noqa: E402
 from track_scenarios import fly, position_sensor  # noqa: E402
 
-import pipeline.conflict.pairs_pc as pairs_pc  # noqa: E402
-from pipeline.conflict import alert_events, classify_alerts, grid_rows, losses_of_separation, warning_times  # noqa: E402
-from pipeline.conflict.approach import closest_approach  # noqa: E402
-from pipeline.conflict.predict import predict_tracks  # noqa: E402
-from pipeline.parallel import thread_count  # noqa: E402
-from pipeline.track import Plane, track  # noqa: E402
+import msdc.pipeline.conflict.pairs_pc as pairs_pc  # noqa: E402
+from msdc.pipeline.conflict import (  # noqa: E402
+    alert_events,
+    classify_alerts,
+    grid_rows,
+    losses_of_separation,
+    warning_times,
+)
+from msdc.pipeline.conflict.approach import closest_approach  # noqa: E402
+from msdc.pipeline.conflict.predict import predict_tracks  # noqa: E402
+from msdc.pipeline.parallel import thread_count  # noqa: E402
+from msdc.pipeline.track import Plane, track  # noqa: E402
 
 LAT0, LON0 = 3.0, 101.5
 HORIZONS_S = (20.0, 60.0, 120.0)
@@ -144,7 +150,7 @@ def pipeline_stages(meas: pd.DataFrame, threshold: float, sigma_alt: bool = Fals
 
 
 def whole_command(hours: float, n_aircraft: int, step: float) -> None:
-    spec = importlib.util.spec_from_file_location("bench_pipeline", ROOT / "benchmarks" / "pipeline.py")
+    spec = importlib.util.spec_from_file_location("bench_pipeline", ROOT / "benchmarks" / "msdc.pipeline.py")
     bench = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(bench)
     with tempfile.TemporaryDirectory() as tmp:

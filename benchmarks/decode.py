@@ -62,7 +62,7 @@ def cat021_frame(n: int, rng: np.random.Generator) -> pd.DataFrame:
 
 def build(path: Path, category: int, n: int) -> None:
     """Encode n records of one category with msdc's encoder (cached on disk)."""
-    from asterix.encode import encode_frame
+    from msdc.asterix.encode import encode_frame
 
     rng = np.random.default_rng(category)
     make = cat048_frame if category == 48 else cat021_frame
@@ -103,7 +103,7 @@ def measure(path: Path, repeat: int) -> dict:
     import gc
     import tempfile
 
-    import asterix
+    import msdc.asterix as asterix
 
     with tempfile.NamedTemporaryFile(suffix=".ast") as tiny:
         tiny.write(path.read_bytes()[:200_000])

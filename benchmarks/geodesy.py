@@ -23,7 +23,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 import numpy as np  # noqa: E402
 from pyproj import Transformer  # noqa: E402
 
-from pipeline.model import geodesy as g  # noqa: E402
+from msdc.pipeline.model import geodesy as g  # noqa: E402
 
 SITE = (2.7456, 101.7072, 40.0)  # a radar site: latitude, longitude (deg), height (m)
 

@@ -55,8 +55,8 @@ def scenario(hours: float, n_aircraft: int, seed: int) -> Scenario:
 
 def build(out: Path, hours: float, n_aircraft: int, radars: int, seed: int) -> list[Path]:
     """Write radar1.ast, radar2.ast (radar3.ast), adsb.ast and sensors.toml; return the input files."""
-    from asterix.encode import encode_frame
     from fixtures.simulate import sensors_toml
+    from msdc.asterix.encode import encode_frame
 
     sc = scenario(hours, n_aircraft, seed)
     two = simulate_two_radars(sc, seed=seed)
@@ -76,7 +76,7 @@ def build(out: Path, hours: float, n_aircraft: int, radars: int, seed: int) -> l
 def timed(label: str, argv: list[str], cwd: Path) -> None:
     """Run ``python -m pipeline.cli ARGV`` in a fresh interpreter; print wall time, CPU time (user + system:
     steadier than wall time on a shared machine), peak RSS and load."""
-    cmd = ["/usr/bin/time", "-f", "%e %M %U %S", sys.executable, "-m", "pipeline.cli", *argv]
+    cmd = ["/usr/bin/time", "-f", "%e %M %U %S", sys.executable, "-m", "msdc.pipeline.cli", *argv]
     load = os.getloadavg()[0]
     done = subprocess.run(cmd, cwd=cwd, capture_output=True, text=True,
                           env={**os.environ, "PYTHONPATH": str(ROOT)})

@@ -23,9 +23,9 @@ sys.path[:0] = [str(ROOT), str(ROOT / "tests")]
 import numpy as np  # noqa: E402
 from track_scenarios import fly, merge, position_sensor, rotating_radar  # noqa: E402
 
-from pipeline.track import TrackerConfig  # noqa: E402
-from pipeline.track.imm import tpm_into  # noqa: E402
-from pipeline.track.plane import filter_plane  # noqa: E402
+from msdc.pipeline.track import TrackerConfig  # noqa: E402
+from msdc.pipeline.track.imm import tpm_into  # noqa: E402
+from msdc.pipeline.track.plane import filter_plane  # noqa: E402
 
 
 def scenario(n_aircraft: int, rng) -> list:

@@ -20,8 +20,8 @@ sys.path[:0] = [str(ROOT), str(ROOT / "tests")]
 import numpy as np  # noqa: E402
 import track_e2e_data as d  # noqa: E402
 
-from pipeline.report.figures import new_figure, save_png  # noqa: E402
-from pipeline.report.track_figures import aircraft_figure  # noqa: E402
+from msdc.pipeline.report.figures import new_figure, save_png  # noqa: E402
+from msdc.pipeline.report.track_figures import aircraft_figure  # noqa: E402
 
 
 def _print(label: str, f: dict) -> None:
@@ -48,7 +48,7 @@ def main() -> int:
     t0 = time.monotonic()
     e = d.build(seed=args.seed)
     if args.noise != "declared":
-        from pipeline.track.noise import estimate_noise
+        from msdc.pipeline.track.noise import estimate_noise
 
         est = estimate_noise(e.measurements, sites=d.SITES, timing=args.noise == "timing")
         e.measurements = est.measurements

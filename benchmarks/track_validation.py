@@ -29,8 +29,8 @@ sys.path[:0] = [str(ROOT), str(ROOT / "tests")]
 import numpy as np  # noqa: E402
 import track_scenarios as sc  # noqa: E402
 
-from pipeline.track import Mode, TrackerConfig, default_modes  # noqa: E402
-from pipeline.track.plane import estimate, filter_plane  # noqa: E402
+from msdc.pipeline.track import Mode, TrackerConfig, default_modes  # noqa: E402
+from msdc.pipeline.track.plane import estimate, filter_plane  # noqa: E402
 
 WARMUP_S = 30.0
 PAPER_MODES = default_modes(3.0, sigma_cv_mps2=0.1, sigma_ct_mps2=0.5)  # the dynamic-TPM paper's filter

@@ -17,7 +17,7 @@ import pandas as pd
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from pipeline.correlate.results import SLOT_COLUMNS, SUMMARY_KEYS, CorrelationRun, WindowResult  # noqa: E402
+from msdc.pipeline.correlate.results import SLOT_COLUMNS, SUMMARY_KEYS, CorrelationRun, WindowResult  # noqa: E402
 
 
 def synthetic_run(n_windows: int, n_slots: int, seed: int = 1) -> CorrelationRun:
@@ -71,7 +71,7 @@ def main() -> None:
     args = parser.parse_args()
     from openpyxl.xml import LXML
 
-    from pipeline.report.excel import write_report
+    from msdc.pipeline.report.excel import write_report
 
     run = synthetic_run(args.windows, args.slots)
     slot_cells = sum(len(w.slots) for w in run.windows) * (len(SLOT_COLUMNS) + 3)

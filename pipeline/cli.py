@@ -12,9 +12,9 @@ import os
 import sys
 from typing import TYPE_CHECKING
 
-from pipeline.meta import FORMATS as _FORMATS
-from pipeline.meta import software_version
-from pipeline.progress import Progress
+from msdc.pipeline.meta import FORMATS as _FORMATS
+from msdc.pipeline.meta import software_version
+from msdc.pipeline.progress import Progress
 
 if TYPE_CHECKING:
     from pathlib import Path
@@ -33,8 +33,8 @@ class _Lazy:
         return getattr(importlib.import_module(self._name), attr)
 
 
-jobs = _Lazy("pipeline.jobs")
-asterix_errors = _Lazy("asterix.errors")
+jobs = _Lazy("msdc.pipeline.jobs")
+asterix_errors = _Lazy("msdc.asterix.errors")
 FORMATS = list(_FORMATS)
 
 
@@ -320,7 +320,7 @@ def cmd_decode(args) -> int:
 
 def cmd_stats(args) -> int:
     """msdc stats: what the inputs hold, printed as tables; the exit status."""
-    from pipeline.stats import format_stats
+    from msdc.pipeline.stats import format_stats
 
     _numba_without_scipy()
     result = jobs.stats_job(jobs.StatsOptions(**_decoding(args), chunk_mb=args.chunk_mb), progress=Progress())
@@ -355,7 +355,7 @@ def _correlate(options, progress: Progress, prepared) -> int:
     result = _run_job("correlate", jobs.validate, jobs.correlate_job, options, progress)
     for name, n in result.run.filters.items():
         print(f"filter {name}: {n} of the input's ADS-B reports", file=sys.stderr)
-    from pipeline.report.summary import summary_table
+    from msdc.pipeline.report.summary import summary_table
 
     print(summary_table(result.run))
     if not options.quality:  # only --quality's figures read the measurements again; the other writers
@@ -409,7 +409,7 @@ def _quality_text(result) -> str:
     bias_cols = [c for c in ("radar", "n_reports", "n_rejected", "n_overhead", "range_bias_m",
                              "range_bias_se_m", "range_gain_ppm", "range_gain_se_ppm", "azimuth_bias_deg",
                              "azimuth_bias_se_deg", "time_bias_s", "time_bias_se_s") if c in b]
-    from pipeline.report.summary import frame_text
+    from msdc.pipeline.report.summary import frame_text
 
     text = "Quality:\n" + frame_text(q[keep]) + "\n\nRadar biases:\n"
     text += frame_text(b[bias_cols]) if len(b) else "  no radar report matched to ADS-B"
@@ -419,7 +419,7 @@ def _quality_text(result) -> str:
 
 def cmd_track(args) -> int:
     """msdc track: fused tracks of the selected aircraft, written as Parquet or CSV; the exit status."""
-    from pipeline import jobs_track
+    from msdc.pipeline import jobs_track
 
     options = jobs_track.TrackOptions(
         **_decoding(args), sensors=args.sensors, callsign=args.callsign, address=args.address,
@@ -439,7 +439,7 @@ def _track_text(result) -> str:
     """Per aircraft: span, updates, gated reports, coasted time; per sensor over every aircraft: aircraft,
     reports, updates, gated, NIS mean (the per-aircraft split is in the JSON: a day of traffic would print
     thousands of lines)."""
-    from pipeline import jobs_track
+    from msdc.pipeline import jobs_track
 
     res = result.result
     if res.aircraft.empty:
@@ -477,7 +477,7 @@ def _noise_text(noise) -> str:
 
 def cmd_conflicts(args) -> int:
     """msdc conflicts: losses of separation and conflict alerts from the fused tracks; the exit status."""
-    from pipeline import jobs_conflict
+    from msdc.pipeline import jobs_conflict
 
     options = jobs_conflict.ConflictOptions(
         **_decoding(args), sensors=args.sensors, output=args.output, json=args.json, step_s=args.step,

@@ -22,10 +22,10 @@ from typing import TYPE_CHECKING
 import numpy as np
 import pandas as pd
 
-from pipeline.meta import FORMATS, software_version
-from pipeline.model import editions as edition_notes
-from pipeline.model.identity import normalise_address, normalise_callsign
-from pipeline.model.load import (
+from msdc.pipeline.meta import FORMATS, software_version
+from msdc.pipeline.model import editions as edition_notes
+from msdc.pipeline.model.identity import normalise_address, normalise_callsign
+from msdc.pipeline.model.load import (
     Loaded,
     NoRecords,
     load,
@@ -34,13 +34,13 @@ from pipeline.model.load import (
     time_spans,
     widen_spans,
 )
-from pipeline.progress import Progress
-from pipeline.report.outputs import Background, BackgroundFailed, Prepared, all_or_nothing
-from pipeline.report.textguard import guard_frame
+from msdc.pipeline.progress import Progress
+from msdc.pipeline.report.outputs import Background, BackgroundFailed, Prepared, all_or_nothing
+from msdc.pipeline.report.textguard import guard_frame
 
 if TYPE_CHECKING:  # the steps are imported by the jobs that run them: msdc stats imports none of them
-    from pipeline.correlate.results import CorrelationRun
-    from pipeline.quality.quality_run import QualityResult
+    from msdc.pipeline.correlate.results import CorrelationRun
+    from msdc.pipeline.quality.quality_run import QualityResult
 
 SLOT_RANGE_S = (0.1, 3600.0)  # below 0.1 s the slot count and the lag tables explode
 FIGURE_WINDOWS = 6  # correlate --quality: slotting and lag figures of the first windows only
@@ -97,7 +97,7 @@ def _integer(name: str, value: int | None, lo: int, hi: int) -> None:
 
 def _editions(editions: list[str] | dict | None) -> dict[int, str]:
     """CAT=EDITION pins checked against the shipped tables ("auto" for CAT021)."""
-    from asterix.tables import available, resolve_edition
+    from msdc.asterix.tables import available, resolve_edition
 
     items = editions.items() if isinstance(editions, dict) else (
         str(e).partition("=")[::2] for e in (editions or []))
@@ -218,13 +218,13 @@ def _sensors(path: str | Path | None, *, required: bool = True) -> pd.DataFrame:
     """The sensor table of --sensors; without the option an empty table where it is optional (track and
     conflicts on ADS-B alone: a radar plot then stops the run naming --sensors), else an OptionError."""
     if path is None and not required:
-        from pipeline.model.sensors import no_sensors
+        from msdc.pipeline.model.sensors import no_sensors
 
         return no_sensors()
     if path is None:
         raise OptionError("--sensors: the sensor file (TOML [[sensor]] tables) is required")
     nonempty_path("--sensors", path)
-    from pipeline.model.sensors import read_sensors
+    from msdc.pipeline.model.sensors import read_sensors
 
     p = Path(path)
     problem = _not_a_file(p, "sensor", "a TOML sensor file")
@@ -256,7 +256,7 @@ def _check_decoding(o: DecodingOptions, warnings: list[str]) -> tuple[list[Path]
     if o.format is not None and o.format not in FORMATS:
         raise OptionError(f"--format {o.format!r}: must be one of {', '.join(FORMATS)}")
     if o.date is not None:
-        from asterix.reader import parse_date  # the rule asterix.read and load apply to date=
+        from msdc.asterix.reader import parse_date  # the rule asterix.read and load apply to date=
 
         try:
             parse_date(o.date, "--date")
@@ -353,11 +353,11 @@ def validate(options) -> Checked:
     inputs, editions = _check_decoding(options, warnings)
     checked = Checked(inputs, editions, warnings=warnings)
     if isinstance(options, AircraftOptions):
-        from pipeline.report.tables import TABLE_FILES, TABLE_MODES, parquet_path
+        from msdc.pipeline.report.tables import TABLE_FILES, TABLE_MODES, parquet_path
 
         _check_aircraft(options)
         if isinstance(options, CorrelateOptions):
-            from pipeline.correlate.correlation import PAIRS
+            from msdc.pipeline.correlate.correlation import PAIRS
 
             _number("--slot", options.slot_s, *SLOT_RANGE_S, " s")
             if options.pairs not in PAIRS:
@@ -430,8 +430,8 @@ def _load(options: DecodingOptions, checked: Checked, progress: Progress | None)
     """Decode the inputs for measurements: only the columns build_measurements reads are decoded."""
     import warnings as python_warnings
 
-    from asterix.errors import EditionWarning, UnreadableInput
-    from pipeline.model.measurements import DECODED_COLUMNS, impossible_positions
+    from msdc.asterix.errors import EditionWarning, UnreadableInput
+    from msdc.pipeline.model.measurements import DECODED_COLUMNS, impossible_positions
 
     try:
         with python_warnings.catch_warnings():  # a wrong edition is said below, with its --edition
@@ -486,7 +486,7 @@ def _format_hints(options: DecodingOptions, inputs: list[dict]) -> list[str]:
 def format_hint(path, fmt: str | None, skipped_blocks: int) -> str:
     """A hint to give --format when detection read a file as raw, blocks were skipped, and the file reads as a
     recorder file (final, gps, oradis) but for its first frame (asterix.containers.recorder_hint); else ''."""
-    from asterix.containers import DETECT_BYTES, recorder_hint
+    from msdc.asterix.containers import DETECT_BYTES, recorder_hint
 
     if fmt != "raw" or not skipped_blocks:
         return ""
@@ -513,7 +513,7 @@ def _load_measurements(options: AircraftOptions, checked: Checked, progress: Pro
     left out with a warning: _stray_verdict). ``stage`` is the progress stage shown once the inputs are
     read (before a missing-data or missing-sensor error too). ``either`` (quality): one category is
     enough, the other's absence is a warning saying which sheets stay empty."""
-    from asterix.errors import UnreadableInput
+    from msdc.asterix.errors import UnreadableInput
 
     try:
         loaded, meas = load_measurements(checked.inputs, checked.sensors, editions=checked.editions or None,
@@ -572,7 +572,7 @@ def unknown_radar_error(missing: list[tuple[int, int]], sensors_path: str | None
                         leave_out: str = "with --sources adsb") -> JobError:
     """The error for radars the sensor file lacks (or with no sensor file given, saying how to ``leave_out``
     the radars), with the TOML lines."""
-    from pipeline.model.sensors import sensor_toml_snippet
+    from msdc.pipeline.model.sensors import sensor_toml_snippet
 
     lines = "\n\n".join(sensor_toml_snippet(sac, sic) for sac, sic in missing)
     pairs = ", ".join(f"{a}/{b}" for a, b in missing)
@@ -588,7 +588,7 @@ def declared_radar(cat048: pd.DataFrame | None, sensors: pd.DataFrame, sensors_p
     """The CAT048 records of radars the sensor file lists. Records of a SAC/SIC it lacks are left out with
     a warning (file, SAC/SIC, count, first offset) when they are too few to be a radar (STRAY_RADAR_*) or
     carry no SAC/SIC at all (no sensor entry could place them); a JobError with the TOML lines otherwise."""
-    from pipeline.model.sensors import undeclared_radars
+    from msdc.pipeline.model.sensors import undeclared_radars
 
     if cat048 is None or cat048.empty:
         return cat048
@@ -678,8 +678,8 @@ def mark_once(meas: pd.DataFrame, *, split_adsb: bool = False, jumps: bool = Tru
     and accuracy reuse them instead of recomputing. ``jumps=False`` skips the jump search (a job that
     neither filters jumps nor assesses quality does not need it); ``flags``: only these jump columns
     (``["jump"]`` for a job that counts or drops jumps but never reads the fit)."""
-    from pipeline.model.dedup import DEDUP_KEYS, duplicate_mask, repeat_groups, shared_rows
-    from pipeline.model.jumps import JUMP_FLAG_COLUMNS, JUMP_INPUTS, jump_flags
+    from msdc.pipeline.model.dedup import DEDUP_KEYS, duplicate_mask, repeat_groups, shared_rows
+    from msdc.pipeline.model.jumps import JUMP_FLAG_COLUMNS, JUMP_INPUTS, jump_flags
 
     meas = meas.drop(columns=[c for c in ("duplicate", *JUMP_FLAG_COLUMNS) if c in meas])
     judged_columns = JUMP_FLAG_COLUMNS if flags is None else [c for c in JUMP_FLAG_COLUMNS if c in flags]
@@ -743,8 +743,8 @@ def _parameters(options: AircraftOptions, loaded: Loaded, started: float, comman
 
 
 def _quality(meas: pd.DataFrame, sensors: pd.DataFrame, options: AircraftOptions) -> QualityResult:
-    from pipeline.model.aircraft import NoSuchAircraft
-    from pipeline.quality.quality_run import quality_run
+    from msdc.pipeline.model.aircraft import NoSuchAircraft
+    from msdc.pipeline.quality.quality_run import quality_run
 
     try:
         return quality_run(meas, sensors, callsign=options.callsign, address=options.address,
@@ -772,7 +772,7 @@ class CorrelateResult:
 
 def _filtered_away(exc, meas_all: pd.DataFrame, options: CorrelateOptions) -> str | None:
     """The message when the aircraft's ADS-B reports exist but the quality filters removed them all."""
-    from pipeline.model.measurements import select
+    from msdc.pipeline.model.measurements import select
 
     asked = [f for f, on in ((f"--min-nic {options.min_nic}", options.min_nic is not None),
                              (f"--min-nacp {options.min_nacp}", options.min_nacp is not None),
@@ -815,7 +815,7 @@ def far_separations(run: CorrelationRun, meas: pd.DataFrame, sensors: pd.DataFra
 def site_warnings(meas: pd.DataFrame, sensors: pd.DataFrame, sensors_path: str) -> list[str]:
     """far_separations for the jobs without correlation windows (quality, track, conflicts): each radar's
     plots against the same aircraft's ADS-B report nearest in time (pipeline.model.site_check)."""
-    from pipeline.model.site_check import MATCH_TOLERANCE_S, radar_offsets
+    from msdc.pipeline.model.site_check import MATCH_TOLERANCE_S, radar_offsets
 
     margin_m = MATCH_TOLERANCE_S * FAST_AIRCRAFT_MPS  # how far an aircraft flies between plot and report
     return [w for row in radar_offsets(meas).itertuples() if np.isfinite(row.rho_p95_nm)
@@ -868,15 +868,15 @@ def correlate_columns(options: CorrelateOptions) -> list[str]:
     filters asked for and far_separations read, with ``fill`` "predict" what the tracker reads, and with
     ``quality`` what the quality step (``quality_columns``) and its slotting figures read. Half the bytes
     of a row on a large recording."""
-    from pipeline.correlate.correlation import CORRELATION_INPUTS
-    from pipeline.model.dedup import DEDUP_KEYS
-    from pipeline.model.jumps import JUMP_INPUTS
-    from pipeline.model.schema import MEASUREMENT_COLUMNS, column_names
+    from msdc.pipeline.correlate.correlation import CORRELATION_INPUTS
+    from msdc.pipeline.model.dedup import DEDUP_KEYS
+    from msdc.pipeline.model.jumps import JUMP_INPUTS
+    from msdc.pipeline.model.schema import MEASUREMENT_COLUMNS, column_names
 
     need = {*CORRELATION_INPUTS, *DEDUP_KEYS, "sensor_kind", "sensor_id", *JUMP_INPUTS,
             *FAR_SEPARATION_INPUTS}
     if options.fill == "predict":
-        from pipeline.track.tracker import FILTER_INPUTS
+        from msdc.pipeline.track.tracker import FILTER_INPUTS
 
         need |= set(FILTER_INPUTS)
     need |= {"nucp_nic"} if options.min_nic is not None else set()
@@ -890,16 +890,16 @@ def _quality_inputs(reference: str) -> list[str]:
     """The measurement columns the quality step reads: the quality tables, the radar errors against the
     ``reference`` ("adsb" or "track": the tracker's and track_reference's inputs as well), the aircraft
     selection and mark_once."""
-    from pipeline.model.dedup import DEDUP_KEYS
-    from pipeline.model.jumps import JUMP_INPUTS
-    from pipeline.quality.accuracy import ACCURACY_INPUTS
-    from pipeline.quality.tables import QUALITY_INPUTS
+    from msdc.pipeline.model.dedup import DEDUP_KEYS
+    from msdc.pipeline.model.jumps import JUMP_INPUTS
+    from msdc.pipeline.quality.accuracy import ACCURACY_INPUTS
+    from msdc.pipeline.quality.tables import QUALITY_INPUTS
 
     need = [*QUALITY_INPUTS, *ACCURACY_INPUTS, *DEDUP_KEYS, *JUMP_INPUTS, "sensor_kind", "sensor_id",
             "aircraft_id", "callsign", "address"]
     if reference == "track":
-        from pipeline.quality.track_reference import TRACK_REFERENCE_INPUTS
-        from pipeline.track.tracker import FILTER_INPUTS, REQUIRED
+        from msdc.pipeline.quality.track_reference import TRACK_REFERENCE_INPUTS
+        from msdc.pipeline.track.tracker import FILTER_INPUTS, REQUIRED
 
         need += [*REQUIRED, *FILTER_INPUTS, *TRACK_REFERENCE_INPUTS]  # the tracker's optional ones too
     return need
@@ -909,8 +909,8 @@ def quality_columns(options: QualityOptions) -> list[str]:
     """The measurement columns a quality job builds, in schema order: what the quality tables, the radar
     errors against the reference (with ``reference="track"`` the tracker's inputs), mark_once and the
     aircraft selection read. Two thirds of the bytes of a row with the ADS-B reference."""
-    from pipeline.model.schema import MEASUREMENT_COLUMNS, column_names
-    from pipeline.model.site_check import SITE_CHECK_INPUTS
+    from msdc.pipeline.model.schema import MEASUREMENT_COLUMNS, column_names
+    from msdc.pipeline.model.site_check import SITE_CHECK_INPUTS
 
     need = set(_quality_inputs(options.reference)) | set(SITE_CHECK_INPUTS)
     return column_names(need & set(MEASUREMENT_COLUMNS))  # the job-wide flags are added by mark_once
@@ -919,9 +919,9 @@ def quality_columns(options: QualityOptions) -> list[str]:
 def correlate_job(options: CorrelateOptions, *, progress: Progress | None = None,
                   checked: Checked | None = None, command: str = "correlate") -> CorrelateResult:
     """Validate, decode, build measurements, filter, correlate (and assess quality); nothing is written."""
-    from pipeline.correlate.correlation import NoOverlap, TooManySlots, correlate
-    from pipeline.model.aircraft import NoSuchAircraft
-    from pipeline.quality.filters import apply_filters, filter_warnings
+    from msdc.pipeline.correlate.correlation import NoOverlap, TooManySlots, correlate
+    from msdc.pipeline.model.aircraft import NoSuchAircraft
+    from msdc.pipeline.quality.filters import apply_filters, filter_warnings
 
     started = time.monotonic()
     checked = checked or validate(options)
@@ -1005,7 +1005,7 @@ def figure_windows_note(n_windows: int, max_windows: int | None = None) -> str |
 
 def quality_figures(result: QualityResult, out_dir: Path, stem: str) -> dict[str, Path]:
     """Update-interval histogram and, per radar, range/azimuth error against range and time (PNG)."""
-    from pipeline.report.quality_figures import interval_histogram_figure, radar_error_figure
+    from msdc.pipeline.report.quality_figures import interval_histogram_figure, radar_error_figure
 
     out_dir.mkdir(parents=True, exist_ok=True)
     figs = {"Update intervals": interval_histogram_figure(result.sheets["Update intervals"],
@@ -1021,7 +1021,7 @@ def quality_figures(result: QualityResult, out_dir: Path, stem: str) -> dict[str
 
 
 def _track_figure(run: CorrelationRun, png: Path, sensors: pd.DataFrame) -> None:
-    from pipeline.report.figures import track_figure  # matplotlib: only where a figure is drawn
+    from msdc.pipeline.report.figures import track_figure  # matplotlib: only where a figure is drawn
 
     track_figure(run, png, sensors)
 
@@ -1031,7 +1031,7 @@ def _track_figure_and_tables(run: CorrelationRun, png: Path, sensors: pd.DataFra
     """The outputs written beside the workbook in a child while the workbook is written: the Parquet
     tables named in ``tables`` (pipeline.report.excel.write_parquet_tables, whose result goes back) and the
     track figure."""
-    from pipeline.report.excel import write_parquet_tables
+    from msdc.pipeline.report.excel import write_parquet_tables
 
     parquet = write_parquet_tables(run, out, names=tables)
     _track_figure(run, png, sensors)
@@ -1045,9 +1045,9 @@ def _warm_track_figure() -> None:
 
     import pyarrow.parquet  # noqa: F401 - imported now, used by write_parquet_tables
 
-    import pipeline.report.excel  # noqa: F401
-    from pipeline.model.geodesy import _geod
-    from pipeline.report.figures import new_figure
+    import msdc.pipeline.report.excel  # noqa: F401
+    from msdc.pipeline.model.geodesy import _geod
+    from msdc.pipeline.report.figures import new_figure
 
     _geod()
     fig = new_figure(1.0, 1.0, dpi=10)
@@ -1100,7 +1100,7 @@ CHILD_TABLES = ("slots",)  # the tables the child can write from the slots it is
 
 def _track_run(run: CorrelationRun) -> CorrelationRun:
     """What the track figure reads of a run (summaries, slots, parameters), without the lag tables."""
-    from pipeline.correlate.results import CorrelationRun, WindowResult
+    from msdc.pipeline.correlate.results import CorrelationRun, WindowResult
 
     return CorrelationRun(windows=[WindowResult(w.summary, w.slots, w.lags.iloc[:0]) for w in run.windows],
                           parameters=run.parameters)
@@ -1108,7 +1108,7 @@ def _track_run(run: CorrelationRun) -> CorrelationRun:
 
 def _write_correlation(result: CorrelateResult, progress: Progress | None,
                        max_windows: int, prepared: Prepared | None = None) -> dict[str, Path]:
-    from pipeline.report.tables import parquet_tables, table_length
+    from msdc.pipeline.report.tables import parquet_tables, table_length
 
     written: dict[str, Path] = {}
     run, checked = result.run, result.checked
@@ -1124,7 +1124,7 @@ def _write_correlation(result: CorrelateResult, progress: Progress | None,
         drawing = prepared.start(*args) if prepared is not None else Background(_track_figure_and_tables,
                                                                                  *args)
     try:
-        from pipeline.report.summary import write_json
+        from msdc.pipeline.report.summary import write_json
 
         if checked.json:
             write_json(run, checked.json)
@@ -1141,17 +1141,17 @@ def _write_workbook(result: CorrelateResult, progress: Progress | None, max_wind
                     drawing: Background, png: Path, in_child: list[str]) -> dict[str, Path]:
     """The workbook (and with quality its figures) while ``drawing`` writes the map and the Parquet tables
     ``in_child``; the other Parquet tables are written here."""
-    from pipeline.report.excel import write_report
-    from pipeline.report.tables import parquet_path
+    from msdc.pipeline.report.excel import write_report
+    from msdc.pipeline.report.tables import parquet_path
 
     run, out = result.run, result.checked.output
     if progress:
         progress.stage("Writing report")
     images = None
     if result.quality is not None:
-        from pipeline.report.figures import lag_figure
-        from pipeline.report.quality_figures import slotting_figure
-        from pipeline.report.summary import window_label
+        from msdc.pipeline.report.figures import lag_figure
+        from msdc.pipeline.report.quality_figures import slotting_figure
+        from msdc.pipeline.report.summary import window_label
 
         images = dict(quality_figures(result.quality, out.parent, out.stem))
         shown = result.measurements[SLOTTING_FIGURE_INPUTS]  # what the figures read, not every column copied
@@ -1215,8 +1215,8 @@ def write_quality(result: QualityJobResult) -> dict[str, Path]:
 def _write_quality(result: QualityJobResult) -> dict[str, Path]:
     import json
 
-    from pipeline.report.excel import write_tables
-    from pipeline.report.summary import table_records
+    from msdc.pipeline.report.excel import write_tables
+    from msdc.pipeline.report.summary import table_records
 
     written: dict[str, Path] = {}
     if result.checked.json:
@@ -1258,11 +1258,11 @@ def stats_job(options: StatsOptions, *, progress: Progress | None = None) -> Sta
     """Validate, then stream every input in chunks of ``chunk_mb`` (asterix.iter_read) and fold the tables of
     records, sources, aircraft and skipped blocks chunk by chunk: memory is bounded by the chunk, not
     the file."""
-    import asterix
-    from asterix.errors import UnreadableInput
-    from pipeline.model.sources import file_labels
-    from pipeline.model.time import UNDATED_DAY, FirstDayTally
-    from pipeline.stats import STATS_COLUMNS, StatsAccumulator
+    import msdc.asterix as asterix
+    from msdc.asterix.errors import UnreadableInput
+    from msdc.pipeline.model.sources import file_labels
+    from msdc.pipeline.model.time import UNDATED_DAY, FirstDayTally
+    from msdc.pipeline.stats import STATS_COLUMNS, StatsAccumulator
 
     checked = validate(options)
     if progress:
@@ -1341,12 +1341,12 @@ def decode_job(options: DecodeOptions, *, on_chunk: Callable[[int, int, str], No
     temporary file beside it and moved into place only when the whole run succeeded: a failed or
     interrupted run writes nothing, nor does a run in which nothing decodes. ``on_chunk(done_bytes, size,
     name)`` reports progress. Raises asterix DecodeError in strict mode, JobError for unreadable input."""
-    import asterix
-    from asterix.errors import UnreadableInput
-    from asterix.reader import categories_in
-    from pipeline.model.sources import file_labels
-    from pipeline.model.time import FirstDayTally
-    from pipeline.report.outputs import Staging
+    import msdc.asterix as asterix
+    from msdc.asterix.errors import UnreadableInput
+    from msdc.asterix.reader import categories_in
+    from msdc.pipeline.model.sources import file_labels
+    from msdc.pipeline.model.time import FirstDayTally
+    from msdc.pipeline.report.outputs import Staging
 
     checked = validate(options)
     out = checked.output

@@ -21,9 +21,9 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from pipeline import jobs
-from pipeline.jobs import Checked, JobError, OptionError
-from pipeline.jobs_track import (
+from msdc.pipeline import jobs
+from msdc.pipeline.jobs import Checked, JobError, OptionError
+from msdc.pipeline.jobs_track import (
     ESTIMATED,
     TrackOptions,
     _estimate_noise,
@@ -33,7 +33,7 @@ from pipeline.jobs_track import (
     check_tracking,
     untrackable,
 )
-from pipeline.progress import Progress
+from msdc.pipeline.progress import Progress
 
 METHODS = ("exact", "one-block", "blocks", "midpoint")
 # aircraft are tracked again for their predictions in batches of about this many reports, each batch's
@@ -164,13 +164,13 @@ class ConflictJobResult:
 def conflict_job(options: ConflictOptions, *, progress: Progress | None = None,
                  checked: Checked | None = None, command: str = "conflicts") -> ConflictJobResult:
     """Validate, decode, track every aircraft, predict, PC per pair/step/horizon, events; writes nothing."""
-    from pipeline.conflict import alert_events, classify_alerts, pair_probabilities, warning_times
-    from pipeline.conflict.approach import closest_approach
-    from pipeline.conflict.events import losses_by_pairs
-    from pipeline.conflict.grid import on_grid
-    from pipeline.conflict.surface import on_surface, surface_pairs
-    from pipeline.track import Plane, track
-    from pipeline.track.noise import SURFACE_SPEED_KT
+    from msdc.pipeline.conflict import alert_events, classify_alerts, pair_probabilities, warning_times
+    from msdc.pipeline.conflict.approach import closest_approach
+    from msdc.pipeline.conflict.events import losses_by_pairs
+    from msdc.pipeline.conflict.grid import on_grid
+    from msdc.pipeline.conflict.surface import on_surface, surface_pairs
+    from msdc.pipeline.track import Plane, track
+    from msdc.pipeline.track.noise import SURFACE_SPEED_KT
 
     started = time.monotonic()
     checked = checked or validate(options)
@@ -244,7 +244,7 @@ def _surface_counts(grid: pd.DataFrame, by_speed: np.ndarray, at_surface: np.nda
     losses and alert events the tables hold with --surface exclude and with include (a run that goes on
     from airborne samples to surface ones is one run with include, and one on each side in the first two
     counts: these do not add up to include's)."""
-    from pipeline.conflict import alert_events
+    from msdc.pipeline.conflict import alert_events
 
     surface = grid["on_surface"].to_numpy(bool)
     alone = alert_events(pc[at_surface], options.threshold, step_s=float(options.step_s))
@@ -269,9 +269,9 @@ def _predictions(meas: pd.DataFrame, epoch: pd.Timestamp, plane, horizons: tuple
     """predict_tracks for every aircraft of `meas`, in `plane`, in batches of aircraft tracked with their
     filter histories kept (about 1.4 kB a report: 1.4 GB for a day of traffic at once), one batch's at a
     time, with the `epoch` of the run without histories: the same predictions, in the same order."""
-    from pipeline.conflict.predict import predict_tracks
-    from pipeline.track import track
-    from pipeline.track.tracker import concat_columns
+    from msdc.pipeline.conflict.predict import predict_tracks
+    from msdc.pipeline.track import track
+    from msdc.pipeline.track.tracker import concat_columns
 
     per_aircraft = meas.groupby("aircraft_id", sort=True, observed=True).size()
     batch = np.cumsum(per_aircraft.to_numpy()) // PREDICTION_BATCH_REPORTS
@@ -301,7 +301,7 @@ def _own_columns(frame: pd.DataFrame) -> dict[str, pd.Series]:
 
 def summary(result: ConflictJobResult) -> dict:
     """The JSON document: parameters, inputs, counts and the three tables as records."""
-    from pipeline.report.summary import json_value
+    from msdc.pipeline.report.summary import json_value
 
     def records(frame: pd.DataFrame) -> list[dict]:
         return [{k: json_value(v) for k, v in row.items()} for row in frame.to_dict("records")]
@@ -359,7 +359,7 @@ def write_conflicts(result: ConflictJobResult) -> dict[str, Path]:
     """Write the tables (CSV: alerts at -o, losses and warning times beside it; xlsx: one workbook), the
     JSON and one figure per alert (--figures); all to temporary names first, renamed only when every file
     is complete (a failure removes what this run renamed, and the figures' folder if it made it)."""
-    from pipeline.report.conflict_excel import write_conflict_workbook
+    from msdc.pipeline.report.conflict_excel import write_conflict_workbook
 
     out, js = result.checked.output, result.checked.json
     targets: dict[str, Path] = {}
@@ -380,7 +380,7 @@ def write_conflicts(result: ConflictJobResult) -> dict[str, Path]:
         writers.append((js, lambda p: p.write_text(json.dumps(summary(result), indent=1, default=str))))
     made_dir = None
     if result.options.figures is not None:
-        from pipeline.report.conflict_figures import alert_figure, figure_name
+        from msdc.pipeline.report.conflict_figures import alert_figure, figure_name
 
         d = Path(result.options.figures)
         alerts = result.alerts
@@ -390,7 +390,7 @@ def write_conflicts(result: ConflictJobResult) -> dict[str, Path]:
         pred = pred[pred["aircraft_id"].isin(involved) & pred["time"].isin(alerts["start"])]
         pc = result.pc[result.pc["aircraft_a"].isin(involved)]
         if result.options.surface == "exclude":  # the samples the events were found in
-            from pipeline.conflict.surface import surface_pairs
+            from msdc.pipeline.conflict.surface import surface_pairs
 
             pc = pc[~surface_pairs(pc, result.tracks)]
         threshold, step = result.options.threshold, float(result.options.step_s)

@@ -18,9 +18,9 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from pipeline import jobs
-from pipeline.jobs import AircraftOptions, Checked, JobError, OptionError
-from pipeline.progress import Progress
+from msdc.pipeline import jobs
+from msdc.pipeline.jobs import AircraftOptions, Checked, JobError, OptionError
+from msdc.pipeline.progress import Progress
 
 SOURCES = ("radar", "adsb")
 # --noise: the sensor file's sigmas and NACp; estimated from residuals (one isotropic ADS-B sigma per
@@ -105,7 +105,7 @@ def _sources(value) -> tuple[str, ...]:
 def check_tracking(options: TrackOptions) -> float:
     """The tracker's options shared by track and conflicts (--step, --max-coast, --tpm, --noise); OptionError
     if bad, else the step (s)."""
-    from pipeline.track import check_tpm
+    from msdc.pipeline.track import check_tpm
 
     step = options.step_s
     if not isinstance(step, int | float) or not math.isfinite(step) or not step > 0.0:
@@ -158,7 +158,7 @@ def validate(options: TrackOptions, *, require_output: bool = False) -> Checked:
     """Check every option, the sensor file and the output paths before any decoding; OptionError if bad.
     ``require_output`` (the command): at least one of -o, --json and --figures; track_job returns the table
     whatever is written."""
-    from pipeline.track.plane import SMOOTHERS
+    from msdc.pipeline.track.plane import SMOOTHERS
 
     warnings: list[str] = []
     inputs, editions = jobs._check_decoding(options, warnings)
@@ -204,14 +204,14 @@ def _measurements(loaded, checked: Checked, options: TrackOptions) -> pd.DataFra
     """Measurements of the requested sources (one of them must be present), repeated reports dropped."""
     import warnings as python_warnings
 
-    from pipeline.model.dedup import duplicate_mask
-    from pipeline.model.measurements import (
+    from msdc.pipeline.model.dedup import duplicate_mask
+    from msdc.pipeline.model.measurements import (
         IdentityWarning,
         OffEarthWarning,
         OutOfCoverageWarning,
         build_measurements,
     )
-    from pipeline.model.sensors import UnknownRadar
+    from msdc.pipeline.model.sensors import UnknownRadar
 
     sources = _sources(options.sources)
     radar = loaded.frames.get(48) if "radar" in sources else None
@@ -236,7 +236,7 @@ def _measurements(loaded, checked: Checked, options: TrackOptions) -> pd.DataFra
         raise jobs.unknown_radar_error(exc.missing, jobs.sensors_path(options)) from exc
     checked.warnings += list(meas.attrs.get("coverage_warnings", ()))
     checked.warnings += list(meas.attrs.get("identity_warnings", ()))
-    from pipeline.track.associate import join_by_track_number
+    from msdc.pipeline.track.associate import join_by_track_number
 
     meas, joined = join_by_track_number(meas, max_gap_s=float(options.max_coast_s))
     dup = duplicate_mask(meas.sort_values("time", kind="stable")).reindex(meas.index).to_numpy(bool)
@@ -251,8 +251,8 @@ def _select(meas: pd.DataFrame, options: TrackOptions) -> pd.DataFrame:
     """The selected aircraft's reports; JobError naming the closest call signs / addresses present."""
     import difflib
 
-    from pipeline.model.identity import normalise_address, normalise_callsign
-    from pipeline.model.measurements import select
+    from msdc.pipeline.model.identity import normalise_address, normalise_callsign
+    from msdc.pipeline.model.measurements import select
 
     if options.all_aircraft:
         return meas
@@ -269,8 +269,8 @@ def _select(meas: pd.DataFrame, options: TrackOptions) -> pd.DataFrame:
 def track_job(options: TrackOptions, *, progress: Progress | None = None, checked: Checked | None = None,
               command: str = "track") -> TrackJobResult:
     """Validate, decode, build measurements, select, track; nothing is written."""
-    from pipeline.model.identity import aircraft_labels
-    from pipeline.track import track
+    from msdc.pipeline.model.identity import aircraft_labels
+    from msdc.pipeline.track import track
 
     started = time.monotonic()
     checked = checked or validate(options)
@@ -344,8 +344,8 @@ def _estimate_noise(meas: pd.DataFrame, sensors: pd.DataFrame, options: TrackOpt
     """The measurements with each sensor's covariance rescaled to its residual scatter, and the table of
     declared against estimated sigmas (radar range m and azimuth deg from the sensor file; ADS-B m per
     NACp level, and its along-track timing sigma s, declared 0)."""
-    from pipeline.model.measurements import sensor_id
-    from pipeline.track.noise import AZIMUTH, RANGE, TIMING, estimate_noise
+    from msdc.pipeline.model.measurements import sensor_id
+    from msdc.pipeline.track.noise import AZIMUTH, RANGE, TIMING, estimate_noise
 
     ids = sensor_id(48, sensors["sac"], sensors["sic"]).to_numpy()
     sites = {str(i): (float(r.latitude), float(r.longitude))
@@ -374,7 +374,7 @@ def _estimate_noise(meas: pd.DataFrame, sensors: pd.DataFrame, options: TrackOpt
 def summary(result: TrackJobResult) -> dict:
     """The JSON document: parameters, inputs, and per aircraft its span, coasted time and per-sensor
     reports, updates, gated reports and NIS mean."""
-    from pipeline.report.summary import json_value
+    from msdc.pipeline.report.summary import json_value
 
     res = result.result
     labels = result.labels.set_index("aircraft_id")
@@ -417,8 +417,8 @@ def write_tracks(result: TrackJobResult) -> dict[str, Path]:
     written: dict[str, Path] = {}
     out, js = result.checked.output, result.checked.json
     if out is not None:
-        from pipeline.report.summary import write_atomically
-        from pipeline.report.tables import write_parquet
+        from msdc.pipeline.report.summary import write_atomically
+        from msdc.pipeline.report.tables import write_parquet
 
         if out.suffix.lower() == ".csv":
             times = result.tracks["time"].dt.strftime("%Y-%m-%dT%H:%M:%S.%fZ")
@@ -431,7 +431,7 @@ def write_tracks(result: TrackJobResult) -> dict[str, Path]:
         js.write_text(json.dumps(summary(result), indent=1, default=str))
         written["json"] = js
     if result.options.figures is not None:
-        from pipeline.report.track_figures import track_figures
+        from msdc.pipeline.report.track_figures import track_figures
 
         d = Path(result.options.figures)
         d.mkdir(exist_ok=True)

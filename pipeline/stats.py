@@ -13,7 +13,7 @@ import re
 import numpy as np
 import pandas as pd
 
-from pipeline.model.sources import file_labels
+from msdc.pipeline.model.sources import file_labels
 
 # "(record at offset 1234)", "at offset 0x1f": the place, not the reason; "(LEN 40, 36 bytes past the
 # end)": a bad data block LEN's numbers; "(capture time 1989-04-23 02:22:56)": a damaged capture time's value

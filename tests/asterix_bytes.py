@@ -10,8 +10,8 @@ from pathlib import Path
 
 import numpy as np
 
-import asterix
-from asterix.containers import read_segments
+import msdc.asterix as asterix
+from msdc.asterix.containers import read_segments
 
 # ../shared beside the repository root (CI clones the repository next to it); a worktree one level
 # deeper (worktrees/<name>) finds it one level up.

@@ -15,10 +15,10 @@ import math
 from dataclasses import dataclass, replace
 from pathlib import Path
 
-from asterix.encode import encode_frame
 from fixtures.flight import Flight, Segment
 from fixtures.scenario import AircraftSpec, default_scenario
 from fixtures.simulate import sensors_toml, simulate
+from msdc.asterix.encode import encode_frame
 
 DATE = dt.date(2019, 3, 1)
 RADIUS_NM = 5.0
@@ -127,7 +127,7 @@ def write_encounter(enc: Encounter, directory: Path, seed: int = 11) -> dict[str
 
 def run_encounter(enc: Encounter, directory: Path, seed: int = 11, horizons_s=(20.0, 60.0, 120.0), **options):
     """Simulate, then `conflict_job` on the recordings (nothing written); returns the job result."""
-    from pipeline.jobs_conflict import ConflictOptions, conflict_job
+    from msdc.pipeline.jobs_conflict import ConflictOptions, conflict_job
 
     p = write_encounter(enc, directory, seed)
     opts = ConflictOptions(inputs=(p["radar"], p["adsb"]), sensors=p["sensors"], date=DATE,

@@ -4,10 +4,10 @@ from __future__ import annotations
 
 import pandas as pd
 
-from pipeline.model.identity import assign_aircraft_id
-from pipeline.model.measurements import sensor_id
-from pipeline.model.schema import conform, validate
-from pipeline.model.time import UNDATED_DAY
+from msdc.pipeline.model.identity import assign_aircraft_id
+from msdc.pipeline.model.measurements import sensor_id
+from msdc.pipeline.model.schema import conform, validate
+from msdc.pipeline.model.time import UNDATED_DAY
 
 
 def meas_frame(frame: pd.DataFrame, kind: str | None = None, day: str | None = None) -> pd.DataFrame:

@@ -14,10 +14,10 @@ import numpy as np
 import paper_imm
 from paper_imm import PaperMode
 
-from pipeline.conflict import conflict_probability
-from pipeline.conflict.predict import propagate_state
-from pipeline.track import ImmState, Mode, Plane, TrackerConfig
-from pipeline.track.plane import filter_plane
+from msdc.pipeline.conflict import conflict_probability
+from msdc.pipeline.conflict.predict import propagate_state
+from msdc.pipeline.track import ImmState, Mode, Plane, TrackerConfig
+from msdc.pipeline.track.plane import filter_plane
 
 NM = 1852.0
 KT = NM / 3600.0

@@ -19,10 +19,10 @@ import numpy as np
 import pandas as pd
 from real_track_data import REAL
 
-from pipeline.conflict.calibration import chi2_2_ppf, interpolate_reports, mahalanobis2
-from pipeline.conflict.predict import propagate_state
-from pipeline.track import ImmState, track
-from pipeline.track.tracker import MAX_RANGE_M
+from msdc.pipeline.conflict.calibration import chi2_2_ppf, interpolate_reports, mahalanobis2
+from msdc.pipeline.conflict.predict import propagate_state
+from msdc.pipeline.track import ImmState, track
+from msdc.pipeline.track.tracker import MAX_RANGE_M
 
 HORIZONS_S = (20.0, 60.0, 120.0)
 D2_95 = chi2_2_ppf(0.95)  # 5.991
@@ -34,8 +34,8 @@ def load_real_tracks(max_aircraft: int | None = None, min_reports: int = 300, si
     the aircraft with the most airborne reports; sigma_m replaces every report's sigma per axis (m)."""
     if not REAL.exists():
         return None
-    import asterix
-    from pipeline.model.measurements import adsb_measurements, nacp_sigma_m
+    import msdc.asterix as asterix
+    from msdc.pipeline.model.measurements import adsb_measurements, nacp_sigma_m
 
     frame = asterix.read(REAL, editions={21: "0.23"}).frames[21]
     frame = frame[(frame["gbs"] == 0) & frame["latitude"].notna() & frame["address"].notna()]

@@ -10,8 +10,8 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from pipeline.track import Plane, TrackerConfig, nacp_covariance
-from pipeline.track.noise import (
+from msdc.pipeline.track import Plane, TrackerConfig, nacp_covariance
+from msdc.pipeline.track.noise import (
     KT_PER_M_S,
     MIN_AIRCRAFT_RESIDUALS,
     SURFACE_SPEED_KT,
@@ -23,7 +23,7 @@ from pipeline.track.noise import (
     plane_residuals,
     variance_ratio,
 )
-from pipeline.track.plane import estimate, filter_plane
+from msdc.pipeline.track.plane import estimate, filter_plane
 
 # ../shared beside the checkout, as the other tests; MSDC_SHARED overrides it (worktrees elsewhere)
 SHARED = Path(os.environ.get("MSDC_SHARED", Path(__file__).resolve().parents[1].parent / "shared"))
@@ -37,7 +37,7 @@ def load_real_adsb(min_span_s: float = 600.0) -> list[dict] | None:
     the report has none); None when the recording is absent."""
     if not REAL.exists():
         return None
-    import asterix
+    import msdc.asterix as asterix
 
     frame = asterix.read(REAL, editions={21: "0.23"}).frames[21]
     frame = frame[(frame["gbs"] == 0) & frame["latitude"].notna() & frame["address"].notna()]

@@ -12,7 +12,7 @@ from measurement_frames import meas_frame
 
 from fixtures.scenario import AircraftSpec, Scenario
 from fixtures.simulate import simulate
-from pipeline.model.geodesy import (
+from msdc.pipeline.model.geodesy import (
     A_M,
     E2,
     M_PER_NM,
@@ -21,9 +21,9 @@ from pipeline.model.geodesy import (
     geodetic_to_ecef,
     slant_range_azimuth,
 )
-from pipeline.model.measurements import build_measurements
-from pipeline.model.sensors import REQUIRED_COLUMNS as SENSOR_COLUMNS
-from pipeline.quality.accuracy import (
+from msdc.pipeline.model.measurements import build_measurements
+from msdc.pipeline.model.sensors import REQUIRED_COLUMNS as SENSOR_COLUMNS
+from msdc.pipeline.quality.accuracy import (
     BIAS_COLUMNS,
     ERROR_COLUMNS,
     LIMITATION_NOTE,
@@ -33,7 +33,7 @@ from pipeline.quality.accuracy import (
     nacp_bound_m,
     radar_errors,
 )
-from pipeline.report.quality_figures import radar_error_figure
+from msdc.pipeline.report.quality_figures import radar_error_figure
 
 SITE = {"name": "TEST", "sac": 25, "sic": 1, "latitude": 0.0, "longitude": 0.0, "altitude_m": 0.0}
 SENSORS = pd.DataFrame([SITE])[SENSOR_COLUMNS]
@@ -455,7 +455,7 @@ def test_radar_errors_needs_the_sensor_table_for_radar_reports():
 
 
 def test_quality_run_rejects_bad_arguments_before_the_tables():
-    from pipeline.quality.quality_run import quality_run
+    from msdc.pipeline.quality.quality_run import quality_run
 
     meas = _hand_meas()
     with pytest.raises(ValueError, match="reference: 'TRACK' is not one of 'adsb', 'track'"):

@@ -16,11 +16,11 @@ import pandas as pd
 import pytest
 from real_track_data import REAL
 
-from asterix.encode import encode_frame
-from pipeline import jobs
-from pipeline.cli import main
-from pipeline.jobs_conflict import ConflictOptions, conflict_job
-from pipeline.jobs_track import TrackOptions, summary, track_job
+from msdc.asterix.encode import encode_frame
+from msdc.pipeline import jobs
+from msdc.pipeline.cli import main
+from msdc.pipeline.jobs_conflict import ConflictOptions, conflict_job
+from msdc.pipeline.jobs_track import TrackOptions, summary, track_job
 
 INJECTED_M = 20.0  # the simulator's ADS-B position sigma per axis for this recording
 DECLARED_M = 50.0
@@ -91,8 +91,8 @@ def test_noise_classes_keep_declared_apart_from_the_same_nacp_sigma():
     """A declared sigma equal to a NACp level's (NACp 9: 30 / 2.4477 m) is still its own class."""
     import pandas as pd
 
-    from pipeline.model.measurements import nacp_sigma_m
-    from pipeline.track.noise import _classes
+    from msdc.pipeline.model.measurements import nacp_sigma_m
+    from msdc.pipeline.track.noise import _classes
 
     var = float(nacp_sigma_m([9])[0]) ** 2
     meas = pd.DataFrame({"sensor_id": ["021:0/1"] * 3, "sensor_kind": ["adsb"] * 3,

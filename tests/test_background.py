@@ -1,7 +1,7 @@
-"""pipeline.report.outputs.Background: an output written in a forked child while the parent writes another;
-the child's error is raised in the parent, a child that dies says so, cancel() stops it, and without fork
-the work runs at once in the process. With msdc correlate: a figure failing in the child ends the run
-with one line and leaves nothing written."""
+"""msdc.pipeline.report.outputs.Background: an output written in a forked child while the parent
+writes another; the child's error is raised in the parent, a child that dies says so, cancel() stops it,
+and without fork the work runs at once in the process. With msdc correlate: a figure failing in the child
+ends the run with one line and leaves nothing written."""
 
 from __future__ import annotations
 
@@ -12,10 +12,10 @@ from pathlib import Path
 
 import pytest
 
-from pipeline import jobs
-from pipeline.cli import main
-from pipeline.report import outputs
-from pipeline.report.outputs import Background, BackgroundFailed, all_or_nothing
+from msdc.pipeline import jobs
+from msdc.pipeline.cli import main
+from msdc.pipeline.report import outputs
+from msdc.pipeline.report.outputs import Background, BackgroundFailed, all_or_nothing
 
 FIX = Path(__file__).resolve().parents[1] / "fixtures"
 forking = pytest.mark.skipif(not (outputs.FORK_OK and hasattr(os, "fork")),
@@ -282,7 +282,7 @@ def test_a_parquet_table_failing_beside_the_workbook_leaves_nothing(tmp_path, mo
                                                                    failing):
     """The slot table is written with the figure (in the child where fork is used), the lag table here: a
     full disk for either ends the run with one line naming that table, and nothing is left."""
-    from pipeline.report import excel
+    from msdc.pipeline.report import excel
 
     real = excel.write_table_parquet
     monkeypatch.setattr(outputs, "FORK_OK", fork and outputs.FORK_OK)
@@ -298,7 +298,7 @@ def test_a_parquet_table_failing_beside_the_workbook_leaves_nothing(tmp_path, mo
 def test_the_table_and_figure_process_dying_names_its_files(tmp_path, monkeypatch, capsys):
     """The child (slot table and map) killed: one line naming the files it was writing; the lag table this
     process wrote meanwhile is removed with everything else."""
-    from pipeline.report import excel
+    from msdc.pipeline.report import excel
 
     parent, real = os.getpid(), excel.write_table_parquet
     monkeypatch.setattr(excel, "write_table_parquet",
@@ -350,7 +350,7 @@ def test_long_tables_are_written_by_this_process_and_come_out_the_same(tmp_path,
     table here. The files are the same either way."""
     import pandas as pd
 
-    from pipeline.report import excel
+    from msdc.pipeline.report import excel
 
     writers = tmp_path / "writers.txt"
     real = excel.write_table_parquet

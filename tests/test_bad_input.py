@@ -9,7 +9,7 @@ from asterix_bytes import block, decode_bytes, fspec
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-import asterix
+import msdc.asterix as asterix
 
 
 def rec048(i: int) -> bytes:
@@ -78,7 +78,7 @@ def test_an_fspec_past_the_end_names_its_record():
 
 def adsb_blocks(n: int, edition: str) -> bytes:
     """n CAT021 blocks of one record each (position, time, address, call sign) in the given edition."""
-    from asterix.encode import encode_frame
+    from msdc.asterix.encode import encode_frame
 
     frame = pd.DataFrame({"sac": 0, "sic": 107, "time_of_day": 79200 + 0.5 * np.arange(n),
                           "latitude": 41.3 + 1e-4 * np.arange(n), "longitude": 2.08 + 1e-4 * np.arange(n),

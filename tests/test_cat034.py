@@ -14,7 +14,7 @@ import pandas as pd
 import pytest
 from asterix_bytes import block, decode_bytes, fspec
 
-from asterix.encode import encode_record
+from msdc.asterix.encode import encode_record
 
 EDITIONS = ["1.27", "1.28", "1.29"]
 

@@ -12,9 +12,9 @@ import openpyxl
 import pandas as pd
 import pytest
 
-import asterix
-from asterix.encode import encode_frame
-from pipeline.cli import main
+import msdc.asterix as asterix
+from msdc.asterix.encode import encode_frame
+from msdc.pipeline.cli import main
 
 FIX = Path(__file__).resolve().parents[1] / "fixtures"
 RADAR, ADSB, SENSORS = FIX / "radar.ast", FIX / "adsb.ast", FIX / "sensors.toml"
@@ -146,7 +146,7 @@ def test_version(capsys):
 def test_program_exit_status_and_output():
     """``python -m pipeline.cli`` (the console entry point) prints everything and exits with main's status."""
     def msdc_stats(path: str) -> subprocess.CompletedProcess:
-        return subprocess.run([sys.executable, "-m", "pipeline.cli", "stats", path], capture_output=True,
+        return subprocess.run([sys.executable, "-m", "msdc.pipeline.cli", "stats", path], capture_output=True,
                               text=True, cwd=FIX.parent, timeout=300)
 
     done = msdc_stats(str(RADAR))
@@ -160,7 +160,7 @@ def test_program_exit_status_and_output():
 def test_console_script():
     out = subprocess.run(["msdc", "--version"], capture_output=True, text=True, check=True)
     assert out.stdout.startswith("msdc ")
-    done = subprocess.run([sys.executable, "-m", "pipeline.cli", "--help"], capture_output=True)
+    done = subprocess.run([sys.executable, "-m", "msdc.pipeline.cli", "--help"], capture_output=True)
     assert done.returncode == 0
 
 

@@ -14,12 +14,12 @@ FIX = ROOT / "fixtures"
 
 
 def _msdc(*argv: str, env=None) -> subprocess.CompletedProcess:
-    return subprocess.run([sys.executable, "-m", "pipeline.cli", *argv], cwd=ROOT, capture_output=True,
+    return subprocess.run([sys.executable, "-m", "msdc.pipeline.cli", *argv], cwd=ROOT, capture_output=True,
                           text=True, timeout=300, env=env)
 
 
 def test_status_and_whole_output_through_a_pipe(tmp_path, capsys):
-    from pipeline.cli import main
+    from msdc.pipeline.cli import main
 
     argv = ["correlate", str(FIX / "radar.ast"), str(FIX / "adsb.ast"), "--sensors",
             str(FIX / "sensors.toml"), "--all"]

@@ -15,11 +15,10 @@ from pathlib import Path
 
 import pytest
 
-import asterix
-import asterix.reader
-from asterix.encode import encode_frame
-from pipeline import jobs
-from pipeline.cli import main
+import msdc.asterix as asterix
+from msdc.asterix.encode import encode_frame
+from msdc.pipeline import jobs
+from msdc.pipeline.cli import main
 
 FIX = Path(__file__).resolve().parents[1] / "fixtures"
 RADAR, ADSB, SENSORS = FIX / "radar.ast", FIX / "adsb.ast", FIX / "sensors.toml"
@@ -331,7 +330,7 @@ def test_spans_are_times_not_seconds_of_day(tmp_path, capsys):
 def test_a_run_failing_while_writing_leaves_nothing(tmp_path: Path, monkeypatch, capsys) -> None:
     """The JSON is written before the workbook, the track figure meanwhile: if the workbook fails, they go
     too, files that were there before stay, and the run ends with a one-line message, not a traceback."""
-    import pipeline.report.excel as excel
+    import msdc.pipeline.report.excel as excel
 
     def disk_full(*args, **kwargs):
         raise OSError(28, "No space left on device", str(tmp_path / "r.xlsx"))
@@ -386,7 +385,7 @@ def test_quality_on_one_kind_of_sensor_fills_the_sheets_it_can(only, tmp_path, c
     aircraft, 3,266 radar plots."""
     import json
 
-    import asterix
+    import msdc.asterix as asterix
 
     path, cat = (ADSB, 21) if only == "adsb" else (RADAR, 48)
     frame = asterix.read(path).frames[cat]

@@ -8,7 +8,7 @@ import pandas as pd
 import pytest
 from pyproj import Geod
 
-from pipeline.conflict.approach import APPROACH_COLUMNS, closest_approach
+from msdc.pipeline.conflict.approach import APPROACH_COLUMNS, closest_approach
 
 GEOD = Geod(ellps="WGS84")
 NM = 1852.0

@@ -9,7 +9,7 @@ import pytest
 from real_track_data import REAL
 from scipy.stats import chi2
 
-from pipeline.conflict.calibration import chi2_2_ppf, coverage, interpolate_reports, mahalanobis2
+from msdc.pipeline.conflict.calibration import chi2_2_ppf, coverage, interpolate_reports, mahalanobis2
 
 
 def test_chi2_quantile_matches_scipy():

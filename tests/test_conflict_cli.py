@@ -14,16 +14,16 @@ import pandas as pd
 import pytest
 from openpyxl import load_workbook
 
-from asterix.encode import encode_frame
 from fixtures.flight import Flight, Segment
 from fixtures.scenario import AircraftSpec, default_scenario
 from fixtures.simulate import sensors_toml, simulate
-from pipeline import jobs, jobs_conflict
-from pipeline.cli import main
-from pipeline.conflict.approach import APPROACH_COLUMNS
-from pipeline.conflict.events import ALERT_COLUMNS, LOSS_COLUMNS, WARNING_COLUMNS
-from pipeline.jobs import OptionError
-from pipeline.jobs_conflict import ConflictOptions
+from msdc.asterix.encode import encode_frame
+from msdc.pipeline import jobs, jobs_conflict
+from msdc.pipeline.cli import main
+from msdc.pipeline.conflict.approach import APPROACH_COLUMNS
+from msdc.pipeline.conflict.events import ALERT_COLUMNS, LOSS_COLUMNS, WARNING_COLUMNS
+from msdc.pipeline.jobs import OptionError
+from msdc.pipeline.jobs_conflict import ConflictOptions
 
 FIX = Path(__file__).resolve().parents[1] / "fixtures"
 RADAR, ADSB, SENSORS = str(FIX / "radar.ast"), str(FIX / "adsb.ast"), str(FIX / "sensors.toml")
@@ -179,7 +179,7 @@ def test_failed_run_after_decoding_writes_nothing(tmp_path, capsys):
 
 
 def test_failure_while_writing_figures_leaves_nothing(crossing, tmp_path, monkeypatch, capsys):
-    import pipeline.report.conflict_figures as figures
+    import msdc.pipeline.report.conflict_figures as figures
 
     real, calls = figures.alert_figure, []
 
@@ -244,7 +244,7 @@ def test_a_batch_of_untrackable_aircraft_predicts_nothing(monkeypatch):
     """Aircraft "A" flies east at 200 m/s with 1 Hz reports; "Z" has reports without a usable covariance
     (NaN, as for NACp 0). In batches of 50 reports, Z is a batch of its own: it adds no prediction, and
     the predictions (their UTC times included) are those of one batch."""
-    from pipeline.track import Plane, track
+    from msdc.pipeline.track import Plane, track
 
     t0 = pd.Timestamp("2019-03-01T08:00:00Z")
     secs = np.arange(60.0)

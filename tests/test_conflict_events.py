@@ -4,7 +4,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from pipeline.conflict import alert_events, classify_alerts, losses_of_separation, warning_times
+from msdc.pipeline.conflict import alert_events, classify_alerts, losses_of_separation, warning_times
 
 A = 6378137.0
 T0 = pd.Timestamp("2024-05-01 10:00:00", tz="UTC")
@@ -200,7 +200,7 @@ def _grid_and_report_rows(offset_a_s: float, offset_b_s: float) -> pd.DataFrame:
 
 @pytest.mark.parametrize("offsets", [(0.3, 0.55), (0.25, 0.5)])  # not multiples; multiples, seldom 0.25 apart
 def test_report_rows_off_the_grid_are_refused_or_left_out(offsets):
-    from pipeline.conflict import grid_rows
+    from msdc.pipeline.conflict import grid_rows
 
     tracks = _grid_and_report_rows(*offsets)
     with pytest.raises(ValueError, match=r"tracks: the rows are not on one common time grid .*grid_rows"):

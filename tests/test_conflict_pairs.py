@@ -6,7 +6,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from pipeline.conflict import (
+from msdc.pipeline.conflict import (
     candidate_pairs,
     closing_margin_m,
     conflict_probability,

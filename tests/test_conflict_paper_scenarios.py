@@ -12,8 +12,8 @@ import pytest
 from paper_imm import PaperMode
 from paper_scenarios import scenario1, scenario2, standard
 
-from pipeline.conflict.predict import propagate_state
-from pipeline.track import ImmState, Mode, Plane, TrackerConfig
+from msdc.pipeline.conflict.predict import propagate_state
+from msdc.pipeline.track import ImmState, Mode, Plane, TrackerConfig
 
 
 def test_numpy_imm_prediction_equals_the_kernel_from_the_same_posterior():

@@ -8,10 +8,10 @@ import pandas as pd
 import pytest
 from scipy.stats import norm
 
-from pipeline.conflict import pair_probabilities
-from pipeline.conflict.predict import predict_tracks, propagate_state, vertical_prediction
-from pipeline.track import ImmState, Mode, Plane, TrackerConfig, track
-from pipeline.track.imm import propagate
+from msdc.pipeline.conflict import pair_probabilities
+from msdc.pipeline.conflict.predict import predict_tracks, propagate_state, vertical_prediction
+from msdc.pipeline.track import ImmState, Mode, Plane, TrackerConfig, track
+from msdc.pipeline.track.imm import propagate
 
 T0 = pd.Timestamp("2026-01-01 12:00:00", tz="UTC")
 

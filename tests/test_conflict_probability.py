@@ -7,7 +7,7 @@ import pytest
 from conflict_reference import polar_reference, rotated
 from scipy.stats import ncx2
 
-from pipeline.conflict import conflict_probability, pc_margin, pc_upper_bound, probability
+from msdc.pipeline.conflict import conflict_probability, pc_margin, pc_upper_bound, probability
 
 # mean, covariance, radius: isotropic and anisotropic, on and off the axes, covariance small and large
 # against the zone, mean inside, on the edge and outside

@@ -4,7 +4,7 @@ the conflicts workbook's cells (UTC labelled, seconds as given, an empty table o
 import numpy as np
 import pandas as pd
 
-from pipeline.report.conflict_figures import pc_line, pc_window
+from msdc.pipeline.report.conflict_figures import pc_line, pc_window
 
 T0 = pd.Timestamp("2016-05-10 22:04:25", tz="UTC")
 
@@ -36,8 +36,8 @@ def test_pc_window_fits_the_samples_not_the_whole_map_window():
 def test_conflict_workbook_labels_utc_and_shows_seconds_as_given(tmp_path):
     from openpyxl import load_workbook
 
-    from pipeline.conflict.events import ALERT_COLUMNS, LOSS_COLUMNS, WARNING_COLUMNS
-    from pipeline.report.conflict_excel import write_conflict_workbook
+    from msdc.pipeline.conflict.events import ALERT_COLUMNS, LOSS_COLUMNS, WARNING_COLUMNS
+    from msdc.pipeline.report.conflict_excel import write_conflict_workbook
 
     losses = pd.DataFrame({"aircraft_a": ["A"], "aircraft_b": ["B"], "start": at(100), "end": at(130),
                            "duration_s": [30.0], "min_horizontal_nm": [2.0], "time_of_min": at(110),

@@ -63,10 +63,10 @@ def test_nothing_trackable_is_one_line_exit_1_and_writes_nothing(tmp_path, capsy
     # NACp 0 (unknown) on every ADS-B report: no covariance, so no track (was a traceback)
     from dataclasses import replace
 
-    from asterix.encode import encode_frame
     from fixtures.scenario import default_scenario
     from fixtures.simulate import sensors_toml, simulate
-    from pipeline.cli import main
+    from msdc.asterix.encode import encode_frame
+    from msdc.pipeline.cli import main
 
     sc = default_scenario()
     sim = simulate(replace(sc, aircraft=sc.aircraft[:2]), seed=3)

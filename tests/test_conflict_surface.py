@@ -13,11 +13,11 @@ import pandas as pd
 import pytest
 from pyproj import Geod
 
-from asterix.encode import encode_frame
-from pipeline.cli import main
-from pipeline.conflict import losses_of_separation
-from pipeline.conflict.events import losses_by_pairs
-from pipeline.conflict.surface import on_surface, surface_pairs
+from msdc.asterix.encode import encode_frame
+from msdc.pipeline.cli import main
+from msdc.pipeline.conflict import losses_of_separation
+from msdc.pipeline.conflict.events import losses_by_pairs
+from msdc.pipeline.conflict.surface import on_surface, surface_pairs
 
 GEOD = Geod(ellps="WGS84")
 

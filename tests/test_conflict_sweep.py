@@ -2,7 +2,7 @@
 
 import numpy as np
 
-from pipeline.conflict.sweep import grouped_box_pairs
+from msdc.pipeline.conflict.sweep import grouped_box_pairs
 
 
 def brute_box_pairs(coords, edges, half_width):

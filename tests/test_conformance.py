@@ -9,7 +9,7 @@ import pandas as pd
 import pytest
 from asterix_bytes import SHARED
 
-import asterix
+import msdc.asterix as asterix
 
 CONF = SHARED / "conformance"
 pytestmark = pytest.mark.skipif(not CONF.is_dir(), reason=f"{CONF} not present: conformance cases skipped")

@@ -10,7 +10,7 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from asterix.containers import FORMATS, Segments, detect_format, implausible_captures, read_segments
+from msdc.asterix.containers import FORMATS, Segments, detect_format, implausible_captures, read_segments
 
 # 2023-11-14 22:13:20 UTC: 1700000000 // 86400 = 19675 days, remainder 80000 s (22*3600 + 13*60 + 20).
 TS_S, DAY, TOD_S = 1_700_000_000, 19675, 80000.0

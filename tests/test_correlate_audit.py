@@ -11,7 +11,7 @@ import pytest
 from measurement_frames import meas_frame
 from pyproj import Geod
 
-from pipeline.correlate.correlation import correlate, separation_summary
+from msdc.pipeline.correlate.correlation import correlate, separation_summary
 
 WGS84 = Geod(ellps="WGS84")
 
@@ -82,8 +82,8 @@ def _two_radars_run():
 def test_every_window_names_its_sensor_pair(tmp_path):
     from openpyxl import load_workbook
 
-    from pipeline.report.excel import write_report
-    from pipeline.report.summary import summary_table
+    from msdc.pipeline.report.excel import write_report
+    from msdc.pipeline.report.summary import summary_table
 
     run = _two_radars_run()
     pairs = [(w.summary["radar_sensor"], w.summary["reference_sensor"], w.summary["window"])
@@ -164,13 +164,13 @@ def test_a_pearson_peak_at_the_search_limit_is_no_lag_estimate():
     assert max((d for d in ref if abs(d) <= 10), key=lambda d: ref[d]) == 10
     s = w.summary
     assert s["pearson_peak_lag_lat"] is None and s["pearson_peak_at_limit_lat"] is True
-    from pipeline.report.summary import window_note
+    from msdc.pipeline.report.summary import window_note
 
     assert "Pearson latitude" in window_note(s) and "edge of the lags searched |lag| = 10" in window_note(s)
 
 
 def test_pearson_min_overlap_is_checked():
-    from pipeline.correlate.correlation import pearson_by_lag
+    from msdc.pipeline.correlate.correlation import pearson_by_lag
 
     for bad in (1, 2.5, True, "10"):
         with pytest.raises(ValueError, match="min_overlap"):
@@ -184,8 +184,8 @@ def test_quality_figures_say_which_windows_they_cover(tmp_path, monkeypatch, cap
 
     from openpyxl import load_workbook
 
-    import pipeline.jobs as jobs
-    from pipeline.cli import main
+    import msdc.pipeline.jobs as jobs
+    from msdc.pipeline.cli import main
 
     fix = Path(__file__).resolve().parents[1] / "fixtures"
     monkeypatch.setattr(jobs, "FIGURE_WINDOWS", 1)
@@ -249,7 +249,7 @@ def test_a_run_whose_every_window_is_skipped_says_so(tmp_path, capsys):
 
     from openpyxl import load_workbook
 
-    from pipeline.cli import main
+    from msdc.pipeline.cli import main
 
     fix = Path(__file__).resolve().parents[1] / "fixtures"
     out = tmp_path / "s.xlsx"
@@ -274,7 +274,7 @@ def _visible_label_boxes(fig, ax):
 def test_map_labels_do_not_overlap_and_stay_inside():
     """Three sensor pairs of one aircraft start at one place with the same window number and time, beside a
     radar site: each text once, no two labels overlapping, all inside the axes."""
-    from pipeline.report.figures import track_map
+    from msdc.pipeline.report.figures import track_map
 
     run = _two_radars_run()
     sensors = pd.DataFrame({"name": ["Site A", "Site B"], "sac": [1, 1], "sic": [2, 3],
@@ -290,7 +290,7 @@ def test_map_labels_do_not_overlap_and_stay_inside():
 
 
 def test_a_lag_peak_at_the_edge_keeps_its_label_inside(monkeypatch):
-    from pipeline.report import figures
+    from msdc.pipeline.report import figures
 
     w = _delayed(150.0)  # the latitude peak sits at the search limit, lag +10
     drawn = {}
@@ -308,8 +308,8 @@ def test_summary_gives_each_note_its_own_row(tmp_path):
     tables (LibreOffice fits the page to the widest row: the fixtures' Summary had shrunk to half size)."""
     from openpyxl import load_workbook
 
-    from pipeline.report.excel import write_report
-    from pipeline.report.summary import window_note, window_notes
+    from msdc.pipeline.report.excel import write_report
+    from msdc.pipeline.report.summary import window_note, window_notes
 
     run = _two_radars_run()
     expected = [n for w in run.windows for n in window_notes(w.summary)]
@@ -327,7 +327,7 @@ def test_chart_titles_are_small_enough_for_one_line(tmp_path):
     chart (Excel's default 14 pt wrapped it onto three, squashing the plot)."""
     from openpyxl import load_workbook
 
-    from pipeline.report.excel import write_report
+    from msdc.pipeline.report.excel import write_report
 
     write_report(_two_radars_run(), tmp_path / "r.xlsx", tables="xlsx")
     wb = load_workbook(tmp_path / "r.xlsx")

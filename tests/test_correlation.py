@@ -7,7 +7,7 @@ import pandas as pd
 import pytest
 from measurement_frames import meas_frame
 
-from pipeline.correlate.correlation import (
+from msdc.pipeline.correlate.correlation import (
     NoOverlap,
     NoSuchAircraft,
     correlate,
@@ -18,8 +18,8 @@ from pipeline.correlate.correlation import (
     pearson_max_lag,
     separation_stats,
 )
-from pipeline.correlate.results import LAG_COLUMNS, SLOT_COLUMNS, SUMMARY_KEYS
-from pipeline.report.summary import window_note
+from msdc.pipeline.correlate.results import LAG_COLUMNS, SLOT_COLUMNS, SUMMARY_KEYS
+from msdc.pipeline.report.summary import window_note
 
 
 def test_ncc_hand_computed_three_elements():
@@ -281,7 +281,7 @@ def test_fft_correlations_scale_to_long_series():
 
 
 def test_slot_count_cap_counts_every_window_slot(monkeypatch):
-    import pipeline.correlate.correlation as correlation
+    import msdc.pipeline.correlate.correlation as correlation
 
     # one window 36000-36095 s; at 0.1 s it has floor(95 / 0.1) + 1 = 951 slots
     t = np.arange(36000.0, 36100.0, 5.0)
@@ -298,7 +298,7 @@ def test_slot_count_cap_counts_every_window_slot(monkeypatch):
 def test_slot_limit_is_the_table_budget_over_measured_row_sizes():
     """MAX_SLOTS is the table budget over what a slot costs in memory: its slot row plus two lag rows,
     measured here on a real window's tables (pandas' own byte count, no index)."""
-    import pipeline.correlate.correlation as correlation
+    import msdc.pipeline.correlate.correlation as correlation
 
     t = np.arange(36000.0, 36100.0, 5.0)
     radar, adsb = frame("radar", t, *weave(t)), frame("adsb", t, *weave(t))
@@ -312,8 +312,8 @@ def test_slot_limit_is_the_table_budget_over_measured_row_sizes():
 
 
 def test_too_many_slots_is_one_line_naming_slot_and_writes_nothing(monkeypatch, tmp_path, capsys):
-    import pipeline.correlate.correlation as correlation
-    from pipeline.cli import main
+    import msdc.pipeline.correlate.correlation as correlation
+    from msdc.pipeline.cli import main
 
     monkeypatch.setattr(correlation, "MAX_SLOTS", 10)
     out = tmp_path / "report.xlsx"

@@ -11,11 +11,11 @@ from asterix_bytes import decode_bytes
 from pyproj import Geod
 from real_track_data import REAL
 
-import asterix
-from asterix.encode import encode_frame
-from pipeline.model.coverage import out_of_coverage
-from pipeline.model.jumps import detect_jumps
-from pipeline.model.measurements import OutOfCoverageWarning, build_measurements
+import msdc.asterix as asterix
+from msdc.asterix.encode import encode_frame
+from msdc.pipeline.model.coverage import out_of_coverage
+from msdc.pipeline.model.jumps import detect_jumps
+from msdc.pipeline.model.measurements import OutOfCoverageWarning, build_measurements
 
 GEOD = Geod(ellps="WGS84")
 SITE = (41.30, 2.08)
@@ -90,8 +90,8 @@ def test_real_recording_far_positions_and_jumps():
 def test_a_job_that_builds_some_columns_names_the_file_and_offset(tmp_path):
     # quality builds only jobs.quality_columns (no file, no offset); its warning still names the first far
     # report's file and byte offset, as one built with every column does, and the two columns go after it
-    from pipeline import jobs
-    from pipeline.model.load import load_measurements
+    from msdc.pipeline import jobs
+    from msdc.pipeline.model.load import load_measurements
 
     rng = np.random.default_rng(5)
     lat, lon = _around(rng, 400, *SITE, 150.0)

@@ -7,9 +7,9 @@ from pathlib import Path
 import pandas as pd
 import pytest
 
-import asterix
-from pipeline.model.measurements import DECODED_COLUMNS, build_measurements
-from pipeline.model.sensors import read_sensors
+import msdc.asterix as asterix
+from msdc.pipeline.model.measurements import DECODED_COLUMNS, build_measurements
+from msdc.pipeline.model.sensors import read_sensors
 
 ROOT = Path(__file__).resolve().parents[1]
 RADAR, ADSB = ROOT / "fixtures" / "radar.ast", ROOT / "fixtures" / "adsb.ast"

@@ -15,9 +15,9 @@ import numpy as np
 import pandas as pd
 import pytest
 
-import asterix
-from asterix.encode import encode_frame
-from pipeline.stats import reason_kind
+import msdc.asterix as asterix
+from msdc.asterix.encode import encode_frame
+from msdc.pipeline.stats import reason_kind
 
 UTC = dt.UTC
 # 2019-03-01 10:00:00 UTC, worked by hand: 17956 days * 86400 = 1551398400 (2019-03-01 00:00:00);

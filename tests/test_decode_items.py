@@ -226,7 +226,7 @@ def test_021_auto_edition_picks_the_family_that_walks():
 def test_column_docs_are_current():
     from pathlib import Path
 
-    from asterix.columns import markdown_schema
+    from msdc.asterix.columns import markdown_schema
 
     doc = Path(__file__).resolve().parents[1] / "docs" / "columns.md"
     assert doc.read_text().strip() == markdown_schema().strip(), "regenerate docs/columns.md"

@@ -11,10 +11,10 @@ import pandas as pd
 import pytest
 from asterix_bytes import SHARED
 
-import asterix
-from asterix.encode import encode_frame
-from pipeline import jobs
-from pipeline.cli import main
+import msdc.asterix as asterix
+from msdc.asterix.encode import encode_frame
+from msdc.pipeline import jobs
+from msdc.pipeline.cli import main
 
 FIX = Path(__file__).resolve().parents[1] / "fixtures"
 RADAR, ADSB = FIX / "radar.ast", FIX / "adsb.ast"
@@ -170,7 +170,7 @@ def test_an_interrupted_or_failing_run_leaves_no_file(tmp_path, capsys, monkeypa
 
 def test_a_failed_move_into_place_removes_the_outputs_moved_before(tmp_path):
     """Staging.commit: when the second move fails, the first output (already moved) is removed."""
-    from pipeline.report.outputs import Staging
+    from msdc.pipeline.report.outputs import Staging
 
     a, b = tmp_path / "a.csv", tmp_path / "b.csv"
     b.mkdir()  # os.replace of a file over a directory fails
@@ -336,9 +336,9 @@ def _same_name_inputs(tmp_path: Path) -> tuple[Path, Path]:
 def test_file_column_names_the_path_when_two_inputs_share_a_name(tmp_path):
     """The `file` column held the base name only, so (file, offset) named two records; stats already
     shows a shared name by its path, and the `file` column follows that rule."""
-    from pipeline.model.load import load_measurements
-    from pipeline.model.sensors import read_sensors
-    from pipeline.model.sources import file_labels
+    from msdc.pipeline.model.load import load_measurements
+    from msdc.pipeline.model.sensors import read_sensors
+    from msdc.pipeline.model.sources import file_labels
 
     assert file_labels(["a/x.ast", "b/x.ast", "c/y.ast"]) == ["a/x.ast", "b/x.ast", "y.ast"]
     a, b = _same_name_inputs(tmp_path)

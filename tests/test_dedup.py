@@ -3,7 +3,7 @@
 import numpy as np
 import pandas as pd
 
-from pipeline.model.dedup import deduplicate
+from msdc.pipeline.model.dedup import deduplicate
 
 NAN = np.nan
 
@@ -57,7 +57,7 @@ def test_midnight_crossing_sorts_after():
 def test_duplicate_mask_in_time_blocks_equals_one_hashing_of_every_row(monkeypatch):
     # repeats only ever share a time, so hashing blocks of whole time values must flag exactly what
     # pandas' duplicated over all rows flags (NaN and NaT equal, -0.0 equal 0.0, first in frame order)
-    from pipeline.model import dedup
+    from msdc.pipeline.model import dedup
 
     rng = np.random.default_rng(1)
     n = 20_000
@@ -77,7 +77,7 @@ def test_duplicate_mask_equals_hashing_every_row_with_awkward_keys():
     """duplicate_mask hashes only rows sharing their time and latitude with another row; with times and
     latitudes that are NaT, NaN, -0.0 or 0.0 (NaN equals NaN, -0.0 equals 0.0 as keys), it must flag exactly
     what pandas' duplicated over every row flags, in one hashing and in time blocks."""
-    from pipeline.model import dedup
+    from msdc.pipeline.model import dedup
 
     rng = np.random.default_rng(7)
     n = 5_000
@@ -94,7 +94,7 @@ def test_duplicate_mask_equals_hashing_every_row_with_awkward_keys():
 
 
 def test_shared_rows_are_the_rows_that_share_time_and_latitude():
-    from pipeline.model.dedup import shared_rows
+    from msdc.pipeline.model.dedup import shared_rows
 
     day = pd.Timestamp("2019-03-01", tz="UTC")
     frame = pd.DataFrame({"time": day + pd.to_timedelta([1, 1, 1, 2, 2, np.nan, np.nan, 3], unit="s"),

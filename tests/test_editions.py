@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 from asterix_bytes import block, decode_bytes
 
-from asterix.layout import compile_layout
+from msdc.asterix.layout import compile_layout
 
 V2 = ["2.1", "2.2", "2.3", "2.4", "2.5", "2.6", "2.7"]
 
@@ -116,7 +116,7 @@ def test_048_1_27_to_1_30_walk_alike():
 
 
 def test_every_edition_has_its_own_table():
-    from asterix.tables import available, resolve_edition
+    from msdc.asterix.tables import available, resolve_edition
 
     tables = available()
     assert tables[21] == ["0.23", "0.24", "0.25", "0.26", *V2]

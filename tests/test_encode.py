@@ -12,8 +12,8 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from asterix.columns import columns_for
-from asterix.encode import (
+from msdc.asterix.columns import columns_for
+from msdc.asterix.encode import (
     EDITIONS,
     encode_block,
     encode_frame,

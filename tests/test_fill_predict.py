@@ -13,11 +13,11 @@ import pytest
 from pyproj import Geod
 
 from fixtures.simulate import simulate
-from pipeline.cli import main
-from pipeline.correlate.correlation import correlate
-from pipeline.model.load import load
-from pipeline.model.measurements import build_measurements
-from pipeline.model.sensors import read_sensors
+from msdc.pipeline.cli import main
+from msdc.pipeline.correlate.correlation import correlate
+from msdc.pipeline.model.load import load
+from msdc.pipeline.model.measurements import build_measurements
+from msdc.pipeline.model.sensors import read_sensors
 
 FIX = Path(__file__).resolve().parents[1] / "fixtures"
 BASE = [str(FIX / "radar.ast"), str(FIX / "adsb.ast"), "--sensors", str(FIX / "sensors.toml"),
@@ -101,7 +101,7 @@ T0 = pd.Timestamp("2024-05-10T23:58:00Z")  # the flight crosses midnight: the fi
 def _old_route(reports: pd.DataFrame, reference: pd.Timestamp, max_coast_s: float, seconds: np.ndarray):
     """What --fill predict computed before: the full track() with filter histories, then per time the state
     after the last update at or before it, propagated by predict() (1 s steps) and read at its last row."""
-    from pipeline.track import predict, track
+    from msdc.pipeline.track import predict, track
 
     result = track(reports.assign(aircraft_id="A"), max_coast_s=max_coast_s, keep_states=True)
     lat, lon = np.full(len(seconds), np.nan), np.full(len(seconds), np.nan)
@@ -156,7 +156,7 @@ def test_fast_predictor_equals_track_then_predict(sensors):
     exactly: its posterior), just after one, through the dropout up to and past max_coast_s, before the
     first report; for a reference on the filter's own midnight and one a day earlier. Reports of the two
     stations at one instant go in track()'s order: by the sensor's category order, or alphabetically."""
-    from pipeline.correlate.fill import track_predictor
+    from msdc.pipeline.correlate.fill import track_predictor
 
     frame = _frame()
     if sensors == "reversed categories":
@@ -187,7 +187,7 @@ def test_fast_predictor_equals_track_then_predict(sensors):
 def test_fast_predictor_in_any_order_and_without_covariances():
     """The kernel continues one chain of 1 s steps between queries; queries out of order, repeated or of
     another row restart it and must give the same numbers as the sorted ones."""
-    from pipeline.correlate.fill import track_predictor
+    from msdc.pipeline.correlate.fill import track_predictor
 
     frame = _frame(seed=5)
     reference = T0.floor("D")

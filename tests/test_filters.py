@@ -6,8 +6,8 @@ import pandas as pd
 import pytest
 
 from fixtures.simulate import simulate
-from pipeline.model.measurements import adsb_measurements
-from pipeline.quality.filters import FILTER_KEYS, apply_filters, filter_warnings
+from msdc.pipeline.model.measurements import adsb_measurements
+from msdc.pipeline.quality.filters import FILTER_KEYS, apply_filters, filter_warnings
 
 
 @pytest.fixture(scope="module")

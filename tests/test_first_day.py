@@ -10,9 +10,9 @@ import pandas as pd
 import pytest
 from asterix_bytes import SHARED
 
-from asterix.encode import encode_frame
-from pipeline.cli import main
-from pipeline.model.time import FirstDayTally
+from msdc.asterix.encode import encode_frame
+from msdc.pipeline.cli import main
+from msdc.pipeline.model.time import FirstDayTally
 
 SENSORS = "fixtures/sensors.toml"  # radar 25/201
 
@@ -72,13 +72,13 @@ def test_no_warning_for_a_recording_that_crosses_midnight(tmp_path, capsys):
 def test_first_report_day_by_hand(tods, first_day):
     """Day 0 is the day of the first report within 1 h (24 h clock) of most of the reports after it; the
     first report's day is counted back from it by the 12 h rule (a drop is a midnight, a rise a day back)."""
-    from asterix.timeline import first_report_day
+    from msdc.asterix.timeline import first_report_day
 
     assert first_report_day(np.array(tods)) == first_day
 
 
 def _fixture_with_first_moved(tmp_path, hours: float, count: int = 1) -> str:
-    import asterix
+    import msdc.asterix as asterix
 
     frame = asterix.read("fixtures/radar.ast").frames[48]
     frame.iloc[:count, frame.columns.get_loc("time_of_day")] += hours * 3600.0
@@ -93,7 +93,7 @@ def test_a_damaged_first_time_of_day_redates_no_other_report(count, chunk, tmp_p
     """The fixture (08:00-11:20 on 2019-03-01) with its first record(s)' I048/140 moved +14 h to 22:00:
     every other report was put on 2019-03-02 (day 1). Now each keeps 2019-03-01 plus its own time of day,
     read whole or in chunks (chunk 1: one data block a chunk, the first chunks alone cannot tell)."""
-    import asterix
+    import msdc.asterix as asterix
 
     good = asterix.read("fixtures/radar.ast").frames[48]["time_of_day"].to_numpy()
     path = _fixture_with_first_moved(tmp_path, 14.0, count)
@@ -115,7 +115,7 @@ REAL_ADSB = SHARED / "real" / "adsb_v023_160510-lebl-220001.ast"
 def test_one_bit_flip_in_the_real_first_time_of_day_redates_no_other_report(tmp_path):
     """LEBL ADS-B (2016-05-10 22:00:01 to 00:01:02): bit 7 of byte 10 is the top bit of the first record's
     I021/030, 79201.7 s becoming 13665.7 s (03:47). The 49,329 others went 24 h early; now none moves."""
-    import asterix
+    import msdc.asterix as asterix
 
     data = bytearray(REAL_ADSB.read_bytes())
     data[10] ^= 0x80

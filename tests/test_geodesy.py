@@ -5,7 +5,7 @@ import math
 import numpy as np
 import pytest
 
-from pipeline.model.geodesy import (
+from msdc.pipeline.model.geodesy import (
     distance_m,
     ecef_to_enu,
     ecef_to_geodetic,

@@ -11,8 +11,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from pipeline import jobs
-from pipeline.cli import main
+from msdc.pipeline import jobs
+from msdc.pipeline.cli import main
 
 FIX = Path(__file__).resolve().parents[1] / "fixtures"
 RADAR, ADSB, SENSORS = FIX / "radar.ast", FIX / "adsb.ast", FIX / "sensors.toml"
@@ -108,8 +108,8 @@ def test_an_output_linked_to_an_input_is_refused(tmp_path, capsys):
 def _mas72(tmp_path: Path, cat: int, latitude_of_row: dict[int, float] | None = None) -> Path:
     """The fixture's MAS72 reports of one category from 08:00 to 08:10 as a raw file, with the latitudes
     of some rows (by position) replaced."""
-    import asterix
-    from asterix.encode import encode_frame
+    import msdc.asterix as asterix
+    from msdc.asterix.encode import encode_frame
 
     f = asterix.read(RADAR if cat == 48 else ADSB).frames[cat]
     f = f[(f.callsign == "MAS72") & f.time_of_day.between(28800, 29400)].copy()
@@ -124,7 +124,7 @@ def _mas72(tmp_path: Path, cat: int, latitude_of_row: dict[int, float] | None = 
 def test_an_adsb_position_off_the_earth_is_named_and_left_out(command, tmp_path, capsys):
     """I021/131 encodes latitudes up to 360 deg: a damaged report may carry one. The run goes on without
     it and a warning names the file, the count, the first report's offset and value."""
-    import asterix
+    import msdc.asterix as asterix
 
     radar, adsb = _mas72(tmp_path, 48), _mas72(tmp_path, 21, {5: 120.0, 9: -95.0})
     frame = asterix.read(adsb).frames[21]
@@ -145,8 +145,8 @@ def test_an_adsb_position_off_the_earth_is_named_and_left_out(command, tmp_path,
 
 
 def test_measurements_leave_out_adsb_positions_off_the_earth(tmp_path):
-    import asterix
-    from pipeline.model.measurements import build_measurements
+    import msdc.asterix as asterix
+    from msdc.pipeline.model.measurements import build_measurements
 
     frame = asterix.read(_mas72(tmp_path, 21, {3: 91.0})).frames[21]
     frame.loc[7, "longitude"] = -180.5
@@ -224,8 +224,8 @@ def test_one_time_of_day_past_midnight_moves_no_other_report(bad_tod, tmp_path, 
     """A raw recording counts midnights from its times of day in file order. One damaged I048/140 of
     120000 s (the 24-bit field reaches 131072 s) in an 08:00-11:20 recording used to look like a jump
     back of a day and forth again, and put every other report on the next day."""
-    import asterix
-    from asterix.encode import encode_frame
+    import msdc.asterix as asterix
+    from msdc.asterix.encode import encode_frame
 
     frame = asterix.read(RADAR).frames[48]
     i = len(frame) // 2
@@ -282,8 +282,8 @@ def test_an_empty_path_is_named_as_empty(argv, option, tmp_path, monkeypatch, ca
 def _with_sic(tmp_path: Path, rows: list[int], sic: int = 202) -> tuple[Path, list[int]]:
     """The fixture's MAS72 radar plots from 08:00 to 08:10 with the SIC of some rows (by position) damaged,
     and the offsets those rows get in the file."""
-    import asterix
-    from asterix.encode import encode_frame
+    import msdc.asterix as asterix
+    from msdc.asterix.encode import encode_frame
 
     good = _mas72(tmp_path, 48)
     f = asterix.read(good).frames[48]
@@ -328,8 +328,8 @@ def test_a_phantom_radar_of_two_damaged_records_is_left_out_with_a_warning(comma
 
 def test_the_phantom_records_are_the_only_ones_left_out(tmp_path):
     """The stray rule drops exactly the records of the undeclared pair, nothing else."""
-    import asterix
-    from pipeline.model.sensors import read_sensors
+    import msdc.asterix as asterix
+    from msdc.pipeline.model.sensors import read_sensors
 
     radar, offsets = _with_sic(tmp_path, [4, 20])
     frame = asterix.read(radar).frames[48].assign(file="damaged048.ast")
@@ -357,8 +357,8 @@ def test_an_undeclared_radar_with_enough_records_still_stops_the_run(command, tm
 def adsb_0_23(tmp_path_factory) -> Path:
     """The fixture's ADS-B reports written as edition 0.23, one record per block (what the real LEBL
     ground station records): nothing on the wire says which edition it is."""
-    import asterix
-    from asterix.encode import encode_frame
+    import msdc.asterix as asterix
+    from msdc.asterix.encode import encode_frame
 
     columns = ["sac", "sic", "time_of_day", "latitude", "longitude", "address", "callsign", "flight_level"]
     frame = asterix.read(ADSB).frames[21][columns].iloc[:400]

@@ -6,7 +6,7 @@ from __future__ import annotations
 import pandas as pd
 import pytest
 
-from pipeline.model.identity import aircraft_labels
+from msdc.pipeline.model.identity import aircraft_labels
 
 
 @pytest.mark.parametrize("dtype", ["string", "category"])

@@ -1,4 +1,4 @@
-"""Imports in pipeline/ flow one way, cli -> jobs -> steps -> model: read from the source (every import
+"""Imports flow one way, cli -> jobs -> areas -> model -> asterix: read from the source (every import
 statement, those inside functions included), so a lazy import breaking the rule is caught too."""
 
 from __future__ import annotations
@@ -8,17 +8,18 @@ from pathlib import Path
 
 import pytest
 
-PIPELINE = Path(__file__).resolve().parents[1] / "pipeline"
-STEPS = ("correlate", "quality", "report", "track", "conflict")
-FRONT = ("pipeline.jobs", "pipeline.jobs_track", "pipeline.jobs_conflict", "pipeline.cli")
+ROOT = Path(__file__).resolve().parents[1]
+AREAS = ("correlate", "quality", "report", "track", "conflict")
+FRONT = ("msdc.pipeline.jobs", "msdc.pipeline.jobs_track", "msdc.pipeline.jobs_conflict", "msdc.pipeline.cli")
 
 
 def _module(path: Path) -> str:
-    return ".".join(path.relative_to(PIPELINE.parent).with_suffix("").parts).removesuffix(".__init__")
+    """The installed name of a source file: the repository root is the package ``msdc``."""
+    return ".".join(("msdc", *path.relative_to(ROOT).with_suffix("").parts)).removesuffix(".__init__")
 
 
 def _imports(path: Path) -> set[str]:
-    """Every pipeline module named by an import statement of the file (relative imports resolved)."""
+    """Every msdc module named by an import statement of the file (relative imports resolved)."""
     out = set()
     package = _module(path).rsplit(".", 1)[0] if path.name != "__init__.py" else _module(path)
     for node in ast.walk(ast.parse(path.read_text(), str(path))):
@@ -30,10 +31,11 @@ def _imports(path: Path) -> set[str]:
             out |= {base} | {f"{base}.{a.name}" for a in node.names}
         elif isinstance(node, ast.Import):
             out |= {a.name for a in node.names}
-    return {m for m in out if m == "pipeline" or m.startswith("pipeline.")}
+    return {m for m in out if m == "msdc" or m.startswith("msdc.")}
 
 
-MODULES = {_module(p): _imports(p) for p in sorted(PIPELINE.rglob("*.py"))}
+SOURCES = sorted([*(ROOT / "asterix").rglob("*.py"), *(ROOT / "pipeline").rglob("*.py")])
+MODULES = {_module(p): _imports(p) for p in SOURCES}
 
 
 def _within(name: str, package: str) -> bool:
@@ -46,27 +48,42 @@ def _offenders(importer: str, forbidden: tuple[str, ...]) -> list[str]:
 
 
 def test_the_modules_were_read():
-    assert "pipeline.correlate.correlation" in MODULES and "pipeline.model.aircraft" in MODULES
-    assert "pipeline.model.aircraft" in MODULES["pipeline.quality.quality_run"]  # the reader sees imports
+    assert "msdc.pipeline.correlate.correlation" in MODULES and "msdc.pipeline.model.aircraft" in MODULES
+    assert "msdc.asterix.kernel" in MODULES
+    assert "msdc.pipeline.model.aircraft" in MODULES["msdc.pipeline.quality.quality_run"]  # sees imports
 
 
 @pytest.mark.parametrize("importer, forbidden", [
-    ("pipeline.quality", ("pipeline.correlate",)),
-    ("pipeline.correlate", ("pipeline.quality",)),
-    *[(f"pipeline.{step}", FRONT) for step in STEPS],
-    ("pipeline.stats", FRONT),
-    ("pipeline.model", FRONT + tuple(f"pipeline.{s}" for s in STEPS) + ("pipeline.stats",)),
+    ("msdc.pipeline.quality", ("msdc.pipeline.correlate",)),
+    ("msdc.pipeline.correlate", ("msdc.pipeline.quality",)),
+    *[(f"msdc.pipeline.{area}", FRONT) for area in AREAS],
+    ("msdc.pipeline.stats", FRONT),
+    ("msdc.pipeline.model", FRONT + tuple(f"msdc.pipeline.{a}" for a in AREAS) + ("msdc.pipeline.stats",)),
+    ("msdc.asterix", ("msdc.pipeline",)),
 ])
 def test_imports_flow_one_way(importer, forbidden):
     assert _offenders(importer, forbidden) == []
 
 
+def test_no_top_level_asterix_or_pipeline_import():
+    """Installed code names only ``msdc.*``: a bare ``asterix`` would load another decoder's package."""
+    bare = [f"{p.relative_to(ROOT)}: {a.name}" for p in SOURCES
+            for node in ast.walk(ast.parse(p.read_text())) if isinstance(node, ast.Import)
+            for a in node.names if a.name.split(".")[0] in ("asterix", "pipeline")]
+    bare += [f"{p.relative_to(ROOT)}: {node.module}" for p in SOURCES
+             for node in ast.walk(ast.parse(p.read_text()))
+             if isinstance(node, ast.ImportFrom) and not node.level
+             and (node.module or "").split(".")[0] in ("asterix", "pipeline")]
+    assert bare == []
+
+
 def test_the_check_sees_a_wrong_import():
     """A step importing the jobs layer is reported (so the tests above can fail)."""
-    MODULES["pipeline.quality.fake"] = {"pipeline.jobs", "pipeline.correlate.slots"}
+    MODULES["msdc.pipeline.quality.fake"] = {"msdc.pipeline.jobs", "msdc.pipeline.correlate.slots"}
     try:
-        assert _offenders("pipeline.quality", FRONT) == ["pipeline.quality.fake imports pipeline.jobs"]
-        assert _offenders("pipeline.quality", ("pipeline.correlate",)) == [
-            "pipeline.quality.fake imports pipeline.correlate.slots"]
+        assert _offenders("msdc.pipeline.quality", FRONT) == [
+            "msdc.pipeline.quality.fake imports msdc.pipeline.jobs"]
+        assert _offenders("msdc.pipeline.quality", ("msdc.pipeline.correlate",)) == [
+            "msdc.pipeline.quality.fake imports msdc.pipeline.correlate.slots"]
     finally:
-        del MODULES["pipeline.quality.fake"]
+        del MODULES["msdc.pipeline.quality.fake"]

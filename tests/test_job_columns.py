@@ -10,12 +10,12 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from pipeline import jobs
-from pipeline.jobs import CorrelateOptions, QualityOptions, correlate_columns, mark_once, quality_columns
-from pipeline.model.load import load_measurements
-from pipeline.model.schema import MEASUREMENT_COLUMNS, SchemaError, column_names, validate
-from pipeline.model.sensors import read_sensors
-from pipeline.track.tracker import FILTER_INPUTS, REQUIRED
+from msdc.pipeline import jobs
+from msdc.pipeline.jobs import CorrelateOptions, QualityOptions, correlate_columns, mark_once, quality_columns
+from msdc.pipeline.model.load import load_measurements
+from msdc.pipeline.model.schema import MEASUREMENT_COLUMNS, SchemaError, column_names, validate
+from msdc.pipeline.model.sensors import read_sensors
+from msdc.pipeline.track.tracker import FILTER_INPUTS, REQUIRED
 
 FIX = Path(__file__).resolve().parents[1] / "fixtures"
 INPUTS = [FIX / "radar.ast", FIX / "adsb.ast"]

@@ -8,8 +8,8 @@ from pathlib import Path
 
 import pytest
 
-from pipeline import jobs
-from pipeline.jobs import CorrelateOptions, DecodeOptions, OptionError, QualityOptions, StatsOptions
+from msdc.pipeline import jobs
+from msdc.pipeline.jobs import CorrelateOptions, DecodeOptions, OptionError, QualityOptions, StatsOptions
 
 FIX = Path(__file__).resolve().parents[1] / "fixtures"
 RADAR, ADSB, SENSORS = str(FIX / "radar.ast"), str(FIX / "adsb.ast"), str(FIX / "sensors.toml")
@@ -119,8 +119,8 @@ def test_warnings_implausible_site_height_and_time_running_backwards(tmp_path):
     checked = jobs.validate(corr(sensors=str(sensors)))
     assert any("altitude_m = -99999" in w for w in checked.warnings)
     # the second half of the radar recording given first: CAT048 runs backwards between the inputs
-    import asterix
-    from asterix.encode import encode_frame
+    import msdc.asterix as asterix
+    from msdc.asterix.encode import encode_frame
 
     frame = asterix.read(RADAR).frames[48]
     early, late = tmp_path / "early.ast", tmp_path / "late.ast"
@@ -139,7 +139,7 @@ def test_order_warning_is_per_data_source():
 
     import pandas as pd
 
-    from pipeline.model.load import time_spans
+    from msdc.pipeline.model.load import time_spans
 
     def frame(sic: int, start_h: float, end_h: float) -> dict[int, pd.DataFrame]:
         return {48: pd.DataFrame({"sac": [25, 25], "sic": [sic, sic], "day": [0, 0],
@@ -162,7 +162,7 @@ def test_time_spans_sources_without_sac_or_sic():
 
     import pandas as pd
 
-    from pipeline.model.load import time_spans
+    from msdc.pipeline.model.load import time_spans
 
     frame = pd.DataFrame({"sac": pd.array([25, None, 25, 25], "Int64"),
                           "sic": pd.array([None, 7, 201, 201], "Int64"),

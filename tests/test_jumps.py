@@ -11,11 +11,11 @@ from measurement_frames import meas_frame
 
 from fixtures.scenario import default_scenario
 from fixtures.simulate import simulate
-from pipeline.model import jumps
-from pipeline.model.geodesy import distance_m, ecef_to_geodetic, enu_to_ecef
-from pipeline.model.identity import assign_aircraft_id
-from pipeline.model.jumps import JUMP_COLUMNS, detect_jumps, jump_flags, jump_table
-from pipeline.model.measurements import adsb_measurements
+from msdc.pipeline.model import jumps
+from msdc.pipeline.model.geodesy import distance_m, ecef_to_geodetic, enu_to_ecef
+from msdc.pipeline.model.identity import assign_aircraft_id
+from msdc.pipeline.model.jumps import JUMP_COLUMNS, detect_jumps, jump_flags, jump_table
+from msdc.pipeline.model.measurements import adsb_measurements
 
 LAT0, LON0 = 3.0, 101.5
 
@@ -238,7 +238,7 @@ def test_theil_sen_kernel_matches_a_plain_median_of_pairwise_slopes():
     neighbours (-1) and repeated times (pairs of equal time give no slope)."""
     import statistics
 
-    from pipeline.model.jumps import _theil_sen
+    from msdc.pipeline.model.jumps import _theil_sen
 
     rng = np.random.default_rng(8)
     n = 200
@@ -267,7 +267,7 @@ def test_refitting_only_changed_neighbourhoods_equals_refitting_everything(monke
     """After its first pass the search scores again only the reports near a flipped one, and re-fits only
     those whose neighbours changed; scoring and re-fitting every report every pass must give the same jumps
     and fits (runs of jumps need several passes; a rejected report is reinstated)."""
-    from pipeline.model import jumps
+    from msdc.pipeline.model import jumps
 
     meas = pd.concat([track(np.arange(0, 600, 4.0), seed=s, address=f"75000{s}", callsign=f"T{s}")
                       for s in range(3)], ignore_index=True)
@@ -315,7 +315,7 @@ def test_refitting_only_changed_neighbourhoods_equals_refitting_everything(monke
 def test_jump_flags_of_some_columns_equal_those_of_all():
     """A job that reads only the jump verdict asks for that column alone (the fit distances are then not
     worked out); the verdicts and fits it gets are those of the full call."""
-    from pipeline.model import jumps
+    from msdc.pipeline.model import jumps
 
     meas = track(np.arange(0, 600, 4.0), seed=3, address="750003", callsign="T3")
     meas.loc[[20, 21, 90], "latitude"] += [0.1, 0.12, 0.2]

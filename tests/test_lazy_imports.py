@@ -14,7 +14,7 @@ sys.argv = ["msdc", *{argv!r}]
 atexit.register(lambda: print("loaded:" + ",".join(m for m in {heavy!r} if m in sys.modules),
                               file=sys.stderr))
 try:
-    runpy.run_module("pipeline.cli", run_name="__main__")
+    runpy.run_module("msdc.pipeline.cli", run_name="__main__")
 except SystemExit:
     pass
 """
@@ -47,9 +47,10 @@ def test_the_check_sees_a_heavy_import():
 
 
 # what msdc stats does not use: the correlate, quality and report steps and the libraries behind them
-NOT_FOR_STATS = ("matplotlib", "openpyxl", "pipeline.correlate.correlation", "pipeline.model.jumps",
-                 "pipeline.model.measurements", "pipeline.quality.quality_run", "pipeline.report.excel",
-                 "pipeline.report.tables", "pipeline.model.sensors", "scipy.linalg")
+NOT_FOR_STATS = ("matplotlib", "openpyxl", "msdc.pipeline.correlate.correlation", "msdc.pipeline.model.jumps",
+                 "msdc.pipeline.model.measurements", "msdc.pipeline.quality.quality_run",
+                 "msdc.pipeline.report.excel", "msdc.pipeline.report.tables", "msdc.pipeline.model.sensors",
+                 "scipy.linalg")
 
 
 def test_stats_imports_only_the_stats_path():
@@ -63,13 +64,13 @@ def test_the_stats_check_sees_a_step_import():
     correlate validates --slot after importing its step, and refuses 0.01 s before decoding."""
     _, loaded = _loaded("correlate", "fixtures/radar.ast", "fixtures/adsb.ast", "--sensors",
                         "fixtures/sensors.toml", "--all", "--slot", "0.01", heavy=NOT_FOR_STATS)
-    assert "pipeline.correlate.correlation" in loaded and "pipeline.model.jumps" in loaded
+    assert "msdc.pipeline.correlate.correlation" in loaded and "msdc.pipeline.model.jumps" in loaded
 
 
 _NUMBA_AFTER = """
 import numpy as np
 from numba import njit
-from pipeline.cli import _numba_without_scipy
+from msdc.pipeline.cli import _numba_without_scipy
 
 _numba_without_scipy()
 assert "scipy.linalg" not in __import__("sys").modules

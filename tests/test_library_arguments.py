@@ -14,14 +14,14 @@ import numpy as np
 import pandas as pd
 import pytest
 
-import asterix
-from pipeline import jobs, jobs_track
-from pipeline.jobs import OptionError
-from pipeline.jobs_track import TrackOptions
-from pipeline.model import schema
-from pipeline.model.load import load
-from pipeline.model.measurements import OffEarthWarning, build_measurements
-from pipeline.model.sensors import read_sensors
+import msdc.asterix as asterix
+from msdc.pipeline import jobs, jobs_track
+from msdc.pipeline.jobs import OptionError
+from msdc.pipeline.jobs_track import TrackOptions
+from msdc.pipeline.model import schema
+from msdc.pipeline.model.load import load
+from msdc.pipeline.model.measurements import OffEarthWarning, build_measurements
+from msdc.pipeline.model.sensors import read_sensors
 
 FIX = Path(__file__).resolve().parents[1] / "fixtures"
 RADAR, ADSB, SENSORS = str(FIX / "radar.ast"), str(FIX / "adsb.ast"), str(FIX / "sensors.toml")
@@ -134,7 +134,7 @@ def test_the_job_options_take_what_read_takes(tmp_path):
 
 def test_track_job_returns_the_table_without_an_output(adsb, tmp_path):
     """The README's notebook use: track_job returns the table; only the command needs an output."""
-    from asterix.encode import encode_frame
+    from msdc.asterix.encode import encode_frame
 
     columns = ["sac", "sic", "time_of_day", "latitude", "longitude", "address", "callsign", "flight_level"]
     few = adsb.loc[adsb["callsign"] == "MAS72", columns].iloc[:120]
@@ -183,7 +183,7 @@ def test_adsb_sigma_is_range_checked(sigma, error, adsb):
 
 
 def test_the_library_and_the_command_take_the_same_adsb_sigma():
-    from pipeline.model.measurements import ADSB_SIGMA_RANGE_M
+    from msdc.pipeline.model.measurements import ADSB_SIGMA_RANGE_M
 
     assert ADSB_SIGMA_RANGE_M == jobs.ADSB_SIGMA_RANGE_M == (0.5, 20000.0)
 
@@ -264,7 +264,7 @@ def test_the_sensor_table_or_its_path(radar):
 def adsb_0_23(tmp_path_factory, adsb) -> Path:
     """100 fixture ADS-B reports written as edition 0.23, one a block: I021/130 is 6 bytes in 0.23 and 8
     from 0.24 (specs), so 2.7 walks none of them and 0.23 alone walks every one."""
-    from asterix.encode import encode_frame
+    from msdc.asterix.encode import encode_frame
 
     columns = ["sac", "sic", "time_of_day", "latitude", "longitude", "address", "callsign", "flight_level"]
     path = tmp_path_factory.mktemp("e023") / "adsb023.ast"
@@ -316,7 +316,7 @@ def test_max_coast_names_its_real_bounds(tmp_path):
 
 
 def test_stats_times_are_labelled_utc():
-    from pipeline.stats import format_stats, stats_tables
+    from msdc.pipeline.stats import format_stats, stats_tables
 
     rec = asterix.read(ADSB, date="2019-03-01")
     text = format_stats(stats_tables(rec.frames, rec.errors))

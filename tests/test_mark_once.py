@@ -10,12 +10,12 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from pipeline.jobs import mark_once
-from pipeline.model.dedup import DEDUP_KEYS, duplicate_mask
-from pipeline.model.jumps import JUMP_FLAG_COLUMNS, jump_flags
-from pipeline.model.load import load
-from pipeline.model.measurements import build_measurements
-from pipeline.model.sensors import read_sensors
+from msdc.pipeline.jobs import mark_once
+from msdc.pipeline.model.dedup import DEDUP_KEYS, duplicate_mask
+from msdc.pipeline.model.jumps import JUMP_FLAG_COLUMNS, jump_flags
+from msdc.pipeline.model.load import load
+from msdc.pipeline.model.measurements import build_measurements
+from msdc.pipeline.model.sensors import read_sensors
 
 ROOT = Path(__file__).resolve().parents[1]
 

@@ -9,16 +9,16 @@ import pandas as pd
 import pytest
 from measurement_frames import meas_frame
 
-from pipeline.model.measurements import (
+from msdc.pipeline.model.measurements import (
     UnknownRadar,
     adsb_measurements,
     normalise_callsign,
     radar_measurements,
     select,
 )
-from pipeline.model.schema import MEASUREMENT_COLUMNS
-from pipeline.model.sensors import read_sensors, sensor_toml_snippet
-from pipeline.model.time import UNDATED_DAY, seconds_since
+from msdc.pipeline.model.schema import MEASUREMENT_COLUMNS
+from msdc.pipeline.model.sensors import read_sensors, sensor_toml_snippet
+from msdc.pipeline.model.time import UNDATED_DAY, seconds_since
 
 A = 6378137.0
 GOOD = """
@@ -210,7 +210,7 @@ def test_select_by_callsign_and_address():
 def test_adsb_0_2x_figure_of_merit_is_not_nucp():
     # 0.2x frames have no nucp_nic column; I021/090 PA (fom_pa) is a figure of merit of its own whose scale
     # no spec gives as NUCp's, NIC's or NACp's: it is carried as fom_pa and fills none of them
-    from pipeline.model.measurements import adsb_measurements
+    from msdc.pipeline.model.measurements import adsb_measurements
 
     frame = pd.DataFrame({"time_of_day": [1.0, 2.0], "day": [0, 0], "latitude": [1.0, 1.1],
                           "longitude": [100.0, 100.1], "sac": [0, 0], "sic": [1, 1],
@@ -244,7 +244,7 @@ def test_radar_offsets_match_the_same_aircraft_within_a_second():
     offset is 1112 m; reports 2 s away are not matched, so 19 plots (below 20) give no row."""
     from pyproj import Geod
 
-    from pipeline.model.site_check import radar_offsets
+    from msdc.pipeline.model.site_check import radar_offsets
 
     t0 = pd.Timestamp("2019-03-01T08:00:00Z")
     n = 30

@@ -6,7 +6,7 @@ from pathlib import Path
 import pandas as pd
 import pytest
 
-from pipeline.model.measurements import DECODED_COLUMNS, adsb_measurements, on_ground
+from msdc.pipeline.model.measurements import DECODED_COLUMNS, adsb_measurements, on_ground
 
 
 def test_cat048_stat_codes_say_on_ground_as_the_spec_table():
@@ -36,7 +36,7 @@ REAL_RADAR = Path(__file__).resolve().parents[2] / "shared" / "real" / "230502-e
                                                     "repository")
 def test_the_real_radars_site_monitor_is_on_the_ground():
     # the Mode 3/A 7777 site monitor of the Barcelona radar (address 344045, 899 plots) replies STAT 1
-    import asterix
+    import msdc.asterix as asterix
 
     frame = asterix.read(REAL_RADAR, date="2023-05-02", columns=DECODED_COLUMNS).frames[48]
     said = on_ground(frame, 48)

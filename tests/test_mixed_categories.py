@@ -8,7 +8,7 @@ from asterix_bytes import block, decode_bytes, fspec
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-import asterix
+import msdc.asterix as asterix
 
 RADARS = [(20, 129), (20, 130), (21, 7)]  # SAC/SIC of three radars
 
@@ -151,7 +151,7 @@ def test_mutated_mixed_stream_accounted_and_far_blocks_survive(data):
 
 
 def test_stats_show_other_categories(tmp_path):
-    from pipeline.stats import format_stats, stats_tables
+    from msdc.pipeline.stats import format_stats, stats_tables
 
     data, _ = mixed_stream(1)
     path = tmp_path / "mixed.ast"

@@ -8,10 +8,10 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from pipeline.model.geodesy import ecef_to_enu, geodetic_to_ecef, polar_to_geodetic
-from pipeline.model.identity import assign_aircraft_id, identify
-from pipeline.model.measurements import IdentityWarning, build_measurements, nacp_sigma_m
-from pipeline.model.schema import (
+from msdc.pipeline.model.geodesy import ecef_to_enu, geodetic_to_ecef, polar_to_geodetic
+from msdc.pipeline.model.identity import assign_aircraft_id, identify
+from msdc.pipeline.model.measurements import IdentityWarning, build_measurements, nacp_sigma_m
+from msdc.pipeline.model.schema import (
     MEASUREMENT_COLUMNS,
     SchemaError,
     conform,
@@ -19,7 +19,7 @@ from pipeline.model.schema import (
     markdown,
     validate,
 )
-from pipeline.model.time import UNDATED_DAY, absolute_time, is_dated, iso_utc, midnight, seconds_since
+from msdc.pipeline.model.time import UNDATED_DAY, absolute_time, is_dated, iso_utc, midnight, seconds_since
 
 ROOT = Path(__file__).resolve().parents[1]
 SENSORS = pd.DataFrame([{"name": "R", "sac": 25, "sic": 201, "latitude": 2.7456, "longitude": 101.7099,

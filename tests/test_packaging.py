@@ -1,21 +1,39 @@
-"""Packaging: only the decoder and the pipeline are installed; the simulator is imported from the checkout."""
+"""Packaging: the repository root installs as the one package ``msdc`` (msdc.asterix, msdc.pipeline); the
+simulator, tests and benchmarks stay in the checkout; nothing installs a top-level asterix or pipeline."""
 
 import tomllib
+import zipfile
 from pathlib import Path
 
 import fixtures
 
 ROOT = Path(__file__).resolve().parents[1]
+CONFIG = tomllib.loads((ROOT / "pyproject.toml").read_text())["tool"]["setuptools"]
 
 
-def test_fixtures_not_installed_as_a_package():
-    from setuptools import find_namespace_packages
+def _source_packages() -> set[str]:
+    """Every folder of asterix/ and pipeline/ that holds an __init__.py, under its installed name."""
+    return {"msdc"} | {".".join(("msdc", *p.parent.relative_to(ROOT).parts))
+                       for top in ("asterix", "pipeline") for p in (ROOT / top).rglob("__init__.py")}
 
-    config = tomllib.loads((ROOT / "pyproject.toml").read_text())["tool"]["setuptools"]
-    found = find_namespace_packages(str(ROOT), include=config["packages"]["find"]["include"])
-    assert not any(p.startswith(("fixtures", "tests", "benchmarks")) for p in found)
-    assert {"asterix", "asterix.tables", "pipeline", "pipeline.model", "pipeline.correlate"} <= set(found)
-    assert "fixtures" not in config.get("package-data", {})
+
+def test_every_source_package_is_listed():
+    assert CONFIG["package-dir"] == {"msdc": "."}
+    assert set(CONFIG["packages"]) == _source_packages()
+
+
+def test_no_checkout_only_folder_is_installed():
+    assert not any(p.split(".")[1:2] and p.split(".")[1] in ("fixtures", "tests", "benchmarks", "docs")
+                   for p in CONFIG["packages"])
+
+
+def test_the_wheel_installs_only_msdc(msdc_wheel):
+    names = zipfile.ZipFile(msdc_wheel).namelist()
+    tops = {n.split("/")[0] for n in names if not n.split("/")[0].endswith(".dist-info")}
+    assert tops == {"msdc"}
+    assert {"msdc/__init__.py", "msdc/asterix/kernel.py", "msdc/pipeline/cli.py",
+            "msdc/asterix/tables/cat048_1.31.json"} <= set(names)
+    assert not any(n.startswith(("msdc/fixtures", "msdc/tests", "msdc/benchmarks")) for n in names)
 
 
 def test_simulator_comes_from_the_checkout():

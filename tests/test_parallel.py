@@ -12,11 +12,11 @@ import pandas as pd
 import pytest
 import track_e2e_data as d
 
-import pipeline.parallel as parallel
-from pipeline.conflict.predict import predict_tracks
-from pipeline.parallel import map_ordered
-from pipeline.track import track
-from pipeline.track.noise import estimate_noise
+import msdc.pipeline.parallel as parallel
+from msdc.pipeline.conflict.predict import predict_tracks
+from msdc.pipeline.parallel import map_ordered
+from msdc.pipeline.track import track
+from msdc.pipeline.track.noise import estimate_noise
 
 
 def test_results_come_in_order_from_several_threads():
@@ -102,9 +102,9 @@ def test_radar_errors_against_the_track_are_the_same_on_two_threads(monkeypatch)
 
     from fixtures.scenario import Scenario
     from fixtures.simulate import simulate
-    from pipeline.model.measurements import build_measurements
-    from pipeline.model.sensors import REQUIRED_COLUMNS
-    from pipeline.quality.accuracy import radar_errors
+    from msdc.pipeline.model.measurements import build_measurements
+    from msdc.pipeline.model.sensors import REQUIRED_COLUMNS
+    from msdc.pipeline.quality.accuracy import radar_errors
 
     sc = Scenario(name="threads", aircraft=FLEET[:4])
     sim = simulate(sc, seed=7)
@@ -121,7 +121,7 @@ def test_radar_errors_against_the_track_are_the_same_on_two_threads(monkeypatch)
 def test_fill_predict_is_the_same_on_two_threads(measurements, monkeypatch):
     """correlate --fill predict builds each aircraft's predictors on the threads: every window's slots,
     lags and summary equal those of one thread, bit for bit, in the same order."""
-    from pipeline.correlate.correlation import correlate
+    from msdc.pipeline.correlate.correlation import correlate
 
     def run(n: int):
         monkeypatch.setattr(parallel, "thread_count", lambda: n)

@@ -38,15 +38,15 @@ import pytest
 from fixtures import geodesy as geo
 from fixtures.scenario import RadarSite, Scenario, midnight_scenario
 from fixtures.simulate import DEFAULT_SEED, TOD_LSB_S, Simulation, simulate, write_fixtures
-from pipeline.cli import main as msdc
-from pipeline.correlate.correlation import correlate
-from pipeline.correlate.slots import slot_index
-from pipeline.model.dedup import deduplicate
-from pipeline.model.geodesy import M_PER_NM
-from pipeline.model.load import load
-from pipeline.model.measurements import build_measurements, radar_measurements, select
-from pipeline.model.sensors import read_sensors
-from pipeline.model.time import with_clock
+from msdc.pipeline.cli import main as msdc
+from msdc.pipeline.correlate.correlation import correlate
+from msdc.pipeline.correlate.slots import slot_index
+from msdc.pipeline.model.dedup import deduplicate
+from msdc.pipeline.model.geodesy import M_PER_NM
+from msdc.pipeline.model.load import load
+from msdc.pipeline.model.measurements import build_measurements, radar_measurements, select
+from msdc.pipeline.model.sensors import read_sensors
+from msdc.pipeline.model.time import with_clock
 
 FIX = Path(__file__).resolve().parents[1] / "fixtures"
 SLOT_S = 10.0

@@ -11,10 +11,10 @@ import pytest
 
 from fixtures.scenario import midnight_scenario
 from fixtures.simulate import GAP_RULE_S, simulate
-from pipeline.correlate.correlation import correlate
-from pipeline.model.measurements import build_measurements
-from pipeline.model.sensors import REQUIRED_COLUMNS as SENSOR_COLUMNS
-from pipeline.quality.tables import (
+from msdc.pipeline.correlate.correlation import correlate
+from msdc.pipeline.model.measurements import build_measurements
+from msdc.pipeline.model.sensors import REQUIRED_COLUMNS as SENSOR_COLUMNS
+from msdc.pipeline.quality.tables import (
     GAP_COLUMNS,
     HISTOGRAM_COLUMNS,
     QUALITY_COLUMNS,
@@ -23,7 +23,7 @@ from pipeline.quality.tables import (
     integrity_shares,
     quality_tables,
 )
-from pipeline.report.quality_figures import interval_histogram_figure, slotting_figure
+from msdc.pipeline.report.quality_figures import interval_histogram_figure, slotting_figure
 
 DAY0 = pd.Timestamp("2019-06-14", tz="UTC")
 
@@ -269,8 +269,8 @@ def test_interval_labels_never_overlap_and_the_largest_count_is_labelled():
     """A radar's intervals fill 30 neighbouring 0.1 s bins near its 4 s scan (real CAT048: the counts ran
     into one another): the labels left visible do not overlap on the canvas, the largest count is one of
     them, and a lone bin far away keeps its own."""
-    from pipeline.quality.tables import histogram_edges_s
-    from pipeline.report.quality_figures import interval_histogram
+    from msdc.pipeline.quality.tables import histogram_edges_s
+    from msdc.pipeline.report.quality_figures import interval_histogram
 
     edges = histogram_edges_s(180.0)
     counts = np.zeros(len(edges) - 1, np.int64)
@@ -292,10 +292,10 @@ def test_interval_labels_never_overlap_and_the_largest_count_is_labelled():
 def test_slotting_figure_rows_equal_a_selection_over_both_sensors_joined(frames):
     """The figure's raw reports of one sensor are found without joining both sensors' frames: the same
     rows, values and clock as select() over the two joined (also with one sensor empty)."""
-    from pipeline.correlate.windows import in_window
-    from pipeline.model.measurements import select
-    from pipeline.model.time import midnight, with_clock
-    from pipeline.report.quality_figures import _raw_in_window
+    from msdc.pipeline.correlate.windows import in_window
+    from msdc.pipeline.model.measurements import select
+    from msdc.pipeline.model.time import midnight, with_clock
+    from msdc.pipeline.report.quality_figures import _raw_in_window
 
     radar, adsb = frames[frames["sensor_kind"] == "radar"], frames[frames["sensor_kind"] == "adsb"]
     window = correlate(frames, callsign="MAS72").windows[0]
@@ -327,7 +327,7 @@ def test_workbook_times_are_excel_dates_of_the_truth(sim, tables, tmp_path):
     (openpyxl reads to the millisecond: within half of one), formatted as UTC date-times."""
     import openpyxl
 
-    from pipeline.report.excel import write_tables
+    from msdc.pipeline.report.excel import write_tables
     write_tables(tables, tmp_path / "q.xlsx")
     wb = openpyxl.load_workbook(tmp_path / "q.xlsx")
     half_ms = dt.timedelta(microseconds=500)
@@ -359,7 +359,7 @@ def test_undated_workbook_shows_time_of_day_only(sim, tmp_path):
     """Without a date the instants are empty cells and the time of day is a clock time, as before."""
     import openpyxl
 
-    from pipeline.report.excel import write_tables
+    from msdc.pipeline.report.excel import write_tables
     sensors = pd.DataFrame([asdict(sim.scenario.radar)])[SENSOR_COLUMNS]
     t = quality_tables(build_measurements(sim.radar, sim.adsb, sensors))
     write_tables(t, tmp_path / "u.xlsx")
@@ -377,7 +377,7 @@ def test_undated_workbook_shows_time_of_day_only(sim, tmp_path):
 
 def test_json_times_are_iso_text_to_the_millisecond(sim, tables):
     """The JSON rows keep ISO 8601 UTC text, cut to the millisecond, worked out here from the truth times."""
-    from pipeline.report.summary import table_records
+    from msdc.pipeline.report.summary import table_records
 
     def iso(seconds: float) -> str:
         ms = int(np.floor(seconds * 1000 + 1e-6))
@@ -401,7 +401,7 @@ def test_json_times_are_iso_text_to_the_millisecond(sim, tables):
 def test_0_2x_figure_of_merit_is_its_own_indicator():
     # CAT021 0.23 reports with PA 0, 6, 7, 7 (I021/090) and no NUCp/NIC: the ADS-B quality sheets count PA as
     # fom_pa, and the NUCp/NIC shares are unknown, not PA's
-    from pipeline.model.measurements import adsb_measurements
+    from msdc.pipeline.model.measurements import adsb_measurements
 
     frame = pd.DataFrame({"time_of_day": [1.0, 2.0, 3.0, 4.0], "day": 0,
                           "latitude": [1.0, 1.001, 1.002, 1.003], "longitude": 100.0, "sac": 0, "sic": 1,
@@ -429,7 +429,7 @@ def test_workbook_headers_say_the_unit_the_cells_show(tables, tmp_path):
     """A column shown as a clock time (hh:mm:ss) is not named in seconds (first_tod_s showed 08:00:00)."""
     import openpyxl
 
-    from pipeline.report.excel import write_tables
+    from msdc.pipeline.report.excel import write_tables
     write_tables(tables, tmp_path / "q.xlsx")
     wb = openpyxl.load_workbook(tmp_path / "q.xlsx")
     clocks = {(ws.title, h) for ws in wb.worksheets for h in (c.value for c in ws[1]) if h and ws.max_row > 1
@@ -444,9 +444,9 @@ def test_a_wide_sheet_note_is_printed_whole(tmp_path):
     every page repeats (one cell in column A ran across the page edge: "ADS-B is the r")."""
     import openpyxl
 
-    from pipeline.quality.accuracy import LIMITATION_NOTE
-    from pipeline.report.cells import PAGE_WIDTH_CHARS
-    from pipeline.report.excel import write_tables
+    from msdc.pipeline.quality.accuracy import LIMITATION_NOTE
+    from msdc.pipeline.report.cells import PAGE_WIDTH_CHARS
+    from msdc.pipeline.report.excel import write_tables
 
     frame = pd.DataFrame({"radar": ["KLIA MSSR"], **{f"quantity_number_{i:02d}_m": [1.0] for i in range(24)}})
     frame.attrs["note"] = LIMITATION_NOTE
@@ -466,7 +466,7 @@ def test_a_wide_sheet_note_is_printed_whole(tmp_path):
 def _real_like_adsb_histogram() -> pd.DataFrame:
     """The real 0.23 ADS-B station's shape: 17410 and 20306 intervals in the 0.4 and 0.5 s bins, 2621 beside
     1031 near 1 s, a few hundred spread to 30 s (99 % end by 1.2 s here, worked out by hand below)."""
-    from pipeline.quality.tables import histogram_edges_s
+    from msdc.pipeline.quality.tables import histogram_edges_s
 
     edges = histogram_edges_s(180.0)
     counts = np.zeros(len(edges) - 1, np.int64)
@@ -478,7 +478,7 @@ def _real_like_adsb_histogram() -> pd.DataFrame:
 
 
 def test_interval_figure_shows_the_bulk_wide_and_the_tail_on_log_axes():
-    from pipeline.report.quality_figures import interval_histogram
+    from msdc.pipeline.report.quality_figures import interval_histogram
 
     hist = _real_like_adsb_histogram()
     # 44738 intervals; 99 % = 44290.6: the bins 0.3-1.2 s hold 44368, so the bulk panel ends at 1.2 s and
@@ -496,7 +496,7 @@ def test_interval_figure_shows_the_bulk_wide_and_the_tail_on_log_axes():
 def test_interval_labels_sit_on_no_other_bar():
     """17410 beside 20306 was drawn over the taller bar; 2621 over 1031: a visible label overlaps no other
     visible label and no bar but its own (checked on the canvas, with the bars' own extents)."""
-    from pipeline.report.quality_figures import interval_histogram
+    from msdc.pipeline.report.quality_figures import interval_histogram
 
     fig = interval_histogram(_real_like_adsb_histogram())
     renderer = fig.canvas.get_renderer()
@@ -514,8 +514,8 @@ def test_interval_labels_sit_on_no_other_bar():
 
 
 def test_radar_error_legend_covers_no_panel(tmp_path, monkeypatch):
-    from pipeline.quality.accuracy import estimate_biases
-    from pipeline.report import quality_figures
+    from msdc.pipeline.quality.accuracy import estimate_biases
+    from msdc.pipeline.report import quality_figures
 
     errors = pd.DataFrame({"radar": "R", "sac": 1, "sic": 2, "callsign": [f"AC{i % 6}" for i in range(600)],
                            "address": None, "time_of_day": np.arange(600.0) * 5,

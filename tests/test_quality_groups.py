@@ -9,7 +9,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from pipeline.quality.tables import ALL, ID_KEYS, QUALITY_BIN_S, _adsb_over_time, _adsb_value_counts
+from msdc.pipeline.quality.tables import ALL, ID_KEYS, QUALITY_BIN_S, _adsb_over_time, _adsb_value_counts
 
 CALLSIGNS = ["", "#1", "(AA", "ZZ9", "AB12", "ab"]  # "" and "#1" sort before "(all)", the rest after
 

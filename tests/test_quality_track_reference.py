@@ -14,11 +14,11 @@ from test_accuracy import FLEET, INJECTED, TOLERANCE, _se_name
 
 from fixtures.scenario import Scenario
 from fixtures.simulate import simulate
-from pipeline import jobs
-from pipeline.cli import main
-from pipeline.model.measurements import build_measurements
-from pipeline.model.sensors import REQUIRED_COLUMNS as SENSOR_COLUMNS
-from pipeline.quality.accuracy import estimate_biases, radar_errors
+from msdc.pipeline import jobs
+from msdc.pipeline.cli import main
+from msdc.pipeline.model.measurements import build_measurements
+from msdc.pipeline.model.sensors import REQUIRED_COLUMNS as SENSOR_COLUMNS
+from msdc.pipeline.quality.accuracy import estimate_biases, radar_errors
 
 FIX = Path(__file__).resolve().parents[1] / "fixtures"
 

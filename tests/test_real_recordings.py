@@ -8,7 +8,7 @@ import pandas as pd
 import pytest
 from asterix_bytes import SHARED
 
-import asterix
+import msdc.asterix as asterix
 
 REAL = SHARED / "real"  # ../shared/real beside the repository root
 pytestmark = pytest.mark.skipif(not REAL.is_dir(), reason=f"{REAL} not present: real-recording cases skipped")

@@ -19,9 +19,9 @@ from asterix_bytes import block, fspec
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-import asterix
-from asterix.containers import DETECT_BYTES, detect_format, read_segments, recorder_hint
-from pipeline.cli import main
+import msdc.asterix as asterix
+from msdc.asterix.containers import DETECT_BYTES, detect_format, read_segments, recorder_hint
+from msdc.pipeline.cli import main
 
 ALL = [21, 34, 48]
 DAY = dt.date(2019, 3, 1)
@@ -407,7 +407,7 @@ def test_mutated_oradis_accounted_and_far_packets_survive(tmp_path_factory, data
 
 
 def test_cli_reads_recorder_files(tmp_path, capsys) -> None:
-    from pipeline.cli import main
+    from msdc.pipeline.cli import main
 
     data, _, _ = midnight_gps()
     path = tmp_path / "day.gps"

@@ -13,10 +13,16 @@ import pandas as pd
 import pytest
 from openpyxl import load_workbook
 
-from pipeline.correlate.results import SLOT_COLUMNS, SUMMARY_KEYS, CorrelationRun, SkippedWindow, WindowResult
-from pipeline.report.excel import sheet_name, write_report
-from pipeline.report.figures import lag_figure, latlon_time_figure, track_figure
-from pipeline.report.summary import run_to_json, summary_table, write_json
+from msdc.pipeline.correlate.results import (
+    SLOT_COLUMNS,
+    SUMMARY_KEYS,
+    CorrelationRun,
+    SkippedWindow,
+    WindowResult,
+)
+from msdc.pipeline.report.excel import sheet_name, write_report
+from msdc.pipeline.report.figures import lag_figure, latlon_time_figure, track_figure
+from msdc.pipeline.report.summary import run_to_json, summary_table, write_json
 
 EVIL = "=cmd|' /C calc'!A0"
 T0 = pd.Timestamp("2019-03-01 10:00:00.500", tz="UTC")
@@ -213,7 +219,7 @@ def test_number_formats_follow_units(outputs: dict[str, Path]) -> None:
 def test_quality_tables_formats(tmp_path: Path) -> None:
     """An azimuth bias of 0.0036 deg shows as 0.0036 (it printed 0.00), ppm to 0.1, seconds of day as
     times."""
-    from pipeline.report.excel import write_tables
+    from msdc.pipeline.report.excel import write_tables
 
     biases = pd.DataFrame({"radar": ["R"], "azimuth_bias_deg": [0.0036], "range_gain_ppm": [-27.0021],
                            "range_bias_m": [6.26], "time_bias_s": [-0.0192], "gap_start_tod": [29401.25]})
@@ -259,7 +265,7 @@ def _page_rows_cm(ws) -> float:
 def test_charts_on_their_own_grid(outputs: dict[str, Path]) -> None:
     """Charts on a grid of 2 across, none overlapping another, each inside the printable width of an A4
     landscape page and inside its grid slot; data sheets carry no chart."""
-    from pipeline.report.charts import CHART_HEADING_ROWS, CHART_SLOT_ROWS
+    from msdc.pipeline.report.charts import CHART_HEADING_ROWS, CHART_SLOT_ROWS
 
     wb = load_workbook(outputs["xlsx"])
     assert len(wb["Lag charts"]._charts) == 2
@@ -285,7 +291,7 @@ def test_charts_on_their_own_grid(outputs: dict[str, Path]) -> None:
 def test_page_breaks_fall_between_chart_rows(tmp_path: Path) -> None:
     """Seven windows: 7 lag charts, 4 rows of 2, 2 rows per page: one break, after the first page's
     charts, and no chart crosses it."""
-    from pipeline.report.charts import CHART_HEADING_ROWS, CHART_ROWS_PER_PAGE, CHART_SLOT_ROWS
+    from msdc.pipeline.report.charts import CHART_HEADING_ROWS, CHART_ROWS_PER_PAGE, CHART_SLOT_ROWS
 
     windows = [WindowResult(summary=_summary(callsign=f"C{i}", window=1, slots=5),
                             slots=_slots(5, T0, 1.0, 100.0), lags=_lags(range(-4, 5))) for i in range(7)]
@@ -414,7 +420,7 @@ def test_sheet_names_are_valid_and_unique() -> None:
 
 
 def test_summary_clock_text():
-    from pipeline.report.summary import clock_text
+    from msdc.pipeline.report.summary import clock_text
 
     # undated: HH:MM:SS of the time of day (seconds cut, not rounded), +Nd past the first day
     assert clock_text(None, 59.96) == "00:00:59"
@@ -430,7 +436,7 @@ def test_wide_tables_span_pages_with_identity_repeated(tmp_path: Path) -> None:
     """29 columns, 27 of them 22 characters wide (header + 2), are over 600 characters: far more than one
     legible landscape page (170), so the sheet is fitted to the cap of 3 pages wide and repeats its leading
     text columns (call sign, address) on each; a narrow sheet stays one page wide."""
-    from pipeline.report.excel import write_tables
+    from msdc.pipeline.report.excel import write_tables
 
     wide = pd.DataFrame({"callsign": ["MAS72"], "address": ["750312"],
                          **{f"interval_{i:02d}_median_s": [4.8] for i in range(27)}})
@@ -445,7 +451,7 @@ def test_window_start_is_a_utc_date_in_the_workbook(tmp_path: Path) -> None:
     """On the fixtures, MAS72's first window starts where the simulator's truth says (its first overlap of
     radar and ADS-B reports, ToD to one LSB): the workbook cell read back is that UTC date-time, a real
     Excel date labelled UTC, and the JSON keeps ISO text."""
-    from pipeline import jobs
+    from msdc.pipeline import jobs
 
     root = Path(__file__).resolve().parents[1]
     truth = json.loads((root / "fixtures" / "truth.json").read_text())
@@ -468,7 +474,7 @@ def test_window_start_is_a_utc_date_in_the_workbook(tmp_path: Path) -> None:
 def test_text_that_looks_like_a_date_stays_text() -> None:
     """Times reach the workbook as datetimes; text is never parsed back into a date (a call sign, file name
     or parameter that happens to read as ISO 8601 stays what it was)."""
-    from pipeline.report.cells import excel_value
+    from msdc.pipeline.report.cells import excel_value
 
     assert excel_value("2019-03-01T10:00:20.500Z") == "2019-03-01T10:00:20.500Z"
     assert excel_value("2024-05-01") == "2024-05-01"
@@ -479,7 +485,7 @@ def test_plain_tables_parameters_have_no_correlation_window_rows(tmp_path):
     # the quality workbook's Parameters: its own parameters, not the correlation report's window counts
     from openpyxl import load_workbook
 
-    from pipeline.report.excel import write_tables
+    from msdc.pipeline.report.excel import write_tables
 
     write_tables({"T": pd.DataFrame({"a": [1, 2]})}, tmp_path / "q.xlsx", parameters={"gap_s": 180})
     rows = list(load_workbook(tmp_path / "q.xlsx")["Parameters"].iter_rows(min_row=2, values_only=True))

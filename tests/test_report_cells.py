@@ -9,7 +9,7 @@ import math
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from pipeline.report.cells import (
+from msdc.pipeline.report.cells import (
     CLOCK_FORMAT,
     DATETIME_FORMAT,
     SUMMARY_DATETIME_FORMAT,
@@ -75,7 +75,7 @@ def _workbook(tmp_path, name: str, fast: bool, monkeypatch) -> list[list[tuple]]
     import pandas as pd
     from openpyxl import Workbook
 
-    from pipeline.report import cells
+    from msdc.pipeline.report import cells
 
     monkeypatch.setattr(cells, "FAST_ROWS", fast)
     wb = Workbook(write_only=True)
@@ -112,7 +112,7 @@ def _sheet_xml(tmp_path, name: str, monkeypatch, many: bool) -> bytes:
     import pandas as pd
     from openpyxl import Workbook
 
-    from pipeline.report import cells, rows
+    from msdc.pipeline.report import cells, rows
 
     monkeypatch.setattr(rows, "CHUNK_ROWS", 3)
     wb = Workbook(write_only=True)
@@ -149,7 +149,7 @@ def test_rows_appended_at_once_are_the_rows_appended_one_by_one(tmp_path, monkey
 
 
 def test_install_declines_a_sheet_without_the_expected_internals():
-    from pipeline.report.rows import RowStyles, install
+    from msdc.pipeline.report.rows import RowStyles, install
 
     class Other:  # what a future openpyxl's sheet might look like: no _get_writer/_writer
         row_dimensions: dict = {}
@@ -162,7 +162,7 @@ def test_install_takes_this_openpyxl_write_only_sheet():
     compares two paths)."""
     from openpyxl import Workbook
 
-    from pipeline.report.rows import RowStyles, install
+    from msdc.pipeline.report.rows import RowStyles, install
 
     ws = Workbook(write_only=True).create_sheet("T")
     assert install(ws, RowStyles(ws, [None])) is True

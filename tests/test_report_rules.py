@@ -11,13 +11,13 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from pipeline.cli import main
-from pipeline.report.figures import figure_peak
-from pipeline.report.formats import column_unit, decimals, excel_format
-from pipeline.report.quality_figures import histogram_range_s
-from pipeline.report.summary import SEP_DOMINATED_RATIO, window_note
-from pipeline.report.textguard import guard_frame, neutralise
-from pipeline.stats import reason_kind, stats_tables
+from msdc.pipeline.cli import main
+from msdc.pipeline.report.figures import figure_peak
+from msdc.pipeline.report.formats import column_unit, decimals, excel_format
+from msdc.pipeline.report.quality_figures import histogram_range_s
+from msdc.pipeline.report.summary import SEP_DOMINATED_RATIO, window_note
+from msdc.pipeline.report.textguard import guard_frame, neutralise
+from msdc.pipeline.stats import reason_kind, stats_tables
 
 FIX = Path(__file__).resolve().parents[1] / "fixtures"
 
@@ -67,7 +67,7 @@ def test_a_peak_at_the_search_limit_is_marked_as_such():
 
 def test_peak_matches_the_summary_rule():
     """The lag the figure marks is the summary's pearson_peak_lag for a window built by correlate."""
-    from pipeline.correlate.correlation import PEARSON_MIN_OVERLAP, pearson_by_lag, pearson_peak
+    from msdc.pipeline.correlate.correlation import PEARSON_MIN_OVERLAP, pearson_by_lag, pearson_peak
 
     t = np.arange(40.0)
     x = np.sin(t / 5.0)
@@ -217,7 +217,7 @@ def test_histogram_range_keeps_the_bulk():
 def test_slotting_panel_range_follows_the_radar():
     """ADS-B jumps of degrees would flatten the track: the raw-report panels take the radar's range,
     padded by 8 % of it, at least 0.01 deg."""
-    from pipeline.report.quality_figures import track_span
+    from msdc.pipeline.report.quality_figures import track_span
 
     assert track_span(np.array([1.0, np.nan, 2.0])) == pytest.approx((0.92, 2.08))
     assert track_span(np.array([5.0, 5.0])) == pytest.approx((4.99, 5.01))

@@ -1,5 +1,5 @@
-"""pipeline.report.saving: a write-only workbook saved with its charts' XML built beforehand and its images
-stored holds the same parts, byte for byte, as openpyxl's own save."""
+"""msdc.pipeline.report.saving: a write-only workbook saved with its charts' XML built beforehand and its
+images stored holds the same parts, byte for byte, as openpyxl's own save."""
 
 from __future__ import annotations
 
@@ -11,7 +11,7 @@ from openpyxl import Workbook
 from openpyxl.chart import Reference, ScatterChart, Series
 from openpyxl.drawing.image import Image
 
-from pipeline.report import saving
+from msdc.pipeline.report import saving
 
 
 def _workbook(png: Path) -> Workbook:

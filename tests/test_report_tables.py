@@ -13,8 +13,8 @@ import pandas as pd
 import pytest
 from openpyxl import load_workbook
 
-from pipeline import jobs
-from pipeline.report import tables as tables_mod
+from msdc.pipeline import jobs
+from msdc.pipeline.report import tables as tables_mod
 
 FIX = Path(__file__).resolve().parents[1] / "fixtures"
 EXCEL_EPOCH = dt.datetime(1899, 12, 30)
@@ -142,7 +142,7 @@ def test_auto_threshold(result, tmp_path, monkeypatch):
 def test_failure_leaves_nothing(result, tmp_path, monkeypatch):
     """The workbook fails after the Parquet files and the figure were written: none of them stays, a file
     that was there before does."""
-    import pipeline.report.excel as excel
+    import msdc.pipeline.report.excel as excel
 
     real = excel.write_atomically
 
@@ -162,7 +162,7 @@ def test_track_map_of_many_slots_draws_lines_only(result, tmp_path, monkeypatch)
     """Past MAX_MARKED_SLOTS the map keeps one line per sensor kind and says markers were left out."""
     from matplotlib.figure import Figure
 
-    import pipeline.report.figures as figures
+    import msdc.pipeline.report.figures as figures
 
     drawn = {}
     monkeypatch.setattr(figures, "MAX_MARKED_SLOTS", 10)
@@ -180,7 +180,7 @@ def test_track_map_of_many_slots_draws_lines_only(result, tmp_path, monkeypatch)
 def test_track_map_legend_lies_inside_the_axes(result, tmp_path, monkeypatch):
     """The map's legend ("best" place) is drawn inside the axes, so leaving it out of the constrained layout
     cannot move anything."""
-    import pipeline.report.figures as figures
+    import msdc.pipeline.report.figures as figures
 
     drawn = {}
     real = figures.save_png
@@ -196,7 +196,7 @@ def test_track_map_png_has_the_pixels_of_the_default_encoding(result, tmp_path, 
     """The map is encoded at a faster zlib level than Pillow's default: the same pixels, decoded."""
     from matplotlib.image import imread
 
-    import pipeline.report.figures as figures
+    import msdc.pipeline.report.figures as figures
 
     fast = figures.track_figure(result.run, tmp_path / "fast.png", result.checked.sensors)
     monkeypatch.setattr(figures, "TRACK_PNG_COMPRESS_LEVEL", None)
@@ -210,7 +210,7 @@ def test_farthest_point_is_the_largest_geodesic_distance():
     that all lie near one range in every direction, where the sphere and the ellipsoid rank them apart."""
     from pyproj import Geod
 
-    from pipeline.report.figures import farthest_m
+    from msdc.pipeline.report.figures import farthest_m
 
     geod, rng = Geod(ellps="WGS84"), np.random.default_rng(7)
     site_lat, site_lon = 52.0, 4.5
@@ -278,7 +278,7 @@ def test_parquet_written_in_batches_equals_the_whole_table(result, tmp_path, nam
 def test_lag_frame_is_in_increasing_lag_whatever_the_order_given():
     """A window's lag table in increasing lag, ties kept in the order given; one already in order is used
     as it is (no copy)."""
-    from pipeline.correlate.results import WindowResult
+    from msdc.pipeline.correlate.results import WindowResult
 
     shuffled = pd.DataFrame({"lag": [1, -1, 0, 1], "ncc_lat": [0.1, 0.2, 0.3, 0.4]})
     got = tables_mod.lag_frame(WindowResult({}, pd.DataFrame(), shuffled))

@@ -21,12 +21,12 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from asterix import decode_buffer
-from asterix.columns import Column, columns_for
-from asterix.containers import read_segments
-from asterix.encode import encode_frame
-from asterix.layout import compile_layout
-from asterix.tables import load_table
+from msdc.asterix import decode_buffer
+from msdc.asterix.columns import Column, columns_for
+from msdc.asterix.containers import read_segments
+from msdc.asterix.encode import encode_frame
+from msdc.asterix.layout import compile_layout
+from msdc.asterix.tables import load_table
 
 EDITIONS = [(48, "1.27"), (48, "1.31"), (48, "1.32"),
             (21, "0.23"), (21, "0.24"), (21, "0.25"), (21, "0.26"),

@@ -348,9 +348,9 @@ def test_planned_flights_stay_in_limits(seed):
 
 def test_write_fixtures_with_stub_encoder(tmp_path, monkeypatch):
     calls = []
-    stub = types.ModuleType("asterix.encode")
+    stub = types.ModuleType("msdc.asterix.encode")
     stub.encode_frame = lambda cat, frame, edition=None: calls.append((cat, len(frame))) or bytes([cat])
-    monkeypatch.setitem(sys.modules, "asterix.encode", stub)
+    monkeypatch.setitem(sys.modules, "msdc.asterix.encode", stub)
     paths = write_fixtures(tmp_path / "m", seed=4, scenario="midnight")
     assert [c for c, _ in calls] == [48, 21]
     assert paths["radar"].read_bytes() == b"\x30" and paths["adsb"].read_bytes() == b"\x15"
@@ -365,8 +365,8 @@ def test_write_fixtures_with_stub_encoder(tmp_path, monkeypatch):
 
 def test_encode_decode_round_trip(sim, tmp_path):
     """Frame values survive the real encoder and decoder unchanged (skipped until both exist)."""
-    encode = pytest.importorskip("asterix.encode")
-    reader = pytest.importorskip("asterix.reader")
+    encode = pytest.importorskip("msdc.asterix.encode")
+    reader = pytest.importorskip("msdc.asterix.reader")
     for cat, frame in ((48, sim.radar.iloc[:400]), (21, sim.adsb.iloc[:2000])):
         path = tmp_path / f"cat{cat}.ast"
         path.write_bytes(encode.encode_frame(cat, frame))

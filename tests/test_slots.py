@@ -4,7 +4,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from pipeline.correlate.slots import slot_count, slot_index, slot_window
+from msdc.pipeline.correlate.slots import slot_count, slot_index, slot_window
 
 
 def meas(times, lat, lon):

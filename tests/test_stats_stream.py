@@ -8,9 +8,9 @@ from pathlib import Path
 import pandas as pd
 import pytest
 
-import asterix
-from pipeline import jobs
-from pipeline.stats import StatsAccumulator, stats_tables
+import msdc.asterix as asterix
+from msdc.pipeline import jobs
+from msdc.pipeline.stats import StatsAccumulator, stats_tables
 from tests.asterix_bytes import block, fspec
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -125,7 +125,7 @@ def test_category_whose_every_block_is_skipped(tmp_path, capsys):
     """A CAT048 block whose only record is cut short (I048/140 needs 3 bytes, 1 is left) decodes no record:
     stats lists no category and the skipped block, says nothing could be decoded, and never traces back.
     A good block of the same category in another chunk is counted as usual."""
-    from pipeline.cli import main
+    from msdc.pipeline.cli import main
 
     bad = block(48, fspec(1, 2) + bytes([25, 201, 0]))
     path = tmp_path / "bad.ast"

@@ -6,7 +6,7 @@ import pytest
 from pyproj import Geod
 from track_scenarios import fly
 
-from pipeline.track import ImmState, Plane, predict, track
+from msdc.pipeline.track import ImmState, Plane, predict, track
 
 GEOD = Geod(ellps="WGS84")
 SITE = (41.0, 2.0)
@@ -150,7 +150,7 @@ def test_predict_ends_is_predicts_last_row():
     """predict_ends (all look-aheads in one kernel call, 1 s steps shared between them) against predict()
     called once per look-ahead: the same cycles, so the same bits, for horizons under a second, whole,
     a hair over or under a whole number, and rows in any order."""
-    from pipeline.track.predict import predict_ends
+    from msdc.pipeline.track.predict import predict_ends
 
     rng = np.random.default_rng(12)
     truth = fly((0, 0), 90.0, 200.0, [(60, 0, 0), (30, 3.0, 0), (60, 0, 0)])
@@ -182,7 +182,7 @@ def test_garbage_position_far_away_is_counted_not_tracked():
 
 
 def test_ellipse_axes_against_eigen_decomposition():
-    from pipeline.track.tracker import _ellipse
+    from msdc.pipeline.track.tracker import _ellipse
 
     rng = np.random.default_rng(12)
     a = rng.normal(size=(50, 2, 2)) * 30.0

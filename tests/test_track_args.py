@@ -7,7 +7,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from pipeline.track import track
+from msdc.pipeline.track import track
 
 T0 = pd.Timestamp("2024-05-10T07:00:00.25Z")
 
@@ -121,14 +121,14 @@ def test_bad_radar_sites_are_named(sites, message):
     """estimate_noise dropped a misspelt key or a (longitude, latitude) site and gave the radar one isotropic
     factor without a word (audit A10); (2.0, 41.2) is the site (41.2, 2.0) swapped: 5,850 km from the
     plots by the haversine (R 6371 km)."""
-    from pipeline.track.noise import estimate_noise
+    from msdc.pipeline.track.noise import estimate_noise
 
     with pytest.raises(ValueError, match=message):
         estimate_noise(_with_radar(), sites=sites)
 
 
 def test_a_sensor_file_radar_absent_from_the_measurements_is_left_out():
-    from pipeline.track.noise import check_sites
+    from msdc.pipeline.track.noise import check_sites
 
     sites = {"048:25/201": (41.2, 2.1), "048:25/999": (40.0, 3.0)}
     assert check_sites(_with_radar(), sites) == {"048:25/201": (41.2, 2.1)}
@@ -137,7 +137,7 @@ def test_a_sensor_file_radar_absent_from_the_measurements_is_left_out():
 def test_a_turn_rate_means_the_same_sign_in_the_modes_and_the_table():
     """Positive turn_rate_dps = right turn (track angle increasing) in the table, in Mode and in the
     parameters (the JSON said turn_left +3, turn_right -3 against the table's right = + (audit B7))."""
-    from pipeline.track import default_modes
+    from msdc.pipeline.track import default_modes
 
     modes = {m.name: m.turn_rate_dps for m in default_modes(3.0)}
     assert modes["turn_left"] == -3.0 and modes["turn_right"] == 3.0
@@ -163,7 +163,7 @@ def test_coasted_time_is_time_beyond_the_update_interval():
     """tracked_s spans first to last update; coasted_s is the time without any update beyond the slowest
     sensor's interval (audit B10: a radar-only track at 4 s read ~75 % coasted with no scan missed, and a
     one-report track 'tracked 60, coasted 60')."""
-    from pipeline.track.tracker import coasted_time
+    from msdc.pipeline.track.tracker import coasted_time
 
     t = np.array([0.0, 4.0, 8.0, 16.0, 20.0])  # the 12 s scan missed: 4 s coasted
     assert coasted_time(t, np.zeros(5, int), np.full(5, "r")) == (4.0, 4.0)

@@ -13,10 +13,10 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from pipeline import jobs, jobs_track
-from pipeline.cli import main
-from pipeline.jobs import OptionError
-from pipeline.jobs_track import TRACK_COLUMNS, TrackOptions
+from msdc.pipeline import jobs, jobs_track
+from msdc.pipeline.cli import main
+from msdc.pipeline.jobs import OptionError
+from msdc.pipeline.jobs_track import TRACK_COLUMNS, TrackOptions
 
 FIX = Path(__file__).resolve().parents[1] / "fixtures"
 RADAR, ADSB, SENSORS = str(FIX / "radar.ast"), str(FIX / "adsb.ast"), str(FIX / "sensors.toml")
@@ -199,10 +199,10 @@ def test_sources_adsb_only(tmp_path):
 def test_plots_without_identity_join_by_track_number():
     """MAS72's radar plots stripped of address, call sign and Mode 3/A rejoin MAS72 by the radar track
     number of its identified plots; a stripped plot whose track number is nowhere identified stays out."""
-    from pipeline.model.load import load
-    from pipeline.model.measurements import build_measurements
-    from pipeline.model.sensors import read_sensors
-    from pipeline.track.associate import join_by_track_number
+    from msdc.pipeline.model.load import load
+    from msdc.pipeline.model.measurements import build_measurements
+    from msdc.pipeline.model.sensors import read_sensors
+    from msdc.pipeline.track.associate import join_by_track_number
 
     data = load([RADAR], date="2019-03-01")
     radar = data.frames[48].copy()
@@ -265,10 +265,10 @@ def test_nothing_trackable_says_why_exit_1_and_writes_nothing(tmp_path, capsys, 
     count and the reason, exit 1, no file (was an empty table with exit 0, or a traceback)."""
     from dataclasses import replace
 
-    from asterix.encode import encode_frame
     from fixtures.scenario import default_scenario
     from fixtures.simulate import sensors_toml, simulate
-    from pipeline.cli import main
+    from msdc.asterix.encode import encode_frame
+    from msdc.pipeline.cli import main
 
     sc = default_scenario()
     sim = simulate(replace(sc, aircraft=sc.aircraft[:2]), seed=3)
@@ -393,7 +393,7 @@ def test_parquet_in_slices_is_the_whole_table(tmp_path):
     booleans and UTC times reads back equal to `to_parquet` of the whole frame, same schema and metadata."""
     import pyarrow.parquet as pq
 
-    from pipeline.report.tables import write_parquet
+    from msdc.pipeline.report.tables import write_parquet
 
     frame = pd.DataFrame({"aircraft_id": ["A"] * 4 + ["B"] * 3,
                           "time": pd.date_range("2019-03-01T08:00:00Z", periods=7, freq="s"),
@@ -422,8 +422,8 @@ def test_reports_with_no_identity_are_counted_not_dropped_silently(tmp_path, cap
     """25 of MAS72's radar plots (each the only plot at its time) stripped of address, call sign, Mode 3/A
     and track number belong to no aircraft: --all tracks the rest and says how many it left out, in the
     warnings and the JSON, where it used to drop them without a word."""
-    import asterix
-    from asterix.encode import encode_frame
+    import msdc.asterix as asterix
+    from msdc.asterix.encode import encode_frame
 
     radar = asterix.read(RADAR).frames[48]
     lone = ~radar["time_of_day"].duplicated(keep=False).to_numpy(bool)

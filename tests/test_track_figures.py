@@ -3,7 +3,7 @@
 import numpy as np
 import pandas as pd
 
-from pipeline.report.track_figures import surface_parts, track_figure
+from msdc.pipeline.report.track_figures import surface_parts, track_figure
 
 KM_PER_DEG = 6371.0088 * np.pi / 180.0
 

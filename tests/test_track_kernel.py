@@ -5,9 +5,9 @@ import pytest
 from scipy.linalg import expm
 from track_scenarios import polar_covariance
 
-from pipeline.track import Mode, TrackerConfig, nacp_covariance, parse_tpm, radar_covariance
-from pipeline.track.imm import CA, CT, CV, TPM_DYNAMIC, TPM_EXPM, TPM_FIXED, tpm_into, transition_into
-from pipeline.track.plane import estimate, filter_plane
+from msdc.pipeline.track import Mode, TrackerConfig, nacp_covariance, parse_tpm, radar_covariance
+from msdc.pipeline.track.imm import CA, CT, CV, TPM_DYNAMIC, TPM_EXPM, TPM_FIXED, tpm_into, transition_into
+from msdc.pipeline.track.plane import estimate, filter_plane
 
 
 def _tpm(kind, param, dt, r, param2=None):
@@ -259,7 +259,7 @@ def test_nacp_covariance():
     1.502 m^2 (the 3 m floor gave 9 m^2), the measurement model's cov_ee_m2 for the same level."""
     from scipy.stats import rayleigh
 
-    from pipeline.model.measurements import nacp_sigma_m
+    from msdc.pipeline.model.measurements import nacp_sigma_m
 
     k95 = rayleigh.ppf(0.95)
     got = nacp_covariance([9, 11, 0, np.nan, 7])

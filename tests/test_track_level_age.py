@@ -9,7 +9,7 @@ import pandas as pd
 import pytest
 from pyproj import Geod
 
-from pipeline.track import track
+from msdc.pipeline.track import track
 
 GEOD = Geod(ellps="WGS84")
 T0 = pd.Timestamp("2016-05-10T22:30:00Z")

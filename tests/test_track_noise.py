@@ -16,12 +16,12 @@ from pyproj import Geod
 from real_track_data import REAL, gap_experiment, load_real_adsb
 from scipy.stats import chi2
 
-from pipeline.cli import main
-from pipeline.model.dedup import duplicate_mask
-from pipeline.model.measurements import build_measurements
-from pipeline.model.sensors import read_sensors
-from pipeline.track import TrackerConfig
-from pipeline.track.noise import (
+from msdc.pipeline.cli import main
+from msdc.pipeline.model.dedup import duplicate_mask
+from msdc.pipeline.model.measurements import build_measurements
+from msdc.pipeline.model.sensors import read_sensors
+from msdc.pipeline.track import TrackerConfig
+from msdc.pipeline.track.noise import (
     CHI2_1_MEDIAN,
     estimate_noise,
     fit_timing,
@@ -150,7 +150,7 @@ def test_estimate_recovers_injected_radar_and_adsb_sigmas(wrong_sigmas):
 
 def test_estimated_noise_makes_the_innovations_consistent(wrong_sigmas):
     # with the estimated covariances each sensor's mean NIS is near its expectation, 2 (declared: far off)
-    from pipeline.track import track
+    from msdc.pipeline.track import track
 
     _, meas, est = wrong_sigmas
     before = track(meas).sensors.groupby("sensor_id")["nis_mean"].mean()
@@ -248,7 +248,7 @@ def test_surface_reports_do_not_shrink_the_airborne_sigma():
     # Pooled, the 20,000 parked reports (1 m) outweigh the 4,000 airborne ones (11.7 m per axis): one
     # sigma near 5 m, and the 99.9 % gate then rejects a fifth of the airborne reports (along-track
     # errors of 15 m against a gate of ~20 m) and breaks their tracks. Separate classes recover both.
-    from pipeline.track import track
+    from msdc.pipeline.track import track
 
     meas, surface_m, airborne_m = _surface_and_jittered_airborne(np.random.default_rng(7))
     est = estimate_noise(meas)
@@ -297,7 +297,7 @@ def test_per_aircraft_guard_raises_only_the_jittery_surface_aircraft():
     # beyond the gate and three in a row restart JIT's track. The guard raises JIT alone until its jumps
     # fit the gate: at least 16 m over the gate's sqrt(chi2(2) 99.9 %) = 3.72 (less the smoother's pull),
     # at most about its whole scatter's per-axis RMS sqrt(1 + 0.15 * 16^2 / 2) = 4.5 m (with a margin).
-    from pipeline.track import track
+    from msdc.pipeline.track import track
 
     meas = _surface_with_one_jittery_aircraft(np.random.default_rng(11))
     est = estimate_noise(meas)
@@ -325,7 +325,7 @@ def test_per_aircraft_guard_raises_only_the_jittery_surface_aircraft():
 
 
 def test_stdout_lists_the_raised_aircraft_largest_first_up_to_a_limit():
-    from pipeline.cli import RAISED_SHOWN, _noise_text
+    from msdc.pipeline.cli import RAISED_SHOWN, _noise_text
 
     table = pd.DataFrame({"sensor_id": ["021:0/107"], "component": ["position"], "motion": ["surface"],
                           "estimated_sigma": [1.3], "residuals": [30000]})
@@ -382,7 +382,7 @@ def test_fit_timing_gate_share_guard_raises_the_along_term_for_late_reports():
 def test_surface_and_airborne_with_ground_vectors_separate_timing_from_position():
     # the same frame with each report's track angle: the airborne class splits its 11.7 m into the 5 m
     # position noise and the injected 0.1 s; the parked reports keep sigma_t = 0 (too slow to separate)
-    from pipeline.track import track
+    from msdc.pipeline.track import track
 
     meas, surface_m, _ = _surface_and_jittered_airborne(np.random.default_rng(7))
     k = meas["aircraft_id"].str[2:].astype(int)
@@ -421,7 +421,7 @@ def _time_jittered(e: d.E2E, sigma_t_s: float, rng, tmp: Path) -> tuple[pd.DataF
 
 
 def _fused_rms(e: d.E2E, meas: pd.DataFrame) -> tuple[float, float]:
-    from pipeline.track import track
+    from msdc.pipeline.track import track
 
     return tuple(d.rms(e.truth_error_m(track(meas, smooth=smooth).tracks)) for smooth in (False, True))
 

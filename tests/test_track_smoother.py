@@ -8,8 +8,8 @@ import pandas as pd
 import pytest
 import track_scenarios as sc
 
-from pipeline.track import Mode, TrackerConfig, default_modes, track
-from pipeline.track.plane import estimate, filter_plane
+from msdc.pipeline.track import Mode, TrackerConfig, default_modes, track
+from msdc.pipeline.track.plane import estimate, filter_plane
 
 IDX = [0, 1, 3, 4]  # e, ve, n, vn: CV and CT keep the acceleration states at exactly zero
 

@@ -7,8 +7,8 @@ import numpy as np
 import pytest
 import track_e2e_data as d
 
-from pipeline.track import track
-from pipeline.track.tracker import track_angle_rate
+from msdc.pipeline.track import track
+from msdc.pipeline.track.tracker import track_angle_rate
 
 
 def test_track_angle_rate_by_hand():

@@ -7,8 +7,8 @@ import pytest
 import track_scenarios as sc
 from real_track_data import REAL, gap_experiment, load_real_adsb
 
-from pipeline.track import Mode, TrackerConfig, default_modes
-from pipeline.track.plane import estimate, filter_plane
+from msdc.pipeline.track import Mode, TrackerConfig, default_modes
+from msdc.pipeline.track.plane import estimate, filter_plane
 
 PAPER_MODES = default_modes(3.0, sigma_cv_mps2=0.1, sigma_ct_mps2=0.5)
 

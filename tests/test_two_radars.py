@@ -7,14 +7,14 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from asterix.encode import encode_frame
 from fixtures import geodesy as geo
 from fixtures.multiradar import simulate_two_radars
 from fixtures.simulate import _segments
-from pipeline.correlate.correlation import correlate
-from pipeline.model.load import load
-from pipeline.model.measurements import build_measurements
-from pipeline.model.sensors import read_sensors
+from msdc.asterix.encode import encode_frame
+from msdc.pipeline.correlate.correlation import correlate
+from msdc.pipeline.model.load import load
+from msdc.pipeline.model.measurements import build_measurements
+from msdc.pipeline.model.sensors import read_sensors
 
 R1, R2, ADSB = "048:25/201", "048:25/202", "021:0/1"
 LSB = 128  # ToD units per second
@@ -149,7 +149,7 @@ def test_job_wide_flags_give_the_windows_of_flags_worked_out_per_source(two, spl
     """correlate() reads the duplicate and jump flags mark_once computed once for the job when the frame
     carries them, else works them out per sensor source; with a second ground station relaying every third
     ADS-B report and jumps put into the ADS-B track, both must give the same windows, counts and tables."""
-    from pipeline.jobs import mark_once
+    from msdc.pipeline.jobs import mark_once
 
     _, meas = two
     adsb = (meas["sensor_kind"] == "adsb").to_numpy()

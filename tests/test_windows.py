@@ -2,7 +2,7 @@
 
 import numpy as np
 
-from pipeline.correlate.windows import in_window, overlap_windows, segments, short_window_reason
+from msdc.pipeline.correlate.windows import in_window, overlap_windows, segments, short_window_reason
 
 
 def test_gap_of_180_s_keeps_one_segment_181_splits():

@@ -14,9 +14,9 @@ from pyproj import Geod
 
 from fixtures.multiradar import TwoRadarSimulation, simulate_two_radars
 from fixtures.scenario import DEFAULT_AIRCRAFT, Scenario, default_scenario
-from pipeline.model.dedup import duplicate_mask
-from pipeline.model.measurements import build_measurements
-from pipeline.model.sensors import read_sensors
+from msdc.pipeline.model.dedup import duplicate_mask
+from msdc.pipeline.model.measurements import build_measurements
+from msdc.pipeline.model.sensors import read_sensors
 
 DATE = dt.date(2019, 3, 1)
 MIDNIGHT = pd.Timestamp(DATE, tz="UTC")
@@ -82,7 +82,7 @@ def rms(x: np.ndarray) -> float:
 def figures(e: E2E, smooth: bool = False) -> dict:
     """RMS errors (m) of each sensor's reports and of the tracks built from several source sets; the
     two-radar comparison is made on each single-radar track's own output times."""
-    from pipeline.track import track
+    from msdc.pipeline.track import track
 
     meas = e.measurements
     err = e.truth_error_m(meas)

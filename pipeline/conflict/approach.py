@@ -11,9 +11,9 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
-from pipeline.conflict.geometry import FT_PER_FL, M_PER_NM, surface_ecef_m
-from pipeline.conflict.pairs import _require
-from pipeline.model.time import utc_frame
+from msdc.pipeline.conflict.geometry import FT_PER_FL, M_PER_NM, surface_ecef_m
+from msdc.pipeline.conflict.pairs import _require
+from msdc.pipeline.model.time import utc_frame
 
 APPROACH_COLUMNS = ["time_to_cpa_s", "cpa_time", "cpa_horizontal_nm", "cpa_vertical_ft"]
 TRACK_COLUMNS = ["aircraft_id", "time", "latitude", "longitude", "flight_level", "speed_kt", "track_deg",

@@ -20,16 +20,16 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
-from pipeline.conflict.geometry import (
+from msdc.pipeline.conflict.geometry import (
     FT_PER_FL,
     VERTICAL_TOLERANCE_FT,
     horizontal_distance_nm,
     vertical_limit_ft,
 )
-from pipeline.conflict.grid import grid_rows, grid_step_s
-from pipeline.conflict.pairs import _require, pairs_per_step, time_key
-from pipeline.model.arguments import finite_number
-from pipeline.model.time import utc_frame
+from msdc.pipeline.conflict.grid import grid_rows, grid_step_s
+from msdc.pipeline.conflict.pairs import _require, pairs_per_step, time_key
+from msdc.pipeline.model.arguments import finite_number
+from msdc.pipeline.model.time import utc_frame
 
 LOSS_COLUMNS = ["aircraft_a", "aircraft_b", "start", "end", "duration_s", "min_horizontal_nm",
                 "time_of_min", "vertical_at_min_ft", "min_vertical_ft"]
@@ -93,7 +93,7 @@ def losses_by_pairs(tracks: pd.DataFrame, radius_nm: float = 5.0, vertical_ft: f
     sep = sep[(sep["horizontal_nm"] < radius_nm) & (sep["vertical_ft"] < limit_ft)]
     surface = None
     if set(kinds) - {"all"}:
-        from pipeline.conflict.surface import surface_pairs
+        from msdc.pipeline.conflict.surface import surface_pairs
 
         _require(tracks, ["on_surface"], "tracks")
         surface = surface_pairs(sep, tracks)

@@ -11,7 +11,7 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
-from pipeline.model.arguments import finite_number
+from msdc.pipeline.model.arguments import finite_number
 
 _TOLERANCE_S = 1e-6  # the tracker's times are whole nanoseconds of a float time of day
 

@@ -21,7 +21,7 @@ from functools import lru_cache
 import numpy as np
 from numba import njit
 
-from pipeline.track.imm import NX, coast_chain, cycle_scratch, tpm_into, transition_into
+from msdc.pipeline.track.imm import NX, coast_chain, cycle_scratch, tpm_into, transition_into
 
 POSITION_PAIRS = ((0, 0), (0, 3), (3, 3))  # east-east, east-north, north-north
 ALL_PAIRS = tuple((a, b) for a in range(NX) for b in range(NX))

@@ -11,8 +11,8 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
-from pipeline.conflict.geometry import M_PER_NM, surface_ecef_m
-from pipeline.conflict.sweep import grouped_box_pairs
+from msdc.pipeline.conflict.geometry import M_PER_NM, surface_ecef_m
+from msdc.pipeline.conflict.sweep import grouped_box_pairs
 
 PAIR_COLUMNS = ["time", "aircraft_a", "aircraft_b"]
 CHUNK_ROWS = 1 << 16  # track rows searched for pairs at once (whole times)

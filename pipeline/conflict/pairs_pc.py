@@ -22,11 +22,11 @@ import numpy as np
 import pandas as pd
 from scipy.special import ndtr
 
-from pipeline.conflict.geometry import FT_PER_FL, M_PER_NM, VERTICAL_TOLERANCE_FT, vertical_limit_ft
-from pipeline.conflict.pairs import _require, time_key
-from pipeline.conflict.probability import conflict_probability, pc_margin, pc_upper_bound
-from pipeline.conflict.sweep import grouped_box_pairs
-from pipeline.model.arguments import finite_number
+from msdc.pipeline.conflict.geometry import FT_PER_FL, M_PER_NM, VERTICAL_TOLERANCE_FT, vertical_limit_ft
+from msdc.pipeline.conflict.pairs import _require, time_key
+from msdc.pipeline.conflict.probability import conflict_probability, pc_margin, pc_upper_bound
+from msdc.pipeline.conflict.sweep import grouped_box_pairs
+from msdc.pipeline.model.arguments import finite_number
 
 PREDICTION_COLUMNS = ["aircraft_id", "time", "horizon_s", "east_m", "north_m", "var_east_m2",
                       "cov_east_north_m2", "var_north_m2", "flight_level"]

@@ -15,13 +15,13 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
-from pipeline.conflict.grid import on_grid
-from pipeline.conflict.moments import ALL_PAIRS, POSITION_PAIRS, predict_states
-from pipeline.model.arguments import finite_number
-from pipeline.parallel import map_ordered
-from pipeline.track.frame import Plane
-from pipeline.track.imm import NX
-from pipeline.track.tracker import ImmState, TrackResult
+from msdc.pipeline.conflict.grid import on_grid
+from msdc.pipeline.conflict.moments import ALL_PAIRS, POSITION_PAIRS, predict_states
+from msdc.pipeline.model.arguments import finite_number
+from msdc.pipeline.parallel import map_ordered
+from msdc.pipeline.track.frame import Plane
+from msdc.pipeline.track.imm import NX
+from msdc.pipeline.track.tracker import ImmState, TrackResult
 
 FL_PER_S_PER_FPM = 1.0 / 6000.0
 FT_PER_FL = 100.0

@@ -13,7 +13,7 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
-from pipeline.track.noise import SURFACE_SPEED_KT
+from msdc.pipeline.track.noise import SURFACE_SPEED_KT
 
 
 def on_surface(tracks: pd.DataFrame, surface_speed_kt: float = SURFACE_SPEED_KT

@@ -14,22 +14,22 @@ import math
 import numpy as np
 import pandas as pd
 
-from pipeline.correlate.results import (
+from msdc.pipeline.correlate.results import (
     LAG_COLUMNS,
     SUMMARY_KEYS,
     CorrelationRun,
     SkippedWindow,
     WindowResult,
 )
-from pipeline.correlate.slots import slot_count, slot_series
-from pipeline.correlate.windows import in_window, overlap_windows, short_window_reason
-from pipeline.model.aircraft import NoSuchAircraft, aircraft_rows, one_aircraft
-from pipeline.model.arguments import finite_number
-from pipeline.model.dedup import duplicate_mask
-from pipeline.model.geodesy import distance_m
-from pipeline.model.jumps import JUMP_FLAG_COLUMNS, detect_jumps
-from pipeline.model.time import is_dated, iso_utc, midnight, seconds_since, utc_frame, with_clock
-from pipeline.parallel import map_ordered
+from msdc.pipeline.correlate.slots import slot_count, slot_series
+from msdc.pipeline.correlate.windows import in_window, overlap_windows, short_window_reason
+from msdc.pipeline.model.aircraft import NoSuchAircraft, aircraft_rows, one_aircraft
+from msdc.pipeline.model.arguments import finite_number
+from msdc.pipeline.model.dedup import duplicate_mask
+from msdc.pipeline.model.geodesy import distance_m
+from msdc.pipeline.model.jumps import JUMP_FLAG_COLUMNS, detect_jumps
+from msdc.pipeline.model.time import is_dated, iso_utc, midnight, seconds_since, utc_frame, with_clock
+from msdc.pipeline.parallel import map_ordered
 
 PAIRS = ("radar-adsb", "radar-radar", "all")
 # A Pearson coefficient is shown where at least this many slot pairs overlap: of m pairs of independent
@@ -313,7 +313,7 @@ def _window_result(ac: tuple[str, str], number: int, start_s: float, end_s: floa
     slots take the tracker's prediction (pipeline.correlate.fill) instead of the previous slot."""
     rs, as_ = slot_series(*radar, start_s, end_s, slot_s), slot_series(*adsb, start_s, end_s, slot_s)
     if predictors[0] is not None or predictors[1] is not None:
-        from pipeline.correlate.fill import fill_predicted
+        from msdc.pipeline.correlate.fill import fill_predicted
 
         rs, as_ = fill_predicted(rs, slot_s, predictors[0]), fill_predicted(as_, slot_s, predictors[1])
     tod = rs["time_of_day"]
@@ -394,7 +394,7 @@ class _Columns:
     @functools.cached_property
     def track_inputs(self):
         """The columns the tracker reads (``--fill predict``) as arrays, read on first use."""
-        from pipeline.correlate.fill import TrackInputs
+        from msdc.pipeline.correlate.fill import TrackInputs
 
         return TrackInputs(self.meas)
 
@@ -451,7 +451,7 @@ class _Source:
         """Its track predictor (``--fill predict``; pipeline.correlate.fill), built on first use and
         shared by all its pairs (the same arguments in one run)."""
         if self._predictor is None:
-            from pipeline.correlate.fill import rows_predictor
+            from msdc.pipeline.correlate.fill import rows_predictor
 
             cols, kept = self._track
             self._predictor = (rows_predictor(cols.track_inputs, kept, reference, max_coast_s),)

@@ -62,9 +62,9 @@ def track_predictor(reports: pd.DataFrame, reference: pd.Timestamp, max_coast_s:
 def rows_predictor(inputs: TrackInputs, rows: np.ndarray, reference: pd.Timestamp, max_coast_s: float
                    ) -> Predictor | None:
     """``track_predictor`` of the reports at positions ``rows`` (in time order) of a run's inputs."""
-    from pipeline.track import TrackerConfig, default_modes
-    from pipeline.track.predict import predict_ends
-    from pipeline.track.tracker import filter_columns
+    from msdc.pipeline.track import TrackerConfig, default_modes
+    from msdc.pipeline.track.predict import predict_ends
+    from msdc.pipeline.track.tracker import filter_columns
 
     v = inputs.values
     finite = np.ones(len(rows), bool)

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
-from pipeline.model.geodesy import wrap180
+from msdc.pipeline.model.geodesy import wrap180
 
 SLOTTED_COLUMNS = ["slot", "time_of_day", "latitude", "longitude", "count", "filled"]
 

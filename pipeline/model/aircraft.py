@@ -12,8 +12,8 @@ from dataclasses import dataclass
 import numpy as np
 import pandas as pd
 
-from pipeline.model.identity import aircraft_labels, normalise_address, normalise_callsign
-from pipeline.model.measurements import select
+from msdc.pipeline.model.identity import aircraft_labels, normalise_address, normalise_callsign
+from msdc.pipeline.model.measurements import select
 
 
 class NoSuchAircraft(LookupError):

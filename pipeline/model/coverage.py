@@ -14,7 +14,7 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
-from pipeline.model.geodesy import great_circle_nm
+from msdc.pipeline.model.geodesy import great_circle_nm
 
 COVERAGE_MIN_NM = 500.0  # twice a ground station's radio horizon at FL450
 COVERAGE_FACTOR = 3.0  # times the source's 99th percentile distance from its median position

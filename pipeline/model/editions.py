@@ -8,7 +8,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from pathlib import Path
 
-from asterix.reader import Recording
+from msdc.asterix.reader import Recording
 
 
 @dataclass

@@ -22,9 +22,9 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
-from pipeline.model.geodesy import great_circle_nm
-from pipeline.model.schema import coded_text, text_categorical
-from pipeline.model.time import iso_utc
+from msdc.pipeline.model.geodesy import great_circle_nm
+from msdc.pipeline.model.schema import coded_text, text_categorical
+from msdc.pipeline.model.time import iso_utc
 
 # Rule 4's reach gate: faster than any civil aircraft's ground speed (an airliner in the jet stream makes
 # about 700 kt), and a margin for radar plot error (0.35 NM is 1 sigma of 0.08 deg at 250 NM) and site error

@@ -24,8 +24,8 @@ import numpy as np
 import pandas as pd
 from numba import njit
 
-from pipeline.model.geodesy import distance_m, wrap180
-from pipeline.model.time import midnight, seconds_since, with_clock
+from msdc.pipeline.model.geodesy import distance_m, wrap180
+from msdc.pipeline.model.time import midnight, seconds_since, with_clock
 
 KT_TO_MS = 1852.0 / 3600.0
 SPEED_SLACK_M = 300.0  # allowance added to max speed * dt: position noise (NACp 6) and time quantisation

@@ -11,11 +11,11 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-import asterix
-from asterix.reader import Recording
-from pipeline.model.sources import file_labels, pair_codes, pair_of, source_id
-from pipeline.model.time import NAT_NS, UNDATED_DAY, FirstDayTally, absolute_time
-from pipeline.progress import Progress
+import msdc.asterix as asterix
+from msdc.asterix.reader import Recording
+from msdc.pipeline.model.sources import file_labels, pair_codes, pair_of, source_id
+from msdc.pipeline.model.time import NAT_NS, UNDATED_DAY, FirstDayTally, absolute_time
+from msdc.pipeline.progress import Progress
 
 # Measurement jobs decode their inputs in chunks of about this many bytes: the decoded columns of one chunk
 # are turned into measurement rows and dropped before the next is read, so a recording of any size never
@@ -199,7 +199,7 @@ def load_measurements(paths: list[str | Path], sensors: pd.DataFrame, *, edition
     ``Loaded.stray_radar`` (per pair and file: records, first offset), for the job to judge. Records
     without a timestamp of their own are dated by ``Loaded.date``, as with ``load``.
     """
-    from pipeline.model.measurements import DECODED_COLUMNS, finish_measurements, impossible_positions
+    from msdc.pipeline.model.measurements import DECODED_COLUMNS, finish_measurements, impossible_positions
 
     recs: list[Recording] = []
     inputs: list[dict] = []
@@ -297,8 +297,8 @@ def _rows(frames: dict[int, pd.DataFrame], name: str, sensors: pd.DataFrame, ads
     """Measurement rows of one decoded chunk, undated records on UNDATED_DAY; the records of radars the
     sensor table lacks are left out and their undeclared_radars table added to ``stray``, CAT021 reports
     with a position off the Earth (left out of the rows) to ``off_earth``."""
-    from pipeline.model.measurements import measurement_rows, off_earth_rows
-    from pipeline.model.sensors import undeclared_radars
+    from msdc.pipeline.model.measurements import measurement_rows, off_earth_rows
+    from msdc.pipeline.model.sensors import undeclared_radars
 
     for frame in frames.values():
         frame["file"] = pd.Categorical.from_codes(np.zeros(len(frame), np.int8), [name])

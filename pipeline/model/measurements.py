@@ -17,17 +17,17 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from asterix.reader import parse_date
-from pipeline.model.coverage import coverage_warnings, out_of_coverage
-from pipeline.model.geodesy import (
+from msdc.asterix.reader import parse_date
+from msdc.pipeline.model.coverage import coverage_warnings, out_of_coverage
+from msdc.pipeline.model.geodesy import (
     enu_basis,
     flight_level_to_m,
     geodetic_to_ecef,
     plane_to_geodetic,
     polar_to_geodetic,
 )
-from pipeline.model.identity import identify, normalise_address, normalise_callsign, refused_warnings
-from pipeline.model.schema import (
+from msdc.pipeline.model.identity import identify, normalise_address, normalise_callsign, refused_warnings
+from msdc.pipeline.model.schema import (
     coded_text,
     column_names,
     concat_columns,
@@ -36,9 +36,9 @@ from pipeline.model.schema import (
     text_categorical,
     validate,
 )
-from pipeline.model.sensors import REQUIRED_COLUMNS, UnknownRadar, read_sensors, sensor_sites
-from pipeline.model.sources import source_id
-from pipeline.model.time import absolute_time
+from msdc.pipeline.model.sensors import REQUIRED_COLUMNS, UnknownRadar, read_sensors, sensor_sites
+from msdc.pipeline.model.sources import source_id
+from msdc.pipeline.model.time import absolute_time
 
 __all__ = ["DECODED_COLUMNS", "IdentityWarning", "NACP_95_M", "OffEarthWarning", "OutOfCoverageWarning",
            "UnknownRadar", "adsb_measurements",

@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from pipeline.model.sources import pair_codes
+from msdc.pipeline.model.sources import pair_codes
 
 REQUIRED_COLUMNS = ["name", "sac", "sic", "latitude", "longitude", "altitude_m"]
 # Optional per-radar measurement noise (1 sigma), used for the position covariance of its plots.

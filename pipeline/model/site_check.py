@@ -8,7 +8,7 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
-from pipeline.model.geodesy import distance_m
+from msdc.pipeline.model.geodesy import distance_m
 
 SITE_CHECK_INPUTS = ["time", "sensor_kind", "sensor_id", "address", "latitude", "longitude", "rho_nm"]
 MATCH_TOLERANCE_S = 1.0  # an ADS-B report at most this far in time from the plot (1 Hz: half a second)

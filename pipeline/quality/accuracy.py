@@ -16,9 +16,9 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
-from pipeline.model.aircraft import aircraft_rows
-from pipeline.model.dedup import DEDUP_KEYS, deduplicate
-from pipeline.model.geodesy import (
+from msdc.pipeline.model.aircraft import aircraft_rows
+from msdc.pipeline.model.dedup import DEDUP_KEYS, deduplicate
+from msdc.pipeline.model.geodesy import (
     M_PER_NM,
     distance_m,
     ecef_to_enu,
@@ -29,12 +29,18 @@ from pipeline.model.geodesy import (
     slant_range_azimuth,
     wrap180,
 )
-from pipeline.model.jumps import JUMP_INPUTS, KT_TO_MS, detect_jumps
-from pipeline.model.measurements import NACP_95_M
-from pipeline.model.sensors import sensor_sites
-from pipeline.model.time import midnight, with_clock
-from pipeline.parallel import map_ordered
-from pipeline.quality.checks import check_frame, check_options, check_reference, check_seconds, check_sensors
+from msdc.pipeline.model.jumps import JUMP_INPUTS, KT_TO_MS, detect_jumps
+from msdc.pipeline.model.measurements import NACP_95_M
+from msdc.pipeline.model.sensors import sensor_sites
+from msdc.pipeline.model.time import midnight, with_clock
+from msdc.pipeline.parallel import map_ordered
+from msdc.pipeline.quality.checks import (
+    check_frame,
+    check_options,
+    check_reference,
+    check_seconds,
+    check_sensors,
+)
 
 MAX_ADSB_GAP_S = 10.0
 ERROR_COLUMNS = [
@@ -169,7 +175,7 @@ def _matched(meas: pd.DataFrame, max_gap_s: float, jump_kw: dict | None, referen
         r, _ = deduplicate(_clocked(meas, keep[radar], start))
         a, _ = deduplicate(_clocked(meas, keep[other], start))
         if reference == "track":
-            from pipeline.quality.track_reference import track_reference
+            from msdc.pipeline.quality.track_reference import track_reference
 
             ref = track_reference(a, r["time_of_day"].to_numpy(float), max_gap_s)
         else:

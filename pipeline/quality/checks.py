@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import pandas as pd
 
-from pipeline.model.arguments import finite_number
+from msdc.pipeline.model.arguments import finite_number
 
 REFERENCES = ("adsb", "track")  # what radar accuracy is measured against
 

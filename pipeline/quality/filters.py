@@ -14,8 +14,8 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
-from pipeline.model.jumps import JUMP_FLAG_COLUMNS, JUMP_INPUTS, detect_jumps
-from pipeline.quality.checks import check_frame, check_indicator, check_options
+from msdc.pipeline.model.jumps import JUMP_FLAG_COLUMNS, JUMP_INPUTS, detect_jumps
+from msdc.pipeline.quality.checks import check_frame, check_indicator, check_options
 
 FILTER_KEYS = ["jumps", "nic_below_min", "nacp_below_min", "nic_missing_kept", "nacp_missing_kept"]
 

@@ -8,10 +8,16 @@ from pathlib import Path
 
 import pandas as pd
 
-from pipeline.model.aircraft import one_aircraft
-from pipeline.quality.accuracy import MEASUREMENT_INPUTS, error_stats, estimate_biases, radar_errors
-from pipeline.quality.checks import check_frame, check_options, check_reference, check_seconds, check_sensors
-from pipeline.quality.tables import quality_tables
+from msdc.pipeline.model.aircraft import one_aircraft
+from msdc.pipeline.quality.accuracy import MEASUREMENT_INPUTS, error_stats, estimate_biases, radar_errors
+from msdc.pipeline.quality.checks import (
+    check_frame,
+    check_options,
+    check_reference,
+    check_seconds,
+    check_sensors,
+)
+from msdc.pipeline.quality.tables import quality_tables
 
 
 @dataclass

@@ -22,11 +22,11 @@ from collections.abc import Iterator
 import numpy as np
 import pandas as pd
 
-from pipeline.model.dedup import DEDUP_KEYS, deduplicate
-from pipeline.model.identity import aircraft_labels
-from pipeline.model.jumps import JUMP_FLAG_COLUMNS, JUMP_INPUTS, jump_table
-from pipeline.model.time import UTC_DTYPE, dated_or_nat, with_clock
-from pipeline.quality.checks import check_frame, check_options, check_seconds
+from msdc.pipeline.model.dedup import DEDUP_KEYS, deduplicate
+from msdc.pipeline.model.identity import aircraft_labels
+from msdc.pipeline.model.jumps import JUMP_FLAG_COLUMNS, JUMP_INPUTS, jump_table
+from msdc.pipeline.model.time import UTC_DTYPE, dated_or_nat, with_clock
+from msdc.pipeline.quality.checks import check_frame, check_options, check_seconds
 
 ALL = "(all)"
 UNIDENTIFIED = "?"  # the aircraft key of reports that belong to no aircraft (aircraft_id <NA>)

@@ -12,7 +12,7 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
-from pipeline.model.geodesy import M_PER_FT, wrap180
+from msdc.pipeline.model.geodesy import M_PER_FT, wrap180
 
 STEP_S = 0.5
 # the measurement columns read here besides the tracker's (pipeline.track.tracker REQUIRED and FILTER_INPUTS)
@@ -25,7 +25,7 @@ def track_reference(adsb: pd.DataFrame, t_s: np.ndarray, max_gap_s: float) -> di
     """The reference state at the radar times t_s (seconds on adsb's ``time_of_day`` clock): lat, lon,
     h (m, from the filtered flight level), ve/vn/vu (m/s), gap (s between the bracketing ADS-B reports)
     and nacp (the worse of the two), NaN outside the gap rule; the keys of accuracy._interpolate."""
-    from pipeline.track import track
+    from msdc.pipeline.track import track
 
     t_s = np.asarray(t_s, float)
     out = {k: np.full(t_s.size, np.nan) for k in ("lat", "lon", "h", "ve", "vn", "vu", "gap", "nacp")}

@@ -29,14 +29,14 @@ from openpyxl.utils import get_column_letter
 from openpyxl.worksheet._write_only import WriteOnlyWorksheet
 from openpyxl.xml import LXML
 
-from pipeline.report.formats import UNITS, column_unit, excel_format
-from pipeline.report.rows import RawRow, RowStyles, append_rows, install
-from pipeline.report.summary import (
+from msdc.pipeline.report.formats import UNITS, column_unit, excel_format
+from msdc.pipeline.report.rows import RawRow, RowStyles, append_rows, install
+from msdc.pipeline.report.summary import (
     is_missing,
     json_value,
     utc_naive,
 )
-from pipeline.report.textguard import FORMULA_START
+from msdc.pipeline.report.textguard import FORMULA_START
 
 if not LXML:  # pragma: no cover - lxml is a dependency; OPENPYXL_LXML=False would halve the write speed
     import warnings

@@ -27,9 +27,9 @@ from openpyxl.utils.units import cm_to_EMU
 from openpyxl.worksheet._write_only import WriteOnlyWorksheet
 from openpyxl.worksheet.pagebreak import Break
 
-from pipeline.correlate.correlation import pearson_max_lag
-from pipeline.correlate.results import LAG_COLUMNS, SLOT_COLUMNS, CorrelationRun, WindowResult
-from pipeline.report.cells import (
+from msdc.pipeline.correlate.correlation import pearson_max_lag
+from msdc.pipeline.correlate.results import LAG_COLUMNS, SLOT_COLUMNS, CorrelationRun, WindowResult
+from msdc.pipeline.report.cells import (
     EXCEL_MAX_ROWS,
     ROW_HEIGHT_PT,
     TITLE_FONT,
@@ -42,8 +42,8 @@ from pipeline.report.cells import (
     page_setup,
     text_cell,
 )
-from pipeline.report.summary import utc_naive, window_label
-from pipeline.report.tables import lag_frame
+from msdc.pipeline.report.summary import utc_naive, window_label
+from msdc.pipeline.report.tables import lag_frame
 
 # every row names its window: number, aircraft and sensor pair (numbers restart for every pair)
 WINDOW_HEADERS = ["window", "callsign", "address", "radar_sensor", "reference_sensor"]

@@ -12,11 +12,11 @@ import os
 import pandas as pd
 from openpyxl import Workbook
 
-from pipeline.correlate.results import CorrelationRun
-from pipeline.report.cells import make_column, write_table
-from pipeline.report.excel import parameter_rows
-from pipeline.report.outputs import write_atomically
-from pipeline.report.saving import save
+from msdc.pipeline.correlate.results import CorrelationRun
+from msdc.pipeline.report.cells import make_column, write_table
+from msdc.pipeline.report.excel import parameter_rows
+from msdc.pipeline.report.outputs import write_atomically
+from msdc.pipeline.report.saving import save
 
 UTC_FORMAT = 'yyyy-mm-dd hh:mm:ss "UTC"'
 UTC_FRACTION_FORMAT = 'yyyy-mm-dd hh:mm:ss.000 "UTC"'  # when a time has a fraction of a second

@@ -28,9 +28,9 @@ from openpyxl.styles import Alignment, PatternFill
 from openpyxl.worksheet._write_only import WriteOnlyWorksheet
 from openpyxl.worksheet.pagebreak import Break
 
-from pipeline.correlate.correlation import PEARSON_MIN_OVERLAP, pearson_max_lag
-from pipeline.correlate.results import SUMMARY_KEYS, CorrelationRun, WindowResult
-from pipeline.report.cells import (
+from msdc.pipeline.correlate.correlation import PEARSON_MIN_OVERLAP, pearson_max_lag
+from msdc.pipeline.correlate.results import SUMMARY_KEYS, CorrelationRun, WindowResult
+from msdc.pipeline.report.cells import (
     BOLD,
     CLOCK_FORMAT,
     ROW_HEIGHT_PT,
@@ -53,7 +53,7 @@ from pipeline.report.cells import (
     text_cell,
     write_table,
 )
-from pipeline.report.charts import (
+from msdc.pipeline.report.charts import (
     CORRELATION_HEADERS,
     LAG_CHART_HEADERS,
     SLOT_CHART_HEADERS,
@@ -62,13 +62,13 @@ from pipeline.report.charts import (
     write_lag_charts,
     write_slot_charts,
 )
-from pipeline.report.saving import get_ready, save
-from pipeline.report.summary import (
+from msdc.pipeline.report.saving import get_ready, save
+from msdc.pipeline.report.summary import (
     sensor_pair,
     window_notes,
     write_atomically,
 )
-from pipeline.report.tables import (
+from msdc.pipeline.report.tables import (
     AUTO_MAX_ROWS,
     CHART_MAX_POINTS,
     COLUMN_NOTES,

@@ -16,9 +16,9 @@ from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 from matplotlib.text import Text
 
-from pipeline.correlate.correlation import peak_lag, pearson_max_lag, pearson_search_limit
-from pipeline.correlate.results import CorrelationRun, WindowResult
-from pipeline.report.summary import printable, slot_seconds, window_label
+from msdc.pipeline.correlate.correlation import peak_lag, pearson_max_lag, pearson_search_limit
+from msdc.pipeline.correlate.results import CorrelationRun, WindowResult
+from msdc.pipeline.report.summary import printable, slot_seconds, window_label
 
 RADAR_COLOR = "#d62728"
 ADSB_COLOR = "#ffd400"

@@ -15,13 +15,13 @@ from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 from matplotlib.ticker import FuncFormatter, MultipleLocator, NullFormatter
 
-from pipeline.correlate.results import WindowResult
-from pipeline.correlate.windows import in_window
-from pipeline.model.measurements import matching_aircraft
-from pipeline.model.time import midnight, with_clock
-from pipeline.quality.accuracy import MAX_AZIMUTH_ELEVATION_DEG, elevation_deg
-from pipeline.report.figures import new_figure, save_png
-from pipeline.report.summary import window_label
+from msdc.pipeline.correlate.results import WindowResult
+from msdc.pipeline.correlate.windows import in_window
+from msdc.pipeline.model.measurements import matching_aircraft
+from msdc.pipeline.model.time import midnight, with_clock
+from msdc.pipeline.quality.accuracy import MAX_AZIMUTH_ELEVATION_DEG, elevation_deg
+from msdc.pipeline.report.figures import new_figure, save_png
+from msdc.pipeline.report.summary import window_label
 
 RADAR_COLOR = "#d62728"
 ADSB_COLOR = "#e6b800"

@@ -14,11 +14,11 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from pipeline.correlate.correlation import pearson_search_limit
-from pipeline.correlate.results import SUMMARY_KEYS, CorrelationRun, WindowResult
-from pipeline.model.time import iso_utc
-from pipeline.report.formats import decimals
-from pipeline.report.outputs import write_atomically
+from msdc.pipeline.correlate.correlation import pearson_search_limit
+from msdc.pipeline.correlate.results import SUMMARY_KEYS, CorrelationRun, WindowResult
+from msdc.pipeline.model.time import iso_utc
+from msdc.pipeline.report.formats import decimals
+from msdc.pipeline.report.outputs import write_atomically
 
 SKIPPED_KEYS = ["callsign", "address", "radar_sensor", "reference_sensor", "start_tod", "end_tod", "reason"]
 # Parameter names (top level or under "options") that may hold the slot length in seconds

@@ -21,8 +21,8 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from pipeline.correlate.results import LAG_COLUMNS, SLOT_COLUMNS, CorrelationRun, WindowResult
-from pipeline.report.summary import slot_seconds, write_atomically
+from msdc.pipeline.correlate.results import LAG_COLUMNS, SLOT_COLUMNS, CorrelationRun, WindowResult
+from msdc.pipeline.report.summary import slot_seconds, write_atomically
 
 TABLE_MODES = ("auto", "xlsx", "parquet")
 # auto: longer tables go to Parquet. At the ~150,000 cells/s openpyxl writes here on a quiet machine

@@ -16,7 +16,7 @@ from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 from matplotlib.patches import Ellipse, Rectangle
 
-from pipeline.report.figures import new_figure, save_png
+from msdc.pipeline.report.figures import new_figure, save_png
 
 _SENSOR_COLORS = ("#d62728", "#1f77b4", "#9467bd", "#8c564b", "#e377c2", "#17becf")
 ADSB_COLOR = "#e6b800"

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from pipeline.model.measurements import CIRCULAR_95_PER_SIGMA, NACP_95_M
+from msdc.pipeline.model.measurements import CIRCULAR_95_PER_SIGMA, NACP_95_M
 
 EARTH_RADIUS_M = 6371000.0
 # NACp 95 % horizontal position bounds (EPU), m, DO-260B (NACp 0, unknown, has none): the measurement model's

@@ -26,7 +26,7 @@ import numpy as np
 import pandas as pd
 from scipy.stats import chi2
 
-from pipeline.parallel import map_ordered
+from msdc.pipeline.parallel import map_ordered
 
 from .config import TrackerConfig, default_modes
 from .frame import Plane

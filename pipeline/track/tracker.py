@@ -28,9 +28,9 @@ from dataclasses import dataclass, field
 import numpy as np
 import pandas as pd
 
-from pipeline.model.arguments import finite_number
-from pipeline.model.time import utc_frame
-from pipeline.parallel import map_ordered
+from msdc.pipeline.model.arguments import finite_number
+from msdc.pipeline.model.time import utc_frame
+from msdc.pipeline.parallel import map_ordered
 
 from .config import TrackerConfig, default_modes
 from .covariance import nacv_variance
