@@ -1,0 +1,182 @@
+"""One output transaction for a whole run: every file is written into a hidden staging folder beside its
+target and moved into place, as a set, only when the run has succeeded.
+
+A failed or interrupted run (an error, Ctrl-C, SIGTERM, SIGHUP) removes its staging folders and leaves
+every file that was there before exactly as it was, and touches no other file of the folder (files other
+programs create meanwhile included). Side files a writer names after its output (``o_cat048.csv`` beside
+``o.csv``, ``r_tracks.png`` beside ``r.xlsx``) land in the same staging folder under their final names, so
+they are committed with it. An output that is a symbolic link is written through: the link stays and the
+file it points to is replaced. Outputs that exist and are not regular files (a FIFO, a device, a folder)
+are refused before any work (``output_problem``).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import os
+import shutil
+import signal
+import uuid
+from collections.abc import Iterator
+from dataclasses import dataclass, field
+from pathlib import Path
+
+STAGING_PREFIX = ".msdc-staging-"
+BLOCKED = (signal.SIGINT, signal.SIGTERM, signal.SIGHUP)  # held back while the set is moved into place
+
+
+def target(path: str | os.PathLike[str]) -> Path:
+    """Where an output really goes: the file a symbolic link points to (the link is kept), else the path."""
+    path = Path(path)
+    return Path(os.path.realpath(path)) if path.is_symlink() else path.absolute()
+
+
+def output_problem(path: str | os.PathLike[str]) -> str | None:
+    """Why ``path`` cannot be an output (an existing folder, FIFO, socket or device), None when it can."""
+    real = target(path)
+    if not real.exists():
+        return None
+    if real.is_dir():
+        return "is a directory"
+    if not real.is_file():  # writing a FIFO blocks until someone reads it; a device is no report
+        return "is not a regular file (a FIFO, socket or device): give a file name"
+    return None
+
+
+@dataclass(frozen=True)
+class Written:
+    """One file a committed run put in place, and whether it replaced a file that was there."""
+
+    path: Path
+    replaced: bool
+
+
+@dataclass
+class OutputTransaction:
+    """The files of one run, staged per target folder and committed together (see the module docstring).
+
+    Use it as a context manager: leaving the block without ``commit()`` (an exception, an interrupt)
+    removes everything staged."""
+
+    _stages: dict[Path, Path] = field(default_factory=dict)  # target folder -> its staging folder
+    written: list[Written] = field(default_factory=list)
+
+    def __enter__(self) -> OutputTransaction:
+        return self
+
+    def __exit__(self, kind, exc, tb) -> None:
+        named = self.final_name(exc.filename) if isinstance(exc, OSError) and exc.filename else None
+        self.abort()
+        if named is not None and named != exc.filename:  # the output the user named, not the staged file
+            raise OSError(exc.errno, exc.strerror, named) from exc
+
+    def path(self, output: str | os.PathLike[str]) -> Path:
+        """The staged path to write ``output`` to: its final name inside its folder's staging folder."""
+        real = target(output)
+        return self._stage(real.parent) / real.name
+
+    def folder(self, directory: str | os.PathLike[str]) -> Path:
+        """A staged folder standing for ``directory`` (created at commit when absent): what is written in
+        it goes into ``directory`` under the same names."""
+        return self._stage(target(directory))
+
+    def final_name(self, staged: str | os.PathLike[str]) -> str:
+        """The output a staged path stands for (``staged`` unchanged when it is not staged here)."""
+        staged = Path(staged)
+        for final_dir, stage in self._stages.items():
+            if staged == stage or stage in staged.parents:
+                return str(final_dir / staged.relative_to(stage))
+        return str(staged)
+
+    def commit(self) -> list[Written]:
+        """Move every staged file into place as a set, interrupts held back meanwhile: if one move fails,
+        the files already moved are put back as they were and the error raised (naming the output)."""
+        moves = [(stage / rel, final_dir / rel) for final_dir, stage in self._stages.items()
+                 for rel in _files(stage)]
+        with _signals_held():
+            done: list[tuple[Path, Path | None]] = []
+            try:
+                for staged, final in moves:
+                    final.parent.mkdir(parents=True, exist_ok=True)
+                    backup = None
+                    if final.exists() or final.is_symlink():
+                        backup = staged.with_name(staged.name + ".replaced")
+                        os.replace(final, backup)
+                    done.append((final, backup))
+                    os.replace(staged, final)
+            except OSError as exc:
+                _undo(done)
+                raise OSError(exc.errno, exc.strerror, str(final)) from exc
+            except BaseException:
+                _undo(done)
+                raise
+            self.written = [Written(final, backup is not None) for final, backup in done]
+            self.abort()  # the staging folders now hold only the replaced files' old content
+        return self.written
+
+    def abort(self) -> None:
+        """Remove every staging folder and what is in it; nothing else is touched."""
+        for stage in self._stages.values():
+            shutil.rmtree(stage, ignore_errors=True)
+        self._stages.clear()
+
+    def _stage(self, final_dir: Path) -> Path:
+        """The staging folder of ``final_dir`` (made on first use; for a folder that does not exist yet, in
+        the nearest one that does, so the commit's moves stay on one file system)."""
+        if final_dir in self._stages:
+            return self._stages[final_dir]
+        home = final_dir
+        while not home.is_dir():
+            home = home.parent
+        stage = home / f"{STAGING_PREFIX}{os.getpid()}-{uuid.uuid4().hex[:8]}"
+        stage.mkdir()
+        self._stages[final_dir] = stage
+        return stage
+
+
+def _files(stage: Path) -> list[Path]:
+    """The files staged under ``stage``, relative to it, in a stable order."""
+    return sorted(p.relative_to(stage) for p in stage.rglob("*") if p.is_file() or p.is_symlink())
+
+
+def _undo(done: list[tuple[Path, Path | None]]) -> None:
+    """Put back what a failed commit moved: each replaced file's old content, or no file where none was."""
+    for final, backup in reversed(done):
+        with contextlib.suppress(OSError):
+            if backup is not None:
+                os.replace(backup, final)
+            else:
+                final.unlink(missing_ok=True)
+
+
+@contextlib.contextmanager
+def _signals_held() -> Iterator[None]:
+    """Hold back SIGINT, SIGTERM and SIGHUP (delivered when the block ends) where the platform can."""
+    if not hasattr(signal, "pthread_sigmask"):
+        yield
+        return
+    old = signal.pthread_sigmask(signal.SIG_BLOCK, BLOCKED)
+    try:
+        yield
+    finally:
+        signal.pthread_sigmask(signal.SIG_SETMASK, old)
+
+
+class Terminated(BaseException):
+    """SIGTERM or SIGHUP, raised where the program is so that every ``with`` block cleans up as for
+    Ctrl-C; the exit status is 128 + the signal's number."""
+
+    def __init__(self, signum: int):
+        super().__init__(f"terminated by signal {signum}")
+        self.signum = signum
+
+
+def raise_on_termination() -> None:
+    """Turn SIGTERM and SIGHUP into Terminated in this process (the command's main thread)."""
+    def _raise(signum, frame):
+        raise Terminated(signum)
+
+    for sig in (signal.SIGTERM, signal.SIGHUP):
+        with contextlib.suppress(ValueError, OSError):  # not the main thread, or not on this platform
+            signal.signal(sig, _raise)
+

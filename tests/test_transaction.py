@@ -1,0 +1,156 @@
+"""The output transaction: a run's files appear together or not at all, and nothing else in the folder
+is touched; interrupts (Ctrl-C, SIGTERM, SIGHUP) clean up the same way."""
+
+from __future__ import annotations
+
+import os
+import signal
+import subprocess
+import sys
+import textwrap
+from pathlib import Path
+
+import pytest
+
+from msdc.pipeline.report import transaction as tx_module
+from msdc.pipeline.report.transaction import STAGING_PREFIX, OutputTransaction, Terminated, output_problem
+
+
+def _listing(folder: Path) -> dict[str, bytes]:
+    return {str(p.relative_to(folder)): p.read_bytes() for p in sorted(folder.rglob("*")) if p.is_file()}
+
+
+def test_commit_puts_every_file_in_place_and_says_which_it_replaced(tmp_path):
+    (tmp_path / "o.csv").write_text("old")
+    with OutputTransaction() as tx:
+        tx.path(tmp_path / "o.csv").write_text("new")
+        side = tx.path(tmp_path / "o.csv").with_name("o_cat048.csv")  # a writer's side file, named after o
+        side.write_text("side")
+        figures = tx.folder(tmp_path / "figs")
+        (figures / "a.png").write_bytes(b"png")
+        assert not (tmp_path / "figs").exists() and (tmp_path / "o.csv").read_text() == "old"
+        written = tx.commit()
+    assert _listing(tmp_path) == {"o.csv": b"new", "o_cat048.csv": b"side", "figs/a.png": b"png"}
+    assert {(w.path.name, w.replaced) for w in written} == {("o.csv", True), ("o_cat048.csv", False),
+                                                            ("a.png", False)}
+
+
+def test_a_failed_run_leaves_the_folder_as_it_was_and_spares_other_programs_files(tmp_path):
+    (tmp_path / "o.csv").write_text("old")
+    with pytest.raises(RuntimeError), OutputTransaction() as tx:
+        tx.path(tmp_path / "o.csv").write_text("new")
+        tx.path(tmp_path / "o.json").write_text("{}")
+        (tmp_path / "theirs.txt").write_bytes(b"another program's file, made during the run")
+        raise RuntimeError("the run failed")
+    theirs = b"another program's file, made during the run"
+    assert _listing(tmp_path) == {"o.csv": b"old", "theirs.txt": theirs}
+    assert not any(p.name.startswith(STAGING_PREFIX) for p in tmp_path.iterdir())
+
+
+def test_leaving_without_commit_writes_nothing(tmp_path):
+    with OutputTransaction() as tx:
+        tx.path(tmp_path / "o.csv").write_text("new")
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_a_symlinked_output_keeps_its_link_and_replaces_the_file_it_points_to(tmp_path):
+    real = tmp_path / "real" / "report.json"
+    real.parent.mkdir()
+    real.write_text("old")
+    link = tmp_path / "report.json"
+    link.symlink_to(real)
+    with OutputTransaction() as tx:
+        tx.path(link).write_text("new")
+        tx.commit()
+    assert link.is_symlink() and real.read_text() == "new"
+
+
+def test_outputs_that_are_not_regular_files_are_refused(tmp_path):
+    fifo = tmp_path / "pipe.json"
+    os.mkfifo(fifo)
+    assert "FIFO" in output_problem(fifo)
+    assert output_problem("/dev/null") and "FIFO" in output_problem("/dev/null")
+    assert output_problem(tmp_path) == "is a directory"
+    assert output_problem(tmp_path / "new.json") is None
+    (tmp_path / "old.json").write_text("{}")
+    assert output_problem(tmp_path / "old.json") is None
+
+
+def test_a_commit_that_fails_half_way_puts_back_what_it_moved(tmp_path, monkeypatch):
+    (tmp_path / "a.csv").write_text("old a")
+    (tmp_path / "b.csv").write_text("old b")
+    real_replace, calls = os.replace, []
+
+    def failing_replace(src, dst):
+        calls.append(dst)
+        if len(calls) == 4:  # a's backup, a's move, b's backup, then b's move fails
+            raise OSError(28, "No space left on device", str(src))
+        real_replace(src, dst)
+
+    monkeypatch.setattr(tx_module.os, "replace", failing_replace)
+    with pytest.raises(OSError) as raised, OutputTransaction() as tx:
+        tx.path(tmp_path / "a.csv").write_text("new a")
+        tx.path(tmp_path / "b.csv").write_text("new b")
+        tx.commit()
+    monkeypatch.undo()
+    assert raised.value.filename == str(tmp_path / "b.csv")  # the output, not the staged name
+    assert _listing(tmp_path) == {"a.csv": b"old a", "b.csv": b"old b"}
+
+
+def test_a_write_error_names_the_output_not_the_staged_file(tmp_path):
+    with pytest.raises(OSError) as raised, OutputTransaction() as tx:
+        staged = tx.path(tmp_path / "o.json")
+        raise OSError(28, "No space left on device", str(staged))
+    assert raised.value.filename == str(tmp_path / "o.json")
+
+
+CHILD = textwrap.dedent("""
+    import os, signal, sys, time
+    from pathlib import Path
+    from msdc.pipeline.report.transaction import OutputTransaction, Terminated, raise_on_termination
+    raise_on_termination()
+    folder, how = Path(sys.argv[1]), sys.argv[2]
+    try:
+        with OutputTransaction() as tx:
+            tx.path(folder / "o.csv").write_text("new")
+            (tx.folder(folder / "figs") / "a.png").write_text("png")
+            os.kill(os.getpid(), {"term": signal.SIGTERM, "hup": signal.SIGHUP, "int": signal.SIGINT}[how])
+            time.sleep(5)
+            tx.commit()
+    except Terminated as exc:
+        sys.exit(128 + exc.signum)
+    except KeyboardInterrupt:
+        sys.exit(130)
+""")
+
+
+@pytest.mark.parametrize("how, status", [("term", 128 + signal.SIGTERM), ("hup", 128 + signal.SIGHUP),
+                                         ("int", 130)])
+def test_signals_clean_up_like_an_error(tmp_path, how, status):
+    (tmp_path / "o.csv").write_text("old")
+    done = subprocess.run([sys.executable, "-c", CHILD, str(tmp_path), how], capture_output=True, text=True,
+                          timeout=60)
+    assert done.returncode == status, done.stderr
+    assert _listing(tmp_path) == {"o.csv": b"old"}
+
+
+def test_interrupts_are_held_back_while_the_set_is_moved(tmp_path):
+    seen = []
+
+    def spy(src, dst):
+        seen.append(signal.SIGTERM in signal.pthread_sigmask(signal.SIG_BLOCK, []))
+        os.rename(src, dst)
+
+    tx = OutputTransaction()
+    tx.path(tmp_path / "o.csv").write_text("x")
+    original = tx_module.os.replace
+    tx_module.os.replace = spy
+    try:
+        tx.commit()
+    finally:
+        tx_module.os.replace = original
+    assert seen == [True] and signal.SIGTERM not in signal.pthread_sigmask(signal.SIG_BLOCK, [])
+
+
+def test_terminated_carries_its_signal():
+    assert Terminated(signal.SIGTERM).signum == signal.SIGTERM
