@@ -147,7 +147,7 @@ CAT021_V0: list[Column] = [
     _c("fom_mn", "090", "MN", "int", doc="Figure of merit: multiple navigation aids"),
     _c("fom_dc", "090", "DC", "int", doc="Figure of merit: differential correction"),
     _c("fom_pa", "090", "PA", "int", doc="Figure of merit: position accuracy, the raw 4 bits 0-15 (the "
-       "0.2x specs print a signed quantity: an erratum, see README Editions)"),
+       "0.2x specs print a signed quantity: an erratum, see docs/decoding/editions.md)"),
     _c("priority_status", "200", "", "int", doc="I021/200 Target Status: " + _PRIORITY_CODES),
     _c("signal_amplitude", "131", "", "int", doc="Signal amplitude (0.26 only)"),
     _c("true_airspeed_kt", "151", "", unit="kt", doc="True airspeed"),
