@@ -332,12 +332,12 @@ def test_sensor_type_message_grammar(tmp_path):
         read_sensors(path)
 
 
-def test_readme_marks_cat021_track_number_as_2x(adsb_0_23):
-    """0.2x editions have no I021/161: their frames have no track_number, and the README's table says so."""
+def test_the_column_docs_mark_cat021_track_number_as_2x(adsb_0_23):
+    """0.2x editions have no I021/161: their frames have no track_number, and the Columns page says so."""
     assert "track_number" not in asterix.read(adsb_0_23, editions={21: "0.23"}).frames[21]
     assert "track_number" in asterix.read(ADSB).frames[21]  # the fixture is 2.x
-    readme = (Path(__file__).resolve().parents[1] / "README.md").read_text()
-    (row,) = [line for line in readme.splitlines() if line.startswith("| identity |")]
+    page = (Path(__file__).resolve().parents[1] / "docs" / "decoding" / "columns.md").read_text()
+    (row,) = [line for line in page.splitlines() if line.startswith("| identity |")]
     cat021 = row.split("|")[3]
     assert "`track_number` (2.x)" in cat021
 
