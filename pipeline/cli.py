@@ -113,7 +113,7 @@ def _sources_option(p: argparse.ArgumentParser) -> None:
 
 
 def build_parser() -> argparse.ArgumentParser:
-    """The msdc argument parser: one subcommand per job, options as the README lists them."""
+    """The msdc argument parser: one subcommand per job, options as docs/guide/ lists them."""
     parser = argparse.ArgumentParser(prog="msdc", description="Multi-Sensor Data Correlator: ASTERIX "
                                      "CAT048/CAT021 decoding and radar/ADS-B correlation.")
     parser.add_argument("--version", action=_Version)

@@ -262,7 +262,7 @@ def test_callsign_hex_absent_without_the_item():
 def test_021_0_2x_position_accuracy_is_the_raw_four_bits():
     # 0.23 I021/090 (FRN 7): AC=MN=DC=0, spare, PA bits 1100 -> 0x00 0x0C. The 0.2x specs print PA as a
     # "signed quantity", which would read -4; a negative accuracy category means nothing, so msdc keeps the
-    # raw bits (README, Editions: the documented errata): 12, and 1111 -> 15
+    # raw bits (docs/decoding/editions.md: the documented errata): 12, and 1111 -> 15
     for edition in ("0.23", "0.24", "0.25", "0.26"):
         for pa_bits, raw in ((0x0C, 12), (0x0F, 15), (0x08, 8)):
             r = decode_bytes(block(21, fspec(1, 7) + bytes([0, 1, 0x00, pa_bits])),

@@ -133,7 +133,8 @@ def test_the_job_options_take_what_read_takes(tmp_path):
 
 
 def test_track_job_returns_the_table_without_an_output(adsb, tmp_path):
-    """The README's notebook use: track_job returns the table; only the command needs an output."""
+    """The guide's notebook use (docs/guide/python.md): track_job returns the table; only the command needs
+    an output."""
     from msdc.asterix.encode import encode_frame
 
     columns = ["sac", "sic", "time_of_day", "latitude", "longitude", "address", "callsign", "flight_level"]

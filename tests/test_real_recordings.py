@@ -71,10 +71,10 @@ def test_auto_chooses_0_23_and_says_why():
 
 
 def test_unpinned_0_23_names_its_edition_and_decodes_no_wrong_value():
-    """The ADS-B recording is edition 0.23 (README); read as the default 2.x, most blocks fail and the rest
-    walk by chance into wrong values (latitudes past 90 deg, times past 24 h). Every block is reported at
-    its own offset (careful framing cut the holding chain into bogus 'LEN' errors before), none decoded,
-    and 0.23 is named as the edition they all walk under."""
+    """The ADS-B recording is edition 0.23 (docs/fixtures.md); read as the default 2.x, most blocks fail and
+    the rest walk by chance into wrong values (latitudes past 90 deg, times past 24 h). Every block is
+    reported at its own offset (careful framing cut the holding chain into bogus 'LEN' errors before), none
+    decoded, and 0.23 is named as the edition they all walk under."""
     path = REAL / "adsb_v023_160510-lebl-220001.ast"
     pinned = asterix.read(path, editions={21: "0.23"})
     rec = asterix.read(path)

@@ -445,7 +445,7 @@ def damaged_first_frames() -> dict[str, bytes]:
 
 def test_recorder_hint_names_the_format_of_a_damaged_start() -> None:
     for fmt, data in damaged_first_frames().items():
-        assert detect_format(data) == "raw"  # the limit README "Containers" states
+        assert detect_format(data) == "raw"  # the limit docs/decoding/containers.md states
         assert recorder_hint(data) == fmt
     # a raw stream, damaged or not, is no recorder file
     raw = b"".join(block(48, r048(i, 3600.0 + i)) for i in range(1, 40))

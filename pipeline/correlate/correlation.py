@@ -45,9 +45,9 @@ CORRELATION_INPUTS = ["time", "time_of_day", "sensor_id", "sensor_kind", "aircra
 # A run holds every window's slot table (one row a slot) and lag table (2N - 1 rows for N slots) until
 # its writers are done, so the slots of all windows together are capped by the memory those tables take:
 # a slot row is 82 bytes (ten 8-byte columns, two 1-byte flags), a lag row 40 (five 8-byte columns), so
-# a slot costs 162 bytes with its two lag rows. 512 MiB of tables allows 3.3 M slots: the
-# README week (292 MB, 7.4 M reports) at the default 10 s slot (1.0 M) or 5 s (2.0 M); --slot 0.1
-# over its day (14 M) is refused.
+# a slot costs 162 bytes with its two lag rows. 512 MiB of tables allows 3.3 M slots: the benchmark
+# week (docs/development/benchmarks.md: 292 MB, 7.4 M reports) at the default 10 s slot (1.0 M) or 5 s
+# (2.0 M); --slot 0.1 over its day (14 M) is refused.
 SLOT_ROW_BYTES, LAG_ROW_BYTES = 82, 40
 TABLE_BUDGET_BYTES = 512 * 2**20
 MAX_SLOTS = TABLE_BUDGET_BYTES // (SLOT_ROW_BYTES + 2 * LAG_ROW_BYTES)  # 3,314,017 over all windows of a run
@@ -202,8 +202,8 @@ def pearson_peak(lags: np.ndarray, r: np.ndarray, n_slots: int) -> tuple[int | N
     return lag, False
 
 
-# A lag is told from its neighbours when a one-slot error costs more than the noise can hide (README
-# Correlation): sqrt(E1) >= 2 z sigma with z = 2 (two standard deviations), see lag_identifiable
+# A lag is told from its neighbours when a one-slot error costs more than the noise can hide (docs/methods/
+# correlation.md): sqrt(E1) >= 2 z sigma with z = 2 (two standard deviations), see lag_identifiable
 LAG_SIGNAL_Z = 2.0
 # a slot covering a share f of its interval has its mean time (1 - f) / 2 slot off the centre: at 3/4 an
 # eighth of a slot (310 m at 250 m/s and 10 s slots, about the radar's per-slot noise)
