@@ -233,7 +233,7 @@ KIND_DTYPES = {"float": "float64 (NaN if absent)", "int": "Int32", "flag": "Int8
 def markdown_schema() -> str:
     """The column reference (docs/columns.md), generated from the tables above."""
     lines = ["# Frame columns", "", "Generated from `asterix/columns.py` by "
-             "`python -c 'from asterix.columns import markdown_schema; print(markdown_schema())'`.",
+             "`python -c 'from msdc.asterix.columns import markdown_schema; print(markdown_schema())'`.",
              "Every frame also has `day` (int64: days after the recording's first day; in raw streams the "
              "first report's day in file order, -1 for a late report before the file's first midnight), "
              "`timestamp` "

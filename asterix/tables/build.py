@@ -1,6 +1,6 @@
 """Convert the printed asterix-specs item layouts into msdc's JSON edition tables.
 
-Run by hand when an edition is added: ``python -m asterix.tables.build ../shared/specs [21 48 ...]``
+Run by hand when an edition is added: ``python -m msdc.asterix.tables.build ../shared/specs [21 48 ...]``
 (category numbers, optional: build only those).
 The JSON files it writes are committed; the decoder never reads the printed specs.
 """

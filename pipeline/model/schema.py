@@ -1,8 +1,8 @@
 """The measurement schema: every report of every sensor as one row; name, dtype, unit and meaning per column.
 
-This is the single source of truth for the columns that ``pipeline.model.measurements`` builds and every
+This is the single source of truth for the columns that ``msdc.pipeline.model.measurements`` builds and every
 later step (correlation, quality, tracking) reads. ``docs/measurements.md`` is generated from it
-(``python -m pipeline.model.schema > docs/measurements.md``; a test keeps the two in sync).
+(``python -m msdc.pipeline.model.schema > docs/measurements.md``; a test keeps the two in sync).
 """
 
 from __future__ import annotations
@@ -38,14 +38,14 @@ _SHORT = "Int16"
 MEASUREMENT_SCHEMA: tuple[Column, ...] = (
     Column("time", "datetime64[ns, UTC]", "UTC",
            "Instant of the report (radar I048/140, ADS-B time of applicability); an undated recording is "
-           "placed on 1970-01-01 (see pipeline.model.time)"),
+           "placed on 1970-01-01 (see msdc.pipeline.model.time)"),
     Column("sensor_id", _TEXT, "",
            "Sensor: category, SAC and SIC as \"CCC:SAC/SIC\" (e.g. 048:25/201, 021:0/107)"),
     Column("sensor_kind", _TEXT, "", "\"radar\" (CAT048) or \"adsb\" (CAT021)"),
     Column("sac", _SHORT, "", "System area code of the sensor"),
     Column("sic", _SHORT, "", "System identification code of the sensor"),
     Column("aircraft_id", _TEXT, "",
-           "Aircraft identity assigned once (pipeline.model.identity): the 24-bit address, else the "
+           "Aircraft identity assigned once (msdc.pipeline.model.identity): the 24-bit address, else the "
            "address the call sign is uniquely seen with, else \"CS:\" call sign, else the address the Mode "
            "3/A code is uniquely seen with (if within reach), else \"M3A:\" Mode 3/A code; <NA> when the "
            "report has none"),
@@ -238,16 +238,16 @@ def markdown() -> str:
         "# Measurement columns",
         "",
         "Generated from `pipeline/model/schema.py`",
-        "(`python -m pipeline.model.schema > docs/measurements.md`).",
+        "(`python -m msdc.pipeline.model.schema > docs/measurements.md`).",
         "One row per report of every sensor, radar and ADS-B alike; `validate(frame)` checks a frame against",
         "it. A job that reads only some columns may ask for those alone (`schema_columns`, `validate(frame,",
-        "columns)`): `msdc correlate` builds the columns listed by `pipeline.jobs.correlate_columns`",
+        "columns)`): `msdc correlate` builds the columns listed by `msdc.pipeline.jobs.correlate_columns`",
         "(with `--fill predict` also those the tracker reads, with `--quality` those quality reads),",
-        "`msdc quality` those of `pipeline.jobs.quality_columns` (with `--reference track` the tracker's",
-        "too). Derived for",
+        "`msdc quality` those of `msdc.pipeline.jobs.quality_columns` (with `--reference track` the",
+        "tracker's too). Derived for",
         "the thesis tables (not stored): `time_of_day`,",
         "seconds since midnight UTC of the run's first day (above 86400 after midnight), from",
-        "`pipeline.model.time.with_clock`.",
+        "`msdc.pipeline.model.time.with_clock`.",
         "",
         "Dtypes: `category` columns hold text as categories of the pandas string dtype in sorted order",
         "(each distinct text stored once, a small integer code per row; sorting or grouping by the codes",
