@@ -15,6 +15,7 @@ import numpy as np
 import pandas as pd
 
 from . import kernel
+from .categories import DECODABLE, MEASUREMENT_CATEGORIES
 from .columns import FAMILIES
 from .containers import Segments, read_segments
 from .errors import REASONS, DecodeError, EditionWarning, UnreadableInput
@@ -23,10 +24,10 @@ from .layout import Layout, compile_layout
 from .tables import available, resolve_edition
 from .timeline import assign_days, timestamp_index
 
-DECODABLE = (21, 34, 48)
-# Decoded when categories=None. CAT034 (service messages) is decoded on request (categories=DECODABLE):
-# until the pipeline handles its frames, its blocks are stepped over and counted as ignored.
-DEFAULT_CATEGORIES = (21, 48)
+# Decoded when categories=None: the measurement categories. CAT034 (service messages) is decoded on
+# request (categories=DECODABLE): until the pipeline handles its frames, its blocks are stepped over and
+# counted as ignored.
+DEFAULT_CATEGORIES = MEASUREMENT_CATEGORIES
 WRONG_EDITION_MIN_BLOCKS = 10  # failed blocks, all walking under another edition, proving the edition wrong
 AUTO_SAMPLE_BLOCKS = 20_000  # blocks walked per candidate edition by editions={cat: "auto"}
 ERROR_COLUMNS = ["file", "offset", "length", "category", "reason"]

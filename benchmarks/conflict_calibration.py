@@ -4,7 +4,7 @@ chosen on half the aircraft and scored on the other half.
 
     python benchmarks/conflict_calibration.py [--every 10]
 
-Needs ../shared/real (or MSDC_SHARED). See tests/real_calibration_data.py for the procedure.
+Needs ../shared/real (or MSDC_SHARED). See fixtures/real_calibration_data.py for the procedure.
 """
 
 from __future__ import annotations
@@ -15,11 +15,12 @@ import time
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
-sys.path[:0] = [str(ROOT), str(ROOT / "tests")]
+sys.path.insert(0, str(ROOT))
 
 import numpy as np  # noqa: E402
 import pandas as pd  # noqa: E402
-from real_calibration_data import (  # noqa: E402
+
+from fixtures.real_calibration_data import (  # noqa: E402
     REAL,
     coverage_table,
     load_real_tracks,

@@ -18,11 +18,12 @@ import sys
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
-sys.path[:0] = [str(ROOT), str(ROOT / "tests")]
+sys.path.insert(0, str(ROOT))
 
 import numpy as np  # noqa: E402
-from paper_imm import PaperMode  # noqa: E402
-from paper_scenarios import Predictor, scenario1, scenario2, standard  # noqa: E402
+
+from fixtures.paper_imm import PaperMode  # noqa: E402
+from fixtures.paper_scenarios import Predictor, scenario1, scenario2, standard  # noqa: E402
 
 
 def _avg(runs: list[dict]) -> dict:

@@ -4,7 +4,7 @@ horizon, over several simulator seeds.
 
     python benchmarks/conflict_scenarios.py [--seeds 3] [--threshold 0.2]
 
-The scenarios are in tests/conflict_scenarios.py (radar + ADS-B, decode -> track -> predict -> PC ->
+The scenarios are in fixtures/conflict_scenarios.py (radar + ADS-B, decode -> track -> predict -> PC ->
 events).
 """
 
@@ -17,10 +17,11 @@ import time
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
-sys.path[:0] = [str(ROOT), str(ROOT / "tests")]
+sys.path.insert(0, str(ROOT))
 
 import pandas as pd  # noqa: E402
-from conflict_scenarios import DATE, encounters, run_encounter  # noqa: E402
+
+from fixtures.conflict_scenarios import DATE, encounters, run_encounter  # noqa: E402
 
 HORIZONS = (20.0, 60.0, 120.0)
 

@@ -17,10 +17,9 @@ import numpy as np
 from scipy.stats import ncx2
 
 ROOT = Path(__file__).resolve().parents[1]
-sys.path[:0] = [str(ROOT), str(ROOT / "tests")]
+sys.path.insert(0, str(ROOT))
 
-from conflict_reference import polar_reference, rotated  # noqa: E402
-
+from fixtures.conflict_reference import polar_reference, rotated  # noqa: E402
 from msdc.pipeline.conflict import conflict_probability  # noqa: E402
 
 

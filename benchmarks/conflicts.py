@@ -32,13 +32,13 @@ from pathlib import Path
 
 os.environ.setdefault("NUMBA_NUM_THREADS", "1")
 ROOT = Path(__file__).resolve().parents[1]
-sys.path[:0] = [str(ROOT), str(ROOT / "tests")]
+sys.path.insert(0, str(ROOT))
 
 import numpy as np  # noqa: E402
 import pandas as pd  # noqa: E402
-from track_scenarios import fly, position_sensor  # noqa: E402
 
 import msdc.pipeline.conflict.pairs_pc as pairs_pc  # noqa: E402
+from fixtures.track_scenarios import fly, position_sensor  # noqa: E402
 from msdc.pipeline.conflict import (  # noqa: E402
     alert_events,
     classify_alerts,

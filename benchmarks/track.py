@@ -18,11 +18,11 @@ from pathlib import Path
 
 os.environ.setdefault("NUMBA_NUM_THREADS", "1")
 ROOT = Path(__file__).resolve().parents[1]
-sys.path[:0] = [str(ROOT), str(ROOT / "tests")]
+sys.path.insert(0, str(ROOT))
 
 import numpy as np  # noqa: E402
-from track_scenarios import fly, merge, position_sensor, rotating_radar  # noqa: E402
 
+from fixtures.track_scenarios import fly, merge, position_sensor, rotating_radar  # noqa: E402
 from msdc.pipeline.track import TrackerConfig  # noqa: E402
 from msdc.pipeline.track.imm import tpm_into  # noqa: E402
 from msdc.pipeline.track.plane import filter_plane  # noqa: E402

@@ -15,11 +15,11 @@ import time
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
-sys.path[:0] = [str(ROOT), str(ROOT / "tests")]
+sys.path.insert(0, str(ROOT))
 
 import numpy as np  # noqa: E402
-import track_e2e_data as d  # noqa: E402
 
+import fixtures.track_e2e_data as d  # noqa: E402
 from msdc.pipeline.report.figures import new_figure, save_png  # noqa: E402
 from msdc.pipeline.report.track_figures import aircraft_figure  # noqa: E402
 

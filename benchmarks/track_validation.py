@@ -24,11 +24,11 @@ import sys
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
-sys.path[:0] = [str(ROOT), str(ROOT / "tests")]
+sys.path.insert(0, str(ROOT))
 
 import numpy as np  # noqa: E402
-import track_scenarios as sc  # noqa: E402
 
+import fixtures.track_scenarios as sc  # noqa: E402
 from msdc.pipeline.track import Mode, TrackerConfig, default_modes  # noqa: E402
 from msdc.pipeline.track.plane import estimate, filter_plane  # noqa: E402
 
@@ -458,7 +458,7 @@ def _gap_rows(res: dict) -> None:
 
 
 def real(runs: int, rng) -> None:
-    from real_track_data import gap_experiment, load_real_adsb
+    from fixtures.real_track_data import gap_experiment, load_real_adsb
 
     tracks = load_real_adsb()
     if tracks is None:
@@ -506,7 +506,7 @@ TPM_REAL_SPECS = ["expm:150,20", "expm:82,45", "expm:82,20", "expm:86", "fixed:0
 def tpm_real(runs: int, rng) -> None:
     """The real-data gap experiment (noise estimate) per transition law: what a law tuned on (b) does to
     predictions through 5-60 s gaps of 1 Hz ADS-B (the same deleted stretches for every law)."""
-    from real_track_data import gap_experiment, load_real_adsb
+    from fixtures.real_track_data import gap_experiment, load_real_adsb
 
     tracks = load_real_adsb()
     if tracks is None:

@@ -7,6 +7,8 @@ import sys
 from pathlib import Path
 
 import pytest
+from budget import FULL_MAX_EXAMPLES
+from hypothesis import settings
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -19,3 +21,10 @@ def msdc_wheel(tmp_path_factory) -> Path:
     done = subprocess.run(argv, capture_output=True, text=True, timeout=600)
     assert done.returncode == 0, done.stderr
     return next(out.glob("msdc-*.whl"))
+
+
+# Hypothesis: "ci" (default) draws a quarter of each property test's written count (tests/budget.py),
+# "full" draws them all: pytest --hypothesis-profile=full
+settings.register_profile("ci", max_examples=25)
+settings.register_profile("full", max_examples=FULL_MAX_EXAMPLES)
+settings.load_profile("ci")

@@ -14,8 +14,8 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 import pytest
-from real_track_data import REAL
 
+from fixtures.real_track_data import REAL
 from msdc.asterix.encode import encode_frame
 from msdc.pipeline import jobs
 from msdc.pipeline.cli import main

@@ -6,6 +6,7 @@ import numpy as np
 import pandas as pd
 import pytest
 from asterix_bytes import block, decode_bytes, fspec
+from budget import examples
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
@@ -177,14 +178,14 @@ def test_block_is_all_or_nothing():
     assert "FRN" in rec.errors.reason.iloc[0]
 
 
-@settings(max_examples=300, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@settings(max_examples=examples(300), deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(st.binary(max_size=600))
 def test_random_bytes_never_crash_and_are_accounted(data):
     rec = decode_bytes(data)
     assert accounted(rec) == len(data)
 
 
-@settings(max_examples=300, deadline=None)
+@settings(max_examples=examples(300), deadline=None)
 @given(st.data())
 def test_mutated_stream_accounted_and_far_blocks_survive(data):
     stream, starts = good_stream(8, 3)
@@ -253,7 +254,7 @@ def _real_streams() -> list[tuple[str, bytes]]:
 REAL = _real_streams()
 
 
-@settings(max_examples=200, deadline=None)
+@settings(max_examples=examples(200), deadline=None)
 @given(st.sampled_from(REAL), st.data())
 def test_bit_flipped_and_truncated_real_blocks(named, data):
     _, stream = named

@@ -6,9 +6,9 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from real_track_data import REAL
 from scipy.stats import chi2
 
+from fixtures.real_track_data import REAL
 from msdc.pipeline.conflict.calibration import chi2_2_ppf, coverage, interpolate_reports, mahalanobis2
 
 
@@ -47,7 +47,7 @@ def test_coverage_of_a_known_gaussian_is_95_percent():
 
 @pytest.mark.skipif(not REAL.exists(), reason=f"real recording {REAL} not present (../shared/real)")
 def test_real_adsb_95_percent_ellipse_holds_about_95_percent_of_outcomes():
-    from real_calibration_data import D2_95, load_real_tracks, prediction_errors
+    from fixtures.real_calibration_data import D2_95, load_real_tracks, prediction_errors
 
     result, meas = load_real_tracks(max_aircraft=6)
     errors = prediction_errors(result, meas, every_s=20.0)

@@ -1,4 +1,4 @@
-"""tracking.md 4.4 with IMM prediction: the numpy IMM of tests/paper_imm.py predicts as msdc's kernel does
+"""tracking.md 4.4 with IMM prediction: the numpy IMM of fixtures/paper_imm.py predicts as msdc's kernel does
 (so the heading-aligned CA noise it adds is compared like for like), and what proved robust in
 benchmarks/conflict_paper_scenarios.py: scenario 2's one block over-estimating most with the small
 covariance and CV prediction erring least on straight flight; scenario 1's CV over-estimating in the
@@ -7,11 +7,11 @@ turn more than the IMM."""
 from __future__ import annotations
 
 import numpy as np
-import paper_imm
 import pytest
-from paper_imm import PaperMode
-from paper_scenarios import scenario1, scenario2, standard
 
+from fixtures import paper_imm
+from fixtures.paper_imm import PaperMode
+from fixtures.paper_scenarios import scenario1, scenario2, standard
 from msdc.pipeline.conflict.predict import propagate_state
 from msdc.pipeline.track import ImmState, Mode, Plane, TrackerConfig
 

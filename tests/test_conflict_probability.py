@@ -4,9 +4,9 @@ polar coordinates, Monte Carlo with a stated error, and the reference rows of tr
 
 import numpy as np
 import pytest
-from conflict_reference import polar_reference, rotated
 from scipy.stats import ncx2
 
+from fixtures.conflict_reference import polar_reference, rotated
 from msdc.pipeline.conflict import conflict_probability, pc_margin, pc_upper_bound, probability
 
 # mean, covariance, radius: isotropic and anisotropic, on and off the axes, covariance small and large

@@ -7,7 +7,8 @@ from __future__ import annotations
 
 import pandas as pd
 import pytest
-from conflict_scenarios import DATE, encounters, run_encounter
+
+from fixtures.conflict_scenarios import DATE, encounters, run_encounter
 
 ENCOUNTERS = {e.name: e for e in encounters()}
 MIDNIGHT = pd.Timestamp(str(DATE), tz="UTC")
@@ -82,7 +83,7 @@ def test_nothing_trackable_is_one_line_exit_1_and_writes_nothing(tmp_path, capsy
 def test_climbing_encounter_over_the_radar_is_tracked(tmp_path):
     """Plots almost overhead have no usable horizontal covariance (NaN, skipped by the tracker); the
     encounter is still tracked and its one loss found (this used to divide by a zero determinant)."""
-    from conflict_scenarios import shifted
+    from fixtures.conflict_scenarios import shifted
 
     enc = shifted(ENCOUNTERS["climbing through FL350"], -30.0, -20.0)  # crossing point over the radar
     r = run_encounter(enc, tmp_path, seed=11)

@@ -9,9 +9,9 @@ import pandas as pd
 import pytest
 from asterix_bytes import decode_bytes
 from pyproj import Geod
-from real_track_data import REAL
 
 import msdc.asterix as asterix
+from fixtures.real_track_data import REAL
 from msdc.asterix.encode import encode_frame
 from msdc.pipeline.model.coverage import out_of_coverage
 from msdc.pipeline.model.jumps import detect_jumps

@@ -9,6 +9,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 import pytest
+from budget import examples
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
@@ -428,7 +429,7 @@ CAT048_ROW = st.fixed_dictionaries({
 })
 
 
-@settings(max_examples=60, deadline=None)
+@settings(max_examples=examples(60), deadline=None)
 @given(st.lists(CAT048_ROW, min_size=1, max_size=8))
 def test_frame_matches_item_encoder(rows: list[dict]) -> None:
     frame = pd.DataFrame(rows)

@@ -125,7 +125,7 @@ def _old_route(reports: pd.DataFrame, reference: pd.Timestamp, max_coast_s: floa
 
 
 def _frame(seed: int = 3) -> pd.DataFrame:
-    from track_scenarios import fly
+    from fixtures.track_scenarios import fly
 
     rng = np.random.default_rng(seed)
     truth = fly((0.0, 0.0), 60.0, 210.0, [(120, 0, 0), (40, -3.0, 0), (100, 0, 0), (80, 0, -1.0), (60, 0, 0)])

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import pandas as pd
 from asterix_bytes import block, decode_bytes, fspec
+from budget import examples
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
@@ -119,7 +120,7 @@ def test_cut_inside_an_other_category_block_keeps_the_decoded_ones():
     assert accounted(rec) == cut
 
 
-@settings(max_examples=300, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@settings(max_examples=examples(300), deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(st.data())
 def test_mutated_mixed_stream_accounted_and_far_blocks_survive(data):
     stream, blocks = mixed_stream(2)

@@ -10,8 +10,8 @@ from dataclasses import asdict
 import numpy as np
 import pandas as pd
 import pytest
-import track_e2e_data as d
 
+import fixtures.track_e2e_data as d
 import msdc.pipeline.parallel as parallel
 from msdc.pipeline.conflict.predict import predict_tracks
 from msdc.pipeline.parallel import map_ordered

@@ -16,6 +16,7 @@ import struct
 import numpy as np
 import pandas as pd
 from asterix_bytes import block, fspec
+from budget import examples
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
@@ -312,7 +313,7 @@ def test_existing_formats_not_taken_for_recorders() -> None:
     assert detect_format(mixed_oradis()[0]) == "oradis"
 
 
-@settings(max_examples=60, deadline=None)
+@settings(max_examples=examples(60), deadline=None)
 @given(st.lists(st.tuples(st.sampled_from([1, 2, 21, 34, 48, 62, 240]), st.binary(min_size=1, max_size=300)),
                 min_size=1, max_size=40))
 def test_raw_streams_stay_raw(blocks: list[tuple[int, bytes]]) -> None:
@@ -367,7 +368,7 @@ def numbered(i: int) -> bytes:
     return block(48, fspec(1, 2, 11) + bytes([25, 1]) + tod3(100.0 + i) + i.to_bytes(2, "big"))
 
 
-@settings(max_examples=150, deadline=None)
+@settings(max_examples=examples(150), deadline=None)
 @given(st.data())
 def test_mutated_gps_accounted_and_far_frames_survive(tmp_path_factory, data) -> None:
     frames = [(numbered(i), 100.5 + i) for i in range(1, 9)]
@@ -388,7 +389,7 @@ def test_mutated_gps_accounted_and_far_frames_survive(tmp_path_factory, data) ->
         assert set(range(end + 3, 9)) <= kept  # and every frame from the second after the last damaged
 
 
-@settings(max_examples=150, deadline=None)
+@settings(max_examples=examples(150), deadline=None)
 @given(st.data())
 def test_mutated_oradis_accounted_and_far_packets_survive(tmp_path_factory, data) -> None:
     good, at = oradis_file([numbered(i) for i in range(1, 9)])

@@ -6,6 +6,7 @@ from __future__ import annotations
 import datetime as dt
 import math
 
+from budget import examples
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
@@ -32,7 +33,7 @@ def _naive_width(header: str, values: list, fmt: str | None) -> float:
     return min(66.0, max(6.0, longest + 2.0))
 
 
-@settings(max_examples=300, deadline=None)
+@settings(max_examples=examples(300), deadline=None)
 @given(st.lists(VALUES, max_size=40), st.sampled_from(FORMATS))
 def test_width_from_candidates_equals_width_from_every_cell(values, fmt):
     values = [v for v in values if not (isinstance(v, str) and fmt is not None)]  # a column is one kind

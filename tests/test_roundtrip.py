@@ -18,6 +18,7 @@ from dataclasses import dataclass
 import numpy as np
 import pandas as pd
 import pytest
+from budget import examples
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
@@ -295,7 +296,7 @@ def check(category: int, edition: str, given_rows: list[dict], expected: list[di
 
 
 @pytest.mark.parametrize(("category", "edition"), GENERIC)
-@settings(max_examples=30, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@settings(max_examples=examples(30), deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(data=st.data())
 def test_round_trip_every_edition(category: int, edition: str, data: st.DataObject) -> None:
     prefer130 = category == 21 and edition.startswith("2.") and data.draw(st.booleans(), label="prefer 130")

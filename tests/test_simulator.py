@@ -10,6 +10,7 @@ import types
 import numpy as np
 import pandas as pd
 import pytest
+from budget import examples
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
@@ -324,7 +325,7 @@ def test_midnight_wraps(midnight):
     np.testing.assert_array_equal(tracks(midnight, "adsb")["t_s"], t_abs(midnight.adsb))
 
 
-@settings(max_examples=25, deadline=None)
+@settings(max_examples=examples(25), deadline=None)
 @given(st.floats(-80, 80), st.floats(-180, 180), st.floats(-100, 15000))
 def test_geodetic_round_trip(lat, lon, h):
     back = geo.ecef_to_geodetic(geo.geodetic_to_ecef(lat, lon, h))
@@ -333,7 +334,7 @@ def test_geodetic_round_trip(lat, lon, h):
     assert back[2] == pytest.approx(h, abs=1e-6)
 
 
-@settings(max_examples=10, deadline=None)
+@settings(max_examples=examples(10), deadline=None)
 @given(st.integers(0, 2**32 - 1))
 def test_planned_flights_stay_in_limits(seed):
     f = plan_flight(np.random.default_rng(seed), 0.0, 1800.0)

@@ -4,8 +4,8 @@ import numpy as np
 import pandas as pd
 import pytest
 from pyproj import Geod
-from track_scenarios import fly
 
+from fixtures.track_scenarios import fly
 from msdc.pipeline.track import ImmState, Plane, predict, track
 
 GEOD = Geod(ellps="WGS84")

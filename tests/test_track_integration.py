@@ -5,7 +5,8 @@ benchmarks/track_e2e.py runs the same on the full default scenario and prints th
 from __future__ import annotations
 
 import pytest
-import track_e2e_data as d
+
+import fixtures.track_e2e_data as d
 
 
 @pytest.fixture(scope="module")

@@ -3,8 +3,8 @@
 import numpy as np
 import pytest
 from scipy.linalg import expm
-from track_scenarios import polar_covariance
 
+from fixtures.track_scenarios import polar_covariance
 from msdc.pipeline.track import Mode, TrackerConfig, nacp_covariance, parse_tpm, radar_covariance
 from msdc.pipeline.track.imm import CA, CT, CV, TPM_DYNAMIC, TPM_EXPM, TPM_FIXED, tpm_into, transition_into
 from msdc.pipeline.track.plane import estimate, filter_plane

@@ -11,11 +11,11 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 import pytest
-import track_e2e_data as d
 from pyproj import Geod
-from real_track_data import REAL, gap_experiment, load_real_adsb
 from scipy.stats import chi2
 
+import fixtures.track_e2e_data as d
+from fixtures.real_track_data import REAL, gap_experiment, load_real_adsb
 from msdc.pipeline.cli import main
 from msdc.pipeline.model.dedup import duplicate_mask
 from msdc.pipeline.model.measurements import build_measurements

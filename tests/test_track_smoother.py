@@ -1,13 +1,13 @@
 """The IMM (two-filter) smoother against textbook numpy written here: with one mode it is the
 Rauch-Tung-Striebel smoother, with two modes the backward recursion (Kim's pair probabilities, the later
 data's information per mode fused with each mode's filtered state, per-mode mixture); and the seeded
-comparison with the RTS pass on the combined estimate (tests/track_scenarios.py truth)."""
+comparison with the RTS pass on the combined estimate (fixtures/track_scenarios.py truth)."""
 
 import numpy as np
 import pandas as pd
 import pytest
-import track_scenarios as sc
 
+import fixtures.track_scenarios as sc
 from msdc.pipeline.track import Mode, TrackerConfig, default_modes, track
 from msdc.pipeline.track.plane import estimate, filter_plane
 

@@ -5,8 +5,8 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-import track_e2e_data as d
 
+import fixtures.track_e2e_data as d
 from msdc.pipeline.track import track
 from msdc.pipeline.track.tracker import track_angle_rate
 

@@ -4,9 +4,9 @@ Every figure is scored against the simulator's truth or against reports withheld
 
 import numpy as np
 import pytest
-import track_scenarios as sc
-from real_track_data import REAL, gap_experiment, load_real_adsb
 
+import fixtures.track_scenarios as sc
+from fixtures.real_track_data import REAL, gap_experiment, load_real_adsb
 from msdc.pipeline.track import Mode, TrackerConfig, default_modes
 from msdc.pipeline.track.plane import estimate, filter_plane
 

@@ -6,15 +6,14 @@ import json
 from functools import cache
 from pathlib import Path
 
+from ..categories import REGISTRY
+
 HERE = Path(__file__).parent
 
-# Edition aliases: editions whose UAP and item layouts are those of a table we ship.
-# CAT048 1.21-1.26 share the UAP and item layouts of 1.27 (the printed specs start at 1.27).
-ALIASES: dict[int, dict[str, str]] = {
-    48: {**{f"1.{m}": "1.27" for m in range(21, 27)}, "1.x": "1.32"},
-    21: {"2.x": "2.7", "0.x": "0.26"},
-}
-DEFAULT_EDITION = {48: "1.32", 21: "2.7", 34: "1.29"}
+# Edition aliases (editions whose UAP and item layouts are those of a table we ship) and the default
+# editions, from the category registry
+ALIASES: dict[int, dict[str, str]] = {c: info.aliases for c, info in REGISTRY.items() if info.aliases}
+DEFAULT_EDITION = {c: info.default_edition for c, info in REGISTRY.items()}
 
 
 def available() -> dict[int, list[str]]:
