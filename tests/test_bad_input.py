@@ -178,6 +178,7 @@ def test_block_is_all_or_nothing():
     assert "FRN" in rec.errors.reason.iloc[0]
 
 
+@pytest.mark.fuzz
 @settings(max_examples=examples(300), deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(st.binary(max_size=600))
 def test_random_bytes_never_crash_and_are_accounted(data):
@@ -185,6 +186,7 @@ def test_random_bytes_never_crash_and_are_accounted(data):
     assert accounted(rec) == len(data)
 
 
+@pytest.mark.fuzz
 @settings(max_examples=examples(300), deadline=None)
 @given(st.data())
 def test_mutated_stream_accounted_and_far_blocks_survive(data):
@@ -254,6 +256,7 @@ def _real_streams() -> list[tuple[str, bytes]]:
 REAL = _real_streams()
 
 
+@pytest.mark.fuzz
 @settings(max_examples=examples(200), deadline=None)
 @given(st.sampled_from(REAL), st.data())
 def test_bit_flipped_and_truncated_real_blocks(named, data):

@@ -494,12 +494,14 @@ SAMPLES = {
 }
 
 
+@pytest.mark.fuzz
 @settings(max_examples=examples(300), deadline=None)
 @given(data=st.binary(max_size=600), fmt=st.sampled_from([None, *FORMATS]))
 def test_random_bytes_accounted(data: bytes, fmt: str | None) -> None:
     assert_accounted(read_segments(data, fmt), len(data))
 
 
+@pytest.mark.fuzz
 @settings(max_examples=examples(300), deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(kind=st.sampled_from(sorted(SAMPLES)), draw=st.data())
 def test_mutated_containers_accounted(kind: str, draw: st.DataObject) -> None:

@@ -4,6 +4,7 @@ every block framed by its LEN, other categories accounted per category, damage l
 from __future__ import annotations
 
 import pandas as pd
+import pytest
 from asterix_bytes import block, decode_bytes, fspec
 from budget import examples
 from hypothesis import HealthCheck, given, settings
@@ -120,6 +121,7 @@ def test_cut_inside_an_other_category_block_keeps_the_decoded_ones():
     assert accounted(rec) == cut
 
 
+@pytest.mark.fuzz
 @settings(max_examples=examples(300), deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(st.data())
 def test_mutated_mixed_stream_accounted_and_far_blocks_survive(data):

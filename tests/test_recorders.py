@@ -15,6 +15,7 @@ import struct
 
 import numpy as np
 import pandas as pd
+import pytest
 from asterix_bytes import block, fspec
 from budget import examples
 from hypothesis import given, settings
@@ -313,6 +314,7 @@ def test_existing_formats_not_taken_for_recorders() -> None:
     assert detect_format(mixed_oradis()[0]) == "oradis"
 
 
+@pytest.mark.fuzz
 @settings(max_examples=examples(60), deadline=None)
 @given(st.lists(st.tuples(st.sampled_from([1, 2, 21, 34, 48, 62, 240]), st.binary(min_size=1, max_size=300)),
                 min_size=1, max_size=40))
@@ -368,6 +370,7 @@ def numbered(i: int) -> bytes:
     return block(48, fspec(1, 2, 11) + bytes([25, 1]) + tod3(100.0 + i) + i.to_bytes(2, "big"))
 
 
+@pytest.mark.fuzz
 @settings(max_examples=examples(150), deadline=None)
 @given(st.data())
 def test_mutated_gps_accounted_and_far_frames_survive(tmp_path_factory, data) -> None:
@@ -389,6 +392,7 @@ def test_mutated_gps_accounted_and_far_frames_survive(tmp_path_factory, data) ->
         assert set(range(end + 3, 9)) <= kept  # and every frame from the second after the last damaged
 
 
+@pytest.mark.fuzz
 @settings(max_examples=examples(150), deadline=None)
 @given(st.data())
 def test_mutated_oradis_accounted_and_far_packets_survive(tmp_path_factory, data) -> None:
