@@ -320,7 +320,7 @@ def cmd_decode(args) -> int:
 
 def cmd_stats(args) -> int:
     """msdc stats: what the inputs hold, printed as tables; the exit status."""
-    from msdc.pipeline.stats import format_stats
+    from msdc.pipeline.quality.inventory import format_stats
 
     _numba_without_scipy()
     result = jobs.stats_job(jobs.StatsOptions(**_decoding(args), chunk_mb=args.chunk_mb), progress=Progress())

@@ -19,7 +19,6 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-import numpy as np
 import pandas as pd
 
 from msdc.pipeline.meta import FORMATS, software_version
@@ -49,16 +48,6 @@ GAP_RANGE_S = (0.1, 86400.0)
 ADSB_SIGMA_RANGE_M = (0.5, 20000.0)
 INDICATOR_RANGE = (0, 11)  # NIC and NACp values
 CHUNK_RANGE_MB = (0.1, 4096.0)
-SITE_ALTITUDE_RANGE_M = (-500.0, 6000.0)  # outside: almost certainly a wrong sensor file entry
-# A SAC/SIC not in the sensor file is taken for damage (its records left out, with a warning) when it has
-# fewer than max(STRAY_RADAR_RECORDS, STRAY_RADAR_SHARE x the CAT048 records) records: one damaged byte of
-# I048/010 makes one such record, and a second hit landing on the same wrong pair is rare (a flipped bit
-# gives one of 16 pairs), so 1-2 records are damage at any size; heavy damage spreads its phantoms over
-# many pairs, each well under 0.1 % of the records. A real radar turns in 4-12 s, so one aircraft in its
-# cover for a minute already makes 5-15 plots, and radars recorded together share the traffic, each
-# holding a large part of the plots: such a radar still stops the run with the sensor-file lines to add.
-STRAY_RADAR_RECORDS = 3
-STRAY_RADAR_SHARE = 0.001
 
 
 class OptionError(ValueError):
@@ -396,11 +385,9 @@ def validate(options) -> Checked:
                       *_figures_beside(out, options, checked.sensors)]
             spare_inputs(options.inputs, [(f"-o {out}", out)] + [(f"-o {out}", p) for p in beside])
         spare_inputs(options.inputs, [(f"--json {checked.json}", checked.json)])
-        odd = checked.sensors[~checked.sensors["altitude_m"].between(*SITE_ALTITUDE_RANGE_M)]
-        lo, hi = SITE_ALTITUDE_RANGE_M
-        warnings += [f"--sensors {options.sensors}: {row.name!r} altitude_m = {row.altitude_m:g} is "
-                     f"implausible for a radar site (expected {lo:g} to {hi:g} m)"
-                     for row in odd.itertuples()]
+        from msdc.pipeline.model.sensors import implausible_altitudes
+
+        warnings += implausible_altitudes(checked.sensors, options.sensors)
     if isinstance(options, DecodeOptions | StatsOptions):
         _number("--chunk-mb", options.chunk_mb, *CHUNK_RANGE_MB, " MB")
     if isinstance(options, DecodeOptions):
@@ -529,9 +516,14 @@ def _load_measurements(options: AircraftOptions, checked: Checked, progress: Pro
     if progress:
         progress.stage(stage)
     if len(loaded.stray_radar):
+        from msdc.pipeline.model.sensors import UnknownRadar, stray_verdict
+
         n_cat048 = sum(info["records"].get(48, 0) for info in loaded.inputs)
-        _stray_verdict(loaded.stray_radar, n_cat048, sensors_path(options), checked.warnings,
-                       leave_out="by giving the ADS-B recordings alone")
+        try:
+            checked.warnings += stray_verdict(loaded.stray_radar, n_cat048, sensors_path(options))
+        except UnknownRadar as exc:
+            raise unknown_radar_error(exc.missing, sensors_path(options),
+                                      leave_out="by giving the ADS-B recordings alone") from exc
     checked.warnings += _empty_inputs(loaded)
     checked.warnings += _wrong_editions(loaded, but=absent_categories(loaded))
     checked.warnings += [f"no {name} (CAT{cat:03d}) records in the inputs{_all_failed(loaded, cat)}: "
@@ -583,52 +575,6 @@ def unknown_radar_error(missing: list[tuple[int, int]], sensors_path: str | None
     return JobError(f"radar SAC/SIC {pairs} not in {sensors_path}; add its position:\n\n{lines}")
 
 
-def declared_radar(cat048: pd.DataFrame | None, sensors: pd.DataFrame, sensors_path: str | None,
-                   warnings: list[str]) -> pd.DataFrame | None:
-    """The CAT048 records of radars the sensor file lists. Records of a SAC/SIC it lacks are left out with
-    a warning (file, SAC/SIC, count, first offset) when they are too few to be a radar (STRAY_RADAR_*) or
-    carry no SAC/SIC at all (no sensor entry could place them); a JobError with the TOML lines otherwise."""
-    from msdc.pipeline.model.sensors import undeclared_radars
-
-    if cat048 is None or cat048.empty:
-        return cat048
-    stray = undeclared_radars(cat048, sensors)
-    if stray.empty:
-        return cat048
-    _stray_verdict(stray, len(cat048), sensors_path, warnings)
-    keys = pd.MultiIndex.from_arrays([cat048["sac"].astype("Int64"), cat048["sic"].astype("Int64")])
-    known = keys.isin(pd.MultiIndex.from_frame(sensors[["sac", "sic"]].astype("Int64")))
-    return cat048[known]
-
-
-def _stray_verdict(stray: pd.DataFrame, n_cat048: int, sensors_path: str | None, warnings: list[str], *,
-                   leave_out: str = "with --sources adsb") -> None:
-    """Judge the records of SAC/SIC pairs the sensor file lacks (undeclared_radars' table, over the run's
-    n_cat048 CAT048 records): a JobError with the TOML lines for a pair with enough records to be a radar,
-    else one warning per pair and file, the records being left out."""
-    limit = max(STRAY_RADAR_RECORDS, math.ceil(STRAY_RADAR_SHARE * n_cat048))
-    per_pair = stray.groupby(["sac", "sic"], dropna=False, sort=False)["records"].transform("sum")
-    no_pair = (stray["sac"].isna() | stray["sic"].isna()).to_numpy(bool)
-    real = stray[~no_pair & (per_pair >= limit).to_numpy(bool)]
-    if len(real):
-        pairs = real[["sac", "sic"]].drop_duplicates().sort_values(["sac", "sic"])
-        raise unknown_radar_error([(int(a), int(b)) for a, b in pairs.itertuples(index=False)], sensors_path,
-                                  leave_out=leave_out)
-    for row in stray.itertuples(index=False):
-        name = row.file if pd.notna(row.file) else "input"
-        if pd.isna(row.sac) or pd.isna(row.sic):
-            why = "carry no SAC/SIC (I048/010), so no sensor entry can place them"
-            pair = "without SAC/SIC"
-        else:
-            pair = f"from SAC/SIC {row.sac}/{row.sic}"
-            where = sensors_path if sensors_path is not None else "a sensor file (no --sensors given)"
-            why = (f"not in {where} and too few for a radar (fewer than {limit}: the larger of "
-                   f"{STRAY_RADAR_RECORDS} and {STRAY_RADAR_SHARE:.1%} of the {n_cat048} CAT048 records), "
-                   "taken for damaged data")
-        warnings.append(f"{name}: {row.records} CAT048 record(s) {pair} (first at offset {row.offset}) "
-                        f"{why}, left out of the measurements")
-
-
 # What a quality run without one of the categories cannot fill (the others need only the sensor's own reports)
 _WITHOUT = {48: "the Radar accuracy and Radar biases sheets are empty",
             21: "the ADS-B quality sheets are empty, and so are Radar accuracy and Radar biases (ADS-B is "
@@ -669,68 +615,6 @@ def _all_failed(loaded: Loaded, cat: int) -> str:
     else:
         hint = f" under edition {edition}"
     return f": {failed} CAT{cat:03d} block(s) could not be decoded{hint} ('msdc stats' lists them)"
-
-
-def mark_once(meas: pd.DataFrame, *, split_adsb: bool = False, jumps: bool = True,
-              flags: list[str] | None = None) -> pd.DataFrame:
-    """The measurements with the ``duplicate`` flag and the ADS-B jump columns (``jump``, ``jump_size_m``,
-    ``fit_latitude``, ``fit_longitude``) computed once for the whole job; deduplication, filters, quality
-    and accuracy reuse them instead of recomputing. ``jumps=False`` skips the jump search (a job that
-    neither filters jumps nor assesses quality does not need it); ``flags``: only these jump columns
-    (``["jump"]`` for a job that counts or drops jumps but never reads the fit)."""
-    from msdc.pipeline.model.dedup import DEDUP_KEYS, duplicate_mask, repeat_groups, shared_rows
-    from msdc.pipeline.model.jumps import JUMP_FLAG_COLUMNS, JUMP_INPUTS, jump_flags
-
-    meas = meas.drop(columns=[c for c in ("duplicate", *JUMP_FLAG_COLUMNS) if c in meas])
-    judged_columns = JUMP_FLAG_COLUMNS if flags is None else [c for c in JUMP_FLAG_COLUMNS if c in flags]
-    keys = [k for k in DEDUP_KEYS if k in meas]
-    # rows equal in every key have the same time, so the first in time order is the first in frame order:
-    # no sorted copy is needed. Only the columns each step reads are selected, never the whole frame.
-    narrow = meas[[*keys, *(c for c in ("sensor_kind", "sensor_id") if c in meas and c not in keys)]]
-    dup = duplicate_mask(narrow, split_adsb=split_adsb)
-    del narrow
-    if not jumps:
-        return meas.assign(duplicate=dup.to_numpy(bool))
-    dup = dup.to_numpy(bool)
-    adsb = (meas["sensor_kind"] == "adsb").to_numpy(bool)
-    judged = jump_flags(meas[[c for c in JUMP_INPUTS if c in meas]][adsb & ~dup],  # judged without repeats
-                        columns=judged_columns)
-    release_free_memory()  # the search's batches leave freed heap pages behind
-    # a repeated report shares the verdict of the report it repeats: per group of ADS-B rows equal in
-    # every dedup key, each column takes its first non-missing value in frame order. Only rows sharing
-    # their time and latitude with another ADS-B row can be in a group of several; the others keep their own
-    rows = np.flatnonzero(adsb)
-    shared = shared_rows(meas, rows)
-    alone = np.zeros(0, np.int64) if shared is None else np.setdiff1d(rows, shared, assume_unique=True)
-    rows = rows if shared is None else shared
-    order, group = repeat_groups(meas, keys, rows)
-    at = np.full(len(meas), -1)  # position of each judged row within the judged frame
-    at[np.flatnonzero(adsb & ~dup)] = np.arange(len(judged))
-    in_key_order = rows[order]
-    pos_all = at[in_key_order]  # judged position of each ADS-B row, in key order
-    alone_pos = at[alone]  # (never repeats: judged themselves)
-    del at, rows
-    out = {}
-    for c in judged_columns:
-        values = judged[c].to_numpy(dtype=bool if c == "jump" else float)
-        pos = pos_all
-        known = pos >= 0
-        if values.dtype.kind == "f":
-            known[known] = ~np.isnan(values[pos[known]])
-        first = np.full(int(group[-1]) + 1 if group.size else 0, -1)
-        first_rows = np.flatnonzero(known)
-        g = group[first_rows]
-        lead = np.concatenate([[True], g[1:] != g[:-1]]) if g.size else np.zeros(0, bool)
-        first[g[lead]] = pos[first_rows[lead]]
-        src = first[group]
-        del first, first_rows, g, lead, known
-        column = np.zeros(len(meas), bool) if c == "jump" else np.full(len(meas), np.nan)
-        has = src >= 0
-        column[in_key_order[has]] = values[src[has]]
-        column[alone] = values[alone_pos]
-        out[c] = column
-        del src, has, values
-    return meas.assign(duplicate=dup, **out)
 
 
 def _parameters(options: AircraftOptions, loaded: Loaded, started: float, command: str) -> dict:
@@ -789,60 +673,6 @@ def _filtered_away(exc, meas_all: pd.DataFrame, options: CorrelateOptions) -> st
     return f"{text}; lower the filter or leave it out"
 
 
-FAR_SEPARATION_FACTOR = 10.0  # times a radar's own position sigma at its far plots
-SLOTTING_MARGIN_M = 1000.0  # what 10 s slots of a fast aircraft add to any separation
-FAST_AIRCRAFT_MPS = 300.0  # ground speed no airliner exceeds (580 kt)
-
-
-def far_separations(run: CorrelationRun, meas: pd.DataFrame, sensors: pd.DataFrame,
-                    sensors_path: str) -> list[str]:
-    """Warnings for radars whose windows put the aircraft much further from ADS-B (median over windows of
-    the median slot separation) than the radar's accuracy allows: most likely a wrong site."""
-    rows = [w.summary for w in run.windows
-            if w.summary.get("sep_median_m") is not None
-            and str(w.summary.get("reference_sensor")).startswith("021")]
-    if not rows:
-        return []
-    warnings = []
-    for sensor_id, sep_m in pd.DataFrame(rows).groupby("radar_sensor")["sep_median_m"].median().items():
-        rho = meas.loc[(meas["sensor_id"] == sensor_id).to_numpy(bool), "rho_nm"].to_numpy(float)
-        if np.isfinite(rho).any():
-            warnings += _far_site(str(sensor_id), float(sep_m), float(np.nanpercentile(rho, 95)), sensors,
-                                  sensors_path, SLOTTING_MARGIN_M)
-    return warnings
-
-
-def site_warnings(meas: pd.DataFrame, sensors: pd.DataFrame, sensors_path: str) -> list[str]:
-    """far_separations for the jobs without correlation windows (quality, track, conflicts): each radar's
-    plots against the same aircraft's ADS-B report nearest in time (pipeline.model.site_check)."""
-    from msdc.pipeline.model.site_check import MATCH_TOLERANCE_S, radar_offsets
-
-    margin_m = MATCH_TOLERANCE_S * FAST_AIRCRAFT_MPS  # how far an aircraft flies between plot and report
-    return [w for row in radar_offsets(meas).itertuples() if np.isfinite(row.rho_p95_nm)
-            for w in _far_site(str(row.sensor_id), float(row.offset_median_m), float(row.rho_p95_nm), sensors,
-                               sensors_path, margin_m)]
-
-
-def _far_site(sensor_id: str, sep_m: float, far_nm: float, sensors: pd.DataFrame, sensors_path: str,
-              margin_m: float) -> list[str]:
-    """The wrong-site warning when a radar's median separation from ADS-B exceeds FAR_SEPARATION_FACTOR
-    times its position sigma at ``far_nm`` (its far plots) plus ``margin_m``; [] otherwise."""
-    try:
-        sac, sic = (int(x) for x in sensor_id.split(":")[1].split("/"))
-    except (IndexError, ValueError):  # a radar without SAC/SIC ("048:?/?") has no site to check
-        return []
-    site = sensors[(sensors["sac"] == sac) & (sensors["sic"] == sic)]
-    if site.empty:
-        return []
-    far_m = far_nm * 1852.0
-    sigma_m = math.hypot(float(site["sigma_range_m"].iloc[0]),
-                         far_m * math.radians(float(site["sigma_azimuth_deg"].iloc[0])))
-    if sep_m <= FAR_SEPARATION_FACTOR * sigma_m + margin_m:
-        return []
-    return [f"radar {sensor_id}: its plots lie a median {sep_m / 1000:.1f} km from ADS-B, far beyond its "
-            f"accuracy ({sigma_m:.0f} m at {far_nm:.0f} NM); check its site in {sensors_path}"]
-
-
 def _marked_measurements(options: AircraftOptions, checked: Checked, progress: Progress | None, stage: str,
                          *, split_adsb: bool = False, either: bool = False, columns=None,
                          flags: list[str] | None = None) -> tuple[Loaded, pd.DataFrame]:
@@ -850,14 +680,14 @@ def _marked_measurements(options: AircraftOptions, checked: Checked, progress: P
     each window's jumps); decoded columns are held one chunk at a time (see _load_measurements).
     ``stage`` is the progress stage shown once the inputs are read; ``columns`` and ``flags``: only those
     measurement columns and jump columns (every one when None)."""
+    from msdc.pipeline.model.marks import mark_once
+
     loaded, meas = _load_measurements(options, checked, progress, stage, either=either, columns=columns)
     meas = mark_once(meas, split_adsb=split_adsb, flags=flags)
     release_free_memory()
     return loaded, meas
 
 
-# the measurement columns far_separations reads
-FAR_SEPARATION_INPUTS = ["sensor_id", "sac", "sic", "rho_nm"]
 # the measurement columns correlate --quality's slotting figures read (pipeline.report.quality_figures)
 SLOTTING_FIGURE_INPUTS = ["time", "sensor_kind", "sensor_id", "aircraft_id", "callsign", "address",
                           "latitude", "longitude"]
@@ -872,6 +702,7 @@ def correlate_columns(options: CorrelateOptions) -> list[str]:
     from msdc.pipeline.model.dedup import DEDUP_KEYS
     from msdc.pipeline.model.jumps import JUMP_INPUTS
     from msdc.pipeline.model.schema import MEASUREMENT_COLUMNS, column_names
+    from msdc.pipeline.model.site_check import FAR_SEPARATION_INPUTS
 
     need = {*CORRELATION_INPUTS, *DEDUP_KEYS, "sensor_kind", "sensor_id", *JUMP_INPUTS,
             *FAR_SEPARATION_INPUTS}
@@ -957,7 +788,10 @@ def correlate_job(options: CorrelateOptions, *, progress: Progress | None = None
     run.parameters = {**run.parameters, **_parameters(options, loaded, started, command),
                       "filters": {"drop_jumps": options.drop_jumps, "min_nic": options.min_nic,
                                   "min_nacp": options.min_nacp, "removed": run.filters}}
-    checked.warnings += far_separations(run, meas, checked.sensors, str(options.sensors))
+    from msdc.pipeline.model.site_check import far_separations
+
+    checked.warnings += far_separations([w.summary for w in run.windows], meas, checked.sensors,
+                                        str(options.sensors))
     checked.warnings += _nothing_correlated(run, options)
     result = CorrelateResult(options, checked, run, meas, loaded)
     if options.quality:
@@ -1197,6 +1031,8 @@ def quality_job(options: QualityOptions, *, progress: Progress | None = None, ch
         progress.stage("Processing data files")
     loaded, meas = _marked_measurements(options, checked, progress, "Analysing data quality", either=True,
                                         columns=quality_columns(options))
+    from msdc.pipeline.model.site_check import site_warnings
+
     absent = absent_categories(loaded)
     checked.warnings += site_warnings(meas, checked.sensors, str(sensors_path(options)))
     quality = _quality(meas, checked.sensors, options)
@@ -1262,7 +1098,7 @@ def stats_job(options: StatsOptions, *, progress: Progress | None = None) -> Sta
     from msdc.asterix.errors import UnreadableInput
     from msdc.pipeline.model.sources import file_labels
     from msdc.pipeline.model.time import UNDATED_DAY, FirstDayTally
-    from msdc.pipeline.stats import STATS_COLUMNS, StatsAccumulator
+    from msdc.pipeline.quality.inventory import STATS_COLUMNS, StatsAccumulator
 
     checked = validate(options)
     if progress:
@@ -1429,5 +1265,5 @@ def _write_chunk(path: Path, cat: int, frame: pd.DataFrame, writers: dict, csv: 
 
 
 __all__ = ["CorrelateOptions", "DecodeOptions", "JobError", "OptionError", "QualityOptions", "StatsOptions",
-           "correlate_job", "decode_job", "mark_once", "quality_job", "stats_job", "validate",
+           "correlate_job", "decode_job", "quality_job", "stats_job", "validate",
            "write_correlation", "write_quality"]

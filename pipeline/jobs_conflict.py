@@ -31,7 +31,6 @@ from msdc.pipeline.jobs_track import (
     _sources,
     check_track_rows,
     check_tracking,
-    untrackable,
 )
 from msdc.pipeline.progress import Progress
 
@@ -169,7 +168,9 @@ def conflict_job(options: ConflictOptions, *, progress: Progress | None = None,
     from msdc.pipeline.conflict.events import losses_by_pairs
     from msdc.pipeline.conflict.grid import on_grid
     from msdc.pipeline.conflict.surface import on_surface, surface_pairs
+    from msdc.pipeline.model.site_check import site_warnings
     from msdc.pipeline.track import Plane, track
+    from msdc.pipeline.track.feasibility import untrackable
     from msdc.pipeline.track.noise import SURFACE_SPEED_KT
 
     started = time.monotonic()
@@ -182,7 +183,7 @@ def conflict_job(options: ConflictOptions, *, progress: Progress | None = None,
     if progress:
         progress.stage("Tracking")
     meas = _measurements(loaded, checked, options)
-    checked.warnings += jobs.site_warnings(meas, checked.sensors, str(jobs.sensors_path(options)))
+    checked.warnings += site_warnings(meas, checked.sensors, str(jobs.sensors_path(options)))
     checked.warnings += jobs.undated_warning(loaded, "the times of the alerts, losses and tracks")
     loaded.drop_frames()  # the measurements hold what tracking needs
     check_track_rows(meas, options)

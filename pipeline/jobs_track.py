@@ -30,12 +30,6 @@ NOISE = ("declared", "estimate", "timing")
 ESTIMATED = ("estimate", "timing")
 STEP_RANGE_S = (1e-3, 3600.0)  # below 1 ms the grid explodes (a day would be 86 M rows per aircraft)
 MAX_COAST_RANGE_S = (0.0, 86400.0)
-# Rows the tracker may put out (grid samples plus report times) in one run: each costs about 570 bytes
-# through estimation and the table (measured: fixtures --all, 33 k rows at --step 1 against 177 k at 0.1:
-# +82 MB), so 4 M rows hold about 2.3 GB; 300 aircraft for an hour at 1 s make 1.1 M. --step alone cannot
-# bound this (the same step is harmless on one aircraft and huge on a day of traffic), so it is counted
-# after decoding, before tracking.
-MAX_TRACK_ROWS = 4_000_000
 # the columns of the track table, in order (issue 10); the tracker's other columns follow
 TRACK_COLUMNS = ["aircraft_id", "callsign", "address", "time", "time_of_day", "latitude", "longitude",
                  "flight_level", "speed_kt", "track_deg", "turn_rate_dps", "sigma_major_m", "sigma_minor_m",
@@ -127,31 +121,16 @@ def check_tracking(options: TrackOptions) -> float:
     return step
 
 
-def track_rows(meas: pd.DataFrame, step_s: float, max_coast_s: float, *, grid_only: bool = False) -> int:
-    """An upper bound on the rows ``track`` will put out: per aircraft, the grid of step_s over the time its
-    reports cover (each gap up to max_coast_s, and max_coast_s after the last), plus one row per report
-    (grid_only: the grid rows alone)."""
-    if meas.empty:
-        return 0
-    t = meas["time"].dt.as_unit("ns").astype("int64").to_numpy() / 1e9
-    ids = pd.factorize(meas["aircraft_id"])[0]
-    order = np.lexsort((t, ids))
-    t, ids = t[order], ids[order]
-    gap = np.diff(t)
-    same = ids[1:] == ids[:-1]
-    covered = float(np.minimum(gap[same], max_coast_s).sum()) + max_coast_s * (int(ids.max()) + 1)
-    return int(covered / step_s) + 2 * (int(ids.max()) + 1) + (0 if grid_only else len(meas))
-
-
 def check_track_rows(meas: pd.DataFrame, options: TrackOptions, per_row: int = 1, what: str = "", *,
                      grid_only: bool = False) -> None:
-    """OptionError naming --step when the run would put out more than MAX_TRACK_ROWS rows (``per_row``
-    rows for each track row, e.g. one prediction per horizon; grid_only: for each grid row)."""
-    rows = track_rows(meas, float(options.step_s), float(options.max_coast_s), grid_only=grid_only) * per_row
-    if rows > MAX_TRACK_ROWS:
-        raise OptionError(f"--step {options.step_s:g}: the tracks of these {meas['aircraft_id'].nunique()} "
-                          f"aircraft would need about {rows:,} {what or 'output rows'}, more than "
-                          f"{MAX_TRACK_ROWS:,}; use a longer --step or fewer aircraft")
+    """pipeline.track.feasibility.check_track_rows as an OptionError naming --step."""
+    from msdc.pipeline.track import feasibility
+
+    try:
+        feasibility.check_track_rows(meas, options.step_s, options.max_coast_s, per_row, what,
+                                     grid_only=grid_only)
+    except feasibility.TooManyRows as exc:
+        raise OptionError(f"--step {options.step_s:g}: {exc}; use a longer --step or fewer aircraft") from exc
 
 
 def validate(options: TrackOptions, *, require_output: bool = False) -> Checked:
@@ -211,7 +190,7 @@ def _measurements(loaded, checked: Checked, options: TrackOptions) -> pd.DataFra
         OutOfCoverageWarning,
         build_measurements,
     )
-    from msdc.pipeline.model.sensors import UnknownRadar
+    from msdc.pipeline.model.sensors import UnknownRadar, declared_radar
 
     sources = _sources(options.sources)
     radar = loaded.frames.get(48) if "radar" in sources else None
@@ -224,7 +203,11 @@ def _measurements(loaded, checked: Checked, options: TrackOptions) -> pd.DataFra
                            if (why := jobs._all_failed(loaded, cat)))
         raise JobError(f"no {wanted} records in the inputs (--sources {','.join(sources)})"
                        + (f": {failed}" if failed else ""))
-    radar = jobs.declared_radar(radar, checked.sensors, jobs.sensors_path(options), checked.warnings)
+    try:
+        radar, stray = declared_radar(radar, checked.sensors, jobs.sensors_path(options))
+    except UnknownRadar as exc:
+        raise jobs.unknown_radar_error(exc.missing, jobs.sensors_path(options)) from exc
+    checked.warnings += stray
     try:
         with python_warnings.catch_warnings():  # jobs._load has said it, naming each file
             python_warnings.simplefilter("ignore", OffEarthWarning)
@@ -270,7 +253,9 @@ def track_job(options: TrackOptions, *, progress: Progress | None = None, checke
               command: str = "track") -> TrackJobResult:
     """Validate, decode, build measurements, select, track; nothing is written."""
     from msdc.pipeline.model.identity import aircraft_labels
+    from msdc.pipeline.model.site_check import site_warnings
     from msdc.pipeline.track import track
+    from msdc.pipeline.track.feasibility import untrackable
 
     started = time.monotonic()
     checked = checked or validate(options)
@@ -280,7 +265,7 @@ def track_job(options: TrackOptions, *, progress: Progress | None = None, checke
     if progress:
         progress.stage("Tracking")
     meas = _measurements(loaded, checked, options)
-    checked.warnings += jobs.site_warnings(meas, checked.sensors, str(jobs.sensors_path(options)))
+    checked.warnings += site_warnings(meas, checked.sensors, str(jobs.sensors_path(options)))
     checked.warnings += jobs.undated_warning(loaded, "the tracks' times")
     loaded.drop_frames()  # the measurements hold what tracking needs: a day's decoded frames are ~0.5 GB
     joined = int(meas.attrs.get("joined_by_track_number", 0))
@@ -315,29 +300,6 @@ def with_labels(tracks: pd.DataFrame, labels: pd.DataFrame) -> pd.DataFrame:
     named = {c: tracks["aircraft_id"].map(by_id[c]).fillna("") for c in ("callsign", "address")}
     out = tracks.assign(**named)
     return out[TRACK_COLUMNS + [c for c in out.columns if c not in TRACK_COLUMNS]]
-
-
-def untrackable(meas: pd.DataFrame) -> str:
-    """Why no aircraft could be tracked: the reports without a usable position or covariance, by kind."""
-    cov = meas[["latitude", "longitude", "cov_ee_m2", "cov_en_m2", "cov_nn_m2"]].to_numpy(dtype=float)
-    bad = ~np.isfinite(cov).all(axis=1)
-    kind = meas["sensor_kind"].astype(str).to_numpy()
-    parts = []
-    n_adsb, n_radar = int((bad & (kind == "adsb")).sum()), int((bad & (kind == "radar")).sum())
-    if n_adsb:
-        no_nacp = int((bad & (kind == "adsb") & meas["nacp"].isna().to_numpy()).sum())
-        why = [f"{no_nacp} carry no NACp, as in CAT021 0.2x, whose figure of merit msdc does not turn into "
-               "a sigma: declare their accuracy with --adsb-sigma M (1-sigma metres per axis)"]
-        why = why if no_nacp else []
-        if n_adsb > no_nacp:
-            why.append(f"{n_adsb - no_nacp} have NACp 0 (unknown) or no position")
-        parts.append(f"{n_adsb} of {int((kind == 'adsb').sum())} ADS-B reports have no usable accuracy "
-                     f"({'; '.join(why)})")
-    if n_radar:
-        parts.append(f"{n_radar} of {int((kind == 'radar').sum())} radar plots have no position or "
-                     "covariance (no range/azimuth, no flight level, or almost overhead)")
-    detail = "; ".join(parts) if parts else f"{len(meas)} reports, none long enough to start a track"
-    return f"no aircraft could be tracked: {detail}"
 
 
 def _estimate_noise(meas: pd.DataFrame, sensors: pd.DataFrame, options: TrackOptions):

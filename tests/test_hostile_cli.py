@@ -329,12 +329,11 @@ def test_a_phantom_radar_of_two_damaged_records_is_left_out_with_a_warning(comma
 def test_the_phantom_records_are_the_only_ones_left_out(tmp_path):
     """The stray rule drops exactly the records of the undeclared pair, nothing else."""
     import msdc.asterix as asterix
-    from msdc.pipeline.model.sensors import read_sensors
+    from msdc.pipeline.model.sensors import declared_radar, read_sensors
 
     radar, offsets = _with_sic(tmp_path, [4, 20])
     frame = asterix.read(radar).frames[48].assign(file="damaged048.ast")
-    warnings: list[str] = []
-    kept = jobs.declared_radar(frame, read_sensors(SENSORS), str(SENSORS), warnings)
+    kept, warnings = declared_radar(frame, read_sensors(SENSORS), str(SENSORS))
     assert len(warnings) == 1
     assert sorted(set(frame["offset"]) - set(kept["offset"])) == offsets
     assert len(kept) == len(frame) - 2

@@ -57,8 +57,7 @@ def test_the_modules_were_read():
     ("msdc.pipeline.quality", ("msdc.pipeline.correlate",)),
     ("msdc.pipeline.correlate", ("msdc.pipeline.quality",)),
     *[(f"msdc.pipeline.{area}", FRONT) for area in AREAS],
-    ("msdc.pipeline.stats", FRONT),
-    ("msdc.pipeline.model", FRONT + tuple(f"msdc.pipeline.{a}" for a in AREAS) + ("msdc.pipeline.stats",)),
+    ("msdc.pipeline.model", FRONT + tuple(f"msdc.pipeline.{a}" for a in AREAS)),
     ("msdc.asterix", ("msdc.pipeline",)),
 ])
 def test_imports_flow_one_way(importer, forbidden):

@@ -11,8 +11,9 @@ import pandas as pd
 import pytest
 
 from msdc.pipeline import jobs
-from msdc.pipeline.jobs import CorrelateOptions, QualityOptions, correlate_columns, mark_once, quality_columns
+from msdc.pipeline.jobs import CorrelateOptions, QualityOptions, correlate_columns, quality_columns
 from msdc.pipeline.model.load import load_measurements
+from msdc.pipeline.model.marks import mark_once
 from msdc.pipeline.model.schema import MEASUREMENT_COLUMNS, SchemaError, column_names, validate
 from msdc.pipeline.model.sensors import read_sensors
 from msdc.pipeline.track.tracker import FILTER_INPUTS, REQUIRED

@@ -316,7 +316,7 @@ def test_max_coast_names_its_real_bounds(tmp_path):
 
 
 def test_stats_times_are_labelled_utc():
-    from msdc.pipeline.stats import format_stats, stats_tables
+    from msdc.pipeline.quality.inventory import format_stats, stats_tables
 
     rec = asterix.read(ADSB, date="2019-03-01")
     text = format_stats(stats_tables(rec.frames, rec.errors))

@@ -10,7 +10,7 @@ import pytest
 
 import msdc.asterix as asterix
 from msdc.pipeline import jobs
-from msdc.pipeline.stats import StatsAccumulator, stats_tables
+from msdc.pipeline.quality.inventory import StatsAccumulator, stats_tables
 from tests.asterix_bytes import block, fspec
 
 ROOT = Path(__file__).resolve().parents[1]

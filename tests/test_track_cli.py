@@ -17,6 +17,7 @@ from msdc.pipeline import jobs, jobs_track
 from msdc.pipeline.cli import main
 from msdc.pipeline.jobs import OptionError
 from msdc.pipeline.jobs_track import TRACK_COLUMNS, TrackOptions
+from msdc.pipeline.track.feasibility import track_rows
 
 FIX = Path(__file__).resolve().parents[1] / "fixtures"
 RADAR, ADSB, SENSORS = str(FIX / "radar.ast"), str(FIX / "adsb.ast"), str(FIX / "sensors.toml")
@@ -292,8 +293,8 @@ def test_track_rows_bound_one_aircraft_by_hand():
     t0 = pd.Timestamp("2019-03-01T08:00:00Z")
     times = [t0 + pd.Timedelta(seconds=s) for s in (0, 10, 100)]
     meas = pd.DataFrame({"aircraft_id": ["A"] * 3, "time": times})
-    assert jobs_track.track_rows(meas, 1.0, 60.0) == 135
-    assert jobs_track.track_rows(meas, 0.1, 60.0) == 1300 + 2 + 3
+    assert track_rows(meas, 1.0, 60.0) == 135
+    assert track_rows(meas, 0.1, 60.0) == 1300 + 2 + 3
 
 
 def test_a_tiny_step_is_refused_after_decoding_with_the_rows_it_would_make(tmp_path, capsys):
@@ -415,7 +416,7 @@ def test_grid_rows_bound_by_hand():
     t0 = pd.Timestamp("2019-03-01T08:00:00Z")
     meas = pd.DataFrame({"aircraft_id": ["A"] * 3,
                          "time": [t0 + pd.Timedelta(seconds=s) for s in (0, 10, 100)]})
-    assert jobs_track.track_rows(meas, 1.0, 60.0, grid_only=True) == 132
+    assert track_rows(meas, 1.0, 60.0, grid_only=True) == 132
 
 
 def test_reports_with_no_identity_are_counted_not_dropped_silently(tmp_path, capsys):

@@ -372,7 +372,7 @@ def _span(times: np.ndarray) -> tuple[float, float]:
 class _Columns:
     """The columns correlate() reads, as arrays over the rows of a measurement frame (read once per run,
     not per aircraft or sensor pair); ``dup`` and ``jump`` are None when the frame does not carry the
-    job-wide flags (pipeline.jobs.mark_once), which are then worked out per source as before."""
+    job-wide flags (pipeline.model.marks.mark_once), which are then worked out per source as before."""
 
     def __init__(self, meas: pd.DataFrame):
         self.meas = meas
