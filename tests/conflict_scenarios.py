@@ -127,7 +127,7 @@ def write_encounter(enc: Encounter, directory: Path, seed: int = 11) -> dict[str
 
 def run_encounter(enc: Encounter, directory: Path, seed: int = 11, horizons_s=(20.0, 60.0, 120.0), **options):
     """Simulate, then `conflict_job` on the recordings (nothing written); returns the job result."""
-    from msdc.pipeline.jobs_conflict import ConflictOptions, conflict_job
+    from msdc.pipeline.jobs.conflicts import ConflictOptions, conflict_job
 
     p = write_encounter(enc, directory, seed)
     opts = ConflictOptions(inputs=(p["radar"], p["adsb"]), sensors=p["sensors"], date=DATE,

@@ -11,8 +11,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from msdc.pipeline import jobs
 from msdc.pipeline.cli import main
+from msdc.pipeline.jobs import stats
+from msdc.pipeline.jobs.common import OptionError
 
 FIX = Path(__file__).resolve().parents[1] / "fixtures"
 RADAR, ADSB, SENSORS = FIX / "radar.ast", FIX / "adsb.ast", FIX / "sensors.toml"
@@ -44,8 +45,8 @@ def test_a_fifo_input_is_refused_not_read(tmp_path):
 
     threading.Thread(target=writer, daemon=True).start()
     try:
-        with pytest.raises(jobs.OptionError, match="live.ast: input is not a regular file"):
-            jobs.validate(jobs.StatsOptions(inputs=(str(fifo),)))
+        with pytest.raises(OptionError, match="live.ast: input is not a regular file"):
+            stats.validate(stats.StatsOptions(inputs=(str(fifo),)))
     finally:  # release the writer if it is still waiting for a reader
         fd = os.open(fifo, os.O_RDONLY | os.O_NONBLOCK)
         os.close(fd)

@@ -13,10 +13,10 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from msdc.pipeline import jobs, jobs_track
 from msdc.pipeline.cli import main
-from msdc.pipeline.jobs import OptionError
-from msdc.pipeline.jobs_track import TRACK_COLUMNS, TrackOptions
+from msdc.pipeline.jobs import common, track
+from msdc.pipeline.jobs.common import OptionError
+from msdc.pipeline.jobs.track import TRACK_COLUMNS, TrackOptions
 from msdc.pipeline.track.feasibility import track_rows
 
 FIX = Path(__file__).resolve().parents[1] / "fixtures"
@@ -62,9 +62,9 @@ BAD = [
 @pytest.mark.parametrize(("options", "words"), BAD)
 def test_bad_options_refused_before_decoding(options, words, tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
-    monkeypatch.setattr(jobs, "load", lambda *a, **k: pytest.fail("decoded before validating"))
+    monkeypatch.setattr(common, "load", lambda *a, **k: pytest.fail("decoded before validating"))
     with pytest.raises(OptionError) as info:
-        jobs_track.validate(options, require_output=True)  # as the command validates
+        track.validate(options, require_output=True)  # as the command validates
     assert words in str(info.value) and "\n" not in str(info.value)
     assert info.value.status == 2
 
@@ -156,7 +156,7 @@ def test_figure_written(mas72):
 def _radar_only(tmp_path, sensors_text: str, noise: str = "declared") -> dict:
     s = tmp_path / "s.toml"
     s.write_text(sensors_text)
-    result = jobs_track.track_job(TrackOptions(inputs=(RADAR, ADSB), sensors=str(s), callsign="MAS72",
+    result = track.track_job(TrackOptions(inputs=(RADAR, ADSB), sensors=str(s), callsign="MAS72",
                                                json=str(tmp_path / "t.json"), date=pd.Timestamp(
                                                    "2019-03-01").date(), sources=("radar",), noise=noise))
     return result
@@ -351,7 +351,7 @@ def test_sensor_totals_by_hand():
                             "reports": [3, 9, 4], "updates": [2, 6, 0], "gated": [1, 1, 4],
                             "invalid": [0, 1, 0], "out_of_range": [0, 1, 0],
                             "nis_mean": [1.0, 3.0, np.nan]})
-    out = jobs_track.sensor_totals(sensors).set_index("sensor_id")
+    out = track.sensor_totals(sensors).set_index("sensor_id")
     assert out.loc["R", ["aircraft", "reports", "updates", "gated", "invalid", "out_of_range"]].tolist() == [
         2, 12, 8, 2, 1, 1]
     assert out.loc["R", "nis_mean"] == pytest.approx(2.5)

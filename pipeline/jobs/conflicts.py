@@ -1,4 +1,4 @@
-"""The conflict job (``msdc conflicts``): post-event conflict analysis of recorded traffic.
+"""The conflicts job (``msdc conflicts``): post-event conflict analysis of recorded traffic.
 
 Options are validated before anything is decoded (``validate``: one-line ``OptionError`` naming the
 option). ``conflict_job`` decodes and builds the measurements as ``msdc track`` does, tracks every
@@ -13,7 +13,6 @@ from __future__ import annotations
 
 import json
 import math
-import os
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -21,16 +20,25 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from msdc.pipeline import jobs
-from msdc.pipeline.jobs import Checked, JobError, OptionError
-from msdc.pipeline.jobs_track import (
+from msdc.pipeline.jobs.common import (
+    ADSB_SIGMA_RANGE_M,
     ESTIMATED,
+    Checked,
+    JobError,
+    OptionError,
     TrackOptions,
-    _estimate_noise,
-    _measurements,
-    _sources,
-    check_track_rows,
+    check_decoding,
+    check_figures_dir,
+    check_number,
+    check_output_rows,
     check_tracking,
+    estimated_noise,
+    output_path,
+    parse_sources,
+    run_parameters,
+    sensor_table,
+    spare_inputs,
+    tracker_inputs,
 )
 from msdc.pipeline.progress import Progress
 
@@ -86,53 +94,45 @@ def parse_horizons(value) -> tuple[float, ...]:
 def validate(options: ConflictOptions) -> Checked:
     """Check every option, the sensor file and the output paths before any decoding; OptionError if bad."""
     warnings: list[str] = []
-    inputs, editions = jobs._check_decoding(options, warnings)
+    inputs, editions = check_decoding(options, warnings)
     checked = Checked(inputs, editions, warnings=warnings)
     step = check_tracking(options)
     horizons = parse_horizons(options.horizons_s)
     for h in horizons:
-        jobs._number("--horizon", h, *HORIZON_RANGE_S, " s")
+        check_number("--horizon", h, *HORIZON_RANGE_S, " s")
         if abs(h / step - round(h / step)) > 1e-9:
             raise OptionError(f"--horizon {h:g}: must be a whole multiple of --step ({step:g} s)")
-    jobs._number("--radius-nm", options.radius_nm, *RADIUS_RANGE_NM, " NM")
-    jobs._number("--vertical-ft", options.vertical_ft, *VERTICAL_RANGE_FT, " ft")
+    check_number("--radius-nm", options.radius_nm, *RADIUS_RANGE_NM, " NM")
+    check_number("--vertical-ft", options.vertical_ft, *VERTICAL_RANGE_FT, " ft")
     tol = options.vertical_tolerance_ft
-    jobs._number("--vertical-tolerance-ft", tol, *VERTICAL_TOLERANCE_RANGE_FT, " ft")
+    check_number("--vertical-tolerance-ft", tol, *VERTICAL_TOLERANCE_RANGE_FT, " ft")
     if not tol < options.vertical_ft:
         raise OptionError(f"--vertical-tolerance-ft {tol!r}: must be less than --vertical-ft "
                           f"({options.vertical_ft:g})")
     t = options.threshold
     if not isinstance(t, int | float) or not math.isfinite(t) or not 0.0 < t < 1.0:
         raise OptionError(f"--threshold {t!r}: must be a probability strictly between 0 and 1")
-    _sources(options.sources)
+    parse_sources(options.sources)
     if options.method not in METHODS:
         raise OptionError(f"--method {options.method!r}: must be one of {', '.join(METHODS)}")
     if options.vertical not in VERTICAL_MODELS:
         raise OptionError(f"--vertical {options.vertical!r}: must be one of {', '.join(VERTICAL_MODELS)}")
     if options.surface not in SURFACE_MODES:
         raise OptionError(f"--surface {options.surface!r}: must be one of {', '.join(SURFACE_MODES)}")
-    jobs._number("--adsb-sigma", options.adsb_sigma_m, *jobs.ADSB_SIGMA_RANGE_M, " m")
-    checked.output = jobs._output("-o", options.output, (".csv", ".xlsx"))
-    checked.json = jobs._output("--json", options.json, (".json",))
+    check_number("--adsb-sigma", options.adsb_sigma_m, *ADSB_SIGMA_RANGE_M, " m")
+    checked.output = output_path("-o", options.output, (".csv", ".xlsx"))
+    checked.json = output_path("--json", options.json, (".json",))
     if checked.output is None:
         raise OptionError("-o: give the output, conflicts.csv or conflicts.xlsx")
     if checked.output.suffix.lower() == ".csv":
         for extra in companion_paths(checked.output).values():
-            jobs._output("-o", extra, (".csv",))
+            output_path("-o", extra, (".csv",))
     beside = companion_paths(checked.output).values() if checked.output.suffix.lower() == ".csv" else ()
-    jobs.spare_inputs(options.inputs, [(f"-o {checked.output}", p) for p in (checked.output, *beside)]
-                      + [(f"--json {checked.json}", checked.json)])
+    spare_inputs(options.inputs, [(f"-o {checked.output}", p) for p in (checked.output, *beside)]
+                 + [(f"--json {checked.json}", checked.json)])
     if options.figures is not None:
-        jobs.nonempty_path("--figures", options.figures)
-        d = Path(options.figures)
-        if d.exists() and not d.is_dir():
-            raise OptionError(f"--figures {d}: exists and is not a directory")
-        parent = d if d.exists() else (d.parent if str(d.parent) else Path("."))
-        if not parent.is_dir():
-            raise OptionError(f"--figures {d}: directory {d.parent} does not exist")
-        if not os.access(parent, os.W_OK):
-            raise OptionError(f"--figures {d}: directory {parent} is not writable")
-    checked.sensors = jobs._sensors(options.sensors, required=False)
+        check_figures_dir(options.figures, writable=True)
+    checked.sensors = sensor_table(options.sensors, required=False)
     return checked
 
 
@@ -168,7 +168,6 @@ def conflict_job(options: ConflictOptions, *, progress: Progress | None = None,
     from msdc.pipeline.conflict.events import losses_by_pairs
     from msdc.pipeline.conflict.grid import on_grid
     from msdc.pipeline.conflict.surface import on_surface, surface_pairs
-    from msdc.pipeline.model.site_check import site_warnings
     from msdc.pipeline.track import Plane, track
     from msdc.pipeline.track.feasibility import untrackable
     from msdc.pipeline.track.noise import SURFACE_SPEED_KT
@@ -177,21 +176,13 @@ def conflict_job(options: ConflictOptions, *, progress: Progress | None = None,
     checked = checked or validate(options)
     horizons = parse_horizons(options.horizons_s)
     step = float(options.step_s)
-    if progress:
-        progress.stage("Processing data files")
-    loaded = jobs._load(options, checked, progress)
-    if progress:
-        progress.stage("Tracking")
-    meas = _measurements(loaded, checked, options)
-    checked.warnings += site_warnings(meas, checked.sensors, str(jobs.sensors_path(options)))
-    checked.warnings += jobs.undated_warning(loaded, "the times of the alerts, losses and tracks")
-    loaded.drop_frames()  # the measurements hold what tracking needs
-    check_track_rows(meas, options)
-    check_track_rows(meas, options, len(horizons), f"predictions ({len(horizons)} horizon(s) a grid row)",
-                     grid_only=True)  # predictions start from the grid rows only, not from the report times
+    loaded, meas = tracker_inputs(options, checked, progress, "the times of the alerts, losses and tracks")
+    check_output_rows(meas, options)
+    check_output_rows(meas, options, len(horizons), f"predictions ({len(horizons)} horizon(s) a grid row)",
+                      grid_only=True)  # predictions start from the grid rows only, not from the report times
     noise = None
     if options.noise in ESTIMATED:
-        meas, noise = _estimate_noise(meas, checked.sensors, options)
+        meas, noise = estimated_noise(meas, checked.sensors, options)
     result = track(meas, step_s=step, max_coast_s=float(options.max_coast_s), tpm=options.tpm)
     tracks = result.tracks
     if tracks.empty:
@@ -227,13 +218,13 @@ def conflict_job(options: ConflictOptions, *, progress: Progress | None = None,
               "missed": {f"{h:g}": int(warn.loc[warn["horizon_s"] == h, "warning_s"].isna().sum())
                          for h in horizons} if len(warn) else {f"{h:g}": 0 for h in horizons},
               "surface": _surface_counts(grid, by_speed, at_surface, lost, both, options, pc)}
-    params = {**jobs._parameters(options, loaded, started, command), **tracker_parameters,
+    params = {**run_parameters(options, loaded, started, command), **tracker_parameters,
               "horizons_s": list(horizons), "radius_nm": options.radius_nm,
               "vertical_ft": options.vertical_ft, "vertical_tolerance_ft": tol,
               "threshold": options.threshold, "method": options.method,
               "vertical": options.vertical, "noise": options.noise, "surface": options.surface,
               "surface_speed_kt": SURFACE_SPEED_KT,
-              "sources": list(_sources(options.sources))}
+              "sources": list(parse_sources(options.sources))}
     return ConflictJobResult(options, checked, grid, pc, alerts, losses, warn, params, loaded, counts,
                              predictions, noise)
 
@@ -349,6 +340,7 @@ def text(result: ConflictJobResult) -> str:
 
 
 def _csv(frame: pd.DataFrame, path: Path) -> None:
+    """One table as CSV, its tz-aware times as ISO 8601 UTC."""
     out = frame.copy()
     for c in out.columns:
         if isinstance(out[c].dtype, pd.DatetimeTZDtype):
