@@ -439,18 +439,19 @@ def cmd_conflicts(args) -> int:
 
 
 def _run_job(name: str, validate, job, options, progress: Progress):
-    """Validate (warnings first), run the job, then print its later warnings and the skipped blocks. A job
-    that fails prints the warnings it collected before its error: one may name the cause (a first day of
-    plots before midnight explains "never overlap in time")."""
+    """Validate (warnings first), run the job, then print its later warnings (its result's, after
+    validation's) and the skipped blocks. A job that fails prints the warnings it collected before its error
+    (the error carries them: jobs.common.carrying): one may name the cause (a first day of plots before
+    midnight explains "never overlap in time")."""
     checked = validate(options)
     _warn(name, checked.warnings)
     seen = len(checked.warnings)
     try:
         result = job(options, progress=progress, checked=checked, command=" ".join(sys.argv[1:]) or name)
-    except (CliError, common.OptionError, common.JobError, asterix_errors.AsterixError, OSError):
-        _warn(name, checked.warnings[seen:])  # main() prints the error after them
+    except (CliError, common.OptionError, common.JobError, asterix_errors.AsterixError, OSError) as exc:
+        _warn(name, getattr(exc, "job_warnings", [])[seen:])  # main() prints the error after them
         raise
-    _warn(name, checked.warnings[seen:])
+    _warn(name, result.warnings[seen:])
     _report_skipped(result.loaded.errors)
     return result
 

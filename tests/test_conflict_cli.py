@@ -236,7 +236,7 @@ def test_predictions_in_batches_equal_those_of_one_batch(crossing, monkeypatch):
         parts = conflicts.conflict_job(options)
         monkeypatch.undo()
         assert parts.predictions["aircraft_id"].nunique() == whole.predictions["aircraft_id"].nunique() >= 2
-        for name in ("predictions", "pc", "alerts", "losses", "warnings", "tracks"):
+        for name in ("predictions", "pc", "alerts", "losses", "warning_times", "tracks"):
             pd.testing.assert_frame_equal(getattr(parts, name), getattr(whole, name), check_exact=True)
 
 

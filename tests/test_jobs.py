@@ -99,6 +99,21 @@ def test_duplicate_inputs_are_skipped_with_a_warning(tmp_path):
     assert "copy.ast" in warning and "SHA-256" in warning
 
 
+def test_a_job_returns_its_warnings_and_an_error_carries_them(tmp_path):
+    """The result holds every warning of the run, validation's first; an error leaving a job (or a step of
+    one) carries those collected before it, earliest first, for the command to print ahead of the error."""
+    copy = tmp_path / "copy.ast"
+    copy.write_bytes(Path(RADAR).read_bytes())
+    options = QualityOptions(inputs=(RADAR, ADSB, str(copy)), sensors=SENSORS, callsign="MAS72")
+    checked = quality.validate(options)
+    result = quality.quality_job(options, checked=checked)
+    assert result.warnings[:1] == checked.warnings and "SHA-256" in checked.warnings[0]
+    with pytest.raises(common.JobError) as info, common.carrying(["job"]), common.carrying(["step"]) as said:
+        said.append("then")
+        raise common.JobError("no such aircraft")
+    assert info.value.job_warnings == ["job", "step", "then"]
+
+
 def test_correlate_job_returns_results_and_writes_only_when_asked(tmp_path):
     result = correlate.correlate_job(corr(date=None, quality=True, drop_jumps=True))
     assert [w.summary["window"] for w in result.run.windows] == [1, 2]
@@ -133,9 +148,9 @@ def test_warnings_implausible_site_height_and_time_running_backwards(tmp_path):
     early.write_bytes(encode_frame(48, frame.iloc[: len(frame) // 2]))
     late.write_bytes(encode_frame(48, frame.iloc[len(frame) // 2:]))
     result = correlate.correlate_job(corr(inputs=(str(late), str(early), ADSB)))
-    assert any("runs backwards" in w or "run backwards" in w for w in result.checked.warnings)
+    assert any("runs backwards" in w or "run backwards" in w for w in result.warnings)
     ordered = correlate.correlate_job(corr(inputs=(str(early), str(late), ADSB)))
-    assert not any("backwards" in w for w in ordered.checked.warnings)
+    assert not any("backwards" in w for w in ordered.warnings)
 
 
 def test_order_warning_is_per_data_source():

@@ -9,6 +9,8 @@ import datetime as dt
 import math
 import os
 import time
+from collections.abc import Iterable, Iterator
+from contextlib import contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -65,6 +67,19 @@ class JobError(RuntimeError):
     def __init__(self, message: str, status: int = 1):
         super().__init__(message)
         self.status = status
+
+
+@contextmanager
+def carrying(said: Iterable[str] = ()) -> Iterator[list[str]]:
+    """The list where a job (or a step of one) collects its warnings, starting with ``said``: an error
+    leaving the block carries them as ``job_warnings``, before those of the step that failed, so that the
+    command prints them ahead of the error (one may name its cause); a job that succeeds returns them."""
+    warnings = list(said)
+    try:
+        yield warnings
+    except Exception as exc:
+        exc.job_warnings = [*warnings, *getattr(exc, "job_warnings", [])]
+        raise
 
 
 # ---------------------------------------------------------------------------------------------------------
@@ -127,13 +142,13 @@ def _not_a_file(p: Path, noun: str, thing: str) -> str | None:
     return None
 
 
-def _inputs(paths: list[str | Path], warnings: list[str]) -> list[Path]:
-    """Readable input files; the same content given twice is skipped with a warning."""
+def _inputs(paths: list[str | Path]) -> tuple[list[Path], list[str]]:
+    """Readable input files, and a warning for each skipped because its content was given before."""
     if not paths:
         raise OptionError("no input file given")
     for p in paths:
         nonempty_path("input", p)
-    out, seen = [], {}
+    out, seen, warnings = [], {}, []
     for p in map(Path, paths):
         problem = _not_a_file(p, "input", "a recording file")
         if problem:
@@ -146,7 +161,7 @@ def _inputs(paths: list[str | Path], warnings: list[str]) -> list[Path]:
             continue
         seen[digest] = p
         out.append(p)
-    return out
+    return out, warnings
 
 
 def output_path(name: str, path: str | Path | None, suffixes: tuple[str, ...]) -> Path | None:
@@ -248,9 +263,9 @@ class DecodingOptions:
     format: str | None = None
 
 
-def check_decoding(o: DecodingOptions, warnings: list[str]) -> tuple[list[Path], dict[int, str]]:
-    """The options every job shares (--format, --date, the inputs, --edition): the inputs to read and the
-    editions pinned; OptionError if bad."""
+def check_decoding(o: DecodingOptions) -> Checked:
+    """The options every job shares (--format, --date, the inputs, --edition): the inputs to read, the
+    editions pinned and the warnings about the inputs; OptionError if bad."""
     if o.format is not None and o.format not in FORMATS:
         raise OptionError(f"--format {o.format!r}: must be one of {', '.join(FORMATS)}")
     if o.date is not None:
@@ -263,7 +278,8 @@ def check_decoding(o: DecodingOptions, warnings: list[str]) -> tuple[list[Path],
     inputs = [o.inputs] if isinstance(o.inputs, str | Path) else list(o.inputs)  # one path is one input
     editions = o.editions if isinstance(o.editions, dict) else [o.editions] if isinstance(
         o.editions, str) else list(o.editions)  # {21: "0.26"} as asterix.read takes it, or "21=0.26"
-    return _inputs(inputs, warnings), _editions(editions)
+    paths, warnings = _inputs(inputs)
+    return Checked(paths, _editions(editions), warnings=warnings)
 
 
 @dataclass(frozen=True)
@@ -396,8 +412,10 @@ def _figures_beside(out: Path, sensors: pd.DataFrame, windows: int | None) -> li
 # Decoding the inputs
 
 
-def load_inputs(options: DecodingOptions, checked: Checked, progress: Progress | None) -> Loaded:
-    """Decode the inputs for measurements: only the columns build_measurements reads are decoded."""
+def load_inputs(options: DecodingOptions, checked: Checked, progress: Progress | None
+                ) -> tuple[Loaded, list[str]]:
+    """Decode the inputs for measurements (only the columns build_measurements reads), with the warnings
+    about them."""
     import warnings as python_warnings
 
     from msdc.asterix.errors import EditionWarning, UnreadableInput
@@ -411,14 +429,9 @@ def load_inputs(options: DecodingOptions, checked: Checked, progress: Progress |
     except UnreadableInput as exc:
         raise JobError(str(exc), 2) from exc
     spans = [time_spans(rec.frames, loaded.date) for rec in loaded.recordings]
-    checked.warnings += _empty_inputs(loaded)
-    checked.warnings += _wrong_editions(loaded)
-    checked.warnings += order_warnings(checked.inputs, spans)
-    checked.warnings += date_ignored(options, loaded.inputs)
-    checked.warnings += format_hints(options, loaded.inputs)
-    checked.warnings += impossible_positions(loaded.frames.get(21))
-    checked.warnings += loaded.warnings
-    return loaded
+    return loaded, [*_empty_inputs(loaded), *_wrong_editions(loaded), *order_warnings(checked.inputs, spans),
+                    *date_ignored(options, loaded.inputs), *format_hints(options, loaded.inputs),
+                    *impossible_positions(loaded.frames.get(21)), *loaded.warnings]
 
 
 def undated_warning(loaded: Loaded, outputs: str) -> list[str]:
@@ -478,12 +491,13 @@ def date_ignored(options: DecodingOptions, inputs: list[dict]) -> list[str]:
 
 
 def _load_measurements(options: AircraftOptions, checked: Checked, progress: Progress | None,
-                       stage: str, *, either: bool = False, columns=None) -> tuple[Loaded, pd.DataFrame]:
+                       stage: str, *, either: bool = False, columns=None
+                       ) -> tuple[Loaded, pd.DataFrame, list[str]]:
     """Decode the inputs chunk by chunk straight into radar and ADS-B measurements (load_measurements),
     with the user-facing errors for unreadable inputs, missing data and sensors (stray radar records are
     left out with a warning: model.sensors.stray_verdict). ``stage`` is the progress stage shown once the
     inputs are read (before a missing-data or missing-sensor error too). ``either`` (quality): one category
-    is enough, the other's absence is a warning saying which sheets stay empty."""
+    is enough, the other's absence is a warning saying which sheets stay empty. Returns the warnings too."""
     from msdc.asterix.errors import UnreadableInput
 
     try:
@@ -499,27 +513,28 @@ def _load_measurements(options: AircraftOptions, checked: Checked, progress: Pro
         raise _no_records(exc) from exc
     if progress:
         progress.stage(stage)
+    warnings = []
     if len(loaded.stray_radar):
         from msdc.pipeline.model.sensors import UnknownRadar, stray_verdict
 
         n_cat048 = sum(info["records"].get(48, 0) for info in loaded.inputs)
         try:
-            checked.warnings += stray_verdict(loaded.stray_radar, n_cat048, sensors_path(options))
+            warnings += stray_verdict(loaded.stray_radar, n_cat048, sensors_path(options))
         except UnknownRadar as exc:
             raise unknown_radar_error(exc.missing, sensors_path(options),
                                       leave_out="by giving the ADS-B recordings alone") from exc
-    checked.warnings += _empty_inputs(loaded)
-    checked.warnings += _wrong_editions(loaded, but=absent_categories(loaded))
-    checked.warnings += [f"no {name} (CAT{cat:03d}) records in the inputs{_all_failed(loaded, cat)}: "
-                         f"{QUALITY_WITHOUT[cat]}" for cat, name in ((48, "radar"), (21, "ADS-B"))
-                         if cat in absent_categories(loaded)]
-    checked.warnings += order_warnings(checked.inputs, loaded.spans)
-    checked.warnings += date_ignored(options, loaded.inputs)
-    checked.warnings += format_hints(options, loaded.inputs)
-    checked.warnings += loaded.warnings
-    checked.warnings += list(meas.attrs.get("coverage_warnings", ()))
-    checked.warnings += list(meas.attrs.get("identity_warnings", ()))
-    return loaded, meas
+    warnings += _empty_inputs(loaded)
+    warnings += _wrong_editions(loaded, but=absent_categories(loaded))
+    warnings += [f"no {name} (CAT{cat:03d}) records in the inputs{_all_failed(loaded, cat)}: "
+                 f"{QUALITY_WITHOUT[cat]}" for cat, name in ((48, "radar"), (21, "ADS-B"))
+                 if cat in absent_categories(loaded)]
+    warnings += order_warnings(checked.inputs, loaded.spans)
+    warnings += date_ignored(options, loaded.inputs)
+    warnings += format_hints(options, loaded.inputs)
+    warnings += loaded.warnings
+    warnings += list(meas.attrs.get("coverage_warnings", ()))
+    warnings += list(meas.attrs.get("identity_warnings", ()))
+    return loaded, meas, warnings
 
 
 def _no_records(exc: NoRecords) -> JobError:
@@ -603,40 +618,45 @@ def _all_failed(loaded: Loaded, cat: int) -> str:
 
 def marked_measurements(options: AircraftOptions, checked: Checked, progress: Progress | None, stage: str,
                         *, split_adsb: bool = False, either: bool = False, columns=None,
-                        flags: list[str] | None = None) -> tuple[Loaded, pd.DataFrame]:
+                        flags: list[str] | None = None) -> tuple[Loaded, pd.DataFrame, list[str]]:
     """The inputs and their measurements with the duplicate and jump flags (once per job; correlate counts
-    each window's jumps); decoded columns are held one chunk at a time (see _load_measurements).
-    ``stage`` is the progress stage shown once the inputs are read; ``columns`` and ``flags``: only those
-    measurement columns and jump columns (every one when None)."""
+    each window's jumps), and the warnings about them; decoded columns are held one chunk at a time (see
+    _load_measurements). ``stage`` is the progress stage shown once the inputs are read; ``columns`` and
+    ``flags``: only those measurement columns and jump columns (every one when None)."""
     from msdc.pipeline.model.marks import mark_once
 
-    loaded, meas = _load_measurements(options, checked, progress, stage, either=either, columns=columns)
+    loaded, meas, warnings = _load_measurements(options, checked, progress, stage, either=either,
+                                                columns=columns)
     meas = mark_once(meas, split_adsb=split_adsb, flags=flags)
     release_free_memory()
-    return loaded, meas
+    return loaded, meas, warnings
 
 
 def tracker_inputs(options: TrackOptions, checked: Checked, progress: Progress | None, times: str
-                   ) -> tuple[Loaded, pd.DataFrame]:
-    """What track and conflicts track: the inputs decoded (their decoded frames then freed) and the
-    measurements of tracker_measurements, with the site and undated warnings (``times``: what an undated
-    run places on 1970-01-01)."""
+                   ) -> tuple[Loaded, pd.DataFrame, list[str]]:
+    """What track and conflicts track: the inputs decoded (their decoded frames then freed), the
+    measurements of tracker_measurements, and the warnings about them with the site and undated warnings
+    (``times``: what an undated run places on 1970-01-01)."""
     from msdc.pipeline.model.site_check import site_warnings
 
-    if progress:
-        progress.stage("Processing data files")
-    loaded = load_inputs(options, checked, progress)
-    if progress:
-        progress.stage("Tracking")
-    meas = tracker_measurements(loaded, checked, options)
-    checked.warnings += site_warnings(meas, checked.sensors, str(sensors_path(options)))
-    checked.warnings += undated_warning(loaded, times)
+    with carrying() as warnings:
+        if progress:
+            progress.stage("Processing data files")
+        loaded, said = load_inputs(options, checked, progress)
+        warnings += said
+        if progress:
+            progress.stage("Tracking")
+        meas, said = tracker_measurements(loaded, checked, options)
+    warnings += said
+    warnings += site_warnings(meas, checked.sensors, str(sensors_path(options)))
+    warnings += undated_warning(loaded, times)
     loaded.drop_frames()  # the measurements hold what tracking needs: a day's decoded frames are ~0.5 GB
-    return loaded, meas
+    return loaded, meas, warnings
 
 
-def tracker_measurements(loaded, checked: Checked, options: TrackOptions) -> pd.DataFrame:
-    """Measurements of the requested sources (one of them must be present), repeated reports dropped."""
+def tracker_measurements(loaded, checked: Checked, options: TrackOptions) -> tuple[pd.DataFrame, list[str]]:
+    """Measurements of the requested sources (one of them must be present), repeated reports dropped, and
+    the warnings about them (stray radar records, coverage, identity)."""
     import warnings as python_warnings
 
     from msdc.pipeline.model.dedup import duplicate_mask
@@ -663,18 +683,18 @@ def tracker_measurements(loaded, checked: Checked, options: TrackOptions) -> pd.
         radar, stray = declared_radar(radar, checked.sensors, sensors_path(options))
     except UnknownRadar as exc:
         raise unknown_radar_error(exc.missing, sensors_path(options)) from exc
-    checked.warnings += stray
-    try:
-        with python_warnings.catch_warnings():  # load_inputs has said it, naming each file
-            python_warnings.simplefilter("ignore", OffEarthWarning)
-            python_warnings.simplefilter("ignore", OutOfCoverageWarning)  # said below, from attrs
-            python_warnings.simplefilter("ignore", IdentityWarning)  # said below, from attrs
-            meas = build_measurements(radar, adsb, checked.sensors, date=loaded.date,
-                                      adsb_sigma_m=options.adsb_sigma_m)
-    except UnknownRadar as exc:
-        raise unknown_radar_error(exc.missing, sensors_path(options)) from exc
-    checked.warnings += list(meas.attrs.get("coverage_warnings", ()))
-    checked.warnings += list(meas.attrs.get("identity_warnings", ()))
+    with carrying(stray) as warnings:
+        try:
+            with python_warnings.catch_warnings():  # load_inputs has said it, naming each file
+                python_warnings.simplefilter("ignore", OffEarthWarning)
+                python_warnings.simplefilter("ignore", OutOfCoverageWarning)  # said below, from attrs
+                python_warnings.simplefilter("ignore", IdentityWarning)  # said below, from attrs
+                meas = build_measurements(radar, adsb, checked.sensors, date=loaded.date,
+                                          adsb_sigma_m=options.adsb_sigma_m)
+        except UnknownRadar as exc:
+            raise unknown_radar_error(exc.missing, sensors_path(options)) from exc
+    warnings += list(meas.attrs.get("coverage_warnings", ()))
+    warnings += list(meas.attrs.get("identity_warnings", ()))
     from msdc.pipeline.track.associate import join_by_track_number
 
     meas, joined = join_by_track_number(meas, max_gap_s=float(options.max_coast_s))
@@ -683,7 +703,7 @@ def tracker_measurements(loaded, checked: Checked, options: TrackOptions) -> pd.
     out = meas[~dup & known].reset_index(drop=True)
     out.attrs["joined_by_track_number"] = joined
     out.attrs["unidentified"] = int((~dup & ~known).sum())
-    return out
+    return out, warnings
 
 
 # ---------------------------------------------------------------------------------------------------------

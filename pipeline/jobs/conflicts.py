@@ -27,6 +27,7 @@ from msdc.pipeline.jobs.common import (
     JobError,
     OptionError,
     TrackOptions,
+    carrying,
     check_decoding,
     check_figures_dir,
     check_number,
@@ -93,9 +94,7 @@ def parse_horizons(value) -> tuple[float, ...]:
 
 def validate(options: ConflictOptions) -> Checked:
     """Check every option, the sensor file and the output paths before any decoding; OptionError if bad."""
-    warnings: list[str] = []
-    inputs, editions = check_decoding(options, warnings)
-    checked = Checked(inputs, editions, warnings=warnings)
+    checked = check_decoding(options)
     step = check_tracking(options)
     horizons = parse_horizons(options.horizons_s)
     for h in horizons:
@@ -152,12 +151,13 @@ class ConflictJobResult:
     pc: pd.DataFrame  # time, aircraft_a, aircraft_b, horizon_s, pc, horizontal_nm, vertical_ft
     alerts: pd.DataFrame  # alert events with loss_start and false_alert
     losses: pd.DataFrame
-    warnings: pd.DataFrame
+    warning_times: pd.DataFrame  # per loss and horizon: how long before the loss an alert was raised
     parameters: dict
     loaded: object
     counts: dict = field(default_factory=dict)
     predictions: pd.DataFrame | None = None  # predict_tracks' frame (for the figures)
     noise: pd.DataFrame | None = None  # --noise estimate or timing: declared and estimated sigmas
+    warnings: list[str] = field(default_factory=list)  # the run's, validation's first
 
 
 def conflict_job(options: ConflictOptions, *, progress: Progress | None = None,
@@ -176,57 +176,63 @@ def conflict_job(options: ConflictOptions, *, progress: Progress | None = None,
     checked = checked or validate(options)
     horizons = parse_horizons(options.horizons_s)
     step = float(options.step_s)
-    loaded, meas = tracker_inputs(options, checked, progress, "the times of the alerts, losses and tracks")
-    check_output_rows(meas, options)
-    check_output_rows(meas, options, len(horizons), f"predictions ({len(horizons)} horizon(s) a grid row)",
-                      grid_only=True)  # predictions start from the grid rows only, not from the report times
-    noise = None
-    if options.noise in ESTIMATED:
-        meas, noise = estimated_noise(meas, checked.sensors, options)
-    result = track(meas, step_s=step, max_coast_s=float(options.max_coast_s), tpm=options.tpm)
-    tracks = result.tracks
-    if tracks.empty:
-        raise JobError(untrackable(meas))
-    grid_at = np.flatnonzero(on_grid(tracks, step))  # the tracker's report-time rows are not the grid
-    plane = Plane.around(tracks["latitude"].to_numpy(float), tracks["longitude"].to_numpy(float))
-    epoch, tracker_parameters = result.epoch, result.parameters
-    del result
-    # the grid rows are what follows needs: the full table (~0.35 GB on a day at 1 s) freed as they are taken
-    grid = _take_rows(tracks, grid_at)
-    del tracks, grid_at
-    if progress:
-        progress.stage("Predicting and computing PC")
-    predictions = _predictions(meas, epoch, plane, horizons, options)
-    tol = options.vertical_tolerance_ft
-    pc = pair_probabilities(predictions, options.radius_nm, options.vertical_ft, method=options.method,
-                            vertical_tolerance_ft=tol)
-    grid["on_surface"], by_speed = on_surface(grid)
-    exclude = options.surface == "exclude"
-    kept = "airborne" if exclude else "all"
-    # both modes' tables are counted, so that the terminal can say what the other would give
-    lost = losses_by_pairs(grid, options.radius_nm, options.vertical_ft, tol,
-                           kinds=("airborne", "all", "surface"), step_s=step)
-    losses = lost[kept]
-    at_surface = surface_pairs(pc, grid)
-    both = {"airborne": alert_events(pc[~at_surface], options.threshold, step_s=step),
-            "all": alert_events(pc, options.threshold, step_s=step)}
-    events = both[kept]
-    alerts = closest_approach(classify_alerts(events, losses), grid)
-    warn = warning_times(losses, events, horizons)
-    counts = {"aircraft": int(grid["aircraft_id"].nunique()), "losses": len(losses),
-              "alerts": len(alerts), "false_alerts": int(alerts["false_alert"].sum()) if len(alerts) else 0,
-              "missed": {f"{h:g}": int(warn.loc[warn["horizon_s"] == h, "warning_s"].isna().sum())
-                         for h in horizons} if len(warn) else {f"{h:g}": 0 for h in horizons},
-              "surface": _surface_counts(grid, by_speed, at_surface, lost, both, options, pc)}
-    params = {**run_parameters(options, loaded, started, command), **tracker_parameters,
-              "horizons_s": list(horizons), "radius_nm": options.radius_nm,
-              "vertical_ft": options.vertical_ft, "vertical_tolerance_ft": tol,
-              "threshold": options.threshold, "method": options.method,
-              "vertical": options.vertical, "noise": options.noise, "surface": options.surface,
-              "surface_speed_kt": SURFACE_SPEED_KT,
-              "sources": list(parse_sources(options.sources))}
-    return ConflictJobResult(options, checked, grid, pc, alerts, losses, warn, params, loaded, counts,
-                             predictions, noise)
+    with carrying(checked.warnings) as warnings:
+        loaded, meas, said = tracker_inputs(options, checked, progress,
+                                            "the times of the alerts, losses and tracks")
+        warnings += said
+        check_output_rows(meas, options)
+        # predictions start from the grid rows only, not from the report times
+        check_output_rows(meas, options, len(horizons),
+                          f"predictions ({len(horizons)} horizon(s) a grid row)", grid_only=True)
+        noise = None
+        if options.noise in ESTIMATED:
+            meas, noise = estimated_noise(meas, checked.sensors, options)
+        result = track(meas, step_s=step, max_coast_s=float(options.max_coast_s), tpm=options.tpm)
+        tracks = result.tracks
+        if tracks.empty:
+            raise JobError(untrackable(meas))
+        grid_at = np.flatnonzero(on_grid(tracks, step))  # the tracker's report-time rows are not the grid
+        plane = Plane.around(tracks["latitude"].to_numpy(float), tracks["longitude"].to_numpy(float))
+        epoch, tracker_parameters = result.epoch, result.parameters
+        del result
+        # the grid rows are what follows needs: the full table (~0.35 GB on a day at 1 s) freed as they are
+        # taken
+        grid = _take_rows(tracks, grid_at)
+        del tracks, grid_at
+        if progress:
+            progress.stage("Predicting and computing PC")
+        predictions = _predictions(meas, epoch, plane, horizons, options)
+        tol = options.vertical_tolerance_ft
+        pc = pair_probabilities(predictions, options.radius_nm, options.vertical_ft, method=options.method,
+                                vertical_tolerance_ft=tol)
+        grid["on_surface"], by_speed = on_surface(grid)
+        exclude = options.surface == "exclude"
+        kept = "airborne" if exclude else "all"
+        # both modes' tables are counted, so that the terminal can say what the other would give
+        lost = losses_by_pairs(grid, options.radius_nm, options.vertical_ft, tol,
+                               kinds=("airborne", "all", "surface"), step_s=step)
+        losses = lost[kept]
+        at_surface = surface_pairs(pc, grid)
+        both = {"airborne": alert_events(pc[~at_surface], options.threshold, step_s=step),
+                "all": alert_events(pc, options.threshold, step_s=step)}
+        events = both[kept]
+        alerts = closest_approach(classify_alerts(events, losses), grid)
+        warn = warning_times(losses, events, horizons)
+        counts = {"aircraft": int(grid["aircraft_id"].nunique()), "losses": len(losses),
+                  "alerts": len(alerts),
+                  "false_alerts": int(alerts["false_alert"].sum()) if len(alerts) else 0,
+                  "missed": {f"{h:g}": int(warn.loc[warn["horizon_s"] == h, "warning_s"].isna().sum())
+                             for h in horizons} if len(warn) else {f"{h:g}": 0 for h in horizons},
+                  "surface": _surface_counts(grid, by_speed, at_surface, lost, both, options, pc)}
+        params = {**run_parameters(options, loaded, started, command), **tracker_parameters,
+                  "horizons_s": list(horizons), "radius_nm": options.radius_nm,
+                  "vertical_ft": options.vertical_ft, "vertical_tolerance_ft": tol,
+                  "threshold": options.threshold, "method": options.method,
+                  "vertical": options.vertical, "noise": options.noise, "surface": options.surface,
+                  "surface_speed_kt": SURFACE_SPEED_KT,
+                  "sources": list(parse_sources(options.sources))}
+        return ConflictJobResult(options, checked, grid, pc, alerts, losses, warn, params, loaded, counts,
+                                 predictions, noise, warnings)
 
 
 def _surface_counts(grid: pd.DataFrame, by_speed: np.ndarray, at_surface: np.ndarray, lost: dict,
@@ -300,7 +306,7 @@ def summary(result: ConflictJobResult) -> dict:
 
     doc = {"parameters": result.parameters, "inputs": result.loaded.inputs, "counts": result.counts,
            "alerts": records(result.alerts), "losses": records(result.losses),
-           "warning_times": records(result.warnings)}
+           "warning_times": records(result.warning_times)}
     if result.noise is not None:
         doc["noise"] = {"passes": result.noise.attrs.get("passes"), "sensors": records(result.noise)}
     return doc
@@ -327,8 +333,8 @@ def text(result: ConflictJobResult) -> str:
                      "and surface samples is one with include)")
     if not c["losses"] and not c["alerts"]:
         lines.append("no loss of separation and no alert: the tables are written empty, with their headers")
-    if len(result.warnings):
-        w = result.warnings.groupby("horizon_s")["warning_s"]
+    if len(result.warning_times):
+        w = result.warning_times.groupby("horizon_s")["warning_s"]
         for h, s in w:
             ahead = int((s > 0).sum())
             lines.append(f"horizon {h:g} s: {ahead} of {len(s)} loss(es) alerted in advance "
@@ -363,11 +369,11 @@ def write_conflicts(result: ConflictJobResult) -> dict[str, Path]:
         extra = companion_paths(out)
         targets.update(extra)
         writers.append((extra["losses"], lambda p: _csv(result.losses, p)))
-        writers.append((extra["warnings"], lambda p: _csv(result.warnings, p)))
+        writers.append((extra["warnings"], lambda p: _csv(result.warning_times, p)))
     else:
         targets["workbook"] = out
-        writers.append((out, lambda p: write_conflict_workbook(result.alerts, result.losses, result.warnings,
-                                                               result.parameters, p)))
+        writers.append((out, lambda p: write_conflict_workbook(result.alerts, result.losses,
+                                                               result.warning_times, result.parameters, p)))
     if js is not None:
         targets["json"] = js
         writers.append((js, lambda p: p.write_text(json.dumps(summary(result), indent=1, default=str))))

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import os
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -22,6 +22,7 @@ from msdc.pipeline.jobs.common import (
     Checked,
     JobError,
     OptionError,
+    carrying,
     check_aircraft,
     check_decoding,
     check_integer,
@@ -67,9 +68,7 @@ def validate(options: CorrelateOptions) -> Checked:
     """Check every option, the sensor file and the output paths, before any decoding; OptionError if bad."""
     from msdc.pipeline.report.tables import TABLE_FILES, TABLE_MODES, parquet_path
 
-    warnings: list[str] = []
-    inputs, editions = check_decoding(options, warnings)
-    checked = Checked(inputs, editions, warnings=warnings)
+    checked = check_decoding(options)
     check_aircraft(options)
     from msdc.pipeline.correlate.correlation import PAIRS
 
@@ -104,7 +103,7 @@ def validate(options: CorrelateOptions) -> Checked:
 @dataclass
 class CorrelateResult:
     """A correlation run, the measurements it used (the columns ``correlate_columns`` names), the quality
-    result (with ``quality``) and warnings."""
+    result (with ``quality``) and the run's warnings (validation's first)."""
 
     options: CorrelateOptions
     checked: Checked
@@ -112,6 +111,7 @@ class CorrelateResult:
     measurements: pd.DataFrame
     loaded: Loaded
     quality: QualityResult | None = None
+    warnings: list[str] = field(default_factory=list)
 
 
 def _filtered_away(exc, meas_all: pd.DataFrame, options: CorrelateOptions) -> str | None:
@@ -172,48 +172,50 @@ def correlate_job(options: CorrelateOptions, *, progress: Progress | None = None
 
     started = time.monotonic()
     checked = checked or validate(options)
-    if progress:
-        progress.stage("Processing data files")
-    columns = correlate_columns(options)
-    loaded, meas_all = marked_measurements(options, checked, progress, "Pre-processing data",
-                                           split_adsb=options.split_adsb, columns=columns,
-                                           flags=None if options.quality or columns is None else ["jump"])
-    meas, removed = apply_filters(meas_all, drop_jumps=options.drop_jumps, min_nic=options.min_nic,
-                                  min_nacp=options.min_nacp)
-    if progress:  # the thesis tool's stage names
-        progress.stage("Slotting data")
-        progress.stage("Correlating data")
-    try:
-        run = correlate(meas, callsign=options.callsign, address=options.address,
-                        all_aircraft=options.all_aircraft, slot_s=options.slot_s, gap_s=options.gap_s,
-                        pairs=options.pairs, split_adsb=options.split_adsb, fill=options.fill)
-    except NoSuchAircraft as exc:
-        raise JobError(_filtered_away(exc, meas_all, options) or str(exc)) from exc
-    except NoOverlap as exc:
-        raise JobError(str(exc)) from exc
-    except TooManySlots as exc:
-        raise OptionError(f"--slot {options.slot_s:g}: the overlap windows would need more than "
-                          f"{exc.limit:,} slots (at least {exc.slots:,}); use a longer --slot") from exc
-    asked = {"jumps": options.drop_jumps, "nic_below_min": options.min_nic is not None,
-             "nic_missing_kept": options.min_nic is not None,
-             "nacp_below_min": options.min_nacp is not None,
-             "nacp_missing_kept": options.min_nacp is not None}
-    run.inputs = loaded.inputs
-    run.filters = {k: v for k, v in removed.items() if asked.get(k, True)}
-    checked.warnings += filter_warnings(removed, options.min_nic, options.min_nacp)
-    run.parameters = {**run.parameters, **run_parameters(options, loaded, started, command),
-                      "filters": {"drop_jumps": options.drop_jumps, "min_nic": options.min_nic,
-                                  "min_nacp": options.min_nacp, "removed": run.filters}}
-    checked.warnings += far_separations([w.summary for w in run.windows], meas, checked.sensors,
-                                        str(options.sensors))
-    checked.warnings += _nothing_correlated(run, options)
-    result = CorrelateResult(options, checked, run, meas, loaded)
-    if options.quality:
+    with carrying(checked.warnings) as warnings:
         if progress:
-            progress.stage("Analysing data quality")
-        result.quality = quality_step(meas_all, checked.sensors, options)
-        run.extra_sheets.update(result.quality.sheets)
-    return result
+            progress.stage("Processing data files")
+        columns = correlate_columns(options)
+        loaded, meas_all, said = marked_measurements(
+            options, checked, progress, "Pre-processing data", split_adsb=options.split_adsb, columns=columns,
+            flags=None if options.quality or columns is None else ["jump"])
+        warnings += said
+        meas, removed = apply_filters(meas_all, drop_jumps=options.drop_jumps, min_nic=options.min_nic,
+                                      min_nacp=options.min_nacp)
+        if progress:  # the thesis tool's stage names
+            progress.stage("Slotting data")
+            progress.stage("Correlating data")
+        try:
+            run = correlate(meas, callsign=options.callsign, address=options.address,
+                            all_aircraft=options.all_aircraft, slot_s=options.slot_s, gap_s=options.gap_s,
+                            pairs=options.pairs, split_adsb=options.split_adsb, fill=options.fill)
+        except NoSuchAircraft as exc:
+            raise JobError(_filtered_away(exc, meas_all, options) or str(exc)) from exc
+        except NoOverlap as exc:
+            raise JobError(str(exc)) from exc
+        except TooManySlots as exc:
+            raise OptionError(f"--slot {options.slot_s:g}: the overlap windows would need more than "
+                              f"{exc.limit:,} slots (at least {exc.slots:,}); use a longer --slot") from exc
+        asked = {"jumps": options.drop_jumps, "nic_below_min": options.min_nic is not None,
+                 "nic_missing_kept": options.min_nic is not None,
+                 "nacp_below_min": options.min_nacp is not None,
+                 "nacp_missing_kept": options.min_nacp is not None}
+        run.inputs = loaded.inputs
+        run.filters = {k: v for k, v in removed.items() if asked.get(k, True)}
+        warnings += filter_warnings(removed, options.min_nic, options.min_nacp)
+        run.parameters = {**run.parameters, **run_parameters(options, loaded, started, command),
+                          "filters": {"drop_jumps": options.drop_jumps, "min_nic": options.min_nic,
+                                      "min_nacp": options.min_nacp, "removed": run.filters}}
+        warnings += far_separations([w.summary for w in run.windows], meas, checked.sensors,
+                                    str(options.sensors))
+        warnings += _nothing_correlated(run, options)
+        result = CorrelateResult(options, checked, run, meas, loaded, warnings=warnings)
+        if options.quality:
+            if progress:
+                progress.stage("Analysing data quality")
+            result.quality = quality_step(meas_all, checked.sensors, options)
+            run.extra_sheets.update(result.quality.sheets)
+        return result
 
 
 def _nothing_correlated(run: CorrelationRun, options: CorrelateOptions) -> list[str]:

@@ -40,9 +40,7 @@ class DecodeOptions(DecodingOptions):
 
 def validate(options: DecodeOptions) -> Checked:
     """Check every option and the output paths before any decoding; OptionError if bad."""
-    warnings: list[str] = []
-    inputs, editions = check_decoding(options, warnings)
-    checked = Checked(inputs, editions, warnings=warnings)
+    checked = check_decoding(options)
     check_number("--chunk-mb", options.chunk_mb, *CHUNK_RANGE_MB, " MB")
     checked.output = output_path("-o", options.output, (".csv", ".parquet"))
     bad = [c for c in options.categories if c not in (21, 48)]

@@ -9,7 +9,7 @@ and the workbook with its figures, all or nothing; ``text`` is the terminal's su
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -19,6 +19,7 @@ from msdc.pipeline.jobs.common import (
     Checked,
     OptionError,
     absent_categories,
+    carrying,
     check_aircraft,
     check_decoding,
     check_workbook,
@@ -47,9 +48,7 @@ class QualityOptions(AircraftOptions):
 
 def validate(options: QualityOptions) -> Checked:
     """Check every option, the sensor file and the output paths, before any decoding; OptionError if bad."""
-    warnings: list[str] = []
-    inputs, editions = check_decoding(options, warnings)
-    checked = Checked(inputs, editions, warnings=warnings)
+    checked = check_decoding(options)
     check_aircraft(options)
     if options.reference not in ("adsb", "track"):
         raise OptionError(f"--reference {options.reference!r}: must be adsb or track")
@@ -60,13 +59,15 @@ def validate(options: QualityOptions) -> Checked:
 
 @dataclass
 class QualityJobResult:
-    """Quality tables and radar accuracy of a run, with its parameters and inputs."""
+    """Quality tables and radar accuracy of a run, with its parameters, inputs and warnings (validation's
+    first)."""
 
     options: QualityOptions
     checked: Checked
     quality: QualityResult
     parameters: dict
     loaded: Loaded
+    warnings: list[str] = field(default_factory=list)
 
 
 def quality_columns(options: QualityOptions) -> list[str]:
@@ -87,17 +88,20 @@ def quality_job(options: QualityOptions, *, progress: Progress | None = None, ch
 
     started = time.monotonic()
     checked = checked or validate(options)
-    if progress:
-        progress.stage("Processing data files")
-    loaded, meas = marked_measurements(options, checked, progress, "Analysing data quality", either=True,
-                                       columns=quality_columns(options))
-    absent = absent_categories(loaded)
-    checked.warnings += site_warnings(meas, checked.sensors, str(sensors_path(options)))
-    quality = quality_step(meas, checked.sensors, options)
-    params = {**run_parameters(options, loaded, started, command), "callsign": options.callsign,
-              "address": options.address, "gap_s": options.gap_s,
-              "notes": [f"no CAT{cat:03d} records in the inputs: {QUALITY_WITHOUT[cat]}" for cat in absent]}
-    return QualityJobResult(options, checked, quality, params, loaded)
+    with carrying(checked.warnings) as warnings:
+        if progress:
+            progress.stage("Processing data files")
+        loaded, meas, said = marked_measurements(options, checked, progress, "Analysing data quality",
+                                                 either=True, columns=quality_columns(options))
+        warnings += said
+        absent = absent_categories(loaded)
+        warnings += site_warnings(meas, checked.sensors, str(sensors_path(options)))
+        quality = quality_step(meas, checked.sensors, options)
+        params = {**run_parameters(options, loaded, started, command), "callsign": options.callsign,
+                  "address": options.address, "gap_s": options.gap_s,
+                  "notes": [f"no CAT{cat:03d} records in the inputs: {QUALITY_WITHOUT[cat]}"
+                            for cat in absent]}
+        return QualityJobResult(options, checked, quality, params, loaded, warnings)
 
 
 def write_quality(result: QualityJobResult) -> dict[str, Path]:

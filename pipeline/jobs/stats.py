@@ -33,9 +33,7 @@ class StatsOptions(DecodingOptions):
 
 def validate(options: StatsOptions) -> Checked:
     """Check the inputs, editions and --chunk-mb before any decoding; OptionError if bad."""
-    warnings: list[str] = []
-    inputs, editions = check_decoding(options, warnings)
-    checked = Checked(inputs, editions, warnings=warnings)
+    checked = check_decoding(options)
     check_number("--chunk-mb", options.chunk_mb, *CHUNK_RANGE_MB, " MB")
     return checked
 
@@ -106,12 +104,9 @@ def stats_job(options: StatsOptions, *, progress: Progress | None = None) -> Sta
         shift = pd.Timestamp(min(dates), tz="UTC") - UNDATED_DAY
         spans = [s if info["date"] else {c: (lo + shift, hi + shift) for c, (lo, hi) in s.items()}
                  for info, s in zip(inputs, spans, strict=True)]
-    checked.warnings += edition_notes.warnings(failed)
-    checked.warnings += order_warnings(checked.inputs, spans)
-    checked.warnings += date_ignored(options, inputs)
-    checked.warnings += format_hints(options, inputs)
-    checked.warnings += early_start
-    return StatsResult(acc.tables(), inputs, checked.warnings)
+    warnings = [*checked.warnings, *edition_notes.warnings(failed), *order_warnings(checked.inputs, spans),
+                *date_ignored(options, inputs), *format_hints(options, inputs), *early_start]
+    return StatsResult(acc.tables(), inputs, warnings)
 
 
 __all__ = ["StatsOptions", "StatsResult", "stats_job", "validate"]

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import json
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -23,6 +23,7 @@ from msdc.pipeline.jobs.common import (
     JobError,
     OptionError,
     TrackOptions,
+    carrying,
     check_aircraft,
     check_decoding,
     check_figures_dir,
@@ -85,9 +86,7 @@ def validate(options: TrackOptions, *, require_output: bool = False) -> Checked:
     whatever is written."""
     from msdc.pipeline.track.plane import SMOOTHERS
 
-    warnings: list[str] = []
-    inputs, editions = check_decoding(options, warnings)
-    checked = Checked(inputs, editions, warnings=warnings)
+    checked = check_decoding(options)
     check_aircraft(options)
     check_tracking(options)
     if options.smoother not in SMOOTHERS:
@@ -118,6 +117,7 @@ class TrackJobResult:
     parameters: dict
     loaded: object  # the inputs, editions and date; its decoded frames are freed once measurements are built
     noise: pd.DataFrame | None = None  # --noise estimate: per sensor and component, declared and estimated
+    warnings: list[str] = field(default_factory=list)  # the run's, validation's first
 
 
 def _select(meas: pd.DataFrame, options: TrackOptions) -> pd.DataFrame:
@@ -148,30 +148,31 @@ def track_job(options: TrackOptions, *, progress: Progress | None = None, checke
 
     started = time.monotonic()
     checked = checked or validate(options)
-    loaded, meas = tracker_inputs(options, checked, progress, "the tracks' times")
-    joined = int(meas.attrs.get("joined_by_track_number", 0))
-    unidentified = int(meas.attrs.get("unidentified", 0))
-    if unidentified and options.all_aircraft:
-        checked.warnings.append(f"{unidentified} report(s) with no identity (no address, call sign or "
-                                "Mode 3/A code, nor a radar track number joining them to an aircraft), "
-                                "not tracked")
-    meas = _select(meas, options)
-    check_output_rows(meas, options)
-    noise = None
-    if options.noise in ESTIMATED:
-        meas, noise = estimated_noise(meas, checked.sensors, options)
-    result = track(meas, step_s=float(options.step_s), max_coast_s=float(options.max_coast_s),
-                   tpm=options.tpm, smooth=options.smooth, smoother=options.smoother)
-    if result.tracks.empty:
-        raise JobError(untrackable(meas))
-    labels = aircraft_labels(meas)
-    tracks = with_labels(result.tracks, labels)
-    params = {**run_parameters(options, loaded, started, command), **result.parameters,
-              "sources": list(parse_sources(options.sources)), "callsign": options.callsign,
-              "address": options.address, "all": bool(options.all_aircraft),
-              "radar_plots_joined_by_track_number": joined, "unidentified_reports_not_tracked": unidentified,
-              "noise": options.noise}
-    return TrackJobResult(options, checked, result, tracks, meas, labels, params, loaded, noise)
+    with carrying(checked.warnings) as warnings:
+        loaded, meas, said = tracker_inputs(options, checked, progress, "the tracks' times")
+        warnings += said
+        joined = int(meas.attrs.get("joined_by_track_number", 0))
+        unidentified = int(meas.attrs.get("unidentified", 0))
+        if unidentified and options.all_aircraft:
+            warnings.append(f"{unidentified} report(s) with no identity (no address, call sign or Mode 3/A "
+                            "code, nor a radar track number joining them to an aircraft), not tracked")
+        meas = _select(meas, options)
+        check_output_rows(meas, options)
+        noise = None
+        if options.noise in ESTIMATED:
+            meas, noise = estimated_noise(meas, checked.sensors, options)
+        result = track(meas, step_s=float(options.step_s), max_coast_s=float(options.max_coast_s),
+                       tpm=options.tpm, smooth=options.smooth, smoother=options.smoother)
+        if result.tracks.empty:
+            raise JobError(untrackable(meas))
+        labels = aircraft_labels(meas)
+        tracks = with_labels(result.tracks, labels)
+        params = {**run_parameters(options, loaded, started, command), **result.parameters,
+                  "sources": list(parse_sources(options.sources)), "callsign": options.callsign,
+                  "address": options.address, "all": bool(options.all_aircraft),
+                  "radar_plots_joined_by_track_number": joined,
+                  "unidentified_reports_not_tracked": unidentified, "noise": options.noise}
+        return TrackJobResult(options, checked, result, tracks, meas, labels, params, loaded, noise, warnings)
 
 
 def with_labels(tracks: pd.DataFrame, labels: pd.DataFrame) -> pd.DataFrame:
