@@ -15,12 +15,12 @@ _PUBLIC = {
     "iter_read": ("msdc.asterix", "iter_read"),
     "Recording": ("msdc.asterix", "Recording"),
     "encode": ("msdc.asterix.encode", "encode_frame"),
-    "decode_job": ("msdc.pipeline.jobs", "decode_job"),
-    "stats_job": ("msdc.pipeline.jobs", "stats_job"),
-    "correlate_job": ("msdc.pipeline.jobs", "correlate_job"),
-    "quality_job": ("msdc.pipeline.jobs", "quality_job"),
-    "track_job": ("msdc.pipeline.jobs_track", "track_job"),
-    "conflict_job": ("msdc.pipeline.jobs_conflict", "conflict_job"),
+    "decode_job": ("msdc.pipeline.jobs.decode", "decode_job"),
+    "stats_job": ("msdc.pipeline.jobs.stats", "stats_job"),
+    "correlate_job": ("msdc.pipeline.jobs.correlate", "correlate_job"),
+    "quality_job": ("msdc.pipeline.jobs.quality", "quality_job"),
+    "track_job": ("msdc.pipeline.jobs.track", "track_job"),
+    "conflict_job": ("msdc.pipeline.jobs.conflicts", "conflict_job"),
 }
 
 __all__ = sorted(_PUBLIC)

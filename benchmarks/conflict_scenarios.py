@@ -51,7 +51,8 @@ def main() -> None:
                 row["found_end"] = (loss["end"] - midnight).total_seconds()
                 row["min_nm"] = loss["min_horizontal_nm"]
             for h in HORIZONS:
-                w = r.warnings.loc[r.warnings["horizon_s"] == h, "warning_s"] if len(r.warnings) else []
+                times = r.warning_times
+                w = times.loc[times["horizon_s"] == h, "warning_s"] if len(times) else []
                 row[f"warn_{h:g}"] = float(w.iloc[0]) if len(w) else None
                 al = r.alerts[r.alerts["horizon_s"] == h] if len(r.alerts) else r.alerts
                 row[f"false_{h:g}"] = int(al["false_alert"].sum()) if len(al) else 0

@@ -1,5 +1,6 @@
-"""The ``msdc`` command: argparse over the jobs (pipeline.jobs); options are validated there, before any
-decoding, and every failure is one line on stderr with exit status 2 (usage) or 1 (data)."""
+"""The ``msdc`` command: argparse over the jobs, one module of pipeline.jobs per command, imported only when
+its command runs; options are validated there, before any decoding, and every failure is one line on stderr
+with exit status 2 (usage) or 1 (data)."""
 
 from __future__ import annotations
 
@@ -33,7 +34,7 @@ class _Lazy:
         return getattr(importlib.import_module(self._name), attr)
 
 
-jobs = _Lazy("msdc.pipeline.jobs")
+common = _Lazy("msdc.pipeline.jobs.common")  # the jobs' errors, caught in main()
 asterix_errors = _Lazy("msdc.asterix.errors")
 FORMATS = list(_FORMATS)
 
@@ -81,7 +82,6 @@ def _decoding_options(p: argparse.ArgumentParser) -> None:
     p.add_argument("--format", choices=FORMATS, help="container format (default: detected)")
 
 
-RAISED_SHOWN = 10  # aircraft listed on stdout whose sigma the per-aircraft guard raised; the JSON has all
 SENSORS_HELP = "sensor positions (TOML [[sensor]] tables)"
 SENSORS_OPTIONAL_HELP = ("sensor positions (TOML [[sensor]] tables); needed when radar plots are used, "
                          "not for ADS-B alone")
@@ -279,30 +279,21 @@ def _numba_without_scipy() -> None:
     context.refresh()  # nothing left to do when the first call succeeded
 
 
-SKIPPED_SHOWN = 20  # skipped blocks decode lists one per line, per input; the rest are counted
-
-
 def cmd_decode(args) -> int:
     """msdc decode: decode the inputs to CSV or Parquet, listing skipped blocks; the exit status."""
+    from msdc.pipeline.jobs import decode
+
     _numba_without_scipy()
     progress = Progress()
-    options = jobs.DecodeOptions(**_decoding(args), output=args.output, categories=tuple(args.category or ()),
-                                 strict=args.strict, chunk_mb=args.chunk_mb)
+    options = decode.DecodeOptions(**_decoding(args), output=args.output,
+                                   categories=tuple(args.category or ()), strict=args.strict,
+                                   chunk_mb=args.chunk_mb)
     try:
-        result = jobs.decode_job(options, on_chunk=lambda done, size, name: progress.bar(done, size, name))
+        result = decode.decode_job(options, on_chunk=lambda done, size, name: progress.bar(done, size, name))
     except asterix_errors.DecodeError as exc:
         raise CliError(f"strict: {exc}") from exc
-    for note in result.notes:
-        print(f"msdc: {note}", file=sys.stderr)
-    shown: dict[str, int] = {}
-    for path, offset, reason in result.skipped:
-        shown[path] = shown.get(path, 0) + 1
-        if shown[path] <= SKIPPED_SHOWN:
-            print(f"msdc: {path}: offset {offset}: {reason}", file=sys.stderr)
-    for path, n in shown.items():
-        if n > SKIPPED_SHOWN:
-            print(f"msdc: {path}: {n - SKIPPED_SHOWN} more skipped block(s) ('msdc stats' groups them by "
-                  "reason)", file=sys.stderr)
+    for line in result.notes + decode.skipped_lines(result):
+        print(f"msdc: {line}", file=sys.stderr)
     _warn("decode", result.warnings)  # after the skipped blocks: a wrong edition's advice stays in view
     if not result.outputs:
         for cat, n in sorted(result.counts.items()):
@@ -320,10 +311,12 @@ def cmd_decode(args) -> int:
 
 def cmd_stats(args) -> int:
     """msdc stats: what the inputs hold, printed as tables; the exit status."""
-    from msdc.pipeline.stats import format_stats
+    from msdc.pipeline.jobs import stats
+    from msdc.pipeline.quality.inventory import format_stats
 
     _numba_without_scipy()
-    result = jobs.stats_job(jobs.StatsOptions(**_decoding(args), chunk_mb=args.chunk_mb), progress=Progress())
+    options = stats.StatsOptions(**_decoding(args), chunk_mb=args.chunk_mb)
+    result = stats.stats_job(options, progress=Progress())
     _warn("stats", result.warnings)
     print(format_stats(result.tables), end="")
     for info in result.inputs:
@@ -337,12 +330,14 @@ def cmd_stats(args) -> int:
 
 def cmd_correlate(args) -> int:
     """msdc correlate: correlate radar against ADS-B and write the report; the exit status."""
+    from msdc.pipeline.jobs import correlate
+
     progress = Progress()
-    options = jobs.CorrelateOptions(
+    options = correlate.CorrelateOptions(
         **_aircraft(args), slot_s=args.slot, pairs=args.pairs, split_adsb=args.split_adsb,
         quality=args.quality, drop_jumps=args.drop_jumps, min_nic=args.min_nic, min_nacp=args.min_nacp,
         fill=args.fill, tables=args.tables)
-    prepared = jobs.prepare_correlation_writers(options)  # gets ready on the other core meanwhile
+    prepared = correlate.prepare_correlation_writers(options)  # gets ready on the other core meanwhile
     try:
         return _correlate(options, progress, prepared)
     finally:
@@ -351,8 +346,11 @@ def cmd_correlate(args) -> int:
 
 
 def _correlate(options, progress: Progress, prepared) -> int:
+    """Run the correlate job and write what it asks for, with ``prepared`` drawing the map."""
+    from msdc.pipeline.jobs import correlate
+
     _numba_without_scipy()
-    result = _run_job("correlate", jobs.validate, jobs.correlate_job, options, progress)
+    result = _run_job("correlate", correlate.validate, correlate.correlate_job, options, progress)
     for name, n in result.run.filters.items():
         print(f"filter {name}: {n} of the input's ADS-B reports", file=sys.stderr)
     from msdc.pipeline.report.summary import summary_table
@@ -360,12 +358,12 @@ def _correlate(options, progress: Progress, prepared) -> int:
     print(summary_table(result.run))
     if not options.quality:  # only --quality's figures read the measurements again; the other writers
         result.measurements = result.measurements.iloc[:0]  # need the run alone: the frame goes first
-    written = jobs.write_correlation(result, progress, prepared=prepared)
+    written = correlate.write_correlation(result, progress, prepared=prepared)
     if "json" in written:
         print(f"JSON summary: {written['json']}", file=sys.stderr)
     if "report" in written:
         print(f"Report: {written['report']}\nTrack figure: {written['figure']}", file=sys.stderr)
-        note = jobs.figure_windows_note(len(result.run.windows)) if options.quality else None
+        note = correlate.figure_windows_note(len(result.run.windows)) if options.quality else None
         _print_images(written)
         if note:
             print(f"Figures: {note}", file=sys.stderr)
@@ -377,11 +375,13 @@ def _correlate(options, progress: Progress, prepared) -> int:
 
 def cmd_quality(args) -> int:
     """msdc quality: sensor quality and radar accuracy and biases, written as a workbook; the exit status."""
+    from msdc.pipeline.jobs import quality
+
     _numba_without_scipy()
-    options = jobs.QualityOptions(**_aircraft(args), reference=args.reference)
-    result = _run_job("quality", jobs.validate, jobs.quality_job, options, Progress())
-    print(_quality_text(result.quality))
-    written = jobs.write_quality(result)
+    options = quality.QualityOptions(**_aircraft(args), reference=args.reference)
+    result = _run_job("quality", quality.validate, quality.quality_job, options, Progress())
+    print(quality.text(result))
+    written = quality.write_quality(result)
     if "json" in written:
         print(f"JSON: {written['json']}", file=sys.stderr)
     if "report" in written:
@@ -399,96 +399,39 @@ def _print_images(written: dict[str, Path]) -> None:
             print(f"  {path}", file=sys.stderr)
 
 
-def _quality_text(result) -> str:
-    """The per-sensor summary and the bias estimates, for the terminal."""
-    q = result.sheets["Quality"]
-    b = result.sheets["Radar biases"]
-    keep = [c for c in ("callsign", "address", "sensor", "sac", "sic", "reports", "duplicates_removed",
-                        "interval_median_s",
-                        "interval_p95_s", "speed_missing_or_zero_pct", "gaps", "jumps") if c in q]
-    bias_cols = [c for c in ("radar", "n_reports", "n_rejected", "n_overhead", "range_bias_m",
-                             "range_bias_se_m", "range_gain_ppm", "range_gain_se_ppm", "azimuth_bias_deg",
-                             "azimuth_bias_se_deg", "time_bias_s", "time_bias_se_s") if c in b]
-    from msdc.pipeline.report.summary import frame_text
-
-    text = "Quality:\n" + frame_text(q[keep]) + "\n\nRadar biases:\n"
-    text += frame_text(b[bias_cols]) if len(b) else "  no radar report matched to ADS-B"
-    note = b.attrs.get("note")
-    return text + (f"\n\nNote: {note}" if note else "")
-
-
 def cmd_track(args) -> int:
     """msdc track: fused tracks of the selected aircraft, written as Parquet or CSV; the exit status."""
-    from msdc.pipeline import jobs_track
+    from msdc.pipeline.jobs import track
 
-    options = jobs_track.TrackOptions(
+    options = track.TrackOptions(
         **_decoding(args), sensors=args.sensors, callsign=args.callsign, address=args.address,
         all_aircraft=args.all, output=args.output, json=args.json, figures=args.figures, step_s=args.step,
         max_coast_s=args.max_coast, smooth=args.smooth or args.smoother is not None,
         smoother=args.smoother or "rts", tpm=args.tpm, sources=args.sources, noise=args.noise,
         adsb_sigma_m=args.adsb_sigma)
-    result = _run_job("track", lambda o: jobs_track.validate(o, require_output=True), jobs_track.track_job,
-                      options, Progress())
-    print(_track_text(result))
-    for kind, path in jobs_track.write_tracks(result).items():
+    result = _run_job("track", lambda o: track.validate(o, require_output=True), track.track_job, options,
+                      Progress())
+    print(track.text(result))
+    for kind, path in track.write_tracks(result).items():
         print(f"{kind}: {path}", file=sys.stderr)
     return 0
 
 
-def _track_text(result) -> str:
-    """Per aircraft: span, updates, gated reports, coasted time; per sensor over every aircraft: aircraft,
-    reports, updates, gated, NIS mean (the per-aircraft split is in the JSON: a day of traffic would print
-    thousands of lines)."""
-    from msdc.pipeline import jobs_track
-
-    res = result.result
-    if res.aircraft.empty:
-        return "no track: no report with a usable position and covariance"
-    ac = res.aircraft.merge(result.labels, on="aircraft_id", how="left")
-    cols = [c for c in ("aircraft_id", "callsign", "segments", "reports", "updates", "gated", "invalid",
-                        "out_of_range", "tracked_s", "update_interval_s", "coasted_s") if c in ac]
-    text = ("Tracks:\n" + ac[cols].to_string(index=False, float_format=lambda v: f"{v:.1f}")
-            + "\n" + jobs_track.TRACK_LEGEND
-            + "\n\nSensors:\n" + jobs_track.sensor_totals(res.sensors).to_string(
-                index=False, float_format=lambda v: f"{v:.2f}"))
-    return text + _noise_text(result.noise)
-
-
-def _noise_text(noise) -> str:
-    """The declared and estimated sigmas of --noise estimate, or nothing."""
-    if noise is None or not len(noise):
-        return ""
-    cols = [c for c in ("sensor_id", "component", "motion", "unit", "declared_from", "declared_sigma",
-                        "estimated_sigma", "residuals", "estimated") if c in noise]
-    text = (f"\n\nMeasurement noise estimated from the residuals ({noise.attrs.get('passes')} passes):\n"
-            + noise[cols].to_string(index=False, float_format=lambda v: f"{v:.4g}"))
-    import pandas as pd
-
-    raised = pd.DataFrame(noise.attrs.get("aircraft", []))
-    if len(raised):
-        shown = raised.sort_values("estimated_sigma_m", ascending=False).head(RAISED_SHOWN)
-        more = len(raised) - len(shown)
-        text += (f"\n\nSigma raised for {len(raised)} aircraft: at its class's sigma over 1 % of the "
-                 "aircraft's own residuals lay beyond the gate:\n"
-                 + shown.to_string(index=False, float_format=lambda v: f"{v:.4g}")
-                 + (f"\n... and {more} more in the JSON summary" if more else ""))
-    return text
-
-
 def cmd_conflicts(args) -> int:
     """msdc conflicts: losses of separation and conflict alerts from the fused tracks; the exit status."""
-    from msdc.pipeline import jobs_conflict
+    from msdc.pipeline.jobs import conflicts
+    from msdc.pipeline.jobs.common import noise_text
 
-    options = jobs_conflict.ConflictOptions(
+    options = conflicts.ConflictOptions(
         **_decoding(args), sensors=args.sensors, output=args.output, json=args.json, step_s=args.step,
         max_coast_s=args.max_coast, tpm=args.tpm, horizons_s=args.horizon, radius_nm=args.radius_nm,
         vertical_ft=args.vertical_ft, vertical_tolerance_ft=args.vertical_tolerance_ft,
         threshold=args.threshold, method=args.method, vertical=args.vertical,
         surface=args.surface, figures=args.figures, noise=args.noise, adsb_sigma_m=args.adsb_sigma,
         sources=args.sources)
-    result = _run_job("conflicts", jobs_conflict.validate, jobs_conflict.conflict_job, options, Progress())
-    print(jobs_conflict.text(result) + _noise_text(result.noise))
-    for kind, path in jobs_conflict.write_conflicts(result).items():
+    result = _run_job("conflicts", conflicts.validate, conflicts.conflict_job, options, Progress())
+    print(conflicts.text(result) + noise_text(result.noise))
+    for kind, path in conflicts.write_conflicts(result).items():
         print(f"{kind}: {path}", file=sys.stderr)
     if args.figures is not None and not len(result.alerts):
         print(f"figures: none (no alert events), {args.figures} left as it was", file=sys.stderr)
@@ -496,18 +439,19 @@ def cmd_conflicts(args) -> int:
 
 
 def _run_job(name: str, validate, job, options, progress: Progress):
-    """Validate (warnings first), run the job, then print its later warnings and the skipped blocks. A job
-    that fails prints the warnings it collected before its error: one may name the cause (a first day of
-    plots before midnight explains "never overlap in time")."""
+    """Validate (warnings first), run the job, then print its later warnings (its result's, after
+    validation's) and the skipped blocks. A job that fails prints the warnings it collected before its error
+    (the error carries them: jobs.common.carrying): one may name the cause (a first day of plots before
+    midnight explains "never overlap in time")."""
     checked = validate(options)
     _warn(name, checked.warnings)
     seen = len(checked.warnings)
     try:
         result = job(options, progress=progress, checked=checked, command=" ".join(sys.argv[1:]) or name)
-    except (CliError, jobs.OptionError, jobs.JobError, asterix_errors.AsterixError, OSError):
-        _warn(name, checked.warnings[seen:])  # main() prints the error after them
+    except (CliError, common.OptionError, common.JobError, asterix_errors.AsterixError, OSError) as exc:
+        _warn(name, getattr(exc, "job_warnings", [])[seen:])  # main() prints the error after them
         raise
-    _warn(name, checked.warnings[seen:])
+    _warn(name, result.warnings[seen:])
     _report_skipped(result.loaded.errors)
     return result
 
@@ -521,7 +465,7 @@ def main(argv: list[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
     try:
         return COMMANDS[args.command](args)
-    except (CliError, jobs.OptionError, jobs.JobError) as exc:
+    except (CliError, common.OptionError, common.JobError) as exc:
         print(f"msdc {args.command}: {exc}", file=sys.stderr)
         return exc.status
     except asterix_errors.AsterixError as exc:

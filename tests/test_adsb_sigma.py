@@ -17,10 +17,10 @@ import pytest
 
 from fixtures.real_track_data import REAL
 from msdc.asterix.encode import encode_frame
-from msdc.pipeline import jobs
 from msdc.pipeline.cli import main
-from msdc.pipeline.jobs_conflict import ConflictOptions, conflict_job
-from msdc.pipeline.jobs_track import TrackOptions, summary, track_job
+from msdc.pipeline.jobs import common
+from msdc.pipeline.jobs.conflicts import ConflictOptions, conflict_job
+from msdc.pipeline.jobs.track import TrackOptions, summary, track_job
 
 INJECTED_M = 20.0  # the simulator's ADS-B position sigma per axis for this recording
 DECLARED_M = 50.0
@@ -158,7 +158,7 @@ BAD = [
 
 @pytest.mark.parametrize(("argv", "words"), [pytest.param(a, w, id=i) for i, a, w in BAD])
 def test_bad_options_refused_before_decoding(argv, words, recording, tmp_path, monkeypatch, capsys):
-    monkeypatch.setattr(jobs, "load", lambda *a, **k: pytest.fail("decoded before validating"))
+    monkeypatch.setattr(common, "load", lambda *a, **k: pytest.fail("decoded before validating"))
     subst = {"{A}": str(recording / "v023.ast"), "{S}": str(recording / "s.toml"), "{O}": str(tmp_path)}
     argv = [subst.get(a, a.replace("{O}", str(tmp_path))) for a in argv]
     try:

@@ -12,8 +12,8 @@ from pathlib import Path
 
 import pytest
 
-from msdc.pipeline import jobs
 from msdc.pipeline.cli import main
+from msdc.pipeline.jobs import correlate
 from msdc.pipeline.report import outputs
 from msdc.pipeline.report.outputs import Background, BackgroundFailed, all_or_nothing
 
@@ -126,7 +126,7 @@ def _correlate(tmp_path: Path, capsys) -> tuple[int, str]:
 @pytest.mark.parametrize("fork", [True, False])
 def test_a_figure_failing_leaves_nothing(tmp_path, monkeypatch, capsys, fork):
     monkeypatch.setattr(outputs, "FORK_OK", fork and outputs.FORK_OK)
-    monkeypatch.setattr(jobs, "_track_figure", lambda run, png, sensors: _fail(png))
+    monkeypatch.setattr(correlate, "_track_figure", lambda run, png, sensors: _fail(png))
     code, err = _correlate(tmp_path, capsys)
     assert code == 1 and "Traceback" not in err and "No space left on device" in err and "r_tracks.png" in err
     assert err.count("msdc correlate: ") == 1 and "Exception ignored" not in err
@@ -135,7 +135,7 @@ def test_a_figure_failing_leaves_nothing(tmp_path, monkeypatch, capsys, fork):
 
 @forking
 def test_a_figure_process_dying_leaves_nothing(tmp_path, monkeypatch, capsys):
-    monkeypatch.setattr(jobs, "_track_figure", lambda run, png, sensors: _die())
+    monkeypatch.setattr(correlate, "_track_figure", lambda run, png, sensors: _die())
     code, err = _correlate(tmp_path, capsys)
     assert code == 1 and "Traceback" not in err
     assert "r_tracks.png: the figure was not drawn (killed by signal 9)" in err
@@ -315,14 +315,14 @@ def test_the_table_and_figure_process_dying_names_its_files(tmp_path, monkeypatc
 @forking
 def test_the_figure_child_is_sent_the_slots_and_not_the_lags(tmp_path, monkeypatch, capsys):
     """The child draws the map from the slots alone: the lag tables (twice the slots' rows) stay here."""
-    seen, real = tmp_path / "seen.txt", jobs._track_figure
+    seen, real = tmp_path / "seen.txt", correlate._track_figure
 
     def recorded(run, png, sensors):
         seen.write_text(f"{os.getpid()} {sum(len(w.slots) for w in run.windows)} "
                         f"{sum(len(w.lags) for w in run.windows)}")
         real(run, png, sensors)
 
-    monkeypatch.setattr(jobs, "_track_figure", recorded)
+    monkeypatch.setattr(correlate, "_track_figure", recorded)
     out = tmp_path / "run"
     out.mkdir()
     assert main(["correlate", str(FIX / "radar.ast"), str(FIX / "adsb.ast"), "--sensors",
@@ -339,7 +339,7 @@ def test_the_figure_child_is_sent_the_slots_and_not_the_lags(tmp_path, monkeypat
 def test_the_figure_child_warms_up_without_error():
     """The prepared child's warm-up is silent about its errors (the real work reports them), so it is run
     here where an error shows: it must get as far as drawing and encoding a PNG."""
-    jobs._warm_track_figure()
+    correlate._warm_track_figure()
 
 
 @forking
@@ -360,7 +360,7 @@ def test_long_tables_are_written_by_this_process_and_come_out_the_same(tmp_path,
             f.write(f"{name} {os.getpid()}\n")
         return real(run, name, path)
 
-    monkeypatch.setattr(jobs, "CHILD_MAX_TABLE_ROWS", limit)
+    monkeypatch.setattr(correlate, "CHILD_MAX_TABLE_ROWS", limit)
     monkeypatch.setattr(excel, "write_table_parquet", recorded)
     out = tmp_path / "run"
     out.mkdir()
@@ -374,7 +374,7 @@ def test_long_tables_are_written_by_this_process_and_come_out_the_same(tmp_path,
     assert (pids["slots"] == os.getpid()) == (limit == 0)
     got = {name: pd.read_parquet(out / f"r_{name}.parquet") for name in pids}
     if limit == 0:  # compared with the child's files of a second run under the default limit
-        monkeypatch.setattr(jobs, "CHILD_MAX_TABLE_ROWS", 1_000_000_000)
+        monkeypatch.setattr(correlate, "CHILD_MAX_TABLE_ROWS", 1_000_000_000)
         other = tmp_path / "other"
         other.mkdir()
         assert main(["correlate", str(FIX / "radar.ast"), str(FIX / "adsb.ast"), "--sensors",

@@ -17,8 +17,8 @@ import pytest
 
 import msdc.asterix as asterix
 from msdc.asterix.encode import encode_frame
-from msdc.pipeline import jobs
 from msdc.pipeline.cli import main
+from msdc.pipeline.jobs import common
 
 FIX = Path(__file__).resolve().parents[1] / "fixtures"
 RADAR, ADSB, SENSORS = FIX / "radar.ast", FIX / "adsb.ast", FIX / "sensors.toml"
@@ -170,7 +170,7 @@ def no_decoding(monkeypatch):
     def decoded(*args, **kwargs):
         raise AssertionError("an input was decoded before the options were checked")
 
-    monkeypatch.setattr(jobs, "load", decoded)
+    monkeypatch.setattr(common, "load", decoded)
     monkeypatch.setattr(asterix, "iter_read", decoded)
     monkeypatch.setattr(asterix.reader, "categories_in", decoded)
 

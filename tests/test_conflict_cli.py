@@ -18,12 +18,12 @@ from fixtures.flight import Flight, Segment
 from fixtures.scenario import AircraftSpec, default_scenario
 from fixtures.simulate import sensors_toml, simulate
 from msdc.asterix.encode import encode_frame
-from msdc.pipeline import jobs, jobs_conflict
 from msdc.pipeline.cli import main
 from msdc.pipeline.conflict.approach import APPROACH_COLUMNS
 from msdc.pipeline.conflict.events import ALERT_COLUMNS, LOSS_COLUMNS, WARNING_COLUMNS
-from msdc.pipeline.jobs import OptionError
-from msdc.pipeline.jobs_conflict import ConflictOptions
+from msdc.pipeline.jobs import common, conflicts
+from msdc.pipeline.jobs.common import OptionError
+from msdc.pipeline.jobs.conflicts import ConflictOptions
 
 FIX = Path(__file__).resolve().parents[1] / "fixtures"
 RADAR, ADSB, SENSORS = str(FIX / "radar.ast"), str(FIX / "adsb.ast"), str(FIX / "sensors.toml")
@@ -65,9 +65,9 @@ BAD = [
 @pytest.mark.parametrize(("options", "words"), BAD)
 def test_bad_options_refused_before_decoding(options, words, tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
-    monkeypatch.setattr(jobs, "load", lambda *a, **k: pytest.fail("decoded before validating"))
+    monkeypatch.setattr(common, "load", lambda *a, **k: pytest.fail("decoded before validating"))
     with pytest.raises(OptionError) as info:
-        jobs_conflict.validate(options)
+        conflicts.validate(options)
     assert words in str(info.value) and "\n" not in str(info.value)
     assert info.value.status == 2
 
@@ -231,12 +231,12 @@ def test_predictions_in_batches_equal_those_of_one_batch(crossing, monkeypatch):
     cases = [ConflictOptions(inputs=(str(d / "r.ast"), str(d / "a.ast")), sensors=str(d / "s.toml"),
                              output="c.csv", date=dt.date(2019, 3, 1)), opts(date=dt.date(2019, 3, 1))]
     for options in cases:
-        whole = jobs_conflict.conflict_job(options)
-        monkeypatch.setattr(jobs_conflict, "PREDICTION_BATCH_REPORTS", 600)
-        parts = jobs_conflict.conflict_job(options)
+        whole = conflicts.conflict_job(options)
+        monkeypatch.setattr(conflicts, "PREDICTION_BATCH_REPORTS", 600)
+        parts = conflicts.conflict_job(options)
         monkeypatch.undo()
         assert parts.predictions["aircraft_id"].nunique() == whole.predictions["aircraft_id"].nunique() >= 2
-        for name in ("predictions", "pc", "alerts", "losses", "warnings", "tracks"):
+        for name in ("predictions", "pc", "alerts", "losses", "warning_times", "tracks"):
             pd.testing.assert_frame_equal(getattr(parts, name), getattr(whole, name), check_exact=True)
 
 
@@ -257,8 +257,8 @@ def test_a_batch_of_untrackable_aircraft_predicts_nothing(monkeypatch):
     options = ConflictOptions(output="c.csv")
     result = track(meas, step_s=1.0, max_coast_s=60.0)
     plane = Plane.around(result.tracks["latitude"], result.tracks["longitude"])
-    whole = jobs_conflict._predictions(meas, result.epoch, plane, (20.0, 60.0), options)
-    monkeypatch.setattr(jobs_conflict, "PREDICTION_BATCH_REPORTS", 50)
-    parts = jobs_conflict._predictions(meas, result.epoch, plane, (20.0, 60.0), options)
+    whole = conflicts._predictions(meas, result.epoch, plane, (20.0, 60.0), options)
+    monkeypatch.setattr(conflicts, "PREDICTION_BATCH_REPORTS", 50)
+    parts = conflicts._predictions(meas, result.epoch, plane, (20.0, 60.0), options)
     assert set(parts["aircraft_id"]) == {"A"} and isinstance(parts["time"].dtype, pd.DatetimeTZDtype)
     pd.testing.assert_frame_equal(parts, whole, check_exact=True)

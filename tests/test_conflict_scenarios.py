@@ -38,7 +38,7 @@ def test_loss_starts_as_the_geometry_says_and_is_alerted_before_it_at_60_s(runs,
     # the tracked (not true) positions and levels
     assert abs(start - enc.loss_s[0]) <= 2.0, (start, enc.loss_s)
     assert abs(end - enc.loss_s[1]) <= 2.0, (end, enc.loss_s)
-    warn = r.warnings.set_index("horizon_s")["warning_s"]
+    warn = r.warning_times.set_index("horizon_s")["warning_s"]
     assert warn.loc[60.0] > 0.0  # alerted before the loss started
     assert warn.loc[20.0] > 0.0
     assert not r.alerts.loc[r.alerts["horizon_s"] <= 60.0, "false_alert"].any()

@@ -184,11 +184,11 @@ def test_quality_figures_say_which_windows_they_cover(tmp_path, monkeypatch, cap
 
     from openpyxl import load_workbook
 
-    import msdc.pipeline.jobs as jobs
     from msdc.pipeline.cli import main
+    from msdc.pipeline.jobs import correlate
 
     fix = Path(__file__).resolve().parents[1] / "fixtures"
-    monkeypatch.setattr(jobs, "FIGURE_WINDOWS", 1)
+    monkeypatch.setattr(correlate, "FIGURE_WINDOWS", 1)
     out = tmp_path / "c.xlsx"
     assert main(["correlate", str(fix / "radar.ast"), str(fix / "adsb.ast"), "--sensors",
                  str(fix / "sensors.toml"), "--callsign", "MAS72", "--quality", "-o", str(out)]) == 0

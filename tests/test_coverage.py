@@ -88,9 +88,9 @@ def test_real_recording_far_positions_and_jumps():
 
 
 def test_a_job_that_builds_some_columns_names_the_file_and_offset(tmp_path):
-    # quality builds only jobs.quality_columns (no file, no offset); its warning still names the first far
+    # quality builds only quality.quality_columns (no file, no offset); its warning still names the first far
     # report's file and byte offset, as one built with every column does, and the two columns go after it
-    from msdc.pipeline import jobs
+    from msdc.pipeline.jobs import quality
     from msdc.pipeline.model.load import load_measurements
 
     rng = np.random.default_rng(5)
@@ -102,7 +102,7 @@ def test_a_job_that_builds_some_columns_names_the_file_and_offset(tmp_path):
     path = tmp_path / "far.ast"
     path.write_bytes(data)
     first_far = int(decode_bytes(data).frames[21]["offset"].iloc[400])  # the decoder's own byte offset
-    columns = jobs.quality_columns(jobs.QualityOptions(inputs=(str(path),), all_aircraft=True))
+    columns = quality.quality_columns(quality.QualityOptions(inputs=(str(path),), all_aircraft=True))
     assert not {"file", "offset"} & set(columns)
     _, meas = load_measurements([path], None, date="2019-03-01", columns=columns, either=True)  # job warns
     (text,) = meas.attrs["coverage_warnings"]

@@ -17,7 +17,7 @@ import pytest
 
 import msdc.asterix as asterix
 from msdc.asterix.encode import encode_frame
-from msdc.pipeline.stats import reason_kind
+from msdc.pipeline.quality.inventory import reason_kind
 
 UTC = dt.UTC
 # 2019-03-01 10:00:00 UTC, worked by hand: 17956 days * 86400 = 1551398400 (2019-03-01 00:00:00);

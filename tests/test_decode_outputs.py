@@ -13,8 +13,8 @@ from asterix_bytes import SHARED
 
 import msdc.asterix as asterix
 from msdc.asterix.encode import encode_frame
-from msdc.pipeline import jobs
 from msdc.pipeline.cli import main
+from msdc.pipeline.jobs import stats
 
 FIX = Path(__file__).resolve().parents[1] / "fixtures"
 RADAR, ADSB = FIX / "radar.ast", FIX / "adsb.ast"
@@ -290,7 +290,7 @@ def test_stats_names_the_file_of_each_skipped_block(tmp_path, capsys):
     (tmp_path / "r_early.ast").write_bytes(r[:r30 + 5])
     (tmp_path / "a_cut.ast").write_bytes(a[:a200 + 20])
     names = ["a_cut.ast", "r_late.ast", "r_early.ast"]
-    result = jobs.stats_job(jobs.StatsOptions(inputs=tuple(str(tmp_path / n) for n in names)))
+    result = stats.stats_job(stats.StatsOptions(inputs=tuple(str(tmp_path / n) for n in names)))
     reason = "data block runs past the end of the data"
     assert result.tables["skipped"].astype(object).values.tolist() == [
         ["r_late.ast", 48, reason, 1, 10, r50], ["r_early.ast", 48, reason, 1, 5, r30],
@@ -306,7 +306,7 @@ def test_stats_names_the_file_of_each_skipped_block(tmp_path, capsys):
     (tmp_path / "b").mkdir()
     (tmp_path / "b" / "r_late.ast").write_bytes(r[:r30 + 5])
     both = (str(tmp_path / "r_late.ast"), str(tmp_path / "b" / "r_late.ast"))
-    skipped = jobs.stats_job(jobs.StatsOptions(inputs=both)).tables["skipped"]
+    skipped = stats.stats_job(stats.StatsOptions(inputs=both)).tables["skipped"]
     assert skipped[["file", "first_offset"]].values.tolist() == [[both[0], r50], [both[1], r30]]
 
 

@@ -11,8 +11,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from msdc.pipeline import jobs
 from msdc.pipeline.cli import main
+from msdc.pipeline.jobs import stats
+from msdc.pipeline.jobs.common import OptionError
 
 FIX = Path(__file__).resolve().parents[1] / "fixtures"
 RADAR, ADSB, SENSORS = FIX / "radar.ast", FIX / "adsb.ast", FIX / "sensors.toml"
@@ -44,8 +45,8 @@ def test_a_fifo_input_is_refused_not_read(tmp_path):
 
     threading.Thread(target=writer, daemon=True).start()
     try:
-        with pytest.raises(jobs.OptionError, match="live.ast: input is not a regular file"):
-            jobs.validate(jobs.StatsOptions(inputs=(str(fifo),)))
+        with pytest.raises(OptionError, match="live.ast: input is not a regular file"):
+            stats.validate(stats.StatsOptions(inputs=(str(fifo),)))
     finally:  # release the writer if it is still waiting for a reader
         fd = os.open(fifo, os.O_RDONLY | os.O_NONBLOCK)
         os.close(fd)
@@ -329,12 +330,11 @@ def test_a_phantom_radar_of_two_damaged_records_is_left_out_with_a_warning(comma
 def test_the_phantom_records_are_the_only_ones_left_out(tmp_path):
     """The stray rule drops exactly the records of the undeclared pair, nothing else."""
     import msdc.asterix as asterix
-    from msdc.pipeline.model.sensors import read_sensors
+    from msdc.pipeline.model.sensors import declared_radar, read_sensors
 
     radar, offsets = _with_sic(tmp_path, [4, 20])
     frame = asterix.read(radar).frames[48].assign(file="damaged048.ast")
-    warnings: list[str] = []
-    kept = jobs.declared_radar(frame, read_sensors(SENSORS), str(SENSORS), warnings)
+    kept, warnings = declared_radar(frame, read_sensors(SENSORS), str(SENSORS))
     assert len(warnings) == 1
     assert sorted(set(frame["offset"]) - set(kept["offset"])) == offsets
     assert len(kept) == len(frame) - 2

@@ -10,7 +10,7 @@ import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
 AREAS = ("correlate", "quality", "report", "track", "conflict")
-FRONT = ("msdc.pipeline.jobs", "msdc.pipeline.jobs_track", "msdc.pipeline.jobs_conflict", "msdc.pipeline.cli")
+FRONT = ("msdc.pipeline.jobs", "msdc.pipeline.cli")
 
 
 def _module(path: Path) -> str:
@@ -57,12 +57,34 @@ def test_the_modules_were_read():
     ("msdc.pipeline.quality", ("msdc.pipeline.correlate",)),
     ("msdc.pipeline.correlate", ("msdc.pipeline.quality",)),
     *[(f"msdc.pipeline.{area}", FRONT) for area in AREAS],
-    ("msdc.pipeline.stats", FRONT),
-    ("msdc.pipeline.model", FRONT + tuple(f"msdc.pipeline.{a}" for a in AREAS) + ("msdc.pipeline.stats",)),
+    ("msdc.pipeline.model", FRONT + tuple(f"msdc.pipeline.{a}" for a in AREAS)),
+    ("msdc.pipeline.jobs", ("msdc.pipeline.cli",)),
     ("msdc.asterix", ("msdc.pipeline",)),
 ])
 def test_imports_flow_one_way(importer, forbidden):
+    assert any(_within(mod, importer) for mod in MODULES)  # a rule about modules that exist
     assert _offenders(importer, forbidden) == []
+
+
+def test_the_command_modules_share_only_common_and_public_names():
+    """Each module of pipeline/jobs/ imports no other command's module, and neither they nor the CLI import a
+    private (``_name``) name of another module: what several share is a public name of jobs.common."""
+    commands = {p.stem for p in (ROOT / "pipeline" / "jobs").glob("*.py")} - {"__init__", "common"}
+    assert commands == {"decode", "stats", "correlate", "quality", "track", "conflicts"}
+    wrong = []
+    for path in SOURCES:
+        mod = _module(path)
+        if not any(_within(mod, front) for front in FRONT):
+            continue
+        for node in ast.walk(ast.parse(path.read_text(), str(path))):
+            if isinstance(node, ast.ImportFrom) and (node.module or "").startswith("msdc."):
+                wrong += [f"{mod} imports {node.module}.{a.name}" for a in node.names
+                          if a.name.startswith("_")]
+        others = [f"msdc.pipeline.jobs.{c}" for c in commands if not mod.endswith(f".{c}")]
+        if _within(mod, "msdc.pipeline.jobs"):
+            wrong += [f"{mod} imports {name}" for name in sorted(MODULES[mod])
+                      if any(_within(name, other) for other in others)]
+    assert wrong == []
 
 
 def test_no_top_level_asterix_or_pipeline_import():

@@ -1,6 +1,6 @@
 """Per-job column selection: a job builds only the measurement columns it reads (pipeline.model.schema
-schema_columns / validate(frame, columns), pipeline.jobs.correlate_columns), and gets the same results as
-from the whole frame."""
+schema_columns / validate(frame, columns), pipeline.jobs.correlate.correlate_columns), and gets the same
+results as from the whole frame."""
 
 from __future__ import annotations
 
@@ -10,9 +10,12 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from msdc.pipeline import jobs
-from msdc.pipeline.jobs import CorrelateOptions, QualityOptions, correlate_columns, mark_once, quality_columns
+from msdc.pipeline.jobs import correlate
+from msdc.pipeline.jobs import quality as quality_jobs
+from msdc.pipeline.jobs.correlate import CorrelateOptions, correlate_columns
+from msdc.pipeline.jobs.quality import QualityOptions, quality_columns
 from msdc.pipeline.model.load import load_measurements
+from msdc.pipeline.model.marks import mark_once
 from msdc.pipeline.model.schema import MEASUREMENT_COLUMNS, SchemaError, column_names, validate
 from msdc.pipeline.model.sensors import read_sensors
 from msdc.pipeline.track.tracker import FILTER_INPUTS, REQUIRED
@@ -69,7 +72,8 @@ def test_correlate_columns_follow_the_options():
     assert not {"cov_ee_m2", "sigma_major_m", "nucp_nic", "nacp", "mode3a", "file"} & set(plain)
     assert {"nucp_nic", "nacp"} <= set(correlate_columns(corr(min_nic=5, min_nacp=7)))
     with_quality = set(correlate_columns(corr(quality=True)))  # what quality and its figures read too
-    assert with_quality == set(plain) | set(quality_columns(quality())) | set(jobs.SLOTTING_FIGURE_INPUTS)
+    figures = set(correlate.SLOTTING_FIGURE_INPUTS)
+    assert with_quality == set(plain) | set(quality_columns(quality())) | figures
     assert {"nacp", "mops_version", "theta_deg"} <= with_quality
     assert not {"cov_ee_m2", "sigma_major_m", "mode3a", "file"} & with_quality
     predict = set(correlate_columns(corr(fill="predict")))  # the tracker reads the covariance
@@ -92,11 +96,11 @@ def _assert_same_windows(narrow, full) -> None:
 @pytest.mark.parametrize("kw", [{}, {"drop_jumps": True, "min_nic": 5, "min_nacp": 7},
                                 {"pairs": "all", "split_adsb": True}, {"fill": "predict"}])
 def test_correlation_on_the_narrow_frame_equals_the_full_frame(kw, monkeypatch):
-    narrow = jobs.correlate_job(corr(**kw))
+    narrow = correlate.correlate_job(corr(**kw))
     assert ("cov_ee_m2" in narrow.measurements) == (kw.get("fill") == "predict")
     assert "fit_latitude" not in narrow.measurements and "mode3a" not in narrow.measurements
-    monkeypatch.setattr(jobs, "correlate_columns", lambda options: None)
-    full = jobs.correlate_job(corr(**kw))
+    monkeypatch.setattr(correlate, "correlate_columns", lambda options: None)
+    full = correlate.correlate_job(corr(**kw))
     assert "cov_ee_m2" in full.measurements and "fit_latitude" in full.measurements
     _assert_same_windows(narrow.run, full.run)
     assert narrow.run.skipped == full.run.skipped and narrow.run.filters == full.run.filters
@@ -131,16 +135,16 @@ def test_quality_columns_follow_the_reference():
                                 {"reference": "track"}])
 def test_quality_on_the_narrow_frame_equals_the_full_frame(kw, monkeypatch):
     seen = []
-    measured = jobs._quality
+    measured = quality_jobs.quality_step
 
     def spy(meas, sensors, options):
         seen.append(set(meas.columns))
         return measured(meas, sensors, options)
 
-    monkeypatch.setattr(jobs, "_quality", spy)
-    narrow = jobs.quality_job(quality(**kw))
-    monkeypatch.setattr(jobs, "quality_columns", lambda options: None)
-    full = jobs.quality_job(quality(**kw))
+    monkeypatch.setattr(quality_jobs, "quality_step", spy)
+    narrow = quality_jobs.quality_job(quality(**kw))
+    monkeypatch.setattr(quality_jobs, "quality_columns", lambda options: None)
+    full = quality_jobs.quality_job(quality(**kw))
     track = kw.get("reference") == "track"
     assert ("cov_ee_m2" in seen[0]) == track and "rho_nm" in seen[0] and "mode3a" not in seen[0]
     assert "cov_ee_m2" in seen[1] and "mode3a" in seen[1]
@@ -154,11 +158,11 @@ def test_quality_on_the_narrow_frame_equals_the_full_frame(kw, monkeypatch):
 def test_correlate_quality_on_the_narrow_frame_equals_the_full_frame(monkeypatch):
     """correlate --quality builds the columns correlate and quality read (and every jump column), not the
     whole frame: the same windows, quality sheets and radar errors."""
-    narrow = jobs.correlate_job(corr(quality=True))
+    narrow = correlate.correlate_job(corr(quality=True))
     assert "fit_latitude" in narrow.measurements and "nacp" in narrow.measurements
     assert "cov_ee_m2" not in narrow.measurements and "mode3a" not in narrow.measurements
-    monkeypatch.setattr(jobs, "correlate_columns", lambda options: None)
-    full = jobs.correlate_job(corr(quality=True))
+    monkeypatch.setattr(correlate, "correlate_columns", lambda options: None)
+    full = correlate.correlate_job(corr(quality=True))
     assert "cov_ee_m2" in full.measurements
     _assert_same_windows(narrow.run, full.run)
     assert list(narrow.quality.sheets) == list(full.quality.sheets) and "Jumps" in full.quality.sheets

@@ -8,8 +8,12 @@ from pathlib import Path
 
 import pytest
 
-from msdc.pipeline import jobs
-from msdc.pipeline.jobs import CorrelateOptions, DecodeOptions, OptionError, QualityOptions, StatsOptions
+from msdc.pipeline.jobs import common, correlate, decode, quality, stats
+from msdc.pipeline.jobs.common import OptionError
+from msdc.pipeline.jobs.correlate import CorrelateOptions
+from msdc.pipeline.jobs.decode import DecodeOptions
+from msdc.pipeline.jobs.quality import QualityOptions
+from msdc.pipeline.jobs.stats import StatsOptions
 
 FIX = Path(__file__).resolve().parents[1] / "fixtures"
 RADAR, ADSB, SENSORS = str(FIX / "radar.ast"), str(FIX / "adsb.ast"), str(FIX / "sensors.toml")
@@ -53,9 +57,11 @@ CASES = [
 @pytest.mark.parametrize(("options", "words"), CASES)
 def test_bad_options_are_refused_before_decoding(options, words, tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
-    monkeypatch.setattr(jobs, "load", lambda *a, **k: pytest.fail("decoded before validating"))
+    monkeypatch.setattr(common, "load", lambda *a, **k: pytest.fail("decoded before validating"))
+    validate = {CorrelateOptions: correlate.validate, QualityOptions: quality.validate,
+                DecodeOptions: decode.validate, StatsOptions: stats.validate}[type(options)]
     with pytest.raises(OptionError) as info:
-        jobs.validate(options)
+        validate(options)
     message = str(info.value)
     assert words in message and "\n" not in message
     assert info.value.status == 2
@@ -64,14 +70,14 @@ def test_bad_options_are_refused_before_decoding(options, words, tmp_path, monke
 def test_output_directory_and_unwritable(tmp_path):
     (tmp_path / "d.xlsx").mkdir()
     with pytest.raises(OptionError, match="is a directory"):
-        jobs.validate(corr(output=str(tmp_path / "d.xlsx")))
+        correlate.validate(corr(output=str(tmp_path / "d.xlsx")))
     locked = tmp_path / "locked"
     locked.mkdir()
     locked.chmod(0o500)
     try:
         if not __import__("os").access(locked, __import__("os").W_OK):  # root can write anyway
             with pytest.raises(OptionError, match="not writable"):
-                jobs.validate(corr(output=str(locked / "r.xlsx")))
+                correlate.validate(corr(output=str(locked / "r.xlsx")))
     finally:
         locked.chmod(0o700)
 
@@ -80,43 +86,58 @@ def test_bad_sensor_file_is_reported_once_before_decoding(tmp_path):
     bad = tmp_path / "s.toml"
     bad.write_text("[[sensor]]\nname = 'x'\n")
     with pytest.raises(OptionError) as info:
-        jobs.validate(corr(sensors=str(bad)))
+        correlate.validate(corr(sensors=str(bad)))
     assert str(info.value).count(str(bad)) == 1 and "lacks" in str(info.value)
 
 
 def test_duplicate_inputs_are_skipped_with_a_warning(tmp_path):
     copy = tmp_path / "copy.ast"
     copy.write_bytes(Path(RADAR).read_bytes())
-    checked = jobs.validate(corr(inputs=(RADAR, ADSB, str(copy))))
+    checked = correlate.validate(corr(inputs=(RADAR, ADSB, str(copy))))
     assert [p.name for p in checked.inputs] == ["radar.ast", "adsb.ast"]
     (warning,) = checked.warnings
     assert "copy.ast" in warning and "SHA-256" in warning
 
 
+def test_a_job_returns_its_warnings_and_an_error_carries_them(tmp_path):
+    """The result holds every warning of the run, validation's first; an error leaving a job (or a step of
+    one) carries those collected before it, earliest first, for the command to print ahead of the error."""
+    copy = tmp_path / "copy.ast"
+    copy.write_bytes(Path(RADAR).read_bytes())
+    options = QualityOptions(inputs=(RADAR, ADSB, str(copy)), sensors=SENSORS, callsign="MAS72")
+    checked = quality.validate(options)
+    result = quality.quality_job(options, checked=checked)
+    assert result.warnings[:1] == checked.warnings and "SHA-256" in checked.warnings[0]
+    with pytest.raises(common.JobError) as info, common.carrying(["job"]), common.carrying(["step"]) as said:
+        said.append("then")
+        raise common.JobError("no such aircraft")
+    assert info.value.job_warnings == ["job", "step", "then"]
+
+
 def test_correlate_job_returns_results_and_writes_only_when_asked(tmp_path):
-    result = jobs.correlate_job(corr(date=None, quality=True, drop_jumps=True))
+    result = correlate.correlate_job(corr(date=None, quality=True, drop_jumps=True))
     assert [w.summary["window"] for w in result.run.windows] == [1, 2]
     assert {w.summary["radar_sensor"] for w in result.run.windows} == {"048:25/201"}
     assert result.quality is not None and "Radar biases" in result.run.extra_sheets
     # jumps were detected once and reused: the filter removed exactly the flagged reports
     assert result.run.filters["jumps"] > 0 and "jump" in result.measurements
-    assert jobs.write_correlation(result) == {}
+    assert correlate.write_correlation(result) == {}
     out = tmp_path / "r.xlsx"
-    written = jobs.write_correlation(jobs.correlate_job(corr(output=str(out))))
+    written = correlate.write_correlation(correlate.correlate_job(corr(output=str(out))))
     assert written["report"] == out and out.exists() and written["figure"].exists()
 
 
 def test_stats_and_quality_jobs():
-    stats = jobs.stats_job(StatsOptions(inputs=(RADAR, ADSB)))
-    assert set(stats.tables["categories"]["category"]) == {21, 48}
-    q = jobs.quality_job(QualityOptions(inputs=(RADAR, ADSB), sensors=SENSORS, callsign="MAS72"))
+    inventory = stats.stats_job(StatsOptions(inputs=(RADAR, ADSB)))
+    assert set(inventory.tables["categories"]["category"]) == {21, 48}
+    q = quality.quality_job(QualityOptions(inputs=(RADAR, ADSB), sensors=SENSORS, callsign="MAS72"))
     assert set(q.quality.sheets["Quality"]["callsign"]) >= {"MAS72"}
 
 
 def test_warnings_implausible_site_height_and_time_running_backwards(tmp_path):
     sensors = tmp_path / "s.toml"
     sensors.write_text(Path(SENSORS).read_text().replace("altitude_m = 40.0", "altitude_m = -99999.0"))
-    checked = jobs.validate(corr(sensors=str(sensors)))
+    checked = correlate.validate(corr(sensors=str(sensors)))
     assert any("altitude_m = -99999" in w for w in checked.warnings)
     # the second half of the radar recording given first: CAT048 runs backwards between the inputs
     import msdc.asterix as asterix
@@ -126,10 +147,10 @@ def test_warnings_implausible_site_height_and_time_running_backwards(tmp_path):
     early, late = tmp_path / "early.ast", tmp_path / "late.ast"
     early.write_bytes(encode_frame(48, frame.iloc[: len(frame) // 2]))
     late.write_bytes(encode_frame(48, frame.iloc[len(frame) // 2:]))
-    result = jobs.correlate_job(corr(inputs=(str(late), str(early), ADSB)))
-    assert any("runs backwards" in w or "run backwards" in w for w in result.checked.warnings)
-    ordered = jobs.correlate_job(corr(inputs=(str(early), str(late), ADSB)))
-    assert not any("backwards" in w for w in ordered.checked.warnings)
+    result = correlate.correlate_job(corr(inputs=(str(late), str(early), ADSB)))
+    assert any("runs backwards" in w or "run backwards" in w for w in result.warnings)
+    ordered = correlate.correlate_job(corr(inputs=(str(early), str(late), ADSB)))
+    assert not any("backwards" in w for w in ordered.warnings)
 
 
 def test_order_warning_is_per_data_source():
@@ -149,9 +170,9 @@ def test_order_warning_is_per_data_source():
     first, other_radar = time_spans(frame(201, 10, 11), day), time_spans(frame(202, 9, 10.5), day)
     assert first == {"048:25/201": (pd.Timestamp("2019-03-01 10:00", tz="UTC"),
                                     pd.Timestamp("2019-03-01 11:00", tz="UTC"))}
-    assert jobs._order_warnings([Path("a.ast"), Path("b.ast")], [first, other_radar]) == []
+    assert common.order_warnings([Path("a.ast"), Path("b.ast")], [first, other_radar]) == []
     same_radar = time_spans(frame(201, 9, 10.5), day)
-    (warning,) = jobs._order_warnings([Path("a.ast"), Path("b.ast")], [first, same_radar])
+    (warning,) = common.order_warnings([Path("a.ast"), Path("b.ast")], [first, same_radar])
     assert warning.startswith("b.ast: 048:25/201 starts at 2019-03-01 09:00:00+00:00, before the end of its "
                               "records in a.ast (2019-03-01 11:00:00+00:00)")
 
@@ -176,8 +197,8 @@ def test_decode_progress_ends_at_the_file_size(tmp_path):
     """The bar is fed byte offsets: its last call for a file must be the file's size, or it stops short of
     100 % and never ends its line (the last record's offset is a record length before the end)."""
     calls = []
-    jobs.decode_job(DecodeOptions(inputs=(RADAR, ADSB), output=str(tmp_path / "d.csv"), chunk_mb=0.1),
-                    on_chunk=lambda done, size, name: calls.append((name, done, size)))
+    decode.decode_job(DecodeOptions(inputs=(RADAR, ADSB), output=str(tmp_path / "d.csv"), chunk_mb=0.1),
+                      on_chunk=lambda done, size, name: calls.append((name, done, size)))
     for path in (RADAR, ADSB):
         name, size = Path(path).name, Path(path).stat().st_size
         mine = [c for c in calls if c[0] == name]

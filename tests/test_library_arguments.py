@@ -15,9 +15,9 @@ import pandas as pd
 import pytest
 
 import msdc.asterix as asterix
-from msdc.pipeline import jobs, jobs_track
-from msdc.pipeline.jobs import OptionError
-from msdc.pipeline.jobs_track import TrackOptions
+from msdc.pipeline.jobs import common, correlate, quality, track
+from msdc.pipeline.jobs.common import OptionError
+from msdc.pipeline.jobs.track import TrackOptions
 from msdc.pipeline.model import schema
 from msdc.pipeline.model.load import load
 from msdc.pipeline.model.measurements import OffEarthWarning, build_measurements
@@ -86,7 +86,7 @@ def test_a_date_outside_the_nanosecond_span_is_refused_everywhere(date, adsb, tm
         text = str(info.value)
         assert text.startswith(f"date {day}: outside the days") and "1678-01-01 to 2261-12-31" in text
     with pytest.raises(OptionError) as info:
-        jobs_track.validate(TrackOptions(inputs=(ADSB,), callsign="MAS72", date=date,
+        track.validate(TrackOptions(inputs=(ADSB,), callsign="MAS72", date=date,
                                          output=str(tmp_path / "t.csv")))
     assert str(info.value).startswith(f"--date {day}: outside the days")
 
@@ -114,7 +114,7 @@ def test_a_date_that_would_shift_the_times_is_refused_everywhere(date, words, ad
             call()
         assert str(info.value).startswith("date ") and words in str(info.value)
     with pytest.raises(OptionError) as info:  # the job options: the same rule, named as the option
-        jobs_track.validate(TrackOptions(inputs=(ADSB,), callsign="MAS72", date=date,
+        track.validate(TrackOptions(inputs=(ADSB,), callsign="MAS72", date=date,
                                          output=str(tmp_path / "t.csv")))
     assert str(info.value).startswith("--date ") and words in str(info.value)
 
@@ -122,14 +122,14 @@ def test_a_date_that_would_shift_the_times_is_refused_everywhere(date, words, ad
 def test_the_job_options_take_what_read_takes(tmp_path):
     """The ISO text read takes as a date, and the {category: edition} dict, are accepted by the options
     (they were refused with messages naming the format given, or an empty edition)."""
-    checked = jobs_track.validate(TrackOptions(inputs=ADSB, callsign="MAS72", date="2019-03-01",
+    checked = track.validate(TrackOptions(inputs=ADSB, callsign="MAS72", date="2019-03-01",
                                                editions={21: "2.7"}))
     assert checked.inputs == [Path(ADSB)] and checked.editions == {21: "2.7"}
-    checked = jobs.validate(jobs.CorrelateOptions(inputs=(RADAR, ADSB), sensors=SENSORS, callsign="MAS72",
-                                                  editions="21=0.26"))
+    checked = correlate.validate(correlate.CorrelateOptions(inputs=(RADAR, ADSB), sensors=SENSORS,
+                                                            callsign="MAS72", editions="21=0.26"))
     assert checked.editions == {21: "0.26"}
     with pytest.raises(OptionError, match=r"--edition 21=9\.9"):
-        jobs_track.validate(TrackOptions(inputs=ADSB, callsign="MAS72", editions={21: "9.9"}))
+        track.validate(TrackOptions(inputs=ADSB, callsign="MAS72", editions={21: "9.9"}))
 
 
 def test_track_job_returns_the_table_without_an_output(adsb, tmp_path):
@@ -141,11 +141,11 @@ def test_track_job_returns_the_table_without_an_output(adsb, tmp_path):
     few = adsb.loc[adsb["callsign"] == "MAS72", columns].iloc[:120]
     path = tmp_path / "mas72.ast"
     path.write_bytes(encode_frame(21, few, edition="2.7"))
-    result = jobs_track.track_job(TrackOptions(inputs=str(path), callsign="MAS72", date="2019-03-01",
+    result = track.track_job(TrackOptions(inputs=str(path), callsign="MAS72", date="2019-03-01",
                                                 adsb_sigma_m=30.0))
     assert result.tracks["time"].min() == _first_expected(few)
     with pytest.raises(OptionError, match="give at least one output"):
-        jobs_track.validate(TrackOptions(inputs=str(path), callsign="MAS72"), require_output=True)
+        track.validate(TrackOptions(inputs=str(path), callsign="MAS72"), require_output=True)
 
 
 def test_missing_columns_are_refused_not_dropped(radar, adsb):
@@ -186,7 +186,7 @@ def test_adsb_sigma_is_range_checked(sigma, error, adsb):
 def test_the_library_and_the_command_take_the_same_adsb_sigma():
     from msdc.pipeline.model.measurements import ADSB_SIGMA_RANGE_M
 
-    assert ADSB_SIGMA_RANGE_M == jobs.ADSB_SIGMA_RANGE_M == (0.5, 20000.0)
+    assert ADSB_SIGMA_RANGE_M == common.ADSB_SIGMA_RANGE_M == (0.5, 20000.0)
 
 
 def test_a_declared_adsb_sigma_is_the_covariance(adsb):
@@ -202,7 +202,7 @@ def test_one_path_is_one_input(tmp_path):
     assert [i["path"] for i in one.inputs] == [ADSB] and len(one.frames[21]) == len(load([ADSB]).frames[21])
     assert load(Path(ADSB)).inputs[0]["path"] == ADSB
     options = TrackOptions(inputs=RADAR, callsign="MAS72", output=str(tmp_path / "t.csv"))
-    checked = jobs_track.validate(options)
+    checked = track.validate(options)
     assert checked.inputs == [Path(RADAR)]
     with pytest.raises(TypeError, match="paths 5"):
         load(5)
@@ -290,20 +290,20 @@ def test_a_wrong_edition_is_a_python_warning(adsb_0_23):
 
 def test_the_jobs_say_a_wrong_edition_once_in_their_terms(adsb_0_23):
     """The jobs name --edition; the library's Python warning does not reach the command's stderr."""
-    options = jobs.QualityOptions(inputs=(str(adsb_0_23),), all_aircraft=True)
-    checked = jobs.validate(options)
+    options = quality.QualityOptions(inputs=(str(adsb_0_23),), all_aircraft=True)
+    checked = quality.validate(options)
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
-        jobs._load(options, checked, None)
+        _, said = common.load_inputs(options, checked, None)
     assert not [w for w in caught if issubclass(w.category, asterix.EditionWarning)]
-    assert sum("pin it with --edition 21=0.23" in w for w in checked.warnings) == 1
+    assert sum("pin it with --edition 21=0.23" in w for w in said) == 1
 
 
 def test_output_under_a_file_says_it_is_a_file(tmp_path):
     afile = tmp_path / "afile"
     afile.write_text("x")
     with pytest.raises(OptionError) as info:
-        jobs._output("-o", afile / "r.xlsx", (".xlsx",))
+        common.output_path("-o", afile / "r.xlsx", (".xlsx",))
     assert str(info.value) == f"-o {afile / 'r.xlsx'}: {afile} is a file, not a directory"
 
 
@@ -312,12 +312,12 @@ def test_max_coast_names_its_real_bounds(tmp_path):
     base = {"inputs": (ADSB,), "callsign": "MAS72", "output": str(tmp_path / "t.csv")}
     for coast in (1e12, 0.0):
         with pytest.raises(OptionError) as info:
-            jobs_track.validate(TrackOptions(**base, max_coast_s=coast))
+            track.validate(TrackOptions(**base, max_coast_s=coast))
         assert "from 0 " not in str(info.value) and "--step (1)" in str(info.value)
 
 
 def test_stats_times_are_labelled_utc():
-    from msdc.pipeline.stats import format_stats, stats_tables
+    from msdc.pipeline.quality.inventory import format_stats, stats_tables
 
     rec = asterix.read(ADSB, date="2019-03-01")
     text = format_stats(stats_tables(rec.frames, rec.errors))
@@ -349,4 +349,4 @@ def test_an_output_that_is_the_one_input_is_refused(tmp_path):
     rec = tmp_path / "t.csv"
     rec.write_bytes(Path(ADSB).read_bytes())
     with pytest.raises(OptionError, match="is the input"):
-        jobs_track.validate(TrackOptions(inputs=str(rec), callsign="MAS72", output=str(rec)))
+        track.validate(TrackOptions(inputs=str(rec), callsign="MAS72", output=str(rec)))

@@ -1,4 +1,4 @@
-"""mark_once (pipeline.jobs): duplicate flags and the ADS-B jump verdicts shared by repeated reports,
+"""mark_once (pipeline.model.marks): duplicate flags and the ADS-B jump verdicts shared by repeated reports,
 against a plain row-by-row reference of the documented rule written here."""
 
 from __future__ import annotations
@@ -10,10 +10,10 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from msdc.pipeline.jobs import mark_once
 from msdc.pipeline.model.dedup import DEDUP_KEYS, duplicate_mask
 from msdc.pipeline.model.jumps import JUMP_FLAG_COLUMNS, jump_flags
 from msdc.pipeline.model.load import load
+from msdc.pipeline.model.marks import mark_once
 from msdc.pipeline.model.measurements import build_measurements
 from msdc.pipeline.model.sensors import read_sensors
 

@@ -154,7 +154,7 @@ def test_mutated_mixed_stream_accounted_and_far_blocks_survive(data):
 
 
 def test_stats_show_other_categories(tmp_path):
-    from msdc.pipeline.stats import format_stats, stats_tables
+    from msdc.pipeline.quality.inventory import format_stats, stats_tables
 
     data, _ = mixed_stream(1)
     path = tmp_path / "mixed.ast"

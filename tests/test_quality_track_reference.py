@@ -14,8 +14,9 @@ from test_accuracy import FLEET, INJECTED, TOLERANCE, _se_name
 
 from fixtures.scenario import Scenario
 from fixtures.simulate import simulate
-from msdc.pipeline import jobs
 from msdc.pipeline.cli import main
+from msdc.pipeline.jobs import quality
+from msdc.pipeline.jobs.common import OptionError
 from msdc.pipeline.model.measurements import build_measurements
 from msdc.pipeline.model.sensors import REQUIRED_COLUMNS as SENSOR_COLUMNS
 from msdc.pipeline.quality.accuracy import estimate_biases, radar_errors
@@ -74,9 +75,10 @@ def test_track_reference_is_closer_to_truth_than_interpolation():
 
 
 def test_reference_option(tmp_path, capsys):
-    with pytest.raises(jobs.OptionError, match="--reference 'smooth': must be adsb or track"):
-        jobs.validate(jobs.QualityOptions(inputs=(str(FIX / "radar.ast"),), sensors=str(FIX / "sensors.toml"),
-                                          all_aircraft=True, reference="smooth"))
+    with pytest.raises(OptionError, match="--reference 'smooth': must be adsb or track"):
+        quality.validate(quality.QualityOptions(inputs=(str(FIX / "radar.ast"),),
+                                                sensors=str(FIX / "sensors.toml"), all_aircraft=True,
+                                                reference="smooth"))
     out = tmp_path / "q.json"
     assert main(["quality", str(FIX / "radar.ast"), str(FIX / "adsb.ast"), "--sensors",
                  str(FIX / "sensors.toml"), "--callsign", "MAS72", "--date", "2019-03-01",

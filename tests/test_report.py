@@ -451,13 +451,13 @@ def test_window_start_is_a_utc_date_in_the_workbook(tmp_path: Path) -> None:
     """On the fixtures, MAS72's first window starts where the simulator's truth says (its first overlap of
     radar and ADS-B reports, ToD to one LSB): the workbook cell read back is that UTC date-time, a real
     Excel date labelled UTC, and the JSON keeps ISO text."""
-    from msdc.pipeline import jobs
+    from msdc.pipeline.jobs import correlate
 
     root = Path(__file__).resolve().parents[1]
     truth = json.loads((root / "fixtures" / "truth.json").read_text())
     first = min((w for w in truth["overlap_windows"] if w["callsign"] == "MAS72"), key=lambda w: w["start_s"])
     want = dt.datetime(2019, 3, 1) + dt.timedelta(seconds=first["start_s"])  # truth: UTC s since midnight
-    result = jobs.correlate_job(jobs.CorrelateOptions(
+    result = correlate.correlate_job(correlate.CorrelateOptions(
         inputs=(str(root / "fixtures" / "radar.ast"), str(root / "fixtures" / "adsb.ast")),
         sensors=str(root / "fixtures" / "sensors.toml"), callsign="MAS72", date=dt.date(2019, 3, 1)))
     write_report(result.run, tmp_path / "r.xlsx")

@@ -12,12 +12,12 @@ import pandas as pd
 import pytest
 
 from msdc.pipeline.cli import main
+from msdc.pipeline.quality.inventory import reason_kind, stats_tables
 from msdc.pipeline.report.figures import figure_peak
 from msdc.pipeline.report.formats import column_unit, decimals, excel_format
 from msdc.pipeline.report.quality_figures import histogram_range_s
 from msdc.pipeline.report.summary import SEP_DOMINATED_RATIO, window_note
 from msdc.pipeline.report.textguard import guard_frame, neutralise
-from msdc.pipeline.stats import reason_kind, stats_tables
 
 FIX = Path(__file__).resolve().parents[1] / "fixtures"
 

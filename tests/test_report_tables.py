@@ -13,7 +13,7 @@ import pandas as pd
 import pytest
 from openpyxl import load_workbook
 
-from msdc.pipeline import jobs
+from msdc.pipeline.jobs import correlate
 from msdc.pipeline.report import tables as tables_mod
 
 FIX = Path(__file__).resolve().parents[1] / "fixtures"
@@ -22,17 +22,17 @@ EXCEL_EPOCH = dt.datetime(1899, 12, 30)
 
 @pytest.fixture(scope="module")
 def result():
-    options = jobs.CorrelateOptions(inputs=(str(FIX / "radar.ast"), str(FIX / "adsb.ast")),
+    options = correlate.CorrelateOptions(inputs=(str(FIX / "radar.ast"), str(FIX / "adsb.ast")),
                                     sensors=str(FIX / "sensors.toml"), all_aircraft=True,
                                     date=dt.date(2019, 3, 1))
-    return jobs.correlate_job(options)
+    return correlate.correlate_job(options)
 
 
 def _write(result, out: Path, tables: str) -> dict[str, Path]:
-    options = jobs.CorrelateOptions(**{**result.options.__dict__, "output": str(out), "tables": tables})
-    checked = jobs.validate(options)
-    return jobs.write_correlation(jobs.CorrelateResult(options, checked, result.run, result.measurements,
-                                                       result.loaded))
+    options = correlate.CorrelateOptions(**{**result.options.__dict__, "output": str(out), "tables": tables})
+    checked = correlate.validate(options)
+    return correlate.write_correlation(correlate.CorrelateResult(options, checked, result.run,
+                                                                 result.measurements, result.loaded))
 
 
 def _sheet(ws) -> dict[str, list]:

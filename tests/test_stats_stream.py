@@ -9,8 +9,9 @@ import pandas as pd
 import pytest
 
 import msdc.asterix as asterix
-from msdc.pipeline import jobs
-from msdc.pipeline.stats import StatsAccumulator, stats_tables
+from msdc.pipeline.jobs import stats
+from msdc.pipeline.jobs.common import OptionError
+from msdc.pipeline.quality.inventory import StatsAccumulator, stats_tables
 from tests.asterix_bytes import block, fspec
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -109,16 +110,16 @@ def test_streamed_tables_equal_whole_file_tables(path, chunk):
 
 
 def test_stats_job_streams_with_its_chunk_size():
-    small = jobs.stats_job(jobs.StatsOptions(inputs=(RADAR, ADSB), chunk_mb=0.1))
-    whole = jobs.stats_job(jobs.StatsOptions(inputs=(RADAR, ADSB), chunk_mb=64.0))
+    small = stats.stats_job(stats.StatsOptions(inputs=(RADAR, ADSB), chunk_mb=0.1))
+    whole = stats.stats_job(stats.StatsOptions(inputs=(RADAR, ADSB), chunk_mb=64.0))
     _assert_tables_equal(small.tables, whole.tables)
     truth = json.loads((ROOT / "fixtures" / "truth.json").read_text())  # the simulator's row counts
     n48, n21 = truth["radar"]["rows"], truth["adsb"]["rows"]
     assert [i["records"] for i in small.inputs] == [{48: n48}, {21: n21}]
     assert small.records == n48 + n21
     assert small.tables["categories"]["records"].tolist() == [n21, n48]
-    with pytest.raises(jobs.OptionError, match="--chunk-mb"):
-        jobs.stats_job(jobs.StatsOptions(inputs=(RADAR,), chunk_mb=0.0))
+    with pytest.raises(OptionError, match="--chunk-mb"):
+        stats.stats_job(stats.StatsOptions(inputs=(RADAR,), chunk_mb=0.0))
 
 
 def test_category_whose_every_block_is_skipped(tmp_path, capsys):

@@ -13,10 +13,11 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from msdc.pipeline import jobs, jobs_track
 from msdc.pipeline.cli import main
-from msdc.pipeline.jobs import OptionError
-from msdc.pipeline.jobs_track import TRACK_COLUMNS, TrackOptions
+from msdc.pipeline.jobs import common, track
+from msdc.pipeline.jobs.common import OptionError
+from msdc.pipeline.jobs.track import TRACK_COLUMNS, TrackOptions
+from msdc.pipeline.track.feasibility import track_rows
 
 FIX = Path(__file__).resolve().parents[1] / "fixtures"
 RADAR, ADSB, SENSORS = str(FIX / "radar.ast"), str(FIX / "adsb.ast"), str(FIX / "sensors.toml")
@@ -61,9 +62,9 @@ BAD = [
 @pytest.mark.parametrize(("options", "words"), BAD)
 def test_bad_options_refused_before_decoding(options, words, tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
-    monkeypatch.setattr(jobs, "load", lambda *a, **k: pytest.fail("decoded before validating"))
+    monkeypatch.setattr(common, "load", lambda *a, **k: pytest.fail("decoded before validating"))
     with pytest.raises(OptionError) as info:
-        jobs_track.validate(options, require_output=True)  # as the command validates
+        track.validate(options, require_output=True)  # as the command validates
     assert words in str(info.value) and "\n" not in str(info.value)
     assert info.value.status == 2
 
@@ -155,7 +156,7 @@ def test_figure_written(mas72):
 def _radar_only(tmp_path, sensors_text: str, noise: str = "declared") -> dict:
     s = tmp_path / "s.toml"
     s.write_text(sensors_text)
-    result = jobs_track.track_job(TrackOptions(inputs=(RADAR, ADSB), sensors=str(s), callsign="MAS72",
+    result = track.track_job(TrackOptions(inputs=(RADAR, ADSB), sensors=str(s), callsign="MAS72",
                                                json=str(tmp_path / "t.json"), date=pd.Timestamp(
                                                    "2019-03-01").date(), sources=("radar",), noise=noise))
     return result
@@ -292,8 +293,8 @@ def test_track_rows_bound_one_aircraft_by_hand():
     t0 = pd.Timestamp("2019-03-01T08:00:00Z")
     times = [t0 + pd.Timedelta(seconds=s) for s in (0, 10, 100)]
     meas = pd.DataFrame({"aircraft_id": ["A"] * 3, "time": times})
-    assert jobs_track.track_rows(meas, 1.0, 60.0) == 135
-    assert jobs_track.track_rows(meas, 0.1, 60.0) == 1300 + 2 + 3
+    assert track_rows(meas, 1.0, 60.0) == 135
+    assert track_rows(meas, 0.1, 60.0) == 1300 + 2 + 3
 
 
 def test_a_tiny_step_is_refused_after_decoding_with_the_rows_it_would_make(tmp_path, capsys):
@@ -350,7 +351,7 @@ def test_sensor_totals_by_hand():
                             "reports": [3, 9, 4], "updates": [2, 6, 0], "gated": [1, 1, 4],
                             "invalid": [0, 1, 0], "out_of_range": [0, 1, 0],
                             "nis_mean": [1.0, 3.0, np.nan]})
-    out = jobs_track.sensor_totals(sensors).set_index("sensor_id")
+    out = track.sensor_totals(sensors).set_index("sensor_id")
     assert out.loc["R", ["aircraft", "reports", "updates", "gated", "invalid", "out_of_range"]].tolist() == [
         2, 12, 8, 2, 1, 1]
     assert out.loc["R", "nis_mean"] == pytest.approx(2.5)
@@ -415,7 +416,7 @@ def test_grid_rows_bound_by_hand():
     t0 = pd.Timestamp("2019-03-01T08:00:00Z")
     meas = pd.DataFrame({"aircraft_id": ["A"] * 3,
                          "time": [t0 + pd.Timedelta(seconds=s) for s in (0, 10, 100)]})
-    assert jobs_track.track_rows(meas, 1.0, 60.0, grid_only=True) == 132
+    assert track_rows(meas, 1.0, 60.0, grid_only=True) == 132
 
 
 def test_reports_with_no_identity_are_counted_not_dropped_silently(tmp_path, capsys):

@@ -325,16 +325,16 @@ def test_per_aircraft_guard_raises_only_the_jittery_surface_aircraft():
 
 
 def test_stdout_lists_the_raised_aircraft_largest_first_up_to_a_limit():
-    from msdc.pipeline.cli import RAISED_SHOWN, _noise_text
+    from msdc.pipeline.jobs.common import RAISED_SHOWN, noise_text
 
     table = pd.DataFrame({"sensor_id": ["021:0/107"], "component": ["position"], "motion": ["surface"],
                           "estimated_sigma": [1.3], "residuals": [30000]})
     table.attrs.update(passes=8, aircraft=[])
-    assert "raised" not in _noise_text(table)
+    assert "raised" not in noise_text(table)
     table.attrs["aircraft"] = [{"aircraft_id": f"A{k:02d}", "sensor_id": "021:0/107", "motion": "surface",
                                 "declared_sigma_m": 30.0, "class_sigma_m": 1.3, "estimated_sigma_m": 2.0 + k,
                                 "residuals": 1200} for k in range(RAISED_SHOWN + 2)]
-    text = _noise_text(table)
+    text = noise_text(table)
     assert f"Sigma raised for {RAISED_SHOWN + 2} aircraft" in text and "... and 2 more in the JSON" in text
     shown = [w for w in text.split() if w.startswith("A") and w[1:].isdigit()]
     assert shown == [f"A{k:02d}" for k in range(RAISED_SHOWN + 1, 1, -1)]  # the largest sigmas first

@@ -149,7 +149,7 @@ def test_job_wide_flags_give_the_windows_of_flags_worked_out_per_source(two, spl
     """correlate() reads the duplicate and jump flags mark_once computed once for the job when the frame
     carries them, else works them out per sensor source; with a second ground station relaying every third
     ADS-B report and jumps put into the ADS-B track, both must give the same windows, counts and tables."""
-    from msdc.pipeline.jobs import mark_once
+    from msdc.pipeline.model.marks import mark_once
 
     _, meas = two
     adsb = (meas["sensor_kind"] == "adsb").to_numpy()

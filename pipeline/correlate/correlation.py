@@ -28,7 +28,7 @@ from msdc.pipeline.model.arguments import finite_number
 from msdc.pipeline.model.dedup import duplicate_mask
 from msdc.pipeline.model.geodesy import distance_m
 from msdc.pipeline.model.jumps import JUMP_FLAG_COLUMNS, detect_jumps
-from msdc.pipeline.model.time import is_dated, iso_utc, midnight, seconds_since, utc_frame, with_clock
+from msdc.pipeline.model.time import clock, is_dated, iso_utc, midnight, seconds_since, utc_frame, with_clock
 from msdc.pipeline.parallel import map_ordered
 
 PAIRS = ("radar-adsb", "radar-radar", "all")
@@ -68,19 +68,10 @@ class NoOverlap(LookupError):
         def span(s: tuple[float, float]) -> str:  # UTC date-times when dated, else HH:MM:SS
             if is_dated(reference):
                 return f"{iso_utc(at_seconds(reference, s[0]))} to {iso_utc(at_seconds(reference, s[1]))}"
-            return f"{_clock(s[0])} to {_clock(s[1])}"
+            return f"{clock(s[0])} to {clock(s[1])}"
 
         super().__init__(f"{aircraft}: radar ({span(radar_span_s)}) and ADS-B ({span(adsb_span_s)}) "
                          "tracks never overlap in time")
-
-
-def _clock(seconds: float) -> str:
-    """HH:MM:SS of seconds since midnight of the first day ("+Nd " past it), for undated recordings."""
-    if not np.isfinite(seconds):
-        return "-"
-    day, rem = divmod(int(seconds // 1), 86400)
-    text = f"{rem // 3600:02d}:{rem % 3600 // 60:02d}:{rem % 60:02d}"
-    return f"+{day}d {text}" if day else text
 
 
 class TooManySlots(ValueError):
@@ -372,7 +363,7 @@ def _span(times: np.ndarray) -> tuple[float, float]:
 class _Columns:
     """The columns correlate() reads, as arrays over the rows of a measurement frame (read once per run,
     not per aircraft or sensor pair); ``dup`` and ``jump`` are None when the frame does not carry the
-    job-wide flags (pipeline.jobs.mark_once), which are then worked out per source as before."""
+    job-wide flags (pipeline.model.marks.mark_once), which are then worked out per source as before."""
 
     def __init__(self, meas: pd.DataFrame):
         self.meas = meas

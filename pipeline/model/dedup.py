@@ -19,7 +19,7 @@ def duplicate_mask(meas: pd.DataFrame, *, split_adsb: bool = False) -> pd.Series
 
     The source is part of the key: each radar (``sensor_id``) on its own, ADS-B as one source whatever
     the ground station (so a report relayed by two stations counts once) unless ``split_adsb``. A
-    ``duplicate`` column, when present, was computed once for the job (pipeline.jobs.mark_once) and is
+    ``duplicate`` column, when present, was computed once for the job (pipeline.model.marks.mark_once) and is
     returned as it is.
     """
     if "duplicate" in meas:

@@ -206,12 +206,13 @@ def distance_m(lat1_deg, lon1_deg, lat2_deg, lon2_deg):
     if not lat1.size:
         return np.zeros(shape)
     flat = [np.ascontiguousarray(v).ravel() for v in (lon1, lat1, lon2, lat2)]
-    dist = _geod().inv(*flat)[2]
+    dist = wgs84_geod().inv(*flat)[2]
     return np.asarray(dist, float).reshape(shape) if shape else float(np.asarray(dist).ravel()[0])
 
 
 @cache
-def _geod():
+def wgs84_geod():
+    """pyproj's WGS-84 Geod, made on first use and kept."""
     from pyproj import Geod
 
     return Geod(ellps="WGS84")

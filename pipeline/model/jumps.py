@@ -254,7 +254,7 @@ def _detect(adsb_meas: pd.DataFrame, max_speed_kt: float, robust_window: int,
             robust_threshold_m: float, need: list[str] = JUMP_FLAG_COLUMNS) -> pd.DataFrame:
     """Per row (original index): jump flag, distance from the robust fit (m) and the fitted lat/lon; the
     ``need`` columns taken as they are when the frame already carries them (computed once per job,
-    pipeline.jobs.mark_once). The distance is worked out only when ``need`` names it."""
+    pipeline.model.marks.mark_once). The distance is worked out only when ``need`` names it."""
     if robust_window < 3:
         raise ValueError(f"robust_window must be at least 3, got {robust_window}")
     if all(c in adsb_meas for c in need) and (max_speed_kt, robust_window, robust_threshold_m) == _DEFAULTS:

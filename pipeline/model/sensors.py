@@ -3,6 +3,7 @@ entry a missing radar needs."""
 
 from __future__ import annotations
 
+import math
 import tomllib
 from pathlib import Path
 
@@ -21,10 +22,20 @@ _NUMBER = (int, float)
 _TYPES = {"name": (str,), "sac": (int,), "sic": (int,), "latitude": _NUMBER, "longitude": _NUMBER,
           "altitude_m": _NUMBER, "sigma_range_m": _NUMBER, "sigma_azimuth_deg": _NUMBER}
 # altitude_m: the geometry needs a finite height; past +-100 km it is no radar site (a plausible range,
-# -500 to 6000 m, only warns: pipeline.jobs)
+# SITE_ALTITUDE_RANGE_M, only warns: implausible_altitudes)
 _RANGES = {"sac": (0, 255), "sic": (0, 255), "latitude": (-90.0, 90.0), "longitude": (-180.0, 180.0),
            "altitude_m": (-100_000.0, 100_000.0), "sigma_range_m": (0.001, 10_000.0),
            "sigma_azimuth_deg": (0.0001, 10.0)}
+SITE_ALTITUDE_RANGE_M = (-500.0, 6000.0)  # outside: almost certainly a wrong sensor file entry
+# A SAC/SIC not in the sensor file is taken for damage (its records left out, with a warning) when it has
+# fewer than max(STRAY_RADAR_RECORDS, STRAY_RADAR_SHARE x the CAT048 records) records: one damaged byte of
+# I048/010 makes one such record, and a second hit landing on the same wrong pair is rare (a flipped bit
+# gives one of 16 pairs), so 1-2 records are damage at any size; heavy damage spreads its phantoms over
+# many pairs, each well under 0.1 % of the records. A real radar turns in 4-12 s, so one aircraft in its
+# cover for a minute already makes 5-15 plots, and radars recorded together share the traffic, each
+# holding a large part of the plots: such a radar still stops the run with the sensor-file lines to add.
+STRAY_RADAR_RECORDS = 3
+STRAY_RADAR_SHARE = 0.001
 
 
 class UnknownRadar(ValueError):
@@ -142,6 +153,59 @@ def undeclared_radars(reports: pd.DataFrame, sensors: pd.DataFrame) -> pd.DataFr
                                     else pd.array([pd.NA] * len(reports), dtype="Int64"))})
     groups = keys.groupby(["sac", "sic", "file"], dropna=False, sort=False)
     return groups.agg(records=("offset", "size"), offset=("offset", "first")).reset_index()[columns]
+
+
+def implausible_altitudes(sensors: pd.DataFrame, sensors_path) -> list[str]:
+    """A warning per sensor whose altitude_m lies outside SITE_ALTITUDE_RANGE_M (``sensors_path``: the file
+    the warnings name)."""
+    odd = sensors[~sensors["altitude_m"].between(*SITE_ALTITUDE_RANGE_M)]
+    lo, hi = SITE_ALTITUDE_RANGE_M
+    return [f"--sensors {sensors_path}: {row.name!r} altitude_m = {row.altitude_m:g} is "
+            f"implausible for a radar site (expected {lo:g} to {hi:g} m)"
+            for row in odd.itertuples()]
+
+
+def stray_verdict(stray: pd.DataFrame, n_cat048: int, sensors_path: str | None) -> list[str]:
+    """Judge the records of SAC/SIC pairs the sensor file lacks (undeclared_radars' table, over the run's
+    n_cat048 CAT048 records): UnknownRadar for the pairs with enough records to be a radar, else one
+    warning per pair and file, the records being left out."""
+    limit = max(STRAY_RADAR_RECORDS, math.ceil(STRAY_RADAR_SHARE * n_cat048))
+    per_pair = stray.groupby(["sac", "sic"], dropna=False, sort=False)["records"].transform("sum")
+    no_pair = (stray["sac"].isna() | stray["sic"].isna()).to_numpy(bool)
+    real = stray[~no_pair & (per_pair >= limit).to_numpy(bool)]
+    if len(real):
+        pairs = real[["sac", "sic"]].drop_duplicates().sort_values(["sac", "sic"])
+        raise UnknownRadar([(int(a), int(b)) for a, b in pairs.itertuples(index=False)])
+    warnings = []
+    for row in stray.itertuples(index=False):
+        name = row.file if pd.notna(row.file) else "input"
+        if pd.isna(row.sac) or pd.isna(row.sic):
+            why = "carry no SAC/SIC (I048/010), so no sensor entry can place them"
+            pair = "without SAC/SIC"
+        else:
+            pair = f"from SAC/SIC {row.sac}/{row.sic}"
+            where = sensors_path if sensors_path is not None else "a sensor file (no --sensors given)"
+            why = (f"not in {where} and too few for a radar (fewer than {limit}: the larger of "
+                   f"{STRAY_RADAR_RECORDS} and {STRAY_RADAR_SHARE:.1%} of the {n_cat048} CAT048 records), "
+                   "taken for damaged data")
+        warnings.append(f"{name}: {row.records} CAT048 record(s) {pair} (first at offset {row.offset}) "
+                        f"{why}, left out of the measurements")
+    return warnings
+
+
+def declared_radar(cat048: pd.DataFrame | None, sensors: pd.DataFrame, sensors_path: str | None
+                   ) -> tuple[pd.DataFrame | None, list[str]]:
+    """The CAT048 records of radars the sensor file lists, and the warnings of stray_verdict: records of a
+    SAC/SIC it lacks are left out when too few to be a radar or without SAC/SIC; UnknownRadar otherwise."""
+    if cat048 is None or cat048.empty:
+        return cat048, []
+    stray = undeclared_radars(cat048, sensors)
+    if stray.empty:
+        return cat048, []
+    warnings = stray_verdict(stray, len(cat048), sensors_path)
+    keys = pd.MultiIndex.from_arrays([cat048["sac"].astype("Int64"), cat048["sic"].astype("Int64")])
+    known = keys.isin(pd.MultiIndex.from_frame(sensors[["sac", "sic"]].astype("Int64")))
+    return cat048[known], warnings
 
 
 def sensor_toml_snippet(sac: int, sic: int) -> str:

@@ -66,6 +66,15 @@ def dated_or_nat(times: pd.Series) -> pd.Series:
     return pd.Series(t.array, index=times.index).where(keep).astype(UTC_DTYPE)
 
 
+def clock(seconds: float) -> str:
+    """HH:MM:SS of seconds since midnight of the first day (with "+Nd " past it); "-" when missing."""
+    if not np.isfinite(seconds):
+        return "-"
+    day, rem = divmod(int(seconds // 1), 86400)
+    text = f"{rem // 3600:02d}:{rem % 3600 // 60:02d}:{rem % 60:02d}"
+    return f"+{day}d {text}" if day else text
+
+
 def iso_utc(instant) -> str | None:
     """ISO 8601 UTC text with milliseconds and "Z"; None when missing or undated."""
     if instant is None or pd.isna(instant):

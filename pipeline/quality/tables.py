@@ -53,8 +53,9 @@ GAP_COLUMNS = [*ID_KEYS, "gap_start_tod", "gap_end_tod", "gap_start_utc", "gap_e
 JUMP_COLUMNS = [*ID_KEYS, "time_of_day", "utc", "latitude", "longitude", "fit_latitude", "fit_longitude",
                 "jump_size_m"]
 VALUE_COUNT_COLUMNS = [*ID_KEYS, "indicator", "value", "reports", "share_pct"]
-# The measurement columns quality_tables reads, and the flags of pipeline.jobs.mark_once it reuses when the
-# frame carries them; every other column is left out of its working copies (a day holds a million reports)
+# The measurement columns quality_tables reads, and the flags of pipeline.model.marks.mark_once it reuses
+# when the frame carries them; every other column is left out of its working copies (a day holds a
+# million reports)
 QUALITY_INPUTS = list(dict.fromkeys([
     *DEDUP_KEYS, *JUMP_INPUTS, "sensor_id", "sensor_kind", "sac", "sic", "address", "callsign",
     *ADSB_INDICATORS, "mops_version"]))

@@ -1,4 +1,4 @@
-"""The conflict job (``msdc conflicts``): post-event conflict analysis of recorded traffic.
+"""The conflicts job (``msdc conflicts``): post-event conflict analysis of recorded traffic.
 
 Options are validated before anything is decoded (``validate``: one-line ``OptionError`` naming the
 option). ``conflict_job`` decodes and builds the measurements as ``msdc track`` does, tracks every
@@ -13,7 +13,6 @@ from __future__ import annotations
 
 import json
 import math
-import os
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -21,17 +20,26 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from msdc.pipeline import jobs
-from msdc.pipeline.jobs import Checked, JobError, OptionError
-from msdc.pipeline.jobs_track import (
+from msdc.pipeline.jobs.common import (
+    ADSB_SIGMA_RANGE_M,
     ESTIMATED,
+    Checked,
+    JobError,
+    OptionError,
     TrackOptions,
-    _estimate_noise,
-    _measurements,
-    _sources,
-    check_track_rows,
+    carrying,
+    check_decoding,
+    check_figures_dir,
+    check_number,
+    check_output_rows,
     check_tracking,
-    untrackable,
+    estimated_noise,
+    output_path,
+    parse_sources,
+    run_parameters,
+    sensor_table,
+    spare_inputs,
+    tracker_inputs,
 )
 from msdc.pipeline.progress import Progress
 
@@ -86,54 +94,44 @@ def parse_horizons(value) -> tuple[float, ...]:
 
 def validate(options: ConflictOptions) -> Checked:
     """Check every option, the sensor file and the output paths before any decoding; OptionError if bad."""
-    warnings: list[str] = []
-    inputs, editions = jobs._check_decoding(options, warnings)
-    checked = Checked(inputs, editions, warnings=warnings)
+    checked = check_decoding(options)
     step = check_tracking(options)
     horizons = parse_horizons(options.horizons_s)
     for h in horizons:
-        jobs._number("--horizon", h, *HORIZON_RANGE_S, " s")
+        check_number("--horizon", h, *HORIZON_RANGE_S, " s")
         if abs(h / step - round(h / step)) > 1e-9:
             raise OptionError(f"--horizon {h:g}: must be a whole multiple of --step ({step:g} s)")
-    jobs._number("--radius-nm", options.radius_nm, *RADIUS_RANGE_NM, " NM")
-    jobs._number("--vertical-ft", options.vertical_ft, *VERTICAL_RANGE_FT, " ft")
+    check_number("--radius-nm", options.radius_nm, *RADIUS_RANGE_NM, " NM")
+    check_number("--vertical-ft", options.vertical_ft, *VERTICAL_RANGE_FT, " ft")
     tol = options.vertical_tolerance_ft
-    jobs._number("--vertical-tolerance-ft", tol, *VERTICAL_TOLERANCE_RANGE_FT, " ft")
+    check_number("--vertical-tolerance-ft", tol, *VERTICAL_TOLERANCE_RANGE_FT, " ft")
     if not tol < options.vertical_ft:
         raise OptionError(f"--vertical-tolerance-ft {tol!r}: must be less than --vertical-ft "
                           f"({options.vertical_ft:g})")
     t = options.threshold
     if not isinstance(t, int | float) or not math.isfinite(t) or not 0.0 < t < 1.0:
         raise OptionError(f"--threshold {t!r}: must be a probability strictly between 0 and 1")
-    _sources(options.sources)
+    parse_sources(options.sources)
     if options.method not in METHODS:
         raise OptionError(f"--method {options.method!r}: must be one of {', '.join(METHODS)}")
     if options.vertical not in VERTICAL_MODELS:
         raise OptionError(f"--vertical {options.vertical!r}: must be one of {', '.join(VERTICAL_MODELS)}")
     if options.surface not in SURFACE_MODES:
         raise OptionError(f"--surface {options.surface!r}: must be one of {', '.join(SURFACE_MODES)}")
-    jobs._number("--adsb-sigma", options.adsb_sigma_m, *jobs.ADSB_SIGMA_RANGE_M, " m")
-    checked.output = jobs._output("-o", options.output, (".csv", ".xlsx"))
-    checked.json = jobs._output("--json", options.json, (".json",))
+    check_number("--adsb-sigma", options.adsb_sigma_m, *ADSB_SIGMA_RANGE_M, " m")
+    checked.output = output_path("-o", options.output, (".csv", ".xlsx"))
+    checked.json = output_path("--json", options.json, (".json",))
     if checked.output is None:
         raise OptionError("-o: give the output, conflicts.csv or conflicts.xlsx")
     if checked.output.suffix.lower() == ".csv":
         for extra in companion_paths(checked.output).values():
-            jobs._output("-o", extra, (".csv",))
+            output_path("-o", extra, (".csv",))
     beside = companion_paths(checked.output).values() if checked.output.suffix.lower() == ".csv" else ()
-    jobs.spare_inputs(options.inputs, [(f"-o {checked.output}", p) for p in (checked.output, *beside)]
-                      + [(f"--json {checked.json}", checked.json)])
+    spare_inputs(options.inputs, [(f"-o {checked.output}", p) for p in (checked.output, *beside)]
+                 + [(f"--json {checked.json}", checked.json)])
     if options.figures is not None:
-        jobs.nonempty_path("--figures", options.figures)
-        d = Path(options.figures)
-        if d.exists() and not d.is_dir():
-            raise OptionError(f"--figures {d}: exists and is not a directory")
-        parent = d if d.exists() else (d.parent if str(d.parent) else Path("."))
-        if not parent.is_dir():
-            raise OptionError(f"--figures {d}: directory {d.parent} does not exist")
-        if not os.access(parent, os.W_OK):
-            raise OptionError(f"--figures {d}: directory {parent} is not writable")
-    checked.sensors = jobs._sensors(options.sensors, required=False)
+        check_figures_dir(options.figures, writable=True)
+    checked.sensors = sensor_table(options.sensors, required=False)
     return checked
 
 
@@ -153,12 +151,13 @@ class ConflictJobResult:
     pc: pd.DataFrame  # time, aircraft_a, aircraft_b, horizon_s, pc, horizontal_nm, vertical_ft
     alerts: pd.DataFrame  # alert events with loss_start and false_alert
     losses: pd.DataFrame
-    warnings: pd.DataFrame
+    warning_times: pd.DataFrame  # per loss and horizon: how long before the loss an alert was raised
     parameters: dict
     loaded: object
     counts: dict = field(default_factory=dict)
     predictions: pd.DataFrame | None = None  # predict_tracks' frame (for the figures)
     noise: pd.DataFrame | None = None  # --noise estimate or timing: declared and estimated sigmas
+    warnings: list[str] = field(default_factory=list)  # the run's, validation's first
 
 
 def conflict_job(options: ConflictOptions, *, progress: Progress | None = None,
@@ -170,71 +169,70 @@ def conflict_job(options: ConflictOptions, *, progress: Progress | None = None,
     from msdc.pipeline.conflict.grid import on_grid
     from msdc.pipeline.conflict.surface import on_surface, surface_pairs
     from msdc.pipeline.track import Plane, track
+    from msdc.pipeline.track.feasibility import untrackable
     from msdc.pipeline.track.noise import SURFACE_SPEED_KT
 
     started = time.monotonic()
     checked = checked or validate(options)
     horizons = parse_horizons(options.horizons_s)
     step = float(options.step_s)
-    if progress:
-        progress.stage("Processing data files")
-    loaded = jobs._load(options, checked, progress)
-    if progress:
-        progress.stage("Tracking")
-    meas = _measurements(loaded, checked, options)
-    checked.warnings += jobs.site_warnings(meas, checked.sensors, str(jobs.sensors_path(options)))
-    checked.warnings += jobs.undated_warning(loaded, "the times of the alerts, losses and tracks")
-    loaded.drop_frames()  # the measurements hold what tracking needs
-    check_track_rows(meas, options)
-    check_track_rows(meas, options, len(horizons), f"predictions ({len(horizons)} horizon(s) a grid row)",
-                     grid_only=True)  # predictions start from the grid rows only, not from the report times
-    noise = None
-    if options.noise in ESTIMATED:
-        meas, noise = _estimate_noise(meas, checked.sensors, options)
-    result = track(meas, step_s=step, max_coast_s=float(options.max_coast_s), tpm=options.tpm)
-    tracks = result.tracks
-    if tracks.empty:
-        raise JobError(untrackable(meas))
-    grid_at = np.flatnonzero(on_grid(tracks, step))  # the tracker's report-time rows are not the grid
-    plane = Plane.around(tracks["latitude"].to_numpy(float), tracks["longitude"].to_numpy(float))
-    epoch, tracker_parameters = result.epoch, result.parameters
-    del result
-    # the grid rows are what follows needs: the full table (~0.35 GB on a day at 1 s) freed as they are taken
-    grid = _take_rows(tracks, grid_at)
-    del tracks, grid_at
-    if progress:
-        progress.stage("Predicting and computing PC")
-    predictions = _predictions(meas, epoch, plane, horizons, options)
-    tol = options.vertical_tolerance_ft
-    pc = pair_probabilities(predictions, options.radius_nm, options.vertical_ft, method=options.method,
-                            vertical_tolerance_ft=tol)
-    grid["on_surface"], by_speed = on_surface(grid)
-    exclude = options.surface == "exclude"
-    kept = "airborne" if exclude else "all"
-    # both modes' tables are counted, so that the terminal can say what the other would give
-    lost = losses_by_pairs(grid, options.radius_nm, options.vertical_ft, tol,
-                           kinds=("airborne", "all", "surface"), step_s=step)
-    losses = lost[kept]
-    at_surface = surface_pairs(pc, grid)
-    both = {"airborne": alert_events(pc[~at_surface], options.threshold, step_s=step),
-            "all": alert_events(pc, options.threshold, step_s=step)}
-    events = both[kept]
-    alerts = closest_approach(classify_alerts(events, losses), grid)
-    warn = warning_times(losses, events, horizons)
-    counts = {"aircraft": int(grid["aircraft_id"].nunique()), "losses": len(losses),
-              "alerts": len(alerts), "false_alerts": int(alerts["false_alert"].sum()) if len(alerts) else 0,
-              "missed": {f"{h:g}": int(warn.loc[warn["horizon_s"] == h, "warning_s"].isna().sum())
-                         for h in horizons} if len(warn) else {f"{h:g}": 0 for h in horizons},
-              "surface": _surface_counts(grid, by_speed, at_surface, lost, both, options, pc)}
-    params = {**jobs._parameters(options, loaded, started, command), **tracker_parameters,
-              "horizons_s": list(horizons), "radius_nm": options.radius_nm,
-              "vertical_ft": options.vertical_ft, "vertical_tolerance_ft": tol,
-              "threshold": options.threshold, "method": options.method,
-              "vertical": options.vertical, "noise": options.noise, "surface": options.surface,
-              "surface_speed_kt": SURFACE_SPEED_KT,
-              "sources": list(_sources(options.sources))}
-    return ConflictJobResult(options, checked, grid, pc, alerts, losses, warn, params, loaded, counts,
-                             predictions, noise)
+    with carrying(checked.warnings) as warnings:
+        loaded, meas, said = tracker_inputs(options, checked, progress,
+                                            "the times of the alerts, losses and tracks")
+        warnings += said
+        check_output_rows(meas, options)
+        # predictions start from the grid rows only, not from the report times
+        check_output_rows(meas, options, len(horizons),
+                          f"predictions ({len(horizons)} horizon(s) a grid row)", grid_only=True)
+        noise = None
+        if options.noise in ESTIMATED:
+            meas, noise = estimated_noise(meas, checked.sensors, options)
+        result = track(meas, step_s=step, max_coast_s=float(options.max_coast_s), tpm=options.tpm)
+        tracks = result.tracks
+        if tracks.empty:
+            raise JobError(untrackable(meas))
+        grid_at = np.flatnonzero(on_grid(tracks, step))  # the tracker's report-time rows are not the grid
+        plane = Plane.around(tracks["latitude"].to_numpy(float), tracks["longitude"].to_numpy(float))
+        epoch, tracker_parameters = result.epoch, result.parameters
+        del result
+        # the grid rows are what follows needs: the full table (~0.35 GB on a day at 1 s) freed as they are
+        # taken
+        grid = _take_rows(tracks, grid_at)
+        del tracks, grid_at
+        if progress:
+            progress.stage("Predicting and computing PC")
+        predictions = _predictions(meas, epoch, plane, horizons, options)
+        tol = options.vertical_tolerance_ft
+        pc = pair_probabilities(predictions, options.radius_nm, options.vertical_ft, method=options.method,
+                                vertical_tolerance_ft=tol)
+        grid["on_surface"], by_speed = on_surface(grid)
+        exclude = options.surface == "exclude"
+        kept = "airborne" if exclude else "all"
+        # both modes' tables are counted, so that the terminal can say what the other would give
+        lost = losses_by_pairs(grid, options.radius_nm, options.vertical_ft, tol,
+                               kinds=("airborne", "all", "surface"), step_s=step)
+        losses = lost[kept]
+        at_surface = surface_pairs(pc, grid)
+        both = {"airborne": alert_events(pc[~at_surface], options.threshold, step_s=step),
+                "all": alert_events(pc, options.threshold, step_s=step)}
+        events = both[kept]
+        alerts = closest_approach(classify_alerts(events, losses), grid)
+        warn = warning_times(losses, events, horizons)
+        counts = {"aircraft": int(grid["aircraft_id"].nunique()), "losses": len(losses),
+                  "alerts": len(alerts),
+                  "false_alerts": int(alerts["false_alert"].sum()) if len(alerts) else 0,
+                  "missed": {f"{h:g}": int(warn.loc[warn["horizon_s"] == h, "warning_s"].isna().sum())
+                             for h in horizons} if len(warn) else {f"{h:g}": 0 for h in horizons},
+                  "surface": _surface_counts(grid, by_speed, at_surface, lost, both, options, pc)}
+        params = {**run_parameters(options, loaded, started, command), **tracker_parameters,
+                  "horizons_s": list(horizons), "radius_nm": options.radius_nm,
+                  "vertical_ft": options.vertical_ft, "vertical_tolerance_ft": tol,
+                  "threshold": options.threshold, "method": options.method,
+                  "vertical": options.vertical, "noise": options.noise, "surface": options.surface,
+                  "surface_speed_kt": SURFACE_SPEED_KT,
+                  "sources": list(parse_sources(options.sources))}
+        return ConflictJobResult(options, checked, grid, pc, alerts, losses, warn, params, loaded, counts,
+                                 predictions, noise, warnings)
 
 
 def _surface_counts(grid: pd.DataFrame, by_speed: np.ndarray, at_surface: np.ndarray, lost: dict,
@@ -308,7 +306,7 @@ def summary(result: ConflictJobResult) -> dict:
 
     doc = {"parameters": result.parameters, "inputs": result.loaded.inputs, "counts": result.counts,
            "alerts": records(result.alerts), "losses": records(result.losses),
-           "warning_times": records(result.warnings)}
+           "warning_times": records(result.warning_times)}
     if result.noise is not None:
         doc["noise"] = {"passes": result.noise.attrs.get("passes"), "sensors": records(result.noise)}
     return doc
@@ -335,8 +333,8 @@ def text(result: ConflictJobResult) -> str:
                      "and surface samples is one with include)")
     if not c["losses"] and not c["alerts"]:
         lines.append("no loss of separation and no alert: the tables are written empty, with their headers")
-    if len(result.warnings):
-        w = result.warnings.groupby("horizon_s")["warning_s"]
+    if len(result.warning_times):
+        w = result.warning_times.groupby("horizon_s")["warning_s"]
         for h, s in w:
             ahead = int((s > 0).sum())
             lines.append(f"horizon {h:g} s: {ahead} of {len(s)} loss(es) alerted in advance "
@@ -348,6 +346,7 @@ def text(result: ConflictJobResult) -> str:
 
 
 def _csv(frame: pd.DataFrame, path: Path) -> None:
+    """One table as CSV, its tz-aware times as ISO 8601 UTC."""
     out = frame.copy()
     for c in out.columns:
         if isinstance(out[c].dtype, pd.DatetimeTZDtype):
@@ -370,11 +369,11 @@ def write_conflicts(result: ConflictJobResult) -> dict[str, Path]:
         extra = companion_paths(out)
         targets.update(extra)
         writers.append((extra["losses"], lambda p: _csv(result.losses, p)))
-        writers.append((extra["warnings"], lambda p: _csv(result.warnings, p)))
+        writers.append((extra["warnings"], lambda p: _csv(result.warning_times, p)))
     else:
         targets["workbook"] = out
-        writers.append((out, lambda p: write_conflict_workbook(result.alerts, result.losses, result.warnings,
-                                                               result.parameters, p)))
+        writers.append((out, lambda p: write_conflict_workbook(result.alerts, result.losses,
+                                                               result.warning_times, result.parameters, p)))
     if js is not None:
         targets["json"] = js
         writers.append((js, lambda p: p.write_text(json.dumps(summary(result), indent=1, default=str))))

@@ -14,6 +14,7 @@ import numpy as np
 import pandas as pd
 
 from msdc.pipeline.model.sources import file_labels
+from msdc.pipeline.model.time import clock
 
 # "(record at offset 1234)", "at offset 0x1f": the place, not the reason; "(LEN 40, 36 bytes past the
 # end)": a bad data block LEN's numbers; "(capture time 1989-04-23 02:22:56)": a damaged capture time's value
@@ -36,15 +37,6 @@ def reason_kind(reason: str) -> str:
     """A skipped block's reason without the offset or LEN numbers embedded in it, so equal reasons group
     together."""
     return _OFFSET.sub("", str(reason)).strip()
-
-
-def clock(seconds: float) -> str:
-    """HH:MM:SS of seconds since midnight of the first day (with "+Nd " past it); "-" when missing."""
-    if not np.isfinite(seconds):
-        return "-"
-    day, rem = divmod(int(seconds // 1), 86400)
-    text = f"{rem // 3600:02d}:{rem % 3600 // 60:02d}:{rem % 60:02d}"
-    return f"+{day}d {text}" if day else text
 
 
 def _span_text(t_min: float, stamp_min, t_max: float, stamp_max) -> tuple[str, str, float]:

@@ -1,0 +1,832 @@
+"""What the command modules share: the errors (``OptionError``, ``JobError``), one check per kind of option
+value, the inputs, outputs and sensor file checked before anything is decoded (``Checked``), the option
+dataclasses several commands extend, decoding the inputs with the warnings about them, and the steps two
+commands run (the quality step; the tracker's measurements, row limit and noise estimate)."""
+
+from __future__ import annotations
+
+import datetime as dt
+import math
+import os
+import time
+from collections.abc import Iterable, Iterator
+from contextlib import contextmanager
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+import pandas as pd
+
+from msdc.pipeline.meta import FORMATS, software_version
+from msdc.pipeline.model import editions as edition_notes
+from msdc.pipeline.model.identity import normalise_address, normalise_callsign
+from msdc.pipeline.model.load import (
+    Loaded,
+    NoRecords,
+    load,
+    load_measurements,
+    release_free_memory,
+    sha256,
+    time_spans,
+)
+from msdc.pipeline.progress import Progress
+
+if TYPE_CHECKING:  # the steps are imported where they run: msdc stats imports none of them
+    from msdc.pipeline.quality.quality_run import QualityResult
+
+
+GAP_RANGE_S = (0.1, 86400.0)
+
+# --adsb-sigma: 1-sigma error per axis declared for ADS-B reports without NACp (CAT021 0.2x)
+ADSB_SIGMA_RANGE_M = (0.5, 20000.0)
+
+CHUNK_RANGE_MB = (0.1, 4096.0)
+SOURCES = ("radar", "adsb")
+# --noise: the sensor file's sigmas and NACp; estimated from residuals (one isotropic ADS-B sigma per
+# class); estimated with an ADS-B along-track timing term as well (docs/tracker.md: fewer gated reports
+# and track segments on the real recording, predictions through gaps no better on the mean)
+NOISE = ("declared", "estimate", "timing")
+ESTIMATED = ("estimate", "timing")
+STEP_RANGE_S = (1e-3, 3600.0)  # below 1 ms the grid explodes (a day would be 86 M rows per aircraft)
+MAX_COAST_RANGE_S = (0.0, 86400.0)
+RAISED_SHOWN = 10  # aircraft listed on stdout whose sigma the per-aircraft guard raised; the JSON has all
+
+
+class OptionError(ValueError):
+    """An option, the sensor file or an output path is not usable: one line naming it and what is allowed.
+    ``status`` is the exit status a command line should use (2: usage)."""
+
+    def __init__(self, message: str, status: int = 2):
+        super().__init__(message)
+        self.status = status
+
+
+class JobError(RuntimeError):
+    """The data do not allow the job (no radar, no such aircraft, no overlap...); exit status 1."""
+
+    def __init__(self, message: str, status: int = 1):
+        super().__init__(message)
+        self.status = status
+
+
+@contextmanager
+def carrying(said: Iterable[str] = ()) -> Iterator[list[str]]:
+    """The list where a job (or a step of one) collects its warnings, starting with ``said``: an error
+    leaving the block carries them as ``job_warnings``, before those of the step that failed, so that the
+    command prints them ahead of the error (one may name its cause); a job that succeeds returns them."""
+    warnings = list(said)
+    try:
+        yield warnings
+    except Exception as exc:
+        exc.job_warnings = [*warnings, *getattr(exc, "job_warnings", [])]
+        raise
+
+
+# ---------------------------------------------------------------------------------------------------------
+# Validation helpers, one per kind of value
+
+
+def check_number(name: str, value: float | None, lo: float, hi: float, unit: str = "") -> None:
+    """A finite number within [lo, hi], else OptionError naming the option."""
+    if value is None:
+        return
+    if not isinstance(value, int | float) or not math.isfinite(value) or not lo <= value <= hi:
+        raise OptionError(f"{name} {value!r}: must be a finite number from {lo:g} to {hi:g}{unit}")
+
+
+def check_integer(name: str, value: int | None, lo: int, hi: int) -> None:
+    """An integer within [lo, hi], else OptionError naming the option."""
+    if value is not None and not (isinstance(value, int) and lo <= value <= hi):
+        raise OptionError(f"{name} {value!r}: must be an integer from {lo} to {hi}")
+
+
+def _editions(editions: list[str] | dict | None) -> dict[int, str]:
+    """CAT=EDITION pins checked against the shipped tables ("auto" for CAT021)."""
+    from msdc.asterix.tables import available, resolve_edition
+
+    items = editions.items() if isinstance(editions, dict) else (
+        str(e).partition("=")[::2] for e in (editions or []))
+    out = {}
+    for cat, ed in items:
+        if not str(cat).strip().isdigit() or int(cat) not in available():
+            raise OptionError(f"--edition {cat}={ed}: category must be one of "
+                              f"{', '.join(str(c) for c in sorted(available()))}")
+        cat = int(cat)
+        if not (cat == 21 and ed == "auto"):
+            try:
+                resolve_edition(cat, ed)
+            except ValueError as exc:
+                raise OptionError(f"--edition {cat}={ed}: {exc}") from None
+        if out.get(cat, ed) != ed:
+            raise OptionError(f"--edition {cat}={ed}: CAT{cat:03d} is already pinned to {out[cat]}; give one "
+                              "edition per category")
+        out[cat] = ed
+    return out
+
+
+def nonempty_path(name: str, value) -> None:
+    """OptionError for an empty path (an unset shell variable): Path("") is the current directory."""
+    if value is not None and not str(value).strip():
+        raise OptionError(f"{name} {str(value)!r}: an empty path")
+
+
+def _not_a_file(p: Path, noun: str, thing: str) -> str | None:
+    """Why ``p`` cannot be read as a file (missing, a directory, a FIFO or device), None when it can:
+    ``noun`` names it ("input"), ``thing`` what it should be ("a recording file")."""
+    if not p.exists():
+        return f"{noun} file does not exist"
+    if p.is_dir():
+        return f"{noun} is a directory, not {thing}"
+    if not p.is_file():  # reading a FIFO blocks, and its bytes could be read only once
+        return f"{noun} is not a regular file (a FIFO, socket or device); give {thing}"
+    return None
+
+
+def _inputs(paths: list[str | Path]) -> tuple[list[Path], list[str]]:
+    """Readable input files, and a warning for each skipped because its content was given before."""
+    if not paths:
+        raise OptionError("no input file given")
+    for p in paths:
+        nonempty_path("input", p)
+    out, seen, warnings = [], {}, []
+    for p in map(Path, paths):
+        problem = _not_a_file(p, "input", "a recording file")
+        if problem:
+            raise OptionError(f"{p}: {problem}")
+        if not os.access(p, os.R_OK):
+            raise OptionError(f"{p}: input file is not readable")
+        digest = sha256(p)
+        if digest in seen:
+            warnings.append(f"{p}: same content as {seen[digest]} (SHA-256); skipped")
+            continue
+        seen[digest] = p
+        out.append(p)
+    return out, warnings
+
+
+def output_path(name: str, path: str | Path | None, suffixes: tuple[str, ...]) -> Path | None:
+    """An output path with an allowed suffix, not a directory, in a writable directory."""
+    if path is None:
+        return None
+    nonempty_path(name, path)
+    p = Path(path)
+    if p.suffix.lower() not in suffixes:
+        raise OptionError(f"{name} {p}: must end in {' or '.join(suffixes)}")
+    if p.is_dir():
+        raise OptionError(f"{name} {p}: is a directory")
+    parent = p.parent if str(p.parent) else Path(".")
+    if parent.exists() and not parent.is_dir():
+        raise OptionError(f"{name} {p}: {parent} is a file, not a directory")
+    if not parent.is_dir():
+        raise OptionError(f"{name} {p}: directory {parent} does not exist")
+    writable = os.access(parent, os.W_OK) and (not p.exists() or os.access(p, os.W_OK))
+    if not writable or not _can_create(parent):
+        raise OptionError(f"{name} {p}: not writable (directory {parent})")
+    return p
+
+
+def spare_inputs(inputs, outputs: list[tuple[str, Path | None]]) -> None:
+    """OptionError when an output (a ``(what, path)`` pair: the option and the file it writes) is one of the
+    inputs, by any path or link: writing it would destroy the recording before or while it is read."""
+    inputs = [inputs] if isinstance(inputs, str | Path) else inputs  # one path is one input
+    given = [Path(p) for p in inputs if Path(p).is_file()]
+    for what, out in outputs:
+        if out is None or not Path(out).is_file():
+            continue
+        for p in given:
+            if os.path.samefile(out, p):
+                also = "" if what.endswith(str(out)) else f" (it writes {out})"
+                raise OptionError(f"{what}{also}: is the input {p}; writing it would destroy the recording")
+
+
+def _can_create(directory: Path) -> bool:
+    """Whether a file can really be created here (permission bits do not stop root; read-only mounts,
+    ACLs and pseudo file systems do): a temporary file is created and removed at once."""
+    import tempfile
+
+    try:
+        with tempfile.NamedTemporaryFile(dir=directory, prefix=".msdc-probe-"):
+            return True
+    except OSError:
+        return False
+
+
+def sensor_table(path: str | Path | None, *, required: bool = True) -> pd.DataFrame:
+    """The sensor table of --sensors; without the option an empty table where it is optional (track and
+    conflicts on ADS-B alone: a radar plot then stops the run naming --sensors), else an OptionError."""
+    if path is None and not required:
+        from msdc.pipeline.model.sensors import no_sensors
+
+        return no_sensors()
+    if path is None:
+        raise OptionError("--sensors: the sensor file (TOML [[sensor]] tables) is required")
+    nonempty_path("--sensors", path)
+    from msdc.pipeline.model.sensors import read_sensors
+
+    p = Path(path)
+    problem = _not_a_file(p, "sensor", "a TOML sensor file")
+    if problem:
+        raise OptionError(f"--sensors {p}: {problem}")
+    try:
+        return read_sensors(p)
+    except OSError as exc:
+        raise OptionError(f"--sensors {p}: cannot be read ({exc.strerror})") from None
+    except ValueError as exc:
+        raise OptionError(str(exc).replace("\n", " "), status=1) from None
+
+
+def check_figures_dir(path, *, writable: bool = False) -> None:
+    """--figures: a directory, or one that can be made in an existing directory (``writable``: that directory
+    must be writable); OptionError otherwise."""
+    nonempty_path("--figures", path)
+    d = Path(path)
+    if d.exists() and not d.is_dir():
+        raise OptionError(f"--figures {d}: exists and is not a directory")
+    parent = d if d.exists() else (d.parent if str(d.parent) else Path("."))
+    if not parent.is_dir():
+        raise OptionError(f"--figures {d}: directory {d.parent} does not exist")
+    if writable and not os.access(parent, os.W_OK):
+        raise OptionError(f"--figures {d}: directory {parent} is not writable")
+
+
+# ---------------------------------------------------------------------------------------------------------
+# Options shared by several commands
+
+
+@dataclass(frozen=True)
+class DecodingOptions:
+    """How to read the inputs (shared by every job)."""
+
+    inputs: tuple[str, ...] = ()
+    editions: tuple[str, ...] = ()  # "CAT=EDITION"
+    date: dt.date | None = None
+    format: str | None = None
+
+
+def check_decoding(o: DecodingOptions) -> Checked:
+    """The options every job shares (--format, --date, the inputs, --edition): the inputs to read, the
+    editions pinned and the warnings about the inputs; OptionError if bad."""
+    if o.format is not None and o.format not in FORMATS:
+        raise OptionError(f"--format {o.format!r}: must be one of {', '.join(FORMATS)}")
+    if o.date is not None:
+        from msdc.asterix.reader import parse_date  # the rule asterix.read and load apply to date=
+
+        try:
+            parse_date(o.date, "--date")
+        except (TypeError, ValueError) as exc:
+            raise OptionError(str(exc)) from None
+    inputs = [o.inputs] if isinstance(o.inputs, str | Path) else list(o.inputs)  # one path is one input
+    editions = o.editions if isinstance(o.editions, dict) else [o.editions] if isinstance(
+        o.editions, str) else list(o.editions)  # {21: "0.26"} as asterix.read takes it, or "21=0.26"
+    paths, warnings = _inputs(inputs)
+    return Checked(paths, _editions(editions), warnings=warnings)
+
+
+@dataclass(frozen=True)
+class AircraftOptions(DecodingOptions):
+    """Inputs, the sensor file and the aircraft selection (call sign, address or all)."""
+
+    sensors: str | None = None
+    callsign: str | None = None
+    address: str | None = None
+    all_aircraft: bool = False
+    output: str | None = None
+    json: str | None = None
+    gap_s: float = 180.0
+    adsb_sigma_m: float | None = None  # declared sigma (m per axis) for ADS-B reports without NACp
+
+
+def check_aircraft(o: AircraftOptions) -> None:
+    """The aircraft selection (exactly one of --callsign, --address, --all), --gap and --adsb-sigma."""
+    chosen = [o.callsign is not None, o.address is not None, bool(o.all_aircraft)]
+    if sum(chosen) != 1:
+        raise OptionError("choose exactly one of --callsign, --address or --all")
+    if o.callsign is not None and not (normalise_callsign(o.callsign) or "").isalnum():
+        raise OptionError(f"--callsign {o.callsign!r}: must be letters and digits (spaces ignored)")
+    if o.address is not None:
+        text = (normalise_address(o.address) or "")
+        if len(text) != 6 or any(c not in "0123456789ABCDEF" for c in text):
+            raise OptionError(f"--address {o.address!r}: must be a 24-bit hex address (up to 6 hex digits)")
+    check_number("--gap", o.gap_s, *GAP_RANGE_S, " s")
+    check_number("--adsb-sigma", o.adsb_sigma_m, *ADSB_SIGMA_RANGE_M, " m")
+
+
+@dataclass(frozen=True)
+class TrackOptions(AircraftOptions):
+    """Everything ``track_job`` needs; see ``msdc track --help`` for the meaning of each option. The
+    inputs, sensor file, aircraft selection and outputs are the other jobs' (``gap_s`` is unused here)."""
+
+    figures: str | None = None  # directory for one PNG per aircraft
+    step_s: float = 1.0
+    max_coast_s: float = 60.0
+    smooth: bool = False
+    smoother: str = "rts"  # with smooth: "rts" (combined estimate) or "imm" (two-filter IMM smoother)
+    tpm: str | None = None  # None: the tracker's default (expm:150,20)
+    sources: tuple[str, ...] = SOURCES
+    noise: str = "estimate"  # one of NOISE (pipeline.track.noise estimates; "declared": as given)
+
+
+def parse_sources(value) -> tuple[str, ...]:
+    """--sources as a tuple of SOURCES ("radar,adsb" or a sequence); OptionError naming the option if bad."""
+    items = tuple(value.split(",")) if isinstance(value, str) else tuple(value or ())
+    items = tuple(s.strip().lower() for s in items)
+    if not items or any(s not in SOURCES for s in items) or len(set(items)) != len(items):
+        raise OptionError(f"--sources {','.join(items) if items else value!r}: must be a comma-separated "
+                          f"subset of {','.join(SOURCES)} without repeats")
+    return items
+
+
+def check_tracking(options: TrackOptions) -> float:
+    """The tracker's options shared by track and conflicts (--step, --max-coast, --tpm, --noise); OptionError
+    if bad, else the step (s)."""
+    from msdc.pipeline.track import check_tpm
+
+    step = options.step_s
+    if not isinstance(step, int | float) or not math.isfinite(step) or not step > 0.0:
+        raise OptionError(f"--step {step!r}: must be a finite number of seconds > 0")
+    check_number("--step", step, *STEP_RANGE_S, " s")
+    coast = options.max_coast_s
+    if not isinstance(coast, int | float) or not math.isfinite(coast) or coast < step:
+        raise OptionError(f"--max-coast {coast!r}: must be a finite number of seconds >= --step ({step:g})")
+    if coast > MAX_COAST_RANGE_S[1]:  # the lower bound is --step, checked above
+        raise OptionError(f"--max-coast {coast!r}: must be a finite number of seconds from --step ({step:g}) "
+                          f"to {MAX_COAST_RANGE_S[1]:g}")
+    if options.tpm is not None:  # every update interval in use: up to --max-coast, coasting cycles of 1 s
+        try:
+            check_tpm(str(options.tpm), max(float(coast), float(step), 1.0))
+        except ValueError as exc:
+            raise OptionError(f"--tpm {options.tpm!r}: {str(exc).partition(': ')[2]}") from None
+    if options.noise not in NOISE:
+        raise OptionError(f"--noise {options.noise!r}: must be one of {', '.join(NOISE)}")
+    return step
+
+
+@dataclass
+class Checked:
+    """Options after validation: the inputs to read (duplicates dropped), editions, sensor table, outputs."""
+
+    inputs: list[Path]
+    editions: dict[int, str]
+    sensors: pd.DataFrame | None = None
+    output: Path | None = None
+    json: Path | None = None
+    warnings: list[str] = field(default_factory=list)
+
+
+def check_workbook(options: AircraftOptions, checked: Checked, *, figure_windows: int | None,
+                   sensors_required: bool = True) -> list[str]:
+    """What correlate and quality check after -o (``checked.output``): --json, the sensor file, the figures
+    beside the workbook (``figure_windows``: _figures_beside), no output an input; sets ``checked.json`` and
+    ``checked.sensors`` and returns the warnings about the sensor file (implausible site altitudes)."""
+    from msdc.pipeline.model.sensors import implausible_altitudes
+    from msdc.pipeline.report.tables import TABLE_FILES, parquet_path
+
+    checked.json = output_path("--json", options.json, (".json",))
+    checked.sensors = sensor_table(options.sensors, required=sensors_required)
+    out = checked.output
+    if out is not None:
+        figures = _figures_beside(out, checked.sensors, figure_windows)
+        for png in figures:
+            if png.is_dir():
+                raise OptionError(f"-o {out}: its figure {png} is a directory")
+        beside = [out.with_name(f"{out.stem}_tracks.png"), *(parquet_path(out, n) for n in TABLE_FILES),
+                  *figures]
+        spare_inputs(options.inputs, [(f"-o {out}", out)] + [(f"-o {out}", p) for p in beside])
+    spare_inputs(options.inputs, [(f"--json {checked.json}", checked.json)])
+    return implausible_altitudes(checked.sensors, options.sensors)
+
+
+def _figures_beside(out: Path, sensors: pd.DataFrame, windows: int | None) -> list[Path]:
+    """The quality figures a run may write beside its workbook: none when ``windows`` is None (correlate
+    without --quality), else the update intervals, each declared radar's errors and the slotting and lag
+    figures of the first ``windows`` windows (correlate --quality: FIGURE_WINDOWS; quality: 0)."""
+    if windows is None:
+        return []
+    names = [f"{out.stem}_intervals.png"] + [f"{out.stem}_radar_errors_{sac}_{sic}.png"
+                                             for sac, sic in zip(sensors["sac"], sensors["sic"], strict=True)]
+    names += [f"{out.stem}_{kind}_{i + 1}.png" for kind in ("slotting", "lags") for i in range(windows)]
+    return [out.with_name(n) for n in names]
+
+
+# ---------------------------------------------------------------------------------------------------------
+# Decoding the inputs
+
+
+def load_inputs(options: DecodingOptions, checked: Checked, progress: Progress | None
+                ) -> tuple[Loaded, list[str]]:
+    """Decode the inputs for measurements (only the columns build_measurements reads), with the warnings
+    about them."""
+    import warnings as python_warnings
+
+    from msdc.asterix.errors import EditionWarning, UnreadableInput
+    from msdc.pipeline.model.measurements import DECODED_COLUMNS, impossible_positions
+
+    try:
+        with python_warnings.catch_warnings():  # a wrong edition is said below, with its --edition
+            python_warnings.simplefilter("ignore", EditionWarning)
+            loaded = load(checked.inputs, editions=checked.editions or None, date=options.date,
+                          format=options.format, columns=DECODED_COLUMNS, progress=progress)
+    except UnreadableInput as exc:
+        raise JobError(str(exc), 2) from exc
+    spans = [time_spans(rec.frames, loaded.date) for rec in loaded.recordings]
+    return loaded, [*_empty_inputs(loaded), *_wrong_editions(loaded), *order_warnings(checked.inputs, spans),
+                    *date_ignored(options, loaded.inputs), *format_hints(options, loaded.inputs),
+                    *impossible_positions(loaded.frames.get(21)), *loaded.warnings]
+
+
+def undated_warning(loaded: Loaded, outputs: str) -> list[str]:
+    """A warning when no input carries a date and --date was not given: ``outputs`` then place their times
+    on 1970-01-01 (pipeline.model.time.UNDATED_DAY); the times of day are right."""
+    if loaded.date is not None:
+        return []
+    return [f"the inputs carry no date and --date was not given: {outputs} are placed on 1970-01-01 (the "
+            "times of day are right); give --date YYYY-MM-DD"]
+
+
+def order_warnings(paths: list[Path], spans: list[dict[str, tuple[pd.Timestamp, pd.Timestamp]]]
+                   ) -> list[str]:
+    """A warning for each input whose records of a data source (category, SAC, SIC) start before the end
+    of that source in an earlier input: one sensor's recording given out of order. Two sensors recorded
+    side by side (two radars' files) overlap in time as they should."""
+    warnings, last = [], {}
+    for path, by_source in zip(paths, spans, strict=True):
+        for source, (lo, hi) in sorted(by_source.items()):
+            if source in last and lo < last[source][0]:
+                warnings.append(f"{path}: {source} starts at {lo}, before the end of its records in "
+                                f"{last[source][1]} ({last[source][0]}): inputs run backwards in time")
+            last[source] = (hi, str(path))
+    return warnings
+
+
+def format_hints(options: DecodingOptions, inputs: list[dict]) -> list[str]:
+    """format_hint for each input, unless --format was given."""
+    if options.format is not None:
+        return []
+    hints = (format_hint(info["path"], info["format"], info["skipped_blocks"]) for info in inputs)
+    return [hint for hint in hints if hint]
+
+
+def format_hint(path, fmt: str | None, skipped_blocks: int) -> str:
+    """A hint to give --format when detection read a file as raw, blocks were skipped, and the file reads as a
+    recorder file (final, gps, oradis) but for its first frame (asterix.containers.recorder_hint); else ''."""
+    from msdc.asterix.containers import DETECT_BYTES, recorder_hint
+
+    if fmt != "raw" or not skipped_blocks:
+        return ""
+    with open(path, "rb") as file:
+        guess = recorder_hint(file.read(DETECT_BYTES))
+    if guess is None:
+        return ""
+    return (f"{path}: read as a raw ASTERIX stream ({skipped_blocks} block(s) skipped), but past its first "
+            f"frame it reads as a {guess} recording (its first frame damaged?): if it is one, give "
+            f"--format {guess}")
+
+
+def date_ignored(options: DecodingOptions, inputs: list[dict]) -> list[str]:
+    """A warning per pcap input when --date was given: its capture time dates it."""
+    if options.date is None:
+        return []
+    return [f"{info['path']}: --date ignored, the capture time dates a {info['format']} file"
+            for info in inputs if info["format"] in ("pcap", "pcapng")]
+
+
+def _load_measurements(options: AircraftOptions, checked: Checked, progress: Progress | None,
+                       stage: str, *, either: bool = False, columns=None
+                       ) -> tuple[Loaded, pd.DataFrame, list[str]]:
+    """Decode the inputs chunk by chunk straight into radar and ADS-B measurements (load_measurements),
+    with the user-facing errors for unreadable inputs, missing data and sensors (stray radar records are
+    left out with a warning: model.sensors.stray_verdict). ``stage`` is the progress stage shown once the
+    inputs are read (before a missing-data or missing-sensor error too). ``either`` (quality): one category
+    is enough, the other's absence is a warning saying which sheets stay empty. Returns the warnings too."""
+    from msdc.asterix.errors import UnreadableInput
+
+    try:
+        loaded, meas = load_measurements(checked.inputs, checked.sensors, editions=checked.editions or None,
+                                         date=options.date, format=options.format,
+                                         adsb_sigma_m=options.adsb_sigma_m, progress=progress, either=either,
+                                         columns=columns)
+    except UnreadableInput as exc:
+        raise JobError(str(exc), 2) from exc
+    except NoRecords as exc:
+        if progress:
+            progress.stage(stage)
+        raise _no_records(exc) from exc
+    if progress:
+        progress.stage(stage)
+    warnings = []
+    if len(loaded.stray_radar):
+        from msdc.pipeline.model.sensors import UnknownRadar, stray_verdict
+
+        n_cat048 = sum(info["records"].get(48, 0) for info in loaded.inputs)
+        try:
+            warnings += stray_verdict(loaded.stray_radar, n_cat048, sensors_path(options))
+        except UnknownRadar as exc:
+            raise unknown_radar_error(exc.missing, sensors_path(options),
+                                      leave_out="by giving the ADS-B recordings alone") from exc
+    warnings += _empty_inputs(loaded)
+    warnings += _wrong_editions(loaded, but=absent_categories(loaded))
+    warnings += [f"no {name} (CAT{cat:03d}) records in the inputs{_all_failed(loaded, cat)}: "
+                 f"{QUALITY_WITHOUT[cat]}" for cat, name in ((48, "radar"), (21, "ADS-B"))
+                 if cat in absent_categories(loaded)]
+    warnings += order_warnings(checked.inputs, loaded.spans)
+    warnings += date_ignored(options, loaded.inputs)
+    warnings += format_hints(options, loaded.inputs)
+    warnings += loaded.warnings
+    warnings += list(meas.attrs.get("coverage_warnings", ()))
+    warnings += list(meas.attrs.get("identity_warnings", ()))
+    return loaded, meas, warnings
+
+
+def _no_records(exc: NoRecords) -> JobError:
+    """The user-facing error for inputs without radar or ADS-B records: every absent category, those whose
+    blocks failed to decode first, with how many failed and the edition to pin (an ADS-B recording under a
+    wrong edition is why there is no record at all, not a missing radar)."""
+    absent = absent_categories(exc.loaded) or [exc.category]
+    failed = {cat: why[2:] for cat in absent if (why := _all_failed(exc.loaded, cat))}
+    absent.sort(key=lambda cat: cat not in failed)
+    names = " or ".join(f"{'radar' if cat == 48 else 'ADS-B'} (CAT{cat:03d})" for cat in absent)
+    why = f": {'; '.join(failed.values())}" if failed else ""
+    return JobError(f"no {names} records in the inputs{why}")
+
+
+def absent_categories(loaded: Loaded) -> list[int]:
+    """Which of CAT048 and CAT021 no input holds a record of."""
+    return [cat for cat in (48, 21) if not any(info["records"].get(cat) for info in loaded.inputs)]
+
+
+def sensors_path(options: AircraftOptions) -> str | None:
+    """--sensors as text for messages and the JSON, None when it was not given (track, conflicts)."""
+    return None if options.sensors is None else str(options.sensors)
+
+
+def unknown_radar_error(missing: list[tuple[int, int]], sensors_path: str | None, *,
+                        leave_out: str = "with --sources adsb") -> JobError:
+    """The error for radars the sensor file lacks (or with no sensor file given, saying how to ``leave_out``
+    the radars), with the TOML lines."""
+    from msdc.pipeline.model.sensors import sensor_toml_snippet
+
+    lines = "\n\n".join(sensor_toml_snippet(sac, sic) for sac, sic in missing)
+    pairs = ", ".join(f"{a}/{b}" for a, b in missing)
+    if sensors_path is None:
+        return JobError(f"radar plots from SAC/SIC {pairs} need the radar's position, and no --sensors file "
+                        f"was given: give --sensors S.toml with these lines, or leave the radars out "
+                        f"{leave_out}:\n\n{lines}")
+    return JobError(f"radar SAC/SIC {pairs} not in {sensors_path}; add its position:\n\n{lines}")
+
+
+# What a quality run without one of the categories cannot fill (the others need only the sensor's own reports)
+QUALITY_WITHOUT = {48: "the Radar accuracy and Radar biases sheets are empty",
+                   21: "the ADS-B quality sheets are empty, and so are Radar accuracy and Radar biases "
+                       "(ADS-B is their reference)"}
+
+
+def _empty_inputs(loaded: Loaded) -> list[str]:
+    """A warning for each input of which no record decoded (a file that is not a recording, or another
+    category): the run goes on with the others, but it should not be silent."""
+    return [f"{info['path']}: no record decoded ({info['skipped_blocks']} block(s) skipped; 'msdc stats' "
+            "lists them)" if info["skipped_blocks"] else f"{info['path']}: no CAT021 or CAT048 record in it"
+            for info in loaded.inputs if not any(info["records"].values())]
+
+
+def _wrong_editions(loaded: Loaded, but: list[int] | tuple[int, ...] = ()) -> list[str]:
+    """A warning per input and category whose blocks mostly failed under a wrong edition, but for the
+    categories in ``but`` (those whose own message says so: _all_failed)."""
+    notes = edition_notes.notes_of(loaded.recordings)
+    return edition_notes.warnings({key: note for key, note in notes.items() if key[1] not in but})
+
+
+def _all_failed(loaded: Loaded, cat: int) -> str:
+    """What to add when a category has no record: how many of its blocks failed, and under which edition
+    (a wrong pin fails every block: nothing on the wire says which CAT021 edition a stream uses)."""
+    errors = loaded.errors
+    failed = int((errors["category"] == cat).sum()) if "category" in errors else 0
+    if not failed:
+        return ""
+    edition = loaded.editions.get(cat)
+    fits = edition_notes.fits_of(edition_notes.notes_of(loaded.recordings), cat)
+    if not edition:
+        hint = ""
+    elif fits:  # the editions every failed block walks under
+        hint = f" under edition {edition}{edition_notes.advice(cat, fits)}"
+    elif cat == 21:
+        hint = (f" under edition {edition}; if that edition is wrong, pin the right one or try "
+                "--edition 21=auto")
+    else:
+        hint = f" under edition {edition}"
+    return f": {failed} CAT{cat:03d} block(s) could not be decoded{hint} ('msdc stats' lists them)"
+
+
+def marked_measurements(options: AircraftOptions, checked: Checked, progress: Progress | None, stage: str,
+                        *, split_adsb: bool = False, either: bool = False, columns=None,
+                        flags: list[str] | None = None) -> tuple[Loaded, pd.DataFrame, list[str]]:
+    """The inputs and their measurements with the duplicate and jump flags (once per job; correlate counts
+    each window's jumps), and the warnings about them; decoded columns are held one chunk at a time (see
+    _load_measurements). ``stage`` is the progress stage shown once the inputs are read; ``columns`` and
+    ``flags``: only those measurement columns and jump columns (every one when None)."""
+    from msdc.pipeline.model.marks import mark_once
+
+    loaded, meas, warnings = _load_measurements(options, checked, progress, stage, either=either,
+                                                columns=columns)
+    meas = mark_once(meas, split_adsb=split_adsb, flags=flags)
+    release_free_memory()
+    return loaded, meas, warnings
+
+
+def tracker_inputs(options: TrackOptions, checked: Checked, progress: Progress | None, times: str
+                   ) -> tuple[Loaded, pd.DataFrame, list[str]]:
+    """What track and conflicts track: the inputs decoded (their decoded frames then freed), the
+    measurements of tracker_measurements, and the warnings about them with the site and undated warnings
+    (``times``: what an undated run places on 1970-01-01)."""
+    from msdc.pipeline.model.site_check import site_warnings
+
+    with carrying() as warnings:
+        if progress:
+            progress.stage("Processing data files")
+        loaded, said = load_inputs(options, checked, progress)
+        warnings += said
+        if progress:
+            progress.stage("Tracking")
+        meas, said = tracker_measurements(loaded, checked, options)
+    warnings += said
+    warnings += site_warnings(meas, checked.sensors, str(sensors_path(options)))
+    warnings += undated_warning(loaded, times)
+    loaded.drop_frames()  # the measurements hold what tracking needs: a day's decoded frames are ~0.5 GB
+    return loaded, meas, warnings
+
+
+def tracker_measurements(loaded, checked: Checked, options: TrackOptions) -> tuple[pd.DataFrame, list[str]]:
+    """Measurements of the requested sources (one of them must be present), repeated reports dropped, and
+    the warnings about them (stray radar records, coverage, identity)."""
+    import warnings as python_warnings
+
+    from msdc.pipeline.model.dedup import duplicate_mask
+    from msdc.pipeline.model.measurements import (
+        IdentityWarning,
+        OffEarthWarning,
+        OutOfCoverageWarning,
+        build_measurements,
+    )
+    from msdc.pipeline.model.sensors import UnknownRadar, declared_radar
+
+    sources = parse_sources(options.sources)
+    radar = loaded.frames.get(48) if "radar" in sources else None
+    adsb = loaded.frames.get(21) if "adsb" in sources else None
+    radar = radar if radar is not None and len(radar) else None
+    adsb = adsb if adsb is not None and len(adsb) else None
+    if radar is None and adsb is None:
+        wanted = " or ".join({"radar": "radar (CAT048)", "adsb": "ADS-B (CAT021)"}[s] for s in sources)
+        failed = "; ".join(why[2:] for cat in ({"radar": 48, "adsb": 21}[s] for s in sources)
+                           if (why := _all_failed(loaded, cat)))
+        raise JobError(f"no {wanted} records in the inputs (--sources {','.join(sources)})"
+                       + (f": {failed}" if failed else ""))
+    try:
+        radar, stray = declared_radar(radar, checked.sensors, sensors_path(options))
+    except UnknownRadar as exc:
+        raise unknown_radar_error(exc.missing, sensors_path(options)) from exc
+    with carrying(stray) as warnings:
+        try:
+            with python_warnings.catch_warnings():  # load_inputs has said it, naming each file
+                python_warnings.simplefilter("ignore", OffEarthWarning)
+                python_warnings.simplefilter("ignore", OutOfCoverageWarning)  # said below, from attrs
+                python_warnings.simplefilter("ignore", IdentityWarning)  # said below, from attrs
+                meas = build_measurements(radar, adsb, checked.sensors, date=loaded.date,
+                                          adsb_sigma_m=options.adsb_sigma_m)
+        except UnknownRadar as exc:
+            raise unknown_radar_error(exc.missing, sensors_path(options)) from exc
+    warnings += list(meas.attrs.get("coverage_warnings", ()))
+    warnings += list(meas.attrs.get("identity_warnings", ()))
+    from msdc.pipeline.track.associate import join_by_track_number
+
+    meas, joined = join_by_track_number(meas, max_gap_s=float(options.max_coast_s))
+    dup = duplicate_mask(meas.sort_values("time", kind="stable")).reindex(meas.index).to_numpy(bool)
+    known = meas["aircraft_id"].notna().to_numpy(bool)
+    out = meas[~dup & known].reset_index(drop=True)
+    out.attrs["joined_by_track_number"] = joined
+    out.attrs["unidentified"] = int((~dup & ~known).sum())
+    return out, warnings
+
+
+# ---------------------------------------------------------------------------------------------------------
+# Steps two commands run
+
+
+def run_parameters(options: AircraftOptions, loaded: Loaded, started: float, command: str) -> dict:
+    """The parameters every measurement job's outputs record: software, command, run time, editions, sensor
+    file, date and declared ADS-B sigma."""
+    return {"software": f"msdc {software_version()}", "command": command,
+            "run_utc": dt.datetime.now(dt.UTC).strftime("%Y-%m-%dT%H:%M:%SZ"),
+            "run_time_s": round(time.monotonic() - started, 3), "editions": {
+                f"CAT{c:03d}": e for c, e in sorted(loaded.editions.items())},
+            "sensors": sensors_path(options), "date": loaded.date.isoformat() if loaded.date else None,
+            "adsb_sigma_m": options.adsb_sigma_m}
+
+
+def quality_inputs(reference: str) -> list[str]:
+    """The measurement columns the quality step reads: the quality tables, the radar errors against the
+    ``reference`` ("adsb" or "track": the tracker's and track_reference's inputs as well), the aircraft
+    selection and mark_once."""
+    from msdc.pipeline.model.dedup import DEDUP_KEYS
+    from msdc.pipeline.model.jumps import JUMP_INPUTS
+    from msdc.pipeline.quality.accuracy import ACCURACY_INPUTS
+    from msdc.pipeline.quality.tables import QUALITY_INPUTS
+
+    need = [*QUALITY_INPUTS, *ACCURACY_INPUTS, *DEDUP_KEYS, *JUMP_INPUTS, "sensor_kind", "sensor_id",
+            "aircraft_id", "callsign", "address"]
+    if reference == "track":
+        from msdc.pipeline.quality.track_reference import TRACK_REFERENCE_INPUTS
+        from msdc.pipeline.track.tracker import FILTER_INPUTS, REQUIRED
+
+        need += [*REQUIRED, *FILTER_INPUTS, *TRACK_REFERENCE_INPUTS]  # the tracker's optional ones too
+    return need
+
+
+def quality_step(meas: pd.DataFrame, sensors: pd.DataFrame, options: AircraftOptions) -> QualityResult:
+    """The quality tables and radar accuracy of the selected aircraft (quality_run); JobError when it is not
+    in the inputs."""
+    from msdc.pipeline.model.aircraft import NoSuchAircraft
+    from msdc.pipeline.quality.quality_run import quality_run
+
+    try:
+        return quality_run(meas, sensors, callsign=options.callsign, address=options.address,
+                           gap_s=options.gap_s, reference=getattr(options, "reference", "adsb"))
+    except NoSuchAircraft as exc:
+        raise JobError(str(exc)) from exc
+
+
+def quality_figures(result: QualityResult, out_dir: Path, stem: str) -> dict[str, Path]:
+    """Update-interval histogram and, per radar, range/azimuth error against range and time (PNG)."""
+    from msdc.pipeline.report.quality_figures import interval_histogram_figure, radar_error_figure
+
+    out_dir.mkdir(parents=True, exist_ok=True)
+    figs = {"Update intervals": interval_histogram_figure(result.sheets["Update intervals"],
+                                                          out_dir / f"{stem}_intervals.png")}
+    biases = result.sheets.get("Radar biases")
+    if len(result.errors):
+        for (sac, sic), g in result.errors.groupby(["sac", "sic"], sort=True):
+            row = biases[(biases["sac"] == sac) & (biases["sic"] == sic)] if biases is not None else None
+            figs[f"Radar errors {sac}/{sic}"] = radar_error_figure(
+                g, out_dir / f"{stem}_radar_errors_{sac}_{sic}.png", row)
+    result.figures.update(figs)
+    return figs
+
+
+def check_output_rows(meas: pd.DataFrame, options: TrackOptions, per_row: int = 1, what: str = "", *,
+                      grid_only: bool = False) -> None:
+    """pipeline.track.feasibility.check_track_rows, its TooManyRows an OptionError naming --step."""
+    from msdc.pipeline.track import feasibility
+
+    try:
+        feasibility.check_track_rows(meas, options.step_s, options.max_coast_s, per_row, what,
+                                     grid_only=grid_only)
+    except feasibility.TooManyRows as exc:
+        raise OptionError(f"--step {options.step_s:g}: {exc}; use a longer --step or fewer aircraft") from exc
+
+
+def estimated_noise(meas: pd.DataFrame, sensors: pd.DataFrame, options: TrackOptions):
+    """The measurements with each sensor's covariance rescaled to its residual scatter, and the table of
+    declared against estimated sigmas (radar range m and azimuth deg from the sensor file; ADS-B m per
+    NACp level, and its along-track timing sigma s, declared 0)."""
+    from msdc.pipeline.model.measurements import sensor_id
+    from msdc.pipeline.track.noise import AZIMUTH, RANGE, TIMING, estimate_noise
+
+    ids = sensor_id(48, sensors["sac"], sensors["sic"]).to_numpy()
+    sites = {str(i): (float(r.latitude), float(r.longitude))
+             for i, r in zip(ids, sensors.itertuples(), strict=True)}
+    est = estimate_noise(meas, sites=sites, max_coast_s=float(options.max_coast_s), tpm=options.tpm,
+                         timing=options.noise == "timing")
+    table = est.sensors.rename(columns={"declared_sigma_m": "declared_sigma",
+                                        "estimated_sigma_m": "estimated_sigma"})
+    table.insert(3, "unit", "m")
+    by_id = dict(zip(ids, sensors.itertuples(), strict=True))
+    for i, row in table.iterrows():
+        site = by_id.get(row["sensor_id"])
+        if site is not None and row["component"] in (RANGE, AZIMUTH):
+            declared = site.sigma_range_m if row["component"] == RANGE else site.sigma_azimuth_deg
+            table.loc[i, ["declared_sigma", "unit"]] = [declared, "m" if row["component"] == RANGE else "deg"]
+    table["estimated_sigma"] = table["declared_sigma"] * table["scale"]
+    timing = table["component"] == TIMING  # the ADS-B along-track time-stamp sigma, declared as none
+    table.loc[timing, ["unit", "declared_sigma"]] = ["s", 0.0]
+    table.loc[timing, "estimated_sigma"] = table.loc[timing, "estimated_sigma_s"]
+    table = table.drop(columns="estimated_sigma_s")
+    table.attrs["passes"] = est.passes
+    table.attrs["aircraft"] = est.aircraft.to_dict("records")  # the per-aircraft guard's raises
+    return est.measurements, table
+
+
+def noise_text(noise) -> str:
+    """The declared and estimated sigmas of --noise estimate, or nothing."""
+    if noise is None or not len(noise):
+        return ""
+    cols = [c for c in ("sensor_id", "component", "motion", "unit", "declared_from", "declared_sigma",
+                        "estimated_sigma", "residuals", "estimated") if c in noise]
+    text = (f"\n\nMeasurement noise estimated from the residuals ({noise.attrs.get('passes')} passes):\n"
+            + noise[cols].to_string(index=False, float_format=lambda v: f"{v:.4g}"))
+    raised = pd.DataFrame(noise.attrs.get("aircraft", []))
+    if len(raised):
+        shown = raised.sort_values("estimated_sigma_m", ascending=False).head(RAISED_SHOWN)
+        more = len(raised) - len(shown)
+        text += (f"\n\nSigma raised for {len(raised)} aircraft: at its class's sigma over 1 % of the "
+                 "aircraft's own residuals lay beyond the gate:\n"
+                 + shown.to_string(index=False, float_format=lambda v: f"{v:.4g}")
+                 + (f"\n... and {more} more in the JSON summary" if more else ""))
+    return text

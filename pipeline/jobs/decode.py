@@ -1,0 +1,193 @@
+"""The decode job (``msdc decode``): every input streamed in chunks to CSV or Parquet, one file or one per
+category, written all or nothing; ``skipped_lines`` lists the skipped blocks for the terminal."""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import pandas as pd
+
+from msdc.pipeline.jobs.common import (
+    CHUNK_RANGE_MB,
+    Checked,
+    DecodingOptions,
+    JobError,
+    OptionError,
+    check_decoding,
+    check_number,
+    format_hints,
+    output_path,
+    spare_inputs,
+)
+from msdc.pipeline.model import editions as edition_notes
+from msdc.pipeline.report.textguard import guard_frame
+
+SKIPPED_SHOWN = 20  # skipped blocks decode lists one per line, per input; the rest are counted
+
+
+@dataclass(frozen=True)
+class DecodeOptions(DecodingOptions):
+    """Everything ``decode_job`` needs."""
+
+    output: str | None = None
+    categories: tuple[int, ...] = ()
+    strict: bool = False
+    chunk_mb: float = 64.0
+
+
+def validate(options: DecodeOptions) -> Checked:
+    """Check every option and the output paths before any decoding; OptionError if bad."""
+    checked = check_decoding(options)
+    check_number("--chunk-mb", options.chunk_mb, *CHUNK_RANGE_MB, " MB")
+    checked.output = output_path("-o", options.output, (".csv", ".parquet"))
+    bad = [c for c in options.categories if c not in (21, 48)]
+    if bad:
+        raise OptionError(f"--category {bad[0]}: must be 21 or 48")
+    if checked.output is not None:
+        out = checked.output
+        spare_inputs(options.inputs, [(f"-o {out}", p) for p in (
+            out, *(category_output(out, c) for c in (21, 48)))])
+        cats = sorted(set(options.categories or (21, 48)))
+        for cat in cats if len(cats) > 1 else ():  # written when several categories decode
+            each = category_output(out, cat)
+            if each.is_dir():
+                raise OptionError(f"-o {out}: its CAT{cat:03d} file {each} is a directory")
+            if each.exists() and not os.access(each, os.W_OK):
+                raise OptionError(f"-o {out}: its CAT{cat:03d} file {each} is not writable")
+    return checked
+
+
+@dataclass
+class DecodeResult:
+    """Records per category, the files written, and every skipped block (path, offset, reason)."""
+
+    counts: dict[int, int]
+    outputs: dict[int, Path]
+    skipped: list[tuple[str, int, str]]
+    warnings: list[str]
+    notes: list[str] = field(default_factory=list)
+    held: dict[str, dict[int, int]] = field(default_factory=dict)  # per input: data blocks per category
+
+    def nothing_decoded(self, categories: tuple[int, ...] = ()) -> str:
+        """Why no record decoded, naming what each input holds (a --category the inputs lack, most often)."""
+        asked = f" with --category {','.join(str(c) for c in categories)}" if categories else ""
+        def listed(cats: dict[int, int]) -> str:
+            return ", ".join(f"CAT{c:03d} ({n} block(s))" for c, n in sorted(cats.items())) or "no data block"
+
+        holds = "; ".join(f"{path} holds {listed(cats)}" for path, cats in self.held.items())
+        return f"nothing could be decoded{asked}" + (f": {holds}" if holds else "")
+
+
+def decode_job(options: DecodeOptions, *, on_chunk: Callable[[int, int, str], None] | None = None
+               ) -> DecodeResult:
+    """Stream every input in chunks and write CSV or Parquet: one file, or one per category when records
+    of several categories decoded (decided from what decoded, at the end). Each output is written to a
+    temporary file beside it and moved into place only when the whole run succeeded: a failed or
+    interrupted run writes nothing, nor does a run in which nothing decodes. ``on_chunk(done_bytes, size,
+    name)`` reports progress. Raises asterix DecodeError in strict mode, JobError for unreadable input."""
+    import msdc.asterix as asterix
+    from msdc.asterix.errors import UnreadableInput
+    from msdc.asterix.reader import categories_in
+    from msdc.pipeline.model.sources import file_labels
+    from msdc.pipeline.model.time import FirstDayTally
+    from msdc.pipeline.report.outputs import Staging
+
+    checked = validate(options)
+    out = checked.output
+    early_start: list[str] = []  # FirstDayTally's warnings
+    counts: dict[int, int] = {}
+    outputs: dict[int, Path] = {}
+    skipped: list[tuple[str, int, str]] = []
+    failed: dict[tuple[str, int], edition_notes.Failed] = {}
+    notes: list[str] = []
+    cats = list(options.categories) or None
+    csv = out is not None and out.suffix.lower() == ".csv"
+    with Staging() as staging:
+        staged: dict[int, Path] = {}  # category -> its temporary file
+        writers: dict[int, object] = {}
+        try:
+            for path, label in zip(checked.inputs, file_labels(checked.inputs), strict=True):
+                size = path.stat().st_size
+                chunk = max(int(options.chunk_mb * 1e6), 1)
+                tally, date, fmt, chosen = FirstDayTally(), None, None, {}
+                for rec in asterix.iter_read(path, chunk=chunk, editions=checked.editions or None,
+                                             date=options.date, format=options.format, categories=cats,
+                                             strict=options.strict):
+                    tally.add(rec.frames)
+                    date, fmt, chosen = date or rec.date, rec.format, {**rec.edition_choice, **chosen}
+                    skipped += [(str(path), int(e.offset), str(e.reason)) for e in rec.errors.itertuples()]
+                    edition_notes.fold(failed, rec)
+                    for cat, frame in rec.frames.items():
+                        counts[cat] = counts.get(cat, 0) + len(frame)
+                        if out is not None and len(frame):
+                            if cat not in staged:
+                                staged[cat] = staging.temporary(category_output(out, cat))
+                            _write_chunk(staged[cat], cat, frame.assign(file=label), writers, csv)
+                    done = max((int(f["offset"].max()) for f in rec.frames.values() if len(f)), default=0)
+                    if on_chunk:
+                        on_chunk(done, size, path.name)
+                if on_chunk:  # the last record's offset is not the file's end: close the bar at 100 %
+                    on_chunk(size, size, path.name)
+                early_start += tally.warning(label, date, fmt)
+                notes += [f"{path}: CAT{cat:03d} --edition auto {why}" for cat, why in sorted(chosen.items())]
+                early_start += format_hints(options, [{"path": path, "format": fmt, "skipped_blocks": sum(
+                    1 for p, _, _ in skipped if p == str(path))}])
+        except UnreadableInput as exc:
+            raise JobError(str(exc), 2) from exc
+        finally:
+            for w in writers.values():
+                if hasattr(w, "close"):
+                    w.close()
+        several = len(staged) > 1
+        for cat in sorted(staged):
+            outputs[cat] = category_output(out, cat) if several else out
+            if several:
+                notes.append(f"several categories: writing {outputs[cat]}")
+        staging.commit({staged[cat]: outputs[cat] for cat in staged})
+    held = {} if sum(counts.values()) else {str(p): categories_in(p, format=options.format)
+                                              for p in checked.inputs}
+    warnings = checked.warnings + early_start + edition_notes.warnings(failed)
+    return DecodeResult(counts, outputs, skipped, warnings, notes, held)
+
+
+def category_output(out: Path, cat: int) -> Path:
+    """Where decode writes one category's records when several decode: ``OUT_cat048.csv`` beside ``OUT``."""
+    return out.with_name(f"{out.stem}_cat{cat:03d}{out.suffix}")
+
+
+def _write_chunk(path: Path, cat: int, frame: pd.DataFrame, writers: dict, csv: bool) -> None:
+    """Append one chunk of a category to its (temporary) output file, CSV or Parquet, opening it on first
+    use."""
+    if csv:
+        frame = guard_frame(frame.assign(timestamp=frame["timestamp"].dt.strftime("%Y-%m-%dT%H:%M:%S.%fZ")))
+        frame.to_csv(path, mode="a" if cat in writers else "w", header=cat not in writers, index=False)
+        writers[cat] = True
+    else:
+        import pyarrow as pa
+        import pyarrow.parquet as pq
+
+        table = pa.Table.from_pandas(frame, preserve_index=False)
+        if cat not in writers:
+            writers[cat] = pq.ParquetWriter(path, table.schema)
+        writers[cat].write_table(table.cast(writers[cat].schema))
+
+
+def skipped_lines(result: DecodeResult) -> list[str]:
+    """The skipped blocks, one line each (path, offset, reason) up to SKIPPED_SHOWN per input, then how many
+    more per input."""
+    lines, shown = [], {}
+    for path, offset, reason in result.skipped:
+        shown[path] = shown.get(path, 0) + 1
+        if shown[path] <= SKIPPED_SHOWN:
+            lines.append(f"{path}: offset {offset}: {reason}")
+    for path, n in shown.items():
+        if n > SKIPPED_SHOWN:
+            lines.append(f"{path}: {n - SKIPPED_SHOWN} more skipped block(s) ('msdc stats' groups them by "
+                         "reason)")
+    return lines
+
+
+__all__ = ["DecodeOptions", "DecodeResult", "category_output", "decode_job", "skipped_lines", "validate"]

@@ -1,0 +1,160 @@
+"""The quality job (``msdc quality``): sensor data quality and radar accuracy against ADS-B.
+
+``validate`` checks every option, the sensor file and the outputs before anything is decoded;
+``quality_job`` decodes straight into measurements (only the columns ``quality_columns`` names), marks
+duplicates and jumps once and computes the quality and accuracy tables; ``write_quality`` writes the JSON
+and the workbook with its figures, all or nothing; ``text`` is the terminal's summary.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+from msdc.pipeline.jobs.common import (
+    QUALITY_WITHOUT,
+    AircraftOptions,
+    Checked,
+    OptionError,
+    absent_categories,
+    carrying,
+    check_aircraft,
+    check_decoding,
+    check_workbook,
+    marked_measurements,
+    output_path,
+    quality_figures,
+    quality_inputs,
+    quality_step,
+    run_parameters,
+    sensors_path,
+)
+from msdc.pipeline.model.load import Loaded
+from msdc.pipeline.progress import Progress
+from msdc.pipeline.report.outputs import all_or_nothing
+
+if TYPE_CHECKING:
+    from msdc.pipeline.quality.quality_run import QualityResult
+
+
+@dataclass(frozen=True)
+class QualityOptions(AircraftOptions):
+    """Everything ``quality_job`` needs."""
+
+    reference: str = "adsb"  # radar accuracy against "adsb" (interpolated reports) or "track" (smoothed)
+
+
+def validate(options: QualityOptions) -> Checked:
+    """Check every option, the sensor file and the output paths, before any decoding; OptionError if bad."""
+    checked = check_decoding(options)
+    check_aircraft(options)
+    if options.reference not in ("adsb", "track"):
+        raise OptionError(f"--reference {options.reference!r}: must be adsb or track")
+    checked.output = output_path("-o", options.output, (".xlsx",))
+    checked.warnings += check_workbook(options, checked, figure_windows=0, sensors_required=False)
+    return checked
+
+
+@dataclass
+class QualityJobResult:
+    """Quality tables and radar accuracy of a run, with its parameters, inputs and warnings (validation's
+    first)."""
+
+    options: QualityOptions
+    checked: Checked
+    quality: QualityResult
+    parameters: dict
+    loaded: Loaded
+    warnings: list[str] = field(default_factory=list)
+
+
+def quality_columns(options: QualityOptions) -> list[str]:
+    """The measurement columns a quality job builds, in schema order: what the quality tables, the radar
+    errors against the reference (with ``reference="track"`` the tracker's inputs), mark_once and the
+    aircraft selection read. Two thirds of the bytes of a row with the ADS-B reference."""
+    from msdc.pipeline.model.schema import MEASUREMENT_COLUMNS, column_names
+    from msdc.pipeline.model.site_check import SITE_CHECK_INPUTS
+
+    need = set(quality_inputs(options.reference)) | set(SITE_CHECK_INPUTS)
+    return column_names(need & set(MEASUREMENT_COLUMNS))  # the job-wide flags are added by mark_once
+
+
+def quality_job(options: QualityOptions, *, progress: Progress | None = None, checked: Checked | None = None,
+                command: str = "quality") -> QualityJobResult:
+    """Validate, decode, build measurements and compute the quality and accuracy tables."""
+    from msdc.pipeline.model.site_check import site_warnings
+
+    started = time.monotonic()
+    checked = checked or validate(options)
+    with carrying(checked.warnings) as warnings:
+        if progress:
+            progress.stage("Processing data files")
+        loaded, meas, said = marked_measurements(options, checked, progress, "Analysing data quality",
+                                                 either=True, columns=quality_columns(options))
+        warnings += said
+        absent = absent_categories(loaded)
+        warnings += site_warnings(meas, checked.sensors, str(sensors_path(options)))
+        quality = quality_step(meas, checked.sensors, options)
+        params = {**run_parameters(options, loaded, started, command), "callsign": options.callsign,
+                  "address": options.address, "gap_s": options.gap_s,
+                  "notes": [f"no CAT{cat:03d} records in the inputs: {QUALITY_WITHOUT[cat]}"
+                            for cat in absent]}
+        return QualityJobResult(options, checked, quality, params, loaded, warnings)
+
+
+def write_quality(result: QualityJobResult) -> dict[str, Path]:
+    """Write the JSON tables and/or the workbook with its figures, as the options ask, all or nothing."""
+    with all_or_nothing(result.checked.json, result.checked.output):
+        return _write_quality(result)
+
+
+def _write_quality(result: QualityJobResult) -> dict[str, Path]:
+    """write_quality's files, inside its all-or-nothing guard."""
+    import json
+
+    from msdc.pipeline.report.excel import write_tables
+    from msdc.pipeline.report.summary import table_records
+
+    written: dict[str, Path] = {}
+    if result.checked.json:
+        doc = {"parameters": result.parameters, "inputs": result.loaded.inputs,
+               "tables": {name: table_records(t) for name, t in result.quality.sheets.items()}}
+        result.checked.json.write_text(json.dumps(doc, indent=1, default=str))
+        written["json"] = result.checked.json
+    if result.checked.output:
+        out = result.checked.output
+        images = quality_figures(result.quality, out.parent, out.stem)
+        # the sheet lists the bins that hold intervals (every 0.1 s bin up to the longest interval printed
+        # 18 pages on the real radar); the DataFrame and the JSON keep every bin
+        sheets = dict(result.quality.sheets)
+        bins = sheets["Update intervals"]
+        sheets["Update intervals"] = bins[bins["intervals"] > 0] if "intervals" in bins else bins
+        write_tables(sheets, out, images=images,
+                     parameters={**result.parameters, "inputs": result.loaded.inputs})
+        written["report"] = out
+        written.update((f"image {name}", Path(path)) for name, path in images.items())
+    return written
+
+
+def text(result: QualityJobResult) -> str:
+    """The per-sensor summary and the bias estimates, for the terminal."""
+    q = result.quality.sheets["Quality"]
+    b = result.quality.sheets["Radar biases"]
+    keep = [c for c in ("callsign", "address", "sensor", "sac", "sic", "reports", "duplicates_removed",
+                        "interval_median_s",
+                        "interval_p95_s", "speed_missing_or_zero_pct", "gaps", "jumps") if c in q]
+    bias_cols = [c for c in ("radar", "n_reports", "n_rejected", "n_overhead", "range_bias_m",
+                             "range_bias_se_m", "range_gain_ppm", "range_gain_se_ppm", "azimuth_bias_deg",
+                             "azimuth_bias_se_deg", "time_bias_s", "time_bias_se_s") if c in b]
+    from msdc.pipeline.report.summary import frame_text
+
+    out = "Quality:\n" + frame_text(q[keep]) + "\n\nRadar biases:\n"
+    out += frame_text(b[bias_cols]) if len(b) else "  no radar report matched to ADS-B"
+    note = b.attrs.get("note")
+    return out + (f"\n\nNote: {note}" if note else "")
+
+
+__all__ = ["QualityJobResult", "QualityOptions", "quality_columns", "quality_job", "text", "validate",
+           "write_quality"]

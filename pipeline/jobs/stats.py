@@ -1,0 +1,112 @@
+"""The stats job (``msdc stats``): what the recordings hold, streamed in chunks (memory follows the chunk,
+not the file): records per category and SAC/SIC, aircraft per sensor, skipped blocks
+(``pipeline.quality.inventory``)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import pandas as pd
+
+from msdc.pipeline.jobs.common import (
+    CHUNK_RANGE_MB,
+    Checked,
+    DecodingOptions,
+    JobError,
+    check_decoding,
+    check_number,
+    date_ignored,
+    format_hints,
+    order_warnings,
+)
+from msdc.pipeline.model import editions as edition_notes
+from msdc.pipeline.model.load import time_spans, widen_spans
+from msdc.pipeline.progress import Progress
+
+
+@dataclass(frozen=True)
+class StatsOptions(DecodingOptions):
+    """Everything ``stats_job`` needs."""
+
+    chunk_mb: float = 64.0  # streaming chunk: peak memory follows it, not the file size
+
+
+def validate(options: StatsOptions) -> Checked:
+    """Check the inputs, editions and --chunk-mb before any decoding; OptionError if bad."""
+    checked = check_decoding(options)
+    check_number("--chunk-mb", options.chunk_mb, *CHUNK_RANGE_MB, " MB")
+    return checked
+
+
+@dataclass
+class StatsResult:
+    """What the recordings hold: the stats tables, and per input its format, records per category, skipped
+    blocks, editions and how an 'auto' edition was chosen (``edition_choice``)."""
+
+    tables: dict[str, pd.DataFrame]
+    inputs: list[dict]
+    warnings: list[str]
+
+    @property
+    def records(self) -> int:
+        """Records decoded over every input and category."""
+        return sum(n for info in self.inputs for n in info["records"].values())
+
+
+def stats_job(options: StatsOptions, *, progress: Progress | None = None) -> StatsResult:
+    """Validate, then stream every input in chunks of ``chunk_mb`` (asterix.iter_read) and fold the tables of
+    records, sources, aircraft and skipped blocks chunk by chunk: memory is bounded by the chunk, not
+    the file."""
+    import msdc.asterix as asterix
+    from msdc.asterix.errors import UnreadableInput
+    from msdc.pipeline.model.sources import file_labels
+    from msdc.pipeline.model.time import UNDATED_DAY, FirstDayTally
+    from msdc.pipeline.quality.inventory import STATS_COLUMNS, StatsAccumulator
+
+    checked = validate(options)
+    if progress:
+        progress.stage("Processing data files")
+    acc = StatsAccumulator()
+    failed: dict[tuple[str, int], edition_notes.Failed] = {}
+    inputs: list[dict] = []
+    spans: list[dict[int, tuple[pd.Timestamp, pd.Timestamp]]] = []
+    chunk = max(int(options.chunk_mb * 1e6), 1)
+    early_start: list[str] = []  # FirstDayTally's warnings
+    labels = file_labels(checked.inputs)
+    for i, path in enumerate(checked.inputs):
+        if progress:
+            progress.step(f"{path.name} ({i + 1}/{len(checked.inputs)})")
+        info = {"path": str(path), "bytes": 0, "format": None, "records": {}, "skipped_blocks": 0,
+                "editions": {}, "edition_choice": {}, "date": None}
+        by_source: dict[str, tuple[pd.Timestamp, pd.Timestamp]] = {}
+        tally = FirstDayTally()
+        try:
+            for rec in asterix.iter_read(path, chunk=chunk, editions=checked.editions or None,
+                                         date=options.date, format=options.format, columns=STATS_COLUMNS):
+                acc.add(rec.frames, rec.errors, rec.ignored)
+                tally.add(rec.frames)
+                edition_notes.fold(failed, rec)
+                info["bytes"], info["format"] = rec.size_bytes, rec.format
+                info["date"] = info["date"] or rec.date
+                for cat, frame in rec.frames.items():
+                    info["records"][cat] = info["records"].get(cat, 0) + len(frame)
+                info["skipped_blocks"] += len(rec.errors)
+                info["editions"].update(rec.editions)
+                info["edition_choice"] = {**rec.edition_choice, **info["edition_choice"]}
+                by_source = widen_spans(by_source, time_spans(rec.frames, rec.date))
+        except UnreadableInput as exc:
+            raise JobError(str(exc), 2) from exc
+        early_start += tally.warning(labels[i], info["date"], info["format"])
+        inputs.append(info)
+        spans.append(by_source)
+    dates = [info["date"] for info in inputs if info["date"] is not None]
+    if dates:  # undated inputs are dated by the earliest known date, as load() does
+        shift = pd.Timestamp(min(dates), tz="UTC") - UNDATED_DAY
+        spans = [s if info["date"] else {c: (lo + shift, hi + shift) for c, (lo, hi) in s.items()}
+                 for info, s in zip(inputs, spans, strict=True)]
+    warnings = [*checked.warnings, *edition_notes.warnings(failed), *order_warnings(checked.inputs, spans),
+                *date_ignored(options, inputs), *format_hints(options, inputs), *early_start]
+    return StatsResult(acc.tables(), inputs, warnings)
+
+
+__all__ = ["StatsOptions", "StatsResult", "stats_job", "validate"]

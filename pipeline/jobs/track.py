@@ -1,0 +1,273 @@
+"""The track job (``msdc track``): fused IMM tracks per aircraft from every radar and ADS-B report.
+
+``validate`` checks every option before anything is decoded (one-line ``OptionError`` naming the option);
+``track_job`` decodes, builds the measurement model (radar covariances from the sensor file's sigmas,
+ADS-B from NACp), drops repeated reports, selects the aircraft and sources, and runs
+``pipeline.track.track``; ``write_tracks`` writes the table (CSV or Parquet), the JSON summary and the
+per-aircraft figures; ``text`` is the terminal's summary.
+"""
+
+from __future__ import annotations
+
+import json
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from msdc.pipeline.jobs.common import (
+    ESTIMATED,
+    Checked,
+    JobError,
+    OptionError,
+    TrackOptions,
+    carrying,
+    check_aircraft,
+    check_decoding,
+    check_figures_dir,
+    check_output_rows,
+    check_tracking,
+    estimated_noise,
+    noise_text,
+    output_path,
+    parse_sources,
+    run_parameters,
+    sensor_table,
+    spare_inputs,
+    tracker_inputs,
+)
+from msdc.pipeline.progress import Progress
+
+# the columns of the track table, in order (issue 10); the tracker's other columns follow
+TRACK_COLUMNS = ["aircraft_id", "callsign", "address", "time", "time_of_day", "latitude", "longitude",
+                 "flight_level", "speed_kt", "track_deg", "turn_rate_dps", "sigma_major_m", "sigma_minor_m",
+                 "mode_cv", "mode_turn_left", "mode_turn_right", "coasted", "sources"]
+# decimals of the track CSV's float columns (Parquet keeps full precision): below what any sensor resolves
+# (1e-7 deg is 1.1 cm; 1 us; 0.01 ft of level, 0.01 kt, 1e-4 deg/s), so that the filter's round-off
+# (turn rates of 1.7e-17) and 17-digit floats do not reach the file; mode_* columns take MODE_DECIMALS
+CSV_DECIMALS = {"time_of_day": 6, "latitude": 7, "longitude": 7, "flight_level": 2, "vertical_rate_fpm": 1,
+                "speed_kt": 2, "track_deg": 3, "turn_rate_dps": 4, "sigma_major_m": 2, "sigma_minor_m": 2,
+                "ellipse_orientation_deg": 2, "age_s": 6}
+MODE_DECIMALS = 4
+
+
+def csv_rounded(tracks: pd.DataFrame) -> pd.DataFrame:
+    """The track table with its float columns rounded to CSV_DECIMALS (mode probabilities to MODE_DECIMALS),
+    a negative zero written as 0, values below 1e-4 as fixed-point text; the other columns as they are (not
+    copied)."""
+    rounded = {}
+    for name in tracks.columns:
+        places = CSV_DECIMALS.get(name, MODE_DECIMALS if name.startswith("mode_") else None)
+        if places is not None and tracks[name].dtype.kind == "f":
+            # + 0.0: a negative zero becomes 0.0
+            values = np.round(tracks[name].to_numpy(float, na_value=np.nan), places) + 0.0
+            tiny = (values != 0.0) & (np.abs(values) < 1e-4)  # Python writes these as 4.48e-05: fixed instead
+            if tiny.any():
+                values = values.astype(object)
+                values[tiny] = [f"{v:.{places}f}" for v in values[tiny]]
+            rounded[name] = values
+    return tracks.assign(**rounded)
+
+
+# printed under the terminal's table of tracks: what its columns mean
+TRACK_LEGEND = (
+    "reports = updates + gated + invalid (no usable position or covariance) + out_of_range (3000 km off)\n"
+    "tracked_s: first to last update of each segment, summed; update_interval_s: the slowest sensor's\n"
+    "median interval between its updates; coasted_s: time without any update beyond that interval, in gaps\n"
+    "longer than 1.5 intervals (a missed 4 s scan counts 4 s); after its last update a segment is coasted\n"
+    "--max-coast s more, counted in neither")
+
+
+def validate(options: TrackOptions, *, require_output: bool = False) -> Checked:
+    """Check every option, the sensor file and the output paths before any decoding; OptionError if bad.
+    ``require_output`` (the command): at least one of -o, --json and --figures; track_job returns the table
+    whatever is written."""
+    from msdc.pipeline.track.plane import SMOOTHERS
+
+    checked = check_decoding(options)
+    check_aircraft(options)
+    check_tracking(options)
+    if options.smoother not in SMOOTHERS:
+        raise OptionError(f"--smoother {options.smoother!r}: must be one of {', '.join(SMOOTHERS)}")
+    parse_sources(options.sources)
+    checked.output = output_path("-o", options.output, (".csv", ".parquet"))
+    checked.json = output_path("--json", options.json, (".json",))
+    spare_inputs(options.inputs, [(f"-o {checked.output}", checked.output),
+                                  (f"--json {checked.json}", checked.json)])
+    if options.figures is not None:
+        check_figures_dir(options.figures)
+    if require_output and checked.output is None and checked.json is None and options.figures is None:
+        raise OptionError("give at least one output: -o tracks.csv|tracks.parquet, --json or --figures")
+    checked.sensors = sensor_table(options.sensors, required=False)
+    return checked
+
+
+@dataclass
+class TrackJobResult:
+    """The tracker's result, the measurements it was fed (one row per report), labels and parameters."""
+
+    options: TrackOptions
+    checked: Checked
+    result: object  # pipeline.track.TrackResult
+    tracks: pd.DataFrame  # TRACK_COLUMNS first, then the tracker's other columns
+    measurements: pd.DataFrame
+    labels: pd.DataFrame  # aircraft_id, callsign, address
+    parameters: dict
+    loaded: object  # the inputs, editions and date; its decoded frames are freed once measurements are built
+    noise: pd.DataFrame | None = None  # --noise estimate: per sensor and component, declared and estimated
+    warnings: list[str] = field(default_factory=list)  # the run's, validation's first
+
+
+def _select(meas: pd.DataFrame, options: TrackOptions) -> pd.DataFrame:
+    """The selected aircraft's reports; JobError naming the closest call signs / addresses present."""
+    import difflib
+
+    from msdc.pipeline.model.identity import normalise_address, normalise_callsign
+    from msdc.pipeline.model.measurements import select
+
+    if options.all_aircraft:
+        return meas
+    chosen = select(meas, options.callsign, options.address)
+    if len(chosen):
+        return chosen
+    column, wanted = (("callsign", normalise_callsign(options.callsign)) if options.callsign is not None
+                      else ("address", normalise_address(options.address)))
+    close = difflib.get_close_matches(wanted or "", sorted(set(meas[column].dropna())), n=5, cutoff=0.5)
+    hint = f"closest present: {', '.join(close)}" if close else "nothing similar is present"
+    raise JobError(f"{'call sign' if column == 'callsign' else 'address'} {wanted} not in the inputs; {hint}")
+
+
+def track_job(options: TrackOptions, *, progress: Progress | None = None, checked: Checked | None = None,
+              command: str = "track") -> TrackJobResult:
+    """Validate, decode, build measurements, select, track; nothing is written."""
+    from msdc.pipeline.model.identity import aircraft_labels
+    from msdc.pipeline.track import track
+    from msdc.pipeline.track.feasibility import untrackable
+
+    started = time.monotonic()
+    checked = checked or validate(options)
+    with carrying(checked.warnings) as warnings:
+        loaded, meas, said = tracker_inputs(options, checked, progress, "the tracks' times")
+        warnings += said
+        joined = int(meas.attrs.get("joined_by_track_number", 0))
+        unidentified = int(meas.attrs.get("unidentified", 0))
+        if unidentified and options.all_aircraft:
+            warnings.append(f"{unidentified} report(s) with no identity (no address, call sign or Mode 3/A "
+                            "code, nor a radar track number joining them to an aircraft), not tracked")
+        meas = _select(meas, options)
+        check_output_rows(meas, options)
+        noise = None
+        if options.noise in ESTIMATED:
+            meas, noise = estimated_noise(meas, checked.sensors, options)
+        result = track(meas, step_s=float(options.step_s), max_coast_s=float(options.max_coast_s),
+                       tpm=options.tpm, smooth=options.smooth, smoother=options.smoother)
+        if result.tracks.empty:
+            raise JobError(untrackable(meas))
+        labels = aircraft_labels(meas)
+        tracks = with_labels(result.tracks, labels)
+        params = {**run_parameters(options, loaded, started, command), **result.parameters,
+                  "sources": list(parse_sources(options.sources)), "callsign": options.callsign,
+                  "address": options.address, "all": bool(options.all_aircraft),
+                  "radar_plots_joined_by_track_number": joined,
+                  "unidentified_reports_not_tracked": unidentified, "noise": options.noise}
+        return TrackJobResult(options, checked, result, tracks, meas, labels, params, loaded, noise, warnings)
+
+
+def with_labels(tracks: pd.DataFrame, labels: pd.DataFrame) -> pd.DataFrame:
+    """The tracker's table with each aircraft's call sign and address ("" when none), TRACK_COLUMNS first;
+    the other columns are not copied (a day's table is ~0.35 GB)."""
+    by_id = labels.set_index("aircraft_id")
+    named = {c: tracks["aircraft_id"].map(by_id[c]).fillna("") for c in ("callsign", "address")}
+    out = tracks.assign(**named)
+    return out[TRACK_COLUMNS + [c for c in out.columns if c not in TRACK_COLUMNS]]
+
+
+def summary(result: TrackJobResult) -> dict:
+    """The JSON document: parameters, inputs, and per aircraft its span, coasted time and per-sensor
+    reports, updates, gated reports and NIS mean."""
+    from msdc.pipeline.report.summary import json_value
+
+    res = result.result
+    labels = result.labels.set_index("aircraft_id")
+    aircraft = []
+    for row in res.aircraft.to_dict("records"):
+        ident = row["aircraft_id"]
+        sens = res.sensors[res.sensors["aircraft_id"] == ident].drop(columns="aircraft_id")
+        aircraft.append({
+            "aircraft_id": ident, "callsign": labels.at[ident, "callsign"] if ident in labels.index else "",
+            "address": labels.at[ident, "address"] if ident in labels.index else "",
+            **{k: json_value(v) for k, v in row.items() if k != "aircraft_id"},
+            "sensors": [{k: json_value(v) for k, v in s.items()} for s in sens.to_dict("records")]})
+    doc = {"parameters": result.parameters, "inputs": result.loaded.inputs, "aircraft": aircraft}
+    if result.noise is not None:
+        doc["noise"] = {"passes": result.noise.attrs.get("passes"),
+                        "sensors": [{k: json_value(v) for k, v in r.items()}
+                                    for r in result.noise.to_dict("records")],
+                        "aircraft_raised": [{k: json_value(v) for k, v in r.items()}
+                                            for r in result.noise.attrs.get("aircraft", [])]}
+    return doc
+
+
+def sensor_totals(sensors: pd.DataFrame) -> pd.DataFrame:
+    """The tracker's per-aircraft sensor table summed per sensor: aircraft, reports, updates, gated, invalid,
+    out_of_range, and the NIS mean over every update (each aircraft's mean weighted by its updates)."""
+    s = sensors.assign(nis_sum=sensors["nis_mean"].fillna(0.0) * sensors["updates"])
+    out = s.groupby("sensor_id", sort=True).agg(
+        aircraft=("aircraft_id", "nunique"), reports=("reports", "sum"), updates=("updates", "sum"),
+        gated=("gated", "sum"), invalid=("invalid", "sum"), out_of_range=("out_of_range", "sum"),
+        nis_sum=("nis_sum", "sum")).reset_index()
+    with np.errstate(invalid="ignore", divide="ignore"):
+        nis = out["nis_sum"].to_numpy(float) / out["updates"].to_numpy(float)
+    return out.drop(columns="nis_sum").assign(nis_mean=np.where(out["updates"] > 0, nis, np.nan))
+
+
+def write_tracks(result: TrackJobResult) -> dict[str, Path]:
+    """Write the track table (CSV: times as ISO 8601 UTC; Parquet: tz-aware timestamps), the JSON and
+    the figures, as the options ask; each file is written whole to a temporary name and then renamed,
+    so a failure leaves nothing behind. Returns what was written, by kind."""
+    written: dict[str, Path] = {}
+    out, js = result.checked.output, result.checked.json
+    if out is not None:
+        from msdc.pipeline.report.summary import write_atomically
+        from msdc.pipeline.report.tables import write_parquet
+
+        if out.suffix.lower() == ".csv":
+            times = result.tracks["time"].dt.strftime("%Y-%m-%dT%H:%M:%S.%fZ")
+            table = csv_rounded(result.tracks).assign(time=times)
+            write_atomically(out, lambda tmp: table.to_csv(tmp, index=False))
+        else:
+            write_parquet(result.tracks, out)
+        written["tracks"] = out
+    if js is not None:
+        js.write_text(json.dumps(summary(result), indent=1, default=str))
+        written["json"] = js
+    if result.options.figures is not None:
+        from msdc.pipeline.report.track_figures import track_figures
+
+        d = Path(result.options.figures)
+        d.mkdir(exist_ok=True)
+        written.update({f"figure {k}": p for k, p in track_figures(result, d).items()})
+    return written
+
+
+def text(result: TrackJobResult) -> str:
+    """Per aircraft: span, updates, gated reports, coasted time; per sensor over every aircraft: aircraft,
+    reports, updates, gated, NIS mean (the per-aircraft split is in the JSON: a day of traffic would print
+    thousands of lines)."""
+    res = result.result
+    if res.aircraft.empty:
+        return "no track: no report with a usable position and covariance"
+    ac = res.aircraft.merge(result.labels, on="aircraft_id", how="left")
+    cols = [c for c in ("aircraft_id", "callsign", "segments", "reports", "updates", "gated", "invalid",
+                        "out_of_range", "tracked_s", "update_interval_s", "coasted_s") if c in ac]
+    out = ("Tracks:\n" + ac[cols].to_string(index=False, float_format=lambda v: f"{v:.1f}")
+           + "\n" + TRACK_LEGEND
+           + "\n\nSensors:\n" + sensor_totals(res.sensors).to_string(
+               index=False, float_format=lambda v: f"{v:.2f}"))
+    return out + noise_text(result.noise)
+
+
+__all__ = ["TRACK_COLUMNS", "TrackJobResult", "TrackOptions", "sensor_totals", "summary", "text", "track_job",
+           "validate", "write_tracks"]
