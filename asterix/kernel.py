@@ -24,6 +24,15 @@ E_GARBAGE = 9  # bytes between blocks that do not start a plausible data block
 E_EMPTY_BLOCK = 10  # a data block with no record
 
 
+# Item kinds (column K_KIND of the part table), shared with the table builder (layout.compile_layout).
+ABSENT = 0  # no item at this FRN (or an unused row)
+FIXED = 1  # K_SIZE bytes
+EXTENDED = 2  # octet-groups (sizes in ext_sizes from K_EXT_START) while an FX bit says another follows
+REP_COUNT = 3  # a one-byte repetition count, then that many elements of K_SIZE bytes
+REP_FX = 4  # elements of K_SIZE bytes while the last bit of each says one follows
+COMPOUND = 5  # a primary subfield, then the subitems it sets (sub_parts from K_SUB_START)
+EXPLICIT = 6  # a length byte counting itself, then the data
+
 # Columns of the packed part table P.
 K_KIND, K_SIZE, K_EXT_START, K_EXT_COUNT, K_SUB_START, K_SUB_COUNT, K_SLOT = range(7)
 LOOKAHEAD = 4  # blocks a resynchronisation candidate's chain is checked over
@@ -45,9 +54,9 @@ def _part_len(buf, pos, end, sp, P, ext_sizes, ext_fx):
     """Bytes of one non-compound part starting at pos, or -1 when it cannot be walked."""
     k = P[sp, K_KIND]
     n = np.int64(0)
-    if k == 1:
+    if k == FIXED:
         n = P[sp, K_SIZE]
-    elif k == 2:
+    elif k == EXTENDED:
         g = 0
         gcount = P[sp, K_EXT_COUNT]
         while True:
@@ -58,18 +67,18 @@ def _part_len(buf, pos, end, sp, P, ext_sizes, ext_fx):
             if ext_fx[P[sp, K_EXT_START] + gi] == 0 or buf[pos + n - 1] & 1 == 0:
                 break
             g += 1
-    elif k == 3:
+    elif k == REP_COUNT:
         if pos >= end:
             return np.int64(-1)
         n = 1 + np.int64(buf[pos]) * P[sp, K_SIZE]
-    elif k == 4:
+    elif k == REP_FX:
         while True:
             n += P[sp, K_SIZE]
             if pos + n > end:
                 return np.int64(-1)
             if buf[pos + n - 1] & 1 == 0:
                 break
-    elif k == 6:
+    elif k == EXPLICIT:
         if pos >= end:
             return np.int64(-1)
         n = np.int64(buf[pos])
@@ -105,10 +114,10 @@ def walks(buf, q, n, p0, n_frn, P, ext_sizes, ext_fx, sub_parts):
                     continue
                 any_item = True
                 f = (fq - fs) * 7 + bit
-                if f >= n_frn or P[p0 + f, K_KIND] == 0:
+                if f >= n_frn or P[p0 + f, K_KIND] == ABSENT:
                     return False
                 p = p0 + f
-                if P[p, K_KIND] != 5:
+                if P[p, K_KIND] != COMPOUND:
                     m = _part_len(buf, pos, end, p, P, ext_sizes, ext_fx)
                     if m < 0:
                         return False
@@ -456,10 +465,10 @@ def scan(buf, blk_start, blk_len, P, ext_sizes, ext_fx, sub_parts, n_frn, n_slot
                         continue
                     any_item = True
                     p = (q - fs) * 7 + bit
-                    if p >= n_frn or P[p, K_KIND] == 0:
+                    if p >= n_frn or P[p, K_KIND] == ABSENT:
                         err = E_UNDEFINED_FRN
                         break
-                    if P[p, K_KIND] == 1:
+                    if P[p, K_KIND] == FIXED:
                         # fast path: a fixed-size item (most items)
                         n = P[p, K_SIZE]
                         if pos + n > end:
@@ -474,7 +483,7 @@ def scan(buf, blk_start, blk_len, P, ext_sizes, ext_fx, sub_parts, n_frn, n_slot
                     item_start = pos
                     # the parts to measure: the item itself, or a compound item's present subitems
                     nwork = 0
-                    if P[p, K_KIND] == 5:
+                    if P[p, K_KIND] == COMPOUND:
                         cs = pos
                         while True:
                             if pos >= end:
@@ -507,9 +516,9 @@ def scan(buf, blk_start, blk_len, P, ext_sizes, ext_fx, sub_parts, n_frn, n_slot
                         sp = work[w]
                         k = P[sp, K_KIND]
                         n = np.int64(0)
-                        if k == 1:
+                        if k == FIXED:
                             n = P[sp, K_SIZE]
-                        elif k == 2:
+                        elif k == EXTENDED:
                             g = 0
                             gcount = P[sp, K_EXT_COUNT]
                             while True:
@@ -521,19 +530,19 @@ def scan(buf, blk_start, blk_len, P, ext_sizes, ext_fx, sub_parts, n_frn, n_slot
                                 if ext_fx[P[sp, K_EXT_START] + gi] == 0 or buf[pos + n - 1] & 1 == 0:
                                     break
                                 g += 1
-                        elif k == 3:
+                        elif k == REP_COUNT:
                             if pos >= end:
                                 err = E_PAST_END
                                 break
                             n = 1 + np.int64(buf[pos]) * P[sp, K_SIZE]
-                        elif k == 4:
+                        elif k == REP_FX:
                             while True:
                                 n += P[sp, K_SIZE]
                                 if pos + n > end:
                                     break
                                 if buf[pos + n - 1] & 1 == 0:
                                     break
-                        elif k == 6:
+                        elif k == EXPLICIT:
                             if pos >= end:
                                 err = E_PAST_END
                                 break

@@ -12,10 +12,9 @@ from functools import cache
 import numpy as np
 
 from .columns import Column, columns_for
+from .kernel import ABSENT, COMPOUND, EXPLICIT, EXTENDED, FIXED, REP_COUNT, REP_FX
 from .tables import load_table, resolve_edition
 
-# Part kinds understood by the kernel.
-ABSENT, FIXED, EXTENDED, REP_COUNT, REP_FX, COMPOUND, EXPLICIT = range(7)
 # Output kinds of a field.
 OUT_INT, OUT_FLOAT, OUT_WIDE = 0, 1, 2  # int32 matrix, float64 matrix, int64 matrix
 
@@ -35,7 +34,7 @@ class Layout:
     category: int
     edition: str
     columns: tuple[Column, ...]
-    kind: np.ndarray  # int8 per part
+    kind: np.ndarray  # int8 per part: an item kind (kernel.FIXED, ...)
     size: np.ndarray  # int32 per part: bytes (fixed), element bytes (repetitive), first group (extended)
     ext_start: np.ndarray  # int32 per part: index into ext_sizes
     ext_count: np.ndarray  # int32 per part
