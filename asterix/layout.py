@@ -12,7 +12,7 @@ from functools import cache
 import numpy as np
 
 from .columns import Column, columns_for
-from .kernel import ABSENT, COMPOUND, EXPLICIT, EXTENDED, FIXED, REP_COUNT, REP_FX
+from .kernel import ABSENT, COMPOUND, EXPLICIT, EXTENDED, FIXED, REP_COUNT, REP_FX, Parts
 from .tables import load_table, resolve_edition
 
 # Output kinds of a field.
@@ -64,6 +64,11 @@ class Layout:
     def P(self) -> np.ndarray:
         """Packed part table for the kernel: kind, size, ext start/count, sub start/count, slot."""
         return _packed(self, "parts")
+
+    @property
+    def parts(self) -> Parts:
+        """The part tables ``kernel.scan`` walks records with."""
+        return Parts(self.P, self.ext_sizes, self.ext_fx, self.sub_parts)
 
     @property
     def F(self) -> np.ndarray:
