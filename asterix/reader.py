@@ -546,9 +546,11 @@ def decode_buffer(buf: np.ndarray, seg: Segments, *, path: str = "", editions: d
     err = pd.DataFrame(errors, columns=["offset", "length", "category", "reason"])
     err.insert(0, "file", path)
     err["category"] = err["category"].astype("Int16").where(err["category"] >= 0)
-    return Recording(frames, err, chosen, path, seg.format, date, int(len(buf)), int(seg.container_bytes),
-                     decoded_bytes, ignored, ignored_bytes, choice, first_day, ignored_by_cat, fits,
-                     int(len(b_start)))
+    return Recording(frames=frames, errors=err, editions=chosen, path=path, format=seg.format, date=date,
+                     size_bytes=int(len(buf)), container_bytes=int(seg.container_bytes),
+                     decoded_bytes=decoded_bytes, ignored_blocks=ignored, ignored_bytes=ignored_bytes,
+                     edition_choice=choice, day0=first_day, ignored_category_bytes=ignored_by_cat,
+                     edition_fits=fits, blocks=int(len(b_start)))
 
 
 def framing_reason(buf: np.ndarray, seg: Segments, offset: int, code: int) -> str:
