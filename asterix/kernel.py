@@ -8,6 +8,8 @@ note where each item of each record lies; ``gather`` reads every field into colu
 
 from __future__ import annotations
 
+from typing import NamedTuple
+
 import numpy as np
 from numba import njit
 
@@ -24,9 +26,36 @@ E_GARBAGE = 9  # bytes between blocks that do not start a plausible data block
 E_EMPTY_BLOCK = 10  # a data block with no record
 
 
+# Item kinds (column K_KIND of the part table), shared with the table builder (layout.compile_layout).
+ABSENT = 0  # no item at this FRN (or an unused row)
+FIXED = 1  # K_SIZE bytes
+EXTENDED = 2  # octet-groups (sizes in ext_sizes from K_EXT_START) while an FX bit says another follows
+REP_COUNT = 3  # a one-byte repetition count, then that many elements of K_SIZE bytes
+REP_FX = 4  # elements of K_SIZE bytes while the last bit of each says one follows
+COMPOUND = 5  # a primary subfield, then the subitems it sets (sub_parts from K_SUB_START)
+EXPLICIT = 6  # a length byte counting itself, then the data
+
 # Columns of the packed part table P.
 K_KIND, K_SIZE, K_EXT_START, K_EXT_COUNT, K_SUB_START, K_SUB_COUNT, K_SLOT = range(7)
 LOOKAHEAD = 4  # blocks a resynchronisation candidate's chain is checked over
+
+
+class Parts(NamedTuple):
+    """The part tables records are walked with: one layout's, or several laid end to end (framing's).
+    Kernels unpack it once on entry: reading a field inside a loop adds reference counting per read."""
+
+    P: np.ndarray  # (parts, 7) int64: columns K_KIND .. K_SLOT per part
+    ext_sizes: np.ndarray  # octet-group sizes of EXTENDED parts
+    ext_fx: np.ndarray  # int8 per octet-group: 1 when it ends with an FX bit
+    sub_parts: np.ndarray  # part index of each COMPOUND subitem, -1 for a spare position
+
+
+class Framing(NamedTuple):
+    """What framing walks blocks with: per category (0-255) its first row in parts.P and its FRNs."""
+
+    base: np.ndarray  # int64 per category: first row of its layout in parts.P, -1 when not walked
+    nfrn: np.ndarray  # int64 per category: FRNs of its UAP
+    parts: Parts
 
 
 @njit(cache=True, nogil=True)
@@ -42,12 +71,13 @@ def _header(buf, q, stop):
 
 @njit(cache=True, nogil=True)
 def _part_len(buf, pos, end, sp, P, ext_sizes, ext_fx):
-    """Bytes of one non-compound part starting at pos, or -1 when it cannot be walked."""
+    """Bytes of one non-compound part starting at pos, or -1 when it cannot be walked (three arrays of
+    Parts, not the tuple: passing it on every item cost framing 5-15 %)."""
     k = P[sp, K_KIND]
     n = np.int64(0)
-    if k == 1:
+    if k == FIXED:
         n = P[sp, K_SIZE]
-    elif k == 2:
+    elif k == EXTENDED:
         g = 0
         gcount = P[sp, K_EXT_COUNT]
         while True:
@@ -58,18 +88,18 @@ def _part_len(buf, pos, end, sp, P, ext_sizes, ext_fx):
             if ext_fx[P[sp, K_EXT_START] + gi] == 0 or buf[pos + n - 1] & 1 == 0:
                 break
             g += 1
-    elif k == 3:
+    elif k == REP_COUNT:
         if pos >= end:
             return np.int64(-1)
         n = 1 + np.int64(buf[pos]) * P[sp, K_SIZE]
-    elif k == 4:
+    elif k == REP_FX:
         while True:
             n += P[sp, K_SIZE]
             if pos + n > end:
                 return np.int64(-1)
             if buf[pos + n - 1] & 1 == 0:
                 break
-    elif k == 6:
+    elif k == EXPLICIT:
         if pos >= end:
             return np.int64(-1)
         n = np.int64(buf[pos])
@@ -81,9 +111,10 @@ def _part_len(buf, pos, end, sp, P, ext_sizes, ext_fx):
 
 
 @njit(cache=True, nogil=True)
-def walks(buf, q, n, p0, n_frn, P, ext_sizes, ext_fx, sub_parts):
+def walks(buf, q, n, p0, n_frn, parts):
     """True when the block at q (LEN n) walks record by record exactly to its end under the layout whose
-    parts start at row p0 of P (framing's consistency check; the decode itself is ``scan``)."""
+    parts start at row p0 of parts.P (framing's consistency check; the decode itself is ``scan``)."""
+    P, ext_sizes, ext_fx, sub_parts = parts
     pos = q + 3
     end = q + n
     if pos >= end:
@@ -105,10 +136,10 @@ def walks(buf, q, n, p0, n_frn, P, ext_sizes, ext_fx, sub_parts):
                     continue
                 any_item = True
                 f = (fq - fs) * 7 + bit
-                if f >= n_frn or P[p0 + f, K_KIND] == 0:
+                if f >= n_frn or P[p0 + f, K_KIND] == ABSENT:
                     return False
                 p = p0 + f
-                if P[p, K_KIND] != 5:
+                if P[p, K_KIND] != COMPOUND:
                     m = _part_len(buf, pos, end, p, P, ext_sizes, ext_fx)
                     if m < 0:
                         return False
@@ -139,27 +170,27 @@ def walks(buf, q, n, p0, n_frn, P, ext_sizes, ext_fx, sub_parts):
 
 
 @njit(cache=True, nogil=True)
-def all_walk(buf, blk_start, blk_len, blk_cat, base, nfrn, P, ext_sizes, ext_fx, sub_parts):
+def all_walk(buf, blk_start, blk_len, blk_cat, framing):
     """True when every block of a walked category walks exactly (no memory: for chunk planning)."""
+    base, nfrn, parts = framing
     for b in range(blk_start.shape[0]):
         c = blk_cat[b]
-        if base[c] >= 0 and not walks(buf, blk_start[b], blk_len[b], base[c], nfrn[c], P, ext_sizes, ext_fx,
-                                      sub_parts):
+        if base[c] >= 0 and not walks(buf, blk_start[b], blk_len[b], base[c], nfrn[c], parts):
             return False
     return True
 
 
 @njit(cache=True, nogil=True)
-def walk_flags(buf, blk_start, blk_len, p0, n_frn, P, ext_sizes, ext_fx, sub_parts):
+def walk_flags(buf, blk_start, blk_len, p0, n_frn, parts):
     """1 for each block that walks exactly under one layout (edition choice; no memory per record)."""
     out = np.zeros(blk_start.shape[0], np.int8)
     for b in range(blk_start.shape[0]):
-        out[b] = walks(buf, blk_start[b], blk_len[b], p0, n_frn, P, ext_sizes, ext_fx, sub_parts)
+        out[b] = walks(buf, blk_start[b], blk_len[b], p0, n_frn, parts)
     return out
 
 
 @njit(cache=True, nogil=True)
-def _cut_tail(buf, x, stop, seen, base):
+def _cut_tail(buf, x, stop, seen):
     """The data ends inside a block header or block at x of a category already met (a truncated file)."""
     if seen[buf[x]] == 0:
         return False
@@ -170,11 +201,12 @@ def _cut_tail(buf, x, stop, seen, base):
 
 
 @njit(cache=True, nogil=True)
-def _anchored(buf, r, stop, seen, base, nfrn, P, ext_sizes, ext_fx, sub_parts):
+def _anchored(buf, r, stop, seen, framing):
     """The block chain from r holds for LOOKAHEAD blocks (or to the end of the data) and is anchored:
     one of its blocks is of a decoded category and walks exactly, or all its categories were already
     met, or it reaches the end in two blocks or more (one LEN landing on the end proves little).
     Every decoded block in it must walk exactly."""
+    base, nfrn, parts = framing
     x = r
     walked = False
     all_seen = True
@@ -183,13 +215,13 @@ def _anchored(buf, r, stop, seen, base, nfrn, P, ext_sizes, ext_fx, sub_parts):
     while k < LOOKAHEAD and x < stop:
         n = _header(buf, x, stop)
         if n < 0:
-            if k > 0 and _cut_tail(buf, x, stop, seen, base):
+            if k > 0 and _cut_tail(buf, x, stop, seen):
                 ended = True  # a truncated tail: the chain reaches the end of the data
                 break
             return walked and k >= 2  # breaks again: two chained blocks, one walking, still anchor it
         c = buf[x]
         if base[c] >= 0:
-            if not walks(buf, x, n, base[c], nfrn[c], P, ext_sizes, ext_fx, sub_parts):
+            if not walks(buf, x, n, base[c], nfrn[c], parts):
                 return False
             walked = True
         elif seen[c] == 0:
@@ -202,9 +234,10 @@ def _anchored(buf, r, stop, seen, base, nfrn, P, ext_sizes, ext_fx, sub_parts):
 
 
 @njit(cache=True, nogil=True)
-def _chained_inside(buf, q, end, stop, base, nfrn, P, ext_sizes, ext_fx, sub_parts):
+def _chained_inside(buf, q, end, stop, framing):
     """A chain of blocks starting inside (q, end) reaches a decoded block that walks and starts before end
     (it may run past end): the block at q is then probably a false header swallowing real blocks."""
+    base, nfrn, parts = framing
     for r in range(q + 1, end - 2):
         x = r
         while x < end:
@@ -213,7 +246,7 @@ def _chained_inside(buf, q, end, stop, base, nfrn, P, ext_sizes, ext_fx, sub_par
                 break
             c = buf[x]
             if base[c] >= 0:
-                if walks(buf, x, n, base[c], nfrn[c], P, ext_sizes, ext_fx, sub_parts):
+                if walks(buf, x, n, base[c], nfrn[c], parts):
                     return True
                 break
             x += n
@@ -221,54 +254,55 @@ def _chained_inside(buf, q, end, stop, base, nfrn, P, ext_sizes, ext_fx, sub_par
 
 
 @njit(cache=True, nogil=True)
-def _hides_decoded(buf, q, end, base, nfrn, P, ext_sizes, ext_fx, sub_parts):
+def _hides_decoded(buf, q, end, framing):
     """A block of a walked category that walks exactly lies inside (q, end): cheap check of a block of
     another category before its LEN is trusted (a damaged LEN there can swallow real blocks)."""
+    base, nfrn, parts = framing
     for r in range(q + 1, end - 2):
         c = buf[r]
         if base[c] < 0:
             continue
         n = (np.int64(buf[r + 1]) << 8) | buf[r + 2]
-        if n >= 3 and r + n <= end and walks(buf, r, n, base[c], nfrn[c], P, ext_sizes, ext_fx, sub_parts):
+        if n >= 3 and r + n <= end and walks(buf, r, n, base[c], nfrn[c], parts):
             return True
     return False
 
 
 @njit(cache=True, nogil=True)
-def _candidate(buf, r, stop, seen, base, nfrn, P, ext_sizes, ext_fx, sub_parts):
+def _candidate(buf, r, stop, seen, framing):
     """Framing may resume at r: its chain is anchored, and a block of a category not walked hides no
     walking chain (a false header there would swallow real blocks)."""
     n = _header(buf, r, stop)
-    if n < 0 or not _anchored(buf, r, stop, seen, base, nfrn, P, ext_sizes, ext_fx, sub_parts):
+    if n < 0 or not _anchored(buf, r, stop, seen, framing):
         return False
-    return base[buf[r]] >= 0 or not _chained_inside(buf, r, r + n, stop, base, nfrn, P, ext_sizes, ext_fx,
-                                                     sub_parts)
+    base = framing.base
+    return base[buf[r]] >= 0 or not _chained_inside(buf, r, r + n, stop, framing)
 
 
 @njit(cache=True, nogil=True)
-def _next_ok(buf, x, stop, seen, base, nfrn, P, ext_sizes, ext_fx, sub_parts):
+def _next_ok(buf, x, stop, seen, framing):
     """What follows a block that does not prove itself: the end, a truncated tail, a header of a decoded
     or already met category, or an anchored chain."""
     if x == stop:
         return True
     n = _header(buf, x, stop)
     if n < 0:
-        return _cut_tail(buf, x, stop, seen, base)
+        return _cut_tail(buf, x, stop, seen)
     c = buf[x]
-    return base[c] >= 0 or seen[c] == 1 or _anchored(buf, x, stop, seen, base, nfrn, P, ext_sizes, ext_fx,
-                                                      sub_parts)
+    return framing.base[c] >= 0 or seen[c] == 1 or _anchored(buf, x, stop, seen, framing)
 
 
 @njit(cache=True, nogil=True)
-def frame_blocks(buf, seg_start, seg_stop, exact, careful, base, nfrn, P, ext_sizes, ext_fx, sub_parts):
+def frame_blocks(buf, seg_start, seg_stop, exact, careful, framing):
     """Split payload segments into data blocks of any category; return block and error arrays.
 
     A raw segment whose block chain runs from its start exactly to its end is taken as it is (no block
     is walked). Otherwise, or with careful=True, it is framed carefully: a block is accepted when it is
-    consistent with what follows (decoded categories, those with base[cat] >= 0, must walk exactly),
+    consistent with what follows (decoded categories, those with framing.base[cat] >= 0, must walk exactly),
     and where the chain breaks, framing resumes at the next offset whose chain is anchored (_anchored).
     Returns (blk_start, blk_len, blk_cat, blk_seg, err_off, err_len, err_cat, err_code).
     """
+    base, nfrn, parts = framing
     cap = 16
     b_start = np.empty(cap, np.int64)
     b_len = np.empty(cap, np.int64)
@@ -308,8 +342,7 @@ def frame_blocks(buf, seg_start, seg_stop, exact, careful, base, nfrn, P, ext_si
                 # the chain holds; trust it unless a block of another category hides a walking block
                 hidden = False
                 for b in range(nb0, nb):
-                    if base[b_cat[b]] < 0 and _hides_decoded(buf, b_start[b], b_start[b] + b_len[b], base,
-                                                             nfrn, P, ext_sizes, ext_fx, sub_parts):
+                    if base[b_cat[b]] < 0 and _hides_decoded(buf, b_start[b], b_start[b] + b_len[b], framing):
                         hidden = True
                         break
                 if not hidden:
@@ -335,22 +368,19 @@ def frame_blocks(buf, seg_start, seg_stop, exact, careful, base, nfrn, P, ext_si
             if n > 0:
                 c = buf[q]
                 if base[c] >= 0:
-                    if walks(buf, q, n, base[c], nfrn[c], P, ext_sizes, ext_fx, sub_parts):
+                    if walks(buf, q, n, base[c], nfrn[c], parts):
                         ok = True  # walking exactly to its LEN is the block's own evidence
                     else:
                         # a block that does not walk keeps its LEN only if what follows is anchored
                         # (and hides no walking chain: a damaged LEN that happens to land on a block)
-                        ok = (q + n == stop or _anchored(buf, q + n, stop, seen, base, nfrn, P, ext_sizes,
-                                                         ext_fx, sub_parts)) and not _chained_inside(
-                            buf, q, q + n, stop, base, nfrn, P, ext_sizes, ext_fx, sub_parts)
+                        ok = ((q + n == stop or _anchored(buf, q + n, stop, seen, framing))
+                              and not _chained_inside(buf, q, q + n, stop, framing))
                 elif seen[c] == 1:
-                    ok = _next_ok(buf, q + n, stop, seen, base, nfrn, P, ext_sizes, ext_fx,
-                                  sub_parts) and not _chained_inside(buf, q, q + n, stop, base, nfrn, P,
-                                                                     ext_sizes, ext_fx, sub_parts)
+                    ok = (_next_ok(buf, q + n, stop, seen, framing)
+                          and not _chained_inside(buf, q, q + n, stop, framing))
                 else:  # a category not met yet: its chain must be anchored, and hide no real blocks
-                    ok = (q + n == stop or _anchored(buf, q, stop, seen, base, nfrn, P, ext_sizes, ext_fx,
-                                                     sub_parts)) and not (
-                        _chained_inside(buf, q, q + n, stop, base, nfrn, P, ext_sizes, ext_fx, sub_parts))
+                    ok = ((q + n == stop or _anchored(buf, q, stop, seen, framing))
+                          and not _chained_inside(buf, q, q + n, stop, framing))
             if ok:
                 if nb == b_start.shape[0]:
                     b_start, b_len, b_seg, b_cat = _grow4(b_start, b_len, b_seg, b_cat)
@@ -364,8 +394,7 @@ def frame_blocks(buf, seg_start, seg_stop, exact, careful, base, nfrn, P, ext_si
                 continue
             # the chain breaks here: resume at the next offset whose chain is anchored
             r = q + 1
-            while r < stop and not _candidate(buf, r, stop, seen, base, nfrn, P, ext_sizes, ext_fx,
-                                              sub_parts):
+            while r < stop and not _candidate(buf, r, stop, seen, framing):
                 r += 1
             if n > 0 and q + n < r:
                 # a complete block ends before the resumption point: keep it (a decoded one that does
@@ -407,8 +436,7 @@ def _grow4(a, b, c, d):
 
 
 @njit(cache=True, nogil=True)
-def scan(buf, blk_start, blk_len, P, ext_sizes, ext_fx, sub_parts, n_frn, n_slots, rel_off, rel_len, rec_off,
-         rec_blk):
+def scan(buf, blk_start, blk_len, parts, n_frn, n_slots, rel_off, rel_len, rec_off, rec_blk):
     """Walk every block record by record, all or nothing per block, in one pass.
 
     Returns counts (records per block, or minus an error code), fail_at (where a bad walk
@@ -418,6 +446,7 @@ def scan(buf, blk_start, blk_len, P, ext_sizes, ext_fx, sub_parts, n_frn, n_slot
     The caller allocates (numpy's allocator reuses huge pages; page faults cost more than the walk),
     and the walk is written out in one body: calls passing arrays cost more than the walk itself.
     """
+    P, ext_sizes, ext_fx, sub_parts = parts
     nblk = blk_start.shape[0]
     counts = np.zeros(nblk, np.int64)
     fail_at = np.full(nblk, -1, np.int64)
@@ -456,10 +485,10 @@ def scan(buf, blk_start, blk_len, P, ext_sizes, ext_fx, sub_parts, n_frn, n_slot
                         continue
                     any_item = True
                     p = (q - fs) * 7 + bit
-                    if p >= n_frn or P[p, K_KIND] == 0:
+                    if p >= n_frn or P[p, K_KIND] == ABSENT:
                         err = E_UNDEFINED_FRN
                         break
-                    if P[p, K_KIND] == 1:
+                    if P[p, K_KIND] == FIXED:
                         # fast path: a fixed-size item (most items)
                         n = P[p, K_SIZE]
                         if pos + n > end:
@@ -474,7 +503,7 @@ def scan(buf, blk_start, blk_len, P, ext_sizes, ext_fx, sub_parts, n_frn, n_slot
                     item_start = pos
                     # the parts to measure: the item itself, or a compound item's present subitems
                     nwork = 0
-                    if P[p, K_KIND] == 5:
+                    if P[p, K_KIND] == COMPOUND:
                         cs = pos
                         while True:
                             if pos >= end:
@@ -507,9 +536,9 @@ def scan(buf, blk_start, blk_len, P, ext_sizes, ext_fx, sub_parts, n_frn, n_slot
                         sp = work[w]
                         k = P[sp, K_KIND]
                         n = np.int64(0)
-                        if k == 1:
+                        if k == FIXED:
                             n = P[sp, K_SIZE]
-                        elif k == 2:
+                        elif k == EXTENDED:
                             g = 0
                             gcount = P[sp, K_EXT_COUNT]
                             while True:
@@ -521,19 +550,19 @@ def scan(buf, blk_start, blk_len, P, ext_sizes, ext_fx, sub_parts, n_frn, n_slot
                                 if ext_fx[P[sp, K_EXT_START] + gi] == 0 or buf[pos + n - 1] & 1 == 0:
                                     break
                                 g += 1
-                        elif k == 3:
+                        elif k == REP_COUNT:
                             if pos >= end:
                                 err = E_PAST_END
                                 break
                             n = 1 + np.int64(buf[pos]) * P[sp, K_SIZE]
-                        elif k == 4:
+                        elif k == REP_FX:
                             while True:
                                 n += P[sp, K_SIZE]
                                 if pos + n > end:
                                     break
                                 if buf[pos + n - 1] & 1 == 0:
                                     break
-                        elif k == 6:
+                        elif k == EXPLICIT:
                             if pos >= end:
                                 err = E_PAST_END
                                 break

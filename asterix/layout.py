@@ -12,10 +12,9 @@ from functools import cache
 import numpy as np
 
 from .columns import Column, columns_for
+from .kernel import ABSENT, COMPOUND, EXPLICIT, EXTENDED, FIXED, REP_COUNT, REP_FX, Parts
 from .tables import load_table, resolve_edition
 
-# Part kinds understood by the kernel.
-ABSENT, FIXED, EXTENDED, REP_COUNT, REP_FX, COMPOUND, EXPLICIT = range(7)
 # Output kinds of a field.
 OUT_INT, OUT_FLOAT, OUT_WIDE = 0, 1, 2  # int32 matrix, float64 matrix, int64 matrix
 
@@ -35,7 +34,7 @@ class Layout:
     category: int
     edition: str
     columns: tuple[Column, ...]
-    kind: np.ndarray  # int8 per part
+    kind: np.ndarray  # int8 per part: an item kind (kernel.FIXED, ...)
     size: np.ndarray  # int32 per part: bytes (fixed), element bytes (repetitive), first group (extended)
     ext_start: np.ndarray  # int32 per part: index into ext_sizes
     ext_count: np.ndarray  # int32 per part
@@ -65,6 +64,11 @@ class Layout:
     def P(self) -> np.ndarray:
         """Packed part table for the kernel: kind, size, ext start/count, sub start/count, slot."""
         return _packed(self, "parts")
+
+    @property
+    def parts(self) -> Parts:
+        """The part tables ``kernel.scan`` walks records with."""
+        return Parts(self.P, self.ext_sizes, self.ext_fx, self.sub_parts)
 
     @property
     def F(self) -> np.ndarray:
@@ -242,14 +246,17 @@ def compile_layout(category: int, edition: str | None = None,
     f = list(zip(*fields, strict=True)) if fields else [[]] * 7
     i32 = np.int32
     return Layout(
-        category, edition, columns,
-        np.array(kind, np.int8), np.array(size, i32), np.array(ext_start, i32), np.array(ext_count, i32),
-        np.array(ext_sizes or [1], i32), np.array(ext_fx or [1], np.int8), np.array(sub_start, i32),
-        np.array(sub_count, i32),
-        np.array(sub_parts or [-1], i32), np.array(slot, i32), n_frn, n_slots,
-        np.array(f[0], i32), np.array(f[1], i32), np.array(f[2], i32), np.array(f[3], np.bool_),
-        np.array(f[4], i32), np.array(f[5], i32), np.array(f[6], np.float64),
-        tuple(names_float), tuple(names_int), tuple(names_wide), item_frn, selected, tuple(code_slots),
+        category=category, edition=edition, columns=columns,
+        kind=np.array(kind, np.int8), size=np.array(size, i32), ext_start=np.array(ext_start, i32),
+        ext_count=np.array(ext_count, i32), ext_sizes=np.array(ext_sizes or [1], i32),
+        ext_fx=np.array(ext_fx or [1], np.int8), sub_start=np.array(sub_start, i32),
+        sub_count=np.array(sub_count, i32), sub_parts=np.array(sub_parts or [-1], i32),
+        slot=np.array(slot, i32), n_frn=n_frn, n_slots=n_slots,
+        f_slot=np.array(f[0], i32), f_bit=np.array(f[1], i32), f_bits=np.array(f[2], i32),
+        f_signed=np.array(f[3], np.bool_), f_out=np.array(f[4], i32), f_kind=np.array(f[5], i32),
+        f_mult=np.array(f[6], np.float64),
+        out_names_float=tuple(names_float), out_names_int=tuple(names_int), out_names_wide=tuple(names_wide),
+        item_frn=item_frn, selected=selected, code_slots=tuple(code_slots),
     )
 
 

@@ -203,8 +203,8 @@ def _scan(buf, starts, lens, lay: Layout):
         rel_off = np.full((cap, slots), 0xFFFF, np.uint16)
         rel_len = np.zeros((cap, slots), np.uint16)
         rec_off, rec_blk = np.empty(cap, np.int64), np.empty(cap, np.int64)
-        counts, fail_at, n = kernel.scan(buf, starts, lens, lay.P, lay.ext_sizes, lay.ext_fx, lay.sub_parts,
-                                         lay.n_frn, lay.n_slots, rel_off, rel_len, rec_off, rec_blk)
+        counts, fail_at, n = kernel.scan(buf, starts, lens, lay.parts, lay.n_frn, lay.n_slots, rel_off,
+                                         rel_len, rec_off, rec_blk)
         if n >= 0:
             return counts, fail_at, rel_off, rel_len, rec_off, rec_blk, n
         cap *= 2
@@ -222,9 +222,9 @@ def _spread(n: int, sample: int) -> np.ndarray:
 
 def _walk_flags(buf: np.ndarray, starts: np.ndarray, lens: np.ndarray, category: int, ed: str) -> np.ndarray:
     """For each block, whether it walks exactly under one edition of the category (kernel.walk_flags)."""
-    base, nfrn, P, ext_sizes, ext_fx, sub_parts = _framing_tables(((category, ed),))
-    return kernel.walk_flags(buf, starts, lens, base[category], nfrn[category], P, ext_sizes, ext_fx,
-                             sub_parts).astype(bool)
+    framing = _framing_tables(((category, ed),))
+    return kernel.walk_flags(buf, starts, lens, framing.base[category], framing.nfrn[category],
+                             framing.parts).astype(bool)
 
 
 def choose_edition(buf: np.ndarray, starts: np.ndarray, lens: np.ndarray, category: int,
@@ -351,7 +351,7 @@ def _build(cols: dict[str, object]) -> pd.DataFrame:
 
 
 @cache
-def _framing_tables(walked: tuple[tuple[int, str], ...]):
+def _framing_tables(walked: tuple[tuple[int, str], ...]) -> kernel.Framing:
     """The layouts framing walks blocks with, packed into one part table (base[cat] = first row, -1 if
     the category is not walked), for kernel.frame_blocks."""
     base = np.full(256, -1, np.int64)
@@ -370,8 +370,9 @@ def _framing_tables(walked: tuple[tuple[int, str], ...]):
         base[cat], nfrn[cat] = n_parts, lay.n_frn
         parts.append(P)
         n_parts, n_ext, n_sub = n_parts + len(P), n_ext + len(lay.ext_sizes), n_sub + len(sub)
-    return (base, nfrn, np.ascontiguousarray(np.concatenate(parts)), _cat_or(ext_sizes, 1, np.int64),
-            _cat_or(ext_fx, 1, np.int8), _cat_or(sub_parts, -1, np.int64))
+    packed = kernel.Parts(np.ascontiguousarray(np.concatenate(parts)), _cat_or(ext_sizes, 1, np.int64),
+                          _cat_or(ext_fx, 1, np.int8), _cat_or(sub_parts, -1, np.int64))
+    return kernel.Framing(base, nfrn, packed)
 
 
 def _cat_or(arrays: list[np.ndarray], fill: int, dtype) -> np.ndarray:
@@ -384,7 +385,7 @@ def frame(buf: np.ndarray, seg: Segments, walked: dict[int, str | None] | None =
     """Data blocks of every category in the segments (kernel.frame_blocks); ``walked`` gives the
     categories (and editions) whose blocks must walk exactly where framing has to resynchronise."""
     key = tuple(sorted((c, compile_layout(c, e).edition) for c, e in (walked or {}).items()))
-    return kernel.frame_blocks(buf, seg.start, seg.stop, seg.exact, careful, *_framing_tables(key))
+    return kernel.frame_blocks(buf, seg.start, seg.stop, seg.exact, careful, _framing_tables(key))
 
 
 def _lone_category(b_cat: np.ndarray, walked: dict) -> bool:
@@ -415,17 +416,16 @@ def framing_walk(buf: np.ndarray, seg: Segments, editions: dict, categories) -> 
     return walked
 
 
-def _walking_bytes(buf: np.ndarray, framed, tables) -> int:
+def _walking_bytes(buf: np.ndarray, framed, framing: kernel.Framing) -> int:
     """Bytes in the framed blocks of walked categories that walk exactly (kernel.walk_flags)."""
-    base, nfrn, P, ext_sizes, ext_fx, sub_parts = tables
     b_start, b_len, b_cat = framed[:3]
     total = 0
     for cat in np.unique(b_cat):
-        if base[cat] < 0:
+        if framing.base[cat] < 0:
             continue
         sel = b_cat == cat
-        ok = kernel.walk_flags(buf, b_start[sel], b_len[sel], base[cat], nfrn[cat], P, ext_sizes, ext_fx,
-                               sub_parts).astype(bool)  # 0/1 flags: as a mask, not as indices
+        ok = kernel.walk_flags(buf, b_start[sel], b_len[sel], framing.base[cat], framing.nfrn[cat],
+                               framing.parts).astype(bool)  # 0/1 flags: as a mask, not as indices
         total += int(b_len[sel][ok].sum())
     return total
 
@@ -436,14 +436,14 @@ def frame_checked(buf: np.ndarray, seg: Segments, walked: dict[int, str | None],
     to end is kept when careful framing walks no more bytes (blocks that do not walk are then of another
     edition, not damaged: cutting them up would lose the blocks and misreport them as framing errors)."""
     key = tuple(sorted((c, compile_layout(c, e).edition) for c, e in walked.items()))
-    tables = _framing_tables(key)
+    framing = _framing_tables(key)
     framed = plain if plain is not None else kernel.frame_blocks(buf, seg.start, seg.stop, seg.exact, False,
-                                                                 *tables)
+                                                                 framing)
     if seg.exact or (not len(framed[4]) and not _lone_category(framed[2], walked)
-                     and kernel.all_walk(buf, framed[0], framed[1], framed[2], *tables)):
+                     and kernel.all_walk(buf, framed[0], framed[1], framed[2], framing)):
         return framed
-    careful = kernel.frame_blocks(buf, seg.start, seg.stop, seg.exact, True, *tables)
-    if not len(framed[4]) and _walking_bytes(buf, careful, tables) <= _walking_bytes(buf, framed, tables):
+    careful = kernel.frame_blocks(buf, seg.start, seg.stop, seg.exact, True, framing)
+    if not len(framed[4]) and _walking_bytes(buf, careful, framing) <= _walking_bytes(buf, framed, framing):
         return framed
     return careful
 
@@ -547,9 +547,11 @@ def decode_buffer(buf: np.ndarray, seg: Segments, *, path: str = "", editions: d
     err = pd.DataFrame(errors, columns=["offset", "length", "category", "reason"])
     err.insert(0, "file", path)
     err["category"] = err["category"].astype("Int16").where(err["category"] >= 0)
-    return Recording(frames, err, chosen, path, seg.format, date, int(len(buf)), int(seg.container_bytes),
-                     decoded_bytes, ignored, ignored_bytes, choice, first_day, ignored_by_cat, fits,
-                     int(len(b_start)))
+    return Recording(frames=frames, errors=err, editions=chosen, path=path, format=seg.format, date=date,
+                     size_bytes=int(len(buf)), container_bytes=int(seg.container_bytes),
+                     decoded_bytes=decoded_bytes, ignored_blocks=ignored, ignored_bytes=ignored_bytes,
+                     edition_choice=choice, day0=first_day, ignored_category_bytes=ignored_by_cat,
+                     edition_fits=fits, blocks=int(len(b_start)))
 
 
 def framing_reason(buf: np.ndarray, seg: Segments, offset: int, code: int) -> str:

@@ -36,7 +36,7 @@ from .config import TrackerConfig, default_modes
 from .covariance import nacv_variance
 from .frame import Plane
 from .imm import STATUS_STARTED, STATUS_UPDATED
-from .plane import SMOOTHERS, PlaneRun, estimate, filter_plane
+from .plane import SMOOTHERS, Estimates, PlaneRun, estimate, filter_plane
 
 REQUIRED = ("time", "sensor_id", "sensor_kind", "aircraft_id", "latitude", "longitude", "flight_level",
             "cov_ee_m2", "cov_en_m2", "cov_nn_m2")
@@ -169,13 +169,13 @@ def track(measurements: pd.DataFrame, *, step_s: float = 1.0, max_coast_s: float
     outs = map_ordered(lambda item: (item[0], _track_one(str(item[0]), item[1], epoch, config, args, names,
                                                          step_s, smooth, smoother)), groups)
     for aircraft_id, out in outs:
-        tracks.append(out["tracks"])
-        sensors.append(out["sensors"])
-        aircraft.append(out["aircraft"])
-        rejected.append(out["rejected"])
-        finals[str(aircraft_id)] = out["final"]
+        tracks.append(out.tracks)
+        sensors.append(out.sensors)
+        aircraft.append(out.aircraft)
+        rejected.append(out.rejected)
+        finals[str(aircraft_id)] = out.final
         if keep_states:
-            runs[str(aircraft_id)] = (out["plane"], out["run"], epoch)
+            runs[str(aircraft_id)] = (out.plane, out.run, epoch)
     sensors_df = _with_invalid(pd.concat(sensors, ignore_index=True), invalid)
     aircraft_df = pd.DataFrame(aircraft)
     counts = sensors_df.groupby("aircraft_id", sort=False)[["reports", "invalid", "out_of_range"]].sum()
@@ -474,68 +474,153 @@ def filter_columns(config: TrackerConfig, t, lat, lon, cov_ee, cov_en, cov_nn, f
     return plane, near, run
 
 
-def _track_one(aircraft_id, group, epoch, config, args, names, step_s, smooth, smoother="rts") -> dict:
-    filtered = filter_reports(group, epoch, config)
-    g, t, plane, run, far = filtered.rows, filtered.t, filtered.plane, filtered.run, filtered.far
-    n = len(g)
-    status, nis, segment = run.status, run.nis, run.segment
-    accepted = run.accepted
-    acc_idx = np.flatnonzero(accepted)
-    acc_t = t[acc_idx]
-    acc_seg = segment[acc_idx]
+@dataclass
+class AircraftTrack:
+    """One aircraft's share of a TrackResult: its estimates, per-sensor counts, summary row, gated reports,
+    IMM posterior after its last update, and its plane and filter run (kept with keep_states)."""
 
-    # output times: the accepted update times and the grid, per segment up to max_coast_s after its end
-    queries = [np.unique(acc_t)]
-    seg_ids = np.unique(acc_seg)
-    seg_first = np.array([acc_t[acc_seg == s][0] for s in seg_ids])
-    seg_last = np.array([acc_t[acc_seg == s][-1] for s in seg_ids])
-    seg_end = seg_last + config.max_coast_s
-    seg_end[:-1] = np.minimum(seg_end[:-1], np.nextafter(seg_first[1:], -np.inf))
-    for first, end in zip(seg_first, seg_end, strict=True):
+    tracks: pd.DataFrame
+    sensors: pd.DataFrame
+    aircraft: dict
+    rejected: pd.DataFrame
+    final: ImmState
+    plane: Plane
+    run: PlaneRun
+
+
+@dataclass
+class Updates:
+    """The accepted updates of one aircraft's filter run (in time order): their rows, seconds since the
+    epoch, segments and sensors."""
+
+    rows: np.ndarray
+    t: np.ndarray
+    segment: np.ndarray
+    sensor: np.ndarray
+
+
+@dataclass
+class SegmentSpans:
+    """Per track segment (ids ascending): its first and last accepted update times, and where its output
+    ends, max_coast_s after the last update but before the next segment starts."""
+
+    ids: np.ndarray
+    first: np.ndarray
+    last: np.ndarray
+    end: np.ndarray
+
+
+def _track_one(aircraft_id: str, group: pd.DataFrame, epoch: pd.Timestamp, config: TrackerConfig, args: dict,
+               names: list[str], step_s: float, smooth: bool, smoother: str = "rts") -> AircraftTrack:
+    """Track one aircraft (``track``'s steps): filter its reports, estimate at its output times, count."""
+    filtered = filter_reports(group, epoch, config)
+    updates = _updates(filtered)
+    spans = _segment_spans(updates, config.max_coast_s)
+    qt = _output_times(updates, spans, step_s)
+    est = estimate(filtered.run, qt, smooth=smooth, smoother=smoother)
+    return AircraftTrack(
+        tracks=_track_table(aircraft_id, filtered, updates, qt, est, epoch, args, names, smooth),
+        sensors=_sensor_table(aircraft_id, group, filtered),
+        aircraft=_aircraft_row(aircraft_id, filtered, updates, spans, epoch),
+        rejected=_rejected(aircraft_id, filtered),
+        final=_final_state(aircraft_id, filtered, updates, epoch, config),
+        plane=filtered.plane, run=filtered.run)
+
+
+def _updates(filtered: FilteredReports) -> Updates:
+    """The filter's accepted updates."""
+    rows = np.flatnonzero(filtered.run.accepted)
+    return Updates(rows, filtered.t[rows], filtered.run.segment[rows],
+                   filtered.rows["sensor_id"].to_numpy(str)[rows])
+
+
+def _segment_spans(updates: Updates, max_coast_s: float) -> SegmentSpans:
+    """Each segment's first and last update, and its output end (coasting up to max_coast_s)."""
+    ids = np.unique(updates.segment)
+    first = np.array([updates.t[updates.segment == s][0] for s in ids])
+    last = np.array([updates.t[updates.segment == s][-1] for s in ids])
+    end = last + max_coast_s
+    end[:-1] = np.minimum(end[:-1], np.nextafter(first[1:], -np.inf))
+    return SegmentSpans(ids, first, last, end)
+
+
+def _output_times(updates: Updates, spans: SegmentSpans, step_s: float) -> np.ndarray:
+    """Output times (sorted, distinct): the accepted update times, and the multiples of step_s within each
+    segment's span up to its output end."""
+    queries = [np.unique(updates.t)]
+    for first, end in zip(spans.first, spans.end, strict=True):
         k0 = np.ceil(first / step_s)
         k1 = np.floor(end / step_s)
         if k1 >= k0:
             queries.append(np.arange(k0, k1 + 1) * step_s)
-    qt = np.unique(np.concatenate(queries))
-    est = estimate(run, qt, smooth=smooth, smoother=smoother)
-    xc, Pc, muq, zv, gov, dt = est.x, est.P, est.mu, est.zv, est.row, est.age_s
-    nq = len(qt)
+    return np.unique(np.concatenate(queries))
 
+
+def _track_table(aircraft_id: str, filtered: FilteredReports, updates: Updates, qt: np.ndarray,
+                 est: Estimates, epoch: pd.Timestamp, args: dict, names: list[str],
+                 smooth: bool) -> pd.DataFrame:
+    """One aircraft's rows of ``track``'s table: the estimates at the output times qt, in local terms."""
+    plane, segment, xc = filtered.plane, filtered.run.segment, est.x
     out_lat, out_lon = plane.inverse(xc[:, 0], xc[:, 3])
-    minv = _inv2(plane.local_to_plane(out_lat, out_lon))
-    v_loc = np.einsum("nij,nj->ni", minv, xc[:, [1, 4]])
-    a_loc = np.einsum("nij,nj->ni", minv, xc[:, [2, 5]])
-    pos = minv @ Pc[:, [0, 3]][:, :, [0, 3]] @ np.swapaxes(minv, 1, 2)
+    v_loc, a_loc, pos = _local_motion(plane, est, out_lat, out_lon)
     sigma_major, sigma_minor, orientation = _ellipse(pos)
     speed = np.hypot(v_loc[:, 0], v_loc[:, 1])
-    omegas = args["omegas"]
-    with np.errstate(invalid="ignore", divide="ignore"):
-        ccw = muq @ np.where(args["kinds"] == 1, omegas, 0.0) + np.where(
-            speed > 1.0, (v_loc[:, 0] * a_loc[:, 1] - v_loc[:, 1] * a_loc[:, 0]) / speed**2, 0.0)
-    times = epoch + pd.to_timedelta(qt, unit="s")
-    acc_sensor = g["sensor_id"].to_numpy(str)[acc_idx]
-    src = _sources_by_time(acc_t, acc_sensor)
-    is_update = dt == 0.0
-    sources = np.full(nq, "", dtype=object)
-    sources[is_update] = src.reindex(qt[is_update]).to_numpy()
+    ccw = _ccw_turn_rate(est.mu, args, v_loc, a_loc, speed)
+    is_update = est.age_s == 0.0
     out = {
-        "aircraft_id": aircraft_id, "segment": segment[gov], "time": times, "time_of_day": qt,
-        "latitude": out_lat, "longitude": out_lon, "flight_level": zv[:, 0],
-        "vertical_rate_fpm": zv[:, 1] * FT_PER_FL * 60.0,
+        "aircraft_id": aircraft_id, "segment": segment[est.row],
+        "time": epoch + pd.to_timedelta(qt, unit="s"), "time_of_day": qt,
+        "latitude": out_lat, "longitude": out_lon, "flight_level": est.zv[:, 0],
+        "vertical_rate_fpm": est.zv[:, 1] * FT_PER_FL * 60.0,
         "speed_kt": speed / M_PER_S_PER_KT,
         "track_deg": np.degrees(np.arctan2(v_loc[:, 0], v_loc[:, 1])) % 360,
-        "turn_rate_dps": (_smoothed_turn_rate(qt, v_loc, segment[gov], -np.degrees(ccw), speed) if smooth
+        "turn_rate_dps": (_smoothed_turn_rate(qt, v_loc, segment[est.row], -np.degrees(ccw), speed) if smooth
                           else -np.degrees(ccw)),
         "sigma_major_m": sigma_major, "sigma_minor_m": sigma_minor,
         "ellipse_orientation_deg": orientation,
     }
     for j, name in enumerate(names):
-        out[f"mode_{name}"] = muq[:, j]
-    out.update({"coasted": ~is_update, "age_s": dt, "sources": sources,
-                "on_ground": _ground_at(ground_said(g), accepted, segment, gov)})
-    tracks = pd.DataFrame(out, copy=False)  # one block per column: `_concat_by_column` frees them one by one
+        out[f"mode_{name}"] = est.mu[:, j]
+    out.update({"coasted": ~is_update, "age_s": est.age_s, "sources": _update_sources(qt, is_update, updates),
+                "on_ground": _ground_at(ground_said(filtered.rows), filtered.run.accepted, segment, est.row)})
+    return pd.DataFrame(out, copy=False)  # one block per column: `_concat_by_column` frees them one by one
 
-    sensor = g["sensor_id"].to_numpy(str)
+
+def _local_motion(plane: Plane, est: Estimates, lat: np.ndarray,
+                  lon: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The estimates' velocity and acceleration (n, 2) and position covariance (n, 2, 2) turned from the
+    plane's axes into local east/north at their positions."""
+    minv = _inv2(plane.local_to_plane(lat, lon))
+    v_loc = np.einsum("nij,nj->ni", minv, est.x[:, [1, 4]])
+    a_loc = np.einsum("nij,nj->ni", minv, est.x[:, [2, 5]])
+    pos = minv @ est.P[:, [0, 3]][:, :, [0, 3]] @ np.swapaxes(minv, 1, 2)
+    return v_loc, a_loc, pos
+
+
+def _ccw_turn_rate(mu: np.ndarray, args: dict, v_loc: np.ndarray, a_loc: np.ndarray,
+                   speed: np.ndarray) -> np.ndarray:
+    """Counter-clockwise turn rate (rad/s): the turn modes' rates weighted by their probabilities, plus the
+    acceleration across the velocity over the speed (above 1 m/s)."""
+    omegas = args["omegas"]
+    with np.errstate(invalid="ignore", divide="ignore"):
+        return mu @ np.where(args["kinds"] == 1, omegas, 0.0) + np.where(
+            speed > 1.0, (v_loc[:, 0] * a_loc[:, 1] - v_loc[:, 1] * a_loc[:, 0]) / speed**2, 0.0)
+
+
+def _update_sources(qt: np.ndarray, is_update: np.ndarray, updates: Updates) -> np.ndarray:
+    """Per output time, the sensors whose updates it holds (comma-joined), "" for a coasted one."""
+    src = _sources_by_time(updates.t, updates.sensor)
+    sources = np.full(len(qt), "", dtype=object)
+    sources[is_update] = src.reindex(qt[is_update]).to_numpy()
+    return sources
+
+
+def _sensor_table(aircraft_id: str, group: pd.DataFrame, filtered: FilteredReports) -> pd.DataFrame:
+    """Per sensor of the aircraft's usable reports: reports, updates, gated, segments started, NIS mean
+    and reports out of range."""
+    run, far = filtered.run, filtered.far
+    status, accepted = run.status, run.accepted
+    sensor = filtered.rows["sensor_id"].to_numpy(str)
     all_sensors = group["sensor_id"].to_numpy(str)
     all_kinds = group["sensor_kind"].to_numpy(str)
     updated = status == STATUS_UPDATED
@@ -547,21 +632,38 @@ def _track_one(aircraft_id, group, epoch, config, args, names, step_s, smooth, s
                      "reports": int(sel.sum()) + n_far,
                      "updates": int((accepted & sel).sum()), "gated": int((sel & ~accepted).sum()),
                      "segments_started": int((sel & (status == STATUS_STARTED)).sum()),
-                     "nis_mean": float(nis[sel & updated].mean()) if (sel & updated).any() else np.nan,
+                     "nis_mean": float(run.nis[sel & updated].mean()) if (sel & updated).any() else np.nan,
                      "out_of_range": n_far})
     sensors = pd.DataFrame(rows)
     sensors.insert(0, "aircraft_id", aircraft_id)
-    interval_s, coasted_s = coasted_time(acc_t, acc_seg, acc_sensor)
-    aircraft = {"aircraft_id": aircraft_id, "segments": len(seg_ids), "reports": n,
-                "updates": int(accepted.sum()), "gated": int((~accepted).sum()),
-                "start": epoch + pd.to_timedelta(seg_first[0], unit="s"),
-                "end": epoch + pd.to_timedelta(seg_end[-1], unit="s"),
-                "tracked_s": float((seg_last - seg_first).sum()), "coasted_s": coasted_s,
-                "update_interval_s": interval_s}
-    rej = g.loc[~accepted, ["time", "sensor_id", "latitude", "longitude"]].assign(nis=nis[~accepted])
+    return sensors
+
+
+def _aircraft_row(aircraft_id: str, filtered: FilteredReports, updates: Updates, spans: SegmentSpans,
+                  epoch: pd.Timestamp) -> dict:
+    """The aircraft's summary: segments, reports, updates, gated, span, tracked and coasted time."""
+    accepted = filtered.run.accepted
+    interval_s, coasted_s = coasted_time(updates.t, updates.segment, updates.sensor)
+    return {"aircraft_id": aircraft_id, "segments": len(spans.ids), "reports": len(filtered.rows),
+            "updates": int(accepted.sum()), "gated": int((~accepted).sum()),
+            "start": epoch + pd.to_timedelta(spans.first[0], unit="s"),
+            "end": epoch + pd.to_timedelta(spans.end[-1], unit="s"),
+            "tracked_s": float((spans.last - spans.first).sum()), "coasted_s": coasted_s,
+            "update_interval_s": interval_s}
+
+
+def _rejected(aircraft_id: str, filtered: FilteredReports) -> pd.DataFrame:
+    """The reports the gate rejected, with their NIS."""
+    accepted = filtered.run.accepted
+    rej = filtered.rows.loc[~accepted, ["time", "sensor_id", "latitude", "longitude"]].assign(
+        nis=filtered.run.nis[~accepted])
     rej.insert(0, "aircraft_id", aircraft_id)
-    last = acc_idx[-1]
-    final = ImmState(aircraft_id, epoch + pd.to_timedelta(t[last], unit="s"), plane, config,
-                     run.mu[last].copy(), run.x[last].copy(), run.P[last].copy())
-    return {"tracks": tracks, "sensors": sensors, "aircraft": aircraft,
-            "rejected": rej.reset_index(drop=True), "final": final, "plane": plane, "run": run}
+    return rej.reset_index(drop=True)
+
+
+def _final_state(aircraft_id: str, filtered: FilteredReports, updates: Updates, epoch: pd.Timestamp,
+                 config: TrackerConfig) -> ImmState:
+    """The IMM posterior after the last accepted update."""
+    run, last = filtered.run, updates.rows[-1]
+    return ImmState(aircraft_id, epoch + pd.to_timedelta(filtered.t[last], unit="s"), filtered.plane, config,
+                    run.mu[last].copy(), run.x[last].copy(), run.P[last].copy())
