@@ -1,0 +1,264 @@
+"""``msdc conflicts``: options refused before decoding (one line, exit 2, nothing written), the bundled
+fixtures (no loss: empty tables with headers), and a simulated crossing at the same level whose loss of
+separation starts when the hand-computed geometry says and is alerted before it at the 60 s horizon."""
+
+from __future__ import annotations
+
+import datetime as dt
+import json
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+from openpyxl import load_workbook
+
+from fixtures.flight import Flight, Segment
+from fixtures.scenario import AircraftSpec, default_scenario
+from fixtures.simulate import sensors_toml, simulate
+from msdc.asterix.encode import encode_frame
+from msdc.pipeline.cli import main
+from msdc.pipeline.conflict.approach import APPROACH_COLUMNS
+from msdc.pipeline.conflict.events import ALERT_COLUMNS, LOSS_COLUMNS, WARNING_COLUMNS
+from msdc.pipeline.jobs import common, conflicts
+from msdc.pipeline.jobs.common import OptionError
+from msdc.pipeline.jobs.conflicts import ConflictOptions
+
+FIX = Path(__file__).resolve().parents[3] / "fixtures"
+RADAR, ADSB, SENSORS = str(FIX / "radar.ast"), str(FIX / "adsb.ast"), str(FIX / "sensors.toml")
+
+
+def opts(**kw) -> ConflictOptions:
+    return ConflictOptions(**({"inputs": (RADAR, ADSB), "sensors": SENSORS, "output": "c.csv"} | kw))
+
+
+BAD = [
+    (opts(horizons_s="20,x"), "--horizon '20,x': item 2 'x' is not a number"),
+    (opts(horizons_s="20,,60"), "--horizon '20,,60': item 2 is empty"),  # named '' before
+    (opts(horizons_s="20,20"), "repeated"),
+    (opts(horizons_s="0"), "--horizon 0.0"),
+    (opts(horizons_s="15", step_s=10.0), "--horizon 15: must be a whole multiple of --step (10 s)"),
+    (opts(radius_nm=-5.0), "--radius-nm -5.0"),
+    (opts(vertical_ft=float("nan")), "--vertical-ft nan"),
+    (opts(vertical_tolerance_ft=-5.0), "--vertical-tolerance-ft -5.0"),
+    (opts(vertical_tolerance_ft=float("inf")), "--vertical-tolerance-ft inf"),
+    (opts(vertical_ft=100.0, vertical_tolerance_ft=100.0),
+     "--vertical-tolerance-ft 100.0: must be less than --vertical-ft (100)"),
+    (opts(threshold=1.0), "--threshold 1.0"),
+    (opts(threshold=0.0), "--threshold 0.0"),
+    (opts(method="montecarlo"), "--method 'montecarlo'"),
+    (opts(step_s=0.0), "--step 0.0"),
+    (opts(tpm="banana"), "--tpm 'banana'"),
+    (opts(tpm="dynamic:-1,2"), "--tpm 'dynamic:-1,2': p(T) = min(0.995, -1 - 2 T) is -1 at T = 0 s"),
+    (opts(output="c.parquet"), "-o c.parquet: must end in .csv or .xlsx"),
+    (opts(output=None), "-o: give the output"),
+    (opts(json="c.txt"), "--json c.txt"),
+    (opts(sensors="/nonexistent/s.toml"), "--sensors /nonexistent/s.toml"),
+    (opts(vertical="probable"), "--vertical 'probable'"),
+    (opts(sources="radar,mlat"), "--sources 'radar,mlat'"),
+    (opts(figures="/nonexistent/dir/figs"), "--figures /nonexistent/dir/figs: directory /nonexistent/dir"),
+    (opts(figures=RADAR), "--figures " + RADAR + ": exists and is not a directory"),
+]
+
+
+@pytest.mark.parametrize(("options", "words"), BAD)
+def test_bad_options_refused_before_decoding(options, words, tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.setattr(common, "load", lambda *a, **k: pytest.fail("decoded before validating"))
+    with pytest.raises(OptionError) as info:
+        conflicts.validate(options)
+    assert words in str(info.value) and "\n" not in str(info.value)
+    assert info.value.status == 2
+
+
+def test_cli_bad_option_is_one_line_exit_2_and_writes_nothing(tmp_path, capsys):
+    out = tmp_path / "c.csv"
+    assert main(["conflicts", RADAR, ADSB, "--sensors", SENSORS, "--threshold", "2", "-o", str(out)]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.startswith("msdc conflicts: --threshold 2.0") and "\n" not in err
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_cli_bad_vertical_tolerance_is_one_line_exit_2_and_writes_nothing(tmp_path, capsys):
+    out = tmp_path / "c.csv"
+    code = main(["conflicts", RADAR, ADSB, "--sensors", SENSORS, "--vertical-tolerance-ft", "-1",
+                 "-o", str(out)])
+    err = capsys.readouterr().err.strip()
+    assert code == 2 and err.startswith("msdc conflicts: --vertical-tolerance-ft -1.0") and "\n" not in err
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_fixtures_without_loss_write_empty_tables_with_headers(tmp_path, capsys):
+    out = tmp_path / "c.xlsx"
+    code = main(["conflicts", RADAR, ADSB, "--sensors", SENSORS, "--date", "2019-03-01", "--step", "10",
+                 "-o", str(out), "--json", str(tmp_path / "c.json")])
+    assert code == 0
+    text = capsys.readouterr().out
+    assert "5 aircraft tracked; 0 loss(es)" in text and "written empty, with their headers" in text
+    wb = load_workbook(out, read_only=True)
+    assert wb.sheetnames == ["Alerts", "Losses", "Warning times", "Parameters"]
+    for sheet, columns in (("Alerts", ALERT_COLUMNS), ("Losses", LOSS_COLUMNS),
+                           ("Warning times", WARNING_COLUMNS)):
+        rows = list(wb[sheet].iter_rows(values_only=True))
+        assert list(rows[0])[:len(columns)] == columns and len(rows) == 1
+    doc = json.loads((tmp_path / "c.json").read_text())
+    assert doc["counts"]["losses"] == 0 and doc["parameters"]["horizons_s"] == [20.0, 60.0, 120.0]
+
+
+# two aircraft at FL350, 420 kt, one flying east from 40 NM west of the radar, one north from 40 NM south:
+# their distance is sqrt(2) |40 NM - v t|, below 5 NM from t = (40 - 5/sqrt(2)) / v
+SPEED_KT = 420.0
+LOSS_START_S = (40.0 - 5.0 / 2**0.5) / (SPEED_KT / 3600.0)  # 312.3 s
+CLOSEST_S = 40.0 / (SPEED_KT / 3600.0)  # 342.9 s
+
+
+@pytest.fixture(scope="module")
+def crossing(tmp_path_factory):
+    d = tmp_path_factory.mktemp("crossing")
+    east = AircraftSpec("CONA", 0x710001, "1001",
+                        flights=(Flight(0.0, -40.0, 0.0, 35000.0, SPEED_KT, 90.0, (Segment(600.0),)),))
+    north = AircraftSpec("CONB", 0x710002, "1002",
+                         flights=(Flight(0.0, 0.0, -40.0, 35000.0, SPEED_KT, 0.0, (Segment(600.0),)),))
+    sc = replace(default_scenario(), name="crossing", aircraft=(east, north), adsb_jump_fraction=0.0,
+                 adsb_long_dropouts=0, adsb_short_dropouts_per_hour=0.0, adsb_low_quality_episodes=0,
+                 radar_long_dropouts=0)
+    sim = simulate(sc, seed=7)
+    (d / "r.ast").write_bytes(encode_frame(48, sim.radar))
+    (d / "a.ast").write_bytes(encode_frame(21, sim.adsb))
+    (d / "s.toml").write_text(sensors_toml(sc.radar))
+    return d
+
+
+def test_crossing_loss_found_and_alerted_before_it_starts_at_60_s(crossing, capsys):
+    d = crossing
+    out = d / "c.csv"
+    assert main(["conflicts", str(d / "r.ast"), str(d / "a.ast"), "--sensors", str(d / "s.toml"),
+                 "--date", "2019-03-01", "-o", str(out), "--figures", str(d / "figs")]) == 0
+    assert "1 loss(es) of separation" in capsys.readouterr().out
+    midnight = pd.Timestamp("2019-03-01", tz="UTC")
+    losses = pd.read_csv(d / "c_losses.csv", parse_dates=["start", "end", "time_of_min"],
+                         dtype={"aircraft_a": str, "aircraft_b": str})
+    assert len(losses) == 1
+    loss = losses.iloc[0]
+    assert (loss["aircraft_a"], loss["aircraft_b"]) == ("710001", "710002")
+    start_s = (loss["start"] - midnight).total_seconds()
+    assert abs(start_s - LOSS_START_S) <= 2.0
+    assert abs((loss["time_of_min"] - midnight).total_seconds() - CLOSEST_S) <= 2.0
+    assert loss["min_horizontal_nm"] < 0.2 and loss["min_vertical_ft"] < 100
+    warn = pd.read_csv(d / "c_warning_times.csv")
+    w60 = warn.loc[warn["horizon_s"] == 60, "warning_s"]
+    assert len(w60) == 1 and w60.iloc[0] > 0  # alerted before the loss started
+    alerts = pd.read_csv(d / "c.csv", parse_dates=["cpa_time"])
+    assert list(alerts.columns) == ALERT_COLUMNS + ["loss_start", "false_alert"] + APPROACH_COLUMNS
+    assert not alerts["false_alert"].any()
+    assert (alerts.loc[alerts["horizon_s"] == 60, "peak_pc"] > 0.5).all()
+    # the predicted closest approach: the geometry's, at 342.9 s, within a few seconds and 0.3 NM
+    for _, a in alerts.iterrows():
+        assert abs((a["cpa_time"] - midnight).total_seconds() - CLOSEST_S) < 5.0
+        assert a["cpa_horizontal_nm"] < 0.3 and a["cpa_vertical_ft"] < 100
+    # one figure per alert event, named by its row, pair and horizon
+    names = sorted(p.name for p in (d / "figs").iterdir())
+    assert names == sorted(f"alert_{i + 1:03d}_710001_710002_{h:g}s.png"
+                           for i, h in enumerate(alerts["horizon_s"]))
+    png = (d / "figs" / names[0]).read_bytes()
+    assert png.startswith(b"\x89PNG\r\n\x1a\n") and len(png) > 20_000
+
+
+def test_failed_run_after_decoding_writes_nothing(tmp_path, capsys):
+    # the radar of the recording (SAC/SIC 25/201) is not in this sensor file: a data error, exit 1
+    sensors = tmp_path / "other.toml"
+    sensors.write_text('[[sensor]]\nname = "Elsewhere"\nsac = 1\nsic = 1\nlatitude = 3.0\nlongitude = 101.0\n'
+                       'altitude_m = 10.0\n')
+    out = tmp_path / "c.csv"
+    code = main(["conflicts", RADAR, "--sensors", str(sensors), "--date", "2019-03-01", "-o", str(out),
+                 "--json", str(tmp_path / "c.json")])
+    err = capsys.readouterr().err
+    assert code == 1 and "25/201" in err and "Traceback" not in err
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["other.toml"]
+
+
+def test_failure_while_writing_figures_leaves_nothing(crossing, tmp_path, monkeypatch, capsys):
+    import msdc.pipeline.report.conflict_figures as figures
+
+    real, calls = figures.alert_figure, []
+
+    def second_fails(*args, **kwargs):
+        calls.append(args[-1])
+        if len(calls) == 2:
+            raise OSError(28, "No space left on device", str(args[-1]))
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(figures, "alert_figure", second_fails)
+    d = crossing
+    code = main(["conflicts", str(d / "r.ast"), str(d / "a.ast"), "--sensors", str(d / "s.toml"),
+                 "--date", "2019-03-01", "--step", "5", "-o", str(tmp_path / "c.xlsx"),
+                 "--json", str(tmp_path / "c.json"), "--figures", str(tmp_path / "figs")])
+    err = capsys.readouterr().err
+    assert code == 1 and "No space left on device" in err and "Traceback" not in err
+    assert len(calls) == 2 and list(tmp_path.iterdir()) == []
+
+
+
+def test_no_alert_makes_no_figures_folder(tmp_path, capsys):
+    # the fixtures have no alert event (the test above reads the empty Alerts sheet): --figures makes no
+    # empty folder, and says why
+    figs = tmp_path / "figs"
+    assert main(["conflicts", RADAR, ADSB, "--sensors", SENSORS, "--date", "2019-03-01", "--step", "10",
+                 "-o", str(tmp_path / "c.csv"), "--figures", str(figs)]) == 0
+    assert pd.read_csv(tmp_path / "c.csv").empty
+    assert not figs.exists() and "figures: none (no alert events)" in capsys.readouterr().err
+
+
+def test_a_tiny_step_is_refused_by_the_predictions_it_would_make(tmp_path, capsys):
+    """--step 0.01 with three horizons: about 1.6 M track rows on the fixtures, 4.8 M predictions, over the
+    4 M bound: refused naming --step after decoding, before tracking; nothing written."""
+    out = tmp_path / "c.csv"
+    code = main(["conflicts", RADAR, ADSB, "--sensors", SENSORS, "--date", "2019-03-01", "--step", "0.01",
+                 "-o", str(out), "--json", str(tmp_path / "c.json")])
+    err = capsys.readouterr().err
+    assert code == 2 and "Traceback" not in err
+    assert "--step 0.01: the tracks of these 5 aircraft would need about 4," in err
+    assert "predictions (3 horizon(s) a grid row), more than 4,000,000; use a longer --step" in err
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_predictions_in_batches_equal_those_of_one_batch(crossing, monkeypatch):
+    """The aircraft are tracked again with their filter histories for the predictions, a batch of them at a
+    time: batches of ~600 reports (one aircraft each on the crossing pair, several on the fixtures) give the
+    same predictions, PC, alerts, losses and warning times, bit for bit, as one batch of every aircraft."""
+    d = crossing
+    cases = [ConflictOptions(inputs=(str(d / "r.ast"), str(d / "a.ast")), sensors=str(d / "s.toml"),
+                             output="c.csv", date=dt.date(2019, 3, 1)), opts(date=dt.date(2019, 3, 1))]
+    for options in cases:
+        whole = conflicts.conflict_job(options)
+        monkeypatch.setattr(conflicts, "PREDICTION_BATCH_REPORTS", 600)
+        parts = conflicts.conflict_job(options)
+        monkeypatch.undo()
+        assert parts.predictions["aircraft_id"].nunique() == whole.predictions["aircraft_id"].nunique() >= 2
+        for name in ("predictions", "pc", "alerts", "losses", "warning_times", "tracks"):
+            pd.testing.assert_frame_equal(getattr(parts, name), getattr(whole, name), check_exact=True)
+
+
+def test_a_batch_of_untrackable_aircraft_predicts_nothing(monkeypatch):
+    """Aircraft "A" flies east at 200 m/s with 1 Hz reports; "Z" has reports without a usable covariance
+    (NaN, as for NACp 0). In batches of 50 reports, Z is a batch of its own: it adds no prediction, and
+    the predictions (their UTC times included) are those of one batch."""
+    from msdc.pipeline.track import Plane, track
+
+    t0 = pd.Timestamp("2019-03-01T08:00:00Z")
+    secs = np.arange(60.0)
+    rows = {"time": t0 + pd.to_timedelta(np.concatenate([secs, secs]), unit="s"), "sensor_id": "021:0/1",
+            "sensor_kind": "adsb", "aircraft_id": ["A"] * 60 + ["Z"] * 60,
+            "latitude": 40.0, "longitude": np.concatenate([2.0 + secs * 200.0 / 85_390.0, 3.0 + 0 * secs]),
+            "flight_level": 300.0, "cov_ee_m2": [25.0] * 60 + [np.nan] * 60, "cov_en_m2": 0.0,
+            "cov_nn_m2": [25.0] * 60 + [np.nan] * 60}
+    meas = pd.DataFrame(rows)
+    options = ConflictOptions(output="c.csv")
+    result = track(meas, step_s=1.0, max_coast_s=60.0)
+    plane = Plane.around(result.tracks["latitude"], result.tracks["longitude"])
+    whole = conflicts._predictions(meas, result.epoch, plane, (20.0, 60.0), options)
+    monkeypatch.setattr(conflicts, "PREDICTION_BATCH_REPORTS", 50)
+    parts = conflicts._predictions(meas, result.epoch, plane, (20.0, 60.0), options)
+    assert set(parts["aircraft_id"]) == {"A"} and isinstance(parts["time"].dtype, pd.DatetimeTZDtype)
+    pd.testing.assert_frame_equal(parts, whole, check_exact=True)

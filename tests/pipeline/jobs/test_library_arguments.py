@@ -1,0 +1,352 @@
+"""The library's arguments (asterix.read/iter_read, load, build_measurements, the job options): a date is
+a UTC calendar day under one rule everywhere, one path is one input, type mistakes and nonsense values are
+refused with a message naming the argument, and what is left out is said. Expected values come from the
+fixture's own time-of-day column and the simulator's setup (08:00 UTC start), never from the code under
+test."""
+
+from __future__ import annotations
+
+import datetime as dt
+import warnings
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+
+import msdc.asterix as asterix
+from msdc.pipeline.jobs import common, correlate, quality, track
+from msdc.pipeline.jobs.common import OptionError
+from msdc.pipeline.jobs.track import TrackOptions
+from msdc.pipeline.model import schema
+from msdc.pipeline.model.load import load
+from msdc.pipeline.model.measurements import OffEarthWarning, build_measurements
+from msdc.pipeline.model.sensors import read_sensors
+
+FIX = Path(__file__).resolve().parents[3] / "fixtures"
+RADAR, ADSB, SENSORS = str(FIX / "radar.ast"), str(FIX / "adsb.ast"), str(FIX / "sensors.toml")
+DAY = pd.Timestamp("2019-03-01", tz="UTC")
+
+
+@pytest.fixture(scope="module")
+def adsb() -> pd.DataFrame:
+    return asterix.read(ADSB).frames[21]
+
+
+@pytest.fixture(scope="module")
+def radar() -> pd.DataFrame:
+    return asterix.read(RADAR).frames[48]
+
+
+def _first_expected(frame: pd.DataFrame) -> pd.Timestamp:
+    """The first record's instant on 2019-03-01: midnight plus its own time of day (I021/073 etc.)."""
+    return DAY + pd.to_timedelta(float(frame["time_of_day"].iloc[0]), "s")
+
+
+MIDNIGHTS = [pd.Timestamp("2019-03-01"), pd.Timestamp("2019-03-01", tz="UTC"), dt.datetime(2019, 3, 1),
+             dt.datetime(2019, 3, 1, tzinfo=dt.UTC), np.datetime64("2019-03-01"), "2019-03-01T00:00",
+             " 2019-03-01 ", dt.date(2019, 3, 1)]
+SHIFTED = [(pd.Timestamp("2019-03-01 12:00"), "time of day (12:00:00)"),
+           (dt.datetime(2019, 3, 1, 12), "time of day (12:00:00)"),
+           ("2019-03-01T12:00", "time of day (12:00:00)"),
+           (pd.Timestamp("2019-03-01", tz="Asia/Kuala_Lumpur"), "not a UTC calendar day"),
+           ("01/03/2019", "'01/03/2019': not a date"), (pd.NaT, "not a date")]
+NOT_DATES = [(20190301, "an integer says neither YYYYMMDD nor nanoseconds"),
+             (1.5, "float is not a date type"), (True, "integer")]
+
+
+@pytest.mark.parametrize("date", MIDNIGHTS, ids=repr)
+def test_a_midnight_is_its_day_everywhere(date, adsb):
+    """A midnight datetime or Timestamp (naive or UTC) and an ISO text name the day: read, iter_read and
+    build_measurements put the first report at 08:00:00.13 of it (the simulator starts at 08:00 UTC)."""
+    want = _first_expected(adsb)
+    assert want.strftime("%H:%M") == "08:00"
+    assert asterix.read(ADSB, date=date).frames[21]["timestamp"].iloc[0] == want
+    assert next(asterix.iter_read(ADSB, date=date)).frames[21]["timestamp"].iloc[0] == want
+    undated = adsb.drop(columns="timestamp")
+    assert build_measurements(None, undated, date=date)["time"].iloc[0] == want
+
+
+# datetime64[ns] holds 1677-09-21 00:12:43 .. 2262-04-11 23:47:16 (pandas' Timestamp.min/max): a day
+# outside it, or so near its ends that the day before or after does not fit, wrapped every timestamp
+OUT_OF_RANGE = ["9999-12-31", "1000-01-01", "0001-01-01", "2262-04-12", "2262-04-11", "1677-09-21",
+                "1677-09-22", dt.date(2300, 1, 1), pd.Timestamp("1677-12-31")]
+
+
+@pytest.mark.parametrize("date", OUT_OF_RANGE, ids=str)
+def test_a_date_outside_the_nanosecond_span_is_refused_everywhere(date, adsb, tmp_path):
+    """9999-12-31 put the first report in 1816 and 1000-01-01 in 2169 (int64 wrap), silently."""
+    undated = adsb.drop(columns="timestamp")
+    calls = [lambda: asterix.read(ADSB, date=date), lambda: list(asterix.iter_read(ADSB, date=date)),
+             lambda: load([ADSB], date=date), lambda: build_measurements(None, undated, date=date)]
+    day = pd.Timestamp(date).date().isoformat()
+    for call in calls:
+        with pytest.raises(ValueError) as info:
+            call()
+        text = str(info.value)
+        assert text.startswith(f"date {day}: outside the days") and "1678-01-01 to 2261-12-31" in text
+    with pytest.raises(OptionError) as info:
+        track.validate(TrackOptions(inputs=(ADSB,), callsign="MAS72", date=date,
+                                         output=str(tmp_path / "t.csv")))
+    assert str(info.value).startswith(f"--date {day}: outside the days")
+
+
+@pytest.mark.parametrize("date", ["1678-01-01", "2261-12-31"])
+def test_the_first_and_last_day_allowed_keep_exact_timestamps(date, adsb):
+    """The range's ends: their neighbour days fit datetime64[ns] (checked against pandas' own limits) and
+    the first report is that day plus its own time of day."""
+    day = pd.Timestamp(date, tz="UTC")
+    assert pd.Timestamp.min.tz_localize("UTC") < day - pd.Timedelta(days=1)
+    assert day + pd.Timedelta(days=2) < pd.Timestamp.max.tz_localize("UTC")
+    want = day + pd.to_timedelta(float(adsb["time_of_day"].iloc[0]), "s")
+    assert asterix.read(ADSB, date=date).frames[21]["timestamp"].iloc[0] == want
+
+
+@pytest.mark.parametrize(("date", "words"), SHIFTED + NOT_DATES, ids=repr)
+def test_a_date_that_would_shift_the_times_is_refused_everywhere(date, words, adsb, tmp_path):
+    """A time of day or another zone would move every timestamp (12:00 put the first report at 20:00, and
+    +08:00 at 00:00); an integer read as nanoseconds put it in 1970. One rule for every entry point."""
+    undated = adsb.drop(columns="timestamp")
+    calls = [lambda: asterix.read(ADSB, date=date), lambda: list(asterix.iter_read(ADSB, date=date)),
+             lambda: load([ADSB], date=date), lambda: build_measurements(None, undated, date=date)]
+    for call in calls:
+        with pytest.raises((ValueError, TypeError)) as info:
+            call()
+        assert str(info.value).startswith("date ") and words in str(info.value)
+    with pytest.raises(OptionError) as info:  # the job options: the same rule, named as the option
+        track.validate(TrackOptions(inputs=(ADSB,), callsign="MAS72", date=date,
+                                         output=str(tmp_path / "t.csv")))
+    assert str(info.value).startswith("--date ") and words in str(info.value)
+
+
+def test_the_job_options_take_what_read_takes(tmp_path):
+    """The ISO text read takes as a date, and the {category: edition} dict, are accepted by the options
+    (they were refused with messages naming the format given, or an empty edition)."""
+    checked = track.validate(TrackOptions(inputs=ADSB, callsign="MAS72", date="2019-03-01",
+                                               editions={21: "2.7"}))
+    assert checked.inputs == [Path(ADSB)] and checked.editions == {21: "2.7"}
+    checked = correlate.validate(correlate.CorrelateOptions(inputs=(RADAR, ADSB), sensors=SENSORS,
+                                                            callsign="MAS72", editions="21=0.26"))
+    assert checked.editions == {21: "0.26"}
+    with pytest.raises(OptionError, match=r"--edition 21=9\.9"):
+        track.validate(TrackOptions(inputs=ADSB, callsign="MAS72", editions={21: "9.9"}))
+
+
+def test_track_job_returns_the_table_without_an_output(adsb, tmp_path):
+    """The guide's notebook use (docs/guide/python.md): track_job returns the table; only the command needs
+    an output."""
+    from msdc.asterix.encode import encode_frame
+
+    columns = ["sac", "sic", "time_of_day", "latitude", "longitude", "address", "callsign", "flight_level"]
+    few = adsb.loc[adsb["callsign"] == "MAS72", columns].iloc[:120]
+    path = tmp_path / "mas72.ast"
+    path.write_bytes(encode_frame(21, few, edition="2.7"))
+    result = track.track_job(TrackOptions(inputs=str(path), callsign="MAS72", date="2019-03-01",
+                                                adsb_sigma_m=30.0))
+    assert result.tracks["time"].min() == _first_expected(few)
+    with pytest.raises(OptionError, match="give at least one output"):
+        track.validate(TrackOptions(inputs=str(path), callsign="MAS72"), require_output=True)
+
+
+def test_missing_columns_are_refused_not_dropped(radar, adsb):
+    """Frames swapped, or decoded without a position, gave 0 rows without a word: every row was dropped."""
+    sensors = read_sensors(SENSORS)
+    with pytest.raises(ValueError, match="cat048: the frame lacks rho_nm/theta_deg or x_nm/y_nm"):
+        build_measurements(adsb, radar, sensors)
+    narrow = asterix.read(RADAR, columns=("address",)).frames[48]
+    with pytest.raises(ValueError, match="cat048: the frame lacks"):
+        build_measurements(narrow, None, sensors)
+    with pytest.raises(ValueError, match="cat021: the frame lacks latitude/longitude"):
+        build_measurements(None, asterix.read(ADSB, columns=("address",)).frames[21])
+    with pytest.raises(TypeError, match="cat021: a list, not a decoded CAT021 frame"):
+        build_measurements(None, [1, 2])
+
+
+def test_a_position_off_the_earth_is_said(adsb):
+    """One report put at latitude 95 deg is left out, and a warning says so with its offset."""
+    bad = adsb.copy()
+    bad.loc[bad.index[7], "latitude"] = 95.0
+    with pytest.warns(OffEarthWarning) as caught:
+        meas = build_measurements(None, bad)
+    assert len(meas) == len(adsb) - 1  # every fixture report has a position and a time
+    (text,) = [str(w.message) for w in caught]
+    assert f"1 CAT021 report(s) with a position off the Earth (first at offset {bad['offset'].iloc[7]}:" \
+           " latitude 95.0000" in text
+
+
+@pytest.mark.parametrize(("sigma", "error"), [(-5, ValueError), (0, ValueError), (0.4, ValueError),
+                                              (1e9, ValueError), (float("nan"), ValueError),
+                                              ("5", TypeError), (True, TypeError)])
+def test_adsb_sigma_is_range_checked(sigma, error, adsb):
+    """-5 m gave a covariance of 25 m^2 and 0 a zero covariance: the command's range (0.5-20,000 m)."""
+    with pytest.raises(error, match=r"^adsb_sigma_m "):
+        build_measurements(None, adsb, adsb_sigma_m=sigma)
+
+
+def test_the_library_and_the_command_take_the_same_adsb_sigma():
+    from msdc.pipeline.model.measurements import ADSB_SIGMA_RANGE_M
+
+    assert ADSB_SIGMA_RANGE_M == common.ADSB_SIGMA_RANGE_M == (0.5, 20000.0)
+
+
+def test_a_declared_adsb_sigma_is_the_covariance(adsb):
+    """Reports without NACp get sigma^2 per axis: 0.5 m gives 0.25 m^2 (the lower bound is allowed)."""
+    no_nacp = adsb.drop(columns=[c for c in ("nacp",) if c in adsb])
+    meas = build_measurements(None, no_nacp, adsb_sigma_m=0.5)
+    assert (meas["cov_ee_m2"] == 0.25).all() and (meas["cov_en_m2"] == 0.0).all()
+
+
+def test_one_path_is_one_input(tmp_path):
+    """A str where a sequence is expected was read character by character ('/: cannot read')."""
+    one = load(ADSB)
+    assert [i["path"] for i in one.inputs] == [ADSB] and len(one.frames[21]) == len(load([ADSB]).frames[21])
+    assert load(Path(ADSB)).inputs[0]["path"] == ADSB
+    options = TrackOptions(inputs=RADAR, callsign="MAS72", output=str(tmp_path / "t.csv"))
+    checked = track.validate(options)
+    assert checked.inputs == [Path(RADAR)]
+    with pytest.raises(TypeError, match="paths 5"):
+        load(5)
+
+
+def test_one_column_name_is_one_column(adsb):
+    meas = build_measurements(None, adsb)
+    assert schema.validate(meas, "latitude") is meas
+    assert schema.column_names("latitude") == ["latitude"]
+
+
+def test_the_same_recording_twice_is_refused(tmp_path):
+    """load([p, p]) doubled every record (29,972 rows): the same content twice is refused, naming both."""
+    copy = tmp_path / "copy.ast"
+    copy.write_bytes(Path(ADSB).read_bytes())
+    for paths in ([ADSB, ADSB], [ADSB, copy]):
+        with pytest.raises(ValueError, match=r"has the same content as .*adsb\.ast \(SHA-256\)"):
+            load(paths)
+
+
+@pytest.mark.parametrize(("categories", "error", "words"), [
+    ((62,), ValueError, "msdc does not decode CAT062; it decodes CAT021, CAT034, CAT048"),
+    ((21, 999), ValueError, "CAT999"), ("21", TypeError, "a category number or a sequence"),
+    ((21.0,), TypeError, "21.0 is not a category number"),
+    (2.5, TypeError, "a category number or a sequence")])
+def test_categories_are_checked(categories, error, words):
+    for call in (lambda: asterix.read(ADSB, categories=categories),
+                 lambda: list(asterix.iter_read(ADSB, categories=categories))):
+        with pytest.raises(error) as info:
+            call()
+        assert str(info.value).startswith("categories ") and words in str(info.value)
+
+
+def test_one_category_is_a_category(adsb):
+    rec = asterix.read(RADAR, categories=48)
+    assert list(rec.frames) == [48] and 21 not in rec.frames
+    assert len(asterix.read(ADSB, categories=np.int64(21)).frames[21]) == len(adsb)
+
+
+@pytest.mark.parametrize(("chunk", "error"), [("64", TypeError), (64.0, TypeError), (0, ValueError),
+                                              (-5, ValueError), (True, TypeError)])
+def test_iter_read_chunk_is_checked(chunk, error):
+    """chunk="64" failed deep in numpy; 0 and -5 ran one block per chunk with an empty first one."""
+    with pytest.raises(error, match=r"^chunk "):
+        next(asterix.iter_read(ADSB, chunk=chunk))
+
+
+def test_the_sensor_table_or_its_path(radar):
+    """A path is read with read_sensors; a dict is refused naming the argument (it failed on .duplicated)."""
+    by_path = build_measurements(radar, None, SENSORS)
+    by_table = build_measurements(radar, None, read_sensors(SENSORS))
+    pd.testing.assert_frame_equal(by_path, by_table)
+    with pytest.raises(TypeError, match="sensors: a dict, not the sensor table"):
+        build_measurements(radar, None, {"sac": 25})
+    with pytest.raises(ValueError, match="sensors: the table lacks latitude"):
+        build_measurements(radar, None, pd.DataFrame({"sac": [25], "sic": [201]}))
+
+
+@pytest.fixture(scope="module")
+def adsb_0_23(tmp_path_factory, adsb) -> Path:
+    """100 fixture ADS-B reports written as edition 0.23, one a block: I021/130 is 6 bytes in 0.23 and 8
+    from 0.24 (specs), so 2.7 walks none of them and 0.23 alone walks every one."""
+    from msdc.asterix.encode import encode_frame
+
+    columns = ["sac", "sic", "time_of_day", "latitude", "longitude", "address", "callsign", "flight_level"]
+    path = tmp_path_factory.mktemp("e023") / "adsb023.ast"
+    path.write_bytes(encode_frame(21, adsb[columns].iloc[:100], edition="0.23", records_per_block=1))
+    return path
+
+
+def test_a_wrong_edition_is_a_python_warning(adsb_0_23):
+    """read under the default 2.7 returned an empty frame with no warning: now asterix.EditionWarning says
+    how many blocks failed and the edition to pin, in read's own terms; load passes it on."""
+    advice = ("100 CAT021 block(s) could not be decoded under edition 2.7; every one sampled decodes under "
+              "0.23: pin it with editions={21: '0.23'}")
+    with pytest.warns(asterix.EditionWarning) as caught:
+        rec = asterix.read(adsb_0_23)
+    assert len(rec.frames[21]) == 0 and [str(w.message) for w in caught] == [f"{adsb_0_23}: {advice}"]
+    with pytest.warns(asterix.EditionWarning, match="pin it with editions="):
+        load(adsb_0_23)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # pinned: nothing to say
+        assert len(asterix.read(adsb_0_23, editions={21: "0.23"}).frames[21]) == 100
+
+
+def test_the_jobs_say_a_wrong_edition_once_in_their_terms(adsb_0_23):
+    """The jobs name --edition; the library's Python warning does not reach the command's stderr."""
+    options = quality.QualityOptions(inputs=(str(adsb_0_23),), all_aircraft=True)
+    checked = quality.validate(options)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        _, said = common.load_inputs(options, checked, None)
+    assert not [w for w in caught if issubclass(w.category, asterix.EditionWarning)]
+    assert sum("pin it with --edition 21=0.23" in w for w in said) == 1
+
+
+def test_output_under_a_file_says_it_is_a_file(tmp_path):
+    afile = tmp_path / "afile"
+    afile.write_text("x")
+    with pytest.raises(OptionError) as info:
+        common.output_path("-o", afile / "r.xlsx", (".xlsx",))
+    assert str(info.value) == f"-o {afile / 'r.xlsx'}: {afile} is a file, not a directory"
+
+
+def test_max_coast_names_its_real_bounds(tmp_path):
+    """0 is refused by the --step bound, so 'from 0 to 86400 s' misled."""
+    base = {"inputs": (ADSB,), "callsign": "MAS72", "output": str(tmp_path / "t.csv")}
+    for coast in (1e12, 0.0):
+        with pytest.raises(OptionError) as info:
+            track.validate(TrackOptions(**base, max_coast_s=coast))
+        assert "from 0 " not in str(info.value) and "--step (1)" in str(info.value)
+
+
+def test_stats_times_are_labelled_utc():
+    from msdc.pipeline.quality.inventory import format_stats, stats_tables
+
+    rec = asterix.read(ADSB, date="2019-03-01")
+    text = format_stats(stats_tables(rec.frames, rec.errors))
+    header = text.splitlines()[1]
+    assert "start (UTC)" in header and "end (UTC)" in header
+
+
+def test_sensor_type_message_grammar(tmp_path):
+    path = tmp_path / "s.toml"
+    path.write_text('[[sensor]]\nname = "r"\nsac = "25"\nsic = 1\nlatitude = 0.0\nlongitude = 0.0\n'
+                    "altitude_m = 0.0\n")
+    with pytest.raises(ValueError, match="sac = '25' should be an integer$"):
+        read_sensors(path)
+
+
+def test_the_column_docs_mark_cat021_track_number_as_2x(adsb_0_23):
+    """0.2x editions have no I021/161: their frames have no track_number, and the Columns page says so."""
+    assert "track_number" not in asterix.read(adsb_0_23, editions={21: "0.23"}).frames[21]
+    assert "track_number" in asterix.read(ADSB).frames[21]  # the fixture is 2.x
+    page = (Path(__file__).resolve().parents[3] / "docs" / "decoding" / "columns.md").read_text()
+    (row,) = [line for line in page.splitlines() if line.startswith("| identity |")]
+    cat021 = row.split("|")[3]
+    assert "`track_number` (2.x)" in cat021
+
+
+def test_an_output_that_is_the_one_input_is_refused(tmp_path):
+    """inputs given as one path: the check that an output is not an input read it letter by letter, so
+    -o naming the input itself was let through (writing it would destroy the recording)."""
+    rec = tmp_path / "t.csv"
+    rec.write_bytes(Path(ADSB).read_bytes())
+    with pytest.raises(OptionError, match="is the input"):
+        track.validate(TrackOptions(inputs=str(rec), callsign="MAS72", output=str(rec)))

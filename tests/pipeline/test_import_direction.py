@@ -1,0 +1,111 @@
+"""Imports flow one way, cli -> jobs -> areas -> model -> asterix: read from the source (every import
+statement, those inside functions included), so a lazy import breaking the rule is caught too."""
+
+from __future__ import annotations
+
+import ast
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[2]
+AREAS = ("correlate", "quality", "report", "track", "conflict")
+FRONT = ("msdc.pipeline.jobs", "msdc.pipeline.cli")
+
+
+def _module(path: Path) -> str:
+    """The installed name of a source file: the repository root is the package ``msdc``."""
+    return ".".join(("msdc", *path.relative_to(ROOT).with_suffix("").parts)).removesuffix(".__init__")
+
+
+def _imports(path: Path) -> set[str]:
+    """Every msdc module named by an import statement of the file (relative imports resolved)."""
+    out = set()
+    package = _module(path).rsplit(".", 1)[0] if path.name != "__init__.py" else _module(path)
+    for node in ast.walk(ast.parse(path.read_text(), str(path))):
+        if isinstance(node, ast.ImportFrom):
+            base = node.module or ""
+            if node.level:
+                parent = package.rsplit(".", node.level - 1)[0] if node.level > 1 else package
+                base = f"{parent}.{base}" if base else parent
+            out |= {base} | {f"{base}.{a.name}" for a in node.names}
+        elif isinstance(node, ast.Import):
+            out |= {a.name for a in node.names}
+    return {m for m in out if m == "msdc" or m.startswith("msdc.")}
+
+
+SOURCES = sorted([*(ROOT / "asterix").rglob("*.py"), *(ROOT / "pipeline").rglob("*.py")])
+MODULES = {_module(p): _imports(p) for p in SOURCES}
+
+
+def _within(name: str, package: str) -> bool:
+    return name == package or name.startswith(package + ".")
+
+
+def _offenders(importer: str, forbidden: tuple[str, ...]) -> list[str]:
+    return [f"{mod} imports {name}" for mod, names in MODULES.items() if _within(mod, importer)
+            for name in sorted(names) if any(_within(name, f) for f in forbidden)]
+
+
+def test_the_modules_were_read():
+    assert "msdc.pipeline.correlate.correlation" in MODULES and "msdc.pipeline.model.aircraft" in MODULES
+    assert "msdc.asterix.kernel" in MODULES
+    assert "msdc.pipeline.model.aircraft" in MODULES["msdc.pipeline.quality.quality_run"]  # sees imports
+
+
+@pytest.mark.parametrize("importer, forbidden", [
+    ("msdc.pipeline.quality", ("msdc.pipeline.correlate",)),
+    ("msdc.pipeline.correlate", ("msdc.pipeline.quality",)),
+    *[(f"msdc.pipeline.{area}", FRONT) for area in AREAS],
+    ("msdc.pipeline.model", FRONT + tuple(f"msdc.pipeline.{a}" for a in AREAS)),
+    ("msdc.pipeline.jobs", ("msdc.pipeline.cli",)),
+    ("msdc.asterix", ("msdc.pipeline",)),
+])
+def test_imports_flow_one_way(importer, forbidden):
+    assert any(_within(mod, importer) for mod in MODULES)  # a rule about modules that exist
+    assert _offenders(importer, forbidden) == []
+
+
+def test_the_command_modules_share_only_common_and_public_names():
+    """Each module of pipeline/jobs/ imports no other command's module, and neither they nor the CLI import a
+    private (``_name``) name of another module: what several share is a public name of jobs.common."""
+    commands = {p.stem for p in (ROOT / "pipeline" / "jobs").glob("*.py")} - {"__init__", "common"}
+    assert commands == {"decode", "stats", "correlate", "quality", "track", "conflicts"}
+    wrong = []
+    for path in SOURCES:
+        mod = _module(path)
+        if not any(_within(mod, front) for front in FRONT):
+            continue
+        for node in ast.walk(ast.parse(path.read_text(), str(path))):
+            if isinstance(node, ast.ImportFrom) and (node.module or "").startswith("msdc."):
+                wrong += [f"{mod} imports {node.module}.{a.name}" for a in node.names
+                          if a.name.startswith("_")]
+        others = [f"msdc.pipeline.jobs.{c}" for c in commands if not mod.endswith(f".{c}")]
+        if _within(mod, "msdc.pipeline.jobs"):
+            wrong += [f"{mod} imports {name}" for name in sorted(MODULES[mod])
+                      if any(_within(name, other) for other in others)]
+    assert wrong == []
+
+
+def test_no_top_level_asterix_or_pipeline_import():
+    """Installed code names only ``msdc.*``: a bare ``asterix`` would load another decoder's package."""
+    bare = [f"{p.relative_to(ROOT)}: {a.name}" for p in SOURCES
+            for node in ast.walk(ast.parse(p.read_text())) if isinstance(node, ast.Import)
+            for a in node.names if a.name.split(".")[0] in ("asterix", "pipeline")]
+    bare += [f"{p.relative_to(ROOT)}: {node.module}" for p in SOURCES
+             for node in ast.walk(ast.parse(p.read_text()))
+             if isinstance(node, ast.ImportFrom) and not node.level
+             and (node.module or "").split(".")[0] in ("asterix", "pipeline")]
+    assert bare == []
+
+
+def test_the_check_sees_a_wrong_import():
+    """A step importing the jobs layer is reported (so the tests above can fail)."""
+    MODULES["msdc.pipeline.quality.fake"] = {"msdc.pipeline.jobs", "msdc.pipeline.correlate.slots"}
+    try:
+        assert _offenders("msdc.pipeline.quality", FRONT) == [
+            "msdc.pipeline.quality.fake imports msdc.pipeline.jobs"]
+        assert _offenders("msdc.pipeline.quality", ("msdc.pipeline.correlate",)) == [
+            "msdc.pipeline.quality.fake imports msdc.pipeline.correlate.slots"]
+    finally:
+        del MODULES["msdc.pipeline.quality.fake"]
