@@ -35,19 +35,19 @@ def reference(meas: pd.DataFrame, split_adsb: bool = False) -> pd.DataFrame:
     adsb = (meas["sensor_kind"] == "adsb").to_numpy(bool)
     judged = jump_flags(meas[adsb & ~dup])
     keys = [k for k in DEDUP_KEYS if k in meas]
+    columns = [meas[k].tolist() for k in keys]  # the values .iloc gives, taken once: .iloc per row is slow
+    verdicts = dict(zip(judged.index, judged[JUMP_FLAG_COLUMNS].itertuples(index=False), strict=True))
     firsts: dict[tuple, dict[str, object]] = {}
     row_keys = []
     for i in range(len(meas)):
         if not adsb[i]:
             row_keys.append(None)
             continue
-        key = tuple(_key_value(meas[k].iloc[i]) for k in keys)
+        key = tuple(_key_value(column[i]) for column in columns)
         row_keys.append(key)
         slot = firsts.setdefault(key, {})
         if adsb[i] and not dup[i]:
-            label = meas.index[i]
-            for c in JUMP_FLAG_COLUMNS:
-                v = judged.at[label, c]
+            for c, v in zip(JUMP_FLAG_COLUMNS, verdicts[meas.index[i]], strict=True):
                 if c not in slot and not (isinstance(v, float) and math.isnan(v)):
                     slot[c] = v
     out = {"duplicate": dup}
