@@ -4,6 +4,7 @@ statement, those inside functions included), so a lazy import breaking the rule 
 from __future__ import annotations
 
 import ast
+import functools
 from pathlib import Path
 
 import pytest
@@ -18,11 +19,17 @@ def _module(path: Path) -> str:
     return ".".join(("msdc", *path.relative_to(ROOT).with_suffix("").parts)).removesuffix(".__init__")
 
 
+@functools.cache
+def _tree(path: Path) -> ast.Module:
+    """The parsed source of one file (each file is read once for every check)."""
+    return ast.parse(path.read_text(), str(path))
+
+
 def _imports(path: Path) -> set[str]:
     """Every msdc module named by an import statement of the file (relative imports resolved)."""
     out = set()
     package = _module(path).rsplit(".", 1)[0] if path.name != "__init__.py" else _module(path)
-    for node in ast.walk(ast.parse(path.read_text(), str(path))):
+    for node in ast.walk(_tree(path)):
         if isinstance(node, ast.ImportFrom):
             base = node.module or ""
             if node.level:
@@ -76,7 +83,7 @@ def test_the_command_modules_share_only_common_and_public_names():
         mod = _module(path)
         if not any(_within(mod, front) for front in FRONT):
             continue
-        for node in ast.walk(ast.parse(path.read_text(), str(path))):
+        for node in ast.walk(_tree(path)):
             if isinstance(node, ast.ImportFrom) and (node.module or "").startswith("msdc."):
                 wrong += [f"{mod} imports {node.module}.{a.name}" for a in node.names
                           if a.name.startswith("_")]
@@ -90,10 +97,10 @@ def test_the_command_modules_share_only_common_and_public_names():
 def test_no_top_level_asterix_or_pipeline_import():
     """Installed code names only ``msdc.*``: a bare ``asterix`` would load another decoder's package."""
     bare = [f"{p.relative_to(ROOT)}: {a.name}" for p in SOURCES
-            for node in ast.walk(ast.parse(p.read_text())) if isinstance(node, ast.Import)
+            for node in ast.walk(_tree(p)) if isinstance(node, ast.Import)
             for a in node.names if a.name.split(".")[0] in ("asterix", "pipeline")]
     bare += [f"{p.relative_to(ROOT)}: {node.module}" for p in SOURCES
-             for node in ast.walk(ast.parse(p.read_text()))
+             for node in ast.walk(_tree(p))
              if isinstance(node, ast.ImportFrom) and not node.level
              and (node.module or "").split(".")[0] in ("asterix", "pipeline")]
     assert bare == []
