@@ -13,6 +13,7 @@ are refused before any work (``output_problem``).
 from __future__ import annotations
 
 import contextlib
+import errno
 import os
 import shutil
 import signal
@@ -23,6 +24,7 @@ from pathlib import Path
 
 STAGING_PREFIX = ".msdc-staging-"
 BLOCKED = (signal.SIGINT, signal.SIGTERM, signal.SIGHUP)  # held back while the set is moved into place
+TERMINATING = (signal.SIGTERM, signal.SIGHUP)  # raised as Terminated by raise_on_termination
 
 
 def target(path: str | os.PathLike[str]) -> Path:
@@ -59,6 +61,7 @@ class OutputTransaction:
     removes everything staged."""
 
     _stages: dict[Path, Path] = field(default_factory=dict)  # target folder -> its staging folder
+    _spelled: dict[Path, Path] = field(default_factory=dict)  # staging folder -> its folder as given
     written: list[Written] = field(default_factory=list)
 
     def __enter__(self) -> OutputTransaction:
@@ -73,20 +76,31 @@ class OutputTransaction:
     def path(self, output: str | os.PathLike[str]) -> Path:
         """The staged path to write ``output`` to: its final name inside its folder's staging folder."""
         real = target(output)
-        return self._stage(real.parent) / real.name
+        stage = self._stage(real.parent)
+        if not Path(output).is_symlink():
+            self._spelled.setdefault(stage, Path(output).parent)
+        return stage / real.name
 
     def folder(self, directory: str | os.PathLike[str]) -> Path:
         """A staged folder standing for ``directory`` (created at commit when absent): what is written in
         it goes into ``directory`` under the same names."""
-        return self._stage(target(directory))
+        stage = self._stage(target(directory))
+        if not Path(directory).is_symlink():
+            self._spelled.setdefault(stage, Path(directory))
+        return stage
 
     def final_name(self, staged: str | os.PathLike[str]) -> str:
-        """The output a staged path stands for (``staged`` unchanged when it is not staged here)."""
+        """The output a staged path stands for, its folder spelled as the user gave it (the real folder for
+        a symbolic link); ``staged`` unchanged when it is not staged here."""
         staged = Path(staged)
         for final_dir, stage in self._stages.items():
             if staged == stage or stage in staged.parents:
-                return str(final_dir / staged.relative_to(stage))
+                return str(self._spelled.get(stage, final_dir) / staged.relative_to(stage))
         return str(staged)
+
+    def final(self, staged: str | os.PathLike[str]) -> Path:
+        """``final_name`` as a Path."""
+        return Path(self.final_name(staged))
 
     def commit(self) -> list[Written]:
         """Move every staged file into place as a set, interrupts held back meanwhile: if one move fails,
@@ -99,6 +113,8 @@ class OutputTransaction:
                 for staged, final in moves:
                     final.parent.mkdir(parents=True, exist_ok=True)
                     backup = None
+                    if final.is_dir() and not final.is_symlink():  # made meanwhile: never moved away
+                        raise IsADirectoryError(errno.EISDIR, os.strerror(errno.EISDIR), str(final))
                     if final.exists() or final.is_symlink():
                         backup = staged.with_name(staged.name + ".replaced")
                         os.replace(final, backup)
@@ -115,10 +131,13 @@ class OutputTransaction:
         return self.written
 
     def abort(self) -> None:
-        """Remove every staging folder and what is in it; nothing else is touched."""
-        for stage in self._stages.values():
-            shutil.rmtree(stage, ignore_errors=True)
-        self._stages.clear()
+        """Remove every staging folder and what is in it (interrupts held back meanwhile, so a second Ctrl-C
+        cannot leave one half removed); nothing else is touched."""
+        with _signals_held():
+            for stage in self._stages.values():
+                shutil.rmtree(stage, ignore_errors=True)
+            self._stages.clear()
+            self._spelled.clear()
 
     def _stage(self, final_dir: Path) -> Path:
         """The staging folder of ``final_dir`` (made on first use; for a folder that does not exist yet, in
@@ -129,9 +148,22 @@ class OutputTransaction:
         while not home.is_dir():
             home = home.parent
         stage = home / f"{STAGING_PREFIX}{os.getpid()}-{uuid.uuid4().hex[:8]}"
-        stage.mkdir()
-        self._stages[final_dir] = stage
+        with _signals_held():  # made and recorded at once: an interrupt cannot leave it unknown to abort()
+            stage.mkdir()
+            self._stages[final_dir] = stage
         return stage
+
+
+@contextlib.contextmanager
+def staged(tx: OutputTransaction | None = None) -> Iterator[OutputTransaction]:
+    """``tx`` itself when given (whoever opened it commits it, with the rest of the run), else a transaction
+    of the block's own, committed when the block succeeds."""
+    if tx is not None:
+        yield tx
+        return
+    with OutputTransaction() as own:
+        yield own
+        own.commit()
 
 
 def _files(stage: Path) -> list[Path]:
@@ -170,13 +202,26 @@ class Terminated(BaseException):
         super().__init__(f"terminated by signal {signum}")
         self.signum = signum
 
+    def __reduce__(self):
+        return Terminated, (self.signum,)
 
-def raise_on_termination() -> None:
-    """Turn SIGTERM and SIGHUP into Terminated in this process (the command's main thread)."""
+
+def raise_on_termination() -> dict[int, object]:
+    """Turn SIGTERM and SIGHUP into Terminated in this process (the command's main thread); returns the
+    handlers it replaced, for ``restore_handlers``."""
     def _raise(signum, frame):
         raise Terminated(signum)
 
-    for sig in (signal.SIGTERM, signal.SIGHUP):
+    previous = {}
+    for sig in TERMINATING:
         with contextlib.suppress(ValueError, OSError):  # not the main thread, or not on this platform
-            signal.signal(sig, _raise)
+            previous[sig] = signal.signal(sig, _raise)
+    return previous
+
+
+def restore_handlers(previous: dict[int, object]) -> None:
+    """Put back the signal handlers ``raise_on_termination`` replaced."""
+    for sig, handler in previous.items():
+        with contextlib.suppress(ValueError, OSError, TypeError):
+            signal.signal(sig, handler)
 

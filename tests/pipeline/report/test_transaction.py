@@ -97,6 +97,20 @@ def test_a_commit_that_fails_half_way_puts_back_what_it_moved(tmp_path, monkeypa
     assert _listing(tmp_path) == {"a.csv": b"old a", "b.csv": b"old b"}
 
 
+def test_a_folder_made_meanwhile_where_an_output_goes_is_left_alone(tmp_path):
+    """Another program makes a folder at b.csv's place during the run: the commit fails naming b.csv, a.csv
+    is put back as it was and the folder keeps its content."""
+    (tmp_path / "a.csv").write_text("old a")
+    with pytest.raises(IsADirectoryError) as raised, OutputTransaction() as tx:
+        tx.path(tmp_path / "a.csv").write_text("new a")
+        tx.path(tmp_path / "b.csv").write_text("new b")
+        (tmp_path / "b.csv").mkdir()
+        (tmp_path / "b.csv" / "theirs.txt").write_text("theirs")
+        tx.commit()
+    assert raised.value.filename == str(tmp_path / "b.csv")
+    assert _listing(tmp_path) == {"a.csv": b"old a", "b.csv/theirs.txt": b"theirs"}
+
+
 def test_a_write_error_names_the_output_not_the_staged_file(tmp_path):
     with pytest.raises(OSError) as raised, OutputTransaction() as tx:
         staged = tx.path(tmp_path / "o.json")
