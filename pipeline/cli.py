@@ -36,6 +36,7 @@ class _Lazy:
 
 common = _Lazy("msdc.pipeline.jobs.common")  # the jobs' errors, caught in main()
 asterix_errors = _Lazy("msdc.asterix.errors")
+transaction = _Lazy("msdc.pipeline.report.transaction")  # every file of a run is written through one
 FORMATS = list(_FORMATS)
 
 
@@ -289,7 +290,9 @@ def cmd_decode(args) -> int:
                                    categories=tuple(args.category or ()), strict=args.strict,
                                    chunk_mb=args.chunk_mb)
     try:
-        result = decode.decode_job(options, on_chunk=lambda done, size, name: progress.bar(done, size, name))
+        with transaction.staged() as tx:
+            result = decode.decode_job(options, tx=tx,
+                                       on_chunk=lambda done, size, name: progress.bar(done, size, name))
     except asterix_errors.DecodeError as exc:
         raise CliError(f"strict: {exc}") from exc
     for line in result.notes + decode.skipped_lines(result):
@@ -350,15 +353,16 @@ def _correlate(options, progress: Progress, prepared) -> int:
     from msdc.pipeline.jobs import correlate
 
     _numba_without_scipy()
-    result = _run_job("correlate", correlate.validate, correlate.correlate_job, options, progress)
-    for name, n in result.run.filters.items():
-        print(f"filter {name}: {n} of the input's ADS-B reports", file=sys.stderr)
-    from msdc.pipeline.report.summary import summary_table
+    with transaction.staged() as tx:
+        result = _run_job("correlate", correlate.validate, correlate.correlate_job, options, progress)
+        for name, n in result.run.filters.items():
+            print(f"filter {name}: {n} of the input's ADS-B reports", file=sys.stderr)
+        from msdc.pipeline.report.summary import summary_table
 
-    print(summary_table(result.run))
-    if not options.quality:  # only --quality's figures read the measurements again; the other writers
-        result.measurements = result.measurements.iloc[:0]  # need the run alone: the frame goes first
-    written = correlate.write_correlation(result, progress, prepared=prepared)
+        print(summary_table(result.run))
+        if not options.quality:  # only --quality's figures read the measurements again; the other writers
+            result.measurements = result.measurements.iloc[:0]  # need the run alone: the frame goes first
+        written = correlate.write_correlation(result, progress, prepared=prepared, tx=tx)
     if "json" in written:
         print(f"JSON summary: {written['json']}", file=sys.stderr)
     if "report" in written:
@@ -379,9 +383,10 @@ def cmd_quality(args) -> int:
 
     _numba_without_scipy()
     options = quality.QualityOptions(**_aircraft(args), reference=args.reference)
-    result = _run_job("quality", quality.validate, quality.quality_job, options, Progress())
-    print(quality.text(result))
-    written = quality.write_quality(result)
+    with transaction.staged() as tx:
+        result = _run_job("quality", quality.validate, quality.quality_job, options, Progress())
+        print(quality.text(result))
+        written = quality.write_quality(result, tx=tx)
     if "json" in written:
         print(f"JSON: {written['json']}", file=sys.stderr)
     if "report" in written:
@@ -409,10 +414,12 @@ def cmd_track(args) -> int:
         max_coast_s=args.max_coast, smooth=args.smooth or args.smoother is not None,
         smoother=args.smoother or "rts", tpm=args.tpm, sources=args.sources, noise=args.noise,
         adsb_sigma_m=args.adsb_sigma)
-    result = _run_job("track", lambda o: track.validate(o, require_output=True), track.track_job, options,
-                      Progress())
-    print(track.text(result))
-    for kind, path in track.write_tracks(result).items():
+    with transaction.staged() as tx:
+        result = _run_job("track", lambda o: track.validate(o, require_output=True), track.track_job, options,
+                          Progress())
+        print(track.text(result))
+        written = track.write_tracks(result, tx=tx)
+    for kind, path in written.items():
         print(f"{kind}: {path}", file=sys.stderr)
     return 0
 
@@ -429,9 +436,11 @@ def cmd_conflicts(args) -> int:
         threshold=args.threshold, method=args.method, vertical=args.vertical,
         surface=args.surface, figures=args.figures, noise=args.noise, adsb_sigma_m=args.adsb_sigma,
         sources=args.sources)
-    result = _run_job("conflicts", conflicts.validate, conflicts.conflict_job, options, Progress())
-    print(conflicts.text(result) + noise_text(result.noise))
-    for kind, path in conflicts.write_conflicts(result).items():
+    with transaction.staged() as tx:
+        result = _run_job("conflicts", conflicts.validate, conflicts.conflict_job, options, Progress())
+        print(conflicts.text(result) + noise_text(result.noise))
+        written = conflicts.write_conflicts(result, tx=tx)
+    for kind, path in written.items():
         print(f"{kind}: {path}", file=sys.stderr)
     if args.figures is not None and not len(result.alerts):
         print(f"figures: none (no alert events), {args.figures} left as it was", file=sys.stderr)

@@ -33,6 +33,7 @@ from msdc.pipeline.progress import Progress
 
 if TYPE_CHECKING:  # the steps are imported where they run: msdc stats imports none of them
     from msdc.pipeline.quality.quality_run import QualityResult
+    from msdc.pipeline.report.transaction import OutputTransaction
 
 
 GAP_RANGE_S = (0.1, 86400.0)
@@ -753,8 +754,10 @@ def quality_step(meas: pd.DataFrame, sensors: pd.DataFrame, options: AircraftOpt
         raise JobError(str(exc)) from exc
 
 
-def quality_figures(result: QualityResult, out_dir: Path, stem: str) -> dict[str, Path]:
-    """Update-interval histogram and, per radar, range/azimuth error against range and time (PNG)."""
+def quality_figures(result: QualityResult, out_dir: Path, stem: str, tx: OutputTransaction | None = None
+                    ) -> dict[str, Path]:
+    """Update-interval histogram and, per radar, range/azimuth error against range and time (PNG), drawn in
+    ``out_dir`` (a staging folder of ``tx``: the result records their final paths)."""
     from msdc.pipeline.report.quality_figures import interval_histogram_figure, radar_error_figure
 
     out_dir.mkdir(parents=True, exist_ok=True)
@@ -766,7 +769,7 @@ def quality_figures(result: QualityResult, out_dir: Path, stem: str) -> dict[str
             row = biases[(biases["sac"] == sac) & (biases["sic"] == sic)] if biases is not None else None
             figs[f"Radar errors {sac}/{sic}"] = radar_error_figure(
                 g, out_dir / f"{stem}_radar_errors_{sac}_{sic}.png", row)
-    result.figures.update(figs)
+    result.figures.update({k: tx.final(p) if tx else p for k, p in figs.items()})
     return figs
 
 

@@ -1,5 +1,6 @@
 """The decode job (``msdc decode``): every input streamed in chunks to CSV or Parquet, one file or one per
-category, written all or nothing; ``skipped_lines`` lists the skipped blocks for the terminal."""
+category, written all or nothing (report.transaction); ``skipped_lines`` lists the skipped blocks for the
+terminal."""
 
 from __future__ import annotations
 
@@ -24,6 +25,7 @@ from msdc.pipeline.jobs.common import (
 )
 from msdc.pipeline.model import editions as edition_notes
 from msdc.pipeline.report.textguard import guard_frame
+from msdc.pipeline.report.transaction import OutputTransaction, staged
 
 SKIPPED_SHOWN = 20  # skipped blocks decode lists one per line, per input; the rest are counted
 
@@ -81,19 +83,19 @@ class DecodeResult:
         return f"nothing could be decoded{asked}" + (f": {holds}" if holds else "")
 
 
-def decode_job(options: DecodeOptions, *, on_chunk: Callable[[int, int, str], None] | None = None
-               ) -> DecodeResult:
+def decode_job(options: DecodeOptions, *, on_chunk: Callable[[int, int, str], None] | None = None,
+               tx: OutputTransaction | None = None) -> DecodeResult:
     """Stream every input in chunks and write CSV or Parquet: one file, or one per category when records
-    of several categories decoded (decided from what decoded, at the end). Each output is written to a
-    temporary file beside it and moved into place only when the whole run succeeded: a failed or
-    interrupted run writes nothing, nor does a run in which nothing decodes. ``on_chunk(done_bytes, size,
-    name)`` reports progress. Raises asterix DecodeError in strict mode, JobError for unreadable input."""
+    of several categories decoded (decided from what decoded, at the end). The files are staged in ``tx``
+    (the caller commits it with the rest of its run; without one, a transaction of the job's own is
+    committed at the end): a failed or interrupted run writes nothing, nor does a run in which nothing
+    decodes. ``on_chunk(done_bytes, size, name)`` reports progress. Raises asterix DecodeError in strict
+    mode, JobError for unreadable input."""
     import msdc.asterix as asterix
     from msdc.asterix.errors import UnreadableInput
     from msdc.asterix.reader import categories_in
     from msdc.pipeline.model.sources import file_labels
     from msdc.pipeline.model.time import FirstDayTally
-    from msdc.pipeline.report.outputs import Staging
 
     checked = validate(options)
     out = checked.output
@@ -105,8 +107,8 @@ def decode_job(options: DecodeOptions, *, on_chunk: Callable[[int, int, str], No
     notes: list[str] = []
     cats = list(options.categories) or None
     csv = out is not None and out.suffix.lower() == ".csv"
-    with Staging() as staging:
-        staged: dict[int, Path] = {}  # category -> its temporary file
+    with staged(tx) as stage:
+        files: dict[int, Path] = {}  # category -> its staged file, named as when several categories decode
         writers: dict[int, object] = {}
         try:
             for path, label in zip(checked.inputs, file_labels(checked.inputs), strict=True):
@@ -123,9 +125,9 @@ def decode_job(options: DecodeOptions, *, on_chunk: Callable[[int, int, str], No
                     for cat, frame in rec.frames.items():
                         counts[cat] = counts.get(cat, 0) + len(frame)
                         if out is not None and len(frame):
-                            if cat not in staged:
-                                staged[cat] = staging.temporary(category_output(out, cat))
-                            _write_chunk(staged[cat], cat, frame.assign(file=label), writers, csv)
+                            if cat not in files:  # named after the file the output really is
+                                files[cat] = category_output(stage.path(out), cat)
+                            _write_chunk(files[cat], cat, frame.assign(file=label), writers, csv)
                     done = max((int(f["offset"].max()) for f in rec.frames.values() if len(f)), default=0)
                     if on_chunk:
                         on_chunk(done, size, path.name)
@@ -141,12 +143,13 @@ def decode_job(options: DecodeOptions, *, on_chunk: Callable[[int, int, str], No
             for w in writers.values():
                 if hasattr(w, "close"):
                     w.close()
-        several = len(staged) > 1
-        for cat in sorted(staged):
-            outputs[cat] = category_output(out, cat) if several else out
+        several = len(files) > 1
+        for cat in sorted(files):
+            outputs[cat] = stage.final(files[cat]) if several else out
             if several:
                 notes.append(f"several categories: writing {outputs[cat]}")
-        staging.commit({staged[cat]: outputs[cat] for cat in staged})
+            else:  # one category: its file is the output itself
+                files[cat].rename(stage.path(out))
     held = {} if sum(counts.values()) else {str(p): categories_in(p, format=options.format)
                                               for p in checked.inputs}
     warnings = checked.warnings + early_start + edition_notes.warnings(failed)
@@ -159,7 +162,7 @@ def category_output(out: Path, cat: int) -> Path:
 
 
 def _write_chunk(path: Path, cat: int, frame: pd.DataFrame, writers: dict, csv: bool) -> None:
-    """Append one chunk of a category to its (temporary) output file, CSV or Parquet, opening it on first
+    """Append one chunk of a category to its (staged) output file, CSV or Parquet, opening it on first
     use."""
     if csv:
         frame = guard_frame(frame.assign(timestamp=frame["timestamp"].dt.strftime("%Y-%m-%dT%H:%M:%S.%fZ")))

@@ -39,6 +39,7 @@ from msdc.pipeline.jobs.common import (
     tracker_inputs,
 )
 from msdc.pipeline.progress import Progress
+from msdc.pipeline.report.transaction import OutputTransaction, staged
 
 # the columns of the track table, in order (issue 10); the tracker's other columns follow
 TRACK_COLUMNS = ["aircraft_id", "callsign", "address", "time", "time_of_day", "latitude", "longitude",
@@ -223,32 +224,30 @@ def sensor_totals(sensors: pd.DataFrame) -> pd.DataFrame:
     return out.drop(columns="nis_sum").assign(nis_mean=np.where(out["updates"] > 0, nis, np.nan))
 
 
-def write_tracks(result: TrackJobResult) -> dict[str, Path]:
+def write_tracks(result: TrackJobResult, *, tx: OutputTransaction | None = None) -> dict[str, Path]:
     """Write the track table (CSV: times as ISO 8601 UTC; Parquet: tz-aware timestamps), the JSON and
-    the figures, as the options ask; each file is written whole to a temporary name and then renamed,
-    so a failure leaves nothing behind. Returns what was written, by kind."""
+    the figures, as the options ask, staged in ``tx`` (committed by the caller; without one, the files are
+    committed together here): a failure leaves nothing behind. Returns the final paths, by kind."""
     written: dict[str, Path] = {}
     out, js = result.checked.output, result.checked.json
-    if out is not None:
-        from msdc.pipeline.report.summary import write_atomically
-        from msdc.pipeline.report.tables import write_parquet
+    with staged(tx) as stage:
+        if out is not None:
+            from msdc.pipeline.report.tables import write_parquet
 
-        if out.suffix.lower() == ".csv":
-            times = result.tracks["time"].dt.strftime("%Y-%m-%dT%H:%M:%S.%fZ")
-            table = csv_rounded(result.tracks).assign(time=times)
-            write_atomically(out, lambda tmp: table.to_csv(tmp, index=False))
-        else:
-            write_parquet(result.tracks, out)
-        written["tracks"] = out
-    if js is not None:
-        js.write_text(json.dumps(summary(result), indent=1, default=str))
-        written["json"] = js
-    if result.options.figures is not None:
-        from msdc.pipeline.report.track_figures import track_figures
+            if out.suffix.lower() == ".csv":
+                times = result.tracks["time"].dt.strftime("%Y-%m-%dT%H:%M:%S.%fZ")
+                csv_rounded(result.tracks).assign(time=times).to_csv(stage.path(out), index=False)
+            else:
+                write_parquet(result.tracks, stage.path(out))
+            written["tracks"] = out
+        if js is not None:
+            stage.path(js).write_text(json.dumps(summary(result), indent=1, default=str))
+            written["json"] = js
+        if result.options.figures is not None:
+            from msdc.pipeline.report.track_figures import track_figures
 
-        d = Path(result.options.figures)
-        d.mkdir(exist_ok=True)
-        written.update({f"figure {k}": p for k, p in track_figures(result, d).items()})
+            drawn = track_figures(result, stage.folder(result.options.figures))
+            written.update({f"figure {k}": stage.final(p) for k, p in drawn.items()})
     return written
 
 

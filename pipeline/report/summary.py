@@ -18,7 +18,6 @@ from msdc.pipeline.correlate.correlation import pearson_search_limit
 from msdc.pipeline.correlate.results import SUMMARY_KEYS, CorrelationRun, WindowResult
 from msdc.pipeline.model.time import iso_utc
 from msdc.pipeline.report.formats import decimals
-from msdc.pipeline.report.outputs import write_atomically
 
 SKIPPED_KEYS = ["callsign", "address", "radar_sensor", "reference_sensor", "start_tod", "end_tod", "reason"]
 # Parameter names (top level or under "options") that may hold the slot length in seconds
@@ -114,7 +113,9 @@ def run_to_json(run: CorrelationRun) -> dict[str, Any]:
 def write_json(run: CorrelationRun, path: str | os.PathLike[str]) -> Path:
     """Write ``run_to_json(run)`` to ``path`` (UTF-8, indented, strict JSON); returns the path."""
     text = json.dumps(run_to_json(run), indent=2, ensure_ascii=False, allow_nan=False) + "\n"
-    return write_atomically(path, lambda tmp: tmp.write_text(text, encoding="utf-8"))
+    path = Path(path)
+    path.write_text(text, encoding="utf-8")
+    return path
 
 
 def slot_seconds(window: WindowResult, parameters: Mapping[str, Any] | None = None) -> float:
