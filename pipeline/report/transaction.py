@@ -108,17 +108,17 @@ class OutputTransaction:
         moves = [(stage / rel, final_dir / rel) for final_dir, stage in self._stages.items()
                  for rel in _files(stage)]
         with _signals_held():
-            done: list[tuple[Path, Path | None]] = []
+            done: list[tuple[Path, Path | None, Path]] = []  # recorded before each move: _undo can tell
             try:
                 for staged, final in moves:
                     final.parent.mkdir(parents=True, exist_ok=True)
-                    backup = None
                     if final.is_dir() and not final.is_symlink():  # made meanwhile: never moved away
                         raise IsADirectoryError(errno.EISDIR, os.strerror(errno.EISDIR), str(final))
-                    if final.exists() or final.is_symlink():
-                        backup = staged.with_name(staged.name + ".replaced")
+                    had = final.exists() or final.is_symlink()
+                    backup = staged.with_name(staged.name + ".replaced") if had else None
+                    done.append((final, backup, staged))
+                    if backup is not None:
                         os.replace(final, backup)
-                    done.append((final, backup))
                     os.replace(staged, final)
             except OSError as exc:
                 _undo(done)
@@ -126,18 +126,26 @@ class OutputTransaction:
             except BaseException:
                 _undo(done)
                 raise
-            self.written = [Written(final, backup is not None) for final, backup in done]
+            self.written = [Written(final, backup is not None) for final, backup, _ in done]
             self.abort()  # the staging folders now hold only the replaced files' old content
         return self.written
 
     def abort(self) -> None:
-        """Remove every staging folder and what is in it (interrupts held back meanwhile, so a second Ctrl-C
-        cannot leave one half removed); nothing else is touched."""
+        """Remove every staging folder and what is in it, nothing else. Interrupts are held back meanwhile;
+        one already on its way (its handler raises at any step) is raised once every folder is gone."""
+        interrupted = None
         with _signals_held():
-            for stage in self._stages.values():
-                shutil.rmtree(stage, ignore_errors=True)
-            self._stages.clear()
+            while self._stages:
+                final_dir, stage = next(iter(self._stages.items()))
+                try:
+                    shutil.rmtree(stage, ignore_errors=True)
+                except BaseException as exc:  # noqa: BLE001 - the same folder again, then raised
+                    interrupted = interrupted or exc
+                    continue
+                del self._stages[final_dir]
             self._spelled.clear()
+        if interrupted is not None:
+            raise interrupted
 
     def _stage(self, final_dir: Path) -> Path:
         """The staging folder of ``final_dir`` (made on first use; for a folder that does not exist yet, in
@@ -148,9 +156,8 @@ class OutputTransaction:
         while not home.is_dir():
             home = home.parent
         stage = home / f"{STAGING_PREFIX}{os.getpid()}-{uuid.uuid4().hex[:8]}"
-        with _signals_held():  # made and recorded at once: an interrupt cannot leave it unknown to abort()
-            stage.mkdir()
-            self._stages[final_dir] = stage
+        self._stages[final_dir] = stage  # recorded first: an interrupt cannot leave it unknown to abort()
+        stage.mkdir()
         return stage
 
 
@@ -171,13 +178,15 @@ def _files(stage: Path) -> list[Path]:
     return sorted(p.relative_to(stage) for p in stage.rglob("*") if p.is_file() or p.is_symlink())
 
 
-def _undo(done: list[tuple[Path, Path | None]]) -> None:
-    """Put back what a failed commit moved: each replaced file's old content, or no file where none was."""
-    for final, backup in reversed(done):
+def _undo(done: list[tuple[Path, Path | None, Path]]) -> None:
+    """Put back what a failed commit moved: each replaced file's old content, or no file where none was
+    (``final`` is removed only when its staged file was moved there)."""
+    for final, backup, staged in reversed(done):
         with contextlib.suppress(OSError):
             if backup is not None:
-                os.replace(backup, final)
-            else:
+                if backup.exists() or backup.is_symlink():
+                    os.replace(backup, final)
+            elif not (staged.exists() or staged.is_symlink()):
                 final.unlink(missing_ok=True)
 
 
@@ -187,8 +196,9 @@ def _signals_held() -> Iterator[None]:
     if not hasattr(signal, "pthread_sigmask"):
         yield
         return
-    old = signal.pthread_sigmask(signal.SIG_BLOCK, BLOCKED)
-    try:
+    old = signal.pthread_sigmask(signal.SIG_BLOCK, [])  # the mask as it is: restored even if a handler
+    try:  # that was already due raises right after the next call
+        signal.pthread_sigmask(signal.SIG_BLOCK, BLOCKED)
         yield
     finally:
         signal.pthread_sigmask(signal.SIG_SETMASK, old)
