@@ -470,8 +470,11 @@ COMMANDS = {"decode": cmd_decode, "stats": cmd_stats, "correlate": cmd_correlate
 
 
 def main(argv: list[str] | None = None) -> int:
-    """Run msdc with argv (the process's when None) and return the exit status; never a traceback."""
+    """Run msdc with argv (the process's when None) and return the exit status; never a traceback. SIGTERM
+    and SIGHUP end the run as Ctrl-C does (report.transaction.Terminated: every staged output removed),
+    with status 128 + the signal's number (Ctrl-C: 130)."""
     args = build_parser().parse_args(argv)
+    handlers = transaction.raise_on_termination()
     try:
         return COMMANDS[args.command](args)
     except (CliError, common.OptionError, common.JobError) as exc:
@@ -483,23 +486,28 @@ def main(argv: list[str] | None = None) -> int:
     except OSError as exc:  # writing outputs: disk full, permissions changed during the run
         print(f"msdc {args.command}: {exc.filename or ''}: {exc.strerror or exc}", file=sys.stderr)
         return 1
-    except KeyboardInterrupt:
-        return 130
+    except (KeyboardInterrupt, transaction.Terminated) as exc:
+        return _interrupted(exc)
     except Exception as exc:  # Ctrl-C inside numba's cache loader surfaces as its SystemError
         if _interrupted(exc):
-            return 130
+            return _interrupted(exc)
         raise
+    finally:
+        transaction.restore_handlers(handlers)
 
 
-def _interrupted(exc: BaseException) -> bool:
-    """Whether a KeyboardInterrupt is among the exceptions that caused or preceded ``exc``."""
+def _interrupted(exc: BaseException) -> int | None:
+    """The exit status of an interrupt among the exceptions that caused or preceded ``exc`` (Ctrl-C: 130,
+    SIGTERM or SIGHUP: 128 + the signal's number); None when there is none."""
     seen: set[int] = set()
     while exc is not None and id(exc) not in seen:
         if isinstance(exc, KeyboardInterrupt):
-            return True
+            return 130
+        if isinstance(exc, transaction.Terminated):
+            return 128 + exc.signum
         seen.add(id(exc))
         exc = exc.__cause__ or exc.__context__
-    return False
+    return None
 
 
 # The command's automatic garbage collection waits for this many new container objects instead of Python's
