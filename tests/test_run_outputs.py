@@ -4,6 +4,7 @@ the folder untouched, with no staging folder left; outputs that are not regular 
 
 from __future__ import annotations
 
+import os
 import signal
 import subprocess
 import sys
@@ -79,3 +80,42 @@ def test_a_signal_while_writing_leaves_the_folder_as_it_was(tmp_path, job, sig):
     assert run.returncode == (130 if sig == signal.SIGINT else 128 + sig), err
     assert "Traceback" not in err
     assert _listing(tmp_path) == before and _no_staging(tmp_path)
+
+
+# ---------------------------------------------------------------------------------------------------------
+# outputs that are not regular files: refused before any decoding, naming the option and the file
+
+
+@pytest.mark.parametrize("job, option, name", [
+    ("decode", "-o", "o_cat048.csv"), ("correlate", "--json", "r.json"), ("quality", "--json", "q.json"),
+    ("track", "--json", "t.json"), ("conflicts", "--json", "k.json")])
+def test_a_fifo_as_an_output_is_refused_at_once(tmp_path, job, option, name):
+    """A FIFO blocks its writer until someone reads it (after all the work): refused like an input, before
+    anything is decoded. decode's o_cat048.csv is the file -o o.csv writes when both categories decode."""
+    fifo = tmp_path / name
+    os.mkfifo(fifo)
+    done = subprocess.run([sys.executable, "-m", "msdc.pipeline.cli", *_argv(job, tmp_path)], cwd=ROOT,
+                          capture_output=True, text=True, timeout=60)
+    given = tmp_path / JOBS[job][0][JOBS[job][0].index(option) + 1].removeprefix("OUT/")
+    assert done.returncode == 2 and "Traceback" not in done.stderr
+    named = f"its CAT048 file {fifo}" if given != fifo else f"{option} {fifo}:"
+    assert done.stderr.strip().endswith("is not a regular file (a FIFO, socket or device): give a file name")
+    assert f"{option} {given}" in done.stderr and named in done.stderr
+    assert sorted(p.name for p in tmp_path.iterdir()) == [name]
+
+
+def test_a_symlinked_output_is_written_through_and_its_side_files_go_beside_the_file_it_points_to(tmp_path):
+    """-o link.csv pointing to real/data.csv: the link stays, data.csv is replaced; with both categories
+    the per-category files are named after data.csv and written beside it."""
+    from msdc.pipeline.cli import main
+
+    real = tmp_path / "real" / "data.csv"
+    real.parent.mkdir()
+    real.write_text("previous run\n")
+    link = tmp_path / "link.csv"
+    link.symlink_to(real)
+    assert main(["decode", *INPUTS, "--category", "48", "-o", str(link)]) == 0
+    assert link.is_symlink() and real.read_text().startswith("sac,sic,")
+    assert main(["decode", *INPUTS, "-o", str(link)]) == 0
+    assert sorted(p.name for p in real.parent.iterdir()) == ["data.csv", "data_cat021.csv", "data_cat048.csv"]
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["link.csv", "real"] and link.is_symlink()

@@ -30,6 +30,7 @@ from msdc.pipeline.model.load import (
     time_spans,
 )
 from msdc.pipeline.progress import Progress
+from msdc.pipeline.report.transaction import output_problem, target
 
 if TYPE_CHECKING:  # the steps are imported where they run: msdc stats imports none of them
     from msdc.pipeline.quality.quality_run import QualityResult
@@ -166,16 +167,18 @@ def _inputs(paths: list[str | Path]) -> tuple[list[Path], list[str]]:
 
 
 def output_path(name: str, path: str | Path | None, suffixes: tuple[str, ...]) -> Path | None:
-    """An output path with an allowed suffix, not a directory, in a writable directory."""
+    """An output path with an allowed suffix, not a directory, FIFO or device, in a writable directory (for
+    a symbolic link: the directory of the file it points to, which is replaced)."""
     if path is None:
         return None
     nonempty_path(name, path)
     p = Path(path)
     if p.suffix.lower() not in suffixes:
         raise OptionError(f"{name} {p}: must end in {' or '.join(suffixes)}")
-    if p.is_dir():
-        raise OptionError(f"{name} {p}: is a directory")
-    parent = p.parent if str(p.parent) else Path(".")
+    problem = output_problem(p)
+    if problem:
+        raise OptionError(f"{name} {p}: {problem}")
+    parent = real_output(p).parent if str(p.parent) else Path(".")
     if parent.exists() and not parent.is_dir():
         raise OptionError(f"{name} {p}: {parent} is a file, not a directory")
     if not parent.is_dir():
@@ -184,6 +187,23 @@ def output_path(name: str, path: str | Path | None, suffixes: tuple[str, ...]) -
     if not writable or not _can_create(parent):
         raise OptionError(f"{name} {p}: not writable (directory {parent})")
     return p
+
+
+def real_output(path: Path) -> Path:
+    """The file an output really is: the one a symbolic link points to (the link is kept), else ``path`` as
+    given. The files written beside an output are named after it and go beside it."""
+    return target(path) if path.is_symlink() else path
+
+
+def check_beside(option: str, out: Path, files: Iterable[tuple[str, Path]]) -> None:
+    """OptionError when a file written beside the output ``out`` (``(noun, path)`` pairs) cannot be: a
+    directory, FIFO or device, or an existing file that is not writable."""
+    for noun, path in files:
+        problem = output_problem(path)
+        if problem is None and path.exists() and not os.access(path, os.W_OK):
+            problem = "is not writable"
+        if problem:
+            raise OptionError(f"{option} {out}: its {noun} {path} {problem}")
 
 
 def spare_inputs(inputs, outputs: list[tuple[str, Path | None]]) -> None:
@@ -386,11 +406,10 @@ def check_workbook(options: AircraftOptions, checked: Checked, *, figure_windows
     checked.sensors = sensor_table(options.sensors, required=sensors_required)
     out = checked.output
     if out is not None:
-        figures = _figures_beside(out, checked.sensors, figure_windows)
-        for png in figures:
-            if png.is_dir():
-                raise OptionError(f"-o {out}: its figure {png} is a directory")
-        beside = [out.with_name(f"{out.stem}_tracks.png"), *(parquet_path(out, n) for n in TABLE_FILES),
+        base = real_output(out)
+        figures = _figures_beside(base, checked.sensors, figure_windows)
+        check_beside("-o", out, [("figure", png) for png in figures])
+        beside = [base.with_name(f"{base.stem}_tracks.png"), *(parquet_path(base, n) for n in TABLE_FILES),
                   *figures]
         spare_inputs(options.inputs, [(f"-o {out}", out)] + [(f"-o {out}", p) for p in beside])
     spare_inputs(options.inputs, [(f"--json {checked.json}", checked.json)])

@@ -36,6 +36,7 @@ from msdc.pipeline.jobs.common import (
     estimated_noise,
     output_path,
     parse_sources,
+    real_output,
     run_parameters,
     sensor_table,
     spare_inputs,
@@ -124,10 +125,10 @@ def validate(options: ConflictOptions) -> Checked:
     checked.json = output_path("--json", options.json, (".json",))
     if checked.output is None:
         raise OptionError("-o: give the output, conflicts.csv or conflicts.xlsx")
-    if checked.output.suffix.lower() == ".csv":
-        for extra in companion_paths(checked.output).values():
-            output_path("-o", extra, (".csv",))
-    beside = companion_paths(checked.output).values() if checked.output.suffix.lower() == ".csv" else ()
+    csv = checked.output.suffix.lower() == ".csv"
+    beside = companion_paths(real_output(checked.output)).values() if csv else ()
+    for extra in beside:
+        output_path("-o", extra, (".csv",))
     spare_inputs(options.inputs, [(f"-o {checked.output}", p) for p in (checked.output, *beside)]
                  + [(f"--json {checked.json}", checked.json)])
     if options.figures is not None:

@@ -9,7 +9,6 @@ tables a child process draws meanwhile (``prepare_correlation_writers`` starts i
 
 from __future__ import annotations
 
-import os
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -24,6 +23,7 @@ from msdc.pipeline.jobs.common import (
     OptionError,
     carrying,
     check_aircraft,
+    check_beside,
     check_decoding,
     check_integer,
     check_number,
@@ -33,6 +33,7 @@ from msdc.pipeline.jobs.common import (
     quality_figures,
     quality_inputs,
     quality_step,
+    real_output,
     run_parameters,
 )
 from msdc.pipeline.model.load import Loaded, release_free_memory
@@ -85,17 +86,12 @@ def validate(options: CorrelateOptions) -> Checked:
     if options.tables == "parquet" and options.output is None:
         raise OptionError("--tables parquet: needs -o (the tables are written beside the workbook)")
     checked.output = output_path("-o", options.output, (".xlsx",))
-    if checked.output is not None:  # the figure beside it
-        png = checked.output.with_name(f"{checked.output.stem}_tracks.png")
-        if png.is_dir():
-            raise OptionError(f"-o {checked.output}: its track figure {png} is a directory")
-        if options.tables != "xlsx":  # the tables that may go to Parquet beside it
-            for name in TABLE_FILES:
-                table = parquet_path(checked.output, name)
-                if table.is_dir():
-                    raise OptionError(f"-o {checked.output}: its {name} table {table} is a directory")
-                if table.exists() and not os.access(table, os.W_OK):
-                    raise OptionError(f"-o {checked.output}: its {name} table {table} is not writable")
+    if checked.output is not None:  # the figure beside it, and the tables that may go to Parquet beside it
+        base = real_output(checked.output)
+        beside = [("track figure", base.with_name(f"{base.stem}_tracks.png"))]
+        beside += [(f"{name} table", parquet_path(base, name)) for name in TABLE_FILES
+                   if options.tables != "xlsx"]
+        check_beside("-o", checked.output, beside)
     checked.warnings += check_workbook(options, checked,
                                        figure_windows=FIGURE_WINDOWS if options.quality else None)
     return checked

@@ -4,7 +4,6 @@ terminal."""
 
 from __future__ import annotations
 
-import os
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -17,10 +16,12 @@ from msdc.pipeline.jobs.common import (
     DecodingOptions,
     JobError,
     OptionError,
+    check_beside,
     check_decoding,
     check_number,
     format_hints,
     output_path,
+    real_output,
     spare_inputs,
 )
 from msdc.pipeline.model import editions as edition_notes
@@ -49,16 +50,13 @@ def validate(options: DecodeOptions) -> Checked:
     if bad:
         raise OptionError(f"--category {bad[0]}: must be 21 or 48")
     if checked.output is not None:
-        out = checked.output
+        out, base = checked.output, real_output(checked.output)
         spare_inputs(options.inputs, [(f"-o {out}", p) for p in (
-            out, *(category_output(out, c) for c in (21, 48)))])
+            out, *(category_output(base, c) for c in (21, 48)))])
         cats = sorted(set(options.categories or (21, 48)))
-        for cat in cats if len(cats) > 1 else ():  # written when several categories decode
-            each = category_output(out, cat)
-            if each.is_dir():
-                raise OptionError(f"-o {out}: its CAT{cat:03d} file {each} is a directory")
-            if each.exists() and not os.access(each, os.W_OK):
-                raise OptionError(f"-o {out}: its CAT{cat:03d} file {each} is not writable")
+        # written when several categories decode
+        check_beside("-o", out, [(f"CAT{cat:03d} file", category_output(base, cat)) for cat in cats
+                                 if len(cats) > 1])
     return checked
 
 
