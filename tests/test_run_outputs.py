@@ -4,6 +4,7 @@ the folder untouched, with no staging folder left; outputs that are not regular 
 
 from __future__ import annotations
 
+import errno
 import os
 import signal
 import subprocess
@@ -58,6 +59,41 @@ def _listing(folder: Path) -> dict[str, bytes]:
 
 def _no_staging(folder: Path) -> bool:
     return not any(p.name.startswith(STAGING_PREFIX) for p in folder.rglob("*"))
+
+
+# ---------------------------------------------------------------------------------------------------------
+# failing while writing: a full disk met by a figure (decode: a CSV chunk), another program busy meanwhile
+
+# the file each job is writing when the disk fills up (decode: the first category's, the output while it is
+# the only one)
+FULL_AT = {"decode": "o.csv", "correlate": "r_tracks.png", "quality": "q_intervals.png",
+           "track": "figs/track_MAS72_750312.png", "conflicts": "figs/alert_001_"}
+
+
+@pytest.mark.parametrize("job", list(JOBS))
+def test_a_write_failing_leaves_the_previous_outputs_and_other_files_as_they_were(tmp_path, monkeypatch,
+                                                                                  capsys, job):
+    import matplotlib.figure
+    import pandas as pd
+
+    from msdc.pipeline.cli import main
+
+    before = _previous_run(job, tmp_path)
+    meanwhile = tmp_path / "made_meanwhile.txt"
+
+    def disk_full(*args, **kwargs):
+        meanwhile.write_bytes(b"another program's file, made during the run\n")
+        raise OSError(errno.ENOSPC, "No space left on device")  # as Pillow and pandas raise it: no file
+
+    if job == "decode":
+        monkeypatch.setattr(pd.DataFrame, "to_csv", disk_full)
+    else:  # drawn in a forked child by correlate: the child has the patch too
+        monkeypatch.setattr(matplotlib.figure.Figure, "savefig", disk_full)
+    assert main(_argv(job, tmp_path)) == 1
+    err = capsys.readouterr().err
+    assert f"msdc {job}: {tmp_path / FULL_AT[job]}" in err and err.endswith(": No space left on device\n")
+    assert err.count(f"msdc {job}: ") == 1 and "Traceback" not in err
+    assert _listing(tmp_path) == {**before, meanwhile.name: meanwhile.read_bytes()} and _no_staging(tmp_path)
 
 
 # ---------------------------------------------------------------------------------------------------------
@@ -119,3 +155,41 @@ def test_a_symlinked_output_is_written_through_and_its_side_files_go_beside_the_
     assert main(["decode", *INPUTS, "-o", str(link)]) == 0
     assert sorted(p.name for p in real.parent.iterdir()) == ["data.csv", "data_cat021.csv", "data_cat048.csv"]
     assert sorted(p.name for p in tmp_path.iterdir()) == ["link.csv", "real"] and link.is_symlink()
+
+
+def _small_disk(folder: Path, size: str) -> bool:
+    """Mount a tmpfs of ``size`` on ``folder`` (root, where mounting is allowed); False when it cannot."""
+    try:
+        done = subprocess.run(["mount", "-t", "tmpfs", "-o", f"size={size}", "tmpfs", str(folder)],
+                              capture_output=True, timeout=30)
+    except (OSError, subprocess.SubprocessError):
+        return False
+    return done.returncode == 0
+
+
+def test_a_full_disk_names_the_output_and_keeps_the_previous_one(tmp_path):
+    """quality --json (70 kB) on a 32 kB tmpfs: one line naming q.json, exit 1, the previous q.json kept.
+    Where no tmpfs can be mounted, a 32 kB file size limit (RLIMIT_FSIZE) fills the disk instead."""
+    import resource
+
+    disk = tmp_path / "disk"
+    disk.mkdir()
+    mounted = _small_disk(disk, "32k")
+    try:
+        (disk / "q.json").write_bytes(b"previous run's q.json\n")
+        before = _listing(disk)
+
+        def limited() -> None:
+            signal.signal(signal.SIGXFSZ, signal.SIG_IGN)  # the write fails with EFBIG instead of a kill
+            resource.setrlimit(resource.RLIMIT_FSIZE, (32_000, 32_000))
+
+        done = subprocess.run([sys.executable, "-m", "msdc.pipeline.cli", "quality", *AIRCRAFT, "--callsign",
+                               "MAS72", "--json", str(disk / "q.json")], cwd=ROOT, capture_output=True,
+                              text=True, timeout=120, preexec_fn=None if mounted else limited)
+        reason = "No space left on device" if mounted else "File too large"
+        assert done.returncode == 1 and "Traceback" not in done.stderr
+        assert done.stderr.splitlines()[-1] == f"msdc quality: {disk / 'q.json'}: {reason}"
+        assert _listing(disk) == before and _no_staging(disk)
+    finally:
+        if mounted:
+            subprocess.run(["umount", str(disk)], check=True, timeout=30)

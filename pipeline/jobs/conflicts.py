@@ -43,6 +43,7 @@ from msdc.pipeline.jobs.common import (
     tracker_inputs,
 )
 from msdc.pipeline.progress import Progress
+from msdc.pipeline.report.files import named
 from msdc.pipeline.report.transaction import OutputTransaction, staged
 
 METHODS = ("exact", "one-block", "blocks", "midpoint")
@@ -353,7 +354,8 @@ def _csv(frame: pd.DataFrame, path: Path) -> None:
     for c in out.columns:
         if isinstance(out[c].dtype, pd.DatetimeTZDtype):
             out[c] = out[c].dt.strftime("%Y-%m-%dT%H:%M:%S.%fZ")
-    out.to_csv(path, index=False)
+    with named(path):
+        out.to_csv(path, index=False)
 
 
 def write_conflicts(result: ConflictJobResult, *, tx: OutputTransaction | None = None) -> dict[str, Path]:
@@ -378,7 +380,8 @@ def write_conflicts(result: ConflictJobResult, *, tx: OutputTransaction | None =
                                     stage.path(out))
         if js is not None:
             targets["json"] = js
-            stage.path(js).write_text(json.dumps(summary(result), indent=1, default=str))
+            with named(js):
+                stage.path(js).write_text(json.dumps(summary(result), indent=1, default=str))
         if result.options.figures is not None and len(result.alerts):
             targets.update(_alert_figures(result, stage.folder(result.options.figures), stage))
     return targets

@@ -25,6 +25,7 @@ from msdc.pipeline.jobs.common import (
     spare_inputs,
 )
 from msdc.pipeline.model import editions as edition_notes
+from msdc.pipeline.report.files import named
 from msdc.pipeline.report.textguard import guard_frame
 from msdc.pipeline.report.transaction import OutputTransaction, staged
 
@@ -125,7 +126,8 @@ def decode_job(options: DecodeOptions, *, on_chunk: Callable[[int, int, str], No
                         if out is not None and len(frame):
                             if cat not in files:  # named after the file the output really is
                                 files[cat] = category_output(stage.path(out), cat)
-                            _write_chunk(files[cat], cat, frame.assign(file=label), writers, csv)
+                            with named(_shown(out, files, cat, stage)):
+                                _write_chunk(files[cat], cat, frame.assign(file=label), writers, csv)
                     done = max((int(f["offset"].max()) for f in rec.frames.values() if len(f)), default=0)
                     if on_chunk:
                         on_chunk(done, size, path.name)
@@ -138,9 +140,10 @@ def decode_job(options: DecodeOptions, *, on_chunk: Callable[[int, int, str], No
         except UnreadableInput as exc:
             raise JobError(str(exc), 2) from exc
         finally:
-            for w in writers.values():
+            for cat, w in writers.items():
                 if hasattr(w, "close"):
-                    w.close()
+                    with named(_shown(out, files, cat, stage)):
+                        w.close()
         several = len(files) > 1
         for cat in sorted(files):
             outputs[cat] = stage.final(files[cat]) if several else out
@@ -157,6 +160,11 @@ def decode_job(options: DecodeOptions, *, on_chunk: Callable[[int, int, str], No
 def category_output(out: Path, cat: int) -> Path:
     """Where decode writes one category's records when several decode: ``OUT_cat048.csv`` beside ``OUT``."""
     return out.with_name(f"{out.stem}_cat{cat:03d}{out.suffix}")
+
+
+def _shown(out: Path, files: dict[int, Path], cat: int, stage: OutputTransaction) -> Path:
+    """The file an error writing category ``cat`` names: the output while it is the only category."""
+    return out if len(files) == 1 else stage.final(files[cat])
 
 
 def _write_chunk(path: Path, cat: int, frame: pd.DataFrame, writers: dict, csv: bool) -> None:

@@ -111,6 +111,7 @@ def write_quality(result: QualityJobResult, *, tx: OutputTransaction | None = No
     import json
 
     from msdc.pipeline.report.excel import write_tables
+    from msdc.pipeline.report.files import named
     from msdc.pipeline.report.summary import table_records
 
     written: dict[str, Path] = {}
@@ -118,7 +119,8 @@ def write_quality(result: QualityJobResult, *, tx: OutputTransaction | None = No
         if result.checked.json:
             doc = {"parameters": result.parameters, "inputs": result.loaded.inputs,
                    "tables": {name: table_records(t) for name, t in result.quality.sheets.items()}}
-            stage.path(result.checked.json).write_text(json.dumps(doc, indent=1, default=str))
+            with named(result.checked.json):
+                stage.path(result.checked.json).write_text(json.dumps(doc, indent=1, default=str))
             written["json"] = result.checked.json
         if result.checked.output:
             out = stage.path(result.checked.output)

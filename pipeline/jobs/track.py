@@ -39,6 +39,7 @@ from msdc.pipeline.jobs.common import (
     tracker_inputs,
 )
 from msdc.pipeline.progress import Progress
+from msdc.pipeline.report.files import named
 from msdc.pipeline.report.transaction import OutputTransaction, staged
 
 # the columns of the track table, in order (issue 10); the tracker's other columns follow
@@ -236,12 +237,14 @@ def write_tracks(result: TrackJobResult, *, tx: OutputTransaction | None = None)
 
             if out.suffix.lower() == ".csv":
                 times = result.tracks["time"].dt.strftime("%Y-%m-%dT%H:%M:%S.%fZ")
-                csv_rounded(result.tracks).assign(time=times).to_csv(stage.path(out), index=False)
+                with named(out):
+                    csv_rounded(result.tracks).assign(time=times).to_csv(stage.path(out), index=False)
             else:
                 write_parquet(result.tracks, stage.path(out))
             written["tracks"] = out
         if js is not None:
-            stage.path(js).write_text(json.dumps(summary(result), indent=1, default=str))
+            with named(js):
+                stage.path(js).write_text(json.dumps(summary(result), indent=1, default=str))
             written["json"] = js
         if result.options.figures is not None:
             from msdc.pipeline.report.track_figures import track_figures

@@ -17,6 +17,7 @@ import pandas as pd
 from msdc.pipeline.correlate.correlation import pearson_search_limit
 from msdc.pipeline.correlate.results import SUMMARY_KEYS, CorrelationRun, WindowResult
 from msdc.pipeline.model.time import iso_utc
+from msdc.pipeline.report.files import named
 from msdc.pipeline.report.formats import decimals
 
 SKIPPED_KEYS = ["callsign", "address", "radar_sensor", "reference_sensor", "start_tod", "end_tod", "reason"]
@@ -114,7 +115,8 @@ def write_json(run: CorrelationRun, path: str | os.PathLike[str]) -> Path:
     """Write ``run_to_json(run)`` to ``path`` (UTF-8, indented, strict JSON); returns the path."""
     text = json.dumps(run_to_json(run), indent=2, ensure_ascii=False, allow_nan=False) + "\n"
     path = Path(path)
-    path.write_text(text, encoding="utf-8")
+    with named(path):
+        path.write_text(text, encoding="utf-8")
     return path
 
 

@@ -22,6 +22,7 @@ import numpy as np
 import pandas as pd
 
 from msdc.pipeline.correlate.results import LAG_COLUMNS, SLOT_COLUMNS, CorrelationRun, WindowResult
+from msdc.pipeline.report.files import named
 from msdc.pipeline.report.summary import slot_seconds
 
 TABLE_MODES = ("auto", "xlsx", "parquet")
@@ -211,19 +212,20 @@ def write_table_parquet(run: CorrelationRun, name: str, path: str | os.PathLike[
         write_parquet(frame, path)
         return len(frame), pa.Schema.from_pandas(frame, preserve_index=False)
     rows, schema, writer = 0, None, None
-    try:
-        for part in parts:
-            frame = build(run, part)
-            table = pa.Table.from_pandas(frame, preserve_index=False)
-            if writer is None:
-                schema = pa.Schema.from_pandas(frame, preserve_index=False)
-                writer = pq.ParquetWriter(path, table.schema)
-            writer.write_table(table)
-            rows += len(frame)
-            del frame, table
-    finally:
-        if writer is not None:
-            writer.close()
+    with named(path):
+        try:
+            for part in parts:
+                frame = build(run, part)
+                table = pa.Table.from_pandas(frame, preserve_index=False)
+                if writer is None:
+                    schema = pa.Schema.from_pandas(frame, preserve_index=False)
+                    writer = pq.ParquetWriter(path, table.schema)
+                writer.write_table(table)
+                rows += len(frame)
+                del frame, table
+        finally:
+            if writer is not None:
+                writer.close()
     return rows, schema
 
 
@@ -236,7 +238,7 @@ def write_parquet(frame: pd.DataFrame, path: str | os.PathLike[str],
     import pyarrow.parquet as pq
 
     schema = pa.Schema.from_pandas(frame, preserve_index=False)  # types from every row, no conversion
-    with pq.ParquetWriter(path, schema) as writer:
+    with named(path), pq.ParquetWriter(path, schema) as writer:
         for start in range(0, max(len(frame), 1), slice_rows):
             writer.write_table(pa.Table.from_pandas(frame.iloc[start:start + slice_rows], schema=schema,
                                                     preserve_index=False))
