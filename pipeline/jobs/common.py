@@ -29,6 +29,7 @@ from msdc.pipeline.model.load import (
     sha256,
     time_spans,
 )
+from msdc.pipeline.model.time import utc_text
 from msdc.pipeline.progress import Progress
 from msdc.pipeline.report.transaction import output_problem, target
 
@@ -734,7 +735,7 @@ def run_parameters(options: AircraftOptions, loaded: Loaded, started: float, com
     """The parameters every measurement job's outputs record: software, command, run time, editions, sensor
     file, date and declared ADS-B sigma."""
     return {"software": f"msdc {software_version()}", "command": command,
-            "run_utc": dt.datetime.now(dt.UTC).strftime("%Y-%m-%dT%H:%M:%SZ"),
+            "run_utc": utc_text(dt.datetime.now(dt.UTC)),
             "run_time_s": round(time.monotonic() - started, 3), "editions": {
                 f"CAT{c:03d}": e for c, e in sorted(loaded.editions.items())},
             "sensors": sensors_path(options), "date": loaded.date.isoformat() if loaded.date else None,

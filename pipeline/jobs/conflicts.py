@@ -11,7 +11,6 @@ or an xlsx workbook, all files staged and moved into place together (report.tran
 
 from __future__ import annotations
 
-import json
 import math
 import time
 from dataclasses import dataclass, field
@@ -43,7 +42,7 @@ from msdc.pipeline.jobs.common import (
     tracker_inputs,
 )
 from msdc.pipeline.progress import Progress
-from msdc.pipeline.report.files import named
+from msdc.pipeline.report.files import json_value, named, write_json
 from msdc.pipeline.report.transaction import OutputTransaction, staged
 
 METHODS = ("exact", "one-block", "blocks", "midpoint")
@@ -302,8 +301,6 @@ def _own_columns(frame: pd.DataFrame) -> dict[str, pd.Series]:
 
 def summary(result: ConflictJobResult) -> dict:
     """The JSON document: parameters, inputs, counts and the three tables as records."""
-    from msdc.pipeline.report.summary import json_value
-
     def records(frame: pd.DataFrame) -> list[dict]:
         return [{k: json_value(v) for k, v in row.items()} for row in frame.to_dict("records")]
 
@@ -380,8 +377,7 @@ def write_conflicts(result: ConflictJobResult, *, tx: OutputTransaction | None =
                                     stage.path(out))
         if js is not None:
             targets["json"] = js
-            with named(js):
-                stage.path(js).write_text(json.dumps(summary(result), indent=1, default=str))
+            write_json(summary(result), stage.path(js))
         if result.options.figures is not None and len(result.alerts):
             targets.update(_alert_figures(result, stage.folder(result.options.figures), stage))
     return targets

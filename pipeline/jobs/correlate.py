@@ -347,10 +347,11 @@ def _write_correlation(result: CorrelateResult, stage: OutputTransaction, progre
         drawing = prepared.start(*args) if prepared is not None else Background(_track_figure_and_tables,
                                                                                  *args)
     try:
-        from msdc.pipeline.report.summary import write_json
+        from msdc.pipeline.report.files import write_json
+        from msdc.pipeline.report.summary import run_to_json
 
         if checked.json:
-            write_json(run, stage.path(checked.json))
+            write_json(run_to_json(run), stage.path(checked.json))
             written["json"] = checked.json
         if drawing is not None:
             written.update(_write_workbook(result, stage, progress, max_windows, drawing, png, in_child))

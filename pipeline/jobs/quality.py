@@ -108,10 +108,8 @@ def write_quality(result: QualityJobResult, *, tx: OutputTransaction | None = No
     """Write the JSON tables and/or the workbook with its figures, as the options ask, staged in ``tx``
     (committed by the caller; without one, the files are committed together here). Returns the final
     paths, by kind."""
-    import json
-
     from msdc.pipeline.report.excel import write_tables
-    from msdc.pipeline.report.files import named
+    from msdc.pipeline.report.files import write_json
     from msdc.pipeline.report.summary import table_records
 
     written: dict[str, Path] = {}
@@ -119,8 +117,7 @@ def write_quality(result: QualityJobResult, *, tx: OutputTransaction | None = No
         if result.checked.json:
             doc = {"parameters": result.parameters, "inputs": result.loaded.inputs,
                    "tables": {name: table_records(t) for name, t in result.quality.sheets.items()}}
-            with named(result.checked.json):
-                stage.path(result.checked.json).write_text(json.dumps(doc, indent=1, default=str))
+            write_json(doc, stage.path(result.checked.json))
             written["json"] = result.checked.json
         if result.checked.output:
             out = stage.path(result.checked.output)

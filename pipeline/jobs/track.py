@@ -9,7 +9,6 @@ per-aircraft figures; ``text`` is the terminal's summary.
 
 from __future__ import annotations
 
-import json
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -39,7 +38,7 @@ from msdc.pipeline.jobs.common import (
     tracker_inputs,
 )
 from msdc.pipeline.progress import Progress
-from msdc.pipeline.report.files import named
+from msdc.pipeline.report.files import json_value, named, write_json
 from msdc.pipeline.report.transaction import OutputTransaction, staged
 
 # the columns of the track table, in order (issue 10); the tracker's other columns follow
@@ -189,8 +188,6 @@ def with_labels(tracks: pd.DataFrame, labels: pd.DataFrame) -> pd.DataFrame:
 def summary(result: TrackJobResult) -> dict:
     """The JSON document: parameters, inputs, and per aircraft its span, coasted time and per-sensor
     reports, updates, gated reports and NIS mean."""
-    from msdc.pipeline.report.summary import json_value
-
     res = result.result
     labels = result.labels.set_index("aircraft_id")
     aircraft = []
@@ -243,8 +240,7 @@ def write_tracks(result: TrackJobResult, *, tx: OutputTransaction | None = None)
                 write_parquet(result.tracks, stage.path(out))
             written["tracks"] = out
         if js is not None:
-            with named(js):
-                stage.path(js).write_text(json.dumps(summary(result), indent=1, default=str))
+            write_json(summary(result), stage.path(js))
             written["json"] = js
         if result.options.figures is not None:
             from msdc.pipeline.report.track_figures import track_figures
