@@ -42,7 +42,7 @@ from msdc.pipeline.jobs.common import (
     tracker_inputs,
 )
 from msdc.pipeline.progress import Progress
-from msdc.pipeline.report.files import json_value, named, write_json
+from msdc.pipeline.report.files import json_value, write_csv, write_json
 from msdc.pipeline.report.transaction import OutputTransaction, staged
 
 METHODS = ("exact", "one-block", "blocks", "midpoint")
@@ -345,16 +345,6 @@ def text(result: ConflictJobResult) -> str:
     return "\n".join(lines)
 
 
-def _csv(frame: pd.DataFrame, path: Path) -> None:
-    """One table as CSV, its tz-aware times as ISO 8601 UTC."""
-    out = frame.copy()
-    for c in out.columns:
-        if isinstance(out[c].dtype, pd.DatetimeTZDtype):
-            out[c] = out[c].dt.strftime("%Y-%m-%dT%H:%M:%S.%fZ")
-    with named(path):
-        out.to_csv(path, index=False)
-
-
 def write_conflicts(result: ConflictJobResult, *, tx: OutputTransaction | None = None) -> dict[str, Path]:
     """Write the tables (CSV: alerts at -o, losses and warning times beside it; xlsx: one workbook), the
     JSON and one figure per alert (--figures, its folder made only when there is one), staged in ``tx``
@@ -367,10 +357,10 @@ def write_conflicts(result: ConflictJobResult, *, tx: OutputTransaction | None =
     with staged(tx) as stage:
         if out.suffix.lower() == ".csv":
             targets["alerts"] = out
-            _csv(result.alerts, stage.path(out))
+            write_csv(result.alerts, stage.path(out))
             for kind, path in companion_paths(stage.path(out)).items():
                 targets[kind] = stage.final(path)
-                _csv(result.losses if kind == "losses" else result.warning_times, path)
+                write_csv(result.losses if kind == "losses" else result.warning_times, path)
         else:
             targets["workbook"] = out
             write_conflict_workbook(result.alerts, result.losses, result.warning_times, result.parameters,

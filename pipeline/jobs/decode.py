@@ -25,8 +25,7 @@ from msdc.pipeline.jobs.common import (
     spare_inputs,
 )
 from msdc.pipeline.model import editions as edition_notes
-from msdc.pipeline.report.files import named
-from msdc.pipeline.report.textguard import guard_frame
+from msdc.pipeline.report.files import named, write_csv
 from msdc.pipeline.report.transaction import OutputTransaction, staged
 
 SKIPPED_SHOWN = 20  # skipped blocks decode lists one per line, per input; the rest are counted
@@ -126,7 +125,7 @@ def decode_job(options: DecodeOptions, *, on_chunk: Callable[[int, int, str], No
                         if out is not None and len(frame):
                             if cat not in files:  # named after the file the output really is
                                 files[cat] = category_output(stage.path(out), cat)
-                            with named(_shown(out, files, cat, stage)):
+                            with named(_shown(out, files, cat, stage), instead_of=files[cat]):
                                 _write_chunk(files[cat], cat, frame.assign(file=label), writers, csv)
                     done = max((int(f["offset"].max()) for f in rec.frames.values() if len(f)), default=0)
                     if on_chunk:
@@ -142,7 +141,7 @@ def decode_job(options: DecodeOptions, *, on_chunk: Callable[[int, int, str], No
         finally:
             for cat, w in writers.items():
                 if hasattr(w, "close"):
-                    with named(_shown(out, files, cat, stage)):
+                    with named(_shown(out, files, cat, stage), instead_of=files[cat]):
                         w.close()
         several = len(files) > 1
         for cat in sorted(files):
@@ -171,8 +170,7 @@ def _write_chunk(path: Path, cat: int, frame: pd.DataFrame, writers: dict, csv: 
     """Append one chunk of a category to its (staged) output file, CSV or Parquet, opening it on first
     use."""
     if csv:
-        frame = guard_frame(frame.assign(timestamp=frame["timestamp"].dt.strftime("%Y-%m-%dT%H:%M:%S.%fZ")))
-        frame.to_csv(path, mode="a" if cat in writers else "w", header=cat not in writers, index=False)
+        write_csv(frame, path, append=cat in writers)
         writers[cat] = True
     else:
         import pyarrow as pa

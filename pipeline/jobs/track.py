@@ -38,7 +38,7 @@ from msdc.pipeline.jobs.common import (
     tracker_inputs,
 )
 from msdc.pipeline.progress import Progress
-from msdc.pipeline.report.files import json_value, named, write_json
+from msdc.pipeline.report.files import json_value, write_csv, write_json
 from msdc.pipeline.report.transaction import OutputTransaction, staged
 
 # the columns of the track table, in order (issue 10); the tracker's other columns follow
@@ -54,22 +54,12 @@ CSV_DECIMALS = {"time_of_day": 6, "latitude": 7, "longitude": 7, "flight_level":
 MODE_DECIMALS = 4
 
 
-def csv_rounded(tracks: pd.DataFrame) -> pd.DataFrame:
-    """The track table with its float columns rounded to CSV_DECIMALS (mode probabilities to MODE_DECIMALS),
-    a negative zero written as 0, values below 1e-4 as fixed-point text; the other columns as they are (not
-    copied)."""
-    rounded = {}
-    for name in tracks.columns:
-        places = CSV_DECIMALS.get(name, MODE_DECIMALS if name.startswith("mode_") else None)
-        if places is not None and tracks[name].dtype.kind == "f":
-            # + 0.0: a negative zero becomes 0.0
-            values = np.round(tracks[name].to_numpy(float, na_value=np.nan), places) + 0.0
-            tiny = (values != 0.0) & (np.abs(values) < 1e-4)  # Python writes these as 4.48e-05: fixed instead
-            if tiny.any():
-                values = values.astype(object)
-                values[tiny] = [f"{v:.{places}f}" for v in values[tiny]]
-            rounded[name] = values
-    return tracks.assign(**rounded)
+def csv_decimals(columns) -> dict[str, int]:
+    """The decimals of the track CSV's columns that have some: CSV_DECIMALS, mode probabilities
+    MODE_DECIMALS (report.files.write_csv rounds the float ones)."""
+    places = {name: CSV_DECIMALS.get(name, MODE_DECIMALS if name.startswith("mode_") else None)
+              for name in columns}
+    return {name: n for name, n in places.items() if n is not None}
 
 
 # printed under the terminal's table of tracks: what its columns mean
@@ -233,9 +223,7 @@ def write_tracks(result: TrackJobResult, *, tx: OutputTransaction | None = None)
             from msdc.pipeline.report.tables import write_parquet
 
             if out.suffix.lower() == ".csv":
-                times = result.tracks["time"].dt.strftime("%Y-%m-%dT%H:%M:%S.%fZ")
-                with named(out):
-                    csv_rounded(result.tracks).assign(time=times).to_csv(stage.path(out), index=False)
+                write_csv(result.tracks, stage.path(out), decimals=csv_decimals(result.tracks.columns))
             else:
                 write_parquet(result.tracks, stage.path(out))
             written["tracks"] = out

@@ -1,5 +1,5 @@
-"""Writing one output file: the one JSON writer (``write_json``: strict JSON, one time format); an error
-names the file (``named``)."""
+"""Writing one output file: the one JSON writer (``write_json``: strict JSON, one time format) and the one
+CSV writer (``write_csv``: formula-like text guarded); an error names the file (``named``)."""
 
 from __future__ import annotations
 
@@ -18,18 +18,23 @@ import numpy as np
 import pandas as pd
 
 from msdc.pipeline.model.time import utc_text
+from msdc.pipeline.report.textguard import guard_frame
 
 _ERRNO_IN_TEXT = re.compile(r"\[errno (\d+)\]", re.IGNORECASE)  # pyarrow's "Detail: [errno 28] ..."
 
 
+CSV_TIME = "%Y-%m-%dT%H:%M:%S.%fZ"  # ISO 8601 UTC to the microsecond: what every CSV output writes
+
+
 @contextlib.contextmanager
-def named(path: str | os.PathLike[str]) -> Iterator[None]:
-    """Writing ``path``: an OSError that names no file (pyarrow's, Pillow's, a zip's on a full disk) is
-    raised again naming it, with the system's message for its error number."""
+def named(path: str | os.PathLike[str], instead_of: str | os.PathLike[str] | None = None) -> Iterator[None]:
+    """Writing ``path``: an OSError that names no file (pyarrow's, Pillow's, a zip's on a full disk), or
+    names ``instead_of``, is raised again naming ``path``, with the system's message for its error number."""
     try:
         yield
     except OSError as exc:
-        if exc.filename is not None:
+        other = instead_of is None or os.fspath(exc.filename) != os.fspath(instead_of)
+        if exc.filename is not None and other:
             raise
         found = _ERRNO_IN_TEXT.search(str(exc))
         code = exc.errno or (int(found.group(1)) if found else None)
@@ -45,6 +50,42 @@ def write_json(doc: Any, path: str | os.PathLike[str]) -> Path:
     with named(path):
         path.write_text(text, encoding="utf-8")
     return path
+
+
+def write_csv(frame: pd.DataFrame, path: str | os.PathLike[str], *, append: bool = False,
+              decimals: Mapping[str, int] | None = None) -> Path:
+    """``frame`` as CSV without its index (``append``: its rows added, no header): text a spreadsheet would
+    run as a formula behind an apostrophe (textguard.guard_frame), date-times as ISO 8601 UTC (CSV_TIME;
+    naive ones taken as UTC), the float columns named in ``decimals`` rounded (``rounded``); an error names
+    ``path``. Returns ``path``."""
+    times = {c: _utc(frame[c]).dt.strftime(CSV_TIME) for c in frame.columns
+             if isinstance(frame[c].dtype, pd.DatetimeTZDtype) or frame[c].dtype.kind == "M"}
+    out = guard_frame(frame).assign(**times)
+    path = Path(path)
+    with named(path):
+        rounded(out, decimals or {}).to_csv(path, mode="a" if append else "w", header=not append, index=False)
+    return path
+
+
+def rounded(frame: pd.DataFrame, decimals: Mapping[str, int]) -> pd.DataFrame:
+    """The float columns named in ``decimals`` rounded to that many places, a negative zero written as 0 and
+    values below 1e-4 as fixed-point text (Python writes 4.48e-05); the other columns as they are (not
+    copied)."""
+    out = {}
+    for name, places in decimals.items():
+        if name in frame.columns and frame[name].dtype.kind == "f":
+            values = np.round(frame[name].to_numpy(float, na_value=np.nan), places) + 0.0  # -0.0 becomes 0.0
+            tiny = (values != 0.0) & (np.abs(values) < 1e-4)
+            if tiny.any():
+                values = values.astype(object)
+                values[tiny] = [f"{v:.{places}f}" for v in values[tiny]]
+            out[name] = values
+    return frame.assign(**out)
+
+
+def _utc(times: pd.Series) -> pd.Series:
+    """Date-times in UTC (naive ones taken as UTC)."""
+    return times.dt.tz_convert("UTC") if isinstance(times.dtype, pd.DatetimeTZDtype) else times
 
 
 def is_missing(value: Any) -> bool:
