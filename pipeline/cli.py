@@ -306,6 +306,7 @@ def cmd_decode(args) -> int:
             print(f"CAT{cat:03d}: {result.counts.get(cat, 0)} records -> {p}")
     if result.skipped:
         print(f"msdc: {len(result.skipped)} block(s) skipped", file=sys.stderr)
+    _list_written("decode", {f"CAT{cat:03d} records": p for cat, p in result.outputs.items()}, tx.written)
     if sum(result.counts.values()) == 0:
         print(f"msdc: {result.nothing_decoded(options.categories)}", file=sys.stderr)
         return 1
@@ -363,17 +364,10 @@ def _correlate(options, progress: Progress, prepared) -> int:
         if not options.quality:  # only --quality's figures read the measurements again; the other writers
             result.measurements = result.measurements.iloc[:0]  # need the run alone: the frame goes first
         written = correlate.write_correlation(result, progress, prepared=prepared, tx=tx)
-    if "json" in written:
-        print(f"JSON summary: {written['json']}", file=sys.stderr)
-    if "report" in written:
-        print(f"Report: {written['report']}\nTrack figure: {written['figure']}", file=sys.stderr)
-        note = correlate.figure_windows_note(len(result.run.windows)) if options.quality else None
-        _print_images(written)
-        if note:
-            print(f"Figures: {note}", file=sys.stderr)
-    for kind, path in written.items():
-        if kind.startswith("table "):
-            print(f"{kind.capitalize()} (Parquet): {path}", file=sys.stderr)
+    _list_written("correlate", written, tx.written)
+    note = correlate.figure_windows_note(len(result.run.windows)) if options.quality else None
+    if "report" in written and note:
+        print(f"Figures: {note}", file=sys.stderr)
     return 0
 
 
@@ -387,21 +381,33 @@ def cmd_quality(args) -> int:
         result = _run_job("quality", quality.validate, quality.quality_job, options, Progress())
         print(quality.text(result))
         written = quality.write_quality(result, tx=tx)
-    if "json" in written:
-        print(f"JSON: {written['json']}", file=sys.stderr)
-    if "report" in written:
-        print(f"Report: {written['report']}", file=sys.stderr)
-        _print_images(written)
+    _list_written("quality", written, tx.written)
     return 0
 
 
-def _print_images(written: dict[str, Path]) -> None:
-    """The PNG files written beside a workbook (also on its Figures sheet), one line each."""
-    images = [path for kind, path in written.items() if kind.startswith("image ")]
-    if images:
-        print(f"Figures ({len(images)} PNG beside the report):", file=sys.stderr)
-        for path in images:
-            print(f"  {path}", file=sys.stderr)
+# what each kind of file a job returns is, as the list of written files says it
+KINDS = {"json": "JSON", "report": "workbook", "workbook": "workbook", "figure": "track figure",
+         "tracks": "track table", "alerts": "alerts table", "losses": "losses table",
+         "warnings": "warning times table"}
+
+
+def _list_written(command: str, kinds: dict[str, Path], written: list) -> None:
+    """Every file the run put in place (``written``: the transaction's Written rows), on stderr beside the
+    other notes (stdout holds the results scripts read): what it is (``kinds``: the job's kind -> path) and
+    whether it replaced a file that was there."""
+    if not written:
+        return
+    named = {transaction.target(path): (path, kind) for kind, path in kinds.items()}
+    order = list(named)
+    rows = sorted(written, key=lambda w: order.index(w.path) if w.path in named else len(order))
+    replaced = sum(w.replaced for w in written)
+    print(f"msdc {command}: {len(written)} file(s) written" + (f" ({replaced} replaced earlier files)"
+                                                              if replaced else "") + ":", file=sys.stderr)
+    for w in rows:
+        path, kind = named.get(w.path, (w.path, "file"))
+        what = "figure" if kind.startswith(("image ", "figure ")) else KINDS.get(
+            kind, f"{kind.removeprefix('table ')} table (Parquet)" if kind.startswith("table ") else kind)
+        print(f"  {path} ({what}{', replaced' if w.replaced else ''})", file=sys.stderr)
 
 
 def cmd_track(args) -> int:
@@ -419,8 +425,7 @@ def cmd_track(args) -> int:
                           Progress())
         print(track.text(result))
         written = track.write_tracks(result, tx=tx)
-    for kind, path in written.items():
-        print(f"{kind}: {path}", file=sys.stderr)
+    _list_written("track", written, tx.written)
     return 0
 
 
@@ -440,8 +445,7 @@ def cmd_conflicts(args) -> int:
         result = _run_job("conflicts", conflicts.validate, conflicts.conflict_job, options, Progress())
         print(conflicts.text(result) + noise_text(result.noise))
         written = conflicts.write_conflicts(result, tx=tx)
-    for kind, path in written.items():
-        print(f"{kind}: {path}", file=sys.stderr)
+    _list_written("conflicts", written, tx.written)
     if args.figures is not None and not len(result.alerts):
         print(f"figures: none (no alert events), {args.figures} left as it was", file=sys.stderr)
     return 0

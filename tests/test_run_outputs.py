@@ -119,6 +119,37 @@ def test_a_signal_while_writing_leaves_the_folder_as_it_was(tmp_path, job, sig):
 
 
 # ---------------------------------------------------------------------------------------------------------
+# the terminal lists every file written, every file replaced, and a file of an earlier run left beside them
+
+
+def test_the_terminal_lists_the_files_written_and_replaced_and_an_earlier_runs_file_left(tmp_path, capsys):
+    """One category to o.csv, then both (o_cat021.csv, o_cat048.csv, o.csv stale beside them), then both
+    again (replacing them): stderr says each, stdout keeps its lines."""
+    from msdc.pipeline.cli import main
+
+    o, c21, c48 = tmp_path / "o.csv", tmp_path / "o_cat021.csv", tmp_path / "o_cat048.csv"
+    assert main(["decode", *INPUTS, "--category", "48", "-o", str(o)]) == 0
+    out, err = capsys.readouterr()
+    assert out == f"CAT048: 3266 records -> {o}\n"
+    assert err.endswith(f"msdc decode: 1 file(s) written:\n  {o} (CAT048 records)\n")
+    assert main(["decode", *INPUTS, "-o", str(o)]) == 0
+    err = capsys.readouterr().err
+    assert (f"msdc: {o} is left as it was (an earlier run's; with several categories this run writes {c21}, "
+            f"{c48})") in err
+    assert err.endswith(f"msdc decode: 2 file(s) written:\n  {c21} (CAT021 records)\n"
+                        f"  {c48} (CAT048 records)\n")
+    assert main(["decode", *INPUTS, "-o", str(o)]) == 0
+    err = capsys.readouterr().err
+    assert err.endswith(f"msdc decode: 2 file(s) written (2 replaced earlier files):\n"
+                        f"  {c21} (CAT021 records, replaced)\n  {c48} (CAT048 records, replaced)\n")
+    assert main(["decode", *INPUTS, "--category", "21", "-o", str(o)]) == 0
+    err = capsys.readouterr().err
+    assert all(f"msdc: {c} is left as it was (an earlier run's; with one category this run writes {o})" in err
+               for c in (c21, c48))
+    assert err.endswith(f"  {o} (CAT021 records, replaced)\n")
+
+
+# ---------------------------------------------------------------------------------------------------------
 # outputs that are not regular files: refused before any decoding, naming the option and the file
 
 

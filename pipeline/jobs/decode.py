@@ -150,6 +150,7 @@ def decode_job(options: DecodeOptions, *, on_chunk: Callable[[int, int, str], No
                 notes.append(f"several categories: writing {outputs[cat]}")
             else:  # one category: its file is the output itself
                 files[cat].rename(stage.path(out))
+        notes += _left_as_they_were(out, outputs)
     held = {} if sum(counts.values()) else {str(p): categories_in(p, format=options.format)
                                               for p in checked.inputs}
     warnings = checked.warnings + early_start + edition_notes.warnings(failed)
@@ -159,6 +160,19 @@ def decode_job(options: DecodeOptions, *, on_chunk: Callable[[int, int, str], No
 def category_output(out: Path, cat: int) -> Path:
     """Where decode writes one category's records when several decode: ``OUT_cat048.csv`` beside ``OUT``."""
     return out.with_name(f"{out.stem}_cat{cat:03d}{out.suffix}")
+
+
+def _left_as_they_were(out: Path | None, outputs: dict[int, Path]) -> list[str]:
+    """A note for each file an earlier run of -o ``out`` wrote that this run does not replace: the single
+    file when several categories decoded now, the per-category files when one did."""
+    if out is None or not outputs:
+        return []
+    several = len(outputs) > 1
+    earlier = [out] if several else [category_output(real_output(out), cat) for cat in (21, 48)]
+    now = f"{'several categories' if several else 'one category'} this run writes " + ", ".join(
+        str(p) for p in outputs.values())
+    return [f"{p} is left as it was (an earlier run's; with {now})" for p in earlier
+            if p.exists() or p.is_symlink()]
 
 
 def _shown(out: Path, files: dict[int, Path], cat: int, stage: OutputTransaction) -> Path:
