@@ -14,7 +14,7 @@ import pytest
 
 from msdc.pipeline.report.files import named, write_csv, write_json
 
-FIX = Path(__file__).resolve().parents[1] / "fixtures"
+FIX = Path(__file__).resolve().parents[3] / "fixtures"
 
 
 def _strict(text: str):

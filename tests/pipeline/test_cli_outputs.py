@@ -16,7 +16,7 @@ import pytest
 
 from msdc.pipeline.report.transaction import STAGING_PREFIX
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 FIX = ROOT / "fixtures"
 INPUTS = [str(FIX / "radar.ast"), str(FIX / "adsb.ast"), "--date", "2019-03-01"]
 AIRCRAFT = [*INPUTS, "--sensors", str(FIX / "sensors.toml")]
