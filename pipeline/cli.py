@@ -36,6 +36,7 @@ class _Lazy:
 
 common = _Lazy("msdc.pipeline.jobs.common")  # the jobs' errors, caught in main()
 asterix_errors = _Lazy("msdc.asterix.errors")
+transaction = _Lazy("msdc.pipeline.report.transaction")  # every file of a run is written through one
 FORMATS = list(_FORMATS)
 
 
@@ -289,7 +290,9 @@ def cmd_decode(args) -> int:
                                    categories=tuple(args.category or ()), strict=args.strict,
                                    chunk_mb=args.chunk_mb)
     try:
-        result = decode.decode_job(options, on_chunk=lambda done, size, name: progress.bar(done, size, name))
+        with transaction.staged() as tx:
+            result = decode.decode_job(options, tx=tx,
+                                       on_chunk=lambda done, size, name: progress.bar(done, size, name))
     except asterix_errors.DecodeError as exc:
         raise CliError(f"strict: {exc}") from exc
     for line in result.notes + decode.skipped_lines(result):
@@ -303,6 +306,7 @@ def cmd_decode(args) -> int:
             print(f"CAT{cat:03d}: {result.counts.get(cat, 0)} records -> {p}")
     if result.skipped:
         print(f"msdc: {len(result.skipped)} block(s) skipped", file=sys.stderr)
+    _list_written("decode", {f"CAT{cat:03d} records": p for cat, p in result.outputs.items()}, tx.written)
     if sum(result.counts.values()) == 0:
         print(f"msdc: {result.nothing_decoded(options.categories)}", file=sys.stderr)
         return 1
@@ -350,26 +354,20 @@ def _correlate(options, progress: Progress, prepared) -> int:
     from msdc.pipeline.jobs import correlate
 
     _numba_without_scipy()
-    result = _run_job("correlate", correlate.validate, correlate.correlate_job, options, progress)
-    for name, n in result.run.filters.items():
-        print(f"filter {name}: {n} of the input's ADS-B reports", file=sys.stderr)
-    from msdc.pipeline.report.summary import summary_table
+    with transaction.staged() as tx:
+        result = _run_job("correlate", correlate.validate, correlate.correlate_job, options, progress)
+        for name, n in result.run.filters.items():
+            print(f"filter {name}: {n} of the input's ADS-B reports", file=sys.stderr)
+        from msdc.pipeline.report.summary import summary_table
 
-    print(summary_table(result.run))
-    if not options.quality:  # only --quality's figures read the measurements again; the other writers
-        result.measurements = result.measurements.iloc[:0]  # need the run alone: the frame goes first
-    written = correlate.write_correlation(result, progress, prepared=prepared)
-    if "json" in written:
-        print(f"JSON summary: {written['json']}", file=sys.stderr)
-    if "report" in written:
-        print(f"Report: {written['report']}\nTrack figure: {written['figure']}", file=sys.stderr)
-        note = correlate.figure_windows_note(len(result.run.windows)) if options.quality else None
-        _print_images(written)
-        if note:
-            print(f"Figures: {note}", file=sys.stderr)
-    for kind, path in written.items():
-        if kind.startswith("table "):
-            print(f"{kind.capitalize()} (Parquet): {path}", file=sys.stderr)
+        print(summary_table(result.run))
+        if not options.quality:  # only --quality's figures read the measurements again; the other writers
+            result.measurements = result.measurements.iloc[:0]  # need the run alone: the frame goes first
+        written = correlate.write_correlation(result, progress, prepared=prepared, tx=tx)
+    _list_written("correlate", written, tx.written)
+    note = correlate.figure_windows_note(len(result.run.windows)) if options.quality else None
+    if "report" in written and note:
+        print(f"Figures: {note}", file=sys.stderr)
     return 0
 
 
@@ -379,24 +377,37 @@ def cmd_quality(args) -> int:
 
     _numba_without_scipy()
     options = quality.QualityOptions(**_aircraft(args), reference=args.reference)
-    result = _run_job("quality", quality.validate, quality.quality_job, options, Progress())
-    print(quality.text(result))
-    written = quality.write_quality(result)
-    if "json" in written:
-        print(f"JSON: {written['json']}", file=sys.stderr)
-    if "report" in written:
-        print(f"Report: {written['report']}", file=sys.stderr)
-        _print_images(written)
+    with transaction.staged() as tx:
+        result = _run_job("quality", quality.validate, quality.quality_job, options, Progress())
+        print(quality.text(result))
+        written = quality.write_quality(result, tx=tx)
+    _list_written("quality", written, tx.written)
     return 0
 
 
-def _print_images(written: dict[str, Path]) -> None:
-    """The PNG files written beside a workbook (also on its Figures sheet), one line each."""
-    images = [path for kind, path in written.items() if kind.startswith("image ")]
-    if images:
-        print(f"Figures ({len(images)} PNG beside the report):", file=sys.stderr)
-        for path in images:
-            print(f"  {path}", file=sys.stderr)
+# what each kind of file a job returns is, as the list of written files says it
+KINDS = {"json": "JSON", "report": "workbook", "workbook": "workbook", "figure": "track figure",
+         "tracks": "track table", "alerts": "alerts table", "losses": "losses table",
+         "warnings": "warning times table"}
+
+
+def _list_written(command: str, kinds: dict[str, Path], written: list) -> None:
+    """Every file the run put in place (``written``: the transaction's Written rows), on stderr beside the
+    other notes (stdout holds the results scripts read): what it is (``kinds``: the job's kind -> path) and
+    whether it replaced a file that was there."""
+    if not written:
+        return
+    named = {transaction.target(path): (path, kind) for kind, path in kinds.items()}
+    order = list(named)
+    rows = sorted(written, key=lambda w: order.index(w.path) if w.path in named else len(order))
+    replaced = sum(w.replaced for w in written)
+    print(f"msdc {command}: {len(written)} file(s) written" + (f" ({replaced} replaced earlier files)"
+                                                              if replaced else "") + ":", file=sys.stderr)
+    for w in rows:
+        path, kind = named.get(w.path, (w.path, "file"))
+        what = "figure" if kind.startswith(("image ", "figure ")) else KINDS.get(
+            kind, f"{kind.removeprefix('table ')} table (Parquet)" if kind.startswith("table ") else kind)
+        print(f"  {path} ({what}{', replaced' if w.replaced else ''})", file=sys.stderr)
 
 
 def cmd_track(args) -> int:
@@ -409,11 +420,12 @@ def cmd_track(args) -> int:
         max_coast_s=args.max_coast, smooth=args.smooth or args.smoother is not None,
         smoother=args.smoother or "rts", tpm=args.tpm, sources=args.sources, noise=args.noise,
         adsb_sigma_m=args.adsb_sigma)
-    result = _run_job("track", lambda o: track.validate(o, require_output=True), track.track_job, options,
-                      Progress())
-    print(track.text(result))
-    for kind, path in track.write_tracks(result).items():
-        print(f"{kind}: {path}", file=sys.stderr)
+    with transaction.staged() as tx:
+        result = _run_job("track", lambda o: track.validate(o, require_output=True), track.track_job, options,
+                          Progress())
+        print(track.text(result))
+        written = track.write_tracks(result, tx=tx)
+    _list_written("track", written, tx.written)
     return 0
 
 
@@ -429,10 +441,11 @@ def cmd_conflicts(args) -> int:
         threshold=args.threshold, method=args.method, vertical=args.vertical,
         surface=args.surface, figures=args.figures, noise=args.noise, adsb_sigma_m=args.adsb_sigma,
         sources=args.sources)
-    result = _run_job("conflicts", conflicts.validate, conflicts.conflict_job, options, Progress())
-    print(conflicts.text(result) + noise_text(result.noise))
-    for kind, path in conflicts.write_conflicts(result).items():
-        print(f"{kind}: {path}", file=sys.stderr)
+    with transaction.staged() as tx:
+        result = _run_job("conflicts", conflicts.validate, conflicts.conflict_job, options, Progress())
+        print(conflicts.text(result) + noise_text(result.noise))
+        written = conflicts.write_conflicts(result, tx=tx)
+    _list_written("conflicts", written, tx.written)
     if args.figures is not None and not len(result.alerts):
         print(f"figures: none (no alert events), {args.figures} left as it was", file=sys.stderr)
     return 0
@@ -461,8 +474,11 @@ COMMANDS = {"decode": cmd_decode, "stats": cmd_stats, "correlate": cmd_correlate
 
 
 def main(argv: list[str] | None = None) -> int:
-    """Run msdc with argv (the process's when None) and return the exit status; never a traceback."""
+    """Run msdc with argv (the process's when None) and return the exit status; never a traceback. SIGTERM
+    and SIGHUP end the run as Ctrl-C does (report.transaction.Terminated: every staged output removed),
+    with status 128 + the signal's number (Ctrl-C: 130)."""
     args = build_parser().parse_args(argv)
+    handlers = transaction.raise_on_termination()
     try:
         return COMMANDS[args.command](args)
     except (CliError, common.OptionError, common.JobError) as exc:
@@ -474,23 +490,28 @@ def main(argv: list[str] | None = None) -> int:
     except OSError as exc:  # writing outputs: disk full, permissions changed during the run
         print(f"msdc {args.command}: {exc.filename or ''}: {exc.strerror or exc}", file=sys.stderr)
         return 1
-    except KeyboardInterrupt:
-        return 130
+    except (KeyboardInterrupt, transaction.Terminated) as exc:
+        return _interrupted(exc)
     except Exception as exc:  # Ctrl-C inside numba's cache loader surfaces as its SystemError
         if _interrupted(exc):
-            return 130
+            return _interrupted(exc)
         raise
+    finally:
+        transaction.restore_handlers(handlers)
 
 
-def _interrupted(exc: BaseException) -> bool:
-    """Whether a KeyboardInterrupt is among the exceptions that caused or preceded ``exc``."""
+def _interrupted(exc: BaseException) -> int | None:
+    """The exit status of an interrupt among the exceptions that caused or preceded ``exc`` (Ctrl-C: 130,
+    SIGTERM or SIGHUP: 128 + the signal's number); None when there is none."""
     seen: set[int] = set()
     while exc is not None and id(exc) not in seen:
         if isinstance(exc, KeyboardInterrupt):
-            return True
+            return 130
+        if isinstance(exc, transaction.Terminated):
+            return 128 + exc.signum
         seen.add(id(exc))
         exc = exc.__cause__ or exc.__context__
-    return False
+    return None
 
 
 # The command's automatic garbage collection waits for this many new container objects instead of Python's

@@ -29,10 +29,13 @@ from msdc.pipeline.model.load import (
     sha256,
     time_spans,
 )
+from msdc.pipeline.model.time import utc_text
 from msdc.pipeline.progress import Progress
+from msdc.pipeline.report.transaction import output_problem, target
 
 if TYPE_CHECKING:  # the steps are imported where they run: msdc stats imports none of them
     from msdc.pipeline.quality.quality_run import QualityResult
+    from msdc.pipeline.report.transaction import OutputTransaction
 
 
 GAP_RANGE_S = (0.1, 86400.0)
@@ -165,16 +168,18 @@ def _inputs(paths: list[str | Path]) -> tuple[list[Path], list[str]]:
 
 
 def output_path(name: str, path: str | Path | None, suffixes: tuple[str, ...]) -> Path | None:
-    """An output path with an allowed suffix, not a directory, in a writable directory."""
+    """An output path with an allowed suffix, not a directory, FIFO or device, in a writable directory (for
+    a symbolic link: the directory of the file it points to, which is replaced)."""
     if path is None:
         return None
     nonempty_path(name, path)
     p = Path(path)
     if p.suffix.lower() not in suffixes:
         raise OptionError(f"{name} {p}: must end in {' or '.join(suffixes)}")
-    if p.is_dir():
-        raise OptionError(f"{name} {p}: is a directory")
-    parent = p.parent if str(p.parent) else Path(".")
+    problem = output_problem(p)
+    if problem:
+        raise OptionError(f"{name} {p}: {problem}")
+    parent = real_output(p).parent if str(p.parent) else Path(".")
     if parent.exists() and not parent.is_dir():
         raise OptionError(f"{name} {p}: {parent} is a file, not a directory")
     if not parent.is_dir():
@@ -183,6 +188,23 @@ def output_path(name: str, path: str | Path | None, suffixes: tuple[str, ...]) -
     if not writable or not _can_create(parent):
         raise OptionError(f"{name} {p}: not writable (directory {parent})")
     return p
+
+
+def real_output(path: Path) -> Path:
+    """The file an output really is: the one a symbolic link points to (the link is kept), else ``path`` as
+    given. The files written beside an output are named after it and go beside it."""
+    return target(path) if path.is_symlink() else path
+
+
+def check_beside(option: str, out: Path, files: Iterable[tuple[str, Path]]) -> None:
+    """OptionError when a file written beside the output ``out`` (``(noun, path)`` pairs) cannot be: a
+    directory, FIFO or device, or an existing file that is not writable."""
+    for noun, path in files:
+        problem = output_problem(path)
+        if problem is None and path.exists() and not os.access(path, os.W_OK):
+            problem = "is not writable"
+        if problem:
+            raise OptionError(f"{option} {out}: its {noun} {path} {problem}")
 
 
 def spare_inputs(inputs, outputs: list[tuple[str, Path | None]]) -> None:
@@ -385,11 +407,10 @@ def check_workbook(options: AircraftOptions, checked: Checked, *, figure_windows
     checked.sensors = sensor_table(options.sensors, required=sensors_required)
     out = checked.output
     if out is not None:
-        figures = _figures_beside(out, checked.sensors, figure_windows)
-        for png in figures:
-            if png.is_dir():
-                raise OptionError(f"-o {out}: its figure {png} is a directory")
-        beside = [out.with_name(f"{out.stem}_tracks.png"), *(parquet_path(out, n) for n in TABLE_FILES),
+        base = real_output(out)
+        figures = _figures_beside(base, checked.sensors, figure_windows)
+        check_beside("-o", out, [("figure", png) for png in figures])
+        beside = [base.with_name(f"{base.stem}_tracks.png"), *(parquet_path(base, n) for n in TABLE_FILES),
                   *figures]
         spare_inputs(options.inputs, [(f"-o {out}", out)] + [(f"-o {out}", p) for p in beside])
     spare_inputs(options.inputs, [(f"--json {checked.json}", checked.json)])
@@ -714,7 +735,7 @@ def run_parameters(options: AircraftOptions, loaded: Loaded, started: float, com
     """The parameters every measurement job's outputs record: software, command, run time, editions, sensor
     file, date and declared ADS-B sigma."""
     return {"software": f"msdc {software_version()}", "command": command,
-            "run_utc": dt.datetime.now(dt.UTC).strftime("%Y-%m-%dT%H:%M:%SZ"),
+            "run_utc": utc_text(dt.datetime.now(dt.UTC)),
             "run_time_s": round(time.monotonic() - started, 3), "editions": {
                 f"CAT{c:03d}": e for c, e in sorted(loaded.editions.items())},
             "sensors": sensors_path(options), "date": loaded.date.isoformat() if loaded.date else None,
@@ -753,8 +774,10 @@ def quality_step(meas: pd.DataFrame, sensors: pd.DataFrame, options: AircraftOpt
         raise JobError(str(exc)) from exc
 
 
-def quality_figures(result: QualityResult, out_dir: Path, stem: str) -> dict[str, Path]:
-    """Update-interval histogram and, per radar, range/azimuth error against range and time (PNG)."""
+def quality_figures(result: QualityResult, out_dir: Path, stem: str, tx: OutputTransaction | None = None
+                    ) -> dict[str, Path]:
+    """Update-interval histogram and, per radar, range/azimuth error against range and time (PNG), drawn in
+    ``out_dir`` (a staging folder of ``tx``: the result records their final paths)."""
     from msdc.pipeline.report.quality_figures import interval_histogram_figure, radar_error_figure
 
     out_dir.mkdir(parents=True, exist_ok=True)
@@ -766,7 +789,7 @@ def quality_figures(result: QualityResult, out_dir: Path, stem: str) -> dict[str
             row = biases[(biases["sac"] == sac) & (biases["sic"] == sic)] if biases is not None else None
             figs[f"Radar errors {sac}/{sic}"] = radar_error_figure(
                 g, out_dir / f"{stem}_radar_errors_{sac}_{sic}.png", row)
-    result.figures.update(figs)
+    result.figures.update({k: tx.final(p) if tx else p for k, p in figs.items()})
     return figs
 
 

@@ -6,12 +6,11 @@ aircraft with the IMM, predicts each track at every output step and look-ahead
 (`pipeline.conflict.predict`), computes PC for every close pair, and derives the alert events, the
 actual losses of separation in the tracked data, the warning time per loss and horizon, and which alerts
 were false. ``write_conflicts`` writes CSV (alerts; losses and warning times in files named beside it)
-or an xlsx workbook, each file whole under a temporary name and then renamed.
+or an xlsx workbook, all files staged and moved into place together (report.transaction).
 """
 
 from __future__ import annotations
 
-import json
 import math
 import time
 from dataclasses import dataclass, field
@@ -36,12 +35,15 @@ from msdc.pipeline.jobs.common import (
     estimated_noise,
     output_path,
     parse_sources,
+    real_output,
     run_parameters,
     sensor_table,
     spare_inputs,
     tracker_inputs,
 )
 from msdc.pipeline.progress import Progress
+from msdc.pipeline.report.files import json_value, write_csv, write_json
+from msdc.pipeline.report.transaction import OutputTransaction, staged
 
 METHODS = ("exact", "one-block", "blocks", "midpoint")
 # aircraft are tracked again for their predictions in batches of about this many reports, each batch's
@@ -123,10 +125,10 @@ def validate(options: ConflictOptions) -> Checked:
     checked.json = output_path("--json", options.json, (".json",))
     if checked.output is None:
         raise OptionError("-o: give the output, conflicts.csv or conflicts.xlsx")
-    if checked.output.suffix.lower() == ".csv":
-        for extra in companion_paths(checked.output).values():
-            output_path("-o", extra, (".csv",))
-    beside = companion_paths(checked.output).values() if checked.output.suffix.lower() == ".csv" else ()
+    csv = checked.output.suffix.lower() == ".csv"
+    beside = companion_paths(real_output(checked.output)).values() if csv else ()
+    for extra in beside:
+        output_path("-o", extra, (".csv",))
     spare_inputs(options.inputs, [(f"-o {checked.output}", p) for p in (checked.output, *beside)]
                  + [(f"--json {checked.json}", checked.json)])
     if options.figures is not None:
@@ -299,8 +301,6 @@ def _own_columns(frame: pd.DataFrame) -> dict[str, pd.Series]:
 
 def summary(result: ConflictJobResult) -> dict:
     """The JSON document: parameters, inputs, counts and the three tables as records."""
-    from msdc.pipeline.report.summary import json_value
-
     def records(frame: pd.DataFrame) -> list[dict]:
         return [{k: json_value(v) for k, v in row.items()} for row in frame.to_dict("records")]
 
@@ -345,83 +345,55 @@ def text(result: ConflictJobResult) -> str:
     return "\n".join(lines)
 
 
-def _csv(frame: pd.DataFrame, path: Path) -> None:
-    """One table as CSV, its tz-aware times as ISO 8601 UTC."""
-    out = frame.copy()
-    for c in out.columns:
-        if isinstance(out[c].dtype, pd.DatetimeTZDtype):
-            out[c] = out[c].dt.strftime("%Y-%m-%dT%H:%M:%S.%fZ")
-    out.to_csv(path, index=False)
-
-
-def write_conflicts(result: ConflictJobResult) -> dict[str, Path]:
+def write_conflicts(result: ConflictJobResult, *, tx: OutputTransaction | None = None) -> dict[str, Path]:
     """Write the tables (CSV: alerts at -o, losses and warning times beside it; xlsx: one workbook), the
-    JSON and one figure per alert (--figures); all to temporary names first, renamed only when every file
-    is complete (a failure removes what this run renamed, and the figures' folder if it made it)."""
+    JSON and one figure per alert (--figures, its folder made only when there is one), staged in ``tx``
+    (committed by the caller; without one, the files are committed together here). Returns the final
+    paths, by kind."""
     from msdc.pipeline.report.conflict_excel import write_conflict_workbook
 
     out, js = result.checked.output, result.checked.json
     targets: dict[str, Path] = {}
-    writers = []
-    if out.suffix.lower() == ".csv":
-        targets["alerts"] = out
-        writers.append((out, lambda p: _csv(result.alerts, p)))
-        extra = companion_paths(out)
-        targets.update(extra)
-        writers.append((extra["losses"], lambda p: _csv(result.losses, p)))
-        writers.append((extra["warnings"], lambda p: _csv(result.warning_times, p)))
-    else:
-        targets["workbook"] = out
-        writers.append((out, lambda p: write_conflict_workbook(result.alerts, result.losses,
-                                                               result.warning_times, result.parameters, p)))
-    if js is not None:
-        targets["json"] = js
-        writers.append((js, lambda p: p.write_text(json.dumps(summary(result), indent=1, default=str))))
-    made_dir = None
-    if result.options.figures is not None:
-        from msdc.pipeline.report.conflict_figures import alert_figure, figure_name
-
-        d = Path(result.options.figures)
-        alerts = result.alerts
-        involved = set(alerts["aircraft_a"]) | set(alerts["aircraft_b"])
-        tracks = result.tracks[result.tracks["aircraft_id"].isin(involved)]
-        pred = result.predictions
-        pred = pred[pred["aircraft_id"].isin(involved) & pred["time"].isin(alerts["start"])]
-        pc = result.pc[result.pc["aircraft_a"].isin(involved)]
-        if result.options.surface == "exclude":  # the samples the events were found in
-            from msdc.pipeline.conflict.surface import surface_pairs
-
-            pc = pc[~surface_pairs(pc, result.tracks)]
-        threshold, step = result.options.threshold, float(result.options.step_s)
-        for i, alert in alerts.iterrows():
-            path = d / figure_name(int(i), alert)
-            targets[f"figure {path.stem}"] = path
-            writers.append((path, lambda p, a=alert: alert_figure(a, tracks, pred, pc, threshold, p,
-                                                                  step_s=step)))
-    parts = [(path, path.with_name(path.name + ".part")) for path, _ in writers]
-    done, moved = False, []
-    try:
-        figures = result.options.figures  # made only when there is a figure to put in it
-        if figures is not None and len(result.alerts) and not Path(figures).exists():
-            made_dir = Path(figures)
-            made_dir.mkdir()
-        for (_, tmp), (_, write) in zip(parts, writers, strict=True):
-            write(tmp)
-        for path, tmp in parts:
-            tmp.replace(path)
-            moved.append(path)
-        done = True
-    except OSError as exc:
-        raise JobError(f"cannot write {exc.filename}: {exc.strerror}") from exc
-    finally:
-        for _, tmp in parts:
-            tmp.unlink(missing_ok=True)
-        if not done:
-            for path in moved:
-                path.unlink(missing_ok=True)
-            if made_dir is not None and made_dir.is_dir() and not any(made_dir.iterdir()):
-                made_dir.rmdir()
+    with staged(tx) as stage:
+        if out.suffix.lower() == ".csv":
+            targets["alerts"] = out
+            write_csv(result.alerts, stage.path(out))
+            for kind, path in companion_paths(stage.path(out)).items():
+                targets[kind] = stage.final(path)
+                write_csv(result.losses if kind == "losses" else result.warning_times, path)
+        else:
+            targets["workbook"] = out
+            write_conflict_workbook(result.alerts, result.losses, result.warning_times, result.parameters,
+                                    stage.path(out))
+        if js is not None:
+            targets["json"] = js
+            write_json(summary(result), stage.path(js))
+        if result.options.figures is not None and len(result.alerts):
+            targets.update(_alert_figures(result, stage.folder(result.options.figures), stage))
     return targets
+
+
+def _alert_figures(result: ConflictJobResult, folder: Path, stage: OutputTransaction) -> dict[str, Path]:
+    """One figure per alert event, drawn in ``folder`` (staged): their final paths, by kind."""
+    from msdc.pipeline.report.conflict_figures import alert_figure, figure_name
+
+    alerts = result.alerts
+    involved = set(alerts["aircraft_a"]) | set(alerts["aircraft_b"])
+    tracks = result.tracks[result.tracks["aircraft_id"].isin(involved)]
+    pred = result.predictions
+    pred = pred[pred["aircraft_id"].isin(involved) & pred["time"].isin(alerts["start"])]
+    pc = result.pc[result.pc["aircraft_a"].isin(involved)]
+    if result.options.surface == "exclude":  # the samples the events were found in
+        from msdc.pipeline.conflict.surface import surface_pairs
+
+        pc = pc[~surface_pairs(pc, result.tracks)]
+    threshold, step = result.options.threshold, float(result.options.step_s)
+    drawn = {}
+    for i, alert in alerts.iterrows():
+        path = folder / figure_name(int(i), alert)
+        alert_figure(alert, tracks, pred, pc, threshold, path, step_s=step)
+        drawn[f"figure {path.stem}"] = stage.final(path)
+    return drawn
 
 
 __all__ = ["ConflictJobResult", "ConflictOptions", "conflict_job", "parse_horizons", "summary",

@@ -9,7 +9,6 @@ tables a child process draws meanwhile (``prepare_correlation_writers`` starts i
 
 from __future__ import annotations
 
-import os
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -24,6 +23,7 @@ from msdc.pipeline.jobs.common import (
     OptionError,
     carrying,
     check_aircraft,
+    check_beside,
     check_decoding,
     check_integer,
     check_number,
@@ -33,11 +33,13 @@ from msdc.pipeline.jobs.common import (
     quality_figures,
     quality_inputs,
     quality_step,
+    real_output,
     run_parameters,
 )
 from msdc.pipeline.model.load import Loaded, release_free_memory
 from msdc.pipeline.progress import Progress
-from msdc.pipeline.report.outputs import Background, BackgroundFailed, Prepared, all_or_nothing
+from msdc.pipeline.report.outputs import Background, BackgroundFailed, Prepared
+from msdc.pipeline.report.transaction import OutputTransaction, staged
 
 if TYPE_CHECKING:
     from msdc.pipeline.correlate.results import CorrelationRun
@@ -84,17 +86,12 @@ def validate(options: CorrelateOptions) -> Checked:
     if options.tables == "parquet" and options.output is None:
         raise OptionError("--tables parquet: needs -o (the tables are written beside the workbook)")
     checked.output = output_path("-o", options.output, (".xlsx",))
-    if checked.output is not None:  # the figure beside it
-        png = checked.output.with_name(f"{checked.output.stem}_tracks.png")
-        if png.is_dir():
-            raise OptionError(f"-o {checked.output}: its track figure {png} is a directory")
-        if options.tables != "xlsx":  # the tables that may go to Parquet beside it
-            for name in TABLE_FILES:
-                table = parquet_path(checked.output, name)
-                if table.is_dir():
-                    raise OptionError(f"-o {checked.output}: its {name} table {table} is a directory")
-                if table.exists() and not os.access(table, os.W_OK):
-                    raise OptionError(f"-o {checked.output}: its {name} table {table} is not writable")
+    if checked.output is not None:  # the figure beside it, and the tables that may go to Parquet beside it
+        base = real_output(checked.output)
+        beside = [("track figure", base.with_name(f"{base.stem}_tracks.png"))]
+        beside += [(f"{name} table", parquet_path(base, name)) for name in TABLE_FILES
+                   if options.tables != "xlsx"]
+        check_beside("-o", checked.output, beside)
     checked.warnings += check_workbook(options, checked,
                                        figure_windows=FIGURE_WINDOWS if options.quality else None)
     return checked
@@ -298,15 +295,17 @@ def _drawn(drawing: Background, png: Path, tables: list[Path] = ()) -> dict:
 
 
 def write_correlation(result: CorrelateResult, progress: Progress | None = None,
-                      max_windows: int | None = None, prepared: Prepared | None = None) -> dict[str, Path]:
+                      max_windows: int | None = None, prepared: Prepared | None = None, *,
+                      tx: OutputTransaction | None = None) -> dict[str, Path]:
     """Write what the options ask for: JSON summary, workbook with its track figure (and, with quality,
-    the quality and per-window figures), all or nothing. Returns what was written, by kind. ``prepared``
+    the quality and per-window figures), staged in ``tx`` (committed by the caller; without one, the files
+    are committed together here). Returns what was written, by kind. ``prepared``
     (prepare_correlation_writers) draws the track figure; it is used up or closed here."""
     release_free_memory()  # what the job freed (the CLI lets go of the measurements), before the tables
     try:
-        with all_or_nothing(result.checked.json, result.checked.output):
+        with staged(tx) as stage:
             shown = FIGURE_WINDOWS if max_windows is None else max_windows
-            return _write_correlation(result, progress, shown, prepared)
+            return _write_correlation(result, stage, progress, shown, prepared)
     finally:
         if prepared is not None:
             prepared.close()  # a no-op once started
@@ -329,16 +328,16 @@ def _track_run(run: CorrelationRun) -> CorrelationRun:
                           parameters=run.parameters)
 
 
-def _write_correlation(result: CorrelateResult, progress: Progress | None,
+def _write_correlation(result: CorrelateResult, stage: OutputTransaction, progress: Progress | None,
                        max_windows: int, prepared: Prepared | None = None) -> dict[str, Path]:
-    """write_correlation's files, inside its all-or-nothing guard: the child drawing the map starts first."""
+    """write_correlation's files, staged in ``stage``: the child drawing the map starts first."""
     from msdc.pipeline.report.tables import parquet_tables, table_length
 
     written: dict[str, Path] = {}
     run, checked = result.run, result.checked
     drawing = None
     if checked.output:  # the child starts first: the map takes it longest
-        out, mode = checked.output, result.options.tables
+        out, mode = stage.path(checked.output), result.options.tables
         png = out.with_name(out.stem + "_tracks.png")
         in_child = [name for name in parquet_tables(run, mode) if name in CHILD_TABLES]
         rows = table_length(run, "slots") + table_length(run, "correlation")
@@ -348,27 +347,28 @@ def _write_correlation(result: CorrelateResult, progress: Progress | None,
         drawing = prepared.start(*args) if prepared is not None else Background(_track_figure_and_tables,
                                                                                  *args)
     try:
-        from msdc.pipeline.report.summary import write_json
+        from msdc.pipeline.report.files import write_json
+        from msdc.pipeline.report.summary import run_to_json
 
         if checked.json:
-            write_json(run, checked.json)
+            write_json(run_to_json(run), stage.path(checked.json))
             written["json"] = checked.json
         if drawing is not None:
-            written.update(_write_workbook(result, progress, max_windows, drawing, png, in_child))
+            written.update(_write_workbook(result, stage, progress, max_windows, drawing, png, in_child))
     finally:
         if drawing is not None:
             drawing.cancel()  # only still running when writing failed
     return written
 
 
-def _write_workbook(result: CorrelateResult, progress: Progress | None, max_windows: int,
-                    drawing: Background, png: Path, in_child: list[str]) -> dict[str, Path]:
-    """The workbook (and with quality its figures) while ``drawing`` writes the map and the Parquet tables
-    ``in_child``; the other Parquet tables are written here."""
+def _write_workbook(result: CorrelateResult, stage: OutputTransaction, progress: Progress | None,
+                    max_windows: int, drawing: Background, png: Path, in_child: list[str]) -> dict[str, Path]:
+    """The workbook (and with quality its figures) while ``drawing`` writes the map ``png`` and the Parquet
+    tables ``in_child``; the other Parquet tables are written here. Returns the final paths, by kind."""
     from msdc.pipeline.report.excel import write_report
     from msdc.pipeline.report.tables import parquet_path
 
-    run, out = result.run, result.checked.output
+    run, out = result.run, stage.path(result.checked.output)
     if progress:
         progress.stage("Writing report")
     images = None
@@ -377,7 +377,7 @@ def _write_workbook(result: CorrelateResult, progress: Progress | None, max_wind
         from msdc.pipeline.report.quality_figures import slotting_figure
         from msdc.pipeline.report.summary import window_label
 
-        images = dict(quality_figures(result.quality, out.parent, out.stem))
+        images = dict(quality_figures(result.quality, out.parent, out.stem, stage))
         shown = result.measurements[SLOTTING_FIGURE_INPUTS]  # what the figures read, not every column copied
         is_radar = (shown["sensor_kind"] == "radar").to_numpy(bool)
         radar, adsb = shown[is_radar], shown[~is_radar]
@@ -388,16 +388,18 @@ def _write_workbook(result: CorrelateResult, progress: Progress | None, max_wind
                 w, radar, adsb, out.with_name(f"{out.stem}_slotting_{i + 1}.png"))
             images[f"{label}: coefficient against lag"] = lag_figure(
                 w, out.with_name(f"{out.stem}_lags_{i + 1}.png"))
-    files = [parquet_path(out, name) for name in in_child]
+    files = [stage.final(parquet_path(out, name)) for name in in_child]
     note = figure_windows_note(len(run.windows), max_windows) if images is not None else None
+
+    def waited() -> dict:
+        return _drawn(drawing, stage.final(png), files)
+
     tables = write_report(run, out, figure_png=png, images=images, images_note=note or "",
-                          tables=result.options.tables,
-                          figure_ready=lambda: _drawn(drawing, png, files),
-                          tables_written=(lambda: _drawn(drawing, png, files)) if in_child else None,
-                          elsewhere=in_child)
-    written = {"report": out, "figure": png}
-    written.update((f"image {name}", Path(path)) for name, path in (images or {}).items())
-    written.update((f"table {p.stem.removeprefix(out.stem + '_')}", p) for p in tables)
+                          tables=result.options.tables, figure_ready=waited,
+                          tables_written=waited if in_child else None, elsewhere=in_child)
+    written = {"report": result.checked.output, "figure": stage.final(png)}
+    written.update((f"image {name}", stage.final(path)) for name, path in (images or {}).items())
+    written.update((f"table {p.stem.removeprefix(out.stem + '_')}", stage.final(p)) for p in tables)
     return written
 
 

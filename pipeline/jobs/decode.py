@@ -1,9 +1,9 @@
 """The decode job (``msdc decode``): every input streamed in chunks to CSV or Parquet, one file or one per
-category, written all or nothing; ``skipped_lines`` lists the skipped blocks for the terminal."""
+category, written all or nothing (report.transaction); ``skipped_lines`` lists the skipped blocks for the
+terminal."""
 
 from __future__ import annotations
 
-import os
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -16,14 +16,17 @@ from msdc.pipeline.jobs.common import (
     DecodingOptions,
     JobError,
     OptionError,
+    check_beside,
     check_decoding,
     check_number,
     format_hints,
     output_path,
+    real_output,
     spare_inputs,
 )
 from msdc.pipeline.model import editions as edition_notes
-from msdc.pipeline.report.textguard import guard_frame
+from msdc.pipeline.report.files import named, write_csv
+from msdc.pipeline.report.transaction import OutputTransaction, staged
 
 SKIPPED_SHOWN = 20  # skipped blocks decode lists one per line, per input; the rest are counted
 
@@ -47,16 +50,13 @@ def validate(options: DecodeOptions) -> Checked:
     if bad:
         raise OptionError(f"--category {bad[0]}: must be 21 or 48")
     if checked.output is not None:
-        out = checked.output
+        out, base = checked.output, real_output(checked.output)
         spare_inputs(options.inputs, [(f"-o {out}", p) for p in (
-            out, *(category_output(out, c) for c in (21, 48)))])
+            out, *(category_output(base, c) for c in (21, 48)))])
         cats = sorted(set(options.categories or (21, 48)))
-        for cat in cats if len(cats) > 1 else ():  # written when several categories decode
-            each = category_output(out, cat)
-            if each.is_dir():
-                raise OptionError(f"-o {out}: its CAT{cat:03d} file {each} is a directory")
-            if each.exists() and not os.access(each, os.W_OK):
-                raise OptionError(f"-o {out}: its CAT{cat:03d} file {each} is not writable")
+        # written when several categories decode
+        check_beside("-o", out, [(f"CAT{cat:03d} file", category_output(base, cat)) for cat in cats
+                                 if len(cats) > 1])
     return checked
 
 
@@ -81,19 +81,19 @@ class DecodeResult:
         return f"nothing could be decoded{asked}" + (f": {holds}" if holds else "")
 
 
-def decode_job(options: DecodeOptions, *, on_chunk: Callable[[int, int, str], None] | None = None
-               ) -> DecodeResult:
+def decode_job(options: DecodeOptions, *, on_chunk: Callable[[int, int, str], None] | None = None,
+               tx: OutputTransaction | None = None) -> DecodeResult:
     """Stream every input in chunks and write CSV or Parquet: one file, or one per category when records
-    of several categories decoded (decided from what decoded, at the end). Each output is written to a
-    temporary file beside it and moved into place only when the whole run succeeded: a failed or
-    interrupted run writes nothing, nor does a run in which nothing decodes. ``on_chunk(done_bytes, size,
-    name)`` reports progress. Raises asterix DecodeError in strict mode, JobError for unreadable input."""
+    of several categories decoded (decided from what decoded, at the end). The files are staged in ``tx``
+    (the caller commits it with the rest of its run; without one, a transaction of the job's own is
+    committed at the end): a failed or interrupted run writes nothing, nor does a run in which nothing
+    decodes. ``on_chunk(done_bytes, size, name)`` reports progress. Raises asterix DecodeError in strict
+    mode, JobError for unreadable input."""
     import msdc.asterix as asterix
     from msdc.asterix.errors import UnreadableInput
     from msdc.asterix.reader import categories_in
     from msdc.pipeline.model.sources import file_labels
     from msdc.pipeline.model.time import FirstDayTally
-    from msdc.pipeline.report.outputs import Staging
 
     checked = validate(options)
     out = checked.output
@@ -105,8 +105,8 @@ def decode_job(options: DecodeOptions, *, on_chunk: Callable[[int, int, str], No
     notes: list[str] = []
     cats = list(options.categories) or None
     csv = out is not None and out.suffix.lower() == ".csv"
-    with Staging() as staging:
-        staged: dict[int, Path] = {}  # category -> its temporary file
+    with staged(tx) as stage:
+        files: dict[int, Path] = {}  # category -> its staged file, named as when several categories decode
         writers: dict[int, object] = {}
         try:
             for path, label in zip(checked.inputs, file_labels(checked.inputs), strict=True):
@@ -123,9 +123,10 @@ def decode_job(options: DecodeOptions, *, on_chunk: Callable[[int, int, str], No
                     for cat, frame in rec.frames.items():
                         counts[cat] = counts.get(cat, 0) + len(frame)
                         if out is not None and len(frame):
-                            if cat not in staged:
-                                staged[cat] = staging.temporary(category_output(out, cat))
-                            _write_chunk(staged[cat], cat, frame.assign(file=label), writers, csv)
+                            if cat not in files:  # named after the file the output really is
+                                files[cat] = category_output(stage.path(out), cat)
+                            with named(_shown(out, files, cat, stage), instead_of=files[cat]):
+                                _write_chunk(files[cat], cat, frame.assign(file=label), writers, csv)
                     done = max((int(f["offset"].max()) for f in rec.frames.values() if len(f)), default=0)
                     if on_chunk:
                         on_chunk(done, size, path.name)
@@ -138,15 +139,18 @@ def decode_job(options: DecodeOptions, *, on_chunk: Callable[[int, int, str], No
         except UnreadableInput as exc:
             raise JobError(str(exc), 2) from exc
         finally:
-            for w in writers.values():
+            for cat, w in writers.items():
                 if hasattr(w, "close"):
-                    w.close()
-        several = len(staged) > 1
-        for cat in sorted(staged):
-            outputs[cat] = category_output(out, cat) if several else out
+                    with named(_shown(out, files, cat, stage), instead_of=files[cat]):
+                        w.close()
+        several = len(files) > 1
+        for cat in sorted(files):
+            outputs[cat] = stage.final(files[cat]) if several else out
             if several:
                 notes.append(f"several categories: writing {outputs[cat]}")
-        staging.commit({staged[cat]: outputs[cat] for cat in staged})
+            else:  # one category: its file is the output itself
+                files[cat].rename(stage.path(out))
+        notes += _left_as_they_were(out, outputs)
     held = {} if sum(counts.values()) else {str(p): categories_in(p, format=options.format)
                                               for p in checked.inputs}
     warnings = checked.warnings + early_start + edition_notes.warnings(failed)
@@ -158,12 +162,29 @@ def category_output(out: Path, cat: int) -> Path:
     return out.with_name(f"{out.stem}_cat{cat:03d}{out.suffix}")
 
 
+def _left_as_they_were(out: Path | None, outputs: dict[int, Path]) -> list[str]:
+    """A note for each file an earlier run of -o ``out`` wrote that this run does not replace: the single
+    file when several categories decoded now, the per-category files when one did."""
+    if out is None or not outputs:
+        return []
+    several = len(outputs) > 1
+    earlier = [out] if several else [category_output(real_output(out), cat) for cat in (21, 48)]
+    now = f"{'several categories' if several else 'one category'} this run writes " + ", ".join(
+        str(p) for p in outputs.values())
+    return [f"{p} is left as it was (an earlier run's; with {now})" for p in earlier
+            if p.exists() or p.is_symlink()]
+
+
+def _shown(out: Path, files: dict[int, Path], cat: int, stage: OutputTransaction) -> Path:
+    """The file an error writing category ``cat`` names: the output while it is the only category."""
+    return out if len(files) == 1 else stage.final(files[cat])
+
+
 def _write_chunk(path: Path, cat: int, frame: pd.DataFrame, writers: dict, csv: bool) -> None:
-    """Append one chunk of a category to its (temporary) output file, CSV or Parquet, opening it on first
+    """Append one chunk of a category to its (staged) output file, CSV or Parquet, opening it on first
     use."""
     if csv:
-        frame = guard_frame(frame.assign(timestamp=frame["timestamp"].dt.strftime("%Y-%m-%dT%H:%M:%S.%fZ")))
-        frame.to_csv(path, mode="a" if cat in writers else "w", header=cat not in writers, index=False)
+        write_csv(frame, path, append=cat in writers)
         writers[cat] = True
     else:
         import pyarrow as pa

@@ -3,7 +3,7 @@
 ``validate`` checks every option, the sensor file and the outputs before anything is decoded;
 ``quality_job`` decodes straight into measurements (only the columns ``quality_columns`` names), marks
 duplicates and jumps once and computes the quality and accuracy tables; ``write_quality`` writes the JSON
-and the workbook with its figures, all or nothing; ``text`` is the terminal's summary.
+and the workbook with its figures, all or nothing (report.transaction); ``text`` is the terminal's summary.
 """
 
 from __future__ import annotations
@@ -33,7 +33,7 @@ from msdc.pipeline.jobs.common import (
 )
 from msdc.pipeline.model.load import Loaded
 from msdc.pipeline.progress import Progress
-from msdc.pipeline.report.outputs import all_or_nothing
+from msdc.pipeline.report.transaction import OutputTransaction, staged
 
 if TYPE_CHECKING:
     from msdc.pipeline.quality.quality_run import QualityResult
@@ -104,37 +104,33 @@ def quality_job(options: QualityOptions, *, progress: Progress | None = None, ch
         return QualityJobResult(options, checked, quality, params, loaded, warnings)
 
 
-def write_quality(result: QualityJobResult) -> dict[str, Path]:
-    """Write the JSON tables and/or the workbook with its figures, as the options ask, all or nothing."""
-    with all_or_nothing(result.checked.json, result.checked.output):
-        return _write_quality(result)
-
-
-def _write_quality(result: QualityJobResult) -> dict[str, Path]:
-    """write_quality's files, inside its all-or-nothing guard."""
-    import json
-
+def write_quality(result: QualityJobResult, *, tx: OutputTransaction | None = None) -> dict[str, Path]:
+    """Write the JSON tables and/or the workbook with its figures, as the options ask, staged in ``tx``
+    (committed by the caller; without one, the files are committed together here). Returns the final
+    paths, by kind."""
     from msdc.pipeline.report.excel import write_tables
+    from msdc.pipeline.report.files import write_json
     from msdc.pipeline.report.summary import table_records
 
     written: dict[str, Path] = {}
-    if result.checked.json:
-        doc = {"parameters": result.parameters, "inputs": result.loaded.inputs,
-               "tables": {name: table_records(t) for name, t in result.quality.sheets.items()}}
-        result.checked.json.write_text(json.dumps(doc, indent=1, default=str))
-        written["json"] = result.checked.json
-    if result.checked.output:
-        out = result.checked.output
-        images = quality_figures(result.quality, out.parent, out.stem)
-        # the sheet lists the bins that hold intervals (every 0.1 s bin up to the longest interval printed
-        # 18 pages on the real radar); the DataFrame and the JSON keep every bin
-        sheets = dict(result.quality.sheets)
-        bins = sheets["Update intervals"]
-        sheets["Update intervals"] = bins[bins["intervals"] > 0] if "intervals" in bins else bins
-        write_tables(sheets, out, images=images,
-                     parameters={**result.parameters, "inputs": result.loaded.inputs})
-        written["report"] = out
-        written.update((f"image {name}", Path(path)) for name, path in images.items())
+    with staged(tx) as stage:
+        if result.checked.json:
+            doc = {"parameters": result.parameters, "inputs": result.loaded.inputs,
+                   "tables": {name: table_records(t) for name, t in result.quality.sheets.items()}}
+            write_json(doc, stage.path(result.checked.json))
+            written["json"] = result.checked.json
+        if result.checked.output:
+            out = stage.path(result.checked.output)
+            images = quality_figures(result.quality, out.parent, out.stem, stage)
+            # the sheet lists the bins that hold intervals (every 0.1 s bin up to the longest interval
+            # printed 18 pages on the real radar); the DataFrame and the JSON keep every bin
+            sheets = dict(result.quality.sheets)
+            bins = sheets["Update intervals"]
+            sheets["Update intervals"] = bins[bins["intervals"] > 0] if "intervals" in bins else bins
+            write_tables(sheets, out, images=images,
+                         parameters={**result.parameters, "inputs": result.loaded.inputs})
+            written["report"] = result.checked.output
+            written.update((f"image {name}", stage.final(path)) for name, path in images.items())
     return written
 
 

@@ -9,7 +9,6 @@ per-aircraft figures; ``text`` is the terminal's summary.
 
 from __future__ import annotations
 
-import json
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -39,6 +38,8 @@ from msdc.pipeline.jobs.common import (
     tracker_inputs,
 )
 from msdc.pipeline.progress import Progress
+from msdc.pipeline.report.files import json_value, write_csv, write_json
+from msdc.pipeline.report.transaction import OutputTransaction, staged
 
 # the columns of the track table, in order (issue 10); the tracker's other columns follow
 TRACK_COLUMNS = ["aircraft_id", "callsign", "address", "time", "time_of_day", "latitude", "longitude",
@@ -53,22 +54,12 @@ CSV_DECIMALS = {"time_of_day": 6, "latitude": 7, "longitude": 7, "flight_level":
 MODE_DECIMALS = 4
 
 
-def csv_rounded(tracks: pd.DataFrame) -> pd.DataFrame:
-    """The track table with its float columns rounded to CSV_DECIMALS (mode probabilities to MODE_DECIMALS),
-    a negative zero written as 0, values below 1e-4 as fixed-point text; the other columns as they are (not
-    copied)."""
-    rounded = {}
-    for name in tracks.columns:
-        places = CSV_DECIMALS.get(name, MODE_DECIMALS if name.startswith("mode_") else None)
-        if places is not None and tracks[name].dtype.kind == "f":
-            # + 0.0: a negative zero becomes 0.0
-            values = np.round(tracks[name].to_numpy(float, na_value=np.nan), places) + 0.0
-            tiny = (values != 0.0) & (np.abs(values) < 1e-4)  # Python writes these as 4.48e-05: fixed instead
-            if tiny.any():
-                values = values.astype(object)
-                values[tiny] = [f"{v:.{places}f}" for v in values[tiny]]
-            rounded[name] = values
-    return tracks.assign(**rounded)
+def csv_decimals(columns) -> dict[str, int]:
+    """The decimals of the track CSV's columns that have some: CSV_DECIMALS, mode probabilities
+    MODE_DECIMALS (report.files.write_csv rounds the float ones)."""
+    places = {name: CSV_DECIMALS.get(name, MODE_DECIMALS if name.startswith("mode_") else None)
+              for name in columns}
+    return {name: n for name, n in places.items() if n is not None}
 
 
 # printed under the terminal's table of tracks: what its columns mean
@@ -187,8 +178,6 @@ def with_labels(tracks: pd.DataFrame, labels: pd.DataFrame) -> pd.DataFrame:
 def summary(result: TrackJobResult) -> dict:
     """The JSON document: parameters, inputs, and per aircraft its span, coasted time and per-sensor
     reports, updates, gated reports and NIS mean."""
-    from msdc.pipeline.report.summary import json_value
-
     res = result.result
     labels = result.labels.set_index("aircraft_id")
     aircraft = []
@@ -223,32 +212,29 @@ def sensor_totals(sensors: pd.DataFrame) -> pd.DataFrame:
     return out.drop(columns="nis_sum").assign(nis_mean=np.where(out["updates"] > 0, nis, np.nan))
 
 
-def write_tracks(result: TrackJobResult) -> dict[str, Path]:
+def write_tracks(result: TrackJobResult, *, tx: OutputTransaction | None = None) -> dict[str, Path]:
     """Write the track table (CSV: times as ISO 8601 UTC; Parquet: tz-aware timestamps), the JSON and
-    the figures, as the options ask; each file is written whole to a temporary name and then renamed,
-    so a failure leaves nothing behind. Returns what was written, by kind."""
+    the figures, as the options ask, staged in ``tx`` (committed by the caller; without one, the files are
+    committed together here): a failure leaves nothing behind. Returns the final paths, by kind."""
     written: dict[str, Path] = {}
     out, js = result.checked.output, result.checked.json
-    if out is not None:
-        from msdc.pipeline.report.summary import write_atomically
-        from msdc.pipeline.report.tables import write_parquet
+    with staged(tx) as stage:
+        if out is not None:
+            from msdc.pipeline.report.tables import write_parquet
 
-        if out.suffix.lower() == ".csv":
-            times = result.tracks["time"].dt.strftime("%Y-%m-%dT%H:%M:%S.%fZ")
-            table = csv_rounded(result.tracks).assign(time=times)
-            write_atomically(out, lambda tmp: table.to_csv(tmp, index=False))
-        else:
-            write_parquet(result.tracks, out)
-        written["tracks"] = out
-    if js is not None:
-        js.write_text(json.dumps(summary(result), indent=1, default=str))
-        written["json"] = js
-    if result.options.figures is not None:
-        from msdc.pipeline.report.track_figures import track_figures
+            if out.suffix.lower() == ".csv":
+                write_csv(result.tracks, stage.path(out), decimals=csv_decimals(result.tracks.columns))
+            else:
+                write_parquet(result.tracks, stage.path(out))
+            written["tracks"] = out
+        if js is not None:
+            write_json(summary(result), stage.path(js))
+            written["json"] = js
+        if result.options.figures is not None:
+            from msdc.pipeline.report.track_figures import track_figures
 
-        d = Path(result.options.figures)
-        d.mkdir(exist_ok=True)
-        written.update({f"figure {k}": p for k, p in track_figures(result, d).items()})
+            drawn = track_figures(result, stage.folder(result.options.figures))
+            written.update({f"figure {k}": stage.final(p) for k, p in drawn.items()})
     return written
 
 

@@ -75,15 +75,19 @@ def clock(seconds: float) -> str:
     return f"+{day}d {text}" if day else text
 
 
-def iso_utc(instant) -> str | None:
-    """ISO 8601 UTC text with milliseconds and "Z"; None when missing or undated."""
-    if instant is None or pd.isna(instant):
-        return None
+def utc_text(instant) -> str:
+    """ISO 8601 UTC text to the millisecond (truncated) with "Z", the one time format of msdc's JSON; a
+    naive instant is taken as UTC."""
     ts = pd.Timestamp(instant)
     ts = ts.tz_localize("UTC") if ts.tzinfo is None else ts.tz_convert("UTC")
-    if not is_dated(ts):
-        return None
     return ts.isoformat(timespec="milliseconds").replace("+00:00", "Z")
+
+
+def iso_utc(instant) -> str | None:
+    """``utc_text``; None when missing or undated."""
+    if instant is None or pd.isna(instant) or not is_dated(pd.Timestamp(instant)):
+        return None
+    return utc_text(instant)
 
 
 def with_clock(meas: pd.DataFrame, reference: pd.Timestamp | None = None) -> pd.DataFrame:

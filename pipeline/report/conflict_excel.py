@@ -1,5 +1,5 @@
 """Conflict workbook: sheets Alerts, Losses, Warning times and Parameters (the shared cell and table rules
-of `pipeline.report.cells`, written atomically).
+of `pipeline.report.cells`).
 
 Times are Excel date-times in UTC, each labelled "UTC" by its number format (the CSV and JSON write them
 with a Z); horizons, warnings and durations, whole multiples of the step, in General format (120, 2.5, -5,
@@ -15,7 +15,6 @@ from openpyxl import Workbook
 from msdc.pipeline.correlate.results import CorrelationRun
 from msdc.pipeline.report.cells import make_column, write_table
 from msdc.pipeline.report.excel import parameter_rows
-from msdc.pipeline.report.outputs import write_atomically
 from msdc.pipeline.report.saving import save
 
 UTC_FORMAT = 'yyyy-mm-dd hh:mm:ss "UTC"'
@@ -38,7 +37,7 @@ def write_conflict_workbook(alerts: pd.DataFrame, losses: pd.DataFrame, warnings
     rows = parameter_rows(CorrelationRun(parameters=parameters), windows=False)
     write_table(ws, [make_column(ws, h, [r[j] for r in rows], general=True)
                      for j, h in enumerate(["section", "key", "value"])])
-    write_atomically(path_xlsx, lambda tmp: save(wb, tmp))
+    save(wb, path_xlsx)
 
 
 def _column(ws, header: str, series: pd.Series):

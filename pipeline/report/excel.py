@@ -66,7 +66,6 @@ from msdc.pipeline.report.saving import get_ready, save
 from msdc.pipeline.report.summary import (
     sensor_pair,
     window_notes,
-    write_atomically,
 )
 from msdc.pipeline.report.tables import (
     AUTO_MAX_ROWS,
@@ -509,7 +508,7 @@ def write_report(run: CorrelationRun, path_xlsx: str | os.PathLike[str], *,
     except BaseException:
         _discard(wb)
         raise
-    write_atomically(path_xlsx, lambda tmp: save(wb, tmp))
+    save(wb, path_xlsx)
     return [path for _, _, path in parquet.values()]
 
 
@@ -533,5 +532,5 @@ def write_tables(tables: dict[str, pd.DataFrame], path_xlsx: str | os.PathLike[s
         _write_figures(wb, sheet_name("Figures", taken), images)
     if parameters is not None:
         _write_parameters(wb, CorrelationRun(parameters=parameters), windows=False)  # not a correlation
-    write_atomically(path_xlsx, lambda tmp: save(wb, tmp))
+    save(wb, path_xlsx)
 

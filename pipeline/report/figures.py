@@ -18,6 +18,7 @@ from matplotlib.text import Text
 
 from msdc.pipeline.correlate.correlation import peak_lag, pearson_max_lag, pearson_search_limit
 from msdc.pipeline.correlate.results import CorrelationRun, WindowResult
+from msdc.pipeline.report.files import named
 from msdc.pipeline.report.summary import printable, slot_seconds, window_label
 
 RADAR_COLOR = "#d62728"
@@ -48,8 +49,9 @@ def save_png(fig: Figure, path: str | os.PathLike[str], compress_level: int | No
     Pillow's 6) trades file size for time, never pixels."""
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, format="png", facecolor="white",
-                pil_kwargs=None if compress_level is None else {"compress_level": compress_level})
+    with named(path):
+        fig.savefig(path, format="png", facecolor="white",
+                    pil_kwargs=None if compress_level is None else {"compress_level": compress_level})
     return path
 
 

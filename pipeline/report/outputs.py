@@ -1,4 +1,5 @@
-"""All-or-nothing output writing: a run that fails while writing leaves no new file behind."""
+"""Outputs written in forked child processes (``Background``, ``Prepared``) while this process writes others:
+given staged paths (report.transaction), waited for or cancelled before the transaction ends."""
 
 from __future__ import annotations
 
@@ -8,72 +9,9 @@ import os
 import pickle
 import signal
 import sys
-import uuid
-from collections.abc import Callable, Iterator, Mapping
-from pathlib import Path
+from collections.abc import Callable
 
-
-@contextlib.contextmanager
-def all_or_nothing(*paths: Path | str | None) -> Iterator[None]:
-    """Remove, if the body raises, every file it created in the folders of ``paths`` (outputs and the
-    figures written beside them), then re-raise: a failed run writes nothing."""
-    folders = {Path(p).resolve().parent for p in paths if p}
-    before = {folder: set(folder.iterdir()) for folder in folders if folder.is_dir()}
-    try:
-        yield
-    except BaseException:
-        for folder, had in before.items():
-            for new in set(folder.iterdir()) - had:
-                if new.is_file():
-                    new.unlink(missing_ok=True)
-        raise
-
-
-class Staging:
-    """Outputs written under temporary names beside where they go, moved into place together by ``commit``
-    once the whole run has succeeded; leaving the ``with`` block removes every temporary file still there
-    (a failed or interrupted run writes nothing). ``write_atomically`` is its one-file case."""
-
-    def __init__(self) -> None:
-        self._made: list[Path] = []
-
-    def __enter__(self) -> Staging:
-        return self
-
-    def __exit__(self, *exc: object) -> None:
-        for tmp in self._made:
-            tmp.unlink(missing_ok=True)
-
-    def temporary(self, path: Path | str) -> Path:
-        """A new hidden temporary name beside ``path`` (the same file system: the move is a rename)."""
-        path = Path(path)
-        tmp = path.with_name(f".{path.name}.{os.getpid()}.{uuid.uuid4().hex[:8]}.tmp")
-        self._made.append(tmp)
-        return tmp
-
-    def commit(self, moves: Mapping[Path, Path]) -> None:
-        """Move each temporary file over its output; if one move fails, the outputs already moved by this
-        call are removed and the error raised (their earlier content was replaced already)."""
-        done: list[Path] = []
-        try:
-            for tmp, final in moves.items():
-                os.replace(tmp, final)
-                done.append(Path(final))
-        except BaseException:
-            for final in done:
-                final.unlink(missing_ok=True)
-            raise
-
-
-def write_atomically(path: str | os.PathLike[str], write: Callable[[Path], object]) -> Path:
-    """Call ``write(tmp)`` on a sibling temporary file, then move it over ``path``; returns ``path``."""
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    with Staging() as staging:
-        tmp = staging.temporary(path)
-        write(tmp)
-        staging.commit({tmp: path})
-    return path
+from msdc.pipeline.report.transaction import TERMINATING
 
 
 class BackgroundFailed(RuntimeError):
@@ -85,7 +23,7 @@ class Background:
     process writes another; ``wait()`` returns what ``fn`` returned or re-raises the child's error here
     (the result must pickle). Where fork is not available
     (or not safe: only Linux is trusted) it runs at once, in this process. Call ``wait()`` or
-    ``cancel()`` before leaving an ``all_or_nothing`` block, so no file appears after its clean-up."""
+    ``cancel()`` before the output transaction it writes into ends, so no file appears after its clean-up."""
 
     def __init__(self, fn: Callable[..., object], *args: object):
         self._pid, self._value = 0, None
@@ -219,6 +157,8 @@ def _fork(child: Callable[[], int], close: tuple[int, ...] = ()) -> int:
     if pid == 0:  # pragma: no cover - the child (coverage does not follow it)
         status = 1
         try:
+            for sig in TERMINATING:  # the parent's Terminated is the parent's: SIGTERM ends a child as usual
+                signal.signal(sig, signal.SIG_DFL)
             for fd in close:
                 os.close(fd)
             status = child()

@@ -10,6 +10,8 @@ from zipfile import ZIP_DEFLATED, ZIP_STORED, ZipFile
 
 from openpyxl import Workbook
 
+from msdc.pipeline.report.files import named
+
 _COMPRESSED_MEDIA = (".png", ".jpeg", ".jpg", ".gif")
 
 
@@ -41,12 +43,14 @@ def get_ready(wb: Workbook) -> None:
 
 
 def save(wb: Workbook, path: str | os.PathLike[str]) -> None:
-    """Save ``wb`` to ``path`` as Workbook.save does (the same parts and content), images stored."""
-    try:
-        from openpyxl.writer.excel import ExcelWriter
-    except ImportError:  # an openpyxl that moved its writer: its own save, the PNG deflated again
-        wb.save(path)
-        return
-    archive = _Archive(path, "w", ZIP_DEFLATED, allowZip64=True)
-    wb.properties.modified = dt.datetime.now(tz=dt.UTC).replace(tzinfo=None)
-    ExcelWriter(wb, archive).save()
+    """Save ``wb`` to ``path`` as Workbook.save does (the same parts and content), images stored; an error
+    names ``path``."""
+    with named(path):
+        try:
+            from openpyxl.writer.excel import ExcelWriter
+        except ImportError:  # an openpyxl that moved its writer: its own save, the PNG deflated again
+            wb.save(path)
+            return
+        archive = _Archive(path, "w", ZIP_DEFLATED, allowZip64=True)
+        wb.properties.modified = dt.datetime.now(tz=dt.UTC).replace(tzinfo=None)
+        ExcelWriter(wb, archive).save()

@@ -3,12 +3,9 @@
 from __future__ import annotations
 
 import datetime as dt
-import json
 import math
-import os
 from collections.abc import Mapping
-from numbers import Integral, Real
-from pathlib import Path
+from numbers import Real
 from typing import Any
 
 import numpy as np
@@ -17,23 +14,12 @@ import pandas as pd
 from msdc.pipeline.correlate.correlation import pearson_search_limit
 from msdc.pipeline.correlate.results import SUMMARY_KEYS, CorrelationRun, WindowResult
 from msdc.pipeline.model.time import iso_utc
+from msdc.pipeline.report.files import is_missing, json_value
 from msdc.pipeline.report.formats import decimals
-from msdc.pipeline.report.outputs import write_atomically
 
 SKIPPED_KEYS = ["callsign", "address", "radar_sensor", "reference_sensor", "start_tod", "end_tod", "reason"]
 # Parameter names (top level or under "options") that may hold the slot length in seconds
 _SLOT_PARAMETER_KEYS = ("slot_s", "slot_seconds", "slot_duration_s", "slot_length_s", "slot_size_s")
-
-
-def is_missing(value: Any) -> bool:
-    """True for None, NaN, NaT and pd.NA (scalars only)."""
-    if value is None or value is pd.NA or value is pd.NaT:
-        return True
-    if isinstance(value, float | np.floating):
-        return math.isnan(value)
-    if isinstance(value, np.datetime64 | np.timedelta64):
-        return bool(np.isnat(value))
-    return False
 
 
 def utc_naive(value: pd.Timestamp | dt.datetime | np.datetime64 | str) -> dt.datetime | None:
@@ -44,37 +30,6 @@ def utc_naive(value: pd.Timestamp | dt.datetime | np.datetime64 | str) -> dt.dat
     if ts.tzinfo is not None:
         ts = ts.tz_convert("UTC").tz_localize(None)
     return ts.round("us").to_pydatetime()
-
-
-def json_value(value: Any) -> Any:
-    """Convert ``value`` to plain JSON types: NaN/NaT/NA and infinities become None, times ISO 8601 UTC."""
-    if is_missing(value):
-        return None
-    if isinstance(value, bool | np.bool_):
-        return bool(value)
-    if isinstance(value, pd.Timestamp | dt.datetime | np.datetime64):
-        ts = pd.Timestamp(value)
-        ts = ts.tz_convert("UTC") if ts.tzinfo is not None else ts.tz_localize("UTC")
-        return ts.isoformat().replace("+00:00", "Z")
-    if isinstance(value, dt.date | dt.time):
-        return value.isoformat()
-    if isinstance(value, pd.Timedelta | dt.timedelta | np.timedelta64):  # before Integral: timedelta64 is one
-        return pd.Timedelta(value).total_seconds()
-    if isinstance(value, Integral):
-        return int(value)
-    if isinstance(value, Real):
-        number = float(value)
-        return number if math.isfinite(number) else None
-    if isinstance(value, str):
-        return value
-    if isinstance(value, Path):
-        return str(value)
-    if isinstance(value, Mapping):
-        return {str(k): json_value(v) for k, v in value.items()}
-    if isinstance(value, np.ndarray | pd.Series | list | tuple | set | frozenset):
-        items = sorted(value, key=str) if isinstance(value, set | frozenset) else value
-        return [json_value(v) for v in items]
-    return str(value)
 
 
 def table_records(frame: pd.DataFrame) -> list[dict[str, Any]]:
@@ -109,12 +64,6 @@ def run_to_json(run: CorrelationRun) -> dict[str, Any]:
         "inputs": json_value(run.inputs),
         "filters": json_value(run.filters),
     }
-
-
-def write_json(run: CorrelationRun, path: str | os.PathLike[str]) -> Path:
-    """Write ``run_to_json(run)`` to ``path`` (UTF-8, indented, strict JSON); returns the path."""
-    text = json.dumps(run_to_json(run), indent=2, ensure_ascii=False, allow_nan=False) + "\n"
-    return write_atomically(path, lambda tmp: tmp.write_text(text, encoding="utf-8"))
 
 
 def slot_seconds(window: WindowResult, parameters: Mapping[str, Any] | None = None) -> float:

@@ -22,7 +22,8 @@ import numpy as np
 import pandas as pd
 
 from msdc.pipeline.correlate.results import LAG_COLUMNS, SLOT_COLUMNS, CorrelationRun, WindowResult
-from msdc.pipeline.report.summary import slot_seconds, write_atomically
+from msdc.pipeline.report.files import named
+from msdc.pipeline.report.summary import slot_seconds
 
 TABLE_MODES = ("auto", "xlsx", "parquet")
 # auto: longer tables go to Parquet. At the ~150,000 cells/s openpyxl writes here on a quiet machine
@@ -210,42 +211,35 @@ def write_table_parquet(run: CorrelationRun, name: str, path: str | os.PathLike[
         frame = build(run)
         write_parquet(frame, path)
         return len(frame), pa.Schema.from_pandas(frame, preserve_index=False)
-    found: dict[str, object] = {"rows": 0}
-
-    def write(tmp: Path) -> None:
-        writer = None
+    rows, schema, writer = 0, None, None
+    with named(path):
         try:
             for part in parts:
                 frame = build(run, part)
                 table = pa.Table.from_pandas(frame, preserve_index=False)
                 if writer is None:
-                    found["schema"] = pa.Schema.from_pandas(frame, preserve_index=False)
-                    writer = pq.ParquetWriter(tmp, table.schema)
+                    schema = pa.Schema.from_pandas(frame, preserve_index=False)
+                    writer = pq.ParquetWriter(path, table.schema)
                 writer.write_table(table)
-                found["rows"] += len(frame)
+                rows += len(frame)
                 del frame, table
         finally:
             if writer is not None:
                 writer.close()
-
-    write_atomically(path, write)
-    return found["rows"], found["schema"]
+    return rows, schema
 
 
 def write_parquet(frame: pd.DataFrame, path: str | os.PathLike[str],
                   slice_rows: int = TABLE_BATCH_ROWS) -> Path:
-    """The table as Parquet (text columns as strings, nulls kept), written atomically, converted to Arrow
+    """The table as Parquet (text columns as strings, nulls kept), converted to Arrow
     slice_rows rows at a time under the whole frame's schema: the same columns, types and rows as one
     conversion, without a second copy of a large table (a day's tracks are ~0.35 GB)."""
     import pyarrow as pa
     import pyarrow.parquet as pq
 
     schema = pa.Schema.from_pandas(frame, preserve_index=False)  # types from every row, no conversion
-
-    def write(tmp: Path) -> None:
-        with pq.ParquetWriter(tmp, schema) as writer:
-            for start in range(0, max(len(frame), 1), slice_rows):
-                writer.write_table(pa.Table.from_pandas(frame.iloc[start:start + slice_rows], schema=schema,
-                                                        preserve_index=False))
-
-    return write_atomically(path, write)
+    with named(path), pq.ParquetWriter(path, schema) as writer:
+        for start in range(0, max(len(frame), 1), slice_rows):
+            writer.write_table(pa.Table.from_pandas(frame.iloc[start:start + slice_rows], schema=schema,
+                                                    preserve_index=False))
+    return Path(path)

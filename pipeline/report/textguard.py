@@ -23,7 +23,8 @@ def neutralise(value: object) -> object:
 
 
 def guard_frame(frame: pd.DataFrame) -> pd.DataFrame:
-    """A copy of ``frame`` whose text columns (object, string, categorical) are neutralised."""
+    """``frame`` with its text columns (object, string, categorical) neutralised; the other columns are not
+    copied."""
     out = {}
     for name in frame.columns:
         column = frame[name]
@@ -37,5 +38,10 @@ def guard_frame(frame: pd.DataFrame) -> pd.DataFrame:
                     column = column.astype(object).map(neutralise, na_action="ignore")
         elif pd.api.types.is_object_dtype(kind) or isinstance(kind, pd.StringDtype):
             column = column.map(neutralise, na_action="ignore")
+        else:
+            continue
         out[name] = column
-    return pd.DataFrame(out, index=frame.index)
+    guarded = frame.copy(deep=False)
+    for name, column in out.items():
+        guarded[name] = column
+    return guarded

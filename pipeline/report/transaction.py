@@ -13,6 +13,7 @@ are refused before any work (``output_problem``).
 from __future__ import annotations
 
 import contextlib
+import errno
 import os
 import shutil
 import signal
@@ -23,6 +24,7 @@ from pathlib import Path
 
 STAGING_PREFIX = ".msdc-staging-"
 BLOCKED = (signal.SIGINT, signal.SIGTERM, signal.SIGHUP)  # held back while the set is moved into place
+TERMINATING = (signal.SIGTERM, signal.SIGHUP)  # raised as Terminated by raise_on_termination
 
 
 def target(path: str | os.PathLike[str]) -> Path:
@@ -59,6 +61,7 @@ class OutputTransaction:
     removes everything staged."""
 
     _stages: dict[Path, Path] = field(default_factory=dict)  # target folder -> its staging folder
+    _spelled: dict[Path, Path] = field(default_factory=dict)  # staging folder -> its folder as given
     written: list[Written] = field(default_factory=list)
 
     def __enter__(self) -> OutputTransaction:
@@ -73,20 +76,31 @@ class OutputTransaction:
     def path(self, output: str | os.PathLike[str]) -> Path:
         """The staged path to write ``output`` to: its final name inside its folder's staging folder."""
         real = target(output)
-        return self._stage(real.parent) / real.name
+        stage = self._stage(real.parent)
+        if not Path(output).is_symlink():
+            self._spelled.setdefault(stage, Path(output).parent)
+        return stage / real.name
 
     def folder(self, directory: str | os.PathLike[str]) -> Path:
         """A staged folder standing for ``directory`` (created at commit when absent): what is written in
         it goes into ``directory`` under the same names."""
-        return self._stage(target(directory))
+        stage = self._stage(target(directory))
+        if not Path(directory).is_symlink():
+            self._spelled.setdefault(stage, Path(directory))
+        return stage
 
     def final_name(self, staged: str | os.PathLike[str]) -> str:
-        """The output a staged path stands for (``staged`` unchanged when it is not staged here)."""
+        """The output a staged path stands for, its folder spelled as the user gave it (the real folder for
+        a symbolic link); ``staged`` unchanged when it is not staged here."""
         staged = Path(staged)
         for final_dir, stage in self._stages.items():
             if staged == stage or stage in staged.parents:
-                return str(final_dir / staged.relative_to(stage))
+                return str(self._spelled.get(stage, final_dir) / staged.relative_to(stage))
         return str(staged)
+
+    def final(self, staged: str | os.PathLike[str]) -> Path:
+        """``final_name`` as a Path."""
+        return Path(self.final_name(staged))
 
     def commit(self) -> list[Written]:
         """Move every staged file into place as a set, interrupts held back meanwhile: if one move fails,
@@ -94,15 +108,17 @@ class OutputTransaction:
         moves = [(stage / rel, final_dir / rel) for final_dir, stage in self._stages.items()
                  for rel in _files(stage)]
         with _signals_held():
-            done: list[tuple[Path, Path | None]] = []
+            done: list[tuple[Path, Path | None, Path]] = []  # recorded before each move: _undo can tell
             try:
                 for staged, final in moves:
                     final.parent.mkdir(parents=True, exist_ok=True)
-                    backup = None
-                    if final.exists() or final.is_symlink():
-                        backup = staged.with_name(staged.name + ".replaced")
+                    if final.is_dir() and not final.is_symlink():  # made meanwhile: never moved away
+                        raise IsADirectoryError(errno.EISDIR, os.strerror(errno.EISDIR), str(final))
+                    had = final.exists() or final.is_symlink()
+                    backup = staged.with_name(staged.name + ".replaced") if had else None
+                    done.append((final, backup, staged))
+                    if backup is not None:
                         os.replace(final, backup)
-                    done.append((final, backup))
                     os.replace(staged, final)
             except OSError as exc:
                 _undo(done)
@@ -110,15 +126,26 @@ class OutputTransaction:
             except BaseException:
                 _undo(done)
                 raise
-            self.written = [Written(final, backup is not None) for final, backup in done]
+            self.written = [Written(final, backup is not None) for final, backup, _ in done]
             self.abort()  # the staging folders now hold only the replaced files' old content
         return self.written
 
     def abort(self) -> None:
-        """Remove every staging folder and what is in it; nothing else is touched."""
-        for stage in self._stages.values():
-            shutil.rmtree(stage, ignore_errors=True)
-        self._stages.clear()
+        """Remove every staging folder and what is in it, nothing else. Interrupts are held back meanwhile;
+        one already on its way (its handler raises at any step) is raised once every folder is gone."""
+        interrupted = None
+        with _signals_held():
+            while self._stages:
+                final_dir, stage = next(iter(self._stages.items()))
+                try:
+                    shutil.rmtree(stage, ignore_errors=True)
+                except BaseException as exc:  # noqa: BLE001 - the same folder again, then raised
+                    interrupted = interrupted or exc
+                    continue
+                del self._stages[final_dir]
+            self._spelled.clear()
+        if interrupted is not None:
+            raise interrupted
 
     def _stage(self, final_dir: Path) -> Path:
         """The staging folder of ``final_dir`` (made on first use; for a folder that does not exist yet, in
@@ -129,9 +156,21 @@ class OutputTransaction:
         while not home.is_dir():
             home = home.parent
         stage = home / f"{STAGING_PREFIX}{os.getpid()}-{uuid.uuid4().hex[:8]}"
+        self._stages[final_dir] = stage  # recorded first: an interrupt cannot leave it unknown to abort()
         stage.mkdir()
-        self._stages[final_dir] = stage
         return stage
+
+
+@contextlib.contextmanager
+def staged(tx: OutputTransaction | None = None) -> Iterator[OutputTransaction]:
+    """``tx`` itself when given (whoever opened it commits it, with the rest of the run), else a transaction
+    of the block's own, committed when the block succeeds."""
+    if tx is not None:
+        yield tx
+        return
+    with OutputTransaction() as own:
+        yield own
+        own.commit()
 
 
 def _files(stage: Path) -> list[Path]:
@@ -139,13 +178,15 @@ def _files(stage: Path) -> list[Path]:
     return sorted(p.relative_to(stage) for p in stage.rglob("*") if p.is_file() or p.is_symlink())
 
 
-def _undo(done: list[tuple[Path, Path | None]]) -> None:
-    """Put back what a failed commit moved: each replaced file's old content, or no file where none was."""
-    for final, backup in reversed(done):
+def _undo(done: list[tuple[Path, Path | None, Path]]) -> None:
+    """Put back what a failed commit moved: each replaced file's old content, or no file where none was
+    (``final`` is removed only when its staged file was moved there)."""
+    for final, backup, staged in reversed(done):
         with contextlib.suppress(OSError):
             if backup is not None:
-                os.replace(backup, final)
-            else:
+                if backup.exists() or backup.is_symlink():
+                    os.replace(backup, final)
+            elif not (staged.exists() or staged.is_symlink()):
                 final.unlink(missing_ok=True)
 
 
@@ -155,8 +196,9 @@ def _signals_held() -> Iterator[None]:
     if not hasattr(signal, "pthread_sigmask"):
         yield
         return
-    old = signal.pthread_sigmask(signal.SIG_BLOCK, BLOCKED)
-    try:
+    old = signal.pthread_sigmask(signal.SIG_BLOCK, [])  # the mask as it is: restored even if a handler
+    try:  # that was already due raises right after the next call
+        signal.pthread_sigmask(signal.SIG_BLOCK, BLOCKED)
         yield
     finally:
         signal.pthread_sigmask(signal.SIG_SETMASK, old)
@@ -170,13 +212,26 @@ class Terminated(BaseException):
         super().__init__(f"terminated by signal {signum}")
         self.signum = signum
 
+    def __reduce__(self):
+        return Terminated, (self.signum,)
 
-def raise_on_termination() -> None:
-    """Turn SIGTERM and SIGHUP into Terminated in this process (the command's main thread)."""
+
+def raise_on_termination() -> dict[int, object]:
+    """Turn SIGTERM and SIGHUP into Terminated in this process (the command's main thread); returns the
+    handlers it replaced, for ``restore_handlers``."""
     def _raise(signum, frame):
         raise Terminated(signum)
 
-    for sig in (signal.SIGTERM, signal.SIGHUP):
+    previous = {}
+    for sig in TERMINATING:
         with contextlib.suppress(ValueError, OSError):  # not the main thread, or not on this platform
-            signal.signal(sig, _raise)
+            previous[sig] = signal.signal(sig, _raise)
+    return previous
+
+
+def restore_handlers(previous: dict[int, object]) -> None:
+    """Put back the signal handlers ``raise_on_termination`` replaced."""
+    for sig, handler in previous.items():
+        with contextlib.suppress(ValueError, OSError, TypeError):
+            signal.signal(sig, handler)
 

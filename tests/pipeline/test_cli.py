@@ -171,10 +171,11 @@ def test_quality_command(tmp_path, capsys):
     captured = capsys.readouterr()
     out = captured.out
     assert "Radar biases" in out and "NACp" in out
-    # every PNG written beside the workbook is named on the terminal, and nothing else is there
+    # every file written is named on the terminal, the PNGs beside the workbook too, and nothing else is there
     pngs = sorted(tmp_path.glob("*.png"))
-    assert pngs and f"Figures ({len(pngs)} PNG beside the report):" in captured.err
-    assert all(f"  {p}" in captured.err for p in pngs)
+    assert pngs and f"msdc quality: {len(pngs) + 2} file(s) written:" in captured.err
+    assert all(f"  {p} (figure)" in captured.err for p in pngs)
+    assert f"  {xlsx} (workbook)" in captured.err and f"  {js} (JSON)" in captured.err
     assert all(f"{name}_se_{unit}" in out
                for name, unit in (("range_bias", "m"), ("azimuth_bias", "deg"), ("time_bias", "s")))
     wb = openpyxl.load_workbook(xlsx)
@@ -199,9 +200,10 @@ def test_correlate_filters_and_quality_sheets(tmp_path, capsys):
     assert main(["correlate", str(RADAR), str(ADSB), "--sensors", str(SENSORS), "--callsign", "MAS72",
                  "--drop-jumps", "--quality", "-o", str(xlsx), "--json", str(js)]) == 0
     err = capsys.readouterr().err
-    pngs = sorted(set(tmp_path.glob("*.png")) - {tmp_path / "c_tracks.png"})  # the map has its own line
+    pngs = sorted(set(tmp_path.glob("*.png")) - {tmp_path / "c_tracks.png"})  # the map is the track figure
     assert {p.name for p in pngs} >= {"c_intervals.png", "c_lags_1.png", "c_slotting_1.png"}
-    assert f"Figures ({len(pngs)} PNG beside the report):" in err and all(f"  {p}" in err for p in pngs)
+    assert f"  {tmp_path / 'c_tracks.png'} (track figure)" in err
+    assert all(f"  {p} (figure)" in err for p in pngs)
     n_jumps = len(TRUTH["jumps"])  # filters run over all the input's ADS-B reports, before selection
     assert f"filter jumps: {n_jumps} of the input's ADS-B reports" in err
     doc = json.loads(js.read_text())

@@ -168,20 +168,6 @@ def test_an_interrupted_or_failing_run_leaves_no_file(tmp_path, capsys, monkeypa
     assert _files(tmp_path) == []
 
 
-def test_a_failed_move_into_place_removes_the_outputs_moved_before(tmp_path):
-    """Staging.commit: when the second move fails, the first output (already moved) is removed."""
-    from msdc.pipeline.report.outputs import Staging
-
-    a, b = tmp_path / "a.csv", tmp_path / "b.csv"
-    b.mkdir()  # os.replace of a file over a directory fails
-    with pytest.raises(OSError), Staging() as staging:
-        ta, tb = staging.temporary(a), staging.temporary(b)
-        ta.write_text("a\n")
-        tb.write_text("b\n")
-        staging.commit({ta: a, tb: b})
-    assert _files(tmp_path) == ["b.csv"] and b.is_dir()
-
-
 # ---------------------------------------------------------------------------------------------------------
 # 3. the block index in the file, whatever the chunk size
 

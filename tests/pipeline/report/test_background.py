@@ -15,7 +15,8 @@ import pytest
 from msdc.pipeline.cli import main
 from msdc.pipeline.jobs import correlate
 from msdc.pipeline.report import outputs
-from msdc.pipeline.report.outputs import Background, BackgroundFailed, all_or_nothing
+from msdc.pipeline.report.outputs import Background, BackgroundFailed
+from msdc.pipeline.report.transaction import OutputTransaction
 
 FIX = Path(__file__).resolve().parents[3] / "fixtures"
 forking = pytest.mark.skipif(not (outputs.FORK_OK and hasattr(os, "fork")),
@@ -105,9 +106,9 @@ def test_without_fork_the_work_runs_at_once(tmp_path, monkeypatch):
 
 
 @forking
-def test_all_or_nothing_with_a_cancelled_child_leaves_nothing(tmp_path):
-    with pytest.raises(RuntimeError), all_or_nothing(tmp_path / "out.xlsx"):
-        job = Background(_write, tmp_path / "fig.png", "partial")
+def test_a_cancelled_child_writing_into_a_transaction_leaves_nothing(tmp_path):
+    with pytest.raises(RuntimeError), OutputTransaction() as tx:
+        job = Background(_write, tx.path(tmp_path / "fig.png"), "partial")
         try:
             raise RuntimeError("the workbook failed")
         finally:

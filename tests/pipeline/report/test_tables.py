@@ -144,14 +144,14 @@ def test_failure_leaves_nothing(result, tmp_path, monkeypatch):
     that was there before does."""
     import msdc.pipeline.report.excel as excel
 
-    real = excel.write_atomically
+    real = excel.save
 
-    def disk_full(path, write):
-        assert (tmp_path / "f_slots.parquet").exists() and (tmp_path / "f_tracks.png").exists()
-        real(path, write)
+    def disk_full(wb, path):
+        assert (path.parent / "f_slots.parquet").exists() and (path.parent / "f_tracks.png").exists()
+        real(wb, path)
         raise OSError(28, "No space left on device", str(path))
 
-    monkeypatch.setattr(excel, "write_atomically", disk_full)
+    monkeypatch.setattr(excel, "save", disk_full)
     (tmp_path / "kept.txt").write_text("was here")
     with pytest.raises(OSError):
         _write(result, tmp_path / "f.xlsx", "parquet")

@@ -97,6 +97,39 @@ def test_a_commit_that_fails_half_way_puts_back_what_it_moved(tmp_path, monkeypa
     assert _listing(tmp_path) == {"a.csv": b"old a", "b.csv": b"old b"}
 
 
+def test_a_folder_made_meanwhile_where_an_output_goes_is_left_alone(tmp_path):
+    """Another program makes a folder at b.csv's place during the run: the commit fails naming b.csv, a.csv
+    is put back as it was and the folder keeps its content."""
+    (tmp_path / "a.csv").write_text("old a")
+    with pytest.raises(IsADirectoryError) as raised, OutputTransaction() as tx:
+        tx.path(tmp_path / "a.csv").write_text("new a")
+        tx.path(tmp_path / "b.csv").write_text("new b")
+        (tmp_path / "b.csv").mkdir()
+        (tmp_path / "b.csv" / "theirs.txt").write_text("theirs")
+        tx.commit()
+    assert raised.value.filename == str(tmp_path / "b.csv")
+    assert _listing(tmp_path) == {"a.csv": b"old a", "b.csv/theirs.txt": b"theirs"}
+
+
+def test_an_interrupt_already_due_while_cleaning_up_still_removes_every_staging_folder(tmp_path, monkeypatch):
+    """A second Ctrl-C that was on its way when the clean-up began raises in the middle of it (its handler
+    runs at any step): every staging folder goes all the same, then the interrupt is raised."""
+    real_rmtree, calls = tx_module.shutil.rmtree, []
+
+    def interrupted_once(path, **kw):
+        calls.append(path)
+        if len(calls) == 1:
+            raise KeyboardInterrupt
+        real_rmtree(path, **kw)
+
+    monkeypatch.setattr(tx_module.shutil, "rmtree", interrupted_once)
+    with pytest.raises(KeyboardInterrupt), OutputTransaction() as tx:
+        tx.path(tmp_path / "o.csv").write_text("new")
+        (tx.folder(tmp_path / "figs") / "a.png").write_text("png")
+        raise RuntimeError("the run failed")
+    assert list(tmp_path.iterdir()) == []
+
+
 def test_a_write_error_names_the_output_not_the_staged_file(tmp_path):
     with pytest.raises(OSError) as raised, OutputTransaction() as tx:
         staged = tx.path(tmp_path / "o.json")

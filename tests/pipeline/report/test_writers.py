@@ -22,7 +22,8 @@ from msdc.pipeline.correlate.results import (
 )
 from msdc.pipeline.report.excel import sheet_name, write_report
 from msdc.pipeline.report.figures import lag_figure, latlon_time_figure, track_figure
-from msdc.pipeline.report.summary import run_to_json, summary_table, write_json
+from msdc.pipeline.report.files import write_json
+from msdc.pipeline.report.summary import run_to_json, summary_table
 
 EVIL = "=cmd|' /C calc'!A0"
 T0 = pd.Timestamp("2019-03-01 10:00:00.500", tz="UTC")
@@ -96,7 +97,7 @@ def outputs(run: CorrelationRun, tmp_path_factory: pytest.TempPathFactory) -> di
     png = track_figure(run, out / "tracks.png")
     xlsx = out / "run.xlsx"
     write_report(run, xlsx, figure_png=png)
-    return {"png": png, "xlsx": xlsx, "json": write_json(run, out / "run.json")}
+    return {"png": png, "xlsx": xlsx, "json": write_json(run_to_json(run), out / "run.json")}
 
 
 def _header_index(row: tuple) -> dict[str, int]:
@@ -365,7 +366,7 @@ def test_json_round_trip(outputs: dict[str, Path]) -> None:
     assert data["skipped"] == [{"callsign": "-1+1", "address": "=HYPERLINK(\"http://x\")",
                                 "radar_sensor": "", "reference_sensor": "", "start_tod": 37000.0,
                                 "end_tod": 37010.0, "reason": "fewer than 10 slots"}]
-    assert data["parameters"]["run_time"] == "2024-05-01T12:00:00Z"
+    assert data["parameters"]["run_time"] == "2024-05-01T12:00:00.000Z"  # every time to the millisecond
     assert data["inputs"][0]["bytes"] == 12345 and data["filters"]["ground"] == 3
 
 
