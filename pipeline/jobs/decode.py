@@ -11,46 +11,31 @@ from pathlib import Path
 import pandas as pd
 
 from msdc.pipeline.jobs.common import (
-    CHUNK_RANGE_MB,
     Checked,
-    DecodingOptions,
     JobError,
     OptionError,
     check_decoding,
-    check_number,
     format_hints,
     output_path,
     spare_inputs,
 )
+from msdc.pipeline.jobs.options import CATEGORIES, DecodeOptions, check_declared
 from msdc.pipeline.model import editions as edition_notes
 from msdc.pipeline.report.textguard import guard_frame
 
 SKIPPED_SHOWN = 20  # skipped blocks decode lists one per line, per input; the rest are counted
 
 
-@dataclass(frozen=True)
-class DecodeOptions(DecodingOptions):
-    """Everything ``decode_job`` needs."""
-
-    output: str | None = None
-    categories: tuple[int, ...] = ()
-    strict: bool = False
-    chunk_mb: float = 64.0
-
-
 def validate(options: DecodeOptions) -> Checked:
     """Check every option and the output paths before any decoding; OptionError if bad."""
     checked = check_decoding(options)
-    check_number("--chunk-mb", options.chunk_mb, *CHUNK_RANGE_MB, " MB")
+    check_declared(options)
     checked.output = output_path("-o", options.output, (".csv", ".parquet"))
-    bad = [c for c in options.categories if c not in (21, 48)]
-    if bad:
-        raise OptionError(f"--category {bad[0]}: must be 21 or 48")
     if checked.output is not None:
         out = checked.output
         spare_inputs(options.inputs, [(f"-o {out}", p) for p in (
-            out, *(category_output(out, c) for c in (21, 48)))])
-        cats = sorted(set(options.categories or (21, 48)))
+            out, *(category_output(out, c) for c in CATEGORIES))])
+        cats = sorted(set(options.categories or CATEGORIES))
         for cat in cats if len(cats) > 1 else ():  # written when several categories decode
             each = category_output(out, cat)
             if each.is_dir():

@@ -18,11 +18,9 @@ import numpy as np
 import pandas as pd
 
 from msdc.pipeline.jobs.common import (
-    ESTIMATED,
     Checked,
     JobError,
     OptionError,
-    TrackOptions,
     carrying,
     check_aircraft,
     check_decoding,
@@ -38,6 +36,8 @@ from msdc.pipeline.jobs.common import (
     spare_inputs,
     tracker_inputs,
 )
+from msdc.pipeline.jobs.options import ESTIMATED, TrackOptions, check_declared
+from msdc.pipeline.meta import SMOOTHERS
 from msdc.pipeline.progress import Progress
 
 # the columns of the track table, in order (issue 10); the tracker's other columns follow
@@ -84,13 +84,12 @@ def validate(options: TrackOptions, *, require_output: bool = False) -> Checked:
     """Check every option, the sensor file and the output paths before any decoding; OptionError if bad.
     ``require_output`` (the command): at least one of -o, --json and --figures; track_job returns the table
     whatever is written."""
-    from msdc.pipeline.track.plane import SMOOTHERS
-
     checked = check_decoding(options)
     check_aircraft(options)
     check_tracking(options)
-    if options.smoother not in SMOOTHERS:
+    if options.smoother not in SMOOTHERS:  # before check_declared: its message says "one of"
         raise OptionError(f"--smoother {options.smoother!r}: must be one of {', '.join(SMOOTHERS)}")
+    check_declared(options)
     parse_sources(options.sources)
     checked.output = output_path("-o", options.output, (".csv", ".parquet"))
     checked.json = output_path("--json", options.json, (".json",))
