@@ -96,6 +96,12 @@ class Spec:
         """The flag a message names: the long one, or the metavar of the positional argument."""
         return self.flags[-1] if self.flags else (self.metavar or "")
 
+    @property
+    def value_name(self) -> str:
+        """What --help calls its value: the metavar, or the flag as argparse names it (--max-coast MAX_COAST;
+        the field's name may differ: max_coast_s)."""
+        return self.metavar or self.name.lstrip("-").replace("-", "_").upper()
+
 
 def option(default: object, *flags: str, help: str = "", **spec: typing.Any) -> typing.Any:
     """A dataclass field declaring its command-line option (see Spec for the keywords)."""
@@ -169,8 +175,8 @@ def _argparse_keywords(f: dataclasses.Field, spec: Spec, kind: type) -> dict[str
         kw["type"] = value_type
     if spec.choices is not None and spec.parser_choices:
         kw["choices"] = list(spec.choices)  # its usage shows them
-    else:  # as argparse names it from the flag; the field's name may differ (--slot, slot_s)
-        kw["metavar"] = spec.metavar or spec.name.lstrip("-").replace("-", "_").upper()
+    else:
+        kw["metavar"] = spec.value_name
     if spec.required:
         kw["required"] = True
     if spec.repeat:
@@ -254,12 +260,12 @@ class DecodingOptions:
     """How to read the inputs (shared by every job)."""
 
     inputs: tuple[str, ...] = option((), metavar="INPUT", section="selection",
-                                     doc="the recordings, one or more")
+                                     doc="the recordings")
     editions: tuple[str, ...] = option(  # "CAT=EDITION"
         (), "--edition", repeat=True, parse=edition_argument, metavar="CAT=ED", section="reading",
         help="pin a category edition, e.g. 21=0.26, 48=1.27, or 21=auto (repeatable)",
-        doc="pin a category edition, e.g. `21=0.26`, `48=1.27`, or `21=auto` (repeatable; "
-            "[Editions](../decoding/editions.md))")
+        doc="pin a category edition, e.g. `21=0.26`, `48=1.27`, or `21=auto` "
+            "([Editions](../decoding/editions.md))")
     date: dt.date | None = option(
         None, "--date", parse=date_argument, section="reading",
         help="UTC day (YYYY-MM-DD) of a recording that carries no date (raw, final, gps, oradis)")
@@ -327,7 +333,7 @@ class CorrelateOptions(AircraftOptions):
     json: str | None = option(None, "--json", section="output", help="window summary as JSON",
                               doc="the windows as JSON ([JSON](#json))")
     slot_s: float = option(10.0, "--slot", range=SLOT_RANGE_S, unit="s",
-                           help="slot width D in seconds (default 10)")
+                           help="slot width D in seconds (default 10)", doc="slot width D in seconds")
     gap_s: float = option(180.0, "--gap", range=GAP_RANGE_S, unit="s",
                           help="gap G in seconds that ends a period (180)",
                           doc="a sensor's track is split where consecutive measurements are more than G "
@@ -385,7 +391,8 @@ class QualityOptions(AircraftOptions):
                                     "([Workbook](#workbook))")
     json: str | None = option(None, "--json", section="output", help="the tables as JSON")
     gap_s: float = option(180.0, "--gap", range=GAP_RANGE_S, unit="s",
-                          help="gap in seconds reported as a discontinuity (180)")
+                          help="gap in seconds reported as a discontinuity (180)",
+                          doc="a gap in seconds reported as a discontinuity")
     reference: str = option("adsb", "--reference", choices=REFERENCES,
                             help="radar accuracy against ADS-B interpolated linearly (default) or against "
                                  "the smoothed ADS-B-only IMM track",
@@ -507,9 +514,11 @@ class ConflictOptions(TrackOptions):
                                            doc="look-aheads in seconds, comma-separated, whole multiples "
                                                "of `--step`")
     radius_nm: float = option(5.0, "--radius-nm", range=RADIUS_RANGE_NM, unit="NM",
-                              help="horizontal separation minimum (default 5)")
+                              help="horizontal separation minimum (default 5)",
+                              doc="horizontal separation minimum")
     vertical_ft: float = option(1000.0, "--vertical-ft", range=VERTICAL_RANGE_FT, unit="ft",
-                                help="vertical separation minimum (default 1000)")
+                                help="vertical separation minimum (default 1000)",
+                                doc="vertical separation minimum")
     vertical_tolerance_ft: float = option(
         25.0, "--vertical-tolerance-ft", range=VERTICAL_TOLERANCE_RANGE_FT, unit="ft",
         help="levels closer than --vertical-ft by at most this are separated: the 25 ft quantum of reported "
@@ -549,7 +558,7 @@ COMMAND_OPTIONS: dict[str, type] = {"decode": DecodeOptions, "stats": StatsOptio
 
 GUIDE = Path(__file__).resolve().parents[2] / "docs" / "guide"  # in a checkout
 TABLE_START, TABLE_END = "<!-- options: {command} -->", "<!-- /options -->"
-_VALUE_NAMES = {str: "text", float: "number", int: "integer", dt.date: "YYYY-MM-DD"}
+_NUMBERS = {float: "number", int: "integer"}
 
 
 def options_table(options_cls: type) -> str:
@@ -558,7 +567,7 @@ def options_table(options_cls: type) -> str:
     rows = ["| option | values | default | meaning |", "|---|---|---|---|"]
     groups: dict[str, list[str]] = {}
     for f, spec, kind in declared(options_cls):
-        flags = ", ".join(f"`{flag}`" for flag in spec.flags) or f"`{spec.metavar} ...`"
+        flags = ", ".join(f"`{flag}`" for flag in spec.flags) or f"`{spec.metavar}`"
         meaning = (spec.doc or spec.help).replace("|", "\\|")
         rows.append(f"| {flags} | {_values(spec, kind)} | {_default(f, spec)} | {meaning} |")
         if spec.group is not None:
@@ -571,13 +580,19 @@ def options_table(options_cls: type) -> str:
 def _values(spec: Spec, kind: type) -> str:
     """What an option takes, for the docs table."""
     unit = f" {spec.unit}" if spec.unit else ""
+    if not spec.flags:
+        return "one or more"
     if kind is bool:
         return "flag"
     if spec.choices is not None:
-        return ", ".join(f"`{c}`" for c in spec.choices)
-    if spec.range is not None:
-        return f"{spec.range[0]:g} to {spec.range[1]:g}{unit}"
-    return spec.metavar or _VALUE_NAMES.get(kind, kind.__name__) + (f" ({spec.unit})" if spec.unit else "")
+        values = ", ".join(f"`{c}`" for c in spec.choices)
+    elif spec.range is not None:
+        values = f"{spec.range[0]:g} to {spec.range[1]:g}{unit}"
+    elif kind in (float, int):
+        values = _NUMBERS[kind] + (f" ({spec.unit})" if spec.unit else "")
+    else:
+        values = spec.value_name
+    return values + (", repeatable" if spec.repeat else "")
 
 
 def _default(f: dataclasses.Field, spec: Spec) -> str:

@@ -250,3 +250,51 @@ def test_the_options_import_no_heavy_library():
             "print(','.join(m for m in ('numpy', 'pandas', 'numba', 'scipy') if m in sys.modules))")
     done = subprocess.run([sys.executable, "-c", code], cwd=ROOT, capture_output=True, text=True, timeout=60)
     assert done.returncode == 0 and done.stdout.strip() == "", done.stdout + done.stderr
+
+
+# ---------------------------------------------------------------------------------------------------------
+# The guide's options tables
+
+
+@pytest.mark.parametrize("command", list(EXPECTED))
+def test_the_guide_shows_the_declared_options(command):
+    """docs/guide/COMMAND.md holds the table options_table makes, between its markers (rewrite them with
+    ``python -m msdc.pipeline.jobs.options --write-docs``), one row per option of the command."""
+    text = (ROOT / "docs" / "guide" / f"{command}.md").read_text()
+    table = text.partition(f"<!-- options: {command} -->\n")[2].partition("<!-- /options -->")[0]
+    assert table == opts.options_table(COMMAND_OPTIONS[command]), "python -m msdc.pipeline.jobs.options " \
+                                                                  "--write-docs rewrites it"
+    rows = [row.split(" | ")[0].removeprefix("| ") for row in table.splitlines()[2:] if row.startswith("| ")]
+    assert sorted(rows) == sorted("`-o`, `--output`" if flag == "--output" else f"`{flag}`"
+                                  for flag in EXPECTED[command])
+
+
+def test_a_table_row_says_what_the_option_takes():
+    table = opts.options_table(CorrelateOptions).splitlines()
+    assert "| `--slot` | 0.1 to 3600 s | `10` | slot width D in seconds |" in table
+    assert "| `--sensors` | SENSORS | required | the radars' positions ([the sensor file](sensors.md)) |" \
+        in table
+    assert "| `--min-nic` | 0 to 11 |  | drop ADS-B reports with NUCp/NIC below N " \
+           "([filters](quality.md#filters)) |" in table
+    assert "| `--split-adsb` | flag |  | keep ADS-B ground stations apart (default: one ADS-B source per " \
+           "aircraft after deduplication) |" in table
+    assert table[-1] == "Exactly one of `--callsign`, `--address` and `--all` is required."
+    rows = opts.options_table(ConflictOptions).splitlines()
+    assert "| `--horizon` | 1 to 3600 s | `20,60,120` | look-aheads in seconds, comma-separated, whole " \
+           "multiples of `--step` |" in rows
+    assert any(row.startswith("| `--max-coast` | number (s) | `60` |") for row in rows)
+    assert any(row.startswith("| `--threshold` | number | `0.2` |") for row in rows)
+    assert any(row.startswith("| `--edition` | CAT=ED, repeatable |  |") for row in rows)
+    assert any(row.startswith("| `INPUT` | one or more |  | the recordings |") for row in rows)
+
+
+def test_a_stale_table_is_found_and_rewritten(tmp_path):
+    for command in COMMAND_OPTIONS:
+        (tmp_path / f"{command}.md").write_text((ROOT / "docs" / "guide" / f"{command}.md").read_text())
+    page = tmp_path / "track.md"
+    page.write_text(page.read_text().replace("| `--smooth` | flag |", "| `--smooth` | switch |"))
+    assert opts.write_docs(tmp_path, check=True) == [page] and "switch" in page.read_text()
+    assert opts.write_docs(tmp_path) == [page] and "switch" not in page.read_text()
+    assert opts.write_docs(tmp_path, check=True) == []
+    with pytest.raises(ValueError, match="no <!-- options: track --> ... <!-- /options --> markers"):
+        opts.page_with_table("# msdc track\n", "track")
