@@ -31,7 +31,7 @@ from msdc.pipeline.jobs.options import (
     check_number,
 )
 from msdc.pipeline.meta import ADSB_SIGMA_RANGE_M as ADSB_SIGMA_RANGE_M  # re-exported, as before
-from msdc.pipeline.meta import FORMATS, software_version
+from msdc.pipeline.meta import software_version
 from msdc.pipeline.model import editions as edition_notes
 from msdc.pipeline.model.identity import normalise_address, normalise_callsign
 from msdc.pipeline.model.load import (
@@ -231,10 +231,9 @@ def check_figures_dir(path, *, writable: bool = False) -> None:
 
 
 def check_decoding(o: DecodingOptions) -> Checked:
-    """The options every job shares (--format, --date, the inputs, --edition): the inputs to read, the
-    editions pinned and the warnings about the inputs; OptionError if bad."""
-    if o.format is not None and o.format not in FORMATS:
-        raise OptionError(f"--format {o.format!r}: must be one of {', '.join(FORMATS)}")
+    """The options every job shares (--date, the inputs, --edition; --format is a declared choice): the
+    inputs to read, the editions pinned and the warnings about the inputs; OptionError if bad. The jobs run
+    it after check_declared: a bad option is found before the inputs are read and hashed."""
     if o.date is not None:
         from msdc.asterix.reader import parse_date  # the rule asterix.read and load apply to date=
 

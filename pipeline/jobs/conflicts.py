@@ -74,7 +74,6 @@ def parse_horizons(value) -> tuple[float, ...]:
 
 def validate(options: ConflictOptions) -> Checked:
     """Check every option, the sensor file and the output paths before any decoding; OptionError if bad."""
-    checked = check_decoding(options)
     step = check_tracking(options)
     horizons = parse_horizons(options.horizons_s)
     if options.vertical not in VERTICAL_MODELS:  # before check_declared: its message says "one of"
@@ -82,6 +81,7 @@ def validate(options: ConflictOptions) -> Checked:
     if options.surface not in SURFACE_MODES:
         raise OptionError(f"--surface {options.surface!r}: must be one of {', '.join(SURFACE_MODES)}")
     check_declared(replace(options, horizons_s=horizons))
+    checked = check_decoding(options)
     for h in horizons:
         if abs(h / step - round(h / step)) > 1e-9:
             raise OptionError(f"--horizon {h:g}: must be a whole multiple of --step ({step:g} s)")

@@ -49,9 +49,9 @@ def validate(options: CorrelateOptions) -> Checked:
     """Check every option, the sensor file and the output paths, before any decoding; OptionError if bad."""
     from msdc.pipeline.report.tables import TABLE_FILES, parquet_path
 
+    check_declared(options)
     checked = check_decoding(options)
     check_aircraft(options)
-    check_declared(options)
     if options.tables == "parquet" and options.output is None:
         raise OptionError("--tables parquet: needs -o (the tables are written beside the workbook)")
     checked.output = output_path("-o", options.output, (".xlsx",))

@@ -28,8 +28,8 @@ SKIPPED_SHOWN = 20  # skipped blocks decode lists one per line, per input; the r
 
 def validate(options: DecodeOptions) -> Checked:
     """Check every option and the output paths before any decoding; OptionError if bad."""
-    checked = check_decoding(options)
     check_declared(options)
+    checked = check_decoding(options)
     checked.output = output_path("-o", options.output, (".csv", ".parquet"))
     if checked.output is not None:
         out = checked.output

@@ -40,9 +40,9 @@ if TYPE_CHECKING:
 
 def validate(options: QualityOptions) -> Checked:
     """Check every option, the sensor file and the output paths, before any decoding; OptionError if bad."""
+    check_declared(options)
     checked = check_decoding(options)
     check_aircraft(options)
-    check_declared(options)
     checked.output = output_path("-o", options.output, (".xlsx",))
     checked.warnings += check_workbook(options, checked, figure_windows=0, sensors_required=False)
     return checked

@@ -24,9 +24,8 @@ from msdc.pipeline.progress import Progress
 
 def validate(options: StatsOptions) -> Checked:
     """Check the inputs, editions and --chunk-mb before any decoding; OptionError if bad."""
-    checked = check_decoding(options)
     check_declared(options)
-    return checked
+    return check_decoding(options)
 
 
 @dataclass

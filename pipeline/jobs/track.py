@@ -84,12 +84,12 @@ def validate(options: TrackOptions, *, require_output: bool = False) -> Checked:
     """Check every option, the sensor file and the output paths before any decoding; OptionError if bad.
     ``require_output`` (the command): at least one of -o, --json and --figures; track_job returns the table
     whatever is written."""
-    checked = check_decoding(options)
-    check_aircraft(options)
     check_tracking(options)
     if options.smoother not in SMOOTHERS:  # before check_declared: its message says "one of"
         raise OptionError(f"--smoother {options.smoother!r}: must be one of {', '.join(SMOOTHERS)}")
     check_declared(options)
+    checked = check_decoding(options)
+    check_aircraft(options)
     parse_sources(options.sources)
     checked.output = output_path("-o", options.output, (".csv", ".parquet"))
     checked.json = output_path("--json", options.json, (".json",))

@@ -226,6 +226,25 @@ def test_every_declared_range_is_checked_at_its_bounds(options_cls):
                 check_declared(dataclasses.replace(options_cls(), **{f.name: kind(bad)}))
 
 
+@pytest.mark.parametrize(("command", "options", "flag"), [
+    ("decode", DecodeOptions(chunk_mb=0.0), "--chunk-mb"), ("stats", StatsOptions(format="zip"), "--format"),
+    ("correlate", CorrelateOptions(callsign="MAS72", slot_s=0.0), "--slot"),
+    ("quality", QualityOptions(all_aircraft=True, reference="x"), "--reference"),
+    ("track", TrackOptions(all_aircraft=True, json="t.json", adsb_sigma_m=0.1), "--adsb-sigma"),
+    ("conflicts", ConflictOptions(output="c.csv", radius_nm=0.0), "--radius-nm")])
+def test_a_declared_option_is_checked_before_the_inputs_are_read(command, options, flag, monkeypatch):
+    """Each job checks the declared ranges and choices first: a bad one is said before any input is hashed
+    (a day's recording takes seconds), by the library as by the command line."""
+    import importlib
+
+    from msdc.pipeline.jobs import common
+
+    monkeypatch.setattr(common, "sha256", lambda path: pytest.fail(f"{path} hashed before the options"))
+    job = importlib.import_module(f"msdc.pipeline.jobs.{command}")
+    with pytest.raises(OptionError, match=f"^{flag} "):
+        job.validate(dataclasses.replace(options, inputs=(str(ROOT / "fixtures" / "radar.ast"),)))
+
+
 def test_what_relates_options_is_not_declared():
     """--max-coast's lower bound is --step and --threshold is strictly inside (0, 1): the jobs check them."""
     fields = {f.name: spec for f, spec, _ in declared(ConflictOptions)}
