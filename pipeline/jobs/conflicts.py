@@ -37,13 +37,7 @@ from msdc.pipeline.jobs.common import (
     spare_inputs,
     tracker_inputs,
 )
-from msdc.pipeline.jobs.options import (
-    ESTIMATED,
-    SURFACE_MODES,
-    VERTICAL_MODELS,
-    ConflictOptions,
-    check_declared,
-)
+from msdc.pipeline.jobs.options import ESTIMATED, ConflictOptions, check_declared
 from msdc.pipeline.progress import Progress
 
 # aircraft are tracked again for their predictions in batches of about this many reports, each batch's
@@ -76,10 +70,6 @@ def validate(options: ConflictOptions) -> Checked:
     """Check every option, the sensor file and the output paths before any decoding; OptionError if bad."""
     step = check_tracking(options)
     horizons = parse_horizons(options.horizons_s)
-    if options.vertical not in VERTICAL_MODELS:  # before check_declared: its message says "one of"
-        raise OptionError(f"--vertical {options.vertical!r}: must be one of {', '.join(VERTICAL_MODELS)}")
-    if options.surface not in SURFACE_MODES:
-        raise OptionError(f"--surface {options.surface!r}: must be one of {', '.join(SURFACE_MODES)}")
     check_declared(replace(options, horizons_s=horizons))
     checked = check_decoding(options)
     for h in horizons:

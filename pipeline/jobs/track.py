@@ -37,7 +37,6 @@ from msdc.pipeline.jobs.common import (
     tracker_inputs,
 )
 from msdc.pipeline.jobs.options import ESTIMATED, TrackOptions, check_declared
-from msdc.pipeline.meta import SMOOTHERS
 from msdc.pipeline.progress import Progress
 
 # the columns of the track table, in order (issue 10); the tracker's other columns follow
@@ -85,8 +84,6 @@ def validate(options: TrackOptions, *, require_output: bool = False) -> Checked:
     ``require_output`` (the command): at least one of -o, --json and --figures; track_job returns the table
     whatever is written."""
     check_tracking(options)
-    if options.smoother not in SMOOTHERS:  # before check_declared: its message says "one of"
-        raise OptionError(f"--smoother {options.smoother!r}: must be one of {', '.join(SMOOTHERS)}")
     check_declared(options)
     checked = check_decoding(options)
     check_aircraft(options)

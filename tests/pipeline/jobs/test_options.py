@@ -193,6 +193,9 @@ DECLARED_ERRORS = [
     (ConflictOptions(vertical_ft=math.nan), "--vertical-ft nan: must be a finite number from 1 to 100000 ft"),
     (ConflictOptions(vertical_tolerance_ft=-1.0),
      "--vertical-tolerance-ft -1.0: must be a finite number from 0 to 500 ft"),
+    (TrackOptions(smoother="two-filter"), "--smoother 'two-filter': must be rts or imm"),
+    (ConflictOptions(vertical="probable"), "--vertical 'probable': must be gate or gaussian"),
+    (ConflictOptions(surface="maybe"), "--surface 'maybe': must be exclude or include"),
     (ConflictOptions(method="montecarlo"), "--method 'montecarlo': must be one of exact, one-block, blocks, "
                                            "midpoint"),
 ]
