@@ -6,14 +6,13 @@ from __future__ import annotations
 
 import argparse
 import atexit
-import datetime as dt
 import gc
 import importlib
 import os
 import sys
 from typing import TYPE_CHECKING
 
-from msdc.pipeline.meta import FORMATS as _FORMATS
+from msdc.pipeline.jobs.options import COMMAND_OPTIONS, add_options, from_args
 from msdc.pipeline.meta import software_version
 from msdc.pipeline.progress import Progress
 
@@ -37,7 +36,6 @@ class _Lazy:
 common = _Lazy("msdc.pipeline.jobs.common")  # the jobs' errors, caught in main()
 asterix_errors = _Lazy("msdc.asterix.errors")
 transaction = _Lazy("msdc.pipeline.report.transaction")  # every file of a run is written through one
-FORMATS = list(_FORMATS)
 
 
 class CliError(Exception):
@@ -61,189 +59,27 @@ class _Version(argparse.Action):
         parser.exit()
 
 
-def _date(text: str) -> dt.date:
-    try:
-        return dt.date.fromisoformat(text)
-    except ValueError as exc:
-        raise argparse.ArgumentTypeError(f"not a date (YYYY-MM-DD): {text!r}") from exc
-
-
-def _edition(text: str) -> str:
-    cat, sep, ed = text.partition("=")
-    if not sep or not cat.strip().isdigit() or not ed:
-        raise argparse.ArgumentTypeError(f"expected CAT=EDITION (e.g. 21=0.26 or 21=auto), got {text!r}")
-    return f"{int(cat)}={ed.strip()}"
-
-
-def _decoding_options(p: argparse.ArgumentParser) -> None:
-    p.add_argument("--edition", action="append", type=_edition, default=[], metavar="CAT=ED",
-                   help="pin a category edition, e.g. 21=0.26, 48=1.27, or 21=auto (repeatable)")
-    p.add_argument("--date", type=_date,
-                   help="UTC day (YYYY-MM-DD) of a recording that carries no date (raw, final, gps, oradis)")
-    p.add_argument("--format", choices=FORMATS, help="container format (default: detected)")
-
-
-SENSORS_HELP = "sensor positions (TOML [[sensor]] tables)"
-SENSORS_OPTIONAL_HELP = ("sensor positions (TOML [[sensor]] tables); needed when radar plots are used, "
-                         "not for ADS-B alone")
-
-
-def _aircraft_options(p: argparse.ArgumentParser, all_help: str, *, sensors_required: bool = True) -> None:
-    """Inputs, the sensor file and the aircraft selection shared by correlate, quality and track."""
-    p.add_argument("inputs", nargs="+", metavar="INPUT")
-    p.add_argument("--sensors", required=sensors_required,
-                   help=SENSORS_HELP if sensors_required else SENSORS_OPTIONAL_HELP)
-    who = p.add_mutually_exclusive_group(required=True)
-    who.add_argument("--callsign", help="call sign (case and spaces ignored)")
-    who.add_argument("--address", help="24-bit aircraft address in hex")
-    who.add_argument("--all", action="store_true", help=all_help)
-
-
-def _adsb_sigma_option(p: argparse.ArgumentParser, used: str) -> None:
-    """--adsb-sigma: the accuracy the user declares for ADS-B reports that carry no NACp."""
-    p.add_argument("--adsb-sigma", type=float, metavar="M",
-                   help="1-sigma position error per axis (m, 0.5-20000) declared for ADS-B reports without "
-                        f"NACp (CAT021 0.2x: its figure of merit is not read as NACp){used}; reports with "
-                        "NACp keep theirs, NACp 0 (unknown) stays untracked. Without it such reports are "
-                        "not tracked")
-
-
-def _sources_option(p: argparse.ArgumentParser) -> None:
-    """--sources: the sensor kinds the tracker fuses (track and conflicts)."""
-    p.add_argument("--sources", default="radar,adsb", help="sensor kinds to fuse: radar, adsb or radar,adsb")
+COMMAND_HELP = {
+    "decode": "decode recordings to CSV or Parquet",
+    "stats": "what the recordings hold",
+    "correlate": "correlate radar against ADS-B per aircraft (thesis algorithm)",
+    "quality": "sensor data quality and radar accuracy against ADS-B",
+    "track": "fused IMM tracks per aircraft from every radar and ADS-B report",
+    "conflicts": "conflict probability from IMM-predicted tracks: alerts, losses of separation, warning "
+                 "times, false alerts",
+}
 
 
 def build_parser() -> argparse.ArgumentParser:
-    """The msdc argument parser: one subcommand per job, options as docs/guide/ lists them."""
+    """The msdc argument parser: one subcommand per job, its options those its options dataclass declares
+    (pipeline.jobs.options)."""
     parser = argparse.ArgumentParser(prog="msdc", description="Multi-Sensor Data Correlator: ASTERIX "
                                      "CAT048/CAT021 decoding and radar/ADS-B correlation.")
     parser.add_argument("--version", action=_Version)
     sub = parser.add_subparsers(dest="command", required=True)
-
-    d = sub.add_parser("decode", help="decode recordings to CSV or Parquet")
-    d.add_argument("inputs", nargs="+", metavar="INPUT")
-    d.add_argument("-o", "--output", help="OUT.csv or OUT.parquet (one file per category: stem_cat048...)")
-    d.add_argument("--category", type=int, action="append", choices=[21, 48], help="only this category")
-    d.add_argument("--strict", action="store_true", help="stop at the first bad block")
-    d.add_argument("--chunk-mb", type=float, default=64.0, help="streaming chunk size (MB)")
-    _decoding_options(d)
-
-    s = sub.add_parser("stats", help="what the recordings hold")
-    s.add_argument("inputs", nargs="+", metavar="INPUT")
-    s.add_argument("--chunk-mb", type=float, default=64.0,
-                   help="streaming chunk size (MB); memory follows it, not the file")
-    _decoding_options(s)
-
-    c = sub.add_parser("correlate", help="correlate radar against ADS-B per aircraft (thesis algorithm)")
-    _aircraft_options(c, "every aircraft seen by both sensors")
-    c.add_argument("-o", "--output", help="Excel report (.xlsx); the track figure is written beside it")
-    c.add_argument("--json", help="window summary as JSON")
-    c.add_argument("--slot", type=float, default=10.0, help="slot width D in seconds (default 10)")
-    c.add_argument("--gap", type=float, default=180.0, help="gap G in seconds that ends a period (180)")
-    c.add_argument("--pairs", choices=["radar-adsb", "radar-radar", "all"], default="radar-adsb",
-                   help="sensor pairs to correlate per aircraft: each radar against ADS-B (default), each "
-                        "two radars, or both; plots of two radars are never mixed")
-    c.add_argument("--split-adsb", action="store_true",
-                   help="keep ADS-B ground stations apart (default: one ADS-B source per aircraft)")
-    c.add_argument("--quality", action="store_true",
-                   help="add the quality sheets (Quality, Update intervals, Gaps, Jumps, ADS-B quality, "
-                        "Radar accuracy, Radar biases, Figures) and their PNGs")
-    c.add_argument("--drop-jumps", action="store_true", help="remove detected ADS-B position jumps first")
-    c.add_argument("--min-nic", type=int, help="drop ADS-B reports with NUCp/NIC below N")
-    c.add_argument("--min-nacp", type=int, help="drop ADS-B reports with NACp below N")
-    c.add_argument("--fill", choices=["hold", "predict"], default="hold",
-                   help="empty slots: hold the previous slot (default, the thesis) or take the tracker's "
-                        "prediction")
-    c.add_argument("--tables", choices=["auto", "xlsx", "parquet"], default="auto",
-                   help="slot and lag tables: in the workbook (xlsx), as STEM_slots.parquet and "
-                        "STEM_correlation.parquet beside it (parquet), or Parquet past 5,000 rows (auto)")
-    _adsb_sigma_option(c, "; used by --fill predict")
-    _decoding_options(c)
-
-    q = sub.add_parser("quality", help="sensor data quality and radar accuracy against ADS-B")
-    _aircraft_options(q, "every aircraft", sensors_required=False)
-    q.add_argument("-o", "--output", help="Excel workbook (.xlsx); figures are written beside it")
-    q.add_argument("--json", help="the tables as JSON")
-    q.add_argument("--gap", type=float, default=180.0,
-                   help="gap in seconds reported as a discontinuity (180)")
-    q.add_argument("--reference", choices=["adsb", "track"], default="adsb",
-                   help="radar accuracy against ADS-B interpolated linearly (default) or against the "
-                        "smoothed ADS-B-only IMM track")
-    _adsb_sigma_option(q, "; used by --reference track")
-    _decoding_options(q)
-
-    t = sub.add_parser("track", help="fused IMM tracks per aircraft from every radar and ADS-B report")
-    _aircraft_options(t, "every aircraft", sensors_required=False)
-    t.add_argument("-o", "--output", help="track table: tracks.csv or tracks.parquet")
-    t.add_argument("--json", help="per-aircraft and per-sensor summary as JSON")
-    t.add_argument("--figures", metavar="DIR", help="one PNG per aircraft in this directory")
-    t.add_argument("--step", type=float, default=1.0, help="output grid in seconds (default 1)")
-    t.add_argument("--max-coast", type=float, default=60.0,
-                   help="seconds a track is predicted after its last report before it ends (default 60)")
-    t.add_argument("--smooth", action="store_true", help="backward (RTS) pass: reference trajectories")
-    t.add_argument("--smoother", choices=["rts", "imm"],
-                   help="implies --smooth: RTS on the combined estimate (default) or the IMM smoother "
-                        "(smoothed mode probabilities too; better on straight legs, worse in most "
-                        "manoeuvres in our validations)")
-    t.add_argument("--tpm", help="mode transition law: fixed:P, dynamic, dynamic:A,B or expm:TAU[,TAU2] "
-                                 "(default expm:150,20)")
-    _sources_option(t)
-    t.add_argument("--noise", default="estimate",
-                   help="measurement noise: estimate (default: each sensor's sigmas from the tracker's "
-                        "residuals, a few extra passes), timing (the same, and an ADS-B along-track "
-                        "time-stamp sigma) or declared (the sensor file's sigmas, ADS-B from NACp)")
-    _adsb_sigma_option(t, "; with --noise estimate it is then refined from the residuals")
-    _decoding_options(t)
-
-    k = sub.add_parser("conflicts", help="conflict probability from IMM-predicted tracks: alerts, losses of "
-                                         "separation, warning times, false alerts")
-    k.add_argument("inputs", nargs="+", metavar="INPUT")
-    k.add_argument("--sensors", help=SENSORS_OPTIONAL_HELP)
-    k.add_argument("-o", "--output", required=True,
-                   help="conflicts.csv (losses and warning times beside it) or conflicts.xlsx")
-    k.add_argument("--json", help="counts and the tables as JSON")
-    k.add_argument("--horizon", default="20,60,120", help="look-aheads in seconds (default 20,60,120)")
-    k.add_argument("--radius-nm", type=float, default=5.0, help="horizontal separation minimum (default 5)")
-    k.add_argument("--vertical-ft", type=float, default=1000.0,
-                   help="vertical separation minimum (default 1000)")
-    k.add_argument("--vertical-tolerance-ft", type=float, default=25.0,
-                   help="levels closer than --vertical-ft by at most this are separated: the 25 ft quantum "
-                        "of reported levels (default 25)")
-    k.add_argument("--threshold", type=float, default=0.2,
-                   help="PC above which an alert is raised (default 0.2)")
-    k.add_argument("--method", default="exact",
-                   help="PC method: exact (default), one-block, blocks or midpoint")
-    k.add_argument("--vertical", default="gate",
-                   help="vertical proximity: gate (predicted levels closer than --vertical-ft, default) or "
-                        "gaussian (PC times the probability from the vertical filter's sigma)")
-    k.add_argument("--surface", default="exclude",
-                   help="pairs with an aircraft on the aerodrome surface (as its reports say, else below "
-                        "50 kt): exclude (default: separation minima apply between airborne aircraft) or "
-                        "include them in the losses and alerts; counted either way")
-    k.add_argument("--figures", metavar="DIR", help="one PNG per alert event in this directory")
-    k.add_argument("--step", type=float, default=1.0, help="output step in seconds (default 1)")
-    k.add_argument("--max-coast", type=float, default=60.0,
-                   help="seconds a track is predicted after its last report before it ends (default 60)")
-    k.add_argument("--tpm", help="mode transition law of the IMM (default expm:150,20)")
-    _sources_option(k)
-    k.add_argument("--noise", default="declared",
-                   help="measurement noise: declared (default: the sensor file's sigmas, ADS-B from NACp "
-                        "or --adsb-sigma; what the conflict validations used), estimate or timing "
-                        "(each sensor's sigmas from the tracker's residuals first, as msdc track)")
-    _adsb_sigma_option(k, "; with --noise estimate it is then refined from the residuals")
-    _decoding_options(k)
+    for command, summary in COMMAND_HELP.items():
+        add_options(sub.add_parser(command, help=summary), COMMAND_OPTIONS[command])
     return parser
-
-
-def _decoding(args) -> dict:
-    return {"inputs": tuple(args.inputs), "editions": tuple(args.edition), "date": args.date,
-            "format": args.format}
-
-
-def _aircraft(args) -> dict:
-    return {**_decoding(args), "sensors": args.sensors, "callsign": args.callsign, "address": args.address,
-            "all_aircraft": args.all, "output": args.output, "json": args.json, "gap_s": args.gap,
-            "adsb_sigma_m": args.adsb_sigma}
 
 
 def _warn(command: str, warnings: list[str]) -> None:
@@ -286,9 +122,7 @@ def cmd_decode(args) -> int:
 
     _numba_without_scipy()
     progress = Progress()
-    options = decode.DecodeOptions(**_decoding(args), output=args.output,
-                                   categories=tuple(args.category or ()), strict=args.strict,
-                                   chunk_mb=args.chunk_mb)
+    options = from_args(decode.DecodeOptions, args)
     try:
         with transaction.staged() as tx:
             result = decode.decode_job(options, tx=tx,
@@ -319,7 +153,7 @@ def cmd_stats(args) -> int:
     from msdc.pipeline.quality.inventory import format_stats
 
     _numba_without_scipy()
-    options = stats.StatsOptions(**_decoding(args), chunk_mb=args.chunk_mb)
+    options = from_args(stats.StatsOptions, args)
     result = stats.stats_job(options, progress=Progress())
     _warn("stats", result.warnings)
     print(format_stats(result.tables), end="")
@@ -337,10 +171,7 @@ def cmd_correlate(args) -> int:
     from msdc.pipeline.jobs import correlate
 
     progress = Progress()
-    options = correlate.CorrelateOptions(
-        **_aircraft(args), slot_s=args.slot, pairs=args.pairs, split_adsb=args.split_adsb,
-        quality=args.quality, drop_jumps=args.drop_jumps, min_nic=args.min_nic, min_nacp=args.min_nacp,
-        fill=args.fill, tables=args.tables)
+    options = from_args(correlate.CorrelateOptions, args)
     prepared = correlate.prepare_correlation_writers(options)  # gets ready on the other core meanwhile
     try:
         return _correlate(options, progress, prepared)
@@ -376,7 +207,7 @@ def cmd_quality(args) -> int:
     from msdc.pipeline.jobs import quality
 
     _numba_without_scipy()
-    options = quality.QualityOptions(**_aircraft(args), reference=args.reference)
+    options = from_args(quality.QualityOptions, args)
     with transaction.staged() as tx:
         result = _run_job("quality", quality.validate, quality.quality_job, options, Progress())
         print(quality.text(result))
@@ -414,12 +245,7 @@ def cmd_track(args) -> int:
     """msdc track: fused tracks of the selected aircraft, written as Parquet or CSV; the exit status."""
     from msdc.pipeline.jobs import track
 
-    options = track.TrackOptions(
-        **_decoding(args), sensors=args.sensors, callsign=args.callsign, address=args.address,
-        all_aircraft=args.all, output=args.output, json=args.json, figures=args.figures, step_s=args.step,
-        max_coast_s=args.max_coast, smooth=args.smooth or args.smoother is not None,
-        smoother=args.smoother or "rts", tpm=args.tpm, sources=args.sources, noise=args.noise,
-        adsb_sigma_m=args.adsb_sigma)
+    options = from_args(track.TrackOptions, args, smooth=args.smooth or args.smoother is not None)
     with transaction.staged() as tx:
         result = _run_job("track", lambda o: track.validate(o, require_output=True), track.track_job, options,
                           Progress())
@@ -434,13 +260,7 @@ def cmd_conflicts(args) -> int:
     from msdc.pipeline.jobs import conflicts
     from msdc.pipeline.jobs.common import noise_text
 
-    options = conflicts.ConflictOptions(
-        **_decoding(args), sensors=args.sensors, output=args.output, json=args.json, step_s=args.step,
-        max_coast_s=args.max_coast, tpm=args.tpm, horizons_s=args.horizon, radius_nm=args.radius_nm,
-        vertical_ft=args.vertical_ft, vertical_tolerance_ft=args.vertical_tolerance_ft,
-        threshold=args.threshold, method=args.method, vertical=args.vertical,
-        surface=args.surface, figures=args.figures, noise=args.noise, adsb_sigma_m=args.adsb_sigma,
-        sources=args.sources)
+    options = from_args(conflicts.ConflictOptions, args)
     with transaction.staged() as tx:
         result = _run_job("conflicts", conflicts.validate, conflicts.conflict_job, options, Progress())
         print(conflicts.text(result) + noise_text(result.noise))

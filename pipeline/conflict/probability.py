@@ -28,7 +28,7 @@ from functools import lru_cache
 import numpy as np
 from scipy.special import ndtr
 
-METHODS = ("exact", "one-block", "blocks", "midpoint")
+from msdc.pipeline.meta import METHODS
 
 _DEFAULT_STRIPS = 16
 _TAIL_SIGMAS = 9.0  # beyond 9 sigma the normal density is below 1e-18 of its peak

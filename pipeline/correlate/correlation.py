@@ -23,6 +23,7 @@ from msdc.pipeline.correlate.results import (
 )
 from msdc.pipeline.correlate.slots import slot_count, slot_series
 from msdc.pipeline.correlate.windows import in_window, overlap_windows, short_window_reason
+from msdc.pipeline.meta import FILLS, PAIRS
 from msdc.pipeline.model.aircraft import NoSuchAircraft, aircraft_rows, one_aircraft
 from msdc.pipeline.model.arguments import finite_number
 from msdc.pipeline.model.dedup import duplicate_mask
@@ -31,7 +32,6 @@ from msdc.pipeline.model.jumps import JUMP_FLAG_COLUMNS, detect_jumps
 from msdc.pipeline.model.time import clock, is_dated, iso_utc, midnight, seconds_since, utc_frame, with_clock
 from msdc.pipeline.parallel import map_ordered
 
-PAIRS = ("radar-adsb", "radar-radar", "all")
 # A Pearson coefficient is shown where at least this many slot pairs overlap: of m pairs of independent
 # noise, |r| exceeds 0.997 by chance 5 % of the time at m = 3, 0.878 at m = 5 and 0.632 at m = 10 (r = +-1
 # always at m = 2), and slotted tracks are smooth, so short overlaps say nothing; 10 slots are 100 s at
@@ -553,8 +553,8 @@ def correlate(meas: pd.DataFrame, *, callsign: str | None = None, address: str |
     seconds from midnight UTC of the earliest report. ``fill``: empty
     slots take the previous slot ("hold", the thesis) or the tracker's prediction ("predict").
     """
-    if fill not in ("hold", "predict"):
-        raise ValueError(f"fill must be 'hold' or 'predict', got {fill!r}")
+    if fill not in FILLS:
+        raise ValueError(f"fill must be {' or '.join(map(repr, FILLS))}, got {fill!r}")
     finite_number("slot_s", slot_s)
     finite_number("gap_s", gap_s, above=None, at_least=0.0)
     if pairs not in PAIRS:

@@ -15,8 +15,6 @@ from collections.abc import Callable
 import numpy as np
 import pandas as pd
 
-FILLS = ("hold", "predict")
-
 Predictor = Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]]
 
 

@@ -1,7 +1,8 @@
-"""What the command modules share: the errors (``OptionError``, ``JobError``), one check per kind of option
-value, the inputs, outputs and sensor file checked before anything is decoded (``Checked``), the option
-dataclasses several commands extend, decoding the inputs with the warnings about them, and the steps two
-commands run (the quality step; the tracker's measurements, row limit and noise estimate)."""
+"""What the command modules share: the errors (``JobError``; ``OptionError`` is the options'), the checks
+that relate options (one aircraft selection, --max-coast against --step...), the inputs, outputs and sensor
+file checked before anything is decoded (``Checked``), decoding the inputs with the warnings about them, and
+the steps two commands run (the quality step; the tracker's measurements, row limit and noise estimate).
+The options themselves, their ranges and choices are declared in ``pipeline.jobs.options``."""
 
 from __future__ import annotations
 
@@ -17,7 +18,20 @@ from typing import TYPE_CHECKING
 
 import pandas as pd
 
-from msdc.pipeline.meta import FORMATS, software_version
+from msdc.pipeline.jobs.options import (
+    MAX_COAST_RANGE_S,
+    SOURCES,
+    STEP_RANGE_S,
+    AircraftOptions,
+    CorrelateOptions,
+    DecodingOptions,
+    OptionError,
+    QualityOptions,
+    TrackOptions,
+    check_number,
+)
+from msdc.pipeline.meta import ADSB_SIGMA_RANGE_M as ADSB_SIGMA_RANGE_M  # re-exported, as before
+from msdc.pipeline.meta import software_version
 from msdc.pipeline.model import editions as edition_notes
 from msdc.pipeline.model.identity import normalise_address, normalise_callsign
 from msdc.pipeline.model.load import (
@@ -38,30 +52,7 @@ if TYPE_CHECKING:  # the steps are imported where they run: msdc stats imports n
     from msdc.pipeline.report.transaction import OutputTransaction
 
 
-GAP_RANGE_S = (0.1, 86400.0)
-
-# --adsb-sigma: 1-sigma error per axis declared for ADS-B reports without NACp (CAT021 0.2x)
-ADSB_SIGMA_RANGE_M = (0.5, 20000.0)
-
-CHUNK_RANGE_MB = (0.1, 4096.0)
-SOURCES = ("radar", "adsb")
-# --noise: the sensor file's sigmas and NACp; estimated from residuals (one isotropic ADS-B sigma per
-# class); estimated with an ADS-B along-track timing term as well (docs/tracker.md: fewer gated reports
-# and track segments on the real recording, predictions through gaps no better on the mean)
-NOISE = ("declared", "estimate", "timing")
-ESTIMATED = ("estimate", "timing")
-STEP_RANGE_S = (1e-3, 3600.0)  # below 1 ms the grid explodes (a day would be 86 M rows per aircraft)
-MAX_COAST_RANGE_S = (0.0, 86400.0)
 RAISED_SHOWN = 10  # aircraft listed on stdout whose sigma the per-aircraft guard raised; the JSON has all
-
-
-class OptionError(ValueError):
-    """An option, the sensor file or an output path is not usable: one line naming it and what is allowed.
-    ``status`` is the exit status a command line should use (2: usage)."""
-
-    def __init__(self, message: str, status: int = 2):
-        super().__init__(message)
-        self.status = status
 
 
 class JobError(RuntimeError):
@@ -86,21 +77,7 @@ def carrying(said: Iterable[str] = ()) -> Iterator[list[str]]:
 
 
 # ---------------------------------------------------------------------------------------------------------
-# Validation helpers, one per kind of value
-
-
-def check_number(name: str, value: float | None, lo: float, hi: float, unit: str = "") -> None:
-    """A finite number within [lo, hi], else OptionError naming the option."""
-    if value is None:
-        return
-    if not isinstance(value, int | float) or not math.isfinite(value) or not lo <= value <= hi:
-        raise OptionError(f"{name} {value!r}: must be a finite number from {lo:g} to {hi:g}{unit}")
-
-
-def check_integer(name: str, value: int | None, lo: int, hi: int) -> None:
-    """An integer within [lo, hi], else OptionError naming the option."""
-    if value is not None and not (isinstance(value, int) and lo <= value <= hi):
-        raise OptionError(f"{name} {value!r}: must be an integer from {lo} to {hi}")
+# Validation helpers, one per kind of value (the declared ranges and choices: options.check_declared)
 
 
 def _editions(editions: list[str] | dict | None) -> dict[int, str]:
@@ -272,24 +249,13 @@ def check_figures_dir(path, *, writable: bool = False) -> None:
 
 
 # ---------------------------------------------------------------------------------------------------------
-# Options shared by several commands
-
-
-@dataclass(frozen=True)
-class DecodingOptions:
-    """How to read the inputs (shared by every job)."""
-
-    inputs: tuple[str, ...] = ()
-    editions: tuple[str, ...] = ()  # "CAT=EDITION"
-    date: dt.date | None = None
-    format: str | None = None
+# Checks of options shared by several commands
 
 
 def check_decoding(o: DecodingOptions) -> Checked:
-    """The options every job shares (--format, --date, the inputs, --edition): the inputs to read, the
-    editions pinned and the warnings about the inputs; OptionError if bad."""
-    if o.format is not None and o.format not in FORMATS:
-        raise OptionError(f"--format {o.format!r}: must be one of {', '.join(FORMATS)}")
+    """The options every job shares (--date, the inputs, --edition; --format is a declared choice): the
+    inputs to read, the editions pinned and the warnings about the inputs; OptionError if bad. The jobs run
+    it after check_declared: a bad option is found before the inputs are read and hashed."""
     if o.date is not None:
         from msdc.asterix.reader import parse_date  # the rule asterix.read and load apply to date=
 
@@ -304,22 +270,8 @@ def check_decoding(o: DecodingOptions) -> Checked:
     return Checked(paths, _editions(editions), warnings=warnings)
 
 
-@dataclass(frozen=True)
-class AircraftOptions(DecodingOptions):
-    """Inputs, the sensor file and the aircraft selection (call sign, address or all)."""
-
-    sensors: str | None = None
-    callsign: str | None = None
-    address: str | None = None
-    all_aircraft: bool = False
-    output: str | None = None
-    json: str | None = None
-    gap_s: float = 180.0
-    adsb_sigma_m: float | None = None  # declared sigma (m per axis) for ADS-B reports without NACp
-
-
 def check_aircraft(o: AircraftOptions) -> None:
-    """The aircraft selection (exactly one of --callsign, --address, --all), --gap and --adsb-sigma."""
+    """The aircraft selection: exactly one of --callsign, --address and --all, each well formed."""
     chosen = [o.callsign is not None, o.address is not None, bool(o.all_aircraft)]
     if sum(chosen) != 1:
         raise OptionError("choose exactly one of --callsign, --address or --all")
@@ -329,23 +281,6 @@ def check_aircraft(o: AircraftOptions) -> None:
         text = (normalise_address(o.address) or "")
         if len(text) != 6 or any(c not in "0123456789ABCDEF" for c in text):
             raise OptionError(f"--address {o.address!r}: must be a 24-bit hex address (up to 6 hex digits)")
-    check_number("--gap", o.gap_s, *GAP_RANGE_S, " s")
-    check_number("--adsb-sigma", o.adsb_sigma_m, *ADSB_SIGMA_RANGE_M, " m")
-
-
-@dataclass(frozen=True)
-class TrackOptions(AircraftOptions):
-    """Everything ``track_job`` needs; see ``msdc track --help`` for the meaning of each option. The
-    inputs, sensor file, aircraft selection and outputs are the other jobs' (``gap_s`` is unused here)."""
-
-    figures: str | None = None  # directory for one PNG per aircraft
-    step_s: float = 1.0
-    max_coast_s: float = 60.0
-    smooth: bool = False
-    smoother: str = "rts"  # with smooth: "rts" (combined estimate) or "imm" (two-filter IMM smoother)
-    tpm: str | None = None  # None: the tracker's default (expm:150,20)
-    sources: tuple[str, ...] = SOURCES
-    noise: str = "estimate"  # one of NOISE (pipeline.track.noise estimates; "declared": as given)
 
 
 def parse_sources(value) -> tuple[str, ...]:
@@ -359,8 +294,9 @@ def parse_sources(value) -> tuple[str, ...]:
 
 
 def check_tracking(options: TrackOptions) -> float:
-    """The tracker's options shared by track and conflicts (--step, --max-coast, --tpm, --noise); OptionError
-    if bad, else the step (s)."""
+    """The tracker's options shared by track and conflicts (--step, --max-coast, --tpm), checked before
+    check_declared: --max-coast relates to --step, and --step's own messages come first; OptionError if
+    bad, else the step (s)."""
     from msdc.pipeline.track import check_tpm
 
     step = options.step_s
@@ -378,8 +314,6 @@ def check_tracking(options: TrackOptions) -> float:
             check_tpm(str(options.tpm), max(float(coast), float(step), 1.0))
         except ValueError as exc:
             raise OptionError(f"--tpm {options.tpm!r}: {str(exc).partition(': ')[2]}") from None
-    if options.noise not in NOISE:
-        raise OptionError(f"--noise {options.noise!r}: must be one of {', '.join(NOISE)}")
     return step
 
 
@@ -761,7 +695,8 @@ def quality_inputs(reference: str) -> list[str]:
     return need
 
 
-def quality_step(meas: pd.DataFrame, sensors: pd.DataFrame, options: AircraftOptions) -> QualityResult:
+def quality_step(meas: pd.DataFrame, sensors: pd.DataFrame, options: CorrelateOptions | QualityOptions
+                 ) -> QualityResult:
     """The quality tables and radar accuracy of the selected aircraft (quality_run); JobError when it is not
     in the inputs."""
     from msdc.pipeline.model.aircraft import NoSuchAircraft

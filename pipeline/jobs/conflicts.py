@@ -13,23 +13,19 @@ from __future__ import annotations
 
 import math
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
 import pandas as pd
 
 from msdc.pipeline.jobs.common import (
-    ADSB_SIGMA_RANGE_M,
-    ESTIMATED,
     Checked,
     JobError,
     OptionError,
-    TrackOptions,
     carrying,
     check_decoding,
     check_figures_dir,
-    check_number,
     check_output_rows,
     check_tracking,
     estimated_noise,
@@ -41,36 +37,14 @@ from msdc.pipeline.jobs.common import (
     spare_inputs,
     tracker_inputs,
 )
+from msdc.pipeline.jobs.options import ESTIMATED, ConflictOptions, check_declared
 from msdc.pipeline.progress import Progress
 from msdc.pipeline.report.files import json_value, write_csv, write_json
 from msdc.pipeline.report.transaction import OutputTransaction, staged
 
-METHODS = ("exact", "one-block", "blocks", "midpoint")
 # aircraft are tracked again for their predictions in batches of about this many reports, each batch's
 # filter histories (~1.4 kB a report) held at a time: ~0.35 GB
 PREDICTION_BATCH_REPORTS = 250_000
-VERTICAL_MODELS = ("gate", "gaussian")
-SURFACE_MODES = ("exclude", "include")  # pairs with an aircraft on the surface (pipeline.conflict.surface)
-HORIZON_RANGE_S = (1.0, 3600.0)
-RADIUS_RANGE_NM = (0.01, 100.0)
-VERTICAL_RANGE_FT = (1.0, 100_000.0)
-VERTICAL_TOLERANCE_RANGE_FT = (0.0, 500.0)
-
-
-@dataclass(frozen=True)
-class ConflictOptions(TrackOptions):
-    """Everything ``conflict_job`` needs; see ``msdc conflicts --help``. Every aircraft is tracked."""
-
-    all_aircraft: bool = True
-    noise: str = "declared"  # the conflict validations used declared noise; "estimate" as msdc track
-    horizons_s: tuple[float, ...] = (20.0, 60.0, 120.0)
-    radius_nm: float = 5.0
-    vertical_ft: float = 1000.0
-    vertical_tolerance_ft: float = 25.0  # levels closer than vertical_ft by at most this are separated
-    threshold: float = 0.2
-    method: str = "exact"
-    vertical: str = "gate"  # "gaussian": PC times P(|dz| < vertical_ft) from the vertical filter's sigma
-    surface: str = "exclude"  # pairs with an aircraft on the surface out of losses and alerts; or "include"
 
 
 def parse_horizons(value) -> tuple[float, ...]:
@@ -96,17 +70,14 @@ def parse_horizons(value) -> tuple[float, ...]:
 
 def validate(options: ConflictOptions) -> Checked:
     """Check every option, the sensor file and the output paths before any decoding; OptionError if bad."""
-    checked = check_decoding(options)
     step = check_tracking(options)
     horizons = parse_horizons(options.horizons_s)
+    check_declared(replace(options, horizons_s=horizons))
+    checked = check_decoding(options)
     for h in horizons:
-        check_number("--horizon", h, *HORIZON_RANGE_S, " s")
         if abs(h / step - round(h / step)) > 1e-9:
             raise OptionError(f"--horizon {h:g}: must be a whole multiple of --step ({step:g} s)")
-    check_number("--radius-nm", options.radius_nm, *RADIUS_RANGE_NM, " NM")
-    check_number("--vertical-ft", options.vertical_ft, *VERTICAL_RANGE_FT, " ft")
     tol = options.vertical_tolerance_ft
-    check_number("--vertical-tolerance-ft", tol, *VERTICAL_TOLERANCE_RANGE_FT, " ft")
     if not tol < options.vertical_ft:
         raise OptionError(f"--vertical-tolerance-ft {tol!r}: must be less than --vertical-ft "
                           f"({options.vertical_ft:g})")
@@ -114,13 +85,6 @@ def validate(options: ConflictOptions) -> Checked:
     if not isinstance(t, int | float) or not math.isfinite(t) or not 0.0 < t < 1.0:
         raise OptionError(f"--threshold {t!r}: must be a probability strictly between 0 and 1")
     parse_sources(options.sources)
-    if options.method not in METHODS:
-        raise OptionError(f"--method {options.method!r}: must be one of {', '.join(METHODS)}")
-    if options.vertical not in VERTICAL_MODELS:
-        raise OptionError(f"--vertical {options.vertical!r}: must be one of {', '.join(VERTICAL_MODELS)}")
-    if options.surface not in SURFACE_MODES:
-        raise OptionError(f"--surface {options.surface!r}: must be one of {', '.join(SURFACE_MODES)}")
-    check_number("--adsb-sigma", options.adsb_sigma_m, *ADSB_SIGMA_RANGE_M, " m")
     checked.output = output_path("-o", options.output, (".csv", ".xlsx"))
     checked.json = output_path("--json", options.json, (".json",))
     if checked.output is None:

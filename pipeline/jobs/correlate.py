@@ -17,7 +17,6 @@ from typing import TYPE_CHECKING
 import pandas as pd
 
 from msdc.pipeline.jobs.common import (
-    AircraftOptions,
     Checked,
     JobError,
     OptionError,
@@ -25,8 +24,6 @@ from msdc.pipeline.jobs.common import (
     check_aircraft,
     check_beside,
     check_decoding,
-    check_integer,
-    check_number,
     check_workbook,
     marked_measurements,
     output_path,
@@ -36,6 +33,7 @@ from msdc.pipeline.jobs.common import (
     real_output,
     run_parameters,
 )
+from msdc.pipeline.jobs.options import CorrelateOptions, check_declared
 from msdc.pipeline.model.load import Loaded, release_free_memory
 from msdc.pipeline.progress import Progress
 from msdc.pipeline.report.outputs import Background, BackgroundFailed, Prepared
@@ -46,43 +44,16 @@ if TYPE_CHECKING:
     from msdc.pipeline.quality.quality_run import QualityResult
 
 
-SLOT_RANGE_S = (0.1, 3600.0)  # below 0.1 s the slot count and the lag tables explode
 FIGURE_WINDOWS = 6  # correlate --quality: slotting and lag figures of the first windows only
-INDICATOR_RANGE = (0, 11)  # NIC and NACp values
-
-
-@dataclass(frozen=True)
-class CorrelateOptions(AircraftOptions):
-    """Everything ``correlate_job`` needs; see the CLI for the meaning of each option."""
-
-    slot_s: float = 10.0
-    pairs: str = "radar-adsb"
-    split_adsb: bool = False
-    quality: bool = False
-    drop_jumps: bool = False
-    min_nic: int | None = None
-    min_nacp: int | None = None
-    fill: str = "hold"  # empty slots: "hold" the previous slot (thesis) or "predict" by the tracker
-    tables: str = "auto"  # slot and lag tables: in the workbook ("xlsx"), as Parquet beside it, or "auto"
 
 
 def validate(options: CorrelateOptions) -> Checked:
     """Check every option, the sensor file and the output paths, before any decoding; OptionError if bad."""
-    from msdc.pipeline.report.tables import TABLE_FILES, TABLE_MODES, parquet_path
+    from msdc.pipeline.report.tables import TABLE_FILES, parquet_path
 
+    check_declared(options)
     checked = check_decoding(options)
     check_aircraft(options)
-    from msdc.pipeline.correlate.correlation import PAIRS
-
-    check_number("--slot", options.slot_s, *SLOT_RANGE_S, " s")
-    if options.pairs not in PAIRS:
-        raise OptionError(f"--pairs {options.pairs!r}: must be one of {', '.join(PAIRS)}")
-    check_integer("--min-nic", options.min_nic, *INDICATOR_RANGE)
-    check_integer("--min-nacp", options.min_nacp, *INDICATOR_RANGE)
-    if options.fill not in ("hold", "predict"):
-        raise OptionError(f"--fill {options.fill!r}: must be hold or predict")
-    if options.tables not in TABLE_MODES:
-        raise OptionError(f"--tables {options.tables!r}: must be one of {', '.join(TABLE_MODES)}")
     if options.tables == "parquet" and options.output is None:
         raise OptionError("--tables parquet: needs -o (the tables are written beside the workbook)")
     checked.output = output_path("-o", options.output, (".xlsx",))

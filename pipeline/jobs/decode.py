@@ -11,19 +11,16 @@ from pathlib import Path
 import pandas as pd
 
 from msdc.pipeline.jobs.common import (
-    CHUNK_RANGE_MB,
     Checked,
-    DecodingOptions,
     JobError,
-    OptionError,
     check_beside,
     check_decoding,
-    check_number,
     format_hints,
     output_path,
     real_output,
     spare_inputs,
 )
+from msdc.pipeline.jobs.options import CATEGORIES, DecodeOptions, check_declared
 from msdc.pipeline.model import editions as edition_notes
 from msdc.pipeline.report.files import named, write_csv
 from msdc.pipeline.report.transaction import OutputTransaction, staged
@@ -31,29 +28,16 @@ from msdc.pipeline.report.transaction import OutputTransaction, staged
 SKIPPED_SHOWN = 20  # skipped blocks decode lists one per line, per input; the rest are counted
 
 
-@dataclass(frozen=True)
-class DecodeOptions(DecodingOptions):
-    """Everything ``decode_job`` needs."""
-
-    output: str | None = None
-    categories: tuple[int, ...] = ()
-    strict: bool = False
-    chunk_mb: float = 64.0
-
-
 def validate(options: DecodeOptions) -> Checked:
     """Check every option and the output paths before any decoding; OptionError if bad."""
+    check_declared(options)
     checked = check_decoding(options)
-    check_number("--chunk-mb", options.chunk_mb, *CHUNK_RANGE_MB, " MB")
     checked.output = output_path("-o", options.output, (".csv", ".parquet"))
-    bad = [c for c in options.categories if c not in (21, 48)]
-    if bad:
-        raise OptionError(f"--category {bad[0]}: must be 21 or 48")
     if checked.output is not None:
         out, base = checked.output, real_output(checked.output)
         spare_inputs(options.inputs, [(f"-o {out}", p) for p in (
-            out, *(category_output(base, c) for c in (21, 48)))])
-        cats = sorted(set(options.categories or (21, 48)))
+            out, *(category_output(base, c) for c in CATEGORIES))])
+        cats = sorted(set(options.categories or CATEGORIES))
         # written when several categories decode
         check_beside("-o", out, [(f"CAT{cat:03d} file", category_output(base, cat)) for cat in cats
                                  if len(cats) > 1])

@@ -15,9 +15,7 @@ from typing import TYPE_CHECKING
 
 from msdc.pipeline.jobs.common import (
     QUALITY_WITHOUT,
-    AircraftOptions,
     Checked,
-    OptionError,
     absent_categories,
     carrying,
     check_aircraft,
@@ -31,6 +29,7 @@ from msdc.pipeline.jobs.common import (
     run_parameters,
     sensors_path,
 )
+from msdc.pipeline.jobs.options import QualityOptions, check_declared
 from msdc.pipeline.model.load import Loaded
 from msdc.pipeline.progress import Progress
 from msdc.pipeline.report.transaction import OutputTransaction, staged
@@ -39,19 +38,11 @@ if TYPE_CHECKING:
     from msdc.pipeline.quality.quality_run import QualityResult
 
 
-@dataclass(frozen=True)
-class QualityOptions(AircraftOptions):
-    """Everything ``quality_job`` needs."""
-
-    reference: str = "adsb"  # radar accuracy against "adsb" (interpolated reports) or "track" (smoothed)
-
-
 def validate(options: QualityOptions) -> Checked:
     """Check every option, the sensor file and the output paths, before any decoding; OptionError if bad."""
+    check_declared(options)
     checked = check_decoding(options)
     check_aircraft(options)
-    if options.reference not in ("adsb", "track"):
-        raise OptionError(f"--reference {options.reference!r}: must be adsb or track")
     checked.output = output_path("-o", options.output, (".xlsx",))
     checked.warnings += check_workbook(options, checked, figure_windows=0, sensors_required=False)
     return checked

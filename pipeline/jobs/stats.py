@@ -9,33 +9,23 @@ from dataclasses import dataclass
 import pandas as pd
 
 from msdc.pipeline.jobs.common import (
-    CHUNK_RANGE_MB,
     Checked,
-    DecodingOptions,
     JobError,
     check_decoding,
-    check_number,
     date_ignored,
     format_hints,
     order_warnings,
 )
+from msdc.pipeline.jobs.options import StatsOptions, check_declared
 from msdc.pipeline.model import editions as edition_notes
 from msdc.pipeline.model.load import time_spans, widen_spans
 from msdc.pipeline.progress import Progress
 
 
-@dataclass(frozen=True)
-class StatsOptions(DecodingOptions):
-    """Everything ``stats_job`` needs."""
-
-    chunk_mb: float = 64.0  # streaming chunk: peak memory follows it, not the file size
-
-
 def validate(options: StatsOptions) -> Checked:
     """Check the inputs, editions and --chunk-mb before any decoding; OptionError if bad."""
-    checked = check_decoding(options)
-    check_number("--chunk-mb", options.chunk_mb, *CHUNK_RANGE_MB, " MB")
-    return checked
+    check_declared(options)
+    return check_decoding(options)
 
 
 @dataclass

@@ -17,11 +17,9 @@ import numpy as np
 import pandas as pd
 
 from msdc.pipeline.jobs.common import (
-    ESTIMATED,
     Checked,
     JobError,
     OptionError,
-    TrackOptions,
     carrying,
     check_aircraft,
     check_decoding,
@@ -37,6 +35,7 @@ from msdc.pipeline.jobs.common import (
     spare_inputs,
     tracker_inputs,
 )
+from msdc.pipeline.jobs.options import ESTIMATED, TrackOptions, check_declared
 from msdc.pipeline.progress import Progress
 from msdc.pipeline.report.files import json_value, write_csv, write_json
 from msdc.pipeline.report.transaction import OutputTransaction, staged
@@ -75,13 +74,10 @@ def validate(options: TrackOptions, *, require_output: bool = False) -> Checked:
     """Check every option, the sensor file and the output paths before any decoding; OptionError if bad.
     ``require_output`` (the command): at least one of -o, --json and --figures; track_job returns the table
     whatever is written."""
-    from msdc.pipeline.track.plane import SMOOTHERS
-
+    check_tracking(options)
+    check_declared(options)
     checked = check_decoding(options)
     check_aircraft(options)
-    check_tracking(options)
-    if options.smoother not in SMOOTHERS:
-        raise OptionError(f"--smoother {options.smoother!r}: must be one of {', '.join(SMOOTHERS)}")
     parse_sources(options.sources)
     checked.output = output_path("-o", options.output, (".csv", ".parquet"))
     checked.json = output_path("--json", options.json, (".json",))

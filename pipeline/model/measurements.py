@@ -18,6 +18,7 @@ import numpy as np
 import pandas as pd
 
 from msdc.asterix.reader import parse_date
+from msdc.pipeline.meta import ADSB_SIGMA_RANGE_M  # also the commands' --adsb-sigma range
 from msdc.pipeline.model.coverage import coverage_warnings, out_of_coverage
 from msdc.pipeline.model.geodesy import (
     enu_basis,
@@ -74,10 +75,6 @@ class IdentityWarning(UserWarning):
     """build_measurements kept reports from the aircraft their Mode 3/A code names: beyond its reach
     (model.identity, rule 4)."""
 
-
-# adsb_sigma_m: a declared 1-sigma ADS-B error per axis below 0.5 m or above 20 km is no receiver's (the
-# commands' --adsb-sigma takes the same range)
-ADSB_SIGMA_RANGE_M = (0.5, 20000.0)
 
 # What each category's frame must have for any row to be built: a time, and a position
 _TIME_COLUMNS = ("time_of_day", "timestamp")  # either

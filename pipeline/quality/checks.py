@@ -5,9 +5,8 @@ from __future__ import annotations
 
 import pandas as pd
 
+from msdc.pipeline.meta import REFERENCES  # what radar accuracy is measured against
 from msdc.pipeline.model.arguments import finite_number
-
-REFERENCES = ("adsb", "track")  # what radar accuracy is measured against
 
 
 def check_frame(name: str, value: object, columns: tuple[str, ...] = ()) -> None:

@@ -22,10 +22,10 @@ import numpy as np
 import pandas as pd
 
 from msdc.pipeline.correlate.results import LAG_COLUMNS, SLOT_COLUMNS, CorrelationRun, WindowResult
+from msdc.pipeline.meta import TABLE_MODES
 from msdc.pipeline.report.files import named
 from msdc.pipeline.report.summary import slot_seconds
 
-TABLE_MODES = ("auto", "xlsx", "parquet")
 # auto: longer tables go to Parquet. At the ~150,000 cells/s openpyxl writes here on a quiet machine
 # (about 35,000 under load), 5,000 rows of the 15-column slot table cost 0.5 s (2 s loaded) and
 # 100 printed pages, while Parquet writes a million rows in well under a second; nobody reads

@@ -7,11 +7,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from msdc.pipeline.meta import SMOOTHERS
+
 from .config import TrackerConfig
 from .imm import NX, STATUS_REJECTED, predict_rows, run_filter
 from .smooth import imm_smooth_rows, smooth_rows
-
-SMOOTHERS = ("rts", "imm")
 
 
 @dataclass

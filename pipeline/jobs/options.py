@@ -1,0 +1,648 @@
+"""Each command-line option declared once, as a field of its job's options dataclass.
+
+A field's ``option(...)`` holds its flags, help, unit, range or choices and default; from them come the
+argparse option (``add_options``), the options object a parsed command line makes (``from_args``), the
+range and choice checks every job runs before decoding (``check_declared``) and the command's options table
+in the docs (``options_table``; ``python -m msdc.pipeline.jobs.options --write-docs`` rewrites the guide's
+tables). The checks that relate options (``--max-coast`` against ``--step``, one aircraft selection...) stay
+in the jobs. Kept free of heavy imports: ``msdc --help`` builds its parser from here.
+"""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import datetime as dt
+import math
+import sys
+import typing
+from collections.abc import Callable, Iterator
+from dataclasses import dataclass
+from pathlib import Path
+
+from msdc.asterix.categories import MEASUREMENT_CATEGORIES
+from msdc.pipeline.meta import (
+    ADSB_SIGMA_RANGE_M,
+    FILLS,
+    FORMATS,
+    METHODS,
+    PAIRS,
+    REFERENCES,
+    SMOOTHERS,
+    TABLE_MODES,
+)
+
+
+class OptionError(ValueError):
+    """An option, the sensor file or an output path is not usable: one line naming it and what is allowed.
+    ``status`` is the exit status a command line should use (2: usage)."""
+
+    def __init__(self, message: str, status: int = 2):
+        super().__init__(message)
+        self.status = status
+
+
+# ---------------------------------------------------------------------------------------------------------
+# Ranges and choices only the options take (those the steps share are in pipeline.meta)
+
+CATEGORIES = tuple(sorted(MEASUREMENT_CATEGORIES))  # decode --category
+CHUNK_RANGE_MB = (0.1, 4096.0)
+GAP_RANGE_S = (0.1, 86400.0)
+SLOT_RANGE_S = (0.1, 3600.0)  # below 0.1 s the slot count and the lag tables explode
+INDICATOR_RANGE = (0, 11)  # NIC and NACp values
+STEP_RANGE_S = (1e-3, 3600.0)  # below 1 ms the grid explodes (a day would be 86 M rows per aircraft)
+MAX_COAST_RANGE_S = (0.0, 86400.0)  # its lower bound is --step (check_tracking)
+SOURCES = ("radar", "adsb")
+# --noise: the sensor file's sigmas and NACp; estimated from residuals (one isotropic ADS-B sigma per
+# class); estimated with an ADS-B along-track timing term as well (docs/tracker.md: fewer gated reports
+# and track segments on the real recording, predictions through gaps no better on the mean)
+NOISE = ("declared", "estimate", "timing")
+ESTIMATED = ("estimate", "timing")
+HORIZON_RANGE_S = (1.0, 3600.0)
+RADIUS_RANGE_NM = (0.01, 100.0)
+VERTICAL_RANGE_FT = (1.0, 100_000.0)
+VERTICAL_TOLERANCE_RANGE_FT = (0.0, 500.0)
+VERTICAL_MODELS = ("gate", "gaussian")
+SURFACE_MODES = ("exclude", "include")  # pairs with an aircraft on the surface (pipeline.conflict.surface)
+
+# Where an option stands in --help and in the docs table: by section, then in declaration order
+SECTIONS = ("selection", "output", "command", "tracking", "measurements", "reading")
+
+
+# ---------------------------------------------------------------------------------------------------------
+# The declaration
+
+
+@dataclass(frozen=True)
+class Spec:
+    """How a field appears on the command line and in the docs, and what values it takes."""
+
+    flags: tuple[str, ...]  # ("-o", "--output"); () for the positional argument, named by metavar
+    help: str
+    unit: str = ""  # after a range in messages and the docs table: "s", "m", "MB"
+    range: tuple[float, float] | None = None  # inclusive; each item of a tuple value
+    choices: tuple | None = None
+    parser_choices: bool = True  # argparse refuses other values and its usage lists them; else the job does
+    metavar: str | None = None
+    required: bool = False  # argparse requires it (the jobs say so for the library)
+    repeat: bool = False  # the flag may be given several times: a tuple of values
+    parse: Callable[[str], object] | None = None  # argparse's type=, when not the field's own type
+    group: str | None = None  # flags of one group are mutually exclusive and one of them is required
+    section: str = "command"  # one of SECTIONS
+    doc: str = ""  # the docs table's meaning (Markdown) when it says more than the help
+
+    @property
+    def name(self) -> str:
+        """The flag a message names: the long one, or the metavar of the positional argument."""
+        return self.flags[-1] if self.flags else (self.metavar or "")
+
+    @property
+    def value_name(self) -> str:
+        """What --help calls its value: the metavar, or the flag as argparse names it (--max-coast MAX_COAST;
+        the field's name may differ: max_coast_s)."""
+        return self.metavar or self.name.lstrip("-").replace("-", "_").upper()
+
+
+def option(default: object, *flags: str, help: str = "", **spec: typing.Any) -> typing.Any:
+    """A dataclass field declaring its command-line option (see Spec for the keywords)."""
+    if isinstance(default, list | dict | set):
+        raise TypeError("option defaults are immutable: use a tuple")
+    if spec.get("section", "command") not in SECTIONS:
+        raise ValueError(f"section {spec['section']!r}: expected one of {', '.join(SECTIONS)}")
+    return dataclasses.field(default=default, metadata={"option": Spec(tuple(flags), help, **spec)})
+
+
+def declared(options_cls: type) -> Iterator[tuple[dataclasses.Field, Spec, type]]:
+    """Each declared field of an options class with its Spec and its value type (``float`` for ``float |
+    None``, ``str`` for ``tuple[str, ...]``), by section and then in declaration order."""
+    hints = typing.get_type_hints(options_cls)
+    fields = [(f, f.metadata["option"]) for f in dataclasses.fields(options_cls) if "option" in f.metadata]
+    for f, spec in sorted(fields, key=lambda item: SECTIONS.index(item[1].section)):
+        yield f, spec, _value_type(hints[f.name])
+
+
+def _value_type(hint: object) -> type:
+    """The type of one value of a field annotated ``hint``: Optional and tuples unwrapped."""
+    args = [a for a in typing.get_args(hint) if a is not type(None) and a is not Ellipsis]
+    if args:
+        return _value_type(args[0])
+    return hint if isinstance(hint, type) else str
+
+
+# ---------------------------------------------------------------------------------------------------------
+# argparse
+
+
+def date_argument(text: str) -> dt.date:
+    """--date: a YYYY-MM-DD day, else argparse's usage error."""
+    try:
+        return dt.date.fromisoformat(text)
+    except ValueError as exc:
+        raise argparse.ArgumentTypeError(f"not a date (YYYY-MM-DD): {text!r}") from exc
+
+
+def edition_argument(text: str) -> str:
+    """--edition: CAT=EDITION with the category as a number ("21=0.26"), else argparse's usage error."""
+    cat, sep, ed = text.partition("=")
+    if not sep or not cat.strip().isdigit() or not ed:
+        raise argparse.ArgumentTypeError(f"expected CAT=EDITION (e.g. 21=0.26 or 21=auto), got {text!r}")
+    return f"{int(cat)}={ed.strip()}"
+
+
+def add_options(parser: argparse.ArgumentParser, options_cls: type) -> None:
+    """Add the declared options of ``options_cls`` to ``parser`` (declared's order); a group's flags go into
+    one required mutually exclusive group. An option left out stays None in the namespace (from_args then
+    takes the field's default)."""
+    groups: dict[str, typing.Any] = {}
+    for f, spec, kind in declared(options_cls):
+        target = parser
+        if spec.group is not None:
+            if spec.group not in groups:
+                groups[spec.group] = parser.add_mutually_exclusive_group(required=True)
+            target = groups[spec.group]
+        target.add_argument(*(spec.flags or (f.name,)), **_argparse_keywords(f, spec, kind))
+
+
+def _argparse_keywords(f: dataclasses.Field, spec: Spec, kind: type) -> dict[str, object]:
+    """add_argument's keywords for one field."""
+    if not spec.flags:  # the positional argument: one or more values
+        return {"nargs": "+", "metavar": spec.metavar, "help": spec.help or None}
+    kw: dict[str, object] = {"dest": f.name, "help": spec.help}
+    if kind is bool:
+        return kw | {"action": "store_true"}
+    value_type = spec.parse or (kind if kind in (int, float) else None)
+    if value_type is not None:
+        kw["type"] = value_type
+    if spec.choices is not None and spec.parser_choices:
+        kw["choices"] = list(spec.choices)  # its usage shows them
+    else:
+        kw["metavar"] = spec.value_name
+    if spec.required:
+        kw["required"] = True
+    if spec.repeat:
+        kw["action"] = "append"
+    return kw
+
+
+def from_args(options_cls: type, args: argparse.Namespace, **extra: object) -> typing.Any:
+    """The options object of a parsed command line: every declared option given (repeated flags and the
+    inputs as tuples; those left out take the field's default), then ``extra``."""
+    values: dict[str, object] = {}
+    for f, _, _ in declared(options_cls):
+        value = getattr(args, f.name, None)
+        if value is not None:
+            values[f.name] = tuple(value) if isinstance(value, list) else value
+    return options_cls(**values | extra)
+
+
+# ---------------------------------------------------------------------------------------------------------
+# Checks
+
+
+def check_declared(options: object) -> None:
+    """Every declared range and choice of ``options`` holds (each item of a tuple), else OptionError naming
+    the option. Unset (None) options are not checked."""
+    for f, spec, kind in declared(type(options)):
+        value = getattr(options, f.name)
+        if value is None:
+            continue
+        items = value if isinstance(value, tuple | list) else (value,)
+        for item in items:
+            if spec.range is not None and kind is int:
+                check_integer(spec.name, item, int(spec.range[0]), int(spec.range[1]))
+            elif spec.range is not None:
+                check_number(spec.name, item, *spec.range, f" {spec.unit}" if spec.unit else "")
+            if spec.choices is not None and item not in spec.choices:
+                raise OptionError(f"{spec.name} {item!r}: must be {_one_of(spec.choices)}")
+
+
+def _one_of(choices: tuple) -> str:
+    """'a or b', 'one of a, b, c'."""
+    names = [str(c) for c in choices]
+    return " or ".join(names) if len(names) == 2 else f"one of {', '.join(names)}"
+
+
+def check_number(name: str, value: float | None, lo: float, hi: float, unit: str = "") -> None:
+    """A finite number within [lo, hi], else OptionError naming the option."""
+    if value is None:
+        return
+    if not isinstance(value, int | float) or not math.isfinite(value) or not lo <= value <= hi:
+        raise OptionError(f"{name} {value!r}: must be a finite number from {lo:g} to {hi:g}{unit}")
+
+
+def check_integer(name: str, value: int | None, lo: int, hi: int) -> None:
+    """An integer within [lo, hi], else OptionError naming the option."""
+    if value is not None and not (isinstance(value, int) and lo <= value <= hi):
+        raise OptionError(f"{name} {value!r}: must be an integer from {lo} to {hi}")
+
+
+# ---------------------------------------------------------------------------------------------------------
+# The options of each command
+
+SENSORS_HELP = "sensor positions (TOML [[sensor]] tables)"
+SENSORS_OPTIONAL_HELP = ("sensor positions (TOML [[sensor]] tables); needed when radar plots are used, "
+                         "not for ADS-B alone")
+
+
+def adsb_sigma_option(used: str, doc: str = "") -> typing.Any:
+    """--adsb-sigma: the accuracy the user declares for ADS-B reports that carry no NACp; ``used`` says what
+    the command uses it for."""
+    return option(None, "--adsb-sigma", metavar="M", range=ADSB_SIGMA_RANGE_M, unit="m",
+                  section="measurements", doc=doc,
+                  help="1-sigma position error per axis (m, 0.5-20000) declared for ADS-B reports without "
+                       f"NACp (CAT021 0.2x: its figure of merit is not read as NACp){used}; reports with "
+                       "NACp keep theirs, NACp 0 (unknown) stays untracked. Without it such reports are "
+                       "not tracked")
+
+
+@dataclass(frozen=True)
+class DecodingOptions:
+    """How to read the inputs (shared by every job)."""
+
+    inputs: tuple[str, ...] = option((), metavar="INPUT", section="selection",
+                                     doc="the recordings")
+    editions: tuple[str, ...] = option(  # "CAT=EDITION"
+        (), "--edition", repeat=True, parse=edition_argument, metavar="CAT=ED", section="reading",
+        help="pin a category edition, e.g. 21=0.26, 48=1.27, or 21=auto (repeatable)",
+        doc="pin a category edition, e.g. `21=0.26`, `48=1.27`, or `21=auto` "
+            "([Editions](../decoding/editions.md))")
+    date: dt.date | None = option(
+        None, "--date", parse=date_argument, section="reading",
+        help="UTC day (YYYY-MM-DD) of a recording that carries no date (raw, final, gps, oradis)")
+    format: str | None = option(None, "--format", choices=FORMATS, section="reading",
+                                help="container format (default: detected)",
+                                doc="container format (default: detected; "
+                                    "[Containers](../decoding/containers.md))")
+
+
+@dataclass(frozen=True)
+class DecodeOptions(DecodingOptions):
+    """Everything ``decode_job`` needs."""
+
+    output: str | None = option(None, "-o", "--output", section="output",
+                                help="OUT.csv or OUT.parquet (one file per category: stem_cat048...)")
+    categories: tuple[int, ...] = option((), "--category", repeat=True, choices=CATEGORIES,
+                                         help="only this category")
+    strict: bool = option(False, "--strict", help="stop at the first bad block")
+    chunk_mb: float = option(64.0, "--chunk-mb", range=CHUNK_RANGE_MB, unit="MB",
+                             help="streaming chunk size (MB)")
+
+
+@dataclass(frozen=True)
+class StatsOptions(DecodingOptions):
+    """Everything ``stats_job`` needs."""
+
+    chunk_mb: float = option(64.0, "--chunk-mb", range=CHUNK_RANGE_MB, unit="MB",  # peak memory follows it
+                             help="streaming chunk size (MB); memory follows it, not the file")
+
+
+@dataclass(frozen=True)
+class AircraftOptions(DecodingOptions):
+    """Inputs, the sensor file and the aircraft selection (call sign, address or all); the outputs and
+    --adsb-sigma, whose help each command words, are declared by the commands."""
+
+    sensors: str | None = option(None, "--sensors", section="selection", help=SENSORS_OPTIONAL_HELP,
+                                 doc="the radars' positions and sigmas ([the sensor file](sensors.md)); not "
+                                     "needed for ADS-B alone")
+    callsign: str | None = option(None, "--callsign", group="aircraft", section="selection",
+                                  help="call sign (case and spaces ignored)")
+    address: str | None = option(None, "--address", group="aircraft", section="selection",
+                                 help="24-bit aircraft address in hex")
+    all_aircraft: bool = option(False, "--all", group="aircraft", section="selection", help="every aircraft")
+    output: str | None = None
+    json: str | None = None
+    adsb_sigma_m: float | None = None  # declared sigma (m per axis) for ADS-B reports without NACp
+
+
+ADSB_SIGMA_DOC = ("ADS-B sigma for reports without NACp, used by {used} "
+                  "([track](track.md#ads-b-without-nacp-adsb-sigma))")
+
+
+@dataclass(frozen=True)
+class CorrelateOptions(AircraftOptions):
+    """Everything ``correlate_job`` needs; see ``msdc correlate --help`` for the meaning of each option."""
+
+    sensors: str | None = option(None, "--sensors", required=True, section="selection", help=SENSORS_HELP,
+                                 doc="the radars' positions ([the sensor file](sensors.md))")
+    all_aircraft: bool = option(False, "--all", group="aircraft", section="selection",
+                                help="every aircraft seen by both sensors")
+    output: str | None = option(None, "-o", "--output", section="output",
+                                help="Excel report (.xlsx); the track figure is written beside it",
+                                doc="the workbook (`.xlsx`), with the track figure `report_tracks.png` "
+                                    "beside it ([Report](#report))")
+    json: str | None = option(None, "--json", section="output", help="window summary as JSON",
+                              doc="the windows as JSON ([JSON](#json))")
+    slot_s: float = option(10.0, "--slot", range=SLOT_RANGE_S, unit="s",
+                           help="slot width D in seconds (default 10)", doc="slot width D in seconds")
+    gap_s: float = option(180.0, "--gap", range=GAP_RANGE_S, unit="s",
+                          help="gap G in seconds that ends a period (180)",
+                          doc="a sensor's track is split where consecutive measurements are more than G "
+                              "seconds apart")
+    pairs: str = option("radar-adsb", "--pairs", choices=PAIRS,
+                        help="sensor pairs to correlate per aircraft: each radar against ADS-B (default), "
+                             "each two radars, or both; plots of two radars are never mixed",
+                        doc="`radar-adsb` (each radar against the ADS-B source), `radar-radar` (each two "
+                            "radars that saw the aircraft) or `all` (both); plots of two radars are never "
+                            "mixed ([sensor pairs](../methods/correlation.md#sensor-pairs))")
+    split_adsb: bool = option(False, "--split-adsb",
+                              help="keep ADS-B ground stations apart (default: one ADS-B source per "
+                                   "aircraft)",
+                              doc="keep ADS-B ground stations apart (default: one ADS-B source per aircraft "
+                                  "after deduplication)")
+    quality: bool = option(False, "--quality",
+                           help="add the quality sheets (Quality, Update intervals, Gaps, Jumps, ADS-B "
+                                "quality, Radar accuracy, Radar biases, Figures) and their PNGs",
+                           doc="add the quality sheets and their PNGs ([quality](quality.md)) and the "
+                               "slotting and lag figures per window")
+    drop_jumps: bool = option(False, "--drop-jumps", help="remove detected ADS-B position jumps first",
+                              doc="remove detected ADS-B position jumps before slotting (off by default, so "
+                                  "the thesis numbers stay reproducible)")
+    min_nic: int | None = option(None, "--min-nic", range=INDICATOR_RANGE,
+                                 help="drop ADS-B reports with NUCp/NIC below N",
+                                 doc="drop ADS-B reports with NUCp/NIC below N "
+                                     "([filters](quality.md#filters))")
+    min_nacp: int | None = option(None, "--min-nacp", range=INDICATOR_RANGE,
+                                  help="drop ADS-B reports with NACp below N",
+                                  doc="drop ADS-B reports with NACp below N ([filters](quality.md#filters))")
+    fill: str = option("hold", "--fill", choices=FILLS,
+                       help="empty slots: hold the previous slot (default, the thesis) or take the tracker's "
+                            "prediction",
+                       doc="empty slots: `hold` the previous slot's value (the thesis) or `predict` the "
+                           "sensor's own track ([Filling empty "
+                           "slots](#filling-empty-slots-with-the-tracker))")
+    tables: str = option("auto", "--tables", choices=TABLE_MODES,
+                         help="slot and lag tables: in the workbook (xlsx), as STEM_slots.parquet and "
+                              "STEM_correlation.parquet beside it (parquet), or Parquet past 5,000 rows "
+                              "(auto)",
+                         doc="slot and lag tables in the workbook (`xlsx`), as Parquet beside it "
+                             "(`parquet`), or Parquet past 5,000 rows (`auto`; [Long tables go to "
+                             "Parquet](#long-tables-go-to-parquet))")
+    adsb_sigma_m: float | None = adsb_sigma_option("; used by --fill predict",
+                                                   ADSB_SIGMA_DOC.format(used="`--fill predict`"))
+
+
+@dataclass(frozen=True)
+class QualityOptions(AircraftOptions):
+    """Everything ``quality_job`` needs."""
+
+    output: str | None = option(None, "-o", "--output", section="output",
+                                help="Excel workbook (.xlsx); figures are written beside it",
+                                doc="the workbook (`.xlsx`), with its figures as PNGs beside it "
+                                    "([Workbook](#workbook))")
+    json: str | None = option(None, "--json", section="output", help="the tables as JSON")
+    gap_s: float = option(180.0, "--gap", range=GAP_RANGE_S, unit="s",
+                          help="gap in seconds reported as a discontinuity (180)",
+                          doc="a gap in seconds reported as a discontinuity")
+    reference: str = option("adsb", "--reference", choices=REFERENCES,
+                            help="radar accuracy against ADS-B interpolated linearly (default) or against "
+                                 "the smoothed ADS-B-only IMM track",
+                            doc="radar accuracy against ADS-B interpolated linearly (`adsb`) or against the "
+                                "smoothed ADS-B-only IMM track (`track`; [Against a tracked "
+                                "reference](#against-a-tracked-reference))")
+    adsb_sigma_m: float | None = adsb_sigma_option("; used by --reference track",
+                                                   ADSB_SIGMA_DOC.format(used="`--reference track`"))
+
+
+MAX_COAST_HELP = "seconds a track is predicted after its last report before it ends (default 60)"
+
+
+
+@dataclass(frozen=True)
+class TrackOptions(AircraftOptions):
+    """Everything ``track_job`` needs; see ``msdc track --help`` for the meaning of each option. The
+    inputs, sensor file, aircraft selection and outputs are the other jobs'."""
+
+    output: str | None = option(None, "-o", "--output", section="output",
+                                help="track table: tracks.csv or tracks.parquet",
+                                doc="the track table: CSV or Parquet ([The track table](#the-track-table))")
+    json: str | None = option(None, "--json", section="output",
+                              help="per-aircraft and per-sensor summary as JSON",
+                              doc="the per-aircraft and per-sensor summary ([JSON and "
+                                  "terminal](#json-and-terminal))")
+    figures: str | None = option(None, "--figures", metavar="DIR", section="tracking",
+                                 help="one PNG per aircraft in this directory",
+                                 doc="one PNG per aircraft in DIR (`track_<callsign>_<id>.png`)")
+    step_s: float = option(
+        1.0, "--step", range=STEP_RANGE_S, unit="s", section="tracking",
+        help="output grid in seconds (default 1)",
+        doc="output grid in seconds (whole multiples of S since UTC midnight), plus one row per report "
+            "time; after decoding, a run whose tracks would need more than 4,000,000 rows (about 570 bytes "
+            "each in memory; for `conflicts` also its predictions, grid rows times horizons) is refused "
+            "naming `--step`")
+    max_coast_s: float = option(60.0, "--max-coast", unit="s", section="tracking", help=MAX_COAST_HELP,
+                                doc="seconds predicted after the last report before the segment ends "
+                                    "(from `--step` to 86400)")
+    smooth: bool = option(False, "--smooth", section="tracking",
+                          help="backward (RTS) pass: reference trajectories",
+                          doc="a backward (RTS) pass: reference trajectories instead of real-time estimates")
+    smoother: str = option(  # with smooth: "rts" (combined estimate) or "imm" (two-filter IMM smoother)
+        "rts", "--smoother", choices=SMOOTHERS, section="tracking",
+        help="implies --smooth: RTS on the combined estimate (default) or the IMM smoother (smoothed mode "
+             "probabilities too; better on straight legs, worse in most manoeuvres in our validations)",
+        doc="implies `--smooth`: `rts` (RTS on the combined estimate) or `imm` (an IMM smoother: also "
+            "smooths the mode probabilities; better on straight legs, worse in most manoeuvres in our "
+            "validations: [Tracker](../tracker.md))")
+    tpm: str | None = option(  # None: the tracker's default (expm:150,20)
+        None, "--tpm", section="tracking",
+        help="mode transition law: fixed:P, dynamic, dynamic:A,B or expm:TAU[,TAU2] (default expm:150,20)",
+        doc="mode transition law: `expm:150,20` (default: mean 150 s in CV, 20 s in a turn), `fixed:P`, "
+            "`dynamic` (the dynamic-TPM paper's p(T)), `dynamic:A,B`; p(T) = min(0.995, A − B·T) must stay "
+            "above 0 for every interval up to `--max-coast` (the paper's law ends at 200 s), sojourn times "
+            "run from 0.01 s to 10⁷ s. `expm:82,45` ties the best fixed p at every manoeuvre peak of the "
+            "paper's 3-radar scenario, where the default loses one by 10 %, but predicts worse through gaps "
+            "(real data: +17-32 % at 30-60 s): [Tracker](../tracker.md)")
+    sources: tuple[str, ...] = option(SOURCES, "--sources", section="tracking",
+                                      help="sensor kinds to fuse: radar, adsb or radar,adsb",
+                                      doc="which sensor kinds to fuse: `radar`, `adsb` or `radar,adsb`")
+    noise: str = option(  # pipeline.track.noise estimates; "declared": as given
+        "estimate", "--noise", choices=NOISE, parser_choices=False, section="tracking",
+        help="measurement noise: estimate (default: each sensor's sigmas from the tracker's residuals, a few "
+             "extra passes), timing (the same, and an ADS-B along-track time-stamp sigma) or declared (the "
+             "sensor file's sigmas, ADS-B from NACp)",
+        doc="`estimate`: each sensor's sigmas measured from the tracker's own residuals before the final "
+            "pass (ADS-B on the surface, below 50 kt, apart from airborne; raised where the gate would "
+            "reject more than 1 % of the residuals, per class and, on the surface, per aircraft); `timing`: "
+            "the same, and for ADS-B an along-track time-stamp sigma (R = σ²I + σₜ² v vᵀ, v the report's own "
+            "ground vector; fewer gated reports and track segments on the real recording, gap predictions "
+            "no better on the mean: [Tracker](../tracker.md)); `declared`: the sensor file's sigmas and NACp "
+            "as they are ([Measurement noise](../methods/tracking.md#measurement-noise))")
+    adsb_sigma_m: float | None = adsb_sigma_option(
+        "; with --noise estimate it is then refined from the residuals",
+        "1-sigma position error per axis (m) declared for ADS-B reports that carry no NACp, such as CAT021 "
+        "0.2x ([ADS-B without NACp](track.md#ads-b-without-nacp-adsb-sigma)); reports with NACp keep theirs; "
+        "with `--noise estimate` it is only the starting value")
+
+
+@dataclass(frozen=True)
+class ConflictOptions(TrackOptions):
+    """Everything ``conflict_job`` needs; see ``msdc conflicts --help``. Every aircraft is tracked."""
+
+    callsign: str | None = None
+    address: str | None = None
+    all_aircraft: bool = True
+    output: str | None = option(None, "-o", "--output", required=True, section="output",
+                                help="conflicts.csv (losses and warning times beside it) or conflicts.xlsx",
+                                doc="the tables: `conflicts.csv` (losses and warning times beside it) or "
+                                    "`conflicts.xlsx` ([Outputs](#outputs))")
+    json: str | None = option(None, "--json", section="output", help="counts and the tables as JSON",
+                              doc="counts and the tables as JSON ([Outputs](#outputs))")
+    figures: str | None = option(None, "--figures", metavar="DIR", section="tracking",
+                                 help="one PNG per alert event in this directory",
+                                 doc="one PNG per alert event in DIR ([Outputs](#outputs))")
+    step_s: float = option(1.0, "--step", range=STEP_RANGE_S, unit="s", section="tracking",
+                           help="output step in seconds (default 1)",
+                           doc="output step in seconds; the bound on output rows (as "
+                               "[track's](track.md#options)) counts the predictions too (grid rows times "
+                               "horizons)")
+    smooth: bool = False
+    smoother: str = "rts"
+    tpm: str | None = option(None, "--tpm", section="tracking",
+                             help="mode transition law of the IMM (default expm:150,20)",
+                             doc="mode transition law of the IMM (as [track's](track.md#options))")
+    noise: str = option(  # the conflict validations used declared noise; "estimate" as msdc track
+        "declared", "--noise", choices=NOISE, parser_choices=False, section="tracking",
+        help="measurement noise: declared (default: the sensor file's sigmas, ADS-B from NACp or "
+             "--adsb-sigma; what the conflict validations used), estimate or timing (each sensor's sigmas "
+             "from the tracker's residuals first, as msdc track)",
+        doc="`declared`: the sensor file's sigmas, ADS-B from NACp or `--adsb-sigma` (what the conflict "
+            "validations and the calibration benchmark used); `estimate` or `timing`: each sensor's sigmas "
+            "from the tracker's residuals first, as `msdc track` ([Measurement "
+            "noise](../methods/tracking.md#measurement-noise))")
+    horizons_s: tuple[float, ...] = option((20.0, 60.0, 120.0), "--horizon", parse=str,
+                                           range=HORIZON_RANGE_S, unit="s",
+                                           help="look-aheads in seconds (default 20,60,120)",
+                                           doc="look-aheads in seconds, comma-separated, whole multiples "
+                                               "of `--step`")
+    radius_nm: float = option(5.0, "--radius-nm", range=RADIUS_RANGE_NM, unit="NM",
+                              help="horizontal separation minimum (default 5)",
+                              doc="horizontal separation minimum")
+    vertical_ft: float = option(1000.0, "--vertical-ft", range=VERTICAL_RANGE_FT, unit="ft",
+                                help="vertical separation minimum (default 1000)",
+                                doc="vertical separation minimum")
+    vertical_tolerance_ft: float = option(
+        25.0, "--vertical-tolerance-ft", range=VERTICAL_TOLERANCE_RANGE_FT, unit="ft",
+        help="levels closer than --vertical-ft by at most this are separated: the 25 ft quantum of reported "
+             "levels (default 25)",
+        doc="levels closer than `--vertical-ft` by at most this are separated: the 25 ft quantum of "
+            "reported levels; less than `--vertical-ft`")
+    threshold: float = option(0.2, "--threshold", help="PC above which an alert is raised (default 0.2)",
+                              doc="PC above which an alert is raised, strictly between 0 and 1")
+    method: str = option("exact", "--method", choices=METHODS, parser_choices=False,
+                         help="PC method: exact (default), one-block, blocks or midpoint",
+                         doc="PC method ([Conflict analysis](../conflict.md))")
+    vertical: str = option(  # "gaussian": PC times P(|dz| < vertical_ft) from the vertical filter's sigma
+        "gate", "--vertical", choices=VERTICAL_MODELS, parser_choices=False,
+        help="vertical proximity: gate (predicted levels closer than --vertical-ft, default) or gaussian (PC "
+             "times the probability from the vertical filter's sigma)",
+        doc="vertical proximity: `gate` (predicted levels closer than `--vertical-ft`) or `gaussian` (PC "
+            "times the probability from the vertical filter's sigma; [Conflicts]"
+            "(../methods/conflicts.md#vertical-proximity))")
+    surface: str = option(  # pairs with an aircraft on the surface out of losses and alerts; or "include"
+        "exclude", "--surface", choices=SURFACE_MODES, parser_choices=False,
+        help="pairs with an aircraft on the aerodrome surface (as its reports say, else below 50 kt): "
+             "exclude (default: separation minima apply between airborne aircraft) or include them in the "
+             "losses and alerts; counted either way",
+        doc="pairs with an aircraft on the aerodrome surface: `exclude` (separation minima apply between "
+            "airborne aircraft) or `include` them in the losses and alerts; counted either way ([Aircraft "
+            "on the surface](#aircraft-on-the-surface))")
+
+
+# the options of each command, in the order msdc --help lists the commands
+COMMAND_OPTIONS: dict[str, type] = {"decode": DecodeOptions, "stats": StatsOptions,
+                                    "correlate": CorrelateOptions, "quality": QualityOptions,
+                                    "track": TrackOptions, "conflicts": ConflictOptions}
+
+
+# ---------------------------------------------------------------------------------------------------------
+# The docs: each command's options table in docs/guide/COMMAND.md, between its markers
+
+GUIDE = Path(__file__).resolve().parents[2] / "docs" / "guide"  # in a checkout
+TABLE_START, TABLE_END = "<!-- options: {command} -->", "<!-- /options -->"
+_NUMBERS = {float: "number", int: "integer"}
+
+
+def options_table(options_cls: type) -> str:
+    """The options of a job as a Markdown table (option, values, default, meaning), then a line per group
+    of which one option is required."""
+    rows = ["| option | values | default | meaning |", "|---|---|---|---|"]
+    groups: dict[str, list[str]] = {}
+    for f, spec, kind in declared(options_cls):
+        flags = ", ".join(f"`{flag}`" for flag in spec.flags) or f"`{spec.metavar}`"
+        meaning = (spec.doc or spec.help).replace("|", "\\|")
+        rows.append(f"| {flags} | {_values(spec, kind)} | {_default(f, spec)} | {meaning} |")
+        if spec.group is not None:
+            groups.setdefault(spec.group, []).append(f"`{spec.name}`")
+    notes = [f"\nExactly one of {', '.join(names[:-1])} and {names[-1]} is required."
+             for names in groups.values()]
+    return "\n".join(rows + notes) + "\n"
+
+
+def _values(spec: Spec, kind: type) -> str:
+    """What an option takes, for the docs table."""
+    unit = f" {spec.unit}" if spec.unit else ""
+    if not spec.flags:
+        return "one or more"
+    if kind is bool:
+        return "flag"
+    if spec.choices is not None:
+        values = ", ".join(f"`{c}`" for c in spec.choices)
+    elif spec.range is not None:
+        values = f"{spec.range[0]:g} to {spec.range[1]:g}{unit}"
+    elif kind in (float, int):
+        values = _NUMBERS[kind] + (f" ({spec.unit})" if spec.unit else "")
+    else:
+        values = spec.value_name
+    return values + (", repeatable" if spec.repeat else "")
+
+
+def _default(f: dataclasses.Field, spec: Spec) -> str:
+    """An option's default for the docs table: "required", or the value as given on the command line."""
+    if spec.required:
+        return "required"
+    value = f.default
+    if value is None or value is False or value == ():
+        return ""
+    items = value if isinstance(value, tuple) else (value,)
+    return "`" + ",".join(f"{v:g}" if isinstance(v, float) else str(v) for v in items) + "`"
+
+
+def page_with_table(text: str, command: str) -> str:
+    """A guide page's text with the options table of ``command`` between its markers (ValueError when the
+    page lacks them)."""
+    start, end = TABLE_START.format(command=command), TABLE_END
+    head, found, rest = text.partition(start)
+    if not found or end not in rest:
+        raise ValueError(f"no {start} ... {end} markers")
+    return f"{head}{start}\n{options_table(COMMAND_OPTIONS[command])}{end}{rest.partition(end)[2]}"
+
+
+def write_docs(guide: Path = GUIDE, *, check: bool = False) -> list[Path]:
+    """Rewrite the options table of every command's guide page (``check``: only say which differ); the
+    pages that differed."""
+    stale = []
+    for command in COMMAND_OPTIONS:
+        page = guide / f"{command}.md"
+        text = page.read_text()
+        new = page_with_table(text, command)
+        if new != text:
+            stale.append(page)
+            if not check:
+                page.write_text(new)
+    return stale
+
+
+def main(argv: list[str] | None = None) -> int:
+    """``python -m msdc.pipeline.jobs.options --write-docs`` (or ``--check``): the guide's options tables."""
+    parser = argparse.ArgumentParser(prog="python -m msdc.pipeline.jobs.options", description=main.__doc__)
+    what = parser.add_mutually_exclusive_group(required=True)
+    what.add_argument("--write-docs", action="store_true", help="rewrite the tables that differ")
+    what.add_argument("--check", action="store_true", help="list the pages whose table differs (exit 1)")
+    check = parser.parse_args(argv).check
+    stale = write_docs(check=check)
+    for page in stale:
+        print(f"{page}: {'differs from the declared options' if check else 'rewritten'}")
+    return 1 if stale and check else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
