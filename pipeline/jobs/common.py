@@ -18,6 +18,7 @@ from typing import TYPE_CHECKING
 
 import pandas as pd
 
+from msdc.asterix.categories import MEASUREMENT_CATEGORIES, REGISTRY
 from msdc.pipeline.jobs.options import (
     MAX_COAST_RANGE_S,
     SOURCES,
@@ -480,9 +481,8 @@ def _load_measurements(options: AircraftOptions, checked: Checked, progress: Pro
                                       leave_out="by giving the ADS-B recordings alone") from exc
     warnings += _empty_inputs(loaded)
     warnings += _wrong_editions(loaded, but=absent_categories(loaded))
-    warnings += [f"no {name} (CAT{cat:03d}) records in the inputs{_all_failed(loaded, cat)}: "
-                 f"{QUALITY_WITHOUT[cat]}" for cat, name in ((48, "radar"), (21, "ADS-B"))
-                 if cat in absent_categories(loaded)]
+    warnings += [f"no {REGISTRY[cat].noun} (CAT{cat:03d}) records in the inputs{_all_failed(loaded, cat)}: "
+                 f"{QUALITY_WITHOUT[cat]}" for cat in absent_categories(loaded)]
     warnings += order_warnings(checked.inputs, loaded.spans)
     warnings += date_ignored(options, loaded.inputs)
     warnings += format_hints(options, loaded.inputs)
@@ -499,14 +499,15 @@ def _no_records(exc: NoRecords) -> JobError:
     absent = absent_categories(exc.loaded) or [exc.category]
     failed = {cat: why[2:] for cat in absent if (why := _all_failed(exc.loaded, cat))}
     absent.sort(key=lambda cat: cat not in failed)
-    names = " or ".join(f"{'radar' if cat == 48 else 'ADS-B'} (CAT{cat:03d})" for cat in absent)
+    names = " or ".join(f"{REGISTRY[cat].noun} (CAT{cat:03d})" for cat in absent)
     why = f": {'; '.join(failed.values())}" if failed else ""
     return JobError(f"no {names} records in the inputs{why}")
 
 
 def absent_categories(loaded: Loaded) -> list[int]:
-    """Which of CAT048 and CAT021 no input holds a record of."""
-    return [cat for cat in (48, 21) if not any(info["records"].get(cat) for info in loaded.inputs)]
+    """Which measurement categories (CAT048, CAT021: the category registry's) no input holds a record of."""
+    held = {cat for info in loaded.inputs for cat, n in info["records"].items() if n}
+    return [cat for cat in MEASUREMENT_CATEGORIES if cat not in held]
 
 
 def sensors_path(options: AircraftOptions) -> str | None:

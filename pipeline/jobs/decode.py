@@ -152,7 +152,7 @@ def _left_as_they_were(out: Path | None, outputs: dict[int, Path]) -> list[str]:
     if out is None or not outputs:
         return []
     several = len(outputs) > 1
-    earlier = [out] if several else [category_output(real_output(out), cat) for cat in (21, 48)]
+    earlier = [out] if several else [category_output(real_output(out), cat) for cat in CATEGORIES]
     now = f"{'several categories' if several else 'one category'} this run writes " + ", ".join(
         str(p) for p in outputs.values())
     return [f"{p} is left as it was (an earlier run's; with {now})" for p in earlier
