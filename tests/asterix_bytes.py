@@ -42,3 +42,21 @@ def decode_bytes(data: bytes, **kw) -> asterix.Recording:
     """Decode in-memory bytes as a raw recording."""
     buf = np.frombuffer(data, np.uint8)
     return asterix.decode_buffer(buf, read_segments(buf, kw.pop("fmt", "raw")), path="<test>", **kw)
+
+
+def mutate(buf: bytearray, data) -> tuple[int, str]:
+    """One random damage drawn by Hypothesis's ``data`` (a bit flipped, the tail cut, 1-8 bytes inserted or
+    deleted) applied to ``buf`` in place; the offset where it starts and which damage it was."""
+    from hypothesis import strategies as st
+
+    pos = data.draw(st.integers(0, len(buf) - 1))
+    action = data.draw(st.sampled_from(["flip", "truncate", "insert", "delete"]))
+    if action == "flip":
+        buf[pos] ^= 1 << data.draw(st.integers(0, 7))
+    elif action == "truncate":
+        del buf[pos:]
+    elif action == "insert":
+        buf[pos:pos] = data.draw(st.binary(min_size=1, max_size=8))
+    else:
+        del buf[pos:pos + data.draw(st.integers(1, 8))]
+    return pos, action

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 import pytest
-from asterix_bytes import block, decode_bytes, fspec
+from asterix_bytes import block, decode_bytes, fspec, mutate
 from budget import examples
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
@@ -192,16 +192,7 @@ def test_random_bytes_never_crash_and_are_accounted(data):
 def test_mutated_stream_accounted_and_far_blocks_survive(data):
     stream, starts = good_stream(8, 3)
     buf = bytearray(stream)
-    pos = data.draw(st.integers(0, len(buf) - 1))
-    action = data.draw(st.sampled_from(["flip", "truncate", "insert", "delete"]))
-    if action == "flip":
-        buf[pos] ^= 1 << data.draw(st.integers(0, 7))
-    elif action == "truncate":
-        del buf[pos:]
-    elif action == "insert":
-        buf[pos:pos] = data.draw(st.binary(min_size=1, max_size=8))
-    else:
-        del buf[pos:pos + data.draw(st.integers(1, 8))]
+    pos, action = mutate(buf, data)
     rec = decode_bytes(bytes(buf))
     assert accounted(rec) == len(buf)
     hit = max(i for i, s in enumerate(starts) if s <= pos)

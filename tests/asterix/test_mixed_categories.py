@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import pandas as pd
 import pytest
-from asterix_bytes import block, decode_bytes, fspec
+from asterix_bytes import block, decode_bytes, fspec, mutate
 from budget import examples
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
@@ -127,16 +127,7 @@ def test_cut_inside_an_other_category_block_keeps_the_decoded_ones():
 def test_mutated_mixed_stream_accounted_and_far_blocks_survive(data):
     stream, blocks = mixed_stream(2)
     buf = bytearray(stream)
-    pos = data.draw(st.integers(0, len(buf) - 1))
-    action = data.draw(st.sampled_from(["flip", "truncate", "insert", "delete"]))
-    if action == "flip":
-        buf[pos] ^= 1 << data.draw(st.integers(0, 7))
-    elif action == "truncate":
-        del buf[pos:]
-    elif action == "insert":
-        buf[pos:pos] = data.draw(st.binary(min_size=1, max_size=8))
-    else:
-        del buf[pos:pos + data.draw(st.integers(1, 8))]
+    pos, action = mutate(buf, data)
     rec = decode_bytes(bytes(buf))
     assert accounted(rec) == len(buf)
     starts = [s for s, _, _ in blocks]
