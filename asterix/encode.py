@@ -1,7 +1,7 @@
 """ASTERIX encoder: engineering values -> item bytes, records and data blocks (the decoder's inverse).
 
 Items are laid out from the edition tables (``asterix/tables/*.json``); records and frames are keyed by the
-column names of ``asterix/columns.py`` so that encode -> decode gives back the same values.
+column names of ``asterix/columns/`` so that encode -> decode gives back the same values.
 """
 
 from __future__ import annotations

@@ -1,0 +1,36 @@
+"""The column record and the helpers every category's column list is written with."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+NM_PER_S_TO_KT = 3600.0
+
+
+@dataclass(frozen=True)
+class Column:
+    """One frame column: its name, sources, how raw bits become a value, and its documentation."""
+
+    name: str
+    sources: tuple[tuple[str, tuple[str, ...]], ...]
+    kind: str = "float"  # float (LSB-scaled) | int | flag | octal | icao | hex | count | codes
+    scale: float = 1.0  # applied after the LSB, for unit conversion (NM/s -> kt)
+    unit: str = ""
+    doc: str = ""
+
+
+def _c(name: str, item: str, path: str, kind: str = "float", unit: str = "", doc: str = "",
+       scale: float = 1.0, also: tuple[tuple[str, str], ...] = ()) -> Column:
+    sources = ((item, tuple(path.split("/")) if path else ()),) + tuple(
+        (i, tuple(p.split("/")) if p else ()) for i, p in also)
+    return Column(name, sources, kind, scale, unit, doc)
+
+
+def _flags(item: str, names: dict[str, str], doc: str) -> list[Column]:
+    return [_c(col, item, field, "flag", doc=f"{doc} {field}") for col, field in names.items()]
+
+
+_COMMON_ID = [
+    _c("sac", "010", "SAC", "int", doc="System Area Code"),
+    _c("sic", "010", "SIC", "int", doc="System Identification Code"),
+]
