@@ -20,6 +20,7 @@ from .columns import FAMILIES
 from .containers import Segments, read_segments
 from .errors import REASONS, DecodeError, EditionWarning, UnreadableInput
 from .frames import code_list_column, empty_column, icao_columns, typed_column
+from .framing import Progress, segment_modes, survey
 from .layout import Layout, compile_layout
 from .tables import available, resolve_edition
 from .timeline import assign_days, timestamp_index
@@ -182,18 +183,6 @@ def _mapped(path) -> Iterator[np.ndarray]:
                 pass
 
 
-def release_pages(buf: np.ndarray, start: int, stop: int) -> None:
-    """Drop the pages of a memory-mapped file between two offsets from this process (the data stay in the
-    page cache and fault back in if read again), so a file read in chunks is not held in memory whole."""
-    mm = getattr(getattr(buf, "base", None), "obj", None)
-    if not isinstance(mm, mmap.mmap) or not hasattr(mmap, "MADV_DONTNEED") or stop <= start:
-        return
-    lo = start // mmap.PAGESIZE * mmap.PAGESIZE
-    hi = min(stop, len(mm))
-    if hi > lo:
-        mm.madvise(mmap.MADV_DONTNEED, lo, hi - lo)
-
-
 def _scan(buf, starts, lens, lay: Layout):
     """One walk over the blocks: records per block (minus an error code for a bad block), where
     bad walks failed, and where each part of each good record lies (arrays sized by numpy)."""
@@ -228,14 +217,16 @@ def _walk_flags(buf: np.ndarray, starts: np.ndarray, lens: np.ndarray, category:
 
 
 def choose_edition(buf: np.ndarray, starts: np.ndarray, lens: np.ndarray, category: int,
-                   sample: int = AUTO_SAMPLE_BLOCKS) -> tuple[str, str]:
+                   sample: int = AUTO_SAMPLE_BLOCKS, total: int | None = None) -> tuple[str, str]:
     """Pick the edition under which every sampled block walks exactly (the newest of those, as they read
     the sample alike), values plausible; say which blocks told the editions apart, or that none walks all.
 
     The sample is every block, or AUTO_SAMPLE_BLOCKS spread evenly over a longer recording: a walk costs
-    no memory, so rare blocks that tell editions apart (I021/271 with an odd LW) are seen.
+    no memory, so rare blocks that tell editions apart (I021/271 with an odd LW) are seen. ``total``: the
+    category's blocks in the recording, when ``starts`` are a sample of them already.
     """
     idx = _spread(len(starts), sample)
+    total = len(starts) if total is None else total
     s, n = starts[idx], lens[idx]
     eds = _editions_oldest_first(category)
     flags = {ed: _walk_flags(buf, s, n, category, ed) for ed in eds}
@@ -260,7 +251,7 @@ def choose_edition(buf: np.ndarray, starts: np.ndarray, lens: np.ndarray, catego
         verdict += " (" + ", ".join(f"{ed} {p:.0%} plausible" for ed, p in plaus.items()) + ")"
     apart_words = (f"{len(apart)} blocks told {'/'.join(contenders)} apart: {told}" if len(contenders) > 1
                    else "no other edition walks half the sample, so none needed telling apart")
-    return chosen, (f"chose {chosen} ({len(idx)} of {len(starts)} blocks sampled; blocks walking: "
+    return chosen, (f"chose {chosen} ({len(idx)} of {total} blocks sampled; blocks walking: "
                     f"{'; '.join(words)}; {verdict}; {apart_words})")
 
 
@@ -274,14 +265,17 @@ def walking_editions(buf: np.ndarray, starts: np.ndarray, lens: np.ndarray, cate
                  if ed != besides and _walk_flags(buf, s, n, category, ed).all())
 
 
-def framing_edition(buf: np.ndarray, seg: Segments, walked: dict, category: int) -> str:
+def framing_edition(buf: np.ndarray, seg: Segments, walked: dict, category: int,
+                    progress: Progress | None = None) -> str:
     """For an 'auto' category of a stream whose block chain breaks: the edition under which careful
     framing loses the fewest bytes (most of its blocks found on a tie, then the newest). Framing cannot
     walk a category without an edition, and would otherwise lose every block of it after the damage."""
     best: tuple | None = None
+    careful = np.full(len(seg.start), kernel.MODE_CAREFUL, np.int8)
     for ed in _editions_oldest_first(category):
-        framed = frame(buf, seg, {**walked, category: ed}, True)
-        key = (int(framed[5].sum()), -int((framed[2] == category).sum()))
+        counted = survey(buf, seg, careful, tables_for({**walked, category: ed}), progress=progress,
+                         what=f"framing under CAT{category:03d} {ed}")
+        key = (counted.error_bytes, -int(counted.blocks[category]))
         if best is None or key <= best[0]:
             best = (key, ed)
     return best[1]
@@ -380,19 +374,17 @@ def _cat_or(arrays: list[np.ndarray], fill: int, dtype) -> np.ndarray:
     return np.concatenate(arrays) if arrays else np.array([fill], dtype)
 
 
+def tables_for(walked: dict[int, str | None]) -> kernel.Framing:
+    """The framing tables walking these categories under these editions (None: the default); the same
+    object for the same editions."""
+    return _framing_tables(tuple(sorted((c, compile_layout(c, e).edition) for c, e in walked.items())))
+
+
 def frame(buf: np.ndarray, seg: Segments, walked: dict[int, str | None] | None = None,
           careful: bool = False):
-    """Data blocks of every category in the segments (kernel.frame_blocks); ``walked`` gives the
-    categories (and editions) whose blocks must walk exactly where framing has to resynchronise."""
-    key = tuple(sorted((c, compile_layout(c, e).edition) for c, e in (walked or {}).items()))
-    return kernel.frame_blocks(buf, seg.start, seg.stop, seg.exact, careful, _framing_tables(key))
-
-
-def _lone_category(b_cat: np.ndarray, walked: dict) -> bool:
-    """A category not walked that has a single block: a possible false header, worth careful framing."""
-    counts = np.bincount(b_cat.astype(np.int64), minlength=256)
-    counts[list(walked)] = 0
-    return bool((counts == 1).any())
+    """Data blocks of every category in the segments, in one piece (kernel.frame_blocks); ``walked`` gives
+    the categories (and editions) whose blocks must walk exactly where framing has to resynchronise."""
+    return kernel.frame_blocks(buf, seg.start, seg.stop, seg.exact, careful, tables_for(walked or {}))
 
 
 def walked_editions(editions: dict, categories) -> dict[int, str | None]:
@@ -404,100 +396,74 @@ def walked_editions(editions: dict, categories) -> dict[int, str | None]:
             and editions.get(c) != "auto"}
 
 
-def framing_walk(buf: np.ndarray, seg: Segments, editions: dict, categories) -> dict[int, str | None]:
-    """walked_editions, plus, on a stream whose block chain breaks, each decoded 'auto' category with the
+def framing_walk(buf: np.ndarray, seg: Segments, editions: dict, categories,
+                 progress: Progress | None = None) -> dict[int, str | None]:
+    """walked_editions, plus, on a stream whose framing finds errors, each decoded 'auto' category with the
     edition framing_edition finds for it (its blocks are found before its edition is chosen)."""
     walked = walked_editions(editions, categories)
     wanted = set(DEFAULT_CATEGORIES if categories is None else categories)
     auto = [c for c in DECODABLE if c in wanted and editions.get(c) == "auto"]
-    if auto and not seg.exact and len(frame(buf, seg, walked, False)[4]):
+    if auto and not seg.exact and framing_errors(buf, seg, walked, progress):
         for cat in auto:
-            walked[cat] = framing_edition(buf, seg, walked, cat)
+            walked[cat] = framing_edition(buf, seg, walked, cat, progress)
     return walked
 
 
-def _walking_bytes(buf: np.ndarray, framed, framing: kernel.Framing) -> int:
-    """Bytes in the framed blocks of walked categories that walk exactly (kernel.walk_flags)."""
-    b_start, b_len, b_cat = framed[:3]
-    total = 0
-    for cat in np.unique(b_cat):
-        if framing.base[cat] < 0:
-            continue
-        sel = b_cat == cat
-        ok = kernel.walk_flags(buf, b_start[sel], b_len[sel], framing.base[cat], framing.nfrn[cat],
-                               framing.parts).astype(bool)  # 0/1 flags: as a mask, not as indices
-        total += int(b_len[sel][ok].sum())
-    return total
+def framing_errors(buf: np.ndarray, seg: Segments, walked: dict, progress: Progress | None = None) -> int:
+    """Framing errors of the recording framed as decoding first frames it (frame(..., careful=False)),
+    counted a window at a time."""
+    tables = tables_for(walked)
+    modes = segment_modes(buf, seg, tables, progress)
+    if (modes != kernel.MODE_CAREFUL).all():
+        return 0
+    return survey(buf, seg, modes, tables, progress=progress).errors
 
 
-def frame_checked(buf: np.ndarray, seg: Segments, walked: dict[int, str | None], plain=None):
-    """Framing as decode_buffer settles it: the chain as it is (``plain``, framed here when not given)
-    when it holds and every walked block walks, else careful framing; but a chain that holds from end
-    to end is kept when careful framing walks no more bytes (blocks that do not walk are then of another
-    edition, not damaged: cutting them up would lose the blocks and misreport them as framing errors)."""
-    key = tuple(sorted((c, compile_layout(c, e).edition) for c, e in walked.items()))
-    framing = _framing_tables(key)
-    framed = plain if plain is not None else kernel.frame_blocks(buf, seg.start, seg.stop, seg.exact, False,
-                                                                 framing)
-    if seg.exact or (not len(framed[4]) and not _lone_category(framed[2], walked)
-                     and kernel.all_walk(buf, framed[0], framed[1], framed[2], framing)):
-        return framed
-    careful = kernel.frame_blocks(buf, seg.start, seg.stop, seg.exact, True, framing)
-    if not len(framed[4]) and _walking_bytes(buf, careful, framing) <= _walking_bytes(buf, framed, framing):
-        return framed
-    return careful
-
-
-def _scan_decoded(buf: np.ndarray, framed, decoded: list[int], editions: dict, choice: dict,
-                  selected) -> dict[int, tuple]:
-    """Walk the framed blocks of each decoded category: {cat: (block indices, layout, scan)}; an 'auto'
-    edition is chosen on its first framing (``editions`` and ``choice`` are updated)."""
+def _scan_decoded(buf: np.ndarray, framed, plan, selected) -> dict[int, tuple]:
+    """Walk the framed blocks of each decoded category under the plan's edition: {cat: (block indices,
+    layout, scan)}."""
     b_start, b_len, b_cat = framed[:3]
     scans: dict[int, tuple] = {}
-    for cat in decoded:
+    for cat in plan.decoded:
         sel = np.flatnonzero(b_cat == cat)
         if not len(sel):
             continue
-        starts, lens = b_start[sel], b_len[sel]
-        ed = editions.get(cat)
-        if ed == "auto" and cat not in choice:
-            ed, choice[cat] = choose_edition(buf, starts, lens, cat)
-            editions[cat] = ed
-        lay = compile_layout(cat, ed, selected)
-        scans[cat] = (sel, lay, _scan(buf, starts, lens, lay))
+        lay = compile_layout(cat, plan.editions.get(cat), selected)
+        scans[cat] = (sel, lay, _scan(buf, b_start[sel], b_len[sel], lay))
     return scans
 
 
 def decode_buffer(buf: np.ndarray, seg: Segments, *, path: str = "", editions: dict | None = None,
                   categories=None, date=None, strict: bool = False, columns=None) -> Recording:
     """Decode an in-memory recording whose container segments are already known (``columns``: see
-    ``read``)."""
-    editions = dict(editions or {})
+    ``read``): the plan settled over the whole recording (asterix.plan), then every block at once."""
+    from .plan import plan_recording  # the plan chooses editions with this module's functions
+
     selected = selected_columns(columns)
     date = parse_date(date)
     categories = check_categories(categories)
-    decoded = [c for c in DECODABLE if c in set(DEFAULT_CATEGORIES if categories is None else categories)]
-    walked = framing_walk(buf, seg, editions, categories)
-    choice: dict[int, str] = {}
-    # Framing first follows the block chain as it is. If it breaks, or a decoded block does not walk
-    # (a LEN may be damaged), the raw stream is framed again carefully, walking the decoded blocks, and
-    # frame_checked settles which framing stands.
-    framed = frame(buf, seg, walked, False)
-    scans = _scan_decoded(buf, framed, decoded, editions, choice, selected)
-    failed = any((sc[2][0] < 0).any() for sc in scans.values())
-    if not seg.exact and (failed or _lone_category(framed[2], walked)):
-        settled = frame_checked(buf, seg, walked_editions(editions, categories), plain=framed)
-        if settled is not framed:
-            framed = settled
-            scans = _scan_decoded(buf, framed, decoded, editions, choice, selected)
+    plan = plan_recording(buf, seg, dict(editions or {}), categories)
+    return decode_framed(buf, plan, plan.framer(buf).window(), path=path, date=date, strict=strict,
+                         selected=selected)
+
+
+def decode_framed(buf: np.ndarray, plan, framed, *, path: str = "", date: dt.date | None = None,
+                  strict: bool = False, selected=None, part: Segments | None = None,
+                  first_segment: int = 0) -> Recording:
+    """Decode framed blocks (all of a recording's, or one window's: kernel.frame_window) by the plan
+    (asterix.plan), into a Recording of them. ``part``: the segments they lie in, the first being the plan's
+    segment ``first_segment`` (days are counted, and container bytes and problems told, by it); the plan's
+    segments when None."""
+    seg = plan.seg
+    part = seg if part is None else part
+    scans = _scan_decoded(buf, framed, plan, selected)
     b_start, b_len, b_cat, b_seg, e_off, e_len, e_cat, e_code = framed
     errors: list[tuple[int, int, int, str]] = [
         (int(o), int(n), int(c), framing_reason(buf, seg, int(o), int(code)))
         for o, n, c, code in zip(e_off, e_len, e_cat, e_code, strict=True)]
-    errors += [(o, n, -1, f"container: {why}") for o, n, why in seg.problems]
+    errors += [(o, n, -1, f"container: {why}") for o, n, why in part.problems]
     columns: dict[int, dict] = {}
     chosen: dict[int, str] = {}
-    fits: dict[int, tuple[str, ...]] = {}
     ignored: dict[int, int] = {}
     ignored_by_cat: dict[int, int] = {}
     decoded_bytes = ignored_bytes = 0
@@ -516,16 +482,14 @@ def decode_buffer(buf: np.ndarray, seg: Segments, *, path: str = "", editions: d
             reason = f"{REASONS[int(-counts[j])]} (record at offset {int(fail_at[j])})"
             errors.append((int(starts[j]), int(lens[j]), cat, reason))
         failed = counts < 0
-        if failed.any() and 2 * int(failed.sum()) >= len(counts):
-            fits[cat] = walking_editions(buf, starts[failed], lens[failed], cat, besides=lay.edition)
-            if fits[cat] and failed.sum() >= WRONG_EDITION_MIN_BLOCKS:
-                # the edition is wrong: blocks that walk under it anyway would give wrong values
-                others = " or ".join(fits[cat])
-                why = (f"walks under edition {lay.edition}, but most CAT{cat:03d} blocks do not and every "
-                       f"one of those sampled walks under {others}: withheld (a wrong edition)")
-                errors += [(int(starts[j]), int(lens[j]), cat, why) for j in np.flatnonzero(~failed)]
-                scanned = (*scanned[:-1], 0)
-                counts = np.full_like(counts, -1)
+        if cat in plan.withheld:
+            # the edition is wrong (plan: over the whole recording): blocks that walk would give wrong values
+            others = " or ".join(plan.fits[cat])
+            why = (f"walks under edition {lay.edition}, but most CAT{cat:03d} blocks do not and every "
+                   f"one of those sampled walks under {others}: withheld (a wrong edition)")
+            errors += [(int(starts[j]), int(lens[j]), cat, why) for j in np.flatnonzero(~failed)]
+            scanned = (*scanned[:-1], 0)
+            counts = np.full_like(counts, -1)
         decoded_bytes += int(lens[counts > 0].sum())
         fl, ints, rec_off, rec_blk = _extract(buf, scanned, lay)
         del scanned
@@ -535,7 +499,7 @@ def decode_buffer(buf: np.ndarray, seg: Segments, *, path: str = "", editions: d
     if strict and errors:
         o, _, c, why = errors[0]
         raise DecodeError(path, o, why, c)
-    first_day = assign_days(columns, seg, b_seg)
+    first_day = assign_days(columns, part, b_seg - first_segment)
     if first_day is not None and seg.dated:
         date = dt.date(1970, 1, 1) + dt.timedelta(days=first_day)
     frames: dict[int, pd.DataFrame] = {}
@@ -548,10 +512,10 @@ def decode_buffer(buf: np.ndarray, seg: Segments, *, path: str = "", editions: d
     err.insert(0, "file", path)
     err["category"] = err["category"].astype("Int16").where(err["category"] >= 0)
     return Recording(frames=frames, errors=err, editions=chosen, path=path, format=seg.format, date=date,
-                     size_bytes=int(len(buf)), container_bytes=int(seg.container_bytes),
+                     size_bytes=int(len(buf)), container_bytes=int(part.container_bytes),
                      decoded_bytes=decoded_bytes, ignored_blocks=ignored, ignored_bytes=ignored_bytes,
-                     edition_choice=choice, day0=first_day, ignored_category_bytes=ignored_by_cat,
-                     edition_fits=fits, blocks=int(len(b_start)))
+                     edition_choice=dict(plan.choice), day0=first_day, ignored_category_bytes=ignored_by_cat,
+                     edition_fits=dict(plan.fits), blocks=int(len(b_start)))
 
 
 def framing_reason(buf: np.ndarray, seg: Segments, offset: int, code: int) -> str:
@@ -626,9 +590,10 @@ def edition_advice(rec: Recording) -> list[str]:
 
 
 def categories_in(path, *, format: str | None = None) -> dict[int, int]:
-    """Data blocks per category in a recording, from framing alone (fast: no record is walked)."""
+    """Data blocks per category in a recording, from framing alone (fast: no record is walked; counted a
+    window at a time)."""
     with _mapped(path) as buf:
         seg = read_segments(buf, format)
-        cats = frame(buf, seg)[2]
-        values, counts = np.unique(cats, return_counts=True)
-        return {int(v): int(n) for v, n in zip(values, counts, strict=True)}
+        tables = tables_for({})
+        counted = survey(buf, seg, segment_modes(buf, seg, tables), tables)
+        return {int(c): int(counted.blocks[c]) for c in np.flatnonzero(counted.blocks)}
