@@ -461,7 +461,11 @@ def frame_window(buf, seg_start, seg_stop, seg_mode, framing, st, seen, seg_limi
                     c = buf[q]
                     if base[c] >= 0:
                         if walks(buf, q, n, base[c], nfrn[c], parts):
-                            ok = True  # walking exactly to its LEN is the block's own evidence
+                            # walking exactly to its LEN is the block's own evidence, unless what follows
+                            # does not fit and a walking chain starts inside it: a damaged block that walks
+                            # by chance, swallowing the head of a real one
+                            ok = (_next_ok(buf, q + n, stop, seen, framing)
+                                  or not _chained_inside(buf, q, q + n, stop, framing))
                         else:
                             # a block that does not walk keeps its LEN only if what follows is anchored
                             # (and hides no walking chain: a damaged LEN that happens to land on a block)
