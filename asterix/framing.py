@@ -64,6 +64,7 @@ class Framer:
     def __init__(self, buf: np.ndarray, seg: Segments, modes: np.ndarray, tables: kernel.Framing):
         self.buf, self.seg, self.modes, self.tables = buf, seg, modes, tables
         self.state, self.seen = kernel.new_state()
+        self.memo = kernel.new_memo()
         self.released = 0  # pages below this offset were dropped
 
     @property
@@ -94,7 +95,7 @@ class Framer:
         self.release(self.position)
         limit = len(seg.start) if seg_limit is None else seg_limit
         return kernel.frame_window(self.buf, seg.start, seg.stop, self.modes, self.tables, self.state,
-                                   self.seen, limit, byte_limit)
+                                   self.seen, self.memo, limit, byte_limit)
 
     def release(self, upto: int) -> None:
         """Drop the mapped pages below ``upto`` (framing no longer reads them)."""

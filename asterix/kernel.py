@@ -189,6 +189,29 @@ def walk_flags(buf, blk_start, blk_len, p0, n_frn, parts):
     return out
 
 
+MEMO_SLOTS = 1 << 16  # walk results framing remembers, by block start (direct-mapped: x % MEMO_SLOTS)
+
+
+def new_memo() -> np.ndarray:
+    """An empty memo of walk results, for one framing (its tables fixed)."""
+    return np.zeros(MEMO_SLOTS, np.int64)
+
+
+@njit(cache=True, nogil=True)
+def _walks_at(buf, x, n, c, framing, memo):
+    """walks() for the block at x (LEN n, category c, walked by framing), remembered by x: resynchronising
+    over non-ASTERIX bytes walks the same false blocks again from the chains of several offsets (each entry
+    is x * 4 + 1 when it walks, + 2 when not; the LEN at x, hence n, is the same every time)."""
+    slot = x & (MEMO_SLOTS - 1)
+    e = memo[slot]
+    if e >> 2 == x and e & 3:
+        return e & 3 == 1
+    base, nfrn, parts = framing
+    ok = walks(buf, x, n, base[c], nfrn[c], parts)
+    memo[slot] = x * 4 + (1 if ok else 2)
+    return ok
+
+
 @njit(cache=True, nogil=True)
 def _cut_tail(buf, x, stop, seen):
     """The data ends inside a block header or block at x of a category already met (a truncated file)."""
@@ -201,12 +224,12 @@ def _cut_tail(buf, x, stop, seen):
 
 
 @njit(cache=True, nogil=True)
-def _anchored(buf, r, stop, seen, framing):
+def _anchored(buf, r, stop, seen, framing, memo):
     """The block chain from r holds for LOOKAHEAD blocks (or to the end of the data) and is anchored:
     one of its blocks is of a decoded category and walks exactly, or all its categories were already
     met, or it reaches the end in two blocks or more (one LEN landing on the end proves little).
     Every decoded block in it must walk exactly."""
-    base, nfrn, parts = framing
+    base = framing[0]
     x = r
     walked = False
     all_seen = True
@@ -221,7 +244,7 @@ def _anchored(buf, r, stop, seen, framing):
             return walked and k >= 2  # breaks again: two chained blocks, one walking, still anchor it
         c = buf[x]
         if base[c] >= 0:
-            if not walks(buf, x, n, base[c], nfrn[c], parts):
+            if not _walks_at(buf, x, n, c, framing, memo):
                 return False
             walked = True
         elif seen[c] == 0:
@@ -234,10 +257,10 @@ def _anchored(buf, r, stop, seen, framing):
 
 
 @njit(cache=True, nogil=True)
-def _chained_inside(buf, q, end, stop, framing):
+def _chained_inside(buf, q, end, stop, framing, memo):
     """A chain of blocks starting inside (q, end) reaches a decoded block that walks and starts before end
     (it may run past end): the block at q is then probably a false header swallowing real blocks."""
-    base, nfrn, parts = framing
+    base = framing[0]
     for r in range(q + 1, end - 2):
         x = r
         while x < end:
@@ -246,7 +269,7 @@ def _chained_inside(buf, q, end, stop, framing):
                 break
             c = buf[x]
             if base[c] >= 0:
-                if walks(buf, x, n, base[c], nfrn[c], parts):
+                if _walks_at(buf, x, n, c, framing, memo):
                     return True
                 break
             x += n
@@ -269,18 +292,18 @@ def _hides_decoded(buf, q, end, framing):
 
 
 @njit(cache=True, nogil=True)
-def _candidate(buf, r, stop, seen, framing):
+def _candidate(buf, r, stop, seen, framing, memo):
     """Framing may resume at r: its chain is anchored, and a block of a category not walked hides no
     walking chain (a false header there would swallow real blocks)."""
     n = _header(buf, r, stop)
-    if n < 0 or not _anchored(buf, r, stop, seen, framing):
+    if n < 0 or not _anchored(buf, r, stop, seen, framing, memo):
         return False
     base = framing.base
-    return base[buf[r]] >= 0 or not _chained_inside(buf, r, r + n, stop, framing)
+    return base[buf[r]] >= 0 or not _chained_inside(buf, r, r + n, stop, framing, memo)
 
 
 @njit(cache=True, nogil=True)
-def _next_ok(buf, x, stop, seen, framing):
+def _next_ok(buf, x, stop, seen, framing, memo):
     """What follows a block that does not prove itself: the end, a truncated tail, a header of a decoded
     or already met category, or an anchored chain."""
     if x == stop:
@@ -289,7 +312,7 @@ def _next_ok(buf, x, stop, seen, framing):
     if n < 0:
         return _cut_tail(buf, x, stop, seen)
     c = buf[x]
-    return framing.base[c] >= 0 or seen[c] == 1 or _anchored(buf, x, stop, seen, framing)
+    return framing.base[c] >= 0 or seen[c] == 1 or _anchored(buf, x, stop, seen, framing, memo)
 
 
 # Framing modes of a payload segment (frame_window's seg_mode).
@@ -356,12 +379,13 @@ def chain_step(buf, start, stop, framing, q, byte_limit):
 
 
 @njit(cache=True, nogil=True)
-def frame_window(buf, seg_start, seg_stop, seg_mode, framing, st, seen, seg_limit, byte_limit):
+def frame_window(buf, seg_start, seg_stop, seg_mode, framing, st, seen, memo, seg_limit, byte_limit):
     """Frame payload segments into data blocks of any category, from where ``st`` left off, until a
     decision would start at or past ``byte_limit`` or segment ``seg_limit`` is reached (one decision at
     least is made per call). Returns (blk_start, blk_len, blk_cat, blk_seg, err_off, err_len, err_cat,
     err_code) for what was settled; ``st`` and ``seen`` (categories met, uint8[256]) carry the framing
-    between calls, so any windows give the blocks and errors of one call over everything, in its order.
+    between calls, so any windows give the blocks and errors of one call over everything, in its order;
+    ``memo`` (new_memo) keeps walk results for the calls of one framing.
 
     MODE_EXACT segments must tile into blocks, else they are skipped whole (E_NO_FRAME); MODE_CHAIN ones are
     followed header by header; MODE_CAREFUL ones accept a block when it is consistent with what follows
@@ -460,23 +484,23 @@ def frame_window(buf, seg_start, seg_stop, seg_mode, framing, st, seen, seg_limi
                 if n > 0:
                     c = buf[q]
                     if base[c] >= 0:
-                        if walks(buf, q, n, base[c], nfrn[c], parts):
+                        if _walks_at(buf, q, n, c, framing, memo):
                             # walking exactly to its LEN is the block's own evidence, unless what follows
                             # does not fit and a walking chain starts inside it: a damaged block that walks
                             # by chance, swallowing the head of a real one
-                            ok = (_next_ok(buf, q + n, stop, seen, framing)
-                                  or not _chained_inside(buf, q, q + n, stop, framing))
+                            ok = (_next_ok(buf, q + n, stop, seen, framing, memo)
+                                  or not _chained_inside(buf, q, q + n, stop, framing, memo))
                         else:
                             # a block that does not walk keeps its LEN only if what follows is anchored
                             # (and hides no walking chain: a damaged LEN that happens to land on a block)
-                            ok = ((q + n == stop or _anchored(buf, q + n, stop, seen, framing))
-                                  and not _chained_inside(buf, q, q + n, stop, framing))
+                            ok = ((q + n == stop or _anchored(buf, q + n, stop, seen, framing, memo))
+                                  and not _chained_inside(buf, q, q + n, stop, framing, memo))
                     elif seen[c] == 1:
-                        ok = (_next_ok(buf, q + n, stop, seen, framing)
-                              and not _chained_inside(buf, q, q + n, stop, framing))
+                        ok = (_next_ok(buf, q + n, stop, seen, framing, memo)
+                              and not _chained_inside(buf, q, q + n, stop, framing, memo))
                     else:  # a category not met yet: its chain must be anchored, and hide no real blocks
-                        ok = ((q + n == stop or _anchored(buf, q, stop, seen, framing))
-                              and not _chained_inside(buf, q, q + n, stop, framing))
+                        ok = ((q + n == stop or _anchored(buf, q, stop, seen, framing, memo))
+                              and not _chained_inside(buf, q, q + n, stop, framing, memo))
                 if ok:
                     if nb == b_start.shape[0]:
                         b_start, b_len, b_seg, b_cat = _grow4(b_start, b_len, b_seg, b_cat)
@@ -507,7 +531,7 @@ def frame_window(buf, seg_start, seg_stop, seg_mode, framing, st, seen, seg_limi
                 if buf[r] != 0 and r + 3 <= stop:
                     m = (np.int64(buf[r + 1]) << 8) | buf[r + 2]
                     if (m >= 3 and r + m <= stop and _may_anchor(buf, r, stop, seen, base)
-                            and _candidate(buf, r, stop, seen, framing)):
+                            and _candidate(buf, r, stop, seen, framing, memo)):
                         break
                 r += 1
             if paused:
@@ -581,7 +605,8 @@ def frame_blocks(buf, seg_start, seg_stop, exact, careful, framing):
     (blk_start, blk_len, blk_cat, blk_seg, err_off, err_len, err_cat, err_code)."""
     modes = segment_modes(buf, seg_start, seg_stop, exact, careful, framing)
     st, seen = new_state()
-    return frame_window(buf, seg_start, seg_stop, modes, framing, st, seen, len(seg_start), NO_LIMIT)
+    return frame_window(buf, seg_start, seg_stop, modes, framing, st, seen, new_memo(), len(seg_start),
+                        NO_LIMIT)
 
 
 @njit(cache=True, nogil=True)
