@@ -18,6 +18,7 @@ from . import kernel
 from .containers import Segments
 
 WINDOW_BYTES = 8 << 20  # payload bytes framed per window of a survey (memory: that window's blocks)
+KEEP_ENTRIES = 1 << 20  # blocks and errors of a careful framing kept for decoding (26 bytes each), at most
 SAMPLE_BLOCKS = 20_000  # blocks a survey keeps of a sampled category: between this and twice as many
 
 Framed = tuple[np.ndarray, ...]  # (blk_start, blk_len, blk_cat, blk_seg, err_off, err_len, err_cat, err_code)
@@ -114,6 +115,47 @@ class Framer:
         self.release(total)
 
 
+class Replay:
+    """A framing kept from a survey (Survey.framed), handed out window by window as Framer does: careful
+    framing costs a pass over the file, and a short list of blocks (non-ASTERIX bytes) is cheaper kept."""
+
+    def __init__(self, buf: np.ndarray, seg: Segments, framed: Framed):
+        self.buf, self.seg, self.framed = buf, seg, framed
+        self.block, self.error = 0, 0  # the next block and error handed out
+        self.at = int(seg.start[0]) if len(seg.start) else 0  # offset handed out up to
+        self.released = 0
+
+    @property
+    def done(self) -> bool:
+        """Every block and error handed out."""
+        return self.block >= len(self.framed[0]) and self.error >= len(self.framed[4])
+
+    @property
+    def position(self) -> int:
+        """The offset handed out up to (the end of the payload once done)."""
+        return int(self.seg.stop.max()) if self.done and len(self.seg.stop) else self.at
+
+    def window(self, byte_limit: int = kernel.NO_LIMIT, seg_limit: int | None = None) -> Framed:
+        """The blocks and errors starting before ``byte_limit`` (at least the next one; raw streams only:
+        ``seg_limit`` is not used)."""
+        b_start, e_off = self.framed[0], self.framed[4]
+        nxt = min(int(b_start[self.block]) if self.block < len(b_start) else kernel.NO_LIMIT,
+                  int(e_off[self.error]) if self.error < len(e_off) else kernel.NO_LIMIT)
+        limit = max(byte_limit, nxt + 1)
+        b1 = self.block + int(np.searchsorted(b_start[self.block:], limit))
+        e1 = self.error + int(np.searchsorted(e_off[self.error:], limit))
+        out = (*(a[self.block:b1] for a in self.framed[:4]), *(a[self.error:e1] for a in self.framed[4:]))
+        self.block, self.error, self.at = b1, e1, max(self.at, min(limit, int(self.seg.stop.max())))
+        self.release(self.at)
+        return out
+
+    def release(self, upto: int) -> None:
+        """Drop the mapped pages below ``upto``."""
+        if upto > self.released:
+            release_pages(self.buf, self.released, upto)
+            self.released = upto
+
+
 class Sample:
     """Every k-th block of a category in framing order, k doubling whenever more than 2 x SAMPLE_BLOCKS
     are kept: an even spread over the file, the same whatever the windows."""
@@ -160,6 +202,7 @@ class Survey:
     error_bytes: int = 0
     samples: dict[int, Sample] = field(default_factory=dict)
     failed_samples: dict[int, Sample] = field(default_factory=dict)
+    framed: Framed | None = None  # the whole framing, when kept (survey's ``keep``)
 
     def lone(self, walked: Iterable[int]) -> bool:
         """A category not walked has a single block: a possible false header (worth careful framing)."""
@@ -171,13 +214,22 @@ class Survey:
 def survey(buf: np.ndarray, seg: Segments, modes: np.ndarray, tables: kernel.Framing,
            walk: kernel.Framing | None = None, *, sample: Iterable[int] = (),
            sample_failed: Iterable[int] = (), progress: Progress | None = None,
-           what: str = "framing") -> Survey:
+           what: str = "framing", keep: int = 0) -> Survey:
     """Frame the recording window by window (with ``tables``), walk each block of a category ``walk``
     walks (default: ``tables``), and count (Survey); ``sample``: categories whose blocks are sampled,
-    ``sample_failed``: those whose failed blocks are."""
+    ``sample_failed``: those whose failed blocks are. A careful framing of at most ``keep`` blocks and
+    errors is kept (Survey.framed), for decoding to replay instead of framing again."""
     walk = tables if walk is None else walk
     out = Survey(samples={c: Sample() for c in sample}, failed_samples={c: Sample() for c in sample_failed})
+    kept: list[Framed] | None = [] if keep and (modes == kernel.MODE_CAREFUL).any() else None
+    entries = 0
     for framed in Framer(buf, seg, modes, tables).windows(progress=progress, what=what):
+        if kept is not None:
+            entries += len(framed[0]) + len(framed[4])
+            if entries <= keep:
+                kept.append(framed)
+            else:
+                kept = None  # too long to keep: decoding frames it again
         b_start, b_len, b_cat = framed[:3]
         cats = b_cat.astype(np.int64)
         out.blocks += np.bincount(cats, minlength=256)
@@ -194,4 +246,6 @@ def survey(buf: np.ndarray, seg: Segments, modes: np.ndarray, tables: kernel.Fra
         for cat, smp in out.failed_samples.items():
             sel = bad & (cats == cat)
             smp.add(b_start[sel], b_len[sel])
+    if kept:
+        out.framed = tuple(np.concatenate([w[i] for w in kept]) for i in range(8))
     return out

@@ -13,7 +13,7 @@ import numpy as np
 from . import kernel
 from .categories import DECODABLE
 from .containers import Segments
-from .framing import Framer, Progress, segment_modes, survey
+from .framing import KEEP_ENTRIES, Framed, Framer, Progress, Replay, segment_modes, survey
 from .layout import compile_layout
 from .reader import (
     DEFAULT_CATEGORIES,
@@ -41,15 +41,13 @@ class Plan:
     choice: dict[int, str] = field(default_factory=dict)
     fits: dict[int, tuple[str, ...]] = field(default_factory=dict)
     withheld: set[int] = field(default_factory=set)
+    framed: Framed | None = None  # the settled framing itself, when careful and short (framing.KEEP_ENTRIES)
 
-    def framer(self, buf: np.ndarray) -> Framer:
-        """The settled framing, to be read window by window."""
+    def framer(self, buf: np.ndarray) -> Framer | Replay:
+        """The settled framing, to be read window by window (replayed when kept)."""
+        if self.framed is not None:
+            return Replay(buf, self.seg, self.framed)
         return Framer(buf, self.seg, self.modes, self.tables)
-
-
-def _decode_key(editions: dict, decoded: list[int]) -> dict[int, str | None]:
-    """The decoded categories with an edition (not 'auto' still), as the walk that decodes them reads them."""
-    return {c: editions.get(c) for c in decoded if editions.get(c) != "auto"}
 
 
 def plan_recording(buf: np.ndarray, seg: Segments, editions: dict, categories,
@@ -66,7 +64,9 @@ def plan_recording(buf: np.ndarray, seg: Segments, editions: dict, categories,
     walked = framing_walk(buf, seg, editions, categories, progress)
     tables = tables_for(walked)
     modes = segment_modes(buf, seg, tables, progress)
-    first = survey(buf, seg, modes, tables, sample=auto, sample_failed=decoded, progress=progress)
+    first = survey(buf, seg, modes, tables, sample=auto, sample_failed=decoded, progress=progress,
+                   keep=KEEP_ENTRIES)
+    framed = first.framed
     choice: dict[int, str] = {}
     for cat in auto:
         if first.blocks[cat]:
@@ -82,9 +82,10 @@ def plan_recording(buf: np.ndarray, seg: Segments, editions: dict, categories,
         kept = not first.errors and not checked.lone(walked2) and not checked.failed.any()
         if not kept:
             again = survey(buf, seg, careful, tables2, sample=[c for c in auto if c not in choice],
-                           sample_failed=decoded, progress=progress, what="framing carefully")
+                           sample_failed=decoded, progress=progress, what="framing carefully",
+                           keep=KEEP_ENTRIES)
             if first.errors or again.walking_bytes > checked.walking_bytes:
-                modes, tables, checked = careful, tables2, again
+                modes, tables, checked, framed = careful, tables2, again, again.framed
                 late = [c for c in auto if c not in choice and again.blocks[c]]
                 for cat in late:  # 'auto' categories whose blocks careful framing alone found
                     editions[cat], choice[cat] = choose_edition(buf, *again.samples[cat].arrays(), cat,
@@ -93,7 +94,7 @@ def plan_recording(buf: np.ndarray, seg: Segments, editions: dict, categories,
                     walk = tables_for(walked_editions(editions, categories))
                     checked = survey(buf, seg, modes, tables, walk, sample_failed=decoded, progress=progress,
                                      what="walking the blocks")
-    plan = Plan(seg, modes, tables, decoded, editions, choice)
+    plan = Plan(seg, modes, tables, decoded, editions, choice, framed=framed)
     for cat in decoded:
         n_failed, n_blocks = int(checked.failed[cat]), int(checked.blocks[cat])
         if n_failed and 2 * n_failed >= n_blocks:
