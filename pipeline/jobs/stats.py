@@ -70,9 +70,12 @@ def stats_job(options: StatsOptions, *, progress: Progress | None = None) -> Sta
                 "editions": {}, "edition_choice": {}, "date": None}
         by_source: dict[str, tuple[pd.Timestamp, pd.Timestamp]] = {}
         tally = FirstDayTally()
+        bar = (lambda done, total, what, name=path.name: progress.bar(done, total, f"{name}: {what}")
+               ) if progress else None
         try:
             for rec in asterix.iter_read(path, chunk=chunk, editions=checked.editions or None,
-                                         date=options.date, format=options.format, columns=STATS_COLUMNS):
+                                         date=options.date, format=options.format, columns=STATS_COLUMNS,
+                                         progress=bar):
                 acc.add(rec.frames, rec.errors, rec.ignored)
                 tally.add(rec.frames)
                 edition_notes.fold(failed, rec)
