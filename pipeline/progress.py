@@ -40,7 +40,8 @@ class Progress:
         width = 30
         filled = int(width * min(done, total) / total)
         rate = (done - self._bar_done0) / max(now - self._bar_t0, 1e-9)
+        speed = f" ({rate / 1e6:.1f} MB/s)" if done > self._bar_done0 else ""  # none from the first call
         self._ended = done >= total
         end = "\n" if done >= total else ""
-        print(f"\r  {label} [{'#' * filled}{'.' * (width - filled)}] {100 * done / total:5.1f}% "
-              f"({rate / 1e6:.1f} MB/s)", end=end, file=self.stream, flush=True)
+        print(f"\r  {label} [{'#' * filled}{'.' * (width - filled)}] {100 * done / total:5.1f}%{speed}",
+              end=end, file=self.stream, flush=True)
