@@ -62,10 +62,11 @@ def segment_modes(buf: np.ndarray, seg: Segments, tables: kernel.Framing,
 class Framer:
     """One framing of a recording (modes per segment, the tables it walks with), produced window by window."""
 
-    def __init__(self, buf: np.ndarray, seg: Segments, modes: np.ndarray, tables: kernel.Framing):
+    def __init__(self, buf: np.ndarray, seg: Segments, modes: np.ndarray, tables: kernel.Framing,
+                 log_cat: int = -1):
         self.buf, self.seg, self.modes, self.tables = buf, seg, modes, tables
         self.state, self.seen = kernel.new_state()
-        self.memo = kernel.new_memo()
+        self.memo = kernel.new_memo(log_cat)
         self.released = 0  # pages below this offset were dropped
 
     @property
@@ -103,6 +104,17 @@ class Framer:
         if upto > self.released:
             release_pages(self.buf, self.released, upto)
             self.released = upto
+
+    def drain(self) -> tuple[np.ndarray, np.ndarray] | None:
+        """The blocks of the logged category walked since the last drain: (starts, walked exactly), emptying
+        the log; None if an entry was lost (no room: see kernel.LOG_RESERVE)."""
+        memo = self.memo
+        count = int(memo[kernel.LOG_COUNT])
+        memo[kernel.LOG_COUNT] = 0
+        if count == kernel.LOG_OVERFLOW:
+            return None
+        entries = memo[kernel.LOG_COUNT + 1:kernel.LOG_COUNT + 1 + count]
+        return entries >> 1, (entries & 1).astype(np.int8)
 
     def windows(self, window_bytes: int = WINDOW_BYTES, progress: Progress | None = None,
                 what: str = "framing") -> Iterable[Framed]:
@@ -176,10 +188,12 @@ class Sample:
         self.start.append(start[keep])
         self.length.append(length[keep])
         if sum(len(i) for i in self.index) > 2 * SAMPLE_BLOCKS:
-            self.k *= 2
             idx, start, length = self.arrays(with_index=True)
-            keep = idx % self.k == 0
-            self.index, self.start, self.length = [idx[keep]], [start[keep]], [length[keep]]
+            while len(idx) > 2 * SAMPLE_BLOCKS:
+                self.k *= 2
+                keep = idx % self.k == 0
+                idx, start, length = idx[keep], start[keep], length[keep]
+            self.index, self.start, self.length = [idx], [start], [length]
 
     def arrays(self, with_index: bool = False):
         """(starts, lengths) of the kept blocks (with their indices first when asked)."""
@@ -209,6 +223,43 @@ class Survey:
         counts = self.blocks.copy()
         counts[list(walked)] = 0
         return bool((counts == 1).any())
+
+
+def alike_framings(buf: np.ndarray, seg: Segments, modes: np.ndarray, tables: dict[str, kernel.Framing],
+                   cat: int, progress: Progress | None = None, what: str = "framing") -> dict[str, Survey]:
+    """Blocks per category and framing errors of the recording framed under each of several tables that
+    differ only in how blocks of ``cat`` walk (its editions), by key. The first is framed, logging every
+    block of ``cat`` its framing walks; tables that walk each of those alike frame alike, decision for
+    decision, and share its counts; the others are framed in turn the same way (framing once per group of
+    editions that agree, instead of once per edition)."""
+    out: dict[str, Survey] = {}
+    remaining = list(tables)
+    while remaining:
+        lead, rest = remaining[0], remaining[1:]
+        alike = set(rest)
+        counted = Survey()
+        framer = Framer(buf, seg, modes, tables[lead], log_cat=cat)
+        for framed in framer.windows(progress=progress, what=f"{what} {lead}"):
+            cats = framed[2].astype(np.int64)
+            counted.blocks += np.bincount(cats, minlength=256)
+            counted.bytes += np.bincount(cats, weights=framed[1], minlength=256).astype(np.int64)
+            counted.errors += len(framed[4])
+            counted.error_bytes += int(framed[5].sum())
+            log = framer.drain()
+            if log is None:
+                alike.clear()
+            elif len(log[0]) and alike:
+                starts = log[0]
+                lens = (buf[starts + 1].astype(np.int64) << 8) | buf[starts + 2]
+                for key in list(alike):
+                    t = tables[key]
+                    walked = kernel.walk_flags(buf, starts, lens, t.base[cat], t.nfrn[cat], t.parts)
+                    if (walked != log[1]).any():
+                        alike.discard(key)
+        for key in (lead, *alike):
+            out[key] = counted
+        remaining = [k for k in rest if k not in alike]
+    return out
 
 
 def survey(buf: np.ndarray, seg: Segments, modes: np.ndarray, tables: kernel.Framing,

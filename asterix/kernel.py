@@ -189,19 +189,30 @@ def walk_flags(buf, blk_start, blk_len, p0, n_frn, parts):
     return out
 
 
-MEMO_SLOTS = 1 << 16  # walk results framing remembers, by block start (direct-mapped: x % MEMO_SLOTS)
+# The walk memo of one framing (new_memo): MEMO_SLOTS remembered walk results by block start (direct-mapped:
+# x % MEMO_SLOTS, each x * 4 + 1 when the block walks, + 2 when not), then the walk log: the category logged
+# (-1: none), its entries so far, and LOG_SLOTS entries x * 2 + walks for each block of that category framing
+# walked (framing pauses before LOG_RESERVE, more than one decision can walk, are left).
+MEMO_SLOTS = 1 << 16
+LOG_CAT = MEMO_SLOTS
+LOG_COUNT = MEMO_SLOTS + 1
+LOG_SLOTS = 1 << 18
+LOG_RESERVE = 1 << 17
+LOG_OVERFLOW = LOG_SLOTS + 1  # the count once an entry was lost (cannot happen with LOG_RESERVE free)
 
 
-def new_memo() -> np.ndarray:
-    """An empty memo of walk results, for one framing (its tables fixed)."""
-    return np.zeros(MEMO_SLOTS, np.int64)
+def new_memo(log_cat: int = -1) -> np.ndarray:
+    """An empty walk memo for one framing (its tables fixed), logging the walks of ``log_cat`` if >= 0."""
+    memo = np.zeros(MEMO_SLOTS + 2 + (LOG_SLOTS if log_cat >= 0 else 0), np.int64)
+    memo[LOG_CAT] = log_cat
+    return memo
 
 
 @njit(cache=True, nogil=True)
 def _walks_at(buf, x, n, c, framing, memo):
     """walks() for the block at x (LEN n, category c, walked by framing), remembered by x: resynchronising
-    over non-ASTERIX bytes walks the same false blocks again from the chains of several offsets (each entry
-    is x * 4 + 1 when it walks, + 2 when not; the LEN at x, hence n, is the same every time)."""
+    over non-ASTERIX bytes walks the same false blocks again from the chains of several offsets (the LEN
+    at x, hence n, is the same every time). Each block of the logged category walked is logged."""
     slot = x & (MEMO_SLOTS - 1)
     e = memo[slot]
     if e >> 2 == x and e & 3:
@@ -209,7 +220,20 @@ def _walks_at(buf, x, n, c, framing, memo):
     base, nfrn, parts = framing
     ok = walks(buf, x, n, base[c], nfrn[c], parts)
     memo[slot] = x * 4 + (1 if ok else 2)
+    if c == memo[LOG_CAT]:
+        k = memo[LOG_COUNT]
+        if k < LOG_SLOTS:
+            memo[LOG_COUNT + 1 + k] = x * 2 + ok
+            memo[LOG_COUNT] = k + 1
+        else:
+            memo[LOG_COUNT] = LOG_OVERFLOW
     return ok
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _log_full(memo):
+    """The walk log has no room left for another decision: the window pauses for it to be read."""
+    return memo[LOG_CAT] >= 0 and memo[LOG_COUNT] > LOG_SLOTS - LOG_RESERVE
 
 
 @njit(cache=True, nogil=True)
@@ -385,7 +409,8 @@ def frame_window(buf, seg_start, seg_stop, seg_mode, framing, st, seen, memo, se
     least is made per call). Returns (blk_start, blk_len, blk_cat, blk_seg, err_off, err_len, err_cat,
     err_code) for what was settled; ``st`` and ``seen`` (categories met, uint8[256]) carry the framing
     between calls, so any windows give the blocks and errors of one call over everything, in its order;
-    ``memo`` (new_memo) keeps walk results for the calls of one framing.
+    ``memo`` (new_memo) keeps walk results for the calls of one framing, and its log (which pauses the
+    window when nearly full).
 
     MODE_EXACT segments must tile into blocks, else they are skipped whole (E_NO_FRAME); MODE_CHAIN ones are
     followed header by header; MODE_CAREFUL ones accept a block when it is consistent with what follows
@@ -475,7 +500,7 @@ def frame_window(buf, seg_start, seg_stop, seg_mode, framing, st, seen, memo, se
         # MODE_CAREFUL
         while q < stop:
             if st[ST_PENDING] == 0:
-                if moved and q >= byte_limit:
+                if moved and (q >= byte_limit or _log_full(memo)):
                     paused = True
                     break
                 moved = True
@@ -522,7 +547,7 @@ def frame_window(buf, seg_start, seg_stop, seg_mode, framing, st, seen, memo, se
             r = st[ST_SCAN]
             while r < stop:
                 # pause only once it is settled whether a complete block ends before the resumption point
-                if moved and r >= byte_limit and (bn <= 0 or r > bq + bn):
+                if moved and ((r >= byte_limit and (bn <= 0 or r > bq + bn)) or _log_full(memo)):
                     paused = True
                     break
                 moved = True

@@ -20,7 +20,7 @@ from .columns import FAMILIES
 from .containers import Segments, read_segments
 from .errors import REASONS, DecodeError, EditionWarning, UnreadableInput
 from .frames import code_list_column, empty_column, icao_columns, typed_column
-from .framing import Progress, segment_modes, survey
+from .framing import Progress, alike_framings, segment_modes, survey
 from .layout import Layout, compile_layout
 from .tables import available, resolve_edition
 from .timeline import assign_days, timestamp_index
@@ -272,9 +272,11 @@ def framing_edition(buf: np.ndarray, seg: Segments, walked: dict, category: int,
     walk a category without an edition, and would otherwise lose every block of it after the damage."""
     best: tuple | None = None
     careful = np.full(len(seg.start), kernel.MODE_CAREFUL, np.int8)
-    for ed in _editions_oldest_first(category):
-        counted = survey(buf, seg, careful, tables_for({**walked, category: ed}), progress=progress,
-                         what=f"framing under CAT{category:03d} {ed}")
+    eds = _editions_oldest_first(category)
+    framed = alike_framings(buf, seg, careful, {ed: tables_for({**walked, category: ed}) for ed in eds},
+                            category, progress, what=f"framing under CAT{category:03d}")
+    for ed in eds:
+        counted = framed[ed]
         key = (counted.error_bytes, -int(counted.blocks[category]))
         if best is None or key <= best[0]:
             best = (key, ed)
