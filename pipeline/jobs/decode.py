@@ -72,8 +72,8 @@ def decode_job(options: DecodeOptions, *, on_chunk: Callable[[int, int, str], No
     (the caller commits it with the rest of its run; without one, a transaction of the job's own is
     committed at the end): a failed or interrupted run writes nothing, nor does a run in which nothing
     decodes. ``on_chunk(done_bytes, size, label)`` reports progress through each pass over a file
-    (asterix.iter_read's ``progress``: checking the block chain, framing, decoding). Raises asterix DecodeError in strict
-    mode, JobError for unreadable input."""
+    (asterix.iter_read's ``progress``: checking the block chain, framing, decoding). Raises asterix
+    DecodeError in strict mode, JobError for unreadable input."""
     import msdc.asterix as asterix
     from msdc.asterix.errors import UnreadableInput
     from msdc.asterix.reader import categories_in
