@@ -34,6 +34,13 @@ REGISTRY: dict[int, Category] = {c.number: c for c in (
              aliases={**{f"1.{m}": "1.27" for m in range(21, 27)}, "1.x": "1.32"}),
     Category(21, "ADS-B Target Reports", "ADS-B", "2.7", aliases={"2.x": "2.7", "0.x": "0.26"}),
     Category(34, "Monoradar Service Messages", "radar service", "1.29", measurements=False),
+    # 1.2, 1.3 and 1.4 print the same UAPs and items: one table serves them (the build checks it).
+    # Not a measurement category yet: the pipeline's measurement model reads CAT048 and CAT021 only.
+    Category(1, "Transmission of Monoradar Data Target Reports", "radar", "1.4",
+             aliases={"1.2": "1.4", "1.3": "1.4", "1.x": "1.4"}, measurements=False),
+    # 1.0, 1.1 and 1.2 print the same UAP and items; CAT002 gives CAT001 its whole time of day
+    Category(2, "Transmission of Monoradar Service Messages", "radar service", "1.2",
+             aliases={"1.0": "1.2", "1.1": "1.2", "1.x": "1.2"}, measurements=False),
 )}
 
 DECODABLE: tuple[int, ...] = tuple(sorted(REGISTRY))

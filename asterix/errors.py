@@ -15,6 +15,8 @@ REASONS = {
     k.E_UNKNOWN_CAT: "unknown category",
     k.E_GARBAGE: "bytes that do not start a plausible ASTERIX data block",
     k.E_EMPTY_BLOCK: "a data block with no record",
+    k.E_RFS: "the FSPEC sets the Random Field Sequencing (RFS) FRN, which msdc does not walk",
+    k.E_NO_UAP: "a record sets items after the item choosing its UAP (I001/020 for CAT001) without that item",
 }
 
 

@@ -356,7 +356,7 @@ def _framing_tables(walked: tuple[tuple[int, str], ...]) -> kernel.Framing:
     the category is not walked), for kernel.frame_blocks."""
     base = np.full(256, -1, np.int64)
     nfrn = np.zeros(256, np.int64)
-    parts, ext_sizes, ext_fx, sub_parts = [np.zeros((1, 7), np.int64)], [], [], []
+    parts, ext_sizes, ext_fx, sub_parts = [np.zeros((1, kernel.N_PART_COLUMNS), np.int64)], [], [], []
     n_parts, n_ext, n_sub = 1, 0, 0  # row 0 is a dummy: P is never empty
     for cat, ed in walked:
         lay = compile_layout(cat, ed)

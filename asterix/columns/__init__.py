@@ -9,12 +9,14 @@ columns are the raw bits, never sign-extended (I021/090 PA, printed signed in 0.
 from __future__ import annotations
 
 from .base import Column
+from .cat001 import CAT001
+from .cat002 import CAT002
 from .cat021 import CAT021_V0, CAT021_V2
 from .cat034 import CAT034
 from .cat048 import CAT048
 
 __all__ = ["Column", "columns_for", "FAMILIES", "KIND_DTYPES", "markdown_schema",
-           "CAT048", "CAT021_V2", "CAT021_V0", "CAT034"]
+           "CAT048", "CAT021_V2", "CAT021_V0", "CAT034", "CAT001", "CAT002"]
 
 
 # category -> its column list for an edition; a new category adds its module and one line here
@@ -22,6 +24,8 @@ BY_CATEGORY = {
     48: lambda edition: CAT048,
     21: lambda edition: CAT021_V0 if edition.startswith("0.") else CAT021_V2,
     34: lambda edition: CAT034,
+    1: lambda edition: CAT001,
+    2: lambda edition: CAT002,
 }
 
 
@@ -31,7 +35,8 @@ def columns_for(category: int, edition: str) -> list[Column]:
 
 
 FAMILIES = {"CAT048 (all editions)": CAT048, "CAT021 2.x (2.1-2.7)": CAT021_V2,
-            "CAT021 0.2x (0.23-0.26)": CAT021_V0, "CAT034 (1.27-1.29)": CAT034}
+            "CAT021 0.2x (0.23-0.26)": CAT021_V0, "CAT034 (1.27-1.29)": CAT034,
+            "CAT001 (1.2-1.4, plot and track UAPs)": CAT001, "CAT002 (1.0-1.2)": CAT002}
 KIND_DTYPES = {"float": "float64 (NaN if absent)", "int": "Int32", "flag": "Int8", "count": "Int16",
                "octal": "text (categorical)", "hex": "text (categorical)", "icao": "text (categorical)",
                "codes": "text (categorical)"}
@@ -64,7 +69,7 @@ def markdown_schema() -> str:
         lines += [f"## {family}", "", "| column | unit | dtype | source | meaning |", "|---|---|---|---|---|"]
         for c in cols:
             src = " else ".join(f"I{item}" + (f"/{'/'.join(path)}" if path else "")
-                                for item, path in c.sources)
+                                for item, path in c.sources) or "derived (see meaning)"
             lines.append(f"| `{c.name}` | {c.unit} | {KIND_DTYPES[c.kind]} | {src} | {c.doc} |")
         lines.append("")
     return "\n".join(lines)
