@@ -29,6 +29,11 @@ class EditionWarning(UserWarning):
     another: a likely wrong edition (said, never switched: nothing on the wire says which edition)."""
 
 
+class UntimedWarning(UserWarning):
+    """``read`` decoded CAT001 records whose truncated time of day no CAT002 message of their radar made
+    whole (``Recording.untimed``: offsets and reasons): their time_of_day is NaN, not guessed."""
+
+
 class DecodeError(AsterixError):
     """Raised in strict mode for the first bad block: names the file, the offset and the reason."""
 

@@ -15,10 +15,11 @@ import numpy as np
 import pandas as pd
 
 from . import kernel
+from .cat001_time import PLOT_CATEGORY, UNTIMED_COLUMNS, SectorClock, time_cat001, untimed_advice
 from .categories import DECODABLE, MEASUREMENT_CATEGORIES
 from .columns import FAMILIES
 from .containers import Segments, read_segments
-from .errors import REASONS, DecodeError, EditionWarning, UnreadableInput
+from .errors import REASONS, DecodeError, EditionWarning, UnreadableInput, UntimedWarning
 from .frames import code_list_column, empty_column, icao_columns, typed_column
 from .layout import Layout, compile_layout
 from .tables import available, resolve_edition
@@ -55,6 +56,9 @@ class Recording:
     # of them sampled walks (a likely wrong edition; it is said, not switched: nothing on the wire says)
     edition_fits: dict[int, tuple[str, ...]] = field(default_factory=dict)
     blocks: int = 0  # data blocks framed, of every category (the ``block`` column numbers them)
+    # CAT001 records whose truncated time of day no CAT002 message made whole (cat001_time): offset,
+    # category, sac, sic, reason; their time_of_day is NaN
+    untimed: pd.DataFrame = field(default_factory=lambda: pd.DataFrame(columns=UNTIMED_COLUMNS))
 
     @property
     def ignored(self) -> pd.DataFrame:
@@ -469,9 +473,10 @@ def _scan_decoded(buf: np.ndarray, framed, decoded: list[int], editions: dict, c
 
 
 def decode_buffer(buf: np.ndarray, seg: Segments, *, path: str = "", editions: dict | None = None,
-                  categories=None, date=None, strict: bool = False, columns=None) -> Recording:
+                  categories=None, date=None, strict: bool = False, columns=None,
+                  sector_clock: SectorClock | None = None) -> Recording:
     """Decode an in-memory recording whose container segments are already known (``columns``: see
-    ``read``)."""
+    ``read``; ``sector_clock``: the CAT002 times of the data before it, which ``iter_read`` carries)."""
     editions = dict(editions or {})
     selected = selected_columns(columns)
     date = parse_date(date)
@@ -531,6 +536,8 @@ def decode_buffer(buf: np.ndarray, seg: Segments, *, path: str = "", editions: d
         del scanned
         columns[cat] = _columns(lay, fl, ints, rec_off, sel[rec_blk])
         del fl, ints
+    untimed = (time_cat001(columns, buf, framed, editions, sector_clock or SectorClock())
+               if PLOT_CATEGORY in decoded else pd.DataFrame(columns=UNTIMED_COLUMNS))
     errors.sort()
     if strict and errors:
         o, _, c, why = errors[0]
@@ -551,7 +558,7 @@ def decode_buffer(buf: np.ndarray, seg: Segments, *, path: str = "", editions: d
                      size_bytes=int(len(buf)), container_bytes=int(seg.container_bytes),
                      decoded_bytes=decoded_bytes, ignored_blocks=ignored, ignored_bytes=ignored_bytes,
                      edition_choice=choice, day0=first_day, ignored_category_bytes=ignored_by_cat,
-                     edition_fits=fits, blocks=int(len(b_start)))
+                     edition_fits=fits, blocks=int(len(b_start)), untimed=untimed)
 
 
 def framing_reason(buf: np.ndarray, seg: Segments, offset: int, code: int) -> str:
@@ -607,6 +614,8 @@ def read(path, *, editions=None, date=None, categories=None, format: str | None 
                             strict=strict, columns=columns)
     for text in edition_advice(rec):
         warnings.warn(text, EditionWarning, stacklevel=2)
+    for text in untimed_advice(rec.path, rec.untimed):
+        warnings.warn(text, UntimedWarning, stacklevel=2)
     return rec
 
 

@@ -7,6 +7,7 @@ from collections.abc import Iterator
 
 import numpy as np
 
+from .cat001_time import SectorClock
 from .containers import UNTIMED, Segments, read_segments
 from .errors import UnreadableInput
 from .reader import (
@@ -55,9 +56,10 @@ def iter_read(path, *, chunk: int = 1_000_000, editions=None, date=None, categor
         held = 0  # their payload bytes
         day0 = None  # container day number of the first chunk's day 0
         blocks = 0  # data blocks framed in the chunks before: each chunk numbers its own from 0
+        sectors = SectorClock()  # each radar's last CAT002 time: CAT001 times continue across chunks
         for sub in bounds:
             rec = decode_buffer(buf, sub, path=str(path), editions=eds, categories=categories,
-                                date=first_date, strict=strict, columns=columns)
+                                date=first_date, strict=strict, columns=columns, sector_clock=sectors)
             for f in rec.frames.values():
                 f["block"] += blocks
             blocks += rec.blocks
