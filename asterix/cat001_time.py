@@ -85,11 +85,15 @@ def date_records(offset: np.ndarray, key: np.ndarray, truncated_s: np.ndarray, r
     offset, key = np.asarray(offset, np.int64), np.asarray(key, np.int64)
     truncated_s = np.asarray(truncated_s, float)
     good = (ref_key >= 0) & (ref_tod_s >= 0) & (ref_tod_s < DAY_S)
+    # references: a sentinel of no radar (key -2: the arrays are never empty), the carried ones (offset
+    # -1: before the data), and those of the data
     carried = np.array(sorted(clock.last), np.int64)
-    r_key = np.concatenate([carried, np.asarray(ref_key, np.int64)[good]])
-    r_off = np.concatenate([np.full(len(carried), -1, np.int64), np.asarray(ref_offset, np.int64)[good]])
-    r_tod = np.concatenate([[clock.last[k][0] for k in carried], np.asarray(ref_tod_s, float)[good]])
-    r_live = np.concatenate([[clock.last[k][1] for k in carried], np.ones(good.sum(), bool)]).astype(bool)
+    r_key = np.concatenate([[-2], carried, np.asarray(ref_key, np.int64)[good]]).astype(np.int64)
+    r_off = np.concatenate([np.full(len(carried) + 1, -1, np.int64), np.asarray(ref_offset, np.int64)[good]])
+    r_tod = np.concatenate([[np.nan], [clock.last[k][0] for k in carried],
+                            np.asarray(ref_tod_s, float)[good]])
+    r_live = np.concatenate([[False], [clock.last[k][1] for k in carried], np.ones(good.sum(), bool)]
+                            ).astype(bool)
     order = np.lexsort((r_off, r_key))
     r_key, r_off, r_tod, r_live = r_key[order], r_off[order], r_tod[order], r_live[order]
     r_comp = (r_key << 41) | (r_off + 1)  # offsets below 2^40; ordering by radar, then file order
@@ -100,7 +104,7 @@ def date_records(offset: np.ndarray, key: np.ndarray, truncated_s: np.ndarray, r
     ref = np.where(has_ref, ref, -1)
     has_time = np.isfinite(truncated_s)
     use = has_ref & has_time
-    tod, d = whole_time(np.where(use, truncated_s, 0.0), r_tod[np.maximum(ref, 0)] if len(r_tod) else 0.0)
+    tod, d = whole_time(np.where(use, truncated_s, 0.0), np.where(use, r_tod[np.maximum(ref, 0)], 0.0))
     near = use & (np.abs(d) <= MAX_FROM_REFERENCE_S)
     # a reference goes stale at its first record beyond the limit: count those before each record
     far = (use & ~near).astype(np.int64)
@@ -111,8 +115,7 @@ def date_records(offset: np.ndarray, key: np.ndarray, truncated_s: np.ndarray, r
     first = np.maximum.accumulate(np.where(start, np.arange(n), 0)) if n else np.zeros(0, np.int64)
     before = np.empty(n, np.int64)
     before[seq] = cum - cum[first]
-    live = r_live[np.maximum(ref, 0)] if len(r_live) else np.ones(n, bool)
-    stale = use & ((before > 0) | ~live)
+    stale = use & ((before > 0) | ~r_live[np.maximum(ref, 0)])
     dated = near & ~stale
     reason = np.full(n, "", dtype=object)
     reason[~dated & use] = TOO_FAR
@@ -121,8 +124,8 @@ def date_records(offset: np.ndarray, key: np.ndarray, truncated_s: np.ndarray, r
     reason[has_time & (key < 0)] = NO_SOURCE
     reason[~has_time] = NO_TIME
     # each radar's last reference, and whether a record beyond the limit ended it
-    fars = np.bincount(ref[ref >= 0], weights=far[ref >= 0], minlength=len(r_key)) if len(r_key) else []
-    for j in np.flatnonzero(np.r_[r_key[1:] != r_key[:-1], True] if len(r_key) else []):
+    fars = np.bincount(ref[ref >= 0], weights=far[ref >= 0], minlength=len(r_key))
+    for j in np.flatnonzero(np.r_[r_key[1:] != r_key[:-1], True] & (r_key >= 0)):
         clock.last[int(r_key[j])] = (float(r_tod[j]), bool(r_live[j] and fars[j] == 0))
     return np.where(dated, tod, np.nan), reason
 
