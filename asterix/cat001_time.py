@@ -22,6 +22,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 import pandas as pd
+from numba import njit
 
 from . import kernel
 from .layout import compile_layout
@@ -34,39 +35,96 @@ DAY_S = 86400.0
 # stale by an unknown time dates a record a multiple of 512 s wrong before it is ended is 2 * 32 / 512.
 MAX_FROM_REFERENCE_S = 32.0
 
+# Why a record stays undated: codes of the walk, and their text in Recording.untimed
+DATED, C_NO_TIME, C_NO_SOURCE, C_NO_REFERENCE, C_STALE, C_TOO_FAR = range(6)
 NO_TIME = "no I001/141 truncated time of day"
 NO_SOURCE = "no I001/010 SAC/SIC: its radar's CAT002 messages cannot be told"
 NO_REFERENCE = "no CAT002 time of day (I002/030) of its radar before it"
 TOO_FAR = f"more than {MAX_FROM_REFERENCE_S:g} s from its radar's last CAT002 time of day"
 STALE = (f"its radar's last CAT002 time of day went stale (a record before it was more than "
          f"{MAX_FROM_REFERENCE_S:g} s from it)")
+REASONS = {C_NO_TIME: NO_TIME, C_NO_SOURCE: NO_SOURCE, C_NO_REFERENCE: NO_REFERENCE, C_STALE: STALE,
+           C_TOO_FAR: TOO_FAR}
 UNTIMED_COLUMNS = ["offset", "category", "sac", "sic", "reason"]
+N_RADARS = 1 << 16  # SAC * 256 + SIC
 
 
 @dataclass
 class SectorClock:
-    """Each radar's (SAC * 256 + SIC) last CAT002 time of day and whether it still dates records, carried
-    from one chunk to the next by ``iter_read`` so that chunks date records as one ``read`` does."""
+    """Each radar's (SAC * 256 + SIC) last CAT002 time of day (NaN: none yet) and whether it still dates
+    records, carried from one chunk to the next by ``iter_read`` so that chunks date records as one
+    ``read`` does."""
 
-    last: dict[int, tuple[float, bool]] = field(default_factory=dict)
+    tod_s: np.ndarray = field(default_factory=lambda: np.full(N_RADARS, np.nan))
+    live: np.ndarray = field(default_factory=lambda: np.zeros(N_RADARS, np.uint8))
+
+
+@njit(cache=True, nogil=True)
+def _whole(tau: float, ref: float) -> tuple[float, float]:
+    """One record's whole time of day and its signed distance from the reference (see whole_time)."""
+    k_max = np.ceil((DAY_S - tau) / WINDOW_S) - 1  # the day's last window: tau + 512 k < 86400
+    best_tod, best_d = np.nan, np.inf
+    for day in (0.0, DAY_S, -DAY_S):
+        k = min(max(np.rint((ref - day - tau) / WINDOW_S), 0.0), k_max)
+        tod = tau + WINDOW_S * k
+        d = tod + day - ref
+        if abs(d) < abs(best_d):
+            best_tod, best_d = tod, d
+    return best_tod, best_d
+
+
+@njit(cache=True, nogil=True)
+def _whole_many(tau, ref, tod, d):
+    for i in range(tau.shape[0]):
+        tod[i], d[i] = _whole(tau[i], ref[i])
 
 
 def whole_time(truncated_s: np.ndarray, reference_s: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """The time of day (0-86400 s) whose value modulo 512 s is ``truncated_s`` nearest ``reference_s``,
     on the reference's day or the day after or before it, and its signed distance from the reference."""
-    tau = np.asarray(truncated_s, float)
-    ref = np.asarray(reference_s, float)
-    k_max = np.ceil((DAY_S - tau) / WINDOW_S) - 1  # the last window of a day: tau + 512 k < 86400
-    best_tod = np.full(np.broadcast(tau, ref).shape, np.nan)
-    best_d = np.full(best_tod.shape, np.inf)
-    for day in (0.0, DAY_S, -DAY_S):
-        k = np.clip(np.rint((ref - day - tau) / WINDOW_S), 0, k_max)
-        tod = tau + WINDOW_S * k
-        d = tod + day - ref
-        better = np.abs(d) < np.abs(best_d)
-        best_tod = np.where(better, tod, best_tod)
-        best_d = np.where(better, d, best_d)
-    return best_tod, best_d
+    tau, ref = np.broadcast_arrays(np.asarray(truncated_s, float), np.asarray(reference_s, float))
+    tod, d = np.empty(tau.shape), np.empty(tau.shape)
+    _whole_many(np.ascontiguousarray(tau).ravel(), np.ascontiguousarray(ref).ravel(), tod.ravel(), d.ravel())
+    return tod, d
+
+
+@njit(cache=True, nogil=True)
+def _date(offset, key, truncated, r_offset, r_key, r_tod, clock_tod, clock_live, limit, tod, code):
+    """Walk the records and the references in file order (both come sorted by offset), dating each record
+    from its radar's last reference (clock_*, updated in place); fill tod and code."""
+    j = 0
+    n_ref = r_offset.shape[0]
+    for i in range(offset.shape[0]):
+        while j < n_ref and r_offset[j] < offset[i]:
+            k = r_key[j]
+            if k >= 0 and 0.0 <= r_tod[j] < DAY_S:
+                clock_tod[k] = r_tod[j]
+                clock_live[k] = 1
+            j += 1
+        k = key[i]
+        tod[i] = np.nan
+        if np.isnan(truncated[i]):
+            code[i] = C_NO_TIME
+        elif k < 0:
+            code[i] = C_NO_SOURCE
+        elif np.isnan(clock_tod[k]):
+            code[i] = C_NO_REFERENCE
+        elif clock_live[k] == 0:
+            code[i] = C_STALE
+        else:
+            t, d = _whole(truncated[i], clock_tod[k])
+            if abs(d) <= limit:
+                tod[i] = t
+                code[i] = DATED
+            else:
+                code[i] = C_TOO_FAR
+                clock_live[k] = 0  # stale until the radar's next CAT002 message
+    while j < n_ref:
+        k = r_key[j]
+        if k >= 0 and 0.0 <= r_tod[j] < DAY_S:
+            clock_tod[k] = r_tod[j]
+            clock_live[k] = 1
+        j += 1
 
 
 def _keys(sac, sic) -> np.ndarray:
@@ -76,58 +134,36 @@ def _keys(sac, sic) -> np.ndarray:
     return np.where((a >= 0) & (b >= 0), a * 256 + b, -1)
 
 
+def _in_file_order(offset: np.ndarray, *columns: np.ndarray) -> list[np.ndarray]:
+    """The arrays sorted by offset (frames already are: then as they are)."""
+    offset = np.ascontiguousarray(offset, np.int64)
+    if len(offset) > 1 and not (np.diff(offset) > 0).all():
+        order = np.argsort(offset, kind="stable")
+        return [offset[order], *(np.ascontiguousarray(c)[order] for c in columns)]
+    return [offset, *(np.ascontiguousarray(c) for c in columns)]
+
+
 def date_records(offset: np.ndarray, key: np.ndarray, truncated_s: np.ndarray, ref_offset: np.ndarray,
                  ref_key: np.ndarray, ref_tod_s: np.ndarray, clock: SectorClock
                  ) -> tuple[np.ndarray, np.ndarray]:
-    """Whole times of day of CAT001 records (NaN where undated) and the reason of each undated one ("" for
-    the dated), from the CAT002 times of the same data (``ref_*``) and those ``clock`` carries from before
-    it; ``clock`` is updated with each radar's last reference."""
-    offset, key = np.asarray(offset, np.int64), np.asarray(key, np.int64)
-    truncated_s = np.asarray(truncated_s, float)
-    good = (ref_key >= 0) & (ref_tod_s >= 0) & (ref_tod_s < DAY_S)
-    # references: a sentinel of no radar (key -2: the arrays are never empty), the carried ones (offset
-    # -1: before the data), and those of the data
-    carried = np.array(sorted(clock.last), np.int64)
-    r_key = np.concatenate([[-2], carried, np.asarray(ref_key, np.int64)[good]]).astype(np.int64)
-    r_off = np.concatenate([np.full(len(carried) + 1, -1, np.int64), np.asarray(ref_offset, np.int64)[good]])
-    r_tod = np.concatenate([[np.nan], [clock.last[k][0] for k in carried],
-                            np.asarray(ref_tod_s, float)[good]])
-    r_live = np.concatenate([[False], [clock.last[k][1] for k in carried], np.ones(good.sum(), bool)]
-                            ).astype(bool)
-    order = np.lexsort((r_off, r_key))
-    r_key, r_off, r_tod, r_live = r_key[order], r_off[order], r_tod[order], r_live[order]
-    r_comp = (r_key << 41) | (r_off + 1)  # offsets below 2^40; ordering by radar, then file order
-
-    n = len(offset)
-    ref = np.searchsorted(r_comp, (key << 41) | (offset + 1)) - 1
-    has_ref = (key >= 0) & (ref >= 0) & (r_key[np.maximum(ref, 0)] == key)
-    ref = np.where(has_ref, ref, -1)
-    has_time = np.isfinite(truncated_s)
-    use = has_ref & has_time
-    tod, d = whole_time(np.where(use, truncated_s, 0.0), np.where(use, r_tod[np.maximum(ref, 0)], 0.0))
-    near = use & (np.abs(d) <= MAX_FROM_REFERENCE_S)
-    # a reference goes stale at its first record beyond the limit: count those before each record
-    far = (use & ~near).astype(np.int64)
-    seq = np.lexsort((offset, ref))
-    run = ref[seq]
-    cum = np.cumsum(far[seq]) - far[seq]  # far records before each, in (reference, file) order
-    start = np.r_[True, run[1:] != run[:-1]] if n else np.zeros(0, bool)
-    first = np.maximum.accumulate(np.where(start, np.arange(n), 0)) if n else np.zeros(0, np.int64)
-    before = np.empty(n, np.int64)
-    before[seq] = cum - cum[first]
-    stale = use & ((before > 0) | ~r_live[np.maximum(ref, 0)])
-    dated = near & ~stale
-    reason = np.full(n, "", dtype=object)
-    reason[~dated & use] = TOO_FAR
-    reason[stale] = STALE
-    reason[has_time & ~has_ref] = NO_REFERENCE
-    reason[has_time & (key < 0)] = NO_SOURCE
-    reason[~has_time] = NO_TIME
-    # each radar's last reference, and whether a record beyond the limit ended it
-    fars = np.bincount(ref[ref >= 0], weights=far[ref >= 0], minlength=len(r_key))
-    for j in np.flatnonzero(np.r_[r_key[1:] != r_key[:-1], True] & (r_key >= 0)):
-        clock.last[int(r_key[j])] = (float(r_tod[j]), bool(r_live[j] and fars[j] == 0))
-    return np.where(dated, tod, np.nan), reason
+    """Whole times of day of CAT001 records (NaN where undated) and the code of each (DATED or why not),
+    from the CAT002 times of the same data (``ref_*``) and those ``clock`` carries from before it;
+    ``clock`` is updated with each radar's last reference."""
+    offset = np.asarray(offset, np.int64)
+    order = np.argsort(offset, kind="stable") if len(offset) > 1 and not (np.diff(offset) > 0).all() else None
+    p = [offset, np.asarray(key, np.int64), np.asarray(truncated_s, float)]
+    if order is not None:
+        p = [a[order] for a in p]
+    r_off, r_key, r_tod = _in_file_order(np.asarray(ref_offset, np.int64), np.asarray(ref_key, np.int64),
+                                         np.asarray(ref_tod_s, float))
+    tod, code = np.empty(len(offset)), np.empty(len(offset), np.int8)
+    _date(*(np.ascontiguousarray(a) for a in p), r_off, r_key, r_tod, clock.tod_s, clock.live,
+          MAX_FROM_REFERENCE_S, tod, code)
+    if order is not None:  # back to the records' own order
+        back = np.empty_like(order)
+        back[order] = np.arange(len(order))
+        tod, code = tod[back], code[back]
+    return tod, code
 
 
 def _service_times(buf: np.ndarray, starts: np.ndarray, lens: np.ndarray, edition: str | None
@@ -168,21 +204,23 @@ def time_cat001(columns: dict[int, dict], buf: np.ndarray, framed, editions: dic
         date_records(np.zeros(0, np.int64), np.zeros(0, np.int64), np.zeros(0), r_off, r_key, r_tod, clock)
         return pd.DataFrame(columns=UNTIMED_COLUMNS)
     key = _keys(plots["sac"], plots["sic"])
-    tod, reason = date_records(plots["offset"], key, np.asarray(plots["truncated_time_of_day"], float),
-                               r_off, r_key, r_tod, clock)
+    tod, code = date_records(plots["offset"], key, np.asarray(plots["truncated_time_of_day"], float),
+                             r_off, r_key, r_tod, clock)
     plots["time_of_day"] = tod
-    bad = np.flatnonzero(reason != "")
+    bad = np.flatnonzero(code != DATED)
     return pd.DataFrame({"offset": np.asarray(plots["offset"], np.int64)[bad],
                          "category": np.full(len(bad), PLOT_CATEGORY, np.int64),
                          "sac": pd.array(plots["sac"], dtype="Int32")[bad],
                          "sic": pd.array(plots["sic"], dtype="Int32")[bad],
-                         "reason": reason[bad]}, columns=UNTIMED_COLUMNS)
+                         "reason": pd.Categorical.from_codes(code[bad] - 1, [REASONS[c] for c in
+                                                                             sorted(REASONS)])},
+                        columns=UNTIMED_COLUMNS)
 
 
 def untimed_advice(path: str, untimed: pd.DataFrame) -> list[str]:
     """One line per reason: how many CAT001 records have no time of day, and the first offsets."""
     out = []
-    for why, g in untimed.groupby("reason", sort=False):
+    for why, g in untimed.groupby("reason", sort=False, observed=True):
         first = ", ".join(str(int(o)) for o in g["offset"].iloc[:3])
         out.append(f"{path}: {len(g)} CAT001 record(s) have no time of day: {why} (offsets {first}"
                    f"{', ...' if len(g) > 3 else ''}; Recording.untimed lists them)")
