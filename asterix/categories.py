@@ -21,6 +21,7 @@ class Category:
     default_edition: str  # the table used when no edition is pinned
     aliases: dict[str, str] = field(default_factory=dict)  # edition -> shipped table with the same layout
     measurements: bool = True  # decoded when no category is asked for; feeds correlate/quality/track
+    record_bytes: int = 40  # a short typical record: sizes the walk's first record arrays (too few: twice)
 
     @property
     def label(self) -> str:
@@ -37,10 +38,10 @@ REGISTRY: dict[int, Category] = {c.number: c for c in (
     # 1.2, 1.3 and 1.4 print the same UAPs and items: one table serves them (the build checks it).
     # Not a measurement category yet: the pipeline's measurement model reads CAT048 and CAT021 only.
     Category(1, "Transmission of Monoradar Data Target Reports", "radar", "1.4",
-             aliases={"1.2": "1.4", "1.3": "1.4", "1.x": "1.4"}, measurements=False),
+             aliases={"1.2": "1.4", "1.3": "1.4", "1.x": "1.4"}, measurements=False, record_bytes=16),
     # 1.0, 1.1 and 1.2 print the same UAP and items; CAT002 gives CAT001 its whole time of day
     Category(2, "Transmission of Monoradar Service Messages", "radar service", "1.2",
-             aliases={"1.0": "1.2", "1.1": "1.2", "1.x": "1.2"}, measurements=False),
+             aliases={"1.0": "1.2", "1.1": "1.2", "1.x": "1.2"}, measurements=False, record_bytes=8),
 )}
 
 DECODABLE: tuple[int, ...] = tuple(sorted(REGISTRY))

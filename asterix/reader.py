@@ -16,7 +16,7 @@ import pandas as pd
 
 from . import kernel
 from .cat001_time import PLOT_CATEGORY, UNTIMED_COLUMNS, SectorClock, time_cat001, untimed_advice
-from .categories import DECODABLE, MEASUREMENT_CATEGORIES
+from .categories import DECODABLE, MEASUREMENT_CATEGORIES, REGISTRY
 from .columns import FAMILIES
 from .containers import Segments, read_segments
 from .errors import REASONS, DecodeError, EditionWarning, UnreadableInput, UntimedWarning
@@ -201,7 +201,8 @@ def release_pages(buf: np.ndarray, start: int, stop: int) -> None:
 def _scan(buf, starts, lens, lay: Layout):
     """One walk over the blocks: records per block (minus an error code for a bad block), where
     bad walks failed, and where each part of each good record lies (arrays sized by numpy)."""
-    cap = int(lens.sum()) // 40 + 16  # a first guess at the record count, doubled until it fits
+    # a first guess at the record count, doubled until it fits
+    cap = int(lens.sum()) // REGISTRY[lay.category].record_bytes + 16
     slots = max(lay.n_slots, 1)
     while True:
         rel_off = np.full((cap, slots), 0xFFFF, np.uint16)
