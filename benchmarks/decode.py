@@ -2,9 +2,11 @@
 
 Run by hand (never a timed test): ``python benchmarks/decode.py [--records 1000000]``.
 Recordings are built with msdc's own encoder and cached in --work; a third case is the CAT048 one with
-30 % of its bytes in blocks of other categories (stepped over by framing). Each measurement runs in a fresh
-process: one warm-up decode (numba's cached kernel loads, memory pages are touched once), then the
-best of --repeat timed decodes, file in page cache to DataFrame.
+30 % of its bytes in blocks of other categories (stepped over by framing). CAT001 (plots and tracks,
+half each, with a CAT002 sector crossing of their radar before every 25 records: their times are made
+whole from them) is decoded alone, categories=(1,), and CAT002 alone, categories=(2,). Each measurement
+runs in a fresh process: one warm-up decode (numba's cached kernel loads, memory pages are touched once),
+then the best of --repeat timed decodes, file in page cache to DataFrame.
 """
 
 from __future__ import annotations
@@ -60,17 +62,73 @@ def cat021_frame(n: int, rng: np.random.Generator) -> pd.DataFrame:
     })
 
 
+def cat001_frame(n: int, rng: np.random.Generator) -> tuple[pd.DataFrame, np.ndarray]:
+    """Monoradar plots and tracks (TYP 0 and 1 alternately) with the items an old radar sends, and their
+    whole times of day."""
+    tod = np.floor(np.sort(rng.uniform(0, 86000, n)) * 128) / 128  # on the 1/128 s grid: mod 512 fits
+    track = (np.arange(n) % 2).astype(float)
+    return pd.DataFrame({
+        "sac": 25, "sic": 201, "typ": track, "ssr_psr": 3, "truncated_time_of_day": tod % 512,
+        "rho_nm": rng.uniform(5, 250, n), "theta_deg": rng.uniform(0, 359.9, n),
+        "mode3a": pd.Series(rng.integers(0, 4096, n)).map(lambda v: f"{v:04o}"), "mode3a_v": 0,
+        "flight_level": rng.integers(0, 1600, n) / 4, "flight_level_v": 0,
+        "track_number": np.where(track == 1, rng.integers(0, 4096, n), np.nan),
+        "x_nm": np.where(track == 1, rng.uniform(-200, 200, n), np.nan),
+        "y_nm": np.where(track == 1, rng.uniform(-200, 200, n), np.nan),
+        "ground_speed_kt": np.where(track == 1, rng.uniform(100, 500, n), np.nan),
+        "heading_deg": np.where(track == 1, rng.uniform(0, 359, n), np.nan),
+        "con": np.where(track == 1, 0, np.nan), "rad": np.where(track == 1, 1, np.nan),
+    }), tod
+
+
+def cat002_frame(n: int, rng: np.random.Generator, tod: np.ndarray | None = None) -> pd.DataFrame:
+    """Sector crossings (32 sectors a turn) with a north marker and its rotation period every 33rd."""
+    tod = np.sort(rng.uniform(0, 86000, n)) if tod is None else tod
+    north = np.arange(n) % 33 == 0
+    return pd.DataFrame({
+        "sac": 25, "sic": 201, "message_type": np.where(north, 1, 2), "time_of_day": tod,
+        "sector_number": np.where(north, np.nan, (np.arange(n) % 33 - 1) * 8),
+        "antenna_rotation_period_s": np.where(north, 4.0, np.nan),
+    })
+
+
 def build(path: Path, category: int, n: int) -> None:
     """Encode n records of one category with msdc's encoder (cached on disk)."""
     from msdc.asterix.encode import encode_frame
 
     rng = np.random.default_rng(category)
-    make = cat048_frame if category == 48 else cat021_frame
-    with open(path, "wb") as fh:
+    part = path.with_suffix(".part")  # renamed when whole: a failed build leaves no file to reuse
+    with open(part, "wb") as fh:
         step = 200_000
         for lo in range(0, n, step):
-            fh.write(encode_frame(category, make(min(step, n - lo), rng), records_per_block=25,
+            m = min(step, n - lo)
+            if category == 1:  # each block of 25 records after a sector crossing of their radar
+                frame, tod = cat001_frame(m, rng)
+                plots = encode_frame(1, frame, records_per_block=25)
+                sectors = encode_frame(2, cat002_frame(len(tod[::25]), rng, np.maximum(tod[::25] - 0.1, 0)),
+                                       records_per_block=1)
+                fh.write(_interleave(sectors, plots))
+                continue
+            make = {48: cat048_frame, 21: cat021_frame, 2: cat002_frame}[category]
+            fh.write(encode_frame(category, make(m, rng), records_per_block=25,
                                   prefer={"latitude": "130", "longitude": "130"} if category == 21 else None))
+    part.rename(path)
+
+
+def _blocks(data: bytes) -> list[bytes]:
+    """The data blocks of a raw stream, by their LEN."""
+    out, pos = [], 0
+    while pos < len(data):
+        n = int.from_bytes(data[pos + 1:pos + 3], "big")
+        out.append(data[pos:pos + n])
+        pos += n
+    return out
+
+
+def _interleave(first: bytes, second: bytes) -> bytes:
+    """Blocks of two streams alternately (one of each in turn)."""
+    a, b = _blocks(first), _blocks(second)
+    return b"".join(x + y for x, y in zip(a, b, strict=True))
 
 
 def build_mixed(path: Path, cat048_path: Path, other_share: float = 0.30) -> None:
@@ -98,7 +156,7 @@ def build_mixed(path: Path, cat048_path: Path, other_share: float = 0.30) -> Non
     path.write_bytes(bytes(out))
 
 
-def measure(path: Path, repeat: int) -> dict:
+def measure(path: Path, repeat: int, categories: tuple[int, ...] | None = None) -> dict:
     """In this (fresh) process: warm up on a prefix, then the peak-memory decode and best-of-repeat."""
     import gc
     import tempfile
@@ -108,10 +166,10 @@ def measure(path: Path, repeat: int) -> dict:
     with tempfile.NamedTemporaryFile(suffix=".ast") as tiny:
         tiny.write(path.read_bytes()[:200_000])
         tiny.flush()
-        asterix.read(tiny.name)  # loads the cached kernel and pandas machinery
+        asterix.read(tiny.name, categories=categories)  # loads the cached kernel and pandas machinery
     base_rss_mb = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
     t0 = time.perf_counter()
-    rec = asterix.read(path)
+    rec = asterix.read(path, categories=categories)
     first_s = time.perf_counter() - t0
     peak_rss_mb = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
     n = sum(len(f) for f in rec.frames.values())
@@ -121,7 +179,7 @@ def measure(path: Path, repeat: int) -> dict:
     times = []
     for _ in range(repeat):
         t0 = time.perf_counter()
-        asterix.read(path)
+        asterix.read(path, categories=categories)
         times.append(time.perf_counter() - t0)
     return {"records": n, "first_s": first_s, "best_s": min(times), "records_per_s": n / min(times),
             "peak_rss_mb": peak_rss_mb, "rss_before_mb": base_rss_mb, "frame_mb": frame_mb,
@@ -152,17 +210,24 @@ def main() -> int:
     ap.add_argument("--work", default="/tmp/msdc-bench")
     ap.add_argument("--pyasteryx-records", type=int, default=100_000)
     ap.add_argument("--measure", help=argparse.SUPPRESS)
+    ap.add_argument("--categories", help=argparse.SUPPRESS)
+    ap.add_argument("--only", help="cases to run, e.g. '48,1' (default: 48, 21, 48+30%% other, 1, 2)")
     ap.add_argument("--measure-pyasteryx", help=argparse.SUPPRESS)
     args = ap.parse_args()
     if args.measure:
-        print(json.dumps(measure(Path(args.measure), args.repeat)))
+        cats = tuple(int(c) for c in args.categories.split(",")) if args.categories else None
+        print(json.dumps(measure(Path(args.measure), args.repeat, cats)))
         return 0
     if args.measure_pyasteryx:
         print(json.dumps(measure_pyasteryx(Path(args.measure_pyasteryx), args.pyasteryx_records)))
         return 0
     work = Path(args.work)
     work.mkdir(parents=True, exist_ok=True)
-    for cat in (48, 21, "48+30% other"):
+    cases: list = [48, 21, "48+30% other", 1, 2]
+    if args.only:
+        cases = [c for c in cases if str(c).split("+")[0] in args.only.split(",")]
+    for cat in cases:
+        categories = cat if cat in (1, 2) else None  # CAT001/CAT002 are decoded when asked for
         if cat == "48+30% other":
             path = work / f"cat048_other30_{args.records}.ast"
             if not path.exists():
@@ -178,8 +243,9 @@ def main() -> int:
             build(path, cat, args.records)
             print(f"built {path} ({path.stat().st_size / 1e6:.1f} MB) in {time.perf_counter() - t0:.1f} s")
         run = [sys.executable, __file__, "--repeat", str(args.repeat)]
-        m = json.loads(subprocess.run(run + ["--measure", str(path)], check=True, capture_output=True,
-                                      text=True).stdout)
+        run_cats = ["--categories", str(categories)] if categories else []
+        m = json.loads(subprocess.run(run + run_cats + ["--measure", str(path)], check=True,
+                                      capture_output=True, text=True).stdout)
         grow_mb = m["peak_rss_mb"] - m["rss_before_mb"]
         print(f"{label}: {m['records']:,} records in {m['best_s']:.3f} s = "
               f"{m['records_per_s']:,.0f} rec/s (first decode in a fresh process {m['first_s']:.3f} s)")
