@@ -34,6 +34,16 @@ REGISTRY: dict[int, Category] = {c.number: c for c in (
              aliases={**{f"1.{m}": "1.27" for m in range(21, 27)}, "1.x": "1.32"}),
     Category(21, "ADS-B Target Reports", "ADS-B", "2.7", aliases={"2.x": "2.7", "0.x": "0.26"}),
     Category(34, "Monoradar Service Messages", "radar service", "1.29", measurements=False),
+    # system tracks: read as tracks under test, not fused as measurements (1.16-1.21; earlier editions
+    # such as the pre-standard 0.17 differ in many items and are not decoded)
+    Category(62, "SDPS Track Messages", "system track", "1.21", measurements=False),
+    Category(19, "Multilateration System Status Messages", "MLAT status", "1.3", measurements=False),
+    # 1.2 and 1.3 print the same UAP and item layouts
+    Category(23, "CNS/ATM Ground Station and Service Status Reports", "ground station status", "1.3",
+             aliases={"1.2": "1.3"}, measurements=False),
+    Category(25, "CNS/ATM Ground System Status Reports", "ground system status", "1.5", measurements=False),
+    Category(63, "Sensor Status Reports", "sensor status", "1.6", measurements=False),
+    Category(65, "SDPS Service Status Messages", "SDPS service status", "1.5", measurements=False),
 )}
 
 DECODABLE: tuple[int, ...] = tuple(sorted(REGISTRY))
