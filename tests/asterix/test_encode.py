@@ -248,7 +248,9 @@ def test_multi_source_columns_cat021() -> None:
 
 
 def test_edition_aliases() -> None:
-    assert set(EDITIONS) == {21, 34, 48}
+    assert set(EDITIONS) == {19, 21, 23, 25, 34, 48, 62, 63, 65}
+    assert EDITIONS[62] == ["1.16", "1.17", "1.18", "1.19", "1.20", "1.21"]
+    assert encode_record(23, {"sac": 1, "nogo": 1}, "1.2") == encode_record(23, {"sac": 1, "nogo": 1}, "1.3")
     assert {"1.27", "1.31", "1.32"} <= set(EDITIONS[48])
     assert encode_item(48, "1.21", "020", {"TYP": 1}) == encode_item(48, "1.27", "020", {"TYP": 1})
     assert encode_record(21, {"sac": 1, "sic": 2}, "2.x") == encode_record(21, {"sac": 1, "sic": 2}, "2.7")
@@ -351,6 +353,9 @@ def _sample(kind: str, bits_lsb: float) -> object:
     return samples.get(kind, bits_lsb)
 
 
+# CAT062 columns of fields added by later editions (latest first), and how many of them each edition lacks
+CAT062_LATER = ["cst_m5", "cst_mlat", "sfc", "idd", "iec", "mode3a_v", "mode3a_g"]
+CAT062_LATER_FROM = {"1.16": 7, "1.17": 5, "1.18": 2, "1.19": 2, "1.20": 1}
 ALL_EDITIONS = [(c, e) for c, eds in sorted(EDITIONS.items()) for e in eds]
 
 
@@ -374,7 +379,10 @@ def test_every_edition_encodes_every_mapped_column(category: int, edition: str) 
     # columns whose item/field is not in this edition (0.23-0.25 have no I021/070 or signal amplitude;
     # I021/151 is a group (RE, TAS) in 2.x while the column addresses a bare element; I021/200 ME is a spare
     # bit in 2.1)
-    assert set(unmapped) <= {"mode3a", "signal_amplitude", "true_airspeed_kt", "me"}
+    if category == 62:  # I062/060 V, G from 1.17; I062/080 SFC, IDD, IEC from 1.18, MLAT 1.20, M5I 1.21
+        assert set(unmapped) == set(CAT062_LATER[:CAT062_LATER_FROM.get(edition, 0)])
+    else:
+        assert set(unmapped) <= {"mode3a", "signal_amplitude", "true_airspeed_kt", "me"}
     for name in unmapped:
         with pytest.raises(ValueError, match=name):
             encode_record(category, {name: 1.0}, edition)
