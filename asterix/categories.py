@@ -42,6 +42,16 @@ REGISTRY: dict[int, Category] = {c.number: c for c in (
     # 1.0, 1.1 and 1.2 print the same UAP and items; CAT002 gives CAT001 its whole time of day
     Category(2, "Transmission of Monoradar Service Messages", "radar service", "1.2",
              aliases={"1.0": "1.2", "1.1": "1.2", "1.x": "1.2"}, measurements=False, record_bytes=8),
+    # system tracks: read as tracks under test, not fused as measurements (1.16-1.21; earlier editions
+    # such as the pre-standard 0.17 differ in many items and are not decoded)
+    Category(62, "SDPS Track Messages", "system track", "1.21", measurements=False),
+    Category(19, "Multilateration System Status Messages", "MLAT status", "1.3", measurements=False),
+    # 1.2 and 1.3 print the same UAP and item layouts
+    Category(23, "CNS/ATM Ground Station and Service Status Reports", "ground station status", "1.3",
+             aliases={"1.2": "1.3"}, measurements=False),
+    Category(25, "CNS/ATM Ground System Status Reports", "ground system status", "1.5", measurements=False),
+    Category(63, "Sensor Status Reports", "sensor status", "1.6", measurements=False),
+    Category(65, "SDPS Service Status Messages", "SDPS service status", "1.5", measurements=False),
 )}
 
 DECODABLE: tuple[int, ...] = tuple(sorted(REGISTRY))

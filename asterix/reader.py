@@ -20,8 +20,8 @@ from .categories import DECODABLE, MEASUREMENT_CATEGORIES, REGISTRY
 from .columns import FAMILIES
 from .containers import Segments, read_segments
 from .errors import REASONS, DecodeError, EditionWarning, UnreadableInput, UntimedWarning
-from .frames import code_list_column, empty_column, icao_columns, typed_column
-from .layout import Layout, compile_layout
+from .frames import code_list_column, empty_columns, icao_columns, typed_column
+from .layout import OUT_FLOAT, OUT_INT, OUT_WIDE, Layout, compile_layout
 from .tables import available, resolve_edition
 from .timeline import assign_days, timestamp_index
 
@@ -299,47 +299,65 @@ def _plausible_share(buf, s, n, category: int, ed: str, limit: int = 400) -> flo
     scanned = _scan(buf, s[k], n[k], lay)
     if not (scanned[0] > 0).any():
         return 0.0
-    fl, _, _, _ = _extract(buf, scanned, lay)
-    cols = {nm: fl[i] for i, nm in enumerate(lay.out_names_float)}
-    lat, lon, tod = cols["latitude"], cols["longitude"], cols["time_of_day"]
+    where, _, _, _ = _extract(buf, scanned, lay)
+    absent = np.full(int(scanned[-1]), np.nan)
+    lat, lon, tod = (where[nm][0][where[nm][1]] if nm in where else absent
+                     for nm in ("latitude", "longitude", "time_of_day"))
     ok = (np.abs(lat) <= 90) & (np.abs(lon) <= 180) & (tod >= 0) & (tod < 86400)
     return float(np.mean(ok)) if len(ok) else 0.0
 
 
 def _extract(buf, scanned, lay: Layout):
-    """Gather every field of the scanned records into column matrices."""
+    """Gather every field of the scanned records into column matrices: only the fields of parts some
+    record carries, into rows for their columns alone (a wide edition's other columns, absent from every
+    record, cost neither a pass nor memory here: ``_columns`` builds them empty)."""
     _, _, rel_off, rel_len, rec_off, rec_blk, n = scanned
-    fl = np.full((len(lay.out_names_float), n), np.nan)
-    it = np.full((len(lay.out_names_int), n), -1, np.int32)
-    wd = np.full((len(lay.out_names_wide), n), -1, np.int64)
-    kernel.gather(buf, rec_off[:n], rel_off[:n], rel_len[:n], lay.F, lay.f_mult, fl, it, wd)
+    F, mult = lay.F, lay.f_mult
+    if len(F):
+        carried = (rel_off[:n] != 0xFFFF).any(axis=0) if n else np.zeros(rel_off.shape[1], bool)
+        keep = carried[F[:, 0]]
+        if not keep.all():
+            F, mult = F[keep], mult[keep]
+    F = np.array(F, np.int64, copy=True)
+    names = {OUT_INT: lay.out_names_int, OUT_FLOAT: lay.out_names_float, OUT_WIDE: lay.out_names_wide}
+    rows = {k: sorted(set(F[F[:, 5] == k, 4].tolist())) for k in names}
+    for k in names:  # the kept columns' rows, numbered afresh per output kind
+        renumber = np.full(len(names[k]) + 1, -1, np.int64)
+        renumber[rows[k]] = np.arange(len(rows[k]))
+        sel = F[:, 5] == k
+        F[sel, 4] = renumber[F[sel, 4]]
+    it = np.full((len(rows[OUT_INT]), n), -1, np.int32)
+    fl = np.full((len(rows[OUT_FLOAT]), n), np.nan)
+    wd = np.full((len(rows[OUT_WIDE]), n), -1, np.int64)
+    kernel.gather(buf, rec_off[:n], rel_off[:n], rel_len[:n], np.ascontiguousarray(F),
+                  np.ascontiguousarray(mult), fl, it, wd)
+    matrices = {OUT_INT: it, OUT_FLOAT: fl, OUT_WIDE: wd}
+    where = {names[k][r]: (matrices[k], i) for k in names for i, r in enumerate(rows[k])}
     texts = {name: code_list_column(buf, rec_off[:n], rel_off[:n, s], rel_len[:n, s])
              for name, s in lay.code_slots}
-    return fl, (it, wd, texts), rec_off[:n].copy(), rec_blk[:n].copy()
+    return where, texts, rec_off[:n].copy(), rec_blk[:n].copy()
 
 
-def _columns(lay: Layout, fl, ints, rec_off, rec_blk) -> dict[str, object]:
-    """The typed columns of one category from kernel arrays, in schema order."""
+def _columns(lay: Layout, where: dict, texts: dict, rec_off, rec_blk) -> dict[str, object]:
+    """The typed columns of one category from kernel arrays, in schema order (``where``: the matrix and
+    row of each gathered column; the others are absent from every record)."""
     n = rec_off.shape[0]
-    it, wd, texts = ints
-    where = {nm: (fl, i) for i, nm in enumerate(lay.out_names_float)}
-    where |= {nm: (it, i) for i, nm in enumerate(lay.out_names_int)}
-    where |= {nm: (wd, i) for i, nm in enumerate(lay.out_names_wide)}
+    empty = empty_columns([c for c in lay.columns if c.name not in where and c.name not in texts], n)
     data: dict[str, object] = {}
     for col in lay.columns:
-        if not any(src[0] in lay.item_frn for src in col.sources):
-            data[col.name] = empty_column(col, n)
-            if col.kind == "icao":
-                data[f"{col.name}_hex"] = icao_columns(np.full(n, -1, np.int64))[1]
-            continue
-        if col.kind == "codes":
+        if col.name in texts:
             data[col.name] = texts[col.name]
+            continue
+        if col.name not in where:
+            data[col.name] = empty[col.name]
+            if col.kind == "icao":
+                data[f"{col.name}_hex"] = empty[f"{col.name}_hex"]
             continue
         matrix, row = where[col.name]
         if col.kind == "icao":  # the raw identification beside its text (codes outside the ICAO set)
             data[col.name], data[f"{col.name}_hex"] = icao_columns(matrix[row])
             continue
-        data[col.name] = matrix[row] if matrix is fl else typed_column(col, matrix[row])
+        data[col.name] = matrix[row] if col.kind == "float" else typed_column(col, matrix[row])
     data["block"] = rec_blk
     data["offset"] = rec_off
     return data
@@ -533,10 +551,10 @@ def decode_buffer(buf: np.ndarray, seg: Segments, *, path: str = "", editions: d
                 scanned = (*scanned[:-1], 0)
                 counts = np.full_like(counts, -1)
         decoded_bytes += int(lens[counts > 0].sum())
-        fl, ints, rec_off, rec_blk = _extract(buf, scanned, lay)
+        where, texts, rec_off, rec_blk = _extract(buf, scanned, lay)
         del scanned
-        columns[cat] = _columns(lay, fl, ints, rec_off, sel[rec_blk])
-        del fl, ints
+        columns[cat] = _columns(lay, where, texts, rec_off, sel[rec_blk])
+        del where, texts
     untimed = (time_cat001(columns, buf, framed, editions, sector_clock or SectorClock())
                if PLOT_CATEGORY in decoded else pd.DataFrame(columns=UNTIMED_COLUMNS))
     errors.sort()

@@ -14,9 +14,13 @@ from .cat002 import CAT002
 from .cat021 import CAT021_V0, CAT021_V2
 from .cat034 import CAT034
 from .cat048 import CAT048
+from .cat062 import CAT062
+from .status import CAT019, CAT023, CAT025, CAT063, CAT065
 
 __all__ = ["Column", "columns_for", "FAMILIES", "KIND_DTYPES", "markdown_schema",
-           "CAT048", "CAT021_V2", "CAT021_V0", "CAT034", "CAT001", "CAT002"]
+           "CAT048", "CAT021_V2", "CAT021_V0", "CAT034", "CAT001", "CAT002", "CAT062",
+           "CAT019", "CAT023", "CAT025", "CAT063",
+           "CAT065"]
 
 
 # category -> its column list for an edition; a new category adds its module and one line here
@@ -26,6 +30,12 @@ BY_CATEGORY = {
     34: lambda edition: CAT034,
     1: lambda edition: CAT001,
     2: lambda edition: CAT002,
+    62: lambda edition: CAT062,
+    19: lambda edition: CAT019,
+    23: lambda edition: CAT023,
+    25: lambda edition: CAT025,
+    63: lambda edition: CAT063,
+    65: lambda edition: CAT065,
 }
 
 
@@ -36,7 +46,9 @@ def columns_for(category: int, edition: str) -> list[Column]:
 
 FAMILIES = {"CAT048 (all editions)": CAT048, "CAT021 2.x (2.1-2.7)": CAT021_V2,
             "CAT021 0.2x (0.23-0.26)": CAT021_V0, "CAT034 (1.27-1.29)": CAT034,
-            "CAT001 (1.2-1.4, plot and track UAPs)": CAT001, "CAT002 (1.0-1.2)": CAT002}
+            "CAT001 (1.2-1.4, plot and track UAPs)": CAT001, "CAT002 (1.0-1.2)": CAT002,
+            "CAT062 (1.16-1.21)": CAT062, "CAT019 (1.3)": CAT019, "CAT023 (1.2, 1.3)": CAT023,
+            "CAT025 (1.5)": CAT025, "CAT063 (1.6)": CAT063, "CAT065 (1.5)": CAT065}
 KIND_DTYPES = {"float": "float64 (NaN if absent)", "int": "Int32", "flag": "Int8", "count": "Int16",
                "octal": "text (categorical)", "hex": "text (categorical)", "icao": "text (categorical)",
                "codes": "text (categorical)"}

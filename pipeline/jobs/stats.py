@@ -1,5 +1,6 @@
 """The stats job (``msdc stats``): what the recordings hold, streamed in chunks (memory follows the chunk,
-not the file): records per category and SAC/SIC, aircraft per sensor, skipped blocks
+not the file): every category present (those msdc does not decode with their blocks), records per category
+and SAC/SIC of every category msdc decodes, aircraft per sensor, skipped blocks
 (``pipeline.quality.inventory``)."""
 
 from __future__ import annotations
@@ -48,6 +49,7 @@ def stats_job(options: StatsOptions, *, progress: Progress | None = None) -> Sta
     records, sources, aircraft and skipped blocks chunk by chunk: memory is bounded by the chunk, not
     the file."""
     import msdc.asterix as asterix
+    from msdc.asterix.categories import DECODABLE
     from msdc.asterix.errors import UnreadableInput
     from msdc.pipeline.model.sources import file_labels
     from msdc.pipeline.model.time import UNDATED_DAY, FirstDayTally
@@ -71,8 +73,10 @@ def stats_job(options: StatsOptions, *, progress: Progress | None = None) -> Sta
         by_source: dict[str, tuple[pd.Timestamp, pd.Timestamp]] = {}
         tally = FirstDayTally()
         try:
+            # every category msdc decodes (tracks and status messages too: stats lists them per SAC/SIC)
             for rec in asterix.iter_read(path, chunk=chunk, editions=checked.editions or None,
-                                         date=options.date, format=options.format, columns=STATS_COLUMNS):
+                                         date=options.date, format=options.format, columns=STATS_COLUMNS,
+                                         categories=DECODABLE):
                 acc.add(rec.frames, rec.errors, rec.ignored)
                 tally.add(rec.frames)
                 edition_notes.fold(failed, rec)

@@ -31,5 +31,10 @@ def test_measurement_categories_are_radar_then_adsb():
 
 
 def test_an_unknown_category_is_named_with_the_known_ones():
-    with pytest.raises(KeyError, match="CAT062 is not decoded by msdc .*CAT048, CAT021, CAT034"):
-        category(62)
+    with pytest.raises(KeyError, match="CAT008 is not decoded by msdc .*CAT048, CAT021, CAT034, .*CAT001, CAT002.*CAT062"):
+        category(8)
+
+
+@pytest.mark.parametrize("number", [62, 19, 23, 25, 63, 65])
+def test_tracks_and_status_categories_are_decoded_only_when_asked(number):
+    assert number in DECODABLE and number not in MEASUREMENT_CATEGORIES

@@ -253,7 +253,9 @@ def test_multi_source_columns_cat021() -> None:
 
 
 def test_edition_aliases() -> None:
-    assert set(EDITIONS) == {1, 2, 21, 34, 48}
+    assert set(EDITIONS) == {1, 2, 19, 21, 23, 25, 34, 48, 62, 63, 65}
+    assert EDITIONS[62] == ["1.16", "1.17", "1.18", "1.19", "1.20", "1.21"]
+    assert encode_record(23, {"sac": 1, "nogo": 1}, "1.2") == encode_record(23, {"sac": 1, "nogo": 1}, "1.3")
     assert {"1.27", "1.31", "1.32"} <= set(EDITIONS[48])
     assert encode_item(48, "1.21", "020", {"TYP": 1}) == encode_item(48, "1.27", "020", {"TYP": 1})
     assert encode_record(21, {"sac": 1, "sic": 2}, "2.x") == encode_record(21, {"sac": 1, "sic": 2}, "2.7")
@@ -361,6 +363,9 @@ ALL_EDITIONS = [(c, e, u) for c, eds in sorted(EDITIONS.items()) for e in eds
                 for u in load_table(c, e).get("uaps", {"": None})]
 # the value of the UAP selector field (CAT001 I001/020 TYP) for each UAP
 SELECT = {"plot": {"typ": 0}, "track": {"typ": 1}}
+# CAT062 columns of fields added by later editions (latest first), and how many of them each edition lacks
+CAT062_LATER = ["cst_m5", "cst_mlat", "sfc", "idd", "iec", "mode3a_v", "mode3a_g"]
+CAT062_LATER_FROM = {"1.16": 7, "1.17": 5, "1.18": 2, "1.19": 2, "1.20": 1}
 
 
 @pytest.mark.parametrize(("category", "edition", "uap"), ALL_EDITIONS)
@@ -385,10 +390,13 @@ def test_every_edition_encodes_every_mapped_column(category: int, edition: str, 
     # columns whose item/field is not in this edition (0.23-0.25 have no I021/070 or signal amplitude;
     # I021/151 is a group (RE, TAS) in 2.x while the column addresses a bare element; I021/200 ME is a spare
     # bit in 2.1)
-    # CAT001: time_of_day is derived from I001/141 and CAT002; plots have no track items
-    assert set(unmapped) <= {"mode3a", "signal_amplitude", "true_airspeed_kt", "me", "time_of_day",
-                             *(("x_nm", "y_nm", "track_number", "ground_speed_kt", "heading_deg", "con",
-                                "rad", "man", "dou", "rdpc", "gho", "tre") if uap == "plot" else ())}
+    if category == 62:  # I062/060 V, G from 1.17; I062/080 SFC, IDD, IEC from 1.18, MLAT 1.20, M5I 1.21
+        assert set(unmapped) == set(CAT062_LATER[:CAT062_LATER_FROM.get(edition, 0)])
+    else:
+        # CAT001: time_of_day is derived from I001/141 and CAT002; plots have no track items
+        assert set(unmapped) <= {"mode3a", "signal_amplitude", "true_airspeed_kt", "me", "time_of_day",
+                                 *(("x_nm", "y_nm", "track_number", "ground_speed_kt", "heading_deg", "con",
+                                    "rad", "man", "dou", "rdpc", "gho", "tre") if uap == "plot" else ())}
     for name in unmapped:
         with pytest.raises(ValueError, match=f"{name}|not an item of the record's UAP \\({uap}\\)"):
             encode_record(category, {**SELECT.get(uap, {}), name: 1.0}, edition)
