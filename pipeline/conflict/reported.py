@@ -1,0 +1,139 @@
+"""Where an aircraft is reported: the track samples a loss of separation may be measured on.
+
+The tracker puts out a row at every accepted report (`coasted` False) and on the grid, coasting up to
+`--max-coast` after the last report. A coasted position is an extrapolation, not a measurement: on the
+real radar recording a loss of 45 s lay wholly after a Mode A target's last plot. So losses are counted
+on the grid times that lie between two consecutive accepted reports of the aircraft at most
+``max_gap_s`` apart, at positions interpolated linearly between those two reports; a stretch of such
+reports is one reported interval (``interval``: a loss run ends where an aircraft's interval does). A
+report the tracker rejected (gated as an outlier) is not one; a new track segment's first report is
+(the tracker restarts a segment on consistent reports its filter had gated).
+
+The horizontal positions are the reports' own (the radar plot, the ADS-B position), not the filter's
+estimates there: the real-time filter lags an aircraft that accelerates or turns (on the real radar hour
+a departure's estimates lay up to 150 m behind its plots in the take-off roll, and the minima of losses
+with a departure 0.08 NM below the plots'). The level is the tracker's at the report (the vertical filter
+holds it across plots without Mode C and on the surface). Linear interpolation between reports 15 s
+apart (the default) of an aircraft at 250 kt turning at 3 deg/s strays at most 190 m (0.1 NM) from its
+arc; an aircraft reported by several sensors zigzags between them by their disagreement.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+
+from msdc.pipeline.conflict.pairs import _require, time_key
+from msdc.pipeline.model.arguments import finite_number
+
+MAX_GAP_S = 15.0
+REPORT_COLUMNS = ["aircraft_id", "time", "latitude", "longitude", "flight_level"]
+_TOLERANCE_NS = 1000  # grid and report times are whole nanoseconds of float seconds: 1 us either side
+
+
+def report_rows(tracks: pd.DataFrame, measurements: pd.DataFrame | None = None,
+                rejected: pd.DataFrame | None = None) -> pd.DataFrame:
+    """The accepted reports of every aircraft: REPORT_COLUMNS sorted by aircraft and time, at the
+    tracker's rows at accepted reports (`coasted` False), with the level there and the position of the
+    report itself, from `measurements` (`aircraft_id, time, sensor_id, latitude, longitude`) less the
+    tracker's `rejected` ones; without measurements, the tracker's estimate there."""
+    _require(tracks, REPORT_COLUMNS + ["coasted"], "tracks")
+    rows = tracks.loc[~tracks["coasted"].to_numpy(bool), REPORT_COLUMNS]
+    rows = rows.assign(aircraft_id=rows["aircraft_id"].astype(str))
+    if measurements is not None:
+        rows = _report_positions(rows, measurements, rejected)
+    return rows.sort_values(["aircraft_id", "time"], kind="stable").reset_index(drop=True)
+
+
+def _report_positions(rows: pd.DataFrame, measurements: pd.DataFrame, rejected: pd.DataFrame | None
+                      ) -> pd.DataFrame:
+    """rows with latitude and longitude of the measurement of the same aircraft at the same time (to
+    _TOLERANCE_NS) that the tracker did not reject; a row without one keeps the tracker's."""
+    cols = ["aircraft_id", "time", "sensor_id", "latitude", "longitude"]
+    meas = measurements.loc[measurements["aircraft_id"].notna().to_numpy(bool), cols]
+    meas = pd.DataFrame({"aircraft_id": meas["aircraft_id"].astype(str).to_numpy(dtype=object),
+                         "t": time_key(meas["time"]), "sensor_id": meas["sensor_id"].astype(str).to_numpy(),
+                         "lat": meas["latitude"].to_numpy(float), "lon": meas["longitude"].to_numpy(float)})
+    meas = meas[np.isfinite(meas["lat"].to_numpy()) & np.isfinite(meas["lon"].to_numpy())]
+    if rejected is not None and len(rejected):
+        gated = pd.MultiIndex.from_arrays([rejected["aircraft_id"].astype(str), time_key(rejected["time"]),
+                                           rejected["sensor_id"].astype(str)])
+        meas = meas[~pd.MultiIndex.from_frame(meas[["aircraft_id", "t", "sensor_id"]]).isin(gated)]
+    left = pd.DataFrame({"aircraft_id": rows["aircraft_id"].to_numpy(dtype=object),
+                         "t": time_key(rows["time"]), "row": np.arange(len(rows))}).sort_values("t")
+    found = pd.merge_asof(left, meas.sort_values("t"), on="t", by="aircraft_id", direction="nearest",
+                          tolerance=_TOLERANCE_NS)
+    hit = found["lat"].notna().to_numpy(bool)
+    out = rows.copy()
+    at = found["row"].to_numpy()[hit]
+    out.iloc[at, out.columns.get_loc("latitude")] = found["lat"].to_numpy()[hit]
+    out.iloc[at, out.columns.get_loc("longitude")] = found["lon"].to_numpy()[hit]
+    return out
+
+
+def reported_samples(grid: pd.DataFrame, reports: pd.DataFrame, max_gap_s: float = MAX_GAP_S
+                     ) -> pd.DataFrame:
+    """The rows of `grid` (one aircraft and time a row) that lie within a reported interval of their
+    aircraft (`report_rows`: between two consecutive reports at most max_gap_s apart, or on a lone
+    report), with `latitude, longitude, flight_level` interpolated between those reports and `interval`,
+    the interval's number (per aircraft, from 0). Other columns are kept as they are."""
+    max_gap_s = finite_number("max_gap_s", max_gap_s, "s")
+    _require(grid, ["aircraft_id", "time"], "grid")
+    _require(reports, REPORT_COLUMNS, "reports")
+    reports = reports.sort_values(["aircraft_id", "time"], kind="stable")
+    by_aircraft = {str(a): r for a, r in reports.groupby("aircraft_id", sort=False, observed=True)}
+    parts = []
+    for aircraft, rows in grid.groupby("aircraft_id", sort=False, observed=True):
+        own = by_aircraft.get(str(aircraft))
+        if own is None:
+            continue
+        at, interval, lat, lon, fl = _interpolate(own, time_key(rows["time"]), max_gap_s)
+        part = rows.iloc[at].copy()
+        part["latitude"], part["longitude"], part["flight_level"] = lat, lon, fl
+        part["interval"] = interval
+        parts.append(part)
+    if not parts:
+        return grid.iloc[:0].assign(interval=pd.Series(dtype=np.int64))
+    return pd.concat(parts).sort_index(kind="stable")
+
+
+def reported_intervals(reports_ns: np.ndarray, max_gap_s: float) -> tuple[np.ndarray, np.ndarray]:
+    """Per report of one aircraft (times sorted, int64 ns), its interval number, and per interval the
+    report positions where it starts (the last entry: the number of reports)."""
+    link = np.diff(reports_ns) <= max_gap_s * 1e9 + _TOLERANCE_NS
+    interval = np.r_[0, np.cumsum(~link)]
+    starts = np.r_[0, np.flatnonzero(~link) + 1, len(reports_ns)]
+    return interval, starts
+
+
+def positions_at(reports: pd.DataFrame, times_ns: np.ndarray, max_gap_s: float = MAX_GAP_S
+                 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """One aircraft's reports (REPORT_COLUMNS, sorted by time) at times_ns (int64): which times lie in a
+    reported interval, their interval numbers and latitude, longitude and flight level there."""
+    at, interval, lat, lon, fl = _interpolate(reports, np.asarray(times_ns, np.int64), max_gap_s)
+    inside = np.zeros(len(times_ns), bool)
+    inside[at] = True
+    return inside, interval, lat, lon, fl
+
+
+def _interpolate(reports: pd.DataFrame, times_ns: np.ndarray, max_gap_s: float):
+    """Positions within the reported intervals of one aircraft's reports at the given times: the positions
+    of the times inside, their interval, latitude, longitude and flight level."""
+    t = time_key(reports["time"])
+    interval, starts = reported_intervals(t, max_gap_s)
+    # the report at or before each time (one within the tolerance after it counts as at it)
+    j = np.clip(np.searchsorted(t, times_ns + _TOLERANCE_NS, side="right") - 1, 0, len(t) - 1)
+    k = interval[j]
+    first, last = starts[k], starts[k + 1] - 1
+    inside = (times_ns >= t[first] - _TOLERANCE_NS) & (times_ns <= t[last] + _TOLERANCE_NS)
+    at = np.flatnonzero(inside)
+    j, first, last = np.clip(j[at], first[at], np.maximum(last[at] - 1, first[at])), first[at], last[at]
+    nxt = np.minimum(j + 1, last)
+    span = (t[nxt] - t[j]).astype(float)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        w = np.where(span > 0, (times_ns[at] - t[j]) / span, 0.0)
+    w = np.clip(w, 0.0, 1.0)
+    lat, lon, fl = (reports[c].to_numpy(float) for c in ("latitude", "longitude", "flight_level"))
+    dlon = (lon[nxt] - lon[j] + 180.0) % 360.0 - 180.0  # across the antimeridian the short way
+    out_lon = (lon[j] + w * dlon + 180.0) % 360.0 - 180.0
+    return (at, k[at], lat[j] + w * (lat[nxt] - lat[j]), out_lon, fl[j] + w * (fl[nxt] - fl[j]))
