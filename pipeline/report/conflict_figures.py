@@ -110,7 +110,7 @@ def alert_figure(alert: pd.Series, tracks: pd.DataFrame, predictions: pd.DataFra
         color = COLORS[key]
         tr = tracks[(tracks["aircraft_id"] == ident) & (tracks["time"] >= t0) & (tracks["time"] <= t1)]
         e, n = _nm(tr["latitude"], tr["longitude"], lat0, lon0)
-        ax.plot(e, n, color=color, lw=1.2, label=f"{ident} track")
+        ax.plot(e, n, color=color, lw=1.2, label=f"{aircraft_label(alert, key)} track")
         now = (tr["time"] == start).to_numpy()
         if now.any():
             ax.plot(e[now], n[now], "o", color=color, ms=6, zorder=5)
