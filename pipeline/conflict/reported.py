@@ -76,31 +76,31 @@ def reported_samples(grid: pd.DataFrame, reports: pd.DataFrame, max_gap_s: float
     """The rows of `grid` (one aircraft and time a row) that lie within a reported interval of their
     aircraft (`report_rows`: between two consecutive reports at most max_gap_s apart, or on a lone
     report), with `latitude, longitude, flight_level` interpolated between those reports and `interval`,
-    the interval's number (per aircraft, from 0). Other columns are kept as they are."""
+    the interval's number (distinct per aircraft and interval). Other columns are kept as they are."""
     max_gap_s = finite_number("max_gap_s", max_gap_s, "s")
     _require(grid, ["aircraft_id", "time"], "grid")
     _require(reports, REPORT_COLUMNS, "reports")
-    reports = reports.sort_values(["aircraft_id", "time"], kind="stable")
-    by_aircraft = {str(a): r for a, r in reports.groupby("aircraft_id", sort=False, observed=True)}
-    parts = []
-    for aircraft, rows in grid.groupby("aircraft_id", sort=False, observed=True):
-        own = by_aircraft.get(str(aircraft))
-        if own is None:
-            continue
-        at, interval, lat, lon, fl = _interpolate(own, time_key(rows["time"]), max_gap_s)
-        part = rows.iloc[at].copy()
-        part["latitude"], part["longitude"], part["flight_level"] = lat, lon, fl
-        part["interval"] = interval
-        parts.append(part)
-    if not parts:
-        return grid.iloc[:0].assign(interval=pd.Series(dtype=np.int64))
-    return pd.concat(parts).sort_index(kind="stable")
+    ids = np.r_[reports["aircraft_id"].astype(str).to_numpy(dtype=object),
+                grid["aircraft_id"].astype(str).to_numpy(dtype=object)]
+    codes = pd.factorize(ids)[0]
+    r_code, r_t = codes[:len(reports)], time_key(reports["time"])
+    order = np.lexsort((r_t, r_code))
+    at, interval, lat, lon, fl = _interpolate(r_code[order], r_t[order], reports.iloc[order],
+                                              codes[len(reports):], time_key(grid["time"]), max_gap_s)
+    out = grid.iloc[at].copy()
+    out["latitude"], out["longitude"], out["flight_level"] = lat, lon, fl
+    out["interval"] = interval
+    return out
 
 
-def reported_intervals(reports_ns: np.ndarray, max_gap_s: float) -> tuple[np.ndarray, np.ndarray]:
-    """Per report of one aircraft (times sorted, int64 ns), its interval number, and per interval the
-    report positions where it starts (the last entry: the number of reports)."""
+def reported_intervals(reports_ns: np.ndarray, max_gap_s: float, codes: np.ndarray | None = None
+                       ) -> tuple[np.ndarray, np.ndarray]:
+    """Per report (sorted by aircraft code, then time, int64 ns; one aircraft without codes), its
+    interval number, and per interval the report positions where it starts (the last entry: the number of
+    reports). An interval ends where the next report is more than max_gap_s later or of another aircraft."""
     link = np.diff(reports_ns) <= max_gap_s * 1e9 + _TOLERANCE_NS
+    if codes is not None:
+        link &= codes[1:] == codes[:-1]
     interval = np.r_[0, np.cumsum(~link)]
     starts = np.r_[0, np.flatnonzero(~link) + 1, len(reports_ns)]
     return interval, starts
@@ -110,30 +110,52 @@ def positions_at(reports: pd.DataFrame, times_ns: np.ndarray, max_gap_s: float =
                  ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """One aircraft's reports (REPORT_COLUMNS, sorted by time) at times_ns (int64): which times lie in a
     reported interval, their interval numbers and latitude, longitude and flight level there."""
-    at, interval, lat, lon, fl = _interpolate(reports, np.asarray(times_ns, np.int64), max_gap_s)
+    times_ns = np.asarray(times_ns, np.int64)
+    at, interval, lat, lon, fl = _interpolate(np.zeros(len(reports), np.int64), time_key(reports["time"]),
+                                              reports, np.zeros(len(times_ns), np.int64), times_ns, max_gap_s)
     inside = np.zeros(len(times_ns), bool)
     inside[at] = True
     return inside, interval, lat, lon, fl
 
 
-def _interpolate(reports: pd.DataFrame, times_ns: np.ndarray, max_gap_s: float):
-    """Positions within the reported intervals of one aircraft's reports at the given times: the positions
-    of the times inside, their interval, latitude, longitude and flight level."""
-    t = time_key(reports["time"])
-    interval, starts = reported_intervals(t, max_gap_s)
-    # the report at or before each time (one within the tolerance after it counts as at it)
-    j = np.clip(np.searchsorted(t, times_ns + _TOLERANCE_NS, side="right") - 1, 0, len(t) - 1)
+def _interpolate(r_code: np.ndarray, r_t: np.ndarray, reports: pd.DataFrame, q_code: np.ndarray,
+                 q_t: np.ndarray, max_gap_s: float):
+    """Positions within the reported intervals at the queries (aircraft code, time ns), from the reports
+    sorted by (code, time) (`reports` their rows in that order): the positions of the queries inside, their
+    interval, latitude, longitude and flight level."""
+    if not len(r_t):
+        return (np.zeros(0, np.int64),) + (np.zeros(0),) * 4
+    interval, starts = reported_intervals(r_t, max_gap_s, r_code)
+    # the report at or before each query (one within the tolerance after it counts as at it)
+    j = _last_at_or_before(r_code, r_t, q_code, q_t + _TOLERANCE_NS)
+    found = j >= 0
+    j = np.maximum(j, 0)
     k = interval[j]
     first, last = starts[k], starts[k + 1] - 1
-    inside = (times_ns >= t[first] - _TOLERANCE_NS) & (times_ns <= t[last] + _TOLERANCE_NS)
+    inside = (found & (r_code[j] == q_code) & (q_t >= r_t[first] - _TOLERANCE_NS)
+              & (q_t <= r_t[last] + _TOLERANCE_NS))
     at = np.flatnonzero(inside)
     j, first, last = np.clip(j[at], first[at], np.maximum(last[at] - 1, first[at])), first[at], last[at]
     nxt = np.minimum(j + 1, last)
-    span = (t[nxt] - t[j]).astype(float)
+    span = (r_t[nxt] - r_t[j]).astype(float)
     with np.errstate(invalid="ignore", divide="ignore"):
-        w = np.where(span > 0, (times_ns[at] - t[j]) / span, 0.0)
+        w = np.where(span > 0, (q_t[at] - r_t[j]) / span, 0.0)
     w = np.clip(w, 0.0, 1.0)
     lat, lon, fl = (reports[c].to_numpy(float) for c in ("latitude", "longitude", "flight_level"))
     dlon = (lon[nxt] - lon[j] + 180.0) % 360.0 - 180.0  # across the antimeridian the short way
     out_lon = (lon[j] + w * dlon + 180.0) % 360.0 - 180.0
     return (at, k[at], lat[j] + w * (lat[nxt] - lat[j]), out_lon, fl[j] + w * (fl[nxt] - fl[j]))
+
+
+def _last_at_or_before(r_code: np.ndarray, r_t: np.ndarray, q_code: np.ndarray, q_t: np.ndarray
+                       ) -> np.ndarray:
+    """Per query, the position of the last report (sorted by code, then time) at or before it in that
+    order: of its own aircraft when it has one at or before its time, else of an earlier aircraft; -1 when
+    none comes before it."""
+    is_query = np.r_[np.zeros(len(r_t), bool), np.ones(len(q_t), bool)]
+    order = np.lexsort((is_query, np.r_[r_t, q_t], np.r_[r_code, q_code]))  # reports first on a tie
+    count = np.cumsum(~is_query[order])
+    out = np.empty(len(q_t), np.int64)
+    queries = is_query[order]
+    out[order[queries] - len(r_t)] = count[queries] - 1
+    return out
