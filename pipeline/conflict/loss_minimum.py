@@ -34,8 +34,10 @@ def loss_minima(losses: pd.DataFrame, reports: pd.DataFrame, radius_nm: float, l
             if c not in out.columns:
                 out[c] = pd.Series(dtype=out["start"].dtype if c == "time_of_min" else float)
         return out
+    involved = set(out["aircraft_a"].astype(str)) | set(out["aircraft_b"].astype(str))
+    mine = reports[reports["aircraft_id"].astype(str).isin(involved).to_numpy(bool)]
     by_aircraft = {str(a): r.sort_values("time", kind="stable")
-                   for a, r in reports.groupby("aircraft_id", sort=False, observed=True)}
+                   for a, r in mine.groupby("aircraft_id", sort=False, observed=True)}
     values = {c: np.full(len(out), np.nan) for c in MINIMUM_COLUMNS if c != "time_of_min"}
     when = np.full(len(out), np.iinfo(np.int64).min, dtype=np.int64)
     start, end = time_key(out["start"]), time_key(out["end"])

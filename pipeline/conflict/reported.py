@@ -49,25 +49,29 @@ def _report_positions(rows: pd.DataFrame, measurements: pd.DataFrame, rejected: 
                       ) -> pd.DataFrame:
     """rows with latitude and longitude of the measurement of the same aircraft at the same time (to
     _TOLERANCE_NS) that the tracker did not reject; a row without one keeps the tracker's."""
-    cols = ["aircraft_id", "time", "sensor_id", "latitude", "longitude"]
-    meas = measurements.loc[measurements["aircraft_id"].notna().to_numpy(bool), cols]
-    meas = pd.DataFrame({"aircraft_id": meas["aircraft_id"].astype(str).to_numpy(dtype=object),
-                         "t": time_key(meas["time"]), "sensor_id": meas["sensor_id"].astype(str).to_numpy(),
-                         "lat": meas["latitude"].to_numpy(float), "lon": meas["longitude"].to_numpy(float)})
-    meas = meas[np.isfinite(meas["lat"].to_numpy()) & np.isfinite(meas["lon"].to_numpy())]
+    ids = pd.Categorical(measurements["aircraft_id"])  # the measurements' own categories: no text per row
+    code = ids.codes.astype(np.int64)
+    t = time_key(measurements["time"])
+    lat, lon = measurements["latitude"].to_numpy(float), measurements["longitude"].to_numpy(float)
+    usable = (code >= 0) & np.isfinite(lat) & np.isfinite(lon)
     if rejected is not None and len(rejected):
+        # the few measurements at a rejected report's time, then exactly by aircraft, time and sensor
+        maybe = np.flatnonzero(usable & np.isin(t, time_key(rejected["time"])))
         gated = pd.MultiIndex.from_arrays([rejected["aircraft_id"].astype(str), time_key(rejected["time"]),
                                            rejected["sensor_id"].astype(str)])
-        meas = meas[~pd.MultiIndex.from_frame(meas[["aircraft_id", "t", "sensor_id"]]).isin(gated)]
-    left = pd.DataFrame({"aircraft_id": rows["aircraft_id"].to_numpy(dtype=object),
-                         "t": time_key(rows["time"]), "row": np.arange(len(rows))}).sort_values("t")
-    found = pd.merge_asof(left, meas.sort_values("t"), on="t", by="aircraft_id", direction="nearest",
-                          tolerance=_TOLERANCE_NS)
+        at = pd.MultiIndex.from_arrays([np.asarray(ids.categories.astype(str))[code[maybe]], t[maybe],
+                                        measurements["sensor_id"].astype(str).to_numpy()[maybe]])
+        usable[maybe[at.isin(gated)]] = False
+    meas = pd.DataFrame({"code": code[usable], "t": t[usable], "lat": lat[usable], "lon": lon[usable]})
+    row_code = pd.Categorical(rows["aircraft_id"], categories=ids.categories).codes.astype(np.int64)
+    left = pd.DataFrame({"code": row_code, "t": time_key(rows["time"]), "row": np.arange(len(rows))})
+    found = pd.merge_asof(left.sort_values("t"), meas.sort_values("t"), on="t", by="code",
+                          direction="nearest", tolerance=_TOLERANCE_NS)
     hit = found["lat"].notna().to_numpy(bool)
     out = rows.copy()
-    at = found["row"].to_numpy()[hit]
-    out.iloc[at, out.columns.get_loc("latitude")] = found["lat"].to_numpy()[hit]
-    out.iloc[at, out.columns.get_loc("longitude")] = found["lon"].to_numpy()[hit]
+    at_rows = found["row"].to_numpy()[hit]
+    out.iloc[at_rows, out.columns.get_loc("latitude")] = found["lat"].to_numpy()[hit]
+    out.iloc[at_rows, out.columns.get_loc("longitude")] = found["lon"].to_numpy()[hit]
     return out
 
 
