@@ -83,8 +83,10 @@ def _closest(ra: pd.DataFrame, rb: pd.DataFrame, start_ns: int, end_ns: int, rad
         cross = dz[:-1] / (dz[:-1] - dz[1:])
     cross = np.where((dz[:-1] * dz[1:] < 0) & np.isfinite(cross), cross, 0.0)
     span = np.diff(breaks).astype(float)
-    extra = np.concatenate([breaks[:-1] + np.round(s * span), breaks[:-1] + np.round(cross * span)])
-    times = np.unique(np.concatenate([breaks, extra.astype(np.int64)]))
+    # whole nanoseconds added to the integer times (as floats, times since 1970 would lose 256 ns)
+    extra = np.concatenate([breaks[:-1] + np.round(s * span).astype(np.int64),
+                            breaks[:-1] + np.round(cross * span).astype(np.int64)])
+    times = np.unique(np.concatenate([breaks, np.clip(extra, start_ns, end_ns)]))
     pa, pb = (_at(r, times, max_gap_s) for r in (ra, rb))
     if pa is None or pb is None:
         return None
