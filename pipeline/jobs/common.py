@@ -49,6 +49,8 @@ from msdc.pipeline.progress import Progress
 from msdc.pipeline.report.transaction import output_problem, target
 
 if TYPE_CHECKING:  # the steps are imported where they run: msdc stats imports none of them
+    from msdc.pipeline.jobs.options import SelectionOptions
+    from msdc.pipeline.model.selection import Selection
     from msdc.pipeline.quality.quality_run import QualityResult
     from msdc.pipeline.report.transaction import OutputTransaction
 
@@ -316,6 +318,21 @@ def check_tracking(options: TrackOptions) -> float:
         except ValueError as exc:
             raise OptionError(f"--tpm {options.tpm!r}: {str(exc).partition(': ')[2]}") from None
     return step
+
+
+def check_selection(options: SelectionOptions) -> Selection:
+    """The samples an analysis counts (--min-fl, --exclude-mode-a-only, --exclude-codes), checked before
+    decoding: OptionError naming the option (check_declared checks --min-fl's range)."""
+    from msdc.pipeline.model.selection import Selection, parse_codes
+
+    try:
+        codes = parse_codes(options.exclude_codes) if options.exclude_codes is not None else ()
+    except ValueError as exc:
+        raise OptionError(str(exc)) from None
+    if options.exclude_codes is not None and not codes:
+        raise OptionError("--exclude-codes: give at least one Mode 3/A code, e.g. 7000")
+    return Selection(min_fl=None if options.min_fl is None else float(options.min_fl),
+                     exclude_mode_a_only=bool(options.exclude_mode_a_only), exclude_codes=codes)
 
 
 @dataclass

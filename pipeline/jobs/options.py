@@ -64,6 +64,9 @@ VERTICAL_RANGE_FT = (1.0, 100_000.0)
 VERTICAL_TOLERANCE_RANGE_FT = (0.0, 500.0)
 VERTICAL_MODELS = ("gate", "gaussian")
 SURFACE_MODES = ("exclude", "include")  # pairs with an aircraft on the surface (pipeline.conflict.surface)
+MIN_FL_RANGE = (-20.0, 1000.0)  # --min-fl: below the lowest aerodrome to above any aircraft
+# --max-report-gap: losses are measured between reports at most this far apart (pipeline.conflict.reported)
+REPORT_GAP_RANGE_S = (0.1, 3600.0)
 
 # Where an option stands in --help and in the docs table: by section, then in declaration order
 SECTIONS = ("selection", "output", "command", "tracking", "measurements", "reading")
@@ -474,7 +477,32 @@ class TrackOptions(AircraftOptions):
 
 
 @dataclass(frozen=True)
-class ConflictOptions(TrackOptions):
+class SelectionOptions:
+    """Which aircraft samples an analysis counts (``pipeline.model.selection``), declared once: ``msdc
+    conflicts`` takes them, and a command that analyses the same traffic inherits them (listed first among
+    its bases, so that its inputs keep their place). ``jobs.common.check_selection`` makes the Selection."""
+
+    min_fl: float | None = option(
+        None, "--min-fl", metavar="FL", range=MIN_FL_RANGE, unit="FL", section="selection",
+        help="count only aircraft samples at or above this flight level (the tracked level; a sample "
+             "without one is left out)",
+        doc="count only aircraft samples at or above this flight level (the tracked level at the time; a "
+            "sample without a level is left out) ([Selection](#selection))")
+    exclude_mode_a_only: bool = option(
+        False, "--exclude-mode-a-only", section="selection",
+        help="leave out Mode-A-only targets: no report gave them a 24-bit address or a call sign",
+        doc="leave out Mode-A-only targets (`M3A:` identities: no report gave them a 24-bit address or a "
+            "call sign) ([Selection](#selection))")
+    exclude_codes: str | tuple[str, ...] | None = option(
+        None, "--exclude-codes", metavar="CODES", section="selection",
+        help="leave out aircraft while they squawk one of these Mode 3/A codes, comma-separated (e.g. "
+             "7000 and the VFR conspicuity codes of the airspace)",
+        doc="leave out aircraft while they squawk one of these Mode 3/A codes, comma-separated four octal "
+            "digits (e.g. `7000`, `2000`, the airspace's VFR conspicuity codes) ([Selection](#selection))")
+
+
+@dataclass(frozen=True)
+class ConflictOptions(SelectionOptions, TrackOptions):
     """Everything ``conflict_job`` needs; see ``msdc conflicts --help``. Every aircraft is tracked."""
 
     callsign: str | None = None
@@ -525,6 +553,13 @@ class ConflictOptions(TrackOptions):
              "levels (default 25)",
         doc="levels closer than `--vertical-ft` by at most this are separated: the 25 ft quantum of "
             "reported levels; less than `--vertical-ft`")
+    max_report_gap_s: float = option(
+        15.0, "--max-report-gap", range=REPORT_GAP_RANGE_S, unit="s",
+        help="losses of separation are measured only where both aircraft are reported: between two reports "
+             "of a track at most this many seconds apart (default 15), never on a coasted stretch",
+        doc="losses of separation are measured only where both aircraft are reported: between two reports "
+            "of a track at most this many seconds apart, at positions interpolated between them; never on "
+            "a coasted stretch ([What a loss is](#what-the-tables-count))")
     threshold: float = option(0.2, "--threshold", help="PC above which an alert is raised (default 0.2)",
                               doc="PC above which an alert is raised, strictly between 0 and 1")
     method: str = option("exact", "--method", choices=METHODS, parser_choices=False,

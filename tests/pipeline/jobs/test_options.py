@@ -54,7 +54,10 @@ EXPECTED = {
                   "--horizon": "horizons_s", "--radius-nm": "radius_nm", "--vertical-ft": "vertical_ft",
                   "--vertical-tolerance-ft": "vertical_tolerance_ft", "--threshold": "threshold",
                   "--method": "method", "--vertical": "vertical", "--surface": "surface", **TRACKING,
-                  "--adsb-sigma": "adsb_sigma_m", **READING},
+                  "--adsb-sigma": "adsb_sigma_m", "--max-report-gap": "max_report_gap_s",
+                  "--min-fl": "min_fl", "--exclude-mode-a-only": "exclude_mode_a_only",
+                  "--exclude-codes": "exclude_codes",
+                  **READING},
 }
 
 
