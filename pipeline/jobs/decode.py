@@ -110,7 +110,7 @@ def decode_job(options: DecodeOptions, *, on_chunk: Callable[[int, int, str], No
                             if cat not in files:  # named after the file the output really is
                                 files[cat] = category_output(stage.path(out), cat)
                             with named(_shown(out, files, cat, stage), instead_of=files[cat]):
-                                _write_chunk(files[cat], cat, frame.assign(file=label), writers, csv)
+                                _write_chunk(files[cat], cat, labelled(frame, label), writers, csv)
                     done = max((int(f["offset"].max()) for f in rec.frames.values() if len(f)), default=0)
                     if on_chunk:
                         on_chunk(done, size, path.name)
@@ -164,20 +164,31 @@ def _shown(out: Path, files: dict[int, Path], cat: int, stage: OutputTransaction
     return out if len(files) == 1 else stage.final(files[cat])
 
 
+def labelled(frame: pd.DataFrame, label: str) -> pd.DataFrame:
+    """``frame`` with its input's label as the ``file`` column: categorical, one copy of the text."""
+    import numpy as np
+
+    return frame.assign(file=pd.Categorical.from_codes(np.zeros(len(frame), np.int8), categories=[label]))
+
+
 def _write_chunk(path: Path, cat: int, frame: pd.DataFrame, writers: dict, csv: bool) -> None:
     """Append one chunk of a category to its (staged) output file, CSV or Parquet, opening it on first
-    use."""
+    use: every chunk of every input under the category's one schema (report.record_schema), so a later
+    chunk or input can neither overflow a type nor put its values under another column's header."""
+    from msdc.pipeline.report.record_schema import record_schema
+
+    schema = record_schema(cat)
+    rows = schema.conform(frame)
     if csv:
-        write_csv(frame, path, append=cat in writers)
+        write_csv(rows, path, append=cat in writers)
         writers[cat] = True
     else:
         import pyarrow as pa
         import pyarrow.parquet as pq
 
-        table = pa.Table.from_pandas(frame, preserve_index=False)
         if cat not in writers:
-            writers[cat] = pq.ParquetWriter(path, table.schema)
-        writers[cat].write_table(table.cast(writers[cat].schema))
+            writers[cat] = pq.ParquetWriter(path, schema.arrow())
+        writers[cat].write_table(pa.Table.from_pandas(rows, schema=writers[cat].schema, preserve_index=False))
 
 
 def skipped_lines(result: DecodeResult) -> list[str]:
