@@ -659,7 +659,23 @@ def tracker_measurements(loaded, checked: Checked, options: TrackOptions) -> tup
     out = meas[~dup & known].reset_index(drop=True)
     out.attrs["joined_by_track_number"] = joined
     out.attrs["unidentified"] = int((~dup & ~known).sum())
-    return out, warnings
+    return out, warnings + short_coast(out, options.max_coast_s)
+
+
+def short_coast(meas: pd.DataFrame, max_coast_s: float) -> list[str]:
+    """A warning when --max-coast is below every sensor's median update interval (track.feasibility): a
+    track segment then ends at each gap between reports, and an aircraft falls apart into segments of one
+    report (--max-coast 0.001 made 3,281 of one aircraft)."""
+    from msdc.pipeline.track.feasibility import update_intervals
+
+    intervals = update_intervals(meas)
+    if intervals.empty or max_coast_s >= intervals.iloc[0]:
+        return []
+    fastest, slowest = intervals.index[0], intervals.index[-1]
+    return [f"--max-coast {max_coast_s:g} s is below every sensor's median update interval (the shortest: "
+            f"{fastest}, {intervals.iloc[0]:.3g} s): a track segment ends at each gap between reports, so "
+            f"nearly every report starts a segment of its own; give more than the slowest sensor's interval "
+            f"({slowest}, {intervals.iloc[-1]:.3g} s; default 60 s)"]
 
 
 # ---------------------------------------------------------------------------------------------------------
