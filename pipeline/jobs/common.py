@@ -46,7 +46,7 @@ from msdc.pipeline.model.load import (
 )
 from msdc.pipeline.model.time import utc_text
 from msdc.pipeline.progress import Progress
-from msdc.pipeline.report.transaction import output_problem, target
+from msdc.pipeline.report.transaction import output_problem, side_pattern, target
 
 if TYPE_CHECKING:  # the steps are imported where they run: msdc stats imports none of them
     from msdc.pipeline.quality.quality_run import QualityResult
@@ -724,6 +724,19 @@ def quality_step(meas: pd.DataFrame, sensors: pd.DataFrame, options: CorrelateOp
                            gap_s=options.gap_s, reference=getattr(options, "reference", "adsb"))
     except NoSuchAircraft as exc:
         raise JobError(str(exc)) from exc
+
+
+QUALITY_FIGURE_GLOBS = ("_intervals.png", "_radar_errors_*_*.png")  # quality_figures' names, as globs
+
+
+def side_files_beside(output: Path | None, globs: Iterable[str]) -> list[Path]:
+    """The globs of the side files named after ``output`` (``globs``: what follows its stem, e.g.
+    ``_lags_*.png``), beside the file it really is; none without an output. The command lists the files
+    they match that a run did not write (report.transaction.left_beside)."""
+    if output is None:
+        return []
+    base = real_output(output)
+    return [side_pattern(base, g) for g in globs]
 
 
 def quality_figures(result: QualityResult, out_dir: Path, stem: str, tx: OutputTransaction | None = None
