@@ -46,7 +46,7 @@ from msdc.pipeline.model.load import (
 )
 from msdc.pipeline.model.time import utc_text
 from msdc.pipeline.progress import Progress
-from msdc.pipeline.report.transaction import output_problem, target
+from msdc.pipeline.report.transaction import output_problem, side_pattern, target
 
 if TYPE_CHECKING:  # the steps are imported where they run: msdc stats imports none of them
     from msdc.pipeline.jobs.options import SelectionOptions
@@ -676,7 +676,23 @@ def tracker_measurements(loaded, checked: Checked, options: TrackOptions) -> tup
     out = meas[~dup & known].reset_index(drop=True)
     out.attrs["joined_by_track_number"] = joined
     out.attrs["unidentified"] = int((~dup & ~known).sum())
-    return out, warnings
+    return out, warnings + short_coast(out, options.max_coast_s)
+
+
+def short_coast(meas: pd.DataFrame, max_coast_s: float) -> list[str]:
+    """A warning when --max-coast is below every sensor's median update interval (track.feasibility): a
+    track segment then ends at each gap between reports, and an aircraft falls apart into segments of one
+    report (--max-coast 0.001 made 3,281 of one aircraft)."""
+    from msdc.pipeline.track.feasibility import update_intervals
+
+    intervals = update_intervals(meas)
+    if intervals.empty or max_coast_s >= intervals.iloc[0]:
+        return []
+    fastest, slowest = intervals.index[0], intervals.index[-1]
+    return [f"--max-coast {max_coast_s:g} s is below every sensor's median update interval (the shortest: "
+            f"{fastest}, {intervals.iloc[0]:.3g} s): a track segment ends at each gap between reports, so "
+            f"nearly every report starts a segment of its own; give more than the slowest sensor's interval "
+            f"({slowest}, {intervals.iloc[-1]:.3g} s; default 60 s)"]
 
 
 # ---------------------------------------------------------------------------------------------------------
@@ -725,6 +741,19 @@ def quality_step(meas: pd.DataFrame, sensors: pd.DataFrame, options: CorrelateOp
                            gap_s=options.gap_s, reference=getattr(options, "reference", "adsb"))
     except NoSuchAircraft as exc:
         raise JobError(str(exc)) from exc
+
+
+QUALITY_FIGURE_GLOBS = ("_intervals.png", "_radar_errors_*_*.png")  # quality_figures' names, as globs
+
+
+def side_files_beside(output: Path | None, globs: Iterable[str]) -> list[Path]:
+    """The globs of the side files named after ``output`` (``globs``: what follows its stem, e.g.
+    ``_lags_*.png``), beside the file it really is; none without an output. The command lists the files
+    they match that a run did not write (report.transaction.left_beside)."""
+    if output is None:
+        return []
+    base = real_output(output)
+    return [side_pattern(base, g) for g in globs]
 
 
 def quality_figures(result: QualityResult, out_dir: Path, stem: str, tx: OutputTransaction | None = None

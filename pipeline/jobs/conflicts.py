@@ -14,6 +14,7 @@ and moved into place together (report.transaction).
 
 from __future__ import annotations
 
+import glob
 import math
 import time
 from dataclasses import dataclass, field, replace
@@ -457,5 +458,14 @@ def _alert_figures(result: ConflictJobResult, folder: Path, stage: OutputTransac
     return drawn
 
 
-__all__ = ["ConflictJobResult", "ConflictOptions", "conflict_job", "parse_horizons", "summary",
+def side_files(checked: Checked, options: ConflictOptions) -> list[Path]:
+    """The files conflicts may write beside its outputs, as globs: the losses and warning times beside a
+    CSV -o, one figure per alert in --figures DIR."""
+    out, beside = checked.output, []
+    if out is not None and out.suffix.lower() == ".csv":
+        beside = [p.with_name(glob.escape(p.name)) for p in companion_paths(real_output(out)).values()]
+    return beside + ([] if options.figures is None else [Path(options.figures) / "alert_*.png"])
+
+
+__all__ = ["ConflictJobResult", "ConflictOptions", "conflict_job", "parse_horizons", "side_files", "summary",
            "text", "validate", "write_conflicts"]

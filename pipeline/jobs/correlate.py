@@ -17,6 +17,7 @@ from typing import TYPE_CHECKING
 import pandas as pd
 
 from msdc.pipeline.jobs.common import (
+    QUALITY_FIGURE_GLOBS,
     Checked,
     JobError,
     OptionError,
@@ -32,6 +33,7 @@ from msdc.pipeline.jobs.common import (
     quality_step,
     real_output,
     run_parameters,
+    side_files_beside,
 )
 from msdc.pipeline.jobs.options import CorrelateOptions, check_declared
 from msdc.pipeline.model.load import Loaded, release_free_memory
@@ -374,5 +376,14 @@ def _write_workbook(result: CorrelateResult, stage: OutputTransaction, progress:
     return written
 
 
+def side_files(checked: Checked) -> list[Path]:
+    """The side files correlate -o may write beside the workbook, as globs: the track figure, the Parquet
+    tables, and --quality's figures."""
+    from msdc.pipeline.report.tables import TABLE_FILES
+
+    return side_files_beside(checked.output, ("_tracks.png", *(f"_{name}.parquet" for name in TABLE_FILES),
+                                              *QUALITY_FIGURE_GLOBS, "_slotting_*.png", "_lags_*.png"))
+
+
 __all__ = ["CorrelateOptions", "CorrelateResult", "correlate_columns", "correlate_job", "figure_windows_note",
-           "prepare_correlation_writers", "validate", "write_correlation"]
+           "prepare_correlation_writers", "side_files", "validate", "write_correlation"]

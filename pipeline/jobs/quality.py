@@ -14,6 +14,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from msdc.pipeline.jobs.common import (
+    QUALITY_FIGURE_GLOBS,
     QUALITY_WITHOUT,
     Checked,
     absent_categories,
@@ -28,6 +29,7 @@ from msdc.pipeline.jobs.common import (
     quality_step,
     run_parameters,
     sensors_path,
+    side_files_beside,
 )
 from msdc.pipeline.jobs.options import QualityOptions, check_declared
 from msdc.pipeline.model.load import Loaded
@@ -143,5 +145,11 @@ def text(result: QualityJobResult) -> str:
     return out + (f"\n\nNote: {note}" if note else "")
 
 
-__all__ = ["QualityJobResult", "QualityOptions", "quality_columns", "quality_job", "text", "validate",
+def side_files(checked: Checked) -> list[Path]:
+    """The figures quality -o may write beside the workbook, as globs."""
+    return side_files_beside(checked.output, QUALITY_FIGURE_GLOBS)
+
+
+__all__ = ["QualityJobResult", "QualityOptions", "quality_columns", "quality_job", "side_files", "text",
+           "validate",
            "write_quality"]

@@ -34,6 +34,12 @@ SITE_ALTITUDE_RANGE_M = (-500.0, 6000.0)  # outside: almost certainly a wrong se
 # many pairs, each well under 0.1 % of the records. A real radar turns in 4-12 s, so one aircraft in its
 # cover for a minute already makes 5-15 plots, and radars recorded together share the traffic, each
 # holding a large part of the plots: such a radar still stops the run with the sensor-file lines to add.
+# Size limits (docs/guide/sensors.md): a sensor file of up to 1 MiB holds thousands of [[sensor]] entries
+# (one takes about 200 bytes); a name labels figures, workbook rows and messages, and one of 100 characters
+# says what any radar is. Past them the file is refused, naming the limit: no run copies a name per plot
+# (names are categorical), but a megabyte of name in a figure title or a message helps nobody.
+SENSOR_FILE_MAX_BYTES = 1 << 20
+NAME_MAX_CHARS = 100
 STRAY_RADAR_RECORDS = 3
 STRAY_RADAR_SHARE = 0.001
 
@@ -69,6 +75,10 @@ def _check_entry(path: Path, i: int, entry: object) -> dict:
             kind = " or ".join("integer" if t is int else "float" if t is float else "string" for t in types)
             article = "an" if kind[0] in "aeiou" else "a"
             raise ValueError(f"{where}: {key} = {value!r} should be {article} {kind}")
+    if len(entry["name"]) > NAME_MAX_CHARS:
+        raise ValueError(f"{where} (SAC {entry['sac']} SIC {entry['sic']}): name is {len(entry['name']):,} "
+                         f"characters long; a name may have up to {NAME_MAX_CHARS} (it labels figures, "
+                         "workbook rows and messages)")
     for key, (lo, hi) in _RANGES.items():
         if not lo <= entry[key] <= hi:
             raise ValueError(f"{where}: {key} = {entry[key]!r} is outside {lo}..{hi}")
@@ -80,21 +90,38 @@ def _check_entry(path: Path, i: int, entry: object) -> dict:
     return {k: entry[k] for k in SENSOR_COLUMNS}
 
 
+def _toml(path: Path) -> dict:
+    """The TOML document of a sensor file of up to SENSOR_FILE_MAX_BYTES, a UTF-8 byte order mark (Windows
+    Notepad writes one) skipped; ValueError naming the file and the reason otherwise."""
+    with path.open("rb") as fh:
+        data = fh.read(SENSOR_FILE_MAX_BYTES + 1)
+    if len(data) > SENSOR_FILE_MAX_BYTES:
+        raise ValueError(f"{path}: larger than {SENSOR_FILE_MAX_BYTES:,} bytes, the limit of a sensor file "
+                         "(a [[sensor]] entry takes about 200 bytes): is it the sensor file?")
+    try:
+        text = data.decode("utf-8").removeprefix("\ufeff")
+    except UnicodeDecodeError as exc:
+        raise ValueError(f"{path}: not valid TOML: byte {exc.start} is not UTF-8 ({exc.reason})") from exc
+    try:
+        return tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise ValueError(f"{path}: not valid TOML: {exc}") from exc
+    except RecursionError:
+        raise ValueError(f"{path}: arrays or inline tables nested too deeply to read (a sensor file needs "
+                         "no nesting: [[sensor]] tables of plain keys)") from None
+
+
 def read_sensors(path: str | Path) -> pd.DataFrame:
     """The sensor table (SENSOR_COLUMNS) of a TOML file; ValueError naming the file and entry if bad.
 
-    Latitude/longitude are WGS-84 degrees (exactly 0 N 0 E, the printed template's value, is refused),
+    The file may have up to SENSOR_FILE_MAX_BYTES, a name up to NAME_MAX_CHARS characters (the table's
+    ``name`` is categorical: a name is never copied per report). Latitude/longitude are WGS-84 degrees
+    (exactly 0 N 0 E, the printed template's value, is refused),
     altitude_m the antenna height above the WGS-84 ellipsoid; sigma_range_m and sigma_azimuth_deg (optional,
     defaults 70 m and 0.08 deg) the 1-sigma plot noise.
     """
     path = Path(path)
-    try:
-        with path.open("rb") as fh:
-            doc = tomllib.load(fh)
-    except tomllib.TOMLDecodeError as exc:
-        raise ValueError(f"{path}: not valid TOML: {exc}") from exc
-    except UnicodeDecodeError as exc:
-        raise ValueError(f"{path}: not valid TOML: byte {exc.start} is not UTF-8 ({exc.reason})") from exc
+    doc = _toml(path)
     entries = doc.get("sensor")
     if not isinstance(entries, list) or not entries:
         raise ValueError(f"{path}: no [[sensor]] tables found")
@@ -107,13 +134,14 @@ def read_sensors(path: str | Path) -> pd.DataFrame:
                              f"({seen[key]!r} and {row['name']!r})")
         seen[key] = row["name"]
     frame = pd.DataFrame(rows, columns=SENSOR_COLUMNS)
-    return frame.astype({"sac": "int64", "sic": "int64"} | dict.fromkeys(SENSOR_COLUMNS[3:], "float64"))
+    return frame.astype({"name": "category", "sac": "int64", "sic": "int64"}
+                        | dict.fromkeys(SENSOR_COLUMNS[3:], "float64"))
 
 
 def no_sensors() -> pd.DataFrame:
     """An empty sensor table (SENSOR_COLUMNS, typed as read_sensors types them): no radar is placed."""
     frame = pd.DataFrame({c: [] for c in SENSOR_COLUMNS})
-    return frame.astype({"name": "object", "sac": "int64", "sic": "int64"}
+    return frame.astype({"name": "category", "sac": "int64", "sic": "int64"}
                         | dict.fromkeys(SENSOR_COLUMNS[3:], "float64"))
 
 
@@ -123,7 +151,7 @@ def sensor_sites(reports: pd.DataFrame, sensors: pd.DataFrame) -> pd.DataFrame:
     if sensors.duplicated(["sac", "sic"]).any():
         raise ValueError("sensor table lists a SAC/SIC pair twice")
     table = sensors.assign(**{k: sensors[k] if k in sensors else v for k, v in OPTIONAL_DEFAULTS.items()})
-    table = table.astype({"sac": "Int64", "sic": "Int64"})[SENSOR_COLUMNS]
+    table = table.astype({"name": "category", "sac": "Int64", "sic": "Int64"})[SENSOR_COLUMNS]
     codes, declared = pair_codes(reports["sac"], reports["sic"]), pair_codes(table["sac"], table["sic"])
     order = np.argsort(declared, kind="stable")
     at = order[np.minimum(np.searchsorted(declared[order], codes), len(order) - 1)] if len(order) else None

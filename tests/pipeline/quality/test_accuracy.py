@@ -435,6 +435,15 @@ def test_radar_errors_rejects_bad_arguments(kw, error, words):
     assert all(w in str(exc.value) for w in words), str(exc.value)
 
 
+def test_the_radar_name_is_one_categorical_value_not_a_copy_per_plot():
+    """Each error row names its radar through the sensor table's categorical name (issue 27 item 8: a name
+    copied per plot took 3.4 GB for a 1 MB name)."""
+    long_name = "N" * 50_000
+    errors = radar_errors(_hand_meas(), SENSORS.assign(name=long_name))
+    assert len(errors) == 1 and isinstance(errors["radar"].dtype, pd.CategoricalDtype)
+    assert errors["radar"].cat.categories.tolist() == [long_name]
+
+
 def test_radar_errors_needs_the_sensor_table_for_radar_reports():
     meas = _hand_meas()
     with pytest.raises(TypeError, match="sensors: expected the sensor table .* got NoneType"):
