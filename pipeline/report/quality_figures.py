@@ -11,8 +11,10 @@ from pathlib import Path
 
 import numpy as np
 import pandas as pd
+from matplotlib import rcParams
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
+from matplotlib.font_manager import FontProperties
 from matplotlib.ticker import FuncFormatter, MultipleLocator, NullFormatter
 
 from msdc.pipeline.correlate.results import WindowResult
@@ -26,35 +28,48 @@ from msdc.pipeline.report.summary import window_label
 RADAR_COLOR = "#d62728"
 ADSB_COLOR = "#e6b800"
 _SENSOR_LABEL = {"radar": "Radar (CAT048)", "adsb": "ADS-B (CAT021)"}
-_TICK_STEPS_S = (10, 30, 60, 120, 300, 600, 900, 1800, 3600, 7200, 14400)
+_TICK_STEPS_S = (10, 30, 60, 120, 300, 600, 900, 1800, 3600, 7200, 14400)  # whole minutes from 60 s
 MAX_ERROR_POINTS = 50_000  # reports drawn per radar error figure: more only overplot, and cost seconds
 MAX_LEGEND_AIRCRAFT = 20  # aircraft named in the radar error legend; past it, colours only
 
 
 def plt_cycle() -> list[str]:
     """The colours of matplotlib's default property cycle (C0, C1, ...)."""
-    from matplotlib import rcParams
-
     return rcParams["axes.prop_cycle"].by_key()["color"]
 
 
-def _clock(seconds: float, _pos=None) -> str:
-    """HH:MM:SS of seconds since midnight (with +Nd past the first day)."""
+def _clock(seconds: float, _pos=None, *, with_seconds: bool = True) -> str:
+    """HH:MM:SS (HH:MM without ``with_seconds``) of seconds since midnight (with +Nd past the first day)."""
     if not np.isfinite(seconds):
         return ""
     day, rem = divmod(int(round(seconds)), 86400)
-    text = f"{rem // 3600:02d}:{rem % 3600 // 60:02d}:{rem % 60:02d}"
+    text = f"{rem // 3600:02d}:{rem % 3600 // 60:02d}" + (f":{rem % 60:02d}" if with_seconds else "")
     return f"+{day}d {text}" if day else text
 
 
+CHAR_WIDTH_EM = 0.62  # a tick label digit's width in ems (DejaVu Sans, matplotlib's default: 0.636)
+LABEL_GAP = 1.5  # a tick step holds at least this many label widths (a label and half a label's room)
+
+
 def _time_axis(ax: Axes, t_s) -> None:
-    """Clock-time ticks on round steps (10 s .. 2 h) for an axis of seconds since midnight."""
+    """Clock-time ticks on round steps (10 s .. 4 h) for an axis of seconds since midnight: the shortest
+    step whose labels fit the axis's width with room between them (HH:MM:SS labels at 30 s on a half-width
+    panel ran into one string), as HH:MM where the step is whole minutes."""
     t = np.asarray(t_s, dtype=float)
     t = t[np.isfinite(t)]
     span = float(t.max() - t.min()) if t.size else 0.0
-    step = next((s for s in _TICK_STEPS_S if span / s <= 7), _TICK_STEPS_S[-1])
+    fig = ax.get_figure()
+    width_in = ax.get_position().width * fig.get_figwidth() * 0.9  # (the layout takes a little more)
+    size_pt = FontProperties(size=rcParams["xtick.labelsize"]).get_size_in_points()
+    longest = max((len(_clock(v)) for v in (t.min(), t.max())), default=8) if t.size else 8
+
+    def fits(step: int) -> bool:
+        chars = longest - (3 if step % 60 == 0 else 0)
+        return (span / step + 1) * chars * CHAR_WIDTH_EM * size_pt / 72.0 * LABEL_GAP <= width_in
+
+    step = next((s for s in _TICK_STEPS_S if fits(s)), _TICK_STEPS_S[-1])
     ax.xaxis.set_major_locator(MultipleLocator(step))
-    ax.xaxis.set_major_formatter(FuncFormatter(_clock))
+    ax.xaxis.set_major_formatter(FuncFormatter(lambda v, _pos=None: _clock(v, with_seconds=step % 60 != 0)))
     ax.set_xlabel("time (UTC)")
 
 
