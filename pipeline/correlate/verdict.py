@@ -2,9 +2,11 @@
 
 It says only what they support: a mean offset along or across track is named when it stands more than
 OFFSET_SE standard errors out of the noise (that of the window's own reports), with its size and, along
-track, the time error it amounts to; otherwise the window shows no systematic offset, and the distance is
-the two sensors' noise together. A window with fewer than MIN_MATCHED_REPORTS matched reports gets no
-verdict, only the count.
+track, the seconds of flight it amounts to; not its cause, which one window cannot tell (a time-stamp
+error and a range or azimuth bias both move plots along track; the bias fit of --quality, over every
+aircraft, tells them apart: the verdict points there). Otherwise the window shows no systematic offset,
+and the distance is the two sensors' noise together. A window with fewer than MIN_MATCHED_REPORTS
+matched reports gets no verdict, only the count.
 """
 
 from __future__ import annotations
@@ -14,6 +16,7 @@ from collections.abc import Mapping
 from typing import Any
 
 MIN_MATCHED_REPORTS = 10
+CAUSES = "a time-stamp, range or azimuth error: the radar's biases (--quality) tell which"
 OFFSET_SE = 3.0  # a mean offset is named past this many standard errors (0.3 % of noise-only windows)
 
 
@@ -49,14 +52,15 @@ def window_verdict(summary: Mapping[str, Any], reference: str = "ADS-B") -> str:
         text = f"{_metres(abs(along))} {where} {reference} along track"
         offset_s = _number(summary, "matched_time_offset_s")
         if math.isfinite(offset_s):
-            late = "late" if offset_s > 0 else "early"
-            text += f" (as if the radar's times were {abs(offset_s):.1f} s {late})"
+            text += f" ({abs(offset_s):.1f} s of flight)"
         offsets.append(text)
     if _stands_out(cross, cross_se):
         offsets.append(f"{_metres(abs(cross))} {'right' if cross > 0 else 'left'} of the {reference} track")
     head = "systematic offset: " + "; ".join(offsets) if offsets else "no systematic offset beyond the noise"
     rms = _number(summary, "matched_sep_rms_m")
     text = f"{head}; {_metres(rms)} RMS from {reference} over {n} reports"
+    if offsets:
+        text += f"; {CAUSES}"
     jumps = _number(summary, "adsb_jumps")
     if reference == "ADS-B" and math.isfinite(jumps) and jumps > 0:
         text += f"; {int(jumps)} ADS-B position jump{'s' if jumps != 1 else ''} left out"

@@ -173,7 +173,7 @@ def test_a_late_radar_shows_as_a_time_offset(late):
         assert w["matched_time_offset_s"] == pytest.approx(float(np.mean(-along / speed_ms)), abs=0.2), w
         assert w["matched_time_offset_s"] == pytest.approx(30.0, abs=1.5), w
         assert w["verdict"].startswith("systematic offset: ") and "behind ADS-B along track" in w["verdict"]
-        said = re.search(r"as if the radar's times were ([0-9.]+) s late", w["verdict"])
+        said = re.search(r"behind ADS-B along track \(([0-9.]+) s of flight\)", w["verdict"])
         assert said and float(said.group(1)) == pytest.approx(w["matched_time_offset_s"], abs=0.05)
         checked += 1
     assert checked >= 5
@@ -244,7 +244,8 @@ def test_matched_pairs_by_hand():
 
 def test_verdict_wording():
     """Too few reports: no verdict. Offsets within 3 standard errors: none named. Beyond: named with their
-    side and, along track, the time error; ADS-B jumps left out are counted."""
+    side and, along track, the seconds of flight, but not their cause (one window cannot tell a time-stamp
+    error from a range or azimuth bias); ADS-B jumps left out are counted."""
     few = window_verdict({"matched_reports": 4})
     assert few.startswith("no verdict: 4 radar reports matched")
     quiet = {"matched_reports": 200, "matched_sep_rms_m": 312.4, "matched_along_mean_m": 20.0,
@@ -255,8 +256,9 @@ def test_verdict_wording():
     late = {**quiet, "matched_along_mean_m": -6900.0, "matched_time_offset_s": 30.04, "adsb_jumps": 0,
             "matched_cross_mean_m": 45.0}
     assert window_verdict(late, "048:25/202") == (
-        "systematic offset: 6,900 m behind 048:25/202 along track (as if the radar's times were 30.0 s "
-        "late); 45 m right of the 048:25/202 track; 312 m RMS from 048:25/202 over 200 reports")
+        "systematic offset: 6,900 m behind 048:25/202 along track (30.0 s of flight); 45 m right of the "
+        "048:25/202 track; 312 m RMS from 048:25/202 over 200 reports; a time-stamp, range or azimuth "
+        "error: the radar's biases (--quality) tell which")
 
 
 def test_window_accuracy_takes_the_radar_errors_of_its_radar_aircraft_and_time():
