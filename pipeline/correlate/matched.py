@@ -152,8 +152,7 @@ def matched_summary(pairs: dict[str, np.ndarray]) -> dict[str, float | int]:
 
 def _label(value) -> str:
     """A call sign or address label as text ("" for a missing one)."""
-    return "" if value is None or (not isinstance(value, str) and value != value) or value is pd.NA \
-        else str(value)
+    return "" if value is None or (not isinstance(value, str) and bool(pd.isna(value))) else str(value)
 
 
 def window_accuracy(summaries: list[dict], errors: pd.DataFrame) -> list[dict]:

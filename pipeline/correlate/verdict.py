@@ -15,6 +15,8 @@ import math
 from collections.abc import Mapping
 from typing import Any
 
+from msdc.pipeline.correlate.matched import MIN_SPEED_MS
+
 MIN_MATCHED_REPORTS = 10
 CAUSES = "a time-stamp, range or azimuth error: the radar's biases (--quality) tell which"
 OFFSET_SE = 3.0  # a mean offset is named past this many standard errors (0.3 % of noise-only windows)
@@ -57,6 +59,9 @@ def window_verdict(summary: Mapping[str, Any], reference: str = "ADS-B") -> str:
     if _stands_out(cross, cross_se):
         offsets.append(f"{_metres(abs(cross))} {'right' if cross > 0 else 'left'} of the {reference} track")
     head = "systematic offset: " + "; ".join(offsets) if offsets else "no systematic offset beyond the noise"
+    if not offsets and not (math.isfinite(along_se) or math.isfinite(cross_se)):  # nothing was tested
+        head = (f"offsets not judged (too few reports moving faster than {MIN_SPEED_MS:g} m/s for a "
+                "direction of travel)")
     rms = _number(summary, "matched_sep_rms_m")
     text = f"{head}; {_metres(rms)} RMS from {reference} over {n} reports"
     if offsets:

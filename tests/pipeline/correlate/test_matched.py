@@ -253,6 +253,9 @@ def test_verdict_wording():
              "matched_time_offset_s": -0.1, "adsb_jumps": 2}
     assert window_verdict(quiet) == ("no systematic offset beyond the noise; 312 m RMS from ADS-B over 200 "
                                      "reports; 2 ADS-B position jumps left out")
+    parked = {**quiet, "matched_along_mean_m": None, "matched_along_se_m": None, "matched_cross_mean_m": None,
+              "matched_cross_se_m": None, "matched_time_offset_s": None, "adsb_jumps": 0}
+    assert window_verdict(parked).startswith("offsets not judged (too few reports moving faster than 20")
     late = {**quiet, "matched_along_mean_m": -6900.0, "matched_time_offset_s": 30.04, "adsb_jumps": 0,
             "matched_cross_mean_m": 45.0}
     assert window_verdict(late, "048:25/202") == (
@@ -282,3 +285,8 @@ def test_window_accuracy_takes_the_radar_errors_of_its_radar_aircraft_and_time()
     assert got["azimuth_error_std_deg"] == pytest.approx(0.1)
     (none,) = window_accuracy([{**window, "radar_sensor": "048:25/202"}], errors)
     assert none["quality_reports"] == 0 and none["range_error_mean_m"] is None
+    # an aircraft without a call sign: the quality step's errors carry <NA>, the window ""
+    anonymous = errors.assign(callsign=pd.array([pd.NA] * 6, dtype="string"),
+                              address=["750312"] * 4 + ["76CDA3", "750312"])
+    (got,) = window_accuracy([{**window, "callsign": ""}], anonymous)
+    assert got["quality_reports"] == 3
