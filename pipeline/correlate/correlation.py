@@ -14,6 +14,7 @@ import math
 import numpy as np
 import pandas as pd
 
+from msdc.pipeline.correlate.matched import matched_pairs, matched_summary
 from msdc.pipeline.correlate.results import (
     LAG_COLUMNS,
     SUMMARY_KEYS,
@@ -22,6 +23,7 @@ from msdc.pipeline.correlate.results import (
     WindowResult,
 )
 from msdc.pipeline.correlate.slots import slot_count, slot_series
+from msdc.pipeline.correlate.verdict import window_verdict
 from msdc.pipeline.correlate.windows import in_window, overlap_windows, short_window_reason
 from msdc.pipeline.meta import FILLS, PAIRS
 from msdc.pipeline.model.aircraft import NoSuchAircraft, aircraft_rows, one_aircraft
@@ -298,10 +300,12 @@ def _none_if_nan(v):
 def _window_result(ac: tuple[str, str], number: int, start_s: float, end_s: float,
                    radar: tuple[np.ndarray, ...], adsb: tuple[np.ndarray, ...],
                    dups: tuple[int, int], slot_s: float, reference: pd.Timestamp, sensors: dict[str, str],
-                   adsb_jumps: int = 0, predictors: tuple = (None, None)) -> WindowResult:
+                   adsb_jumps: int = 0, predictors: tuple = (None, None), matched: dict | None = None
+                   ) -> WindowResult:
     """Slot, correlate and summarise one window of one aircraft (call sign, address) from each side's
     reports in it (time of day, latitude, longitude arrays); with predictors (``--fill predict``), empty
-    slots take the tracker's prediction (pipeline.correlate.fill) instead of the previous slot."""
+    slots take the tracker's prediction (pipeline.correlate.fill) instead of the previous slot. ``matched``:
+    the window's lead numbers and verdict (pipeline.correlate.matched, .verdict), worked out beforehand."""
     rs, as_ = slot_series(*radar, start_s, end_s, slot_s), slot_series(*adsb, start_s, end_s, slot_s)
     if predictors[0] is not None or predictors[1] is not None:
         from msdc.pipeline.correlate.fill import fill_predicted
@@ -336,7 +340,8 @@ def _window_result(ac: tuple[str, str], number: int, start_s: float, end_s: floa
     summary = {
         "callsign": ac[0], "address": ac[1], "window": number, **sensors,
         "start_tod": float(start_s), "end_tod": float(end_s),
-        "start": at_seconds(reference, start_s), "end": at_seconds(reference, end_s), "slots": len(slots),
+        "start": at_seconds(reference, start_s), "end": at_seconds(reference, end_s), **(matched or {}),
+        "slots": len(slots),
         "radar_before": len(radar[0]), "radar_after": len(slots),
         "adsb_before": len(adsb[0]), "adsb_after": len(slots),
         "radar_duplicates": dups[0], "adsb_duplicates": dups[1], "adsb_jumps": adsb_jumps,
@@ -350,7 +355,7 @@ def _window_result(ac: tuple[str, str], number: int, start_s: float, end_s: floa
         "pearson_lag_unidentified_lat": flat_lat, "pearson_lag_unidentified_lon": flat_lon,
         **separation_summary(slots["sep_m"].to_numpy(), rs["filled"], as_["filled"]),
     }
-    summary = {k: _none_if_nan(summary[k]) for k in SUMMARY_KEYS}
+    summary = {k: _none_if_nan(summary.get(k)) for k in SUMMARY_KEYS}
     return WindowResult(summary=summary, slots=slots, lags=lag_frame)
 
 
@@ -428,13 +433,14 @@ class _Source:
         kept = order[~dup]
         self.dup_t = cols.tod[order[dup]]
         self.t, self.lat, self.lon = cols.tod[kept], cols.lat[kept], cols.lon[kept]
-        self.jump_t = np.array([])
+        self.jump = np.zeros(kept.size, bool)
         if kept.size and cols.is_adsb[kept].all():  # jumps are an ADS-B notion
             if cols.jump is not None:
-                jump = cols.jump[kept]
+                self.jump = cols.jump[kept]
             else:
-                jump = detect_jumps(meas.iloc[kept].reset_index(drop=True)).to_numpy(bool)
-            self.jump_t = self.t[jump]
+                self.jump = detect_jumps(meas.iloc[kept].reset_index(drop=True)).to_numpy(bool)
+        self.jump_t = self.t[self.jump]
+        self.is_adsb = bool(kept.size) and bool(cols.is_adsb[kept].all())
         self._track = (cols, kept) if track else None
         self._predictor: tuple | None = None
 
@@ -452,6 +458,11 @@ class _Source:
     def inside(self, start_s: float, end_s: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Its reports inside [start, end]."""
         keep = in_window(self.t, start_s, end_s)
+        return self.t[keep], self.lat[keep], self.lon[keep]
+
+    def clean_inside(self, start_s: float, end_s: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Its reports inside [start, end] without its ADS-B position jumps."""
+        keep = in_window(self.t, start_s, end_s) & ~self.jump
         return self.t[keep], self.lat[keep], self.lon[keep]
 
 
@@ -535,8 +546,12 @@ def _correlate_pair(ac: tuple[str, str], run: CorrelationRun, pair: tuple[str, _
         dups = (int(in_window(radar.dup_t, start_s, end_s).sum()),
                 int(in_window(adsb.dup_t, start_s, end_s).sum()))
         jumps = int(in_window(adsb.jump_t, start_s, end_s).sum())
+        matched = matched_summary(matched_pairs(r_in, adsb.clean_inside(start_s, end_s), start_s, end_s,
+                                                slot_s))
+        matched["verdict"] = window_verdict({**matched, "adsb_jumps": jumps},
+                                            "ADS-B" if adsb.is_adsb else ref_id)
         run.windows.append(_window_result(ac, number, start_s, end_s, r_in, a_in, dups, slot_s, reference,
-                                          sensors, jumps, predictors))
+                                          sensors, jumps, predictors, matched))
     return None
 
 

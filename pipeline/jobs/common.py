@@ -402,6 +402,8 @@ def load_inputs(options: DecodingOptions, checked: Checked, progress: Progress |
     except UnreadableInput as exc:
         raise JobError(str(exc), 2) from exc
     spans = [time_spans(rec.frames, loaded.date) for rec in loaded.recordings]
+    if loaded.spans is None:  # kept: the track figures end at the recording's last report
+        loaded.spans = spans
     return loaded, [*_empty_inputs(loaded), *_wrong_editions(loaded), *order_warnings(checked.inputs, spans),
                     *date_ignored(options, loaded.inputs), *format_hints(options, loaded.inputs),
                     *impossible_positions(loaded.frames.get(21)), *loaded.warnings]

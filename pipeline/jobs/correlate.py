@@ -185,7 +185,35 @@ def correlate_job(options: CorrelateOptions, *, progress: Progress | None = None
                 progress.stage("Analysing data quality")
             result.quality = quality_step(meas_all, checked.sensors, options)
             run.extra_sheets.update(result.quality.sheets)
+            lead_quality(run, result.quality)
         return result
+
+
+def lead_quality(run: CorrelationRun, quality: QualityResult) -> None:
+    """The quality step's numbers a report leads with: per window the radar's range and azimuth errors
+    against ADS-B inside it (pipeline.correlate.matched.window_accuracy), per radar its accuracy and fitted
+    biases over the run (``run.radars``, RADAR_KEYS: the Radar accuracy sheet's all-aircraft row and the
+    Radar biases sheet)."""
+    from msdc.pipeline.correlate.matched import window_accuracy
+    from msdc.pipeline.correlate.results import RADAR_KEYS
+    from msdc.pipeline.model.measurements import sensor_id
+
+    for w, numbers in zip(run.windows, window_accuracy([w.summary for w in run.windows], quality.errors),
+                          strict=True):
+        w.summary.update(numbers)
+    biases, accuracy = quality.sheets.get("Radar biases"), quality.sheets.get("Radar accuracy")
+    if biases is None or biases.empty:
+        run.radars = []
+        return
+    overall = accuracy[accuracy["callsign"] == "(all)"].set_index(["sac", "sic"]) if accuracy is not None \
+        else pd.DataFrame()
+    ids = sensor_id(48, biases["sac"], biases["sic"]).tolist()
+    radars = []
+    for ident, row in zip(ids, biases.to_dict("records"), strict=True):
+        stats = overall.loc[(row["sac"], row["sic"])] if (row["sac"], row["sic"]) in overall.index else {}
+        radars.append({key: row.get(key, stats.get(key) if len(stats) else None) for key in RADAR_KEYS}
+                      | {"radar_sensor": ident})
+    run.radars = radars
 
 
 def _nothing_correlated(run: CorrelationRun, options: CorrelateOptions) -> list[str]:
@@ -386,4 +414,4 @@ def side_files(checked: Checked) -> list[Path]:
 
 
 __all__ = ["CorrelateOptions", "CorrelateResult", "correlate_columns", "correlate_job", "figure_windows_note",
-           "prepare_correlation_writers", "side_files", "validate", "write_correlation"]
+           "lead_quality", "prepare_correlation_writers", "side_files", "validate", "write_correlation"]

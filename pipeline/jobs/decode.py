@@ -16,6 +16,7 @@ from msdc.pipeline.jobs.common import (
     JobError,
     check_beside,
     check_decoding,
+    date_ignored,
     format_hints,
     output_path,
     real_output,
@@ -119,6 +120,7 @@ def decode_job(options: DecodeOptions, *, on_chunk: Callable[[int, int, str], No
                 if on_chunk:  # the last record's offset is not the file's end: close the bar at 100 %
                     on_chunk(size, size, path.name)
                 early_start += tally.warning(label, date, fmt)
+                early_start += date_ignored(options, [{"path": path, "format": fmt}])
                 notes += [f"{path}: CAT{cat:03d} --edition auto {why}" for cat, why in sorted(chosen.items())]
                 early_start += format_hints(options, [{"path": path, "format": fmt, "skipped_blocks": sum(
                     1 for p, _, _ in skipped if p == str(path))}])

@@ -21,7 +21,7 @@ class NoSuchAircraft(LookupError):
 
     def __init__(self, wanted: str, missing_in: list[str], closest: list[str], message: str | None = None):
         self.wanted, self.missing_in, self.closest = wanted, missing_in, closest
-        hint = f"closest present in both: {', '.join(closest)}" if closest else "nothing similar is present"
+        hint = f"closest present: {', '.join(closest)}" if closest else "nothing similar is present"
         super().__init__(message or f"{wanted} not seen by {' or '.join(missing_in)}; {hint}")
 
 
@@ -42,9 +42,14 @@ def _split(meas: pd.DataFrame) -> tuple[pd.DataFrame, pd.DataFrame]:
 
 
 def _closest(wanted: str, meas: pd.DataFrame, column: str) -> list[str]:
+    """The names (call signs or addresses) closest to ``wanted`` seen by any sensor, as msdc track
+    suggests them; one seen by a single kind of sensor says which ("VLG1306 (ADS-B only)"), since
+    correlating it needs both."""
     radar, adsb = _split(meas)
-    both = sorted(set(radar[column].dropna()) & set(adsb[column].dropna()))
-    return difflib.get_close_matches(wanted, both, n=5, cutoff=0.5)
+    in_radar, in_adsb = set(radar[column].dropna()), set(adsb[column].dropna())
+    close = difflib.get_close_matches(wanted, sorted(in_radar | in_adsb), n=5, cutoff=0.5)
+    return [name if name in in_radar and name in in_adsb else
+            f"{name} ({'radar' if name in in_radar else 'ADS-B'} only)" for name in close]
 
 
 def one_aircraft(meas: pd.DataFrame, callsign: str | None = None, address: str | None = None, *,

@@ -366,6 +366,7 @@ def lag_figure(window: WindowResult, path: str | os.PathLike[str]) -> Path:
     x = _floats(lags, "lag")
     half = pearson_max_lag((x.size + 1) // 2)
     inside = np.abs(x) <= half
+    peaks: list[tuple[Axes, Text, Line2D]] = []
     for i, axis in enumerate(("lat", "lon")):
         ax = fig.add_subplot(1, 2, i + 1)
         ax.axvline(0, color="0.6", lw=0.8, zorder=1)
@@ -381,16 +382,18 @@ def lag_figure(window: WindowResult, path: str | os.PathLike[str]) -> Path:
                 # the label on the side towards the middle, so a peak at the edge keeps it inside the axes
                 right = x[k] <= 0
                 if at_limit or flat:  # no lag estimate: a hollow mark, said in words
-                    ax.plot(x[k], y[k], marker="o", ms=9, mfc="white", mec=color, mew=1.4, ls="none",
-                            zorder=4, clip_on=False)
+                    (mark,) = ax.plot(x[k], y[k], marker="o", ms=9, mfc="white", mec=color, mew=1.4,
+                                      ls="none", zorder=4, clip_on=False)
                     why = "search limit" if at_limit else "straight leg, not identified"
                     text = f"{int(x[k]):+d}: {why}, no estimate"
                 else:
-                    ax.plot(x[k], y[k], marker="*", ms=12, color=color, mec="black", mew=0.6, ls="none",
-                            zorder=4, clip_on=False)
+                    (mark,) = ax.plot(x[k], y[k], marker="*", ms=12, color=color, mec="black", mew=0.6,
+                                      ls="none", zorder=4, clip_on=False)
                     text = f"{int(x[k]):+d}"
-                ax.annotate(text, (x[k], y[k]), xytext=(7 if right else -7, 4), textcoords="offset points",
-                            ha="left" if right else "right", fontsize=8, color=color, zorder=5)
+                label = ax.annotate(text, (x[k], y[k]), xytext=(10 if right else -10, 6),
+                                    textcoords="offset points", ha="left" if right else "right", fontsize=8,
+                                    color=color, zorder=5)
+                peaks.append((ax, label, mark))
         values = np.concatenate(shown) if shown else np.array([])
         values = values[np.isfinite(values)]
         if values.size:
@@ -410,7 +413,44 @@ def lag_figure(window: WindowResult, path: str | os.PathLike[str]) -> Path:
     fig.suptitle(f"Correlation against lag: {window_label(window.summary)}{note}\n(star = peak, hollow = "
                  "peak at the search limit; wider lags, with less than half the slots overlapping, left out)",
                  fontsize=10)
+    place_peak_labels(fig, peaks)
     return save_png(fig, path)
+
+
+# where a peak's label may go, in points from the peak: beside it on the side towards the middle first,
+# then below, above and on the other side; each clears the largest mark (a 12 pt star: 6 pt radius)
+_PEAK_LABEL_OFFSETS_PT = [(10, 6), (10, -14), (0, 10), (0, -20), (-10, 6), (-10, -14), (16, -4), (-16, -4)]
+LABEL_CLEARANCE_PX = 1.0
+
+
+def place_peak_labels(fig: Figure, peaks: list[tuple[Axes, Text, Line2D]]) -> None:
+    """Move each peak label (its axes, text, mark) to the first of _PEAK_LABEL_OFFSETS_PT (mirrored for a
+    label on the left) where it covers no peak mark and no label placed before it and stays inside its
+    axes; where none is free, the first. The NCC and Pearson peaks at one lag, and a label 7 pt beside a
+    12 pt star, drew their labels over the marks."""
+    if not peaks:
+        return
+    fig.draw_without_rendering()  # the layout settled: the marks' and labels' extents are final
+    renderer = fig.canvas.get_renderer()
+    marks = {id(ax): [m.get_window_extent(renderer) for a, _, m in peaks if a is ax] for ax, _, _ in peaks}
+    placed = []
+    for ax, label, _ in peaks:
+        left = label.get_horizontalalignment() == "right"
+        area = ax.get_window_extent(renderer)
+        for n, (dx, dy) in enumerate(_PEAK_LABEL_OFFSETS_PT):
+            dx = -dx if left else dx
+            label.set_horizontalalignment("center" if dx == 0 else ("right" if dx < 0 else "left"))
+            label.xyann = (dx, dy)
+            box = label.get_window_extent(renderer).padded(LABEL_CLEARANCE_PX)
+            clear = not any(box.overlaps(other) for other in [*marks[id(ax)], *placed])
+            inside = area.x0 <= box.x0 and box.x1 <= area.x1 and area.y0 <= box.y0 and box.y1 <= area.y1
+            if clear and inside:
+                break
+            if n == len(_PEAK_LABEL_OFFSETS_PT) - 1:  # nowhere free: the first place
+                dx0, dy0 = _PEAK_LABEL_OFFSETS_PT[0]
+                label.set_horizontalalignment("right" if left else "left")
+                label.xyann = (-dx0 if left else dx0, dy0)
+        placed.append(label.get_window_extent(renderer).padded(LABEL_CLEARANCE_PX))
 
 
 def latlon_time_figure(window: WindowResult, path: str | os.PathLike[str]) -> Path:

@@ -233,15 +233,21 @@ def test_same_input_twice_is_skipped_and_not_doubled(tmp_path, capsys):
     assert windows == single  # same reports, same duplicate counts: the copy added nothing
 
 
-def test_date_on_a_pcap_warns(tmp_path, capsys):
+@pytest.mark.parametrize("command", [["stats"], ["decode"], ["decode", "-o", "out.csv"]])
+def test_date_on_a_pcap_warns(tmp_path, capsys, command):
+    """A pcap is dated by its capture time: --date is ignored, and every command that reads it says so
+    (decode said nothing), naming the file; a raw recording beside it takes the date without a word."""
     from container_bytes import pcap_file, udp_frame
 
-    raw = _tiny(tmp_path, "r.ast", 28800, 28900).read_bytes()
+    raw = _tiny(tmp_path, "r.ast", 28800, 28900)
     pcap = tmp_path / "r.pcap"
-    pcap.write_bytes(pcap_file([(1551398400 + 28800, 0, udp_frame(raw))])[0])
-    status, _, err = _run(["stats", str(pcap), "--date", "2020-01-01"], capsys)
+    pcap.write_bytes(pcap_file([(1551398400 + 28800, 0, udp_frame(raw.read_bytes()))])[0])
+    argv = [command[0], str(pcap), str(raw), "--date", "2020-01-01",
+            *(str(tmp_path / a) if a.endswith(".csv") else a for a in command[1:])]
+    status, _, err = _run(argv, capsys)
     assert status == 0, err
-    assert "warning" in err and "--date ignored" in err and "r.pcap" in err
+    ignored = [line for line in err.splitlines() if "--date ignored" in line]
+    assert len(ignored) == 1 and "warning" in ignored[0] and str(pcap) in ignored[0]
 
 
 def test_inputs_running_backwards_warn(tmp_path, capsys):
