@@ -224,7 +224,7 @@ def test_the_same_recording_twice_is_refused(tmp_path):
 
 
 @pytest.mark.parametrize(("categories", "error", "words"), [
-    ((62,), ValueError, "msdc does not decode CAT062; it decodes CAT021, CAT034, CAT048"),
+    ((62,), ValueError, "msdc does not decode CAT062; it decodes CAT001, CAT002, CAT021, CAT034, CAT048"),
     ((21, 999), ValueError, "CAT999"), ("21", TypeError, "a category number or a sequence"),
     ((21.0,), TypeError, "21.0 is not a category number"),
     (2.5, TypeError, "a category number or a sequence")])
