@@ -178,3 +178,9 @@ def test_a_column_selection_keeps_the_time() -> None:
     f = rec.frames[1]
     np.testing.assert_array_equal(f.time_of_day.to_numpy(), times)
     assert "truncated_time_of_day" in f and "typ" not in f
+
+
+def test_cat002_auto_when_only_cat001_is_decoded() -> None:
+    data, _, times, _ = stream_a()
+    rec = decode_bytes(data, categories=[1], editions={2: "auto"})
+    np.testing.assert_array_equal(rec.frames[1].time_of_day.to_numpy(), times)
