@@ -198,7 +198,10 @@ def time_cat001(columns: dict[int, dict], buf: np.ndarray, framed, editions: dic
     else:
         b_start, b_len, b_cat = framed[:3]
         sel = b_cat == SERVICE_CATEGORY
-        r_off, r_key, r_tod = _service_times(buf, b_start[sel], b_len[sel], editions.get(SERVICE_CATEGORY))
+        edition = editions.get(SERVICE_CATEGORY)
+        if edition == "auto":  # CAT002 is not decoded: nothing chose; its editions share one table
+            edition = None
+        r_off, r_key, r_tod = _service_times(buf, b_start[sel], b_len[sel], edition)
     plots = columns.get(PLOT_CATEGORY)
     if plots is None:
         date_records(np.zeros(0, np.int64), np.zeros(0, np.int64), np.zeros(0), r_off, r_key, r_tod, clock)

@@ -497,12 +497,9 @@ def scan(buf, blk_start, blk_len, parts, n_frn, n_slots, rel_off, rel_len, rec_o
                     if byte & (0x80 >> bit) == 0:
                         continue
                     any_item = True
-                    p = (q - fs) * 7 + bit
-                    if p >= n_frn:
-                        err = E_UNDEFINED_FRN
-                        break
-                    p += base
-                    if P[p, K_KIND] == ABSENT:
+                    f = (q - fs) * 7 + bit
+                    p = base + f
+                    if f >= n_frn or P[p, K_KIND] == ABSENT:
                         err = E_UNDEFINED_FRN
                         break
                     if P[p, K_KIND] == FIXED:

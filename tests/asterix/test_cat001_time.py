@@ -169,3 +169,18 @@ def test_iter_read_dates_records_as_read_does(tmp_path, chunk: int) -> None:
     untimed = pd.concat([p.untimed for p in parts], ignore_index=True)
     assert untimed.offset.tolist() == whole.untimed.offset.tolist()
     assert untimed.reason.tolist() == [r for r in reasons if r]
+
+
+def test_a_column_selection_keeps_the_time() -> None:
+    # the truncated time of day is decoded whatever the selection: the whole time is made from it
+    data, _, times, _ = stream_a()
+    rec = decode_bytes(data, categories=[1], columns=["rho_nm"])
+    f = rec.frames[1]
+    np.testing.assert_array_equal(f.time_of_day.to_numpy(), times)
+    assert "truncated_time_of_day" in f and "typ" not in f
+
+
+def test_cat002_auto_when_only_cat001_is_decoded() -> None:
+    data, _, times, _ = stream_a()
+    rec = decode_bytes(data, categories=[1], editions={2: "auto"})
+    np.testing.assert_array_equal(rec.frames[1].time_of_day.to_numpy(), times)
