@@ -224,8 +224,8 @@ def test_the_same_recording_twice_is_refused(tmp_path):
 
 
 @pytest.mark.parametrize(("categories", "error", "words"), [
-    ((8,), ValueError, "msdc does not decode CAT008; it decodes CAT001, CAT002, CAT019, CAT021, CAT023, CAT025, "
-                       "CAT034, CAT048, CAT062"),
+    ((8,), ValueError, "msdc does not decode CAT008; it decodes CAT001, CAT002, CAT019, CAT021, CAT023, "
+                       "CAT025, CAT034, CAT048, CAT062"),
     ((21, 999), ValueError, "CAT999"), ("21", TypeError, "a category number or a sequence"),
     ((21.0,), TypeError, "21.0 is not a category number"),
     (2.5, TypeError, "a category number or a sequence")])
