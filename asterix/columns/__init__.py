@@ -80,8 +80,8 @@ def markdown_schema() -> str:
              "Mode S register fields (`bds` columns, CAT048: source `I250/BDS50/ROLL` is the ROLL field of "
              "the BDS 5,0 register in I048/250) are read from the register the radar declares by BDS1/BDS2, "
              "with the ICAO Doc 9871 layouts of `asterix/bds.py`. A field whose status bit is 0 is absent "
-             "(NaN), never 0; a record carrying one register twice gives its first. See "
-             "docs/decoding/mode-s-registers.md.", ""]
+             "(NaN), never 0; a record carrying one register twice gives its first: see "
+             "[Mode S registers](decoding/mode-s-registers.md).", ""]
     for family, cols in FAMILIES.items():
         lines += [f"## {family}", "", "| column | unit | dtype | source | meaning |", "|---|---|---|---|---|"]
         for c in cols:
