@@ -760,6 +760,10 @@ def _assign(category: int, edition: str, data: Mapping[str, np.ndarray], n: int,
         if not cols[name].sources:
             raise ValueError(f"column {name!r} of CAT{category:03d} is derived on decoding, not sent: "
                              f"{cols[name].doc}")
+        if cols[name].kind == "bds":
+            raise ValueError(f"column {name!r} is read from a Mode S register in I{category:03d}/250 and is "
+                             f"not written from its value: pass the register groups as extra={{'250': "
+                             f"encode_item({category}, None, '250', [...])}}")
         if not ts:
             raise ValueError(f"column {name!r} has no item in CAT{category:03d} edition {edition}")
         if cols[name].kind == "codes":  # the repetitions themselves, beside their count
@@ -949,13 +953,16 @@ def _frame_arrays(frame: pd.DataFrame, names: Iterable[str]) -> dict[str, np.nda
 def encode_frame(category: int, frame: pd.DataFrame, edition: str | None = None, records_per_block: int = 20,
                  prefer: Mapping[str, str] | None = None) -> bytes:
     """Data blocks for a frame (one record per row, in order), at most records_per_block records and 65535
-    bytes per block. Frame columns that are not in the category's schema, or derived on decoding (CAT001
-    time_of_day: write truncated_time_of_day and CAT002 messages), are ignored."""
+    bytes per block. Frame columns that are not in the category's schema, derived on decoding (CAT001
+    time_of_day: write truncated_time_of_day and CAT002 messages) or read from I048/250 Mode S registers
+    (their groups are written as zeros, bds_count of them) are ignored."""
     if records_per_block < 1:
         raise ValueError("records_per_block must be at least 1")
     ed = resolve_edition(category, edition)
     # derived columns (CAT001 time_of_day, made whole from CAT002 on decoding) have no item to write
-    names = [c for c, col in _columns(category, ed).items() if c in frame.columns and col.sources]
+    # Mode S register columns (I048/250 contents, kind "bds") are not written: bds_count writes the count
+    names = [c for c, col in _columns(category, ed).items()
+             if c in frame.columns and col.sources and col.kind != "bds"]
     n = len(frame)
     if n == 0:
         return b""

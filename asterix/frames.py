@@ -72,7 +72,7 @@ def icao_columns(values: np.ndarray) -> tuple[pd.Categorical, pd.Categorical]:
 
 def empty_column(col: Column, n: int):
     """An all-absent column of the right dtype, for fields the edition does not have."""
-    if col.kind == "float":
+    if col.kind in ("float", "bds"):
         return np.full(n, np.nan)
     if col.kind == "codes":
         return pd.Categorical.from_codes(np.full(n, -1), categories=pd.Index([], dtype=object))
@@ -84,7 +84,7 @@ def empty_columns(cols: list[Column], n: int) -> dict[str, object]:
     of one matrix per dtype (one allocation each rather than one per column), text ones empty categoricals;
     an ``icao`` column with its ``_hex`` beside it."""
     out: dict[str, object] = {}
-    floats = [c for c in cols if c.kind == "float"]
+    floats = [c for c in cols if c.kind in ("float", "bds")]
     ints = [c for c in cols if c.kind in _INT_DTYPES]
     if floats:
         matrix = np.full((len(floats), n), np.nan)

@@ -11,6 +11,7 @@ from functools import cache
 
 import numpy as np
 
+from .bds import field_of
 from .columns import Column, columns_for
 from .kernel import ABSENT, COMPOUND, EXPLICIT, EXTENDED, FIXED, REP_COUNT, REP_FX, RFS, UNSELECTED, Parts
 from .tables import load_table, resolve_edition, uaps
@@ -59,6 +60,8 @@ class Layout:
     item_frn: dict  # item id -> FRN (1-based; of the first UAP that has it)
     selected: tuple[str, ...] | None = None  # the columns compiled (None: all of the edition's)
     code_slots: tuple[tuple[str, int], ...] = ()  # "codes" columns: (name, slot of their repetitive item)
+    # "bds" columns: (name, slot of I048/250, register path), read by asterix/bds.py after the gather
+    bds_slots: tuple[tuple[str, int, tuple[str, ...]], ...] = ()
     # per part: the UAP selector (byte of the item, right shift, mask; mask 0 for every other part)
     sel_byte: np.ndarray | None = None
     sel_shift: np.ndarray | None = None
@@ -315,7 +318,13 @@ def compile_layout(category: int, edition: str | None = None,
     names_int: list[str] = []
     names_wide: list[str] = []
     code_slots: list[tuple[str, int]] = []
+    bds_slots: list[tuple[str, int, tuple[str, ...]]] = []
     for col in columns:
+        if col.kind == "bds":  # a Mode S register field, read from the item's bytes after the gather
+            found = _bds_item(category, edition, col, item_part, parts)
+            if found is not None:
+                bds_slots.append((col.name, use(found[0]), found[1]))
+            continue
         if col.kind == "codes":  # read from the item's bytes after the gather (reader), not by a field
             p = _code_item(category, edition, col, item_part, parts)
             if p is not None:
@@ -366,6 +375,7 @@ def compile_layout(category: int, edition: str | None = None,
         f_mult=np.array(f[6], np.float64),
         out_names_float=tuple(names_float), out_names_int=tuple(names_int), out_names_wide=tuple(names_wide),
         item_frn=item_frn, selected=selected, code_slots=tuple(code_slots),
+        bds_slots=tuple(bds_slots),
         sel_byte=sel_byte, sel_shift=sel_shift, sel_mask=sel_mask,
     )
 
@@ -382,4 +392,21 @@ def _code_item(category: int, edition: str, col: Column, item_part: dict, parts:
             raise ValueError(f"CAT{category:03d} {edition} I{item_id}: column {col.name!r} needs repeated "
                              f"7-bit codes with FX")
         return p
+    return None
+
+
+def _bds_item(category: int, edition: str, col: Column, item_part: dict, parts: list
+              ) -> tuple[int, tuple[str, ...]] | None:
+    """The part and register path of a "bds" column: a counted repetitive item of 8-byte groups (MB
+    data, BDS1, BDS2), such as I048/250; None when the edition has no such item."""
+    for item_id, path in col.sources:
+        if item_id not in item_part:
+            continue
+        p = item_part[item_id]
+        node = parts[p]
+        if node["kind"] != "repetitive" or node["rep_bytes"] != 1 or fixed_bits(node["item"]) != 64:
+            raise ValueError(f"CAT{category:03d} {edition} I{item_id}: column {col.name!r} needs counted "
+                             f"8-byte BDS register groups")
+        field_of(path)
+        return p, path
     return None

@@ -14,7 +14,7 @@ from functools import cache
 import numpy as np
 import pandas as pd
 
-from . import kernel
+from . import bds, kernel
 from .cat001_time import PLOT_CATEGORY, UNTIMED_COLUMNS, SectorClock, time_cat001, untimed_advice
 from .categories import DECODABLE, MEASUREMENT_CATEGORIES, REGISTRY
 from .columns import FAMILIES
@@ -335,6 +335,9 @@ def _extract(buf, scanned, lay: Layout):
     where = {names[k][r]: (matrices[k], i) for k in names for i, r in enumerate(rows[k])}
     texts = {name: code_list_column(buf, rec_off[:n], rel_off[:n, s], rel_len[:n, s])
              for name, s in lay.code_slots}
+    for s in sorted({s for _, s, _ in lay.bds_slots}):  # Mode S register fields, one pass per item
+        texts |= bds.decode(buf, rec_off[:n], rel_off[:n, s], rel_len[:n, s],
+                            {name: path for name, slot, path in lay.bds_slots if slot == s})
     return where, texts, rec_off[:n].copy(), rec_blk[:n].copy()
 
 

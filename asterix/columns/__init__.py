@@ -51,7 +51,7 @@ FAMILIES = {"CAT048 (all editions)": CAT048, "CAT021 2.x (2.1-2.7)": CAT021_V2,
             "CAT025 (1.5)": CAT025, "CAT063 (1.6)": CAT063, "CAT065 (1.5)": CAT065}
 KIND_DTYPES = {"float": "float64 (NaN if absent)", "int": "Int32", "flag": "Int8", "count": "Int16",
                "octal": "text (categorical)", "hex": "text (categorical)", "icao": "text (categorical)",
-               "codes": "text (categorical)"}
+               "codes": "text (categorical)", "bds": "float64 (NaN if absent)"}
 
 
 def markdown_schema() -> str:
@@ -76,7 +76,12 @@ def markdown_schema() -> str:
              "filters in one line: `f.warning_codes.str.contains(r\"(?:^|,)3(?:,|$)\", na=False)` selects "
              "the plots carrying code 3 (split plot), `f.warning_codes.str.split(\",\").explode()` gives one "
              "row per code. Its cost is small: a presence check over the records (about 10 ms per million "
-             "records), then one reading per distinct item.", ""]
+             "records), then one reading per distinct item.", "",
+             "Mode S register fields (`bds` columns, CAT048: source `I250/BDS50/ROLL` is the ROLL field of "
+             "the BDS 5,0 register in I048/250) are read from the register the radar declares by BDS1/BDS2, "
+             "with the ICAO Doc 9871 layouts of `asterix/bds.py`. A field whose status bit is 0 is absent "
+             "(NaN), never 0; a record carrying one register twice gives its first: see "
+             "[Mode S registers](decoding/mode-s-registers.md).", ""]
     for family, cols in FAMILIES.items():
         lines += [f"## {family}", "", "| column | unit | dtype | source | meaning |", "|---|---|---|---|---|"]
         for c in cols:
