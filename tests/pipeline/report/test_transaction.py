@@ -157,12 +157,19 @@ CHILD = textwrap.dedent("""
 """)
 
 
+def _as_from_a_shell() -> None:
+    """The child starts with the signal state a shell gives it: a test runner's worker may leave SIGINT
+    ignored or blocked, and a child inherits both (Python then installs no KeyboardInterrupt handler)."""
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+    signal.pthread_sigmask(signal.SIG_UNBLOCK, [signal.SIGINT, signal.SIGTERM, signal.SIGHUP])
+
+
 @pytest.mark.parametrize("how, status", [("term", 128 + signal.SIGTERM), ("hup", 128 + signal.SIGHUP),
                                          ("int", 130)])
 def test_signals_clean_up_like_an_error(tmp_path, how, status):
     (tmp_path / "o.csv").write_text("old")
     done = subprocess.run([sys.executable, "-c", CHILD, str(tmp_path), how], capture_output=True, text=True,
-                          timeout=60)
+                          timeout=60, preexec_fn=_as_from_a_shell)
     assert done.returncode == status, done.stderr
     assert _listing(tmp_path) == {"o.csv": b"old"}
 
