@@ -1,10 +1,11 @@
 """Decode speed and memory: records/s and peak RSS per category, and pyasteryx's rate when installed.
 
 Run by hand (never a timed test): ``python benchmarks/decode.py [--records 1000000]``.
-Recordings are built with msdc's own encoder and cached in --work; a third case is the CAT048 one with
-30 % of its bytes in blocks of other categories (stepped over by framing). Each measurement runs in a fresh
-process: one warm-up decode (numba's cached kernel loads, memory pages are touched once), then the
-best of --repeat timed decodes, file in page cache to DataFrame.
+Recordings are built with msdc's own encoder and cached in --work: CAT048 plots, CAT021 ADS-B reports,
+CAT010 multilateration reports, CAT020 WAM reports, and the CAT048 one with 30 % of its bytes in blocks of
+other categories (stepped over by framing); each rate is also given as a share of CAT048's. Each
+measurement runs in a fresh process: one warm-up decode (numba's cached kernel loads, memory pages are
+touched once), then the best of --repeat timed decodes, file in page cache to DataFrame.
 """
 
 from __future__ import annotations
@@ -60,12 +61,51 @@ def cat021_frame(n: int, rng: np.random.Generator) -> pd.DataFrame:
     })
 
 
+def cat010_frame(n: int, rng: np.random.Generator) -> pd.DataFrame:
+    """Airport Mode S multilateration target reports (as the real LEBL file: I010/042 x/y, I010/200, /202,
+    /161, /170, /060, /220, /245, /090)."""
+    ac = rng.integers(0, len(CALLSIGNS), n)
+    return pd.DataFrame({
+        "sac": 0, "sic": 107, "message_type": 1, "typ": 1, "time_of_day": np.sort(rng.uniform(0, 86000, n)),
+        "x_m": rng.integers(-8000, 8000, n).astype(float), "y_m": rng.integers(-8000, 8000, n).astype(float),
+        "ground_speed_kt": rng.uniform(0, 160, n), "track_angle_deg": rng.uniform(0, 359, n),
+        "vx_ms": rng.integers(-300, 300, n) / 4, "vy_ms": rng.integers(-300, 300, n) / 4,
+        "track_number": rng.integers(0, 4096, n), "cnf": 0, "tre": 0, "cst": 0, "mah": 0, "tcc": 1, "sth": 0,
+        "mode3a": pd.Series(rng.integers(0, 4096, n)).map(lambda v: f"{v:04o}"),
+        "address": pd.Series(0x340000 + ac).map(lambda v: f"{v:06X}"), "callsign": CALLSIGNS[ac],
+        "flight_level": rng.integers(-4, 40, n) / 4,
+    })
+
+
+def cat020_frame(n: int, rng: np.random.Generator) -> pd.DataFrame:
+    """Wide-area multilateration reports: WGS-84 and Cartesian position, track, codes, velocity, heights and
+    the I020/500 standard deviations."""
+    ac = rng.integers(0, len(CALLSIGNS), n)
+    return pd.DataFrame({
+        "sac": 25, "sic": 10, "tech_ssr": 1, "tech_ms": 0, "tech_hf": 1, "tech_vdl4": 1, "tech_uat": 1,
+        "tech_dme": 1, "tech_ot": 1, "time_of_day": np.sort(rng.uniform(0, 86000, n)),
+        "latitude": rng.uniform(40, 43, n), "longitude": rng.uniform(0, 4, n),
+        "x_m": rng.uniform(-100_000, 100_000, n), "y_m": rng.uniform(-100_000, 100_000, n),
+        "track_number": rng.integers(0, 4096, n), "cnf": 0, "tre": 0, "cst": 0, "cdm": 0, "mah": 0, "sth": 0,
+        "mode3a": pd.Series(rng.integers(0, 4096, n)).map(lambda v: f"{v:04o}"),
+        "vx_ms": rng.integers(-1000, 1000, n) / 4, "vy_ms": rng.integers(-1000, 1000, n) / 4,
+        "flight_level": rng.integers(0, 1600, n) / 4,
+        "address": pd.Series(0x340000 + ac).map(lambda v: f"{v:06X}"), "callsign": CALLSIGNS[ac],
+        "geometric_height_ft": rng.integers(0, 6000, n) * 6.25,
+        "sigma_x_m": rng.integers(4, 400, n) / 4, "sigma_y_m": rng.integers(4, 400, n) / 4,
+        "com": 1, "flight_status": 0,
+    })
+
+
+FRAMES = {48: cat048_frame, 21: cat021_frame, 10: cat010_frame, 20: cat020_frame}
+
+
 def build(path: Path, category: int, n: int) -> None:
     """Encode n records of one category with msdc's encoder (cached on disk)."""
     from msdc.asterix.encode import encode_frame
 
     rng = np.random.default_rng(category)
-    make = cat048_frame if category == 48 else cat021_frame
+    make = FRAMES[category]
     with open(path, "wb") as fh:
         step = 200_000
         for lo in range(0, n, step):
@@ -162,7 +202,8 @@ def main() -> int:
         return 0
     work = Path(args.work)
     work.mkdir(parents=True, exist_ok=True)
-    for cat in (48, 21, "48+30% other"):
+    rates: dict[str, float] = {}
+    for cat in (48, 21, 10, 20, "48+30% other"):
         if cat == "48+30% other":
             path = work / f"cat048_other30_{args.records}.ast"
             if not path.exists():
@@ -181,8 +222,12 @@ def main() -> int:
         m = json.loads(subprocess.run(run + ["--measure", str(path)], check=True, capture_output=True,
                                       text=True).stdout)
         grow_mb = m["peak_rss_mb"] - m["rss_before_mb"]
+        rates[label] = m["records_per_s"]
+        versus = (f"; {m['records_per_s'] / rates['CAT048']:.0%} of CAT048's rate"
+                  if label != "CAT048" and "CAT048" in rates else "")
         print(f"{label}: {m['records']:,} records in {m['best_s']:.3f} s = "
-              f"{m['records_per_s']:,.0f} rec/s (first decode in a fresh process {m['first_s']:.3f} s)")
+              f"{m['records_per_s']:,.0f} rec/s (first decode in a fresh process {m['first_s']:.3f} s)"
+              f"{versus}")
         print(f"{label}: peak RSS {m['peak_rss_mb']:.0f} MB, of which the decode added {grow_mb:.0f} MB"
               f" (imports and kernel before it: {m['rss_before_mb']:.0f} MB); frames {m['frame_mb']:.0f} MB,"
               f" file {m['file_mb']:.0f} MB;"

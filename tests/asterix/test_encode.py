@@ -248,10 +248,11 @@ def test_multi_source_columns_cat021() -> None:
 
 
 def test_edition_aliases() -> None:
-    assert set(EDITIONS) == {21, 34, 48}
+    assert set(EDITIONS) == {10, 20, 21, 34, 48}
     assert {"1.27", "1.31", "1.32"} <= set(EDITIONS[48])
     assert encode_item(48, "1.21", "020", {"TYP": 1}) == encode_item(48, "1.27", "020", {"TYP": 1})
     assert encode_record(21, {"sac": 1, "sic": 2}, "2.x") == encode_record(21, {"sac": 1, "sic": 2}, "2.7")
+    assert encode_record(20, {"sac": 1, "sic": 2}, "1.x") == encode_record(20, {"sac": 1, "sic": 2}, "1.11")
     with pytest.raises(ValueError):
         encode_record(48, {"sac": 1}, "9.9")
 
@@ -373,8 +374,8 @@ def test_every_edition_encodes_every_mapped_column(category: int, edition: str) 
         values[col.name] = _sample(col.kind, lsb * col.scale)
     # columns whose item/field is not in this edition (0.23-0.25 have no I021/070 or signal amplitude;
     # I021/151 is a group (RE, TAS) in 2.x while the column addresses a bare element; I021/200 ME is a spare
-    # bit in 2.1)
-    assert set(unmapped) <= {"mode3a", "signal_amplitude", "true_airspeed_kt", "me"}
+    # bit in 2.1; CAT020 has no message type item, and 1.9 no I020/020 CF)
+    assert set(unmapped) <= {"mode3a", "signal_amplitude", "true_airspeed_kt", "me", "message_type", "cf"}
     for name in unmapped:
         with pytest.raises(ValueError, match=name):
             encode_record(category, {name: 1.0}, edition)

@@ -31,7 +31,8 @@ from msdc.asterix.tables import load_table
 
 EDITIONS = [(48, "1.27"), (48, "1.31"), (48, "1.32"),
             (21, "0.23"), (21, "0.24"), (21, "0.25"), (21, "0.26"),
-            (21, "2.1"), (21, "2.4"), (21, "2.6"), (21, "2.7")]
+            (21, "2.1"), (21, "2.4"), (21, "2.6"), (21, "2.7"),
+            (10, "1.1"), (20, "1.9"), (20, "1.10"), (20, "1.11")]
 V2 = [(c, e) for c, e in EDITIONS if c == 21 and e.startswith("2.")]
 CAT034 = [(34, "1.27"), (34, "1.28"), (34, "1.29")]  # no call sign nor Mode 3/A: only the generic tests
 GENERIC = EDITIONS + CAT034
@@ -137,13 +138,17 @@ def test_table_walk_agrees_with_layout(category: int, edition: str) -> None:
     items = set(compile_layout(category, edition).item_frn)
     assert {s.item for s in specs.values()} <= items
     # a column exists in an edition when one of its sources resolves there
-    # (but for a field that is a spare bit in that edition: I021/200 ME, spare in 2.1)
-    spare = {"me"} if (category, edition) == (21, "2.1") else set()
+    # (but for a field that is a spare bit in that edition: I021/200 ME, spare in 2.1; I020/020 CF, an
+    # octet-group 1.9 does not define)
+    spare = {"me"} if (category, edition) == (21, "2.1") else {"cf"} if (category, edition) == (20, "1.9") \
+        else set()
     for col in columns_for(category, edition):
         if col.name not in specs and col.name not in spare:
             assert not any(item in items for item, _ in col.sources), col.name
     missing = {c.name for c in columns_for(category, edition)} - set(specs)
-    if category in (34, 48) or edition.startswith("2.") or edition == "0.26":
+    if category == 20:  # no message type item in CAT020 (I020/020 CF, from 1.10 on, is in spare)
+        assert missing == {"message_type"} | spare
+    elif category in (10, 34, 48) or edition.startswith("2.") or edition == "0.26":
         assert missing == spare
     else:
         assert missing == {"mode3a", "signal_amplitude"}  # no I021/070 nor I021/131 before 0.26
