@@ -34,6 +34,9 @@ REGISTRY: dict[int, Category] = {c.number: c for c in (
              # 1.21-1.26 share the UAP and item layouts of 1.27 (the printed specs start at 1.27)
              aliases={**{f"1.{m}": "1.27" for m in range(21, 27)}, "1.x": "1.32"}),
     Category(21, "ADS-B Target Reports", "ADS-B", "2.7", aliases={"2.x": "2.7", "0.x": "0.26"}),
+    # surface radar and airport multilateration in one category: I010/020 TYP says which per report
+    Category(10, "Monosensor Surface Movement Data", "surface movement", "1.1"),
+    Category(20, "Multilateration Target Reports", "multilateration", "1.11", aliases={"1.x": "1.11"}),
     Category(34, "Monoradar Service Messages", "radar service", "1.29", measurements=False),
     # 1.2, 1.3 and 1.4 print the same UAPs and items: one table serves them (the build checks it).
     # Not a measurement category yet: the pipeline's measurement model reads CAT048 and CAT021 only.

@@ -1,10 +1,10 @@
 """Decode speed and memory: records/s and peak RSS per category, and pyasteryx's rate when installed.
 
 Run by hand (never a timed test): ``python benchmarks/decode.py [--records 1000000] [--categories 48,62]``.
-Cases: CAT048 plots, CAT021 ADS-B, CAT048 among other categories, CAT062 system tracks, CAT063 sensor
-status messages.
-Recordings are built with msdc's own encoder and cached in --work; a third case is the CAT048 one with
-30 % of its bytes in blocks of other categories (stepped over by framing). CAT001 (plots and tracks,
+Cases: CAT048 plots, CAT021 ADS-B, CAT010 multilateration reports, CAT020 WAM reports, CAT048 among other
+categories, CAT062 system tracks, CAT063 sensor status messages; each rate is also given as a share of
+CAT048's. Recordings are built with msdc's own encoder and cached in --work; the mixed case is the CAT048 one
+with 30 % of its bytes in blocks of other categories (stepped over by framing). CAT001 (plots and tracks,
 half each, with a CAT002 sector crossing of their radar before every 25 records: their times are made
 whole from them) is decoded alone, categories=(1,), and CAT002 alone, categories=(2,). Each measurement
 runs in a fresh process: one warm-up decode (numba's cached kernel loads, memory pages are touched once),
@@ -129,7 +129,44 @@ def cat063_frame(n: int, rng: np.random.Generator) -> pd.DataFrame:
     })
 
 
-FRAMES = {48: cat048_frame, 21: cat021_frame, 62: cat062_frame, 63: cat063_frame, 2: cat002_frame}
+def cat010_frame(n: int, rng: np.random.Generator) -> pd.DataFrame:
+    """Airport Mode S multilateration target reports (as the real LEBL file: I010/042 x/y, I010/200, /202,
+    /161, /170, /060, /220, /245, /090)."""
+    ac = rng.integers(0, len(CALLSIGNS), n)
+    return pd.DataFrame({
+        "sac": 0, "sic": 107, "message_type": 1, "typ": 1, "time_of_day": np.sort(rng.uniform(0, 86000, n)),
+        "x_m": rng.integers(-8000, 8000, n).astype(float), "y_m": rng.integers(-8000, 8000, n).astype(float),
+        "ground_speed_kt": rng.uniform(0, 160, n), "track_angle_deg": rng.uniform(0, 359, n),
+        "vx_ms": rng.integers(-300, 300, n) / 4, "vy_ms": rng.integers(-300, 300, n) / 4,
+        "track_number": rng.integers(0, 4096, n), "cnf": 0, "tre": 0, "cst": 0, "mah": 0, "tcc": 1, "sth": 0,
+        "mode3a": pd.Series(rng.integers(0, 4096, n)).map(lambda v: f"{v:04o}"),
+        "address": pd.Series(0x340000 + ac).map(lambda v: f"{v:06X}"), "callsign": CALLSIGNS[ac],
+        "flight_level": rng.integers(-4, 40, n) / 4,
+    })
+
+
+def cat020_frame(n: int, rng: np.random.Generator) -> pd.DataFrame:
+    """Wide-area multilateration reports: WGS-84 and Cartesian position, track, codes, velocity, heights and
+    the I020/500 standard deviations."""
+    ac = rng.integers(0, len(CALLSIGNS), n)
+    return pd.DataFrame({
+        "sac": 25, "sic": 10, "tech_ssr": 1, "tech_ms": 0, "tech_hf": 1, "tech_vdl4": 1, "tech_uat": 1,
+        "tech_dme": 1, "tech_ot": 1, "time_of_day": np.sort(rng.uniform(0, 86000, n)),
+        "latitude": rng.uniform(40, 43, n), "longitude": rng.uniform(0, 4, n),
+        "x_m": rng.uniform(-100_000, 100_000, n), "y_m": rng.uniform(-100_000, 100_000, n),
+        "track_number": rng.integers(0, 4096, n), "cnf": 0, "tre": 0, "cst": 0, "cdm": 0, "mah": 0, "sth": 0,
+        "mode3a": pd.Series(rng.integers(0, 4096, n)).map(lambda v: f"{v:04o}"),
+        "vx_ms": rng.integers(-1000, 1000, n) / 4, "vy_ms": rng.integers(-1000, 1000, n) / 4,
+        "flight_level": rng.integers(0, 1600, n) / 4,
+        "address": pd.Series(0x340000 + ac).map(lambda v: f"{v:06X}"), "callsign": CALLSIGNS[ac],
+        "geometric_height_ft": rng.integers(0, 6000, n) * 6.25,
+        "sigma_x_m": rng.integers(4, 400, n) / 4, "sigma_y_m": rng.integers(4, 400, n) / 4,
+        "com": 1, "flight_status": 0,
+    })
+
+
+FRAMES = {48: cat048_frame, 21: cat021_frame, 10: cat010_frame, 20: cat020_frame, 62: cat062_frame,
+          63: cat063_frame, 2: cat002_frame}
 
 
 def build(path: Path, category: int, n: int) -> None:
@@ -249,7 +286,7 @@ def main() -> int:
     ap.add_argument("--repeat", type=int, default=3)
     ap.add_argument("--work", default="/tmp/msdc-bench")
     ap.add_argument("--pyasteryx-records", type=int, default=100_000)
-    ap.add_argument("--categories", default="48,21,48+30% other,1,2,62,63",
+    ap.add_argument("--categories", default="48,21,10,20,48+30% other,1,2,62,63",
                     help="the cases to run, comma-separated (default: all)")
     ap.add_argument("--measure", help=argparse.SUPPRESS)
     ap.add_argument("--category", type=int, default=48, help=argparse.SUPPRESS)
@@ -284,8 +321,12 @@ def main() -> int:
                                       capture_output=True, text=True).stdout)
         rates[label] = m["records_per_s"]
         grow_mb = m["peak_rss_mb"] - m["rss_before_mb"]
+        rates[label] = m["records_per_s"]
+        versus = (f"; {m['records_per_s'] / rates['CAT048']:.0%} of CAT048's rate"
+                  if label != "CAT048" and "CAT048" in rates else "")
         print(f"{label}: {m['records']:,} records in {m['best_s']:.3f} s = "
-              f"{m['records_per_s']:,.0f} rec/s (first decode in a fresh process {m['first_s']:.3f} s)")
+              f"{m['records_per_s']:,.0f} rec/s (first decode in a fresh process {m['first_s']:.3f} s)"
+              f"{versus}")
         print(f"{label}: peak RSS {m['peak_rss_mb']:.0f} MB, of which the decode added {grow_mb:.0f} MB"
               f" (imports and kernel before it: {m['rss_before_mb']:.0f} MB); frames {m['frame_mb']:.0f} MB,"
               f" file {m['file_mb']:.0f} MB;"

@@ -178,6 +178,11 @@ ERRATA: dict[tuple[int, str, str], dict] = {
     # The CAT048 standard gives I048/090 FL as 14-bit two's complement in every edition (1.21 on);
     # the 1.27 and 1.31 printouts mark it unsigned, which would read FL -1 as FL 4095.75.
     (48, "090", "FL"): {"signed": True},
+    # The CAT010 standard (1.1) gives I010/202 Vx and Vy an LSB of 0.25 m/s; the printout's 1/16 m/s reads
+    # every velocity 4x too slow, and real recordings agree with 0.25 only (|(Vx, Vy)| matches the same
+    # report's I010/200 ground speed then: see ../shared/specs/README.md).
+    (10, "202", "VX"): {"lsb": 0.25},
+    (10, "202", "VY"): {"lsb": 0.25},
 }
 
 

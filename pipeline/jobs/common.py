@@ -524,9 +524,10 @@ def _no_records(exc: NoRecords) -> JobError:
 
 
 def absent_categories(loaded: Loaded) -> list[int]:
-    """Which measurement categories (CAT048, CAT021: the category registry's) no input holds a record of."""
+    """Which of the measurement categories the jobs need (CAT048 radar and CAT021 ADS-B, those of
+    QUALITY_WITHOUT) no input holds a record of."""
     held = {cat for info in loaded.inputs for cat, n in info["records"].items() if n}
-    return [cat for cat in MEASUREMENT_CATEGORIES if cat not in held]
+    return [cat for cat in MEASUREMENT_CATEGORIES if cat in QUALITY_WITHOUT and cat not in held]
 
 
 def sensors_path(options: AircraftOptions) -> str | None:

@@ -253,12 +253,13 @@ def test_multi_source_columns_cat021() -> None:
 
 
 def test_edition_aliases() -> None:
-    assert set(EDITIONS) == {1, 2, 19, 21, 23, 25, 34, 48, 62, 63, 65}
+    assert set(EDITIONS) == {1, 2, 10, 19, 20, 21, 23, 25, 34, 48, 62, 63, 65}
     assert EDITIONS[62] == ["1.16", "1.17", "1.18", "1.19", "1.20", "1.21"]
     assert encode_record(23, {"sac": 1, "nogo": 1}, "1.2") == encode_record(23, {"sac": 1, "nogo": 1}, "1.3")
     assert {"1.27", "1.31", "1.32"} <= set(EDITIONS[48])
     assert encode_item(48, "1.21", "020", {"TYP": 1}) == encode_item(48, "1.27", "020", {"TYP": 1})
     assert encode_record(21, {"sac": 1, "sic": 2}, "2.x") == encode_record(21, {"sac": 1, "sic": 2}, "2.7")
+    assert encode_record(20, {"sac": 1, "sic": 2}, "1.x") == encode_record(20, {"sac": 1, "sic": 2}, "1.11")
     with pytest.raises(ValueError):
         encode_record(48, {"sac": 1}, "9.9")
 
@@ -389,12 +390,13 @@ def test_every_edition_encodes_every_mapped_column(category: int, edition: str, 
         values[col.name] = _sample(col.kind, lsb * col.scale)
     # columns whose item/field is not in this edition (0.23-0.25 have no I021/070 or signal amplitude;
     # I021/151 is a group (RE, TAS) in 2.x while the column addresses a bare element; I021/200 ME is a spare
-    # bit in 2.1)
+    # bit in 2.1; CAT020 has no message type item, and 1.9 no I020/020 CF)
     if category == 62:  # I062/060 V, G from 1.17; I062/080 SFC, IDD, IEC from 1.18, MLAT 1.20, M5I 1.21
         assert set(unmapped) == set(CAT062_LATER[:CAT062_LATER_FROM.get(edition, 0)])
     else:
         # CAT001: time_of_day is derived from I001/141 and CAT002; plots have no track items
         assert set(unmapped) <= {"mode3a", "signal_amplitude", "true_airspeed_kt", "me", "time_of_day",
+                                 "message_type", "cf",
                                  *(("x_nm", "y_nm", "track_number", "ground_speed_kt", "heading_deg", "con",
                                     "rad", "man", "dou", "rdpc", "gho", "tre") if uap == "plot" else ())}
     for name in unmapped:

@@ -14,7 +14,9 @@ REAL = SHARED / "real"  # ../shared/real beside the repository root
 pytestmark = pytest.mark.skipif(not REAL.is_dir(), reason=f"{REAL} not present: real-recording cases skipped")
 
 CASES = [("230502-est-080001_BCN_60MN_08_09.ast", 48, None, 44_085),
-         ("adsb_v023_160510-lebl-220001.ast", 21, "0.23", 49_330)]
+         ("adsb_v023_160510-lebl-220001.ast", 21, "0.23", 49_330),
+         ("mlat_160510-lebl-220001.ast", 10, None, 84_453),
+         ("smr_160510-lebl-220001.ast", 10, None, 77_345)]
 TEXT = ("mode3a", "address", "callsign")
 
 

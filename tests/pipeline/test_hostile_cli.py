@@ -194,10 +194,6 @@ def test_a_misspelt_sensor_key_is_refused_not_ignored(tmp_path, capsys):
     assert not (tmp_path / "t.json").exists()
 
 
-@pytest.mark.xfail(strict=True, reason=(
-    "known defect since stats decodes every category: resynchronising over the ADS-B bytes that do not walk "
-    "under 0.26 frames 8 phantom CAT002 'records', so stats exits 0; the not-ASTERIX/implausible verdict "
-    "on branch 'editions' (issue 27 item 4) is meant to fix it"))
 def test_stats_with_a_category_whose_every_block_failed(capsys):
     """The fixture's CAT021 is edition 2.7; pinned to 0.26 none of its blocks walks. stats lists the radar
     and the skipped blocks (a KeyError traceback before); alone, the ADS-B file decodes nothing: exit 1."""
