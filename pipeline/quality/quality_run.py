@@ -1,5 +1,6 @@
 """The quality step: per-sensor data quality and radar accuracy against ADS-B, as sheets (figures are drawn
-by pipeline.jobs)."""
+by pipeline.jobs); with multilateration or surface radar reports, where their reference points are
+(pipeline.quality.reference_offset)."""
 
 from __future__ import annotations
 
@@ -31,11 +32,14 @@ class QualityResult:
 
 def select_aircraft(meas: pd.DataFrame, *, callsign: str | None = None,
                     address: str | None = None) -> pd.DataFrame:
-    """Both sensors' measurements of one aircraft (NoSuchAircraft lists the closest), or all of them."""
+    """Every sensor's measurements of one aircraft (NoSuchAircraft lists the closest, when radar or ADS-B
+    lacks it), or all of them."""
     if callsign is None and address is None:
         return meas
     ac = one_aircraft(meas, callsign, address)
-    return pd.concat([ac.radar, ac.adsb], ignore_index=True)
+    others = meas[meas["aircraft_id"].isin([ac.aircraft_id] if ac.aircraft_id else []).to_numpy(bool)
+                  & meas["sensor_kind"].astype(str).isin(["mlat", "smr"]).to_numpy(bool)]
+    return pd.concat([ac.radar, ac.adsb, others], ignore_index=True)
 
 
 def quality_run(meas: pd.DataFrame, sensors: pd.DataFrame, *, callsign: str | None = None,
@@ -53,5 +57,9 @@ def quality_run(meas: pd.DataFrame, sensors: pd.DataFrame, *, callsign: str | No
     sheets["Radar accuracy"] = error_stats(errors)
     biases = estimate_biases(errors)
     sheets["Radar biases"] = biases
+    if meas["sensor_kind"].astype(str).isin(["mlat", "smr"]).any():
+        from msdc.pipeline.quality.reference_offset import reference_offsets
+
+        sheets["Reference points"] = reference_offsets(meas, sensors)
     return QualityResult(sheets, errors)
 

@@ -56,7 +56,7 @@ BAD = [
     (opts(json="c.txt"), "--json c.txt"),
     (opts(sensors="/nonexistent/s.toml"), "--sensors /nonexistent/s.toml"),
     (opts(vertical="probable"), "--vertical 'probable'"),
-    (opts(sources="radar,mlat"), "--sources 'radar,mlat'"),
+    (opts(sources="radar,wam"), "--sources 'radar,wam'"),
     (opts(figures="/nonexistent/dir/figs"), "--figures /nonexistent/dir/figs: directory /nonexistent/dir"),
     (opts(figures=RADAR), "--figures " + RADAR + ": exists and is not a directory"),
 ]
