@@ -32,14 +32,19 @@ class QualityResult:
 
 def select_aircraft(meas: pd.DataFrame, *, callsign: str | None = None,
                     address: str | None = None) -> pd.DataFrame:
-    """Every sensor's measurements of one aircraft (NoSuchAircraft lists the closest, when radar or ADS-B
-    lacks it), or all of them."""
+    """Every sensor's measurements of one aircraft, or all of them. NoSuchAircraft lists the closest when
+    radar or ADS-B lacks it; with multilateration or surface radar reports in ``meas``, only when no sensor
+    saw it (radar accuracy then has nothing to compare, the other sheets do)."""
     if callsign is None and address is None:
         return meas
+    if meas["sensor_kind"].astype(str).isin(["mlat", "smr"]).any():
+        from msdc.pipeline.model.measurements import select
+
+        rows = select(meas, callsign, address)
+        if len(rows):
+            return rows
     ac = one_aircraft(meas, callsign, address)
-    others = meas[meas["aircraft_id"].isin([ac.aircraft_id] if ac.aircraft_id else []).to_numpy(bool)
-                  & meas["sensor_kind"].astype(str).isin(["mlat", "smr"]).to_numpy(bool)]
-    return pd.concat([ac.radar, ac.adsb, others], ignore_index=True)
+    return pd.concat([ac.radar, ac.adsb], ignore_index=True)
 
 
 def quality_run(meas: pd.DataFrame, sensors: pd.DataFrame, *, callsign: str | None = None,

@@ -127,3 +127,15 @@ def test_track_fuses_the_kinds_asked_for(files, tmp_path, capsys):
     (aircraft,) = json.loads(out.read_text())["aircraft"]
     sensors = {row["sensor_id"] for row in aircraft["sensors"]}
     assert sensors == {"010:0/107:mlat"}  # the surface radar's reports are CAT010 too, not asked for
+
+
+def test_quality_of_one_aircraft_no_radar_saw(files, tmp_path, capsys):
+    out = tmp_path / "q.json"
+    both = ["quality", files["adsb"], files["mlat"], "--sensors", files["sensors"]]
+    status, _, err = _run([*both, "--callsign", "RYR1AB", "--date", "2016-05-10", "--json", out], capsys)
+    assert status == 0, err
+    quality = json.loads(out.read_text())["tables"]["Quality"]
+    assert {(r["callsign"], r["sensor"]) for r in quality} == {
+        (who, kind) for who in ("RYR1AB", "(all)") for kind in ("adsb", "mlat")}
+    status, _, err = _run([*both, "--callsign", "XYZ99", "--json", tmp_path / "n.json"], capsys)
+    assert status == 1 and "XYZ99" in err
