@@ -31,6 +31,7 @@ from msdc.pipeline.model.arguments import finite_number
 from msdc.pipeline.model.dedup import duplicate_mask
 from msdc.pipeline.model.geodesy import distance_m
 from msdc.pipeline.model.jumps import JUMP_FLAG_COLUMNS, detect_jumps
+from msdc.pipeline.model.schema import coded_text
 from msdc.pipeline.model.time import clock, is_dated, iso_utc, midnight, seconds_since, utc_frame, with_clock
 from msdc.pipeline.parallel import map_ordered
 
@@ -44,6 +45,12 @@ PEARSON_MIN_OVERLAP = 10
 CORRELATION_INPUTS = ["time", "time_of_day", "sensor_id", "sensor_kind", "aircraft_id", "callsign",
                       "address", "latitude", "longitude", "ground_speed_kt", "heading_deg", "duplicate",
                       *JUMP_FLAG_COLUMNS]
+# Per --pairs value, the sensor kind correlated (the "radar" role of the slot and summary tables) and the
+# kind it is correlated against (the "adsb" role: the reference); radar-radar and all correlate radars with
+# each other too. Rows of other kinds are left out of the run.
+PAIR_KINDS = {"radar-adsb": ("radar", "adsb"), "radar-radar": ("radar", "adsb"), "all": ("radar", "adsb"),
+              "mlat-adsb": ("mlat", "adsb"), "smr-mlat": ("smr", "mlat")}
+ROLE_NOUNS = {"radar": "radar", "adsb": "ADS-B", "mlat": "multilateration", "smr": "surface radar"}
 # A run holds every window's slot table (one row a slot) and lag table (2N - 1 rows for N slots) until
 # its writers are done, so the slots of all windows together are capped by the memory those tables take:
 # a slot row is 82 bytes (ten 8-byte columns, two 1-byte flags), a lag row 40 (five 8-byte columns), so
@@ -555,6 +562,21 @@ def _correlate_pair(ac: tuple[str, str], run: CorrelationRun, pair: tuple[str, _
     return None
 
 
+def in_roles(meas: pd.DataFrame, pairs: str) -> pd.DataFrame:
+    """The rows of the two sensor kinds a ``pairs`` value correlates, their sensor_kind renamed to the roles
+    the correlation runs with ("radar" the correlated sensor, "adsb" its reference: PAIR_KINDS); ``meas``
+    itself when it holds radar and ADS-B rows alone (radar-adsb, radar-radar, all)."""
+    tested, reference = PAIR_KINDS[pairs]
+    kind = meas["sensor_kind"].astype(str).to_numpy()
+    roles = np.select([kind == tested, kind == reference], [0, 1], -1)
+    if (tested, reference) == ("radar", "adsb") and (roles >= 0).all():
+        return meas
+    keep = roles >= 0
+    out = meas[keep].reset_index(drop=True)
+    out["sensor_kind"] = pd.Series(coded_text(roles[keep], ["radar", "adsb"]), index=out.index)
+    return out
+
+
 def correlate(meas: pd.DataFrame, *, callsign: str | None = None, address: str | None = None,
               all_aircraft: bool = False, slot_s: float = 10.0, gap_s: float = 180.0,
               pairs: str = "radar-adsb", split_adsb: bool = False, fill: str = "hold") -> CorrelationRun:
@@ -562,10 +584,12 @@ def correlate(meas: pd.DataFrame, *, callsign: str | None = None, address: str |
 
     ``meas`` is a measurement frame (pipeline.model.schema). Each radar is correlated on its own (plots
     of two radars are never mixed) against each ADS-B source and/or each other radar (``pairs``); ADS-B
-    ground stations are one source unless ``split_adsb``. One aircraft by call sign and/or address
-    (NoSuchAircraft, NoOverlap when no pair overlaps), or with ``all_aircraft`` every aircraft seen by a
-    pair (TooManySlots when the windows need more than MAX_SLOTS slots). Times in the tables count
-    seconds from midnight UTC of the earliest report. ``fill``: empty
+    ground stations are one source unless ``split_adsb``. ``pairs`` "mlat-adsb" correlates each
+    multilateration system against ADS-B, "smr-mlat" each surface movement radar against multilateration
+    (in the tables the correlated sensor takes the radar's columns, its reference the ADS-B ones). One
+    aircraft by call sign and/or address (NoSuchAircraft, NoOverlap when no pair overlaps), or with
+    ``all_aircraft`` every aircraft seen by a pair (TooManySlots when the windows need more than MAX_SLOTS
+    slots). Times in the tables count seconds from midnight UTC of the earliest report. ``fill``: empty
     slots take the previous slot ("hold", the thesis) or the tracker's prediction ("predict").
     """
     if fill not in FILLS:
@@ -586,8 +610,11 @@ def correlate(meas: pd.DataFrame, *, callsign: str | None = None, address: str |
     if str(meas["time"].dtype) != "datetime64[ns, UTC]":
         meas = meas.assign(time=meas["time"].dt.as_unit("ns"))
     reference = midnight(meas["time"])
+    tested, against = (ROLE_NOUNS[k] for k in PAIR_KINDS[pairs])
     if reference is None:
-        raise NoSuchAircraft("any aircraft", ["radar", "ADS-B"], [], "there are no measurements")
+        raise NoSuchAircraft("any aircraft", [tested, against], [], "there are no measurements")
+    if "sensor_kind" in meas:
+        meas = in_roles(meas, pairs)
     if fill == "hold":  # the steps below read these columns only (time_of_day, not timestamp); each window
         # copies its rows
         columns = [c for c in dict.fromkeys(CORRELATION_INPUTS) if c in meas or c == "time_of_day"]
@@ -599,24 +626,34 @@ def correlate(meas: pd.DataFrame, *, callsign: str | None = None, address: str |
         "gap_s": gap_s, "pairs": pairs, "split_adsb": split_adsb,
         **({"fill": fill} if fill != "hold" else {}),  # the thesis default leaves the parameters as they were
         "date": reference.date().isoformat() if is_dated(reference) else None})
-    need_adsb = pairs == "radar-adsb"
+    role_pairs = pairs if pairs in ("radar-radar", "all") else "radar-adsb"  # the pairs of the two roles
+    need_adsb = role_pairs == "radar-adsb"
     if all_aircraft:  # one aircraft's rows at a time (aircraft_rows), not a second copy of the run
         cols = _Columns(meas)
         targets = aircraft_rows(meas, need_adsb=need_adsb)
         first = next(targets, None)
         if first is None:
-            raise NoSuchAircraft("any aircraft", ["radar", "ADS-B"], [],
-                                 "no aircraft is seen by both radar and ADS-B")
+            raise NoSuchAircraft("any aircraft", [tested, against], [],
+                                 f"no aircraft is seen by both {tested} and {against}")
         targets = itertools.chain([first], targets)
         del first
     else:
-        ac = one_aircraft(meas, callsign, address, need_adsb=need_adsb)
+        try:
+            ac = one_aircraft(meas, callsign, address, need_adsb=need_adsb)
+        except NoSuchAircraft as exc:  # the roles by their own names
+            if (tested, against) == ("radar", "ADS-B"):
+                raise
+            names = {"radar": tested, "ADS-B": against}
+            missing = [names.get(m, m) for m in exc.missing_in]
+            text = str(exc).replace("radar or ADS-B", " or ".join(missing)).replace(
+                " by radar", f" by {tested}").replace(" by ADS-B", f" by {against}")
+            raise NoSuchAircraft(exc.wanted, missing, exc.closest, text) from None
         cols = _Columns(pd.concat([ac.radar, ac.adsb], ignore_index=True))
         targets = iter([(ac.callsign, ac.address, ac.aircraft_id, np.arange(len(ac.radar)),
                          np.arange(len(ac.radar), len(ac.radar) + len(ac.adsb)))])
         del ac
     paired, budget = False, [0]
-    prepare = functools.partial(_prepared_pairs, cols, pairs, split_adsb, fill, reference, slot_s, gap_s)
+    prepare = functools.partial(_prepared_pairs, cols, role_pairs, split_adsb, fill, reference, slot_s, gap_s)
     if fill == "predict":
         _ = cols.track_inputs  # read here once, not by the threads
     # --fill predict builds each aircraft's predictors on the per-aircraft threads (their filter kernels
@@ -632,19 +669,21 @@ def correlate(meas: pd.DataFrame, *, callsign: str | None = None, address: str |
     if not paired:
         seen_by = None if all_aircraft else (callsign_label, address_label, sorted(cols.by_sensor(
             np.flatnonzero(cols.is_radar))))
-        raise NoSuchAircraft("a sensor pair", ["radar"], [], _unpaired_message(pairs, seen_by))
+        raise NoSuchAircraft("a sensor pair", [tested], [], _unpaired_message(pairs, seen_by))
     return run
 
 
 def _unpaired_message(pairs: str, aircraft: tuple[str, str, list[str]] | None) -> str:
     """Why no sensor pair was found: for every aircraft (``aircraft`` None), or for the one asked for
     (call sign, address, the radars that saw it)."""
-    wanted = {"radar-radar": "two radars", "radar-adsb": "radar and ADS-B"}.get(
+    wanted = {"radar-radar": "two radars", "radar-adsb": "radar and ADS-B",
+              "mlat-adsb": "multilateration and ADS-B", "smr-mlat": "surface radar and multilateration"}.get(
         pairs, "two radars nor by radar and ADS-B")
     if aircraft is None:
         wanted = wanted.replace(" nor ", " or ")
         return f"no aircraft is seen by {wanted} (--pairs {pairs})"
     callsign, address, radars = aircraft
     who = " ".join(part for part in (callsign, f"(address {address})" if address else "") if part)
-    seen = f"only by {', '.join(radars)}" if radars else "by no radar"
+    noun = ROLE_NOUNS[PAIR_KINDS[pairs][0]]
+    seen = f"only by {', '.join(radars)}" if radars else f"by no {noun}"
     return f"{who or 'the aircraft'} is not seen by {wanted} ({seen}) (--pairs {pairs})"

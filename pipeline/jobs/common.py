@@ -21,7 +21,7 @@ import pandas as pd
 from msdc.asterix.categories import MEASUREMENT_CATEGORIES, REGISTRY
 from msdc.pipeline.jobs.options import (
     MAX_COAST_RANGE_S,
-    SOURCES,
+    SOURCE_KINDS,
     STEP_RANGE_S,
     AircraftOptions,
     CorrelateOptions,
@@ -287,12 +287,13 @@ def check_aircraft(o: AircraftOptions) -> None:
 
 
 def parse_sources(value) -> tuple[str, ...]:
-    """--sources as a tuple of SOURCES ("radar,adsb" or a sequence); OptionError naming the option if bad."""
+    """--sources as a tuple of SOURCE_KINDS ("radar,adsb" or a sequence); OptionError naming the option if
+    bad."""
     items = tuple(value.split(",")) if isinstance(value, str) else tuple(value or ())
     items = tuple(s.strip().lower() for s in items)
-    if not items or any(s not in SOURCES for s in items) or len(set(items)) != len(items):
+    if not items or any(s not in SOURCE_KINDS for s in items) or len(set(items)) != len(items):
         raise OptionError(f"--sources {','.join(items) if items else value!r}: must be a comma-separated "
-                          f"subset of {','.join(SOURCES)} without repeats")
+                          f"subset of {','.join(SOURCE_KINDS)} without repeats")
     return items
 
 
@@ -466,20 +467,22 @@ def date_ignored(options: DecodingOptions, inputs: list[dict]) -> list[str]:
 
 
 def _load_measurements(options: AircraftOptions, checked: Checked, progress: Progress | None,
-                       stage: str, *, either: bool = False, columns=None
+                       stage: str, *, either: bool = False, columns=None, needs=None
                        ) -> tuple[Loaded, pd.DataFrame, list[str]]:
     """Decode the inputs chunk by chunk straight into radar and ADS-B measurements (load_measurements),
     with the user-facing errors for unreadable inputs, missing data and sensors (stray radar records are
     left out with a warning: model.sensors.stray_verdict). ``stage`` is the progress stage shown once the
     inputs are read (before a missing-data or missing-sensor error too). ``either`` (quality): one category
-    is enough, the other's absence is a warning saying which sheets stay empty. Returns the warnings too."""
+    is enough, the other's absence is a warning saying which sheets stay empty. ``needs``: the categories
+    the job needs (load_measurements; CAT048 and CAT021 when None). Returns the warnings too."""
     from msdc.asterix.errors import UnreadableInput
+    from msdc.pipeline.model.load import RADAR_AND_ADSB
 
     try:
         loaded, meas = load_measurements(checked.inputs, checked.sensors, editions=checked.editions or None,
                                          date=options.date, format=options.format,
                                          adsb_sigma_m=options.adsb_sigma_m, progress=progress, either=either,
-                                         columns=columns)
+                                         columns=columns, needs=needs or RADAR_AND_ADSB)
     except UnreadableInput as exc:
         raise JobError(str(exc), 2) from exc
     except NoRecords as exc:
@@ -498,10 +501,13 @@ def _load_measurements(options: AircraftOptions, checked: Checked, progress: Pro
         except UnknownRadar as exc:
             raise unknown_radar_error(exc.missing, sensors_path(options),
                                       leave_out="by giving the ADS-B recordings alone") from exc
+    if len(loaded.unplaced):
+        warnings += unplaced_warnings(loaded, options)
     warnings += _empty_inputs(loaded)
     warnings += _wrong_editions(loaded, but=absent_categories(loaded))
     warnings += [f"no {REGISTRY[cat].noun} (CAT{cat:03d}) records in the inputs{_all_failed(loaded, cat)}: "
-                 f"{QUALITY_WITHOUT[cat]}" for cat in absent_categories(loaded)]
+                 f"{QUALITY_WITHOUT[cat]}" for cat in absent_categories(loaded)
+                 if needs is None or any(cat in group for group in needs)]
     warnings += order_warnings(checked.inputs, loaded.spans)
     warnings += date_ignored(options, loaded.inputs)
     warnings += format_hints(options, loaded.inputs)
@@ -511,10 +517,40 @@ def _load_measurements(options: AircraftOptions, checked: Checked, progress: Pro
     return loaded, meas, warnings
 
 
+def unplaced_warnings(loaded: Loaded, options: AircraftOptions) -> list[str]:
+    """The warnings for CAT010/CAT020 reports left unplaced for want of a reference point (too few of a
+    sensor: damage); a JobError with the sensor-file lines when a sensor has enough of them to be one."""
+    from msdc.pipeline.model.measurements import unplaced_verdict
+    from msdc.pipeline.model.sensors import UnknownReferencePoint
+
+    counts = {cat: sum(info["records"].get(cat, 0) for info in loaded.inputs) for cat in (10, 20)}
+    try:
+        return unplaced_verdict(loaded.unplaced, counts)
+    except UnknownReferencePoint as exc:
+        raise unknown_reference_error(exc.missing, sensors_path(options)) from exc
+
+
+def unknown_reference_error(missing: list[tuple[int, str, int, int]], path: str | None) -> JobError:
+    """The error for multilateration or surface radar reports whose reference point the sensor file lacks,
+    with the TOML lines."""
+    from msdc.pipeline.model.sensors import KIND_NOUN, reference_toml_snippet
+
+    lines = "\n\n".join(reference_toml_snippet(*m) for m in missing)
+    names = ", ".join(f"CAT{c:03d} {KIND_NOUN[k]} SAC/SIC {a}/{b}" for c, k, a, b in missing)
+    where = ("no --sensors file was given: give --sensors S.toml with these lines" if path is None
+             else f"not in {path}; add it")
+    return JobError(f"{names}: Cartesian positions need the system's reference point, and {where}:"
+                    f"\n\n{lines}")
+
+
 def _no_records(exc: NoRecords) -> JobError:
     """The user-facing error for inputs without radar or ADS-B records: every absent category, those whose
     blocks failed to decode first, with how many failed and the edition to pin (an ADS-B recording under a
     wrong edition is why there is no record at all, not a missing radar)."""
+    if exc.category not in QUALITY_WITHOUT:  # a multilateration or surface radar category the job needs
+        names = " or ".join(f"CAT{c:03d}" for c in exc.alternatives)
+        nouns = "multilateration" if len(exc.alternatives) > 1 else REGISTRY[exc.category].noun
+        return JobError(f"no {nouns} ({names}) records in the inputs")
     absent = absent_categories(exc.loaded) or [exc.category]
     failed = {cat: why[2:] for cat in absent if (why := _all_failed(exc.loaded, cat))}
     absent.sort(key=lambda cat: cat not in failed)
@@ -594,15 +630,16 @@ def _all_failed(loaded: Loaded, cat: int) -> str:
 
 def marked_measurements(options: AircraftOptions, checked: Checked, progress: Progress | None, stage: str,
                         *, split_adsb: bool = False, either: bool = False, columns=None,
-                        flags: list[str] | None = None) -> tuple[Loaded, pd.DataFrame, list[str]]:
+                        flags: list[str] | None = None, needs=None) -> tuple[Loaded, pd.DataFrame, list[str]]:
     """The inputs and their measurements with the duplicate and jump flags (once per job; correlate counts
     each window's jumps), and the warnings about them; decoded columns are held one chunk at a time (see
     _load_measurements). ``stage`` is the progress stage shown once the inputs are read; ``columns`` and
-    ``flags``: only those measurement columns and jump columns (every one when None)."""
+    ``flags``: only those measurement columns and jump columns (every one when None); ``needs``: the
+    categories the job needs (load_measurements)."""
     from msdc.pipeline.model.marks import mark_once
 
     loaded, meas, warnings = _load_measurements(options, checked, progress, stage, either=either,
-                                                columns=columns)
+                                                columns=columns, needs=needs)
     meas = mark_once(meas, split_adsb=split_adsb, flags=flags)
     release_free_memory()
     return loaded, meas, warnings
@@ -638,20 +675,28 @@ def tracker_measurements(loaded, checked: Checked, options: TrackOptions) -> tup
     from msdc.pipeline.model.dedup import duplicate_mask
     from msdc.pipeline.model.measurements import (
         IdentityWarning,
+        LeftOutWarning,
         OffEarthWarning,
         OutOfCoverageWarning,
         build_measurements,
     )
-    from msdc.pipeline.model.sensors import UnknownRadar, declared_radar
+    from msdc.pipeline.model.sensors import UnknownRadar, UnknownReferencePoint, declared_radar
 
     sources = parse_sources(options.sources)
     radar = loaded.frames.get(48) if "radar" in sources else None
     adsb = loaded.frames.get(21) if "adsb" in sources else None
     radar = radar if radar is not None and len(radar) else None
     adsb = adsb if adsb is not None and len(adsb) else None
-    if radar is None and adsb is None:
-        wanted = " or ".join({"radar": "radar (CAT048)", "adsb": "ADS-B (CAT021)"}[s] for s in sources)
-        failed = "; ".join(why[2:] for cat in ({"radar": 48, "adsb": 21}[s] for s in sources)
+    local = {"mlat", "smr"} & set(sources)
+    cat010 = loaded.frames.get(10) if local else None
+    cat020 = loaded.frames.get(20) if "mlat" in local else None
+    cat010, cat020 = (f if f is not None and len(f) else None for f in (cat010, cat020))
+    if radar is None and adsb is None and cat010 is None and cat020 is None:
+        names = {"radar": "radar (CAT048)", "adsb": "ADS-B (CAT021)", "mlat": "multilateration (CAT010 or "
+                 "CAT020)", "smr": "surface radar (CAT010)"}
+        cats = {"radar": (48,), "adsb": (21,), "mlat": (10, 20), "smr": (10,)}
+        wanted = " or ".join(names[s] for s in sources)
+        failed = "; ".join(why[2:] for cat in dict.fromkeys(c for s in sources for c in cats[s])
                            if (why := _all_failed(loaded, cat)))
         raise JobError(f"no {wanted} records in the inputs (--sources {','.join(sources)})"
                        + (f": {failed}" if failed else ""))
@@ -661,16 +706,23 @@ def tracker_measurements(loaded, checked: Checked, options: TrackOptions) -> tup
         raise unknown_radar_error(exc.missing, sensors_path(options)) from exc
     with carrying(stray) as warnings:
         try:
-            with python_warnings.catch_warnings():  # load_inputs has said it, naming each file
+            with python_warnings.catch_warnings(record=True) as said:  # load_inputs has said it, per file
                 python_warnings.simplefilter("ignore", OffEarthWarning)
                 python_warnings.simplefilter("ignore", OutOfCoverageWarning)  # said below, from attrs
                 python_warnings.simplefilter("ignore", IdentityWarning)  # said below, from attrs
+                python_warnings.simplefilter("always", LeftOutWarning)
                 meas = build_measurements(radar, adsb, checked.sensors, date=loaded.date,
-                                          adsb_sigma_m=options.adsb_sigma_m)
+                                          adsb_sigma_m=options.adsb_sigma_m, cat010=cat010, cat020=cat020)
+            warnings += [str(w.message) for w in said if issubclass(w.category, LeftOutWarning)]
         except UnknownRadar as exc:
             raise unknown_radar_error(exc.missing, sensors_path(options)) from exc
+        except UnknownReferencePoint as exc:
+            raise unknown_reference_error(exc.missing, sensors_path(options)) from exc
     warnings += list(meas.attrs.get("coverage_warnings", ()))
     warnings += list(meas.attrs.get("identity_warnings", ()))
+    if local and local != {"mlat", "smr"} and len(meas):  # CAT010 holds both kinds: the one not asked goes
+        kinds = meas["sensor_kind"].astype(str)
+        meas = meas[~kinds.isin({"mlat", "smr"} - local).to_numpy(bool)].reset_index(drop=True)
     from msdc.pipeline.track.associate import join_by_track_number
 
     meas, joined = join_by_track_number(meas, max_gap_s=float(options.max_coast_s))
@@ -720,10 +772,11 @@ def quality_inputs(reference: str) -> list[str]:
     from msdc.pipeline.model.dedup import DEDUP_KEYS
     from msdc.pipeline.model.jumps import JUMP_INPUTS
     from msdc.pipeline.quality.accuracy import ACCURACY_INPUTS
+    from msdc.pipeline.quality.reference_offset import OFFSET_INPUTS
     from msdc.pipeline.quality.tables import QUALITY_INPUTS
 
-    need = [*QUALITY_INPUTS, *ACCURACY_INPUTS, *DEDUP_KEYS, *JUMP_INPUTS, "sensor_kind", "sensor_id",
-            "aircraft_id", "callsign", "address"]
+    need = [*QUALITY_INPUTS, *ACCURACY_INPUTS, *DEDUP_KEYS, *JUMP_INPUTS, *OFFSET_INPUTS, "sensor_kind",
+            "sensor_id", "aircraft_id", "callsign", "address"]
     if reference == "track":
         from msdc.pipeline.quality.track_reference import TRACK_REFERENCE_INPUTS
         from msdc.pipeline.track.tracker import FILTER_INPUTS, REQUIRED
@@ -795,7 +848,7 @@ def estimated_noise(meas: pd.DataFrame, sensors: pd.DataFrame, options: TrackOpt
     declared against estimated sigmas (radar range m and azimuth deg from the sensor file; ADS-B m per
     NACp level, and its along-track timing sigma s, declared 0)."""
     from msdc.pipeline.model.measurements import sensor_id
-    from msdc.pipeline.track.noise import AZIMUTH, RANGE, TIMING, estimate_noise
+    from msdc.pipeline.track.noise import AZIMUTH, POSITION, RANGE, TIMING, estimate_noise
 
     ids = sensor_id(48, sensors["sac"], sensors["sic"]).to_numpy()
     sites = {str(i): (float(r.latitude), float(r.longitude))
@@ -811,6 +864,11 @@ def estimated_noise(meas: pd.DataFrame, sensors: pd.DataFrame, options: TrackOpt
         if site is not None and row["component"] in (RANGE, AZIMUTH):
             declared = site.sigma_range_m if row["component"] == RANGE else site.sigma_azimuth_deg
             table.loc[i, ["declared_sigma", "unit"]] = [declared, "m" if row["component"] == RANGE else "deg"]
+    local = table["sensor_id"].astype(str).str.match(r"0(10|20):") & (table["component"] == POSITION)
+    if local.any():  # multilateration, surface radar: their reports' own sigma (I010/500, I020/500, sigma_m)
+        sigma = pd.Series(meas["cov_ee_m2"].to_numpy(float)) ** 0.5
+        median = sigma.groupby(meas["sensor_id"].astype(str).to_numpy()).median()
+        table.loc[local, "declared_sigma"] = table.loc[local, "sensor_id"].astype(str).map(median).to_numpy()
     table["estimated_sigma"] = table["declared_sigma"] * table["scale"]
     timing = table["component"] == TIMING  # the ADS-B along-track time-stamp sigma, declared as none
     table.loc[timing, ["unit", "declared_sigma"]] = ["s", 0.0]

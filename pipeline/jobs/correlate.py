@@ -47,6 +47,8 @@ if TYPE_CHECKING:
 
 
 FIGURE_WINDOWS = 6  # correlate --quality: slotting and lag figures of the first windows only
+# the categories a --pairs value needs, one of each group (radar pairs: CAT048 and CAT021, the default)
+NEEDS = {"mlat-adsb": ((10, 20), (21,)), "smr-mlat": ((10,),)}
 
 
 def validate(options: CorrelateOptions) -> Checked:
@@ -148,7 +150,7 @@ def correlate_job(options: CorrelateOptions, *, progress: Progress | None = None
         columns = correlate_columns(options)
         loaded, meas_all, said = marked_measurements(
             options, checked, progress, "Pre-processing data", split_adsb=options.split_adsb, columns=columns,
-            flags=None if options.quality or columns is None else ["jump"])
+            flags=None if options.quality or columns is None else ["jump"], needs=NEEDS.get(options.pairs))
         warnings += said
         meas, removed = apply_filters(meas_all, drop_jumps=options.drop_jumps, min_nic=options.min_nic,
                                       min_nacp=options.min_nacp)

@@ -52,7 +52,8 @@ SLOT_RANGE_S = (0.1, 3600.0)  # below 0.1 s the slot count and the lag tables ex
 INDICATOR_RANGE = (0, 11)  # NIC and NACp values
 STEP_RANGE_S = (1e-3, 3600.0)  # below 1 ms the grid explodes (a day would be 86 M rows per aircraft)
 MAX_COAST_RANGE_S = (0.0, 86400.0)  # its lower bound is --step (check_tracking)
-SOURCES = ("radar", "adsb")
+SOURCES = ("radar", "adsb")  # track and conflicts fuse these by default
+SOURCE_KINDS = (*SOURCES, "mlat", "smr")  # and may fuse these: multilateration, surface radar (CAT010/020)
 # --noise: the sensor file's sigmas and NACp; estimated from residuals (one isotropic ADS-B sigma per
 # class); estimated with an ADS-B along-track timing term as well (docs/tracker.md: fewer gated reports
 # and track segments on the real recording, predictions through gaps no better on the mean)
@@ -343,10 +344,13 @@ class CorrelateOptions(AircraftOptions):
                               "seconds apart")
     pairs: str = option("radar-adsb", "--pairs", choices=PAIRS,
                         help="sensor pairs to correlate per aircraft: each radar against ADS-B (default), "
-                             "each two radars, or both; plots of two radars are never mixed",
+                             "each two radars, all (both), multilateration against ADS-B, or surface "
+                             "radar against multilateration; plots of two radars are never mixed",
                         doc="`radar-adsb` (each radar against the ADS-B source), `radar-radar` (each two "
-                            "radars that saw the aircraft) or `all` (both); plots of two radars are never "
-                            "mixed ([sensor pairs](../methods/correlation.md#sensor-pairs))")
+                            "radars that saw the aircraft), `all` (both), `mlat-adsb` (each "
+                            "multilateration system against ADS-B) or `smr-mlat` (each surface movement "
+                            "radar against multilateration); plots of two sensors are never mixed "
+                            "([sensor pairs](../methods/correlation.md#sensor-pairs))")
     split_adsb: bool = option(False, "--split-adsb",
                               help="keep ADS-B ground stations apart (default: one ADS-B source per "
                                    "aircraft)",
@@ -455,8 +459,11 @@ class TrackOptions(AircraftOptions):
             "paper's 3-radar scenario, where the default loses one by 10 %, but predicts worse through gaps "
             "(real data: +17-32 % at 30-60 s): [Tracker](../tracker.md)")
     sources: tuple[str, ...] = option(SOURCES, "--sources", section="tracking",
-                                      help="sensor kinds to fuse: radar, adsb or radar,adsb",
-                                      doc="which sensor kinds to fuse: `radar`, `adsb` or `radar,adsb`")
+                                      help="sensor kinds to fuse, comma-separated: radar, adsb (the default "
+                                           "radar,adsb), mlat (multilateration), smr (surface radar)",
+                                      doc="which sensor kinds to fuse, comma-separated: `radar`, `adsb` (the "
+                                          "default `radar,adsb`), `mlat` (multilateration, CAT010/CAT020), "
+                                          "`smr` (surface movement radar, CAT010)")
     noise: str = option(  # pipeline.track.noise estimates; "declared": as given
         "estimate", "--noise", choices=NOISE, parser_choices=False, section="tracking",
         help="measurement noise: estimate (default: each sensor's sigmas from the tracker's residuals, a few "

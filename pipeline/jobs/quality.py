@@ -85,7 +85,8 @@ def quality_job(options: QualityOptions, *, progress: Progress | None = None, ch
         if progress:
             progress.stage("Processing data files")
         loaded, meas, said = marked_measurements(options, checked, progress, "Analysing data quality",
-                                                 either=True, columns=quality_columns(options))
+                                                 either=True, columns=quality_columns(options),
+                                                 needs=((48,), (21,), (10, 20)))
         warnings += said
         absent = absent_categories(loaded)
         warnings += site_warnings(meas, checked.sensors, str(sensors_path(options)))
@@ -141,6 +142,10 @@ def text(result: QualityJobResult) -> str:
 
     out = "Quality:\n" + frame_text(q[keep]) + "\n\nRadar biases:\n"
     out += frame_text(b[bias_cols]) if len(b) else "  no radar report matched to ADS-B"
+    points = result.quality.sheets.get("Reference points")
+    if points is not None:  # multilateration and surface radar: where their x/y origin lies
+        out += ("\n\nReference points (offset of each sensor's surface positions from its reference's; "
+                "corrected: the sensor-file point that removes it):\n" + frame_text(points))
     note = b.attrs.get("note")
     return out + (f"\n\nNote: {note}" if note else "")
 

@@ -37,8 +37,11 @@ class Aircraft:
 
 
 def _split(meas: pd.DataFrame) -> tuple[pd.DataFrame, pd.DataFrame]:
-    radar = meas["sensor_kind"] == "radar"
-    return meas[radar.to_numpy()].reset_index(drop=True), meas[(~radar).to_numpy()].reset_index(drop=True)
+    """The radar rows and the ADS-B rows (the other kinds, multilateration and surface radar, in neither:
+    pipeline.correlate names them radar and ADS-B by their role in a pair)."""
+    kind = meas["sensor_kind"]
+    radar, adsb = (kind == "radar").to_numpy(bool), (kind == "adsb").to_numpy(bool)
+    return meas[radar].reset_index(drop=True), meas[adsb].reset_index(drop=True)
 
 
 def _closest(wanted: str, meas: pd.DataFrame, column: str) -> list[str]:
@@ -96,12 +99,14 @@ def iter_aircraft(meas: pd.DataFrame, *, need_adsb: bool = True) -> Iterator[Air
 def aircraft_rows(meas: pd.DataFrame, *, need_adsb: bool = True
                   ) -> Iterator[tuple[str, str, str, np.ndarray, np.ndarray]]:
     """Per aircraft, in ``all_aircraft`` order: its call sign and address labels, its ``aircraft_id``, and the
-    positions in ``meas`` (ascending) of its radar rows and of its other rows; no row is copied."""
+    positions in ``meas`` (ascending) of its radar rows and of its ADS-B rows; no row is copied (rows of
+    the other kinds, multilateration and surface radar, are in neither)."""
     radar = (meas["sensor_kind"] == "radar").to_numpy(bool)
+    adsb = (meas["sensor_kind"] == "adsb").to_numpy(bool)
     ident = meas["aircraft_id"]
     rows = {kind: ident[mask].groupby(ident[mask], sort=False, observed=True).indices  # positions in mask
-            for kind, mask in (("radar", radar), ("adsb", ~radar))}
-    at = {"radar": np.flatnonzero(radar), "adsb": np.flatnonzero(~radar)}  # mask position -> row
+            for kind, mask in (("radar", radar), ("adsb", adsb))}
+    at = {"radar": np.flatnonzero(radar), "adsb": np.flatnonzero(adsb)}  # mask position -> row
     labels = aircraft_labels(meas).set_index("aircraft_id")
     ids = set(rows["radar"])
     chosen = sorted(ids & set(rows["adsb"]) if need_adsb else ids)

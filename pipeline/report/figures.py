@@ -29,6 +29,9 @@ _STYLE = {
     "adsb": {"line": ADSB_COLOR, "face": ADSB_COLOR, "edge": ADSB_EDGE, "lw": 1.6, "ms": 5.6, "z": 3},
 }
 _LABEL = {"radar": "Radar (CAT048)", "adsb": "ADS-B (CAT021)"}
+# what the two roles of a correlation run are, by its --pairs (pipeline.correlate.correlation.PAIR_KINDS)
+_PAIR_LABELS = {"mlat-adsb": {"radar": "Multilateration (CAT010/CAT020)", "adsb": "ADS-B (CAT021)"},
+                "smr-mlat": {"radar": "Surface radar (CAT010)", "adsb": "Multilateration (CAT010/CAT020)"}}
 _MAX_TITLE_CALLSIGNS = 6
 _MAX_TRACK_LABELS = 30
 MAX_MARKED_SLOTS = 20_000  # past this many slots the map shows lines only: markers would only overplot
@@ -98,14 +101,14 @@ def _draw_sensor(ax: Axes, x: np.ndarray, y: np.ndarray, filled: np.ndarray, sen
             zorder=st["z"] + 0.1)
 
 
-def _legend_handles(any_filled: bool) -> list[Line2D]:
+def _legend_handles(any_filled: bool, labels: dict[str, str] = _LABEL) -> list[Line2D]:
     handles = []
     for sensor in ("radar", "adsb"):
         st = _STYLE[sensor]
         effects = ([patheffects.Stroke(linewidth=st["lw"] + 1.6, foreground=ADSB_EDGE), patheffects.Normal()]
                    if sensor == "adsb" else None)
         handles.append(Line2D([], [], color=st["line"], lw=st["lw"], marker="o", ms=st["ms"], mfc=st["face"],
-                              mec=st["edge"], mew=0.7, path_effects=effects, label=_LABEL[sensor]))
+                              mec=st["edge"], mew=0.7, path_effects=effects, label=labels[sensor]))
     if any_filled:
         handles.append(Line2D([], [], ls="none", marker="o", ms=5, mfc="white", mec="0.3", mew=0.9,
                               label="filled slot (no report)"))
@@ -312,10 +315,11 @@ def track_map(run: CorrelationRun, sensors: pd.DataFrame | None = None) -> Figur
         coslat = math.cos(math.radians(float(np.mean(finite_lat))))
         if coslat > 0.01:
             ax.set_aspect(1.0 / coslat, adjustable="datalim")
-        handles = _legend_handles(any_filled)
+        pairs = str(run.parameters.get("pairs", ""))
+        handles = _legend_handles(any_filled, _PAIR_LABELS.get(pairs, _LABEL))
         if sensors is not None and len(sensors):
             handles.append(Line2D([], [], marker="^", ms=9, color="black", mfc="#4d4d4d", ls="none",
-                                  label="radar site"))
+                                  label="reference point" if pairs in _PAIR_LABELS else "radar site"))
             handles.append(Line2D([], [], color="0.55", lw=0.7, ls=":",
                                   label=f"range ring every {RING_STEP_NM:g} NM"))
         handles.append(Line2D([], [], marker=r"$\rightarrow$", ms=10, color="black", ls="none",
@@ -334,7 +338,10 @@ def track_map(run: CorrelationRun, sensors: pd.DataFrame | None = None) -> Figur
     ax.set_ylabel("Latitude (deg, WGS-84)")
     fig.suptitle(f"Slotted tracks: {_callsign_title(run.windows) or 'none'}", fontsize=13, fontweight="bold")
     unmarked = "" if markers else f"; {n_slots:,} slots: lines only, no slot markers"
-    ax.set_title(f"radar (red) over ADS-B (yellow), {len(run.windows)} window(s), equal-distance aspect"
+    roles = _PAIR_LABELS.get(str(run.parameters.get("pairs", "")))
+    first, second = (roles["radar"].split(" (")[0].lower(), roles["adsb"].split(" (")[0]) if roles else (
+        "radar", "ADS-B")
+    ax.set_title(f"{first} (red) over {second} (yellow), {len(run.windows)} window(s), equal-distance aspect"
                  f"{unmarked}", fontsize=9, color="0.35")
     missed = place_labels(fig, ax)
     if missed:  # said, not hidden silently

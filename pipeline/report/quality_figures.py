@@ -27,7 +27,8 @@ from msdc.pipeline.report.summary import window_label
 
 RADAR_COLOR = "#d62728"
 ADSB_COLOR = "#e6b800"
-_SENSOR_LABEL = {"radar": "Radar (CAT048)", "adsb": "ADS-B (CAT021)"}
+_SENSOR_LABEL = {"radar": "Radar (CAT048)", "adsb": "ADS-B (CAT021)", "mlat": "Multilateration",
+                 "smr": "Surface radar (CAT010)"}
 _TICK_STEPS_S = (10, 30, 60, 120, 300, 600, 900, 1800, 3600, 7200, 14400)  # whole minutes from 60 s
 MAX_ERROR_POINTS = 50_000  # reports drawn per radar error figure: more only overplot, and cost seconds
 MAX_LEGEND_AIRCRAFT = 20  # aircraft named in the radar error legend; past it, colours only

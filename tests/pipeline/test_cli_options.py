@@ -114,7 +114,7 @@ ERRORS = [
     ("track-coast-below-step", TRACK + ["--step", "10", "--max-coast", "5"], 2, ["--max-coast", ">= --step"]),
     ("track-tpm-unknown", TRACK + ["--tpm", "magic"], 2, ["--tpm", "magic"]),
     ("track-tpm-nan", TRACK + ["--tpm", "fixed:nan"], 2, ["--tpm"]),
-    ("track-sources-unknown", TRACK + ["--sources", "radar,mlat"], 2, ["--sources", "radar,adsb"]),
+    ("track-sources-unknown", TRACK + ["--sources", "radar,wam"], 2, ["--sources", "radar,adsb"]),
     ("track-sources-repeat", TRACK + ["--sources", "radar,radar"], 2, ["--sources", "without repeats"]),
     ("track-sources-empty", TRACK + ["--sources", ""], 2, ["--sources"]),
     ("track-noise-unknown", TRACK + ["--noise", "nacp"], 2, ["--noise", "declared, estimate"]),

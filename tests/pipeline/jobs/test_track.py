@@ -48,7 +48,7 @@ BAD = [
     (opts(tpm="expm:0.001"), "sojourn times from 0.01 to 10,000,000 seconds"),
     (opts(tpm="expm:150,1e-320"), "--tpm 'expm:150,1e-320'"),  # 1/TAU overflows: NaN probabilities
     (opts(smoother="two-filter"), "--smoother 'two-filter': must be rts or imm"),
-    (opts(sources=("radar", "mlat")), "--sources 'radar,mlat'"),
+    (opts(sources=("radar", "wam")), "--sources 'radar,wam'"),
     (opts(sources=()), "--sources"),
     (opts(callsign=None), "exactly one of --callsign, --address or --all"),
     (opts(callsign=None, address="XYZ"), "--address 'XYZ'"),
