@@ -15,7 +15,7 @@ import importlib.util
 from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:  # what the names are, for readers and the API docs; loaded by __getattr__
-    from .errors import AsterixError, DecodeError, EditionWarning, UnreadableInput
+    from .errors import AsterixError, ContentWarning, DecodeError, EditionWarning, UnreadableInput
     from .reader import Recording, decode_buffer, parse_date, read
     from .stream import iter_read
     from .tables import available as available_editions
@@ -23,6 +23,7 @@ if TYPE_CHECKING:  # what the names are, for readers and the API docs; loaded by
 # name -> (module, attribute)
 _PUBLIC = {
     "AsterixError": ("errors", "AsterixError"), "DecodeError": ("errors", "DecodeError"),
+    "ContentWarning": ("errors", "ContentWarning"),
     "EditionWarning": ("errors", "EditionWarning"), "UnreadableInput": ("errors", "UnreadableInput"),
     "Recording": ("reader", "Recording"), "decode_buffer": ("reader", "decode_buffer"),
     "parse_date": ("reader", "parse_date"), "read": ("reader", "read"), "iter_read": ("stream", "iter_read"),
@@ -30,7 +31,8 @@ _PUBLIC = {
 }
 
 __all__ = [  # the names of _PUBLIC
-    "AsterixError", "DecodeError", "EditionWarning", "Recording", "UnreadableInput", "available_editions",
+    "AsterixError", "ContentWarning", "DecodeError", "EditionWarning", "Recording", "UnreadableInput",
+    "available_editions",
     "decode_buffer", "iter_read", "parse_date", "read",
 ]
 

@@ -27,6 +27,11 @@ class EditionWarning(UserWarning):
     another: a likely wrong edition (said, never switched: nothing on the wire says which edition)."""
 
 
+class ContentWarning(UserWarning):
+    """``read`` found an input mostly not ASTERIX (bytes skipped, or framed into blocks unlike a recording's),
+    not ASTERIX at all, or a category whose records carry values no real report does (asterix.verdict)."""
+
+
 class DecodeError(AsterixError):
     """Raised in strict mode for the first bad block: names the file, the offset and the reason."""
 
