@@ -19,7 +19,7 @@ from .categories import DECODABLE, MEASUREMENT_CATEGORIES
 from .columns import FAMILIES
 from .containers import Segments, read_segments
 from .errors import REASONS, ContentWarning, DecodeError, EditionWarning, UnreadableInput
-from .families import AUTO, edition_families, edition_span, family_of, with_defaults
+from .families import AUTO, edition_families, edition_span, family_name, family_of, with_defaults
 from .frames import code_list_column, empty_column, icao_columns, typed_column
 from .layout import Layout, compile_layout
 from .plausible import BOUNDS, Implausible, count_implausible, implausible
@@ -283,14 +283,18 @@ def choose_edition(buf: np.ndarray, starts: np.ndarray, lens: np.ndarray, catego
     contenders = [ed for ed in eds if share[ed] >= 0.5] or [chosen]
     stack = np.array([flags[ed] for ed in contenders])
     apart = np.flatnonzero(stack.min(axis=0) != stack.max(axis=0))
-    words = [f"{ed}: {share[ed]:.0%}" for ed in eds]
+    # per family (its editions walk every block alike, so their shares are one)
+    words = [f"{family_name(f)}: {share[f[0]]:.0%}" for f in edition_families(category)]
     told = ", ".join(f"offset {int(s[j])} walks under {'/'.join(ed for ed in contenders if flags[ed][j])}"
                      for j in apart[:3]) or "none"
     if best < 1:
         verdict = f"no edition walks every sampled block; best {chosen}"
     else:
-        verdict = f"editions walking every sampled block: {', '.join(tied)}; newest {chosen}"
-    if plaus:
+        walking = edition_span(category, tuple(tied))
+        verdict = f"editions walking every sampled block: {walking}; newest {chosen}"
+    if plaus and len(set(plaus.values())) == 1:
+        verdict += f" (all {next(iter(plaus.values())):.0%} plausible)"
+    elif plaus:
         verdict += " (" + ", ".join(f"{ed} {p:.0%} plausible" for ed, p in plaus.items()) + ")"
     apart_words = (f"{len(apart)} blocks told {'/'.join(contenders)} apart: {told}" if len(contenders) > 1
                    else "no other edition walks half the sample, so none needed telling apart")
