@@ -15,7 +15,14 @@ import importlib.util
 from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:  # what the names are, for readers and the API docs; loaded by __getattr__
-    from .errors import AsterixError, DecodeError, EditionWarning, UnreadableInput, UntimedWarning
+    from .errors import (
+        AsterixError,
+        ContentWarning,
+        DecodeError,
+        EditionWarning,
+        UnreadableInput,
+        UntimedWarning,
+    )
     from .reader import Recording, decode_buffer, parse_date, read
     from .stream import iter_read
     from .tables import available as available_editions
@@ -23,6 +30,7 @@ if TYPE_CHECKING:  # what the names are, for readers and the API docs; loaded by
 # name -> (module, attribute)
 _PUBLIC = {
     "AsterixError": ("errors", "AsterixError"), "DecodeError": ("errors", "DecodeError"),
+    "ContentWarning": ("errors", "ContentWarning"),
     "EditionWarning": ("errors", "EditionWarning"), "UnreadableInput": ("errors", "UnreadableInput"),
     "UntimedWarning": ("errors", "UntimedWarning"),
     "Recording": ("reader", "Recording"), "decode_buffer": ("reader", "decode_buffer"),
@@ -31,8 +39,8 @@ _PUBLIC = {
 }
 
 __all__ = [  # the names of _PUBLIC
-    "AsterixError", "DecodeError", "EditionWarning", "Recording", "UnreadableInput", "available_editions",
-    "decode_buffer", "iter_read", "parse_date", "read", "UntimedWarning",
+    "AsterixError", "ContentWarning", "DecodeError", "EditionWarning", "Recording", "UnreadableInput",
+    "available_editions", "decode_buffer", "iter_read", "parse_date", "read", "UntimedWarning",
 ]
 
 

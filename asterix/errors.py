@@ -34,6 +34,11 @@ class UntimedWarning(UserWarning):
     whole (``Recording.untimed``: offsets and reasons): their time_of_day is NaN, not guessed."""
 
 
+class ContentWarning(UserWarning):
+    """``read`` found an input mostly not ASTERIX (bytes skipped, or framed into blocks unlike a recording's),
+    not ASTERIX at all, or a category whose records carry values no real report does (asterix.verdict)."""
+
+
 class DecodeError(AsterixError):
     """Raised in strict mode for the first bad block: names the file, the offset and the reason."""
 

@@ -14,16 +14,20 @@ from functools import cache
 import numpy as np
 import pandas as pd
 
-from . import bds, kernel
+from . import bds, kernel, sampling
 from .cat001_time import PLOT_CATEGORY, UNTIMED_COLUMNS, SectorClock, time_cat001, untimed_advice
 from .categories import DECODABLE, MEASUREMENT_CATEGORIES, REGISTRY
 from .columns import FAMILIES
 from .containers import Segments, read_segments
-from .errors import REASONS, DecodeError, EditionWarning, UnreadableInput, UntimedWarning
+from .errors import REASONS, ContentWarning, DecodeError, EditionWarning, UnreadableInput, UntimedWarning
+from .families import AUTO, edition_families, edition_span, family_name, family_of, with_defaults
 from .frames import code_list_column, empty_columns, icao_columns, typed_column
 from .layout import OUT_FLOAT, OUT_INT, OUT_WIDE, Layout, compile_layout
+from .plausible import BOUNDS, Implausible, count_implausible, implausible
+from .stretches import Stretch, describe, foreign_spans
 from .tables import available, resolve_edition
 from .timeline import assign_days, timestamp_index
+from .verdict import Tally, head_of
 
 # Decoded when categories=None: the measurement categories. CAT034 (service messages) is decoded on
 # request (categories=DECODABLE): until the pipeline handles its frames, its blocks are stepped over and
@@ -31,7 +35,13 @@ from .timeline import assign_days, timestamp_index
 DEFAULT_CATEGORIES = MEASUREMENT_CATEGORIES
 WRONG_EDITION_MIN_BLOCKS = 10  # failed blocks, all walking under another edition, proving the edition wrong
 AUTO_SAMPLE_BLOCKS = 20_000  # blocks walked per candidate edition by editions={cat: "auto"}
+# a raw stream whose chain breaks (choose_editions): blocks before the break enough to choose the edition
+# that frames the rest; else framing_edition over the stream's first FRAMING_EDITION_BYTES; then windows
+AUTO_PREFIX_BLOCKS = 100
+FRAMING_EDITION_BYTES = 1 << 22
+AUTO_WINDOWS, AUTO_WINDOW_BYTES = 16, 1 << 18
 ERROR_COLUMNS = ["file", "offset", "length", "category", "reason"]
+OVERSIZED_BLOCK_BYTES = 8192  # a longer block of a category not decoded counts as unlike a recording's
 
 
 @dataclass
@@ -59,6 +69,15 @@ class Recording:
     # CAT001 records whose truncated time of day no CAT002 message made whole (cat001_time): offset,
     # category, sac, sic, reason; their time_of_day is NaN
     untimed: pd.DataFrame = field(default_factory=lambda: pd.DataFrame(columns=UNTIMED_COLUMNS))
+    # a category holding stretches of blocks that walk under another edition family than the rest: each
+    # stretch, withheld (recordings of different editions laid end to end)
+    edition_stretches: dict[int, list[Stretch]] = field(default_factory=dict)
+    decoded_blocks: dict[int, int] = field(default_factory=dict)  # blocks per category whose records decoded
+    # per category, the decoded records holding a value no real report carries (plausible.BOUNDS)
+    implausible: dict[int, Implausible] = field(default_factory=dict)
+    # bytes in blocks of categories not decoded longer than OVERSIZED_BLOCK_BYTES: what text and random bytes
+    # frame into (printable text makes every LEN at least 0x2020 = 8224), rarely what a recorder writes
+    oversized_bytes: int = 0
 
     @property
     def ignored(self) -> pd.DataFrame:
@@ -73,6 +92,7 @@ class Recording:
 
 
 _ALWAYS = ("day", "timestamp", "block", "offset")  # built for every frame
+KNOWN_COLUMNS = frozenset(c.name for family in FAMILIES.values() for c in family)
 
 
 def selected_columns(columns) -> tuple[str, ...] | None:
@@ -80,7 +100,7 @@ def selected_columns(columns) -> tuple[str, ...] | None:
     ValueError naming a column no category has."""
     if columns is None:
         return None
-    known = {c.name for family in FAMILIES.values() for c in family}
+    known = KNOWN_COLUMNS
     names = set()
     for name in ([columns] if isinstance(columns, str) else columns):
         base = name[:-4] if name.endswith("_hex") and name[:-4] in known else name
@@ -255,18 +275,32 @@ def _walk_flags(buf: np.ndarray, starts: np.ndarray, lens: np.ndarray, category:
                              framing.parts).astype(bool)
 
 
+def _family_flags(buf: np.ndarray, starts: np.ndarray, lens: np.ndarray, category: int
+                  ) -> dict[str, np.ndarray]:
+    """_walk_flags under every edition, walked once per family (its editions walk every block alike)."""
+    flags: dict[str, np.ndarray] = {}
+    for family in edition_families(category):
+        walked = _walk_flags(buf, starts, lens, category, family[-1])
+        flags |= {ed: walked for ed in family}
+    return {ed: flags[ed] for ed in _editions_oldest_first(category)}
+
+
 def choose_edition(buf: np.ndarray, starts: np.ndarray, lens: np.ndarray, category: int,
-                   sample: int = AUTO_SAMPLE_BLOCKS) -> tuple[str, str]:
+                   sample: int = AUTO_SAMPLE_BLOCKS, total: int | None = None, source: str = ""
+                   ) -> tuple[str, str]:
     """Pick the edition under which every sampled block walks exactly (the newest of those, as they read
     the sample alike), values plausible; say which blocks told the editions apart, or that none walks all.
 
     The sample is every block, or AUTO_SAMPLE_BLOCKS spread evenly over a longer recording: a walk costs
-    no memory, so rare blocks that tell editions apart (I021/271 with an odd LW) are seen.
+    no memory, so rare blocks that tell editions apart (I021/271 with an odd LW) are seen. ``total``:
+    the blocks the given ones were sampled from (choose_editions samples the whole recording first), or
+    ``source``: where they come from, in words.
     """
     idx = _spread(len(starts), sample)
     s, n = starts[idx], lens[idx]
+    total = len(starts) if total is None else total
     eds = _editions_oldest_first(category)
-    flags = {ed: _walk_flags(buf, s, n, category, ed) for ed in eds}
+    flags = _family_flags(buf, s, n, category)
     share = {ed: float(f.mean()) for ed, f in flags.items()}
     best = max(share.values())
     tied = [ed for ed in eds if share[ed] == best]
@@ -277,18 +311,23 @@ def choose_edition(buf: np.ndarray, starts: np.ndarray, lens: np.ndarray, catego
     contenders = [ed for ed in eds if share[ed] >= 0.5] or [chosen]
     stack = np.array([flags[ed] for ed in contenders])
     apart = np.flatnonzero(stack.min(axis=0) != stack.max(axis=0))
-    words = [f"{ed}: {share[ed]:.0%}" for ed in eds]
+    # per family (its editions walk every block alike, so their shares are one)
+    words = [f"{family_name(f)}: {share[f[0]]:.0%}" for f in edition_families(category)]
     told = ", ".join(f"offset {int(s[j])} walks under {'/'.join(ed for ed in contenders if flags[ed][j])}"
                      for j in apart[:3]) or "none"
     if best < 1:
         verdict = f"no edition walks every sampled block; best {chosen}"
     else:
-        verdict = f"editions walking every sampled block: {', '.join(tied)}; newest {chosen}"
-    if plaus:
+        walking = edition_span(category, tuple(tied))
+        verdict = f"editions walking every sampled block: {walking}; newest {chosen}"
+    if plaus and len(set(plaus.values())) == 1:
+        verdict += f" (all {next(iter(plaus.values())):.0%} plausible)"
+    elif plaus:
         verdict += " (" + ", ".join(f"{ed} {p:.0%} plausible" for ed, p in plaus.items()) + ")"
     apart_words = (f"{len(apart)} blocks told {'/'.join(contenders)} apart: {told}" if len(contenders) > 1
                    else "no other edition walks half the sample, so none needed telling apart")
-    return chosen, (f"chose {chosen} ({len(idx)} of {len(starts)} blocks sampled; blocks walking: "
+    sampled = f"{len(idx)} {source}" if source else f"{len(idx)} of {total} blocks sampled"
+    return chosen, (f"chose {chosen} ({sampled}; blocks walking: "
                     f"{'; '.join(words)}; {verdict}; {apart_words})")
 
 
@@ -297,17 +336,38 @@ def walking_editions(buf: np.ndarray, starts: np.ndarray, lens: np.ndarray, cate
     """The editions (oldest first, ``besides`` left out) under which every one of these blocks walks
     exactly, or of ``sample`` of them spread evenly over a longer list."""
     idx = _spread(len(starts), sample)
-    s, n = starts[idx], lens[idx]
-    return tuple(ed for ed in _editions_oldest_first(category)
-                 if ed != besides and _walk_flags(buf, s, n, category, ed).all())
+    flags = _family_flags(buf, starts[idx], lens[idx], category)
+    return tuple(ed for ed, f in flags.items() if ed != besides and f.all())
+
+
+def _other_family_spans(buf: np.ndarray, starts: np.ndarray, lens: np.ndarray, failed: np.ndarray,
+                        category: int, edition: str) -> list[tuple[int, int]]:
+    """Block spans of stretches of another edition family (asterix.stretches), when at least
+    WRONG_EDITION_MIN_BLOCKS blocks failed, that many walk under one other family, and at least as many
+    blocks outside the stretches are evidence for ``edition``; else none (a wrong edition throughout is
+    the rule of decode_buffer, a few failed blocks are damage)."""
+    if failed.sum() < WRONG_EDITION_MIN_BLOCKS:
+        return []
+    idx = np.flatnonzero(failed)[_spread(int(failed.sum()), AUTO_SAMPLE_BLOCKS)]
+    own = family_of(category, compile_layout(category, edition).edition)
+    counts = {f[-1]: int(_walk_flags(buf, starts[idx], lens[idx], category, f[-1]).sum())
+              for f in edition_families(category) if f != own}
+    if not counts or max(counts.values()) < WRONG_EDITION_MIN_BLOCKS:
+        return []
+    other = max(counts, key=lambda ed: counts[ed])
+    spans, used = foreign_spans(~failed, _walk_flags(buf, starts, lens, category, other),
+                                WRONG_EDITION_MIN_BLOCKS)
+    return spans if used >= WRONG_EDITION_MIN_BLOCKS else []
 
 
 def framing_edition(buf: np.ndarray, seg: Segments, walked: dict, category: int) -> str:
     """For an 'auto' category of a stream whose block chain breaks: the edition under which careful
     framing loses the fewest bytes (most of its blocks found on a tie, then the newest). Framing cannot
-    walk a category without an edition, and would otherwise lose every block of it after the damage."""
+    walk a category without an edition, and would otherwise lose every block of it after the damage.
+    One edition per family is tried, the newest: the editions of a family frame alike."""
     best: tuple | None = None
-    for ed in _editions_oldest_first(category):
+    for family in edition_families(category):
+        ed = family[-1]
         framed = frame(buf, seg, {**walked, category: ed}, True)
         key = (int(framed[5].sum()), -int((framed[2] == category).sum()))
         if best is None or key <= best[0]:
@@ -316,17 +376,16 @@ def framing_edition(buf: np.ndarray, seg: Segments, walked: dict, category: int)
 
 
 def _plausible_share(buf, s, n, category: int, ed: str, limit: int = 400) -> float:
-    """Share of records of up to ``limit`` sampled blocks with a plausible position and time of day."""
+    """Share of records of up to ``limit`` sampled blocks whose values are plausible (plausible.mask:
+    positions on the Earth, times of day within 24 h; the columns the category has)."""
     k = _spread(len(s), limit)
     lay = compile_layout(category, ed)
     scanned = _scan(buf, s[k], n[k], lay)
     if not (scanned[0] > 0).any():
         return 0.0
     where, _, _, _ = _extract(buf, scanned, lay)
-    absent = np.full(int(scanned[-1]), np.nan)
-    lat, lon, tod = (where[nm][0][where[nm][1]] if nm in where else absent
-                     for nm in ("latitude", "longitude", "time_of_day"))
-    ok = (np.abs(lat) <= 90) & (np.abs(lon) <= 180) & (tod >= 0) & (tod < 86400)
+    bounded = {nm: where[nm][0][where[nm][1]] for nm in BOUNDS if nm in where}
+    ok = ~implausible(bounded) if bounded else np.ones(int(scanned[-1]), bool)
     return float(np.mean(ok)) if len(ok) else 0.0
 
 
@@ -450,19 +509,74 @@ def walked_editions(editions: dict, categories) -> dict[int, str | None]:
     wanted = set(DEFAULT_CATEGORIES if categories is None else categories)
     return {c: editions.get(c) for c in DECODABLE
             if (c in wanted or c == 48 or c in editions)
-            and editions.get(c) != "auto"}
+            and editions.get(c) != AUTO}
 
 
 def framing_walk(buf: np.ndarray, seg: Segments, editions: dict, categories) -> dict[int, str | None]:
-    """walked_editions, plus, on a stream whose block chain breaks, each decoded 'auto' category with the
-    edition framing_edition finds for it (its blocks are found before its edition is chosen)."""
-    walked = walked_editions(editions, categories)
+    """The categories framing walks, with their editions (walked_editions). Every 'auto' edition is chosen
+    before framing (choose_editions, which frames a broken raw stream under the edition it finds): one
+    left 'auto' had no block in the sample, and is not walked (framing it under every family to find
+    blocks that sampling did not cost several times the decoding)."""
+    return walked_editions(editions, categories)
+
+
+def _raw_part(lo: int, hi: int) -> Segments:
+    """Bytes [lo, hi) of a file as a raw stream of their own."""
+    return Segments("raw", np.array([lo]), np.array([hi]), np.array([-1]), np.array([np.nan]), False, False,
+                    0, [])
+
+
+def _broken_chain_sample(buf: np.ndarray, seg: Segments, cat: int, walked: dict) -> tuple[np.ndarray, str]:
+    """For a raw stream whose chain breaks: the starts of the sampled blocks of ``cat``, and where they come
+    from. Framing such a stream needs an edition for ``cat`` (careful framing finds blocks by walking
+    them): one is chosen from the blocks before the chain's first break, or, with too few there, the one
+    under which careful framing of the stream's start loses the fewest bytes (framing_edition); the
+    sample is then the blocks before the break and those careful framing under it finds in
+    AUTO_WINDOWS windows spread over the stream (the whole stream when it is no longer)."""
+    start, stop = int(seg.start[0]), int(seg.stop[0])
+    prefix = sampling.prefix_starts(buf, start, stop, cat, AUTO_SAMPLE_BLOCKS)
+    if len(prefix) >= AUTO_PREFIX_BLOCKS:
+        ed = choose_edition(buf, prefix, sampling.block_lengths(buf, prefix), cat)[0]
+    else:
+        ed = framing_edition(buf, _raw_part(start, min(stop, start + FRAMING_EDITION_BYTES)), walked, cat)
+    span = AUTO_WINDOWS * AUTO_WINDOW_BYTES
+    windows = ([(start, stop)] if stop - start <= span else
+               [(int(lo), int(lo) + AUTO_WINDOW_BYTES)
+                for lo in np.linspace(start, stop - AUTO_WINDOW_BYTES, AUTO_WINDOWS).astype(np.int64)])
+    found = [prefix]
+    for lo, hi in windows:
+        framed = frame(buf, _raw_part(lo, hi), {**walked, cat: ed}, True)
+        found.append(framed[0][framed[2] == cat])
+    found = np.unique(np.concatenate(found))
+    starts = found[_spread(len(found), AUTO_SAMPLE_BLOCKS)]  # clustered: spread by count, not by offset
+    where = ("the stream framed" if len(windows) == 1 else f"{len(windows)} windows of the stream framed")
+    return starts, (f"blocks sampled from the chain before its first break and {where} under {ed} (its "
+                    "chain breaks)")
+
+
+def choose_editions(buf: np.ndarray, seg: Segments, editions: dict, categories
+                    ) -> tuple[dict, dict[int, str]]:
+    """Each 'auto' edition of a decoded category chosen over the whole recording before it is decoded
+    (``read`` decodes with the result whole, ``iter_read`` in chunks: they choose alike): the editions
+    with each 'auto' replaced, and how each was chosen in words. A category with no block stays 'auto'.
+
+    The sample follows the block chain (asterix.sampling), at no cost in memory and next to none in time;
+    a raw stream whose chain breaks is sampled as _broken_chain_sample says."""
     wanted = set(DEFAULT_CATEGORIES if categories is None else categories)
-    auto = [c for c in DECODABLE if c in wanted and editions.get(c) == "auto"]
-    if auto and not seg.exact and len(frame(buf, seg, walked, False)[4]):
-        for cat in auto:
-            walked[cat] = framing_edition(buf, seg, walked, cat)
-    return walked
+    auto = [c for c in DECODABLE if c in wanted and editions.get(c) == AUTO]
+    chosen, why = dict(editions), {}
+    for cat in auto:
+        source = ""
+        if seg.exact or all(sampling.chain_holds(buf, a, b)
+                            for a, b in zip(seg.start, seg.stop, strict=True)):
+            starts, total = sampling.sample_starts(buf, seg.start, seg.stop, cat, AUTO_SAMPLE_BLOCKS)
+        else:
+            starts, source = _broken_chain_sample(buf, seg, cat, walked_editions(editions, categories))
+            total = len(starts)
+        if total:
+            chosen[cat], why[cat] = choose_edition(buf, starts, sampling.block_lengths(buf, starts), cat,
+                                                   total=total, source=source)
+    return chosen, why
 
 
 def _walking_bytes(buf: np.ndarray, framed, framing: kernel.Framing, among=None) -> int:
@@ -514,12 +628,63 @@ def _scan_decoded(buf: np.ndarray, framed, decoded: list[int], editions: dict, c
             continue
         starts, lens = b_start[sel], b_len[sel]
         ed = editions.get(cat)
-        if ed == "auto" and cat not in choice:
+        if ed == AUTO and cat not in choice:
             ed, choice[cat] = choose_edition(buf, starts, lens, cat)
             editions[cat] = ed
         lay = compile_layout(cat, ed, selected)
         scans[cat] = (sel, lay, _scan(buf, starts, lens, lay))
     return scans
+
+
+@dataclass
+class _Judged:
+    """What the walk of one category's blocks says about its edition: the errors (each failed block, and
+    blocks withheld), the blocks kept (None: all), and the evidence of another edition."""
+
+    errors: list[tuple[int, int, int, str]]
+    keep: np.ndarray | None = None
+    fits: dict[int, tuple[str, ...]] = field(default_factory=dict)
+    stretches: list[Stretch] = field(default_factory=list)
+
+
+def _judge_edition(buf: np.ndarray, starts: np.ndarray, lens: np.ndarray, scanned, cat: int,
+                   edition: str) -> _Judged:
+    """Report the blocks that failed to walk, and judge the edition: stretches of another edition family
+    among the blocks (_other_family_spans) are withheld whole, each stretch's blocks reported as such;
+    else, when most blocks failed and every one sampled walks under another edition, the edition is
+    wrong: the blocks that walk under it anyway are withheld too (they would give wrong values)."""
+    counts, fail_at = scanned[0], scanned[1]
+    failed = counts < 0
+    why_failed = {int(j): f"{REASONS[int(-counts[j])]} (record at offset {int(fail_at[j])})"
+                  for j in np.flatnonzero(failed)}
+    judged = _Judged([])
+    for lo, hi in _other_family_spans(buf, starts, lens, failed, cat, edition):
+        inside = np.arange(lo, hi)
+        eds = walking_editions(buf, starts[inside][failed[inside]], lens[inside][failed[inside]], cat,
+                               besides=edition)
+        end = int(starts[hi - 1] + lens[hi - 1])
+        judged.stretches.append(Stretch(int(starts[lo]), end, hi - lo, eds, edition, lo == 0,
+                                        hi == len(counts)))
+        among = (f"CAT{cat:03d} blocks at offsets {int(starts[lo])}-{end - 1} that walk under "
+                 f"{edition_span(cat, eds) or 'another edition'} and not under {edition}")
+        for j in inside:
+            why_failed[int(j)] = (f"does not walk under edition {edition}; lies among {among}: skipped "
+                                  f"(another edition)" if failed[j] else
+                                  f"walks under edition {edition}, but lies among {among}: withheld "
+                                  f"(another edition)")
+        if judged.keep is None:
+            judged.keep = np.ones(len(counts), bool)
+        judged.keep[inside] = False
+    if not judged.stretches and failed.any() and 2 * int(failed.sum()) >= len(counts):
+        judged.fits[cat] = walking_editions(buf, starts[failed], lens[failed], cat, besides=edition)
+        if judged.fits[cat] and failed.sum() >= WRONG_EDITION_MIN_BLOCKS:
+            others = " or ".join(judged.fits[cat])
+            why = (f"walks under edition {edition}, but most CAT{cat:03d} blocks do not and every one of "
+                   f"those sampled walks under {others}: withheld (a wrong edition)")
+            why_failed |= {int(j): why for j in np.flatnonzero(~failed)}
+            judged.keep = np.zeros(len(counts), bool)
+    judged.errors = [(int(starts[j]), int(lens[j]), cat, why) for j, why in sorted(why_failed.items())]
+    return judged
 
 
 def decode_buffer(buf: np.ndarray, seg: Segments, *, path: str = "", editions: dict | None = None,
@@ -528,12 +693,14 @@ def decode_buffer(buf: np.ndarray, seg: Segments, *, path: str = "", editions: d
     """Decode an in-memory recording whose container segments are already known (``columns``: see
     ``read``; ``sector_clock``: the CAT002 times of the data before it, which ``iter_read`` carries)."""
     editions = dict(editions or {})
-    selected = selected_columns(columns)
+    asked = selected_columns(columns)
+    # the columns plausibility is judged on are decoded whatever was asked, and dropped after
+    selected = None if asked is None else tuple(sorted({*asked, *(c for c in BOUNDS if c in KNOWN_COLUMNS)}))
     date = parse_date(date)
     categories = check_categories(categories)
     decoded = [c for c in DECODABLE if c in set(DEFAULT_CATEGORIES if categories is None else categories)]
+    editions, choice = choose_editions(buf, seg, with_defaults(editions, decoded), categories)
     walked = framing_walk(buf, seg, editions, categories)
-    choice: dict[int, str] = {}
     # Framing first follows the block chain as it is. If it breaks, or a decoded block does not walk
     # (a LEN may be damaged), the raw stream is framed again carefully, walking the decoded blocks, and
     # frame_checked settles which framing stands.
@@ -553,35 +720,38 @@ def decode_buffer(buf: np.ndarray, seg: Segments, *, path: str = "", editions: d
     columns: dict[int, dict] = {}
     chosen: dict[int, str] = {}
     fits: dict[int, tuple[str, ...]] = {}
+    stretches: dict[int, list[Stretch]] = {}
+    decoded_blocks: dict[int, int] = {}
     ignored: dict[int, int] = {}
     ignored_by_cat: dict[int, int] = {}
-    decoded_bytes = ignored_bytes = 0
+    decoded_bytes = ignored_bytes = oversized_bytes = 0
     for cat in (int(c) for c in np.unique(b_cat)):
         if cat not in scans:  # a category not decoded: stepped over, accounted per category
             sel = b_cat == cat
             ignored[cat] = int(sel.sum())
             ignored_by_cat[cat] = int(b_len[sel].sum())
+            oversized_bytes += int(b_len[sel][b_len[sel] > OVERSIZED_BLOCK_BYTES].sum())
             ignored_bytes += ignored_by_cat[cat]
             continue
         sel, lay, scanned = scans.pop(cat)
         starts, lens = b_start[sel], b_len[sel]
         chosen[cat] = lay.edition
-        counts, fail_at = scanned[0], scanned[1]
-        for j in np.flatnonzero(counts < 0):
-            reason = f"{REASONS[int(-counts[j])]} (record at offset {int(fail_at[j])})"
-            errors.append((int(starts[j]), int(lens[j]), cat, reason))
-        failed = counts < 0
-        if failed.any() and 2 * int(failed.sum()) >= len(counts):
-            fits[cat] = walking_editions(buf, starts[failed], lens[failed], cat, besides=lay.edition)
-            if fits[cat] and failed.sum() >= WRONG_EDITION_MIN_BLOCKS:
-                # the edition is wrong: blocks that walk under it anyway would give wrong values
-                others = " or ".join(fits[cat])
-                why = (f"walks under edition {lay.edition}, but most CAT{cat:03d} blocks do not and every "
-                       f"one of those sampled walks under {others}: withheld (a wrong edition)")
-                errors += [(int(starts[j]), int(lens[j]), cat, why) for j in np.flatnonzero(~failed)]
-                scanned = (*scanned[:-1], 0)
-                counts = np.full_like(counts, -1)
+        judged = _judge_edition(buf, starts, lens, scanned, cat, lay.edition)
+        errors += judged.errors
+        if cat in judged.fits:
+            fits[cat] = judged.fits[cat]
+        if judged.stretches:
+            stretches[cat] = judged.stretches
+        counts = scanned[0]
+        if judged.keep is not None and not judged.keep.any():
+            scanned = (*scanned[:-1], 0)
+            counts = np.full_like(counts, -1)
+        elif judged.keep is not None:  # stretches withheld: the rest walked again on its own
+            sel, starts, lens = sel[judged.keep], starts[judged.keep], lens[judged.keep]
+            scanned = _scan(buf, starts, lens, lay)
+            counts = scanned[0]
         decoded_bytes += int(lens[counts > 0].sum())
+        decoded_blocks[cat] = int((counts > 0).sum())
         where, texts, rec_off, rec_blk = _extract(buf, scanned, lay)
         del scanned
         columns[cat] = _columns(lay, where, texts, rec_off, sel[rec_blk])
@@ -596,8 +766,12 @@ def decode_buffer(buf: np.ndarray, seg: Segments, *, path: str = "", editions: d
     if first_day is not None and seg.dated:
         date = dt.date(1970, 1, 1) + dt.timedelta(days=first_day)
     frames: dict[int, pd.DataFrame] = {}
+    odd: dict[int, Implausible] = {}
     for cat in list(columns):
         cols = columns.pop(cat)
+        odd[cat] = count_implausible(cols, cols["offset"])
+        for extra in () if asked is None else set(selected) - set(asked) - set(LEADING):
+            cols.pop(extra, None)
         cols["timestamp"] = timestamp_index(cols["day"], cols["time_of_day"], date)
         frames[cat] = _build(cols)
         del cols
@@ -608,7 +782,10 @@ def decode_buffer(buf: np.ndarray, seg: Segments, *, path: str = "", editions: d
                      size_bytes=int(len(buf)), container_bytes=int(seg.container_bytes),
                      decoded_bytes=decoded_bytes, ignored_blocks=ignored, ignored_bytes=ignored_bytes,
                      edition_choice=choice, day0=first_day, ignored_category_bytes=ignored_by_cat,
-                     edition_fits=fits, blocks=int(len(b_start)), untimed=untimed)
+                     edition_fits=fits, blocks=int(len(b_start)), untimed=untimed,
+                     edition_stretches=stretches,
+                     decoded_blocks=decoded_blocks, implausible={c: v for c, v in odd.items() if v.records},
+                     oversized_bytes=oversized_bytes)
 
 
 def framing_reason(buf: np.ndarray, seg: Segments, offset: int, code: int) -> str:
@@ -641,6 +818,17 @@ def _parse_editions(editions) -> dict[int, str]:
     return out
 
 
+def reading_editions(editions, categories) -> dict[int, str]:
+    """The editions a recording is read with: those given (``read``'s forms; a pinned one must name a
+    shipped table), and for each other decoded category its reading default ('auto' for a category whose
+    editions walk differently: asterix.families)."""
+    eds = _parse_editions(editions)
+    for cat, ed in eds.items():
+        if ed != AUTO:
+            resolve_edition(cat, ed)
+    return with_defaults(eds, DEFAULT_CATEGORIES if categories is None else categories)
+
+
 def read(path, *, editions=None, date=None, categories=None, format: str | None = None,
          strict: bool = False, columns=None) -> Recording:
     """Decode a recording file (raw, pcap/pcapng, final, gps or oradis) into typed frames by category.
@@ -649,12 +837,9 @@ def read(path, *, editions=None, date=None, categories=None, format: str | None 
     ``time_of_day``, ``day``, ``timestamp``, ``block`` and ``offset``: a job that needs a few columns
     of a large recording holds only them. Every block is still walked and accounted alike.
     """
-    eds = _parse_editions(editions)
     selected_columns(columns)
     date, categories = parse_date(date), check_categories(categories)
-    for cat, ed in eds.items():
-        if ed != "auto":
-            resolve_edition(cat, ed)
+    eds = reading_editions(editions, categories)
     with _mapped(path) as buf:
         try:
             seg = read_segments(buf, format)
@@ -666,13 +851,19 @@ def read(path, *, editions=None, date=None, categories=None, format: str | None 
         warnings.warn(text, EditionWarning, stacklevel=2)
     for text in untimed_advice(rec.path, rec.untimed):
         warnings.warn(text, UntimedWarning, stacklevel=2)
+    content = Tally(str(path))
+    content.add(rec)
+    for text in content.warnings(head_of(path), detected=format is None):
+        warnings.warn(text, ContentWarning, stacklevel=2)
     return rec
 
 
 def edition_advice(rec: Recording) -> list[str]:
     """Per category whose blocks mostly failed under its edition (``Recording.edition_fits``): how many, and
-    the edition(s) every one sampled walks under, as ``read``'s ``editions=`` argument."""
-    out = []
+    the edition(s) every one sampled walks under, as ``read``'s ``editions=`` argument; per category holding
+    stretches of another edition family (``Recording.edition_stretches``): where, and how to decode them."""
+    out = [describe(rec.path, cat, found, lambda ed, c=cat: f"editions={{{c}: {ed!r}}}", rec.format == "raw")
+           for cat, found in rec.edition_stretches.items()]
     for cat, fits in rec.edition_fits.items():
         if not fits:
             continue

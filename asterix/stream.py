@@ -13,12 +13,13 @@ from .errors import UnreadableInput
 from .reader import (
     Recording,
     _mapped,
-    _parse_editions,
     check_categories,
+    choose_editions,
     decode_buffer,
     frame_checked,
     framing_walk,
     parse_date,
+    reading_editions,
     release_pages,
     selected_columns,
 )
@@ -40,14 +41,15 @@ def iter_read(path, *, chunk: int = 1_000_000, editions=None, date=None, categor
                         f"{type(chunk).__name__}")
     if chunk <= 0:
         raise ValueError(f"chunk {chunk!r}: must be a positive number of bytes")
-    eds = _parse_editions(editions)
     selected_columns(columns)
     first_date, categories = parse_date(date), check_categories(categories)
+    eds = reading_editions(editions, categories)
     with _mapped(path) as buf:
         try:
             seg = read_segments(buf, format)
         except ValueError as exc:  # as read() says it
             raise UnreadableInput(f"{path}: {exc}") from exc
+        eds, choice = choose_editions(buf, seg, eds, categories)  # over the whole file, as read() does
         bounds = _chunk_bounds(buf, seg, chunk, eds, categories)
         release_pages(buf, 0, len(buf))  # planning the chunks read the whole file
         clock = None  # a raw stream's (day, time of day) at the end of the chunks before; None: not anchored
@@ -60,6 +62,7 @@ def iter_read(path, *, chunk: int = 1_000_000, editions=None, date=None, categor
         for sub in bounds:
             rec = decode_buffer(buf, sub, path=str(path), editions=eds, categories=categories,
                                 date=first_date, strict=strict, columns=columns, sector_clock=sectors)
+            rec.edition_choice = {**choice, **rec.edition_choice}
             for f in rec.frames.values():
                 f["block"] += blocks
             blocks += rec.blocks

@@ -160,7 +160,7 @@ def cmd_stats(args) -> int:
     print(format_stats(result.tables), end="")
     for info in result.inputs:
         for cat, why in info["edition_choice"].items():
-            print(f"{info['path']}: CAT{cat:03d} --edition auto {why}")
+            print(f"{info['path']}: CAT{cat:03d} edition auto {why}")
     if not result.records:
         print("msdc: nothing could be decoded", file=sys.stderr)
         return 1

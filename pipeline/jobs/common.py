@@ -84,7 +84,7 @@ def carrying(said: Iterable[str] = ()) -> Iterator[list[str]]:
 
 
 def _editions(editions: list[str] | dict | None) -> dict[int, str]:
-    """CAT=EDITION pins checked against the shipped tables ("auto" for CAT021)."""
+    """CAT=EDITION pins checked against the shipped tables, or "auto" (any category: asterix.families)."""
     from msdc.asterix.tables import available, resolve_edition
 
     items = editions.items() if isinstance(editions, dict) else (
@@ -95,7 +95,7 @@ def _editions(editions: list[str] | dict | None) -> dict[int, str]:
             raise OptionError(f"--edition {cat}={ed}: category must be one of "
                               f"{', '.join(str(c) for c in sorted(available()))}")
         cat = int(cat)
-        if not (cat == 21 and ed == "auto"):
+        if ed != "auto":
             try:
                 resolve_edition(cat, ed)
             except ValueError as exc:
@@ -392,12 +392,13 @@ def load_inputs(options: DecodingOptions, checked: Checked, progress: Progress |
     about them."""
     import warnings as python_warnings
 
-    from msdc.asterix.errors import EditionWarning, UnreadableInput
+    from msdc.asterix.errors import ContentWarning, EditionWarning, UnreadableInput
     from msdc.pipeline.model.measurements import DECODED_COLUMNS, impossible_positions
 
     try:
-        with python_warnings.catch_warnings():  # a wrong edition is said below, with its --edition
-            python_warnings.simplefilter("ignore", EditionWarning)
+        with python_warnings.catch_warnings():  # a wrong edition is said below, with its --edition; what
+            python_warnings.simplefilter("ignore", EditionWarning)  # the inputs are, in loaded.warnings
+            python_warnings.simplefilter("ignore", ContentWarning)
             loaded = load(checked.inputs, editions=checked.editions or None, date=options.date,
                           format=options.format, columns=DECODED_COLUMNS, progress=progress)
     except UnreadableInput as exc:
@@ -446,16 +447,13 @@ def format_hint(path, fmt: str | None, skipped_blocks: int) -> str:
     """A hint to give --format when detection read a file as raw, blocks were skipped, and the file reads as a
     recorder file (final, gps, oradis) but for its first frame (asterix.containers.recorder_hint); else ''."""
     from msdc.asterix.containers import DETECT_BYTES, recorder_hint
+    from msdc.asterix.verdict import recorder_words
 
     if fmt != "raw" or not skipped_blocks:
         return ""
     with open(path, "rb") as file:
         guess = recorder_hint(file.read(DETECT_BYTES))
-    if guess is None:
-        return ""
-    return (f"{path}: read as a raw ASTERIX stream ({skipped_blocks} block(s) skipped), but past its first "
-            f"frame it reads as a {guess} recording (its first frame damaged?): if it is one, give "
-            f"--format {guess}")
+    return "" if guess is None else recorder_words(path, skipped_blocks, guess)
 
 
 def date_ignored(options: DecodingOptions, inputs: list[dict]) -> list[str]:

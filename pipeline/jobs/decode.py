@@ -79,6 +79,7 @@ def decode_job(options: DecodeOptions, *, on_chunk: Callable[[int, int, str], No
     import msdc.asterix as asterix
     from msdc.asterix.errors import UnreadableInput
     from msdc.asterix.reader import categories_in
+    from msdc.asterix.verdict import Tally, head_of, sniff
     from msdc.pipeline.model.sources import file_labels
     from msdc.pipeline.model.time import FirstDayTally
 
@@ -92,6 +93,18 @@ def decode_job(options: DecodeOptions, *, on_chunk: Callable[[int, int, str], No
     notes: list[str] = []
     cats = list(options.categories) or None
     csv = out is not None and out.suffix.lower() == ".csv"
+    content: list[str] = []  # what the inputs turned out to be, when not sound (asterix.verdict)
+    sniffed = set()  # inputs said to be not ASTERIX at once (decoded with --lenient)
+    for path in checked.inputs:  # a file that is not ASTERIX at all is said at once
+        try:
+            said = sniff(path, options.format)
+        except UnreadableInput as exc:
+            raise JobError(str(exc), 2) from exc
+        if said and not options.lenient:
+            raise JobError(f"{said}; nothing written (--lenient decodes it anyway)")
+        if said:
+            content.append(said)
+            sniffed.add(path)
     with staged(tx) as stage:
         files: dict[int, Path] = {}  # category -> its staged file, named as when several categories decode
         writers: dict[int, object] = {}
@@ -99,11 +112,12 @@ def decode_job(options: DecodeOptions, *, on_chunk: Callable[[int, int, str], No
             for path, label in zip(checked.inputs, file_labels(checked.inputs), strict=True):
                 size = path.stat().st_size
                 chunk = max(int(options.chunk_mb * 1e6), 1)
-                tally, date, fmt, chosen = FirstDayTally(), None, None, {}
+                tally, date, fmt, chosen, account = FirstDayTally(), None, None, {}, Tally(str(path))
                 for rec in asterix.iter_read(path, chunk=chunk, editions=checked.editions or None,
                                              date=options.date, format=options.format, categories=cats,
                                              strict=options.strict):
                     tally.add(rec.frames)
+                    account.add(rec)
                     date, fmt, chosen = date or rec.date, rec.format, {**rec.edition_choice, **chosen}
                     skipped += [(str(path), int(e.offset), str(e.reason)) for e in rec.errors.itertuples()]
                     edition_notes.fold(failed, rec)
@@ -121,7 +135,10 @@ def decode_job(options: DecodeOptions, *, on_chunk: Callable[[int, int, str], No
                     on_chunk(size, size, path.name)
                 early_start += tally.warning(label, date, fmt)
                 early_start += date_ignored(options, [{"path": path, "format": fmt}])
-                notes += [f"{path}: CAT{cat:03d} --edition auto {why}" for cat, why in sorted(chosen.items())]
+                notes += [f"{path}: CAT{cat:03d} edition auto {why}" for cat, why in sorted(chosen.items())]
+                if path not in sniffed:
+                    content += account.warnings(head_of(path), hint=False,  # format_hints says that
+                                                detected=options.format is None)
                 early_start += format_hints(options, [{"path": path, "format": fmt, "skipped_blocks": sum(
                     1 for p, _, _ in skipped if p == str(path))}])
         except UnreadableInput as exc:
@@ -138,9 +155,11 @@ def decode_job(options: DecodeOptions, *, on_chunk: Callable[[int, int, str], No
                 notes.append(f"several categories: writing {outputs[cat]}")
             else:  # one category: its file is the output itself
                 files[cat].rename(stage.path(out))
+        if content and not options.lenient:
+            raise JobError("; ".join(content) + "; nothing written (--lenient writes what decodes anyway)")
     held = {} if sum(counts.values()) else {str(p): categories_in(p, format=options.format)
                                               for p in checked.inputs}
-    warnings = checked.warnings + early_start + edition_notes.warnings(failed)
+    warnings = checked.warnings + content + early_start + edition_notes.warnings(failed)
     return DecodeResult(counts, outputs, skipped, warnings, notes, held, out)
 
 

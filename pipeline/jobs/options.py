@@ -267,8 +267,10 @@ class DecodingOptions:
                                      doc="the recordings")
     editions: tuple[str, ...] = option(  # "CAT=EDITION"
         (), "--edition", repeat=True, parse=edition_argument, metavar="CAT=ED", section="reading",
-        help="pin a category edition, e.g. 21=0.26, 48=1.27, or 21=auto (repeatable)",
-        doc="pin a category edition, e.g. `21=0.26`, `48=1.27`, or `21=auto` "
+        help="pin a category edition, e.g. 21=0.26 or 48=1.27 (repeatable; a category whose editions walk "
+             "differently, CAT021, is read with auto unless pinned)",
+        doc="pin a category edition, e.g. `21=0.26` or `48=1.27` (repeatable); a category whose editions "
+            "walk differently (CAT021) is read with `auto` unless pinned "
             "([Editions](../decoding/editions.md))")
     date: dt.date | None = option(
         None, "--date", parse=date_argument, section="reading",
@@ -288,6 +290,12 @@ class DecodeOptions(DecodingOptions):
     categories: tuple[int, ...] = option((), "--category", repeat=True, choices=CATEGORIES,
                                          help="only this category")
     strict: bool = option(False, "--strict", help="stop at the first bad block")
+    lenient: bool = option(False, "--lenient",
+                           help="write what decodes even when an input is mostly not ASTERIX or its records "
+                                "implausible (said as a warning; else an error, nothing written)",
+                           doc="write what decodes even when an input is mostly not ASTERIX or its records "
+                               "implausible (said as a warning; else an error and nothing is written: "
+                               "[Bad input](../decoding/bad-input.md#not-asterix))")
     chunk_mb: float = option(64.0, "--chunk-mb", range=CHUNK_RANGE_MB, unit="MB",
                              help="streaming chunk size (MB)")
 

@@ -13,6 +13,7 @@ import pandas as pd
 
 import msdc.asterix as asterix
 from msdc.asterix.reader import Recording
+from msdc.asterix.verdict import Tally, head_of
 from msdc.pipeline.model.sources import file_labels, pair_codes, pair_of, source_id
 from msdc.pipeline.model.time import NAT_NS, UNDATED_DAY, FirstDayTally, absolute_time
 from msdc.pipeline.progress import Progress
@@ -132,6 +133,9 @@ def load(paths: list[str | Path] | str | Path, *, editions=None, date=None, form
         rec = asterix.read(p, editions=editions, date=date, format=format, categories=categories,
                            columns=columns)
         recs.append(rec)
+        content = Tally(str(p))
+        content.add(rec)
+        warnings += content.warnings(head_of(p), hint=False, detected=format is None)
         tally = FirstDayTally()
         tally.add(rec.frames)
         warnings += tally.warning(labels[i], rec.date, rec.format)
@@ -236,12 +240,14 @@ def load_measurements(paths: list[str | Path], sensors: pd.DataFrame, *, edition
         first = True
         tally = FirstDayTally()
         other_kinds = {}
+        content = Tally(str(p))
         for rec in asterix.iter_read(p, chunk=chunk, editions=editions, date=date, format=format,
                                      columns=DECODED_COLUMNS):
             if first:
                 dates.append(rec.date)
                 first = False
             tally.add(rec.frames)
+            content.add(rec)
             info["bytes"], info["format"] = rec.size_bytes, rec.format
             for cat, frame in rec.frames.items():
                 info["records"][int(cat)] = info["records"].get(int(cat), 0) + len(frame)
@@ -263,6 +269,7 @@ def load_measurements(paths: list[str | Path], sensors: pd.DataFrame, *, edition
         from msdc.pipeline.model.multilateration import other_kinds_warning
 
         early_start += other_kinds_warning(labels[i], other_kinds)
+        early_start += content.warnings(head_of(p), hint=False, detected=format is None)
         info["records"] = dict(sorted(info["records"].items()))
         info["editions"] = dict(sorted(info["editions"].items()))
         inputs.append(info)

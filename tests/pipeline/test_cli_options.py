@@ -50,7 +50,7 @@ ERRORS = [
     ("edition-stats", ["stats", "{R}", "--edition", "21=9.9"], 2, ["--edition 21=9.9", "2.7"]),
     ("edition-correlate", CORR + ["--edition", "21=9.9"], 2, ["--edition 21=9.9", "2.7"]),
     ("edition-category", CORR + ["--edition", "99=1.0"], 2, ["--edition 99=1.0", "21"]),
-    ("edition-48-auto", ["stats", "{R}", "--edition", "48=auto"], 2, ["--edition 48=auto"]),
+    ("edition-48-unknown", ["stats", "{R}", "--edition", "48=1.99"], 2, ["--edition 48=1.99"]),
     ("edition-syntax", ["stats", "{R}", "--edition", "21"], 2, ["--edition", "CAT=EDITION"]),
     ("out-readonly-dir", CORR + ["-o", "{RO}/report.xlsx"], 2, ["-o", "not writable"]),
     ("out-is-directory", CORR + ["-o", "{O}/dir.xlsx"], 2, ["-o", "is a directory"]),
@@ -277,7 +277,7 @@ def test_nothing_decoded_writes_no_csv(tmp_path, capsys):
     out = tmp_path / "out"
     out.mkdir()
     status, _, err = _run(["decode", str(junk), "-o", str(out / "x.csv")], capsys)
-    assert status == 1 and "nothing could be decoded" in err
+    assert status == 1 and "junk.ast is not ASTERIX" in err and "nothing written" in err
     assert _contents(out) == set()
 
 

@@ -40,6 +40,7 @@ TRACKING = {"--figures": "figures", "--step": "step_s", "--max-coast": "max_coas
 # every option of each command: flag -> the options field it fills ("INPUT": the positional argument)
 EXPECTED = {
     "decode": {"INPUT": "inputs", "--output": "output", "--category": "categories", "--strict": "strict",
+               "--lenient": "lenient",
                "--chunk-mb": "chunk_mb", **READING},
     "stats": {"INPUT": "inputs", "--chunk-mb": "chunk_mb", **READING},
     "correlate": {"INPUT": "inputs", **SELECTION, "--output": "output", "--json": "json", "--slot": "slot_s",
