@@ -1,4 +1,4 @@
-"""ASTERIX decoding for msdc: CAT048, CAT021 and CAT034 recordings into typed pandas frames.
+"""ASTERIX decoding for msdc: CAT048, CAT021, CAT034, CAT001 and CAT002 recordings into typed pandas frames.
 
 ``read`` decodes a file (raw data blocks, pcap/pcapng, or the "final", GPS and ORADIS recorder
 formats) into a Recording with one DataFrame per category and an account of what was skipped;
@@ -15,7 +15,14 @@ import importlib.util
 from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:  # what the names are, for readers and the API docs; loaded by __getattr__
-    from .errors import AsterixError, DecodeError, EditionWarning, UnreadableInput
+    from .errors import (
+        AsterixError,
+        ContentWarning,
+        DecodeError,
+        EditionWarning,
+        UnreadableInput,
+        UntimedWarning,
+    )
     from .reader import Recording, decode_buffer, parse_date, read
     from .stream import iter_read
     from .tables import available as available_editions
@@ -23,15 +30,17 @@ if TYPE_CHECKING:  # what the names are, for readers and the API docs; loaded by
 # name -> (module, attribute)
 _PUBLIC = {
     "AsterixError": ("errors", "AsterixError"), "DecodeError": ("errors", "DecodeError"),
+    "ContentWarning": ("errors", "ContentWarning"),
     "EditionWarning": ("errors", "EditionWarning"), "UnreadableInput": ("errors", "UnreadableInput"),
+    "UntimedWarning": ("errors", "UntimedWarning"),
     "Recording": ("reader", "Recording"), "decode_buffer": ("reader", "decode_buffer"),
     "parse_date": ("reader", "parse_date"), "read": ("reader", "read"), "iter_read": ("stream", "iter_read"),
     "available_editions": ("tables", "available"),
 }
 
 __all__ = [  # the names of _PUBLIC
-    "AsterixError", "DecodeError", "EditionWarning", "Recording", "UnreadableInput", "available_editions",
-    "decode_buffer", "iter_read", "parse_date", "read",
+    "AsterixError", "ContentWarning", "DecodeError", "EditionWarning", "Recording", "UnreadableInput",
+    "available_editions", "decode_buffer", "iter_read", "parse_date", "read", "UntimedWarning",
 ]
 
 

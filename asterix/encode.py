@@ -17,7 +17,7 @@ import pandas as pd
 from bitstring import BitArray, Bits, pack
 
 from msdc.asterix.columns import Column, columns_for
-from msdc.asterix.tables import available, load_table, resolve_edition
+from msdc.asterix.tables import available, load_table, resolve_edition, uaps
 
 __all__ = [
     "EDITIONS", "load_table", "encode_item", "encode_record", "encode_block", "encode_frame", "item_fields",
@@ -175,14 +175,69 @@ def _layout(node: dict, prefix: tuple[str, ...]) -> Layout:
 
 
 @cache
-def _items(category: int, edition: str) -> dict[str, Item]:
-    """All items of an edition (resolved name), compiled, by item id."""
-    table = load_table(category, edition)
-    out: dict[str, Item] = {}
-    for frn, entry in enumerate(table["uap"], start=1):
-        if entry is not None:
-            out[entry["id"]] = Item(frn, entry["id"], _layout(entry["node"], ()))
+def _uap_items(category: int, edition: str) -> dict[str, dict[str, Item]]:
+    """The items of each UAP of an edition (resolved name; "" for a category with one UAP), compiled, by
+    item id. RFS (Random Field Sequencing) is not encoded: the decoder does not walk it either."""
+    out: dict[str, dict[str, Item]] = {}
+    for name, uap in uaps(load_table(category, edition)).items():
+        out[name] = {e["id"]: Item(frn, e["id"], _layout(e["node"], ()))
+                     for frn, e in enumerate(uap, start=1) if e is not None and e["node"]["kind"] != "rfs"}
     return out
+
+
+@cache
+def _items(category: int, edition: str) -> dict[str, Item]:
+    """All items of an edition by item id, of every UAP (an item in several: its first UAP's FRN)."""
+    out: dict[str, Item] = {}
+    for items in _uap_items(category, edition).values():
+        for item_id, item in items.items():
+            out.setdefault(item_id, item)
+    return out
+
+
+@dataclass(frozen=True)
+class _Selector:
+    """The field whose value chooses a record's UAP (CAT001 I001/020 TYP), and the UAP of each value."""
+
+    item: str
+    path: str
+    field: Field  # in the item's first octet-group
+    uap: dict[int, str]
+    column: str  # the column that writes it ("typ")
+
+
+@cache
+def _selector(category: int, edition: str) -> _Selector | None:
+    """The UAP selector of an edition with several UAPs, None with one."""
+    sel = load_table(category, edition).get("selector")
+    if sel is None:
+        return None
+    path = "/".join(sel["field"])
+    layout = _items(category, edition)[sel["item"]].layout
+    first = layout.groups[0] if isinstance(layout, Extended) else layout
+    if not isinstance(first, Fixed) or path not in first.fields:
+        raise ValueError(f"CAT{category:03d} {edition}: UAP selector {path!r} not in the first octets")
+    column = next((c.name for c in columns_for(category, edition) if (sel["item"], tuple(sel["field"]))
+                   in c.sources), f"I{category:03d}/{sel['item']} {path}")
+    return _Selector(sel["item"], path, first.fields[path], {int(v): u for v, u in sel["values"].items()},
+                     column)
+
+
+def _uap_of(category: int, edition: str, value: int | None, later: bool, where: str) -> str:
+    """The UAP a record is laid out by: the selector's value names it (None: the selector item is absent,
+    allowed only when no item after it is present, ``later`` False)."""
+    sel = _selector(category, edition)
+    if sel is None:
+        return ""
+    if value is None:
+        if later:
+            raise ValueError(f"{where}: CAT{category:03d} records choose their UAP "
+                             f"({' or '.join(sel.uap.values())}) by I{category:03d}/{sel.item} {sel.path}: "
+                             f"give {sel.column!r} with the other values")
+        return next(iter(sel.uap.values()))
+    if value not in sel.uap:
+        raise ValueError(f"{where}: I{category:03d}/{sel.item} {sel.path} = {value} chooses no UAP")
+    return sel.uap[value]
 
 
 def _item(category: int, edition: str | None, item_id: str) -> Item:
@@ -702,6 +757,13 @@ def _assign(category: int, edition: str, data: Mapping[str, np.ndarray], n: int,
     for name in single + multi:
         present, vals = converted[name]
         ts = targets[name]
+        if not cols[name].sources:
+            raise ValueError(f"column {name!r} of CAT{category:03d} is derived on decoding, not sent: "
+                             f"{cols[name].doc}")
+        if cols[name].kind == "bds":
+            raise ValueError(f"column {name!r} is read from a Mode S register in I{category:03d}/250 and is "
+                             f"not written from its value: pass the register groups as extra={{'250': "
+                             f"encode_item({category}, None, '250', [...])}}")
         if not ts:
             raise ValueError(f"column {name!r} has no item in CAT{category:03d} edition {edition}")
         if cols[name].kind == "codes":  # the repetitions themselves, beside their count
@@ -733,29 +795,75 @@ def _assign(category: int, edition: str, data: Mapping[str, np.ndarray], n: int,
 
 
 def _item_parts(category: int, edition: str, data: Mapping[str, np.ndarray], n: int,
-                prefer: Mapping[str, str] | None) -> dict[int, _Part]:
-    """The encoded items of n rows, by FRN."""
+                prefer: Mapping[str, str] | None) -> tuple[dict[str, _Part], dict[str, _Assigned]]:
+    """The encoded items of n rows, by item id, and the raw field values they were built from."""
     assigned = _assign(category, edition, data, n, prefer)
     items = _items(category, edition)
     parts = {}
     for item_id, fields in assigned.items():
-        item = items[item_id]
-        parts[item.frn] = _node_part(item.layout, fields, n, f"I{category:03d}/{item_id}")
-    return parts
+        parts[item_id] = _node_part(items[item_id].layout, fields, n, f"I{category:03d}/{item_id}")
+    return parts, assigned
+
+
+def _row_uaps(category: int, edition: str, parts: dict[str, _Part], assigned: dict[str, _Assigned],
+              n: int) -> np.ndarray:
+    """The UAP name of each row (all "" for a category with one UAP): its selector field's value (0 where
+    the selector item is written without it: zero-filled on the wire)."""
+    sel = _selector(category, edition)
+    if sel is None:
+        return np.full(n, "", dtype=object)
+    has = parts[sel.item][0] if sel.item in parts else np.zeros(n, dtype=bool)
+    mask, raw = assigned.get(sel.item, {}).get(sel.path, (np.zeros(n, dtype=bool), np.zeros(n, np.int64)))
+    value = np.where(mask, raw, 0)
+    frn = _items(category, edition)[sel.item].frn
+    later = np.zeros(n, dtype=bool)
+    for item_id, part in parts.items():
+        if _items(category, edition)[item_id].frn > frn:
+            later |= part[0]
+    out = np.empty(n, dtype=object)
+    for v in np.unique(value[has]):
+        out[has & (value == v)] = _uap_of(category, edition, int(v), True, "row")
+    missing = np.flatnonzero(~has & later)
+    if len(missing):
+        _uap_of(category, edition, None, True, f"row {missing[0]}")
+    out[~has] = _uap_of(category, edition, None, False, "row")
+    return out
 
 
 def _records(category: int, edition: str, data: Mapping[str, np.ndarray], n: int,
              prefer: Mapping[str, str] | None) -> tuple[np.ndarray, np.ndarray]:
-    """All records of n rows: (lengths, flat bytes in row order)."""
-    parts = _item_parts(category, edition, data, n, prefer)
-    nfrn = len(load_table(category, edition)["uap"])
+    """All records of n rows: (lengths, flat bytes in row order), each laid out by its UAP."""
+    parts, assigned = _item_parts(category, edition, data, n, prefer)
+    row_uap = _row_uaps(category, edition, parts, assigned, n)
     zero = np.zeros(n, dtype=bool)
-    fspec = _fspec_part([parts[f][0] if f in parts else zero for f in range(1, nfrn + 1)], n)
-    empty = np.flatnonzero(~fspec[0])
-    if len(empty):
-        raise ValueError(f"row {empty[0]} has no value to encode")
-    length, mat = _concat([fspec, *(parts[f] for f in sorted(parts))], n)
-    flat = mat[np.arange(mat.shape[1])[None, :] < length[:, None]]
+    length = np.zeros(n, dtype=np.int64)
+    records: list[tuple[np.ndarray, np.ndarray]] = []
+    for name, items in _uap_items(category, edition).items():
+        rows = row_uap == name
+        if not rows.any():
+            continue
+        by_frn = {}
+        for item_id, (present, size, m) in parts.items():
+            if item_id in items:
+                by_frn[items[item_id].frn] = (present & rows, size, m)
+            elif (present & rows).any():
+                row = int(np.flatnonzero(present & rows)[0])
+                raise ValueError(f"row {row}: I{category:03d}/{item_id} is not an item of its UAP ({name})")
+        nfrn = len(uaps(load_table(category, edition))[name])
+        fspec = _fspec_part([by_frn[f][0] if f in by_frn else zero for f in range(1, nfrn + 1)], n)
+        empty = np.flatnonzero(rows & ~fspec[0])
+        if len(empty):
+            raise ValueError(f"row {empty[0]} has no value to encode")
+        fspec = (fspec[0] & rows, fspec[1], fspec[2])
+        uap_length, mat = _concat([fspec, *(by_frn[f] for f in sorted(by_frn))], n)
+        length = np.where(rows, uap_length, length)
+        records.append((rows, mat))
+    width = int(length.max(initial=0))
+    mat = np.zeros((n, width), dtype=np.uint8)
+    for rows, m in records:
+        w = min(width, m.shape[1])
+        mat[rows, :w] = m[rows, :w]
+    flat = mat[np.arange(width)[None, :] < length[:, None]]
     return length, flat
 
 
@@ -787,16 +895,38 @@ def encode_record(category: int, values: Mapping[str, Any], edition: str | None 
                 raise ValueError(f"column {k!r}: {v!r} is not a number") from None
         else:
             data[k] = np.array([v], dtype=object)
-    parts = _item_parts(category, ed, data, 1, prefer)
-    raw_items = {frn: bytes(mat[0, : length[0]]) for frn, (present, length, mat) in parts.items()
+    parts, _ = _item_parts(category, ed, data, 1, prefer)
+    raw_items = {item_id: bytes(mat[0, : length[0]]) for item_id, (present, length, mat) in parts.items()
                  if present[0]}
     for item_id, raw in (extra or {}).items():
-        raw_items[_item(category, ed, item_id).frn] = bytes(raw)
+        raw_items[_item(category, ed, item_id).id] = bytes(raw)
     if not raw_items:
         raise ValueError("record has no value to encode")
-    nfrn = len(load_table(category, ed)["uap"])
-    fspec = _fspec_bits([f in raw_items for f in range(1, nfrn + 1)]).tobytes()
-    return fspec + b"".join(raw_items[f] for f in sorted(raw_items))
+    uap = _record_uap(category, ed, raw_items)
+    items = _uap_items(category, ed)[uap]
+    by_frn = {}
+    for item_id, raw in raw_items.items():
+        if item_id not in items:
+            raise ValueError(f"I{category:03d}/{item_id} is not an item of the record's UAP ({uap})")
+        by_frn[items[item_id].frn] = raw
+    nfrn = max(item.frn for item in items.values())
+    fspec = _fspec_bits([f in by_frn for f in range(1, nfrn + 1)]).tobytes()
+    return fspec + b"".join(by_frn[f] for f in sorted(by_frn))
+
+
+def _record_uap(category: int, edition: str, raw_items: dict[str, bytes]) -> str:
+    """The UAP of one record from its item bytes: the selector field as written (also from ``extra``)."""
+    sel = _selector(category, edition)
+    if sel is None:
+        return ""
+    frn = _items(category, edition)[sel.item].frn
+    later = any(_items(category, edition)[i].frn > frn for i in raw_items)
+    if sel.item not in raw_items:
+        return _uap_of(category, edition, None, later, "record")
+    f = sel.field
+    byte = raw_items[sel.item][f.offset // 8]
+    value = (byte >> (8 - f.offset % 8 - f.bits)) & ((1 << f.bits) - 1)
+    return _uap_of(category, edition, value, later, "record")
 
 
 def encode_block(category: int, records: list[bytes]) -> bytes:
@@ -823,11 +953,16 @@ def _frame_arrays(frame: pd.DataFrame, names: Iterable[str]) -> dict[str, np.nda
 def encode_frame(category: int, frame: pd.DataFrame, edition: str | None = None, records_per_block: int = 20,
                  prefer: Mapping[str, str] | None = None) -> bytes:
     """Data blocks for a frame (one record per row, in order), at most records_per_block records and 65535
-    bytes per block. Frame columns that are not in the category's schema are ignored."""
+    bytes per block. Frame columns that are not in the category's schema, derived on decoding (CAT001
+    time_of_day: write truncated_time_of_day and CAT002 messages) or read from I048/250 Mode S registers
+    (their groups are written as zeros, bds_count of them) are ignored."""
     if records_per_block < 1:
         raise ValueError("records_per_block must be at least 1")
     ed = resolve_edition(category, edition)
-    names = [c for c in _columns(category, ed) if c in frame.columns]
+    # derived columns (CAT001 time_of_day, made whole from CAT002 on decoding) have no item to write
+    # Mode S register columns (I048/250 contents, kind "bds") are not written: bds_count writes the count
+    names = [c for c, col in _columns(category, ed).items()
+             if c in frame.columns and col.sources and col.kind != "bds"]
     n = len(frame)
     if n == 0:
         return b""

@@ -15,6 +15,8 @@ REASONS = {
     k.E_UNKNOWN_CAT: "unknown category",
     k.E_GARBAGE: "bytes that do not start a plausible ASTERIX data block",
     k.E_EMPTY_BLOCK: "a data block with no record",
+    k.E_RFS: "the FSPEC sets the Random Field Sequencing (RFS) FRN, which msdc does not walk",
+    k.E_NO_UAP: "a record sets items after the item choosing its UAP (I001/020 for CAT001) without that item",
 }
 
 
@@ -25,6 +27,16 @@ class AsterixError(Exception):
 class EditionWarning(UserWarning):
     """``read`` found most blocks of a category failing under its edition, every one sampled walking under
     another: a likely wrong edition (said, never switched: nothing on the wire says which edition)."""
+
+
+class UntimedWarning(UserWarning):
+    """``read`` decoded CAT001 records whose truncated time of day no CAT002 message of their radar made
+    whole (``Recording.untimed``: offsets and reasons): their time_of_day is NaN, not guessed."""
+
+
+class ContentWarning(UserWarning):
+    """``read`` found an input mostly not ASTERIX (bytes skipped, or framed into blocks unlike a recording's),
+    not ASTERIX at all, or a category whose records carry values no real report does (asterix.verdict)."""
 
 
 class DecodeError(AsterixError):

@@ -72,11 +72,34 @@ def icao_columns(values: np.ndarray) -> tuple[pd.Categorical, pd.Categorical]:
 
 def empty_column(col: Column, n: int):
     """An all-absent column of the right dtype, for fields the edition does not have."""
-    if col.kind == "float":
+    if col.kind in ("float", "bds"):
         return np.full(n, np.nan)
     if col.kind == "codes":
         return pd.Categorical.from_codes(np.full(n, -1), categories=pd.Index([], dtype=object))
     return typed_column(col, np.full(n, -1, np.int64))
+
+
+def empty_columns(cols: list[Column], n: int) -> dict[str, object]:
+    """All-absent columns (``empty_column``'s) for several columns at once: the float and integer ones as rows
+    of one matrix per dtype (one allocation each rather than one per column), text ones empty categoricals;
+    an ``icao`` column with its ``_hex`` beside it."""
+    out: dict[str, object] = {}
+    floats = [c for c in cols if c.kind in ("float", "bds")]
+    ints = [c for c in cols if c.kind in _INT_DTYPES]
+    if floats:
+        matrix = np.full((len(floats), n), np.nan)
+        out |= {c.name: matrix[i] for i, c in enumerate(floats)}
+    for dtype in {_INT_DTYPES[c.kind] for c in ints}:
+        same = [c for c in ints if _INT_DTYPES[c.kind] == dtype]
+        values, mask = np.zeros((len(same), n), dtype), np.ones((len(same), n), bool)
+        out |= {c.name: pd.arrays.IntegerArray(values[i], mask[i]) for i, c in enumerate(same)}
+    nothing = pd.Index([], dtype=object)
+    for c in cols:
+        if c.name not in out:  # text: categorical codes -1
+            out[c.name] = pd.Categorical.from_codes(np.full(n, -1, np.int8), categories=nothing)
+            if c.kind == "icao":
+                out[f"{c.name}_hex"] = pd.Categorical.from_codes(np.full(n, -1, np.int8), categories=nothing)
+    return out
 
 
 def code_list_column(buf: np.ndarray, rec_off: np.ndarray, rel_off: np.ndarray, rel_len: np.ndarray

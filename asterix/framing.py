@@ -216,11 +216,16 @@ class Survey:
     bytes: np.ndarray = field(default_factory=lambda: np.zeros(256, np.int64))
     failed: np.ndarray = field(default_factory=lambda: np.zeros(256, np.int64))
     walking_bytes: int = 0
+    walking: np.ndarray = field(default_factory=lambda: np.zeros(256, np.int64))  # those bytes per category
     errors: int = 0
     error_bytes: int = 0
     samples: dict[int, Sample] = field(default_factory=dict)
     failed_samples: dict[int, Sample] = field(default_factory=dict)
     framed: Framed | None = None  # the whole framing, when kept (survey's ``keep``)
+
+    def walking_among(self, cats: Iterable[int]) -> int:
+        """Bytes of walking blocks of these categories."""
+        return int(self.walking[list(cats)].sum())
 
     def lone(self, walked: Iterable[int]) -> bool:
         """A category not walked has a single block: a possible false header (worth careful framing)."""
@@ -294,7 +299,9 @@ def survey(buf: np.ndarray, seg: Segments, modes: np.ndarray, tables: kernel.Fra
         flags = kernel.block_walks(buf, b_start, b_len, b_cat, walk)
         bad = flags == 0
         out.failed += np.bincount(cats[bad], minlength=256)
-        out.walking_bytes += int(b_len[flags == 1].sum())
+        good = flags == 1
+        out.walking_bytes += int(b_len[good].sum())
+        out.walking += np.bincount(cats[good], weights=b_len[good], minlength=256).astype(np.int64)
         for cat, smp in out.samples.items():
             sel = cats == cat
             smp.add(b_start[sel], b_len[sel])

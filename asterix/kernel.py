@@ -24,6 +24,8 @@ E_NO_FRAME = 7  # UDP payload / frame that does not frame exactly into data bloc
 E_UNKNOWN_CAT = 8  # category msdc cannot decode
 E_GARBAGE = 9  # bytes between blocks that do not start a plausible data block
 E_EMPTY_BLOCK = 10  # a data block with no record
+E_RFS = 11  # FSPEC sets the Random Field Sequencing FRN (not walked)
+E_NO_UAP = 12  # a record of a category with several UAPs sets items its UAP selector has not chosen
 
 
 # Item kinds (column K_KIND of the part table), shared with the table builder (layout.compile_layout).
@@ -34,9 +36,15 @@ REP_COUNT = 3  # a one-byte repetition count, then that many elements of K_SIZE 
 REP_FX = 4  # elements of K_SIZE bytes while the last bit of each says one follows
 COMPOUND = 5  # a primary subfield, then the subitems it sets (sub_parts from K_SUB_START)
 EXPLICIT = 6  # a length byte counting itself, then the data
+UNSELECTED = 7  # an FRN past the UAP selector of a record that has not chosen its UAP (E_NO_UAP)
+RFS = 8  # Random Field Sequencing (CAT001 FRN 21, CAT002 FRN 14): reported, not walked (E_RFS)
 
-# Columns of the packed part table P.
+# Columns of the packed part table P. K_SEL_*: a part that chooses the record's UAP (CAT001 I001/020):
+# byte of the item, right shift and mask of the selector field; mask 0 for every other part. After
+# walking it, the walk reads FRNs from row block (value + 1) * n_frn (layout._frn_rows).
 K_KIND, K_SIZE, K_EXT_START, K_EXT_COUNT, K_SUB_START, K_SUB_COUNT, K_SLOT = range(7)
+K_SEL_BYTE, K_SEL_SHIFT, K_SEL_MASK = 7, 8, 9
+N_PART_COLUMNS = 10
 LOOKAHEAD = 4  # blocks a resynchronisation candidate's chain is checked over
 
 
@@ -44,7 +52,7 @@ class Parts(NamedTuple):
     """The part tables records are walked with: one layout's, or several laid end to end (framing's).
     Kernels unpack it once on entry: reading a field inside a loop adds reference counting per read."""
 
-    P: np.ndarray  # (parts, 7) int64: columns K_KIND .. K_SLOT per part
+    P: np.ndarray  # (parts, N_PART_COLUMNS) int64: columns K_KIND .. K_SEL_MASK per part
     ext_sizes: np.ndarray  # octet-group sizes of EXTENDED parts
     ext_fx: np.ndarray  # int8 per octet-group: 1 when it ends with an FX bit
     sub_parts: np.ndarray  # part index of each COMPOUND subitem, -1 for a spare position
@@ -121,6 +129,7 @@ def walks(buf, q, n, p0, n_frn, parts):
         return False
     while pos < end:
         fs = pos
+        base = p0  # FRN rows of the record's UAP: block 0 until a selector chooses (K_SEL_*)
         while True:
             if pos >= end:
                 return False
@@ -136,13 +145,16 @@ def walks(buf, q, n, p0, n_frn, parts):
                     continue
                 any_item = True
                 f = (fq - fs) * 7 + bit
-                if f >= n_frn or P[p0 + f, K_KIND] == ABSENT:
+                if f >= n_frn or P[base + f, K_KIND] == ABSENT:
                     return False
-                p = p0 + f
+                p = base + f
                 if P[p, K_KIND] != COMPOUND:
                     m = _part_len(buf, pos, end, p, P, ext_sizes, ext_fx)
                     if m < 0:
                         return False
+                    if P[p, K_SEL_MASK] != 0:
+                        v = (np.int64(buf[pos + P[p, K_SEL_BYTE]]) >> P[p, K_SEL_SHIFT]) & P[p, K_SEL_MASK]
+                        base = p0 + (v + 1) * n_frn
                     pos += m
                     continue
                 cs = pos
@@ -676,6 +688,7 @@ def scan(buf, blk_start, blk_len, parts, n_frn, n_slots, rel_off, rel_len, rec_o
         err = 0
         while pos < end and err == 0:
             rec_start = pos
+            base = 0  # FRN rows of the record's UAP: block 0 until a selector chooses (K_SEL_*)
             for s in range(n_slots):
                 part_off[s] = -1
             fs = pos
@@ -697,8 +710,9 @@ def scan(buf, blk_start, blk_len, parts, n_frn, n_slots, rel_off, rel_len, rec_o
                     if byte & (0x80 >> bit) == 0:
                         continue
                     any_item = True
-                    p = (q - fs) * 7 + bit
-                    if p >= n_frn or P[p, K_KIND] == ABSENT:
+                    f = (q - fs) * 7 + bit
+                    p = base + f
+                    if f >= n_frn or P[p, K_KIND] == ABSENT:
                         err = E_UNDEFINED_FRN
                         break
                     if P[p, K_KIND] == FIXED:
@@ -783,6 +797,12 @@ def scan(buf, blk_start, blk_len, parts, n_frn, n_slots, rel_off, rel_len, rec_o
                             if n == 0:
                                 err = E_EXPLICIT_LEN
                                 break
+                        elif k == UNSELECTED:
+                            err = E_NO_UAP
+                            break
+                        elif k == RFS:
+                            err = E_RFS
+                            break
                         else:
                             err = E_UNDEFINED_FRN
                             break
@@ -800,6 +820,9 @@ def scan(buf, blk_start, blk_len, parts, n_frn, n_slots, rel_off, rel_len, rec_o
                     if s >= 0:
                         part_off[s] = item_start
                         part_len[s] = pos - item_start
+                    if P[p, K_SEL_MASK] != 0:  # the record's UAP: by the selector field's value
+                        v = np.int64(buf[item_start + P[p, K_SEL_BYTE]]) >> P[p, K_SEL_SHIFT]
+                        base = ((v & P[p, K_SEL_MASK]) + 1) * n_frn
                 if err:
                     break
             if err == 0 and not any_item:

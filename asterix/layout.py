@@ -11,9 +11,10 @@ from functools import cache
 
 import numpy as np
 
+from .bds import field_of
 from .columns import Column, columns_for
-from .kernel import ABSENT, COMPOUND, EXPLICIT, EXTENDED, FIXED, REP_COUNT, REP_FX, Parts
-from .tables import load_table, resolve_edition
+from .kernel import ABSENT, COMPOUND, EXPLICIT, EXTENDED, FIXED, REP_COUNT, REP_FX, RFS, UNSELECTED, Parts
+from .tables import load_table, resolve_edition, uaps
 
 # Output kinds of a field.
 OUT_INT, OUT_FLOAT, OUT_WIDE = 0, 1, 2  # int32 matrix, float64 matrix, int64 matrix
@@ -56,13 +57,20 @@ class Layout:
     out_names_float: tuple[str, ...]
     out_names_int: tuple[str, ...]
     out_names_wide: tuple[str, ...]
-    item_frn: dict  # item id -> FRN (1-based)
+    item_frn: dict  # item id -> FRN (1-based; of the first UAP that has it)
     selected: tuple[str, ...] | None = None  # the columns compiled (None: all of the edition's)
     code_slots: tuple[tuple[str, int], ...] = ()  # "codes" columns: (name, slot of their repetitive item)
+    # "bds" columns: (name, slot of I048/250, register path), read by asterix/bds.py after the gather
+    bds_slots: tuple[tuple[str, int, tuple[str, ...]], ...] = ()
+    # per part: the UAP selector (byte of the item, right shift, mask; mask 0 for every other part)
+    sel_byte: np.ndarray | None = None
+    sel_shift: np.ndarray | None = None
+    sel_mask: np.ndarray | None = None
 
     @property
     def P(self) -> np.ndarray:
-        """Packed part table for the kernel: kind, size, ext start/count, sub start/count, slot."""
+        """Packed part table for the kernel: kind, size, ext start/count, sub start/count, slot, and the
+        UAP selector's byte, shift and mask."""
         return _packed(self, "parts")
 
     @property
@@ -92,7 +100,8 @@ _PACKED: dict[tuple, np.ndarray] = {}
 def _packed(lay: Layout, which: str) -> np.ndarray:
     key = (lay.category, lay.edition, lay.selected, which)
     if key not in _PACKED:
-        cols = ((lay.kind, lay.size, lay.ext_start, lay.ext_count, lay.sub_start, lay.sub_count, lay.slot)
+        cols = ((lay.kind, lay.size, lay.ext_start, lay.ext_count, lay.sub_start, lay.sub_count, lay.slot,
+                 lay.sel_byte, lay.sel_shift, lay.sel_mask)
                 if which == "parts" else
                 (lay.f_slot, lay.f_bit, lay.f_bits, lay.f_signed, lay.f_out, lay.f_kind, _fallback(lay)))
         _PACKED[key] = np.ascontiguousarray(np.stack([c.astype(np.int64) for c in cols], axis=1))
@@ -130,8 +139,73 @@ def _locate(node: dict, path: tuple[str, ...]) -> tuple[int, dict] | None:
     return None
 
 
-# Always decoded, whatever the selection: the identity and time every frame is built on
-REQUIRED_COLUMNS = ("sac", "sic", "time_of_day")
+# Always decoded, whatever the selection: the identity and time every frame is built on (CAT001's whole
+# time of day is made from its truncated one, cat001_time)
+REQUIRED_COLUMNS = ("sac", "sic", "time_of_day", "truncated_time_of_day")
+
+
+@dataclass(frozen=True)
+class _Selector:
+    """Where the value choosing a record's UAP lies in the selector item, and the UAP of each value."""
+
+    frn: int  # FRN of the selector item (the same in every UAP, as is every FRN before it)
+    byte: int  # byte of the item holding the field
+    shift: int  # right shift of that byte
+    mask: int  # field mask after the shift (the field is one to eight bits inside one byte)
+    by_value: tuple[str | None, ...]  # UAP name of each value, None where no UAP is named
+
+
+def _selector(category: int, edition: str, table: dict, named: dict[str, list]) -> _Selector | None:
+    """The UAP selector of a table with several UAPs (None with one); ValueError when it cannot be walked
+    as data: its item must stand at the same FRN in every UAP, with the same items before it, and its field
+    must lie in the item's first octet-group (always present once the item is)."""
+    sel = table.get("selector")
+    if sel is None:
+        return None
+    where = f"CAT{category:03d} {edition} UAP selector I{sel['item']}/{'/'.join(sel['field'])}"
+    lists = list(named.values())
+    frns = {next((e["frn"] for e in u if e and e["id"] == sel["item"]), None) for u in lists}
+    if len(frns) != 1 or None in frns:
+        raise ValueError(f"{where}: not at one FRN in every UAP")
+    frn = frns.pop()
+    if any(u[:frn] != lists[0][:frn] for u in lists):
+        raise ValueError(f"{where}: the UAPs differ before it")
+    node = lists[0][frn - 1]["node"]
+    if node["kind"] not in ("element", "group", "extended"):
+        raise ValueError(f"{where}: a {node['kind']} item cannot select")
+    found = _locate(node, tuple(sel["field"]))
+    if found is None:
+        raise ValueError(f"{where}: no such field")
+    bit, elem = found
+    first_bits = fixed_bits(node) or sum(c["bits"] for c in node["groups"][0])
+    width = elem["bits"]
+    if bit % 8 + width > 8 or bit + width > first_bits or width > 4:
+        raise ValueError(f"{where}: the field must lie in one byte of the first octet-group (1-4 bits)")
+    by_value = tuple(sel["values"].get(str(v)) for v in range(1 << width))
+    return _Selector(frn, bit // 8, 8 - bit % 8 - width, (1 << width) - 1, by_value)
+
+
+def _frn_rows(named: dict[str, list], selector: _Selector | None) -> tuple[list, int]:
+    """The part rows of the FRNs, in blocks of n_frn rows, and n_frn. One UAP: its FRNs. Several: block 0
+    holds the FRNs up to the selector and "unselected" rows after it (where a record without the
+    selector stops), then one block per selector value, with its UAP's FRNs after the selector (rows up
+    to it are never reached: the walk switches blocks once the selector item is walked)."""
+    lists = list(named.values())
+    n_frn = max(len(u) for u in lists)
+    if selector is None:
+        return lists[0] + [None] * (n_frn - len(lists[0])), n_frn
+    k = selector.frn
+    rows: list = lists[0][:k] + [_UNSELECTED] * (n_frn - k)
+    for name in selector.by_value:
+        if name is None:
+            rows += [None] * k + [_UNSELECTED] * (n_frn - k)
+        else:
+            uap = named[name]
+            rows += [None] * k + uap[k:] + [None] * (n_frn - len(uap))
+    return rows, n_frn
+
+
+_UNSELECTED = {"id": None, "node": {"kind": "unselected"}}  # an FRN row of a record whose UAP is not chosen
 
 
 @cache
@@ -139,14 +213,20 @@ def compile_layout(category: int, edition: str | None = None,
                    selected: tuple[str, ...] | None = None) -> Layout:
     """Build the kernel arrays for a category edition (cached); ``selected`` (sorted column names)
     compiles only those columns and ``REQUIRED_COLUMNS``: the walker then records only their items and
-    the gather fills only their rows, so memory follows the columns a job needs."""
+    the gather fills only their rows, so memory follows the columns a job needs.
+
+    A category with several UAPs (CAT001) gets one block of FRN rows per selector value (``_frn_rows``);
+    the walker moves to a record's block once it has walked the selector item. Rows of one item in
+    several UAPs share their slot (a record walks one of them), so a column needs one field."""
     edition = resolve_edition(category, edition)
     table = load_table(category, edition)
+    named = uaps(table)
+    selector = _selector(category, edition, table, named)
     columns = tuple(c for c in columns_for(category, edition)
                     if selected is None or c.name in selected or c.name in REQUIRED_COLUMNS)
-    uap = table["uap"]
-    parts: list[dict | None] = [u["node"] if u else None for u in uap]
-    n_frn = len(parts)
+    rows, n_frn = _frn_rows(named, selector)
+    parts: list[dict | None] = [u["node"] if u else None for u in rows]
+    keys: list = [u["id"] if u else None for u in rows]  # what a part's slot is shared by
     kind, size, ext_start, ext_count, sub_start, sub_count = ([] for _ in range(6))
     ext_sizes: list[int] = []
     ext_fx: list[int] = []
@@ -159,6 +239,12 @@ def compile_layout(category: int, edition: str | None = None,
             nk = node["kind"]
             if (bits := fixed_bits(node)) is not None:
                 k, s = FIXED, bits // 8
+                if selector is not None and i == selector.frn - 1:
+                    # the selector is walked off the fixed fast path (which never checks for one): as an
+                    # extended item of one octet-group without FX, the same bytes
+                    k, es, ec = EXTENDED, len(ext_sizes), 1
+                    ext_sizes.append(s)
+                    ext_fx.append(0)
             elif nk == "extended":
                 k, es = EXTENDED, len(ext_sizes)
                 for g, fx in zip(node["groups"], _fx_flags(node), strict=True):
@@ -185,8 +271,13 @@ def compile_layout(category: int, edition: str | None = None,
                             raise ValueError("nested compound items are unsupported")
                         sub_parts.append(len(parts))
                         parts.append(sub["node"])
+                        keys.append((keys[i], sub["name"]))
             elif nk == "explicit":
                 k = EXPLICIT
+            elif nk == "rfs":
+                k = RFS
+            elif nk == "unselected":
+                k = UNSELECTED
         kind.append(k)
         size.append(s)
         ext_start.append(es)
@@ -194,21 +285,50 @@ def compile_layout(category: int, edition: str | None = None,
         sub_start.append(ss)
         sub_count.append(sc)
         i += 1
+    sel_byte, sel_shift, sel_mask = (np.zeros(len(parts), np.int32) for _ in range(3))
+    if selector is not None:
+        at = selector.frn - 1
+        sel_byte[at], sel_shift[at], sel_mask[at] = selector.byte, selector.shift, selector.mask
 
-    item_frn = {u["id"]: u["frn"] for u in uap if u}
+    # item id -> FRN (the first UAP's, where an item is in several) and -> its part in the first block
+    # that has it (fields are located there; its rows in the other blocks share its slot)
+    item_frn: dict[str, int] = {}
+    item_part: dict[str, int] = {}
+    for r, u in enumerate(rows):
+        if u and u["id"] is not None and u["node"]["kind"] not in ("rfs",):
+            item_frn.setdefault(u["id"], u["frn"])
+            item_part.setdefault(u["id"], r)
+            if parts[item_part[u["id"]]] != u["node"]:
+                raise ValueError(f"CAT{category:03d} {edition} I{u['id']}: laid out differently in two UAPs")
     slot = [-1] * len(parts)
+    slot_of: dict = {}
+
+    def use(p: int) -> int:
+        """The slot of part p, shared by every part of the same key (item, or item and subitem)."""
+        key = keys[p]
+        if key not in slot_of:
+            slot_of[key] = len(slot_of)
+        for q, other in enumerate(keys):
+            if other == key:
+                slot[q] = slot_of[key]
+        return slot_of[key]
+
     fields: list[tuple[int, int, int, bool, int, bool, float]] = []
     names_float: list[str] = []
     names_int: list[str] = []
     names_wide: list[str] = []
     code_slots: list[tuple[str, int]] = []
+    bds_slots: list[tuple[str, int, tuple[str, ...]]] = []
     for col in columns:
+        if col.kind == "bds":  # a Mode S register field, read from the item's bytes after the gather
+            found = _bds_item(category, edition, col, item_part, parts)
+            if found is not None:
+                bds_slots.append((col.name, use(found[0]), found[1]))
+            continue
         if col.kind == "codes":  # read from the item's bytes after the gather (reader), not by a field
-            p = _code_item(category, edition, col, item_frn, parts)
+            p = _code_item(category, edition, col, item_part, parts)
             if p is not None:
-                if slot[p] < 0:
-                    slot[p] = max(slot) + 1 if max(slot) >= 0 else 0
-                code_slots.append((col.name, slot[p]))
+                code_slots.append((col.name, use(p)))
             continue
         is_float = col.kind == "float"
         out_kind = OUT_FLOAT if is_float else OUT_WIDE if col.kind == "icao" else OUT_INT
@@ -216,16 +336,16 @@ def compile_layout(category: int, edition: str | None = None,
         out = len(names)
         names.append(col.name)
         for item_id, path in col.sources:
-            if item_id not in item_frn:
+            if item_id not in item_part:
                 continue
-            p = item_frn[item_id] - 1
+            p = item_part[item_id]
             node = parts[p]
             assert node is not None
             if col.kind == "count":
                 loc: tuple[int, dict] | None = (0, {"bits": 8, "signed": False, "lsb": 1.0})
             else:
                 if node["kind"] == "compound" and path:
-                    subs = uap[p]["node"]["subitems"]
+                    subs = node["subitems"]
                     names_sub = [s["name"] if s else None for s in subs]
                     if path[0] not in names_sub:
                         continue
@@ -237,12 +357,10 @@ def compile_layout(category: int, edition: str | None = None,
             if loc is None:
                 continue
             bit, elem = loc
-            if slot[p] < 0:
-                slot[p] = max(slot) + 1 if max(slot) >= 0 else 0
             lsb = elem.get("lsb", 1.0) if is_float else 1.0
-            fields.append((slot[p], bit, elem["bits"], bool(elem.get("signed", False)), out, out_kind,
+            fields.append((use(p), bit, elem["bits"], bool(elem.get("signed", False)), out, out_kind,
                            lsb * col.scale))
-    n_slots = max(slot) + 1 if max(slot) >= 0 else 0
+    n_slots = len(slot_of)
     f = list(zip(*fields, strict=True)) if fields else [[]] * 7
     i32 = np.int32
     return Layout(
@@ -257,19 +375,38 @@ def compile_layout(category: int, edition: str | None = None,
         f_mult=np.array(f[6], np.float64),
         out_names_float=tuple(names_float), out_names_int=tuple(names_int), out_names_wide=tuple(names_wide),
         item_frn=item_frn, selected=selected, code_slots=tuple(code_slots),
+        bds_slots=tuple(bds_slots),
+        sel_byte=sel_byte, sel_shift=sel_shift, sel_mask=sel_mask,
     )
 
 
-def _code_item(category: int, edition: str, col: Column, item_frn: dict, parts: list) -> int | None:
+def _code_item(category: int, edition: str, col: Column, item_part: dict, parts: list) -> int | None:
     """The part of a "codes" column's item: an FX-repetitive item of one-byte repetitions (7-bit code and
     FX), such as I048/030; None when the edition has no such item."""
     for item_id, _ in col.sources:
-        if item_id not in item_frn:
+        if item_id not in item_part:
             continue
-        p = item_frn[item_id] - 1
+        p = item_part[item_id]
         node = parts[p]
         if node["kind"] != "repetitive" or node["rep_bytes"] is not None or node["item"].get("bits") != 7:
             raise ValueError(f"CAT{category:03d} {edition} I{item_id}: column {col.name!r} needs repeated "
                              f"7-bit codes with FX")
         return p
+    return None
+
+
+def _bds_item(category: int, edition: str, col: Column, item_part: dict, parts: list
+              ) -> tuple[int, tuple[str, ...]] | None:
+    """The part and register path of a "bds" column: a counted repetitive item of 8-byte groups (MB
+    data, BDS1, BDS2), such as I048/250; None when the edition has no such item."""
+    for item_id, path in col.sources:
+        if item_id not in item_part:
+            continue
+        p = item_part[item_id]
+        node = parts[p]
+        if node["kind"] != "repetitive" or node["rep_bytes"] != 1 or fixed_bits(node["item"]) != 64:
+            raise ValueError(f"CAT{category:03d} {edition} I{item_id}: column {col.name!r} needs counted "
+                             f"8-byte BDS register groups")
+        field_of(path)
+        return p, path
     return None

@@ -14,16 +14,21 @@ from functools import cache
 import numpy as np
 import pandas as pd
 
-from . import kernel
-from .categories import DECODABLE, MEASUREMENT_CATEGORIES
+from . import bds, kernel, sampling
+from .cat001_time import PLOT_CATEGORY, UNTIMED_COLUMNS, SectorClock, time_cat001, untimed_advice
+from .categories import DECODABLE, MEASUREMENT_CATEGORIES, REGISTRY
 from .columns import FAMILIES
 from .containers import Segments, read_segments
-from .errors import REASONS, DecodeError, EditionWarning, UnreadableInput
-from .frames import code_list_column, empty_column, icao_columns, typed_column
+from .errors import REASONS, ContentWarning, DecodeError, EditionWarning, UnreadableInput, UntimedWarning
+from .families import AUTO, edition_families, edition_span, family_name, family_of, with_defaults
+from .frames import code_list_column, empty_columns, icao_columns, typed_column
 from .framing import Progress, alike_framings, segment_modes, survey
-from .layout import Layout, compile_layout
+from .layout import OUT_FLOAT, OUT_INT, OUT_WIDE, Layout, compile_layout
+from .plausible import BOUNDS, Implausible, count_implausible, implausible
+from .stretches import Stretch, describe, foreign_spans
 from .tables import available, resolve_edition
 from .timeline import assign_days, timestamp_index
+from .verdict import Tally, head_of
 
 # Decoded when categories=None: the measurement categories. CAT034 (service messages) is decoded on
 # request (categories=DECODABLE): until the pipeline handles its frames, its blocks are stepped over and
@@ -31,7 +36,13 @@ from .timeline import assign_days, timestamp_index
 DEFAULT_CATEGORIES = MEASUREMENT_CATEGORIES
 WRONG_EDITION_MIN_BLOCKS = 10  # failed blocks, all walking under another edition, proving the edition wrong
 AUTO_SAMPLE_BLOCKS = 20_000  # blocks walked per candidate edition by editions={cat: "auto"}
+# a raw stream whose chain breaks (choose_editions): blocks before the break enough to choose the edition
+# that frames the rest; else framing_edition over the stream's first FRAMING_EDITION_BYTES; then windows
+AUTO_PREFIX_BLOCKS = 100
+FRAMING_EDITION_BYTES = 1 << 22
+AUTO_WINDOWS, AUTO_WINDOW_BYTES = 16, 1 << 18
 ERROR_COLUMNS = ["file", "offset", "length", "category", "reason"]
+OVERSIZED_BLOCK_BYTES = 8192  # a longer block of a category not decoded counts as unlike a recording's
 
 
 @dataclass
@@ -56,6 +67,18 @@ class Recording:
     # of them sampled walks (a likely wrong edition; it is said, not switched: nothing on the wire says)
     edition_fits: dict[int, tuple[str, ...]] = field(default_factory=dict)
     blocks: int = 0  # data blocks framed, of every category (the ``block`` column numbers them)
+    # CAT001 records whose truncated time of day no CAT002 message made whole (cat001_time): offset,
+    # category, sac, sic, reason; their time_of_day is NaN
+    untimed: pd.DataFrame = field(default_factory=lambda: pd.DataFrame(columns=UNTIMED_COLUMNS))
+    # a category holding stretches of blocks that walk under another edition family than the rest: each
+    # stretch, withheld (recordings of different editions laid end to end)
+    edition_stretches: dict[int, list[Stretch]] = field(default_factory=dict)
+    decoded_blocks: dict[int, int] = field(default_factory=dict)  # blocks per category whose records decoded
+    # per category, the decoded records holding a value no real report carries (plausible.BOUNDS)
+    implausible: dict[int, Implausible] = field(default_factory=dict)
+    # bytes in blocks of categories not decoded longer than OVERSIZED_BLOCK_BYTES: what text and random bytes
+    # frame into (printable text makes every LEN at least 0x2020 = 8224), rarely what a recorder writes
+    oversized_bytes: int = 0
 
     @property
     def ignored(self) -> pd.DataFrame:
@@ -70,6 +93,7 @@ class Recording:
 
 
 _ALWAYS = ("day", "timestamp", "block", "offset")  # built for every frame
+KNOWN_COLUMNS = frozenset(c.name for family in FAMILIES.values() for c in family)
 
 
 def selected_columns(columns) -> tuple[str, ...] | None:
@@ -77,7 +101,7 @@ def selected_columns(columns) -> tuple[str, ...] | None:
     ValueError naming a column no category has."""
     if columns is None:
         return None
-    known = {c.name for family in FAMILIES.values() for c in family}
+    known = KNOWN_COLUMNS
     names = set()
     for name in ([columns] if isinstance(columns, str) else columns):
         base = name[:-4] if name.endswith("_hex") and name[:-4] in known else name
@@ -183,10 +207,34 @@ def _mapped(path) -> Iterator[np.ndarray]:
                 pass
 
 
+SIZE_SAMPLE_BLOCKS = 64  # blocks walked, spread over the recording, to guess the record count
+SIZE_SAMPLE_BYTES = 1 << 18  # at most this many bytes of them
+
+
+def _record_guess(buf, starts, lens, lay: Layout) -> int:
+    """A first guess at the record count of these blocks (5 % over), from the records per byte of up to
+    SIZE_SAMPLE_BLOCKS blocks spread over them (SIZE_SAMPLE_BYTES at most); the category's typical record
+    size when none of those walks. A guess short of the count walks everything twice (records of about 30
+    bytes, the real CAT010 and CAT021 0.23 recordings, did with 1 per 40 bytes)."""
+    k = _spread(len(starts), SIZE_SAMPLE_BLOCKS)
+    k = k[:max(1, int(np.searchsorted(np.cumsum(lens[k]), SIZE_SAMPLE_BYTES, side="right")))]
+    cap = int(lens[k].sum()) // 8 + 16  # records past it: the blocks walked before are enough to judge
+    slots = max(lay.n_slots, 1)
+    rel_off = np.full((cap, slots), 0xFFFF, np.uint16)
+    counts, _, _ = kernel.scan(buf, starts[k], lens[k], lay.parts, lay.n_frn, lay.n_slots, rel_off,
+                               np.zeros((cap, slots), np.uint16), np.empty(cap, np.int64),
+                               np.empty(cap, np.int64))
+    good = counts > 0
+    if not good.any():
+        return int(lens.sum()) // REGISTRY[lay.category].record_bytes + 16
+    per_byte = counts[good].sum() / lens[k][good].sum()
+    return int(per_byte * int(lens.sum()) * 1.05) + 16
+
+
 def _scan(buf, starts, lens, lay: Layout):
     """One walk over the blocks: records per block (minus an error code for a bad block), where
     bad walks failed, and where each part of each good record lies (arrays sized by numpy)."""
-    cap = int(lens.sum()) // 40 + 16  # a first guess at the record count, doubled until it fits
+    cap = _record_guess(buf, starts, lens, lay)  # doubled until it fits
     slots = max(lay.n_slots, 1)
     while True:
         rel_off = np.full((cap, slots), 0xFFFF, np.uint16)
@@ -216,20 +264,32 @@ def _walk_flags(buf: np.ndarray, starts: np.ndarray, lens: np.ndarray, category:
                              framing.parts).astype(bool)
 
 
+def _family_flags(buf: np.ndarray, starts: np.ndarray, lens: np.ndarray, category: int
+                  ) -> dict[str, np.ndarray]:
+    """_walk_flags under every edition, walked once per family (its editions walk every block alike)."""
+    flags: dict[str, np.ndarray] = {}
+    for family in edition_families(category):
+        walked = _walk_flags(buf, starts, lens, category, family[-1])
+        flags |= {ed: walked for ed in family}
+    return {ed: flags[ed] for ed in _editions_oldest_first(category)}
+
+
 def choose_edition(buf: np.ndarray, starts: np.ndarray, lens: np.ndarray, category: int,
-                   sample: int = AUTO_SAMPLE_BLOCKS, total: int | None = None) -> tuple[str, str]:
+                   sample: int = AUTO_SAMPLE_BLOCKS, total: int | None = None, source: str = ""
+                   ) -> tuple[str, str]:
     """Pick the edition under which every sampled block walks exactly (the newest of those, as they read
     the sample alike), values plausible; say which blocks told the editions apart, or that none walks all.
 
     The sample is every block, or AUTO_SAMPLE_BLOCKS spread evenly over a longer recording: a walk costs
-    no memory, so rare blocks that tell editions apart (I021/271 with an odd LW) are seen. ``total``: the
-    category's blocks in the recording, when ``starts`` are a sample of them already.
+    no memory, so rare blocks that tell editions apart (I021/271 with an odd LW) are seen. ``total``:
+    the blocks the given ones were sampled from (choose_editions samples the whole recording first), or
+    ``source``: where they come from, in words.
     """
     idx = _spread(len(starts), sample)
-    total = len(starts) if total is None else total
     s, n = starts[idx], lens[idx]
+    total = len(starts) if total is None else total
     eds = _editions_oldest_first(category)
-    flags = {ed: _walk_flags(buf, s, n, category, ed) for ed in eds}
+    flags = _family_flags(buf, s, n, category)
     share = {ed: float(f.mean()) for ed, f in flags.items()}
     best = max(share.values())
     tied = [ed for ed in eds if share[ed] == best]
@@ -240,18 +300,23 @@ def choose_edition(buf: np.ndarray, starts: np.ndarray, lens: np.ndarray, catego
     contenders = [ed for ed in eds if share[ed] >= 0.5] or [chosen]
     stack = np.array([flags[ed] for ed in contenders])
     apart = np.flatnonzero(stack.min(axis=0) != stack.max(axis=0))
-    words = [f"{ed}: {share[ed]:.0%}" for ed in eds]
+    # per family (its editions walk every block alike, so their shares are one)
+    words = [f"{family_name(f)}: {share[f[0]]:.0%}" for f in edition_families(category)]
     told = ", ".join(f"offset {int(s[j])} walks under {'/'.join(ed for ed in contenders if flags[ed][j])}"
                      for j in apart[:3]) or "none"
     if best < 1:
         verdict = f"no edition walks every sampled block; best {chosen}"
     else:
-        verdict = f"editions walking every sampled block: {', '.join(tied)}; newest {chosen}"
-    if plaus:
+        walking = edition_span(category, tuple(tied))
+        verdict = f"editions walking every sampled block: {walking}; newest {chosen}"
+    if plaus and len(set(plaus.values())) == 1:
+        verdict += f" (all {next(iter(plaus.values())):.0%} plausible)"
+    elif plaus:
         verdict += " (" + ", ".join(f"{ed} {p:.0%} plausible" for ed, p in plaus.items()) + ")"
     apart_words = (f"{len(apart)} blocks told {'/'.join(contenders)} apart: {told}" if len(contenders) > 1
                    else "no other edition walks half the sample, so none needed telling apart")
-    return chosen, (f"chose {chosen} ({len(idx)} of {total} blocks sampled; blocks walking: "
+    sampled = f"{len(idx)} {source}" if source else f"{len(idx)} of {total} blocks sampled"
+    return chosen, (f"chose {chosen} ({sampled}; blocks walking: "
                     f"{'; '.join(words)}; {verdict}; {apart_words})")
 
 
@@ -260,77 +325,117 @@ def walking_editions(buf: np.ndarray, starts: np.ndarray, lens: np.ndarray, cate
     """The editions (oldest first, ``besides`` left out) under which every one of these blocks walks
     exactly, or of ``sample`` of them spread evenly over a longer list."""
     idx = _spread(len(starts), sample)
-    s, n = starts[idx], lens[idx]
-    return tuple(ed for ed in _editions_oldest_first(category)
-                 if ed != besides and _walk_flags(buf, s, n, category, ed).all())
+    flags = _family_flags(buf, starts[idx], lens[idx], category)
+    return tuple(ed for ed, f in flags.items() if ed != besides and f.all())
+
+
+def _other_family_spans(buf: np.ndarray, starts: np.ndarray, lens: np.ndarray, failed: np.ndarray,
+                        category: int, edition: str) -> list[tuple[int, int]]:
+    """Block spans of stretches of another edition family (asterix.stretches), when at least
+    WRONG_EDITION_MIN_BLOCKS blocks failed, that many walk under one other family, and at least as many
+    blocks outside the stretches are evidence for ``edition``; else none (a wrong edition throughout is
+    the rule of decode_buffer, a few failed blocks are damage)."""
+    if failed.sum() < WRONG_EDITION_MIN_BLOCKS:
+        return []
+    idx = np.flatnonzero(failed)[_spread(int(failed.sum()), AUTO_SAMPLE_BLOCKS)]
+    own = family_of(category, compile_layout(category, edition).edition)
+    counts = {f[-1]: int(_walk_flags(buf, starts[idx], lens[idx], category, f[-1]).sum())
+              for f in edition_families(category) if f != own}
+    if not counts or max(counts.values()) < WRONG_EDITION_MIN_BLOCKS:
+        return []
+    other = max(counts, key=lambda ed: counts[ed])
+    spans, used = foreign_spans(~failed, _walk_flags(buf, starts, lens, category, other),
+                                WRONG_EDITION_MIN_BLOCKS)
+    return spans if used >= WRONG_EDITION_MIN_BLOCKS else []
 
 
 def framing_edition(buf: np.ndarray, seg: Segments, walked: dict, category: int,
                     progress: Progress | None = None) -> str:
     """For an 'auto' category of a stream whose block chain breaks: the edition under which careful
     framing loses the fewest bytes (most of its blocks found on a tie, then the newest). Framing cannot
-    walk a category without an edition, and would otherwise lose every block of it after the damage."""
-    best: tuple | None = None
+    walk a category without an edition, and would otherwise lose every block of it after the damage.
+    One edition per family is tried, the newest: the editions of a family frame alike (and families that
+    walk every block framing meets alike are framed once: framing.alike_framings)."""
     careful = np.full(len(seg.start), kernel.MODE_CAREFUL, np.int8)
-    eds = _editions_oldest_first(category)
+    eds = [family[-1] for family in edition_families(category)]
     framed = alike_framings(buf, seg, careful, {ed: tables_for({**walked, category: ed}) for ed in eds},
                             category, progress, what=f"framing under CAT{category:03d}")
+    best: tuple | None = None
     for ed in eds:
-        counted = framed[ed]
-        key = (counted.error_bytes, -int(counted.blocks[category]))
+        key = (framed[ed].error_bytes, -int(framed[ed].blocks[category]))
         if best is None or key <= best[0]:
             best = (key, ed)
     return best[1]
 
 
 def _plausible_share(buf, s, n, category: int, ed: str, limit: int = 400) -> float:
-    """Share of records of up to ``limit`` sampled blocks with a plausible position and time of day."""
+    """Share of records of up to ``limit`` sampled blocks whose values are plausible (plausible.mask:
+    positions on the Earth, times of day within 24 h; the columns the category has)."""
     k = _spread(len(s), limit)
     lay = compile_layout(category, ed)
     scanned = _scan(buf, s[k], n[k], lay)
     if not (scanned[0] > 0).any():
         return 0.0
-    fl, _, _, _ = _extract(buf, scanned, lay)
-    cols = {nm: fl[i] for i, nm in enumerate(lay.out_names_float)}
-    lat, lon, tod = cols["latitude"], cols["longitude"], cols["time_of_day"]
-    ok = (np.abs(lat) <= 90) & (np.abs(lon) <= 180) & (tod >= 0) & (tod < 86400)
+    where, _, _, _ = _extract(buf, scanned, lay)
+    bounded = {nm: where[nm][0][where[nm][1]] for nm in BOUNDS if nm in where}
+    ok = ~implausible(bounded) if bounded else np.ones(int(scanned[-1]), bool)
     return float(np.mean(ok)) if len(ok) else 0.0
 
 
 def _extract(buf, scanned, lay: Layout):
-    """Gather every field of the scanned records into column matrices."""
+    """Gather every field of the scanned records into column matrices: only the fields of parts some
+    record carries, into rows for their columns alone (a wide edition's other columns, absent from every
+    record, cost neither a pass nor memory here: ``_columns`` builds them empty)."""
     _, _, rel_off, rel_len, rec_off, rec_blk, n = scanned
-    fl = np.full((len(lay.out_names_float), n), np.nan)
-    it = np.full((len(lay.out_names_int), n), -1, np.int32)
-    wd = np.full((len(lay.out_names_wide), n), -1, np.int64)
-    kernel.gather(buf, rec_off[:n], rel_off[:n], rel_len[:n], lay.F, lay.f_mult, fl, it, wd)
+    F, mult = lay.F, lay.f_mult
+    if len(F):
+        carried = (rel_off[:n] != 0xFFFF).any(axis=0) if n else np.zeros(rel_off.shape[1], bool)
+        keep = carried[F[:, 0]]
+        if not keep.all():
+            F, mult = F[keep], mult[keep]
+    F = np.array(F, np.int64, copy=True)
+    names = {OUT_INT: lay.out_names_int, OUT_FLOAT: lay.out_names_float, OUT_WIDE: lay.out_names_wide}
+    rows = {k: sorted(set(F[F[:, 5] == k, 4].tolist())) for k in names}
+    for k in names:  # the kept columns' rows, numbered afresh per output kind
+        renumber = np.full(len(names[k]) + 1, -1, np.int64)
+        renumber[rows[k]] = np.arange(len(rows[k]))
+        sel = F[:, 5] == k
+        F[sel, 4] = renumber[F[sel, 4]]
+    it = np.full((len(rows[OUT_INT]), n), -1, np.int32)
+    fl = np.full((len(rows[OUT_FLOAT]), n), np.nan)
+    wd = np.full((len(rows[OUT_WIDE]), n), -1, np.int64)
+    kernel.gather(buf, rec_off[:n], rel_off[:n], rel_len[:n], np.ascontiguousarray(F),
+                  np.ascontiguousarray(mult), fl, it, wd)
+    matrices = {OUT_INT: it, OUT_FLOAT: fl, OUT_WIDE: wd}
+    where = {names[k][r]: (matrices[k], i) for k in names for i, r in enumerate(rows[k])}
     texts = {name: code_list_column(buf, rec_off[:n], rel_off[:n, s], rel_len[:n, s])
              for name, s in lay.code_slots}
-    return fl, (it, wd, texts), rec_off[:n].copy(), rec_blk[:n].copy()
+    for s in sorted({s for _, s, _ in lay.bds_slots}):  # Mode S register fields, one pass per item
+        texts |= bds.decode(buf, rec_off[:n], rel_off[:n, s], rel_len[:n, s],
+                            {name: path for name, slot, path in lay.bds_slots if slot == s})
+    return where, texts, rec_off[:n].copy(), rec_blk[:n].copy()
 
 
-def _columns(lay: Layout, fl, ints, rec_off, rec_blk) -> dict[str, object]:
-    """The typed columns of one category from kernel arrays, in schema order."""
+def _columns(lay: Layout, where: dict, texts: dict, rec_off, rec_blk) -> dict[str, object]:
+    """The typed columns of one category from kernel arrays, in schema order (``where``: the matrix and
+    row of each gathered column; the others are absent from every record)."""
     n = rec_off.shape[0]
-    it, wd, texts = ints
-    where = {nm: (fl, i) for i, nm in enumerate(lay.out_names_float)}
-    where |= {nm: (it, i) for i, nm in enumerate(lay.out_names_int)}
-    where |= {nm: (wd, i) for i, nm in enumerate(lay.out_names_wide)}
+    empty = empty_columns([c for c in lay.columns if c.name not in where and c.name not in texts], n)
     data: dict[str, object] = {}
     for col in lay.columns:
-        if not any(src[0] in lay.item_frn for src in col.sources):
-            data[col.name] = empty_column(col, n)
-            if col.kind == "icao":
-                data[f"{col.name}_hex"] = icao_columns(np.full(n, -1, np.int64))[1]
-            continue
-        if col.kind == "codes":
+        if col.name in texts:
             data[col.name] = texts[col.name]
+            continue
+        if col.name not in where:
+            data[col.name] = empty[col.name]
+            if col.kind == "icao":
+                data[f"{col.name}_hex"] = empty[f"{col.name}_hex"]
             continue
         matrix, row = where[col.name]
         if col.kind == "icao":  # the raw identification beside its text (codes outside the ICAO set)
             data[col.name], data[f"{col.name}_hex"] = icao_columns(matrix[row])
             continue
-        data[col.name] = matrix[row] if matrix is fl else typed_column(col, matrix[row])
+        data[col.name] = matrix[row] if col.kind == "float" else typed_column(col, matrix[row])
     data["block"] = rec_blk
     data["offset"] = rec_off
     return data
@@ -352,7 +457,7 @@ def _framing_tables(walked: tuple[tuple[int, str], ...]) -> kernel.Framing:
     the category is not walked), for kernel.frame_blocks."""
     base = np.full(256, -1, np.int64)
     nfrn = np.zeros(256, np.int64)
-    parts, ext_sizes, ext_fx, sub_parts = [np.zeros((1, 7), np.int64)], [], [], []
+    parts, ext_sizes, ext_fx, sub_parts = [np.zeros((1, kernel.N_PART_COLUMNS), np.int64)], [], [], []
     n_parts, n_ext, n_sub = 1, 0, 0  # row 0 is a dummy: P is never empty
     for cat, ed in walked:
         lay = compile_layout(cat, ed)
@@ -395,30 +500,66 @@ def walked_editions(editions: dict, categories) -> dict[int, str | None]:
     wanted = set(DEFAULT_CATEGORIES if categories is None else categories)
     return {c: editions.get(c) for c in DECODABLE
             if (c in wanted or c == 48 or c in editions)
-            and editions.get(c) != "auto"}
+            and editions.get(c) != AUTO}
 
 
-def framing_walk(buf: np.ndarray, seg: Segments, editions: dict, categories,
-                 progress: Progress | None = None) -> dict[int, str | None]:
-    """walked_editions, plus, on a stream whose framing finds errors, each decoded 'auto' category with the
-    edition framing_edition finds for it (its blocks are found before its edition is chosen)."""
-    walked = walked_editions(editions, categories)
+def _raw_part(lo: int, hi: int) -> Segments:
+    """Bytes [lo, hi) of a file as a raw stream of their own."""
+    return Segments("raw", np.array([lo]), np.array([hi]), np.array([-1]), np.array([np.nan]), False, False,
+                    0, [])
+
+
+def _broken_chain_sample(buf: np.ndarray, seg: Segments, cat: int, walked: dict) -> tuple[np.ndarray, str]:
+    """For a raw stream whose chain breaks: the starts of the sampled blocks of ``cat``, and where they come
+    from. Framing such a stream needs an edition for ``cat`` (careful framing finds blocks by walking
+    them): one is chosen from the blocks before the chain's first break, or, with too few there, the one
+    under which careful framing of the stream's start loses the fewest bytes (framing_edition); the
+    sample is then the blocks before the break and those careful framing under it finds in
+    AUTO_WINDOWS windows spread over the stream (the whole stream when it is no longer)."""
+    start, stop = int(seg.start[0]), int(seg.stop[0])
+    prefix = sampling.prefix_starts(buf, start, stop, cat, AUTO_SAMPLE_BLOCKS)
+    if len(prefix) >= AUTO_PREFIX_BLOCKS:
+        ed = choose_edition(buf, prefix, sampling.block_lengths(buf, prefix), cat)[0]
+    else:
+        ed = framing_edition(buf, _raw_part(start, min(stop, start + FRAMING_EDITION_BYTES)), walked, cat)
+    span = AUTO_WINDOWS * AUTO_WINDOW_BYTES
+    windows = ([(start, stop)] if stop - start <= span else
+               [(int(lo), int(lo) + AUTO_WINDOW_BYTES)
+                for lo in np.linspace(start, stop - AUTO_WINDOW_BYTES, AUTO_WINDOWS).astype(np.int64)])
+    found = [prefix]
+    for lo, hi in windows:
+        framed = frame(buf, _raw_part(lo, hi), {**walked, cat: ed}, True)
+        found.append(framed[0][framed[2] == cat])
+    found = np.unique(np.concatenate(found))
+    starts = found[_spread(len(found), AUTO_SAMPLE_BLOCKS)]  # clustered: spread by count, not by offset
+    where = ("the stream framed" if len(windows) == 1 else f"{len(windows)} windows of the stream framed")
+    return starts, (f"blocks sampled from the chain before its first break and {where} under {ed} (its "
+                    "chain breaks)")
+
+
+def choose_editions(buf: np.ndarray, seg: Segments, editions: dict, categories
+                    ) -> tuple[dict, dict[int, str]]:
+    """Each 'auto' edition of a decoded category chosen over the whole recording before it is decoded
+    (``read`` decodes with the result whole, ``iter_read`` in chunks: they choose alike): the editions
+    with each 'auto' replaced, and how each was chosen in words. A category with no block stays 'auto'.
+
+    The sample follows the block chain (asterix.sampling), at no cost in memory and next to none in time;
+    a raw stream whose chain breaks is sampled as _broken_chain_sample says."""
     wanted = set(DEFAULT_CATEGORIES if categories is None else categories)
-    auto = [c for c in DECODABLE if c in wanted and editions.get(c) == "auto"]
-    if auto and not seg.exact and framing_errors(buf, seg, walked, progress):
-        for cat in auto:
-            walked[cat] = framing_edition(buf, seg, walked, cat, progress)
-    return walked
-
-
-def framing_errors(buf: np.ndarray, seg: Segments, walked: dict, progress: Progress | None = None) -> int:
-    """Framing errors of the recording framed as decoding first frames it (frame(..., careful=False)),
-    counted a window at a time."""
-    tables = tables_for(walked)
-    modes = segment_modes(buf, seg, tables, progress)
-    if (modes != kernel.MODE_CAREFUL).all():
-        return 0
-    return survey(buf, seg, modes, tables, progress=progress).errors
+    auto = [c for c in DECODABLE if c in wanted and editions.get(c) == AUTO]
+    chosen, why = dict(editions), {}
+    for cat in auto:
+        source = ""
+        if seg.exact or all(sampling.chain_holds(buf, a, b)
+                            for a, b in zip(seg.start, seg.stop, strict=True)):
+            starts, total = sampling.sample_starts(buf, seg.start, seg.stop, cat, AUTO_SAMPLE_BLOCKS)
+        else:
+            starts, source = _broken_chain_sample(buf, seg, cat, walked_editions(editions, categories))
+            total = len(starts)
+        if total:
+            chosen[cat], why[cat] = choose_edition(buf, starts, sampling.block_lengths(buf, starts), cat,
+                                                   total=total, source=source)
+    return chosen, why
 
 
 def _scan_decoded(buf: np.ndarray, framed, plan, selected) -> dict[int, tuple]:
@@ -435,10 +576,76 @@ def _scan_decoded(buf: np.ndarray, framed, plan, selected) -> dict[int, tuple]:
     return scans
 
 
+@dataclass
+class _Judged:
+    """What the walk of one category's blocks says about its edition: the errors (each failed block, and
+    blocks withheld), the blocks kept (None: all), and the stretches of another edition among them."""
+
+    errors: list[tuple[int, int, int, str]]
+    keep: np.ndarray | None = None
+    stretches: list[Stretch] = field(default_factory=list)
+
+
+def find_stretches(buf: np.ndarray, starts: np.ndarray, lens: np.ndarray, failed: np.ndarray, cat: int,
+                   edition: str) -> list[Stretch]:
+    """The stretches of another edition family among all of a category's blocks (``failed``: those that do
+    not walk under ``edition``), found over the whole recording (asterix.plan): _other_family_spans."""
+    out = []
+    for lo, hi in _other_family_spans(buf, starts, lens, failed, cat, edition):
+        inside = slice(lo, hi)
+        eds = walking_editions(buf, starts[inside][failed[inside]], lens[inside][failed[inside]], cat,
+                               besides=edition)
+        end = int(starts[hi - 1] + lens[hi - 1])
+        out.append(Stretch(int(starts[lo]), end, hi - lo, eds, edition, lo == 0, hi == len(starts)))
+    return out
+
+
+def _judge_edition(starts: np.ndarray, lens: np.ndarray, scanned, cat: int, edition: str, plan) -> _Judged:
+    """Report the blocks that failed to walk, and apply the plan's judgement of the edition (settled over
+    the whole recording): blocks in stretches of another edition family are withheld, each reported as such
+    (the part of a stretch among these blocks is reported as a Stretch of them, ``opens``/``closes`` saying
+    it goes on before or after); a wrong edition throughout withholds the blocks that walk under it anyway
+    (they would give wrong values)."""
+    counts, fail_at = scanned[0], scanned[1]
+    failed = counts < 0
+    why_failed = {int(j): f"{REASONS[int(-counts[j])]} (record at offset {int(fail_at[j])})"
+                  for j in np.flatnonzero(failed)}
+    judged = _Judged([])
+    for whole in plan.stretches.get(cat, ()):
+        inside = np.flatnonzero((starts >= whole.first_offset) & (starts < whole.stop_offset))
+        if not len(inside):
+            continue
+        lo, hi = int(inside[0]), int(inside[-1]) + 1
+        first, end = int(starts[lo]), int(starts[hi - 1] + lens[hi - 1])
+        judged.stretches.append(Stretch(first, end, hi - lo, whole.editions, edition,
+                                        (lo == 0 and first > whole.first_offset) or whole.opens,
+                                        (hi == len(counts) and end < whole.stop_offset) or whole.closes))
+        among = (f"CAT{cat:03d} blocks at offsets {whole.first_offset}-{whole.stop_offset - 1} that walk "
+                 f"under {edition_span(cat, whole.editions) or 'another edition'} and not under {edition}")
+        for j in inside:
+            why_failed[int(j)] = (f"does not walk under edition {edition}; lies among {among}: skipped "
+                                  f"(another edition)" if failed[j] else
+                                  f"walks under edition {edition}, but lies among {among}: withheld "
+                                  f"(another edition)")
+        if judged.keep is None:
+            judged.keep = np.ones(len(counts), bool)
+        judged.keep[inside] = False
+    if cat in plan.withheld:
+        others = " or ".join(plan.fits[cat])
+        why = (f"walks under edition {edition}, but most CAT{cat:03d} blocks do not and every one of "
+               f"those sampled walks under {others}: withheld (a wrong edition)")
+        why_failed |= {int(j): why for j in np.flatnonzero(~failed)}
+        judged.keep = np.zeros(len(counts), bool)
+    judged.errors = [(int(starts[j]), int(lens[j]), cat, why) for j, why in sorted(why_failed.items())]
+    return judged
+
+
 def decode_buffer(buf: np.ndarray, seg: Segments, *, path: str = "", editions: dict | None = None,
-                  categories=None, date=None, strict: bool = False, columns=None) -> Recording:
+                  categories=None, date=None, strict: bool = False, columns=None,
+                  sector_clock: SectorClock | None = None) -> Recording:
     """Decode an in-memory recording whose container segments are already known (``columns``: see
-    ``read``): the plan settled over the whole recording (asterix.plan), then every block at once."""
+    ``read``; ``sector_clock``: the CAT002 times of the data before it): the plan settled over the whole
+    recording (asterix.plan), then every block at once."""
     from .plan import plan_recording  # the plan chooses editions with this module's functions
 
     selected = selected_columns(columns)
@@ -446,18 +653,22 @@ def decode_buffer(buf: np.ndarray, seg: Segments, *, path: str = "", editions: d
     categories = check_categories(categories)
     plan = plan_recording(buf, seg, dict(editions or {}), categories)
     return decode_framed(buf, plan, plan.framer(buf).window(), path=path, date=date, strict=strict,
-                         selected=selected)
+                         selected=selected, sector_clock=sector_clock)
 
 
 def decode_framed(buf: np.ndarray, plan, framed, *, path: str = "", date: dt.date | None = None,
                   strict: bool = False, selected=None, part: Segments | None = None,
-                  first_segment: int = 0) -> Recording:
+                  first_segment: int = 0, sector_clock: SectorClock | None = None) -> Recording:
     """Decode framed blocks (all of a recording's, or one window's: kernel.frame_window) by the plan
-    (asterix.plan), into a Recording of them. ``part``: the segments they lie in, the first being the plan's
-    segment ``first_segment`` (days are counted, and container bytes and problems told, by it); the plan's
-    segments when None."""
+    (asterix.plan), into a Recording of them. ``selected``: the columns asked for (None: all); ``part``:
+    the segments they lie in, the first being the plan's segment ``first_segment`` (days are counted, and
+    container bytes and problems told, by it), the plan's segments when None; ``sector_clock``: the CAT002
+    times of the data before (``iter_read`` carries it from window to window)."""
     seg = plan.seg
     part = seg if part is None else part
+    asked = selected
+    # the columns plausibility is judged on are decoded whatever was asked, and dropped after
+    selected = None if asked is None else tuple(sorted({*asked, *(c for c in BOUNDS if c in KNOWN_COLUMNS)}))
     scans = _scan_decoded(buf, framed, plan, selected)
     b_start, b_len, b_cat, b_seg, e_off, e_len, e_cat, e_code = framed
     errors: list[tuple[int, int, int, str]] = [
@@ -466,37 +677,42 @@ def decode_framed(buf: np.ndarray, plan, framed, *, path: str = "", date: dt.dat
     errors += [(o, n, -1, f"container: {why}") for o, n, why in part.problems]
     columns: dict[int, dict] = {}
     chosen: dict[int, str] = {}
+    stretches: dict[int, list[Stretch]] = {}
+    decoded_blocks: dict[int, int] = {}
     ignored: dict[int, int] = {}
     ignored_by_cat: dict[int, int] = {}
-    decoded_bytes = ignored_bytes = 0
+    decoded_bytes = ignored_bytes = oversized_bytes = 0
     for cat in (int(c) for c in np.unique(b_cat)):
         if cat not in scans:  # a category not decoded: stepped over, accounted per category
             sel = b_cat == cat
             ignored[cat] = int(sel.sum())
             ignored_by_cat[cat] = int(b_len[sel].sum())
+            oversized_bytes += int(b_len[sel][b_len[sel] > OVERSIZED_BLOCK_BYTES].sum())
             ignored_bytes += ignored_by_cat[cat]
             continue
         sel, lay, scanned = scans.pop(cat)
         starts, lens = b_start[sel], b_len[sel]
         chosen[cat] = lay.edition
-        counts, fail_at = scanned[0], scanned[1]
-        for j in np.flatnonzero(counts < 0):
-            reason = f"{REASONS[int(-counts[j])]} (record at offset {int(fail_at[j])})"
-            errors.append((int(starts[j]), int(lens[j]), cat, reason))
-        failed = counts < 0
-        if cat in plan.withheld:
-            # the edition is wrong (plan: over the whole recording): blocks that walk would give wrong values
-            others = " or ".join(plan.fits[cat])
-            why = (f"walks under edition {lay.edition}, but most CAT{cat:03d} blocks do not and every "
-                   f"one of those sampled walks under {others}: withheld (a wrong edition)")
-            errors += [(int(starts[j]), int(lens[j]), cat, why) for j in np.flatnonzero(~failed)]
+        judged = _judge_edition(starts, lens, scanned, cat, lay.edition, plan)
+        errors += judged.errors
+        if judged.stretches:
+            stretches[cat] = judged.stretches
+        counts = scanned[0]
+        if judged.keep is not None and not judged.keep.any():
             scanned = (*scanned[:-1], 0)
             counts = np.full_like(counts, -1)
+        elif judged.keep is not None:  # stretches withheld: the rest walked again on its own
+            sel, starts, lens = sel[judged.keep], starts[judged.keep], lens[judged.keep]
+            scanned = _scan(buf, starts, lens, lay)
+            counts = scanned[0]
         decoded_bytes += int(lens[counts > 0].sum())
-        fl, ints, rec_off, rec_blk = _extract(buf, scanned, lay)
+        decoded_blocks[cat] = int((counts > 0).sum())
+        where, texts, rec_off, rec_blk = _extract(buf, scanned, lay)
         del scanned
-        columns[cat] = _columns(lay, fl, ints, rec_off, sel[rec_blk])
-        del fl, ints
+        columns[cat] = _columns(lay, where, texts, rec_off, sel[rec_blk])
+        del where, texts
+    untimed = (time_cat001(columns, buf, framed, plan.editions, sector_clock or SectorClock())
+               if PLOT_CATEGORY in plan.decoded else pd.DataFrame(columns=UNTIMED_COLUMNS))
     errors.sort()
     if strict and errors:
         o, _, c, why = errors[0]
@@ -505,8 +721,12 @@ def decode_framed(buf: np.ndarray, plan, framed, *, path: str = "", date: dt.dat
     if first_day is not None and seg.dated:
         date = dt.date(1970, 1, 1) + dt.timedelta(days=first_day)
     frames: dict[int, pd.DataFrame] = {}
+    odd: dict[int, Implausible] = {}
     for cat in list(columns):
         cols = columns.pop(cat)
+        odd[cat] = count_implausible(cols, cols["offset"])
+        for extra in () if asked is None else set(selected) - set(asked) - set(LEADING):
+            cols.pop(extra, None)
         cols["timestamp"] = timestamp_index(cols["day"], cols["time_of_day"], date)
         frames[cat] = _build(cols)
         del cols
@@ -517,7 +737,10 @@ def decode_framed(buf: np.ndarray, plan, framed, *, path: str = "", date: dt.dat
                      size_bytes=int(len(buf)), container_bytes=int(part.container_bytes),
                      decoded_bytes=decoded_bytes, ignored_blocks=ignored, ignored_bytes=ignored_bytes,
                      edition_choice=dict(plan.choice), day0=first_day, ignored_category_bytes=ignored_by_cat,
-                     edition_fits=dict(plan.fits), blocks=int(len(b_start)))
+                     edition_fits=dict(plan.fits), blocks=int(len(b_start)), untimed=untimed,
+                     edition_stretches=stretches,
+                     decoded_blocks=decoded_blocks, implausible={c: v for c, v in odd.items() if v.records},
+                     oversized_bytes=oversized_bytes)
 
 
 def framing_reason(buf: np.ndarray, seg: Segments, offset: int, code: int) -> str:
@@ -550,6 +773,17 @@ def _parse_editions(editions) -> dict[int, str]:
     return out
 
 
+def reading_editions(editions, categories) -> dict[int, str]:
+    """The editions a recording is read with: those given (``read``'s forms; a pinned one must name a
+    shipped table), and for each other decoded category its reading default ('auto' for a category whose
+    editions walk differently: asterix.families)."""
+    eds = _parse_editions(editions)
+    for cat, ed in eds.items():
+        if ed != AUTO:
+            resolve_edition(cat, ed)
+    return with_defaults(eds, DEFAULT_CATEGORIES if categories is None else categories)
+
+
 def read(path, *, editions=None, date=None, categories=None, format: str | None = None,
          strict: bool = False, columns=None) -> Recording:
     """Decode a recording file (raw, pcap/pcapng, final, gps or oradis) into typed frames by category.
@@ -558,12 +792,9 @@ def read(path, *, editions=None, date=None, categories=None, format: str | None 
     ``time_of_day``, ``day``, ``timestamp``, ``block`` and ``offset``: a job that needs a few columns
     of a large recording holds only them. Every block is still walked and accounted alike.
     """
-    eds = _parse_editions(editions)
     selected_columns(columns)
     date, categories = parse_date(date), check_categories(categories)
-    for cat, ed in eds.items():
-        if ed != "auto":
-            resolve_edition(cat, ed)
+    eds = reading_editions(editions, categories)
     with _mapped(path) as buf:
         try:
             seg = read_segments(buf, format)
@@ -573,13 +804,21 @@ def read(path, *, editions=None, date=None, categories=None, format: str | None 
                             strict=strict, columns=columns)
     for text in edition_advice(rec):
         warnings.warn(text, EditionWarning, stacklevel=2)
+    for text in untimed_advice(rec.path, rec.untimed):
+        warnings.warn(text, UntimedWarning, stacklevel=2)
+    content = Tally(str(path))
+    content.add(rec)
+    for text in content.warnings(head_of(path), detected=format is None):
+        warnings.warn(text, ContentWarning, stacklevel=2)
     return rec
 
 
 def edition_advice(rec: Recording) -> list[str]:
     """Per category whose blocks mostly failed under its edition (``Recording.edition_fits``): how many, and
-    the edition(s) every one sampled walks under, as ``read``'s ``editions=`` argument."""
-    out = []
+    the edition(s) every one sampled walks under, as ``read``'s ``editions=`` argument; per category holding
+    stretches of another edition family (``Recording.edition_stretches``): where, and how to decode them."""
+    out = [describe(rec.path, cat, found, lambda ed, c=cat: f"editions={{{c}: {ed!r}}}", rec.format == "raw")
+           for cat, found in rec.edition_stretches.items()]
     for cat, fits in rec.edition_fits.items():
         if not fits:
             continue

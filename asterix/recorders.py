@@ -424,13 +424,42 @@ def _gps_head(head: bytes, whole: bool) -> bool:
     return bool(_gps_chained(buf, first, second, ANY_CATEGORY))
 
 
+def _raw_blocks_past(head: bytes, at: int) -> int:
+    """Blocks of the raw chain from the head's start that start at or past ``at`` (up to its first break)."""
+    pos, count = 0, 0
+    while len(head) - pos >= 3 and head[pos] != 0:
+        block_bytes = int.from_bytes(head[pos + 1:pos + 3], "big")
+        if block_bytes < 3 or pos + block_bytes > len(head):
+            break
+        count += pos >= at
+        pos += block_bytes
+    return count
+
+
+def _gps_chain_frames(head: bytes) -> int:
+    """GPS frames chained from the end of the 2200-byte header, each plausible and following the one
+    before in recording time, up to the first that does not or the end of the head."""
+    buf = np.frombuffer(head, np.uint8)
+    pos, count = GPS_HEADER_BYTES, 0
+    while pos < len(head) and _gps_plausible(buf, pos, ANY_CATEGORY):
+        count += 1
+        nxt = _gps_next(buf, pos)
+        if nxt >= len(head) or not _gps_chained(buf, pos, nxt, ANY_CATEGORY):
+            break
+        pos = nxt
+    return count
+
+
 def detect_recorder(head: bytes, whole: bool) -> str | None:
     """'oradis' or 'gps' when the head (the whole file if whole) frames as one, None otherwise.
 
-    A head that starts with chained raw data blocks stays raw, whatever else it might look like.
+    A head that starts with chained raw data blocks stays raw, whatever else it might look like, but for
+    a GPS file whose header (any 2200 bytes: spaces, a text) happens to start a chain of blocks: its frames
+    are told apart by number, more GPS frames chaining after the header than raw blocks starting there.
     """
     if _raw_chains(head, whole):
-        return None
+        frames = _gps_chain_frames(head) if _gps_head(head, whole) else 0
+        return "gps" if frames > max(_raw_blocks_past(head, GPS_HEADER_BYTES), 1) else None
     if _oradis_head(head, whole):
         return "oradis"
     if _gps_head(head, whole):

@@ -7,6 +7,7 @@ from collections.abc import Iterator
 
 import numpy as np
 
+from .cat001_time import SectorClock
 from .containers import UNTIMED, Segments, read_segments
 from .errors import UnreadableInput
 from .framing import Progress, release_pages
@@ -14,10 +15,10 @@ from .plan import Plan, plan_recording
 from .reader import (
     Recording,
     _mapped,
-    _parse_editions,
     check_categories,
     decode_framed,
     parse_date,
+    reading_editions,
     selected_columns,
 )
 from .timeline import ANCHOR_REPORTS, file_order_days, first_report_day, known_captures, restamp, valid_times
@@ -41,24 +42,25 @@ def iter_read(path, *, chunk: int = 1_000_000, editions=None, date=None, categor
                         f"{type(chunk).__name__}")
     if chunk <= 0:
         raise ValueError(f"chunk {chunk!r}: must be a positive number of bytes")
-    eds = _parse_editions(editions)
     selected = selected_columns(columns)
     first_date, categories = parse_date(date), check_categories(categories)
+    eds = reading_editions(editions, categories)
     with _mapped(path) as buf:
         try:
             seg = read_segments(buf, format)
         except ValueError as exc:  # as read() says it
             raise UnreadableInput(f"{path}: {exc}") from exc
         release_pages(buf, 0, len(buf))  # finding the payloads of a container read the whole file
-        plan = plan_recording(buf, seg, eds, categories, progress)
+        plan = plan_recording(buf, seg, eds, categories, progress)  # 'auto' chosen over the whole file
         clock = None  # a raw stream's (day, time of day) at the end of the chunks before; None: not anchored
         pending: list[Recording] = []  # a raw stream's first chunks, held until day 0 is anchored
         seen = np.zeros(0)  # their valid times of day in file order (the first ANCHOR_REPORTS)
         held = 0  # their payload bytes
         day0 = None  # container day number of the first chunk's day 0
         blocks = 0  # data blocks framed in the chunks before: each chunk numbers its own from 0
+        sectors = SectorClock()  # each radar's last CAT002 time: CAT001 times continue across chunks
         for rec, covered in _chunks(buf, plan, chunk, path=str(path), date=first_date, strict=strict,
-                                    selected=selected, progress=progress):
+                                    selected=selected, sector_clock=sectors, progress=progress):
             for f in rec.frames.values():
                 f["block"] += blocks
             blocks += rec.blocks

@@ -11,9 +11,9 @@ of `msdc conflicts` after decoding, each timed on `--cpus` cores (default 1: the
 first CPU, so msdc's per-aircraft threads are one; NUMBA_NUM_THREADS=1): `track(...,
 keep_states=True)` of every aircraft (the real tracker, not synthetic states), `predict_tracks` (IMM
 prediction at every second and horizon), `pair_probabilities` (sort and sweep of the predicted positions
-widened by the PC margin, cheap bound, exact PC), losses of separation in the tracked data, alert
-events, false alerts, closest approach and warning times. The numba kernels are compiled (or loaded from
-their cache) on a warm-up run first, not counted.
+widened by the PC margin, cheap bound, exact PC), losses of separation on the samples between reports
+with their closest points, alert events, false alerts, closest approach and warning times. The numba
+kernels are compiled (or loaded from their cache) on a warm-up run first, not counted.
 
 Then the whole command (`python -m pipeline.cli conflicts`, a fresh interpreter, decoding included) on a
 smaller recording made by the project's simulator (benchmarks/pipeline.py's scenario: one radar pair and
@@ -43,11 +43,13 @@ from msdc.pipeline.conflict import (  # noqa: E402
     alert_events,
     classify_alerts,
     grid_rows,
-    losses_of_separation,
     warning_times,
 )
 from msdc.pipeline.conflict.approach import closest_approach  # noqa: E402
+from msdc.pipeline.conflict.events import losses_by_pairs  # noqa: E402
+from msdc.pipeline.conflict.loss_minimum import loss_minima  # noqa: E402
 from msdc.pipeline.conflict.predict import predict_tracks  # noqa: E402
+from msdc.pipeline.conflict.reported import report_rows, reported_samples  # noqa: E402
 from msdc.pipeline.parallel import thread_count  # noqa: E402
 from msdc.pipeline.track import Plane, track  # noqa: E402
 
@@ -122,7 +124,14 @@ def pipeline_stages(meas: pd.DataFrame, threshold: float, sigma_alt: bool = Fals
     timed_inside(pairs_pc, "conflict_probability", inside, "exact PC")
     pc = clock.run("pair_probabilities (pre-filter, bound, exact PC)", pairs_pc.pair_probabilities, pred,
                    5.0, 1000.0, "exact")
-    losses = clock.run("losses of separation (tracked data)", losses_of_separation, grid)
+
+    def reported_losses():  # as msdc conflicts: on the samples between reports, closest points refined
+        reports = report_rows(result.tracks, meas, result.rejected)
+        samples = reported_samples(grid, reports)
+        found = losses_by_pairs(samples, kinds=("all",), step_s=1.0)["all"]
+        return loss_minima(found, reports, 5.0, 975.0)
+
+    losses = clock.run("losses of separation (reported samples, closest points)", reported_losses)
 
     def scoring():
         events = alert_events(pc, threshold, step_s=1.0)

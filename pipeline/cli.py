@@ -140,7 +140,8 @@ def cmd_decode(args) -> int:
             print(f"CAT{cat:03d}: {result.counts.get(cat, 0)} records -> {p}")
     if result.skipped:
         print(f"msdc: {len(result.skipped)} block(s) skipped", file=sys.stderr)
-    _list_written("decode", {f"CAT{cat:03d} records": p for cat, p in result.outputs.items()}, tx.written)
+    _list_written("decode", {f"CAT{cat:03d} records": p for cat, p in result.outputs.items()}, tx.written,
+                  decode.side_files(result.output))
     if sum(result.counts.values()) == 0:
         print(f"msdc: {result.nothing_decoded(options.categories)}", file=sys.stderr)
         return 1
@@ -159,7 +160,7 @@ def cmd_stats(args) -> int:
     print(format_stats(result.tables), end="")
     for info in result.inputs:
         for cat, why in info["edition_choice"].items():
-            print(f"{info['path']}: CAT{cat:03d} --edition auto {why}")
+            print(f"{info['path']}: CAT{cat:03d} edition auto {why}")
     if not result.records:
         print("msdc: nothing could be decoded", file=sys.stderr)
         return 1
@@ -195,7 +196,7 @@ def _correlate(options, progress: Progress, prepared) -> int:
         if not options.quality:  # only --quality's figures read the measurements again; the other writers
             result.measurements = result.measurements.iloc[:0]  # need the run alone: the frame goes first
         written = correlate.write_correlation(result, progress, prepared=prepared, tx=tx)
-    _list_written("correlate", written, tx.written)
+    _list_written("correlate", written, tx.written, correlate.side_files(result.checked))
     note = correlate.figure_windows_note(len(result.run.windows)) if options.quality else None
     if "report" in written and note:
         print(f"Figures: {note}", file=sys.stderr)
@@ -212,7 +213,7 @@ def cmd_quality(args) -> int:
         result = _run_job("quality", quality.validate, quality.quality_job, options, Progress())
         print(quality.text(result))
         written = quality.write_quality(result, tx=tx)
-    _list_written("quality", written, tx.written)
+    _list_written("quality", written, tx.written, quality.side_files(result.checked))
     return 0
 
 
@@ -222,10 +223,11 @@ KINDS = {"json": "JSON", "report": "workbook", "workbook": "workbook", "figure":
          "warnings": "warning times table"}
 
 
-def _list_written(command: str, kinds: dict[str, Path], written: list) -> None:
+def _list_written(command: str, kinds: dict[str, Path], written: list, beside: list | tuple = ()) -> None:
     """Every file the run put in place (``written``: the transaction's Written rows), on stderr beside the
     other notes (stdout holds the results scripts read): what it is (``kinds``: the job's kind -> path) and
-    whether it replaced a file that was there."""
+    whether it replaced a file that was there; then the files matching the globs ``beside`` (the side files
+    the command may write) that the run did not write: an earlier run's, left as they were."""
     if not written:
         return
     named = {transaction.target(path): (path, kind) for kind, path in kinds.items()}
@@ -239,6 +241,12 @@ def _list_written(command: str, kinds: dict[str, Path], written: list) -> None:
         what = "figure" if kind.startswith(("image ", "figure ")) else KINDS.get(
             kind, f"{kind.removeprefix('table ')} table (Parquet)" if kind.startswith("table ") else kind)
         print(f"  {path} ({what}{', replaced' if w.replaced else ''})", file=sys.stderr)
+    earlier = transaction.left_beside(beside, written)
+    if earlier:
+        print(f"msdc {command}: {len(earlier)} earlier file(s) left as they were (named like this run's "
+              "outputs, not written by it):", file=sys.stderr)
+        for path in earlier:
+            print(f"  {path}", file=sys.stderr)
 
 
 def cmd_track(args) -> int:
@@ -251,7 +259,7 @@ def cmd_track(args) -> int:
                           Progress())
         print(track.text(result))
         written = track.write_tracks(result, tx=tx)
-    _list_written("track", written, tx.written)
+    _list_written("track", written, tx.written, track.side_files(options))
     return 0
 
 
@@ -265,7 +273,7 @@ def cmd_conflicts(args) -> int:
         result = _run_job("conflicts", conflicts.validate, conflicts.conflict_job, options, Progress())
         print(conflicts.text(result) + noise_text(result.noise))
         written = conflicts.write_conflicts(result, tx=tx)
-    _list_written("conflicts", written, tx.written)
+    _list_written("conflicts", written, tx.written, conflicts.side_files(result.checked, options))
     if args.figures is not None and not len(result.alerts):
         print(f"figures: none (no alert events), {args.figures} left as it was", file=sys.stderr)
     return 0

@@ -5,7 +5,8 @@ that take them (pipeline.jobs.options declares those)."""
 from __future__ import annotations
 
 FORMATS = ("raw", "pcap", "pcapng", "final", "gps", "oradis")
-PAIRS = ("radar-adsb", "radar-radar", "all")  # correlate: the sensor pairs correlated per aircraft
+# correlate: the sensor pairs correlated per aircraft ("all": radar-adsb and radar-radar)
+PAIRS = ("radar-adsb", "radar-radar", "mlat-adsb", "smr-mlat", "all")
 FILLS = ("hold", "predict")  # correlate: empty slots hold the previous one or take the tracker's prediction
 TABLE_MODES = ("auto", "xlsx", "parquet")  # correlate: where the slot and lag tables go
 REFERENCES = ("adsb", "track")  # quality: what radar accuracy is measured against

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import shutil
 import subprocess
 import sys
 from pathlib import Path
@@ -15,9 +16,14 @@ ROOT = Path(__file__).resolve().parents[1]
 
 @pytest.fixture(scope="session")
 def msdc_wheel(tmp_path_factory) -> Path:
-    """msdc's wheel, built from the checkout as pip builds it for an install."""
+    """msdc's wheel, built from a copy of the checkout as pip builds it for an install.
+
+    A copy, because pip builds in the source tree: two xdist workers building in one `build/` race."""
     out = tmp_path_factory.mktemp("msdc_wheel")
-    argv = [sys.executable, "-m", "pip", "wheel", "--no-deps", "-q", "-w", str(out), str(ROOT)]
+    source = tmp_path_factory.mktemp("msdc_source") / "msdc"
+    junk = shutil.ignore_patterns(".git", "build", "dist", "site", "*.egg-info", "__pycache__", ".*_cache")
+    shutil.copytree(ROOT, source, ignore=junk)
+    argv = [sys.executable, "-m", "pip", "wheel", "--no-deps", "-q", "-w", str(out), str(source)]
     done = subprocess.run(argv, capture_output=True, text=True, timeout=600)
     assert done.returncode == 0, done.stderr
     return next(out.glob("msdc-*.whl"))

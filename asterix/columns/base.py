@@ -13,7 +13,7 @@ class Column:
 
     name: str
     sources: tuple[tuple[str, tuple[str, ...]], ...]
-    kind: str = "float"  # float (LSB-scaled) | int | flag | octal | icao | hex | count | codes
+    kind: str = "float"  # float (LSB-scaled) | int | flag | octal | icao | hex | count | codes | bds
     scale: float = 1.0  # applied after the LSB, for unit conversion (NM/s -> kt)
     unit: str = ""
     doc: str = ""

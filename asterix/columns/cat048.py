@@ -4,6 +4,37 @@ from __future__ import annotations
 
 from .base import _COMMON_ID, NM_PER_S_TO_KT, Column, _c, _flags
 
+_SEL = "selected altitude (16 ft)"
+_ABSENT = "; absent when the register's status bit says not valid"
+# I048/250 Mode S registers (asterix/bds.py holds their layouts): kind "bds", float64, NaN when absent
+_BDS = [
+    _c("mcp_selected_altitude_ft", "250", "BDS40/MCP_ALT", "bds", unit="ft",
+       doc=f"BDS 4,0 MCP/FCU {_SEL}{_ABSENT}"),
+    _c("fms_selected_altitude_ft", "250", "BDS40/FMS_ALT", "bds", unit="ft",
+       doc=f"BDS 4,0 FMS {_SEL}{_ABSENT}"),
+    _c("baro_setting_hpa", "250", "BDS40/BARO", "bds", unit="hPa",
+       doc=f"BDS 4,0 barometric pressure setting (800 + 0.1 hPa steps){_ABSENT}"),
+    _c("roll_angle_deg", "250", "BDS50/ROLL", "bds", unit="deg",
+       doc=f"BDS 5,0 roll angle, + right wing down (45/256 deg){_ABSENT}"),
+    _c("track_angle_deg", "250", "BDS50/TRK", "bds", unit="deg",
+       doc=f"BDS 5,0 true track angle, clockwise from true north, 0-360 (90/512 deg){_ABSENT}"),
+    _c("bds50_ground_speed_kt", "250", "BDS50/GS", "bds", unit="kt",
+       doc=f"BDS 5,0 ground speed (2 kt; the radar's own is ground_speed_kt){_ABSENT}"),
+    _c("track_angle_rate_degs", "250", "BDS50/TAR", "bds", unit="deg/s",
+       doc=f"BDS 5,0 track angle rate, + clockwise (1/32 deg/s){_ABSENT}"),
+    _c("true_airspeed_kt", "250", "BDS50/TAS", "bds", unit="kt",
+       doc=f"BDS 5,0 true airspeed (2 kt){_ABSENT}"),
+    _c("magnetic_heading_deg", "250", "BDS60/HDG", "bds", unit="deg",
+       doc=f"BDS 6,0 magnetic heading, 0-360 (90/512 deg){_ABSENT}"),
+    _c("indicated_airspeed_kt", "250", "BDS60/IAS", "bds", unit="kt",
+       doc=f"BDS 6,0 indicated airspeed (1 kt){_ABSENT}"),
+    _c("mach", "250", "BDS60/MACH", "bds", unit="Mach", doc=f"BDS 6,0 Mach number (0.004){_ABSENT}"),
+    _c("baro_vertical_rate_ftmin", "250", "BDS60/BAR", "bds", unit="ft/min",
+       doc=f"BDS 6,0 barometric altitude rate, + climb (32 ft/min){_ABSENT}"),
+    _c("inertial_vertical_rate_ftmin", "250", "BDS60/IVV", "bds", unit="ft/min",
+       doc=f"BDS 6,0 inertial vertical velocity, + climb (32 ft/min){_ABSENT}"),
+]
+
 CAT048: list[Column] = [
     *_COMMON_ID,
     _c("time_of_day", "140", "", unit="s", doc="Time of day (UTC seconds since midnight)"),
@@ -27,6 +58,7 @@ CAT048: list[Column] = [
     _c("address", "220", "", "hex", doc="24-bit aircraft address, 6 upper-case hex digits"),
     _c("callsign", "240", "", "icao", doc="Aircraft identification, trailing spaces stripped"),
     _c("bds_count", "250", "", "count", doc="Number of BDS registers in I048/250"),
+    *_BDS,
     _c("track_number", "161", "TRN", "int", doc="Track number"),
     _c("x_nm", "042", "X", unit="NM", doc="Calculated cartesian X (east)"),
     _c("y_nm", "042", "Y", unit="NM", doc="Calculated cartesian Y (north)"),

@@ -41,3 +41,9 @@ def load_table(category: int, edition: str | None = None) -> dict:
     """The parsed edition table: {'category', 'edition', 'uap': [item or None by FRN]}."""
     edition = resolve_edition(category, edition)
     return json.loads((HERE / f"cat{category:03d}_{edition}.json").read_text())
+
+
+def uaps(table: dict) -> dict[str, list[dict | None]]:
+    """A table's UAPs by name: {"": uap} for a category with one UAP, {"plot": ..., "track": ...} for
+    one whose records choose theirs by an item's value (``table["selector"]``: item, field, value -> name)."""
+    return table["uaps"] if "uaps" in table else {"": table["uap"]}

@@ -15,8 +15,16 @@ from pathlib import Path
 HERE = Path(__file__).parent
 
 # A spare FRN prints as "(spare FRN, no item)" or, in some printouts (CAT021 2.2, 2.3, 2.5), as a bare
-# "UapItem_<n>" placeholder with no layout below it: both are FRNs without an item.
-_FRN = re.compile(r"^FRN (\d+): (?:I(\d{3})/(\w+): (.*)|\(spare FRN, no item\)|UapItem_\d+)$")
+# "UapItem_<n>" placeholder with no layout below it: both are FRNs without an item. One placeholder,
+# "UapItem_599", stands where the EUROCONTROL UAPs put RFS (Random Field Sequencing: CAT001 FRN 21,
+# CAT002 FRN 14, the only printouts with it): it becomes an "rfs" node, which the walker reports rather
+# than walks (an RFS field is a count, then FRN-item pairs in any order).
+_FRN = re.compile(r"^FRN (\d+): (?:I(\d{3})/(\w+): (.*)|\(spare FRN, no item\)|UapItem_(\d+))$")
+_RFS_PLACEHOLDER = "599"
+# Several UAPs (CAT001 plot and track): "UAP chosen by I001/020/TYP: 0 -> plot, 1 -> track", then one
+# "## UAP <name>" section per UAP.
+_SELECTOR = re.compile(r"^UAP chosen by I(\d{3})/(\w+)/([\w/]+): (.*)$")
+_UAP_HEAD = re.compile(r"^## UAP (\w+)$")
 _ELEMENT = re.compile(r"^element (\d+) bits: (.*)$")
 _GROUP = re.compile(r"^group (\d+) bits$")
 _SPARE = re.compile(r"^spare (\d+) bits$")
@@ -106,24 +114,63 @@ def _children(ls: _Lines, indent: int) -> list[dict]:
     return out
 
 
-def parse_spec(text: str) -> dict:
-    """Parse one printed edition into {'category', 'edition', 'uap': [item or None by FRN]}."""
-    lines = text.splitlines()
-    head = re.match(r"# Cat_(\d+)_(\d+)_(\d+)", lines[0])
-    assert head, lines[0]
-    ls = _Lines(lines[1:])
+def _parse_uap(ls: _Lines) -> list[dict | None]:
+    """FRN lines and their layouts up to the next "## UAP" heading or the end: [item or None by FRN]."""
     uap: list[dict | None] = []
-    while ls.peek():
+    while (p := ls.peek()) and not _UAP_HEAD.match(p[1]):
         _, text_line = ls.next()
         m = _FRN.match(text_line)
         if not m:
             raise ValueError(f"expected FRN line, got {text_line!r}")
+        if m[5] == _RFS_PLACEHOLDER:
+            uap.append({"frn": int(m[1]), "id": "RFS", "title": "Random Field Sequencing",
+                        "node": {"kind": "rfs"}})
+            continue
         if m[2] is None:
             uap.append(None)
             continue
         node = _node(ls)
         uap.append({"frn": int(m[1]), "id": m[3], "title": m[4], "node": node})
-    return {"category": int(head[1]), "edition": f"{int(head[2])}.{int(head[3])}", "uap": uap}
+    return uap
+
+
+def parse_spec(text: str) -> dict:
+    """Parse one printed edition into {'category', 'edition', 'uap': [item or None by FRN]}, or, for a
+    category with several UAPs, {'category', 'edition', 'uaps': {name: [...]}, 'selector': {...}}: the
+    selector names the item and field whose value picks the UAP (``values``: value -> UAP name)."""
+    lines = text.splitlines()
+    head = re.match(r"# Cat_(\d+)_(\d+)_(\d+)", lines[0])
+    assert head, lines[0]
+    out: dict = {"category": int(head[1]), "edition": f"{int(head[2])}.{int(head[3])}"}
+    sel = _SELECTOR.match(lines[1].strip()) if len(lines) > 1 else None
+    ls = _Lines(lines[2:] if sel else lines[1:])
+    if not sel:
+        out["uap"] = _parse_uap(ls)
+        return out
+    if int(sel[1]) != out["category"]:
+        raise ValueError(f"UAP selector {lines[1]!r} names another category")
+    values = {}
+    for pair in sel[4].split(","):
+        value, _, name = (x.strip() for x in pair.partition("->"))
+        values[str(int(value))] = name
+    uaps: dict[str, list] = {}
+    while ls.peek():
+        _, text_line = ls.next()
+        m = _UAP_HEAD.match(text_line)
+        if not m:
+            raise ValueError(f"expected a '## UAP <name>' heading, got {text_line!r}")
+        uaps[m[1]] = _parse_uap(ls)
+    if set(values.values()) != set(uaps):
+        raise ValueError(f"UAP selector names {sorted(set(values.values()))}, sections are {sorted(uaps)}")
+    out["uaps"] = uaps
+    out["selector"] = {"item": sel[2], "field": sel[3].split("/"), "values": values}
+    return out
+
+
+def all_items(table: dict) -> list[dict]:
+    """Every item entry of a table, of every UAP (an item in several UAPs once per UAP)."""
+    uaps = table["uaps"].values() if "uaps" in table else [table["uap"]]
+    return [item for uap in uaps for item in uap if item]
 
 
 # Corrections to the printed layouts, each with its reason. (category, item, field) -> changes.
@@ -131,6 +178,11 @@ ERRATA: dict[tuple[int, str, str], dict] = {
     # The CAT048 standard gives I048/090 FL as 14-bit two's complement in every edition (1.21 on);
     # the 1.27 and 1.31 printouts mark it unsigned, which would read FL -1 as FL 4095.75.
     (48, "090", "FL"): {"signed": True},
+    # The CAT010 standard (1.1) gives I010/202 Vx and Vy an LSB of 0.25 m/s; the printout's 1/16 m/s reads
+    # every velocity 4x too slow, and real recordings agree with 0.25 only (|(Vx, Vy)| matches the same
+    # report's I010/200 ground speed then: see ../shared/specs/README.md).
+    (10, "202", "VX"): {"lsb": 0.25},
+    (10, "202", "VY"): {"lsb": 0.25},
 }
 
 
@@ -139,8 +191,8 @@ def apply_errata(table: dict) -> dict:
     for (cat, item_id, name), patch in ERRATA.items():
         if table["category"] != cat:
             continue
-        for item in table["uap"]:
-            if item and item["id"] == item_id:
+        for item in all_items(table):
+            if item["id"] == item_id:
                 _patch(item["node"], name, patch)
     return table
 
@@ -152,17 +204,40 @@ def _patch(node: dict, name: str, patch: dict) -> None:
         _patch(child, name, patch)
 
 
+def _layout_only(table: dict) -> dict:
+    """A table without its edition name: what walking and decoding depend on."""
+    return {k: v for k, v in table.items() if k != "edition"}
+
+
 def main(argv: list[str]) -> int:
-    """Convert every printed spec in a folder, or only those of the categories named: ``... specs 34``."""
+    """Convert every printed spec in a folder, or only those of the categories named: ``... specs 34``.
+
+    An edition the category registry lists as an alias (CAT001 1.2 and 1.3 of 1.4) gets no table of its
+    own: its printout must parse to the same layout as the table it names, or the build stops."""
+    from ..categories import REGISTRY
+
     src = Path(argv[1] if len(argv) > 1 else "../shared/specs")
     only = {int(c) for c in argv[2:]}  # optional category numbers: build only those
+    tables: dict[tuple[int, str], tuple[Path, dict]] = {}
     for path in sorted(src.glob("Cat_*.txt")):
         if only and int(path.name.split("_")[1]) not in only:
             continue
         table = apply_errata(parse_spec(path.read_text()))
-        out = HERE / f"cat{table['category']:03d}_{table['edition']}.json"
+        tables[(table["category"], table["edition"])] = (path, table)
+    for (cat, edition), (path, table) in tables.items():
+        target = REGISTRY[cat].aliases.get(edition) if cat in REGISTRY else None
+        if target is not None:
+            if (cat, target) not in tables:
+                raise ValueError(f"{path.name}: edition {edition} is an alias of {target}, whose printout "
+                                 f"is not in {src}")
+            if _layout_only(tables[(cat, target)][1]) != _layout_only(table):
+                raise ValueError(f"{path.name}: edition {edition} is registered as an alias of {target}, "
+                                 f"but its layout differs: give it a table of its own")
+            print(f"{path.name}: same layout as {target} (an alias in the category registry): no table")
+            continue
+        out = HERE / f"cat{cat:03d}_{edition}.json"
         out.write_text(json.dumps(table, indent=1) + "\n")
-        print(f"{path.name} -> {out.name}: {sum(1 for u in table['uap'] if u)} items")
+        print(f"{path.name} -> {out.name}: {len(all_items(table))} items")
     return 0
 
 

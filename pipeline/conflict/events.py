@@ -5,9 +5,10 @@ Schemas (times are pandas datetimes, UTC; a pair is always written with aircraft
 - tracks: `aircraft_id, time, latitude, longitude, flight_level`, one row per aircraft and time of a
   common grid: the grid rows of the tracker's output (`step_s=` or `grid_rows` selects them; a frame
   not on one grid is refused, `pipeline.conflict.grid`).
-- losses: `aircraft_a, aircraft_b, start, end, duration_s, min_horizontal_nm, time_of_min,
+- losses: `aircraft_a, aircraft_b, start, end, duration_s, began_inside, min_horizontal_nm, time_of_min,
   vertical_at_min_ft, min_vertical_ft`, one row per uninterrupted run of grid times in loss (start and
-  end are the first and last such times).
+  end are the first and last such times; began_inside: the pair had no sample one step before the start,
+  so it entered the analysis already inside the minimum and no alert could have warned of it).
 - pc: `time, aircraft_a, aircraft_b, horizon_s, pc`, PC computed at `time` for `time + horizon_s`;
   pairs and times absent from it count as PC = 0.
 - Every time is a time-zone-aware datetime (converted to UTC; naive ones, strings or numbers are refused).
@@ -31,7 +32,7 @@ from msdc.pipeline.conflict.pairs import _require, pairs_per_step, time_key
 from msdc.pipeline.model.arguments import finite_number
 from msdc.pipeline.model.time import utc_frame
 
-LOSS_COLUMNS = ["aircraft_a", "aircraft_b", "start", "end", "duration_s", "min_horizontal_nm",
+LOSS_COLUMNS = ["aircraft_a", "aircraft_b", "start", "end", "duration_s", "began_inside", "min_horizontal_nm",
                 "time_of_min", "vertical_at_min_ft", "min_vertical_ft"]
 ALERT_COLUMNS = ["aircraft_a", "aircraft_b", "horizon_s", "start", "end", "peak_pc", "time_of_peak"]
 WARNING_COLUMNS = ["aircraft_a", "aircraft_b", "loss_start", "horizon_s", "alert_start", "warning_s"]
@@ -63,7 +64,9 @@ def losses_of_separation(tracks: pd.DataFrame, radius_nm: float = 5.0, vertical_
                          step_s: float | None = None) -> pd.DataFrame:
     """Every loss of separation: horizontal distance below radius_nm and vertical below vertical_ft less
     vertical_tolerance_ft (the level quantum: tracked levels 1000 ft apart wobble a few feet) at the same
-    grid time. A run ends at the first grid time either aircraft is out of loss or absent. pairs: "all"
+    grid time. A run ends at the first grid time either aircraft is out of loss or absent, or where the
+    tracks' `interval` column (`pipeline.conflict.reported`: an aircraft's reported stretch) changes
+    when they have one. pairs: "all"
     samples, "airborne" (neither aircraft on the surface by the tracks' boolean `on_surface`) or "surface"
     (one or both on it); a run also ends where its samples stop being of that kind. step_s: the grid (the
     rows at whole multiples of it since UTC midnight are used, e.g. the grid rows of `track()` output);
@@ -98,21 +101,41 @@ def losses_by_pairs(tracks: pd.DataFrame, radius_nm: float = 5.0, vertical_ft: f
         _require(tracks, ["on_surface"], "tracks")
         surface = surface_pairs(sep, tracks)
     picks = {"all": slice(None), "airborne": ~surface if surface is not None else None, "surface": surface}
-    return {kind: _loss_runs(sep[picks[kind]], tracks, float(step_s)) for kind in kinds}
+    if "interval" in tracks.columns:  # a run ends where either aircraft's reported stretch does
+        keys = pd.MultiIndex.from_arrays([time_key(tracks["time"]), tracks["aircraft_id"]])
+        interval = pd.Series(tracks["interval"].to_numpy(), index=keys)
+        for side in ("a", "b"):
+            at = pd.MultiIndex.from_arrays([time_key(sep["time"]), sep[f"aircraft_{side}"]])
+            sep[f"interval_{side}"] = interval.reindex(at).to_numpy()
+    present = {kind: _present(tracks, kind) for kind in kinds}
+    return {kind: _loss_runs(sep[picks[kind]], tracks, float(step_s), present[kind]) for kind in kinds}
 
 
-def _loss_runs(sep: pd.DataFrame, tracks: pd.DataFrame, step_s: float) -> pd.DataFrame:
-    """The runs of consecutive grid times (step_s apart) of the separation samples in loss, one row a run."""
+def _present(tracks: pd.DataFrame, kind: str) -> pd.MultiIndex:
+    """(time ns, aircraft) of the samples a pair of this kind is counted on: every sample, or for
+    "airborne" those not on the surface."""
+    rows = tracks if kind != "airborne" else tracks[~tracks["on_surface"].to_numpy(bool)]
+    return pd.MultiIndex.from_arrays([time_key(rows["time"]), rows["aircraft_id"]])
+
+
+def _loss_runs(sep: pd.DataFrame, tracks: pd.DataFrame, step_s: float, present: pd.MultiIndex
+               ) -> pd.DataFrame:
+    """The runs of consecutive grid times (step_s apart) of the separation samples in loss, one row a run;
+    began_inside where either aircraft has no sample in `present` one step before the run's start."""
     if sep.empty:
         return _empty(LOSS_COLUMNS, tracks["time"].dtype, tracks["aircraft_id"].dtype)
     sep = sep.sort_values(["aircraft_a", "aircraft_b", "time"], kind="stable").reset_index(drop=True)
     ns = time_key(sep["time"])
-    sep["run"] = _runs(sep, np.round((ns - ns.min()) / (step_s * 1e9)), 1)
+    extra = [c for c in ("interval_a", "interval_b") if c in sep.columns]
+    sep["run"] = _runs(sep, np.round((ns - ns.min()) / (step_s * 1e9)), 1, extra=extra)
     at_min = sep.loc[sep.groupby("run")["horizontal_nm"].idxmin()].set_index("run")
     runs = sep.groupby("run").agg(aircraft_a=("aircraft_a", "first"), aircraft_b=("aircraft_b", "first"),
                                   start=("time", "min"), end=("time", "max"),
                                   min_vertical_ft=("vertical_ft", "min"))
     runs["duration_s"] = (runs["end"] - runs["start"]).dt.total_seconds()
+    before = time_key(runs["start"]) - int(round(step_s * 1e9))
+    runs["began_inside"] = ~(pd.MultiIndex.from_arrays([before, runs["aircraft_a"]]).isin(present)
+                             & pd.MultiIndex.from_arrays([before, runs["aircraft_b"]]).isin(present))
     runs["min_horizontal_nm"] = at_min["horizontal_nm"]
     runs["time_of_min"] = at_min["time"]
     runs["vertical_at_min_ft"] = at_min["vertical_ft"]
@@ -207,11 +230,12 @@ def _matches(alerts: pd.DataFrame, losses: pd.DataFrame) -> pd.DataFrame:
     return both[keep].rename(columns={"start": "alert_start"})
 
 
-def _runs(frame: pd.DataFrame, position, max_step, extra: str | None = None, breaks=None) -> np.ndarray:
+def _runs(frame: pd.DataFrame, position, max_step, extra: str | list[str] | None = None,
+          breaks=None) -> np.ndarray:
     """Run number per row of a frame sorted by pair (and `extra`) then time: a run breaks where the pair
-    changes, `position` advances by more than max_step (a number, or one per row), or after a row flagged
-    in `breaks`."""
-    keys = ["aircraft_a", "aircraft_b"] + ([extra] if extra else [])
+    or an `extra` column changes, `position` advances by more than max_step (a number, or one per row), or
+    after a row flagged in `breaks`."""
+    keys = ["aircraft_a", "aircraft_b"] + ([extra] if isinstance(extra, str) else list(extra or []))
     new_key = np.zeros(len(frame), dtype=bool)
     for k in keys:
         v = frame[k].to_numpy()
@@ -238,4 +262,5 @@ def _ordered(frame: pd.DataFrame) -> pd.DataFrame:
 def _empty(columns: list[str], time_dtype, id_dtype) -> pd.DataFrame:
     dtypes = {"aircraft_a": id_dtype, "aircraft_b": id_dtype, "start": time_dtype, "end": time_dtype,
               "time_of_min": time_dtype, "time_of_peak": time_dtype}
+    dtypes["began_inside"] = dtypes["false_alert"] = bool
     return pd.DataFrame({c: pd.Series(dtype=dtypes.get(c, float)) for c in columns})

@@ -32,11 +32,11 @@ def on_surface(tracks: pd.DataFrame, surface_speed_kt: float = SURFACE_SPEED_KT
     return reported | by_speed, by_speed
 
 
-def surface_pairs(frame: pd.DataFrame, tracks: pd.DataFrame) -> np.ndarray:
+def surface_pairs(frame: pd.DataFrame, tracks: pd.DataFrame, column: str = "on_surface") -> np.ndarray:
     """Per row of a pair frame (`time, aircraft_a, aircraft_b`: pc or separations), whether either aircraft
     is on the surface at that time, by the tracks' boolean `on_surface` (a pair time without a track row
-    counts as airborne)."""
-    flag = pd.Series(tracks["on_surface"].to_numpy(bool),
+    counts as airborne); or flagged by another boolean `column` of the tracks."""
+    flag = pd.Series(tracks[column].to_numpy(bool),
                      index=pd.MultiIndex.from_arrays([tracks["time"], tracks["aircraft_id"].astype(str)]))
     if flag.index.duplicated().any():
         flag = flag.groupby(level=[0, 1]).any()

@@ -14,6 +14,7 @@ import math
 import numpy as np
 import pandas as pd
 
+from msdc.pipeline.correlate.matched import matched_pairs, matched_summary
 from msdc.pipeline.correlate.results import (
     LAG_COLUMNS,
     SUMMARY_KEYS,
@@ -22,6 +23,7 @@ from msdc.pipeline.correlate.results import (
     WindowResult,
 )
 from msdc.pipeline.correlate.slots import slot_count, slot_series
+from msdc.pipeline.correlate.verdict import window_verdict
 from msdc.pipeline.correlate.windows import in_window, overlap_windows, short_window_reason
 from msdc.pipeline.meta import FILLS, PAIRS
 from msdc.pipeline.model.aircraft import NoSuchAircraft, aircraft_rows, one_aircraft
@@ -29,6 +31,7 @@ from msdc.pipeline.model.arguments import finite_number
 from msdc.pipeline.model.dedup import duplicate_mask
 from msdc.pipeline.model.geodesy import distance_m
 from msdc.pipeline.model.jumps import JUMP_FLAG_COLUMNS, detect_jumps
+from msdc.pipeline.model.schema import coded_text
 from msdc.pipeline.model.time import clock, is_dated, iso_utc, midnight, seconds_since, utc_frame, with_clock
 from msdc.pipeline.parallel import map_ordered
 
@@ -42,6 +45,12 @@ PEARSON_MIN_OVERLAP = 10
 CORRELATION_INPUTS = ["time", "time_of_day", "sensor_id", "sensor_kind", "aircraft_id", "callsign",
                       "address", "latitude", "longitude", "ground_speed_kt", "heading_deg", "duplicate",
                       *JUMP_FLAG_COLUMNS]
+# Per --pairs value, the sensor kind correlated (the "radar" role of the slot and summary tables) and the
+# kind it is correlated against (the "adsb" role: the reference); radar-radar and all correlate radars with
+# each other too. Rows of other kinds are left out of the run.
+PAIR_KINDS = {"radar-adsb": ("radar", "adsb"), "radar-radar": ("radar", "adsb"), "all": ("radar", "adsb"),
+              "mlat-adsb": ("mlat", "adsb"), "smr-mlat": ("smr", "mlat")}
+ROLE_NOUNS = {"radar": "radar", "adsb": "ADS-B", "mlat": "multilateration", "smr": "surface radar"}
 # A run holds every window's slot table (one row a slot) and lag table (2N - 1 rows for N slots) until
 # its writers are done, so the slots of all windows together are capped by the memory those tables take:
 # a slot row is 82 bytes (ten 8-byte columns, two 1-byte flags), a lag row 40 (five 8-byte columns), so
@@ -298,10 +307,12 @@ def _none_if_nan(v):
 def _window_result(ac: tuple[str, str], number: int, start_s: float, end_s: float,
                    radar: tuple[np.ndarray, ...], adsb: tuple[np.ndarray, ...],
                    dups: tuple[int, int], slot_s: float, reference: pd.Timestamp, sensors: dict[str, str],
-                   adsb_jumps: int = 0, predictors: tuple = (None, None)) -> WindowResult:
+                   adsb_jumps: int = 0, predictors: tuple = (None, None), matched: dict | None = None
+                   ) -> WindowResult:
     """Slot, correlate and summarise one window of one aircraft (call sign, address) from each side's
     reports in it (time of day, latitude, longitude arrays); with predictors (``--fill predict``), empty
-    slots take the tracker's prediction (pipeline.correlate.fill) instead of the previous slot."""
+    slots take the tracker's prediction (pipeline.correlate.fill) instead of the previous slot. ``matched``:
+    the window's lead numbers and verdict (pipeline.correlate.matched, .verdict), worked out beforehand."""
     rs, as_ = slot_series(*radar, start_s, end_s, slot_s), slot_series(*adsb, start_s, end_s, slot_s)
     if predictors[0] is not None or predictors[1] is not None:
         from msdc.pipeline.correlate.fill import fill_predicted
@@ -336,7 +347,8 @@ def _window_result(ac: tuple[str, str], number: int, start_s: float, end_s: floa
     summary = {
         "callsign": ac[0], "address": ac[1], "window": number, **sensors,
         "start_tod": float(start_s), "end_tod": float(end_s),
-        "start": at_seconds(reference, start_s), "end": at_seconds(reference, end_s), "slots": len(slots),
+        "start": at_seconds(reference, start_s), "end": at_seconds(reference, end_s), **(matched or {}),
+        "slots": len(slots),
         "radar_before": len(radar[0]), "radar_after": len(slots),
         "adsb_before": len(adsb[0]), "adsb_after": len(slots),
         "radar_duplicates": dups[0], "adsb_duplicates": dups[1], "adsb_jumps": adsb_jumps,
@@ -350,7 +362,7 @@ def _window_result(ac: tuple[str, str], number: int, start_s: float, end_s: floa
         "pearson_lag_unidentified_lat": flat_lat, "pearson_lag_unidentified_lon": flat_lon,
         **separation_summary(slots["sep_m"].to_numpy(), rs["filled"], as_["filled"]),
     }
-    summary = {k: _none_if_nan(summary[k]) for k in SUMMARY_KEYS}
+    summary = {k: _none_if_nan(summary.get(k)) for k in SUMMARY_KEYS}
     return WindowResult(summary=summary, slots=slots, lags=lag_frame)
 
 
@@ -428,13 +440,14 @@ class _Source:
         kept = order[~dup]
         self.dup_t = cols.tod[order[dup]]
         self.t, self.lat, self.lon = cols.tod[kept], cols.lat[kept], cols.lon[kept]
-        self.jump_t = np.array([])
+        self.jump = np.zeros(kept.size, bool)
         if kept.size and cols.is_adsb[kept].all():  # jumps are an ADS-B notion
             if cols.jump is not None:
-                jump = cols.jump[kept]
+                self.jump = cols.jump[kept]
             else:
-                jump = detect_jumps(meas.iloc[kept].reset_index(drop=True)).to_numpy(bool)
-            self.jump_t = self.t[jump]
+                self.jump = detect_jumps(meas.iloc[kept].reset_index(drop=True)).to_numpy(bool)
+        self.jump_t = self.t[self.jump]
+        self.is_adsb = bool(kept.size) and bool(cols.is_adsb[kept].all())
         self._track = (cols, kept) if track else None
         self._predictor: tuple | None = None
 
@@ -452,6 +465,11 @@ class _Source:
     def inside(self, start_s: float, end_s: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Its reports inside [start, end]."""
         keep = in_window(self.t, start_s, end_s)
+        return self.t[keep], self.lat[keep], self.lon[keep]
+
+    def clean_inside(self, start_s: float, end_s: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Its reports inside [start, end] without its ADS-B position jumps."""
+        keep = in_window(self.t, start_s, end_s) & ~self.jump
         return self.t[keep], self.lat[keep], self.lon[keep]
 
 
@@ -535,9 +553,28 @@ def _correlate_pair(ac: tuple[str, str], run: CorrelationRun, pair: tuple[str, _
         dups = (int(in_window(radar.dup_t, start_s, end_s).sum()),
                 int(in_window(adsb.dup_t, start_s, end_s).sum()))
         jumps = int(in_window(adsb.jump_t, start_s, end_s).sum())
+        matched = matched_summary(matched_pairs(r_in, adsb.clean_inside(start_s, end_s), start_s, end_s,
+                                                slot_s))
+        matched["verdict"] = window_verdict({**matched, "adsb_jumps": jumps},
+                                            "ADS-B" if adsb.is_adsb else ref_id)
         run.windows.append(_window_result(ac, number, start_s, end_s, r_in, a_in, dups, slot_s, reference,
-                                          sensors, jumps, predictors))
+                                          sensors, jumps, predictors, matched))
     return None
+
+
+def in_roles(meas: pd.DataFrame, pairs: str) -> pd.DataFrame:
+    """The rows of the two sensor kinds a ``pairs`` value correlates, their sensor_kind renamed to the roles
+    the correlation runs with ("radar" the correlated sensor, "adsb" its reference: PAIR_KINDS); ``meas``
+    itself when it holds radar and ADS-B rows alone (radar-adsb, radar-radar, all)."""
+    tested, reference = PAIR_KINDS[pairs]
+    kind = meas["sensor_kind"].astype(str).to_numpy()
+    roles = np.select([kind == tested, kind == reference], [0, 1], -1)
+    if (tested, reference) == ("radar", "adsb") and (roles >= 0).all():
+        return meas
+    keep = roles >= 0
+    out = meas[keep].reset_index(drop=True)
+    out["sensor_kind"] = pd.Series(coded_text(roles[keep], ["radar", "adsb"]), index=out.index)
+    return out
 
 
 def correlate(meas: pd.DataFrame, *, callsign: str | None = None, address: str | None = None,
@@ -547,10 +584,12 @@ def correlate(meas: pd.DataFrame, *, callsign: str | None = None, address: str |
 
     ``meas`` is a measurement frame (pipeline.model.schema). Each radar is correlated on its own (plots
     of two radars are never mixed) against each ADS-B source and/or each other radar (``pairs``); ADS-B
-    ground stations are one source unless ``split_adsb``. One aircraft by call sign and/or address
-    (NoSuchAircraft, NoOverlap when no pair overlaps), or with ``all_aircraft`` every aircraft seen by a
-    pair (TooManySlots when the windows need more than MAX_SLOTS slots). Times in the tables count
-    seconds from midnight UTC of the earliest report. ``fill``: empty
+    ground stations are one source unless ``split_adsb``. ``pairs`` "mlat-adsb" correlates each
+    multilateration system against ADS-B, "smr-mlat" each surface movement radar against multilateration
+    (in the tables the correlated sensor takes the radar's columns, its reference the ADS-B ones). One
+    aircraft by call sign and/or address (NoSuchAircraft, NoOverlap when no pair overlaps), or with
+    ``all_aircraft`` every aircraft seen by a pair (TooManySlots when the windows need more than MAX_SLOTS
+    slots). Times in the tables count seconds from midnight UTC of the earliest report. ``fill``: empty
     slots take the previous slot ("hold", the thesis) or the tracker's prediction ("predict").
     """
     if fill not in FILLS:
@@ -571,8 +610,11 @@ def correlate(meas: pd.DataFrame, *, callsign: str | None = None, address: str |
     if str(meas["time"].dtype) != "datetime64[ns, UTC]":
         meas = meas.assign(time=meas["time"].dt.as_unit("ns"))
     reference = midnight(meas["time"])
+    tested, against = (ROLE_NOUNS[k] for k in PAIR_KINDS[pairs])
     if reference is None:
-        raise NoSuchAircraft("any aircraft", ["radar", "ADS-B"], [], "there are no measurements")
+        raise NoSuchAircraft("any aircraft", [tested, against], [], "there are no measurements")
+    if "sensor_kind" in meas:
+        meas = in_roles(meas, pairs)
     if fill == "hold":  # the steps below read these columns only (time_of_day, not timestamp); each window
         # copies its rows
         columns = [c for c in dict.fromkeys(CORRELATION_INPUTS) if c in meas or c == "time_of_day"]
@@ -584,24 +626,34 @@ def correlate(meas: pd.DataFrame, *, callsign: str | None = None, address: str |
         "gap_s": gap_s, "pairs": pairs, "split_adsb": split_adsb,
         **({"fill": fill} if fill != "hold" else {}),  # the thesis default leaves the parameters as they were
         "date": reference.date().isoformat() if is_dated(reference) else None})
-    need_adsb = pairs == "radar-adsb"
+    role_pairs = pairs if pairs in ("radar-radar", "all") else "radar-adsb"  # the pairs of the two roles
+    need_adsb = role_pairs == "radar-adsb"
     if all_aircraft:  # one aircraft's rows at a time (aircraft_rows), not a second copy of the run
         cols = _Columns(meas)
         targets = aircraft_rows(meas, need_adsb=need_adsb)
         first = next(targets, None)
         if first is None:
-            raise NoSuchAircraft("any aircraft", ["radar", "ADS-B"], [],
-                                 "no aircraft is seen by both radar and ADS-B")
+            raise NoSuchAircraft("any aircraft", [tested, against], [],
+                                 f"no aircraft is seen by both {tested} and {against}")
         targets = itertools.chain([first], targets)
         del first
     else:
-        ac = one_aircraft(meas, callsign, address, need_adsb=need_adsb)
+        try:
+            ac = one_aircraft(meas, callsign, address, need_adsb=need_adsb)
+        except NoSuchAircraft as exc:  # the roles by their own names
+            if (tested, against) == ("radar", "ADS-B"):
+                raise
+            names = {"radar": tested, "ADS-B": against}
+            missing = [names.get(m, m) for m in exc.missing_in]
+            text = str(exc).replace("radar or ADS-B", " or ".join(missing)).replace(
+                " by radar", f" by {tested}").replace(" by ADS-B", f" by {against}")
+            raise NoSuchAircraft(exc.wanted, missing, exc.closest, text) from None
         cols = _Columns(pd.concat([ac.radar, ac.adsb], ignore_index=True))
         targets = iter([(ac.callsign, ac.address, ac.aircraft_id, np.arange(len(ac.radar)),
                          np.arange(len(ac.radar), len(ac.radar) + len(ac.adsb)))])
         del ac
     paired, budget = False, [0]
-    prepare = functools.partial(_prepared_pairs, cols, pairs, split_adsb, fill, reference, slot_s, gap_s)
+    prepare = functools.partial(_prepared_pairs, cols, role_pairs, split_adsb, fill, reference, slot_s, gap_s)
     if fill == "predict":
         _ = cols.track_inputs  # read here once, not by the threads
     # --fill predict builds each aircraft's predictors on the per-aircraft threads (their filter kernels
@@ -617,19 +669,21 @@ def correlate(meas: pd.DataFrame, *, callsign: str | None = None, address: str |
     if not paired:
         seen_by = None if all_aircraft else (callsign_label, address_label, sorted(cols.by_sensor(
             np.flatnonzero(cols.is_radar))))
-        raise NoSuchAircraft("a sensor pair", ["radar"], [], _unpaired_message(pairs, seen_by))
+        raise NoSuchAircraft("a sensor pair", [tested], [], _unpaired_message(pairs, seen_by))
     return run
 
 
 def _unpaired_message(pairs: str, aircraft: tuple[str, str, list[str]] | None) -> str:
     """Why no sensor pair was found: for every aircraft (``aircraft`` None), or for the one asked for
     (call sign, address, the radars that saw it)."""
-    wanted = {"radar-radar": "two radars", "radar-adsb": "radar and ADS-B"}.get(
+    wanted = {"radar-radar": "two radars", "radar-adsb": "radar and ADS-B",
+              "mlat-adsb": "multilateration and ADS-B", "smr-mlat": "surface radar and multilateration"}.get(
         pairs, "two radars nor by radar and ADS-B")
     if aircraft is None:
         wanted = wanted.replace(" nor ", " or ")
         return f"no aircraft is seen by {wanted} (--pairs {pairs})"
     callsign, address, radars = aircraft
     who = " ".join(part for part in (callsign, f"(address {address})" if address else "") if part)
-    seen = f"only by {', '.join(radars)}" if radars else "by no radar"
+    noun = ROLE_NOUNS[PAIR_KINDS[pairs][0]]
+    seen = f"only by {', '.join(radars)}" if radars else f"by no {noun}"
     return f"{who or 'the aircraft'} is not seen by {wanted} ({seen}) (--pairs {pairs})"

@@ -22,10 +22,24 @@ SLOT_COLUMNS = [
 ]
 # Columns of WindowResult.lags
 LAG_COLUMNS = ["lag", "ncc_lat", "ncc_lon", "pearson_lat", "pearson_lon"]
-# Keys of WindowResult.summary, in report order (the JSON fields of a window)
+# The numbers a report leads with (pipeline.correlate.matched): the radar's reports against the reference
+# at their own times, over the slots both reported, ADS-B jumps left out
+MATCHED_KEYS = ["matched_reports", "matched_sep_median_m", "matched_sep_rms_m", "matched_sep_p95_m",
+                "matched_along_mean_m", "matched_along_se_m", "matched_cross_mean_m", "matched_cross_se_m",
+                "matched_time_offset_s"]
+# With --quality: the radar's errors against ADS-B in its own terms over the window (None without)
+WINDOW_QUALITY_KEYS = ["quality_reports", "range_error_mean_m", "range_error_std_m", "azimuth_error_mean_deg",
+                       "azimuth_error_std_deg"]
+# With --quality: per radar, its accuracy and fitted biases against ADS-B over the whole run
+RADAR_KEYS = ["radar", "radar_sensor", "n_reports", "horizontal_error_rms_m", "range_error_std_m",
+              "azimuth_error_std_deg", "range_bias_m", "range_bias_se_m", "range_gain_ppm",
+              "range_gain_se_ppm", "azimuth_bias_deg", "azimuth_bias_se_deg", "time_bias_s", "time_bias_se_s",
+              "note"]
+# Keys of WindowResult.summary, in report order (the JSON fields of a window): identity, the lead numbers
+# and verdict, then the thesis's measures
 SUMMARY_KEYS = [
     "callsign", "address", "window", "radar_sensor", "reference_sensor", "start_tod", "end_tod", "start",
-    "end", "slots",
+    "end", *MATCHED_KEYS, *WINDOW_QUALITY_KEYS, "verdict", "slots",
     "radar_before", "radar_after", "adsb_before", "adsb_after", "radar_duplicates", "adsb_duplicates",
     "adsb_jumps", "radar_filled_slots", "adsb_filled_slots",
     "ncc0_lat", "ncc0_lon", "ncc_peak_lag_lat", "ncc_peak_lag_lon",
@@ -68,3 +82,4 @@ class CorrelationRun:
     inputs: list[dict] = field(default_factory=list)  # {"path", "sha256", "bytes", "format"}
     filters: dict = field(default_factory=dict)  # filter name -> reports removed (issue 4 filters)
     extra_sheets: dict[str, pd.DataFrame] = field(default_factory=dict)  # e.g. Quality, Radar accuracy
+    radars: list[dict] = field(default_factory=list)  # --quality: each radar's accuracy, biases (RADAR_KEYS)

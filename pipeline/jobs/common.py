@@ -21,7 +21,7 @@ import pandas as pd
 from msdc.asterix.categories import MEASUREMENT_CATEGORIES, REGISTRY
 from msdc.pipeline.jobs.options import (
     MAX_COAST_RANGE_S,
-    SOURCES,
+    SOURCE_KINDS,
     STEP_RANGE_S,
     AircraftOptions,
     CorrelateOptions,
@@ -46,9 +46,11 @@ from msdc.pipeline.model.load import (
 )
 from msdc.pipeline.model.time import utc_text
 from msdc.pipeline.progress import Progress
-from msdc.pipeline.report.transaction import output_problem, target
+from msdc.pipeline.report.transaction import output_problem, side_pattern, target
 
 if TYPE_CHECKING:  # the steps are imported where they run: msdc stats imports none of them
+    from msdc.pipeline.jobs.options import SelectionOptions
+    from msdc.pipeline.model.selection import Selection
     from msdc.pipeline.quality.quality_run import QualityResult
     from msdc.pipeline.report.transaction import OutputTransaction
 
@@ -82,7 +84,7 @@ def carrying(said: Iterable[str] = ()) -> Iterator[list[str]]:
 
 
 def _editions(editions: list[str] | dict | None) -> dict[int, str]:
-    """CAT=EDITION pins checked against the shipped tables ("auto" for CAT021)."""
+    """CAT=EDITION pins checked against the shipped tables, or "auto" (any category: asterix.families)."""
     from msdc.asterix.tables import available, resolve_edition
 
     items = editions.items() if isinstance(editions, dict) else (
@@ -93,7 +95,7 @@ def _editions(editions: list[str] | dict | None) -> dict[int, str]:
             raise OptionError(f"--edition {cat}={ed}: category must be one of "
                               f"{', '.join(str(c) for c in sorted(available()))}")
         cat = int(cat)
-        if not (cat == 21 and ed == "auto"):
+        if ed != "auto":
             try:
                 resolve_edition(cat, ed)
             except ValueError as exc:
@@ -285,12 +287,13 @@ def check_aircraft(o: AircraftOptions) -> None:
 
 
 def parse_sources(value) -> tuple[str, ...]:
-    """--sources as a tuple of SOURCES ("radar,adsb" or a sequence); OptionError naming the option if bad."""
+    """--sources as a tuple of SOURCE_KINDS ("radar,adsb" or a sequence); OptionError naming the option if
+    bad."""
     items = tuple(value.split(",")) if isinstance(value, str) else tuple(value or ())
     items = tuple(s.strip().lower() for s in items)
-    if not items or any(s not in SOURCES for s in items) or len(set(items)) != len(items):
+    if not items or any(s not in SOURCE_KINDS for s in items) or len(set(items)) != len(items):
         raise OptionError(f"--sources {','.join(items) if items else value!r}: must be a comma-separated "
-                          f"subset of {','.join(SOURCES)} without repeats")
+                          f"subset of {','.join(SOURCE_KINDS)} without repeats")
     return items
 
 
@@ -316,6 +319,21 @@ def check_tracking(options: TrackOptions) -> float:
         except ValueError as exc:
             raise OptionError(f"--tpm {options.tpm!r}: {str(exc).partition(': ')[2]}") from None
     return step
+
+
+def check_selection(options: SelectionOptions) -> Selection:
+    """The samples an analysis counts (--min-fl, --exclude-mode-a-only, --exclude-codes), checked before
+    decoding: OptionError naming the option (check_declared checks --min-fl's range)."""
+    from msdc.pipeline.model.selection import Selection, parse_codes
+
+    try:
+        codes = parse_codes(options.exclude_codes) if options.exclude_codes is not None else ()
+    except ValueError as exc:
+        raise OptionError(str(exc)) from None
+    if options.exclude_codes is not None and not codes:
+        raise OptionError("--exclude-codes: give at least one Mode 3/A code, e.g. 7000")
+    return Selection(min_fl=None if options.min_fl is None else float(options.min_fl),
+                     exclude_mode_a_only=bool(options.exclude_mode_a_only), exclude_codes=codes)
 
 
 @dataclass
@@ -374,17 +392,20 @@ def load_inputs(options: DecodingOptions, checked: Checked, progress: Progress |
     about them."""
     import warnings as python_warnings
 
-    from msdc.asterix.errors import EditionWarning, UnreadableInput
+    from msdc.asterix.errors import ContentWarning, EditionWarning, UnreadableInput
     from msdc.pipeline.model.measurements import DECODED_COLUMNS, impossible_positions
 
     try:
-        with python_warnings.catch_warnings():  # a wrong edition is said below, with its --edition
-            python_warnings.simplefilter("ignore", EditionWarning)
+        with python_warnings.catch_warnings():  # a wrong edition is said below, with its --edition; what
+            python_warnings.simplefilter("ignore", EditionWarning)  # the inputs are, in loaded.warnings
+            python_warnings.simplefilter("ignore", ContentWarning)
             loaded = load(checked.inputs, editions=checked.editions or None, date=options.date,
                           format=options.format, columns=DECODED_COLUMNS, progress=progress)
     except UnreadableInput as exc:
         raise JobError(str(exc), 2) from exc
     spans = [time_spans(rec.frames, loaded.date) for rec in loaded.recordings]
+    if loaded.spans is None:  # kept: the track figures end at the recording's last report
+        loaded.spans = spans
     return loaded, [*_empty_inputs(loaded), *_wrong_editions(loaded), *order_warnings(checked.inputs, spans),
                     *date_ignored(options, loaded.inputs), *format_hints(options, loaded.inputs),
                     *impossible_positions(loaded.frames.get(21)), *loaded.warnings]
@@ -426,16 +447,13 @@ def format_hint(path, fmt: str | None, skipped_blocks: int) -> str:
     """A hint to give --format when detection read a file as raw, blocks were skipped, and the file reads as a
     recorder file (final, gps, oradis) but for its first frame (asterix.containers.recorder_hint); else ''."""
     from msdc.asterix.containers import DETECT_BYTES, recorder_hint
+    from msdc.asterix.verdict import recorder_words
 
     if fmt != "raw" or not skipped_blocks:
         return ""
     with open(path, "rb") as file:
         guess = recorder_hint(file.read(DETECT_BYTES))
-    if guess is None:
-        return ""
-    return (f"{path}: read as a raw ASTERIX stream ({skipped_blocks} block(s) skipped), but past its first "
-            f"frame it reads as a {guess} recording (its first frame damaged?): if it is one, give "
-            f"--format {guess}")
+    return "" if guess is None else recorder_words(path, skipped_blocks, guess)
 
 
 def date_ignored(options: DecodingOptions, inputs: list[dict]) -> list[str]:
@@ -447,20 +465,22 @@ def date_ignored(options: DecodingOptions, inputs: list[dict]) -> list[str]:
 
 
 def _load_measurements(options: AircraftOptions, checked: Checked, progress: Progress | None,
-                       stage: str, *, either: bool = False, columns=None
+                       stage: str, *, either: bool = False, columns=None, needs=None
                        ) -> tuple[Loaded, pd.DataFrame, list[str]]:
     """Decode the inputs chunk by chunk straight into radar and ADS-B measurements (load_measurements),
     with the user-facing errors for unreadable inputs, missing data and sensors (stray radar records are
     left out with a warning: model.sensors.stray_verdict). ``stage`` is the progress stage shown once the
     inputs are read (before a missing-data or missing-sensor error too). ``either`` (quality): one category
-    is enough, the other's absence is a warning saying which sheets stay empty. Returns the warnings too."""
+    is enough, the other's absence is a warning saying which sheets stay empty. ``needs``: the categories
+    the job needs (load_measurements; CAT048 and CAT021 when None). Returns the warnings too."""
     from msdc.asterix.errors import UnreadableInput
+    from msdc.pipeline.model.load import RADAR_AND_ADSB
 
     try:
         loaded, meas = load_measurements(checked.inputs, checked.sensors, editions=checked.editions or None,
                                          date=options.date, format=options.format,
                                          adsb_sigma_m=options.adsb_sigma_m, progress=progress, either=either,
-                                         columns=columns)
+                                         columns=columns, needs=needs or RADAR_AND_ADSB)
     except UnreadableInput as exc:
         raise JobError(str(exc), 2) from exc
     except NoRecords as exc:
@@ -479,10 +499,13 @@ def _load_measurements(options: AircraftOptions, checked: Checked, progress: Pro
         except UnknownRadar as exc:
             raise unknown_radar_error(exc.missing, sensors_path(options),
                                       leave_out="by giving the ADS-B recordings alone") from exc
+    if len(loaded.unplaced):
+        warnings += unplaced_warnings(loaded, options)
     warnings += _empty_inputs(loaded)
     warnings += _wrong_editions(loaded, but=absent_categories(loaded))
     warnings += [f"no {REGISTRY[cat].noun} (CAT{cat:03d}) records in the inputs{_all_failed(loaded, cat)}: "
-                 f"{QUALITY_WITHOUT[cat]}" for cat in absent_categories(loaded)]
+                 f"{QUALITY_WITHOUT[cat]}" for cat in absent_categories(loaded)
+                 if needs is None or any(cat in group for group in needs)]
     warnings += order_warnings(checked.inputs, loaded.spans)
     warnings += date_ignored(options, loaded.inputs)
     warnings += format_hints(options, loaded.inputs)
@@ -492,10 +515,40 @@ def _load_measurements(options: AircraftOptions, checked: Checked, progress: Pro
     return loaded, meas, warnings
 
 
+def unplaced_warnings(loaded: Loaded, options: AircraftOptions) -> list[str]:
+    """The warnings for CAT010/CAT020 reports left unplaced for want of a reference point (too few of a
+    sensor: damage); a JobError with the sensor-file lines when a sensor has enough of them to be one."""
+    from msdc.pipeline.model.measurements import unplaced_verdict
+    from msdc.pipeline.model.sensors import UnknownReferencePoint
+
+    counts = {cat: sum(info["records"].get(cat, 0) for info in loaded.inputs) for cat in (10, 20)}
+    try:
+        return unplaced_verdict(loaded.unplaced, counts)
+    except UnknownReferencePoint as exc:
+        raise unknown_reference_error(exc.missing, sensors_path(options)) from exc
+
+
+def unknown_reference_error(missing: list[tuple[int, str, int, int]], path: str | None) -> JobError:
+    """The error for multilateration or surface radar reports whose reference point the sensor file lacks,
+    with the TOML lines."""
+    from msdc.pipeline.model.sensors import KIND_NOUN, reference_toml_snippet
+
+    lines = "\n\n".join(reference_toml_snippet(*m) for m in missing)
+    names = ", ".join(f"CAT{c:03d} {KIND_NOUN[k]} SAC/SIC {a}/{b}" for c, k, a, b in missing)
+    where = ("no --sensors file was given: give --sensors S.toml with these lines" if path is None
+             else f"not in {path}; add it")
+    return JobError(f"{names}: Cartesian positions need the system's reference point, and {where}:"
+                    f"\n\n{lines}")
+
+
 def _no_records(exc: NoRecords) -> JobError:
     """The user-facing error for inputs without radar or ADS-B records: every absent category, those whose
     blocks failed to decode first, with how many failed and the edition to pin (an ADS-B recording under a
     wrong edition is why there is no record at all, not a missing radar)."""
+    if exc.category not in QUALITY_WITHOUT:  # a multilateration or surface radar category the job needs
+        names = " or ".join(f"CAT{c:03d}" for c in exc.alternatives)
+        nouns = "multilateration" if len(exc.alternatives) > 1 else REGISTRY[exc.category].noun
+        return JobError(f"no {nouns} ({names}) records in the inputs")
     absent = absent_categories(exc.loaded) or [exc.category]
     failed = {cat: why[2:] for cat in absent if (why := _all_failed(exc.loaded, cat))}
     absent.sort(key=lambda cat: cat not in failed)
@@ -505,9 +558,10 @@ def _no_records(exc: NoRecords) -> JobError:
 
 
 def absent_categories(loaded: Loaded) -> list[int]:
-    """Which measurement categories (CAT048, CAT021: the category registry's) no input holds a record of."""
+    """Which of the measurement categories the jobs need (CAT048 radar and CAT021 ADS-B, those of
+    QUALITY_WITHOUT) no input holds a record of."""
     held = {cat for info in loaded.inputs for cat, n in info["records"].items() if n}
-    return [cat for cat in MEASUREMENT_CATEGORIES if cat not in held]
+    return [cat for cat in MEASUREMENT_CATEGORIES if cat in QUALITY_WITHOUT and cat not in held]
 
 
 def sensors_path(options: AircraftOptions) -> str | None:
@@ -574,15 +628,16 @@ def _all_failed(loaded: Loaded, cat: int) -> str:
 
 def marked_measurements(options: AircraftOptions, checked: Checked, progress: Progress | None, stage: str,
                         *, split_adsb: bool = False, either: bool = False, columns=None,
-                        flags: list[str] | None = None) -> tuple[Loaded, pd.DataFrame, list[str]]:
+                        flags: list[str] | None = None, needs=None) -> tuple[Loaded, pd.DataFrame, list[str]]:
     """The inputs and their measurements with the duplicate and jump flags (once per job; correlate counts
     each window's jumps), and the warnings about them; decoded columns are held one chunk at a time (see
     _load_measurements). ``stage`` is the progress stage shown once the inputs are read; ``columns`` and
-    ``flags``: only those measurement columns and jump columns (every one when None)."""
+    ``flags``: only those measurement columns and jump columns (every one when None); ``needs``: the
+    categories the job needs (load_measurements)."""
     from msdc.pipeline.model.marks import mark_once
 
     loaded, meas, warnings = _load_measurements(options, checked, progress, stage, either=either,
-                                                columns=columns)
+                                                columns=columns, needs=needs)
     meas = mark_once(meas, split_adsb=split_adsb, flags=flags)
     release_free_memory()
     return loaded, meas, warnings
@@ -618,20 +673,28 @@ def tracker_measurements(loaded, checked: Checked, options: TrackOptions) -> tup
     from msdc.pipeline.model.dedup import duplicate_mask
     from msdc.pipeline.model.measurements import (
         IdentityWarning,
+        LeftOutWarning,
         OffEarthWarning,
         OutOfCoverageWarning,
         build_measurements,
     )
-    from msdc.pipeline.model.sensors import UnknownRadar, declared_radar
+    from msdc.pipeline.model.sensors import UnknownRadar, UnknownReferencePoint, declared_radar
 
     sources = parse_sources(options.sources)
     radar = loaded.frames.get(48) if "radar" in sources else None
     adsb = loaded.frames.get(21) if "adsb" in sources else None
     radar = radar if radar is not None and len(radar) else None
     adsb = adsb if adsb is not None and len(adsb) else None
-    if radar is None and adsb is None:
-        wanted = " or ".join({"radar": "radar (CAT048)", "adsb": "ADS-B (CAT021)"}[s] for s in sources)
-        failed = "; ".join(why[2:] for cat in ({"radar": 48, "adsb": 21}[s] for s in sources)
+    local = {"mlat", "smr"} & set(sources)
+    cat010 = loaded.frames.get(10) if local else None
+    cat020 = loaded.frames.get(20) if "mlat" in local else None
+    cat010, cat020 = (f if f is not None and len(f) else None for f in (cat010, cat020))
+    if radar is None and adsb is None and cat010 is None and cat020 is None:
+        names = {"radar": "radar (CAT048)", "adsb": "ADS-B (CAT021)", "mlat": "multilateration (CAT010 or "
+                 "CAT020)", "smr": "surface radar (CAT010)"}
+        cats = {"radar": (48,), "adsb": (21,), "mlat": (10, 20), "smr": (10,)}
+        wanted = " or ".join(names[s] for s in sources)
+        failed = "; ".join(why[2:] for cat in dict.fromkeys(c for s in sources for c in cats[s])
                            if (why := _all_failed(loaded, cat)))
         raise JobError(f"no {wanted} records in the inputs (--sources {','.join(sources)})"
                        + (f": {failed}" if failed else ""))
@@ -641,16 +704,23 @@ def tracker_measurements(loaded, checked: Checked, options: TrackOptions) -> tup
         raise unknown_radar_error(exc.missing, sensors_path(options)) from exc
     with carrying(stray) as warnings:
         try:
-            with python_warnings.catch_warnings():  # load_inputs has said it, naming each file
+            with python_warnings.catch_warnings(record=True) as said:  # load_inputs has said it, per file
                 python_warnings.simplefilter("ignore", OffEarthWarning)
                 python_warnings.simplefilter("ignore", OutOfCoverageWarning)  # said below, from attrs
                 python_warnings.simplefilter("ignore", IdentityWarning)  # said below, from attrs
+                python_warnings.simplefilter("always", LeftOutWarning)
                 meas = build_measurements(radar, adsb, checked.sensors, date=loaded.date,
-                                          adsb_sigma_m=options.adsb_sigma_m)
+                                          adsb_sigma_m=options.adsb_sigma_m, cat010=cat010, cat020=cat020)
+            warnings += [str(w.message) for w in said if issubclass(w.category, LeftOutWarning)]
         except UnknownRadar as exc:
             raise unknown_radar_error(exc.missing, sensors_path(options)) from exc
+        except UnknownReferencePoint as exc:
+            raise unknown_reference_error(exc.missing, sensors_path(options)) from exc
     warnings += list(meas.attrs.get("coverage_warnings", ()))
     warnings += list(meas.attrs.get("identity_warnings", ()))
+    if local and local != {"mlat", "smr"} and len(meas):  # CAT010 holds both kinds: the one not asked goes
+        kinds = meas["sensor_kind"].astype(str)
+        meas = meas[~kinds.isin({"mlat", "smr"} - local).to_numpy(bool)].reset_index(drop=True)
     from msdc.pipeline.track.associate import join_by_track_number
 
     meas, joined = join_by_track_number(meas, max_gap_s=float(options.max_coast_s))
@@ -659,7 +729,23 @@ def tracker_measurements(loaded, checked: Checked, options: TrackOptions) -> tup
     out = meas[~dup & known].reset_index(drop=True)
     out.attrs["joined_by_track_number"] = joined
     out.attrs["unidentified"] = int((~dup & ~known).sum())
-    return out, warnings
+    return out, warnings + short_coast(out, options.max_coast_s)
+
+
+def short_coast(meas: pd.DataFrame, max_coast_s: float) -> list[str]:
+    """A warning when --max-coast is below every sensor's median update interval (track.feasibility): a
+    track segment then ends at each gap between reports, and an aircraft falls apart into segments of one
+    report (--max-coast 0.001 made 3,281 of one aircraft)."""
+    from msdc.pipeline.track.feasibility import update_intervals
+
+    intervals = update_intervals(meas)
+    if intervals.empty or max_coast_s >= intervals.iloc[0]:
+        return []
+    fastest, slowest = intervals.index[0], intervals.index[-1]
+    return [f"--max-coast {max_coast_s:g} s is below every sensor's median update interval (the shortest: "
+            f"{fastest}, {intervals.iloc[0]:.3g} s): a track segment ends at each gap between reports, so "
+            f"nearly every report starts a segment of its own; give more than the slowest sensor's interval "
+            f"({slowest}, {intervals.iloc[-1]:.3g} s; default 60 s)"]
 
 
 # ---------------------------------------------------------------------------------------------------------
@@ -684,10 +770,11 @@ def quality_inputs(reference: str) -> list[str]:
     from msdc.pipeline.model.dedup import DEDUP_KEYS
     from msdc.pipeline.model.jumps import JUMP_INPUTS
     from msdc.pipeline.quality.accuracy import ACCURACY_INPUTS
+    from msdc.pipeline.quality.reference_offset import OFFSET_INPUTS
     from msdc.pipeline.quality.tables import QUALITY_INPUTS
 
-    need = [*QUALITY_INPUTS, *ACCURACY_INPUTS, *DEDUP_KEYS, *JUMP_INPUTS, "sensor_kind", "sensor_id",
-            "aircraft_id", "callsign", "address"]
+    need = [*QUALITY_INPUTS, *ACCURACY_INPUTS, *DEDUP_KEYS, *JUMP_INPUTS, *OFFSET_INPUTS, "sensor_kind",
+            "sensor_id", "aircraft_id", "callsign", "address"]
     if reference == "track":
         from msdc.pipeline.quality.track_reference import TRACK_REFERENCE_INPUTS
         from msdc.pipeline.track.tracker import FILTER_INPUTS, REQUIRED
@@ -708,6 +795,19 @@ def quality_step(meas: pd.DataFrame, sensors: pd.DataFrame, options: CorrelateOp
                            gap_s=options.gap_s, reference=getattr(options, "reference", "adsb"))
     except NoSuchAircraft as exc:
         raise JobError(str(exc)) from exc
+
+
+QUALITY_FIGURE_GLOBS = ("_intervals.png", "_radar_errors_*_*.png")  # quality_figures' names, as globs
+
+
+def side_files_beside(output: Path | None, globs: Iterable[str]) -> list[Path]:
+    """The globs of the side files named after ``output`` (``globs``: what follows its stem, e.g.
+    ``_lags_*.png``), beside the file it really is; none without an output. The command lists the files
+    they match that a run did not write (report.transaction.left_beside)."""
+    if output is None:
+        return []
+    base = real_output(output)
+    return [side_pattern(base, g) for g in globs]
 
 
 def quality_figures(result: QualityResult, out_dir: Path, stem: str, tx: OutputTransaction | None = None
@@ -746,7 +846,7 @@ def estimated_noise(meas: pd.DataFrame, sensors: pd.DataFrame, options: TrackOpt
     declared against estimated sigmas (radar range m and azimuth deg from the sensor file; ADS-B m per
     NACp level, and its along-track timing sigma s, declared 0)."""
     from msdc.pipeline.model.measurements import sensor_id
-    from msdc.pipeline.track.noise import AZIMUTH, RANGE, TIMING, estimate_noise
+    from msdc.pipeline.track.noise import AZIMUTH, POSITION, RANGE, TIMING, estimate_noise
 
     ids = sensor_id(48, sensors["sac"], sensors["sic"]).to_numpy()
     sites = {str(i): (float(r.latitude), float(r.longitude))
@@ -762,6 +862,11 @@ def estimated_noise(meas: pd.DataFrame, sensors: pd.DataFrame, options: TrackOpt
         if site is not None and row["component"] in (RANGE, AZIMUTH):
             declared = site.sigma_range_m if row["component"] == RANGE else site.sigma_azimuth_deg
             table.loc[i, ["declared_sigma", "unit"]] = [declared, "m" if row["component"] == RANGE else "deg"]
+    local = table["sensor_id"].astype(str).str.match(r"0(10|20):") & (table["component"] == POSITION)
+    if local.any():  # multilateration, surface radar: their reports' own sigma (I010/500, I020/500, sigma_m)
+        sigma = pd.Series(meas["cov_ee_m2"].to_numpy(float)) ** 0.5
+        median = sigma.groupby(meas["sensor_id"].astype(str).to_numpy()).median()
+        table.loc[local, "declared_sigma"] = table.loc[local, "sensor_id"].astype(str).map(median).to_numpy()
     table["estimated_sigma"] = table["declared_sigma"] * table["scale"]
     timing = table["component"] == TIMING  # the ADS-B along-track time-stamp sigma, declared as none
     table.loc[timing, ["unit", "declared_sigma"]] = ["s", 0.0]

@@ -4,13 +4,17 @@ Options are validated before anything is decoded (``validate``: one-line ``Optio
 option). ``conflict_job`` decodes and builds the measurements as ``msdc track`` does, tracks every
 aircraft with the IMM, predicts each track at every output step and look-ahead
 (`pipeline.conflict.predict`), computes PC for every close pair, and derives the alert events, the
-actual losses of separation in the tracked data, the warning time per loss and horizon, and which alerts
-were false. ``write_conflicts`` writes CSV (alerts; losses and warning times in files named beside it)
-or an xlsx workbook, all files staged and moved into place together (report.transaction).
+losses of separation (geometric proximities below the minima where both aircraft are reported, not
+separation infringements), the warning time per loss and horizon, and which alerts were false; the
+aircraft samples counted are those the selection options keep (`pipeline.model.selection`), and every
+table names each aircraft by call sign and Mode 3/A code as well as address. ``write_conflicts`` writes
+CSV (alerts; losses and warning times in files named beside it) or an xlsx workbook, all files staged
+and moved into place together (report.transaction).
 """
 
 from __future__ import annotations
 
+import glob
 import math
 import time
 from dataclasses import dataclass, field, replace
@@ -27,6 +31,7 @@ from msdc.pipeline.jobs.common import (
     check_decoding,
     check_figures_dir,
     check_output_rows,
+    check_selection,
     check_tracking,
     estimated_noise,
     output_path,
@@ -73,6 +78,7 @@ def validate(options: ConflictOptions) -> Checked:
     step = check_tracking(options)
     horizons = parse_horizons(options.horizons_s)
     check_declared(replace(options, horizons_s=horizons))
+    check_selection(options)
     checked = check_decoding(options)
     for h in horizons:
         if abs(h / step - round(h / step)) > 1e-9:
@@ -129,11 +135,11 @@ class ConflictJobResult:
 def conflict_job(options: ConflictOptions, *, progress: Progress | None = None,
                  checked: Checked | None = None, command: str = "conflicts") -> ConflictJobResult:
     """Validate, decode, track every aircraft, predict, PC per pair/step/horizon, events; writes nothing."""
-    from msdc.pipeline.conflict import alert_events, classify_alerts, pair_probabilities, warning_times
-    from msdc.pipeline.conflict.approach import closest_approach
-    from msdc.pipeline.conflict.events import losses_by_pairs
+    from msdc.pipeline.conflict import pair_probabilities
     from msdc.pipeline.conflict.grid import on_grid
-    from msdc.pipeline.conflict.surface import on_surface, surface_pairs
+    from msdc.pipeline.conflict.reported import report_rows
+    from msdc.pipeline.conflict.surface import on_surface
+    from msdc.pipeline.model.selection import identity_timeline, selected_samples
     from msdc.pipeline.track import Plane, track
     from msdc.pipeline.track.feasibility import untrackable
     from msdc.pipeline.track.noise import SURFACE_SPEED_KT
@@ -142,6 +148,7 @@ def conflict_job(options: ConflictOptions, *, progress: Progress | None = None,
     checked = checked or validate(options)
     horizons = parse_horizons(options.horizons_s)
     step = float(options.step_s)
+    selection = check_selection(options)
     with carrying(checked.warnings) as warnings:
         loaded, meas, said = tracker_inputs(options, checked, progress,
                                             "the times of the alerts, losses and tracks")
@@ -160,45 +167,116 @@ def conflict_job(options: ConflictOptions, *, progress: Progress | None = None,
         grid_at = np.flatnonzero(on_grid(tracks, step))  # the tracker's report-time rows are not the grid
         plane = Plane.around(tracks["latitude"].to_numpy(float), tracks["longitude"].to_numpy(float))
         epoch, tracker_parameters = result.epoch, result.parameters
+        # where each aircraft is reported: the accepted reports a loss is measured between
+        reports = report_rows(tracks, meas, result.rejected)
         del result
         # the grid rows are what follows needs: the full table (~0.35 GB on a day at 1 s) freed as they are
         # taken
         grid = _take_rows(tracks, grid_at)
         del tracks, grid_at
+        timeline = identity_timeline(meas)
         if progress:
             progress.stage("Predicting and computing PC")
         predictions = _predictions(meas, epoch, plane, horizons, options)
-        tol = options.vertical_tolerance_ft
         pc = pair_probabilities(predictions, options.radius_nm, options.vertical_ft, method=options.method,
-                                vertical_tolerance_ft=tol)
+                                vertical_tolerance_ft=options.vertical_tolerance_ft)
         grid["on_surface"], by_speed = on_surface(grid)
-        exclude = options.surface == "exclude"
-        kept = "airborne" if exclude else "all"
-        # both modes' tables are counted, so that the terminal can say what the other would give
-        lost = losses_by_pairs(grid, options.radius_nm, options.vertical_ft, tol,
-                               kinds=("airborne", "all", "surface"), step_s=step)
-        losses = lost[kept]
-        at_surface = surface_pairs(pc, grid)
-        both = {"airborne": alert_events(pc[~at_surface], options.threshold, step_s=step),
-                "all": alert_events(pc, options.threshold, step_s=step)}
-        events = both[kept]
-        alerts = closest_approach(classify_alerts(events, losses), grid)
-        warn = warning_times(losses, events, horizons)
-        counts = {"aircraft": int(grid["aircraft_id"].nunique()), "losses": len(losses),
-                  "alerts": len(alerts),
-                  "false_alerts": int(alerts["false_alert"].sum()) if len(alerts) else 0,
-                  "missed": {f"{h:g}": int(warn.loc[warn["horizon_s"] == h, "warning_s"].isna().sum())
-                             for h in horizons} if len(warn) else {f"{h:g}": 0 for h in horizons},
-                  "surface": _surface_counts(grid, by_speed, at_surface, lost, both, options, pc)}
+        grid["selected"], left_out = selected_samples(grid, selection, timeline)
+        tables = _tables(grid, reports, pc, timeline, options, horizons)
+        counts = {"aircraft": int(grid["aircraft_id"].nunique()), **tables.counts,
+                  "selection": {"active": selection.active, "samples": len(grid),
+                                "left_out": int((~grid["selected"]).sum()), **left_out,
+                                "losses_without": tables.losses_without},
+                  "surface": _surface_counts(grid, by_speed, tables.at_surface, tables.lost, tables.events,
+                                             options, tables.pc)}
         params = {**run_parameters(options, loaded, started, command), **tracker_parameters,
                   "horizons_s": list(horizons), "radius_nm": options.radius_nm,
-                  "vertical_ft": options.vertical_ft, "vertical_tolerance_ft": tol,
+                  "vertical_ft": options.vertical_ft, "vertical_tolerance_ft": options.vertical_tolerance_ft,
+                  "max_report_gap_s": options.max_report_gap_s,
                   "threshold": options.threshold, "method": options.method,
                   "vertical": options.vertical, "noise": options.noise, "surface": options.surface,
-                  "surface_speed_kt": SURFACE_SPEED_KT,
+                  "surface_speed_kt": SURFACE_SPEED_KT, **selection.parameters(),
                   "sources": list(parse_sources(options.sources))}
-        return ConflictJobResult(options, checked, grid, pc, alerts, losses, warn, params, loaded, counts,
-                                 predictions, noise, warnings)
+        return ConflictJobResult(options, checked, grid, pc, tables.alerts, tables.losses, tables.warnings,
+                                 params, loaded, counts, predictions, noise, warnings)
+
+
+@dataclass
+class _Tables:
+    """The tables of one run and what the counts need of them."""
+
+    alerts: pd.DataFrame
+    losses: pd.DataFrame
+    warnings: pd.DataFrame
+    counts: dict
+    lost: dict  # the loss runs of each kind of pairs (airborne, all, surface)
+    events: dict  # the alert events with and without the surface pairs (airborne, all)
+    pc: pd.DataFrame  # the selected samples' PC
+    at_surface: np.ndarray  # per row of pc: an aircraft on the surface
+    losses_without: int | None  # losses without the selection (None: no selection)
+
+
+def _tables(grid: pd.DataFrame, reports: pd.DataFrame, pc: pd.DataFrame, timeline: pd.DataFrame,
+            options: ConflictOptions, horizons: tuple[float, ...]) -> _Tables:
+    """Losses on the reported samples the selection keeps, their closest points, alert events of the
+    selected samples' PC, the alerts scored against the losses, warning times, each table labelled."""
+    from msdc.pipeline.conflict import alert_events, classify_alerts, warning_times
+    from msdc.pipeline.conflict.approach import closest_approach
+    from msdc.pipeline.conflict.events import losses_by_pairs
+    from msdc.pipeline.conflict.geometry import vertical_limit_ft
+    from msdc.pipeline.conflict.labels import ordered, with_identities, with_position
+    from msdc.pipeline.conflict.loss_minimum import loss_minima
+    from msdc.pipeline.conflict.reported import reported_samples
+    from msdc.pipeline.conflict.surface import surface_pairs
+
+    step, tol, gap = float(options.step_s), options.vertical_tolerance_ft, float(options.max_report_gap_s)
+    kept = "airborne" if options.surface == "exclude" else "all"
+    samples = reported_samples(grid[grid["selected"].to_numpy(bool)], reports, gap)
+    # both surface modes' tables are counted, so that the terminal can say what the other would give
+    lost = losses_by_pairs(samples, options.radius_nm, options.vertical_ft, tol,
+                           kinds=("airborne", "all", "surface"), step_s=step)
+    losses_without = None
+    if not grid["selected"].all():
+        every = reported_samples(grid, reports, gap)
+        losses_without = len(losses_by_pairs(every, options.radius_nm, options.vertical_ft, tol,
+                                             kinds=(kept,), step_s=step)[kept])
+    limit = vertical_limit_ft(options.vertical_ft, tol)
+    losses = loss_minima(lost[kept], reports, options.radius_nm, limit, gap)
+    pc = pc[~surface_pairs(pc, grid.assign(left_out=~grid["selected"].to_numpy(bool)), "left_out")]
+    at_surface = surface_pairs(pc, grid)
+    events = {"airborne": alert_events(pc[~at_surface], options.threshold, step_s=step),
+              "all": alert_events(pc, options.threshold, step_s=step)}
+    alerts = closest_approach(classify_alerts(events[kept], losses), grid)
+    warn = warning_times(losses, events[kept], horizons)
+    warn = warn.merge(losses[["aircraft_a", "aircraft_b", "start", "began_inside"]].rename(
+        columns={"start": "loss_start"}), on=["aircraft_a", "aircraft_b", "loss_start"], how="left")
+    counts = {"losses": len(losses), "began_inside": int(losses["began_inside"].sum()),
+              "alerts": len(alerts), "false_alerts": int(alerts["false_alert"].sum()) if len(alerts) else 0,
+              "missed": {f"{h:g}": int(warn.loc[warn["horizon_s"] == h, "warning_s"].isna().sum())
+                         for h in horizons},
+              "warning": _warning_counts(warn, horizons), "reported_samples": len(samples),
+              "selected_samples": int(grid["selected"].sum())}
+    alerts = ordered(with_identities(with_position(alerts, "start", grid), "start", timeline), "start")
+    losses = with_identities(losses, "start", timeline)
+    losses = ordered(losses, "time_of_min")
+    order = ["aircraft_a", "aircraft_b", "loss_start", "began_inside", "horizon_s", "alert_start",
+             "warning_s"]
+    warn = with_identities(with_position(warn[order], "loss_start", samples), "loss_start", timeline)
+    warn = ordered(warn, "loss_start")
+    return _Tables(alerts, losses, warn, counts, lost, events, pc, at_surface, losses_without)
+
+
+def _warning_counts(warn: pd.DataFrame, horizons: tuple[float, ...]) -> dict:
+    """Per horizon, over the losses that began outside the minimum (an alert could have warned of them):
+    how many, alerted in advance (warning > 0 s), at or after the start, missed, and the median warning of
+    those alerted."""
+    out = {}
+    for h in horizons:
+        s = warn.loc[(warn["horizon_s"] == h) & ~warn["began_inside"].astype(bool), "warning_s"]
+        out[f"{h:g}"] = {"losses": len(s), "in_advance": int((s > 0).sum()), "late": int((s <= 0).sum()),
+                         "missed": int(s.isna().sum()),
+                         "median_warning_s": float(s.median()) if s.notna().any() else None}
+    return out
 
 
 def _surface_counts(grid: pd.DataFrame, by_speed: np.ndarray, at_surface: np.ndarray, lost: dict,
@@ -279,11 +357,23 @@ def summary(result: ConflictJobResult) -> dict:
 def text(result: ConflictJobResult) -> str:
     """What the run found, in a few lines (says so when there is no loss and no alert)."""
     c = result.counts
+    o = result.options
     speed_kt = result.parameters["surface_speed_kt"]
     lines = [f"{c['aircraft']} aircraft tracked; {c['losses']} loss(es) of separation "
-             f"(< {result.options.radius_nm:g} NM and < {result.options.vertical_ft:g} ft less "
-             f"{result.options.vertical_tolerance_ft:g} ft); "
-             f"{c['alerts']} alert event(s), {c['false_alerts']} false"]
+             f"(< {o.radius_nm:g} NM and < {o.vertical_ft:g} ft less {o.vertical_tolerance_ft:g} ft, "
+             f"both aircraft reported, reports at most {o.max_report_gap_s:g} s apart), "
+             f"{c['began_inside']} of them begun inside the minimum; {c['alerts']} alert event(s), "
+             f"{c['false_alerts']} false",
+             "the losses are geometric proximities in the tracked data, not separation infringements: msdc "
+             "knows no clearance, airspace or minimum that applied (aerodrome traffic, VFR flights and "
+             "visual separation count here)"]
+    sel = c["selection"]
+    if sel["active"]:
+        labels = {"below_min_fl": f"below FL {o.min_fl:g}" if o.min_fl is not None else "",
+                  "mode_a_only": "of Mode-A-only targets", "excluded_codes": "squawking an excluded code"}
+        why = ", ".join(f"{sel[key]} {label}" for key, label in labels.items() if key in sel)
+        lines.append(f"selection: {sel['left_out']} of {sel['samples']} aircraft samples left out ({why}); "
+                     f"without it {sel['losses_without']} loss(es)")
     g = c["surface"]
     if g["rows"]:
         other = "include" if g["excluded"] else "exclude"
@@ -297,15 +387,20 @@ def text(result: ConflictJobResult) -> str:
                      "and surface samples is one with include)")
     if not c["losses"] and not c["alerts"]:
         lines.append("no loss of separation and no alert: the tables are written empty, with their headers")
-    if len(result.warning_times):
-        w = result.warning_times.groupby("horizon_s")["warning_s"]
-        for h, s in w:
-            ahead = int((s > 0).sum())
-            lines.append(f"horizon {h:g} s: {ahead} of {len(s)} loss(es) alerted in advance "
-                         f"(warning > 0 s), {int((s <= 0).sum())} at or after the loss's start, "
-                         f"{int(s.isna().sum())} missed; median warning of the alerted "
-                         f"{float(s.median()):g} s" if s.notna().any()
-                         else f"horizon {h:g} s: no loss alerted")
+    if c["losses"]:
+        if c["began_inside"]:
+            lines.append(f"{c['began_inside']} loss(es) began inside the minimum (the pair entered the "
+                         "analysis already closer: a track starting, taking off or entering the selection): "
+                         "no alert could warn of them, so they are left out of the warning times below")
+        for h, w in c["warning"].items():
+            if not w["losses"]:
+                lines.append(f"horizon {h} s: no loss began outside the minimum")
+                continue
+            median = (f"; median warning of the alerted {w['median_warning_s']:g} s"
+                      if w["median_warning_s"] is not None else "")
+            lines.append(f"horizon {h} s: of {w['losses']} loss(es) begun outside the minimum, "
+                         f"{w['in_advance']} alerted in advance (warning > 0 s), {w['late']} at or after the "
+                         f"loss's start, {w['missed']} missed{median}")
     return "\n".join(lines)
 
 
@@ -347,10 +442,13 @@ def _alert_figures(result: ConflictJobResult, folder: Path, stage: OutputTransac
     pred = result.predictions
     pred = pred[pred["aircraft_id"].isin(involved) & pred["time"].isin(alerts["start"])]
     pc = result.pc[result.pc["aircraft_a"].isin(involved)]
-    if result.options.surface == "exclude":  # the samples the events were found in
-        from msdc.pipeline.conflict.surface import surface_pairs
+    from msdc.pipeline.conflict.surface import surface_pairs
 
-        pc = pc[~surface_pairs(pc, result.tracks)]
+    # the samples the events were found in: those the selection keeps, without the surface pairs' (exclude)
+    grid = result.tracks
+    pc = pc[~surface_pairs(pc, grid.assign(left_out=~grid["selected"].to_numpy(bool)), "left_out")]
+    if result.options.surface == "exclude":
+        pc = pc[~surface_pairs(pc, grid)]
     threshold, step = result.options.threshold, float(result.options.step_s)
     drawn = {}
     for i, alert in alerts.iterrows():
@@ -360,5 +458,14 @@ def _alert_figures(result: ConflictJobResult, folder: Path, stage: OutputTransac
     return drawn
 
 
-__all__ = ["ConflictJobResult", "ConflictOptions", "conflict_job", "parse_horizons", "summary",
+def side_files(checked: Checked, options: ConflictOptions) -> list[Path]:
+    """The files conflicts may write beside its outputs, as globs: the losses and warning times beside a
+    CSV -o, one figure per alert in --figures DIR."""
+    out, beside = checked.output, []
+    if out is not None and out.suffix.lower() == ".csv":
+        beside = [p.with_name(glob.escape(p.name)) for p in companion_paths(real_output(out)).values()]
+    return beside + ([] if options.figures is None else [Path(options.figures) / "alert_*.png"])
+
+
+__all__ = ["ConflictJobResult", "ConflictOptions", "conflict_job", "parse_horizons", "side_files", "summary",
            "text", "validate", "write_conflicts"]

@@ -17,6 +17,7 @@ from typing import TYPE_CHECKING
 import pandas as pd
 
 from msdc.pipeline.jobs.common import (
+    QUALITY_FIGURE_GLOBS,
     Checked,
     JobError,
     OptionError,
@@ -32,6 +33,7 @@ from msdc.pipeline.jobs.common import (
     quality_step,
     real_output,
     run_parameters,
+    side_files_beside,
 )
 from msdc.pipeline.jobs.options import CorrelateOptions, check_declared
 from msdc.pipeline.model.load import Loaded, release_free_memory
@@ -45,6 +47,8 @@ if TYPE_CHECKING:
 
 
 FIGURE_WINDOWS = 6  # correlate --quality: slotting and lag figures of the first windows only
+# the categories a --pairs value needs, one of each group (radar pairs: CAT048 and CAT021, the default)
+NEEDS = {"mlat-adsb": ((10, 20), (21,)), "smr-mlat": ((10,),)}
 
 
 def validate(options: CorrelateOptions) -> Checked:
@@ -146,7 +150,7 @@ def correlate_job(options: CorrelateOptions, *, progress: Progress | None = None
         columns = correlate_columns(options)
         loaded, meas_all, said = marked_measurements(
             options, checked, progress, "Pre-processing data", split_adsb=options.split_adsb, columns=columns,
-            flags=None if options.quality or columns is None else ["jump"])
+            flags=None if options.quality or columns is None else ["jump"], needs=NEEDS.get(options.pairs))
         warnings += said
         meas, removed = apply_filters(meas_all, drop_jumps=options.drop_jumps, min_nic=options.min_nic,
                                       min_nacp=options.min_nacp)
@@ -183,7 +187,35 @@ def correlate_job(options: CorrelateOptions, *, progress: Progress | None = None
                 progress.stage("Analysing data quality")
             result.quality = quality_step(meas_all, checked.sensors, options)
             run.extra_sheets.update(result.quality.sheets)
+            lead_quality(run, result.quality)
         return result
+
+
+def lead_quality(run: CorrelationRun, quality: QualityResult) -> None:
+    """The quality step's numbers a report leads with: per window the radar's range and azimuth errors
+    against ADS-B inside it (pipeline.correlate.matched.window_accuracy), per radar its accuracy and fitted
+    biases over the run (``run.radars``, RADAR_KEYS: the Radar accuracy sheet's all-aircraft row and the
+    Radar biases sheet)."""
+    from msdc.pipeline.correlate.matched import window_accuracy
+    from msdc.pipeline.correlate.results import RADAR_KEYS
+    from msdc.pipeline.model.measurements import sensor_id
+
+    for w, numbers in zip(run.windows, window_accuracy([w.summary for w in run.windows], quality.errors),
+                          strict=True):
+        w.summary.update(numbers)
+    biases, accuracy = quality.sheets.get("Radar biases"), quality.sheets.get("Radar accuracy")
+    if biases is None or biases.empty:
+        run.radars = []
+        return
+    overall = accuracy[accuracy["callsign"] == "(all)"].set_index(["sac", "sic"]) if accuracy is not None \
+        else pd.DataFrame()
+    ids = sensor_id(48, biases["sac"], biases["sic"]).tolist()
+    radars = []
+    for ident, row in zip(ids, biases.to_dict("records"), strict=True):
+        stats = overall.loc[(row["sac"], row["sic"])] if (row["sac"], row["sic"]) in overall.index else {}
+        radars.append({key: row.get(key, stats.get(key) if len(stats) else None) for key in RADAR_KEYS}
+                      | {"radar_sensor": ident})
+    run.radars = radars
 
 
 def _nothing_correlated(run: CorrelationRun, options: CorrelateOptions) -> list[str]:
@@ -374,5 +406,14 @@ def _write_workbook(result: CorrelateResult, stage: OutputTransaction, progress:
     return written
 
 
+def side_files(checked: Checked) -> list[Path]:
+    """The side files correlate -o may write beside the workbook, as globs: the track figure, the Parquet
+    tables, and --quality's figures."""
+    from msdc.pipeline.report.tables import TABLE_FILES
+
+    return side_files_beside(checked.output, ("_tracks.png", *(f"_{name}.parquet" for name in TABLE_FILES),
+                                              *QUALITY_FIGURE_GLOBS, "_slotting_*.png", "_lags_*.png"))
+
+
 __all__ = ["CorrelateOptions", "CorrelateResult", "correlate_columns", "correlate_job", "figure_windows_note",
-           "prepare_correlation_writers", "validate", "write_correlation"]
+           "lead_quality", "prepare_correlation_writers", "side_files", "validate", "write_correlation"]

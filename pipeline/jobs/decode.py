@@ -4,6 +4,7 @@ terminal."""
 
 from __future__ import annotations
 
+import glob
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -15,6 +16,7 @@ from msdc.pipeline.jobs.common import (
     JobError,
     check_beside,
     check_decoding,
+    date_ignored,
     format_hints,
     output_path,
     real_output,
@@ -23,7 +25,7 @@ from msdc.pipeline.jobs.common import (
 from msdc.pipeline.jobs.options import CATEGORIES, DecodeOptions, check_declared
 from msdc.pipeline.model import editions as edition_notes
 from msdc.pipeline.report.files import named, write_csv
-from msdc.pipeline.report.transaction import OutputTransaction, staged
+from msdc.pipeline.report.transaction import OutputTransaction, side_pattern, staged
 
 SKIPPED_SHOWN = 20  # skipped blocks decode lists one per line, per input; the rest are counted
 
@@ -54,6 +56,7 @@ class DecodeResult:
     warnings: list[str]
     notes: list[str] = field(default_factory=list)
     held: dict[str, dict[int, int]] = field(default_factory=dict)  # per input: data blocks per category
+    output: Path | None = None  # -o as validated
 
     def nothing_decoded(self, categories: tuple[int, ...] = ()) -> str:
         """Why no record decoded, naming what each input holds (a --category the inputs lack, most often)."""
@@ -77,6 +80,7 @@ def decode_job(options: DecodeOptions, *, on_chunk: Callable[[int, int, str], No
     import msdc.asterix as asterix
     from msdc.asterix.errors import UnreadableInput
     from msdc.asterix.reader import categories_in
+    from msdc.asterix.verdict import Tally, head_of, sniff
     from msdc.pipeline.model.sources import file_labels
     from msdc.pipeline.model.time import FirstDayTally
 
@@ -90,6 +94,18 @@ def decode_job(options: DecodeOptions, *, on_chunk: Callable[[int, int, str], No
     notes: list[str] = []
     cats = list(options.categories) or None
     csv = out is not None and out.suffix.lower() == ".csv"
+    content: list[str] = []  # what the inputs turned out to be, when not sound (asterix.verdict)
+    sniffed = set()  # inputs said to be not ASTERIX at once (decoded with --lenient)
+    for path in checked.inputs:  # a file that is not ASTERIX at all is said at once
+        try:
+            said = sniff(path, options.format)
+        except UnreadableInput as exc:
+            raise JobError(str(exc), 2) from exc
+        if said and not options.lenient:
+            raise JobError(f"{said}; nothing written (--lenient decodes it anyway)")
+        if said:
+            content.append(said)
+            sniffed.add(path)
     with staged(tx) as stage:
         files: dict[int, Path] = {}  # category -> its staged file, named as when several categories decode
         writers: dict[int, object] = {}
@@ -97,13 +113,14 @@ def decode_job(options: DecodeOptions, *, on_chunk: Callable[[int, int, str], No
             for path, label in zip(checked.inputs, file_labels(checked.inputs), strict=True):
                 size = path.stat().st_size
                 chunk = max(int(options.chunk_mb * 1e6), 1)
-                tally, date, fmt, chosen = FirstDayTally(), None, None, {}
+                tally, date, fmt, chosen, account = FirstDayTally(), None, None, {}, Tally(str(path))
                 bar = (lambda done, total, what, name=path.name: on_chunk(done, total, f"{name}: {what}")
                        ) if on_chunk else None
                 for rec in asterix.iter_read(path, chunk=chunk, editions=checked.editions or None,
                                              date=options.date, format=options.format, categories=cats,
                                              strict=options.strict, progress=bar):
                     tally.add(rec.frames)
+                    account.add(rec)
                     date, fmt, chosen = date or rec.date, rec.format, {**rec.edition_choice, **chosen}
                     skipped += [(str(path), int(e.offset), str(e.reason)) for e in rec.errors.itertuples()]
                     edition_notes.fold(failed, rec)
@@ -113,11 +130,15 @@ def decode_job(options: DecodeOptions, *, on_chunk: Callable[[int, int, str], No
                             if cat not in files:  # named after the file the output really is
                                 files[cat] = category_output(stage.path(out), cat)
                             with named(_shown(out, files, cat, stage), instead_of=files[cat]):
-                                _write_chunk(files[cat], cat, frame.assign(file=label), writers, csv)
+                                _write_chunk(files[cat], cat, labelled(frame, label), writers, csv)
                 if on_chunk:  # the decoding's bar ends where the last block does: close it at 100 %
                     on_chunk(size, size, f"{path.name}: decoding")
                 early_start += tally.warning(label, date, fmt)
-                notes += [f"{path}: CAT{cat:03d} --edition auto {why}" for cat, why in sorted(chosen.items())]
+                early_start += date_ignored(options, [{"path": path, "format": fmt}])
+                notes += [f"{path}: CAT{cat:03d} edition auto {why}" for cat, why in sorted(chosen.items())]
+                if path not in sniffed:
+                    content += account.warnings(head_of(path), hint=False,  # format_hints says that
+                                                detected=options.format is None)
                 early_start += format_hints(options, [{"path": path, "format": fmt, "skipped_blocks": sum(
                     1 for p, _, _ in skipped if p == str(path))}])
         except UnreadableInput as exc:
@@ -134,11 +155,12 @@ def decode_job(options: DecodeOptions, *, on_chunk: Callable[[int, int, str], No
                 notes.append(f"several categories: writing {outputs[cat]}")
             else:  # one category: its file is the output itself
                 files[cat].rename(stage.path(out))
-        notes += _left_as_they_were(out, outputs)
+        if content and not options.lenient:
+            raise JobError("; ".join(content) + "; nothing written (--lenient writes what decodes anyway)")
     held = {} if sum(counts.values()) else {str(p): categories_in(p, format=options.format)
                                               for p in checked.inputs}
-    warnings = checked.warnings + early_start + edition_notes.warnings(failed)
-    return DecodeResult(counts, outputs, skipped, warnings, notes, held)
+    warnings = checked.warnings + content + early_start + edition_notes.warnings(failed)
+    return DecodeResult(counts, outputs, skipped, warnings, notes, held, out)
 
 
 def category_output(out: Path, cat: int) -> Path:
@@ -146,17 +168,14 @@ def category_output(out: Path, cat: int) -> Path:
     return out.with_name(f"{out.stem}_cat{cat:03d}{out.suffix}")
 
 
-def _left_as_they_were(out: Path | None, outputs: dict[int, Path]) -> list[str]:
-    """A note for each file an earlier run of -o ``out`` wrote that this run does not replace: the single
-    file when several categories decoded now, the per-category files when one did."""
-    if out is None or not outputs:
+def side_files(output: Path | None) -> list[Path]:
+    """The files decode -o ``output`` may write, as globs (report.transaction.left_beside lists those an
+    earlier run left): the output itself and the per-category files beside it."""
+    if output is None:
         return []
-    several = len(outputs) > 1
-    earlier = [out] if several else [category_output(real_output(out), cat) for cat in CATEGORIES]
-    now = f"{'several categories' if several else 'one category'} this run writes " + ", ".join(
-        str(p) for p in outputs.values())
-    return [f"{p} is left as it was (an earlier run's; with {now})" for p in earlier
-            if p.exists() or p.is_symlink()]
+    base = real_output(output)
+    return [side_pattern(base, glob.escape(base.suffix)),
+            side_pattern(base, f"_cat[0-9][0-9][0-9]{glob.escape(base.suffix)}")]
 
 
 def _shown(out: Path, files: dict[int, Path], cat: int, stage: OutputTransaction) -> Path:
@@ -164,20 +183,31 @@ def _shown(out: Path, files: dict[int, Path], cat: int, stage: OutputTransaction
     return out if len(files) == 1 else stage.final(files[cat])
 
 
+def labelled(frame: pd.DataFrame, label: str) -> pd.DataFrame:
+    """``frame`` with its input's label as the ``file`` column: categorical, one copy of the text."""
+    import numpy as np
+
+    return frame.assign(file=pd.Categorical.from_codes(np.zeros(len(frame), np.int8), categories=[label]))
+
+
 def _write_chunk(path: Path, cat: int, frame: pd.DataFrame, writers: dict, csv: bool) -> None:
     """Append one chunk of a category to its (staged) output file, CSV or Parquet, opening it on first
-    use."""
+    use: every chunk of every input under the category's one schema (report.record_schema), so a later
+    chunk or input can neither overflow a type nor put its values under another column's header."""
+    from msdc.pipeline.report.record_schema import record_schema
+
+    schema = record_schema(cat)
+    rows = schema.conform(frame)
     if csv:
-        write_csv(frame, path, append=cat in writers)
+        write_csv(rows, path, append=cat in writers)
         writers[cat] = True
     else:
         import pyarrow as pa
         import pyarrow.parquet as pq
 
-        table = pa.Table.from_pandas(frame, preserve_index=False)
         if cat not in writers:
-            writers[cat] = pq.ParquetWriter(path, table.schema)
-        writers[cat].write_table(table.cast(writers[cat].schema))
+            writers[cat] = pq.ParquetWriter(path, schema.arrow())
+        writers[cat].write_table(pa.Table.from_pandas(rows, schema=writers[cat].schema, preserve_index=False))
 
 
 def skipped_lines(result: DecodeResult) -> list[str]:
@@ -195,4 +225,5 @@ def skipped_lines(result: DecodeResult) -> list[str]:
     return lines
 
 
-__all__ = ["DecodeOptions", "DecodeResult", "category_output", "decode_job", "skipped_lines", "validate"]
+__all__ = ["DecodeOptions", "DecodeResult", "category_output", "decode_job", "side_files", "skipped_lines",
+           "validate"]

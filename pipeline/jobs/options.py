@@ -52,7 +52,8 @@ SLOT_RANGE_S = (0.1, 3600.0)  # below 0.1 s the slot count and the lag tables ex
 INDICATOR_RANGE = (0, 11)  # NIC and NACp values
 STEP_RANGE_S = (1e-3, 3600.0)  # below 1 ms the grid explodes (a day would be 86 M rows per aircraft)
 MAX_COAST_RANGE_S = (0.0, 86400.0)  # its lower bound is --step (check_tracking)
-SOURCES = ("radar", "adsb")
+SOURCES = ("radar", "adsb")  # track and conflicts fuse these by default
+SOURCE_KINDS = (*SOURCES, "mlat", "smr")  # and may fuse these: multilateration, surface radar (CAT010/020)
 # --noise: the sensor file's sigmas and NACp; estimated from residuals (one isotropic ADS-B sigma per
 # class); estimated with an ADS-B along-track timing term as well (docs/tracker.md: fewer gated reports
 # and track segments on the real recording, predictions through gaps no better on the mean)
@@ -64,6 +65,9 @@ VERTICAL_RANGE_FT = (1.0, 100_000.0)
 VERTICAL_TOLERANCE_RANGE_FT = (0.0, 500.0)
 VERTICAL_MODELS = ("gate", "gaussian")
 SURFACE_MODES = ("exclude", "include")  # pairs with an aircraft on the surface (pipeline.conflict.surface)
+MIN_FL_RANGE = (-20.0, 1000.0)  # --min-fl: below the lowest aerodrome to above any aircraft
+# --max-report-gap: losses are measured between reports at most this far apart (pipeline.conflict.reported)
+REPORT_GAP_RANGE_S = (0.1, 3600.0)
 
 # Where an option stands in --help and in the docs table: by section, then in declaration order
 SECTIONS = ("selection", "output", "command", "tracking", "measurements", "reading")
@@ -263,8 +267,10 @@ class DecodingOptions:
                                      doc="the recordings")
     editions: tuple[str, ...] = option(  # "CAT=EDITION"
         (), "--edition", repeat=True, parse=edition_argument, metavar="CAT=ED", section="reading",
-        help="pin a category edition, e.g. 21=0.26, 48=1.27, or 21=auto (repeatable)",
-        doc="pin a category edition, e.g. `21=0.26`, `48=1.27`, or `21=auto` "
+        help="pin a category edition, e.g. 21=0.26 or 48=1.27 (repeatable; a category whose editions walk "
+             "differently, CAT021, is read with auto unless pinned)",
+        doc="pin a category edition, e.g. `21=0.26` or `48=1.27` (repeatable); a category whose editions "
+            "walk differently (CAT021) is read with `auto` unless pinned "
             "([Editions](../decoding/editions.md))")
     date: dt.date | None = option(
         None, "--date", parse=date_argument, section="reading",
@@ -284,6 +290,12 @@ class DecodeOptions(DecodingOptions):
     categories: tuple[int, ...] = option((), "--category", repeat=True, choices=CATEGORIES,
                                          help="only this category")
     strict: bool = option(False, "--strict", help="stop at the first bad block")
+    lenient: bool = option(False, "--lenient",
+                           help="write what decodes even when an input is mostly not ASTERIX or its records "
+                                "implausible (said as a warning; else an error, nothing written)",
+                           doc="write what decodes even when an input is mostly not ASTERIX or its records "
+                               "implausible (said as a warning; else an error and nothing is written: "
+                               "[Bad input](../decoding/bad-input.md#not-asterix))")
     chunk_mb: float = option(64.0, "--chunk-mb", range=CHUNK_RANGE_MB, unit="MB",
                              help="streaming chunk size (MB)")
 
@@ -340,10 +352,13 @@ class CorrelateOptions(AircraftOptions):
                               "seconds apart")
     pairs: str = option("radar-adsb", "--pairs", choices=PAIRS,
                         help="sensor pairs to correlate per aircraft: each radar against ADS-B (default), "
-                             "each two radars, or both; plots of two radars are never mixed",
+                             "each two radars, all (both), multilateration against ADS-B, or surface "
+                             "radar against multilateration; plots of two radars are never mixed",
                         doc="`radar-adsb` (each radar against the ADS-B source), `radar-radar` (each two "
-                            "radars that saw the aircraft) or `all` (both); plots of two radars are never "
-                            "mixed ([sensor pairs](../methods/correlation.md#sensor-pairs))")
+                            "radars that saw the aircraft), `all` (both), `mlat-adsb` (each "
+                            "multilateration system against ADS-B) or `smr-mlat` (each surface movement "
+                            "radar against multilateration); plots of two sensors are never mixed "
+                            "([sensor pairs](../methods/correlation.md#sensor-pairs))")
     split_adsb: bool = option(False, "--split-adsb",
                               help="keep ADS-B ground stations apart (default: one ADS-B source per "
                                    "aircraft)",
@@ -452,8 +467,11 @@ class TrackOptions(AircraftOptions):
             "paper's 3-radar scenario, where the default loses one by 10 %, but predicts worse through gaps "
             "(real data: +17-32 % at 30-60 s): [Tracker](../tracker.md)")
     sources: tuple[str, ...] = option(SOURCES, "--sources", section="tracking",
-                                      help="sensor kinds to fuse: radar, adsb or radar,adsb",
-                                      doc="which sensor kinds to fuse: `radar`, `adsb` or `radar,adsb`")
+                                      help="sensor kinds to fuse, comma-separated: radar, adsb (the default "
+                                           "radar,adsb), mlat (multilateration), smr (surface radar)",
+                                      doc="which sensor kinds to fuse, comma-separated: `radar`, `adsb` (the "
+                                          "default `radar,adsb`), `mlat` (multilateration, CAT010/CAT020), "
+                                          "`smr` (surface movement radar, CAT010)")
     noise: str = option(  # pipeline.track.noise estimates; "declared": as given
         "estimate", "--noise", choices=NOISE, parser_choices=False, section="tracking",
         help="measurement noise: estimate (default: each sensor's sigmas from the tracker's residuals, a few "
@@ -474,7 +492,32 @@ class TrackOptions(AircraftOptions):
 
 
 @dataclass(frozen=True)
-class ConflictOptions(TrackOptions):
+class SelectionOptions:
+    """Which aircraft samples an analysis counts (``pipeline.model.selection``), declared once: ``msdc
+    conflicts`` takes them, and a command that analyses the same traffic inherits them (listed first among
+    its bases, so that its inputs keep their place). ``jobs.common.check_selection`` makes the Selection."""
+
+    min_fl: float | None = option(
+        None, "--min-fl", metavar="FL", range=MIN_FL_RANGE, unit="FL", section="selection",
+        help="count only aircraft samples at or above this flight level (the tracked level; a sample "
+             "without one is left out)",
+        doc="count only aircraft samples at or above this flight level (the tracked level at the time; a "
+            "sample without a level is left out) ([Selection](#selection))")
+    exclude_mode_a_only: bool = option(
+        False, "--exclude-mode-a-only", section="selection",
+        help="leave out Mode-A-only targets: no report gave them a 24-bit address or a call sign",
+        doc="leave out Mode-A-only targets (`M3A:` identities: no report gave them a 24-bit address or a "
+            "call sign) ([Selection](#selection))")
+    exclude_codes: str | tuple[str, ...] | None = option(
+        None, "--exclude-codes", metavar="CODES", section="selection",
+        help="leave out aircraft while they squawk one of these Mode 3/A codes, comma-separated (e.g. "
+             "7000 and the VFR conspicuity codes of the airspace)",
+        doc="leave out aircraft while they squawk one of these Mode 3/A codes, comma-separated four octal "
+            "digits (e.g. `7000`, `2000`, the airspace's VFR conspicuity codes) ([Selection](#selection))")
+
+
+@dataclass(frozen=True)
+class ConflictOptions(SelectionOptions, TrackOptions):
     """Everything ``conflict_job`` needs; see ``msdc conflicts --help``. Every aircraft is tracked."""
 
     callsign: str | None = None
@@ -525,6 +568,13 @@ class ConflictOptions(TrackOptions):
              "levels (default 25)",
         doc="levels closer than `--vertical-ft` by at most this are separated: the 25 ft quantum of "
             "reported levels; less than `--vertical-ft`")
+    max_report_gap_s: float = option(
+        15.0, "--max-report-gap", range=REPORT_GAP_RANGE_S, unit="s",
+        help="losses of separation are measured only where both aircraft are reported: between two reports "
+             "of a track at most this many seconds apart (default 15), never on a coasted stretch",
+        doc="losses of separation are measured only where both aircraft are reported: between two reports "
+            "of a track at most this many seconds apart, at positions interpolated between them; never on "
+            "a coasted stretch ([What a loss is](#what-the-tables-count))")
     threshold: float = option(0.2, "--threshold", help="PC above which an alert is raised (default 0.2)",
                               doc="PC above which an alert is raised, strictly between 0 and 1")
     method: str = option("exact", "--method", choices=METHODS, parser_choices=False,

@@ -14,6 +14,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from msdc.pipeline.jobs.common import (
+    QUALITY_FIGURE_GLOBS,
     QUALITY_WITHOUT,
     Checked,
     absent_categories,
@@ -28,6 +29,7 @@ from msdc.pipeline.jobs.common import (
     quality_step,
     run_parameters,
     sensors_path,
+    side_files_beside,
 )
 from msdc.pipeline.jobs.options import QualityOptions, check_declared
 from msdc.pipeline.model.load import Loaded
@@ -83,7 +85,8 @@ def quality_job(options: QualityOptions, *, progress: Progress | None = None, ch
         if progress:
             progress.stage("Processing data files")
         loaded, meas, said = marked_measurements(options, checked, progress, "Analysing data quality",
-                                                 either=True, columns=quality_columns(options))
+                                                 either=True, columns=quality_columns(options),
+                                                 needs=((48,), (21,), (10, 20)))
         warnings += said
         absent = absent_categories(loaded)
         warnings += site_warnings(meas, checked.sensors, str(sensors_path(options)))
@@ -139,9 +142,19 @@ def text(result: QualityJobResult) -> str:
 
     out = "Quality:\n" + frame_text(q[keep]) + "\n\nRadar biases:\n"
     out += frame_text(b[bias_cols]) if len(b) else "  no radar report matched to ADS-B"
+    points = result.quality.sheets.get("Reference points")
+    if points is not None:  # multilateration and surface radar: where their x/y origin lies
+        out += ("\n\nReference points (offset of each sensor's surface positions from its reference's; "
+                "corrected: the sensor-file point that removes it):\n" + frame_text(points))
     note = b.attrs.get("note")
     return out + (f"\n\nNote: {note}" if note else "")
 
 
-__all__ = ["QualityJobResult", "QualityOptions", "quality_columns", "quality_job", "text", "validate",
+def side_files(checked: Checked) -> list[Path]:
+    """The figures quality -o may write beside the workbook, as globs."""
+    return side_files_beside(checked.output, QUALITY_FIGURE_GLOBS)
+
+
+__all__ = ["QualityJobResult", "QualityOptions", "quality_columns", "quality_job", "side_files", "text",
+           "validate",
            "write_quality"]

@@ -1,10 +1,12 @@
 """The stats job (``msdc stats``): what the recordings hold, streamed in chunks (memory follows the chunk,
-not the file): records per category and SAC/SIC, aircraft per sensor, skipped blocks
+not the file): every category present (those msdc does not decode with their blocks), records per category
+and SAC/SIC of every category msdc decodes, aircraft per sensor, skipped blocks
 (``pipeline.quality.inventory``)."""
 
 from __future__ import annotations
 
 from dataclasses import dataclass
+from pathlib import Path
 
 import pandas as pd
 
@@ -48,7 +50,9 @@ def stats_job(options: StatsOptions, *, progress: Progress | None = None) -> Sta
     records, sources, aircraft and skipped blocks chunk by chunk: memory is bounded by the chunk, not
     the file."""
     import msdc.asterix as asterix
+    from msdc.asterix.categories import DECODABLE
     from msdc.asterix.errors import UnreadableInput
+    from msdc.asterix.verdict import Tally, head_of, sniff
     from msdc.pipeline.model.sources import file_labels
     from msdc.pipeline.model.time import UNDATED_DAY, FirstDayTally
     from msdc.pipeline.quality.inventory import STATS_COLUMNS, StatsAccumulator
@@ -63,9 +67,18 @@ def stats_job(options: StatsOptions, *, progress: Progress | None = None) -> Sta
     chunk = max(int(options.chunk_mb * 1e6), 1)
     early_start: list[str] = []  # FirstDayTally's warnings
     labels = file_labels(checked.inputs)
+    content: list[str] = []  # what the inputs turned out to be, when not sound (asterix.verdict)
     for i, path in enumerate(checked.inputs):
         if progress:
             progress.step(f"{path.name} ({i + 1}/{len(checked.inputs)})")
+        try:
+            said = sniff(path, options.format)  # a file that is not ASTERIX at all is said at once
+        except UnreadableInput as exc:
+            raise JobError(str(exc), 2) from exc
+        if said:
+            content.append(said)
+            continue
+        account = Tally(str(path))
         info = {"path": str(path), "bytes": 0, "format": None, "records": {}, "skipped_blocks": 0,
                 "editions": {}, "edition_choice": {}, "date": None}
         by_source: dict[str, tuple[pd.Timestamp, pd.Timestamp]] = {}
@@ -73,10 +86,12 @@ def stats_job(options: StatsOptions, *, progress: Progress | None = None) -> Sta
         bar = (lambda done, total, what, name=path.name: progress.bar(done, total, f"{name}: {what}")
                ) if progress else None
         try:
+            # every category msdc decodes (tracks and status messages too: stats lists them per SAC/SIC)
             for rec in asterix.iter_read(path, chunk=chunk, editions=checked.editions or None,
                                          date=options.date, format=options.format, columns=STATS_COLUMNS,
-                                         progress=bar):
+                                         categories=DECODABLE, progress=bar):
                 acc.add(rec.frames, rec.errors, rec.ignored)
+                account.add(rec)
                 tally.add(rec.frames)
                 edition_notes.fold(failed, rec)
                 info["bytes"], info["format"] = rec.size_bytes, rec.format
@@ -90,6 +105,7 @@ def stats_job(options: StatsOptions, *, progress: Progress | None = None) -> Sta
         except UnreadableInput as exc:
             raise JobError(str(exc), 2) from exc
         early_start += tally.warning(labels[i], info["date"], info["format"])
+        content += account.warnings(head_of(path), hint=False, detected=options.format is None)
         inputs.append(info)
         spans.append(by_source)
     dates = [info["date"] for info in inputs if info["date"] is not None]
@@ -97,7 +113,8 @@ def stats_job(options: StatsOptions, *, progress: Progress | None = None) -> Sta
         shift = pd.Timestamp(min(dates), tz="UTC") - UNDATED_DAY
         spans = [s if info["date"] else {c: (lo + shift, hi + shift) for c, (lo, hi) in s.items()}
                  for info, s in zip(inputs, spans, strict=True)]
-    warnings = [*checked.warnings, *edition_notes.warnings(failed), *order_warnings(checked.inputs, spans),
+    read = [Path(info["path"]) for info in inputs]  # the inputs decoded: not those said to be not ASTERIX
+    warnings = [*checked.warnings, *content, *edition_notes.warnings(failed), *order_warnings(read, spans),
                 *date_ignored(options, inputs), *format_hints(options, inputs), *early_start]
     return StatsResult(acc.tables(), inputs, warnings)
 

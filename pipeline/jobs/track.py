@@ -251,5 +251,10 @@ def text(result: TrackJobResult) -> str:
     return out + noise_text(result.noise)
 
 
-__all__ = ["TRACK_COLUMNS", "TrackJobResult", "TrackOptions", "sensor_totals", "summary", "text", "track_job",
-           "validate", "write_tracks"]
+def side_files(options: TrackOptions) -> list[Path]:
+    """The figures track --figures DIR may write, as a glob (one per aircraft: track_<name>.png)."""
+    return [] if options.figures is None else [Path(options.figures) / "track_*.png"]
+
+
+__all__ = ["TRACK_COLUMNS", "TrackJobResult", "TrackOptions", "sensor_totals", "side_files", "summary",
+           "text", "track_job", "validate", "write_tracks"]

@@ -21,7 +21,7 @@ class NoSuchAircraft(LookupError):
 
     def __init__(self, wanted: str, missing_in: list[str], closest: list[str], message: str | None = None):
         self.wanted, self.missing_in, self.closest = wanted, missing_in, closest
-        hint = f"closest present in both: {', '.join(closest)}" if closest else "nothing similar is present"
+        hint = f"closest present: {', '.join(closest)}" if closest else "nothing similar is present"
         super().__init__(message or f"{wanted} not seen by {' or '.join(missing_in)}; {hint}")
 
 
@@ -37,14 +37,22 @@ class Aircraft:
 
 
 def _split(meas: pd.DataFrame) -> tuple[pd.DataFrame, pd.DataFrame]:
-    radar = meas["sensor_kind"] == "radar"
-    return meas[radar.to_numpy()].reset_index(drop=True), meas[(~radar).to_numpy()].reset_index(drop=True)
+    """The radar rows and the ADS-B rows (the other kinds, multilateration and surface radar, in neither:
+    pipeline.correlate names them radar and ADS-B by their role in a pair)."""
+    kind = meas["sensor_kind"]
+    radar, adsb = (kind == "radar").to_numpy(bool), (kind == "adsb").to_numpy(bool)
+    return meas[radar].reset_index(drop=True), meas[adsb].reset_index(drop=True)
 
 
 def _closest(wanted: str, meas: pd.DataFrame, column: str) -> list[str]:
+    """The names (call signs or addresses) closest to ``wanted`` seen by any sensor, as msdc track
+    suggests them; one seen by a single kind of sensor says which ("VLG1306 (ADS-B only)"), since
+    correlating it needs both."""
     radar, adsb = _split(meas)
-    both = sorted(set(radar[column].dropna()) & set(adsb[column].dropna()))
-    return difflib.get_close_matches(wanted, both, n=5, cutoff=0.5)
+    in_radar, in_adsb = set(radar[column].dropna()), set(adsb[column].dropna())
+    close = difflib.get_close_matches(wanted, sorted(in_radar | in_adsb), n=5, cutoff=0.5)
+    return [name if name in in_radar and name in in_adsb else
+            f"{name} ({'radar' if name in in_radar else 'ADS-B'} only)" for name in close]
 
 
 def one_aircraft(meas: pd.DataFrame, callsign: str | None = None, address: str | None = None, *,
@@ -91,12 +99,14 @@ def iter_aircraft(meas: pd.DataFrame, *, need_adsb: bool = True) -> Iterator[Air
 def aircraft_rows(meas: pd.DataFrame, *, need_adsb: bool = True
                   ) -> Iterator[tuple[str, str, str, np.ndarray, np.ndarray]]:
     """Per aircraft, in ``all_aircraft`` order: its call sign and address labels, its ``aircraft_id``, and the
-    positions in ``meas`` (ascending) of its radar rows and of its other rows; no row is copied."""
+    positions in ``meas`` (ascending) of its radar rows and of its ADS-B rows; no row is copied (rows of
+    the other kinds, multilateration and surface radar, are in neither)."""
     radar = (meas["sensor_kind"] == "radar").to_numpy(bool)
+    adsb = (meas["sensor_kind"] == "adsb").to_numpy(bool)
     ident = meas["aircraft_id"]
     rows = {kind: ident[mask].groupby(ident[mask], sort=False, observed=True).indices  # positions in mask
-            for kind, mask in (("radar", radar), ("adsb", ~radar))}
-    at = {"radar": np.flatnonzero(radar), "adsb": np.flatnonzero(~radar)}  # mask position -> row
+            for kind, mask in (("radar", radar), ("adsb", adsb))}
+    at = {"radar": np.flatnonzero(radar), "adsb": np.flatnonzero(adsb)}  # mask position -> row
     labels = aircraft_labels(meas).set_index("aircraft_id")
     ids = set(rows["radar"])
     chosen = sorted(ids & set(rows["adsb"]) if need_adsb else ids)

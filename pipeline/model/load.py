@@ -13,6 +13,7 @@ import pandas as pd
 
 import msdc.asterix as asterix
 from msdc.asterix.reader import Recording
+from msdc.asterix.verdict import Tally, head_of
 from msdc.pipeline.model.sources import file_labels, pair_codes, pair_of, source_id
 from msdc.pipeline.model.time import NAT_NS, UNDATED_DAY, FirstDayTally, absolute_time
 from msdc.pipeline.progress import Progress
@@ -37,6 +38,9 @@ class Loaded:
     warnings: list[str] = field(default_factory=list)  # about the data, e.g. reports left out as damaged
     # CAT048 records of SAC/SIC pairs the sensor table lacks, left out (sensors.undeclared_radars' table)
     stray_radar: pd.DataFrame = field(default_factory=pd.DataFrame)
+    # CAT010/CAT020 reports with Cartesian positions and no reference point, left out
+    # (multilateration.UNPLACED_COLUMNS, for measurements.unplaced_verdict)
+    unplaced: pd.DataFrame = field(default_factory=pd.DataFrame)
 
     @property
     def errors(self) -> pd.DataFrame:
@@ -129,6 +133,9 @@ def load(paths: list[str | Path] | str | Path, *, editions=None, date=None, form
         rec = asterix.read(p, editions=editions, date=date, format=format, categories=categories,
                            columns=columns)
         recs.append(rec)
+        content = Tally(str(p))
+        content.add(rec)
+        warnings += content.warnings(head_of(p), hint=False, detected=format is None)
         tally = FirstDayTally()
         tally.add(rec.frames)
         warnings += tally.warning(labels[i], rec.date, rec.format)
@@ -176,27 +183,35 @@ def widen_spans(spans: dict[str, Span], more: dict[str, Span]) -> dict[str, Span
 
 
 class NoRecords(LookupError):
-    """The inputs hold no record of a category the job needs."""
+    """The inputs hold no record of a category the job needs (of any of ``alternatives``, when given)."""
 
-    def __init__(self, category: int, loaded: Loaded):
+    def __init__(self, category: int, loaded: Loaded, alternatives: tuple[int, ...] = ()):
         self.category, self.loaded = category, loaded  # what was read: its skipped blocks and editions
-        super().__init__(f"no CAT{category:03d} records in the inputs")
+        self.alternatives = alternatives or (category,)
+        super().__init__(f"no {' or '.join(f'CAT{c:03d}' for c in self.alternatives)} records in the inputs")
+
+
+# The categories a measurement job needs by default: one of each group (CAT048 radar, CAT021 ADS-B)
+RADAR_AND_ADSB: tuple[tuple[int, ...], ...] = ((48,), (21,))
 
 
 def load_measurements(paths: list[str | Path], sensors: pd.DataFrame, *, editions=None, date=None,
                       format: str | None = None, adsb_sigma_m: float | None = None,
                       chunk: int = MEASUREMENT_CHUNK_BYTES, progress: Progress | None = None,
-                      either: bool = False, columns=None) -> tuple[Loaded, pd.DataFrame]:
+                      either: bool = False, columns=None,
+                      needs: tuple[tuple[int, ...], ...] = RADAR_AND_ADSB) -> tuple[Loaded, pd.DataFrame]:
     """Decode every input in chunks (asterix.iter_read, only DECODED_COLUMNS) straight into measurement
     rows, and join them into one validated measurement frame (rows as build_measurements orders them:
-    every input's radar rows, then every input's ADS-B rows). The Loaded has no frames but the inputs,
-    errors, editions, date and time spans that ``load`` gives. ``columns``: only those measurement
-    columns (a job's narrower frame, see pipeline.model.schema.validate), each chunk's rows keeping only
-    what they need; every column when None.
+    every input's radar rows, then every input's ADS-B rows, then the CAT010/CAT020 ones). The Loaded has
+    no frames but the inputs, errors, editions, date and time spans that ``load`` gives. ``columns``: only
+    those measurement columns (a job's narrower frame, see pipeline.model.schema.validate), each chunk's
+    rows keeping only what they need; every column when None.
 
-    NoRecords when the inputs hold no CAT048 or no CAT021 record (with ``either``, only when they hold
-    neither). Records of a radar the sensor table lacks are left out and listed in
-    ``Loaded.stray_radar`` (per pair and file: records, first offset), for the job to judge. Records
+    NoRecords when the inputs hold no record of one of the ``needs`` groups (by default CAT048, and
+    CAT021; with ``either``, only when they hold none of any group). Records of a radar the sensor table
+    lacks are left out and listed in ``Loaded.stray_radar`` (per pair and file: records, first offset),
+    for the job to judge; so are CAT010/CAT020 reports to place from a reference point it lacks
+    (``Loaded.unplaced``, measurements.unplaced_verdict). Records
     without a timestamp of their own are dated by ``Loaded.date``, as with ``load``.
     """
     from msdc.pipeline.model.measurements import DECODED_COLUMNS, finish_measurements, impossible_positions
@@ -208,6 +223,9 @@ def load_measurements(paths: list[str | Path], sensors: pd.DataFrame, *, edition
     dates: list[dt.date | None] = []
     radar: list[tuple[int, pd.DataFrame]] = []  # (input number, rows)
     adsb: list[tuple[int, pd.DataFrame]] = []
+    local: list[tuple[int, pd.DataFrame]] = []  # CAT010/CAT020 rows
+    unplaced: list[pd.DataFrame] = []  # their reports without a reference point, per chunk
+    other_kinds: dict[int, int] = {}  # CAT010 target reports of other kinds, per input (reset below)
     stray: list[pd.DataFrame] = []  # undeclared_radars' table per chunk
     early_start: list[str] = []  # FirstDayTally's warnings
     paths = input_paths(paths)
@@ -221,12 +239,15 @@ def load_measurements(paths: list[str | Path], sensors: pd.DataFrame, *, edition
         by_source: dict[str, Span] = {}
         first = True
         tally = FirstDayTally()
+        other_kinds = {}
+        content = Tally(str(p))
         for rec in asterix.iter_read(p, chunk=chunk, editions=editions, date=date, format=format,
                                      columns=DECODED_COLUMNS):
             if first:
                 dates.append(rec.date)
                 first = False
             tally.add(rec.frames)
+            content.add(rec)
             info["bytes"], info["format"] = rec.size_bytes, rec.format
             for cat, frame in rec.frames.items():
                 info["records"][int(cat)] = info["records"].get(int(cat), 0) + len(frame)
@@ -236,13 +257,19 @@ def load_measurements(paths: list[str | Path], sensors: pd.DataFrame, *, edition
             by_source = widen_spans(by_source, time_spans(rec.frames, None))
             frames, rec.frames = rec.frames, {}
             r, a = _rows(frames, labels[i], sensors, adsb_sigma_m, stray, off_earth, columns)
+            more = _local_rows(frames, sensors, unplaced, other_kinds, columns)
             del frames
             radar += [(i, r)] if r is not None else []
             adsb += [(i, a)] if a is not None else []
+            local += [(i, part) for part in more]
             recs.append(rec)
         if first:  # nothing at all in the file: iter_read yields no chunk
             dates.append(None)
         early_start += tally.warning(labels[i], dates[-1], info["format"])
+        from msdc.pipeline.model.multilateration import other_kinds_warning
+
+        early_start += other_kinds_warning(labels[i], other_kinds)
+        early_start += content.warnings(head_of(p), hint=False, detected=format is None)
         info["records"] = dict(sorted(info["records"].items()))
         info["editions"] = dict(sorted(info["editions"].items()))
         inputs.append(info)
@@ -252,24 +279,55 @@ def load_measurements(paths: list[str | Path], sensors: pd.DataFrame, *, edition
     if first_date is not None:  # undated inputs are dated by the earliest known date
         shift = pd.Timestamp(first_date, tz="UTC") - UNDATED_DAY
         undated = {i for i, d in enumerate(dates) if d is None}
-        for i, part in radar + adsb:
+        for i, part in radar + adsb + local:
             if i in undated and "time" in part:
                 part["time"] = part["time"] + shift
         spans = [{c: (lo + shift, hi + shift) for c, (lo, hi) in s.items()} if i in undated else s
                  for i, s in enumerate(spans)]
-    absent = [cat for cat in (48, 21) if not any(info["records"].get(cat) for info in inputs)]
-    if absent and not (either and len(absent) == 1):
-        raise NoRecords(absent[0], Loaded({}, recs, inputs, first_date, spans))
-    parts = [part for _, part in radar + adsb]
+    held = {cat for info in inputs for cat, n in info["records"].items() if n}
+    absent = [group for group in needs if not held & set(group)]
+    if absent and not (either and len(absent) < len(needs)):
+        raise NoRecords(absent[0][0], Loaded({}, recs, inputs, first_date, spans), absent[0])
+    parts = [part for _, part in radar + adsb + local]
     radar.clear()
     adsb.clear()
+    local.clear()
     release_free_memory()  # what the chunks' decoding freed, before the join needs room
     meas = finish_measurements(parts, columns)
     release_free_memory()
     damaged = pd.concat(off_earth, ignore_index=True) if off_earth else None
     warnings = early_start + impossible_positions(damaged)
     stray_radar = _stray_table(stray)
-    return Loaded({}, recs, inputs, first_date, spans, warnings, stray_radar), meas
+    unplaced_table = _unplaced_table(unplaced)
+    return Loaded({}, recs, inputs, first_date, spans, warnings, stray_radar, unplaced_table), meas
+
+
+def _unplaced_table(parts: list[pd.DataFrame]) -> pd.DataFrame:
+    """The chunks' unplaced CAT010/CAT020 tables as one (records summed, the first offset)."""
+    from msdc.pipeline.model.multilateration import UNPLACED_COLUMNS
+
+    if not parts:
+        return pd.DataFrame(columns=UNPLACED_COLUMNS)
+    table = pd.concat(parts, ignore_index=True)
+    groups = table.groupby(["category", "kind", "sac", "sic", "file"], dropna=False, sort=False)
+    return groups.agg(records=("records", "sum"), offset=("offset", "first")).reset_index()[UNPLACED_COLUMNS]
+
+
+def _local_rows(frames: dict[int, pd.DataFrame], sensors: pd.DataFrame, unplaced: list[pd.DataFrame],
+                other_kinds: dict[int, int], columns=None) -> list[pd.DataFrame]:
+    """The CAT010/CAT020 measurement rows of one decoded chunk (its frames carry ``file`` already, _rows),
+    their unplaced reports added to ``unplaced`` and their other kinds counted in ``other_kinds``."""
+    from msdc.pipeline.model.measurements import local_measurement_rows
+
+    cat010, cat020 = frames.get(10), frames.get(20)
+    if (cat010 is None or not len(cat010)) and (cat020 is None or not len(cat020)):
+        return []
+    local = local_measurement_rows(cat010, cat020, sensors, columns=columns)
+    if len(local.unplaced):
+        unplaced.append(local.unplaced)
+    for typ, n in local.other_kinds.items():
+        other_kinds[typ] = other_kinds.get(typ, 0) + n
+    return local.parts
 
 
 def _stray_table(parts: list[pd.DataFrame]) -> pd.DataFrame:

@@ -1,7 +1,10 @@
-"""Decoded CAT048/CAT021 frames to one measurement frame (pipeline.model.schema), and aircraft selection.
+"""Decoded CAT048/CAT021/CAT010/CAT020 frames to one measurement frame (pipeline.model.schema), and
+aircraft selection.
 
 Radar slant range and azimuth (I048/040, else x/y of I048/042) become WGS-84 positions from the radar site
-at the height of the flight level; ADS-B positions come from I021/131 or /130. Each row gets its absolute
+at the height of the flight level; ADS-B positions come from I021/131 or /130; multilateration and surface
+radar reports (CAT010, CAT020) from their WGS-84 position or their x/y from the system's reference point
+(pipeline.model.multilateration). Each row gets its absolute
 UTC ``time``, its sensor, its aircraft identity (pipeline.model.identity) and its horizontal position
 covariance. Rows without a position or a time are dropped, and so are ADS-B positions no aircraft can have
 (latitude beyond 90 deg or longitude beyond 180 deg: damaged bytes; ``impossible_positions`` names them).
@@ -37,25 +40,34 @@ from msdc.pipeline.model.schema import (
     text_categorical,
     validate,
 )
-from msdc.pipeline.model.sensors import REQUIRED_COLUMNS, UnknownRadar, read_sensors, sensor_sites
+from msdc.pipeline.model.sensors import (
+    REQUIRED_COLUMNS,
+    UnknownRadar,
+    UnknownReferencePoint,
+    read_sensors,
+    sensor_sites,
+)
 from msdc.pipeline.model.sources import source_id
 from msdc.pipeline.model.time import absolute_time
 
-__all__ = ["DECODED_COLUMNS", "IdentityWarning", "NACP_95_M", "OffEarthWarning", "OutOfCoverageWarning",
-           "UnknownRadar", "adsb_measurements",
-           "build_measurements", "finish_measurements", "impossible_positions", "measurement_rows",
+__all__ = ["DECODED_COLUMNS", "IdentityWarning", "LeftOutWarning", "NACP_95_M", "OffEarthWarning",
+           "OutOfCoverageWarning", "UnknownRadar", "UnknownReferencePoint", "adsb_measurements",
+           "build_measurements", "finish_measurements", "impossible_positions", "local_measurement_rows",
+           "measurement_rows",
            "nacp_sigma_m", "normalise_address", "normalise_callsign", "off_earth_rows", "on_ground",
            "radar_measurements", "select", "sensor_id"]
 
-# The decoded CAT048/CAT021 columns build_measurements reads (besides sac, sic, time_of_day, day, timestamp
-# and offset, which every decoded frame has): jobs decode only these (asterix.read(columns=...))
+# The decoded CAT048/CAT021/CAT010/CAT020 columns build_measurements reads (besides sac, sic, time_of_day,
+# day, timestamp and offset, which every decoded frame has): jobs decode only these (asterix.read(columns=))
 DECODED_COLUMNS = ("flight_level", "ground_speed_kt", "callsign", "address", "mode3a", "track_number",
                    "heading_deg", "rho_nm", "theta_deg", "x_nm", "y_nm", "track_angle_deg", "latitude",
                    "longitude", "nucp_nic", "fom_pa", "nacp", "nucr_nacv", "sil", "mops_version",
-                   "geometric_height_ft", "gbs", "flight_status", "rab")
+                   "geometric_height_ft", "gbs", "flight_status", "rab", "message_type", "typ", "rho_m",
+                   "x_m", "y_m", "vx_ms", "vy_ms", "sigma_x_m", "sigma_y_m")
 
 # Columns worked out over the whole run by finish_measurements, and the built columns each is made from
-DERIVED_INPUTS = {"aircraft_id": ("address", "callsign", "mode3a", "time", "latitude", "longitude"),
+DERIVED_INPUTS = {"aircraft_id": ("address", "callsign", "mode3a", "time", "latitude", "longitude",
+                                   "sensor_kind", "sensor_id", "track_number"),
                   "sigma_major_m": ("cov_ee_m2", "cov_en_m2", "cov_nn_m2")}
 
 # Where a report came from: finish_measurements names them in its out-of-coverage warning, so a job that
@@ -71,6 +83,11 @@ class OutOfCoverageWarning(UserWarning):
     """build_measurements left out ADS-B reports beyond any ground station's reach (model.coverage)."""
 
 
+class LeftOutWarning(UserWarning):
+    """build_measurements left out CAT010 target reports of another kind than multilateration or surface
+    radar, or CAT010/CAT020 reports of a sensor without reference point (too few to stop the run: damage)."""
+
+
 class IdentityWarning(UserWarning):
     """build_measurements kept reports from the aircraft their Mode 3/A code names: beyond its reach
     (model.identity, rule 4)."""
@@ -78,7 +95,9 @@ class IdentityWarning(UserWarning):
 
 # What each category's frame must have for any row to be built: a time, and a position
 _TIME_COLUMNS = ("time_of_day", "timestamp")  # either
-_POSITION_COLUMNS = {48: (("rho_nm", "theta_deg"), ("x_nm", "y_nm")), 21: (("latitude", "longitude"),)}
+_POSITION_COLUMNS = {48: (("rho_nm", "theta_deg"), ("x_nm", "y_nm")), 21: (("latitude", "longitude"),),
+                     10: (("latitude", "longitude"), ("x_m", "y_m"), ("rho_m", "theta_deg")),
+                     20: (("latitude", "longitude"), ("x_m", "y_m"))}
 
 # I048/230 STAT codes (CAT048 1.27-1.32 alike): 0 and 2 "aircraft airborne", 1 and 3 "aircraft on ground";
 # 4 and 5 "airborne or on ground", 6 unassigned, 7 "unknown" say nothing
@@ -143,10 +162,11 @@ def _common(frame: pd.DataFrame, category: int, kind: str, date: dt.date | None)
 
 def on_ground(frame: pd.DataFrame, category: int) -> pd.Series:
     """Whether each decoded report says the aircraft is on the surface (nullable boolean): CAT021 by I021/040
-    GBS (set: on ground), CAT048 by I048/230 STAT (STAT_ON_GROUND / STAT_AIRBORNE); a field monitor (RAB
-    set: a fixed transponder) is on the ground whatever they say; <NA> where the report says nothing."""
+    GBS (set: on ground; CAT010 and CAT020 by I010/020, I020/020 GBS alike), CAT048 by I048/230 STAT
+    (STAT_ON_GROUND / STAT_AIRBORNE); a field monitor (RAB set: a fixed transponder) is on the ground
+    whatever they say; <NA> where the report says nothing."""
     said = pd.Series(pd.NA, index=frame.index, dtype="boolean")
-    if category == 21 and "gbs" in frame:
+    if category in (21, 10, 20) and "gbs" in frame:
         said = frame["gbs"].astype("Int64").eq(1)
     elif category == 48 and "flight_status" in frame:
         stat = frame["flight_status"].astype("Int64")
@@ -372,12 +392,59 @@ def _check_frame(frame, category: int, name: str) -> None:
         lacking.append(" or ".join(_TIME_COLUMNS))
     if not any(all(c in frame for c in group) for group in _POSITION_COLUMNS[category]):
         lacking.append(" or ".join("/".join(g) for g in _POSITION_COLUMNS[category]))
-    if category == 48:
+    if category in (48, 10, 20):
         lacking += [c for c in ("sac", "sic") if c not in frame]
     if lacking:
         raise ValueError(f"{name}: the frame lacks {'; '.join(lacking)}, so no row could be built: is it "
                          f"a CAT{category:03d} frame (asterix.read(...).frames[{category}]), decoded with "
                          f"those columns? (build_measurements(cat048, cat021, sensors))")
+
+
+def local_measurement_rows(cat010: pd.DataFrame | None, cat020: pd.DataFrame | None,
+                           sensors: pd.DataFrame | None, *, date: dt.date | None = None, columns=None):
+    """The CAT010 and CAT020 rows of decoded frames at the schema's dtypes, as ``measurement_rows`` makes
+    the others (pipeline.model.multilateration.LocalRows: the rows per category, the reports left unplaced
+    for want of a reference point, the CAT010 target reports of other kinds)."""
+    from msdc.pipeline.model.multilateration import local_rows
+
+    date = parse_date(date)
+    _check_frame(cat010, 10, "cat010")
+    _check_frame(cat020, 20, "cat020")
+    if sensors is not None and not isinstance(sensors, pd.DataFrame):
+        raise TypeError(f"sensors: a {type(sensors).__name__}, not the sensor table; give "
+                        "read_sensors(path)'s DataFrame or the TOML file's path")
+    local = local_rows(cat010, cat020, sensors, date=date)
+    keep = row_columns(columns)
+    local.parts = [conform(p, keep) for p in local.parts if len(p)]
+    return local
+
+
+def unplaced_verdict(unplaced: pd.DataFrame, reports: dict[int, int]) -> list[str]:
+    """Judge the CAT010/CAT020 reports left unplaced for want of a reference point (LocalRows.unplaced over a
+    run with ``reports`` records per category): UnknownReferencePoint for a sensor with enough of them to
+    be one (multilateration.unplaced_limit), else one warning per sensor and file (damaged data)."""
+    from msdc.pipeline.model.multilateration import unplaced_limit
+
+    if unplaced.empty:
+        return []
+    keys = ["category", "kind", "sac", "sic"]
+    total = unplaced.groupby(keys, dropna=False, sort=False)["records"].transform("sum").to_numpy()
+    limit = np.array([unplaced_limit(reports.get(int(c), 0)) for c in unplaced["category"]])
+    named = (unplaced["sac"].notna() & unplaced["sic"].notna()).to_numpy(bool)
+    real = unplaced[named & (total >= limit)]
+    if len(real):
+        missing = real[keys].drop_duplicates()
+        raise UnknownReferencePoint([(int(c), str(k), int(a), int(b)) for c, k, a, b in
+                                     missing.itertuples(index=False)])
+    out = []
+    for row in unplaced.itertuples(index=False):
+        name = row.file if pd.notna(row.file) else "input"
+        pair = (f"SAC/SIC {row.sac}/{row.sic}" if pd.notna(row.sac) and pd.notna(row.sic)
+                else "without SAC/SIC")
+        out.append(f"{name}: {row.records} CAT{int(row.category):03d} {row.kind} report(s) {pair} (first at "
+                   f"offset {row.offset}) with Cartesian positions and no reference point in the sensor "
+                   f"file, too few for a sensor: taken for damaged data, left out of the measurements")
+    return out
 
 
 def finish_measurements(parts: list[pd.DataFrame], columns=None) -> pd.DataFrame:
@@ -395,6 +462,11 @@ def finish_measurements(parts: list[pd.DataFrame], columns=None) -> pd.DataFrame
     if "aircraft_id" in wanted:
         meas["aircraft_id"], table = identify(meas)
         refused = refused_warnings(table, meas)
+        if "smr" in set(meas["sensor_kind"].cat.categories):  # surface radar tracks joined by position
+            from msdc.pipeline.model.primary_tracks import join_primary_tracks
+
+            meas["aircraft_id"], joined = join_primary_tracks(meas)
+            meas.attrs["primary_joined"] = joined
     if "sigma_major_m" in wanted:
         meas["sigma_major_m"] = _sigma_major(meas["cov_ee_m2"].to_numpy(), meas["cov_en_m2"].to_numpy(),
                                              meas["cov_nn_m2"].to_numpy())
@@ -410,8 +482,10 @@ def finish_measurements(parts: list[pd.DataFrame], columns=None) -> pd.DataFrame
 
 def build_measurements(cat048: pd.DataFrame | None = None, cat021: pd.DataFrame | None = None,
                        sensors: pd.DataFrame | str | Path | None = None, *, date: dt.date | str | None = None,
-                       adsb_sigma_m: float | None = None) -> pd.DataFrame:
-    """Every radar and ADS-B report as one validated measurement frame, identity assigned over both.
+                       adsb_sigma_m: float | None = None, cat010: pd.DataFrame | None = None,
+                       cat020: pd.DataFrame | None = None) -> pd.DataFrame:
+    """Every radar, ADS-B, multilateration and surface radar report as one validated measurement frame,
+    identity assigned over all of them.
 
     ``sensors``: the sensor table (read_sensors) or its TOML file's path. ``date`` (the UTC day, as
     asterix.read takes it) dates records that carry no timestamp of their own (see
@@ -420,14 +494,27 @@ def build_measurements(cat048: pd.DataFrame | None = None, cat021: pd.DataFrame 
     position off the Earth (damaged bytes) are left out with an OffEarthWarning saying how many, those
     beyond any ground station's reach with an OutOfCoverageWarning (its words also in
     ``attrs["coverage_warnings"]``); reports the identity rule's reach gate kept from the aircraft their
-    Mode 3/A code names give an IdentityWarning (also in ``attrs["identity_warnings"]``).
+    Mode 3/A code names give an IdentityWarning (also in ``attrs["identity_warnings"]``). ``cat010`` and
+    ``cat020`` (pipeline.model.multilateration) come after the others; their Cartesian positions need the
+    sensor table's reference points (UnknownReferencePoint names a missing one; a LeftOutWarning says
+    which CAT010 target reports are of another kind, or too few of a sensor without its point).
     """
     if isinstance(sensors, str | Path):
         sensors = read_sensors(sensors)
     parts = measurement_rows(cat048, cat021, sensors, date=date, adsb_sigma_m=adsb_sigma_m)
     for text in impossible_positions(cat021):
         warnings.warn(text, OffEarthWarning, stacklevel=2)
-    meas = finish_measurements([p for p in parts if p is not None])
+    parts = [p for p in parts if p is not None]
+    if (cat010 is not None and len(cat010)) or (cat020 is not None and len(cat020)):
+        from msdc.pipeline.model.multilateration import other_kinds_warning
+
+        local = local_measurement_rows(cat010, cat020, sensors, date=date)
+        counts = {10: len(cat010) if cat010 is not None else 0, 20: len(cat020) if cat020 is not None else 0}
+        said = other_kinds_warning("cat010", local.other_kinds) + unplaced_verdict(local.unplaced, counts)
+        for text in said:
+            warnings.warn(text, LeftOutWarning, stacklevel=2)
+        parts += local.parts
+    meas = finish_measurements(parts)
     for text in meas.attrs.get("coverage_warnings", ()):
         warnings.warn(text, OutOfCoverageWarning, stacklevel=2)
     for text in meas.attrs.get("identity_warnings", ()):

@@ -37,11 +37,14 @@ _SHORT = "Int16"
 
 MEASUREMENT_SCHEMA: tuple[Column, ...] = (
     Column("time", "datetime64[ns, UTC]", "UTC",
-           "Instant of the report (radar I048/140, ADS-B time of applicability); an undated recording is "
+           "Instant of the report (radar I048/140, ADS-B time of applicability, I010/140, I020/140); an "
+           "undated recording is "
            "placed on 1970-01-01 (see msdc.pipeline.model.time)"),
     Column("sensor_id", _TEXT, "",
-           "Sensor: category, SAC and SIC as \"CCC:SAC/SIC\" (e.g. 048:25/201, 021:0/107)"),
-    Column("sensor_kind", _TEXT, "", "\"radar\" (CAT048) or \"adsb\" (CAT021)"),
+           "Sensor: category, SAC and SIC as \"CCC:SAC/SIC\" (e.g. 048:25/201, 021:0/107, 020:25/10), and "
+           "for CAT010, whose one SAC/SIC may carry both, its kind: \"010:0/107:mlat\", \"010:0/7:smr\""),
+    Column("sensor_kind", _TEXT, "", "\"radar\" (CAT048), \"adsb\" (CAT021), \"mlat\" (multilateration: "
+           "CAT020, CAT010 with I010/020 TYP 0, 1 or 5) or \"smr\" (surface movement radar: CAT010 TYP 3)"),
     Column("sac", _SHORT, "", "System area code of the sensor"),
     Column("sic", _SHORT, "", "System identification code of the sensor"),
     Column("aircraft_id", _TEXT, "",
@@ -54,25 +57,29 @@ MEASUREMENT_SCHEMA: tuple[Column, ...] = (
     Column("height_m", "float64", "m",
            "Height used for the position, above the WGS-84 ellipsoid (see height_source); NaN if none"),
     Column("height_source", _TEXT, "",
-           "\"flight_level\" (FL x 100 ft taken as height), \"geometric\" (ADS-B geometric height) or "
-           "\"none\" (radar plot without FL: placed at zero elevation)"),
+           "\"flight_level\" (FL x 100 ft taken as height), \"geometric\" (ADS-B or CAT020 geometric height) "
+           "or \"none\" (radar plot without FL: placed at zero elevation; CAT010/CAT020 x/y without a "
+           "height: on the plane tangent at the reference point)"),
     Column("flight_level", "float64", "FL", "Flight level (pressure altitude / 100 ft)"),
     Column("ground_speed_kt", "float64", "kt", "Ground speed"),
     Column("on_ground", "boolean", "",
-           "The report says the aircraft is on the surface: CAT021 I021/040 GBS set, CAT048 I048/230 STAT "
+           "The report says the aircraft is on the surface: CAT021 I021/040 GBS set (and CAT010 I010/020, "
+           "CAT020 I020/020 GBS; <NA> for surface radar reports), CAT048 I048/230 STAT "
            "1 or 3 (on ground), or either's RAB set (a field monitor: a fixed transponder); False for GBS "
            "clear or STAT 0 or 2 (airborne); <NA> when the report does not say (no such item, STAT 4, 5 "
            "or 7)"),
     Column("heading_deg", "float64", "deg",
-           "Direction of motion, clockwise from true north (radar I048/200 heading, ADS-B track angle)"),
+           "Direction of motion, clockwise from true north (radar I048/200 heading, ADS-B track angle, "
+           "CAT010/CAT020 the velocity vector's direction, else I010/200 track angle)"),
     Column("address", _TEXT, "", "24-bit ICAO aircraft address, 6 upper-case hex digits"),
     Column("callsign", _TEXT, "", "Call sign (target identification), upper case without spaces"),
     Column("mode3a", _TEXT, "", "Mode 3/A code, 4 octal digits"),
     Column("track_number", _SHORT, "", "Sensor track number"),
-    Column("rho_nm", "float64", "NM", "Radar slant range (I048/040); NaN for ADS-B"),
+    Column("rho_nm", "float64", "NM", "Radar slant range (I048/040); NaN for the other sensors"),
     Column("theta_deg", "float64", "deg", "Radar azimuth clockwise from north (I048/040); NaN for ADS-B"),
     Column("position_item", _TEXT, "",
-           "Source item of a radar position: \"040\" polar or \"042\" cartesian; <NA> for ADS-B"),
+           "Source item of a radar, multilateration or surface radar position: \"040\" polar, \"042\" "
+           "cartesian or (CAT010, CAT020) \"041\" WGS-84; <NA> for ADS-B"),
     Column("nucp_nic", _SMALL, "", "ADS-B NUCp (MOPS version 0) or NIC (versions 1, 2)"),
     Column("nacp", _SMALL, "", "ADS-B navigation accuracy category for position"),
     Column("nucr_nacv", _SMALL, "", "ADS-B NUCr or NACv"),
@@ -85,8 +92,9 @@ MEASUREMENT_SCHEMA: tuple[Column, ...] = (
            "Horizontal position covariance, east-east, in the local east/north frame at the report; radar: "
            "from the sensor's range and azimuth sigmas with the slant-range geometry; ADS-B: "
            "(NACp 95 % bound / 2.4477)^2 (2.4477 = sqrt(-2 ln 0.05), the 95 % radius of a circular "
-           "Gaussian; NACp 11: 1.50 m^2); NaN when unknown, and for radar plots almost overhead "
-           "(slant range over 10 x ground distance from the site)"),
+           "Gaussian; NACp 11: 1.50 m^2); multilateration and surface radar: I010/500 or I020/500 standard "
+           "deviations squared, else the sensor file's sigma_m squared; NaN when unknown, and for radar "
+           "plots almost overhead (slant range over 10 x ground distance from the site)"),
     Column("cov_en_m2", "float64", "m^2", "Horizontal position covariance, east-north"),
     Column("cov_nn_m2", "float64", "m^2", "Horizontal position covariance, north-north"),
     Column("sigma_major_m", "float64", "m", "Standard deviation along the error ellipse's major axis"),
@@ -95,6 +103,7 @@ MEASUREMENT_SCHEMA: tuple[Column, ...] = (
     Column("offset", "Int64", "B", "Byte offset of the record in that file"),
 )
 MEASUREMENT_COLUMNS = [c.name for c in MEASUREMENT_SCHEMA]
+SENSOR_KINDS = ("radar", "adsb", "mlat", "smr")  # the values of sensor_kind
 _BY_NAME = {c.name: c for c in MEASUREMENT_SCHEMA}
 
 
@@ -218,10 +227,10 @@ def validate(frame: pd.DataFrame, columns=None) -> pd.DataFrame:
     names = {c.name for c in wanted}
     if "time" in names and frame["time"].isna().any():
         raise SchemaError("measurement column 'time' has missing values")
-    kinds = set(frame["sensor_kind"].dropna().unique()) - {"radar", "adsb"} if "sensor_kind" in names else ()
+    kinds = set(frame["sensor_kind"].dropna().unique()) - set(SENSOR_KINDS) if "sensor_kind" in names else ()
     if kinds or ("sensor_kind" in names and frame["sensor_kind"].isna().any()):
         raise SchemaError(f"measurement column 'sensor_kind' holds {sorted(kinds) or ['<NA>']}; "
-                          "allowed: radar, adsb")
+                          f"allowed: {', '.join(SENSOR_KINDS)}")
     for name, lo, hi in (("latitude", -90.0, 90.0), ("longitude", -180.0, 180.0)):
         v = frame[name] if name in names else None
         if v is not None and (v.isna().any() or ((v < lo) | (v > hi)).any()):
@@ -239,7 +248,8 @@ def markdown() -> str:
         "",
         "Generated from `pipeline/model/schema.py`",
         "(`python -m msdc.pipeline.model.schema > docs/measurements.md`).",
-        "One row per report of every sensor, radar and ADS-B alike; `validate(frame)` checks a frame against",
+        "One row per report of every sensor (radar, ADS-B, multilateration, surface radar) alike;",
+        "`validate(frame)` checks a frame against",
         "it. A job that reads only some columns may ask for those alone (`schema_columns`, `validate(frame,",
         "columns)`): `msdc correlate` builds the columns listed by",
         "`msdc.pipeline.jobs.correlate.correlate_columns`",

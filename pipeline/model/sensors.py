@@ -1,5 +1,10 @@
-"""The radar site table: read ``[[sensor]]`` entries from TOML, look up each plot's site, and print the
-entry a missing radar needs."""
+"""The sensor table: read ``[[sensor]]`` entries from TOML, look up each radar plot's site, and print the
+entry a missing radar needs.
+
+An entry is a radar (CAT048, the default) or the reference point of a multilateration system or a surface
+movement radar (``category = 10`` or ``20`` with ``kind = "mlat"`` or ``"smr"``): the point their
+Cartesian x/y are measured from (pipeline.model.multilateration places those reports).
+"""
 
 from __future__ import annotations
 
@@ -17,15 +22,30 @@ REQUIRED_COLUMNS = ["name", "sac", "sic", "latitude", "longitude", "altitude_m"]
 DEFAULT_SIGMA_RANGE_M = 70.0
 DEFAULT_SIGMA_AZIMUTH_DEG = 0.08
 OPTIONAL_DEFAULTS = {"sigma_range_m": DEFAULT_SIGMA_RANGE_M, "sigma_azimuth_deg": DEFAULT_SIGMA_AZIMUTH_DEG}
-SENSOR_COLUMNS = [*REQUIRED_COLUMNS, *OPTIONAL_DEFAULTS]
+RADAR_COLUMNS = [*REQUIRED_COLUMNS, *OPTIONAL_DEFAULTS]  # a radar entry, as sensor_sites gives it
+# Which sensor an entry describes: its category and sensor kind (CAT048 radars by default; a CAT010 entry
+# names its kind, which its reports' I010/020 TYP selects; CAT020 reports are all multilateration), and,
+# for a reference point, the 1-sigma position error per axis of its reports that carry no I010/500 or
+# I020/500 (NaN: none given)
+KIND_COLUMNS = ["category", "kind", "sigma_m"]
+SENSOR_COLUMNS = [*RADAR_COLUMNS, *KIND_COLUMNS]
+RADAR_CATEGORY = 48
+KINDS_OF = {48: ("radar",), 10: ("mlat", "smr"), 20: ("mlat",)}  # the kinds an entry of a category may be
+# A CAT010 reference point without sigma_m: the A-SMGCS surveillance requirement (ICAO Doc 9830, EUROCAE
+# ED-116 for surface radar, ED-117 for multilateration: 7.5 m at 95 %) as a circular Gaussian's per-axis
+# sigma, 7.5 / 2.4477 = 3.06 m. A requirement, not a measurement: give sigma_m from the system's figures.
+# CAT020 (wide-area multilateration too, whose accuracy varies by kilometres) has no default.
+SMGCS_95_M = 7.5
+DEFAULT_SIGMA_M = {10: SMGCS_95_M / math.sqrt(-2.0 * math.log(0.05))}
 _NUMBER = (int, float)
 _TYPES = {"name": (str,), "sac": (int,), "sic": (int,), "latitude": _NUMBER, "longitude": _NUMBER,
-          "altitude_m": _NUMBER, "sigma_range_m": _NUMBER, "sigma_azimuth_deg": _NUMBER}
+          "altitude_m": _NUMBER, "sigma_range_m": _NUMBER, "sigma_azimuth_deg": _NUMBER, "category": (int,),
+          "kind": (str,), "sigma_m": _NUMBER}
 # altitude_m: the geometry needs a finite height; past +-100 km it is no radar site (a plausible range,
 # SITE_ALTITUDE_RANGE_M, only warns: implausible_altitudes)
 _RANGES = {"sac": (0, 255), "sic": (0, 255), "latitude": (-90.0, 90.0), "longitude": (-180.0, 180.0),
            "altitude_m": (-100_000.0, 100_000.0), "sigma_range_m": (0.001, 10_000.0),
-           "sigma_azimuth_deg": (0.0001, 10.0)}
+           "sigma_azimuth_deg": (0.0001, 10.0), "sigma_m": (0.01, 100_000.0)}
 SITE_ALTITUDE_RANGE_M = (-500.0, 6000.0)  # outside: almost certainly a wrong sensor file entry
 # A SAC/SIC not in the sensor file is taken for damage (its records left out, with a warning) when it has
 # fewer than max(STRAY_RADAR_RECORDS, STRAY_RADAR_SHARE x the CAT048 records) records: one damaged byte of
@@ -34,6 +54,12 @@ SITE_ALTITUDE_RANGE_M = (-500.0, 6000.0)  # outside: almost certainly a wrong se
 # many pairs, each well under 0.1 % of the records. A real radar turns in 4-12 s, so one aircraft in its
 # cover for a minute already makes 5-15 plots, and radars recorded together share the traffic, each
 # holding a large part of the plots: such a radar still stops the run with the sensor-file lines to add.
+# Size limits (docs/guide/sensors.md): a sensor file of up to 1 MiB holds thousands of [[sensor]] entries
+# (one takes about 200 bytes); a name labels figures, workbook rows and messages, and one of 100 characters
+# says what any radar is. Past them the file is refused, naming the limit: no run copies a name per plot
+# (names are categorical), but a megabyte of name in a figure title or a message helps nobody.
+SENSOR_FILE_MAX_BYTES = 1 << 20
+NAME_MAX_CHARS = 100
 STRAY_RADAR_RECORDS = 3
 STRAY_RADAR_SHARE = 0.001
 
@@ -62,68 +88,149 @@ def _check_entry(path: Path, i: int, entry: object) -> dict:
     missing = [k for k in REQUIRED_COLUMNS if k not in entry]
     if missing:
         raise ValueError(f"{where} lacks {', '.join(missing)} (needs {', '.join(REQUIRED_COLUMNS)})")
-    entry = OPTIONAL_DEFAULTS | entry
+    entry = _kind_of(where, entry)
     for key, types in _TYPES.items():
         value = entry[key]
+        if value is None:  # an optional key that does not apply to this kind of sensor
+            continue
         if isinstance(value, bool) or not isinstance(value, types):
             kind = " or ".join("integer" if t is int else "float" if t is float else "string" for t in types)
             article = "an" if kind[0] in "aeiou" else "a"
             raise ValueError(f"{where}: {key} = {value!r} should be {article} {kind}")
+    if len(entry["name"]) > NAME_MAX_CHARS:
+        raise ValueError(f"{where} (SAC {entry['sac']} SIC {entry['sic']}): name is {len(entry['name']):,} "
+                         f"characters long; a name may have up to {NAME_MAX_CHARS} (it labels figures, "
+                         "workbook rows and messages)")
     for key, (lo, hi) in _RANGES.items():
-        if not lo <= entry[key] <= hi:
+        if entry[key] is not None and not lo <= entry[key] <= hi:
             raise ValueError(f"{where}: {key} = {entry[key]!r} is outside {lo}..{hi}")
     if entry["latitude"] == 0 and entry["longitude"] == 0:
+        what = ("radar site" if entry["kind"] == "radar" else
+                f"{KIND_NOUN[entry['kind']]} reference point")
         raise ValueError(f"{where} ({entry['name']!r}, SAC {entry['sac']} SIC {entry['sic']}): latitude 0, "
-                         "longitude 0 is no radar site (it is the TODO template msdc prints for a missing "
-                         "radar, or a missing value; every plot would land at 0 N 0 E): give the antenna's "
+                         f"longitude 0 is no {what} (it is the TODO template msdc prints for a missing "
+                         "sensor, or a missing value; every report would land at 0 N 0 E): give its "
                          "WGS-84 position")
     return {k: entry[k] for k in SENSOR_COLUMNS}
+
+
+def _toml(path: Path) -> dict:
+    """The TOML document of a sensor file of up to SENSOR_FILE_MAX_BYTES, a UTF-8 byte order mark (Windows
+    Notepad writes one) skipped; ValueError naming the file and the reason otherwise."""
+    with path.open("rb") as fh:
+        data = fh.read(SENSOR_FILE_MAX_BYTES + 1)
+    if len(data) > SENSOR_FILE_MAX_BYTES:
+        raise ValueError(f"{path}: larger than {SENSOR_FILE_MAX_BYTES:,} bytes, the limit of a sensor file "
+                         "(a [[sensor]] entry takes about 200 bytes): is it the sensor file?")
+    try:
+        text = data.decode("utf-8").removeprefix("\ufeff")
+    except UnicodeDecodeError as exc:
+        raise ValueError(f"{path}: not valid TOML: byte {exc.start} is not UTF-8 ({exc.reason})") from exc
+    try:
+        return tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise ValueError(f"{path}: not valid TOML: {exc}") from exc
+    except RecursionError:
+        raise ValueError(f"{path}: arrays or inline tables nested too deeply to read (a sensor file needs "
+                         "no nesting: [[sensor]] tables of plain keys)") from None
+
+
+KIND_NOUN = {"radar": "radar", "mlat": "multilateration", "smr": "surface movement radar"}
+
+
+def _kind_of(where: str, entry: dict) -> dict:
+    """The entry with its category (48 when not given) and kind checked, and the optional keys of its kind
+    filled: a radar's range and azimuth sigmas (defaults), a reference point's sigma_m (CAT010's default,
+    else None); ValueError for a key that does not apply to the kind, or a kind the category cannot be."""
+    category = entry.get("category", RADAR_CATEGORY)
+    if isinstance(category, bool) or not isinstance(category, int) or category not in KINDS_OF:
+        raise ValueError(f"{where}: category = {category!r} should be one of "
+                         f"{', '.join(str(c) for c in KINDS_OF)} (48 radar, 10 surface movement, 20 "
+                         "multilateration)")
+    kinds = KINDS_OF[category]
+    kind = entry.get("kind", kinds[0] if len(kinds) == 1 else None)
+    if kind not in kinds:
+        choice = " or ".join(repr(k) for k in kinds)
+        said = f"kind = {kind!r}" if "kind" in entry else "no kind"
+        raise ValueError(f"{where}: {said}; a CAT{category:03d} entry is {choice}"
+                         + (" (which of the category's reports it places: I010/020 TYP 0, 1, 5 mlat, 3 smr)"
+                            if category == 10 else ""))
+    radar = kind == "radar"
+    wrong = [k for k in (("sigma_m",) if radar else tuple(OPTIONAL_DEFAULTS)) if k in entry]
+    if wrong:
+        takes = "sigma_range_m and sigma_azimuth_deg" if radar else "sigma_m"
+        raise ValueError(f"{where}: {wrong[0]} does not apply to a {KIND_NOUN[kind]} entry (it takes "
+                         f"{takes})")
+    fill = OPTIONAL_DEFAULTS | {"sigma_m": None} if radar else dict.fromkeys(OPTIONAL_DEFAULTS) | {
+        "sigma_m": DEFAULT_SIGMA_M.get(category)}
+    return fill | entry | {"category": category, "kind": kind}
 
 
 def read_sensors(path: str | Path) -> pd.DataFrame:
     """The sensor table (SENSOR_COLUMNS) of a TOML file; ValueError naming the file and entry if bad.
 
-    Latitude/longitude are WGS-84 degrees (exactly 0 N 0 E, the printed template's value, is refused),
+    The file may have up to SENSOR_FILE_MAX_BYTES, a name up to NAME_MAX_CHARS characters (the table's
+    ``name`` is categorical: a name is never copied per report). Latitude/longitude are WGS-84 degrees
+    (exactly 0 N 0 E, the printed template's value, is refused),
     altitude_m the antenna height above the WGS-84 ellipsoid; sigma_range_m and sigma_azimuth_deg (optional,
     defaults 70 m and 0.08 deg) the 1-sigma plot noise.
     """
     path = Path(path)
-    try:
-        with path.open("rb") as fh:
-            doc = tomllib.load(fh)
-    except tomllib.TOMLDecodeError as exc:
-        raise ValueError(f"{path}: not valid TOML: {exc}") from exc
-    except UnicodeDecodeError as exc:
-        raise ValueError(f"{path}: not valid TOML: byte {exc.start} is not UTF-8 ({exc.reason})") from exc
+    doc = _toml(path)
     entries = doc.get("sensor")
     if not isinstance(entries, list) or not entries:
         raise ValueError(f"{path}: no [[sensor]] tables found")
     rows = [_check_entry(path, i, e) for i, e in enumerate(entries)]
-    seen: dict[tuple[int, int], str] = {}
+    seen: dict[tuple[int, str, int, int], str] = {}
     for row in rows:
-        key = (row["sac"], row["sic"])
+        key = (row["category"], row["kind"], row["sac"], row["sic"])
         if key in seen:
-            raise ValueError(f"{path}: SAC {key[0]} SIC {key[1]} appears twice "
+            what = "" if row["kind"] == "radar" else f"CAT{key[0]:03d} {key[1]} "
+            raise ValueError(f"{path}: {what}SAC {key[2]} SIC {key[3]} appears twice "
                              f"({seen[key]!r} and {row['name']!r})")
         seen[key] = row["name"]
-    frame = pd.DataFrame(rows, columns=SENSOR_COLUMNS)
-    return frame.astype({"sac": "int64", "sic": "int64"} | dict.fromkeys(SENSOR_COLUMNS[3:], "float64"))
+    return _typed(pd.DataFrame(rows, columns=SENSOR_COLUMNS))
+
+
+_DTYPES = {"name": "category", "sac": "int64", "sic": "int64"} | dict.fromkeys(RADAR_COLUMNS[3:], "float64") \
+    | {"category": "int64", "kind": "object", "sigma_m": "float64"}
+
+
+def _typed(frame: pd.DataFrame) -> pd.DataFrame:
+    return frame.astype(_DTYPES)
 
 
 def no_sensors() -> pd.DataFrame:
     """An empty sensor table (SENSOR_COLUMNS, typed as read_sensors types them): no radar is placed."""
-    frame = pd.DataFrame({c: [] for c in SENSOR_COLUMNS})
-    return frame.astype({"name": "object", "sac": "int64", "sic": "int64"}
-                        | dict.fromkeys(SENSOR_COLUMNS[3:], "float64"))
+    return _typed(pd.DataFrame({c: [] for c in SENSOR_COLUMNS}))
+
+
+def radar_entries(sensors: pd.DataFrame) -> pd.DataFrame:
+    """The radar entries of a sensor table (RADAR_COLUMNS, as many as it has; every row of a table without a
+    ``category`` column, as tables built by hand before reference points existed)."""
+    if "category" not in sensors:
+        return sensors
+    radar = sensors["category"].to_numpy() == RADAR_CATEGORY
+    return sensors if radar.all() else sensors[radar].reset_index(drop=True)
+
+
+def reference_entries(sensors: pd.DataFrame | None) -> pd.DataFrame:
+    """The multilateration and surface radar reference points of a sensor table (SENSOR_COLUMNS but the
+    radar sigmas); an empty table when it has none."""
+    if sensors is None or "category" not in sensors:
+        return no_sensors().drop(columns=list(OPTIONAL_DEFAULTS))
+    rows = sensors[sensors["category"].to_numpy() != RADAR_CATEGORY]
+    return rows.drop(columns=list(OPTIONAL_DEFAULTS)).reset_index(drop=True)
 
 
 def sensor_sites(reports: pd.DataFrame, sensors: pd.DataFrame) -> pd.DataFrame:
     """The sensor-table row (SENSOR_COLUMNS) of each report's SAC/SIC, aligned with ``reports`` by position;
     UnknownRadar for pairs the table lacks. Sigma columns missing from ``sensors`` take their defaults."""
+    sensors = radar_entries(sensors)
     if sensors.duplicated(["sac", "sic"]).any():
         raise ValueError("sensor table lists a SAC/SIC pair twice")
     table = sensors.assign(**{k: sensors[k] if k in sensors else v for k, v in OPTIONAL_DEFAULTS.items()})
-    table = table.astype({"sac": "Int64", "sic": "Int64"})[SENSOR_COLUMNS]
+    table = table.astype({"name": "category", "sac": "Int64", "sic": "Int64"})[RADAR_COLUMNS]
     codes, declared = pair_codes(reports["sac"], reports["sic"]), pair_codes(table["sac"], table["sic"])
     order = np.argsort(declared, kind="stable")
     at = order[np.minimum(np.searchsorted(declared[order], codes), len(order) - 1)] if len(order) else None
@@ -140,6 +247,7 @@ def undeclared_radars(reports: pd.DataFrame, sensors: pd.DataFrame) -> pd.DataFr
     """Per SAC/SIC pair (and file) of ``reports`` that ``sensors`` does not list: sac, sic, file, records and
     the first record's offset, in file order of first appearance; SAC/SIC missing shows as <NA>."""
     columns = ["sac", "sic", "file", "records", "offset"]
+    sensors = radar_entries(sensors)
     declared = pair_codes(sensors["sac"], sensors["sic"])
     unknown = ~np.isin(pair_codes(reports["sac"], reports["sic"]), declared)
     if not unknown.any():
@@ -160,8 +268,9 @@ def implausible_altitudes(sensors: pd.DataFrame, sensors_path) -> list[str]:
     the warnings name)."""
     odd = sensors[~sensors["altitude_m"].between(*SITE_ALTITUDE_RANGE_M)]
     lo, hi = SITE_ALTITUDE_RANGE_M
-    return [f"--sensors {sensors_path}: {row.name!r} altitude_m = {row.altitude_m:g} is "
-            f"implausible for a radar site (expected {lo:g} to {hi:g} m)"
+    return [f"--sensors {sensors_path}: {row.name!r} altitude_m = {row.altitude_m:g} is implausible for a "
+            f"{'radar site' if getattr(row, 'kind', 'radar') == 'radar' else 'reference point'}"
+            f" (expected {lo:g} to {hi:g} m)"
             for row in odd.itertuples()]
 
 
@@ -204,8 +313,40 @@ def declared_radar(cat048: pd.DataFrame | None, sensors: pd.DataFrame, sensors_p
         return cat048, []
     warnings = stray_verdict(stray, len(cat048), sensors_path)
     keys = pd.MultiIndex.from_arrays([cat048["sac"].astype("Int64"), cat048["sic"].astype("Int64")])
-    known = keys.isin(pd.MultiIndex.from_frame(sensors[["sac", "sic"]].astype("Int64")))
+    known = keys.isin(pd.MultiIndex.from_frame(radar_entries(sensors)[["sac", "sic"]].astype("Int64")))
     return cat048[known], warnings
+
+
+class UnknownReferencePoint(ValueError):
+    """CAT010/CAT020 reports to place from a reference point the sensor table lacks: (category, kind, SAC,
+    SIC) each, with the entries to add."""
+
+    def __init__(self, missing: list[tuple[int, str, int, int]]):
+        self.missing = missing
+        names = ", ".join(f"CAT{c:03d} {KIND_NOUN[k]} SAC {a} SIC {b}" for c, k, a, b in missing)
+        snippets = "\n".join(reference_toml_snippet(*m) for m in missing)
+        super().__init__(f"{names}: Cartesian positions from a reference point the sensor table does not "
+                         f"give; add:\n{snippets}")
+
+
+def reference_toml_snippet(category: int, kind: str, sac: int, sic: int) -> str:
+    """The ``[[sensor]]`` lines for a multilateration or surface radar reference point the sensor file
+    lacks (read_sensors refuses the 0 N 0 E placeholder until it is edited)."""
+    default = DEFAULT_SIGMA_M.get(category)
+    sigma = (f"# optional: sigma_m = 1-sigma error per axis of reports without I{category:03d}/500 "
+             + (f"(default {default:.2f} m)\n" if default else "(none by default: no covariance)\n"))
+    return (
+        "[[sensor]]  # replace the three TODO values: msdc refuses a point at latitude 0, longitude 0\n"
+        f'name = "{KIND_NOUN[kind]} SAC {sac} SIC {sic}"\n'
+        f"category = {category}\n"
+        f'kind = "{kind}"\n'
+        f"sac = {sac}\n"
+        f"sic = {sic}\n"
+        "latitude = 0.0    # TODO: the system's reference point (origin of its x/y), degrees north\n"
+        "longitude = 0.0   # TODO: degrees east (WGS-84)\n"
+        "altitude_m = 0.0  # TODO: its height above the WGS-84 ellipsoid, metres\n"
+        + sigma
+    )
 
 
 def sensor_toml_snippet(sac: int, sic: int) -> str:

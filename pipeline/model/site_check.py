@@ -11,6 +11,7 @@ import numpy as np
 import pandas as pd
 
 from msdc.pipeline.model.geodesy import distance_m
+from msdc.pipeline.model.sensors import radar_entries
 
 SITE_CHECK_INPUTS = ["time", "sensor_kind", "sensor_id", "address", "latitude", "longitude", "rho_nm"]
 MATCH_TOLERANCE_S = 1.0  # an ADS-B report at most this far in time from the plot (1 Hz: half a second)
@@ -84,10 +85,13 @@ def _far_site(sensor_id: str, sep_m: float, far_nm: float, sensors: pd.DataFrame
               margin_m: float) -> list[str]:
     """The wrong-site warning when a radar's median separation from ADS-B exceeds FAR_SEPARATION_FACTOR
     times its position sigma at ``far_nm`` (its far plots) plus ``margin_m``; [] otherwise."""
+    if not sensor_id.startswith("048:"):  # a radar's site only
+        return []
     try:
         sac, sic = (int(x) for x in sensor_id.split(":")[1].split("/"))
     except (IndexError, ValueError):  # a radar without SAC/SIC ("048:?/?") has no site to check
         return []
+    sensors = radar_entries(sensors)
     site = sensors[(sensors["sac"] == sac) & (sensors["sic"] == sic)]
     if site.empty:
         return []

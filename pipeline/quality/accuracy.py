@@ -239,7 +239,7 @@ def radar_errors(meas: pd.DataFrame, sensors: pd.DataFrame, *, max_gap_s: float 
     trk = np.arctan2(ve, vn)
 
     columns = {
-        "radar": site["name"].to_numpy(), "sac": m["sac"].astype("Int64").to_numpy(),
+        "radar": site["name"].array, "sac": m["sac"].astype("Int64").to_numpy(),
         "sic": m["sic"].astype("Int64").to_numpy(), "callsign": m["callsign"].to_numpy(),
         "address": m["address"].to_numpy(), "time_of_day": m["time_of_day"].to_numpy(float),
         "timestamp": m["timestamp"].to_numpy(), "radar_row": m["radar_row"].to_numpy(),

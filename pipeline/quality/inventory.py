@@ -93,8 +93,8 @@ def _chunk_tables(cat: int, frame: pd.DataFrame) -> dict[str, tuple[pd.DataFrame
     t = t + frame["time_of_day"].to_numpy(dtype=float, na_value=np.nan)
     stamps = (frame["timestamp"].array if "timestamp" in frame.columns
               else pd.array(np.full(n, np.datetime64("NaT", "ns"))).tz_localize("UTC"))
-    addr, addr_labels = _codes(frame["address"])
-    cs, cs_labels = _codes(frame["callsign"])
+    addr, addr_labels = _codes(_identity(frame, "address"))
+    cs, cs_labels = _codes(_identity(frame, "callsign"))
     sac = frame["sac"].to_numpy(np.int64, na_value=-1)
     sic = frame["sic"].to_numpy(np.int64, na_value=-1)
     # the aircraft key: its address, else its call sign (numbered after the addresses), else NO_IDENTITY
@@ -105,8 +105,10 @@ def _chunk_tables(cat: int, frame: pd.DataFrame) -> dict[str, tuple[pd.DataFrame
     source = (sac + 1) * (1 << 32) + (sic + 1)  # every SAC/SIC pair, a missing one (-1) included
     aircraft = np.where((sac >= 0) & (sic >= 0), source * (len(key_labels) + 1) + key, -1)
     out = {}
-    for level, combined in (("categories", np.zeros(n, np.int64)), ("sources", source),
-                            ("aircraft", aircraft)):
+    levels = [("categories", np.zeros(n, np.int64)), ("sources", source)]
+    if "address" in frame.columns or "callsign" in frame.columns:  # status messages name no aircraft
+        levels.append(("aircraft", aircraft))
+    for level, combined in levels:
         keep = np.flatnonzero(combined >= 0)
         ids = np.full(n, -1, np.int64)
         ids[keep], uniques = pd.factorize(combined[keep])
@@ -126,6 +128,14 @@ def _chunk_tables(cat: int, frame: pd.DataFrame) -> dict[str, tuple[pd.DataFrame
             distinct[value] = found
         out[level] = (_group_spans(stamps, t, ids, groups, keys), distinct)
     return out
+
+
+def _identity(frame: pd.DataFrame, name: str) -> pd.Series:
+    """An identity column (address, callsign), or an all-missing one for a category without it."""
+    if name in frame.columns:
+        return frame[name]
+    empty = pd.Index([], dtype=object)
+    return pd.Series(pd.Categorical.from_codes(np.full(len(frame), -1), categories=empty))
 
 
 def _extremes(rows: pd.DataFrame, keys: list[str], how: str) -> pd.DataFrame:
@@ -156,12 +166,17 @@ class StatsAccumulator:
         self._skipped: pd.DataFrame | None = None
         self._files: dict[str, int] = {}  # files with skipped blocks, in the order met
         self._other: pd.DataFrame | None = None
+        self._blocks: dict[int, int] = {}  # data blocks whose records decoded, per category
+        self._identity: dict[int, set[str]] = {}  # the identity columns (address, callsign) per category
 
     def add(self, frames: dict[int, pd.DataFrame], errors: pd.DataFrame | None = None,
             ignored: pd.DataFrame | list[pd.DataFrame] | None = None) -> None:
         """Fold in one chunk: decoded frames by category, its skipped-bytes account, its ignored blocks."""
         self.categories |= {cat for cat, frame in frames.items() if len(frame)}  # no record: not listed
         for cat, frame in sorted(frames.items()):
+            if len(frame):  # a chunk holds whole blocks: their numbers are distinct from other chunks'
+                self._blocks[cat] = self._blocks.get(cat, 0) + int(frame["block"].nunique())
+                self._identity.setdefault(cat, set()).update(c for c in ("address", "callsign") if c in frame)
             for level, (new, distinct) in _chunk_tables(cat, frame).items():
                 old = self._spans.get(level)
                 self._spans[level] = new if old is None else _fold(pd.concat([old, new], ignore_index=True),
@@ -207,23 +222,41 @@ class StatsAccumulator:
             spans = spans.merge(found.rename(f"seen_{value}").reset_index(), on=keys, how="left")
         return spans
 
+    def _seen(self, cat: int, value: str, count) -> object:
+        """A distinct count of addresses or call signs, <NA> for a category without that column."""
+        return _count(count) if value in self._identity.get(cat, ()) else pd.NA
+
     def tables(self) -> dict[str, pd.DataFrame]:
-        """Tables: per category, per category and SAC/SIC, aircraft per sensor, skipped blocks by reason,
-        and blocks of categories not decoded."""
+        """Tables: per category (every one present: those not decoded with their blocks, and said so), per
+        category and SAC/SIC, aircraft per sensor, skipped blocks by reason, and blocks of categories not
+        decoded."""
         per_cat, per_src, aircraft = [], [], []
+        other = self._other if self._other is not None else pd.DataFrame(columns=["category", "blocks",
+                                                                                   "bytes"])
         if self._spans:
             cats = self._table("categories").set_index("category")
             for cat in sorted(self.categories):
                 r = cats.loc[cat]
                 start, end, duration = _span_text(r.t_min, r.stamp_min, r.t_max, r.stamp_max)
-                per_cat.append({"category": cat, "records": int(r.records), "start": start, "end": end,
+                per_cat.append({"category": cat, "decoded": "yes", "blocks": self._blocks.get(cat, 0),
+                                "records": int(r.records), "start": start, "end": end,
                                 "duration_min": round(duration / 60.0, 1),
-                                "addresses": _count(r.seen_address), "callsigns": _count(r.seen_callsign)})
+                                "addresses": self._seen(cat, "address", r.seen_address),
+                                "callsigns": self._seen(cat, "callsign", r.seen_callsign)})
             for r in self._table("sources").itertuples(index=False):
                 start, end, _ = _span_text(r.t_min, r.stamp_min, r.t_max, r.stamp_max)
                 per_src.append({"category": r.category, "sac": r.sac, "sic": r.sic, "records": int(r.records),
-                                "start": start, "end": end, "addresses": _count(r.seen_address),
-                                "callsigns": _count(r.seen_callsign)})
+                                "start": start, "end": end,
+                                "addresses": self._seen(r.category, "address", r.seen_address),
+                                "callsigns": self._seen(r.category, "callsign", r.seen_callsign)})
+        # categories whose blocks were stepped over: the blocks framing counted, no record walked
+        for r in other.itertuples(index=False):
+            if int(r.category) not in self.categories:
+                per_cat.append({"category": int(r.category), "decoded": "no", "blocks": int(r.blocks),
+                                "records": pd.NA, "start": "-", "end": "-", "duration_min": float("nan"),
+                                "addresses": pd.NA, "callsigns": pd.NA})
+        per_cat.sort(key=lambda row: row["category"])
+        if "aircraft" in self._spans:
             for r in self._table("aircraft").itertuples(index=False):
                 start, end, duration = _span_text(r.t_min, r.stamp_min, r.t_max, r.stamp_max)
                 callsigns = r.seen_callsign if isinstance(r.seen_callsign, str) and r.seen_callsign else "-"
@@ -236,9 +269,8 @@ class StatsAccumulator:
             skipped = _by_reason(self._skipped, self._files)
         else:
             skipped = pd.DataFrame(columns=_SKIPPED)
-        other = self._other if self._other is not None else pd.DataFrame(columns=["category", "blocks",
-                                                                                   "bytes"])
-        return {"categories": pd.DataFrame(per_cat), "sources": pd.DataFrame(per_src),
+        return {"categories": _integers(pd.DataFrame(per_cat), ["records", "addresses", "callsigns"]),
+                "sources": _integers(pd.DataFrame(per_src), ["addresses", "callsigns"]),
                 "aircraft": pd.DataFrame(aircraft), "skipped": skipped, "other": other}
 
 
@@ -257,6 +289,14 @@ def _by_reason(skipped: pd.DataFrame, files: dict[str, int]) -> pd.DataFrame:
     labels = dict(zip(files, file_labels(list(files)), strict=True))
     skipped = skipped.assign(file=skipped["file"].map(labels))
     return skipped[_SKIPPED].reset_index(drop=True)
+
+
+def _integers(table: pd.DataFrame, columns: list[str]) -> pd.DataFrame:
+    """The count columns as nullable integers (<NA>: not decoded, or a category without that column)."""
+    for name in columns:
+        if name in table:
+            table[name] = pd.array(table[name].tolist(), dtype="Int64")
+    return table
 
 
 def _count(value) -> int:
@@ -286,6 +326,9 @@ def format_stats(tables: dict[str, pd.DataFrame]) -> str:
         t = tables[key]
         if "category" in t:  # bytes that name no category (garbage) show '-', not <NA>
             t = t.assign(category=t["category"].astype(object).where(t["category"].notna(), "-"))
+        if key in ("categories", "sources"):  # what a category not decoded, or without the column, lacks
+            t = t.assign(**{c: t[c].astype(object).where(t[c].notna(), "-")
+                            for c in ("records", "duration_min", "addresses", "callsigns") if c in t})
         # ASTERIX times are UTC, dated or not (HH:MM:SS is the UTC time of day)
         t = t.rename(columns={"start": "start (UTC)", "end": "end (UTC)"})
         parts.append(f"{title}:\n" + ("  none" if t.empty else t.to_string(index=False)))

@@ -1,5 +1,6 @@
 """The quality step: per-sensor data quality and radar accuracy against ADS-B, as sheets (figures are drawn
-by pipeline.jobs)."""
+by pipeline.jobs); with multilateration or surface radar reports, where their reference points are
+(pipeline.quality.reference_offset)."""
 
 from __future__ import annotations
 
@@ -31,9 +32,17 @@ class QualityResult:
 
 def select_aircraft(meas: pd.DataFrame, *, callsign: str | None = None,
                     address: str | None = None) -> pd.DataFrame:
-    """Both sensors' measurements of one aircraft (NoSuchAircraft lists the closest), or all of them."""
+    """Every sensor's measurements of one aircraft, or all of them. NoSuchAircraft lists the closest when
+    radar or ADS-B lacks it; with multilateration or surface radar reports in ``meas``, only when no sensor
+    saw it (radar accuracy then has nothing to compare, the other sheets do)."""
     if callsign is None and address is None:
         return meas
+    if meas["sensor_kind"].astype(str).isin(["mlat", "smr"]).any():
+        from msdc.pipeline.model.measurements import select
+
+        rows = select(meas, callsign, address)
+        if len(rows):
+            return rows
     ac = one_aircraft(meas, callsign, address)
     return pd.concat([ac.radar, ac.adsb], ignore_index=True)
 
@@ -53,5 +62,9 @@ def quality_run(meas: pd.DataFrame, sensors: pd.DataFrame, *, callsign: str | No
     sheets["Radar accuracy"] = error_stats(errors)
     biases = estimate_biases(errors)
     sheets["Radar biases"] = biases
+    if meas["sensor_kind"].astype(str).isin(["mlat", "smr"]).any():
+        from msdc.pipeline.quality.reference_offset import reference_offsets
+
+        sheets["Reference points"] = reference_offsets(meas, sensors)
     return QualityResult(sheets, errors)
 

@@ -30,7 +30,7 @@ from openpyxl.worksheet._write_only import WriteOnlyWorksheet
 from openpyxl.xml import LXML
 
 from msdc.pipeline.report.formats import UNITS, column_unit, excel_format
-from msdc.pipeline.report.rows import RawRow, RowStyles, append_rows, install
+from msdc.pipeline.report.rows import RawRow, RowStyles, append_rows, bool_cell, install
 from msdc.pipeline.report.summary import (
     is_missing,
     json_value,
@@ -143,9 +143,12 @@ def is_number(value: Any) -> bool:
 
 
 def cell_for(ws: WriteOnlyWorksheet, value: Any, number_format: str | None) -> Any:
-    """The cell (or plain value) for an excel_value() result under a column number format."""
-    if value is None or isinstance(value, bool):
+    """The cell (or plain value) for an excel_value() result under a column number format; a boolean reads
+    TRUE or FALSE (rows.BOOL_FORMAT)."""
+    if value is None:
         return value
+    if isinstance(value, bool):
+        return bool_cell(ws, value)
     if isinstance(value, str):
         return text_cell(ws, value)
     if isinstance(value, dt.datetime):
@@ -175,6 +178,7 @@ class Column:
     number_format: str | None
     styled: WriteOnlyCell | None = None
     text: bool = False  # values may hold text, which must be checked for formula-like starts
+    bools: bool = False  # values may hold booleans, written with rows.BOOL_FORMAT
 
 
 def _datetime_serials(series: pd.Series) -> list[Any]:
@@ -243,7 +247,7 @@ def make_column(ws: WriteOnlyWorksheet, header: str, data: pd.Series | list[Any]
                 return Column(header, values, fmt, text=True)
             if fmt == "0" and kinds <= {int, bool}:
                 fmt = None  # integers read the same in General
-            column = Column(header, values, fmt)
+            column = Column(header, values, fmt, bools=bool in kinds)
     if column.number_format is not None:
         column.styled = WriteOnlyCell(ws, 0.0)
         column.styled.number_format = column.number_format
@@ -256,6 +260,7 @@ def table_rows(ws: WriteOnlyWorksheet, columns: list[Column], start: int = 0,
     swapped in) for formatted numbers, text cells for text."""
     styled = [(j, c.styled) for j, c in enumerate(columns) if c.styled is not None and not c.text]
     texts = [(j, c.number_format) for j, c in enumerate(columns) if c.text]
+    flags = [j for j, c in enumerate(columns) if c.bools and not c.text]
     for row in islice(zip(*(c.values for c in columns), strict=True), start, stop):
         out = list(row)
         for j, cell in styled:
@@ -263,6 +268,9 @@ def table_rows(ws: WriteOnlyWorksheet, columns: list[Column], start: int = 0,
             if value is not None and value.__class__ is not bool:
                 cell.value = value
                 out[j] = cell
+        for j in flags:
+            if out[j].__class__ is bool:
+                out[j] = bool_cell(ws, out[j])
         for j, fmt in texts:
             value = out[j]
             if value is not None and not (value.__class__ is str and not value.startswith(FORMULA_START)):

@@ -30,6 +30,28 @@ def figure_name(index: int, alert: pd.Series) -> str:
            f"{alert['horizon_s']:g}s.png"
 
 
+def aircraft_label(row: pd.Series, side: str) -> str:
+    """One aircraft of a conflict table's row as an ATC reader names it: call sign, Mode 3/A code, address
+    and flight level ("EZY12AB 7061 (4CA216) FL 95"), each part left out when the row lacks it."""
+    def text(column: str) -> str:
+        value = row.get(f"{column}_{side}")
+        return "" if value is None or (not isinstance(value, str) and pd.isna(value)) else str(value)
+
+    parts = [text("callsign"), text("mode3a"), f"({row[f'aircraft_{side}']})"]
+    level = row.get(f"flight_level_{side}")
+    if level is not None and pd.notna(level):
+        parts.append(f"FL {float(level):.0f}")
+    return " ".join(p for p in parts if p)
+
+
+def place_label(row: pd.Series) -> str:
+    """", at 41.297 N 2.078 E" from the row's latitude and longitude (the pair's midpoint); "" without."""
+    lat, lon = row.get("latitude"), row.get("longitude")
+    if lat is None or lon is None or pd.isna(lat) or pd.isna(lon):
+        return ""
+    return f", at {abs(lat):.3f} {'N' if lat >= 0 else 'S'} {abs(lon):.3f} {'E' if lon >= 0 else 'W'}"
+
+
 def _nm(lat, lon, lat0: float, lon0: float) -> tuple[np.ndarray, np.ndarray]:
     """East and north in NM from (lat0, lon0), equirectangular (plenty for one event's picture)."""
     k = 6371.0088 * math.pi / 180.0 / KM_PER_NM
@@ -88,7 +110,7 @@ def alert_figure(alert: pd.Series, tracks: pd.DataFrame, predictions: pd.DataFra
         color = COLORS[key]
         tr = tracks[(tracks["aircraft_id"] == ident) & (tracks["time"] >= t0) & (tracks["time"] <= t1)]
         e, n = _nm(tr["latitude"], tr["longitude"], lat0, lon0)
-        ax.plot(e, n, color=color, lw=1.2, label=f"{ident} track")
+        ax.plot(e, n, color=color, lw=1.2, label=f"{aircraft_label(alert, key)} track")
         now = (tr["time"] == start).to_numpy()
         if now.any():
             ax.plot(e[now], n[now], "o", color=color, ms=6, zorder=5)
@@ -117,7 +139,8 @@ def alert_figure(alert: pd.Series, tracks: pd.DataFrame, predictions: pd.DataFra
     if "cpa_horizontal_nm" in alert and pd.notna(alert.get("cpa_horizontal_nm")):
         cpa = (f"; predicted closest approach in {alert['time_to_cpa_s']:.0f} s: "
                f"{alert['cpa_horizontal_nm']:.2f} NM, {alert['cpa_vertical_ft']:.0f} ft")
-    ax.set_title(f"{a} / {b}: PC > {threshold:g} at the {alert['horizon_s']:g} s horizon from "
+    ax.set_title(f"{aircraft_label(alert, 'a')} / {aircraft_label(alert, 'b')}{place_label(alert)}\n"
+                 f"PC > {threshold:g} at the {alert['horizon_s']:g} s horizon from "
                  f"{start:%H:%M:%S} to {alert['end']:%H:%M:%S} UTC, peak {alert['peak_pc']:.2f}{cpa}",
                  fontsize=8.5, wrap=True)
     series = pc[(pc["aircraft_a"] == a) & (pc["aircraft_b"] == b) & (pc["time"] >= t0) & (pc["time"] <= t1)]

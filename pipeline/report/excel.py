@@ -16,6 +16,7 @@ import contextlib
 import datetime as dt
 import os
 import re
+import textwrap
 from collections.abc import Callable, Collection, Iterator, Mapping
 from pathlib import Path
 from typing import Any
@@ -29,10 +30,17 @@ from openpyxl.worksheet._write_only import WriteOnlyWorksheet
 from openpyxl.worksheet.pagebreak import Break
 
 from msdc.pipeline.correlate.correlation import PEARSON_MIN_OVERLAP, pearson_max_lag
-from msdc.pipeline.correlate.results import SUMMARY_KEYS, CorrelationRun, WindowResult
+from msdc.pipeline.correlate.results import (
+    MATCHED_KEYS,
+    RADAR_KEYS,
+    WINDOW_QUALITY_KEYS,
+    CorrelationRun,
+    WindowResult,
+)
 from msdc.pipeline.report.cells import (
     BOLD,
     CLOCK_FORMAT,
+    NOTE_FONT,
     ROW_HEIGHT_PT,
     SUMMARY_DATETIME_FORMAT,
     TITLE_FONT,
@@ -64,6 +72,14 @@ from msdc.pipeline.report.charts import (
 )
 from msdc.pipeline.report.saving import get_ready, save
 from msdc.pipeline.report.summary import (
+    LEAD_TEXT,
+    LEAD_TITLE,
+    RADARS_TEXT,
+    RADARS_TITLE,
+    THESIS_LIMITS,
+    THESIS_TEXT,
+    THESIS_TITLE,
+    has_quality,
     sensor_pair,
     window_notes,
 )
@@ -81,22 +97,23 @@ from msdc.pipeline.report.tables import (
     write_table_parquet,
 )
 
-# Summary: stacked blocks that each fit a landscape page; every block starts with call sign, window and sensor
-# pair ("048:25/201 vs 021:0/1": window numbers restart for every pair of an aircraft)
+# Summary: stacked blocks that each fit a landscape page; every window block starts with call sign, window and
+# sensor pair ("048:25/201 vs 021:0/1": window numbers restart for every pair of an aircraft). The lead block
+# comes first (what each window shows, then with --quality the radar's errors in it), then the thesis's
+LEAD_BLOCK_KEYS = ["callsign", "window", "sensors", "start", "end", *MATCHED_KEYS]
 SUMMARY_BLOCKS: list[tuple[str, list[str]]] = [
-    ("Windows and measurements (thesis table 6.1: before = reports in the window, after = slots)",
+    (f"{THESIS_LIMITS['counts'][0]} ({THESIS_LIMITS['counts'][1]})",
      ["callsign", "window", "sensors", "start", "end", "address", "slots",
       "radar_before", "radar_after", "adsb_before", "adsb_after", "radar_duplicates", "adsb_duplicates",
       "adsb_jumps", "radar_filled_slots", "adsb_filled_slots"]),
-    (f"Coefficients (thesis table 6.2: r(0) by NCC; Pearson where at least {PEARSON_MIN_OVERLAP} slots "
-     "overlap, its peak searched over |lag| <= N/2; a peak at that limit, or not identified on a "
-     "near-straight leg, is no lag estimate)",
+    (f"{THESIS_LIMITS['coefficients'][0]} ({THESIS_LIMITS['coefficients'][1]}; Pearson where at least "
+     f"{PEARSON_MIN_OVERLAP} slots overlap, its peak searched over |lag| <= N/2)",
      ["callsign", "window", "sensors", "start", "end", "ncc0_lat", "ncc0_lon", "ncc_peak_lag_lat",
       "ncc_peak_lag_lon", "pearson0_lat", "pearson0_lon", "pearson_peak_lag_lat", "pearson_peak_lag_lon",
       "pearson_peak_at_limit_lat", "pearson_peak_at_limit_lon", "pearson_lag_unidentified_lat",
       "pearson_lag_unidentified_lon"]),
-    ("Separation between slotted radar and ADS-B positions (m) over the slots where both reported "
-     "(sep slots; a filled slot holds an earlier position); sep rms all m: every slot",
+    (f"{THESIS_LIMITS['separation'][0]} (m; {THESIS_LIMITS['separation'][1]}); sep rms all m: every slot, "
+     "filled ones included",
      ["callsign", "window", "sensors", "start", "end", "sep_mean_m", "sep_median_m", "sep_rms_m", "sep_p95_m",
       "sep_max_m", "sep_slots", "sep_rms_all_m"]),
 ]
@@ -104,6 +121,7 @@ SKIPPED_HEADERS = ["callsign", "address", "sensors", "start", "end", "reason"]
 SUMMARY_TITLE_ROWS = "1:1"
 _CORE_SHEETS = ("Summary", "Map", "Lag charts", "Slot charts", "Correlation", "Slots", "Parameters")
 _BLOCK_FILLS = ["EDEDED", "E2EFDA", "DDEBF7", "FCE4D6"]
+_LEAD_FILL = "FFF2CC"
 IMAGE_MAX_W_PX, IMAGE_MAX_H_PX = 1000, 620  # one figure per printed page
 
 
@@ -142,12 +160,21 @@ def _summary_time_cell(ws: WriteOnlyWorksheet, value: Any) -> Any:
     return cell_for(ws, value, None)
 
 
+def _wrapped(ws: WriteOnlyWorksheet, text: str, chars: int, font=BOLD) -> int:
+    """``text`` on as many rows as it needs at ``chars`` characters a row (a row running far past the
+    tables would shrink the printed page: it is fitted to the widest row); returns the rows written."""
+    lines = textwrap.wrap(text, width=chars) or [text]
+    for line in lines:
+        ws.append([text_cell(ws, line, font=font)])
+    return len(lines)
+
+
 def _summary_block(ws: WriteOnlyWorksheet, summaries: list[dict[str, Any]], title: str, keys: list[str],
-                   fill: str, row: int) -> int:
-    """One Summary block (title, header, one row per window of ``summaries``, _summary_values, blank) from
-    sheet row ``row``; returns the next free row."""
-    keys = [k for k in keys if k in SUMMARY_KEYS or k == "sensors"]
-    ws.append([text_cell(ws, title, font=BOLD)])
+                   fill: str, row: int, chars: int, empty: str = "no correlated window") -> int:
+    """One Summary block (title cut into rows of ``chars`` characters, header, one row per entry of
+    ``summaries``: _summary_values, or the radars' Excel values, blank) from sheet row ``row``; returns the
+    next free row."""
+    row += _wrapped(ws, title, chars) - 1
     ws.row_dimensions[row + 1].height = 3 * ROW_HEIGHT_PT  # "radar filled slots" wraps onto 3 lines
     ws.append(header_cells(ws, [summary_header(k) for k in keys], PatternFill("solid", fgColor=fill)))
     rows = [[_summary_value(values, k) for k in keys] for values in summaries]
@@ -165,16 +192,43 @@ def _summary_block(ws: WriteOnlyWorksheet, summaries: list[dict[str, Any]], titl
                 cells.append(cell_for(ws, value, fmt))
         ws.append(cells)
     if not rows:
-        ws.append([note_text_cell(ws, "no correlated window")])
+        ws.append([note_text_cell(ws, empty)])
     ws.append([])
     return row + 2 + max(len(rows), 1) + 1
+
+
+def _lead_keys(run: CorrelationRun) -> list[str]:
+    """The lead block's columns: with --quality the radar's errors in the window too."""
+    return LEAD_BLOCK_KEYS + (WINDOW_QUALITY_KEYS if has_quality(run) else [])
+
+
+def _text_rows(ws: WriteOnlyWorksheet, title: str, lines: list[tuple[dict[str, Any], str]],
+               none: str) -> int:
+    """A titled list of one text per window (its call sign, number, sensors and start first): the verdicts,
+    the notes. Returns the rows written."""
+    ws.append([text_cell(ws, title, font=BOLD)])
+    for values, text in lines:
+        cell = note_text_cell(ws, text)
+        cell.alignment = _INDENT
+        pair = cell_for(ws, values.get("sensors"), None)
+        if pair is not None:
+            pair.alignment = _INDENT
+        ws.append([cell_for(ws, values.get("callsign"), None), cell_for(ws, values.get("window"), None), pair,
+                   _summary_time_cell(ws, _summary_value(values, "start")), cell])
+    if not lines:
+        ws.append([note_text_cell(ws, none)])
+    ws.append([])
+    return 1 + max(len(lines), 1) + 1
 
 
 def _write_summary(wb: Workbook, run: CorrelationRun) -> None:
     ws = wb.create_sheet("Summary")
     summaries = _summary_values(run)
+    radars = [{k: excel_value(r.get(k)) for k in RADAR_KEYS} for r in run.radars]
+    radar_keys = [k for k in RADAR_KEYS if k != "note"]  # (each radar's note on rows of its own)
     skipped = [[excel_value(s.callsign), excel_value(s.address), sensor_pair(vars(s)) or None,
                 excel_value(s.start_tod), excel_value(s.end_tod), excel_value(s.reason)] for s in run.skipped]
+    blocks = [(f"{LEAD_TITLE}: {LEAD_TEXT}", _lead_keys(run)), *SUMMARY_BLOCKS]
     widths: dict[int, float] = {}
 
     def widen(headers: list[str], rows: list[list[Any]], formats: list[str | None]) -> None:
@@ -182,12 +236,15 @@ def _write_summary(wb: Workbook, run: CorrelationRun) -> None:
             values = [r[j] for r in rows]
             widths[j] = max(widths.get(j, 0.0), column_width(header, values, formats[j]))
 
-    for _title, keys in SUMMARY_BLOCKS:  # widths first: write-only sheets take them before any row
-        keys = [k for k in keys if k in SUMMARY_KEYS or k == "sensors"]
+    for _title, keys in blocks:  # widths first: write-only sheets take them before any row
         rows = [[values.get(k) for k in keys] for values in summaries]
         formats = [SUMMARY_DATETIME_FORMAT if k in ("start", "end") else
                    number_format_for(k, [r[j] for r in rows]) for j, k in enumerate(keys)]
         widen([summary_header(k) for k in keys], rows, formats)
+    if radars:
+        rows = [[r.get(k) for k in radar_keys] for r in radars]
+        widen([summary_header(k) for k in radar_keys], rows, [number_format_for(k, [r[j] for r in rows])
+                                                               for j, k in enumerate(radar_keys)])
     widen(SKIPPED_HEADERS[:-1], [r[:-1] for r in skipped], [None, None, None, CLOCK_FORMAT, CLOCK_FORMAT])
     # (the reason overflows)
     set_widths(ws, [widths[j] for j in sorted(widths)])
@@ -196,26 +253,30 @@ def _write_summary(wb: Workbook, run: CorrelationRun) -> None:
     date = run.parameters.get("date")
     ws.append([text_cell(ws, f"Correlation summary: {len(run.windows)} window(s), {len(run.skipped)} skipped"
                          + (f", {date} UTC" if date else ", date unknown (clock times)"), font=TITLE_FONT)])
+    chars = max(60, int(0.9 * sum(widths.values())))  # a title's row: about the tables' width
     row = 2
+    row = _summary_block(ws, summaries, blocks[0][0], blocks[0][1], _LEAD_FILL, row, chars)
+    row += _text_rows(ws, f"Verdicts ({len(summaries)})", [(values, str(values.get("verdict") or "-"))
+                                                           for values in summaries], "none")
+    if radars:
+        row = _summary_block(ws, radars, f"{RADARS_TITLE} ({RADARS_TEXT})", radar_keys, _LEAD_FILL, row,
+                             chars)
+        for radar in run.radars:
+            if radar.get("note"):
+                row += _wrapped(ws, f"{radar.get('radar')}: {radar['note']}", chars, NOTE_FONT)
+        ws.append([])
+        row += 1
+    ws.append([text_cell(ws, f"{THESIS_TITLE} ({THESIS_TEXT})", font=TITLE_FONT)])
+    row += 1
     for (title, keys), fill in zip(SUMMARY_BLOCKS, _BLOCK_FILLS, strict=False):
-        row = _summary_block(ws, summaries, title, keys, fill, row)
+        row = _summary_block(ws, summaries, title, keys, fill, row, chars)
 
     # one row per note, so that no row runs far past the tables (the page is fitted to its widest row)
     notes = [(values, n) for w, values in zip(run.windows, summaries, strict=True)
              for n in window_notes(w.summary)]
-    ws.append([text_cell(ws, f"Notes ({len(notes)})", font=BOLD)])
-    for values, note in notes:
-        start = _summary_value(values, "start")
-        note_cell = note_text_cell(ws, note)
-        note_cell.alignment = _INDENT
-        pair = cell_for(ws, values.get("sensors"), None)
-        pair.alignment = _INDENT
-        ws.append([cell_for(ws, values.get("callsign"), None),
-                   cell_for(ws, values.get("window"), None), pair, _summary_time_cell(ws, start), note_cell])
-    if not notes:
-        ws.append([note_text_cell(ws, "none: in every window the RMS separation is within 3 x the median and "
-                                      "no Pearson peak needs a warning")])
-    ws.append([])
+    row += _text_rows(ws, f"Notes on the thesis's measures ({len(notes)})", notes,
+                      "none: in every window the RMS separation is within 3 x the median and no Pearson peak "
+                      "needs a warning")
     ws.append([text_cell(ws, f"Skipped windows ({len(skipped)})", font=BOLD)])
     if skipped:
         ws.append(header_cells(ws, SKIPPED_HEADERS, PatternFill("solid", fgColor=_BLOCK_FILLS[3])))

@@ -29,6 +29,9 @@ _STYLE = {
     "adsb": {"line": ADSB_COLOR, "face": ADSB_COLOR, "edge": ADSB_EDGE, "lw": 1.6, "ms": 5.6, "z": 3},
 }
 _LABEL = {"radar": "Radar (CAT048)", "adsb": "ADS-B (CAT021)"}
+# what the two roles of a correlation run are, by its --pairs (pipeline.correlate.correlation.PAIR_KINDS)
+_PAIR_LABELS = {"mlat-adsb": {"radar": "Multilateration (CAT010/CAT020)", "adsb": "ADS-B (CAT021)"},
+                "smr-mlat": {"radar": "Surface radar (CAT010)", "adsb": "Multilateration (CAT010/CAT020)"}}
 _MAX_TITLE_CALLSIGNS = 6
 _MAX_TRACK_LABELS = 30
 MAX_MARKED_SLOTS = 20_000  # past this many slots the map shows lines only: markers would only overplot
@@ -98,14 +101,14 @@ def _draw_sensor(ax: Axes, x: np.ndarray, y: np.ndarray, filled: np.ndarray, sen
             zorder=st["z"] + 0.1)
 
 
-def _legend_handles(any_filled: bool) -> list[Line2D]:
+def _legend_handles(any_filled: bool, labels: dict[str, str] = _LABEL) -> list[Line2D]:
     handles = []
     for sensor in ("radar", "adsb"):
         st = _STYLE[sensor]
         effects = ([patheffects.Stroke(linewidth=st["lw"] + 1.6, foreground=ADSB_EDGE), patheffects.Normal()]
                    if sensor == "adsb" else None)
         handles.append(Line2D([], [], color=st["line"], lw=st["lw"], marker="o", ms=st["ms"], mfc=st["face"],
-                              mec=st["edge"], mew=0.7, path_effects=effects, label=_LABEL[sensor]))
+                              mec=st["edge"], mew=0.7, path_effects=effects, label=labels[sensor]))
     if any_filled:
         handles.append(Line2D([], [], ls="none", marker="o", ms=5, mfc="white", mec="0.3", mew=0.9,
                               label="filled slot (no report)"))
@@ -312,10 +315,11 @@ def track_map(run: CorrelationRun, sensors: pd.DataFrame | None = None) -> Figur
         coslat = math.cos(math.radians(float(np.mean(finite_lat))))
         if coslat > 0.01:
             ax.set_aspect(1.0 / coslat, adjustable="datalim")
-        handles = _legend_handles(any_filled)
+        pairs = str(run.parameters.get("pairs", ""))
+        handles = _legend_handles(any_filled, _PAIR_LABELS.get(pairs, _LABEL))
         if sensors is not None and len(sensors):
             handles.append(Line2D([], [], marker="^", ms=9, color="black", mfc="#4d4d4d", ls="none",
-                                  label="radar site"))
+                                  label="reference point" if pairs in _PAIR_LABELS else "radar site"))
             handles.append(Line2D([], [], color="0.55", lw=0.7, ls=":",
                                   label=f"range ring every {RING_STEP_NM:g} NM"))
         handles.append(Line2D([], [], marker=r"$\rightarrow$", ms=10, color="black", ls="none",
@@ -334,7 +338,10 @@ def track_map(run: CorrelationRun, sensors: pd.DataFrame | None = None) -> Figur
     ax.set_ylabel("Latitude (deg, WGS-84)")
     fig.suptitle(f"Slotted tracks: {_callsign_title(run.windows) or 'none'}", fontsize=13, fontweight="bold")
     unmarked = "" if markers else f"; {n_slots:,} slots: lines only, no slot markers"
-    ax.set_title(f"radar (red) over ADS-B (yellow), {len(run.windows)} window(s), equal-distance aspect"
+    roles = _PAIR_LABELS.get(str(run.parameters.get("pairs", "")))
+    first, second = (roles["radar"].split(" (")[0].lower(), roles["adsb"].split(" (")[0]) if roles else (
+        "radar", "ADS-B")
+    ax.set_title(f"{first} (red) over {second} (yellow), {len(run.windows)} window(s), equal-distance aspect"
                  f"{unmarked}", fontsize=9, color="0.35")
     missed = place_labels(fig, ax)
     if missed:  # said, not hidden silently
@@ -366,6 +373,7 @@ def lag_figure(window: WindowResult, path: str | os.PathLike[str]) -> Path:
     x = _floats(lags, "lag")
     half = pearson_max_lag((x.size + 1) // 2)
     inside = np.abs(x) <= half
+    peaks: list[tuple[Axes, Text, Line2D]] = []
     for i, axis in enumerate(("lat", "lon")):
         ax = fig.add_subplot(1, 2, i + 1)
         ax.axvline(0, color="0.6", lw=0.8, zorder=1)
@@ -381,16 +389,18 @@ def lag_figure(window: WindowResult, path: str | os.PathLike[str]) -> Path:
                 # the label on the side towards the middle, so a peak at the edge keeps it inside the axes
                 right = x[k] <= 0
                 if at_limit or flat:  # no lag estimate: a hollow mark, said in words
-                    ax.plot(x[k], y[k], marker="o", ms=9, mfc="white", mec=color, mew=1.4, ls="none",
-                            zorder=4, clip_on=False)
+                    (mark,) = ax.plot(x[k], y[k], marker="o", ms=9, mfc="white", mec=color, mew=1.4,
+                                      ls="none", zorder=4, clip_on=False)
                     why = "search limit" if at_limit else "straight leg, not identified"
                     text = f"{int(x[k]):+d}: {why}, no estimate"
                 else:
-                    ax.plot(x[k], y[k], marker="*", ms=12, color=color, mec="black", mew=0.6, ls="none",
-                            zorder=4, clip_on=False)
+                    (mark,) = ax.plot(x[k], y[k], marker="*", ms=12, color=color, mec="black", mew=0.6,
+                                      ls="none", zorder=4, clip_on=False)
                     text = f"{int(x[k]):+d}"
-                ax.annotate(text, (x[k], y[k]), xytext=(7 if right else -7, 4), textcoords="offset points",
-                            ha="left" if right else "right", fontsize=8, color=color, zorder=5)
+                label = ax.annotate(text, (x[k], y[k]), xytext=(10 if right else -10, 6),
+                                    textcoords="offset points", ha="left" if right else "right", fontsize=8,
+                                    color=color, zorder=5)
+                peaks.append((ax, label, mark))
         values = np.concatenate(shown) if shown else np.array([])
         values = values[np.isfinite(values)]
         if values.size:
@@ -410,7 +420,44 @@ def lag_figure(window: WindowResult, path: str | os.PathLike[str]) -> Path:
     fig.suptitle(f"Correlation against lag: {window_label(window.summary)}{note}\n(star = peak, hollow = "
                  "peak at the search limit; wider lags, with less than half the slots overlapping, left out)",
                  fontsize=10)
+    place_peak_labels(fig, peaks)
     return save_png(fig, path)
+
+
+# where a peak's label may go, in points from the peak: beside it on the side towards the middle first,
+# then below, above and on the other side; each clears the largest mark (a 12 pt star: 6 pt radius)
+_PEAK_LABEL_OFFSETS_PT = [(10, 6), (10, -14), (0, 10), (0, -20), (-10, 6), (-10, -14), (16, -4), (-16, -4)]
+LABEL_CLEARANCE_PX = 1.0
+
+
+def place_peak_labels(fig: Figure, peaks: list[tuple[Axes, Text, Line2D]]) -> None:
+    """Move each peak label (its axes, text, mark) to the first of _PEAK_LABEL_OFFSETS_PT (mirrored for a
+    label on the left) where it covers no peak mark and no label placed before it and stays inside its
+    axes; where none is free, the first. The NCC and Pearson peaks at one lag, and a label 7 pt beside a
+    12 pt star, drew their labels over the marks."""
+    if not peaks:
+        return
+    fig.draw_without_rendering()  # the layout settled: the marks' and labels' extents are final
+    renderer = fig.canvas.get_renderer()
+    marks = {id(ax): [m.get_window_extent(renderer) for a, _, m in peaks if a is ax] for ax, _, _ in peaks}
+    placed = []
+    for ax, label, _ in peaks:
+        left = label.get_horizontalalignment() == "right"
+        area = ax.get_window_extent(renderer)
+        for n, (dx, dy) in enumerate(_PEAK_LABEL_OFFSETS_PT):
+            dx = -dx if left else dx
+            label.set_horizontalalignment("center" if dx == 0 else ("right" if dx < 0 else "left"))
+            label.xyann = (dx, dy)
+            box = label.get_window_extent(renderer).padded(LABEL_CLEARANCE_PX)
+            clear = not any(box.overlaps(other) for other in [*marks[id(ax)], *placed])
+            inside = area.x0 <= box.x0 and box.x1 <= area.x1 and area.y0 <= box.y0 and box.y1 <= area.y1
+            if clear and inside:
+                break
+            if n == len(_PEAK_LABEL_OFFSETS_PT) - 1:  # nowhere free: the first place
+                dx0, dy0 = _PEAK_LABEL_OFFSETS_PT[0]
+                label.set_horizontalalignment("right" if left else "left")
+                label.xyann = (-dx0 if left else dx0, dy0)
+        placed.append(label.get_window_extent(renderer).padded(LABEL_CLEARANCE_PX))
 
 
 def latlon_time_figure(window: WindowResult, path: str | os.PathLike[str]) -> Path:

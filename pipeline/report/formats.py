@@ -40,7 +40,7 @@ COLUMN_UNITS: dict[str, str] = {
     "radar_before": "count", "radar_after": "count", "adsb_before": "count", "adsb_after": "count",
     "radar_duplicates": "count", "adsb_duplicates": "count", "adsb_jumps": "count",
     "radar_filled_slots": "count", "adsb_filled_slots": "count", "radar_count": "count",
-    "adsb_count": "count", "sep_slots": "count",
+    "adsb_count": "count", "sep_slots": "count", "matched_reports": "count", "quality_reports": "count",
     "ncc_peak_lag_lat": "count", "ncc_peak_lag_lon": "count", "pearson_peak_lag_lat": "count",
     "pearson_peak_lag_lon": "count", "n_reports": "count", "reports": "count", "intervals": "count",
     "gaps": "count", "jumps": "count", "blocks": "count", "records": "count", "track_number": "count",

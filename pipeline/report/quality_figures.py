@@ -11,8 +11,10 @@ from pathlib import Path
 
 import numpy as np
 import pandas as pd
+from matplotlib import rcParams
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
+from matplotlib.font_manager import FontProperties
 from matplotlib.ticker import FuncFormatter, MultipleLocator, NullFormatter
 
 from msdc.pipeline.correlate.results import WindowResult
@@ -25,36 +27,50 @@ from msdc.pipeline.report.summary import window_label
 
 RADAR_COLOR = "#d62728"
 ADSB_COLOR = "#e6b800"
-_SENSOR_LABEL = {"radar": "Radar (CAT048)", "adsb": "ADS-B (CAT021)"}
-_TICK_STEPS_S = (10, 30, 60, 120, 300, 600, 900, 1800, 3600, 7200, 14400)
+_SENSOR_LABEL = {"radar": "Radar (CAT048)", "adsb": "ADS-B (CAT021)", "mlat": "Multilateration",
+                 "smr": "Surface radar (CAT010)"}
+_TICK_STEPS_S = (10, 30, 60, 120, 300, 600, 900, 1800, 3600, 7200, 14400)  # whole minutes from 60 s
 MAX_ERROR_POINTS = 50_000  # reports drawn per radar error figure: more only overplot, and cost seconds
 MAX_LEGEND_AIRCRAFT = 20  # aircraft named in the radar error legend; past it, colours only
 
 
 def plt_cycle() -> list[str]:
     """The colours of matplotlib's default property cycle (C0, C1, ...)."""
-    from matplotlib import rcParams
-
     return rcParams["axes.prop_cycle"].by_key()["color"]
 
 
-def _clock(seconds: float, _pos=None) -> str:
-    """HH:MM:SS of seconds since midnight (with +Nd past the first day)."""
+def _clock(seconds: float, _pos=None, *, with_seconds: bool = True) -> str:
+    """HH:MM:SS (HH:MM without ``with_seconds``) of seconds since midnight (with +Nd past the first day)."""
     if not np.isfinite(seconds):
         return ""
     day, rem = divmod(int(round(seconds)), 86400)
-    text = f"{rem // 3600:02d}:{rem % 3600 // 60:02d}:{rem % 60:02d}"
+    text = f"{rem // 3600:02d}:{rem % 3600 // 60:02d}" + (f":{rem % 60:02d}" if with_seconds else "")
     return f"+{day}d {text}" if day else text
 
 
+CHAR_WIDTH_EM = 0.62  # a tick label digit's width in ems (DejaVu Sans, matplotlib's default: 0.636)
+LABEL_GAP = 1.5  # a tick step holds at least this many label widths (a label and half a label's room)
+
+
 def _time_axis(ax: Axes, t_s) -> None:
-    """Clock-time ticks on round steps (10 s .. 2 h) for an axis of seconds since midnight."""
+    """Clock-time ticks on round steps (10 s .. 4 h) for an axis of seconds since midnight: the shortest
+    step whose labels fit the axis's width with room between them (HH:MM:SS labels at 30 s on a half-width
+    panel ran into one string), as HH:MM where the step is whole minutes."""
     t = np.asarray(t_s, dtype=float)
     t = t[np.isfinite(t)]
     span = float(t.max() - t.min()) if t.size else 0.0
-    step = next((s for s in _TICK_STEPS_S if span / s <= 7), _TICK_STEPS_S[-1])
+    fig = ax.get_figure()
+    width_in = ax.get_position().width * fig.get_figwidth() * 0.9  # (the layout takes a little more)
+    size_pt = FontProperties(size=rcParams["xtick.labelsize"]).get_size_in_points()
+    longest = max((len(_clock(v)) for v in (t.min(), t.max())), default=8) if t.size else 8
+
+    def fits(step: int) -> bool:
+        chars = longest - (3 if step % 60 == 0 else 0)
+        return (span / step + 1) * chars * CHAR_WIDTH_EM * size_pt / 72.0 * LABEL_GAP <= width_in
+
+    step = next((s for s in _TICK_STEPS_S if fits(s)), _TICK_STEPS_S[-1])
     ax.xaxis.set_major_locator(MultipleLocator(step))
-    ax.xaxis.set_major_formatter(FuncFormatter(_clock))
+    ax.xaxis.set_major_formatter(FuncFormatter(lambda v, _pos=None: _clock(v, with_seconds=step % 60 != 0)))
     ax.set_xlabel("time (UTC)")
 
 
@@ -89,8 +105,9 @@ BULK_SHARE = 0.99  # the left panel of an update-interval figure: the range hold
 def interval_histogram(histogram: pd.DataFrame) -> Figure:
     """Update-interval histogram ("Update intervals" of quality_tables), one row per sensor: at the left
     the bulk (the range holding 99 % of the intervals, linear), at the right every interval on log-log
-    axes (the rare long ones, a few against tens of thousands, stay visible); bars labelled by their
-    counts where the labels leave room."""
+    axes as intervals per second of interval (the rare long ones, a few against tens of thousands, stay
+    visible, and a 30 s wide bin of 5 is not drawn 300 times the height of a 0.1 s bin of 5); bars
+    labelled by their counts where the labels leave room."""
     sensors = list(histogram.groupby(["sensor", "sac", "sic"], dropna=False, sort=True))
     fig = new_figure(11, 2.7 * max(len(sensors), 1))
     if not sensors:
@@ -117,19 +134,22 @@ def interval_histogram(histogram: pd.DataFrame) -> Figure:
         bulk_ax.set_xlabel("update interval (s)")
         nonzero = h[h["intervals"] > 0]
         if len(nonzero):
-            placed.append(_bars(all_ax, nonzero, color, lw=0.0))  # 0.1 s bins at 10 s: edges only
+            # 0.1 s bins at 10 s: edges only; bins 0.1 s to 60 s wide: heights per second of interval
+            placed.append(_bars(all_ax, nonzero, color, lw=0.0, density=True))
             all_ax.set_xscale("log")  # 0.1 s bins near the bulk and the 30-180 s ones alike visible
             all_ax.set_yscale("log")
             first = float(nonzero["bin_start_s"].min())
             all_ax.set_xlim(max(first, 0.05) / 1.3, float(nonzero["bin_end_s"].max()) * 1.3)
-            all_ax.set_ylim(0.7, float(nonzero["intervals"].max()) * 4.0)
+            density = nonzero["intervals"] / (nonzero["bin_end_s"] - nonzero["bin_start_s"])
+            all_ax.set_ylim(float(density.min()) / 10.0, float(density.max()) * 4.0)
+            all_ax.set_ylabel("intervals per s of interval")
             plain = FuncFormatter(lambda v, _pos: f"{v:g}")  # 4, 5, 6 s, not 4 x 10^0
             all_ax.xaxis.set_major_formatter(plain)
             all_ax.xaxis.set_minor_formatter(plain if all_ax.get_xlim()[1] / all_ax.get_xlim()[0] < 20
                                              else NullFormatter())
         else:
             _empty(all_ax, "No update intervals")
-        all_ax.set_title("every interval (log-log)", fontsize=10)
+        all_ax.set_title("every interval, per second of interval (log-log)", fontsize=10)
         all_ax.set_xlabel("update interval (s)")
         for ax in (bulk_ax, all_ax):
             _grid(ax)
@@ -138,10 +158,13 @@ def interval_histogram(histogram: pd.DataFrame) -> Figure:
     return fig
 
 
-def _bars(ax: Axes, bins: pd.DataFrame, color: str, lw: float = 0.5) -> tuple:
-    """The bins as bars labelled with their counts; (labels, counts, bars) for _drop_overlapping."""
-    bars = ax.bar(bins["bin_start_s"], bins["intervals"], width=bins["bin_end_s"] - bins["bin_start_s"],
-                  align="edge", color=color, edgecolor="0.25" if lw else color, lw=lw)
+def _bars(ax: Axes, bins: pd.DataFrame, color: str, lw: float = 0.5, density: bool = False) -> tuple:
+    """The bins as bars labelled with their counts, as high as their counts or (``density``) as their
+    counts per second of the bin's width; (labels, counts, bars) for _drop_overlapping."""
+    width = bins["bin_end_s"] - bins["bin_start_s"]
+    height = bins["intervals"] / width if density else bins["intervals"]
+    bars = ax.bar(bins["bin_start_s"], height, width=width, align="edge", color=color,
+                  edgecolor="0.25" if lw else color, lw=lw)
     labels = [f"{int(v)}" if v > 0 else "" for v in bins["intervals"]]
     return ax.bar_label(bars, labels=labels, fontsize=7, padding=1), bins["intervals"].to_numpy(), bars
 

@@ -22,6 +22,10 @@ from openpyxl.utils import get_column_letter
 from openpyxl.xml import LXML
 
 _MAX_TEXT = 32_767
+# Booleans carry this number format: LibreOffice shows an unstyled boolean cell as 0/1 or TRUE/FALSE
+# depending on its neighbours (both in one Summary row); with it every one reads TRUE or FALSE, as Excel
+# shows booleans whatever their format
+BOOL_FORMAT = '"TRUE";"TRUE";"FALSE"'
 
 
 class RawRow(list):
@@ -36,6 +40,15 @@ class RowStyles:
         self.ws, self.formats = ws, list(formats)
         self.ids: list[str | None] = [None] * len(self.formats)
         self.letters = [get_column_letter(j + 1) for j in range(len(self.formats))]
+        self._bool_id: str | None = None
+
+    def bool_id(self) -> str:
+        """The style id of BOOL_FORMAT, looked up once."""
+        if self._bool_id is None:
+            cell = WriteOnlyCell(self.ws, True)
+            cell.number_format = BOOL_FORMAT
+            self._bool_id = f"{cell.style_id}"
+        return self._bool_id
 
     def style_id(self, j: int) -> str:
         sid = self.ids[j]
@@ -162,7 +175,8 @@ def _row_text(values: RawRow, row_idx: int, styles: RowStyles) -> str | None:
                 parts.append(f'<c r="{styles.letter(j)}{r}" s="{styles.style_id(j)}" t="n"><v>{value:.16g}'
                              '</v></c>')
         elif kind is bool:
-            parts.append(f'<c r="{styles.letter(j)}{r}" t="b"><v>{1 if value else 0}</v></c>')
+            parts.append(f'<c r="{styles.letter(j)}{r}" s="{styles.bool_id()}" t="b"><v>{1 if value else 0}'
+                         '</v></c>')
         elif kind is str and formats[j] is None and _plain_text(value):
             if not value:  # openpyxl writes "" as an element without content
                 parts.append(f'<c r="{styles.letter(j)}{r}" t="inlineStr"/>')
@@ -185,12 +199,20 @@ def openpyxl_values(ws, values: Sequence[Any], formats: Sequence[str | None]) ->
     public path, one cell per value), everything else as it is."""
     out = list(values)
     for j, value in enumerate(out):
-        if formats[j] is not None and value is not None and value.__class__ is not bool \
-                and not isinstance(value, Cell):
+        if value.__class__ is bool:
+            out[j] = bool_cell(ws, value)
+        elif formats[j] is not None and value is not None and not isinstance(value, Cell):
             cell = WriteOnlyCell(ws, value)
             cell.number_format = formats[j]
             out[j] = cell
     return out
+
+
+def bool_cell(ws, value: bool) -> WriteOnlyCell:
+    """A boolean cell that reads TRUE or FALSE in every spreadsheet (BOOL_FORMAT)."""
+    cell = WriteOnlyCell(ws, value)
+    cell.number_format = BOOL_FORMAT
+    return cell
 
 
 def _plain_text(value: str) -> bool:

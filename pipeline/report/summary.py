@@ -12,7 +12,14 @@ import numpy as np
 import pandas as pd
 
 from msdc.pipeline.correlate.correlation import pearson_search_limit
-from msdc.pipeline.correlate.results import SUMMARY_KEYS, CorrelationRun, WindowResult
+from msdc.pipeline.correlate.results import (
+    MATCHED_KEYS,
+    RADAR_KEYS,
+    SUMMARY_KEYS,
+    WINDOW_QUALITY_KEYS,
+    CorrelationRun,
+    WindowResult,
+)
 from msdc.pipeline.model.time import iso_utc
 from msdc.pipeline.report.files import is_missing, json_value
 from msdc.pipeline.report.formats import decimals
@@ -55,9 +62,54 @@ def window_summary(window: WindowResult) -> dict[str, Any]:
     return summary
 
 
+# What a report leads with, and the thesis's measures that follow with their limits, one sentence each: the
+# same words in the workbook's Summary, on the terminal and in the JSON's "summary"
+LEAD_TITLE = "What each window shows"
+LEAD_TEXT = ("every radar report against the reference's position at the report's own time (interpolated "
+             "between the reference reports on either side), over the slots where both sensors reported, "
+             "ADS-B position jumps left out: no slot mean and no filled slot is read")
+RADARS_TITLE = "Radars against ADS-B over the run"
+RADARS_TEXT = ("--quality: each radar's accuracy (RMS distance, range and azimuth error SD) and the biases "
+               "fitted over every aircraft, with their standard errors (the Radar biases sheet)")
+THESIS_TITLE = "The thesis's measures"
+THESIS_TEXT = "kept as the thesis computes them; each with its limit"
+THESIS_LIMITS: dict[str, tuple[str, str]] = {
+    "counts": ("Thesis table 6.1: reports in the window before slotting, slots after",
+               "'after' counts every slot, filled ones included: the window's length, not its reports"),
+    "coefficients": ("Thesis table 6.2: r(0) by NCC, with Pearson and the peak lags",
+                     "NCC keeps the mean, so r(0) is near 1 for any two nearby tracks, even kilometres "
+                     "apart, and peaks at lag 0 whatever the clock; a Pearson peak lag is an estimate only "
+                     "on a window that turns (withheld at the search limit or on a near-straight leg)"),
+    "separation": ("Separation between the slot means, over the slots both sensors reported",
+                   "it holds the slotting (two slot means describe the aircraft at different moments of a "
+                   "slot: hundreds of metres between unbiased sensors) and, unless --drop-jumps, ADS-B "
+                   "position jumps"),
+}
+LEAD_WINDOW_KEYS = ["callsign", "address", "window", "radar_sensor", "reference_sensor", "start", "end",
+                    *MATCHED_KEYS, *WINDOW_QUALITY_KEYS, "verdict"]
+
+
+def has_quality(run: CorrelationRun) -> bool:
+    """Whether the run carries the quality step's numbers (--quality): its radars, or a window's."""
+    return bool(run.radars) or any(not is_missing(w.summary.get("quality_reports")) for w in run.windows)
+
+
+def lead_json(run: CorrelationRun) -> dict[str, Any]:
+    """The JSON's "summary": what each window shows (LEAD_WINDOW_KEYS; without --quality its quality keys
+    are left out), the radars' accuracy and biases (--quality), and the thesis's measures' limits."""
+    summaries = [window_summary(w) for w in run.windows]
+    keys = [k for k in LEAD_WINDOW_KEYS if k not in WINDOW_QUALITY_KEYS or has_quality(run)]
+    return {"about": f"{LEAD_TITLE}: {LEAD_TEXT}",
+            "windows": [{k: s.get(k) for k in keys} for s in summaries],
+            "radars": [{k: json_value(r.get(k)) for k in RADAR_KEYS} for r in run.radars],
+            "thesis_measures": {name: f"{title}: {limit}" for name, (title, limit) in THESIS_LIMITS.items()}}
+
+
 def run_to_json(run: CorrelationRun) -> dict[str, Any]:
-    """The run as a JSON-ready dict: windows, skipped windows, parameters, inputs and filters."""
+    """The run as a JSON-ready dict: the summary it leads with (lead_json), then windows, skipped windows,
+    parameters, inputs and filters."""
     return {
+        "summary": lead_json(run),
         "windows": [window_summary(w) for w in run.windows],
         "skipped": [{key: json_value(getattr(s, key)) for key in SKIPPED_KEYS} for s in run.skipped],
         "parameters": json_value(run.parameters),
@@ -239,18 +291,96 @@ def frame_text(frame: pd.DataFrame) -> str:
     return shown.to_string(index=False)
 
 
-def summary_table(run: CorrelationRun) -> str:
-    """A fixed-width text table, one line per window, then the windows' notes, for printing after a run."""
-    header = [h for h, _, _ in _TABLE]
-    right = [r for _, _, r in _TABLE]
-    rows = [_table_row(w.summary) for w in run.windows]
+def _fixed_width(header: list[str], rows: list[list[str]], right: list[bool]) -> list[str]:
+    """A header, a rule and the rows, each column as wide as its widest cell."""
     widths = [max(len(r[i]) for r in [header, *rows]) for i in range(len(header))]
 
     def line(cells: list[str]) -> str:
         padded = (c.rjust(n) if r else c.ljust(n) for c, n, r in zip(cells, widths, right, strict=True))
         return "  ".join(padded)
 
-    lines = [line(header), "  ".join("-" * n for n in widths), *(line(r) for r in rows)]
+    return [line(header), "  ".join("-" * n for n in widths), *(line(r) for r in rows)]
+
+
+def _plus_minus(s: Mapping[str, Any], key: str, se_key: str) -> str:
+    """A mean with its standard error, "-27.6 +- 19.8" ("-" when the mean is missing)."""
+    mean = _num(s.get(key), key)
+    se = _num(s.get(se_key), se_key)
+    return mean if mean == "-" or se == "-" else f"{mean} +- {se}"
+
+
+# the lead table: (header, cell of a window summary, right-aligned); with --quality the _QUALITY_TABLE too
+_LEAD_TABLE = [
+    ("call sign", lambda s: printable(s.get("callsign")) or printable(s.get("address")) or "-", False),
+    ("win", lambda s: _count(s.get("window")), True),
+    ("sensors", lambda s: sensor_pair(s) or "- vs -", False),
+    ("start (UTC)", lambda s: clock_text(s.get("start"), s.get("start_tod")), False),
+    ("reports", lambda s: _count(s.get("matched_reports")), True),
+    ("median m", lambda s: _num(s.get("matched_sep_median_m"), "matched_sep_median_m"), True),
+    ("RMS m", lambda s: _num(s.get("matched_sep_rms_m"), "matched_sep_rms_m"), True),
+    ("p95 m", lambda s: _num(s.get("matched_sep_p95_m"), "matched_sep_p95_m"), True),
+    ("along m (+- SE)", lambda s: _plus_minus(s, "matched_along_mean_m", "matched_along_se_m"), True),
+    ("cross m (+- SE)", lambda s: _plus_minus(s, "matched_cross_mean_m", "matched_cross_se_m"), True),
+    ("time offset s", lambda s: _num(s.get("matched_time_offset_s"), "matched_time_offset_s"), True),
+]
+_QUALITY_TABLE = [
+    ("range error m", lambda s: _num(s.get("range_error_mean_m"), "range_error_mean_m"), True),
+    ("range SD m", lambda s: _num(s.get("range_error_std_m"), "range_error_std_m"), True),
+    ("azimuth error deg", lambda s: _num(s.get("azimuth_error_mean_deg"), "azimuth_error_mean_deg"), True),
+    ("azimuth SD deg", lambda s: _num(s.get("azimuth_error_std_deg"), "azimuth_error_std_deg"), True),
+]
+_RADAR_TABLE = [
+    ("radar", lambda r: printable(r.get("radar")) or "-", False),
+    ("sensor", lambda r: printable(r.get("radar_sensor")) or "-", False),
+    ("reports", lambda r: _count(r.get("n_reports")), True),
+    ("RMS m", lambda r: _num(r.get("horizontal_error_rms_m"), "horizontal_error_rms_m"), True),
+    ("range SD m", lambda r: _num(r.get("range_error_std_m"), "range_error_std_m"), True),
+    ("azimuth SD deg", lambda r: _num(r.get("azimuth_error_std_deg"), "azimuth_error_std_deg"), True),
+    ("range bias m", lambda r: _plus_minus(r, "range_bias_m", "range_bias_se_m"), True),
+    ("gain ppm", lambda r: _plus_minus(r, "range_gain_ppm", "range_gain_se_ppm"), True),
+    ("azimuth bias deg", lambda r: _plus_minus(r, "azimuth_bias_deg", "azimuth_bias_se_deg"), True),
+    ("time bias s", lambda r: _plus_minus(r, "time_bias_s", "time_bias_se_s"), True),
+]
+
+
+def lead_table(run: CorrelationRun) -> list[str]:
+    """The lines a run's terminal output leads with: what each window shows (with --quality the radar's
+    errors in it), each window's verdict, and with --quality the radars' accuracy and biases."""
+    if not run.windows:
+        return []
+    spec = _LEAD_TABLE + (_QUALITY_TABLE if has_quality(run) else [])
+    lines = [f"{LEAD_TITLE}: {LEAD_TEXT}"]
+    lines += _fixed_width([h for h, _, _ in spec], [[cell(w.summary) for _, cell, _ in spec]
+                                                     for w in run.windows], [r for _, _, r in spec])
+    lines += [f"Verdict: {window_label(w.summary)}: {printable(w.summary.get('verdict')) or '-'}"
+              for w in run.windows]
+    if run.radars:
+        lines += ["", f"{RADARS_TITLE} ({RADARS_TEXT}):"]
+        lines += _fixed_width([h for h, _, _ in _RADAR_TABLE], [[cell(r) for _, cell, _ in _RADAR_TABLE]
+                                                                 for r in run.radars],
+                              [r for _, _, r in _RADAR_TABLE])
+        lines += [f"Note: {printable(r.get('radar'))}: {printable(r.get('note'))}" for r in run.radars
+                  if printable(r.get("note"))]
+    return [*lines, ""]
+
+
+def thesis_limits() -> list[str]:
+    """One line per thesis measure: what it is and its limit."""
+    return [f"  {title}: {limit}" for title, limit in THESIS_LIMITS.values()]
+
+
+def summary_table(run: CorrelationRun) -> str:
+    """The run for the terminal: the lead (lead_table), then the thesis's measures as a fixed-width table,
+    one line per window, their limits, the skipped windows and the windows' notes."""
+    header = [h for h, _, _ in _TABLE]
+    right = [r for _, _, r in _TABLE]
+    rows = [_table_row(w.summary) for w in run.windows]
+    lines = lead_table(run)
+    if run.windows:
+        lines.append(f"{THESIS_TITLE} ({THESIS_TEXT}):")
+    lines += _fixed_width(header, rows, right)
+    if run.windows:
+        lines += thesis_limits()
     lines.append(f"{len(run.windows)} window(s) correlated, {len(run.skipped)} skipped")
     for skipped in run.skipped:
         who = printable(skipped.callsign) or printable(skipped.address) or "?"

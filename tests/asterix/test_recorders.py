@@ -420,9 +420,10 @@ def test_cli_reads_recorder_files(tmp_path, capsys) -> None:
     assert main(["stats", str(path), "--format", "gps", "--date", "2019-03-01"]) == 0
     out = capsys.readouterr()
     assert "Traceback" not in out.err
-    # CAT021 and CAT048 records; the CAT034 block is stepped over (not decoded by default, not an error)
+    # CAT021 and CAT048 records, and the CAT034 block (stats decodes every category msdc decodes)
     assert "Skipped blocks by reason:\n  none" in out.out
-    assert re.search(r"Blocks of categories not decoded:\n\s*category\s+blocks\s+bytes\n\s*34\s+1\s", out.out)
+    assert "Blocks of categories not decoded:\n  none" in out.out
+    assert re.search(r"\n\s*34\s+yes\s+1\s", out.out.split("Records per SAC/SIC")[0])
     oradis, _ = mixed_oradis()
     opath = tmp_path / "day.oradis"
     opath.write_bytes(oradis)
@@ -466,3 +467,30 @@ def test_stats_hints_at_format_for_a_damaged_start(tmp_path, capsys) -> None:
         assert f"{path}: read as a raw ASTERIX stream" in err and f"give --format {fmt}" in err
         assert main(["stats", str(path), "--date", "2019-03-01", "--format", fmt]) == 0
         assert "give --format" not in capsys.readouterr().err
+
+
+FILLERS = [b" " * 2200, b"\xff" * 2200, b"\x01" * 2200, (b"GPS RECORDER 1.0 " * 130)[:2200]]
+
+
+@pytest.mark.parametrize("header", FILLERS, ids=["spaces", "0xff", "0x01", "text"])
+def test_gps_header_of_any_filler_is_detected_from_its_frames(tmp_path, header) -> None:
+    """A GPS recorder file whose 2200-byte header is spaces (0x20 0x20 0x20: CAT032, LEN 8224), 0xFF, 0x01
+    or text starts a chain of data blocks: it was read as raw ('blocks of categories 6, 19, 32 ...',
+    nothing decoded). Its frames tell it (every frame chains after the header, the raw chain breaks inside
+    them): detected as gps, every record of the fixture decodes, nothing skipped."""
+    import json
+    from pathlib import Path
+
+    fixtures = Path(__file__).resolve().parents[2] / "fixtures"
+    raw = (fixtures / "adsb.ast").read_bytes()
+    blocks, at = [], 0
+    while at < len(raw):  # the fixture's blocks, hopped by LEN
+        n = int.from_bytes(raw[at + 1:at + 3], "big")
+        blocks.append(raw[at:at + n])
+        at += n
+    data = header + b"".join(b + TRAILER_HEAD + tod3(28800 + i / 2) + TRAILER_TAIL
+                             for i, b in enumerate(blocks))
+    assert detect_format(data[:DETECT_BYTES]) == "gps"
+    rec = read(tmp_path, data, "filler.gps", categories=None)
+    rows = json.loads((fixtures / "truth.json").read_text())["adsb"]["rows"]
+    assert rec.format == "gps" and rec.errors.empty and len(rec.frames[21]) == rows

@@ -31,10 +31,19 @@ from msdc.asterix.tables import load_table
 
 EDITIONS = [(48, "1.27"), (48, "1.31"), (48, "1.32"),
             (21, "0.23"), (21, "0.24"), (21, "0.25"), (21, "0.26"),
-            (21, "2.1"), (21, "2.4"), (21, "2.6"), (21, "2.7")]
+            (21, "2.1"), (21, "2.4"), (21, "2.6"), (21, "2.7"),
+            (10, "1.1"), (20, "1.9"), (20, "1.10"), (20, "1.11")]
 V2 = [(c, e) for c, e in EDITIONS if c == 21 and e.startswith("2.")]
-CAT034 = [(34, "1.27"), (34, "1.28"), (34, "1.29")]  # no call sign nor Mode 3/A: only the generic tests
-GENERIC = EDITIONS + CAT034
+# service messages (no call sign nor Mode 3/A): only the generic tests
+CAT034 = [(34, "1.27"), (34, "1.28"), (34, "1.29"), (2, "1.2")]
+SERVICE = (2, 34)  # I0xx/020 feeds two columns: sector_number and sector_azimuth_deg
+CAT062 = [(62, f"1.{m}") for m in range(16, 22)]
+STATUS = [(19, "1.3"), (23, "1.3"), (25, "1.5"), (63, "1.6"), (65, "1.5")]
+GENERIC = EDITIONS + CAT034 + CAT062 + STATUS
+# CAT062 fields later editions add (I062/060 V, G in 1.17; I062/080 SFC, IDD, IEC in 1.18, MLAT in 1.20,
+# M5I in 1.21): columns the earlier editions lack
+CAT062_ADDED = {"1.17": {"mode3a_v", "mode3a_g"}, "1.18": {"sfc", "idd", "iec"}, "1.20": {"cst_mlat"},
+                "1.21": {"cst_m5"}}
 PREFER_130 = {"latitude": "130", "longitude": "130"}
 ICAO_CHARS = "ABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789 "
 DAY_S = 86400.0
@@ -42,8 +51,9 @@ DAY_S = 86400.0
 TOD_COLUMNS = {"time_of_day", "time_applicability_position", "time_reception_position"}
 # 2.x: time_of_day is I021/071, else I021/073 (derived below, not drawn)
 V2_DERIVED = {"time_of_day"}
-# CAT034: I034/020 feeds two columns; the azimuth is the sector number times 360/256 deg (not drawn)
+# CAT034, CAT002: I0xx/020 feeds two columns; the azimuth is the sector number times 360/256 deg (not drawn)
 SECTOR_DEG = 360 / 256
+TYP = {"plot": 0, "track": 1}  # CAT001: the I001/020 TYP of each UAP
 
 
 @dataclass(frozen=True)
@@ -91,9 +101,16 @@ def _locate(node: dict, path: tuple[str, ...]) -> tuple[dict, int] | None:
     return None
 
 
-def _resolve(category: int, edition: str, col: Column, only_item: str | None = None) -> Spec | None:
-    """The first source of a column that exists in the edition (or the source in only_item)."""
-    items = {u["id"]: u["node"] for u in load_table(category, edition)["uap"] if u}
+def _uap(category: int, edition: str, uap: str = "") -> list:
+    """One UAP of an edition table ("uap", or one of "uaps": CAT001 "plot" and "track")."""
+    table = load_table(category, edition)
+    return table["uaps"][uap] if "uaps" in table else table["uap"]
+
+
+def _resolve(category: int, edition: str, col: Column, only_item: str | None = None,
+             uap: str = "") -> Spec | None:
+    """The first source of a column that exists in the edition's UAP (or the source in only_item)."""
+    items = {u["id"]: u["node"] for u in _uap(category, edition, uap) if u}
     for item, path in col.sources:
         if item not in items or (only_item is not None and item != only_item):
             continue
@@ -121,11 +138,11 @@ def _resolve(category: int, edition: str, col: Column, only_item: str | None = N
     return None
 
 
-def specs_for(category: int, edition: str, prefer130: bool = False) -> dict[str, Spec]:
+def specs_for(category: int, edition: str, prefer130: bool = False, uap: str = "") -> dict[str, Spec]:
     out = {}
     for col in columns_for(category, edition):
         only = PREFER_130.get(col.name) if prefer130 else None
-        spec = _resolve(category, edition, col, only)
+        spec = _resolve(category, edition, col, only, uap)
         if spec is not None:
             out[col.name] = spec
     return out
@@ -137,13 +154,22 @@ def test_table_walk_agrees_with_layout(category: int, edition: str) -> None:
     items = set(compile_layout(category, edition).item_frn)
     assert {s.item for s in specs.values()} <= items
     # a column exists in an edition when one of its sources resolves there
-    # (but for a field that is a spare bit in that edition: I021/200 ME, spare in 2.1)
-    spare = {"me"} if (category, edition) == (21, "2.1") else set()
+    # (but for a field that is a spare bit in that edition: I021/200 ME, spare in 2.1; I020/020 CF, an
+    # octet-group 1.9 does not define)
+    spare = {"me"} if (category, edition) == (21, "2.1") else {"cf"} if (category, edition) == (20, "1.9") \
+        else set()
+    if category == 62:  # spare bits (or an octet group not yet defined) in the earlier editions
+        spare = set().union(*(cols for ed, cols in CAT062_ADDED.items() if _version(ed) > _version(edition)))
+    # Mode S register fields (kind "bds", I048/250 contents) are read by asterix/bds.py, not the table walk
+    registers = {c.name for c in columns_for(category, edition) if c.kind == "bds"}
     for col in columns_for(category, edition):
-        if col.name not in specs and col.name not in spare:
+        if col.name not in specs and col.name not in spare | registers:
             assert not any(item in items for item, _ in col.sources), col.name
-    missing = {c.name for c in columns_for(category, edition)} - set(specs)
-    if category in (34, 48) or edition.startswith("2.") or edition == "0.26":
+    missing = {c.name for c in columns_for(category, edition)} - set(specs) - registers
+    if category == 20:  # no message type item in CAT020 (I020/020 CF, from 1.10 on, is in spare)
+        assert missing == {"message_type"} | spare
+    elif category in (*SERVICE, 10, 48, 62, 19, 23, 25, 63, 65) or edition.startswith("2.") \
+            or edition == "0.26":
         assert missing == spare
     else:
         assert missing == {"mode3a", "signal_amplitude"}  # no I021/070 nor I021/131 before 0.26
@@ -186,18 +212,21 @@ def _expected_text(spec: Spec, value):
 
 
 @st.composite
-def rows(draw, category: int, edition: str, prefer130: bool) -> tuple[dict, dict]:
-    """(input row for encode_frame, expected decoded row)."""
-    specs = specs_for(category, edition, prefer130)
+def rows(draw, category: int, edition: str, prefer130: bool, uap: str = "") -> tuple[dict, dict]:
+    """(input row for encode_frame, expected decoded row); CAT001 rows of one UAP (``typ`` fixed)."""
+    specs = specs_for(category, edition, prefer130, uap)
     v2 = category == 21 and edition.startswith("2.")
     drawn = {n: s for n, s in specs.items()
-             if not (v2 and n in V2_DERIVED) and not (category == 34 and n == "sector_azimuth_deg")}
+             if not (v2 and n in V2_DERIVED) and not (category in SERVICE and n == "sector_azimuth_deg")
+             and not (uap and n == "typ")}
     units: dict[tuple, list[Spec]] = {}
     for s in drawn.values():
         units.setdefault(s.unit, []).append(s)
     present = {u for u in units if draw(st.booleans())}
     if not present:
         present = {drawn["sac"].unit}
+    if uap:  # the octet of TYP is always written: it chooses the UAP
+        present.add(specs["typ"].unit)
     # octet groups of an extended node before a written one are written too (zero-filled)
     emitted = set(present)
     for u in units:
@@ -223,7 +252,9 @@ def rows(draw, category: int, edition: str, prefer130: bool) -> tuple[dict, dict
                 v = draw(_value(s))
                 given_row[s.name] = v
                 expected[s.name] = _expected_text(s, v)
-    if category == 34 and "sector_azimuth_deg" in specs:
+    if uap:
+        given_row["typ"] = expected["typ"] = TYP[uap]
+    if category in SERVICE and "sector_azimuth_deg" in specs:
         number = expected["sector_number"]
         expected["sector_azimuth_deg"] = None if number is None else number * SECTOR_DEG
         given_row["sector_azimuth_deg"] = None
@@ -437,3 +468,51 @@ def test_time_of_day_near_midnight(category: int, edition: str) -> None:
     assert decoded.time_of_day.iloc[-2] == 86399.9921875 and decoded.time_of_day.iloc[0] == 0.0
     assert decoded.timestamp.isna().all()  # no date given
     assert math.isclose(decoded.time_of_day.max(), 86399.9921875)
+
+
+# ---------------------------------------------------------------------------------------------------------
+# CAT001: each UAP, and the whole time of day from a CAT002 message before each record
+
+
+@pytest.mark.parametrize("uap", ["plot", "track"])
+@settings(max_examples=examples(30), deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(data=st.data())
+def test_round_trip_cat001(uap: str, data: st.DataObject) -> None:
+    n = data.draw(st.integers(1, 7), label="rows")
+    drawn = [data.draw(rows(1, "1.4", False, uap), label=f"row {i}") for i in range(n)]
+    given_rows, expected = [g for g, _ in drawn], [e for _, e in drawn]
+    # each record's whole time, its I001/141 (the time modulo 512 s) and a CAT002 message of its radar
+    # before it, within 32 s of it
+    blocks, times = [], []
+    for i, (g, e) in enumerate(drawn):
+        true = data.draw(st.integers(0, 86400 * 128 - 1), label=f"time {i}") / 128
+        ahead = data.draw(st.integers(-32 * 128, 32 * 128), label=f"ahead {i}") / 128
+        if g.get("truncated_time_of_day") is not None or e.get("truncated_time_of_day") is not None:
+            g["truncated_time_of_day"] = e["truncated_time_of_day"] = true % 512
+        sector = pd.DataFrame([{"sac": e["sac"] or 0, "sic": e["sic"] or 0, "message_type": 2,
+                                "time_of_day": (true - ahead) % 86400}])
+        blocks.append(encode_frame(2, sector))
+        dated = e["sac"] is not None and e["truncated_time_of_day"] is not None
+        times.append(true if dated else np.nan)
+    plots = encode_frame(1, pd.DataFrame(given_rows), edition="1.4", records_per_block=1)
+    starts = [0]
+    while starts[-1] < len(plots):
+        starts.append(starts[-1] + int.from_bytes(plots[starts[-1] + 1:starts[-1] + 3], "big"))
+    stream = b"".join(s + plots[a:b] for s, a, b in zip(blocks, starts[:-1], starts[1:], strict=True))
+    buf = np.frombuffer(stream, np.uint8)
+    rec = decode_buffer(buf, read_segments(buf, "raw"), path="<round trip>", categories=[1, 2])
+    assert rec.errors.empty, rec.errors.to_dict("records")
+    assert rec.decoded_bytes == len(stream)
+    decoded = rec.frames[1]
+    specs = specs_for(1, "1.4", uap=uap)
+    for i, row in enumerate(expected):
+        assert_row(decoded, i, row, specs)
+    np.testing.assert_array_equal(decoded.time_of_day.to_numpy(), times)
+    for col in columns_for(1, "1.4"):  # the other UAP's items are absent
+        if col.name not in specs and col.name != "time_of_day":
+            assert decoded[col.name].isna().all(), col.name
+
+
+def _version(edition: str) -> tuple[int, ...]:
+    """'1.20' -> (1, 20): editions compare as numbers, not as decimals (1.20 after 1.3)."""
+    return tuple(int(x) for x in edition.split("."))

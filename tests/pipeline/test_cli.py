@@ -45,7 +45,8 @@ def test_decode_exit_codes(tmp_path, capsys):
     junk = tmp_path / "junk.bin"
     junk.write_bytes(bytes(range(200)))
     assert main(["decode", str(junk)]) == 1
-    assert "nothing could be decoded" in capsys.readouterr().err
+    err = capsys.readouterr().err
+    assert "junk.bin is not ASTERIX" in err and "nothing written" in err
     assert main(["decode", str(tmp_path / "nope.ast")]) == 2
     assert "nope.ast" in capsys.readouterr().err
     damaged = tmp_path / "damaged.ast"
@@ -258,12 +259,14 @@ def test_correlate_names_the_sensors_and_pairs(tmp_path, capsys):
     assert "no aircraft is seen by two radars" in capsys.readouterr().err
 
 
-def test_decode_says_which_edition_auto_chose(tmp_path, capsys):
-    """--edition 21=auto: decode names the edition it walked (the simulator writes the newest, 2.7), as
-    stats does; the 0.2x and 2.x families read I021/130 and /131 differently."""
-    assert main(["decode", str(ADSB), "--edition", "21=auto", "-o", str(tmp_path / "a.csv")]) == 0
+@pytest.mark.parametrize("pin", [[], ["--edition", "21=auto"]])
+def test_decode_says_which_edition_auto_chose(tmp_path, capsys, pin):
+    """CAT021 is read with auto unless pinned (--edition 21=auto says it again): decode names the edition it
+    walked (the simulator writes the newest, 2.7), as stats does; the 0.2x and 2.x families read I021/130
+    and /131 differently."""
+    assert main(["decode", str(ADSB), *pin, "-o", str(tmp_path / "a.csv")]) == 0
     err = capsys.readouterr().err
-    assert f"{ADSB}: CAT021 --edition auto chose 2.7 (" in err
+    assert f"{ADSB}: CAT021 edition auto chose 2.7 (" in err
     assert "none needed telling apart" in err or "apart:" in err
 
 

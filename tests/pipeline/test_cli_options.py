@@ -50,7 +50,7 @@ ERRORS = [
     ("edition-stats", ["stats", "{R}", "--edition", "21=9.9"], 2, ["--edition 21=9.9", "2.7"]),
     ("edition-correlate", CORR + ["--edition", "21=9.9"], 2, ["--edition 21=9.9", "2.7"]),
     ("edition-category", CORR + ["--edition", "99=1.0"], 2, ["--edition 99=1.0", "21"]),
-    ("edition-48-auto", ["stats", "{R}", "--edition", "48=auto"], 2, ["--edition 48=auto"]),
+    ("edition-48-unknown", ["stats", "{R}", "--edition", "48=1.99"], 2, ["--edition 48=1.99"]),
     ("edition-syntax", ["stats", "{R}", "--edition", "21"], 2, ["--edition", "CAT=EDITION"]),
     ("out-readonly-dir", CORR + ["-o", "{RO}/report.xlsx"], 2, ["-o", "not writable"]),
     ("out-is-directory", CORR + ["-o", "{O}/dir.xlsx"], 2, ["-o", "is a directory"]),
@@ -114,7 +114,7 @@ ERRORS = [
     ("track-coast-below-step", TRACK + ["--step", "10", "--max-coast", "5"], 2, ["--max-coast", ">= --step"]),
     ("track-tpm-unknown", TRACK + ["--tpm", "magic"], 2, ["--tpm", "magic"]),
     ("track-tpm-nan", TRACK + ["--tpm", "fixed:nan"], 2, ["--tpm"]),
-    ("track-sources-unknown", TRACK + ["--sources", "radar,mlat"], 2, ["--sources", "radar,adsb"]),
+    ("track-sources-unknown", TRACK + ["--sources", "radar,wam"], 2, ["--sources", "radar,adsb"]),
     ("track-sources-repeat", TRACK + ["--sources", "radar,radar"], 2, ["--sources", "without repeats"]),
     ("track-sources-empty", TRACK + ["--sources", ""], 2, ["--sources"]),
     ("track-noise-unknown", TRACK + ["--noise", "nacp"], 2, ["--noise", "declared, estimate"]),
@@ -233,15 +233,21 @@ def test_same_input_twice_is_skipped_and_not_doubled(tmp_path, capsys):
     assert windows == single  # same reports, same duplicate counts: the copy added nothing
 
 
-def test_date_on_a_pcap_warns(tmp_path, capsys):
+@pytest.mark.parametrize("command", [["stats"], ["decode"], ["decode", "-o", "out.csv"]])
+def test_date_on_a_pcap_warns(tmp_path, capsys, command):
+    """A pcap is dated by its capture time: --date is ignored, and every command that reads it says so
+    (decode said nothing), naming the file; a raw recording beside it takes the date without a word."""
     from container_bytes import pcap_file, udp_frame
 
-    raw = _tiny(tmp_path, "r.ast", 28800, 28900).read_bytes()
+    raw = _tiny(tmp_path, "r.ast", 28800, 28900)
     pcap = tmp_path / "r.pcap"
-    pcap.write_bytes(pcap_file([(1551398400 + 28800, 0, udp_frame(raw))])[0])
-    status, _, err = _run(["stats", str(pcap), "--date", "2020-01-01"], capsys)
+    pcap.write_bytes(pcap_file([(1551398400 + 28800, 0, udp_frame(raw.read_bytes()))])[0])
+    argv = [command[0], str(pcap), str(raw), "--date", "2020-01-01",
+            *(str(tmp_path / a) if a.endswith(".csv") else a for a in command[1:])]
+    status, _, err = _run(argv, capsys)
     assert status == 0, err
-    assert "warning" in err and "--date ignored" in err and "r.pcap" in err
+    ignored = [line for line in err.splitlines() if "--date ignored" in line]
+    assert len(ignored) == 1 and "warning" in ignored[0] and str(pcap) in ignored[0]
 
 
 def test_inputs_running_backwards_warn(tmp_path, capsys):
@@ -271,7 +277,7 @@ def test_nothing_decoded_writes_no_csv(tmp_path, capsys):
     out = tmp_path / "out"
     out.mkdir()
     status, _, err = _run(["decode", str(junk), "-o", str(out / "x.csv")], capsys)
-    assert status == 1 and "nothing could be decoded" in err
+    assert status == 1 and "junk.ast is not ASTERIX" in err and "nothing written" in err
     assert _contents(out) == set()
 
 

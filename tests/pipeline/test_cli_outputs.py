@@ -128,25 +128,54 @@ def test_the_terminal_lists_the_files_written_and_replaced_and_an_earlier_runs_f
     from msdc.pipeline.cli import main
 
     o, c21, c48 = tmp_path / "o.csv", tmp_path / "o_cat021.csv", tmp_path / "o_cat048.csv"
+    left = "file(s) left as they were (named like this run's outputs, not written by it):\n"
     assert main(["decode", *INPUTS, "--category", "48", "-o", str(o)]) == 0
     out, err = capsys.readouterr()
     assert out == f"CAT048: 3266 records -> {o}\n"
     assert err.endswith(f"msdc decode: 1 file(s) written:\n  {o} (CAT048 records)\n")
     assert main(["decode", *INPUTS, "-o", str(o)]) == 0
     err = capsys.readouterr().err
-    assert (f"msdc: {o} is left as it was (an earlier run's; with several categories this run writes {c21}, "
-            f"{c48})") in err
     assert err.endswith(f"msdc decode: 2 file(s) written:\n  {c21} (CAT021 records)\n"
-                        f"  {c48} (CAT048 records)\n")
+                        f"  {c48} (CAT048 records)\nmsdc decode: 1 earlier {left}  {o}\n")
     assert main(["decode", *INPUTS, "-o", str(o)]) == 0
     err = capsys.readouterr().err
     assert err.endswith(f"msdc decode: 2 file(s) written (2 replaced earlier files):\n"
-                        f"  {c21} (CAT021 records, replaced)\n  {c48} (CAT048 records, replaced)\n")
+                        f"  {c21} (CAT021 records, replaced)\n  {c48} (CAT048 records, replaced)\n"
+                        f"msdc decode: 1 earlier {left}  {o}\n")
     assert main(["decode", *INPUTS, "--category", "21", "-o", str(o)]) == 0
     err = capsys.readouterr().err
-    assert all(f"msdc: {c} is left as it was (an earlier run's; with one category this run writes {o})" in err
-               for c in (c21, c48))
-    assert err.endswith(f"  {o} (CAT021 records, replaced)\n")
+    assert err.endswith(f"  {o} (CAT021 records, replaced)\nmsdc decode: 2 earlier {left}  {c21}\n  {c48}\n")
+
+
+# per job but decode: side files an earlier run left that this run does not write (named like its outputs)
+EARLIER = {"correlate": ["r_intervals.png", "r_radar_errors_9_9.png", "r_lags_7.png", "r_slots.parquet"],
+           "quality": ["q_radar_errors_9_9.png"], "track": ["figs/track_OLD_9.png"],
+           "conflicts": ["figs/alert_099_A_B_60s.png"]}
+
+
+@pytest.mark.parametrize("job", list(EARLIER))
+def test_every_command_lists_what_it_replaced_and_the_earlier_side_files_it_left(tmp_path, capsys, job):
+    """A previous run's files (JOBS) and side files this run does not write: the ones it rewrites are
+    listed as replaced, the others as left as they were, byte for byte; another program's file is not
+    named."""
+    from msdc.pipeline.cli import main
+
+    before = _previous_run(job, tmp_path)
+    for name in EARLIER[job]:
+        (tmp_path / name).write_bytes(b"an earlier run's side file\n")
+    assert main(_argv(job, tmp_path)) == 0
+    err = capsys.readouterr().err
+    written, _, rest = err.partition(f"msdc {job}: ")[2].partition(f"msdc {job}: ")
+    listed = [line.strip() for line in rest.splitlines()[1:]]
+    left = sorted({*EARLIER[job], *(n for n in JOBS[job][1] if n.startswith("figs/"))})
+    assert rest.startswith(f"{len(left)} earlier file(s) left as they were"), err
+    assert sorted(listed) == sorted(str(tmp_path / n) for n in left)
+    for name in left:
+        assert (tmp_path / name).read_bytes() == before.get(name, b"an earlier run's side file\n")
+    replaced = [n for n in JOBS[job][1] if not n.startswith("figs/")]
+    assert all(f"{tmp_path / n} (" in written and written.split(f"{tmp_path / n} (")[1].split(")")[0]
+               .endswith(", replaced") for n in replaced), written
+    assert "theirs.txt" not in err
 
 
 # ---------------------------------------------------------------------------------------------------------

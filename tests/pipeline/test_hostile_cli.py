@@ -190,7 +190,7 @@ def test_a_misspelt_sensor_key_is_refused_not_ignored(tmp_path, capsys):
     assert status == 1
     assert err.strip() == (f"msdc track: {sensors}: [[sensor]] entry 1: unknown key 'sigma_range' (did you "
                            "mean sigma_range_m? allowed: name, sac, sic, latitude, longitude, altitude_m, "
-                           "sigma_range_m, sigma_azimuth_deg)")
+                           "sigma_range_m, sigma_azimuth_deg, category, kind, sigma_m)")
     assert not (tmp_path / "t.json").exists()
 
 
@@ -367,47 +367,55 @@ def adsb_0_23(tmp_path_factory) -> Path:
     return path
 
 
-def test_an_unpinned_0_23_recording_is_named_in_every_job(adsb_0_23, tmp_path, capsys):
-    """Read as the default 2.x, the 0.23 blocks fail: each job names the edition to pin (I021/130 is 6 bytes
-    in 0.23 and 8 from 0.24 on, so 0.23 alone walks them), writes nothing, and pinned it works."""
+def test_a_0_23_recording_pinned_to_2_7_is_named_in_every_job(adsb_0_23, tmp_path, capsys):
+    """Read as 2.7 (a wrong pin), the 0.23 blocks fail: each job names the edition to pin (I021/130 is 6
+    bytes in 0.23 and 8 from 0.24 on, so 0.23 alone walks them), writes nothing, and pinned right (or not
+    pinned: auto) it works."""
     advice = "400 CAT021 block(s) could not be decoded under edition 2.7; every one sampled decodes under " \
              "0.23: pin it with --edition 21=0.23"
-    status, _, err = _run(["stats", adsb_0_23], capsys)
+    wrong = ["--edition", "21=2.7"]
+    status, _, err = _run(["stats", adsb_0_23, *wrong], capsys)
     assert status == 1 and f"msdc stats: warning: adsb023.ast: {advice}" in err
-    status, _, err = _run(["decode", adsb_0_23, "-o", tmp_path / "d.csv"], capsys)
+    status, _, err = _run(["decode", adsb_0_23, "-o", tmp_path / "d.csv", *wrong], capsys)
     assert status == 1 and f"msdc decode: warning: adsb023.ast: {advice}" in err
+    assert "not ASTERIX" not in err  # blocks of another edition are ASTERIX
     # one line per skipped block for the first 20, then a count
     assert err.count(f"msdc: {adsb_0_23}: offset ") == 20
     assert f"msdc: {adsb_0_23}: 380 more skipped block(s)" in err
-    status, _, err = _run(["track", adsb_0_23, "--all", "-o", tmp_path / "t.parquet"], capsys)
+    status, _, err = _run(["track", adsb_0_23, "--all", "-o", tmp_path / "t.parquet", *wrong], capsys)
     assert status == 1 and f"records in the inputs (--sources radar,adsb): {advice} ('msdc stats'" in err
     status, _, err = _run(["correlate", RADAR, adsb_0_23, "--sensors", SENSORS, "--all", "--date",
-                           "2019-03-01", "-o", tmp_path / "r.xlsx"], capsys)
+                           "2019-03-01", "-o", tmp_path / "r.xlsx", *wrong], capsys)
     assert status == 1 and f"no ADS-B (CAT021) records in the inputs: {advice} ('msdc stats'" in err
     assert not list(tmp_path.iterdir())
-    status, _, err = _run(["stats", adsb_0_23, "--edition", "21=0.23"], capsys)
-    assert status == 0 and "warning" not in err
+    for right in (["--edition", "21=0.23"], []):
+        status, _, err = _run(["stats", adsb_0_23, *right], capsys)
+        assert status == 0 and "warning" not in err
 
 
-def test_an_unpinned_0_23_recording_alone_is_why_quality_and_correlate_have_no_records(adsb_0_23, tmp_path,
-                                                                                         capsys):
-    """quality needs only one kind of sensor: given the 0.23 recording alone, unpinned, it said "no radar
-    (CAT048) records", sending the user for a radar file; the failed CAT021 blocks and the edition come
-    first. correlate (which needs both) names them too."""
+def test_a_0_23_recording_pinned_to_2_7_alone_is_why_quality_and_correlate_have_no_records(
+        adsb_0_23, tmp_path, capsys):
+    """quality needs only one kind of sensor: given the 0.23 recording alone, pinned to 2.7, it said "no
+    radar (CAT048) records", sending the user for a radar file; the failed CAT021 blocks and the edition
+    come first. correlate (which needs both) names them too."""
     advice = "400 CAT021 block(s) could not be decoded under edition 2.7; every one sampled decodes under " \
              "0.23: pin it with --edition 21=0.23 ('msdc stats' lists them)"
     for job in (["quality", adsb_0_23, "--all", "-o", tmp_path / "q.xlsx"],
                 ["correlate", adsb_0_23, "--sensors", SENSORS, "--all", "-o", tmp_path / "r.xlsx"]):
-        status, _, err = _run(job, capsys)
+        status, _, err = _run([*job, "--edition", "21=2.7"], capsys)
         assert status == 1 and "Traceback" not in err
         assert f"msdc {job[0]}: no ADS-B (CAT021) or radar (CAT048) records in the inputs: {advice}" in err
     assert not list(tmp_path.iterdir())
 
 
-def test_a_0_23_recording_beside_a_2_7_one_is_named_alone(adsb_0_23, capsys):
-    """Two ADS-B inputs of different editions: the 2.7 one decodes, the 0.23 one is named with its
-    edition (a warning: the run goes on with what decoded)."""
-    status, _, err = _run(["stats", ADSB, adsb_0_23], capsys)
+def test_a_0_23_recording_beside_a_2_7_one(adsb_0_23, capsys):
+    """Two ADS-B inputs of different editions: unpinned, auto chooses each one's edition and both decode;
+    pinned to 2.7, the 2.7 one decodes and the 0.23 one is named with its edition (a warning: the run goes
+    on with what decoded)."""
+    status, out, err = _run(["stats", ADSB, adsb_0_23], capsys)
+    assert status == 0 and "could not be decoded" not in err  # (it warns that the copy runs back in time)
+    assert "chose 2.7" in out and "chose 0.23" in out
+    status, _, err = _run(["stats", ADSB, adsb_0_23, "--edition", "21=2.7"], capsys)
     assert status == 0
     warned = [line for line in err.splitlines() if "warning" in line]
     assert len(warned) == 1 and "adsb023.ast: 400 CAT021 block(s)" in warned[0] and "21=0.23" in warned[0]

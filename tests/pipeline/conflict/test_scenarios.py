@@ -5,10 +5,14 @@ several seeds (warning times, false alerts per horizon)."""
 
 from __future__ import annotations
 
+import math
+from dataclasses import replace
+
 import pandas as pd
 import pytest
 
 from fixtures.conflict_scenarios import DATE, encounters, run_encounter
+from fixtures.flight import Segment
 
 ENCOUNTERS = {e.name: e for e in encounters()}
 MIDNIGHT = pd.Timestamp(str(DATE), tz="UTC")
@@ -88,3 +92,25 @@ def test_climbing_encounter_over_the_radar_is_tracked(tmp_path):
     enc = shifted(ENCOUNTERS["climbing through FL350"], -30.0, -20.0)  # crossing point over the radar
     r = run_encounter(enc, tmp_path, seed=11)
     assert len(r.losses) == 1
+
+
+@pytest.mark.parametrize("cut", ["both", "b"])
+def test_a_recording_cut_before_the_closest_point_has_no_loss_after_the_last_report(tmp_path, cut):
+    # the converging encounter (closest at 400 s, loss from 322.7 s) with the reports of both aircraft, or
+    # of B alone, stopping at 360 s: the tracks coast on for 60 s through the closest point, but a loss is
+    # measured only where both are reported. By the geometry the pair is |dv| (400 s - t) apart, |dv| =
+    # 2 x 450 kt x sin 15 deg: 2.59 NM at 360 s; before issue 26 the coasted samples gave a loss to 420 s
+    # with a minimum near 0
+    enc = ENCOUNTERS["converging 30 deg"]
+    b = replace(enc.b, segments=(Segment(360.0),))
+    a = replace(enc.a, segments=(Segment(360.0),)) if cut == "both" else enc.a
+    r = run_encounter(replace(enc, a=a, b=b), tmp_path)
+    dv_nm_s = 2 * 450.0 * math.sin(math.radians(15.0)) / 3600.0
+    assert len(r.losses) == 1
+    loss = r.losses.iloc[0]
+    end_s = (loss["end"] - MIDNIGHT).total_seconds()
+    assert abs((loss["start"] - MIDNIGHT).total_seconds() - enc.loss_s[0]) <= 2.0
+    assert 355.0 <= end_s <= 360.0  # the last grid second both aircraft are reported
+    # the closest reported point is at the last reports (4 s radar scans, 1 s ADS-B), 0.1 NM of noise
+    assert dv_nm_s * (400.0 - 360.0) - 0.1 <= loss["min_horizontal_nm"] <= dv_nm_s * (400.0 - 355.0) + 0.1
+    assert not loss["began_inside"]

@@ -191,8 +191,26 @@ def test_quality_figures_say_which_windows_they_cover(tmp_path, monkeypatch, cap
     monkeypatch.setattr(correlate, "FIGURE_WINDOWS", 1)
     out = tmp_path / "c.xlsx"
     assert main(["correlate", str(fix / "radar.ast"), str(fix / "adsb.ast"), "--sensors",
-                 str(fix / "sensors.toml"), "--callsign", "MAS72", "--quality", "-o", str(out)]) == 0
+                 str(fix / "sensors.toml"), "--callsign", "MAS72", "--quality", "-o", str(out), "--json",
+                 str(tmp_path / "c.json")]) == 0
     err = capsys.readouterr().err
+    # the lead carries the radar's errors in each window: the simulator's radar noise (range sigma 70 m,
+    # azimuth sigma 0.08 deg: fixtures/truth.json) within 15 %, and the Radar biases sheet's fit
+    import json
+
+    lead = json.loads((tmp_path / "c.json").read_text())["summary"]
+    assert len(lead["windows"]) == 2
+    for w in lead["windows"]:
+        assert w["quality_reports"] >= 0.9 * w["matched_reports"] > 50
+        assert w["range_error_std_m"] == pytest.approx(70.0, rel=0.15)
+        assert w["azimuth_error_std_deg"] == pytest.approx(0.08, rel=0.15)
+    (radar,) = lead["radars"]
+    biases = load_workbook(out)["Radar biases"]
+    header = [c.value for c in biases[1]]
+    row = dict(zip(header, [c.value for c in biases[2]], strict=True))
+    assert radar["radar_sensor"] == "048:25/201"
+    assert radar["range_bias_m"] == pytest.approx(row["range_bias_m"])
+    assert radar["time_bias_se_s"] == pytest.approx(row["time_bias_se_s"])
     assert "Figures: slotting and lag figures for the first 1 of 2 windows only" in err
     first = load_workbook(out)["Figures"]["A1"].value
     assert first.startswith("Slotting and lag figures for the first 1 of 2 windows only")
@@ -316,8 +334,8 @@ def test_summary_gives_each_note_its_own_row(tmp_path):
     assert any("; " in (window_note(w.summary) or "").replace("; rerun", "") for w in run.windows)
     write_report(run, tmp_path / "r.xlsx", tables="xlsx")
     rows = list(load_workbook(tmp_path / "r.xlsx")["Summary"].iter_rows(values_only=True))
-    start = next(i for i, r in enumerate(rows) if isinstance(r[0], str) and r[0].startswith("Notes ("))
-    assert rows[start][0] == f"Notes ({len(expected)})"
+    start = next(i for i, r in enumerate(rows) if isinstance(r[0], str) and r[0].startswith("Notes on"))
+    assert rows[start][0] == f"Notes on the thesis's measures ({len(expected)})"
     shown = [r[4] for r in rows[start + 1: start + 1 + len(expected)]]
     assert shown == expected and all(n.count("Pearson") <= 1 for n in shown)
 

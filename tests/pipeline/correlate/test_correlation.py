@@ -174,6 +174,21 @@ def test_no_such_aircraft_suggests_close_callsigns():
     assert info.value.missing_in == ["radar", "ADS-B"]
 
 
+def test_no_such_aircraft_suggests_names_of_every_sensor():
+    """VLG130 asked, VLG1306 seen by ADS-B alone: it is suggested, saying that radar lacks it (the
+    suggestions were taken from the names both sensors saw only: "nothing similar is present")."""
+    t = np.arange(0.0, 100.0, 5.0)
+    radar = pd.concat([frame("radar", t, *weave(t)), frame("radar", t, *weave(t), "AFR12", "3944F1")])
+    adsb = pd.concat([frame("adsb", t, *weave(t)), frame("adsb", t, *weave(t), "VLG1306", "3443C5")])
+    with pytest.raises(NoSuchAircraft) as info:
+        corr(radar, adsb, callsign="VLG130")
+    assert "closest present: VLG1306 (ADS-B only)" in str(info.value)
+    assert "nothing similar" not in str(info.value)
+    with pytest.raises(NoSuchAircraft) as info:
+        corr(radar, adsb, callsign="AFR123")
+    assert "AFR12 (radar only)" in str(info.value)
+
+
 def test_no_overlap_gives_both_spans():
     radar = frame("radar", np.arange(0.0, 100.0, 5.0), 1.0, 103.0)
     adsb = frame("adsb", np.arange(1000.0, 1100.0, 5.0), 1.0, 103.0)

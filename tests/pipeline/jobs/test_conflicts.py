@@ -19,14 +19,22 @@ from fixtures.scenario import AircraftSpec, default_scenario
 from fixtures.simulate import sensors_toml, simulate
 from msdc.asterix.encode import encode_frame
 from msdc.pipeline.cli import main
-from msdc.pipeline.conflict.approach import APPROACH_COLUMNS
-from msdc.pipeline.conflict.events import ALERT_COLUMNS, LOSS_COLUMNS, WARNING_COLUMNS
 from msdc.pipeline.jobs import common, conflicts
 from msdc.pipeline.jobs.common import OptionError
 from msdc.pipeline.jobs.conflicts import ConflictOptions
 
 FIX = Path(__file__).resolve().parents[3] / "fixtures"
 RADAR, ADSB, SENSORS = str(FIX / "radar.ast"), str(FIX / "adsb.ast"), str(FIX / "sensors.toml")
+
+
+# every table names the pair by address, call sign and Mode 3/A code, and says where the pair was
+PAIR = ["aircraft_a", "callsign_a", "mode3a_a", "aircraft_b", "callsign_b", "mode3a_b"]
+WHERE = ["latitude", "longitude", "flight_level_a", "flight_level_b"]
+ALERT_TABLE = PAIR + ["horizon_s", "start", *WHERE, "end", "peak_pc", "time_of_peak", "loss_start",
+                      "false_alert", "time_to_cpa_s", "cpa_time", "cpa_horizontal_nm", "cpa_vertical_ft"]
+LOSS_TABLE = PAIR + ["start", "end", "duration_s", "began_inside", "min_horizontal_nm", "time_of_min", *WHERE,
+                     "vertical_at_min_ft", "min_vertical_ft"]
+WARNING_TABLE = PAIR + ["loss_start", *WHERE, "began_inside", "horizon_s", "alert_start", "warning_s"]
 
 
 def opts(**kw) -> ConflictOptions:
@@ -56,9 +64,13 @@ BAD = [
     (opts(json="c.txt"), "--json c.txt"),
     (opts(sensors="/nonexistent/s.toml"), "--sensors /nonexistent/s.toml"),
     (opts(vertical="probable"), "--vertical 'probable'"),
-    (opts(sources="radar,mlat"), "--sources 'radar,mlat'"),
+    (opts(sources="radar,wam"), "--sources 'radar,wam'"),
     (opts(figures="/nonexistent/dir/figs"), "--figures /nonexistent/dir/figs: directory /nonexistent/dir"),
     (opts(figures=RADAR), "--figures " + RADAR + ": exists and is not a directory"),
+    (opts(exclude_codes="7000,7008"), "--exclude-codes '7000,7008': item 2 '7008' is not a Mode 3/A code"),
+    (opts(exclude_codes=()), "--exclude-codes: give at least one Mode 3/A code"),
+    (opts(min_fl=2000.0), "--min-fl 2000.0: must be a finite number from -20 to 1000 FL"),
+    (opts(max_report_gap_s=0.0), "--max-report-gap 0.0"),
 ]
 
 
@@ -98,10 +110,9 @@ def test_fixtures_without_loss_write_empty_tables_with_headers(tmp_path, capsys)
     assert "5 aircraft tracked; 0 loss(es)" in text and "written empty, with their headers" in text
     wb = load_workbook(out, read_only=True)
     assert wb.sheetnames == ["Alerts", "Losses", "Warning times", "Parameters"]
-    for sheet, columns in (("Alerts", ALERT_COLUMNS), ("Losses", LOSS_COLUMNS),
-                           ("Warning times", WARNING_COLUMNS)):
+    for sheet, columns in (("Alerts", ALERT_TABLE), ("Losses", LOSS_TABLE), ("Warning times", WARNING_TABLE)):
         rows = list(wb[sheet].iter_rows(values_only=True))
-        assert list(rows[0])[:len(columns)] == columns and len(rows) == 1
+        assert list(rows[0]) == columns and len(rows) == 1
     doc = json.loads((tmp_path / "c.json").read_text())
     assert doc["counts"]["losses"] == 0 and doc["parameters"]["horizons_s"] == [20.0, 60.0, 120.0]
 
@@ -149,8 +160,17 @@ def test_crossing_loss_found_and_alerted_before_it_starts_at_60_s(crossing, caps
     warn = pd.read_csv(d / "c_warning_times.csv")
     w60 = warn.loc[warn["horizon_s"] == 60, "warning_s"]
     assert len(w60) == 1 and w60.iloc[0] > 0  # alerted before the loss started
-    alerts = pd.read_csv(d / "c.csv", parse_dates=["cpa_time"])
-    assert list(alerts.columns) == ALERT_COLUMNS + ["loss_start", "false_alert"] + APPROACH_COLUMNS
+    alerts = pd.read_csv(d / "c.csv", parse_dates=["cpa_time"], dtype={"mode3a_a": str, "mode3a_b": str})
+    assert list(alerts.columns) == ALERT_TABLE
+    assert list(losses.columns) == LOSS_TABLE and list(warn.columns) == WARNING_TABLE
+    # the pair named as the simulator made it (CONA squawking 1001, CONB 1002), and where it met: over the
+    # radar (the flights cross at its site), both at FL350
+    assert (loss["callsign_a"], loss["mode3a_a"], loss["callsign_b"], loss["mode3a_b"]) == (
+        "CONA", 1001, "CONB", 1002)
+    assert abs(loss["latitude"] - 2.7456) < 0.005 and abs(loss["longitude"] - 101.7099) < 0.005
+    assert abs(loss["flight_level_a"] - 350) < 1 and abs(loss["flight_level_b"] - 350) < 1
+    assert not loss["began_inside"] and not warn["began_inside"].any()
+    assert (alerts["callsign_a"] == "CONA").all() and (alerts["mode3a_b"] == "1002").all()
     assert not alerts["false_alert"].any()
     assert (alerts.loc[alerts["horizon_s"] == 60, "peak_pc"] > 0.5).all()
     # the predicted closest approach: the geometry's, at 342.9 s, within a few seconds and 0.3 NM
@@ -163,6 +183,23 @@ def test_crossing_loss_found_and_alerted_before_it_starts_at_60_s(crossing, caps
                            for i, h in enumerate(alerts["horizon_s"]))
     png = (d / "figs" / names[0]).read_bytes()
     assert png.startswith(b"\x89PNG\r\n\x1a\n") and len(png) > 20_000
+
+
+@pytest.mark.parametrize(("selection", "left_out"), [({"min_fl": 360.0}, "below_min_fl"),
+                                                    ({"exclude_codes": "1001"}, "excluded_codes")])
+def test_the_selection_leaves_samples_out_and_says_what_it_would_give(crossing, selection, left_out):
+    # both aircraft fly at FL350 and CONA squawks 1001 throughout: either selection leaves the loss and
+    # every alert out, and the counts say what was left out and that the loss is there without it
+    d = crossing
+    options = ConflictOptions(inputs=(str(d / "r.ast"), str(d / "a.ast")), sensors=str(d / "s.toml"),
+                              date=dt.date(2019, 3, 1), output=str(d / "sel.csv"), step_s=5.0, **selection)
+    result = conflicts.conflict_job(options)
+    assert result.losses.empty and result.alerts.empty
+    sel = result.counts["selection"]
+    grid = result.tracks
+    expected = len(grid) if left_out == "below_min_fl" else int((grid["aircraft_id"] == "710001").sum())
+    assert sel["active"] and sel["left_out"] == sel[left_out] == expected and sel["losses_without"] == 1
+    assert "without it 1 loss(es)" in conflicts.text(result)
 
 
 def test_failed_run_after_decoding_writes_nothing(tmp_path, capsys):

@@ -40,6 +40,7 @@ TRACKING = {"--figures": "figures", "--step": "step_s", "--max-coast": "max_coas
 # every option of each command: flag -> the options field it fills ("INPUT": the positional argument)
 EXPECTED = {
     "decode": {"INPUT": "inputs", "--output": "output", "--category": "categories", "--strict": "strict",
+               "--lenient": "lenient",
                "--chunk-mb": "chunk_mb", **READING},
     "stats": {"INPUT": "inputs", "--chunk-mb": "chunk_mb", **READING},
     "correlate": {"INPUT": "inputs", **SELECTION, "--output": "output", "--json": "json", "--slot": "slot_s",
@@ -54,7 +55,10 @@ EXPECTED = {
                   "--horizon": "horizons_s", "--radius-nm": "radius_nm", "--vertical-ft": "vertical_ft",
                   "--vertical-tolerance-ft": "vertical_tolerance_ft", "--threshold": "threshold",
                   "--method": "method", "--vertical": "vertical", "--surface": "surface", **TRACKING,
-                  "--adsb-sigma": "adsb_sigma_m", **READING},
+                  "--adsb-sigma": "adsb_sigma_m", "--max-report-gap": "max_report_gap_s",
+                  "--min-fl": "min_fl", "--exclude-mode-a-only": "exclude_mode_a_only",
+                  "--exclude-codes": "exclude_codes",
+                  **READING},
 }
 
 
@@ -116,7 +120,7 @@ def test_help_reads_as_declared():
     assert "[--smoother {rts,imm}]" in usage
     assert "[--noise NOISE]" in usage and "[--adsb-sigma M]" in usage and "[--edition CAT=ED]" in usage
     assert "(--callsign CALLSIGN | --address ADDRESS | --all)" in usage and "INPUT [INPUT ...]" in usage
-    assert "[--category {21,48}]" in _subparsers()["decode"].format_usage()
+    assert "[--category {10,20,21,48}]" in _subparsers()["decode"].format_usage()
 
 
 # ---------------------------------------------------------------------------------------------------------
@@ -174,7 +178,8 @@ DECLARED_ERRORS = [
     (CorrelateOptions(gap_s=math.nan), "--gap nan: must be a finite number from 0.1 to 86400 s"),
     (CorrelateOptions(min_nic=12), "--min-nic 12: must be an integer from 0 to 11"),
     (CorrelateOptions(min_nacp=5.5), "--min-nacp 5.5: must be an integer from 0 to 11"),
-    (CorrelateOptions(pairs="radar"), "--pairs 'radar': must be one of radar-adsb, radar-radar, all"),
+    (CorrelateOptions(pairs="radar"),
+     "--pairs 'radar': must be one of radar-adsb, radar-radar, mlat-adsb, smr-mlat, all"),
     (CorrelateOptions(fill="zero"), "--fill 'zero': must be hold or predict"),
     (CorrelateOptions(tables="csv"), "--tables 'csv': must be one of auto, xlsx, parquet"),
     (CorrelateOptions(adsb_sigma_m=0.1), "--adsb-sigma 0.1: must be a finite number from 0.5 to 20000 m"),
@@ -182,7 +187,7 @@ DECLARED_ERRORS = [
     (QualityOptions(reference="smooth"), "--reference 'smooth': must be adsb or track"),
     (QualityOptions(gap_s=-5.0), "--gap -5.0: must be a finite number from 0.1 to 86400 s"),
     (DecodeOptions(chunk_mb=0.0), "--chunk-mb 0.0: must be a finite number from 0.1 to 4096 MB"),
-    (DecodeOptions(categories=(48, 34)), "--category 34: must be 21 or 48"),
+    (DecodeOptions(categories=(48, 34)), "--category 34: must be one of 10, 20, 21, 48"),
     (StatsOptions(chunk_mb=1e6), "--chunk-mb 1000000.0: must be a finite number from 0.1 to 4096 MB"),
     (TrackOptions(noise="nacp"), "--noise 'nacp': must be one of declared, estimate, timing"),
     (TrackOptions(step_s=7200.0), "--step 7200.0: must be a finite number from 0.001 to 3600 s"),

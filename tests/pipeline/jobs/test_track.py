@@ -48,7 +48,7 @@ BAD = [
     (opts(tpm="expm:0.001"), "sojourn times from 0.01 to 10,000,000 seconds"),
     (opts(tpm="expm:150,1e-320"), "--tpm 'expm:150,1e-320'"),  # 1/TAU overflows: NaN probabilities
     (opts(smoother="two-filter"), "--smoother 'two-filter': must be rts or imm"),
-    (opts(sources=("radar", "mlat")), "--sources 'radar,mlat'"),
+    (opts(sources=("radar", "wam")), "--sources 'radar,wam'"),
     (opts(sources=()), "--sources"),
     (opts(callsign=None), "exactly one of --callsign, --address or --all"),
     (opts(callsign=None, address="XYZ"), "--address 'XYZ'"),
@@ -479,3 +479,32 @@ def test_smoother_implies_smooth(tmp_path):
     assert main(["track", *BASE, "--address", "750312", "--step", "5", "-o", str(out),
                  "--json", str(js)]) == 0
     assert json.loads(js.read_text())["parameters"]["smooth"] is False
+
+
+def test_update_intervals_by_hand():
+    """Radar R every 4 s on two aircraft (one gap of 8 s), ADS-B D every 1 s with one repeated time (left
+    out): medians 4 s and 1 s, the fastest first."""
+    from msdc.pipeline.track.feasibility import update_intervals
+
+    t0 = pd.Timestamp("2019-03-01T08:00:00Z")
+    rows = [("A", "R", s) for s in (0, 4, 8, 16, 20)] + [("B", "R", s) for s in (1, 5, 9)]
+    rows += [("A", "D", s) for s in (0, 1, 1, 2, 3)]
+    meas = pd.DataFrame(rows, columns=["aircraft_id", "sensor_id", "s"])
+    meas["time"] = t0 + pd.to_timedelta(meas.pop("s"), unit="s")
+    intervals = update_intervals(meas.sample(frac=1.0, random_state=1))  # any row order
+    assert intervals.to_dict() == {"D": 1.0, "R": 4.0} and list(intervals.index) == ["D", "R"]
+
+
+def test_a_max_coast_below_every_sensor_interval_is_warned():
+    """--max-coast 0.001 (with --step 0.001) cut MAS72 into thousands of one-report segments without a
+    word. The fixtures' radar turns in 4.8 s and their ADS-B reports every 0.5-1.5 s (fixtures/scenario.py):
+    a warning names the option, the shortest and the longest interval; the default 60 s gets none."""
+    result = track.track_job(opts(output=None, json="t.json", max_coast_s=0.001, step_s=0.001,
+                                  noise="declared", date="2019-03-01"))
+    (said,) = [w for w in result.warnings if w.startswith("--max-coast")]
+    assert said.startswith("--max-coast 0.001 s is below every sensor's median update interval (the shortest:"
+                           " 021:")
+    assert "(048:25/201, 4.8 s; default 60 s)" in said
+    assert result.result.aircraft["segments"].sum() > 1000
+    usual = track.track_job(opts(output=None, json="t.json", noise="declared", date="2019-03-01"))
+    assert not [w for w in usual.warnings if "--max-coast" in w]

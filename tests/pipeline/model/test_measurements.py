@@ -49,7 +49,9 @@ def write(tmp_path, text):
 def test_read_sensors(tmp_path):
     table = read_sensors(write(tmp_path, GOOD))
     assert list(table.columns) == ["name", "sac", "sic", "latitude", "longitude", "altitude_m",
-                                   "sigma_range_m", "sigma_azimuth_deg"]
+                                   "sigma_range_m", "sigma_azimuth_deg", "category", "kind", "sigma_m"]
+    assert table["category"].tolist() == [48, 48] and table["kind"].tolist() == ["radar", "radar"]
+    assert table["sigma_m"].isna().all()  # a radar's noise is its range and azimuth sigmas
     assert table["name"].tolist() == ["Equator", "Changi"]
     assert table.loc[1, "altitude_m"] == 20.0 and table["altitude_m"].dtype == np.float64
     # optional noise: defaults 70 m and 0.08 deg, or per radar

@@ -435,6 +435,15 @@ def test_radar_errors_rejects_bad_arguments(kw, error, words):
     assert all(w in str(exc.value) for w in words), str(exc.value)
 
 
+def test_the_radar_name_is_one_categorical_value_not_a_copy_per_plot():
+    """Each error row names its radar through the sensor table's categorical name (issue 27 item 8: a name
+    copied per plot took 3.4 GB for a 1 MB name)."""
+    long_name = "N" * 50_000
+    errors = radar_errors(_hand_meas(), SENSORS.assign(name=long_name))
+    assert len(errors) == 1 and isinstance(errors["radar"].dtype, pd.CategoricalDtype)
+    assert errors["radar"].cat.categories.tolist() == [long_name]
+
+
 def test_radar_errors_needs_the_sensor_table_for_radar_reports():
     meas = _hand_meas()
     with pytest.raises(TypeError, match="sensors: expected the sensor table .* got NoneType"):
@@ -460,3 +469,33 @@ def test_quality_run_rejects_bad_arguments_before_the_tables():
         estimate_biases(None)
     with pytest.raises(ValueError, match="errors: lacks the column.s. radar"):
         error_stats(pd.DataFrame({"x": [1]}))
+
+
+@pytest.mark.parametrize("span_s", [600.0, 12000.0, 40000.0])
+def test_radar_error_time_labels_stand_apart(tmp_path, monkeypatch, span_s):
+    """The time panels are half the figure wide: their clock labels ran into one string
+    ('08:00:0008:30:00...', 2-3 px apart) over the fixtures' 08:00-11:20. On the drawn canvas, for 10 min,
+    3 h 20 min and 11 h of reports, at least three labels show and each two stand at least half their
+    height apart (half an em: a character's room)."""
+    from msdc.pipeline.report import quality_figures
+
+    n = 400
+    errors = pd.DataFrame({"radar": "R", "sac": 1, "sic": 2, "callsign": [f"AC{i % 3}" for i in range(n)],
+                           "address": None, "time_of_day": 28800.0 + np.linspace(0.0, span_s, n),
+                           "slant_range_m": np.linspace(20e3, 300e3, n),
+                           "range_error_m": np.sin(np.arange(n)), "azimuth_error_deg": 0.0})
+    errors["ground_range_m"] = errors["slant_range_m"] * 0.99
+    captured = {}
+    monkeypatch.setattr(quality_figures, "save_png", lambda fig, path: captured.setdefault("fig", fig))
+    quality_figures.radar_error_figure(errors, tmp_path / "e.png")
+    fig = captured["fig"]
+    fig.draw_without_rendering()
+    renderer = fig.canvas.get_renderer()
+    for ax in (fig.axes[1], fig.axes[3]):  # the two panels against time
+        low, high = ax.get_xlim()
+        labels = [t for t, x in zip(ax.get_xticklabels(), ax.get_xticks(), strict=True)
+                  if t.get_visible() and t.get_text() and low <= x <= high]  # (the ones drawn)
+        boxes = sorted((t.get_window_extent(renderer) for t in labels), key=lambda b: b.x0)
+        assert len(boxes) >= 3, [t.get_text() for t in labels]
+        assert all(b.x0 - a.x1 >= 0.5 * a.height for a, b in zip(boxes, boxes[1:], strict=False)), [
+            t.get_text() for t in labels]

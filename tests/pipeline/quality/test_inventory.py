@@ -150,3 +150,52 @@ def _streamed_any(path, chunk: int = 1 << 20) -> dict[str, pd.DataFrame]:
     for rec in asterix.iter_read(path, chunk=chunk):
         acc.add(rec.frames, rec.errors, rec.ignored)
     return acc.tables()
+
+
+def _every_category_stream() -> bytes:
+    """Blocks written by hand: CAT048 from radar 25/201 (two blocks), CAT062 system tracks from tracker
+    9/1 (one block of two tracks: I062/010, /070 at 100 s and 101 s, /040, /380 ADR 4840D6 on the first),
+    a CAT063 sensor status (tracker 9/1 about 25/201, time 99 s), a CAT065 end of batch (9/1, 102 s) and
+    two blocks of CAT008, which msdc does not decode (FSPEC 0x80, I008/010 SAC SIC)."""
+    track1 = (fspec(1, 4, 11, 12) + bytes([9, 1]) + (100 * 128).to_bytes(3, "big")
+              + bytes.fromhex("80" "4840D6") + b"\x00\x05")
+    track2 = fspec(1, 4, 12) + bytes([9, 1]) + (101 * 128).to_bytes(3, "big") + b"\x00\x06"
+    status63 = fspec(1, 3, 4) + bytes([9, 1]) + (99 * 128).to_bytes(3, "big") + bytes([25, 201])
+    batch65 = fspec(1, 2, 4) + bytes([9, 1, 2]) + (102 * 128).to_bytes(3, "big")
+    cat008 = block(8, bytes([0x80, 9, 2]))
+    return (_plot(201, 98.0, 0x4840D6, "KLM1") + cat008 + block(62, track1, track2) + block(63, status63)
+            + cat008 + block(65, batch65) + _plot(201, 103.0, 0x4840D6, "KLM1"))
+
+
+def test_every_category_listed_per_sac_sic(tmp_path, capsys):
+    """stats decodes every category msdc decodes (tracks and status messages per SAC/SIC; addresses and call
+    signs only where the category has them) and lists those it does not decode with their blocks."""
+    from msdc.pipeline.cli import main
+
+    path = tmp_path / "every.ast"
+    path.write_bytes(_every_category_stream())
+    result = stats.stats_job(stats.StatsOptions(inputs=(str(path),), date=pd.Timestamp("2019-03-01").date()))
+    cats = result.tables["categories"]
+    assert cats["category"].tolist() == [8, 48, 62, 63, 65]
+    assert cats["decoded"].tolist() == ["no", "yes", "yes", "yes", "yes"]
+    assert cats["blocks"].tolist() == [2, 2, 1, 1, 1]
+    assert cats["records"].tolist()[1:] == [2, 2, 1, 1] and pd.isna(cats["records"].iloc[0])
+    assert cats.set_index("category").loc[62, ["start", "end"]].tolist() == ["2019-03-01 00:01:40",
+                                                                            "00:01:41"]
+    assert cats["addresses"].tolist()[1:3] == [1, 1] and cats["addresses"].iloc[3:].isna().all()
+    src = result.tables["sources"]
+    assert src[["category", "sac", "sic", "records"]].values.tolist() == [[48, 25, 201, 2], [62, 9, 1, 2],
+                                                                         [63, 9, 1, 1], [65, 9, 1, 1]]
+    ac = result.tables["aircraft"]
+    assert ac[["category", "address", "records"]].values.tolist() == [[48, "4840D6", 2], [62, "4840D6", 1],
+                                                                     [62, "(none)", 1]]
+    assert result.inputs[0]["records"] == {48: 2, 62: 2, 63: 1, 65: 1}
+    assert main(["stats", str(path)]) == 0
+    text = capsys.readouterr().out.split("Records per SAC/SIC")[0]
+    row8 = next(line.split() for line in text.splitlines() if line.split()[:1] == ["8"])
+    assert row8[:4] == ["8", "no", "2", "-"]
+    # with the measurement categories alone (asterix.read's default), the others are listed as not decoded
+    rec = asterix.read(path)
+    listed = stats_tables(rec.frames, rec.errors, rec.ignored)["categories"].set_index("category")
+    assert listed["decoded"].to_dict() == {8: "no", 48: "yes", 62: "no", 63: "no", 65: "no"}
+    assert listed.loc[62, "blocks"] == 1

@@ -493,6 +493,22 @@ def test_interval_figure_shows_the_bulk_wide_and_the_tail_on_log_axes():
     assert "370 longer than 1.2 s" in bulk.get_title()
 
 
+def test_the_log_log_panel_draws_intervals_per_second_of_interval():
+    """Bins 0.1 s wide near the bulk, 10 s wide from 20 s: on the log-log panel a bar is as high as its
+    count per second of its width (17410 in 0.4-0.5 s: 174,100 per s; 26 in 20-30 s: 2.6 per s), so the
+    26 long intervals are not drawn 100 times higher than they would be in 0.1 s bins; its label still
+    gives the count."""
+    from msdc.pipeline.report.quality_figures import interval_histogram
+
+    fig = interval_histogram(_real_like_adsb_histogram())
+    every = fig.axes[1]
+    bars = {round(p.get_x(), 6): p for p in every.patches}
+    assert bars[0.4].get_height() == pytest.approx(174_100.0) and bars[0.4].get_width() == pytest.approx(0.1)
+    assert bars[20.0].get_height() == pytest.approx(2.6) and bars[20.0].get_width() == pytest.approx(10.0)
+    assert every.get_ylim()[0] < 2.6 and "per s" in every.get_ylabel()
+    assert "26" in {t.get_text() for t in every.texts}
+
+
 def test_interval_labels_sit_on_no_other_bar():
     """17410 beside 20306 was drawn over the taller bar; 2621 over 1031: a visible label overlaps no other
     visible label and no bar but its own (checked on the canvas, with the bars' own extents)."""
@@ -507,7 +523,9 @@ def test_interval_labels_sit_on_no_other_bar():
         boxes = [t.get_window_extent(renderer) for t in labels]
         assert all(not a.overlaps(b) for i, a in enumerate(boxes) for b in boxes[i + 1:])
         for text, box in zip(labels, boxes, strict=True):
-            own = [b for b in bars if str(int(b.get_height())) == text.get_text()]
+            middle = (box.x0 + box.x1) / 2  # bar_label centres a label over its bar
+            own = [b for b in bars if b.get_window_extent(renderer).x0 <= middle
+                   <= b.get_window_extent(renderer).x1]
             others = [b for b in bars if b not in own]
             assert not any(box.overlaps(b.get_window_extent(renderer)) for b in others), text.get_text()
         assert "20306" in {t.get_text() for t in labels}

@@ -40,7 +40,8 @@ def test_conflict_workbook_labels_utc_and_shows_seconds_as_given(tmp_path):
     from msdc.pipeline.report.conflict_excel import write_conflict_workbook
 
     losses = pd.DataFrame({"aircraft_a": ["A"], "aircraft_b": ["B"], "start": at(100), "end": at(130),
-                           "duration_s": [30.0], "min_horizontal_nm": [2.0], "time_of_min": at(110),
+                           "duration_s": [30.0], "began_inside": [False], "min_horizontal_nm": [2.0],
+                           "time_of_min": at(110),
                            "vertical_at_min_ft": [500.0], "min_vertical_ft": [400.0]})[LOSS_COLUMNS]
     warnings = pd.DataFrame({"aircraft_a": ["A", "A"], "aircraft_b": ["B", "B"], "loss_start": at(100, 100),
                              "horizon_s": [20.0, 120.0], "alert_start": at(97.5, 100),
@@ -63,3 +64,16 @@ def test_conflict_workbook_labels_utc_and_shows_seconds_as_given(tmp_path):
     assert wb["Alerts"].page_setup.fitToWidth == 1 and wb["Alerts"].max_row == 1  # headers alone: one page
     sections = {wb["Parameters"].cell(r, 1).value for r in range(2, wb["Parameters"].max_row + 1)}
     assert sections == {"parameters"}  # no correlation report's "report windows"
+
+
+def test_figure_titles_name_each_aircraft_as_atc_does():
+    from msdc.pipeline.report.conflict_figures import aircraft_label, place_label
+
+    alert = pd.Series({"aircraft_a": "4CA216", "callsign_a": "EIN56P", "mode3a_a": "2011",
+                       "flight_level_a": 95.4, "aircraft_b": "M3A:7052", "callsign_b": "", "mode3a_b": "7052",
+                       "flight_level_b": float("nan"), "latitude": 41.5856, "longitude": -2.5982})
+    assert aircraft_label(alert, "a") == "EIN56P 2011 (4CA216) FL 95"
+    assert aircraft_label(alert, "b") == "7052 (M3A:7052)"  # no call sign, no level: left out
+    assert place_label(alert) == ", at 41.586 N 2.598 W"
+    bare = pd.Series({"aircraft_a": "A", "aircraft_b": "B"})  # a table without the labels
+    assert aircraft_label(bare, "a") == "(A)" and place_label(bare) == ""

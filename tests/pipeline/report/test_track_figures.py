@@ -2,6 +2,7 @@
 
 import numpy as np
 import pandas as pd
+import pytest
 
 from msdc.pipeline.report.track_figures import surface_parts, track_figure
 
@@ -85,3 +86,72 @@ def test_mode_lines_break_between_segments_and_short_tracks_tick_seconds():
     labels = [tick.get_text() for tick in fig.axes[-1].get_xticklabels() if tick.get_text()]
     assert len(labels) > 1 and len(set(labels)) == len(labels)
     assert all(len(text) == 8 and text.count(":") == 2 for text in labels)  # HH:MM:SS
+
+
+def _reported_every(t: pd.DataFrame, every_s: int, silent: tuple[int, int] | None = None) -> pd.DataFrame:
+    """The 1 s track rows with a report every ``every_s`` seconds (none inside ``silent``): ``coasted`` on
+    every row between two reports, ``age_s`` the seconds since the last one, the sensor that gave it."""
+    k = np.arange(len(t))
+    reported = k % every_s == 0
+    if silent is not None:
+        reported &= ~((k > silent[0]) & (k < silent[1]))
+    last = np.maximum.accumulate(np.where(reported, k, 0))
+    return t.assign(coasted=~reported, age_s=(k - last).astype(float), time_of_day=k.astype(float),
+                    sources=np.where(reported, "021:0/1", ""))
+
+
+def test_rows_between_regular_reports_are_not_drawn_as_coasted():
+    """On the 1 s grid, reports every 4 s leave three rows in four without a report (``coasted``): none
+    is coasting (4 s is the update interval); 32 s without a report (reports at 100 s, then 132 s) is, from
+    1.5 intervals (6 s) on: rows 107-131 (age 7-31 s)."""
+    from msdc.pipeline.report.track_figures import coasting
+
+    regular = _reported_every(_flight(), 4)
+    assert regular["coasted"].mean() == 0.75 and not coasting(regular).any()
+    silent = _reported_every(_flight(), 4, silent=(100, 130))
+    assert np.flatnonzero(coasting(silent)).tolist() == list(range(107, 132))
+    assert (coasting(_flight()) == _flight()["coasted"].to_numpy()).all()  # no age_s: the flags
+
+
+def test_the_surface_zoom_draws_a_reported_taxi_solid():
+    """The zoomed taxi of a track reported every 4 s: its dashed (coasted) line holds no point, where it
+    held three rows in four."""
+    t = _reported_every(_flight(), 4)
+    reports = pd.DataFrame({"sensor_id": "021:0/1", "sensor_kind": "adsb", "time": t["time"],
+                            "latitude": t["latitude"], "longitude": t["longitude"]})
+    fig = track_figure(t, reports, "ABC123")
+    zoom = fig.axes[1]
+    dashed = [line for line in zoom.get_lines() if line.get_linestyle() != "-" and line.get_marker() in
+              ("None", "", None)]
+    assert dashed and all(np.isnan(np.asarray(line.get_xdata(), float)).all() for line in dashed)
+
+
+def test_the_figure_ends_at_the_recordings_last_report():
+    """The tracker coasts a minute past an aircraft's last report; at the end of the recording that
+    minute is no data: rows after ``end`` are not drawn (map or mode panel), and the recording's end is
+    its inputs' last report (any source), not the aircraft's."""
+    import matplotlib.dates as mdates
+
+    from msdc.pipeline.report.track_figures import recording_end
+
+    t = _flight(taxi_s=300, air_s=0)
+    end = t["time"].iloc[239]
+    reports = pd.DataFrame({"sensor_id": "021:0/1", "sensor_kind": "adsb", "time": t["time"].iloc[:240],
+                            "latitude": t["latitude"].iloc[:240], "longitude": t["longitude"].iloc[:240]})
+    fig = track_figure(t, reports, "ABC123", end=end)
+    mode = fig.axes[-1]
+    last = max(np.asarray(line.get_xdata())[-1] for line in mode.get_lines())
+    assert mdates.date2num(last) == pytest.approx(mdates.date2num(end.tz_convert(None)))
+    assert sum(np.isfinite(np.asarray(line.get_xdata(), float)).sum() for line in fig.axes[0].get_lines()
+               if line.get_color() == "#111111") <= 2 * 240
+
+    class Loaded:
+        spans = [{"021:0/1": (t["time"].iloc[0], end)},
+                 {"048:25/201": (t["time"].iloc[0], t["time"].iloc[250])}]
+
+    class Result:
+        loaded, measurements = Loaded(), reports
+
+    assert recording_end(Result()) == t["time"].iloc[250]
+    Loaded.spans = None
+    assert recording_end(Result()) == end

@@ -157,12 +157,19 @@ CHILD = textwrap.dedent("""
 """)
 
 
+def _as_from_a_shell() -> None:
+    """The child starts with the signal state a shell gives it: a test runner's worker may leave SIGINT
+    ignored or blocked, and a child inherits both (Python then installs no KeyboardInterrupt handler)."""
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+    signal.pthread_sigmask(signal.SIG_UNBLOCK, [signal.SIGINT, signal.SIGTERM, signal.SIGHUP])
+
+
 @pytest.mark.parametrize("how, status", [("term", 128 + signal.SIGTERM), ("hup", 128 + signal.SIGHUP),
                                          ("int", 130)])
 def test_signals_clean_up_like_an_error(tmp_path, how, status):
     (tmp_path / "o.csv").write_text("old")
     done = subprocess.run([sys.executable, "-c", CHILD, str(tmp_path), how], capture_output=True, text=True,
-                          timeout=60)
+                          timeout=60, preexec_fn=_as_from_a_shell)
     assert done.returncode == status, done.stderr
     assert _listing(tmp_path) == {"o.csv": b"old"}
 
@@ -187,3 +194,22 @@ def test_interrupts_are_held_back_while_the_set_is_moved(tmp_path):
 
 def test_terminated_carries_its_signal():
     assert Terminated(signal.SIGTERM).signum == signal.SIGTERM
+
+
+def test_left_beside_lists_the_matching_files_the_run_did_not_write(tmp_path, monkeypatch):
+    """An earlier run left r_lags_1.png and r_lags_2.png; this one writes r_lags_1.png only: r_lags_2.png is
+    named, spelled as the pattern spells it; r_notes.txt matches no pattern. A '[' in the output's own name
+    is no glob: 'w[1]_lags_*.png' matches w[1]_lags_5.png, not w1_lags_5.png."""
+    from msdc.pipeline.report.transaction import left_beside, side_pattern
+
+    monkeypatch.chdir(tmp_path)
+    for name in ("r_lags_1.png", "r_lags_2.png", "r_notes.txt", "w[1]_lags_5.png", "w1_lags_5.png"):
+        (tmp_path / name).write_bytes(b"earlier")
+    with OutputTransaction() as tx:
+        tx.path(Path("r_lags_1.png")).write_bytes(b"now")
+        written = tx.commit()
+    patterns = [side_pattern(Path("r.xlsx"), "_lags_*.png"), side_pattern(Path("w[1].xlsx"), "_lags_*.png")]
+    assert patterns[1] == Path("w[[]1]_lags_*.png")
+    assert left_beside(patterns, written) == [Path("r_lags_2.png"), Path("w[1]_lags_5.png")]
+    assert left_beside([tmp_path / "r_lags_*.png"], written) == [tmp_path / "r_lags_2.png"]  # absolute too
+    assert left_beside([Path("figs") / "track_*.png"], written) == []  # a folder not there: nothing

@@ -14,8 +14,10 @@ import pytest
 from openpyxl import load_workbook
 
 from msdc.pipeline.correlate.results import (
+    MATCHED_KEYS,
     SLOT_COLUMNS,
     SUMMARY_KEYS,
+    WINDOW_QUALITY_KEYS,
     CorrelationRun,
     SkippedWindow,
     WindowResult,
@@ -23,7 +25,7 @@ from msdc.pipeline.correlate.results import (
 from msdc.pipeline.report.excel import sheet_name, write_report
 from msdc.pipeline.report.figures import lag_figure, latlon_time_figure, track_figure
 from msdc.pipeline.report.files import write_json
-from msdc.pipeline.report.summary import run_to_json, summary_table
+from msdc.pipeline.report.summary import LEAD_WINDOW_KEYS, run_to_json, summary_table
 
 EVIL = "=cmd|' /C calc'!A0"
 T0 = pd.Timestamp("2019-03-01 10:00:00.500", tz="UTC")
@@ -107,7 +109,8 @@ def _header_index(row: tuple) -> dict[str, int]:
 def _block(ws, title_start: str) -> tuple[int, dict[str, int]]:
     """Row of a Summary block's header and its column index by key (headers are keys with spaces)."""
     row = next(c.row for c in ws["A"] if isinstance(c.value, str) and c.value.startswith(title_start))
-    return row + 1, {str(c.value).replace(" ", "_"): c.column for c in ws[row + 1] if c.value is not None}
+    row = next(r for r in range(row + 1, row + 4) if ws.cell(r, 1).value in ("callsign", "radar"))
+    return row, {str(c.value).replace(" ", "_"): c.column for c in ws[row] if c.value is not None}
 
 
 def test_sheets_headers_and_freeze(outputs: dict[str, Path]) -> None:
@@ -116,17 +119,24 @@ def test_sheets_headers_and_freeze(outputs: dict[str, Path]) -> None:
                              "Parameters"]
     summary = wb["Summary"]
     titles = [c.value for c in summary["A"] if isinstance(c.value, str) and c.font.b and " " in c.value]
-    assert [t.split(" ")[0] for t in titles[1:4]] == ["Windows", "Coefficients", "Separation"]
+    # the lead first (what each window shows, its verdicts), then the thesis's measures, each with its limit
+    order = ["What each window shows: ", "Verdicts (", "The thesis's measures (", "Thesis table 6.1: ",
+             "Thesis table 6.2: ", "Separation between the slot means, "]
+    assert [next(i for i, t in enumerate(titles) if t.startswith(o)) for o in order] == sorted(
+        next(i for i, t in enumerate(titles) if t.startswith(o)) for o in order)
+    assert titles[1].startswith(order[0])
     keys = set()
-    for start in ("Windows", "Coefficients", "Separation"):
+    for start in ("What each window shows", "Thesis table 6.1", "Thesis table 6.2",
+                  "Separation between the slot means"):
         row, col = _block(summary, start)
         # every block names its window: aircraft, number and sensor pair (numbers restart for every pair)
         assert list(col)[:5] == ["callsign", "window", "sensors", "start", "end"]
         assert all(summary.cell(row, c).font.b for c in col.values())
         keys |= set(col)
-    # clock times live in start/end, the sensor pair in "sensors"
-    assert keys == (set(SUMMARY_KEYS) - {"start_tod", "end_tod", "radar_sensor", "reference_sensor"}) | {
-        "sensors"}
+    # clock times live in start/end, the sensor pair in "sensors"; the verdict has its own rows, and the
+    # quality step's numbers a block of their own with --quality only
+    assert keys == (set(SUMMARY_KEYS) - {"start_tod", "end_tod", "radar_sensor", "reference_sensor",
+                                         "verdict", *WINDOW_QUALITY_KEYS}) | {"sensors"}
     assert summary.freeze_panes == "C2"
     assert [c.value for c in wb["Correlation"][1]][:11] == [
         "window", "callsign", "address", "radar_sensor", "reference_sensor", "lag", "lag_s", "ncc_lat",
@@ -143,12 +153,12 @@ def test_sheets_headers_and_freeze(outputs: dict[str, Path]) -> None:
 def test_values_numbers_datetimes_and_blanks(outputs: dict[str, Path]) -> None:
     wb = load_workbook(outputs["xlsx"])
     summary = wb["Summary"]
-    row, col = _block(summary, "Coefficients")
+    row, col = _block(summary, "Thesis table 6.2")
     assert summary.cell(row + 1, col["ncc0_lat"]).value == 0.99998
     assert summary.cell(row + 1, col["ncc0_lat"]).data_type == "n"
     assert summary.cell(row + 2, col["pearson0_lat"]).value is None  # NaN
     assert summary.cell(row + 2, col["ncc_peak_lag_lat"]).value == 1
-    row, col = _block(summary, "Windows")
+    row, col = _block(summary, "Thesis table 6.1")
     assert summary.cell(row + 1, col["radar_after"]).value == 5
     assert summary.cell(row + 1, col["start"]).value == dt.datetime(2019, 3, 1, 10, 0, 0, 500000)
     assert summary.cell(row + 1, col["start"]).number_format == 'yyyy-mm-dd hh:mm:ss "UTC"'
@@ -156,7 +166,7 @@ def test_values_numbers_datetimes_and_blanks(outputs: dict[str, Path]) -> None:
     # window 2 has no date: its start is the clock time of start_tod 36100 s = 10:01:40, never 36100
     assert summary.cell(row + 2, col["start"]).value == dt.timedelta(seconds=36100)
     assert summary.cell(row + 2, col["start"]).number_format == "[hh]:mm:ss.000"
-    row, col = _block(summary, "Separation")
+    row, col = _block(summary, "Separation between the slot means")
     assert summary.cell(row + 2, col["sep_rms_m"]).value == 12.5
 
     slots = wb["Slots"]
@@ -213,7 +223,7 @@ def test_number_formats_follow_units(outputs: dict[str, Path]) -> None:
     assert corr.cell(2, col["ncc_lon"]).number_format == "0.000000"
     assert corr.cell(2, col["lag_s"]).number_format == "0.000"
     summary = wb["Summary"]
-    row, col = _block(summary, "Separation")
+    row, col = _block(summary, "Separation between the slot means")
     assert summary.cell(row + 1, col["sep_mean_m"]).number_format == "0.0"
 
 
@@ -324,7 +334,7 @@ def test_lag_charts_cover_half_the_lags(outputs: dict[str, Path]) -> None:
 def test_formula_looking_text_stays_text(outputs: dict[str, Path]) -> None:
     wb = load_workbook(outputs["xlsx"])
     summary = wb["Summary"]
-    row, _ = _block(summary, "Windows")
+    row, _ = _block(summary, "Thesis table 6.1")
     evil = summary.cell(row + 2, 1)
     assert evil.value == EVIL and evil.data_type == "s"
     assert evil.quotePrefix  # Excel keeps it text even when the cell is edited
@@ -356,7 +366,13 @@ def test_without_figure_there_is_no_map(run: CorrelationRun, tmp_path: Path) -> 
 def test_json_round_trip(outputs: dict[str, Path]) -> None:
     with open(outputs["json"], encoding="utf-8") as fh:
         data = json.load(fh)
-    assert set(data) == {"windows", "skipped", "parameters", "inputs", "filters"}
+    # the lead first
+    assert list(data) == ["summary", "windows", "skipped", "parameters", "inputs", "filters"]
+    lead = data["summary"]
+    assert lead["about"].startswith("What each window shows: every radar report against the reference's")
+    assert list(lead["windows"][0]) == [*LEAD_WINDOW_KEYS[:7], *MATCHED_KEYS, "verdict"]  # no --quality keys
+    assert lead["radars"] == [] and list(lead["thesis_measures"]) == ["counts", "coefficients", "separation"]
+    assert lead["thesis_measures"]["coefficients"].startswith("Thesis table 6.2: r(0) by NCC")
     assert [list(w) for w in data["windows"]] == [[*SUMMARY_KEYS, "note"]] * 2
     first, second = data["windows"]
     assert first["ncc0_lat"] == 0.99998 and first["radar_after"] == 5
@@ -376,7 +392,16 @@ def test_run_to_json_is_strict_json(run: CorrelationRun) -> None:
 
 def test_summary_table(run: CorrelationRun) -> None:
     text = summary_table(run)
-    lines = text.splitlines()
+    lead = text.splitlines()
+    # the lead: what the numbers are, header, rule, windows, a verdict per window, a blank line
+    assert lead[0].startswith("What each window shows: ") and lead[1].split()[:6] == [
+        "call", "sign", "win", "sensors", "start", "(UTC)"]
+    assert "reports" in lead[1] and "RMS m" in lead[1] and "range SD m" not in lead[1]  # no --quality
+    assert [line.split(":")[0] for line in lead[5:7]] == ["Verdict", "Verdict"] and lead[7] == ""
+    assert lead[8] == "The thesis's measures (kept as the thesis computes them; each with its limit):"
+    limits = [line for line in lead if line.startswith("  Thesis table") or line.startswith("  Separation")]
+    assert len(limits) == 3
+    lines = [line for line in lead[9:] if line not in limits]
     # header, rule, windows, count, one skipped window, what the separations are taken over
     assert len(lines) == 2 + len(run.windows) + 3
     assert lines[0].split()[:6] == ["call", "sign", "win", "sensors", "start", "(UTC)"]
@@ -463,7 +488,7 @@ def test_window_start_is_a_utc_date_in_the_workbook(tmp_path: Path) -> None:
         sensors=str(root / "fixtures" / "sensors.toml"), callsign="MAS72", date=dt.date(2019, 3, 1)))
     write_report(result.run, tmp_path / "r.xlsx")
     summary = load_workbook(tmp_path / "r.xlsx")["Summary"]
-    row, col = _block(summary, "Windows")
+    row, col = _block(summary, "Thesis table 6.1")
     cell = summary.cell(row + 1, col["start"])
     assert isinstance(cell.value, dt.datetime) and cell.is_date
     assert abs((cell.value - want).total_seconds()) <= 1 / 128
@@ -491,3 +516,49 @@ def test_plain_tables_parameters_have_no_correlation_window_rows(tmp_path):
     write_tables({"T": pd.DataFrame({"a": [1, 2]})}, tmp_path / "q.xlsx", parameters={"gap_s": 180})
     rows = list(load_workbook(tmp_path / "q.xlsx")["Parameters"].iter_rows(min_row=2, values_only=True))
     assert [r[:3] for r in rows] == [("parameters", "gap_s", 180)]
+
+
+def test_every_boolean_reads_true_or_false(outputs: dict[str, Path]) -> None:
+    """LibreOffice showed unstyled boolean cells as 0/1 or TRUE/FALSE depending on their neighbours (both
+    in one Summary row): every boolean, in the Summary's blocks and the Slots sheet's streamed rows alike,
+    carries the format that reads TRUE or FALSE."""
+    from msdc.pipeline.report.rows import BOOL_FORMAT
+
+    wb = load_workbook(outputs["xlsx"])
+    flags = [c for name in ("Summary", "Slots") for row in wb[name].iter_rows() for c in row
+             if c.data_type == "b"]
+    assert len([c for c in flags if c.parent.title == "Slots"]) == 2 * (6 + 4)  # radar/adsb filled per slot
+    assert flags and all(c.number_format == BOOL_FORMAT for c in flags)
+
+
+def test_quality_numbers_lead_the_summary(run: CorrelationRun, tmp_path: Path) -> None:
+    """With --quality (a radar's accuracy and biases, the radar's errors in each window) the lead block
+    gains the window's range and azimuth errors, a block of radars follows the verdicts with each radar's
+    note under it, and the JSON's summary carries both; the terminal adds both tables."""
+    radar = {"radar": "KLIA MSSR", "radar_sensor": "048:25/201", "n_reports": 2922,
+             "horizontal_error_rms_m": 275.3, "range_error_std_m": 70.4, "azimuth_error_std_deg": 0.079,
+             "range_bias_m": 6.3, "range_bias_se_m": 4.3, "range_gain_ppm": -27.0, "range_gain_se_ppm": 22.4,
+             "azimuth_bias_deg": 0.0036, "azimuth_bias_se_deg": 0.0015, "time_bias_s": -0.019,
+             "time_bias_se_s": 0.015, "note": "the standard errors rest on 5 aircraft"}
+    windows = [WindowResult({**w.summary, "quality_reports": 7, "range_error_mean_m": 2.5,
+                             "range_error_std_m": 66.0, "azimuth_error_mean_deg": -0.01,
+                             "azimuth_error_std_deg": 0.08, "matched_reports": 7, "matched_sep_rms_m": 250.7,
+                             "verdict": "no verdict: 7 radar reports matched"}, w.slots, w.lags)
+               for w in run.windows]
+    quality = CorrelationRun(windows=windows, parameters=run.parameters, radars=[radar])
+    write_report(quality, tmp_path / "q.xlsx")
+    summary = load_workbook(tmp_path / "q.xlsx")["Summary"]
+    row, col = _block(summary, "What each window shows")
+    assert list(col)[-5:] == WINDOW_QUALITY_KEYS
+    assert summary.cell(row + 1, col["range_error_std_m"]).value == 66.0
+    assert summary.cell(row + 1, col["matched_sep_rms_m"]).value == 250.7
+    verdicts = next(c.row for c in summary["A"] if c.value == "Verdicts (2)")
+    assert summary.cell(verdicts + 1, 5).value == "no verdict: 7 radar reports matched"
+    row, col = _block(summary, "Radars against ADS-B over the run")
+    assert summary.cell(row + 1, col["range_bias_m"]).value == 6.3 and "note" not in col
+    assert summary.cell(row + 3, 1).value == "KLIA MSSR: the standard errors rest on 5 aircraft"
+    lead = run_to_json(quality)["summary"]
+    assert list(lead["windows"][0])[-6:] == [*WINDOW_QUALITY_KEYS, "verdict"]
+    assert lead["radars"][0]["time_bias_s"] == -0.019
+    text = summary_table(quality)
+    assert "range SD m" in text and "KLIA MSSR  048:25/201" in text and "6.3 +- 4.3" in text

@@ -1,0 +1,72 @@
+"""A window's verdict: one line saying what its matched numbers (pipeline.correlate.matched) show.
+
+It says only what they support: a mean offset along or across track is named when it stands more than
+OFFSET_SE standard errors out of the noise (that of the window's own reports), with its size and, along
+track, the seconds of flight it amounts to; not its cause, which one window cannot tell (a time-stamp
+error and a range or azimuth bias both move plots along track; the bias fit of --quality, over every
+aircraft, tells them apart: the verdict points there). Otherwise the window shows no systematic offset,
+and the distance is the two sensors' noise together. A window with fewer than MIN_MATCHED_REPORTS
+matched reports gets no verdict, only the count.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from typing import Any
+
+from msdc.pipeline.correlate.matched import MIN_SPEED_MS
+
+MIN_MATCHED_REPORTS = 10
+CAUSES = "a time-stamp, range or azimuth error: the radar's biases (--quality) tell which"
+OFFSET_SE = 3.0  # a mean offset is named past this many standard errors (0.3 % of noise-only windows)
+
+
+def _number(summary: Mapping[str, Any], key: str) -> float:
+    value = summary.get(key)
+    try:
+        number = float(value)
+    except (TypeError, ValueError):
+        return math.nan
+    return number
+
+
+def _metres(value: float) -> str:
+    return f"{value:,.0f} m"
+
+
+def _stands_out(mean: float, se: float) -> bool:
+    return math.isfinite(mean) and math.isfinite(se) and abs(mean) > OFFSET_SE * se
+
+
+def window_verdict(summary: Mapping[str, Any], reference: str = "ADS-B") -> str:
+    """The verdict of a window from its summary's matched keys; ``reference`` names the reference sensor
+    in the text ("ADS-B", or the other radar's id)."""
+    n = int(_number(summary, "matched_reports")) if math.isfinite(_number(summary, "matched_reports")) else 0
+    if n < MIN_MATCHED_REPORTS:
+        return (f"no verdict: {n} radar report{'s' if n != 1 else ''} matched to {reference} at their own "
+                f"time (at least {MIN_MATCHED_REPORTS} needed)")
+    along, along_se = _number(summary, "matched_along_mean_m"), _number(summary, "matched_along_se_m")
+    cross, cross_se = _number(summary, "matched_cross_mean_m"), _number(summary, "matched_cross_se_m")
+    offsets = []
+    if _stands_out(along, along_se):
+        where = "behind" if along < 0 else "ahead of"
+        text = f"{_metres(abs(along))} {where} {reference} along track"
+        offset_s = _number(summary, "matched_time_offset_s")
+        if math.isfinite(offset_s):
+            text += f" ({abs(offset_s):.1f} s of flight)"
+        offsets.append(text)
+    if _stands_out(cross, cross_se):
+        offsets.append(f"{_metres(abs(cross))} {'right' if cross > 0 else 'left'} of the {reference} track")
+    head = "systematic offset: " + "; ".join(offsets) if offsets else "no systematic offset beyond the noise"
+    if not offsets and not (math.isfinite(along_se) or math.isfinite(cross_se)):  # nothing was tested
+        head = (f"offsets not judged (too few reports moving faster than {MIN_SPEED_MS:g} m/s for a "
+                "direction of travel)")
+    rms = _number(summary, "matched_sep_rms_m")
+    text = f"{head}; {_metres(rms)} RMS from {reference} over {n} reports"
+    if offsets:
+        text += f"; {CAUSES}"
+    jumps = _number(summary, "adsb_jumps")
+    if reference == "ADS-B" and math.isfinite(jumps) and jumps > 0:
+        text += f"; {int(jumps)} ADS-B position jump{'s' if jumps != 1 else ''} left out"
+    return text

@@ -1,0 +1,54 @@
+"""--pairs mlat-adsb and smr-mlat: multilateration correlated against ADS-B, surface radar against
+multilateration, each pair's separation what the positions were made with (pyproj's geodesic)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+import pytest
+from measurement_frames import meas_frame
+from pyproj import Geod
+
+from msdc.pipeline.correlate.correlation import NoSuchAircraft, correlate
+
+GEOD = Geod(ellps="WGS84")
+REF = (45.0, 5.0)
+
+
+def rows(kind, sensor, t, east, north, **cols):
+    east, north = np.broadcast_arrays(np.asarray(east, float), np.asarray(north, float))
+    lon, lat, _ = GEOD.fwd(np.full(east.shape, REF[1]), np.full(east.shape, REF[0]),
+                           np.degrees(np.arctan2(east, north)), np.hypot(east, north))
+    return pd.DataFrame({"time_of_day": t, "latitude": lat, "longitude": lon, "sensor_kind": kind,
+                         "sensor_id": sensor, "address": "4CA1B2", "ground_speed_kt": 20.0, **cols})
+
+
+T = np.arange(0.0, 600.0, 1.0)
+NORTH = 10.0 * T - 3000.0  # due north at 10 m/s
+MEAS = meas_frame(pd.concat([
+    rows("adsb", "021:0/107", T, 0.0, NORTH),
+    rows("mlat", "010:0/107:mlat", T, 20.0, NORTH),  # 20 m east of ADS-B
+    rows("smr", "010:0/7:smr", T, 20.0, NORTH + 15.0),  # 15 m north of the multilateration
+    rows("radar", "048:0/1", T, -500.0, NORTH, sac=0, sic=1),  # a radar 500 m west of ADS-B
+], ignore_index=True))
+
+
+@pytest.mark.parametrize(("pairs", "tested", "reference", "sep_m"), [
+    ("mlat-adsb", "010:0/107:mlat", "021:0/107", 20.0),
+    ("smr-mlat", "010:0/7:smr", "010:0/107:mlat", 15.0),
+    ("radar-adsb", "048:0/1", "021:0/107", 500.0),  # the other kinds stay out of the ADS-B reference
+])
+def test_each_pair_kind_against_its_reference(pairs, tested, reference, sep_m):
+    run = correlate(MEAS, all_aircraft=True, pairs=pairs)
+    (window,) = run.windows
+    assert (window.summary["radar_sensor"], window.summary["reference_sensor"]) == (tested, reference)
+    assert window.summary["sep_median_m"] == pytest.approx(sep_m, abs=0.05)
+    assert run.parameters["pairs"] == pairs
+
+
+def test_an_aircraft_not_seen_by_the_pair_is_named_in_its_terms():
+    meas = MEAS[(MEAS["sensor_kind"] != "mlat").to_numpy()].reset_index(drop=True)
+    with pytest.raises(NoSuchAircraft, match="multilateration"):
+        correlate(meas, callsign=None, address="4CA1B2", pairs="mlat-adsb")
+    with pytest.raises(NoSuchAircraft, match="surface radar and multilateration"):
+        correlate(meas, all_aircraft=True, pairs="smr-mlat")

@@ -1,0 +1,141 @@
+"""The commands take multilateration and surface radar recordings: CAT010 and CAT021 files encoded here
+(positions made with pyproj's geodesic), correlated, assessed and tracked from the command line."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pandas as pd
+import pytest
+from pyproj import Geod
+
+from msdc.asterix.encode import encode_frame
+from msdc.pipeline.cli import main
+
+GEOD = Geod(ellps="WGS84")
+REF = (45.0, 5.0)
+T = np.arange(0.0, 300.0, 1.0)
+NORTH = 5.0 * T - 750.0  # one aircraft due north at 5 m/s (about 10 kt), on the surface
+SENSORS = f"""
+[[sensor]]
+name = "MLAT"
+category = 10
+kind = "mlat"
+sac = 0
+sic = 107
+latitude = {REF[0]}
+longitude = {REF[1]}
+altitude_m = 0.0
+
+[[sensor]]
+name = "SMR"
+category = 10
+kind = "smr"
+sac = 0
+sic = 7
+latitude = {REF[0]}
+longitude = {REF[1]}
+altitude_m = 0.0
+"""
+
+
+def _run(argv, capsys) -> tuple[int, str, str]:
+    try:
+        status = main([str(a) for a in argv])
+    except SystemExit as exc:
+        status = exc.code
+    out, err = capsys.readouterr()
+    return status, out, err
+
+
+@pytest.fixture
+def files(tmp_path):
+    """ADS-B (CAT021 2.7) of aircraft 4CA1B2, the multilateration's reports of it 20 m east (CAT010, x/y
+    from the reference point, TYP 1), and the surface radar's 12 m north of those (TYP 3, no identity,
+    track 5), with a status message per second; and the sensor file."""
+    lon, lat, _ = GEOD.fwd(np.full(T.size, REF[1]), np.full(T.size, REF[0]), np.where(NORTH >= 0, 0.0, 180.0),
+                           np.abs(NORTH))
+    adsb = pd.DataFrame({"sac": 0, "sic": 107, "time_of_day": T, "latitude": lat, "longitude": lon,
+                         "address": "4CA1B2", "callsign": "RYR1AB", "nacp": 10, "ground_speed_kt": 9.7})
+    mlat = pd.DataFrame({"sac": 0, "sic": 107, "message_type": 1, "typ": 1, "time_of_day": T, "x_m": 20.0,
+                         "y_m": np.round(NORTH), "address": "4CA1B2", "callsign": "RYR1AB", "track_number": 9,
+                         "vx_ms": 0.0, "vy_ms": 5.0})
+    status = pd.DataFrame({"sac": 0, "sic": 107, "message_type": 2, "time_of_day": T + 0.5})
+    smr = pd.DataFrame({"sac": 0, "sic": 7, "message_type": 1, "typ": 3, "time_of_day": T, "x_m": 20.0,
+                        "y_m": np.round(NORTH) + 12.0, "track_number": 5, "vx_ms": 0.0, "vy_ms": 5.0})
+    paths = {name: tmp_path / f"{name}.ast" for name in ("adsb", "mlat", "smr")}
+    paths["adsb"].write_bytes(encode_frame(21, adsb, edition="2.7"))
+    paths["mlat"].write_bytes(encode_frame(10, pd.concat([mlat, status], ignore_index=True)))
+    paths["smr"].write_bytes(encode_frame(10, smr))
+    paths["sensors"] = tmp_path / "sensors.toml"
+    paths["sensors"].write_text(SENSORS)
+    return paths
+
+
+@pytest.mark.parametrize(("pairs", "inputs", "tested", "reference", "sep_m"), [
+    ("mlat-adsb", ("adsb", "mlat"), "010:0/107:mlat", "021:0/107", 20.0),
+    ("smr-mlat", ("smr", "mlat"), "010:0/7:smr", "010:0/107:mlat", 12.0),
+])
+def test_correlate_pairs(files, tmp_path, capsys, pairs, inputs, tested, reference, sep_m):
+    out = tmp_path / "c.json"
+    status, _, err = _run(["correlate", *(files[i] for i in inputs), "--sensors", files["sensors"], "--all",
+                           "--pairs", pairs, "--date", "2016-05-10", "--json", out], capsys)
+    assert status == 0, err
+    (window,) = json.loads(out.read_text())["windows"]
+    assert (window["radar_sensor"], window["reference_sensor"]) == (tested, reference)
+    # x/y rounded to the metre: the separation is the offset within 0.5 m
+    assert window["sep_median_m"] == pytest.approx(sep_m, abs=0.5)
+
+
+def test_a_missing_reference_point_stops_the_run_with_its_lines(files, tmp_path, capsys):
+    files["sensors"].write_text("[[sensor]]" + SENSORS.split("[[sensor]]")[2])  # the surface radar's alone
+    out = tmp_path / "c.json"
+    status, _, err = _run(["correlate", files["adsb"], files["mlat"], "--sensors", files["sensors"], "--all",
+                           "--pairs", "mlat-adsb", "--json", out], capsys)
+    assert status == 1 and not out.exists()
+    assert "CAT010 multilateration SAC/SIC 0/107" in err and f"not in {files['sensors']}" in err
+    assert 'kind = "mlat"' in err and "sic = 107" in err
+
+
+def test_a_missing_category_is_named(files, tmp_path, capsys):
+    status, _, err = _run(["correlate", files["adsb"], "--sensors", files["sensors"], "--all", "--pairs",
+                           "mlat-adsb", "--json", tmp_path / "c.json"], capsys)
+    assert status == 1 and "no multilateration (CAT010 or CAT020) records in the inputs" in err
+
+
+def test_quality_measures_the_reference_points(files, tmp_path, capsys):
+    out = tmp_path / "q.json"
+    status, text, err = _run(["quality", files["adsb"], files["mlat"], files["smr"], "--sensors",
+                              files["sensors"], "--all", "--date", "2016-05-10", "--json", out], capsys)
+    assert status == 0, err
+    tables = json.loads(out.read_text())["tables"]
+    rows = {r["sensor_id"]: r for r in tables["Reference points"]}
+    assert rows["010:0/107:mlat"]["reference"] == "adsb"
+    assert rows["010:0/107:mlat"]["east_offset_m"] == pytest.approx(20.0, abs=0.5)
+    assert rows["010:0/7:smr"]["north_offset_m"] == pytest.approx(12.0, abs=0.5)
+    sensors = {(r["sensor"], r["sic"]) for r in tables["Quality"] if r["callsign"] == "(all)"}
+    assert sensors == {("adsb", 107), ("mlat", 107), ("smr", 7)}
+    assert "Reference points" in text
+
+
+def test_track_fuses_the_kinds_asked_for(files, tmp_path, capsys):
+    out = tmp_path / "t.json"
+    status, _, err = _run(["track", files["mlat"], files["smr"], "--sensors", files["sensors"], "--all",
+                           "--sources", "mlat", "--date", "2016-05-10", "--json", out], capsys)
+    assert status == 0, err
+    (aircraft,) = json.loads(out.read_text())["aircraft"]
+    sensors = {row["sensor_id"] for row in aircraft["sensors"]}
+    assert sensors == {"010:0/107:mlat"}  # the surface radar's reports are CAT010 too, not asked for
+
+
+def test_quality_of_one_aircraft_no_radar_saw(files, tmp_path, capsys):
+    out = tmp_path / "q.json"
+    both = ["quality", files["adsb"], files["mlat"], "--sensors", files["sensors"]]
+    status, _, err = _run([*both, "--callsign", "RYR1AB", "--date", "2016-05-10", "--json", out], capsys)
+    assert status == 0, err
+    quality = json.loads(out.read_text())["tables"]["Quality"]
+    assert {(r["callsign"], r["sensor"]) for r in quality} == {
+        (who, kind) for who in ("RYR1AB", "(all)") for kind in ("adsb", "mlat")}
+    status, _, err = _run([*both, "--callsign", "XYZ99", "--json", tmp_path / "n.json"], capsys)
+    assert status == 1 and "XYZ99" in err

@@ -1,0 +1,46 @@
+"""The lag figure's peak labels, checked on the drawn canvas."""
+
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+
+from msdc.pipeline.correlate.results import WindowResult
+from msdc.pipeline.report import figures
+
+
+def _window() -> WindowResult:
+    """21 slots: NCC (a tent) and Pearson peak together at lag 0 in latitude, 0.01 apart (the two stars
+    nearly coincide, as on the fixtures' MAS136 longitude); in longitude Pearson rises to the search
+    limit, +10 (a hollow mark whose label is long)."""
+    d = np.arange(-20, 21)
+    lags = pd.DataFrame({"lag": d, "ncc_lat": 1.0 - np.abs(d) / 21.0, "ncc_lon": 1.0 - np.abs(d) / 21.0,
+                         "pearson_lat": 0.99 - 0.0005 * d**2, "pearson_lon": 0.5 + 0.04 * d})
+    return WindowResult({"callsign": "TST1", "window": 1, "slots": 21}, pd.DataFrame(), lags)
+
+
+def test_peak_labels_cover_no_mark_and_no_other_label(tmp_path, monkeypatch):
+    """A label 7 pt beside a 12 pt star sat on it, and the NCC and Pearson labels of one lag on each
+    other: every label now clears every peak mark of its panel and every other label, and stays inside
+    its panel."""
+    captured = {}
+    monkeypatch.setattr(figures, "save_png", lambda fig, path: captured.setdefault("fig", fig))
+    figures.lag_figure(_window(), tmp_path / "lags.png")
+    fig = captured["fig"]
+    fig.draw_without_rendering()
+    renderer = fig.canvas.get_renderer()
+    labels = []
+    for ax in fig.axes:
+        marks = [line.get_window_extent(renderer) for line in ax.get_lines()
+                 if line.get_marker() in ("*", "o")]
+        texts = [t for t in ax.texts if t.get_visible() and t.get_text()]
+        assert len(marks) == len(texts) == 2
+        area = ax.get_window_extent(renderer)
+        for text in texts:
+            box = text.get_window_extent(renderer)
+            assert not any(box.overlaps(m) for m in marks), text.get_text()
+            assert area.x0 <= box.x0 and box.x1 <= area.x1 and area.y0 <= box.y0 and box.y1 <= area.y1
+            labels.append(box)
+    assert all(not a.overlaps(b) for i, a in enumerate(labels) for b in labels[i + 1:])
+    assert {t.get_text() for ax in fig.axes for t in ax.texts} == {"+0", "+10: search limit, no estimate"}
+
