@@ -438,6 +438,7 @@ def page_setup(ws: WriteOnlyWorksheet, title_rows: str | None = "1:1", *, fit_he
 PAGE_WIDTH_CHARS = 170  # characters of column width a landscape page shows legibly
 # a short table (a page tall or less) up to this wide prints on one page, smaller (down to about half size),
 # rather than across pages that each hold a few columns of a row or two (wider: 2-3 pages, as a long one)
+PAGE_SLACK = 0.1  # a table up to this much of a page wider than a whole number of pages is fitted to it
 SHORT_TABLE_ROWS, SHORT_TABLE_MAX_CHARS = 40, 1.5 * PAGE_WIDTH_CHARS
 
 
@@ -448,6 +449,7 @@ def wide_pages(ws: WriteOnlyWorksheet, widths: list[float], text: list[bool], ro
     pages = page_count(widths, rows)
     if pages > 1:
         ws.page_setup.fitToWidth = pages
+        ws.page_setup.pageOrder = "overThenDown"  # a band of rows on consecutive pages, then the next
         lead = lead_columns(text)
         if lead:
             ws.print_title_cols = f"A:{get_column_letter(lead)}"
@@ -459,7 +461,7 @@ def page_count(widths: list[float], rows: int | None = None) -> int:
     (at most SHORT_TABLE_ROWS ``rows``) up to SHORT_TABLE_MAX_CHARS wide."""
     if rows is not None and rows <= SHORT_TABLE_ROWS and sum(widths) <= SHORT_TABLE_MAX_CHARS:
         return 1
-    return max(1, min(3, math.ceil(sum(widths) / PAGE_WIDTH_CHARS))) if widths else 1
+    return max(1, min(3, math.ceil(sum(widths) / PAGE_WIDTH_CHARS - PAGE_SLACK))) if widths else 1
 
 
 def lead_columns(text: list[bool]) -> int:

@@ -476,19 +476,21 @@ def test_wide_tables_span_pages_with_identity_repeated(tmp_path: Path) -> None:
 
 
 def test_a_short_wide_table_prints_one_page_wide_and_a_long_one_across_pages(tmp_path: Path) -> None:
-    """A call sign (7 characters: MAS72 and 2) and 9 columns of 20 (18 and 2) are 187 wide: over a legible
-    page of 170, under 1.5 pages. One row prints on one page wide, smaller, rather than a few columns a page;
-    41 rows (over SHORT_TABLE_ROWS = 40) print 2 wide with the leading text columns (3 at most) on each."""
+    """A call sign (7 characters: MAS72 and 2) and 10 columns of 20 (18 and 2) are 207 wide: over a legible
+    page of 170 and its slack (187), under 1.5 pages (255). One row prints on one page wide, smaller,
+    rather than a few columns a page; 41 rows (over SHORT_TABLE_ROWS = 40) print 2 wide with the leading
+    text columns (3 at most) on each, the two halves of a band of rows on consecutive pages."""
     from msdc.pipeline.report.excel import write_tables
 
     def table(rows: int) -> pd.DataFrame:
-        return pd.DataFrame({"callsign": ["MAS72"] * rows, **{f"c{i}": ["x" * 18] * rows for i in range(9)}})
+        return pd.DataFrame({"callsign": ["MAS72"] * rows, **{f"c{i}": ["x" * 18] * rows for i in range(10)}})
 
     write_tables({"Short": table(1), "Long": table(41)}, tmp_path / "t.xlsx")
     wb = load_workbook(tmp_path / "t.xlsx")
-    assert sum(wb["Short"].column_dimensions[c].width for c in "ABCDEFGHIJ") == 187.0
+    assert sum(wb["Short"].column_dimensions[c].width for c in "ABCDEFGHIJK") == 207.0
     assert wb["Short"].page_setup.fitToWidth == 1 and wb["Short"].print_title_cols is None
     assert wb["Long"].page_setup.fitToWidth == 2 and wb["Long"].print_title_cols == "$A:$C"
+    assert wb["Long"].page_setup.pageOrder == "overThenDown"  # a band of rows across its 2 pages, then on
 
 
 def test_window_start_is_a_utc_date_in_the_workbook(tmp_path: Path) -> None:
