@@ -285,7 +285,7 @@ def table_rows(ws: WriteOnlyWorksheet, columns: list[Column], start: int = 0,
         yield out
 
 
-_WRAPPED = Alignment(wrap_text=True, vertical="top")
+_WRAPPED = Alignment(wrap_text=True)  # bottom-aligned, as the row's other cells
 
 
 def _wraps(columns: list[Column]) -> list[tuple[int, int]]:
