@@ -16,7 +16,7 @@ import numpy as np
 import pandas as pd
 from bitstring import BitArray, Bits, pack
 
-from msdc.asterix.columns import Column, columns_for
+from msdc.asterix.columns import BDS_KINDS, Column, columns_for
 from msdc.asterix.tables import available, load_table, resolve_edition, uaps
 
 __all__ = [
@@ -760,7 +760,7 @@ def _assign(category: int, edition: str, data: Mapping[str, np.ndarray], n: int,
         if not cols[name].sources:
             raise ValueError(f"column {name!r} of CAT{category:03d} is derived on decoding, not sent: "
                              f"{cols[name].doc}")
-        if cols[name].kind == "bds":
+        if cols[name].kind in BDS_KINDS:
             raise ValueError(f"column {name!r} is read from a Mode S register in I{category:03d}/250 and is "
                              f"not written from its value: pass the register groups as extra={{'250': "
                              f"encode_item({category}, None, '250', [...])}}")
@@ -962,7 +962,7 @@ def encode_frame(category: int, frame: pd.DataFrame, edition: str | None = None,
     # derived columns (CAT001 time_of_day, made whole from CAT002 on decoding) have no item to write
     # Mode S register columns (I048/250 contents, kind "bds") are not written: bds_count writes the count
     names = [c for c, col in _columns(category, ed).items()
-             if c in frame.columns and col.sources and col.kind != "bds"]
+             if c in frame.columns and col.sources and col.kind not in BDS_KINDS]
     n = len(frame)
     if n == 0:
         return b""

@@ -51,7 +51,7 @@ _FORMATS = {
     "octal": lambda v: f"{v:04o}",
     "icao": icao_text,
 }
-_INT_DTYPES = {"flag": np.int8, "int": np.int32, "count": np.int16}
+_INT_DTYPES = {"flag": np.int8, "int": np.int32, "count": np.int16, "bdsflag": np.int8, "bdsint": np.int16}
 
 
 def typed_column(col: Column, values: np.ndarray):
@@ -74,7 +74,7 @@ def empty_column(col: Column, n: int):
     """An all-absent column of the right dtype, for fields the edition does not have."""
     if col.kind in ("float", "bds"):
         return np.full(n, np.nan)
-    if col.kind == "codes":
+    if col.kind in ("codes", "bdstext"):
         return pd.Categorical.from_codes(np.full(n, -1), categories=pd.Index([], dtype=object))
     return typed_column(col, np.full(n, -1, np.int64))
 

@@ -11,8 +11,8 @@ from functools import cache
 
 import numpy as np
 
-from .bds import field_of
-from .columns import Column, columns_for
+from .bds import COLUMN_KIND, field_of
+from .columns import BDS_KINDS, Column, columns_for
 from .kernel import ABSENT, COMPOUND, EXPLICIT, EXTENDED, FIXED, REP_COUNT, REP_FX, RFS, UNSELECTED, Parts
 from .tables import load_table, resolve_edition, uaps
 
@@ -320,7 +320,7 @@ def compile_layout(category: int, edition: str | None = None,
     code_slots: list[tuple[str, int]] = []
     bds_slots: list[tuple[str, int, tuple[str, ...]]] = []
     for col in columns:
-        if col.kind == "bds":  # a Mode S register field, read from the item's bytes after the gather
+        if col.kind in BDS_KINDS:  # a Mode S register field, read from the item's bytes after the gather
             found = _bds_item(category, edition, col, item_part, parts)
             if found is not None:
                 bds_slots.append((col.name, use(found[0]), found[1]))
@@ -407,6 +407,9 @@ def _bds_item(category: int, edition: str, col: Column, item_part: dict, parts: 
         if node["kind"] != "repetitive" or node["rep_bytes"] != 1 or fixed_bits(node["item"]) != 64:
             raise ValueError(f"CAT{category:03d} {edition} I{item_id}: column {col.name!r} needs counted "
                              f"8-byte BDS register groups")
-        field_of(path)
+        _, field = field_of(path)
+        if COLUMN_KIND[field.kind] != col.kind:
+            raise ValueError(f"column {col.name!r}: register field {'/'.join(path)} decodes as {field.kind}, "
+                             f"so its kind is {COLUMN_KIND[field.kind]!r}, not {col.kind!r}")
         return p, path
     return None

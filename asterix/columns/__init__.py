@@ -8,7 +8,7 @@ columns are the raw bits, never sign-extended (I021/090 PA, printed signed in 0.
 
 from __future__ import annotations
 
-from .base import Column
+from .base import BDS_KINDS, Column
 from .cat001 import CAT001
 from .cat002 import CAT002
 from .cat010 import CAT010
@@ -19,7 +19,7 @@ from .cat048 import CAT048
 from .cat062 import CAT062
 from .status import CAT019, CAT023, CAT025, CAT063, CAT065
 
-__all__ = ["Column", "columns_for", "FAMILIES", "KIND_DTYPES", "markdown_schema",
+__all__ = ["BDS_KINDS", "Column", "columns_for", "FAMILIES", "KIND_DTYPES", "markdown_schema",
            "CAT048", "CAT021_V2", "CAT021_V0", "CAT034", "CAT001", "CAT002", "CAT010", "CAT020", "CAT062",
            "CAT019", "CAT023", "CAT025", "CAT063", "CAT065"]
 
@@ -55,7 +55,8 @@ FAMILIES = {"CAT048 (all editions)": CAT048, "CAT021 2.x (2.1-2.7)": CAT021_V2,
             "CAT025 (1.5)": CAT025, "CAT063 (1.6)": CAT063, "CAT065 (1.5)": CAT065}
 KIND_DTYPES = {"float": "float64 (NaN if absent)", "int": "Int32", "flag": "Int8", "count": "Int16",
                "octal": "text (categorical)", "hex": "text (categorical)", "icao": "text (categorical)",
-               "codes": "text (categorical)", "bds": "float64 (NaN if absent)"}
+               "codes": "text (categorical)", "bds": "float64 (NaN if absent)", "bdsint": "Int16",
+               "bdsflag": "Int8", "bdstext": "text (categorical)"}
 
 
 def markdown_schema() -> str:

@@ -7,13 +7,18 @@ from dataclasses import dataclass
 NM_PER_S_TO_KT = 3600.0
 
 
+# Mode S register fields read from I048/250 by asterix/bds.py: float, small int, flag, text
+BDS_KINDS = ("bds", "bdsint", "bdsflag", "bdstext")
+
+
 @dataclass(frozen=True)
 class Column:
     """One frame column: its name, sources, how raw bits become a value, and its documentation."""
 
     name: str
     sources: tuple[tuple[str, tuple[str, ...]], ...]
-    kind: str = "float"  # float (LSB-scaled) | int | flag | octal | icao | hex | count | codes | bds
+    # float (LSB-scaled) | int | flag | octal | icao | hex | count | codes | Mode S register (BDS_KINDS)
+    kind: str = "float"
     scale: float = 1.0  # applied after the LSB, for unit conversion (NM/s -> kt)
     unit: str = ""
     doc: str = ""

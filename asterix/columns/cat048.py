@@ -6,14 +6,55 @@ from .base import _COMMON_ID, NM_PER_S_TO_KT, Column, _c, _flags
 
 _SEL = "selected altitude (16 ft)"
 _ABSENT = "; absent when the register's status bit says not valid"
-# I048/250 Mode S registers (asterix/bds.py holds their layouts): kind "bds", float64, NaN when absent
+_OWN = "; absent unless MB bits 1-8 hold the register's own code"
+# I048/250 Mode S registers (asterix/bds.py holds their layouts): kind "bds" float64 (NaN when absent),
+# "bdsint" Int16, "bdsflag" Int8, "bdstext" categorical (<NA> when absent)
 _BDS = [
+    _c("mode_s_subnetwork_version", "250", "BDS10/SUBNETWORK", "bdsint",
+       doc=f"BDS 1,0 Mode S subnetwork version number (0 none; 3 Annex 10 Amdt 77, 4/5 Doc 9871 ed. "
+           f"1/2){_OWN}"),
+    _c("mode_s_level5", "250", "BDS10/LEVEL5", "bdsflag",
+       doc=f"BDS 1,0 transponder enhanced protocol indicator (1: level 5 transponder){_OWN}"),
+    _c("specific_services_capability", "250", "BDS10/SPECIFIC_SERVICES", "bdsflag",
+       doc=f"BDS 1,0 Mode S specific services capability{_OWN}"),
+    _c("identification_capability", "250", "BDS10/IDENTIFICATION", "bdsflag",
+       doc=f"BDS 1,0 aircraft identification capability{_OWN}"),
+    _c("squitter_capability", "250", "BDS10/SQUITTER", "bdsflag",
+       doc=f"BDS 1,0 squitter capability subfield (extended squitter registers 0,5 and 0,6 updated){_OWN}"),
+    _c("surveillance_identifier_capability", "250", "BDS10/SURVEILLANCE_ID", "bdsflag",
+       doc=f"BDS 1,0 surveillance identifier code capability{_OWN}"),
+    _c("gicb_capability", "250", "BDS17/CAPABILITY", "bdstext",
+       doc="BDS 1,7 common usage GICB capability: the registers the aircraft says it gives ('20,40,50,60'; "
+           "bits 1-24)"),
+    _c("bds20_callsign", "250", "BDS20/IDENT", "bdstext",
+       doc=f"BDS 2,0 aircraft identification (8 ICAO 6-bit characters; I048/240 is the radar's own){_OWN}"),
+    _c("acas_ara", "250", "BDS30/ARA", "bdsint",
+       doc=f"BDS 3,0 active resolution advisories, 14 bits as an integer (the first, MB bit 9, is the "
+           f"highest){_OWN}"),
+    _c("acas_rac", "250", "BDS30/RAC", "bdsint",
+       doc=f"BDS 3,0 RA complements: 4 bits (do not pass below, above, turn left, right){_OWN}"),
+    _c("acas_ra_terminated", "250", "BDS30/RAT", "bdsflag", doc=f"BDS 3,0 RA terminated{_OWN}"),
+    _c("acas_multiple_threats", "250", "BDS30/MTE", "bdsflag",
+       doc=f"BDS 3,0 multiple threat encounter{_OWN}"),
+    _c("acas_threat_type", "250", "BDS30/TTI", "bdsint",
+       doc=f"BDS 3,0 threat type indicator: 0 no identity, 1 Mode S address, 2 altitude, range and "
+           f"bearing{_OWN}"),
+    _c("acas_threat_address", "250", "BDS30/THREAT_ADDRESS", "bdstext",
+       doc=f"BDS 3,0 the threat's Mode S address (6 hex digits) when the threat type is 1{_OWN}"),
     _c("mcp_selected_altitude_ft", "250", "BDS40/MCP_ALT", "bds", unit="ft",
        doc=f"BDS 4,0 MCP/FCU {_SEL}{_ABSENT}"),
     _c("fms_selected_altitude_ft", "250", "BDS40/FMS_ALT", "bds", unit="ft",
        doc=f"BDS 4,0 FMS {_SEL}{_ABSENT}"),
     _c("baro_setting_hpa", "250", "BDS40/BARO", "bds", unit="hPa",
        doc=f"BDS 4,0 barometric pressure setting (800 + 0.1 hPa steps){_ABSENT}"),
+    _c("vnav_mode", "250", "BDS40/VNAV", "bdsflag", doc=f"BDS 4,0 MCP/FCU mode: VNAV engaged{_ABSENT}"),
+    _c("altitude_hold_mode", "250", "BDS40/ALT_HOLD", "bdsflag",
+       doc=f"BDS 4,0 MCP/FCU mode: altitude hold engaged{_ABSENT}"),
+    _c("approach_mode", "250", "BDS40/APPROACH", "bdsflag",
+       doc=f"BDS 4,0 MCP/FCU mode: approach engaged{_ABSENT}"),
+    _c("target_altitude_source", "250", "BDS40/TARGET_SOURCE", "bdsint",
+       doc=f"BDS 4,0 target altitude source: 0 unknown, 1 aircraft altitude, 2 FCU/MCP selected altitude, "
+           f"3 FMS selected altitude{_ABSENT}"),
     _c("roll_angle_deg", "250", "BDS50/ROLL", "bds", unit="deg",
        doc=f"BDS 5,0 roll angle, + right wing down (45/256 deg){_ABSENT}"),
     _c("track_angle_deg", "250", "BDS50/TRK", "bds", unit="deg",

@@ -141,6 +141,7 @@ def correlate_job(options: CorrelateOptions, *, progress: Progress | None = None
     from msdc.pipeline.model.aircraft import NoSuchAircraft
     from msdc.pipeline.model.site_check import far_separations
     from msdc.pipeline.quality.filters import apply_filters, filter_warnings
+    from msdc.pipeline.quality.tables import workbook_sheets
 
     started = time.monotonic()
     checked = checked or validate(options)
@@ -186,7 +187,7 @@ def correlate_job(options: CorrelateOptions, *, progress: Progress | None = None
             if progress:
                 progress.stage("Analysing data quality")
             result.quality = quality_step(meas_all, checked.sensors, options)
-            run.extra_sheets.update(result.quality.sheets)
+            run.extra_sheets.update(workbook_sheets(result.quality.sheets))
             lead_quality(run, result.quality)
         return result
 

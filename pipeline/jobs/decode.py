@@ -22,7 +22,7 @@ from msdc.pipeline.jobs.common import (
     real_output,
     spare_inputs,
 )
-from msdc.pipeline.jobs.options import CATEGORIES, DecodeOptions, check_declared
+from msdc.pipeline.jobs.options import CATEGORIES, DEFAULT_CATEGORIES, DecodeOptions, check_declared
 from msdc.pipeline.model import editions as edition_notes
 from msdc.pipeline.report.files import named, write_csv
 from msdc.pipeline.report.transaction import OutputTransaction, side_pattern, staged
@@ -39,7 +39,7 @@ def validate(options: DecodeOptions) -> Checked:
         out, base = checked.output, real_output(checked.output)
         spare_inputs(options.inputs, [(f"-o {out}", p) for p in (
             out, *(category_output(base, c) for c in CATEGORIES))])
-        cats = sorted(set(options.categories or CATEGORIES))
+        cats = sorted(set(options.categories or DEFAULT_CATEGORIES))
         # written when several categories decode
         check_beside("-o", out, [(f"CAT{cat:03d} file", category_output(base, cat)) for cat in cats
                                  if len(cats) > 1])

@@ -20,7 +20,7 @@ from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from pathlib import Path
 
-from msdc.asterix.categories import MEASUREMENT_CATEGORIES
+from msdc.asterix.categories import DECODABLE, MEASUREMENT_CATEGORIES
 from msdc.pipeline.meta import (
     ADSB_SIGMA_RANGE_M,
     FILLS,
@@ -45,7 +45,8 @@ class OptionError(ValueError):
 # ---------------------------------------------------------------------------------------------------------
 # Ranges and choices only the options take (those the steps share are in pipeline.meta)
 
-CATEGORIES = tuple(sorted(MEASUREMENT_CATEGORIES))  # decode --category
+CATEGORIES = tuple(sorted(DECODABLE))  # decode --category: any category msdc decodes
+DEFAULT_CATEGORIES = tuple(sorted(MEASUREMENT_CATEGORIES))  # decoded when no --category is given
 CHUNK_RANGE_MB = (0.1, 4096.0)
 GAP_RANGE_S = (0.1, 86400.0)
 SLOT_RANGE_S = (0.1, 3600.0)  # below 0.1 s the slot count and the lag tables explode
@@ -288,7 +289,11 @@ class DecodeOptions(DecodingOptions):
     output: str | None = option(None, "-o", "--output", section="output",
                                 help="OUT.csv or OUT.parquet (one file per category: stem_cat048...)")
     categories: tuple[int, ...] = option((), "--category", repeat=True, choices=CATEGORIES,
-                                         help="only this category")
+                                         help="only this category (repeatable; default: the measurement "
+                                              "categories 48, 21, 10 and 20)",
+                                         doc="decode only this category, any msdc decodes (repeatable: "
+                                             "`--category 62 --category 63`); without it the measurement "
+                                             "categories CAT048, CAT021, CAT010 and CAT020 are decoded")
     strict: bool = option(False, "--strict", help="stop at the first bad block")
     lenient: bool = option(False, "--lenient",
                            help="write what decodes even when an input is mostly not ASTERIX or its records "

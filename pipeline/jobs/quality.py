@@ -102,6 +102,7 @@ def write_quality(result: QualityJobResult, *, tx: OutputTransaction | None = No
     """Write the JSON tables and/or the workbook with its figures, as the options ask, staged in ``tx``
     (committed by the caller; without one, the files are committed together here). Returns the final
     paths, by kind."""
+    from msdc.pipeline.quality.tables import workbook_sheets
     from msdc.pipeline.report.excel import write_tables
     from msdc.pipeline.report.files import write_json
     from msdc.pipeline.report.summary import table_records
@@ -116,12 +117,7 @@ def write_quality(result: QualityJobResult, *, tx: OutputTransaction | None = No
         if result.checked.output:
             out = stage.path(result.checked.output)
             images = quality_figures(result.quality, out.parent, out.stem, stage)
-            # the sheet lists the bins that hold intervals (every 0.1 s bin up to the longest interval
-            # printed 18 pages on the real radar); the DataFrame and the JSON keep every bin
-            sheets = dict(result.quality.sheets)
-            bins = sheets["Update intervals"]
-            sheets["Update intervals"] = bins[bins["intervals"] > 0] if "intervals" in bins else bins
-            write_tables(sheets, out, images=images,
+            write_tables(workbook_sheets(result.quality.sheets), out, images=images,
                          parameters={**result.parameters, "inputs": result.loaded.inputs})
             written["report"] = result.checked.output
             written.update((f"image {name}", stage.final(path)) for name, path in images.items())

@@ -392,3 +392,13 @@ def quality_tables(meas: pd.DataFrame, *, gap_s: float = 180.0,
         "ADS-B quality": adsb_quality,
         "ADS-B quality over time": adsb_over_time,
     }
+
+
+def workbook_sheets(sheets: dict[str, pd.DataFrame]) -> dict[str, pd.DataFrame]:
+    """The quality sheets as a workbook prints them: "Update intervals" lists only the bins that hold
+    intervals (every 0.1 s bin up to the longest interval printed 18 pages on the real radar), numbered
+    afresh (a kept index would print as a column); the DataFrames and the JSON keep every bin."""
+    bins = sheets.get("Update intervals")
+    if bins is None or "intervals" not in bins:
+        return dict(sheets)
+    return {**sheets, "Update intervals": bins[bins["intervals"] > 0].reset_index(drop=True)}

@@ -30,6 +30,7 @@ from openpyxl.worksheet._write_only import WriteOnlyWorksheet
 from openpyxl.xml import LXML
 
 from msdc.pipeline.report.formats import UNITS, column_unit, excel_format
+from msdc.pipeline.report.headers import workbook_header
 from msdc.pipeline.report.rows import RawRow, RowStyles, append_rows, bool_cell, install
 from msdc.pipeline.report.summary import (
     is_missing,
@@ -59,6 +60,8 @@ FAST_ROWS = True  # table rows through pipeline.report.rows (False: openpyxl's a
 _ISO_DATE = re.compile(r"\d{4}-\d{2}-\d{2}\Z")
 _ISO_DATETIME = re.compile(r"\d{4}-\d{2}-\d{2}[T ]\d{2}:\d{2}(:\d{2}(\.\d{1,9})?)?(Z|[+-]\d{2}:?\d{2})?\Z")
 _DATETIME_HEADERS = {"time_utc", "start", "end", "timestamp", "run_time"}
+_DATE_CODES = re.compile(r"yy|hh")  # a number format showing a date or a time
+_FORMAT_SYNTAX = re.compile(r'[\[\]"]')  # what a number format has that its text does not
 
 BOLD = Font(bold=True)
 TITLE_FONT = Font(bold=True, size=12)
@@ -179,6 +182,7 @@ class Column:
     styled: WriteOnlyCell | None = None
     text: bool = False  # values may hold text, which must be checked for formula-like starts
     bools: bool = False  # values may hold booleans, written with rows.BOOL_FORMAT
+    wrap: int | None = None  # text longer than this many characters wraps inside its cell (write_table)
 
 
 def _datetime_serials(series: pd.Series) -> list[Any]:
@@ -261,6 +265,7 @@ def table_rows(ws: WriteOnlyWorksheet, columns: list[Column], start: int = 0,
     styled = [(j, c.styled) for j, c in enumerate(columns) if c.styled is not None and not c.text]
     texts = [(j, c.number_format) for j, c in enumerate(columns) if c.text]
     flags = [j for j, c in enumerate(columns) if c.bools and not c.text]
+    wraps = _wraps(columns)
     for row in islice(zip(*(c.values for c in columns), strict=True), start, stop):
         out = list(row)
         for j, cell in styled:
@@ -275,7 +280,28 @@ def table_rows(ws: WriteOnlyWorksheet, columns: list[Column], start: int = 0,
             value = out[j]
             if value is not None and not (value.__class__ is str and not value.startswith(FORMULA_START)):
                 out[j] = cell_for(ws, value, fmt)
+        if wraps:
+            _wrap_long(ws, out, wraps)
         yield out
+
+
+_WRAPPED = Alignment(wrap_text=True)  # bottom-aligned, as the row's other cells
+
+
+def _wraps(columns: list[Column]) -> list[tuple[int, int]]:
+    """(index, characters) of the text columns whose long text wraps."""
+    return [(j, c.wrap) for j, c in enumerate(columns) if c.text and c.wrap]
+
+
+def _wrap_long(ws: WriteOnlyWorksheet, row: list[Any], wraps: list[tuple[int, int]]) -> None:
+    """Text longer than its column's ``wrap`` as a cell that wraps (cleaned as text_cell does): it would
+    otherwise run on to the right, and the printed page, fitted to the widest row, would shrink to it."""
+    for j, chars in wraps:
+        value = row[j]
+        if value.__class__ is str and len(value) > chars:
+            cell = text_cell(ws, clean_text(value))
+            cell.alignment = _WRAPPED
+            row[j] = cell
 
 
 def raw_rows(ws: WriteOnlyWorksheet, columns: list[Column], start: int = 0,
@@ -283,12 +309,15 @@ def raw_rows(ws: WriteOnlyWorksheet, columns: list[Column], start: int = 0,
     """Rows for a sheet set up by rows.install: values as they are (the writer gives numbers their
     column's style), text columns' formula-like text and other values as cells, as table_rows does."""
     texts = [(j, c.number_format) for j, c in enumerate(columns) if c.text]
+    wraps = _wraps(columns)
     for row in islice(zip(*(c.values for c in columns), strict=True), start, stop):
         out = RawRow(row)
         for j, fmt in texts:
             value = out[j]
             if value is not None and not (value.__class__ is str and not value.startswith(FORMULA_START)):
                 out[j] = cell_for(ws, value, fmt)
+        if wraps:
+            _wrap_long(ws, out, wraps)
         yield out
 
 
@@ -306,6 +335,8 @@ def display_len(value: Any, number_format: str | None) -> int:
         return len(DATETIME_FORMAT)
     if isinstance(value, dt.date | dt.time) or number_format == CLOCK_FORMAT:
         return 12
+    if number_format and _DATE_CODES.search(number_format):  # another date format ("UTC"-labelled ones)
+        return len(_FORMAT_SYNTAX.sub("", number_format))
     if number_format and "." in number_format:
         return len(f"{value:,.{number_format.count('0', number_format.index('.'))}f}")
     if number_format and number_format.startswith("#,"):
@@ -346,9 +377,11 @@ def _widest(values: Iterable[Any], number_format: str | None) -> list[Any]:
     return widest
 
 
-def column_width(header: str, values: Iterable[Any], number_format: str | None) -> float:
-    """Column width (characters) fitting the header's longest word and the widest values, within limits."""
-    longest = max([max(len(word) for word in header.split(" ")),
+def column_width(header: str, values: Iterable[Any], number_format: str | None,
+                 label: str | None = None) -> float:
+    """Column width (characters) fitting the longest word of the header printed (``label``, else
+    ``header``) and the widest values, within limits."""
+    longest = max([max(len(word) for word in (label or header).split(" ")),
                    *(display_len(v, number_format) for v in _widest(values, number_format))])
     if header in _DATETIME_HEADERS:
         longest = max(longest, display_len(None, number_format) or len(DATETIME_FORMAT))
@@ -370,6 +403,14 @@ def header_cells(ws: WriteOnlyWorksheet, headers: list[str], fill: PatternFill =
         cell.alignment = _HEADER_ALIGN
         cells.append(cell)
     return cells
+
+
+def header_height(headers: list[str], widths: list[float]) -> float:
+    """Height (points) of a header row whose headers wrap at their spaces into columns of ``widths``
+    characters: the lines of the longest, set explicitly (spreadsheet programs do not all fit it)."""
+    lines = [len(textwrap.wrap(h, width=max(1, int(w) - 1), break_long_words=False) or [h])
+             for h, w in zip(headers, widths, strict=False)]
+    return max([1, *lines]) * ROW_HEIGHT_PT
 
 
 def note_text_cell(ws: WriteOnlyWorksheet, text: str) -> WriteOnlyCell:
@@ -395,24 +436,32 @@ def page_setup(ws: WriteOnlyWorksheet, title_rows: str | None = "1:1", *, fit_he
 
 
 PAGE_WIDTH_CHARS = 170  # characters of column width a landscape page shows legibly
+# a short table (a page tall or less) up to this wide prints on one page, smaller (down to about half size),
+# rather than across pages that each hold a few columns of a row or two (wider: 2-3 pages, as a long one)
+PAGE_SLACK = 0.1  # a table up to this much of a page wider than a whole number of pages is fitted to it
+SHORT_TABLE_ROWS, SHORT_TABLE_MAX_CHARS = 40, 1.5 * PAGE_WIDTH_CHARS
 
 
-def wide_pages(ws: WriteOnlyWorksheet, widths: list[float], text: list[bool]) -> int:
+def wide_pages(ws: WriteOnlyWorksheet, widths: list[float], text: list[bool], rows: int | None = None) -> int:
     """For a table wider than one legible landscape page: fit it to 2 or 3 pages wide instead of 1 and
-    repeat its leading text columns (identity: call sign, address, sensor) on every page. Returns the
-    number of pages wide."""
-    pages = page_count(widths)
+    repeat its leading text columns (identity: call sign, address, sensor) on every page; a short one
+    (``rows``, page_count) stays one page wide. Returns the number of pages wide."""
+    pages = page_count(widths, rows)
     if pages > 1:
         ws.page_setup.fitToWidth = pages
+        ws.page_setup.pageOrder = "overThenDown"  # a band of rows on consecutive pages, then the next
         lead = lead_columns(text)
         if lead:
             ws.print_title_cols = f"A:{get_column_letter(lead)}"
     return pages
 
 
-def page_count(widths: list[float]) -> int:
-    """How many landscape pages wide a table of these column widths prints (1 to 3)."""
-    return max(1, min(3, math.ceil(sum(widths) / PAGE_WIDTH_CHARS))) if widths else 1
+def page_count(widths: list[float], rows: int | None = None) -> int:
+    """How many landscape pages wide a table of these column widths prints (1 to 3): one for a short table
+    (at most SHORT_TABLE_ROWS ``rows``) up to SHORT_TABLE_MAX_CHARS wide."""
+    if rows is not None and rows <= SHORT_TABLE_ROWS and sum(widths) <= SHORT_TABLE_MAX_CHARS:
+        return 1
+    return max(1, min(3, math.ceil(sum(widths) / PAGE_WIDTH_CHARS - PAGE_SLACK))) if widths else 1
 
 
 def lead_columns(text: list[bool]) -> int:
@@ -435,15 +484,22 @@ def write_table(ws: WriteOnlyWorksheet, columns: list[Column], *, freeze: str = 
     """Header row, the rows and an optional note under them; returns the number of rows kept."""
     n_rows = len(columns[0].values) if columns else 0
     sample = [c.values[:_WIDTH_SAMPLE_ROWS] for c in columns]
-    widths = [column_width(c.header, v, c.number_format) for c, v in zip(columns, sample, strict=True)]
+    labels = [workbook_header(c.header) for c in columns]
+    widths = [column_width(c.header, v, c.number_format, label)
+              for c, v, label in zip(columns, sample, labels, strict=True)]
+    for c, width in zip(columns, widths, strict=True):
+        if c.text and width >= MAX_WIDTH:
+            c.wrap = int(width) - 2
+    _wrapped_heights(ws, columns, min(n_rows, EXCEL_MAX_ROWS - 1))
     set_widths(ws, widths)
     ws.freeze_panes = freeze
     page_setup(ws)
-    wide_pages(ws, widths, [c.text for c in columns])
+    wide_pages(ws, widths, [c.text for c in columns], n_rows)
     kept = min(n_rows, EXCEL_MAX_ROWS - 1)
     if kept < n_rows:
         note = f"{note} Rows cut at Excel's limit: {kept} of {n_rows} written.".strip()
-    ws.append(header_cells(ws, [c.header for c in columns]))
+    ws.row_dimensions[1].height = header_height(labels, widths)
+    ws.append(header_cells(ws, labels))
     styles = RowStyles(ws, [None if c.styled is None or c.text else c.number_format for c in columns])
     if FAST_ROWS and install(ws, styles):
         append_rows(ws, raw_rows(ws, columns, 0, kept), kept)
@@ -452,17 +508,33 @@ def write_table(ws: WriteOnlyWorksheet, columns: list[Column], *, freeze: str = 
             ws.append(row)
     if note:  # below the table, so the printed width stays the table's
         ws.append([])
-        lead, lines = note_lines(note, widths, [c.text for c in columns])
+        lead, lines = note_lines(note, widths, [c.text for c in columns], n_rows)
         for line in lines:
             ws.append([None] * lead + [note_text_cell(ws, line)])
     return kept
 
 
-def note_lines(note: str, widths: list[float], text: list[bool]) -> tuple[int, list[str]]:
+def _wrapped_heights(ws: WriteOnlyWorksheet, columns: list[Column], kept: int) -> None:
+    """Rows holding wrapped text (Column.wrap) made tall enough for its lines, set before any row is
+    written (spreadsheet programs do not all fit a row to its text on opening)."""
+    heights: dict[int, int] = {}
+    for c in columns:
+        if not c.wrap:
+            continue
+        for i, value in enumerate(c.values[:kept]):
+            if value.__class__ is str and len(value) > c.wrap:
+                lines = len(textwrap.wrap(value, width=c.wrap)) or 1
+                heights[i + 2] = max(heights.get(i + 2, 1), lines)
+    for row, lines in heights.items():
+        ws.row_dimensions[row].height = lines * ROW_HEIGHT_PT
+
+
+def note_lines(note: str, widths: list[float], text: list[bool],
+               rows: int | None = None) -> tuple[int, list[str]]:
     """Where a table's note starts (the first column after those repeated on every page, where a table
     prints wider than a page) and the note cut at spaces into lines that fit the rest of the first page,
     so that no page shows a line cut off."""
-    pages = page_count(widths)
+    pages = page_count(widths, rows)
     lead = lead_columns(text) if pages > 1 else 0
     lead_w = sum(widths[:lead])
     page_w = (sum(widths) + (pages - 1) * lead_w) / pages if pages > 1 else max(sum(widths), 100.0)

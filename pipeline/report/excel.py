@@ -51,6 +51,7 @@ from msdc.pipeline.report.cells import (
     excel_value,
     fixed_rows,
     header_cells,
+    header_height,
     is_number,
     iso_time,
     make_column,
@@ -70,6 +71,7 @@ from msdc.pipeline.report.charts import (
     write_lag_charts,
     write_slot_charts,
 )
+from msdc.pipeline.report.headers import workbook_header
 from msdc.pipeline.report.saving import get_ready, save
 from msdc.pipeline.report.summary import (
     LEAD_TEXT,
@@ -142,8 +144,9 @@ def _summary_value(values: dict[str, Any], key: str) -> Any:
 
 
 def summary_header(key: str) -> str:
-    """A Summary header: the JSON key with spaces, so it wraps onto two lines ("radar duplicates")."""
-    return key.replace("_", " ")
+    """A Summary header: the workbooks' header of the JSON key (headers.workbook_header), wrapped at its
+    spaces."""
+    return workbook_header(key)
 
 
 _INDENT = Alignment(horizontal="left", indent=1)
@@ -170,13 +173,15 @@ def _wrapped(ws: WriteOnlyWorksheet, text: str, chars: int, font=BOLD) -> int:
 
 
 def _summary_block(ws: WriteOnlyWorksheet, summaries: list[dict[str, Any]], title: str, keys: list[str],
-                   fill: str, row: int, chars: int, empty: str = "no correlated window") -> int:
+                   fill: str, row: int, chars: int, widths: list[float],
+                   empty: str = "no correlated window") -> int:
     """One Summary block (title cut into rows of ``chars`` characters, header, one row per entry of
     ``summaries``: _summary_values, or the radars' Excel values, blank) from sheet row ``row``; returns the
-    next free row."""
+    next free row. ``widths``: the sheet's column widths, which the header row's height is made for."""
     row += _wrapped(ws, title, chars) - 1
-    ws.row_dimensions[row + 1].height = 3 * ROW_HEIGHT_PT  # "radar filled slots" wraps onto 3 lines
-    ws.append(header_cells(ws, [summary_header(k) for k in keys], PatternFill("solid", fgColor=fill)))
+    headers = [summary_header(k) for k in keys]
+    ws.row_dimensions[row + 1].height = header_height(headers, widths)
+    ws.append(header_cells(ws, headers, PatternFill("solid", fgColor=fill)))
     rows = [[_summary_value(values, k) for k in keys] for values in summaries]
     formats = [number_format_for(k, [r[j] for r in rows]) for j, k in enumerate(keys)]
     for values in rows:
@@ -245,9 +250,10 @@ def _write_summary(wb: Workbook, run: CorrelationRun) -> None:
         rows = [[r.get(k) for k in radar_keys] for r in radars]
         widen([summary_header(k) for k in radar_keys], rows, [number_format_for(k, [r[j] for r in rows])
                                                                for j, k in enumerate(radar_keys)])
-    widen(SKIPPED_HEADERS[:-1], [r[:-1] for r in skipped], [None, None, None, CLOCK_FORMAT, CLOCK_FORMAT])
-    # (the reason overflows)
+    widen([summary_header(k) for k in SKIPPED_HEADERS[:-1]], [r[:-1] for r in skipped],
+          [None, None, None, CLOCK_FORMAT, CLOCK_FORMAT])  # (the reason overflows)
     set_widths(ws, [widths[j] for j in sorted(widths)])
+    col_widths = [widths[j] for j in sorted(widths)]
     ws.freeze_panes = "C2"
     page_setup(ws, SUMMARY_TITLE_ROWS)
     date = run.parameters.get("date")
@@ -255,12 +261,13 @@ def _write_summary(wb: Workbook, run: CorrelationRun) -> None:
                          + (f", {date} UTC" if date else ", date unknown (clock times)"), font=TITLE_FONT)])
     chars = max(60, int(0.9 * sum(widths.values())))  # a title's row: about the tables' width
     row = 2
-    row = _summary_block(ws, summaries, blocks[0][0], blocks[0][1], _LEAD_FILL, row, chars)
+    row = _summary_block(ws, summaries, blocks[0][0], blocks[0][1], _LEAD_FILL, row, chars,
+                         col_widths)
     row += _text_rows(ws, f"Verdicts ({len(summaries)})", [(values, str(values.get("verdict") or "-"))
                                                            for values in summaries], "none")
     if radars:
         row = _summary_block(ws, radars, f"{RADARS_TITLE} ({RADARS_TEXT})", radar_keys, _LEAD_FILL, row,
-                             chars)
+                             chars, col_widths)
         for radar in run.radars:
             if radar.get("note"):
                 row += _wrapped(ws, f"{radar.get('radar')}: {radar['note']}", chars, NOTE_FONT)
@@ -269,7 +276,7 @@ def _write_summary(wb: Workbook, run: CorrelationRun) -> None:
     ws.append([text_cell(ws, f"{THESIS_TITLE} ({THESIS_TEXT})", font=TITLE_FONT)])
     row += 1
     for (title, keys), fill in zip(SUMMARY_BLOCKS, _BLOCK_FILLS, strict=False):
-        row = _summary_block(ws, summaries, title, keys, fill, row, chars)
+        row = _summary_block(ws, summaries, title, keys, fill, row, chars, col_widths)
 
     # one row per note, so that no row runs far past the tables (the page is fitted to its widest row)
     notes = [(values, n) for w, values in zip(run.windows, summaries, strict=True)
@@ -279,7 +286,8 @@ def _write_summary(wb: Workbook, run: CorrelationRun) -> None:
                       "needs a warning")
     ws.append([text_cell(ws, f"Skipped windows ({len(skipped)})", font=BOLD)])
     if skipped:
-        ws.append(header_cells(ws, SKIPPED_HEADERS, PatternFill("solid", fgColor=_BLOCK_FILLS[3])))
+        ws.append(header_cells(ws, [summary_header(k) for k in SKIPPED_HEADERS],
+                               PatternFill("solid", fgColor=_BLOCK_FILLS[3])))
         for row in skipped:
             ws.append([*(cell_for(ws, v, None) for v in row[:3]),
                        *(cell_for(ws, v, CLOCK_FORMAT if is_number(v) else None) for v in row[3:5]),
@@ -360,7 +368,7 @@ def _write_parquet_note(wb: Workbook, title: str, rows: int, schema, path: Path,
     ws.append([note_text_cell(ws, f"Written as Parquet because {why}. The charts use an excerpt of it: "
                                   f"{chart_sheet} sheet.")])
     ws.append([])
-    ws.append(header_cells(ws, ["column", "type", "meaning"]))
+    ws.append(header_cells(ws, ["Column", "Type", "Meaning"]))  # of the Parquet file: its own names
     if schema is not None:
         _parquet_columns(ws, schema)
     return ws

@@ -46,8 +46,8 @@ COLUMN_UNITS: dict[str, str] = {
     "gaps": "count", "jumps": "count", "blocks": "count", "records": "count", "track_number": "count",
     "lag_s": "s", "time_bias_s": "s", "time_bias_se_s": "s",
     "range_gain_ppm": "ppm", "range_gain_se_ppm": "ppm",
-    "flight_level": "fl", "bytes": "bytes", "size_bytes": "bytes", "length": "bytes", "offset": "bytes",
-    "first_offset": "bytes",
+    "flight_level": "fl", "flight_level_a": "fl", "flight_level_b": "fl",
+    "bytes": "bytes", "size_bytes": "bytes", "length": "bytes", "offset": "bytes", "first_offset": "bytes",
 }
 
 # (pattern on the lower-case name, unit), first match wins

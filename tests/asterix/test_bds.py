@@ -180,6 +180,82 @@ def test_encoder_writes_registers_as_extra_only():
     assert again.bds_count.iloc[0] == 1 and again[ALL].isna().all(axis=None)  # zero registers: all absent
 
 
+def _bits(value: int, width: int) -> str:
+    return format(value, f"0{width}b")
+
+
+def _chars(text: str) -> str:
+    """ICAO 6-bit codes of an 8-character text: A-Z 1-26, space 32, 0-9 48-57 (Annex 10 Vol IV 3.1.2.9)."""
+    code = {**{c: i + 1 for i, c in enumerate("ABCDEFGHIJKLMNOPQRSTUVWXYZ")}, " ": 32,
+            **{c: 48 + i for i, c in enumerate("0123456789")}}
+    return "".join(_bits(code[c], 6) for c in text.ljust(8))
+
+
+def test_bds40_mode_bits_and_target_source():
+    # bit 48 status of the mode bits, 49 VNAV 1, 50 ALT HOLD 0, 51 APPROACH 1, 52-53 reserved,
+    # bit 54 status of the target source, 55-56 = 10: FCU/MCP selected altitude (2)
+    head = "1 100010001100" "0 000000000000" "0 000000000000" + "0" * 8  # MCP 35008 ft, bits 1-47
+    r = one(group(head + "1" "101" "00" "1" "10", 0x40))
+    assert r.mcp_selected_altitude_ft == 35008
+    assert (r.vnav_mode, r.altitude_hold_mode, r.approach_mode, r.target_altitude_source) == (1, 0, 1, 2)
+    # status bits 48 and 54 off: the modes and the source are absent, whatever their bits say
+    r = one(group(head + "0" "111" "00" "0" "11", 0x40))
+    assert r[["vnav_mode", "altitude_hold_mode", "approach_mode", "target_altitude_source"]].isna().all()
+
+
+def test_bds10_capability_report():
+    # 1-8 0001 0000, 9 continuation 0, 10-14 reserved, 15 OCC 0, 16 ACAS 1, 17-23 subnetwork 5 = 0000101,
+    # 24 level 5 1, 25 specific services 1, 26-28 UELM 0, 29-32 DELM 0, 33 identification 1, 34 squitter 1,
+    # 35 surveillance identifier 0, 36 GICB report 1, 37-40 ACAS, 41-56 DTE
+    mb = "00010000" "0" "00000" "0" "1" "0000101" "1" "1" "000" "0000" "1" "1" "0" "1" "0000" + "0" * 16
+    r = one(group(mb, 0x10))
+    assert (r.mode_s_subnetwork_version, r.mode_s_level5, r.specific_services_capability) == (5, 1, 1)
+    assert (r.identification_capability, r.squitter_capability, r.surveillance_identifier_capability) == \
+        (1, 1, 0)
+    # declared 1,0 but bits 1-8 are not 0001 0000 (another register's content): nothing read
+    r = one(group("00100000" + mb[8:], 0x10))
+    assert pd.isna(r.mode_s_subnetwork_version) and pd.isna(r.squitter_capability)
+
+
+def test_bds17_names_the_registers_by_their_bits():
+    # Doc 9871 Table A-2-23: bit 1 0,5 ... bit 7 2,0, bit 9 4,0, bit 16 5,0, bit 23 5,F, bit 24 6,0
+    bits = ["0"] * 56
+    for b in (1, 7, 9, 16, 23, 24):
+        bits[b - 1] = "1"
+    assert one(group("".join(bits), 0x17)).gicb_capability == "05,20,40,50,5F,60"
+    assert pd.isna(one(group("0" * 56, 0x17)).gicb_capability)  # no register at all: nothing to name
+
+
+def test_bds20_identification():
+    r = one(group("00100000" + _chars("KLM1023"), 0x20))
+    assert r.bds20_callsign == "KLM1023"
+    # The 1090 Megahertz Riddle (2nd ed.), A000083E202CC371C31DE0AA1CCF: MB 202CC371C31DE0 is "KLM1017"
+    assert one(from_hex("202CC371C31DE0", 0x20)).bds20_callsign == "KLM1017"
+    assert pd.isna(one(group("00000000" + _chars("KLM1023"), 0x20)).bds20_callsign)  # bits 1-8 not 2,0
+
+
+def test_bds30_resolution_advisory():
+    # 1-8 0011 0000, 9-22 ARA 10000000000001 = 8193, 23-26 RAC 0100 = 4, 27 RAT 1, 28 MTE 0,
+    # 29-30 TTI 01 (a Mode S address), 31-54 the threat's address 4840D6, 55-56 zero
+    mb = "00110000" "10000000000001" "0100" "1" "0" "01" + _bits(0x4840D6, 24) + "00"
+    r = one(group(mb, 0x30))
+    assert (r.acas_ara, r.acas_rac, r.acas_ra_terminated, r.acas_multiple_threats) == (8193, 4, 1, 0)
+    assert (r.acas_threat_type, r.acas_threat_address) == (1, "4840D6")
+    # TTI 2: the 26 bits are altitude, range and bearing, not an address
+    r = one(group(mb[:28] + "10" + mb[30:], 0x30))
+    assert r.acas_threat_type == 2 and pd.isna(r.acas_threat_address)
+
+
+def test_register_columns_keep_their_dtype_when_absent():
+    present = frame_of(record((FRN_250, item250(group("00010000" + "0" * 8 + "0000101" + "0" * 33, 0x10)))))
+    absent = frame_of(record())
+    for name in ("mode_s_subnetwork_version", "squitter_capability", "gicb_capability", "bds20_callsign",
+                 "acas_threat_address", "vnav_mode", "mach"):
+        assert present[name].dtype == absent[name].dtype, name
+    assert str(absent.vnav_mode.dtype) == "Int8" and str(absent.acas_ara.dtype) == "Int16"
+    assert absent.bds20_callsign.dtype == "category" and absent.mach.dtype == np.float64
+
+
 # --------------------------------------------------------------------------------------------------------
 # The real radar file: physics that does not depend on this decoder.
 
@@ -230,6 +306,26 @@ def test_real_mode_c_and_vertical_rates_are_physical(real048):
     assert (f.mach < 1.0).mean() > 0.999 and (f.indicated_airspeed_kt < 450).mean() > 0.999
     v = real048.dropna(subset=["baro_vertical_rate_ftmin", "inertial_vertical_rate_ftmin"])
     assert abs(np.median(v.baro_vertical_rate_ftmin - v.inertial_vertical_rate_ftmin)) <= 64
+
+
+def test_real_registers_sent_are_among_those_the_aircraft_says_it_gives(real048):
+    # BDS 1,7 says which registers an aircraft gives; the radar declares each group's register itself:
+    # every aircraft's 4,0 / 5,0 / 6,0 groups must be registers its own 1,7 names
+    data = REAL.read_bytes()
+    declared = real048.dropna(subset=["gicb_capability", "address"]).groupby("address", observed=True)[
+        "gicb_capability"].agg(lambda v: set(",".join(v.astype(str)).split(",")))
+    assert len(declared) > 50
+    sent: dict[str, set] = {}
+    for off, address in zip(real048.offset.to_numpy(), real048.address.astype(object), strict=True):
+        raw = _item250(data, int(off)) if address in declared.index else None
+        if raw is not None:
+            sent.setdefault(address, set()).update(
+                f"{raw[8 + 8 * k]:02X}" for k in range(raw[0]) if raw[8 + 8 * k] in (0x40, 0x50, 0x60))
+    fits = [sent.get(a, set()) <= declared[a] for a in declared.index]
+    print(f"{np.mean(fits):.3f} of {len(fits)} aircraft sent only registers their BDS 1,7 names")
+    assert np.mean(fits) > 0.95, np.mean(fits)
+    versions = real048.mode_s_subnetwork_version.dropna()
+    assert len(versions) > 1000 and versions.isin(range(6)).mean() > 0.99  # defined: 0-5 (Doc 9871)
 
 
 @pytest.mark.validation

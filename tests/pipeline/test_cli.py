@@ -15,6 +15,7 @@ import pytest
 import msdc.asterix as asterix
 from msdc.asterix.encode import encode_frame
 from msdc.pipeline.cli import main
+from msdc.pipeline.report.headers import column_name
 
 FIX = Path(__file__).resolve().parents[2] / "fixtures"
 RADAR, ADSB, SENSORS = FIX / "radar.ast", FIX / "adsb.ast", FIX / "sensors.toml"
@@ -188,7 +189,7 @@ def test_quality_command(tmp_path, capsys):
     assert (tmp_path / "quality_intervals.png").exists()
     # the sheet lists the bins that hold intervals; the JSON every bin, with the same total per sensor
     ws = wb["Update intervals"]
-    header = [c.value for c in ws[1]]
+    header = [column_name(c.value) for c in ws[1]]
     sheet = pd.DataFrame(list(ws.iter_rows(min_row=2, values_only=True)), columns=header)
     every = pd.DataFrame(tables["Update intervals"])
     assert (sheet["intervals"] > 0).all() and (every["intervals"] == 0).any()

@@ -103,7 +103,7 @@ ERRORS = [
     ("input-directory", ["decode", "{O}", "-o", "{O}/x.csv"], 2, ["is a directory"]),
     ("date-malformed", ["stats", "{R}", "--date", "2019-13-01"], 2, ["--date", "YYYY-MM-DD"]),
     ("format-unknown", ["stats", "{R}", "--format", "zip"], 2, ["--format", "raw"]),
-    ("category-34-decode", ["decode", "{R}", "--category", "34"], 2, ["--category", "21"]),
+    ("category-8-decode", ["decode", "{R}", "--category", "8"], 2, ["--category", "62"]),
     ("pairs-unknown", CORR + ["--pairs", "radar"], 2, ["--pairs", "radar-adsb"]),
     ("track-step-zero", TRACK + ["--step", "0"], 2, ["--step", "> 0"]),
     ("track-step-nan", TRACK + ["--step", "nan"], 2, ["--step", "finite"]),

@@ -12,6 +12,7 @@ from measurement_frames import meas_frame
 from pyproj import Geod
 
 from msdc.pipeline.correlate.correlation import correlate, separation_summary
+from msdc.pipeline.report.headers import column_name
 
 WGS84 = Geod(ellps="WGS84")
 
@@ -97,14 +98,14 @@ def test_every_window_names_its_sensor_pair(tmp_path):
     wb = load_workbook(tmp_path / "r.xlsx")
     for sheet, per_window in (("Slots", 20), ("Correlation", 39)):
         rows = list(wb[sheet].iter_rows(values_only=True))
-        head = rows[0]
+        head = [column_name(h) for h in rows[0]]
         body = [dict(zip(head, r, strict=True)) for r in rows[1:] if isinstance(r[0], int)]
         counts = pd.Series([(r["radar_sensor"], r["reference_sensor"]) for r in body]).value_counts()
         assert counts.to_dict() == {(r, ref): per_window for r, ref, _ in pairs}, sheet
     titles = [c.title.tx.rich.p[0].r[0].t for c in wb["Lag charts"]._charts]
     assert sorted(titles) == sorted(f"MAS72 window 1 ({r} vs {ref}), N = 20" for r, ref, _ in pairs)
     summary = list(wb["Summary"].iter_rows(values_only=True))
-    header = next(i for i, r in enumerate(summary) if r[:3] == ("callsign", "window", "sensors"))
+    header = next(i for i, r in enumerate(summary) if r[:3] == ("Call sign", "Window", "Sensors"))
     assert sorted(r[2] for r in summary[header + 1: header + 4]) == sorted(f"{r} vs {ref}"
                                                                           for r, ref, _ in pairs)
 
@@ -206,7 +207,7 @@ def test_quality_figures_say_which_windows_they_cover(tmp_path, monkeypatch, cap
         assert w["azimuth_error_std_deg"] == pytest.approx(0.08, rel=0.15)
     (radar,) = lead["radars"]
     biases = load_workbook(out)["Radar biases"]
-    header = [c.value for c in biases[1]]
+    header = [column_name(c.value) for c in biases[1]]
     row = dict(zip(header, [c.value for c in biases[2]], strict=True))
     assert radar["radar_sensor"] == "048:25/201"
     assert radar["range_bias_m"] == pytest.approx(row["range_bias_m"])

@@ -344,3 +344,24 @@ def test_file_column_names_the_path_when_two_inputs_share_a_name(tmp_path):
     # a name no other input shares stays the bare name
     _, meas = load_measurements([a, ADSB], read_sensors(FIX / "sensors.toml"))
     assert set(meas["file"].astype(str)) == {"x.ast", "adsb.ast"}
+
+
+def test_category_picks_any_decodable_category(tmp_path, capsys):
+    """--category takes every category msdc decodes (it offered only the measurement categories): north
+    markers (CAT034) and sensor status (CAT063) beside the radar, each written to its own file with the
+    values encoded; without --category only the measurement categories are decoded."""
+    north = pd.DataFrame({"sac": 25, "sic": 201, "message_type": 1, "time_of_day": [28800.0, 28804.75]})
+    status = pd.DataFrame({"sac": 25, "sic": 100, "time_of_day": [28801.5], "sensor_sac": 25,
+                           "sensor_sic": 201})
+    path = tmp_path / "mixed.ast"
+    path.write_bytes(RADAR.read_bytes() + encode_frame(34, north) + encode_frame(63, status))
+    out = tmp_path / "o.csv"
+    assert main(["decode", str(path), "--category", "34", "--category", "63", "-o", str(out)]) == 0
+    cat034 = pd.read_csv(tmp_path / "o_cat034.csv")
+    cat063 = pd.read_csv(tmp_path / "o_cat063.csv")
+    assert cat034.time_of_day.tolist() == [28800.0, 28804.75] and set(cat034.message_type) == {1}
+    assert (cat063.sensor_sac.tolist(), cat063.sensor_sic.tolist()) == ([25], [201])
+    assert not (tmp_path / "o_cat048.csv").exists()
+    capsys.readouterr()
+    assert main(["decode", str(path), "-o", str(tmp_path / "d.csv")]) == 0
+    assert "CAT034" not in capsys.readouterr().out and (tmp_path / "d.csv").exists()

@@ -120,7 +120,7 @@ def test_help_reads_as_declared():
     assert "[--smoother {rts,imm}]" in usage
     assert "[--noise NOISE]" in usage and "[--adsb-sigma M]" in usage and "[--edition CAT=ED]" in usage
     assert "(--callsign CALLSIGN | --address ADDRESS | --all)" in usage and "INPUT [INPUT ...]" in usage
-    assert "[--category {10,20,21,48}]" in _subparsers()["decode"].format_usage()
+    assert "[--category {1,2,10,19,20,21,23,25,34,48,62,63,65}]" in _subparsers()["decode"].format_usage()
 
 
 # ---------------------------------------------------------------------------------------------------------
@@ -187,7 +187,8 @@ DECLARED_ERRORS = [
     (QualityOptions(reference="smooth"), "--reference 'smooth': must be adsb or track"),
     (QualityOptions(gap_s=-5.0), "--gap -5.0: must be a finite number from 0.1 to 86400 s"),
     (DecodeOptions(chunk_mb=0.0), "--chunk-mb 0.0: must be a finite number from 0.1 to 4096 MB"),
-    (DecodeOptions(categories=(48, 34)), "--category 34: must be one of 10, 20, 21, 48"),
+    (DecodeOptions(categories=(48, 8)),
+     "--category 8: must be one of 1, 2, 10, 19, 20, 21, 23, 25, 34, 48, 62, 63, 65"),
     (StatsOptions(chunk_mb=1e6), "--chunk-mb 1000000.0: must be a finite number from 0.1 to 4096 MB"),
     (TrackOptions(noise="nacp"), "--noise 'nacp': must be one of declared, estimate, timing"),
     (TrackOptions(step_s=7200.0), "--step 7200.0: must be a finite number from 0.001 to 3600 s"),

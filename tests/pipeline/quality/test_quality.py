@@ -23,6 +23,7 @@ from msdc.pipeline.quality.tables import (
     integrity_shares,
     quality_tables,
 )
+from msdc.pipeline.report.headers import column_name
 from msdc.pipeline.report.quality_figures import interval_histogram_figure, slotting_figure
 
 DAY0 = pd.Timestamp("2019-06-14", tz="UTC")
@@ -312,13 +313,14 @@ def test_slotting_figure_rows_equal_a_selection_over_both_sensors_joined(frames)
 
 
 def _sheet(ws) -> pd.DataFrame:
-    """A workbook sheet read back by openpyxl: header row, then the cells' values as openpyxl reads them."""
+    """A workbook sheet read back by openpyxl: header row (as snake_case names), then the cells' values as
+    openpyxl reads them."""
     rows = list(ws.iter_rows(values_only=True))
-    return pd.DataFrame(rows[1:], columns=rows[0], dtype=object)
+    return pd.DataFrame(rows[1:], columns=[column_name(h) for h in rows[0]], dtype=object)
 
 
 def _formats(ws, header: str) -> set[str]:
-    col = [c.value for c in ws[1]].index(header)
+    col = [column_name(c.value) for c in ws[1]].index(header)
     return {row[col].number_format for row in ws.iter_rows(min_row=2) if row[col].value is not None}
 
 
@@ -433,10 +435,12 @@ def test_workbook_headers_say_the_unit_the_cells_show(tables, tmp_path):
     write_tables(tables, tmp_path / "q.xlsx")
     wb = openpyxl.load_workbook(tmp_path / "q.xlsx")
     clocks = {(ws.title, h) for ws in wb.worksheets for h in (c.value for c in ws[1]) if h and ws.max_row > 1
-              and "[hh]:mm:ss.000" in _formats(ws, h)}
-    assert ("Quality", "first_tod") in clocks and ("Gaps", "gap_start_tod") in clocks
-    assert ("ADS-B quality over time", "bin_start_tod") in clocks
-    assert not [h for _, h in clocks if h.endswith("_s")]
+              and "[hh]:mm:ss.000" in _formats(ws, column_name(h))}
+    names = {(title, column_name(h)) for title, h in clocks}
+    assert ("Quality", "first_tod") in names and ("Gaps", "gap_start_tod") in names
+    assert ("ADS-B quality over time", "bin_start_tod") in names
+    assert not [h for _, h in names if h.endswith("_s")]
+    assert all(h.endswith(" (UTC)") for _, h in clocks), clocks  # the printed header: a UTC clock time
 
 
 def test_a_wide_sheet_note_is_printed_whole(tmp_path):

@@ -19,6 +19,7 @@ from msdc.pipeline.report.cells import (
     excel_value,
     memo_values,
 )
+from msdc.pipeline.report.headers import column_name
 
 FORMATS = [None, "0", "0.0", "0.0000", "0.000000", "#,##0", "#,##0.0", CLOCK_FORMAT, DATETIME_FORMAT,
            SUMMARY_DATETIME_FORMAT]
@@ -96,7 +97,7 @@ def test_raw_rows_write_the_cells_openpyxl_writes(tmp_path, monkeypatch):
     slow = _workbook(tmp_path, "slow.xlsx", False, monkeypatch)
     assert fast == slow
     # by hand, from the cell rules: text as text (formula-like with a quote prefix), numbers formatted
-    by_header = dict(zip([c[0] for c in slow[0]], zip(*slow[1:12], strict=True), strict=True))
+    by_header = dict(zip([column_name(c[0]) for c in slow[0]], zip(*slow[1:12], strict=True), strict=True))
     assert by_header["callsign"][0] == ("MAS72", "s", "General", False)
     assert by_header["callsign"][3] == ("a&b<c>d", "s", "General", False)
     assert by_header["callsign"][5] == ("=1+1", "s", "General", True)

@@ -5,6 +5,7 @@ import numpy as np
 import pandas as pd
 
 from msdc.pipeline.report.conflict_figures import pc_line, pc_window
+from msdc.pipeline.report.headers import column_name
 
 T0 = pd.Timestamp("2016-05-10 22:04:25", tz="UTC")
 
@@ -53,11 +54,15 @@ def test_conflict_workbook_labels_utc_and_shows_seconds_as_given(tmp_path):
     write_conflict_workbook(alerts, losses, warnings, parameters, path)
     wb = load_workbook(path)
     ws = wb["Losses"]
-    fmt = {ws.cell(1, j).value: ws.cell(2, j).number_format for j in range(1, ws.max_column + 1)}
+    fmt = {column_name(ws.cell(1, j).value): ws.cell(2, j).number_format for j in range(1, ws.max_column + 1)}
     assert fmt["start"] == fmt["end"] == fmt["time_of_min"] == 'yyyy-mm-dd hh:mm:ss "UTC"'
     assert fmt["duration_s"] == "General" and ws.cell(2, 5).value == 30
+    # wide enough for "2019-03-01 00:01:50 UTC" (23 characters; narrower, a spreadsheet shows ###)
+    width = {column_name(ws.cell(1, j).value): ws.column_dimensions[ws.cell(1, j).column_letter].width
+             for j in range(1, ws.max_column + 1)}
+    assert width["time_of_min"] >= 23 and width["start"] >= 23
     ws = wb["Warning times"]
-    fmt = {ws.cell(1, j).value: ws.cell(2, j).number_format for j in range(1, ws.max_column + 1)}
+    fmt = {column_name(ws.cell(1, j).value): ws.cell(2, j).number_format for j in range(1, ws.max_column + 1)}
     assert fmt["loss_start"] == 'yyyy-mm-dd hh:mm:ss "UTC"'
     assert fmt["alert_start"] == 'yyyy-mm-dd hh:mm:ss.000 "UTC"'  # 97.5 s: the fraction shown
     assert fmt["horizon_s"] == fmt["warning_s"] == "General"

@@ -15,6 +15,7 @@ from openpyxl import load_workbook
 
 from msdc.pipeline.jobs import correlate
 from msdc.pipeline.report import tables as tables_mod
+from msdc.pipeline.report.headers import column_name
 
 FIX = Path(__file__).resolve().parents[3] / "fixtures"
 EXCEL_EPOCH = dt.datetime(1899, 12, 30)
@@ -36,9 +37,10 @@ def _write(result, out: Path, tables: str) -> dict[str, Path]:
 
 
 def _sheet(ws) -> dict[str, list]:
-    """A data sheet's columns (header -> cell values): rows until the first empty one (the note follows)."""
+    """A data sheet's columns (snake_case name of the header -> cell values): rows until the first empty one
+    (the note follows)."""
     rows = list(ws.iter_rows(values_only=True))
-    header = list(rows[0])
+    header = [column_name(h) for h in rows[0]]
     body = []
     for row in rows[1:]:
         if all(v is None for v in row):
@@ -244,7 +246,7 @@ def test_chart_series_read_the_columns_they_name(result, tmp_path, tables):
                     data, cells = ref.rsplit("!", 1)
                     ws = wb[data.strip("'")]
                     col = column_index_from_string(cells.split("$")[1])
-                    refs[axis] = ws.cell(row=1, column=col).value
+                    refs[axis] = column_name(ws.cell(row=1, column=col).value)
                 assert refs["x"] == x_name, (sheet, refs)
                 title = series.tx.strRef.f if series.tx.strRef is not None else series.tx.v
                 if y_names is not None:

@@ -25,6 +25,7 @@ from msdc.pipeline.correlate.results import (
 from msdc.pipeline.report.excel import sheet_name, write_report
 from msdc.pipeline.report.figures import lag_figure, latlon_time_figure, track_figure
 from msdc.pipeline.report.files import write_json
+from msdc.pipeline.report.headers import column_name
 from msdc.pipeline.report.summary import LEAD_WINDOW_KEYS, run_to_json, summary_table
 
 EVIL = "=cmd|' /C calc'!A0"
@@ -103,14 +104,15 @@ def outputs(run: CorrelationRun, tmp_path_factory: pytest.TempPathFactory) -> di
 
 
 def _header_index(row: tuple) -> dict[str, int]:
-    return {c.value: c.column for c in row if c.value is not None}
+    """Column index by snake_case name of a header row (the workbook prints headers with units)."""
+    return {column_name(c.value): c.column for c in row if c.value is not None}
 
 
 def _block(ws, title_start: str) -> tuple[int, dict[str, int]]:
-    """Row of a Summary block's header and its column index by key (headers are keys with spaces)."""
+    """Row of a Summary block's header and its column index by key (headers.workbook_header's)."""
     row = next(c.row for c in ws["A"] if isinstance(c.value, str) and c.value.startswith(title_start))
-    row = next(r for r in range(row + 1, row + 4) if ws.cell(r, 1).value in ("callsign", "radar"))
-    return row, {str(c.value).replace(" ", "_"): c.column for c in ws[row] if c.value is not None}
+    row = next(r for r in range(row + 1, row + 4) if ws.cell(r, 1).value in ("Call sign", "Radar"))
+    return row, _header_index(ws[row])
 
 
 def test_sheets_headers_and_freeze(outputs: dict[str, Path]) -> None:
@@ -139,13 +141,13 @@ def test_sheets_headers_and_freeze(outputs: dict[str, Path]) -> None:
                                          "verdict", *WINDOW_QUALITY_KEYS}) | {"sensors"}
     assert summary.freeze_panes == "C2"
     assert [c.value for c in wb["Correlation"][1]][:11] == [
-        "window", "callsign", "address", "radar_sensor", "reference_sensor", "lag", "lag_s", "ncc_lat",
-        "ncc_lon", "pearson_lat", "pearson_lon"]
+        "Window", "Call sign", "Address", "Radar sensor", "Reference sensor", "Lag (slots)", "Lag (s)",
+        "NCC latitude", "NCC longitude", "Pearson latitude", "Pearson longitude"]
     assert wb["Correlation"].freeze_panes == "F2"
     slot_headers = _header_index(wb["Slots"][1])
     assert {"slot", "time_utc", "radar_lat", "adsb_lon", "radar_filled", "sep_m"} <= set(slot_headers)
     assert "time_of_day" not in slot_headers  # never seconds of day: time_utc carries the time
-    assert [c.value for c in wb["Quality"][1]] == ["sensor", "score", "when"]
+    assert [c.value for c in wb["Quality"][1]] == ["Sensor", "score", "when"]  # (no labels of their own)
     assert wb["Parameters"].freeze_panes == "A2"
     assert 6 <= summary.column_dimensions["A"].width <= 66
 
@@ -253,8 +255,8 @@ def test_every_sheet_prints_landscape_fitted_with_titles(outputs: dict[str, Path
         assert ws.page_setup.orientation == "landscape", ws.title
         assert ws.page_setup.paperSize == 9, ws.title  # A4
         assert ws.sheet_properties.pageSetUpPr.fitToPage, ws.title
-        # the Slots sheet's 17 columns (its window named by number, aircraft and sensor pair) print 2 wide
-        assert ws.page_setup.fitToWidth == (2 if ws.title == "Slots" else 1), ws.title
+        # every table here is short (at most SHORT_TABLE_ROWS rows): one page wide, the 17 Slots columns too
+        assert ws.page_setup.fitToWidth == 1, ws.title
         assert ws.page_setup.fitToHeight == (1 if ws.title == "Map" else 0), ws.title
         assert ws.print_title_rows == titles[ws.title], ws.title
 
@@ -471,6 +473,24 @@ def test_wide_tables_span_pages_with_identity_repeated(tmp_path: Path) -> None:
     wb = load_workbook(tmp_path / "wide.xlsx")
     assert wb["Quality"].page_setup.fitToWidth == 3 and wb["Quality"].print_title_cols == "$A:$B"
     assert wb["Small"].page_setup.fitToWidth == 1 and wb["Small"].print_title_cols is None
+
+
+def test_a_short_wide_table_prints_one_page_wide_and_a_long_one_across_pages(tmp_path: Path) -> None:
+    """A call sign (7 characters: MAS72 and 2) and 10 columns of 20 (18 and 2) are 207 wide: over a legible
+    page of 170 and its slack (187), under 1.5 pages (255). One row prints on one page wide, smaller,
+    rather than a few columns a page; 41 rows (over SHORT_TABLE_ROWS = 40) print 2 wide with the leading
+    text columns (3 at most) on each, the two halves of a band of rows on consecutive pages."""
+    from msdc.pipeline.report.excel import write_tables
+
+    def table(rows: int) -> pd.DataFrame:
+        return pd.DataFrame({"callsign": ["MAS72"] * rows, **{f"c{i}": ["x" * 18] * rows for i in range(10)}})
+
+    write_tables({"Short": table(1), "Long": table(41)}, tmp_path / "t.xlsx")
+    wb = load_workbook(tmp_path / "t.xlsx")
+    assert sum(wb["Short"].column_dimensions[c].width for c in "ABCDEFGHIJK") == 207.0
+    assert wb["Short"].page_setup.fitToWidth == 1 and wb["Short"].print_title_cols is None
+    assert wb["Long"].page_setup.fitToWidth == 2 and wb["Long"].print_title_cols == "$A:$C"
+    assert wb["Long"].page_setup.pageOrder == "overThenDown"  # a band of rows across its 2 pages, then on
 
 
 def test_window_start_is_a_utc_date_in_the_workbook(tmp_path: Path) -> None:
