@@ -201,6 +201,53 @@ def walk_flags(buf, blk_start, blk_len, p0, n_frn, parts):
     return out
 
 
+# The walk memo of one framing (new_memo): MEMO_SLOTS remembered walk results by block start (direct-mapped:
+# x % MEMO_SLOTS, each x * 4 + 1 when the block walks, + 2 when not), then the walk log: the category logged
+# (-1: none), its entries so far, and LOG_SLOTS entries x * 2 + walks for each block of that category framing
+# walked (framing pauses before LOG_RESERVE, more than one decision can walk, are left).
+MEMO_SLOTS = 1 << 16
+LOG_CAT = MEMO_SLOTS
+LOG_COUNT = MEMO_SLOTS + 1
+LOG_SLOTS = 1 << 18
+LOG_RESERVE = 1 << 17
+LOG_OVERFLOW = LOG_SLOTS + 1  # the count once an entry was lost (cannot happen with LOG_RESERVE free)
+
+
+def new_memo(log_cat: int = -1) -> np.ndarray:
+    """An empty walk memo for one framing (its tables fixed), logging the walks of ``log_cat`` if >= 0."""
+    memo = np.zeros(MEMO_SLOTS + 2 + (LOG_SLOTS if log_cat >= 0 else 0), np.int64)
+    memo[LOG_CAT] = log_cat
+    return memo
+
+
+@njit(cache=True, nogil=True)
+def _walks_at(buf, x, n, c, framing, memo):
+    """walks() for the block at x (LEN n, category c, walked by framing), remembered by x: resynchronising
+    over non-ASTERIX bytes walks the same false blocks again from the chains of several offsets (the LEN
+    at x, hence n, is the same every time). Each block of the logged category walked is logged."""
+    slot = x & (MEMO_SLOTS - 1)
+    e = memo[slot]
+    if e >> 2 == x and e & 3:
+        return e & 3 == 1
+    base, nfrn, parts = framing
+    ok = walks(buf, x, n, base[c], nfrn[c], parts)
+    memo[slot] = x * 4 + (1 if ok else 2)
+    if c == memo[LOG_CAT]:
+        k = memo[LOG_COUNT]
+        if k < LOG_SLOTS:
+            memo[LOG_COUNT + 1 + k] = x * 2 + ok
+            memo[LOG_COUNT] = k + 1
+        else:
+            memo[LOG_COUNT] = LOG_OVERFLOW
+    return ok
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _log_full(memo):
+    """The walk log has no room left for another decision: the window pauses for it to be read."""
+    return memo[LOG_CAT] >= 0 and memo[LOG_COUNT] > LOG_SLOTS - LOG_RESERVE
+
+
 @njit(cache=True, nogil=True)
 def _cut_tail(buf, x, stop, seen):
     """The data ends inside a block header or block at x of a category already met (a truncated file)."""
@@ -213,12 +260,12 @@ def _cut_tail(buf, x, stop, seen):
 
 
 @njit(cache=True, nogil=True)
-def _anchored(buf, r, stop, seen, framing):
+def _anchored(buf, r, stop, seen, framing, memo):
     """The block chain from r holds for LOOKAHEAD blocks (or to the end of the data) and is anchored:
     one of its blocks is of a decoded category and walks exactly, or all its categories were already
     met, or it reaches the end in two blocks or more (one LEN landing on the end proves little).
     Every decoded block in it must walk exactly."""
-    base, nfrn, parts = framing
+    base = framing[0]
     x = r
     walked = False
     all_seen = True
@@ -233,7 +280,7 @@ def _anchored(buf, r, stop, seen, framing):
             return walked and k >= 2  # breaks again: two chained blocks, one walking, still anchor it
         c = buf[x]
         if base[c] >= 0:
-            if not walks(buf, x, n, base[c], nfrn[c], parts):
+            if not _walks_at(buf, x, n, c, framing, memo):
                 return False
             walked = True
         elif seen[c] == 0:
@@ -246,10 +293,10 @@ def _anchored(buf, r, stop, seen, framing):
 
 
 @njit(cache=True, nogil=True)
-def _chained_inside(buf, q, end, stop, framing):
+def _chained_inside(buf, q, end, stop, framing, memo):
     """A chain of blocks starting inside (q, end) reaches a decoded block that walks and starts before end
     (it may run past end): the block at q is then probably a false header swallowing real blocks."""
-    base, nfrn, parts = framing
+    base = framing[0]
     for r in range(q + 1, end - 2):
         x = r
         while x < end:
@@ -258,7 +305,7 @@ def _chained_inside(buf, q, end, stop, framing):
                 break
             c = buf[x]
             if base[c] >= 0:
-                if walks(buf, x, n, base[c], nfrn[c], parts):
+                if _walks_at(buf, x, n, c, framing, memo):
                     return True
                 break
             x += n
@@ -281,18 +328,18 @@ def _hides_decoded(buf, q, end, framing):
 
 
 @njit(cache=True, nogil=True)
-def _candidate(buf, r, stop, seen, framing):
+def _candidate(buf, r, stop, seen, framing, memo):
     """Framing may resume at r: its chain is anchored, and a block of a category not walked hides no
     walking chain (a false header there would swallow real blocks)."""
     n = _header(buf, r, stop)
-    if n < 0 or not _anchored(buf, r, stop, seen, framing):
+    if n < 0 or not _anchored(buf, r, stop, seen, framing, memo):
         return False
     base = framing.base
-    return base[buf[r]] >= 0 or not _chained_inside(buf, r, r + n, stop, framing)
+    return base[buf[r]] >= 0 or not _chained_inside(buf, r, r + n, stop, framing, memo)
 
 
 @njit(cache=True, nogil=True)
-def _next_ok(buf, x, stop, seen, framing):
+def _next_ok(buf, x, stop, seen, framing, memo):
     """What follows a block that does not prove itself: the end, a truncated tail, a header of a decoded
     or already met category, or an anchored chain."""
     if x == stop:
@@ -301,18 +348,87 @@ def _next_ok(buf, x, stop, seen, framing):
     if n < 0:
         return _cut_tail(buf, x, stop, seen)
     c = buf[x]
-    return framing.base[c] >= 0 or seen[c] == 1 or _anchored(buf, x, stop, seen, framing)
+    return framing.base[c] >= 0 or seen[c] == 1 or _anchored(buf, x, stop, seen, framing, memo)
+
+
+# Framing modes of a payload segment (frame_window's seg_mode).
+MODE_EXACT = 0  # a container payload: it tiles into data blocks exactly, or it is skipped whole
+MODE_CHAIN = 1  # a raw stream whose block chain holds from start to end (chain_step said so): taken as it is
+MODE_CAREFUL = 2  # a raw stream framed block by block, resynchronising where the chain breaks
+
+# Slots of frame_window's state: an int64 array the caller keeps from one window to the next.
+ST_SEG = 0  # the segment being framed
+ST_POS = 1  # where its next decision starts (-1: at the segment's start, not begun)
+ST_PENDING = 2  # 1 while the search for where framing resumes after a break is under way
+ST_BREAK_AT = 3  # where the chain broke (the search's start)
+ST_BREAK_LEN = 4  # the LEN of a complete block header there, else -1
+ST_SCAN = 5  # the next offset the search tries
+STATE_SLOTS = 6
+NO_LIMIT = np.iinfo(np.int64).max
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _may_anchor(buf, r, stop, seen, base):
+    """False when the chain from r cannot be anchored whatever its walked blocks walk (_anchored read from
+    headers alone, taking every block of a walked category as walking): a cheap first test."""
+    x = r
+    maybe = False  # a block of a walked category (it may walk)
+    all_seen = True
+    k = 0
+    while k < LOOKAHEAD and x < stop:
+        if buf[x] == 0 or x + 3 > stop:
+            n = np.int64(-1)
+        else:
+            n = (np.int64(buf[x + 1]) << 8) | buf[x + 2]
+            if n < 3 or x + n > stop:
+                n = -1
+        if n < 0:
+            return (k > 0 and _cut_tail(buf, x, stop, seen)) or (maybe and k >= 2)
+        c = buf[x]
+        if base[c] >= 0:
+            maybe = True
+        elif seen[c] == 0:
+            all_seen = False
+        x += n
+        k += 1
+    return maybe or all_seen or (k >= 2 and x == stop)
 
 
 @njit(cache=True, nogil=True)
-def frame_blocks(buf, seg_start, seg_stop, exact, careful, framing):
-    """Split payload segments into data blocks of any category; return block and error arrays.
+def chain_step(buf, start, stop, framing, q, byte_limit):
+    """Follow a raw segment's block chain from q: (where it got to, status), status 0 when it paused at
+    byte_limit (call again from there), 1 when the chain runs exactly to ``stop`` and no block of a category
+    not walked hides a walking block (frame_blocks then takes the chain as it is), 2 when it does not."""
+    base = framing[0]
+    moved = False
+    while q < stop:
+        if moved and q >= byte_limit:
+            return q, 0
+        n = _header(buf, q, stop)
+        if n < 0:
+            return q, 2
+        if base[buf[q]] < 0 and _hides_decoded(buf, q, q + n, framing):
+            return q, 2
+        q += n
+        moved = True
+    return q, 1
 
-    A raw segment whose block chain runs from its start exactly to its end is taken as it is (no block
-    is walked). Otherwise, or with careful=True, it is framed carefully: a block is accepted when it is
-    consistent with what follows (decoded categories, those with framing.base[cat] >= 0, must walk exactly),
-    and where the chain breaks, framing resumes at the next offset whose chain is anchored (_anchored).
-    Returns (blk_start, blk_len, blk_cat, blk_seg, err_off, err_len, err_cat, err_code).
+
+@njit(cache=True, nogil=True)
+def frame_window(buf, seg_start, seg_stop, seg_mode, framing, st, seen, memo, seg_limit, byte_limit):
+    """Frame payload segments into data blocks of any category, from where ``st`` left off, until a
+    decision would start at or past ``byte_limit`` or segment ``seg_limit`` is reached (one decision at
+    least is made per call). Returns (blk_start, blk_len, blk_cat, blk_seg, err_off, err_len, err_cat,
+    err_code) for what was settled; ``st`` and ``seen`` (categories met, uint8[256]) carry the framing
+    between calls, so any windows give the blocks and errors of one call over everything, in its order;
+    ``memo`` (new_memo) keeps walk results for the calls of one framing, and its log (which pauses the
+    window when nearly full).
+
+    MODE_EXACT segments must tile into blocks, else they are skipped whole (E_NO_FRAME); MODE_CHAIN ones are
+    followed header by header; MODE_CAREFUL ones accept a block when it is consistent with what follows
+    (walked categories, framing.base[cat] >= 0, must walk exactly), and where the chain breaks, framing
+    resumes at the next offset whose chain is anchored (_anchored). Decisions read ahead of byte_limit by
+    a few blocks at most (LOOKAHEAD blocks of up to 65535 bytes, and one block's length more).
     """
     base, nfrn, parts = framing
     cap = 16
@@ -324,19 +440,28 @@ def frame_blocks(buf, seg_start, seg_stop, exact, careful, framing):
     e_len = np.empty(cap, np.int64)
     e_cat = np.empty(cap, np.int16)
     e_code = np.empty(cap, np.int16)
-    seen = np.zeros(256, np.uint8)
     nb = 0
     ne = 0
-    for s in range(seg_start.shape[0]):
+    s = st[ST_SEG]
+    q = st[ST_POS]
+    moved = False
+    paused = False
+    nseg = min(seg_limit, seg_start.shape[0])
+    while s < nseg and not paused:
         start = seg_start[s]
         stop = seg_stop[s]
-        if exact or not careful:
-            # follow the chain; a payload (exact) must tile into blocks, else it is skipped whole
+        mode = seg_mode[s]
+        if q < 0:
+            if moved and start >= byte_limit:
+                break
             q = start
+            if mode == MODE_CAREFUL:
+                seen[:] = 0
+        if mode == MODE_EXACT:
             nb0 = nb
             while q < stop:
-                n = _header(buf, q, stop) if not exact else np.int64(-1)
-                if exact and q + 3 <= stop:
+                n = np.int64(-1)
+                if q + 3 <= stop:
                     n = (np.int64(buf[q + 1]) << 8) | buf[q + 2]
                     if n < 3 or q + n > stop:
                         n = -1
@@ -350,19 +475,8 @@ def frame_blocks(buf, seg_start, seg_stop, exact, careful, framing):
                 b_seg[nb] = s
                 nb += 1
                 q += n
-            if q == stop and not exact:
-                # the chain holds; trust it unless a block of another category hides a walking block
-                hidden = False
-                for b in range(nb0, nb):
-                    if base[b_cat[b]] < 0 and _hides_decoded(buf, b_start[b], b_start[b] + b_len[b], framing):
-                        hidden = True
-                        break
-                if not hidden:
-                    continue
-            elif q == stop:
-                continue
-            nb = nb0
-            if exact:
+            if q != stop:  # the payload does not tile: skipped whole
+                nb = nb0
                 if ne == e_off.shape[0]:
                     e_off, e_len, e_cat, e_code = _grow4(e_off, e_len, e_cat, e_code)
                 e_off[ne] = start
@@ -370,30 +484,18 @@ def frame_blocks(buf, seg_start, seg_stop, exact, careful, framing):
                 e_cat[ne] = buf[start] if stop > start else -1
                 e_code[ne] = E_NO_FRAME
                 ne += 1
-                continue
-        # careful framing of a raw segment
-        seen[:] = 0
-        q = start
-        while q < stop:
-            n = _header(buf, q, stop)
-            ok = False
-            if n > 0:
-                c = buf[q]
-                if base[c] >= 0:
-                    if walks(buf, q, n, base[c], nfrn[c], parts):
-                        ok = True  # walking exactly to its LEN is the block's own evidence
-                    else:
-                        # a block that does not walk keeps its LEN only if what follows is anchored
-                        # (and hides no walking chain: a damaged LEN that happens to land on a block)
-                        ok = ((q + n == stop or _anchored(buf, q + n, stop, seen, framing))
-                              and not _chained_inside(buf, q, q + n, stop, framing))
-                elif seen[c] == 1:
-                    ok = (_next_ok(buf, q + n, stop, seen, framing)
-                          and not _chained_inside(buf, q, q + n, stop, framing))
-                else:  # a category not met yet: its chain must be anchored, and hide no real blocks
-                    ok = ((q + n == stop or _anchored(buf, q, stop, seen, framing))
-                          and not _chained_inside(buf, q, q + n, stop, framing))
-            if ok:
+            moved = True
+            s += 1
+            q = -1
+            continue
+        if mode == MODE_CHAIN:
+            while q < stop:
+                if moved and q >= byte_limit:
+                    paused = True
+                    break
+                n = _header(buf, q, stop)
+                if n < 0:
+                    raise ValueError("frame_window: MODE_CHAIN on a block chain that breaks")
                 if nb == b_start.shape[0]:
                     b_start, b_len, b_seg, b_cat = _grow4(b_start, b_len, b_seg, b_cat)
                 b_start[nb] = q
@@ -401,25 +503,91 @@ def frame_blocks(buf, seg_start, seg_stop, exact, careful, framing):
                 b_cat[nb] = buf[q]
                 b_seg[nb] = s
                 nb += 1
-                seen[buf[q]] = 1
                 q += n
-                continue
-            # the chain breaks here: resume at the next offset whose chain is anchored
-            r = q + 1
-            while r < stop and not _candidate(buf, r, stop, seen, framing):
+                moved = True
+            if not paused:
+                s += 1
+                q = -1
+            continue
+        # MODE_CAREFUL
+        while q < stop:
+            if st[ST_PENDING] == 0:
+                if moved and (q >= byte_limit or _log_full(memo)):
+                    paused = True
+                    break
+                moved = True
+                n = _header(buf, q, stop)
+                ok = False
+                if n > 0:
+                    c = buf[q]
+                    if base[c] >= 0:
+                        if _walks_at(buf, q, n, c, framing, memo):
+                            # walking exactly to its LEN is the block's own evidence, unless what follows
+                            # does not fit and a walking chain starts inside it: a damaged block that walks
+                            # by chance, swallowing the head of a real one
+                            ok = (_next_ok(buf, q + n, stop, seen, framing, memo)
+                                  or not _chained_inside(buf, q, q + n, stop, framing, memo))
+                        else:
+                            # a block that does not walk keeps its LEN only if what follows is anchored
+                            # (and hides no walking chain: a damaged LEN that happens to land on a block)
+                            ok = ((q + n == stop or _anchored(buf, q + n, stop, seen, framing, memo))
+                                  and not _chained_inside(buf, q, q + n, stop, framing, memo))
+                    elif seen[c] == 1:
+                        ok = (_next_ok(buf, q + n, stop, seen, framing, memo)
+                              and not _chained_inside(buf, q, q + n, stop, framing, memo))
+                    else:  # a category not met yet: its chain must be anchored, and hide no real blocks
+                        ok = ((q + n == stop or _anchored(buf, q, stop, seen, framing, memo))
+                              and not _chained_inside(buf, q, q + n, stop, framing, memo))
+                if ok:
+                    if nb == b_start.shape[0]:
+                        b_start, b_len, b_seg, b_cat = _grow4(b_start, b_len, b_seg, b_cat)
+                    b_start[nb] = q
+                    b_len[nb] = n
+                    b_cat[nb] = buf[q]
+                    b_seg[nb] = s
+                    nb += 1
+                    seen[buf[q]] = 1
+                    q += n
+                    continue
+                # the chain breaks here: search for the next offset whose chain is anchored
+                st[ST_PENDING] = 1
+                st[ST_BREAK_AT] = q
+                st[ST_BREAK_LEN] = n
+                st[ST_SCAN] = q + 1
+            bq = st[ST_BREAK_AT]
+            bn = st[ST_BREAK_LEN]
+            r = st[ST_SCAN]
+            while r < stop:
+                # pause only once it is settled whether a complete block ends before the resumption point
+                if moved and ((r >= byte_limit and (bn <= 0 or r > bq + bn)) or _log_full(memo)):
+                    paused = True
+                    break
+                moved = True
+                # _candidate's header test inline, then _may_anchor: most offsets of non-ASTERIX bytes
+                # fail them, and a call per offset cost 10-20 times the tests
+                if buf[r] != 0 and r + 3 <= stop:
+                    m = (np.int64(buf[r + 1]) << 8) | buf[r + 2]
+                    if (m >= 3 and r + m <= stop and _may_anchor(buf, r, stop, seen, base)
+                            and _candidate(buf, r, stop, seen, framing, memo)):
+                        break
                 r += 1
-            if n > 0 and q + n < r:
+            if paused:
+                st[ST_SCAN] = r
+                break
+            st[ST_PENDING] = 0
+            q = bq
+            if bn > 0 and q + bn < r:
                 # a complete block ends before the resumption point: keep it (a decoded one that does
                 # not walk is reported by the walk); only the bytes after it are unaccounted for
                 if nb == b_start.shape[0]:
                     b_start, b_len, b_seg, b_cat = _grow4(b_start, b_len, b_seg, b_cat)
                 b_start[nb] = q
-                b_len[nb] = n
+                b_len[nb] = bn
                 b_cat[nb] = buf[q]
                 b_seg[nb] = s
                 nb += 1
                 seen[buf[q]] = 1
-                q += n
+                q += bn
             if ne == e_off.shape[0]:
                 e_off, e_len, e_cat, e_code = _grow4(e_off, e_len, e_cat, e_code)
             e_off[ne] = q
@@ -429,8 +597,53 @@ def frame_blocks(buf, seg_start, seg_stop, exact, careful, framing):
             e_code[ne] = E_BAD_LEN if bad_len else E_GARBAGE
             ne += 1
             q = r
+        if not paused:
+            s += 1
+            q = -1
+    st[ST_SEG] = s
+    st[ST_POS] = q
     return (b_start[:nb], b_len[:nb], b_cat[:nb], b_seg[:nb], e_off[:ne], e_len[:ne], e_cat[:ne],
             e_code[:ne])
+
+
+@njit(cache=True, nogil=True)
+def block_walks(buf, blk_start, blk_len, blk_cat, framing):
+    """Per block: 1 when it walks exactly under its category's layout in ``framing``, 0 when it does not,
+    -1 when its category is not walked (surveys of a recording before it is decoded; no memory per record)."""
+    base, nfrn, parts = framing
+    out = np.full(blk_start.shape[0], -1, np.int8)
+    for b in range(blk_start.shape[0]):
+        c = blk_cat[b]
+        if base[c] >= 0:
+            out[b] = walks(buf, blk_start[b], blk_len[b], base[c], nfrn[c], parts)
+    return out
+
+
+def new_state() -> tuple[np.ndarray, np.ndarray]:
+    """A fresh frame_window state and its set of categories met."""
+    st = np.zeros(STATE_SLOTS, np.int64)
+    st[ST_POS] = -1
+    return st, np.zeros(256, np.uint8)
+
+
+def segment_modes(buf, seg_start, seg_stop, exact, careful, framing) -> np.ndarray:
+    """Each segment's framing mode as frame_blocks settles it (its chain checked from end to end)."""
+    if exact:
+        return np.full(len(seg_start), MODE_EXACT, np.int8)
+    if careful:
+        return np.full(len(seg_start), MODE_CAREFUL, np.int8)
+    return np.array([MODE_CHAIN if chain_step(buf, int(a), int(b), framing, int(a), NO_LIMIT)[1] == 1
+                     else MODE_CAREFUL for a, b in zip(seg_start, seg_stop, strict=True)], np.int8)
+
+
+def frame_blocks(buf, seg_start, seg_stop, exact, careful, framing):
+    """Split payload segments into data blocks of any category in one window (frame_window); a raw
+    segment whose block chain holds from start to end is taken as it is unless ``careful``. Returns
+    (blk_start, blk_len, blk_cat, blk_seg, err_off, err_len, err_cat, err_code)."""
+    modes = segment_modes(buf, seg_start, seg_stop, exact, careful, framing)
+    st, seen = new_state()
+    return frame_window(buf, seg_start, seg_stop, modes, framing, st, seen, new_memo(), len(seg_start),
+                        NO_LIMIT)
 
 
 @njit(cache=True, nogil=True)

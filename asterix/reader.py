@@ -22,6 +22,7 @@ from .containers import Segments, read_segments
 from .errors import REASONS, ContentWarning, DecodeError, EditionWarning, UnreadableInput, UntimedWarning
 from .families import AUTO, edition_families, edition_span, family_name, family_of, with_defaults
 from .frames import code_list_column, empty_columns, icao_columns, typed_column
+from .framing import Progress, alike_framings, segment_modes, survey
 from .layout import OUT_FLOAT, OUT_INT, OUT_WIDE, Layout, compile_layout
 from .plausible import BOUNDS, Implausible, count_implausible, implausible
 from .stretches import Stretch, describe, foreign_spans
@@ -206,18 +207,6 @@ def _mapped(path) -> Iterator[np.ndarray]:
                 pass
 
 
-def release_pages(buf: np.ndarray, start: int, stop: int) -> None:
-    """Drop the pages of a memory-mapped file between two offsets from this process (the data stay in the
-    page cache and fault back in if read again), so a file read in chunks is not held in memory whole."""
-    mm = getattr(getattr(buf, "base", None), "obj", None)
-    if not isinstance(mm, mmap.mmap) or not hasattr(mmap, "MADV_DONTNEED") or stop <= start:
-        return
-    lo = start // mmap.PAGESIZE * mmap.PAGESIZE
-    hi = min(stop, len(mm))
-    if hi > lo:
-        mm.madvise(mmap.MADV_DONTNEED, lo, hi - lo)
-
-
 SIZE_SAMPLE_BLOCKS = 64  # blocks walked, spread over the recording, to guess the record count
 SIZE_SAMPLE_BYTES = 1 << 18  # at most this many bytes of them
 
@@ -360,16 +349,20 @@ def _other_family_spans(buf: np.ndarray, starts: np.ndarray, lens: np.ndarray, f
     return spans if used >= WRONG_EDITION_MIN_BLOCKS else []
 
 
-def framing_edition(buf: np.ndarray, seg: Segments, walked: dict, category: int) -> str:
+def framing_edition(buf: np.ndarray, seg: Segments, walked: dict, category: int,
+                    progress: Progress | None = None) -> str:
     """For an 'auto' category of a stream whose block chain breaks: the edition under which careful
     framing loses the fewest bytes (most of its blocks found on a tie, then the newest). Framing cannot
     walk a category without an edition, and would otherwise lose every block of it after the damage.
-    One edition per family is tried, the newest: the editions of a family frame alike."""
+    One edition per family is tried, the newest: the editions of a family frame alike (and families that
+    walk every block framing meets alike are framed once: framing.alike_framings)."""
+    careful = np.full(len(seg.start), kernel.MODE_CAREFUL, np.int8)
+    eds = [family[-1] for family in edition_families(category)]
+    framed = alike_framings(buf, seg, careful, {ed: tables_for({**walked, category: ed}) for ed in eds},
+                            category, progress, what=f"framing under CAT{category:03d}")
     best: tuple | None = None
-    for family in edition_families(category):
-        ed = family[-1]
-        framed = frame(buf, seg, {**walked, category: ed}, True)
-        key = (int(framed[5].sum()), -int((framed[2] == category).sum()))
+    for ed in eds:
+        key = (framed[ed].error_bytes, -int(framed[ed].blocks[category]))
         if best is None or key <= best[0]:
             best = (key, ed)
     return best[1]
@@ -488,19 +481,17 @@ def _cat_or(arrays: list[np.ndarray], fill: int, dtype) -> np.ndarray:
     return np.concatenate(arrays) if arrays else np.array([fill], dtype)
 
 
+def tables_for(walked: dict[int, str | None]) -> kernel.Framing:
+    """The framing tables walking these categories under these editions (None: the default); the same
+    object for the same editions."""
+    return _framing_tables(tuple(sorted((c, compile_layout(c, e).edition) for c, e in walked.items())))
+
+
 def frame(buf: np.ndarray, seg: Segments, walked: dict[int, str | None] | None = None,
           careful: bool = False):
-    """Data blocks of every category in the segments (kernel.frame_blocks); ``walked`` gives the
-    categories (and editions) whose blocks must walk exactly where framing has to resynchronise."""
-    key = tuple(sorted((c, compile_layout(c, e).edition) for c, e in (walked or {}).items()))
-    return kernel.frame_blocks(buf, seg.start, seg.stop, seg.exact, careful, _framing_tables(key))
-
-
-def _lone_category(b_cat: np.ndarray, walked: dict) -> bool:
-    """A category not walked that has a single block: a possible false header, worth careful framing."""
-    counts = np.bincount(b_cat.astype(np.int64), minlength=256)
-    counts[list(walked)] = 0
-    return bool((counts == 1).any())
+    """Data blocks of every category in the segments, in one piece (kernel.frame_blocks); ``walked`` gives
+    the categories (and editions) whose blocks must walk exactly where framing has to resynchronise."""
+    return kernel.frame_blocks(buf, seg.start, seg.stop, seg.exact, careful, tables_for(walked or {}))
 
 
 def walked_editions(editions: dict, categories) -> dict[int, str | None]:
@@ -510,14 +501,6 @@ def walked_editions(editions: dict, categories) -> dict[int, str | None]:
     return {c: editions.get(c) for c in DECODABLE
             if (c in wanted or c == 48 or c in editions)
             and editions.get(c) != AUTO}
-
-
-def framing_walk(buf: np.ndarray, seg: Segments, editions: dict, categories) -> dict[int, str | None]:
-    """The categories framing walks, with their editions (walked_editions). Every 'auto' edition is chosen
-    before framing (choose_editions, which frames a broken raw stream under the edition it finds): one
-    left 'auto' had no block in the sample, and is not walked (framing it under every family to find
-    blocks that sampling did not cost several times the decoding)."""
-    return walked_editions(editions, categories)
 
 
 def _raw_part(lo: int, hi: int) -> Segments:
@@ -579,94 +562,66 @@ def choose_editions(buf: np.ndarray, seg: Segments, editions: dict, categories
     return chosen, why
 
 
-def _walking_bytes(buf: np.ndarray, framed, framing: kernel.Framing, among=None) -> int:
-    """Bytes in the framed blocks of walked categories (of ``among`` only, when given) that walk exactly
-    (kernel.walk_flags)."""
-    b_start, b_len, b_cat = framed[:3]
-    total = 0
-    for cat in np.unique(b_cat):
-        if framing.base[cat] < 0 or (among is not None and cat not in among):
-            continue
-        sel = b_cat == cat
-        ok = kernel.walk_flags(buf, b_start[sel], b_len[sel], framing.base[cat], framing.nfrn[cat],
-                               framing.parts).astype(bool)  # 0/1 flags: as a mask, not as indices
-        total += int(b_len[sel][ok].sum())
-    return total
-
-
-def frame_checked(buf: np.ndarray, seg: Segments, walked: dict[int, str | None], plain=None):
-    """Framing as decode_buffer settles it: the chain as it is (``plain``, framed here when not given)
-    when it holds and every walked block walks, else careful framing; but a chain that holds from end
-    to end is kept when careful framing walks no more bytes (blocks that do not walk are then of another
-    edition, not damaged: cutting them up would lose the blocks and misreport them as framing errors)."""
-    key = tuple(sorted((c, compile_layout(c, e).edition) for c, e in walked.items()))
-    framing = _framing_tables(key)
-    framed = plain if plain is not None else kernel.frame_blocks(buf, seg.start, seg.stop, seg.exact, False,
-                                                                 framing)
-    if seg.exact or (not len(framed[4]) and not _lone_category(framed[2], walked)
-                     and kernel.all_walk(buf, framed[0], framed[1], framed[2], framing)):
-        return framed
-    careful = kernel.frame_blocks(buf, seg.start, seg.stop, seg.exact, True, framing)
-    # only the categories of the holding chain count: blocks of another category that careful framing finds
-    # inside them (random bytes walk as a short CAT010 or CAT020 block now and then) prove nothing
-    among = set(np.unique(framed[2]).tolist())
-    if not len(framed[4]) and (_walking_bytes(buf, careful, framing, among)
-                               <= _walking_bytes(buf, framed, framing, among)):
-        return framed
-    return careful
-
-
-def _scan_decoded(buf: np.ndarray, framed, decoded: list[int], editions: dict, choice: dict,
-                  selected) -> dict[int, tuple]:
-    """Walk the framed blocks of each decoded category: {cat: (block indices, layout, scan)}; an 'auto'
-    edition is chosen on its first framing (``editions`` and ``choice`` are updated)."""
+def _scan_decoded(buf: np.ndarray, framed, plan, selected) -> dict[int, tuple]:
+    """Walk the framed blocks of each decoded category under the plan's edition: {cat: (block indices,
+    layout, scan)}."""
     b_start, b_len, b_cat = framed[:3]
     scans: dict[int, tuple] = {}
-    for cat in decoded:
+    for cat in plan.decoded:
         sel = np.flatnonzero(b_cat == cat)
         if not len(sel):
             continue
-        starts, lens = b_start[sel], b_len[sel]
-        ed = editions.get(cat)
-        if ed == AUTO and cat not in choice:
-            ed, choice[cat] = choose_edition(buf, starts, lens, cat)
-            editions[cat] = ed
-        lay = compile_layout(cat, ed, selected)
-        scans[cat] = (sel, lay, _scan(buf, starts, lens, lay))
+        lay = compile_layout(cat, plan.editions.get(cat), selected)
+        scans[cat] = (sel, lay, _scan(buf, b_start[sel], b_len[sel], lay))
     return scans
 
 
 @dataclass
 class _Judged:
     """What the walk of one category's blocks says about its edition: the errors (each failed block, and
-    blocks withheld), the blocks kept (None: all), and the evidence of another edition."""
+    blocks withheld), the blocks kept (None: all), and the stretches of another edition among them."""
 
     errors: list[tuple[int, int, int, str]]
     keep: np.ndarray | None = None
-    fits: dict[int, tuple[str, ...]] = field(default_factory=dict)
     stretches: list[Stretch] = field(default_factory=list)
 
 
-def _judge_edition(buf: np.ndarray, starts: np.ndarray, lens: np.ndarray, scanned, cat: int,
-                   edition: str) -> _Judged:
-    """Report the blocks that failed to walk, and judge the edition: stretches of another edition family
-    among the blocks (_other_family_spans) are withheld whole, each stretch's blocks reported as such;
-    else, when most blocks failed and every one sampled walks under another edition, the edition is
-    wrong: the blocks that walk under it anyway are withheld too (they would give wrong values)."""
+def find_stretches(buf: np.ndarray, starts: np.ndarray, lens: np.ndarray, failed: np.ndarray, cat: int,
+                   edition: str) -> list[Stretch]:
+    """The stretches of another edition family among all of a category's blocks (``failed``: those that do
+    not walk under ``edition``), found over the whole recording (asterix.plan): _other_family_spans."""
+    out = []
+    for lo, hi in _other_family_spans(buf, starts, lens, failed, cat, edition):
+        inside = slice(lo, hi)
+        eds = walking_editions(buf, starts[inside][failed[inside]], lens[inside][failed[inside]], cat,
+                               besides=edition)
+        end = int(starts[hi - 1] + lens[hi - 1])
+        out.append(Stretch(int(starts[lo]), end, hi - lo, eds, edition, lo == 0, hi == len(starts)))
+    return out
+
+
+def _judge_edition(starts: np.ndarray, lens: np.ndarray, scanned, cat: int, edition: str, plan) -> _Judged:
+    """Report the blocks that failed to walk, and apply the plan's judgement of the edition (settled over
+    the whole recording): blocks in stretches of another edition family are withheld, each reported as such
+    (the part of a stretch among these blocks is reported as a Stretch of them, ``opens``/``closes`` saying
+    it goes on before or after); a wrong edition throughout withholds the blocks that walk under it anyway
+    (they would give wrong values)."""
     counts, fail_at = scanned[0], scanned[1]
     failed = counts < 0
     why_failed = {int(j): f"{REASONS[int(-counts[j])]} (record at offset {int(fail_at[j])})"
                   for j in np.flatnonzero(failed)}
     judged = _Judged([])
-    for lo, hi in _other_family_spans(buf, starts, lens, failed, cat, edition):
-        inside = np.arange(lo, hi)
-        eds = walking_editions(buf, starts[inside][failed[inside]], lens[inside][failed[inside]], cat,
-                               besides=edition)
-        end = int(starts[hi - 1] + lens[hi - 1])
-        judged.stretches.append(Stretch(int(starts[lo]), end, hi - lo, eds, edition, lo == 0,
-                                        hi == len(counts)))
-        among = (f"CAT{cat:03d} blocks at offsets {int(starts[lo])}-{end - 1} that walk under "
-                 f"{edition_span(cat, eds) or 'another edition'} and not under {edition}")
+    for whole in plan.stretches.get(cat, ()):
+        inside = np.flatnonzero((starts >= whole.first_offset) & (starts < whole.stop_offset))
+        if not len(inside):
+            continue
+        lo, hi = int(inside[0]), int(inside[-1]) + 1
+        first, end = int(starts[lo]), int(starts[hi - 1] + lens[hi - 1])
+        judged.stretches.append(Stretch(first, end, hi - lo, whole.editions, edition,
+                                        (lo == 0 and first > whole.first_offset) or whole.opens,
+                                        (hi == len(counts) and end < whole.stop_offset) or whole.closes))
+        among = (f"CAT{cat:03d} blocks at offsets {whole.first_offset}-{whole.stop_offset - 1} that walk "
+                 f"under {edition_span(cat, whole.editions) or 'another edition'} and not under {edition}")
         for j in inside:
             why_failed[int(j)] = (f"does not walk under edition {edition}; lies among {among}: skipped "
                                   f"(another edition)" if failed[j] else
@@ -675,14 +630,12 @@ def _judge_edition(buf: np.ndarray, starts: np.ndarray, lens: np.ndarray, scanne
         if judged.keep is None:
             judged.keep = np.ones(len(counts), bool)
         judged.keep[inside] = False
-    if not judged.stretches and failed.any() and 2 * int(failed.sum()) >= len(counts):
-        judged.fits[cat] = walking_editions(buf, starts[failed], lens[failed], cat, besides=edition)
-        if judged.fits[cat] and failed.sum() >= WRONG_EDITION_MIN_BLOCKS:
-            others = " or ".join(judged.fits[cat])
-            why = (f"walks under edition {edition}, but most CAT{cat:03d} blocks do not and every one of "
-                   f"those sampled walks under {others}: withheld (a wrong edition)")
-            why_failed |= {int(j): why for j in np.flatnonzero(~failed)}
-            judged.keep = np.zeros(len(counts), bool)
+    if cat in plan.withheld:
+        others = " or ".join(plan.fits[cat])
+        why = (f"walks under edition {edition}, but most CAT{cat:03d} blocks do not and every one of "
+               f"those sampled walks under {others}: withheld (a wrong edition)")
+        why_failed |= {int(j): why for j in np.flatnonzero(~failed)}
+        judged.keep = np.zeros(len(counts), bool)
     judged.errors = [(int(starts[j]), int(lens[j]), cat, why) for j, why in sorted(why_failed.items())]
     return judged
 
@@ -691,35 +644,39 @@ def decode_buffer(buf: np.ndarray, seg: Segments, *, path: str = "", editions: d
                   categories=None, date=None, strict: bool = False, columns=None,
                   sector_clock: SectorClock | None = None) -> Recording:
     """Decode an in-memory recording whose container segments are already known (``columns``: see
-    ``read``; ``sector_clock``: the CAT002 times of the data before it, which ``iter_read`` carries)."""
-    editions = dict(editions or {})
-    asked = selected_columns(columns)
-    # the columns plausibility is judged on are decoded whatever was asked, and dropped after
-    selected = None if asked is None else tuple(sorted({*asked, *(c for c in BOUNDS if c in KNOWN_COLUMNS)}))
+    ``read``; ``sector_clock``: the CAT002 times of the data before it): the plan settled over the whole
+    recording (asterix.plan), then every block at once."""
+    from .plan import plan_recording  # the plan chooses editions with this module's functions
+
+    selected = selected_columns(columns)
     date = parse_date(date)
     categories = check_categories(categories)
-    decoded = [c for c in DECODABLE if c in set(DEFAULT_CATEGORIES if categories is None else categories)]
-    editions, choice = choose_editions(buf, seg, with_defaults(editions, decoded), categories)
-    walked = framing_walk(buf, seg, editions, categories)
-    # Framing first follows the block chain as it is. If it breaks, or a decoded block does not walk
-    # (a LEN may be damaged), the raw stream is framed again carefully, walking the decoded blocks, and
-    # frame_checked settles which framing stands.
-    framed = frame(buf, seg, walked, False)
-    scans = _scan_decoded(buf, framed, decoded, editions, choice, selected)
-    failed = any((sc[2][0] < 0).any() for sc in scans.values())
-    if not seg.exact and (failed or _lone_category(framed[2], walked)):
-        settled = frame_checked(buf, seg, walked_editions(editions, categories), plain=framed)
-        if settled is not framed:
-            framed = settled
-            scans = _scan_decoded(buf, framed, decoded, editions, choice, selected)
+    plan = plan_recording(buf, seg, dict(editions or {}), categories)
+    return decode_framed(buf, plan, plan.framer(buf).window(), path=path, date=date, strict=strict,
+                         selected=selected, sector_clock=sector_clock)
+
+
+def decode_framed(buf: np.ndarray, plan, framed, *, path: str = "", date: dt.date | None = None,
+                  strict: bool = False, selected=None, part: Segments | None = None,
+                  first_segment: int = 0, sector_clock: SectorClock | None = None) -> Recording:
+    """Decode framed blocks (all of a recording's, or one window's: kernel.frame_window) by the plan
+    (asterix.plan), into a Recording of them. ``selected``: the columns asked for (None: all); ``part``:
+    the segments they lie in, the first being the plan's segment ``first_segment`` (days are counted, and
+    container bytes and problems told, by it), the plan's segments when None; ``sector_clock``: the CAT002
+    times of the data before (``iter_read`` carries it from window to window)."""
+    seg = plan.seg
+    part = seg if part is None else part
+    asked = selected
+    # the columns plausibility is judged on are decoded whatever was asked, and dropped after
+    selected = None if asked is None else tuple(sorted({*asked, *(c for c in BOUNDS if c in KNOWN_COLUMNS)}))
+    scans = _scan_decoded(buf, framed, plan, selected)
     b_start, b_len, b_cat, b_seg, e_off, e_len, e_cat, e_code = framed
     errors: list[tuple[int, int, int, str]] = [
         (int(o), int(n), int(c), framing_reason(buf, seg, int(o), int(code)))
         for o, n, c, code in zip(e_off, e_len, e_cat, e_code, strict=True)]
-    errors += [(o, n, -1, f"container: {why}") for o, n, why in seg.problems]
+    errors += [(o, n, -1, f"container: {why}") for o, n, why in part.problems]
     columns: dict[int, dict] = {}
     chosen: dict[int, str] = {}
-    fits: dict[int, tuple[str, ...]] = {}
     stretches: dict[int, list[Stretch]] = {}
     decoded_blocks: dict[int, int] = {}
     ignored: dict[int, int] = {}
@@ -736,10 +693,8 @@ def decode_buffer(buf: np.ndarray, seg: Segments, *, path: str = "", editions: d
         sel, lay, scanned = scans.pop(cat)
         starts, lens = b_start[sel], b_len[sel]
         chosen[cat] = lay.edition
-        judged = _judge_edition(buf, starts, lens, scanned, cat, lay.edition)
+        judged = _judge_edition(starts, lens, scanned, cat, lay.edition, plan)
         errors += judged.errors
-        if cat in judged.fits:
-            fits[cat] = judged.fits[cat]
         if judged.stretches:
             stretches[cat] = judged.stretches
         counts = scanned[0]
@@ -756,13 +711,13 @@ def decode_buffer(buf: np.ndarray, seg: Segments, *, path: str = "", editions: d
         del scanned
         columns[cat] = _columns(lay, where, texts, rec_off, sel[rec_blk])
         del where, texts
-    untimed = (time_cat001(columns, buf, framed, editions, sector_clock or SectorClock())
-               if PLOT_CATEGORY in decoded else pd.DataFrame(columns=UNTIMED_COLUMNS))
+    untimed = (time_cat001(columns, buf, framed, plan.editions, sector_clock or SectorClock())
+               if PLOT_CATEGORY in plan.decoded else pd.DataFrame(columns=UNTIMED_COLUMNS))
     errors.sort()
     if strict and errors:
         o, _, c, why = errors[0]
         raise DecodeError(path, o, why, c)
-    first_day = assign_days(columns, seg, b_seg)
+    first_day = assign_days(columns, part, b_seg - first_segment)
     if first_day is not None and seg.dated:
         date = dt.date(1970, 1, 1) + dt.timedelta(days=first_day)
     frames: dict[int, pd.DataFrame] = {}
@@ -779,10 +734,10 @@ def decode_buffer(buf: np.ndarray, seg: Segments, *, path: str = "", editions: d
     err.insert(0, "file", path)
     err["category"] = err["category"].astype("Int16").where(err["category"] >= 0)
     return Recording(frames=frames, errors=err, editions=chosen, path=path, format=seg.format, date=date,
-                     size_bytes=int(len(buf)), container_bytes=int(seg.container_bytes),
+                     size_bytes=int(len(buf)), container_bytes=int(part.container_bytes),
                      decoded_bytes=decoded_bytes, ignored_blocks=ignored, ignored_bytes=ignored_bytes,
-                     edition_choice=choice, day0=first_day, ignored_category_bytes=ignored_by_cat,
-                     edition_fits=fits, blocks=int(len(b_start)), untimed=untimed,
+                     edition_choice=dict(plan.choice), day0=first_day, ignored_category_bytes=ignored_by_cat,
+                     edition_fits=dict(plan.fits), blocks=int(len(b_start)), untimed=untimed,
                      edition_stretches=stretches,
                      decoded_blocks=decoded_blocks, implausible={c: v for c, v in odd.items() if v.records},
                      oversized_bytes=oversized_bytes)
@@ -876,9 +831,10 @@ def edition_advice(rec: Recording) -> list[str]:
 
 
 def categories_in(path, *, format: str | None = None) -> dict[int, int]:
-    """Data blocks per category in a recording, from framing alone (fast: no record is walked)."""
+    """Data blocks per category in a recording, from framing alone (fast: no record is walked; counted a
+    window at a time)."""
     with _mapped(path) as buf:
         seg = read_segments(buf, format)
-        cats = frame(buf, seg)[2]
-        values, counts = np.unique(cats, return_counts=True)
-        return {int(v): int(n) for v, n in zip(values, counts, strict=True)}
+        tables = tables_for({})
+        counted = survey(buf, seg, segment_modes(buf, seg, tables), tables)
+        return {int(c): int(counted.blocks[c]) for c in np.flatnonzero(counted.blocks)}

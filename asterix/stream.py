@@ -10,17 +10,15 @@ import numpy as np
 from .cat001_time import SectorClock
 from .containers import UNTIMED, Segments, read_segments
 from .errors import UnreadableInput
+from .framing import Progress, release_pages
+from .plan import Plan, plan_recording
 from .reader import (
     Recording,
     _mapped,
     check_categories,
-    choose_editions,
-    decode_buffer,
-    frame_checked,
-    framing_walk,
+    decode_framed,
     parse_date,
     reading_editions,
-    release_pages,
     selected_columns,
 )
 from .timeline import ANCHOR_REPORTS, file_order_days, first_report_day, known_captures, restamp, valid_times
@@ -29,19 +27,22 @@ HOLD_BYTES = 1 << 22  # a raw stream's first chunks held at most until day 0 is 
 
 
 def iter_read(path, *, chunk: int = 1_000_000, editions=None, date=None, categories=None,
-              format: str | None = None, strict: bool = False, columns=None) -> Iterator[Recording]:
+              format: str | None = None, strict: bool = False, columns=None,
+              progress: Progress | None = None) -> Iterator[Recording]:
     """Stream a recording in chunks of about ``chunk`` bytes of payload, yielding a Recording each
-    (``columns``: only those decoded columns, as in ``read``).
+    (``columns``: only those decoded columns, as in ``read``); ``progress(done, total, what)`` is called
+    as the passes that plan the decoding (asterix.plan) and the decoding itself go through the file.
 
-    Days, timestamps and the ``block`` index continue across chunks; memory stays bounded by the chunk
-    size.
+    The records, errors, days, timestamps and ``block`` index are those ``read`` gives, whatever the chunk
+    size: the framing, the editions and the verdicts on them are settled over the whole file first. Memory
+    follows the chunk size, not the file (but for a container's table of packets, 32 bytes a packet).
     """
     if isinstance(chunk, bool) or not isinstance(chunk, int | np.integer):
         raise TypeError(f"chunk {chunk!r}: must be a whole number of bytes (an int), not a "
                         f"{type(chunk).__name__}")
     if chunk <= 0:
         raise ValueError(f"chunk {chunk!r}: must be a positive number of bytes")
-    selected_columns(columns)
+    selected = selected_columns(columns)
     first_date, categories = parse_date(date), check_categories(categories)
     eds = reading_editions(editions, categories)
     with _mapped(path) as buf:
@@ -49,9 +50,8 @@ def iter_read(path, *, chunk: int = 1_000_000, editions=None, date=None, categor
             seg = read_segments(buf, format)
         except ValueError as exc:  # as read() says it
             raise UnreadableInput(f"{path}: {exc}") from exc
-        eds, choice = choose_editions(buf, seg, eds, categories)  # over the whole file, as read() does
-        bounds = _chunk_bounds(buf, seg, chunk, eds, categories)
-        release_pages(buf, 0, len(buf))  # planning the chunks read the whole file
+        release_pages(buf, 0, len(buf))  # finding the payloads of a container read the whole file
+        plan = plan_recording(buf, seg, eds, categories, progress)  # 'auto' chosen over the whole file
         clock = None  # a raw stream's (day, time of day) at the end of the chunks before; None: not anchored
         pending: list[Recording] = []  # a raw stream's first chunks, held until day 0 is anchored
         seen = np.zeros(0)  # their valid times of day in file order (the first ANCHOR_REPORTS)
@@ -59,20 +59,15 @@ def iter_read(path, *, chunk: int = 1_000_000, editions=None, date=None, categor
         day0 = None  # container day number of the first chunk's day 0
         blocks = 0  # data blocks framed in the chunks before: each chunk numbers its own from 0
         sectors = SectorClock()  # each radar's last CAT002 time: CAT001 times continue across chunks
-        for sub in bounds:
-            rec = decode_buffer(buf, sub, path=str(path), editions=eds, categories=categories,
-                                date=first_date, strict=strict, columns=columns, sector_clock=sectors)
-            rec.edition_choice = {**choice, **rec.edition_choice}
+        for rec, covered in _chunks(buf, plan, chunk, path=str(path), date=first_date, strict=strict,
+                                    selected=selected, sector_clock=sectors, progress=progress):
             for f in rec.frames.values():
                 f["block"] += blocks
             blocks += rec.blocks
-            eds = {**eds, **{c: e for c, e in rec.editions.items() if eds.get(c) == "auto"}}
-            if len(sub.start):
-                release_pages(buf, int(sub.start.min()), int(sub.stop.max()))
             if seg.format in UNTIMED and clock is None:
                 pending.append(rec)
                 seen = np.concatenate([seen, valid_times(rec.frames)])[:ANCHOR_REPORTS]
-                held += int((sub.stop - sub.start).sum())
+                held += covered
                 if len(seen) < ANCHOR_REPORTS and held < HOLD_BYTES:
                     continue
                 clock = (first_report_day(seen), np.nan)
@@ -101,32 +96,44 @@ def iter_read(path, *, chunk: int = 1_000_000, editions=None, date=None, categor
             yield held_rec
 
 
-def _chunk_bounds(buf: np.ndarray, seg: Segments, chunk: int, eds: dict, categories):
-    """Split the segments into groups of about ``chunk`` bytes, cutting raw streams at block starts."""
-    out = []
-    if seg.format == "raw" and len(seg.start):
-        b_start = frame_checked(buf, seg, framing_walk(buf, seg, eds, categories))[0]
-        cuts = [int(seg.start[0])]
-        for s in b_start:
-            if s - cuts[-1] >= chunk:
-                cuts.append(int(s))
-        cuts.append(int(seg.stop[0]))
-        for lo, hi in zip(cuts[:-1], cuts[1:], strict=True):
-            sub = _sub_segments(seg, np.array([lo]), np.array([hi]), np.array([0]))
-            out.append(sub)
-        return out
+def _chunks(buf: np.ndarray, plan: Plan, chunk: int, *, progress: Progress | None = None,
+            **decode) -> Iterator[tuple[Recording, int]]:
+    """The recording decoded by the plan in chunks of about ``chunk`` payload bytes, each with the payload
+    bytes it covers: a raw stream cut at block starts as framing goes, a container's payloads in groups
+    (chunks holding nothing at all are not yielded, but for a file without payload)."""
+    seg = plan.seg
+    framer = plan.framer(buf)
+    total = int(len(buf))
+    if not len(seg.start):
+        yield decode_framed(buf, plan, framer.window(), **decode), 0
+        return
+    if not seg.exact:
+        while not framer.done:
+            at = framer.position
+            framed = framer.window(at + chunk)
+            if progress:
+                progress(framer.position, total, "decoding")
+            if len(framed[0]) or len(framed[4]):
+                yield decode_framed(buf, plan, framed, **decode), framer.position - at
+        framer.release(total)
+        return
     day, tod = known_captures(seg)  # untimed packets (pcapng SPB) take their neighbour's capture time
     if day is not None:
         seg = dataclasses.replace(seg, capture_day=day, capture_tod=tod)
     sizes = np.cumsum(seg.stop - seg.start)
     group = (sizes // max(chunk, 1)).astype(np.int64)
-    for g in np.unique(group):
-        idx = np.flatnonzero(group == g)
-        sub = _sub_segments(seg, seg.start[idx], seg.stop[idx], idx)
-        out.append(sub)
-    if not len(seg.start):
-        out.append(seg)
-    return out
+    ends = np.flatnonzero(np.diff(group, append=group[-1] + 1)) + 1  # one past each group's last segment
+    first = 0
+    for end in ends.tolist():
+        idx = np.arange(first, end)
+        part = _sub_segments(seg, seg.start[idx], seg.stop[idx], idx)
+        framed = framer.window(seg_limit=end)
+        if progress:
+            progress(int(seg.stop[end - 1]), total, "decoding")
+        covered = int(sizes[end - 1] - (sizes[first - 1] if first else 0))
+        yield decode_framed(buf, plan, framed, part=part, first_segment=first, **decode), covered
+        first = end
+    framer.release(total)
 
 
 def _sub_segments(seg: Segments, start, stop, idx) -> Segments:

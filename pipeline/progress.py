@@ -14,7 +14,8 @@ class Progress:
         self.stream = stream or sys.stderr
         self.enabled = enabled
         self.tty = enabled and hasattr(self.stream, "isatty") and self.stream.isatty()
-        self._t0 = time.monotonic()
+        self._label: str | None = None  # the bar being drawn
+        self._bar_t0, self._bar_done0, self._ended = time.monotonic(), 0, True
 
     def stage(self, name: str) -> None:
         """Announce a pipeline stage ("Processing data files", "Slotting data", ...)."""
@@ -27,12 +28,20 @@ class Progress:
             print(f"  {text}", file=self.stream, flush=True)
 
     def bar(self, done: int, total: int, label: str = "") -> None:
-        """Redraw a progress bar (terminal only): done of total units."""
+        """Redraw a progress bar (terminal only): done of total units; a new label starts a new bar (its rate
+        counted from then: a file's passes each start from its beginning)."""
         if not self.tty or total <= 0:
             return
+        now = time.monotonic()
+        if label != self._label:
+            if self._label is not None and not self._ended:
+                print(file=self.stream)  # the bar before stopped short of 100 %: keep it on its own line
+            self._label, self._bar_t0, self._bar_done0 = label, now, done
         width = 30
         filled = int(width * min(done, total) / total)
-        rate = done / max(time.monotonic() - self._t0, 1e-9)
+        rate = (done - self._bar_done0) / max(now - self._bar_t0, 1e-9)
+        speed = f" ({rate / 1e6:.1f} MB/s)" if done > self._bar_done0 else ""  # none from the first call
+        self._ended = done >= total
         end = "\n" if done >= total else ""
-        print(f"\r  {label} [{'#' * filled}{'.' * (width - filled)}] {100 * done / total:5.1f}% "
-              f"({rate / 1e6:.1f} MB/s)", end=end, file=self.stream, flush=True)
+        print(f"\r  {label} [{'#' * filled}{'.' * (width - filled)}] {100 * done / total:5.1f}%{speed}",
+              end=end, file=self.stream, flush=True)

@@ -74,8 +74,9 @@ def decode_job(options: DecodeOptions, *, on_chunk: Callable[[int, int, str], No
     of several categories decoded (decided from what decoded, at the end). The files are staged in ``tx``
     (the caller commits it with the rest of its run; without one, a transaction of the job's own is
     committed at the end): a failed or interrupted run writes nothing, nor does a run in which nothing
-    decodes. ``on_chunk(done_bytes, size, name)`` reports progress. Raises asterix DecodeError in strict
-    mode, JobError for unreadable input."""
+    decodes. ``on_chunk(done_bytes, size, label)`` reports progress through each pass over a file
+    (asterix.iter_read's ``progress``: checking the block chain, framing, decoding). Raises asterix
+    DecodeError in strict mode, JobError for unreadable input."""
     import msdc.asterix as asterix
     from msdc.asterix.errors import UnreadableInput
     from msdc.asterix.reader import categories_in
@@ -113,9 +114,11 @@ def decode_job(options: DecodeOptions, *, on_chunk: Callable[[int, int, str], No
                 size = path.stat().st_size
                 chunk = max(int(options.chunk_mb * 1e6), 1)
                 tally, date, fmt, chosen, account = FirstDayTally(), None, None, {}, Tally(str(path))
+                bar = (lambda done, total, what, name=path.name: on_chunk(done, total, f"{name}: {what}")
+                       ) if on_chunk else None
                 for rec in asterix.iter_read(path, chunk=chunk, editions=checked.editions or None,
                                              date=options.date, format=options.format, categories=cats,
-                                             strict=options.strict):
+                                             strict=options.strict, progress=bar):
                     tally.add(rec.frames)
                     account.add(rec)
                     date, fmt, chosen = date or rec.date, rec.format, {**rec.edition_choice, **chosen}
@@ -128,11 +131,8 @@ def decode_job(options: DecodeOptions, *, on_chunk: Callable[[int, int, str], No
                                 files[cat] = category_output(stage.path(out), cat)
                             with named(_shown(out, files, cat, stage), instead_of=files[cat]):
                                 _write_chunk(files[cat], cat, labelled(frame, label), writers, csv)
-                    done = max((int(f["offset"].max()) for f in rec.frames.values() if len(f)), default=0)
-                    if on_chunk:
-                        on_chunk(done, size, path.name)
-                if on_chunk:  # the last record's offset is not the file's end: close the bar at 100 %
-                    on_chunk(size, size, path.name)
+                if on_chunk:  # the decoding's bar ends where the last block does: close it at 100 %
+                    on_chunk(size, size, f"{path.name}: decoding")
                 early_start += tally.warning(label, date, fmt)
                 early_start += date_ignored(options, [{"path": path, "format": fmt}])
                 notes += [f"{path}: CAT{cat:03d} edition auto {why}" for cat, why in sorted(chosen.items())]

@@ -83,11 +83,13 @@ def stats_job(options: StatsOptions, *, progress: Progress | None = None) -> Sta
                 "editions": {}, "edition_choice": {}, "date": None}
         by_source: dict[str, tuple[pd.Timestamp, pd.Timestamp]] = {}
         tally = FirstDayTally()
+        bar = (lambda done, total, what, name=path.name: progress.bar(done, total, f"{name}: {what}")
+               ) if progress else None
         try:
             # every category msdc decodes (tracks and status messages too: stats lists them per SAC/SIC)
             for rec in asterix.iter_read(path, chunk=chunk, editions=checked.editions or None,
                                          date=options.date, format=options.format, columns=STATS_COLUMNS,
-                                         categories=DECODABLE):
+                                         categories=DECODABLE, progress=bar):
                 acc.add(rec.frames, rec.errors, rec.ignored)
                 account.add(rec)
                 tally.add(rec.frames)

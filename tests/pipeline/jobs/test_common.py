@@ -194,13 +194,17 @@ def test_time_spans_sources_without_sac_or_sic():
 
 
 def test_decode_progress_ends_at_the_file_size(tmp_path):
-    """The bar is fed byte offsets: its last call for a file must be the file's size, or it stops short of
-    100 % and never ends its line (the last record's offset is a record length before the end)."""
+    """The bar is fed byte offsets, one bar per pass over a file (label "FILE: what"): its last call for a
+    file must be the file's size, or it stops short of 100 % and never ends its line (the last record's
+    offset is a record length before the end); within a pass the offsets only grow."""
     calls = []
     decode.decode_job(DecodeOptions(inputs=(RADAR, ADSB), output=str(tmp_path / "d.csv"), chunk_mb=0.1),
-                      on_chunk=lambda done, size, name: calls.append((name, done, size)))
+                      on_chunk=lambda done, size, label: calls.append((label, done, size)))
     for path in (RADAR, ADSB):
         name, size = Path(path).name, Path(path).stat().st_size
-        mine = [c for c in calls if c[0] == name]
-        assert len(mine) >= 2 and mine[-1] == (name, size, size)
-        assert all(done <= size for _, done, _ in mine)
+        mine = [c for c in calls if c[0].startswith(f"{name}: ")]
+        assert len(mine) >= 2 and mine[-1] == (f"{name}: decoding", size, size)
+        assert all(done <= total == size for _, done, total in mine)
+        for label in {c[0] for c in mine}:
+            done = [c[1] for c in mine if c[0] == label]
+            assert done == sorted(done), label
