@@ -26,13 +26,16 @@ class Progress:
         if self.enabled:
             print(f"  {text}", file=self.stream, flush=True)
 
-    def bar(self, done: int, total: int, label: str = "") -> None:
-        """Redraw a progress bar (terminal only): done of total units."""
+    def bar(self, done: int, total: int, label: str = "", *, unit: str = "MB",
+            since: float | None = None) -> None:
+        """Redraw a progress bar (terminal only): done of total units (bytes for "MB", else counted
+        ``unit``s), the rate since ``since`` (time.monotonic(); default this Progress's start)."""
         if not self.tty or total <= 0:
             return
         width = 30
         filled = int(width * min(done, total) / total)
-        rate = done / max(time.monotonic() - self._t0, 1e-9)
+        rate = done / max(time.monotonic() - (self._t0 if since is None else since), 1e-9)
+        speed = f"{rate / 1e6:.1f} MB/s" if unit == "MB" else f"{done}/{total}, {rate:.1f} {unit}/s"
         end = "\n" if done >= total else ""
         print(f"\r  {label} [{'#' * filled}{'.' * (width - filled)}] {100 * done / total:5.1f}% "
-              f"({rate / 1e6:.1f} MB/s)", end=end, file=self.stream, flush=True)
+              f"({speed})", end=end, file=self.stream, flush=True)
