@@ -12,7 +12,7 @@ import numpy as np
 import pandas as pd
 from matplotlib.patches import Ellipse
 
-from msdc.pipeline.report.figures import new_figure, save_png
+from msdc.pipeline.report.figures import FIGURE_PNG_COMPRESS_LEVEL, new_figure, save_png
 
 CHI2_95_2D = 5.991464547107979  # 95 % quantile of chi-square with 2 degrees of freedom
 KM_PER_NM = 1.852
@@ -93,19 +93,47 @@ def pc_window(sample_times: pd.Series, alert: pd.Series, step_s: float, t0: pd.T
     return max(lo - pad, t0), min(hi + pad, t1)
 
 
-def alert_figure(alert: pd.Series, tracks: pd.DataFrame, predictions: pd.DataFrame, pc: pd.DataFrame,
-                 threshold: float, path: str | Path, dpi: int = 110, step_s: float | None = None) -> Path:
-    """One alert event: map (NM from aircraft_a at the alert's start) above PC against time (pc: the
-    samples the alert events were found in; step_s: their step, default the smallest in the pair's)."""
-    a, b, start = alert["aircraft_a"], alert["aircraft_b"], alert["start"]
+def _window(alert: pd.Series, horizons: list[float]) -> tuple[pd.Timestamp, pd.Timestamp]:
+    """The times a figure draws: BEFORE_S before the alert's start to its end plus the longest horizon."""
+    start = alert["start"]
+    return (start - pd.Timedelta(seconds=BEFORE_S),
+            max(alert["end"], start) + pd.Timedelta(seconds=float(max(horizons))))
+
+
+def _origin(alert: pd.Series, tracks: pd.DataFrame) -> tuple[float, float]:
+    """The map's origin: aircraft_a at the alert's start, else the tracks' median position."""
+    at = tracks[(tracks["aircraft_id"] == alert["aircraft_a"]) & (tracks["time"] == alert["start"])]
+    return (float(at["latitude"].iloc[0]), float(at["longitude"].iloc[0])) if len(at) else (
+        float(tracks["latitude"].median()), float(tracks["longitude"].median()))
+
+
+def alert_data(alert: pd.Series, tracks: pd.DataFrame, predictions: pd.DataFrame,
+               pc: pd.DataFrame) -> dict:
+    """alert_figure's arguments for one alert cut to what its figure draws (the pair's tracks and PC in
+    the figure's window, their predictions from the alert's start), with the horizons and map origin taken
+    from the whole frames: the same figure as from the whole frames, from a few kB to send to a worker."""
+    a, b = alert["aircraft_a"], alert["aircraft_b"]
     horizons = sorted(predictions["horizon_s"].unique())
-    t0 = start - pd.Timedelta(seconds=BEFORE_S)
-    t1 = max(alert["end"], start) + pd.Timedelta(seconds=float(max(horizons)))
+    t0, t1 = _window(alert, horizons)
+    pair = tracks["aircraft_id"].isin([a, b]) & (tracks["time"] >= t0) & (tracks["time"] <= t1)
+    pred = predictions[predictions["aircraft_id"].isin([a, b]) & (predictions["time"] == alert["start"])]
+    series = pc[(pc["aircraft_a"] == a) & (pc["aircraft_b"] == b) & (pc["time"] >= t0) & (pc["time"] <= t1)]
+    return {"alert": alert, "tracks": tracks[pair], "predictions": pred, "pc": series, "horizons": horizons,
+            "origin": _origin(alert, tracks)}
+
+
+def alert_figure(alert: pd.Series, tracks: pd.DataFrame, predictions: pd.DataFrame, pc: pd.DataFrame,
+                 threshold: float, path: str | Path, dpi: int = 110, step_s: float | None = None,
+                 horizons: list[float] | None = None, origin: tuple[float, float] | None = None) -> Path:
+    """One alert event: map (NM from aircraft_a at the alert's start) above PC against time (pc: the
+    samples the alert events were found in; step_s: their step, default the smallest in the pair's;
+    horizons and origin: the predictions' horizons and ``_origin``, default from these frames)."""
+    a, b, start = alert["aircraft_a"], alert["aircraft_b"], alert["start"]
+    horizons = sorted(predictions["horizon_s"].unique()) if horizons is None else horizons
+    t0, t1 = _window(alert, horizons)
     fig = new_figure(7.5, 8.8, dpi=dpi)
     ax, ax_pc = fig.subplots(2, 1, height_ratios=(2.4, 1.0))
-    at = tracks[(tracks["aircraft_id"] == a) & (tracks["time"] == start)]
-    lat0, lon0 = (float(at["latitude"].iloc[0]), float(at["longitude"].iloc[0])) if len(at) else (
-        float(tracks["latitude"].median()), float(tracks["longitude"].median()))
+    lat0, lon0 = _origin(alert, tracks) if origin is None else origin
     for key, ident in (("a", a), ("b", b)):
         color = COLORS[key]
         tr = tracks[(tracks["aircraft_id"] == ident) & (tracks["time"] >= t0) & (tracks["time"] <= t1)]
@@ -166,4 +194,4 @@ def alert_figure(alert: pd.Series, tracks: pd.DataFrame, predictions: pd.DataFra
     ax_pc.set_ylabel("probability of conflict")
     ax_pc.grid(True, lw=0.3)
     ax_pc.legend(fontsize=7, loc="upper left")
-    return save_png(fig, path)
+    return save_png(fig, path, compress_level=FIGURE_PNG_COMPRESS_LEVEL)

@@ -35,6 +35,8 @@ MAX_MARKED_SLOTS = 20_000  # past this many slots the map shows lines only: mark
 # the map's PNG (1300 x 975) at zlib level 1: the same pixels as level 6 in 0.05 s instead of 0.08 (the 3 h
 # run's critical path), 5 % more bytes
 TRACK_PNG_COMPRESS_LEVEL = 1
+# the per-aircraft and per-alert PNGs at zlib level 1 too: the same pixels, 0.02-0.03 s less each (of ~0.4)
+FIGURE_PNG_COMPRESS_LEVEL = 1
 
 
 def new_figure(width: float, height: float, dpi: int = 130) -> Figure:

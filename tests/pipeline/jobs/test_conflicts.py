@@ -217,6 +217,7 @@ def test_failed_run_after_decoding_writes_nothing(tmp_path, capsys):
 
 def test_failure_while_writing_figures_leaves_nothing(crossing, tmp_path, monkeypatch, capsys):
     import msdc.pipeline.report.conflict_figures as figures
+    from msdc.pipeline.report import figure_pool
 
     real, calls = figures.alert_figure, []
 
@@ -227,6 +228,7 @@ def test_failure_while_writing_figures_leaves_nothing(crossing, tmp_path, monkey
         return real(*args, **kwargs)
 
     monkeypatch.setattr(figures, "alert_figure", second_fails)
+    monkeypatch.setattr(figure_pool, "cores", lambda: 1)  # the patch reaches this process only: drawn here
     d = crossing
     code = main(["conflicts", str(d / "r.ast"), str(d / "a.ast"), "--sensors", str(d / "s.toml"),
                  "--date", "2019-03-01", "--step", "5", "-o", str(tmp_path / "c.xlsx"),
