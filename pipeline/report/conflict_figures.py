@@ -12,7 +12,7 @@ import numpy as np
 import pandas as pd
 from matplotlib.patches import Ellipse
 
-from msdc.pipeline.report.figures import FIGURE_PNG_COMPRESS_LEVEL, new_figure, save_png
+from msdc.pipeline.report.canvas import FIGURE_PNG_COMPRESS_LEVEL, new_figure, save_png
 
 CHI2_95_2D = 5.991464547107979  # 95 % quantile of chi-square with 2 degrees of freedom
 KM_PER_NM = 1.852

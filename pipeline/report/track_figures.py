@@ -17,9 +17,9 @@ from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 from matplotlib.patches import Ellipse, Rectangle
 
+from msdc.pipeline.model.coasting import MISSED_UPDATE_FACTOR, coasted_time
+from msdc.pipeline.report.canvas import FIGURE_PNG_COMPRESS_LEVEL, new_figure, save_png
 from msdc.pipeline.report.figure_pool import FigureTask, render
-from msdc.pipeline.report.figures import FIGURE_PNG_COMPRESS_LEVEL, new_figure, save_png
-from msdc.pipeline.track.tracker import MISSED_UPDATE_FACTOR, coasted_time
 
 _SENSOR_COLORS = ("#d62728", "#1f77b4", "#9467bd", "#8c564b", "#e377c2", "#17becf")
 ADSB_COLOR = "#e6b800"
@@ -105,7 +105,7 @@ def _draw_reports(ax: Axes, reports: pd.DataFrame, lat0: float, lon0: float, *, 
 
 def coasting(tracks: pd.DataFrame) -> np.ndarray:
     """The rows drawn as coasted: more than MISSED_UPDATE_FACTOR expected update intervals after the last
-    update (``age_s``; the interval that of the slowest sensor, pipeline.track.tracker.coasted_time, as the
+    update (``age_s``; the interval that of the slowest sensor, pipeline.model.coasting.coasted_time, as the
     summary's coasted_s counts it). On a 1 s grid most rows fall between two reports (``coasted``: no
     report at that time), and dashing them drew every reported stretch as coasted; without ``age_s``
     (a table of other origin) the ``coasted`` flags."""
