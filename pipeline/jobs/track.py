@@ -17,15 +17,19 @@ import numpy as np
 import pandas as pd
 
 from msdc.pipeline.jobs.common import (
+    NOT_DRAWN,
     Checked,
+    FigureChoice,
     JobError,
     OptionError,
     carrying,
     check_aircraft,
     check_decoding,
+    check_figure_options,
     check_figures_dir,
     check_output_rows,
     check_tracking,
+    choose,
     estimated_noise,
     noise_text,
     output_path,
@@ -34,8 +38,8 @@ from msdc.pipeline.jobs.common import (
     sensor_table,
     spare_inputs,
     tracker_inputs,
+    write_not_drawn,
 )
-from msdc.pipeline.jobs.figures import NOT_DRAWN, FigureChoice, check_figure_options, choose, write_not_drawn
 from msdc.pipeline.jobs.options import ESTIMATED, TrackOptions, check_declared
 from msdc.pipeline.progress import Progress
 from msdc.pipeline.report.files import json_value, write_csv, write_json

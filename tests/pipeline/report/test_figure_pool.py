@@ -17,8 +17,7 @@ from PIL import Image
 
 from msdc.pipeline.cli import build_parser, main
 from msdc.pipeline.jobs import track
-from msdc.pipeline.jobs.common import JobError, OptionError
-from msdc.pipeline.jobs.figures import NOT_DRAWN, choose
+from msdc.pipeline.jobs.common import NOT_DRAWN, JobError, OptionError, choose
 from msdc.pipeline.jobs.options import command_args, from_args
 from msdc.pipeline.jobs.track import TrackOptions
 from msdc.pipeline.report.figure_pool import FigureError, FigureTask, render
