@@ -70,7 +70,7 @@ REPORT_GAP_RANGE_S = (0.1, 3600.0)
 # --figures-limit: a reader looks at tens of per-aircraft or per-alert figures, not hundreds, and each costs
 # ~0.2-0.4 s of a core: 50 take ~10 s on two cores, the real hour's 181 aircraft ~45 s, its 728 alerts ~3 min
 FIGURES_LIMIT = 50
-FIGURES_LIMIT_RANGE = (0, 1_000_000)
+FIGURES_LIMIT_RANGE = (0, 100_000)
 
 # Where an option stands in --help and in the docs table: by section, then in declaration order
 SECTIONS = ("selection", "output", "command", "tracking", "measurements", "reading")
@@ -467,14 +467,14 @@ class TrackOptions(AircraftOptions):
         doc=f"draw at most N figures: the first N aircraft in the order of their ids (`track`) or alert "
             f"events in the Alerts table's order (`conflicts`) (default {FIGURES_LIMIT}, about 10 s on two "
             "cores; `0`: all); the others are listed in `DIR/figures_not_drawn.txt`, each with the "
-            "command that draws it ([Figures](track.md#figures))")
+            "command that draws it ([How many figures](track.md#how-many-figures))")
     figures_only: str | None = option(
         None, "--figures-only", metavar="NAMES", section="tracking",
         help="draw only these figures, comma-separated file names (as figures_not_drawn.txt lists them); "
              "--figures-limit does not apply",
         doc="draw only these figures: their file names, comma-separated, with or without `.png` (as "
             "`figures_not_drawn.txt` lists them); `--figures-limit` does not apply "
-            "([Figures](track.md#figures))")
+            "([How many figures](track.md#how-many-figures))")
     step_s: float = option(
         1.0, "--step", range=STEP_RANGE_S, unit="s", section="tracking",
         help="output grid in seconds (default 1)",

@@ -20,6 +20,7 @@ from msdc.pipeline.progress import Progress
 # ~0.1 s instead of importing them again (~1.5 s each)
 PRELOAD = ("msdc.pipeline.report.track_figures", "msdc.pipeline.report.conflict_figures")
 IN_FLIGHT_PER_WORKER = 2  # tasks handed to the pool per worker: one drawing, one waiting
+MAX_WORKERS = 8  # each holds ~130-200 MB (matplotlib, one figure): 8 stay under ~1.6 GB on a big machine
 SERIAL_BELOW = 3  # fewer figures than this are drawn in this process: starting workers costs more
 
 
@@ -38,11 +39,12 @@ class FigureTask:
 
 
 def cores() -> int:
-    """The cores this process may run on."""
+    """The figure workers: one per CPU this process may run on (taskset), at most MAX_WORKERS."""
     try:
-        return len(os.sched_getaffinity(0))
+        cpus = len(os.sched_getaffinity(0))
     except AttributeError:  # not on Linux
-        return os.cpu_count() or 1
+        cpus = os.cpu_count() or 1
+    return max(1, min(cpus, MAX_WORKERS))
 
 
 def _context() -> multiprocessing.context.BaseContext:
@@ -72,10 +74,10 @@ def _failed(task: FigureTask, exc: BaseException) -> FigureError:
 
 def render(tasks: Iterable[FigureTask], total: int, *, workers: int | None = None,
            progress: Progress | None = None, label: str = "figures") -> list[Path]:
-    """Draw every task's figure (``total`` of them), in parallel on ``workers`` processes (default: every
-    core; 1 or fewer than SERIAL_BELOW figures: in this process). The tasks are made as the pool takes them,
-    so only IN_FLIGHT_PER_WORKER figures' data per worker exist at once. Returns the paths in task order;
-    FigureError naming the first figure that failed (the others are cancelled)."""
+    """Draw every task's figure (``total`` of them), in parallel on ``workers`` processes (default:
+    ``cores()``; 1, or fewer than SERIAL_BELOW figures: in this process). The tasks are made as the pool
+    takes them, so only IN_FLIGHT_PER_WORKER figures' data per worker exist at once. Returns the paths in
+    task order; FigureError naming the first figure that failed (the others are cancelled)."""
     workers = cores() if workers is None else max(int(workers), 1)
     workers = min(workers, total)
     started = time.monotonic()
