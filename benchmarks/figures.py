@@ -2,6 +2,7 @@
 `track --all --figures` and `conflicts --figures` (issue #26 item 5).
 
     python benchmarks/figures.py [--limit N ...] [--commands track,conflicts] [--keep DIR]
+    PYTHONPATH=/path/to/old-checkout-parent python benchmarks/figures.py --old   # before, every figure
 
 Memory is sampled from /proc every 50 ms: the peak of the summed RSS of every process of the tree (shared
 pages counted once per process: an upper bound) and of the summed PSS (shared pages split between the
@@ -93,6 +94,9 @@ def main() -> None:
     ap.add_argument("--limit", type=int, nargs="+", default=[50, 0], help="--figures-limit values to time")
     ap.add_argument("--commands", default="track,conflicts")
     ap.add_argument("--keep", help="write the figures here (default: a temporary folder)")
+    ap.add_argument("--old", action="store_true",
+                    help="msdc predates --figures-limit (PYTHONPATH=an old checkout's parent): every figure, "
+                         "in one process")
     a = ap.parse_args()
     if not REAL.exists():
         sys.exit(f"{REAL}: not found (the real recording is beside the repository in /work/shared/real)")
@@ -106,9 +110,10 @@ def main() -> None:
         common = [str(REAL), "--sensors", str(site), "--date", "2023-05-02"]
         rows = []
         for command in a.commands.split(","):
-            for limit in [None, *a.limit]:
+            for limit in [None, *([0] if a.old else a.limit)]:
                 folder = str(d / f"{command}_{limit}")
-                extra = [] if limit is None else ["--figures", folder, "--figures-limit", str(limit)]
+                extra = [] if limit is None else ["--figures", folder, *(
+                    [] if a.old else ["--figures-limit", str(limit)])]
                 if command == "track":
                     argv = [*msdc, "track", *common, "--all", *(extra or ["--json", str(d / "t.json")])]
                 else:

@@ -470,9 +470,9 @@ def _alert_figures(result: ConflictJobResult, folder: Path, stage: OutputTransac
 
 def _alert_tasks(result: ConflictJobResult, folder: Path, rows: list[int]) -> Iterator[FigureTask]:
     """One task per chosen row of the Alerts table, made when the pool takes it: that alert's pair's
-    tracks, predictions and PC only (conflict_figures.alert_data)."""
+    tracks, predictions and PC only (conflict_figures.AlertData)."""
     from msdc.pipeline.conflict.surface import surface_pairs
-    from msdc.pipeline.report.conflict_figures import alert_data, alert_figure, figure_name
+    from msdc.pipeline.report.conflict_figures import AlertData, alert_figure, figure_name
 
     alerts = result.alerts
     involved = set(alerts["aircraft_a"]) | set(alerts["aircraft_b"])
@@ -486,11 +486,12 @@ def _alert_tasks(result: ConflictJobResult, folder: Path, rows: list[int]) -> It
     if result.options.surface == "exclude":
         pc = pc[~surface_pairs(pc, grid)]
     threshold, step = result.options.threshold, float(result.options.step_s)
+    data = AlertData(tracks, pred, pc)
     for row in rows:
         alert = alerts.iloc[row]
         name = figure_name(int(alerts.index[row]), alert)
-        yield FigureTask(name, alert_figure, {**alert_data(alert, tracks, pred, pc), "threshold": threshold,
-                                              "path": folder / name, "step_s": step})
+        yield FigureTask(name, alert_figure, {**data(alert), "threshold": threshold, "path": folder / name,
+                                              "step_s": step})
 
 
 def side_files(checked: Checked, options: ConflictOptions) -> list[Path]:

@@ -107,19 +107,44 @@ def _origin(alert: pd.Series, tracks: pd.DataFrame) -> tuple[float, float]:
         float(tracks["latitude"].median()), float(tracks["longitude"].median()))
 
 
-def alert_data(alert: pd.Series, tracks: pd.DataFrame, predictions: pd.DataFrame,
-               pc: pd.DataFrame) -> dict:
-    """alert_figure's arguments for one alert cut to what its figure draws (the pair's tracks and PC in
+class AlertData:
+    """alert_figure's arguments for each alert cut to what its figure draws (the pair's tracks and PC in
     the figure's window, their predictions from the alert's start), with the horizons and map origin taken
-    from the whole frames: the same figure as from the whole frames, from a few kB to send to a worker."""
-    a, b = alert["aircraft_a"], alert["aircraft_b"]
-    horizons = sorted(predictions["horizon_s"].unique())
-    t0, t1 = _window(alert, horizons)
-    pair = tracks["aircraft_id"].isin([a, b]) & (tracks["time"] >= t0) & (tracks["time"] <= t1)
-    pred = predictions[predictions["aircraft_id"].isin([a, b]) & (predictions["time"] == alert["start"])]
-    series = pc[(pc["aircraft_a"] == a) & (pc["aircraft_b"] == b) & (pc["time"] >= t0) & (pc["time"] <= t1)]
-    return {"alert": alert, "tracks": tracks[pair], "predictions": pred, "pc": series, "horizons": horizons,
-            "origin": _origin(alert, tracks)}
+    from the whole frames: the same figure as from the whole frames, from a few kB to send to a worker.
+    The frames are indexed once by aircraft and pair (rows kept in their order), so that each alert's cut
+    costs its own rows, not a scan of the whole PC table."""
+
+    def __init__(self, tracks: pd.DataFrame, predictions: pd.DataFrame, pc: pd.DataFrame):
+        self.tracks, self.predictions, self.pc = tracks, predictions, pc
+        self.horizons = sorted(predictions["horizon_s"].unique())
+        self._tracks = tracks.groupby("aircraft_id", sort=False, observed=True).indices
+        self._predictions = predictions.groupby("aircraft_id", sort=False, observed=True).indices
+        self._pairs = pc.groupby(["aircraft_a", "aircraft_b"], sort=False, observed=True).indices
+        self._median: tuple[float, float] | None = None
+
+    def _rows(self, frame: pd.DataFrame, index: dict, keys: list) -> pd.DataFrame:
+        """The rows of ``frame`` under these keys of its index, in the frame's order."""
+        found = [index[k] for k in keys if k in index]
+        return frame.iloc[np.sort(np.concatenate(found))] if found else frame.iloc[:0]
+
+    def __call__(self, alert: pd.Series) -> dict:
+        a, b = alert["aircraft_a"], alert["aircraft_b"]
+        t0, t1 = _window(alert, self.horizons)
+        tracks = self._rows(self.tracks, self._tracks, [a] if a == b else [a, b])
+        pred = self._rows(self.predictions, self._predictions, [a] if a == b else [a, b])
+        series = self._rows(self.pc, self._pairs, [(a, b)])
+        at = tracks[(tracks["aircraft_id"] == a) & (tracks["time"] == alert["start"])]
+        if len(at):
+            origin = (float(at["latitude"].iloc[0]), float(at["longitude"].iloc[0]))
+        else:  # the whole frame's median, as _origin takes it
+            if self._median is None:
+                lat, lon = self.tracks["latitude"].median(), self.tracks["longitude"].median()
+                self._median = (float(lat), float(lon))
+            origin = self._median
+        return {"alert": alert, "tracks": tracks[(tracks["time"] >= t0) & (tracks["time"] <= t1)],
+                "predictions": pred[pred["time"] == alert["start"]],
+                "pc": series[(series["time"] >= t0) & (series["time"] <= t1)], "horizons": self.horizons,
+                "origin": origin}
 
 
 def alert_figure(alert: pd.Series, tracks: pd.DataFrame, predictions: pd.DataFrame, pc: pd.DataFrame,

@@ -5,6 +5,7 @@ listed with commands that really draw them."""
 from __future__ import annotations
 
 import datetime as dt
+import io
 import json
 import shlex
 from dataclasses import replace
@@ -20,6 +21,7 @@ from msdc.pipeline.jobs import track
 from msdc.pipeline.jobs.common import NOT_DRAWN, JobError, OptionError, choose
 from msdc.pipeline.jobs.options import command_args, from_args
 from msdc.pipeline.jobs.track import TrackOptions
+from msdc.pipeline.progress import Progress
 from msdc.pipeline.report.figure_pool import FigureError, FigureTask, render
 from msdc.pipeline.report.track_figures import aircraft_figure, figure_names
 
@@ -86,19 +88,38 @@ def test_limit_draws_the_first_and_lists_the_rest_with_commands_that_draw_them(f
     assert np.array_equal(_pixels(tmp_path / "two" / name), _pixels(tmp_path / "one" / name))
 
 
-def test_a_figure_failing_in_a_worker_is_named_with_its_reason(tmp_path):
-    n, t0 = 60, pd.Timestamp("2026-01-01", tz="UTC")
-    good = pd.DataFrame({  # a straight 250 kt flight east along the equator, one row a second
+def _straight(n: int = 60) -> pd.DataFrame:
+    """A track table by hand: a straight 250 kt flight east along the equator, one row a second."""
+    t0 = pd.Timestamp("2026-01-01", tz="UTC")
+    return pd.DataFrame({
         "aircraft_id": "ABC123", "time": t0 + pd.to_timedelta(range(n), "s"),
         "latitude": 0.0, "longitude": np.arange(n) * 250 / 3600 / 60, "speed_kt": 250.0, "coasted": False,
         "segment": 0, "sigma_major_m": 20.0, "sigma_minor_m": 10.0, "mode_cv": 1.0})
-    bad = good.drop(columns="latitude")
-    reports = good.iloc[:0].assign(sensor_id=[], sensor_kind=[])
-    tasks = [FigureTask(f"f{i}.png", aircraft_figure, {"tracks": t, "reports": reports,
-                                                        "path": tmp_path / f"f{i}.png"})
-             for i, t in enumerate([good, bad, good])]
+
+
+def _tasks(folder: Path, frames: list[pd.DataFrame]) -> list[FigureTask]:
+    reports = frames[0].iloc[:0].assign(sensor_id=[], sensor_kind=[])
+    return [FigureTask(f"f{i}.png", aircraft_figure,
+                       {"tracks": t, "reports": reports, "path": folder / f"f{i}.png"})
+            for i, t in enumerate(frames)]
+
+
+def test_a_figure_failing_in_a_worker_is_named_with_its_reason(tmp_path):
+    good = _straight()
     with pytest.raises(FigureError, match=r"figure f1\.png could not be drawn: KeyError: 'latitude'"):
-        render(tasks, len(tasks), workers=2)
+        render(_tasks(tmp_path, [good, good.drop(columns="latitude"), good]), 3, workers=2)
+
+
+def test_the_progress_bar_counts_figures_on_a_terminal(tmp_path):
+    class Terminal(io.StringIO):
+        def isatty(self) -> bool:
+            return True
+
+    stream = Terminal()
+    paths = render(_tasks(tmp_path, [_straight()] * 3), 3, workers=1, progress=Progress(stream))
+    assert [p.name for p in paths] == ["f0.png", "f1.png", "f2.png"] and all(p.exists() for p in paths)
+    bars = stream.getvalue().split("\r")[1:]
+    assert [b.split("(")[1].split(",")[0] for b in bars] == ["1/3", "2/3", "3/3"] and bars[-1].endswith("\n")
 
 
 def test_a_failing_figure_fails_the_run_naming_it_and_writes_nothing(fixture_run, tmp_path, monkeypatch):
