@@ -63,9 +63,22 @@ def _kb(pid: int, path: str, key: str) -> int:
     return 0
 
 
-def run(argv: list[str]) -> tuple[float, float, float, int]:
-    """Run argv: wall seconds, peak summed RSS and PSS of its process tree (MB), most processes at once."""
+def _cpu_s(pid: int) -> float:
+    """User + system CPU seconds of one process so far."""
+    try:
+        with open(f"/proc/{pid}/stat") as f:
+            fields = f.read().rsplit(")", 1)[1].split()
+        return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
+    except (OSError, IndexError, ValueError):
+        return 0.0
+
+
+def run(argv: list[str]) -> tuple[float, float, float, float, int]:
+    """Run argv: wall seconds, the tree's CPU seconds (each process's last sample: a process ending within
+    a sample's 50 ms loses that much), peak summed RSS and PSS of its process tree (MB), most processes at
+    once."""
     peak = {"rss": 0, "pss": 0, "procs": 0}
+    cpu: dict[int, float] = {}
     proc = subprocess.Popen(argv, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
     stop = threading.Event()
 
@@ -75,6 +88,7 @@ def run(argv: list[str]) -> tuple[float, float, float, int]:
             peak["rss"] = max(peak["rss"], sum(_kb(p, "status", "VmRSS:") for p in pids))
             peak["pss"] = max(peak["pss"], sum(_kb(p, "smaps_rollup", "Pss:") for p in pids))
             peak["procs"] = max(peak["procs"], len(pids))
+            cpu.update({p: _cpu_s(p) or cpu.get(p, 0.0) for p in pids})
             stop.wait(SAMPLE_S)
 
     t0 = time.monotonic()
@@ -86,7 +100,7 @@ def run(argv: list[str]) -> tuple[float, float, float, int]:
     sampler.join()
     if proc.returncode:
         sys.exit(f"{' '.join(argv)} failed ({proc.returncode}):\n{err}")
-    return wall, peak["rss"] / 1024, peak["pss"] / 1024, peak["procs"]
+    return wall, sum(cpu.values()), peak["rss"] / 1024, peak["pss"] / 1024, peak["procs"]
 
 
 def main() -> None:
@@ -108,7 +122,6 @@ def main() -> None:
         d.mkdir(parents=True, exist_ok=True)
         site.write_text(SITE)
         common = [str(REAL), "--sensors", str(site), "--date", "2023-05-02"]
-        rows = []
         for command in a.commands.split(","):
             for limit in [None, *([0] if a.old else a.limit)]:
                 folder = str(d / f"{command}_{limit}")
@@ -118,12 +131,11 @@ def main() -> None:
                     argv = [*msdc, "track", *common, "--all", *(extra or ["--json", str(d / "t.json")])]
                 else:
                     argv = [*msdc, "conflicts", *common, "-o", str(d / "c.csv"), *extra]
-                wall, rss, pss, procs = run(argv)
+                wall, cpu_s, rss, pss, procs = run(argv)
                 drawn = len(list((d / f"{command}_{limit}").glob("*.png"))) if limit is not None else 0
-                rows.append((command, "no figures" if limit is None else f"--figures-limit {limit}", drawn,
-                             wall, rss, pss, procs))
-                print(f"{rows[-1][0]:10s} {rows[-1][1]:20s} {drawn:4d} PNGs  {wall:6.1f} s wall  peak RSS "
-                      f"{rss:6.0f} MB (summed)  PSS {pss:6.0f} MB  {procs} processes", flush=True)
+                what = "no figures" if limit is None else f"--figures-limit {limit}"
+                print(f"{command:10s} {what:20s} {drawn:4d} PNGs  {wall:6.1f} s wall  {cpu_s:6.1f} s CPU  "
+                      f"peak RSS {rss:6.0f} MB (summed)  PSS {pss:6.0f} MB  {procs} processes", flush=True)
     print(f"load after: {os.getloadavg()[0]:.2f} (1 min)")
 
 
