@@ -110,6 +110,18 @@ def test_a_figure_failing_in_a_worker_is_named_with_its_reason(tmp_path):
         render(_tasks(tmp_path, [good, good.drop(columns="latitude"), good]), 3, workers=2)
 
 
+def test_an_os_error_in_a_worker_comes_back_as_it_is_naming_its_file(tmp_path):
+    # a figure whose folder cannot be made (a file is in the way): the OSError, naming that path, as drawn
+    # in one process (the output transaction then names the user's path)
+    (tmp_path / "in_the_way").write_text("a file\n")
+    tasks = _tasks(tmp_path, [_straight()] * 3)
+    blocked = tmp_path / "in_the_way" / "f1.png"
+    tasks[1] = FigureTask("f1.png", aircraft_figure, {**tasks[1].kwargs, "path": blocked})
+    with pytest.raises(OSError) as raised:
+        render(tasks, 3, workers=2)
+    assert not isinstance(raised.value, FigureError) and str(tmp_path / "in_the_way") in str(raised.value)
+
+
 def test_the_progress_bar_counts_figures_on_a_terminal(tmp_path):
     class Terminal(io.StringIO):
         def isatty(self) -> bool:
