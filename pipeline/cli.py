@@ -218,7 +218,8 @@ def cmd_quality(args) -> int:
 
 
 # what each kind of file a job returns is, as the list of written files says it
-KINDS = {"json": "JSON", "report": "workbook", "workbook": "workbook", "figure": "track figure",
+KINDS = {"json": "JSON", "figures not drawn": "list of the figures not drawn",
+         "report": "workbook", "workbook": "workbook", "figure": "track figure",
          "tracks": "track table", "alerts": "alerts table", "losses": "losses table",
          "warnings": "warning times table"}
 
@@ -254,13 +255,24 @@ def cmd_track(args) -> int:
     from msdc.pipeline.jobs import track
 
     options = from_args(track.TrackOptions, args, smooth=args.smooth or args.smoother is not None)
+    progress = Progress()
     with transaction.staged() as tx:
         result = _run_job("track", lambda o: track.validate(o, require_output=True), track.track_job, options,
-                          Progress())
+                          progress)
         print(track.text(result))
-        written = track.write_tracks(result, tx=tx)
+        written = track.write_tracks(result, tx=tx, progress=progress)
     _list_written("track", written, tx.written, track.side_files(options))
+    _figures_left_out("track", result.figures, written.get("figures not drawn"))
     return 0
+
+
+def _figures_left_out(command: str, choice, listed: Path | None) -> None:
+    """Say how many figures --figures-limit left out and where they are listed with their commands."""
+    if choice is None or listed is None:
+        return
+    print(f"msdc {command}: {len(choice.drawn)} of {len(choice.names)} figures drawn (--figures-limit); the "
+          f"other {len(choice.not_drawn)} are listed in {listed} with the command that draws each "
+          "(--figures-limit 0 draws all)", file=sys.stderr)
 
 
 def cmd_conflicts(args) -> int:
@@ -269,11 +281,13 @@ def cmd_conflicts(args) -> int:
     from msdc.pipeline.jobs.common import noise_text
 
     options = from_args(conflicts.ConflictOptions, args)
+    progress = Progress()
     with transaction.staged() as tx:
-        result = _run_job("conflicts", conflicts.validate, conflicts.conflict_job, options, Progress())
+        result = _run_job("conflicts", conflicts.validate, conflicts.conflict_job, options, progress)
         print(conflicts.text(result) + noise_text(result.noise))
-        written = conflicts.write_conflicts(result, tx=tx)
+        written = conflicts.write_conflicts(result, tx=tx, progress=progress)
     _list_written("conflicts", written, tx.written, conflicts.side_files(result.checked, options))
+    _figures_left_out("conflicts", result.figures, written.get("figures not drawn"))
     if args.figures is not None and not len(result.alerts):
         print(f"figures: none (no alert events), {args.figures} left as it was", file=sys.stderr)
     return 0

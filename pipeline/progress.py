@@ -27,20 +27,24 @@ class Progress:
         if self.enabled:
             print(f"  {text}", file=self.stream, flush=True)
 
-    def bar(self, done: int, total: int, label: str = "") -> None:
-        """Redraw a progress bar (terminal only): done of total units; a new label starts a new bar (its rate
-        counted from then: a file's passes each start from its beginning)."""
+    def bar(self, done: int, total: int, label: str = "", *, unit: str = "MB",
+            since: float | None = None) -> None:
+        """Redraw a progress bar (terminal only): done of total units (bytes for "MB", else counted
+        ``unit``s); a new label starts a new bar, its rate counted from then (a file's passes each start from
+        its beginning) or from ``since`` (time.monotonic(), counting from 0 units)."""
         if not self.tty or total <= 0:
             return
         now = time.monotonic()
         if label != self._label:
             if self._label is not None and not self._ended:
                 print(file=self.stream)  # the bar before stopped short of 100 %: keep it on its own line
-            self._label, self._bar_t0, self._bar_done0 = label, now, done
+            self._label = label
+            self._bar_t0, self._bar_done0 = (now, done) if since is None else (since, 0)
         width = 30
         filled = int(width * min(done, total) / total)
         rate = (done - self._bar_done0) / max(now - self._bar_t0, 1e-9)
-        speed = f" ({rate / 1e6:.1f} MB/s)" if done > self._bar_done0 else ""  # none from the first call
+        speed = (f"{rate / 1e6:.1f} MB/s" if unit == "MB" else f"{done}/{total}, {rate:.1f} {unit}/s")
+        speed = f" ({speed})" if done > self._bar_done0 else ""  # none from the first call: it has not moved
         self._ended = done >= total
         end = "\n" if done >= total else ""
         print(f"\r  {label} [{'#' * filled}{'.' * (width - filled)}] {100 * done / total:5.1f}%{speed}",

@@ -17,6 +17,7 @@ from __future__ import annotations
 import glob
 import math
 import time
+from collections.abc import Iterator
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 
@@ -24,15 +25,19 @@ import numpy as np
 import pandas as pd
 
 from msdc.pipeline.jobs.common import (
+    NOT_DRAWN,
     Checked,
+    FigureChoice,
     JobError,
     OptionError,
     carrying,
     check_decoding,
+    check_figure_options,
     check_figures_dir,
     check_output_rows,
     check_selection,
     check_tracking,
+    choose,
     estimated_noise,
     output_path,
     parse_sources,
@@ -41,9 +46,11 @@ from msdc.pipeline.jobs.common import (
     sensor_table,
     spare_inputs,
     tracker_inputs,
+    write_not_drawn,
 )
 from msdc.pipeline.jobs.options import ESTIMATED, ConflictOptions, check_declared
 from msdc.pipeline.progress import Progress
+from msdc.pipeline.report.figure_pool import FigureTask
 from msdc.pipeline.report.files import json_value, write_csv, write_json
 from msdc.pipeline.report.transaction import OutputTransaction, staged
 
@@ -103,6 +110,7 @@ def validate(options: ConflictOptions) -> Checked:
                  + [(f"--json {checked.json}", checked.json)])
     if options.figures is not None:
         check_figures_dir(options.figures, writable=True)
+    check_figure_options(options)
     checked.sensors = sensor_table(options.sensors, required=False)
     return checked
 
@@ -130,6 +138,7 @@ class ConflictJobResult:
     predictions: pd.DataFrame | None = None  # predict_tracks' frame (for the figures)
     noise: pd.DataFrame | None = None  # --noise estimate or timing: declared and estimated sigmas
     warnings: list[str] = field(default_factory=list)  # the run's, validation's first
+    figures: FigureChoice | None = None  # the figures --figures drew and left out, once written
 
 
 def conflict_job(options: ConflictOptions, *, progress: Progress | None = None,
@@ -404,11 +413,12 @@ def text(result: ConflictJobResult) -> str:
     return "\n".join(lines)
 
 
-def write_conflicts(result: ConflictJobResult, *, tx: OutputTransaction | None = None) -> dict[str, Path]:
+def write_conflicts(result: ConflictJobResult, *, tx: OutputTransaction | None = None,
+                    progress: Progress | None = None, workers: int | None = None) -> dict[str, Path]:
     """Write the tables (CSV: alerts at -o, losses and warning times beside it; xlsx: one workbook), the
     JSON and one figure per alert (--figures, its folder made only when there is one), staged in ``tx``
-    (committed by the caller; without one, the files are committed together here). Returns the final
-    paths, by kind."""
+    (committed by the caller; without one, the files are committed together here); the figures on
+    ``workers`` processes (None: every core). Returns the final paths, by kind."""
     from msdc.pipeline.report.conflict_excel import write_conflict_workbook
 
     out, js = result.checked.output, result.checked.json
@@ -428,13 +438,41 @@ def write_conflicts(result: ConflictJobResult, *, tx: OutputTransaction | None =
             targets["json"] = js
             write_json(summary(result), stage.path(js))
         if result.options.figures is not None and len(result.alerts):
-            targets.update(_alert_figures(result, stage.folder(result.options.figures), stage))
+            targets.update(_alert_figures(result, stage.folder(result.options.figures), stage, progress,
+                                          workers))
     return targets
 
 
-def _alert_figures(result: ConflictJobResult, folder: Path, stage: OutputTransaction) -> dict[str, Path]:
-    """One figure per alert event, drawn in ``folder`` (staged): their final paths, by kind."""
-    from msdc.pipeline.report.conflict_figures import alert_figure, figure_name
+def _alert_figures(result: ConflictJobResult, folder: Path, stage: OutputTransaction,
+                   progress: Progress | None, workers: int | None) -> dict[str, Path]:
+    """The chosen alert events' figures (--figures-limit, --figures-only) drawn in ``folder`` (staged), the
+    others listed in figures_not_drawn.txt: their final paths, by kind."""
+    from msdc.pipeline.report.conflict_figures import figure_name
+    from msdc.pipeline.report.figure_pool import FigureError, render
+
+    alerts = result.alerts
+    names = [figure_name(int(i), alert) for i, alert in alerts.iterrows()]
+    choice = choose(names, result.options.figures_limit, result.options.figures_only)
+    result.figures = choice
+    if progress:
+        progress.stage(f"Drawing {len(choice.drawn)} of {len(names)} alert figures")
+    try:
+        paths = render(_alert_tasks(result, folder, choice.drawn), len(choice.drawn), workers=workers,
+                       progress=progress)
+    except FigureError as exc:
+        raise JobError(f"--figures {result.options.figures}: {exc}; nothing written") from exc
+    drawn = {f"figure {path.stem}": stage.final(path) for path in paths}
+    listed = write_not_drawn(folder, "conflicts", result.options, choice)
+    if listed is not None:
+        drawn["figures not drawn"] = stage.final(listed)
+    return drawn
+
+
+def _alert_tasks(result: ConflictJobResult, folder: Path, rows: list[int]) -> Iterator[FigureTask]:
+    """One task per chosen row of the Alerts table, made when the pool takes it: that alert's pair's
+    tracks, predictions and PC only (conflict_figures.AlertData)."""
+    from msdc.pipeline.conflict.surface import surface_pairs
+    from msdc.pipeline.report.conflict_figures import AlertData, alert_figure, figure_name
 
     alerts = result.alerts
     involved = set(alerts["aircraft_a"]) | set(alerts["aircraft_b"])
@@ -442,20 +480,18 @@ def _alert_figures(result: ConflictJobResult, folder: Path, stage: OutputTransac
     pred = result.predictions
     pred = pred[pred["aircraft_id"].isin(involved) & pred["time"].isin(alerts["start"])]
     pc = result.pc[result.pc["aircraft_a"].isin(involved)]
-    from msdc.pipeline.conflict.surface import surface_pairs
-
     # the samples the events were found in: those the selection keeps, without the surface pairs' (exclude)
     grid = result.tracks
     pc = pc[~surface_pairs(pc, grid.assign(left_out=~grid["selected"].to_numpy(bool)), "left_out")]
     if result.options.surface == "exclude":
         pc = pc[~surface_pairs(pc, grid)]
     threshold, step = result.options.threshold, float(result.options.step_s)
-    drawn = {}
-    for i, alert in alerts.iterrows():
-        path = folder / figure_name(int(i), alert)
-        alert_figure(alert, tracks, pred, pc, threshold, path, step_s=step)
-        drawn[f"figure {path.stem}"] = stage.final(path)
-    return drawn
+    data = AlertData(tracks, pred, pc)
+    for row in rows:
+        alert = alerts.iloc[row]
+        name = figure_name(int(alerts.index[row]), alert)
+        yield FigureTask(name, alert_figure, {**data(alert), "threshold": threshold, "path": folder / name,
+                                              "step_s": step})
 
 
 def side_files(checked: Checked, options: ConflictOptions) -> list[Path]:
@@ -464,7 +500,8 @@ def side_files(checked: Checked, options: ConflictOptions) -> list[Path]:
     out, beside = checked.output, []
     if out is not None and out.suffix.lower() == ".csv":
         beside = [p.with_name(glob.escape(p.name)) for p in companion_paths(real_output(out)).values()]
-    return beside + ([] if options.figures is None else [Path(options.figures) / "alert_*.png"])
+    return beside + ([] if options.figures is None else [Path(options.figures) / "alert_*.png",
+                                                          Path(options.figures) / NOT_DRAWN])
 
 
 __all__ = ["ConflictJobResult", "ConflictOptions", "conflict_job", "parse_horizons", "side_files", "summary",

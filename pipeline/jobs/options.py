@@ -69,6 +69,10 @@ SURFACE_MODES = ("exclude", "include")  # pairs with an aircraft on the surface 
 MIN_FL_RANGE = (-20.0, 1000.0)  # --min-fl: below the lowest aerodrome to above any aircraft
 # --max-report-gap: losses are measured between reports at most this far apart (pipeline.conflict.reported)
 REPORT_GAP_RANGE_S = (0.1, 3600.0)
+# --figures-limit: a reader looks at tens of per-aircraft or per-alert figures, not hundreds, and each costs
+# ~0.2-0.4 s of a core: 50 take ~10 s on two cores, the real hour's 181 aircraft ~45 s, its 728 alerts ~3 min
+FIGURES_LIMIT = 50
+FIGURES_LIMIT_RANGE = (0, 100_000)
 
 # Where an option stands in --help and in the docs table: by section, then in declaration order
 SECTIONS = ("selection", "output", "command", "tracking", "measurements", "reading")
@@ -198,6 +202,37 @@ def from_args(options_cls: type, args: argparse.Namespace, **extra: object) -> t
         if value is not None:
             values[f.name] = tuple(value) if isinstance(value, list) else value
     return options_cls(**values | extra)
+
+
+def command_args(options: object, **changed: object) -> list[str]:
+    """The command-line arguments that give ``options`` (with ``changed`` fields replaced): every declared
+    option that differs from its default, then the inputs; from_args of them parses back to the same
+    options."""
+    values = dataclasses.replace(options, **changed) if changed else options  # type: ignore[type-var]
+    args: list[str] = []
+    for f, spec, kind in declared(type(values)):
+        value = getattr(values, f.name)
+        if not spec.flags or value == f.default or value is None:
+            continue
+        flag = spec.flags[-1]
+        if kind is bool:
+            args += [flag] if value else []
+        elif spec.repeat:
+            args += [a for item in value for a in (flag, str(item))]
+        elif isinstance(value, tuple):
+            args += [flag, ",".join(_arg_text(v) for v in value)]
+        else:
+            args += [flag, _arg_text(value)]
+    return [str(p) for p in getattr(values, "inputs", ())] + args
+
+
+def _arg_text(value: object) -> str:
+    """One option value as typed: dates ISO, floats short but exact (20, 0.1, 0.123456789)."""
+    if isinstance(value, dt.date):
+        return value.isoformat()
+    if isinstance(value, float):
+        return f"{value:g}" if float(f"{value:g}") == value else repr(value)
+    return str(value)
 
 
 # ---------------------------------------------------------------------------------------------------------
@@ -442,6 +477,21 @@ class TrackOptions(AircraftOptions):
     figures: str | None = option(None, "--figures", metavar="DIR", section="tracking",
                                  help="one PNG per aircraft in this directory",
                                  doc="one PNG per aircraft in DIR (`track_<callsign>_<id>.png`)")
+    figures_limit: int = option(
+        FIGURES_LIMIT, "--figures-limit", metavar="N", range=FIGURES_LIMIT_RANGE, section="tracking",
+        help=f"draw at most N figures (default {FIGURES_LIMIT}; 0: all); the others are listed in "
+             "DIR/figures_not_drawn.txt with the command that draws each",
+        doc=f"draw at most N figures: the first N aircraft in the order of their ids (`track`) or alert "
+            f"events in the Alerts table's order (`conflicts`) (default {FIGURES_LIMIT}, about 10 s on two "
+            "cores; `0`: all); the others are listed in `DIR/figures_not_drawn.txt`, each with the "
+            "command that draws it ([How many figures](track.md#how-many-figures))")
+    figures_only: str | None = option(
+        None, "--figures-only", metavar="NAMES", section="tracking",
+        help="draw only these figures, comma-separated file names (as figures_not_drawn.txt lists them); "
+             "--figures-limit does not apply",
+        doc="draw only these figures: their file names, comma-separated, with or without `.png` (as "
+            "`figures_not_drawn.txt` lists them); `--figures-limit` does not apply "
+            "([How many figures](track.md#how-many-figures))")
     step_s: float = option(
         1.0, "--step", range=STEP_RANGE_S, unit="s", section="tracking",
         help="output grid in seconds (default 1)",

@@ -17,15 +17,19 @@ import numpy as np
 import pandas as pd
 
 from msdc.pipeline.jobs.common import (
+    NOT_DRAWN,
     Checked,
+    FigureChoice,
     JobError,
     OptionError,
     carrying,
     check_aircraft,
     check_decoding,
+    check_figure_options,
     check_figures_dir,
     check_output_rows,
     check_tracking,
+    choose,
     estimated_noise,
     noise_text,
     output_path,
@@ -34,6 +38,7 @@ from msdc.pipeline.jobs.common import (
     sensor_table,
     spare_inputs,
     tracker_inputs,
+    write_not_drawn,
 )
 from msdc.pipeline.jobs.options import ESTIMATED, TrackOptions, check_declared
 from msdc.pipeline.progress import Progress
@@ -85,6 +90,7 @@ def validate(options: TrackOptions, *, require_output: bool = False) -> Checked:
                                   (f"--json {checked.json}", checked.json)])
     if options.figures is not None:
         check_figures_dir(options.figures)
+    check_figure_options(options)
     if require_output and checked.output is None and checked.json is None and options.figures is None:
         raise OptionError("give at least one output: -o tracks.csv|tracks.parquet, --json or --figures")
     checked.sensors = sensor_table(options.sensors, required=False)
@@ -105,6 +111,7 @@ class TrackJobResult:
     loaded: object  # the inputs, editions and date; its decoded frames are freed once measurements are built
     noise: pd.DataFrame | None = None  # --noise estimate: per sensor and component, declared and estimated
     warnings: list[str] = field(default_factory=list)  # the run's, validation's first
+    figures: FigureChoice | None = None  # the figures --figures drew and left out, once written
 
 
 def _select(meas: pd.DataFrame, options: TrackOptions) -> pd.DataFrame:
@@ -208,10 +215,12 @@ def sensor_totals(sensors: pd.DataFrame) -> pd.DataFrame:
     return out.drop(columns="nis_sum").assign(nis_mean=np.where(out["updates"] > 0, nis, np.nan))
 
 
-def write_tracks(result: TrackJobResult, *, tx: OutputTransaction | None = None) -> dict[str, Path]:
+def write_tracks(result: TrackJobResult, *, tx: OutputTransaction | None = None,
+                 progress: Progress | None = None, workers: int | None = None) -> dict[str, Path]:
     """Write the track table (CSV: times as ISO 8601 UTC; Parquet: tz-aware timestamps), the JSON and
     the figures, as the options ask, staged in ``tx`` (committed by the caller; without one, the files are
-    committed together here): a failure leaves nothing behind. Returns the final paths, by kind."""
+    committed together here): a failure leaves nothing behind. The figures are drawn on ``workers``
+    processes (None: every core). Returns the final paths, by kind."""
     written: dict[str, Path] = {}
     out, js = result.checked.output, result.checked.json
     with staged(tx) as stage:
@@ -227,11 +236,35 @@ def write_tracks(result: TrackJobResult, *, tx: OutputTransaction | None = None)
             write_json(summary(result), stage.path(js))
             written["json"] = js
         if result.options.figures is not None:
-            from msdc.pipeline.report.track_figures import track_figures
-
-            drawn = track_figures(result, stage.folder(result.options.figures))
-            written.update({f"figure {k}": stage.final(p) for k, p in drawn.items()})
+            written.update(_track_figures(result, stage.folder(result.options.figures), stage, progress,
+                                          workers))
     return written
+
+
+def _track_figures(result: TrackJobResult, folder: Path, stage: OutputTransaction,
+                   progress: Progress | None, workers: int | None) -> dict[str, Path]:
+    """The chosen aircraft's figures (--figures-limit, --figures-only) drawn in ``folder`` (staged), the
+    others listed in figures_not_drawn.txt: their final paths, by kind."""
+    from msdc.pipeline.report.figure_pool import FigureError, render
+    from msdc.pipeline.report.track_figures import figure_names, figure_tasks
+
+    names = figure_names(result.tracks)
+    ids = list(names)
+    choice = choose([name for name, _ in names.values()], result.options.figures_limit,
+                    result.options.figures_only)
+    result.figures = choice
+    chosen = [ids[i] for i in choice.drawn]
+    if progress:
+        progress.stage(f"Drawing {len(chosen)} of {len(ids)} track figures")
+    try:
+        paths = render(figure_tasks(result, folder, chosen), len(chosen), workers=workers, progress=progress)
+    except FigureError as exc:
+        raise JobError(f"--figures {result.options.figures}: {exc}; nothing written") from exc
+    out = {f"figure {ident}": stage.final(p) for ident, p in zip(chosen, paths, strict=True)}
+    listed = write_not_drawn(folder, "track", result.options, choice)
+    if listed is not None:
+        out["figures not drawn"] = stage.final(listed)
+    return out
 
 
 def text(result: TrackJobResult) -> str:
@@ -252,8 +285,10 @@ def text(result: TrackJobResult) -> str:
 
 
 def side_files(options: TrackOptions) -> list[Path]:
-    """The figures track --figures DIR may write, as a glob (one per aircraft: track_<name>.png)."""
-    return [] if options.figures is None else [Path(options.figures) / "track_*.png"]
+    """The figures track --figures DIR may write, as globs (one per aircraft: track_<name>.png, and the list
+    of those not drawn)."""
+    return [] if options.figures is None else [Path(options.figures) / "track_*.png",
+                                               Path(options.figures) / NOT_DRAWN]
 
 
 __all__ = ["TRACK_COLUMNS", "TrackJobResult", "TrackOptions", "sensor_totals", "side_files", "summary",

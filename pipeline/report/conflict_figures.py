@@ -12,7 +12,7 @@ import numpy as np
 import pandas as pd
 from matplotlib.patches import Ellipse
 
-from msdc.pipeline.report.figures import new_figure, save_png
+from msdc.pipeline.report.canvas import FIGURE_PNG_COMPRESS_LEVEL, new_figure, save_png
 
 CHI2_95_2D = 5.991464547107979  # 95 % quantile of chi-square with 2 degrees of freedom
 KM_PER_NM = 1.852
@@ -93,19 +93,72 @@ def pc_window(sample_times: pd.Series, alert: pd.Series, step_s: float, t0: pd.T
     return max(lo - pad, t0), min(hi + pad, t1)
 
 
+def _window(alert: pd.Series, horizons: list[float]) -> tuple[pd.Timestamp, pd.Timestamp]:
+    """The times a figure draws: BEFORE_S before the alert's start to its end plus the longest horizon."""
+    start = alert["start"]
+    return (start - pd.Timedelta(seconds=BEFORE_S),
+            max(alert["end"], start) + pd.Timedelta(seconds=float(max(horizons))))
+
+
+def _origin(alert: pd.Series, tracks: pd.DataFrame) -> tuple[float, float]:
+    """The map's origin: aircraft_a at the alert's start, else the tracks' median position."""
+    at = tracks[(tracks["aircraft_id"] == alert["aircraft_a"]) & (tracks["time"] == alert["start"])]
+    return (float(at["latitude"].iloc[0]), float(at["longitude"].iloc[0])) if len(at) else (
+        float(tracks["latitude"].median()), float(tracks["longitude"].median()))
+
+
+class AlertData:
+    """alert_figure's arguments for each alert cut to what its figure draws (the pair's tracks and PC in
+    the figure's window, their predictions from the alert's start), with the horizons and map origin taken
+    from the whole frames: the same figure as from the whole frames, from a few kB to send to a worker.
+    The frames are indexed once by aircraft and pair (rows kept in their order), so that each alert's cut
+    costs its own rows, not a scan of the whole PC table."""
+
+    def __init__(self, tracks: pd.DataFrame, predictions: pd.DataFrame, pc: pd.DataFrame):
+        self.tracks, self.predictions, self.pc = tracks, predictions, pc
+        self.horizons = sorted(predictions["horizon_s"].unique())
+        self._tracks = tracks.groupby("aircraft_id", sort=False, observed=True).indices
+        self._predictions = predictions.groupby("aircraft_id", sort=False, observed=True).indices
+        self._pairs = pc.groupby(["aircraft_a", "aircraft_b"], sort=False, observed=True).indices
+        self._median: tuple[float, float] | None = None
+
+    def _rows(self, frame: pd.DataFrame, index: dict, keys: list) -> pd.DataFrame:
+        """The rows of ``frame`` under these keys of its index, in the frame's order."""
+        found = [index[k] for k in keys if k in index]
+        return frame.iloc[np.sort(np.concatenate(found))] if found else frame.iloc[:0]
+
+    def __call__(self, alert: pd.Series) -> dict:
+        a, b = alert["aircraft_a"], alert["aircraft_b"]
+        t0, t1 = _window(alert, self.horizons)
+        tracks = self._rows(self.tracks, self._tracks, [a] if a == b else [a, b])
+        pred = self._rows(self.predictions, self._predictions, [a] if a == b else [a, b])
+        series = self._rows(self.pc, self._pairs, [(a, b)])
+        at = tracks[(tracks["aircraft_id"] == a) & (tracks["time"] == alert["start"])]
+        if len(at):
+            origin = (float(at["latitude"].iloc[0]), float(at["longitude"].iloc[0]))
+        else:  # the whole frame's median, as _origin takes it
+            if self._median is None:
+                lat, lon = self.tracks["latitude"].median(), self.tracks["longitude"].median()
+                self._median = (float(lat), float(lon))
+            origin = self._median
+        return {"alert": alert, "tracks": tracks[(tracks["time"] >= t0) & (tracks["time"] <= t1)],
+                "predictions": pred[pred["time"] == alert["start"]],
+                "pc": series[(series["time"] >= t0) & (series["time"] <= t1)], "horizons": self.horizons,
+                "origin": origin}
+
+
 def alert_figure(alert: pd.Series, tracks: pd.DataFrame, predictions: pd.DataFrame, pc: pd.DataFrame,
-                 threshold: float, path: str | Path, dpi: int = 110, step_s: float | None = None) -> Path:
+                 threshold: float, path: str | Path, dpi: int = 110, step_s: float | None = None,
+                 horizons: list[float] | None = None, origin: tuple[float, float] | None = None) -> Path:
     """One alert event: map (NM from aircraft_a at the alert's start) above PC against time (pc: the
-    samples the alert events were found in; step_s: their step, default the smallest in the pair's)."""
+    samples the alert events were found in; step_s: their step, default the smallest in the pair's;
+    horizons and origin: the predictions' horizons and ``_origin``, default from these frames)."""
     a, b, start = alert["aircraft_a"], alert["aircraft_b"], alert["start"]
-    horizons = sorted(predictions["horizon_s"].unique())
-    t0 = start - pd.Timedelta(seconds=BEFORE_S)
-    t1 = max(alert["end"], start) + pd.Timedelta(seconds=float(max(horizons)))
+    horizons = sorted(predictions["horizon_s"].unique()) if horizons is None else horizons
+    t0, t1 = _window(alert, horizons)
     fig = new_figure(7.5, 8.8, dpi=dpi)
     ax, ax_pc = fig.subplots(2, 1, height_ratios=(2.4, 1.0))
-    at = tracks[(tracks["aircraft_id"] == a) & (tracks["time"] == start)]
-    lat0, lon0 = (float(at["latitude"].iloc[0]), float(at["longitude"].iloc[0])) if len(at) else (
-        float(tracks["latitude"].median()), float(tracks["longitude"].median()))
+    lat0, lon0 = _origin(alert, tracks) if origin is None else origin
     for key, ident in (("a", a), ("b", b)):
         color = COLORS[key]
         tr = tracks[(tracks["aircraft_id"] == ident) & (tracks["time"] >= t0) & (tracks["time"] <= t1)]
@@ -166,4 +219,4 @@ def alert_figure(alert: pd.Series, tracks: pd.DataFrame, predictions: pd.DataFra
     ax_pc.set_ylabel("probability of conflict")
     ax_pc.grid(True, lw=0.3)
     ax_pc.legend(fontsize=7, loc="upper left")
-    return save_png(fig, path)
+    return save_png(fig, path, compress_level=FIGURE_PNG_COMPRESS_LEVEL)

@@ -11,14 +11,13 @@ import numpy as np
 import pandas as pd
 from matplotlib import patheffects
 from matplotlib.axes import Axes
-from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 from matplotlib.text import Text
 
 from msdc.pipeline.correlate.correlation import peak_lag, pearson_max_lag, pearson_search_limit
 from msdc.pipeline.correlate.results import CorrelationRun, WindowResult
-from msdc.pipeline.report.files import named
+from msdc.pipeline.report.canvas import new_figure, save_png  # noqa: F401 - importable here too
 from msdc.pipeline.report.summary import printable, slot_seconds, window_label
 
 RADAR_COLOR = "#d62728"
@@ -38,24 +37,6 @@ MAX_MARKED_SLOTS = 20_000  # past this many slots the map shows lines only: mark
 # the map's PNG (1300 x 975) at zlib level 1: the same pixels as level 6 in 0.05 s instead of 0.08 (the 3 h
 # run's critical path), 5 % more bytes
 TRACK_PNG_COMPRESS_LEVEL = 1
-
-
-def new_figure(width: float, height: float, dpi: int = 130) -> Figure:
-    """A white, constrained-layout Figure on its own Agg canvas (no pyplot state)."""
-    fig = Figure(figsize=(width, height), dpi=dpi, layout="constrained", facecolor="white")
-    FigureCanvasAgg(fig)
-    return fig
-
-
-def save_png(fig: Figure, path: str | os.PathLike[str], compress_level: int | None = None) -> Path:
-    """Write the figure as PNG, creating the folder; returns the path. ``compress_level`` (zlib, 0-9; None:
-    Pillow's 6) trades file size for time, never pixels."""
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    with named(path):
-        fig.savefig(path, format="png", facecolor="white",
-                    pil_kwargs=None if compress_level is None else {"compress_level": compress_level})
-    return path
 
 
 def _text(value: object) -> str:

@@ -7,6 +7,7 @@ from __future__ import annotations
 import itertools
 import math
 import re
+from collections.abc import Iterator
 from pathlib import Path
 
 import matplotlib.dates as mdates
@@ -16,8 +17,9 @@ from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 from matplotlib.patches import Ellipse, Rectangle
 
-from msdc.pipeline.report.figures import new_figure, save_png
-from msdc.pipeline.track.tracker import MISSED_UPDATE_FACTOR, coasted_time
+from msdc.pipeline.model.coasting import MISSED_UPDATE_FACTOR, coasted_time
+from msdc.pipeline.report.canvas import FIGURE_PNG_COMPRESS_LEVEL, new_figure, save_png
+from msdc.pipeline.report.figure_pool import FigureTask, render
 
 _SENSOR_COLORS = ("#d62728", "#1f77b4", "#9467bd", "#8c564b", "#e377c2", "#17becf")
 ADSB_COLOR = "#e6b800"
@@ -103,7 +105,7 @@ def _draw_reports(ax: Axes, reports: pd.DataFrame, lat0: float, lon0: float, *, 
 
 def coasting(tracks: pd.DataFrame) -> np.ndarray:
     """The rows drawn as coasted: more than MISSED_UPDATE_FACTOR expected update intervals after the last
-    update (``age_s``; the interval that of the slowest sensor, pipeline.track.tracker.coasted_time, as the
+    update (``age_s``; the interval that of the slowest sensor, pipeline.model.coasting.coasted_time, as the
     summary's coasted_s counts it). On a 1 s grid most rows fall between two reports (``coasted``: no
     report at that time), and dashing them drew every reported stretch as coasted; without ``age_s``
     (a table of other origin) the ``coasted`` flags."""
@@ -256,25 +258,46 @@ def aircraft_figure(tracks: pd.DataFrame, reports: pd.DataFrame, path: str | Pat
     are left out)."""
     fig = track_figure(tracks, reports, title, end)
     fig.set_dpi(dpi)
-    return save_png(fig, path)
+    return save_png(fig, path, compress_level=FIGURE_PNG_COMPRESS_LEVEL)
 def _safe(name: str) -> str:
     return re.sub(r"[^A-Za-z0-9_.-]+", "_", name).strip("_") or "aircraft"
 
 
-def track_figures(result, directory: str | Path) -> dict[str, Path]:
-    """One PNG per aircraft of a track job's result (``track_<callsign or id>.png``) in directory."""
-    d = Path(directory)
-    out: dict[str, Path] = {}
-    tracks, meas = result.tracks, result.measurements
-    end = recording_end(result)
-    for ident, g in tracks.groupby("aircraft_id", sort=True, observed=True):
+def figure_names(tracks: pd.DataFrame) -> dict[object, tuple[str, str]]:
+    """Per aircraft id, in drawing order (the ids sorted): its figure's file name
+    (``track_<callsign>_<id>.png`` or ``track_<id>.png``) and title."""
+    names = {}
+    for ident, g in tracks[["aircraft_id", "callsign"]].groupby("aircraft_id", sort=True, observed=True):
         cs = str(g["callsign"].iloc[0] or "")
-        title = f"{cs} ({ident})" if cs else str(ident)
-        reports = meas[(meas["aircraft_id"] == ident).to_numpy(bool)]
-        name = _safe(f"{cs}_{ident}" if cs else str(ident))
-        out[str(ident)] = aircraft_figure(g.reset_index(drop=True), reports, d / f"track_{name}.png", title,
-                                          end=end)
-    return out
+        names[ident] = (f"track_{_safe(f'{cs}_{ident}' if cs else str(ident))}.png",
+                        f"{cs} ({ident})" if cs else str(ident))
+    return names
+
+
+def figure_tasks(result, directory: str | Path, chosen: list[object]) -> Iterator[FigureTask]:
+    """One task per chosen aircraft id (figure_names' keys), made when the pool takes it: that aircraft's
+    track rows and reports only."""
+    d = Path(directory)
+    names = figure_names(result.tracks)
+    end = recording_end(result)
+    tracks = result.tracks.groupby("aircraft_id", sort=True, observed=True)
+    meas = result.measurements
+    reports = meas.groupby("aircraft_id", sort=False, observed=True).indices
+    for ident in chosen:
+        name, title = names[ident]
+        rows = reports.get(ident)
+        mine = meas.iloc[rows] if rows is not None else meas.iloc[:0]
+        yield FigureTask(name, aircraft_figure, {
+            "tracks": tracks.get_group(ident).reset_index(drop=True), "reports": mine, "path": d / name,
+            "title": title, "end": end})
+
+
+def track_figures(result, directory: str | Path, workers: int | None = 1) -> dict[str, Path]:
+    """One PNG per aircraft of a track job's result (``track_<callsign or id>.png``) in directory, drawn on
+    ``workers`` processes (None: every core)."""
+    names = figure_names(result.tracks)
+    paths = render(figure_tasks(result, directory, list(names)), len(names), workers=workers)
+    return {str(ident): path for ident, path in zip(names, paths, strict=True)}
 
 
 def recording_end(result) -> pd.Timestamp | None:

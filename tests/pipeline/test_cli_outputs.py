@@ -77,9 +77,12 @@ def test_a_write_failing_leaves_the_previous_outputs_and_other_files_as_they_wer
     import pandas as pd
 
     from msdc.pipeline.cli import main
+    from msdc.pipeline.report import figure_pool
 
     before = _previous_run(job, tmp_path)
     meanwhile = tmp_path / "made_meanwhile.txt"
+    # the per-alert figures are drawn here, not on the figure workers the patch would not reach
+    monkeypatch.setattr(figure_pool, "cores", lambda: 1)
 
     def disk_full(*args, **kwargs):
         meanwhile.write_bytes(b"another program's file, made during the run\n")

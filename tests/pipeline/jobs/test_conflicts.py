@@ -218,16 +218,18 @@ def test_failed_run_after_decoding_writes_nothing(tmp_path, capsys):
 
 def test_failure_while_writing_figures_leaves_nothing(crossing, tmp_path, monkeypatch, capsys):
     import msdc.pipeline.report.conflict_figures as figures
+    from msdc.pipeline.report import figure_pool
 
     real, calls = figures.alert_figure, []
 
-    def second_fails(*args, **kwargs):
-        calls.append(args[-1])
+    def second_fails(**kwargs):
+        calls.append(kwargs["path"])
         if len(calls) == 2:
-            raise OSError(28, "No space left on device", str(args[-1]))
-        return real(*args, **kwargs)
+            raise OSError(28, "No space left on device", str(kwargs["path"]))
+        return real(**kwargs)
 
     monkeypatch.setattr(figures, "alert_figure", second_fails)
+    monkeypatch.setattr(figure_pool, "cores", lambda: 1)  # the patch reaches this process only: drawn here
     d = crossing
     code = main(["conflicts", str(d / "r.ast"), str(d / "a.ast"), "--sensors", str(d / "s.toml"),
                  "--date", "2019-03-01", "--step", "5", "-o", str(tmp_path / "c.xlsx"),
@@ -236,6 +238,29 @@ def test_failure_while_writing_figures_leaves_nothing(crossing, tmp_path, monkey
     assert code == 1 and "No space left on device" in err and "Traceback" not in err
     assert len(calls) == 2 and list(tmp_path.iterdir()) == []
 
+
+
+def test_an_alert_figure_from_its_cut_data_is_the_one_from_the_whole_frames(crossing, tmp_path):
+    # what a worker gets (AlertData: the pair's rows in the figure's window) draws the very pixels that
+    # alert_figure draws from the job's whole frames
+    from PIL import Image
+
+    from msdc.pipeline.report.conflict_figures import AlertData, alert_figure
+
+    d = crossing
+    options = ConflictOptions(inputs=(str(d / "r.ast"), str(d / "a.ast")), sensors=str(d / "s.toml"),
+                              date=dt.date(2019, 3, 1), output=str(tmp_path / "c.csv"), step_s=5.0)
+    result = conflicts.conflict_job(options)
+    assert len(result.alerts)
+    alert = result.alerts.iloc[-1]
+    whole = alert_figure(alert, result.tracks, result.predictions, result.pc, options.threshold,
+                         tmp_path / "whole.png", step_s=5.0)
+    data = AlertData(result.tracks, result.predictions, result.pc)(alert)
+    assert len(data["tracks"]) < len(result.tracks)  # the figure's window only
+    assert set(data["tracks"]["aircraft_id"]) == {"710001", "710002"}
+    cut = alert_figure(**data, threshold=options.threshold, path=tmp_path / "cut.png", step_s=5.0)
+    with Image.open(whole) as a, Image.open(cut) as b:
+        assert a.size == b.size and a.tobytes() == b.tobytes()
 
 
 def test_no_alert_makes_no_figures_folder(tmp_path, capsys):

@@ -34,7 +34,8 @@ ROOT = Path(__file__).resolve().parents[3]
 READING = {"--edition": "editions", "--date": "date", "--format": "format"}
 SELECTION = {"--sensors": "sensors", "--callsign": "callsign", "--address": "address",
              "--all": "all_aircraft"}
-TRACKING = {"--figures": "figures", "--step": "step_s", "--max-coast": "max_coast_s", "--tpm": "tpm",
+TRACKING = {"--figures": "figures", "--figures-limit": "figures_limit", "--figures-only": "figures_only",
+            "--step": "step_s", "--max-coast": "max_coast_s", "--tpm": "tpm",
             "--sources": "sources", "--noise": "noise"}
 
 # every option of each command: flag -> the options field it fills ("INPUT": the positional argument)
