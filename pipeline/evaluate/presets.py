@@ -189,7 +189,10 @@ def load_preset(name_or_path: str | Path) -> Preset:
     path = Path(name)
     if path.suffix == ".toml" or path.exists():
         if not path.is_file():
-            raise ValueError(f"preset file {path}: no such file")
+            why = "not a file" if path.exists() else "no such file"
+            if path.stem in files:
+                why += f" (the shipped preset is named {path.stem!r}, without .toml)"
+            raise ValueError(f"preset file {path}: {why}")
         try:
             text = path.read_text(encoding="utf-8")
         except (OSError, UnicodeDecodeError) as exc:

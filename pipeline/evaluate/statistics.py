@@ -4,6 +4,7 @@ statistics, and the three-valued verdict (pass / fail / inconclusive) of an inte
 from __future__ import annotations
 
 import math
+import numbers
 import re
 from dataclasses import dataclass
 
@@ -50,7 +51,7 @@ class Verdict:
 
 def _check_confidence(confidence: float) -> float:
     """The two-sided tail probability alpha of a confidence level strictly between 0 and 1."""
-    if not isinstance(confidence, int | float) or not 0.0 < float(confidence) < 1.0:
+    if not isinstance(confidence, numbers.Real) or not 0.0 < float(confidence) < 1.0:
         raise ValueError(f"confidence must be a number strictly between 0 and 1, got {confidence!r}")
     return 1.0 - float(confidence)
 
@@ -77,6 +78,39 @@ def proportion(successes, trials, confidence: float = 0.95) -> Proportion:
     if value.ndim == 0:
         return Proportion(float(value), float(low), float(high), int(n))
     return Proportion(value, low, high, n.astype(np.int64))
+
+
+@dataclass(frozen=True)
+class Rate:
+    """Events per unit of exposure (e.g. false reports per antenna scan) with its exact Poisson interval."""
+
+    value: np.ndarray | float
+    ci_low: np.ndarray | float
+    ci_high: np.ndarray | float
+    n: np.ndarray | int
+
+
+def poisson_rate(events, exposure, confidence: float = 0.95) -> Rate:
+    """Rate events/exposure with the exact (Garwood) Poisson interval from chi-square quantiles: lower end
+    exactly 0 at no events; an exposure of 0 gives NaN. For counts such as false reports per scan, where
+    the events are many independent rare ones. Vectorised over arrays."""
+    alpha = _check_confidence(confidence)
+    k = np.asarray(events)
+    t = np.asarray(exposure, dtype=float)
+    if k.dtype.kind not in "iuf" or not np.all(np.isfinite(k)) or np.any(k < 0) or np.any(k != np.floor(k)):
+        raise ValueError(f"events must be whole numbers >= 0, got {k!r}")
+    if not np.all(np.isfinite(t)) or np.any(t < 0):
+        raise ValueError(f"exposure must be finite and >= 0, got {t!r}")
+    k, t = np.broadcast_arrays(k.astype(float), t)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        safe = np.where(t > 0, t, 1.0)
+        value = np.where(t > 0, k / safe, np.nan)
+        low = np.where(k > 0, stats.chi2.ppf(alpha / 2, 2 * np.maximum(k, 1)) / 2, 0.0) / safe
+        high = stats.chi2.ppf(1 - alpha / 2, 2 * k + 2) / 2 / safe
+    low, high = np.where(t > 0, low, np.nan), np.where(t > 0, high, np.nan)
+    if value.ndim == 0:
+        return Rate(float(value), float(low), float(high), int(k))
+    return Rate(value, low, high, k.astype(np.int64))
 
 
 def _percentile_level(statistic: str) -> float | None:
@@ -177,7 +211,7 @@ def verdict(ci_low: float, ci_high: float, threshold: float, direction: str, n: 
     otherwise, and also when the interval is undefined or n is below the preset's minimum sample."""
     if direction not in DIRECTIONS:
         raise ValueError(f"direction must be one of {', '.join(DIRECTIONS)}, got {direction!r}")
-    if not isinstance(threshold, int | float) or not math.isfinite(threshold):
+    if not isinstance(threshold, numbers.Real) or isinstance(threshold, bool) or not math.isfinite(threshold):
         raise ValueError(f"threshold must be a finite number, got {threshold!r}")
     if ci_low is None or ci_high is None or math.isnan(ci_low) or math.isnan(ci_high):
         return Verdict("inconclusive", "interval undefined (no sample, or one aircraft)")

@@ -268,6 +268,10 @@ def test_unknown_preset_name_and_missing_file(tmp_path):
         load_preset("ed117")
     with pytest.raises(ValueError, match=r"preset file .*nothere.toml: no such file"):
         load_preset(tmp_path / "nothere.toml")
+    with pytest.raises(ValueError, match=r"ed116.toml: no such file \(the shipped preset is named 'ed116'"):
+        load_preset("ed116.toml")
+    with pytest.raises(ValueError, match=r"preset file .*: not a file"):
+        load_preset(tmp_path)
 
 
 def test_the_docs_show_the_shipped_presets_and_ids():

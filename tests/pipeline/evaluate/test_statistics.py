@@ -10,7 +10,13 @@ import numpy as np
 import pytest
 from scipy import stats
 
-from msdc.pipeline.evaluate.statistics import clustered_interval, magnitude_interval, proportion, verdict
+from msdc.pipeline.evaluate.statistics import (
+    clustered_interval,
+    magnitude_interval,
+    poisson_rate,
+    proportion,
+    verdict,
+)
 
 
 def _bisect(f, lo: float, hi: float) -> float:
@@ -59,6 +65,19 @@ def test_clopper_pearson_other_confidence_against_bisection():
     assert (got.ci_low, got.ci_high) == pytest.approx((low, high), rel=1e-9)
 
 
+@pytest.mark.parametrize("n", [20, 100, 1000])
+@pytest.mark.parametrize("p", [0.5, 0.9, 0.97, 0.999])
+def test_clopper_pearson_never_covers_less_than_nominal(n, p):
+    """Exact coverage, summed from the binomial law over the k whose interval holds p: at least 95 % for
+    every p (the interval's defining property), and not absurdly conservative where n p (1 - p) is large."""
+    k = np.arange(n + 1)
+    got = proportion(k, np.full(n + 1, n))
+    coverage = stats.binom.pmf(k, n, p)[(got.ci_low <= p) & (p <= got.ci_high)].sum()
+    assert coverage >= 0.95 - 1e-12
+    if n * p * (1 - p) > 20:
+        assert coverage < 0.97
+
+
 def test_proportion_is_vectorised_and_zero_trials_is_nan():
     got = proportion(np.array([0, 95, 3, 0]), np.array([10, 100, 7, 0]))
     expected = [_clopper_pearson_by_bisection(k, n) for k, n in ((0, 10), (95, 100), (3, 7))]
@@ -74,6 +93,25 @@ def test_proportion_is_vectorised_and_zero_trials_is_nan():
 def test_proportion_refuses_bad_input(k, n, confidence, message):
     with pytest.raises(ValueError, match=message):
         proportion(k, n, confidence)
+
+
+def test_poisson_rate_published_and_by_bisection():
+    """0 events: the 95 % upper limit 3.689 (published tables of exact Poisson limits, e.g. Garwood 1936);
+    others by bisection on the Poisson CDF: P(X >= k | low) = 2.5 %, P(X <= k | high) = 2.5 %."""
+    zero = poisson_rate(0, 1.0)
+    assert zero.ci_low == 0.0 and zero.ci_high == pytest.approx(3.689, abs=5e-4)
+    for k, scans in ((1, 1.0), (7, 10.0), (1500, 100.0)):
+        low = _bisect(lambda m, k=k: stats.poisson.sf(k - 1, m) - 0.025, 0.0, 10.0 * k + 10)
+        high = _bisect(lambda m, k=k: stats.poisson.cdf(k, m) - 0.025, 0.0, 10.0 * k + 10)
+        got = poisson_rate(k, scans)
+        assert got.value == k / scans
+        assert (got.ci_low, got.ci_high) == pytest.approx((low / scans, high / scans), rel=1e-9)
+    many = poisson_rate(np.array([0, 1500]), np.array([0.0, 100.0]))
+    assert np.isnan(many.value[0]) and many.ci_high[1] == pytest.approx(poisson_rate(1500, 100.0).ci_high)
+    with pytest.raises(ValueError, match="events"):
+        poisson_rate(-1, 3.0)
+    with pytest.raises(ValueError, match="exposure"):
+        poisson_rate(1, -3.0)
 
 
 def test_one_cluster_and_empty_input():
@@ -207,6 +245,7 @@ def test_verdict_minimum_sample_and_undefined_interval():
     assert "misses" in verdict(0.5, 0.6, 0.97, ">", n=100, min_sample=50_000).reason
     assert verdict(0.98, 0.99, 0.97, ">", n=50_000, min_sample=50_000).verdict == "pass"
     assert verdict(math.nan, math.nan, 0.97, ">").verdict == "inconclusive"
+    assert verdict(np.float64(0.98), np.float64(0.99), np.float64(0.97), ">").verdict == "pass"
 
 
 def test_a_small_perfect_sample_is_not_a_pass():
