@@ -125,11 +125,14 @@ def _percentile_level(statistic: str) -> float | None:
 
 
 def _weighted_inverted_cdf(sorted_values: np.ndarray, weights: np.ndarray, q: float) -> np.ndarray:
-    """Per row of integer weights, the smallest sorted value whose cumulative weight share reaches q: the
-    inverted-CDF percentile of the sample each row of weights describes (numpy's method='inverted_cdf')."""
-    cum = np.cumsum(weights, axis=1)
-    target = q * cum[:, -1:]
-    index = (cum < target - 1e-9 * cum[:, -1:]).sum(axis=1)
+    """Per row of whole-number weights, the smallest sorted value whose cumulative weight reaches the share
+    q of the row's total: the inverted-CDF percentile of the sample the row describes (numpy's
+    method='inverted_cdf'), in exact integer sums."""
+    cum = np.cumsum(weights, axis=1, dtype=np.int64 if weights.dtype == np.int64 else np.int32)
+    total = cum[:, -1].astype(float)
+    target = np.ceil(q * total - 1e-9 * total)  # q * total within rounding of a whole number is that number
+    index = np.fromiter((np.searchsorted(row, t) for row, t in zip(cum, target, strict=True)), np.int64,
+                        count=cum.shape[0])
     return sorted_values[np.minimum(index, sorted_values.size - 1)]
 
 
@@ -171,20 +174,30 @@ def clustered_interval(values, clusters, statistic: str, confidence: float = 0.9
         return ClusteredInterval(statistic, value, math.nan, math.nan, int(x.size), 1,
                                  "one aircraft: no interval over aircraft")
     rng = np.random.default_rng(seed)
-    draws = rng.multinomial(n_clusters, np.full(n_clusters, 1.0 / n_clusters), size=n_boot).astype(float)
-    if level is None:
-        counts = draws @ np.bincount(cluster_of, minlength=n_clusters).astype(float)
-        mean = (draws @ np.bincount(cluster_of, weights=x, minlength=n_clusters)) / counts
-        square = (draws @ np.bincount(cluster_of, weights=x**2, minlength=n_clusters)) / counts
-        replicates = {"mean": mean, "rms": np.sqrt(square),
-                      "sd": np.sqrt(np.maximum(square - mean**2, 0.0))}[statistic]
-    else:
-        order = np.argsort(x, kind="stable")
-        sorted_x, sorted_cluster = x[order], cluster_of[order]
-        rows = max(1, _CHUNK_CELLS // x.size)
-        replicates = np.concatenate([
-            _weighted_inverted_cdf(sorted_x, draws[start:start + rows][:, sorted_cluster], level / 100.0)
-            for start in range(0, n_boot, rows)])
+    counts = np.bincount(cluster_of, minlength=n_clusters).astype(float)
+    sums = np.bincount(cluster_of, weights=x, minlength=n_clusters)
+    squares = np.bincount(cluster_of, weights=x**2, minlength=n_clusters)
+    order = np.argsort(x, kind="stable")
+    sorted_x, sorted_cluster = x[order], cluster_of[order]
+    # replicates in chunks, so the draws (replicates x aircraft) and weights (x reports) stay bounded
+    rows = max(1, _CHUNK_CELLS // (n_clusters + (x.size if level is not None else 0)))
+    # a replicate's total weight is at most every draw on the largest aircraft
+    wide = np.int32 if n_clusters * counts.max() < 2**31 - 1 else np.int64
+    replicates = []
+    for start in range(0, n_boot, rows):
+        # how many times each aircraft is drawn in each replicate
+        draws = rng.multinomial(n_clusters, np.full(n_clusters, 1.0 / n_clusters),
+                                size=min(rows, n_boot - start))
+        if level is not None:
+            weights = draws.astype(wide)[:, sorted_cluster]
+            replicates.append(_weighted_inverted_cdf(sorted_x, weights, level / 100.0))
+            continue
+        draws = draws.astype(float)
+        n = draws @ counts
+        mean, square = (draws @ sums) / n, (draws @ squares) / n
+        replicates.append({"mean": mean, "rms": np.sqrt(square),
+                           "sd": np.sqrt(np.maximum(square - mean**2, 0.0))}[statistic])
+    replicates = np.concatenate(replicates)
     low, high = np.quantile(replicates, [alpha / 2, 1 - alpha / 2])
     return ClusteredInterval(statistic, value, float(low), float(high), int(x.size), int(n_clusters))
 

@@ -11,6 +11,7 @@ import pytest
 from scipy import stats
 
 from msdc.pipeline.evaluate.statistics import (
+    _weighted_inverted_cdf,
     clustered_interval,
     magnitude_interval,
     poisson_rate,
@@ -134,6 +135,18 @@ def test_point_values_by_their_definitions():
     # inverted CDF: the smallest value with at least 95 % (19 of 20) at or below it
     assert clustered_interval(x, clusters, "p95").value == 19.0
     assert clustered_interval(x, clusters, "p99").value == 20.0
+
+
+@pytest.mark.parametrize("q", [0.5, 0.95, 0.99, 0.01, 1.0])
+def test_a_replicate_percentile_is_the_percentile_of_the_resampled_reports(q):
+    """Each replicate's percentile equals numpy's inverted-CDF percentile of the sample written out in full
+    (every report repeated as often as its aircraft was drawn)."""
+    rng = np.random.default_rng(5)
+    x = np.sort(rng.rayleigh(40.0, 120))
+    weights = rng.integers(0, 4, (30, x.size)).astype(np.int32)
+    weights[:, 0] += 1  # no empty replicate
+    expected = [np.percentile(np.repeat(x, w), 100 * q, method="inverted_cdf") for w in weights]
+    assert np.array_equal(_weighted_inverted_cdf(x, weights, q), expected)
 
 
 def test_reproducible_with_a_seed():
