@@ -14,6 +14,9 @@ from scipy import stats
 DIRECTIONS = (">=", ">", "<=", "<")
 VERDICTS = ("pass", "fail", "inconclusive")
 N_BOOT = 2000
+# below this many aircraft the bootstrap's 95 % intervals hold the truth clearly less often than 95 %
+# (benchmarks/evaluate_statistics.py: RMS 0.88-0.92 over 10-20 aircraft, tail percentiles far less)
+FEW_AIRCRAFT = 30
 _PERCENTILE = re.compile(r"p(\d{1,2}(?:\.\d+)?)")
 _CHUNK_CELLS = 4_000_000  # bootstrap replicates x reports held at once by the percentile bootstrap
 
@@ -153,7 +156,8 @@ def clustered_interval(values, clusters, statistic: str, confidence: float = 0.9
     percentile bootstrap interval over clusters. Whole aircraft are resampled with replacement, because
     the reports of one aircraft share its errors (transponder delay, its own bias, its geometry) and are
     not independent samples: resampling single reports gives intervals far too narrow. Reproducible for a
-    given seed; one cluster gives the value with a NaN interval, no values a NaN value (``reason`` says)."""
+    given seed; one cluster gives the value with a NaN interval, no values a NaN value, and fewer than
+    FEW_AIRCRAFT aircraft an interval marked as too narrow (``reason`` says which)."""
     alpha = _check_confidence(confidence)
     level = _percentile_level(statistic)
     if not isinstance(n_boot, int | np.integer) or n_boot < 100:
@@ -199,7 +203,9 @@ def clustered_interval(values, clusters, statistic: str, confidence: float = 0.9
                            "sd": np.sqrt(np.maximum(square - mean**2, 0.0))}[statistic])
     replicates = np.concatenate(replicates)
     low, high = np.quantile(replicates, [alpha / 2, 1 - alpha / 2])
-    return ClusteredInterval(statistic, value, float(low), float(high), int(x.size), int(n_clusters))
+    few = (f"{n_clusters} aircraft: below {FEW_AIRCRAFT} the interval over aircraft is too narrow "
+           "(covers clearly less than 95 %)") if n_clusters < FEW_AIRCRAFT else ""
+    return ClusteredInterval(statistic, value, float(low), float(high), int(x.size), int(n_clusters), few)
 
 
 def magnitude_interval(ci_low: float, ci_high: float) -> tuple[float, float]:

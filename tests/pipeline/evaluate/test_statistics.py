@@ -125,6 +125,13 @@ def test_one_cluster_and_empty_input():
     assert math.isnan(empty.value) and empty.n == 0 and empty.reason == "no reports"
 
 
+def test_an_interval_over_few_aircraft_is_marked():
+    rng = np.random.default_rng(9)
+    x = rng.rayleigh(30.0, 600)
+    assert "29 aircraft" in clustered_interval(x, np.arange(600) % 29, "rms").reason
+    assert clustered_interval(x, np.arange(600) % 30, "rms").reason == ""
+
+
 def test_point_values_by_their_definitions():
     x = np.arange(1.0, 21.0)  # 1..20
     clusters = np.repeat(np.arange(4), 5)
