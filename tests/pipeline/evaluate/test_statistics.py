@@ -208,8 +208,9 @@ def _coverage(statistic: str, truth: float, runs: int, sb: float, sn: float, per
 
 
 # Truth from the Rayleigh law, sigma = hypot(15, 25): RMS = sigma sqrt(2), p95 = sigma sqrt(-2 ln 0.05).
-# Tolerance: nominal 95 %; 200 runs have a binomial SD of 1.5 %; the percentile bootstrap over 40 aircraft
-# covers 1-3 % below nominal (benchmarks/evaluate_statistics.py, 1000 runs): 95 - 3 - 2 x 1.5 = 89 %.
+# Tolerance: over 40 aircraft with this clustering the percentile bootstrap covers below nominal: 0.928 (RMS)
+# and 0.905 (p95) in 1000 runs (benchmarks/evaluate_statistics.py); 200 runs add a binomial SD of 2.1 %,
+# so 0.905 - 2 x 0.021 = 0.86 at the least; nominal 95 % + 2 SD (1.5 %) = 0.98 at the most.
 SIGMA_M = math.hypot(15.0, 25.0)
 
 
@@ -217,7 +218,7 @@ SIGMA_M = math.hypot(15.0, 25.0)
                                               ("p95", SIGMA_M * math.sqrt(-2 * math.log(0.05)))])
 def test_cluster_bootstrap_coverage(statistic, truth):
     coverage = _coverage(statistic, truth, runs=200, sb=15.0, sn=25.0, per_report=False, n_boot=400)
-    assert 0.89 <= coverage <= 0.99, coverage
+    assert 0.86 <= coverage <= 0.98, coverage
 
 
 def test_resampling_single_reports_would_not_cover():
