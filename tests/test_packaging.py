@@ -34,6 +34,9 @@ def test_the_wheel_installs_only_msdc(msdc_wheel):
     assert {"msdc/__init__.py", "msdc/asterix/kernel.py", "msdc/pipeline/cli.py",
             "msdc/asterix/tables/cat048_1.31.json"} <= set(names)
     assert not any(n.startswith(("msdc/fixtures", "msdc/tests", "msdc/benchmarks")) for n in names)
+    shipped = (ROOT / "pipeline" / "evaluate" / "presets").glob("*.toml")
+    presets = {f"msdc/pipeline/evaluate/presets/{p.name}" for p in shipped}
+    assert presets and presets <= set(names)  # the evaluation presets ship as package data
 
 
 def test_simulator_comes_from_the_checkout():

@@ -10,7 +10,7 @@ from pathlib import Path
 import pytest
 
 ROOT = Path(__file__).resolve().parents[2]
-AREAS = ("correlate", "quality", "report", "track", "conflict")
+AREAS = ("correlate", "quality", "report", "track", "conflict", "evaluate")
 FRONT = ("msdc.pipeline.jobs", "msdc.pipeline.cli")
 
 

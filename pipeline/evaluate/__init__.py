@@ -1,0 +1,2 @@
+"""Evaluation against the surveillance standards: statistics that decide (intervals, verdicts) and the
+standards' requirements as data (presets)."""

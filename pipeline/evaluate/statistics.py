@@ -1,0 +1,248 @@
+"""Statistics that decide: exact binomial intervals for proportions, a bootstrap over aircraft for error
+statistics, and the three-valued verdict (pass / fail / inconclusive) of an interval against a threshold."""
+
+from __future__ import annotations
+
+import math
+import numbers
+import re
+from dataclasses import dataclass
+
+import numpy as np
+from scipy import stats
+
+DIRECTIONS = (">=", ">", "<=", "<")
+VERDICTS = ("pass", "fail", "inconclusive")
+N_BOOT = 2000
+# below this many aircraft the bootstrap's 95 % intervals hold the truth clearly less often than 95 %
+# (benchmarks/evaluate_statistics.py: RMS 0.88-0.92 over 10-20 aircraft, tail percentiles far less)
+FEW_AIRCRAFT = 30
+_PERCENTILE = re.compile(r"p(\d{1,2}(?:\.\d+)?)")
+_CHUNK_CELLS = 4_000_000  # bootstrap replicates x reports held at once by the percentile bootstrap
+
+
+@dataclass(frozen=True)
+class Proportion:
+    """A proportion (successes / trials) with its exact two-sided interval; arrays when vectorised."""
+
+    value: np.ndarray | float
+    ci_low: np.ndarray | float
+    ci_high: np.ndarray | float
+    n: np.ndarray | int
+
+
+@dataclass(frozen=True)
+class ClusteredInterval:
+    """An error statistic over reports, its bootstrap interval over clusters (aircraft), and the counts."""
+
+    statistic: str
+    value: float
+    ci_low: float
+    ci_high: float
+    n: int
+    n_clusters: int
+    reason: str = ""
+
+
+@dataclass(frozen=True)
+class Verdict:
+    """The verdict of an interval against a threshold, and why when it is not pass or fail outright."""
+
+    verdict: str
+    reason: str = ""
+
+
+def _check_confidence(confidence: float) -> float:
+    """The two-sided tail probability alpha of a confidence level strictly between 0 and 1."""
+    if not isinstance(confidence, numbers.Real) or not 0.0 < float(confidence) < 1.0:
+        raise ValueError(f"confidence must be a number strictly between 0 and 1, got {confidence!r}")
+    return 1.0 - float(confidence)
+
+
+def proportion(successes, trials, confidence: float = 0.95) -> Proportion:
+    """Proportion successes/trials with its Clopper-Pearson interval (beta quantiles; lower bound exactly 0
+    at 0 successes, upper exactly 1 at all successes); trials of 0 give NaN. Vectorised over arrays."""
+    alpha = _check_confidence(confidence)
+    k = np.asarray(successes)
+    n = np.asarray(trials)
+    for name, arr in (("successes", k), ("trials", n)):
+        if arr.dtype.kind not in "iuf" or not np.all(np.isfinite(arr)) or np.any(arr < 0) \
+                or np.any(arr != np.floor(arr)):
+            raise ValueError(f"{name} must be whole numbers >= 0, got {arr!r}")
+    if np.any(k > n):
+        raise ValueError(f"successes must not exceed trials, got {k!r} of {n!r}")
+    k, n = np.broadcast_arrays(k.astype(float), n.astype(float))
+    with np.errstate(divide="ignore", invalid="ignore"):
+        value = np.where(n > 0, k / np.where(n > 0, n, 1.0), np.nan)
+        low = np.where(k > 0, stats.beta.ppf(alpha / 2, np.maximum(k, 1), n - k + 1), 0.0)
+        high = np.where(k < n, stats.beta.ppf(1 - alpha / 2, k + 1, np.maximum(n - k, 1)), 1.0)
+    low = np.where(n > 0, low, np.nan)
+    high = np.where(n > 0, high, np.nan)
+    if value.ndim == 0:
+        return Proportion(float(value), float(low), float(high), int(n))
+    return Proportion(value, low, high, n.astype(np.int64))
+
+
+@dataclass(frozen=True)
+class Rate:
+    """Events per unit of exposure (e.g. false reports per antenna scan) with its exact Poisson interval."""
+
+    value: np.ndarray | float
+    ci_low: np.ndarray | float
+    ci_high: np.ndarray | float
+    n: np.ndarray | int
+
+
+def poisson_rate(events, exposure, confidence: float = 0.95) -> Rate:
+    """Rate events/exposure with the exact (Garwood) Poisson interval from chi-square quantiles: lower end
+    exactly 0 at no events; an exposure of 0 gives NaN. For counts such as false reports per scan, where
+    the events are many independent rare ones. Vectorised over arrays."""
+    alpha = _check_confidence(confidence)
+    k = np.asarray(events)
+    t = np.asarray(exposure, dtype=float)
+    if k.dtype.kind not in "iuf" or not np.all(np.isfinite(k)) or np.any(k < 0) or np.any(k != np.floor(k)):
+        raise ValueError(f"events must be whole numbers >= 0, got {k!r}")
+    if not np.all(np.isfinite(t)) or np.any(t < 0):
+        raise ValueError(f"exposure must be finite and >= 0, got {t!r}")
+    k, t = np.broadcast_arrays(k.astype(float), t)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        safe = np.where(t > 0, t, 1.0)
+        value = np.where(t > 0, k / safe, np.nan)
+        low = np.where(k > 0, stats.chi2.ppf(alpha / 2, 2 * np.maximum(k, 1)) / 2, 0.0) / safe
+        high = stats.chi2.ppf(1 - alpha / 2, 2 * k + 2) / 2 / safe
+    low, high = np.where(t > 0, low, np.nan), np.where(t > 0, high, np.nan)
+    if value.ndim == 0:
+        return Rate(float(value), float(low), float(high), int(k))
+    return Rate(value, low, high, k.astype(np.int64))
+
+
+def _percentile_level(statistic: str) -> float | None:
+    """The percentile (0-100) a statistic name like 'p95' asks for; None for 'rms' and 'mean'."""
+    if statistic in ("rms", "mean", "sd"):
+        return None
+    match = _PERCENTILE.fullmatch(statistic)
+    if match is None or not 0.0 < float(match.group(1)) < 100.0:
+        raise ValueError(f"statistic must be 'rms', 'mean', 'sd' or a percentile such as 'p95', "
+                         f"got {statistic!r}")
+    return float(match.group(1))
+
+
+def _weighted_inverted_cdf(sorted_values: np.ndarray, weights: np.ndarray, q: float) -> np.ndarray:
+    """Per row of whole-number weights, the smallest sorted value whose cumulative weight reaches the share
+    q of the row's total: the inverted-CDF percentile of the sample the row describes (numpy's
+    method='inverted_cdf'), in exact integer sums."""
+    cum = np.cumsum(weights, axis=1, dtype=np.int64 if weights.dtype == np.int64 else np.int32)
+    total = cum[:, -1].astype(float)
+    target = np.ceil(q * total - 1e-9 * total)  # q * total within rounding of a whole number is that number
+    index = np.fromiter((np.searchsorted(row, t) for row, t in zip(cum, target, strict=True)), np.int64,
+                        count=cum.shape[0])
+    return sorted_values[np.minimum(index, sorted_values.size - 1)]
+
+
+def _point(values: np.ndarray, statistic: str, level: float | None) -> float:
+    """The statistic on the whole sample (percentiles by the inverted-CDF definition, as the bootstrap)."""
+    if statistic == "rms":
+        return float(np.sqrt(np.mean(values**2)))
+    if statistic == "mean":
+        return float(np.mean(values))
+    if statistic == "sd":
+        return float(np.std(values))
+    return float(np.percentile(values, level, method="inverted_cdf"))
+
+
+def clustered_interval(values, clusters, statistic: str, confidence: float = 0.95, n_boot: int = N_BOOT,
+                       seed: int = 0) -> ClusteredInterval:
+    """RMS, mean, SD (population form) or a percentile ('p95', 'p99') of per-report errors with a
+    percentile bootstrap interval over clusters. Whole aircraft are resampled with replacement, because
+    the reports of one aircraft share its errors (transponder delay, its own bias, its geometry) and are
+    not independent samples: resampling single reports gives intervals far too narrow. Reproducible for a
+    given seed; one cluster gives the value with a NaN interval, no values a NaN value, and fewer than
+    FEW_AIRCRAFT aircraft an interval marked as too narrow (``reason`` says which)."""
+    alpha = _check_confidence(confidence)
+    level = _percentile_level(statistic)
+    if not isinstance(n_boot, int | np.integer) or n_boot < 100:
+        raise ValueError(f"n_boot must be a whole number >= 100, got {n_boot!r}")
+    x = np.asarray(values, dtype=float).ravel()
+    groups = np.asarray(clusters).ravel()
+    if x.size != groups.size:
+        raise ValueError(f"values and clusters differ in length: {x.size} values, {groups.size} clusters")
+    if not np.all(np.isfinite(x)):
+        bad = int(np.sum(~np.isfinite(x)))
+        raise ValueError(f"values hold {bad} NaN or infinite errors: drop them first")
+    if x.size == 0:
+        return ClusteredInterval(statistic, math.nan, math.nan, math.nan, 0, 0, "no reports")
+    labels, cluster_of = np.unique(groups, return_inverse=True)
+    n_clusters = labels.size
+    value = _point(x, statistic, level)
+    if n_clusters < 2:
+        return ClusteredInterval(statistic, value, math.nan, math.nan, int(x.size), 1,
+                                 "one aircraft: no interval over aircraft")
+    rng = np.random.default_rng(seed)
+    counts = np.bincount(cluster_of, minlength=n_clusters).astype(float)
+    sums = np.bincount(cluster_of, weights=x, minlength=n_clusters)
+    squares = np.bincount(cluster_of, weights=x**2, minlength=n_clusters)
+    order = np.argsort(x, kind="stable")
+    sorted_x, sorted_cluster = x[order], cluster_of[order]
+    # replicates in chunks, so the draws (replicates x aircraft) and weights (x reports) stay bounded
+    rows = max(1, _CHUNK_CELLS // (n_clusters + (x.size if level is not None else 0)))
+    # a replicate's total weight is at most every draw on the largest aircraft
+    wide = np.int32 if n_clusters * counts.max() < 2**31 - 1 else np.int64
+    replicates = []
+    for start in range(0, n_boot, rows):
+        # how many times each aircraft is drawn in each replicate
+        draws = rng.multinomial(n_clusters, np.full(n_clusters, 1.0 / n_clusters),
+                                size=min(rows, n_boot - start))
+        if level is not None:
+            weights = draws.astype(wide)[:, sorted_cluster]
+            replicates.append(_weighted_inverted_cdf(sorted_x, weights, level / 100.0))
+            continue
+        draws = draws.astype(float)
+        n = draws @ counts
+        mean, square = (draws @ sums) / n, (draws @ squares) / n
+        replicates.append({"mean": mean, "rms": np.sqrt(square),
+                           "sd": np.sqrt(np.maximum(square - mean**2, 0.0))}[statistic])
+    replicates = np.concatenate(replicates)
+    low, high = np.quantile(replicates, [alpha / 2, 1 - alpha / 2])
+    few = (f"{n_clusters} aircraft: below {FEW_AIRCRAFT} the interval over aircraft is too narrow "
+           "(covers clearly less than 95 %)") if n_clusters < FEW_AIRCRAFT else ""
+    return ClusteredInterval(statistic, value, float(low), float(high), int(x.size), int(n_clusters), few)
+
+
+def magnitude_interval(ci_low: float, ci_high: float) -> tuple[float, float]:
+    """The interval of |x| when x lies in [ci_low, ci_high]: for a signed bias judged by its size."""
+    if math.isnan(ci_low) or math.isnan(ci_high):
+        return math.nan, math.nan
+    if ci_low > ci_high:
+        raise ValueError(f"interval bounds reversed: low {ci_low!r} > high {ci_high!r}")
+    if ci_low <= 0.0 <= ci_high:
+        return 0.0, max(-ci_low, ci_high)
+    return min(abs(ci_low), abs(ci_high)), max(abs(ci_low), abs(ci_high))
+
+
+def _meets(x: float, threshold: float, direction: str) -> bool:
+    """Whether the single value x meets the threshold in the given direction."""
+    return {">=": x >= threshold, ">": x > threshold, "<=": x <= threshold, "<": x < threshold}[direction]
+
+
+def verdict(ci_low: float, ci_high: float, threshold: float, direction: str, n: int | None = None,
+            min_sample: int | None = None) -> Verdict:
+    """'pass' when every value of the interval meets the threshold, 'fail' when none does, 'inconclusive'
+    otherwise, and also when the interval is undefined or n is below the preset's minimum sample."""
+    if direction not in DIRECTIONS:
+        raise ValueError(f"direction must be one of {', '.join(DIRECTIONS)}, got {direction!r}")
+    if not isinstance(threshold, numbers.Real) or isinstance(threshold, bool) or not math.isfinite(threshold):
+        raise ValueError(f"threshold must be a finite number, got {threshold!r}")
+    if ci_low is None or ci_high is None or math.isnan(ci_low) or math.isnan(ci_high):
+        return Verdict("inconclusive", "interval undefined (no sample, or one aircraft)")
+    if ci_low > ci_high:
+        raise ValueError(f"interval bounds reversed: low {ci_low!r} > high {ci_high!r}")
+    # the interval is convex, so its two ends decide for all its values
+    low_meets, high_meets = _meets(ci_low, threshold, direction), _meets(ci_high, threshold, direction)
+    outcome = "pass" if low_meets and high_meets else "fail" if not (low_meets or high_meets) else ""
+    if min_sample is not None and (n is None or n < min_sample):
+        said = {"pass": "meets", "fail": "misses", "": "straddles"}[outcome]
+        said = f"interval {said} the threshold"
+        return Verdict("inconclusive", f"n = {n} below the minimum sample {min_sample} ({said})")
+    if not outcome:
+        return Verdict("inconclusive", f"interval [{ci_low:.6g}, {ci_high:.6g}] straddles {threshold:g}")
+    return Verdict(outcome)

@@ -1,0 +1,290 @@
+"""Statistics that decide: Clopper-Pearson against published values and a bisection on the binomial
+CDF, the cluster bootstrap against closed forms and its coverage on simulated clustered errors (small seeded
+Monte Carlo; the full one is benchmarks/evaluate_statistics.py), and the verdict's truth table."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from scipy import stats
+
+from msdc.pipeline.evaluate.statistics import (
+    _weighted_inverted_cdf,
+    clustered_interval,
+    magnitude_interval,
+    poisson_rate,
+    proportion,
+    verdict,
+)
+
+
+def _bisect(f, lo: float, hi: float) -> float:
+    """The root of a monotone f on [lo, hi] by plain bisection (60 halvings: below 1e-15)."""
+    f_lo = f(lo)
+    for _ in range(60):
+        mid = (lo + hi) / 2
+        if (f(mid) > 0) == (f_lo > 0):
+            lo, f_lo = mid, f(mid)
+        else:
+            hi = mid
+    return (lo + hi) / 2
+
+
+def _clopper_pearson_by_bisection(k: int, n: int, alpha: float = 0.05) -> tuple[float, float]:
+    """The exact interval by its definition: P(X >= k | p_low) = alpha/2, P(X <= k | p_high) = alpha/2."""
+    low = 0.0 if k == 0 else _bisect(lambda p: stats.binom.sf(k - 1, n, p) - alpha / 2, 0.0, 1.0)
+    high = 1.0 if k == n else _bisect(lambda p: stats.binom.cdf(k, n, p) - alpha / 2, 0.0, 1.0)
+    return low, high
+
+
+# published: 0 of 10 and 95 of 100 (two-sided 95 %), e.g. Clopper & Pearson's tables / any exact-CI table
+@pytest.mark.parametrize("k, n, low, high", [(0, 10, 0.0, 0.3085), (95, 100, 0.8872, 0.9836),
+                                             (10, 10, 0.6915, 1.0)])
+def test_clopper_pearson_published_values(k, n, low, high):
+    got = proportion(k, n)
+    assert got.value == k / n and got.n == n
+    assert got.ci_low == pytest.approx(low, abs=5e-5) and got.ci_high == pytest.approx(high, abs=5e-5)
+
+
+def test_clopper_pearson_ends_are_exact():
+    assert proportion(0, 50).ci_low == 0.0 and proportion(50, 50).ci_high == 1.0
+
+
+@pytest.mark.parametrize("k, n", [(1, 10), (3, 7), (48_500, 50_000), (49_990, 50_000), (17, 1000)])
+def test_clopper_pearson_against_bisection_on_the_binomial_cdf(k, n):
+    low, high = _clopper_pearson_by_bisection(k, n)
+    got = proportion(k, n)
+    assert got.ci_low == pytest.approx(low, rel=1e-9, abs=1e-12)
+    assert got.ci_high == pytest.approx(high, rel=1e-9, abs=1e-12)
+
+
+def test_clopper_pearson_other_confidence_against_bisection():
+    low, high = _clopper_pearson_by_bisection(4, 20, alpha=0.10)
+    got = proportion(4, 20, confidence=0.90)
+    assert (got.ci_low, got.ci_high) == pytest.approx((low, high), rel=1e-9)
+
+
+@pytest.mark.parametrize("n", [20, 100, 1000])
+@pytest.mark.parametrize("p", [0.5, 0.9, 0.97, 0.999])
+def test_clopper_pearson_never_covers_less_than_nominal(n, p):
+    """Exact coverage, summed from the binomial law over the k whose interval holds p: at least 95 % for
+    every p (the interval's defining property), and not absurdly conservative where n p (1 - p) is large."""
+    k = np.arange(n + 1)
+    got = proportion(k, np.full(n + 1, n))
+    coverage = stats.binom.pmf(k, n, p)[(got.ci_low <= p) & (p <= got.ci_high)].sum()
+    assert coverage >= 0.95 - 1e-12
+    if n * p * (1 - p) > 20:
+        assert coverage < 0.97
+
+
+def test_proportion_is_vectorised_and_zero_trials_is_nan():
+    got = proportion(np.array([0, 95, 3, 0]), np.array([10, 100, 7, 0]))
+    expected = [_clopper_pearson_by_bisection(k, n) for k, n in ((0, 10), (95, 100), (3, 7))]
+    assert np.allclose(got.ci_low[:3], [e[0] for e in expected], rtol=1e-9, atol=1e-12)
+    assert np.allclose(got.ci_high[:3], [e[1] for e in expected], rtol=1e-9)
+    assert np.isnan(got.value[3]) and np.isnan(got.ci_low[3]) and np.isnan(got.ci_high[3])
+    assert list(got.n) == [10, 100, 7, 0]
+
+
+@pytest.mark.parametrize("k, n, confidence, message", [
+    (11, 10, 0.95, "must not exceed"), (-1, 10, 0.95, "successes"), (1.5, 10, 0.95, "whole numbers"),
+    (1, 10, 1.0, "confidence"), (1, float("nan"), 0.95, "trials")])
+def test_proportion_refuses_bad_input(k, n, confidence, message):
+    with pytest.raises(ValueError, match=message):
+        proportion(k, n, confidence)
+
+
+def test_poisson_rate_published_and_by_bisection():
+    """0 events: the 95 % upper limit 3.689 (published tables of exact Poisson limits, e.g. Garwood 1936);
+    others by bisection on the Poisson CDF: P(X >= k | low) = 2.5 %, P(X <= k | high) = 2.5 %."""
+    zero = poisson_rate(0, 1.0)
+    assert zero.ci_low == 0.0 and zero.ci_high == pytest.approx(3.689, abs=5e-4)
+    for k, scans in ((1, 1.0), (7, 10.0), (1500, 100.0)):
+        low = _bisect(lambda m, k=k: stats.poisson.sf(k - 1, m) - 0.025, 0.0, 10.0 * k + 10)
+        high = _bisect(lambda m, k=k: stats.poisson.cdf(k, m) - 0.025, 0.0, 10.0 * k + 10)
+        got = poisson_rate(k, scans)
+        assert got.value == k / scans
+        assert (got.ci_low, got.ci_high) == pytest.approx((low / scans, high / scans), rel=1e-9)
+    many = poisson_rate(np.array([0, 1500]), np.array([0.0, 100.0]))
+    assert np.isnan(many.value[0]) and many.ci_high[1] == pytest.approx(poisson_rate(1500, 100.0).ci_high)
+    with pytest.raises(ValueError, match="events"):
+        poisson_rate(-1, 3.0)
+    with pytest.raises(ValueError, match="exposure"):
+        poisson_rate(1, -3.0)
+
+
+def test_one_cluster_and_empty_input():
+    one = clustered_interval([1.0, 2.0, 3.0], ["A", "A", "A"], "rms")
+    assert one.value == pytest.approx(math.sqrt(14 / 3))
+    assert math.isnan(one.ci_low) and math.isnan(one.ci_high)
+    assert one.n == 3 and one.n_clusters == 1 and "one aircraft" in one.reason
+    assert verdict(one.ci_low, one.ci_high, 10.0, "<=").verdict == "inconclusive"
+    empty = clustered_interval([], [], "p95")
+    assert math.isnan(empty.value) and empty.n == 0 and empty.reason == "no reports"
+
+
+def test_an_interval_over_few_aircraft_is_marked():
+    rng = np.random.default_rng(9)
+    x = rng.rayleigh(30.0, 600)
+    assert "29 aircraft" in clustered_interval(x, np.arange(600) % 29, "rms").reason
+    assert clustered_interval(x, np.arange(600) % 30, "rms").reason == ""
+
+
+def test_point_values_by_their_definitions():
+    x = np.arange(1.0, 21.0)  # 1..20
+    clusters = np.repeat(np.arange(4), 5)
+    assert clustered_interval(x, clusters, "mean").value == 10.5
+    # sum of k^2 for k = 1..20 is 2870; the population variance of 1..n is (n^2 - 1) / 12
+    assert clustered_interval(x, clusters, "rms").value == pytest.approx(math.sqrt(2870 / 20))
+    assert clustered_interval(x, clusters, "sd").value == pytest.approx(math.sqrt((400 - 1) / 12))
+    # inverted CDF: the smallest value with at least 95 % (19 of 20) at or below it
+    assert clustered_interval(x, clusters, "p95").value == 19.0
+    assert clustered_interval(x, clusters, "p99").value == 20.0
+
+
+@pytest.mark.parametrize("q", [0.5, 0.95, 0.99, 0.01, 1.0])
+def test_a_replicate_percentile_is_the_percentile_of_the_resampled_reports(q):
+    """Each replicate's percentile equals numpy's inverted-CDF percentile of the sample written out in full
+    (every report repeated as often as its aircraft was drawn)."""
+    rng = np.random.default_rng(5)
+    x = np.sort(rng.rayleigh(40.0, 120))
+    weights = rng.integers(0, 4, (30, x.size)).astype(np.int32)
+    weights[:, 0] += 1  # no empty replicate
+    expected = [np.percentile(np.repeat(x, w), 100 * q, method="inverted_cdf") for w in weights]
+    assert np.array_equal(_weighted_inverted_cdf(x, weights, q), expected)
+
+
+def test_reproducible_with_a_seed():
+    rng = np.random.default_rng(3)
+    x, clusters = rng.rayleigh(50.0, 400), rng.integers(0, 20, 400)
+    for statistic in ("rms", "p95"):
+        first = clustered_interval(x, clusters, statistic, seed=7)
+        assert first == clustered_interval(x, clusters, statistic, seed=7)
+    # another seed draws other aircraft (a percentile's ends, taken from the data, may coincide)
+    assert clustered_interval(x, clusters, "rms", seed=7) != clustered_interval(x, clusters, "rms", seed=8)
+
+
+def test_independent_reports_mean_interval_matches_normal_theory():
+    """One report per cluster: the bootstrap interval of the mean is close to mean +- 1.96 SD / sqrt(n)."""
+    x = np.random.default_rng(11).normal(100.0, 20.0, 2000)
+    got = clustered_interval(x, np.arange(x.size), "mean", n_boot=2000, seed=1)
+    half = 1.959964 * x.std(ddof=1) / math.sqrt(x.size)
+    assert got.ci_low == pytest.approx(x.mean() - half, abs=0.1 * half)
+    assert got.ci_high == pytest.approx(x.mean() + half, abs=0.1 * half)
+
+
+def test_independent_reports_p95_interval_matches_order_statistics():
+    """One report per cluster: the bootstrap interval of the 95th percentile is close to the distribution-free
+    one, the order statistics whose ranks hold the quantile with 95 % binomial probability."""
+    x = np.sort(np.random.default_rng(12).exponential(30.0, 2000))
+    low_rank, high_rank = stats.binom.ppf([0.025, 0.975], x.size, 0.95).astype(int)
+    got = clustered_interval(x, np.arange(x.size), "p95", n_boot=1000, seed=2)
+    width = x[high_rank] - x[low_rank - 1]
+    assert got.ci_low == pytest.approx(x[low_rank - 1], abs=0.2 * width)
+    assert got.ci_high == pytest.approx(x[high_rank], abs=0.2 * width)
+
+
+def _clustered_errors(rng, n_aircraft: int, sigma_bias_m: float, sigma_noise_m: float):
+    """Horizontal errors of 10-60 reports per aircraft: an aircraft's own 2-D offset N(0, sigma_bias) shared
+    by its reports, plus N(0, sigma_noise) per report; each error is then Rayleigh(sqrt(sb^2 + sn^2))."""
+    per = rng.integers(10, 61, n_aircraft)
+    clusters = np.repeat(np.arange(n_aircraft), per)
+    offset = rng.normal(0.0, sigma_bias_m, (n_aircraft, 2))[clusters]
+    return np.hypot(*(offset + rng.normal(0.0, sigma_noise_m, (clusters.size, 2))).T), clusters
+
+
+def _coverage(statistic: str, truth: float, runs: int, sb: float, sn: float, per_report: bool, n_boot: int):
+    """Share of seeded runs whose interval holds the truth."""
+    rng = np.random.default_rng(2024)
+    hits = 0
+    for run in range(runs):
+        x, clusters = _clustered_errors(rng, 40, sb, sn)
+        got = clustered_interval(x, np.arange(x.size) if per_report else clusters, statistic,
+                                 n_boot=n_boot, seed=run)
+        hits += got.ci_low <= truth <= got.ci_high
+    return hits / runs
+
+
+# Truth from the Rayleigh law, sigma = hypot(15, 25): RMS = sigma sqrt(2), p95 = sigma sqrt(-2 ln 0.05).
+# Tolerance: over 40 aircraft with this clustering the percentile bootstrap covers below nominal: 0.928 (RMS)
+# and 0.905 (p95) in 1000 runs (benchmarks/evaluate_statistics.py); 200 runs add a binomial SD of 2.1 %,
+# so 0.905 - 2 x 0.021 = 0.86 at the least; nominal 95 % + 2 SD (1.5 %) = 0.98 at the most.
+SIGMA_M = math.hypot(15.0, 25.0)
+
+
+@pytest.mark.parametrize("statistic, truth", [("rms", SIGMA_M * math.sqrt(2)),
+                                              ("p95", SIGMA_M * math.sqrt(-2 * math.log(0.05)))])
+def test_cluster_bootstrap_coverage(statistic, truth):
+    coverage = _coverage(statistic, truth, runs=200, sb=15.0, sn=25.0, per_report=False, n_boot=400)
+    assert 0.86 <= coverage <= 0.98, coverage
+
+
+def test_resampling_single_reports_would_not_cover():
+    """Why clusters: on strongly clustered errors, an interval that resamples single reports covers the RMS
+    far less often than 95 % (the aircraft's shared offset is taken for independent information)."""
+    truth = math.hypot(30.0, 20.0) * math.sqrt(2)
+    assert _coverage("rms", truth, runs=40, sb=30.0, sn=20.0, per_report=True, n_boot=200) < 0.7
+    assert _coverage("rms", truth, runs=40, sb=30.0, sn=20.0, per_report=False, n_boot=200) >= 0.85
+
+
+@pytest.mark.parametrize("bad, message", [
+    ({"statistic": "median"}, "statistic"), ({"statistic": "p100"}, "statistic"), ({"n_boot": 10}, "n_boot"),
+    ({"values": [1.0, float("nan")], "clusters": [1, 2]}, "NaN"), ({"clusters": [1]}, "differ in length")])
+def test_clustered_interval_refuses_bad_input(bad, message):
+    args = {"values": [1.0, 2.0], "clusters": [1, 2], "statistic": "rms", **bad}
+    with pytest.raises(ValueError, match=message):
+        clustered_interval(**args)
+
+
+# truth table worked by hand: (low, high, threshold, direction) -> verdict
+TRUTH_TABLE = [
+    (0.98, 0.99, 0.97, ">=", "pass"), (0.97, 0.99, 0.97, ">=", "pass"), (0.95, 0.96, 0.97, ">=", "fail"),
+    (0.96, 0.98, 0.97, ">=", "inconclusive"), (0.96, 0.97, 0.97, ">=", "inconclusive"),
+    (0.98, 0.99, 0.97, ">", "pass"), (0.97, 0.99, 0.97, ">", "inconclusive"), (0.96, 0.97, 0.97, ">", "fail"),
+    (0.90, 0.96, 0.97, ">", "fail"),
+    (80.0, 95.0, 100.0, "<=", "pass"), (80.0, 100.0, 100.0, "<=", "pass"),
+    (101.0, 120.0, 100.0, "<=", "fail"),
+    (90.0, 110.0, 100.0, "<=", "inconclusive"), (100.0, 110.0, 100.0, "<=", "inconclusive"),
+    (10.0, 19.0, 20.0, "<", "pass"), (10.0, 20.0, 20.0, "<", "inconclusive"), (20.0, 25.0, 20.0, "<", "fail"),
+    (20.0, 20.0, 20.0, "<", "fail"), (20.0, 20.0, 20.0, "<=", "pass"),
+]
+
+
+@pytest.mark.parametrize("low, high, threshold, direction, expected", TRUTH_TABLE)
+def test_verdict_truth_table(low, high, threshold, direction, expected):
+    got = verdict(low, high, threshold, direction)
+    assert got.verdict == expected
+    assert (got.reason == "") == (expected != "inconclusive")
+
+
+def test_verdict_minimum_sample_and_undefined_interval():
+    small = verdict(0.98, 0.99, 0.97, ">", n=49_999, min_sample=50_000)
+    assert small.verdict == "inconclusive" and "49999" in small.reason and "50000" in small.reason
+    assert "meets" in small.reason
+    assert "misses" in verdict(0.5, 0.6, 0.97, ">", n=100, min_sample=50_000).reason
+    assert verdict(0.98, 0.99, 0.97, ">", n=50_000, min_sample=50_000).verdict == "pass"
+    assert verdict(math.nan, math.nan, 0.97, ">").verdict == "inconclusive"
+    assert verdict(np.float64(0.98), np.float64(0.99), np.float64(0.97), ">").verdict == "pass"
+
+
+def test_a_small_perfect_sample_is_not_a_pass():
+    """0 misses in 60 expected updates: the exact interval's lower end (0.94) is below 97 %."""
+    pd = proportion(60, 60)
+    assert pd.ci_low == pytest.approx(0.025 ** (1 / 60))
+    assert verdict(pd.ci_low, pd.ci_high, 0.97, ">").verdict == "inconclusive"
+
+
+@pytest.mark.parametrize("bad, message", [({"direction": "=>"}, "direction"),
+                                          ({"threshold": math.inf}, "finite"), ({"low": 2.0}, "reversed")])
+def test_verdict_refuses_bad_input(bad, message):
+    args = {"low": 1.0, "high": 1.5, "threshold": 1.2, "direction": "<=", **bad}
+    with pytest.raises(ValueError, match=message):
+        verdict(args["low"], args["high"], args["threshold"], args["direction"])
+
+
+@pytest.mark.parametrize("low, high, expected", [(-50.0, 80.0, (0.0, 80.0)), (-120.0, -30.0, (30.0, 120.0)),
+                                                 (20.0, 60.0, (20.0, 60.0)), (-90.0, 10.0, (0.0, 90.0))])
+def test_magnitude_interval(low, high, expected):
+    assert magnitude_interval(low, high) == expected
