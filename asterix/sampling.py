@@ -4,13 +4,16 @@ recording before it is decoded (whole or in chunks: ``read`` and ``iter_read`` s
 Every block when there are at most ``size`` of them; else the first block at or after each of ``size``
 offsets spread evenly over the recording's payload. Following the block chain costs no memory: a
 recording of any length is sampled in one pass (a raw stream whose chain breaks is framed first, as the
-decoder frames it).
+decoder frames it), a window of WINDOW_BYTES at a time with the pages behind each window released (a walk
+over the whole mapped file at once kept all of it resident: 1.08 GB of a 1 GB file, issue #27 item 6).
 """
 
 from __future__ import annotations
 
 import numpy as np
 from numba import njit
+
+WINDOW_BYTES = 8 << 20  # payload bytes walked between page releases
 
 
 @njit(cache=True, nogil=True)
@@ -38,27 +41,97 @@ def chain_end(buf, q, stop):
 
 
 @njit(cache=True, nogil=True)
-def sample_chain(buf, seg_start, seg_stop, cat, targets, kept, picks):
-    """Follow the block chain of every payload (one that does not tile into blocks is left out, as framing
-    skips it) and note blocks of ``cat``: the first ``len(kept)`` of them in ``kept`` and, in ``picks``,
-    the first at or after each target offset (-1 when none). Returns the number of blocks of ``cat``."""
-    count = 0
-    t = 0
+def chain_walk(buf, q, stop, limit):
+    """Follow the block chain from q until it reaches ``limit`` (or ``stop``): the offset reached, -1 where
+    the chain breaks before."""
+    while q < stop and q < limit:
+        if q + 3 > stop or buf[q] == 0:
+            return -1
+        n = (np.int64(buf[q + 1]) << 8) | buf[q + 2]
+        if n < 3 or q + n > stop:
+            return -1
+        q += n
+    return q
+
+
+@njit(cache=True, nogil=True)
+def chains_hold(buf, seg_start, seg_stop):
+    """Every payload of the arrays is data blocks end to end."""
+    for s in range(seg_start.shape[0]):
+        if not chain_holds(buf, seg_start[s], seg_stop[s]):
+            return False
+    return True
+
+
+@njit(cache=True, nogil=True)
+def sample_walk(buf, q, stop, limit, cat, targets, kept, picks, count, t):
+    """Along a chain known to hold, from q until ``limit`` (or ``stop``): note blocks of ``cat``, the first
+    ``len(kept)`` in ``kept`` and, in ``picks``, the first at or after each target offset; returns the
+    offset reached, the blocks of ``cat`` counted so far and the next target."""
+    while q < stop and q < limit:
+        n = (np.int64(buf[q + 1]) << 8) | buf[q + 2]
+        if buf[q] == cat:
+            if count < kept.shape[0]:
+                kept[count] = q
+            while t < targets.shape[0] and targets[t] <= q:
+                picks[t] = q
+                t += 1
+            count += 1
+        q += n
+    return q, count, t
+
+
+@njit(cache=True, nogil=True)
+def sample_chain(buf, seg_start, seg_stop, cat, targets, kept, picks, count, t):
+    """sample_walk over every payload of the arrays that tiles into blocks (one that does not is left out,
+    as framing skips it); returns the blocks of ``cat`` counted so far and the next target."""
     for s in range(seg_start.shape[0]):
         q, stop = seg_start[s], seg_stop[s]
-        if not chain_holds(buf, q, stop):
+        if chain_holds(buf, q, stop):
+            q, count, t = sample_walk(buf, q, stop, stop, cat, targets, kept, picks, count, t)
+    return count, t
+
+
+def _batches(seg_start: np.ndarray, seg_stop: np.ndarray):
+    """The payloads in batches of about WINDOW_BYTES: (first, end) index ranges, a payload longer than a
+    window alone in its batch (walked window by window)."""
+    sizes = (seg_stop - seg_start).astype(np.int64)
+    ends = np.cumsum(sizes)
+    i, n = 0, len(sizes)
+    while i < n:
+        if sizes[i] > WINDOW_BYTES:
+            yield i, i + 1
+            i += 1
             continue
-        while q < stop:
-            n = (np.int64(buf[q + 1]) << 8) | buf[q + 2]
-            if buf[q] == cat:
-                if count < kept.shape[0]:
-                    kept[count] = q
-                while t < targets.shape[0] and targets[t] <= q:
-                    picks[t] = q
-                    t += 1
-                count += 1
-            q += n
-    return count
+        j = int(np.searchsorted(ends, (ends[i - 1] if i else 0) + WINDOW_BYTES, side="right"))
+        j = max(j, i + 1)
+        long = np.flatnonzero(sizes[i:j] > WINDOW_BYTES)
+        j = i + int(long[0]) if len(long) else j
+        yield i, j
+        i = j
+
+
+def all_chains_hold(buf: np.ndarray, seg_start: np.ndarray, seg_stop: np.ndarray, release=None) -> bool:
+    """Every payload tiles into data blocks, walked a window at a time; ``release(lo, hi)`` drops the pages
+    of each window walked."""
+    starts, stops = seg_start.astype(np.int64), seg_stop.astype(np.int64)
+    for i, j in _batches(starts, stops):
+        if j == i + 1 and stops[i] - starts[i] > WINDOW_BYTES:
+            q, stop = int(starts[i]), int(stops[i])
+            while q < stop:
+                reached = chain_walk(buf, np.int64(q), np.int64(stop), np.int64(min(q + WINDOW_BYTES, stop)))
+                if release is not None:
+                    release(q, reached if reached >= 0 else min(q + WINDOW_BYTES, stop))
+                if reached < 0:
+                    return False
+                q = reached
+            continue
+        held = chains_hold(buf, starts[i:j], stops[i:j])
+        if release is not None:
+            release(int(starts[i]), int(stops[j - 1]))
+        if not held:
+            return False
+    return True
 
 
 @njit(cache=True, nogil=True)
@@ -89,15 +162,33 @@ def spread_offsets(lo: int, hi: int, size: int) -> np.ndarray:
 
 
 def sample_starts(buf: np.ndarray, seg_start: np.ndarray, seg_stop: np.ndarray, cat: int,
-                  size: int) -> tuple[np.ndarray, int]:
-    """(starts of the sampled blocks of ``cat``, its blocks in all) over chaining payloads (module doc)."""
+                  size: int, release=None) -> tuple[np.ndarray, int]:
+    """(starts of the sampled blocks of ``cat``, its blocks in all) over chaining payloads (module doc),
+    walked a window at a time; ``release(lo, hi)`` drops the pages of each window walked."""
     if not len(seg_start):
         return np.zeros(0, np.int64), 0
     targets = spread_offsets(int(seg_start.min()), int(seg_stop.max()), size)
     kept = np.zeros(size, np.int64)
     picks = np.full(len(targets), -1, np.int64)
-    count = sample_chain(buf, seg_start.astype(np.int64), seg_stop.astype(np.int64), np.uint8(cat), targets,
-                         kept, picks)
+    starts, stops = seg_start.astype(np.int64), seg_stop.astype(np.int64)
+    count, t, code = 0, 0, np.uint8(cat)
+    for i, j in _batches(starts, stops):
+        if j == i + 1 and stops[i] - starts[i] > WINDOW_BYTES:
+            lo, stop = int(starts[i]), int(stops[i])
+            if not all_chains_hold(buf, starts[i:j], stops[i:j], release):
+                continue
+            q = lo
+            while q < stop:
+                before = q
+                limit = np.int64(min(q + WINDOW_BYTES, stop))
+                q, count, t = sample_walk(buf, np.int64(q), np.int64(stop), limit, code, targets, kept, picks,
+                                          count, t)
+                if release is not None:
+                    release(before, int(q))
+            continue
+        count, t = sample_chain(buf, starts[i:j], stops[i:j], code, targets, kept, picks, count, t)
+        if release is not None:
+            release(int(starts[i]), int(stops[j - 1]))
     if count <= size:
         return kept[:count], count
     return np.unique(picks[picks >= 0]), count

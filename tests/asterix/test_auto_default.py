@@ -104,10 +104,14 @@ def test_cli_takes_auto_for_any_category(capsys):
 # the sample
 
 
-def test_sample_is_every_block_or_the_first_at_each_spread_offset():
+@pytest.mark.parametrize("window", [8 << 20, 1000, 7])
+def test_sample_is_every_block_or_the_first_at_each_spread_offset(monkeypatch, window):
     """A chain of 300 blocks of categories 21 and 48: the sample of CAT021 is all of them when there are
     no more than asked, else the first CAT021 block at or after each offset spread over the stream; the
-    chain followed by sample_starts, framed starts given to sample_of, and a plain loop agree."""
+    chain followed by sample_starts, framed starts given to sample_of, and a plain loop agree, whatever the
+    window the chain is walked by (pages are released behind each: the windows must not change the
+    sample), and each byte walked is released once, in order."""
+    monkeypatch.setattr(sampling, "WINDOW_BYTES", window)
     blocks = [block(21 if i % 3 else 48, bytes([0x80, 0, i % 256])) for i in range(300)]
     data = b"".join(blocks)
     buf = np.frombuffer(data, np.uint8)
@@ -120,6 +124,18 @@ def test_sample_is_every_block_or_the_first_at_each_spread_offset():
     by_hand = sorted({next(s for s in of21 if s >= t) for t in targets if t <= of21[-1]})
     assert total == 200 and got.tolist() == by_hand
     assert sampling.sample_of(of21, 0, len(data), 30).tolist() == by_hand
+    released = []
+    assert sampling.all_chains_hold(buf, np.array([0]), np.array([len(data)]),
+                                    lambda a, b: released.append((a, b)))
+    assert released[0][0] == 0 and released[-1][1] == len(data)
+    assert all(a[1] == b[0] for a, b in zip(released, released[1:], strict=False))
+    # payloads of a container (many small ones, as pcap packets): batched, the same sample as one chain
+    cut = [0, *starts[50:300:50], len(data)]
+    got, total = sampling.sample_starts(buf, np.array(cut[:-1]), np.array(cut[1:]), 21, 30)
+    assert total == 200 and got.tolist() == by_hand
+    broken = buf.copy()
+    broken[starts[120] + 1:starts[120] + 3] = 0  # a LEN of 0 in the middle: the chain does not hold
+    assert not sampling.all_chains_hold(broken, np.array([0]), np.array([len(data)]))
 
 
 @real
