@@ -14,6 +14,8 @@ from msdc.pipeline.evaluate.catalogue import CATALOGUE
 from msdc.pipeline.evaluate.presets import available_presets, load_preset
 from msdc.pipeline.evaluate.presets_doc import PAGE, page_with_tables
 
+REPO = Path(__file__).resolve().parents[3]
+
 STANDARDS = SHARED / "standards.md"
 needs_standards = pytest.mark.skipif(not STANDARDS.is_file(),
                                      reason=f"{STANDARDS} absent (reference material beside the repository)")
@@ -276,6 +278,6 @@ def test_unknown_preset_name_and_missing_file(tmp_path):
 
 def test_the_docs_show_the_shipped_presets_and_ids():
     """docs/methods/evaluate.md holds the tables made from the catalogue and the TOML files."""
-    text = PAGE.read_text()
+    text = (REPO / PAGE).read_text()
     assert text == page_with_tables(text), "python -m msdc.pipeline.evaluate.presets_doc --write-docs"
     assert all(f"#### `{name}`" in text for name in SHIPPED) and "| `rms_m` |" in text
