@@ -148,6 +148,15 @@ def walks(buf, q, n, p0, n_frn, parts):
                 if f >= n_frn or P[base + f, K_KIND] == ABSENT:
                     return False
                 p = base + f
+                if P[p, K_KIND] == FIXED:  # fast path: most items (a call per item cost 3/4 of the walk)
+                    pos += P[p, K_SIZE]
+                    if pos > end:
+                        return False
+                    if P[p, K_SEL_MASK] != 0:
+                        v = (np.int64(buf[pos - P[p, K_SIZE] + P[p, K_SEL_BYTE]]) >> P[p, K_SEL_SHIFT]) \
+                            & P[p, K_SEL_MASK]
+                        base = p0 + (v + 1) * n_frn
+                    continue
                 if P[p, K_KIND] != COMPOUND:
                     m = _part_len(buf, pos, end, p, P, ext_sizes, ext_fx)
                     if m < 0:
@@ -172,7 +181,13 @@ def walks(buf, q, n, p0, n_frn, parts):
                         si = (cq - cs) * 7 + cbit
                         if si >= P[p, K_SUB_COUNT] or sub_parts[P[p, K_SUB_START] + si] < 0:
                             return False
-                        m = _part_len(buf, pos, end, sub_parts[P[p, K_SUB_START] + si], P, ext_sizes, ext_fx)
+                        sp = sub_parts[P[p, K_SUB_START] + si]
+                        if P[sp, K_KIND] == FIXED:
+                            pos += P[sp, K_SIZE]
+                            if pos > end:
+                                return False
+                            continue
+                        m = _part_len(buf, pos, end, sp, P, ext_sizes, ext_fx)
                         if m < 0:
                             return False
                         pos += m
