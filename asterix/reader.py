@@ -22,7 +22,7 @@ from .containers import Segments, read_segments
 from .errors import REASONS, ContentWarning, DecodeError, EditionWarning, UnreadableInput, UntimedWarning
 from .families import AUTO, edition_families, edition_span, family_name, family_of, with_defaults
 from .frames import code_list_column, empty_columns, icao_columns, typed_column
-from .framing import Progress, alike_framings, release_pages, segment_modes, survey
+from .framing import Progress, alike_framings, held, release_pages, segment_modes, survey
 from .layout import OUT_FLOAT, OUT_INT, OUT_WIDE, Layout, compile_layout
 from .plausible import BOUNDS, Implausible, count_implausible, implausible
 from .stretches import Stretch, describe, foreign_spans
@@ -36,6 +36,7 @@ from .verdict import Tally, head_of
 DEFAULT_CATEGORIES = MEASUREMENT_CATEGORIES
 WRONG_EDITION_MIN_BLOCKS = 10  # failed blocks, all walking under another edition, proving the edition wrong
 AUTO_SAMPLE_BLOCKS = 20_000  # blocks walked per candidate edition by editions={cat: "auto"}
+AUTO_SAMPLE_BYTES = 2 << 20  # at most about this many bytes of them (20,000 one-record blocks fit)
 # a raw stream whose chain breaks (choose_editions): blocks before the break enough to choose the edition
 # that frames the rest; else framing_edition over the stream's first FRAMING_EDITION_BYTES; then windows
 AUTO_PREFIX_BLOCKS = 100
@@ -280,13 +281,16 @@ def choose_edition(buf: np.ndarray, starts: np.ndarray, lens: np.ndarray, catego
     """Pick the edition under which every sampled block walks exactly (the newest of those, as they read
     the sample alike), values plausible; say which blocks told the editions apart, or that none walks all.
 
-    The sample is every block, or AUTO_SAMPLE_BLOCKS spread evenly over a longer recording: a walk costs
-    no memory, so rare blocks that tell editions apart (I021/271 with an odd LW) are seen. ``total``:
+    The sample is every block, or AUTO_SAMPLE_BLOCKS spread evenly over a longer recording, or fewer spread
+    alike where they would hold more than AUTO_SAMPLE_BYTES: a walk costs no memory, so rare blocks that
+    tell editions apart (I021/271 with an odd LW) are seen. ``total``:
     the blocks the given ones were sampled from (choose_editions samples the whole recording first), or
     ``source``: where they come from, in words. ``offsets``: the blocks' offsets in the file, when ``buf``
     holds copies of them (``_gathered``).
     """
     idx = _spread(len(starts), sample)
+    if len(idx) and int(lens[idx].sum()) > AUTO_SAMPLE_BYTES:  # long blocks: spread over fewer
+        idx = idx[_spread(len(idx), max(1, AUTO_SAMPLE_BYTES * len(idx) // int(lens[idx].sum())))]
     s, n = starts[idx], lens[idx]
     where = s if offsets is None else offsets[idx]
     total = len(starts) if total is None else total
@@ -370,11 +374,17 @@ def framing_edition(buf: np.ndarray, seg: Segments, walked: dict, category: int,
     return best[1]
 
 
+PLAUSIBLE_SAMPLE_BYTES = 1 << 18  # at most about this many bytes of blocks decoded per tied edition
+
+
 def _plausible_share(buf, s, n, category: int, ed: str, limit: int = 400) -> float:
-    """Share of records of up to ``limit`` sampled blocks whose values are plausible (plausible.mask:
-    positions on the Earth, times of day within 24 h; the columns the category has)."""
+    """Share of records of up to ``limit`` sampled blocks (PLAUSIBLE_SAMPLE_BYTES at most) whose values are
+    plausible (plausible.mask: positions on the Earth, times of day within 24 h; the columns the category
+    has), only those columns decoded."""
     k = _spread(len(s), limit)
-    lay = compile_layout(category, ed)
+    if len(k) and int(n[k].sum()) > PLAUSIBLE_SAMPLE_BYTES:
+        k = k[_spread(len(k), max(1, PLAUSIBLE_SAMPLE_BYTES * len(k) // int(n[k].sum())))]
+    lay = compile_layout(category, ed, _scanned_columns(()))
     scanned = _scan(buf, s[k], n[k], lay)
     if not (scanned[0] > 0).any():
         return 0.0
@@ -554,7 +564,8 @@ def choose_editions(buf: np.ndarray, seg: Segments, editions: dict, categories
         source = ""
         release = partial(release_pages, buf)  # pages behind each window walked: not held
         if seg.exact or sampling.all_chains_hold(buf, seg.start, seg.stop, release):
-            starts, total = sampling.sample_starts(buf, seg.start, seg.stop, cat, AUTO_SAMPLE_BLOCKS, release)
+            starts, total = sampling.sample_starts(buf, seg.start, seg.stop, cat, AUTO_SAMPLE_BLOCKS, release,
+                                                   AUTO_SAMPLE_BYTES)
         else:
             starts, source = _broken_chain_sample(buf, seg, cat, walked_editions(editions, categories))
             total = len(starts)
@@ -672,25 +683,38 @@ def decode_buffer(buf: np.ndarray, seg: Segments, *, path: str = "", editions: d
     selected = selected_columns(columns)
     date = parse_date(date)
     categories = check_categories(categories)
-    plan = plan_recording(buf, seg, dict(editions or {}), categories)
-    return decode_framed(buf, plan, plan.framer(buf).window(), path=path, date=date, strict=strict,
-                         selected=selected, sector_clock=sector_clock)
+    plan = plan_recording(buf, seg, dict(editions or {}), categories, assume_walking=True)
+    framed = plan.framer(buf).window()
+    scans = _scan_decoded(buf, framed, plan, _scanned_columns(selected))
+    if plan.assumed and any((scan[2][0] < 0).any() for scan in scans.values()):
+        del scans  # a decoded block does not walk: the plan is settled again, walking every block
+        plan = plan_recording(buf, seg, dict(editions or {}), categories)
+        framed, scans = plan.framer(buf).window(), None
+    return decode_framed(buf, plan, framed, path=path, date=date, strict=strict, selected=selected,
+                         sector_clock=sector_clock, scans=scans)
+
+
+def _scanned_columns(asked) -> tuple[str, ...] | None:
+    """The columns decoded for ``asked`` (None: all): those plausibility is judged on too (dropped after)."""
+    return None if asked is None else tuple(sorted({*asked, *(c for c in BOUNDS if c in KNOWN_COLUMNS)}))
 
 
 def decode_framed(buf: np.ndarray, plan, framed, *, path: str = "", date: dt.date | None = None,
                   strict: bool = False, selected=None, part: Segments | None = None,
-                  first_segment: int = 0, sector_clock: SectorClock | None = None) -> Recording:
+                  first_segment: int = 0, sector_clock: SectorClock | None = None,
+                  scans: dict[int, tuple] | None = None) -> Recording:
     """Decode framed blocks (all of a recording's, or one window's: kernel.frame_window) by the plan
     (asterix.plan), into a Recording of them. ``selected``: the columns asked for (None: all); ``part``:
     the segments they lie in, the first being the plan's segment ``first_segment`` (days are counted, and
     container bytes and problems told, by it), the plan's segments when None; ``sector_clock``: the CAT002
-    times of the data before (``iter_read`` carries it from window to window)."""
+    times of the data before (``iter_read`` carries it from window to window); ``scans``: the framed
+    blocks' walks (_scan_decoded), when already made."""
     seg = plan.seg
     part = seg if part is None else part
     asked = selected
-    # the columns plausibility is judged on are decoded whatever was asked, and dropped after
-    selected = None if asked is None else tuple(sorted({*asked, *(c for c in BOUNDS if c in KNOWN_COLUMNS)}))
-    scans = _scan_decoded(buf, framed, plan, selected)
+    selected = _scanned_columns(asked)
+    if scans is None:
+        scans = _scan_decoded(buf, framed, plan, selected)
     b_start, b_len, b_cat, b_seg, e_off, e_len, e_cat, e_code = framed
     errors: list[tuple[int, int, int, str]] = [
         (int(o), int(n), int(c), framing_reason(buf, seg, int(o), int(code)))
@@ -821,7 +845,7 @@ def read(path, *, editions=None, date=None, categories=None, format: str | None 
             seg = read_segments(buf, format)
         except ValueError as exc:
             raise UnreadableInput(f"{path}: {exc}") from exc
-        rec = decode_buffer(buf, seg, path=str(path), editions=eds, categories=categories, date=date,
+        rec = decode_buffer(held(buf), seg, path=str(path), editions=eds, categories=categories, date=date,
                             strict=strict, columns=columns)
     for text in edition_advice(rec):
         warnings.warn(text, EditionWarning, stacklevel=2)

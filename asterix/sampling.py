@@ -2,10 +2,12 @@
 recording before it is decoded (whole or in chunks: ``read`` and ``iter_read`` see the same sample).
 
 Every block when there are at most ``size`` of them; else the first block at or after each of ``size``
-offsets spread evenly over the recording's payload. Following the block chain costs no memory: a
-recording of any length is sampled in one pass (a raw stream whose chain breaks is framed first, as the
-decoder frames it), a window of WINDOW_BYTES at a time with the pages behind each window released (a walk
-over the whole mapped file at once kept all of it resident: 1.08 GB of a 1 GB file, issue #27 item 6).
+offsets spread evenly over the recording's payload; either thinned evenly to about ``max_bytes`` of blocks
+when they hold more (blocks of many records: each edition family walks every sampled record). Following
+the block chain costs no memory: a recording of any length is sampled in one pass (a raw stream whose
+chain breaks is framed first, as the decoder frames it), a window of WINDOW_BYTES at a time with the pages
+behind each window released (a walk over the whole mapped file at once kept all of it resident: 1.08 GB
+of a 1 GB file, issue #27 item 6).
 """
 
 from __future__ import annotations
@@ -64,13 +66,14 @@ def chains_hold(buf, seg_start, seg_stop):
 
 
 @njit(cache=True, nogil=True)
-def sample_walk(buf, q, stop, limit, cat, targets, kept, picks, count, t):
+def sample_walk(buf, q, stop, limit, cat, targets, kept, picks, count, t, nbytes):
     """Along a chain known to hold, from q until ``limit`` (or ``stop``): note blocks of ``cat``, the first
     ``len(kept)`` in ``kept`` and, in ``picks``, the first at or after each target offset; returns the
-    offset reached, the blocks of ``cat`` counted so far and the next target."""
+    offset reached, the blocks of ``cat`` counted so far, the next target and their bytes so far."""
     while q < stop and q < limit:
         n = (np.int64(buf[q + 1]) << 8) | buf[q + 2]
         if buf[q] == cat:
+            nbytes += n
             if count < kept.shape[0]:
                 kept[count] = q
             while t < targets.shape[0] and targets[t] <= q:
@@ -78,18 +81,18 @@ def sample_walk(buf, q, stop, limit, cat, targets, kept, picks, count, t):
                 t += 1
             count += 1
         q += n
-    return q, count, t
+    return q, count, t, nbytes
 
 
 @njit(cache=True, nogil=True)
-def sample_chain(buf, seg_start, seg_stop, cat, targets, kept, picks, count, t):
+def sample_chain(buf, seg_start, seg_stop, cat, targets, kept, picks, count, t, nbytes):
     """sample_walk over every payload of the arrays that tiles into blocks (one that does not is left out,
-    as framing skips it); returns the blocks of ``cat`` counted so far and the next target."""
+    as framing skips it); returns the blocks of ``cat`` counted so far, the next target and their bytes."""
     for s in range(seg_start.shape[0]):
         q, stop = seg_start[s], seg_stop[s]
         if chain_holds(buf, q, stop):
-            q, count, t = sample_walk(buf, q, stop, stop, cat, targets, kept, picks, count, t)
-    return count, t
+            q, count, t, nbytes = sample_walk(buf, q, stop, stop, cat, targets, kept, picks, count, t, nbytes)
+    return count, t, nbytes
 
 
 def _batches(seg_start: np.ndarray, seg_stop: np.ndarray):
@@ -162,16 +165,17 @@ def spread_offsets(lo: int, hi: int, size: int) -> np.ndarray:
 
 
 def sample_starts(buf: np.ndarray, seg_start: np.ndarray, seg_stop: np.ndarray, cat: int,
-                  size: int, release=None) -> tuple[np.ndarray, int]:
+                  size: int, release=None, max_bytes: int | None = None) -> tuple[np.ndarray, int]:
     """(starts of the sampled blocks of ``cat``, its blocks in all) over chaining payloads (module doc),
-    walked a window at a time; ``release(lo, hi)`` drops the pages of each window walked."""
+    walked a window at a time; ``release(lo, hi)`` drops the pages of each window walked. ``max_bytes``:
+    the sample thinned evenly to about that many bytes of blocks of the category's mean size."""
     if not len(seg_start):
         return np.zeros(0, np.int64), 0
     targets = spread_offsets(int(seg_start.min()), int(seg_stop.max()), size)
     kept = np.zeros(size, np.int64)
     picks = np.full(len(targets), -1, np.int64)
     starts, stops = seg_start.astype(np.int64), seg_stop.astype(np.int64)
-    count, t, code = 0, 0, np.uint8(cat)
+    count, t, code, nbytes = 0, 0, np.uint8(cat), np.int64(0)
     for i, j in _batches(starts, stops):
         if j == i + 1 and stops[i] - starts[i] > WINDOW_BYTES:
             lo, stop = int(starts[i]), int(stops[i])
@@ -181,17 +185,21 @@ def sample_starts(buf: np.ndarray, seg_start: np.ndarray, seg_stop: np.ndarray, 
             while q < stop:
                 before = q
                 limit = np.int64(min(q + WINDOW_BYTES, stop))
-                q, count, t = sample_walk(buf, np.int64(q), np.int64(stop), limit, code, targets, kept, picks,
-                                          count, t)
+                q, count, t, nbytes = sample_walk(buf, np.int64(q), np.int64(stop), limit, code, targets,
+                                                  kept, picks, count, t, nbytes)
                 if release is not None:
                     release(before, int(q))
             continue
-        count, t = sample_chain(buf, starts[i:j], stops[i:j], code, targets, kept, picks, count, t)
+        count, t, nbytes = sample_chain(buf, starts[i:j], stops[i:j], code, targets, kept, picks, count, t,
+                                        nbytes)
         if release is not None:
             release(int(starts[i]), int(stops[j - 1]))
-    if count <= size:
-        return kept[:count], count
-    return np.unique(picks[picks >= 0]), count
+    sample = kept[:count] if count <= size else np.unique(picks[picks >= 0])
+    if max_bytes is not None and count:
+        fit = max(1, int(max_bytes * count // int(nbytes)))  # blocks of the mean size in max_bytes
+        if len(sample) > fit:
+            sample = sample[np.unique(np.linspace(0, len(sample) - 1, fit).astype(np.int64))]
+    return sample, count
 
 
 def sample_of(cat_starts: np.ndarray, lo: int, hi: int, size: int) -> np.ndarray:

@@ -136,6 +136,10 @@ def test_sample_is_every_block_or_the_first_at_each_spread_offset(monkeypatch, w
     broken = buf.copy()
     broken[starts[120] + 1:starts[120] + 3] = 0  # a LEN of 0 in the middle: the chain does not hold
     assert not sampling.all_chains_hold(broken, np.array([0]), np.array([len(data)]))
+    # at most about max_bytes of blocks: each block is 6 bytes (header, FSPEC, 2 bytes): 10 of the 200 in 60,
+    # the 1st, 23rd, 45th, ... (floor of 10 positions spread evenly over 0..199)
+    got, total = sampling.sample_starts(buf, np.array([0]), np.array([len(data)]), 21, 500, max_bytes=60)
+    assert total == 200 and got.tolist() == of21[[0, 22, 44, 66, 88, 110, 132, 154, 176, 199]].tolist()
 
 
 @real
