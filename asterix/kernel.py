@@ -279,7 +279,8 @@ def _anchored(buf, r, stop, seen, framing, memo):
     """The block chain from r holds for LOOKAHEAD blocks (or to the end of the data) and is anchored:
     one of its blocks is of a decoded category and walks exactly, or all its categories were already
     met, or it reaches the end in two blocks or more (one LEN landing on the end proves little).
-    Every decoded block in it must walk exactly."""
+    Every decoded block in it must walk exactly, but for a chain that meets damage after two blocks or
+    more, one of them walking: it anchors as a chain that breaks there does (real blocks before damage)."""
     base = framing[0]
     x = r
     walked = False
@@ -296,7 +297,7 @@ def _anchored(buf, r, stop, seen, framing, memo):
         c = buf[x]
         if base[c] >= 0:
             if not _walks_at(buf, x, n, c, framing, memo):
-                return False
+                return walked and k >= 2
             walked = True
         elif seen[c] == 0:
             all_seen = False
