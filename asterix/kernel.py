@@ -311,9 +311,10 @@ def _anchored(buf, r, stop, seen, framing, memo):
 @njit(cache=True, nogil=True)
 def _chained_inside(buf, q, end, stop, framing, memo):
     """A chain of blocks starting inside (q, end) reaches a decoded block that walks and starts before end
-    (it may run past end): the block at q is then probably a false header swallowing real blocks."""
+    (it may run past end, its header too: a cut block may end a byte into the real one after the cut):
+    the block at q is then probably a false header swallowing real blocks."""
     base = framing[0]
-    for r in range(q + 1, end - 2):
+    for r in range(q + 1, end):
         x = r
         while x < end:
             n = _header(buf, x, stop)
@@ -365,6 +366,22 @@ def _next_ok(buf, x, stop, seen, framing, memo):
         return _cut_tail(buf, x, stop, seen)
     c = buf[x]
     return framing.base[c] >= 0 or seen[c] == 1 or _anchored(buf, x, stop, seen, framing, memo)
+
+
+@njit(cache=True, nogil=True)
+def _next_proves(buf, x, stop, seen, framing, memo):
+    """What follows a block is evidence of its LEN: the end, a truncated tail, a decoded block that walks
+    exactly, or a block of a category already met whose chain is anchored (a chain that reaches a walking
+    block only after LENs jumping far is not: it lands on a real block by chance)."""
+    if x == stop:
+        return True
+    n = _header(buf, x, stop)
+    if n < 0:
+        return _cut_tail(buf, x, stop, seen)
+    c = buf[x]
+    if framing.base[c] >= 0:
+        return _walks_at(buf, x, n, c, framing, memo)
+    return seen[c] == 1 and _anchored(buf, x, stop, seen, framing, memo)
 
 
 # Framing modes of a payload segment (frame_window's seg_mode).
@@ -539,9 +556,10 @@ def frame_window(buf, seg_start, seg_stop, seg_mode, framing, st, seen, memo, se
                     if base[c] >= 0:
                         if _walks_at(buf, q, n, c, framing, memo):
                             # walking exactly to its LEN is the block's own evidence, unless what follows
-                            # does not fit and a walking chain starts inside it: a damaged block that walks
-                            # by chance, swallowing the head of a real one
-                            ok = (_next_ok(buf, q + n, stop, seen, framing, memo)
+                            # is not anchored and a walking chain starts inside it: a damaged block that
+                            # walks by chance, swallowing the head of a real one (a plausible header after
+                            # it is no evidence: the bytes there are the real block's)
+                            ok = (_next_proves(buf, q + n, stop, seen, framing, memo)
                                   or not _chained_inside(buf, q, q + n, stop, framing, memo))
                         else:
                             # a block that does not walk keeps its LEN only if what follows is anchored

@@ -1,0 +1,71 @@
+"""Careful framing does not let a cut block that walks by chance swallow the real block after it (issue
+#27, found by benchmarks/fuzz_reader.py on the real CAT021 and CAT010 files). Streams built by hand from
+the CAT048 fixture's blocks and the I048 layout of the spec (I048/010 2 bytes, I048/140 3, I048/020 1 with
+FX, I048/040 4: RHO in 1/256 NM, THETA in 360/2^16 degrees)."""
+
+from __future__ import annotations
+
+import warnings
+from pathlib import Path
+
+import numpy as np
+
+import msdc.asterix as asterix
+
+
+def _stream(tmp_path: Path, pieces: list[bytes]) -> asterix.Recording:
+    path = tmp_path / "stream.ast"
+    path.write_bytes(b"".join(pieces))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        return asterix.read(path, categories=[48])
+
+
+def plot(sac: int, sic: int, rho: int, theta: int) -> bytes:
+    """A CAT048 block of one record: I048/010 and I048/040 (FSPEC 0x90), raw RHO and THETA."""
+    return bytes([48, 0, 10, 0x90, sac, sic, rho >> 8, rho & 255, theta >> 8, theta & 255])
+
+
+def _real_blocks(n: int) -> list[bytes]:
+    return [plot(1, 2 * i, 2560 + i, 1000 * i) for i in range(n)]
+
+
+def test_a_cut_block_ending_a_byte_into_the_next_does_not_swallow_it(tmp_path):
+    """The cut block: header, FSPEC of I048/010 alone, one byte of its own, and for its last byte the real
+    block's category: it walks exactly and ends one byte into the real block, where a zero follows."""
+    real = _real_blocks(6)
+    cut = bytes([48, 0, 6, 0x80, 7])  # + the real block's first byte (48) as I048/010's SIC
+    pieces = [*real[:3], cut, *real[3:]]
+    rec = _stream(tmp_path, pieces)
+    start = sum(len(p) for p in pieces[:4])  # the real block after the cut one
+    assert start + 3 in set(rec.frames[48]["offset"]), "the real block after the cut one is lost"
+    # every real block's records, none of the cut one's
+    whole = _stream(tmp_path, real)
+    assert len(rec.frames[48]) == len(whole.frames[48])
+    assert rec.errors["offset"].min() == sum(len(p) for p in real[:3])
+
+
+def test_a_cut_block_whose_tail_lands_far_on_a_real_block_does_not_swallow_the_next(tmp_path):
+    """The cut block (header and FSPEC of I048/010, I048/140, I048/020) walks over the next block's first
+    six bytes; the bytes it ends on read as a CAT096 header (the next block's RHO 96.0 NM) whose LEN (the
+    THETA's first byte) jumps to a real block two blocks on: a chain that lands on a real block by chance
+    is no evidence, and the next block is decoded with its values."""
+    real = _real_blocks(6)
+    after = real[2]
+    jump = 4 + len(after)  # from the CAT096 'header' (RHO's first byte) to the block after ``after``
+    assert jump < 256
+    sic = 8  # even: I048/020's one byte ends (FX clear) on it
+    nxt = bytes([48, 0, 10, 0x90, 5, sic, 96, 0, jump, 64])  # I048/010 and I048/040
+    cut = bytes([48, 0, 10, 0xE0])  # + nxt's first 6 bytes: I048/010 (2), I048/140 (3), I048/020 (1)
+    pieces = [*real[:2], cut, nxt, after, *real[3:]]
+    rec = _stream(tmp_path, pieces)
+    at = sum(len(p) for p in pieces[:3])
+    got = rec.frames[48].set_index("offset")
+    assert at + 3 in got.index, "the block after the cut one is lost"
+    row = got.loc[at + 3]
+    assert (int(row["sac"]), int(row["sic"])) == (5, sic)
+    assert np.isclose(row["rho_nm"], (96 * 256) / 256)
+    assert np.isclose(row["theta_deg"], (jump * 256 + 64) * 360 / 65536)
+    assert len(rec.frames[48]) == len(_stream(tmp_path, real).frames[48]) + 1  # every real block's, and nxt's
+    assert rec.errors["offset"].tolist() == [sum(len(p) for p in pieces[:2])]
+
