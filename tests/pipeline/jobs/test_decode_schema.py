@@ -91,6 +91,29 @@ def test_a_quiet_first_chunk_then_many_call_signs_in_one_recording(tmp_path):
     assert str(field.type) == "dictionary<values=string, indices=int32, ordered=0>"
 
 
+def test_chunks_are_gathered_into_row_groups_of_about_row_group_bytes(tmp_path, monkeypatch):
+    """Issue 27 item 6: a row group per chunk grew the writer's metadata with the file. 26,000 plots in
+    0.1 MB chunks: one row group while under ROW_GROUP_BYTES, more once it is lowered, rows in order."""
+    import pyarrow.parquet as pq
+
+    import msdc.pipeline.jobs.decode as decode
+
+    names = call_signs(26_000)
+    path = tmp_path / "day.ast"
+    path.write_bytes(encode_frame(48, plots(names)))
+    chunks = len(path.read_bytes()) / 100_000
+    assert chunks > 5
+    out = tmp_path / "day.parquet"
+    assert main(["decode", str(path), "--chunk-mb", "0.1", "-o", str(out)]) == 0
+    assert pq.ParquetFile(out).metadata.num_row_groups == 1
+    assert read_back(out)["callsign"].tolist() == names
+    monkeypatch.setattr(decode, "ROW_GROUP_BYTES", 1)  # every chunk written as it comes
+    out2 = tmp_path / "day2.parquet"
+    assert main(["decode", str(path), "--chunk-mb", "0.1", "-o", str(out2)]) == 0
+    assert pq.ParquetFile(out2).metadata.num_row_groups >= int(chunks)
+    assert read_back(out2)["callsign"].tolist() == names
+
+
 @pytest.mark.skipif(not REAL_RADAR.is_file(), reason=f"{REAL_RADAR} not present: the real-recording case is "
                     "skipped")
 def test_the_fixture_radar_then_the_real_radar_recording_to_parquet(tmp_path):
