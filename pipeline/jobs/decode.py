@@ -55,7 +55,7 @@ def validate(options: DecodeOptions) -> Checked:
         if checked.selection is not None and checked.selection.active:
             spare_inputs(options.inputs, [(f"-o {out}", selection_output(base))])
             check_beside("-o", out, [("selection file", selection_output(base))])
-    checked.sensors = sensor_table(options.sensors, required=False)
+    checked.sensors = None if options.sensors is None else sensor_table(options.sensors)  # for --area
     return checked
 
 

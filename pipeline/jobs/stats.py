@@ -32,7 +32,7 @@ def validate(options: StatsOptions) -> Checked:
     bad."""
     check_declared(options)
     checked = check_decoding(options)
-    checked.sensors = sensor_table(options.sensors, required=False)
+    checked.sensors = None if options.sensors is None else sensor_table(options.sensors)  # for --area
     return checked
 
 
