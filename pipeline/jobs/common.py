@@ -289,7 +289,7 @@ def check_report_selection(o: DecodingOptions) -> ReportSelection:
         start = rs.parse_time(o.from_time, "--from") if o.from_time is not None else None
         end = rs.parse_time(o.to_time, "--to") if o.to_time is not None else None
         if start is not None and end is not None and (start.instant is None) == (end.instant is None):
-            rs.ReportSelection(start=start, end=end).window(dt.date(2000, 1, 1))  # an empty window, said now
+            rs.check_order(start, end)  # said now; a time of day and a date-time: once placed
         fl = rs.parse_fl(o.fl) if o.fl is not None else None
         ids = (o.sensor_ids,) if isinstance(o.sensor_ids, str) else tuple(o.sensor_ids or ())
         sensors = tuple(dict.fromkeys(rs.parse_sensor(s) for s in ids))

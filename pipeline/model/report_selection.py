@@ -148,6 +148,19 @@ class ReportSelection:
 # Option texts
 
 
+def check_order(start: TimeBound, end: TimeBound) -> None:
+    """ValueError when --from is not before --to, both date-times or both times of day (a time of day and a
+    date-time are compared once placed on the recording's day: ReportSelection.window)."""
+    if start.instant is not None and end.instant is not None:
+        empty = not start.instant < end.instant
+    elif start.time_of_day_s is not None and end.time_of_day_s is not None:
+        empty = not start.time_of_day_s < end.time_of_day_s
+    else:
+        return
+    if empty:
+        raise ValueError(f"--from {start.text} is not before --to {end.text}: the window holds no time")
+
+
 def parse_time(text: str, name: str) -> TimeBound:
     """An ISO date-time in UTC (2023-05-02T08:10:00, ...Z or +00:00; a date alone is its midnight) or a
     time of day (08:10, 08:10:30.5) on the recording's day; ValueError naming the option, the value and
@@ -220,7 +233,10 @@ def parse_window(text: str, name: str = "--area") -> SensorWindow:
              "20/129:0-60nm:30-120deg")
     if len(parts) != 3:
         raise ValueError(usage)
-    sensor = parse_sensor(parts[0], name)
+    try:
+        sensor = parse_sensor(parts[0], "SENSOR")
+    except ValueError as exc:
+        raise ValueError(f"{name} {text!r}: {exc}") from None
     rm, am = _RANGE.fullmatch(parts[1].strip()), _AZIMUTH.fullmatch(parts[2].strip())
     if rm is None or am is None:
         raise ValueError(usage + (" (range in NM: 0-60nm)" if rm is None else " (azimuth in degrees: "
@@ -375,5 +391,6 @@ def describe(record: dict) -> str:
 
 
 __all__ = ["FL_RANGE", "ReportSelection", "SELECTION_INPUTS", "SensorRef", "SensorWindow", "TimeBound",
-           "describe", "in_area", "parse_fl", "parse_sensor", "parse_time", "parse_window", "recorded",
+           "check_order", "describe", "in_area", "parse_fl", "parse_sensor", "parse_time", "parse_window",
+           "recorded",
            "select_reports", "sensor_parts", "with_site"]
