@@ -141,7 +141,7 @@ def cmd_decode(args) -> int:
     if result.skipped:
         print(f"msdc: {len(result.skipped)} block(s) skipped", file=sys.stderr)
     if result.selection is not None:
-        print(_selection_line(result.selection))
+        print(_selection_line(result.selection).replace(" reports ", " records "))
     _list_written("decode", {f"CAT{cat:03d} records": p for cat, p in result.outputs.items()}, tx.written,
                   decode.side_files(result.output))
     if sum(result.counts.values()) == 0:
@@ -177,7 +177,7 @@ def _selection_line(record: dict) -> str:
     """The report selection's line on the terminal (report_selection.describe)."""
     from msdc.pipeline.model.report_selection import describe
 
-    return describe(record).replace(" reports ", " records ")
+    return describe(record)
 
 
 def cmd_correlate(args) -> int:
@@ -321,6 +321,8 @@ def _run_job(name: str, validate, job, options, progress: Progress):
         raise
     _warn(name, result.warnings[seen:])
     _report_skipped(result.loaded.errors)
+    if result.loaded.selection is not None:
+        print(f"msdc {name}: {_selection_line(result.loaded.selection)}", file=sys.stderr)
     return result
 
 

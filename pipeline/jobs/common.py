@@ -837,7 +837,7 @@ def run_parameters(options: AircraftOptions, loaded: Loaded, started: float, com
                 f"CAT{c:03d}": e for c, e in sorted(loaded.editions.items())},
             "sensors": sensors_path(options), "date": loaded.date.isoformat() if loaded.date else None,
             "adsb_sigma_m": options.adsb_sigma_m,
-            **({"selection": loaded.selection} if loaded.selection else {})}
+            **({"report_selection": loaded.selection} if loaded.selection else {})}
 
 
 def quality_inputs(reference: str) -> list[str]:

@@ -210,7 +210,7 @@ def _write_selection(path: Path, record: dict, options: DecodeOptions) -> None:
     from msdc.pipeline.meta import software_version
 
     doc = {"software": f"msdc {software_version()}", "inputs": [str(p) for p in options.inputs],
-           "selection": record}
+           "report_selection": record}
     path.write_text(json.dumps(doc, indent=1) + "\n", encoding="utf-8")
 
 

@@ -65,20 +65,22 @@ def _recorded(command: str, d: Path, out: str) -> dict:
         kept, total = (int(v) for v in line.split(": ", 1)[1].split(" records")[0].split(" of "))
         return {"kept": kept, "reports": total}
     if command == "decode":
-        return json.loads((d / "out_selection.json").read_text())["selection"]
+        return json.loads((d / "out_selection.json").read_text())["report_selection"]
     name = {"correlate": "c", "quality": "q", "track": "t", "conflicts": "k"}[command]
-    return json.loads((d / f"{name}.json").read_text())["parameters"]["selection"]
+    return json.loads((d / f"{name}.json").read_text())["parameters"]["report_selection"]
 
 
 @pytest.mark.parametrize("command", list(COMMANDS))
 def test_every_command_reads_only_the_selected_reports(command, tmp_path, capsys, decoded):
     argv = [command, *INPUTS, *WINDOW, *(a.format(d=tmp_path) for a in COMMANDS[command])]
     assert main(argv) == 0, capsys.readouterr().err
-    out = capsys.readouterr().out
+    out, err = capsys.readouterr()
     record = _recorded(command, tmp_path, out)
     kept, total = _expected_window(decoded)
     assert 500 < kept < total / 2
     assert (record["kept"], record["reports"]) == (kept, total)
+    said = out if command in ("decode", "stats") else err  # the terminal says it too
+    assert f": {kept} of {total} re" in next(x for x in said.splitlines() if "selection --from 08:10" in x)
     if command != "stats":
         assert record["from_utc"] == f"{DAY}T08:10:00+00:00" and record["to_utc"] == f"{DAY}T08:16:00+00:00"
         assert record["fl"] == [100.0, 300.0] and record["sensors"] == ["25/201", "021:0/1"]
@@ -91,7 +93,7 @@ def test_every_command_reads_only_the_selected_reports(command, tmp_path, capsys
 
         ws = openpyxl.load_workbook(tmp_path / "q.xlsx", read_only=True)["Parameters"]
         rows = {(r[0], r[1]): r[2] for r in ws.iter_rows(values_only=True) if len(r) >= 3}
-        assert rows[("selection", "kept")] == kept and rows[("selection", "from")] == "08:10"
+        assert rows[("report_selection", "kept")] == kept and rows[("report_selection", "from")] == "08:10"
 
 
 def test_decode_writes_only_the_selected_records(tmp_path, capsys, decoded):
