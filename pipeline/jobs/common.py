@@ -540,8 +540,7 @@ def _load_measurements(options: AircraftOptions, checked: Checked, progress: Pro
         raise _no_records(exc) from exc
     if progress:
         progress.stage(stage)
-    meas = selected_reports(meas, checked, loaded)
-    warnings = []
+    meas, warnings = selected_reports(meas, checked, loaded)
     if len(loaded.stray_radar):
         from msdc.pipeline.model.sensors import UnknownRadar, stray_verdict
 
@@ -567,16 +566,16 @@ def _load_measurements(options: AircraftOptions, checked: Checked, progress: Pro
     return loaded, meas, warnings
 
 
-def selected_reports(meas: pd.DataFrame, checked: Checked, loaded: Loaded) -> pd.DataFrame:
+def selected_reports(meas: pd.DataFrame, checked: Checked, loaded: Loaded) -> tuple[pd.DataFrame, list[str]]:
     """The measurements the report selection keeps (pipeline.model.report_selection), before anything is
     computed from them, with what it kept and left out recorded in ``loaded.selection`` (run_parameters
-    records it); OptionError when a time cannot be placed on the recording's day, JobError when no report
-    is left."""
+    records it), and a warning per kind of sensor the inputs hold of which it keeps no report; OptionError
+    when a time cannot be placed on the recording's day, JobError when no report is left."""
     from msdc.pipeline.model.report_selection import describe, recorded, select_reports
 
     selection = checked.selection
     if selection is None or not selection.active:
-        return meas
+        return meas, []
     try:
         keep, left_out = select_reports(meas, selection, loaded.date)
     except ValueError as exc:
@@ -585,9 +584,14 @@ def selected_reports(meas: pd.DataFrame, checked: Checked, loaded: Loaded) -> pd
     if not keep.any():
         raise JobError(f"{describe(loaded.selection)}: no report is left to analyse")
     attrs = dict(meas.attrs)
+    kinds = meas["sensor_kind"].astype(str) if "sensor_kind" in meas else None
     meas = meas[keep].reset_index(drop=True)
     meas.attrs = attrs
-    return meas
+    gone = [] if kinds is None else sorted(set(kinds) - set(kinds[keep]))
+    nouns = {"radar": "radar (CAT048)", "adsb": "ADS-B (CAT021)", "mlat": "multilateration (CAT010/CAT020)",
+             "smr": "surface radar (CAT010)"}
+    return meas, [f"the report selection keeps no {nouns.get(k, k)} report of the {int((kinds == k).sum())} "
+                  "in the inputs: what needs them is empty" for k in gone]
 
 
 def unplaced_warnings(loaded: Loaded, options: AircraftOptions) -> list[str]:
@@ -791,7 +795,8 @@ def tracker_measurements(loaded, checked: Checked, options: TrackOptions) -> tup
             raise unknown_radar_error(exc.missing, sensors_path(options)) from exc
         except UnknownReferencePoint as exc:
             raise unknown_reference_error(exc.missing, sensors_path(options)) from exc
-    meas = selected_reports(meas, checked, loaded)
+    meas, said = selected_reports(meas, checked, loaded)
+    warnings += said
     warnings += list(meas.attrs.get("coverage_warnings", ()))
     warnings += list(meas.attrs.get("identity_warnings", ()))
     if local and local != {"mlat", "smr"} and len(meas):  # CAT010 holds both kinds: the one not asked goes

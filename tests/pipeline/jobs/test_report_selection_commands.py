@@ -175,3 +175,13 @@ def test_a_selection_that_leaves_nothing_says_so(tmp_path, capsys, decoded):
     total = sum(len(f) for f in decoded.values())
     assert status == 1 and f"--fl 900:1000: 0 of {total} reports kept" in err and "no report is left" in err
     assert not list(tmp_path.iterdir())
+
+
+def test_a_selection_that_keeps_no_adsb_says_what_is_left_empty(tmp_path, capsys, decoded):
+    assert main(["quality", *INPUTS, *SENSORS, "--all", "--sensor", "048:25/201",
+                 "--json", str(tmp_path / "q.json")]) == 0
+    err = capsys.readouterr().err
+    assert (f"the report selection keeps no ADS-B (CAT021) report of the {len(decoded[21])} in the inputs"
+            in err)
+    record = json.loads((tmp_path / "q.json").read_text())["parameters"]["report_selection"]
+    assert record["kept"] == len(decoded[48]) and record["left_out"] == {"sensor": len(decoded[21])}
