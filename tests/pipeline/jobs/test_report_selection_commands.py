@@ -11,6 +11,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 import pytest
+from asterix_bytes import SHARED
 from matplotlib.path import Path as MplPath
 
 import msdc.asterix as asterix
@@ -185,3 +186,25 @@ def test_a_selection_that_keeps_no_adsb_says_what_is_left_empty(tmp_path, capsys
             in err)
     record = json.loads((tmp_path / "q.json").read_text())["parameters"]["report_selection"]
     assert record["kept"] == len(decoded[48]) and record["left_out"] == {"sensor": len(decoded[21])}
+
+
+REAL_RADAR = SHARED / "real" / "230502-est-080001_BCN_60MN_08_09.ast"
+
+
+@pytest.mark.skipif(not REAL_RADAR.exists(), reason="../shared/real (the real recordings) is not beside the "
+                    "repository")
+def test_the_real_radar_hour_against_the_independent_decoders_values(tmp_path, capsys):
+    """08:15 to 08:45 at FL 100 and above within 40 NM of the radar, azimuth 300 through north to 120 deg:
+    counted from the values two independent decoders agree on (expected.csv.gz), not from msdc's."""
+    agreed = pd.read_csv(REAL_RADAR.with_name(REAL_RADAR.name + ".expected.csv.gz"))
+    t, theta = agreed["time_of_day"], agreed["theta_deg"]
+    expected = ((t >= 8.25 * 3600) & (t < 8.75 * 3600) & (agreed["flight_level"] >= 100)
+                & (agreed["rho_nm"] <= 40) & ((theta >= 300) | (theta <= 120)))
+    assert 1000 < expected.sum() < len(agreed) / 4
+    site = tmp_path / "bcn.toml"  # the site matters only for other sensors' reports: there are none
+    site.write_text('[[sensor]]\nname = "BCN"\nsac = 20\nsic = 129\nlatitude = 41.297\nlongitude = 2.078\n'
+                    'altitude_m = 0.0\n')
+    assert main(["decode", str(REAL_RADAR), "--sensors", str(site), "--date", "2023-05-02", "--from", "08:15",
+                 "--to", "2023-05-02T08:45Z", "--fl", "100:", "--area", "20/129:0-40nm:300-120deg",
+                 "-o", str(tmp_path / "out.csv")]) == 0
+    assert pd.read_csv(tmp_path / "out.csv")["offset"].tolist() == agreed.loc[expected, "offset"].tolist()
