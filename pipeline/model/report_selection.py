@@ -281,16 +281,14 @@ def with_site(window: SensorWindow, sensors: pd.DataFrame, sensors_path: str | N
 def sensor_parts(sensor_ids) -> pd.DataFrame:
     """category, sac, sic and kind of each "CCC:SAC/SIC[:kind]" sensor id (-1 and None where unreadable),
     worked out once per distinct id."""
-    ids = pd.Series(sensor_ids).astype("string").fillna("")
-    codes, uniques = pd.factorize(ids)
+    codes, uniques = pd.factorize(pd.Series(sensor_ids))  # a categorical's codes: no text per row
     rows = []
-    for u in uniques:
-        m = _SENSOR.fullmatch(str(u))
+    for u in [*uniques, None]:  # the last row: a missing id (code -1)
+        m = _SENSOR.fullmatch(str(u)) if u is not None and not pd.isna(u) else None
         rows.append((int(m.group(1)), int(m.group(2)), int(m.group(3)), m.group(4)) if m and m.group(1)
                     else (-1, -1, -1, None))
-    table = pd.DataFrame(rows, columns=["category", "sac", "sic", "kind"]) if rows else pd.DataFrame(
-        {"category": [], "sac": [], "sic": [], "kind": []})
-    return table.iloc[codes].reset_index(drop=True) if len(codes) else table.iloc[:0]
+    table = pd.DataFrame(rows, columns=["category", "sac", "sic", "kind"])
+    return table.iloc[np.where(codes < 0, len(uniques), codes)].reset_index(drop=True)
 
 
 def select_reports(reports: pd.DataFrame, selection: ReportSelection, day: dt.date | None
