@@ -876,7 +876,15 @@ def quality_step(meas: pd.DataFrame, sensors: pd.DataFrame, options: CorrelateOp
         return quality_run(meas, sensors, callsign=options.callsign, address=options.address,
                            gap_s=options.gap_s, reference=getattr(options, "reference", "adsb"))
     except NoSuchAircraft as exc:
-        raise JobError(str(exc)) from exc
+        raise JobError(str(exc) + selection_note(options)) from exc
+
+
+def selection_note(options: DecodingOptions) -> str:
+    """What to add to "not seen" when a report selection was given: it may be why."""
+    given = [flag for flag, value in (("--from", options.from_time), ("--to", options.to_time),
+                                      ("--area", options.area), ("--fl", options.fl),
+                                      ("--sensor", options.sensor_ids)) if value]
+    return (f" (among the reports the selection keeps: {', '.join(given)})" if given else "")
 
 
 QUALITY_FIGURE_GLOBS = ("_intervals.png", "_radar_errors_*_*.png")  # quality_figures' names, as globs

@@ -208,3 +208,11 @@ def test_the_real_radar_hour_against_the_independent_decoders_values(tmp_path, c
                  "--to", "2023-05-02T08:45Z", "--fl", "100:", "--area", "20/129:0-40nm:300-120deg",
                  "-o", str(tmp_path / "out.csv")]) == 0
     assert pd.read_csv(tmp_path / "out.csv")["offset"].tolist() == agreed.loc[expected, "offset"].tolist()
+
+
+def test_an_aircraft_not_seen_names_the_selection_as_a_possible_cause(capsys):
+    """SIA305's ADS-B reports are all left out by --sensor: 'not seen by ADS-B' says the selection ran."""
+    status = main(["correlate", *INPUTS, *SENSORS, "--callsign", "SIA305", "--sensor", "048:25/201"])
+    err = capsys.readouterr().err
+    assert status == 1 and "SIA305 not seen by ADS-B" in err
+    assert "(among the reports the selection keeps: --sensor)" in err
