@@ -10,6 +10,8 @@ import json
 import numpy as np
 import pandas as pd
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 from matplotlib.path import Path as MplPath
 
 from fixtures import geodesy as geo
@@ -266,3 +268,26 @@ def test_a_window_needs_the_sensor_in_the_sensor_file():
         rs.with_site(window, sensors, "s.toml")
     with pytest.raises(ValueError, match="needs the sensor's site: give --sensors"):
         rs.with_site(window, sensors, None)
+
+
+@settings(deadline=None)
+@given(st.lists(st.integers(0, 86_399_999), min_size=1, max_size=60), st.integers(0, 86_399_999),
+       st.integers(0, 86_399_999))
+def test_consecutive_windows_split_the_reports_without_sharing_one(ms, a, b):
+    """[from, b) and [b, to) keep disjoint reports whose union is [from, to)'s: no report counted twice at a
+    boundary, none lost (times in milliseconds of the day, bounds as times of day)."""
+    lo, hi = sorted((a, b))
+    mid = (lo + hi) // 2
+    frame = _reports(time=pd.Series(pd.Timestamp("2023-05-02", tz="UTC") + pd.to_timedelta(ms, unit="ms")))
+
+    def kept(start: int, end: int) -> np.ndarray:
+        clock = [f"{t // 3_600_000:02d}:{t // 60_000 % 60:02d}:{t % 60_000 / 1000:06.3f}"
+                 for t in (start, end)]
+        sel = rs.ReportSelection(start=rs.parse_time(clock[0], "--from"), end=rs.parse_time(clock[1], "--to"))
+        return rs.select_reports(frame, sel, DAY)[0]
+
+    if not lo < mid < hi:
+        return
+    first, second, whole = kept(lo, mid), kept(mid, hi), kept(lo, hi)
+    assert not (first & second).any() and ((first | second) == whole).all()
+    assert whole.tolist() == [lo <= t < hi for t in ms]
