@@ -140,6 +140,8 @@ def cmd_decode(args) -> int:
             print(f"CAT{cat:03d}: {result.counts.get(cat, 0)} records -> {p}")
     if result.skipped:
         print(f"msdc: {len(result.skipped)} block(s) skipped", file=sys.stderr)
+    if result.selection is not None:
+        print(_selection_line(result.selection).replace(" reports ", " records "))
     _list_written("decode", {f"CAT{cat:03d} records": p for cat, p in result.outputs.items()}, tx.written,
                   decode.side_files(result.output))
     if sum(result.counts.values()) == 0:
@@ -157,14 +159,25 @@ def cmd_stats(args) -> int:
     options = from_args(stats.StatsOptions, args)
     result = stats.stats_job(options, progress=Progress())
     _warn("stats", result.warnings)
+    if result.selection is not None:
+        print(_selection_line(result.selection).replace(" reports ", " records "))
     print(format_stats(result.tables), end="")
     for info in result.inputs:
         for cat, why in info["edition_choice"].items():
             print(f"{info['path']}: CAT{cat:03d} edition auto {why}")
     if not result.records:
-        print("msdc: nothing could be decoded", file=sys.stderr)
+        left = result.selection is not None and result.selection["reports"]
+        print("msdc: the selection left no record" if left else "msdc: nothing could be decoded",
+              file=sys.stderr)
         return 1
     return 0
+
+
+def _selection_line(record: dict) -> str:
+    """The report selection's line on the terminal (report_selection.describe)."""
+    from msdc.pipeline.model.report_selection import describe
+
+    return describe(record)
 
 
 def cmd_correlate(args) -> int:
@@ -308,6 +321,8 @@ def _run_job(name: str, validate, job, options, progress: Progress):
         raise
     _warn(name, result.warnings[seen:])
     _report_skipped(result.loaded.errors)
+    if result.loaded.selection is not None:
+        print(f"msdc {name}: {_selection_line(result.loaded.selection)}", file=sys.stderr)
     return result
 
 

@@ -53,6 +53,7 @@ from msdc.pipeline.report.transaction import output_problem, side_pattern, targe
 
 if TYPE_CHECKING:  # the steps are imported where they run: msdc stats imports none of them
     from msdc.pipeline.jobs.options import SelectionOptions
+    from msdc.pipeline.model.report_selection import ReportSelection
     from msdc.pipeline.model.selection import Selection
     from msdc.pipeline.quality.quality_run import QualityResult
     from msdc.pipeline.report.transaction import OutputTransaction
@@ -272,8 +273,49 @@ def check_decoding(o: DecodingOptions) -> Checked:
     inputs = [o.inputs] if isinstance(o.inputs, str | Path) else list(o.inputs)  # one path is one input
     editions = o.editions if isinstance(o.editions, dict) else [o.editions] if isinstance(
         o.editions, str) else list(o.editions)  # {21: "0.26"} as asterix.read takes it, or "21=0.26"
+    selection = check_report_selection(o)
     paths, warnings = _inputs(inputs)
-    return Checked(paths, _editions(editions), warnings=warnings)
+    return Checked(paths, _editions(editions), warnings=warnings, selection=selection)
+
+
+def check_report_selection(o: DecodingOptions) -> ReportSelection:
+    """--from, --to, --area, --fl and --sensor as a ReportSelection (pipeline.model.report_selection), the
+    polygon file read and a sensor window's site looked up in --sensors; OptionError naming the option and
+    value. A time of day is placed on the recording's day once it is known (ReportSelection.window)."""
+    from msdc.pipeline.model import report_selection as rs
+    from msdc.pipeline.model.polygons import read_polygons
+
+    try:
+        start = rs.parse_time(o.from_time, "--from") if o.from_time is not None else None
+        end = rs.parse_time(o.to_time, "--to") if o.to_time is not None else None
+        if start is not None and end is not None and (start.instant is None) == (end.instant is None):
+            rs.check_order(start, end)  # said now; a time of day and a date-time: once placed
+        fl = rs.parse_fl(o.fl) if o.fl is not None else None
+        ids = (o.sensor_ids,) if isinstance(o.sensor_ids, str) else tuple(o.sensor_ids or ())
+        sensors = tuple(dict.fromkeys(rs.parse_sensor(s) for s in ids))
+    except ValueError as exc:
+        raise OptionError(str(exc)) from None
+    area = None
+    if o.area is not None:
+        nonempty_path("--area", o.area)
+        text = str(o.area)
+        if text.lower().endswith((".geojson", ".json")) or Path(text).exists():
+            problem = _not_a_file(Path(text), "--area", "a GeoJSON file")
+            if problem:
+                raise OptionError(f"--area {text}: {problem}")
+            try:
+                area = read_polygons(text)
+            except ValueError as exc:
+                raise OptionError(f"--area {exc}") from None
+        else:
+            try:
+                window = rs.parse_window(text)
+                table = sensor_table(o.sensors, required=False)
+                area = rs.with_site(window, table, None if o.sensors is None else str(o.sensors))
+            except ValueError as exc:
+                raise OptionError(str(exc)) from None
+    return rs.ReportSelection(start=start, end=end, area=area, area_text=None if o.area is None else str(
+        o.area), fl=fl, fl_text=o.fl, sensors=sensors)
 
 
 def check_aircraft(o: AircraftOptions) -> None:
@@ -349,6 +391,7 @@ class Checked:
     output: Path | None = None
     json: Path | None = None
     warnings: list[str] = field(default_factory=list)
+    selection: ReportSelection | None = None  # --from, --to, --area, --fl, --sensor (check_report_selection)
 
 
 def check_workbook(options: AircraftOptions, checked: Checked, *, figure_windows: int | None,
@@ -479,6 +522,11 @@ def _load_measurements(options: AircraftOptions, checked: Checked, progress: Pro
     from msdc.asterix.errors import UnreadableInput
     from msdc.pipeline.model.load import RADAR_AND_ADSB
 
+    if columns is not None and checked.selection is not None and checked.selection.active:
+        from msdc.pipeline.model.report_selection import SELECTION_INPUTS
+        from msdc.pipeline.model.schema import column_names
+
+        columns = column_names(set(columns) | set(SELECTION_INPUTS))
     try:
         loaded, meas = load_measurements(checked.inputs, checked.sensors, editions=checked.editions or None,
                                          date=options.date, format=options.format,
@@ -492,7 +540,7 @@ def _load_measurements(options: AircraftOptions, checked: Checked, progress: Pro
         raise _no_records(exc) from exc
     if progress:
         progress.stage(stage)
-    warnings = []
+    meas, warnings = selected_reports(meas, checked, loaded)
     if len(loaded.stray_radar):
         from msdc.pipeline.model.sensors import UnknownRadar, stray_verdict
 
@@ -516,6 +564,34 @@ def _load_measurements(options: AircraftOptions, checked: Checked, progress: Pro
     warnings += list(meas.attrs.get("coverage_warnings", ()))
     warnings += list(meas.attrs.get("identity_warnings", ()))
     return loaded, meas, warnings
+
+
+def selected_reports(meas: pd.DataFrame, checked: Checked, loaded: Loaded) -> tuple[pd.DataFrame, list[str]]:
+    """The measurements the report selection keeps (pipeline.model.report_selection), before anything is
+    computed from them, with what it kept and left out recorded in ``loaded.selection`` (run_parameters
+    records it), and a warning per kind of sensor the inputs hold of which it keeps no report; OptionError
+    when a time cannot be placed on the recording's day, JobError when no report is left."""
+    from msdc.pipeline.model.report_selection import describe, recorded, select_reports
+
+    selection = checked.selection
+    if selection is None or not selection.active:
+        return meas, []
+    try:
+        keep, left_out = select_reports(meas, selection, loaded.date)
+    except ValueError as exc:
+        raise OptionError(str(exc)) from None
+    loaded.selection = recorded(selection, loaded.date, len(meas), int(keep.sum()), left_out)
+    if not keep.any():
+        raise JobError(f"{describe(loaded.selection)}: no report is left to analyse")
+    attrs = dict(meas.attrs)
+    kinds = meas["sensor_kind"].astype(str) if "sensor_kind" in meas else None
+    meas = meas[keep].reset_index(drop=True)
+    meas.attrs = attrs
+    gone = [] if kinds is None else sorted(set(kinds) - set(kinds[keep]))
+    nouns = {"radar": "radar (CAT048)", "adsb": "ADS-B (CAT021)", "mlat": "multilateration (CAT010/CAT020)",
+             "smr": "surface radar (CAT010)"}
+    return meas, [f"the report selection keeps no {nouns.get(k, k)} report of the {int((kinds == k).sum())} "
+                  "in the inputs: what needs them is empty" for k in gone]
 
 
 def unplaced_warnings(loaded: Loaded, options: AircraftOptions) -> list[str]:
@@ -719,6 +795,8 @@ def tracker_measurements(loaded, checked: Checked, options: TrackOptions) -> tup
             raise unknown_radar_error(exc.missing, sensors_path(options)) from exc
         except UnknownReferencePoint as exc:
             raise unknown_reference_error(exc.missing, sensors_path(options)) from exc
+    meas, said = selected_reports(meas, checked, loaded)
+    warnings += said
     warnings += list(meas.attrs.get("coverage_warnings", ()))
     warnings += list(meas.attrs.get("identity_warnings", ()))
     if local and local != {"mlat", "smr"} and len(meas):  # CAT010 holds both kinds: the one not asked goes
@@ -763,7 +841,8 @@ def run_parameters(options: AircraftOptions, loaded: Loaded, started: float, com
             "run_time_s": round(time.monotonic() - started, 3), "editions": {
                 f"CAT{c:03d}": e for c, e in sorted(loaded.editions.items())},
             "sensors": sensors_path(options), "date": loaded.date.isoformat() if loaded.date else None,
-            "adsb_sigma_m": options.adsb_sigma_m}
+            "adsb_sigma_m": options.adsb_sigma_m,
+            **({"report_selection": loaded.selection} if loaded.selection else {})}
 
 
 def quality_inputs(reference: str) -> list[str]:
@@ -797,7 +876,15 @@ def quality_step(meas: pd.DataFrame, sensors: pd.DataFrame, options: CorrelateOp
         return quality_run(meas, sensors, callsign=options.callsign, address=options.address,
                            gap_s=options.gap_s, reference=getattr(options, "reference", "adsb"))
     except NoSuchAircraft as exc:
-        raise JobError(str(exc)) from exc
+        raise JobError(str(exc) + selection_note(options)) from exc
+
+
+def selection_note(options: DecodingOptions) -> str:
+    """What to add to "not seen" when a report selection was given: it may be why."""
+    given = [flag for flag, value in (("--from", options.from_time), ("--to", options.to_time),
+                                      ("--area", options.area), ("--fl", options.fl),
+                                      ("--sensor", options.sensor_ids)) if value]
+    return (f" (among the reports the selection keeps: {', '.join(given)})" if given else "")
 
 
 QUALITY_FIGURE_GLOBS = ("_intervals.png", "_radar_errors_*_*.png")  # quality_figures' names, as globs

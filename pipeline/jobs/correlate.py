@@ -33,6 +33,7 @@ from msdc.pipeline.jobs.common import (
     quality_step,
     real_output,
     run_parameters,
+    selection_note,
     side_files_beside,
 )
 from msdc.pipeline.jobs.options import CorrelateOptions, check_declared
@@ -163,7 +164,8 @@ def correlate_job(options: CorrelateOptions, *, progress: Progress | None = None
                             all_aircraft=options.all_aircraft, slot_s=options.slot_s, gap_s=options.gap_s,
                             pairs=options.pairs, split_adsb=options.split_adsb, fill=options.fill)
         except NoSuchAircraft as exc:
-            raise JobError(_filtered_away(exc, meas_all, options) or str(exc)) from exc
+            raise JobError((_filtered_away(exc, meas_all, options) or str(exc)) + selection_note(options)
+                           ) from exc
         except NoOverlap as exc:
             raise JobError(str(exc)) from exc
         except TooManySlots as exc:

@@ -20,10 +20,19 @@ from msdc.pipeline.jobs.common import (
     format_hints,
     output_path,
     real_output,
+    sensor_table,
     spare_inputs,
 )
-from msdc.pipeline.jobs.options import CATEGORIES, DEFAULT_CATEGORIES, DecodeOptions, check_declared
+from msdc.pipeline.jobs.options import (
+    CATEGORIES,
+    DEFAULT_CATEGORIES,
+    DecodeOptions,
+    OptionError,
+    check_declared,
+)
 from msdc.pipeline.model import editions as edition_notes
+from msdc.pipeline.model.decoded_reports import select_decoded
+from msdc.pipeline.model.report_selection import describe, recorded
 from msdc.pipeline.report.files import named, write_csv
 from msdc.pipeline.report.transaction import OutputTransaction, side_pattern, staged
 
@@ -43,6 +52,10 @@ def validate(options: DecodeOptions) -> Checked:
         # written when several categories decode
         check_beside("-o", out, [(f"CAT{cat:03d} file", category_output(base, cat)) for cat in cats
                                  if len(cats) > 1])
+        if checked.selection is not None and checked.selection.active:
+            spare_inputs(options.inputs, [(f"-o {out}", selection_output(base))])
+            check_beside("-o", out, [("selection file", selection_output(base))])
+    checked.sensors = None if options.sensors is None else sensor_table(options.sensors)  # for --area
     return checked
 
 
@@ -57,6 +70,7 @@ class DecodeResult:
     notes: list[str] = field(default_factory=list)
     held: dict[str, dict[int, int]] = field(default_factory=dict)  # per input: data blocks per category
     output: Path | None = None  # -o as validated
+    selection: dict | None = None  # what the report selection kept and left out (report_selection.recorded)
 
     def nothing_decoded(self, categories: tuple[int, ...] = ()) -> str:
         """Why no record decoded, naming what each input holds (a --category the inputs lack, most often)."""
@@ -94,6 +108,10 @@ def decode_job(options: DecodeOptions, *, on_chunk: Callable[[int, int, str], No
     notes: list[str] = []
     cats = list(options.categories) or None
     csv = out is not None and out.suffix.lower() == ".csv"
+    selection = checked.selection if checked.selection is not None and checked.selection.active else None
+    left_out: dict[str, int] = {}
+    read = kept = 0
+    day = None  # the first dated input's day, recorded with the selection
     content: list[str] = []  # what the inputs turned out to be, when not sound (asterix.verdict)
     sniffed = set()  # inputs said to be not ASTERIX at once (decoded with --lenient)
     for path in checked.inputs:  # a file that is not ASTERIX at all is said at once
@@ -122,6 +140,15 @@ def decode_job(options: DecodeOptions, *, on_chunk: Callable[[int, int, str], No
                     tally.add(rec.frames)
                     account.add(rec)
                     date, fmt, chosen = date or rec.date, rec.format, {**rec.edition_choice, **chosen}
+                    if selection is not None:
+                        day = day or rec.date
+                        try:
+                            rec.frames, n = select_decoded(rec.frames, selection, rec.date, checked.sensors,
+                                                           left_out)
+                        except ValueError as exc:
+                            raise OptionError(f"{exc} ({path})") from None
+                        read += n
+                        kept += sum(len(f) for f in rec.frames.values())
                     skipped += [(str(path), int(e.offset), str(e.reason)) for e in rec.errors.itertuples()]
                     edition_notes.fold(failed, rec)
                     for cat, frame in rec.frames.items():
@@ -148,6 +175,9 @@ def decode_job(options: DecodeOptions, *, on_chunk: Callable[[int, int, str], No
                 if hasattr(w, "close"):
                     with named(_shown(out, files, cat, stage), instead_of=files[cat]):
                         w.close()
+        record = recorded(selection, day, read, kept, left_out) if selection is not None else None
+        if record is not None and read and not kept:
+            raise JobError(f"{describe(record)}: no record is left to write; nothing written")
         several = len(files) > 1
         for cat in sorted(files):
             outputs[cat] = stage.final(files[cat]) if several else out
@@ -157,10 +187,31 @@ def decode_job(options: DecodeOptions, *, on_chunk: Callable[[int, int, str], No
                 files[cat].rename(stage.path(out))
         if content and not options.lenient:
             raise JobError("; ".join(content) + "; nothing written (--lenient writes what decodes anyway)")
+        if record is not None and out is not None and files:
+            side = stage.path(out).with_name(selection_output(out).name)
+            _write_selection(side, record, options)
+            notes.append(f"selection recorded in {stage.final(side)}")
     held = {} if sum(counts.values()) else {str(p): categories_in(p, format=options.format)
                                               for p in checked.inputs}
     warnings = checked.warnings + content + early_start + edition_notes.warnings(failed)
-    return DecodeResult(counts, outputs, skipped, warnings, notes, held, out)
+    counts = {cat: n for cat, n in counts.items() if n or selection is None}
+    return DecodeResult(counts, outputs, skipped, warnings, notes, held, out, record)
+
+
+def selection_output(out: Path) -> Path:
+    """Where decode records its report selection: ``OUT_selection.json`` beside ``OUT``."""
+    return out.with_name(f"{out.stem}_selection.json")
+
+
+def _write_selection(path: Path, record: dict, options: DecodeOptions) -> None:
+    """The selection file: the software, the command's selection and what it kept and left out."""
+    import json
+
+    from msdc.pipeline.meta import software_version
+
+    doc = {"software": f"msdc {software_version()}", "inputs": [str(p) for p in options.inputs],
+           "report_selection": record}
+    path.write_text(json.dumps(doc, indent=1) + "\n", encoding="utf-8")
 
 
 def category_output(out: Path, cat: int) -> Path:
@@ -175,7 +226,8 @@ def side_files(output: Path | None) -> list[Path]:
         return []
     base = real_output(output)
     return [side_pattern(base, glob.escape(base.suffix)),
-            side_pattern(base, f"_cat[0-9][0-9][0-9]{glob.escape(base.suffix)}")]
+            side_pattern(base, f"_cat[0-9][0-9][0-9]{glob.escape(base.suffix)}"),
+            side_pattern(base, "_selection.json")]
 
 
 def _shown(out: Path, files: dict[int, Path], cat: int, stage: OutputTransaction) -> Path:

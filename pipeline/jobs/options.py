@@ -301,6 +301,39 @@ class DecodingOptions:
 
     inputs: tuple[str, ...] = option((), metavar="INPUT", section="selection",
                                      doc="the recordings")
+    from_time: str | None = option(
+        None, "--from", metavar="TIME", section="selection",
+        help="read only reports at or after this UTC time: an ISO date-time (2023-05-02T08:10:00) or a time "
+             "of day (08:10, 08:10:30.5) on the recording's day",
+        doc="read only reports at or after this UTC time: an ISO date-time (`2023-05-02T08:10:00`, `Z` or "
+            "`+00:00` allowed) or a time of day (`08:10`, `08:10:30.5`) on the recording's day "
+            "([Selecting reports](selection.md))")
+    to_time: str | None = option(
+        None, "--to", metavar="TIME", section="selection",
+        help="read only reports before this UTC time (as --from; --to itself is left out)",
+        doc="read only reports before this UTC time, written as `--from` (the instant itself is left out: "
+            "consecutive windows share no report) ([Selecting reports](selection.md))")
+    area: str | None = option(
+        None, "--area", metavar="AREA", section="selection",
+        help="read only reports inside this area: a GeoJSON file of polygons, or SENSOR:A-Bnm:C-Ddeg, a "
+             "slant range and azimuth window of a sensor in --sensors (e.g. 20/129:0-60nm:30-120deg)",
+        doc="read only reports inside this area: a GeoJSON file (`.geojson`, `.json`) of Polygons or "
+            "MultiPolygons, or `SENSOR:A-Bnm:C-Ddeg`, slant range A to B NM and azimuth C to D degrees "
+            "clockwise from north from the site of SENSOR in `--sensors` (e.g. `20/129:0-60nm:30-120deg`; "
+            "`300-60deg` wraps through north) ([Selecting reports](selection.md))")
+    fl: str | None = option(
+        None, "--fl", metavar="MIN:MAX", section="selection",
+        help="read only reports whose own flight level is from MIN to MAX (e.g. 100:245, 245: or :100); "
+             "reports without one are left out",
+        doc="read only reports whose own flight level is from MIN to MAX, both included (`100:245`, `245:`, "
+            "`:100`); a report without a flight level is left out ([Selecting reports](selection.md))")
+    sensor_ids: tuple[str, ...] = option(
+        (), "--sensor", repeat=True, metavar="ID", section="selection",
+        help="read only this sensor's reports (repeatable): SAC/SIC (every category), CCC:SAC/SIC or "
+             "010:SAC/SIC:mlat, as the outputs' sensor_id names it",
+        doc="read only this sensor's reports (repeatable): `SAC/SIC` (any category), `CCC:SAC/SIC` (e.g. "
+            "`048:20/129`) or `010:SAC/SIC:mlat`, as the outputs' `sensor_id` names it "
+            "([Selecting reports](selection.md))")
     editions: tuple[str, ...] = option(  # "CAT=EDITION"
         (), "--edition", repeat=True, parse=edition_argument, metavar="CAT=ED", section="reading",
         help="pin a category edition, e.g. 21=0.26 or 48=1.27 (repeatable; a category whose editions walk "
@@ -315,6 +348,11 @@ class DecodingOptions:
                                 help="container format (default: detected)",
                                 doc="container format (default: detected; "
                                     "[Containers](../decoding/containers.md))")
+    sensors: str | None = option(None, "--sensors", section="selection",
+                                 help="sensor positions (TOML [[sensor]] tables); needed by --area with a "
+                                      "sensor window or radar plots",
+                                 doc="the sensors' positions ([the sensor file](sensors.md)); needed by "
+                                     "`--area` with a sensor window, or to place radar plots in a polygon")
 
 
 @dataclass(frozen=True)

@@ -17,17 +17,23 @@ from msdc.pipeline.jobs.common import (
     date_ignored,
     format_hints,
     order_warnings,
+    sensor_table,
 )
-from msdc.pipeline.jobs.options import StatsOptions, check_declared
+from msdc.pipeline.jobs.options import OptionError, StatsOptions, check_declared
 from msdc.pipeline.model import editions as edition_notes
+from msdc.pipeline.model.decoded_reports import VIEW_COLUMNS, select_decoded
 from msdc.pipeline.model.load import time_spans, widen_spans
+from msdc.pipeline.model.report_selection import recorded
 from msdc.pipeline.progress import Progress
 
 
 def validate(options: StatsOptions) -> Checked:
-    """Check the inputs, editions and --chunk-mb before any decoding; OptionError if bad."""
+    """Check the inputs, editions, --chunk-mb and the report selection before any decoding; OptionError if
+    bad."""
     check_declared(options)
-    return check_decoding(options)
+    checked = check_decoding(options)
+    checked.sensors = None if options.sensors is None else sensor_table(options.sensors)  # for --area
+    return checked
 
 
 @dataclass
@@ -38,6 +44,7 @@ class StatsResult:
     tables: dict[str, pd.DataFrame]
     inputs: list[dict]
     warnings: list[str]
+    selection: dict | None = None  # what the report selection kept and left out (report_selection.recorded)
 
     @property
     def records(self) -> int:
@@ -68,6 +75,11 @@ def stats_job(options: StatsOptions, *, progress: Progress | None = None) -> Sta
     early_start: list[str] = []  # FirstDayTally's warnings
     labels = file_labels(checked.inputs)
     content: list[str] = []  # what the inputs turned out to be, when not sound (asterix.verdict)
+    selection = checked.selection if checked.selection is not None and checked.selection.active else None
+    columns = STATS_COLUMNS if selection is None else (*STATS_COLUMNS, *VIEW_COLUMNS)
+    left_out: dict[str, int] = {}
+    n_read = kept = 0
+    day = None
     for i, path in enumerate(checked.inputs):
         if progress:
             progress.step(f"{path.name} ({i + 1}/{len(checked.inputs)})")
@@ -88,8 +100,17 @@ def stats_job(options: StatsOptions, *, progress: Progress | None = None) -> Sta
         try:
             # every category msdc decodes (tracks and status messages too: stats lists them per SAC/SIC)
             for rec in asterix.iter_read(path, chunk=chunk, editions=checked.editions or None,
-                                         date=options.date, format=options.format, columns=STATS_COLUMNS,
+                                         date=options.date, format=options.format, columns=columns,
                                          categories=DECODABLE, progress=bar):
+                if selection is not None:
+                    day = day or rec.date
+                    try:
+                        rec.frames, n = select_decoded(rec.frames, selection, rec.date, checked.sensors,
+                                                       left_out)
+                    except ValueError as exc:
+                        raise OptionError(f"{exc} ({path})") from None
+                    n_read += n
+                    kept += sum(len(f) for f in rec.frames.values())
                 acc.add(rec.frames, rec.errors, rec.ignored)
                 account.add(rec)
                 tally.add(rec.frames)
@@ -116,7 +137,8 @@ def stats_job(options: StatsOptions, *, progress: Progress | None = None) -> Sta
     read = [Path(info["path"]) for info in inputs]  # the inputs decoded: not those said to be not ASTERIX
     warnings = [*checked.warnings, *content, *edition_notes.warnings(failed), *order_warnings(read, spans),
                 *date_ignored(options, inputs), *format_hints(options, inputs), *early_start]
-    return StatsResult(acc.tables(), inputs, warnings)
+    record = recorded(selection, day, n_read, kept, left_out) if selection is not None else None
+    return StatsResult(acc.tables(), inputs, warnings, record)
 
 
 __all__ = ["StatsOptions", "StatsResult", "stats_job", "validate"]

@@ -41,6 +41,8 @@ class Loaded:
     # CAT010/CAT020 reports with Cartesian positions and no reference point, left out
     # (multilateration.UNPLACED_COLUMNS, for measurements.unplaced_verdict)
     unplaced: pd.DataFrame = field(default_factory=pd.DataFrame)
+    # the report selection's record (pipeline.model.report_selection.recorded), None when none was given
+    selection: dict | None = None
 
     @property
     def errors(self) -> pd.DataFrame:

@@ -31,7 +31,9 @@ from msdc.pipeline.jobs.options import (
 )
 
 ROOT = Path(__file__).resolve().parents[3]
-READING = {"--edition": "editions", "--date": "date", "--format": "format"}
+# the report selection every command takes (pipeline.model.report_selection)
+READING = {"--edition": "editions", "--date": "date", "--format": "format", "--from": "from_time",
+           "--to": "to_time", "--area": "area", "--fl": "fl", "--sensor": "sensor_ids"}
 SELECTION = {"--sensors": "sensors", "--callsign": "callsign", "--address": "address",
              "--all": "all_aircraft"}
 TRACKING = {"--figures": "figures", "--figures-limit": "figures_limit", "--figures-only": "figures_only",
@@ -42,8 +44,8 @@ TRACKING = {"--figures": "figures", "--figures-limit": "figures_limit", "--figur
 EXPECTED = {
     "decode": {"INPUT": "inputs", "--output": "output", "--category": "categories", "--strict": "strict",
                "--lenient": "lenient",
-               "--chunk-mb": "chunk_mb", **READING},
-    "stats": {"INPUT": "inputs", "--chunk-mb": "chunk_mb", **READING},
+               "--chunk-mb": "chunk_mb", "--sensors": "sensors", **READING},
+    "stats": {"INPUT": "inputs", "--chunk-mb": "chunk_mb", "--sensors": "sensors", **READING},
     "correlate": {"INPUT": "inputs", **SELECTION, "--output": "output", "--json": "json", "--slot": "slot_s",
                   "--gap": "gap_s", "--pairs": "pairs", "--split-adsb": "split_adsb", "--quality": "quality",
                   "--drop-jumps": "drop_jumps", "--min-nic": "min_nic", "--min-nacp": "min_nacp",
@@ -98,7 +100,8 @@ def test_inherited_options_are_redeclared_where_they_differ():
     sensors = {cmd: [a for a in _subparsers()[cmd]._actions if a.dest == "sensors"] for cmd in EXPECTED}
     assert sensors["correlate"][0].required and not sensors["quality"][0].required
     assert "needed when radar plots are used" in sensors["quality"][0].help
-    assert not sensors["decode"] and not sensors["stats"]
+    for cmd in ("decode", "stats"):  # only --area reads it there
+        assert not sensors[cmd][0].required and "--area" in sensors[cmd][0].help
     assert TrackOptions().noise == "estimate" and ConflictOptions().noise == "declared"
     assert ConflictOptions().all_aircraft and not TrackOptions().all_aircraft
     assert TrackOptions.__dataclass_fields__["max_coast_s"] is ConflictOptions.__dataclass_fields__[
