@@ -267,8 +267,9 @@ ROW_GROUP_BYTES = 32 << 20  # Arrow bytes of chunks gathered into one Parquet ro
 
 class ParquetSink:
     """Chunks of one category gathered into row groups of about ROW_GROUP_BYTES: the writer keeps every row
-    group's metadata until it closes (~75 kB a group of 87 columns), so a row group per 8 MB chunk grew
-    decode's memory by ~57 MB from a 1 GB to a 4 GB recording (issue #27 item 6)."""
+    group's metadata until it closes (~75 kB a group of 87 columns), so small chunks (--chunk-mb below
+    about 1) would each add theirs. An 8 MB chunk of CAT048 (~360 Arrow bytes a record) is a group alone:
+    its metadata is what decode's memory still grows by with the file (issue #27 item 6)."""
 
     def __init__(self, writer) -> None:
         self.writer, self.pending, self.pending_bytes = writer, [], 0
