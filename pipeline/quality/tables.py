@@ -3,8 +3,9 @@
 Rows are per aircraft (``aircraft_id``, pipeline.model.identity; "(all)" pools every aircraft) and per
 sensor (radar or ADS-B, with its SAC/SIC). Everything after the duplicate count is computed on
 de-duplicated reports (``pipeline.model.dedup``, per aircraft and sensor). Update intervals are the time
-differences between consecutive reports of one aircraft from one sensor of at most ``gap_s``; longer
-ones are gaps (listed with their start and end; "reappeared_after_1h" when longer than an hour). An
+differences between consecutive reports of one aircraft from one sensor of at most ``gap_s`` (their
+count, min, median, 95th percentile and ``interval_max_within_gap_s``; ``interval_max_s`` is the longest
+interval of all, gaps included); longer ones are gaps (listed with their start and end; "reappeared_after_1h" when longer than an hour). An
 aircraft known by its Mode 3/A code alone is labelled with it ("M3A:7052"); reports of no aircraft (no
 address, call sign or Mode 3/A) get one row per sensor labelled "(no identity)", counted but with no
 intervals or gaps: they are many targets, and time between them measures nothing.
@@ -43,9 +44,9 @@ ID_KEYS = ["callsign", "address", *SENSOR_KEYS]
 QUALITY_COLUMNS = [
     *ID_KEYS, "reports", "duplicates_removed", "reports_after_dedup", "first_tod", "last_tod",
     "first_utc", "last_utc", "intervals", "interval_min_s", "interval_median_s", "interval_p95_s",
-    "interval_max_s", "gaps", "longest_gap_s", "reappearances", "speed_missing", "speed_zero",
-    "speed_missing_or_zero", "speed_missing_or_zero_pct", "jumps", "nucp_below_5_pct", "nic_below_6_pct",
-    "low_integrity_pct", "mops_versions",
+    "interval_max_s", "interval_max_within_gap_s", "gaps", "longest_gap_s", "reappearances", "speed_missing",
+    "speed_zero", "speed_missing_or_zero", "speed_missing_or_zero_pct", "jumps", "nucp_below_5_pct",
+    "nic_below_6_pct", "low_integrity_pct", "mops_versions",
 ]
 HISTOGRAM_COLUMNS = [*SENSOR_KEYS, "bin_start_s", "bin_end_s", "intervals"]
 GAP_COLUMNS = [*ID_KEYS, "gap_start_tod", "gap_end_tod", "gap_start_utc", "gap_end_utc", "gap_duration_s",
@@ -104,14 +105,17 @@ def _deduplicated_rows(frame: pd.DataFrame, by: list[str]) -> np.ndarray:
     return np.concatenate(rows) if rows else np.zeros(0, np.int64)
 
 
-def _interval_stats(intervals_s: np.ndarray) -> dict:
+def _interval_stats(intervals_s: np.ndarray, longest_s: float = np.nan) -> dict:
+    """Count, min, median, 95th percentile and maximum of the intervals within the gap rule, and
+    ``interval_max_s`` the longest interval between successive reports, gaps included (``longest_s``)."""
     if intervals_s.size == 0:
-        return {"intervals": 0} | dict.fromkeys(
-            ["interval_min_s", "interval_median_s", "interval_p95_s", "interval_max_s"], np.nan)
+        return {"intervals": 0, "interval_min_s": np.nan, "interval_median_s": np.nan, "interval_p95_s": np.nan,
+                "interval_max_s": longest_s, "interval_max_within_gap_s": np.nan}
     return {"intervals": int(intervals_s.size), "interval_min_s": float(intervals_s.min()),
             "interval_median_s": float(np.median(intervals_s)),
             "interval_p95_s": float(np.percentile(intervals_s, 95)),
-            "interval_max_s": float(intervals_s.max())}
+            "interval_max_s": float(np.fmax(intervals_s.max(), longest_s)),
+            "interval_max_within_gap_s": float(intervals_s.max())}
 
 
 def _speed_stats(gs_kt: pd.Series) -> dict:
@@ -157,7 +161,8 @@ def _group_rows(group: pd.DataFrame, gap_s: float,
             for i in gap]
     row = {**ident, "reports": len(group), "duplicates_removed": dups, "reports_after_dedup": len(clean),
            "first_tod": t[0], "last_tod": t[-1], "first_utc": stamps.iloc[0],
-           "last_utc": stamps.iloc[-1], **_interval_stats(within), "gaps": len(gaps),
+           "last_utc": stamps.iloc[-1], **_interval_stats(within, float(dt.max()) if dt.size else np.nan),
+           "gaps": len(gaps),
            "longest_gap_s": float(dt[gap].max()) if gap.size else np.nan,
            "reappearances": sum(g["reappeared_after_1h"] for g in gaps),
            **_speed_stats(clean["ground_speed_kt"])}
@@ -192,7 +197,8 @@ def _pooled_row(rows: list[dict], intervals: list[np.ndarray], sensor_id: tuple,
     row["first_tod"], row["last_tod"] = frame["first_tod"].min(), frame["last_tod"].max()
     first, last = frame["first_tod"].idxmin(), frame["last_tod"].idxmax()
     row["first_utc"], row["last_utc"] = frame.loc[first, "first_utc"], frame.loc[last, "last_utc"]
-    row |= _interval_stats(np.concatenate(intervals) if intervals else np.array([]))
+    row |= _interval_stats(np.concatenate(intervals) if intervals else np.array([]),
+                           frame["interval_max_s"].max())
     row["longest_gap_s"] = frame["longest_gap_s"].max()
     row["speed_missing_or_zero_pct"] = (100.0 * row["speed_missing_or_zero"] / row["reports_after_dedup"]
                                         if row["reports_after_dedup"] else np.nan)
