@@ -5,10 +5,11 @@ sensor (radar or ADS-B, with its SAC/SIC). Everything after the duplicate count 
 de-duplicated reports (``pipeline.model.dedup``, per aircraft and sensor). Update intervals are the time
 differences between consecutive reports of one aircraft from one sensor of at most ``gap_s`` (their
 count, min, median, 95th percentile and ``interval_max_within_gap_s``; ``interval_max_s`` is the longest
-interval of all, gaps included); longer ones are gaps (listed with their start and end; "reappeared_after_1h" when longer than an hour). An
-aircraft known by its Mode 3/A code alone is labelled with it ("M3A:7052"); reports of no aircraft (no
-address, call sign or Mode 3/A) get one row per sensor labelled "(no identity)", counted but with no
-intervals or gaps: they are many targets, and time between them measures nothing.
+interval of all, gaps included); longer ones are gaps (listed with their start and end;
+"reappeared_after_1h" when longer than an hour). An aircraft known by its Mode 3/A code alone is
+labelled with it ("M3A:7052"); reports of no aircraft (no address, call sign or Mode 3/A) get one row
+per sensor labelled "(no identity)", counted but with no intervals or gaps: they are many targets, and
+time between them measures nothing.
 Columns ending ``_utc`` (and the jumps' ``utc``) are instants, datetime64[ns, UTC], NaT when the
 recording is undated (its ``*_tod`` columns then give the time of day); JSON writes them as ISO 8601.
 Columns ending ``_tod`` are times of day in seconds since midnight UTC, like ``time_of_day``; the workbook
@@ -109,8 +110,8 @@ def _interval_stats(intervals_s: np.ndarray, longest_s: float = np.nan) -> dict:
     """Count, min, median, 95th percentile and maximum of the intervals within the gap rule, and
     ``interval_max_s`` the longest interval between successive reports, gaps included (``longest_s``)."""
     if intervals_s.size == 0:
-        return {"intervals": 0, "interval_min_s": np.nan, "interval_median_s": np.nan, "interval_p95_s": np.nan,
-                "interval_max_s": longest_s, "interval_max_within_gap_s": np.nan}
+        return {"intervals": 0, "interval_min_s": np.nan, "interval_median_s": np.nan,
+                "interval_p95_s": np.nan, "interval_max_s": longest_s, "interval_max_within_gap_s": np.nan}
     return {"intervals": int(intervals_s.size), "interval_min_s": float(intervals_s.min()),
             "interval_median_s": float(np.median(intervals_s)),
             "interval_p95_s": float(np.percentile(intervals_s, 95)),

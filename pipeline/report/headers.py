@@ -61,7 +61,9 @@ LABELS: dict[str, str] = {
     "range_bias_se_m": "Range bias SE", "range_gain_ppm": "Range gain", "range_gain_se_ppm": "Range gain SE",
     "azimuth_bias_deg": "Azimuth bias", "azimuth_bias_se_deg": "Azimuth bias SE", "time_bias_s": "Time bias",
     "time_bias_se_s": "Time bias SE", "range_residual_rms_m": "Range residual RMS",
-    "azimuth_residual_rms_deg": "Azimuth residual RMS", "adsb_nacp_median": "ADS-B NACp median",
+    "azimuth_residual_rms_deg": "Azimuth residual RMS",
+    "chi2_per_dof": "Chi-square per degree of freedom", "site_offset_m": "Site offset",
+    "fit_trusted": "Fit trusted", "adsb_nacp_median": "ADS-B NACp median",
     "adsb_nacp_95_m": "ADS-B NACp 95 % bound",
     # quality: reports, update intervals, gaps, jumps, ADS-B quality indicators
     "reports": "Reports", "duplicates_removed": "Duplicates removed",
