@@ -447,7 +447,7 @@ class CorrelateOptions(ReferenceFilterOptions, AircraftOptions):
 
 
 @dataclass(frozen=True)
-class QualityOptions(AircraftOptions):
+class QualityOptions(ReferenceFilterOptions, AircraftOptions):
     """Everything ``quality_job`` needs."""
 
     output: str | None = option(None, "-o", "--output", section="output",

@@ -519,7 +519,7 @@ def estimate_biases(errors: pd.DataFrame) -> pd.DataFrame:
     from msdc.pipeline.quality.fit_checks import fit_warning
 
     check_frame("errors", errors, ("radar", "sac", "sic"))
-    rows, few_notes = [], []
+    rows, few_notes, distrust = [], [], []
     for (name, sac, sic), g in errors.groupby(["radar", "sac", "sic"], sort=True, dropna=False):
         fit = fit_biases(g)
         nacp = pd.to_numeric(g["adsb_nacp"], errors="coerce").dropna()
@@ -534,7 +534,7 @@ def estimate_biases(errors: pd.DataFrame) -> pd.DataFrame:
             note = few + note
             if warning:
                 note = f"NOT TO BE TRUSTED: {warning}; " + note
-                few_notes.append(f"{name}: the bias fit is not to be trusted: {warning}.")
+                distrust.append(f"{name}: the bias fit is not to be trusted: {warning}.")
             if few:
                 few_notes.append(f"{name}: {few.rstrip('; ')}.")
         else:
@@ -552,5 +552,6 @@ def estimate_biases(errors: pd.DataFrame) -> pd.DataFrame:
                      "adsb_nacp_median": nacp_median,
                      "adsb_nacp_95_m": nacp_bound_m(nacp_median), "note": note})
     out = pd.DataFrame(rows, columns=BIAS_COLUMNS)
-    out.attrs["note"] = " ".join(filter(None, [LIMITATION_NOTE, height_note(errors), *few_notes]))
+    out.attrs["note"] = " ".join(filter(None, [*distrust, LIMITATION_NOTE, height_note(errors), *few_notes]))
+    out.attrs["distrust"] = distrust
     return out
