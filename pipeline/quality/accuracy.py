@@ -42,6 +42,7 @@ from msdc.pipeline.quality.checks import (
     check_seconds,
     check_sensors,
 )
+from msdc.pipeline.quality.surface import SURFACE_ALL, SURFACE_INPUTS, mostly_surface, on_surface
 
 MAX_ADSB_GAP_S = 10.0
 ERROR_COLUMNS = [
@@ -49,7 +50,7 @@ ERROR_COLUMNS = [
     "theta_deg", "adsb_latitude", "adsb_longitude", "adsb_height_m", "adsb_track_deg", "adsb_speed_ms",
     "adsb_gap_s", "adsb_nacp", "slant_range_m", "ground_range_m", "azimuth_deg", "range_rate_ms",
     "tangential_speed_ms", "range_error_m", "azimuth_error_deg", "along_track_m", "cross_track_m",
-    "horizontal_error_m", "adsb_height_source", "sigma_range_m", "sigma_azimuth_deg",
+    "horizontal_error_m", "adsb_height_source", "sigma_range_m", "sigma_azimuth_deg", "on_surface",
 ]
 ERROR_METRICS = ["range_error_m", "azimuth_error_deg", "along_track_m", "cross_track_m", "horizontal_error_m"]
 BIAS_COLUMNS = [
@@ -63,7 +64,7 @@ BIAS_COLUMNS = [
 # when the frame carries them); --reference track hands the tracker every column
 ACCURACY_INPUTS = list(dict.fromkeys([
     *DEDUP_KEYS, *JUMP_INPUTS, "sensor_id", "sensor_kind", "sac", "sic", "address", "callsign",
-    "flight_level", "height_m", "height_source", "rho_nm", "theta_deg", "nacp"]))
+    "flight_level", "height_m", "height_source", "rho_nm", "theta_deg", "nacp", *SURFACE_INPUTS]))
 # what radar_errors cannot do without (the rest of ACCURACY_INPUTS is read where present)
 MEASUREMENT_INPUTS = ("sensor_kind", "time", "sac", "sic", "latitude", "longitude", "flight_level")
 AIRCRAFT_COLUMNS = ["sensor_kind", "aircraft_id", "callsign", "address"]  # what aircraft_rows reads
@@ -275,6 +276,7 @@ def radar_errors(meas: pd.DataFrame, sensors: pd.DataFrame, *, max_gap_s: float 
         "adsb_height_source": pd.Categorical.from_codes(geometric.astype(np.int8), HEIGHT_SOURCES),
         "sigma_range_m": site["sigma_range_m"].to_numpy(float),
         "sigma_azimuth_deg": site["sigma_azimuth_deg"].to_numpy(float),
+        "on_surface": on_surface(m),  # the radar report's own (pipeline.quality.surface)
     }
     # sorted by radar and time: the order found on the three key columns alone, then each column taken in
     # it, so that the table is built once and not copied (selected, sorted, re-indexed) as a whole
@@ -294,12 +296,21 @@ def _moments(values: pd.Series, base: str, unit: str) -> dict[str, float]:
 
 
 def error_stats(errors: pd.DataFrame) -> pd.DataFrame:
-    """Mean, standard deviation and RMS of each error per radar, for all aircraft ("(all)") and each one."""
+    """Mean, standard deviation and RMS of each error per radar, for the aircraft in the air ("(all)"), those
+    on the surface ("(all surface)", when there are: pipeline.quality.surface) and each one."""
     check_frame("errors", errors, ("radar", "sac", "sic", "callsign", "address", *ERROR_METRICS))
     rows = []
     for (name, sac, sic), g in errors.groupby(["radar", "sac", "sic"], sort=True, dropna=False):
-        parts = [("(all)", "", g)] + [(cs, addr, a) for (cs, addr), a in
-                                      g.groupby(["callsign", "address"], sort=True, dropna=False)]
+        aircraft = [(cs, addr, a) for (cs, addr), a in g.groupby(["callsign", "address"], sort=True,
+                                                                  dropna=False)]
+        surface = [mostly_surface(a["on_surface"].to_numpy(bool)) if "on_surface" in a else False
+                   for _, _, a in aircraft]
+        pooled = []
+        for label, on in (("(all)", False), (SURFACE_ALL, True)):
+            if on in surface:
+                pooled.append((label, "", pd.concat([a for (_, _, a), s in zip(aircraft, surface, strict=True)
+                                                     if s == on])))
+        parts = pooled + aircraft
         for cs, addr, a in parts:
             row = {"radar": name, "sac": sac, "sic": sic, "callsign": cs, "address": addr,
                    "n_reports": len(a)}

@@ -1,11 +1,12 @@
 """Sensor data quality tables: counts, duplicates, update intervals, gaps, missing speeds, jumps, ADS-B NIC.
 
-Rows are per aircraft (``aircraft_id``, pipeline.model.identity; "(all)" pools every aircraft) and per
-sensor (radar or ADS-B, with its SAC/SIC). Everything after the duplicate count is computed on
-de-duplicated reports (``pipeline.model.dedup``, per aircraft and sensor). Update intervals are the time
-differences between consecutive reports of one aircraft from one sensor of at most ``gap_s`` (their
-count, min, median, 95th percentile and ``interval_max_within_gap_s``; ``interval_max_s`` is the longest
-interval of all, gaps included); longer ones are gaps (listed with their start and end;
+Rows are per aircraft (``aircraft_id``, pipeline.model.identity; "(all)" pools the aircraft in the air,
+"(all surface)" those on the surface: pipeline.quality.surface) and per sensor (radar or ADS-B, with its
+SAC/SIC). Everything after the duplicate count is computed on de-duplicated reports
+(``pipeline.model.dedup``, per aircraft and sensor). Update intervals are the time differences
+between consecutive reports of one aircraft from one sensor of at most ``gap_s`` (their count, min,
+median, 95th percentile and ``interval_max_within_gap_s``; ``interval_max_s`` is the longest interval of
+all, gaps included); longer ones are gaps (listed with their start and end;
 "reappeared_after_1h" when longer than an hour). An aircraft known by its Mode 3/A code alone is
 labelled with it ("M3A:7052"); reports of no aircraft (no address, call sign or Mode 3/A) get one row
 per sensor labelled "(no identity)", counted but with no intervals or gaps: they are many targets, and
@@ -29,6 +30,7 @@ from msdc.pipeline.model.identity import aircraft_labels
 from msdc.pipeline.model.jumps import JUMP_FLAG_COLUMNS, JUMP_INPUTS, jump_table
 from msdc.pipeline.model.time import UTC_DTYPE, dated_or_nat, with_clock
 from msdc.pipeline.quality.checks import check_frame, check_options, check_seconds
+from msdc.pipeline.quality.surface import SURFACE_ALL, SURFACE_INPUTS, mostly_surface, on_surface
 
 ALL = "(all)"
 UNIDENTIFIED = "?"  # the aircraft key of reports that belong to no aircraft (aircraft_id <NA>)
@@ -43,7 +45,7 @@ SHARE_COLUMNS = ["nucp_below_5_pct", "nic_below_6_pct", "low_integrity_pct"]
 ID_KEYS = ["callsign", "address", *SENSOR_KEYS]
 
 QUALITY_COLUMNS = [
-    *ID_KEYS, "reports", "duplicates_removed", "reports_after_dedup", "first_tod", "last_tod",
+    *ID_KEYS, "on_surface", "reports", "duplicates_removed", "reports_after_dedup", "first_tod", "last_tod",
     "first_utc", "last_utc", "intervals", "interval_min_s", "interval_median_s", "interval_p95_s",
     "interval_max_s", "interval_max_within_gap_s", "gaps", "longest_gap_s", "reappearances", "speed_missing",
     "speed_zero", "speed_missing_or_zero", "speed_missing_or_zero_pct", "jumps", "nucp_below_5_pct",
@@ -60,7 +62,7 @@ VALUE_COUNT_COLUMNS = [*ID_KEYS, "indicator", "value", "reports", "share_pct"]
 # million reports)
 QUALITY_INPUTS = list(dict.fromkeys([
     *DEDUP_KEYS, *JUMP_INPUTS, "sensor_id", "sensor_kind", "sac", "sic", "address", "callsign",
-    *ADSB_INDICATORS, "mops_version"]))
+    *ADSB_INDICATORS, "mops_version", *SURFACE_INPUTS]))
 QUALITY_FLAGS = ["duplicate", *JUMP_FLAG_COLUMNS]
 DEDUP_COLUMNS = [*DEDUP_KEYS, "sensor_kind", "sensor_id", "duplicate"]  # what deduplicate reads
 ADSB_UNREAD = ["sensor_kind", "sensor_id", "ground_speed_kt", "heading_deg", "duplicate"]  # once deduplicated
@@ -160,7 +162,8 @@ def _group_rows(group: pd.DataFrame, gap_s: float,
              "gap_start_utc": stamps.iloc[i], "gap_end_utc": stamps.iloc[i + 1],
              "gap_duration_s": t[i + 1] - t[i], "reappeared_after_1h": bool(t[i + 1] - t[i] > REAPPEARANCE_S)}
             for i in gap]
-    row = {**ident, "reports": len(group), "duplicates_removed": dups, "reports_after_dedup": len(clean),
+    row = {**ident, "on_surface": mostly_surface(on_surface(clean)), "reports": len(group),
+           "duplicates_removed": dups, "reports_after_dedup": len(clean),
            "first_tod": t[0], "last_tod": t[-1], "first_utc": stamps.iloc[0],
            "last_utc": stamps.iloc[-1], **_interval_stats(within, float(dt.max()) if dt.size else np.nan),
            "gaps": len(gaps),
@@ -188,10 +191,12 @@ def _aircraft_groups(narrow: pd.DataFrame) -> Iterator[tuple[tuple, pd.DataFrame
 
 
 def _pooled_row(rows: list[dict], intervals: list[np.ndarray], sensor_id: tuple,
-                clean: list[pd.DataFrame]) -> dict:
-    """The "(all)" summary row of one sensor from its per-aircraft rows, intervals and reports."""
+                clean: list[pd.DataFrame], label: str = ALL) -> dict:
+    """A pooled summary row of one sensor ("(all)" or "(all surface)": ``label``) from its per-aircraft
+    rows, intervals and reports."""
     frame = pd.DataFrame(rows)
-    row = {"callsign": ALL, "address": "", **dict(zip(SENSOR_KEYS, sensor_id, strict=True))}
+    row = {"callsign": label, "address": "", **dict(zip(SENSOR_KEYS, sensor_id, strict=True)),
+           "on_surface": label == SURFACE_ALL}
     for c in ("reports", "duplicates_removed", "reports_after_dedup", "gaps", "reappearances",
               "speed_missing", "speed_zero", "speed_missing_or_zero"):
         row[c] = int(frame[c].sum())
@@ -362,7 +367,7 @@ def quality_tables(meas: pd.DataFrame, *, gap_s: float = 180.0,
     summary, gaps, hist = [], [], []
     edges = histogram_edges_s(gap_s)
     needed = [*ID_KEYS, "aircraft", "time", "time_of_day", "timestamp", "ground_speed_kt", "nucp_nic",
-              "mops_version", "duplicate", "sensor_kind", "sensor_id", *DEDUP_KEYS]
+              "mops_version", "duplicate", "sensor_kind", "sensor_id", *DEDUP_KEYS, *SURFACE_INPUTS]
     narrow = both[[c for c in dict.fromkeys(needed) if c in both]]  # the groups are copied: keep them narrow
     del both
     for _, groups in itertools.groupby(_aircraft_groups(narrow), key=lambda group: group[0][0]):  # per sensor
@@ -377,7 +382,13 @@ def quality_tables(meas: pd.DataFrame, *, gap_s: float = 180.0,
             intervals.append(within)
             clean.append(g_clean[[c for c in ("nucp_nic", "mops_version") if c in g_clean]])  # for the pool
             gaps += g_gaps
-        summary += [_pooled_row(rows, intervals, sensor_id, clean), *rows]
+        pooled = []  # the aircraft in the air, then those on the surface (pipeline.quality.surface)
+        for label, surface in ((ALL, False), (SURFACE_ALL, True)):
+            at = [i for i, row in enumerate(rows) if row["on_surface"] == surface]
+            if at:
+                pooled.append(_pooled_row([rows[i] for i in at], [intervals[i] for i in at], sensor_id,
+                                          [clean[i] for i in at], label))
+        summary += [*pooled, *rows]
         counts, _ = np.histogram(np.concatenate(intervals), bins=edges)
         hist.append(pd.DataFrame({**dict(zip(SENSOR_KEYS, sensor_id, strict=True)), "bin_start_s": edges[:-1],
                                   "bin_end_s": edges[1:], "intervals": counts}))

@@ -66,7 +66,7 @@ LABELS: dict[str, str] = {
     "fit_trusted": "Fit trusted", "adsb_nacp_median": "ADS-B NACp median",
     "adsb_nacp_95_m": "ADS-B NACp 95 % bound",
     # quality: reports, update intervals, gaps, jumps, ADS-B quality indicators
-    "reports": "Reports", "duplicates_removed": "Duplicates removed",
+    "reports": "Reports", "on_surface": "On the surface", "duplicates_removed": "Duplicates removed",
     "reports_after_dedup": "Reports after de-duplication", "first_tod": "First report time of day",
     "last_tod": "Last report time of day", "first_utc": "First report", "last_utc": "Last report",
     "intervals": "Intervals", "interval_min_s": "Interval min", "interval_median_s": "Interval median",
