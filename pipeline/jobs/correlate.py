@@ -189,6 +189,7 @@ def correlate_job(options: CorrelateOptions, *, progress: Progress | None = None
             result.quality = quality_step(meas_all, checked.sensors, options,
                                           reference_meas=meas if filters_asked(options) else None)
             run.parameters["notes"] = [*run.parameters.get("notes", []), *result.quality.notes]
+            warnings += result.quality.sheets["Radar biases"].attrs.get("distrust", [])
             run.extra_sheets.update(workbook_sheets(result.quality.sheets))
             lead_quality(run, result.quality)
         return result

@@ -99,6 +99,7 @@ def quality_job(options: QualityOptions, *, progress: Progress | None = None, ch
         warnings += filter_warnings(removed, options.min_nic, options.min_nacp)
         quality = quality_step(meas, checked.sensors, options, reference_meas=reference)
         del reference
+        warnings += quality.sheets["Radar biases"].attrs.get("distrust", [])  # fits not to be trusted
         params = {**run_parameters(options, loaded, started, command), "callsign": options.callsign,
                   "address": options.address, "gap_s": options.gap_s,
                   "filters": filter_parameters(options, removed),

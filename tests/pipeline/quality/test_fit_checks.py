@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import functools
 from dataclasses import asdict, replace
+from pathlib import Path
 
 import numpy as np
 import pandas as pd
@@ -71,6 +72,23 @@ def test_a_site_1_1_km_off_is_flagged(east_m, north_m):
     assert b["site_offset_m"] == pytest.approx(1100.0, abs=60.0)
     assert b["note"].startswith("NOT TO BE TRUSTED") and "check the site in the sensor file" in b["note"]
     assert "the bias fit is not to be trusted" in biases.attrs["note"]
+
+
+def test_the_quality_command_warns_of_a_fit_not_to_be_trusted(tmp_path):
+    # the fixtures' radar declared 1.1 km west of where the simulator put it
+    from fixtures.scenario import RadarSite
+    from msdc.pipeline.jobs.quality import QualityOptions, quality_job
+
+    fix = Path(__file__).resolve().parents[3] / "fixtures"
+    site = RadarSite()
+    sensors = tmp_path / "off.toml"
+    sensors.write_text(f'[[sensor]]\nname = "off"\nsac = {site.sac}\nsic = {site.sic}\n'
+                       f"latitude = {site.latitude}\nlongitude = {site.longitude - 1100.0 / M_PER_DEG_LON}\n"
+                       f"altitude_m = {site.altitude_m}\n")
+    result = quality_job(QualityOptions(inputs=(str(fix / "radar.ast"), str(fix / "adsb.ast")),
+                                        sensors=str(sensors), all_aircraft=True))
+    (said,) = [w for w in result.warnings if "not to be trusted" in w]
+    assert said.startswith("off: the bias fit is not to be trusted") and said in result.parameters["notes"]
 
 
 def test_geometric_height_is_the_reference_and_the_note_says_so():
