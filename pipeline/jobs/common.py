@@ -30,6 +30,7 @@ from msdc.pipeline.jobs.options import (
     DecodingOptions,
     OptionError,
     QualityOptions,
+    ReferenceFilterOptions,
     TrackOptions,
     check_number,
     command_args,
@@ -865,16 +866,17 @@ def quality_inputs(reference: str) -> list[str]:
     return need
 
 
-def quality_step(meas: pd.DataFrame, sensors: pd.DataFrame, options: CorrelateOptions | QualityOptions
-                 ) -> QualityResult:
-    """The quality tables and radar accuracy of the selected aircraft (quality_run); JobError when it is not
-    in the inputs."""
+def quality_step(meas: pd.DataFrame, sensors: pd.DataFrame, options: CorrelateOptions | QualityOptions,
+                 reference_meas: pd.DataFrame | None = None) -> QualityResult:
+    """The quality tables and radar accuracy of the selected aircraft (quality_run), the reference built from
+    ``reference_meas`` (the ADS-B filters applied) when given; JobError when no sensor saw the aircraft."""
     from msdc.pipeline.model.aircraft import NoSuchAircraft
     from msdc.pipeline.quality.quality_run import quality_run
 
     try:
         return quality_run(meas, sensors, callsign=options.callsign, address=options.address,
-                           gap_s=options.gap_s, reference=getattr(options, "reference", "adsb"))
+                           gap_s=options.gap_s, reference=getattr(options, "reference", "adsb"),
+                           reference_meas=reference_meas)
     except NoSuchAircraft as exc:
         raise JobError(str(exc) + selection_note(options)) from exc
 
@@ -885,6 +887,25 @@ def selection_note(options: DecodingOptions) -> str:
                                       ("--area", options.area), ("--fl", options.fl),
                                       ("--sensor", options.sensor_ids)) if value]
     return (f" (among the reports the selection keeps: {', '.join(given)})" if given else "")
+
+
+def filters_asked(options: ReferenceFilterOptions) -> bool:
+    """Whether any ADS-B filter (--drop-jumps, --min-nic, --min-nacp) was asked for."""
+    return bool(options.drop_jumps) or options.min_nic is not None or options.min_nacp is not None
+
+
+def filters_removed(options: ReferenceFilterOptions, removed: dict[str, int]) -> dict[str, int]:
+    """The counts of pipeline.quality.filters.apply_filters of the filters asked for (none asked: {})."""
+    asked = {"jumps": options.drop_jumps, "nic_below_min": options.min_nic is not None,
+             "nic_missing_kept": options.min_nic is not None, "nacp_below_min": options.min_nacp is not None,
+             "nacp_missing_kept": options.min_nacp is not None}
+    return {k: v for k, v in removed.items() if asked.get(k, True)}
+
+
+def filter_parameters(options: ReferenceFilterOptions, removed: dict[str, int]) -> dict:
+    """What a run's outputs record of the ADS-B filters: those asked for and what each removed."""
+    return {"drop_jumps": options.drop_jumps, "min_nic": options.min_nic, "min_nacp": options.min_nacp,
+            "removed": filters_removed(options, removed)}
 
 
 QUALITY_FIGURE_GLOBS = ("_intervals.png", "_radar_errors_*_*.png")  # quality_figures' names, as globs

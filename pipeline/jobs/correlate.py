@@ -26,6 +26,9 @@ from msdc.pipeline.jobs.common import (
     check_beside,
     check_decoding,
     check_workbook,
+    filter_parameters,
+    filters_asked,
+    filters_removed,
     marked_measurements,
     output_path,
     quality_figures,
@@ -171,16 +174,11 @@ def correlate_job(options: CorrelateOptions, *, progress: Progress | None = None
         except TooManySlots as exc:
             raise OptionError(f"--slot {options.slot_s:g}: the overlap windows would need more than "
                               f"{exc.limit:,} slots (at least {exc.slots:,}); use a longer --slot") from exc
-        asked = {"jumps": options.drop_jumps, "nic_below_min": options.min_nic is not None,
-                 "nic_missing_kept": options.min_nic is not None,
-                 "nacp_below_min": options.min_nacp is not None,
-                 "nacp_missing_kept": options.min_nacp is not None}
         run.inputs = loaded.inputs
-        run.filters = {k: v for k, v in removed.items() if asked.get(k, True)}
+        run.filters = filters_removed(options, removed)
         warnings += filter_warnings(removed, options.min_nic, options.min_nacp)
         run.parameters = {**run.parameters, **run_parameters(options, loaded, started, command),
-                          "filters": {"drop_jumps": options.drop_jumps, "min_nic": options.min_nic,
-                                      "min_nacp": options.min_nacp, "removed": run.filters}}
+                          "filters": filter_parameters(options, removed)}
         warnings += far_separations([w.summary for w in run.windows], meas, checked.sensors,
                                     str(options.sensors))
         warnings += _nothing_correlated(run, options)
@@ -188,7 +186,12 @@ def correlate_job(options: CorrelateOptions, *, progress: Progress | None = None
         if options.quality:
             if progress:
                 progress.stage("Analysing data quality")
-            result.quality = quality_step(meas_all, checked.sensors, options)
+            # the quality sheets describe every report; radar accuracy, biases and reference points use the
+            # reference the filters left, as the correlation does
+            result.quality = quality_step(meas_all, checked.sensors, options,
+                                          reference_meas=meas if filters_asked(options) else None)
+            run.parameters["notes"] = [*run.parameters.get("notes", []), *result.quality.notes]
+            warnings += result.quality.sheets["Radar biases"].attrs.get("distrust", [])
             run.extra_sheets.update(workbook_sheets(result.quality.sheets))
             lead_quality(run, result.quality)
         return result

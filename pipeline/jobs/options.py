@@ -409,7 +409,27 @@ ADSB_SIGMA_DOC = ("ADS-B sigma for reports without NACp, used by {used} "
 
 
 @dataclass(frozen=True)
-class CorrelateOptions(AircraftOptions):
+class ReferenceFilterOptions:
+    """The ADS-B report filters (pipeline.quality.filters), declared once for the commands that take them:
+    correlate (before slotting) and quality (the reference of radar accuracy and biases). Listed first
+    among a command's bases, so that its inputs keep their place."""
+
+    drop_jumps: bool = option(False, "--drop-jumps", section="measurements",
+                              help="remove detected ADS-B position jumps first",
+                              doc="remove detected ADS-B position jumps (correlate: before slotting; "
+                                  "quality: from the reference) (off by default, so the thesis numbers stay "
+                                  "reproducible; [filters](quality.md#filters))")
+    min_nic: int | None = option(None, "--min-nic", range=INDICATOR_RANGE, section="measurements",
+                                 help="drop ADS-B reports with NUCp/NIC below N",
+                                 doc="drop ADS-B reports with NUCp/NIC below N "
+                                     "([filters](quality.md#filters))")
+    min_nacp: int | None = option(None, "--min-nacp", range=INDICATOR_RANGE, section="measurements",
+                                  help="drop ADS-B reports with NACp below N",
+                                  doc="drop ADS-B reports with NACp below N ([filters](quality.md#filters))")
+
+
+@dataclass(frozen=True)
+class CorrelateOptions(ReferenceFilterOptions, AircraftOptions):
     """Everything ``correlate_job`` needs; see ``msdc correlate --help`` for the meaning of each option."""
 
     sensors: str | None = option(None, "--sensors", required=True, section="selection", help=SENSORS_HELP,
@@ -447,16 +467,6 @@ class CorrelateOptions(AircraftOptions):
                                 "quality, Radar accuracy, Radar biases, Figures) and their PNGs",
                            doc="add the quality sheets and their PNGs ([quality](quality.md)) and the "
                                "slotting and lag figures per window")
-    drop_jumps: bool = option(False, "--drop-jumps", help="remove detected ADS-B position jumps first",
-                              doc="remove detected ADS-B position jumps before slotting (off by default, so "
-                                  "the thesis numbers stay reproducible)")
-    min_nic: int | None = option(None, "--min-nic", range=INDICATOR_RANGE,
-                                 help="drop ADS-B reports with NUCp/NIC below N",
-                                 doc="drop ADS-B reports with NUCp/NIC below N "
-                                     "([filters](quality.md#filters))")
-    min_nacp: int | None = option(None, "--min-nacp", range=INDICATOR_RANGE,
-                                  help="drop ADS-B reports with NACp below N",
-                                  doc="drop ADS-B reports with NACp below N ([filters](quality.md#filters))")
     fill: str = option("hold", "--fill", choices=FILLS,
                        help="empty slots: hold the previous slot (default, the thesis) or take the tracker's "
                             "prediction",
@@ -475,7 +485,7 @@ class CorrelateOptions(AircraftOptions):
 
 
 @dataclass(frozen=True)
-class QualityOptions(AircraftOptions):
+class QualityOptions(ReferenceFilterOptions, AircraftOptions):
     """Everything ``quality_job`` needs."""
 
     output: str | None = option(None, "-o", "--output", section="output",

@@ -13,6 +13,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING
 
+import pandas as pd
+
 from msdc.pipeline.jobs.common import (
     QUALITY_FIGURE_GLOBS,
     QUALITY_WITHOUT,
@@ -22,6 +24,8 @@ from msdc.pipeline.jobs.common import (
     check_aircraft,
     check_decoding,
     check_workbook,
+    filter_parameters,
+    filters_asked,
     marked_measurements,
     output_path,
     quality_figures,
@@ -78,6 +82,7 @@ def quality_job(options: QualityOptions, *, progress: Progress | None = None, ch
                 command: str = "quality") -> QualityJobResult:
     """Validate, decode, build measurements and compute the quality and accuracy tables."""
     from msdc.pipeline.model.site_check import site_warnings
+    from msdc.pipeline.quality.filters import filter_warnings
 
     started = time.monotonic()
     checked = checked or validate(options)
@@ -90,12 +95,28 @@ def quality_job(options: QualityOptions, *, progress: Progress | None = None, ch
         warnings += said
         absent = absent_categories(loaded)
         warnings += site_warnings(meas, checked.sensors, str(sensors_path(options)))
-        quality = quality_step(meas, checked.sensors, options)
+        reference, removed = _filtered(meas, options)
+        warnings += filter_warnings(removed, options.min_nic, options.min_nacp)
+        quality = quality_step(meas, checked.sensors, options, reference_meas=reference)
+        del reference
+        warnings += quality.sheets["Radar biases"].attrs.get("distrust", [])  # fits not to be trusted
         params = {**run_parameters(options, loaded, started, command), "callsign": options.callsign,
                   "address": options.address, "gap_s": options.gap_s,
-                  "notes": [f"no CAT{cat:03d} records in the inputs: {QUALITY_WITHOUT[cat]}"
-                            for cat in absent]}
+                  "filters": filter_parameters(options, removed),
+                  "notes": [*(f"no CAT{cat:03d} records in the inputs: {QUALITY_WITHOUT[cat]}"
+                              for cat in absent), *quality.notes]}
         return QualityJobResult(options, checked, quality, params, loaded, warnings)
+
+
+def _filtered(meas, options: QualityOptions) -> tuple[pd.DataFrame | None, dict[str, int]]:
+    """The measurements the reference is built from, the ADS-B filters asked for applied (None when none
+    is), and the count each removed (pipeline.quality.filters)."""
+    from msdc.pipeline.quality.filters import FILTER_KEYS, apply_filters
+
+    if not filters_asked(options):
+        return None, dict.fromkeys(FILTER_KEYS, 0)
+    return apply_filters(meas, drop_jumps=options.drop_jumps, min_nic=options.min_nic,
+                         min_nacp=options.min_nacp)
 
 
 def write_quality(result: QualityJobResult, *, tx: OutputTransaction | None = None) -> dict[str, Path]:
@@ -133,16 +154,25 @@ def text(result: QualityJobResult) -> str:
                         "interval_p95_s", "speed_missing_or_zero_pct", "gaps", "jumps") if c in q]
     bias_cols = [c for c in ("radar", "n_reports", "n_rejected", "n_overhead", "range_bias_m",
                              "range_bias_se_m", "range_gain_ppm", "range_gain_se_ppm", "azimuth_bias_deg",
-                             "azimuth_bias_se_deg", "time_bias_s", "time_bias_se_s") if c in b]
+                             "azimuth_bias_se_deg", "time_bias_s", "time_bias_se_s", "chi2_per_dof",
+                             "site_offset_m", "fit_trusted") if c in b]
     from msdc.pipeline.report.summary import frame_text
 
-    out = "Quality:\n" + frame_text(q[keep]) + "\n\nRadar biases:\n"
-    out += frame_text(b[bias_cols]) if len(b) else "  no radar report matched to ADS-B"
+    out = "Quality:\n" + frame_text(q[keep])
+    removed = result.parameters.get("filters", {}).get("removed", {})
+    if removed:
+        out += "\n\nADS-B filters (radar accuracy and biases use what they leave): " + ", ".join(
+            f"{name} {n}" for name, n in removed.items())
+    out += "\n\nRadar biases:\n"
+    empty = next((n for n in result.quality.notes if n.startswith("No radar report")), "")
+    out += frame_text(b[bias_cols]) if len(b) else f"  none. {empty or 'No radar report matched to ADS-B.'}"
     points = result.quality.sheets.get("Reference points")
     if points is not None:  # multilateration and surface radar: where their x/y origin lies
         out += ("\n\nReference points (offset of each sensor's surface positions from its reference's; "
                 "corrected: the sensor-file point that removes it):\n" + frame_text(points))
     note = b.attrs.get("note")
+    if note and not len(b):  # its reason is said above
+        note = note.removeprefix(empty).strip()
     return out + (f"\n\nNote: {note}" if note else "")
 
 

@@ -2,13 +2,14 @@
 
 Each radar report of an aircraft that also has (jump-free, de-duplicated) ADS-B is compared with the ADS-B
 track interpolated linearly to the radar time, only across ADS-B gaps of at most ``max_gap_s``; the
-reference height is the ADS-B flight level (FL * 100 ft, taken as height above the ellipsoid, as
-``pipeline.model.measurements`` does for radar). The radar plot is placed at that same height, so the
-horizontal errors reflect range and azimuth only.
+reference height is the ADS-B geometric height where the reports carry it (I021/140), else the flight
+level (FL * 100 ft, taken as height above the ellipsoid, as ``pipeline.model.measurements`` does for
+radar); ``adsb_height_source`` says which, per report, and the note says which was used. The radar
+plot is placed at that same height, so the horizontal errors reflect range and azimuth only.
 
 Limitation (thesis): ADS-B is the reference but carries its own position error, bounded at 95 % by its
 NACp (DO-260B: NACp 8 < 92.6 m, 9 < 30 m, 10 < 10 m, 11 < 3 m); systematic errors below that level cannot
-be attributed to the radar, and the ADS-B altitude is pressure altitude, not geometric height.
+be attributed to the radar.
 """
 
 from __future__ import annotations
@@ -41,6 +42,7 @@ from msdc.pipeline.quality.checks import (
     check_seconds,
     check_sensors,
 )
+from msdc.pipeline.quality.surface import SURFACE_ALL, SURFACE_INPUTS, mostly_surface, on_surface
 
 MAX_ADSB_GAP_S = 10.0
 ERROR_COLUMNS = [
@@ -48,24 +50,26 @@ ERROR_COLUMNS = [
     "theta_deg", "adsb_latitude", "adsb_longitude", "adsb_height_m", "adsb_track_deg", "adsb_speed_ms",
     "adsb_gap_s", "adsb_nacp", "slant_range_m", "ground_range_m", "azimuth_deg", "range_rate_ms",
     "tangential_speed_ms", "range_error_m", "azimuth_error_deg", "along_track_m", "cross_track_m",
-    "horizontal_error_m",
+    "horizontal_error_m", "adsb_height_source", "sigma_range_m", "sigma_azimuth_deg", "on_surface",
 ]
 ERROR_METRICS = ["range_error_m", "azimuth_error_deg", "along_track_m", "cross_track_m", "horizontal_error_m"]
 BIAS_COLUMNS = [
     "radar", "sac", "sic", "n_reports", "n_rejected", "n_overhead", "aircraft", "range_bias_m",
     "range_bias_se_m", "range_gain_ppm", "range_gain_se_ppm", "azimuth_bias_deg", "azimuth_bias_se_deg",
-    "time_bias_s", "time_bias_se_s", "range_residual_rms_m", "azimuth_residual_rms_deg", "adsb_nacp_median",
-    "adsb_nacp_95_m", "note",
+    "time_bias_s", "time_bias_se_s", "range_residual_rms_m", "azimuth_residual_rms_deg", "chi2_per_dof",
+    "site_offset_m", "fit_trusted",
+    "adsb_nacp_median", "adsb_nacp_95_m", "note",
 ]
 # The measurement columns the ADS-B reference and the errors read (with mark_once's duplicate and jump flags
 # when the frame carries them); --reference track hands the tracker every column
 ACCURACY_INPUTS = list(dict.fromkeys([
     *DEDUP_KEYS, *JUMP_INPUTS, "sensor_id", "sensor_kind", "sac", "sic", "address", "callsign",
-    "flight_level", "rho_nm", "theta_deg", "nacp"]))
+    "flight_level", "height_m", "height_source", "rho_nm", "theta_deg", "nacp", *SURFACE_INPUTS]))
 # what radar_errors cannot do without (the rest of ACCURACY_INPUTS is read where present)
 MEASUREMENT_INPUTS = ("sensor_kind", "time", "sac", "sic", "latitude", "longitude", "flight_level")
 AIRCRAFT_COLUMNS = ["sensor_kind", "aircraft_id", "callsign", "address"]  # what aircraft_rows reads
 MIN_BIAS_REPORTS = 20
+HEIGHT_SOURCES = ["flight_level", "geometric"]  # adsb_height_source: the reference height used per report
 # Below this many aircraft the aircraft-clustered standard errors (fit_biases) rest on few independent
 # pieces and are themselves uncertain: the note says so
 MIN_SE_AIRCRAFT = 10
@@ -73,10 +77,10 @@ MIN_SE_AIRCRAFT = 10
 T975 = {1: 12.71, 2: 4.30, 3: 3.18, 4: 2.78, 5: 2.57, 6: 2.45, 7: 2.36, 8: 2.31, 9: 2.26}
 LIMITATION_NOTE = ("ADS-B is the reference but carries its own position error, bounded at 95 % by its NACp "
                    "(DO-260B: NACp 8 < 92.6 m, 9 < 30 m, 10 < 10 m, 11 < 3 m); radar errors below that "
-                   "level cannot be attributed to the radar (thesis limitation). ADS-B height is pressure "
-                   "altitude. All four biases are relative to ADS-B: the time bias is radar time minus "
-                   "ADS-B time (positive: the radar stamps its plots late), so an ADS-B latency (time of "
-                   "applicability stamped late) enters it with the opposite sign.")
+                   "level cannot be attributed to the radar (thesis limitation). All four biases are "
+                   "relative to ADS-B: the time bias is radar time minus ADS-B time (positive: the radar "
+                   "stamps its plots late), so an ADS-B latency (time of applicability stamped late) enters "
+                   "it with the opposite sign.")
 CLIP_SIGMAS = 5.0  # rows further than this many robust sigmas from the fit are rejected
 # Above this elevation seen from the site (the radar's cone of silence, or a target nearly overhead) the
 # azimuth means nothing: a few metres across the line of sight are degrees, at azimuth rates of tens of
@@ -93,25 +97,39 @@ def nacp_bound_m(nacp) -> float:
     return NACP_95_M.get(int(nacp), float("nan"))
 
 
+def reference_height_m(adsb: pd.DataFrame) -> tuple[np.ndarray, np.ndarray]:
+    """The ADS-B reports' height above the ellipsoid (m): their geometric height where they carry it
+    (I021/140, ``height_source`` "geometric"), else the flight level x 100 ft taken as height; and whether
+    each is geometric."""
+    fl_m = flight_level_to_m(adsb["flight_level"].to_numpy(float))
+    if "height_source" not in adsb or "height_m" not in adsb:
+        return fl_m, np.zeros(len(adsb), bool)
+    geometric = (adsb["height_source"].astype(str) == "geometric").to_numpy(bool) & np.isfinite(
+        adsb["height_m"].to_numpy(float))
+    return np.where(geometric, adsb["height_m"].to_numpy(float), fl_m), geometric
+
+
 def _adsb_track(adsb: pd.DataFrame) -> pd.DataFrame:
-    """One aircraft's ADS-B reports by unique time (reports at the same time averaged, NACp the worst)."""
+    """One aircraft's ADS-B reports by unique time (reports at the same time averaged, NACp the worst,
+    geometric when every report at that time gives its geometric height)."""
     a = adsb.sort_values("time_of_day", kind="stable")
     lon = np.unwrap(a["longitude"].to_numpy(float), period=360.0)
     trk = np.radians(a["heading_deg"].to_numpy(float))
     gs_ms = a["ground_speed_kt"].to_numpy(float) * KT_TO_MS
+    h, geometric = reference_height_m(a)
     frame = pd.DataFrame({"t": a["time_of_day"].to_numpy(float), "lat": a["latitude"].to_numpy(float),
-                          "lon": lon, "h": flight_level_to_m(a["flight_level"].to_numpy(float)),
+                          "lon": lon, "h": h, "geo": geometric.astype(float),
                           "ve": gs_ms * np.sin(trk), "vn": gs_ms * np.cos(trk),
                           "nacp": pd.to_numeric(a["nacp"], errors="coerce").to_numpy(float)
                           if "nacp" in a else np.nan})
-    agg = {c: "mean" for c in ("lat", "lon", "h", "ve", "vn")} | {"nacp": "min"}
+    agg = {c: "mean" for c in ("lat", "lon", "h", "ve", "vn")} | {"nacp": "min", "geo": "min"}
     return frame.groupby("t", sort=True).agg(agg).reset_index()
 
 
 def _interpolate(track: pd.DataFrame, t_s: np.ndarray, max_gap_s: float) -> dict[str, np.ndarray]:
     """ADS-B state at the radar times: position, height, ENU velocity (m/s), gap and NACp of the segment."""
     ta = track["t"].to_numpy()
-    out = {k: np.full(t_s.size, np.nan) for k in ("lat", "lon", "h", "ve", "vn", "vu", "gap", "nacp")}
+    out = {k: np.full(t_s.size, np.nan) for k in ("lat", "lon", "h", "ve", "vn", "vu", "gap", "nacp", "geo")}
     if ta.size < 2:
         return out
     k = np.searchsorted(ta, t_s, side="right") - 1
@@ -141,6 +159,7 @@ def _interpolate(track: pd.DataFrame, t_s: np.ndarray, max_gap_s: float) -> dict
     out["vn"] = np.where(no_vel, (n1 - n0) / gap, out["vn"])
     out["gap"] = np.where(ok, gap, np.nan)
     out["nacp"] = np.fmin(*col("nacp"))
+    out["geo"] = np.fmin(*col("geo"))  # 1: both ends geometric; a segment mixing the two counts as not
     out["lon"] = wrap180(out["lon"])
     for name in out:
         out[name] = np.where(ok, out[name], np.nan)
@@ -237,6 +256,7 @@ def radar_errors(meas: pd.DataFrame, sensors: pd.DataFrame, *, max_gap_s: float 
     p_lat, p_lon, p_h = polar_to_geodetic(s_lat, s_lon, s_alt, rho_nm, theta, h)
     de, dn, _ = ecef_to_enu(*geodetic_to_ecef(p_lat, p_lon, p_h), lat, lon, h)
     trk = np.arctan2(ve, vn)
+    geometric = m["ref_geo"].to_numpy(float) == 1.0 if "ref_geo" in m else np.zeros(len(m), bool)
 
     columns = {
         "radar": site["name"].array, "sac": m["sac"].astype("Int64").to_numpy(),
@@ -253,6 +273,10 @@ def radar_errors(meas: pd.DataFrame, sensors: pd.DataFrame, *, max_gap_s: float 
         "along_track_m": de * np.sin(trk) + dn * np.cos(trk),
         "cross_track_m": de * np.cos(trk) - dn * np.sin(trk),
         "horizontal_error_m": distance_m(lat, lon, p_lat, p_lon),
+        "adsb_height_source": pd.Categorical.from_codes(geometric.astype(np.int8), HEIGHT_SOURCES),
+        "sigma_range_m": site["sigma_range_m"].to_numpy(float),
+        "sigma_azimuth_deg": site["sigma_azimuth_deg"].to_numpy(float),
+        "on_surface": on_surface(m),  # the radar report's own (pipeline.quality.surface)
     }
     # sorted by radar and time: the order found on the three key columns alone, then each column taken in
     # it, so that the table is built once and not copied (selected, sorted, re-indexed) as a whole
@@ -272,12 +296,21 @@ def _moments(values: pd.Series, base: str, unit: str) -> dict[str, float]:
 
 
 def error_stats(errors: pd.DataFrame) -> pd.DataFrame:
-    """Mean, standard deviation and RMS of each error per radar, for all aircraft ("(all)") and each one."""
+    """Mean, standard deviation and RMS of each error per radar, for the aircraft in the air ("(all)"), those
+    on the surface ("(all surface)", when there are: pipeline.quality.surface) and each one."""
     check_frame("errors", errors, ("radar", "sac", "sic", "callsign", "address", *ERROR_METRICS))
     rows = []
     for (name, sac, sic), g in errors.groupby(["radar", "sac", "sic"], sort=True, dropna=False):
-        parts = [("(all)", "", g)] + [(cs, addr, a) for (cs, addr), a in
-                                      g.groupby(["callsign", "address"], sort=True, dropna=False)]
+        aircraft = [(cs, addr, a) for (cs, addr), a in g.groupby(["callsign", "address"], sort=True,
+                                                                  dropna=False)]
+        surface = [mostly_surface(a["on_surface"].to_numpy(bool)) if "on_surface" in a else False
+                   for _, _, a in aircraft]
+        pooled = []
+        for label, on in (("(all)", False), (SURFACE_ALL, True)):
+            if on in surface:
+                pooled.append((label, "", pd.concat([a for (_, _, a), s in zip(aircraft, surface, strict=True)
+                                                     if s == on])))
+        parts = pooled + aircraft
         for cs, addr, a in parts:
             row = {"radar": name, "sac": sac, "sic": sic, "callsign": cs, "address": addr,
                    "n_reports": len(a)}
@@ -342,6 +375,45 @@ def aircraft_codes(errors: pd.DataFrame) -> np.ndarray:
     return callsign * (int(address.max(initial=0)) + 1) + address
 
 
+def _robust_fit(x: np.ndarray, y: np.ndarray, is_range: np.ndarray, usable: np.ndarray,
+                aircraft: np.ndarray) -> dict | None:
+    """Weighted least squares of rows ``x``, ``y`` (range rows and azimuth rows, each type weighted by the
+    inverse of its residual sigma), re-weighted and clipped at CLIP_SIGMAS robust sigmas until stable;
+    None when the rows cannot separate the parameters. Standard errors: the largest of the model's, the
+    leverage-robust (HC3) and the delete-one-aircraft (CR3) ones."""
+    n_par = x.shape[1]
+    if np.linalg.matrix_rank(x[usable]) < n_par:
+        return None
+    keep = usable.copy()
+    sig = np.array([_robust_sigma(y[is_range]), _robust_sigma(y[~is_range & usable])])
+    sig = np.where(sig > 0, sig, 1.0)
+    for _ in range(_FIT_PASSES):
+        w = np.where(is_range, 1.0 / sig[0], 1.0 / sig[1])
+        if np.linalg.matrix_rank(x[keep]) < n_par:
+            return None
+        beta, *_ = np.linalg.lstsq(x[keep] * w[keep, None], y[keep] * w[keep], rcond=None)
+        res = y - x @ beta
+        robust = np.array([_robust_sigma(res[is_range & keep]), _robust_sigma(res[~is_range & keep])])
+        new_keep = usable & (np.abs(res) <= CLIP_SIGMAS * np.where(is_range, robust[0], robust[1]))
+        new_sig = np.array([np.std(res[is_range & new_keep]), np.std(res[~is_range & new_keep])])
+        stable = np.array_equal(new_keep, keep) and np.allclose(new_sig, sig, rtol=1e-3)
+        keep, sig = new_keep, np.where(new_sig > 0, new_sig, 1.0)
+        if stable:
+            break
+    if np.linalg.matrix_rank(x[keep]) < n_par:
+        return None
+    w = np.where(is_range, 1.0 / sig[0], 1.0 / sig[1])
+    xw = x[keep] * w[keep, None]
+    beta, *_ = np.linalg.lstsq(xw, y[keep] * w[keep], rcond=None)
+    res = y - x @ beta
+    cov = np.linalg.inv(xw.T @ xw)
+    robust_cov = _robust_cov(xw, res[keep] * w[keep], cov)
+    cluster_cov = _cluster_cov(xw, y[keep] * w[keep], beta, aircraft[keep])
+    se = np.sqrt(np.fmax(np.maximum(np.diag(cov), np.diag(robust_cov)), np.diag(cluster_cov)))
+    covs = [c for c in (cov, robust_cov, cluster_cov) if np.all(np.isfinite(c))]
+    return {"params": beta, "se": se, "covs": covs, "keep": keep, "res": res}
+
+
 def fit_biases(errors: pd.DataFrame) -> dict:
     """Joint weighted least squares of one radar's errors: range rows [1, R, 0, -range_rate] (R in Mm,
     giving ppm) and azimuth rows [0, 0, 1, -azimuth_rate] in degrees, weighted by the inverse residual
@@ -349,7 +421,10 @@ def fit_biases(errors: pd.DataFrame) -> dict:
     rows above MAX_AZIMUTH_ELEVATION_DEG are left out (``n_overhead``). Standard errors are the largest of
     the model's, the leverage-robust (HC3) and the delete-one-aircraft (CR3) ones, so a fit decided by a few
     plots, or errors shared by all plots of an aircraft (transponder delay, ADS-B offset), do not look
-    precise; ``aircraft`` counts the aircraft with fitted rows."""
+    precise; ``aircraft`` counts the aircraft with fitted rows. Also its goodness of fit against the declared
+    sigmas (``chi2_per_dof``) and the site-offset check (pipeline.quality.fit_checks)."""
+    from msdc.pipeline.quality import fit_checks
+
     ok = errors[["range_error_m", "azimuth_error_deg", "slant_range_m", "ground_range_m", "range_rate_ms",
                  "tangential_speed_ms"]].notna().all(axis=1).to_numpy()
     e = errors[ok]
@@ -363,37 +438,29 @@ def fit_biases(errors: pd.DataFrame) -> dict:
     is_range = np.arange(2 * n) < n
     usable = np.concatenate([np.ones(n, bool), elevation_deg(e) <= MAX_AZIMUTH_ELEVATION_DEG])
     result = {"n_reports": n, "n_rejected": 0, "n_overhead": int(n - usable[n:].sum()),
-              "params": np.full(4, np.nan), "se": np.full(4, np.nan), "rms": (np.nan, np.nan), "aircraft": 0}
-    if n < MIN_BIAS_REPORTS or np.linalg.matrix_rank(x[usable]) < 4:
+              "params": np.full(4, np.nan), "se": np.full(4, np.nan), "rms": (np.nan, np.nan), "aircraft": 0,
+              "chi2_per_dof": np.nan, "offset": np.full(2, np.nan), "offset_se": np.nan, "wald": np.nan,
+              "offset_flagged": False, "offset_checked": False}
+    fit = _robust_fit(x, y, is_range, usable, aircraft) if n >= MIN_BIAS_REPORTS else None
+    if fit is None:
         return result
-    keep = usable.copy()
-    sig = np.array([_robust_sigma(y[is_range]), _robust_sigma(y[~is_range & usable])])
-    sig = np.where(sig > 0, sig, 1.0)
-    for _ in range(_FIT_PASSES):
-        w = np.where(is_range, 1.0 / sig[0], 1.0 / sig[1])
-        if np.linalg.matrix_rank(x[keep]) < 4:
-            return result
-        beta, *_ = np.linalg.lstsq(x[keep] * w[keep, None], y[keep] * w[keep], rcond=None)
-        res = y - x @ beta
-        robust = np.array([_robust_sigma(res[is_range & keep]), _robust_sigma(res[~is_range & keep])])
-        new_keep = usable & (np.abs(res) <= CLIP_SIGMAS * np.where(is_range, robust[0], robust[1]))
-        new_sig = np.array([np.std(res[is_range & new_keep]), np.std(res[~is_range & new_keep])])
-        stable = np.array_equal(new_keep, keep) and np.allclose(new_sig, sig, rtol=1e-3)
-        keep, sig = new_keep, np.where(new_sig > 0, new_sig, 1.0)
-        if stable:
-            break
-    w = np.where(is_range, 1.0 / sig[0], 1.0 / sig[1])
-    xw = x[keep] * w[keep, None]
-    beta, *_ = np.linalg.lstsq(xw, y[keep] * w[keep], rcond=None)
-    res = y - x @ beta
-    cov = np.linalg.inv(xw.T @ xw)
-    robust_cov = _robust_cov(xw, res[keep] * w[keep], cov)
-    cluster_cov = _cluster_cov(xw, y[keep] * w[keep], beta, aircraft[keep])
-    se = np.sqrt(np.fmax(np.maximum(np.diag(cov), np.diag(robust_cov)), np.diag(cluster_cov)))
-    result.update(params=beta, se=se, n_rejected=int((usable & ~keep).sum()),
+    keep, res = fit["keep"], fit["res"]
+    sigmas = fit_checks.declared_sigmas(e)
+    result.update(params=fit["params"], se=fit["se"], n_rejected=int((usable & ~keep).sum()),
                   aircraft=int(np.unique(aircraft[keep]).size),
                   rms=(float(np.sqrt(np.mean(res[is_range & keep] ** 2))),
-                       float(np.sqrt(np.mean(res[~is_range & keep] ** 2)))))
+                       float(np.sqrt(np.mean(res[~is_range & keep] ** 2)))),
+                  chi2_per_dof=fit_checks.chi2_per_dof(res[keep], None if sigmas is None else sigmas[keep],
+                                                       4))
+    extra = fit_checks.offset_columns(e)
+    if extra is not None:
+        wide = _robust_fit(np.hstack([x, extra]), y, is_range, usable, aircraft)
+        if wide is not None:
+            offset = wide["params"][4:]
+            cov = max((c[4:, 4:] for c in wide["covs"]), key=lambda c: float(np.trace(c)))  # the widest
+            wald, flagged = fit_checks.offset_verdict(offset, cov)
+            result.update(offset=offset, offset_se=float(np.sqrt(np.trace(cov) / 2.0)), wald=wald,
+                          offset_flagged=flagged, offset_checked=True)
     return result
 
 
@@ -416,23 +483,69 @@ def _few_aircraft_note(n_aircraft: int) -> str:
             "degrees of freedom); ")
 
 
+def height_note(errors: pd.DataFrame) -> str:
+    """Which height the reference had at the compared reports (``adsb_height_source``); "" if unknown."""
+    if "adsb_height_source" not in errors or not len(errors):
+        return ""
+    n = len(errors)
+    geometric = int((errors["adsb_height_source"].astype(str) == "geometric").sum())
+    pressure = ("the ADS-B pressure altitude (flight level x 100 ft, taken as height above the WGS-84 "
+                "ellipsoid: off by the difference between the two, which moves the slant range by that "
+                "difference times the sine of the elevation)")
+    if geometric == n:
+        return f"Reference height: the ADS-B geometric height (I021/140) at all {n} compared reports."
+    if geometric == 0:
+        return f"Reference height: {pressure} at all {n} compared reports; no geometric height was used."
+    return (f"Reference height: the ADS-B geometric height (I021/140) at {geometric} of the {n} compared "
+            f"reports, {pressure} at the other {n - geometric}.")
+
+
+def _offset_note(fit: dict) -> str:
+    """The site-offset check's result for a radar's note (pipeline.quality.fit_checks)."""
+    if not fit["offset_checked"]:
+        return "site offset not checked: the plots do not surround the radar enough to separate it; "
+    east, north = fit["offset"]
+    verdict = "flagged" if fit["offset_flagged"] else "not flagged"
+    return (f"site offset {np.hypot(east, north):.0f} m ({east:+.0f} m east, {north:+.0f} m north, SE "
+            f"{fit['offset_se']:.0f} m per axis): {verdict}; ")
+
+
+def _trusted(fit: dict, warning: str) -> str:
+    """The fit_trusted column: "no" when a check says so, "unchecked" when the goodness of fit could not be
+    measured (no declared sigmas) or the site offset not checked, else "yes"."""
+    if warning:
+        return "no"
+    if not fit["offset_checked"] or not np.isfinite(fit["chi2_per_dof"]):
+        return "unchecked"
+    return "yes"
+
+
 def estimate_biases(errors: pd.DataFrame) -> pd.DataFrame:
     """Per radar: range bias (m), range gain (ppm), azimuth bias (deg) and time bias (s, radar time minus
     ADS-B time: positive when the radar stamps late, and an ADS-B latency enters with the opposite sign)
-    over all aircraft by ``fit_biases``, with standard errors, counts, residual RMS and the ADS-B accuracy
-    note (the general limitation, and radars whose standard errors rest on few aircraft, in
-    ``attrs["note"]``)."""
+    over all aircraft by ``fit_biases``, with standard errors, counts, residual RMS, the goodness of fit and
+    site-offset check (pipeline.quality.fit_checks) and the ADS-B accuracy note (the general limitation,
+    the reference height used, radars whose standard errors rest on few aircraft and fits not to be
+    trusted, in ``attrs["note"]``)."""
+    from msdc.pipeline.quality.fit_checks import fit_warning
+
     check_frame("errors", errors, ("radar", "sac", "sic"))
-    rows, few_notes = [], []
+    rows, few_notes, distrust = [], [], []
     for (name, sac, sic), g in errors.groupby(["radar", "sac", "sic"], sort=True, dropna=False):
         fit = fit_biases(g)
         nacp = pd.to_numeric(g["adsb_nacp"], errors="coerce").dropna()
         nacp_median = float(np.floor(nacp.median())) if len(nacp) else float("nan")
         (b_r, gain, b_a, dt), (se_r, se_g, se_a, se_t) = fit["params"], fit["se"]
         note = _note(nacp_median)
+        warning = ""
         if np.isfinite(b_r):
             few = _few_aircraft_note(fit["aircraft"])
+            warning = fit_warning(fit["chi2_per_dof"], fit["offset"], fit["offset_flagged"])
+            note = _offset_note(fit) + note
             note = few + note
+            if warning:
+                note = f"NOT TO BE TRUSTED: {warning}; " + note
+                distrust.append(f"{name}: the bias fit is not to be trusted: {warning}.")
             if few:
                 few_notes.append(f"{name}: {few.rstrip('; ')}.")
         else:
@@ -444,8 +557,12 @@ def estimate_biases(errors: pd.DataFrame) -> pd.DataFrame:
                      "range_bias_m": b_r, "range_bias_se_m": se_r, "range_gain_ppm": gain,
                      "range_gain_se_ppm": se_g, "azimuth_bias_deg": b_a, "azimuth_bias_se_deg": se_a,
                      "time_bias_s": dt, "time_bias_se_s": se_t, "range_residual_rms_m": fit["rms"][0],
-                     "azimuth_residual_rms_deg": fit["rms"][1], "adsb_nacp_median": nacp_median,
+                     "azimuth_residual_rms_deg": fit["rms"][1], "chi2_per_dof": fit["chi2_per_dof"],
+                     "site_offset_m": float(np.hypot(*fit["offset"])),
+                     "fit_trusted": _trusted(fit, warning) if np.isfinite(b_r) else "no",
+                     "adsb_nacp_median": nacp_median,
                      "adsb_nacp_95_m": nacp_bound_m(nacp_median), "note": note})
     out = pd.DataFrame(rows, columns=BIAS_COLUMNS)
-    out.attrs["note"] = " ".join([LIMITATION_NOTE, *few_notes])
+    out.attrs["note"] = " ".join(filter(None, [*distrust, LIMITATION_NOTE, height_note(errors), *few_notes]))
+    out.attrs["distrust"] = distrust
     return out

@@ -1,13 +1,16 @@
 """Sensor data quality tables: counts, duplicates, update intervals, gaps, missing speeds, jumps, ADS-B NIC.
 
-Rows are per aircraft (``aircraft_id``, pipeline.model.identity; "(all)" pools every aircraft) and per
-sensor (radar or ADS-B, with its SAC/SIC). Everything after the duplicate count is computed on
-de-duplicated reports (``pipeline.model.dedup``, per aircraft and sensor). Update intervals are the time
-differences between consecutive reports of one aircraft from one sensor of at most ``gap_s``; longer
-ones are gaps (listed with their start and end; "reappeared_after_1h" when longer than an hour). An
-aircraft known by its Mode 3/A code alone is labelled with it ("M3A:7052"); reports of no aircraft (no
-address, call sign or Mode 3/A) get one row per sensor labelled "(no identity)", counted but with no
-intervals or gaps: they are many targets, and time between them measures nothing.
+Rows are per aircraft (``aircraft_id``, pipeline.model.identity; "(all)" pools the aircraft in the air,
+"(all surface)" those on the surface: pipeline.quality.surface) and per sensor (radar or ADS-B, with its
+SAC/SIC). Everything after the duplicate count is computed on de-duplicated reports
+(``pipeline.model.dedup``, per aircraft and sensor). Update intervals are the time differences
+between consecutive reports of one aircraft from one sensor of at most ``gap_s`` (their count, min,
+median, 95th percentile and ``interval_max_within_gap_s``; ``interval_max_s`` is the longest interval of
+all, gaps included); longer ones are gaps (listed with their start and end;
+"reappeared_after_1h" when longer than an hour). An aircraft known by its Mode 3/A code alone is
+labelled with it ("M3A:7052"); reports of no aircraft (no address, call sign or Mode 3/A) get one row
+per sensor labelled "(no identity)", counted but with no intervals or gaps: they are many targets, and
+time between them measures nothing.
 Columns ending ``_utc`` (and the jumps' ``utc``) are instants, datetime64[ns, UTC], NaT when the
 recording is undated (its ``*_tod`` columns then give the time of day); JSON writes them as ISO 8601.
 Columns ending ``_tod`` are times of day in seconds since midnight UTC, like ``time_of_day``; the workbook
@@ -27,6 +30,7 @@ from msdc.pipeline.model.identity import aircraft_labels
 from msdc.pipeline.model.jumps import JUMP_FLAG_COLUMNS, JUMP_INPUTS, jump_table
 from msdc.pipeline.model.time import UTC_DTYPE, dated_or_nat, with_clock
 from msdc.pipeline.quality.checks import check_frame, check_options, check_seconds
+from msdc.pipeline.quality.surface import SURFACE_ALL, SURFACE_INPUTS, mostly_surface, on_surface
 
 ALL = "(all)"
 UNIDENTIFIED = "?"  # the aircraft key of reports that belong to no aircraft (aircraft_id <NA>)
@@ -41,11 +45,11 @@ SHARE_COLUMNS = ["nucp_below_5_pct", "nic_below_6_pct", "low_integrity_pct"]
 ID_KEYS = ["callsign", "address", *SENSOR_KEYS]
 
 QUALITY_COLUMNS = [
-    *ID_KEYS, "reports", "duplicates_removed", "reports_after_dedup", "first_tod", "last_tod",
+    *ID_KEYS, "on_surface", "reports", "duplicates_removed", "reports_after_dedup", "first_tod", "last_tod",
     "first_utc", "last_utc", "intervals", "interval_min_s", "interval_median_s", "interval_p95_s",
-    "interval_max_s", "gaps", "longest_gap_s", "reappearances", "speed_missing", "speed_zero",
-    "speed_missing_or_zero", "speed_missing_or_zero_pct", "jumps", "nucp_below_5_pct", "nic_below_6_pct",
-    "low_integrity_pct", "mops_versions",
+    "interval_max_s", "interval_max_within_gap_s", "gaps", "longest_gap_s", "reappearances", "speed_missing",
+    "speed_zero", "speed_missing_or_zero", "speed_missing_or_zero_pct", "jumps", "nucp_below_5_pct",
+    "nic_below_6_pct", "low_integrity_pct", "mops_versions",
 ]
 HISTOGRAM_COLUMNS = [*SENSOR_KEYS, "bin_start_s", "bin_end_s", "intervals"]
 GAP_COLUMNS = [*ID_KEYS, "gap_start_tod", "gap_end_tod", "gap_start_utc", "gap_end_utc", "gap_duration_s",
@@ -58,7 +62,7 @@ VALUE_COUNT_COLUMNS = [*ID_KEYS, "indicator", "value", "reports", "share_pct"]
 # million reports)
 QUALITY_INPUTS = list(dict.fromkeys([
     *DEDUP_KEYS, *JUMP_INPUTS, "sensor_id", "sensor_kind", "sac", "sic", "address", "callsign",
-    *ADSB_INDICATORS, "mops_version"]))
+    *ADSB_INDICATORS, "mops_version", *SURFACE_INPUTS]))
 QUALITY_FLAGS = ["duplicate", *JUMP_FLAG_COLUMNS]
 DEDUP_COLUMNS = [*DEDUP_KEYS, "sensor_kind", "sensor_id", "duplicate"]  # what deduplicate reads
 ADSB_UNREAD = ["sensor_kind", "sensor_id", "ground_speed_kt", "heading_deg", "duplicate"]  # once deduplicated
@@ -104,14 +108,17 @@ def _deduplicated_rows(frame: pd.DataFrame, by: list[str]) -> np.ndarray:
     return np.concatenate(rows) if rows else np.zeros(0, np.int64)
 
 
-def _interval_stats(intervals_s: np.ndarray) -> dict:
+def _interval_stats(intervals_s: np.ndarray, longest_s: float = np.nan) -> dict:
+    """Count, min, median, 95th percentile and maximum of the intervals within the gap rule, and
+    ``interval_max_s`` the longest interval between successive reports, gaps included (``longest_s``)."""
     if intervals_s.size == 0:
-        return {"intervals": 0} | dict.fromkeys(
-            ["interval_min_s", "interval_median_s", "interval_p95_s", "interval_max_s"], np.nan)
+        return {"intervals": 0, "interval_min_s": np.nan, "interval_median_s": np.nan,
+                "interval_p95_s": np.nan, "interval_max_s": longest_s, "interval_max_within_gap_s": np.nan}
     return {"intervals": int(intervals_s.size), "interval_min_s": float(intervals_s.min()),
             "interval_median_s": float(np.median(intervals_s)),
             "interval_p95_s": float(np.percentile(intervals_s, 95)),
-            "interval_max_s": float(intervals_s.max())}
+            "interval_max_s": float(np.fmax(intervals_s.max(), longest_s)),
+            "interval_max_within_gap_s": float(intervals_s.max())}
 
 
 def _speed_stats(gs_kt: pd.Series) -> dict:
@@ -155,9 +162,11 @@ def _group_rows(group: pd.DataFrame, gap_s: float,
              "gap_start_utc": stamps.iloc[i], "gap_end_utc": stamps.iloc[i + 1],
              "gap_duration_s": t[i + 1] - t[i], "reappeared_after_1h": bool(t[i + 1] - t[i] > REAPPEARANCE_S)}
             for i in gap]
-    row = {**ident, "reports": len(group), "duplicates_removed": dups, "reports_after_dedup": len(clean),
+    row = {**ident, "on_surface": mostly_surface(on_surface(clean)), "reports": len(group),
+           "duplicates_removed": dups, "reports_after_dedup": len(clean),
            "first_tod": t[0], "last_tod": t[-1], "first_utc": stamps.iloc[0],
-           "last_utc": stamps.iloc[-1], **_interval_stats(within), "gaps": len(gaps),
+           "last_utc": stamps.iloc[-1], **_interval_stats(within, float(dt.max()) if dt.size else np.nan),
+           "gaps": len(gaps),
            "longest_gap_s": float(dt[gap].max()) if gap.size else np.nan,
            "reappearances": sum(g["reappeared_after_1h"] for g in gaps),
            **_speed_stats(clean["ground_speed_kt"])}
@@ -182,17 +191,20 @@ def _aircraft_groups(narrow: pd.DataFrame) -> Iterator[tuple[tuple, pd.DataFrame
 
 
 def _pooled_row(rows: list[dict], intervals: list[np.ndarray], sensor_id: tuple,
-                clean: list[pd.DataFrame]) -> dict:
-    """The "(all)" summary row of one sensor from its per-aircraft rows, intervals and reports."""
+                clean: list[pd.DataFrame], label: str = ALL) -> dict:
+    """A pooled summary row of one sensor ("(all)" or "(all surface)": ``label``) from its per-aircraft
+    rows, intervals and reports."""
     frame = pd.DataFrame(rows)
-    row = {"callsign": ALL, "address": "", **dict(zip(SENSOR_KEYS, sensor_id, strict=True))}
+    row = {"callsign": label, "address": "", **dict(zip(SENSOR_KEYS, sensor_id, strict=True)),
+           "on_surface": label == SURFACE_ALL}
     for c in ("reports", "duplicates_removed", "reports_after_dedup", "gaps", "reappearances",
               "speed_missing", "speed_zero", "speed_missing_or_zero"):
         row[c] = int(frame[c].sum())
     row["first_tod"], row["last_tod"] = frame["first_tod"].min(), frame["last_tod"].max()
     first, last = frame["first_tod"].idxmin(), frame["last_tod"].idxmax()
     row["first_utc"], row["last_utc"] = frame.loc[first, "first_utc"], frame.loc[last, "last_utc"]
-    row |= _interval_stats(np.concatenate(intervals) if intervals else np.array([]))
+    row |= _interval_stats(np.concatenate(intervals) if intervals else np.array([]),
+                           frame["interval_max_s"].max())
     row["longest_gap_s"] = frame["longest_gap_s"].max()
     row["speed_missing_or_zero_pct"] = (100.0 * row["speed_missing_or_zero"] / row["reports_after_dedup"]
                                         if row["reports_after_dedup"] else np.nan)
@@ -355,7 +367,7 @@ def quality_tables(meas: pd.DataFrame, *, gap_s: float = 180.0,
     summary, gaps, hist = [], [], []
     edges = histogram_edges_s(gap_s)
     needed = [*ID_KEYS, "aircraft", "time", "time_of_day", "timestamp", "ground_speed_kt", "nucp_nic",
-              "mops_version", "duplicate", "sensor_kind", "sensor_id", *DEDUP_KEYS]
+              "mops_version", "duplicate", "sensor_kind", "sensor_id", *DEDUP_KEYS, *SURFACE_INPUTS]
     narrow = both[[c for c in dict.fromkeys(needed) if c in both]]  # the groups are copied: keep them narrow
     del both
     for _, groups in itertools.groupby(_aircraft_groups(narrow), key=lambda group: group[0][0]):  # per sensor
@@ -370,7 +382,13 @@ def quality_tables(meas: pd.DataFrame, *, gap_s: float = 180.0,
             intervals.append(within)
             clean.append(g_clean[[c for c in ("nucp_nic", "mops_version") if c in g_clean]])  # for the pool
             gaps += g_gaps
-        summary += [_pooled_row(rows, intervals, sensor_id, clean), *rows]
+        pooled = []  # the aircraft in the air, then those on the surface (pipeline.quality.surface)
+        for label, surface in ((ALL, False), (SURFACE_ALL, True)):
+            at = [i for i, row in enumerate(rows) if row["on_surface"] == surface]
+            if at:
+                pooled.append(_pooled_row([rows[i] for i in at], [intervals[i] for i in at], sensor_id,
+                                          [clean[i] for i in at], label))
+        summary += [*pooled, *rows]
         counts, _ = np.histogram(np.concatenate(intervals), bins=edges)
         hist.append(pd.DataFrame({**dict(zip(SENSOR_KEYS, sensor_id, strict=True)), "bin_start_s": edges[:-1],
                                   "bin_end_s": edges[1:], "intervals": counts}))

@@ -124,11 +124,12 @@ def quality(**kw) -> QualityOptions:
 def test_quality_columns_follow_the_reference():
     plain = quality_columns(quality())
     assert plain == column_names(plain) and {"aircraft_id", "rho_nm", "nacp", "mops_version"} <= set(plain)
-    assert not {"cov_ee_m2", "sigma_major_m", "height_m", "mode3a", "track_number", "file"} & set(plain)
+    assert {"height_m", "height_source"} <= set(plain)  # the reference's geometric height, where reported
+    assert not {"cov_ee_m2", "sigma_major_m", "mode3a", "track_number", "file"} & set(plain)
     track = quality_columns(quality(reference="track"))  # the tracker reads the covariance and NACv
     assert set(track) - set(plain) == {"cov_ee_m2", "cov_en_m2", "cov_nn_m2"}
     assert set(REQUIRED) | set(FILTER_INPUTS) | {"nacp"} <= set(track)
-    assert not {"sigma_major_m", "height_m", "mode3a", "track_number", "file"} & set(track)
+    assert not {"sigma_major_m", "mode3a", "track_number", "file"} & set(track)
 
 
 @pytest.mark.parametrize("kw", [{}, {"all_aircraft": False, "callsign": "MAS72", "gap_s": 30.0},
@@ -137,9 +138,9 @@ def test_quality_on_the_narrow_frame_equals_the_full_frame(kw, monkeypatch):
     seen = []
     measured = quality_jobs.quality_step
 
-    def spy(meas, sensors, options):
+    def spy(meas, sensors, options, reference_meas=None):
         seen.append(set(meas.columns))
-        return measured(meas, sensors, options)
+        return measured(meas, sensors, options, reference_meas)
 
     monkeypatch.setattr(quality_jobs, "quality_step", spy)
     narrow = quality_jobs.quality_job(quality(**kw))

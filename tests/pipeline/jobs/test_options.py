@@ -51,7 +51,8 @@ EXPECTED = {
                   "--drop-jumps": "drop_jumps", "--min-nic": "min_nic", "--min-nacp": "min_nacp",
                   "--fill": "fill", "--tables": "tables", "--adsb-sigma": "adsb_sigma_m", **READING},
     "quality": {"INPUT": "inputs", **SELECTION, "--output": "output", "--json": "json", "--gap": "gap_s",
-                "--reference": "reference", "--adsb-sigma": "adsb_sigma_m", **READING},
+                "--reference": "reference", "--drop-jumps": "drop_jumps", "--min-nic": "min_nic",
+                "--min-nacp": "min_nacp", "--adsb-sigma": "adsb_sigma_m", **READING},
     "track": {"INPUT": "inputs", **SELECTION, "--output": "output", "--json": "json", **TRACKING,
               "--smooth": "smooth", "--smoother": "smoother", "--adsb-sigma": "adsb_sigma_m", **READING},
     "conflicts": {"INPUT": "inputs", "--sensors": "sensors", "--output": "output", "--json": "json",
@@ -106,6 +107,9 @@ def test_inherited_options_are_redeclared_where_they_differ():
     assert ConflictOptions().all_aircraft and not TrackOptions().all_aircraft
     assert TrackOptions.__dataclass_fields__["max_coast_s"] is ConflictOptions.__dataclass_fields__[
         "max_coast_s"]
+    # the ADS-B filters are declared once, for correlate and quality alike
+    for name in ("drop_jumps", "min_nic", "min_nacp"):
+        assert CorrelateOptions.__dataclass_fields__[name] is QualityOptions.__dataclass_fields__[name]
 
 
 def test_the_aircraft_selection_is_one_required_group():

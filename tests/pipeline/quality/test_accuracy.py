@@ -202,7 +202,8 @@ def test_nacp_bounds_and_too_few_reports():
     assert list(b.columns) == BIAS_COLUMNS
     assert np.isnan(b["range_bias_m"].iloc[0]) and "too few reports" in b["note"].iloc[0]
     assert b["adsb_nacp_95_m"].iloc[0] == 30.0 and "within 30 m" in b["note"].iloc[0]
-    assert b.attrs["note"] == LIMITATION_NOTE
+    # the general limitation, then the height the reference had: this frame says no geometric height
+    assert b.attrs["note"].startswith(LIMITATION_NOTE + " Reference height: the ADS-B pressure altitude")
 
 
 # ---------------------------------------------------------------------------------------------------------
