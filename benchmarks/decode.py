@@ -251,6 +251,7 @@ def measure(path: Path, repeat: int, category: int) -> dict:
     peak_rss_mb = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
     n = sum(len(f) for f in rec.frames.values())
     frame_mb = sum(f.memory_usage(deep=True).sum() for f in rec.frames.values()) / 1e6
+    values = sum(int(f.notna().to_numpy().sum()) for f in rec.frames.values())  # present cells
     del rec
     gc.collect()
     times = []
@@ -260,6 +261,7 @@ def measure(path: Path, repeat: int, category: int) -> dict:
         times.append(time.perf_counter() - t0)
     return {"records": n, "first_s": first_s, "best_s": min(times), "records_per_s": n / min(times),
             "peak_rss_mb": peak_rss_mb, "rss_before_mb": base_rss_mb, "frame_mb": frame_mb,
+            "values_per_record": values / max(n, 1),
             "file_mb": path.stat().st_size / 1e6}
 
 
@@ -301,6 +303,7 @@ def main() -> int:
     work = Path(args.work)
     work.mkdir(parents=True, exist_ok=True)
     rates: dict[str, float] = {}
+    value_rates: dict[str, float] = {}  # present values (non-empty cells) per second
     for cat in [c if "other" in c else int(c) for c in args.categories.split(",")]:
         if cat == "48+30% other":
             path = work / f"cat048_other30_{args.records}.ast"
@@ -320,6 +323,7 @@ def main() -> int:
         m = json.loads(subprocess.run(run + ["--measure", str(path), "--category", str(cat)], check=True,
                                       capture_output=True, text=True).stdout)
         rates[label] = m["records_per_s"]
+        value_rates[label] = m["records_per_s"] * m["values_per_record"]
         grow_mb = m["peak_rss_mb"] - m["rss_before_mb"]
         rates[label] = m["records_per_s"]
         versus = (f"; {m['records_per_s'] / rates['CAT048']:.0%} of CAT048's rate"
@@ -327,6 +331,10 @@ def main() -> int:
         print(f"{label}: {m['records']:,} records in {m['best_s']:.3f} s = "
               f"{m['records_per_s']:,.0f} rec/s (first decode in a fresh process {m['first_s']:.3f} s)"
               f"{versus}")
+        value_versus = (f"; {value_rates[label] / value_rates['CAT048']:.0%} of CAT048's"
+                        if label != "CAT048" and "CAT048" in value_rates else "")
+        print(f"{label}: {m['values_per_record']:.1f} present values a record, "
+              f"{value_rates[label]:,.0f} values/s{value_versus}")
         print(f"{label}: peak RSS {m['peak_rss_mb']:.0f} MB, of which the decode added {grow_mb:.0f} MB"
               f" (imports and kernel before it: {m['rss_before_mb']:.0f} MB); frames {m['frame_mb']:.0f} MB,"
               f" file {m['file_mb']:.0f} MB;"
