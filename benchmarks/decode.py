@@ -233,8 +233,9 @@ def build_mixed(path: Path, cat048_path: Path, other_share: float = 0.30) -> Non
     path.write_bytes(bytes(out))
 
 
-def measure(path: Path, repeat: int, category: int) -> dict:
-    """In this (fresh) process: warm up on a prefix, then the peak-memory decode and best-of-repeat."""
+def measure(path: Path, repeat: int, category: int, pin: str = "") -> dict:
+    """In this (fresh) process: warm up on a prefix, then the peak-memory decode and best-of-repeat
+    (``pin``: the category's edition pinned instead of its default)."""
     import gc
     import tempfile
 
@@ -243,10 +244,11 @@ def measure(path: Path, repeat: int, category: int) -> dict:
     with tempfile.NamedTemporaryFile(suffix=".ast") as tiny:
         tiny.write(path.read_bytes()[:200_000])
         tiny.flush()
-        asterix.read(tiny.name, categories=[category])  # loads the cached kernel and pandas machinery
+        kw = {"editions": {category: pin}} if pin else {}
+        asterix.read(tiny.name, categories=[category], **kw)  # loads the cached kernel and pandas machinery
     base_rss_mb = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
     t0 = time.perf_counter()
-    rec = asterix.read(path, categories=[category])
+    rec = asterix.read(path, categories=[category], **kw)
     first_s = time.perf_counter() - t0
     peak_rss_mb = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
     n = sum(len(f) for f in rec.frames.values())
@@ -257,7 +259,7 @@ def measure(path: Path, repeat: int, category: int) -> dict:
     times = []
     for _ in range(repeat):
         t0 = time.perf_counter()
-        asterix.read(path, categories=[category])
+        asterix.read(path, categories=[category], **kw)
         times.append(time.perf_counter() - t0)
     return {"records": n, "first_s": first_s, "best_s": min(times), "records_per_s": n / min(times),
             "peak_rss_mb": peak_rss_mb, "rss_before_mb": base_rss_mb, "frame_mb": frame_mb,
@@ -292,10 +294,11 @@ def main() -> int:
                     help="the cases to run, comma-separated (default: all)")
     ap.add_argument("--measure", help=argparse.SUPPRESS)
     ap.add_argument("--category", type=int, default=48, help=argparse.SUPPRESS)
+    ap.add_argument("--pin", default="", help=argparse.SUPPRESS)
     ap.add_argument("--measure-pyasteryx", help=argparse.SUPPRESS)
     args = ap.parse_args()
     if args.measure:
-        print(json.dumps(measure(Path(args.measure), args.repeat, args.category)))
+        print(json.dumps(measure(Path(args.measure), args.repeat, args.category, args.pin)))
         return 0
     if args.measure_pyasteryx:
         print(json.dumps(measure_pyasteryx(Path(args.measure_pyasteryx), args.pyasteryx_records)))
@@ -339,6 +342,11 @@ def main() -> int:
               f" (imports and kernel before it: {m['rss_before_mb']:.0f} MB); frames {m['frame_mb']:.0f} MB,"
               f" file {m['file_mb']:.0f} MB;"
               f" added/(frames+file) = {grow_mb / (m['frame_mb'] + m['file_mb']):.2f}")
+        if label == "CAT021":  # the cost of 'auto' (CAT021's default) against the edition it chooses
+            argv = run + ["--measure", str(path), "--category", "21", "--pin", "2.7"]
+            pinned = json.loads(subprocess.run(argv, check=True, capture_output=True, text=True).stdout)
+            print(f"CAT021 with --edition 21=2.7: {pinned['best_s']:.3f} s; auto costs "
+                  f"{m['best_s'] / pinned['best_s'] - 1:.1%} of decoding")
         p = json.loads(subprocess.run(run + ["--measure-pyasteryx", str(path), "--pyasteryx-records",
                                              str(args.pyasteryx_records)], check=True, capture_output=True,
                                       text=True).stdout)
