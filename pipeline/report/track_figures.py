@@ -39,6 +39,11 @@ MAX_ZOOMS = 2
 MIN_ZOOM_UPDATES = 10  # a part's reports needed for a zoom (a lone report coasted at 0 kt is no taxi)
 MIN_ZOOM_KM = 0.3
 MAP_WIDTH_IN, ZOOM_WIDTH_IN, MODE_HEIGHT_IN = 8.0, 3.6, 2.2
+# the figure's own layout (inches): margins left, right, top, bottom for tick labels, axis labels and the
+# title; the gap between rows (the map's x label and the mode panel's legend above it), between the map and
+# the zoom panels (their tick labels), and the mode panel's axes
+MARGINS_IN = (0.85, 0.3, 0.45, 0.6)
+ROW_GAP_IN, COLUMN_GAP_IN, MODE_AXES_IN = 0.95, 0.6, MODE_HEIGHT_IN - 0.6
 MAP_ASPECT = (0.45, 1.2)  # the map's height over width lies within these
 
 
@@ -162,12 +167,21 @@ def _draw_ellipses(ax: Axes, tracks: pd.DataFrame, e: np.ndarray, n: np.ndarray,
 def _layout(span_e: float, span_n: float, zooms: int) -> tuple[Figure, Axes, list[Axes], Axes]:
     """The figure: the map (its height following its shape), up to MAX_ZOOMS zoom panels to its right,
     and the mode probabilities below across the width."""
-    map_h = (MAP_WIDTH_IN - 1.2) * span_n / span_e
+    left, right, top, bottom = MARGINS_IN
+    map_w = MAP_WIDTH_IN - left - (0.0 if zooms else right)
+    map_h = map_w * span_n / span_e
     width = MAP_WIDTH_IN + (ZOOM_WIDTH_IN if zooms else 0.0)
-    fig = new_figure(width, map_h + MODE_HEIGHT_IN + 0.6)
     rows = max(zooms, 1)
-    gs = fig.add_gridspec(rows + 1, 2 if zooms else 1, height_ratios=[map_h / rows] * rows + [MODE_HEIGHT_IN],
-                          width_ratios=[MAP_WIDTH_IN, ZOOM_WIDTH_IN] if zooms else None)
+    height = top + map_h + ROW_GAP_IN + MODE_AXES_IN + bottom
+    fig = new_figure(width, height, layout=None)  # placed here: the same margins on every figure
+    zoom_w = width - left - map_w - COLUMN_GAP_IN - right
+    row_h = (map_h - ROW_GAP_IN * (rows - 1)) / rows
+    gs = fig.add_gridspec(rows + 1, 2 if zooms else 1, height_ratios=[row_h] * rows + [MODE_AXES_IN],
+                          width_ratios=[map_w, zoom_w] if zooms else None,
+                          left=left / width, right=1 - right / width, top=1 - top / height,
+                          bottom=bottom / height, hspace=ROW_GAP_IN / ((map_h - ROW_GAP_IN * (rows - 1)
+                                                                         + MODE_AXES_IN) / (rows + 1)),
+                          wspace=COLUMN_GAP_IN / ((map_w + zoom_w) / 2) if zooms else 0.0)
     ax = fig.add_subplot(gs[:rows, 0])
     zoom_axes = [fig.add_subplot(gs[i, 1]) for i in range(zooms)]
     return fig, ax, zoom_axes, fig.add_subplot(gs[rows, :])

@@ -155,3 +155,33 @@ def test_the_figure_ends_at_the_recordings_last_report():
     assert recording_end(Result()) == t["time"].iloc[250]
     Loaded.spans = None
     assert recording_end(Result()) == end
+
+
+@pytest.mark.parametrize("arrival_taxi_s", [None, 0, 200])
+def test_the_fixed_layout_keeps_every_text_in_the_figure_and_off_the_other_axes(arrival_taxi_s):
+    """The figure is laid out by fixed margins, not constrained layout: with no zoom, one and two zoom
+    panels, every tick label, axis label, title and legend lies inside the figure, and none of one axes'
+    texts runs into another axes' plotting area."""
+    t = _flight(taxi_s=0) if arrival_taxi_s is None else _flight(arrival_taxi_s=arrival_taxi_s)
+    reports = pd.DataFrame({"sensor_id": "021:0/1", "sensor_kind": "adsb", "time": t["time"],
+                            "latitude": t["latitude"], "longitude": t["longitude"]})
+    fig = track_figure(t, reports, "ABC123 (A1B2C3)")
+    assert len(fig.axes) == {None: 2, 0: 3, 200: 4}[arrival_taxi_s]
+    renderer = fig.canvas.get_renderer()
+    fig.draw(renderer)
+    page = fig.bbox
+    for ax in fig.axes:
+        texts = [ax.xaxis.label, ax.yaxis.label, ax.title]
+        for axis in (ax.xaxis, ax.yaxis):  # the tick labels drawn: those of ticks within the view
+            lo, hi = sorted(axis.get_view_interval())
+            texts += [label for at, label in zip(axis.get_majorticklocs(), axis.get_majorticklabels(),
+                                                 strict=True) if lo <= at <= hi]
+        boxes = [x.get_window_extent(renderer) for x in texts if x.get_visible() and x.get_text()]
+        if ax.get_legend() is not None:
+            boxes.append(ax.get_legend().get_window_extent(renderer))
+        for box in boxes:
+            assert page.x0 <= box.x0 and box.x1 <= page.x1 and page.y0 <= box.y0 and box.y1 <= page.y1
+            for other in fig.axes:
+                if other is not ax:
+                    assert not box.overlaps(other.get_window_extent(renderer)), (ax.get_title(),
+                                                                                 other.get_title())
