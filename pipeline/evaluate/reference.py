@@ -24,7 +24,8 @@ def _check_columns(frame: pd.DataFrame, required: tuple[str, ...], what: str) ->
     """Refuse a frame that lacks a required column, naming them all."""
     missing = [c for c in required if c not in frame.columns]
     if missing:
-        raise ValueError(f"{what} lacks the column(s) {', '.join(missing)} (required: {', '.join(required)})")
+        raise ValueError(f"missing column(s) in {what}: {', '.join(missing)} "
+                         f"(required: {', '.join(required)})")
 
 
 def check_reference(reference: pd.DataFrame) -> pd.DataFrame:

@@ -7,7 +7,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from fixtures.radar_effects import RadarEffects, simulate_effects
+from fixtures.radar_effects import RadarEffects, expected_rates, simulate_effects
 from msdc.pipeline.evaluate.coverage import Sensor
 from msdc.pipeline.evaluate.reference import associate
 from msdc.pipeline.evaluate.requirements import REQUIREMENTS, radar_reports
@@ -220,9 +220,9 @@ def test_association_is_by_position_to_the_nearest_aircraft():
 
 
 def test_bad_input_is_named():
-    with pytest.raises(ValueError, match="the reference lacks the column.*longitude"):
+    with pytest.raises(ValueError, match="missing column.* in the reference: longitude"):
         run("pd", reports([0]), reference().drop(columns="longitude"))
-    with pytest.raises(ValueError, match="the test reports lack|the test reports lacks.*t_s"):
+    with pytest.raises(ValueError, match="missing column.* in the test reports: t_s"):
         run("pd", reports([0]).drop(columns="t_s"), reference())
     with pytest.raises(ValueError, match="no update interval"):
         run("pd", reports([0, 4]), reference(), Sensor(0.0, 0.0, 0.0))
@@ -237,26 +237,6 @@ INJECTED = RadarEffects(pd=0.9, full_range_nm=140.0, max_range_nm=180.0, cone_el
                         mode3a_garble=0.03, mode3a_error=0.01, modec_garble=0.02, modec_error=0.015,
                         false_per_scan=2.0, split=0.03)
 PARAMETERS = {"tolerance_ft": 300.0, "distance_m": 2100.0}
-
-
-def expected_rates(eff: RadarEffects, period_s: float) -> dict[str, tuple[float, dict]]:
-    """Each requirement's true value from the injected effects, with the parameters it is measured with."""
-    q = 1.0 - eff.pd
-    return {
-        "pd": (eff.pd, {}),
-        # successive detections 3 or more scans apart: two misses in a row
-        "long_gaps": (q**2, {"min_gap_s": 2.5 * period_s}),
-        "mode3a_present": (1.0, {}), "mode3a_valid": (1 - eff.mode3a_garble, {}),
-        "mode3a_correct": ((1 - eff.mode3a_garble) * (1 - eff.mode3a_error), {}),
-        "mode3a_false": (eff.mode3a_error, {}),
-        "modec_present": (1.0, {}), "modec_valid": (1 - eff.modec_garble, {}),
-        "modec_correct": ((1 - eff.modec_garble) * (1 - eff.modec_error), {}),
-        "modec_false": (eff.modec_error, {}),
-        "address_correct": (1.0, {}), "address_false": (0.0, {}),
-        "callsign_correct": (1.0, {}), "callsign_false": (0.0, {}),
-        "false_reports_per_scan": (eff.false_per_scan, {}),
-        "split_reports": (eff.split, {}), "multiple_reports": (eff.split, {}),
-    }
 
 
 def evaluate_all(sim) -> tuple[dict, pd.DataFrame]:
