@@ -17,6 +17,10 @@ REFERENCE_OPTIONAL = ("altitude_ft", "height_m", "mode3a", "address", "callsign"
 REPORTS_REQUIRED = ("t_s", "latitude", "longitude")
 DEFAULT_GATE_M = 3704.0  # 2 NM: a report further than this from every reference aircraft is not associated
 DEFAULT_REFERENCE_GAP_S = 30.0  # reference samples further apart than this leave the aircraft unknown between
+# a report's Mode C this far from an aircraft's altitude prefers another aircraft within the gate, if any:
+# aircraft crossing at different levels keep their own plots (a Mode C error is 400 ft and up, a garbled
+# one anything, so only a gross one with another aircraft in the gate at that level can mislead it)
+DEFAULT_VERTICAL_GATE_FT = 3000.0
 ASSOCIATION_COLUMNS = ("ref_index", "ref_aircraft", "ref_distance_m")
 
 
@@ -118,29 +122,40 @@ def associate(reports: pd.DataFrame, reference: pd.DataFrame,
     """The reports with ``ref_index`` (the nearest reference aircraft's position in the sorted list of
     aircraft, -1 when none is within gate_m), ``ref_aircraft`` (its label, None when -1) and
     ``ref_distance_m`` (distance to the nearest reference aircraft at the report's time, inf when none is
-    known then). Association is by position alone, so codes are judged independently of it."""
+    known then). Association is by horizontal position; where two aircraft are within the gate, one whose
+    altitude is within vertical_gate_ft of the report's Mode C is preferred, so aircraft crossing at
+    different levels keep their plots. Codes are judged apart from it: a wrong Mode C with a single
+    aircraft in the gate still goes to that aircraft."""
     _check_columns(reports, REPORTS_REQUIRED, "the test reports")
     gate_m = float(parameter(parameters, "gate_m", DEFAULT_GATE_M))
+    vertical_ft = float(parameter(parameters, "vertical_gate_ft", DEFAULT_VERTICAL_GATE_FT))
     max_gap_s = float(parameter(parameters, "reference_max_gap_s", DEFAULT_REFERENCE_GAP_S))
     ref = check_reference(reference)
     t = reports["t_s"].to_numpy(float)
     lat, lon = reports["latitude"].to_numpy(float), reports["longitude"].to_numpy(float)
+    mode_c_ft = (pd.to_numeric(reports["flight_level"], errors="coerce").to_numpy(float) * 100.0
+                 if "flight_level" in reports.columns else np.full(t.size, np.nan))
     order = np.argsort(t, kind="stable")
     ts = t[order]
-    best = np.full(t.size, np.inf)
-    index = np.full(t.size, -1, dtype=np.int64)
+    best, level_best = np.full(t.size, np.inf), np.full(t.size, np.inf)
+    index, level_index = np.full(t.size, -1, dtype=np.int64), np.full(t.size, -1, dtype=np.int64)
     trajs = trajectories(ref)
     for k, tr in enumerate(trajs):
         a, b = np.searchsorted(ts, tr.t_s[0], "left"), np.searchsorted(ts, tr.t_s[-1], "right")
         rows = order[a:b]
-        r_lat, r_lon, _, _ = tr.at(t[rows], max_gap_s)
-        d = local_distance_m(lat[rows], lon[rows], r_lat, r_lon)
-        closer = np.nan_to_num(d, nan=np.inf) < best[rows]
+        r_lat, r_lon, _, r_alt = tr.at(t[rows], max_gap_s)
+        d = np.nan_to_num(local_distance_m(lat[rows], lon[rows], r_lat, r_lon), nan=np.inf)
+        closer = d < best[rows]
         best[rows[closer]] = d[closer]
         index[rows[closer]] = k
+        with np.errstate(invalid="ignore"):
+            apart = np.abs(mode_c_ft[rows] - r_alt) > vertical_ft  # False where either is unknown
+        closer = ~apart & (d < level_best[rows])
+        level_best[rows[closer]] = d[closer]
+        level_index[rows[closer]] = k
     out = reports.copy()
     out["ref_distance_m"] = np.where(np.isfinite(lat) & np.isfinite(lon), best, np.nan)
-    index = np.where(best <= gate_m, index, -1)
+    index = np.where(level_best <= gate_m, level_index, np.where(best <= gate_m, index, -1))
     out["ref_index"] = index
     labels = np.array([tr.label for tr in trajs] + [None], dtype=object)
     out["ref_aircraft"] = pd.Series(labels[index], index=out.index, dtype=object)

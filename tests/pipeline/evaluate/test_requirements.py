@@ -219,6 +219,18 @@ def test_association_is_by_position_to_the_nearest_aircraft():
     assert associate(rep, ref, {"gate_m": 50.0})["ref_aircraft"].tolist() == ["A", None]
 
 
+def test_crossing_aircraft_keep_their_plots_by_level():
+    # B is 0.1 deg (99 m) beside A but 20,000 ft above it
+    a_ref, b_ref = reference(label="A", altitude_ft=10_000.0), reference(label="B", azimuth_deg=0.1,
+                                                                           altitude_ft=30_000.0)
+    rep = reports([4, 4, 4], azimuth_deg=0.1, flight_level=[100.0, 300.0, np.nan])
+    both = pd.concat([a_ref, b_ref])
+    assert associate(rep, both)["ref_aircraft"].tolist() == ["A", "B", "B"]
+    # a Mode C far from the only aircraft in the gate still goes to it (a code error, judged apart)
+    assert associate(rep, b_ref)["ref_aircraft"].tolist() == ["B", "B", "B"]
+    assert associate(rep, both, {"vertical_gate_ft": 1e6})["ref_aircraft"].tolist() == ["B", "B", "B"]
+
+
 def test_bad_input_is_named():
     with pytest.raises(ValueError, match="missing column.* in the reference: longitude"):
         run("pd", reports([0]), reference().drop(columns="longitude"))
