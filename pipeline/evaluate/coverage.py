@@ -4,6 +4,7 @@ reference aircraft is inside its coverage: the declared limits, else the limits 
 from __future__ import annotations
 
 import math
+import numbers
 from dataclasses import dataclass
 
 import numpy as np
@@ -31,7 +32,8 @@ class Sensor:
     def __post_init__(self) -> None:
         for key in ("latitude", "longitude", "altitude_m", *LIMITS):
             v = getattr(self, key)
-            if v is not None and (not isinstance(v, int | float) or not math.isfinite(v)):
+            number = isinstance(v, numbers.Real) and not isinstance(v, bool)
+            if v is not None and (not number or not math.isfinite(v)):
                 raise ValueError(f"sensor {self.name!r}: {key} must be a finite number, got {v!r}")
 
     def polar(self, lat_deg, lon_deg, h_m) -> tuple[np.ndarray, np.ndarray]:

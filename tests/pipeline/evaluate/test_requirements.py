@@ -240,6 +240,9 @@ def test_bad_input_is_named():
         run("pd", reports([0, 4]), reference(), Sensor(0.0, 0.0, 0.0))
     with pytest.raises(ValueError, match="max_range_nm must be a finite number"):
         Sensor(0.0, 0.0, 0.0, name="x", max_range_nm=float("nan"))
+    with pytest.raises(ValueError, match="altitude_m must be a finite number, got True"):
+        Sensor(0.0, 0.0, True)
+    assert Sensor(np.float32(1.0), np.int64(2), 0).longitude == 2  # numpy numbers are numbers
 
 
 # ---------------------------------------------------------------------------------------------------------
