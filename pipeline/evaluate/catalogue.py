@@ -59,14 +59,16 @@ CATALOGUE: dict[str, RequirementType] = {
     "azimuth_sd_deg": _error("deg", "radar azimuth random error, standard deviation", "sd"),
     "mode3a_present": _share("reports with a Mode 3/A code"),
     "mode3a_valid": _share("Mode 3/A codes marked valid and not garbled"),
-    "mode3a_correct": _share("Mode 3/A codes equal to the reference's"),
-    "mode3a_false": _share("Mode 3/A codes differing from the reference's"),
+    "mode3a_correct": _share("reports with a validated, ungarbled Mode 3/A code equal to the reference's, of "
+                             "the reports whose reference code is known"),
+    "mode3a_false": _share("validated, ungarbled Mode 3/A codes differing from the reference's"),
     "modec_present": _share("reports with a Mode C pressure altitude"),
     "modec_valid": _share("Mode C altitudes marked valid and not garbled"),
-    "modec_correct": _share("Mode C within tolerance_ft of the reference's", parameters=_TOLERANCE_FT,
-                            required=("tolerance_ft",)),
-    "modec_false": _share("Mode C outside tolerance_ft of the reference's", parameters=_TOLERANCE_FT,
-                          required=("tolerance_ft",)),
+    "modec_correct": _share("reports with a validated, ungarbled Mode C within tolerance_ft of the "
+                            "reference's, of the reports whose reference altitude is known",
+                            parameters=_TOLERANCE_FT, required=("tolerance_ft",)),
+    "modec_false": _share("validated, ungarbled Mode C outside tolerance_ft of the reference's",
+                          parameters=_TOLERANCE_FT, required=("tolerance_ft",)),
     "address_correct": _share("Mode S addresses equal to the reference's"),
     "address_false": _share("Mode S addresses differing from the reference's"),
     "callsign_correct": _share("call signs equal to the reference's"),
@@ -77,8 +79,10 @@ CATALOGUE: dict[str, RequirementType] = {
     "false_reports": _share("reports with no reference aircraft within distance_m",
                             parameters={"distance_m": float}, required=("distance_m",)),
     "false_reports_per_scan": RequirementType(RATE, "per scan", "false target reports per antenna scan"),
-    "split_reports": _share("reports split from one aircraft's in one scan"),
-    "multiple_reports": _share("more than one report of one aircraft in one scan or interval"),
+    "split_reports": _share("updates (scans) of an aircraft holding a split plot: a second report not an "
+                            "exact repeat, or one marked split (I048/030 code 3)"),
+    "multiple_reports": _share("updates (scans or intervals) of an aircraft holding more than one report "
+                               "(I048/030 code 3 counted too)"),
     "dubious": _share("physically implausible reports"),
     "psr_ssr_association": _share("PSR and SSR plots of one aircraft associated (combined radar)"),
     "velocity_correct": _share("reported velocities within the tolerance of the reference's (the larger of "

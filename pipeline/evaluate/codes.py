@@ -1,0 +1,132 @@
+"""Code and identity requirements: Mode 3/A and Mode C present, valid, correct and false; Mode S address and
+call sign correct and false; each over the test reports associated with a reference aircraft."""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+
+import numpy as np
+import pandas as pd
+
+from msdc.pipeline.evaluate.outcome import Outcome, share, withheld
+from msdc.pipeline.evaluate.reference import (
+    associated,
+    parameter,
+    reference_altitude_ft,
+    reference_values,
+)
+
+# per code: the report's column, the reference's, and the report's 'not validated' and 'garbled' bits
+MODE3A = ("mode3a", "mode3a", "mode3a_v", "mode3a_g")
+MODEC = ("flight_level", "altitude_ft", "flight_level_v", "flight_level_g")
+
+
+def _present(values: pd.Series) -> np.ndarray:
+    """Whether each report carries the value (not NA, not empty text)."""
+    v = values.to_numpy(object)
+    return np.array([x is not None and x is not pd.NA and not (isinstance(x, float) and np.isnan(x))
+                     and x != "" for x in v], dtype=bool)
+
+
+def _validated(rep: pd.DataFrame, v_col: str, g_col: str) -> np.ndarray | None:
+    """1 where the report's code is validated and not garbled, 0 where either bit is set, None when the
+    reports carry neither bit (then validity cannot be judged); a missing bit counts as not set."""
+    if v_col not in rep.columns and g_col not in rep.columns:
+        return None
+    bad = np.zeros(len(rep), dtype=bool)
+    for col in (v_col, g_col):
+        if col in rep.columns:
+            bad |= pd.to_numeric(rep[col], errors="coerce").fillna(0).to_numpy() != 0
+    return ~bad
+
+
+def _mine(reports: pd.DataFrame, reference: pd.DataFrame, parameters: Mapping | None) -> pd.DataFrame:
+    """The reports associated with a reference aircraft."""
+    rep = associated(reports, reference, parameters)
+    return rep[rep["ref_index"].to_numpy() >= 0].reset_index(drop=True)
+
+
+def _code_outcome(requirement: str, reports: pd.DataFrame, reference: pd.DataFrame,
+                  parameters: Mapping | None, code: tuple[str, str, str, str]) -> Outcome:
+    """Present / valid / correct / false of Mode 3/A or Mode C, by the rule the docs give."""
+    col, ref_col, v_col, g_col = code
+    what = requirement.rsplit("_", 1)[1]
+    rep = _mine(reports, reference, parameters)
+    have = _present(rep[col]) if col in rep.columns else np.zeros(len(rep), bool)
+    if what == "present":
+        return share(requirement, int(have.sum()), len(rep))
+    valid = _validated(rep, v_col, g_col)
+    if what == "valid":
+        if valid is None:
+            return withheld(requirement, f"the reports carry no {v_col}/{g_col} bits")
+        return share(requirement, int((have & valid).sum()), int(have.sum()))
+    valid = np.ones(len(rep), bool) if valid is None else valid
+    notes = () if v_col in rep.columns or g_col in rep.columns else (
+        f"no {v_col}/{g_col} bits: every code taken as validated",)
+    if col == "flight_level":
+        tol = parameter(parameters, "tolerance_ft", None)
+        if tol is None:
+            raise ValueError(f"{requirement} needs the parameter tolerance_ft")
+        truth = reference_altitude_ft(rep, reference, parameters)
+        known = np.isfinite(truth)
+        alt = (pd.to_numeric(rep[col], errors="coerce").to_numpy(float) * 100.0 if col in rep.columns
+               else np.full(len(rep), np.nan))
+        with np.errstate(invalid="ignore"):
+            equal = np.abs(alt - truth) <= float(tol)
+    else:
+        truth = reference_values(rep, reference, ref_col, parameters)
+        known = _present(pd.Series(truth, dtype=object))
+        equal = np.array([str(a) == str(b) for a, b in zip(rep[col].to_numpy(object), truth, strict=True)]) \
+            if col in rep.columns else np.zeros(len(rep), bool)
+    if not known.any():
+        return withheld(requirement, f"the reference gives no {ref_col} for the associated reports")
+    used = have & valid & known
+    if what == "correct":
+        return share(requirement, int((used & equal).sum()), int(known.sum()), notes)
+    return share(requirement, int((used & ~equal).sum()), int(used.sum()), notes)
+
+
+def _identity_outcome(requirement: str, reports: pd.DataFrame, reference: pd.DataFrame,
+                      parameters: Mapping | None, column: str) -> Outcome:
+    """Correct / false Mode S address or call sign: as Mode 3/A, without validity bits."""
+    rep = _mine(reports, reference, parameters)
+    truth = reference_values(rep, reference, column, parameters)
+    known = _present(pd.Series(truth, dtype=object))
+    if not known.any():
+        return withheld(requirement, f"the reference gives no {column} for the associated reports")
+    have = _present(rep[column]) if column in rep.columns else np.zeros(len(rep), bool)
+    got = rep[column].to_numpy(object) if column in rep.columns else np.full(len(rep), None, object)
+    equal = np.array([str(a).strip().upper() == str(b).strip().upper()
+                      for a, b in zip(got, truth, strict=True)], dtype=bool)
+    used = have & known
+    if requirement.endswith("_correct"):
+        return share(requirement, int((used & equal).sum()), int(known.sum()))
+    return share(requirement, int((used & ~equal).sum()), int(used.sum()))
+
+
+def _code(requirement: str, code: tuple[str, str, str, str]):
+    """The requirement function of one Mode 3/A or Mode C id."""
+    def fn(reports: pd.DataFrame, reference: pd.DataFrame, parameters: Mapping | None = None,
+           sensor=None) -> Outcome:
+        return _code_outcome(requirement, reports, reference, parameters, code)
+    fn.__name__ = requirement
+    fn.__doc__ = f"``{requirement}`` (rule: docs/methods/evaluate.md)."
+    return fn
+
+
+def _identity(requirement: str, column: str):
+    """The requirement function of one address or call sign id."""
+    def fn(reports: pd.DataFrame, reference: pd.DataFrame, parameters: Mapping | None = None,
+           sensor=None) -> Outcome:
+        return _identity_outcome(requirement, reports, reference, parameters, column)
+    fn.__name__ = requirement
+    fn.__doc__ = f"``{requirement}`` (rule: docs/methods/evaluate.md)."
+    return fn
+
+
+CODE_REQUIREMENTS = {
+    **{f"mode3a_{w}": _code(f"mode3a_{w}", MODE3A) for w in ("present", "valid", "correct", "false")},
+    **{f"modec_{w}": _code(f"modec_{w}", MODEC) for w in ("present", "valid", "correct", "false")},
+    **{f"address_{w}": _identity(f"address_{w}", "address") for w in ("correct", "false")},
+    **{f"callsign_{w}": _identity(f"callsign_{w}", "callsign") for w in ("correct", "false")},
+}

@@ -1,0 +1,162 @@
+"""Detection requirements: probability of detection/update (``pd``) and long gaps (``long_gaps``), from the
+updates the reference says the sensor should have made inside its coverage."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+
+import numpy as np
+import pandas as pd
+
+from msdc.pipeline.evaluate.coverage import Coverage, Sensor, coverage
+from msdc.pipeline.evaluate.outcome import Outcome, share, withheld
+from msdc.pipeline.evaluate.reference import (
+    DEFAULT_REFERENCE_GAP_S,
+    associated,
+    check_reference,
+    parameter,
+    trajectories,
+)
+from msdc.pipeline.evaluate.scans import period_from_markers, period_from_plots, update_groups
+from msdc.pipeline.evaluate.statistics import proportion
+
+EXPECTED_COLUMNS = ["aircraft", "stretch", "t_s", "detected", "in_coverage", "rho_nm", "elevation_deg"]
+EDGE_SLACK = 0.05  # of a period: a missed update this close outside a reference stretch still counts
+
+
+def update_period(reports: pd.DataFrame, sensor: Sensor) -> tuple[float, str]:
+    """The sensor's scan period and where it came from: its north markers when given, else the plots."""
+    if sensor.north_markers_s is not None and len(sensor.north_markers_s) >= 2:
+        period = period_from_markers(sensor.north_markers_s)
+        if math.isfinite(period):
+            return period, f"scan period {period:.4g} s from {len(sensor.north_markers_s)} north markers"
+    mine = reports[reports["ref_index"] >= 0]
+    period = period_from_plots(mine["t_s"].to_numpy(float), mine["ref_index"].to_numpy())
+    return period, f"scan period {period:.4g} s estimated from the plots (no north markers)"
+
+
+def _missed_times(times: np.ndarray, start_s: float, end_s: float, period_s: float) -> np.ndarray:
+    """Times of the updates missed in a reference stretch with the given update times: in a gap g between
+    updates, round(g / T) - 1 evenly spaced; before the first and after the last, every T back to the
+    stretch's start and on to its end; with no update at all, every T from half a period after the start."""
+    if not times.size:
+        k = int(np.floor((end_s - start_s) / period_s + EDGE_SLACK))
+        return start_s + period_s * (np.arange(k) + 0.5)
+    before = int(np.floor((times[0] - start_s) / period_s + EDGE_SLACK))
+    after = int(np.floor((end_s - times[-1]) / period_s + EDGE_SLACK))
+    out = [times[0] - period_s * np.arange(before, 0, -1), times[-1] + period_s * np.arange(1, after + 1)]
+    gaps = np.diff(times)
+    for a, g in zip(times[:-1], gaps, strict=True):
+        m = int(round(g / period_s)) - 1
+        if m > 0:
+            out.append(a + g * np.arange(1, m + 1) / (m + 1))
+    return np.sort(np.concatenate(out))
+
+
+def _window_updates(times: np.ndarray, start_s: float, end_s: float,
+                    interval_s: float) -> tuple[np.ndarray, np.ndarray]:
+    """Whole intervals tiling a reference stretch from its start (a last partial one left out): each one's
+    middle time and whether it holds a report."""
+    k = int(np.floor((end_s - start_s) / interval_s + 1e-9))
+    edges = start_s + interval_s * np.arange(k + 1)
+    held = np.zeros(k, dtype=bool)
+    if k and times.size:
+        idx = np.searchsorted(edges, times, side="right") - 1
+        held[np.unique(idx[(idx >= 0) & (idx < k)])] = True
+    return edges[:-1] + 0.5 * interval_s, held
+
+
+def expected_updates(reports: pd.DataFrame, reference: pd.DataFrame, parameters: Mapping | None,
+                     sensor: Sensor) -> tuple[pd.DataFrame, Coverage, tuple[str, ...]]:
+    """Every update the sensor should have made of each reference aircraft, whether it did, and whether the
+    aircraft was then inside coverage, with the coverage and notes on what was used. With ``interval_s``
+    the updates are whole intervals tiling each reference stretch; else one per scan period, the
+    detected ones at their report times and the missed ones spread over the gaps."""
+    max_gap_s = float(parameter(parameters, "reference_max_gap_s", DEFAULT_REFERENCE_GAP_S))
+    rep = associated(reports, reference, parameters)
+    interval = parameter(parameters, "interval_s", None)
+    period, said = update_period(rep, sensor)
+    if interval is not None:
+        said = f"intervals of {float(interval):g} s"
+    step = float(interval) if interval is not None else period
+    if not math.isfinite(step) or step <= 0:
+        raise ValueError(f"sensor {sensor.name!r}: no update interval ({said})")
+    ref = check_reference(reference)
+    t_all, idx = rep["t_s"].to_numpy(float), rep["ref_index"].to_numpy()
+    parts = []
+    for k, tr in enumerate(trajectories(ref)):
+        mine = np.sort(t_all[idx == k])
+        for s, (a, b) in enumerate(tr.stretches(max_gap_s)):
+            times = mine[(mine >= a) & (mine <= b)]
+            if interval is not None:
+                t_exp, held = _window_updates(times, a, b, step)
+            else:
+                groups = update_groups(times, step)
+                first = times[np.concatenate([[True], np.diff(groups) > 0])] if times.size else times
+                missed = _missed_times(first, a, b, step)
+                t_exp = np.concatenate([first, missed])
+                held = np.concatenate([np.ones(first.size, bool), np.zeros(missed.size, bool)])
+            lat, lon, h, _ = tr.at(np.clip(t_exp, a, b), max_gap_s)
+            rho, el = sensor.polar(lat, lon, h)
+            parts.append(pd.DataFrame({"aircraft": tr.label, "stretch": s, "t_s": t_exp, "detected": held,
+                                       "rho_nm": rho, "elevation_deg": el}))
+    table = (pd.concat(parts, ignore_index=True) if parts
+             else pd.DataFrame({c: [] for c in EXPECTED_COLUMNS if c != "in_coverage"}))
+    table = table.sort_values(["aircraft", "stretch", "t_s"], kind="stable", ignore_index=True)
+    det = table["detected"].to_numpy(bool)
+    cov = coverage(sensor, table["rho_nm"].to_numpy(float)[det], table["elevation_deg"].to_numpy(float)[det])
+    table["in_coverage"] = cov.inside(table["rho_nm"], table["elevation_deg"])
+    return table[EXPECTED_COLUMNS], cov, (said, cov.source)
+
+
+def _per_aircraft(table: pd.DataFrame) -> pd.DataFrame:
+    """Per aircraft: expected updates inside coverage, detected ones, PD and its interval."""
+    inside = table[table["in_coverage"]]
+    g = inside.groupby("aircraft", sort=True)["detected"].agg(["sum", "size"])
+    p = proportion(g["sum"].to_numpy(np.int64), g["size"].to_numpy(np.int64))
+    return pd.DataFrame({"aircraft": g.index, "expected": g["size"].to_numpy(),
+                         "detected": g["sum"].to_numpy(), "pd": p.value, "ci_low": p.ci_low,
+                         "ci_high": p.ci_high})
+
+
+def pd_requirement(reports: pd.DataFrame, reference: pd.DataFrame, parameters: Mapping | None,
+                   sensor: Sensor) -> Outcome:
+    """``pd``: detected expected updates inside coverage over all expected ones. Scope 'global' pools every
+    update; 'per_target' gives the aircraft whose interval reaches lowest (every aircraft must meet it)."""
+    table, _, notes = expected_updates(reports, reference, parameters, sensor)
+    inside = table[table["in_coverage"]]
+    per = _per_aircraft(table)
+    if parameter(parameters, "scope", "global") == "per_target":
+        if per.empty:
+            return withheld("pd", "no expected update inside coverage")
+        worst = per.iloc[int(np.argmin(per["ci_high"].to_numpy()))]
+        notes = (*notes, f"per target: the aircraft {worst['aircraft']!r} of {len(per)} reaches lowest")
+        return share("pd", int(worst["detected"]), int(worst["expected"]), notes, per)
+    return share("pd", int(inside["detected"].sum()), len(inside), notes, per)
+
+
+def long_gaps(reports: pd.DataFrame, reference: pd.DataFrame, parameters: Mapping | None,
+              sensor: Sensor) -> Outcome:
+    """``long_gaps``: of the intervals between successive updates of an aircraft in one reference stretch
+    with every update between them expected inside coverage (scan updates, whatever interval_s says),
+    the share with min_gap_s <= gap < max_gap_s."""
+    lo = parameter(parameters, "min_gap_s", None)
+    if lo is None:
+        raise ValueError("long_gaps needs the parameter min_gap_s")
+    hi = float(parameter(parameters, "max_gap_s", math.inf))
+    scans = {k: v for k, v in (parameters or {}).items() if k != "interval_s"}
+    table, _, notes = expected_updates(reports, reference, scans, sensor)
+    gaps = []
+    for _, one in table.groupby(["aircraft", "stretch"], sort=False):
+        det = one["detected"].to_numpy(bool)
+        t, inside = one["t_s"].to_numpy(float), one["in_coverage"].to_numpy(bool)
+        at = np.flatnonzero(det)
+        if at.size < 2:
+            continue
+        out_before = np.concatenate([[0], np.cumsum(~inside)])  # outside-coverage updates before each row
+        ok = (out_before[at[1:] + 1] - out_before[at[:-1]]) == 0
+        gaps.append(np.diff(t[at])[ok])
+    g = np.concatenate(gaps) if gaps else np.zeros(0)
+    count = int(np.sum((g >= float(lo)) & (g < hi)))
+    return share("long_gaps", count, g.size, (*notes, f"{g.size} gaps inside coverage"))

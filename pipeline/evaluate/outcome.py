@@ -1,0 +1,44 @@
+"""What a requirement function returns: the counts, the value with its 95 % interval, and what it rests on."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import pandas as pd
+
+from msdc.pipeline.evaluate.statistics import poisson_rate, proportion
+
+
+@dataclass(frozen=True)
+class Outcome:
+    """One requirement measured on one sensor: ``count`` of ``n`` (successes of trials, or events per
+    exposure for a rate), the value and its interval, notes on what it used (scan period, coverage), and
+    the per-aircraft table where the requirement has one."""
+
+    requirement: str
+    value: float
+    ci_low: float
+    ci_high: float
+    n: float
+    count: int
+    notes: tuple[str, ...] = ()
+    per_aircraft: pd.DataFrame | None = field(default=None, compare=False)
+
+
+def share(requirement: str, count: int, n: int, notes: tuple[str, ...] = (),
+          per_aircraft: pd.DataFrame | None = None) -> Outcome:
+    """A proportion count / n with its Clopper-Pearson interval (NaN when n is 0)."""
+    p = proportion(int(count), int(n))
+    return Outcome(requirement, p.value, p.ci_low, p.ci_high, int(n), int(count), notes, per_aircraft)
+
+
+def rate(requirement: str, events: int, exposure: float, notes: tuple[str, ...] = ()) -> Outcome:
+    """Events per unit of exposure with the exact Poisson interval (NaN when the exposure is 0)."""
+    r = poisson_rate(int(events), float(exposure))
+    return Outcome(requirement, r.value, r.ci_low, r.ci_high, float(exposure), int(events), notes)
+
+
+def withheld(requirement: str, reason: str) -> Outcome:
+    """No figure: the data cannot support one; the reason says why."""
+    return Outcome(requirement, math.nan, math.nan, math.nan, 0, 0, (reason,))

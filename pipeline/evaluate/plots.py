@@ -1,0 +1,103 @@
+"""Plot requirements: false reports (no reference aircraft near), split and multiple reports (more than one
+report of one aircraft in one update)."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+
+import numpy as np
+import pandas as pd
+
+from msdc.pipeline.evaluate.coverage import Sensor
+from msdc.pipeline.evaluate.detection import update_period
+from msdc.pipeline.evaluate.outcome import Outcome, rate, share
+from msdc.pipeline.evaluate.reference import associated, parameter
+from msdc.pipeline.evaluate.scans import update_groups
+
+SPLIT_PLOT_CODE = 3  # I048/030: split plot
+_CODE_3 = rf"(?:^|,)\s*{SPLIT_PLOT_CODE}\s*(?:,|$)"
+
+
+def _false(reports: pd.DataFrame, reference: pd.DataFrame, parameters: Mapping | None) -> np.ndarray:
+    """Whether each report with a position has no reference aircraft within distance_m at its time."""
+    distance = parameter(parameters, "distance_m", None)
+    if distance is None:
+        raise ValueError("false reports need the parameter distance_m")
+    rep = associated(reports, reference, parameters)
+    d = rep["ref_distance_m"].to_numpy(float)
+    return ~np.isnan(d) & (d > float(distance))
+
+
+def false_reports(reports: pd.DataFrame, reference: pd.DataFrame, parameters: Mapping | None = None,
+                  sensor: Sensor | None = None) -> Outcome:
+    """``false_reports``: reports with a position and no reference aircraft within distance_m, of all
+    reports with a position."""
+    rep = associated(reports, reference, parameters)
+    positioned = ~np.isnan(rep["ref_distance_m"].to_numpy(float))
+    return share("false_reports", int(_false(rep, reference, parameters).sum()), int(positioned.sum()))
+
+
+def false_reports_per_scan(reports: pd.DataFrame, reference: pd.DataFrame, parameters: Mapping | None,
+                           sensor: Sensor) -> Outcome:
+    """``false_reports_per_scan``: false reports (as false_reports) per antenna scan, the scans being the
+    span of the reports' times over the scan period."""
+    rep = associated(reports, reference, parameters)
+    period, said = update_period(rep, sensor)
+    if not math.isfinite(period):
+        raise ValueError(f"sensor {sensor.name!r}: no scan period ({said})")
+    t = rep["t_s"].to_numpy(float)
+    scans = (np.nanmax(t) - np.nanmin(t)) / period if t.size else 0.0
+    return rate("false_reports_per_scan", int(_false(rep, reference, parameters).sum()), scans,
+                (said, f"{scans:.1f} scans"))
+
+
+def update_table(reports: pd.DataFrame, reference: pd.DataFrame, parameters: Mapping | None,
+                 sensor: Sensor) -> tuple[pd.DataFrame, tuple[str, ...]]:
+    """One row per update of a reference aircraft (its associated reports less than half an update interval
+    apart, the interval being interval_s else the scan period): how many reports it holds, how many of
+    them are exact repeats (same time and position as another), and whether one carries I048/030 code 3."""
+    rep = associated(reports, reference, parameters)
+    interval = parameter(parameters, "interval_s", None)
+    period, said = update_period(rep, sensor) if interval is None else (float(interval),
+                                                                        f"intervals of {float(interval):g} s")
+    if not math.isfinite(period) or period <= 0:
+        raise ValueError(f"sensor {sensor.name!r}: no update interval ({said})")
+    mine = rep[rep["ref_index"].to_numpy() >= 0]
+    code3 = (mine["warning_codes"].astype("string").str.contains(_CODE_3, regex=True, na=False).to_numpy(bool)
+             if "warning_codes" in mine.columns else np.zeros(len(mine), bool))
+    rows = []
+    for _, idx in mine.groupby("ref_index", sort=True).indices.items():
+        one = mine.iloc[idx]
+        order = np.argsort(one["t_s"].to_numpy(float), kind="stable")
+        t = one["t_s"].to_numpy(float)[order]
+        key = pd.DataFrame({"t": t, "lat": one["latitude"].to_numpy(float)[order],
+                            "lon": one["longitude"].to_numpy(float)[order]})
+        repeat = key.duplicated().to_numpy()
+        g = update_groups(t, period)
+        per = pd.DataFrame({"group": g, "repeat": repeat, "code3": code3[idx][order]}).groupby("group")
+        agg = per.agg(reports=("repeat", "size"), repeats=("repeat", "sum"), code3=("code3", "any"))
+        agg.insert(0, "aircraft", one["ref_aircraft"].iloc[0])
+        agg.insert(1, "t_s", t[np.searchsorted(g, agg.index.to_numpy())])
+        rows.append(agg.reset_index(drop=True))
+    table = pd.concat(rows, ignore_index=True) if rows else pd.DataFrame(
+        {"aircraft": [], "t_s": [], "reports": [], "repeats": [], "code3": []})
+    return table, (said,)
+
+
+def split_reports(reports: pd.DataFrame, reference: pd.DataFrame, parameters: Mapping | None,
+                  sensor: Sensor) -> Outcome:
+    """``split_reports``: updates of an aircraft holding a second report that is not an exact repeat of
+    another (a split, not a duplicate), or a report marked split (I048/030 code 3), of all its updates."""
+    table, notes = update_table(reports, reference, parameters, sensor)
+    split = ((table["reports"] - table["repeats"]) > 1) | table["code3"].astype(bool)
+    return share("split_reports", int(split.sum()), len(table), notes)
+
+
+def multiple_reports(reports: pd.DataFrame, reference: pd.DataFrame, parameters: Mapping | None,
+                     sensor: Sensor) -> Outcome:
+    """``multiple_reports``: updates of an aircraft holding more than one report (repeats included), or a
+    report marked split (I048/030 code 3), of all its updates."""
+    table, notes = update_table(reports, reference, parameters, sensor)
+    multiple = (table["reports"] > 1) | table["code3"].astype(bool)
+    return share("multiple_reports", int(multiple.sum()), len(table), notes)

@@ -1,0 +1,204 @@
+"""The reference the requirements judge against (positions and identities per aircraft over time), its
+minimum schema, its interpolation at report times, and the association of each test report with the
+nearest reference aircraft."""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass
+
+import numpy as np
+import pandas as pd
+
+from msdc.pipeline.model.geodesy import A_M, E2, M_PER_FT
+
+REFERENCE_REQUIRED = ("aircraft", "t_s", "latitude", "longitude")
+REFERENCE_OPTIONAL = ("altitude_ft", "height_m", "mode3a", "address", "callsign")
+REPORTS_REQUIRED = ("t_s", "latitude", "longitude")
+DEFAULT_GATE_M = 3704.0  # 2 NM: a report further than this from every reference aircraft is not associated
+DEFAULT_REFERENCE_GAP_S = 30.0  # reference samples further apart than this leave the aircraft unknown between
+# a report's Mode C this far from an aircraft's altitude prefers another aircraft within the gate, if any:
+# aircraft crossing at different levels keep their own plots (a Mode C error is 400 ft and up, a garbled
+# one anything, so only a gross one with another aircraft in the gate at that level can mislead it)
+DEFAULT_VERTICAL_GATE_FT = 3000.0
+ASSOCIATION_COLUMNS = ("ref_index", "ref_aircraft", "ref_distance_m")
+
+
+def _check_columns(frame: pd.DataFrame, required: tuple[str, ...], what: str) -> None:
+    """Refuse a frame that lacks a required column, naming them all."""
+    missing = [c for c in required if c not in frame.columns]
+    if missing:
+        raise ValueError(f"missing column(s) in {what}: {', '.join(missing)} "
+                         f"(required: {', '.join(required)})")
+
+
+def check_reference(reference: pd.DataFrame) -> pd.DataFrame:
+    """The reference sorted by aircraft and time, rows without a position or time dropped; refused with a
+    message when a required column is missing."""
+    _check_columns(reference, REFERENCE_REQUIRED, "the reference")
+    ref = reference.dropna(subset=["t_s", "latitude", "longitude"])
+    return ref.sort_values(["aircraft", "t_s"], kind="stable", ignore_index=True)
+
+
+def parameter(parameters: Mapping | None, name: str, default):
+    """A parameter's value, or its default when absent."""
+    return default if not parameters or parameters.get(name) is None else parameters[name]
+
+
+@dataclass(frozen=True)
+class Trajectory:
+    """One reference aircraft's samples as arrays, sorted by time."""
+
+    label: object
+    t_s: np.ndarray
+    latitude: np.ndarray
+    longitude: np.ndarray
+    height_m: np.ndarray
+    altitude_ft: np.ndarray
+    rows: np.ndarray  # row numbers in the checked reference, for its identity columns
+
+    def at(self, t_s: np.ndarray, max_gap_s: float) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """Latitude, longitude, height (m) and pressure altitude (ft) interpolated linearly at t_s; NaN
+        before the first sample, after the last, and between samples more than max_gap_s apart."""
+        t = np.asarray(t_s, dtype=float)
+        last = self.t_s.size - 1
+        i = np.searchsorted(self.t_s, t, side="right") - 1
+        j = np.clip(i, 0, max(last - 1, 0))
+        k = np.minimum(j + 1, last)
+        span = self.t_s[k] - self.t_s[j]
+        at = np.clip(i, 0, last)
+        exact = (i >= 0) & (t == self.t_s[at])  # on a sample: its value, whatever the gaps around it
+        ok = ((i >= 0) & (i < last) & (span <= max_gap_s)) | exact
+        w = (t - self.t_s[j]) / np.where(span > 0, span, 1.0)
+        out = []
+        for v, wrap in ((self.latitude, False), (self.longitude, True), (self.height_m, False),
+                        (self.altitude_ft, False)):
+            d = v[k] - v[j]
+            d = (d + 180.0) % 360.0 - 180.0 if wrap else d
+            out.append(np.where(exact, v[at], np.where(ok, v[j] + w * d, np.nan)))
+        return tuple(out)  # type: ignore[return-value]
+
+    def stretches(self, max_gap_s: float) -> list[tuple[float, float]]:
+        """Spans (first, last sample time) of the reference, cut where samples are more than max_gap_s
+        apart: the aircraft is known only inside them."""
+        cut = np.flatnonzero(np.diff(self.t_s) > max_gap_s)
+        starts = np.concatenate([[0], cut + 1])
+        ends = np.concatenate([cut, [self.t_s.size - 1]])
+        return [(float(self.t_s[a]), float(self.t_s[b])) for a, b in zip(starts, ends, strict=True)]
+
+
+def trajectories(reference: pd.DataFrame) -> list[Trajectory]:
+    """Per reference aircraft, its samples (the reference as check_reference returns it). Height comes from
+    height_m, else the pressure altitude, else 0; the pressure altitude is NaN when absent."""
+    n = len(reference)
+    alt = reference["altitude_ft"].to_numpy(float) if "altitude_ft" in reference else np.full(n, np.nan)
+    if "height_m" in reference:
+        h = reference["height_m"].to_numpy(float)
+    else:
+        h = np.nan_to_num(alt * M_PER_FT, nan=0.0)
+    t = reference["t_s"].to_numpy(float)
+    lat, lon = reference["latitude"].to_numpy(float), reference["longitude"].to_numpy(float)
+    out = []
+    for label, rows in reference.groupby("aircraft", sort=True).indices.items():
+        out.append(Trajectory(label, t[rows], lat[rows], lon[rows], h[rows], alt[rows], rows))
+    return out
+
+
+def local_distance_m(lat1_deg, lon1_deg, lat2_deg, lon2_deg) -> np.ndarray:
+    """Horizontal distance (m) between nearby points on the WGS-84 ellipsoid's local radii of curvature:
+    within 0.1 % of the geodesic below 20 km, which is all an association gate needs."""
+    lat1, lat2 = np.asarray(lat1_deg, float), np.asarray(lat2_deg, float)
+    s = np.sin(np.radians(0.5 * (lat1 + lat2)))
+    w = np.sqrt(1.0 - E2 * s**2)
+    meridian, normal = A_M * (1.0 - E2) / w**3, A_M / w
+    dn = np.radians(lat2 - lat1) * meridian
+    dlon = (np.asarray(lon2_deg, float) - np.asarray(lon1_deg, float) + 180.0) % 360.0 - 180.0
+    de = np.radians(dlon) * normal * np.cos(np.radians(0.5 * (lat1 + lat2)))
+    return np.hypot(de, dn)
+
+
+def associate(reports: pd.DataFrame, reference: pd.DataFrame,
+              parameters: Mapping | None = None) -> pd.DataFrame:
+    """The reports with ``ref_index`` (the nearest reference aircraft's position in the sorted list of
+    aircraft, -1 when none is within gate_m), ``ref_aircraft`` (its label, None when -1) and
+    ``ref_distance_m`` (distance to the nearest reference aircraft at the report's time, inf when none is
+    known then). Association is by horizontal position; where two aircraft are within the gate, one whose
+    altitude is within vertical_gate_ft of the report's Mode C is preferred, so aircraft crossing at
+    different levels keep their plots. Codes are judged apart from it: a wrong Mode C with a single
+    aircraft in the gate still goes to that aircraft."""
+    _check_columns(reports, REPORTS_REQUIRED, "the test reports")
+    gate_m = float(parameter(parameters, "gate_m", DEFAULT_GATE_M))
+    vertical_ft = float(parameter(parameters, "vertical_gate_ft", DEFAULT_VERTICAL_GATE_FT))
+    max_gap_s = float(parameter(parameters, "reference_max_gap_s", DEFAULT_REFERENCE_GAP_S))
+    ref = check_reference(reference)
+    t = reports["t_s"].to_numpy(float)
+    lat, lon = reports["latitude"].to_numpy(float), reports["longitude"].to_numpy(float)
+    mode_c_ft = (pd.to_numeric(reports["flight_level"], errors="coerce").to_numpy(float) * 100.0
+                 if "flight_level" in reports.columns else np.full(t.size, np.nan))
+    order = np.argsort(t, kind="stable")
+    ts = t[order]
+    best, level_best = np.full(t.size, np.inf), np.full(t.size, np.inf)
+    index, level_index = np.full(t.size, -1, dtype=np.int64), np.full(t.size, -1, dtype=np.int64)
+    trajs = trajectories(ref)
+    for k, tr in enumerate(trajs):
+        a, b = np.searchsorted(ts, tr.t_s[0], "left"), np.searchsorted(ts, tr.t_s[-1], "right")
+        rows = order[a:b]
+        r_lat, r_lon, _, r_alt = tr.at(t[rows], max_gap_s)
+        d = np.nan_to_num(local_distance_m(lat[rows], lon[rows], r_lat, r_lon), nan=np.inf)
+        closer = d < best[rows]
+        best[rows[closer]] = d[closer]
+        index[rows[closer]] = k
+        with np.errstate(invalid="ignore"):
+            apart = np.abs(mode_c_ft[rows] - r_alt) > vertical_ft  # False where either is unknown
+        closer = ~apart & (d < level_best[rows])
+        level_best[rows[closer]] = d[closer]
+        level_index[rows[closer]] = k
+    out = reports.copy()
+    out["ref_distance_m"] = np.where(np.isfinite(lat) & np.isfinite(lon), best, np.nan)
+    index = np.where(level_best <= gate_m, level_index, np.where(best <= gate_m, index, -1))
+    out["ref_index"] = index
+    labels = np.array([tr.label for tr in trajs] + [None], dtype=object)
+    out["ref_aircraft"] = pd.Series(labels[index], index=out.index, dtype=object)
+    return out
+
+
+def associated(reports: pd.DataFrame, reference: pd.DataFrame, parameters: Mapping | None) -> pd.DataFrame:
+    """The reports as associate returns them, reusing the association when the frame already carries it."""
+    if all(c in reports.columns for c in ASSOCIATION_COLUMNS):
+        return reports
+    return associate(reports, reference, parameters)
+
+
+def reference_values(reports: pd.DataFrame, reference: pd.DataFrame, column: str,
+                     parameters: Mapping | None) -> np.ndarray:
+    """Per associated report, the reference's value of an identity column (mode3a, address, callsign) at the
+    report's time: the latest reference sample at or before it (else the first); None where the report is
+    not associated or the reference lacks the column."""
+    out = np.full(len(reports), None, dtype=object)
+    if column not in reference.columns:
+        return out
+    ref = check_reference(reference)
+    values = ref[column].to_numpy(object)
+    t = reports["t_s"].to_numpy(float)
+    idx = reports["ref_index"].to_numpy()
+    for k, tr in enumerate(trajectories(ref)):
+        rows = np.flatnonzero(idx == k)
+        if rows.size:
+            i = np.clip(np.searchsorted(tr.t_s, t[rows], side="right") - 1, 0, tr.t_s.size - 1)
+            out[rows] = values[tr.rows[i]]
+    return np.array([None if v is None or v is pd.NA or (isinstance(v, float) and np.isnan(v)) else v
+                     for v in out], dtype=object)
+
+
+def reference_altitude_ft(reports: pd.DataFrame, reference: pd.DataFrame,
+                          parameters: Mapping | None) -> np.ndarray:
+    """Per associated report, the reference's pressure altitude (ft) interpolated at the report's time."""
+    max_gap_s = float(parameter(parameters, "reference_max_gap_s", DEFAULT_REFERENCE_GAP_S))
+    out = np.full(len(reports), np.nan)
+    t = reports["t_s"].to_numpy(float)
+    idx = reports["ref_index"].to_numpy()
+    for k, tr in enumerate(trajectories(check_reference(reference))):
+        rows = np.flatnonzero(idx == k)
+        if rows.size:
+            out[rows] = tr.at(t[rows], max_gap_s)[3]
+    return out
