@@ -83,7 +83,10 @@ CATALOGUE: dict[str, RequirementType] = {
                             "exact repeat, or one marked split (I048/030 code 3)"),
     "multiple_reports": _share("updates (scans or intervals) of an aircraft holding more than one report "
                                "(I048/030 code 3 counted too)"),
-    "dubious": _share("physically implausible reports"),
+    "dubious": _share("reports physically implausible against their aircraft's report before it: speed, "
+                      "acceleration, turn rate or vertical rate beyond the limits",
+                      parameters={"max_speed_kt": float, "max_accel_mps2": float, "max_turn_dps": float,
+                                  "max_vertical_ftps": float}),
     "psr_ssr_association": _share("PSR and SSR plots of one aircraft associated (combined radar)"),
     "velocity_correct": _share("reported velocities within the tolerance of the reference's (the larger of "
                                "tolerance_mps and tolerance_fraction x speed)",

@@ -9,6 +9,7 @@ import pandas as pd
 from msdc.pipeline.evaluate.codes import CODE_REQUIREMENTS
 from msdc.pipeline.evaluate.coverage import Sensor
 from msdc.pipeline.evaluate.detection import long_gaps, pd_requirement
+from msdc.pipeline.evaluate.dubious import dubious
 from msdc.pipeline.evaluate.plots import (
     false_reports,
     false_reports_per_scan,
@@ -27,6 +28,7 @@ REQUIREMENTS = {
     "false_reports_per_scan": false_reports_per_scan,
     "split_reports": split_reports,
     "multiple_reports": multiple_reports,
+    "dubious": dubious,
 }
 
 
