@@ -73,9 +73,11 @@ CATALOGUE: dict[str, RequirementType] = {
     "address_false": _share("Mode S addresses differing from the reference's"),
     "callsign_correct": _share("call signs equal to the reference's"),
     "callsign_false": _share("call signs differing from the reference's"),
-    "identification_correct": _share("reports whose identity (address, call sign or Mode 3/A, whichever "
-                                     "they carry) matches the reference"),
-    "identification_false": _share("reports carrying an identity that differs from the reference's"),
+    "identification_correct": _share("reports whose identity (address, call sign, validated Mode 3/A: "
+                                     "whichever they carry and the reference knows) matches the reference "
+                                     "in every item, of the reports with such an item"),
+    "identification_false": _share("reports with an identity item (address, call sign, validated Mode 3/A) "
+                                   "that differs from the reference's, of the same reports"),
     "false_reports": _share("reports with no reference aircraft within distance_m",
                             parameters={"distance_m": float}, required=("distance_m",)),
     "false_reports_per_scan": RequirementType(RATE, "per scan", "false target reports per antenna scan"),

@@ -10,6 +10,7 @@ from msdc.pipeline.evaluate.codes import CODE_REQUIREMENTS
 from msdc.pipeline.evaluate.coverage import Sensor
 from msdc.pipeline.evaluate.detection import long_gaps, pd_requirement
 from msdc.pipeline.evaluate.dubious import dubious
+from msdc.pipeline.evaluate.identification import identification_correct, identification_false
 from msdc.pipeline.evaluate.plots import (
     false_reports,
     false_reports_per_scan,
@@ -29,6 +30,8 @@ REQUIREMENTS = {
     "split_reports": split_reports,
     "multiple_reports": multiple_reports,
     "dubious": dubious,
+    "identification_correct": identification_correct,
+    "identification_false": identification_false,
 }
 
 
