@@ -17,6 +17,7 @@ from msdc.pipeline.evaluate.plots import (
     multiple_reports,
     split_reports,
 )
+from msdc.pipeline.evaluate.velocity import velocity_correct
 from msdc.pipeline.model.geodesy import flight_level_to_m, polar_to_geodetic
 
 DAY_S = 86400.0
@@ -32,6 +33,7 @@ REQUIREMENTS = {
     "dubious": dubious,
     "identification_correct": identification_correct,
     "identification_false": identification_false,
+    "velocity_correct": velocity_correct,
 }
 
 

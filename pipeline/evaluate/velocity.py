@@ -1,0 +1,88 @@
+"""``velocity_correct``: a report's velocity (ground speed and heading, or vx/vy) against the reference's,
+differenced from the reference positions around the report's time."""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+
+import numpy as np
+import pandas as pd
+
+from msdc.pipeline.evaluate.outcome import Outcome, share, withheld
+from msdc.pipeline.evaluate.reference import (
+    DEFAULT_REFERENCE_GAP_S,
+    associated,
+    check_reference,
+    parameter,
+    trajectories,
+)
+from msdc.pipeline.model.geodesy import A_M, E2
+
+MPS_PER_KT = 1852.0 / 3600.0
+STEP_S = 1.0  # the reference velocity is the displacement from t - STEP_S to t + STEP_S over 2 STEP_S
+
+
+def _east_north_m(lat1, lon1, lat2, lon2) -> tuple[np.ndarray, np.ndarray]:
+    """Signed east and north displacement (m) between nearby points on the ellipsoid's local radii."""
+    s = np.sin(np.radians(0.5 * (lat1 + lat2)))
+    w = np.sqrt(1.0 - E2 * s**2)
+    dn = np.radians(lat2 - lat1) * A_M * (1.0 - E2) / w**3
+    dlon = (lon2 - lon1 + 180.0) % 360.0 - 180.0
+    de = np.radians(dlon) * A_M / w * np.cos(np.radians(0.5 * (lat1 + lat2)))
+    return de, dn
+
+
+def report_velocity(rep: pd.DataFrame) -> tuple[np.ndarray, np.ndarray]:
+    """East and north velocity (m/s) of each report: vx_ms/vy_ms where given, else from ground speed and
+    heading (NaN where neither)."""
+    def column(name: str) -> np.ndarray:
+        return (pd.to_numeric(rep[name], errors="coerce").to_numpy(float) if name in rep
+                else np.full(len(rep), np.nan))
+
+    vx, vy = column("vx_ms"), column("vy_ms")
+    if {"ground_speed_kt", "heading_deg"} <= set(rep.columns):
+        gs = pd.to_numeric(rep["ground_speed_kt"], errors="coerce").to_numpy(float) * MPS_PER_KT
+        hdg = np.radians(pd.to_numeric(rep["heading_deg"], errors="coerce").to_numpy(float))
+        missing = ~np.isfinite(vx) | ~np.isfinite(vy)
+        vx = np.where(missing, gs * np.sin(hdg), vx)
+        vy = np.where(missing, gs * np.cos(hdg), vy)
+    return vx, vy
+
+
+def reference_velocity(rep: pd.DataFrame, reference: pd.DataFrame,
+                       parameters: Mapping | None) -> tuple[np.ndarray, np.ndarray]:
+    """East and north velocity (m/s) of each associated report's reference aircraft at its time, from the
+    reference positions STEP_S before and after (NaN where either is unknown)."""
+    max_gap_s = float(parameter(parameters, "reference_max_gap_s", DEFAULT_REFERENCE_GAP_S))
+    vx, vy = np.full(len(rep), np.nan), np.full(len(rep), np.nan)
+    t, idx = rep["t_s"].to_numpy(float), rep["ref_index"].to_numpy()
+    for k, tr in enumerate(trajectories(check_reference(reference))):
+        rows = np.flatnonzero(idx == k)
+        if not len(rows):
+            continue
+        lat0, lon0, _, _ = tr.at(t[rows] - STEP_S, max_gap_s)
+        lat1, lon1, _, _ = tr.at(t[rows] + STEP_S, max_gap_s)
+        de, dn = _east_north_m(lat0, lon0, lat1, lon1)
+        vx[rows], vy[rows] = de / (2 * STEP_S), dn / (2 * STEP_S)
+    return vx, vy
+
+
+def velocity_correct(reports: pd.DataFrame, reference: pd.DataFrame, parameters: Mapping | None = None,
+                     sensor=None) -> Outcome:
+    """Of the associated reports with a velocity where the reference's is known, those whose velocity
+    vector lies within the larger of tolerance_mps and tolerance_fraction x the reference speed."""
+    tol_mps = parameter(parameters, "tolerance_mps", None)
+    if tol_mps is None:
+        raise ValueError("velocity_correct needs the parameter tolerance_mps")
+    fraction = float(parameter(parameters, "tolerance_fraction", 0.0))
+    rep = associated(reports, reference, parameters)
+    rep = rep[rep["ref_index"].to_numpy() >= 0].reset_index(drop=True)
+    vx, vy = report_velocity(rep)
+    rx, ry = reference_velocity(rep, reference, parameters)
+    known = np.isfinite(vx) & np.isfinite(vy) & np.isfinite(rx) & np.isfinite(ry)
+    if not known.any():
+        return withheld("velocity_correct",
+                        "no associated report has a velocity where the reference's is known")
+    error = np.hypot(vx - rx, vy - ry)[known]
+    tol = np.maximum(float(tol_mps), fraction * np.hypot(rx, ry)[known])
+    return share("velocity_correct", int((error <= tol).sum()), int(known.sum()))
