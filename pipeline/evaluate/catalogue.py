@@ -94,7 +94,10 @@ CATALOGUE: dict[str, RequirementType] = {
                                "tolerance_mps and tolerance_fraction x speed)",
                                parameters={"tolerance_mps": float, "tolerance_fraction": float},
                                required=("tolerance_mps",)),
-    "extra_tracks": _share("more than one test track per aircraft at a time"),
-    "track_continuity": RequirementType(RATE, "per aircraft", "track number changes per aircraft"),
+    "extra_tracks": _share("intervals of interval_s of an aircraft holding more than one test track number",
+                           parameters={"interval_s": float}),
+    "track_continuity": RequirementType(RATE, "per aircraft", "changes of an aircraft's main test track "
+                                        "number from one interval of interval_s to the next, per aircraft",
+                                        parameters={"interval_s": float}),
     "coasting_correct": _share("coasting flag agreeing with the reference"),
 }

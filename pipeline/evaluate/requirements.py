@@ -17,6 +17,7 @@ from msdc.pipeline.evaluate.plots import (
     multiple_reports,
     split_reports,
 )
+from msdc.pipeline.evaluate.tracks import extra_tracks, track_continuity
 from msdc.pipeline.evaluate.velocity import velocity_correct
 from msdc.pipeline.model.geodesy import flight_level_to_m, polar_to_geodetic
 
@@ -34,6 +35,8 @@ REQUIREMENTS = {
     "identification_correct": identification_correct,
     "identification_false": identification_false,
     "velocity_correct": velocity_correct,
+    "extra_tracks": extra_tracks,
+    "track_continuity": track_continuity,
 }
 
 
