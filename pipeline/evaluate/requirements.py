@@ -6,6 +6,7 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
+from msdc.pipeline.evaluate.accuracy import ACCURACY_REQUIREMENTS
 from msdc.pipeline.evaluate.codes import CODE_REQUIREMENTS
 from msdc.pipeline.evaluate.coverage import Sensor
 from msdc.pipeline.evaluate.detection import long_gaps, pd_requirement
@@ -37,6 +38,7 @@ REQUIREMENTS = {
     "velocity_correct": velocity_correct,
     "extra_tracks": extra_tracks,
     "track_continuity": track_continuity,
+    **ACCURACY_REQUIREMENTS,
 }
 
 

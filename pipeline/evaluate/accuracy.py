@@ -1,0 +1,93 @@
+"""Position accuracy against an independent reference: per report the horizontal error to the reference
+interpolated at its time, split along and across the reference's track; RMS, mean, percentiles and maximum
+with a bootstrap interval over aircraft (statistics.clustered_interval). Reference rows marked
+``self_reference`` (a sensor's own track) are never used: a sensor cannot judge its own position."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+
+import numpy as np
+import pandas as pd
+
+from msdc.pipeline.evaluate.outcome import Outcome, withheld
+from msdc.pipeline.evaluate.reference import (
+    DEFAULT_REFERENCE_GAP_S,
+    associated,
+    check_reference,
+    parameter,
+    reference_values,
+    trajectories,
+)
+from msdc.pipeline.evaluate.statistics import clustered_interval
+from msdc.pipeline.evaluate.velocity import _east_north_m, reference_velocity
+
+MIN_SPEED_MPS = 5.0  # below this the reference has no track direction: along/across and latency not judged
+
+
+def position_errors(reports: pd.DataFrame, reference: pd.DataFrame, parameters: Mapping | None = None
+                    ) -> pd.DataFrame:
+    """Per associated report judged against an independent reference: ``aircraft``, ``error_m`` (horizontal),
+    ``along_m`` (positive ahead of the reference), ``across_m`` (positive to the right of its track),
+    ``latency_s`` (-along / speed: positive when the report lags); NaN along/across/latency where the
+    reference moves slower than MIN_SPEED_MPS."""
+    max_gap_s = float(parameter(parameters, "reference_max_gap_s", DEFAULT_REFERENCE_GAP_S))
+    rep = associated(reports, reference, parameters)
+    rep = rep[rep["ref_index"].to_numpy() >= 0].reset_index(drop=True)
+    if "self_reference" in reference.columns and len(rep):
+        own = reference_values(rep, reference, "self_reference", parameters)
+        rep = rep[~np.array([bool(x) if x is not None else False for x in own])].reset_index(drop=True)
+    t, idx = rep["t_s"].to_numpy(float), rep["ref_index"].to_numpy()
+    de, dn = np.full(len(rep), np.nan), np.full(len(rep), np.nan)
+    lat, lon = rep["latitude"].to_numpy(float), rep["longitude"].to_numpy(float)
+    for k, tr in enumerate(trajectories(check_reference(reference))):
+        rows = np.flatnonzero(idx == k)
+        if len(rows):
+            r_lat, r_lon, _, _ = tr.at(t[rows], max_gap_s)
+            de[rows], dn[rows] = _east_north_m(r_lat, r_lon, lat[rows], lon[rows])
+    vx, vy = reference_velocity(rep, reference, parameters)
+    speed = np.hypot(vx, vy)
+    moving = speed >= MIN_SPEED_MPS
+    safe = np.where(moving, speed, 1.0)
+    ux, uy = np.where(moving, vx / safe, np.nan), np.where(moving, vy / safe, np.nan)
+    along = de * ux + dn * uy
+    across = de * uy - dn * ux  # to the right of the track is positive
+    out = pd.DataFrame({"aircraft": rep["ref_aircraft"].to_numpy(object), "t_s": t,
+                        "error_m": np.hypot(de, dn), "along_m": along, "across_m": across,
+                        "latency_s": -along / safe})
+    return out[np.isfinite(out["error_m"].to_numpy())].reset_index(drop=True)
+
+
+def _statistic(requirement: str, column: str, statistic: str):
+    """The requirement function of one error statistic."""
+    def fn(reports: pd.DataFrame, reference: pd.DataFrame, parameters: Mapping | None = None,
+           sensor=None) -> Outcome:
+        errors = position_errors(reports, reference, parameters)
+        values = errors[column].to_numpy(float)
+        keep = np.isfinite(values)
+        if not keep.any():
+            return withheld(requirement, "no report judged against an independent reference"
+                            + ("" if column == "error_m" else " while the reference moves"))
+        values, clusters = values[keep], errors["aircraft"].to_numpy(object)[keep].astype(str)
+        if statistic == "max":
+            return Outcome(requirement, float(values.max()), math.nan, math.nan, int(values.size),
+                           int(values.size), ("a maximum has no interval",))
+        ci = clustered_interval(values, clusters, statistic, seed=int(parameter(parameters, "seed", 0)))
+        notes = (f"{ci.n_clusters} aircraft",) + ((ci.reason,) if ci.reason else ())
+        return Outcome(requirement, ci.value, ci.ci_low, ci.ci_high, ci.n, ci.n, notes)
+    fn.__name__ = requirement
+    fn.__doc__ = f"``{requirement}``: {statistic} of {column} over aircraft (docs/methods/evaluate.md)."
+    return fn
+
+
+ACCURACY_REQUIREMENTS = {
+    "rms_m": _statistic("rms_m", "error_m", "rms"),
+    "mean_m": _statistic("mean_m", "error_m", "mean"),
+    "p95_m": _statistic("p95_m", "error_m", "p95"),
+    "p99_m": _statistic("p99_m", "error_m", "p99"),
+    "max_m": _statistic("max_m", "error_m", "max"),
+    "along_rms_m": _statistic("along_rms_m", "along_m", "rms"),
+    "across_rms_m": _statistic("across_rms_m", "across_m", "rms"),
+    "latency_p95_s": _statistic("latency_p95_s", "latency_s", "p95"),
+}
