@@ -88,6 +88,19 @@ def carrying(said: Iterable[str] = ()) -> Iterator[list[str]]:
 # Validation helpers, one per kind of value (the declared ranges and choices: options.check_declared)
 
 
+def select_chunk(rec, selection, sensors, left_out: dict[str, int], path) -> tuple[int, int]:
+    """Keep the records of one decoded chunk that the report selection keeps (``rec.frames`` replaced), the
+    counts left out added to ``left_out``: (records read, records kept). OptionError naming the input when a
+    time cannot be placed on the recording's day."""
+    from msdc.pipeline.model.decoded_reports import select_decoded
+
+    try:
+        rec.frames, n = select_decoded(rec.frames, selection, rec.date, sensors, left_out)
+    except ValueError as exc:
+        raise OptionError(f"{exc} ({path})") from None
+    return n, sum(len(f) for f in rec.frames.values())
+
+
 def _editions(editions: list[str] | dict | None) -> dict[int, str]:
     """CAT=EDITION pins checked against the shipped tables, or "auto" (any category: asterix.families)."""
     from msdc.asterix.tables import available, resolve_edition

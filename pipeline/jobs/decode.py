@@ -20,6 +20,7 @@ from msdc.pipeline.jobs.common import (
     format_hints,
     output_path,
     real_output,
+    select_chunk,
     sensor_table,
     spare_inputs,
 )
@@ -27,11 +28,9 @@ from msdc.pipeline.jobs.options import (
     CATEGORIES,
     DEFAULT_CATEGORIES,
     DecodeOptions,
-    OptionError,
     check_declared,
 )
 from msdc.pipeline.model import editions as edition_notes
-from msdc.pipeline.model.decoded_reports import select_decoded
 from msdc.pipeline.model.report_selection import describe, recorded
 from msdc.pipeline.report.files import named, write_csv
 from msdc.pipeline.report.transaction import OutputTransaction, side_pattern, staged
@@ -142,13 +141,8 @@ def decode_job(options: DecodeOptions, *, on_chunk: Callable[[int, int, str], No
                     date, fmt, chosen = date or rec.date, rec.format, {**rec.edition_choice, **chosen}
                     if selection is not None:
                         day = day or rec.date
-                        try:
-                            rec.frames, n = select_decoded(rec.frames, selection, rec.date, checked.sensors,
-                                                           left_out)
-                        except ValueError as exc:
-                            raise OptionError(f"{exc} ({path})") from None
-                        read += n
-                        kept += sum(len(f) for f in rec.frames.values())
+                        n, k = select_chunk(rec, selection, checked.sensors, left_out, path)
+                        read, kept = read + n, kept + k
                     skipped += [(str(path), int(e.offset), str(e.reason)) for e in rec.errors.itertuples()]
                     edition_notes.fold(failed, rec)
                     for cat, frame in rec.frames.items():

@@ -17,11 +17,12 @@ from msdc.pipeline.jobs.common import (
     date_ignored,
     format_hints,
     order_warnings,
+    select_chunk,
     sensor_table,
 )
-from msdc.pipeline.jobs.options import OptionError, StatsOptions, check_declared
+from msdc.pipeline.jobs.options import StatsOptions, check_declared
 from msdc.pipeline.model import editions as edition_notes
-from msdc.pipeline.model.decoded_reports import VIEW_COLUMNS, select_decoded
+from msdc.pipeline.model.decoded_reports import VIEW_COLUMNS
 from msdc.pipeline.model.load import time_spans, widen_spans
 from msdc.pipeline.model.report_selection import recorded
 from msdc.pipeline.progress import Progress
@@ -104,13 +105,8 @@ def stats_job(options: StatsOptions, *, progress: Progress | None = None) -> Sta
                                          categories=DECODABLE, progress=bar):
                 if selection is not None:
                     day = day or rec.date
-                    try:
-                        rec.frames, n = select_decoded(rec.frames, selection, rec.date, checked.sensors,
-                                                       left_out)
-                    except ValueError as exc:
-                        raise OptionError(f"{exc} ({path})") from None
-                    n_read += n
-                    kept += sum(len(f) for f in rec.frames.values())
+                    n, k = select_chunk(rec, selection, checked.sensors, left_out, path)
+                    n_read, kept = n_read + n, kept + k
                 acc.add(rec.frames, rec.errors, rec.ignored)
                 account.add(rec)
                 tally.add(rec.frames)
