@@ -112,7 +112,8 @@ def _widths(rows: list[dict[str, object]]) -> list[float]:
     widths = []
     for key, header in SCORECARD_HEADERS:
         numeric = key in ("value", "ci_low", "ci_high", "threshold")
-        texts = [_display(r[key], r["_format"] if numeric else None) for r in rows]
+        texts = [_display(r[key], r["_format"] if numeric else "#,##0.0" if key == "n" else None)
+                 for r in rows]
         longest = max([max(len(w) for w in header.split(" ")), *(len(t) for t in texts)])
         cap = _WRAP_COLUMNS.get(key, MAX_WIDTH)
         widths.append(min(cap, max(6.0, longest + 2.0)))
@@ -147,6 +148,8 @@ def _write_scorecard(wb: Workbook, card: pd.DataFrame) -> None:
                 cells.append(_cell(ws, value, fmt, font=italic))
             elif key == "verdict":
                 cells.append(_cell(ws, value, font=VERDICT_FONTS[value], fill=VERDICT_FILLS[value]))
+            elif key == "n":  # a count with thousands separated; an exposure (a rate's) to one decimal
+                cells.append(_cell(ws, value, "#,##0" if isinstance(value, int) else "#,##0.0"))
             elif key == "checked":
                 cells.append(_cell(ws, value, font=BOLD if value == "no" else None))
             else:
