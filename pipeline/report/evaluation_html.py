@@ -94,11 +94,19 @@ def _frame_table(name: str, frame: pd.DataFrame) -> str:
             f"<tbody>{''.join(body)}</tbody></table>")
 
 
+def _source(frame: pd.DataFrame):
+    """A Bokeh data source of the map's columns, given as arrays (a DataFrame would be copied with an index
+    column, and pandas warns of Bokeh's reset_index(inplace=True))."""
+    from bokeh.models import ColumnDataSource
+
+    return ColumnDataSource(data={c: frame[c].to_numpy() for c in frame.columns})
+
+
 def _map(points: pd.DataFrame):
     """The Bokeh map: per aircraft its reference as a line and its reports as dots, in one colour; the
     legend hides an entry on click. Axes in degrees, scaled so that a degree of longitude and of latitude
     show their true ground lengths at the mean latitude."""
-    from bokeh.models import ColumnDataSource, HoverTool
+    from bokeh.models import HoverTool
     from bokeh.plotting import figure
 
     mean_lat = float(points["latitude"].mean())
@@ -112,10 +120,10 @@ def _map(points: pd.DataFrame):
         ref = group[group["source"] == "reference"]
         rep = group[group["source"] == "report"]
         if not ref.empty:
-            fig.line("longitude", "latitude", source=ColumnDataSource(ref), color=colour, line_width=2,
+            fig.line("longitude", "latitude", source=_source(ref), color=colour, line_width=2,
                      legend_label=f"{aircraft} reference")
         if not rep.empty:
-            fig.scatter("longitude", "latitude", source=ColumnDataSource(rep), color=colour, size=6,
+            fig.scatter("longitude", "latitude", source=_source(rep), color=colour, size=6,
                         fill_alpha=0.6, legend_label=f"{aircraft} reports")
     fig.add_tools(HoverTool(tooltips=[
         ("aircraft", "@aircraft"), ("source", "@source"), ("sensor", "@sensor"),
