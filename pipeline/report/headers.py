@@ -95,6 +95,12 @@ LABELS: dict[str, str] = {
     "began_inside": "Began inside", "min_horizontal_nm": "Min horizontal", "time_of_min": "Time of min",
     "vertical_at_min_ft": "Vertical at min", "min_vertical_ft": "Min vertical",
     "alert_start": "Alert start", "warning_s": "Warning",
+    # evaluate: the scorecard's columns (its own sheet prints them) and its per-aircraft and per-bin tables
+    "sector": "Sector", "requirement": "Requirement", "ci_low": "95 % interval, low",
+    "ci_high": "95 % interval, high", "n": "Sample size", "threshold": "Threshold", "verdict": "Verdict",
+    "clause": "Clause", "checked": "Threshold checked against the standard", "notes": "Notes",
+    "expected_updates": "Expected updates", "detected_updates": "Detected updates",
+    "pd": "Probability of detection", "range_from_nm": "Range from", "range_to_nm": "Range to",
 }
 
 _DATETIMES = ("start", "end", "time_utc", "first_utc", "last_utc", "gap_start_utc", "gap_end_utc", "utc",

@@ -13,11 +13,13 @@ import shutil
 import subprocess
 from pathlib import Path
 
+import evaluation_sample
 import pytest
 from openpyxl import load_workbook
 
 from msdc.pipeline.cli import main
 from msdc.pipeline.report import cells, excel
+from msdc.pipeline.report.evaluation_xlsx import write_evaluation_xlsx
 from msdc.pipeline.report.headers import LABELS, column_name, has_header, header_unit, workbook_header
 
 ROOT = Path(__file__).resolve().parents[3]
@@ -50,6 +52,9 @@ def workbooks(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, set[str]]
         mp.setattr(excel, "workbook_header", spy)
         for name, argv in RUNS.items():
             assert main([*argv, "-o", str(out / name)]) == 0, name
+        # the evaluation's workbook, on the hand-made scorecard (its command comes later)
+        sample = evaluation_sample
+        write_evaluation_xlsx(sample.scorecard(), out / "evaluation.xlsx", sample.tables())
     return out, asked
 
 
@@ -218,7 +223,22 @@ def test_a_short_table_prints_on_one_page(workbooks, pdfs) -> None:
                 assert counts[ws.title] == 1, (name, ws.title, counts[ws.title])
     # the one-row Radar biases, the Gaps, the Losses and the Warning times among them
     assert {("quality.xlsx", "Radar biases"), ("quality.xlsx", "Gaps"), ("conflicts.xlsx", "Losses"),
-            ("conflicts.xlsx", "Warning times")} <= set(short)
+            ("conflicts.xlsx", "Warning times"), ("evaluation.xlsx", "Scorecard"),
+            ("evaluation.xlsx", "PD per range band")} <= set(short)
+
+
+@pytest.mark.slow  # the commands on the fixtures (about 20 s), LibreOffice (about 15 s)
+def test_the_evaluation_scorecard_prints_every_row_and_its_marks(pdfs) -> None:
+    """The Scorecard's page holds each hand-made row's requirement and verdict, the percentages as
+    written by hand, and the note on unchecked thresholds."""
+    pages = [text for sheet, text in _pages(pdfs["evaluation.xlsx"]) if sheet == "Scorecard"]
+    assert len(pages) == 1
+    text = " ".join(pages[0].split())
+    for row in evaluation_sample.ROWS:
+        assert row[2] in text and row[8] in text, row
+    assert "97.50% 97.36% 97.64% percent 97.00% pass 50,000" in text
+    assert "120.5 110.4 131.0 metres 150.0 pass 4,000" in text
+    assert "not checked against the standard's own text" in text
 
 
 def _words(text: str) -> set[str]:

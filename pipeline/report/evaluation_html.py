@@ -1,0 +1,177 @@
+"""The evaluation's HTML report: one self-contained file that works offline (Bokeh's scripts written inside
+it, no request to any server): the scorecard as a table (verdicts coloured, unchecked thresholds marked),
+the tables, and an interactive map of the reports and the reference per aircraft (legend click hides an
+aircraft or a source; hover names the point; pan and wheel zoom)."""
+
+from __future__ import annotations
+
+import html
+import math
+import os
+from collections.abc import Mapping
+from pathlib import Path
+
+import pandas as pd
+
+from msdc.pipeline.evaluate.catalogue import CATALOGUE
+from msdc.pipeline.evaluate.scorecard_schema import validate_map, validate_scorecard, validate_tables
+from msdc.pipeline.report.evaluation_xlsx import SCORECARD_HEADERS, UNCHECKED_NOTE, UNIT_WORDS
+from msdc.pipeline.report.files import named
+from msdc.pipeline.report.headers import workbook_header
+
+PALETTE = ("#1f77b4", "#d62728", "#2ca02c", "#9467bd", "#ff7f0e", "#8c564b", "#e377c2", "#17becf",
+           "#7f7f7f", "#bcbd22")  # one colour per aircraft, repeating past ten
+_DECIMALS = {"m": 1, "s": 3, "deg": 4, "ppm": 1, "per scan": 3, "per aircraft": 3}
+_STYLE = """
+body { font-family: sans-serif; margin: 1.5em; color: #222; }
+table { border-collapse: collapse; margin: 0.5em 0 1.5em; font-size: 0.9em; }
+th, td { border: 1px solid #bbb; padding: 0.25em 0.5em; vertical-align: top; }
+th { background: #d9e1f2; text-align: left; }
+td.num { text-align: right; font-variant-numeric: tabular-nums; }
+td.pass { background: #c6efce; color: #006100; font-weight: bold; }
+td.fail { background: #ffc7ce; color: #9c0006; font-weight: bold; }
+td.inconclusive { background: #ffeb9c; color: #9c5700; font-weight: bold; }
+td.unchecked { font-weight: bold; }
+p.note { font-style: italic; color: #595959; max-width: 60em; }
+"""
+
+
+def _number(value: float, unit: str) -> str:
+    """A scorecard number as text in its row's unit: a proportion as a percentage, '' when missing."""
+    if value is None or math.isnan(value):
+        return ""
+    if unit == "fraction":
+        return f"{100.0 * value:.2f} %"
+    return f"{value:,.{_DECIMALS[unit]}f}"
+
+
+def _scorecard_table(card: pd.DataFrame) -> str:
+    """The scorecard as an HTML table, one row per sensor, sector and requirement."""
+    head = "".join(f"<th>{html.escape(h)}</th>" for _, h in SCORECARD_HEADERS)
+    rows = []
+    for rec in card.to_dict("records"):
+        unit = CATALOGUE[rec["requirement"]].unit
+        n = rec["n"]
+        cells = {
+            "unit": html.escape(UNIT_WORDS[unit]),
+            "checked": "yes" if rec["checked"] else "no",
+            "n": f"{int(n):,}" if float(n).is_integer() else f"{n:,.1f}",
+        }
+        out = []
+        for key, _ in SCORECARD_HEADERS:
+            if key in ("value", "ci_low", "ci_high", "threshold"):
+                out.append(f'<td class="num">{_number(rec[key], unit)}</td>')
+            elif key == "n":
+                out.append(f'<td class="num">{cells["n"]}</td>')
+            elif key == "verdict":
+                out.append(f'<td class="{rec[key]}">{html.escape(rec[key])}</td>')
+            elif key == "checked":
+                cls = "" if rec["checked"] else ' class="unchecked"'
+                out.append(f"<td{cls}>{cells['checked']}</td>")
+            else:
+                out.append(f"<td>{cells[key] if key in cells else html.escape(str(rec[key]))}</td>")
+        rows.append("<tr>" + "".join(out) + "</tr>")
+    return (f'<table id="scorecard"><thead><tr>{head}</tr></thead><tbody>{"".join(rows)}</tbody></table>')
+
+
+def _frame_table(name: str, frame: pd.DataFrame) -> str:
+    """A table as HTML: headers as the workbook prints them, NaN as an empty cell."""
+    if not isinstance(frame.index, pd.RangeIndex):
+        frame = frame.reset_index()
+    head = "".join(f"<th>{html.escape(workbook_header(str(c)))}</th>" for c in frame.columns)
+    body = []
+    for row in frame.itertuples(index=False):
+        cells = []
+        for value in row:
+            if isinstance(value, float):
+                cells.append(f'<td class="num">{"" if math.isnan(value) else f"{value:.6g}"}</td>')
+            elif isinstance(value, int):
+                cells.append(f'<td class="num">{value}</td>')
+            else:
+                cells.append(f"<td>{html.escape(str(value))}</td>")
+        body.append("<tr>" + "".join(cells) + "</tr>")
+    return (f"<h2>{html.escape(name)}</h2><table class=\"evaluation-table\"><thead><tr>{head}</tr></thead>"
+            f"<tbody>{''.join(body)}</tbody></table>")
+
+
+def _source(frame: pd.DataFrame):
+    """A Bokeh data source of the map's columns, given as arrays (a DataFrame would be copied with an index
+    column, and pandas warns of Bokeh's reset_index(inplace=True))."""
+    from bokeh.models import ColumnDataSource
+
+    return ColumnDataSource(data={c: frame[c].to_numpy() for c in frame.columns})
+
+
+def _map(points: pd.DataFrame):
+    """The Bokeh map: per aircraft its reference as a line and its reports as dots, in one colour; the
+    legend hides an entry on click. Axes in degrees, scaled so that a degree of longitude and of latitude
+    show their true ground lengths at the mean latitude."""
+    from bokeh.models import HoverTool
+    from bokeh.plotting import figure
+
+    mean_lat = float(points["latitude"].mean())
+    fig = figure(title="Reports and reference per aircraft", x_axis_label="Longitude (deg)",
+                 y_axis_label="Latitude (deg)", width=900, height=650, match_aspect=True,
+                 aspect_scale=max(0.05, math.cos(math.radians(mean_lat))),
+                 tools="pan,wheel_zoom,box_zoom,reset,save", active_scroll="wheel_zoom",
+                 output_backend="canvas")
+    for i, (aircraft, group) in enumerate(points.groupby("aircraft", sort=True)):
+        colour = PALETTE[i % len(PALETTE)]
+        ref = group[group["source"] == "reference"]
+        rep = group[group["source"] == "report"]
+        if not ref.empty:
+            fig.line("longitude", "latitude", source=_source(ref), color=colour, line_width=2,
+                     legend_label=f"{aircraft} reference")
+        if not rep.empty:
+            fig.scatter("longitude", "latitude", source=_source(rep), color=colour, size=6,
+                        fill_alpha=0.6, legend_label=f"{aircraft} reports")
+    fig.add_tools(HoverTool(tooltips=[
+        ("aircraft", "@aircraft"), ("source", "@source"), ("sensor", "@sensor"),
+        ("latitude", "@latitude{0.00000}"), ("longitude", "@longitude{0.00000}")]))
+    fig.legend.click_policy = "hide"
+    fig.legend.location = "top_left"
+    return fig
+
+
+def evaluation_html(scorecard: pd.DataFrame, tables: Mapping[str, pd.DataFrame] | None = None,
+                    map_points: pd.DataFrame | None = None, title: str = "msdc evaluation") -> str:
+    """The report's HTML text (inputs validated by scorecard_schema)."""
+    card = validate_scorecard(scorecard)
+    frames = validate_tables(tables)
+    points = validate_map(map_points)
+    parts = [f"<h1>{html.escape(title)}</h1>", "<h2>Scorecard</h2>", _scorecard_table(card),
+             "<p class=\"note\">Values, intervals and thresholds are in the row's unit. Verdict: pass when "
+             "the "
+             "whole 95 % interval meets the threshold, fail when the whole interval misses it, inconclusive "
+             "otherwise (or below the standard's minimum sample).</p>"]
+    if not card["checked"].all():
+        parts.append(f'<p class="note">{html.escape(UNCHECKED_NOTE)}</p>')
+    head = ""
+    if points is not None and not points.empty:
+        try:
+            from bokeh.embed import components
+            from bokeh.resources import Resources
+        except ImportError:
+            raise ValueError("the HTML report's map needs Bokeh, which is not installed: pip install bokeh "
+                             "(or msdc[html])") from None
+
+        script, div = components(_map(points))
+        head = Resources(mode="inline", components=["bokeh"]).render_js() + script
+        parts += ["<h2>Map</h2>", f'<div id="map">{div}</div>']
+    else:
+        parts.append('<h2>Map</h2><p class="note">No map points were given.</p>')
+    parts += [_frame_table(name, frame) for name, frame in frames.items()]
+    return ("<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\">"
+            f"<title>{html.escape(title)}</title><style>{_STYLE}</style>{head}</head>"
+            f"<body>{''.join(parts)}</body></html>\n")
+
+
+def write_evaluation_html(scorecard: pd.DataFrame, path: str | os.PathLike[str],
+                          tables: Mapping[str, pd.DataFrame] | None = None,
+                          map_points: pd.DataFrame | None = None, title: str = "msdc evaluation") -> Path:
+    """evaluation_html written to ``path`` as UTF-8 (an error names it); returns ``path``."""
+    text = evaluation_html(scorecard, tables, map_points, title)
+    path = Path(path)
+    with named(path):
+        path.write_text(text, encoding="utf-8")
+    return path

@@ -1,0 +1,199 @@
+"""The evaluation's workbook: a Scorecard sheet first (human headers, each row's unit in words, verdicts
+coloured, unchecked thresholds marked "no" as the presets mark them), then one sheet per table; every sheet
+A4 landscape, fitted to the page width, its header row repeated on every printed page."""
+
+from __future__ import annotations
+
+import math
+import os
+import textwrap
+from collections.abc import Mapping
+
+import pandas as pd
+from openpyxl import Workbook
+from openpyxl.cell import WriteOnlyCell
+from openpyxl.styles import Alignment, Font, PatternFill
+from openpyxl.worksheet._write_only import WriteOnlyWorksheet
+
+from msdc.pipeline.evaluate.catalogue import CATALOGUE
+from msdc.pipeline.evaluate.scorecard_schema import validate_scorecard, validate_tables
+from msdc.pipeline.report.cells import (
+    BOLD,
+    MAX_WIDTH,
+    ROW_HEIGHT_PT,
+    clean_text,
+    header_cells,
+    header_height,
+    make_column,
+    note_lines,
+    note_text_cell,
+    page_setup,
+    set_widths,
+    text_cell,
+    write_table,
+)
+from msdc.pipeline.report.excel import _discard, sheet_name
+from msdc.pipeline.report.saving import save
+
+SCORECARD_SHEET = "Scorecard"
+# the scorecard's printed columns: (schema column or 'unit', header)
+SCORECARD_HEADERS: tuple[tuple[str, str], ...] = (
+    ("sensor", "Sensor"), ("sector", "Sector"), ("requirement", "Requirement"), ("value", "Value"),
+    ("ci_low", "95 % interval, low"), ("ci_high", "95 % interval, high"), ("unit", "Unit"),
+    ("threshold", "Threshold"), ("verdict", "Verdict"), ("n", "Sample size"), ("clause", "Clause"),
+    ("checked", "Threshold checked against the standard"), ("notes", "Notes"))
+# a requirement's unit (catalogue.RequirementType.unit) in words, and the number format of its values
+UNIT_WORDS: dict[str, str] = {"fraction": "percent", "m": "metres", "s": "seconds", "deg": "degrees",
+                              "ppm": "parts per million", "per scan": "per antenna scan",
+                              "per aircraft": "per aircraft"}
+UNIT_FORMATS: dict[str, str] = {"fraction": "0.00%", "m": "0.0", "s": "0.000", "deg": "0.0000",
+                                "ppm": "0.0", "per scan": "0.000", "per aircraft": "0.000"}
+VERDICT_FILLS: dict[str, PatternFill] = {  # Excel's own good / bad / neutral colours
+    "pass": PatternFill("solid", fgColor="C6EFCE"), "fail": PatternFill("solid", fgColor="FFC7CE"),
+    "inconclusive": PatternFill("solid", fgColor="FFEB9C")}
+VERDICT_FONTS: dict[str, Font] = {
+    "pass": Font(bold=True, color="006100"), "fail": Font(bold=True, color="9C0006"),
+    "inconclusive": Font(bold=True, color="9C5700")}
+UNCHECKED_NOTE = ("Threshold checked against the standard 'no': the preset marks the figure as not checked "
+                  "against the standard's own text (checked = false); it is a configurable default, and a "
+                  "pass against it is not compliance with the standard.")
+_WRAP_COLUMNS = {"clause": 28, "notes": 44}  # long text wraps inside these widths (characters)
+_WRAP = Alignment(wrap_text=True, vertical="top")
+_TOP = Alignment(vertical="top")
+
+
+def unit_words(requirement: str) -> str:
+    """A requirement's unit in words (a proportion is shown as a percentage)."""
+    return UNIT_WORDS[CATALOGUE[requirement].unit]
+
+
+def _cell(ws: WriteOnlyWorksheet, value, number_format: str | None = None, *, font: Font | None = None,
+          fill: PatternFill | None = None, wrap: bool = False) -> WriteOnlyCell | None:
+    """One scorecard cell: text never a formula, NaN an empty cell, numbers in the row's unit format."""
+    if isinstance(value, str):
+        cell = text_cell(ws, clean_text(value), font=font, fill=fill)
+    elif value is None or (isinstance(value, float) and math.isnan(value)):
+        cell = WriteOnlyCell(ws, None)
+    else:
+        cell = WriteOnlyCell(ws, value)
+        if number_format:
+            cell.number_format = number_format
+        if font is not None:
+            cell.font = font
+    cell.alignment = _WRAP if wrap else _TOP
+    return cell
+
+
+def _display(value, number_format: str | None) -> str:
+    """The text a number shows under the scorecard's formats (for the column widths)."""
+    if isinstance(value, str):
+        return value
+    if value is None or (isinstance(value, float) and math.isnan(value)):
+        return ""
+    if number_format and number_format.endswith("%"):
+        return f"{100 * value:.2f}%"
+    decimals = len(number_format.split(".")[1]) if number_format and "." in number_format else 0
+    return f"{value:,.{decimals}f}"
+
+
+def _scorecard_rows(card: pd.DataFrame) -> list[dict[str, object]]:
+    """The scorecard's printed values per row: the schema's, the unit in words, 'yes'/'no' for checked."""
+    rows = []
+    for rec in card.to_dict("records"):
+        unit = CATALOGUE[rec["requirement"]].unit
+        rows.append({**rec, "unit": UNIT_WORDS[unit], "checked": "yes" if rec["checked"] else "no",
+                     "n": int(rec["n"]) if float(rec["n"]).is_integer() else rec["n"],
+                     "_format": UNIT_FORMATS[unit]})
+    return rows
+
+
+def _widths(rows: list[dict[str, object]]) -> list[float]:
+    """Each column's width: its header's longest word and its widest value, the wrapped columns capped."""
+    widths = []
+    for key, header in SCORECARD_HEADERS:
+        numeric = key in ("value", "ci_low", "ci_high", "threshold")
+        texts = [_display(r[key], r["_format"] if numeric else "#,##0.0" if key == "n" else None)
+                 for r in rows]
+        longest = max([max(len(w) for w in header.split(" ")), *(len(t) for t in texts)])
+        cap = _WRAP_COLUMNS.get(key, MAX_WIDTH)
+        widths.append(min(cap, max(6.0, longest + 2.0)))
+    return widths
+
+
+def _write_scorecard(wb: Workbook, card: pd.DataFrame) -> None:
+    """The Scorecard sheet: one row per sensor, sector and requirement, the verdict cell coloured."""
+    ws = wb.create_sheet(SCORECARD_SHEET)
+    rows = _scorecard_rows(card)
+    widths = _widths(rows)
+    headers = [h for _, h in SCORECARD_HEADERS]
+    set_widths(ws, widths)
+    ws.freeze_panes = "D2"
+    page_setup(ws)  # one page wide, header row repeated on every page
+    ws.row_dimensions[1].height = header_height(headers, widths)
+    for i, row in enumerate(rows, start=2):
+        lines = max([1, *(len(textwrap.wrap(str(row[k]), width=int(widths[j]) - 2) or [""])
+                          for j, (k, _) in enumerate(SCORECARD_HEADERS) if k in _WRAP_COLUMNS)])
+        if lines > 1:
+            ws.row_dimensions[i].height = lines * ROW_HEIGHT_PT
+    ws.append(header_cells(ws, headers))
+    for row in rows:
+        fmt = str(row["_format"])
+        cells = []
+        for key, _ in SCORECARD_HEADERS:
+            value = row[key]
+            if key in ("value", "ci_low", "ci_high"):
+                cells.append(_cell(ws, value, fmt))
+            elif key == "threshold":
+                italic = None if row["checked"] == "yes" else Font(italic=True)
+                cells.append(_cell(ws, value, fmt, font=italic))
+            elif key == "verdict":
+                cells.append(_cell(ws, value, font=VERDICT_FONTS[value], fill=VERDICT_FILLS[value]))
+            elif key == "n":  # a count with thousands separated; an exposure (a rate's) to one decimal
+                cells.append(_cell(ws, value, "#,##0" if isinstance(value, int) else "#,##0.0"))
+            elif key == "checked":
+                cells.append(_cell(ws, value, font=BOLD if value == "no" else None))
+            else:
+                cells.append(_cell(ws, value, wrap=key in _WRAP_COLUMNS))
+        ws.append(cells)
+    notes = ["Values, intervals and thresholds are in the row's unit; a proportion is shown as a "
+             "percentage. Verdict: pass when the whole 95 % interval meets the threshold, fail when the "
+             "whole interval misses it, inconclusive otherwise (or below the standard's minimum sample)."]
+    if any(r["checked"] == "no" for r in rows):
+        notes.append(UNCHECKED_NOTE)
+    ws.append([])
+    for note in notes:
+        _, lines = note_lines(note, widths, [True] * len(widths), len(rows))
+        for line in lines:
+            ws.append([note_text_cell(ws, line)])
+
+
+def _write_table(wb: Workbook, title: str, frame: pd.DataFrame) -> None:
+    """One table on its own sheet, under the workbooks' common rules (headers with units, formats)."""
+    ws = wb.create_sheet(title)
+    if not isinstance(frame.index, pd.RangeIndex) or any(n is not None for n in frame.index.names):
+        frame = frame.reset_index()
+    columns = [make_column(ws, str(h), frame.iloc[:, j]) for j, h in enumerate(frame.columns)]
+    if not columns:
+        page_setup(ws)
+        ws.append([text_cell(ws, "No columns.", font=BOLD)])
+        return
+    note = frame.attrs.get("note") if isinstance(frame.attrs.get("note"), str) else ""
+    write_table(ws, columns, note=note or ("No rows." if frame.empty else ""))
+
+
+def write_evaluation_xlsx(scorecard: pd.DataFrame, path: str | os.PathLike[str],
+                          tables: Mapping[str, pd.DataFrame] | None = None) -> None:
+    """The evaluation workbook at ``path``: the scorecard (validated: scorecard_schema) and the tables in
+    their order, one sheet each."""
+    card = validate_scorecard(scorecard)
+    extra = validate_tables(tables)
+    wb = Workbook(write_only=True)
+    taken = {SCORECARD_SHEET.lower()}
+    try:
+        _write_scorecard(wb, card)
+        for name, frame in extra.items():
+            _write_table(wb, sheet_name(name, taken), frame)
+    except BaseException:
+        _discard(wb)
+        raise
+    save(wb, path)

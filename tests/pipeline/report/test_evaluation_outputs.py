@@ -1,0 +1,253 @@
+"""The evaluation's writers (XLSX, JSON, HTML) on a hand-made scorecard (tests/evaluation_sample.py): what
+each writes is read back and compared with the values written there by hand; the HTML is opened in headless
+Chromium with every network request refused."""
+
+from __future__ import annotations
+
+import json
+import math
+import shutil
+from pathlib import Path
+
+import pandas as pd
+import pytest
+from evaluation_sample import COLUMNS, ROWS, map_points, scorecard, tables
+from openpyxl import load_workbook
+
+from msdc.pipeline.evaluate.scorecard_schema import (
+    SCORECARD_COLUMNS,
+    schema_markdown,
+    validate_map,
+    validate_scorecard,
+)
+from msdc.pipeline.report.evaluation_html import evaluation_html, write_evaluation_html
+from msdc.pipeline.report.evaluation_json import read_evaluation_json, write_evaluation_json
+from msdc.pipeline.report.evaluation_xlsx import write_evaluation_xlsx
+
+ROOT = Path(__file__).resolve().parents[3]
+CHROMIUM = "/usr/bin/chromium"
+
+
+# ------------------------------------------------------------------------------------------- schema
+
+def test_the_schema_is_the_documented_one() -> None:
+    """The columns the brief names, in order; the docs page shows the schema's own tables."""
+    assert SCORECARD_COLUMNS == ("sensor", "sector", "requirement", "value", "ci_low", "ci_high", "n",
+                                 "threshold", "verdict", "clause", "checked", "notes")
+    page = (ROOT / "docs" / "guide" / "evaluate-outputs.md").read_text(encoding="utf-8")
+    assert schema_markdown() in page
+
+
+@pytest.mark.parametrize(("change", "message"), [
+    (lambda f: f.drop(columns="clause"), "scorecard: columns missing 'clause'"),
+    (lambda f: f.assign(extra=1), "unknown 'extra'"),
+    (lambda f: f.assign(verdict=["pass", "fail", "maybe", "pass", "pass"]),
+     "column 'verdict', row 2: 'maybe' is not one of pass, fail, inconclusive"),
+    (lambda f: f.assign(requirement=["pd", "pd_x", "pd", "rms_m", "p95_m"]),
+     "column 'requirement', row 1: 'pd_x' is not a documented requirement id"),
+    (lambda f: f.assign(ci_low=[0.98, 0.94, 0.955, 110.4, math.nan]), "column 'ci_low', row 0: 0.98 exceeds"),
+    (lambda f: f.assign(ci_high=[0.9764, 0.96, 0.975, math.nan, math.nan]), "column 'ci_high', row 3"),
+    (lambda f: f.assign(threshold=[0.97, 0.98, "0.96", 150.0, 50.0]),
+     "column 'threshold', row 2: '0.96' is not a number"),
+    (lambda f: f.assign(n=[50000, 2000, 3000, -1, 0]), "column 'n', row 3: -1 is negative"),
+    (lambda f: f.assign(checked=[True, False, False, "yes", False]), "column 'checked', row 3: 'yes' is not"),
+    (lambda f: pd.concat([f, f.iloc[[0]]]), "row 5: 'pd' repeats row 0"),
+])
+def test_a_bad_scorecard_is_refused_naming_column_row_and_value(change, message: str) -> None:
+    with pytest.raises(ValueError, match=None) as caught:
+        validate_scorecard(change(scorecard()))
+    assert message in str(caught.value)
+
+
+def test_bad_map_points_are_refused() -> None:
+    bad = map_points().assign(source=["reference", "radar"] * 6)
+    with pytest.raises(ValueError, match=r"map points: column 'source', row 1: 'radar' is not one of"):
+        validate_map(bad)
+    with pytest.raises(ValueError, match=r"column 'latitude', row 0: 91.0 is outside -90 to 90"):
+        validate_map(map_points().assign(latitude=[91.0] * 12))
+
+
+# --------------------------------------------------------------------------------------------- XLSX
+
+@pytest.fixture(scope="module")
+def workbook(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    path = tmp_path_factory.mktemp("evaluation") / "evaluation.xlsx"
+    write_evaluation_xlsx(scorecard(), path, tables())
+    return path
+
+
+def test_the_workbook_opens_on_the_scorecard_then_the_tables(workbook: Path) -> None:
+    wb = load_workbook(workbook)
+    assert wb.sheetnames == ["Scorecard", "PD per aircraft", "PD per range band"]
+    ws = wb["Scorecard"]
+    header = [c.value for c in ws[1]]
+    assert header == ["Sensor", "Sector", "Requirement", "Value", "95 % interval, low", "95 % interval, high",
+                      "Unit", "Threshold", "Verdict", "Sample size", "Clause",
+                      "Threshold checked against the standard", "Notes"]
+    rows = [[c.value for c in row] for row in ws.iter_rows(min_row=2, max_row=6)]
+    for row, want in zip(rows, ROWS, strict=True):
+        sensor, sector, req, value, low, high, n, threshold, verdict, clause, checked, notes = want
+        assert row[:3] == [sensor, sector, req]
+        got = [math.nan if v is None else v for v in (row[3], row[4], row[5], row[7])]
+        assert got == pytest.approx([value, low, high, threshold], nan_ok=True)
+        assert row[8:12] == [verdict, n, clause, "yes" if checked else "no"]
+        assert (row[12] or "") == notes
+    assert [r[6] for r in rows] == ["percent", "percent", "percent", "metres", "metres"]
+    # the formula-like note stays text
+    assert ws.cell(6, 13).data_type == "s"
+
+
+def test_verdicts_are_coloured_and_unchecked_thresholds_marked(workbook: Path) -> None:
+    ws = load_workbook(workbook)["Scorecard"]
+    fills = {ws.cell(r, 9).value: ws.cell(r, 9).fill.fgColor.rgb[-6:] for r in range(2, 7)}
+    assert fills == {"pass": "C6EFCE", "fail": "FFC7CE", "inconclusive": "FFEB9C"}
+    marks = [(ws.cell(r, 12).value, ws.cell(r, 12).font.b, ws.cell(r, 8).font.i) for r in range(2, 7)]
+    assert marks == [("yes", False, False), ("no", True, True), ("no", True, True), ("yes", False, False),
+                     ("no", True, True)]
+    # a proportion is shown as a percentage, a distance in metres with one decimal
+    assert ws.cell(2, 4).number_format == "0.00%" and ws.cell(5, 4).number_format == "0.0"
+    notes = " ".join(str(c.value) for row in ws.iter_rows(min_row=7) for c in row if c.value)
+    assert "not checked against the standard's own text" in notes
+
+
+def test_every_sheet_is_set_up_to_print(workbook: Path) -> None:
+    for ws in load_workbook(workbook).worksheets:
+        assert ws.page_setup.orientation == "landscape", ws.title
+        assert ws.page_setup.fitToWidth == 1 and ws.sheet_properties.pageSetUpPr.fitToPage, ws.title
+        assert ws.print_title_rows == "$1:$1", ws.title  # the header row repeated
+
+
+def test_the_tables_sheets_hold_the_tables(workbook: Path) -> None:
+    ws = load_workbook(workbook)["PD per range band"]
+    assert [c.value for c in ws[1]] == ["Sensor", "Range from (NM)", "Range to (NM)", "Expected updates",
+                                        "Detected updates", "Probability of detection"]
+    assert [c.value for c in ws[2]] == ["SSR1", 0, 50, 150, 148, pytest.approx(148 / 150)]
+    assert [c.value for c in ws[3]] == ["SSR1", 50, 100, 0, 0, None]  # NaN: an empty cell
+
+
+# --------------------------------------------------------------------------------------------- JSON
+
+def test_json_results_have_exactly_the_keys_and_nan_is_null(tmp_path: Path) -> None:
+    path = write_evaluation_json(scorecard(), tmp_path / "e.json", tables(), map_points())
+    doc = json.loads(path.read_text(encoding="utf-8"))
+    assert [list(r) for r in doc["results"]] == [COLUMNS] * 5
+    assert doc["results"][0] == {"sensor": "SSR1", "sector": "global", "requirement": "pd", "value": 0.975,
+                                 "ci_low": 0.9736, "ci_high": 0.9764, "n": 50000, "threshold": 0.97,
+                                 "verdict": "pass", "clause": "6.3.2.1", "checked": True, "notes": ""}
+    withheld = doc["results"][4]
+    ends = (withheld["value"], withheld["ci_low"], withheld["ci_high"], withheld["n"])
+    assert ends == (None, None, None, 0)
+    assert "NaN" not in path.read_text(encoding="utf-8")
+    assert doc["tables"]["PD per range band"][1] == {"sensor": "SSR1", "range_from_nm": 50.0,
+                                                     "range_to_nm": 100.0, "expected_updates": 0,
+                                                     "detected_updates": 0, "pd": None}
+    assert len(doc["map_points"]) == 12 and doc["map_points"][0]["source"] == "reference"
+
+
+def test_json_round_trip(tmp_path: Path) -> None:
+    path = write_evaluation_json(scorecard(), tmp_path / "e.json", tables())
+    card, back = read_evaluation_json(path)
+    pd.testing.assert_frame_equal(card, validate_scorecard(scorecard()))
+    assert list(back) == list(tables())
+    for name, frame in tables().items():
+        pd.testing.assert_frame_equal(back[name], frame, check_dtype=False)
+
+
+# --------------------------------------------------------------------------------------------- HTML
+
+def test_the_html_holds_its_scripts_and_loads_nothing() -> None:
+    """Self-contained: no <script src>, no <link> to a style sheet; the scorecard's text is escaped."""
+    text = evaluation_html(scorecard(), tables(), map_points())
+    assert "<script src" not in text.lower() and "<link" not in text.lower()
+    assert "<script" in text and "Bokeh" in text
+    bad = scorecard()
+    bad.loc[0, "notes"] = "<img src=x onerror=alert(1)>"
+    assert "<img src=x" not in evaluation_html(bad)
+
+
+def _browser():
+    """Playwright's sync API and Debian's Chromium, or a skip saying which is missing."""
+    try:
+        from playwright.sync_api import sync_playwright
+    except ImportError:
+        pytest.skip("playwright not installed (pip install playwright): the HTML report is opened in "
+                    "headless Chromium through it")
+    if shutil.which(CHROMIUM) is None:
+        pytest.skip(f"{CHROMIUM} not installed (apt-get install chromium): the HTML report is opened in it")
+    return sync_playwright
+
+
+# every canvas, inside Bokeh's shadow roots too, and how many of its pixels are an aircraft's colour
+_PAINTED = """([r, g, b]) => {
+  const canvases = [];
+  const walk = (root) => { for (const el of root.querySelectorAll('*')) {
+    if (el.tagName === 'CANVAS') canvases.push(el); if (el.shadowRoot) walk(el.shadowRoot); } };
+  walk(document);
+  let painted = 0;
+  for (const c of canvases) {
+    if (!c.width || !c.height) continue;
+    const d = c.getContext('2d').getImageData(0, 0, c.width, c.height).data;
+    for (let i = 0; i < d.length; i += 4)
+      if (Math.abs(d[i] - r) < 40 && Math.abs(d[i + 1] - g) < 40 && Math.abs(d[i + 2] - b) < 40) painted++;
+  }
+  return painted;
+}"""
+
+
+@pytest.mark.slow  # Chromium's start and Bokeh's 1 MB script: about 3 s
+def test_the_html_report_works_offline_in_chromium(tmp_path: Path) -> None:
+    sync_playwright = _browser()
+    path = write_evaluation_html(scorecard(), tmp_path / "e.html", tables(), map_points())
+    url = path.as_uri()
+    refused: list[str] = []
+    messages: list[tuple[str, str]] = []
+    with sync_playwright() as p:
+        browser = p.chromium.launch(executable_path=CHROMIUM, args=[
+            "--no-sandbox", "--disable-gpu", "--disable-background-networking", "--disable-component-update",
+            "--disable-sync", "--no-first-run"])
+        try:
+            context = browser.new_context(offline=True)
+
+            def route(request_route) -> None:
+                if request_route.request.url == url:
+                    request_route.continue_()
+                else:
+                    refused.append(request_route.request.url)
+                    request_route.abort()
+
+            context.route("**/*", route)
+            page = context.new_page()
+            page.on("console", lambda m: messages.append((m.type, m.text)))
+            page.on("pageerror", lambda e: messages.append(("error", str(e))))
+            page.goto(url)
+            page.wait_for_selector("#map canvas", state="attached", timeout=30_000)
+            page.wait_for_function("() => window.Bokeh && Bokeh.documents.length > 0", timeout=30_000)
+            page.wait_for_timeout(300)  # the first paint after the document is idle
+            rows = page.eval_on_selector_all(
+                "#scorecard tbody tr", "rs => rs.map(r => [...r.cells].map(c => c.textContent))")
+            verdict_colour = page.eval_on_selector(
+                "#scorecard tbody tr:nth-child(2) td:nth-child(9)",
+                "c => getComputedStyle(c).backgroundColor")
+            page_messages = list(messages)  # before the test's own pixel reads (Chromium warns of those)
+            blue = page.evaluate(_PAINTED, [0x1F, 0x77, 0xB4])  # IBE3150, the first aircraft by name
+            red = page.evaluate(_PAINTED, [0xD6, 0x27, 0x28])  # MAS72
+        finally:
+            browser.close()
+    assert rows == [
+        ["SSR1", "global", "pd", "97.50 %", "97.36 %", "97.64 %", "percent", "97.00 %", "pass", "50,000",
+         "6.3.2.1", "yes", ""],
+        ["SSR1", "global", "mode3a_correct", "95.00 %", "94.00 %", "96.00 %", "percent", "98.00 %", "fail",
+         "2,000", "COMPASS Radar preset (no clause of the 1997 standard given)", "no", ""],
+        ["SSR1", "FL 100-200", "modec_correct", "96.50 %", "95.50 %", "97.50 %", "percent", "96.00 %",
+         "inconclusive", "3,000", "COMPASS Radar preset (no clause of the 1997 standard given)", "no",
+         "interval [0.955, 0.975] straddles 0.96"],
+        ["SSR1", "global", "rms_m", "120.5", "110.4", "131.0", "metres", "150.0", "pass", "4,000", "5.2.1",
+         "yes", ""],
+        ["ADSB1", "global", "p95_m", "", "", "", "metres", "50.0", "inconclusive", "0", "ED-129 3.2", "no",
+         "=withheld: no report where the reference's sigma is below the tolerance"],
+    ]
+    assert verdict_colour == "rgb(255, 199, 206)"  # fail: #ffc7ce
+    assert blue > 50 and red > 50, (blue, red)  # both aircraft's lines and dots drawn
+    assert refused == []
+    assert [m for m in page_messages if m[0] in ("error", "warning")] == []
+    assert any("bokeh" in text.lower() for _, text in page_messages)  # the console was listened to
