@@ -11,12 +11,13 @@ import pytest
 
 from fixtures.radar_effects import RadarEffects, simulate_effects
 from msdc.pipeline.evaluate import bins
-from msdc.pipeline.evaluate.coverage import Sensor
+from msdc.pipeline.evaluate.coverage import Sensor, sensor_from_entry
 from msdc.pipeline.evaluate.detection import EXPECTED_COLUMNS, expected_updates
 from msdc.pipeline.evaluate.reference import associate
-from msdc.pipeline.evaluate.requirements import radar_reports
+from msdc.pipeline.evaluate.requirements import REQUIREMENTS, radar_reports
 from msdc.pipeline.evaluate.statistics import proportion
 from msdc.pipeline.model.geodesy import M_PER_FT, M_PER_NM
+from msdc.pipeline.model.sensors import read_sensors
 from tests.pipeline.evaluate.test_requirements import NEAR, reference, reports
 
 
@@ -194,3 +195,21 @@ def test_the_polar_map_counts_every_expected_update_once(simulated):
     grid = bins.polar_grid(table)
     assert grid["expected"].sum() == len(table) and grid["detected"].sum() == table["detected"].sum()
     assert grid["y_high"].max() == 360.0 and (grid["y_high"] - grid["y_low"]).max() == 10.0
+
+
+def test_pd_takes_its_coverage_from_the_sensor_file(simulated, tmp_path):
+    sim, _ = simulated
+    path = tmp_path / "sensors.toml"
+    path.write_text(sim.sensors_toml(coverage=True))
+    m = sim.north_markers
+    markers = (m["day"] * 86400.0 + m["time_of_day"]).to_numpy()
+    sensor = sensor_from_entry(read_sensors(path).iloc[0], markers)
+    ref = sim.reference()
+    rep = associate(radar_reports(sim.radar, sensor), ref)
+    out = REQUIREMENTS["pd"](rep, ref, {}, sensor)
+    assert "declared: max_range_nm 60, max_elevation_deg 30" in out.notes[1]
+    # inside the declared 60 NM and 30 deg the injected PD is 0.9 everywhere
+    assert out.ci_low <= EFFECTS.pd <= out.ci_high and out.n > 300
+    crossings = sim.plots[sim.plots["kind"].isin(["target", "missed"])]
+    inside = crossings[(crossings["rho_true_nm"] <= 60.0) & (crossings["elevation_deg"] <= 30.0)]
+    assert abs(out.count - int(inside["detected"].sum())) <= 2
