@@ -163,10 +163,9 @@ def vertical_grid(table: pd.DataFrame, range_edges_nm=None, height_edges_ft=None
     h = height_ft(table)
     if range_edges_nm is None:
         range_edges_nm = _edges(float(np.nanmax(table["rho_nm"], initial=0.0)), VERTICAL_RANGE_NM)
-    if height_edges_ft is None:
-        top = float(np.nanmax(h, initial=0.0))
-        height_edges_ft = _edges(top, VERTICAL_HEIGHT_FT)
-        if np.nanmin(h, initial=0.0) < 0:  # an aircraft (or a reference) below the ellipsoid: one band more
-            height_edges_ft = np.concatenate([[-VERTICAL_HEIGHT_FT], height_edges_ft])
+    if height_edges_ft is None:  # from 0, or lower where an aircraft is below the ellipsoid (the Dead Sea)
+        lowest_ft = float(np.nanmin(h, initial=0.0))
+        bottom = VERTICAL_HEIGHT_FT * min(float(np.floor(lowest_ft / VERTICAL_HEIGHT_FT)), 0.0)
+        height_edges_ft = bottom + _edges(float(np.nanmax(h, initial=0.0)) - bottom, VERTICAL_HEIGHT_FT)
     return detection_grid(table, table["rho_nm"].to_numpy(float), range_edges_nm, h, height_edges_ft,
                           **kwargs)

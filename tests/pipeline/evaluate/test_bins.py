@@ -213,3 +213,11 @@ def test_pd_takes_its_coverage_from_the_sensor_file(simulated, tmp_path):
     crossings = sim.plots[sim.plots["kind"].isin(["target", "missed"])]
     inside = crossings[(crossings["rho_true_nm"] <= 60.0) & (crossings["elevation_deg"] <= 30.0)]
     assert abs(out.count - int(inside["detected"].sum())) <= 2
+
+
+def test_default_vertical_edges_reach_below_the_ellipsoid():
+    low = HAND.assign(height_m=HAND["height_m"] - 2500.0 * M_PER_FT)  # 1,000 ft lowest: now -1,500 ft
+    grid = bins.vertical_grid(low, min_expected=1)
+    assert grid["y_low"].min() == -2000.0 and grid["y_high"].max() == 8000.0  # highest 6,500 ft
+    assert grid["expected"].sum() == len(HAND) - 1  # every update but the one without a height
+    assert grid.loc[grid["y_low"] == -2000.0, "expected"].sum() == 3
