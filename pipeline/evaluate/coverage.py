@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import math
 import numbers
+from collections.abc import Mapping
 from dataclasses import dataclass
 
 import numpy as np
@@ -38,9 +39,14 @@ class Sensor:
 
     def polar(self, lat_deg, lon_deg, h_m) -> tuple[np.ndarray, np.ndarray]:
         """Slant range (NM) and elevation (deg) of positions seen from the site."""
-        rho, _, elev = slant_range_azimuth(self.latitude, self.longitude, self.altitude_m, lat_deg, lon_deg,
-                                           h_m)
-        return np.asarray(rho, float), np.asarray(elev, float)
+        rho, _, elev = self.polar_azimuth(lat_deg, lon_deg, h_m)
+        return rho, elev
+
+    def polar_azimuth(self, lat_deg, lon_deg, h_m) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Slant range (NM), azimuth (deg from true north, 0-360) and elevation (deg) seen from the site."""
+        rho, az, elev = slant_range_azimuth(self.latitude, self.longitude, self.altitude_m, lat_deg, lon_deg,
+                                            h_m)
+        return np.asarray(rho, float), np.asarray(az, float) % 360.0, np.asarray(elev, float)
 
 
 @dataclass(frozen=True)
@@ -91,3 +97,15 @@ def coverage(sensor: Sensor, detected_rho_nm: np.ndarray, detected_elev_deg: np.
     if estimated:
         parts.append("estimated from the sensor's own detections: " + ", ".join(estimated))
     return Coverage(**values, source="coverage " + "; ".join(parts))
+
+
+def sensor_from_entry(entry: Mapping, north_markers_s: np.ndarray | None = None) -> Sensor:
+    """The evaluation's Sensor of a sensor-table row (a row of read_sensors' table, or a dict): its site, name
+    and the coverage limits it declares (absent or NaN: not declared, so estimated from its detections)."""
+    def declared(key: str) -> float | None:
+        v = entry.get(key)
+        return None if v is None or (isinstance(v, numbers.Real) and math.isnan(v)) else float(v)
+
+    return Sensor(float(entry["latitude"]), float(entry["longitude"]), float(entry["altitude_m"]),
+                  name=str(entry["name"]), **{k: declared(k) for k in LIMITS},
+                  north_markers_s=north_markers_s)

@@ -21,7 +21,8 @@ from msdc.pipeline.evaluate.reference import (
 from msdc.pipeline.evaluate.scans import period_from_markers, period_from_plots, update_groups
 from msdc.pipeline.evaluate.statistics import proportion
 
-EXPECTED_COLUMNS = ["aircraft", "stretch", "t_s", "detected", "in_coverage", "rho_nm", "elevation_deg"]
+EXPECTED_COLUMNS = ["aircraft", "stretch", "t_s", "detected", "in_coverage", "rho_nm", "elevation_deg",
+                    "azimuth_deg", "altitude_ft", "height_m"]
 EDGE_SLACK = 0.05  # of a period: a missed update this close outside a reference stretch still counts
 
 
@@ -70,9 +71,10 @@ def _window_updates(times: np.ndarray, start_s: float, end_s: float,
 def expected_updates(reports: pd.DataFrame, reference: pd.DataFrame, parameters: Mapping | None,
                      sensor: Sensor) -> tuple[pd.DataFrame, Coverage, tuple[str, ...]]:
     """Every update the sensor should have made of each reference aircraft, whether it did, and whether the
-    aircraft was then inside coverage, with the coverage and notes on what was used. With ``interval_s``
-    the updates are whole intervals tiling each reference stretch; else one per scan period, the
-    detected ones at their report times and the missed ones spread over the gaps."""
+    aircraft was then inside coverage, where it then was (slant range, elevation, azimuth from the site; the
+    reference's pressure altitude and height), with the coverage and notes on what was used. With
+    ``interval_s`` the updates are whole intervals tiling each reference stretch; else one per scan period,
+    the detected ones at their report times and the missed ones spread over the gaps."""
     max_gap_s = float(parameter(parameters, "reference_max_gap_s", DEFAULT_REFERENCE_GAP_S))
     rep = associated(reports, reference, parameters)
     interval = parameter(parameters, "interval_s", None)
@@ -97,10 +99,11 @@ def expected_updates(reports: pd.DataFrame, reference: pd.DataFrame, parameters:
                 missed = _missed_times(first, a, b, step)
                 t_exp = np.concatenate([first, missed])
                 held = np.concatenate([np.ones(first.size, bool), np.zeros(missed.size, bool)])
-            lat, lon, h, _ = tr.at(np.clip(t_exp, a, b), max_gap_s)
-            rho, el = sensor.polar(lat, lon, h)
+            lat, lon, h, alt = tr.at(np.clip(t_exp, a, b), max_gap_s)
+            rho, az, el = sensor.polar_azimuth(lat, lon, h)
             parts.append(pd.DataFrame({"aircraft": tr.label, "stretch": s, "t_s": t_exp, "detected": held,
-                                       "rho_nm": rho, "elevation_deg": el}))
+                                       "rho_nm": rho, "elevation_deg": el, "azimuth_deg": az,
+                                       "altitude_ft": alt, "height_m": h}))
     table = (pd.concat(parts, ignore_index=True) if parts
              else pd.DataFrame({c: [] for c in EXPECTED_COLUMNS if c != "in_coverage"}))
     table = table.sort_values(["aircraft", "stretch", "t_s"], kind="stable", ignore_index=True)

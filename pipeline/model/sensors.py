@@ -28,7 +28,11 @@ RADAR_COLUMNS = [*REQUIRED_COLUMNS, *OPTIONAL_DEFAULTS]  # a radar entry, as sen
 # for a reference point, the 1-sigma position error per axis of its reports that carry no I010/500 or
 # I020/500 (NaN: none given)
 KIND_COLUMNS = ["category", "kind", "sigma_m"]
-SENSOR_COLUMNS = [*RADAR_COLUMNS, *KIND_COLUMNS]
+# Optional declared coverage of a radar or surface radar (slant range from the site, elevation seen from it;
+# above max_elevation_deg: the cone of silence), used by the evaluation (msdc.pipeline.evaluate.coverage);
+# NaN where not given: the evaluation then estimates that limit from the sensor's own detections
+COVERAGE_COLUMNS = ["min_range_nm", "max_range_nm", "min_elevation_deg", "max_elevation_deg"]
+SENSOR_COLUMNS = [*RADAR_COLUMNS, *KIND_COLUMNS, *COVERAGE_COLUMNS]
 RADAR_CATEGORY = 48
 KINDS_OF = {48: ("radar",), 10: ("mlat", "smr"), 20: ("mlat",)}  # the kinds an entry of a category may be
 # A CAT010 reference point without sigma_m: the A-SMGCS surveillance requirement (ICAO Doc 9830, EUROCAE
@@ -40,12 +44,15 @@ DEFAULT_SIGMA_M = {10: SMGCS_95_M / math.sqrt(-2.0 * math.log(0.05))}
 _NUMBER = (int, float)
 _TYPES = {"name": (str,), "sac": (int,), "sic": (int,), "latitude": _NUMBER, "longitude": _NUMBER,
           "altitude_m": _NUMBER, "sigma_range_m": _NUMBER, "sigma_azimuth_deg": _NUMBER, "category": (int,),
-          "kind": (str,), "sigma_m": _NUMBER}
+          "kind": (str,), "sigma_m": _NUMBER, **dict.fromkeys(COVERAGE_COLUMNS, _NUMBER)}
 # altitude_m: the geometry needs a finite height; past +-100 km it is no radar site (a plausible range,
 # SITE_ALTITUDE_RANGE_M, only warns: implausible_altitudes)
 _RANGES = {"sac": (0, 255), "sic": (0, 255), "latitude": (-90.0, 90.0), "longitude": (-180.0, 180.0),
            "altitude_m": (-100_000.0, 100_000.0), "sigma_range_m": (0.001, 10_000.0),
-           "sigma_azimuth_deg": (0.0001, 10.0), "sigma_m": (0.01, 100_000.0)}
+           "sigma_azimuth_deg": (0.0001, 10.0), "sigma_m": (0.01, 100_000.0),
+           # no radar sees past 1,000 NM (the longest over-the-horizon ones are HF, not ASTERIX sources)
+           "min_range_nm": (0.0, 1000.0), "max_range_nm": (0.0, 1000.0),
+           "min_elevation_deg": (-90.0, 90.0), "max_elevation_deg": (-90.0, 90.0)}
 SITE_ALTITUDE_RANGE_M = (-500.0, 6000.0)  # outside: almost certainly a wrong sensor file entry
 # A SAC/SIC not in the sensor file is taken for damage (its records left out, with a warning) when it has
 # fewer than max(STRAY_RADAR_RECORDS, STRAY_RADAR_SHARE x the CAT048 records) records: one damaged byte of
@@ -102,8 +109,9 @@ def _check_entry(path: Path, i: int, entry: object) -> dict:
                          f"characters long; a name may have up to {NAME_MAX_CHARS} (it labels figures, "
                          "workbook rows and messages)")
     for key, (lo, hi) in _RANGES.items():
-        if entry[key] is not None and not lo <= entry[key] <= hi:
+        if entry[key] is not None and not lo <= entry[key] <= hi:  # (NaN is outside too)
             raise ValueError(f"{where}: {key} = {entry[key]!r} is outside {lo}..{hi}")
+    _check_coverage(where, entry)
     if entry["latitude"] == 0 and entry["longitude"] == 0:
         what = ("radar site" if entry["kind"] == "radar" else
                 f"{KIND_NOUN[entry['kind']]} reference point")
@@ -112,6 +120,14 @@ def _check_entry(path: Path, i: int, entry: object) -> dict:
                          "sensor, or a missing value; every report would land at 0 N 0 E): give its "
                          "WGS-84 position")
     return {k: entry[k] for k in SENSOR_COLUMNS}
+
+
+def _check_coverage(where: str, entry: dict) -> None:
+    """Refuse coverage limits whose minimum is not below their maximum (no position would be inside)."""
+    for lo, hi in (("min_range_nm", "max_range_nm"), ("min_elevation_deg", "max_elevation_deg")):
+        if entry[lo] is not None and entry[hi] is not None and not entry[lo] < entry[hi]:
+            raise ValueError(f"{where} ({entry['name']!r}): {lo} = {entry[lo]!r} is not below {hi} = "
+                             f"{entry[hi]!r}: no position would be inside the coverage")
 
 
 def _toml(path: Path) -> dict:
@@ -161,8 +177,15 @@ def _kind_of(where: str, entry: dict) -> dict:
         takes = "sigma_range_m and sigma_azimuth_deg" if radar else "sigma_m"
         raise ValueError(f"{where}: {wrong[0]} does not apply to a {KIND_NOUN[kind]} entry (it takes "
                          f"{takes})")
+    if kind == "mlat":  # its reference point is the origin of x/y, not a site that ranges are measured from
+        wrong = [k for k in COVERAGE_COLUMNS if k in entry]
+        if wrong:
+            raise ValueError(f"{where}: {wrong[0]} does not apply to a multilateration entry (its reference "
+                             "point is the origin of its x/y, not a site whose range or elevation limits "
+                             "its coverage)")
     fill = OPTIONAL_DEFAULTS | {"sigma_m": None} if radar else dict.fromkeys(OPTIONAL_DEFAULTS) | {
         "sigma_m": DEFAULT_SIGMA_M.get(category)}
+    fill |= dict.fromkeys(COVERAGE_COLUMNS)
     return fill | entry | {"category": category, "kind": kind}
 
 
@@ -173,7 +196,8 @@ def read_sensors(path: str | Path) -> pd.DataFrame:
     ``name`` is categorical: a name is never copied per report). Latitude/longitude are WGS-84 degrees
     (exactly 0 N 0 E, the printed template's value, is refused),
     altitude_m the antenna height above the WGS-84 ellipsoid; sigma_range_m and sigma_azimuth_deg (optional,
-    defaults 70 m and 0.08 deg) the 1-sigma plot noise.
+    defaults 70 m and 0.08 deg) the 1-sigma plot noise; COVERAGE_COLUMNS the optional declared coverage of
+    a radar or surface radar (NaN when not given).
     """
     path = Path(path)
     doc = _toml(path)
@@ -193,7 +217,8 @@ def read_sensors(path: str | Path) -> pd.DataFrame:
 
 
 _DTYPES = {"name": "category", "sac": "int64", "sic": "int64"} | dict.fromkeys(RADAR_COLUMNS[3:], "float64") \
-    | {"category": "int64", "kind": "object", "sigma_m": "float64"}
+    | {"category": "int64", "kind": "object", "sigma_m": "float64"} \
+    | dict.fromkeys(COVERAGE_COLUMNS, "float64")
 
 
 def _typed(frame: pd.DataFrame) -> pd.DataFrame:

@@ -190,7 +190,8 @@ def test_a_misspelt_sensor_key_is_refused_not_ignored(tmp_path, capsys):
     assert status == 1
     assert err.strip() == (f"msdc track: {sensors}: [[sensor]] entry 1: unknown key 'sigma_range' (did you "
                            "mean sigma_range_m? allowed: name, sac, sic, latitude, longitude, altitude_m, "
-                           "sigma_range_m, sigma_azimuth_deg, category, kind, sigma_m)")
+                           "sigma_range_m, sigma_azimuth_deg, category, kind, sigma_m, min_range_nm, "
+                           "max_range_nm, min_elevation_deg, max_elevation_deg)")
     assert not (tmp_path / "t.json").exists()
 
 

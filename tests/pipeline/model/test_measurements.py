@@ -49,7 +49,10 @@ def write(tmp_path, text):
 def test_read_sensors(tmp_path):
     table = read_sensors(write(tmp_path, GOOD))
     assert list(table.columns) == ["name", "sac", "sic", "latitude", "longitude", "altitude_m",
-                                   "sigma_range_m", "sigma_azimuth_deg", "category", "kind", "sigma_m"]
+                                   "sigma_range_m", "sigma_azimuth_deg", "category", "kind", "sigma_m",
+                                   "min_range_nm", "max_range_nm", "min_elevation_deg", "max_elevation_deg"]
+    limits = ["min_range_nm", "max_range_nm", "min_elevation_deg", "max_elevation_deg"]
+    assert table[limits].isna().all().all()  # coverage not declared
     assert table["category"].tolist() == [48, 48] and table["kind"].tolist() == ["radar", "radar"]
     assert table["sigma_m"].isna().all()  # a radar's noise is its range and azimuth sigmas
     assert table["name"].tolist() == ["Equator", "Changi"]
