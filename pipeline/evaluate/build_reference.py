@@ -39,8 +39,10 @@ class BuiltReference:
 def _epoch(meas: pd.DataFrame, epoch: pd.Timestamp | None) -> pd.Timestamp | None:
     """The UTC midnight ``t_s`` counts from: the one given, else that of the earliest report (the day the
     decoder's ``day`` column counts from, so reference and radar_reports share a clock)."""
+    from msdc.pipeline.track.tracker import utc_timestamp
+
     if epoch is not None:
-        return pd.Timestamp(epoch).tz_convert("UTC")
+        return utc_timestamp("epoch", epoch)
     return None if meas.empty else pd.Timestamp(meas["time"].min()).tz_convert("UTC").floor("D")
 
 
@@ -147,7 +149,7 @@ def _reference(meas: pd.DataFrame, builders: np.ndarray, sensor_id: str | None, 
     """The reference from the gated reports the mask ``builders`` selects (a mask over ``meas``), with the
     sensor's own track where no builder covers an aircraft when ``fallback``."""
     epoch = _epoch(meas, epoch)
-    notes: list[str] = []
+    notes = _shared_navigation(meas, builders, sensor_id)
     gated, counts = gate_reports(meas[builders], gates)
     built = (reconstruct(gated, epoch, step_s=step_s, max_coast_s=max_coast_s) if epoch is not None
              else _empty())
@@ -167,6 +169,22 @@ def _reference(meas: pd.DataFrame, builders: np.ndarray, sensor_id: str | None, 
         else _empty()
     frame = frame.sort_values(["aircraft", "t_s"], kind="stable", ignore_index=True)
     return BuiltReference(frame, counts, epoch, notes)
+
+
+def _shared_navigation(meas: pd.DataFrame, builders: np.ndarray, sensor_id: str | None) -> list[str]:
+    """A note when an ADS-B sensor under test is judged against other ADS-B ground stations: they relay
+    the same aircraft's position, from the same navigation source, so their errors are not independent."""
+    if sensor_id is None:
+        return []
+    kind = meas["sensor_kind"].to_numpy(object)
+    ids = meas["sensor_id"].astype(str).to_numpy(object)
+    if not (kind[ids == sensor_id] == "adsb").any():
+        return []
+    others = sorted(set(ids[builders & (kind == "adsb")]))
+    if not others:
+        return []
+    return [f"the reference of ADS-B sensor {sensor_id} includes ADS-B from {', '.join(others)}: the same "
+            "aircraft's navigation source, so its position errors are not independent of the sensor's"]
 
 
 def _check_sensor(meas: pd.DataFrame, sensor_id: str) -> None:

@@ -102,13 +102,15 @@ def read_external_reference(path: str | Path, epoch: pd.Timestamp, *,
     """The CSV as a reference frame (build_reference.BUILT_COLUMNS, plus ``height_m`` when given), ``t_s``
     in seconds since ``epoch`` (the UTC midnight the test reports count from), ``built_by`` "external",
     ``self_reference`` False; ``sigma_m`` fills the rows without one. ExternalReferenceError otherwise."""
+    from msdc.pipeline.track.tracker import utc_timestamp
+
     path = Path(path)
     try:
         text = path.read_text(encoding="utf-8-sig")
     except (OSError, UnicodeDecodeError) as exc:
         raise ExternalReferenceError(f"{path}: cannot read the external reference: {exc}") from None
     names, rows = _rows(path, text)
-    epoch = pd.Timestamp(epoch).tz_convert("UTC")
+    epoch = utc_timestamp("epoch", epoch)
     cols: dict[str, list] = {c: [] for c in ("line", "aircraft", "time", "latitude", "longitude",
                                              *EXTERNAL_ALTITUDES, *EXTERNAL_OPTIONAL)}
     for line, f in rows:

@@ -98,6 +98,13 @@ def self_referenced(reports: pd.DataFrame, reference: pd.DataFrame, parameters: 
         return np.nan_to_num(reference_at(reports, flag, "self_reference", parameters), nan=0.0) > 0.0
 
 
+def independent_reference(reference: pd.DataFrame) -> pd.DataFrame:
+    """The reference without its self-reference rows: what position accuracy may be judged against."""
+    if "self_reference" not in reference.columns:
+        return reference
+    return reference[~reference["self_reference"].astype(bool).to_numpy()]
+
+
 @dataclass(frozen=True)
 class SigmaGate:
     """Which reports are judged (a boolean per report, in the reports' order) and the counts of

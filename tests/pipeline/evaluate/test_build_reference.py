@@ -15,7 +15,7 @@ from fixtures.multiradar import simulate_two_radars
 from msdc.pipeline.evaluate.build_reference import BUILT_COLUMNS, adsb_reference, leave_one_out
 from msdc.pipeline.evaluate.external_reference import ExternalReferenceError, read_external_reference
 from msdc.pipeline.evaluate.reference import associate, local_distance_m
-from msdc.pipeline.evaluate.reference_gates import Gates, gate_reports, sigma_gate
+from msdc.pipeline.evaluate.reference_gates import Gates, gate_reports, independent_reference, sigma_gate
 from msdc.pipeline.model.measurements import build_measurements
 from msdc.pipeline.model.sensors import read_sensors
 
@@ -50,8 +50,8 @@ def test_leave_one_out_is_built_without_the_sensor_and_lies_near_the_truth(two_r
     m, meas = two_radars
     ref = leave_one_out(meas, RADAR_A, epoch=EPOCH).frame
     assert list(ref.columns) == list(BUILT_COLUMNS)
-    independent = ref[~ref["self_reference"]]
-    assert len(independent) > 500
+    independent = independent_reference(ref)
+    assert len(independent) > 500 and len(independent) < len(ref)
     assert not independent["built_by"].str.contains(RADAR_A, regex=False).any()
     assert set(independent["built_by"]) <= {ADSB, RADAR_B, f"{ADSB} + {RADAR_B}"}
     # the self-reference rows are the radar's own track, where neither ADS-B nor radar B covers the aircraft
@@ -104,6 +104,7 @@ def test_single_radar_falls_back_to_its_own_track_flagged(two_radars):
     ref = built.frame
     assert len(ref) > 500 and ref["self_reference"].all() and (ref["built_by"] == RADAR_A).all()
     assert built.notes and "self-reference" in built.notes[0]
+    assert independent_reference(ref).empty
     # position accuracy may not use it: every associated report is excluded as self-referenced
     reports = ref.iloc[100:110][["t_s", "latitude", "longitude"]].reset_index(drop=True)
     gate = sigma_gate(reports, ref, tolerance_m=1000.0)
@@ -242,3 +243,22 @@ def test_external_reference_refuses_unreadable_files(tmp_path):
     path.write_bytes(b"aircraft,time\n\xff\xfe\x00")
     with pytest.raises(ExternalReferenceError, match="binary.csv: cannot read"):
         read_external_reference(path, EPOCH)
+
+
+def test_an_adsb_sensor_under_test_is_told_its_reference_shares_its_navigation(two_radars):
+    _, meas = two_radars
+    second = meas[meas["sensor_id"] == ADSB].assign(sensor_id="021:0/2").iloc[::7]
+    both = pd.concat([meas, second], ignore_index=True)
+    built = leave_one_out(both, "021:0/2", epoch=EPOCH)
+    assert any("021:0/1" in n and "not independent" in n for n in built.notes)
+    assert not any("not independent" in n for n in leave_one_out(meas, ADSB, epoch=EPOCH).notes)
+
+
+def test_a_naive_epoch_is_refused(two_radars, tmp_path):
+    _, meas = two_radars
+    with pytest.raises(ValueError, match="epoch .*naive"):
+        leave_one_out(meas, RADAR_A, epoch=pd.Timestamp("2019-03-01"))
+    path = tmp_path / "gps.csv"
+    path.write_text(GOOD)
+    with pytest.raises(ValueError, match="epoch .*naive"):
+        read_external_reference(path, pd.Timestamp("2019-03-01"))
