@@ -105,6 +105,9 @@ def read_external_reference(path: str | Path, epoch: pd.Timestamp, *,
     from msdc.pipeline.track.tracker import utc_timestamp
 
     path = Path(path)
+    if sigma_m is not None and not (math.isfinite(sigma_m) and sigma_m > 0):
+        raise ExternalReferenceError(f"{path}: declared sigma_m {sigma_m!r} must be a positive number of "
+                                     "metres")
     try:
         text = path.read_text(encoding="utf-8-sig")
     except (OSError, UnicodeDecodeError) as exc:

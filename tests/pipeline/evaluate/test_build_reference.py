@@ -236,6 +236,13 @@ def test_external_reference_refuses_a_bad_file(tmp_path, text, line, reason):
         read_external_reference(path, EPOCH)
 
 
+def test_external_reference_refuses_a_bad_declared_sigma(tmp_path):
+    path = tmp_path / "gps.csv"
+    path.write_text(GOOD)
+    with pytest.raises(ExternalReferenceError, match="gps.csv: declared sigma_m -1.0"):
+        read_external_reference(path, EPOCH, sigma_m=-1.0)
+
+
 def test_external_reference_refuses_unreadable_files(tmp_path):
     with pytest.raises(ExternalReferenceError, match="missing.csv: cannot read"):
         read_external_reference(tmp_path / "missing.csv", EPOCH)
