@@ -1,0 +1,220 @@
+"""Building the reference the requirements judge against, from the measurements (pipeline.model's frame):
+``leave_one_out`` (every sensor but the one under test, tracked and smoothed by the IMM of pipeline.track),
+``adsb_reference`` (ADS-B reports alone), each after the quality gates (reference_gates), with the
+self-reference fallback where no other sensor sees the aircraft. An external reference is read by
+``external_reference.read_external_reference``.
+
+Each reference row carries, besides reference.REFERENCE_REQUIRED and the pressure altitude and identity:
+``sigma_m`` (the reference's 1-sigma position error along its ellipse's major axis), ``built_by`` (the
+sensors whose reports updated the track stretch the row belongs to) and ``self_reference`` (True where the
+row comes from the sensor's own track: detection, codes and identity may use it, position accuracy not).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+import pandas as pd
+
+from msdc.pipeline.evaluate.reference_gates import Gates, gate_reports
+
+IDENTITY_COLUMNS = ("mode3a", "address", "callsign")
+BUILT_COLUMNS = ("aircraft", "t_s", "latitude", "longitude", "altitude_ft", *IDENTITY_COLUMNS, "sigma_m",
+                 "built_by", "self_reference")
+BUILT_BY_SEPARATOR = " + "
+
+
+@dataclass
+class BuiltReference:
+    """The reference frame (BUILT_COLUMNS), how many ADS-B reports each gate removed (GATE_KEYS), the
+    epoch its ``t_s`` counts from, and what was done, in words."""
+
+    frame: pd.DataFrame
+    gate_counts: dict[str, int]
+    epoch: pd.Timestamp | None
+    notes: list[str] = field(default_factory=list)
+
+
+def _epoch(meas: pd.DataFrame, epoch: pd.Timestamp | None) -> pd.Timestamp | None:
+    """The UTC midnight ``t_s`` counts from: the one given, else that of the earliest report (the day the
+    decoder's ``day`` column counts from, so reference and radar_reports share a clock)."""
+    from msdc.pipeline.track.tracker import utc_timestamp
+
+    if epoch is not None:
+        return utc_timestamp("epoch", epoch)
+    return None if meas.empty else pd.Timestamp(meas["time"].min()).tz_convert("UTC").floor("D")
+
+
+def _empty() -> pd.DataFrame:
+    """A reference with no row, in BUILT_COLUMNS."""
+    return pd.DataFrame({c: pd.Series(dtype=object if c in (*IDENTITY_COLUMNS, "aircraft", "built_by")
+                                      else bool if c == "self_reference" else float) for c in BUILT_COLUMNS})
+
+
+def _built_by(tracks: pd.DataFrame) -> pd.Series:
+    """Per track row, the sensors whose reports updated its segment, sorted and joined."""
+    src = tracks["sources"].astype(str)
+    parts = src.str.split(",").explode().str.strip()
+    parts = parts[parts != ""]
+    keys = tracks[["aircraft_id", "segment"]].loc[parts.index]
+    joined = (pd.DataFrame({"aircraft_id": keys["aircraft_id"].to_numpy(),
+                            "segment": keys["segment"].to_numpy(), "sensor": parts.to_numpy()})
+              .drop_duplicates().sort_values("sensor")
+              .groupby(["aircraft_id", "segment"], sort=False)["sensor"].agg(BUILT_BY_SEPARATOR.join))
+    index = pd.MultiIndex.from_frame(tracks[["aircraft_id", "segment"]])
+    return pd.Series(joined.reindex(index).fillna("").to_numpy(), index=tracks.index)
+
+
+def _identity(reference: pd.DataFrame, reports: pd.DataFrame) -> pd.DataFrame:
+    """The reference with each identity column taken from the reports that built it: per aircraft, the
+    latest value reported at or before the row's time (before the first, the first)."""
+    out = reference.sort_values("time", kind="stable")
+    for col in IDENTITY_COLUMNS:
+        if col not in reports.columns:
+            out[col] = None
+            continue
+        said = reports.loc[reports[col].notna(), ["aircraft_id", "time", col]]
+        said = pd.DataFrame({"aircraft_id": said["aircraft_id"].astype(str).to_numpy(object),
+                             "time": said["time"].astype("datetime64[ns, UTC]").to_numpy(),
+                             col: said[col].astype(str).to_numpy(object)})
+        said = said[said[col] != ""].sort_values("time", kind="stable")
+        if said.empty:
+            out[col] = None
+            continue
+        left = pd.DataFrame({"aircraft_id": out["aircraft_id"].astype(str).to_numpy(object),
+                             "time": out["time"].astype("datetime64[ns, UTC]").to_numpy()})
+        back = pd.merge_asof(left, said, on="time", by="aircraft_id", direction="backward")[col]
+        fwd = pd.merge_asof(left, said, on="time", by="aircraft_id", direction="forward")[col]
+        out[col] = back.where(back.notna(), fwd).to_numpy(object)
+    return out.sort_index()
+
+
+def reconstruct(reports: pd.DataFrame, epoch: pd.Timestamp, *, step_s: float = 1.0,
+                max_coast_s: float = 60.0, self_reference: bool = False) -> pd.DataFrame:
+    """The smoothed IMM reconstruction (pipeline.track.track, RTS) of these reports as reference rows:
+    only rows the reports support (coasted rows after a segment's last update left out), with sigma_m,
+    built_by and the identity of the reports."""
+    from msdc.pipeline.track import track
+
+    if reports.empty:
+        return _empty()
+    res = track(reports, step_s=step_s, max_coast_s=max_coast_s, smooth=True, epoch=epoch)
+    tr = res.tracks
+    if tr.empty:
+        return _empty()
+    tr = tr.assign(built_by=_built_by(tr))
+    # a smoothed segment is supported between its first and last update; rows coasted beyond the last
+    # update are a prediction, not a reconstruction
+    updated = tr["sources"].astype(str) != ""
+    t_upd = tr["time"].where(updated)
+    keys = [tr["aircraft_id"], tr["segment"]]
+    first, last = tr["time"].groupby(keys).transform("min"), t_upd.groupby(keys).transform("max")
+    tr = tr[(tr["time"] >= first) & (tr["time"] <= last)]
+    tr = _identity(tr, reports)
+    out = pd.DataFrame({
+        "aircraft": tr["aircraft_id"].astype(str).to_numpy(object),
+        "t_s": (tr["time"] - epoch).dt.total_seconds().to_numpy(float),
+        "latitude": tr["latitude"].to_numpy(float), "longitude": tr["longitude"].to_numpy(float),
+        "altitude_ft": tr["flight_level"].to_numpy(float) * 100.0,
+        **{c: tr[c].to_numpy(object) for c in IDENTITY_COLUMNS},
+        "sigma_m": tr["sigma_major_m"].to_numpy(float), "built_by": tr["built_by"].to_numpy(object),
+        "self_reference": np.full(len(tr), self_reference)})
+    return out.sort_values(["aircraft", "t_s"], kind="stable", ignore_index=True)
+
+
+def _uncovered(own: pd.DataFrame, independent: pd.DataFrame, max_gap_s: float) -> pd.DataFrame:
+    """The rows of the sensor's own track at times no independent reference stretch of the same aircraft
+    covers (stretches: runs of samples at most max_gap_s apart)."""
+    if own.empty or independent.empty:
+        return own
+    keep = np.ones(len(own), bool)
+    for aircraft, rows in own.groupby("aircraft", sort=False).indices.items():
+        t_ind = independent.loc[independent["aircraft"] == aircraft, "t_s"].to_numpy(float)
+        if not t_ind.size:
+            continue
+        t = own["t_s"].to_numpy(float)[rows]
+        i = np.searchsorted(t_ind, t, side="right") - 1
+        before = np.clip(i, 0, t_ind.size - 1)
+        after = np.clip(i + 1, 0, t_ind.size - 1)
+        bridged = t_ind[after] - t_ind[before] <= max_gap_s
+        inside = (i >= 0) & (t <= t_ind[-1]) & ((t == t_ind[before]) | bridged)
+        keep[rows] = ~inside
+    return own[keep]
+
+
+def _reference(meas: pd.DataFrame, builders: np.ndarray, sensor_id: str | None, gates: Gates,
+               epoch: pd.Timestamp | None, step_s: float, max_coast_s: float, fallback: bool,
+               max_gap_s: float) -> BuiltReference:
+    """The reference from the gated reports the mask ``builders`` selects (a mask over ``meas``), with the
+    sensor's own track where no builder covers an aircraft when ``fallback``."""
+    epoch = _epoch(meas, epoch)
+    notes = _shared_navigation(meas, builders, sensor_id)
+    gated, counts = gate_reports(meas[builders], gates)
+    built = (reconstruct(gated, epoch, step_s=step_s, max_coast_s=max_coast_s) if epoch is not None
+             else _empty())
+    frames = [built]
+    if fallback and sensor_id is not None and epoch is not None:
+        own_reports = meas[(meas["sensor_id"].astype(str) == sensor_id).to_numpy(bool)]
+        if (own_reports["sensor_kind"] == "adsb").any():
+            own_reports, _ = gate_reports(own_reports, gates)
+        own = reconstruct(own_reports, epoch, step_s=step_s, max_coast_s=max_coast_s, self_reference=True)
+        own = _uncovered(own, built, max_gap_s)
+        if len(own):
+            notes.append(f"{own['aircraft'].nunique()} aircraft judged in part or whole against "
+                         f"{sensor_id}'s own track ({len(own)} self-reference rows): not for position "
+                         "accuracy")
+            frames.append(own)
+    frame = pd.concat([f for f in frames if len(f)], ignore_index=True) if any(len(f) for f in frames) \
+        else _empty()
+    frame = frame.sort_values(["aircraft", "t_s"], kind="stable", ignore_index=True)
+    return BuiltReference(frame, counts, epoch, notes)
+
+
+def _shared_navigation(meas: pd.DataFrame, builders: np.ndarray, sensor_id: str | None) -> list[str]:
+    """A note when an ADS-B sensor under test is judged against other ADS-B ground stations: they relay
+    the same aircraft's position, from the same navigation source, so their errors are not independent."""
+    if sensor_id is None:
+        return []
+    kind = meas["sensor_kind"].to_numpy(object)
+    ids = meas["sensor_id"].astype(str).to_numpy(object)
+    if not (kind[ids == sensor_id] == "adsb").any():
+        return []
+    others = sorted(set(ids[builders & (kind == "adsb")]))
+    if not others:
+        return []
+    return [f"the reference of ADS-B sensor {sensor_id} includes ADS-B from {', '.join(others)}: the same "
+            "aircraft's navigation source, so its position errors are not independent of the sensor's"]
+
+
+def _check_sensor(meas: pd.DataFrame, sensor_id: str) -> None:
+    """Refuse a sensor under test that is not in the measurements, naming those present."""
+    present = sorted(set(meas["sensor_id"].astype(str)))
+    if sensor_id not in present:
+        raise ValueError(f"sensor {sensor_id!r} is not in the measurements (present: {', '.join(present)})")
+
+
+def leave_one_out(meas: pd.DataFrame, sensor_id: str, *, gates: Gates | None = None,
+                  epoch: pd.Timestamp | None = None, step_s: float = 1.0, max_coast_s: float = 60.0,
+                  fallback: bool = True, max_gap_s: float = 30.0) -> BuiltReference:
+    """The reference for ``sensor_id``: per aircraft, the smoothed IMM track of every other sensor's
+    reports (the ADS-B ones after the gates); where none covers an aircraft (no independent sample within
+    max_gap_s), the sensor's own smoothed track, flagged ``self_reference`` (``fallback``)."""
+    _check_sensor(meas, sensor_id)
+    builders = (meas["sensor_id"].astype(str) != sensor_id).to_numpy(bool)
+    return _reference(meas, builders, sensor_id, gates or Gates(), epoch, step_s, max_coast_s, fallback,
+                      max_gap_s)
+
+
+def adsb_reference(meas: pd.DataFrame, sensor_id: str | None = None, *, gates: Gates | None = None,
+                   epoch: pd.Timestamp | None = None, step_s: float = 1.0, max_coast_s: float = 60.0,
+                   fallback: bool = True, max_gap_s: float = 30.0) -> BuiltReference:
+    """The reference from the ADS-B reports alone, after the gates, tracked and smoothed; an ADS-B sensor
+    under test is left out of it. With ``sensor_id`` and ``fallback``, aircraft no ADS-B report covers get
+    the sensor's own track, flagged ``self_reference``."""
+    if sensor_id is not None:
+        _check_sensor(meas, sensor_id)
+    builders = ((meas["sensor_kind"] == "adsb").to_numpy(bool)
+                & (meas["sensor_id"].astype(str) != (sensor_id or "")).to_numpy(bool))
+    return _reference(meas, builders, sensor_id, gates or Gates(), epoch, step_s, max_coast_s, fallback,
+                      max_gap_s)

@@ -1,0 +1,271 @@
+"""The reference builders (pipeline/evaluate/build_reference.py) against the two-radar simulation's truth, the
+reference gates counted on reports whose indicators are set by hand, the sigma gate on a hand-made reference,
+and the external reference file refused line by line."""
+
+from __future__ import annotations
+
+import re
+import warnings
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from fixtures.multiradar import simulate_two_radars
+from msdc.pipeline.evaluate.build_reference import BUILT_COLUMNS, adsb_reference, leave_one_out
+from msdc.pipeline.evaluate.external_reference import ExternalReferenceError, read_external_reference
+from msdc.pipeline.evaluate.reference import associate, local_distance_m
+from msdc.pipeline.evaluate.reference_gates import Gates, gate_reports, independent_reference, sigma_gate
+from msdc.pipeline.model.measurements import build_measurements
+from msdc.pipeline.model.sensors import read_sensors
+
+RADAR_A, RADAR_B, ADSB = "048:25/201", "048:25/202", "021:0/1"
+EPOCH = pd.Timestamp("2019-03-01", tz="UTC")
+WINDOW = pd.Timedelta(minutes=15)
+
+
+@pytest.fixture(scope="module")
+def two_radars(tmp_path_factory):
+    """The two-radar simulation and its measurements, one aircraft (MAS72, sim aircraft 0) over 15 minutes."""
+    m = simulate_two_radars()
+    path = tmp_path_factory.mktemp("sensors") / "sensors.toml"
+    path.write_text(m.sensors_toml())
+    radar = pd.concat([m.sim.radar, m.radar2], ignore_index=True)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        meas = build_measurements(radar, m.sim.adsb, read_sensors(path), date=EPOCH.date())
+    address = m.sim.aircraft[0].spec.address_hex
+    meas = meas[(meas["aircraft_id"] == address) & (meas["time"] < meas["time"].min() + WINDOW)]
+    return m, meas.reset_index(drop=True)
+
+
+def truth_error_m(m, frame: pd.DataFrame) -> np.ndarray:
+    """Horizontal distance of each reference row from sim aircraft 0's true position at its time."""
+    st = m.sim.aircraft[0].truth(frame["t_s"].to_numpy(float))
+    return local_distance_m(frame["latitude"].to_numpy(float), frame["longitude"].to_numpy(float),
+                            st.latitude, st.longitude)
+
+
+def test_leave_one_out_is_built_without_the_sensor_and_lies_near_the_truth(two_radars):
+    m, meas = two_radars
+    ref = leave_one_out(meas, RADAR_A, epoch=EPOCH).frame
+    assert list(ref.columns) == list(BUILT_COLUMNS)
+    independent = independent_reference(ref)
+    assert len(independent) > 500 and len(independent) < len(ref)
+    assert not independent["built_by"].str.contains(RADAR_A, regex=False).any()
+    assert set(independent["built_by"]) <= {ADSB, RADAR_B, f"{ADSB} + {RADAR_B}"}
+    # the self-reference rows are the radar's own track, where neither ADS-B nor radar B covers the aircraft
+    assert (ref.loc[ref["self_reference"], "built_by"] == RADAR_A).all()
+    # within a few of its own sigmas of the simulator's truth, and well inside the radars' noise
+    err = truth_error_m(m, independent)
+    ratio = err / independent["sigma_m"].to_numpy(float)
+    assert np.quantile(ratio, 0.99) < 4.0 and ratio.max() < 6.0
+    # sigma_m is the major axis: the 2-D error's RMS is at most sqrt(2) sigma for an honest sigma
+    assert np.sqrt(np.mean(ratio**2)) < np.sqrt(2.0)
+    # where ADS-B builds it (sigma a few metres) the error is a few metres; through the 479 s ADS-B gap,
+    # radar B alone (10 s scans, 120 m in range) builds it, and its sigma grows to 100 m and more
+    precise = independent["sigma_m"].to_numpy(float) < 10.0
+    assert precise.sum() > 500 and np.sqrt(np.mean(err[precise] ** 2)) < 10.0
+    assert independent["sigma_m"].max() > 80.0
+    # the identity comes from the reports that built it
+    assert set(independent["callsign"]) == {m.sim.aircraft[0].spec.callsign}
+
+
+def test_leave_one_out_ignores_the_sensor_under_test(two_radars):
+    """Radar A's plots moved 5 km north: the independent reference does not move at all."""
+    _, meas = two_radars
+    moved = meas.copy()
+    a = (moved["sensor_id"] == RADAR_A).to_numpy()
+    moved.loc[a, "latitude"] += 5000.0 / 111_000.0
+    before = leave_one_out(meas, RADAR_A, epoch=EPOCH).frame
+    after = leave_one_out(moved, RADAR_A, epoch=EPOCH).frame
+    pd.testing.assert_frame_equal(before[~before["self_reference"]].reset_index(drop=True),
+                                  after[~after["self_reference"]].reset_index(drop=True))
+    # while the reference of radar B, which radar A builds, does move
+    b_before = leave_one_out(meas, RADAR_B, epoch=EPOCH, fallback=False).frame
+    b_after = leave_one_out(moved, RADAR_B, epoch=EPOCH, fallback=False).frame
+    both = b_before.merge(b_after, on="t_s")
+    assert local_distance_m(both["latitude_x"], both["longitude_x"], both["latitude_y"],
+                            both["longitude_y"]).max() > 1000.0
+
+
+def test_adsb_reference_is_built_by_adsb_alone(two_radars):
+    m, meas = two_radars
+    ref = adsb_reference(meas, RADAR_A, epoch=EPOCH, fallback=False).frame
+    assert (ref["built_by"] == ADSB).all() and not ref["self_reference"].any()
+    err = truth_error_m(m, ref)
+    assert np.quantile(err / ref["sigma_m"].to_numpy(float), 0.99) < 4.0
+
+
+def test_single_radar_falls_back_to_its_own_track_flagged(two_radars):
+    m, meas = two_radars
+    alone = meas[meas["sensor_id"] == RADAR_A]
+    built = leave_one_out(alone, RADAR_A, epoch=EPOCH)
+    ref = built.frame
+    assert len(ref) > 500 and ref["self_reference"].all() and (ref["built_by"] == RADAR_A).all()
+    assert built.notes and "self-reference" in built.notes[0]
+    assert independent_reference(ref).empty
+    # position accuracy may not use it: every associated report is excluded as self-referenced
+    reports = ref.iloc[100:110][["t_s", "latitude", "longitude"]].reset_index(drop=True)
+    gate = sigma_gate(reports, ref, tolerance_m=1000.0)
+    assert gate.counts["self_reference"] == 10 and gate.counts["judged"] == 0
+    # detection and codes may: without the independence rule the same reports are judged
+    assert sigma_gate(reports, ref, tolerance_m=1000.0, independent=False).counts["judged"] == 10
+    assert not leave_one_out(alone, RADAR_A, epoch=EPOCH, fallback=False).frame.shape[0]
+
+
+def test_unknown_sensor_is_refused(two_radars):
+    _, meas = two_radars
+    with pytest.raises(ValueError, match="048:99/1.*present: 021:0/1"):
+        leave_one_out(meas, "048:99/1")
+
+
+def test_gates_remove_and_count_exactly(two_radars):
+    """Every ADS-B report set to NACp 9, NIC 8, SIL 3, then chosen ones lowered or blanked by hand."""
+    _, meas = two_radars
+    meas = meas.copy()
+    adsb = np.flatnonzero((meas["sensor_kind"] == "adsb").to_numpy())
+    meas["nacp"] = meas["nacp"].astype(float)
+    meas["nucp_nic"] = meas["nucp_nic"].astype(float)
+    meas["sil"] = meas["sil"].astype(float)
+    meas.loc[adsb, ["nacp", "nucp_nic", "sil"]] = [9.0, 8.0, 3.0]
+    low_nic, low_nacp, no_nacp = adsb[0:5], adsb[10:27], adsb[30:33]
+    low_sil, no_sil = adsb[40:51], adsb[60:62]
+    meas.loc[low_nic, "nucp_nic"] = 6.0
+    meas.loc[low_nacp, "nacp"] = 7.0
+    meas.loc[no_nacp, "nacp"] = np.nan
+    meas.loc[low_sil, "sil"] = 1.0
+    meas.loc[no_sil, "sil"] = np.nan
+    meas.loc[low_sil[:2], "nacp"] = 5.0  # below both: counted once, by NACp, which runs first
+    kept, counts = gate_reports(meas, Gates(min_nacp=8, min_nic=7, min_sil=2))
+    assert counts["nic_below_min"] == 5
+    assert counts["nacp_below_min"] == 17 + 2 and counts["nacp_missing_kept"] == 3
+    assert counts["sil_below_min"] == 9 and counts["sil_missing_kept"] == 2
+    assert len(kept) == len(meas) - 5 - 19 - 9
+    assert (kept["sensor_kind"] == "radar").sum() == (meas["sensor_kind"] == "radar").sum()
+    built = leave_one_out(meas, RADAR_A, epoch=EPOCH, gates=Gates(min_nacp=8, min_nic=7, min_sil=2))
+    assert built.gate_counts == counts
+
+
+def test_jumps_dropped_are_the_simulated_jumps(two_radars):
+    """The simulator's ADS-B position jumps (hundreds of km, flagged in its truth) are the ones dropped."""
+    m, meas = two_radars
+    truth = m.sim.truth_tracks
+    t0 = EPOCH + pd.to_timedelta(truth["t_s"], unit="s")
+    mine = truth[(truth["sensor"] == "adsb") & (truth["aircraft"] == 0) & (t0 >= meas["time"].min())
+                 & (t0 <= meas["time"].max())]
+    jumps = int(mine["jump"].sum())
+    if jumps == 0:
+        pytest.skip("no simulated ADS-B jump in this aircraft's window")
+    _, counts = gate_reports(meas, Gates(drop_jumps=True))
+    assert counts["jumps"] == jumps
+
+
+def hand_reference() -> pd.DataFrame:
+    """Aircraft A flying north along longitude 0 at 100 m/s from t = 0 to 500 s: sigma 10 m before 100 s,
+    50 m from 100 to 200 s, 10 m and self-referenced from 200 to 300 s, unknown from 300 s."""
+    t = np.arange(0.0, 501.0, 1.0)
+    sigma = np.where(t < 100, 10.0, np.where(t < 200, 50.0, np.where(t < 300, 10.0, np.nan)))
+    return pd.DataFrame({"aircraft": "A", "t_s": t, "latitude": t * 100.0 / 111_000.0, "longitude": 0.0,
+                         "sigma_m": sigma, "self_reference": (t >= 200) & (t < 300)})
+
+
+def test_sigma_gate_counts_each_exclusion():
+    ref = hand_reference()
+    times = np.array([10.5, 50.0, 99.0, 150.0, 160.0, 250.0, 350.0, 400.0, 420.0])
+    reports = pd.DataFrame({"t_s": np.append(times, 60.0),
+                            "latitude": np.append(times * 100.0 / 111_000.0, 0.0),
+                            "longitude": np.append(np.zeros(times.size), 1.0)})  # the last one 111 km off
+    gate = sigma_gate(reports, ref, tolerance_m=60.0)  # a third of 60 m: sigma below 20 m
+    assert gate.counts == {"reports": 10, "judged": 3, "no_reference": 1, "self_reference": 1,
+                           "sigma_unknown": 3, "sigma_too_large": 2}
+    np.testing.assert_array_equal(gate.judged, [True] * 3 + [False] * 7)
+    # a tolerance of 300 m lets sigma 50 m in (below 100 m)
+    assert sigma_gate(reports, ref, tolerance_m=300.0).counts["judged"] == 5
+    # the bracketing samples at 99 and 100 s are 10 and 50 m: at 99.5 s, 30 m, too large for 60 m
+    between = pd.DataFrame({"t_s": [99.5], "latitude": [99.5 * 100.0 / 111_000.0], "longitude": [0.0]})
+    assert sigma_gate(between, ref, tolerance_m=60.0).counts["sigma_too_large"] == 1
+    wider = sigma_gate(between, ref, tolerance_m=60.0, parameters={"sigma_fraction": 0.6})
+    assert wider.counts["judged"] == 1
+    # reports already associated are not associated again
+    assert sigma_gate(associate(reports, ref), ref, tolerance_m=60.0).counts == gate.counts
+    with pytest.raises(ValueError, match="tolerance"):
+        sigma_gate(reports, ref, tolerance_m=0.0)
+
+
+GOOD = ("aircraft,time,latitude,longitude,altitude_ft,callsign\n"
+        "TRIAL1,2019-03-01T08:00:00Z,3.1,101.5,12000,FLT01\n"
+        "TRIAL1,2019-03-01T08:00:01.5+00:00,3.1005,101.5,12010,FLT01\n"
+        "TRIAL2,2019-03-01T09:00:00+01:00,3.2,101.6,,\n")
+
+
+def test_external_reference_reads_a_good_file(tmp_path):
+    path = tmp_path / "gps.csv"
+    path.write_text(GOOD.replace(",,\n", ",,\n").replace("101.6,,", "101.6,5000,"))
+    ref = read_external_reference(path, EPOCH, sigma_m=3.0)
+    assert list(ref["aircraft"]) == ["TRIAL1", "TRIAL1", "TRIAL2"]
+    np.testing.assert_allclose(ref["t_s"], [28800.0, 28801.5, 28800.0])  # 09:00+01:00 is 08:00 UTC
+    np.testing.assert_allclose(ref["altitude_ft"], [12000.0, 12010.0, 5000.0])
+    assert (ref["sigma_m"] == 3.0).all() and (ref["built_by"] == "external").all()
+    assert not ref["self_reference"].any() and ref["callsign"].iloc[0] == "FLT01"
+    assert pd.isna(ref["callsign"].iloc[2])
+
+
+@pytest.mark.parametrize("text, line, reason", [
+    ("", 1, "empty file"),
+    ("aircraft,time,latitude\nA,2019-03-01T08:00:00Z,3\n", 1, "missing column.*longitude.*altitude_ft or"),
+    ("aircraft,time,latitude,longitude,height_m\n", 2, "no data line"),
+    ("aircraft,time,latitude,longitude,height_m\nA,2019-03-01T08:00:00Z,3,101,100\nA,yesterday,3,101,100\n",
+     3, "time 'yesterday' is not an ISO 8601 time"),
+    ("aircraft,time,latitude,longitude,height_m\nA,2019-03-01T08:00:00,3,101,100\n", 2, "has no zone"),
+    ("aircraft,time,latitude,longitude,height_m\nA,2019-03-01T08:00:00Z,93,101,100\n", 2,
+     "latitude '93' is outside -90 to 90"),
+    ("aircraft,time,latitude,longitude,height_m\nA,2019-03-01T08:00:00Z,3,east,100\n", 2,
+     "longitude 'east' is not a number"),
+    ("aircraft,time,latitude,longitude,height_m\nA,2019-03-01T08:00:00Z,3,101\n", 2, "4 field.*header has 5"),
+    ("aircraft,time,latitude,longitude,height_m\n,2019-03-01T08:00:00Z,3,101,100\n", 2, "aircraft is empty"),
+    ("aircraft,time,latitude,longitude,height_m\nA,2019-03-01T08:00:00Z,3,101,\n", 2, "no altitude"),
+    ("aircraft,time,latitude,longitude,height_m\nA,2019-03-01T08:00:02Z,3,101,1\nB,2019-03-01T08:00:00Z,3,101,1\n"
+     "A,2019-03-01T08:00:02Z,3,101,1\n", 4, "aircraft A's time does not increase"),
+    ("aircraft,time,latitude,longitude,height_m\nA,2019-03-01T08:00:00Z,3,101,nan\n", 2, "height_m 'nan'"),
+])
+def test_external_reference_refuses_a_bad_file(tmp_path, text, line, reason):
+    path = tmp_path / "gps.csv"
+    path.write_text(text)
+    with pytest.raises(ExternalReferenceError, match=f"^{re.escape(str(path))}:{line}: .*{reason}"):
+        read_external_reference(path, EPOCH)
+
+
+def test_external_reference_refuses_a_bad_declared_sigma(tmp_path):
+    path = tmp_path / "gps.csv"
+    path.write_text(GOOD)
+    with pytest.raises(ExternalReferenceError, match="gps.csv: declared sigma_m -1.0"):
+        read_external_reference(path, EPOCH, sigma_m=-1.0)
+
+
+def test_external_reference_refuses_unreadable_files(tmp_path):
+    with pytest.raises(ExternalReferenceError, match="missing.csv: cannot read"):
+        read_external_reference(tmp_path / "missing.csv", EPOCH)
+    path = tmp_path / "binary.csv"
+    path.write_bytes(b"aircraft,time\n\xff\xfe\x00")
+    with pytest.raises(ExternalReferenceError, match="binary.csv: cannot read"):
+        read_external_reference(path, EPOCH)
+
+
+def test_an_adsb_sensor_under_test_is_told_its_reference_shares_its_navigation(two_radars):
+    _, meas = two_radars
+    second = meas[meas["sensor_id"] == ADSB].assign(sensor_id="021:0/2").iloc[::7]
+    both = pd.concat([meas, second], ignore_index=True)
+    built = leave_one_out(both, "021:0/2", epoch=EPOCH)
+    assert any("021:0/1" in n and "not independent" in n for n in built.notes)
+    assert not any("not independent" in n for n in leave_one_out(meas, ADSB, epoch=EPOCH).notes)
+
+
+def test_a_naive_epoch_is_refused(two_radars, tmp_path):
+    _, meas = two_radars
+    with pytest.raises(ValueError, match="epoch .*naive"):
+        leave_one_out(meas, RADAR_A, epoch=pd.Timestamp("2019-03-01"))
+    path = tmp_path / "gps.csv"
+    path.write_text(GOOD)
+    with pytest.raises(ValueError, match="epoch .*naive"):
+        read_external_reference(path, pd.Timestamp("2019-03-01"))
