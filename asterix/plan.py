@@ -71,7 +71,6 @@ def plan_recording(buf: np.ndarray, seg: Segments, editions: dict, categories,
     and no category has a lone block, the blocks are not walked: the plan is the one for a recording whose
     decoded blocks all walk (``Plan.assumed``). A decoder that then meets a block that does not walk must
     settle the plan again without it (``read`` does: a walk per block saved, a quarter of decoding)."""
-    asked = editions
     wanted = set(DEFAULT_CATEGORIES if categories is None else categories)
     decoded = [c for c in DECODABLE if c in wanted]
     editions, choice = choose_editions(buf, seg, with_defaults(dict(editions), decoded), categories)
@@ -82,8 +81,10 @@ def plan_recording(buf: np.ndarray, seg: Segments, editions: dict, categories,
     assumed = assume_walking and not (modes == kernel.MODE_CAREFUL).any()
     first = survey(buf, seg, modes, tables, sample=auto, sample_failed=decoded, progress=progress,
                    keep=KEEP_ENTRIES, walk_blocks=not assumed)
-    if assumed and (first.errors or first.lone(walked)):
-        return plan_recording(buf, seg, asked, categories, progress)  # careful framing may be tried
+    if assumed and (first.errors or first.lone(walked)):  # careful framing may be tried: walk after all
+        assumed = False
+        first = survey(buf, seg, modes, tables, sample=auto, sample_failed=decoded, progress=progress,
+                       keep=KEEP_ENTRIES)
     framed = first.framed
     for cat in auto:
         if first.blocks[cat]:
