@@ -43,8 +43,12 @@ SCORECARD: tuple[Field, ...] = (
     Field("checked", "flag", False, "false where the threshold was not checked against the standard's own "
           "text (the preset's `checked`)"),
     Field("notes", "text", False, "why a figure is withheld or inconclusive, what it rests on; may be ''"),
+    Field("parameters", "text", False, "the requirement's parameters as the preset gives them (interval_s = "
+          "5, tolerance_ft = 300); may be ''"),
 )
 SCORECARD_COLUMNS: tuple[str, ...] = tuple(f.name for f in SCORECARD)
+
+MAY_BE_EMPTY = ("notes", "parameters")  # text columns that may hold ''
 
 MAP: tuple[Field, ...] = (
     Field("aircraft", "text", False, "the aircraft's label (call sign, else address or track)"),
@@ -92,7 +96,8 @@ def _column(what: str, frame: pd.DataFrame, field: Field) -> list:
     out = []
     for row, value in enumerate(frame[field.name].tolist()):
         if field.kind in ("text", "verdict"):
-            if not isinstance(value, str) or (not field.nullable and field.name != "notes" and not value):
+            empty_ok = field.nullable or field.name in MAY_BE_EMPTY
+            if not isinstance(value, str) or (not empty_ok and not value):
                 raise _bad(what, field.name, row, value, "is not a non-empty text")
             if field.kind == "verdict" and value not in VERDICTS:
                 raise _bad(what, field.name, row, value, f"is not one of {', '.join(VERDICTS)}")
@@ -136,12 +141,13 @@ def validate_scorecard(frame: pd.DataFrame) -> pd.DataFrame:
         if ident not in CATALOGUE:
             raise _bad(what, "requirement", row, ident, "is not a documented requirement id "
                        "(evaluate.catalogue; docs/methods/evaluate.md)")
-    keys = list(zip(data["sensor"], data["sector"], data["requirement"], data["threshold"], strict=True))
+    keys = list(zip(data["sensor"], data["sector"], data["requirement"], data["parameters"],
+                    data["threshold"], strict=True))
     seen: dict[tuple, int] = {}
     for row, key in enumerate(keys):
         if key in seen:
             raise _bad(what, "requirement", row, key[2], f"repeats row {seen[key]} (same sensor, sector, "
-                       "requirement and threshold)")
+                       "requirement, parameters and threshold)")
         seen[key] = row
     out = pd.DataFrame(data, columns=list(SCORECARD_COLUMNS))
     for name in ("value", "ci_low", "ci_high", "n", "threshold"):

@@ -38,7 +38,8 @@ from msdc.pipeline.report.saving import save
 SCORECARD_SHEET = "Scorecard"
 # the scorecard's printed columns: (schema column or 'unit', header)
 SCORECARD_HEADERS: tuple[tuple[str, str], ...] = (
-    ("sensor", "Sensor"), ("sector", "Sector"), ("requirement", "Requirement"), ("value", "Value"),
+    ("sensor", "Sensor"), ("sector", "Sector"), ("requirement", "Requirement"), ("parameters", "Parameters"),
+    ("value", "Value"),
     ("ci_low", "95 % interval, low"), ("ci_high", "95 % interval, high"), ("unit", "Unit"),
     ("threshold", "Threshold"), ("verdict", "Verdict"), ("n", "Sample size"), ("clause", "Clause"),
     ("checked", "Threshold checked against the standard"), ("notes", "Notes"))
@@ -57,7 +58,8 @@ VERDICT_FONTS: dict[str, Font] = {
 UNCHECKED_NOTE = ("Threshold checked against the standard 'no': the preset marks the figure as not checked "
                   "against the standard's own text (checked = false); it is a configurable default, and a "
                   "pass against it is not compliance with the standard.")
-_WRAP_COLUMNS = {"clause": 28, "notes": 44}  # long text wraps inside these widths (characters)
+# long text wraps inside these widths (characters)
+_WRAP_COLUMNS = {"clause": 28, "notes": 44, "parameters": 22}
 _WRAP = Alignment(wrap_text=True, vertical="top")
 _TOP = Alignment(vertical="top")
 

@@ -33,7 +33,7 @@ CHROMIUM = "/usr/bin/chromium"
 def test_the_schema_is_the_documented_one() -> None:
     """The columns the brief names, in order; the docs page shows the schema's own tables."""
     assert SCORECARD_COLUMNS == ("sensor", "sector", "requirement", "value", "ci_low", "ci_high", "n",
-                                 "threshold", "verdict", "clause", "checked", "notes")
+                                 "threshold", "verdict", "clause", "checked", "notes", "parameters")
     page = (ROOT / "docs" / "guide" / "evaluate-outputs.md").read_text(encoding="utf-8")
     assert schema_markdown() in page
 
@@ -81,31 +81,33 @@ def test_the_workbook_opens_on_the_scorecard_then_the_tables(workbook: Path) -> 
     assert wb.sheetnames == ["Scorecard", "PD per aircraft", "PD per range band"]
     ws = wb["Scorecard"]
     header = [c.value for c in ws[1]]
-    assert header == ["Sensor", "Sector", "Requirement", "Value", "95 % interval, low", "95 % interval, high",
+    assert header == ["Sensor", "Sector", "Requirement", "Parameters", "Value", "95 % interval, low",
+                      "95 % interval, high",
                       "Unit", "Threshold", "Verdict", "Sample size", "Clause",
                       "Threshold checked against the standard", "Notes"]
     rows = [[c.value for c in row] for row in ws.iter_rows(min_row=2, max_row=6)]
     for row, want in zip(rows, ROWS, strict=True):
         sensor, sector, req, value, low, high, n, threshold, verdict, clause, checked, notes = want
         assert row[:3] == [sensor, sector, req]
-        got = [math.nan if v is None else v for v in (row[3], row[4], row[5], row[7])]
+        got = [math.nan if v is None else v for v in (row[4], row[5], row[6], row[8])]
         assert got == pytest.approx([value, low, high, threshold], nan_ok=True)
-        assert row[8:12] == [verdict, n, clause, "yes" if checked else "no"]
-        assert (row[12] or "") == notes
-    assert [r[6] for r in rows] == ["percent", "percent", "percent", "metres", "metres"]
+        assert row[9:13] == [verdict, n, clause, "yes" if checked else "no"]
+        assert (row[13] or "") == notes
+    assert [r[3] for r in rows] == ["interval_s = 5", None, None, None, None]
+    assert [r[7] for r in rows] == ["percent", "percent", "percent", "metres", "metres"]
     # the formula-like note stays text
-    assert ws.cell(6, 13).data_type == "s"
+    assert ws.cell(6, 14).data_type == "s"
 
 
 def test_verdicts_are_coloured_and_unchecked_thresholds_marked(workbook: Path) -> None:
     ws = load_workbook(workbook)["Scorecard"]
-    fills = {ws.cell(r, 9).value: ws.cell(r, 9).fill.fgColor.rgb[-6:] for r in range(2, 7)}
+    fills = {ws.cell(r, 10).value: ws.cell(r, 10).fill.fgColor.rgb[-6:] for r in range(2, 7)}
     assert fills == {"pass": "C6EFCE", "fail": "FFC7CE", "inconclusive": "FFEB9C"}
-    marks = [(ws.cell(r, 12).value, ws.cell(r, 12).font.b, ws.cell(r, 8).font.i) for r in range(2, 7)]
+    marks = [(ws.cell(r, 13).value, ws.cell(r, 13).font.b, ws.cell(r, 9).font.i) for r in range(2, 7)]
     assert marks == [("yes", False, False), ("no", True, True), ("no", True, True), ("yes", False, False),
                      ("no", True, True)]
     # a proportion is shown as a percentage, a distance in metres with one decimal
-    assert ws.cell(2, 4).number_format == "0.00%" and ws.cell(5, 4).number_format == "0.0"
+    assert ws.cell(2, 5).number_format == "0.00%" and ws.cell(5, 5).number_format == "0.0"
     notes = " ".join(str(c.value) for row in ws.iter_rows(min_row=7) for c in row if c.value)
     assert "not checked against the standard's own text" in notes
 
@@ -130,10 +132,11 @@ def test_the_tables_sheets_hold_the_tables(workbook: Path) -> None:
 def test_json_results_have_exactly_the_keys_and_nan_is_null(tmp_path: Path) -> None:
     path = write_evaluation_json(scorecard(), tmp_path / "e.json", tables(), map_points())
     doc = json.loads(path.read_text(encoding="utf-8"))
-    assert [list(r) for r in doc["results"]] == [COLUMNS] * 5
+    assert [list(r) for r in doc["results"]] == [[*COLUMNS, "parameters"]] * 5
     assert doc["results"][0] == {"sensor": "SSR1", "sector": "global", "requirement": "pd", "value": 0.975,
                                  "ci_low": 0.9736, "ci_high": 0.9764, "n": 50000, "threshold": 0.97,
-                                 "verdict": "pass", "clause": "6.3.2.1", "checked": True, "notes": ""}
+                                 "verdict": "pass", "clause": "6.3.2.1", "checked": True, "notes": "",
+                                 "parameters": "interval_s = 5"}
     withheld = doc["results"][4]
     ends = (withheld["value"], withheld["ci_low"], withheld["ci_high"], withheld["n"])
     assert ends == (None, None, None, 0)
@@ -226,7 +229,7 @@ def test_the_html_report_works_offline_in_chromium(tmp_path: Path) -> None:
             rows = page.eval_on_selector_all(
                 "#scorecard tbody tr", "rs => rs.map(r => [...r.cells].map(c => c.textContent))")
             verdict_colour = page.eval_on_selector(
-                "#scorecard tbody tr:nth-child(2) td:nth-child(9)",
+                "#scorecard tbody tr:nth-child(2) td:nth-child(10)",
                 "c => getComputedStyle(c).backgroundColor")
             page_messages = list(messages)  # before the test's own pixel reads (Chromium warns of those)
             blue = page.evaluate(_PAINTED, [0x1F, 0x77, 0xB4])  # IBE3150, the first aircraft by name
@@ -234,17 +237,18 @@ def test_the_html_report_works_offline_in_chromium(tmp_path: Path) -> None:
         finally:
             browser.close()
     assert rows == [
-        ["SSR1", "global", "pd", "97.50 %", "97.36 %", "97.64 %", "percent", "97.00 %", "pass", "50,000",
+        ["SSR1", "global", "pd", "interval_s = 5", "97.50 %", "97.36 %", "97.64 %", "percent", "97.00 %",
+         "pass", "50,000",
          "6.3.2.1", "yes", ""],
-        ["SSR1", "global", "mode3a_correct", "95.00 %", "94.00 %", "96.00 %", "percent", "98.00 %", "fail",
-         "2,000", "COMPASS Radar preset (no clause of the 1997 standard given)", "no", ""],
-        ["SSR1", "FL 100-200", "modec_correct", "96.50 %", "95.50 %", "97.50 %", "percent", "96.00 %",
+        ["SSR1", "global", "mode3a_correct", "", "95.00 %", "94.00 %", "96.00 %", "percent", "98.00 %",
+         "fail", "2,000", "COMPASS Radar preset (no clause of the 1997 standard given)", "no", ""],
+        ["SSR1", "FL 100-200", "modec_correct", "", "96.50 %", "95.50 %", "97.50 %", "percent", "96.00 %",
          "inconclusive", "3,000", "COMPASS Radar preset (no clause of the 1997 standard given)", "no",
          "interval [0.955, 0.975] straddles 0.96"],
-        ["SSR1", "global", "rms_m", "120.5", "110.4", "131.0", "metres", "150.0", "pass", "4,000", "5.2.1",
-         "yes", ""],
-        ["ADSB1", "global", "p95_m", "", "", "", "metres", "50.0", "inconclusive", "0", "ED-129 3.2", "no",
-         "=withheld: no report where the reference's sigma is below the tolerance"],
+        ["SSR1", "global", "rms_m", "", "120.5", "110.4", "131.0", "metres", "150.0", "pass", "4,000",
+         "5.2.1", "yes", ""],
+        ["ADSB1", "global", "p95_m", "", "", "", "", "metres", "50.0", "inconclusive", "0", "ED-129 3.2",
+         "no", "=withheld: no report where the reference's sigma is below the tolerance"],
     ]
     assert verdict_colour == "rgb(255, 199, 206)"  # fail: #ffc7ce
     assert blue > 50 and red > 50, (blue, red)  # both aircraft's lines and dots drawn
