@@ -446,10 +446,10 @@ def _figures_beside(out: Path, sensors: pd.DataFrame, windows: int | None) -> li
 # Decoding the inputs
 
 
-def load_inputs(options: DecodingOptions, checked: Checked, progress: Progress | None
+def load_inputs(options: DecodingOptions, checked: Checked, progress: Progress | None, extra_columns=()
                 ) -> tuple[Loaded, list[str]]:
-    """Decode the inputs for measurements (only the columns build_measurements reads), with the warnings
-    about them."""
+    """Decode the inputs for measurements (only the columns build_measurements reads, and
+    ``extra_columns``), with the warnings about them."""
     import warnings as python_warnings
 
     from msdc.asterix.errors import ContentWarning, EditionWarning, UnreadableInput
@@ -460,7 +460,8 @@ def load_inputs(options: DecodingOptions, checked: Checked, progress: Progress |
             python_warnings.simplefilter("ignore", EditionWarning)  # the inputs are, in loaded.warnings
             python_warnings.simplefilter("ignore", ContentWarning)
             loaded = load(checked.inputs, editions=checked.editions or None, date=options.date,
-                          format=options.format, columns=DECODED_COLUMNS, progress=progress)
+                          format=options.format, columns=(*DECODED_COLUMNS, *extra_columns),
+                          progress=progress)
     except UnreadableInput as exc:
         raise JobError(str(exc), 2) from exc
     spans = [time_spans(rec.frames, loaded.date) for rec in loaded.recordings]
@@ -761,9 +762,32 @@ def tracker_inputs(options: TrackOptions, checked: Checked, progress: Progress |
 def tracker_measurements(loaded, checked: Checked, options: TrackOptions) -> tuple[pd.DataFrame, list[str]]:
     """Measurements of the requested sources (one of them must be present), repeated reports dropped, and
     the warnings about them (stray radar records, coverage, identity)."""
+    meas, warnings = source_measurements(loaded, checked, options)
+    out = tracked_reports(meas, options.max_coast_s)
+    return out, warnings + short_coast(out, options.max_coast_s)
+
+
+def tracked_reports(meas: pd.DataFrame, max_coast_s: float) -> pd.DataFrame:
+    """What the tracker takes of the measurements: reports joined by track number, repeats and reports no
+    identity places on an aircraft left out (counted in attrs)."""
+    from msdc.pipeline.model.dedup import duplicate_mask
+    from msdc.pipeline.track.associate import join_by_track_number
+
+    meas, joined = join_by_track_number(meas, max_gap_s=float(max_coast_s))
+    dup = duplicate_mask(meas.sort_values("time", kind="stable")).reindex(meas.index).to_numpy(bool)
+    known = meas["aircraft_id"].notna().to_numpy(bool)
+    out = meas[~dup & known].reset_index(drop=True)
+    out.attrs["joined_by_track_number"] = joined
+    out.attrs["unidentified"] = int((~dup & ~known).sum())
+    return out
+
+
+def source_measurements(loaded, checked: Checked, options) -> tuple[pd.DataFrame, list[str]]:
+    """Every measurement of the requested sources (``options.sources``; one must be present) after the
+    report selection, repeats and unidentified reports kept, and the warnings about them (stray radar
+    records, coverage, identity)."""
     import warnings as python_warnings
 
-    from msdc.pipeline.model.dedup import duplicate_mask
     from msdc.pipeline.model.measurements import (
         IdentityWarning,
         LeftOutWarning,
@@ -816,15 +840,7 @@ def tracker_measurements(loaded, checked: Checked, options: TrackOptions) -> tup
     if local and local != {"mlat", "smr"} and len(meas):  # CAT010 holds both kinds: the one not asked goes
         kinds = meas["sensor_kind"].astype(str)
         meas = meas[~kinds.isin({"mlat", "smr"} - local).to_numpy(bool)].reset_index(drop=True)
-    from msdc.pipeline.track.associate import join_by_track_number
-
-    meas, joined = join_by_track_number(meas, max_gap_s=float(options.max_coast_s))
-    dup = duplicate_mask(meas.sort_values("time", kind="stable")).reindex(meas.index).to_numpy(bool)
-    known = meas["aircraft_id"].notna().to_numpy(bool)
-    out = meas[~dup & known].reset_index(drop=True)
-    out.attrs["joined_by_track_number"] = joined
-    out.attrs["unidentified"] = int((~dup & ~known).sum())
-    return out, warnings + short_coast(out, options.max_coast_s)
+    return meas, warnings
 
 
 def short_coast(meas: pd.DataFrame, max_coast_s: float) -> list[str]:
