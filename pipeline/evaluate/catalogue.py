@@ -80,7 +80,10 @@ CATALOGUE: dict[str, RequirementType] = {
                                    "that differs from the reference's, of the same reports"),
     "false_reports": _share("reports with no reference aircraft within distance_m",
                             parameters={"distance_m": float}, required=("distance_m",)),
-    "false_reports_per_scan": RequirementType(RATE, "per scan", "false target reports per antenna scan"),
+    "false_reports_per_scan": RequirementType(RATE, "per scan", "false target reports per antenna scan: "
+                                              "reports with no reference aircraft within distance_m (by "
+                                              "default the association gate, 2 NM)",
+                                              parameters={"distance_m": float}),
     "split_reports": _share("updates (scans) of an aircraft holding a split plot: a second report not an "
                             "exact repeat, or one marked split (I048/030 code 3)"),
     "multiple_reports": _share("updates (scans or intervals) of an aircraft holding more than one report "

@@ -12,7 +12,7 @@ import pandas as pd
 from msdc.pipeline.evaluate.coverage import Sensor
 from msdc.pipeline.evaluate.detection import update_period
 from msdc.pipeline.evaluate.outcome import Outcome, rate, share
-from msdc.pipeline.evaluate.reference import associated, parameter
+from msdc.pipeline.evaluate.reference import DEFAULT_GATE_M, associated, parameter
 from msdc.pipeline.evaluate.scans import update_groups
 
 SPLIT_PLOT_CODE = 3  # I048/030: split plot
@@ -48,8 +48,13 @@ def false_reports_per_scan(reports: pd.DataFrame, reference: pd.DataFrame, param
         raise ValueError(f"sensor {sensor.name!r}: no scan period ({said})")
     t = rep["t_s"].to_numpy(float)
     scans = (np.nanmax(t) - np.nanmin(t)) / period if t.size else 0.0
-    return rate("false_reports_per_scan", int(_false(rep, reference, parameters).sum()), scans,
-                (said, f"{scans:.1f} scans"))
+    notes = (said, f"{scans:.1f} scans")
+    if parameter(parameters, "distance_m", None) is None:  # the standard gives none: unassociated is false
+        gate_m = float(parameter(parameters, "gate_m", DEFAULT_GATE_M))
+        parameters = {**(parameters or {}), "distance_m": gate_m}
+        notes = (*notes, f"false: no reference aircraft within {gate_m:g} m (the association gate; no "
+                         "distance_m given)")
+    return rate("false_reports_per_scan", int(_false(rep, reference, parameters).sum()), scans, notes)
 
 
 def update_table(reports: pd.DataFrame, reference: pd.DataFrame, parameters: Mapping | None,

@@ -203,6 +203,12 @@ def test_false_reports_beyond_the_distance():
     assert (out.count, out.n) == (1, 2.0)  # 8 s of reports over a 4 s scan
     # the far plot is associated with nobody, so the aircraft's updates are unchanged
     assert counts(run("pd", rep, ref)) == (3, 3)
+    # without distance_m (the PSR standard gives none) a report is false beyond the association gate, 2 NM
+    # (3704 m): 5 km east is, 3 km east is not
+    assert run("false_reports_per_scan", rep, ref).count == 1
+    near = rep.copy()
+    near.loc[2, "longitude"] -= 2000.0 / 111_320.0
+    assert run("false_reports_per_scan", near, ref).count == 0
     # a report when no reference aircraft is known is false whatever the distance
     late = reports([0, 4, 30])
     assert counts(run("false_reports", late, reference(8), distance_m=1e9)) == (1, 3)
