@@ -67,6 +67,8 @@ COMMAND_HELP = {
     "track": "fused IMM tracks per aircraft from every radar and ADS-B report",
     "conflicts": "conflict probability from IMM-predicted tracks: alerts, losses of separation, warning "
                  "times, false alerts",
+    "evaluate": "every sensor against a surveillance standard's requirements: scorecard with intervals and "
+                "verdicts",
 }
 
 
@@ -306,6 +308,20 @@ def cmd_conflicts(args) -> int:
     return 0
 
 
+def cmd_evaluate(args) -> int:
+    """msdc evaluate: every sensor's performance against a preset's requirements; the exit status."""
+    from msdc.pipeline.jobs import evaluate
+
+    _numba_without_scipy()
+    options = from_args(evaluate.EvaluateOptions, args)
+    with transaction.staged() as tx:
+        result = _run_job("evaluate", evaluate.validate, evaluate.evaluate_job, options, Progress())
+        print(evaluate.text(result))
+        written = evaluate.write_evaluation(result, tx=tx)
+    _list_written("evaluate", written, tx.written, [])
+    return 0
+
+
 def _run_job(name: str, validate, job, options, progress: Progress):
     """Validate (warnings first), run the job, then print its later warnings (its result's, after
     validation's) and the skipped blocks. A job that fails prints the warnings it collected before its error
@@ -327,7 +343,7 @@ def _run_job(name: str, validate, job, options, progress: Progress):
 
 
 COMMANDS = {"decode": cmd_decode, "stats": cmd_stats, "correlate": cmd_correlate, "quality": cmd_quality,
-            "track": cmd_track, "conflicts": cmd_conflicts}
+            "track": cmd_track, "conflicts": cmd_conflicts, "evaluate": cmd_evaluate}
 
 
 def main(argv: list[str] | None = None) -> int:

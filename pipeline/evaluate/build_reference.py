@@ -196,11 +196,14 @@ def _check_sensor(meas: pd.DataFrame, sensor_id: str) -> None:
 
 def leave_one_out(meas: pd.DataFrame, sensor_id: str, *, gates: Gates | None = None,
                   epoch: pd.Timestamp | None = None, step_s: float = 1.0, max_coast_s: float = 60.0,
-                  fallback: bool = True, max_gap_s: float = 30.0) -> BuiltReference:
+                  fallback: bool = True, max_gap_s: float = 30.0, require_present: bool = True
+                  ) -> BuiltReference:
     """The reference for ``sensor_id``: per aircraft, the smoothed IMM track of every other sensor's
     reports (the ADS-B ones after the gates); where none covers an aircraft (no independent sample within
-    max_gap_s), the sensor's own smoothed track, flagged ``self_reference`` (``fallback``)."""
-    _check_sensor(meas, sensor_id)
+    max_gap_s), the sensor's own smoothed track, flagged ``self_reference`` (``fallback``). A sensor absent
+    from ``meas`` is refused unless ``require_present`` is False (its reports may all be unidentified)."""
+    if require_present:
+        _check_sensor(meas, sensor_id)
     builders = (meas["sensor_id"].astype(str) != sensor_id).to_numpy(bool)
     return _reference(meas, builders, sensor_id, gates or Gates(), epoch, step_s, max_coast_s, fallback,
                       max_gap_s)

@@ -446,12 +446,14 @@ def _figures_beside(out: Path, sensors: pd.DataFrame, windows: int | None) -> li
 # Decoding the inputs
 
 
-def load_inputs(options: DecodingOptions, checked: Checked, progress: Progress | None, extra_columns=()
-                ) -> tuple[Loaded, list[str]]:
+def load_inputs(options: DecodingOptions, checked: Checked, progress: Progress | None, extra_columns=(),
+                extra_categories=()) -> tuple[Loaded, list[str]]:
     """Decode the inputs for measurements (only the columns build_measurements reads, and
-    ``extra_columns``), with the warnings about them."""
+    ``extra_columns``; the measurement categories and ``extra_categories``), with the warnings about
+    them."""
     import warnings as python_warnings
 
+    from msdc.asterix.categories import MEASUREMENT_CATEGORIES
     from msdc.asterix.errors import ContentWarning, EditionWarning, UnreadableInput
     from msdc.pipeline.model.measurements import DECODED_COLUMNS, impossible_positions
 
@@ -461,7 +463,8 @@ def load_inputs(options: DecodingOptions, checked: Checked, progress: Progress |
             python_warnings.simplefilter("ignore", ContentWarning)
             loaded = load(checked.inputs, editions=checked.editions or None, date=options.date,
                           format=options.format, columns=(*DECODED_COLUMNS, *extra_columns),
-                          progress=progress)
+                          categories=(sorted({*MEASUREMENT_CATEGORIES, *extra_categories})
+                                      if extra_categories else None), progress=progress)
     except UnreadableInput as exc:
         raise JobError(str(exc), 2) from exc
     spans = [time_spans(rec.frames, loaded.date) for rec in loaded.recordings]

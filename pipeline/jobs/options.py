@@ -700,10 +700,73 @@ class ConflictOptions(SelectionOptions, TrackOptions):
             "on the surface](#aircraft-on-the-surface))")
 
 
+REFERENCE_BUILDS = ("leave-one-out", "adsb")  # evaluate --reference (build_reference)
+SIL_RANGE = (0, 3)
+
+
+@dataclass(frozen=True)
+class EvaluateOptions(ReferenceFilterOptions, DecodingOptions):
+    """Everything ``evaluate_job`` needs; see ``msdc evaluate --help``. Every aircraft is evaluated."""
+
+    sensors: str | None = option(None, "--sensors", required=True, section="selection", help=SENSORS_HELP,
+                                 doc="the sensors' positions and optional coverage limits ([the sensor "
+                                     "file](sensors.md))")
+    preset: str | None = option(None, "--preset", required=True, metavar="NAME|FILE", section="command",
+                                help="the standard's requirements: a shipped preset (eurocontrol-1997-ssr, "
+                                     "ed117a, ...; see docs) or a TOML file of your own",
+                                doc="the standard's requirements: a shipped preset by name or a TOML file "
+                                    "of your own ([Presets](../methods/evaluate.md#presets-the-standards-"
+                                    "as-data))")
+    sectors: str | None = option(None, "--sectors", metavar="FILE", section="command",
+                                 help="GeoJSON sectors (name, optional area and flight-level band): every "
+                                      "figure is also given per sector, and a preset's area requirements on "
+                                      "the sectors of that area",
+                                 doc="GeoJSON sectors: every figure is also given per sector, and a "
+                                     "requirement with an `area` on the sectors of that area ([Evaluation]"
+                                     "(../methods/evaluate.md))")
+    reference: str = option("leave-one-out", "--reference", choices=REFERENCE_BUILDS, section="command",
+                            help="the reference: every other sensor tracked and smoothed (leave-one-out, "
+                                 "default) or ADS-B alone",
+                            doc="`leave-one-out`: per aircraft the smoothed IMM track of every sensor but "
+                                "the one under test; `adsb`: of ADS-B alone ([The reference]"
+                                "(../methods/evaluate.md#how-msdc-builds-the-reference))")
+    reference_file: str | None = option(None, "--reference-file", metavar="CSV", section="command",
+                                        help="an external reference instead (time, latitude, longitude, "
+                                             "altitude per aircraft, e.g. a flight trial's GPS)",
+                                        doc="an external reference instead of a built one ([How msdc builds "
+                                            "the reference](../methods/evaluate.md#how-msdc-builds-the-"
+                                            "reference))")
+    test_sensors: tuple[str, ...] = option(
+        (), "--test", repeat=True, metavar="ID", section="command",
+        help="judge only this sensor (repeatable; as the outputs' sensor_id names it); the others still "
+             "build the reference. Default: every sensor the preset applies to",
+        doc="judge only this sensor (repeatable: `048:20/129`); the others still build the reference. "
+            "Default: every sensor the preset applies to")
+    min_sil: int | None = option(None, "--min-sil", range=SIL_RANGE, section="measurements",
+                                 help="leave ADS-B reports with SIL below N out of the reference",
+                                 doc="leave ADS-B reports with SIL below N out of the reference")
+    output: str | None = option(None, "-o", "--output", section="output",
+                                help="the workbook (.xlsx): the scorecard first, then the tables",
+                                doc="the workbook (`.xlsx`): the scorecard first, then the tables "
+                                    "([Outputs](evaluate-outputs.md))")
+    json: str | None = option(None, "--json", section="output", help="results, tables and map points as JSON",
+                              doc="the results, tables and map points as JSON ([JSON]"
+                                  "(evaluate-outputs.md#json))")
+    html: str | None = option(None, "--html", section="output",
+                              help="one self-contained HTML report (works offline)",
+                              doc="one self-contained HTML report, working offline ([HTML]"
+                                  "(evaluate-outputs.md#html))")
+    adsb_sigma_m: float | None = adsb_sigma_option("; used by the reference",
+                                                   ADSB_SIGMA_DOC.format(used="the reference"))
+    sources: str = "radar,adsb,mlat,smr"  # every sensor kind is read
+    max_coast_s: float = 60.0  # the reference tracker's (build_reference)
+
+
 # the options of each command, in the order msdc --help lists the commands
 COMMAND_OPTIONS: dict[str, type] = {"decode": DecodeOptions, "stats": StatsOptions,
                                     "correlate": CorrelateOptions, "quality": QualityOptions,
-                                    "track": TrackOptions, "conflicts": ConflictOptions}
+                                    "track": TrackOptions, "conflicts": ConflictOptions,
+                                    "evaluate": EvaluateOptions}
 
 
 # ---------------------------------------------------------------------------------------------------------

@@ -63,6 +63,11 @@ EXPECTED = {
                   "--min-fl": "min_fl", "--exclude-mode-a-only": "exclude_mode_a_only",
                   "--exclude-codes": "exclude_codes",
                   **READING},
+    "evaluate": {"INPUT": "inputs", "--sensors": "sensors", "--preset": "preset", "--sectors": "sectors",
+                 "--reference": "reference", "--reference-file": "reference_file", "--test": "test_sensors",
+                 "--drop-jumps": "drop_jumps", "--min-nic": "min_nic", "--min-nacp": "min_nacp",
+                 "--min-sil": "min_sil", "--output": "output", "--json": "json", "--html": "html",
+                 "--adsb-sigma": "adsb_sigma_m", **READING},
 }
 
 

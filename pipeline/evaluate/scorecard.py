@@ -1,0 +1,212 @@
+"""One sensor evaluated against a preset: each requirement measured (globally, per sector of the sector file,
+and on its preset area) and judged into the scorecard's rows (scorecard_schema.SCORECARD) with its verdict.
+
+Sectors are regions: a name, an optional preset area and a mask function of (latitude, longitude, flight
+level). A report belongs to a region where its reference aircraft is inside it at the report's time (an
+unassociated report: where the report itself is); the reference is cut to its samples inside the region,
+so no update is expected of an aircraft outside it."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+import pandas as pd
+
+from msdc.pipeline.evaluate.catalogue import CATALOGUE, ERROR, SIGNED
+from msdc.pipeline.evaluate.coverage import Sensor
+from msdc.pipeline.evaluate.outcome import Outcome, withheld
+from msdc.pipeline.evaluate.presets import Preset, Requirement
+from msdc.pipeline.evaluate.reference import (
+    DEFAULT_REFERENCE_GAP_S,
+    associate,
+    check_reference,
+    trajectories,
+)
+from msdc.pipeline.evaluate.reference_gates import sigma_gate
+from msdc.pipeline.evaluate.requirements import REQUIREMENTS
+from msdc.pipeline.evaluate.statistics import magnitude_interval, verdict
+
+GLOBAL = "global"
+Mask = Callable[[np.ndarray, np.ndarray, np.ndarray], np.ndarray]  # (lat deg, lon deg, FL) -> inside
+
+
+@dataclass(frozen=True)
+class Region:
+    """Where figures are cut: a name (the scorecard's ``sector``), the preset area it belongs to (None: any
+    requirement without an area is also given per region) and its mask."""
+
+    name: str
+    mask: Mask
+    area: str | None = None
+
+
+@dataclass
+class SensorScore:
+    """The scorecard rows of one sensor, the outcomes they came from (per region name and requirement) and
+    the notes on what was done."""
+
+    sensor: str
+    rows: list[dict] = field(default_factory=list)
+    outcomes: dict[tuple[str, str, int], Outcome] = field(default_factory=dict)
+    notes: list[str] = field(default_factory=list)
+
+
+def _is_position(requirement: Requirement) -> bool:
+    """Whether the requirement judges positions against a tolerance in metres (the sigma gate applies)."""
+    kind = CATALOGUE[requirement.id]
+    return kind.kind == ERROR and kind.unit == "m" and requirement.id not in ("range_sd_m",)
+
+
+def measure(requirement: Requirement, reports: pd.DataFrame, reference: pd.DataFrame,
+            sensor: Sensor) -> Outcome:
+    """The requirement's outcome; a position requirement judges only the reports the sigma gate passes (its
+    counts in the notes); a requirement the data cannot support is withheld with the reason."""
+    function = REQUIREMENTS.get(requirement.id)
+    if function is None:
+        return withheld(requirement.id, "not measured by this version of msdc")
+    params = dict(requirement.parameters)
+    notes: tuple[str, ...] = ()
+    rep = reports
+    if _is_position(requirement) and len(reports) and len(reference):
+        gate = sigma_gate(reports, reference, requirement.threshold, params)
+        c = gate.counts
+        rep = reports[gate.judged].reset_index(drop=True)
+        left = {k: v for k, v in c.items() if k not in ("reports", "judged") and v}
+        notes = (f"sigma gate at {requirement.threshold:g} m: {c['judged']} of {c['reports']} reports judged"
+                 + (" (" + ", ".join(f"{k.replace('_', ' ')} {v}" for k, v in left.items()) + ")"
+                    if left else ""),)
+    try:
+        out = function(rep, reference, params, sensor)
+    except ValueError as exc:
+        return withheld(requirement.id, str(exc))
+    return Outcome(out.requirement, out.value, out.ci_low, out.ci_high, out.n, out.count,
+                   (*notes, *out.notes), out.per_aircraft)
+
+
+def parameters_text(requirement: Requirement) -> str:
+    """The requirement's parameters as the preset gives them: 'interval_s = 5, scope = global'."""
+    return ", ".join(f"{k} = {v:g}" if isinstance(v, float) else f"{k} = {v}"
+                     for k, v in requirement.parameters.items())
+
+
+def judge(outcome: Outcome, requirement: Requirement, preset: Preset, sensor_id: str, sector: str) -> dict:
+    """The scorecard row of one outcome: the verdict from its interval (a signed bias by its magnitude)
+    against the threshold, with the preset's minimum sample."""
+    low, high = outcome.ci_low, outcome.ci_high
+    notes = list(outcome.notes)
+    if CATALOGUE[requirement.id].kind == SIGNED and not math.isnan(low):
+        low, high = magnitude_interval(low, high)
+        notes.append(f"judged by its magnitude, in [{low:.4g}, {high:.4g}]")
+    n = outcome.n
+    v = verdict(low, high, requirement.threshold, requirement.direction,
+                int(n) if math.isfinite(n) else None, preset.minimum_sample(requirement))
+    if v.reason and (not math.isnan(outcome.value) or not notes):
+        notes.append(v.reason)
+    if not requirement.checked:
+        notes.append("threshold not checked against the standard's text")
+    return {"sensor": sensor_id, "sector": sector, "requirement": requirement.id,
+            "parameters": parameters_text(requirement), "value": float(outcome.value),
+            "ci_low": float(outcome.ci_low), "ci_high": float(outcome.ci_high),
+            "n": float(n) if math.isfinite(n) else 0.0, "threshold": float(requirement.threshold),
+            "verdict": v.verdict, "clause": requirement.clause, "checked": bool(requirement.checked),
+            "notes": "; ".join(dict.fromkeys(x for x in notes if x))}
+
+
+def reference_positions(reports: pd.DataFrame, reference: pd.DataFrame,
+                        max_gap_s: float = DEFAULT_REFERENCE_GAP_S
+                        ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Per associated report, its reference aircraft's latitude, longitude and flight level at the report's
+    time (NaN where not associated or the reference does not know)."""
+    n = len(reports)
+    lat, lon, fl = np.full(n, np.nan), np.full(n, np.nan), np.full(n, np.nan)
+    t, idx = reports["t_s"].to_numpy(float), reports["ref_index"].to_numpy()
+    for k, tr in enumerate(trajectories(check_reference(reference))):
+        rows = np.flatnonzero(idx == k)
+        if rows.size:
+            a, b, _, alt = tr.at(t[rows], max_gap_s)
+            lat[rows], lon[rows], fl[rows] = a, b, alt / 100.0
+    return lat, lon, fl
+
+
+def _report_fl(reports: pd.DataFrame) -> np.ndarray:
+    """The reports' own flight levels (NaN where absent)."""
+    if "flight_level" not in reports.columns:
+        return np.full(len(reports), np.nan)
+    return pd.to_numeric(reports["flight_level"], errors="coerce").to_numpy(float)
+
+
+def cut(reports: pd.DataFrame, reference: pd.DataFrame, masks: Sequence[Mask],
+        where: tuple[np.ndarray, np.ndarray, np.ndarray]) -> tuple[pd.DataFrame, pd.DataFrame]:
+    """The associated reports and the reference inside the union of ``masks``: reports by ``where`` (their
+    reference position, else their own), the reference by its samples; each report's ``ref_index``
+    renumbered to the cut reference's aircraft (a report whose aircraft has no sample inside is left out)."""
+    lat, lon, fl = where
+
+    def inside(a, b, c) -> np.ndarray:
+        keep = np.zeros(len(a), bool)
+        for m in masks:
+            keep |= np.asarray(m(a, b, c), bool)
+        return keep
+
+    ref = check_reference(reference)
+    alt = ref["altitude_ft"].to_numpy(float) / 100.0 if "altitude_ft" in ref else np.full(len(ref), np.nan)
+    ref_in = ref[inside(ref["latitude"].to_numpy(float), ref["longitude"].to_numpy(float), alt)]
+    ref_in = ref_in.reset_index(drop=True)
+    rep_in = reports[inside(lat, lon, fl)]
+    labels = np.array(sorted(ref_in["aircraft"].unique()), dtype=object)
+    linked = rep_in["ref_index"].to_numpy() >= 0
+    names = rep_in["ref_aircraft"].to_numpy(object)
+    pos = np.full(len(rep_in), -1, np.int64)
+    if labels.size and linked.any():
+        found = np.searchsorted(labels, names[linked])
+        found = np.clip(found, 0, labels.size - 1)
+        pos[linked] = np.where(labels[found] == names[linked], found, -2)
+    rep_in = rep_in.assign(ref_index=pos)
+    rep_in = rep_in[pos != -2].reset_index(drop=True)
+    return rep_in, ref_in
+
+
+def _regions_for(requirement: Requirement, regions: Sequence[Region]) -> list[tuple[str, list[Mask]]]:
+    """The (sector name, masks) a requirement is measured on: its preset area (the union of the regions of
+    that area) when it has one; else global and every region."""
+    if requirement.area is not None:
+        masks = [r.mask for r in regions if r.area == requirement.area]
+        return [(requirement.area, masks)] if masks else []
+    return [(GLOBAL, [])] + [(r.name, [r.mask]) for r in regions]
+
+
+def score_sensor(preset: Preset, sensor_id: str, reports: pd.DataFrame, reference: pd.DataFrame,
+                 sensor: Sensor, regions: Sequence[Region] = ()) -> SensorScore:
+    """Every requirement of the preset measured on the sensor's reports against the reference, globally and
+    per region, judged into scorecard rows."""
+    score = SensorScore(sensor_id)
+    rep = associate(reports, reference) if len(reference) else reports.assign(
+        ref_index=-1, ref_aircraft=None, ref_distance_m=np.inf)
+    cuts: dict[str, tuple[pd.DataFrame, pd.DataFrame]] = {GLOBAL: (rep, reference)}
+    where = None
+    for i, req in enumerate(preset.requirements):
+        spots = _regions_for(req, regions)
+        if not spots:
+            score.notes.append(f"{req.id} on area {req.area!r}: no sector of that area in the sector file, "
+                               "not measured")
+            continue
+        for name, masks in spots:
+            if name not in cuts:
+                if where is None:
+                    lat, lon, fl = reference_positions(rep, reference)
+                    own = ~np.isfinite(lat)
+                    where = (np.where(own, rep["latitude"].to_numpy(float), lat),
+                             np.where(own, rep["longitude"].to_numpy(float), lon),
+                             np.where(own, _report_fl(rep), fl))
+                cuts[name] = cut(rep, reference, masks, where)
+            r, ref = cuts[name]
+            if r.empty and ref.empty:
+                outcome = withheld(req.id, f"no report and no reference inside {name!r}")
+            else:
+                outcome = measure(req, r, ref, sensor)
+            score.outcomes[(name, req.id, i)] = outcome
+            score.rows.append(judge(outcome, req, preset, sensor_id, name))
+    return score

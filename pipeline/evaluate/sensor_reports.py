@@ -1,0 +1,88 @@
+"""The reports of a sensor under test, as the requirement functions take them: its measurement rows (every
+report, identified or not, repeats kept: a repeat is the sensor's own doing) on the reference's clock
+(``t_s``), with the radar's code validity and warning bits joined from the decoded CAT048 frame; the
+evaluation's Sensor of each (site, coverage limits, north markers) and the preset types a sensor kind
+can be judged by."""
+
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+
+from msdc.pipeline.evaluate.coverage import Sensor, sensor_from_entry
+from msdc.pipeline.model.time import absolute_time, seconds_since
+
+# decoded CAT048 columns the requirements read besides the measurements: Mode 3/A and Mode C validity and
+# garble bits, I048/030 warning codes (split plots), the detection type (PSR/SSR)
+RADAR_EXTRA_COLUMNS = ("mode3a_v", "mode3a_g", "flight_level_v", "flight_level_g", "warning_codes", "typ")
+# measurement columns the requirements read
+REPORT_COLUMNS = ("sensor_id", "sensor_kind", "aircraft_id", "latitude", "longitude", "height_m",
+                  "flight_level", "mode3a", "address", "callsign", "track_number", "ground_speed_kt",
+                  "heading_deg", "on_ground", "rho_nm", "theta_deg", "file", "offset")
+# the preset sensor types (presets.SENSOR_TYPES) each measurement sensor kind may be judged by
+KIND_TYPES: dict[str, tuple[str, ...]] = {"radar": ("ssr", "mode_s", "psr"), "adsb": ("adsb",),
+                                          "mlat": ("mlat", "wam"), "smr": ("smr",)}
+SERVICE_CATEGORIES = (34, 2)  # radar service messages: the north markers give the scan period
+NORTH_MARKER = 1  # CAT034 message type 1 (CAT002: 1 too): north marker
+
+
+def judged_by(kind: str, sensor_types: tuple[str, ...]) -> bool:
+    """Whether a preset for these sensor types applies to a sensor of this measurement kind."""
+    return bool(set(KIND_TYPES.get(kind, ())) & set(sensor_types))
+
+
+def sensor_reports(meas: pd.DataFrame, sensor_id: str, epoch: pd.Timestamp,
+                   radar_frame: pd.DataFrame | None = None) -> pd.DataFrame:
+    """The sensor's reports with ``t_s`` (seconds from ``epoch``) and, for a radar, RADAR_EXTRA_COLUMNS
+    joined from its decoded frame by file and offset (absent columns stay absent: then validity is not
+    judged)."""
+    rows = meas[(meas["sensor_id"].astype(str) == sensor_id).to_numpy(bool)]
+    cols = [c for c in REPORT_COLUMNS if c in rows.columns]
+    out = pd.DataFrame({c: rows[c].to_numpy() if c != "aircraft_id" else rows[c].astype(object).to_numpy()
+                        for c in cols})
+    for c in ("mode3a", "address", "callsign", "sensor_id", "sensor_kind", "file"):
+        if c in out:
+            out[c] = out[c].astype(object).where(out[c].notna(), None)
+    out.insert(0, "t_s", seconds_since(rows["time"], epoch))
+    extra = [c for c in RADAR_EXTRA_COLUMNS if radar_frame is not None and c in radar_frame.columns]
+    if extra and {"file", "offset"} <= set(out.columns) and {"file", "offset"} <= set(radar_frame.columns):
+        right = radar_frame[["file", "offset", *extra]].copy()
+        right["file"] = right["file"].astype(str)
+        right = right.drop_duplicates(["file", "offset"])
+        left = out.assign(file=out["file"].astype(str), offset=out["offset"].astype("int64"))
+        joined = left.merge(right.assign(offset=right["offset"].astype("int64")), on=["file", "offset"],
+                            how="left", sort=False)
+        for c in extra:
+            out[c] = joined[c].to_numpy()
+    return out.sort_values("t_s", kind="stable", ignore_index=True)
+
+
+def north_markers_s(frames: dict[int, pd.DataFrame], sac: int, sic: int, date, epoch: pd.Timestamp
+                    ) -> np.ndarray | None:
+    """The radar's north-marker times (seconds from ``epoch``) from CAT034 (else CAT002) service messages;
+    None when the inputs hold none."""
+    for cat in (34, 2):
+        f = frames.get(cat)
+        if f is None or not len(f) or "message_type" not in f.columns:
+            continue
+        mine = f[(pd.to_numeric(f["sac"], errors="coerce") == sac).to_numpy(bool)
+                 & (pd.to_numeric(f["sic"], errors="coerce") == sic).to_numpy(bool)
+                 & (pd.to_numeric(f["message_type"], errors="coerce") == NORTH_MARKER).to_numpy(bool)]
+        if len(mine) >= 2:
+            t = seconds_since(absolute_time(mine, date), epoch)
+            t = np.sort(t[np.isfinite(t)])
+            return t if t.size >= 2 else None
+    return None
+
+
+def evaluation_sensor(sensor_id: str, reports: pd.DataFrame, entry: dict | None,
+                      north_markers: np.ndarray | None = None) -> tuple[Sensor, str]:
+    """The evaluation's Sensor: the sensor file's site and coverage limits when it declares the sensor,
+    else (ADS-B, no site) a point at the middle of its reports, with a note saying so."""
+    if entry is not None:
+        return sensor_from_entry({**entry, "name": sensor_id}, north_markers), ""
+    lat = float(np.nanmedian(reports["latitude"].to_numpy(float))) if len(reports) else 0.0
+    lon = float(np.nanmedian(reports["longitude"].to_numpy(float))) if len(reports) else 0.0
+    note = (f"{sensor_id} has no site in the sensor file: its coverage is estimated around the middle of its "
+            f"reports ({lat:.4f}, {lon:.4f})")
+    return Sensor(lat, lon, 0.0, name=sensor_id), note

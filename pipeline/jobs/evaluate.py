@@ -1,0 +1,421 @@
+"""The evaluate job (``msdc evaluate``): every sensor the preset applies to, judged against the standard's
+requirements on a reference msdc builds itself (leave-one-out, ADS-B only) or one given as a file.
+
+``validate`` checks every option, the preset, the sectors and the outputs before anything is decoded;
+``evaluate_job`` decodes the inputs, builds the measurements and, per sensor under test, its reference, its
+reports and its scorecard rows, per-aircraft and per-bin tables, coverage grids and map points;
+``write_evaluation`` writes the workbook, JSON and HTML, all or nothing; ``text`` is the terminal's summary.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from msdc.pipeline.jobs.common import (
+    Checked,
+    JobError,
+    carrying,
+    check_decoding,
+    load_inputs,
+    output_path,
+    run_parameters,
+    sensor_table,
+    sensors_path,
+    source_measurements,
+    spare_inputs,
+    tracked_reports,
+)
+from msdc.pipeline.jobs.options import EvaluateOptions, OptionError, check_declared
+from msdc.pipeline.model.load import Loaded
+from msdc.pipeline.progress import Progress
+from msdc.pipeline.report.transaction import OutputTransaction, staged
+
+MAP_POINTS_PER_SENSOR = 20_000  # the HTML map thins each sensor's reports (and reference) to about this many
+
+
+@dataclass
+class EvaluateChecked(Checked):
+    """Checked options, with the preset, the sectors (as scorecard regions) and the HTML output."""
+
+    preset: object = None
+    regions: list = field(default_factory=list)
+    html: Path | None = None
+    tests: tuple = ()
+
+
+def validate(options: EvaluateOptions) -> EvaluateChecked:
+    """Check every option, the sensor file, the preset, the sectors and the output paths, before any
+    decoding; OptionError if bad."""
+    from msdc.pipeline.evaluate.presets import load_preset
+    from msdc.pipeline.model.report_selection import parse_sensor
+
+    check_declared(options)
+    base = check_decoding(options)
+    checked = EvaluateChecked(**vars(base))
+    checked.output = output_path("-o", options.output, (".xlsx",))
+    checked.json = output_path("--json", options.json, (".json",))
+    checked.html = output_path("--html", options.html, (".html", ".htm"))
+    outs = [(f"-o {checked.output}", checked.output), (f"--json {checked.json}", checked.json),
+            (f"--html {checked.html}", checked.html)]
+    given = [p for _, p in outs if p is not None]
+    if len({str(p.resolve()) for p in given}) < len(given):
+        raise OptionError("-o, --json and --html name the same file")
+    spare_inputs(options.inputs, outs)
+    checked.sensors = sensor_table(options.sensors)
+    try:
+        checked.preset = load_preset(options.preset)
+    except ValueError as exc:
+        raise OptionError(f"--preset: {exc}") from None
+    checked.regions = _regions(options.sectors)
+    if options.reference_file is not None:
+        path = Path(options.reference_file)
+        if not path.is_file():
+            raise OptionError(f"--reference-file {path}: {'not a file' if path.exists() else 'no such file'}")
+    try:
+        checked.tests = tuple(parse_sensor(t, "--test") for t in options.test_sensors)
+    except ValueError as exc:
+        raise OptionError(str(exc)) from None
+    return checked
+
+
+def _regions(path: str | None) -> list:
+    """The sector file's sectors as scorecard regions ([] without one); OptionError naming the file."""
+    if path is None:
+        return []
+    from msdc.pipeline.evaluate.scorecard import Region
+    from msdc.pipeline.evaluate.sectors import read_sectors, sector_mask
+
+    try:
+        sectors = read_sectors(path)
+    except ValueError as exc:
+        raise OptionError(f"--sectors: {exc}") from None
+
+    def mask(sector):
+        return lambda lat, lon, fl: sector_mask(sector, lat, lon, fl)
+
+    return [Region(s.name, mask(s), s.area) for s in sectors]
+
+
+@dataclass
+class SensorResult:
+    """What one sensor under test gave: its scorecard rows, tables, coverage grids and map points."""
+
+    sensor: str
+    kind: str
+    rows: list[dict]
+    per_aircraft: pd.DataFrame
+    bands: dict[str, pd.DataFrame]
+    polar: pd.DataFrame | None
+    vertical: pd.DataFrame | None
+    map_points: pd.DataFrame
+    notes: list[str]
+
+
+@dataclass
+class EvaluateResult:
+    """The evaluation of a run: the scorecard, the tables, the map points and what they rest on."""
+
+    options: EvaluateOptions
+    checked: EvaluateChecked
+    scorecard: pd.DataFrame
+    tables: dict[str, pd.DataFrame]
+    map_points: pd.DataFrame | None
+    sensors: list[SensorResult]
+    parameters: dict
+    loaded: Loaded
+    warnings: list[str] = field(default_factory=list)
+
+
+def _under_test(meas: pd.DataFrame, preset, tests: tuple) -> tuple[list[tuple[str, str]], list[str]]:
+    """The (sensor id, kind) pairs to judge: those of a kind the preset applies to, narrowed by --test."""
+    from msdc.pipeline.evaluate.sensor_reports import judged_by
+    from msdc.pipeline.model.report_selection import sensor_parts
+
+    pairs = meas[["sensor_id", "sensor_kind"]].astype(str).drop_duplicates().sort_values("sensor_id")
+    present = list(zip(pairs["sensor_id"], pairs["sensor_kind"], strict=True))
+    fits = [(s, k) for s, k in present if judged_by(k, preset.sensor_types)]
+    notes = []
+    if tests:
+        parts = sensor_parts([s for s, _ in fits])
+        keep = np.zeros(len(fits), bool)
+        for ref in tests:
+            hit = np.array([ref.matches(int(c), int(a), int(b), k) for c, a, b, k in parts.itertuples(
+                index=False)], dtype=bool)
+            if not hit.any():
+                raise JobError(f"--test {ref.text}: no sensor of a kind the preset {preset.name} applies to "
+                               f"({', '.join(preset.sensor_types)}) has that id in the inputs (present: "
+                               f"{', '.join(f'{s} ({k})' for s, k in present) or 'none'})")
+            keep |= hit
+        fits = [f for f, k in zip(fits, keep, strict=True) if k]
+    if not fits:
+        raise JobError(f"no sensor in the inputs is of a kind the preset {preset.name} applies to "
+                       f"({', '.join(preset.sensor_types)}); present: "
+                       f"{', '.join(f'{s} ({k})' for s, k in present) or 'none'}")
+    left = [f"{s} ({k})" for s, k in present if (s, k) not in fits]
+    if left:
+        notes.append(f"not judged by {preset.name}: {', '.join(left)} (they still build the reference)")
+    return fits, notes
+
+
+def _entry(sensors: pd.DataFrame, sensor_id: str) -> dict | None:
+    """The sensor file's row of a sensor (by category, SAC and SIC), or None (ADS-B has none)."""
+    from msdc.pipeline.model.report_selection import sensor_parts
+
+    part = sensor_parts([sensor_id]).iloc[0]
+    if sensors is None or part["sac"] < 0:
+        return None
+    hit = sensors[(sensors["sac"] == part["sac"]) & (sensors["sic"] == part["sic"])
+                  & (sensors["category"] == part["category"])]
+    if part["kind"] is not None and "kind" in hit:
+        hit = hit[hit["kind"].astype(str) == part["kind"]]
+    return hit.iloc[0].to_dict() if len(hit) else None
+
+
+def _reference(options: EvaluateOptions, builders: pd.DataFrame, sensor_id: str, gates, epoch,
+               external: pd.DataFrame | None):
+    """The reference for one sensor under test: external, ADS-B only or leave-one-out."""
+    from msdc.pipeline.evaluate.build_reference import BuiltReference, adsb_reference, leave_one_out
+
+    if external is not None:
+        return BuiltReference(external, {}, epoch, [f"external reference {options.reference_file}"])
+    present = sensor_id in set(builders["sensor_id"].astype(str))
+    if options.reference == "adsb":
+        return adsb_reference(builders, sensor_id if present else None, gates=gates, epoch=epoch,
+                              max_coast_s=options.max_coast_s)
+    return leave_one_out(builders, sensor_id, gates=gates, epoch=epoch, max_coast_s=options.max_coast_s,
+                         require_present=False)
+
+
+def _per_aircraft(sensor_id: str, reports: pd.DataFrame, reference: pd.DataFrame, pd_outcome) -> pd.DataFrame:
+    """One row per reference aircraft: the sensor's associated reports, its expected and detected updates
+    (the first pd requirement's) with PD and interval, the RMS position error and whether the reference
+    was the sensor's own track."""
+    from msdc.pipeline.evaluate.accuracy import position_errors
+    from msdc.pipeline.evaluate.reference import associated
+
+    rep = associated(reports, reference, None)
+    counts = rep[rep["ref_index"] >= 0].groupby("ref_aircraft").size().rename("reports")
+    ref = reference.groupby("aircraft").agg(built_by=("built_by", lambda s: " | ".join(sorted(set(map(
+        str, s))))), self_reference_share=("self_reference", "mean"))
+    table = ref.join(counts, how="left")
+    table["reports"] = table["reports"].fillna(0).astype(int)
+    if pd_outcome is not None and pd_outcome.per_aircraft is not None and len(pd_outcome.per_aircraft):
+        per = pd_outcome.per_aircraft.set_index("aircraft")[["expected", "detected", "pd", "ci_low",
+                                                             "ci_high"]]
+        table = table.join(per.rename(columns={"ci_low": "pd_ci_low", "ci_high": "pd_ci_high"}), how="left")
+    errors = position_errors(rep, reference)
+    if len(errors):
+        rms = errors.groupby("aircraft")["error_m"].agg(lambda e: float(np.sqrt(np.mean(np.square(e)))))
+        table = table.join(rms.rename("rms_error_m"), how="left")
+        table = table.join(errors.groupby("aircraft").size().rename("errors_judged"), how="left")
+    table.index.name = "aircraft"
+    out = table.reset_index()
+    out.insert(0, "sensor", sensor_id)
+    return out
+
+
+def _thinned(frame: pd.DataFrame, limit: int) -> pd.DataFrame:
+    """Every k-th row so that about ``limit`` remain (all when fewer)."""
+    step = max(1, math.ceil(len(frame) / limit)) if limit > 0 else 1
+    return frame.iloc[::step]
+
+
+def _map_points(sensor_id: str, reports: pd.DataFrame, reference: pd.DataFrame) -> pd.DataFrame:
+    """The associated reports and the reference, per aircraft, thinned for the HTML map."""
+    from msdc.pipeline.evaluate.reference import associated
+
+    rep = associated(reports, reference, None)
+    rep = _thinned(rep[rep["ref_index"] >= 0], MAP_POINTS_PER_SENSOR)
+    ref = _thinned(reference, MAP_POINTS_PER_SENSOR)
+    parts = [pd.DataFrame({"aircraft": rep["ref_aircraft"].astype(str).to_numpy(object), "source": "report",
+                           "sensor": sensor_id, "latitude": rep["latitude"].to_numpy(float),
+                           "longitude": rep["longitude"].to_numpy(float)}),
+             pd.DataFrame({"aircraft": ref["aircraft"].astype(str).to_numpy(object), "source": "reference",
+                           "sensor": f"reference for {sensor_id}",
+                           "latitude": ref["latitude"].to_numpy(float),
+                           "longitude": ref["longitude"].to_numpy(float)})]
+    out = pd.concat(parts, ignore_index=True)
+    ok = np.isfinite(out["latitude"].to_numpy(float)) & np.isfinite(out["longitude"].to_numpy(float))
+    return out[ok].reset_index(drop=True)
+
+
+def _coverage(reports: pd.DataFrame, reference: pd.DataFrame, sensor, preset) -> tuple[dict, object, object]:
+    """PD per band (range, azimuth, flight level, surface/airborne) and on the polar and vertical grids,
+    from the expected updates of the scan (the preset's first pd parameters without its interval)."""
+    from msdc.pipeline.evaluate.bins import detection_bands, polar_grid, vertical_grid
+    from msdc.pipeline.evaluate.detection import expected_updates
+
+    params = next((dict(r.parameters) for r in preset.requirements if r.id == "pd"), {})
+    try:
+        table, _, _ = expected_updates(reports, reference, params, sensor)
+    except ValueError:
+        return {}, None, None
+    if table.empty:
+        return {}, None, None
+    return detection_bands(table, reference), polar_grid(table), vertical_grid(table)
+
+
+def _sensor(options, checked, loaded, meas, builders, sensor_id, kind, gates, epoch, external
+            ) -> SensorResult:
+    """Everything about one sensor under test."""
+    from msdc.pipeline.evaluate.scorecard import score_sensor
+    from msdc.pipeline.evaluate.sensor_reports import evaluation_sensor, north_markers_s, sensor_reports
+    from msdc.pipeline.model.report_selection import sensor_parts
+
+    built = _reference(options, builders, sensor_id, gates, epoch, external)
+    reference = built.frame
+    radar = loaded.frames.get(48) if kind == "radar" else None
+    reports = sensor_reports(meas, sensor_id, epoch, radar)
+    part = sensor_parts([sensor_id]).iloc[0]
+    markers = (north_markers_s(loaded.frames, int(part["sac"]), int(part["sic"]), loaded.date, epoch)
+               if kind == "radar" else None)
+    sensor, said = evaluation_sensor(sensor_id, reports, _entry(checked.sensors, sensor_id), markers)
+    notes = [n for n in (said, *built.notes) if n]
+    if built.gate_counts and any(built.gate_counts.values()):
+        notes.append("reference gates removed " + ", ".join(f"{k} {v}" for k, v in built.gate_counts.items()
+                                                            if v))
+    score = score_sensor(checked.preset, sensor_id, reports, reference, sensor, checked.regions)
+    notes += score.notes
+    pd_outcome = next((o for (name, rid, _), o in score.outcomes.items() if rid == "pd" and name == "global"),
+                      None)
+    bands, polar, vertical = ({}, None, None) if reference.empty else _coverage(reports, reference, sensor,
+                                                                                 checked.preset)
+    per = _per_aircraft(sensor_id, reports, reference, pd_outcome) if len(reference) else pd.DataFrame()
+    points = _map_points(sensor_id, reports, reference) if len(reference) else pd.DataFrame()
+    return SensorResult(sensor_id, kind, score.rows, per, bands, polar, vertical, points, notes)
+
+
+def evaluate_job(options: EvaluateOptions, *, progress: Progress | None = None,
+                 checked: EvaluateChecked | None = None, command: str = "evaluate") -> EvaluateResult:
+    """Validate, decode, build the measurements, then evaluate every sensor under test."""
+    from msdc.pipeline.evaluate.reference_gates import Gates
+    from msdc.pipeline.evaluate.sensor_reports import RADAR_EXTRA_COLUMNS, SERVICE_CATEGORIES
+    from msdc.pipeline.model.site_check import site_warnings
+    from msdc.pipeline.model.time import midnight
+
+    started = time.monotonic()
+    checked = checked or validate(options)
+    with carrying(checked.warnings) as warnings:
+        if progress:
+            progress.stage("Processing data files")
+        loaded, said = load_inputs(options, checked, progress, extra_columns=RADAR_EXTRA_COLUMNS,
+                                   extra_categories=SERVICE_CATEGORIES)
+        warnings += said
+        if progress:
+            progress.stage("Evaluating")
+        meas, said = source_measurements(loaded, checked, options)
+        warnings += said
+        warnings += site_warnings(meas, checked.sensors, str(sensors_path(options)))
+        if meas.empty:
+            raise JobError("no report in the inputs to evaluate")
+        tests, notes = _under_test(meas, checked.preset, checked.tests)
+        builders = tracked_reports(meas, options.max_coast_s)
+        epoch = midnight(meas["time"])
+        external = _external(options, epoch)
+        gates = Gates(min_nacp=options.min_nacp, min_nic=options.min_nic, min_sil=options.min_sil,
+                      drop_jumps=options.drop_jumps)
+        results = []
+        for i, (sensor_id, kind) in enumerate(tests):
+            if progress:
+                progress.step(f"{sensor_id} ({i + 1}/{len(tests)})")
+            results.append(_sensor(options, checked, loaded, meas, builders, sensor_id, kind, gates, epoch,
+                                   external))
+        loaded.drop_frames()
+        card, tables, points = _assemble(results)
+        params = {**run_parameters(options, loaded, started, command), "preset": checked.preset.name,
+                  "preset_source": checked.preset.path, "reference": "external" if external is not None
+                  else options.reference, "sectors": options.sectors,
+                  "gates": {"min_nacp": options.min_nacp, "min_nic": options.min_nic,
+                            "min_sil": options.min_sil, "drop_jumps": options.drop_jumps},
+                  "notes": [*notes, *(f"{r.sensor}: {n}" for r in results for n in r.notes)]}
+        return EvaluateResult(options, checked, card, tables, points, results, params, loaded, warnings)
+
+
+def _external(options: EvaluateOptions, epoch) -> pd.DataFrame | None:
+    """The external reference file read on the run's clock, or None; OptionError naming file and line."""
+    if options.reference_file is None:
+        return None
+    from msdc.pipeline.evaluate.external_reference import read_external_reference
+
+    try:
+        return read_external_reference(options.reference_file, epoch)
+    except ValueError as exc:
+        raise OptionError(f"--reference-file: {exc}") from None
+
+
+BAND_TITLES = {"range_nm": "PD per range band", "azimuth_deg": "PD per azimuth sector",
+               "flight_level": "PD per flight-level band", "surface": "PD surface and airborne"}
+
+
+def _assemble(results: list[SensorResult]) -> tuple[pd.DataFrame, dict[str, pd.DataFrame], pd.DataFrame]:
+    """The scorecard, the named tables (per aircraft, per band, the grids) and the map points of every
+    sensor together."""
+    from msdc.pipeline.evaluate.scorecard_schema import SCORECARD_COLUMNS
+
+    card = pd.DataFrame([row for r in results for row in r.rows], columns=list(SCORECARD_COLUMNS))
+    tables: dict[str, pd.DataFrame] = {}
+    per = [r.per_aircraft for r in results if len(r.per_aircraft)]
+    if per:
+        tables["Per aircraft"] = pd.concat(per, ignore_index=True)
+    for key, title in BAND_TITLES.items():
+        parts = [r.bands[key].assign(sensor=r.sensor)[["sensor", *r.bands[key].columns]] for r in results
+                 if key in r.bands]
+        if parts:
+            tables[title] = pd.concat(parts, ignore_index=True)
+    for attr, title in (("polar", "PD range x azimuth"), ("vertical", "PD range x height")):
+        parts = [getattr(r, attr).assign(sensor=r.sensor) for r in results if getattr(r, attr) is not None]
+        if parts:
+            frame = pd.concat(parts, ignore_index=True)
+            frame = frame[frame["expected"] > 0]
+            tables[title] = frame[["sensor", *[c for c in frame.columns if c != "sensor"]]]
+    points = [r.map_points for r in results if len(r.map_points)]
+    return card, tables, pd.concat(points, ignore_index=True) if points else None
+
+
+def write_evaluation(result: EvaluateResult, *, tx: OutputTransaction | None = None) -> dict[str, Path]:
+    """Write the workbook, the JSON and the HTML report the options ask for, staged in ``tx`` (committed by
+    the caller; without one, together here). Returns the final paths, by kind."""
+    from msdc.pipeline.report.evaluation_html import write_evaluation_html
+    from msdc.pipeline.report.evaluation_json import write_evaluation_json
+    from msdc.pipeline.report.evaluation_xlsx import write_evaluation_xlsx
+
+    written: dict[str, Path] = {}
+    c = result.checked
+    title = f"msdc evaluation: {result.checked.preset.title}"
+    with staged(tx) as stage:
+        if c.output:
+            write_evaluation_xlsx(result.scorecard, stage.path(c.output), result.tables)
+            written["workbook"] = c.output
+        if c.json:
+            write_evaluation_json(result.scorecard, stage.path(c.json), result.tables, result.map_points)
+            written["json"] = c.json
+        if c.html:
+            write_evaluation_html(result.scorecard, stage.path(c.html), result.tables, result.map_points,
+                                  title=title)
+            written["html"] = c.html
+    return written
+
+
+def text(result: EvaluateResult) -> str:
+    """The scorecard for the terminal: sensor, sector, requirement, value, interval, threshold, verdict."""
+    from msdc.pipeline.report.summary import frame_text
+
+    card = result.scorecard
+    if card.empty:
+        return "Scorecard: no row (see the notes)"
+    shown = card[["sensor", "sector", "requirement", "parameters", "value", "ci_low", "ci_high", "threshold",
+                  "verdict", "n"]].copy()
+    out = "Scorecard (" + result.checked.preset.title + "):\n" + frame_text(shown)
+    notes = result.parameters.get("notes", [])
+    if notes:
+        out += "\n\nNotes:\n" + "\n".join(f"  {n}" for n in notes)
+    return out
+
+
+__all__ = ["EvaluateOptions", "EvaluateResult", "evaluate_job", "text", "validate", "write_evaluation"]

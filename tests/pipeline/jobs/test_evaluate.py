@@ -1,0 +1,179 @@
+"""msdc evaluate end to end on a recording written from the radar-effects simulator (a radar with known Pd,
+code garble and error rates, false and split plots, CAT034 north markers) and its ADS-B: every injected rate
+lies inside the scorecard's 95 % interval, verdicts follow the intervals, and bad options are refused
+before anything is written."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from fixtures.radar_effects import RadarEffects, expected_rates, simulate_effects
+from msdc.asterix.encode import encode_frame
+from msdc.pipeline.cli import main
+from msdc.pipeline.jobs.evaluate import EvaluateOptions, evaluate_job, validate
+from msdc.pipeline.jobs.options import OptionError
+
+INJECTED = RadarEffects(pd=0.9, full_range_nm=140.0, max_range_nm=180.0, cone_elevation_deg=40.0,
+                        mode3a_garble=0.03, mode3a_error=0.01, modec_garble=0.02, modec_error=0.015,
+                        false_per_scan=2.0, split=0.03)
+RADAR_ID = "048:25/201"
+DATE = "2020-01-01"  # the simulator's recordings carry no date
+
+
+def _requirement(ident: str, threshold: float, direction: str, params: dict) -> str:
+    lines = ["[[requirement]]", f'id = "{ident}"', f"threshold = {threshold!r}", f'direction = "{direction}"',
+             'stated = "test"', 'clause = "test clause"', "checked = true", 'source = "test"']
+    if params:
+        lines.append("parameters = { " + ", ".join(f"{k} = {v!r}" for k, v in params.items()) + " }")
+    return "\n".join(lines) + "\n"
+
+
+def _preset(sim) -> str:
+    """Every simulated rate as a requirement whose threshold its truth clearly meets, and pd twice more:
+    against a threshold far below the truth (pass) and far above it (fail)."""
+    text = ('[preset]\nname = "test-radar"\ntitle = "test"\nstandard = "none"\nsensor_types = ["ssr"]\n'
+            'source = "hand"\n\n')
+    for ident, (truth, params) in expected_rates(sim.effects, sim.scan_period_s).items():
+        if ident == "pd":
+            continue
+        if ident == "false_reports_per_scan":
+            text += _requirement(ident, 100.0, "<=", params)
+        else:
+            text += _requirement(ident, 0.0 if truth > 0.5 else 1.0, ">=" if truth > 0.5 else "<=", params)
+    text += _requirement("pd", 0.5, ">=", {}) + _requirement("pd", 0.99, ">=", {"scope": "global"})
+    text += _requirement("false_reports", 0.9, "<=", {"distance_m": 2100.0})
+    return text
+
+
+@pytest.fixture(scope="module")
+def recording(tmp_path_factory) -> tuple[object, Path]:
+    sim = simulate_effects(effects=INJECTED, seed=2028)
+    out = tmp_path_factory.mktemp("effects")
+    (out / "radar.ast").write_bytes(encode_frame(48, sim.radar) + encode_frame(34, sim.north_markers))
+    (out / "adsb.ast").write_bytes(encode_frame(21, sim.sim.adsb))
+    (out / "sensors.toml").write_text(sim.sensors_toml(coverage=True))
+    (out / "preset.toml").write_text(_preset(sim))
+    return sim, out
+
+
+def _options(folder: Path, **kw) -> EvaluateOptions:
+    given = {"inputs": (str(folder / "radar.ast"), str(folder / "adsb.ast")),
+             "sensors": str(folder / "sensors.toml"), "preset": str(folder / "preset.toml"),
+             "date": pd.Timestamp(DATE).date()}
+    return EvaluateOptions(**{**given, **kw})
+
+
+@pytest.fixture(scope="module")
+def evaluated(recording):
+    sim, folder = recording
+    return sim, evaluate_job(_options(folder))
+
+
+def test_every_injected_rate_is_inside_its_interval(evaluated):
+    sim, result = evaluated
+    card = result.scorecard.set_index(["sensor", "sector", "requirement", "threshold"])
+    truth = expected_rates(sim.effects, sim.scan_period_s)
+    assert set(result.scorecard["sensor"]) == {RADAR_ID}  # ADS-B is not of the preset's types
+    for ident, (value, _) in truth.items():
+        threshold = 0.5 if ident == "pd" else 100.0 if ident == "false_reports_per_scan" else \
+            0.0 if value > 0.5 else 1.0
+        row = card.loc[(RADAR_ID, "global", ident, threshold)]
+        assert row["ci_low"] <= value <= row["ci_high"], (ident, value, row.to_dict())
+        assert row["n"] > 500, ident
+
+
+def test_the_scan_period_comes_from_the_north_markers_and_coverage_from_the_sensor_file(evaluated):
+    sim, result = evaluated
+    pd_row = result.scorecard[(result.scorecard["requirement"] == "pd")].iloc[0]
+    assert f"scan period {sim.scan_period_s:.4g} s from" in pd_row["notes"]
+    assert "max_range_nm 140" in pd_row["notes"] and "max_elevation_deg 40" in pd_row["notes"]
+
+
+def test_false_plots_are_counted_as_the_truth_has_them(evaluated):
+    sim, result = evaluated
+    row = result.scorecard[result.scorecard["requirement"] == "false_reports"].iloc[0]
+    false_plots = int((sim.plots["kind"] == "false").sum())
+    assert round(row["value"] * row["n"]) == false_plots
+    assert row["n"] == len(sim.radar)  # every plot is a trial
+
+
+def test_the_verdict_follows_the_interval(evaluated):
+    _, result = evaluated
+    pd_rows = result.scorecard[result.scorecard["requirement"] == "pd"].set_index("threshold")
+    assert pd_rows.loc[0.5, "verdict"] == "pass" and pd_rows.loc[0.99, "verdict"] == "fail"
+    assert (result.scorecard["verdict"] != "fail").sum() == len(result.scorecard) - 1
+
+
+def test_per_aircraft_and_per_band_tables(evaluated):
+    sim, result = evaluated
+    per = result.tables["Per aircraft"]
+    # every simulated aircraft the radar saw is a row, with its plots counted
+    seen = sim.plots[(sim.plots["row"] >= 0) & (sim.plots["kind"] != "false")]
+    assert len(per) == seen["aircraft"].nunique()
+    assert per["reports"].sum() == len(seen)
+    band = result.tables["PD per range band"]
+    inside = band[band["high"] <= INJECTED.full_range_nm]
+    total = inside["detected"].sum() / inside["expected"].sum()
+    assert abs(total - INJECTED.pd) < 0.03
+
+
+def test_the_cli_writes_the_three_outputs(recording, tmp_path):
+    _, folder = recording
+    out = tmp_path / "out"
+    out.mkdir()
+    args = [str(folder / "radar.ast"), str(folder / "adsb.ast"), "--sensors", str(folder / "sensors.toml"),
+            "--preset", str(folder / "preset.toml"), "--date", DATE, "-o", str(out / "e.xlsx"),
+            "--json", str(out / "e.json"), "--html", str(out / "e.html")]
+    assert main(["evaluate", *args]) == 0
+    doc = json.loads((out / "e.json").read_text())
+    assert {r["requirement"] for r in doc["results"]} >= {"pd", "mode3a_valid", "split_reports"}
+    assert "Per aircraft" in doc["tables"] and doc["map_points"]
+    assert (out / "e.xlsx").stat().st_size > 0 and "<table" in (out / "e.html").read_text()
+
+
+@pytest.mark.parametrize(("change", "message"), [
+    ({"preset": "eurocontrol-1997"}, "--preset: unknown preset 'eurocontrol-1997' (did you mean "
+                                     "'eurocontrol-1997-ssr'?)"),
+    ({"output": "e.csv"}, "-o"),
+    ({"reference_file": "nowhere.csv"}, "--reference-file nowhere.csv: no such file"),
+    ({"test_sensors": ("25-201",)}, "--test"),
+])
+def test_bad_options_are_refused_before_decoding(recording, change, message):
+    _, folder = recording
+    with pytest.raises(OptionError, match=None) as caught:
+        validate(_options(folder, **change))
+    assert message in str(caught.value)
+
+
+def test_a_preset_for_other_sensors_is_refused_with_what_is_present(recording, tmp_path, capsys):
+    _, folder = recording
+    before = sorted(tmp_path.iterdir())
+    status = main(["evaluate", str(folder / "radar.ast"), "--sensors", str(folder / "sensors.toml"),
+                   "--preset", "ed117a", "--date", DATE, "--json", str(tmp_path / "e.json")])
+    assert status == 1
+    err = capsys.readouterr().err
+    assert "no sensor in the inputs is of a kind the preset ed117a applies to (mlat)" in err
+    assert f"{RADAR_ID} (radar)" in err
+    assert sorted(tmp_path.iterdir()) == before
+
+
+def test_an_unknown_test_sensor_is_refused(recording):
+    _, folder = recording
+    from msdc.pipeline.jobs.common import JobError
+
+    with pytest.raises(JobError, match=r"--test 25/202: no sensor .* \(present: 021:0/1 \(adsb\), "
+                                       r"048:25/201 \(radar\)\)"):
+        evaluate_job(_options(folder, test_sensors=("25/202",)))
+
+
+def test_leave_one_out_never_uses_the_sensor_under_test(evaluated):
+    _, result = evaluated
+    notes = " ".join(result.parameters["notes"])
+    assert "self-reference rows" in notes  # aircraft without ADS-B fall back to the radar's own track
+    rows = result.scorecard
+    assert np.isfinite(rows["value"]).all()
