@@ -21,7 +21,7 @@ from msdc.pipeline.evaluate.reference_gates import Gates, gate_reports
 
 IDENTITY_COLUMNS = ("mode3a", "address", "callsign")
 BUILT_COLUMNS = ("aircraft", "t_s", "latitude", "longitude", "altitude_ft", *IDENTITY_COLUMNS, "sigma_m",
-                 "built_by", "self_reference")
+                 "built_by", "self_reference", "on_ground")
 BUILT_BY_SEPARATOR = " + "
 
 
@@ -49,7 +49,8 @@ def _epoch(meas: pd.DataFrame, epoch: pd.Timestamp | None) -> pd.Timestamp | Non
 def _empty() -> pd.DataFrame:
     """A reference with no row, in BUILT_COLUMNS."""
     return pd.DataFrame({c: pd.Series(dtype=object if c in (*IDENTITY_COLUMNS, "aircraft", "built_by")
-                                      else bool if c == "self_reference" else float) for c in BUILT_COLUMNS})
+                                      else bool if c == "self_reference" else "boolean" if c == "on_ground"
+                                      else float) for c in BUILT_COLUMNS})
 
 
 def _built_by(tracks: pd.DataFrame) -> pd.Series:
@@ -90,6 +91,27 @@ def _identity(reference: pd.DataFrame, reports: pd.DataFrame) -> pd.DataFrame:
     return out.sort_index()
 
 
+def _on_ground(reference: pd.DataFrame, reports: pd.DataFrame) -> pd.Series:
+    """Per reference row, whether the aircraft is on the surface by its latest report at or before the row's
+    time (before the first, the first): the report's own say (GBS, STAT, a field monitor's RAB), else below
+    50 kt (quality.surface.on_surface, the rule of quality and conflicts)."""
+    from msdc.pipeline.quality.surface import on_surface
+
+    said = pd.DataFrame({"aircraft_id": reports["aircraft_id"].astype(str).to_numpy(object),
+                         "time": reports["time"].astype("datetime64[ns, UTC]").to_numpy(),
+                         "ground": on_surface(reports).astype(float)}).sort_values("time", kind="stable")
+    left = pd.DataFrame({"aircraft_id": reference["aircraft_id"].astype(str).to_numpy(object),
+                         "time": reference["time"].astype("datetime64[ns, UTC]").to_numpy(),
+                         "row": np.arange(len(reference))}).sort_values("time", kind="stable")
+    back = pd.merge_asof(left, said, on="time", by="aircraft_id", direction="backward")["ground"]
+    fwd = pd.merge_asof(left, said, on="time", by="aircraft_id", direction="forward")["ground"]
+    flag = back.where(back.notna(), fwd).to_numpy(float)
+    out = np.full(len(reference), np.nan)
+    out[left["row"].to_numpy()] = flag
+    return pd.Series(pd.array([None if np.isnan(v) else bool(v) for v in out], dtype="boolean"),
+                     index=reference.index)
+
+
 def reconstruct(reports: pd.DataFrame, epoch: pd.Timestamp, *, step_s: float = 1.0,
                 max_coast_s: float = 60.0, self_reference: bool = False) -> pd.DataFrame:
     """The smoothed IMM reconstruction (pipeline.track.track, RTS) of these reports as reference rows:
@@ -112,6 +134,7 @@ def reconstruct(reports: pd.DataFrame, epoch: pd.Timestamp, *, step_s: float = 1
     first, last = tr["time"].groupby(keys).transform("min"), t_upd.groupby(keys).transform("max")
     tr = tr[(tr["time"] >= first) & (tr["time"] <= last)]
     tr = _identity(tr, reports)
+    tr["on_ground"] = _on_ground(tr, reports)
     out = pd.DataFrame({
         "aircraft": tr["aircraft_id"].astype(str).to_numpy(object),
         "t_s": (tr["time"] - epoch).dt.total_seconds().to_numpy(float),
@@ -119,7 +142,8 @@ def reconstruct(reports: pd.DataFrame, epoch: pd.Timestamp, *, step_s: float = 1
         "altitude_ft": tr["flight_level"].to_numpy(float) * 100.0,
         **{c: tr[c].to_numpy(object) for c in IDENTITY_COLUMNS},
         "sigma_m": tr["sigma_major_m"].to_numpy(float), "built_by": tr["built_by"].to_numpy(object),
-        "self_reference": np.full(len(tr), self_reference)})
+        "self_reference": np.full(len(tr), self_reference),
+        "on_ground": tr["on_ground"].astype("boolean").to_numpy()})
     return out.sort_values(["aircraft", "t_s"], kind="stable", ignore_index=True)
 
 

@@ -138,6 +138,7 @@ def read_external_reference(path: str | Path, epoch: pd.Timestamp, *,
     frame["t_s"] = (pd.to_datetime(frame["time"], utc=True) - epoch).dt.total_seconds()
     frame["built_by"] = "external"
     frame["self_reference"] = False
+    frame["on_ground"] = pd.array([None] * len(frame), dtype="boolean")  # a trial's file does not say
     extra = ["height_m"] if "height_m" in names else []
     return frame[list(BUILT_COLUMNS) + extra].sort_values(["aircraft", "t_s"], kind="stable",
                                                           ignore_index=True)

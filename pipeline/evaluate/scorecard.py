@@ -2,9 +2,10 @@
 and on its preset area) and judged into the scorecard's rows (scorecard_schema.SCORECARD) with its verdict.
 
 Sectors are regions: a name, an optional preset area and a mask function of (latitude, longitude, flight
-level). A report belongs to a region where its reference aircraft is inside it at the report's time (an
-unassociated report: where the report itself is); the reference is cut to its samples inside the region,
-so no update is expected of an aircraft outside it."""
+level, on ground: 1, 0 or NaN unknown). Besides the sector file's, "surface" and "airborne" are regions of
+their own when the reference has aircraft on the surface. A report belongs to a region where its reference
+aircraft is inside it at the report's time (an unassociated report: where the report itself is); the
+reference is cut to its samples inside the region, so no update is expected of an aircraft outside it."""
 
 from __future__ import annotations
 
@@ -25,12 +26,14 @@ from msdc.pipeline.evaluate.reference import (
     check_reference,
     trajectories,
 )
-from msdc.pipeline.evaluate.reference_gates import sigma_gate
+from msdc.pipeline.evaluate.reference_gates import reference_at, sigma_gate
 from msdc.pipeline.evaluate.requirements import REQUIREMENTS
 from msdc.pipeline.evaluate.statistics import magnitude_interval, verdict
 
 GLOBAL = "global"
-Mask = Callable[[np.ndarray, np.ndarray, np.ndarray], np.ndarray]  # (lat deg, lon deg, FL) -> inside
+SURFACE, AIRBORNE = "surface", "airborne"
+# (lat deg, lon deg, FL, on ground 1/0/NaN) -> inside
+Mask = Callable[[np.ndarray, np.ndarray, np.ndarray, np.ndarray], np.ndarray]
 
 
 @dataclass(frozen=True)
@@ -117,9 +120,9 @@ def judge(outcome: Outcome, requirement: Requirement, preset: Preset, sensor_id:
 
 def reference_positions(reports: pd.DataFrame, reference: pd.DataFrame,
                         max_gap_s: float = DEFAULT_REFERENCE_GAP_S
-                        ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Per associated report, its reference aircraft's latitude, longitude and flight level at the report's
-    time (NaN where not associated or the reference does not know)."""
+                        ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Per associated report, its reference aircraft's latitude, longitude, flight level and on-ground flag
+    (1, 0) at the report's time (NaN where not associated or the reference does not know)."""
     n = len(reports)
     lat, lon, fl = np.full(n, np.nan), np.full(n, np.nan), np.full(n, np.nan)
     t, idx = reports["t_s"].to_numpy(float), reports["ref_index"].to_numpy()
@@ -128,7 +131,18 @@ def reference_positions(reports: pd.DataFrame, reference: pd.DataFrame,
         if rows.size:
             a, b, _, alt = tr.at(t[rows], max_gap_s)
             lat[rows], lon[rows], fl[rows] = a, b, alt / 100.0
-    return lat, lon, fl
+    ground = np.full(n, np.nan)
+    if "on_ground" in reference.columns and n:
+        flag = reference.assign(on_ground=ground_flags(reference))
+        ground = np.rint(reference_at(reports, flag, "on_ground", {"reference_max_gap_s": max_gap_s}))
+    return lat, lon, fl, ground
+
+
+def ground_flags(frame: pd.DataFrame) -> np.ndarray:
+    """The on_ground column as 1.0, 0.0 and NaN (unknown or absent)."""
+    if "on_ground" not in frame.columns:
+        return np.full(len(frame), np.nan)
+    return frame["on_ground"].astype("boolean").astype("Float64").to_numpy(float, na_value=np.nan)
 
 
 def _report_fl(reports: pd.DataFrame) -> np.ndarray:
@@ -139,23 +153,22 @@ def _report_fl(reports: pd.DataFrame) -> np.ndarray:
 
 
 def cut(reports: pd.DataFrame, reference: pd.DataFrame, masks: Sequence[Mask],
-        where: tuple[np.ndarray, np.ndarray, np.ndarray]) -> tuple[pd.DataFrame, pd.DataFrame]:
+        where: tuple[np.ndarray, ...]) -> tuple[pd.DataFrame, pd.DataFrame]:
     """The associated reports and the reference inside the union of ``masks``: reports by ``where`` (their
     reference position, else their own), the reference by its samples; each report's ``ref_index``
     renumbered to the cut reference's aircraft (a report whose aircraft has no sample inside is left out)."""
-    lat, lon, fl = where
-
-    def inside(a, b, c) -> np.ndarray:
-        keep = np.zeros(len(a), bool)
+    def inside(*columns) -> np.ndarray:
+        keep = np.zeros(len(columns[0]), bool)
         for m in masks:
-            keep |= np.asarray(m(a, b, c), bool)
+            keep |= np.asarray(m(*columns), bool)
         return keep
 
     ref = check_reference(reference)
     alt = ref["altitude_ft"].to_numpy(float) / 100.0 if "altitude_ft" in ref else np.full(len(ref), np.nan)
-    ref_in = ref[inside(ref["latitude"].to_numpy(float), ref["longitude"].to_numpy(float), alt)]
+    ref_in = ref[inside(ref["latitude"].to_numpy(float), ref["longitude"].to_numpy(float), alt,
+                        ground_flags(ref))]
     ref_in = ref_in.reset_index(drop=True)
-    rep_in = reports[inside(lat, lon, fl)]
+    rep_in = reports[inside(*where)]
     labels = np.array(sorted(ref_in["aircraft"].unique()), dtype=object)
     linked = rep_in["ref_index"].to_numpy() >= 0
     names = rep_in["ref_aircraft"].to_numpy(object)
@@ -167,6 +180,15 @@ def cut(reports: pd.DataFrame, reference: pd.DataFrame, masks: Sequence[Mask],
     rep_in = rep_in.assign(ref_index=pos)
     rep_in = rep_in[pos != -2].reset_index(drop=True)
     return rep_in, ref_in
+
+
+def surface_regions(reference: pd.DataFrame) -> list[Region]:
+    """"surface" and "airborne" as regions, when the reference has aircraft on the surface (else the
+    airborne row would repeat the global one)."""
+    if not (ground_flags(reference) == 1.0).any():
+        return []
+    return [Region(SURFACE, lambda lat, lon, fl, ground: ground == 1.0),
+            Region(AIRBORNE, lambda lat, lon, fl, ground: ground == 0.0)]
 
 
 def _regions_for(requirement: Requirement, regions: Sequence[Region]) -> list[tuple[str, list[Mask]]]:
@@ -183,6 +205,7 @@ def score_sensor(preset: Preset, sensor_id: str, reports: pd.DataFrame, referenc
     """Every requirement of the preset measured on the sensor's reports against the reference, globally and
     per region, judged into scorecard rows."""
     score = SensorScore(sensor_id)
+    regions = [*surface_regions(reference), *regions]
     rep = associate(reports, reference) if len(reference) else reports.assign(
         ref_index=-1, ref_aircraft=None, ref_distance_m=np.inf)
     cuts: dict[str, tuple[pd.DataFrame, pd.DataFrame]] = {GLOBAL: (rep, reference)}
@@ -196,11 +219,11 @@ def score_sensor(preset: Preset, sensor_id: str, reports: pd.DataFrame, referenc
         for name, masks in spots:
             if name not in cuts:
                 if where is None:
-                    lat, lon, fl = reference_positions(rep, reference)
+                    lat, lon, fl, ground = reference_positions(rep, reference)
                     own = ~np.isfinite(lat)
                     where = (np.where(own, rep["latitude"].to_numpy(float), lat),
                              np.where(own, rep["longitude"].to_numpy(float), lon),
-                             np.where(own, _report_fl(rep), fl))
+                             np.where(own, _report_fl(rep), fl), np.where(own, np.nan, ground))
                 cuts[name] = cut(rep, reference, masks, where)
             r, ref = cuts[name]
             if r.empty and ref.empty:

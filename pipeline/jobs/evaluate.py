@@ -97,7 +97,7 @@ def _regions(path: str | None) -> list:
         raise OptionError(f"--sectors: {exc}") from None
 
     def mask(sector):
-        return lambda lat, lon, fl: sector_mask(sector, lat, lon, fl)
+        return lambda lat, lon, fl, ground: sector_mask(sector, lat, lon, fl)
 
     return [Region(s.name, mask(s), s.area) for s in sectors]
 
@@ -201,8 +201,11 @@ def _per_aircraft(sensor_id: str, reports: pd.DataFrame, reference: pd.DataFrame
 
     rep = associated(reports, reference, None)
     counts = rep[rep["ref_index"] >= 0].groupby("ref_aircraft").size().rename("reports")
-    ref = reference.groupby("aircraft").agg(built_by=("built_by", lambda s: " | ".join(sorted(set(map(
-        str, s))))), self_reference_share=("self_reference", "mean"))
+    from msdc.pipeline.evaluate.scorecard import ground_flags
+
+    ref = reference.assign(surface=ground_flags(reference)).groupby("aircraft").agg(
+        built_by=("built_by", lambda s: " | ".join(sorted(set(map(str, s))))),
+        self_reference_share=("self_reference", "mean"), surface_share=("surface", "mean"))
     table = ref.join(counts, how="left")
     table["reports"] = table["reports"].fillna(0).astype(int)
     if pd_outcome is not None and pd_outcome.per_aircraft is not None and len(pd_outcome.per_aircraft):

@@ -104,9 +104,26 @@ def test_false_plots_are_counted_as_the_truth_has_them(evaluated):
 
 def test_the_verdict_follows_the_interval(evaluated):
     _, result = evaluated
-    pd_rows = result.scorecard[result.scorecard["requirement"] == "pd"].set_index("threshold")
+    card = result.scorecard[result.scorecard["sector"] == "global"]
+    pd_rows = card[card["requirement"] == "pd"].set_index("threshold")
     assert pd_rows.loc[0.5, "verdict"] == "pass" and pd_rows.loc[0.99, "verdict"] == "fail"
-    assert (result.scorecard["verdict"] != "fail").sum() == len(result.scorecard) - 1
+    assert (card["verdict"] != "fail").sum() == len(card) - 1
+
+
+def test_the_surface_target_has_rows_of_its_own(evaluated):
+    """The simulated surface target (1.3 NM from the site, under 50 kt) is judged apart: its updates are the
+    surface rows', every other aircraft's the airborne rows', together the global row's."""
+    sim, result = evaluated
+    card = result.scorecard
+    pd_rows = card[(card["requirement"] == "pd") & (card["threshold"] == 0.5)].set_index("sector")
+    assert set(pd_rows.index) == {"global", "surface", "airborne"}
+    assert pd_rows.loc["surface", "n"] + pd_rows.loc["airborne", "n"] == pd_rows.loc["global", "n"]
+    per = result.tables["Per aircraft"].set_index("aircraft")
+    surface = per[per["surface_share"] > 0.5]
+    assert len(surface) == 1
+    (label,) = surface.index
+    expected_surface = int(surface.loc[label, "expected"])
+    assert pd_rows.loc["surface", "n"] == expected_surface
 
 
 def test_per_aircraft_and_per_band_tables(evaluated):
