@@ -431,7 +431,9 @@ def fit_biases(errors: pd.DataFrame) -> dict:
     the model's, the leverage-robust (HC3) and the delete-one-aircraft (CR3) ones, so a fit decided by a few
     plots, or errors shared by all plots of an aircraft (transponder delay, ADS-B offset), do not look
     precise; ``aircraft`` counts the aircraft with fitted rows. Also its goodness of fit against the declared
-    sigmas (``chi2_per_dof``) and the site-offset check (pipeline.quality.fit_checks)."""
+    sigmas (``chi2_per_dof``) and the site-offset check (pipeline.quality.fit_checks). A fit also gives
+    ``rows`` (the positions in ``errors`` of the fitted plots), and per fit row (their range rows, then
+    their azimuth rows) ``residuals`` (m, deg) and ``kept`` (not clipped nor overhead)."""
     from msdc.pipeline.quality import fit_checks
 
     ok = errors[["range_error_m", "azimuth_error_deg", "slant_range_m", "ground_range_m", "range_rate_ms",
@@ -456,6 +458,7 @@ def fit_biases(errors: pd.DataFrame) -> dict:
     keep, res = fit["keep"], fit["res"]
     sigmas = fit_checks.declared_sigmas(e)
     result.update(params=fit["params"], se=fit["se"], n_rejected=int((usable & ~keep).sum()),
+                  rows=np.flatnonzero(ok), residuals=res, kept=keep,
                   aircraft=int(np.unique(aircraft[keep]).size),
                   rms=(float(np.sqrt(np.mean(res[is_range & keep] ** 2))),
                        float(np.sqrt(np.mean(res[~is_range & keep] ** 2)))),
