@@ -45,6 +45,8 @@ def coasting_correct(reports: pd.DataFrame, reference: pd.DataFrame, parameters:
         if not rows.size:
             continue
         t_upd = tr.t_s[updated[tr.rows]]
+        if not t_upd.size:
+            continue
         last = np.searchsorted(t_upd, t[rows], side="right") - 1
         seen[rows] = (last >= 0) & (t[rows] - t_upd[np.maximum(last, 0)] <= window_s)
     if not len(rep):
