@@ -27,11 +27,16 @@ def psr_ssr_association(reports: pd.DataFrame, reference: pd.DataFrame, paramete
                         sensor: Sensor | None = None) -> Outcome:
     """Per reference aircraft, its associated plots grouped into updates (reports less than half a scan
     period apart: scans.update_groups); an update where PSR and SSR both saw the aircraft holds a combined
-    plot, or a PSR-only and an SSR-only plot. The share of those updates holding a combined plot."""
+    plot, or a PSR-only and an SSR-only plot. The share of those updates holding a combined plot. Withheld
+    where a failure could not be seen: no TYP, no PSR detection, no single PSR plot in the whole frame."""
     rid = "psr_ssr_association"
     if "typ" not in reports.columns:
         return withheld(rid, "the radar frame has no detection type (I048/020 TYP): PSR and SSR plots "
                              "cannot be told apart")
+    if not np.isin(pd.to_numeric(reports["typ"], errors="coerce").to_numpy(float), TYP_PSR_ONLY).any():
+        return withheld(rid, "no single PSR plot (I048/020 TYP 1) anywhere in the recording: the radar "
+                             "reports none, or the recording leaves them out, so a PSR detection left "
+                             "unassociated could not be seen")
     rep = associated(reports, reference, parameters)
     rep = rep[rep["ref_index"].to_numpy() >= 0]
     typ = pd.to_numeric(rep["typ"], errors="coerce").to_numpy(float)

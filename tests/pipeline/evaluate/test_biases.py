@@ -148,8 +148,14 @@ def test_psr_ssr_association_withheld_without_the_bits_or_a_psr():
     ref = _track("A", 0.0)
     no_typ = REQUIREMENTS["psr_ssr_association"](_plots(0.0, [0.0, 4.0]), ref, {}, SITE)
     assert np.isnan(no_typ.value) and "I048/020 TYP" in no_typ.notes[0]
-    ssr = REQUIREMENTS["psr_ssr_association"](_plots(0.0, [0.0, 4.0], typ=5), ref, {}, SITE)
+    clutter = _plots(180.0, [2.0], typ=1)  # a single PSR plot 60 NM from aircraft A: nobody's
+    ssr = pd.concat([_plots(0.0, [0.0, 4.0], typ=5), clutter], ignore_index=True)
+    ssr = REQUIREMENTS["psr_ssr_association"](ssr, ref, {}, SITE)
     assert np.isnan(ssr.value) and "no PSR detection" in ssr.notes[0]
+    # combined plots only, as in the real Barcelona hour (TYP 7, 5, 3, 2; no TYP 1 in 44,085 records): a
+    # PSR detection the radar failed to associate would be a TYP 1 plot, and none could be seen
+    only = REQUIREMENTS["psr_ssr_association"](_plots(0.0, [0.0, 4.0], typ=7), ref, {}, SITE)
+    assert np.isnan(only.value) and "no single PSR plot" in only.notes[0]
 
 
 # ---------------------------------------------------------------------------------------------------------
