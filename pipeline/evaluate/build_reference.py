@@ -6,8 +6,9 @@ self-reference fallback where no other sensor sees the aircraft. An external ref
 
 Each reference row carries, besides reference.REFERENCE_REQUIRED and the pressure altitude and identity:
 ``sigma_m`` (the reference's 1-sigma position error along its ellipse's major axis), ``built_by`` (the
-sensors whose reports updated the track stretch the row belongs to) and ``self_reference`` (True where the
-row comes from the sensor's own track: detection, codes and identity may use it, position accuracy not).
+sensors whose reports updated the track stretch the row belongs to), ``self_reference`` (True where the
+row comes from the sensor's own track: detection, codes and identity may use it, position accuracy not) and
+``updated`` (True where a report updated the track at the row's time: the reference saw the aircraft then).
 """
 
 from __future__ import annotations
@@ -21,7 +22,7 @@ from msdc.pipeline.evaluate.reference_gates import Gates, gate_reports
 
 IDENTITY_COLUMNS = ("mode3a", "address", "callsign")
 BUILT_COLUMNS = ("aircraft", "t_s", "latitude", "longitude", "altitude_ft", *IDENTITY_COLUMNS, "sigma_m",
-                 "built_by", "self_reference", "on_ground")
+                 "built_by", "self_reference", "updated", "on_ground")
 BUILT_BY_SEPARATOR = " + "
 
 
@@ -49,8 +50,8 @@ def _epoch(meas: pd.DataFrame, epoch: pd.Timestamp | None) -> pd.Timestamp | Non
 def _empty() -> pd.DataFrame:
     """A reference with no row, in BUILT_COLUMNS."""
     return pd.DataFrame({c: pd.Series(dtype=object if c in (*IDENTITY_COLUMNS, "aircraft", "built_by")
-                                      else bool if c == "self_reference" else "boolean" if c == "on_ground"
-                                      else float) for c in BUILT_COLUMNS})
+                                      else bool if c in ("self_reference", "updated")
+                                      else "boolean" if c == "on_ground" else float) for c in BUILT_COLUMNS})
 
 
 def _built_by(tracks: pd.DataFrame) -> pd.Series:
@@ -116,7 +117,7 @@ def reconstruct(reports: pd.DataFrame, epoch: pd.Timestamp, *, step_s: float = 1
                 max_coast_s: float = 60.0, self_reference: bool = False) -> pd.DataFrame:
     """The smoothed IMM reconstruction (pipeline.track.track, RTS) of these reports as reference rows:
     only rows the reports support (coasted rows after a segment's last update left out), with sigma_m,
-    built_by and the identity of the reports."""
+    built_by, updated (a report updated the row) and the identity of the reports."""
     from msdc.pipeline.track import track
 
     if reports.empty:
@@ -143,6 +144,7 @@ def reconstruct(reports: pd.DataFrame, epoch: pd.Timestamp, *, step_s: float = 1
         **{c: tr[c].to_numpy(object) for c in IDENTITY_COLUMNS},
         "sigma_m": tr["sigma_major_m"].to_numpy(float), "built_by": tr["built_by"].to_numpy(object),
         "self_reference": np.full(len(tr), self_reference),
+        "updated": (tr["sources"].astype(str) != "").to_numpy(bool),
         "on_ground": tr["on_ground"].astype("boolean").to_numpy()})
     return out.sort_values(["aircraft", "t_s"], kind="stable", ignore_index=True)
 

@@ -92,7 +92,8 @@ CATALOGUE: dict[str, RequirementType] = {
                       "acceleration, turn rate or vertical rate beyond the limits",
                       parameters={"max_speed_kt": float, "max_accel_mps2": float, "max_turn_dps": float,
                                   "max_vertical_ftps": float}),
-    "psr_ssr_association": _share("PSR and SSR plots of one aircraft associated (combined radar)"),
+    "psr_ssr_association": _share("updates (scans) of an aircraft in which PSR and SSR both detected it that "
+                                  "hold a combined PSR + SSR plot (I048/020 TYP 3, 6, 7)"),
     "velocity_correct": _share("reported velocities within the tolerance of the reference's (the larger of "
                                "tolerance_mps and tolerance_fraction x speed)",
                                parameters={"tolerance_mps": float, "tolerance_fraction": float},
@@ -102,5 +103,7 @@ CATALOGUE: dict[str, RequirementType] = {
     "track_continuity": RequirementType(RATE, "per aircraft", "changes of an aircraft's main test track "
                                         "number from one interval of interval_s to the next, per aircraft",
                                         parameters={"interval_s": float}),
-    "coasting_correct": _share("coasting flag agreeing with the reference"),
+    "coasting_correct": _share("track reports whose coasting flag (I062/080 CST) agrees with the reference: "
+                               "set when no reference sensor detected the aircraft in the last window_s, "
+                               "clear when one did", parameters={"window_s": float}),
 }

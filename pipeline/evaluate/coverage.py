@@ -13,6 +13,7 @@ import numpy as np
 from msdc.pipeline.model.geodesy import slant_range_azimuth
 
 LIMITS = ("min_range_nm", "max_range_nm", "min_elevation_deg", "max_elevation_deg")
+SIGMAS = ("sigma_range_m", "sigma_azimuth_deg")
 
 
 @dataclass(frozen=True)
@@ -29,9 +30,11 @@ class Sensor:
     min_elevation_deg: float | None = None
     max_elevation_deg: float | None = None  # above it: the cone of silence
     north_markers_s: np.ndarray | None = None
+    sigma_range_m: float | None = None  # declared 1-sigma plot noise (radars): the bias fit's goodness of fit
+    sigma_azimuth_deg: float | None = None
 
     def __post_init__(self) -> None:
-        for key in ("latitude", "longitude", "altitude_m", *LIMITS):
+        for key in ("latitude", "longitude", "altitude_m", *LIMITS, *SIGMAS):
             v = getattr(self, key)
             number = isinstance(v, numbers.Real) and not isinstance(v, bool)
             if v is not None and (not number or not math.isfinite(v)):
@@ -100,12 +103,13 @@ def coverage(sensor: Sensor, detected_rho_nm: np.ndarray, detected_elev_deg: np.
 
 
 def sensor_from_entry(entry: Mapping, north_markers_s: np.ndarray | None = None) -> Sensor:
-    """The evaluation's Sensor of a sensor-table row (a row of read_sensors' table, or a dict): its site, name
-    and the coverage limits it declares (absent or NaN: not declared, so estimated from its detections)."""
+    """The evaluation's Sensor of a sensor-table row (a row of read_sensors' table, or a dict): its site,
+    name, the coverage limits it declares (absent or NaN: not declared, so estimated from its detections)
+    and its plot noise sigmas where given."""
     def declared(key: str) -> float | None:
         v = entry.get(key)
         return None if v is None or (isinstance(v, numbers.Real) and math.isnan(v)) else float(v)
 
     return Sensor(float(entry["latitude"]), float(entry["longitude"]), float(entry["altitude_m"]),
-                  name=str(entry["name"]), **{k: declared(k) for k in LIMITS},
+                  name=str(entry["name"]), **{k: declared(k) for k in (*LIMITS, *SIGMAS)},
                   north_markers_s=north_markers_s)

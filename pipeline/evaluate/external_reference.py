@@ -101,7 +101,8 @@ def read_external_reference(path: str | Path, epoch: pd.Timestamp, *,
                             sigma_m: float | None = None) -> pd.DataFrame:
     """The CSV as a reference frame (build_reference.BUILT_COLUMNS, plus ``height_m`` when given), ``t_s``
     in seconds since ``epoch`` (the UTC midnight the test reports count from), ``built_by`` "external",
-    ``self_reference`` False; ``sigma_m`` fills the rows without one. ExternalReferenceError otherwise."""
+    ``self_reference`` False, ``updated`` True (every sample a fix); ``sigma_m`` fills the rows without one.
+    ExternalReferenceError otherwise."""
     from msdc.pipeline.track.tracker import utc_timestamp
 
     path = Path(path)
@@ -138,6 +139,7 @@ def read_external_reference(path: str | Path, epoch: pd.Timestamp, *,
     frame["t_s"] = (pd.to_datetime(frame["time"], utc=True) - epoch).dt.total_seconds()
     frame["built_by"] = "external"
     frame["self_reference"] = False
+    frame["updated"] = True  # every sample is a fix of the aircraft
     frame["on_ground"] = pd.array([None] * len(frame), dtype="boolean")  # a trial's file does not say
     extra = ["height_m"] if "height_m" in names else []
     return frame[list(BUILT_COLUMNS) + extra].sort_values(["aircraft", "t_s"], kind="stable",

@@ -7,7 +7,10 @@ import numpy as np
 import pandas as pd
 
 from msdc.pipeline.evaluate.accuracy import ACCURACY_REQUIREMENTS
+from msdc.pipeline.evaluate.biases import BIAS_REQUIREMENTS
+from msdc.pipeline.evaluate.coasting import coasting_correct
 from msdc.pipeline.evaluate.codes import CODE_REQUIREMENTS
+from msdc.pipeline.evaluate.combination import psr_ssr_association
 from msdc.pipeline.evaluate.coverage import Sensor
 from msdc.pipeline.evaluate.detection import long_gaps, pd_requirement
 from msdc.pipeline.evaluate.dubious import dubious
@@ -39,6 +42,9 @@ REQUIREMENTS = {
     "extra_tracks": extra_tracks,
     "track_continuity": track_continuity,
     **ACCURACY_REQUIREMENTS,
+    **BIAS_REQUIREMENTS,
+    "psr_ssr_association": psr_ssr_association,
+    "coasting_correct": coasting_correct,
 }
 
 

@@ -211,6 +211,22 @@ def _matched(meas: pd.DataFrame, max_gap_s: float, jump_kw: dict | None, referen
     return pd.concat(parts, ignore_index=True)
 
 
+def site_geometry(lat, lon, h, ve, vn, vu, s_lat, s_lon, s_alt) -> tuple[np.ndarray, ...]:
+    """Reference positions (deg, deg, m above the ellipsoid) with their east/north/up velocity (m/s) seen
+    from a radar site: east and north offsets (m, the site's local frame), slant and ground range (m), range
+    rate and tangential speed (m/s, positive clockwise): the geometry ``fit_biases`` regresses on."""
+    e, n, u = ecef_to_enu(*geodetic_to_ecef(lat, lon, h), s_lat, s_lon, s_alt)
+    slant_m, ground_m = np.sqrt(e**2 + n**2 + u**2), np.hypot(e, n)
+    east, north, up = enu_basis(lat, lon)
+    v_ecef = ve[:, None] * east + vn[:, None] * north + vu[:, None] * up
+    del east, north, up  # (n, 3) arrays: gone before the next ones
+    s_east, s_north, s_up = enu_basis(s_lat, s_lon)
+    vs_e, vs_n, vs_u = ((v_ecef * b).sum(-1) for b in (s_east, s_north, s_up))
+    range_rate = (e * vs_e + n * vs_n + u * vs_u) / slant_m
+    tangential = (n * vs_e - e * vs_n) / ground_m
+    return e, n, slant_m, ground_m, range_rate, tangential
+
+
 def radar_errors(meas: pd.DataFrame, sensors: pd.DataFrame, *, max_gap_s: float = MAX_ADSB_GAP_S,
                  jump_kw: dict | None = None, reference: str = "adsb") -> pd.DataFrame:
     """One row per radar report matched to ADS-B: range, azimuth, along/cross-track and horizontal error.
@@ -235,15 +251,8 @@ def radar_errors(meas: pd.DataFrame, sensors: pd.DataFrame, *, max_gap_s: float 
     ve, vn, vu = m["ref_ve"].to_numpy(), m["ref_vn"].to_numpy(), m["ref_vu"].to_numpy()
 
     # reference geometry seen from the site, and its rates from the ADS-B velocity
-    e, n, u = ecef_to_enu(*geodetic_to_ecef(lat, lon, h), s_lat, s_lon, s_alt)
-    slant_m, ground_m = np.sqrt(e**2 + n**2 + u**2), np.hypot(e, n)
-    east, north, up = enu_basis(lat, lon)
-    v_ecef = ve[:, None] * east + vn[:, None] * north + vu[:, None] * up
-    s_east, s_north, s_up = enu_basis(s_lat, s_lon)
-    vs_e, vs_n, vs_u = ((v_ecef * b).sum(-1) for b in (s_east, s_north, s_up))
-    range_rate = (e * vs_e + n * vs_n + u * vs_u) / slant_m
-    tangential = (n * vs_e - e * vs_n) / ground_m
-    del east, north, up, v_ecef, s_east, s_north, s_up  # (n, 3) arrays: gone before the plots' own geometry
+    e, n, slant_m, ground_m, range_rate, tangential = site_geometry(lat, lon, h, ve, vn, vu, s_lat, s_lon,
+                                                                    s_alt)
 
     # the radar plot in its own terms; cartesian-only plots get them from their position
     rho_nm, theta = m["rho_nm"].to_numpy(float), m["theta_deg"].to_numpy(float)
@@ -422,7 +431,9 @@ def fit_biases(errors: pd.DataFrame) -> dict:
     the model's, the leverage-robust (HC3) and the delete-one-aircraft (CR3) ones, so a fit decided by a few
     plots, or errors shared by all plots of an aircraft (transponder delay, ADS-B offset), do not look
     precise; ``aircraft`` counts the aircraft with fitted rows. Also its goodness of fit against the declared
-    sigmas (``chi2_per_dof``) and the site-offset check (pipeline.quality.fit_checks)."""
+    sigmas (``chi2_per_dof``) and the site-offset check (pipeline.quality.fit_checks). A fit also gives
+    ``rows`` (the positions in ``errors`` of the fitted plots), and per fit row (their range rows, then
+    their azimuth rows) ``residuals`` (m, deg) and ``kept`` (not clipped nor overhead)."""
     from msdc.pipeline.quality import fit_checks
 
     ok = errors[["range_error_m", "azimuth_error_deg", "slant_range_m", "ground_range_m", "range_rate_ms",
@@ -447,6 +458,7 @@ def fit_biases(errors: pd.DataFrame) -> dict:
     keep, res = fit["keep"], fit["res"]
     sigmas = fit_checks.declared_sigmas(e)
     result.update(params=fit["params"], se=fit["se"], n_rejected=int((usable & ~keep).sum()),
+                  rows=np.flatnonzero(ok), residuals=res, kept=keep,
                   aircraft=int(np.unique(aircraft[keep]).size),
                   rms=(float(np.sqrt(np.mean(res[is_range & keep] ** 2))),
                        float(np.sqrt(np.mean(res[~is_range & keep] ** 2)))),
@@ -510,14 +522,18 @@ def _offset_note(fit: dict) -> str:
             f"{fit['offset_se']:.0f} m per axis): {verdict}; ")
 
 
-def _trusted(fit: dict, warning: str) -> str:
-    """The fit_trusted column: "no" when a check says so, "unchecked" when the goodness of fit could not be
-    measured (no declared sigmas) or the site offset not checked, else "yes"."""
+def fit_trust(fit: dict) -> tuple[str, str]:
+    """Whether a fit of ``fit_biases`` can be trusted (the fit_trusted column), and why not: "no" with the
+    warning when a check (pipeline.quality.fit_checks) says so, "unchecked" when the goodness of fit could
+    not be measured (no declared sigmas) or the site offset not checked, else "yes"."""
+    from msdc.pipeline.quality.fit_checks import fit_warning
+
+    warning = fit_warning(fit["chi2_per_dof"], fit["offset"], fit["offset_flagged"])
     if warning:
-        return "no"
+        return "no", warning
     if not fit["offset_checked"] or not np.isfinite(fit["chi2_per_dof"]):
-        return "unchecked"
-    return "yes"
+        return "unchecked", ""
+    return "yes", ""
 
 
 def estimate_biases(errors: pd.DataFrame) -> pd.DataFrame:
@@ -527,8 +543,6 @@ def estimate_biases(errors: pd.DataFrame) -> pd.DataFrame:
     site-offset check (pipeline.quality.fit_checks) and the ADS-B accuracy note (the general limitation,
     the reference height used, radars whose standard errors rest on few aircraft and fits not to be
     trusted, in ``attrs["note"]``)."""
-    from msdc.pipeline.quality.fit_checks import fit_warning
-
     check_frame("errors", errors, ("radar", "sac", "sic"))
     rows, few_notes, distrust = [], [], []
     for (name, sac, sic), g in errors.groupby(["radar", "sac", "sic"], sort=True, dropna=False):
@@ -537,10 +551,10 @@ def estimate_biases(errors: pd.DataFrame) -> pd.DataFrame:
         nacp_median = float(np.floor(nacp.median())) if len(nacp) else float("nan")
         (b_r, gain, b_a, dt), (se_r, se_g, se_a, se_t) = fit["params"], fit["se"]
         note = _note(nacp_median)
-        warning = ""
+        trusted, warning = "no", ""
         if np.isfinite(b_r):
             few = _few_aircraft_note(fit["aircraft"])
-            warning = fit_warning(fit["chi2_per_dof"], fit["offset"], fit["offset_flagged"])
+            trusted, warning = fit_trust(fit)
             note = _offset_note(fit) + note
             note = few + note
             if warning:
@@ -559,7 +573,7 @@ def estimate_biases(errors: pd.DataFrame) -> pd.DataFrame:
                      "time_bias_s": dt, "time_bias_se_s": se_t, "range_residual_rms_m": fit["rms"][0],
                      "azimuth_residual_rms_deg": fit["rms"][1], "chi2_per_dof": fit["chi2_per_dof"],
                      "site_offset_m": float(np.hypot(*fit["offset"])),
-                     "fit_trusted": _trusted(fit, warning) if np.isfinite(b_r) else "no",
+                     "fit_trusted": trusted,
                      "adsb_nacp_median": nacp_median,
                      "adsb_nacp_95_m": nacp_bound_m(nacp_median), "note": note})
     out = pd.DataFrame(rows, columns=BIAS_COLUMNS)

@@ -56,6 +56,15 @@ def test_leave_one_out_is_built_without_the_sensor_and_lies_near_the_truth(two_r
     assert set(independent["built_by"]) <= {ADSB, RADAR_B, f"{ADSB} + {RADAR_B}"}
     # the self-reference rows are the radar's own track, where neither ADS-B nor radar B covers the aircraft
     assert (ref.loc[ref["self_reference"], "built_by"] == RADAR_A).all()
+    # updated rows are exactly at the times of the reports that built them (the others are the tracker's
+    # 1 s steps between reports): what coasting_correct judges a coasting flag by
+    t_rep = (meas["time"] - EPOCH).dt.total_seconds().to_numpy()
+    others = (meas["sensor_id"].astype(str) != RADAR_A).to_numpy()
+    for own, built_by in ((False, others), (True, ~others)):
+        rows = ref[(ref["self_reference"] == own) & ref["updated"]]
+        assert len(rows) > 40
+        assert np.abs(rows["t_s"].to_numpy()[:, None] - t_rep[built_by][None, :]).min(axis=1).max() < 1e-6
+    assert 0.2 < independent["updated"].mean() < 0.8
     # within a few of its own sigmas of the simulator's truth, and well inside the radars' noise
     err = truth_error_m(m, independent)
     ratio = err / independent["sigma_m"].to_numpy(float)
@@ -207,7 +216,7 @@ def test_external_reference_reads_a_good_file(tmp_path):
     np.testing.assert_allclose(ref["t_s"], [28800.0, 28801.5, 28800.0])  # 09:00+01:00 is 08:00 UTC
     np.testing.assert_allclose(ref["altitude_ft"], [12000.0, 12010.0, 5000.0])
     assert (ref["sigma_m"] == 3.0).all() and (ref["built_by"] == "external").all()
-    assert not ref["self_reference"].any() and ref["callsign"].iloc[0] == "FLT01"
+    assert not ref["self_reference"].any() and ref["updated"].all() and ref["callsign"].iloc[0] == "FLT01"
     assert pd.isna(ref["callsign"].iloc[2])
 
 

@@ -92,6 +92,10 @@ def test_the_evaluation_sensor_uses_the_declared_limits(tmp_path):
     assert (sensor.name, sensor.latitude, sensor.altitude_m) == ("Hill", 41.0, 600.0)
     assert (sensor.max_range_nm, sensor.max_elevation_deg) == (200.0, 40.0)
     assert sensor.min_range_nm is None and sensor.min_elevation_deg is None
+    # the plot noise the bias fit's goodness of fit is judged by: the file's
+    _, noisy = read(tmp_path, RADAR + "sigma_range_m = 55.0\nsigma_azimuth_deg = 0.05\n")
+    given = sensor_from_entry(noisy.iloc[0])
+    assert (given.sigma_range_m, given.sigma_azimuth_deg) == (55.0, 0.05)
     # detections out to 120 NM and 30 deg: the declared limits stand, the absent minimums are none
     cov = coverage(sensor, [10.0, 120.0], [1.0, 30.0])
     assert (cov.max_range_nm, cov.max_elevation_deg, cov.min_range_nm, cov.min_elevation_deg) \
