@@ -97,7 +97,7 @@ def main() -> None:
     ap.add_argument("--keep", type=Path, help="directory for the recordings and reports (default: "
                     "temporary); recordings of the same scenario already there are reused")
     ap.add_argument("--only", default="help,stats,correlate,quality",
-                    help="comma-separated commands to time (help, stats, correlate, quality)")
+                    help="comma-separated commands to time (help, stats, correlate, quality, evaluate)")
     args = ap.parse_args()
     only = set(args.only.split(","))
     with tempfile.TemporaryDirectory() as tmp:
@@ -128,6 +128,11 @@ def main() -> None:
                                                          str(out / "report.xlsx")], ROOT)
         if "quality" in only:
             timed("msdc quality --all", ["quality", *files, *common, "-o", str(out / "quality.xlsx")], ROOT)
+        if "evaluate" in only:
+            timed("msdc evaluate (1997 SSR preset, XLSX, JSON, HTML)",
+                  ["evaluate", *files, "--sensors", str(out / "sensors.toml"), "--date", DATE, "--preset",
+                   "eurocontrol-1997-ssr", "-o", str(out / "eval.xlsx"), "--json", str(out / "eval.json"),
+                   "--html", str(out / "eval.html")], ROOT)
 
 
 if __name__ == "__main__":

@@ -78,14 +78,14 @@ def _identity(reference: pd.DataFrame, reports: pd.DataFrame) -> pd.DataFrame:
             continue
         said = reports.loc[reports[col].notna(), ["aircraft_id", "time", col]]
         said = pd.DataFrame({"aircraft_id": said["aircraft_id"].astype(str).to_numpy(object),
-                             "time": said["time"].astype("datetime64[ns, UTC]").to_numpy(),
+                             "time": said["time"].astype("datetime64[ns, UTC]").array.asi8,
                              col: said[col].astype(str).to_numpy(object)})
         said = said[said[col] != ""].sort_values("time", kind="stable")
         if said.empty:
             out[col] = None
             continue
         left = pd.DataFrame({"aircraft_id": out["aircraft_id"].astype(str).to_numpy(object),
-                             "time": out["time"].astype("datetime64[ns, UTC]").to_numpy()})
+                             "time": out["time"].astype("datetime64[ns, UTC]").array.asi8})
         back = pd.merge_asof(left, said, on="time", by="aircraft_id", direction="backward")[col]
         fwd = pd.merge_asof(left, said, on="time", by="aircraft_id", direction="forward")[col]
         out[col] = back.where(back.notna(), fwd).to_numpy(object)
@@ -99,10 +99,10 @@ def _on_ground(reference: pd.DataFrame, reports: pd.DataFrame) -> pd.Series:
     from msdc.pipeline.quality.surface import on_surface
 
     said = pd.DataFrame({"aircraft_id": reports["aircraft_id"].astype(str).to_numpy(object),
-                         "time": reports["time"].astype("datetime64[ns, UTC]").to_numpy(),
+                         "time": reports["time"].astype("datetime64[ns, UTC]").array.asi8,
                          "ground": on_surface(reports).astype(float)}).sort_values("time", kind="stable")
     left = pd.DataFrame({"aircraft_id": reference["aircraft_id"].astype(str).to_numpy(object),
-                         "time": reference["time"].astype("datetime64[ns, UTC]").to_numpy(),
+                         "time": reference["time"].astype("datetime64[ns, UTC]").array.asi8,
                          "row": np.arange(len(reference))}).sort_values("time", kind="stable")
     back = pd.merge_asof(left, said, on="time", by="aircraft_id", direction="backward")["ground"]
     fwd = pd.merge_asof(left, said, on="time", by="aircraft_id", direction="forward")["ground"]
@@ -169,6 +169,19 @@ def _uncovered(own: pd.DataFrame, independent: pd.DataFrame, max_gap_s: float) -
     return own[keep]
 
 
+def _needing_fallback(own: pd.DataFrame, independent: pd.DataFrame, epoch: pd.Timestamp,
+                      max_gap_s: float) -> np.ndarray:
+    """Per report of the sensor, whether its aircraft has a report the independent reference does not
+    cover (_uncovered's rule at report times): only those aircraft need the sensor's own track, which is
+    the costly part of a leave-one-out reference where ADS-B sees every aircraft."""
+    if own.empty or independent.empty:
+        return np.ones(len(own), bool)
+    t_s = (own["time"].astype("datetime64[ns, UTC]").array.asi8 - epoch.value) / 1e9
+    probe = pd.DataFrame({"aircraft": own["aircraft_id"].astype(str).to_numpy(object), "t_s": t_s})
+    left = _uncovered(probe.sort_values(["aircraft", "t_s"], kind="stable"), independent, max_gap_s)
+    return probe["aircraft"].isin(set(left["aircraft"])).to_numpy(bool)
+
+
 def _reference(meas: pd.DataFrame, builders: np.ndarray, sensor_id: str | None, gates: Gates,
                epoch: pd.Timestamp | None, step_s: float, max_coast_s: float, fallback: bool,
                max_gap_s: float) -> BuiltReference:
@@ -184,6 +197,7 @@ def _reference(meas: pd.DataFrame, builders: np.ndarray, sensor_id: str | None, 
         own_reports = meas[(meas["sensor_id"].astype(str) == sensor_id).to_numpy(bool)]
         if (own_reports["sensor_kind"] == "adsb").any():
             own_reports, _ = gate_reports(own_reports, gates)
+        own_reports = own_reports[_needing_fallback(own_reports, built, epoch, max_gap_s)]
         own = reconstruct(own_reports, epoch, step_s=step_s, max_coast_s=max_coast_s, self_reference=True)
         own = _uncovered(own, built, max_gap_s)
         if len(own):

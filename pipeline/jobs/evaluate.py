@@ -36,7 +36,9 @@ from msdc.pipeline.model.load import Loaded
 from msdc.pipeline.progress import Progress
 from msdc.pipeline.report.transaction import OutputTransaction, staged
 
-MAP_POINTS_PER_SENSOR = 20_000  # the HTML map thins each sensor's reports (and reference) to about this many
+# the HTML map thins each sensor's reports (and its reference) to about this many points: a browser draws
+# them at once, and the aircraft's paths stay readable
+MAP_POINTS_PER_SENSOR = 5_000
 
 
 @dataclass
@@ -396,7 +398,7 @@ def write_evaluation(result: EvaluateResult, *, tx: OutputTransaction | None = N
             write_evaluation_xlsx(result.scorecard, stage.path(c.output), result.tables)
             written["workbook"] = c.output
         if c.json:
-            write_evaluation_json(result.scorecard, stage.path(c.json), result.tables, result.map_points)
+            write_evaluation_json(result.scorecard, stage.path(c.json), result.tables)  # map: HTML only
             written["json"] = c.json
         if c.html:
             write_evaluation_html(result.scorecard, stage.path(c.html), result.tables, result.map_points,
