@@ -1,5 +1,5 @@
-"""Sector layers (``--sectors FILE.geojson``): named polygons, each optionally one of a preset's areas
-(runway, taxiway, apron, stand... as the preset names them) and optionally limited to a flight-level band,
+"""Sector layers (``--sectors FILE.geojson``): named polygons, each belonging to one of a preset's areas (the
+one its ``area`` property names, else the one of its own name), optionally limited to a flight-level band,
 and which reports or reference samples lie in each.
 
 Polygons follow the ``--area`` rules (pipeline.model.polygons: straight edges in longitude/latitude, holes
@@ -141,16 +141,22 @@ def sector_mask(sector: Sector, latitude, longitude, flight_level=None) -> np.nd
     return hit & np.isfinite(fl)
 
 
+def area_of(sector: Sector) -> str:
+    """The preset area a sector belongs to: its ``area`` property, else its name (a sector named "tma"
+    without an area is the preset's area "tma")."""
+    return sector.area if sector.area is not None else sector.name
+
+
 def sectors_for_area(sectors: list[Sector], area: str) -> list[Sector]:
-    """The sectors that belong to a preset area, in file order."""
-    return [s for s in sectors if s.area == area]
+    """The sectors that belong to a preset area (area_of), in file order."""
+    return [s for s in sectors if area_of(s) == area]
 
 
 def check_preset_areas(preset, sectors: list[Sector]) -> list[str]:
     """Warnings for the preset's areas that no sector belongs to (their requirements are then not
     evaluated) and for sectors naming an area the preset does not declare."""
     warnings = []
-    have = {s.area for s in sectors if s.area is not None}
+    have = {area_of(s) for s in sectors}
     for area, description in preset.areas.items():
         if area in have:
             continue
@@ -170,4 +176,5 @@ def check_preset_areas(preset, sectors: list[Sector]) -> list[str]:
     return warnings
 
 
-__all__ = ["PROPERTIES", "Sector", "check_preset_areas", "read_sectors", "sector_mask", "sectors_for_area"]
+__all__ = ["PROPERTIES", "Sector", "area_of", "check_preset_areas", "read_sectors", "sector_mask",
+           "sectors_for_area"]

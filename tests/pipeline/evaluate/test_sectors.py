@@ -67,6 +67,8 @@ def test_the_sectors_are_read_in_file_order_with_their_properties(sectors) -> No
     assert len(sectors[0].polygons[0]) == 2  # the outer ring and its hole
     assert [s.name for s in sectors_for_area(sectors, "apron")] == ["Apron T1"]
     assert sectors_for_area(sectors, "stands") == []
+    # without an area property a sector belongs to the area of its own name
+    assert [s.name for s in sectors_for_area(sectors, "TMA lower")] == ["TMA lower"]
 
 
 def test_a_point_in_the_hole_is_outside(sectors) -> None:
