@@ -49,3 +49,25 @@ def map_points() -> pd.DataFrame:
             rows.append((name, "reference", "reference", lat0 + 0.01 * i, lon0 + 0.02 * i))
             rows.append((name, "report", "SSR1", lat0 + 0.01 * i + 0.001, lon0 + 0.02 * i - 0.001))
     return pd.DataFrame(rows, columns=["aircraft", "source", "sensor", "latitude", "longitude"])
+
+
+def png(width: int, height: int, rgb: tuple[int, int, int]) -> bytes:
+    """A one-colour PNG written from the PNG specification (signature; IHDR: 8-bit truecolour; one IDAT of
+    zlib-compressed scanlines, each after filter byte 0; IEND), so a reader's width and height can be
+    checked against the numbers given here."""
+    import struct
+    import zlib
+
+    def chunk(kind: bytes, data: bytes) -> bytes:
+        return struct.pack(">I", len(data)) + kind + data + struct.pack(">I", zlib.crc32(kind + data))
+
+    header = struct.pack(">IIBBBBB", width, height, 8, 2, 0, 0, 0)
+    rows = b"".join(b"\x00" + bytes(rgb) * width for _ in range(height))
+    return (b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", header) + chunk(b"IDAT", zlib.compress(rows))
+            + chunk(b"IEND", b""))
+
+
+def images() -> dict[str, bytes]:
+    """Two coverage figures stand-ins: 400 x 300 blue and 320 x 200 green."""
+    return {"SSR1: polar map": png(400, 300, (31, 119, 180)),
+            "SSR1: vertical coverage": png(320, 200, (44, 160, 44))}

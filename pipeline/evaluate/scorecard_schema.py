@@ -196,6 +196,27 @@ def validate_map(frame: pd.DataFrame | None) -> pd.DataFrame | None:
     return pd.DataFrame(data, columns=list(MAP_COLUMNS))
 
 
+PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
+
+
+def validate_images(images: Mapping[str, bytes] | None) -> dict[str, bytes]:
+    """The optional coverage figures (title -> PNG bytes): non-empty text titles, each a PNG (by its
+    signature); returned as a plain dict ({} for None)."""
+    if images is None:
+        return {}
+    if not isinstance(images, Mapping):
+        raise ValueError(f"images: must be a mapping of title -> PNG bytes, got {type(images).__name__}")
+    out = {}
+    for title, data in images.items():
+        if not isinstance(title, str) or not title.strip():
+            raise ValueError(f"images: title {title!r} is not a non-empty text")
+        if not isinstance(data, bytes | bytearray) or not bytes(data[:8]) == PNG_SIGNATURE:
+            got = f"{len(data)} bytes" if isinstance(data, bytes | bytearray) else type(data).__name__
+            raise ValueError(f"images: {title!r} is not a PNG image (no PNG signature; got {got})")
+        out[title] = bytes(data)
+    return out
+
+
 def schema_markdown() -> str:
     """The scorecard's and the map's columns as markdown tables (the docs page shows them)."""
     lines = []

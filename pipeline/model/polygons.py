@@ -30,30 +30,44 @@ def read_polygons(path: str | Path) -> Polygons:
     """The Polygon and MultiPolygon geometries of a GeoJSON file (a bare geometry, a Feature or a
     FeatureCollection); ValueError naming the file and what is wrong."""
     p = Path(path)
-    try:
-        doc = json.loads(p.read_text(encoding="utf-8"))
-    except OSError as exc:
-        raise ValueError(f"{p}: cannot be read ({exc.strerror})") from None
-    except UnicodeDecodeError:
-        raise ValueError(f"{p}: not a GeoJSON file (not UTF-8 text)") from None
-    except json.JSONDecodeError as exc:
-        raise ValueError(f"{p}: not a GeoJSON file (JSON error at line {exc.lineno}, column {exc.colno}: "
-                         f"{exc.msg})") from None
+    doc = read_geojson(p)
     polygons: list[tuple[np.ndarray, ...]] = []
     for where, geometry in _geometries(doc, "the document"):
         kind = geometry.get("type") if isinstance(geometry, dict) else None
         if kind not in POLYGON_TYPES:
             raise ValueError(f"{p}: {where} is a {kind or 'non-geometry'}, not a Polygon or MultiPolygon")
-        coords = geometry.get("coordinates")
-        parts = [coords] if kind == "Polygon" else coords
-        if not isinstance(parts, list) or not parts:
-            raise ValueError(f"{p}: {where} has no coordinates")
-        for k, rings in enumerate(parts):
-            name = where if kind == "Polygon" else f"{where}, polygon {k + 1}"
-            polygons.append(_rings(p, name, rings))
+        polygons += geometry_polygons(p, where, geometry)
     if not polygons:
         raise ValueError(f"{p}: no Polygon or MultiPolygon in it")
     return Polygons(str(p), tuple(polygons))
+
+
+def read_geojson(path: Path) -> object:
+    """The parsed JSON of a GeoJSON file; ValueError naming the file when it cannot be read or parsed."""
+    try:
+        return json.loads(path.read_text(encoding="utf-8"))
+    except OSError as exc:
+        raise ValueError(f"{path}: cannot be read ({exc.strerror})") from None
+    except UnicodeDecodeError:
+        raise ValueError(f"{path}: not a GeoJSON file (not UTF-8 text)") from None
+    except json.JSONDecodeError as exc:
+        raise ValueError(f"{path}: not a GeoJSON file (JSON error at line {exc.lineno}, column {exc.colno}: "
+                         f"{exc.msg})") from None
+
+
+def geometry_polygons(path: Path, where: str, geometry: dict) -> list[tuple[np.ndarray, ...]]:
+    """The polygons (each a tuple of closed rings) of a Polygon or MultiPolygon geometry; ValueError naming
+    the file, ``where`` and the polygon and ring at fault."""
+    kind = geometry.get("type")
+    coords = geometry.get("coordinates")
+    parts = [coords] if kind == "Polygon" else coords
+    if not isinstance(parts, list) or not parts:
+        raise ValueError(f"{path}: {where} has no coordinates")
+    out = []
+    for k, rings in enumerate(parts):
+        name = where if kind == "Polygon" else f"{where}, polygon {k + 1}"
+        out.append(_rings(path, name, rings))
+    return out
 
 
 def _geometries(doc: object, where: str):
@@ -99,10 +113,16 @@ def _rings(path: Path, where: str, rings: object) -> tuple[np.ndarray, ...]:
 def inside(polygons: Polygons, latitude, longitude) -> np.ndarray:
     """Per position, whether it lies inside any polygon (even-odd over its rings, straight edges in
     longitude/latitude); False where the position is NaN."""
+    return inside_any(polygons.polygons, latitude, longitude)
+
+
+def inside_any(polygons: tuple[tuple[np.ndarray, ...], ...], latitude, longitude) -> np.ndarray:
+    """Per position, whether it lies inside any of the polygons (each a tuple of closed rings: the outer
+    ring, then its holes); False where the position is NaN."""
     lat = np.asarray(latitude, dtype=float)
     lon = np.asarray(longitude, dtype=float)
     hit = np.zeros(lat.shape, bool)
-    for rings in polygons.polygons:
+    for rings in polygons:
         odd = np.zeros(lat.shape, bool)
         for ring in rings:
             odd ^= _crossings_odd(ring, lon, lat)
@@ -129,4 +149,4 @@ def bounds(polygons: Polygons) -> tuple[float, float, float, float]:
     return (float(xy[:, 0].min()), float(xy[:, 1].min()), float(xy[:, 0].max()), float(xy[:, 1].max()))
 
 
-__all__ = ["Polygons", "bounds", "inside", "read_polygons"]
+__all__ = ["Polygons", "bounds", "geometry_polygons", "inside", "inside_any", "read_geojson", "read_polygons"]

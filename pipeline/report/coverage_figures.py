@@ -6,6 +6,7 @@ where nothing was expected is left white."""
 
 from __future__ import annotations
 
+import io
 import os
 from pathlib import Path
 
@@ -114,3 +115,28 @@ def vertical_coverage_figure(grid: pd.DataFrame, path: str | os.PathLike[str], t
                              **kwargs) -> Path:
     """Write the vertical coverage diagram as PNG; returns the path."""
     return save_png(vertical_coverage(grid, title, **kwargs), path)
+
+
+def png_bytes(fig: Figure) -> bytes:
+    """The figure as PNG bytes; its artists are released afterwards (no pyplot: nothing else holds it)."""
+    buffer = io.BytesIO()
+    try:
+        fig.savefig(buffer, format="png", facecolor="white")
+    finally:
+        fig.clear()
+    return buffer.getvalue()
+
+
+def coverage_images(polar_grid: pd.DataFrame | None, vertical_grid: pd.DataFrame | None, title: str,
+                    min_expected: int | None = None, **vertical) -> dict[str, bytes]:
+    """The polar PD map and the vertical coverage diagram as PNG bytes, keyed by their titles (for the HTML
+    report and the workbook's Coverage sheet); a grid that is None or empty is left out. ``vertical`` goes
+    to vertical_coverage (cone_elevation_deg, site_altitude_m, max_range_nm)."""
+    out: dict[str, bytes] = {}
+    if polar_grid is not None and not polar_grid.empty:
+        name = f"{title}: probability of detection by range and azimuth"
+        out[name] = png_bytes(polar_pd_map(polar_grid, name, min_expected))
+    if vertical_grid is not None and not vertical_grid.empty:
+        name = f"{title}: vertical coverage (probability of detection by range and height)"
+        out[name] = png_bytes(vertical_coverage(vertical_grid, name, min_expected, **vertical))
+    return out

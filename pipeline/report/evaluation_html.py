@@ -1,20 +1,29 @@
 """The evaluation's HTML report: one self-contained file that works offline (Bokeh's scripts written inside
 it, no request to any server): the scorecard as a table (verdicts coloured, unchecked thresholds marked),
-the tables, and an interactive map of the reports and the reference per aircraft (legend click hides an
+the coverage figures (PNGs inside the file as data URIs), the tables (numbers as evaluation_formats shows
+them), and an interactive map of the reports and the reference per aircraft (legend click hides an
 aircraft or a source; hover names the point; pan and wheel zoom)."""
 
 from __future__ import annotations
 
+import base64
 import html
 import math
 import os
 from collections.abc import Mapping
 from pathlib import Path
 
+import numpy as np
 import pandas as pd
 
 from msdc.pipeline.evaluate.catalogue import CATALOGUE
-from msdc.pipeline.evaluate.scorecard_schema import validate_map, validate_scorecard, validate_tables
+from msdc.pipeline.evaluate.scorecard_schema import (
+    validate_images,
+    validate_map,
+    validate_scorecard,
+    validate_tables,
+)
+from msdc.pipeline.report.evaluation_formats import number_text, proportion_columns
 from msdc.pipeline.report.evaluation_xlsx import SCORECARD_HEADERS, UNCHECKED_NOTE, UNIT_WORDS
 from msdc.pipeline.report.files import named
 from msdc.pipeline.report.headers import workbook_header
@@ -33,6 +42,9 @@ td.fail { background: #ffc7ce; color: #9c0006; font-weight: bold; }
 td.inconclusive { background: #ffeb9c; color: #9c5700; font-weight: bold; }
 td.unchecked { font-weight: bold; }
 p.note { font-style: italic; color: #595959; max-width: 60em; }
+figure.coverage { margin: 0.5em 0 1.5em; }
+figure.coverage img { max-width: 100%; height: auto; border: 1px solid #ddd; }
+figure.coverage figcaption { font-weight: bold; margin-bottom: 0.3em; }
 """
 
 
@@ -75,23 +87,43 @@ def _scorecard_table(card: pd.DataFrame) -> str:
 
 
 def _frame_table(name: str, frame: pd.DataFrame) -> str:
-    """A table as HTML: headers as the workbook prints them, NaN as an empty cell."""
+    """A table as HTML: headers as the workbook prints them, numbers as evaluation_formats shows them
+    (a requirement's values in its unit when the table has a ``requirement`` column), NaN as an empty
+    cell."""
     if not isinstance(frame.index, pd.RangeIndex):
         frame = frame.reset_index()
     head = "".join(f"<th>{html.escape(workbook_header(str(c)))}</th>" for c in frame.columns)
+    proportions = proportion_columns(frame)
+    columns = [str(c) for c in frame.columns]
     body = []
     for row in frame.itertuples(index=False):
+        ident = row[columns.index("requirement")] if "requirement" in columns else None
+        row_unit = CATALOGUE[ident].unit if isinstance(ident, str) and ident in CATALOGUE else None
         cells = []
-        for value in row:
-            if isinstance(value, float):
-                cells.append(f'<td class="num">{"" if math.isnan(value) else f"{value:.6g}"}</td>')
-            elif isinstance(value, int):
-                cells.append(f'<td class="num">{value}</td>')
+        for column, value in zip(columns, row, strict=True):
+            if isinstance(value, bool | np.bool_):
+                cells.append(f"<td>{'yes' if value else 'no'}</td>")
+            elif isinstance(value, float | np.floating):
+                text = number_text(float(value), column, proportions, row_unit)
+                cells.append(f'<td class="num">{text}</td>')
+            elif isinstance(value, int | np.integer):
+                cells.append(f'<td class="num">{int(value)}</td>')
             else:
                 cells.append(f"<td>{html.escape(str(value))}</td>")
         body.append("<tr>" + "".join(cells) + "</tr>")
     return (f"<h2>{html.escape(name)}</h2><table class=\"evaluation-table\"><thead><tr>{head}</tr></thead>"
             f"<tbody>{''.join(body)}</tbody></table>")
+
+
+def _figures(images: Mapping[str, bytes]) -> str:
+    """The coverage figures, each a PNG inside the page as a data URI under its title."""
+    parts = []
+    for title, png in images.items():
+        uri = "data:image/png;base64," + base64.b64encode(png).decode("ascii")
+        text = html.escape(title)
+        parts.append(f'<figure class="coverage"><figcaption>{text}</figcaption>'
+                     f'<img src="{uri}" alt="{text}"></figure>')
+    return "".join(parts)
 
 
 def _source(frame: pd.DataFrame):
@@ -134,11 +166,14 @@ def _map(points: pd.DataFrame):
 
 
 def evaluation_html(scorecard: pd.DataFrame, tables: Mapping[str, pd.DataFrame] | None = None,
-                    map_points: pd.DataFrame | None = None, title: str = "msdc evaluation") -> str:
-    """The report's HTML text (inputs validated by scorecard_schema)."""
+                    map_points: pd.DataFrame | None = None, title: str = "msdc evaluation",
+                    images: Mapping[str, bytes] | None = None) -> str:
+    """The report's HTML text (inputs validated by scorecard_schema); ``images`` (title -> PNG bytes, e.g.
+    coverage_figures.coverage_images) make its Coverage section."""
     card = validate_scorecard(scorecard)
     frames = validate_tables(tables)
     points = validate_map(map_points)
+    figures = validate_images(images)
     parts = [f"<h1>{html.escape(title)}</h1>", "<h2>Scorecard</h2>", _scorecard_table(card),
              "<p class=\"note\">Values, intervals and thresholds are in the row's unit. Verdict: pass when "
              "the "
@@ -146,6 +181,8 @@ def evaluation_html(scorecard: pd.DataFrame, tables: Mapping[str, pd.DataFrame] 
              "otherwise (or below the standard's minimum sample).</p>"]
     if not card["checked"].all():
         parts.append(f'<p class="note">{html.escape(UNCHECKED_NOTE)}</p>')
+    if figures:
+        parts += ['<h2>Coverage</h2><div id="coverage">', _figures(figures), "</div>"]
     head = ""
     if points is not None and not points.empty:
         try:
@@ -168,9 +205,10 @@ def evaluation_html(scorecard: pd.DataFrame, tables: Mapping[str, pd.DataFrame] 
 
 def write_evaluation_html(scorecard: pd.DataFrame, path: str | os.PathLike[str],
                           tables: Mapping[str, pd.DataFrame] | None = None,
-                          map_points: pd.DataFrame | None = None, title: str = "msdc evaluation") -> Path:
+                          map_points: pd.DataFrame | None = None, title: str = "msdc evaluation",
+                          images: Mapping[str, bytes] | None = None) -> Path:
     """evaluation_html written to ``path`` as UTF-8 (an error names it); returns ``path``."""
-    text = evaluation_html(scorecard, tables, map_points, title)
+    text = evaluation_html(scorecard, tables, map_points, title, images)
     path = Path(path)
     with named(path):
         path.write_text(text, encoding="utf-8")

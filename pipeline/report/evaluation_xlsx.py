@@ -1,6 +1,8 @@
 """The evaluation's workbook: a Scorecard sheet first (human headers, each row's unit in words, verdicts
-coloured, unchecked thresholds marked "no" as the presets mark them), then one sheet per table; every sheet
-A4 landscape, fitted to the page width, its header row repeated on every printed page."""
+coloured, unchecked thresholds marked "no" as the presets mark them), the coverage figures when given (a
+Coverage sheet, one figure per printed page), then one sheet per table (proportions as percentages, as the
+scorecard: evaluation_formats); every sheet A4 landscape, fitted to the page width, its header row repeated
+on every printed page."""
 
 from __future__ import annotations
 
@@ -16,7 +18,7 @@ from openpyxl.styles import Alignment, Font, PatternFill
 from openpyxl.worksheet._write_only import WriteOnlyWorksheet
 
 from msdc.pipeline.evaluate.catalogue import CATALOGUE
-from msdc.pipeline.evaluate.scorecard_schema import validate_scorecard, validate_tables
+from msdc.pipeline.evaluate.scorecard_schema import validate_images, validate_scorecard, validate_tables
 from msdc.pipeline.report.cells import (
     BOLD,
     MAX_WIDTH,
@@ -32,10 +34,12 @@ from msdc.pipeline.report.cells import (
     text_cell,
     write_table,
 )
-from msdc.pipeline.report.excel import _discard, sheet_name
+from msdc.pipeline.report.evaluation_formats import PROPORTION_FORMAT, proportion_columns
+from msdc.pipeline.report.excel import _discard, _write_figures, sheet_name
 from msdc.pipeline.report.saving import save
 
 SCORECARD_SHEET = "Scorecard"
+COVERAGE_SHEET = "Coverage"
 # the scorecard's printed columns: (schema column or 'unit', header)
 SCORECARD_HEADERS: tuple[tuple[str, str], ...] = (
     ("sensor", "Sensor"), ("sector", "Sector"), ("requirement", "Requirement"), ("parameters", "Parameters"),
@@ -175,6 +179,12 @@ def _write_table(wb: Workbook, title: str, frame: pd.DataFrame) -> None:
     if not isinstance(frame.index, pd.RangeIndex) or any(n is not None for n in frame.index.names):
         frame = frame.reset_index()
     columns = [make_column(ws, str(h), frame.iloc[:, j]) for j, h in enumerate(frame.columns)]
+    proportions = proportion_columns(frame)
+    for column in columns:
+        if column.header in proportions and not column.text:  # a percentage, as on the scorecard
+            column.number_format = PROPORTION_FORMAT
+            column.styled = WriteOnlyCell(ws, 0.0)
+            column.styled.number_format = PROPORTION_FORMAT
     if not columns:
         page_setup(ws)
         ws.append([text_cell(ws, "No columns.", font=BOLD)])
@@ -184,15 +194,20 @@ def _write_table(wb: Workbook, title: str, frame: pd.DataFrame) -> None:
 
 
 def write_evaluation_xlsx(scorecard: pd.DataFrame, path: str | os.PathLike[str],
-                          tables: Mapping[str, pd.DataFrame] | None = None) -> None:
-    """The evaluation workbook at ``path``: the scorecard (validated: scorecard_schema) and the tables in
-    their order, one sheet each."""
+                          tables: Mapping[str, pd.DataFrame] | None = None,
+                          images: Mapping[str, bytes] | None = None) -> None:
+    """The evaluation workbook at ``path``: the scorecard (validated: scorecard_schema), the Coverage sheet
+    of ``images`` (title -> PNG bytes, e.g. coverage_figures.coverage_images) when given, and the tables
+    in their order, one sheet each."""
     card = validate_scorecard(scorecard)
     extra = validate_tables(tables)
+    figures = validate_images(images)
     wb = Workbook(write_only=True)
     taken = {SCORECARD_SHEET.lower()}
     try:
         _write_scorecard(wb, card)
+        if figures:
+            _write_figures(wb, sheet_name(COVERAGE_SHEET, taken), figures)
         for name, frame in extra.items():
             _write_table(wb, sheet_name(name, taken), frame)
     except BaseException:

@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import contextlib
 import datetime as dt
+import io
 import os
 import re
 import textwrap
@@ -296,9 +297,9 @@ def _write_summary(wb: Workbook, run: CorrelationRun) -> None:
         ws.append([note_text_cell(ws, "none")])
 
 
-def _scaled_image(png: str | os.PathLike[str]) -> Image:
-    """The PNG as an openpyxl Image, scaled down to fit one printed landscape page."""
-    image = Image(str(png))
+def _scaled_image(png: str | os.PathLike[str] | bytes) -> Image:
+    """The PNG (a file, or its bytes) as an openpyxl Image, scaled down to fit one printed landscape page."""
+    image = Image(io.BytesIO(png) if isinstance(png, bytes) else str(png))
     if image.width and image.height:
         scale = min(1.0, IMAGE_MAX_W_PX / image.width, IMAGE_MAX_H_PX / image.height)
         image.width, image.height = int(image.width * scale), int(image.height * scale)
@@ -499,7 +500,7 @@ def _write_frame(wb: Workbook, title: str, frame: pd.DataFrame | pd.Series) -> N
     write_table(ws, columns, note=note)
 
 
-def _write_figures(wb: Workbook, title: str, images: dict[str, str | os.PathLike[str]],
+def _write_figures(wb: Workbook, title: str, images: Mapping[str, str | os.PathLike[str] | bytes],
                    note: str = "") -> None:
     """A sheet of PNG figures, one per printed page, each under its caption; ``note`` (what the figures
     leave out) on the first row."""

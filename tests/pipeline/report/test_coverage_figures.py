@@ -9,6 +9,7 @@ import pytest
 from matplotlib.collections import QuadMesh
 
 from msdc.pipeline.report.coverage_figures import (
+    coverage_images,
     grid_arrays,
     polar_pd_figure,
     polar_pd_map,
@@ -63,3 +64,20 @@ def test_figures_are_written(tmp_path):
 def test_a_grid_without_its_columns_is_refused():
     with pytest.raises(ValueError, match="missing enough"):
         grid_arrays(GRID.drop(columns="enough"))
+
+
+def _png_size(data: bytes) -> tuple[int, int]:
+    """Width and height from a PNG's IHDR chunk (PNG specification 11.2.2: bytes 16-23, big-endian)."""
+    assert data[:8] == b"\x89PNG\r\n\x1a\n" and data[12:16] == b"IHDR"
+    return int.from_bytes(data[16:20], "big"), int.from_bytes(data[20:24], "big")
+
+
+def test_coverage_images_are_pngs_keyed_by_title():
+    vertical = GRID.assign(y_low=GRID["y_low"] * 100, y_high=GRID["y_high"] * 100)
+    images = coverage_images(GRID, vertical, "SSR1", min_expected=20, cone_elevation_deg=40.0)
+    assert list(images) == ["SSR1: probability of detection by range and azimuth",
+                            "SSR1: vertical coverage (probability of detection by range and height)"]
+    # the figures are 7.5 x 7.5 in and 10 x 5.5 in at 130 dots per inch
+    assert [_png_size(b) for b in images.values()] == [(975, 975), (1300, 715)]
+    assert coverage_images(None, GRID.iloc[:0], "SSR1") == {}
+    assert list(coverage_images(GRID, None, "x")) == ["x: probability of detection by range and azimuth"]

@@ -6,12 +6,13 @@ from __future__ import annotations
 
 import json
 import math
+import re
 import shutil
 from pathlib import Path
 
 import pandas as pd
 import pytest
-from evaluation_sample import COLUMNS, ROWS, map_points, scorecard, tables
+from evaluation_sample import COLUMNS, ROWS, images, map_points, png, scorecard, tables
 from openpyxl import load_workbook
 
 from msdc.pipeline.evaluate.scorecard_schema import (
@@ -125,6 +126,35 @@ def test_the_tables_sheets_hold_the_tables(workbook: Path) -> None:
                                         "Detected updates", "Probability of detection"]
     assert [c.value for c in ws[2]] == ["SSR1", 0, 50, 150, 148, pytest.approx(148 / 150)]
     assert [c.value for c in ws[3]] == ["SSR1", 50, 100, 0, 0, None]  # NaN: an empty cell
+    assert ws.cell(2, 6).number_format == "0.00%"  # a proportion as on the scorecard, not 0.986667
+
+
+def test_the_coverage_sheet_holds_the_images_after_the_scorecard(tmp_path: Path) -> None:
+    path = tmp_path / "e.xlsx"
+    write_evaluation_xlsx(scorecard(), path, tables(), images())
+    wb = load_workbook(path)
+    assert wb.sheetnames == ["Scorecard", "Coverage", "PD per aircraft", "PD per range band"]
+    ws = wb["Coverage"]
+    assert [ws.cell(r, 1).value for r in range(1, ws.max_row + 1) if ws.cell(r, 1).value] == list(images())
+    # each image whole (both fit a landscape page unscaled), its own pixels
+    assert [(i.width, i.height) for i in ws._images] == [(400, 300), (320, 200)]
+    assert ws.page_setup.orientation == "landscape" and ws.page_setup.fitToWidth == 1
+    assert len(ws.row_breaks.brk) == 2  # one figure per printed page
+
+
+@pytest.mark.parametrize(("bad", "message"), [
+    ({"x": b"GIF89a"}, "images: 'x' is not a PNG image (no PNG signature; got 6 bytes)"),
+    ({"x": "a.png"}, "images: 'x' is not a PNG image (no PNG signature; got str)"),
+    ({" ": png(1, 1, (0, 0, 0))}, "images: title ' ' is not a non-empty text"),
+    ([b"\x89PNG"], "images: must be a mapping of title -> PNG bytes, got list"),
+])
+def test_bad_images_are_refused(tmp_path: Path, bad, message: str) -> None:
+    for write in (lambda: write_evaluation_xlsx(scorecard(), tmp_path / "e.xlsx", images=bad),
+                  lambda: evaluation_html(scorecard(), images=bad)):
+        with pytest.raises(ValueError) as caught:
+            write()
+        assert str(caught.value) == message
+    assert not (tmp_path / "e.xlsx").exists()
 
 
 # --------------------------------------------------------------------------------------------- JSON
@@ -166,6 +196,22 @@ def test_the_html_holds_its_scripts_and_loads_nothing() -> None:
     bad = scorecard()
     bad.loc[0, "notes"] = "<img src=x onerror=alert(1)>"
     assert "<img src=x" not in evaluation_html(bad)
+    with_images = evaluation_html(scorecard(), images={"<b>x</b>": png(2, 1, (0, 0, 0))})
+    assert '<img src="data:image/png;base64,' in with_images and "<b>x</b>" not in with_images
+    assert "Coverage" not in evaluation_html(scorecard())  # no figures, no section
+
+
+def test_the_html_tables_show_numbers_as_the_workbook() -> None:
+    """Proportions as the scorecard's percentages (148 / 150 = 98.67 %, not 0.986667), NM to 3 decimals,
+    counts whole, NaN empty."""
+    text = evaluation_html(scorecard(), tables())
+    band = text.split("<h2>PD per range band</h2>")[1]
+    cells = re.findall(r"<td[^>]*>([^<]*)</td>", band)
+    assert cells == ["SSR1", "0.000", "50.000", "150", "148", "98.67 %",
+                     "SSR1", "50.000", "100.000", "0", "0", ""]
+    first = text.split("<h2>PD per aircraft</h2>")[1].split("</table>")[0]
+    aircraft = re.findall(r"<td[^>]*>([^<]*)</td>", first)
+    assert aircraft == ["MAS72", "SSR1", "120", "118", "98.33 %", "IBE3150", "SSR1", "80", "80", "100.00 %"]
 
 
 def _browser():
@@ -200,7 +246,7 @@ _PAINTED = """([r, g, b]) => {
 @pytest.mark.slow  # Chromium's start and Bokeh's 1 MB script: about 3 s
 def test_the_html_report_works_offline_in_chromium(tmp_path: Path) -> None:
     sync_playwright = _browser()
-    path = write_evaluation_html(scorecard(), tmp_path / "e.html", tables(), map_points())
+    path = write_evaluation_html(scorecard(), tmp_path / "e.html", tables(), map_points(), images=images())
     url = path.as_uri()
     refused: list[str] = []
     messages: list[tuple[str, str]] = []
@@ -231,6 +277,8 @@ def test_the_html_report_works_offline_in_chromium(tmp_path: Path) -> None:
             verdict_colour = page.eval_on_selector(
                 "#scorecard tbody tr:nth-child(2) td:nth-child(10)",
                 "c => getComputedStyle(c).backgroundColor")
+            figures = page.eval_on_selector_all(
+                "#coverage img", "is => is.map(i => [i.alt, i.complete, i.naturalWidth, i.naturalHeight])")
             page_messages = list(messages)  # before the test's own pixel reads (Chromium warns of those)
             blue = page.evaluate(_PAINTED, [0x1F, 0x77, 0xB4])  # IBE3150, the first aircraft by name
             red = page.evaluate(_PAINTED, [0xD6, 0x27, 0x28])  # MAS72
@@ -251,6 +299,8 @@ def test_the_html_report_works_offline_in_chromium(tmp_path: Path) -> None:
          "no", "=withheld: no report where the reference's sigma is below the tolerance"],
     ]
     assert verdict_colour == "rgb(255, 199, 206)"  # fail: #ffc7ce
+    # the coverage figures load from the page itself, at the sizes the sample's PNGs were written with
+    assert figures == [["SSR1: polar map", True, 400, 300], ["SSR1: vertical coverage", True, 320, 200]]
     assert blue > 50 and red > 50, (blue, red)  # both aircraft's lines and dots drawn
     assert refused == []
     assert [m for m in page_messages if m[0] in ("error", "warning")] == []

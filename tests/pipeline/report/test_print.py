@@ -54,7 +54,7 @@ def workbooks(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, set[str]]
             assert main([*argv, "-o", str(out / name)]) == 0, name
         # the evaluation's workbook, on the hand-made scorecard (its command comes later)
         sample = evaluation_sample
-        write_evaluation_xlsx(sample.scorecard(), out / "evaluation.xlsx", sample.tables())
+        write_evaluation_xlsx(sample.scorecard(), out / "evaluation.xlsx", sample.tables(), sample.images())
     return out, asked
 
 
@@ -268,3 +268,10 @@ def test_no_column_is_cut_and_no_value_overflows_its_cell(workbooks, pdfs) -> No
             assert not missing, (name, ws.title, missing)
             checked += 1
     assert checked >= 10
+
+
+@pytest.mark.slow  # the commands on the fixtures (about 20 s), LibreOffice (about 15 s)
+def test_the_evaluation_coverage_figures_print_one_per_page(pdfs) -> None:
+    pages = [text for sheet, text in _pages(pdfs["evaluation.xlsx"]) if sheet == "Coverage"]
+    captions = [" ".join(p.split()).split(" Coverage, page")[0] for p in pages]
+    assert captions == list(evaluation_sample.images())  # each figure on a page of its own, under its title

@@ -1,0 +1,42 @@
+"""How the evaluation's tables show numbers (HTML and workbook alike): values worked out by hand."""
+
+from __future__ import annotations
+
+import math
+
+import pandas as pd
+import pytest
+
+from msdc.pipeline.report.evaluation_formats import (
+    number_text,
+    proportion_columns,
+    significant,
+)
+
+
+@pytest.mark.parametrize(("value", "text"), [
+    (0.983333, "0.9833"), (118 / 120, "0.9833"), (12345.6, "12,346"), (1234.56, "1,235"), (12.3456, "12.35"),
+    (0.00012, "0.0001200"), (1.23e-6, "1.230e-06"), (-2.5, "-2.500"), (0.0, "0"), (1e16, "1.000e+16"),
+])
+def test_other_floats_show_four_significant_digits(value: float, text: str) -> None:
+    assert significant(value) == text
+
+
+def test_proportions_are_the_requirement_named_columns_and_their_interval() -> None:
+    bins = pd.DataFrame(columns=["low", "high", "expected", "detected", "pd", "ci_low", "ci_high", "enough"])
+    assert proportion_columns(bins) == {"pd", "ci_low", "ci_high"}
+    # an interval beside a distance is not a proportion's
+    mixed = pd.DataFrame(columns=["aircraft", "pd", "rms_m", "ci_low", "ci_high"])
+    assert proportion_columns(mixed) == {"pd"}
+    assert proportion_columns(pd.DataFrame(columns=["aircraft", "ci_low"])) == set()
+
+
+def test_each_kind_of_column_as_the_workbook_shows_it() -> None:
+    shares = {"pd"}
+    assert number_text(148 / 150, "pd", shares) == "98.67 %"
+    assert number_text(50.0, "range_from_nm", shares) == "50.000"  # NM: 3 decimals (formats.UNITS)
+    assert number_text(120.45, "error_m", shares) == "120.5"  # metres: 1 decimal
+    assert number_text(3725.5, "time_of_day", shares) == "01:02:05.500"  # a clock time
+    assert number_text(0.975, "value", shares, "fraction") == "97.50 %"  # beside requirement pd
+    assert number_text(120.45, "value", shares, "m") == "120.5"  # beside requirement rms_m
+    assert number_text(math.nan, "pd", shares) == ""
