@@ -74,7 +74,8 @@ def validate(options: EvaluateOptions) -> EvaluateChecked:
         checked.preset = load_preset(options.preset)
     except ValueError as exc:
         raise OptionError(f"--preset: {exc}") from None
-    checked.regions = _regions(options.sectors)
+    checked.regions, said = _regions(options.sectors, checked.preset)
+    checked.warnings += said
     if options.reference_file is not None:
         path = Path(options.reference_file)
         if not path.is_file():
@@ -86,13 +87,17 @@ def validate(options: EvaluateOptions) -> EvaluateChecked:
     return checked
 
 
-def _regions(path: str | None) -> list:
-    """The sector file's sectors as scorecard regions ([] without one); OptionError naming the file."""
-    if path is None:
-        return []
+def _regions(path: str | None, preset) -> tuple[list, list[str]]:
+    """The sector file's sectors as scorecard regions, and the warnings for the preset's areas no sector
+    provides (their requirements are not evaluated); ([], warnings) without a file. OptionError naming the
+    file."""
     from msdc.pipeline.evaluate.scorecard import Region
-    from msdc.pipeline.evaluate.sectors import read_sectors, sector_mask
+    from msdc.pipeline.evaluate.sectors import area_of, check_preset_areas, read_sectors, sector_mask
 
+    if path is None:
+        areas = sorted({r.area for r in preset.requirements if r.area is not None})
+        return [], ([f"no --sectors: the preset's requirements on its areas ({', '.join(areas)}) are not "
+                     "evaluated"] if areas else [])
     try:
         sectors = read_sectors(path)
     except ValueError as exc:
@@ -101,7 +106,7 @@ def _regions(path: str | None) -> list:
     def mask(sector):
         return lambda lat, lon, fl, ground: sector_mask(sector, lat, lon, fl)
 
-    return [Region(s.name, mask(s), s.area) for s in sectors]
+    return [Region(s.name, mask(s), area_of(s)) for s in sectors], check_preset_areas(preset, sectors)
 
 
 @dataclass
@@ -117,6 +122,7 @@ class SensorResult:
     vertical: pd.DataFrame | None
     map_points: pd.DataFrame
     notes: list[str]
+    site: object = None  # the evaluation's coverage.Sensor
 
 
 @dataclass
@@ -293,7 +299,7 @@ def _sensor(options, checked, loaded, meas, builders, sensor_id, kind, gates, ep
                                                                                  checked.preset)
     per = _per_aircraft(sensor_id, reports, reference, pd_outcome) if len(reference) else pd.DataFrame()
     points = _map_points(sensor_id, reports, reference) if len(reference) else pd.DataFrame()
-    return SensorResult(sensor_id, kind, score.rows, per, bands, polar, vertical, points, notes)
+    return SensorResult(sensor_id, kind, score.rows, per, bands, polar, vertical, points, notes, sensor)
 
 
 def evaluate_job(options: EvaluateOptions, *, progress: Progress | None = None,
@@ -393,18 +399,36 @@ def write_evaluation(result: EvaluateResult, *, tx: OutputTransaction | None = N
     written: dict[str, Path] = {}
     c = result.checked
     title = f"msdc evaluation: {result.checked.preset.title}"
+    images = coverage(result) if c.output or c.html else {}
     with staged(tx) as stage:
         if c.output:
-            write_evaluation_xlsx(result.scorecard, stage.path(c.output), result.tables)
+            write_evaluation_xlsx(result.scorecard, stage.path(c.output), result.tables, images)
             written["workbook"] = c.output
         if c.json:
             write_evaluation_json(result.scorecard, stage.path(c.json), result.tables)  # map: HTML only
             written["json"] = c.json
         if c.html:
             write_evaluation_html(result.scorecard, stage.path(c.html), result.tables, result.map_points,
-                                  title=title)
+                                  title=title, images=images)
             written["html"] = c.html
     return written
+
+
+def coverage(result: EvaluateResult) -> dict[str, bytes]:
+    """Per sensor with a site, its polar PD map and vertical coverage diagram as PNG bytes."""
+    from msdc.pipeline.report.coverage_figures import coverage_images
+
+    images: dict[str, bytes] = {}
+    for r in result.sensors:
+        if r.site is None or r.kind not in ("radar", "smr"):
+            continue
+        vertical = {"site_altitude_m": r.site.altitude_m}
+        if r.site.max_elevation_deg is not None:
+            vertical["cone_elevation_deg"] = r.site.max_elevation_deg
+        if r.site.max_range_nm is not None:
+            vertical["max_range_nm"] = r.site.max_range_nm
+        images.update(coverage_images(r.polar, r.vertical, r.sensor, **vertical))
+    return images
 
 
 def text(result: EvaluateResult) -> str:

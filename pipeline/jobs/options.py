@@ -722,8 +722,8 @@ class EvaluateOptions(ReferenceFilterOptions, DecodingOptions):
                                       "figure is also given per sector, and a preset's area requirements on "
                                       "the sectors of that area",
                                  doc="GeoJSON sectors: every figure is also given per sector, and a "
-                                     "requirement with an `area` on the sectors of that area ([Evaluation]"
-                                     "(../methods/evaluate.md))")
+                                     "requirement with an `area` on the sectors of that area ([Sectors]"
+                                     "(sectors.md))")
     reference: str = option("leave-one-out", "--reference", choices=REFERENCE_BUILDS, section="command",
                             help="the reference: every other sensor tracked and smoothed (leave-one-out, "
                                  "default) or ADS-B alone",

@@ -194,3 +194,38 @@ def test_leave_one_out_never_uses_the_sensor_under_test(evaluated):
     assert "self-reference rows" in notes  # aircraft without ADS-B fall back to the radar's own track
     rows = result.scorecard
     assert np.isfinite(rows["value"]).all()
+
+
+def _square(lat: float, lon: float, half_deg: float) -> list:
+    a, b, c, d = lon - half_deg, lon + half_deg, lat - half_deg, lat + half_deg
+    return [[[a, c], [b, c], [b, d], [a, d], [a, c]]]
+
+
+def test_sectors_cut_the_figures(recording, tmp_path):
+    """A sector holding all the traffic gives the global figures exactly (as a sector and as a preset area),
+    one holding none is withheld with the reason, and a flight-level band keeps fewer updates."""
+    sim, folder = recording
+    site = sim.declared_site
+    everywhere = _square(site.latitude, site.longitude, 10.0)  # 600 NM across: all the traffic
+    features = [{"type": "Feature", "properties": {"name": "all", "area": "everywhere"},
+                 "geometry": {"type": "Polygon", "coordinates": everywhere}},
+                {"type": "Feature", "properties": {"name": "high", "min_fl": 200},
+                 "geometry": {"type": "Polygon", "coordinates": everywhere}},
+                {"type": "Feature", "properties": {"name": "elsewhere"},
+                 "geometry": {"type": "Polygon",
+                              "coordinates": _square(-site.latitude, site.longitude - 90, 1)}}]
+    sectors = tmp_path / "sectors.geojson"
+    sectors.write_text(json.dumps({"type": "FeatureCollection", "features": features}))
+    preset = tmp_path / "p.toml"
+    preset.write_text('[preset]\nname = "sectors"\ntitle = "t"\nstandard = "none"\nsensor_types = ["ssr"]\n'
+                      'source = "hand"\n\n[preset.areas]\neverywhere = "all of it"\n\n'
+                      + _requirement("pd", 0.5, ">=", {}) + 'area = "everywhere"\n'
+                      + _requirement("pd", 0.6, ">=", {}))
+    result = evaluate_job(_options(folder, preset=str(preset), sectors=str(sectors)))
+    card = result.scorecard.set_index(["sector", "threshold"])
+    assert card.loc[("everywhere", 0.5), "n"] == card.loc[("global", 0.6), "n"]
+    assert card.loc[("everywhere", 0.5), "value"] == card.loc[("global", 0.6), "value"]
+    assert card.loc[("all", 0.6), "n"] == card.loc[("global", 0.6), "n"]
+    assert 0 < card.loc[("high", 0.6), "n"] < card.loc[("global", 0.6), "n"]
+    assert np.isnan(card.loc[("elsewhere", 0.6), "value"])
+    assert "no report and no reference inside 'elsewhere'" in card.loc[("elsewhere", 0.6), "notes"]
