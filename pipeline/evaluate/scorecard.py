@@ -23,6 +23,7 @@ from msdc.pipeline.evaluate.presets import Preset, Requirement
 from msdc.pipeline.evaluate.reference import (
     DEFAULT_REFERENCE_GAP_S,
     associate,
+    associated,
     check_reference,
     trajectories,
 )
@@ -81,12 +82,28 @@ def measure(requirement: Requirement, reports: pd.DataFrame, reference: pd.DataF
         notes = (f"sigma gate at {requirement.threshold:g} m: {c['judged']} of {c['reports']} reports judged"
                  + (" (" + ", ".join(f"{k.replace('_', ' ')} {v}" for k, v in left.items()) + ")"
                     if left else ""),)
+    elif "distance_m" in params and len(reports) and len(reference):
+        rep, notes = _gate_false(reports, reference, float(params["distance_m"]), params)
     try:
         out = function(rep, reference, params, sensor)
     except ValueError as exc:
         return withheld(requirement.id, str(exc))
     return Outcome(out.requirement, out.value, out.ci_low, out.ci_high, out.n, out.count,
                    (*notes, *out.notes), out.per_aircraft)
+
+
+def _gate_false(reports: pd.DataFrame, reference: pd.DataFrame, distance_m: float,
+                params: dict) -> tuple[pd.DataFrame, tuple[str, ...]]:
+    """The reports a false-report count may judge: those no reference aircraft is near (false whatever the
+    reference's accuracy), and those near one whose reference sigma is well below distance_m (a reference
+    as uncertain as the distance would make true reports look false); the count left out in a note."""
+    rep = associated(reports, reference, params)
+    gate = sigma_gate(rep, reference, distance_m, params, independent=False)
+    keep = (rep["ref_index"].to_numpy() < 0) | gate.judged
+    dropped = int((~keep).sum())
+    note = (f"sigma gate at {distance_m:g} m: {dropped} of {len(rep)} reports left out, near an aircraft "
+            "whose reference sigma is unknown or too large") if dropped else ""
+    return rep[keep].reset_index(drop=True), (note,) if note else ()
 
 
 def parameters_text(requirement: Requirement) -> str:

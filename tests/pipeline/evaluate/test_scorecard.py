@@ -1,0 +1,81 @@
+"""The scorecard's assembly (pipeline/evaluate/scorecard.py) on hand-made reports and references: the verdict
+of a signed bias by its magnitude, the parameters text, the sigma gate of false reports, and the cut of
+reports and reference into a region by the reference's position."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pandas as pd
+
+from msdc.pipeline.evaluate.coverage import Sensor
+from msdc.pipeline.evaluate.outcome import Outcome
+from msdc.pipeline.evaluate.presets import Preset, Requirement
+from msdc.pipeline.evaluate.scorecard import Region, judge, measure, parameters_text, score_sensor
+
+M_PER_DEG_LAT = 111_320.0  # near the equator, where these cases lie: good to 0.5 %
+
+
+def requirement(ident: str, threshold: float, direction: str = "<=", **parameters) -> Requirement:
+    return Requirement(ident, threshold, direction, "clause", True, "hand", "stated", parameters=parameters)
+
+
+def preset(*requirements: Requirement) -> Preset:
+    return Preset("hand", "hand", "none", ("ssr",), "hand", tuple(requirements))
+
+
+def track(n: int = 21, sigma_m: float = 5.0, label: str = "A") -> pd.DataFrame:
+    """An aircraft flying north along longitude 0 at 100 m/s, sampled every second, its sigma given."""
+    t = np.arange(float(n))
+    return pd.DataFrame({"aircraft": label, "t_s": t, "latitude": 100.0 * t / M_PER_DEG_LAT, "longitude": 0.0,
+                         "altitude_ft": 10_000.0, "sigma_m": sigma_m, "self_reference": False})
+
+
+def test_a_signed_bias_is_judged_by_its_magnitude():
+    req = requirement("range_bias_m", 100.0)
+    inside = Outcome("range_bias_m", -40.0, -60.0, -20.0, 5000, 5000)
+    row = judge(inside, req, preset(req), "R", "global")
+    assert (row["value"], row["ci_low"], row["verdict"]) == (-40.0, -60.0, "pass")  # |x| in [20, 60]
+    beyond = Outcome("range_bias_m", -150.0, -170.0, -130.0, 5000, 5000)
+    assert judge(beyond, req, preset(req), "R", "global")["verdict"] == "fail"
+    across = Outcome("range_bias_m", 10.0, -120.0, 140.0, 5000, 5000)  # |x| in [0, 140]
+    assert judge(across, req, preset(req), "R", "global")["verdict"] == "inconclusive"
+
+
+def test_parameters_are_written_as_the_preset_gives_them():
+    assert parameters_text(requirement("pd", 0.97, ">=", interval_s=5.0, scope="global")) == \
+        "interval_s = 5, scope = global"
+    assert parameters_text(requirement("mode3a_correct", 0.98, ">=")) == ""
+
+
+def test_false_reports_leave_out_reports_near_an_uncertain_reference():
+    """Three reports against a 60 m tolerance: one on an aircraft whose reference sigma is 5 m (judged, not
+    false), one 100 m off an aircraft whose sigma is 50 m, above a third of 60 m (left out), one 5 km from
+    any aircraft (false, whatever the reference's accuracy)."""
+    ref = pd.concat([track(sigma_m=5.0, label="A"),
+                     track(sigma_m=50.0, label="B").assign(longitude=0.1)], ignore_index=True)
+    rep = pd.DataFrame({"t_s": [5.0, 5.0, 5.0],
+                        "latitude": [500.0 / M_PER_DEG_LAT, 500.0 / M_PER_DEG_LAT, 5500.0 / M_PER_DEG_LAT],
+                        "longitude": [0.0, 0.1 + 100.0 / M_PER_DEG_LAT, 0.0]})
+    out = measure(requirement("false_reports", 0.01, distance_m=60.0), rep, ref, Sensor(0.0, 0.0, 0.0))
+    assert (out.count, out.n) == (1, 2)
+    assert "1 of 3 reports left out" in " ".join(out.notes)
+
+
+def test_a_region_takes_the_reports_where_their_aircraft_is():
+    """A region north of latitude 1000 m holds the aircraft's second half: its reports there (even one 30 m
+    south of the line, its aircraft being north of it) and only the reference's samples there."""
+    ref = track()  # 0 to 2000 m north in 20 s
+    t = np.arange(0.0, 21.0, 4.0)  # 0, 4, ..., 20 s: 0, 400, ..., 2000 m
+    lat = 100.0 * t / M_PER_DEG_LAT
+    lat[3] = (1200.0 - 230.0) / M_PER_DEG_LAT  # the report at 12 s (aircraft at 1200 m) lies at 970 m
+    rep = pd.DataFrame({"t_s": t, "latitude": lat, "longitude": 0.0})
+    north = Region("north", lambda la, lo, fl, g: la * M_PER_DEG_LAT > 1000.0)
+    score = score_sensor(preset(requirement("pd", 0.5, ">=", interval_s=4.0)), "R", rep, ref,
+                         Sensor(0.0, 0.0, 0.0, max_range_nm=100.0), [north])
+    rows = {r["sector"]: r for r in score.rows}
+    assert rows["global"]["n"] == 5  # 20 s of reference: five whole 4 s intervals
+    # north of 1000 m the reference runs from 11 s to 20 s: two whole intervals, both with a report
+    assert (rows["north"]["n"], rows["north"]["value"]) == (2, 1.0)
+    assert not math.isnan(rows["north"]["ci_low"])
