@@ -432,15 +432,24 @@ def coverage(result: EvaluateResult) -> dict[str, bytes]:
 
 
 def text(result: EvaluateResult) -> str:
-    """The scorecard for the terminal: sensor, sector, requirement, value, interval, threshold, verdict."""
+    """The scorecard for the terminal: the global, surface/airborne and preset-area rows (the per-sector rows
+    are in the outputs), with the notes."""
+    from msdc.pipeline.evaluate.scorecard import AIRBORNE, GLOBAL, SURFACE
     from msdc.pipeline.report.summary import frame_text
 
     card = result.scorecard
     if card.empty:
         return "Scorecard: no row (see the notes)"
-    shown = card[["sensor", "sector", "requirement", "parameters", "value", "ci_low", "ci_high", "threshold",
-                  "verdict", "n"]].copy()
-    out = "Scorecard (" + result.checked.preset.title + "):\n" + frame_text(shown)
+    areas = {r.area for r in result.checked.preset.requirements if r.area is not None}
+    shown = card[card["sector"].isin({GLOBAL, SURFACE, AIRBORNE, *areas})]
+    cols = ["sensor", "sector", "requirement", "parameters", "value", "ci_low", "ci_high", "threshold",
+            "verdict", "n"]
+    out = "Scorecard (" + result.checked.preset.title + "):\n" + frame_text(shown[cols])
+    if len(shown) < len(card):
+        out += (f"\n  ... and {len(card) - len(shown)} rows per sector of --sectors (in the outputs)")
+    counts = card["verdict"].value_counts()
+    out += "\nVerdicts: " + ", ".join(f"{v} {int(counts.get(v, 0))}"
+                                      for v in ("pass", "fail", "inconclusive"))
     notes = result.parameters.get("notes", [])
     if notes:
         out += "\n\nNotes:\n" + "\n".join(f"  {n}" for n in notes)
