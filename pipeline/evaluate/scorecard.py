@@ -32,7 +32,8 @@ from msdc.pipeline.evaluate.requirements import REQUIREMENTS
 from msdc.pipeline.evaluate.statistics import magnitude_interval, verdict
 
 GLOBAL = "global"
-SURFACE, AIRBORNE = "surface", "airborne"
+SURFACE, AIRBORNE, MONITORS = "surface", "airborne", "field monitors"
+MONITOR_CODE = 2.0  # the on-ground channel's value for a field monitor
 # (lat deg, lon deg, FL, on ground 1/0/NaN) -> inside
 Mask = Callable[[np.ndarray, np.ndarray, np.ndarray, np.ndarray], np.ndarray]
 
@@ -149,17 +150,20 @@ def reference_positions(reports: pd.DataFrame, reference: pd.DataFrame,
             a, b, _, alt = tr.at(t[rows], max_gap_s)
             lat[rows], lon[rows], fl[rows] = a, b, alt / 100.0
     ground = np.full(n, np.nan)
-    if "on_ground" in reference.columns and n:
+    if ("on_ground" in reference.columns or "field_monitor" in reference.columns) and n:
         flag = reference.assign(on_ground=ground_flags(reference))
         ground = np.rint(reference_at(reports, flag, "on_ground", {"reference_max_gap_s": max_gap_s}))
     return lat, lon, fl, ground
 
 
 def ground_flags(frame: pd.DataFrame) -> np.ndarray:
-    """The on_ground column as 1.0, 0.0 and NaN (unknown or absent)."""
-    if "on_ground" not in frame.columns:
-        return np.full(len(frame), np.nan)
-    return frame["on_ground"].astype("boolean").astype("Float64").to_numpy(float, na_value=np.nan)
+    """Per row, 1.0 on the surface, 0.0 airborne, NaN unknown (the ``on_ground`` column) and MONITOR_CODE
+    for a field monitor (the ``field_monitor`` column: a fixed transponder, not traffic)."""
+    out = (frame["on_ground"].astype("boolean").astype("Float64").to_numpy(float, na_value=np.nan)
+           if "on_ground" in frame.columns else np.full(len(frame), np.nan))
+    if "field_monitor" in frame.columns:
+        out[frame["field_monitor"].fillna(False).to_numpy(bool)] = MONITOR_CODE
+    return out
 
 
 def _report_fl(reports: pd.DataFrame) -> np.ndarray:
@@ -201,19 +205,39 @@ def cut(reports: pd.DataFrame, reference: pd.DataFrame, masks: Sequence[Mask],
 
 def surface_regions(reference: pd.DataFrame) -> list[Region]:
     """"surface" and "airborne" as regions, when the reference has aircraft on the surface (else the
-    airborne row would repeat the global one)."""
-    if not (ground_flags(reference) == 1.0).any():
-        return []
-    return [Region(SURFACE, lambda lat, lon, fl, ground: ground == 1.0),
-            Region(AIRBORNE, lambda lat, lon, fl, ground: ground == 0.0)]
+    airborne row would repeat the global one), and "field monitors" when it has any (fixed transponders:
+    judged apart from the traffic, and left out of every other region)."""
+    flags = ground_flags(reference)
+    out = []
+    if (flags == 1.0).any():
+        out += [Region(SURFACE, lambda lat, lon, fl, ground: ground == 1.0),
+                Region(AIRBORNE, lambda lat, lon, fl, ground: ground == 0.0)]
+    if (flags == MONITOR_CODE).any():
+        out.append(Region(MONITORS, lambda lat, lon, fl, ground: ground == MONITOR_CODE))
+    return out
 
 
-def _regions_for(requirement: Requirement, regions: Sequence[Region]) -> list[tuple[str, list[Mask]]]:
+def traffic(mask: Mask) -> Mask:
+    """The mask without the field monitors."""
+    def inside(lat, lon, fl, ground) -> np.ndarray:
+        return np.asarray(mask(lat, lon, fl, ground), bool) & (ground != MONITOR_CODE)
+    return inside
+
+
+def _everywhere(lat, lon, fl, ground) -> np.ndarray:
+    return np.ones(len(lat), bool)
+
+
+def _regions_for(requirement: Requirement, regions: Sequence[Region], monitors: bool = False
+                 ) -> list[tuple[str, list[Mask]]]:
     """The (sector name, masks) a requirement is measured on: its preset area (the union of the regions of
     that area) when it has one; else global and every region."""
     if requirement.area is not None:
-        masks = [r.mask for r in regions if r.area == requirement.area]
+        masks = [traffic(r.mask) if monitors else r.mask for r in regions if r.area == requirement.area]
         return [(requirement.area, masks)] if masks else []
+    if monitors:
+        return [(GLOBAL, [traffic(_everywhere)])] + [(r.name, [r.mask if r.name == MONITORS else
+                                                              traffic(r.mask)]) for r in regions]
     return [(GLOBAL, [])] + [(r.name, [r.mask]) for r in regions]
 
 
@@ -223,12 +247,13 @@ def score_sensor(preset: Preset, sensor_id: str, reports: pd.DataFrame, referenc
     per region, judged into scorecard rows."""
     score = SensorScore(sensor_id)
     regions = [*surface_regions(reference), *regions]
+    monitors = any(r.name == MONITORS for r in regions)
     rep = associate(reports, reference) if len(reference) else reports.assign(
         ref_index=-1, ref_aircraft=None, ref_distance_m=np.inf)
-    cuts: dict[str, tuple[pd.DataFrame, pd.DataFrame]] = {GLOBAL: (rep, reference)}
+    cuts: dict[str, tuple[pd.DataFrame, pd.DataFrame]] = {} if monitors else {GLOBAL: (rep, reference)}
     where = None
     for i, req in enumerate(preset.requirements):
-        spots = _regions_for(req, regions)
+        spots = _regions_for(req, regions, monitors)
         if not spots:
             score.notes.append(f"{req.id} on area {req.area!r}: no sector of that area in the sector file, "
                                "not measured")

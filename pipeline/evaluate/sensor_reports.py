@@ -57,6 +57,28 @@ def sensor_reports(meas: pd.DataFrame, sensor_id: str, epoch: pd.Timestamp,
     return out.sort_values("t_s", kind="stable", ignore_index=True)
 
 
+def field_monitors(meas: pd.DataFrame, frames: dict[int, pd.DataFrame]) -> set[str]:
+    """The aircraft ids of field monitors (fixed transponders): those with a report whose decoded record
+    sets RAB (I048/020, I010/020, I021/040), matched to the measurements by file and offset."""
+    keys = []
+    for frame in frames.values():
+        if frame is None or "rab" not in frame.columns or not {"file", "offset"} <= set(frame.columns):
+            continue
+        hit = frame[pd.to_numeric(frame["rab"], errors="coerce").eq(1).fillna(False).to_numpy(bool)]
+        keys.append(pd.DataFrame({"file": hit["file"].astype(str).to_numpy(object),
+                                  "offset": hit["offset"].astype("int64").to_numpy()}))
+    if not keys or not {"file", "offset", "aircraft_id"} <= set(meas.columns):
+        return set()
+    said = pd.concat(keys, ignore_index=True).drop_duplicates()
+    if said.empty:
+        return set()
+    left = pd.DataFrame({"file": meas["file"].astype(str).to_numpy(object),
+                         "offset": meas["offset"].astype("int64").to_numpy(),
+                         "aircraft_id": meas["aircraft_id"].astype(object).to_numpy()})
+    hit = left.merge(said, on=["file", "offset"], how="inner")["aircraft_id"].dropna()
+    return set(hit.astype(str))
+
+
 def north_markers_s(frames: dict[int, pd.DataFrame], sac: int, sic: int, date, epoch: pd.Timestamp
                     ) -> np.ndarray | None:
     """The radar's north-marker times (seconds from ``epoch``) from CAT034 (else CAT002) service messages;

@@ -104,7 +104,7 @@ def _regions(path: str | None, preset) -> tuple[list, list[str]]:
         raise OptionError(f"--sectors: {exc}") from None
 
     def mask(sector):
-        return lambda lat, lon, fl, ground: sector_mask(sector, lat, lon, fl)
+        return lambda lat, lon, fl, ground: sector_mask(sector, lat, lon, fl)  # monitors: score_sensor
 
     return [Region(s.name, mask(s), area_of(s)) for s in sectors], check_preset_areas(preset, sectors)
 
@@ -272,7 +272,7 @@ def _coverage(reports: pd.DataFrame, reference: pd.DataFrame, sensor, preset) ->
     return detection_bands(table, reference), polar_grid(table), vertical_grid(table)
 
 
-def _sensor(options, checked, loaded, meas, builders, sensor_id, kind, gates, epoch, external
+def _sensor(options, checked, loaded, meas, builders, sensor_id, kind, gates, epoch, external, monitors
             ) -> SensorResult:
     """Everything about one sensor under test."""
     from msdc.pipeline.evaluate.scorecard import score_sensor
@@ -280,7 +280,7 @@ def _sensor(options, checked, loaded, meas, builders, sensor_id, kind, gates, ep
     from msdc.pipeline.model.report_selection import sensor_parts
 
     built = _reference(options, builders, sensor_id, gates, epoch, external)
-    reference = built.frame
+    reference = built.frame.assign(field_monitor=built.frame["aircraft"].astype(str).isin(monitors))
     radar = loaded.frames.get(48) if kind == "radar" else None
     reports = sensor_reports(meas, sensor_id, epoch, radar)
     part = sensor_parts([sensor_id]).iloc[0]
@@ -306,7 +306,7 @@ def evaluate_job(options: EvaluateOptions, *, progress: Progress | None = None,
                  checked: EvaluateChecked | None = None, command: str = "evaluate") -> EvaluateResult:
     """Validate, decode, build the measurements, then evaluate every sensor under test."""
     from msdc.pipeline.evaluate.reference_gates import Gates
-    from msdc.pipeline.evaluate.sensor_reports import RADAR_EXTRA_COLUMNS, SERVICE_CATEGORIES
+    from msdc.pipeline.evaluate.sensor_reports import RADAR_EXTRA_COLUMNS, SERVICE_CATEGORIES, field_monitors
     from msdc.pipeline.model.site_check import site_warnings
     from msdc.pipeline.model.time import midnight
 
@@ -329,6 +329,10 @@ def evaluate_job(options: EvaluateOptions, *, progress: Progress | None = None,
         builders = tracked_reports(meas, options.max_coast_s)
         epoch = midnight(meas["time"])
         external = _external(options, epoch)
+        monitors = field_monitors(meas, loaded.frames)
+        if monitors:
+            notes.append(f"field monitors (fixed transponders, RAB set): {', '.join(sorted(monitors))}; "
+                         "judged in their own rows, left out of the others")
         gates = Gates(min_nacp=options.min_nacp, min_nic=options.min_nic, min_sil=options.min_sil,
                       drop_jumps=options.drop_jumps)
         results = []
@@ -336,7 +340,7 @@ def evaluate_job(options: EvaluateOptions, *, progress: Progress | None = None,
             if progress:
                 progress.step(f"{sensor_id} ({i + 1}/{len(tests)})")
             results.append(_sensor(options, checked, loaded, meas, builders, sensor_id, kind, gates, epoch,
-                                   external))
+                                   external, monitors))
         loaded.drop_frames()
         card, tables, points = _assemble(results)
         params = {**run_parameters(options, loaded, started, command), "preset": checked.preset.name,
