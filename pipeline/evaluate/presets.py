@@ -14,7 +14,7 @@ from msdc.pipeline.evaluate.catalogue import CATALOGUE
 from msdc.pipeline.evaluate.statistics import DIRECTIONS
 
 PRESET_KEYS = {"name": str, "title": str, "standard": str, "sensor_types": list, "source": str,
-               "min_sample": int, "areas": dict, "note": str}
+               "min_sample": int, "areas": dict, "note": str, "gate_m": float}
 PRESET_REQUIRED = ("name", "title", "standard", "sensor_types", "source")
 REQUIREMENT_KEYS = {"id": str, "threshold": float, "direction": str, "clause": str, "checked": bool,
                     "source": str, "stated": str, "area": str, "min_sample": int, "parameters": dict,
@@ -57,6 +57,11 @@ class Preset:
     areas: dict[str, str] = field(default_factory=dict)
     note: str = ""
     path: str = ""
+    gate_m: float | None = None  # the association gate (reference.DEFAULT_GATE_M when None)
+
+    def association(self) -> dict[str, float]:
+        """The parameters the association of reports with reference aircraft takes under this preset."""
+        return {} if self.gate_m is None else {"gate_m": self.gate_m}
 
     def minimum_sample(self, requirement: Requirement) -> int | None:
         """The minimum sample that applies to a requirement: its own, else the preset's."""
@@ -162,6 +167,9 @@ def _parse(label: str, text: str) -> Preset:
             raise ValueError(f"{label} [preset]: key 'sensor_types' holds {kind!r}"
                              f"{_hint(str(kind), SENSOR_TYPES)}; known types: {', '.join(SENSOR_TYPES)}")
     meta["sensor_types"] = tuple(meta["sensor_types"])
+    if "gate_m" in meta and not meta["gate_m"] > 0.0:
+        raise ValueError(f"{label} [preset]: key 'gate_m' must be a positive number of metres, "
+                         f"got {meta['gate_m']!r}")
     areas = meta.get("areas", {})
     for area, description in areas.items():
         _typed(f"{label} [preset.areas]", area, description, str)

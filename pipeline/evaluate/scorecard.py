@@ -248,7 +248,7 @@ def score_sensor(preset: Preset, sensor_id: str, reports: pd.DataFrame, referenc
     score = SensorScore(sensor_id)
     regions = [*surface_regions(reference), *regions]
     monitors = any(r.name == MONITORS for r in regions)
-    rep = associate(reports, reference) if len(reference) else reports.assign(
+    rep = associate(reports, reference, preset.association()) if len(reference) else reports.assign(
         ref_index=-1, ref_aircraft=None, ref_distance_m=np.inf)
     cuts: dict[str, tuple[pd.DataFrame, pd.DataFrame]] = {} if monitors else {GLOBAL: (rep, reference)}
     where = None

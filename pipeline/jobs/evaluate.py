@@ -200,14 +200,15 @@ def _reference(options: EvaluateOptions, builders: pd.DataFrame, sensor_id: str,
                          require_present=False)
 
 
-def _per_aircraft(sensor_id: str, reports: pd.DataFrame, reference: pd.DataFrame, pd_outcome) -> pd.DataFrame:
+def _per_aircraft(sensor_id: str, reports: pd.DataFrame, reference: pd.DataFrame, pd_outcome,
+                  association: dict) -> pd.DataFrame:
     """One row per reference aircraft: the sensor's associated reports, its expected and detected updates
     (the first pd requirement's) with PD and interval, the RMS position error and whether the reference
     was the sensor's own track."""
     from msdc.pipeline.evaluate.accuracy import position_errors
     from msdc.pipeline.evaluate.reference import associated
 
-    rep = associated(reports, reference, None)
+    rep = associated(reports, reference, association)
     counts = rep[rep["ref_index"] >= 0].groupby("ref_aircraft").size().rename("reports")
     from msdc.pipeline.evaluate.scorecard import ground_flags
 
@@ -220,7 +221,7 @@ def _per_aircraft(sensor_id: str, reports: pd.DataFrame, reference: pd.DataFrame
         per = pd_outcome.per_aircraft.set_index("aircraft")[["expected", "detected", "pd", "ci_low",
                                                              "ci_high"]]
         table = table.join(per.rename(columns={"ci_low": "pd_ci_low", "ci_high": "pd_ci_high"}), how="left")
-    errors = position_errors(rep, reference)
+    errors = position_errors(rep, reference, association)
     if len(errors):
         rms = errors.groupby("aircraft")["error_m"].agg(lambda e: float(np.sqrt(np.mean(np.square(e)))))
         table = table.join(rms.rename("rms_error_m"), how="left")
@@ -237,11 +238,12 @@ def _thinned(frame: pd.DataFrame, limit: int) -> pd.DataFrame:
     return frame.iloc[::step]
 
 
-def _map_points(sensor_id: str, reports: pd.DataFrame, reference: pd.DataFrame) -> pd.DataFrame:
+def _map_points(sensor_id: str, reports: pd.DataFrame, reference: pd.DataFrame,
+                association: dict) -> pd.DataFrame:
     """The associated reports and the reference, per aircraft, thinned for the HTML map."""
     from msdc.pipeline.evaluate.reference import associated
 
-    rep = associated(reports, reference, None)
+    rep = associated(reports, reference, association)
     rep = _thinned(rep[rep["ref_index"] >= 0], MAP_POINTS_PER_SENSOR)
     ref = _thinned(reference, MAP_POINTS_PER_SENSOR)
     parts = [pd.DataFrame({"aircraft": rep["ref_aircraft"].astype(str).to_numpy(object), "source": "report",
@@ -262,7 +264,8 @@ def _coverage(reports: pd.DataFrame, reference: pd.DataFrame, sensor, preset) ->
     from msdc.pipeline.evaluate.bins import detection_bands, polar_grid, vertical_grid
     from msdc.pipeline.evaluate.detection import expected_updates
 
-    params = next((dict(r.parameters) for r in preset.requirements if r.id == "pd"), {})
+    params = {**next((dict(r.parameters) for r in preset.requirements if r.id == "pd"), {}),
+              **preset.association()}
     try:
         table, _, _ = expected_updates(reports, reference, params, sensor)
     except ValueError:
@@ -297,8 +300,9 @@ def _sensor(options, checked, loaded, meas, builders, sensor_id, kind, gates, ep
                       None)
     bands, polar, vertical = ({}, None, None) if reference.empty else _coverage(reports, reference, sensor,
                                                                                  checked.preset)
-    per = _per_aircraft(sensor_id, reports, reference, pd_outcome) if len(reference) else pd.DataFrame()
-    points = _map_points(sensor_id, reports, reference) if len(reference) else pd.DataFrame()
+    gate = checked.preset.association()
+    per = _per_aircraft(sensor_id, reports, reference, pd_outcome, gate) if len(reference) else pd.DataFrame()
+    points = _map_points(sensor_id, reports, reference, gate) if len(reference) else pd.DataFrame()
     return SensorResult(sensor_id, kind, score.rows, per, bands, polar, vertical, points, notes, sensor)
 
 

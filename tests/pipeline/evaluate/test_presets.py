@@ -281,3 +281,18 @@ def test_the_docs_show_the_shipped_presets_and_ids():
     text = (REPO / PAGE).read_text()
     assert text == page_with_tables(text), "python -m msdc.pipeline.evaluate.presets_doc --write-docs"
     assert all(f"#### `{name}`" in text for name in SHIPPED) and "| `rms_m` |" in text
+
+
+def test_a_preset_gate_must_be_a_positive_distance(tmp_path):
+    from msdc.pipeline.evaluate.presets import load_preset
+
+    text = load_preset("ed116").path  # the shipped text, with its gate changed
+    from importlib import resources
+
+    shipped = resources.files("msdc.pipeline.evaluate").joinpath("presets/ed116.toml").read_text()
+    assert text == "preset ed116" and "gate_m = 150.0" in shipped
+    assert load_preset("ed116").association() == {"gate_m": 150.0}
+    bad = tmp_path / "bad.toml"
+    bad.write_text(shipped.replace("gate_m = 150.0", "gate_m = -1.0"))
+    with pytest.raises(ValueError, match=r"\[preset\]: key 'gate_m' must be a positive number of metres"):
+        load_preset(bad)

@@ -8,6 +8,7 @@ import math
 
 import numpy as np
 import pandas as pd
+import pytest
 
 from msdc.pipeline.evaluate.coverage import Sensor
 from msdc.pipeline.evaluate.outcome import Outcome
@@ -79,3 +80,17 @@ def test_a_region_takes_the_reports_where_their_aircraft_is():
     # north of 1000 m the reference runs from 11 s to 20 s: two whole intervals, both with a report
     assert (rows["north"]["n"], rows["north"]["value"]) == (2, 1.0)
     assert not math.isnan(rows["north"]["ci_low"])
+
+
+def test_the_preset_association_gate_decides_which_reports_an_aircraft_has():
+    """A report 500 m east of the aircraft is its report under the default gate (2 NM), judged 500 m off;
+    beyond an airport preset's 150 m gate it is no aircraft's, and no error is judged."""
+    ref = track()
+    rep = pd.DataFrame({"t_s": [5.0], "latitude": [500.0 / M_PER_DEG_LAT],
+                        "longitude": [500.0 / M_PER_DEG_LAT]})
+    req = requirement("max_m", 1000.0)
+    wide = score_sensor(preset(req), "R", rep, ref, Sensor(0.0, 0.0, 0.0))
+    narrow = Preset("hand", "hand", "none", ("mlat",), "hand", (req,), gate_m=150.0)
+    tight = score_sensor(narrow, "R", rep, ref, Sensor(0.0, 0.0, 0.0))
+    assert wide.rows[0]["value"] == pytest.approx(500.0, rel=0.01)
+    assert math.isnan(tight.rows[0]["value"])
