@@ -220,7 +220,8 @@ def _per_aircraft(sensor_id: str, reports: pd.DataFrame, reference: pd.DataFrame
     if pd_outcome is not None and pd_outcome.per_aircraft is not None and len(pd_outcome.per_aircraft):
         per = pd_outcome.per_aircraft.set_index("aircraft")[["expected", "detected", "pd", "ci_low",
                                                              "ci_high"]]
-        table = table.join(per.rename(columns={"ci_low": "pd_ci_low", "ci_high": "pd_ci_high"}), how="left")
+        names = {"expected": "expected_updates", "detected": "detected_updates"}
+        table = table.join(per.rename(columns=names), how="left")
     errors = position_errors(rep, reference, association)
     if len(errors):
         rms = errors.groupby("aircraft")["error_m"].agg(lambda e: float(np.sqrt(np.mean(np.square(e)))))

@@ -122,7 +122,7 @@ def test_the_surface_target_has_rows_of_its_own(evaluated):
     surface = per[per["surface_share"] > 0.5]
     assert len(surface) == 1
     (label,) = surface.index
-    expected_surface = int(surface.loc[label, "expected"])
+    expected_surface = int(surface.loc[label, "expected_updates"])
     assert pd_rows.loc["surface", "n"] == expected_surface
 
 
