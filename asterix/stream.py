@@ -4,10 +4,11 @@ from __future__ import annotations
 
 import dataclasses
 from collections.abc import Iterator
+from concurrent.futures import Executor
 
 import numpy as np
 
-from .cat001_time import SectorClock
+from .cat001_time import PLOT_CATEGORY, SectorClock
 from .containers import UNTIMED, Segments, read_segments
 from .errors import UnreadableInput
 from .framing import Progress, release_pages
@@ -28,7 +29,7 @@ HOLD_BYTES = 1 << 22  # a raw stream's first chunks held at most until day 0 is 
 
 def iter_read(path, *, chunk: int = 1_000_000, editions=None, date=None, categories=None,
               format: str | None = None, strict: bool = False, columns=None,
-              progress: Progress | None = None) -> Iterator[Recording]:
+              progress: Progress | None = None, pool: Executor | None = None) -> Iterator[Recording]:
     """Stream a recording in chunks of about ``chunk`` bytes of payload, yielding a Recording each
     (``columns``: only those decoded columns, as in ``read``); ``progress(done, total, what)`` is called
     as the passes that plan the decoding (asterix.plan) and the decoding itself go through the file.
@@ -59,8 +60,10 @@ def iter_read(path, *, chunk: int = 1_000_000, editions=None, date=None, categor
         day0 = None  # container day number of the first chunk's day 0
         blocks = 0  # data blocks framed in the chunks before: each chunk numbers its own from 0
         sectors = SectorClock()  # each radar's last CAT002 time: CAT001 times continue across chunks
+        pooled = pool if pool is not None and can_pool(plan) else None
         for rec, covered in _chunks(buf, plan, chunk, path=str(path), date=first_date, strict=strict,
-                                    selected=selected, sector_clock=sectors, progress=progress):
+                                    selected=selected, sector_clock=sectors, progress=progress,
+                                    pool=pooled):
             for f in rec.frames.values():
                 f["block"] += blocks
             blocks += rec.blocks
@@ -96,11 +99,18 @@ def iter_read(path, *, chunk: int = 1_000_000, editions=None, date=None, categor
             yield held_rec
 
 
+def can_pool(plan: Plan) -> bool:
+    """Whether a recording's chunks may decode apart: a raw stream (one payload, framed here) without
+    CAT001 plots, whose times come from the CAT002 messages of the chunks before."""
+    return bool(len(plan.seg.start)) and not plan.seg.exact and PLOT_CATEGORY not in plan.decoded
+
+
 def _chunks(buf: np.ndarray, plan: Plan, chunk: int, *, progress: Progress | None = None,
-            **decode) -> Iterator[tuple[Recording, int]]:
+            pool: Executor | None = None, **decode) -> Iterator[tuple[Recording, int]]:
     """The recording decoded by the plan in chunks of about ``chunk`` payload bytes, each with the payload
     bytes it covers: a raw stream cut at block starts as framing goes, a container's payloads in groups
-    (chunks holding nothing at all are not yielded, but for a file without payload)."""
+    (chunks holding nothing at all are not yielded, but for a file without payload). ``pool``: a raw
+    stream's chunks decoded in its processes (can_pool), in order, at most POOL_AHEAD per process ahead."""
     seg = plan.seg
     framer = plan.framer(buf)
     total = int(len(buf))
@@ -108,13 +118,12 @@ def _chunks(buf: np.ndarray, plan: Plan, chunk: int, *, progress: Progress | Non
         yield decode_framed(buf, plan, framer.window(), **decode), 0
         return
     if not seg.exact:
-        while not framer.done:
-            at = framer.position
-            framed = framer.window(at + chunk)
-            if progress:
-                progress(framer.position, total, "decoding")
-            if len(framed[0]) or len(framed[4]):
-                yield decode_framed(buf, plan, framed, **decode), framer.position - at
+        windows = _raw_windows(framer, chunk, total, progress)
+        if pool is None:
+            for framed, covered in windows:
+                yield decode_framed(buf, plan, framed, **decode), covered
+        else:
+            yield from _pooled(pool, plan, windows, decode)
         framer.release(total)
         return
     day, tod = known_captures(seg)  # untimed packets (pcapng SPB) take their neighbour's capture time
@@ -134,6 +143,47 @@ def _chunks(buf: np.ndarray, plan: Plan, chunk: int, *, progress: Progress | Non
         yield decode_framed(buf, plan, framed, part=part, first_segment=first, **decode), covered
         first = end
     framer.release(total)
+
+
+def _raw_windows(framer, chunk: int, total: int, progress: Progress | None
+                 ) -> Iterator[tuple[tuple, int]]:
+    """A raw stream's framed windows of about ``chunk`` bytes, cut at block starts, each with the bytes it
+    covers (windows holding no block and no framing error are passed over)."""
+    while not framer.done:
+        at = framer.position
+        framed = framer.window(at + chunk)
+        if progress:
+            progress(framer.position, total, "decoding")
+        if len(framed[0]) or len(framed[4]):
+            yield framed, framer.position - at
+
+
+POOL_AHEAD = 2  # windows in flight per pool process: the next is ready when one is taken
+
+
+def _pooled(pool: Executor, plan: Plan, windows: Iterator[tuple[tuple, int]], decode: dict
+            ) -> Iterator[tuple[Recording, int]]:
+    """Each window decoded in ``pool`` (_decode_window), yielded in file order as it comes back."""
+    from collections import deque
+
+    ahead = POOL_AHEAD * max(getattr(pool, "_max_workers", 1), 1)
+    path = decode.pop("path")
+    decode.pop("sector_clock", None)  # no CAT001 plots here (can_pool): the clock is never read
+    pending: deque = deque()
+    for framed, covered in windows:
+        pending.append((pool.submit(_decode_window, path, plan, framed, decode), covered))
+        if len(pending) >= ahead:
+            future, n = pending.popleft()
+            yield future.result(), n
+    while pending:
+        future, n = pending.popleft()
+        yield future.result(), n
+
+
+def _decode_window(path: str, plan: Plan, framed: tuple, decode: dict) -> Recording:
+    """One framed window of the file at ``path`` decoded in a pool process (the file mapped again there)."""
+    with _mapped(path) as buf:
+        return decode_framed(buf, plan, framed, path=path, **decode)
 
 
 def _sub_segments(seg: Segments, start, stop, idx) -> Segments:
