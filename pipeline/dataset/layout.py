@@ -1,0 +1,55 @@
+"""Where a dataset keeps things: ``date=YYYY-MM-DD/category=CCC/sensor=SAC_SIC/part-ID-NNNNN.parquet``
+(hive-style: DuckDB, pyarrow and Polars read the partition keys from the folder names), the manifest and
+the lock at the top."""
+
+from __future__ import annotations
+
+import datetime as dt
+import re
+from pathlib import Path
+
+MANIFEST = "manifest.json"
+LOCK = ".ingest.lock"
+PART_GLOB = "date=*/category=*/sensor=*/part-*.parquet"
+TEMP_GLOB = "date=*/category=*/sensor=*/.part-*.tmp"
+UNKNOWN_SENSOR = "unknown"  # records without SAC/SIC
+INPUT_ID_CHARS = 16  # a part names its input by this many hex digits of the input's SHA-256
+_PART = re.compile(r"^part-([0-9a-f]+)-(\d+)\.parquet$")
+
+
+def sensor_key(sac: int | None, sic: int | None) -> str:
+    """The sensor partition's value: ``SAC_SIC`` (``20_129``), ``unknown`` when either is missing."""
+    if sac is None or sic is None:
+        return UNKNOWN_SENSOR
+    return f"{int(sac)}_{int(sic)}"
+
+
+def partition_dir(root: Path, date: dt.date, category: int, sensor: str) -> Path:
+    """The folder of one (day, category, sensor) partition."""
+    return root / f"date={date.isoformat()}" / f"category={category:03d}" / f"sensor={sensor}"
+
+
+def part_name(input_id: str, seq: int) -> str:
+    """A part's file name: its input's id (SHA-256 prefix) and its number among the input's parts."""
+    return f"part-{input_id}-{seq:05d}.parquet"
+
+
+def temp_path(final: Path) -> Path:
+    """Where a part is written before it is renamed to ``final`` (hidden: readers never list it)."""
+    return final.with_name(f".{final.stem}.tmp")
+
+
+def input_id(sha256: str) -> str:
+    """An input's id in part names."""
+    return sha256[:INPUT_ID_CHARS]
+
+
+def part_input(path: Path) -> str | None:
+    """The input id a part file's name carries (None: not a part's name)."""
+    m = _PART.match(path.name)
+    return m.group(1) if m else None
+
+
+def relative(root: Path, path: Path) -> str:
+    """A path inside the dataset as the manifest writes it (POSIX, relative to the root)."""
+    return path.relative_to(root).as_posix()
