@@ -113,6 +113,7 @@ def _ingest_one(path: Path, digest: str, label: str, options: IngestOptions, che
                 pool, on_chunk, result: IngestResult) -> dict:
     """Decode one input into its parts and return its manifest record; every file of it removed on failure."""
     import numpy as np
+    import pandas as pd
 
     import msdc.asterix as asterix
     from msdc.asterix.errors import UnreadableInput
@@ -120,7 +121,6 @@ def _ingest_one(path: Path, digest: str, label: str, options: IngestOptions, che
     from msdc.pipeline.dataset.layout import input_id
     from msdc.pipeline.dataset.manifest import prune_empty
     from msdc.pipeline.dataset.writer import InputWriter
-    from msdc.pipeline.jobs.decode import labelled
     from msdc.pipeline.meta import software_version
     from msdc.pipeline.model import editions as edition_notes
     from msdc.pipeline.model.time import FirstDayTally
@@ -153,7 +153,8 @@ def _ingest_one(path: Path, digest: str, label: str, options: IngestOptions, che
                                    "YYYY-MM-DD (the dataset's partitions are UTC days); nothing ingested "
                                    "from it")
                 days = np.datetime64(rec.date, "D") + frame["day"].to_numpy(np.int64)
-                writer.add(cat, record_schema(cat).conform(labelled(frame, label)), days)
+                file = pd.Categorical.from_codes(np.zeros(len(frame), np.int8), categories=[label])
+                writer.add(cat, record_schema(cat).conform(frame.assign(file=file)), days)
                 rows[cat] = rows.get(cat, 0) + len(frame)
         content = account.warnings(head_of(path), hint=False, detected=options.format is None)
         if content and not options.lenient:

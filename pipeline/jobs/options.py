@@ -719,8 +719,8 @@ class IngestOptions:
     lenient: bool = option(False, "--lenient",
                            help="ingest what decodes even when an input is mostly not ASTERIX (said as a "
                                 "warning; else an error and that input is not ingested)")
-    chunk_mb: float = option(64.0, "--chunk-mb", range=CHUNK_RANGE_MB, unit="MB",
-                             help="streaming chunk size (MB): memory per worker follows it")
+    chunk_mb: float = option(8.0, "--chunk-mb", range=CHUNK_RANGE_MB, unit="MB",  # ~50 MB of memory a MB
+                             help="streaming chunk size (MB): the memory of each process follows it")
     editions: tuple[str, ...] = option(
         (), "--edition", repeat=True, parse=edition_argument, metavar="CAT=ED", section="reading",
         help="pin a category edition, e.g. 21=0.26 or 48=1.27 (repeatable)",

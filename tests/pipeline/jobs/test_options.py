@@ -63,6 +63,10 @@ EXPECTED = {
                   "--min-fl": "min_fl", "--exclude-mode-a-only": "exclude_mode_a_only",
                   "--exclude-codes": "exclude_codes",
                   **READING},
+    "ingest": {"INPUT": "inputs", "--dataset": "dataset", "--workers": "workers", "--category": "categories",
+               "--lenient": "lenient", "--chunk-mb": "chunk_mb", "--edition": "editions", "--date": "date",
+               "--format": "format"},
+    "sql": {"SQL": "query", "--dataset": "dataset", "--output": "output", "--limit": "limit"},
 }
 
 
