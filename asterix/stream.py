@@ -3,8 +3,10 @@
 from __future__ import annotations
 
 import dataclasses
+import datetime as dt
 from collections.abc import Iterator
 from concurrent.futures import Executor
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -22,7 +24,15 @@ from .reader import (
     reading_editions,
     selected_columns,
 )
-from .timeline import ANCHOR_REPORTS, file_order_days, first_report_day, known_captures, restamp, valid_times
+from .timeline import (
+    ANCHOR_REPORTS,
+    _file_order,
+    file_order_days,
+    first_report_day,
+    known_captures,
+    restamp,
+    valid_times,
+)
 
 HOLD_BYTES = 1 << 22  # a raw stream's first chunks held at most until day 0 is anchored (payload bytes)
 
@@ -193,3 +203,77 @@ def _sub_segments(seg: Segments, start, stop, idx) -> Segments:
                     seg.capture_tod[idx] if len(seg.capture_tod) else np.full(len(idx), np.nan),
                     seg.dated, seg.exact, seg.container_bytes if first else 0,
                     seg.problems if first else [])
+
+
+@dataclass(frozen=True)
+class Window:
+    """One chunk of a raw stream, framed and clocked in file order, to decode on its own (decode_window):
+    its framed blocks, the data blocks before it, and the clock (day, last valid time of day) the reports
+    before it leave, on the recording's ``date``."""
+
+    index: int
+    framed: tuple
+    blocks_before: int
+    day: int
+    last_tod_s: float
+    date: dt.date | None
+
+
+def plan_windows(path, pool: Executor, *, chunk: int, editions=None, date=None, categories=None,
+                 format: str | None = None) -> tuple[Plan, list[Window]] | None:
+    """A raw stream cut into windows of about ``chunk`` bytes that decode apart, in ``pool``'s processes,
+    into the records, days and block numbers iter_read gives: the windows' times of day are decoded first
+    (in the pool; the time of day alone, about a third of a whole decode) and the clocks settled from them
+    in file order as iter_read settles them. None when the recording is not a raw stream or holds CAT001
+    plots (can_pool): iter_read decodes it."""
+    first_date, categories = parse_date(date), check_categories(categories)
+    eds = reading_editions(editions, categories)
+    with _mapped(path) as buf:
+        try:
+            seg = read_segments(buf, format)
+        except ValueError as exc:
+            raise UnreadableInput(f"{path}: {exc}") from exc
+        release_pages(buf, 0, len(buf))
+        plan = plan_recording(buf, seg, eds, categories, None)
+        if seg.format != "raw" or not can_pool(plan):
+            return None
+        framer = plan.framer(buf)
+        framed = list(_raw_windows(framer, chunk, int(len(buf)), None))
+        framer.release(int(len(buf)))
+    timed = list(pool.map(_window_times, [(str(path), plan, f) for f, _ in framed]))
+    seen = np.zeros(0)  # the first valid times of day, as iter_read anchors day 0 on them
+    held = 0
+    for (_, covered), (t, _) in zip(framed, timed, strict=True):
+        seen = np.concatenate([seen, t[np.isfinite(t)]])[:ANCHOR_REPORTS]
+        held += covered
+        if len(seen) >= ANCHOR_REPORTS or held >= HOLD_BYTES:
+            break
+    clock = (first_report_day(seen), np.nan)
+    windows, blocks = [], 0
+    for i, ((f, _), (t, n)) in enumerate(zip(framed, timed, strict=True)):
+        windows.append(Window(i, f, blocks, clock[0], clock[1], first_date))
+        clock = file_order_days({0: {"offset": np.arange(len(t)), "time_of_day": t}}, *clock)
+        blocks += n
+    return plan, windows
+
+
+def _window_times(args: tuple) -> tuple[np.ndarray, int]:
+    """A window's times of day in file order (NaN where not valid) and its data blocks (in a pool process)."""
+    path, plan, framed = args
+    with _mapped(path) as buf:
+        rec = decode_framed(buf, plan, framed, path=path, selected=selected_columns(["time_of_day"]))
+    parts = [f for f in rec.frames.values() if len(f["offset"])]
+    return (_file_order(parts)[1] if parts else np.zeros(0)), rec.blocks
+
+
+def decode_window(path, plan: Plan, window: Window, *, strict: bool = False, columns=None) -> Recording:
+    """One window of plan_windows decoded: the records, days, timestamps and block numbers iter_read gives
+    them."""
+    with _mapped(path) as buf:
+        rec = decode_framed(buf, plan, window.framed, path=str(path), date=window.date, strict=strict,
+                            selected=selected_columns(columns))
+    for f in rec.frames.values():
+        f["block"] += window.blocks_before
+    file_order_days(rec.frames, window.day, window.last_tod_s)
+    restamp(rec.frames, window.date)
+    return rec
