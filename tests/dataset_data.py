@@ -87,3 +87,27 @@ def same_dataset(a: Path, b: Path) -> None:
     ra = [{k: v for k, v in r.items() if k not in strip} for r in manifest(a)["inputs"]]
     rb = [{k: v for k, v in r.items() if k not in strip} for r in manifest(b)["inputs"]]
     assert ra == rb
+
+
+def partition_rows(root: Path) -> dict[str, object]:
+    """Each partition's rows (folder -> Arrow table), its parts read in name order (file order), text
+    columns as plain strings (each part has dictionaries of its own)."""
+    import pyarrow as pa
+
+    out: dict[str, list] = {}
+    for rel in listed_parts(root):
+        t = pq.read_table(root / rel)
+        t = t.cast(pa.schema([pa.field(f.name, f.type.value_type) if pa.types.is_dictionary(f.type) else f
+                              for f in t.schema]))
+        out.setdefault(rel.rsplit("/", 1)[0], []).append(t)
+    return {k: pa.concat_tables(v) for k, v in out.items()}
+
+
+def same_rows(a: Path, b: Path) -> None:
+    """Assert two datasets hold the same rows in every partition, in the same order, and nothing else."""
+    assert on_disk(a) == listed_parts(a) and on_disk(b) == listed_parts(b)
+    ra, rb = partition_rows(a), partition_rows(b)
+    assert sorted(ra) == sorted(rb)
+    for key in ra:
+        assert ra[key].equals(rb[key]), key
+    assert [r["rows"] for r in manifest(a)["inputs"]] == [r["rows"] for r in manifest(b)["inputs"]]

@@ -14,7 +14,7 @@ PART_GLOB = "date=*/category=*/sensor=*/part-*.parquet"
 TEMP_GLOB = "date=*/category=*/sensor=*/.part-*.tmp"
 UNKNOWN_SENSOR = "unknown"  # records without SAC/SIC
 INPUT_ID_CHARS = 16  # a part names its input by this many hex digits of the input's SHA-256
-_PART = re.compile(r"^part-([0-9a-f]+)-(\d+)\.parquet$")
+_PART = re.compile(r"^part-([0-9a-f]+)-[-0-9]+\.parquet$")  # part-ID-NNNNN, or part-ID-WWWWW-NNNNN
 
 
 def sensor_key(sac: int | None, sic: int | None) -> str:
@@ -29,9 +29,16 @@ def partition_dir(root: Path, date: dt.date, category: int, sensor: str) -> Path
     return root / f"date={date.isoformat()}" / f"category={category:03d}" / f"sensor={sensor}"
 
 
-def part_name(input_id: str, seq: int) -> str:
-    """A part's file name: its input's id (SHA-256 prefix) and its number among the input's parts."""
-    return f"part-{input_id}-{seq:05d}.parquet"
+def part_name(prefix: str, seq: int) -> str:
+    """A part's file name: its input's id (SHA-256 prefix; then the window's number when windows of the
+    input are written apart) and its number among the parts of that."""
+    return f"part-{prefix}-{seq:05d}.parquet"
+
+
+def input_files(root: Path, input_id: str) -> list[Path]:
+    """Every part of an input on disk, renamed into place or temporary."""
+    return [*root.glob(f"date=*/category=*/sensor=*/part-{input_id}-*.parquet"),
+            *root.glob(f"date=*/category=*/sensor=*/.part-{input_id}-*.tmp")]
 
 
 def temp_path(final: Path) -> Path:

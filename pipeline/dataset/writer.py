@@ -40,6 +40,11 @@ class _Open:
     offset_max: int = -1
 
 
+class Undated(ValueError):
+    """Records of a recording that carries no date (a raw stream without --date): no UTC day to file them
+    under."""
+
+
 class InputWriter:
     """The parts of one input (named by its id), written as its chunks come: ``add`` each category's
     conformed chunk with the UTC date of each row, ``finish`` to close and rename every part (their records
@@ -58,6 +63,24 @@ class InputWriter:
         # so each part's row groups are written in order
         self.thread = ThreadPoolExecutor(1, thread_name_prefix="msdc-parquet")
         self.writing: list = []  # the thread's tasks not yet waited for
+
+    def add_recording(self, rec, label: str) -> dict[int, int]:
+        """Add every category's records of a decoded chunk (asterix Recording) with ``label`` as their
+        ``file``, on the UTC day of their ``day`` after the recording's date; the records added per category.
+        Undated when records come without a date."""
+        from msdc.pipeline.report.record_schema import record_schema
+
+        rows = {}
+        for cat, frame in rec.frames.items():
+            if not len(frame):
+                continue
+            if rec.date is None:
+                raise Undated(f"a {rec.format} recording carries no date")
+            days = np.datetime64(rec.date, "D") + frame["day"].to_numpy(np.int64)
+            file = pd.Categorical.from_codes(np.zeros(len(frame), np.int8), categories=[label])
+            self.add(cat, record_schema(cat).conform(frame.assign(file=file)), days)
+            rows[cat] = len(frame)
+        return rows
 
     def add(self, category: int, rows: pd.DataFrame, dates: np.ndarray) -> None:
         """Add a chunk of one category (its rows in the category's schema; ``dates``: each row's UTC day as

@@ -29,6 +29,7 @@ from dataset_data import (
     midnight_recording,
     on_disk,
     same_dataset,
+    same_rows,
 )
 
 import msdc.asterix as asterix
@@ -124,7 +125,9 @@ def test_ingesting_the_same_input_again_does_nothing(fixtures_dataset, tmp_path,
     assert {p: p.read_bytes() for p in root.rglob("*") if p.is_file()} == before
 
 
-def test_workers_2_make_the_dataset_workers_1_makes(tmp_path):
+def test_workers_2_write_the_rows_workers_1_writes(tmp_path):
+    """Each window of a raw stream written by a pool process (parts of their own): the same rows, in the
+    same order, in every partition, across midnight (the clocks settled before the windows decode)."""
     rec = tmp_path / "midnight.ast"
     midnight_recording(rec, 12000)  # about 190 kB: chunks of 0.1 MB, midnight in the middle one
     one, two = tmp_path / "one", tmp_path / "two"
@@ -132,7 +135,11 @@ def test_workers_2_make_the_dataset_workers_1_makes(tmp_path):
     assert ingest(*args, "--dataset", one) == 0
     assert ingest(*args, "--dataset", two, "--workers", "2") == 0
     assert len({p.split("/")[0] for p in listed_parts(one)}) == 2  # both days
-    same_dataset(one, two)
+    assert len(listed_parts(two)) > len(listed_parts(one))  # the windows' parts
+    same_rows(one, two)
+    again = tmp_path / "again"
+    assert ingest(*args, "--dataset", again, "--workers", "2") == 0
+    same_dataset(two, again)  # and the same parts for the same command
 
 
 def _run(args: list[str]) -> subprocess.Popen:
