@@ -6,7 +6,9 @@ recording is a day of 10 radars' CAT048 plots (80 %) and one ADS-B station's CAT
 msdc's encoder in time order (cached in --work). Each measurement is a fresh process running the ingest job
 into an empty dataset (numba's cached kernels load in the first chunk, counted); the file is read once
 before, so it is in the page cache. RSS: ru_maxrss of the process, and the largest VmHWM among its
-descendants (the forkserver and the pool's workers), polled every 0.1 s.
+descendants (the forkserver and the pool's workers), polled every 0.05 s; CPU: the process's user and
+system time and its descendants' as last polled (a loaded machine stretches the wall time, much less the
+CPU time).
 """
 
 from __future__ import annotations
@@ -61,6 +63,8 @@ import json, os, resource, sys, threading, time
 from pathlib import Path
 from msdc.pipeline.jobs.ingest import ingest_job
 peak = {}  # pid -> VmHWM (kB) of this process's descendants (the forkserver and the pool's workers)
+cpu = {}  # pid -> CPU seconds (user + system) of each descendant, as last seen
+TICK = os.sysconf("SC_CLK_TCK")
 def descendants():
     kids = {}
     for stat in Path("/proc").glob("[0-9]*/stat"):
@@ -79,12 +83,14 @@ def watch():
     while True:
         for pid in descendants():
             try:
+                f = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()
+                cpu[pid] = (int(f[11]) + int(f[12])) / TICK
                 for line in Path(f"/proc/{pid}/status").read_text().splitlines():
                     if line.startswith("VmHWM:"):
                         peak[pid] = max(peak.get(pid, 0), int(line.split()[1]))
             except OSError:
                 pass
-        time.sleep(0.1)
+        time.sleep(0.05)
 threading.Thread(target=watch, daemon=True).start()
 from msdc.pipeline.jobs.options import IngestOptions
 path, root, workers, chunk = sys.argv[1], sys.argv[2], int(sys.argv[3]), float(sys.argv[4])
@@ -93,9 +99,11 @@ result = ingest_job(IngestOptions(inputs=(path,), dataset=root, workers=workers,
     "datetime").date(2026, 11, 28), chunk_mb=chunk))
 took = time.perf_counter() - t
 rec = result.ingested[0]
+own = resource.getrusage(resource.RUSAGE_SELF)
 print(json.dumps({"seconds": took, "records": sum(rec["rows"].values()), "parts": len(rec["parts"]),
                   "main_rss_mb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024,
-                  "worker_rss_mb": max(peak.values(), default=0) / 1024}))
+                  "worker_rss_mb": max(peak.values(), default=0) / 1024,
+                  "cpu_s": own.ru_utime + own.ru_stime + sum(cpu.values())}))
 """
 
 
@@ -131,7 +139,8 @@ def main() -> None:
         base = base or rate
         print(f"workers {workers}: {m['records']} records in {m['seconds']:.1f} s = {rate / 1e6:.2f} M "
               f"records/s (x{rate / base:.2f}), {m['parts']} parts; peak RSS main {m['main_rss_mb']:.0f} MB, "
-              f"largest worker {m['worker_rss_mb']:.0f} MB")
+              f"largest worker {m['worker_rss_mb']:.0f} MB; CPU {m['cpu_s']:.1f} s = "
+              f"{m['records'] / m['cpu_s'] / 1e6:.2f} M records per CPU-second")
 
 
 if __name__ == "__main__":
