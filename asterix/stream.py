@@ -243,27 +243,53 @@ def plan_windows(path, pool: Executor, *, chunk: int, editions=None, date=None, 
     timed = list(pool.map(_window_times, [(str(path), plan, f) for f, _ in framed]))
     seen = np.zeros(0)  # the first valid times of day, as iter_read anchors day 0 on them
     held = 0
-    for (_, covered), (t, _) in zip(framed, timed, strict=True):
-        seen = np.concatenate([seen, t[np.isfinite(t)]])[:ANCHOR_REPORTS]
+    for (_, covered), clock in zip(framed, timed, strict=True):
+        seen = np.concatenate([seen, clock.head])[:ANCHOR_REPORTS]
         held += covered
         if len(seen) >= ANCHOR_REPORTS or held >= HOLD_BYTES:
             break
-    clock = (first_report_day(seen), np.nan)
+    day, last_tod = first_report_day(seen), np.nan
     windows, blocks = [], 0
-    for i, ((f, _), (t, n)) in enumerate(zip(framed, timed, strict=True)):
-        windows.append(Window(i, f, blocks, clock[0], clock[1], first_date))
-        clock = file_order_days({0: {"offset": np.arange(len(t)), "time_of_day": t}}, *clock)
-        blocks += n
+    for i, ((f, _), clock) in enumerate(zip(framed, timed, strict=True)):
+        windows.append(Window(i, f, blocks, day, last_tod, first_date))
+        day, last_tod = clock.after(day, last_tod)
+        blocks += clock.blocks
     return plan, windows
 
 
-def _window_times(args: tuple) -> tuple[np.ndarray, int]:
-    """A window's times of day in file order (NaN where not valid) and its data blocks (in a pool process)."""
+@dataclass(frozen=True)
+class WindowClock:
+    """What a window's times of day tell the windows after it (file order, valid times only): the first
+    ANCHOR_REPORTS of them, the first and last, and the midnights between them (+1 for a drop of more than
+    12 h, -1 for a rise of more than 12 h), with its data blocks. A few numbers, whatever the window."""
+
+    head: np.ndarray
+    first_s: float
+    last_s: float
+    midnights: int
+    blocks: int
+
+    def after(self, day: int, last_tod_s: float) -> tuple[int, float]:
+        """The clock after the window from the clock before it: timeline.file_order_days's, exactly."""
+        if not len(self.head):
+            return day, last_tod_s
+        step = 0.0 if np.isnan(last_tod_s) else self.first_s - last_tod_s
+        return day + int(step < -43200) - int(step > 43200) + self.midnights, self.last_s
+
+
+def _window_times(args: tuple) -> WindowClock:
+    """A window's WindowClock (in a pool process): its times of day decoded alone."""
     path, plan, framed = args
     with _mapped(path) as buf:
         rec = decode_framed(buf, plan, framed, path=path, selected=selected_columns(["time_of_day"]))
     parts = [f for f in rec.frames.values() if len(f["offset"])]
-    return (_file_order(parts)[1] if parts else np.zeros(0)), rec.blocks
+    t = _file_order(parts)[1] if parts else np.zeros(0)
+    valid = t[np.isfinite(t)]
+    if not len(valid):
+        return WindowClock(valid, np.nan, np.nan, 0, rec.blocks)
+    d = np.diff(valid)
+    return WindowClock(valid[:ANCHOR_REPORTS].copy(), float(valid[0]), float(valid[-1]),
+                       int((d < -43200).sum() - (d > 43200).sum()), rec.blocks)
 
 
 def decode_window(path, plan: Plan, window: Window, *, strict: bool = False, columns=None) -> Recording:
