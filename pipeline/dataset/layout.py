@@ -5,7 +5,6 @@ the lock at the top."""
 from __future__ import annotations
 
 import datetime as dt
-import re
 from pathlib import Path
 
 MANIFEST = "manifest.json"
@@ -14,7 +13,6 @@ PART_GLOB = "date=*/category=*/sensor=*/part-*.parquet"
 TEMP_GLOB = "date=*/category=*/sensor=*/.part-*.tmp"
 UNKNOWN_SENSOR = "unknown"  # records without SAC/SIC
 INPUT_ID_CHARS = 16  # a part names its input by this many hex digits of the input's SHA-256
-_PART = re.compile(r"^part-([0-9a-f]+)-[-0-9]+\.parquet$")  # part-ID-NNNNN, or part-ID-WWWWW-NNNNN
 
 
 def sensor_key(sac: int | None, sic: int | None) -> str:
@@ -49,12 +47,6 @@ def temp_path(final: Path) -> Path:
 def input_id(sha256: str) -> str:
     """An input's id in part names."""
     return sha256[:INPUT_ID_CHARS]
-
-
-def part_input(path: Path) -> str | None:
-    """The input id a part file's name carries (None: not a part's name)."""
-    m = _PART.match(path.name)
-    return m.group(1) if m else None
 
 
 def relative(root: Path, path: Path) -> str:
