@@ -3,11 +3,14 @@
 from __future__ import annotations
 
 import dataclasses
+import datetime as dt
 from collections.abc import Iterator
+from concurrent.futures import Executor
+from dataclasses import dataclass
 
 import numpy as np
 
-from .cat001_time import SectorClock
+from .cat001_time import PLOT_CATEGORY, SectorClock
 from .containers import UNTIMED, Segments, read_segments
 from .errors import UnreadableInput
 from .framing import Progress, release_pages
@@ -21,14 +24,22 @@ from .reader import (
     reading_editions,
     selected_columns,
 )
-from .timeline import ANCHOR_REPORTS, file_order_days, first_report_day, known_captures, restamp, valid_times
+from .timeline import (
+    ANCHOR_REPORTS,
+    _file_order,
+    file_order_days,
+    first_report_day,
+    known_captures,
+    restamp,
+    valid_times,
+)
 
 HOLD_BYTES = 1 << 22  # a raw stream's first chunks held at most until day 0 is anchored (payload bytes)
 
 
 def iter_read(path, *, chunk: int = 1_000_000, editions=None, date=None, categories=None,
               format: str | None = None, strict: bool = False, columns=None,
-              progress: Progress | None = None) -> Iterator[Recording]:
+              progress: Progress | None = None, pool: Executor | None = None) -> Iterator[Recording]:
     """Stream a recording in chunks of about ``chunk`` bytes of payload, yielding a Recording each
     (``columns``: only those decoded columns, as in ``read``); ``progress(done, total, what)`` is called
     as the passes that plan the decoding (asterix.plan) and the decoding itself go through the file.
@@ -59,8 +70,10 @@ def iter_read(path, *, chunk: int = 1_000_000, editions=None, date=None, categor
         day0 = None  # container day number of the first chunk's day 0
         blocks = 0  # data blocks framed in the chunks before: each chunk numbers its own from 0
         sectors = SectorClock()  # each radar's last CAT002 time: CAT001 times continue across chunks
+        pooled = pool if pool is not None and can_pool(plan) else None
         for rec, covered in _chunks(buf, plan, chunk, path=str(path), date=first_date, strict=strict,
-                                    selected=selected, sector_clock=sectors, progress=progress):
+                                    selected=selected, sector_clock=sectors, progress=progress,
+                                    pool=pooled):
             for f in rec.frames.values():
                 f["block"] += blocks
             blocks += rec.blocks
@@ -96,11 +109,18 @@ def iter_read(path, *, chunk: int = 1_000_000, editions=None, date=None, categor
             yield held_rec
 
 
+def can_pool(plan: Plan) -> bool:
+    """Whether a recording's chunks may decode apart: a raw stream (one payload, framed here) without
+    CAT001 plots, whose times come from the CAT002 messages of the chunks before."""
+    return bool(len(plan.seg.start)) and not plan.seg.exact and PLOT_CATEGORY not in plan.decoded
+
+
 def _chunks(buf: np.ndarray, plan: Plan, chunk: int, *, progress: Progress | None = None,
-            **decode) -> Iterator[tuple[Recording, int]]:
+            pool: Executor | None = None, **decode) -> Iterator[tuple[Recording, int]]:
     """The recording decoded by the plan in chunks of about ``chunk`` payload bytes, each with the payload
     bytes it covers: a raw stream cut at block starts as framing goes, a container's payloads in groups
-    (chunks holding nothing at all are not yielded, but for a file without payload)."""
+    (chunks holding nothing at all are not yielded, but for a file without payload). ``pool``: a raw
+    stream's chunks decoded in its processes (can_pool), in order, at most POOL_AHEAD per process ahead."""
     seg = plan.seg
     framer = plan.framer(buf)
     total = int(len(buf))
@@ -108,13 +128,12 @@ def _chunks(buf: np.ndarray, plan: Plan, chunk: int, *, progress: Progress | Non
         yield decode_framed(buf, plan, framer.window(), **decode), 0
         return
     if not seg.exact:
-        while not framer.done:
-            at = framer.position
-            framed = framer.window(at + chunk)
-            if progress:
-                progress(framer.position, total, "decoding")
-            if len(framed[0]) or len(framed[4]):
-                yield decode_framed(buf, plan, framed, **decode), framer.position - at
+        windows = _raw_windows(framer, chunk, total, progress)
+        if pool is None:
+            for framed, covered in windows:
+                yield decode_framed(buf, plan, framed, **decode), covered
+        else:
+            yield from _pooled(pool, plan, windows, decode)
         framer.release(total)
         return
     day, tod = known_captures(seg)  # untimed packets (pcapng SPB) take their neighbour's capture time
@@ -136,6 +155,47 @@ def _chunks(buf: np.ndarray, plan: Plan, chunk: int, *, progress: Progress | Non
     framer.release(total)
 
 
+def _raw_windows(framer, chunk: int, total: int, progress: Progress | None
+                 ) -> Iterator[tuple[tuple, int]]:
+    """A raw stream's framed windows of about ``chunk`` bytes, cut at block starts, each with the bytes it
+    covers (windows holding no block and no framing error are passed over)."""
+    while not framer.done:
+        at = framer.position
+        framed = framer.window(at + chunk)
+        if progress:
+            progress(framer.position, total, "decoding")
+        if len(framed[0]) or len(framed[4]):
+            yield framed, framer.position - at
+
+
+POOL_AHEAD = 2  # windows in flight per pool process: the next is ready when one is taken
+
+
+def _pooled(pool: Executor, plan: Plan, windows: Iterator[tuple[tuple, int]], decode: dict
+            ) -> Iterator[tuple[Recording, int]]:
+    """Each window decoded in ``pool`` (_decode_window), yielded in file order as it comes back."""
+    from collections import deque
+
+    ahead = POOL_AHEAD * max(getattr(pool, "_max_workers", 1), 1)
+    path = decode.pop("path")
+    decode.pop("sector_clock", None)  # no CAT001 plots here (can_pool): the clock is never read
+    pending: deque = deque()
+    for framed, covered in windows:
+        pending.append((pool.submit(_decode_window, path, plan, framed, decode), covered))
+        if len(pending) >= ahead:
+            future, n = pending.popleft()
+            yield future.result(), n
+    while pending:
+        future, n = pending.popleft()
+        yield future.result(), n
+
+
+def _decode_window(path: str, plan: Plan, framed: tuple, decode: dict) -> Recording:
+    """One framed window of the file at ``path`` decoded in a pool process (the file mapped again there)."""
+    with _mapped(path) as buf:
+        return decode_framed(buf, plan, framed, path=path, **decode)
+
+
 def _sub_segments(seg: Segments, start, stop, idx) -> Segments:
     first = len(idx) and idx[0] == 0
     return Segments(seg.format, np.asarray(start, np.int64), np.asarray(stop, np.int64),
@@ -143,3 +203,103 @@ def _sub_segments(seg: Segments, start, stop, idx) -> Segments:
                     seg.capture_tod[idx] if len(seg.capture_tod) else np.full(len(idx), np.nan),
                     seg.dated, seg.exact, seg.container_bytes if first else 0,
                     seg.problems if first else [])
+
+
+@dataclass(frozen=True)
+class Window:
+    """One chunk of a raw stream, framed and clocked in file order, to decode on its own (decode_window):
+    its framed blocks, the data blocks before it, and the clock (day, last valid time of day) the reports
+    before it leave, on the recording's ``date``."""
+
+    index: int
+    framed: tuple
+    blocks_before: int
+    day: int
+    last_tod_s: float
+    date: dt.date | None
+
+
+def plan_windows(path, pool: Executor, *, chunk: int, editions=None, date=None, categories=None,
+                 format: str | None = None) -> tuple[Plan, list[Window]] | None:
+    """A raw stream cut into windows of about ``chunk`` bytes that decode apart, in ``pool``'s processes,
+    into the records, days and block numbers iter_read gives: the windows' times of day are decoded first
+    (in the pool; the time of day alone, about a third of a whole decode) and the clocks settled from them
+    in file order as iter_read settles them. None when the recording is not a raw stream or holds CAT001
+    plots (can_pool): iter_read decodes it."""
+    first_date, categories = parse_date(date), check_categories(categories)
+    eds = reading_editions(editions, categories)
+    with _mapped(path) as buf:
+        try:
+            seg = read_segments(buf, format)
+        except ValueError as exc:
+            raise UnreadableInput(f"{path}: {exc}") from exc
+        release_pages(buf, 0, len(buf))
+        plan = plan_recording(buf, seg, eds, categories, None)
+        if seg.format != "raw" or not can_pool(plan):
+            return None
+        framer = plan.framer(buf)
+        framed = list(_raw_windows(framer, chunk, int(len(buf)), None))
+        framer.release(int(len(buf)))
+    timed = list(pool.map(_window_times, [(str(path), plan, f) for f, _ in framed]))
+    seen = np.zeros(0)  # the first valid times of day, as iter_read anchors day 0 on them
+    held = 0
+    for (_, covered), clock in zip(framed, timed, strict=True):
+        seen = np.concatenate([seen, clock.head])[:ANCHOR_REPORTS]
+        held += covered
+        if len(seen) >= ANCHOR_REPORTS or held >= HOLD_BYTES:
+            break
+    day, last_tod = first_report_day(seen), np.nan
+    windows, blocks = [], 0
+    for i, ((f, _), clock) in enumerate(zip(framed, timed, strict=True)):
+        windows.append(Window(i, f, blocks, day, last_tod, first_date))
+        day, last_tod = clock.after(day, last_tod)
+        blocks += clock.blocks
+    return plan, windows
+
+
+@dataclass(frozen=True)
+class WindowClock:
+    """What a window's times of day tell the windows after it (file order, valid times only): the first
+    ANCHOR_REPORTS of them, the first and last, and the midnights between them (+1 for a drop of more than
+    12 h, -1 for a rise of more than 12 h), with its data blocks. A few numbers, whatever the window."""
+
+    head: np.ndarray
+    first_s: float
+    last_s: float
+    midnights: int
+    blocks: int
+
+    def after(self, day: int, last_tod_s: float) -> tuple[int, float]:
+        """The clock after the window from the clock before it: timeline.file_order_days's, exactly."""
+        if not len(self.head):
+            return day, last_tod_s
+        step = 0.0 if np.isnan(last_tod_s) else self.first_s - last_tod_s
+        return day + int(step < -43200) - int(step > 43200) + self.midnights, self.last_s
+
+
+def _window_times(args: tuple) -> WindowClock:
+    """A window's WindowClock (in a pool process): its times of day decoded alone."""
+    path, plan, framed = args
+    with _mapped(path) as buf:
+        rec = decode_framed(buf, plan, framed, path=path, selected=selected_columns(["time_of_day"]))
+    parts = [f for f in rec.frames.values() if len(f["offset"])]
+    t = _file_order(parts)[1] if parts else np.zeros(0)
+    valid = t[np.isfinite(t)]
+    if not len(valid):
+        return WindowClock(valid, np.nan, np.nan, 0, rec.blocks)
+    d = np.diff(valid)
+    return WindowClock(valid[:ANCHOR_REPORTS].copy(), float(valid[0]), float(valid[-1]),
+                       int((d < -43200).sum() - (d > 43200).sum()), rec.blocks)
+
+
+def decode_window(path, plan: Plan, window: Window, *, strict: bool = False, columns=None) -> Recording:
+    """One window of plan_windows decoded: the records, days, timestamps and block numbers iter_read gives
+    them."""
+    with _mapped(path) as buf:
+        rec = decode_framed(buf, plan, window.framed, path=str(path), date=window.date, strict=strict,
+                            selected=selected_columns(columns))
+    for f in rec.frames.values():
+        f["block"] += window.blocks_before
+    file_order_days(rec.frames, window.day, window.last_tod_s)
+    restamp(rec.frames, window.date)
+    return rec

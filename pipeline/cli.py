@@ -69,6 +69,8 @@ COMMAND_HELP = {
                  "times, false alerts",
     "evaluate": "every sensor against a surveillance standard's requirements: scorecard with intervals and "
                 "verdicts",
+    "ingest": "decode recordings into a Parquet dataset by UTC day, category and sensor (resumable)",
+    "sql": "a DuckDB query over a dataset 'msdc ingest' made",
 }
 
 
@@ -322,6 +324,42 @@ def cmd_evaluate(args) -> int:
     return 0
 
 
+def cmd_ingest(args) -> int:
+    """msdc ingest: the inputs not in the dataset yet decoded into it; the exit status."""
+    from msdc.pipeline.jobs import ingest
+
+    _numba_without_scipy()
+    progress = Progress()
+    options = from_args(ingest.IngestOptions, args)
+    result = ingest.ingest_job(options, on_chunk=lambda done, size, name: progress.bar(done, size, name))
+    if result.discarded:
+        print(f"msdc ingest: removed {len(result.discarded)} file(s) an interrupted ingest left in "
+              f"{result.dataset} (its inputs are ingested again now)", file=sys.stderr)
+    _warn("ingest", result.warnings)
+    for line in ingest.summary_lines(result):
+        print(line)
+    if not result.ingested:
+        print(f"msdc ingest: nothing to do: every input is already in {result.dataset}")
+    return 0
+
+
+def cmd_sql(args) -> int:
+    """msdc sql: a DuckDB query over a dataset, printed or written with -o; the exit status."""
+    from msdc.pipeline.jobs import sql
+
+    options = from_args(sql.SqlOptions, args)
+    with transaction.staged() as tx:
+        result = sql.sql_job(options, tx=tx)
+    if result.output is not None:
+        print(f"{result.rows_written} row(s) -> {result.output}")
+    elif result.head is not None:
+        print(result.head.to_string(index=False) if len(result.head.columns) else "(no column)")
+        if result.more:
+            print(f"msdc sql: only the first {len(result.head)} rows are shown (--limit; -o writes every "
+                  "row)", file=sys.stderr)
+    return 0
+
+
 def _run_job(name: str, validate, job, options, progress: Progress):
     """Validate (warnings first), run the job, then print its later warnings (its result's, after
     validation's) and the skipped blocks. A job that fails prints the warnings it collected before its error
@@ -343,7 +381,8 @@ def _run_job(name: str, validate, job, options, progress: Progress):
 
 
 COMMANDS = {"decode": cmd_decode, "stats": cmd_stats, "correlate": cmd_correlate, "quality": cmd_quality,
-            "track": cmd_track, "conflicts": cmd_conflicts, "evaluate": cmd_evaluate}
+            "track": cmd_track, "conflicts": cmd_conflicts, "evaluate": cmd_evaluate, "ingest": cmd_ingest,
+            "sql": cmd_sql}
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -73,6 +73,7 @@ REPORT_GAP_RANGE_S = (0.1, 3600.0)
 # ~0.2-0.4 s of a core: 50 take ~10 s on two cores, the real hour's 181 aircraft ~45 s, its 728 alerts ~3 min
 FIGURES_LIMIT = 50
 FIGURES_LIMIT_RANGE = (0, 100_000)
+WORKERS_RANGE = (1, 256)  # ingest --workers: processes decoding a raw recording's chunks
 
 # Where an option stands in --help and in the docs table: by section, then in declaration order
 SECTIONS = ("selection", "output", "command", "tracking", "measurements", "reading")
@@ -762,11 +763,62 @@ class EvaluateOptions(ReferenceFilterOptions, DecodingOptions):
     max_coast_s: float = 60.0  # the reference tracker's (build_reference)
 
 
+@dataclass(frozen=True)
+class IngestOptions:
+    """Everything ``ingest_job`` needs."""
+
+    inputs: tuple[str, ...] = option((), metavar="INPUT", section="selection", doc="the recordings")
+    dataset: str | None = option(None, "--dataset", metavar="DIR", required=True, section="output",
+                                 help="the dataset folder (made if absent; an existing one is added to)")
+    workers: int = option(1, "--workers", metavar="N", range=WORKERS_RANGE, section="command",
+                          help="processes decoding a raw recording's chunks in parallel (the records and "
+                               "days are those of one)")
+    categories: tuple[int, ...] = option((), "--category", repeat=True, choices=CATEGORIES,
+                                         help="only this category (repeatable; default: the measurement "
+                                              "categories 48, 21, 10 and 20)",
+                                         doc="ingest only this category, any msdc decodes (repeatable); "
+                                             "without it CAT048, CAT021, CAT010 and CAT020 are ingested")
+    lenient: bool = option(False, "--lenient",
+                           help="ingest what decodes even when an input is mostly not ASTERIX (said as a "
+                                "warning; else an error and that input is not ingested)")
+    chunk_mb: float = option(8.0, "--chunk-mb", range=CHUNK_RANGE_MB, unit="MB",  # ~50 MB of memory a MB
+                             help="streaming chunk size (MB): the memory of each process follows it")
+    editions: tuple[str, ...] = option(
+        (), "--edition", repeat=True, parse=edition_argument, metavar="CAT=ED", section="reading",
+        help="pin a category edition, e.g. 21=0.26 or 48=1.27 (repeatable)",
+        doc="pin a category edition, e.g. `21=0.26` or `48=1.27` (repeatable; "
+            "[Editions](../decoding/editions.md))")
+    date: dt.date | None = option(
+        None, "--date", parse=date_argument, section="reading",
+        help="UTC day (YYYY-MM-DD) of a recording that carries no date (raw, final, gps, oradis): needed, "
+             "the partitions are UTC days")
+    format: str | None = option(None, "--format", choices=FORMATS, section="reading",
+                                help="container format (default: detected)",
+                                doc="container format (default: detected; "
+                                    "[Containers](../decoding/containers.md))")
+
+
+@dataclass(frozen=True)
+class SqlOptions:
+    """Everything ``sql_job`` needs."""
+
+    query: tuple[str, ...] = option((), metavar="SQL", section="selection",
+                                    doc="a DuckDB query over the views `cat048`, `cat021`... (one per "
+                                        "category; several words are joined by spaces)")
+    dataset: str | None = option(None, "--dataset", metavar="DIR", required=True, section="selection",
+                                 help="the dataset folder ('msdc ingest' makes it)")
+    output: str | None = option(None, "-o", "--output", section="output",
+                                help="OUT.csv or OUT.parquet (default: a table on the terminal)")
+    limit: int = option(50, "--limit", metavar="N", range=(1, 1_000_000), section="output",
+                        help="rows printed on the terminal at most (-o writes every row)")
+
+
 # the options of each command, in the order msdc --help lists the commands
 COMMAND_OPTIONS: dict[str, type] = {"decode": DecodeOptions, "stats": StatsOptions,
                                     "correlate": CorrelateOptions, "quality": QualityOptions,
                                     "track": TrackOptions, "conflicts": ConflictOptions,
-                                    "evaluate": EvaluateOptions}
+                                    "evaluate": EvaluateOptions, "ingest": IngestOptions,
+                                    "sql": SqlOptions}
 
 
 # ---------------------------------------------------------------------------------------------------------

@@ -78,7 +78,8 @@ def test_the_command_modules_share_only_common_and_public_names():
     private (``_name``) name of another module: what several share is a public name of jobs.common (or of
     jobs.options, where every option is declared)."""
     commands = {p.stem for p in (ROOT / "pipeline" / "jobs").glob("*.py")} - {"__init__", "common", "options"}
-    assert commands == {"decode", "stats", "correlate", "quality", "track", "conflicts", "evaluate"}
+    assert commands == {"decode", "stats", "correlate", "quality", "track", "conflicts", "evaluate", "ingest",
+                        "sql"}
     wrong = []
     for path in SOURCES:
         mod = _module(path)

@@ -68,6 +68,10 @@ EXPECTED = {
                  "--drop-jumps": "drop_jumps", "--min-nic": "min_nic", "--min-nacp": "min_nacp",
                  "--min-sil": "min_sil", "--output": "output", "--json": "json", "--html": "html",
                  "--adsb-sigma": "adsb_sigma_m", **READING},
+    "ingest": {"INPUT": "inputs", "--dataset": "dataset", "--workers": "workers", "--category": "categories",
+               "--lenient": "lenient", "--chunk-mb": "chunk_mb", "--edition": "editions", "--date": "date",
+               "--format": "format"},
+    "sql": {"SQL": "query", "--dataset": "dataset", "--output": "output", "--limit": "limit"},
 }
 
 

@@ -1,0 +1,83 @@
+"""The sql job (``msdc sql``): a DuckDB query over a dataset (``msdc ingest``), each category a view
+(``cat048``, ``cat021``...) over the parts its manifest lists, printed as a table or written whole to CSV
+or Parquet (all or nothing: report.transaction)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import pandas as pd
+
+from msdc.pipeline.jobs.common import JobError, OptionError, nonempty_path, output_path
+from msdc.pipeline.jobs.options import SqlOptions, check_declared
+from msdc.pipeline.report.transaction import OutputTransaction, staged
+
+
+@dataclass
+class SqlResult:
+    """The first rows (as many as --limit, for the terminal) or the file written, and the views there were."""
+
+    views: list[str]
+    head: pd.DataFrame | None = None
+    more: bool = False  # rows beyond the head
+    output: Path | None = None
+    rows_written: int | None = None
+    notes: list[str] = field(default_factory=list)
+
+
+def validate(options: SqlOptions) -> tuple[str, Path, Path | None]:
+    """The query, the dataset folder and -o, checked; OptionError if bad."""
+    check_declared(options)
+    query = " ".join(options.query).strip().rstrip(";").strip()
+    if not query:
+        raise OptionError("no query given: msdc sql --dataset DIR \"SELECT ...\"")
+    if options.dataset is None:
+        raise OptionError("--dataset is required")
+    nonempty_path("--dataset", options.dataset)
+    out = output_path("-o", options.output, (".csv", ".parquet"))
+    return query, Path(options.dataset), out
+
+
+def sql_job(options: SqlOptions, *, tx: OutputTransaction | None = None) -> SqlResult:
+    """Run the query; JobError when DuckDB is missing or refuses the query (its message, and the views)."""
+    from msdc.pipeline.dataset.manifest import ManifestError
+    from msdc.pipeline.dataset.reader import NotADataset, duckdb_views
+
+    query, root, out = validate(options)
+    try:
+        import duckdb
+    except ImportError:
+        raise JobError("msdc sql needs DuckDB: pip install 'msdc[dataset]' (or pip install duckdb)",
+                       2) from None
+    try:
+        con, views = duckdb_views(root)
+    except NotADataset as exc:
+        raise OptionError(f"--dataset {exc}") from None
+    except ManifestError as exc:
+        raise JobError(str(exc), 2) from None
+    except duckdb.Error as exc:
+        raise JobError(f"--dataset {root}: its parts cannot be read: {exc}") from None
+    shown = ", ".join(views) or "none: the dataset holds no record"
+    try:
+        if out is None:
+            cursor = con.execute(query)
+            if cursor.description is None:
+                return SqlResult(views, None)
+            names = [d[0] for d in cursor.description]
+            rows = cursor.fetchmany(options.limit + 1)
+            head = pd.DataFrame.from_records(rows[:options.limit], columns=names)
+            return SqlResult(views, head, more=len(rows) > options.limit)
+        with staged(tx) as stage:
+            target = stage.path(out)
+            kind = "PARQUET" if out.suffix.lower() == ".parquet" else "CSV, HEADER"
+            quoted = str(target).replace("'", "''")
+            n = con.execute(f"COPY ({query}) TO '{quoted}' (FORMAT {kind})").fetchone()[0]  # rows copied
+        return SqlResult(views, output=out, rows_written=int(n))
+    except duckdb.Error as exc:
+        raise JobError(f"the query failed: {str(exc).splitlines()[0]} (views: {shown})", 2) from None
+    finally:
+        con.close()
+
+
+__all__ = ["SqlOptions", "SqlResult", "sql_job", "validate"]

@@ -1,0 +1,232 @@
+"""msdc ingest: the partition layout and schema, rows equal to asterix.read's, days across midnight, a second
+ingest doing nothing, a SIGKILLed ingest resuming to the same dataset, --workers 2 equal to one, and failed
+runs leaving the dataset as it was."""
+
+from __future__ import annotations
+
+import datetime as dt
+import json
+import random
+import shutil
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pyarrow.parquet as pq
+import pytest
+from dataset_data import (
+    ADSB,
+    DAY,
+    FIX,
+    RADAR,
+    category_rows,
+    listed_parts,
+    manifest,
+    midnight_recording,
+    on_disk,
+    same_dataset,
+    same_rows,
+)
+
+import msdc.asterix as asterix
+from msdc.pipeline.cli import main
+from msdc.pipeline.report.record_schema import record_schema
+
+TRUTH = json.loads((FIX / "truth.json").read_text())
+
+
+def ingest(*args: str) -> int:
+    return main(["ingest", *map(str, args)])
+
+
+@pytest.fixture(scope="module")
+def fixtures_dataset(tmp_path_factory) -> Path:
+    root = tmp_path_factory.mktemp("ds") / "data"
+    assert ingest(RADAR, ADSB, "--dataset", root, "--date", DAY) == 0
+    return root
+
+
+def test_partitions_are_day_category_sensor(fixtures_dataset):
+    radar, adsb = TRUTH["radar"], TRUTH["adsb"]
+    assert listed_parts(fixtures_dataset) == on_disk(fixtures_dataset)  # nothing beside the parts
+    folders = sorted(p.rsplit("/", 1)[0] for p in listed_parts(fixtures_dataset))
+    assert folders == [f"date={DAY}/category=021/sensor={adsb['sac']}_{adsb['sic']}",
+                       f"date={DAY}/category=048/sensor={radar['sac']}_{radar['sic']}"]
+    doc = manifest(fixtures_dataset)
+    rows = {rec["file"]: rec["rows"] for rec in doc["inputs"]}
+    assert rows == {"radar.ast": {"048": radar["rows"]}, "adsb.ast": {"021": adsb["rows"]}}
+    import hashlib
+
+    first = doc["inputs"][0]
+    assert first["sha256"] == hashlib.sha256(RADAR.read_bytes()).hexdigest()
+    assert first["size_bytes"] == RADAR.stat().st_size and first["format"] == "raw" and first["date"] == DAY
+    assert set(first["editions"]) == {"048"} and doc["msdc"]
+    assert [p["rows"] for p in first["parts"]] == [radar["rows"]]
+
+
+def test_each_part_has_its_categorys_documented_schema(fixtures_dataset):
+    for rel in listed_parts(fixtures_dataset):
+        cat = int(rel.split("/")[1].split("=")[1])
+        schema = pq.read_schema(fixtures_dataset / rel)
+        assert schema.names == record_schema(cat).columns
+        assert schema.names[-3:] == ["block", "offset", "file"]
+
+
+@pytest.mark.parametrize("path,cat", [(RADAR, 48), (ADSB, 21)])
+def test_rows_equal_asterix_read(fixtures_dataset, path, cat):
+    frame = asterix.read(path, date=DAY).frames[cat]  # the whole file at once: no chunk, no dataset
+    rows = category_rows(fixtures_dataset, cat)
+    rows = rows[rows["file"] == path.name].reset_index(drop=True)
+    assert len(rows) == len(frame)
+    assert (rows["date"] == DAY).all()
+    for col in frame.columns:
+        got, want = rows[col], frame[col].reset_index(drop=True)
+        if isinstance(want.dtype, pd.CategoricalDtype):
+            got, want = got.astype(object), want.astype(object)
+        pd.testing.assert_series_equal(got, want, check_dtype=False, check_names=False,
+                                       check_categorical=False, obj=col)
+
+
+def test_days_across_midnight_go_to_their_dates(tmp_path):
+    rec = tmp_path / "midnight.ast"
+    a, b = midnight_recording(rec)
+    root = tmp_path / "ds"
+    assert ingest(rec, "--dataset", root, "--date", DAY, "--chunk-mb", "0.1") == 0
+    rows = category_rows(root, 48)
+    next_day = (dt.date.fromisoformat(DAY) + dt.timedelta(days=1)).isoformat()
+    for f, sensor in ((a, "20_129"), (b, "20_130")):
+        tod = f["time_of_day"].to_numpy()
+        before = int(np.flatnonzero(np.diff(tod) < 0)[0]) + 1  # the plots before the clock wraps
+        got = rows[rows["sensor"] == sensor]
+        assert len(got) == len(f)
+        assert (got["date"].iloc[:before] == DAY).all() and (got["date"].iloc[before:] == next_day).all()
+        want = pd.Timestamp(DAY, tz="UTC") + pd.to_timedelta(np.where(np.arange(len(f)) < before, 0, 86400)
+                                                               + tod, unit="s")
+        assert (got["timestamp"].to_numpy() == want.to_numpy()).all()
+    parts = sorted(p.rsplit("/", 1)[0] for p in listed_parts(root))
+    assert parts == [f"date={d}/category=048/sensor={s}" for d in (DAY, next_day)
+                     for s in ("20_129", "20_130")]
+
+
+def test_ingesting_the_same_input_again_does_nothing(fixtures_dataset, tmp_path, capsys):
+    root = tmp_path / "copy"
+    shutil.copytree(fixtures_dataset, root)
+    before = {p: p.read_bytes() for p in root.rglob("*") if p.is_file()}
+    capsys.readouterr()
+    copy = tmp_path / "renamed.ast"  # the same bytes under another name: the same input
+    shutil.copy(RADAR, copy)
+    assert ingest(RADAR, copy, ADSB, "--dataset", root, "--date", DAY) == 0
+    out = capsys.readouterr().out
+    assert out.count("already in the dataset") == 2 and "nothing to do" in out
+    assert {p: p.read_bytes() for p in root.rglob("*") if p.is_file()} == before
+
+
+def test_workers_2_write_the_rows_workers_1_writes(tmp_path):
+    """Each window of a raw stream written by a pool process (parts of their own): the same rows, in the
+    same order, in every partition, across midnight (the clocks settled before the windows decode)."""
+    rec = tmp_path / "midnight.ast"
+    midnight_recording(rec, 12000)  # about 190 kB: chunks of 0.1 MB, midnight in the middle one
+    one, two = tmp_path / "one", tmp_path / "two"
+    args = (rec, ADSB, "--date", DAY, "--chunk-mb", "0.1")
+    assert ingest(*args, "--dataset", one) == 0
+    assert ingest(*args, "--dataset", two, "--workers", "2") == 0
+    assert len({p.split("/")[0] for p in listed_parts(one)}) == 2  # both days
+    assert len(listed_parts(two)) > len(listed_parts(one))  # the windows' parts
+    same_rows(one, two)
+    again = tmp_path / "again"
+    assert ingest(*args, "--dataset", again, "--workers", "2") == 0
+    same_dataset(two, again)  # and the same parts for the same command
+
+
+def _run(args: list[str]) -> subprocess.Popen:
+    return subprocess.Popen([sys.executable, "-m", "msdc.pipeline.cli", "ingest", *args],
+                            stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+
+
+def _started(root: Path, proc: subprocess.Popen) -> float:
+    """When the ingest made its dataset folder (its work starts: the start-up before is no interest)."""
+    while not root.exists() and proc.poll() is None:
+        time.sleep(0.002)
+    return time.monotonic()
+
+
+def test_an_ingest_killed_at_any_moment_resumes_to_the_same_dataset(tmp_path):
+    """SIGKILL at a random moment of the work (seeded, one in each third of it), then the same command
+    again: the dataset of a run never killed, part by part and row by row, nothing else left."""
+    rec = tmp_path / "midnight.ast"
+    midnight_recording(rec, 12000)
+    inputs = [str(rec), str(RADAR), str(ADSB), "--date", DAY, "--chunk-mb", "0.1"]
+    reference = tmp_path / "reference"
+    proc = _run([*inputs, "--dataset", str(reference)])
+    start = _started(reference, proc)
+    assert proc.wait(timeout=120) == 0
+    work_s = time.monotonic() - start
+    for seed in range(3):
+        root = tmp_path / f"killed{seed}"
+        proc = _run([*inputs, "--dataset", str(root)])
+        _started(root, proc)
+        try:
+            proc.wait(timeout=(seed + random.Random(seed).random()) / 3 * work_s)  # a third of it each
+        except subprocess.TimeoutExpired:
+            proc.send_signal(signal.SIGKILL)
+            proc.wait()
+        assert ingest(*inputs, "--dataset", root) == 0
+        same_dataset(reference, root)
+
+
+def test_what_an_interrupted_ingest_left_is_removed(fixtures_dataset, tmp_path, capsys):
+    """Every state a kill can leave, made by hand: a part renamed but its input not in the manifest, a part
+    still under its temporary name, a temporary manifest."""
+    root = tmp_path / "ds"
+    shutil.copytree(fixtures_dataset, root)
+    doc = manifest(root)
+    adsb = doc["inputs"].pop()
+    (root / "manifest.json").write_text(json.dumps(doc))  # the ADS-B input's record never written
+    part = root / adsb["parts"][0]["path"]
+    shutil.copy(part, part.with_name(".part-d37f30c9f33a4be7-00001.tmp"))
+    stray = root / f"date={DAY}/category=048/sensor=25_201/.part-0123456789abcdef-00000.tmp"
+    stray.write_bytes(b"PAR1")
+    (root / ".manifest.json.tmp").write_text("{")
+    capsys.readouterr()
+    assert ingest(RADAR, ADSB, "--dataset", root, "--date", DAY) == 0
+    assert "removed 4 file(s) an interrupted ingest left" in capsys.readouterr().err
+    same_dataset(fixtures_dataset, root)
+
+
+def test_an_undated_input_is_refused_and_the_inputs_before_it_stay(tmp_path, capsys):
+    root = tmp_path / "ds"
+    assert ingest(RADAR, "--dataset", root) == 1  # a raw stream carries no date
+    err = capsys.readouterr().err
+    assert f"{RADAR}: a raw recording carries no date: give --date" in err and "Traceback" not in err
+    assert not root.exists()  # the folder this run made is gone: as it was
+    assert ingest(RADAR, "--dataset", root, "--date", DAY) == 0
+    before = on_disk(root)
+    assert ingest(ADSB, "--dataset", root) == 1
+    assert on_disk(root) == before == listed_parts(root)  # the radar input stays, nothing of the ADS-B one
+
+
+@pytest.mark.parametrize("args,says", [
+    (["--dataset", "{file}"], "is a file, not a folder"),
+    (["--dataset", "{tmp}/no/such/ds"], "does not exist"),
+    (["--dataset", "{tmp}/ds", "--workers", "0"], "--workers"),
+])
+def test_bad_options_exit_2_with_a_message(tmp_path, capsys, args, says):
+    file = tmp_path / "f.txt"
+    file.write_text("x")
+    argv = [RADAR, "--date", DAY] + [a.format(file=file, tmp=tmp_path) for a in args]
+    assert ingest(*argv) == 2
+    err = capsys.readouterr().err
+    assert says in err and "Traceback" not in err
+
+
+def test_an_input_that_is_not_asterix_writes_nothing(tmp_path, capsys):
+    junk = tmp_path / "notes.ast"
+    junk.write_text("these are not data blocks at all, " * 200)
+    root = tmp_path / "ds"
+    assert ingest(RADAR, junk, "--dataset", root, "--date", DAY) == 1
+    assert "nothing ingested" in capsys.readouterr().err
+    assert not root.exists()
