@@ -21,7 +21,11 @@ REPORT_COLUMNS = ("sensor_id", "sensor_kind", "aircraft_id", "latitude", "longit
                   "heading_deg", "on_ground", "rho_nm", "theta_deg", "file", "offset")
 # the preset sensor types (presets.SENSOR_TYPES) each measurement sensor kind may be judged by
 KIND_TYPES: dict[str, tuple[str, ...]] = {"radar": ("ssr", "mode_s", "psr"), "adsb": ("adsb",),
-                                          "mlat": ("mlat", "wam"), "smr": ("smr",)}
+                                          "mlat": ("mlat", "wam"), "smr": ("smr",), "tracker": ("tracker",)}
+TRACKER_CATEGORY = 62  # system tracks: judged from their decoded frame (they are no measurement)
+# decoded CAT062 columns a tracker's reports take (besides the common ones: time, sac, sic, offset)
+TRACKER_COLUMNS = ("latitude", "longitude", "flight_level", "mode3a", "mode3a_v", "mode3a_g", "address",
+                   "callsign", "track_number", "vx_ms", "vy_ms", "cst")
 SERVICE_CATEGORIES = (34, 2)  # radar service messages: the north markers give the scan period
 NORTH_MARKER = 1  # CAT034 message type 1 (CAT002: 1 too): north marker
 
@@ -77,6 +81,36 @@ def field_monitors(meas: pd.DataFrame, frames: dict[int, pd.DataFrame]) -> set[s
                          "aircraft_id": meas["aircraft_id"].astype(object).to_numpy()})
     hit = left.merge(said, on=["file", "offset"], how="inner")["aircraft_id"].dropna()
     return set(hit.astype(str))
+
+
+def tracker_ids(frame: pd.DataFrame | None) -> list[str]:
+    """The sensor ids (062:SAC/SIC) of the trackers in a decoded CAT062 frame."""
+    if frame is None or not len(frame):
+        return []
+    pairs = frame[["sac", "sic"]].dropna().drop_duplicates().astype(int).sort_values(["sac", "sic"])
+    return [f"{TRACKER_CATEGORY:03d}:{a}/{b}" for a, b in pairs.itertuples(index=False)]
+
+
+def tracker_reports(frame: pd.DataFrame, sensor_id: str, date, epoch: pd.Timestamp) -> pd.DataFrame:
+    """A tracker's track updates as test reports: ``time`` (UTC) and ``t_s`` (seconds from ``epoch``),
+    ``sensor_id`` and the TRACKER_COLUMNS the frame has."""
+    from msdc.pipeline.model.report_selection import sensor_parts
+
+    part = sensor_parts([sensor_id]).iloc[0]
+    rows = frame[(pd.to_numeric(frame["sac"], errors="coerce") == part["sac"]).to_numpy(bool)
+                 & (pd.to_numeric(frame["sic"], errors="coerce") == part["sic"]).to_numpy(bool)]
+    time = absolute_time(rows, date)
+    out = pd.DataFrame({"t_s": seconds_since(time, epoch), "time": time.to_numpy(), "sensor_id": sensor_id,
+                        "sensor_kind": "tracker", "sac": int(part["sac"]), "sic": int(part["sic"])})
+    for c in (*TRACKER_COLUMNS, "file", "offset"):
+        if c in rows.columns:
+            values = rows[c].to_numpy()
+            out[c] = values.astype(object) if c in ("mode3a", "address", "callsign", "file") else values
+    for c in ("mode3a", "address", "callsign"):
+        if c in out:
+            out[c] = out[c].where(pd.notna(out[c]), None)
+    ok = np.isfinite(out["t_s"].to_numpy(float))
+    return out[ok].sort_values("t_s", kind="stable", ignore_index=True)
 
 
 def north_markers_s(frames: dict[int, pd.DataFrame], sac: int, sic: int, date, epoch: pd.Timestamp

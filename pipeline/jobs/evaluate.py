@@ -140,13 +140,16 @@ class EvaluateResult:
     warnings: list[str] = field(default_factory=list)
 
 
-def _under_test(meas: pd.DataFrame, preset, tests: tuple) -> tuple[list[tuple[str, str]], list[str]]:
-    """The (sensor id, kind) pairs to judge: those of a kind the preset applies to, narrowed by --test."""
+def _under_test(meas: pd.DataFrame, preset, tests: tuple, trackers: list[str] = ()
+                ) -> tuple[list[tuple[str, str]], list[str]]:
+    """The (sensor id, kind) pairs to judge: those of a kind the preset applies to (the measurements'
+    sensors and the CAT062 ``trackers``), narrowed by --test."""
     from msdc.pipeline.evaluate.sensor_reports import judged_by
     from msdc.pipeline.model.report_selection import sensor_parts
 
     pairs = meas[["sensor_id", "sensor_kind"]].astype(str).drop_duplicates().sort_values("sensor_id")
-    present = list(zip(pairs["sensor_id"], pairs["sensor_kind"], strict=True))
+    present = [*zip(pairs["sensor_id"], pairs["sensor_kind"], strict=True),
+               *((t, "tracker") for t in trackers)]
     fits = [(s, k) for s, k in present if judged_by(k, preset.sensor_types)]
     notes = []
     if tests:
@@ -169,6 +172,20 @@ def _under_test(meas: pd.DataFrame, preset, tests: tuple) -> tuple[list[tuple[st
     if left:
         notes.append(f"not judged by {preset.name}: {', '.join(left)} (they still build the reference)")
     return fits, notes
+
+
+def _selected(reports: pd.DataFrame, checked: EvaluateChecked, date) -> pd.DataFrame:
+    """A tracker's reports after the report selection (--from, --to, --area, --fl, --sensor), as the
+    measurements get it."""
+    from msdc.pipeline.model.report_selection import select_reports
+
+    if checked.selection is None or not checked.selection.active or reports.empty:
+        return reports
+    try:
+        keep, _ = select_reports(reports, checked.selection, date)
+    except ValueError as exc:
+        raise OptionError(str(exc)) from None
+    return reports[keep].reset_index(drop=True)
 
 
 def _entry(sensors: pd.DataFrame, sensor_id: str) -> dict | None:
@@ -280,13 +297,23 @@ def _sensor(options, checked, loaded, meas, builders, sensor_id, kind, gates, ep
             ) -> SensorResult:
     """Everything about one sensor under test."""
     from msdc.pipeline.evaluate.scorecard import score_sensor
-    from msdc.pipeline.evaluate.sensor_reports import evaluation_sensor, north_markers_s, sensor_reports
+    from msdc.pipeline.evaluate.sensor_reports import (
+        TRACKER_CATEGORY,
+        evaluation_sensor,
+        north_markers_s,
+        sensor_reports,
+        tracker_reports,
+    )
     from msdc.pipeline.model.report_selection import sensor_parts
 
     built = _reference(options, builders, sensor_id, gates, epoch, external)
     reference = built.frame.assign(field_monitor=built.frame["aircraft"].astype(str).isin(monitors))
     radar = loaded.frames.get(48) if kind == "radar" else None
-    reports = sensor_reports(meas, sensor_id, epoch, radar)
+    if kind == "tracker":
+        reports = _selected(tracker_reports(loaded.frames[TRACKER_CATEGORY], sensor_id, loaded.date, epoch),
+                            checked, loaded.date)
+    else:
+        reports = sensor_reports(meas, sensor_id, epoch, radar)
     part = sensor_parts([sensor_id]).iloc[0]
     markers = (north_markers_s(loaded.frames, int(part["sac"]), int(part["sic"]), loaded.date, epoch)
                if kind == "radar" else None)
@@ -311,7 +338,14 @@ def evaluate_job(options: EvaluateOptions, *, progress: Progress | None = None,
                  checked: EvaluateChecked | None = None, command: str = "evaluate") -> EvaluateResult:
     """Validate, decode, build the measurements, then evaluate every sensor under test."""
     from msdc.pipeline.evaluate.reference_gates import Gates
-    from msdc.pipeline.evaluate.sensor_reports import RADAR_EXTRA_COLUMNS, SERVICE_CATEGORIES, field_monitors
+    from msdc.pipeline.evaluate.sensor_reports import (
+        RADAR_EXTRA_COLUMNS,
+        SERVICE_CATEGORIES,
+        TRACKER_CATEGORY,
+        TRACKER_COLUMNS,
+        field_monitors,
+        tracker_ids,
+    )
     from msdc.pipeline.model.site_check import site_warnings
     from msdc.pipeline.model.time import midnight
 
@@ -320,8 +354,11 @@ def evaluate_job(options: EvaluateOptions, *, progress: Progress | None = None,
     with carrying(checked.warnings) as warnings:
         if progress:
             progress.stage("Processing data files")
-        loaded, said = load_inputs(options, checked, progress, extra_columns=RADAR_EXTRA_COLUMNS,
-                                   extra_categories=SERVICE_CATEGORIES)
+        wants_tracks = "tracker" in checked.preset.sensor_types
+        extra = (*RADAR_EXTRA_COLUMNS, *(TRACKER_COLUMNS if wants_tracks else ()))
+        loaded, said = load_inputs(options, checked, progress, extra_columns=extra,
+                                   extra_categories=(*SERVICE_CATEGORIES,
+                                                     *((TRACKER_CATEGORY,) if wants_tracks else ())))
         warnings += said
         if progress:
             progress.stage("Evaluating")
@@ -330,7 +367,8 @@ def evaluate_job(options: EvaluateOptions, *, progress: Progress | None = None,
         warnings += site_warnings(meas, checked.sensors, str(sensors_path(options)))
         if meas.empty:
             raise JobError("no report in the inputs to evaluate")
-        tests, notes = _under_test(meas, checked.preset, checked.tests)
+        trackers = tracker_ids(loaded.frames.get(TRACKER_CATEGORY)) if wants_tracks else []
+        tests, notes = _under_test(meas, checked.preset, checked.tests, trackers)
         builders = tracked_reports(meas, options.max_coast_s)
         epoch = midnight(meas["time"])
         external = _external(options, epoch)

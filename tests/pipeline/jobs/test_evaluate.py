@@ -229,3 +229,47 @@ def test_sectors_cut_the_figures(recording, tmp_path):
     assert 0 < card.loc[("high", 0.6), "n"] < card.loc[("global", 0.6), "n"]
     assert np.isnan(card.loc[("elsewhere", 0.6), "value"])
     assert "no report and no reference inside 'elsewhere'" in card.loc[("elsewhere", 0.6), "notes"]
+
+
+TRACKER_NOISE_M = 50.0  # per axis: a horizontal RMS of 50 * sqrt(2) = 70.7 m
+
+
+def _tracker_frame(sim, seed: int = 5) -> pd.DataFrame:
+    """System tracks of every simulated aircraft every 4 s along its true path with 50 m of noise per axis;
+    the first aircraft changes track number once, half way."""
+    truth = sim.reference(step_s=4.0)
+    rng = np.random.default_rng(seed)
+    m_per_deg = 111_320.0
+    lat = truth["latitude"].to_numpy() + rng.normal(0.0, TRACKER_NOISE_M, len(truth)) / m_per_deg
+    lon = truth["longitude"].to_numpy() + rng.normal(0.0, TRACKER_NOISE_M, len(truth)) / (
+        m_per_deg * np.cos(np.radians(truth["latitude"].to_numpy())))
+    number = truth["aircraft"].to_numpy() * 10 + 1
+    first = truth["aircraft"].to_numpy() == 0
+    number[np.flatnonzero(first)[first.sum() // 2:]] += 1
+    return pd.DataFrame({"sac": 25, "sic": 100, "time_of_day": truth["t_s"].to_numpy() % 86400.0,
+                         "track_number": number, "latitude": lat, "longitude": lon,
+                         "mode3a": truth["mode3a"], "address": truth["address"],
+                         "callsign": truth["callsign"],
+                         "flight_level": truth["altitude_ft"].to_numpy() / 100.0})
+
+
+def test_a_tracker_is_judged_on_its_system_tracks(recording, tmp_path):
+    """CAT062 tracks of every aircraft every 4 s: every 5 s interval holds an update (PD exactly 1), the one
+    track number change is counted, and the RMS error is the tracks' 70.7 m plus the reference's own."""
+    sim, folder = recording
+    tracks = tmp_path / "tracks.ast"
+    tracks.write_bytes(encode_frame(62, _tracker_frame(sim)))
+    preset = tmp_path / "tracker.toml"
+    preset.write_text('[preset]\nname = "tracks"\ntitle = "t"\nstandard = "none"\n'
+                      'sensor_types = ["tracker"]\nsource = "hand"\n\n'
+                      + _requirement("pd", 0.5, ">=", {"interval_s": 5.0})
+                      + _requirement("track_continuity", 1.0, "<=", {})
+                      + _requirement("rms_m", 1000.0, "<=", {}))
+    result = evaluate_job(_options(folder, preset=str(preset),
+                                   inputs=(str(folder / "radar.ast"), str(folder / "adsb.ast"), str(tracks))))
+    card = result.scorecard[result.scorecard["sector"] == "global"].set_index("requirement")
+    assert set(result.scorecard["sensor"]) == {"062:25/100"}
+    row = card.loc["pd"]
+    assert row["value"] == 1.0 and row["n"] > 500
+    assert card.loc["track_continuity", "value"] * card.loc["track_continuity", "n"] == pytest.approx(1.0)
+    assert 60.0 < card.loc["rms_m", "value"] < 90.0
