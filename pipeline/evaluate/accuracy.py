@@ -30,8 +30,8 @@ def position_errors(reports: pd.DataFrame, reference: pd.DataFrame, parameters: 
                     ) -> pd.DataFrame:
     """Per associated report judged against an independent reference: ``aircraft``, ``error_m`` (horizontal),
     ``along_m`` (positive ahead of the reference), ``across_m`` (positive to the right of its track),
-    ``latency_s`` (-along / speed: positive when the report lags); NaN along/across/latency where the
-    reference moves slower than MIN_SPEED_MPS."""
+    ``latency_s`` (-along / speed: positive when the report lags), and the report's ``latitude`` and
+    ``longitude``; NaN along/across/latency where the reference moves slower than MIN_SPEED_MPS."""
     max_gap_s = float(parameter(parameters, "reference_max_gap_s", DEFAULT_REFERENCE_GAP_S))
     rep = associated(reports, reference, parameters)
     rep = rep[rep["ref_index"].to_numpy() >= 0].reset_index(drop=True)
@@ -55,7 +55,7 @@ def position_errors(reports: pd.DataFrame, reference: pd.DataFrame, parameters: 
     across = de * uy - dn * ux  # to the right of the track is positive
     out = pd.DataFrame({"aircraft": rep["ref_aircraft"].to_numpy(object), "t_s": t,
                         "error_m": np.hypot(de, dn), "along_m": along, "across_m": across,
-                        "latency_s": -along / safe})
+                        "latency_s": -along / safe, "latitude": lat, "longitude": lon})
     return out[np.isfinite(out["error_m"].to_numpy())].reset_index(drop=True)
 
 
@@ -91,3 +91,26 @@ ACCURACY_REQUIREMENTS = {
     "across_rms_m": _statistic("across_rms_m", "across_m", "rms"),
     "latency_p95_s": _statistic("latency_p95_s", "latency_s", "p95"),
 }
+
+
+ERROR_RANGE_BAND_NM = 10.0
+
+
+def errors_by_range(reports: pd.DataFrame, reference: pd.DataFrame, sensor, parameters: Mapping | None = None,
+                    step_nm: float = ERROR_RANGE_BAND_NM) -> pd.DataFrame:
+    """Horizontal position error against range from the sensor's site (on the ground, NM): per band of
+    step_nm, the reports judged (position_errors: an independent reference only), the aircraft, and the
+    RMS, 95th percentile and maximum error (m). Empty when no report is judged."""
+    columns = ["low_nm", "high_nm", "reports", "aircraft", "rms_m", "p95_m", "max_m"]
+    errors = position_errors(reports, reference, parameters)
+    if errors.empty:
+        return pd.DataFrame(columns=columns)
+    rho, _ = sensor.polar(errors["latitude"].to_numpy(float), errors["longitude"].to_numpy(float),
+                          np.zeros(len(errors)))
+    band = np.floor(rho / step_nm).astype(int)
+    rows = []
+    for k in np.unique(band):
+        e = errors["error_m"].to_numpy(float)[band == k]
+        rows.append((k * step_nm, (k + 1) * step_nm, e.size, errors["aircraft"][band == k].nunique(),
+                     float(np.sqrt(np.mean(e ** 2))), float(np.percentile(e, 95)), float(e.max())))
+    return pd.DataFrame(rows, columns=columns)

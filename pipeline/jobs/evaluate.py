@@ -278,12 +278,15 @@ def _map_points(sensor_id: str, reports: pd.DataFrame, reference: pd.DataFrame,
 
 def _coverage(reports: pd.DataFrame, reference: pd.DataFrame, sensor, preset) -> tuple[dict, object, object]:
     """PD per band (range, azimuth, flight level, surface/airborne) and on the polar and vertical grids,
-    from the expected updates of the scan (the preset's first pd parameters without its interval)."""
+    from the expected updates under the preset's first pd requirement's parameters, the field monitors left
+    out."""
     from msdc.pipeline.evaluate.bins import detection_bands, polar_grid, vertical_grid
     from msdc.pipeline.evaluate.detection import expected_updates
 
     params = {**next((dict(r.parameters) for r in preset.requirements if r.id == "pd"), {}),
               **preset.association()}
+    if "field_monitor" in reference.columns:
+        reference = reference[~reference["field_monitor"].to_numpy(bool)]
     try:
         table, _, _ = expected_updates(reports, reference, params, sensor)
     except ValueError:
@@ -296,6 +299,7 @@ def _coverage(reports: pd.DataFrame, reference: pd.DataFrame, sensor, preset) ->
 def _sensor(options, checked, loaded, meas, builders, sensor_id, kind, gates, epoch, external, monitors
             ) -> SensorResult:
     """Everything about one sensor under test."""
+    from msdc.pipeline.evaluate.accuracy import errors_by_range
     from msdc.pipeline.evaluate.scorecard import score_sensor
     from msdc.pipeline.evaluate.sensor_reports import (
         TRACKER_CATEGORY,
@@ -331,6 +335,8 @@ def _sensor(options, checked, loaded, meas, builders, sensor_id, kind, gates, ep
     gate = checked.preset.association()
     per = _per_aircraft(sensor_id, reports, reference, pd_outcome, gate) if len(reference) else pd.DataFrame()
     points = _map_points(sensor_id, reports, reference, gate) if len(reference) else pd.DataFrame()
+    if len(reference):
+        bands["error_range"] = errors_by_range(reports, reference, sensor, gate)
     return SensorResult(sensor_id, kind, score.rows, per, bands, polar, vertical, points, notes, sensor)
 
 
@@ -408,7 +414,8 @@ def _external(options: EvaluateOptions, epoch) -> pd.DataFrame | None:
 
 
 BAND_TITLES = {"range_nm": "PD per range band", "azimuth_deg": "PD per azimuth sector",
-               "flight_level": "PD per flight-level band", "surface": "PD surface and airborne"}
+               "flight_level": "PD per flight-level band", "surface": "PD surface and airborne",
+               "error_range": "Position error per range band"}
 
 
 def _assemble(results: list[SensorResult]) -> tuple[pd.DataFrame, dict[str, pd.DataFrame], pd.DataFrame]:
@@ -423,7 +430,7 @@ def _assemble(results: list[SensorResult]) -> tuple[pd.DataFrame, dict[str, pd.D
         tables["Per aircraft"] = pd.concat(per, ignore_index=True)
     for key, title in BAND_TITLES.items():
         parts = [r.bands[key].assign(sensor=r.sensor)[["sensor", *r.bands[key].columns]] for r in results
-                 if key in r.bands]
+                 if key in r.bands and len(r.bands[key])]
         if parts:
             tables[title] = pd.concat(parts, ignore_index=True)
     for attr, title in (("polar", "PD range x azimuth"), ("vertical", "PD range x height")):

@@ -273,3 +273,8 @@ def test_a_tracker_is_judged_on_its_system_tracks(recording, tmp_path):
     assert row["value"] == 1.0 and row["n"] > 500
     assert card.loc["track_continuity", "value"] * card.loc["track_continuity", "n"] == pytest.approx(1.0)
     assert 60.0 < card.loc["rms_m", "value"] < 90.0
+    # error against range: the same judged reports, banded; the noise does not grow with range
+    by_range = result.tables["Position error per range band"]
+    assert by_range["reports"].sum() == card.loc["rms_m", "n"]
+    full = by_range[by_range["reports"] >= 200]
+    assert len(full) >= 3 and full["rms_m"].between(55.0, 95.0).all()
