@@ -7,7 +7,8 @@ target: inside the 95 % interval in at least 93 % of 100 runs; the binomial SD n
 `false_reports` is checked against the truth's own false-plot share of the run (false plots over plots
 shown), a realised count, not a rate: it checks the counting. `--truth-draws` adds, per rate, the coverage
 of the same interval put around the simulator's own realised draws, to tell the evaluation's misses from
-the simulator's.
+the simulator's: per rate, the share of runs whose draws' interval holds it, and the runs the evaluation
+missed although the draws held.
 
     python benchmarks/evaluate_endtoend.py [--runs 100] [--seed0 1] [--effects issue|low] [--truth-draws]
 """
@@ -136,7 +137,7 @@ def main() -> None:
     print(f"msdc evaluate end to end, effects '{args.effects}' ({eff}), seeds {args.seed0}-{last}: "
           f"{np.sum(seconds):.0f} s, {np.mean(seconds):.1f} s a seed (median {np.median(seconds):.1f} s; "
           f"simulate + write + evaluate)")
-    own_head = f" {'truth draws':>11s}" if args.truth_draws else ""
+    own_head = f" {'truth draws':>11s} {'own misses':>10s}" if args.truth_draws else ""
     print(f"{'requirement':24s} {'truth':>9s} {'held/runs':>10s} {'mean estimate':>14s} {'mean n':>8s}"
           f"{own_head}")
     short = []
@@ -144,7 +145,10 @@ def main() -> None:
         held = np.array([g[0] for g in got])
         truth = "realised" if ident == "false_reports" else f"{truths[ident][0]:9.4g}"
         own = [g[3] for g in got if g[3] is not None]
-        own_col = (f" {np.mean(own):11.2f}" if own else f" {'':11s}") if args.truth_draws else ""
+        # own misses: runs the evaluation's interval missed although the truth's own draws' interval held
+        own_misses = sum(1 for g in got if g[3] and not g[0])
+        own_col = (f" {np.mean(own):11.2f} {own_misses:10d}" if own else f" {'':11s} {'':10s}") \
+            if args.truth_draws else ""
         print(f"{ident:24s} {truth:>9s} {f'{held.sum()}/{held.size}':>10s} "
               f"{np.mean([g[1] for g in got]):14.5f} {np.mean([g[2] for g in got]):8.0f}{own_col}")
         if held.mean() < TARGET:
