@@ -278,3 +278,33 @@ def test_a_naive_epoch_is_refused(two_radars, tmp_path):
     path.write_text(GOOD)
     with pytest.raises(ValueError, match="epoch .*naive"):
         read_external_reference(path, pd.Timestamp("2019-03-01"))
+
+
+def test_a_self_reference_code_is_the_established_one_not_the_report_own(two_radars):
+    """A single wrong Mode 3/A code in a radar's own track is judged against the code the aircraft's
+    reports keep giving (the simulator's code), not against itself; the next report's code is too."""
+    m, meas = two_radars
+    alone = meas[meas["sensor_id"] == RADAR_A].sort_values("time").reset_index(drop=True)
+    code = m.sim.aircraft[0].spec.mode3a
+    assert (alone["mode3a"].astype(str) == code).all()
+    alone["mode3a"] = alone["mode3a"].astype(object)
+    wrong = len(alone) // 2
+    alone.loc[wrong, "mode3a"] = "7777"
+    ref = leave_one_out(alone, RADAR_A, epoch=EPOCH).frame
+    assert ref["self_reference"].all()
+    t_s = (alone["time"] - EPOCH).dt.total_seconds().to_numpy()
+    for k in (wrong, wrong + 1):
+        at = ref[np.isclose(ref["t_s"], t_s[k], atol=1e-6)]
+        assert len(at) == 1 and at["mode3a"].iloc[0] == code, (k, at["mode3a"].tolist())
+
+
+def test_the_reference_level_between_updates_is_interpolated_not_predicted():
+    """Between two updates 40 s apart the rows take the straight line between the updates' levels (by
+    hand: 240 at 0 s, 220 at 40 s, so 235 at 10 s), whatever the vertical filter predicted there."""
+    from msdc.pipeline.evaluate.build_reference import _level_between_updates
+
+    t = pd.Timestamp("2019-03-01", tz="UTC") + pd.to_timedelta([0.0, 10.0, 20.0, 40.0, 41.0], unit="s")
+    tracks = pd.DataFrame({"aircraft_id": "A", "segment": 0, "time": t,
+                           "flight_level": [240.0, 239.0, 238.0, 220.0, 219.9]})
+    updated = pd.Series([True, False, False, True, True])
+    np.testing.assert_allclose(_level_between_updates(tracks, updated), [240.0, 235.0, 230.0, 220.0, 219.9])
