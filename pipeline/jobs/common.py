@@ -55,6 +55,7 @@ from msdc.pipeline.report.transaction import output_problem, side_pattern, targe
 if TYPE_CHECKING:  # the steps are imported where they run: msdc stats imports none of them
     from msdc.pipeline.jobs.options import SelectionOptions
     from msdc.pipeline.model.report_selection import ReportSelection
+    from msdc.pipeline.dataset.inputs import DatasetInputs
     from msdc.pipeline.model.selection import Selection
     from msdc.pipeline.quality.quality_run import QualityResult
     from msdc.pipeline.report.transaction import OutputTransaction
@@ -288,8 +289,34 @@ def check_decoding(o: DecodingOptions) -> Checked:
     editions = o.editions if isinstance(o.editions, dict) else [o.editions] if isinstance(
         o.editions, str) else list(o.editions)  # {21: "0.26"} as asterix.read takes it, or "21=0.26"
     selection = check_report_selection(o)
+    dataset = getattr(o, "dataset", None)
+    if dataset is not None:
+        source = check_dataset(dataset, inputs, selection)
+        return Checked(source.paths, _editions(editions), selection=selection, dataset=source)
     paths, warnings = _inputs(inputs)
     return Checked(paths, _editions(editions), warnings=warnings, selection=selection)
+
+
+def check_dataset(root, inputs: list, selection: ReportSelection) -> DatasetInputs:
+    """--dataset as the inputs (pipeline.dataset.inputs), pruned by the report selection; OptionError (exit
+    2) naming the folder when it is no dataset or its manifest cannot be read, or when INPUT files are
+    given too."""
+    from msdc.pipeline.dataset.inputs import open_inputs, pruning
+    from msdc.pipeline.dataset.manifest import ManifestError
+    from msdc.pipeline.dataset.reader import NotADataset
+
+    nonempty_path("--dataset", root)
+    if inputs:
+        raise OptionError(f"--dataset {root} and INPUT files ({', '.join(map(str, inputs))}) both given: read "
+                          "either the recordings or the dataset made of them")
+    try:
+        source = open_inputs(root)
+    except (NotADataset, ManifestError) as exc:
+        raise OptionError(f"--dataset {exc}") from None
+    if not source.records:
+        raise OptionError(f"--dataset {root}: the dataset holds no input yet (its manifest lists none)")
+    source.pruning = pruning(selection)
+    return source
 
 
 def check_report_selection(o: DecodingOptions) -> ReportSelection:
@@ -406,6 +433,7 @@ class Checked:
     json: Path | None = None
     warnings: list[str] = field(default_factory=list)
     selection: ReportSelection | None = None  # --from, --to, --area, --fl, --sensor (check_report_selection)
+    dataset: DatasetInputs | None = None  # --dataset: the inputs read from it (check_dataset)
 
 
 def check_workbook(options: AircraftOptions, checked: Checked, *, figure_windows: int | None,
@@ -464,7 +492,8 @@ def load_inputs(options: DecodingOptions, checked: Checked, progress: Progress |
             loaded = load(checked.inputs, editions=checked.editions or None, date=options.date,
                           format=options.format, columns=(*DECODED_COLUMNS, *extra_columns),
                           categories=(sorted({*MEASUREMENT_CATEGORIES, *extra_categories})
-                                      if extra_categories else None), progress=progress)
+                                      if extra_categories else None), progress=progress,
+                          dataset=checked.dataset)
     except UnreadableInput as exc:
         raise JobError(str(exc), 2) from exc
     spans = [time_spans(rec.frames, loaded.date) for rec in loaded.recordings]
@@ -549,7 +578,8 @@ def _load_measurements(options: AircraftOptions, checked: Checked, progress: Pro
         loaded, meas = load_measurements(checked.inputs, checked.sensors, editions=checked.editions or None,
                                          date=options.date, format=options.format,
                                          adsb_sigma_m=options.adsb_sigma_m, progress=progress, either=either,
-                                         columns=columns, needs=needs or RADAR_AND_ADSB)
+                                         columns=columns, needs=needs or RADAR_AND_ADSB,
+                                         dataset=checked.dataset)
     except UnreadableInput as exc:
         raise JobError(str(exc), 2) from exc
     except NoRecords as exc:
