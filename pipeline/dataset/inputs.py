@@ -21,6 +21,10 @@ PARTITION_KEYS = (("date", "string"), ("category", "int32"), ("sensor", "string"
 PROVENANCE = ("block", "offset")
 
 
+class UnreadablePart(ValueError):
+    """A part the manifest lists cannot be read as Parquet: the message names it and the reason."""
+
+
 @dataclass(frozen=True)
 class Pruning:
     """Which partitions a run reads: days from ``first`` to ``last`` (inclusive; None: unbounded), the
@@ -144,12 +148,20 @@ class DatasetInputs:
 
         names = _columns(category, edition, columns)
         partitioning = ds.partitioning(pa.schema([pa.field(k, t) for k, t in PARTITION_KEYS]), flavor="hive")
-        data = ds.dataset([str(f) for f in files], format="parquet", partitioning=partitioning,
-                          partition_base_dir=str(self.root))
-        names = [n for n in names if n in data.schema.names]
-        fragments = list(data.get_fragments(filter=prune.expression()))
-        self.read_parts += [Path(f.path) for f in fragments]
-        table = data.to_table(columns=names, filter=prune.expression())
+        # the category's own schema: no part is opened to learn it (pruned parts are never read)
+        from msdc.pipeline.report.record_schema import record_schema
+
+        schema = record_schema(category).arrow()
+        schema = pa.unify_schemas([schema, pa.schema([pa.field(k, t) for k, t in PARTITION_KEYS])])
+        try:
+            data = ds.dataset([str(f) for f in files], schema=schema, format="parquet",
+                              partitioning=partitioning, partition_base_dir=str(self.root))
+            names = [n for n in names if n in data.schema.names]
+            fragments = list(data.get_fragments(filter=prune.expression()))
+            self.read_parts += [Path(f.path) for f in fragments]
+            table = data.to_table(columns=names, filter=prune.expression())
+        except (OSError, pa.ArrowException) as exc:
+            raise UnreadablePart(f"{self.root}: a part of CAT{category:03d} cannot be read: {exc}") from None
         frame = table.to_pandas()
         for name in frame.columns:  # text labels as decoding gives them (object, not Arrow's str)
             if isinstance(frame[name].dtype, pd.CategoricalDtype):
@@ -183,7 +195,7 @@ def _columns(category: int, edition: str | None, columns) -> list[str]:
             own.add(col.name)
             if col.kind == "icao":
                 own.add(f"{col.name}_hex")
-    asked = own if columns is None else own & set(columns)
+    asked = own if columns is None else own & {*columns, *(f"{c}_hex" for c in columns)}
     keep = set(LEADING) | asked | set(PROVENANCE)
     return [c for c in stored if c in keep and c != "file"]
 

@@ -122,7 +122,12 @@ def load(paths: list[str | Path] | str | Path, *, editions=None, date=None, form
 
     Records keep their own ``timestamp``; ``Loaded.date`` (the earliest known date) dates the records of
     inputs that have none (pipeline.model.time.absolute_time).
+
+    ``dataset`` (pipeline.dataset.inputs.DatasetInputs): its inputs are read from the dataset's parts
+    instead (``paths``, ``editions``, ``date`` and ``format`` unused: the ingest applied them).
     """
+    if dataset is not None:
+        return _load_dataset(dataset, categories, columns, progress)
     paths = input_paths(paths)
     recs: list[Recording] = []
     inputs: list[dict] = []
@@ -158,7 +163,7 @@ def load(paths: list[str | Path] | str | Path, *, editions=None, date=None, form
 def _load_dataset(dataset, categories, columns, progress: Progress | None) -> Loaded:
     """``load`` of a dataset's inputs (pipeline.dataset.inputs.DatasetInputs)."""
     recs, inputs = [], []
-    for i, (p, rec) in enumerate(zip(dataset.paths, dataset.records, strict=True)):
+    for i, p in enumerate(dataset.paths):
         if progress:
             progress.step(f"{p.name} ({i + 1}/{len(dataset.records)})")
         recs.append(dataset.read(i, categories=categories, columns=columns))
