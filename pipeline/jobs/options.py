@@ -176,7 +176,7 @@ def add_options(parser: argparse.ArgumentParser, options_cls: type) -> None:
 
 def _argparse_keywords(f: dataclasses.Field, spec: Spec, kind: type) -> dict[str, object]:
     """add_argument's keywords for one field."""
-    if not spec.flags:  # the positional argument: one or more values
+    if not spec.flags:  # the positional argument: one or more values (or none: Spec.optional)
         return {"nargs": "*" if spec.optional else "+", "metavar": spec.metavar, "help": spec.help or None}
     kw: dict[str, object] = {"dest": f.name, "help": spec.help}
     if kind is bool:
@@ -387,8 +387,7 @@ class DatasetOptions:
     ``jobs.common.check_decoding`` opens it)."""
 
     inputs: tuple[str, ...] = option((), metavar="INPUT", section="selection", optional=True,
-                                     help="the recordings (or --dataset)",
-                                     doc="the recordings (or `--dataset`)")
+                                     help="the recordings (or --dataset)", doc="the recordings")
     dataset: str | None = option(
         None, "--dataset", metavar="DIR", section="selection",
         help="read a dataset made by 'msdc ingest' instead of INPUT files: only its committed parts, and "
@@ -868,7 +867,7 @@ def _values(spec: Spec, kind: type) -> str:
     """What an option takes, for the docs table."""
     unit = f" {spec.unit}" if spec.unit else ""
     if not spec.flags:
-        return "one or more"
+        return "one or more, or none with `--dataset`" if spec.optional else "one or more"
     if kind is bool:
         return "flag"
     if spec.choices is not None:
