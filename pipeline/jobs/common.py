@@ -291,6 +291,12 @@ def check_decoding(o: DecodingOptions) -> Checked:
     selection = check_report_selection(o)
     dataset = getattr(o, "dataset", None)
     if dataset is not None:
+        asked = (("--edition", editions), ("--date", o.date), ("--format", o.format))
+        decoding = [flag for flag, given in asked if given]
+        if decoding:
+            raise OptionError(f"--dataset {dataset} with {', '.join(decoding)}: these say how to decode "
+                              "recordings, and the dataset's were decoded by msdc ingest (its manifest keeps "
+                              "the options each input was ingested with); give them to msdc ingest")
         source = check_dataset(dataset, inputs, selection)
         return Checked(source.paths, _editions(editions), selection=selection, dataset=source)
     paths, warnings = _inputs(inputs)

@@ -118,6 +118,8 @@ def test_refusals(tmp_path, dataset, capsys):
     assert str(tmp_path) in err and "manifest.json" in err
     assert main(["track", "--dataset", str(tmp_path / "nope"), "--sensors", str(SENSORS), "--all"]) == 2
     assert "no such folder" in capsys.readouterr().err
+    assert main(["track", "--dataset", str(dataset), "--sensors", str(SENSORS), "--all", "--date", DAY]) == 2
+    assert "with --date" in capsys.readouterr().err  # the ingest decoded it
     assert main(["stats", "--dataset", str(dataset)]) == 2
     assert "does not read a dataset yet" in capsys.readouterr().err
     assert main(["quality", "--sensors", str(SENSORS), "--all"]) == 2  # neither INPUT nor --dataset
