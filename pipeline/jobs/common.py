@@ -53,6 +53,7 @@ from msdc.pipeline.progress import Progress
 from msdc.pipeline.report.transaction import output_problem, side_pattern, target
 
 if TYPE_CHECKING:  # the steps are imported where they run: msdc stats imports none of them
+    from msdc.pipeline.dataset.inputs import DatasetInputs
     from msdc.pipeline.jobs.options import SelectionOptions
     from msdc.pipeline.model.report_selection import ReportSelection
     from msdc.pipeline.model.selection import Selection
@@ -288,8 +289,41 @@ def check_decoding(o: DecodingOptions) -> Checked:
     editions = o.editions if isinstance(o.editions, dict) else [o.editions] if isinstance(
         o.editions, str) else list(o.editions)  # {21: "0.26"} as asterix.read takes it, or "21=0.26"
     selection = check_report_selection(o)
+    dataset = getattr(o, "dataset", None)
+    if dataset is not None:
+        asked = (("--edition", editions), ("--date", o.date), ("--format", o.format))
+        decoding = [flag for flag, given in asked if given]
+        if decoding:
+            raise OptionError(f"--dataset {dataset} with {', '.join(decoding)}: these say how to decode "
+                              "recordings, and the dataset's were decoded by msdc ingest (its manifest keeps "
+                              "the options each input was ingested with); give them to msdc ingest")
+        source = check_dataset(dataset, inputs, selection)
+        return Checked(source.paths, _editions(editions), selection=selection, dataset=source)
     paths, warnings = _inputs(inputs)
     return Checked(paths, _editions(editions), warnings=warnings, selection=selection)
+
+
+def check_dataset(root, inputs: list, selection: ReportSelection) -> DatasetInputs:
+    """--dataset as the inputs (pipeline.dataset.inputs), pruned by the report selection; OptionError (exit
+    2) naming the folder when it is no dataset or its manifest cannot be read, or when INPUT files are
+    given too."""
+    from msdc.pipeline.dataset.inputs import open_inputs, pruning
+    from msdc.pipeline.dataset.manifest import ManifestError
+    from msdc.pipeline.dataset.reader import NotADataset
+
+    nonempty_path("--dataset", root)
+    if inputs:
+        given = ", ".join(map(str, inputs))
+        raise OptionError(f"--dataset {root} and INPUT files ({given}) both given: read either the "
+                          "recordings or the dataset made of them")
+    try:
+        source = open_inputs(root)
+    except (NotADataset, ManifestError) as exc:
+        raise OptionError(f"--dataset {exc}") from None
+    if not source.records:
+        raise OptionError(f"--dataset {root}: the dataset holds no input yet (its manifest lists none)")
+    source.pruning = pruning(selection)
+    return source
 
 
 def check_report_selection(o: DecodingOptions) -> ReportSelection:
@@ -406,6 +440,7 @@ class Checked:
     json: Path | None = None
     warnings: list[str] = field(default_factory=list)
     selection: ReportSelection | None = None  # --from, --to, --area, --fl, --sensor (check_report_selection)
+    dataset: DatasetInputs | None = None  # --dataset: the inputs read from it (check_dataset)
 
 
 def check_workbook(options: AircraftOptions, checked: Checked, *, figure_windows: int | None,
@@ -455,6 +490,7 @@ def load_inputs(options: DecodingOptions, checked: Checked, progress: Progress |
 
     from msdc.asterix.categories import MEASUREMENT_CATEGORIES
     from msdc.asterix.errors import ContentWarning, EditionWarning, UnreadableInput
+    from msdc.pipeline.dataset.inputs import UnreadablePart
     from msdc.pipeline.model.measurements import DECODED_COLUMNS, impossible_positions
 
     try:
@@ -464,13 +500,15 @@ def load_inputs(options: DecodingOptions, checked: Checked, progress: Progress |
             loaded = load(checked.inputs, editions=checked.editions or None, date=options.date,
                           format=options.format, columns=(*DECODED_COLUMNS, *extra_columns),
                           categories=(sorted({*MEASUREMENT_CATEGORIES, *extra_categories})
-                                      if extra_categories else None), progress=progress)
-    except UnreadableInput as exc:
+                                      if extra_categories else None), progress=progress,
+                          dataset=checked.dataset)
+    except (UnreadableInput, UnreadablePart) as exc:
         raise JobError(str(exc), 2) from exc
     spans = [time_spans(rec.frames, loaded.date) for rec in loaded.recordings]
     if loaded.spans is None:  # kept: the track figures end at the recording's last report
         loaded.spans = spans
-    return loaded, [*_empty_inputs(loaded), *_wrong_editions(loaded), *order_warnings(checked.inputs, spans),
+    return loaded, [*_empty_inputs(loaded, checked.dataset), *_wrong_editions(loaded),
+                    *order_warnings(checked.inputs, spans),
                     *date_ignored(options, loaded.inputs), *format_hints(options, loaded.inputs),
                     *impossible_positions(loaded.frames.get(21)), *loaded.warnings]
 
@@ -538,6 +576,7 @@ def _load_measurements(options: AircraftOptions, checked: Checked, progress: Pro
     is enough, the other's absence is a warning saying which sheets stay empty. ``needs``: the categories
     the job needs (load_measurements; CAT048 and CAT021 when None). Returns the warnings too."""
     from msdc.asterix.errors import UnreadableInput
+    from msdc.pipeline.dataset.inputs import UnreadablePart
     from msdc.pipeline.model.load import RADAR_AND_ADSB
 
     if columns is not None and checked.selection is not None and checked.selection.active:
@@ -549,8 +588,9 @@ def _load_measurements(options: AircraftOptions, checked: Checked, progress: Pro
         loaded, meas = load_measurements(checked.inputs, checked.sensors, editions=checked.editions or None,
                                          date=options.date, format=options.format,
                                          adsb_sigma_m=options.adsb_sigma_m, progress=progress, either=either,
-                                         columns=columns, needs=needs or RADAR_AND_ADSB)
-    except UnreadableInput as exc:
+                                         columns=columns, needs=needs or RADAR_AND_ADSB,
+                                         dataset=checked.dataset)
+    except (UnreadableInput, UnreadablePart) as exc:
         raise JobError(str(exc), 2) from exc
     except NoRecords as exc:
         if progress:
@@ -570,7 +610,7 @@ def _load_measurements(options: AircraftOptions, checked: Checked, progress: Pro
                                       leave_out="by giving the ADS-B recordings alone") from exc
     if len(loaded.unplaced):
         warnings += unplaced_warnings(loaded, options)
-    warnings += _empty_inputs(loaded)
+    warnings += _empty_inputs(loaded, checked.dataset)
     warnings += _wrong_editions(loaded, but=absent_categories(loaded))
     warnings += [f"no {REGISTRY[cat].noun} (CAT{cat:03d}) records in the inputs{_all_failed(loaded, cat)}: "
                  f"{QUALITY_WITHOUT[cat]}" for cat in absent_categories(loaded)
@@ -687,12 +727,14 @@ QUALITY_WITHOUT = {48: "the Radar accuracy and Radar biases sheets are empty",
                        "(ADS-B is their reference)"}
 
 
-def _empty_inputs(loaded: Loaded) -> list[str]:
+def _empty_inputs(loaded: Loaded, dataset: DatasetInputs | None = None) -> list[str]:
     """A warning for each input of which no record decoded (a file that is not a recording, or another
-    category): the run goes on with the others, but it should not be silent."""
+    category): the run goes on with the others, but it should not be silent. Of a dataset, an input whose
+    records the partition pruning left out (its manifest lists rows) is not said."""
+    held = set() if dataset is None else {rec["path"] for rec in dataset.records if any(rec["rows"].values())}
     return [f"{info['path']}: no record decoded ({info['skipped_blocks']} block(s) skipped; 'msdc stats' "
             "lists them)" if info["skipped_blocks"] else f"{info['path']}: no CAT021 or CAT048 record in it"
-            for info in loaded.inputs if not any(info["records"].values())]
+            for info in loaded.inputs if not any(info["records"].values()) and info["path"] not in held]
 
 
 def _wrong_editions(loaded: Loaded, but: list[int] | tuple[int, ...] = ()) -> list[str]:

@@ -95,6 +95,7 @@ class Spec:
     parser_choices: bool = True  # argparse refuses other values and its usage lists them; else the job does
     metavar: str | None = None
     required: bool = False  # argparse requires it (the jobs say so for the library)
+    optional: bool = False  # the positional argument may be left out (another option names the input)
     repeat: bool = False  # the flag may be given several times: a tuple of values
     parse: Callable[[str], object] | None = None  # argparse's type=, when not the field's own type
     group: str | None = None  # flags of one group are mutually exclusive and one of them is required
@@ -175,8 +176,8 @@ def add_options(parser: argparse.ArgumentParser, options_cls: type) -> None:
 
 def _argparse_keywords(f: dataclasses.Field, spec: Spec, kind: type) -> dict[str, object]:
     """add_argument's keywords for one field."""
-    if not spec.flags:  # the positional argument: one or more values
-        return {"nargs": "+", "metavar": spec.metavar, "help": spec.help or None}
+    if not spec.flags:  # the positional argument: one or more values (or none: Spec.optional)
+        return {"nargs": "*" if spec.optional else "+", "metavar": spec.metavar, "help": spec.help or None}
     kw: dict[str, object] = {"dest": f.name, "help": spec.help}
     if kind is bool:
         return kw | {"action": "store_true"}
@@ -380,7 +381,24 @@ class DecodeOptions(DecodingOptions):
 
 
 @dataclass(frozen=True)
-class StatsOptions(DecodingOptions):
+class DatasetOptions:
+    """--dataset: a dataset made by ``msdc ingest`` as the input instead of recordings, declared once for
+    the commands that read one (listed first among a command's bases, so that its inputs keep their place;
+    ``jobs.common.check_decoding`` opens it)."""
+
+    inputs: tuple[str, ...] = option((), metavar="INPUT", section="selection", optional=True,
+                                     help="the recordings (or --dataset)", doc="the recordings")
+    dataset: str | None = option(
+        None, "--dataset", metavar="DIR", section="selection",
+        help="read a dataset made by 'msdc ingest' instead of INPUT files: only its committed parts, and "
+             "only the days, categories and sensors --from/--to and --sensor can keep",
+        doc="read a dataset made by `msdc ingest` instead of INPUT files: only the parts its manifest lists, "
+            "and only the partitions `--from`/`--to` (given as date-times) and `--sensor` can keep "
+            "([Large recordings](large-recordings.md#the-jobs-on-a-dataset))")
+
+
+@dataclass(frozen=True)
+class StatsOptions(DatasetOptions, DecodingOptions):
     """Everything ``stats_job`` needs."""
 
     chunk_mb: float = option(64.0, "--chunk-mb", range=CHUNK_RANGE_MB, unit="MB",  # peak memory follows it
@@ -388,7 +406,7 @@ class StatsOptions(DecodingOptions):
 
 
 @dataclass(frozen=True)
-class AircraftOptions(DecodingOptions):
+class AircraftOptions(DatasetOptions, DecodingOptions):
     """Inputs, the sensor file and the aircraft selection (call sign, address or all); the outputs and
     --adsb-sigma, whose help each command words, are declared by the commands."""
 
@@ -706,7 +724,7 @@ SIL_RANGE = (0, 3)
 
 
 @dataclass(frozen=True)
-class EvaluateOptions(ReferenceFilterOptions, DecodingOptions):
+class EvaluateOptions(ReferenceFilterOptions, DatasetOptions, DecodingOptions):
     """Everything ``evaluate_job`` needs; see ``msdc evaluate --help``. Every aircraft is evaluated."""
 
     sensors: str | None = option(None, "--sensors", required=True, section="selection", help=SENSORS_HELP,
@@ -849,7 +867,7 @@ def _values(spec: Spec, kind: type) -> str:
     """What an option takes, for the docs table."""
     unit = f" {spec.unit}" if spec.unit else ""
     if not spec.flags:
-        return "one or more"
+        return "one or more, or none with `--dataset`" if spec.optional else "one or more"
     if kind is bool:
         return "flag"
     if spec.choices is not None:

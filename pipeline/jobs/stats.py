@@ -20,7 +20,7 @@ from msdc.pipeline.jobs.common import (
     select_chunk,
     sensor_table,
 )
-from msdc.pipeline.jobs.options import StatsOptions, check_declared
+from msdc.pipeline.jobs.options import OptionError, StatsOptions, check_declared
 from msdc.pipeline.model import editions as edition_notes
 from msdc.pipeline.model.decoded_reports import VIEW_COLUMNS
 from msdc.pipeline.model.load import time_spans, widen_spans
@@ -32,6 +32,10 @@ def validate(options: StatsOptions) -> Checked:
     """Check the inputs, editions, --chunk-mb and the report selection before any decoding; OptionError if
     bad."""
     check_declared(options)
+    if options.dataset is not None:
+        raise OptionError(f"--dataset {options.dataset}: msdc stats does not read a dataset yet (a dataset "
+                          "keeps no account of skipped bytes and categories not ingested, which stats "
+                          "reports): run it on the recordings, or query the dataset with msdc sql")
     checked = check_decoding(options)
     checked.sensors = None if options.sensors is None else sensor_table(options.sensors)  # for --area
     return checked

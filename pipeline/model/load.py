@@ -115,14 +115,19 @@ def _digests(paths: list[Path]) -> list[str]:
 
 
 def load(paths: list[str | Path] | str | Path, *, editions=None, date=None, format: str | None = None,
-         categories=None, columns=None, progress: Progress | None = None) -> Loaded:
+         categories=None, columns=None, progress: Progress | None = None, dataset=None) -> Loaded:
     """Decode every input into one frame per category, each row tagged with its file (``columns``: only
     those decoded columns, see asterix.read). ``paths``: one path or a list; ValueError when two hold the
     same content. A likely wrong edition is said by asterix.read's ``asterix.EditionWarning``.
 
     Records keep their own ``timestamp``; ``Loaded.date`` (the earliest known date) dates the records of
     inputs that have none (pipeline.model.time.absolute_time).
+
+    ``dataset`` (pipeline.dataset.inputs.DatasetInputs): its inputs are read from the dataset's parts
+    instead (``paths``, ``editions``, ``date`` and ``format`` unused: the ingest applied them).
     """
+    if dataset is not None:
+        return _load_dataset(dataset, categories, columns, progress)
     paths = input_paths(paths)
     recs: list[Recording] = []
     inputs: list[dict] = []
@@ -153,6 +158,31 @@ def load(paths: list[str | Path] | str | Path, *, editions=None, date=None, form
             by_cat.setdefault(cat, []).append(frame)
     frames = {cat: _concat(parts) for cat, parts in by_cat.items()}
     return Loaded(frames, recs, inputs, first, warnings=warnings)
+
+
+def _load_dataset(dataset, categories, columns, progress: Progress | None) -> Loaded:
+    """``load`` of a dataset's inputs (pipeline.dataset.inputs.DatasetInputs)."""
+    recs, inputs = [], []
+    for i, p in enumerate(dataset.paths):
+        if progress:
+            progress.step(f"{p.name} ({i + 1}/{len(dataset.records)})")
+        recs.append(dataset.read(i, categories=categories, columns=columns))
+        inputs.append(dataset_info(dataset, i, recs[-1]))
+    dates = [r.date for r in recs if r.date is not None]
+    by_cat: dict[int, list[pd.DataFrame]] = {}
+    for label, rec in zip(dataset.labels, recs, strict=True):
+        for cat, frame in rec.frames.items():
+            by_cat.setdefault(cat, []).append(frame.assign(file=pd.Categorical([label] * len(frame))))
+    frames = {cat: _concat(parts) for cat, parts in by_cat.items()}
+    return Loaded(frames, recs, inputs, min(dates) if dates else None)
+
+
+def dataset_info(dataset, i: int, rec: Recording) -> dict:
+    """An input's provenance as ``load`` gives it, from the dataset's manifest (records: those read)."""
+    record = dataset.records[i]
+    return {"path": record["path"], "sha256": record["sha256"], "bytes": int(record["size_bytes"]),
+            "format": record.get("format"), "records": {int(c): len(f) for c, f in rec.frames.items()},
+            "skipped_blocks": int(record.get("skipped_blocks", 0)), "editions": dict(rec.editions)}
 
 
 def time_spans(frames: dict[int, pd.DataFrame], date: dt.date | None) -> dict[str, Span]:
@@ -201,7 +231,8 @@ def load_measurements(paths: list[str | Path], sensors: pd.DataFrame, *, edition
                       format: str | None = None, adsb_sigma_m: float | None = None,
                       chunk: int = MEASUREMENT_CHUNK_BYTES, progress: Progress | None = None,
                       either: bool = False, columns=None,
-                      needs: tuple[tuple[int, ...], ...] = RADAR_AND_ADSB) -> tuple[Loaded, pd.DataFrame]:
+                      needs: tuple[tuple[int, ...], ...] = RADAR_AND_ADSB, dataset=None
+                      ) -> tuple[Loaded, pd.DataFrame]:
     """Decode every input in chunks (asterix.iter_read, only DECODED_COLUMNS) straight into measurement
     rows, and join them into one validated measurement frame (rows as build_measurements orders them:
     every input's radar rows, then every input's ADS-B rows, then the CAT010/CAT020 ones). The Loaded has
@@ -214,7 +245,9 @@ def load_measurements(paths: list[str | Path], sensors: pd.DataFrame, *, edition
     lacks are left out and listed in ``Loaded.stray_radar`` (per pair and file: records, first offset),
     for the job to judge; so are CAT010/CAT020 reports to place from a reference point it lacks
     (``Loaded.unplaced``, measurements.unplaced_verdict). Records
-    without a timestamp of their own are dated by ``Loaded.date``, as with ``load``.
+    without a timestamp of their own are dated by ``Loaded.date``, as with ``load``. ``dataset``
+    (pipeline.dataset.inputs.DatasetInputs): its inputs are read from the dataset's parts instead, each
+    as one chunk (``paths``, ``editions``, ``date`` and ``format`` unused: the ingest applied them).
     """
     from msdc.pipeline.model.measurements import DECODED_COLUMNS, finish_measurements, impossible_positions
 
@@ -230,9 +263,12 @@ def load_measurements(paths: list[str | Path], sensors: pd.DataFrame, *, edition
     other_kinds: dict[int, int] = {}  # CAT010 target reports of other kinds, per input (reset below)
     stray: list[pd.DataFrame] = []  # undeclared_radars' table per chunk
     early_start: list[str] = []  # FirstDayTally's warnings
-    paths = input_paths(paths)
-    digests = _digests(paths)
-    labels = file_labels(paths)
+    if dataset is None:
+        paths = input_paths(paths)
+        digests = _digests(paths)
+        labels = file_labels(paths)
+    else:
+        paths, digests, labels = dataset.paths, dataset.digests, dataset.labels
     for i, p in enumerate(paths):
         if progress:
             progress.step(f"{p.name} ({i + 1}/{len(paths)})")
@@ -243,8 +279,10 @@ def load_measurements(paths: list[str | Path], sensors: pd.DataFrame, *, edition
         tally = FirstDayTally()
         other_kinds = {}
         content = Tally(str(p))
-        for rec in asterix.iter_read(p, chunk=chunk, editions=editions, date=date, format=format,
-                                     columns=DECODED_COLUMNS):
+        chunks = (asterix.iter_read(p, chunk=chunk, editions=editions, date=date, format=format,
+                                    columns=DECODED_COLUMNS) if dataset is None
+                  else _dataset_chunks(dataset, i, DECODED_COLUMNS))
+        for rec in chunks:
             if first:
                 dates.append(rec.date)
                 first = False
@@ -271,7 +309,10 @@ def load_measurements(paths: list[str | Path], sensors: pd.DataFrame, *, edition
         from msdc.pipeline.model.multilateration import other_kinds_warning
 
         early_start += other_kinds_warning(labels[i], other_kinds)
-        early_start += content.warnings(head_of(p), hint=False, detected=format is None)
+        if dataset is None:  # a dataset's were said when it was ingested
+            early_start += content.warnings(head_of(p), hint=False, detected=format is None)
+        else:
+            info["skipped_blocks"] = int(dataset.records[i].get("skipped_blocks", 0))
         info["records"] = dict(sorted(info["records"].items()))
         info["editions"] = dict(sorted(info["editions"].items()))
         inputs.append(info)
@@ -302,6 +343,14 @@ def load_measurements(paths: list[str | Path], sensors: pd.DataFrame, *, edition
     stray_radar = _stray_table(stray)
     unplaced_table = _unplaced_table(unplaced)
     return Loaded({}, recs, inputs, first_date, spans, warnings, stray_radar, unplaced_table), meas
+
+
+def _dataset_chunks(dataset, i: int, columns):
+    """Input ``i`` of a dataset as one chunk (its records in file order), none when it holds no record (as
+    iter_read yields none for an empty file)."""
+    rec = dataset.read(i, columns=columns)
+    if rec.frames:
+        yield rec
 
 
 def _unplaced_table(parts: list[pd.DataFrame]) -> pd.DataFrame:

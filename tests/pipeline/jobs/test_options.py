@@ -36,6 +36,7 @@ READING = {"--edition": "editions", "--date": "date", "--format": "format", "--f
            "--to": "to_time", "--area": "area", "--fl": "fl", "--sensor": "sensor_ids"}
 SELECTION = {"--sensors": "sensors", "--callsign": "callsign", "--address": "address",
              "--all": "all_aircraft"}
+DATASET = {"--dataset": "dataset"}  # the commands that read a dataset instead of INPUT files
 TRACKING = {"--figures": "figures", "--figures-limit": "figures_limit", "--figures-only": "figures_only",
             "--step": "step_s", "--max-coast": "max_coast_s", "--tpm": "tpm",
             "--sources": "sources", "--noise": "noise"}
@@ -45,16 +46,18 @@ EXPECTED = {
     "decode": {"INPUT": "inputs", "--output": "output", "--category": "categories", "--strict": "strict",
                "--lenient": "lenient",
                "--chunk-mb": "chunk_mb", "--sensors": "sensors", **READING},
-    "stats": {"INPUT": "inputs", "--chunk-mb": "chunk_mb", "--sensors": "sensors", **READING},
+    "stats": {"INPUT": "inputs", "--chunk-mb": "chunk_mb", "--sensors": "sensors", **READING, **DATASET},
     "correlate": {"INPUT": "inputs", **SELECTION, "--output": "output", "--json": "json", "--slot": "slot_s",
                   "--gap": "gap_s", "--pairs": "pairs", "--split-adsb": "split_adsb", "--quality": "quality",
                   "--drop-jumps": "drop_jumps", "--min-nic": "min_nic", "--min-nacp": "min_nacp",
-                  "--fill": "fill", "--tables": "tables", "--adsb-sigma": "adsb_sigma_m", **READING},
+                  "--fill": "fill", "--tables": "tables", "--adsb-sigma": "adsb_sigma_m",
+                  **READING, **DATASET},
     "quality": {"INPUT": "inputs", **SELECTION, "--output": "output", "--json": "json", "--gap": "gap_s",
                 "--reference": "reference", "--drop-jumps": "drop_jumps", "--min-nic": "min_nic",
-                "--min-nacp": "min_nacp", "--adsb-sigma": "adsb_sigma_m", **READING},
+                "--min-nacp": "min_nacp", "--adsb-sigma": "adsb_sigma_m", **READING, **DATASET},
     "track": {"INPUT": "inputs", **SELECTION, "--output": "output", "--json": "json", **TRACKING,
-              "--smooth": "smooth", "--smoother": "smoother", "--adsb-sigma": "adsb_sigma_m", **READING},
+              "--smooth": "smooth", "--smoother": "smoother", "--adsb-sigma": "adsb_sigma_m",
+              **READING, **DATASET},
     "conflicts": {"INPUT": "inputs", "--sensors": "sensors", "--output": "output", "--json": "json",
                   "--horizon": "horizons_s", "--radius-nm": "radius_nm", "--vertical-ft": "vertical_ft",
                   "--vertical-tolerance-ft": "vertical_tolerance_ft", "--threshold": "threshold",
@@ -62,12 +65,12 @@ EXPECTED = {
                   "--adsb-sigma": "adsb_sigma_m", "--max-report-gap": "max_report_gap_s",
                   "--min-fl": "min_fl", "--exclude-mode-a-only": "exclude_mode_a_only",
                   "--exclude-codes": "exclude_codes",
-                  **READING},
+                  **READING, **DATASET},
     "evaluate": {"INPUT": "inputs", "--sensors": "sensors", "--preset": "preset", "--sectors": "sectors",
                  "--reference": "reference", "--reference-file": "reference_file", "--test": "test_sensors",
                  "--drop-jumps": "drop_jumps", "--min-nic": "min_nic", "--min-nacp": "min_nacp",
                  "--min-sil": "min_sil", "--output": "output", "--json": "json", "--html": "html",
-                 "--adsb-sigma": "adsb_sigma_m", **READING},
+                 "--adsb-sigma": "adsb_sigma_m", **READING, **DATASET},
     "ingest": {"INPUT": "inputs", "--dataset": "dataset", "--workers": "workers", "--category": "categories",
                "--lenient": "lenient", "--chunk-mb": "chunk_mb", "--edition": "editions", "--date": "date",
                "--format": "format"},
@@ -136,7 +139,9 @@ def test_help_reads_as_declared():
     assert "[--step STEP]" in usage and "[--max-coast MAX_COAST]" in usage
     assert "[--smoother {rts,imm}]" in usage
     assert "[--noise NOISE]" in usage and "[--adsb-sigma M]" in usage and "[--edition CAT=ED]" in usage
-    assert "(--callsign CALLSIGN | --address ADDRESS | --all)" in usage and "INPUT [INPUT ...]" in usage
+    assert "(--callsign CALLSIGN | --address ADDRESS | --all)" in usage
+    assert "[INPUT ...]" in usage  # or --dataset
+    assert "INPUT [INPUT ...]" in _subparsers()["decode"].format_usage()  # no --dataset there
     assert "[--category {1,2,10,19,20,21,23,25,34,48,62,63,65}]" in _subparsers()["decode"].format_usage()
 
 
@@ -330,7 +335,10 @@ def test_a_table_row_says_what_the_option_takes():
     assert any(row.startswith("| `--max-coast` | number (s) | `60` |") for row in rows)
     assert any(row.startswith("| `--threshold` | number | `0.2` |") for row in rows)
     assert any(row.startswith("| `--edition` | CAT=ED, repeatable |  |") for row in rows)
-    assert any(row.startswith("| `INPUT` | one or more |  | the recordings |") for row in rows)
+    assert any(row.startswith("| `INPUT` | one or more, or none with `--dataset` |  | the recordings |")
+               for row in rows)
+    decode = opts.options_table(opts.DecodeOptions).splitlines()
+    assert any(row.startswith("| `INPUT` | one or more |  | the recordings") for row in decode)
 
 
 def test_a_stale_table_is_found_and_rewritten(tmp_path):

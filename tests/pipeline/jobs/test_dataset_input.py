@@ -1,0 +1,125 @@
+"""--dataset as the jobs' input: quality, track and evaluate on a dataset ingested from the fixtures give the
+JSON the recordings give (exactly, but for the run's clock and the inputs' paths, which the manifest holds
+resolved); the recordings are moved away first, so only the dataset can be read. --sensor and --from/--to
+prune partitions (a corrupted part outside them is never opened); bad --dataset values exit 2."""
+
+from __future__ import annotations
+
+import json
+import shutil
+from pathlib import Path
+
+import pytest
+from dataset_data import ADSB, DAY, FIX, RADAR
+
+from msdc.pipeline.cli import main
+from msdc.pipeline.dataset.inputs import Pruning, open_inputs
+
+SENSORS = FIX / "sensors.toml"
+TRUTH = json.loads((FIX / "truth.json").read_text())
+VOLATILE = {"run_utc", "run_time_s", "path"}  # the run's clock; the manifest keeps the resolved input path
+
+
+@pytest.fixture(scope="module")
+def dataset(tmp_path_factory) -> Path:
+    """A dataset ingested from copies of the fixtures, the copies then moved away (unreadable by path)."""
+    work = tmp_path_factory.mktemp("dsin")
+    copies = [shutil.copy(p, work / p.name) for p in (RADAR, ADSB)]
+    root = work / "data"
+    assert main(["ingest", *map(str, copies), "--dataset", str(root), "--date", DAY]) == 0
+    gone = work / "gone"
+    gone.mkdir()
+    for c in copies:
+        Path(c).rename(gone / Path(c).name)
+    return root
+
+
+def _without_volatile(doc):
+    if isinstance(doc, dict):
+        return {k: _without_volatile(v) for k, v in doc.items() if k not in VOLATILE}
+    if isinstance(doc, list):
+        return [_without_volatile(v) for v in doc]
+    return doc
+
+
+def _json(tmp_path: Path, name: str, args: list[str]) -> dict:
+    out = tmp_path / f"{name}.json"
+    assert main([*args, "--json", str(out)]) == 0
+    return _without_volatile(json.loads(out.read_text()))
+
+
+def _file_and_dataset(tmp_path, dataset, command: list[str]) -> tuple[dict, dict]:
+    files = _json(tmp_path, "files", [command[0], str(RADAR), str(ADSB), "--date", DAY, *command[1:]])
+    on_dataset = _json(tmp_path, "dataset", [command[0], "--dataset", str(dataset), *command[1:]])
+    return files, on_dataset
+
+
+@pytest.mark.parametrize("command", [
+    ["quality", "--sensors", str(SENSORS), "--all"],
+    ["track", "--sensors", str(SENSORS), "--all"],
+    ["evaluate", "--sensors", str(SENSORS), "--preset", "eurocontrol-1997-ssr"],
+], ids=["quality", "track", "evaluate"])
+def test_dataset_gives_the_recordings_results(tmp_path, dataset, command):
+    files, on_dataset = _file_and_dataset(tmp_path, dataset, command)
+    assert on_dataset == files  # exactly: the same records in the same order give the same sums
+
+
+def _corrupt(root: Path, category: int) -> Path:
+    part = next(root.glob(f"date=*/category={category:03d}/sensor=*/part-*.parquet"))
+    saved = part.with_name("saved")
+    shutil.copy(part, saved)
+    part.write_bytes(b"not parquet")
+    return saved
+
+
+def test_sensor_prunes_partitions(tmp_path, dataset, capsys):
+    adsb = f"{TRUTH['adsb']['sac']}/{TRUTH['adsb']['sic']}"
+    root = tmp_path / "data"
+    shutil.copytree(dataset, root)
+    _corrupt(root, 48)  # the radar's part: read, it would fail
+    args = ["quality", "--dataset", str(root), "--sensors", str(SENSORS), "--all", "--sensor", adsb]
+    assert main([*args, "--json", str(tmp_path / "q.json")]) == 0
+    assert "radar.ast: no CAT021 or CAT048 record" not in capsys.readouterr().err  # pruned, not empty
+    assert main(["quality", "--dataset", str(root), "--sensors", str(SENSORS), "--all"]) == 2  # it is read
+    assert "part-" in capsys.readouterr().err
+
+
+def test_days_and_sensors_prune_the_parts_read(dataset):
+    import datetime as dt
+
+    src = open_inputs(dataset)
+    radar = f"{TRUTH['radar']['sac']}_{TRUTH['radar']['sic']}"
+    day = dt.date.fromisoformat(DAY)
+    src.pruning = Pruning(first=day + dt.timedelta(days=1))
+    assert all(not src.read(i).frames for i in range(2)) and src.read_parts == []
+    src.pruning = Pruning(first=day, last=day, sensors=((48, radar),))
+    frames = [src.read(i).frames for i in range(2)]
+    assert [list(f) for f in frames] == [[48], []]
+    assert [p.parts[-3:-1] for p in src.read_parts] == [("category=048", f"sensor={radar}")]
+
+
+def test_window_prunes_days_and_keeps_the_margin():
+    from msdc.pipeline.model.report_selection import ReportSelection, parse_time
+
+    sel = ReportSelection(start=parse_time("2026-11-28T00:02:00", "--from"),
+                          end=parse_time("2026-11-29T12:00:00", "--to"))
+    from msdc.pipeline.dataset.inputs import pruning
+
+    p = pruning(sel)
+    assert (p.first.isoformat(), p.last.isoformat()) == ("2026-11-27", "2026-11-29")  # 5 min before 00:02
+    assert pruning(ReportSelection(start=parse_time("08:10", "--from"))).first is None  # day not yet known
+
+
+def test_refusals(tmp_path, dataset, capsys):
+    assert main(["quality", str(RADAR), "--dataset", str(dataset), "--sensors", str(SENSORS), "--all"]) == 2
+    assert "both given" in capsys.readouterr().err
+    assert main(["quality", "--dataset", str(tmp_path), "--sensors", str(SENSORS), "--all"]) == 2
+    err = capsys.readouterr().err
+    assert str(tmp_path) in err and "manifest.json" in err
+    assert main(["track", "--dataset", str(tmp_path / "nope"), "--sensors", str(SENSORS), "--all"]) == 2
+    assert "no such folder" in capsys.readouterr().err
+    assert main(["track", "--dataset", str(dataset), "--sensors", str(SENSORS), "--all", "--date", DAY]) == 2
+    assert "with --date" in capsys.readouterr().err  # the ingest decoded it
+    assert main(["stats", "--dataset", str(dataset)]) == 2
+    assert "does not read a dataset yet" in capsys.readouterr().err
+    assert main(["quality", "--sensors", str(SENSORS), "--all"]) == 2  # neither INPUT nor --dataset
