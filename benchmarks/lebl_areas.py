@@ -50,27 +50,14 @@ APRONS = [
 MONITORS = {"342383", "342384", "342385", "342386", "342387"}  # fixed field transponders (lebl-hour.md)
 RUNWAY_SPEED_KT = 50.0  # on the ground this fast: a take-off or landing roll
 MOVING_KT = 5.0  # on the ground and this fast: taxiing (or a vehicle driving)
-SENSORS = """
-[[sensor]]
-name = "LEBL MLAT"
-category = 10
-kind = "mlat"
-sac = 0
-sic = 107
-latitude = 41.297074
-longitude = 2.078480
-altitude_m = 53.0
+LEBL_HOUR = Path(__file__).resolve().parents[1] / "docs" / "methods" / "lebl-hour.md"
 
-[[sensor]]
-name = "LEBL SMR"
-category = 10
-kind = "smr"
-sac = 0
-sic = 7
-latitude = 41.295569
-longitude = 2.095099
-altitude_m = 53.0
-"""
+
+def sensors_toml() -> str:
+    """The [[sensor]] tables of docs/methods/lebl-hour.md (its TOML block: the corrected reference points)."""
+    text = LEBL_HOUR.read_text(encoding="utf-8")
+    start = text.index("[[sensor]]")
+    return text[start:text.index("```", start)]
 
 
 def strip(a: tuple[float, float], b: tuple[float, float], width_m: float) -> list[list[float]]:
@@ -112,7 +99,7 @@ def measurements(real: Path) -> pd.DataFrame:
     with tempfile.TemporaryDirectory() as tmp, warnings.catch_warnings():
         warnings.simplefilter("ignore")
         path = Path(tmp) / "lebl.toml"
-        path.write_text(SENSORS)
+        path.write_text(sensors_toml())
         return build_measurements(None, adsb.frames[21], read_sensors(path), adsb_sigma_m=10.0,
                                   cat010=pd.concat([mlat.frames[10], smr.frames[10]], ignore_index=True),
                                   date="2016-05-10")
