@@ -57,6 +57,7 @@ class SensorScore:
     rows: list[dict] = field(default_factory=list)
     outcomes: dict[tuple[str, str, int], Outcome] = field(default_factory=dict)
     notes: list[str] = field(default_factory=list)
+    reports: pd.DataFrame | None = field(default=None, compare=False)  # associated with the whole reference
 
 
 def _is_position(requirement: Requirement) -> bool:
@@ -250,6 +251,7 @@ def score_sensor(preset: Preset, sensor_id: str, reports: pd.DataFrame, referenc
     monitors = any(r.name == MONITORS for r in regions)
     rep = associate(reports, reference, preset.association()) if len(reference) else reports.assign(
         ref_index=-1, ref_aircraft=None, ref_distance_m=np.inf)
+    score.reports = rep
     cuts: dict[str, tuple[pd.DataFrame, pd.DataFrame]] = {} if monitors else {GLOBAL: (rep, reference)}
     where = None
     for i, req in enumerate(preset.requirements):

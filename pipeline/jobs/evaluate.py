@@ -30,6 +30,7 @@ from msdc.pipeline.jobs.common import (
     source_measurements,
     spare_inputs,
     tracked_reports,
+    undated_warning,
 )
 from msdc.pipeline.jobs.options import EvaluateOptions, OptionError, check_declared
 from msdc.pipeline.model.load import Loaded
@@ -333,10 +334,11 @@ def _sensor(options, checked, loaded, meas, builders, sensor_id, kind, gates, ep
     bands, polar, vertical = ({}, None, None) if reference.empty else _coverage(reports, reference, sensor,
                                                                                  checked.preset)
     gate = checked.preset.association()
-    per = _per_aircraft(sensor_id, reports, reference, pd_outcome, gate) if len(reference) else pd.DataFrame()
-    points = _map_points(sensor_id, reports, reference, gate) if len(reference) else pd.DataFrame()
+    linked = score.reports  # associated once, with the preset's gate: reused below
+    per = _per_aircraft(sensor_id, linked, reference, pd_outcome, gate) if len(reference) else pd.DataFrame()
+    points = _map_points(sensor_id, linked, reference, gate) if len(reference) else pd.DataFrame()
     if len(reference):
-        bands["error_range"] = errors_by_range(reports, reference, sensor, gate)
+        bands["error_range"] = errors_by_range(linked, reference, sensor, gate)
     return SensorResult(sensor_id, kind, score.rows, per, bands, polar, vertical, points, notes, sensor)
 
 
@@ -371,6 +373,7 @@ def evaluate_job(options: EvaluateOptions, *, progress: Progress | None = None,
         meas, said = source_measurements(loaded, checked, options)
         warnings += said
         warnings += site_warnings(meas, checked.sensors, str(sensors_path(options)))
+        warnings += undated_warning(loaded, "the reports and the reference")
         if meas.empty:
             raise JobError("no report in the inputs to evaluate")
         trackers = tracker_ids(loaded.frames.get(TRACKER_CATEGORY)) if wants_tracks else []
