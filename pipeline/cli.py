@@ -369,10 +369,13 @@ def _run_job(name: str, validate, job, options, progress: Progress):
     _warn(name, checked.warnings)
     seen = len(checked.warnings)
     try:
-        result = job(options, progress=progress, checked=checked, command=" ".join(sys.argv[1:]) or name)
+        with common.distributed(options, progress) as cluster:
+            result = job(options, progress=progress, checked=checked, command=" ".join(sys.argv[1:]) or name)
     except (CliError, common.OptionError, common.JobError, asterix_errors.AsterixError, OSError) as exc:
         _warn(name, getattr(exc, "job_warnings", [])[seen:])  # main() prints the error after them
         raise
+    if cluster is not None and cluster.summary():
+        print(f"msdc {name}: {cluster.summary()}", file=sys.stderr)
     _warn(name, result.warnings[seen:])
     _report_skipped(result.loaded.errors)
     if result.loaded.selection is not None:

@@ -44,8 +44,20 @@ class Progress:
         filled = int(width * min(done, total) / total)
         rate = (done - self._bar_done0) / max(now - self._bar_t0, 1e-9)
         speed = (f"{rate / 1e6:.1f} MB/s" if unit == "MB" else f"{done}/{total}, {rate:.1f} {unit}/s")
+        if 0 < rate and done < total:
+            speed += f", ETA {eta_text((total - done) / rate)}"
         speed = f" ({speed})" if done > self._bar_done0 else ""  # none from the first call: it has not moved
         self._ended = done >= total
         end = "\n" if done >= total else ""
         print(f"\r  {label} [{'#' * filled}{'.' * (width - filled)}] {100 * done / total:5.1f}%{speed}",
               end=end, file=self.stream, flush=True)
+
+
+def eta_text(seconds: float) -> str:
+    """Time left as a bar shows it: "42 s", "7 min 05 s", "2 h 03 min"."""
+    s = int(round(seconds))
+    if s < 60:
+        return f"{s} s"
+    if s < 3600:
+        return f"{s // 60} min {s % 60:02d} s"
+    return f"{s // 3600} h {s % 3600 // 60:02d} min"

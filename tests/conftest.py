@@ -29,6 +29,19 @@ def msdc_wheel(tmp_path_factory) -> Path:
     return next(out.glob("msdc-*.whl"))
 
 
+@pytest.fixture(scope="session")
+def dask_scheduler():
+    """The address of a 2-process Dask LocalCluster on the loopback (one per xdist worker), for the jobs'
+    --scheduler: started once, as a user's running cluster would be."""
+    import logging
+
+    distributed = pytest.importorskip("distributed", reason="dask's distributed scheduler is not installed")
+    cluster = distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, host="127.0.0.1",
+                                       dashboard_address=None, silence_logs=logging.ERROR)
+    yield cluster.scheduler_address
+    cluster.close()
+
+
 # Hypothesis: "ci" (default) draws a quarter of each property test's written count (tests/budget.py),
 # "full" draws them all: pytest --hypothesis-profile=full
 settings.register_profile("ci", max_examples=25)

@@ -53,6 +53,7 @@ from msdc.pipeline.progress import Progress
 from msdc.pipeline.report.transaction import output_problem, side_pattern, target
 
 if TYPE_CHECKING:  # the steps are imported where they run: msdc stats imports none of them
+    from msdc.pipeline.dataset.cluster import DaskDistributor
     from msdc.pipeline.dataset.inputs import DatasetInputs
     from msdc.pipeline.jobs.options import SelectionOptions
     from msdc.pipeline.model.report_selection import ReportSelection
@@ -290,6 +291,7 @@ def check_decoding(o: DecodingOptions) -> Checked:
         o.editions, str) else list(o.editions)  # {21: "0.26"} as asterix.read takes it, or "21=0.26"
     selection = check_report_selection(o)
     dataset = getattr(o, "dataset", None)
+    check_scheduler(o)
     if dataset is not None:
         asked = (("--edition", editions), ("--date", o.date), ("--format", o.format))
         decoding = [flag for flag, given in asked if given]
@@ -301,6 +303,53 @@ def check_decoding(o: DecodingOptions) -> Checked:
         return Checked(source.paths, _editions(editions), selection=selection, dataset=source)
     paths, warnings = _inputs(inputs)
     return Checked(paths, _editions(editions), warnings=warnings, selection=selection)
+
+
+def check_scheduler(o) -> None:
+    """--scheduler (local, none or tcp://HOST:PORT) and --workers (only for a local cluster); OptionError."""
+    from msdc.pipeline.dataset.cluster import LOCAL, scheduler_problem
+
+    scheduler, workers = getattr(o, "scheduler", None), getattr(o, "workers", None)
+    if scheduler is not None:
+        why = scheduler_problem(scheduler)
+        if why:
+            raise OptionError(f"--scheduler {scheduler!r}: {why}")
+    if workers is not None and effective_scheduler(o) != LOCAL:
+        raise OptionError(f"--workers {workers}: sizes the local Dask cluster, which runs with --dataset or "
+                          "--scheduler local (not with --scheduler "
+                          f"{effective_scheduler(o)})")
+
+
+def effective_scheduler(o) -> str:
+    """Where a job's distributable work runs: --scheduler as given, else local with --dataset, else none."""
+    from msdc.pipeline.dataset.cluster import LOCAL, NONE
+
+    given = getattr(o, "scheduler", None)
+    if given is not None:
+        return given
+    return LOCAL if getattr(o, "dataset", None) is not None else NONE
+
+
+@contextmanager
+def distributed(o, progress: Progress | None = None) -> Iterator[DaskDistributor | None]:
+    """The job's distributor installed for the block (pipeline.parallel.distributed_by), closed after it;
+    None (threads) for --scheduler none. A cluster that cannot be reached is a JobError naming it; a task
+    that failed on every try is a JobError naming its aircraft or partition."""
+    from msdc.pipeline.dataset.cluster import NONE, ClusterUnavailable, DaskDistributor, TaskFailed
+    from msdc.pipeline.parallel import distributed_by
+
+    where = effective_scheduler(o)
+    if where == NONE:
+        yield None
+        return
+    distributor = DaskDistributor(where, getattr(o, "workers", None), progress)
+    try:
+        with distributed_by(distributor):
+            yield distributor
+    except (ClusterUnavailable, TaskFailed) as exc:
+        raise JobError(str(exc)) from None
+    finally:
+        distributor.close()
 
 
 def check_dataset(root, inputs: list, selection: ReportSelection) -> DatasetInputs:

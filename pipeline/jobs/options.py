@@ -73,7 +73,7 @@ REPORT_GAP_RANGE_S = (0.1, 3600.0)
 # ~0.2-0.4 s of a core: 50 take ~10 s on two cores, the real hour's 181 aircraft ~45 s, its 728 alerts ~3 min
 FIGURES_LIMIT = 50
 FIGURES_LIMIT_RANGE = (0, 100_000)
-WORKERS_RANGE = (1, 256)  # ingest --workers: processes decoding a raw recording's chunks
+WORKERS_RANGE = (1, 256)  # --workers: ingest's decoding processes, a local Dask cluster's workers
 
 # Where an option stands in --help and in the docs table: by section, then in declaration order
 SECTIONS = ("selection", "output", "command", "tracking", "measurements", "reading")
@@ -395,6 +395,18 @@ class DatasetOptions:
         doc="read a dataset made by `msdc ingest` instead of INPUT files: only the parts its manifest lists, "
             "and only the partitions `--from`/`--to` (given as date-times) and `--sensor` can keep "
             "([Large recordings](large-recordings.md#the-jobs-on-a-dataset))")
+    scheduler: str | None = option(
+        None, "--scheduler", metavar="ADDRESS", section="selection",
+        help="where the per-aircraft and per-partition work runs: 'local' (the default with --dataset: a "
+             "Dask cluster of --workers processes on this machine), 'none' (threads in this process, the "
+             "default on recordings) or a Dask scheduler's address tcp://HOST:PORT",
+        doc="where the per-aircraft and per-partition work runs: `local` (the default with `--dataset`: a "
+            "Dask LocalCluster of `--workers` processes on this machine), `none` (threads in this process, "
+            "the default on recordings) or the address of a running Dask scheduler, `tcp://HOST:PORT` "
+            "([Large recordings](large-recordings.md#on-a-cluster))")
+    workers: int | None = option(None, "--workers", metavar="N", range=WORKERS_RANGE, section="selection",
+                                 help="worker processes of the local Dask cluster (default: the machine's "
+                                      "cores)")
 
 
 @dataclass(frozen=True)

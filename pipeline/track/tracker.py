@@ -167,7 +167,8 @@ def track(measurements: pd.DataFrame, *, step_s: float = 1.0, max_coast_s: float
     tracks, sensors, aircraft, rejected, finals, runs = [], [], [], [], {}, {}
     groups = frame.groupby("aircraft_id", sort=True, observed=True)
     outs = map_ordered(lambda item: (item[0], _track_one(str(item[0]), item[1], epoch, config, args, names,
-                                                         step_s, smooth, smoother)), groups)
+                                                         step_s, smooth, smoother)), groups,
+                       distributable=True, label=aircraft_label)
     for aircraft_id, out in outs:
         tracks.append(out.tracks)
         sensors.append(out.sensors)
@@ -204,6 +205,15 @@ def _identified(measurements: pd.DataFrame) -> tuple[pd.DataFrame, dict[str, int
                   + ", ".join(f"{k}: {v}" for k, v in unidentified.items())
                   + "; TrackResult.parameters['unidentified_reports'])", UserWarning, stacklevel=3)
     return measurements.loc[~missing], unidentified
+
+
+def aircraft_label(item: tuple) -> str:
+    """An aircraft's task named for progress and failure messages: its identity and first report's place."""
+    aircraft_id, group = item
+    where = ""
+    if len(group) and "file" in group and "offset" in group:
+        where = f" (from {group['file'].iloc[0]} offset {group['offset'].iloc[0]})"
+    return f"aircraft {aircraft_id}{where}"
 
 
 def usable_rows(frame: pd.DataFrame) -> np.ndarray:

@@ -48,9 +48,10 @@ def _json(tmp_path: Path, name: str, args: list[str]) -> dict:
     return _without_volatile(json.loads(out.read_text()))
 
 
-def _file_and_dataset(tmp_path, dataset, command: list[str]) -> tuple[dict, dict]:
+def _file_and_dataset(tmp_path, dataset, command: list[str], scheduler: str) -> tuple[dict, dict]:
     files = _json(tmp_path, "files", [command[0], str(RADAR), str(ADSB), "--date", DAY, *command[1:]])
-    on_dataset = _json(tmp_path, "dataset", [command[0], "--dataset", str(dataset), *command[1:]])
+    on_dataset = _json(tmp_path, "dataset", [command[0], "--dataset", str(dataset), *command[1:],
+                                             "--scheduler", scheduler])
     return files, on_dataset
 
 
@@ -59,9 +60,15 @@ def _file_and_dataset(tmp_path, dataset, command: list[str]) -> tuple[dict, dict
     ["track", "--sensors", str(SENSORS), "--all"],
     ["evaluate", "--sensors", str(SENSORS), "--preset", "eurocontrol-1997-ssr"],
 ], ids=["quality", "track", "evaluate"])
-def test_dataset_gives_the_recordings_results(tmp_path, dataset, command):
-    files, on_dataset = _file_and_dataset(tmp_path, dataset, command)
+def test_dataset_gives_the_recordings_results(tmp_path, dataset, command, dask_scheduler, capsys):
+    """On the dataset the per-aircraft work runs as tasks on a 2-process Dask cluster; the recordings run
+    it on threads in the test's process: the results are equal exactly (each aircraft's own work, combined
+    in the same order)."""
+    files, on_dataset = _file_and_dataset(tmp_path, dataset, command, dask_scheduler)
     assert on_dataset == files  # exactly: the same records in the same order give the same sums
+    err = capsys.readouterr().err
+    if command[0] != "quality":  # quality's reference interpolation is no per-aircraft task
+        assert f"task(s) on the Dask scheduler at {dask_scheduler}, none failed" in err
 
 
 def _corrupt(root: Path, category: int) -> Path:

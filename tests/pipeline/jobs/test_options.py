@@ -36,7 +36,8 @@ READING = {"--edition": "editions", "--date": "date", "--format": "format", "--f
            "--to": "to_time", "--area": "area", "--fl": "fl", "--sensor": "sensor_ids"}
 SELECTION = {"--sensors": "sensors", "--callsign": "callsign", "--address": "address",
              "--all": "all_aircraft"}
-DATASET = {"--dataset": "dataset"}  # the commands that read a dataset instead of INPUT files
+# the commands that read a dataset instead of INPUT files, and run their work on a Dask cluster
+DATASET = {"--dataset": "dataset", "--scheduler": "scheduler", "--workers": "workers"}
 TRACKING = {"--figures": "figures", "--figures-limit": "figures_limit", "--figures-only": "figures_only",
             "--step": "step_s", "--max-coast": "max_coast_s", "--tpm": "tpm",
             "--sources": "sources", "--noise": "noise"}

@@ -1,0 +1,149 @@
+"""Dask's distributed scheduler as the engine of the jobs' per-aircraft and per-partition work: a LocalCluster
+of worker processes on this machine, or an existing cluster by its scheduler's address. The cluster starts
+on the first task (a job with nothing to distribute starts none); tasks are submitted a few per worker
+ahead of the results, which come back in the items' order, so results equal a one-process run's."""
+
+from __future__ import annotations
+
+import logging
+import os
+import re
+import time
+from collections import deque
+from collections.abc import Callable, Iterable, Iterator
+from dataclasses import dataclass, field
+from typing import Any, TypeVar
+
+from msdc.pipeline.progress import Progress
+
+T = TypeVar("T")
+R = TypeVar("R")
+
+LOCAL = "local"  # --scheduler local: a LocalCluster of --workers processes
+NONE = "none"  # --scheduler none: threads in this process, as without --dataset
+RETRIES = 2  # a failed task is tried this many times more before the run reports it
+AHEAD_PER_WORKER = 4  # tasks submitted ahead of the results, per worker: bounds what waits in memory
+CONNECT_TIMEOUT_S = 10.0
+_ADDRESS = re.compile(r"^(tcp|tls)://[^\s:/]+:\d{1,5}$")
+
+
+class TaskFailed(RuntimeError):
+    """A task failed on every try: the message names the task (its aircraft or partition, input and
+    offset) and the cause."""
+
+
+class ClusterUnavailable(RuntimeError):
+    """The scheduler could not be reached or the local cluster not started: the message says which."""
+
+
+def scheduler_problem(value: str) -> str | None:
+    """Why ``value`` is not a --scheduler (None when it is one)."""
+    if value in (LOCAL, NONE) or _ADDRESS.match(value):
+        return None
+    return "expected 'local', 'none' or a scheduler address tcp://HOST:PORT"
+
+
+def machine_workers() -> int:
+    """The local cluster's default size: the CPUs this process may run on."""
+    return len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else (os.cpu_count() or 1)
+
+
+@dataclass
+class DaskDistributor:
+    """Runs tasks on a Dask cluster (pipeline.parallel.Distributor): ``address`` is LOCAL or a scheduler's
+    address; ``workers`` sizes a local cluster (None: the machine's CPUs). Counts what it ran."""
+
+    address: str = LOCAL
+    workers: int | None = None
+    progress: Progress | None = None
+    retries: int = RETRIES
+    tasks: int = 0
+    failed: list[str] = field(default_factory=list)
+    _client: Any = None
+    _cluster: Any = None
+
+    def client(self):
+        """The Dask client, the cluster started (or connected to) on first use; ClusterUnavailable if not."""
+        if self._client is not None:
+            return self._client
+        try:
+            from distributed import Client, LocalCluster
+        except ImportError:
+            raise ClusterUnavailable("--scheduler: running on a Dask cluster (the default with --dataset) "
+                                     "needs Dask's distributed package: pip install 'msdc[dataset]', or give "
+                                     "--scheduler none") from None
+        try:
+            if self.address == LOCAL:
+                self._cluster = LocalCluster(n_workers=self.workers or machine_workers(), threads_per_worker=1,
+                                             processes=True, dashboard_address=None,
+                                             silence_logs=logging.ERROR)
+                self._client = Client(self._cluster)
+            else:
+                self._client = Client(self.address, timeout=f"{CONNECT_TIMEOUT_S}s")
+        except (OSError, TimeoutError, RuntimeError) as exc:  # RuntimeError: a nanny that failed to start
+            self.close()
+            where = "the local Dask cluster" if self.address == LOCAL else f"--scheduler {self.address}"
+            raise ClusterUnavailable(f"{where}: cannot be reached or started ({exc})") from None
+        return self._client
+
+    def worker_count(self) -> int:
+        """Workers the scheduler knows now (at least 1)."""
+        return max(1, len(self.client().scheduler_info().get("workers", {})))
+
+    def map_ordered(self, fn: Callable[[T], R], items: Iterable[T],
+                    label: Callable[[T], str] | None = None) -> Iterator[R]:
+        """fn over items as tasks, the results in the items' order; TaskFailed naming the first item whose
+        task failed on every try (the tasks after it are cancelled)."""
+        client = self.client()
+        ahead = AHEAD_PER_WORKER * self.worker_count()
+        total = len(items) if hasattr(items, "__len__") else 0
+        pending: deque = deque()
+        started, done = time.monotonic(), 0
+        try:
+            for i, item in enumerate(items):
+                name = label(item) if label else f"task {i + 1}"
+                pending.append((client.submit(fn, item, pure=False, retries=self.retries), name))
+                self.tasks += 1
+                if len(pending) >= ahead:
+                    yield self._result(*pending.popleft())
+                    done += 1
+                    self._show(done, total, started)
+            while pending:
+                yield self._result(*pending.popleft())
+                done += 1
+                self._show(done, total, started)
+        finally:
+            if pending:
+                client.cancel([f for f, _ in pending])
+
+    def _result(self, future, name: str):
+        """A task's result, or TaskFailed naming it."""
+        try:
+            return future.result()
+        except Exception as exc:  # the task's own exception, re-raised here, or the worker's loss
+            self.failed.append(name)
+            raise TaskFailed(f"{name}: failed on {self.retries + 1} tries ({type(exc).__name__}: {exc})"
+                             ) from None
+
+    def _show(self, done: int, total: int, started: float) -> None:
+        if self.progress is not None and total:
+            self.progress.bar(done, total, "tasks", unit="tasks", since=started)
+
+    def summary(self) -> str | None:
+        """One line on what ran on the cluster (None when nothing did)."""
+        if not self.tasks:
+            return None
+        where = (f"a local Dask cluster of {self.workers or machine_workers()} worker process(es)"
+                 if self.address == LOCAL else f"the Dask scheduler at {self.address}")
+        failed = f", {len(self.failed)} failed: {'; '.join(self.failed)}" if self.failed else ", none failed"
+        return f"{self.tasks} task(s) on {where}{failed}"
+
+    def close(self) -> None:
+        """Close the client and a local cluster (an external cluster keeps running)."""
+        for thing in (self._client, self._cluster):
+            if thing is not None:
+                try:
+                    thing.close()
+                except Exception:  # noqa: BLE001 - closing must not hide the run's own outcome
+                    pass
+        self._client = self._cluster = None

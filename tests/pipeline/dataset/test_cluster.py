@@ -1,0 +1,129 @@
+"""The Dask engine (pipeline.dataset.cluster): results in the items' order whatever order the tasks end in,
+a failed task retried, one that fails every try named with its cause, the job's --scheduler and --workers
+checked, an unreachable scheduler said; and the progress bar's time left."""
+
+from __future__ import annotations
+
+import io
+import time
+from pathlib import Path
+
+import pytest
+
+from msdc.pipeline.dataset import cluster
+from msdc.pipeline.dataset.cluster import DaskDistributor, TaskFailed
+from msdc.pipeline.jobs.common import JobError, OptionError, check_scheduler, distributed
+from msdc.pipeline.jobs.options import TrackOptions
+from msdc.pipeline.parallel import map_ordered
+from msdc.pipeline.progress import Progress, eta_text
+
+
+def _slow_square(x: int) -> int:
+    time.sleep(0.02 * (5 - x % 5))  # the early items end last
+    return x * x
+
+
+def _flaky(item: tuple[str, int]) -> int:
+    """Fails on its first try (a file beside the test counts the tries: workers are other processes)."""
+    folder, x = item
+    tries = Path(folder) / f"tries-{x}"
+    tries.write_text(tries.read_text() + "x" if tries.exists() else "x")
+    if len(tries.read_text()) == 1:
+        raise OSError("first try fails")
+    return x
+
+
+def _always_fails(item: tuple[str, int]) -> int:
+    folder, x = item
+    tries = Path(folder) / f"tries-{x}"
+    tries.write_text(tries.read_text() + "x" if tries.exists() else "x")
+    raise ValueError(f"bad aircraft {x}")
+
+
+def test_results_come_in_the_items_order(dask_scheduler):
+    engine = DaskDistributor(dask_scheduler)
+    try:
+        assert list(engine.map_ordered(_slow_square, range(20))) == [x * x for x in range(20)]
+        assert engine.tasks == 20 and engine.failed == []
+        assert "20 task(s) on the Dask scheduler at" in engine.summary()
+    finally:
+        engine.close()
+
+
+def test_a_failed_task_is_retried(dask_scheduler, tmp_path):
+    engine = DaskDistributor(dask_scheduler)
+    try:
+        assert list(engine.map_ordered(_flaky, [(str(tmp_path), x) for x in range(3)])) == [0, 1, 2]
+    finally:
+        engine.close()
+    assert [len((tmp_path / f"tries-{x}").read_text()) for x in range(3)] == [2, 2, 2]
+
+
+def test_a_task_failing_every_try_is_named(dask_scheduler, tmp_path):
+    engine = DaskDistributor(dask_scheduler)
+    items = [(str(tmp_path), x) for x in range(3)]
+    try:
+        with pytest.raises(TaskFailed) as exc:
+            list(engine.map_ordered(_always_fails, items, label=lambda item: f"aircraft A{item[1]}"))
+    finally:
+        engine.close()
+    text = str(exc.value)
+    assert text.startswith("aircraft A0: failed on 3 tries") and "ValueError: bad aircraft 0" in text
+    assert len((tmp_path / "tries-0").read_text()) == 3  # the first try and RETRIES = 2 more
+    assert engine.failed == ["aircraft A0"]
+
+
+def test_the_job_context_installs_the_cluster_and_reports_a_failure(dask_scheduler, tmp_path):
+    options = TrackOptions(dataset=str(tmp_path), scheduler=dask_scheduler)
+    items = [(str(tmp_path), x) for x in range(2)]
+    with distributed(options) as engine:  # distributable work goes to the cluster, the rest stays here
+        assert list(map_ordered(_slow_square, range(4), distributable=True)) == [0, 1, 4, 9]
+        assert list(map_ordered(_slow_square, range(3))) == [0, 1, 4]
+        assert engine.tasks == 4
+    with pytest.raises(JobError) as exc, distributed(options):
+        list(map_ordered(_always_fails, items, distributable=True, label=lambda item: f"partition {item[1]}"))
+    assert "partition 0: failed on 3 tries" in str(exc.value)
+    with distributed(TrackOptions(scheduler="none")) as engine:  # threads, as without --dataset
+        assert engine is None and list(map_ordered(_slow_square, range(3), distributable=True)) == [0, 1, 4]
+
+
+def test_scheduler_and_workers_are_checked():
+    for good in ("local", "none", "tcp://127.0.0.1:8786", "tls://sched.example:8786"):
+        check_scheduler(TrackOptions(scheduler=good))
+    for bad in ("127.0.0.1:8786", "tcp://host", "http://127.0.0.1:8786", ""):
+        with pytest.raises(OptionError, match="--scheduler"):
+            check_scheduler(TrackOptions(scheduler=bad))
+    check_scheduler(TrackOptions(dataset="d", workers=2))  # the local cluster: the default with --dataset
+    for options in (TrackOptions(workers=2), TrackOptions(dataset="d", workers=2, scheduler="none"),
+                    TrackOptions(workers=2, scheduler="tcp://127.0.0.1:8786")):
+        with pytest.raises(OptionError, match="--workers 2: sizes the local Dask cluster"):
+            check_scheduler(options)
+
+
+def test_an_unreachable_scheduler_is_said(monkeypatch, tmp_path):
+    import socket
+
+    with socket.socket() as s:  # a loopback port nothing listens on
+        s.bind(("127.0.0.1", 0))
+        port = s.getsockname()[1]
+    monkeypatch.setattr(cluster, "CONNECT_TIMEOUT_S", 1.0)
+    options = TrackOptions(dataset=str(tmp_path), scheduler=f"tcp://127.0.0.1:{port}")
+    with pytest.raises(JobError, match=f"--scheduler tcp://127.0.0.1:{port}: cannot be reached"), \
+            distributed(options):
+        list(map_ordered(_slow_square, range(2), distributable=True))
+
+
+def test_the_bar_says_the_time_left():
+    assert [eta_text(s) for s in (0.4, 42, 425, 7380)] == ["0 s", "42 s", "7 min 05 s", "2 h 03 min"]
+
+    class Tty(io.StringIO):
+        def isatty(self) -> bool:
+            return True
+
+    out = Tty()
+    bar = Progress(out)
+    started = time.monotonic() - 10.0  # 25 tasks in 10 s: 2.5 tasks/s, 75 left: 30 s
+    bar.bar(25, 100, "tasks", unit="tasks", since=started)
+    assert "25/100, 2.5 tasks/s, ETA 30 s" in out.getvalue()
+    bar.bar(100, 100, "tasks", unit="tasks", since=started)
+    assert out.getvalue().endswith("tasks/s)\n")  # done: no time left shown
