@@ -74,9 +74,9 @@ class DaskDistributor:
                                      "--scheduler none") from None
         try:
             if self.address == LOCAL:
-                self._cluster = LocalCluster(n_workers=self.workers or machine_workers(), threads_per_worker=1,
-                                             processes=True, dashboard_address=None,
-                                             silence_logs=logging.ERROR)
+                self._cluster = LocalCluster(n_workers=self.workers or machine_workers(),
+                                             threads_per_worker=1, processes=True, host="127.0.0.1",
+                                             dashboard_address=None, silence_logs=logging.ERROR)
                 self._client = Client(self._cluster)
             else:
                 self._client = Client(self.address, timeout=f"{CONNECT_TIMEOUT_S}s")
