@@ -206,6 +206,27 @@ class StatsAccumulator:
                 other.insert(0, self._other)
             self._other = pd.concat(other).groupby("category", as_index=False)[["blocks", "bytes"]].sum()
 
+    def merge(self, other: StatsAccumulator) -> None:
+        """Fold in another accumulator's records (a dataset partition's: pipeline.dataset.partition_stats);
+        its block counts are added as they are (a caller whose parts may share a block sets ``blocks``)."""
+        self.categories |= other.categories
+        for level, new in other._spans.items():
+            old = self._spans.get(level)
+            self._spans[level] = new if old is None else _fold(pd.concat([old, new], ignore_index=True),
+                                                               _LEVELS[level])
+        for key, seen in other._distinct.items():
+            prev = self._distinct.get(key)
+            self._distinct[key] = seen if prev is None else pd.concat(
+                [prev, seen], ignore_index=True).drop_duplicates(ignore_index=True)
+        for cat, n in other._blocks.items():
+            self._blocks[cat] = self._blocks.get(cat, 0) + n
+        for cat, names in other._identity.items():
+            self._identity.setdefault(cat, set()).update(names)
+
+    def set_blocks(self, blocks: dict[int, int]) -> None:
+        """The data blocks per category, counted by the caller (distinct over a dataset's partitions)."""
+        self._blocks = dict(blocks)
+
     def _table(self, level: str) -> pd.DataFrame:
         """A level's groups in key order (missing keys last), with their distinct addresses and call signs:
         counted, or for aircraft the call signs (stripped) listed."""

@@ -10,7 +10,7 @@ import shutil
 from pathlib import Path
 
 import pytest
-from dataset_data import ADSB, DAY, FIX, RADAR
+from dataset_data import ADSB, DAY, FIX, RADAR, midnight_recording
 
 from msdc.pipeline.cli import main
 from msdc.pipeline.dataset.inputs import Pruning, open_inputs
@@ -127,6 +127,42 @@ def test_refusals(tmp_path, dataset, capsys):
     assert "no such folder" in capsys.readouterr().err
     assert main(["track", "--dataset", str(dataset), "--sensors", str(SENSORS), "--all", "--date", DAY]) == 2
     assert "with --date" in capsys.readouterr().err  # the ingest decoded it
-    assert main(["stats", "--dataset", str(dataset)]) == 2
-    assert "does not read a dataset yet" in capsys.readouterr().err
     assert main(["quality", "--sensors", str(SENSORS), "--all"]) == 2  # neither INPUT nor --dataset
+
+
+def _stats_lines(capsys, args: list[str]) -> list[str]:
+    assert main(["stats", *args]) == 0
+    out = capsys.readouterr().out.splitlines()
+    return [line for line in out if "edition auto" not in line]  # the ingest chose it, and said so
+
+
+@pytest.mark.parametrize("selection", [[], ["--sensor", f"{TRUTH['adsb']['sac']}/{TRUTH['adsb']['sic']}",
+                                            "--from", f"{DAY}T08:10:00", "--to", f"{DAY}T08:40:00"]],
+                         ids=["all", "selected"])
+def test_stats_on_a_dataset_are_the_recordings(dataset, capsys, dask_scheduler, selection):
+    """Each partition's stats a task on the cluster, folded per input: the tables printed are the
+    recordings' (records, blocks, spans, distinct addresses and call signs per sensor and aircraft)."""
+    files = _stats_lines(capsys, [str(RADAR), str(ADSB), "--date", DAY, *selection])
+    on_dataset = _stats_lines(capsys, ["--dataset", str(dataset), "--scheduler", dask_scheduler, *selection])
+    if selection:  # the radar's partition is never read: its records are not counted as left out
+        import re
+
+        said = [re.search(r"(\d+) of (\d+) records kept", lines[0]).groups() for lines in (files, on_dataset)]
+        radar = re.search(r"(\d+) by sensor", files[0]).group(1)
+        assert said[1] == (said[0][0], str(int(said[0][1]) - int(radar)))
+        files, on_dataset = files[1:], on_dataset[1:]
+    assert on_dataset == files and len(files) > 5  # tables, not a message
+
+
+def test_stats_count_a_block_split_at_midnight_once(tmp_path, capsys):
+    """Blocks of 5 plots 4 s apart across midnight: the block holding midnight is split over two day
+    partitions; the dataset's block counts are the recording's (each block once)."""
+    rec = tmp_path / "midnight.ast"
+    midnight_recording(rec, n=600 * 5 + 100)  # plot 3000 of radar 20/129 at 00:00:00, inside a block
+    root = tmp_path / "data"
+    assert main(["ingest", str(rec), "--dataset", str(root), "--date", DAY]) == 0
+    capsys.readouterr()
+    days = sorted(p.name for p in root.glob("date=*"))
+    assert len(days) == 2  # both days hold parts
+    files = _stats_lines(capsys, [str(rec), "--date", DAY])
+    assert _stats_lines(capsys, ["--dataset", str(root), "--scheduler", "none"]) == files
