@@ -224,14 +224,24 @@ def _needing_fallback(own: pd.DataFrame, independent: pd.DataFrame, epoch: pd.Ti
 
 def _reference(meas: pd.DataFrame, builders: np.ndarray, sensor_id: str | None, gates: Gates,
                epoch: pd.Timestamp | None, step_s: float, max_coast_s: float, fallback: bool,
-               max_gap_s: float) -> BuiltReference:
+               max_gap_s: float, cache: dict | None = None) -> BuiltReference:
     """The reference from the gated reports the mask ``builders`` selects (a mask over ``meas``), with the
-    sensor's own track where no builder covers an aircraft when ``fallback``."""
+    sensor's own track where no builder covers an aircraft when ``fallback``. ``cache`` (one per ``meas``)
+    keeps the latest reconstruction by the sensors that built it: the ADS-B reference of ten radars in a
+    row is built once."""
     epoch = _epoch(meas, epoch)
     notes = _shared_navigation(meas, builders, sensor_id)
-    gated, counts = gate_reports(meas[builders], gates)
-    built = (reconstruct(gated, epoch, step_s=step_s, max_coast_s=max_coast_s) if epoch is not None
-             else _empty())
+    key = (frozenset(meas.loc[builders, "sensor_id"].astype(str).unique()), repr(gates), epoch, step_s,
+           max_coast_s)
+    if cache is not None and key in cache:
+        built, counts = cache[key]
+    else:
+        gated, counts = gate_reports(meas[builders], gates)
+        built = (reconstruct(gated, epoch, step_s=step_s, max_coast_s=max_coast_s) if epoch is not None
+                 else _empty())
+        if cache is not None:  # the latest only: leave-one-out never builds the same twice
+            cache.clear()
+            cache[key] = (built, counts)
     frames = [built]
     if fallback and sensor_id is not None and epoch is not None:
         own_reports = meas[(meas["sensor_id"].astype(str) == sensor_id).to_numpy(bool)]
@@ -276,8 +286,8 @@ def _check_sensor(meas: pd.DataFrame, sensor_id: str) -> None:
 
 def leave_one_out(meas: pd.DataFrame, sensor_id: str, *, gates: Gates | None = None,
                   epoch: pd.Timestamp | None = None, step_s: float = 1.0, max_coast_s: float = 60.0,
-                  fallback: bool = True, max_gap_s: float = 30.0, require_present: bool = True
-                  ) -> BuiltReference:
+                  fallback: bool = True, max_gap_s: float = 30.0, require_present: bool = True,
+                  cache: dict | None = None) -> BuiltReference:
     """The reference for ``sensor_id``: per aircraft, the smoothed IMM track of every other sensor's
     reports (the ADS-B ones after the gates); where none covers an aircraft (no independent sample within
     max_gap_s), the sensor's own smoothed track, flagged ``self_reference`` (``fallback``). A sensor absent
@@ -286,12 +296,13 @@ def leave_one_out(meas: pd.DataFrame, sensor_id: str, *, gates: Gates | None = N
         _check_sensor(meas, sensor_id)
     builders = (meas["sensor_id"].astype(str) != sensor_id).to_numpy(bool)
     return _reference(meas, builders, sensor_id, gates or Gates(), epoch, step_s, max_coast_s, fallback,
-                      max_gap_s)
+                      max_gap_s, cache)
 
 
 def adsb_reference(meas: pd.DataFrame, sensor_id: str | None = None, *, gates: Gates | None = None,
                    epoch: pd.Timestamp | None = None, step_s: float = 1.0, max_coast_s: float = 60.0,
-                   fallback: bool = True, max_gap_s: float = 30.0) -> BuiltReference:
+                   fallback: bool = True, max_gap_s: float = 30.0, cache: dict | None = None
+                   ) -> BuiltReference:
     """The reference from the ADS-B reports alone, after the gates, tracked and smoothed; an ADS-B sensor
     under test is left out of it. With ``sensor_id`` and ``fallback``, aircraft no ADS-B report covers get
     the sensor's own track, flagged ``self_reference``."""
@@ -300,4 +311,4 @@ def adsb_reference(meas: pd.DataFrame, sensor_id: str | None = None, *, gates: G
     builders = ((meas["sensor_kind"] == "adsb").to_numpy(bool)
                 & (meas["sensor_id"].astype(str) != (sensor_id or "")).to_numpy(bool))
     return _reference(meas, builders, sensor_id, gates or Gates(), epoch, step_s, max_coast_s, fallback,
-                      max_gap_s)
+                      max_gap_s, cache)

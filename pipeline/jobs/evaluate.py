@@ -204,7 +204,7 @@ def _entry(sensors: pd.DataFrame, sensor_id: str) -> dict | None:
 
 
 def _reference(options: EvaluateOptions, builders: pd.DataFrame, sensor_id: str, gates, epoch,
-               external: pd.DataFrame | None):
+               external: pd.DataFrame | None, cache: dict | None = None):
     """The reference for one sensor under test: external, ADS-B only or leave-one-out."""
     from msdc.pipeline.evaluate.build_reference import BuiltReference, adsb_reference, leave_one_out
 
@@ -213,9 +213,9 @@ def _reference(options: EvaluateOptions, builders: pd.DataFrame, sensor_id: str,
     present = sensor_id in set(builders["sensor_id"].astype(str))
     if options.reference == "adsb":
         return adsb_reference(builders, sensor_id if present else None, gates=gates, epoch=epoch,
-                              max_coast_s=options.max_coast_s)
+                              max_coast_s=options.max_coast_s, cache=cache)
     return leave_one_out(builders, sensor_id, gates=gates, epoch=epoch, max_coast_s=options.max_coast_s,
-                         require_present=False)
+                         require_present=False, cache=cache)
 
 
 def _per_aircraft(sensor_id: str, reports: pd.DataFrame, reference: pd.DataFrame, pd_outcome,
@@ -297,8 +297,8 @@ def _coverage(reports: pd.DataFrame, reference: pd.DataFrame, sensor, preset) ->
     return detection_bands(table, reference), polar_grid(table), vertical_grid(table)
 
 
-def _sensor(options, checked, loaded, meas, builders, sensor_id, kind, gates, epoch, external, monitors
-            ) -> SensorResult:
+def _sensor(options, checked, loaded, meas, builders, sensor_id, kind, gates, epoch, external, monitors,
+            cache: dict | None = None) -> SensorResult:
     """Everything about one sensor under test."""
     from msdc.pipeline.evaluate.accuracy import errors_by_range
     from msdc.pipeline.evaluate.scorecard import score_sensor
@@ -311,7 +311,7 @@ def _sensor(options, checked, loaded, meas, builders, sensor_id, kind, gates, ep
     )
     from msdc.pipeline.model.report_selection import sensor_parts
 
-    built = _reference(options, builders, sensor_id, gates, epoch, external)
+    built = _reference(options, builders, sensor_id, gates, epoch, external, cache)
     reference = built.frame.assign(field_monitor=built.frame["aircraft"].astype(str).isin(monitors))
     radar = loaded.frames.get(48) if kind == "radar" else None
     if kind == "tracker":
@@ -387,12 +387,12 @@ def evaluate_job(options: EvaluateOptions, *, progress: Progress | None = None,
                          "judged in their own rows, left out of the others")
         gates = Gates(min_nacp=options.min_nacp, min_nic=options.min_nic, min_sil=options.min_sil,
                       drop_jumps=options.drop_jumps)
-        results = []
+        results, cache = [], {}  # the latest reference, reused by the next sensor built from the same
         for i, (sensor_id, kind) in enumerate(tests):
             if progress:
                 progress.step(f"{sensor_id} ({i + 1}/{len(tests)})")
             results.append(_sensor(options, checked, loaded, meas, builders, sensor_id, kind, gates, epoch,
-                                   external, monitors))
+                                   external, monitors, cache))
         loaded.drop_frames()
         card, tables, points = _assemble(results)
         params = {**run_parameters(options, loaded, started, command), "preset": checked.preset.name,

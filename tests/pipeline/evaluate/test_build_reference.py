@@ -308,3 +308,23 @@ def test_the_reference_level_between_updates_is_interpolated_not_predicted():
                            "flight_level": [240.0, 239.0, 238.0, 220.0, 219.9]})
     updated = pd.Series([True, False, False, True, True])
     np.testing.assert_allclose(_level_between_updates(tracks, updated), [240.0, 235.0, 230.0, 220.0, 219.9])
+
+
+def test_the_adsb_reference_of_two_radars_is_built_once(two_radars, monkeypatch):
+    """Radars A and B judged against ADS-B in a row: the second reuses the first's reconstruction (one
+    tracking run instead of two), and gets the reference it would build alone; leave-one-out builds anew."""
+    from msdc.pipeline.evaluate import build_reference
+
+    _, meas = two_radars
+    alone = adsb_reference(meas, RADAR_B, epoch=EPOCH, fallback=False).frame
+    calls = []
+    real = build_reference.reconstruct
+    monkeypatch.setattr(build_reference, "reconstruct", lambda *a, **k: calls.append(1) or real(*a, **k))
+    cache: dict = {}
+    adsb_reference(meas, RADAR_A, epoch=EPOCH, fallback=False, cache=cache)
+    reused = adsb_reference(meas, RADAR_B, epoch=EPOCH, fallback=False, cache=cache).frame
+    assert len(calls) == 1
+    pd.testing.assert_frame_equal(reused, alone)
+    leave_one_out(meas, RADAR_A, epoch=EPOCH, fallback=False, cache=cache)
+    leave_one_out(meas, RADAR_B, epoch=EPOCH, fallback=False, cache=cache)  # other builders: built again
+    assert len(calls) == 3
