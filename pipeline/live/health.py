@@ -215,8 +215,8 @@ def _feeds_of(sensor_id: str, rows: pd.DataFrame, counters: dict) -> list[str]:
 
 
 def sensor_figures(sensor_id: str, rows: pd.DataFrame, window: pd.DataFrame, counters: dict,
-                   status_times: dict, now_wall_s: float, rate_window_s: float, last_heard_wall_s: float | None,
-                   thresholds: Thresholds) -> tuple[dict, list[dict]]:
+                   status_times: dict, now_wall_s: float, rate_window_s: float,
+                   last_heard_wall_s: float | None, thresholds: Thresholds) -> tuple[dict, list[dict]]:
     """One sensor's panel and alarms. ``rows``: its reports over the lookback, ``window``: those of the
     window; ``last_heard_wall_s``: when it was last heard (None: not in the lookback nor remembered)."""
     feeds = _feeds_of(sensor_id, rows, counters)
@@ -320,7 +320,8 @@ def targets(window: pd.DataFrame, now_wall_s: float, periods_s: dict[str, float]
 
 
 def snapshot(frame: pd.DataFrame, counters: dict, status_times: dict, now_wall_s: float,
-             started_wall_s: float, thresholds: Thresholds, memory: Memory | None = None) -> tuple[dict, Memory]:
+             started_wall_s: float, thresholds: Thresholds,
+             memory: Memory | None = None) -> tuple[dict, Memory]:
     """The monitor's JSON snapshot (schema in docs/guide/live-monitor.md) and the memory for the next one.
     ``frame``: state.recent(lookback_s(thresholds)); ``counters``, ``status_times``: the state's."""
     memory = memory or Memory()
@@ -355,8 +356,8 @@ def snapshot(frame: pd.DataFrame, counters: dict, status_times: dict, now_wall_s
         samples[f] = [*kept, (now_wall_s, counter)]
     shown = targets(frame.loc[in_window] if len(frame) else frame, now_wall_s, periods)
     ends = np.array([t["trail"][-1] for t in shown], float).reshape(-1, 2)
-    centre = ({"latitude": round(float(ends[:, 0].mean()), 5), "longitude": round(float(ends[:, 1].mean()), 5)}
-              if len(ends) else None)
+    centre = ({"latitude": round(float(ends[:, 0].mean()), 5),
+               "longitude": round(float(ends[:, 1].mean()), 5)} if len(ends) else None)
     snap = {"schema": SCHEMA, "now_wall_s": now_wall_s, "started_wall_s": started_wall_s,
             "uptime_s": max(0.0, now_wall_s - started_wall_s), "thresholds": thresholds.as_dict(),
             "alarms": alarms, "sensors": sensors, "feeds": feeds, "centre": centre, "targets": shown}

@@ -11,7 +11,6 @@ import pytest
 from scipy.stats import beta
 
 from msdc.pipeline.live.health import (
-    Memory,
     judged,
     live_pd,
     live_validity,
@@ -140,7 +139,8 @@ def test_a_sensor_gone_from_the_window_is_silent_and_remembered() -> None:
     assert _sensor(later, "048:25/201")["last_report_age_s"] == pytest.approx(65.0)
     assert [a["kind"] for a in later["alarms"]] == ["silent"]
     # never in a window the monitor saw, only in the counters: silent for longer than the lookback
-    unseen, _ = snapshot(reports("048:25/201", 1, [])[:0], _counters({"048:25/201": 1}), {}, NOW, NOW - 1e3, th)
+    unseen, _ = snapshot(reports("048:25/201", 1, [])[:0], _counters({"048:25/201": 1}), {}, NOW, NOW - 1e3,
+                         th)
     assert _sensor(unseen, "048:25/201")["last_report_age_s"] is None
     assert "no report in the last 20 s" in unseen["alarms"][0]["message"]
 
@@ -148,7 +148,8 @@ def test_a_sensor_gone_from_the_window_is_silent_and_remembered() -> None:
 def test_report_rate_status_age_and_degraded_alarm() -> None:
     th = Thresholds(window_s=120.0, min_pd=0.97)
     window = two_tracks_with_misses()  # 16 reports, the last one 60 - 36 = 24 s ago
-    snap, _ = snapshot(window, _counters({"048:25/201": 500}), {"048:25/201": NOW - 2.5}, NOW, NOW - 300.0, th)
+    snap, _ = snapshot(window, _counters({"048:25/201": 500}), {"048:25/201": NOW - 2.5}, NOW, NOW - 300.0,
+                       th)
     s = _sensor(snap, "048:25/201")
     assert s["reports_per_s"] == pytest.approx(16 / 120.0)
     assert s["reports_in_window"] == 16 and s["records_total"] == 500
