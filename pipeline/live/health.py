@@ -11,7 +11,7 @@ sample is too small is withheld (``value`` None and a ``note`` saying why), neve
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 import pandas as pd
@@ -128,7 +128,10 @@ def live_pd(rows: pd.DataFrame, sensor_id: str, window_s: float) -> Outcome:
                                                                                                 sensor_id))
     if outcome.n < MIN_UPDATES:
         return withheld("pd", f"{int(outcome.n)} expected updates in the window (fewer than {MIN_UPDATES})")
-    return outcome
+    tracks = int(rep["ref_index"].nunique())
+    return replace(outcome, notes=(f"update period {period:.4g} s measured on the window's {tracks} tracks; "
+                                   "misses before a track's first or after its last report in the window "
+                                   "are not counted",))
 
 
 def _validity_frame(rep: pd.DataFrame, code: str, v_col: str, valid_col: str) -> pd.DataFrame | None:
