@@ -1,15 +1,19 @@
-"""A stand-in for msdc.pipeline.live.state.LiveState (the protocol of issue #30's live interface) that replays
-a recording's measurement rows against the wall clock, accelerated: a row of report time t is "received" at
-start + (t - t0) / speed. One sensor can be silenced from a given moment, as if its feed stopped."""
+"""For the live monitor's tests: a stand-in for msdc.pipeline.live.state.LiveState (the protocol of issue
+#30's live interface) that replays a recording's measurement rows against the wall clock, accelerated: a row
+of report time t is "received" at start + (t - t0) / speed. One sensor can be silenced from a given moment,
+as if its feed stopped. And the monitor run on a free loopback port in a thread."""
 
 from __future__ import annotations
 
+import contextlib
 import threading
 import time
 from pathlib import Path
 
 import numpy as np
 import pandas as pd
+
+from msdc.pipeline.live.monitor import Thresholds, serve
 
 ROOT = Path(__file__).resolve().parents[1]
 FEED = "udp:239.1.2.3:8600"
@@ -39,7 +43,8 @@ def fixture_measurements() -> pd.DataFrame:
 class ReplayState:
     """The LiveState protocol over a measurement frame replayed at ``speed`` times real time from now."""
 
-    def __init__(self, frame: pd.DataFrame, speed: float, feed: str = FEED, start_wall_s: float | None = None):
+    def __init__(self, frame: pd.DataFrame, speed: float, feed: str = FEED,
+                 start_wall_s: float | None = None) -> None:
         self._lock = threading.Lock()
         self._started = time.time() if start_wall_s is None else start_wall_s
         t = frame["time"].to_numpy("datetime64[ns]").astype("int64") / 1e9
@@ -81,3 +86,33 @@ class ReplayState:
 
     def started_wall_s(self) -> float:
         return self._started
+
+
+@contextlib.contextmanager
+def running(state, thresholds: Thresholds, timeout_s: float = 10.0):
+    """msdc's live monitor serving ``state`` on 127.0.0.1 (a free port): yields its address, its thread and
+    its stop event."""
+    stop = threading.Event()
+    ready: list[str] = []
+    got = threading.Event()
+    failed: list[BaseException] = []
+
+    def run() -> None:
+        try:
+            serve(state, "127.0.0.1", 0, thresholds, stop,
+                  on_ready=lambda url: (ready.append(url), got.set()))
+        except BaseException as exc:  # reported by the test, not lost in the thread
+            failed.append(exc)
+            got.set()
+
+    thread = threading.Thread(target=run, name="monitor-under-test", daemon=True)
+    thread.start()
+    assert got.wait(timeout_s), "the monitor did not start listening"
+    assert not failed, failed
+    try:
+        yield ready[0], thread, stop
+    finally:
+        stop.set()
+        thread.join(timeout_s)
+    assert not thread.is_alive(), "the monitor did not stop"
+    assert not failed, failed

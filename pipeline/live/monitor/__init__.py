@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import math
 import threading
+from collections.abc import Callable
 from dataclasses import dataclass, field, fields
 
 
@@ -47,9 +48,12 @@ class Thresholds:
         return {f.name: float(getattr(self, f.name)) for f in fields(self)}
 
 
-def serve(state, host: str, port: int, thresholds: Thresholds, stop: threading.Event) -> None:
+def serve(state, host: str, port: int, thresholds: Thresholds, stop: threading.Event, *,
+          on_ready: Callable[[str], None] | None = None) -> None:
     """Run the monitor's web server (blocking) until ``stop`` is set: the page and its scripts served by msdc,
-    a JSON snapshot pushed once a second over server-sent events (msdc.pipeline.live.monitor.server)."""
+    a JSON snapshot pushed once a second over server-sent events (msdc.pipeline.live.monitor.server).
+    ``on_ready`` receives the page's address once it listens (port 0: a free port); ServeError (an OSError)
+    when it cannot listen, saying on what and why."""
     from msdc.pipeline.live.monitor.server import serve as _serve
 
-    _serve(state, host, port, thresholds, stop)
+    _serve(state, host, port, thresholds, stop, on_ready=on_ready)
