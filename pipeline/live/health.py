@@ -58,18 +58,19 @@ def report_times_s(frame: pd.DataFrame) -> np.ndarray:
 
 
 def track_keys(frame: pd.DataFrame) -> np.ndarray:
-    """Per report, the track it belongs to within its sensor: "T<n>" from its track number, else "A:<id>"
-    from its aircraft identity, else None (a plot that cannot be followed)."""
+    """Per report, the target it belongs to within its sensor: "A:<id>" from its aircraft identity (the
+    Mode S address where it has one), else "T<n>" from the sensor's track number, else None (a plot that
+    cannot be followed)."""
     n = len(frame)
     out = np.full(n, None, dtype=object)
-    if "aircraft_id" in frame.columns:
-        ac = frame["aircraft_id"].astype("string")
-        ok = ac.notna().to_numpy()
-        out[ok] = ("A:" + ac[ok]).to_numpy(object)
     if "track_number" in frame.columns:
         tn = pd.to_numeric(frame["track_number"], errors="coerce")
         ok = tn.notna().to_numpy()
         out[ok] = ["T" + str(int(v)) for v in tn[ok]]
+    if "aircraft_id" in frame.columns:
+        ac = frame["aircraft_id"].astype("string")
+        ok = ac.notna().to_numpy()
+        out[ok] = ("A:" + ac[ok]).to_numpy(object)
     return out
 
 
@@ -283,10 +284,21 @@ def feed_figures(feed: str, counter: dict, samples: list[tuple[float, dict]], no
     return panel, warnings
 
 
-def targets(window: pd.DataFrame, now_wall_s: float, periods_s: dict[str, float]) -> list[dict]:
+def arrival_period_s(wall_s: np.ndarray, key: np.ndarray) -> float:
+    """The median interval between successive arrivals of a target's reports (any length: a replay may be
+    faster than real time), NaN with fewer than MIN_DIFFS intervals."""
+    order = np.lexsort((wall_s, key))
+    t, k = wall_s[order], key[order]
+    d = np.diff(t)[k[1:] == k[:-1]]
+    d = d[d > 0]
+    return float(np.median(d)) if d.size >= MIN_DIFFS else math.nan
+
+
+def targets(window: pd.DataFrame, now_wall_s: float) -> list[dict]:
     """The targets of the window for the map: per sensor and track, its trail (latest TRAIL_POINTS
     positions, oldest first, as [latitude, longitude]), its latest call sign, Mode 3/A and flight level,
-    its age and whether it is stale (not updated for STALE_PERIODS update periods)."""
+    its age and whether it is stale (not updated for STALE_PERIODS of its sensor's update periods, measured
+    on arrival times: a replay faster than real time updates faster)."""
     if not len(window):
         return []
     key = track_keys(window)
@@ -298,6 +310,8 @@ def targets(window: pd.DataFrame, now_wall_s: float, periods_s: dict[str, float]
     w["key"], w["lat"], w["lon"] = key[ok], lat[ok], lon[ok]
     w["sensor_id"] = w["sensor_id"].astype(str)
     w = w.sort_values("wall_s", kind="stable")
+    periods_s = {s: arrival_period_s(g["wall_s"].to_numpy(float), g["key"].to_numpy(object).astype(str))
+                 for s, g in w.groupby("sensor_id", sort=False, observed=True)}
     out = []
     for (sid, k), g in w.groupby(["sensor_id", "key"], sort=False, observed=True):
         last = g.iloc[-1]
@@ -340,13 +354,12 @@ def snapshot(frame: pd.DataFrame, counters: dict, status_times: dict, now_wall_s
         sid, in_window = np.zeros(0, object), np.zeros(0, bool)
     known = set(last_heard) | {s for c in counters.values() for s in (c.get("records") or {})}
     rate_window = min(thresholds.window_s, now_wall_s - started_wall_s)
-    sensors, alarms, periods = [], [], {}
+    sensors, alarms = [], []
     for s in sorted(known):
         rows = frame.loc[sid == s] if len(frame) else frame
         window = frame.loc[(sid == s) & in_window] if len(frame) else frame
         panel, raised = sensor_figures(s, rows, window, counters, status_times, now_wall_s, rate_window,
                                        last_heard.get(s), thresholds)
-        periods[s] = panel["update_interval_s"] if panel["update_interval_s"] is not None else math.nan
         sensors.append(panel)
         alarms += raised
     feeds, samples = [], {}
@@ -357,7 +370,7 @@ def snapshot(frame: pd.DataFrame, counters: dict, status_times: dict, now_wall_s
         feeds.append(panel)
         alarms += warned
         samples[f] = [*kept, (now_wall_s, counter)]
-    shown = targets(frame.loc[in_window] if len(frame) else frame, now_wall_s, periods)
+    shown = targets(frame.loc[in_window] if len(frame) else frame, now_wall_s)
     ends = np.array([t["trail"][-1] for t in shown], float).reshape(-1, 2)
     centre = ({"latitude": round(float(ends[:, 0].mean()), 5),
                "longitude": round(float(ends[:, 1].mean()), 5)} if len(ends) else None)

@@ -179,13 +179,19 @@ def test_targets_trails_labels_and_staleness() -> None:
     window = pd.concat([reports("048:25/201", 101, [0, 1, 2], wall0=NOW - 8.0),
                         reports("048:25/201", 102, [0], wall0=NOW - 20.0)], ignore_index=True)
     window.loc[2, "callsign"] = None  # the latest report of 101 without a call sign: the last known is kept
-    shown = targets(window, NOW, {"048:25/201": 4.0})
+    window["aircraft_id"] = None  # followed by their track numbers
+    shown = targets(window, NOW)
     assert [t["id"] for t in shown] == ["048:25/201|T101", "048:25/201|T102"]  # most recent first
     first = shown[0]
     assert first["trail"] == [[2.7, 101.7 + 10.1], [2.71, 101.7 + 10.1], [2.72, 101.7 + 10.1]]
     assert (first["callsign"], first["mode3a"], first["flight_level"]) == ("MAS101", "1234", 102.0)
     assert first["age_s"] == pytest.approx(0.0) and not first["stale"]
-    assert shown[1]["age_s"] == pytest.approx(20.0) and shown[1]["stale"]  # 20 s > 3 scans of 4 s
+    # the arrival period is not measurable on 3 reports: stale after 15 s
+    assert shown[1]["age_s"] == pytest.approx(20.0) and shown[1]["stale"]
+    # one track of 12 arrivals 4 s apart: stale once over 3 x 4 s
+    long = reports("048:25/201", 7, list(range(12)), wall0=NOW - 44.0 - 12.5)
+    assert targets(long, NOW)[0]["stale"] and not targets(long, NOW - 1.0)[0]["stale"]
+    assert targets(long, NOW)[0]["id"] == "048:25/201|A:AC7"  # the aircraft identity first
 
 
 @pytest.mark.parametrize("field, value", [("min_pd", 1.5), ("silent_s", 0.0), ("window_s", float("nan"))])

@@ -79,8 +79,9 @@
     $("feeds").tBodies[0].replaceChildren(...feeds.map((f) => {
       const tr = el("tr", null, {"data-feed": f.feed});
       tr.append(el("td", f.feed), el("td", num(f.packets_per_s, 1)), el("td", String(f.packets)),
-                el("td", `${f.decode_errors} (${f.decode_errors_in_window} in window)`),
-                el("td", String(f.unframed)), el("td", String(f.dropped)), el("td", age(f.last_packet_age_s)));
+                el("td", `${f.decode_errors} (+${f.decode_errors_in_window})`,
+                        {title: "since start (in the window)"}),
+                el("td", String(f.unframed)), el("td", String(f.dropped)), el("td", num(f.last_packet_age_s, 1, " s"), {title: "since the last packet"}));
       return tr;
     }));
   };
@@ -123,12 +124,13 @@
     const lat0 = snap.centre.latitude, lon0 = snap.centre.longitude;
     const k = Math.cos((lat0 * Math.PI) / 180);
     const nm = (p) => [((((p[1] - lon0) % 360) + 540) % 360 - 180) * 60 * k, (p[0] - lat0) * 60];
-    let extent = 1;
-    for (const t of targets) for (const p of t.trail) {
-      const [x, y] = nm(p);
+    // fitted to the targets' latest positions (a trail, or a stray position in it, may run off the map)
+    let extent = 5;
+    for (const t of targets) {
+      const [x, y] = nm(t.trail[t.trail.length - 1]);
       extent = Math.max(extent, Math.abs(x), Math.abs(y));
     }
-    extent *= 1.15;
+    extent *= 1.25;
     const scale = Math.min(w, h) / 2 / extent;
     const cx = w / 2, cy = h / 2;
     const px = (p) => { const [x, y] = nm(p); return [cx + x * scale, cy - y * scale]; };
@@ -160,8 +162,12 @@
       if (t.sensor_id.startsWith("021")) { g.beginPath(); g.arc(x, y, 3.5, 0, 2 * Math.PI); g.fill(); }
       else g.fillRect(x - 3.5, y - 3.5, 7, 7);
       const [top, bottom] = label(t);
-      g.fillText(top, x + 6, y - 2);
-      if (bottom) g.fillText(bottom, x + 6, y + 10);
+      const adsb = t.sensor_id.startsWith("021");  // ADS-B labels left of the target, the others right
+      g.textAlign = adsb ? "right" : "left";
+      const lx = adsb ? x - 6 : x + 6;
+      g.fillText(top, lx, y - 2);
+      if (bottom) g.fillText(bottom, lx, y + 10);
+      g.textAlign = "left";
       drawn += 1;
     }
     document.body.dataset.targetsDrawn = String(drawn);
