@@ -40,6 +40,23 @@ def fixture_measurements() -> pd.DataFrame:
     return frame.sort_values("time", kind="stable", ignore_index=True)
 
 
+def synthetic_measurements(duration_s: float = 600.0) -> pd.DataFrame:
+    """A small made-up recording for the server's tests (no decoding): a 4 s radar "048:25/201" and an
+    ADS-B station "021:0/1" (a report a second) seeing three aircraft flying north from 2.7 N 101.7 E."""
+    parts = []
+    for sensor, kind, period_s in (("048:25/201", "radar", 4.0), ("021:0/1", "adsb", 1.0)):
+        t = np.arange(0.0, duration_s, period_s)
+        for k in range(3):
+            parts.append(pd.DataFrame({
+                "time": pd.Timestamp("2026-11-28T12:00:00Z") + pd.to_timedelta(t + 0.3 * k, unit="s"),
+                "sensor_id": sensor, "sensor_kind": kind, "aircraft_id": f"7500{k}0",
+                "track_number": pd.array([100 + k] * t.size, "Int16"), "latitude": 2.7 + t * 1e-3,
+                "longitude": 101.7 + 0.2 * k, "flight_level": 300.0, "mode3a": f"100{k}",
+                "callsign": f"MAS{k}",
+                "mode3a_valid": pd.array([kind == "radar" or pd.NA] * t.size, "boolean")}))
+    return pd.concat(parts, ignore_index=True).sort_values("time", kind="stable", ignore_index=True)
+
+
 class ReplayState:
     """The LiveState protocol over a measurement frame replayed at ``speed`` times real time from now."""
 

@@ -39,8 +39,8 @@ def _figure(page, sensor: str, key: str) -> str:
 def test_the_monitor_page_in_chromium_offline() -> None:
     sync_playwright = _browser()
     frame = fixture_measurements()
-    # silent after 2 s: the radar's scans come every 4.8 s / 20 = 0.24 s, the ADS-B's reports faster
-    thresholds = Thresholds(silent_s=2.0, window_s=60.0)
+    # silent after 1.5 s: the radar's scans come every 4.8 s / 20 = 0.24 s, the ADS-B's reports faster
+    thresholds = Thresholds(silent_s=1.5, window_s=60.0)
     state = ReplayState(frame, speed=20.0)
     refused: list[str] = []
     messages: list[tuple[str, str]] = []
@@ -95,9 +95,9 @@ def test_the_monitor_page_in_chromium_offline() -> None:
     assert {RADAR, ADSB} <= set(listed)
     # the radar's records counter moved between two snapshots (the replay sends a scan every 0.24 s)
     assert before != after and int(after.split(" / ")[1]) > int(before.split(" / ")[1])
-    # silent 2 s after the radar's last report (at most 0.25 s before the replay stopped), seen at the next
-    # snapshot (a second later at most); the ADS-B, still replayed, not
-    assert 1.75 <= alarm_after_s < 4.5
+    # silent 1.5 s after the radar's last report (at most 0.25 s before the replay stopped), seen at the
+    # next snapshot (a second later at most); the ADS-B, still replayed, not
+    assert 1.25 <= alarm_after_s < 4.0
     assert alarms == [["silent", RADAR]]
     assert radar_pd != "–"  # the radar's live probability of update is measured on its replayed scans
     assert server_alive

@@ -12,7 +12,7 @@ import urllib.error
 import urllib.request
 
 import pytest
-from live_fake_state import ReplayState, fixture_measurements, running
+from live_fake_state import ReplayState, running, synthetic_measurements
 
 from msdc.pipeline.live.monitor import Thresholds, serve
 from msdc.pipeline.live.monitor.server import ServeError
@@ -22,7 +22,7 @@ THRESHOLDS = Thresholds(silent_s=5.0, window_s=30.0)
 
 @pytest.fixture(scope="module")
 def frame():
-    return fixture_measurements()
+    return synthetic_measurements()
 
 
 def get(url: str) -> tuple[int, dict, bytes]:
@@ -63,7 +63,8 @@ def test_the_page_and_its_files_come_from_msdc(frame) -> None:
         status, _, body = get(url + "snapshot.json")
         snap = json.loads(body)
         assert snap["schema"] == "msdc-live-monitor/1"
-        assert [s["sensor_id"] for s in snap["sensors"]] == ["021:0/1", "048:25/201"]  # fixtures' sensors
+        assert [s["sensor_id"] for s in snap["sensors"]] == ["021:0/1", "048:25/201"]  # the replayed ones
+        assert len(snap["targets"]) == 6  # three aircraft seen by both
         assert snap["thresholds"] == {"silent_s": 5.0, "min_pd": 0.97, "min_mode3a_valid": 0.98,
                                       "min_modec_valid": 0.96, "window_s": 30.0}
 
@@ -78,8 +79,12 @@ def test_dropped_streams_leave_the_server_serving(frame) -> None:
             s.sendall(b"GET /events HTTP/1.1\r\nHost: x\r\n\r\n")
             assert b"text/event-stream" in s.recv(4096)
             s.close()
-        time.sleep(1.2)
         later, snap = first_event(url)
+        for _ in range(25):  # the next snapshot (once a second)
+            if later > first:
+                break
+            time.sleep(0.2)
+            later, snap = first_event(url)
         assert later > first and thread.is_alive()  # new snapshots, pushed to a new page
         assert get(url + "snapshot.json")[0] == 200
 
