@@ -64,9 +64,9 @@ def track_keys(frame: pd.DataFrame) -> np.ndarray:
     n = len(frame)
     out = np.full(n, None, dtype=object)
     if "track_number" in frame.columns:
-        tn = pd.to_numeric(frame["track_number"], errors="coerce")
+        tn = pd.to_numeric(frame["track_number"], errors="coerce").round().astype("Int64")
         ok = tn.notna().to_numpy()
-        out[ok] = ["T" + str(int(v)) for v in tn[ok]]
+        out[ok] = ("T" + tn[ok].astype(str)).to_numpy(object)
     if "aircraft_id" in frame.columns:
         ac = frame["aircraft_id"].astype("string")
         ok = ac.notna().to_numpy()

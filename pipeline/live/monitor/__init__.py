@@ -19,19 +19,15 @@ class Thresholds:
     """When the monitor raises an alarm, and over which window it measures; each field's metadata gives its
     unit and a one-line help (the listen options take their defaults and help from here)."""
 
-    silent_s: float = _threshold(
-        30.0, "s", "a sensor with no report for this long raises 'silent' (a few scans of a 12 s radar)")
+    silent_s: float = _threshold(30.0, "s", "a sensor with no report for this long is 'silent'")
     min_pd: float = _threshold(
-        0.97, "", "live probability of update (per scan) whose 95 % interval lies wholly below this "
-        "raises 'degraded' (EUROCONTROL 1997 SSR: PD > 97 %)")
+        0.97, "", "a sensor whose live probability of update is below this (its whole 95 % interval) is "
+        "'degraded'")
     min_mode3a_valid: float = _threshold(
-        0.98, "", "share of Mode 3/A codes marked valid whose 95 % interval lies wholly below this raises "
-        "'degraded' (the Mode 3/A correct figure of the EUROCONTROL SSR preset, 98 %)")
+        0.98, "", "likewise for the share of its Mode 3/A codes marked valid")
     min_modec_valid: float = _threshold(
-        0.96, "", "share of Mode C codes marked valid whose 95 % interval lies wholly below this raises "
-        "'degraded' (the Mode C correct figure of the EUROCONTROL SSR preset, 96 %)")
-    window_s: float = _threshold(
-        120.0, "s", "sliding window of the live figures and of the map's trails")
+        0.96, "", "likewise for the share of its Mode C codes marked valid")
+    window_s: float = _threshold(120.0, "s", "the sliding window of the live figures and of the map's trails")
 
     def __post_init__(self) -> None:
         for f in fields(self):
@@ -46,6 +42,15 @@ class Thresholds:
     def as_dict(self) -> dict[str, float]:
         """The thresholds by field name (the JSON feed carries them)."""
         return {f.name: float(getattr(self, f.name)) for f in fields(self)}
+
+
+def thresholds_markdown() -> str:
+    """The thresholds as a Markdown table (docs/guide/live-monitor.md shows it; a test keeps them equal)."""
+    rows = ["| threshold | default | unit | meaning |", "|---|---|---|---|"]
+    for f in fields(Thresholds):
+        unit = f.metadata["unit"] or "share"
+        rows.append(f"| `{f.name}` | {f.default:g} | {unit} | {f.metadata['help']} |")
+    return "\n".join(rows)
 
 
 def serve(state, host: str, port: int, thresholds: Thresholds, stop: threading.Event, *,
