@@ -118,6 +118,8 @@ def update_interval_s(rows: pd.DataFrame) -> float:
 def live_pd(rows: pd.DataFrame, sensor_id: str, window_s: float) -> Outcome:
     """The probability of update over the window (the evaluation's ``pd``, scope global): every track its
     own reference, one update expected per measured update period between its first and last report."""
+    if not len(rows):
+        return withheld("pd", "no report in the window")
     rep, reference = self_reference(rows)
     if not len(rep):
         return withheld("pd", "no report with a time, a position and a track number or identity")
@@ -154,6 +156,8 @@ def live_validity(rows: pd.DataFrame, requirement: str) -> Outcome:
     """``mode3a_valid`` or ``modec_valid`` over the window (the evaluation's requirement): of the reports
     carrying the code whose validity the feed states, the share marked valid."""
     code, v_col, valid_col, _ = VALIDITY[requirement]
+    if not len(rows):
+        return withheld(requirement, "no report in the window")
     rep, reference = self_reference(rows)
     rep = _validity_frame(rep, code, v_col, valid_col) if code in rep.columns else None
     if rep is None:

@@ -142,6 +142,10 @@ def test_a_sensor_gone_from_the_window_is_silent_and_remembered() -> None:
     unseen, _ = snapshot(reports("048:25/201", 1, [])[:0], _counters({"048:25/201": 1}), {}, NOW, NOW - 1e3,
                          th)
     assert _sensor(unseen, "048:25/201")["last_report_age_s"] is None
+    # a state with nothing at all in the window (not even columns) gives the same
+    bare, _ = snapshot(pd.DataFrame(), _counters({"048:25/201": 1}), {}, NOW, NOW - 1e3, th)
+    assert bare["alarms"] == unseen["alarms"] and bare["targets"] == [] and bare["centre"] is None
+    assert _sensor(bare, "048:25/201")["pd"]["note"] == "no report in the window"
     assert "no report in the last 20 s" in unseen["alarms"][0]["message"]
 
 

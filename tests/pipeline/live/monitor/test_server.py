@@ -89,6 +89,17 @@ def test_dropped_streams_leave_the_server_serving(frame) -> None:
         assert get(url + "snapshot.json")[0] == 200
 
 
+def test_stop_ends_the_server_with_a_page_still_listening(frame) -> None:
+    state = ReplayState(frame, speed=20.0, start_wall_s=time.time() - 10.0)
+    with running(state, THRESHOLDS) as (url, thread, stop):
+        stream = urllib.request.urlopen(url + "events", timeout=5)
+        assert stream.readline().startswith(b"retry:")
+        stop.set()
+        thread.join(5.0)
+        assert not thread.is_alive()  # the open stream ended with the server
+        stream.close()
+
+
 class BrokenState(ReplayState):
     def recent(self, window_s: float):
         raise RuntimeError("the state broke")
