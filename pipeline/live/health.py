@@ -31,6 +31,9 @@ STALE_PERIODS = 3.0  # a target not updated for this many update periods is draw
 DEFAULT_STALE_S = 15.0  # ... or for this long when its sensor's update period is not known
 TRAIL_POINTS = 60  # the most positions kept per target trail (the latest ones)
 MAX_TARGETS = 3000  # the most targets sent to the page (the most recently updated ones)
+# categories of status messages (north markers, sector crossings, service status): their senders are not
+# sensors of target reports, their times come through status_times
+STATUS_CATEGORIES = frozenset({"002", "019", "023", "025", "034", "063", "065"})
 # the validity figures: requirement id, the report's code column, its 'not validated' column, the live
 # state's boolean 'valid' column, the threshold's field
 VALIDITY = {
@@ -356,7 +359,8 @@ def snapshot(frame: pd.DataFrame, counters: dict, status_times: dict, now_wall_s
         in_window = wall >= window_start
     else:
         sid, in_window = np.zeros(0, object), np.zeros(0, bool)
-    known = set(last_heard) | {s for c in counters.values() for s in (c.get("records") or {})}
+    known = {s for s in set(last_heard) | {s for c in counters.values() for s in (c.get("records") or {})}
+             if s.split(":", 1)[0] not in STATUS_CATEGORIES}
     rate_window = min(thresholds.window_s, now_wall_s - started_wall_s)
     sensors, alarms = [], []
     for s in sorted(known):

@@ -128,6 +128,17 @@ def test_a_sensor_last_heard_31_s_ago_is_silent_with_a_30_s_threshold() -> None:
     assert _sensor(snap, "021:0/1")["alarms"] == []
 
 
+def test_status_messages_make_no_sensor_panel() -> None:
+    """A radar's CAT034 messages counted as records of "034:25/201" give its panel a status age, not a
+    panel of their own (which would be silent forever)."""
+    th = Thresholds(silent_s=30.0)
+    snap, _ = snapshot(reports("048:25/201", 1, [0], wall0=NOW - 1.0),
+                       _counters({"048:25/201": 1, "034:25/201": 40}),
+                       {"048:25/201": NOW - 3.0, "034:25/201": NOW - 3.0}, NOW, NOW - 300.0, th)
+    assert [s["sensor_id"] for s in snap["sensors"]] == ["048:25/201"] and snap["alarms"] == []
+    assert snap["sensors"][0]["last_status_age_s"] == pytest.approx(3.0)
+
+
 def test_a_sensor_gone_from_the_window_is_silent_and_remembered() -> None:
     th = Thresholds(silent_s=10.0, window_s=20.0)
     assert lookback_s(th) == 20.0
