@@ -37,6 +37,9 @@ def test_the_wheel_installs_only_msdc(msdc_wheel):
     shipped = (ROOT / "pipeline" / "evaluate" / "presets").glob("*.toml")
     presets = {f"msdc/pipeline/evaluate/presets/{p.name}" for p in shipped}
     assert presets and presets <= set(names)  # the evaluation presets ship as package data
+    static = {f"msdc/pipeline/live/monitor/static/{p.name}"
+              for p in (ROOT / "pipeline" / "live" / "monitor" / "static").iterdir()}
+    assert len(static) == 3 and static <= set(names)  # the live monitor's page, script and style sheet
 
 
 def test_simulator_comes_from_the_checkout():

@@ -1,0 +1,208 @@
+// msdc live monitor: renders the JSON snapshot the server pushes once a second (server-sent events).
+// Plain JS, no library; every text from the feed goes in through textContent (call signs are untrusted).
+"use strict";
+(() => {
+  const PALETTE = ["#4fa3ff", "#ffb347", "#7fd17f", "#ff7eb6", "#c9a0ff", "#5ee0d6", "#f2e86d", "#ff8a65"];
+  const STALE = "#5c6670";
+  const $ = (id) => document.getElementById(id);
+  const colours = new Map();
+  let last = null;
+  let snapshots = 0;
+
+  const colour = (sensorId) => {
+    if (!colours.has(sensorId)) colours.set(sensorId, PALETTE[colours.size % PALETTE.length]);
+    return colours.get(sensorId);
+  };
+  const el = (tag, text, attrs) => {
+    const e = document.createElement(tag);
+    if (text !== undefined && text !== null) e.textContent = text;
+    for (const [k, v] of Object.entries(attrs || {})) e.setAttribute(k, v);
+    return e;
+  };
+  const age = (s) => {
+    if (s === null || s === undefined) return "–";
+    if (s < 60) return `${s.toFixed(1)} s ago`;
+    if (s < 3600) return `${Math.floor(s / 60)} min ${Math.floor(s % 60)} s ago`;
+    return `${(s / 3600).toFixed(1)} h ago`;
+  };
+  const num = (v, digits, unit) => (v === null || v === undefined ? "–" : `${v.toFixed(digits)}${unit || ""}`);
+  const pct = (v) => `${(100 * v).toFixed(1)} %`;
+
+  // one figure (probability of update, validity): its value and 95 % interval, or "–" with the reason
+  const figure = (f) => {
+    if (!f || f.value === null) return ["–", "withheld", f ? f.note : "no figure"];
+    const text = `${pct(f.value)} [${pct(f.ci_low)}–${pct(f.ci_high)}] n=${f.n}`;
+    const says = {ok: "at or above", low: "below (not yet shown by the sample)", degraded: "wholly below"};
+    return [text, f.state, `${f.count} of ${f.n}; 95 % interval ${says[f.state]} the threshold ` +
+            `${pct(f.threshold)}${f.note ? "; " + f.note : ""}`];
+  };
+
+  const renderAlarms = (alarms) => {
+    const list = $("alarms");
+    list.replaceChildren(...alarms.map((a) => el("li", a.message, {
+      class: a.level, "data-kind": a.kind, "data-sensor": a.sensor_id || "", "data-feed": a.feed || ""})));
+  };
+
+  const renderSensors = (sensors) => {
+    const box = $("sensors");
+    box.replaceChildren(...sensors.map((s) => {
+      const div = el("div", null, {class: "sensor" + (s.alarms.length ? " alarmed" : ""),
+                                   "data-sensor-id": s.sensor_id});
+      div.style.borderLeftColor = colour(s.sensor_id);
+      div.append(el("h3", `${s.sensor_id}${s.kind ? " (" + s.kind + ")" : ""}`));
+      const rows = [
+        ["reports per second", num(s.reports_per_s, 2), "rate", "", ""],
+        ["reports in window / records", `${s.reports_in_window} / ${s.records_total}`, "records", "", ""],
+        ["update interval", num(s.update_interval_s, 2, " s"), "interval",
+         s.update_interval_s === null ? "withheld" : "", s.update_interval_note],
+        ["last report", age(s.last_report_age_s), "last-report",
+         s.alarms.includes("silent") ? "degraded" : "", ""],
+        ["last north marker / status", age(s.last_status_age_s), "last-status", "",
+         s.last_status_age_s === null ? "no north marker or status message received from this sensor" : ""],
+        ["probability of update", figure(s.pd)[0], "pd", ...figure(s.pd).slice(1)],
+        ["Mode 3/A valid", figure(s.mode3a_valid)[0], "mode3a-valid", ...figure(s.mode3a_valid).slice(1)],
+        ["Mode C valid", figure(s.modec_valid)[0], "modec-valid", ...figure(s.modec_valid).slice(1)],
+        ["decode errors (its feeds)", String(s.decode_errors), "decode-errors", "", s.feeds.join(", ")],
+      ];
+      const table = el("table");
+      for (const [name, value, key, state, note] of rows) {
+        const tr = el("tr");
+        tr.append(el("td", name), el("td", value, {class: state || "", "data-figure": key, title: note || ""}));
+        table.append(tr);
+      }
+      div.append(table);
+      return div;
+    }));
+  };
+
+  const renderFeeds = (feeds) => {
+    $("feeds").tBodies[0].replaceChildren(...feeds.map((f) => {
+      const tr = el("tr", null, {"data-feed": f.feed});
+      tr.append(el("td", f.feed), el("td", num(f.packets_per_s, 1)), el("td", String(f.packets)),
+                el("td", `${f.decode_errors} (+${f.decode_errors_in_window})`,
+                        {title: "since start (in the window)"}),
+                el("td", String(f.unframed)), el("td", String(f.dropped)), el("td", num(f.last_packet_age_s, 1, " s"), {title: "since the last packet"}));
+      return tr;
+    }));
+  };
+
+  const label = (t) => [t.callsign || (t.mode3a ? "A" + t.mode3a : t.track),
+                        [t.mode3a && t.callsign ? "A" + t.mode3a : "",
+                         t.flight_level === null ? "" : "FL" + Math.round(t.flight_level)].join(" ").trim()];
+
+  const renderTargets = (targets) => {
+    $("target-count").textContent = String(targets.length);
+    $("targets").replaceChildren(...targets.map((t) => el("li",
+      `${label(t).join(" ")} — ${t.sensor_id} ${t.track}, ${age(t.age_s)}${t.stale ? " (stale)" : ""}`,
+      {"data-id": t.id, "data-sensor": t.sensor_id})));
+  };
+
+  const niceStep = (x) => {
+    const p = Math.pow(10, Math.floor(Math.log10(x)));
+    return [1, 2, 2.5, 5, 10].map((m) => m * p).find((s) => s >= x) || 10 * p;
+  };
+
+  // the map: nautical miles east and north of the targets' centroid (equirectangular), range rings around it
+  const drawMap = (snap) => {
+    const canvas = $("map");
+    const dpr = window.devicePixelRatio || 1;
+    const w = canvas.clientWidth, h = canvas.clientHeight;
+    if (canvas.width !== Math.round(w * dpr) || canvas.height !== Math.round(h * dpr)) {
+      canvas.width = Math.round(w * dpr);
+      canvas.height = Math.round(h * dpr);
+    }
+    const g = canvas.getContext("2d");
+    g.setTransform(dpr, 0, 0, dpr, 0, 0);
+    g.clearRect(0, 0, w, h);
+    const targets = snap.targets || [];
+    const windowS = snap.thresholds ? snap.thresholds.window_s : 0;
+    if (!snap.centre || !targets.length) {
+      $("map-caption").textContent = `No target in the last ${windowS} s.`;
+      document.body.dataset.targetsDrawn = "0";
+      return;
+    }
+    const lat0 = snap.centre.latitude, lon0 = snap.centre.longitude;
+    const k = Math.cos((lat0 * Math.PI) / 180);
+    const nm = (p) => [((((p[1] - lon0) % 360) + 540) % 360 - 180) * 60 * k, (p[0] - lat0) * 60];
+    // fitted to the targets' latest positions (a trail, or a stray position in it, may run off the map)
+    let extent = 5;
+    for (const t of targets) {
+      const [x, y] = nm(t.trail[t.trail.length - 1]);
+      extent = Math.max(extent, Math.abs(x), Math.abs(y));
+    }
+    extent *= 1.25;
+    const scale = Math.min(w, h) / 2 / extent;
+    const cx = w / 2, cy = h / 2;
+    const px = (p) => { const [x, y] = nm(p); return [cx + x * scale, cy - y * scale]; };
+    const step = niceStep(extent / 4);
+    g.strokeStyle = "#24313d";
+    g.fillStyle = "#5c6b7a";
+    g.font = "11px system-ui, sans-serif";
+    g.lineWidth = 1;
+    for (let r = step; r * scale < Math.hypot(w, h) / 2; r += step) {
+      g.beginPath();
+      g.arc(cx, cy, r * scale, 0, 2 * Math.PI);
+      g.stroke();
+      g.fillText(`${r} NM`, cx + 3, cy - r * scale - 3);
+    }
+    g.beginPath(); g.moveTo(cx, 0); g.lineTo(cx, h); g.moveTo(0, cy); g.lineTo(w, cy); g.stroke();
+    g.fillText("N", cx + 4, 12);
+    let drawn = 0;
+    for (const t of targets) {
+      const c = t.stale ? STALE : colour(t.sensor_id);
+      const pts = t.trail.map(px);
+      g.strokeStyle = c;
+      g.globalAlpha = 0.55;
+      g.beginPath();
+      pts.forEach(([x, y], i) => (i ? g.lineTo(x, y) : g.moveTo(x, y)));
+      g.stroke();
+      g.globalAlpha = 1;
+      const [x, y] = pts[pts.length - 1];
+      g.fillStyle = c;
+      if (t.sensor_id.startsWith("021")) { g.beginPath(); g.arc(x, y, 3.5, 0, 2 * Math.PI); g.fill(); }
+      else g.fillRect(x - 3.5, y - 3.5, 7, 7);
+      const [top, bottom] = label(t);
+      const adsb = t.sensor_id.startsWith("021");  // ADS-B labels left of the target, the others right
+      g.textAlign = adsb ? "right" : "left";
+      const lx = adsb ? x - 6 : x + 6;
+      g.fillText(top, lx, y - 2);
+      if (bottom) g.fillText(bottom, lx, y + 10);
+      g.textAlign = "left";
+      drawn += 1;
+    }
+    document.body.dataset.targetsDrawn = String(drawn);
+    $("map-caption").textContent = `${drawn} targets of the last ${windowS} s around ` +
+      `${lat0.toFixed(3)}°, ${lon0.toFixed(3)}°; rings every ${step} NM; grey: stale; ` +
+      "squares: radar and others, dots: ADS-B (CAT021).";
+  };
+
+  const update = (snap) => {
+    last = snap;
+    snapshots += 1;
+    document.body.dataset.snapshots = String(snapshots);
+    const err = $("error");
+    err.hidden = !snap.error;
+    err.textContent = snap.error || "";
+    if (!snap.thresholds) return;  // no snapshot computed yet: only the error to show
+    $("clock").textContent = new Date(snap.now_wall_s * 1000).toISOString().slice(11, 19) + " UTC";
+    $("uptime").textContent = `up ${Math.round(snap.uptime_s)} s`;
+    const th = snap.thresholds;
+    $("thresholds").textContent = `Window ${th.window_s} s; alarms: silent after ${th.silent_s} s, ` +
+      `probability of update < ${pct(th.min_pd)}, Mode 3/A valid < ${pct(th.min_mode3a_valid)}, ` +
+      `Mode C valid < ${pct(th.min_modec_valid)} (95 % interval wholly below).`;
+    renderAlarms(snap.alarms);
+    renderSensors(snap.sensors);
+    renderFeeds(snap.feeds);
+    renderTargets(snap.targets);
+    drawMap(snap);
+  };
+
+  const source = new EventSource("events");
+  source.onopen = () => { $("connection").textContent = "live"; $("connection").className = "up"; };
+  source.onerror = () => { $("connection").textContent = "reconnecting…"; $("connection").className = "down"; };
+  source.onmessage = (event) => {
+    const snap = JSON.parse(event.data);
+    if (!snap.pending) update(snap);
+  };
+  window.addEventListener("resize", () => { if (last) drawMap(last); });
+})();
