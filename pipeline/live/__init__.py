@@ -1,0 +1,3 @@
+"""Live feeds (issue 30): receive ASTERIX over UDP (``receive``), decode it in batches (``decode``) into a
+thread-safe ``state.LiveState`` the monitor page reads, record it as pcapng (``record``) and replay any
+recording as UDP (``replay``)."""
