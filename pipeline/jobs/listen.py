@@ -16,7 +16,7 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from msdc.pipeline.jobs.common import JobError, _editions, nonempty_path, sensor_table
+from msdc.pipeline.jobs.common import JobError, nonempty_path, pinned_editions, sensor_table
 from msdc.pipeline.jobs.options import ListenOptions, OptionError, check_declared
 
 STATUS_S = 10.0  # a status line on stderr this often
@@ -109,8 +109,8 @@ def validate(options: ListenOptions) -> Checked:
     elif asked:
         warnings.append("--alarm-* and --window set the monitor page's alarms: ignored without --http")
     sensors = None if options.sensors is None else sensor_table(options.sensors)
-    return Checked(endpoints, sensors, _editions(list(options.editions)), record, rotate_s, rotate_bytes,
-                   http, thresholds, warnings)
+    editions = pinned_editions(list(options.editions))
+    return Checked(endpoints, sensors, editions, record, rotate_s, rotate_bytes, http, thresholds, warnings)
 
 
 def monitor_thresholds(asked: dict[str, float]):

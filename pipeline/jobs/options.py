@@ -1006,8 +1006,9 @@ def write_docs(guide: Path = GUIDE, *, check: bool = False) -> list[Path]:
         page = guide / f"{COMMAND_PAGES.get(command, command)}.md"
         text = page.read_text()
         new = page_with_table(text, command)
-        if new != text and page not in stale:
-            stale.append(page)
+        if new != text:
+            if page not in stale:
+                stale.append(page)
             if not check:
                 page.write_text(new)
     return stale

@@ -8,7 +8,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
-from msdc.pipeline.jobs.common import JobError, _inputs
+from msdc.pipeline.jobs.common import JobError, input_files
 from msdc.pipeline.jobs.options import OptionError, ReplayOptions, check_declared
 
 
@@ -44,7 +44,7 @@ def validate(options: ReplayOptions):
             raise OptionError(f"--iface {options.iface!r}: not an IPv4 address") from None
     if not options.inputs:
         raise OptionError("RECORDING: give at least one recording to replay")
-    paths, warnings = _inputs(list(options.inputs))
+    paths, warnings = input_files(list(options.inputs))
     return to, paths, warnings
 
 
