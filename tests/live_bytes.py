@@ -10,7 +10,8 @@ from asterix_bytes import block, fspec
 
 
 def cat048_record(sac: int, sic: int, tod_s: float, *, mode3a_v: int = 0, modec_v: int = 0,
-                  code: int = 0o1234, fl: float = 350.0, rho_nm: float = 50.0, theta_deg: float = 90.0) -> bytes:
+                  code: int = 0o1234, fl: float = 350.0, rho_nm: float = 50.0,
+                  theta_deg: float = 90.0) -> bytes:
     """A CAT048 record (UAP FRN 1-6): I048/010 SAC/SIC, I048/140 time of day (1/128 s), I048/020 (TYP 2,
     no extension), I048/040 rho (1/256 NM) and theta (360/2^16 deg), I048/070 Mode 3/A (V bit 16, code
     in 12 bits), I048/090 flight level (V bit 16, 1/4 FL in 14 bits)."""

@@ -85,7 +85,8 @@ def test_recent_reports_carry_the_validity_bits_and_positions():
                                         pd.Timestamp("2023-11-14 22:13:20", tz="UTC"),
                                         pd.Timestamp("2023-11-14 22:13:20", tz="UTC")]
         assert list(recent["mode3a"].astype(str)) == ["1234"] * 3
-        assert math.isclose(recent["rho_nm"].iloc[0], 50.0) and math.isclose(recent["flight_level"].iloc[2], 350)
+        assert math.isclose(recent["rho_nm"].iloc[0], 50.0)
+        assert math.isclose(recent["flight_level"].iloc[2], 350)
         assert len(state.recent(0.4)) == 0  # arrived 1.5 s before the clock's now
 
 
