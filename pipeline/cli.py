@@ -370,8 +370,8 @@ def cmd_listen(args) -> int:
     _numba_without_scipy()
     options = from_args(listen.ListenOptions, args)
     names = ", ".join(options.udp)
-    result = listen.listen_job(options, ready=lambda: print(f"msdc listen: receiving {names} (Ctrl-C ends)",
-                                                            file=sys.stderr, flush=True))
+    line = f"msdc listen: receiving {names} (Ctrl-C ends)"
+    result = listen.listen_job(options, ready=lambda state: print(line, file=sys.stderr, flush=True))
     _warn("listen", result.warnings)
     for line in listen.summary_lines(result):
         print(line)

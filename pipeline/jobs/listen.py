@@ -15,9 +15,13 @@ import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from msdc.pipeline.jobs.common import JobError, nonempty_path, pinned_editions, sensor_table
 from msdc.pipeline.jobs.options import ListenOptions, OptionError, check_declared
+
+if TYPE_CHECKING:
+    from msdc.pipeline.live.state import LiveState
 
 STATUS_S = 10.0  # a status line on stderr this often
 DROP_NOTE_S = 1.0  # datagrams dropped are said at most this often (each time with the count since)
@@ -159,11 +163,11 @@ class ListenResult:
 
 def listen_job(options: ListenOptions, *, stop: threading.Event | None = None,
                say: Callable[[str], None] | None = None,
-               ready: Callable[[], None] | None = None) -> ListenResult:
+               ready: Callable[[LiveState], None] | None = None) -> ListenResult:
     """Validate, open the feeds, then receive, decode, record (and serve the monitor) until ``stop`` is set,
     --duration has passed or Ctrl-C (KeyboardInterrupt, or SIGTERM's Terminated) arrives; then drain the
     queues, close the recording and return the counts. ``say`` prints status lines and drop notes;
-    ``ready`` is called once every socket listens."""
+    ``ready`` is called with the LiveState once every socket listens."""
     from msdc.pipeline.live.decode import BatchDecoder
     from msdc.pipeline.live.receive import Listener
     from msdc.pipeline.live.record import Recorder
@@ -196,7 +200,7 @@ def listen_job(options: ListenOptions, *, stop: threading.Event | None = None,
     server = _start_monitor(state, checked, stop) if checked.http is not None else None
     listener.start()
     if ready is not None:
-        ready()
+        ready(state)
     started = time.monotonic()
     interrupted = False
     try:
