@@ -190,12 +190,12 @@ def send(sched: Schedule, sock: socket.socket, *, speed: float = 1.0, loop: bool
          duration_s: float | None = None, stop: Callable[[], bool] = lambda: False,
          clock: Callable[[], float] = time.monotonic, sleep: Callable[[float], None] = time.sleep) -> Sent:
     """Send the schedule, each datagram at its time / ``speed`` from the start; again and again with
-    ``loop`` (the next pass starts one mean datagram interval after the last); until ``duration_s`` (wall)
-    or ``stop()``."""
+    ``loop`` (the next pass starts one mean datagram interval after the last, 1 s of recording when there
+    is no interval); until ``duration_s`` (wall) or ``stop()``."""
     out = Sent()
     if not len(sched):
         return out
-    gap_s = sched.span_s / max(len(sched) - 1, 1)
+    gap_s = sched.span_s / (len(sched) - 1) if len(sched) > 1 and sched.span_s > 0 else 1.0
     pass_s = sched.span_s + gap_s
     t0 = clock()
     end = math.inf if duration_s is None else t0 + duration_s
