@@ -371,7 +371,8 @@ def cmd_listen(args) -> int:
     options = from_args(listen.ListenOptions, args)
     names = ", ".join(options.udp)
     line = f"msdc listen: receiving {names} (Ctrl-C ends)"
-    result = listen.listen_job(options, ready=lambda state: print(line, file=sys.stderr, flush=True))
+    result = listen.listen_job(options, ready=lambda state: print(line, file=sys.stderr, flush=True),
+                               ingest=_ingester(options.dataset, options.editions))
     _warn("listen", result.warnings)
     for line in listen.summary_lines(result):
         print(line)
@@ -381,6 +382,21 @@ def cmd_listen(args) -> int:
         print(f"msdc listen: decoding stopped: {result.decoding_failure}", file=sys.stderr)
         return 1
     return 0
+
+
+def _ingester(dataset: str | None, editions: tuple[str, ...]):
+    """listen --dataset: each closed recording ingested as 'msdc ingest FILE --dataset DIR' would; the
+    lines it says. None without --dataset."""
+    if dataset is None:
+        return None
+    from msdc.pipeline.jobs import ingest
+
+    def run(path) -> list[str]:
+        result = ingest.ingest_job(ingest.IngestOptions(inputs=(str(path),), dataset=dataset, lenient=True,
+                                                        editions=editions))
+        return [*result.warnings, *ingest.summary_lines(result)]
+
+    return run
 
 
 def cmd_replay(args) -> int:

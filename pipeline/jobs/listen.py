@@ -93,6 +93,11 @@ def validate(options: ListenOptions) -> Checked:
             raise OptionError(f"--iface {options.iface!r}: not an IPv4 address (give the interface's "
                               "address, e.g. 10.1.2.3)") from None
     rotate_s, rotate_bytes = parse_rotate(options.rotate)
+    if options.dataset is not None and options.record is None:
+        raise OptionError(f"--dataset {options.dataset}: needs --record (the recordings are what is "
+                          "ingested)")
+    if options.dataset is not None:
+        nonempty_path("--dataset", options.dataset)
     record = None
     if options.record is not None:
         nonempty_path("--record", options.record)
@@ -133,6 +138,19 @@ def monitor_thresholds(asked: dict[str, float]):
     return dataclasses.replace(Thresholds(), **{names[k]: v for k, v in asked.items()})
 
 
+def check_http_port(host: str, port: int) -> None:
+    """--http: the address can be served (a TCP socket binds to it), else OptionError naming it."""
+    import socket
+
+    try:
+        with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as s:
+            s.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
+            s.bind((host, port))
+    except (OSError, OverflowError) as exc:
+        why = getattr(exc, "strerror", None) or str(exc)
+        raise OptionError(f"--http {host}:{port}: cannot serve the monitor there ({why})") from None
+
+
 def prepare_record(folder: Path) -> None:
     """Make the --record folder and check a file can be created in it (OptionError otherwise)."""
     try:
@@ -155,6 +173,7 @@ class ListenResult:
     interrupted: bool
     warnings: list[str]
     decoding_failure: str | None = None
+    ingested: list[Path] = field(default_factory=list)  # recording files ingested into --dataset
 
     @property
     def records(self) -> int:
@@ -163,11 +182,13 @@ class ListenResult:
 
 def listen_job(options: ListenOptions, *, stop: threading.Event | None = None,
                say: Callable[[str], None] | None = None,
-               ready: Callable[[LiveState], None] | None = None) -> ListenResult:
+               ready: Callable[[LiveState], None] | None = None,
+               ingest: Callable[[Path], list[str]] | None = None) -> ListenResult:
     """Validate, open the feeds, then receive, decode, record (and serve the monitor) until ``stop`` is set,
     --duration has passed or Ctrl-C (KeyboardInterrupt, or SIGTERM's Terminated) arrives; then drain the
     queues, close the recording and return the counts. ``say`` prints status lines and drop notes;
-    ``ready`` is called with the LiveState once every socket listens."""
+    ``ready`` is called with the LiveState once every socket listens; ``ingest`` (with --dataset) is given
+    each recording file once closed, in a thread of its own, and returns lines to say."""
     from msdc.pipeline.live.decode import BatchDecoder
     from msdc.pipeline.live.receive import Listener
     from msdc.pipeline.live.record import Recorder
@@ -186,12 +207,20 @@ def listen_job(options: ListenOptions, *, stop: threading.Event | None = None,
         listener.open()
     except OSError as exc:
         raise OptionError(f"--udp {exc.strerror}") from None
-    recorder = None
+    if checked.http is not None:
+        try:
+            check_http_port(*checked.http)
+        except OptionError:
+            listener.close_sockets()
+            raise
+    recorder = ingesting = None
     try:
         if checked.record is not None:
             prepare_record(checked.record)
+            ingesting = Ingesting(ingest, say) if options.dataset is not None and ingest else None
             recorder = Recorder(checked.record, names, [(e.host, e.port) for e in checked.endpoints],
-                                rotate_s=checked.rotate_s, rotate_bytes=checked.rotate_bytes)
+                                rotate_s=checked.rotate_s, rotate_bytes=checked.rotate_bytes,
+                                on_closed=ingesting.put if ingesting else None)
             listener.recorder = recorder
     except OptionError:
         listener.close_sockets()
@@ -212,11 +241,52 @@ def listen_job(options: ListenOptions, *, stop: threading.Event | None = None,
         _stop_quietly(listener)
         if server is not None:
             server.join(timeout=5)
+        if ingesting is not None:
+            ingesting.finish()
     failure = listener.failure
-    return ListenResult(state.counters(), list(recorder.files) if recorder else [],
+    result = ListenResult(state.counters(), list(recorder.files) if recorder else [],
                         recorder.error if recorder else None, state.clashes(), time.monotonic() - started,
                         interrupted, checked.warnings,
-                        None if failure is None else f"{type(failure).__name__}: {failure}")
+                          None if failure is None else f"{type(failure).__name__}: {failure}")
+    result.ingested = list(ingesting.ingested) if ingesting else []
+    return result
+
+
+class Ingesting:
+    """Recording files handed, once closed, to ``ingest`` one after the other in a thread of their own (an
+    ingest takes seconds: the decoding thread must not wait for it); what it says, and its failures, go
+    to ``say``."""
+
+    def __init__(self, ingest: Callable[[Path], list[str]], say: Callable[[str], None]):
+        import queue
+
+        self.ingest, self.say = ingest, say
+        self.paths: queue.Queue = queue.Queue()
+        self.ingested: list[Path] = []
+        self.thread = threading.Thread(target=self._run, name="msdc-ingest", daemon=True)
+        self.thread.start()
+
+    def put(self, path: Path) -> None:
+        self.paths.put(path)
+
+    def finish(self) -> None:
+        """Ingest what is left, then end the thread (a second Ctrl-C meanwhile is ignored)."""
+        self.paths.put(None)
+        while True:
+            try:
+                self.thread.join()
+                return
+            except KeyboardInterrupt:
+                continue
+
+    def _run(self) -> None:
+        while (path := self.paths.get()) is not None:
+            try:
+                for line in self.ingest(path):
+                    self.say(f"msdc listen: --dataset: {line}")
+                self.ingested.append(path)
+            except Exception as exc:  # said; listening and recording go on
+                self.say(f"msdc listen: --dataset: {path} not ingested: {exc}")
 
 
 def _stop_quietly(listener) -> None:

@@ -861,6 +861,12 @@ class ListenOptions:
     record: str | None = option(
         None, "--record", metavar="DIR", section="output",
         help="record every datagram received, byte for byte, as pcapng files in DIR (made if absent)")
+    dataset: str | None = option(
+        None, "--dataset", metavar="DIR", section="output",
+        help="also ingest each recording file, once closed, into this dataset ('msdc ingest' layout); needs "
+             "--record",
+        doc="also ingest each recording file, once closed (every `--rotate` and at the end), into this "
+            "dataset, as `msdc ingest` does ([ingest](ingest.md)); needs `--record`")
     rotate: str = option(
         "1h", "--rotate", metavar="PERIOD|SIZE", section="output",
         help="start a new recording file every PERIOD (30s, 15m, 1h, 1d: aligned to the UTC clock) or at "

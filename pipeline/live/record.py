@@ -13,6 +13,7 @@ import logging
 import os
 import socket
 import struct
+from collections.abc import Callable
 from pathlib import Path
 
 log = logging.getLogger("msdc.live")
@@ -82,10 +83,12 @@ class Recorder:
     ``rotate_bytes``. After a write error it records nothing more and says why (``error``)."""
 
     def __init__(self, folder: str | Path, feeds: list[str], addresses: list[tuple[str, int]], *,
-                 rotate_s: float | None = None, rotate_bytes: int | None = None):
+                 rotate_s: float | None = None, rotate_bytes: int | None = None,
+                 on_closed: Callable[[Path], None] | None = None):
         self.folder = Path(folder)
         self.feeds, self.addresses = list(feeds), list(addresses)
         self.rotate_s, self.rotate_bytes = rotate_s, rotate_bytes
+        self.on_closed = on_closed  # called with each file closed under its final name
         self.files: list[Path] = []  # the recordings closed so far
         self.error: str | None = None
         self.packets = 0  # datagrams recorded in closed or open files
@@ -133,6 +136,8 @@ class Recorder:
             os.replace(part, final)
             self._sync_folder()
             self.files.append(final)
+            if self.on_closed is not None:
+                self.on_closed(final)
         except OSError as exc:
             self._failed(exc, closing=(fh, part, final))
 

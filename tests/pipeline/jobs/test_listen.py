@@ -54,6 +54,21 @@ def test_http_says_when_the_monitor_is_not_installed(capsys):
     assert "--http: the monitor is not available" in capsys.readouterr().err
 
 
+def test_an_http_port_taken_is_refused(capsys, monkeypatch):
+    import socket
+
+    from msdc.pipeline.jobs import listen
+
+    monkeypatch.setattr(listen, "monitor_thresholds", lambda asked: None)  # as if the monitor were there
+    with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as taken:
+        taken.bind(("127.0.0.1", 0))
+        taken.listen()
+        port = taken.getsockname()[1]
+        assert main(["listen", "--udp", f"127.0.0.1:{free_port()}", "--http", f"127.0.0.1:{port}"]) == 2
+    assert f"--http 127.0.0.1:{port}: cannot serve the monitor there (Address already in use)" in \
+        capsys.readouterr().err
+
+
 def test_a_raw_file_whose_chain_breaks_is_not_replayed(tmp_path, capsys):
     one = block(48, cat048_record(25, 201, 10.0))
     (tmp_path / "cut.ast").write_bytes(one + one[:5])

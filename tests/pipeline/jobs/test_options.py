@@ -79,7 +79,7 @@ EXPECTED = {
                "--rotate": "rotate", "--http": "http", "--alarm-silent": "alarm_silent_s",
                "--alarm-min-pd": "alarm_min_pd", "--alarm-min-mode3a-valid": "alarm_min_mode3a_valid",
                "--alarm-min-modec-valid": "alarm_min_modec_valid", "--window": "window_s", "--queue": "queue",
-               "--duration": "duration_s", "--edition": "editions"},
+               "--duration": "duration_s", "--edition": "editions", "--dataset": "dataset"},
     "replay": {"RECORDING": "inputs", "--to": "to", "--iface": "iface", "--ttl": "ttl", "--speed": "speed",
                "--loop": "loop", "--duration": "duration_s", "--format": "format"},
 }

@@ -32,7 +32,7 @@ class Running:
 
     def __init__(self, options: ListenOptions):
         self.options, self.stop, self.ready = options, threading.Event(), threading.Event()
-        self.result, self.error, self.state = None, None, None
+        self.result, self.error, self.state, self.ingest = None, None, None, None
 
     def _ready(self, state):
         self.state = state
@@ -43,7 +43,8 @@ class Running:
 
     def _run(self):
         try:
-            self.result = listen_job(self.options, stop=self.stop, say=lambda line: None, ready=self._ready)
+            self.result = listen_job(self.options, stop=self.stop, say=lambda line: None, ready=self._ready,
+                                     ingest=self.ingest)
         except Exception as exc:  # said by the test
             self.error = exc
             self.ready.set()
@@ -150,6 +151,59 @@ def test_a_full_queue_drops_and_counts_never_silently():
     c = state.counters()[port.name]
     decoded = sum(c["records"].values())
     assert c["dropped"] >= 20 - 2 - 2 and decoded + c["dropped"] == 20  # at most a batch and a queue kept
+
+
+def test_a_full_disk_stops_the_recording_and_receiving_goes_on(tmp_path, monkeypatch):
+    import errno
+
+    from msdc.pipeline.live.record import Recorder
+
+    port = parse_endpoint(f"127.0.0.1:{free_port()}", "--udp")
+    state = LiveState([port.name])
+    recorder = Recorder(tmp_path, [port.name], [(port.host, port.port)])
+    real = Recorder._write
+
+    def write(self, data):
+        if self.packets >= 2:  # the disk fills once two datagrams are recorded
+            raise OSError(errno.ENOSPC, "No space left on device")
+        real(self, data)
+
+    monkeypatch.setattr(Recorder, "_write", write)
+    listener = Listener([port], state, BatchDecoder(state, [port.name], reports=False), recorder,
+                        batch_s=0.02)
+    listener.start()
+    try:
+        send_all([block(48, cat048_record(25, 201, 1.0))] * 2, port.port)
+        _wait(lambda: sum(state.counters()[port.name]["records"].values()) == 2)
+        send_all([block(48, cat048_record(25, 201, 2.0))] * 3, port.port)
+        _wait(lambda: sum(state.counters()[port.name]["records"].values()) == 5)
+    finally:
+        listener.stop()
+    assert "No space left on device" in recorder.error and listener.failure is None
+    (path,) = recorder.files
+    data = path.read_bytes()
+    seg = read_segments(data)
+    assert len(seg.start) == 2 and seg.problems == []  # the two recorded before, whole
+
+
+def test_dataset_ingests_each_closed_recording(tmp_path):
+    import pyarrow.parquet as pq
+
+    from msdc.pipeline.cli import _ingester
+    from msdc.pipeline.dataset.reader import category_parts
+
+    port = free_port()
+    options = ListenOptions(udp=(f"127.0.0.1:{port}",), record=str(tmp_path / "rec"),
+                            dataset=str(tmp_path / "ds"))
+    run = Running(options)
+    run.ingest = _ingester(options.dataset, ())
+    with run:
+        send_all([block(48, cat048_record(25, 201, 80000.0 + i), cat048_record(25, 201, 80000.5 + i))
+                  for i in range(4)], port)
+        _wait(lambda: run.packets() == 4)
+    assert len(run.result.ingested) == 1 and run.result.ingested == run.result.recordings
+    parts = category_parts(tmp_path / "ds")
+    assert set(parts) == {48} and sum(pq.read_metadata(p).num_rows for p in parts[48]) == 8
 
 
 def test_a_port_already_taken_is_refused_naming_the_feed():
