@@ -217,7 +217,10 @@ def listen_job(options: ListenOptions, *, stop: threading.Event | None = None,
     try:
         if checked.record is not None:
             prepare_record(checked.record)
-            ingesting = Ingesting(ingest, say) if options.dataset is not None and ingest else None
+            if options.dataset is not None and ingest is None:
+                raise OptionError(f"--dataset {options.dataset}: listen_job needs ``ingest`` (the command "
+                                  "line gives msdc ingest's job)")
+            ingesting = Ingesting(ingest, say) if options.dataset is not None else None
             recorder = Recorder(checked.record, names, [(e.host, e.port) for e in checked.endpoints],
                                 rotate_s=checked.rotate_s, rotate_bytes=checked.rotate_bytes,
                                 on_closed=ingesting.put if ingesting else None)

@@ -837,7 +837,7 @@ SPEED_RANGE = (0.001, 1e6)  # replay --speed: a 3 h recording in 10 ms at most
 TTL_RANGE = (0, 255)
 ALARM_FRACTION_RANGE = (0.0, 1.0)
 ALARM_SECONDS_RANGE = (1.0, 86400.0)
-MONITOR_DEFAULTS = "the monitor's default (msdc.pipeline.live.monitor.Thresholds)"
+MONITOR_DEFAULTS = "the monitor's, msdc.pipeline.live.monitor.Thresholds"
 
 
 @dataclass(frozen=True)
@@ -868,9 +868,9 @@ class ListenOptions:
         doc="also ingest each recording file, once closed (every `--rotate` and at the end), into this "
             "dataset, as `msdc ingest` does ([ingest](ingest.md)); needs `--record`")
     rotate: str = option(
-        "1h", "--rotate", metavar="PERIOD|SIZE", section="output",
-        help="start a new recording file every PERIOD (30s, 15m, 1h, 1d: aligned to the UTC clock) or at "
-             "SIZE (500MB, 2GB)")
+        "1h", "--rotate", metavar="EVERY", section="output",
+        help="start a new recording file every period (30s, 15m, 1h, 1d: aligned to the UTC clock) or at a "
+             "size (500MB, 2GB)")
     http: str | None = option(
         None, "--http", metavar="HOST:PORT", section="output",
         help="serve the monitor page at http://HOST:PORT (e.g. 127.0.0.1:8080)")
