@@ -71,6 +71,8 @@ COMMAND_HELP = {
                 "verdicts",
     "ingest": "decode recordings into a Parquet dataset by UTC day, category and sensor (resumable)",
     "sql": "a DuckDB query over a dataset 'msdc ingest' made",
+    "listen": "receive live ASTERIX feeds over UDP: count, record as pcapng, serve the monitor page",
+    "replay": "send recordings as UDP with their original timing scaled (simulate a live feed)",
 }
 
 
@@ -360,6 +362,57 @@ def cmd_sql(args) -> int:
     return 0
 
 
+def cmd_listen(args) -> int:
+    """msdc listen: receive the feeds until Ctrl-C (or --duration), then print the counts; exit 0 once the
+    recording is closed, whatever ended the run."""
+    from msdc.pipeline.jobs import listen
+
+    _numba_without_scipy()
+    options = from_args(listen.ListenOptions, args)
+    names = ", ".join(options.udp)
+    line = f"msdc listen: receiving {names} (Ctrl-C ends)"
+    result = listen.listen_job(options, ready=lambda state: print(line, file=sys.stderr, flush=True),
+                               ingest=_ingester(options.dataset, options.editions))
+    _warn("listen", result.warnings)
+    for line in listen.summary_lines(result):
+        print(line)
+    if result.recording_error:
+        print(f"msdc listen: --record: {result.recording_error}", file=sys.stderr)
+    if result.decoding_failure:
+        print(f"msdc listen: decoding stopped: {result.decoding_failure}", file=sys.stderr)
+        return 1
+    return 0
+
+
+def _ingester(dataset: str | None, editions: tuple[str, ...]):
+    """listen --dataset: each closed recording ingested as 'msdc ingest FILE --dataset DIR' would; the
+    lines it says. None without --dataset."""
+    if dataset is None:
+        return None
+    from msdc.pipeline.jobs import ingest
+
+    def run(path) -> list[str]:
+        result = ingest.ingest_job(ingest.IngestOptions(inputs=(str(path),), dataset=dataset, lenient=True,
+                                                        editions=editions))
+        return [*result.warnings, *ingest.summary_lines(result)]
+
+    return run
+
+
+def cmd_replay(args) -> int:
+    """msdc replay: send the recordings as UDP; the exit status (Ctrl-C: 130, with what was sent said)."""
+    from msdc.pipeline.jobs import replay
+
+    _numba_without_scipy()
+    options = from_args(replay.ReplayOptions, args)
+    result = replay.replay_job(options)
+    _warn("replay", result.warnings)
+    print(f"{result.datagrams} datagrams ({result.bytes} bytes) sent to {options.to} in "
+          f"{result.wall_s:.2f} s ({result.passes} pass(es) over {result.scheduled} datagrams spanning "
+          f"{result.span_s:.1f} s of recording; at most {result.late_s * 1000:.1f} ms late)")
+    return 0
+
+
 def _run_job(name: str, validate, job, options, progress: Progress):
     """Validate (warnings first), run the job, then print its later warnings (its result's, after
     validation's) and the skipped blocks. A job that fails prints the warnings it collected before its error
@@ -385,7 +438,7 @@ def _run_job(name: str, validate, job, options, progress: Progress):
 
 COMMANDS = {"decode": cmd_decode, "stats": cmd_stats, "correlate": cmd_correlate, "quality": cmd_quality,
             "track": cmd_track, "conflicts": cmd_conflicts, "evaluate": cmd_evaluate, "ingest": cmd_ingest,
-            "sql": cmd_sql}
+            "sql": cmd_sql, "listen": cmd_listen, "replay": cmd_replay}
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -127,6 +127,17 @@ def _editions(editions: list[str] | dict | None) -> dict[int, str]:
     return out
 
 
+def pinned_editions(editions: list[str] | dict | None) -> dict[int, str]:
+    """--edition CAT=EDITION pins, checked (OptionError naming a bad one): for jobs that read no file."""
+    return _editions(editions)
+
+
+def input_files(paths: list[str | Path]) -> tuple[list[Path], list[str]]:
+    """The input files, checked (OptionError naming a missing or unreadable one), and a warning for each
+    skipped because its content was given before."""
+    return _inputs(paths)
+
+
 def nonempty_path(name: str, value) -> None:
     """OptionError for an empty path (an unset shell variable): Path("") is the current directory."""
     if value is not None and not str(value).strip():

@@ -843,12 +843,114 @@ class SqlOptions:
                         help="rows printed on the terminal at most (-o writes every row)")
 
 
+QUEUE_RANGE = (1, 10_000_000)  # listen --queue: datagrams waiting per feed
+DURATION_RANGE_S = (0.1, 1e7)
+SPEED_RANGE = (0.001, 1e6)  # replay --speed: a 3 h recording in 10 ms at most
+TTL_RANGE = (0, 255)
+ALARM_FRACTION_RANGE = (0.0, 1.0)
+ALARM_SECONDS_RANGE = (1.0, 86400.0)
+MONITOR_DEFAULTS = "the monitor's, msdc.pipeline.live.monitor.Thresholds"
+
+
+@dataclass(frozen=True)
+class ListenOptions:
+    """Everything ``listen_job`` needs (docs/guide/live.md)."""
+
+    udp: tuple[str, ...] = option(
+        (), "--udp", repeat=True, metavar="ADDR:PORT", required=True, section="selection",
+        help="a feed: a multicast group (joined) or a unicast address of this machine, and a UDP port "
+             "(repeatable: one receiving thread per feed)")
+    iface: str | None = option(
+        None, "--iface", metavar="IP", section="selection",
+        help="the IPv4 address of the interface the multicast groups are joined on (default: the kernel's "
+             "choice by its routes)")
+    sensors: str | None = option(None, "--sensors", section="selection",
+                                 help="sensor positions (TOML [[sensor]] tables): places radar plots on the "
+                                      "monitor page (without it they are counted, shown without position)",
+                                 doc="sensor positions ([the sensor file](sensors.md)): radar plots get "
+                                     "their latitude and longitude for the monitor page; without it they "
+                                     "are counted and shown without a position")
+    record: str | None = option(
+        None, "--record", metavar="DIR", section="output",
+        help="record every datagram received, byte for byte, as pcapng files in DIR (made if absent)")
+    dataset: str | None = option(
+        None, "--dataset", metavar="DIR", section="output",
+        help="also ingest each recording file, once closed, into this dataset ('msdc ingest' layout); needs "
+             "--record",
+        doc="also ingest each recording file, once closed (every `--rotate` and at the end), into this "
+            "dataset, as `msdc ingest` does ([ingest](ingest.md)); needs `--record`")
+    rotate: str = option(
+        "1h", "--rotate", metavar="EVERY", section="output",
+        help="start a new recording file every period (30s, 15m, 1h, 1d: aligned to the UTC clock) or at a "
+             "size (500MB, 2GB)")
+    http: str | None = option(
+        None, "--http", metavar="HOST:PORT", section="output",
+        help="serve the monitor page at http://HOST:PORT (e.g. 127.0.0.1:8080)")
+    alarm_silent_s: float | None = option(
+        None, "--alarm-silent", metavar="SECONDS", range=ALARM_SECONDS_RANGE, unit="s", section="output",
+        help=f"monitor: a sensor with no report for this long is silent (default: {MONITOR_DEFAULTS})")
+    alarm_min_pd: float | None = option(
+        None, "--alarm-min-pd", metavar="P", range=ALARM_FRACTION_RANGE, section="output",
+        help=f"monitor: a live probability of update below this is degraded (default: {MONITOR_DEFAULTS})")
+    alarm_min_mode3a_valid: float | None = option(
+        None, "--alarm-min-mode3a-valid", metavar="P", range=ALARM_FRACTION_RANGE, section="output",
+        help=f"monitor: a share of valid Mode 3/A codes below this raises an alarm (default: "
+             f"{MONITOR_DEFAULTS})")
+    alarm_min_modec_valid: float | None = option(
+        None, "--alarm-min-modec-valid", metavar="P", range=ALARM_FRACTION_RANGE, section="output",
+        help=f"monitor: a share of valid Mode C codes below this raises an alarm (default: "
+             f"{MONITOR_DEFAULTS})")
+    window_s: float | None = option(
+        None, "--window", metavar="SECONDS", range=ALARM_SECONDS_RANGE, unit="s", section="output",
+        help=f"monitor: the sliding window of the live figures (default: {MONITOR_DEFAULTS})")
+    queue: int = option(
+        50_000, "--queue", metavar="N", range=QUEUE_RANGE,
+        help="datagrams each feed's queue holds while the decoding thread catches up; when full, datagrams "
+             "are dropped, counted and said")
+    duration_s: float | None = option(
+        None, "--duration", metavar="SECONDS", range=DURATION_RANGE_S, unit="s",
+        help="stop after this many seconds (default: run until Ctrl-C)")
+    editions: tuple[str, ...] = option(
+        (), "--edition", repeat=True, parse=edition_argument, metavar="CAT=ED", section="reading",
+        help="pin a category edition, e.g. 21=0.26 or 48=1.27 (repeatable)",
+        doc="pin a category edition, e.g. `21=0.26` or `48=1.27` (repeatable; "
+            "[Editions](../decoding/editions.md))")
+
+
+@dataclass(frozen=True)
+class ReplayOptions:
+    """Everything ``replay_job`` needs (docs/guide/live.md)."""
+
+    inputs: tuple[str, ...] = option((), metavar="RECORDING", section="selection",
+                                     doc="the recordings (raw, pcap, pcapng, final, gps), merged by time")
+    to: str | None = option(
+        None, "--to", metavar="ADDR:PORT", required=True, section="output",
+        help="where the datagrams go: a multicast group or a unicast address, and a UDP port")
+    iface: str | None = option(
+        None, "--iface", metavar="IP", section="output",
+        help="the IPv4 address of the interface the datagrams leave from (multicast: IP_MULTICAST_IF)")
+    ttl: int = option(1, "--ttl", metavar="N", range=TTL_RANGE, section="output",
+                      help="multicast time to live (0: this machine only; 1: the local network)")
+    speed: float = option(1.0, "--speed", metavar="X", range=SPEED_RANGE,
+                          help="how many times faster than recorded (10: a 3 h recording in 18 min)")
+    loop: bool = option(False, "--loop", help="start again at the end (until Ctrl-C or --duration)")
+    duration_s: float | None = option(
+        None, "--duration", metavar="SECONDS", range=DURATION_RANGE_S, unit="s",
+        help="stop after this many seconds (default: at the end of the recordings, or never with --loop)")
+    format: str | None = option(None, "--format", choices=FORMATS, section="reading",
+                                help="container format (default: detected)",
+                                doc="container format (default: detected; "
+                                    "[Containers](../decoding/containers.md))")
+
+
 # the options of each command, in the order msdc --help lists the commands
 COMMAND_OPTIONS: dict[str, type] = {"decode": DecodeOptions, "stats": StatsOptions,
                                     "correlate": CorrelateOptions, "quality": QualityOptions,
                                     "track": TrackOptions, "conflicts": ConflictOptions,
                                     "evaluate": EvaluateOptions, "ingest": IngestOptions,
-                                    "sql": SqlOptions}
+                                    "sql": SqlOptions, "listen": ListenOptions, "replay": ReplayOptions}
+# the guide page holding a command's options table, when not docs/guide/COMMAND.md
+COMMAND_PAGES = {"listen": "live", "replay": "live"}
 
 
 # ---------------------------------------------------------------------------------------------------------
@@ -919,11 +1021,12 @@ def write_docs(guide: Path = GUIDE, *, check: bool = False) -> list[Path]:
     pages that differed."""
     stale = []
     for command in COMMAND_OPTIONS:
-        page = guide / f"{command}.md"
+        page = guide / f"{COMMAND_PAGES.get(command, command)}.md"
         text = page.read_text()
         new = page_with_table(text, command)
         if new != text:
-            stale.append(page)
+            if page not in stale:
+                stale.append(page)
             if not check:
                 page.write_text(new)
     return stale

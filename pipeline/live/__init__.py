@@ -1,1 +1,4 @@
-"""Live feeds: receive ASTERIX over UDP, keep the recent reports, record, replay, and monitor them."""
+"""Live feeds (issue 30): receive ASTERIX over UDP (``receive``), decode it in batches (``decode``) into a
+thread-safe ``state.LiveState`` the monitor page reads, record it as pcapng (``record``) and replay any
+recording as UDP (``replay``); the monitor page (``monitor``) shows the state with the live figures of
+``health``."""

@@ -10,7 +10,7 @@ from pathlib import Path
 import pytest
 
 ROOT = Path(__file__).resolve().parents[2]
-AREAS = ("correlate", "quality", "report", "track", "conflict", "evaluate")
+AREAS = ("correlate", "quality", "report", "track", "conflict", "evaluate", "live")
 FRONT = ("msdc.pipeline.jobs", "msdc.pipeline.cli")
 
 
@@ -79,7 +79,7 @@ def test_the_command_modules_share_only_common_and_public_names():
     jobs.options, where every option is declared)."""
     commands = {p.stem for p in (ROOT / "pipeline" / "jobs").glob("*.py")} - {"__init__", "common", "options"}
     assert commands == {"decode", "stats", "correlate", "quality", "track", "conflicts", "evaluate", "ingest",
-                        "sql"}
+                        "sql", "listen", "replay"}
     wrong = []
     for path in SOURCES:
         mod = _module(path)

@@ -76,7 +76,15 @@ EXPECTED = {
                "--lenient": "lenient", "--chunk-mb": "chunk_mb", "--edition": "editions", "--date": "date",
                "--format": "format"},
     "sql": {"SQL": "query", "--dataset": "dataset", "--output": "output", "--limit": "limit"},
+    "listen": {"--udp": "udp", "--iface": "iface", "--sensors": "sensors", "--record": "record",
+               "--rotate": "rotate", "--http": "http", "--alarm-silent": "alarm_silent_s",
+               "--alarm-min-pd": "alarm_min_pd", "--alarm-min-mode3a-valid": "alarm_min_mode3a_valid",
+               "--alarm-min-modec-valid": "alarm_min_modec_valid", "--window": "window_s", "--queue": "queue",
+               "--duration": "duration_s", "--edition": "editions", "--dataset": "dataset"},
+    "replay": {"RECORDING": "inputs", "--to": "to", "--iface": "iface", "--ttl": "ttl", "--speed": "speed",
+               "--loop": "loop", "--duration": "duration_s", "--format": "format"},
 }
+PAGES = {"listen": "live", "replay": "live"}  # the guide page of a command not on COMMAND.md
 
 
 def _subparsers() -> dict[str, argparse.ArgumentParser]:
@@ -311,7 +319,7 @@ def test_the_options_import_no_heavy_library():
 def test_the_guide_shows_the_declared_options(command):
     """docs/guide/COMMAND.md holds the table options_table makes, between its markers (rewrite them with
     ``python -m msdc.pipeline.jobs.options --write-docs``), one row per option of the command."""
-    text = (ROOT / "docs" / "guide" / f"{command}.md").read_text()
+    text = (ROOT / "docs" / "guide" / f"{PAGES.get(command, command)}.md").read_text()
     table = text.partition(f"<!-- options: {command} -->\n")[2].partition("<!-- /options -->")[0]
     assert table == opts.options_table(COMMAND_OPTIONS[command]), "python -m msdc.pipeline.jobs.options " \
                                                                   "--write-docs rewrites it"
@@ -344,7 +352,8 @@ def test_a_table_row_says_what_the_option_takes():
 
 def test_a_stale_table_is_found_and_rewritten(tmp_path):
     for command in COMMAND_OPTIONS:
-        (tmp_path / f"{command}.md").write_text((ROOT / "docs" / "guide" / f"{command}.md").read_text())
+        page = f"{PAGES.get(command, command)}.md"
+        (tmp_path / page).write_text((ROOT / "docs" / "guide" / page).read_text())
     page = tmp_path / "track.md"
     page.write_text(page.read_text().replace("| `--smooth` | flag |", "| `--smooth` | switch |"))
     assert opts.write_docs(tmp_path, check=True) == [page] and "switch" in page.read_text()

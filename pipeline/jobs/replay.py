@@ -1,0 +1,76 @@
+"""The replay job (``msdc replay``): send recordings' data blocks as UDP with their original timing scaled
+(pipeline.live.replay), so that a live feed can be simulated from any recording."""
+
+from __future__ import annotations
+
+import ipaddress
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+
+from msdc.pipeline.jobs.common import JobError, input_files
+from msdc.pipeline.jobs.options import OptionError, ReplayOptions, check_declared
+
+
+@dataclass
+class ReplayResult:
+    """What was sent: datagrams, bytes, passes, wall time, and the recording's span in its own time."""
+
+    datagrams: int
+    bytes: int
+    passes: int
+    wall_s: float
+    span_s: float
+    scheduled: int  # datagrams in one pass
+    late_s: float
+    warnings: list[str]
+
+
+def validate(options: ReplayOptions):
+    """The inputs and the destination, checked before anything is read or sent."""
+    from msdc.pipeline.live.receive import parse_endpoint
+
+    check_declared(options)
+    if options.to is None:
+        raise OptionError("--to: give where to send, e.g. --to 239.1.2.3:8600")
+    try:
+        to = parse_endpoint(options.to, "--to")
+    except ValueError as exc:
+        raise OptionError(str(exc)) from None
+    if options.iface is not None:
+        try:
+            ipaddress.IPv4Address(options.iface)
+        except ValueError:
+            raise OptionError(f"--iface {options.iface!r}: not an IPv4 address") from None
+    if not options.inputs:
+        raise OptionError("RECORDING: give at least one recording to replay")
+    paths, warnings = input_files(list(options.inputs))
+    return to, paths, warnings
+
+
+def replay_job(options: ReplayOptions, *, stop: Callable[[], bool] = lambda: False) -> ReplayResult:
+    """Read the recordings' datagrams and times, then send them to --to at --speed (--loop, --duration)
+    until done or ``stop()``; Ctrl-C ends it with what was sent so far."""
+    from msdc.pipeline.live.replay import ReplayError, schedule, send, sending_socket
+
+    to, paths, warnings = validate(options)
+    try:
+        sched = schedule([Path(p) for p in paths], options.format)
+    except ReplayError as exc:
+        raise JobError(str(exc), 2) from None
+    try:
+        sock = sending_socket(to, options.iface, options.ttl)
+    except OSError as exc:
+        raise OptionError(f"--to {options.to}: cannot send there ({exc.strerror or exc})") from None
+    try:
+        sent = send(sched, sock, speed=options.speed, loop=options.loop, duration_s=options.duration_s,
+                    stop=stop)
+    except OSError as exc:
+        raise JobError(f"--to {options.to}: sending failed: {exc.strerror or exc}") from None
+    finally:
+        sock.close()
+    return ReplayResult(sent.datagrams, sent.bytes, sent.passes, sent.wall_s, sched.span_s, len(sched),
+                        float(sent.late_s), warnings)
+
+
+__all__ = ["ReplayOptions", "ReplayResult", "replay_job", "validate"]

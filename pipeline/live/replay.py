@@ -1,0 +1,228 @@
+"""Replaying recordings as UDP: the datagrams of pcap and pcapng captures (and the frames of final and GPS
+recordings) as they were captured, a raw recording one data block per datagram; each sent at its original
+time, scaled by ``speed``.
+
+Times: a capture's own capture times; a raw file has none, so each block goes out at the time of day of its
+first record that has one (I048/140, I021/073...: what msdc decodes as time_of_day), a block without one
+(a category msdc does not decode, a block that fails) at the time of the block before it. Within a recording
+the order of the file is kept: a block stamped earlier than the one before it goes out right after it.
+Several recordings are merged by time."""
+
+from __future__ import annotations
+
+import math
+import socket
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from msdc.pipeline.live.receive import Endpoint
+
+SECONDS_PER_DAY = 86400
+HALF_DAY_S = 43200
+TIMED_FORMATS = ("pcap", "pcapng", "final", "gps")
+REPLAYED_FORMATS = ("raw", *TIMED_FORMATS)
+SLEEP_MIN_S = 0.0005  # datagrams due within this are sent at once (the OS sleeps no finer)
+
+
+class ReplayError(ValueError):
+    """A recording cannot be replayed: names it and why."""
+
+
+@dataclass
+class Schedule:
+    """The datagrams of one or more recordings in sending order: seconds from the first, and their bytes."""
+
+    time_s: np.ndarray  # float64, non-decreasing, 0 for the first datagram
+    data: list[bytes]
+
+    @property
+    def span_s(self) -> float:
+        return float(self.time_s[-1]) if len(self.time_s) else 0.0
+
+    def __len__(self) -> int:
+        return len(self.data)
+
+
+def recording_datagrams(path: str | Path, fmt: str | None = None) -> tuple[np.ndarray, list[bytes]]:
+    """(time in seconds, non-decreasing, file order; datagram bytes) of one recording; ReplayError when it
+    cannot be replayed."""
+    from msdc.asterix.containers import read_segments
+
+    path = Path(path)
+    try:
+        data = path.read_bytes()
+    except OSError as exc:
+        raise ReplayError(f"{path}: cannot read: {exc.strerror or exc}") from exc
+    try:
+        seg = read_segments(data, fmt)
+    except ValueError as exc:
+        raise ReplayError(f"{path}: {exc}") from exc
+    if seg.format == "raw":
+        return _raw_blocks(path, data, fmt)
+    if seg.format not in TIMED_FORMATS:
+        sent = ", ".join(REPLAYED_FORMATS)
+        raise ReplayError(f"{path}: a {seg.format} recording; msdc replay sends {sent} recordings")
+    if not len(seg.start):
+        raise ReplayError(f"{path}: no ASTERIX payload found in this {seg.format} recording")
+    times = seg.capture_day.astype(np.float64) * SECONDS_PER_DAY + seg.capture_tod
+    if seg.format in ("final", "gps"):  # a day number (or none): times of day only, unwrapped in file order
+        times = _unwrap(seg.capture_tod)
+    payloads = [data[a:b] for a, b in zip(seg.start.tolist(), seg.stop.tolist(), strict=True)]
+    return _monotonic(times), payloads
+
+
+def _raw_blocks(path: Path, data: bytes, fmt: str | None) -> tuple[np.ndarray, list[bytes]]:
+    """A raw recording's data blocks (its chain of CAT, LEN headers) and each one's time (module doc)."""
+    import msdc.asterix as asterix
+    from msdc.asterix.categories import DECODABLE
+
+    starts, pos = [], 0
+    while pos < len(data):
+        length = int.from_bytes(data[pos + 1:pos + 3], "big") if pos + 3 <= len(data) else 0
+        if length < 3 or pos + length > len(data):
+            raise ReplayError(f"{path}: offset {pos}: the raw chain of data blocks breaks (LEN {length}); "
+                              "msdc replay sends a raw recording whose blocks follow each other exactly "
+                              "('msdc stats' lists what is wrong)")
+        starts.append(pos)
+        pos += length
+    if not starts:
+        raise ReplayError(f"{path}: empty recording")
+    try:
+        rec = asterix.read(path, categories=DECODABLE, columns=["time_of_day"], format=fmt)
+    except asterix.AsterixError as exc:
+        raise ReplayError(f"{path}: {exc}") from exc
+    block_s = np.full(len(starts), np.nan)
+    for frame in rec.frames.values():
+        if len(frame) and "time_of_day" in frame:
+            b = frame["block"].to_numpy(np.int64)
+            t = frame["time_of_day"].to_numpy(np.float64)
+            ok = np.isfinite(t) & (b < len(starts))
+            first = np.full(len(starts), np.nan)
+            order = np.argsort(b[ok], kind="stable")[::-1]  # the first record of each block wins
+            first[b[ok][order]] = t[ok][order]
+            block_s = np.where(np.isnan(block_s), first, block_s)
+    if np.isnan(block_s).all():
+        raise ReplayError(f"{path}: no record with a time of day: nothing to time the blocks by")
+    stops = [*starts[1:], len(data)]
+    return _monotonic(_unwrap(_carry(block_s))), [data[a:b] for a, b in zip(starts, stops, strict=True)]
+
+
+def _carry(t: np.ndarray) -> np.ndarray:
+    """NaN times take the time before them (the first valid one at the start)."""
+    t = t.copy()
+    valid = np.flatnonzero(np.isfinite(t))
+    t[:valid[0]] = t[valid[0]]
+    idx = np.where(np.isfinite(t), np.arange(len(t)), 0)
+    return t[np.maximum.accumulate(idx)]
+
+
+def _unwrap(tod: np.ndarray) -> np.ndarray:
+    """Times of day in file order made continuous across midnights (a drop of more than 12 h is a new day)."""
+    tod = _carry(np.asarray(tod, np.float64)) if np.isfinite(tod).any() else np.zeros(len(tod))
+    steps = np.diff(tod, prepend=tod[:1])
+    return tod + SECONDS_PER_DAY * np.cumsum(steps < -HALF_DAY_S) - SECONDS_PER_DAY * np.cumsum(
+        steps > HALF_DAY_S)
+
+
+def _monotonic(t: np.ndarray) -> np.ndarray:
+    """File order kept: each time at least the one before it (NaN: the one before)."""
+    t = np.where(np.isfinite(t), t, -np.inf)
+    t = np.maximum.accumulate(t)
+    return np.where(np.isfinite(t), t, t[np.isfinite(t)][0] if np.isfinite(t).any() else 0.0)
+
+
+def schedule(paths: list[str | Path], fmt: str | None = None) -> Schedule:
+    """Every recording's datagrams merged by time (a stable merge: each file's order kept), as seconds from
+    the first datagram. Recordings that do not overlap in time are replayed one after the other only if
+    their times say so: their absolute times are kept (a raw file's are times of day)."""
+    times, data = [], []
+    for p in paths:
+        t, d = recording_datagrams(p, fmt)
+        times.append(t)
+        data.extend(d)
+    t = np.concatenate(times)
+    order = np.argsort(t, kind="stable")
+    t = t[order]
+    return Schedule(t - t[0], [data[i] for i in order])
+
+
+def sending_socket(to: Endpoint, iface: str | None, ttl: int) -> socket.socket:
+    """A UDP socket sending to ``to``: multicast out of ``iface`` (default: the kernel's route) with ``ttl``
+    and loop-back on (a listener on this machine hears it)."""
+    sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM, socket.IPPROTO_UDP)
+    try:
+        try:
+            sock.setsockopt(socket.SOL_SOCKET, socket.SO_SNDBUF, 8 << 20)
+        except OSError:
+            pass
+        if to.multicast:
+            sock.setsockopt(socket.IPPROTO_IP, socket.IP_MULTICAST_TTL, ttl)
+            sock.setsockopt(socket.IPPROTO_IP, socket.IP_MULTICAST_LOOP, 1)
+            if iface:
+                sock.setsockopt(socket.IPPROTO_IP, socket.IP_MULTICAST_IF, socket.inet_aton(iface))
+        else:
+            sock.setsockopt(socket.IPPROTO_IP, socket.IP_TTL, max(ttl, 1))
+        if iface:
+            sock.bind((iface, 0))
+        sock.connect((to.host, to.port))
+    except OSError:
+        sock.close()
+        raise
+    return sock
+
+
+@dataclass
+class Sent:
+    """What a replay sent."""
+
+    datagrams: int = 0
+    bytes: int = 0
+    passes: int = 0  # times the schedule was gone through (--loop)
+    wall_s: float = 0.0
+    late_s: float = 0.0  # the most a datagram went out after its scaled time
+
+
+def send(sched: Schedule, sock: socket.socket, *, speed: float = 1.0, loop: bool = False,
+         duration_s: float | None = None, stop: Callable[[], bool] = lambda: False,
+         clock: Callable[[], float] = time.monotonic, sleep: Callable[[float], None] = time.sleep) -> Sent:
+    """Send the schedule, each datagram at its time / ``speed`` from the start; again and again with
+    ``loop`` (the next pass starts one mean datagram interval after the last, 1 s of recording when there
+    is no interval); until ``duration_s`` (wall) or ``stop()``."""
+    out = Sent()
+    if not len(sched):
+        return out
+    gap_s = sched.span_s / (len(sched) - 1) if len(sched) > 1 and sched.span_s > 0 else 1.0
+    pass_s = sched.span_s + gap_s
+    t0 = clock()
+    end = math.inf if duration_s is None else t0 + duration_s
+    times = sched.time_s / speed
+    while True:
+        base = t0 + out.passes * pass_s / speed
+        i = 0
+        n = len(sched)
+        while i < n:
+            now = clock()
+            if now >= end or stop():
+                out.wall_s = now - t0
+                return out
+            due = base + times[i]
+            if due - now > SLEEP_MIN_S:
+                sleep(min(due - now, end - now, 0.1))
+                continue
+            j = int(np.searchsorted(times, now - base, side="right"))  # everything due by now
+            j = max(j, i + 1)
+            for k in range(i, j):
+                d = sched.data[k]
+                sock.send(d)
+                out.bytes += len(d)
+            out.datagrams += j - i
+            out.late_s = max(out.late_s, now - due)
+            i = j
+        out.passes += 1
+        if not loop:
+            out.wall_s = clock() - t0
+            return out

@@ -1,0 +1,103 @@
+"""msdc listen and msdc replay on the command line: bad options say what is wrong in one line (never a
+traceback), and Ctrl-C (SIGINT to the process) ends listen with status 0 and a complete recording that
+msdc stats reads."""
+
+from __future__ import annotations
+
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+from asterix_bytes import block
+from live_bytes import cat048_record, free_port, send_all
+
+from msdc.pipeline.cli import main
+
+ROOT = Path(__file__).resolve().parents[3]
+
+
+@pytest.mark.parametrize(("argv", "message"), [
+    (["listen", "--udp", "127.0.0.1"], "--udp '127.0.0.1': expected ADDR:PORT"),
+    (["listen", "--udp", "localhost:8600"], "--udp 'localhost:8600': 'localhost' is not an IPv4 address"),
+    (["listen", "--udp", "127.0.0.1:70000"], "--udp '127.0.0.1:70000': the port must be a number from 1"),
+    (["listen", "--udp", "127.0.0.1:8600", "--udp", "127.0.0.1:8600"], "--udp 127.0.0.1:8600: given twice"),
+    (["listen", "--udp", "127.0.0.1:8600", "--rotate", "soon"], "--rotate 'soon': expected a period"),
+    (["listen", "--udp", "127.0.0.1:8600", "--iface", "eth0"], "--iface 'eth0': not an IPv4 address"),
+    (["listen", "--udp", "127.0.0.1:8600", "--queue", "0"], "--queue 0: must be an integer from 1"),
+    (["replay", "nowhere.ast", "--to", "127.0.0.1:8600"], "nowhere.ast: input file does not exist"),
+    (["replay", "fixtures/radar.ast", "--to", "127.0.0.1"], "--to '127.0.0.1': expected ADDR:PORT"),
+    (["replay", "fixtures/radar.ast", "--to", "127.0.0.1:8600", "--speed", "0"], "--speed 0.0: must be a"),
+])
+def test_bad_options_are_one_line(argv, message, capsys, monkeypatch):
+    monkeypatch.chdir(ROOT)
+    assert main(argv) == 2
+    err = capsys.readouterr().err
+    assert err.startswith(f"msdc {argv[0]}: {message}") and "Traceback" not in err
+
+
+def test_a_record_folder_that_cannot_be_written_is_refused_before_listening(tmp_path, capsys):
+    (tmp_path / "file").write_text("x")
+    assert main(["listen", "--udp", f"127.0.0.1:{free_port()}", "--record", str(tmp_path / "file")]) == 2
+    assert f"--record {tmp_path / 'file'}: not a folder" in capsys.readouterr().err
+    assert (tmp_path / "file").read_text() == "x"
+
+
+def test_http_says_when_the_monitor_is_not_installed(capsys):
+    import importlib.util
+
+    if importlib.util.find_spec("msdc.pipeline.live.monitor") is not None:
+        pytest.skip("the monitor is installed: --http serves it")
+    assert main(["listen", "--udp", f"127.0.0.1:{free_port()}", "--http", "127.0.0.1:8080"]) == 2
+    assert "--http: the monitor is not available" in capsys.readouterr().err
+
+
+def test_an_http_port_taken_is_refused(capsys, monkeypatch):
+    import socket
+
+    from msdc.pipeline.jobs import listen
+
+    monkeypatch.setattr(listen, "monitor_thresholds", lambda asked: None)  # as if the monitor were there
+    with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as taken:
+        taken.bind(("127.0.0.1", 0))
+        taken.listen()
+        port = taken.getsockname()[1]
+        assert main(["listen", "--udp", f"127.0.0.1:{free_port()}", "--http", f"127.0.0.1:{port}"]) == 2
+    assert f"--http 127.0.0.1:{port}: cannot serve the monitor there (Address already in use)" in \
+        capsys.readouterr().err
+
+
+def test_a_raw_file_whose_chain_breaks_is_not_replayed(tmp_path, capsys):
+    one = block(48, cat048_record(25, 201, 10.0))
+    (tmp_path / "cut.ast").write_bytes(one + one[:5])
+    assert main(["replay", str(tmp_path / "cut.ast"), "--to", f"127.0.0.1:{free_port()}"]) == 2
+    assert f"cut.ast: offset {len(one)}: the raw chain of data blocks breaks" in capsys.readouterr().err
+
+
+def test_ctrl_c_ends_listen_with_a_complete_recording(tmp_path, capsys):
+    port = free_port()
+    folder = tmp_path / "rec"
+    argv = [sys.executable, "-m", "msdc.pipeline.cli", "listen", "--udp", f"127.0.0.1:{port}", "--record",
+            str(folder)]
+    proc = subprocess.Popen(argv, cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    try:
+        assert "receiving 127.0.0.1:" in proc.stderr.readline()
+        datagrams = [block(48, cat048_record(25, 201, 100.0 + i), cat048_record(25, 201, 100.5 + i))
+                     for i in range(5)]
+        send_all(datagrams, port)
+        time.sleep(0.3)  # received; the decoding thread may still hold them when the signal comes
+        proc.send_signal(signal.SIGINT)
+        out, err = proc.communicate(timeout=60)
+    finally:
+        proc.kill()
+    assert proc.returncode == 0, err
+    assert "Traceback" not in err and f"127.0.0.1:{port}: 5 packets" in out
+    (path,) = folder.iterdir()
+    assert path.suffix == ".pcapng"  # closed and renamed: no .part left
+    capsys.readouterr()
+    assert main(["stats", str(path)]) == 0
+    stats = capsys.readouterr().out
+    row = next(line.split() for line in stats.splitlines() if line.split()[:3] == ["48", "25", "201"])
+    assert row[3] == "10"  # records of 048 25/201: 5 datagrams of 2

@@ -1,0 +1,96 @@
+"""What replay sends and when (pipeline.live.replay): raw blocks timed by their first record's time of day
+(hand-built records), capture times of a hand-built pcap, the pacing by speed and loop on a fake clock."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from asterix_bytes import block
+from container_bytes import pcap_file, udp_frame
+from live_bytes import cat034_north_marker, cat048_record
+
+from msdc.pipeline.live.replay import ReplayError, Schedule, schedule, send
+
+
+def test_raw_blocks_go_at_their_first_records_time_in_file_order(tmp_path):
+    blocks = [block(48, cat048_record(25, 201, 100.0), cat048_record(25, 201, 99.0)),  # first record: 100
+              cat034_north_marker(25, 201, 101.5),
+              block(30, b"\x80\x01\x02"),  # a category msdc does not decode: the time before it
+              block(48, cat048_record(25, 201, 98.0)),  # earlier than the block before: sent right after
+              block(48, cat048_record(25, 201, 104.25))]
+    path = tmp_path / "feed.ast"
+    path.write_bytes(b"".join(blocks))
+    sched = schedule([path])
+    assert sched.data == blocks
+    assert list(sched.time_s) == [0.0, 1.5, 1.5, 1.5, 4.25]
+
+
+def test_raw_times_run_on_across_midnight(tmp_path):
+    blocks = [block(48, cat048_record(25, 201, 86399.5)), block(48, cat048_record(25, 201, 0.25))]
+    (tmp_path / "midnight.ast").write_bytes(b"".join(blocks))
+    assert list(schedule([tmp_path / "midnight.ast"]).time_s) == [0.0, 0.75]
+
+
+def test_a_capture_sends_its_datagrams_at_their_capture_times(tmp_path):
+    payloads = [block(48, cat048_record(25, 201, 10.0)), block(48, cat048_record(25, 201, 11.0)) * 2,
+                cat034_north_marker(25, 201, 12.0)]
+    data, _ = pcap_file([(1_700_000_000, 250_000, udp_frame(payloads[0])),
+                         (1_700_000_002, 0, udp_frame(payloads[1])),
+                         (1_700_000_002, 500_000, udp_frame(payloads[2]))])
+    (tmp_path / "c.pcap").write_bytes(data)
+    sched = schedule([tmp_path / "c.pcap"])
+    assert sched.data == payloads  # the datagrams as captured: two blocks stay one datagram
+    assert list(sched.time_s) == [0.0, 1.75, 2.25]
+
+
+def test_several_recordings_are_merged_by_time(tmp_path):
+    a = [block(48, cat048_record(25, 201, t)) for t in (10.0, 12.0)]
+    b = [block(48, cat048_record(30, 1, t)) for t in (11.0, 13.0)]
+    (tmp_path / "a.ast").write_bytes(b"".join(a))
+    (tmp_path / "b.ast").write_bytes(b"".join(b))
+    sched = schedule([tmp_path / "a.ast", tmp_path / "b.ast"])
+    assert sched.data == [a[0], b[0], a[1], b[1]] and list(sched.time_s) == [0.0, 1.0, 2.0, 3.0]
+
+
+def test_a_broken_raw_chain_is_refused_naming_the_offset(tmp_path):
+    good = block(48, cat048_record(25, 201, 10.0))
+    (tmp_path / "cut.ast").write_bytes(good + good[:-1])
+    with pytest.raises(ReplayError, match=rf"cut.ast: offset {len(good)}: the raw chain of data blocks"):
+        schedule([tmp_path / "cut.ast"])
+
+
+class _Clock:
+    """A fake monotonic clock that sleeping advances."""
+
+    def __init__(self):
+        self.now = 0.0
+
+    def __call__(self) -> float:
+        return self.now
+
+    def sleep(self, s: float) -> None:
+        self.now += s
+
+
+class _Socket:
+    def __init__(self, clock):
+        self.clock, self.sent = clock, []
+
+    def send(self, data: bytes) -> int:
+        self.sent.append((round(self.clock(), 9), data))
+        return len(data)
+
+
+def test_send_scales_the_times_and_loops_until_the_duration():
+    sched = Schedule(np.array([0.0, 1.0, 1.0, 3.0]), [b"a", b"b", b"c", b"d"])
+    clock = _Clock()
+    sock = _Socket(clock)
+    out = send(sched, sock, speed=2.0, clock=clock, sleep=clock.sleep)
+    assert sock.sent == [(0.0, b"a"), (0.5, b"b"), (0.5, b"c"), (1.5, b"d")]
+    assert (out.datagrams, out.bytes, out.passes) == (4, 4, 1)
+    # --loop: a pass lasts the span plus one mean interval (3 + 1 s of recording: 2 s at speed 2)
+    clock = _Clock()
+    sock2 = _Socket(clock)
+    out = send(sched, sock2, speed=2.0, loop=True, duration_s=3.0, clock=clock, sleep=clock.sleep)
+    assert [t for t, _ in sock2.sent] == [0.0, 0.5, 0.5, 1.5, 2.0, 2.5, 2.5]
+    assert out.datagrams == 7 and out.passes == 1
