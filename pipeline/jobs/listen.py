@@ -4,7 +4,6 @@ feed brings, record it as pcapng and serve the monitor page (pipeline.live). Run
 
 from __future__ import annotations
 
-import importlib.util
 import logging
 import os
 import re
@@ -25,7 +24,6 @@ if TYPE_CHECKING:
 
 STATUS_S = 10.0  # a status line on stderr this often
 DROP_NOTE_S = 1.0  # datagrams dropped are said at most this often (each time with the count since)
-MONITOR = "msdc.pipeline.live.monitor"
 _PERIODS = {"s": 1, "m": 60, "h": 3600, "d": 86400}
 _SIZES = {"kb": 10**3, "mb": 10**6, "gb": 10**9}
 MIN_ROTATE_S, MIN_ROTATE_BYTES = 1, 10**5
@@ -123,14 +121,10 @@ def validate(options: ListenOptions) -> Checked:
 
 
 def monitor_thresholds(asked: dict[str, float]):
-    """The monitor's Thresholds, its defaults replaced by the options given; OptionError when the monitor
-    is not installed."""
+    """The monitor's Thresholds, its defaults replaced by the options given."""
     import dataclasses
 
-    if importlib.util.find_spec(MONITOR) is None:
-        raise OptionError("--http: the monitor is not available (msdc.pipeline.live.monitor is not "
-                          "installed)")
-    from msdc.pipeline.live.monitor import Thresholds  # type: ignore[import-not-found]
+    from msdc.pipeline.live.monitor import Thresholds
 
     names = {"alarm_silent_s": "silent_s", "alarm_min_pd": "min_pd",
              "alarm_min_mode3a_valid": "min_mode3a_valid", "alarm_min_modec_valid": "min_modec_valid",

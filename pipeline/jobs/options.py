@@ -21,6 +21,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from msdc.asterix.categories import DECODABLE, MEASUREMENT_CATEGORIES
+from msdc.pipeline.live.monitor import Thresholds
 from msdc.pipeline.meta import (
     ADSB_SIGMA_RANGE_M,
     FILLS,
@@ -849,7 +850,7 @@ SPEED_RANGE = (0.001, 1e6)  # replay --speed: a 3 h recording in 10 ms at most
 TTL_RANGE = (0, 255)
 ALARM_FRACTION_RANGE = (0.0, 1.0)
 ALARM_SECONDS_RANGE = (1.0, 86400.0)
-MONITOR_DEFAULTS = "the monitor's, msdc.pipeline.live.monitor.Thresholds"
+_T = Thresholds  # the monitor's alarm thresholds: their defaults are said in the listen options' help
 
 
 @dataclass(frozen=True)
@@ -888,21 +889,21 @@ class ListenOptions:
         help="serve the monitor page at http://HOST:PORT (e.g. 127.0.0.1:8080)")
     alarm_silent_s: float | None = option(
         None, "--alarm-silent", metavar="SECONDS", range=ALARM_SECONDS_RANGE, unit="s", section="output",
-        help=f"monitor: a sensor with no report for this long is silent (default: {MONITOR_DEFAULTS})")
+        help=f"monitor: a sensor with no report for this long is silent (default: {_T.silent_s:g} s)")
     alarm_min_pd: float | None = option(
         None, "--alarm-min-pd", metavar="P", range=ALARM_FRACTION_RANGE, section="output",
-        help=f"monitor: a live probability of update below this is degraded (default: {MONITOR_DEFAULTS})")
+        help=f"monitor: a live probability of update below this is degraded (default: {_T.min_pd:g})")
     alarm_min_mode3a_valid: float | None = option(
         None, "--alarm-min-mode3a-valid", metavar="P", range=ALARM_FRACTION_RANGE, section="output",
         help=f"monitor: a share of valid Mode 3/A codes below this raises an alarm (default: "
-             f"{MONITOR_DEFAULTS})")
+             f"{_T.min_mode3a_valid:g})")
     alarm_min_modec_valid: float | None = option(
         None, "--alarm-min-modec-valid", metavar="P", range=ALARM_FRACTION_RANGE, section="output",
         help=f"monitor: a share of valid Mode C codes below this raises an alarm (default: "
-             f"{MONITOR_DEFAULTS})")
+             f"{_T.min_modec_valid:g})")
     window_s: float | None = option(
         None, "--window", metavar="SECONDS", range=ALARM_SECONDS_RANGE, unit="s", section="output",
-        help=f"monitor: the sliding window of the live figures (default: {MONITOR_DEFAULTS})")
+        help=f"monitor: the sliding window of the live figures (default: {_T.window_s:g} s)")
     queue: int = option(
         50_000, "--queue", metavar="N", range=QUEUE_RANGE,
         help="datagrams each feed's queue holds while the decoding thread catches up; when full, datagrams "

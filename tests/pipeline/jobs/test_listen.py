@@ -45,15 +45,6 @@ def test_a_record_folder_that_cannot_be_written_is_refused_before_listening(tmp_
     assert (tmp_path / "file").read_text() == "x"
 
 
-def test_http_says_when_the_monitor_is_not_installed(capsys):
-    import importlib.util
-
-    if importlib.util.find_spec("msdc.pipeline.live.monitor") is not None:
-        pytest.skip("the monitor is installed: --http serves it")
-    assert main(["listen", "--udp", f"127.0.0.1:{free_port()}", "--http", "127.0.0.1:8080"]) == 2
-    assert "--http: the monitor is not available" in capsys.readouterr().err
-
-
 def test_an_http_port_taken_is_refused(capsys, monkeypatch):
     import socket
 

@@ -212,3 +212,31 @@ def test_a_port_already_taken_is_refused_naming_the_feed():
         port = taken.getsockname()[1]
         with pytest.raises(OptionError, match=rf"^--udp 127.0.0.1:{port}: cannot receive: Address already"):
             listen_job(ListenOptions(udp=(f"127.0.0.1:{port}",)), say=lambda line: None)
+
+
+def test_listen_serves_the_monitor_of_a_replay(tmp_path):
+    """listen --http end to end: the fixtures replayed over the loopback at 6,000 times real time (about 2 s)
+    show on the monitor's snapshot as targets and sensors with counts; once the replay ends, the radar is
+    said silent (--alarm-silent 1). The page itself is tested in a browser on a replaying state
+    (tests/pipeline/live/monitor/test_page.py)."""
+    import json
+    import urllib.request
+
+    port, http = free_port(), free_port()
+    options = ListenOptions(udp=(f"127.0.0.1:{port}",), http=f"127.0.0.1:{http}",
+                            sensors=str(ROOT / "fixtures" / "sensors.toml"), alarm_silent_s=1.0, window_s=30.0)
+
+    def snapshot() -> dict:
+        with urllib.request.urlopen(f"http://127.0.0.1:{http}/snapshot.json", timeout=5) as reply:
+            return json.loads(reply.read())
+
+    with Running(options) as run:
+        sent = replay_job(ReplayOptions(inputs=tuple(map(str, FIXTURES)), to=f"127.0.0.1:{port}",
+                                        speed=6000.0))
+        _wait(lambda: run.packets() == sent.datagrams)
+        _wait(lambda: len(snapshot()["targets"]) > 0, timeout_s=5.0)
+        snap = snapshot()
+        assert {s["sensor_id"] for s in snap["sensors"]} == {"048:25/201", "021:0/1"}
+        _wait(lambda: any(a["kind"] == "silent" and a.get("sensor_id") == "048:25/201"
+                          for a in snapshot()["alarms"]), timeout_s=5.0)
+    assert run.result.counters[f"udp:127.0.0.1:{port}"]["records"]["048:25/201"] > 0
