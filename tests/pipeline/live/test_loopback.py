@@ -224,7 +224,8 @@ def test_listen_serves_the_monitor_of_a_replay(tmp_path):
 
     port, http = free_port(), free_port()
     options = ListenOptions(udp=(f"127.0.0.1:{port}",), http=f"127.0.0.1:{http}",
-                            sensors=str(ROOT / "fixtures" / "sensors.toml"), alarm_silent_s=1.0, window_s=30.0)
+                            sensors=str(ROOT / "fixtures" / "sensors.toml"), alarm_silent_s=1.0,
+                            window_s=30.0)
 
     def snapshot() -> dict:
         with urllib.request.urlopen(f"http://127.0.0.1:{http}/snapshot.json", timeout=5) as reply:
