@@ -6,6 +6,7 @@ and report for each speed the records a second sent, received and lost, and the 
     python benchmarks/live_load.py                        # 127.0.0.1 unicast, 4 s per speed
     python benchmarks/live_load.py --keep /tmp/bench3h    # reuse the recordings benchmarks/pipeline.py kept
     python benchmarks/live_load.py --record               # listen also records (pcapng in a temporary folder)
+    python benchmarks/live_load.py --http                 # listen also serves the monitor (one page open)
 
 Target: 20 times a busy centre's real-time rate (2,000 plots + 5,000 ADS-B reports a second x 20 = 140,000
 records a second) without loss on a 2-core machine. Loopback only (127.0.0.1): nothing leaves the machine.
@@ -93,9 +94,26 @@ def free_port() -> int:
         return s.getsockname()[1]
 
 
-def run_speed(sched, per_dgram: np.ndarray, speed: float, seconds: float, record: Path | None) -> dict:
+def _open_page(port: int, stop) -> None:
+    """A page's event stream held open (the monitor then computes a snapshot a second), read until stop."""
+    import urllib.request
+
+    for _ in range(100):
+        try:
+            with urllib.request.urlopen(f"http://127.0.0.1:{port}/events", timeout=5) as stream:
+                while not stop.is_set():
+                    stream.readline()
+            return
+        except OSError:
+            time.sleep(0.1)
+
+
+def run_speed(sched, per_dgram: np.ndarray, speed: float, seconds: float, record: Path | None,
+              sensors: Path | None = None) -> dict:
     """listen in a fresh process, the schedule looped at ``speed`` for ``seconds``, then Ctrl-C: the
-    figures of that run."""
+    figures of that run. With ``sensors``, listen serves the monitor (--http) and one page follows it."""
+    import threading
+
     from msdc.pipeline.live.receive import Endpoint
     from msdc.pipeline.live.replay import send, sending_socket
 
@@ -103,10 +121,16 @@ def run_speed(sched, per_dgram: np.ndarray, speed: float, seconds: float, record
     argv = [sys.executable, "-m", "msdc.pipeline.cli", "listen", "--udp", f"127.0.0.1:{port}"]
     if record is not None:
         argv += ["--record", str(record)]
+    http = free_port() if sensors is not None else None
+    if http is not None:
+        argv += ["--http", f"127.0.0.1:{http}", "--sensors", str(sensors)]
+    page_stop = threading.Event()
     proc = subprocess.Popen(argv, cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     try:
         line = proc.stderr.readline()
         assert "receiving" in line, line + proc.stderr.read()
+        if http is not None:
+            threading.Thread(target=_open_page, args=(http, page_stop), daemon=True).start()
         time.sleep(0.5)
         cpu0, buf0 = cpu_s(proc.pid), udp_rcvbuf_errors()
         sock = sending_socket(Endpoint("127.0.0.1", port), None, 1)
@@ -124,6 +148,7 @@ def run_speed(sched, per_dgram: np.ndarray, speed: float, seconds: float, record
         proc.send_signal(signal.SIGINT)
         out, err = proc.communicate(timeout=120)
     finally:
+        page_stop.set()
         proc.kill()
     m = re.search(r"(\d+) packets, (\d+) bytes, (\d+) records, (\d+) unframed, (\d+) decode errors, "
                   r"(\d+) dropped", out)
@@ -143,6 +168,7 @@ def main() -> None:
     ap.add_argument("--speeds", default="2000,4000,8000,16000,24000,32000,48000,64000",
                     help="comma-separated speeds, tried in order until records are lost")
     ap.add_argument("--record", action="store_true", help="listen records as pcapng too")
+    ap.add_argument("--http", action="store_true", help="listen serves the monitor, one page following it")
     args = ap.parse_args()
     from msdc.pipeline.live.replay import schedule
 
@@ -159,7 +185,8 @@ def main() -> None:
     with tempfile.TemporaryDirectory() as tmp:
         for i, speed in enumerate(float(s) for s in args.speeds.split(",")):
             record = Path(tmp) / f"rec{i}" if args.record else None
-            r = run_speed(sched, per_dgram, speed, args.seconds, record)
+            sensors = paths[0].parent / "sensors.toml" if args.http else None
+            r = run_speed(sched, per_dgram, speed, args.seconds, record, sensors)
             lost = r["expected"] - r["records"]
             sent_rate = r["expected"] / r["wall_s"]
             per10k = r["cpu_s"] / max(r["records"], 1) * 10_000

@@ -213,3 +213,35 @@ def test_targets_trails_labels_and_staleness() -> None:
 def test_thresholds_refuse_values_naming_the_field(field: str, value: float) -> None:
     with pytest.raises(ValueError, match=field):
         Thresholds(**{field: value})
+
+
+def test_a_large_window_is_measured_on_whole_tracks_in_a_fixed_order(monkeypatch) -> None:
+    """12 tracks of 10 scans (120 reports) with MAX_FIGURE_REPORTS 45: the figures are measured on the 4
+    tracks whose keys have the lowest CRC-32 (40 reports; a fifth would pass 45), and the panel says so;
+    each of those tracks misses scans 3 and 6, so PD is 8 of 10 per track: 32 of 40."""
+    import zlib
+
+    from msdc.pipeline.live import health
+
+    monkeypatch.setattr(health, "MAX_FIGURE_REPORTS", 45)
+    seen = [0, 1, 2, 4, 5, 7, 8, 9]
+    frames = [reports("048:25/201", t, seen + ([3, 6] if t % 2 else [])) for t in range(1, 13)]
+    window = pd.concat(frames, ignore_index=True)  # odd tracks complete (10 reports), even ones 8
+    sizes = {f"A:AC{t}": 10 if t % 2 else 8 for t in range(1, 13)}
+    order = sorted(sizes, key=lambda k: zlib.crc32(k.encode()))
+    total, chosen = 0, []
+    for k in order:  # whole tracks in CRC-32 order while they fit
+        if total + sizes[k] > 45:
+            break
+        total, chosen = total + sizes[k], [*chosen, k]
+    sample, said = health.figure_sample(window)
+    assert said == {"tracks": len(chosen), "of_tracks": 12, "reports": total, "of_reports": len(window)}
+    assert set("A:" + sample["aircraft_id"].astype(str)) == set(chosen)
+    counters = {"udp:239.1.2.3:8600": {"records": {"048:25/201": len(window)}, "decode_errors": 0}}
+    snap, _ = snapshot(window, counters, {}, NOW, NOW - 120.0, Thresholds(window_s=120.0))
+    (panel,) = snap["sensors"]
+    assert panel["figures_sample"] == said and panel["reports_in_window"] == len(window)
+    updates = sum(10 for k in chosen)
+    detected = sum(sizes[k] for k in chosen)
+    assert (panel["pd"]["value"]) == pytest.approx(detected / updates)
+    assert health.figure_sample(window.iloc[:40])[1] is None  # up to the cap: every report

@@ -53,6 +53,7 @@
       const rows = [
         ["reports per second", num(s.reports_per_s, 2), "rate", "", ""],
         ["reports in window / records", `${s.reports_in_window} / ${s.records_total}`, "records", "", ""],
+        ["figures measured on", s.figures_sample ? `${s.figures_sample.tracks} of ${s.figures_sample.of_tracks} tracks` : "every track", "sample", "", ""],
         ["update interval", num(s.update_interval_s, 2, " s"), "interval",
          s.update_interval_s === null ? "withheld" : "", s.update_interval_note],
         ["last report", age(s.last_report_age_s), "last-report",
