@@ -204,10 +204,9 @@ def _stream(path: Path, label: str, options: IngestOptions, checked: Checked, ro
             cats: list[int], pool, seen: _Seen, on_chunk) -> list[dict]:
     """The input streamed in chunks (asterix.iter_read) into one writer: its parts' records."""
     import msdc.asterix as asterix
-    from msdc.pipeline.dataset.writer import InputWriter
-    from msdc.pipeline.report.record_schema import record_schema
+    from msdc.pipeline.dataset.writer import InputWriter, arrow_schema
 
-    writer = InputWriter(root, iid, {c: record_schema(c).arrow() for c in cats})
+    writer = InputWriter(root, iid, {c: arrow_schema(c) for c in cats})
     bar = (lambda done, total, what: on_chunk(done, total, f"{path.name}: {what}")) if on_chunk else None
     try:
         for rec in asterix.iter_read(path, chunk=max(int(options.chunk_mb * 1e6), 1),
