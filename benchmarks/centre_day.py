@@ -164,11 +164,12 @@ def fleet_of(starts: np.ndarray, durations: np.ndarray, ids: np.ndarray, seed: i
 
 
 def _identity(ids: np.ndarray) -> dict[str, np.ndarray]:
-    """Address, callsign and Mode 3/A of flights ``ids`` (one aircraft per flight)."""
-    names = np.array([f"CTR{i:05d}" for i in range(int(ids.max()) + 1)], dtype=object) if len(ids) else []
-    return {"address": np.array([f"{0x400000 + i:06X}" for i in ids], dtype=object),
-            "callsign": np.asarray(names, dtype=object)[ids] if len(ids) else np.array([], dtype=object),
-            "mode3a": np.array([f"{i % 4096:04o}" for i in ids], dtype=object)}
+    """Address, callsign and Mode 3/A of flights ``ids`` (one aircraft per flight), each formatted once per
+    flight."""
+    flights, rows = np.unique(ids, return_inverse=True)
+    return {"address": np.array([f"{0x400000 + i:06X}" for i in flights], dtype=object)[rows],
+            "callsign": np.array([f"CTR{i:05d}" for i in flights], dtype=object)[rows],
+            "mode3a": np.array([f"{i % 4096:04o}" for i in flights], dtype=object)[rows]}
 
 
 def adsb_frame(fleet: Fleet, station: RadarSite, t0: float, t1: float, rng: np.random.Generator
