@@ -73,6 +73,7 @@ ADSB_SIGMA_M = 5.0
 DETECTION = 0.97
 SIGMA_RANGE_M, SIGMA_AZIMUTH_DEG = 70.0, 0.08
 RECORDS_PER_BLOCK = 25
+GENERATOR = 2  # recordings made by an earlier version are made again (2: one plot per crossing)
 # (east NM, north NM of the centre, scan period s, range NM): approach radars turn fast and see less
 RADARS = [(-200, -100, 10.0, 250.0), (-200, 100, 12.0, 250.0), (-70, -180, 8.0, 200.0), (-40, 10, 4.0, 80.0),
           (-70, 180, 8.0, 200.0), (70, -180, 6.0, 200.0), (50, -20, 5.0, 100.0), (70, 180, 10.0, 250.0),
@@ -236,7 +237,10 @@ def radar_frame(fleet: Fleet, radar: Radar, t0: float, t1: float, rng: np.random
         az = az + (new - az + 180.0) % 360.0 - 180.0
     t = north + period * az / 360.0
     az, slant, el, st = azimuth(t)
+    # a crossing belongs to the scan whose turn it falls in: an aircraft on the north azimuth solves to the
+    # end of one scan and the start of the next, the same crossing twice
     keep = ((t >= t0) & (t < t1) & (t >= fleet.start[k]) & (t <= fleet.end[k]) & (el > -1.0)
+            & (t >= north) & (t < north + period)
             & (slant <= radar.range_nm * geo.M_PER_NM) & (rng.uniform(size=len(t)) < DETECTION))
     k, t, az, slant = k[keep], t[keep], az[keep], slant[keep]
     st = {c: v[keep] for c, v in st.items()}
@@ -352,7 +356,8 @@ def generate(out: Path, hours: int, peak: int, seed: int) -> dict:
                    f"sigma_azimuth_deg = {SIGMA_AZIMUTH_DEG!r}\nmax_range_nm = {r.range_nm!r}\n\n"
                    for r in radars)
     (tmp / "sensors.toml").write_text(toml)
-    meta = {"hours": hours, "peak": peak, "seed": seed, "date": DATE, "from_tod_s": t0, "to_tod_s": t1,
+    meta = {"generator": GENERATOR, "hours": hours, "peak": peak, "seed": seed, "date": DATE,
+            "from_tod_s": t0, "to_tod_s": t1,
             "airborne_peak_seen": peak_seen,
             "flights": int(((starts < t1) & (starts + durations > t0)).sum()),
             "records": counts, "records_total": sum(counts.values()),
@@ -372,7 +377,8 @@ def recordings(base: Path, hours: int, peak: int, seed: int) -> tuple[Path, dict
     meta_path = out / "scenario.json"
     if meta_path.exists():
         meta = json.loads(meta_path.read_text())
-        if (meta["hours"], meta["peak"], meta["seed"]) == (hours, peak, seed):
+        wanted = (GENERATOR, hours, peak, seed)
+        if (meta.get("generator"), meta["hours"], meta["peak"], meta["seed"]) == wanted:
             return out, meta
     print(f"generating {out} ...", flush=True)
     return out, generate(out, hours, peak, seed)
