@@ -93,14 +93,17 @@ def watch():
         time.sleep(0.05)
 threading.Thread(target=watch, daemon=True).start()
 from msdc.pipeline.jobs.options import IngestOptions
-path, root, workers, chunk = sys.argv[1], sys.argv[2], int(sys.argv[3]), float(sys.argv[4])
+paths = json.loads(sys.argv[1]) if sys.argv[1].startswith("[") else [sys.argv[1]]
+root, workers, chunk = sys.argv[2], int(sys.argv[3]), float(sys.argv[4])
+date = __import__("datetime").date.fromisoformat(sys.argv[5] if len(sys.argv) > 5 else "2026-11-28")
 t = time.perf_counter()
-result = ingest_job(IngestOptions(inputs=(path,), dataset=root, workers=workers, date=__import__(
-    "datetime").date(2026, 11, 28), chunk_mb=chunk))
+result = ingest_job(IngestOptions(inputs=tuple(paths), dataset=root, workers=workers, date=date,
+                                  chunk_mb=chunk))
 took = time.perf_counter() - t
-rec = result.ingested[0]
 own = resource.getrusage(resource.RUSAGE_SELF)
-print(json.dumps({"seconds": took, "records": sum(rec["rows"].values()), "parts": len(rec["parts"]),
+print(json.dumps({"seconds": took, "records": sum(sum(r["rows"].values()) for r in result.ingested),
+                  "parts": sum(len(r["parts"]) for r in result.ingested),
+                  "dataset_mb": sum(p.stat().st_size for p in Path(root).rglob("*.parquet")) / 1e6,
                   "main_rss_mb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024,
                   "worker_rss_mb": max(peak.values(), default=0) / 1024,
                   "cpu_s": own.ru_utime + own.ru_stime + sum(cpu.values())}))

@@ -6,7 +6,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from msdc.pipeline.dataset.writer import InputWriter
+from msdc.pipeline.dataset.writer import InputWriter, arrow_schema
 
 KEPT_COLUMNS = ("day", "time_of_day", "offset")  # what the main process's tallies read of a window's records
 
@@ -16,10 +16,9 @@ def write_window(path: str, plan, window, label: str, root: Path, input_id: str,
     """Decode one window and write its parts (in a pool process): their records, the records per category,
     and the decoded Recording with only KEPT_COLUMNS (for the warnings the main process folds)."""
     from msdc.asterix.stream import decode_window
-    from msdc.pipeline.report.record_schema import record_schema
 
     rec = decode_window(path, plan, window)
-    schemas = {c: record_schema(c).arrow() for c in categories}
+    schemas = {c: arrow_schema(c) for c in categories}
     writer = InputWriter(root, f"{input_id}-{window.index:05d}", schemas)
     try:
         rows = writer.add_recording(rec, label)

@@ -76,6 +76,22 @@ def test_each_part_has_its_categorys_documented_schema(fixtures_dataset):
         assert schema.names[-3:] == ["block", "offset", "file"]
 
 
+def test_parts_are_zstd_with_dictionaries_for_text_only(fixtures_dataset):
+    # the encodings docs/guide/large-recordings.md states (they change the bytes, not the values read back)
+    for rel in listed_parts(fixtures_dataset):
+        meta = pq.ParquetFile(fixtures_dataset / rel).metadata
+        schema = pq.read_schema(fixtures_dataset / rel)
+        for g in range(meta.num_row_groups):
+            for c in range(meta.num_columns):
+                chunk = meta.row_group(g).column(c)
+                field = schema.field(chunk.path_in_schema)
+                assert chunk.compression == "ZSTD", chunk.path_in_schema
+                text = str(field.type).startswith("dictionary")
+                assert chunk.has_dictionary_page == text, chunk.path_in_schema
+                if str(field.type) == "double":
+                    assert "BYTE_STREAM_SPLIT" in chunk.encodings, chunk.path_in_schema
+
+
 @pytest.mark.parametrize("path,cat", [(RADAR, 48), (ADSB, 21)])
 def test_rows_equal_asterix_read(fixtures_dataset, path, cat):
     frame = asterix.read(path, date=DAY).frames[cat]  # the whole file at once: no chunk, no dataset
