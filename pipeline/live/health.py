@@ -68,7 +68,10 @@ def report_times_s(frame: pd.DataFrame) -> np.ndarray:
 def track_keys(frame: pd.DataFrame) -> np.ndarray:
     """Per report, the target it belongs to within its sensor: "A:<id>" from its aircraft identity (the
     Mode S address where it has one), else "T<n>" from the sensor's track number, else None (a plot that
-    cannot be followed)."""
+    cannot be followed). A frame that carries them already (``_track_key``, set once by snapshot) gives
+    those."""
+    if "_track_key" in frame.columns:
+        return frame["_track_key"].to_numpy(object)
     n = len(frame)
     out = np.full(n, None, dtype=object)
     if "track_number" in frame.columns:
@@ -121,14 +124,15 @@ def figure_sample(window: pd.DataFrame) -> tuple[pd.DataFrame, dict | None]:
     import zlib
 
     key = track_keys(window)
-    has = np.array([k is not None for k in key], bool)
-    names, counts = np.unique(key[has].astype(str), return_counts=True)
-    order = np.argsort([zlib.crc32(n.encode()) for n in names], kind="stable")
+    codes, names = pd.factorize(pd.Series(key, dtype=object), use_na_sentinel=True)
+    counts = np.bincount(codes[codes >= 0], minlength=len(names))
+    order = np.argsort([zlib.crc32(str(n).encode()) for n in names], kind="stable")
     room = np.cumsum(counts[order]) <= MAX_FIGURE_REPORTS
     room[0] = True  # at least one track
-    chosen = set(names[order][room])
-    keep = np.zeros(len(window), bool)
-    keep[has] = np.isin(key[has].astype(str), list(chosen))
+    picked = np.zeros(len(names), bool)
+    picked[order[room]] = True
+    keep = (codes >= 0) & picked[np.maximum(codes, 0)]
+    chosen = names[picked]
     sample = window.loc[keep]
     return sample, {"tracks": len(chosen), "of_tracks": int(len(names)), "reports": int(keep.sum()),
                     "of_reports": int(len(window))}
@@ -347,26 +351,35 @@ def targets(window: pd.DataFrame, now_wall_s: float) -> list[dict]:
     w = w.sort_values("wall_s", kind="stable")
     periods_s = {s: arrival_period_s(g["wall_s"].to_numpy(float), g["key"].to_numpy(object).astype(str))
                  for s, g in w.groupby("sensor_id", sort=False, observed=True)}
+    # per target (sensor, track), vectorised: its rows' group, the last row and the last non-null value of
+    # each label column; the trail from the latest TRAIL_POINTS rows alone
+    group = w.groupby(["sensor_id", "key"], sort=False, observed=True)
+    last = group.tail(1)
+    labels = {c: group[c].last() for c in ("callsign", "mode3a", "flight_level") if c in w.columns}
+    gid = group.ngroup().to_numpy()
+    inside = group.cumcount(ascending=False).to_numpy() < TRAIL_POINTS
+    order = np.argsort(gid[inside], kind="stable")  # by target, in arrival order within each
+    xy = np.column_stack([w["lat"].to_numpy(float), w["lon"].to_numpy(float)])[inside][order].round(5)
+    cuts = np.flatnonzero(np.diff(gid[inside][order])) + 1
+    by_gid = dict(zip(np.unique(gid[inside]), np.split(xy, cuts), strict=True))
+    last_gid = gid[group.cumcount(ascending=False).to_numpy() == 0]
+    trails = {key: by_gid[g].tolist() for key, g in zip(zip(last["sensor_id"], last["key"], strict=True),
+                                                         last_gid, strict=True)}
     out = []
-    for (sid, k), g in w.groupby(["sensor_id", "key"], sort=False, observed=True):
-        last = g.iloc[-1]
-
-        def latest(col: str, g=g):
-            if col not in g.columns:
-                return None
-            v = g[col].dropna()
-            return None if not len(v) else v.iloc[-1]
+    for sid, k, wall in zip(last["sensor_id"], last["key"], last["wall_s"].to_numpy(float), strict=True):
+        def latest(col: str, sid=sid, k=k):
+            v = labels[col].get((sid, k)) if col in labels else None
+            return None if v is None or pd.isna(v) else v
 
         fl = _number(latest("flight_level"))
-        age = max(0.0, now_wall_s - float(last["wall_s"]))
+        age = max(0.0, now_wall_s - float(wall))
         period = periods_s.get(sid, math.nan)
         stale_after = STALE_PERIODS * period if math.isfinite(period) else DEFAULT_STALE_S
-        trail = g[["lat", "lon"]].to_numpy(float)[-TRAIL_POINTS:].round(5).tolist()
         cs, m3a = latest("callsign"), latest("mode3a")
         out.append({"id": f"{sid}|{k}", "sensor_id": sid, "track": k,
                     "callsign": None if cs is None else str(cs), "mode3a": None if m3a is None else str(m3a),
                     "flight_level": None if fl is None else round(fl, 2), "age_s": round(age, 2),
-                    "stale": bool(age > stale_after), "trail": trail})
+                    "stale": bool(age > stale_after), "trail": trails[(sid, k)]})
     out.sort(key=lambda t: t["age_s"])
     return out[:MAX_TARGETS]
 
@@ -377,6 +390,8 @@ def snapshot(frame: pd.DataFrame, counters: dict, status_times: dict, now_wall_s
     """The monitor's JSON snapshot (schema in docs/guide/live-monitor.md) and the memory for the next one.
     ``frame``: state.recent(lookback_s(thresholds)); ``counters``, ``status_times``: the state's."""
     memory = memory or Memory()
+    if len(frame):
+        frame = frame.assign(_track_key=track_keys(frame))  # once, for the figures and the map
     last_heard = dict(memory.last_heard_wall_s)
     window_start = now_wall_s - thresholds.window_s
     if len(frame):
