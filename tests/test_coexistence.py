@@ -14,6 +14,7 @@ from pathlib import Path
 
 import pytest
 
+pytestmark = pytest.mark.xdist_group("wheel")  # the wheel is built once, on one worker
 ROOT = Path(__file__).resolve().parents[1]
 OTHERS = {  # PyPI name -> a check that its own ``asterix`` module is the one imported
     "asterix_decoder": "import asterix; assert callable(asterix.parse), asterix.__file__",

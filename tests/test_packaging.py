@@ -5,7 +5,11 @@ import tomllib
 import zipfile
 from pathlib import Path
 
+import pytest
+
 import fixtures
+
+pytestmark = pytest.mark.xdist_group("wheel")  # the wheel is built once, on one worker
 
 ROOT = Path(__file__).resolve().parents[1]
 CONFIG = tomllib.loads((ROOT / "pyproject.toml").read_text())["tool"]["setuptools"]

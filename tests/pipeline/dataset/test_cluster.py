@@ -17,6 +17,8 @@ from msdc.pipeline.jobs.options import TrackOptions
 from msdc.pipeline.parallel import map_ordered
 from msdc.pipeline.progress import Progress, eta_text
 
+pytestmark = pytest.mark.xdist_group("dask")  # one Dask cluster for these tests
+
 
 def _slow_square(x: int) -> int:
     time.sleep(0.02 * (5 - x % 5))  # the early items end last

@@ -15,6 +15,8 @@ from dataset_data import ADSB, DAY, FIX, RADAR, midnight_recording
 from msdc.pipeline.cli import main
 from msdc.pipeline.dataset.inputs import Pruning, open_inputs
 
+pytestmark = pytest.mark.xdist_group("dask")  # one Dask cluster for these tests
+
 SENSORS = FIX / "sensors.toml"
 TRUTH = json.loads((FIX / "truth.json").read_text())
 VOLATILE = {"run_utc", "run_time_s", "path"}  # the run's clock; the manifest keeps the resolved input path

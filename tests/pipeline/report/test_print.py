@@ -22,6 +22,8 @@ from msdc.pipeline.report import cells, excel
 from msdc.pipeline.report.evaluation_xlsx import write_evaluation_xlsx
 from msdc.pipeline.report.headers import LABELS, column_name, has_header, header_unit, workbook_header
 
+pytestmark = pytest.mark.xdist_group("print_workbooks")  # one worker renders the workbooks once
+
 ROOT = Path(__file__).resolve().parents[3]
 FIX = ROOT / "fixtures"
 AIRCRAFT = [str(FIX / "radar.ast"), str(FIX / "adsb.ast"), "--date", "2019-03-01", "--sensors",
