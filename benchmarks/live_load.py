@@ -138,7 +138,8 @@ def run_speed(sched, per_dgram: np.ndarray, speed: float, seconds: float, record
         sock.close()
         wall = sent.wall_s
         last, idle_since = cpu_s(proc.pid), time.monotonic()
-        while time.monotonic() - idle_since < 0.6:  # decoding done: the CPU time stops moving
+        give_up = time.monotonic() + 15.0  # with --http the monitor's snapshots keep the CPU moving
+        while time.monotonic() - idle_since < 0.6 and time.monotonic() < give_up:  # decoding done
             time.sleep(0.2)
             now = cpu_s(proc.pid)
             if now - last > 0.02:
