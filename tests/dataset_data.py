@@ -8,6 +8,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 import pyarrow.parquet as pq
+from live_bytes import raw_blocks
 
 from msdc.asterix.encode import encode_frame
 
@@ -30,19 +31,9 @@ def midnight_frames(n: int = 6000) -> tuple[pd.DataFrame, pd.DataFrame]:
 def midnight_recording(path: Path, n: int = 6000) -> tuple[pd.DataFrame, pd.DataFrame]:
     """Write the two radars' plots as a raw stream, a block of 5 of each in turn, in time order."""
     a, b = midnight_frames(n)
-    ba, bb = (_blocks(encode_frame(48, f, records_per_block=5)) for f in (a, b))
+    ba, bb = (raw_blocks(encode_frame(48, f, records_per_block=5)) for f in (a, b))
     path.write_bytes(b"".join(x + y for x, y in zip(ba, bb, strict=True)))
     return a, b
-
-
-def _blocks(data: bytes) -> list[bytes]:
-    """Data blocks one by one, by their LEN fields (bytes 1-2 of each block)."""
-    out, q = [], 0
-    while q < len(data):
-        n = int.from_bytes(data[q + 1:q + 3], "big")
-        out.append(data[q:q + n])
-        q += n
-    return out
 
 
 def manifest(root: Path) -> dict:
