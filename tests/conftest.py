@@ -2,9 +2,12 @@
 
 from __future__ import annotations
 
+import os
 import shutil
 import subprocess
 import sys
+import tempfile
+import time
 from pathlib import Path
 
 import pytest
@@ -12,6 +15,45 @@ from budget import FULL_MAX_EXAMPLES
 from hypothesis import settings
 
 ROOT = Path(__file__).resolve().parents[1]
+PREWARM_DONE = "MSDC_TEST_PREWARM_DONE"  # the file tests/prewarm.py writes when the kernels are compiled
+
+
+def pytest_configure(config) -> None:
+    """With xdist workers, compile the numba kernels once in a process of its own while the workers collect
+    (tests/prewarm.py); without it, each worker compiles every kernel it meets on a cold cache."""
+    workers = getattr(config.option, "numprocesses", None)
+    if hasattr(config, "workerinput") or not workers or os.environ.get(PREWARM_DONE):
+        return
+    done = Path(tempfile.mkdtemp(prefix="msdc-prewarm-")) / "done"
+    proc = subprocess.Popen([sys.executable, str(ROOT / "tests" / "prewarm.py"), str(done)],
+                            stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    os.environ[PREWARM_DONE] = f"{done}:{proc.pid}"  # the workers, started after this hook, inherit it
+    config._msdc_prewarm = proc
+
+
+def pytest_unconfigure(config) -> None:
+    proc = getattr(config, "_msdc_prewarm", None)
+    if proc is not None:
+        proc.kill()
+        proc.wait()
+        shutil.rmtree(Path(os.environ[PREWARM_DONE].rsplit(":", 1)[0]).parent, ignore_errors=True)
+
+
+@pytest.fixture(scope="session", autouse=True)
+def _kernels_compiled() -> None:
+    """Wait (at most 3 minutes, and while the prewarm lives) for its kernels before a worker's first test."""
+    said = os.environ.get(PREWARM_DONE)
+    if not said:
+        return
+    done, pid = said.rsplit(":", 1)
+    deadline = time.monotonic() + 180
+    while not Path(done).exists() and time.monotonic() < deadline:
+        try:  # ended without its file (a crash): a zombie until the controller reaps it
+            if Path(f"/proc/{pid}/stat").read_text().split(")")[-1].split()[0] == "Z":
+                return
+        except OSError:
+            return
+        time.sleep(0.2)
 
 
 @pytest.fixture(scope="session")
