@@ -56,16 +56,34 @@ def _empty() -> pd.DataFrame:
 
 def _built_by(tracks: pd.DataFrame) -> pd.Series:
     """Per track row, the sensors whose reports updated its segment, sorted and joined."""
-    src = tracks["sources"].astype(str)
-    parts = src.str.split(",").explode().str.strip()
-    parts = parts[parts != ""]
-    keys = tracks[["aircraft_id", "segment"]].loc[parts.index]
-    joined = (pd.DataFrame({"aircraft_id": keys["aircraft_id"].to_numpy(),
-                            "segment": keys["segment"].to_numpy(), "sensor": parts.to_numpy()})
-              .drop_duplicates().sort_values("sensor")
-              .groupby(["aircraft_id", "segment"], sort=False)["sensor"].agg(BUILT_BY_SEPARATOR.join))
-    index = pd.MultiIndex.from_frame(tracks[["aircraft_id", "segment"]])
-    return pd.Series(joined.reindex(index).fillna("").to_numpy(), index=tracks.index)
+    aircraft, _ = pd.factorize(tracks["aircraft_id"].astype(str).to_numpy(object))
+    segment = tracks["segment"].to_numpy(np.int64)
+    group, groups = pd.factorize(aircraft.astype(np.int64) * (int(segment.max(initial=0)) + 1) + segment)
+    sensors: list[set[str]] = [set() for _ in groups]
+    for g, sources in set(zip(group.tolist(), tracks["sources"].astype(str).to_numpy(object), strict=True)):
+        sensors[g].update(p.strip() for p in sources.split(",") if p.strip())
+    joined = np.array([BUILT_BY_SEPARATOR.join(sorted(s)) for s in sensors] or [""], dtype=object)
+    return pd.Series(joined[group], index=tracks.index)
+
+
+def _latest_at(left_key: np.ndarray, left_t: np.ndarray, right_key: np.ndarray, right_t: np.ndarray
+               ) -> np.ndarray:
+    """Per left row, the index into the right rows of the same key's latest row at or before the left
+    row's time (of equal times, the last in the right's order), else that key's first; -1 for a key with
+    no right row. The right rows must be sorted by key, then time (stably)."""
+    out = np.full(len(left_key), -1, np.int64)
+    for key in pd.unique(left_key):
+        lo, hi = np.searchsorted(right_key, key, "left"), np.searchsorted(right_key, key, "right")
+        if lo == hi:
+            continue
+        rows = np.flatnonzero(left_key == key)
+        out[rows] = lo + np.maximum(np.searchsorted(right_t[lo:hi], left_t[rows], "right") - 1, 0)
+    return out
+
+
+def _keyed(aircraft: pd.Series, time: pd.Series) -> tuple[np.ndarray, np.ndarray]:
+    """Aircraft ids as an object array and times as int64 nanoseconds (UTC)."""
+    return (aircraft.astype(str).to_numpy(object), time.astype("datetime64[ns, UTC]").array.asi8)
 
 
 def _identity(reference: pd.DataFrame, reports: pd.DataFrame, established: bool = False) -> pd.DataFrame:
@@ -74,25 +92,30 @@ def _identity(reference: pd.DataFrame, reports: pd.DataFrame, established: bool 
     (a sensor's own track judging that sensor's codes), only values the aircraft's previous report also
     gave count: otherwise each report's own code, wrong or garbled, would be its reference and never false."""
     out = reference.sort_values("time", kind="stable")
+    left_key, left_t = _keyed(out["aircraft_id"], out["time"])
+    rep_key, rep_t = _keyed(reports["aircraft_id"], reports["time"])
     for col in IDENTITY_COLUMNS:
         if col not in reports.columns:
             out[col] = None
             continue
-        said = reports.loc[reports[col].notna(), ["aircraft_id", "time", col]]
-        said = pd.DataFrame({"aircraft_id": said["aircraft_id"].astype(str).to_numpy(object),
-                             "time": said["time"].astype("datetime64[ns, UTC]").array.asi8,
-                             col: said[col].astype(str).to_numpy(object)})
-        said = said[said[col] != ""].sort_values("time", kind="stable")
-        if established:
-            said = said[said[col] == said.groupby("aircraft_id", sort=False)[col].shift(1)]
-        if said.empty:
+        given = reports[col].notna().to_numpy(bool)
+        value = reports.loc[given, col].astype(str).to_numpy(object)
+        key, t = rep_key[given], rep_t[given]
+        keep = value != ""
+        value, key, t = value[keep], key[keep], t[keep]
+        order = np.lexsort((t, key))  # by aircraft, then time; stable among equal times
+        value, key, t = value[order], key[order], t[order]
+        if established:  # the aircraft's previous report gave the same value
+            same = np.zeros(len(value), bool)
+            same[1:] = (key[1:] == key[:-1]) & (value[1:] == value[:-1])
+            value, key, t = value[same], key[same], t[same]
+        if not len(value):
             out[col] = None
             continue
-        left = pd.DataFrame({"aircraft_id": out["aircraft_id"].astype(str).to_numpy(object),
-                             "time": out["time"].astype("datetime64[ns, UTC]").array.asi8})
-        back = pd.merge_asof(left, said, on="time", by="aircraft_id", direction="backward")[col]
-        fwd = pd.merge_asof(left, said, on="time", by="aircraft_id", direction="forward")[col]
-        out[col] = back.where(back.notna(), fwd).to_numpy(object)
+        at = _latest_at(left_key, left_t, key, t)
+        col_out = np.full(len(out), np.nan, object)
+        col_out[at >= 0] = value[at[at >= 0]]
+        out[col] = col_out
     return out.sort_index()
 
 
@@ -120,19 +143,13 @@ def _on_ground(reference: pd.DataFrame, reports: pd.DataFrame) -> pd.Series:
     50 kt (quality.surface.on_surface, the rule of quality and conflicts)."""
     from msdc.pipeline.quality.surface import on_surface
 
-    said = pd.DataFrame({"aircraft_id": reports["aircraft_id"].astype(str).to_numpy(object),
-                         "time": reports["time"].astype("datetime64[ns, UTC]").array.asi8,
-                         "ground": on_surface(reports).astype(float)}).sort_values("time", kind="stable")
-    left = pd.DataFrame({"aircraft_id": reference["aircraft_id"].astype(str).to_numpy(object),
-                         "time": reference["time"].astype("datetime64[ns, UTC]").array.asi8,
-                         "row": np.arange(len(reference))}).sort_values("time", kind="stable")
-    back = pd.merge_asof(left, said, on="time", by="aircraft_id", direction="backward")["ground"]
-    fwd = pd.merge_asof(left, said, on="time", by="aircraft_id", direction="forward")["ground"]
-    flag = back.where(back.notna(), fwd).to_numpy(float)
-    out = np.full(len(reference), np.nan)
-    out[left["row"].to_numpy()] = flag
-    return pd.Series(pd.array([None if np.isnan(v) else bool(v) for v in out], dtype="boolean"),
-                     index=reference.index)
+    key, t = _keyed(reports["aircraft_id"], reports["time"])
+    ground = np.asarray(on_surface(reports), bool)
+    order = np.lexsort((t, key))
+    at = _latest_at(*_keyed(reference["aircraft_id"], reference["time"]), key[order], t[order])
+    flag = pd.array(ground[order][np.maximum(at, 0)], dtype="boolean")
+    flag[at < 0] = pd.NA
+    return pd.Series(flag, index=reference.index)
 
 
 def reconstruct(reports: pd.DataFrame, epoch: pd.Timestamp, *, step_s: float = 1.0,
