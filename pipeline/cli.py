@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import argparse
 import atexit
+import functools
 import gc
 import importlib
 import os
@@ -86,6 +87,13 @@ def build_parser() -> argparse.ArgumentParser:
     for command, summary in COMMAND_HELP.items():
         add_options(sub.add_parser(command, help=summary), COMMAND_OPTIONS[command])
     return parser
+
+
+@functools.cache
+def _parser() -> argparse.ArgumentParser:
+    """build_parser's parser, built once a process (parsing leaves it as it was; tests run main hundreds
+    of times in one process)."""
+    return build_parser()
 
 
 def _warn(command: str, warnings: list[str]) -> None:
@@ -445,7 +453,7 @@ def main(argv: list[str] | None = None) -> int:
     """Run msdc with argv (the process's when None) and return the exit status; never a traceback. SIGTERM
     and SIGHUP end the run as Ctrl-C does (report.transaction.Terminated: every staged output removed),
     with status 128 + the signal's number (Ctrl-C: 130)."""
-    args = build_parser().parse_args(argv)
+    args = _parser().parse_args(argv)
     handlers = transaction.raise_on_termination()
     try:
         return COMMANDS[args.command](args)
