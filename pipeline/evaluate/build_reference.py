@@ -156,26 +156,17 @@ def reconstruct(reports: pd.DataFrame, epoch: pd.Timestamp, *, step_s: float = 1
                 max_coast_s: float = 60.0, self_reference: bool = False) -> pd.DataFrame:
     """The smoothed IMM reconstruction (pipeline.track.track, RTS) of these reports as reference rows:
     only rows the reports support (coasted rows after a segment's last update left out), with sigma_m,
-    built_by, updated (a report updated the row) and the identity of the reports. Each aircraft's is its
-    own task (pipeline.parallel: threads, or a cluster's workers), sorted together as one run's."""
-    from msdc.pipeline.parallel import map_ordered
-    from msdc.pipeline.track.tracker import aircraft_label
-
+    built_by, updated (a report updated the row) and the identity of the reports. The tracker runs each
+    aircraft as its own task (pipeline.parallel: threads, or a cluster's workers); what follows is done
+    for every aircraft at once, column by column."""
     if reports.empty:
         return _empty()
-    groups = reports.groupby("aircraft_id", sort=True, observed=True)
-    parts = [p for p in map_ordered(
-        lambda item: _reconstruct_one(item[1], epoch, step_s, max_coast_s, self_reference), groups,
-        distributable=True, label=aircraft_label) if len(p)]
-    if not parts:
-        return _empty()
-    out = pd.concat(parts, ignore_index=True)
-    return out.sort_values(["aircraft", "t_s"], kind="stable", ignore_index=True)
+    return _reconstruct_one(reports, epoch, step_s, max_coast_s, self_reference)
 
 
 def _reconstruct_one(reports: pd.DataFrame, epoch: pd.Timestamp, step_s: float, max_coast_s: float,
                      self_reference: bool) -> pd.DataFrame:
-    """One aircraft's reference rows (reconstruct)."""
+    """The aircraft's reference rows (reconstruct)."""
     from msdc.pipeline.track import track
 
     res = track(reports, step_s=step_s, max_coast_s=max_coast_s, smooth=True, epoch=epoch)
