@@ -71,14 +71,22 @@ def _latest_at(left_key: np.ndarray, left_t: np.ndarray, right_key: np.ndarray, 
     """Per left row, the index into the right rows of the same key's latest row at or before the left
     row's time (of equal times, the last in the right's order), else that key's first; -1 for a key with
     no right row. The right rows must be sorted by key, then time (stably)."""
-    out = np.full(len(left_key), -1, np.int64)
-    for key in pd.unique(left_key):
-        lo, hi = np.searchsorted(right_key, key, "left"), np.searchsorted(right_key, key, "right")
-        if lo == hi:
-            continue
-        rows = np.flatnonzero(left_key == key)
-        out[rows] = lo + np.maximum(np.searchsorted(right_t[lo:hi], left_t[rows], "right") - 1, 0)
-    return out
+    if not len(right_key):
+        return np.full(len(left_key), -1, np.int64)
+    codes, _ = pd.factorize(np.concatenate([right_key, left_key]))
+    r_code, l_code = codes[:len(right_key)].astype(np.int64), codes[len(right_key):].astype(np.int64)
+    times = np.unique(np.concatenate([right_t, left_t]))
+    span = len(times) + 1  # (key, time) as one integer: key code * span + the time's rank
+    r_comb = r_code * span + np.searchsorted(times, right_t)
+    l_comb = l_code * span + np.searchsorted(times, left_t)
+    order = np.argsort(r_comb, kind="stable")  # the codes' order, equal (key, time) rows as given
+    r_sorted, r_code_sorted = r_comb[order], r_code[order]
+    at = np.searchsorted(r_sorted, l_comb, "right") - 1
+    same = (at >= 0) & (r_code_sorted[np.maximum(at, 0)] == l_code)
+    first = np.searchsorted(r_code_sorted, l_code, "left")  # before the key's first row: its first
+    last = len(order) - 1
+    has_key = (first <= last) & (r_code_sorted[np.minimum(first, last)] == l_code)
+    return np.where(has_key, order[np.minimum(np.where(same, at, first), last)], -1)
 
 
 def _keyed(aircraft: pd.Series, time: pd.Series) -> tuple[np.ndarray, np.ndarray]:

@@ -328,3 +328,21 @@ def test_the_adsb_reference_of_two_radars_is_built_once(two_radars, monkeypatch)
     leave_one_out(meas, RADAR_A, epoch=EPOCH, fallback=False, cache=cache)
     leave_one_out(meas, RADAR_B, epoch=EPOCH, fallback=False, cache=cache)  # other builders: built again
     assert len(calls) == 3
+
+
+def test_latest_at_is_the_latest_row_at_or_before_else_the_first_of_the_key():
+    """_latest_at (the reference's identity and on-ground rule) against its definition, row by row."""
+    from msdc.pipeline.evaluate.build_reference import _latest_at
+
+    rng = np.random.default_rng(1)
+    for _ in range(200):
+        nr, nl = rng.integers(0, 30), rng.integers(0, 30)
+        rk, rt = rng.choice(list("abcd"), nr).astype(object), rng.integers(0, 10, nr)
+        order = np.lexsort((rt, rk))
+        rk, rt = rk[order], rt[order]
+        lk, lt = rng.choice(list("abcde"), nl).astype(object), rng.integers(-2, 12, nl)
+        got = _latest_at(lk, lt, rk, rt)
+        for i in range(nl):
+            same = [j for j in range(nr) if rk[j] == lk[i]]
+            before = [j for j in same if rt[j] <= lt[i]]
+            assert got[i] == (before[-1] if before else same[0] if same else -1)
