@@ -86,9 +86,12 @@ def expected_updates(reports: pd.DataFrame, reference: pd.DataFrame, parameters:
         raise ValueError(f"sensor {sensor.name!r}: no update interval ({said})")
     ref = check_reference(reference)
     t_all, idx = rep["t_s"].to_numpy(float), rep["ref_index"].to_numpy()
-    parts = []
-    for k, tr in enumerate(trajectories(ref)):
-        mine = np.sort(t_all[idx == k])
+    names = ("aircraft", "stretch", "t_s", "detected", "lat", "lon", "height_m", "altitude_ft")
+    cols: dict[str, list] = {c: [] for c in names}
+    order = np.lexsort((t_all, idx))  # each reference aircraft's report times, sorted, one after the other
+    t_sorted, idx_sorted = t_all[order], idx[order]
+    for k, tr in enumerate(trajectories(ref)):  # the expected updates; where the sensor saw them, at once
+        mine = t_sorted[np.searchsorted(idx_sorted, k, "left"):np.searchsorted(idx_sorted, k, "right")]
         for s, (a, b) in enumerate(tr.stretches(max_gap_s)):
             times = mine[(mine >= a) & (mine <= b)]
             if interval is not None:
@@ -100,12 +103,19 @@ def expected_updates(reports: pd.DataFrame, reference: pd.DataFrame, parameters:
                 t_exp = np.concatenate([first, missed])
                 held = np.concatenate([np.ones(first.size, bool), np.zeros(missed.size, bool)])
             lat, lon, h, alt = tr.at(np.clip(t_exp, a, b), max_gap_s)
-            rho, az, el = sensor.polar_azimuth(lat, lon, h)
-            parts.append(pd.DataFrame({"aircraft": tr.label, "stretch": s, "t_s": t_exp, "detected": held,
-                                       "rho_nm": rho, "elevation_deg": el, "azimuth_deg": az,
-                                       "altitude_ft": alt, "height_m": h}))
-    table = (pd.concat(parts, ignore_index=True) if parts
-             else pd.DataFrame({c: [] for c in EXPECTED_COLUMNS if c != "in_coverage"}))
+            for c, v in (("aircraft", np.full(t_exp.size, tr.label, object)),
+                         ("stretch", np.full(t_exp.size, s, np.int64)), ("t_s", t_exp), ("detected", held),
+                         ("lat", lat), ("lon", lon), ("height_m", h), ("altitude_ft", alt)):
+                cols[c].append(v)
+    if cols["t_s"]:
+        whole = {c: np.concatenate(v) for c, v in cols.items()}
+        rho, az, el = sensor.polar_azimuth(whole.pop("lat"), whole.pop("lon"), whole["height_m"])
+        table = pd.DataFrame({"aircraft": whole["aircraft"], "stretch": whole["stretch"], "t_s": whole["t_s"],
+                              "detected": whole["detected"], "rho_nm": rho, "elevation_deg": el,
+                              "azimuth_deg": az, "altitude_ft": whole["altitude_ft"],
+                              "height_m": whole["height_m"]})
+    else:
+        table = pd.DataFrame({c: [] for c in EXPECTED_COLUMNS if c != "in_coverage"})
     table = table.sort_values(["aircraft", "stretch", "t_s"], kind="stable", ignore_index=True)
     det = table["detected"].to_numpy(bool)
     cov = coverage(sensor, table["rho_nm"].to_numpy(float)[det], table["elevation_deg"].to_numpy(float)[det])
