@@ -211,8 +211,13 @@ def _uncovered(own: pd.DataFrame, independent: pd.DataFrame, max_gap_s: float) -
     if own.empty or independent.empty:
         return own
     keep = np.ones(len(own), bool)
-    for aircraft, rows in own.groupby("aircraft", sort=False).indices.items():
-        t_ind = independent.loc[independent["aircraft"] == aircraft, "t_s"].to_numpy(float)
+    ind_t = independent["t_s"].to_numpy(float)
+    def rows_of(frame: pd.DataFrame) -> dict:
+        return frame.groupby(frame["aircraft"].astype(str).to_numpy(object), sort=False).indices
+
+    ind_rows = rows_of(independent)
+    for aircraft, rows in rows_of(own).items():
+        t_ind = ind_t[ind_rows[aircraft]] if aircraft in ind_rows else ind_t[:0]
         if not t_ind.size:
             continue
         t = own["t_s"].to_numpy(float)[rows]
