@@ -17,7 +17,7 @@ from msdc.pipeline.jobs.options import DecodingOptions, IngestOptions, check_dec
 
 # what the pool's processes import (about 0.6 s of CPU each), imported once by the forkserver they fork from
 POOL_PRELOAD = ("msdc.pipeline.dataset.windows", "msdc.asterix.stream", "msdc.pipeline.model.editions",
-                "pyarrow.parquet")
+                "pyarrow.parquet", "msdc.pipeline.jobs.ingest_parallel", "msdc.pipeline.jobs.ingest_input")
 
 
 def validate(options: IngestOptions) -> tuple[Checked, Path]:
@@ -58,24 +58,28 @@ class IngestResult:
 
 def ingest_job(options: IngestOptions, *, on_chunk: Callable[[int, int, str], None] | None = None
                ) -> IngestResult:
-    """Ingest every input not in the dataset yet, one after the other, ``options.workers`` processes
-    decoding each raw recording's chunks (asterix.iter_read's pool). A failure removes the parts of the
-    input being ingested; the inputs committed before it stay (run again to go on). JobError for bad or
+    """Ingest every input not in the dataset yet (keyed by the SHA-256 validation hashed). With
+    ``options.workers`` > 1 the inputs are checked in a process pool; then, when there are at least as many
+    inputs to ingest as workers, each pool process ingests whole inputs (ingest_parallel), else the inputs
+    are ingested one after the other, a raw recording's windows decoded and written in the pool. Either
+    way the inputs are committed in input order. A failure removes the parts of the input that failed (and
+    of those after it); the inputs before it are committed (run again to go on). JobError for bad or
     unreadable input, OptionError for bad options."""
     from msdc.asterix.errors import UnreadableInput
     from msdc.asterix.verdict import sniff
     from msdc.pipeline.dataset import manifest as mf
     from msdc.pipeline.jobs.ingest_input import ingest_input
+    from msdc.pipeline.jobs.ingest_parallel import check_inputs, ingest_all
     from msdc.pipeline.model.load import sha256
 
     checked, root = validate(options)
-    for path in checked.inputs:  # a file that is not ASTERIX at all is said before anything is written
-        try:
-            said = sniff(path, options.format)
-        except UnreadableInput as exc:
-            raise JobError(str(exc), 2) from exc
-        if said and not options.lenient:
-            raise JobError(f"{said}; nothing ingested (--lenient ingests it anyway)")
+    if options.workers <= 1:
+        for path in checked.inputs:  # a file that is not ASTERIX at all is said before anything is written
+            try:
+                said = sniff(path, options.format)
+            except UnreadableInput as exc:
+                raise JobError(str(exc), 2) from exc
+            _refuse(said, options)
     made = not root.exists()
     result = IngestResult(root, warnings=list(checked.warnings))
     try:
@@ -84,29 +88,62 @@ def ingest_job(options: IngestOptions, *, on_chunk: Callable[[int, int, str], No
                 manifest = mf.load(root)
             except mf.ManifestError as exc:
                 raise JobError(str(exc), 2) from None
+            if pool is not None:  # the checks above, in the pool, still before anything is written
+                check_inputs(pool.executor, checked.inputs, options.format,
+                             lambda said: _refuse(said, options))
+            digests = [checked.digests.get(path) or sha256(path) for path in checked.inputs]
             result.discarded = mf.discard_unlisted(root, manifest)
-            labels = manifest.labels()
-            for path in checked.inputs:
-                digest = sha256(path)
-                if digest in manifest.inputs:
-                    rec = manifest.inputs[digest]
-                    result.skipped.append((str(path), f"already in the dataset (same SHA-256 as "
-                                                      f"{rec['file']}, ingested {rec['ingested_at']}): "
-                                                      "nothing to do"))
-                    continue
-                label = path.name if labels.get(path.name, digest) == digest else str(path.resolve())
-                labels[label] = digest
-                record, warnings = ingest_input(path, digest, label, options, checked, root, pool, on_chunk)
+            todo, skipped = _plan(checked.inputs, digests, manifest)
+
+            def commit(record: dict, warnings: list[str]) -> None:
                 result.warnings += warnings
-                manifest.inputs[digest] = record
+                manifest.inputs[record["sha256"]] = record
                 manifest.msdc = record["msdc"]
                 mf.save(root, manifest)  # last: the input is in the dataset from now on
                 result.ingested.append(record)
+
+            if pool is not None and len(todo) >= options.workers:
+                ingest_all(todo, options, checked, root, pool.executor, pool.stop, pool.progress, commit,
+                           on_chunk)
+            else:
+                for t in todo:
+                    commit(*ingest_input(t.path, t.digest, t.label, options, checked, root,
+                                         None if pool is None else pool.executor, on_chunk))
+            for path, digest in skipped:
+                rec = manifest.inputs[digest]
+                result.skipped.append((str(path), f"already in the dataset (same SHA-256 as {rec['file']}, "
+                                                  f"ingested {rec['ingested_at']}): nothing to do"))
     except BaseException:
         if made and not any(root.glob("date=*")) and not (root / mf.MANIFEST).exists():
             _remove_made(root)  # the folder this run made, holding nothing: as it was, absent
         raise
     return result
+
+
+def _refuse(said: str | None, options: IngestOptions) -> None:
+    """JobError for an input that is not ASTERIX at all (asterix.verdict.sniff's ``said``), unless
+    --lenient."""
+    if said and not options.lenient:
+        raise JobError(f"{said}; nothing ingested (--lenient ingests it anyway)")
+
+
+def _plan(paths: list[Path], digests: list[str], manifest) -> tuple[list, list[tuple[Path, str]]]:
+    """The inputs to ingest (ingest_parallel.Todo, in input order, each with its ``file`` label: its name,
+    or its resolved path when an input of another content has that name) and those skipped (path, SHA-256):
+    already in the dataset, or the same bytes as an input before them."""
+    from msdc.pipeline.jobs.ingest_parallel import Todo
+
+    labels = manifest.labels()
+    todo, skipped, planned = [], [], set()
+    for index, (path, digest) in enumerate(zip(paths, digests, strict=True)):
+        if digest in manifest.inputs or digest in planned:
+            skipped.append((path, digest))
+            continue
+        label = path.name if labels.get(path.name, digest) == digest else str(path.resolve())
+        labels[label] = digest
+        planned.add(digest)
+        todo.append(Todo(index, path, digest, label, path.stat().st_size))
+    return todo, skipped
 
 
 @contextmanager
@@ -127,24 +164,39 @@ def _locked(root: Path) -> Iterator[None]:
         fh.close()
 
 
+@dataclass
+class _Pool:
+    """The pool's processes, the index above which inputs stop (ingest_parallel) and the queue of their
+    progress."""
+
+    executor: object
+    stop: object
+    progress: object
+
+
 @contextmanager
-def _pool(workers: int):
-    """A process pool of ``workers`` (None for one: the chunks decode in this process). Its processes start
+def _pool(workers: int) -> Iterator[_Pool | None]:
+    """A process pool of ``workers`` (None for one: everything runs in this process). Its processes start
     from a fresh server process (forkserver), not forked from this one's threads; the server imports what
-    they run first (POOL_PRELOAD), once for all of them."""
+    they run first (POOL_PRELOAD), once for all of them. They die with the forkserver, so with this process
+    (ingest_parallel.worker_start)."""
     if workers <= 1:
         yield None
         return
     import multiprocessing
     from concurrent.futures import ProcessPoolExecutor
 
+    from msdc.pipeline.jobs.ingest_parallel import NO_STOP, worker_start
+
     ctx = multiprocessing.get_context("forkserver")
     ctx.set_forkserver_preload(list(POOL_PRELOAD))
-    pool = ProcessPoolExecutor(workers, mp_context=ctx)
+    stop, progress = ctx.Value("q", NO_STOP), ctx.Queue()
+    pool = ProcessPoolExecutor(workers, mp_context=ctx, initializer=worker_start, initargs=(stop, progress))
     try:
-        yield pool
+        yield _Pool(pool, stop, progress)
     finally:
         pool.shutdown(wait=True, cancel_futures=True)
+        progress.close()
 
 
 def _remove_made(root: Path) -> None:
