@@ -395,6 +395,8 @@ def main() -> None:
     parser.add_argument("--workers", type=int, nargs="+", default=[1, 2])
     parser.add_argument("--chunk-mb", type=float, default=16.0)
     parser.add_argument("--generate-only", action="store_true")
+    parser.add_argument("--datasets", type=Path, default=None,
+                        help="where the ingests write their datasets (default: --out)")
     args = parser.parse_args()
     t = time.perf_counter()
     folder, meta = recordings(args.out, args.hours, args.peak, args.seed)
@@ -411,7 +413,7 @@ def main() -> None:
         p.read_bytes()  # in the page cache, as far as it fits
     base = None
     for workers in args.workers:
-        root = args.out / f"dataset-{args.hours}h-w{workers}"
+        root = (args.datasets or args.out) / f"dataset-{args.hours}h-w{workers}"
         shutil.rmtree(root, ignore_errors=True)
         load = __import__("os").getloadavg()[0]
         done = subprocess.run([sys.executable, "-c", MEASURE, json.dumps([str(p) for p in inputs]), str(root),

@@ -15,9 +15,11 @@ from pathlib import Path
 from msdc.pipeline.jobs.common import Checked, JobError, OptionError, check_decoding, nonempty_path
 from msdc.pipeline.jobs.options import DecodingOptions, IngestOptions, check_declared
 
-# what the pool's processes import (about 0.6 s of CPU each), imported once by the forkserver they fork from
+# what the pool's processes import (about 0.6 s of CPU each), imported once by the forkserver they fork from,
+# then the decoder's compiled kernels loaded there (ingest_warm: about 1 s of CPU each)
 POOL_PRELOAD = ("msdc.pipeline.dataset.windows", "msdc.asterix.stream", "msdc.pipeline.model.editions",
-                "pyarrow.parquet", "msdc.pipeline.jobs.ingest_parallel", "msdc.pipeline.jobs.ingest_input")
+                "pyarrow.parquet", "msdc.pipeline.jobs.ingest_parallel", "msdc.pipeline.jobs.ingest_input",
+                "msdc.pipeline.jobs.ingest_warm")
 
 
 def validate(options: IngestOptions) -> tuple[Checked, Path]:
@@ -72,6 +74,9 @@ def ingest_job(options: IngestOptions, *, on_chunk: Callable[[int, int, str], No
     from msdc.pipeline.jobs.ingest_parallel import check_inputs, ingest_all
     from msdc.pipeline.model.load import sha256
 
+    check_declared(options)
+    if options.workers > 1:  # the pool's server starts now: its imports overlap the hashing below
+        _forkserver()
     checked, root = validate(options)
     if options.workers <= 1:
         for path in checked.inputs:  # a file that is not ASTERIX at all is said before anything is written
@@ -183,13 +188,11 @@ def _pool(workers: int) -> Iterator[_Pool | None]:
     if workers <= 1:
         yield None
         return
-    import multiprocessing
     from concurrent.futures import ProcessPoolExecutor
 
     from msdc.pipeline.jobs.ingest_parallel import NO_STOP, worker_start
 
-    ctx = multiprocessing.get_context("forkserver")
-    ctx.set_forkserver_preload(list(POOL_PRELOAD))
+    ctx = _forkserver()
     stop, progress = ctx.Value("q", NO_STOP), ctx.Queue()
     pool = ProcessPoolExecutor(workers, mp_context=ctx, initializer=worker_start, initargs=(stop, progress))
     try:
@@ -197,6 +200,18 @@ def _pool(workers: int) -> Iterator[_Pool | None]:
     finally:
         pool.shutdown(wait=True, cancel_futures=True)
         progress.close()
+
+
+def _forkserver():
+    """The forkserver context, its server started (if not yet) with POOL_PRELOAD: it imports them while this
+    process goes on."""
+    import multiprocessing
+    from multiprocessing import forkserver
+
+    ctx = multiprocessing.get_context("forkserver")
+    ctx.set_forkserver_preload(list(POOL_PRELOAD))
+    forkserver.ensure_running()
+    return ctx
 
 
 def _remove_made(root: Path) -> None:
