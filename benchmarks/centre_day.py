@@ -6,6 +6,7 @@ Run by hand (never a timed test):
 
     python benchmarks/centre_day.py --hours 1 --out /work/bench-data      # generate (cached), then ingest
     python benchmarks/centre_day.py --hours 6 --out /work/bench-data --generate-only
+    python benchmarks/centre_day.py --hours 6 --out /work/bench-data --datasets /tmp/ds   # datasets elsewhere
 
 The recordings go to ``OUT/centre-{hours}h-seed{seed}/``: one raw file per sensor (``radar_20_01.ast`` ...,
 ``adsb_0_1.ast``), written hour by hour in time order, the radars' ``sensors.toml`` and ``scenario.json``

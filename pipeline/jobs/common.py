@@ -72,10 +72,6 @@ class JobError(RuntimeError):
         super().__init__(message)
         self.status = status
 
-    def __reduce__(self):
-        """Pickled with its status and attributes (raised in a pool process, re-raised in the main one)."""
-        return type(self), (str(self), self.status), self.__dict__
-
 
 @contextmanager
 def carrying(said: Iterable[str] = ()) -> Iterator[list[str]]:

@@ -13,13 +13,13 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from msdc.pipeline.jobs.common import Checked, JobError, OptionError, check_decoding, nonempty_path
-from msdc.pipeline.jobs.options import DecodingOptions, IngestOptions, check_declared
+from msdc.pipeline.jobs.options import DEFAULT_CATEGORIES, DecodingOptions, IngestOptions, check_declared
 
 # what the pool's processes import (about 0.6 s of CPU each), imported once by the forkserver they fork from,
-# then the decoder's compiled kernels loaded there (ingest_warm: about 1 s of CPU each)
+# then the decoder's compiled kernels loaded there (dataset.warm: about 1 s of CPU each)
 POOL_PRELOAD = ("msdc.pipeline.dataset.windows", "msdc.asterix.stream", "msdc.pipeline.model.editions",
-                "pyarrow.parquet", "msdc.pipeline.jobs.ingest_parallel", "msdc.pipeline.jobs.ingest_input",
-                "msdc.pipeline.jobs.ingest_warm")
+                "pyarrow.parquet", "msdc.pipeline.dataset.parallel", "msdc.pipeline.dataset.ingest_input",
+                "msdc.pipeline.dataset.warm")
 
 
 def validate(options: IngestOptions) -> tuple[Checked, Path]:
@@ -62,7 +62,7 @@ def ingest_job(options: IngestOptions, *, on_chunk: Callable[[int, int, str], No
                ) -> IngestResult:
     """Ingest every input not in the dataset yet (keyed by the SHA-256 validation hashed). With
     ``options.workers`` > 1 the inputs are checked in a process pool; then, when there are at least as many
-    inputs to ingest as workers, each pool process ingests whole inputs (ingest_parallel), else the inputs
+    inputs to ingest as workers, each pool process ingests whole inputs (dataset.parallel), else the inputs
     are ingested one after the other, a raw recording's windows decoded and written in the pool. Either
     way the inputs are committed in input order. A failure removes the parts of the input that failed (and
     of those after it); the inputs before it are committed (run again to go on). JobError for bad or
@@ -70,8 +70,8 @@ def ingest_job(options: IngestOptions, *, on_chunk: Callable[[int, int, str], No
     from msdc.asterix.errors import UnreadableInput
     from msdc.asterix.verdict import sniff
     from msdc.pipeline.dataset import manifest as mf
-    from msdc.pipeline.jobs.ingest_input import ingest_input
-    from msdc.pipeline.jobs.ingest_parallel import check_inputs, ingest_all
+    from msdc.pipeline.dataset.ingest_input import IngestFailed, IngestSettings, ingest_input
+    from msdc.pipeline.dataset.parallel import check_inputs, ingest_all
     from msdc.pipeline.model.load import sha256
 
     check_declared(options)
@@ -93,6 +93,10 @@ def ingest_job(options: IngestOptions, *, on_chunk: Callable[[int, int, str], No
                 manifest = mf.load(root)
             except mf.ManifestError as exc:
                 raise JobError(str(exc), 2) from None
+            settings = IngestSettings(sorted(set(options.categories or DEFAULT_CATEGORIES)),
+                                      max(int(options.chunk_mb * 1e6), 1), checked.editions,
+                                      list(options.editions), options.date, options.format, options.lenient,
+                                      options.workers)
             if pool is not None:  # the checks above, in the pool, still before anything is written
                 check_inputs(pool.executor, checked.inputs, options.format,
                              lambda said: _refuse(said, options))
@@ -108,19 +112,20 @@ def ingest_job(options: IngestOptions, *, on_chunk: Callable[[int, int, str], No
                 result.ingested.append(record)
 
             if pool is not None and len(todo) >= options.workers:
-                ingest_all(todo, options, checked, root, pool.executor, pool.stop, pool.progress, commit,
-                           on_chunk)
+                ingest_all(todo, settings, root, pool.executor, pool.stop, pool.progress, commit, on_chunk)
             else:
                 for t in todo:
-                    commit(*ingest_input(t.path, t.digest, t.label, options, checked, root,
+                    commit(*ingest_input(t.path, t.digest, t.label, settings, root,
                                          None if pool is None else pool.executor, on_chunk))
             for path, digest in skipped:
                 rec = manifest.inputs[digest]
                 result.skipped.append((str(path), f"already in the dataset (same SHA-256 as {rec['file']}, "
                                                   f"ingested {rec['ingested_at']}): nothing to do"))
-    except BaseException:
+    except BaseException as exc:
         if made and not any(root.glob("date=*")) and not (root / mf.MANIFEST).exists():
             _remove_made(root)  # the folder this run made, holding nothing: as it was, absent
+        if isinstance(exc, IngestFailed):
+            raise JobError(str(exc), exc.status) from None
         raise
     return result
 
@@ -133,10 +138,10 @@ def _refuse(said: str | None, options: IngestOptions) -> None:
 
 
 def _plan(paths: list[Path], digests: list[str], manifest) -> tuple[list, list[tuple[Path, str]]]:
-    """The inputs to ingest (ingest_parallel.Todo, in input order, each with its ``file`` label: its name,
+    """The inputs to ingest (dataset.parallel.Todo, in input order, each with its ``file`` label: its name,
     or its resolved path when an input of another content has that name) and those skipped (path, SHA-256):
     already in the dataset, or the same bytes as an input before them."""
-    from msdc.pipeline.jobs.ingest_parallel import Todo
+    from msdc.pipeline.dataset.parallel import Todo
 
     labels = manifest.labels()
     todo, skipped, planned = [], [], set()
@@ -171,7 +176,7 @@ def _locked(root: Path) -> Iterator[None]:
 
 @dataclass
 class _Pool:
-    """The pool's processes, the index above which inputs stop (ingest_parallel) and the queue of their
+    """The pool's processes, the index above which inputs stop (dataset.parallel) and the queue of their
     progress."""
 
     executor: object
@@ -184,13 +189,13 @@ def _pool(workers: int) -> Iterator[_Pool | None]:
     """A process pool of ``workers`` (None for one: everything runs in this process). Its processes start
     from a fresh server process (forkserver), not forked from this one's threads; the server imports what
     they run first (POOL_PRELOAD), once for all of them. They die with the forkserver, so with this process
-    (ingest_parallel.worker_start)."""
+    (dataset.parallel.worker_start)."""
     if workers <= 1:
         yield None
         return
     from concurrent.futures import ProcessPoolExecutor
 
-    from msdc.pipeline.jobs.ingest_parallel import NO_STOP, worker_start
+    from msdc.pipeline.dataset.parallel import NO_STOP, worker_start
 
     ctx = _forkserver()
     stop, progress = ctx.Value("q", NO_STOP), ctx.Queue()

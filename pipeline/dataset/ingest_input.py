@@ -9,11 +9,37 @@ from collections import deque
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from msdc.pipeline.jobs.common import Checked, JobError
-from msdc.pipeline.jobs.options import DEFAULT_CATEGORIES, IngestOptions
+
+class IngestFailed(RuntimeError):
+    """An input that cannot be ingested (the message names it and why; ``status`` 2 when it cannot be read,
+    else 1): the ingest job says it as its error."""
+
+    def __init__(self, message: str, status: int = 1):
+        super().__init__(message)
+        self.status = status
+
+    def __reduce__(self):
+        """Pickled with its status (raised in a pool process, re-raised in the main one)."""
+        return type(self), (str(self), self.status)
 
 
-def ingest_input(path: Path, digest: str, label: str, options: IngestOptions, checked: Checked, root: Path,
+@dataclass(frozen=True)
+class IngestSettings:
+    """What shapes an input's rows and how it is read (the ingest job's options, checked): the categories,
+    the chunk size, the editions pinned (and as given, for the manifest), --date, --format, --lenient, and
+    the pool's processes."""
+
+    categories: list[int]
+    chunk_bytes: int
+    editions: dict[int, str]
+    edition_args: list[str]
+    date: dt.date | None
+    format: str | None
+    lenient: bool
+    workers: int
+
+
+def ingest_input(path: Path, digest: str, label: str, settings: IngestSettings, root: Path,
                  pool, on_chunk) -> tuple[dict, list[str]]:
     """Decode one input into its parts: its manifest record and its warnings; every file of it removed on
     failure.
@@ -28,19 +54,20 @@ def ingest_input(path: Path, digest: str, label: str, options: IngestOptions, ch
     from msdc.pipeline.model import editions as edition_notes
     from msdc.pipeline.model.time import FirstDayTally
 
-    cats = sorted(set(options.categories or DEFAULT_CATEGORIES))
+    cats = settings.categories
     size = path.stat().st_size
     seen = _Seen(FirstDayTally(), Tally(str(path)), {})
     iid = input_id(digest)
     futures: list = []
     try:
-        parts = None if pool is None else _windows(path, label, options, checked, root, iid, cats, pool, seen,
+        parts = None if pool is None else _windows(path, label, settings, root, iid, cats, pool, seen,
                                                     futures, on_chunk)
         if parts is None:
-            parts = _stream(path, label, options, checked, root, iid, cats, pool, seen, on_chunk)
-        content = seen.account.warnings(head_of(path), hint=False, detected=options.format is None)
-        if content and not options.lenient:
-            raise JobError("; ".join(content) + "; nothing ingested from it (--lenient ingests it anyway)")
+            parts = _stream(path, label, settings, root, iid, cats, pool, seen, on_chunk)
+        content = seen.account.warnings(head_of(path), hint=False, detected=settings.format is None)
+        if content and not settings.lenient:
+            raise IngestFailed("; ".join(content) + "; nothing ingested from it (--lenient ingests it "
+                               "anyway)")
     except BaseException as exc:
         for f in futures:  # the pool's writes of this input end before its files are removed
             f.cancel()
@@ -55,10 +82,10 @@ def ingest_input(path: Path, digest: str, label: str, options: IngestOptions, ch
             p.unlink(missing_ok=True)
         prune_empty(root, {p.parent for p in removed})
         if isinstance(exc, UnreadableInput):
-            raise JobError(str(exc), 2) from exc
+            raise IngestFailed(str(exc), 2) from exc
         if isinstance(exc, Undated):
-            raise JobError(f"{path}: {exc}: give --date YYYY-MM-DD (the dataset's partitions are UTC days); "
-                           "nothing ingested from it") from None
+            raise IngestFailed(f"{path}: {exc}: give --date YYYY-MM-DD (the dataset's partitions are UTC "
+                               "days); nothing ingested from it") from None
         raise
     if on_chunk:
         on_chunk(size, size, f"{path.name}: decoding")
@@ -72,9 +99,9 @@ def ingest_input(path: Path, digest: str, label: str, options: IngestOptions, ch
             "rows": {f"{c:03d}": n for c, n in sorted(seen.rows.items())}, "skipped_blocks": seen.skipped,
             "parts": sorted(parts, key=lambda p: p["path"].rsplit("/", 1)[1]), "msdc": software_version(),
             "ingested_at": dt.datetime.now(dt.UTC).isoformat(timespec="seconds"),
-            "options": {"categories": cats, "editions": list(options.editions),
-                        "date": None if options.date is None else str(options.date),
-                        "format": options.format}}
+            "options": {"categories": cats, "editions": settings.edition_args,
+                        "date": None if settings.date is None else str(settings.date),
+                        "format": settings.format}}
     return record, warnings
 
 
@@ -104,7 +131,7 @@ class _Seen:
             self.rows[c] = self.rows.get(c, 0) + n
 
 
-def _stream(path: Path, label: str, options: IngestOptions, checked: Checked, root: Path, iid: str,
+def _stream(path: Path, label: str, settings: IngestSettings, root: Path, iid: str,
             cats: list[int], pool, seen: _Seen, on_chunk) -> list[dict]:
     """The input streamed in chunks (asterix.iter_read) into one writer: its parts' records."""
     import msdc.asterix as asterix
@@ -113,9 +140,9 @@ def _stream(path: Path, label: str, options: IngestOptions, checked: Checked, ro
     writer = InputWriter(root, iid, {c: arrow_schema(c) for c in cats})
     bar = (lambda done, total, what: on_chunk(done, total, f"{path.name}: {what}")) if on_chunk else None
     try:
-        for rec in asterix.iter_read(path, chunk=max(int(options.chunk_mb * 1e6), 1),
-                                     editions=checked.editions or None, date=options.date,
-                                     format=options.format, categories=cats, progress=bar, pool=pool):
+        for rec in asterix.iter_read(path, chunk=settings.chunk_bytes,
+                                     editions=settings.editions or None, date=settings.date,
+                                     format=settings.format, categories=cats, progress=bar, pool=pool):
             seen.fold(rec, writer.add_recording(rec, label))
         return writer.finish()
     except BaseException:
@@ -123,7 +150,7 @@ def _stream(path: Path, label: str, options: IngestOptions, checked: Checked, ro
         raise
 
 
-def _windows(path: Path, label: str, options: IngestOptions, checked: Checked, root: Path, iid: str,
+def _windows(path: Path, label: str, settings: IngestSettings, root: Path, iid: str,
              cats: list[int], pool, seen: _Seen, futures: list, on_chunk) -> list[dict] | None:
     """A raw recording's windows decoded and written in the pool (dataset.windows), at most two per
     process in flight; their parts' records, or None when the recording is not one whose windows decode
@@ -131,13 +158,13 @@ def _windows(path: Path, label: str, options: IngestOptions, checked: Checked, r
     from msdc.asterix.stream import plan_windows
     from msdc.pipeline.dataset.windows import write_window
 
-    planned = plan_windows(path, pool, chunk=max(int(options.chunk_mb * 1e6), 1),
-                           editions=checked.editions or None, date=options.date, categories=cats,
-                           format=options.format)
+    planned = plan_windows(path, pool, chunk=settings.chunk_bytes,
+                           editions=settings.editions or None, date=settings.date, categories=cats,
+                           format=settings.format)
     if planned is None:
         return None
     plan, windows = planned
-    ahead = 2 * max(options.workers, 1)
+    ahead = 2 * max(settings.workers, 1)
     parts: list[dict] = []
     size = path.stat().st_size
     pending: deque = deque()
@@ -159,4 +186,4 @@ def _windows(path: Path, label: str, options: IngestOptions, checked: Checked, r
     return parts
 
 
-__all__ = ["ingest_input"]
+__all__ = ["IngestFailed", "IngestSettings", "ingest_input"]

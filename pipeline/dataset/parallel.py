@@ -14,8 +14,7 @@ from concurrent.futures import FIRST_COMPLETED, wait
 from dataclasses import dataclass
 from pathlib import Path
 
-from msdc.pipeline.jobs.common import Checked, JobError
-from msdc.pipeline.jobs.options import IngestOptions
+from msdc.pipeline.dataset.ingest_input import IngestFailed, IngestSettings
 
 NO_STOP = 2**62  # the stop index while no input failed: no input's index is above it
 POLL_S = 0.2  # how often the main process folds the pool's progress while it waits
@@ -71,10 +70,10 @@ def check_input(path: str, format: str | None) -> str | None:
     return sniff(path, format)
 
 
-def ingest_whole(todo: Todo, options: IngestOptions, checked: Checked, root: Path) -> tuple[dict, list[str]]:
+def ingest_whole(todo: Todo, settings: IngestSettings, root: Path) -> tuple[dict, list[str]]:
     """One input ingested whole in a pool process (streamed, its memory bounded by --chunk-mb): its
     manifest record and warnings; Stopped when an input before it failed."""
-    from msdc.pipeline.jobs.ingest_input import ingest_input
+    from msdc.pipeline.dataset.ingest_input import ingest_input
 
     def on_chunk(done: int, total: int, what: str) -> None:
         if _stop is not None and todo.index > _stop.value:
@@ -82,12 +81,12 @@ def ingest_whole(todo: Todo, options: IngestOptions, checked: Checked, root: Pat
         if _progress is not None and what.endswith("decoding"):
             _progress.put((todo.index, done))
 
-    return ingest_input(todo.path, todo.digest, todo.label, options, checked, root, None, on_chunk)
+    return ingest_input(todo.path, todo.digest, todo.label, settings, root, None, on_chunk)
 
 
 def check_inputs(pool, paths: list[Path], format: str | None, refuse: Callable[[str | None], None]) -> None:
     """Every input's verdict (check_input), in the pool, passed to ``refuse`` (which raises for an input
-    refused) in input order; JobError (status 2) for an input that cannot be read."""
+    refused) in input order; IngestFailed (status 2) for an input that cannot be read."""
     from msdc.asterix.errors import UnreadableInput
 
     futures = [pool.submit(check_input, str(p), format) for p in paths]
@@ -95,13 +94,13 @@ def check_inputs(pool, paths: list[Path], format: str | None, refuse: Callable[[
         for f in futures:
             refuse(f.result())
     except UnreadableInput as exc:
-        raise JobError(str(exc), 2) from exc
+        raise IngestFailed(str(exc), 2) from exc
     finally:
         for f in futures:
             f.cancel()
 
 
-def ingest_all(todo: list[Todo], options: IngestOptions, checked: Checked, root: Path, pool, stop, progress,
+def ingest_all(todo: list[Todo], settings: IngestSettings, root: Path, pool, stop, progress,
                commit: Callable[[dict, list[str]], None], on_chunk) -> None:
     """Ingest every input of ``todo`` (in input order) whole in the pool, the largest first, committing
     each (``commit(record, warnings)``) once those before it are. When one fails, the inputs after it stop
@@ -111,10 +110,10 @@ def ingest_all(todo: list[Todo], options: IngestOptions, checked: Checked, root:
     from msdc.pipeline.dataset.manifest import prune_empty
 
     total = sum(t.size_bytes for t in todo) or 1
-    label = f"{len(todo)} inputs, {options.workers} processes: decoding"
+    label = f"{len(todo)} inputs, {settings.workers} processes: decoding"
     done_bytes = {t.index: 0 for t in todo}
     stop.value = NO_STOP
-    futures = {pool.submit(ingest_whole, t, options, checked, root): t
+    futures = {pool.submit(ingest_whole, t, settings, root): t
                for t in sorted(todo, key=lambda t: (-t.size_bytes, t.index))}
     finished: dict[int, tuple[dict, list[str]]] = {}
     failed: dict[int, BaseException] = {}
@@ -156,12 +155,12 @@ def ingest_all(todo: list[Todo], options: IngestOptions, checked: Checked, root:
 
 
 def _said(todo: Todo, exc: BaseException) -> BaseException:
-    """An input's failure as raised: a pool process that died (killed, out of memory) said as a JobError
+    """An input's failure as raised: a pool process that died (killed, out of memory) said as an IngestFailed
     naming the input."""
     from concurrent.futures.process import BrokenProcessPool
 
     if isinstance(exc, BrokenProcessPool):
-        return JobError(f"{todo.path}: the process ingesting it ended abruptly ({exc}); nothing ingested "
+        return IngestFailed(f"{todo.path}: the process ingesting it ended abruptly ({exc}); nothing ingested "
                         "from it")
     return exc
 
