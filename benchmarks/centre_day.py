@@ -386,7 +386,7 @@ def recordings(base: Path, hours: int, peak: int, seed: int) -> tuple[Path, dict
 
 
 def main() -> None:
-    from ingest import MEASURE
+    from ingest import MEASURE, read_through
 
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--hours", type=int, choices=(1, 6, 24), default=1)
@@ -411,7 +411,7 @@ def main() -> None:
     if args.generate_only:
         return
     for p in inputs:
-        p.read_bytes()  # in the page cache, as far as it fits
+        read_through(p)  # in the page cache, as far as it fits
     base = None
     for workers in args.workers:
         root = (args.datasets or args.out) / f"dataset-{args.hours}h-w{workers}"
