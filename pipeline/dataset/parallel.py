@@ -155,13 +155,13 @@ def ingest_all(todo: list[Todo], settings: IngestSettings, root: Path, pool, sto
 
 
 def _said(todo: Todo, exc: BaseException) -> BaseException:
-    """An input's failure as raised: a pool process that died (killed, out of memory) said as an IngestFailed
-    naming the input."""
+    """An input's failure as raised: a pool process that died (killed, out of memory) breaks every input not
+    yet ingested, said as an IngestFailed naming the first of them in input order."""
     from concurrent.futures.process import BrokenProcessPool
 
     if isinstance(exc, BrokenProcessPool):
-        return IngestFailed(f"{todo.path}: the process ingesting it ended abruptly ({exc}); nothing ingested "
-                        "from it")
+        return IngestFailed(f"{todo.path}: nothing ingested from it: a pool process ended abruptly (killed, "
+                            f"or out of memory?): {exc}")
     return exc
 
 
