@@ -6,6 +6,7 @@ Run by hand (never a timed test):
 
     python benchmarks/centre_day.py --hours 1 --out /work/bench-data      # generate (cached), then ingest
     python benchmarks/centre_day.py --hours 6 --out /work/bench-data --generate-only
+    python benchmarks/centre_day.py --hours 6 --out /work/bench-data --datasets /tmp/ds   # datasets elsewhere
 
 The recordings go to ``OUT/centre-{hours}h-seed{seed}/``: one raw file per sensor (``radar_20_01.ast`` ...,
 ``adsb_0_1.ast``), written hour by hour in time order, the radars' ``sensors.toml`` and ``scenario.json``
@@ -385,7 +386,7 @@ def recordings(base: Path, hours: int, peak: int, seed: int) -> tuple[Path, dict
 
 
 def main() -> None:
-    from ingest import MEASURE
+    from ingest import MEASURE, read_through
 
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--hours", type=int, choices=(1, 6, 24), default=1)
@@ -395,6 +396,8 @@ def main() -> None:
     parser.add_argument("--workers", type=int, nargs="+", default=[1, 2])
     parser.add_argument("--chunk-mb", type=float, default=16.0)
     parser.add_argument("--generate-only", action="store_true")
+    parser.add_argument("--datasets", type=Path, default=None,
+                        help="where the ingests write their datasets (default: --out)")
     args = parser.parse_args()
     t = time.perf_counter()
     folder, meta = recordings(args.out, args.hours, args.peak, args.seed)
@@ -408,10 +411,10 @@ def main() -> None:
     if args.generate_only:
         return
     for p in inputs:
-        p.read_bytes()  # in the page cache, as far as it fits
+        read_through(p)  # in the page cache, as far as it fits
     base = None
     for workers in args.workers:
-        root = args.out / f"dataset-{args.hours}h-w{workers}"
+        root = (args.datasets or args.out) / f"dataset-{args.hours}h-w{workers}"
         shutil.rmtree(root, ignore_errors=True)
         load = __import__("os").getloadavg()[0]
         done = subprocess.run([sys.executable, "-c", MEASURE, json.dumps([str(p) for p in inputs]), str(root),

@@ -58,6 +58,14 @@ def build(path: Path, n: int) -> None:
     part.rename(path)
 
 
+def read_through(path: Path) -> None:
+    """Read a file through, 16 MB at a time, to have it in the page cache: not whole, since a measured
+    process starts with its parent's peak RSS as its own (Linux keeps ru_maxrss across fork and exec)."""
+    with open(path, "rb") as fh:
+        while fh.read(1 << 24):
+            pass
+
+
 MEASURE = r"""
 import json, os, resource, sys, threading, time
 from pathlib import Path
@@ -133,7 +141,7 @@ def main() -> None:
         t = time.perf_counter()
         build(path, args.records)
         print(f"built {path} ({path.stat().st_size / 1e6:.0f} MB) in {time.perf_counter() - t:.0f} s")
-    path.read_bytes()  # in the page cache
+    read_through(path)  # in the page cache
     print(f"{path.name}: {path.stat().st_size / 1e6:.0f} MB, --chunk-mb {args.chunk_mb:g}")
     base = None
     for workers in args.workers:

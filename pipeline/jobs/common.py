@@ -135,7 +135,8 @@ def pinned_editions(editions: list[str] | dict | None) -> dict[int, str]:
 def input_files(paths: list[str | Path]) -> tuple[list[Path], list[str]]:
     """The input files, checked (OptionError naming a missing or unreadable one), and a warning for each
     skipped because its content was given before."""
-    return _inputs(paths)
+    paths, warnings, _ = _inputs(paths)
+    return paths, warnings
 
 
 def nonempty_path(name: str, value) -> None:
@@ -156,8 +157,9 @@ def _not_a_file(p: Path, noun: str, thing: str) -> str | None:
     return None
 
 
-def _inputs(paths: list[str | Path]) -> tuple[list[Path], list[str]]:
-    """Readable input files, and a warning for each skipped because its content was given before."""
+def _inputs(paths: list[str | Path]) -> tuple[list[Path], list[str], dict[Path, str]]:
+    """Readable input files, a warning for each skipped because its content was given before, and each
+    file's SHA-256."""
     if not paths:
         raise OptionError("no input file given")
     for p in paths:
@@ -175,7 +177,7 @@ def _inputs(paths: list[str | Path]) -> tuple[list[Path], list[str]]:
             continue
         seen[digest] = p
         out.append(p)
-    return out, warnings
+    return out, warnings, {p: d for d, p in seen.items()}
 
 
 def output_path(name: str, path: str | Path | None, suffixes: tuple[str, ...]) -> Path | None:
@@ -312,8 +314,8 @@ def check_decoding(o: DecodingOptions) -> Checked:
                               "the options each input was ingested with); give them to msdc ingest")
         source = check_dataset(dataset, inputs, selection)
         return Checked(source.paths, _editions(editions), selection=selection, dataset=source)
-    paths, warnings = _inputs(inputs)
-    return Checked(paths, _editions(editions), warnings=warnings, selection=selection)
+    paths, warnings, digests = _inputs(inputs)
+    return Checked(paths, _editions(editions), warnings=warnings, selection=selection, digests=digests)
 
 
 def check_scheduler(o) -> None:
@@ -501,6 +503,7 @@ class Checked:
     warnings: list[str] = field(default_factory=list)
     selection: ReportSelection | None = None  # --from, --to, --area, --fl, --sensor (check_report_selection)
     dataset: DatasetInputs | None = None  # --dataset: the inputs read from it (check_dataset)
+    digests: dict[Path, str] = field(default_factory=dict)  # each input's SHA-256, hashed to find duplicates
 
 
 def check_workbook(options: AircraftOptions, checked: Checked, *, figure_windows: int | None,

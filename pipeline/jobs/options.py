@@ -802,8 +802,9 @@ class IngestOptions:
     dataset: str | None = option(None, "--dataset", metavar="DIR", required=True, section="output",
                                  help="the dataset folder (made if absent; an existing one is added to)")
     workers: int = option(1, "--workers", metavar="N", range=WORKERS_RANGE, section="command",
-                          help="processes decoding a raw recording's chunks in parallel (the records and "
-                               "days are those of one)")
+                          help="processes: with at least N inputs to ingest, each ingests whole inputs; "
+                               "else a raw recording's windows are decoded in parallel (the rows are those "
+                               "of one process)")
     categories: tuple[int, ...] = option((), "--category", repeat=True, choices=CATEGORIES,
                                          help="only this category (repeatable; default: the measurement "
                                               "categories 48, 21, 10 and 20)",

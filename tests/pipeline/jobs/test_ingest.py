@@ -141,13 +141,14 @@ def test_ingesting_the_same_input_again_does_nothing(fixtures_dataset, tmp_path,
     assert {p: p.read_bytes() for p in root.rglob("*") if p.is_file()} == before
 
 
-def test_workers_2_write_the_rows_workers_1_writes(tmp_path):
-    """Each window of a raw stream written by a pool process (parts of their own): the same rows, in the
-    same order, in every partition, across midnight (the clocks settled before the windows decode)."""
+def test_workers_2_on_one_input_write_the_rows_workers_1_writes(tmp_path):
+    """One input, two workers: each window of the raw stream written by a pool process (parts of their
+    own): the same rows, in the same order, in every partition, across midnight (the clocks settled before
+    the windows decode)."""
     rec = tmp_path / "midnight.ast"
     midnight_recording(rec, 12000)  # about 190 kB: chunks of 0.1 MB, midnight in the middle one
     one, two = tmp_path / "one", tmp_path / "two"
-    args = (rec, ADSB, "--date", DAY, "--chunk-mb", "0.1")
+    args = (rec, "--date", DAY, "--chunk-mb", "0.1")
     assert ingest(*args, "--dataset", one) == 0
     assert ingest(*args, "--dataset", two, "--workers", "2") == 0
     assert len({p.split("/")[0] for p in listed_parts(one)}) == 2  # both days
@@ -156,6 +157,86 @@ def test_workers_2_write_the_rows_workers_1_writes(tmp_path):
     again = tmp_path / "again"
     assert ingest(*args, "--dataset", again, "--workers", "2") == 0
     same_dataset(two, again)  # and the same parts for the same command
+
+
+def _several_inputs(tmp_path: Path) -> list[Path]:
+    """Inputs whose ingests end in another order than theirs: the ADS-B station's (the largest, six times
+    the others: it ends last), a radar's, a copy of it (the same bytes: skipped), an input of another
+    content under the radar's name (its label the resolved path)."""
+    copy, other = tmp_path / "copy.ast", tmp_path / "other" / "radar.ast"
+    shutil.copy(RADAR, copy)
+    other.parent.mkdir()
+    midnight_recording(other, 3000)
+    return [ADSB, RADAR, copy, other]
+
+
+def test_workers_2_on_several_inputs_write_the_dataset_workers_1_writes(tmp_path, capsys):
+    """Inputs at least as many as workers: each ingested whole by a pool process, streamed as one process
+    streams it, so the same parts (names and rows), the same manifest (inputs in input order, labels and
+    skips as one process assigns them) and the same lines said, whatever order the inputs end in."""
+    inputs = _several_inputs(tmp_path)
+    one, two = tmp_path / "one", tmp_path / "two"
+    said = {}
+    for root, workers in ((one, "1"), (two, "2")):
+        assert ingest(*inputs, "--dataset", root, "--date", DAY, "--chunk-mb", "0.1", "--workers", workers
+                      ) == 0
+        said[workers] = capsys.readouterr()
+    same_dataset(one, two)
+    assert [r["file"] for r in manifest(two)["inputs"]] == ["adsb.ast", "radar.ast", str(inputs[3].resolve())]
+    assert said["2"].out.replace(str(two), str(one)) == said["1"].out
+    assert f"{inputs[2]}: same content as {RADAR} (SHA-256); skipped" in said["2"].err
+    assert said["2"].err == said["1"].err
+
+
+def test_workers_2_warnings_and_progress(tmp_path):
+    """The warnings of inputs ingested in parallel come in input order, as one process says them; the
+    progress bar moves over all the inputs' bytes to its end."""
+    from msdc.pipeline.jobs.ingest import ingest_job
+    from msdc.pipeline.jobs.options import IngestOptions
+
+    rec = tmp_path / "midnight.ast"
+    midnight_recording(rec, 3000)
+    inputs = (str(RADAR), str(ADSB), str(rec))  # CAT021 only: the two radars' inputs have no record of it
+    got = {}
+    calls: list[tuple[int, int, str]] = []
+    for workers in (1, 2):
+        options = IngestOptions(inputs=inputs, dataset=str(tmp_path / f"ds{workers}"), workers=workers,
+                                date=dt.date.fromisoformat(DAY), categories=(21,), chunk_mb=0.1)
+        got[workers] = ingest_job(options, on_chunk=(lambda *a: calls.append(a)) if workers == 2 else None)
+    no_record = [w for w in got[2].warnings if "no record of CAT021 decoded" in w]
+    assert [w.split(":")[0] for w in no_record] == [str(RADAR), str(rec)]
+    assert got[2].warnings == got[1].warnings
+    total = RADAR.stat().st_size + ADSB.stat().st_size + rec.stat().st_size
+    assert calls and calls[-1][:2] == (total, total)
+    assert [c[0] for c in calls] == sorted(c[0] for c in calls)  # never back
+
+
+def test_workers_2_a_failed_input_leaves_the_dataset_one_process_leaves(tmp_path, capsys):
+    """Inputs ingested in parallel, one of them failing (a raw stream without --date, between two dated
+    pcap files, the largest after it): the input before it committed, nothing of it nor of the input after
+    it, the error one process says, the same exit status."""
+    from container_bytes import pcap_file, udp_frame
+    from live_bytes import raw_blocks
+
+    def pcap_of(raw: Path, out: Path) -> Path:
+        start_s = int(dt.datetime.fromisoformat(f"{DAY}T08:00:00+00:00").timestamp())
+        blocks = raw_blocks(raw.read_bytes())
+        out.write_bytes(pcap_file([(start_s + k, 0, udp_frame(b)) for k, b in enumerate(blocks)])[0])
+        return out
+
+    first, last = pcap_of(RADAR, tmp_path / "radar.pcap"), pcap_of(ADSB, tmp_path / "adsb.pcap")
+    assert last.stat().st_size > first.stat().st_size > RADAR.stat().st_size
+    err = {}
+    for workers in ("1", "2"):
+        root = tmp_path / f"ds{workers}"
+        assert ingest(first, RADAR, last, "--dataset", root, "--workers", workers) == 1
+        err[workers] = capsys.readouterr().err
+        assert [r["file"] for r in manifest(root)["inputs"]] == ["radar.pcap"]
+        assert on_disk(root) == listed_parts(root)
+    assert f"{RADAR}: a raw recording carries no date: give --date" in err["2"]
+    assert "Traceback" not in err["2"]
+    assert err["2"] == err["1"]
+    same_dataset(tmp_path / "ds1", tmp_path / "ds2")
 
 
 def _run(args: list[str]) -> subprocess.Popen:
@@ -170,12 +251,15 @@ def _started(root: Path, proc: subprocess.Popen) -> float:
     return time.monotonic()
 
 
-def test_an_ingest_killed_at_any_moment_resumes_to_the_same_dataset(tmp_path):
+@pytest.mark.parametrize("workers", ["1", "2"])
+def test_an_ingest_killed_at_any_moment_resumes_to_the_same_dataset(tmp_path, workers):
     """SIGKILL at a random moment of the work (seeded, one in each third of it), then the same command
-    again: the dataset of a run never killed, part by part and row by row, nothing else left."""
+    again: the dataset of a run never killed, part by part and row by row, nothing else left. With two
+    workers each input is ingested whole by a pool process (three inputs), and the pool's processes die
+    with the main one: none goes on writing parts the rerun writes again."""
     rec = tmp_path / "midnight.ast"
     midnight_recording(rec, 12000)
-    inputs = [str(rec), str(RADAR), str(ADSB), "--date", DAY, "--chunk-mb", "0.1"]
+    inputs = [str(rec), str(RADAR), str(ADSB), "--date", DAY, "--chunk-mb", "0.1", "--workers", workers]
     reference = tmp_path / "reference"
     proc = _run([*inputs, "--dataset", str(reference)])
     start = _started(reference, proc)
