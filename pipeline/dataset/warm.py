@@ -1,9 +1,14 @@
 """Imported by the ingest pool's forkserver only (ingest.POOL_PRELOAD): a tiny recording, a CAT048 and a
 CAT021 data block, checked once there, so that numba's compiled kernels are loaded (from its cache) once,
 in the forkserver, and every pool process forked from it starts with them (each loaded them itself, about
-1 s of CPU, before)."""
+1 s of CPU, before). Imported anywhere else (the forkserver's environment lacks WARM_ENV), it does nothing:
+with a cold numba cache the warm-up compiles the decoder, about 20 s."""
 
 from __future__ import annotations
+
+import os
+
+WARM_ENV = "MSDC_INGEST_FORKSERVER"  # set only in the ingest pool's forkserver (jobs.ingest._forkserver)
 
 
 def warm() -> None:
@@ -28,7 +33,8 @@ def warm() -> None:
         os.unlink(path)
 
 
-try:
-    warm()
-except Exception:  # noqa: BLE001,S110 - only a head start: each pool process loads the kernels it lacks
-    pass
+if os.environ.get(WARM_ENV) == "1":
+    try:
+        warm()
+    except Exception:  # noqa: BLE001,S110 - only a head start: each pool process loads the kernels it lacks
+        pass

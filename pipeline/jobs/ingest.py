@@ -213,9 +213,15 @@ def _forkserver():
     import multiprocessing
     from multiprocessing import forkserver
 
+    from msdc.pipeline.dataset.warm import WARM_ENV
+
     ctx = multiprocessing.get_context("forkserver")
     ctx.set_forkserver_preload(list(POOL_PRELOAD))
-    forkserver.ensure_running()
+    os.environ[WARM_ENV] = "1"  # the server starts with it: dataset.warm warms there, and only there
+    try:
+        forkserver.ensure_running()
+    finally:
+        os.environ.pop(WARM_ENV, None)
     return ctx
 
 
