@@ -22,7 +22,7 @@ Rows without a finite position or covariance are counted (`invalid`) and skipped
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 import pandas as pd
@@ -166,9 +166,11 @@ def track(measurements: pd.DataFrame, *, step_s: float = 1.0, max_coast_s: float
     epoch = frame["time"].min().floor("D") if epoch is None else epoch
     tracks, sensors, aircraft, rejected, finals, runs = [], [], [], [], {}, {}
     groups = frame.groupby("aircraft_id", sort=True, observed=True)
-    outs = map_ordered(lambda item: (item[0], _track_one(str(item[0]), item[1], epoch, config, args, names,
-                                                         step_s, smooth, smoother)), groups,
-                       distributable=True, label=aircraft_label)
+    def one(item: tuple) -> tuple:  # the filter run travels back (a cluster's worker) only when kept
+        out = _track_one(str(item[0]), item[1], epoch, config, args, names, step_s, smooth, smoother)
+        return item[0], (out if keep_states else replace(out, plane=None, run=None))
+
+    outs = map_ordered(one, groups, distributable=True, label=aircraft_label)
     for aircraft_id, out in outs:
         tracks.append(out.tracks)
         sensors.append(out.sensors)
@@ -467,8 +469,8 @@ class AircraftTrack:
     aircraft: dict
     rejected: pd.DataFrame
     final: ImmState
-    plane: Plane
-    run: PlaneRun
+    plane: Plane | None
+    run: PlaneRun | None
 
 
 @dataclass
