@@ -41,7 +41,8 @@ def pytest_unconfigure(config) -> None:
 
 @pytest.fixture(scope="session", autouse=True)
 def _kernels_compiled() -> None:
-    """Wait (at most 3 minutes, and while the prewarm lives) for its kernels before a worker's first test."""
+    """Wait (at most 3 minutes, and while the prewarm lives) for the decoder's kernels before a worker's first
+    test (tests/prewarm.py compiles the others while the first tests run)."""
     said = os.environ.get(PREWARM_DONE)
     if not said:
         return

@@ -3,8 +3,10 @@ most (decode, track, evaluate, conflicts, correlate with quality) on the bundled
 
     python tests/prewarm.py DONE_FILE
 
-Started by tests/conftest.py beside the xdist workers' collection; each worker waits for DONE_FILE before
-its first test, so a cold cache (a fresh checkout, CI) compiles each kernel once, not once per process."""
+Started by tests/conftest.py beside the xdist workers' collection. The decoder's kernels first (``msdc
+stats``, about 15 s on a cold cache, under the workers' 20 s of collection), then DONE_FILE, which each
+worker waits for before its first test; then the tracker's and the others' (about 35 s more), while the
+workers run their first tests: a test needing one of them before compiles it itself, as without this."""
 
 from __future__ import annotations
 
@@ -19,23 +21,28 @@ FIX = ROOT / "fixtures"
 
 
 def main(done: Path) -> None:
-    """Run the commands (their outputs thrown away), then write DONE_FILE whatever happened."""
-    try:
-        from msdc.pipeline import cli
+    """Decode (DONE_FILE written after it, whatever happened), then run the commands (outputs thrown away)."""
+    from msdc.pipeline import cli
 
-        inputs = [str(FIX / "radar.ast"), str(FIX / "adsb.ast")]
-        sensors = ["--sensors", str(FIX / "sensors.toml")]
-        with tempfile.TemporaryDirectory() as tmp:
-            preset = ["--preset", "eurocontrol-1997-ssr"]
-            runs = [["evaluate", *inputs, *sensors, *preset, "--json", f"{tmp}/e.json"],
-                    ["conflicts", *inputs, *sensors, "--json", f"{tmp}/c.json"],
-                    ["correlate", *inputs, *sensors, "--all", "--quality", "--json", f"{tmp}/q.json"]]
-            for argv in runs:
-                with contextlib.redirect_stdout(io.StringIO()), contextlib.redirect_stderr(io.StringIO()):
-                    with contextlib.suppress(SystemExit, Exception):
-                        cli.main(argv)
+    inputs = [str(FIX / "radar.ast"), str(FIX / "adsb.ast")]
+    try:
+        _quietly(cli.main, ["stats", *inputs])
     finally:
         done.write_text("done\n")
+    sensors = ["--sensors", str(FIX / "sensors.toml")]
+    with tempfile.TemporaryDirectory() as tmp:
+        preset = ["--preset", "eurocontrol-1997-ssr"]
+        for argv in (["evaluate", *inputs, *sensors, *preset, "--json", f"{tmp}/e.json"],
+                     ["conflicts", *inputs, *sensors, "--json", f"{tmp}/c.json"],
+                     ["correlate", *inputs, *sensors, "--all", "--quality", "--json", f"{tmp}/q.json"]):
+            _quietly(cli.main, argv)
+
+
+def _quietly(fn, argv: list[str]) -> None:
+    """fn(argv), its output and any failure swallowed (the tests say what fails)."""
+    with contextlib.redirect_stdout(io.StringIO()), contextlib.redirect_stderr(io.StringIO()):
+        with contextlib.suppress(SystemExit, Exception):
+            fn(argv)
 
 
 if __name__ == "__main__":
