@@ -39,22 +39,29 @@ def pytest_unconfigure(config) -> None:
         shutil.rmtree(Path(os.environ[PREWARM_DONE].rsplit(":", 1)[0]).parent, ignore_errors=True)
 
 
-@pytest.fixture(scope="session", autouse=True)
-def _kernels_compiled() -> None:
-    """Wait (at most 3 minutes, and while the prewarm lives) for the decoder's kernels before a worker's first
-    test (tests/prewarm.py compiles the others while the first tests run)."""
+def _wait_for_prewarm(stage: str) -> None:
+    """Wait (at most 3 minutes, and while the prewarm lives) for its file of ``stage``: "done" (the decoder's
+    kernels) or "all" (every command's)."""
     said = os.environ.get(PREWARM_DONE)
     if not said:
         return
     done, pid = said.rsplit(":", 1)
+    path = Path(done) if stage == "done" else Path(done).with_name(stage)
     deadline = time.monotonic() + 180
-    while not Path(done).exists() and time.monotonic() < deadline:
+    while not path.exists() and time.monotonic() < deadline:
         try:  # ended without its file (a crash): a zombie until the controller reaps it
             if Path(f"/proc/{pid}/stat").read_text().split(")")[-1].split()[0] == "Z":
                 return
         except OSError:
             return
         time.sleep(0.2)
+
+
+@pytest.fixture(scope="session", autouse=True)
+def _kernels_compiled() -> None:
+    """The decoder's kernels before a worker's first test (tests/prewarm.py compiles the others while the
+    first tests run)."""
+    _wait_for_prewarm("done")
 
 
 @pytest.fixture(scope="session")
@@ -79,6 +86,7 @@ def dask_scheduler():
     import logging
 
     distributed = pytest.importorskip("distributed", reason="dask's distributed scheduler is not installed")
+    _wait_for_prewarm("all")  # its worker processes load every kernel from the cache, not compile it again
     cluster = distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, host="127.0.0.1",
                                        dashboard_address=None, silence_logs=logging.ERROR)
     yield cluster.scheduler_address

@@ -6,7 +6,8 @@ most (decode, track, evaluate, conflicts, correlate with quality) on the bundled
 Started by tests/conftest.py beside the xdist workers' collection. The decoder's kernels first (``msdc
 stats``, about 15 s on a cold cache, under the workers' 20 s of collection), then DONE_FILE, which each
 worker waits for before its first test; then the tracker's and the others' (about 35 s more), while the
-workers run their first tests: a test needing one of them before compiles it itself, as without this."""
+workers run their first tests: a test needing one of them before compiles it itself, as without this. Then
+the file "all" beside DONE_FILE (the Dask cluster's fixture waits for it: its processes compile apart)."""
 
 from __future__ import annotations
 
@@ -36,6 +37,7 @@ def main(done: Path) -> None:
                      ["conflicts", *inputs, *sensors, "--json", f"{tmp}/c.json"],
                      ["correlate", *inputs, *sensors, "--all", "--quality", "--json", f"{tmp}/q.json"]):
             _quietly(cli.main, argv)
+    done.with_name("all").write_text("done\n")
 
 
 def _quietly(fn, argv: list[str]) -> None:
