@@ -7,7 +7,8 @@ Started by tests/conftest.py beside the xdist workers' collection. The decoder's
 stats``, about 15 s on a cold cache, under the workers' 20 s of collection), then DONE_FILE, which each
 worker waits for before its first test; then the tracker's and the others' (about 35 s more), while the
 workers run their first tests: a test needing one of them before compiles it itself, as without this. Then
-the file "all" beside DONE_FILE (the Dask cluster's fixture waits for it: its processes compile apart)."""
+the file "all" beside DONE_FILE once the dataset jobs' kernels are (the Dask cluster's fixture waits for
+it: its processes compile apart), then the conflicts' kernels."""
 
 from __future__ import annotations
 
@@ -34,10 +35,10 @@ def main(done: Path) -> None:
     with tempfile.TemporaryDirectory() as tmp:
         preset = ["--preset", "eurocontrol-1997-ssr"]
         for argv in (["evaluate", *inputs, *sensors, *preset, "--json", f"{tmp}/e.json"],
-                     ["conflicts", *inputs, *sensors, "--json", f"{tmp}/c.json"],
                      ["correlate", *inputs, *sensors, "--all", "--quality", "--json", f"{tmp}/q.json"]):
             _quietly(cli.main, argv)
-    done.with_name("all").write_text("done\n")
+        done.with_name("all").write_text("done\n")  # what the dataset jobs run (track, quality, evaluate)
+        _quietly(cli.main, ["conflicts", *inputs, *sensors, "--json", f"{tmp}/c.json"])
 
 
 def _quietly(fn, argv: list[str]) -> None:
