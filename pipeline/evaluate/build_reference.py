@@ -167,16 +167,10 @@ def reconstruct(reports: pd.DataFrame, epoch: pd.Timestamp, *, step_s: float = 1
     built_by, updated (a report updated the row) and the identity of the reports. The tracker runs each
     aircraft as its own task (pipeline.parallel: threads, or a cluster's workers); what follows is done
     for every aircraft at once, column by column."""
-    if reports.empty:
-        return _empty()
-    return _reconstruct_one(reports, epoch, step_s, max_coast_s, self_reference)
-
-
-def _reconstruct_one(reports: pd.DataFrame, epoch: pd.Timestamp, step_s: float, max_coast_s: float,
-                     self_reference: bool) -> pd.DataFrame:
-    """The aircraft's reference rows (reconstruct)."""
     from msdc.pipeline.track import track
 
+    if reports.empty:
+        return _empty()
     res = track(reports, step_s=step_s, max_coast_s=max_coast_s, smooth=True, epoch=epoch)
     tr = res.tracks
     if tr.empty:
