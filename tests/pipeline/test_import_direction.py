@@ -42,7 +42,12 @@ def _imports(path: Path) -> set[str]:
 
 
 SOURCES = sorted([*(ROOT / "asterix").rglob("*.py"), *(ROOT / "pipeline").rglob("*.py")])
-MODULES = {_module(p): _imports(p) for p in SOURCES}
+
+
+@functools.cache
+def _modules() -> dict[str, set[str]]:
+    """Every source module's msdc imports, read when a test first asks (not at collection)."""
+    return {_module(p): _imports(p) for p in SOURCES}
 
 
 def _within(name: str, package: str) -> bool:
@@ -50,14 +55,15 @@ def _within(name: str, package: str) -> bool:
 
 
 def _offenders(importer: str, forbidden: tuple[str, ...]) -> list[str]:
-    return [f"{mod} imports {name}" for mod, names in MODULES.items() if _within(mod, importer)
+    return [f"{mod} imports {name}" for mod, names in _modules().items() if _within(mod, importer)
             for name in sorted(names) if any(_within(name, f) for f in forbidden)]
 
 
 def test_the_modules_were_read():
-    assert "msdc.pipeline.correlate.correlation" in MODULES and "msdc.pipeline.model.aircraft" in MODULES
-    assert "msdc.asterix.kernel" in MODULES
-    assert "msdc.pipeline.model.aircraft" in MODULES["msdc.pipeline.quality.quality_run"]  # sees imports
+    modules = _modules()
+    assert "msdc.pipeline.correlate.correlation" in modules and "msdc.pipeline.model.aircraft" in modules
+    assert "msdc.asterix.kernel" in modules
+    assert "msdc.pipeline.model.aircraft" in modules["msdc.pipeline.quality.quality_run"]  # sees imports
 
 
 @pytest.mark.parametrize("importer, forbidden", [
@@ -69,7 +75,7 @@ def test_the_modules_were_read():
     ("msdc.asterix", ("msdc.pipeline",)),
 ])
 def test_imports_flow_one_way(importer, forbidden):
-    assert any(_within(mod, importer) for mod in MODULES)  # a rule about modules that exist
+    assert any(_within(mod, importer) for mod in _modules())  # a rule about modules that exist
     assert _offenders(importer, forbidden) == []
 
 
@@ -91,7 +97,7 @@ def test_the_command_modules_share_only_common_and_public_names():
                           if a.name.startswith("_")]
         others = [f"msdc.pipeline.jobs.{c}" for c in commands if not mod.endswith(f".{c}")]
         if _within(mod, "msdc.pipeline.jobs"):
-            wrong += [f"{mod} imports {name}" for name in sorted(MODULES[mod])
+            wrong += [f"{mod} imports {name}" for name in sorted(_modules()[mod])
                       if any(_within(name, other) for other in others)]
     assert wrong == []
 
@@ -110,11 +116,11 @@ def test_no_top_level_asterix_or_pipeline_import():
 
 def test_the_check_sees_a_wrong_import():
     """A step importing the jobs layer is reported (so the tests above can fail)."""
-    MODULES["msdc.pipeline.quality.fake"] = {"msdc.pipeline.jobs", "msdc.pipeline.correlate.slots"}
+    _modules()["msdc.pipeline.quality.fake"] = {"msdc.pipeline.jobs", "msdc.pipeline.correlate.slots"}
     try:
         assert _offenders("msdc.pipeline.quality", FRONT) == [
             "msdc.pipeline.quality.fake imports msdc.pipeline.jobs"]
         assert _offenders("msdc.pipeline.quality", ("msdc.pipeline.correlate",)) == [
             "msdc.pipeline.quality.fake imports msdc.pipeline.correlate.slots"]
     finally:
-        del MODULES["msdc.pipeline.quality.fake"]
+        del _modules()["msdc.pipeline.quality.fake"]
