@@ -175,24 +175,35 @@ LABEL_MARGIN_PX = 2.0  # room kept around a bar label
 def _drop_overlapping(fig: Figure, placed: list[tuple]) -> None:
     """In each panel (its bar labels, counts and bars), hide the labels that would overlap the label of a
     larger count or a bar other than their own (a radar's few bins near its scan period, 0.1 s apart: their
-    counts ran into one another, or sat on the taller bar beside); the sheet gives every count."""
-    fig.draw_without_rendering()  # once: the constrained layout settled, the labels' extents are final
+    counts ran into one another, or sat on the taller bar beside); the sheet gives every count. The layout
+    is settled once here and kept when saved unless a hidden label reached outside its panel (it took room
+    there, which the layout gives back)."""
     renderer = fig.canvas.get_renderer()
+    engine = fig.get_layout_engine()
+    if engine is not None:
+        engine.execute(fig)  # the panels placed: the labels' extents are final (no drawing needed)
+    keeps_layout = True
     for texts, counts, bars in placed:
         edges = np.array([b.get_window_extent(renderer).extents for b in bars]).reshape(-1, 4)
         kept: list[np.ndarray] = []
         for i in np.argsort(-counts, kind="stable"):
             if not texts[i].get_text():
                 continue
-            box = texts[i].get_window_extent(renderer).extents + np.array([-1, -1, 1, 1]) * LABEL_MARGIN_PX
+            extent = texts[i].get_window_extent(renderer)
+            box = extent.extents + np.array([-1, -1, 1, 1]) * LABEL_MARGIN_PX
             on_bar = ((edges[:, 0] < box[2]) & (edges[:, 2] > box[0]) & (edges[:, 1] < box[3])
                       & (edges[:, 3] > box[1]))
             on_bar[i] = False
             on_label = any(k[0] < box[2] and k[2] > box[0] and k[1] < box[3] and k[3] > box[1] for k in kept)
             if on_label or on_bar.any():
                 texts[i].set_visible(False)
+                panel = texts[i].axes.get_window_extent(renderer)
+                keeps_layout &= bool(panel.x0 <= extent.x0 and extent.x1 <= panel.x1
+                                     and panel.y0 <= extent.y0 and extent.y1 <= panel.y1)
             else:
                 kept.append(box)
+    if engine is not None and keeps_layout:
+        fig.set_layout_engine("none")  # what was hidden lay inside its panel: the same layout, not redone
 
 
 def radar_error_figure(errors: pd.DataFrame, path: str | os.PathLike[str],
