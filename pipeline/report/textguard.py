@@ -37,6 +37,8 @@ def guard_frame(frame: pd.DataFrame) -> pd.DataFrame:
                 except ValueError:  # "=x" and "'=x" both present: give up the categorical
                     column = column.astype(object).map(neutralise, na_action="ignore")
         elif pd.api.types.is_object_dtype(kind) or isinstance(kind, pd.StringDtype):
+            if not _any_formula_like(column):
+                continue  # as it is (the common case: each distinct value looked at once, not every cell)
             column = column.map(neutralise, na_action="ignore")
         else:
             continue
@@ -45,3 +47,13 @@ def guard_frame(frame: pd.DataFrame) -> pd.DataFrame:
     for name, column in out.items():
         guarded[name] = column
     return guarded
+
+
+def _any_formula_like(column: pd.Series) -> bool:
+    """Whether any value of a text column is formula-like, each distinct value tested once (values that
+    cannot be hashed: every one)."""
+    try:
+        values = pd.unique(column.to_numpy(object, na_value=None))
+    except TypeError:
+        values = column.to_numpy(object)
+    return any(isinstance(v, str) and is_formula_like(v) for v in values)

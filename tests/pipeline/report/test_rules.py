@@ -152,6 +152,10 @@ def test_neutralise_and_guard_frame():
     assert out["file"].tolist()[:2] == ["'@x", "a.ast"]
     assert out["rho_nm"].tolist() == [-1.0, 2.0, 3.0]  # numbers untouched
     assert frame["file"].iloc[0] == "@x"  # the input is not modified
+    # text none of which is formula-like, and values that cannot be hashed (each then looked at)
+    lists = pd.DataFrame({"plain": ["MAS72", "a-b", None], "parts": [["=x"], "-1", None]})
+    out = guard_frame(lists)
+    assert out["plain"].tolist()[:2] == ["MAS72", "a-b"] and out["parts"].tolist()[:2] == [["=x"], "'-1"]
 
 
 def test_decode_csv_file_column_is_protected(tmp_path, capsys):
