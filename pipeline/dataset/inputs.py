@@ -134,6 +134,7 @@ class DatasetInputs:
         frames = {}
         for cat, files in sorted(by_cat.items()):
             frames[cat] = self._frame(files, cat, editions.get(cat), columns, prune)
+        _release_arrow_memory()
         errors = pd.DataFrame({"offset": pd.Series(dtype=np.int64), "length": pd.Series(dtype=np.int64),
                                "category": pd.Series(dtype=np.int64), "reason": pd.Series(dtype=object)})
         return Recording(frames, errors, {c: e for c, e in editions.items() if c in frames}, path=rec["path"],
@@ -169,6 +170,15 @@ class DatasetInputs:
                 frame[name] = pd.Categorical.from_codes(frame[name].cat.codes, categories=cats)
         order = np.argsort(frame["offset"].to_numpy(np.int64), kind="stable")
         return frame.iloc[order].reset_index(drop=True)
+
+
+def _release_arrow_memory() -> None:
+    """Hand back to the system the memory Arrow's allocator keeps after the tables it read were turned into
+    frames and freed: its pool (mimalloc) held it, about twice the frames' own size (570 MB beside 250 MB of
+    frames for two inputs of the simulated centre's hour)."""
+    import pyarrow as pa
+
+    pa.default_memory_pool().release_unused()
 
 
 def _narrower(a, b) -> tuple[int, ...] | None:

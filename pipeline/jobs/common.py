@@ -46,7 +46,6 @@ from msdc.pipeline.model.load import (
     load_measurements,
     release_free_memory,
     sha256,
-    time_spans,
 )
 from msdc.pipeline.model.time import utc_text
 from msdc.pipeline.progress import Progress
@@ -567,9 +566,7 @@ def load_inputs(options: DecodingOptions, checked: Checked, progress: Progress |
                           dataset=checked.dataset)
     except (UnreadableInput, UnreadablePart) as exc:
         raise JobError(str(exc), 2) from exc
-    spans = [time_spans(rec.frames, loaded.date) for rec in loaded.recordings]
-    if loaded.spans is None:  # kept: the track figures end at the recording's last report
-        loaded.spans = spans
+    spans = loaded.spans  # per input (load: before it let each input's own frames go)
     return loaded, [*_empty_inputs(loaded, checked.dataset), *_wrong_editions(loaded),
                     *order_warnings(checked.inputs, spans),
                     *date_ignored(options, loaded.inputs), *format_hints(options, loaded.inputs),

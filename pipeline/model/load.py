@@ -151,13 +151,26 @@ def load(paths: list[str | Path] | str | Path, *, editions=None, date=None, form
                        "skipped_blocks": len(rec.errors), "editions": dict(rec.editions)})
     dates = [r.date for r in recs if r.date is not None]
     first = min(dates) if dates else None
+    frames, spans = _joined(recs, labels, first)
+    return Loaded(frames, recs, inputs, first, spans, warnings=warnings)
+
+
+def _joined(recs: list[Recording], labels: list[str], date: dt.date | None
+            ) -> tuple[dict[int, pd.DataFrame], list[dict[str, Span]]]:
+    """Each category's records of every input in one frame (its ``file`` column added) and each input's
+    time spans (time_spans, undated records on ``date``); each recording's frames are let go once copied,
+    so the records are held once, not twice (its errors, editions and counts stay)."""
     by_cat: dict[int, list[pd.DataFrame]] = {}
+    spans = []
     for label, rec in zip(labels, recs, strict=True):
+        spans.append(time_spans(rec.frames, date))
         for cat, frame in rec.frames.items():
-            frame = frame.assign(file=pd.Categorical([label] * len(frame)))
-            by_cat.setdefault(cat, []).append(frame)
+            by_cat.setdefault(cat, []).append(frame.assign(file=pd.Categorical([label] * len(frame))))
+        rec.frames = {}
     frames = {cat: _concat(parts) for cat, parts in by_cat.items()}
-    return Loaded(frames, recs, inputs, first, warnings=warnings)
+    del by_cat
+    release_free_memory()
+    return frames, spans
 
 
 def _load_dataset(dataset, categories, columns, progress: Progress | None) -> Loaded:
@@ -169,12 +182,9 @@ def _load_dataset(dataset, categories, columns, progress: Progress | None) -> Lo
         recs.append(dataset.read(i, categories=categories, columns=columns))
         inputs.append(dataset_info(dataset, i, recs[-1]))
     dates = [r.date for r in recs if r.date is not None]
-    by_cat: dict[int, list[pd.DataFrame]] = {}
-    for label, rec in zip(dataset.labels, recs, strict=True):
-        for cat, frame in rec.frames.items():
-            by_cat.setdefault(cat, []).append(frame.assign(file=pd.Categorical([label] * len(frame))))
-    frames = {cat: _concat(parts) for cat, parts in by_cat.items()}
-    return Loaded(frames, recs, inputs, min(dates) if dates else None)
+    first = min(dates) if dates else None
+    frames, spans = _joined(recs, dataset.labels, first)
+    return Loaded(frames, recs, inputs, first, spans)
 
 
 def dataset_info(dataset, i: int, rec: Recording) -> dict:
