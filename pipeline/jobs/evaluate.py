@@ -382,6 +382,7 @@ def evaluate_job(options: EvaluateOptions, *, progress: Progress | None = None,
         epoch = midnight(meas["time"])
         external = _external(options, epoch)
         monitors = field_monitors(meas, loaded.frames)
+        _keep_frames(loaded, (48, TRACKER_CATEGORY, *SERVICE_CATEGORIES))  # what each sensor's part reads
         if monitors:
             notes.append(f"field monitors (fixed transponders, RAB set): {', '.join(sorted(monitors))}; "
                          "judged in their own rows, left out of the others")
@@ -402,6 +403,15 @@ def evaluate_job(options: EvaluateOptions, *, progress: Progress | None = None,
                             "min_sil": options.min_sil, "drop_jumps": options.drop_jumps},
                   "notes": [*notes, *(f"{r.sensor}: {n}" for r in results for n in r.notes)]}
         return EvaluateResult(options, checked, card, tables, points, results, params, loaded, warnings)
+
+
+def _keep_frames(loaded: Loaded, categories: tuple[int, ...]) -> None:
+    """Let go the decoded frames of the other categories once the measurements are built from them (the
+    ADS-B frame, the largest, is no more read: its reports are in the measurements)."""
+    from msdc.pipeline.model.load import release_free_memory
+
+    loaded.frames = {c: f for c, f in loaded.frames.items() if c in categories}
+    release_free_memory()
 
 
 def _external(options: EvaluateOptions, epoch) -> pd.DataFrame | None:
