@@ -28,7 +28,8 @@ Span = tuple[pd.Timestamp, pd.Timestamp]
 
 @dataclass
 class Loaded:
-    """Frames of all inputs by category, the recordings they came from, and what each input was."""
+    """Frames of all inputs by category, the recordings they came from (their errors, editions and counts:
+    their own frames are let go once joined into ``frames``), and what each input was."""
 
     frames: dict[int, pd.DataFrame]
     recordings: list[Recording]
