@@ -18,7 +18,7 @@ from . import bds, kernel, sampling
 from .cat001_time import PLOT_CATEGORY, UNTIMED_COLUMNS, SectorClock, time_cat001, untimed_advice
 from .categories import DECODABLE, MEASUREMENT_CATEGORIES, REGISTRY
 from .columns import FAMILIES
-from .containers import Segments, read_segments
+from .containers import Segments, read_segments, readonly
 from .errors import REASONS, ContentWarning, DecodeError, EditionWarning, UnreadableInput, UntimedWarning
 from .families import AUTO, edition_families, edition_span, family_name, family_of, with_defaults
 from .frames import code_list_column, empty_columns, icao_columns, typed_column
@@ -196,7 +196,7 @@ def _mapped(path) -> Iterator[np.ndarray]:
             mm = mmap.mmap(fh.fileno(), 0, access=mmap.ACCESS_READ) if size else None
     except OSError as exc:
         raise UnreadableInput(f"{path}: cannot read: {exc.strerror or exc}") from exc
-    buf = np.frombuffer(mm, np.uint8) if mm is not None else np.zeros(0, np.uint8)
+    buf = np.frombuffer(mm, np.uint8) if mm is not None else np.frombuffer(b"", np.uint8)  # read-only alike
     try:
         yield buf
     finally:
@@ -681,6 +681,7 @@ def decode_buffer(buf: np.ndarray, seg: Segments, *, path: str = "", editions: d
     recording (asterix.plan), then every block at once."""
     from .plan import plan_recording  # the plan chooses editions with this module's functions
 
+    buf = readonly(buf)
     selected = selected_columns(columns)
     date = parse_date(date)
     categories = check_categories(categories)
