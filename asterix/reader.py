@@ -590,8 +590,7 @@ def _gathered(buf: np.ndarray, starts: np.ndarray, release, batch: int = 256
         lens.append(n.astype(np.int64))
         release(int(part[0]), int(part[-1] + n[-1]))
     length = np.concatenate(lens) if lens else np.zeros(0, np.int64)
-    data = np.concatenate(pieces) if pieces else np.zeros(0, np.uint8)
-    data.flags.writeable = False  # read-only as a mapped file is: the kernels compile once for both
+    data = readonly(np.concatenate(pieces) if pieces else np.zeros(0, np.uint8))
     return data, np.concatenate([[0], np.cumsum(length)[:-1]]).astype(np.int64), length
 
 

@@ -566,9 +566,8 @@ def load_inputs(options: DecodingOptions, checked: Checked, progress: Progress |
                           dataset=checked.dataset)
     except (UnreadableInput, UnreadablePart) as exc:
         raise JobError(str(exc), 2) from exc
-    spans = loaded.spans  # per input (load: before it let each input's own frames go)
     return loaded, [*_empty_inputs(loaded, checked.dataset), *_wrong_editions(loaded),
-                    *order_warnings(checked.inputs, spans),
+                    *order_warnings(checked.inputs, loaded.spans),
                     *date_ignored(options, loaded.inputs), *format_hints(options, loaded.inputs),
                     *impossible_positions(loaded.frames.get(21)), *loaded.warnings]
 
