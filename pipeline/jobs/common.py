@@ -637,6 +637,7 @@ def _load_measurements(options: AircraftOptions, checked: Checked, progress: Pro
     from msdc.asterix.errors import UnreadableInput
     from msdc.pipeline.dataset.inputs import UnreadablePart
     from msdc.pipeline.model.load import RADAR_AND_ADSB
+    from msdc.pipeline.model.report_selection import WindowError
 
     if columns is not None and checked.selection is not None and checked.selection.active:
         from msdc.pipeline.model.report_selection import SELECTION_INPUTS
@@ -648,9 +649,11 @@ def _load_measurements(options: AircraftOptions, checked: Checked, progress: Pro
                                          date=options.date, format=options.format,
                                          adsb_sigma_m=options.adsb_sigma_m, progress=progress, either=either,
                                          columns=columns, needs=needs or RADAR_AND_ADSB,
-                                         dataset=checked.dataset)
+                                         dataset=checked.dataset, selection=checked.selection)
     except (UnreadableInput, UnreadablePart) as exc:
         raise JobError(str(exc), 2) from exc
+    except WindowError as exc:
+        raise OptionError(str(exc)) from None
     except NoRecords as exc:
         if progress:
             progress.stage(stage)
@@ -697,7 +700,11 @@ def selected_reports(meas: pd.DataFrame, checked: Checked, loaded: Loaded) -> tu
         keep, left_out = select_reports(meas, selection, loaded.date)
     except ValueError as exc:
         raise OptionError(str(exc)) from None
-    loaded.selection = recorded(selection, loaded.date, len(meas), int(keep.sum()), left_out)
+    read = len(meas)
+    if loaded.cut is not None:  # the reports cut beyond the window's margin were read and left out too
+        read += loaded.cut.reports
+        left_out = {k: v + loaded.cut.left_out.get(k, 0) for k, v in left_out.items()}
+    loaded.selection = recorded(selection, loaded.date, read, int(keep.sum()), left_out)
     if not keep.any():
         raise JobError(f"{describe(loaded.selection)}: no report is left to analyse")
     attrs = dict(meas.attrs)
@@ -923,6 +930,14 @@ def source_measurements(loaded, checked: Checked, options) -> tuple[pd.DataFrame
         radar, stray = declared_radar(radar, checked.sensors, sensors_path(options))
     except UnknownRadar as exc:
         raise unknown_radar_error(exc.missing, sensors_path(options)) from exc
+    selection = checked.selection
+    if selection is not None and (selection.start is not None or selection.end is not None):
+        from msdc.pipeline.model.report_selection import MarginCut, WindowError
+
+        try:
+            loaded.cut = MarginCut(selection, loaded.date)
+        except WindowError as exc:
+            raise OptionError(str(exc)) from None
     with carrying(stray) as warnings:
         try:
             with python_warnings.catch_warnings(record=True) as said:  # load_inputs has said it, per file
@@ -931,7 +946,8 @@ def source_measurements(loaded, checked: Checked, options) -> tuple[pd.DataFrame
                 python_warnings.simplefilter("ignore", IdentityWarning)  # said below, from attrs
                 python_warnings.simplefilter("always", LeftOutWarning)
                 meas = build_measurements(radar, adsb, checked.sensors, date=loaded.date,
-                                          adsb_sigma_m=options.adsb_sigma_m, cat010=cat010, cat020=cat020)
+                                          adsb_sigma_m=options.adsb_sigma_m, cat010=cat010, cat020=cat020,
+                                          cut=loaded.cut)
             warnings += [str(w.message) for w in said if issubclass(w.category, LeftOutWarning)]
         except UnknownRadar as exc:
             raise unknown_radar_error(exc.missing, sensors_path(options)) from exc

@@ -1,6 +1,7 @@
 """Aircraft identity, assigned once when measurements are built, and the normalisation of its parts.
 
-Rule, per report, over all sensors of the run together:
+Rule, per report, over all sensors of the run together (the reports the run builds measurements from: with a
+time window, those within report_selection.READING_MARGIN of it):
 1. the report's 24-bit address, when it has one;
 2. else the address its call sign is seen with elsewhere in the run, when that address is unique;
 3. else "CS:" + call sign;

@@ -44,6 +44,9 @@ class Loaded:
     unplaced: pd.DataFrame = field(default_factory=pd.DataFrame)
     # the report selection's record (pipeline.model.report_selection.recorded), None when none was given
     selection: dict | None = None
+    # the reports cut beyond the window's margin before the measurements were finished (report_selection.
+    # MarginCut), None when no time window was given
+    cut: object | None = None
 
     @property
     def errors(self) -> pd.DataFrame:
@@ -242,7 +245,7 @@ def load_measurements(paths: list[str | Path], sensors: pd.DataFrame, *, edition
                       format: str | None = None, adsb_sigma_m: float | None = None,
                       chunk: int = MEASUREMENT_CHUNK_BYTES, progress: Progress | None = None,
                       either: bool = False, columns=None,
-                      needs: tuple[tuple[int, ...], ...] = RADAR_AND_ADSB, dataset=None
+                      needs: tuple[tuple[int, ...], ...] = RADAR_AND_ADSB, dataset=None, selection=None
                       ) -> tuple[Loaded, pd.DataFrame]:
     """Decode every input in chunks (asterix.iter_read, only DECODED_COLUMNS) straight into measurement
     rows, and join them into one validated measurement frame (rows as build_measurements orders them:
@@ -259,8 +262,12 @@ def load_measurements(paths: list[str | Path], sensors: pd.DataFrame, *, edition
     without a timestamp of their own are dated by ``Loaded.date``, as with ``load``. ``dataset``
     (pipeline.dataset.inputs.DatasetInputs): its inputs are read from the dataset's parts instead, each
     as one chunk (``paths``, ``editions``, ``date`` and ``format`` unused: the ingest applied them).
+    ``selection`` (report_selection.ReportSelection): only the rows within its margin of the time window are
+    kept (report_selection.MarginCut, in ``Loaded.cut``): chunk by chunk when the window is given as
+    instants, so a long recording's rows beyond it are never held; WindowError when it cannot be placed.
     """
     from msdc.pipeline.model.measurements import DECODED_COLUMNS, finish_measurements, impossible_positions
+    from msdc.pipeline.model.report_selection import MarginCut
 
     recs: list[Recording] = []
     inputs: list[dict] = []
@@ -274,6 +281,8 @@ def load_measurements(paths: list[str | Path], sensors: pd.DataFrame, *, edition
     other_kinds: dict[int, int] = {}  # CAT010 target reports of other kinds, per input (reset below)
     stray: list[pd.DataFrame] = []  # undeclared_radars' table per chunk
     early_start: list[str] = []  # FirstDayTally's warnings
+    timed = selection is not None and (selection.start is not None or selection.end is not None)
+    cut: MarginCut | None = None  # made at the first dated chunk when the window is given as instants
     if dataset is None:
         paths = input_paths(paths)
         digests = _digests(paths)
@@ -310,6 +319,10 @@ def load_measurements(paths: list[str | Path], sensors: pd.DataFrame, *, edition
             r, a = _rows(frames, labels[i], sensors, adsb_sigma_m, stray, off_earth, columns)
             more = _local_rows(frames, sensors, unplaced, other_kinds, columns)
             del frames
+            if timed and selection.placed and dates[-1] is not None:  # an undated input's times move below
+                cut = cut or MarginCut(selection, dates[-1])
+                r, a = (None if x is None else cut.keep(x) for x in (r, a))
+                more = [cut.keep(x) for x in more]
             radar += [(i, r)] if r is not None else []
             adsb += [(i, a)] if a is not None else []
             local += [(i, part) for part in more]
@@ -342,6 +355,9 @@ def load_measurements(paths: list[str | Path], sensors: pd.DataFrame, *, edition
     absent = [group for group in needs if not held & set(group)]
     if absent and not (either and len(absent) < len(needs)):
         raise NoRecords(absent[0][0], Loaded({}, recs, inputs, first_date, spans), absent[0])
+    if timed:  # every row now on its day: the rows an early cut kept pass again untouched
+        cut = cut or MarginCut(selection, first_date)
+        radar, adsb, local = ([(i, cut.keep(part)) for i, part in group] for group in (radar, adsb, local))
     parts = [part for _, part in radar + adsb + local]
     radar.clear()
     adsb.clear()
@@ -353,7 +369,7 @@ def load_measurements(paths: list[str | Path], sensors: pd.DataFrame, *, edition
     warnings = early_start + impossible_positions(damaged)
     stray_radar = _stray_table(stray)
     unplaced_table = _unplaced_table(unplaced)
-    return Loaded({}, recs, inputs, first_date, spans, warnings, stray_radar, unplaced_table), meas
+    return Loaded({}, recs, inputs, first_date, spans, warnings, stray_radar, unplaced_table, cut=cut), meas
 
 
 def _dataset_chunks(dataset, i: int, columns):

@@ -483,9 +483,9 @@ def finish_measurements(parts: list[pd.DataFrame], columns=None) -> pd.DataFrame
 def build_measurements(cat048: pd.DataFrame | None = None, cat021: pd.DataFrame | None = None,
                        sensors: pd.DataFrame | str | Path | None = None, *, date: dt.date | str | None = None,
                        adsb_sigma_m: float | None = None, cat010: pd.DataFrame | None = None,
-                       cat020: pd.DataFrame | None = None) -> pd.DataFrame:
+                       cat020: pd.DataFrame | None = None, cut=None) -> pd.DataFrame:
     """Every radar, ADS-B, multilateration and surface radar report as one validated measurement frame,
-    identity assigned over all of them.
+    identity assigned over all of them (``cut``, a report_selection.MarginCut: over those it keeps).
 
     ``sensors``: the sensor table (read_sensors) or its TOML file's path. ``date`` (the UTC day, as
     asterix.read takes it) dates records that carry no timestamp of their own (see
@@ -514,6 +514,8 @@ def build_measurements(cat048: pd.DataFrame | None = None, cat021: pd.DataFrame 
         for text in said:
             warnings.warn(text, LeftOutWarning, stacklevel=2)
         parts += local.parts
+    if cut is not None:
+        parts = [cut.keep(p) for p in parts]
     meas = finish_measurements(parts)
     for text in meas.attrs.get("coverage_warnings", ()):
         warnings.warn(text, OutOfCoverageWarning, stacklevel=2)

@@ -21,6 +21,12 @@ frame of reports), by one rule per criterion; a report must meet every criterion
 
 Reports left out are counted per criterion (one report may fail several); the counts are recorded with the
 run's parameters (``recorded``).
+
+The jobs that build measurements (identity, coverage) build them from the reports within READING_MARGIN of
+the time window only (``MarginCut``): which address a call sign or Mode 3/A code goes with, and each ADS-B
+source's coverage, are settled over the window and its margin, not over whatever else the inputs hold, so a
+window's results do not depend on how much of the day a recording or a dataset holds, and a dataset's read
+stops at the margin. The reports cut are counted as left out, by every criterion they fail.
 """
 
 from __future__ import annotations
@@ -43,6 +49,16 @@ _TIME_OF_DAY = re.compile(r"(\d{1,2}):(\d{2})(?::(\d{2}(?:\.\d+)?))?")
 _NUMBER = r"[-+]?(?:\d+(?:\.\d*)?|\.\d+)"
 _RANGE = re.compile(rf"({_NUMBER})-({_NUMBER})nm", re.IGNORECASE)
 _AZIMUTH = re.compile(rf"({_NUMBER})-({_NUMBER})deg", re.IGNORECASE)
+# How far beyond --from/--to the measurement jobs read (module docstring): a flight's address, call sign and
+# Mode 3/A code are seen together within minutes (ADS-B sends them every few seconds, a Mode S radar every
+# scan), while a code is reused by other flights over hours; the reach gate's farthest useful neighbour in
+# time is well inside it (15 min at 1000 kt is 250 NM).
+READING_MARGIN = pd.Timedelta(minutes=15)
+
+
+class WindowError(ValueError):
+    """--from or --to cannot be placed (no date), or the window holds no time; the message names the
+    option."""
 
 
 @dataclass(frozen=True)
@@ -73,7 +89,7 @@ class TimeBound:
         """The instant on the recording's ``day`` (None: the inputs carry no date); ValueError naming the
         option when it cannot be placed."""
         if day is None:
-            raise ValueError(f"{name} {self.text}: the inputs carry no date (their times are placed on "
+            raise WindowError(f"{name} {self.text}: the inputs carry no date (their times are placed on "
                              "1970-01-01) and --date was not given: give --date YYYY-MM-DD")
         if self.instant is not None:
             return self.instant
@@ -124,9 +140,22 @@ class ReportSelection:
         lo = self.start.on(day, "--from") if self.start is not None else None
         hi = self.end.on(day, "--to") if self.end is not None else None
         if lo is not None and hi is not None and not lo < hi:
-            raise ValueError(f"--from {self.start.text} ({lo.isoformat()}) is not before --to "
+            raise WindowError(f"--from {self.start.text} ({lo.isoformat()}) is not before --to "
                              f"{self.end.text} ({hi.isoformat()}): the window holds no time")
         return lo, hi
+
+    @property
+    def placed(self) -> bool:
+        """Whether every time bound given is an instant (placed without the recording's day)."""
+        return all(b is None or b.instant is not None for b in (self.start, self.end))
+
+    def reading_window(self, day: dt.date | None) -> tuple[pd.Timestamp | None, pd.Timestamp | None] | None:
+        """What the measurement jobs read: the window widened by READING_MARGIN on each side (a side not
+        given stays open); None when no time bound is given. WindowError as ``window``."""
+        if self.start is None and self.end is None:
+            return None
+        lo, hi = self.window(day)
+        return (None if lo is None else lo - READING_MARGIN, None if hi is None else hi + READING_MARGIN)
 
     def parameters(self, day: dt.date | None = None) -> dict:
         """The selection as given, and the window's instants when the day is known."""
@@ -369,6 +398,41 @@ def in_area(reports: pd.DataFrame, area: Polygons | SensorWindow) -> np.ndarray:
     return (rho >= lo) & (rho <= hi) & area.azimuth_inside(theta)
 
 
+@dataclass
+class MarginCut:
+    """Cuts the reports beyond READING_MARGIN of the window from measurement rows before the identity rule
+    sees them (module docstring), counting them as ``select_reports`` would leave them out."""
+
+    selection: ReportSelection
+    day: dt.date | None  # the recording's day, for times of day
+    reports: int = 0  # cut so far
+    left_out: dict[str, int] = field(default_factory=dict)  # theirs, per criterion
+
+    def __post_init__(self):
+        self.span = self.selection.reading_window(self.day)
+
+    def keep(self, rows: pd.DataFrame) -> pd.DataFrame:
+        """The rows (measurement rows, by their UTC ``time``) within the margin; those cut are counted. A row
+        without a time is cut: the window leaves it out."""
+        if self.span is None or not len(rows):
+            return rows
+        ns = pd.DatetimeIndex(pd.to_datetime(rows["time"], utc=True)).as_unit("ns")
+        inside = ~ns.isna()
+        lo, hi = self.span
+        if lo is not None:
+            inside &= ns >= lo
+        if hi is not None:
+            inside &= ns <= hi
+        inside = np.asarray(inside, bool)
+        if inside.all():
+            return rows
+        _, counts = select_reports(rows[~inside], self.selection, self.day)
+        self.reports += int((~inside).sum())
+        for k, v in counts.items():
+            self.left_out[k] = self.left_out.get(k, 0) + v
+        return rows[inside].reset_index(drop=True)
+
+
 def recorded(selection: ReportSelection, day: dt.date | None, reports: int, kept: int,
              left_out: dict[str, int]) -> dict:
     """What a run's outputs record of its selection: the options as given, the window's instants, and the
@@ -388,7 +452,7 @@ def describe(record: dict) -> str:
             + (f" (left out: {why})" if why else ""))
 
 
-__all__ = ["FL_RANGE", "ReportSelection", "SELECTION_INPUTS", "SensorRef", "SensorWindow", "TimeBound",
-           "check_order", "describe", "in_area", "parse_fl", "parse_sensor", "parse_time", "parse_window",
-           "recorded",
-           "select_reports", "sensor_parts", "with_site"]
+__all__ = ["FL_RANGE", "MarginCut", "READING_MARGIN", "ReportSelection", "SELECTION_INPUTS", "SensorRef",
+           "SensorWindow", "TimeBound", "WindowError", "check_order", "describe", "in_area", "parse_fl",
+           "parse_sensor", "parse_time", "parse_window", "recorded", "select_reports", "sensor_parts",
+           "with_site"]

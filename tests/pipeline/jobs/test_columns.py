@@ -66,6 +66,37 @@ def test_narrow_measurements_are_the_full_ones_columns(sensors):
         pd.testing.assert_frame_equal(narrow, full[columns])
 
 
+@pytest.mark.parametrize("bounds", [("2024-01-01T08:40:00Z", "2024-01-01T09:00:00Z"), ("08:40", "09:00")],
+                         ids=["instants", "times of day"])
+def test_the_window_margin_is_the_same_in_chunks_whole_and_from_frames(sensors, bounds):
+    """The rows within 15 minutes of --from/--to: cut chunk by chunk while decoding (instants), once all is
+    read (times of day), or from the decoded frames (evaluate's path): the same measurements, the same
+    reports cut; none beyond the margin, and the window's own rows all there."""
+    from msdc.pipeline.model.load import load
+    from msdc.pipeline.model.measurements import build_measurements
+    from msdc.pipeline.model.report_selection import MarginCut, ReportSelection, parse_time
+
+    day = "2024-01-01"
+    window = ReportSelection(start=parse_time(bounds[0], "--from"), end=parse_time(bounds[1], "--to"))
+    got = []
+    for chunk in (40_000, 10**9):
+        loaded, meas = load_measurements(INPUTS, sensors, date=day, chunk=chunk, selection=window)
+        got.append((meas, loaded.cut.reports, loaded.cut.left_out))
+    frames = load(INPUTS, date=day)
+    cut = MarginCut(window, frames.date)
+    meas = build_measurements(frames.frames[48], frames.frames[21], sensors, date=frames.date, cut=cut)
+    got.append((meas, cut.reports, cut.left_out))
+    _, whole = load_measurements(INPUTS, sensors, date=day)
+    for meas, reports, left_out in got:
+        pd.testing.assert_frame_equal(meas, got[0][0])
+        assert (reports, left_out) == (got[0][1], got[0][2]) == (len(whole) - len(meas), {"time": reports})
+    t = got[0][0]["time"]
+    assert t.min() >= pd.Timestamp(f"{day}T08:25Z") and t.max() <= pd.Timestamp(f"{day}T09:15Z")
+    lo, hi = pd.Timestamp(f"{day}T08:40Z"), pd.Timestamp(f"{day}T09:00Z")
+    inside = (whole["time"] >= lo) & (whole["time"] < hi)
+    assert ((t >= lo) & (t < hi)).sum() == inside.sum() > 1000
+
+
 def test_correlate_columns_follow_the_options():
     plain = correlate_columns(corr())
     assert plain == column_names(plain) and "aircraft_id" in plain and "rho_nm" in plain

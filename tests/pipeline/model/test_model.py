@@ -130,6 +130,46 @@ def test_mode3a_join_needs_the_aircraft_within_reach():
     assert assign_aircraft_id(meas[["address", "callsign", "mode3a"]]).tolist()[3:] == ["750001"] * 4
 
 
+def _code_reused(earlier_s: float) -> pd.DataFrame:
+    """Code 4445: 750002 replies with it ``earlier_s`` before 01:00, 750001 at 01:00:00 and 01:00:04, and a
+    plot with only the code at 01:00:04 beside 750001's (1 NM apart)."""
+    frame = radar_frame([20.0, 20.0, 20.0, 21.0], [90.0, 90.0, 90.0, 90.0], [100.0] * 4,
+                        tod=np.array([3600.0 - earlier_s, 3600.0, 3604.0, 3604.0]))
+    return frame.assign(address=["750002", "750001", "750001", None], mode3a=["4445"] * 4, file="r.ast")
+
+
+@pytest.mark.parametrize("earlier_min", [40.0, 10.0])
+def test_a_window_settles_identity_over_itself_and_its_margin(earlier_min):
+    """A Mode 3/A code seen with two addresses is no identity (rule 4); with --from/--to the rule sees the
+    reports within 15 minutes of the window only: 750002's reply 40 minutes before no longer makes the code
+    ambiguous, one 10 minutes before still does. The reports cut are counted as the window leaves them out."""
+    from msdc.pipeline.model.report_selection import MarginCut, ReportSelection, parse_time
+
+    frame = _code_reused(earlier_min * 60.0)
+    whole = build_measurements(frame, None, SENSORS, date="2026-11-28")
+    assert whole["aircraft_id"].tolist() == ["750002", "750001", "750001", "M3A:4445"]
+    window = ReportSelection(start=parse_time("2026-11-28T01:00:00", "--from"),
+                             end=parse_time("2026-11-28T01:10:00", "--to"))
+    cut = MarginCut(window, pd.Timestamp("2026-11-28").date())
+    meas = build_measurements(frame, None, SENSORS, date="2026-11-28", cut=cut)
+    if earlier_min == 40.0:
+        assert meas["aircraft_id"].tolist() == ["750001", "750001", "750001"]
+        assert (cut.reports, cut.left_out) == (1, {"time": 1})
+    else:
+        assert meas["aircraft_id"].tolist() == ["750002", "750001", "750001", "M3A:4445"]
+        assert (cut.reports, cut.left_out) == (0, {})
+
+
+def test_a_window_of_times_of_day_needs_the_day():
+    from msdc.pipeline.model.report_selection import MarginCut, ReportSelection, WindowError, parse_time
+
+    window = ReportSelection(start=parse_time("01:00", "--from"))
+    with pytest.raises(WindowError, match="--from 01:00: the inputs carry no date"):
+        MarginCut(window, None)
+    lo, hi = MarginCut(window, pd.Timestamp("2026-11-28").date()).span
+    assert (lo, hi) == (pd.Timestamp("2026-11-28T00:45Z"), None)
+
+
 def test_build_measurements_warns_of_a_plot_out_of_reach():
     # the radar at 2.7456 N 101.7099 E sees 750001 (code 4445) due east at 20 NM; a plot with only 4445 at
     # the same instant due west, about 40 NM from it (FL 0: slant range is ground range within 0.1 %), is a
