@@ -5,7 +5,7 @@ alone, with partition pruning (day, category, sensor) and column pushdown throug
 from __future__ import annotations
 
 import datetime as dt
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
@@ -28,15 +28,20 @@ class UnreadablePart(ValueError):
 @dataclass(frozen=True)
 class Pruning:
     """Which partitions a run reads: days from ``first`` to ``last`` (inclusive; None: unbounded), the
-    sensors as (category or None, "SAC_SIC") pairs (empty: every sensor) and the categories (None: all)."""
+    sensors as (category or None, "SAC_SIC") pairs (empty: every sensor) and the categories (None: all);
+    and which of their records: those whose ``timestamp`` lies from ``since`` to ``until`` (inclusive; None:
+    unbounded) or who have none (the row groups outside are skipped by their statistics)."""
 
     first: dt.date | None = None
     last: dt.date | None = None
     sensors: tuple[tuple[int | None, str], ...] = ()
     categories: tuple[int, ...] | None = None
+    since: pd.Timestamp | None = None
+    until: pd.Timestamp | None = None
 
     def expression(self):
-        """The pyarrow.dataset filter on the partition keys (None: no filter)."""
+        """The pyarrow.dataset filter on the partition keys and the timestamp (None: no filter)."""
+        import pyarrow as pa
         import pyarrow.dataset as ds
 
         terms = []
@@ -54,6 +59,14 @@ class Pruning:
                     term = term & (ds.field("category") == category)
                 one = term if one is None else one | term
             terms.append(one)
+        if self.since is not None or self.until is not None:
+            stamp = ds.field("timestamp")
+            inside = None
+            for bound, term in ((self.since, lambda v: stamp >= v), (self.until, lambda v: stamp <= v)):
+                if bound is not None:
+                    one = term(pa.scalar(bound.tz_convert("UTC"), type=pa.timestamp("ns", tz="UTC")))
+                    inside = one if inside is None else inside & one
+            terms.append(inside | stamp.is_null())
         out = None
         for t in terms:
             out = t if out is None else out & t
@@ -84,6 +97,22 @@ def pruning(selection, categories=None) -> Pruning:
             last = (selection.end.instant + PRUNE_MARGIN).date()
         sensors = tuple((ref.category, f"{ref.sac}_{ref.sic}") for ref in selection.sensors)
     return Pruning(first, last, sensors, None if categories is None else tuple(sorted(set(categories))))
+
+
+def reading_pruning(prune: Pruning, selection) -> Pruning:
+    """``prune`` narrowed to what a measurement job reads of a time window given as instants: the records
+    within report_selection.READING_MARGIN of it, and PRUNE_MARGIN more (a report's time may come from another
+    field than its record's timestamp); the days those cover. ``prune`` as it is otherwise (no window, or a
+    bound given as a time of day: the day is known once read)."""
+    from msdc.pipeline.model.report_selection import READING_MARGIN
+
+    if selection is None or (selection.start is None and selection.end is None) or not selection.placed:
+        return prune
+    reach = READING_MARGIN + PRUNE_MARGIN
+    since = None if selection.start is None else selection.start.instant - reach
+    until = None if selection.end is None else selection.end.instant + reach
+    return replace(prune, since=since, until=until, first=None if since is None else since.date(),
+                   last=None if until is None else until.date())
 
 
 @dataclass
@@ -124,8 +153,7 @@ class DatasetInputs:
         from msdc.asterix.reader import Recording
 
         rec = self.records[i]
-        prune = Pruning(self.pruning.first, self.pruning.last, self.pruning.sensors,
-                        _narrower(self.pruning.categories, categories))
+        prune = replace(self.pruning, categories=_narrower(self.pruning.categories, categories))
         by_cat: dict[int, list[Path]] = {}
         for part in rec["parts"]:
             if prune.keeps(part):

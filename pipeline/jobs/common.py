@@ -555,6 +555,7 @@ def load_inputs(options: DecodingOptions, checked: Checked, progress: Progress |
     from msdc.pipeline.dataset.inputs import UnreadablePart
     from msdc.pipeline.model.measurements import DECODED_COLUMNS, impossible_positions
 
+    reading_window(checked)
     try:
         with python_warnings.catch_warnings():  # a wrong edition is said below, with its --edition; what
             python_warnings.simplefilter("ignore", EditionWarning)  # the inputs are, in loaded.warnings
@@ -570,6 +571,15 @@ def load_inputs(options: DecodingOptions, checked: Checked, progress: Progress |
                     *order_warnings(checked.inputs, loaded.spans),
                     *date_ignored(options, loaded.inputs), *format_hints(options, loaded.inputs),
                     *impossible_positions(loaded.frames.get(21)), *loaded.warnings]
+
+
+def reading_window(checked: Checked) -> None:
+    """A dataset's read narrowed to the records a measurement job builds from: those within the time
+    window's margin (report_selection.MarginCut), when the window is given as instants."""
+    from msdc.pipeline.dataset.inputs import reading_pruning
+
+    if checked.dataset is not None:
+        checked.dataset.pruning = reading_pruning(checked.dataset.pruning, checked.selection)
 
 
 def undated_warning(loaded: Loaded, outputs: str) -> list[str]:
@@ -644,6 +654,7 @@ def _load_measurements(options: AircraftOptions, checked: Checked, progress: Pro
         from msdc.pipeline.model.schema import column_names
 
         columns = column_names(set(columns) | set(SELECTION_INPUTS))
+    reading_window(checked)
     try:
         loaded, meas = load_measurements(checked.inputs, checked.sensors, editions=checked.editions or None,
                                          date=options.date, format=options.format,

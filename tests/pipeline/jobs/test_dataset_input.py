@@ -9,6 +9,7 @@ import json
 import shutil
 from pathlib import Path
 
+import pandas as pd
 import pytest
 from dataset_data import ADSB, DAY, FIX, RADAR, midnight_recording
 
@@ -73,6 +74,47 @@ def test_dataset_gives_the_recordings_results(tmp_path, dataset, command, dask_s
         assert f"task(s) on the Dask scheduler at {dask_scheduler}, none failed" in err
 
 
+WINDOW = ("08:40:00", "09:00:00")
+
+
+def _records_within(start: str, end: str) -> list[dict[str, int]]:
+    """Per fixture and category, its records whose time lies from ``start`` to ``end`` (times of day on
+    DAY), inclusive."""
+    import msdc.asterix as asterix
+
+    lo, hi = (pd.Timedelta(t).total_seconds() for t in (start, end))
+    out = []
+    for path in (RADAR, ADSB):
+        out.append({})
+        for cat, frame in asterix.read(path).frames.items():
+            tod = frame["day"].to_numpy(float) * 86400.0 + frame["time_of_day"].to_numpy(float)
+            out[-1][str(cat)] = int(((tod >= lo) & (tod <= hi)).sum())
+    return out
+
+
+@pytest.mark.parametrize("command", [
+    ["track", "--sensors", str(SENSORS), "--all"],
+    ["evaluate", "--sensors", str(SENSORS), "--preset", "eurocontrol-1997-ssr"],
+], ids=["track", "evaluate"])
+def test_a_window_reads_only_its_margin_of_the_dataset(tmp_path, dataset, command, dask_scheduler):
+    """--from/--to given as instants: the dataset's read stops 20 minutes beyond the window (its 15-minute
+    margin, 5 more for a report's own time), the recordings are read whole and cut at 15 minutes; the
+    results are the same, and only the counts of what was read differ, by the records beyond 20 minutes."""
+    window = ["--from", f"{DAY}T{WINDOW[0]}Z", "--to", f"{DAY}T{WINDOW[1]}Z"]
+    files, on_dataset = _file_and_dataset(tmp_path, dataset, [*command, *window], dask_scheduler)
+    if command[0] == "evaluate":  # its JSON holds the results alone
+        assert on_dataset == files and len(files["results"]) > 10
+        return
+    read = [[i.pop("records") for i in doc["inputs"]] for doc in (files, on_dataset)]
+    assert read == [_records_within("00:00:00", "23:59:59"), _records_within("08:20:00", "09:20:00")]
+    reports = [doc["parameters"]["report_selection"].pop("reports") for doc in (files, on_dataset)]
+    time_cut = [doc["parameters"]["report_selection"]["left_out"].pop("time") for doc in (files, on_dataset)]
+    assert on_dataset == files
+    never_read = sum(n for by_cat in read[0] for n in by_cat.values()) - sum(
+        n for by_cat in read[1] for n in by_cat.values())
+    assert never_read > 5_000 and reports[0] - reports[1] == never_read == time_cut[0] - time_cut[1]
+
+
 def _corrupt(root: Path, category: int) -> Path:
     part = next(root.glob(f"date=*/category={category:03d}/sensor=*/part-*.parquet"))
     saved = part.with_name("saved")
@@ -117,6 +159,14 @@ def test_window_prunes_days_and_keeps_the_margin():
     p = pruning(sel)
     assert (p.first.isoformat(), p.last.isoformat()) == ("2026-11-27", "2026-11-29")  # 5 min before 00:02
     assert pruning(ReportSelection(start=parse_time("08:10", "--from"))).first is None  # day not yet known
+    # a measurement job reads 15 minutes more (its identity margin), and only those records
+    from msdc.pipeline.dataset.inputs import reading_pruning
+
+    read = reading_pruning(p, sel)
+    assert (read.first.isoformat(), read.last.isoformat()) == ("2026-11-27", "2026-11-29")
+    assert (read.since, read.until) == (pd.Timestamp("2026-11-27T23:42Z"), pd.Timestamp("2026-11-29T12:20Z"))
+    tod = ReportSelection(start=parse_time("08:10", "--from"))
+    assert reading_pruning(pruning(tod), tod) == pruning(tod)  # a time of day: placed once read
 
 
 def test_refusals(tmp_path, dataset, capsys):
