@@ -372,6 +372,7 @@ def evaluate_job(options: EvaluateOptions, *, progress: Progress | None = None,
             progress.stage("Evaluating")
         meas, said = source_measurements(loaded, checked, options)
         warnings += said
+        within_margin(loaded, (TRACKER_CATEGORY, *SERVICE_CATEGORIES))
         warnings += site_warnings(meas, checked.sensors, str(sensors_path(options)))
         warnings += undated_warning(loaded, "the reports and the reference")
         if meas.empty:
@@ -403,6 +404,31 @@ def evaluate_job(options: EvaluateOptions, *, progress: Progress | None = None,
                             "min_sil": options.min_sil, "drop_jumps": options.drop_jumps},
                   "notes": [*notes, *(f"{r.sensor}: {n}" for r in results for n in r.notes)]}
         return EvaluateResult(options, checked, card, tables, points, results, params, loaded, warnings)
+
+
+def within_margin(loaded: Loaded, categories: tuple[int, ...]) -> None:
+    """The decoded records of ``categories`` (tracker tracks, service messages) cut to the time window's
+    margin, as the measurements are (``loaded.cut``, report_selection.MarginCut): a window's north markers
+    and trackers are those near it, whether the inputs are a day's recording or a dataset read around it."""
+    from msdc.pipeline.model.time import absolute_time
+
+    span = None if loaded.cut is None else loaded.cut.span
+    if span is None:
+        return
+    lo, hi = span
+    for cat in categories:
+        frame = loaded.frames.get(cat)
+        if frame is None or not len(frame):
+            continue
+        t = absolute_time(frame, loaded.date)
+        inside = t.notna()
+        if lo is not None:
+            inside &= t >= lo
+        if hi is not None:
+            inside &= t <= hi
+        inside = inside.to_numpy(bool)
+        if not inside.all():
+            loaded.frames[cat] = frame[inside].reset_index(drop=True)
 
 
 def _keep_frames(loaded: Loaded, categories: tuple[int, ...]) -> None:

@@ -278,3 +278,23 @@ def test_a_tracker_is_judged_on_its_system_tracks(recording, tmp_path):
     assert by_range["reports"].sum() == card.loc["rms_m", "n"]
     full = by_range[by_range["reports"] >= 200]
     assert len(full) >= 3 and full["rms_m"].between(55.0, 95.0).all()
+
+
+def test_a_window_keeps_the_north_markers_of_its_margin(recording):
+    """With --from/--to the service messages are cut to the window's 15-minute margin, as the measurements
+    are: the markers from 08:15 to 08:46 of the simulated hour for 08:30-08:31."""
+    from msdc.pipeline.jobs.evaluate import within_margin
+    from msdc.pipeline.model.load import Loaded
+    from msdc.pipeline.model.report_selection import MarginCut, ReportSelection, parse_time
+
+    sim, _ = recording
+    day = pd.Timestamp(DATE).date()
+    window = ReportSelection(start=parse_time("08:30", "--from"), end=parse_time("08:31", "--to"))
+    markers = sim.north_markers
+    loaded = Loaded({34: markers, 48: sim.radar}, [], date=day, cut=MarginCut(window, day))
+    within_margin(loaded, (34, 62))
+    tod = markers["time_of_day"].to_numpy(float)
+    expected = markers[(tod >= 8.25 * 3600) & (tod <= 8.5 * 3600 + 60 + 900)]
+    assert 100 < len(expected) < 0.6 * len(markers)  # 31 of the 60 minutes
+    assert loaded.frames[34]["time_of_day"].tolist() == expected["time_of_day"].tolist()
+    assert loaded.frames[48] is sim.radar  # the categories not named are left as they are
