@@ -449,10 +449,12 @@ COMMANDS = {"decode": cmd_decode, "stats": cmd_stats, "correlate": cmd_correlate
             "sql": cmd_sql, "listen": cmd_listen, "replay": cmd_replay}
 
 
-def main(argv: list[str] | None = None) -> int:
-    """Run msdc with argv (the process's when None) and return the exit status; never a traceback. SIGTERM
-    and SIGHUP end the run as Ctrl-C does (report.transaction.Terminated: every staged output removed),
-    with status 128 + the signal's number (Ctrl-C: 130)."""
+def main(argv: list[str | os.PathLike] | None = None) -> int:
+    """Run msdc with argv (the process's when None; a path object is its text) and return the exit status;
+    never a traceback. SIGTERM and SIGHUP end the run as Ctrl-C does (report.transaction.Terminated: every
+    staged output removed), with status 128 + the signal's number (Ctrl-C: 130)."""
+    if argv is not None:  # argparse takes text only: a pathlib.Path from a library caller is its path
+        argv = [os.fspath(a) if isinstance(a, os.PathLike) else a for a in argv]
     args = _parser().parse_args(argv)
     handlers = transaction.raise_on_termination()
     try:

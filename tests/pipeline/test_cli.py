@@ -62,6 +62,8 @@ def test_stats(capsys):
     out = capsys.readouterr().out
     assert str(TRUTH["radar"]["rows"]) in out and str(TRUTH["adsb"]["rows"]) in out
     assert "Skipped blocks" in out
+    assert main(["stats", RADAR, ADSB]) == 0  # path objects from a library caller: their paths
+    assert capsys.readouterr().out == out
 
 
 def test_correlate_report_json_and_figure(tmp_path, capsys):
