@@ -21,6 +21,9 @@ import pandas as pd
 from msdc.pipeline.evaluate.reference_gates import Gates, gate_reports
 
 IDENTITY_COLUMNS = ("mode3a", "address", "callsign")
+# the tracker's columns a reconstruction reads (reconstruct)
+TRACK_INPUTS = ("aircraft_id", "segment", "time", "latitude", "longitude", "flight_level", "sigma_major_m",
+                "sources")
 BUILT_COLUMNS = ("aircraft", "t_s", "latitude", "longitude", "altitude_ft", *IDENTITY_COLUMNS, "sigma_m",
                  "built_by", "self_reference", "updated", "on_ground")
 BUILT_BY_SEPARATOR = " + "
@@ -99,8 +102,8 @@ def _identity(reference: pd.DataFrame, reports: pd.DataFrame, established: bool 
     latest value reported at or before the row's time (before the first, the first). With ``established``
     (a sensor's own track judging that sensor's codes), only values the aircraft's previous report also
     gave count: otherwise each report's own code, wrong or garbled, would be its reference and never false."""
-    out = reference.sort_values("time", kind="stable")
-    left_key, left_t = _keyed(out["aircraft_id"], out["time"])
+    out = reference.copy(deep=False)  # the identity columns added to a view, not to the caller's frame
+    left_key, left_t = _keyed(out["aircraft_id"], out["time"])  # per row: the rows' order is no matter
     rep_key, rep_t = _keyed(reports["aircraft_id"], reports["time"])
     for col in IDENTITY_COLUMNS:
         if col not in reports.columns:
@@ -124,7 +127,7 @@ def _identity(reference: pd.DataFrame, reports: pd.DataFrame, established: bool 
         col_out = np.full(len(out), np.nan, object)
         col_out[at >= 0] = value[at[at >= 0]]
         out[col] = col_out
-    return out.sort_index()
+    return out
 
 
 def _level_between_updates(tracks: pd.DataFrame, updated: pd.Series) -> np.ndarray:
@@ -171,10 +174,10 @@ def reconstruct(reports: pd.DataFrame, epoch: pd.Timestamp, *, step_s: float = 1
 
     if reports.empty:
         return _empty()
-    res = track(reports, step_s=step_s, max_coast_s=max_coast_s, smooth=True, epoch=epoch)
-    tr = res.tracks
+    tr = track(reports, step_s=step_s, max_coast_s=max_coast_s, smooth=True, epoch=epoch).tracks
     if tr.empty:
         return _empty()
+    tr = tr[list(TRACK_INPUTS)]  # what the reference rows are made of: the other estimates let go first
     tr = tr.assign(built_by=_built_by(tr))
     # a smoothed segment is supported between its first and last update; rows coasted beyond the last
     # update are a prediction, not a reconstruction
@@ -196,7 +199,19 @@ def reconstruct(reports: pd.DataFrame, epoch: pd.Timestamp, *, step_s: float = 1
         "self_reference": np.full(len(tr), self_reference),
         "updated": (tr["sources"].astype(str) != "").to_numpy(bool),
         "on_ground": tr["on_ground"].astype("boolean").to_numpy()})
+    del tr
+    if _in_order(out["aircraft"].to_numpy(object), out["t_s"].to_numpy(float)):
+        return out  # as the tracker gives them, most often: the sort would copy every column for nothing
     return out.sort_values(["aircraft", "t_s"], kind="stable", ignore_index=True)
+
+
+def _in_order(aircraft: np.ndarray, t_s: np.ndarray) -> bool:
+    """Whether rows are sorted by aircraft, then time (what a stable sort by both would leave as it is)."""
+    if len(aircraft) < 2:
+        return True
+    a, b = aircraft[:-1], aircraft[1:]
+    same = a == b
+    return bool(np.all((b > a) | (same & (t_s[1:] >= t_s[:-1]))))
 
 
 def _uncovered(own: pd.DataFrame, independent: pd.DataFrame, max_gap_s: float) -> pd.DataFrame:

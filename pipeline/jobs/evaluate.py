@@ -354,6 +354,7 @@ def evaluate_job(options: EvaluateOptions, *, progress: Progress | None = None,
         field_monitors,
         tracker_ids,
     )
+    from msdc.pipeline.model.load import release_free_memory
     from msdc.pipeline.model.site_check import site_warnings
     from msdc.pipeline.model.time import midnight
 
@@ -395,6 +396,7 @@ def evaluate_job(options: EvaluateOptions, *, progress: Progress | None = None,
                 progress.step(f"{sensor_id} ({i + 1}/{len(tests)})")
             results.append(_sensor(options, checked, loaded, meas, builders, sensor_id, kind, gates, epoch,
                                    external, monitors, cache))
+            release_free_memory()  # a reference's transient copies, handed back before the next sensor's
         loaded.drop_frames()
         card, tables, points = _assemble(results)
         params = {**run_parameters(options, loaded, started, command), "preset": checked.preset.name,
