@@ -495,16 +495,17 @@ def write_evaluation(result: EvaluateResult, *, tx: OutputTransaction | None = N
     c = result.checked
     title = f"msdc evaluation: {result.checked.preset.title}"
     images = coverage(result) if c.output or c.html else {}
+    run = {"inputs": result.loaded.inputs, "parameters": result.parameters}
     with staged(tx) as stage:
         if c.output:
-            write_evaluation_xlsx(result.scorecard, stage.path(c.output), result.tables, images)
+            write_evaluation_xlsx(result.scorecard, stage.path(c.output), result.tables, images, run=run)
             written["workbook"] = c.output
-        if c.json:
-            write_evaluation_json(result.scorecard, stage.path(c.json), result.tables)  # map: HTML only
+        if c.json:  # the map: HTML only
+            write_evaluation_json(result.scorecard, stage.path(c.json), result.tables, run=run)
             written["json"] = c.json
         if c.html:
             write_evaluation_html(result.scorecard, stage.path(c.html), result.tables, result.map_points,
-                                  title=title, images=images)
+                                  title=title, images=images, run=run)
             written["html"] = c.html
     return written
 

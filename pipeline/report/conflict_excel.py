@@ -14,7 +14,7 @@ from openpyxl import Workbook
 
 from msdc.pipeline.correlate.results import CorrelationRun
 from msdc.pipeline.report.cells import make_column, write_table
-from msdc.pipeline.report.excel import parameter_rows
+from msdc.pipeline.report.excel import write_parameters
 from msdc.pipeline.report.saving import save
 
 UTC_FORMAT = 'yyyy-mm-dd hh:mm:ss "UTC"'
@@ -33,10 +33,7 @@ def write_conflict_workbook(alerts: pd.DataFrame, losses: pd.DataFrame, warnings
         if frame.empty:  # a header row alone: one page, not the width the data would need
             ws.page_setup.fitToWidth = 1
             ws.print_title_cols = None
-    ws = wb.create_sheet("Parameters")
-    rows = parameter_rows(CorrelationRun(parameters=parameters), windows=False)
-    write_table(ws, [make_column(ws, h, [r[j] for r in rows], general=True)
-                     for j, h in enumerate(["section", "key", "value"])])
+    write_parameters(wb, CorrelationRun(parameters=parameters), windows=False)
     save(wb, path_xlsx)
 
 

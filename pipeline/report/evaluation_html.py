@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import base64
 import html
+import json
 import math
 import os
 from collections.abc import Mapping
@@ -167,9 +168,10 @@ def _map(points: pd.DataFrame):
 
 def evaluation_html(scorecard: pd.DataFrame, tables: Mapping[str, pd.DataFrame] | None = None,
                     map_points: pd.DataFrame | None = None, title: str = "msdc evaluation",
-                    images: Mapping[str, bytes] | None = None) -> str:
+                    images: Mapping[str, bytes] | None = None, run: Mapping | None = None) -> str:
     """The report's HTML text (inputs validated by scorecard_schema); ``images`` (title -> PNG bytes, e.g.
-    coverage_figures.coverage_images) make its Coverage section."""
+    coverage_figures.coverage_images) make its Coverage section, ``run`` (inputs and parameters) its last,
+    Run."""
     card = validate_scorecard(scorecard)
     frames = validate_tables(tables)
     points = validate_map(map_points)
@@ -198,17 +200,35 @@ def evaluation_html(scorecard: pd.DataFrame, tables: Mapping[str, pd.DataFrame] 
     else:
         parts.append('<h2>Map</h2><p class="note">No map points were given.</p>')
     parts += [_frame_table(name, frame) for name, frame in frames.items()]
+    if run is not None:
+        parts.append(_run_table(run))
     return ("<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\">"
             f"<title>{html.escape(title)}</title><style>{_STYLE}</style>{head}</head>"
             f"<body>{''.join(parts)}</body></html>\n")
 
 
+def _run_table(run: Mapping) -> str:
+    """The Run section: what was read (paths, SHA-256) and how, a row per item as the JSON has it."""
+    from msdc.pipeline.correlate.results import CorrelationRun
+    from msdc.pipeline.report.excel import run_rows
+
+    rows = run_rows(CorrelationRun(inputs=list(run.get("inputs", [])),
+                                   parameters=dict(run.get("parameters", {}))), windows=False)
+    def text(v) -> str:
+        return "" if v is None else json.dumps(v) if isinstance(v, Mapping | list | tuple) else str(v)
+
+    body = "".join("<tr>" + "".join(f"<td>{html.escape(text(v))}</td>" for v in row) + "</tr>"
+                   for row in rows)
+    return ('<h2>Run</h2><table id="run"><tr><th>Section</th><th>Key</th><th>Value</th></tr>'
+            f"{body}</table>")
+
+
 def write_evaluation_html(scorecard: pd.DataFrame, path: str | os.PathLike[str],
                           tables: Mapping[str, pd.DataFrame] | None = None,
                           map_points: pd.DataFrame | None = None, title: str = "msdc evaluation",
-                          images: Mapping[str, bytes] | None = None) -> Path:
+                          images: Mapping[str, bytes] | None = None, run: Mapping | None = None) -> Path:
     """evaluation_html written to ``path`` as UTF-8 (an error names it); returns ``path``."""
-    text = evaluation_html(scorecard, tables, map_points, title, images)
+    text = evaluation_html(scorecard, tables, map_points, title, images, run)
     path = Path(path)
     with named(path):
         path.write_text(text, encoding="utf-8")

@@ -24,12 +24,18 @@ VERSION = 1
 
 
 def evaluation_document(scorecard: pd.DataFrame, tables: Mapping[str, pd.DataFrame] | None = None,
-                        map_points: pd.DataFrame | None = None) -> dict[str, Any]:
+                        map_points: pd.DataFrame | None = None, run: Mapping[str, Any] | None = None
+                        ) -> dict[str, Any]:
     """The JSON document of an evaluation (validated by scorecard_schema): format, version, columns,
-    results, tables (name -> rows) and, when given, map_points."""
+    results, tables (name -> rows) and, when given, map_points, and the run's ``inputs`` and
+    ``parameters`` (``run``: what was read, with SHA-256, and how: software, preset, reference, gates,
+    report selection, notes)."""
     card = validate_scorecard(scorecard)
     doc: dict[str, Any] = {"format": FORMAT, "version": VERSION, "columns": list(SCORECARD_COLUMNS),
                            "results": table_records(card)}
+    if run is not None:
+        doc["inputs"] = list(run.get("inputs", []))
+        doc["parameters"] = dict(run.get("parameters", {}))
     for row in doc["results"]:
         row["n"] = int(row["n"]) if float(row["n"]).is_integer() else row["n"]  # a count reads as one
     frames = validate_tables(tables)
@@ -43,9 +49,10 @@ def evaluation_document(scorecard: pd.DataFrame, tables: Mapping[str, pd.DataFra
 
 def write_evaluation_json(scorecard: pd.DataFrame, path: str | os.PathLike[str],
                           tables: Mapping[str, pd.DataFrame] | None = None,
-                          map_points: pd.DataFrame | None = None) -> Path:
+                          map_points: pd.DataFrame | None = None, run: Mapping[str, Any] | None = None
+                          ) -> Path:
     """evaluation_document written as strict JSON to ``path`` (an error names it); returns ``path``."""
-    return write_json(evaluation_document(scorecard, tables, map_points), path)
+    return write_json(evaluation_document(scorecard, tables, map_points, run), path)
 
 
 def read_evaluation_json(path: str | os.PathLike[str]) -> tuple[pd.DataFrame, dict[str, pd.DataFrame]]:

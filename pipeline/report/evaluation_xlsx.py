@@ -17,6 +17,7 @@ from openpyxl.cell import WriteOnlyCell
 from openpyxl.styles import Alignment, Font, PatternFill
 from openpyxl.worksheet._write_only import WriteOnlyWorksheet
 
+from msdc.pipeline.correlate.results import CorrelationRun
 from msdc.pipeline.evaluate.catalogue import CATALOGUE
 from msdc.pipeline.evaluate.scorecard_schema import validate_images, validate_scorecard, validate_tables
 from msdc.pipeline.report.cells import (
@@ -35,7 +36,7 @@ from msdc.pipeline.report.cells import (
     write_table,
 )
 from msdc.pipeline.report.evaluation_formats import PROPORTION_FORMAT, proportion_columns
-from msdc.pipeline.report.excel import _discard, _write_figures, sheet_name
+from msdc.pipeline.report.excel import _discard, _write_figures, sheet_name, write_parameters
 from msdc.pipeline.report.saving import save
 
 SCORECARD_SHEET = "Scorecard"
@@ -195,10 +196,10 @@ def _write_table(wb: Workbook, title: str, frame: pd.DataFrame) -> None:
 
 def write_evaluation_xlsx(scorecard: pd.DataFrame, path: str | os.PathLike[str],
                           tables: Mapping[str, pd.DataFrame] | None = None,
-                          images: Mapping[str, bytes] | None = None) -> None:
+                          images: Mapping[str, bytes] | None = None, run: Mapping | None = None) -> None:
     """The evaluation workbook at ``path``: the scorecard (validated: scorecard_schema), the Coverage sheet
-    of ``images`` (title -> PNG bytes, e.g. coverage_figures.coverage_images) when given, and the tables
-    in their order, one sheet each."""
+    of ``images`` (title -> PNG bytes, e.g. coverage_figures.coverage_images) when given, the tables in
+    their order, one sheet each, and the Parameters sheet of ``run`` (its inputs and parameters)."""
     card = validate_scorecard(scorecard)
     extra = validate_tables(tables)
     figures = validate_images(images)
@@ -210,6 +211,10 @@ def write_evaluation_xlsx(scorecard: pd.DataFrame, path: str | os.PathLike[str],
             _write_figures(wb, sheet_name(COVERAGE_SHEET, taken), figures)
         for name, frame in extra.items():
             _write_table(wb, sheet_name(name, taken), frame)
+        if run is not None:
+            write_parameters(wb, CorrelationRun(inputs=list(run.get("inputs", [])),
+                                                parameters=dict(run.get("parameters", {}))),
+                             windows=False, title=sheet_name("Parameters", taken))
     except BaseException:
         _discard(wb)
         raise

@@ -451,6 +451,13 @@ def _flatten(prefix: str, value: Any) -> Iterator[tuple[str, Any]]:
 def parameter_rows(run: CorrelationRun, windows: bool = True) -> list[list[Any]]:
     """Key/value rows of the Parameters sheet: section, key, value (ISO 8601 text, as the JSON has it, shown
     as an Excel date); ``windows``: with the correlation report's window counts."""
+    return [[(iso_time(v) if isinstance(v, str) else None) or excel_value(v) for v in row]
+            for row in run_rows(run, windows)]
+
+
+def run_rows(run: CorrelationRun, windows: bool = True) -> list[list[Any]]:
+    """The run's record as section, key, value rows (values as the JSON has them): each input, the
+    parameters (a mapping's items under its name), the filters; ``windows``: the window counts."""
     rows: list[list[Any]] = []
     for i, item in enumerate(run.inputs, start=1):
         order = ["path", "format", "bytes", "sha256"]
@@ -464,11 +471,13 @@ def parameter_rows(run: CorrelationRun, windows: bool = True) -> list[list[Any]]
     rows += [["filters", str(k), v] for k, v in run.filters.items()]
     if windows:
         rows += [["report", "windows", len(run.windows)], ["report", "skipped windows", len(run.skipped)]]
-    return [[(iso_time(v) if isinstance(v, str) else None) or excel_value(v) for v in row] for row in rows]
+    return rows
 
 
-def _write_parameters(wb: Workbook, run: CorrelationRun, windows: bool = True) -> None:
-    ws = wb.create_sheet("Parameters")
+def write_parameters(wb: Workbook, run: CorrelationRun, windows: bool = True, title: str = "Parameters"
+                     ) -> None:
+    """The Parameters sheet: parameter_rows under the headers section, key, value."""
+    ws = wb.create_sheet(title)
     rows = parameter_rows(run, windows)
     headers = ["section", "key", "value"]
     columns = [make_column(ws, h, [r[j] for r in rows], general=True) for j, h in enumerate(headers)]
@@ -565,7 +574,7 @@ def write_report(run: CorrelationRun, path_xlsx: str | os.PathLike[str], *,
             _write_frame(wb, sheet_name(name, taken), frame)
         if images:
             _write_figures(wb, sheet_name("Figures", taken), images, images_note)
-        _write_parameters(wb, run)
+        write_parameters(wb, run)
         get_ready(wb)  # while the tables and the figure may still be written elsewhere
         if away:
             parquet.update(tables_written())
@@ -601,6 +610,6 @@ def write_tables(tables: dict[str, pd.DataFrame], path_xlsx: str | os.PathLike[s
     if images:
         _write_figures(wb, sheet_name("Figures", taken), images)
     if parameters is not None:
-        _write_parameters(wb, CorrelationRun(parameters=parameters), windows=False)  # not a correlation
+        write_parameters(wb, CorrelationRun(parameters=parameters), windows=False)  # not a correlation
     save(wb, path_xlsx)
 

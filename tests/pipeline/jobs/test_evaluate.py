@@ -140,7 +140,7 @@ def test_per_aircraft_and_per_band_tables(evaluated):
 
 
 def test_the_cli_writes_the_three_outputs(recording, tmp_path):
-    _, folder = recording
+    sim, folder = recording
     out = tmp_path / "out"
     out.mkdir()
     args = [str(folder / "radar.ast"), str(folder / "adsb.ast"), "--sensors", str(folder / "sensors.toml"),
@@ -151,6 +151,23 @@ def test_the_cli_writes_the_three_outputs(recording, tmp_path):
     assert {r["requirement"] for r in doc["results"]} >= {"pd", "mode3a_valid", "split_reports"}
     assert "Per aircraft" in doc["tables"] and "map_points" not in doc  # the map is the HTML's
     assert (out / "e.xlsx").stat().st_size > 0 and "<table" in (out / "e.html").read_text()
+    # every output says what it was made from and how: the inputs' SHA-256, the preset, the reference
+    import hashlib
+
+    import openpyxl
+
+    digests = [hashlib.sha256((folder / n).read_bytes()).hexdigest() for n in ("radar.ast", "adsb.ast")]
+    assert [i["sha256"] for i in doc["inputs"]] == digests
+    assert [i["records"] for i in doc["inputs"]] == [{"34": len(sim.north_markers), "48": len(sim.radar)},
+                                                     {"21": len(sim.sim.adsb)}]
+    params = doc["parameters"]
+    assert (params["preset"], params["reference"]) == ("test-radar", "leave-one-out")
+    assert params["date"] == DATE and params["software"].startswith("msdc ")
+    ws = openpyxl.load_workbook(out / "e.xlsx", read_only=True)["Parameters"]
+    rows = {(r[0], r[1]): r[2] for r in ws.iter_rows(values_only=True) if len(r) >= 3}
+    assert rows[("input 1", "sha256")] == digests[0] and rows[("parameters", "preset")] == "test-radar"
+    page = (out / "e.html").read_text()
+    assert '<h2>Run</h2>' in page and all(d in page for d in digests)
 
 
 @pytest.mark.parametrize(("change", "message"), [
