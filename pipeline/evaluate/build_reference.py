@@ -18,7 +18,9 @@ from dataclasses import dataclass, field
 import numpy as np
 import pandas as pd
 
+from msdc.pipeline.evaluate.reference import in_order
 from msdc.pipeline.evaluate.reference_gates import Gates, gate_reports
+from msdc.pipeline.model.schema import equals_text
 
 IDENTITY_COLUMNS = ("mode3a", "address", "callsign")
 # the tracker's columns a reconstruction reads (reconstruct)
@@ -200,18 +202,9 @@ def reconstruct(reports: pd.DataFrame, epoch: pd.Timestamp, *, step_s: float = 1
         "updated": (tr["sources"].astype(str) != "").to_numpy(bool),
         "on_ground": tr["on_ground"].astype("boolean").to_numpy()})
     del tr
-    if _in_order(out["aircraft"].to_numpy(object), out["t_s"].to_numpy(float)):
+    if in_order(out["aircraft"], out["t_s"].to_numpy(float)):
         return out  # as the tracker gives them, most often: the sort would copy every column for nothing
     return out.sort_values(["aircraft", "t_s"], kind="stable", ignore_index=True)
-
-
-def _in_order(aircraft: np.ndarray, t_s: np.ndarray) -> bool:
-    """Whether rows are sorted by aircraft, then time (what a stable sort by both would leave as it is)."""
-    if len(aircraft) < 2:
-        return True
-    a, b = aircraft[:-1], aircraft[1:]
-    same = a == b
-    return bool(np.all((b > a) | (same & (t_s[1:] >= t_s[:-1]))))
 
 
 def _uncovered(own: pd.DataFrame, independent: pd.DataFrame, max_gap_s: float) -> pd.DataFrame:
@@ -261,7 +254,7 @@ def _reference(meas: pd.DataFrame, builders: np.ndarray, sensor_id: str | None, 
     row is built once."""
     epoch = _epoch(meas, epoch)
     notes = _shared_navigation(meas, builders, sensor_id)
-    key = (frozenset(meas.loc[builders, "sensor_id"].astype(str).unique()), repr(gates), epoch, step_s,
+    key = (frozenset(str(v) for v in meas.loc[builders, "sensor_id"].unique()), repr(gates), epoch, step_s,
            max_coast_s)
     if cache is not None and key in cache:
         built, counts = cache[key]
@@ -274,7 +267,7 @@ def _reference(meas: pd.DataFrame, builders: np.ndarray, sensor_id: str | None, 
             cache[key] = (built, counts)
     frames = [built]
     if fallback and sensor_id is not None and epoch is not None:
-        own_reports = meas[(meas["sensor_id"].astype(str) == sensor_id).to_numpy(bool)]
+        own_reports = meas[equals_text(meas["sensor_id"], sensor_id)]
         if (own_reports["sensor_kind"] == "adsb").any():
             own_reports, _ = gate_reports(own_reports, gates)
         own_reports = own_reports[_needing_fallback(own_reports, built, epoch, max_gap_s)]
@@ -287,7 +280,8 @@ def _reference(meas: pd.DataFrame, builders: np.ndarray, sensor_id: str | None, 
             frames.append(own)
     frame = pd.concat([f for f in frames if len(f)], ignore_index=True) if any(len(f) for f in frames) \
         else _empty()
-    frame = frame.sort_values(["aircraft", "t_s"], kind="stable", ignore_index=True)
+    if not in_order(frame["aircraft"], frame["t_s"].to_numpy(float)):
+        frame = frame.sort_values(["aircraft", "t_s"], kind="stable", ignore_index=True)
     return BuiltReference(frame, counts, epoch, notes)
 
 
@@ -296,11 +290,10 @@ def _shared_navigation(meas: pd.DataFrame, builders: np.ndarray, sensor_id: str 
     the same aircraft's position, from the same navigation source, so their errors are not independent."""
     if sensor_id is None:
         return []
-    kind = meas["sensor_kind"].to_numpy(object)
-    ids = meas["sensor_id"].astype(str).to_numpy(object)
-    if not (kind[ids == sensor_id] == "adsb").any():
+    adsb = equals_text(meas["sensor_kind"], "adsb")
+    if not adsb[equals_text(meas["sensor_id"], sensor_id)].any():
         return []
-    others = sorted(set(ids[builders & (kind == "adsb")]))
+    others = sorted(str(v) for v in meas.loc[builders & adsb, "sensor_id"].dropna().unique())
     if not others:
         return []
     return [f"the reference of ADS-B sensor {sensor_id} includes ADS-B from {', '.join(others)}: the same "
@@ -309,7 +302,7 @@ def _shared_navigation(meas: pd.DataFrame, builders: np.ndarray, sensor_id: str 
 
 def _check_sensor(meas: pd.DataFrame, sensor_id: str) -> None:
     """Refuse a sensor under test that is not in the measurements, naming those present."""
-    present = sorted(set(meas["sensor_id"].astype(str)))
+    present = sorted(str(v) for v in meas["sensor_id"].dropna().unique())
     if sensor_id not in present:
         raise ValueError(f"sensor {sensor_id!r} is not in the measurements (present: {', '.join(present)})")
 
@@ -324,7 +317,7 @@ def leave_one_out(meas: pd.DataFrame, sensor_id: str, *, gates: Gates | None = N
     from ``meas`` is refused unless ``require_present`` is False (its reports may all be unidentified)."""
     if require_present:
         _check_sensor(meas, sensor_id)
-    builders = (meas["sensor_id"].astype(str) != sensor_id).to_numpy(bool)
+    builders = ~equals_text(meas["sensor_id"], sensor_id)
     return _reference(meas, builders, sensor_id, gates or Gates(), epoch, step_s, max_coast_s, fallback,
                       max_gap_s, cache)
 
@@ -339,6 +332,6 @@ def adsb_reference(meas: pd.DataFrame, sensor_id: str | None = None, *, gates: G
     if sensor_id is not None:
         _check_sensor(meas, sensor_id)
     builders = ((meas["sensor_kind"] == "adsb").to_numpy(bool)
-                & (meas["sensor_id"].astype(str) != (sensor_id or "")).to_numpy(bool))
+                & ~equals_text(meas["sensor_id"], sensor_id or ""))
     return _reference(meas, builders, sensor_id, gates or Gates(), epoch, step_s, max_coast_s, fallback,
                       max_gap_s, cache)

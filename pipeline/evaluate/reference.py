@@ -37,7 +37,29 @@ def check_reference(reference: pd.DataFrame) -> pd.DataFrame:
     message when a required column is missing."""
     _check_columns(reference, REFERENCE_REQUIRED, "the reference")
     ref = reference.dropna(subset=["t_s", "latitude", "longitude"])
+    if in_order(ref["aircraft"], ref["t_s"].to_numpy(float)):
+        return ref.reset_index(drop=True)  # a reconstruction's order: sorting its text ids costs seconds
     return ref.sort_values(["aircraft", "t_s"], kind="stable", ignore_index=True)
+
+
+def in_order(aircraft: pd.Series, t_s: np.ndarray) -> bool:
+    """Whether rows are sorted by aircraft (text, none missing), then time (what a stable sort by both would
+    leave as it is); times without NaN. Arrow-backed text is compared by pyarrow, with no object per row."""
+    if len(aircraft) < 2:
+        return True
+    values = aircraft.array
+    if hasattr(values, "__arrow_array__") and not isinstance(values, pd.Categorical):
+        import pyarrow as pa
+        import pyarrow.compute as pc
+
+        ids = pa.array(values)
+        a, b = ids.slice(0, len(ids) - 1), ids.slice(1)
+        after = pc.greater(b, a).fill_null(False).to_numpy(zero_copy_only=False)
+        same = pc.equal(b, a).fill_null(False).to_numpy(zero_copy_only=False)
+    else:
+        ids = aircraft.to_numpy(object)
+        after, same = ids[1:] > ids[:-1], ids[1:] == ids[:-1]
+    return bool(np.all(after | (same & (t_s[1:] >= t_s[:-1]))))
 
 
 def parameter(parameters: Mapping | None, name: str, default):

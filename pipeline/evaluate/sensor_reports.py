@@ -10,6 +10,7 @@ import numpy as np
 import pandas as pd
 
 from msdc.pipeline.evaluate.coverage import Sensor, sensor_from_entry
+from msdc.pipeline.model.schema import equals_text
 from msdc.pipeline.model.time import absolute_time, seconds_since
 
 # decoded CAT048 columns the requirements read besides the measurements: Mode 3/A and Mode C validity and
@@ -40,7 +41,7 @@ def sensor_reports(meas: pd.DataFrame, sensor_id: str, epoch: pd.Timestamp,
     """The sensor's reports with ``t_s`` (seconds from ``epoch``) and, for a radar, RADAR_EXTRA_COLUMNS
     joined from its decoded frame by file and offset (absent columns stay absent: then validity is not
     judged)."""
-    rows = meas[(meas["sensor_id"].astype(str) == sensor_id).to_numpy(bool)]
+    rows = meas[equals_text(meas["sensor_id"], sensor_id)]
     cols = [c for c in REPORT_COLUMNS if c in rows.columns]
     out = pd.DataFrame({c: rows[c].to_numpy() if c != "aircraft_id" else rows[c].astype(object).to_numpy()
                         for c in cols})

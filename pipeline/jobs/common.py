@@ -722,7 +722,7 @@ def selected_reports(meas: pd.DataFrame, checked: Checked, loaded: Loaded) -> tu
     kinds = meas["sensor_kind"].astype(str) if "sensor_kind" in meas else None
     meas = meas[keep].reset_index(drop=True)
     meas.attrs = attrs
-    gone = [] if kinds is None else sorted(set(kinds) - set(kinds[keep]))
+    gone = [] if kinds is None else sorted(set(kinds.unique()) - set(kinds[keep].unique()))
     nouns = {"radar": "radar (CAT048)", "adsb": "ADS-B (CAT021)", "mlat": "multilateration (CAT010/CAT020)",
              "smr": "surface radar (CAT010)"}
     return meas, [f"the report selection keeps no {nouns.get(k, k)} report of the {int((kinds == k).sum())} "

@@ -210,7 +210,7 @@ def _reference(options: EvaluateOptions, builders: pd.DataFrame, sensor_id: str,
 
     if external is not None:
         return BuiltReference(external, {}, epoch, [f"external reference {options.reference_file}"])
-    present = sensor_id in set(builders["sensor_id"].astype(str))
+    present = sensor_id in {str(v) for v in builders["sensor_id"].dropna().unique()}
     if options.reference == "adsb":
         return adsb_reference(builders, sensor_id if present else None, gates=gates, epoch=epoch,
                               max_coast_s=options.max_coast_s, cache=cache)
@@ -231,7 +231,7 @@ def _per_aircraft(sensor_id: str, reports: pd.DataFrame, reference: pd.DataFrame
     from msdc.pipeline.evaluate.scorecard import ground_flags
 
     ref = reference.assign(surface=ground_flags(reference)).groupby("aircraft").agg(
-        built_by=("built_by", lambda s: " | ".join(sorted(set(map(str, s))))),
+        built_by=("built_by", lambda s: " | ".join(sorted(set(map(str, s.unique()))))),
         self_reference_share=("self_reference", "mean"), surface_share=("surface", "mean"))
     table = ref.join(counts, how="left")
     table["reports"] = table["reports"].fillna(0).astype(int)

@@ -162,6 +162,15 @@ def coded_text(codes, labels) -> pd.Categorical:
                                      categories=pd.Index(texts, dtype=LABEL_DTYPE))
 
 
+def equals_text(values: pd.Series, text: str) -> np.ndarray:
+    """Per row, whether the text column reads ``text`` (as ``values.astype(str) == text`` for any value but a
+    missing one, which is never equal); a categorical is compared by its codes, with no text made per row."""
+    if isinstance(values.dtype, pd.CategoricalDtype):
+        hits = np.flatnonzero(np.asarray(values.cat.categories.astype(str) == text, bool))
+        return np.isin(values.cat.codes.to_numpy(), hits)
+    return (values.astype(str) == text).to_numpy(bool) & values.notna().to_numpy(bool)
+
+
 def text_categorical(values: pd.Series) -> pd.Series:
     """Text as the schema's categorical: categories of the pandas string dtype, in sorted order."""
     if isinstance(values.dtype, pd.CategoricalDtype):

@@ -346,3 +346,19 @@ def test_latest_at_is_the_latest_row_at_or_before_else_the_first_of_the_key():
             same = [j for j in range(nr) if rk[j] == lk[i]]
             before = [j for j in same if rt[j] <= lt[i]]
             assert got[i] == (before[-1] if before else same[0] if same else -1)
+
+
+@pytest.mark.parametrize("dtype", [object, "str", "category"])
+def test_in_order_is_what_a_stable_sort_by_aircraft_and_time_leaves(dtype):
+    from msdc.pipeline.evaluate.reference import in_order
+
+    cases = [(["A", "A", "B", "B"], [1.0, 2.0, 0.0, 0.0], True),  # equal times keep their order
+             (["A", "B", "A"], [1.0, 2.0, 3.0], False),  # an aircraft back after another
+             (["A", "A"], [2.0, 1.0], False),  # time going back
+             (["B", "A"], [0.0, 1.0], False), (["AB", "B"], [5.0, 0.0], True), (["X"], [1.0], True)]
+    for ids, t, expected in cases:
+        s = pd.Series(ids, dtype=dtype)
+        assert in_order(s, np.array(t)) is expected, (ids, t)
+        frame = pd.DataFrame({"aircraft": s, "t_s": t})
+        moved = frame.sort_values(["aircraft", "t_s"], kind="stable").index.tolist() != list(range(len(ids)))
+        assert moved is not expected  # pandas' own sort agrees with the hand's verdict

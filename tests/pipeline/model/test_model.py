@@ -234,3 +234,15 @@ def test_adsb_sigma_from_nacp():
 
     k95 = rayleigh.ppf(0.95)  # a circular 2-D Gaussian's radius holds 95 % within 2.4477 sigma
     assert got[:2].tolist() == pytest.approx([92.6 / k95, 3.0 / k95]) and np.isnan(got[2:]).all()
+
+
+def test_equals_text_reads_as_the_text_column_does():
+    from msdc.pipeline.model.schema import equals_text
+
+    for values in (["048:20/1", "021:0/1", None, "048:20/1"],):
+        for dtype in ("category", object, "string"):
+            s = pd.Series(values, dtype=dtype)
+            assert equals_text(s, "048:20/1").tolist() == [True, False, False, True]
+            assert not equals_text(s, "nan").any() and not equals_text(s, "048:20/2").any()
+    codes = pd.Series([25, 201, 25]).astype("category")  # a categorical of numbers, read as their text
+    assert equals_text(codes, "25").tolist() == [True, False, True]
