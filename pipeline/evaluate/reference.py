@@ -79,6 +79,16 @@ class Trajectory:
     altitude_ft: np.ndarray
     rows: np.ndarray  # row numbers in the checked reference, for its identity columns
 
+    @property
+    def box(self) -> tuple[float, float, float, float] | None:
+        """South, north, west and east bounds (deg) of the samples, which hold every interpolated position;
+        None when the samples span 180 deg of longitude or more (across the antimeridian: interpolation
+        between them wraps)."""
+        west, east = float(np.nanmin(self.longitude)), float(np.nanmax(self.longitude))
+        if not east - west < 180.0:
+            return None
+        return float(np.nanmin(self.latitude)), float(np.nanmax(self.latitude)), west, east
+
     def at(self, t_s: np.ndarray, max_gap_s: float) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """Latitude, longitude, height (m) and pressure altitude (ft) interpolated linearly at t_s; NaN
         before the first sample, after the last, and between samples more than max_gap_s apart."""
@@ -126,6 +136,24 @@ def trajectories(reference: pd.DataFrame) -> list[Trajectory]:
     return out
 
 
+def _box_bound_m(lat_deg: np.ndarray, lon_deg: np.ndarray, box: tuple[float, float, float, float] | None
+                 ) -> np.ndarray:
+    """Per point, a distance (m) no point of the box (south, north, west, east, deg) is nearer than by
+    local_distance_m: its latitude and longitude gaps on the least radii of curvature (the meridian's and
+    the parallel's at the equator, the latter shrunk by the cosine of the highest latitude involved), less
+    a thousandth and a millimetre for rounding; 0 for a box that cannot bound (None: see Trajectory.box)."""
+    if box is None:
+        return np.zeros(len(lat_deg))
+    south, north, west, east = box
+    dlat = np.maximum(np.maximum(south - lat_deg, lat_deg - north), 0.0)
+    gap = np.maximum(np.maximum(west - lon_deg, lon_deg - east), 0.0)  # along the line, to the nearer edge
+    dlon = np.maximum(np.minimum(gap, 360.0 - gap - (east - west)), 0.0)  # or round the other way
+    top = np.maximum(np.abs(lat_deg), max(abs(south), abs(north)))
+    bound = np.hypot(np.radians(dlat) * A_M * (1.0 - E2),
+                     np.radians(dlon) * A_M * np.cos(np.radians(np.minimum(top, 90.0))))
+    return np.maximum(0.999 * bound - 0.001, 0.0)
+
+
 def local_distance_m(lat1_deg, lon1_deg, lat2_deg, lon2_deg) -> np.ndarray:
     """Horizontal distance (m) between nearby points on the WGS-84 ellipsoid's local radii of curvature:
     within 0.1 % of the geodesic below 20 km, which is all an association gate needs."""
@@ -162,19 +190,30 @@ def associate(reports: pd.DataFrame, reference: pd.DataFrame,
     best, level_best = np.full(t.size, np.inf), np.full(t.size, np.inf)
     index, level_index = np.full(t.size, -1, dtype=np.int64), np.full(t.size, -1, dtype=np.int64)
     trajs = trajectories(ref)
-    for k, tr in enumerate(trajs):
-        a, b = np.searchsorted(ts, tr.t_s[0], "left"), np.searchsorted(ts, tr.t_s[-1], "right")
-        rows = order[a:b]
-        r_lat, r_lon, _, r_alt = tr.at(t[rows], max_gap_s)
-        d = np.nan_to_num(local_distance_m(lat[rows], lon[rows], r_lat, r_lon), nan=np.inf)
-        closer = d < best[rows]
-        best[rows[closer]] = d[closer]
-        index[rows[closer]] = k
-        with np.errstate(invalid="ignore"):
-            apart = np.abs(mode_c_ft[rows] - r_alt) > vertical_ft  # False where either is unknown
-        closer = ~apart & (d < level_best[rows])
-        level_best[rows[closer]] = d[closer]
-        level_index[rows[closer]] = k
+    spans = [order[np.searchsorted(ts, tr.t_s[0], "left"):np.searchsorted(ts, tr.t_s[-1], "right")]
+             for tr in trajs]
+    # Per report, the nearest aircraft (and the nearest within the vertical gate), the smallest k on equal
+    # distances, as a pass over every aircraft in order finds them. An aircraft is measured only against
+    # the reports its box of samples may hold nearer: first those it may hold within the gate (every
+    # aircraft within the gate of a report is measured against it there, so the association is whole),
+    # then, for the distance to the nearest aircraft beyond the gate, those it may hold nearer than the
+    # nearest found.
+    for near in (True, False):
+        for k, (tr, rows) in enumerate(zip(trajs, spans, strict=True)):
+            bound = _box_bound_m(lat[rows], lon[rows], tr.box)
+            rows = rows[bound <= gate_m] if near else rows[bound <= best[rows]]  # NaN: no position
+            if not rows.size:
+                continue
+            r_lat, r_lon, _, r_alt = tr.at(t[rows], max_gap_s)
+            d = np.nan_to_num(local_distance_m(lat[rows], lon[rows], r_lat, r_lon), nan=np.inf)
+            closer = (d < best[rows]) | ((d == best[rows]) & (k < index[rows]))
+            best[rows[closer]] = d[closer]
+            index[rows[closer]] = k
+            with np.errstate(invalid="ignore"):
+                apart = np.abs(mode_c_ft[rows] - r_alt) > vertical_ft  # False where either is unknown
+            closer = ~apart & ((d < level_best[rows]) | ((d == level_best[rows]) & (k < level_index[rows])))
+            level_best[rows[closer]] = d[closer]
+            level_index[rows[closer]] = k
     out = reports.copy()
     out["ref_distance_m"] = np.where(np.isfinite(lat) & np.isfinite(lon), best, np.nan)
     index = np.where(level_best <= gate_m, level_index, np.where(best <= gate_m, index, -1))

@@ -362,3 +362,65 @@ def test_in_order_is_what_a_stable_sort_by_aircraft_and_time_leaves(dtype):
         frame = pd.DataFrame({"aircraft": s, "t_s": t})
         moved = frame.sort_values(["aircraft", "t_s"], kind="stable").index.tolist() != list(range(len(ids)))
         assert moved is not expected  # pandas' own sort agrees with the hand's verdict
+
+
+def _brute_association(reports: pd.DataFrame, reference: pd.DataFrame, gate_m: float, vertical_ft: float,
+                       max_gap_s: float) -> tuple[np.ndarray, np.ndarray]:
+    """The association by exhaustion: every report measured against every aircraft, in order, the first
+    nearest kept (the nearest within the vertical gate first, as associate's rule says)."""
+    from msdc.pipeline.evaluate.reference import check_reference, local_distance_m, trajectories
+
+    t, lat, lon = (reports[c].to_numpy(float) for c in ("t_s", "latitude", "longitude"))
+    mode_c_ft = reports["flight_level"].to_numpy(float) * 100.0
+    best, level = np.full(len(t), np.inf), np.full(len(t), np.inf)
+    index, level_index = np.full(len(t), -1), np.full(len(t), -1)
+    for k, tr in enumerate(trajectories(check_reference(reference))):
+        r_lat, r_lon, _, r_alt = tr.at(t, max_gap_s)
+        d = np.nan_to_num(local_distance_m(lat, lon, r_lat, r_lon), nan=np.inf)
+        closer = d < best
+        best[closer], index[closer] = d[closer], k
+        with np.errstate(invalid="ignore"):
+            closer = ~(np.abs(mode_c_ft - r_alt) > vertical_ft) & (d < level)
+        level[closer], level_index[closer] = d[closer], k
+    index = np.where(level <= gate_m, level_index, np.where(best <= gate_m, index, -1))
+    return index, np.where(np.isfinite(lat) & np.isfinite(lon), best, np.nan)
+
+
+def test_association_equals_the_exhaustive_search():
+    """The pruned association (aircraft measured only against the reports their box may hold nearer) gives
+    exactly the exhaustive search's aircraft and distances: aircraft close together at different levels,
+    two aircraft flying the same samples (the first of equals wins), one across the antimeridian, reports
+    far from all, reports without a position or a Mode C, and gaps in the reference."""
+    from msdc.pipeline.evaluate.reference import associate
+
+    rng = np.random.default_rng(11)
+    rows = []
+    for k in range(12):
+        lat0, lon0 = 60.0 + rng.normal(0, 0.05), 10.0 + rng.normal(0, 0.1)
+        t = np.arange(0.0, 120.0, 2.0)
+        t = t[(t < 40) | (t > 80)] if k == 3 else t  # a 40 s gap: unknown in between
+        for tt in t:
+            rows.append((f"A{k:02d}", tt, lat0 + 1e-4 * tt * (k % 3 - 1), lon0 + 2e-4 * tt, 10000 + 1500 * k))
+    twin = [r for r in rows if r[0] == "A05"]
+    rows += [("A05b", *r[1:]) for r in twin]  # the same samples under another label (sorted after A05)
+    rows += [("Z", tt, 0.5, 179.99 + 0.0002 * tt - (360.0 if tt > 60 else 0.0), 20000)  # antimeridian
+             for tt in range(0, 120, 2)]
+    reference = pd.DataFrame(rows, columns=["aircraft", "t_s", "latitude", "longitude", "altitude_ft"])
+    n = 600
+    pick = reference.sample(n, replace=True, random_state=3).reset_index(drop=True)
+    reports = pd.DataFrame({"t_s": pick["t_s"] + rng.uniform(-1, 1, n),
+                            "latitude": pick["latitude"] + rng.normal(0, 0.01, n),
+                            "longitude": pick["longitude"] + rng.normal(0, 0.02, n),
+                            "flight_level": pick["altitude_ft"] / 100.0 + rng.normal(0, 20, n)})
+    reports.loc[::37, ["latitude", "longitude"]] = np.nan
+    reports.loc[::11, "flight_level"] = np.nan
+    reports.loc[::13, "latitude"] += 3.0  # far from every aircraft
+    reports.loc[::17, ["latitude", "longitude"]] = pick.loc[::17, ["latitude", "longitude"]].to_numpy()
+    params = {"gate_m": 3704.0, "vertical_gate_ft": 3000.0, "reference_max_gap_s": 30.0}
+    got = associate(reports, reference, params)
+    index, distance = _brute_association(reports, reference, 3704.0, 3000.0, 30.0)
+    assert got["ref_index"].tolist() == index.tolist()
+    np.testing.assert_array_equal(got["ref_distance_m"].to_numpy(float), distance)
+    assert 50 < (index >= 0).sum() < n and (np.isinf(distance)).sum() > 0
+    labels = sorted(reference["aircraft"].unique())
+    assert "A05b" not in set(got["ref_aircraft"].dropna()) and labels.index("A05") in set(index)
