@@ -106,7 +106,7 @@ def reading_pruning(prune: Pruning, selection) -> Pruning:
     bound given as a time of day: the day is known once read)."""
     from msdc.pipeline.model.report_selection import READING_MARGIN
 
-    if selection is None or (selection.start is None and selection.end is None) or not selection.placed:
+    if selection is None or not selection.timed or not selection.placed:
         return prune
     reach = READING_MARGIN + PRUNE_MARGIN
     since = None if selection.start is None else selection.start.instant - reach

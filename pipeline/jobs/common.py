@@ -942,7 +942,7 @@ def source_measurements(loaded, checked: Checked, options) -> tuple[pd.DataFrame
     except UnknownRadar as exc:
         raise unknown_radar_error(exc.missing, sensors_path(options)) from exc
     selection = checked.selection
-    if selection is not None and (selection.start is not None or selection.end is not None):
+    if selection is not None and selection.timed:
         from msdc.pipeline.model.report_selection import MarginCut, WindowError
 
         try:

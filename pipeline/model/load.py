@@ -281,7 +281,7 @@ def load_measurements(paths: list[str | Path], sensors: pd.DataFrame, *, edition
     other_kinds: dict[int, int] = {}  # CAT010 target reports of other kinds, per input (reset below)
     stray: list[pd.DataFrame] = []  # undeclared_radars' table per chunk
     early_start: list[str] = []  # FirstDayTally's warnings
-    timed = selection is not None and (selection.start is not None or selection.end is not None)
+    timed = selection is not None and selection.timed
     cut: MarginCut | None = None  # made at the first dated chunk when the window is given as instants
     if dataset is None:
         paths = input_paths(paths)

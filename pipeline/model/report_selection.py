@@ -145,6 +145,11 @@ class ReportSelection:
         return lo, hi
 
     @property
+    def timed(self) -> bool:
+        """Whether a time window (--from, --to or both) is given."""
+        return self.start is not None or self.end is not None
+
+    @property
     def placed(self) -> bool:
         """Whether every time bound given is an instant (placed without the recording's day)."""
         return all(b is None or b.instant is not None for b in (self.start, self.end))
@@ -152,7 +157,7 @@ class ReportSelection:
     def reading_window(self, day: dt.date | None) -> tuple[pd.Timestamp | None, pd.Timestamp | None] | None:
         """What the measurement jobs read: the window widened by READING_MARGIN on each side (a side not
         given stays open); None when no time bound is given. WindowError as ``window``."""
-        if self.start is None and self.end is None:
+        if not self.timed:
             return None
         lo, hi = self.window(day)
         return (None if lo is None else lo - READING_MARGIN, None if hi is None else hi + READING_MARGIN)
@@ -330,7 +335,7 @@ def select_reports(reports: pd.DataFrame, selection: ReportSelection, day: dt.da
     n = len(reports)
     keep = np.ones(n, bool)
     counts: dict[str, int] = {}
-    if selection.start is not None or selection.end is not None:
+    if selection.timed:
         lo, hi = selection.window(day)
         ns = pd.DatetimeIndex(pd.to_datetime(reports["time"], utc=True)).as_unit("ns").asi8
         known = ~pd.isna(pd.to_datetime(reports["time"], utc=True)).to_numpy(bool)
