@@ -176,10 +176,10 @@ def reconstruct(reports: pd.DataFrame, epoch: pd.Timestamp, *, step_s: float = 1
 
     if reports.empty:
         return _empty()
-    tr = track(reports, step_s=step_s, max_coast_s=max_coast_s, smooth=True, epoch=epoch).tracks
+    tr = track(reports, step_s=step_s, max_coast_s=max_coast_s, smooth=True, epoch=epoch,
+               columns=TRACK_INPUTS).tracks  # what the reference rows are made of, kept in each task
     if tr.empty:
         return _empty()
-    tr = tr[list(TRACK_INPUTS)]  # what the reference rows are made of: the other estimates let go first
     tr = tr.assign(built_by=_built_by(tr))
     # a smoothed segment is supported between its first and last update; rows coasted beyond the last
     # update are a prediction, not a reconstruction

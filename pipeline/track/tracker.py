@@ -128,7 +128,8 @@ def _check(measurements: pd.DataFrame) -> pd.DataFrame:
 def track(measurements: pd.DataFrame, *, step_s: float = 1.0, max_coast_s: float = 60.0,
           tpm: str | None = None, smooth: bool = False, config: TrackerConfig | None = None,
           turn_rate_dps: float = 3.0, with_ca: bool = False, keep_states: bool = False,
-          smoother: str = "rts", epoch: pd.Timestamp | None = None) -> TrackResult:
+          smoother: str = "rts", epoch: pd.Timestamp | None = None, columns: tuple[str, ...] | None = None
+          ) -> TrackResult:
     """Track every aircraft: estimates on a regular grid of step_s (aligned to whole multiples of step_s
     since UTC midnight) and at every accepted report, coasted up to max_coast_s after the last update,
     smoothed backwards when smooth. tpm: 'dynamic[:A,B]', 'fixed:P' or 'expm:TAU[,TAU2]' (default:
@@ -136,7 +137,9 @@ def track(measurements: pd.DataFrame, *, step_s: float = 1.0, max_coast_s: float
     smoother of `imm_smooth_rows`; also smooths the mode probabilities). keep_states keeps every
     aircraft's filter history for `TrackResult.state_at`. epoch: the UTC midnight the filter counts its
     seconds from (default: that of the earliest usable report; `TrackResult.epoch`), so that a subset of
-    the aircraft tracked again gives the same numbers."""
+    the aircraft tracked again gives the same numbers. columns: only these columns of the tracks table are
+    kept, in each aircraft's task (what a caller reads: less to send back from a cluster's worker and to
+    hold)."""
     measurements = _check(measurements)
     if smoother not in SMOOTHERS:
         raise ValueError(f"smoother {smoother!r}: expected one of {', '.join(SMOOTHERS)}")
@@ -168,6 +171,8 @@ def track(measurements: pd.DataFrame, *, step_s: float = 1.0, max_coast_s: float
     groups = frame.groupby("aircraft_id", sort=True, observed=True)
     def one(item: tuple) -> tuple:  # the filter run travels back (a cluster's worker) only when kept
         out = _track_one(str(item[0]), item[1], epoch, config, args, names, step_s, smooth, smoother)
+        if columns is not None:
+            out = replace(out, tracks=out.tracks[list(columns)])
         return item[0], (out if keep_states else replace(out, plane=None, run=None))
 
     outs = map_ordered(one, groups, distributable=True, label=aircraft_label)

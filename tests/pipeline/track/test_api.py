@@ -111,6 +111,21 @@ def test_smoothing_improves_and_segment_ends():
     assert errs[True] < 0.8 * errs[False]
 
 
+def test_columns_keep_only_those_of_the_tracks_table():
+    """track(columns=...) gives the whole table's columns asked for, the same rows and values, and the
+    same counts (two aircraft: the tables of both joined)."""
+    rng = np.random.default_rng(9)
+    truth = fly((0, 0), 0.0, 150.0, [(120, 0, 0)])
+    t = np.arange(0.0, 120.0, 4.0)
+    m = pd.concat([_adsb(truth, t, rng), _adsb(truth, t, rng, aircraft="A2")], ignore_index=True)
+    whole = track(m, smooth=True)
+    asked = ("aircraft_id", "time", "latitude", "sources")
+    some = track(m, smooth=True, columns=asked)
+    assert list(some.tracks.columns) == list(asked) and len(whole.tracks) > 50
+    pd.testing.assert_frame_equal(some.tracks, whole.tracks[list(asked)])
+    pd.testing.assert_frame_equal(some.aircraft, whole.aircraft)
+
+
 def test_predict_propagates_modes_and_uncertainty():
     rng = np.random.default_rng(9)
     truth = fly((0, 0), 90.0, 200.0, [(120, 0, 0)])
