@@ -154,6 +154,21 @@ def _box_bound_m(lat_deg: np.ndarray, lon_deg: np.ndarray, box: tuple[float, flo
     return np.maximum(0.999 * bound - 0.001, 0.0)
 
 
+def _may_hold(lat_deg: np.ndarray, lon_deg: np.ndarray, box, limit_m) -> np.ndarray:
+    """Per point, whether _box_bound_m lets the box hold a point within ``limit_m`` (a scalar or one per
+    point) of it; False without a position. The latitude gap alone rules most points out before the
+    whole bound is worked out for the rest."""
+    limit_m = np.broadcast_to(np.asarray(limit_m, float), lat_deg.shape)
+    if box is None:
+        return np.isfinite(lat_deg) & np.isfinite(lon_deg)
+    south, north = box[0], box[1]
+    dlat = np.maximum(np.maximum(south - lat_deg, lat_deg - north), 0.0)
+    out = 0.999 * np.radians(dlat) * A_M * (1.0 - E2) - 0.001 <= limit_m  # a bound of the bound: NaN False
+    near = np.flatnonzero(out)
+    out[near] = _box_bound_m(lat_deg[near], lon_deg[near], box) <= limit_m[near]
+    return out
+
+
 def local_distance_m(lat1_deg, lon1_deg, lat2_deg, lon2_deg) -> np.ndarray:
     """Horizontal distance (m) between nearby points on the WGS-84 ellipsoid's local radii of curvature:
     within 0.1 % of the geodesic below 20 km, which is all an association gate needs."""
@@ -200,8 +215,7 @@ def associate(reports: pd.DataFrame, reference: pd.DataFrame,
     # nearest found.
     for near in (True, False):
         for k, (tr, rows) in enumerate(zip(trajs, spans, strict=True)):
-            bound = _box_bound_m(lat[rows], lon[rows], tr.box)
-            rows = rows[bound <= gate_m] if near else rows[bound <= best[rows]]  # NaN: no position
+            rows = rows[_may_hold(lat[rows], lon[rows], tr.box, gate_m if near else best[rows])]
             if not rows.size:
                 continue
             r_lat, r_lon, _, r_alt = tr.at(t[rows], max_gap_s)
