@@ -414,21 +414,13 @@ def within_margin(loaded: Loaded, categories: tuple[int, ...]) -> None:
     and trackers are those near it, whether the inputs are a day's recording or a dataset read around it."""
     from msdc.pipeline.model.time import absolute_time
 
-    span = None if loaded.cut is None else loaded.cut.span
-    if span is None:
+    if loaded.cut is None or loaded.cut.span is None:
         return
-    lo, hi = span
     for cat in categories:
         frame = loaded.frames.get(cat)
         if frame is None or not len(frame):
             continue
-        t = absolute_time(frame, loaded.date)
-        inside = t.notna()
-        if lo is not None:
-            inside &= t >= lo
-        if hi is not None:
-            inside &= t <= hi
-        inside = inside.to_numpy(bool)
+        inside = loaded.cut.inside(absolute_time(frame, loaded.date))
         if not inside.all():
             loaded.frames[cat] = frame[inside].reset_index(drop=True)
 

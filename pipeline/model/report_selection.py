@@ -416,19 +416,23 @@ class MarginCut:
     def __post_init__(self):
         self.span = self.selection.reading_window(self.day)
 
+    def inside(self, times) -> np.ndarray:
+        """Per UTC time, whether it lies within the margin (both ends included); False for a missing one."""
+        ns = pd.DatetimeIndex(pd.to_datetime(times, utc=True)).as_unit("ns")
+        inside = ~ns.isna()
+        lo, hi = self.span if self.span is not None else (None, None)
+        if lo is not None:
+            inside &= ns >= lo
+        if hi is not None:
+            inside &= ns <= hi
+        return np.asarray(inside, bool)
+
     def keep(self, rows: pd.DataFrame) -> pd.DataFrame:
         """The rows (measurement rows, by their UTC ``time``) within the margin; those cut are counted. A row
         without a time is cut: the window leaves it out."""
         if self.span is None or not len(rows):
             return rows
-        ns = pd.DatetimeIndex(pd.to_datetime(rows["time"], utc=True)).as_unit("ns")
-        inside = ~ns.isna()
-        lo, hi = self.span
-        if lo is not None:
-            inside &= ns >= lo
-        if hi is not None:
-            inside &= ns <= hi
-        inside = np.asarray(inside, bool)
+        inside = self.inside(rows["time"])
         if inside.all():
             return rows
         _, counts = select_reports(rows[~inside], self.selection, self.day)
