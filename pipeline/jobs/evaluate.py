@@ -342,9 +342,46 @@ def _sensor(options, checked, loaded, meas, builders, sensor_id, kind, gates, ep
     return SensorResult(sensor_id, kind, score.rows, per, bands, polar, vertical, points, notes, sensor)
 
 
+@dataclass
+class WindowRun:
+    """One window's evaluation before it is assembled: each sensor's result, the run's notes, what was read
+    and whether the reference was an external file."""
+
+    results: list[SensorResult]
+    notes: list[str]
+    loaded: Loaded
+    external: bool
+
+
 def evaluate_job(options: EvaluateOptions, *, progress: Progress | None = None,
                  checked: EvaluateChecked | None = None, command: str = "evaluate") -> EvaluateResult:
     """Validate, decode, build the measurements, then evaluate every sensor under test."""
+    started = time.monotonic()
+    checked = checked or validate(options)
+    with carrying(checked.warnings) as warnings:
+        run = _evaluate_window(options, checked, progress, warnings)
+        card, tables, points = _assemble(run.results)
+        params = _parameters(options, checked, run, started, command)
+        return EvaluateResult(options, checked, card, tables, points, run.results, params, run.loaded,
+                              warnings)
+
+
+def _parameters(options: EvaluateOptions, checked: EvaluateChecked, run: WindowRun, started: float,
+                command: str) -> dict:
+    """The run's parameters as the outputs record them: the common ones, the preset, reference, sectors,
+    gates and notes."""
+    return {**run_parameters(options, run.loaded, started, command), "preset": checked.preset.name,
+            "preset_source": checked.preset.path, "reference": "external" if run.external
+            else options.reference, "sectors": options.sectors,
+            "gates": {"min_nacp": options.min_nacp, "min_nic": options.min_nic,
+                      "min_sil": options.min_sil, "drop_jumps": options.drop_jumps},
+            "notes": [*run.notes, *(f"{r.sensor}: {n}" for r in run.results for n in r.notes)]}
+
+
+def _evaluate_window(options: EvaluateOptions, checked: EvaluateChecked, progress: Progress | None,
+                     warnings: list[str]) -> WindowRun:
+    """Decode the inputs checked.selection keeps (with its margin), build the measurements and evaluate
+    every sensor under test; warnings added to ``warnings``."""
     from msdc.pipeline.evaluate.reference_gates import Gates
     from msdc.pipeline.evaluate.sensor_reports import (
         RADAR_EXTRA_COLUMNS,
@@ -358,54 +395,44 @@ def evaluate_job(options: EvaluateOptions, *, progress: Progress | None = None,
     from msdc.pipeline.model.site_check import site_warnings
     from msdc.pipeline.model.time import midnight
 
-    started = time.monotonic()
-    checked = checked or validate(options)
-    with carrying(checked.warnings) as warnings:
+    if progress:
+        progress.stage("Processing data files")
+    wants_tracks = "tracker" in checked.preset.sensor_types
+    extra = (*RADAR_EXTRA_COLUMNS, *(TRACKER_COLUMNS if wants_tracks else ()))
+    loaded, said = load_inputs(options, checked, progress, extra_columns=extra,
+                               extra_categories=(*SERVICE_CATEGORIES,
+                                                 *((TRACKER_CATEGORY,) if wants_tracks else ())))
+    warnings += said
+    if progress:
+        progress.stage("Evaluating")
+    meas, said = source_measurements(loaded, checked, options)
+    warnings += said
+    within_margin(loaded, (TRACKER_CATEGORY, *SERVICE_CATEGORIES))
+    warnings += site_warnings(meas, checked.sensors, str(sensors_path(options)))
+    warnings += undated_warning(loaded, "the reports and the reference")
+    if meas.empty:
+        raise JobError("no report in the inputs to evaluate")
+    trackers = tracker_ids(loaded.frames.get(TRACKER_CATEGORY)) if wants_tracks else []
+    tests, notes = _under_test(meas, checked.preset, checked.tests, trackers)
+    builders = tracked_reports(meas, options.max_coast_s)
+    epoch = midnight(meas["time"])
+    external = _external(options, epoch)
+    monitors = field_monitors(meas, loaded.frames)
+    _keep_frames(loaded, (48, TRACKER_CATEGORY, *SERVICE_CATEGORIES))  # what each sensor's part reads
+    if monitors:
+        notes.append(f"field monitors (fixed transponders, RAB set): {', '.join(sorted(monitors))}; "
+                     "judged in their own rows, left out of the others")
+    gates = Gates(min_nacp=options.min_nacp, min_nic=options.min_nic, min_sil=options.min_sil,
+                  drop_jumps=options.drop_jumps)
+    results, cache = [], {}  # the latest reference, reused by the next sensor built from the same
+    for i, (sensor_id, kind) in enumerate(tests):
         if progress:
-            progress.stage("Processing data files")
-        wants_tracks = "tracker" in checked.preset.sensor_types
-        extra = (*RADAR_EXTRA_COLUMNS, *(TRACKER_COLUMNS if wants_tracks else ()))
-        loaded, said = load_inputs(options, checked, progress, extra_columns=extra,
-                                   extra_categories=(*SERVICE_CATEGORIES,
-                                                     *((TRACKER_CATEGORY,) if wants_tracks else ())))
-        warnings += said
-        if progress:
-            progress.stage("Evaluating")
-        meas, said = source_measurements(loaded, checked, options)
-        warnings += said
-        within_margin(loaded, (TRACKER_CATEGORY, *SERVICE_CATEGORIES))
-        warnings += site_warnings(meas, checked.sensors, str(sensors_path(options)))
-        warnings += undated_warning(loaded, "the reports and the reference")
-        if meas.empty:
-            raise JobError("no report in the inputs to evaluate")
-        trackers = tracker_ids(loaded.frames.get(TRACKER_CATEGORY)) if wants_tracks else []
-        tests, notes = _under_test(meas, checked.preset, checked.tests, trackers)
-        builders = tracked_reports(meas, options.max_coast_s)
-        epoch = midnight(meas["time"])
-        external = _external(options, epoch)
-        monitors = field_monitors(meas, loaded.frames)
-        _keep_frames(loaded, (48, TRACKER_CATEGORY, *SERVICE_CATEGORIES))  # what each sensor's part reads
-        if monitors:
-            notes.append(f"field monitors (fixed transponders, RAB set): {', '.join(sorted(monitors))}; "
-                         "judged in their own rows, left out of the others")
-        gates = Gates(min_nacp=options.min_nacp, min_nic=options.min_nic, min_sil=options.min_sil,
-                      drop_jumps=options.drop_jumps)
-        results, cache = [], {}  # the latest reference, reused by the next sensor built from the same
-        for i, (sensor_id, kind) in enumerate(tests):
-            if progress:
-                progress.step(f"{sensor_id} ({i + 1}/{len(tests)})")
-            results.append(_sensor(options, checked, loaded, meas, builders, sensor_id, kind, gates, epoch,
-                                   external, monitors, cache))
-            release_free_memory()  # a reference's transient copies, handed back before the next sensor's
-        loaded.drop_frames()
-        card, tables, points = _assemble(results)
-        params = {**run_parameters(options, loaded, started, command), "preset": checked.preset.name,
-                  "preset_source": checked.preset.path, "reference": "external" if external is not None
-                  else options.reference, "sectors": options.sectors,
-                  "gates": {"min_nacp": options.min_nacp, "min_nic": options.min_nic,
-                            "min_sil": options.min_sil, "drop_jumps": options.drop_jumps},
-                  "notes": [*notes, *(f"{r.sensor}: {n}" for r in results for n in r.notes)]}
-        return EvaluateResult(options, checked, card, tables, points, results, params, loaded, warnings)
+            progress.step(f"{sensor_id} ({i + 1}/{len(tests)})")
+        results.append(_sensor(options, checked, loaded, meas, builders, sensor_id, kind, gates, epoch,
+                               external, monitors, cache))
+        release_free_memory()  # a reference's transient copies, handed back before the next sensor's
+    loaded.drop_frames()
+    return WindowRun(results, notes, loaded, external is not None)
 
 
 def within_margin(loaded: Loaded, categories: tuple[int, ...]) -> None:
