@@ -160,8 +160,7 @@ def clustered_interval(values, clusters, statistic: str, confidence: float = 0.9
     FEW_AIRCRAFT aircraft an interval marked as too narrow (``reason`` says which)."""
     alpha = _check_confidence(confidence)
     level = _percentile_level(statistic)
-    if not isinstance(n_boot, int | np.integer) or n_boot < 100:
-        raise ValueError(f"n_boot must be a whole number >= 100, got {n_boot!r}")
+    _check_boot(n_boot)
     x = np.asarray(values, dtype=float).ravel()
     groups = np.asarray(clusters).ravel()
     if x.size != groups.size:
@@ -179,12 +178,15 @@ def clustered_interval(values, clusters, statistic: str, confidence: float = 0.9
                                  "one aircraft: no interval over aircraft")
     rng = np.random.default_rng(seed)
     counts = np.bincount(cluster_of, minlength=n_clusters).astype(float)
-    sums = np.bincount(cluster_of, weights=x, minlength=n_clusters)
-    squares = np.bincount(cluster_of, weights=x**2, minlength=n_clusters)
+    if level is None:
+        sums = np.bincount(cluster_of, weights=x, minlength=n_clusters)
+        squares = np.bincount(cluster_of, weights=x**2, minlength=n_clusters)
+        replicates = _moment_replicates(rng, counts, sums, squares, statistic, n_boot)
+        return _finished(statistic, value, replicates, alpha, int(x.size), n_clusters)
     order = np.argsort(x, kind="stable")
     sorted_x, sorted_cluster = x[order], cluster_of[order]
     # replicates in chunks, so the draws (replicates x aircraft) and weights (x reports) stay bounded
-    rows = max(1, _CHUNK_CELLS // (n_clusters + (x.size if level is not None else 0)))
+    rows = max(1, _CHUNK_CELLS // (n_clusters + x.size))
     # a replicate's total weight is at most every draw on the largest aircraft
     wide = np.int32 if n_clusters * counts.max() < 2**31 - 1 else np.int64
     replicates = []
@@ -192,20 +194,102 @@ def clustered_interval(values, clusters, statistic: str, confidence: float = 0.9
         # how many times each aircraft is drawn in each replicate
         draws = rng.multinomial(n_clusters, np.full(n_clusters, 1.0 / n_clusters),
                                 size=min(rows, n_boot - start))
-        if level is not None:
-            weights = draws.astype(wide)[:, sorted_cluster]
-            replicates.append(_weighted_inverted_cdf(sorted_x, weights, level / 100.0))
-            continue
-        draws = draws.astype(float)
+        weights = draws.astype(wide)[:, sorted_cluster]
+        replicates.append(_weighted_inverted_cdf(sorted_x, weights, level / 100.0))
+    return _finished(statistic, value, np.concatenate(replicates), alpha, int(x.size), n_clusters)
+
+
+def _check_boot(n_boot: int) -> None:
+    """ValueError unless n_boot is a whole number of at least 100 replicates."""
+    if not isinstance(n_boot, int | np.integer) or n_boot < 100:
+        raise ValueError(f"n_boot must be a whole number >= 100, got {n_boot!r}")
+
+
+def _moment_replicates(rng: np.random.Generator, counts: np.ndarray, sums: np.ndarray, squares: np.ndarray,
+                       statistic: str, n_boot: int) -> np.ndarray:
+    """The bootstrap replicates of an RMS, mean or SD from each cluster's count, sum and sum of squares:
+    whole clusters drawn with replacement, in chunks so that the draws stay bounded."""
+    n_clusters = counts.size
+    rows = max(1, _CHUNK_CELLS // n_clusters)
+    replicates = []
+    for start in range(0, n_boot, rows):
+        draws = rng.multinomial(n_clusters, np.full(n_clusters, 1.0 / n_clusters),
+                                size=min(rows, n_boot - start)).astype(float)
         n = draws @ counts
         mean, square = (draws @ sums) / n, (draws @ squares) / n
         replicates.append({"mean": mean, "rms": np.sqrt(square),
                            "sd": np.sqrt(np.maximum(square - mean**2, 0.0))}[statistic])
-    replicates = np.concatenate(replicates)
+    return np.concatenate(replicates)
+
+
+def _finished(statistic: str, value: float, replicates: np.ndarray, alpha: float, n: int,
+              n_clusters: int) -> ClusteredInterval:
+    """The interval from the replicates' quantiles, marked too narrow below FEW_AIRCRAFT clusters."""
     low, high = np.quantile(replicates, [alpha / 2, 1 - alpha / 2])
     few = (f"{n_clusters} aircraft: below {FEW_AIRCRAFT} the interval over aircraft is too narrow "
            "(covers clearly less than 95 %)") if n_clusters < FEW_AIRCRAFT else ""
-    return ClusteredInterval(statistic, value, float(low), float(high), int(x.size), int(n_clusters), few)
+    return ClusteredInterval(statistic, value, float(low), float(high), n, int(n_clusters), few)
+
+
+@dataclass(frozen=True)
+class ClusterSums:
+    """Per cluster (labels sorted): its reports, the sum and the sum of squares of their values: all an RMS,
+    mean or SD and its bootstrap over clusters need, and what the windows of a span add up exactly."""
+
+    labels: np.ndarray
+    counts: np.ndarray
+    sums: np.ndarray
+    squares: np.ndarray
+
+    @property
+    def n(self) -> int:
+        """The reports summed."""
+        return int(self.counts.sum())
+
+
+def cluster_sums(values, clusters) -> ClusterSums:
+    """Each cluster's count, sum and sum of squares of ``values`` (finite), labels as text, sorted."""
+    x = np.asarray(values, dtype=float).ravel()
+    labels, cluster_of = np.unique(np.asarray(clusters).astype(str).ravel(), return_inverse=True)
+    k = labels.size
+    return ClusterSums(labels, np.bincount(cluster_of, minlength=k).astype(float),
+                       np.bincount(cluster_of, weights=x, minlength=k),
+                       np.bincount(cluster_of, weights=x**2, minlength=k))
+
+
+def pooled_sums(parts) -> ClusterSums:
+    """The cluster sums of several samples taken together (a cluster in several: its sums added)."""
+    parts = list(parts)
+    if not parts:
+        return cluster_sums(np.zeros(0), np.zeros(0, dtype=str))
+    labels, index = np.unique(np.concatenate([p.labels for p in parts]), return_inverse=True)
+
+    def total(attr: str) -> np.ndarray:
+        return np.bincount(index, weights=np.concatenate([getattr(p, attr) for p in parts]),
+                           minlength=labels.size)
+
+    return ClusterSums(labels, total("counts"), total("sums"), total("squares"))
+
+
+def interval_from_sums(sums: ClusterSums, statistic: str, confidence: float = 0.95, n_boot: int = N_BOOT,
+                       seed: int = 0) -> ClusteredInterval:
+    """As clustered_interval for an RMS, mean or SD, from the clusters' sums alone: the same draws for the
+    same seed and clusters, so equal to it on the same reports up to the order of summation."""
+    alpha = _check_confidence(confidence)
+    if _percentile_level(statistic) is not None:
+        raise ValueError(f"a percentile ({statistic}) needs every value, not the clusters' sums")
+    _check_boot(n_boot)
+    n, n_clusters = sums.n, int(sums.labels.size)
+    if n == 0:
+        return ClusteredInterval(statistic, math.nan, math.nan, math.nan, 0, 0, "no reports")
+    mean, square = float(sums.sums.sum()) / n, float(sums.squares.sum()) / n
+    value = {"mean": mean, "rms": math.sqrt(square), "sd": math.sqrt(max(square - mean**2, 0.0))}[statistic]
+    if n_clusters < 2:
+        return ClusteredInterval(statistic, value, math.nan, math.nan, n, 1,
+                                 "one aircraft: no interval over aircraft")
+    replicates = _moment_replicates(np.random.default_rng(seed), sums.counts, sums.sums, sums.squares,
+                                    statistic, n_boot)
+    return _finished(statistic, value, replicates, alpha, n, n_clusters)
 
 
 def magnitude_interval(ci_low: float, ci_high: float) -> tuple[float, float]:

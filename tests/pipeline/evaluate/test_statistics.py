@@ -288,3 +288,35 @@ def test_verdict_refuses_bad_input(bad, message):
                                                  (20.0, 60.0, (20.0, 60.0)), (-90.0, 10.0, (0.0, 90.0))])
 def test_magnitude_interval(low, high, expected):
     assert magnitude_interval(low, high) == expected
+
+
+@pytest.mark.parametrize("statistic", ["rms", "mean", "sd"])
+def test_an_interval_from_pooled_cluster_sums_equals_the_one_from_every_value(statistic):
+    """Two windows of one span, an aircraft in both: their cluster sums pooled give the statistic and the
+    bootstrap interval clustered_interval gives on the reports together (the same draws)."""
+    from msdc.pipeline.evaluate.statistics import cluster_sums, interval_from_sums, pooled_sums
+
+    rng = np.random.default_rng(7)
+    a_values, a_aircraft = rng.normal(40.0, 30.0, 400), rng.choice(["A1", "B2", "C3", "D4"], 400)
+    b_values, b_aircraft = rng.normal(60.0, 20.0, 300), rng.choice(["C3", "D4", "E5"], 300)
+    values, aircraft = np.concatenate([a_values, b_values]), np.concatenate([a_aircraft, b_aircraft])
+    whole = clustered_interval(values, aircraft, statistic, seed=3)
+    pooled = interval_from_sums(pooled_sums([cluster_sums(a_values, a_aircraft),
+                                             cluster_sums(b_values, b_aircraft)]), statistic, seed=3)
+    direct = {"rms": np.sqrt(np.mean(values**2)), "mean": np.mean(values), "sd": np.std(values)}[statistic]
+    assert pooled.value == pytest.approx(direct, rel=1e-12)
+    assert (pooled.n, pooled.n_clusters) == (700, 5)
+    assert pooled.ci_low == pytest.approx(whole.ci_low, rel=1e-12)
+    assert pooled.ci_high == pytest.approx(whole.ci_high, rel=1e-12)
+    assert pooled.reason == whole.reason != ""  # 5 aircraft: marked too narrow
+
+
+def test_cluster_sums_refuse_a_percentile_and_say_so_for_one_or_no_aircraft():
+    from msdc.pipeline.evaluate.statistics import cluster_sums, interval_from_sums, pooled_sums
+
+    one = cluster_sums([3.0, 4.0], ["A", "A"])
+    with pytest.raises(ValueError, match="needs every value"):
+        interval_from_sums(one, "p95")
+    alone = interval_from_sums(one, "rms")
+    assert alone.value == pytest.approx(np.sqrt(12.5)) and np.isnan(alone.ci_low) and alone.n_clusters == 1
+    assert interval_from_sums(pooled_sums([]), "mean").reason == "no reports"
