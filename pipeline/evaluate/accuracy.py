@@ -11,7 +11,7 @@ from collections.abc import Mapping
 import numpy as np
 import pandas as pd
 
-from msdc.pipeline.evaluate.outcome import Outcome, withheld
+from msdc.pipeline.evaluate.outcome import ErrorEvidence, Outcome, withheld
 from msdc.pipeline.evaluate.reference import (
     DEFAULT_REFERENCE_GAP_S,
     associated,
@@ -20,7 +20,7 @@ from msdc.pipeline.evaluate.reference import (
     reference_values,
     trajectories,
 )
-from msdc.pipeline.evaluate.statistics import clustered_interval
+from msdc.pipeline.evaluate.statistics import cluster_sums, clustered_interval
 from msdc.pipeline.evaluate.velocity import _east_north_m, reference_velocity
 
 MIN_SPEED_MPS = 5.0  # below this the reference has no track direction: along/across and latency not judged
@@ -70,15 +70,31 @@ def _statistic(requirement: str, column: str, statistic: str):
             return withheld(requirement, "no report judged against an independent reference"
                             + ("" if column == "error_m" else " while the reference moves"))
         values, clusters = values[keep], errors["aircraft"].to_numpy(object)[keep].astype(str)
+        seed = int(parameter(parameters, "seed", 0))
         if statistic == "max":
             return Outcome(requirement, float(values.max()), math.nan, math.nan, int(values.size),
-                           int(values.size), ("a maximum has no interval",))
-        ci = clustered_interval(values, clusters, statistic, seed=int(parameter(parameters, "seed", 0)))
-        notes = (f"{ci.n_clusters} aircraft",) + ((ci.reason,) if ci.reason else ())
-        return Outcome(requirement, ci.value, ci.ci_low, ci.ci_high, ci.n, ci.n, notes)
+                           int(values.size), ("a maximum has no interval",),
+                           evidence=ErrorEvidence(statistic, seed, values=values.max(keepdims=True)))
+        ci = clustered_interval(values, clusters, statistic, seed=seed)
+        return Outcome(requirement, ci.value, ci.ci_low, ci.ci_high, ci.n, ci.n, error_notes(ci),
+                       evidence=error_evidence(values, clusters, statistic, seed))
     fn.__name__ = requirement
     fn.__doc__ = f"``{requirement}``: {statistic} of {column} over aircraft (docs/methods/evaluate.md)."
     return fn
+
+
+def error_notes(ci) -> tuple[str, ...]:
+    """An error statistic's notes: the aircraft it rests on, and why its interval is marked."""
+    return (f"{ci.n_clusters} aircraft",) + ((ci.reason,) if ci.reason else ())
+
+
+def error_evidence(values: np.ndarray, clusters: np.ndarray, statistic: str, seed: int) -> ErrorEvidence:
+    """What the statistic rests on for pooling windows: a percentile keeps every value, the others the
+    aircraft's sums."""
+    if statistic in ("rms", "mean", "sd"):
+        return ErrorEvidence(statistic, seed, sums=cluster_sums(values, clusters))
+    return ErrorEvidence(statistic, seed, values=np.asarray(values, float),
+                         clusters=np.asarray(clusters, str))
 
 
 ACCURACY_REQUIREMENTS = {

@@ -14,7 +14,7 @@ import numpy as np
 import pandas as pd
 
 from msdc.pipeline.evaluate.coverage import Sensor
-from msdc.pipeline.evaluate.outcome import Outcome, withheld
+from msdc.pipeline.evaluate.outcome import ErrorEvidence, FitEvidence, Outcome, withheld
 from msdc.pipeline.evaluate.reference import (
     DEFAULT_REFERENCE_GAP_S,
     associated,
@@ -23,7 +23,7 @@ from msdc.pipeline.evaluate.reference import (
     trajectories,
 )
 from msdc.pipeline.evaluate.reference_gates import reference_at, self_referenced
-from msdc.pipeline.evaluate.statistics import clustered_interval
+from msdc.pipeline.evaluate.statistics import cluster_sums, clustered_interval
 from msdc.pipeline.evaluate.velocity import _east_north_m
 from msdc.pipeline.model.geodesy import M_PER_NM, wrap180
 from msdc.pipeline.quality.accuracy import (
@@ -180,7 +180,8 @@ def _signed(requirement: str):
             return withheld(requirement, why + said)
         q, said = _interval_factor(fit["aircraft"])
         return Outcome(requirement, value, value - q * se, value + q * se, int(fit["n_reports"]),
-                       int(fit["n_reports"]), (f"standard error {se:.3g} {unit}", said, *_fit_notes(fit)))
+                       int(fit["n_reports"]), (f"standard error {se:.3g} {unit}", said, *_fit_notes(fit)),
+                       evidence=FitEvidence(value, se, unit, int(fit["n_reports"]), int(fit["aircraft"])))
     fn.__name__ = requirement
     fn.__doc__ = f"``{requirement}``: the fitted radar {what} (docs/methods/evaluate.md)."
     return fn
@@ -203,14 +204,26 @@ def _random(requirement: str):
         kept = fit["kept"][part]
         values = fit["residuals"][part][kept]
         clusters = aircraft_codes(errors.iloc[fit["rows"]])[kept]
-        ci = clustered_interval(values, clusters, "sd", seed=int(parameter(parameters, "seed", 0)))
+        seed = int(parameter(parameters, "seed", 0))
+        ci = clustered_interval(values, clusters, "sd", seed=seed)
         notes = (f"{what} residuals after removing the four fitted biases: {ci.n} plots of {ci.n_clusters} "
                  "aircraft (outliers clipped by the fit left out); the reference's own error is in them",
                  *((ci.reason,) if ci.reason else ()), *_fit_notes(fit)[1:])
-        return Outcome(requirement, ci.value, ci.ci_low, ci.ci_high, ci.n, ci.n, notes)
+        labels = aircraft_labels(errors.iloc[fit["rows"]])[kept]
+        return Outcome(requirement, ci.value, ci.ci_low, ci.ci_high, ci.n, ci.n, notes,
+                       evidence=ErrorEvidence("sd", seed, sums=cluster_sums(values, labels)))
     fn.__name__ = requirement
     fn.__doc__ = f"``{requirement}``: SD of the radar's {what} residuals (docs/methods/evaluate.md)."
     return fn
+
+
+def aircraft_labels(errors: pd.DataFrame) -> np.ndarray:
+    """Per row, its aircraft as text (call sign and address), the same in every window of a span (the fit's
+    integer codes number the aircraft of one window)."""
+    if not {"callsign", "address"} <= set(errors.columns):
+        return np.full(len(errors), "all", dtype=object)
+    return (errors["callsign"].astype(object).fillna("").astype(str).to_numpy(object) + "|"
+            + errors["address"].astype(object).fillna("").astype(str).to_numpy(object))
 
 
 BIAS_REQUIREMENTS = {**{rid: _signed(rid) for rid in SIGNED}, **{rid: _random(rid) for rid in RANDOM}}

@@ -5,9 +5,35 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 
+import numpy as np
 import pandas as pd
 
-from msdc.pipeline.evaluate.statistics import poisson_rate, proportion
+from msdc.pipeline.evaluate.statistics import ClusterSums, poisson_rate, proportion
+
+
+@dataclass(frozen=True)
+class ErrorEvidence:
+    """What an error statistic rests on, kept so that the windows of a span pool exactly: each aircraft's
+    sums (an RMS, mean or SD), or every value with its aircraft (a percentile), or the largest value (the
+    maximum; its count is the outcome's ``n``)."""
+
+    statistic: str
+    seed: int = 0
+    sums: ClusterSums | None = None
+    values: np.ndarray | None = None
+    clusters: np.ndarray | None = None
+
+
+@dataclass(frozen=True)
+class FitEvidence:
+    """A fitted radar bias of one window: value and standard error (its unit), the plots and aircraft it
+    rests on; the windows of a span combine their fits by inverse variance."""
+
+    value: float
+    se: float
+    unit: str
+    n_reports: int
+    aircraft: int
 
 
 @dataclass(frozen=True)
@@ -24,6 +50,7 @@ class Outcome:
     count: int
     notes: tuple[str, ...] = ()
     per_aircraft: pd.DataFrame | None = field(default=None, compare=False)
+    evidence: ErrorEvidence | FitEvidence | None = field(default=None, compare=False)
 
 
 def share(requirement: str, count: int, n: int, notes: tuple[str, ...] = (),

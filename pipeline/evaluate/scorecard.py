@@ -91,7 +91,7 @@ def measure(requirement: Requirement, reports: pd.DataFrame, reference: pd.DataF
     except ValueError as exc:
         return withheld(requirement.id, str(exc))
     return Outcome(out.requirement, out.value, out.ci_low, out.ci_high, out.n, out.count,
-                   (*notes, *out.notes), out.per_aircraft)
+                   (*notes, *out.notes), out.per_aircraft, out.evidence)
 
 
 def _gate_false(reports: pd.DataFrame, reference: pd.DataFrame, distance_m: float,
