@@ -117,16 +117,32 @@ def errors_by_range(reports: pd.DataFrame, reference: pd.DataFrame, sensor, para
     """Horizontal position error against range from the sensor's site (on the ground, NM): per band of
     step_nm, the reports judged (position_errors: an independent reference only), the aircraft, and the
     RMS, 95th percentile and maximum error (m). Empty when no report is judged."""
-    columns = ["low_nm", "high_nm", "reports", "aircraft", "rms_m", "p95_m", "max_m"]
+    return error_bands(range_errors(reports, reference, sensor, parameters), step_nm)
+
+
+def range_errors(reports: pd.DataFrame, reference: pd.DataFrame, sensor, parameters: Mapping | None = None
+                 ) -> pd.DataFrame:
+    """Per report judged (position_errors): its ground range from the sensor's site (``range_nm``), its
+    ``aircraft`` (categorical) and ``error_m``: what error_bands counts, and what windows of a span pool."""
     errors = position_errors(reports, reference, parameters)
     if errors.empty:
-        return pd.DataFrame(columns=columns)
+        return pd.DataFrame({"range_nm": [], "aircraft": pd.Categorical([]), "error_m": []})
     rho, _ = sensor.polar(errors["latitude"].to_numpy(float), errors["longitude"].to_numpy(float),
                           np.zeros(len(errors)))
-    band = np.floor(rho / step_nm).astype(int)
+    return pd.DataFrame({"range_nm": rho, "aircraft": pd.Categorical(errors["aircraft"].astype(str)),
+                         "error_m": errors["error_m"].to_numpy(float)})
+
+
+def error_bands(errors: pd.DataFrame, step_nm: float = ERROR_RANGE_BAND_NM) -> pd.DataFrame:
+    """The table of errors_by_range from range_errors' rows (of one window or several pooled)."""
+    columns = ["low_nm", "high_nm", "reports", "aircraft", "rms_m", "p95_m", "max_m"]
+    if errors.empty:
+        return pd.DataFrame(columns=columns)
+    band = np.floor(errors["range_nm"].to_numpy(float) / step_nm).astype(int)
+    aircraft = errors["aircraft"].astype(str).to_numpy(object)
     rows = []
     for k in np.unique(band):
         e = errors["error_m"].to_numpy(float)[band == k]
-        rows.append((k * step_nm, (k + 1) * step_nm, e.size, errors["aircraft"][band == k].nunique(),
+        rows.append((k * step_nm, (k + 1) * step_nm, e.size, len(set(aircraft[band == k])),
                      float(np.sqrt(np.mean(e ** 2))), float(np.percentile(e, 95)), float(e.max())))
     return pd.DataFrame(rows, columns=columns)
