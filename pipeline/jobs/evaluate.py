@@ -124,6 +124,10 @@ class SensorResult:
     map_points: pd.DataFrame
     notes: list[str]
     site: object = None  # the evaluation's coverage.Sensor
+    # the scorecard's outcomes by (sector, requirement id, index in the preset), and the judged reports'
+    # range, aircraft and error (accuracy.range_errors): what the windows of a span combine
+    outcomes: dict = field(default_factory=dict, repr=False)
+    range_errors: pd.DataFrame | None = field(default=None, repr=False)
 
 
 @dataclass
@@ -221,8 +225,8 @@ def _reference(options: EvaluateOptions, builders: pd.DataFrame, sensor_id: str,
 def _per_aircraft(sensor_id: str, reports: pd.DataFrame, reference: pd.DataFrame, pd_outcome,
                   association: dict) -> pd.DataFrame:
     """One row per reference aircraft: the sensor's associated reports, its expected and detected updates
-    (the first pd requirement's) with PD and interval, the RMS position error and whether the reference
-    was the sensor's own track."""
+    (the first pd requirement's) with PD and interval, the RMS position error, the reference's samples and
+    the shares of them that were the sensor's own track and on the surface."""
     from msdc.pipeline.evaluate.accuracy import position_errors
     from msdc.pipeline.evaluate.reference import associated
 
@@ -232,7 +236,8 @@ def _per_aircraft(sensor_id: str, reports: pd.DataFrame, reference: pd.DataFrame
 
     ref = reference.assign(surface=ground_flags(reference)).groupby("aircraft").agg(
         built_by=("built_by", lambda s: " | ".join(sorted(set(map(str, s.unique()))))),
-        self_reference_share=("self_reference", "mean"), surface_share=("surface", "mean"))
+        self_reference_share=("self_reference", "mean"), surface_share=("surface", "mean"),
+        reference_samples=("built_by", "size"))
     table = ref.join(counts, how="left")
     table["reports"] = table["reports"].fillna(0).astype(int)
     if pd_outcome is not None and pd_outcome.per_aircraft is not None and len(pd_outcome.per_aircraft):
@@ -300,7 +305,7 @@ def _coverage(reports: pd.DataFrame, reference: pd.DataFrame, sensor, preset) ->
 def _sensor(options, checked, loaded, meas, builders, sensor_id, kind, gates, epoch, external, monitors,
             cache: dict | None = None) -> SensorResult:
     """Everything about one sensor under test."""
-    from msdc.pipeline.evaluate.accuracy import errors_by_range
+    from msdc.pipeline.evaluate.accuracy import error_bands, range_errors
     from msdc.pipeline.evaluate.scorecard import score_sensor
     from msdc.pipeline.evaluate.sensor_reports import (
         TRACKER_CATEGORY,
@@ -337,9 +342,11 @@ def _sensor(options, checked, loaded, meas, builders, sensor_id, kind, gates, ep
     linked = score.reports  # associated once, with the preset's gate: reused below
     per = _per_aircraft(sensor_id, linked, reference, pd_outcome, gate) if len(reference) else pd.DataFrame()
     points = _map_points(sensor_id, linked, reference, gate) if len(reference) else pd.DataFrame()
-    if len(reference):
-        bands["error_range"] = errors_by_range(linked, reference, sensor, gate)
-    return SensorResult(sensor_id, kind, score.rows, per, bands, polar, vertical, points, notes, sensor)
+    errors = range_errors(linked, reference, sensor, gate) if len(reference) else None
+    if errors is not None:
+        bands["error_range"] = error_bands(errors)
+    return SensorResult(sensor_id, kind, score.rows, per, bands, polar, vertical, points, notes, sensor,
+                        score.outcomes, errors)
 
 
 @dataclass
