@@ -5,6 +5,7 @@ reference aircraft: ``extra_tracks`` (more than one test track of one aircraft a
 from __future__ import annotations
 
 from collections.abc import Mapping
+from dataclasses import replace
 
 import numpy as np
 import pandas as pd
@@ -56,5 +57,7 @@ def track_continuity(reports: pd.DataFrame, reference: pd.DataFrame, parameters:
         return withheld("track_continuity", "no associated report carries a track number")
     changes = bins.groupby("aircraft")["main"].agg(
         lambda s: int((s.to_numpy()[1:] != s.to_numpy()[:-1]).sum()))
-    return rate("track_continuity", int(changes.sum()), float(len(changes)),
-                (f"{len(changes)} aircraft tracked",))
+    out = rate("track_continuity", int(changes.sum()), float(len(changes)),
+               (f"{len(changes)} aircraft tracked",))
+    per = pd.DataFrame({"aircraft": changes.index.astype(str), "changes": changes.to_numpy(np.int64)})
+    return replace(out, per_aircraft=per)  # the windows of a span count an aircraft in several once

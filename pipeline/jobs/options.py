@@ -733,6 +733,7 @@ class ConflictOptions(SelectionOptions, TrackOptions):
 
 
 REFERENCE_BUILDS = ("leave-one-out", "adsb")  # evaluate --reference (build_reference)
+WINDOW_RANGE_MIN = (1.0, 44_640.0)  # evaluate --window: a minute to 31 days
 SIL_RANGE = (0, 3)
 
 
@@ -774,6 +775,14 @@ class EvaluateOptions(ReferenceFilterOptions, DatasetOptions, DecodingOptions):
              "build the reference. Default: every sensor the preset applies to",
         doc="judge only this sensor (repeatable: `048:20/129`); the others still build the reference. "
             "Default: every sensor the preset applies to")
+    window_minutes: float | None = option(
+        None, "--window", metavar="MINUTES", range=WINDOW_RANGE_MIN, unit="min", section="command",
+        help="evaluate the --from/--to span window by window, each of MINUTES read with its margin, and pool "
+             "the windows' figures: memory stays that of one window over a day or a month",
+        doc="evaluate the `--from`/`--to` span window by window, each of MINUTES (the last may be shorter) "
+            "read with its margin as `--from`/`--to` of it alone would be, and pool the windows' figures: "
+            "memory stays that of one window over a day or a month; the outputs add a scorecard per window "
+            "([A long span, window by window](#a-long-span-window-by-window))")
     min_sil: int | None = option(None, "--min-sil", range=SIL_RANGE, section="measurements",
                                  help="leave ADS-B reports with SIL below N out of the reference",
                                  doc="leave ADS-B reports with SIL below N out of the reference")

@@ -32,8 +32,9 @@ stops at the margin. The reports cut are counted as left out, by every criterion
 from __future__ import annotations
 
 import datetime as dt
+import math
 import re
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 import pandas as pd
@@ -193,6 +194,49 @@ def check_order(start: TimeBound, end: TimeBound) -> None:
         return
     if empty:
         raise ValueError(f"--from {start.text} is not before --to {end.text}: the window holds no time")
+
+
+MAX_WINDOWS = 100_000  # --window: more windows than this is a mistake (a month of 1-minute windows: 44,640)
+
+
+def span_windows(selection: ReportSelection, minutes: float, name: str = "--window") -> list[ReportSelection]:
+    """The selection's --from/--to span cut into consecutive windows of ``minutes`` (the last one shorter
+    when the span is not a whole number of them), each the selection with that window's bounds, written as
+    the span's are (date-times or times of day); ValueError naming the option when the span is not given by
+    both bounds of one kind."""
+    start, end = selection.start, selection.end
+    if start is None or end is None:
+        raise ValueError(f"{name} {minutes:g}: cuts the span --from ... --to ... into windows; give both")
+    step = float(minutes) * 60.0
+    if start.instant is not None and end.instant is not None:
+        lo, hi = start.instant, end.instant
+        total = (hi - lo).total_seconds()
+
+        def bound(s: float) -> TimeBound:
+            t = lo + pd.Timedelta(seconds=s)
+            return TimeBound(t.isoformat().replace("+00:00", "Z"), instant=t)
+    elif start.time_of_day_s is not None and end.time_of_day_s is not None:
+        lo_s = start.time_of_day_s
+        total = end.time_of_day_s - lo_s
+
+        def bound(s: float) -> TimeBound:
+            t = lo_s + s
+            h, rest = divmod(t, 3600.0)
+            m, sec = divmod(rest, 60.0)
+            text = f"{int(h):02d}:{int(m):02d}" + (f":{sec:06.3f}".rstrip("0").rstrip(".") if sec else "")
+            return TimeBound(text, time_of_day_s=t)
+    else:
+        raise ValueError(f"{name} {minutes:g}: --from {start.text} and --to {end.text} must both be "
+                         "date-times or both times of day for the span to be cut into windows")
+    if not total > 0:
+        raise ValueError(f"--from {start.text} is not before --to {end.text}: the window holds no time")
+    count = math.ceil(total / step - 1e-9)
+    if count > MAX_WINDOWS:
+        raise ValueError(f"{name} {minutes:g}: the span from {start.text} to {end.text} would be {count:,} "
+                         f"windows, more than {MAX_WINDOWS:,}; give longer windows")
+    edges = [bound(k * step) for k in range(count)] + [end]
+    edges[0] = start
+    return [replace(selection, start=a, end=b) for a, b in zip(edges[:-1], edges[1:], strict=True)]
 
 
 def parse_time(text: str, name: str) -> TimeBound:
@@ -461,7 +505,7 @@ def describe(record: dict) -> str:
             + (f" (left out: {why})" if why else ""))
 
 
-__all__ = ["FL_RANGE", "MarginCut", "READING_MARGIN", "ReportSelection", "SELECTION_INPUTS", "SensorRef",
-           "SensorWindow", "TimeBound", "WindowError", "check_order", "describe", "in_area", "parse_fl",
-           "parse_sensor", "parse_time", "parse_window", "recorded", "select_reports", "sensor_parts",
-           "with_site"]
+__all__ = ["FL_RANGE", "MAX_WINDOWS", "MarginCut", "READING_MARGIN", "ReportSelection", "SELECTION_INPUTS",
+           "SensorRef", "SensorWindow", "TimeBound", "WindowError", "check_order", "describe", "in_area",
+           "parse_fl", "parse_sensor", "parse_time", "parse_window", "recorded", "select_reports",
+           "sensor_parts", "span_windows", "with_site"]

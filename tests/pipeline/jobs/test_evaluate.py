@@ -315,3 +315,106 @@ def test_a_window_keeps_the_north_markers_of_its_margin(recording):
     assert 100 < len(expected) < 0.6 * len(markers)  # 31 of the 60 minutes
     assert loaded.frames[34]["time_of_day"].tolist() == expected["time_of_day"].tolist()
     assert loaded.frames[48] is sim.radar  # the categories not named are left as they are
+
+
+HALVES = (("08:00", "08:30"), ("08:30", "09:00"))
+
+
+@pytest.fixture(scope="module")
+def windowed(recording):
+    """The simulated hour evaluated as two 30-minute windows pooled (--window 30), and each half alone
+    (--from/--to), with the accuracy and bias requirements added to the preset."""
+    sim, folder = recording
+    preset = folder / "preset_windows.toml"
+    preset.write_text(_preset(sim) + _requirement("rms_m", 1000.0, "<=", {})
+                      + _requirement("p95_m", 1000.0, "<=", {}) + _requirement("max_m", 5000.0, "<=", {})
+                      + _requirement("range_bias_m", 500.0, "<=", {}))
+    span = evaluate_job(_options(folder, preset=str(preset), from_time="08:00", to_time="09:00",
+                                 window_minutes=30.0))
+    halves = [evaluate_job(_options(folder, preset=str(preset), from_time=a, to_time=b)) for a, b in HALVES]
+    return span, halves
+
+
+def _key(card: pd.DataFrame) -> pd.DataFrame:
+    return card.set_index(["sector", "requirement", "parameters"])
+
+
+def test_each_window_is_evaluated_as_its_own_from_and_to(windowed):
+    span, halves = windowed
+    per = span.tables["Scorecard per window"]
+    for (a, b), half in zip(HALVES, halves, strict=True):
+        rows = per[(per["window_from"] == a) & (per["window_to"] == b)].drop(columns=["window_from",
+                                                                                      "window_to"])
+        pd.testing.assert_frame_equal(rows.reset_index(drop=True), half.scorecard.reset_index(drop=True))
+    assert span.parameters["windows"] == [{"from": a, "to": b, "kept": h.loaded.selection["kept"]}
+                                          for (a, b), h in zip(HALVES, halves, strict=True)]
+
+
+def test_the_span_pools_the_windows_counts_and_errors(windowed):
+    """Worked out from the two halves' own outputs: successes and trials (value x n) added, the
+    Clopper-Pearson interval from beta quantiles, the RMS from the halves' mean squares, the maximum the
+    larger, a fitted bias the inverse-variance mean of the halves' (standard errors from their notes)."""
+    import re
+
+    from scipy import stats
+
+    span, halves = windowed
+    card = _key(span.scorecard[span.scorecard["sector"] == "global"])
+    parts = [_key(h.scorecard[h.scorecard["sector"] == "global"]) for h in halves]
+    for key, row in card.iterrows():
+        if key[1] not in ("mode3a_valid", "modec_correct", "split_reports", "pd", "false_reports"):
+            continue
+        n = [p.loc[key, "n"] for p in parts]
+        k = [round(p.loc[key, "value"] * p.loc[key, "n"]) for p in parts]
+        assert row["n"] == sum(n), key
+        assert row["value"] == pytest.approx(sum(k) / sum(n)), key
+        assert row["ci_low"] == pytest.approx(stats.beta.ppf(0.025, sum(k), sum(n) - sum(k) + 1)), key
+    rms = card.xs("rms_m", level=1).iloc[0]
+    halves_rms = [p.xs("rms_m", level=1).iloc[0] for p in parts]
+    assert rms["n"] == sum(h["n"] for h in halves_rms)
+    assert rms["value"] == pytest.approx(np.sqrt(sum(h["value"] ** 2 * h["n"] for h in halves_rms)
+                                                 / rms["n"]), rel=1e-9)
+    assert card.xs("max_m", level=1).iloc[0]["value"] == max(p.xs("max_m", level=1).iloc[0]["value"]
+                                                             for p in parts)
+    p95 = card.xs("p95_m", level=1).iloc[0]["value"]
+    lo, hi = sorted(p.xs("p95_m", level=1).iloc[0]["value"] for p in parts)
+    assert lo <= p95 <= hi
+    bias = [p.xs("range_bias_m", level=1).iloc[0] for p in parts]
+    assert all(np.isfinite(b["value"]) for b in bias), "each half fits a range bias"
+    se = [float(re.search(r"standard error ([0-9.eE+-]+) m", b["notes"]).group(1)) for b in bias]
+    w = 1 / np.square(se)
+    pooled = card.xs("range_bias_m", level=1).iloc[0]
+    assert pooled["value"] == pytest.approx(np.sum(w * [b["value"] for b in bias]) / np.sum(w), rel=2e-2)
+    assert "combined by inverse variance" in pooled["notes"]
+
+
+def test_the_span_is_the_hour_evaluated_at_once_but_at_the_windows_edge(windowed, evaluated):
+    """The detection and code figures of the pooled halves equal those of the hour evaluated at once (the
+    north markers fix the scan period; the reference is cut at 08:30 only); a gap across 08:30 is in
+    neither half."""
+    span, _ = windowed
+    _, whole = evaluated
+    card, one = _key(span.scorecard), _key(whole.scorecard)
+    for req in ("pd", "mode3a_correct", "modec_correct", "split_reports"):
+        for key in [k for k in one.index if k[1] == req and k[0] == "global"]:
+            assert card.loc[key, "n"] == pytest.approx(one.loc[key, "n"], rel=0.01), key
+            assert card.loc[key, "value"] == pytest.approx(one.loc[key, "value"], abs=0.01), key
+    gaps = [k for k in one.index if k[1] == "long_gaps" and k[0] == "global"]
+    assert gaps and all(card.loc[k, "n"] <= one.loc[k, "n"] for k in gaps)
+    per = span.tables["Per aircraft"]
+    assert per["reports"].sum() == whole.tables["Per aircraft"]["reports"].sum()
+    assert set(per["windows"]) <= {1, 2} and (per["windows"] == 2).any()
+
+
+@pytest.mark.parametrize(("change", "message"), [
+    ({"window_minutes": 30.0}, "--window 30: cuts the span --from ... --to ... into windows; give both"),
+    ({"window_minutes": 30.0, "from_time": "08:00", "to_time": "2020-01-01T09:00"},
+     "must both be date-times or both times of day"),
+    ({"window_minutes": 0.5, "from_time": "08:00", "to_time": "09:00"}, "--window"),
+    ({"window_minutes": 1.0, "from_time": "2020-01-01", "to_time": "2020-12-01"}, "more than 100,000"),
+])
+def test_window_options_are_checked_before_decoding(recording, change, message):
+    _, folder = recording
+    with pytest.raises(OptionError) as caught:
+        validate(_options(folder, **change))
+    assert message in str(caught.value)

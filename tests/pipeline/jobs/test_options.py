@@ -71,6 +71,7 @@ EXPECTED = {
                  "--reference": "reference", "--reference-file": "reference_file", "--test": "test_sensors",
                  "--drop-jumps": "drop_jumps", "--min-nic": "min_nic", "--min-nacp": "min_nacp",
                  "--min-sil": "min_sil", "--output": "output", "--json": "json", "--html": "html",
+                 "--window": "window_minutes",
                  "--adsb-sigma": "adsb_sigma_m", **READING, **DATASET},
     "ingest": {"INPUT": "inputs", "--dataset": "dataset", "--workers": "workers", "--category": "categories",
                "--lenient": "lenient", "--chunk-mb": "chunk_mb", "--edition": "editions", "--date": "date",

@@ -291,3 +291,24 @@ def test_consecutive_windows_split_the_reports_without_sharing_one(ms, a, b):
     first, second, whole = kept(lo, mid), kept(mid, hi), kept(lo, hi)
     assert not (first & second).any() and ((first | second) == whole).all()
     assert whole.tolist() == [lo <= t < hi for t in ms]
+
+
+def test_a_span_is_cut_into_consecutive_windows_the_last_shorter():
+    """65 minutes in windows of 20: 13:30, 13:50, 14:10, 14:30 and the last 5 minutes to 14:35; each
+    window's end the next one's start (--to left out: no report in two windows)."""
+    from msdc.pipeline.model.report_selection import ReportSelection, parse_time, span_windows
+
+    span = ReportSelection(start=parse_time("2026-11-28T13:30", "--from"),
+                           end=parse_time("2026-11-28T14:35Z", "--to"), fl=(100.0, 200.0), fl_text="100:200")
+    windows = span_windows(span, 20)
+    starts = [w.start.instant for w in windows]
+    assert starts == [pd.Timestamp(f"2026-11-28T{t}", tz="UTC") for t in ("13:30", "13:50", "14:10", "14:30")]
+    assert [w.end.instant for w in windows[:-1]] == starts[1:]
+    assert windows[-1].end is span.end and windows[0].start is span.start
+    assert all(w.fl == (100.0, 200.0) for w in windows)  # the other criteria stay
+    morning = ReportSelection(start=parse_time("08:00", "--from"), end=parse_time("08:25:30", "--to"))
+    day = span_windows(morning, 10.5)
+    assert [(w.start.text, w.end.text) for w in day] == [("08:00", "08:10:30"), ("08:10:30", "08:21"),
+                                                          ("08:21", "08:25:30")]
+    assert [w.start.time_of_day_s for w in day] == [28800.0, 29430.0, 30060.0]
+    assert len(span_windows(span, 65)) == 1 and len(span_windows(span, 64.99)) == 2

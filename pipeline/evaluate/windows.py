@@ -1,0 +1,230 @@
+"""A span evaluated window by window, combined: each requirement's figure over the span from the windows'
+outcomes, exactly where it is a sum (successes and trials, events and exposure, each aircraft's error sums,
+every value of a percentile), and by inverse variance where it is a fit (a radar's biases, fitted per
+window); the per-aircraft and per-bin tables by summing their counts.
+
+A window is evaluated as ``--from``/``--to`` of that window alone would evaluate it (its reference built from
+its reports), so the span's figures are those of its windows pooled: they differ from one evaluation of the
+whole span only where a reference track or a scan estimate is cut at a window's edge (docs/guide/
+evaluate.md, "A long span, window by window")."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+
+import numpy as np
+import pandas as pd
+from scipy import stats
+
+from msdc.pipeline.evaluate.catalogue import CATALOGUE, ERROR, PROPORTION, RATE, SIGNED
+from msdc.pipeline.evaluate.outcome import ErrorEvidence, FitEvidence, Outcome, rate, share, withheld
+from msdc.pipeline.evaluate.presets import Requirement
+from msdc.pipeline.evaluate.statistics import (
+    clustered_interval,
+    interval_from_sums,
+    pooled_sums,
+    proportion,
+)
+
+# below this p-value the windows' fits of one bias disagree beyond their standard errors
+DRIFT_P = 0.01
+Z975 = stats.norm.ppf(0.975)
+
+
+def combine_outcomes(requirement: Requirement, outcomes: Sequence[Outcome]) -> Outcome:
+    """The requirement's outcome over the span from its windows' outcomes (a window without a figure adds
+    nothing; the notes say how many and why); withheld when no window gave one."""
+    rid = requirement.id
+    given = [o for o in outcomes if not (math.isnan(o.value) and o.n == 0)]
+    if not given:
+        reasons = list(dict.fromkeys(n for o in outcomes for n in o.notes))
+        return withheld(rid, "no window gave a figure: " + "; ".join(reasons) if reasons
+                        else "no window gave a figure")
+    kind = CATALOGUE[rid].kind
+    if kind == PROPORTION:
+        out = _proportion(requirement, given)
+    elif kind == RATE:
+        out = _rate(rid, given)
+    elif kind == ERROR:
+        out = _error(rid, given)
+    elif kind == SIGNED:
+        out = _fits(rid, given)
+    else:  # pragma: no cover - the catalogue has these four kinds
+        raise ValueError(f"{rid}: no rule to combine a {kind} over windows")
+    return Outcome(out.requirement, out.value, out.ci_low, out.ci_high, out.n, out.count,
+                   (*out.notes, *_window_notes(outcomes, given)), out.per_aircraft, out.evidence)
+
+
+def _window_notes(outcomes: Sequence[Outcome], given: Sequence[Outcome]) -> tuple[str, ...]:
+    """How many windows the figure pools, the notes every one of them gave, and those without a figure."""
+    out = [f"pooled over {len(given)} window{'s' if len(given) != 1 else ''}"]
+    common = [n for n in given[0].notes if all(n in o.notes for o in given[1:])]
+    out += common
+    if any(set(o.notes) - set(common) for o in given):
+        out.append("notes that differ between windows are in the scorecard per window")
+    empty = [o for o in outcomes if o not in given]
+    if empty:
+        reasons = "; ".join(dict.fromkeys(n for o in empty for n in o.notes))
+        out.append(f"{len(empty)} window{'s' if len(empty) != 1 else ''} without a figure"
+                   + (f" ({reasons})" if reasons else ""))
+    return tuple(out)
+
+
+def _proportion(requirement: Requirement, given: Sequence[Outcome]) -> Outcome:
+    """Successes over trials, summed; a per-target PD from each aircraft's updates summed over windows."""
+    rid = requirement.id
+    if rid == "pd" and requirement.parameters.get("scope") == "per_target":
+        per = combine_counts([o.per_aircraft for o in given if o.per_aircraft is not None],
+                             ["aircraft"], "expected", "detected")
+        if per.empty:
+            return withheld(rid, "no expected update inside coverage")
+        worst = per.iloc[int(np.argmin(per["ci_high"].to_numpy()))]
+        return share(rid, int(worst["detected"]), int(worst["expected"]),
+                     (f"per target: the aircraft {worst['aircraft']!r} of {len(per)} reaches lowest",), per)
+    per = [o.per_aircraft for o in given if o.per_aircraft is not None] if rid == "pd" else []
+    table = combine_counts(per, ["aircraft"], "expected", "detected") if per and len(per) == len(given) \
+        else None
+    return share(rid, sum(o.count for o in given), int(sum(o.n for o in given)), (), table)
+
+
+def _rate(rid: str, given: Sequence[Outcome]) -> Outcome:
+    """Events and exposure added; a rate per aircraft (its outcomes' per-aircraft tables of ``changes``)
+    takes as exposure the aircraft of every window, each once."""
+    events = sum(o.count for o in given)
+    tables = [o.per_aircraft for o in given if o.per_aircraft is not None and "changes" in o.per_aircraft]
+    if len(tables) == len(given):
+        aircraft = pd.concat(tables, ignore_index=True)["aircraft"].nunique()
+        return rate(rid, events, float(aircraft), (f"{aircraft} aircraft tracked",))
+    return rate(rid, events, float(sum(o.n for o in given)))
+
+
+def _error(rid: str, given: Sequence[Outcome]) -> Outcome:
+    """An error statistic from the windows' evidence pooled: aircraft sums, every value, or the largest."""
+    evidence = [o.evidence for o in given]
+    if not all(isinstance(e, ErrorEvidence) for e in evidence):
+        return withheld(rid, "a window kept no evidence to pool (this requirement is not combined over "
+                             "windows by this version of msdc)")
+    statistic, seed = evidence[0].statistic, evidence[0].seed
+    n = int(sum(o.n for o in given))
+    if statistic == "max":
+        top = float(max(float(np.max(e.values)) for e in evidence))
+        return Outcome(rid, top, math.nan, math.nan, n, n, ("a maximum has no interval",),
+                       evidence=ErrorEvidence(statistic, seed, values=np.array([top])))
+    if evidence[0].sums is not None:
+        sums = pooled_sums([e.sums for e in evidence])
+        ci = interval_from_sums(sums, statistic, seed=seed)
+        kept = ErrorEvidence(statistic, seed, sums=sums)
+    else:
+        values = np.concatenate([e.values for e in evidence])
+        clusters = np.concatenate([e.clusters for e in evidence])
+        ci = clustered_interval(values, clusters, statistic, seed=seed)
+        kept = ErrorEvidence(statistic, seed, values=values, clusters=clusters)
+    notes = (f"{ci.n_clusters} aircraft",) + ((ci.reason,) if ci.reason else ())
+    return Outcome(rid, ci.value, ci.ci_low, ci.ci_high, ci.n, ci.n, notes, evidence=kept)
+
+
+def _fits(rid: str, given: Sequence[Outcome]) -> Outcome:
+    """A fitted bias over the span: the windows' fits weighted by their inverse variance, its standard error
+    1 / sqrt(sum of weights), and Cochran's Q of their agreement (a drift shows as disagreement)."""
+    fits = [o.evidence for o in given]
+    if not all(isinstance(f, FitEvidence) and f.se > 0 and math.isfinite(f.se) for f in fits):
+        return withheld(rid, "a window's fit kept no standard error to combine")
+    if len(fits) == 1:
+        return given[0]
+    v = np.array([f.value for f in fits])
+    w = 1.0 / np.square([f.se for f in fits])
+    value = float(np.sum(w * v) / np.sum(w))
+    se = float(1.0 / np.sqrt(np.sum(w)))
+    q = float(np.sum(w * (v - value) ** 2))
+    p = float(stats.chi2.sf(q, len(fits) - 1))
+    unit = fits[0].unit
+    n = int(sum(f.n_reports for f in fits))
+    notes = [f"the {len(fits)} windows' fits combined by inverse variance (a fit over the whole span may "
+             f"differ): standard error {se:.3g} {unit}",
+             f"the windows' fits range from {v.min():.4g} to {v.max():.4g} {unit}; Cochran's Q {q:.3g} on "
+             f"{len(fits) - 1} degrees of freedom (p = {p:.2g})"]
+    if p < DRIFT_P:
+        notes.append(f"the windows' fits disagree beyond their standard errors (p < {DRIFT_P:g}): the bias "
+                     "changed over the span, or a window's fit is off; see the scorecard per window")
+    return Outcome(rid, value, value - Z975 * se, value + Z975 * se, n, n, tuple(notes),
+                   evidence=FitEvidence(value, se, unit, n, max(f.aircraft for f in fits)))
+
+
+def combine_counts(frames: Sequence[pd.DataFrame], keys: list[str], expected: str = "expected",
+                   detected: str = "detected", first: Sequence[str] = ()) -> pd.DataFrame:
+    """Tables of expected and detected updates per key (aircraft, band, cell) summed over windows, PD and its
+    Clopper-Pearson interval worked out again (and ``enough`` where the tables have it, from
+    bins.MIN_EXPECTED); ``first`` columns keep their first window's value. Key order: first seen."""
+    from msdc.pipeline.evaluate.bins import MIN_EXPECTED
+
+    frames = [f for f in frames if f is not None and len(f)]
+    if not frames:
+        return pd.DataFrame()
+    whole = pd.concat(frames, ignore_index=True)
+    agg = {expected: (expected, "sum"), detected: (detected, "sum"), **{c: (c, "first") for c in first}}
+    out = whole.groupby(keys, sort=False, dropna=False).agg(**agg).reset_index()
+    p = proportion(out[detected].to_numpy(np.int64), out[expected].to_numpy(np.int64))
+    out["pd"], out["ci_low"], out["ci_high"] = p.value, p.ci_low, p.ci_high
+    if "enough" in whole.columns:
+        out["enough"] = out[expected].to_numpy() >= MIN_EXPECTED
+    return out[[*(c for c in whole.columns if c in out.columns),
+                *(c for c in ("pd", "ci_low", "ci_high") if c not in whole.columns)]]
+
+
+def combine_grid(frames: Sequence[pd.DataFrame]) -> pd.DataFrame:
+    """PD grids (bins.detection_grid) of several windows as one: every cell of any window's grid, on the
+    whole rectangle their bands make (a cell no window reached: nothing expected), x varying slowest."""
+    frames = [f for f in frames if f is not None and len(f)]
+    if not frames:
+        return pd.DataFrame()
+    whole = pd.concat(frames, ignore_index=True)
+    xs = whole[["x_low", "x_high"]].drop_duplicates().sort_values("x_low", ignore_index=True)
+    ys = whole[["y_low", "y_high"]].drop_duplicates().sort_values("y_low", ignore_index=True)
+    cells = xs.merge(ys, how="cross")
+    empty = cells.assign(expected=0, detected=0)
+    table = combine_counts([empty, *frames], ["x_low", "x_high", "y_low", "y_high"])
+    return cells.merge(table, on=["x_low", "x_high", "y_low", "y_high"], how="left")
+
+
+def combine_per_aircraft(frames: Sequence[pd.DataFrame]) -> pd.DataFrame:
+    """The evaluation's per-aircraft tables of one sensor's windows as one: counts summed, PD and interval
+    again, the RMS error from the windows' mean squares, the reference shares weighted by its samples and the
+    builders joined; ``windows`` counts the windows an aircraft is in."""
+    frames = [f for f in frames if f is not None and len(f)]
+    if not frames:
+        return pd.DataFrame()
+    whole = pd.concat(frames, ignore_index=True)
+    keys = ["sensor", "aircraft"]
+    g = whole.groupby(keys, sort=False)
+    out = g.size().rename("windows").to_frame()
+    out["built_by"] = g["built_by"].agg(lambda s: " | ".join(sorted({p for v in s.dropna()
+                                                                      for p in str(v).split(" | ") if p})))
+    samples = whole["reference_samples"].to_numpy(float)
+    for col in ("self_reference_share", "surface_share"):
+        weighted = pd.Series(whole[col].to_numpy(float) * samples, index=whole.index)
+        out[col] = (weighted.groupby([whole[k] for k in keys], sort=False).sum(min_count=1)
+                    / g["reference_samples"].sum()).to_numpy()
+    out["reference_samples"] = g["reference_samples"].sum()
+    out["reports"] = g["reports"].sum()
+    if "expected_updates" in whole.columns:
+        out["expected_updates"] = g["expected_updates"].sum(min_count=1)
+        out["detected_updates"] = g["detected_updates"].sum(min_count=1)
+        known = out["expected_updates"].notna().to_numpy()
+        e = out["expected_updates"].fillna(0).to_numpy(np.int64)
+        d = out["detected_updates"].fillna(0).to_numpy(np.int64)
+        p = proportion(d, e)
+        for col, v in (("pd", p.value), ("ci_low", p.ci_low), ("ci_high", p.ci_high)):
+            out[col] = np.where(known, v, np.nan)
+    if "rms_error_m" in whole.columns:
+        n = whole["errors_judged"].fillna(0).to_numpy(float)
+        squares = pd.Series(np.square(whole["rms_error_m"].fillna(0).to_numpy(float)) * n, index=whole.index)
+        total = g["errors_judged"].sum(min_count=1)
+        out["errors_judged"] = total
+        out["rms_error_m"] = np.sqrt(squares.groupby([whole[k] for k in keys], sort=False).sum().to_numpy()
+                                     / total.to_numpy(float))
+    out = out.reset_index()
+    return out[[*[c for c in whole.columns if c in out.columns], "windows"]]
+
+
+__all__ = ["DRIFT_P", "combine_counts", "combine_grid", "combine_outcomes", "combine_per_aircraft"]

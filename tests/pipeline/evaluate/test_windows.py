@@ -1,0 +1,158 @@
+"""Pooling the windows of a span: each rule against arithmetic done here by hand or with scipy and numpy
+directly (Clopper-Pearson from beta quantiles, Garwood from chi-square ones, inverse-variance weights,
+percentiles of the values put together)."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pandas as pd
+import pytest
+from scipy import stats
+
+from msdc.pipeline.evaluate.outcome import ErrorEvidence, FitEvidence, Outcome, rate, share, withheld
+from msdc.pipeline.evaluate.presets import Requirement
+from msdc.pipeline.evaluate.statistics import cluster_sums
+from msdc.pipeline.evaluate.windows import (
+    combine_grid,
+    combine_outcomes,
+    combine_per_aircraft,
+)
+
+
+def _req(ident: str, **parameters) -> Requirement:
+    return Requirement(ident, 0.5, ">=", "clause", True, "test", "test", parameters=parameters)
+
+
+def test_a_proportion_pools_successes_and_trials_with_the_exact_interval():
+    windows = [share("mode3a_valid", 90, 100), share("mode3a_valid", 45, 50),
+               withheld("mode3a_valid", "no report")]
+    out = combine_outcomes(_req("mode3a_valid"), windows)
+    assert (out.count, out.n) == (135, 150)
+    assert out.value == pytest.approx(0.9)
+    assert out.ci_low == pytest.approx(stats.beta.ppf(0.025, 135, 16))
+    assert out.ci_high == pytest.approx(stats.beta.ppf(0.975, 136, 15))
+    assert "pooled over 2 windows" in out.notes
+    assert any(n.startswith("1 window without a figure (no report)") for n in out.notes)
+
+
+def test_a_rate_pools_events_and_exposure_with_the_garwood_interval():
+    out = combine_outcomes(_req("false_reports_per_scan"), [rate("false_reports_per_scan", 7, 100.0),
+                                                            rate("false_reports_per_scan", 3, 50.0)])
+    assert (out.count, out.n, out.value) == (10, 150.0, pytest.approx(10 / 150))
+    assert out.ci_low == pytest.approx(stats.chi2.ppf(0.025, 20) / 2 / 150)
+    assert out.ci_high == pytest.approx(stats.chi2.ppf(0.975, 22) / 2 / 150)
+
+
+def test_no_window_with_a_figure_is_withheld_with_their_reasons():
+    out = combine_outcomes(_req("pd"), [withheld("pd", "no update interval"), withheld("pd", "no report")])
+    assert math.isnan(out.value) and out.n == 0
+    assert out.notes == ("no window gave a figure: no update interval; no report",)
+
+
+def test_a_per_target_pd_sums_each_aircraft_over_windows_then_takes_the_lowest():
+    """A: 9 of 10 then 1 of 10 (10 of 20 pooled); B: 5 of 10 twice (10 of 20); C: 10 of 10. A's and B's
+    pooled PD are equal; the lowest upper bound picks the first of them in order of appearance."""
+    def per(rows):
+        return pd.DataFrame(rows, columns=["aircraft", "expected", "detected"])
+
+    w1 = share("pd", 5, 10, (), per([("A", 10, 9), ("B", 10, 5), ("C", 10, 10)]))
+    w2 = share("pd", 1, 10, (), per([("A", 10, 1), ("B", 10, 5)]))
+    out = combine_outcomes(_req("pd", scope="per_target"), [w1, w2])
+    table = out.per_aircraft.set_index("aircraft")
+    assert table.loc["A", "expected"] == 20 and table.loc["A", "detected"] == 10
+    assert table.loc["C", "detected"] == 10 and table.loc["C", "pd"] == 1.0
+    assert (out.count, out.n) == (10, 20)
+    assert "per target: the aircraft 'A' of 3 reaches lowest" in out.notes
+
+
+def _errors(values, aircraft, statistic, ident="rms_m") -> Outcome:
+    values = np.asarray(values, float)
+    evidence = (ErrorEvidence(statistic, 0, sums=cluster_sums(values, aircraft))
+                if statistic in ("rms", "mean", "sd")
+                else ErrorEvidence(statistic, 0, values=values, clusters=np.asarray(aircraft, str)))
+    return Outcome(ident, math.nan, math.nan, math.nan, values.size, values.size, (), evidence=evidence)
+
+
+@pytest.mark.parametrize("statistic,ident", [("rms", "rms_m"), ("mean", "mean_m"), ("p95", "p95_m")])
+def test_an_error_statistic_is_that_of_the_windows_values_together(statistic, ident):
+    rng = np.random.default_rng(11)
+    a, b = rng.gamma(2.0, 40.0, 300), rng.gamma(3.0, 30.0, 200)
+    ac_a, ac_b = rng.choice(list("ABCD"), 300), rng.choice(list("CDEF"), 200)
+    windows = [_errors(a, ac_a, statistic, ident), _errors(b, ac_b, statistic, ident)]
+    out = combine_outcomes(_req(ident), windows)
+    both = np.concatenate([a, b])
+    direct = {"rms": np.sqrt(np.mean(both**2)), "mean": np.mean(both),
+              "p95": np.percentile(both, 95, method="inverted_cdf")}[statistic]
+    assert out.value == pytest.approx(direct, rel=1e-12)
+    assert out.n == 500 and "6 aircraft" in out.notes
+    assert out.ci_low <= out.value <= out.ci_high
+
+
+def test_a_maximum_is_the_largest_of_the_windows():
+    def top(v, n):
+        return Outcome("max_m", v, math.nan, math.nan, n, n, (),
+                       evidence=ErrorEvidence("max", 0, values=np.array([v])))
+
+    out = combine_outcomes(_req("max_m"), [top(120.0, 40), top(310.5, 25), top(99.0, 3)])
+    assert (out.value, out.n) == (310.5, 68) and math.isnan(out.ci_low)
+
+
+def test_fitted_biases_combine_by_inverse_variance_with_cochrans_q():
+    """10 m (SE 2) and 14 m (SE 4): weights 1/4 and 1/16, mean 10.8 m, SE 1/sqrt(0.3125) = 1.789 m,
+    Q = 0.25 * 0.8^2 + 0.0625 * 3.2^2 = 0.8 on 1 degree of freedom."""
+    def fit(v, se):
+        return Outcome("range_bias_m", v, v - 2 * se, v + 2 * se, 100, 100, (),
+                       evidence=FitEvidence(v, se, "m", 100, 12))
+
+    out = combine_outcomes(_req("range_bias_m"), [fit(10.0, 2.0), fit(14.0, 4.0)])
+    assert out.value == pytest.approx(10.8)
+    se = 1 / math.sqrt(0.3125)
+    assert out.ci_low == pytest.approx(10.8 - 1.959964 * se, rel=1e-6)
+    assert out.ci_high == pytest.approx(10.8 + 1.959964 * se, rel=1e-6)
+    assert out.n == 200
+    assert any(f"Q 0.8 on 1 degrees of freedom (p = {stats.chi2.sf(0.8, 1):.2g})" in n for n in out.notes)
+    assert not any("disagree" in n for n in out.notes)
+    drift = combine_outcomes(_req("range_bias_m"), [fit(10.0, 0.5), fit(20.0, 0.5)])
+    assert any("disagree beyond their standard errors" in n for n in drift.notes)
+
+
+def test_grids_of_windows_cover_the_whole_rectangle_their_bands_make():
+    """Window 1 reaches 0-20 NM up to 2,000 ft, window 2 0-10 NM up to 4,000 ft: the pooled grid holds the
+    four cells, the one no window reached with nothing expected."""
+    def grid(rows):
+        cells = pd.DataFrame(rows, columns=["x_low", "x_high", "y_low", "y_high", "expected", "detected"])
+        return cells.assign(pd=np.nan, ci_low=np.nan, ci_high=np.nan, enough=False)
+
+    one = grid([(0, 10, 0, 2000, 30, 27), (10, 20, 0, 2000, 10, 5)])
+    two = grid([(0, 10, 0, 2000, 20, 20), (0, 10, 2000, 4000, 25, 24)])
+    out = combine_grid([one, two]).set_index(["x_low", "y_low"])
+    assert len(out) == 4
+    assert out.loc[(0, 0), "expected"] == 50 and out.loc[(0, 0), "detected"] == 47
+    assert out.loc[(10, 2000), "expected"] == 0 and math.isnan(out.loc[(10, 2000), "pd"])
+    assert out.loc[(0, 0), "ci_low"] == pytest.approx(stats.beta.ppf(0.025, 47, 4))
+    assert bool(out.loc[(0, 0), "enough"]) and not bool(out.loc[(10, 0), "enough"])
+
+
+def test_per_aircraft_rows_of_windows_add_up():
+    """An aircraft in two windows: 30 + 10 reports, 40 + 20 expected updates with 36 + 10 detected, RMS
+    100 m over 30 errors and 200 m over 10 (pooled: sqrt((30 * 100^2 + 10 * 200^2) / 40) = 132.29 m), self
+    reference 0.5 of 100 samples and 0 of 300 (pooled 50 / 400)."""
+    columns = ["sensor", "aircraft", "built_by", "self_reference_share", "surface_share", "reference_samples",
+               "reports", "expected_updates", "detected_updates", "pd", "ci_low", "ci_high", "rms_error_m",
+               "errors_judged"]
+    w1 = pd.DataFrame([("s", "A", "021:0/1", 0.5, 0.0, 100, 30, 40, 36, 0.9, 0, 1, 100.0, 30)],
+                      columns=columns)
+    w2 = pd.DataFrame([("s", "A", "048:1/2 | 021:0/1", 0.0, 0.0, 300, 10, 20, 10, 0.5, 0, 1, 200.0, 10),
+                       ("s", "B", "021:0/1", 0.0, 1.0, 50, 5, 6, 6, 1.0, 0, 1, np.nan, np.nan)],
+                      columns=columns)
+    out = combine_per_aircraft([w1, w2]).set_index("aircraft")
+    a = out.loc["A"]
+    assert (a["reports"], a["expected_updates"], a["detected_updates"], a["windows"]) == (40, 60, 46, 2)
+    assert a["pd"] == pytest.approx(46 / 60)
+    assert a["ci_low"] == pytest.approx(stats.beta.ppf(0.025, 46, 15))
+    assert a["rms_error_m"] == pytest.approx(math.sqrt((30 * 100**2 + 10 * 200**2) / 40))
+    assert a["self_reference_share"] == pytest.approx(50 / 400)
+    assert a["built_by"] == "021:0/1 | 048:1/2"
+    assert math.isnan(out.loc["B", "rms_error_m"]) and out.loc["B", "surface_share"] == 1.0
