@@ -617,8 +617,9 @@ def _pooled_loaded(checked: EvaluateChecked, runs: list[Loaded]) -> Loaded:
     for r in records:
         for k, v in r.get("left_out", {}).items():
             left[k] = left.get(k, 0) + int(v)
-    selection = recorded(checked.selection, first.date, sum(int(r["reports"]) for r in records),
-                         sum(int(r["kept"]) for r in records), left) if records else None
+    selection = {**recorded(checked.selection, first.date, sum(int(r["reports"]) for r in records),
+                            sum(int(r["kept"]) for r in records), left),
+                 "windows": len(runs)} if records else None
     return replace(first, inputs=inputs, selection=selection)
 
 
@@ -684,7 +685,7 @@ def _assemble(results: list[SensorResult]) -> tuple[pd.DataFrame, dict[str, pd.D
         parts = [getattr(r, attr).assign(sensor=r.sensor) for r in results if getattr(r, attr) is not None]
         if parts:
             frame = pd.concat(parts, ignore_index=True)
-            frame = frame[frame["expected"] > 0]
+            frame = frame[frame["expected"] > 0].reset_index(drop=True)
             tables[title] = frame[["sensor", *[c for c in frame.columns if c != "sensor"]]]
     points = [r.map_points for r in results if len(r.map_points)]
     return card, tables, pd.concat(points, ignore_index=True) if points else None

@@ -501,8 +501,10 @@ def describe(record: dict) -> str:
         given.append(f"--fl {record['fl'][0]:g}:{record['fl'][1]:g}")
     given += [f"--sensor {s}" for s in record.get("sensors") or ()]
     why = ", ".join(f"{v} by {k.replace('_', ' ')}" for k, v in record.get("left_out", {}).items() if v)
+    windows = record.get("windows")
     return (f"selection {' '.join(given)}: {record['kept']} of {record['reports']} reports kept"
-            + (f" (left out: {why})" if why else ""))
+            + (f" (left out: {why})" if why else "")
+            + (f", read over {windows} windows, each with its margin" if windows else ""))
 
 
 __all__ = ["FL_RANGE", "MAX_WINDOWS", "MarginCut", "READING_MARGIN", "ReportSelection", "SELECTION_INPUTS",

@@ -150,6 +150,8 @@ def test_the_cli_writes_the_three_outputs(recording, tmp_path):
     doc = json.loads((out / "e.json").read_text())
     assert {r["requirement"] for r in doc["results"]} >= {"pd", "mode3a_valid", "split_reports"}
     assert "Per aircraft" in doc["tables"] and "map_points" not in doc  # the map is the HTML's
+    assert "PD range x azimuth" in doc["tables"]
+    assert not [t for t, rows in doc["tables"].items() if rows and "index" in rows[0]]  # no row labels
     assert (out / "e.xlsx").stat().st_size > 0 and "<table" in (out / "e.html").read_text()
     # every output says what it was made from and how: the inputs' SHA-256, the preset, the reference
     import hashlib
@@ -348,6 +350,11 @@ def test_each_window_is_evaluated_as_its_own_from_and_to(windowed):
         pd.testing.assert_frame_equal(rows.reset_index(drop=True), half.scorecard.reset_index(drop=True))
     assert span.parameters["windows"] == [{"from": a, "to": b, "kept": h.loaded.selection["kept"]}
                                           for (a, b), h in zip(HALVES, halves, strict=True)]
+    from msdc.pipeline.model.report_selection import describe
+
+    kept = sum(h.loaded.selection["kept"] for h in halves)
+    assert describe(span.loaded.selection).startswith(f"selection --from 08:00 --to 09:00: {kept} of ")
+    assert describe(span.loaded.selection).endswith(", read over 2 windows, each with its margin")
 
 
 def test_the_span_pools_the_windows_counts_and_errors(windowed):
