@@ -101,6 +101,14 @@ LABELS: dict[str, str] = {
     "clause": "Clause", "checked": "Threshold checked against the standard", "notes": "Notes",
     "expected_updates": "Expected updates", "detected_updates": "Detected updates",
     "pd": "Probability of detection", "range_from_nm": "Range from", "range_to_nm": "Range to",
+    "parameters": "Parameters", "built_by": "Reference built by",
+    "self_reference_share": "Self-reference share", "surface_share": "Surface share",
+    "reference_samples": "Reference samples", "errors_judged": "Errors judged",
+    "rms_error_m": "RMS position error", "windows": "Windows", "window_from": "Window from",
+    "window_to": "Window to", "expected": "Expected", "detected": "Detected", "enough": "Enough to show",
+    "class": "Class", "low": "Band from", "high": "Band to", "low_nm": "Band from", "high_nm": "Band to",
+    "rms_m": "RMS error", "p95_m": "95th percentile error", "max_m": "Maximum error", "x_low": "x from",
+    "x_high": "x to", "y_low": "y from", "y_high": "y to",
 }
 
 _DATETIMES = ("start", "end", "time_utc", "first_utc", "last_utc", "gap_start_utc", "gap_end_utc", "utc",

@@ -425,3 +425,13 @@ def test_window_options_are_checked_before_decoding(recording, change, message):
     with pytest.raises(OptionError) as caught:
         validate(_options(folder, **change))
     assert message in str(caught.value)
+
+
+def test_every_column_of_the_evaluation_tables_has_a_workbook_header(windowed):
+    """The tables a windowed run writes (every table of a run, and those per window): no column would
+    print its snake_case name in the workbook."""
+    from msdc.pipeline.report.headers import has_header
+
+    span, _ = windowed
+    assert len(span.tables) >= 10
+    assert sorted({c for t in span.tables.values() for c in t.columns if not has_header(c)}) == []
