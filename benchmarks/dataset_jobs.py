@@ -3,7 +3,7 @@ of the largest worker (sampled over the process tree every 0.2 s with psutil, wh
 depends on).
 
     python benchmarks/dataset_jobs.py --dataset DIR --sensors SENSORS.toml [--workers 1 2] [--job evaluate]
-        [--from 2026-11-28T13:30 --to 2026-11-28T14:30] [--reference adsb]
+        [--from 2026-11-28T13:30 --to 2026-11-28T14:30] [--reference adsb] [--window MINUTES]
 
 Run it by hand on a quiet machine (the figures go to the notes and docs/guide/large-recordings.md); the
 dataset comes from ``msdc ingest`` of benchmarks/centre_day.py's recordings."""
@@ -81,9 +81,11 @@ def main() -> None:
     ap.add_argument("--from", dest="start")
     ap.add_argument("--to", dest="end")
     ap.add_argument("--reference", choices=["leave-one-out", "adsb"], help="evaluate's reference")
+    ap.add_argument("--window", help="evaluate's --window: the span window by window, pooled")
     a = ap.parse_args()
     extra = [*(["--from", a.start] if a.start else []), *(["--to", a.end] if a.end else []),
-             *(["--reference", a.reference] if a.reference else [])]
+             *(["--reference", a.reference] if a.reference else []),
+             *(["--window", a.window] if a.window else [])]
     print("| job | workers | wall s | CPU s | main peak MB | largest worker MB | tasks |")
     print("|---|---|---|---|---|---|---|")
     for n in a.workers:
