@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
+from dataclasses import dataclass, field
 
 import numpy as np
 import pandas as pd
@@ -164,6 +165,8 @@ def combine_counts(frames: Sequence[pd.DataFrame], keys: list[str], expected: st
     whole = pd.concat(frames, ignore_index=True)
     agg = {expected: (expected, "sum"), detected: (detected, "sum"), **{c: (c, "first") for c in first}}
     out = whole.groupby(keys, sort=False, dropna=False).agg(**agg).reset_index()
+    if keys == ["low", "high"] or keys == ["low_nm", "high_nm"]:
+        out = out.sort_values(keys[0], ignore_index=True)
     p = proportion(out[detected].to_numpy(np.int64), out[expected].to_numpy(np.int64))
     out["pd"], out["ci_low"], out["ci_high"] = p.value, p.ci_low, p.ci_high
     if "enough" in whole.columns:
@@ -196,8 +199,11 @@ def combine_per_aircraft(frames: Sequence[pd.DataFrame]) -> pd.DataFrame:
         return pd.DataFrame()
     whole = pd.concat(frames, ignore_index=True)
     keys = ["sensor", "aircraft"]
+    # a window's own table counts as one window; a table pooled before says how many it holds
+    whole = whole.assign(windows=whole["windows"].fillna(1).astype(np.int64) if "windows" in whole.columns
+                         else 1)
     g = whole.groupby(keys, sort=False)
-    out = g.size().rename("windows").to_frame()
+    out = g["windows"].sum().to_frame()
     out["built_by"] = g["built_by"].agg(lambda s: " | ".join(sorted({p for v in s.dropna()
                                                                       for p in str(v).split(" | ") if p})))
     samples = whole["reference_samples"].to_numpy(float)
@@ -224,7 +230,85 @@ def combine_per_aircraft(frames: Sequence[pd.DataFrame]) -> pd.DataFrame:
         out["rms_error_m"] = np.sqrt(squares.groupby([whole[k] for k in keys], sort=False).sum().to_numpy()
                                      / total.to_numpy(float))
     out = out.reset_index()
-    return out[[*[c for c in whole.columns if c in out.columns], "windows"]]
+    return out[[*(c for c in whole.columns if c in out.columns and c != "windows"), "windows"]]
 
 
-__all__ = ["DRIFT_P", "combine_counts", "combine_grid", "combine_outcomes", "combine_per_aircraft"]
+@dataclass
+class SensorSpan:
+    """One sensor's windows, folded as they come: its tables summed so far (fixed in size whatever the span),
+    each window's outcomes and notes (small, but for a percentile's values), the judged errors by range and
+    the thinned map points."""
+
+    kind: str
+    site: object = None
+    labels: list[tuple[str, str]] = field(default_factory=list)
+    outcomes: list[dict] = field(default_factory=list)
+    notes: list[list[str]] = field(default_factory=list)
+    per_aircraft: pd.DataFrame = field(default_factory=pd.DataFrame)
+    bands: dict[str, pd.DataFrame] = field(default_factory=dict)
+    polar: pd.DataFrame | None = None
+    vertical: pd.DataFrame | None = None
+    range_errors: list[pd.DataFrame] = field(default_factory=list)
+    map_points: list[pd.DataFrame] = field(default_factory=list)
+
+    def add(self, label: tuple[str, str], outcomes: dict, notes: list[str], per_aircraft: pd.DataFrame,
+            bands: dict[str, pd.DataFrame], polar: pd.DataFrame | None, vertical: pd.DataFrame | None,
+            range_errors: pd.DataFrame | None, map_points: pd.DataFrame) -> None:
+        """Fold one window in."""
+        self.labels.append(label)
+        self.outcomes.append(outcomes)
+        self.notes.append(list(notes))
+        self.per_aircraft = combine_per_aircraft([self.per_aircraft, per_aircraft])
+        for key, table in bands.items():
+            if key == "error_range":
+                continue
+            on = ["class"] if key == "surface" else ["low", "high"]
+            self.bands[key] = combine_counts([self.bands.get(key), table], on)
+        if polar is not None:
+            self.polar = combine_grid([self.polar, polar])
+        if vertical is not None:
+            self.vertical = combine_grid([self.vertical, vertical])
+        if range_errors is not None:
+            self.range_errors.append(range_errors)
+        if len(map_points):
+            self.map_points.append(map_points)
+
+    def pooled(self, requirements: Sequence[Requirement]) -> dict[tuple, Outcome]:
+        """Every (sector, requirement id, index) any window gave, pooled over the windows."""
+        out = {}
+        for key in dict.fromkeys(k for o in self.outcomes for k in o):
+            given = [o for o in (window_outcome(w, key) for w in self.outcomes) if o is not None]
+            out[key] = combine_outcomes(requirements[key[2]], given)
+        return out
+
+    def common_notes(self) -> tuple[list[str], list[tuple[tuple[str, str], str]]]:
+        """The notes every window gave, and the others with their window."""
+        return common_notes(list(zip(self.labels, self.notes, strict=True)))
+
+
+def window_outcome(outcomes: dict, key: tuple) -> Outcome | None:
+    """A window's outcome of (sector, requirement id, index): where the window had no aircraft on the surface
+    its airborne figure is its global one (scorecard.surface_regions gives no airborne row then); a sector
+    the window has no row of (no surface aircraft, no field monitor) adds nothing."""
+    from msdc.pipeline.evaluate.scorecard import AIRBORNE, GLOBAL, SURFACE
+
+    if key in outcomes:
+        return outcomes[key]
+    name, rid, index = key
+    if name == AIRBORNE and (SURFACE, rid, index) not in outcomes:
+        return outcomes.get((GLOBAL, rid, index))
+    return None
+
+
+def common_notes(labelled: Sequence[tuple[tuple[str, str], list[str]]]
+                 ) -> tuple[list[str], list[tuple[tuple[str, str], str]]]:
+    """The notes every window gave (in the first one's order) and, with their window, the others."""
+    if not labelled:
+        return [], []
+    common = [n for n in dict.fromkeys(labelled[0][1]) if all(n in notes for _, notes in labelled[1:])]
+    rest = [(label, n) for label, notes in labelled for n in dict.fromkeys(notes) if n not in common]
+    return common, rest
+
+
+__all__ = ["DRIFT_P", "SensorSpan", "combine_counts", "combine_grid", "combine_outcomes",
+           "combine_per_aircraft", "common_notes", "window_outcome"]

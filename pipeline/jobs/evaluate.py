@@ -460,32 +460,57 @@ NOTES_PER_WINDOW = "Notes per window"
 def _evaluate_span(options: EvaluateOptions, checked: EvaluateChecked, progress: Progress | None,
                    warnings: list[str]) -> tuple[WindowRun, dict[str, pd.DataFrame]]:
     """--window: each window of the span evaluated as --from/--to of it alone would be (read with its
-    margin), then pooled (evaluate.windows); the tables per window. A window the data do not allow (no
-    report, no sensor the preset judges) is said in the notes; JobError when none does."""
+    margin), folded into each sensor's span (evaluate.windows.SensorSpan) and let go; then pooled, with the
+    tables per window. A window the data do not allow (no report, no sensor the preset judges) is said in
+    the notes; JobError when none does."""
+    from msdc.pipeline.evaluate.scorecard_schema import SCORECARD_COLUMNS
+    from msdc.pipeline.evaluate.windows import SensorSpan, common_notes
     from msdc.pipeline.model.report_selection import span_windows
 
     windows = span_windows(checked.selection, options.window_minutes)
-    done: list[tuple[object, WindowRun]] = []
-    refused: list[str] = []
+    spans: dict[str, SensorSpan] = {}
+    runs: list[tuple[tuple[str, str], list[str]]] = []  # each window's label and run notes
+    reads: list[Loaded] = []  # the first window's, then each one's inputs and selection alone
+    rows, refused, external = [], [], False
     points = max(1, MAP_POINTS_PER_SENSOR // len(windows))  # the span's map keeps about as many points
     for k, selection in enumerate(windows):
-        label = f"{selection.start.text} to {selection.end.text}"
+        label = (selection.start.text, selection.end.text)
         if progress:
-            progress.stage(f"Window {k + 1} of {len(windows)}: {label}")
+            progress.stage(f"Window {k + 1} of {len(windows)}: {label[0]} to {label[1]}")
         try:
             run = _evaluate_window(options, replace(checked, selection=selection), progress, warnings)
         except JobError as exc:
-            refused.append(f"window {label}: {exc}")
+            refused.append(f"window {label[0]} to {label[1]}: {exc}")
             continue
         for r in run.results:
-            r.map_points = _thinned_map(r.map_points, points)
-        done.append((selection, run))
-    if not done:
+            span = spans.setdefault(r.sensor, SensorSpan(r.kind, r.site))
+            span.add(label, r.outcomes, r.notes, r.per_aircraft, r.bands, r.polar, r.vertical, r.range_errors,
+                     _thinned_map(r.map_points, points))
+            rows += [{"window_from": label[0], "window_to": label[1], **row} for row in r.rows]
+        runs.append((label, run.notes))
+        reads.append(run.loaded if not reads else Loaded({}, [], run.loaded.inputs, run.loaded.date,
+                                                         selection=run.loaded.selection))
+        external = run.external
+    if not runs:
         raise JobError(f"--window {options.window_minutes:g}: no window of the span gave an evaluation ("
                        + "; ".join(refused[:3]) + (f"; and {len(refused) - 3} more" if len(refused) > 3
                                                    else "") + ")")
     warnings[:] = list(dict.fromkeys(warnings))  # each window says the same of the same inputs
-    return _pooled(checked, done, refused)
+    results, noted = [], []
+    for sensor_id, span in spans.items():
+        result, differing = _pooled_sensor(checked, sensor_id, span)
+        results.append(result)
+        noted += differing
+    notes, differing = common_notes(runs)
+    noted = [*((a, b, "", n) for (a, b), n in differing), *noted]
+    notes += refused
+    tables = {PER_WINDOW: pd.DataFrame(rows, columns=["window_from", "window_to", *SCORECARD_COLUMNS])}
+    if noted:
+        tables[NOTES_PER_WINDOW] = pd.DataFrame(noted, columns=["window_from", "window_to", "sensor", "note"])
+        notes.append(f"{len(noted)} notes differ between windows: in the table {NOTES_PER_WINDOW!r}")
+    kept = [{"from": a, "to": b, "kept": (loaded.selection or {}).get("kept")}
+            for ((a, b), _), loaded in zip(runs, reads, strict=True)]
+    return WindowRun(results, notes, _pooled_loaded(checked, reads), external, kept), tables
 
 
 def _thinned_map(points: pd.DataFrame, limit: int) -> pd.DataFrame:
@@ -495,103 +520,24 @@ def _thinned_map(points: pd.DataFrame, limit: int) -> pd.DataFrame:
     return pd.concat([_thinned(g, limit) for _, g in points.groupby("source", sort=False)], ignore_index=True)
 
 
-def _pooled(checked: EvaluateChecked, done: list[tuple[object, WindowRun]], refused: list[str]
-            ) -> tuple[WindowRun, dict[str, pd.DataFrame]]:
-    """The windows' runs as one: each sensor's outcomes and tables pooled, the scorecard and the notes that
-    differ per window as tables, the inputs' and selection's counts summed."""
-    from msdc.pipeline.evaluate.scorecard_schema import SCORECARD_COLUMNS
-
-    labels = [(sel.start.text, sel.end.text) for sel, _ in done]
-    sensors = list(dict.fromkeys((r.sensor, r.kind) for _, run in done for r in run.results))
-    results, noted = [], []
-    for sensor_id, kind in sensors:
-        parts = [(label, r) for label, (_, run) in zip(labels, done, strict=True) for r in run.results
-                 if r.sensor == sensor_id]
-        result, differing = _pooled_sensor(checked, sensor_id, kind, parts)
-        results.append(result)
-        noted += differing
-    run_notes, differing = _common_notes([(label, run.notes) for label, (_, run) in zip(labels, done,
-                                                                                       strict=True)])
-    noted = [*((a, b, "", n) for (a, b), n in differing), *noted]
-    run_notes += refused
-    rows = [{"window_from": a, "window_to": b, **row} for (a, b), (_, run) in zip(labels, done, strict=True)
-            for r in run.results for row in r.rows]
-    tables = {PER_WINDOW: pd.DataFrame(rows, columns=["window_from", "window_to", *SCORECARD_COLUMNS])}
-    if noted:
-        tables[NOTES_PER_WINDOW] = pd.DataFrame(noted, columns=["window_from", "window_to", "sensor", "note"])
-        run_notes.append(f"{len(noted)} notes differ between windows: in the table {NOTES_PER_WINDOW!r}")
-    loaded = _pooled_loaded(checked, [run.loaded for _, run in done])
-    windows = [{"from": a, "to": b, "kept": (run.loaded.selection or {}).get("kept")}
-               for (a, b), (_, run) in zip(labels, done, strict=True)]
-    return WindowRun(results, run_notes, loaded, done[0][1].external, windows), tables
-
-
-def _common_notes(labelled: list[tuple[tuple[str, str], list[str]]]
-                  ) -> tuple[list[str], list[tuple[tuple[str, str], str]]]:
-    """The notes every window gave (in the first one's order) and, with their window, the others."""
-    common = [n for n in dict.fromkeys(labelled[0][1]) if all(n in notes for _, notes in labelled[1:])]
-    rest = [(label, n) for label, notes in labelled for n in dict.fromkeys(notes) if n not in common]
-    return common, rest
-
-
-def _pooled_sensor(checked: EvaluateChecked, sensor_id: str, kind: str,
-                   parts: list[tuple[tuple[str, str], SensorResult]]) -> tuple[SensorResult, list[tuple]]:
-    """One sensor's windows as one result: its outcomes pooled and judged again, its tables summed, its map
-    points together; the notes that differ between windows, with their window."""
+def _pooled_sensor(checked: EvaluateChecked, sensor_id: str, span) -> tuple[SensorResult, list[tuple]]:
+    """One sensor's span as a result: its outcomes pooled and judged again, its folded tables, the error
+    bands of every window's judged errors; the notes that differ between windows, with their window."""
     from msdc.pipeline.evaluate.accuracy import error_bands
     from msdc.pipeline.evaluate.scorecard import judge
-    from msdc.pipeline.evaluate.windows import (
-        combine_counts,
-        combine_grid,
-        combine_outcomes,
-        combine_per_aircraft,
-    )
 
     preset = checked.preset
-    outcomes, rows = {}, []
-    for key in dict.fromkeys(k for _, r in parts for k in r.outcomes):
-        name, _, index = key
-        requirement = preset.requirements[index]
-        given = [_window_outcome(r.outcomes, key) for _, r in parts]
-        given = [o for o in given if o is not None]
-        outcomes[key] = combine_outcomes(requirement, given)
-        rows.append(judge(outcomes[key], requirement, preset, sensor_id, name))
-    results = [r for _, r in parts]
-    bands: dict[str, pd.DataFrame] = {}
-    for key in dict.fromkeys(k for r in results for k in r.bands if k != "error_range"):
-        on = ["class"] if key == "surface" else ["low", "high"]
-        table = combine_counts([r.bands.get(key) for r in results], on)
-        bands[key] = table if key == "surface" or table.empty else table.sort_values(
-            "low", ignore_index=True)
-    errors = [r.range_errors for r in results if r.range_errors is not None and len(r.range_errors)]
-    if any(r.range_errors is not None for r in results):
-        bands["error_range"] = error_bands(pd.concat(errors, ignore_index=True) if errors
-                                           else pd.DataFrame({"range_nm": [], "aircraft": [], "error_m": []}))
-    grids = {}
-    for attr in ("polar", "vertical"):
-        frames = [getattr(r, attr) for r in results if getattr(r, attr) is not None]
-        grids[attr] = combine_grid(frames) if frames else None
-    maps = [r.map_points for r in results if len(r.map_points)]
-    notes, differing = _common_notes([(label, r.notes) for label, r in parts])
-    result = SensorResult(sensor_id, kind, rows, combine_per_aircraft([r.per_aircraft for r in results]),
-                          bands, grids["polar"], grids["vertical"],
-                          pd.concat(maps, ignore_index=True) if maps else pd.DataFrame(), notes,
-                          results[0].site, outcomes, None)
+    outcomes = span.pooled(preset.requirements)
+    rows = [judge(o, preset.requirements[index], preset, sensor_id, name)
+            for (name, _, index), o in outcomes.items()]
+    bands = dict(span.bands)
+    if span.range_errors:
+        bands["error_range"] = error_bands(pd.concat(span.range_errors, ignore_index=True))
+    notes, differing = span.common_notes()
+    points = pd.concat(span.map_points, ignore_index=True) if span.map_points else pd.DataFrame()
+    result = SensorResult(sensor_id, span.kind, rows, span.per_aircraft, bands, span.polar, span.vertical,
+                          points, notes, span.site, outcomes, None)
     return result, [(a, b, sensor_id, n) for (a, b), n in differing]
-
-
-def _window_outcome(outcomes: dict, key: tuple):
-    """A window's outcome of (sector, requirement, index): where the window had no aircraft on the surface
-    its airborne figure is its global one (scorecard.surface_regions gives no airborne row then); a sector
-    the window has no row of (no surface aircraft, no field monitor) adds nothing."""
-    from msdc.pipeline.evaluate.scorecard import AIRBORNE, GLOBAL, SURFACE
-
-    if key in outcomes:
-        return outcomes[key]
-    name, rid, index = key
-    if name == AIRBORNE and (SURFACE, rid, index) not in outcomes:
-        return outcomes.get((GLOBAL, rid, index))
-    return None
 
 
 def _pooled_loaded(checked: EvaluateChecked, runs: list[Loaded]) -> Loaded:

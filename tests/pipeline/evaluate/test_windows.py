@@ -156,3 +156,21 @@ def test_per_aircraft_rows_of_windows_add_up():
     assert a["self_reference_share"] == pytest.approx(50 / 400)
     assert a["built_by"] == "021:0/1 | 048:1/2"
     assert math.isnan(out.loc["B", "rms_error_m"]) and out.loc["B", "surface_share"] == 1.0
+
+
+def test_per_aircraft_tables_folded_window_by_window_equal_them_pooled_at_once():
+    """Folding a third window into the pooled table of two gives the table of the three at once (a span's
+    tables are folded as its windows come)."""
+    columns = ["sensor", "aircraft", "built_by", "self_reference_share", "surface_share", "reference_samples",
+               "reports", "expected_updates", "detected_updates", "pd", "ci_low", "ci_high", "rms_error_m",
+               "errors_judged"]
+    rows = [("s", "A", "021:0/1", 0.5, 0.0, 100, 30, 40, 36, 0.9, 0, 1, 100.0, 30),
+            ("s", "A", "048:1/2", 0.0, 0.25, 300, 10, 20, 10, 0.5, 0, 1, 200.0, 10),
+            ("s", "A", "021:0/1", 0.1, 0.0, 50, 5, 6, 6, 1.0, 0, 1, 50.0, 5)]
+    windows = [pd.DataFrame([r], columns=columns) for r in rows]
+    at_once = combine_per_aircraft(windows)
+    folded = combine_per_aircraft([combine_per_aircraft([pd.DataFrame(), windows[0]]), windows[1]])
+    folded = combine_per_aircraft([folded, windows[2]])
+    pd.testing.assert_frame_equal(folded, at_once)
+    assert at_once.loc[0, "windows"] == 3 and at_once.loc[0, "reference_samples"] == 450
+    assert at_once.loc[0, "surface_share"] == pytest.approx(75 / 450)
