@@ -657,10 +657,23 @@ def write_evaluation(result: EvaluateResult, *, tx: OutputTransaction | None = N
             write_evaluation_json(result.scorecard, stage.path(c.json), result.tables, run=run)
             written["json"] = c.json
         if c.html:
-            write_evaluation_html(result.scorecard, stage.path(c.html), result.tables, result.map_points,
-                                  title=title, images=images, run=run)
+            write_evaluation_html(result.scorecard, stage.path(c.html), _html_tables(result.tables),
+                                  result.map_points, title=title, images=images, run=run)
             written["html"] = c.html
     return written
+
+
+def _html_tables(tables: dict[str, pd.DataFrame]) -> dict[str, pd.DataFrame]:
+    """The tables as the HTML report shows them: of the scorecard per window, the global rows only (a long
+    span's windows make many; the workbook and the JSON hold every sector's)."""
+    from msdc.pipeline.evaluate.scorecard import GLOBAL
+
+    if PER_WINDOW not in tables:
+        return tables
+    per = tables[PER_WINDOW]
+    title = f"{PER_WINDOW}, global rows (every sector's in the workbook and the JSON)"
+    return {(title if k == PER_WINDOW else k): (per[per["sector"] == GLOBAL].reset_index(drop=True)
+                                                 if k == PER_WINDOW else t) for k, t in tables.items()}
 
 
 def coverage(result: EvaluateResult) -> dict[str, bytes]:

@@ -6,6 +6,7 @@ before anything is written."""
 from __future__ import annotations
 
 import json
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -435,3 +436,26 @@ def test_every_column_of_the_evaluation_tables_has_a_workbook_header(windowed):
     span, _ = windowed
     assert len(span.tables) >= 10
     assert sorted({c for t in span.tables.values() for c in t.columns if not has_header(c)}) == []
+
+
+def test_a_windowed_runs_outputs_hold_the_windows(windowed, tmp_path):
+    """The workbook and the JSON hold every row per window; the HTML report the global ones."""
+    import openpyxl
+
+    from msdc.pipeline.jobs.evaluate import write_evaluation
+
+    span, _ = windowed
+    checked = replace(span.checked, output=tmp_path / "w.xlsx", json=tmp_path / "w.json",
+                      html=tmp_path / "w.html")
+    write_evaluation(replace(span, checked=checked))
+    doc = json.loads((tmp_path / "w.json").read_text())
+    per = span.tables["Scorecard per window"]
+    assert len(doc["tables"]["Scorecard per window"]) == len(per) > 0
+    assert doc["parameters"]["windows"][1]["from"] == "08:30"
+    sheet = openpyxl.load_workbook(tmp_path / "w.xlsx", read_only=True)["Scorecard per window"]
+    assert sum(1 for row in sheet.iter_rows(values_only=True) if any(v is not None for v in row)) \
+        == len(per) + 1  # with the header row
+    page = (tmp_path / "w.html").read_text()
+    shown = page.split("Scorecard per window, global rows")[1].split("</table>")[0]
+    assert shown.count("<tr>") == (per["sector"] == "global").sum() + 1  # with the header row
+    assert (per["sector"] != "global").any()
