@@ -72,7 +72,10 @@ def test_ctrl_c_ends_listen_with_a_complete_recording(tmp_path, capsys):
     folder = tmp_path / "rec"
     argv = [sys.executable, "-m", "msdc.pipeline.cli", "listen", "--udp", f"127.0.0.1:{port}", "--record",
             str(folder)]
-    proc = subprocess.Popen(argv, cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    # the child gets the SIGINT handling a shell gives a foreground command: a suite started in the
+    # background (SIGINT ignored, inherited) would otherwise leave listen deaf to Ctrl-C
+    proc = subprocess.Popen(argv, cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                            preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
     try:
         assert "receiving 127.0.0.1:" in proc.stderr.readline()
         datagrams = [block(48, cat048_record(25, 201, 100.0 + i), cat048_record(25, 201, 100.5 + i))
