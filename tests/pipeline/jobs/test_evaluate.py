@@ -459,3 +459,27 @@ def test_a_windowed_runs_outputs_hold_the_windows(windowed, tmp_path):
     shown = page.split("Scorecard per window, global rows")[1].split("</table>")[0]
     assert shown.count("<tr>") == (per["sector"] == "global").sum() + 1  # with the header row
     assert (per["sector"] != "global").any()
+
+
+def test_windows_without_reports_are_named_and_the_others_pooled(recording, windowed):
+    """07:00-08:30 in 30-minute windows: the recording starts at 08:00, so the first two windows hold no
+    report and are named in the notes; the span's figures are the third window's, which is the first half
+    evaluated alone. A span with no report in any window is refused, naming its windows."""
+    from msdc.pipeline.jobs.common import JobError
+
+    _, folder = recording
+    span, halves = windowed
+    preset = str(folder / "preset_windows.toml")
+    late = evaluate_job(_options(folder, preset=preset, from_time="07:00", to_time="08:30",
+                                 window_minutes=30.0))
+    notes = late.parameters["notes"]
+    refused = [n for n in notes if n.startswith("window ")]
+    assert [n.split(": ")[0] for n in refused] == ["window 07:00 to 07:30", "window 07:30 to 08:00"]
+    assert all("0 of" in n and n.endswith("no report is left to analyse") for n in refused)
+    assert [w["from"] for w in late.parameters["windows"]] == ["08:00"]
+    cols = ["sensor", "sector", "requirement", "value", "ci_low", "ci_high", "n", "verdict"]
+    pd.testing.assert_frame_equal(late.scorecard[cols], halves[0].scorecard[cols])
+    with pytest.raises(JobError, match=r"--window 30: no window of the span gave an evaluation \(window "
+                                       r"06:00 to 06:30: selection .* no report is left to analyse; window "
+                                       r"06:30 to 07:00: "):
+        evaluate_job(_options(folder, preset=preset, from_time="06:00", to_time="07:00", window_minutes=30.0))
