@@ -43,7 +43,9 @@ def combine_outcomes(requirement: Requirement, outcomes: Sequence[Outcome]) -> O
         return withheld(rid, "no window gave a figure: " + "; ".join(reasons) if reasons
                         else "no window gave a figure")
     kind = CATALOGUE[rid].kind
-    if kind == PROPORTION:
+    if len(given) == 1:  # one window's figure is its own
+        out = given[0]
+    elif kind == PROPORTION:
         out = _proportion(requirement, given)
     elif kind == RATE:
         out = _rate(rid, given)
@@ -58,13 +60,16 @@ def combine_outcomes(requirement: Requirement, outcomes: Sequence[Outcome]) -> O
 
 
 def _window_notes(outcomes: Sequence[Outcome], given: Sequence[Outcome]) -> tuple[str, ...]:
-    """How many windows the figure pools, the notes every one of them gave, and those without a figure."""
+    """How many windows the figure pools, the notes every one of them gave (marked as each window's: "6
+    aircraft" in every window is not 6 over the span), and the windows without a figure."""
     out = [f"pooled over {len(given)} window{'s' if len(given) != 1 else ''}"]
-    common = [n for n in given[0].notes if all(n in o.notes for o in given[1:])]
-    out += common
-    if any(set(o.notes) - set(common) for o in given):
-        out.append("notes that differ between windows are in the scorecard per window")
-    empty = [o for o in outcomes if o not in given]
+    if len(given) > 1:
+        common = [n for n in given[0].notes if all(n in o.notes for o in given[1:])]
+        out += [f"every window: {n}" for n in common]
+        if any(set(o.notes) - set(common) for o in given):
+            out.append("notes that differ between windows are in the scorecard per window")
+    figured = {id(o) for o in given}
+    empty = [o for o in outcomes if id(o) not in figured]
     if empty:
         reasons = "; ".join(dict.fromkeys(n for o in empty for n in o.notes))
         out.append(f"{len(empty)} window{'s' if len(empty) != 1 else ''} without a figure"
@@ -131,8 +136,6 @@ def _fits(rid: str, given: Sequence[Outcome]) -> Outcome:
     fits = [o.evidence for o in given]
     if not all(isinstance(f, FitEvidence) and f.se > 0 and math.isfinite(f.se) for f in fits):
         return withheld(rid, "a window's fit kept no standard error to combine")
-    if len(fits) == 1:
-        return given[0]
     v = np.array([f.value for f in fits])
     w = 1.0 / np.square([f.se for f in fits])
     value = float(np.sum(w * v) / np.sum(w))

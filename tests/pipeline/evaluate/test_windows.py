@@ -174,3 +174,20 @@ def test_per_aircraft_tables_folded_window_by_window_equal_them_pooled_at_once()
     pd.testing.assert_frame_equal(folded, at_once)
     assert at_once.loc[0, "windows"] == 3 and at_once.loc[0, "reference_samples"] == 450
     assert at_once.loc[0, "surface_share"] == pytest.approx(75 / 450)
+
+
+def test_a_note_every_window_gave_is_marked_as_each_windows_and_one_window_is_its_own_figure():
+    """Two windows of 2 aircraft each ("2 aircraft" in both), 3 aircraft together: the pooled row says 3,
+    and the windows' "2 aircraft" only as every window's. One window's outcome is its own, notes and all."""
+    from dataclasses import replace
+
+    a = replace(_errors([1.0, 2.0, 3.0], ["A", "B", "B"], "rms"), notes=("2 aircraft", "scan period 5 s"))
+    b = replace(_errors([4.0, 5.0], ["B", "C"], "rms"), notes=("2 aircraft", "scan period 5 s"))
+    out = combine_outcomes(_req("rms_m"), [a, b])
+    assert "3 aircraft" in out.notes and "2 aircraft" not in out.notes
+    assert "every window: 2 aircraft" in out.notes and "every window: scan period 5 s" in out.notes
+    assert out.value == pytest.approx(math.sqrt((1 + 4 + 9 + 16 + 25) / 5))
+    alone = combine_outcomes(_req("rms_m"), [a, withheld("rms_m", "no report")])
+    assert alone.n == 3 and alone.evidence is a.evidence
+    assert alone.notes == ("2 aircraft", "scan period 5 s", "pooled over 1 window",
+                           "1 window without a figure (no report)")
