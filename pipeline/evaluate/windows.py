@@ -305,12 +305,13 @@ def window_outcome(outcomes: dict, key: tuple) -> Outcome | None:
 
 def common_notes(labelled: Sequence[tuple[tuple[str, str], list[str]]]
                  ) -> tuple[list[str], list[tuple[tuple[str, str], str]]]:
-    """The notes every window gave (in the first one's order) and, with their window, the others."""
+    """The notes every window gave (in the first one's order; of several windows, written as every
+    window's) and, with their window, the others."""
     if not labelled:
         return [], []
     common = [n for n in dict.fromkeys(labelled[0][1]) if all(n in notes for _, notes in labelled[1:])]
     rest = [(label, n) for label, notes in labelled for n in dict.fromkeys(notes) if n not in common]
-    return common, rest
+    return ([f"every window: {n}" for n in common] if len(labelled) > 1 else common), rest
 
 
 __all__ = ["DRIFT_P", "SensorSpan", "combine_counts", "combine_grid", "combine_outcomes",

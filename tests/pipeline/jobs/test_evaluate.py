@@ -356,6 +356,9 @@ def test_each_window_is_evaluated_as_its_own_from_and_to(windowed):
     kept = sum(h.loaded.selection["kept"] for h in halves)
     assert describe(span.loaded.selection).startswith(f"selection --from 08:00 --to 09:00: {kept} of ")
     assert describe(span.loaded.selection).endswith(", read over 2 windows, each with its margin")
+    # a note both windows gave is said as each window's
+    assert "every window: not judged by test-radar: 021:0/1 (adsb) (they still build the reference)" \
+        in span.parameters["notes"]
 
 
 def test_the_span_pools_the_windows_counts_and_errors(windowed):
