@@ -141,12 +141,18 @@ def pd_requirement(reports: pd.DataFrame, reference: pd.DataFrame, parameters: M
     inside = table[table["in_coverage"]]
     per = _per_aircraft(table)
     if parameter(parameters, "scope", "global") == "per_target":
-        if per.empty:
-            return withheld("pd", "no expected update inside coverage")
-        worst = per.iloc[int(np.argmin(per["ci_high"].to_numpy()))]
-        notes = (*notes, f"per target: the aircraft {worst['aircraft']!r} of {len(per)} reaches lowest")
-        return share("pd", int(worst["detected"]), int(worst["expected"]), notes, per)
+        return per_target(per, notes)
     return share("pd", int(inside["detected"].sum()), len(inside), notes, per)
+
+
+def per_target(per: pd.DataFrame, notes: tuple[str, ...] = ()) -> Outcome:
+    """A per-target PD from the per-aircraft table (aircraft, expected, detected, ci_high): the aircraft whose
+    interval reaches lowest, every aircraft having to meet the threshold."""
+    if per.empty:
+        return withheld("pd", "no expected update inside coverage")
+    worst = per.iloc[int(np.argmin(per["ci_high"].to_numpy()))]
+    notes = (*notes, f"per target: the aircraft {worst['aircraft']!r} of {len(per)} reaches lowest")
+    return share("pd", int(worst["detected"]), int(worst["expected"]), notes, per)
 
 
 def long_gaps(reports: pd.DataFrame, reference: pd.DataFrame, parameters: Mapping | None,

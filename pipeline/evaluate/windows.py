@@ -18,7 +18,9 @@ import numpy as np
 import pandas as pd
 from scipy import stats
 
+from msdc.pipeline.evaluate.accuracy import error_notes
 from msdc.pipeline.evaluate.catalogue import CATALOGUE, ERROR, PROPORTION, RATE, SIGNED
+from msdc.pipeline.evaluate.detection import per_target
 from msdc.pipeline.evaluate.outcome import ErrorEvidence, FitEvidence, Outcome, rate, share, withheld
 from msdc.pipeline.evaluate.presets import Requirement
 from msdc.pipeline.evaluate.statistics import (
@@ -81,16 +83,10 @@ def _proportion(requirement: Requirement, given: Sequence[Outcome]) -> Outcome:
     """Successes over trials, summed; a per-target PD from each aircraft's updates summed over windows."""
     rid = requirement.id
     if rid == "pd" and requirement.parameters.get("scope") == "per_target":
-        per = combine_counts([o.per_aircraft for o in given if o.per_aircraft is not None],
-                             ["aircraft"], "expected", "detected")
-        if per.empty:
-            return withheld(rid, "no expected update inside coverage")
-        worst = per.iloc[int(np.argmin(per["ci_high"].to_numpy()))]
-        return share(rid, int(worst["detected"]), int(worst["expected"]),
-                     (f"per target: the aircraft {worst['aircraft']!r} of {len(per)} reaches lowest",), per)
+        return per_target(combine_counts([o.per_aircraft for o in given if o.per_aircraft is not None],
+                                         ["aircraft"]))
     per = [o.per_aircraft for o in given if o.per_aircraft is not None] if rid == "pd" else []
-    table = combine_counts(per, ["aircraft"], "expected", "detected") if per and len(per) == len(given) \
-        else None
+    table = combine_counts(per, ["aircraft"]) if per and len(per) == len(given) else None
     return share(rid, sum(o.count for o in given), int(sum(o.n for o in given)), (), table)
 
 
@@ -126,8 +122,7 @@ def _error(rid: str, given: Sequence[Outcome]) -> Outcome:
         clusters = np.concatenate([e.clusters for e in evidence])
         ci = clustered_interval(values, clusters, statistic, seed=seed)
         kept = ErrorEvidence(statistic, seed, values=values, clusters=clusters)
-    notes = (f"{ci.n_clusters} aircraft",) + ((ci.reason,) if ci.reason else ())
-    return Outcome(rid, ci.value, ci.ci_low, ci.ci_high, ci.n, ci.n, notes, evidence=kept)
+    return Outcome(rid, ci.value, ci.ci_low, ci.ci_high, ci.n, ci.n, error_notes(ci), evidence=kept)
 
 
 def _fits(rid: str, given: Sequence[Outcome]) -> Outcome:
@@ -155,25 +150,23 @@ def _fits(rid: str, given: Sequence[Outcome]) -> Outcome:
                    evidence=FitEvidence(value, se, unit, n, max(f.aircraft for f in fits)))
 
 
-def combine_counts(frames: Sequence[pd.DataFrame], keys: list[str], expected: str = "expected",
-                   detected: str = "detected", first: Sequence[str] = ()) -> pd.DataFrame:
-    """Tables of expected and detected updates per key (aircraft, band, cell) summed over windows, PD and its
-    Clopper-Pearson interval worked out again (and ``enough`` where the tables have it, from
-    bins.MIN_EXPECTED); ``first`` columns keep their first window's value. Key order: first seen."""
+def combine_counts(frames: Sequence[pd.DataFrame], keys: list[str]) -> pd.DataFrame:
+    """Tables of ``expected`` and ``detected`` updates per key (aircraft, band, cell) summed over windows, PD
+    and its Clopper-Pearson interval worked out again (and ``enough`` where the tables have it, from
+    bins.MIN_EXPECTED). Key order: first seen, bands by their lower end."""
     from msdc.pipeline.evaluate.bins import MIN_EXPECTED
 
     frames = [f for f in frames if f is not None and len(f)]
     if not frames:
         return pd.DataFrame()
     whole = pd.concat(frames, ignore_index=True)
-    agg = {expected: (expected, "sum"), detected: (detected, "sum"), **{c: (c, "first") for c in first}}
-    out = whole.groupby(keys, sort=False, dropna=False).agg(**agg).reset_index()
-    if keys == ["low", "high"] or keys == ["low_nm", "high_nm"]:
-        out = out.sort_values(keys[0], ignore_index=True)
-    p = proportion(out[detected].to_numpy(np.int64), out[expected].to_numpy(np.int64))
+    out = whole.groupby(keys, sort=False, dropna=False)[["expected", "detected"]].sum().reset_index()
+    if keys == ["low", "high"]:
+        out = out.sort_values("low", ignore_index=True)
+    p = proportion(out["detected"].to_numpy(np.int64), out["expected"].to_numpy(np.int64))
     out["pd"], out["ci_low"], out["ci_high"] = p.value, p.ci_low, p.ci_high
     if "enough" in whole.columns:
-        out["enough"] = out[expected].to_numpy() >= MIN_EXPECTED
+        out["enough"] = out["expected"].to_numpy() >= MIN_EXPECTED
     return out[[*(c for c in whole.columns if c in out.columns),
                 *(c for c in ("pd", "ci_low", "ci_high") if c not in whole.columns)]]
 
