@@ -321,6 +321,7 @@ def test_a_window_keeps_the_north_markers_of_its_margin(recording):
 
 
 HALVES = (("08:00", "08:30"), ("08:30", "09:00"))
+WINDOWED = pytest.mark.xdist_group("evaluate_windows")  # one worker evaluates the windows once
 
 
 @pytest.fixture(scope="module")
@@ -342,6 +343,7 @@ def _key(card: pd.DataFrame) -> pd.DataFrame:
     return card.set_index(["sector", "requirement", "parameters"])
 
 
+@WINDOWED
 def test_each_window_is_evaluated_as_its_own_from_and_to(windowed):
     span, halves = windowed
     per = span.tables["Scorecard per window"]
@@ -361,6 +363,7 @@ def test_each_window_is_evaluated_as_its_own_from_and_to(windowed):
         in span.parameters["notes"]
 
 
+@WINDOWED
 def test_the_span_pools_the_windows_counts_and_errors(windowed):
     """Worked out from the two halves' own outputs: successes and trials (value x n) added, the
     Clopper-Pearson interval from beta quantiles, the RMS from the halves' mean squares, the maximum the
@@ -399,6 +402,7 @@ def test_the_span_pools_the_windows_counts_and_errors(windowed):
     assert "combined by inverse variance" in pooled["notes"]
 
 
+@WINDOWED
 def test_the_span_is_the_hour_evaluated_at_once_but_at_the_windows_edge(windowed, evaluated):
     """The detection and code figures of the pooled halves equal those of the hour evaluated at once (the
     north markers fix the scan period; the reference is cut at 08:30 only); a gap across 08:30 is in
@@ -431,6 +435,7 @@ def test_window_options_are_checked_before_decoding(recording, change, message):
     assert message in str(caught.value)
 
 
+@WINDOWED
 def test_every_column_of_the_evaluation_tables_has_a_workbook_header(windowed):
     """The tables a windowed run writes (every table of a run, and those per window): no column would
     print its snake_case name in the workbook."""
@@ -441,6 +446,7 @@ def test_every_column_of_the_evaluation_tables_has_a_workbook_header(windowed):
     assert sorted({c for t in span.tables.values() for c in t.columns if not has_header(c)}) == []
 
 
+@WINDOWED
 def test_a_windowed_runs_outputs_hold_the_windows(windowed, tmp_path):
     """The workbook and the JSON hold every row per window; the HTML report the global ones."""
     import openpyxl
@@ -464,6 +470,7 @@ def test_a_windowed_runs_outputs_hold_the_windows(windowed, tmp_path):
     assert (per["sector"] != "global").any()
 
 
+@WINDOWED
 def test_windows_without_reports_are_named_and_the_others_pooled(recording, windowed):
     """07:00-08:30 in 30-minute windows: the recording starts at 08:00, so the first two windows hold no
     report and are named in the notes; the span's figures are the third window's, which is the first half
