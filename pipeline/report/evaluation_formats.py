@@ -15,6 +15,9 @@ from msdc.pipeline.report.formats import UNITS, column_unit
 
 PROPORTION_FORMAT = "0.00%"  # the scorecard's (evaluation_xlsx.UNIT_FORMATS["fraction"])
 INTERVAL_COLUMNS = ("ci_low", "ci_high")
+# the per-aircraft table's shares of the reference's samples: fractions 0-1 (formats' "share" columns are
+# percentages already elsewhere)
+SHARE_COLUMNS = ("self_reference_share", "surface_share")
 ROW_UNIT_COLUMNS = ("value", "ci_low", "ci_high", "threshold")  # in the unit of the row's requirement
 SIGNIFICANT = 4
 # decimals of each requirement unit, as the scorecard shows them (evaluation_xlsx.UNIT_FORMATS)
@@ -29,12 +32,13 @@ def is_proportion_id(name: str) -> bool:
 
 def proportion_columns(frame: pd.DataFrame) -> set[str]:
     """The columns holding proportions 0-1: those named by a proportion requirement, and ci_low/ci_high
-    when every requirement-named column of the table is a proportion (they are its interval)."""
+    when every requirement-named column of the table is a proportion (they are its interval), and the
+    reference's shares (SHARE_COLUMNS)."""
     named = [str(c) for c in frame.columns if str(c) in CATALOGUE]
     out = {c for c in named if is_proportion_id(c)}
     if out and len(out) == len(named) and "requirement" not in frame.columns:
         out |= {c for c in INTERVAL_COLUMNS if c in frame.columns}
-    return out
+    return out | {c for c in SHARE_COLUMNS if c in frame.columns}
 
 
 def unit_text(value: float, unit: str) -> str:

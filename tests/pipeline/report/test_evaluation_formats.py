@@ -40,3 +40,13 @@ def test_each_kind_of_column_as_the_workbook_shows_it() -> None:
     assert number_text(0.975, "value", shares, "fraction") == "97.50 %"  # beside requirement pd
     assert number_text(120.45, "value", shares, "m") == "120.5"  # beside requirement rms_m
     assert number_text(math.nan, "pd", shares) == ""
+
+
+def test_the_reference_shares_of_the_per_aircraft_table_are_fractions_shown_as_percentages() -> None:
+    """self_reference_share 0.0446 is 4.46 % of the reference's samples (not 0.0 of a percent)."""
+    per = pd.DataFrame(columns=["aircraft", "self_reference_share", "surface_share", "reference_samples",
+                                "pd", "ci_low", "ci_high", "rms_error_m"])
+    shown = proportion_columns(per)
+    assert shown == {"self_reference_share", "surface_share", "pd", "ci_low", "ci_high"}
+    assert number_text(0.0446, "self_reference_share", shown) == "4.46 %"
+    assert number_text(1.0, "surface_share", shown) == "100.00 %"
