@@ -39,6 +39,11 @@ def distributed_by(distributor: Distributor | None) -> Iterator[None]:
         _DISTRIBUTOR.reset(token)
 
 
+def distributed_now() -> bool:
+    """Whether ``map_ordered(..., distributable=True)`` called here would run on a distributor."""
+    return _DISTRIBUTOR.get() is not None and not threading.current_thread().name.startswith(PREFIX)
+
+
 def thread_count() -> int:
     """The threads per-aircraft work uses: the CPUs this process may run on (taskset), at most
     MAX_THREADS."""
@@ -53,9 +58,8 @@ def map_ordered(fn: Callable[[T], R], items: Iterable[T], threads: int | None = 
     touch what another item's call writes. Called from one of its own threads (an aircraft's work that
     maps again) it runs in that thread: no pool inside a pool. ``distributable``: fn and each item are
     small enough to ship (fn holds no frame of the whole run), so an installed distributor runs them."""
-    distributor = _DISTRIBUTOR.get()
-    if distributable and distributor is not None and not threading.current_thread().name.startswith(PREFIX):
-        yield from distributor.map_ordered(fn, items, label)
+    if distributable and distributed_now():
+        yield from _DISTRIBUTOR.get().map_ordered(fn, items, label)
         return
     n = thread_count() if threads is None else threads
     if n <= 1 or threading.current_thread().name.startswith(PREFIX):

@@ -11,7 +11,9 @@ from __future__ import annotations
 
 import math
 import time
+from collections.abc import Iterator
 from dataclasses import dataclass, field, replace
+from functools import partial
 from pathlib import Path
 
 import numpy as np
@@ -473,14 +475,10 @@ def _evaluate_span(options: EvaluateOptions, checked: EvaluateChecked, progress:
     reads: list[Loaded] = []  # the first window's, then each one's inputs and selection alone
     rows, refused, external = [], [], False
     points = max(1, MAP_POINTS_PER_SENSOR // len(windows))  # the span's map keeps about as many points
-    for k, selection in enumerate(windows):
-        label = (selection.start.text, selection.end.text)
-        if progress:
-            progress.stage(f"Window {k + 1} of {len(windows)}: {label[0]} to {label[1]}")
-        try:
-            run = _evaluate_window(options, replace(checked, selection=selection), progress, warnings)
-        except JobError as exc:
-            refused.append(f"window {label[0]} to {label[1]}: {exc}")
+    for label, run, said in _window_runs(options, checked, windows, progress):
+        warnings += said
+        if isinstance(run, str):
+            refused.append(f"window {label[0]} to {label[1]}: {run}")
             continue
         for r in run.results:
             span = spans.setdefault(r.sensor, SensorSpan(r.kind, r.site))
@@ -511,6 +509,60 @@ def _evaluate_span(options: EvaluateOptions, checked: EvaluateChecked, progress:
     kept = [{"from": a, "to": b, "kept": (loaded.selection or {}).get("kept")}
             for ((a, b), _), loaded in zip(runs, reads, strict=True)]
     return WindowRun(results, notes, _pooled_loaded(checked, reads), external, kept), tables
+
+
+def _window_runs(options: EvaluateOptions, checked: EvaluateChecked, windows: list, progress: Progress | None
+                 ) -> Iterator[tuple[tuple[str, str], WindowRun | str, list[str]]]:
+    """Each window's label, evaluation (or why the data do not allow one) and warnings, in the windows' order.
+    On a cluster each window is a task of its own: a worker reads its inputs around the window and evaluates
+    it (its per-aircraft work on the worker's threads), so the windows run side by side and this process only
+    pools them; otherwise one after the other here."""
+    from msdc.pipeline.parallel import distributed_now, map_ordered
+
+    def label(selection) -> tuple[str, str]:
+        return selection.start.text, selection.end.text
+
+    if distributed_now() and len(windows) > 1:
+        if progress:
+            progress.stage(f"Evaluating {len(windows)} windows, each a task on the cluster")
+        task = partial(_window_task, options, checked)
+        outs = map_ordered(task, windows, distributable=True,
+                           label=lambda s: f"window {s.start.text} to {s.end.text}")
+        for k, (selection, (run, said)) in enumerate(zip(windows, outs, strict=True)):
+            if isinstance(run, OptionError):
+                raise run
+            if progress:
+                progress.step(f"window {k + 1} of {len(windows)} evaluated: {selection.start.text} to "
+                              f"{selection.end.text}")
+            yield label(selection), run, said
+        return
+    for k, selection in enumerate(windows):
+        if progress:
+            a, b = label(selection)
+            progress.stage(f"Window {k + 1} of {len(windows)}: {a} to {b}")
+        run, said = _window_task(options, checked, selection, progress)
+        if isinstance(run, OptionError):
+            raise run
+        yield label(selection), run, said
+
+
+def _window_task(options: EvaluateOptions, checked: EvaluateChecked, selection,
+                 progress: Progress | None = None) -> tuple[WindowRun | str | OptionError, list[str]]:
+    """One window evaluated as --from/--to of it alone would be, and its warnings; the JobError's message when
+    the data do not allow it, an OptionError returned to be raised by the caller (a task's own exceptions are
+    retried as failures). Runs here or on a cluster's worker."""
+    from msdc.pipeline.model.load import release_free_memory
+
+    said: list[str] = []
+    try:
+        run = _evaluate_window(options, replace(checked, selection=selection), progress, said)
+    except JobError as exc:
+        return str(exc), said
+    except OptionError as exc:
+        return exc, said
+    finally:
+        release_free_memory()  # a worker goes on to its next window
+    return run, said
 
 
 def _thinned_map(points: pd.DataFrame, limit: int) -> pd.DataFrame:

@@ -112,6 +112,25 @@ def test_a_window_reads_only_its_margin_of_the_dataset(tmp_path, dataset, comman
     assert never_read > 5_000 and reports[0] - reports[1] == never_read == time_cut[0] - time_cut[1]
 
 
+def test_windows_on_a_cluster_are_the_windows_one_after_the_other(tmp_path, dataset, dask_scheduler, capsys):
+    """--window on a cluster: each window is one task, evaluated on a worker (which reads the dataset around
+    it); the recordings' windows run one after the other in the test's process. The JSON is the same
+    exactly: each window is evaluated by the same code on the same records, pooled in the windows' order."""
+    command = ["evaluate", "--sensors", str(SENSORS), "--preset", "eurocontrol-1997-ssr",
+               "--from", f"{DAY}T08:40:00Z", "--to", f"{DAY}T09:00:00Z", "--window", "10"]
+    files, on_dataset = _file_and_dataset(tmp_path, dataset, command, dask_scheduler)
+    for doc in (files, on_dataset):  # what was read differs: the recordings whole, the dataset around each
+        for info in doc["inputs"]:
+            info.pop("records")
+        doc["parameters"]["report_selection"].pop("reports")
+        doc["parameters"]["report_selection"]["left_out"].pop("time")
+    assert len(files["parameters"]["windows"]) == 2
+    assert on_dataset == files
+    err = capsys.readouterr().err
+    assert "Evaluating 2 windows, each a task on the cluster" in err
+    assert f"2 task(s) on the Dask scheduler at {dask_scheduler}, none failed" in err  # windows, not aircraft
+
+
 def _corrupt(root: Path, category: int) -> Path:
     part = next(root.glob(f"date=*/category={category:03d}/sensor=*/part-*.parquet"))
     saved = part.with_name("saved")
