@@ -5,6 +5,8 @@ depends on).
     python benchmarks/dataset_jobs.py --dataset DIR --sensors SENSORS.toml [--workers 1 2] [--job evaluate]
         [--from 2026-11-28T13:30 --to 2026-11-28T14:30] [--reference adsb] [--window MINUTES]
 
+``--workers 0`` runs the job with ``--scheduler none`` (no cluster: threads in the one process).
+
 Run it by hand on a quiet machine (the figures go to the notes and docs/guide/large-recordings.md); the
 dataset comes from ``msdc ingest`` of benchmarks/centre_day.py's recordings."""
 
@@ -49,7 +51,8 @@ def run(job: str, dataset: str, sensors: str, workers: int, extra: list[str]) ->
     with tempfile.TemporaryDirectory() as tmp:
         out = [] if job == "stats" else ["--json", str(Path(tmp) / "out.json")]
         sens = [] if job == "stats" else ["--sensors", sensors]
-        argv = ["msdc", *JOBS[job], "--dataset", dataset, *sens, "--workers", str(workers), *out, *extra]
+        engine = ["--workers", str(workers)] if workers else ["--scheduler", "none"]
+        argv = ["msdc", *JOBS[job], "--dataset", dataset, *sens, *engine, *out, *extra]
         before = resource.getrusage(resource.RUSAGE_CHILDREN)
         started = time.monotonic()
         proc = subprocess.Popen(argv, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
@@ -77,7 +80,8 @@ def main() -> None:
     ap.add_argument("--dataset", required=True)
     ap.add_argument("--sensors", required=True)
     ap.add_argument("--job", choices=sorted(JOBS), default="evaluate")
-    ap.add_argument("--workers", type=int, nargs="+", default=[1, 2])
+    ap.add_argument("--workers", type=int, nargs="+", default=[1, 2],
+                    help="local cluster sizes to run; 0: --scheduler none (threads in the one process)")
     ap.add_argument("--from", dest="start")
     ap.add_argument("--to", dest="end")
     ap.add_argument("--reference", choices=["leave-one-out", "adsb"], help="evaluate's reference")
