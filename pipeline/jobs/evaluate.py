@@ -531,7 +531,7 @@ def _window_runs(options: EvaluateOptions, checked: EvaluateChecked, windows: li
         for k, (selection, (run, said)) in enumerate(zip(windows, outs, strict=True)):
             if isinstance(run, OptionError):
                 raise run
-            if progress:
+            if progress and not progress.tty:  # a terminal has the cluster's bar of tasks instead
                 progress.step(f"window {k + 1} of {len(windows)} evaluated: {selection.start.text} to "
                               f"{selection.end.text}")
             yield label(selection), run, said

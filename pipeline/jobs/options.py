@@ -781,7 +781,8 @@ class EvaluateOptions(ReferenceFilterOptions, DatasetOptions, DecodingOptions):
              "the windows' figures: memory stays about that of one window over a day",
         doc="evaluate the `--from`/`--to` span window by window, each of MINUTES (the last may be shorter) "
             "read with its margin as `--from`/`--to` of it alone would be, and pool the windows' figures: "
-            "memory stays about that of one window over a day; the outputs add a scorecard per window "
+            "memory stays about that of one window over a day; on a Dask cluster each window is a task of "
+            "its own, the windows side by side; the outputs add a scorecard per window "
             "([A long span, window by window](#a-long-span-window-by-window))")
     min_sil: int | None = option(None, "--min-sil", range=SIL_RANGE, section="measurements",
                                  help="leave ADS-B reports with SIL below N out of the reference",
