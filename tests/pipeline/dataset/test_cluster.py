@@ -5,6 +5,7 @@ checked, an unreachable scheduler said; and the progress bar's time left."""
 from __future__ import annotations
 
 import io
+import os
 import time
 from pathlib import Path
 
@@ -87,6 +88,31 @@ def test_the_job_context_installs_the_cluster_and_reports_a_failure(dask_schedul
     assert "partition 0: failed on 3 tries" in str(exc.value)
     with distributed(TrackOptions(scheduler="none")) as engine:  # threads, as without --dataset
         assert engine is None and list(map_ordered(_slow_square, range(3), distributable=True)) == [0, 1, 4]
+
+
+def _trim_threshold(_) -> str | None:
+    return os.environ.get("MALLOC_TRIM_THRESHOLD_")
+
+
+def test_local_workers_keep_glibcs_own_heap_trimming(monkeypatch):
+    """Dask's nanny gives its workers MALLOC_TRIM_THRESHOLD_=65536 (distributed's own configuration, read
+    here, not copied); the local cluster msdc starts leaves it unset, and a value the user exports wins."""
+    import dask
+
+    pytest.importorskip("distributed", reason="dask's distributed scheduler is not installed")
+    assert dask.config.get("distributed.nanny.pre-spawn-environ.MALLOC_TRIM_THRESHOLD_") is not None
+    monkeypatch.delenv("MALLOC_TRIM_THRESHOLD_", raising=False)
+    engine = DaskDistributor(workers=1)
+    try:
+        assert list(engine.map_ordered(_trim_threshold, [0])) == [None]
+    finally:
+        engine.close()
+    monkeypatch.setenv("MALLOC_TRIM_THRESHOLD_", "1048576")
+    engine = DaskDistributor(workers=1)
+    try:
+        assert list(engine.map_ordered(_trim_threshold, [0])) == ["1048576"]
+    finally:
+        engine.close()
 
 
 def test_scheduler_and_workers_are_checked():
