@@ -475,7 +475,7 @@ def _evaluate_span(options: EvaluateOptions, checked: EvaluateChecked, progress:
     reads: list[Loaded] = []  # the first window's, then each one's inputs and selection alone
     rows, refused, external = [], [], False
     points = max(1, MAP_POINTS_PER_SENSOR // len(windows))  # the span's map keeps about as many points
-    for label, run, said in _window_runs(options, checked, windows, progress):
+    for label, run, said in _window_runs(options, checked, windows, points, progress):
         warnings += said
         if isinstance(run, str):
             refused.append(f"window {label[0]} to {label[1]}: {run}")
@@ -483,7 +483,7 @@ def _evaluate_span(options: EvaluateOptions, checked: EvaluateChecked, progress:
         for r in run.results:
             span = spans.setdefault(r.sensor, SensorSpan(r.kind, r.site))
             span.add(label, r.outcomes, r.notes, r.per_aircraft, r.bands, r.polar, r.vertical, r.range_errors,
-                     _thinned_map(r.map_points, points))
+                     r.map_points)
             rows += [{"window_from": label[0], "window_to": label[1], **row} for row in r.rows]
         runs.append((label, run.notes))
         reads.append(run.loaded if not reads else Loaded({}, [], run.loaded.inputs, run.loaded.date,
@@ -511,12 +511,13 @@ def _evaluate_span(options: EvaluateOptions, checked: EvaluateChecked, progress:
     return WindowRun(results, notes, _pooled_loaded(checked, reads), external, kept), tables
 
 
-def _window_runs(options: EvaluateOptions, checked: EvaluateChecked, windows: list, progress: Progress | None
-                 ) -> Iterator[tuple[tuple[str, str], WindowRun | str, list[str]]]:
+def _window_runs(options: EvaluateOptions, checked: EvaluateChecked, windows: list, map_points: int,
+                 progress: Progress | None) -> Iterator[tuple[tuple[str, str], WindowRun | str, list[str]]]:
     """Each window's label, evaluation (or why the data do not allow one) and warnings, in the windows' order.
     On a cluster each window is a task of its own: a worker reads its inputs around the window and evaluates
     it (its per-aircraft work on the worker's threads), so the windows run side by side and this process only
-    pools them; otherwise one after the other here."""
+    pools them; otherwise one after the other here. Each window's map points are thinned to ``map_points`` a
+    sensor and source where it ran."""
     from msdc.pipeline.parallel import distributed_now, map_ordered
 
     def label(selection) -> tuple[str, str]:
@@ -525,7 +526,7 @@ def _window_runs(options: EvaluateOptions, checked: EvaluateChecked, windows: li
     if distributed_now() and len(windows) > 1:
         if progress:
             progress.stage(f"Evaluating {len(windows)} windows, each a task on the cluster")
-        task = partial(_window_task, options, checked)
+        task = partial(_window_task, options, checked, map_points)
         outs = map_ordered(task, windows, distributable=True,
                            label=lambda s: f"window {s.start.text} to {s.end.text}")
         for k, (selection, (run, said)) in enumerate(zip(windows, outs, strict=True)):
@@ -540,17 +541,18 @@ def _window_runs(options: EvaluateOptions, checked: EvaluateChecked, windows: li
         if progress:
             a, b = label(selection)
             progress.stage(f"Window {k + 1} of {len(windows)}: {a} to {b}")
-        run, said = _window_task(options, checked, selection, progress)
+        run, said = _window_task(options, checked, map_points, selection, progress)
         if isinstance(run, OptionError):
             raise run
         yield label(selection), run, said
 
 
-def _window_task(options: EvaluateOptions, checked: EvaluateChecked, selection,
+def _window_task(options: EvaluateOptions, checked: EvaluateChecked, map_points: int, selection,
                  progress: Progress | None = None) -> tuple[WindowRun | str | OptionError, list[str]]:
-    """One window evaluated as --from/--to of it alone would be, and its warnings; the JobError's message when
-    the data do not allow it, an OptionError returned to be raised by the caller (a task's own exceptions are
-    retried as failures). Runs here or on a cluster's worker."""
+    """One window evaluated as --from/--to of it alone would be, its map points thinned to ``map_points`` a
+    sensor and source (what a task sends back is what the span keeps), and its warnings; the JobError's
+    message when the data do not allow it, an OptionError returned to be raised by the caller (a task's own
+    exceptions are retried as failures). Runs here or on a cluster's worker."""
     from msdc.pipeline.model.load import release_free_memory
 
     said: list[str] = []
@@ -562,6 +564,8 @@ def _window_task(options: EvaluateOptions, checked: EvaluateChecked, selection,
         return exc, said
     finally:
         release_free_memory()  # a worker goes on to its next window
+    for r in run.results:
+        r.map_points = _thinned_map(r.map_points, map_points)
     return run, said
 
 
