@@ -122,7 +122,10 @@ class DaskDistributor:
                 self._show(done, total, started)
         finally:
             if pending:
-                client.cancel([f for f, _ in pending])
+                try:
+                    client.cancel([f for f, _ in pending])
+                except (RuntimeError, OSError):  # the client already closed: its tasks went with it
+                    pass
 
     def _result(self, future, name: str):
         """A task's result, or TaskFailed naming it."""

@@ -529,13 +529,16 @@ def _window_runs(options: EvaluateOptions, checked: EvaluateChecked, windows: li
         task = partial(_window_task, options, checked, map_points)
         outs = map_ordered(task, windows, distributable=True,
                            label=lambda s: f"window {s.start.text} to {s.end.text}")
-        for k, (selection, (run, said)) in enumerate(zip(windows, outs, strict=True)):
-            if isinstance(run, OptionError):
-                raise run
-            if progress and not progress.tty:  # a terminal has the cluster's bar of tasks instead
-                progress.step(f"window {k + 1} of {len(windows)} evaluated: {selection.start.text} to "
-                              f"{selection.end.text}")
-            yield label(selection), run, said
+        try:
+            for k, (selection, (run, said)) in enumerate(zip(windows, outs, strict=True)):
+                if isinstance(run, OptionError):
+                    raise run
+                if progress and not progress.tty:  # a terminal has the cluster's bar of tasks instead
+                    progress.step(f"window {k + 1} of {len(windows)} evaluated: {selection.start.text} to "
+                                  f"{selection.end.text}")
+                yield label(selection), run, said
+        finally:
+            outs.close()  # the windows still running are cancelled now, while the cluster is there
         return
     for k, selection in enumerate(windows):
         if progress:

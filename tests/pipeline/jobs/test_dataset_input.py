@@ -131,6 +131,24 @@ def test_windows_on_a_cluster_are_the_windows_one_after_the_other(tmp_path, data
     assert f"2 task(s) on the Dask scheduler at {dask_scheduler}, none failed" in err  # windows, not aircraft
 
 
+@pytest.mark.filterwarnings("error::pytest.PytestUnraisableExceptionWarning")  # the windows' tasks left behind
+def test_a_bad_option_found_in_a_window_task_is_said_as_without_a_cluster(tmp_path, dataset, dask_scheduler,
+                                                                         capsys):
+    """A reference file is read by each window's task (on its worker): a bad line in it ends the run with
+    exit status 2 and the file and line named, as without a cluster, and writes nothing; the other windows'
+    tasks are cancelled while the cluster is there (no error is left for the garbage collector to print)."""
+    bad = tmp_path / "ref.csv"
+    bad.write_text("aircraft,time,latitude,longitude,altitude_ft\n,2020-01-01T08:41:00Z,3.0,101.0,10000\n")
+    out = tmp_path / "e.json"
+    for engine in (["--scheduler", dask_scheduler], ["--scheduler", "none"]):
+        assert main(["evaluate", "--dataset", str(dataset), "--sensors", str(SENSORS), "--preset",
+                     "eurocontrol-1997-ssr", "--from", f"{DAY}T08:40:00Z", "--to", f"{DAY}T09:00:00Z",
+                     "--window", "10", "--reference-file", str(bad), "--json", str(out), *engine]) == 2
+        err = capsys.readouterr().err
+        assert f"--reference-file: {bad}:2: aircraft is empty" in err and "Traceback" not in err
+        assert not out.exists()
+
+
 def _corrupt(root: Path, category: int) -> Path:
     part = next(root.glob(f"date=*/category={category:03d}/sensor=*/part-*.parquet"))
     saved = part.with_name("saved")
