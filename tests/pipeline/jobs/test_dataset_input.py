@@ -131,7 +131,7 @@ def test_windows_on_a_cluster_are_the_windows_one_after_the_other(tmp_path, data
     assert f"2 task(s) on the Dask scheduler at {dask_scheduler}, none failed" in err  # windows, not aircraft
 
 
-@pytest.mark.filterwarnings("error::pytest.PytestUnraisableExceptionWarning")  # the windows' tasks left behind
+@pytest.mark.filterwarnings("error::pytest.PytestUnraisableExceptionWarning")  # tasks left behind
 def test_a_bad_option_found_in_a_window_task_is_said_as_without_a_cluster(tmp_path, dataset, dask_scheduler,
                                                                          capsys):
     """A reference file is read by each window's task (on its worker): a bad line in it ends the run with
