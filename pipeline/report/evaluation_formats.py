@@ -67,11 +67,20 @@ def _clock(seconds: float) -> str:
     return f"{h:02d}:{m:02d}:{rest / 1000:06.3f}"
 
 
+def sample_text(n: float) -> str:
+    """A scorecard row's sample ``n``: a count with thousands separated, an exposure (a rate's scans) to one
+    decimal."""
+    return f"{int(n):,}" if float(n).is_integer() else f"{n:,.1f}"
+
+
 def column_text(column: str, proportions: set[str], row_unit: str | None = None):
-    """A function giving a float of ``column`` as text ('' for NaN), under the rules above."""
+    """A function giving a float of ``column`` as text ('' for NaN), under the rules above; a scorecard
+    row's ``n`` (a table with a requirement column) as the scorecard shows it."""
     name = str(column)
     if row_unit is not None and name in ROW_UNIT_COLUMNS:
         return lambda v: unit_text(v, row_unit)
+    if row_unit is not None and name == "n":
+        return sample_text
     if name in proportions:
         return lambda v: unit_text(v, "fraction")
     unit = column_unit(name)

@@ -24,7 +24,7 @@ from msdc.pipeline.evaluate.scorecard_schema import (
     validate_scorecard,
     validate_tables,
 )
-from msdc.pipeline.report.evaluation_formats import number_text, proportion_columns
+from msdc.pipeline.report.evaluation_formats import number_text, proportion_columns, sample_text
 from msdc.pipeline.report.evaluation_xlsx import SCORECARD_HEADERS, UNCHECKED_NOTE, UNIT_WORDS
 from msdc.pipeline.report.files import named
 from msdc.pipeline.report.headers import workbook_header
@@ -68,7 +68,7 @@ def _scorecard_table(card: pd.DataFrame) -> str:
         cells = {
             "unit": html.escape(UNIT_WORDS[unit]),
             "checked": "yes" if rec["checked"] else "no",
-            "n": f"{int(n):,}" if float(n).is_integer() else f"{n:,.1f}",
+            "n": sample_text(n),
         }
         out = []
         for key, _ in SCORECARD_HEADERS:

@@ -50,3 +50,13 @@ def test_the_reference_shares_of_the_per_aircraft_table_are_fractions_shown_as_p
     assert shown == {"self_reference_share", "surface_share", "pd", "ci_low", "ci_high"}
     assert number_text(0.0446, "self_reference_share", shown) == "4.46 %"
     assert number_text(1.0, "surface_share", shown) == "100.00 %"
+
+
+def test_a_scorecard_rows_sample_reads_as_the_scorecard_shows_it() -> None:
+    """In a table of scorecard rows (the scorecard per window) ``n`` is a count, 874 not 874.0, with thousands
+    separated; a rate's exposure in scans keeps one decimal; ``n`` of a table without requirements is a plain
+    number."""
+    assert number_text(874.0, "n", set(), "fraction") == "874"
+    assert number_text(2904.0, "n", set(), "fraction") == "2,904"
+    assert number_text(2500.4, "n", set(), "per scan") == "2,500.4"
+    assert number_text(874.0, "n", set()) == "874.0"
