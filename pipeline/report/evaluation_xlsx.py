@@ -15,11 +15,17 @@ import pandas as pd
 from openpyxl import Workbook
 from openpyxl.cell import WriteOnlyCell
 from openpyxl.styles import Alignment, Font, PatternFill
+from openpyxl.utils import get_column_letter
 from openpyxl.worksheet._write_only import WriteOnlyWorksheet
 
 from msdc.pipeline.correlate.results import CorrelationRun
 from msdc.pipeline.evaluate.catalogue import CATALOGUE
-from msdc.pipeline.evaluate.scorecard_schema import validate_images, validate_scorecard, validate_tables
+from msdc.pipeline.evaluate.scorecard_schema import (
+    SCORECARD_COLUMNS,
+    validate_images,
+    validate_scorecard,
+    validate_tables,
+)
 from msdc.pipeline.report.cells import (
     BOLD,
     MAX_WIDTH,
@@ -37,6 +43,7 @@ from msdc.pipeline.report.cells import (
 )
 from msdc.pipeline.report.evaluation_formats import PROPORTION_FORMAT, proportion_columns
 from msdc.pipeline.report.excel import _discard, _write_figures, sheet_name, write_parameters
+from msdc.pipeline.report.headers import workbook_header
 from msdc.pipeline.report.saving import save
 
 SCORECARD_SHEET = "Scorecard"
@@ -114,10 +121,11 @@ def _scorecard_rows(card: pd.DataFrame) -> list[dict[str, object]]:
     return rows
 
 
-def _widths(rows: list[dict[str, object]]) -> list[float]:
+def _widths(rows: list[dict[str, object]], headers: tuple[tuple[str, str], ...] = SCORECARD_HEADERS
+            ) -> list[float]:
     """Each column's width: its header's longest word and its widest value, the wrapped columns capped."""
     widths = []
-    for key, header in SCORECARD_HEADERS:
+    for key, header in headers:
         numeric = key in ("value", "ci_low", "ci_high", "threshold")
         texts = [_display(r[key], r["_format"] if numeric else "#,##0.0" if key == "n" else None)
                  for r in rows]
@@ -127,26 +135,30 @@ def _widths(rows: list[dict[str, object]]) -> list[float]:
     return widths
 
 
-def _write_scorecard(wb: Workbook, card: pd.DataFrame) -> None:
-    """The Scorecard sheet: one row per sensor, sector and requirement, the verdict cell coloured."""
-    ws = wb.create_sheet(SCORECARD_SHEET)
+def _write_scorecard(wb: Workbook, card: pd.DataFrame, title: str = SCORECARD_SHEET,
+                     leading: tuple[str, ...] = ()) -> None:
+    """The Scorecard sheet (or another table of scorecard rows, its ``leading`` columns first, e.g. each
+    row's window): one row per sensor, sector and requirement, the values in the row's unit, the verdict
+    cell coloured."""
+    ws = wb.create_sheet(title)
+    keys = (*((c, workbook_header(c)) for c in leading), *SCORECARD_HEADERS)
     rows = _scorecard_rows(card)
-    widths = _widths(rows)
-    headers = [h for _, h in SCORECARD_HEADERS]
+    widths = _widths(rows, keys)
+    headers = [h for _, h in keys]
     set_widths(ws, widths)
-    ws.freeze_panes = "D2"
+    ws.freeze_panes = f"{get_column_letter(len(leading) + 4)}2"
     page_setup(ws)  # one page wide, header row repeated on every page
     ws.row_dimensions[1].height = header_height(headers, widths)
     for i, row in enumerate(rows, start=2):
         lines = max([1, *(len(textwrap.wrap(str(row[k]), width=int(widths[j]) - 2) or [""])
-                          for j, (k, _) in enumerate(SCORECARD_HEADERS) if k in _WRAP_COLUMNS)])
+                          for j, (k, _) in enumerate(keys) if k in _WRAP_COLUMNS)])
         if lines > 1:
             ws.row_dimensions[i].height = lines * ROW_HEIGHT_PT
     ws.append(header_cells(ws, headers))
     for row in rows:
         fmt = str(row["_format"])
         cells = []
-        for key, _ in SCORECARD_HEADERS:
+        for key, _ in keys:
             value = row[key]
             if key in ("value", "ci_low", "ci_high"):
                 cells.append(_cell(ws, value, fmt))
@@ -210,7 +222,11 @@ def write_evaluation_xlsx(scorecard: pd.DataFrame, path: str | os.PathLike[str],
         if figures:
             _write_figures(wb, sheet_name(COVERAGE_SHEET, taken), figures)
         for name, frame in extra.items():
-            _write_table(wb, sheet_name(name, taken), frame)
+            if set(SCORECARD_COLUMNS) <= set(frame.columns):  # scorecard rows (per window): as the scorecard
+                leading = tuple(str(c) for c in frame.columns if c not in SCORECARD_COLUMNS)
+                _write_scorecard(wb, frame, sheet_name(name, taken), leading)
+            else:
+                _write_table(wb, sheet_name(name, taken), frame)
         if run is not None:
             write_parameters(wb, CorrelationRun(inputs=list(run.get("inputs", [])),
                                                 parameters=dict(run.get("parameters", {}))),

@@ -461,9 +461,18 @@ def test_a_windowed_runs_outputs_hold_the_windows(windowed, tmp_path):
     per = span.tables["Scorecard per window"]
     assert len(doc["tables"]["Scorecard per window"]) == len(per) > 0
     assert doc["parameters"]["windows"][1]["from"] == "08:30"
-    sheet = openpyxl.load_workbook(tmp_path / "w.xlsx", read_only=True)["Scorecard per window"]
-    assert sum(1 for row in sheet.iter_rows(values_only=True) if any(v is not None for v in row)) \
-        == len(per) + 1  # with the header row
+    sheet = openpyxl.load_workbook(tmp_path / "w.xlsx")["Scorecard per window"]
+    rows = [row for row in sheet.iter_rows() if row[1].value is not None]  # the notes below: column A only
+    assert len(rows) == len(per) + 1  # with the header row
+    head = [c.value for c in rows[0]]
+    assert head[:5] == ["Window from", "Window to", "Sensor", "Sector", "Requirement"]
+    # written as the scorecard is: a PD row's figures as percentages, "yes"/"no", the verdict coloured
+    value, checked, verdict = (head.index(h) for h in ("Value", "Threshold checked against the standard",
+                                                       "Verdict"))
+    pd_rows = [r for r in rows[1:] if r[head.index("Requirement")].value == "pd"]
+    assert pd_rows and all(r[value].number_format == "0.00%" for r in pd_rows)
+    assert {r[checked].value for r in rows[1:]} <= {"yes", "no"}
+    assert all(r[verdict].fill.fgColor.rgb.endswith(("C6EFCE", "FFC7CE", "FFEB9C")) for r in rows[1:])
     page = (tmp_path / "w.html").read_text()
     shown = page.split("Scorecard per window, global rows")[1].split("</table>")[0]
     assert shown.count("<tr>") == (per["sector"] == "global").sum() + 1  # with the header row
