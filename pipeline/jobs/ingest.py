@@ -61,8 +61,9 @@ class IngestResult:
 def ingest_job(options: IngestOptions, *, on_chunk: Callable[[int, int, str], None] | None = None
                ) -> IngestResult:
     """Ingest every input not in the dataset yet (keyed by the SHA-256 validation hashed). With
-    ``options.workers`` > 1 the inputs are checked in a process pool; then, when there are at least as many
-    inputs to ingest as workers, each pool process ingests whole inputs (dataset.parallel), else the inputs
+    ``options.workers`` > 1 the inputs are checked in a process pool; then, when the command names at least as
+    many inputs (distinct files, ingested already or not) as workers, each pool process ingests whole inputs
+    (dataset.parallel), else the inputs
     are ingested one after the other, a raw recording's windows decoded and written in the pool. Either
     way the inputs are committed in input order. A failure removes the parts of the input that failed (and
     of those after it); the inputs before it are committed (run again to go on). JobError for bad or
@@ -111,7 +112,9 @@ def ingest_job(options: IngestOptions, *, on_chunk: Callable[[int, int, str], No
                 mf.save(root, manifest)  # last: the input is in the dataset from now on
                 result.ingested.append(record)
 
-            if pool is not None and len(todo) >= options.workers:
+            # whole inputs or windows by the command's inputs, not by those left: a run resumed after a kill
+            # writes each input's parts as the uninterrupted run did
+            if pool is not None and len(set(digests)) >= options.workers:
                 ingest_all(todo, settings, root, pool.executor, pool.stop, pool.progress, commit, on_chunk)
             else:
                 for t in todo:

@@ -239,6 +239,28 @@ def test_workers_2_a_failed_input_leaves_the_dataset_one_process_leaves(tmp_path
     same_dataset(tmp_path / "ds1", tmp_path / "ds2")
 
 
+def test_a_resumed_ingest_cuts_its_inputs_as_the_whole_command_did(tmp_path):
+    """Three inputs on two workers are each ingested whole (one part per partition); a rerun of the same
+    command after a kill that left only the last input to do writes it whole too, not in windows as a
+    command of that one input would: the dataset of the uninterrupted run (seen once in the kill test above,
+    when a kill fell after the first two inputs' commits)."""
+    from msdc.pipeline.dataset import manifest as mf
+
+    rec = tmp_path / "midnight.ast"
+    midnight_recording(rec, 12000)
+    inputs = [str(rec), str(RADAR), str(ADSB), "--date", DAY, "--chunk-mb", "0.1", "--workers", "2"]
+    reference, resumed = tmp_path / "reference", tmp_path / "resumed"
+    assert ingest(*inputs, "--dataset", str(reference)) == 0
+    shutil.copytree(reference, resumed)
+    manifest = mf.load(resumed)
+    last = next(d for d, r in manifest.inputs.items() if Path(r["path"]).name == ADSB.name)
+    for part in manifest.inputs.pop(last)["parts"]:  # as if killed before the last input's commit
+        (resumed / part["path"]).unlink()
+    mf.save(resumed, manifest)
+    assert ingest(*inputs, "--dataset", str(resumed)) == 0
+    same_dataset(reference, resumed)
+
+
 def _run(args: list[str]) -> subprocess.Popen:
     return subprocess.Popen([sys.executable, "-m", "msdc.pipeline.cli", "ingest", *args],
                             stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
