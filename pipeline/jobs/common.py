@@ -719,14 +719,23 @@ def selected_reports(meas: pd.DataFrame, checked: Checked, loaded: Loaded) -> tu
     if not keep.any():
         raise JobError(f"{describe(loaded.selection)}: no report is left to analyse")
     attrs = dict(meas.attrs)
-    kinds = meas["sensor_kind"].astype(str) if "sensor_kind" in meas else None
+    read_kinds = _kind_counts(meas)
     meas = meas[keep].reset_index(drop=True)
     meas.attrs = attrs
-    gone = [] if kinds is None else sorted(set(kinds.unique()) - set(kinds[keep].unique()))
+    kept_kinds = _kind_counts(meas)
+    gone = sorted(k for k in read_kinds if k not in kept_kinds)
     nouns = {"radar": "radar (CAT048)", "adsb": "ADS-B (CAT021)", "mlat": "multilateration (CAT010/CAT020)",
              "smr": "surface radar (CAT010)"}
-    return meas, [f"the report selection keeps no {nouns.get(k, k)} report of the {int((kinds == k).sum())} "
+    return meas, [f"the report selection keeps no {nouns.get(k, k)} report of the {read_kinds[k]} "
                   "in the inputs: what needs them is empty" for k in gone]
+
+
+def _kind_counts(meas: pd.DataFrame) -> dict[str, int]:
+    """Reports per sensor kind present, counted by the column's codes (no text made per row)."""
+    if "sensor_kind" not in meas:
+        return {}
+    counts = meas["sensor_kind"].value_counts(dropna=False)
+    return {str(k): int(n) for k, n in counts.items() if n}
 
 
 def unplaced_warnings(loaded: Loaded, options: AircraftOptions) -> list[str]:
@@ -969,8 +978,10 @@ def source_measurements(loaded, checked: Checked, options) -> tuple[pd.DataFrame
     warnings += list(meas.attrs.get("coverage_warnings", ()))
     warnings += list(meas.attrs.get("identity_warnings", ()))
     if local and local != {"mlat", "smr"} and len(meas):  # CAT010 holds both kinds: the one not asked goes
-        kinds = meas["sensor_kind"].astype(str)
-        meas = meas[~kinds.isin({"mlat", "smr"} - local).to_numpy(bool)].reset_index(drop=True)
+        from msdc.pipeline.model.schema import equals_text
+
+        (unasked,) = {"mlat", "smr"} - local
+        meas = meas[~equals_text(meas["sensor_kind"], unasked)].reset_index(drop=True)
     return meas, warnings
 
 
