@@ -28,7 +28,7 @@ CONNECT_TIMEOUT_S = 10.0
 # KiB for them, so every free of a few pages goes back to the kernel and is faulted in again (10 minutes of
 # the simulated centre evaluated in one process: 4.0 M page faults and 12 s of system time with that
 # setting, 1.0 M and 5 s without). msdc trims itself where a job lets go of its data
-# (model.load.release_free_memory). A value exported in the environment still wins, as Dask lets it.
+# (model.heap.release_free_memory). A value exported in the environment still wins, as Dask lets it.
 LOCAL_WORKER_CONFIG = {"distributed.nanny.pre-spawn-environ.MALLOC_TRIM_THRESHOLD_": None}
 _ADDRESS = re.compile(r"^(tcp|tls)://[^\s:/]+:\d{1,5}$")
 

@@ -38,13 +38,13 @@ from msdc.pipeline.jobs.options import (
 from msdc.pipeline.meta import ADSB_SIGMA_RANGE_M as ADSB_SIGMA_RANGE_M  # re-exported, as before
 from msdc.pipeline.meta import software_version
 from msdc.pipeline.model import editions as edition_notes
+from msdc.pipeline.model.heap import release_free_memory
 from msdc.pipeline.model.identity import normalise_address, normalise_callsign
 from msdc.pipeline.model.load import (
     Loaded,
     NoRecords,
     load,
     load_measurements,
-    release_free_memory,
     sha256,
 )
 from msdc.pipeline.model.time import utc_text

@@ -40,7 +40,8 @@ from msdc.pipeline.jobs.common import (
     side_files_beside,
 )
 from msdc.pipeline.jobs.options import CorrelateOptions, check_declared
-from msdc.pipeline.model.load import Loaded, release_free_memory
+from msdc.pipeline.model.heap import release_free_memory
+from msdc.pipeline.model.load import Loaded
 from msdc.pipeline.progress import Progress
 from msdc.pipeline.report.outputs import Background, BackgroundFailed, Prepared
 from msdc.pipeline.report.transaction import OutputTransaction, staged

@@ -411,7 +411,7 @@ def _evaluate_window(options: EvaluateOptions, checked: EvaluateChecked, progres
         field_monitors,
         tracker_ids,
     )
-    from msdc.pipeline.model.load import release_free_memory
+    from msdc.pipeline.model.heap import release_free_memory
     from msdc.pipeline.model.site_check import site_warnings
     from msdc.pipeline.model.time import midnight
 
@@ -556,7 +556,7 @@ def _window_task(options: EvaluateOptions, checked: EvaluateChecked, map_points:
     sensor and source (what a task sends back is what the span keeps), and its warnings; the JobError's
     message when the data do not allow it, an OptionError returned to be raised by the caller (a task's own
     exceptions are retried as failures). Runs here or on a cluster's worker."""
-    from msdc.pipeline.model.load import release_free_memory
+    from msdc.pipeline.model.heap import release_free_memory
 
     said: list[str] = []
     try:
@@ -648,7 +648,7 @@ def within_margin(loaded: Loaded, categories: tuple[int, ...]) -> None:
 def _keep_frames(loaded: Loaded, categories: tuple[int, ...]) -> None:
     """Let go the decoded frames of the other categories once the measurements are built from them (the
     ADS-B frame, the largest, is no more read: its reports are in the measurements)."""
-    from msdc.pipeline.model.load import release_free_memory
+    from msdc.pipeline.model.heap import release_free_memory
 
     loaded.frames = {c: f for c, f in loaded.frames.items() if c in categories}
     release_free_memory()

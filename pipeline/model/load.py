@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import ctypes
 import datetime as dt
 import hashlib
 from dataclasses import dataclass, field
@@ -14,6 +13,7 @@ import pandas as pd
 import msdc.asterix as asterix
 from msdc.asterix.reader import Recording
 from msdc.asterix.verdict import Tally, head_of
+from msdc.pipeline.model.heap import release_free_memory
 from msdc.pipeline.model.sources import file_labels, pair_codes, pair_of, source_id
 from msdc.pipeline.model.time import NAT_NS, UNDATED_DAY, FirstDayTally, absolute_time
 from msdc.pipeline.progress import Progress
@@ -416,15 +416,6 @@ def _stray_table(parts: list[pd.DataFrame]) -> pd.DataFrame:
     table = pd.concat(parts, ignore_index=True)
     groups = table.groupby(["sac", "sic", "file"], dropna=False, sort=False)
     return groups.agg(records=("records", "sum"), offset=("offset", "first")).reset_index()
-
-
-def release_free_memory() -> None:
-    """Give the heap pages freed so far back to the operating system (glibc's malloc_trim; nothing on
-    other C libraries): the chunks' freed columns would otherwise stay counted in the process's memory."""
-    try:
-        ctypes.CDLL("libc.so.6").malloc_trim(0)
-    except (OSError, AttributeError):
-        pass
 
 
 def _rows(frames: dict[int, pd.DataFrame], name: str, sensors: pd.DataFrame, adsb_sigma_m: float | None,

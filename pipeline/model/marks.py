@@ -7,8 +7,8 @@ import numpy as np
 import pandas as pd
 
 from msdc.pipeline.model.dedup import DEDUP_KEYS, duplicate_mask, repeat_groups, shared_rows
+from msdc.pipeline.model.heap import release_free_memory
 from msdc.pipeline.model.jumps import JUMP_FLAG_COLUMNS, JUMP_INPUTS, jump_flags
-from msdc.pipeline.model.load import release_free_memory
 
 
 def mark_once(meas: pd.DataFrame, *, split_adsb: bool = False, jumps: bool = True,
