@@ -30,6 +30,7 @@ from msdc.pipeline.model.geodesy import (
     plane_to_geodetic,
     polar_to_geodetic,
 )
+from msdc.pipeline.model.heap import release_free_memory
 from msdc.pipeline.model.identity import identify, normalise_address, normalise_callsign, refused_warnings
 from msdc.pipeline.model.schema import (
     coded_text,
@@ -516,6 +517,7 @@ def build_measurements(cat048: pd.DataFrame | None = None, cat021: pd.DataFrame 
         parts += local.parts
     if cut is not None:
         parts = [cut.keep(p) for p in parts]
+        release_free_memory()  # the rows beyond the margin (most of a short window's read) go back at once
     meas = finish_measurements(parts)
     for text in meas.attrs.get("coverage_warnings", ()):
         warnings.warn(text, OutOfCoverageWarning, stacklevel=2)
