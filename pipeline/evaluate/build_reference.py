@@ -107,6 +107,9 @@ def _identity(reference: pd.DataFrame, reports: pd.DataFrame, established: bool 
     out = reference.copy(deep=False)  # the identity columns added to a view, not to the caller's frame
     left_key, left_t = _keyed(out["aircraft_id"], out["time"])  # per row: the rows' order is no matter
     rep_key, rep_t = _keyed(reports["aircraft_id"], reports["time"])
+    # the ids as integer codes (one code per id, both sides): sorting and matching compare numbers, not texts
+    codes, _ = pd.factorize(np.concatenate([left_key, rep_key]))
+    left_key, rep_key = codes[:len(left_key)], codes[len(left_key):]
     for col in IDENTITY_COLUMNS:
         if col not in reports.columns:
             out[col] = None
