@@ -202,8 +202,8 @@ MAX_WINDOWS = 100_000  # --window: more windows than this is a mistake (a month 
 def span_windows(selection: ReportSelection, minutes: float, name: str = "--window") -> list[ReportSelection]:
     """The selection's --from/--to span cut into consecutive windows of ``minutes`` (the last one shorter
     when the span is not a whole number of them), each the selection with that window's bounds, written as
-    the span's are (date-times or times of day); ValueError naming the option when the span is not given by
-    both bounds of one kind."""
+    the span's are (date-times, every edge as 2026-11-28T13:30:00Z, or times of day); ValueError naming the
+    option when the span is not given by both bounds of one kind."""
     start, end = selection.start, selection.end
     if start is None or end is None:
         raise ValueError(f"{name} {minutes:g}: cuts the span --from ... --to ... into windows; give both")
@@ -236,6 +236,9 @@ def span_windows(selection: ReportSelection, minutes: float, name: str = "--wind
                          f"windows, more than {MAX_WINDOWS:,}; give longer windows")
     edges = [bound(k * step) for k in range(count)] + [end]
     edges[0] = start
+    if start.instant is not None:  # every edge's label in one form (the span's own instants kept)
+        edges[0] = replace(start, text=bound(0).text)
+        edges[-1] = replace(end, text=end.instant.isoformat().replace("+00:00", "Z"))
     return [replace(selection, start=a, end=b) for a, b in zip(edges[:-1], edges[1:], strict=True)]
 
 

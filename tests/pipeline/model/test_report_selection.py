@@ -304,7 +304,11 @@ def test_a_span_is_cut_into_consecutive_windows_the_last_shorter():
     starts = [w.start.instant for w in windows]
     assert starts == [pd.Timestamp(f"2026-11-28T{t}", tz="UTC") for t in ("13:30", "13:50", "14:10", "14:30")]
     assert [w.end.instant for w in windows[:-1]] == starts[1:]
-    assert windows[-1].end is span.end and windows[0].start is span.start
+    assert windows[-1].end.instant == span.end.instant and windows[0].start.instant == span.start.instant
+    # every edge labelled alike, the user's own "2026-11-28T13:30" included
+    assert [(w.start.text, w.end.text) for w in windows] == [
+        ("2026-11-28T13:30:00Z", "2026-11-28T13:50:00Z"), ("2026-11-28T13:50:00Z", "2026-11-28T14:10:00Z"),
+        ("2026-11-28T14:10:00Z", "2026-11-28T14:30:00Z"), ("2026-11-28T14:30:00Z", "2026-11-28T14:35:00Z")]
     assert all(w.fl == (100.0, 200.0) for w in windows)  # the other criteria stay
     morning = ReportSelection(start=parse_time("08:00", "--from"), end=parse_time("08:25:30", "--to"))
     day = span_windows(morning, 10.5)
