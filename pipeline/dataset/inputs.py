@@ -102,16 +102,16 @@ def pruning(selection, categories=None) -> Pruning:
 
 def reading_pruning(prune: Pruning, selection) -> Pruning:
     """``prune`` narrowed to what a measurement job reads of a time window given as instants: the records
-    within report_selection.READING_MARGIN of it, and PRUNE_MARGIN more (a report's time may come from another
-    field than its record's timestamp); the days those cover. ``prune`` as it is otherwise (no window, or a
-    bound given as a time of day: the day is known once read)."""
+    whose ``timestamp`` lies within report_selection.READING_MARGIN of it (a measurement's time is its
+    record's timestamp, model.time.absolute_time, so the margin's cut keeps every record read; records
+    without one are read whatever the window), and the days those cover. ``prune`` as it is otherwise (no
+    window, or a bound given as a time of day: the day is known once read)."""
     from msdc.pipeline.model.report_selection import READING_MARGIN
 
     if selection is None or not selection.timed or not selection.placed:
         return prune
-    reach = READING_MARGIN + PRUNE_MARGIN
-    since = None if selection.start is None else selection.start.instant - reach
-    until = None if selection.end is None else selection.end.instant + reach
+    since = None if selection.start is None else selection.start.instant - READING_MARGIN
+    until = None if selection.end is None else selection.end.instant + READING_MARGIN
     return replace(prune, since=since, until=until, first=None if since is None else since.date(),
                    last=None if until is None else until.date())
 

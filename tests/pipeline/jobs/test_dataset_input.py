@@ -97,13 +97,13 @@ def _records_within(start: str, end: str) -> list[dict[str, int]]:
     ["evaluate", "--sensors", str(SENSORS), "--preset", "eurocontrol-1997-ssr"],
 ], ids=["track", "evaluate"])
 def test_a_window_reads_only_its_margin_of_the_dataset(tmp_path, dataset, command, dask_scheduler):
-    """--from/--to given as instants: the dataset's read stops 20 minutes beyond the window (its 15-minute
-    margin, 5 more for a report's own time), the recordings are read whole and cut at 15 minutes; the
-    results are the same, and only the counts of what was read differ, by the records beyond 20 minutes."""
+    """--from/--to given as instants: the dataset's read stops 15 minutes beyond the window (its margin: a
+    report's time is its record's timestamp), the recordings are read whole and cut at 15 minutes; the
+    results are the same, and only the counts of what was read differ, by the records beyond 15 minutes."""
     window = ["--from", f"{DAY}T{WINDOW[0]}Z", "--to", f"{DAY}T{WINDOW[1]}Z"]
     files, on_dataset = _file_and_dataset(tmp_path, dataset, [*command, *window], dask_scheduler)
     read = [[i.pop("records") for i in doc["inputs"]] for doc in (files, on_dataset)]
-    assert read == [_records_within("00:00:00", "23:59:59"), _records_within("08:20:00", "09:20:00")]
+    assert read == [_records_within("00:00:00", "23:59:59"), _records_within("08:25:00", "09:15:00")]
     reports = [doc["parameters"]["report_selection"].pop("reports") for doc in (files, on_dataset)]
     time_cut = [doc["parameters"]["report_selection"]["left_out"].pop("time") for doc in (files, on_dataset)]
     assert on_dataset == files
@@ -193,12 +193,12 @@ def test_window_prunes_days_and_keeps_the_margin():
     p = pruning(sel)
     assert (p.first.isoformat(), p.last.isoformat()) == ("2026-11-27", "2026-11-29")  # 5 min before 00:02
     assert pruning(ReportSelection(start=parse_time("08:10", "--from"))).first is None  # day not yet known
-    # a measurement job reads 15 minutes more (its identity margin), and only those records
+    # a measurement job reads the records within 15 minutes (its identity margin), and only those
     from msdc.pipeline.dataset.inputs import reading_pruning
 
     read = reading_pruning(p, sel)
     assert (read.first.isoformat(), read.last.isoformat()) == ("2026-11-27", "2026-11-29")
-    assert (read.since, read.until) == (pd.Timestamp("2026-11-27T23:42Z"), pd.Timestamp("2026-11-29T12:20Z"))
+    assert (read.since, read.until) == (pd.Timestamp("2026-11-27T23:47Z"), pd.Timestamp("2026-11-29T12:15Z"))
     tod = ReportSelection(start=parse_time("08:10", "--from"))
     assert reading_pruning(pruning(tod), tod) == pruning(tod)  # a time of day: placed once read
 
