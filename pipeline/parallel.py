@@ -23,7 +23,8 @@ class Distributor(Protocol):
     order; ``label`` names an item in progress and failure messages."""
 
     def map_ordered(self, fn: Callable[[T], R], items: Iterable[T],
-                    label: Callable[[T], str] | None = None) -> Iterator[R]: ...
+                    label: Callable[[T], str] | None = None, fresh_after: int | None = None
+                    ) -> Iterator[R]: ...
 
 
 _DISTRIBUTOR: ContextVar[Distributor | None] = ContextVar("msdc_distributor", default=None)
@@ -52,14 +53,17 @@ def thread_count() -> int:
 
 
 def map_ordered(fn: Callable[[T], R], items: Iterable[T], threads: int | None = None, *,
-                distributable: bool = False, label: Callable[[T], str] | None = None) -> Iterator[R]:
+                distributable: bool = False, label: Callable[[T], str] | None = None,
+                fresh_after: int | None = None) -> Iterator[R]:
     """fn over items on up to ``threads`` threads (default `thread_count`), the results in the items'
     order; at most two items per thread are taken ahead, so a lazy iterable stays lazy. fn must not
     touch what another item's call writes. Called from one of its own threads (an aircraft's work that
     maps again) it runs in that thread: no pool inside a pool. ``distributable``: fn and each item are
-    small enough to ship (fn holds no frame of the whole run), so an installed distributor runs them."""
+    small enough to ship (fn holds no frame of the whole run), so an installed distributor runs them;
+    ``fresh_after``: there, a worker process is restarted after that many of these tasks (large ones whose
+    leftovers in the process's heap would add up)."""
     if distributable and distributed_now():
-        yield from _DISTRIBUTOR.get().map_ordered(fn, items, label)
+        yield from _DISTRIBUTOR.get().map_ordered(fn, items, label, fresh_after)
         return
     n = thread_count() if threads is None else threads
     if n <= 1 or threading.current_thread().name.startswith(PREFIX):

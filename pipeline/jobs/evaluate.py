@@ -456,6 +456,9 @@ def _evaluate_window(options: EvaluateOptions, checked: EvaluateChecked, progres
 
 
 PER_WINDOW = "Scorecard per window"
+# a local cluster's worker process is restarted after evaluating this many windows: the heap a window frees
+# but the process cannot hand back adds up over a day (dataset.cluster.DaskDistributor._fresh_workers)
+WINDOWS_PER_WORKER_PROCESS = 6
 NOTES_PER_WINDOW = "Notes per window"
 
 
@@ -527,7 +530,7 @@ def _window_runs(options: EvaluateOptions, checked: EvaluateChecked, windows: li
         if progress:
             progress.stage(f"Evaluating {len(windows)} windows, each a task on the cluster")
         task = partial(_window_task, options, checked, map_points)
-        outs = map_ordered(task, windows, distributable=True,
+        outs = map_ordered(task, windows, distributable=True, fresh_after=WINDOWS_PER_WORKER_PROCESS,
                            label=lambda s: f"window {s.start.text} to {s.end.text}")
         try:
             for k, (selection, (run, said)) in enumerate(zip(windows, outs, strict=True)):
