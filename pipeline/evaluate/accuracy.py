@@ -94,7 +94,7 @@ def error_evidence(values: np.ndarray, clusters: np.ndarray, statistic: str, see
     if statistic in ("rms", "mean", "sd"):
         return ErrorEvidence(statistic, seed, sums=cluster_sums(values, clusters))
     return ErrorEvidence(statistic, seed, values=np.asarray(values, float),
-                         clusters=np.asarray(clusters, str))
+                         clusters=pd.Categorical(np.asarray(clusters, str)))
 
 
 ACCURACY_REQUIREMENTS = {

@@ -21,7 +21,7 @@ class ErrorEvidence:
     seed: int = 0
     sums: ClusterSums | None = None
     values: np.ndarray | None = None
-    clusters: np.ndarray | None = None
+    clusters: pd.Categorical | None = None  # each value's aircraft: codes, not a text per value
 
 
 @dataclass(frozen=True)

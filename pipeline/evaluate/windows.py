@@ -16,6 +16,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 import pandas as pd
+from pandas.api.types import union_categoricals
 from scipy import stats
 
 from msdc.pipeline.evaluate.accuracy import error_notes
@@ -119,8 +120,10 @@ def _error(rid: str, given: Sequence[Outcome]) -> Outcome:
         kept = ErrorEvidence(statistic, seed, sums=sums)
     else:
         values = np.concatenate([e.values for e in evidence])
-        clusters = np.concatenate([e.clusters for e in evidence])
-        ci = clustered_interval(values, clusters, statistic, seed=seed)
+        # the aircraft of every window as one categorical, its labels sorted: their codes then order the
+        # aircraft as the labels themselves would (the bootstrap draws whole aircraft in that order)
+        clusters = union_categoricals([pd.Categorical(e.clusters) for e in evidence], sort_categories=True)
+        ci = clustered_interval(values, clusters.codes, statistic, seed=seed)
         kept = ErrorEvidence(statistic, seed, values=values, clusters=clusters)
     return Outcome(rid, ci.value, ci.ci_low, ci.ci_high, ci.n, ci.n, error_notes(ci), evidence=kept)
 

@@ -13,7 +13,7 @@ from scipy import stats
 
 from msdc.pipeline.evaluate.outcome import ErrorEvidence, FitEvidence, Outcome, rate, share, withheld
 from msdc.pipeline.evaluate.presets import Requirement
-from msdc.pipeline.evaluate.statistics import cluster_sums
+from msdc.pipeline.evaluate.statistics import cluster_sums, clustered_interval
 from msdc.pipeline.evaluate.windows import (
     combine_grid,
     combine_outcomes,
@@ -88,6 +88,20 @@ def test_an_error_statistic_is_that_of_the_windows_values_together(statistic, id
     assert out.value == pytest.approx(direct, rel=1e-12)
     assert out.n == 500 and "6 aircraft" in out.notes
     assert out.ci_low <= out.value <= out.ci_high
+
+
+def test_a_pooled_percentiles_interval_is_that_of_the_windows_values_and_aircraft_together():
+    """The windows keep each value's aircraft as codes; pooled, the bootstrap over aircraft must draw them as
+    over the aircraft's names themselves (statistics.clustered_interval on the texts): the windows meet
+    their aircraft in another order than the names sort in."""
+    rng = np.random.default_rng(5)
+    a, b = rng.gamma(2.0, 40.0, 240), rng.gamma(3.0, 30.0, 160)
+    ac_a, ac_b = rng.choice(["Z9", "K2", "M1", "B7"], 240), rng.choice(["Q4", "B7", "A0", "Z9"], 160)
+    windows = [_errors(a, ac_a, "p95", "p95_m"), _errors(b, ac_b, "p95", "p95_m")]
+    out = combine_outcomes(_req("p95_m"), windows)
+    direct = clustered_interval(np.concatenate([a, b]), np.concatenate([ac_a, ac_b]).astype(object), "p95")
+    assert (out.value, out.ci_low, out.ci_high) == (direct.value, direct.ci_low, direct.ci_high)
+    assert math.isfinite(out.ci_low) and "6 aircraft" in out.notes
 
 
 def test_a_maximum_is_the_largest_of_the_windows():
