@@ -104,7 +104,7 @@ class DaskDistributor:
         """fn over items as tasks, the results in the items' order; TaskFailed naming the first item whose
         task failed on every try (the tasks after it are cancelled). ``fresh_after``: on a local cluster,
         each worker process is restarted after that many tasks (``_fresh_workers``)."""
-        if fresh_after and self.address == LOCAL and self.worker_count() > 1:
+        if fresh_after and self.address == LOCAL:
             yield from self._fresh_workers(fn, items, label, fresh_after)
             return
         client = self.client()
@@ -134,33 +134,32 @@ class DaskDistributor:
 
     def _fresh_workers(self, fn: Callable[[T], R], items: Iterable[T], label: Callable[[T], str] | None,
                        every: int) -> Iterator[R]:
-        """map_ordered where each worker process is restarted by its nanny after ``every`` tasks: a process
+        """map_ordered where each worker process is restarted by its nanny once it has run ``every`` tasks
+        and runs none (the scheduler may give it one more as it ends one: then after that): a process
         that ran large tasks keeps heap they freed but it cannot hand back (a worker evaluating the
-        simulated day's 10-minute windows grew from 1.8 to 2.2 GB at the same traffic). A task goes to a
-        worker only when that worker has none, so a restart never cuts one short; a task whose worker is
-        lost runs on another (loose restriction). Results come in the items' order, at most
-        AHEAD_PER_WORKER a worker held here waiting for an earlier one."""
+        simulated day's 10-minute windows grew from 1.8 to 2.2 GB at the same traffic). No more tasks run
+        than there are workers, so each has at most one, and a worker is restarted only when the scheduler
+        says it runs none and every other task is placed: a restart never cuts a task short (but for one
+        Dask moves from a lost worker in the moment the restart is asked). A task whose worker is lost runs
+        again on another, as Dask does. Results come in the items' order, at most AHEAD_PER_WORKER a worker
+        held here waiting for an earlier one."""
         from distributed import wait
 
         client = self.client()
-        address_of = self._addresses(client)
-        names = sorted(address_of, key=str)
+        workers = self.worker_count()
         total = len(items) if hasattr(items, "__len__") else 0
         todo = iter(enumerate(items))
-        idle, running, finished = deque(names), {}, {}
-        ran = dict.fromkeys(names, 0)
-        started, done, ahead = time.monotonic(), 0, AHEAD_PER_WORKER * len(names)
+        running, finished, ran = {}, {}, {}
+        started, done, ahead = time.monotonic(), 0, AHEAD_PER_WORKER * workers
         try:
             while True:
-                while idle and len(running) + len(finished) < ahead:
+                while len(running) < workers and len(running) + len(finished) < ahead:
                     nxt = next(todo, None)
                     if nxt is None:
                         break
                     i, item = nxt
-                    worker = idle.popleft()
-                    future = client.submit(fn, item, pure=False, retries=self.retries,
-                                           workers=[address_of[worker]], allow_other_workers=True)
-                    running[future] = (i, label(item) if label else f"task {i + 1}", worker)
+                    future = client.submit(fn, item, pure=False, retries=self.retries)
+                    running[future] = (i, label(item) if label else f"task {i + 1}")
                     self.tasks += 1
                 if not running and not finished:
                     return
@@ -169,15 +168,18 @@ class DaskDistributor:
                     done += 1
                     self._show(done, total, started)
                     continue
-                ended = next(iter(wait(list(running), return_when="FIRST_COMPLETED").done))
-                i, name, worker = running.pop(ended)
-                finished[i] = self._result(ended, name)  # fetched before its worker may restart
-                del ended
-                ran[worker] += 1
-                if ran[worker] >= every:
-                    address_of[worker] = self._restart(client, worker, address_of[worker])
-                    ran[worker] = 0
-                idle.append(worker)
+                for ended in wait(list(running), return_when="FIRST_COMPLETED").done:
+                    i, name = running.pop(ended)
+                    holders = client.who_has([ended]).get(ended.key) or ()
+                    finished[i] = self._result(ended, name)  # fetched before its worker may restart
+                    ended.release()
+                    for worker in holders[:1]:  # the worker that ran it
+                        ran[worker] = ran.get(worker, 0) + 1
+                # before the next tasks go out, so none is given to a worker about to restart
+                for worker in [w for w, n in ran.items() if n >= every]:
+                    if self._idle(client, worker, running):
+                        self._restart(client, worker)
+                        del ran[worker]
         finally:
             if running:
                 try:
@@ -186,26 +188,31 @@ class DaskDistributor:
                     pass
 
     @staticmethod
-    def _addresses(client) -> dict:
-        """Each worker's address by its name."""
-        return {w.get("name"): a for a, w in client.scheduler_info()["workers"].items()}
+    def _idle(client, worker: str, running) -> bool:
+        """Whether the scheduler has no task on ``worker`` and every other task running is placed on a
+        worker or done (one Dask moves from a lost worker could be given to this one as it restarts)."""
+        busy = client.processing()
+        placed = {key for keys in busy.values() for key in keys}
+        return not busy.get(worker) and all(f.done() or f.key in placed for f in running)
 
-    def _restart(self, client, worker, was: str) -> str:
-        """Restart an idle worker by its nanny and wait for its new process (the scheduler's restart may
-        return while the old one is still listed; the new one listens on a new port): its address, or the
-        old one when it is not back in RESTART_WAIT_S (its next task may then run on another: loose
-        restriction)."""
+    @staticmethod
+    def _restart(client, worker: str) -> None:
+        """Restart an idle worker by its nanny and wait until the scheduler lists its new process (its
+        restart may return while the old one is still listed; the new one listens on another port), at most
+        RESTART_WAIT_S: a worker not back by then is the cluster's to replace."""
+        name = {a: w.get("name") for a, w in client.scheduler_info()["workers"].items()}.get(worker)
+        if name is None:  # gone already: its nanny or the cluster replaces it
+            return
         try:
-            client.restart_workers([was], raise_for_error=False)
+            client.restart_workers([worker], raise_for_error=False)
         except (OSError, TimeoutError, RuntimeError, KeyError):  # KeyError: the worker left meanwhile
-            return was
+            return
         deadline = time.monotonic() + RESTART_WAIT_S
         while time.monotonic() < deadline:
-            now = self._addresses(client).get(worker)
-            if now is not None and now != was:
-                return now
+            now = {w.get("name"): a for a, w in client.scheduler_info()["workers"].items()}
+            if now.get(name, worker) != worker:
+                return
             time.sleep(0.1)
-        return was
 
     def _result(self, future, name: str):
         """A task's result, or TaskFailed naming it."""
