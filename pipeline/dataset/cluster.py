@@ -24,7 +24,7 @@ NONE = "none"  # --scheduler none: threads in this process, as without --dataset
 RETRIES = 2  # a failed task is tried this many times more before the run reports it
 AHEAD_PER_WORKER = 4  # tasks submitted ahead of the results, per worker: bounds what waits in memory
 CONNECT_TIMEOUT_S = 10.0
-RESTART_WAIT_S = 60.0  # how long a restarted local worker is waited for before its tasks go elsewhere
+RESTART_WAIT_S = 60.0  # how long a restarted local worker is waited for to be listed again
 # the local cluster's workers keep glibc's own heap trimming: Dask's nanny sets MALLOC_TRIM_THRESHOLD_ to 64
 # KiB for them, so every free of a few pages goes back to the kernel and is faulted in again (10 minutes of
 # the simulated centre evaluated in one process: 4.0 M page faults and 12 s of system time with that

@@ -456,10 +456,10 @@ def _evaluate_window(options: EvaluateOptions, checked: EvaluateChecked, progres
 
 
 PER_WINDOW = "Scorecard per window"
+NOTES_PER_WINDOW = "Notes per window"
 # a local cluster's worker process is restarted after evaluating this many windows: the heap a window frees
 # but the process cannot hand back adds up over a day (dataset.cluster.DaskDistributor._fresh_workers)
 WINDOWS_PER_WORKER_PROCESS = 6
-NOTES_PER_WINDOW = "Notes per window"
 
 
 def _evaluate_span(options: EvaluateOptions, checked: EvaluateChecked, progress: Progress | None,
