@@ -126,11 +126,7 @@ class DaskDistributor:
                 done += 1
                 self._show(done, total, started)
         finally:
-            if pending:
-                try:
-                    client.cancel([f for f, _ in pending])
-                except (RuntimeError, OSError):  # the client already closed: its tasks went with it
-                    pass
+            _cancel(client, [f for f, _ in pending])
 
     def _fresh_workers(self, fn: Callable[[T], R], items: Iterable[T], label: Callable[[T], str] | None,
                        every: int) -> Iterator[R]:
@@ -181,11 +177,7 @@ class DaskDistributor:
                         self._restart(client, worker)
                         del ran[worker]
         finally:
-            if running:
-                try:
-                    client.cancel(list(running))
-                except (RuntimeError, OSError):  # the client already closed: its tasks went with it
-                    pass
+            _cancel(client, list(running))
 
     @staticmethod
     def _idle(client, worker: str, running) -> bool:
@@ -245,3 +237,12 @@ class DaskDistributor:
                 except Exception:  # noqa: BLE001 - closing must not hide the run's own outcome
                     pass
         self._client = self._cluster = None
+
+
+def _cancel(client, futures: list) -> None:
+    """Cancel the tasks a run leaves behind (none: nothing to do)."""
+    if futures:
+        try:
+            client.cancel(futures)
+        except (RuntimeError, OSError):  # the client already closed: its tasks went with it
+            pass

@@ -235,10 +235,10 @@ def span_windows(selection: ReportSelection, minutes: float, name: str = "--wind
         raise ValueError(f"{name} {minutes:g}: the span from {start.text} to {end.text} would be {count:,} "
                          f"windows, more than {MAX_WINDOWS:,}; give longer windows")
     edges = [bound(k * step) for k in range(count)] + [end]
-    edges[0] = start
-    if start.instant is not None:  # every edge's label in one form (the span's own instants kept)
-        edges[0] = replace(start, text=bound(0).text)
-        edges[-1] = replace(end, text=end.instant.isoformat().replace("+00:00", "Z"))
+    if start.instant is None:  # times of day: the span's ends as the user wrote them
+        edges[0] = start
+    else:  # every edge's label in one form, the span's own bounds kept
+        edges[0], edges[-1] = replace(start, text=edges[0].text), replace(end, text=bound(total).text)
     return [replace(selection, start=a, end=b) for a, b in zip(edges[:-1], edges[1:], strict=True)]
 
 
