@@ -24,6 +24,7 @@ from msdc.pipeline.evaluate.catalogue import CATALOGUE, ERROR, PROPORTION, RATE,
 from msdc.pipeline.evaluate.detection import per_target
 from msdc.pipeline.evaluate.outcome import ErrorEvidence, FitEvidence, Outcome, rate, share, withheld
 from msdc.pipeline.evaluate.presets import Requirement
+from msdc.pipeline.evaluate.spill import SpilledFrames
 from msdc.pipeline.evaluate.statistics import (
     clustered_interval,
     interval_from_sums,
@@ -235,8 +236,9 @@ def combine_per_aircraft(frames: Sequence[pd.DataFrame]) -> pd.DataFrame:
 @dataclass
 class SensorSpan:
     """One sensor's windows, folded as they come: its tables summed so far (fixed in size whatever the span),
-    each window's outcomes and notes (small, but for a percentile's values), the judged errors by range and
-    the thinned map points."""
+    each window's outcomes and notes (small, but for a percentile's values), the judged errors by range (a
+    list, or spill.SpilledFrames: on disk, the largest part of a radar's windows) and the thinned map
+    points."""
 
     kind: str
     site: object = None
@@ -247,7 +249,7 @@ class SensorSpan:
     bands: dict[str, pd.DataFrame] = field(default_factory=dict)
     polar: pd.DataFrame | None = None
     vertical: pd.DataFrame | None = None
-    range_errors: list[pd.DataFrame] = field(default_factory=list)
+    range_errors: list[pd.DataFrame] | SpilledFrames = field(default_factory=list)
     map_points: list[pd.DataFrame] = field(default_factory=list)
 
     def add(self, label: tuple[str, str], outcomes: dict, notes: list[str], per_aircraft: pd.DataFrame,
@@ -271,6 +273,14 @@ class SensorSpan:
             self.range_errors.append(range_errors)
         if len(map_points):
             self.map_points.append(map_points)
+
+    def judged_errors(self) -> pd.DataFrame | None:
+        """Every window's judged errors by range as one frame (None when no window gave any)."""
+        if not len(self.range_errors):
+            return None
+        if isinstance(self.range_errors, SpilledFrames):
+            return self.range_errors.concat()
+        return pd.concat(self.range_errors, ignore_index=True)
 
     def pooled(self, requirements: Sequence[Requirement]) -> dict[tuple, Outcome]:
         """Every (sector, requirement id, index) any window gave, pooled over the windows."""

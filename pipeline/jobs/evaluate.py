@@ -10,6 +10,7 @@ reports and its scorecard rows, per-aircraft and per-bin tables, coverage grids 
 from __future__ import annotations
 
 import math
+import tempfile
 import time
 from collections.abc import Iterator
 from dataclasses import dataclass, field, replace
@@ -467,12 +468,22 @@ def _evaluate_span(options: EvaluateOptions, checked: EvaluateChecked, progress:
     """--window: each window of the span evaluated as --from/--to of it alone would be (read with its
     margin), folded into each sensor's span (evaluate.windows.SensorSpan) and let go; then pooled, with the
     tables per window. A window the data do not allow (no report, no sensor the preset judges) is said in
-    the notes; JobError when none does."""
-    from msdc.pipeline.evaluate.scorecard_schema import SCORECARD_COLUMNS
-    from msdc.pipeline.evaluate.windows import SensorSpan, common_notes
+    the notes; JobError when none does. Each sensor's judged errors by range wait for the pooling in a
+    temporary folder (the system's, TMPDIR), removed at the end whatever happens."""
     from msdc.pipeline.model.report_selection import span_windows
 
     windows = span_windows(checked.selection, options.window_minutes)
+    with tempfile.TemporaryDirectory(prefix="msdc-evaluate-") as spill:  # the judged errors, off memory
+        return _span(options, checked, progress, warnings, windows, Path(spill))
+
+
+def _span(options: EvaluateOptions, checked: EvaluateChecked, progress: Progress | None, warnings: list[str],
+          windows: list, spill: Path) -> tuple[WindowRun, dict[str, pd.DataFrame]]:
+    """_evaluate_span's work, each sensor's judged errors by range kept in its own folder under ``spill``."""
+    from msdc.pipeline.evaluate.scorecard_schema import SCORECARD_COLUMNS
+    from msdc.pipeline.evaluate.spill import SpilledFrames
+    from msdc.pipeline.evaluate.windows import SensorSpan, common_notes
+
     spans: dict[str, SensorSpan] = {}
     runs: list[tuple[tuple[str, str], list[str]]] = []  # each window's label and run notes
     reads: list[Loaded] = []  # the first window's, then each one's inputs and selection alone
@@ -484,7 +495,10 @@ def _evaluate_span(options: EvaluateOptions, checked: EvaluateChecked, progress:
             refused.append(f"window {label[0]} to {label[1]}: {run}")
             continue
         for r in run.results:
-            span = spans.setdefault(r.sensor, SensorSpan(r.kind, r.site))
+            if r.sensor not in spans:
+                spans[r.sensor] = SensorSpan(r.kind, r.site,
+                                             range_errors=SpilledFrames(spill / f"sensor-{len(spans)}"))
+            span = spans[r.sensor]
             span.add(label, r.outcomes, r.notes, r.per_aircraft, r.bands, r.polar, r.vertical, r.range_errors,
                      r.map_points)
             rows += [{"window_from": label[0], "window_to": label[1], **row} for row in r.rows]
@@ -593,8 +607,10 @@ def _pooled_sensor(checked: EvaluateChecked, sensor_id: str, span) -> tuple[Sens
     rows = [judge(o, preset.requirements[index], preset, sensor_id, name)
             for (name, _, index), o in outcomes.items()]
     bands = dict(span.bands)
-    if span.range_errors:
-        bands["error_range"] = error_bands(pd.concat(span.range_errors, ignore_index=True))
+    errors = span.judged_errors()
+    if errors is not None:
+        bands["error_range"] = error_bands(errors)
+    del errors
     notes, differing = span.common_notes()
     points = pd.concat(span.map_points, ignore_index=True) if span.map_points else pd.DataFrame()
     result = SensorResult(sensor_id, span.kind, rows, span.per_aircraft, bands, span.polar, span.vertical,

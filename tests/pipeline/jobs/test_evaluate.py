@@ -502,3 +502,55 @@ def test_windows_without_reports_are_named_and_the_others_pooled(recording, wind
                                        r"06:00 to 06:30: selection .* no report is left to analyse; window "
                                        r"06:30 to 07:00: "):
         evaluate_job(_options(folder, preset=preset, from_time="06:00", to_time="07:00", window_minutes=30.0))
+
+
+@WINDOWED
+def test_the_spans_errors_per_range_band_pool_the_windows(windowed):
+    """Per sensor and band, from the halves' own tables: the reports added, the RMS from their mean squares,
+    the maximum the larger, the aircraft at least the most of either and at most both; the 95th percentile
+    at least the lower half's and at most the larger maximum. Every band of a half is in the span's."""
+    span, halves = windowed
+    title = "Position error per range band"
+    whole = span.tables[title].set_index(["sensor", "low_nm"])
+    parts = [h.tables[title].set_index(["sensor", "low_nm"]) for h in halves]
+    assert len(whole) > 3 and set().union(*(p.index for p in parts)) == set(whole.index)
+    for key, row in whole.iterrows():
+        given = [p.loc[key] for p in parts if key in p.index]
+        assert row["reports"] == sum(g["reports"] for g in given), key
+        assert row["rms_m"] == pytest.approx(np.sqrt(sum(g["rms_m"] ** 2 * g["reports"] for g in given)
+                                                     / row["reports"]), rel=1e-9), key
+        assert row["max_m"] == max(g["max_m"] for g in given), key
+        assert max(g["aircraft"] for g in given) <= row["aircraft"] <= sum(g["aircraft"] for g in given)
+        assert min(g["p95_m"] for g in given) <= row["p95_m"] <= row["max_m"], key
+
+
+def test_a_span_keeps_its_judged_errors_in_a_temporary_folder_it_removes(recording, tmp_path, monkeypatch):
+    """The windows' judged errors wait for the pooling in files under the system's temporary folder (one
+    a window and sensor), which is gone after the run, and after a run that fails while pooling."""
+    import tempfile
+
+    import msdc.pipeline.jobs.evaluate as job
+
+    _, folder = recording
+    monkeypatch.setattr(tempfile, "tempdir", str(tmp_path))
+    seen: list[list[str]] = []
+    pooled = job._pooled_sensor
+
+    def watching(checked, sensor_id, span):
+        seen.append(sorted(p.name for p in tmp_path.glob("msdc-evaluate-*/sensor-*/*.parquet")))
+        return pooled(checked, sensor_id, span)
+
+    monkeypatch.setattr(job, "_pooled_sensor", watching)
+    options = _options(folder, from_time="08:00", to_time="08:20", window_minutes=10.0)
+    run = evaluate_job(options)
+    sensors = run.scorecard["sensor"].nunique()
+    assert sensors and seen[0] == ["0000000.parquet"] * sensors + ["0000001.parquet"] * sensors  # 2 windows
+    assert list(tmp_path.iterdir()) == []
+
+    def failing(*_):
+        raise RuntimeError("pooling failed")
+
+    monkeypatch.setattr(job, "_pooled_sensor", failing)
+    with pytest.raises(RuntimeError, match="pooling failed"):
+        evaluate_job(options)
+    assert list(tmp_path.iterdir()) == []

@@ -1,0 +1,36 @@
+"""Frames a long span keeps per window, held in files of a folder instead of memory and read back as one
+frame in the order they came: over a month of windows the main process then holds one sensor's share at a
+time, when it is pooled, not every sensor's for the whole span."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pandas as pd
+
+
+class SpilledFrames:
+    """A list of frames that lives in ``folder`` (created when the first frame comes): ``append`` writes
+    each as a Parquet file of its own, ``concat`` reads them back as ``pd.concat`` of them would be
+    (columns, dtypes and values as written: a categorical stays one, but one without any category, which
+    Parquet gives back as text)."""
+
+    def __init__(self, folder: str | Path) -> None:
+        self.folder = Path(folder)
+        self._count = 0
+
+    def append(self, frame: pd.DataFrame) -> None:
+        """Write one frame after the others."""
+        self.folder.mkdir(parents=True, exist_ok=True)
+        frame.to_parquet(self.folder / f"{self._count:07d}.parquet", index=False)
+        self._count += 1
+
+    def __len__(self) -> int:
+        return self._count
+
+    def concat(self) -> pd.DataFrame:
+        """Every frame written, in order, as one frame with a fresh index."""
+        if not self._count:
+            raise ValueError(f"{self.folder}: no frame was written")
+        return pd.concat([pd.read_parquet(self.folder / f"{k:07d}.parquet") for k in range(self._count)],
+                         ignore_index=True)
