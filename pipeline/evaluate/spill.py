@@ -28,9 +28,14 @@ class SpilledFrames:
     def __len__(self) -> int:
         return self._count
 
+    def frame(self, k: int) -> pd.DataFrame:
+        """The k-th frame written (from 0)."""
+        if not 0 <= k < self._count:
+            raise IndexError(f"{self.folder}: frame {k} of {self._count}")
+        return pd.read_parquet(self.folder / f"{k:07d}.parquet")
+
     def concat(self) -> pd.DataFrame:
         """Every frame written, in order, as one frame with a fresh index."""
         if not self._count:
             raise ValueError(f"{self.folder}: no frame was written")
-        return pd.concat([pd.read_parquet(self.folder / f"{k:07d}.parquet") for k in range(self._count)],
-                         ignore_index=True)
+        return pd.concat([self.frame(k) for k in range(self._count)], ignore_index=True)

@@ -12,7 +12,8 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
+from pathlib import Path
 
 import numpy as np
 import pandas as pd
@@ -233,15 +234,32 @@ def combine_per_aircraft(frames: Sequence[pd.DataFrame]) -> pd.DataFrame:
     return out[[*(c for c in whole.columns if c in out.columns and c != "windows"), "windows"]]
 
 
+@dataclass(frozen=True)
+class SpilledValues:
+    """A window's error values with their aircraft (a percentile's ErrorEvidence) as written to disk: the
+    ``k``-th frame of ``frames``."""
+
+    statistic: str
+    seed: int
+    frames: SpilledFrames
+    k: int
+
+    def load(self) -> ErrorEvidence:
+        frame = self.frames.frame(self.k)
+        return ErrorEvidence(self.statistic, self.seed, values=frame["value"].to_numpy(float),
+                             clusters=pd.Categorical(frame["aircraft"]))
+
+
 @dataclass
 class SensorSpan:
     """One sensor's windows, folded as they come: its tables summed so far (fixed in size whatever the span),
-    each window's outcomes and notes (small, but for a percentile's values), the judged errors by range (a
-    list, or spill.SpilledFrames: on disk, the largest part of a radar's windows) and the thinned map
-    points."""
+    each window's outcomes and notes, the judged errors by range and the thinned map points. With ``spill``
+    (a folder of its own) the judged errors by range and a percentile's values wait there, read back when
+    pooled, one requirement at a time: what the main process holds is then small whatever the span."""
 
     kind: str
     site: object = None
+    spill: Path | None = None
     labels: list[tuple[str, str]] = field(default_factory=list)
     outcomes: list[dict] = field(default_factory=list)
     notes: list[list[str]] = field(default_factory=list)
@@ -251,13 +269,18 @@ class SensorSpan:
     vertical: pd.DataFrame | None = None
     range_errors: list[pd.DataFrame] | SpilledFrames = field(default_factory=list)
     map_points: list[pd.DataFrame] = field(default_factory=list)
+    values: dict[tuple, SpilledFrames] = field(default_factory=dict, repr=False)  # with spill, per outcome
+
+    def __post_init__(self) -> None:
+        if self.spill is not None:
+            self.range_errors = SpilledFrames(self.spill / "errors-by-range")
 
     def add(self, label: tuple[str, str], outcomes: dict, notes: list[str], per_aircraft: pd.DataFrame,
             bands: dict[str, pd.DataFrame], polar: pd.DataFrame | None, vertical: pd.DataFrame | None,
             range_errors: pd.DataFrame | None, map_points: pd.DataFrame) -> None:
         """Fold one window in."""
         self.labels.append(label)
-        self.outcomes.append(outcomes)
+        self.outcomes.append(self._written(outcomes) if self.spill is not None else outcomes)
         self.notes.append(list(notes))
         self.per_aircraft = combine_per_aircraft([self.per_aircraft, per_aircraft])
         for key, table in bands.items():
@@ -282,12 +305,31 @@ class SensorSpan:
             return self.range_errors.concat()
         return pd.concat(self.range_errors, ignore_index=True)
 
+    def _written(self, outcomes: dict) -> dict:
+        """The window's outcomes, each one's error values written to disk (SpilledValues in their place)."""
+        out = {}
+        for key, o in outcomes.items():
+            e = o.evidence
+            if isinstance(e, ErrorEvidence) and e.values is not None and e.clusters is not None:
+                frames = self.values.setdefault(key, SpilledFrames(self.spill / f"values-{len(self.values)}"))
+                frames.append(pd.DataFrame({"value": e.values, "aircraft": e.clusters}))
+                o = replace(o, evidence=SpilledValues(e.statistic, e.seed, frames, len(frames) - 1))
+            out[key] = o
+        return out
+
     def pooled(self, requirements: Sequence[Requirement]) -> dict[tuple, Outcome]:
-        """Every (sector, requirement id, index) any window gave, pooled over the windows."""
+        """Every (sector, requirement id, index) any window gave, pooled over the windows; with ``spill``,
+        one requirement's values read back at a time, and the pooled outcomes keep none."""
         out = {}
         for key in dict.fromkeys(k for o in self.outcomes for k in o):
             given = [o for o in (window_outcome(w, key) for w in self.outcomes) if o is not None]
-            out[key] = combine_outcomes(requirements[key[2]], given)
+            given = [replace(o, evidence=o.evidence.load()) if isinstance(o.evidence, SpilledValues) else o
+                     for o in given]
+            pooled = combine_outcomes(requirements[key[2]], given)
+            del given
+            if self.spill is not None and isinstance(pooled.evidence, ErrorEvidence):
+                pooled = replace(pooled, evidence=None)
+            out[key] = pooled
         return out
 
     def common_notes(self) -> tuple[list[str], list[tuple[tuple[str, str], str]]]:

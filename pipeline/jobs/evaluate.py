@@ -468,20 +468,19 @@ def _evaluate_span(options: EvaluateOptions, checked: EvaluateChecked, progress:
     """--window: each window of the span evaluated as --from/--to of it alone would be (read with its
     margin), folded into each sensor's span (evaluate.windows.SensorSpan) and let go; then pooled, with the
     tables per window. A window the data do not allow (no report, no sensor the preset judges) is said in
-    the notes; JobError when none does. Each sensor's judged errors by range wait for the pooling in a
-    temporary folder (the system's, TMPDIR), removed at the end whatever happens."""
+    the notes; JobError when none does. Each sensor's error values (by range, a percentile's) wait for the
+    pooling in a temporary folder (the system's, TMPDIR), removed at the end whatever happens."""
     from msdc.pipeline.model.report_selection import span_windows
 
     windows = span_windows(checked.selection, options.window_minutes)
-    with tempfile.TemporaryDirectory(prefix="msdc-evaluate-") as spill:  # the judged errors, off memory
+    with tempfile.TemporaryDirectory(prefix="msdc-evaluate-") as spill:  # the error values, off memory
         return _span(options, checked, progress, warnings, windows, Path(spill))
 
 
 def _span(options: EvaluateOptions, checked: EvaluateChecked, progress: Progress | None, warnings: list[str],
           windows: list, spill: Path) -> tuple[WindowRun, dict[str, pd.DataFrame]]:
-    """_evaluate_span's work, each sensor's judged errors by range kept in its own folder under ``spill``."""
+    """_evaluate_span's work, each sensor's error values kept in its own folder under ``spill``."""
     from msdc.pipeline.evaluate.scorecard_schema import SCORECARD_COLUMNS
-    from msdc.pipeline.evaluate.spill import SpilledFrames
     from msdc.pipeline.evaluate.windows import SensorSpan, common_notes
 
     spans: dict[str, SensorSpan] = {}
@@ -496,8 +495,7 @@ def _span(options: EvaluateOptions, checked: EvaluateChecked, progress: Progress
             continue
         for r in run.results:
             if r.sensor not in spans:
-                spans[r.sensor] = SensorSpan(r.kind, r.site,
-                                             range_errors=SpilledFrames(spill / f"sensor-{len(spans)}"))
+                spans[r.sensor] = SensorSpan(r.kind, r.site, spill=spill / f"sensor-{len(spans)}")
             span = spans[r.sensor]
             span.add(label, r.outcomes, r.notes, r.per_aircraft, r.bands, r.polar, r.vertical, r.range_errors,
                      r.map_points)

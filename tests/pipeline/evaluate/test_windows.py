@@ -104,6 +104,30 @@ def test_a_pooled_percentiles_interval_is_that_of_the_windows_values_and_aircraf
     assert math.isfinite(out.ci_low) and "6 aircraft" in out.notes
 
 
+def test_a_span_that_keeps_its_values_on_disk_pools_them_as_together(tmp_path):
+    """A sensor's span with a spill folder: each window's percentile values written there as they come (the
+    span holds none), the pooled percentile and interval those of the values and aircraft together
+    (statistics.clustered_interval on the texts), the judged errors by range read back whole, in order."""
+    from msdc.pipeline.evaluate.windows import SensorSpan, SpilledValues
+
+    rng = np.random.default_rng(8)
+    a, b = rng.gamma(2.0, 40.0, 180), rng.gamma(3.0, 30.0, 120)
+    ac_a, ac_b = rng.choice(["Z9", "K2", "B7"], 180), rng.choice(["Q4", "B7", "A0"], 120)
+    span = SensorSpan("radar", spill=tmp_path / "sensor-0")
+    for k, (v, ac) in enumerate(((a, ac_a), (b, ac_b))):
+        errors = pd.DataFrame({"range_nm": v / 10.0, "aircraft": pd.Categorical(ac), "error_m": v})
+        span.add((f"0{k}:00", f"0{k + 1}:00"), {("global", "p95_m", 0): _errors(v, ac, "p95", "p95_m")}, [],
+                 pd.DataFrame(), {}, None, None, errors, pd.DataFrame())
+    assert all(isinstance(o[("global", "p95_m", 0)].evidence, SpilledValues) for o in span.outcomes)
+    assert len(list((tmp_path / "sensor-0").glob("values-0/*.parquet"))) == 2
+    out = span.pooled([_req("p95_m")])[("global", "p95_m", 0)]
+    direct = clustered_interval(np.concatenate([a, b]), np.concatenate([ac_a, ac_b]).astype(object), "p95")
+    assert (out.value, out.ci_low, out.ci_high, out.n) == (direct.value, direct.ci_low, direct.ci_high, 300)
+    assert out.evidence is None  # the pooled span keeps no values
+    whole = span.judged_errors()
+    assert whole["error_m"].tolist() == [*a, *b] and whole["aircraft"].astype(str).tolist() == [*ac_a, *ac_b]
+
+
 def test_a_maximum_is_the_largest_of_the_windows():
     def top(v, n):
         return Outcome("max_m", v, math.nan, math.nan, n, n, (),

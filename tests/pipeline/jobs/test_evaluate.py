@@ -524,28 +524,46 @@ def test_the_spans_errors_per_range_band_pool_the_windows(windowed):
         assert min(g["p95_m"] for g in given) <= row["p95_m"] <= row["max_m"], key
 
 
-def test_a_span_keeps_its_judged_errors_in_a_temporary_folder_it_removes(recording, tmp_path, monkeypatch):
-    """The windows' judged errors wait for the pooling in files under the system's temporary folder (one
-    a window and sensor), which is gone after the run, and after a run that fails while pooling."""
+def test_a_span_keeps_its_error_values_in_a_temporary_folder_it_removes(recording, tmp_path, monkeypatch):
+    """The windows' judged errors by range and the values of a percentile or maximum wait for the pooling in
+    files under the system's temporary folder (one a window, per sensor and requirement), which is gone
+    after the run, and after a run that fails while pooling."""
     import tempfile
 
     import msdc.pipeline.jobs.evaluate as job
 
-    _, folder = recording
-    monkeypatch.setattr(tempfile, "tempdir", str(tmp_path))
-    seen: list[list[str]] = []
+    sim, folder = recording
+    preset = tmp_path / "preset.toml"
+    preset.write_text(_preset(sim) + _requirement("p95_m", 1000.0, "<=", {})
+                      + _requirement("max_m", 5000.0, "<=", {}))
+    temporary = tmp_path / "tmp"
+    temporary.mkdir()
+    monkeypatch.setattr(tempfile, "tempdir", str(temporary))
+    seen: list[dict[str, list[str]]] = []
     pooled = job._pooled_sensor
 
     def watching(checked, sensor_id, span):
-        seen.append(sorted(p.name for p in tmp_path.glob("msdc-evaluate-*/sensor-*/*.parquet")))
+        files: dict[str, list[str]] = {}
+        for p in sorted(temporary.glob("msdc-evaluate-*/sensor-*/*/*.parquet")):
+            files.setdefault(p.parent.name, []).append(p.name)
+        seen.append(files)
         return pooled(checked, sensor_id, span)
 
     monkeypatch.setattr(job, "_pooled_sensor", watching)
-    options = _options(folder, from_time="08:00", to_time="08:20", window_minutes=10.0)
+    options = _options(folder, preset=str(preset), from_time="08:00", to_time="08:20", window_minutes=10.0)
     run = evaluate_job(options)
-    sensors = run.scorecard["sensor"].nunique()
-    assert sensors and seen[0] == ["0000000.parquet"] * sensors + ["0000001.parquet"] * sensors  # 2 windows
-    assert list(tmp_path.iterdir()) == []
+    assert run.scorecard["sensor"].nunique() == 1
+    two = ["0000000.parquet", "0000001.parquet"]  # two windows
+    assert seen[0]["errors-by-range"] == two
+    # the 95th percentile's values (a maximum keeps its largest only): global in both windows, surface and
+    # airborne in the second only (the first has no aircraft on the surface: its airborne is its global)
+    per = run.tables["Scorecard per window"]
+    p95 = per[per["requirement"] == "p95_m"]
+    assert sorted(p95[p95["window_from"] == "08:00"]["sector"]) == ["global"]
+    assert sorted(p95[p95["window_from"] == "08:10"]["sector"]) == ["airborne", "global", "surface"]
+    files = sorted(v for k, v in seen[0].items() if k.startswith("values-"))
+    assert files == [["0000000.parquet"]] * 2 + [two]
+    assert list(temporary.iterdir()) == []
 
     def failing(*_):
         raise RuntimeError("pooling failed")
@@ -553,4 +571,4 @@ def test_a_span_keeps_its_judged_errors_in_a_temporary_folder_it_removes(recordi
     monkeypatch.setattr(job, "_pooled_sensor", failing)
     with pytest.raises(RuntimeError, match="pooling failed"):
         evaluate_job(options)
-    assert list(tmp_path.iterdir()) == []
+    assert list(temporary.iterdir()) == []
