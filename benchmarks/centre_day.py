@@ -7,6 +7,7 @@ Run by hand (never a timed test):
     python benchmarks/centre_day.py --hours 1 --out /work/bench-data      # generate (cached), then ingest
     python benchmarks/centre_day.py --hours 6 --out /work/bench-data --generate-only
     python benchmarks/centre_day.py --hours 6 --out /work/bench-data --datasets /tmp/ds   # datasets elsewhere
+    python benchmarks/centre_day.py --days 7 --out /work/bench-data --workers 2   # a week into one dataset
 
 The recordings go to ``OUT/centre-{hours}h-seed{seed}/``: one raw file per sensor (``radar_20_01.ast`` ...,
 ``adsb_0_1.ast``), written hour by hour in time order, the radars' ``sensors.toml`` and ``scenario.json``
@@ -309,8 +310,9 @@ def window(hours: int) -> tuple[float, float]:
     return t0, t0 + hours * HOUR_S
 
 
-def generate(out: Path, hours: int, peak: int, seed: int) -> dict:
-    """Write the recordings of the window into ``out`` (made anew) and return scenario.json's content."""
+def generate(out: Path, hours: int, peak: int, seed: int, date: str = DATE) -> dict:
+    """Write the recordings of the window into ``out`` (made anew) and return scenario.json's content
+    (``date``: the day they are said to be of; the traffic is the seed's whatever the date)."""
     from msdc.asterix.encode import encode_frame
 
     radars, stations = sensors(seed)
@@ -357,7 +359,7 @@ def generate(out: Path, hours: int, peak: int, seed: int) -> dict:
                    f"sigma_azimuth_deg = {SIGMA_AZIMUTH_DEG!r}\nmax_range_nm = {r.range_nm!r}\n\n"
                    for r in radars)
     (tmp / "sensors.toml").write_text(toml)
-    meta = {"generator": GENERATOR, "hours": hours, "peak": peak, "seed": seed, "date": DATE,
+    meta = {"generator": GENERATOR, "hours": hours, "peak": peak, "seed": seed, "date": date,
             "from_tod_s": t0, "to_tod_s": t1,
             "airborne_peak_seen": peak_seen,
             "flights": int(((starts < t1) & (starts + durations > t0)).sum()),
@@ -371,18 +373,61 @@ def generate(out: Path, hours: int, peak: int, seed: int) -> dict:
     return meta
 
 
-def recordings(base: Path, hours: int, peak: int, seed: int) -> tuple[Path, dict]:
+def recordings(base: Path, hours: int, peak: int, seed: int, date: str = DATE) -> tuple[Path, dict]:
     """The window's folder and scenario, generated unless a previous run left them for these parameters."""
     name = f"centre-{hours}h-seed{seed}" if peak == 450 else f"centre-{hours}h-peak{peak}-seed{seed}"
-    out = base / name
+    out = base / (name if date == DATE else f"{name}-{date}")
     meta_path = out / "scenario.json"
     if meta_path.exists():
         meta = json.loads(meta_path.read_text())
-        wanted = (GENERATOR, hours, peak, seed)
-        if (meta.get("generator"), meta["hours"], meta["peak"], meta["seed"]) == wanted:
+        wanted = (GENERATOR, hours, peak, seed, date)
+        if (meta.get("generator"), meta["hours"], meta["peak"], meta["seed"], meta["date"]) == wanted:
             return out, meta
     print(f"generating {out} ...", flush=True)
-    return out, generate(out, hours, peak, seed)
+    return out, generate(out, hours, peak, seed, date)
+
+
+def days(args) -> None:
+    """--days N: N whole days (day k: seed + k, dated DATE + k days) ingested one after the other into one
+    dataset with the last of --workers, each day's figures as the dataset grows; then the same inputs
+    again, which must do nothing."""
+    from ingest import MEASURE, read_through
+
+    workers = args.workers[-1]
+    root = (args.datasets or args.out) / f"dataset-{args.days}d-w{workers}"
+    shutil.rmtree(root, ignore_errors=True)
+    made = []
+    for k in range(args.days):
+        date = str(pd.Timestamp(DATE).date() + pd.Timedelta(days=k))
+        made.append(recordings(args.out, 24, args.peak, args.seed + k, date))
+    if args.generate_only:
+        return
+    total_records = total_s = 0.0
+    for again in (False, True):
+        for folder, meta in made:
+            inputs = sorted(folder.glob("*.ast"))
+            for p in inputs:
+                read_through(p)
+            done = subprocess.run([sys.executable, "-c", MEASURE, json.dumps([str(p) for p in inputs]),
+                                   str(root), str(workers), str(args.chunk_mb), meta["date"]],
+                                  capture_output=True, text=True)
+            if done.returncode:
+                print(done.stderr[-3000:])
+                raise SystemExit(f"ingest of {meta['date']} failed")
+            m = json.loads(done.stdout.strip().splitlines()[-1])
+            parts = sum(1 for _ in root.rglob("*.parquet"))
+            if again:
+                print(f"{meta['date']} again: {m['records']} records ingested in {m['seconds']:.1f} s "
+                      f"(nothing to do), peak RSS main {m['main_rss_mb']:.0f} MB", flush=True)
+                continue
+            total_records += m["records"]
+            total_s += m["seconds"]
+            print(f"{meta['date']}: {m['records']} records in {m['seconds']:.1f} s = "
+                  f"{m['records'] / m['seconds'] / 1e6:.2f} M records/s; dataset now {parts} parts, "
+                  f"{m['dataset_mb']:.0f} MB; peak RSS main {m['main_rss_mb']:.0f} MB, largest worker "
+                  f"{m['worker_rss_mb']:.0f} MB; CPU {m['cpu_s']:.1f} s", flush=True)
+    print(f"{args.days} days: {total_records / 1e6:.1f} M records in {total_s:.0f} s = "
+          f"{total_records / total_s / 1e6:.2f} M records/s with {workers} workers", flush=True)
 
 
 def main() -> None:
@@ -398,7 +443,12 @@ def main() -> None:
     parser.add_argument("--generate-only", action="store_true")
     parser.add_argument("--datasets", type=Path, default=None,
                         help="where the ingests write their datasets (default: --out)")
+    parser.add_argument("--days", type=int, default=None,
+                        help="N whole days into one dataset (day k: seed + k, dated DATE + k days)")
     args = parser.parse_args()
+    if args.days:
+        days(args)
+        return
     t = time.perf_counter()
     folder, meta = recordings(args.out, args.hours, args.peak, args.seed)
     inputs = sorted(folder.glob("*.ast"))
