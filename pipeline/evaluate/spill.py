@@ -20,9 +20,14 @@ class SpilledFrames:
         self._count = 0
 
     def append(self, frame: pd.DataFrame) -> None:
-        """Write one frame after the others."""
-        self.folder.mkdir(parents=True, exist_ok=True)
-        frame.to_parquet(self.folder / f"{self._count:07d}.parquet", index=False)
+        """Write one frame after the others; an OSError (a full disk) says what the file was for."""
+        path = self.folder / f"{self._count:07d}.parquet"
+        try:
+            self.folder.mkdir(parents=True, exist_ok=True)
+            frame.to_parquet(path, index=False)
+        except OSError as exc:
+            raise OSError(exc.errno, f"{exc.strerror or exc} (writing values a long span keeps for its "
+                          "pooling: TMPDIR chooses their folder)", str(path)) from None
         self._count += 1
 
     def __len__(self) -> int:

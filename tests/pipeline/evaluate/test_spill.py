@@ -44,3 +44,12 @@ def test_windows_with_the_same_aircraft_stay_categorical(tmp_path):
 def test_nothing_written_is_refused_by_name(tmp_path):
     with pytest.raises(ValueError, match="sensor-3: no frame was written"):
         SpilledFrames(tmp_path / "sensor-3").concat()
+
+
+def test_a_folder_that_cannot_be_written_says_what_the_file_was_for(tmp_path):
+    (tmp_path / "taken").write_text("a file where the folder should be")
+    spill = SpilledFrames(tmp_path / "taken" / "sensor-0")
+    with pytest.raises(OSError, match="TMPDIR chooses their folder") as caught:
+        spill.append(_errors([1.0], ["x"], [2.0]))
+    assert caught.value.filename == str(tmp_path / "taken" / "sensor-0" / "0000000.parquet")
+    assert len(spill) == 0
