@@ -250,12 +250,33 @@ class SpilledValues:
                              clusters=pd.Categorical(frame["aircraft"]))
 
 
+@dataclass(frozen=True)
+class SpilledTable:
+    """A window outcome's per-aircraft table as written to disk: the ``k``-th frame of ``frames``."""
+
+    frames: SpilledFrames
+    k: int
+
+    def load(self) -> pd.DataFrame:
+        return self.frames.frame(self.k)
+
+
+def _loaded(outcome: Outcome) -> Outcome:
+    """The outcome with what its window wrote to disk read back."""
+    if isinstance(outcome.evidence, SpilledValues):
+        outcome = replace(outcome, evidence=outcome.evidence.load())
+    if isinstance(outcome.per_aircraft, SpilledTable):
+        outcome = replace(outcome, per_aircraft=outcome.per_aircraft.load())
+    return outcome
+
+
 @dataclass
 class SensorSpan:
     """One sensor's windows, folded as they come: its tables summed so far (fixed in size whatever the span),
     each window's outcomes and notes, the judged errors by range and the thinned map points. With ``spill``
-    (a folder of its own) the judged errors by range and a percentile's values wait there, read back when
-    pooled, one requirement at a time: what the main process holds is then small whatever the span."""
+    (a folder of its own) the judged errors by range, a percentile's values and an outcome's per-aircraft
+    table (a PD's) wait there, read back when pooled, one requirement at a time: what the main process
+    holds is then small whatever the span."""
 
     kind: str
     site: object = None
@@ -270,6 +291,7 @@ class SensorSpan:
     range_errors: list[pd.DataFrame] | SpilledFrames = field(default_factory=list)
     map_points: list[pd.DataFrame] = field(default_factory=list)
     values: dict[tuple, SpilledFrames] = field(default_factory=dict, repr=False)  # with spill, per outcome
+    tables: dict[tuple, SpilledFrames] = field(default_factory=dict, repr=False)  # with spill, per outcome
 
     def __post_init__(self) -> None:
         if self.spill is not None:
@@ -306,7 +328,8 @@ class SensorSpan:
         return pd.concat(self.range_errors, ignore_index=True)
 
     def _written(self, outcomes: dict) -> dict:
-        """The window's outcomes, each one's error values written to disk (SpilledValues in their place)."""
+        """The window's outcomes, each one's error values and per-aircraft table written to disk
+        (SpilledValues and SpilledTable in their place)."""
         out = {}
         for key, o in outcomes.items():
             e = o.evidence
@@ -314,6 +337,10 @@ class SensorSpan:
                 frames = self.values.setdefault(key, SpilledFrames(self.spill / f"values-{len(self.values)}"))
                 frames.append(pd.DataFrame({"value": e.values, "aircraft": e.clusters}))
                 o = replace(o, evidence=SpilledValues(e.statistic, e.seed, frames, len(frames) - 1))
+            if o.per_aircraft is not None and len(o.per_aircraft):
+                frames = self.tables.setdefault(key, SpilledFrames(self.spill / f"tables-{len(self.tables)}"))
+                frames.append(o.per_aircraft)
+                o = replace(o, per_aircraft=SpilledTable(frames, len(frames) - 1))
             out[key] = o
         return out
 
@@ -323,8 +350,7 @@ class SensorSpan:
         out = {}
         for key in dict.fromkeys(k for o in self.outcomes for k in o):
             given = [o for o in (window_outcome(w, key) for w in self.outcomes) if o is not None]
-            given = [replace(o, evidence=o.evidence.load()) if isinstance(o.evidence, SpilledValues) else o
-                     for o in given]
+            given = [_loaded(o) for o in given]
             pooled = combine_outcomes(requirements[key[2]], given)
             del given
             if self.spill is not None and isinstance(pooled.evidence, ErrorEvidence):
@@ -362,5 +388,5 @@ def common_notes(labelled: Sequence[tuple[tuple[str, str], list[str]]]
     return ([f"every window: {n}" for n in common] if len(labelled) > 1 else common), rest
 
 
-__all__ = ["DRIFT_P", "SensorSpan", "combine_counts", "combine_grid", "combine_outcomes",
-           "combine_per_aircraft", "common_notes", "window_outcome"]
+__all__ = ["DRIFT_P", "SensorSpan", "SpilledTable", "SpilledValues", "combine_counts", "combine_grid",
+           "combine_outcomes", "combine_per_aircraft", "common_notes", "window_outcome"]

@@ -128,6 +128,29 @@ def test_a_span_that_keeps_its_values_on_disk_pools_them_as_together(tmp_path):
     assert whole["error_m"].tolist() == [*a, *b] and whole["aircraft"].astype(str).tolist() == [*ac_a, *ac_b]
 
 
+def test_a_span_that_keeps_its_tables_on_disk_sums_each_aircraft_as_together(tmp_path):
+    """The per-target PD of test_a_per_target_pd_sums_each_aircraft_over_windows_then_takes_the_lowest,
+    through a span with a spill folder: each window's per-aircraft table written there (the span holds a
+    SpilledTable), the pooled table and the lowest aircraft as worked out there by hand."""
+    from msdc.pipeline.evaluate.windows import SensorSpan, SpilledTable
+
+    def per(rows):
+        return pd.DataFrame(rows, columns=["aircraft", "expected", "detected"])
+
+    span = SensorSpan("radar", spill=tmp_path / "sensor-0")
+    for k, rows in enumerate(([("A", 10, 9), ("B", 10, 5), ("C", 10, 10)], [("A", 10, 1), ("B", 10, 5)])):
+        span.add((f"0{k}:00", f"0{k + 1}:00"), {("global", "pd", 0): share("pd", 5, 10, (), per(rows))}, [],
+                 pd.DataFrame(), {}, None, None, None, pd.DataFrame())
+    assert all(isinstance(o[("global", "pd", 0)].per_aircraft, SpilledTable) for o in span.outcomes)
+    out = span.pooled([_req("pd", scope="per_target")])[("global", "pd", 0)]
+    table = out.per_aircraft.set_index("aircraft")
+    assert (table.loc["A", "expected"], table.loc["A", "detected"]) == (20, 10)
+    assert (table.loc["B", "expected"], table.loc["B", "detected"]) == (20, 10)
+    assert (table.loc["C", "expected"], table.loc["C", "detected"], table.loc["C", "pd"]) == (10, 10, 1.0)
+    assert (out.count, out.n) == (10, 20)
+    assert "per target: the aircraft 'A' of 3 reaches lowest" in out.notes
+
+
 def test_a_maximum_is_the_largest_of_the_windows():
     def top(v, n):
         return Outcome("max_m", v, math.nan, math.nan, n, n, (),
