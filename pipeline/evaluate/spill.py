@@ -1,6 +1,6 @@
-"""Frames a long span keeps per window, held in files of a folder instead of memory and read back as one
-frame in the order they came: over a month of windows the main process then holds one sensor's share at a
-time, when it is pooled, not every sensor's for the whole span."""
+"""Frames a long span keeps per window, held in files of a folder instead of memory and read back in the
+order they came: over a month of windows the main process then holds one sensor's values of one
+requirement at a time, when they are pooled, not every sensor's for the whole span."""
 
 from __future__ import annotations
 

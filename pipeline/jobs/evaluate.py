@@ -468,8 +468,9 @@ def _evaluate_span(options: EvaluateOptions, checked: EvaluateChecked, progress:
     """--window: each window of the span evaluated as --from/--to of it alone would be (read with its
     margin), folded into each sensor's span (evaluate.windows.SensorSpan) and let go; then pooled, with the
     tables per window. A window the data do not allow (no report, no sensor the preset judges) is said in
-    the notes; JobError when none does. Each sensor's error values (by range, a percentile's) wait for the
-    pooling in a temporary folder (the system's, TMPDIR), removed at the end whatever happens."""
+    the notes; JobError when none does. What the pooling needs value by value (each sensor's errors by
+    range, a percentile's values, a PD's per-aircraft tables) waits in a temporary folder (the system's,
+    TMPDIR), removed at the end whatever happens."""
     from msdc.pipeline.model.report_selection import span_windows
 
     windows = span_windows(checked.selection, options.window_minutes)
@@ -479,7 +480,7 @@ def _evaluate_span(options: EvaluateOptions, checked: EvaluateChecked, progress:
 
 def _span(options: EvaluateOptions, checked: EvaluateChecked, progress: Progress | None, warnings: list[str],
           windows: list, spill: Path) -> tuple[WindowRun, dict[str, pd.DataFrame]]:
-    """_evaluate_span's work, each sensor's error values kept in its own folder under ``spill``."""
+    """_evaluate_span's work, each sensor's spilled values in a folder of its own under ``spill``."""
     from msdc.pipeline.evaluate.scorecard_schema import SCORECARD_COLUMNS
     from msdc.pipeline.evaluate.windows import SensorSpan, common_notes
 
