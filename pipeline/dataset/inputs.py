@@ -145,6 +145,12 @@ class DatasetInputs:
         text = self.records[i].get("date")
         return None if text is None else dt.date.fromisoformat(text)
 
+    def touched(self, i: int, categories=None) -> bool:
+        """Whether ``read(i, categories)`` would open any part of input ``i`` (a day, sensor and category
+        the pruning keeps)."""
+        prune = replace(self.pruning, categories=_narrower(self.pruning.categories, categories))
+        return any(prune.keeps(part) for part in self.records[i]["parts"])
+
     def read(self, i: int, categories=None, columns=None):
         """Input ``i`` as an asterix Recording: its records of ``categories`` (None: all) in the pruned
         partitions, each category's in file order (by ``offset``), with the columns its edition decodes

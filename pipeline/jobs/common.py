@@ -568,9 +568,15 @@ def load_inputs(options: DecodingOptions, checked: Checked, progress: Progress |
     except (UnreadableInput, UnreadablePart) as exc:
         raise JobError(str(exc), 2) from exc
     return loaded, [*_empty_inputs(loaded, checked.dataset), *_wrong_editions(loaded),
-                    *order_warnings(checked.inputs, loaded.spans),
+                    *order_warnings(read_paths(checked, loaded), loaded.spans),
                     *date_ignored(options, loaded.inputs), *format_hints(options, loaded.inputs),
                     *impossible_positions(loaded.frames.get(21)), *loaded.warnings]
+
+
+def read_paths(checked: Checked, loaded: Loaded) -> list[Path]:
+    """The inputs the run decoded, in order (loaded.spans' order): of a dataset, those with a part the run
+    read, which may be fewer than it holds."""
+    return list(checked.inputs) if checked.dataset is None else [Path(i["path"]) for i in loaded.inputs]
 
 
 def reading_window(checked: Checked) -> None:
@@ -688,7 +694,7 @@ def _load_measurements(options: AircraftOptions, checked: Checked, progress: Pro
     warnings += [f"no {REGISTRY[cat].noun} (CAT{cat:03d}) records in the inputs{_all_failed(loaded, cat)}: "
                  f"{QUALITY_WITHOUT[cat]}" for cat in absent_categories(loaded)
                  if needs is None or any(cat in group for group in needs)]
-    warnings += order_warnings(checked.inputs, loaded.spans)
+    warnings += order_warnings(read_paths(checked, loaded), loaded.spans)
     warnings += date_ignored(options, loaded.inputs)
     warnings += format_hints(options, loaded.inputs)
     warnings += loaded.warnings

@@ -178,16 +178,20 @@ def _joined(recs: list[Recording], labels: list[str], date: dt.date | None
 
 
 def _load_dataset(dataset, categories, columns, progress: Progress | None) -> Loaded:
-    """``load`` of a dataset's inputs (pipeline.dataset.inputs.DatasetInputs)."""
+    """``load`` of a dataset's inputs (pipeline.dataset.inputs.DatasetInputs): those with a part the run
+    reads (an input of other days, sensors or categories is neither listed in the outputs nor dates the
+    run; all of them when none has), in ingest order."""
+    read = [i for i in range(len(dataset.records)) if dataset.touched(i, categories)]
+    read = read or list(range(len(dataset.records)))
     recs, inputs = [], []
-    for i, p in enumerate(dataset.paths):
+    for n, i in enumerate(read):
         if progress:
-            progress.step(f"{p.name} ({i + 1}/{len(dataset.records)})")
+            progress.step(f"{dataset.paths[i].name} ({n + 1}/{len(read)})")
         recs.append(dataset.read(i, categories=categories, columns=columns))
         inputs.append(dataset_info(dataset, i, recs[-1]))
     dates = [r.date for r in recs if r.date is not None]
     first = min(dates) if dates else None
-    frames, spans = _joined(recs, dataset.labels, first)
+    frames, spans = _joined(recs, [dataset.labels[i] for i in read], first)
     return Loaded(frames, recs, inputs, first, spans)
 
 

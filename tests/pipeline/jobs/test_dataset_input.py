@@ -252,3 +252,28 @@ def test_stats_count_a_block_split_at_midnight_once(tmp_path, capsys):
     assert len(days) == 2  # both days hold parts
     files = _stats_lines(capsys, [str(rec), "--date", DAY])
     assert _stats_lines(capsys, ["--dataset", str(root), "--scheduler", "none"]) == files
+
+
+def test_a_run_lists_and_dates_only_the_inputs_it_reads(tmp_path):
+    """A dataset holding the fixtures on DAY and another radar's recording on an earlier day: a run of a
+    window on DAY reads only the fixtures, so its outputs list those two inputs and give DAY as the run's
+    date (not the dataset's first day); a run over both days lists all three, dated the earlier day."""
+    rec = tmp_path / "earlier.ast"
+    midnight_recording(rec, n=600)  # radar 20/129, the 40 minutes before midnight
+    work = tmp_path / "work"
+    work.mkdir()
+    copies = [shutil.copy(p, work / p.name) for p in (RADAR, ADSB)]
+    root = tmp_path / "data"
+    assert main(["ingest", str(rec), "--dataset", str(root), "--date", "2026-11-20"]) == 0
+    assert main(["ingest", *map(str, copies), "--dataset", str(root), "--date", DAY]) == 0
+    command = ["track", "--sensors", str(SENSORS), "--all", "--dataset", str(root), "--scheduler", "none"]
+    window = _json(tmp_path, "window", [*command, "--from", f"{DAY}T08:40Z", "--to", f"{DAY}T09:00Z"])
+    import hashlib
+
+    fixtures = [hashlib.sha256(p.read_bytes()).hexdigest() for p in (RADAR, ADSB)]
+    assert [i["sha256"] for i in window["inputs"]] == fixtures
+    assert window["parameters"]["date"] == DAY
+    both = _json(tmp_path, "both", [*command, "--from", "2026-11-20T23:00Z", "--to", f"{DAY}T09:00Z"])
+    earlier = hashlib.sha256(rec.read_bytes()).hexdigest()
+    assert [i["sha256"] for i in both["inputs"]] == [earlier, *fixtures]
+    assert both["parameters"]["date"] == "2026-11-20"
