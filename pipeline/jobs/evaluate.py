@@ -474,7 +474,7 @@ def _evaluate_span(options: EvaluateOptions, checked: EvaluateChecked, progress:
     from msdc.pipeline.model.report_selection import span_windows
 
     windows = span_windows(checked.selection, options.window_minutes)
-    with tempfile.TemporaryDirectory(prefix="msdc-evaluate-") as spill:  # the error values, off memory
+    with tempfile.TemporaryDirectory(prefix="msdc-evaluate-") as spill:  # values to pool, off memory
         return _span(options, checked, progress, warnings, windows, Path(spill))
 
 

@@ -183,10 +183,10 @@ def _load_dataset(dataset, categories, columns, progress: Progress | None) -> Lo
     run; all of them when none has), in ingest order."""
     read = [i for i in range(len(dataset.records)) if dataset.touched(i, categories)]
     read = read or list(range(len(dataset.records)))
-    recs, inputs = [], []
+    paths, recs, inputs = dataset.paths, [], []
     for n, i in enumerate(read):
         if progress:
-            progress.step(f"{dataset.paths[i].name} ({n + 1}/{len(read)})")
+            progress.step(f"{paths[i].name} ({n + 1}/{len(read)})")
         recs.append(dataset.read(i, categories=categories, columns=columns))
         inputs.append(dataset_info(dataset, i, recs[-1]))
     dates = [r.date for r in recs if r.date is not None]
