@@ -334,15 +334,21 @@ class SensorSpan:
         for key, o in outcomes.items():
             e = o.evidence
             if isinstance(e, ErrorEvidence) and e.values is not None and e.clusters is not None:
-                frames = self.values.setdefault(key, SpilledFrames(self.spill / f"values-{len(self.values)}"))
-                frames.append(pd.DataFrame({"value": e.values, "aircraft": e.clusters}))
-                o = replace(o, evidence=SpilledValues(e.statistic, e.seed, frames, len(frames) - 1))
+                frame = pd.DataFrame({"value": e.values, "aircraft": e.clusters})
+                written = self._write("values", key, frame)
+                o = replace(o, evidence=SpilledValues(e.statistic, e.seed, *written))
             if o.per_aircraft is not None and len(o.per_aircraft):
-                frames = self.tables.setdefault(key, SpilledFrames(self.spill / f"tables-{len(self.tables)}"))
-                frames.append(o.per_aircraft)
-                o = replace(o, per_aircraft=SpilledTable(frames, len(frames) - 1))
+                o = replace(o, per_aircraft=SpilledTable(*self._write("tables", key, o.per_aircraft)))
             out[key] = o
         return out
+
+    def _write(self, kind: str, key: tuple, frame: pd.DataFrame) -> tuple[SpilledFrames, int]:
+        """``frame`` written after the earlier windows' of the same kind and outcome key (a folder each):
+        where, and its number there."""
+        stores = getattr(self, kind)
+        frames = stores.setdefault(key, SpilledFrames(self.spill / f"{kind}-{len(stores)}"))
+        frames.append(frame)
+        return frames, len(frames) - 1
 
     def pooled(self, requirements: Sequence[Requirement]) -> dict[tuple, Outcome]:
         """Every (sector, requirement id, index) any window gave, pooled over the windows; with ``spill``,
