@@ -4,6 +4,7 @@ requirement at a time, when they are pooled, not every sensor's for the whole sp
 
 from __future__ import annotations
 
+from collections.abc import Iterator
 from pathlib import Path
 
 import pandas as pd
@@ -18,6 +19,7 @@ class SpilledFrames:
     def __init__(self, folder: str | Path) -> None:
         self.folder = Path(folder)
         self._count = 0
+        self.rows = 0  # of every frame written
 
     def append(self, frame: pd.DataFrame) -> None:
         """Write one frame after the others; an OSError (a full disk) says what the file was for."""
@@ -29,6 +31,7 @@ class SpilledFrames:
             raise OSError(exc.errno, f"{exc.strerror or exc} (writing values a long span keeps for its "
                           "pooling: TMPDIR chooses their folder)", str(path)) from None
         self._count += 1
+        self.rows += len(frame)
 
     def __len__(self) -> int:
         return self._count
@@ -38,6 +41,10 @@ class SpilledFrames:
         if not 0 <= k < self._count:
             raise IndexError(f"{self.folder}: frame {k} of {self._count}")
         return pd.read_parquet(self.folder / f"{k:07d}.parquet")
+
+    def parts(self) -> Iterator[pd.DataFrame]:
+        """The frames written, read one at a time in order (a new pass each call)."""
+        return (self.frame(k) for k in range(self._count))
 
     def concat(self) -> pd.DataFrame:
         """Every frame written, in order, as one frame with a fresh index."""

@@ -20,7 +20,7 @@ import pandas as pd
 from pandas.api.types import union_categoricals
 from scipy import stats
 
-from msdc.pipeline.evaluate.accuracy import error_notes
+from msdc.pipeline.evaluate.accuracy import ERROR_RANGE_BAND_NM, error_bands, error_notes
 from msdc.pipeline.evaluate.catalogue import CATALOGUE, ERROR, PROPORTION, RATE, SIGNED
 from msdc.pipeline.evaluate.detection import per_target
 from msdc.pipeline.evaluate.outcome import ErrorEvidence, FitEvidence, Outcome, rate, share, withheld
@@ -32,10 +32,14 @@ from msdc.pipeline.evaluate.statistics import (
     pooled_sums,
     proportion,
 )
+from msdc.pipeline.evaluate.streamed import streamed_error_bands, streamed_interval
 
 # below this p-value the windows' fits of one bias disagree beyond their standard errors
 DRIFT_P = 0.01
 Z975 = stats.norm.ppf(0.975)
+# a spilled span pools a percentile, or its error bands, from more values than this in passes over the files
+# (streamed: the same figures, memory bounded by a window's values) instead of reading them back together
+VALUES_HELD = 20_000_000
 
 
 def combine_outcomes(requirement: Requirement, outcomes: Sequence[Outcome]) -> Outcome:
@@ -107,6 +111,10 @@ def _rate(rid: str, given: Sequence[Outcome]) -> Outcome:
 def _error(rid: str, given: Sequence[Outcome]) -> Outcome:
     """An error statistic from the windows' evidence pooled: aircraft sums, every value, or the largest."""
     evidence = [o.evidence for o in given]
+    if all(isinstance(e, SpilledValues) for e in evidence):
+        ci = streamed_interval(lambda: (e.part() for e in evidence), evidence[0].statistic,
+                               seed=evidence[0].seed)
+        return Outcome(rid, ci.value, ci.ci_low, ci.ci_high, ci.n, ci.n, error_notes(ci))
     if not all(isinstance(e, ErrorEvidence) for e in evidence):
         return withheld(rid, "a window kept no evidence to pool (this requirement is not combined over "
                              "windows by this version of msdc)")
@@ -245,9 +253,13 @@ class SpilledValues:
     k: int
 
     def load(self) -> ErrorEvidence:
+        values, clusters = self.part()
+        return ErrorEvidence(self.statistic, self.seed, values=values, clusters=clusters)
+
+    def part(self) -> tuple[np.ndarray, pd.Categorical]:
+        """The values and their aircraft, read back."""
         frame = self.frames.frame(self.k)
-        return ErrorEvidence(self.statistic, self.seed, values=frame["value"].to_numpy(float),
-                             clusters=pd.Categorical(frame["aircraft"]))
+        return frame["value"].to_numpy(float), pd.Categorical(frame["aircraft"])
 
 
 @dataclass(frozen=True)
@@ -261,9 +273,9 @@ class SpilledTable:
         return self.frames.frame(self.k)
 
 
-def _loaded(outcome: Outcome) -> Outcome:
-    """The outcome with what its window wrote to disk read back."""
-    if isinstance(outcome.evidence, SpilledValues):
+def _loaded(outcome: Outcome, values: bool = True) -> Outcome:
+    """The outcome with what its window wrote to disk read back (its error values only if ``values``)."""
+    if values and isinstance(outcome.evidence, SpilledValues):
         outcome = replace(outcome, evidence=outcome.evidence.load())
     if isinstance(outcome.per_aircraft, SpilledTable):
         outcome = replace(outcome, per_aircraft=outcome.per_aircraft.load())
@@ -327,6 +339,15 @@ class SensorSpan:
             return self.range_errors.concat()
         return pd.concat(self.range_errors, ignore_index=True)
 
+    def error_bands(self) -> pd.DataFrame | None:
+        """The error-by-range table of every window's judged errors (None when no window gave any), from
+        the files in passes when they hold more than VALUES_HELD errors."""
+        if not len(self.range_errors):
+            return None
+        if isinstance(self.range_errors, SpilledFrames) and self.range_errors.rows > VALUES_HELD:
+            return streamed_error_bands(self.range_errors.parts, ERROR_RANGE_BAND_NM)
+        return error_bands(self.judged_errors())
+
     def _written(self, outcomes: dict) -> dict:
         """The window's outcomes, each one's error values and per-aircraft table written to disk
         (SpilledValues and SpilledTable in their place)."""
@@ -356,10 +377,11 @@ class SensorSpan:
         out = {}
         for key in dict.fromkeys(k for o in self.outcomes for k in o):
             given = [o for o in (window_outcome(w, key) for w in self.outcomes) if o is not None]
-            given = [_loaded(o) for o in given]
+            many = sum(o.n for o in given if isinstance(o.evidence, SpilledValues)) > VALUES_HELD
+            given = [_loaded(o, values=not many) for o in given]
             pooled = combine_outcomes(requirements[key[2]], given)
             del given
-            if self.spill is not None and isinstance(pooled.evidence, ErrorEvidence):
+            if self.spill is not None and isinstance(pooled.evidence, ErrorEvidence | SpilledValues):
                 pooled = replace(pooled, evidence=None)
             out[key] = pooled
         return out

@@ -598,7 +598,6 @@ def _thinned_map(points: pd.DataFrame, limit: int) -> pd.DataFrame:
 def _pooled_sensor(checked: EvaluateChecked, sensor_id: str, span) -> tuple[SensorResult, list[tuple]]:
     """One sensor's span as a result: its outcomes pooled and judged again, its folded tables, the error
     bands of every window's judged errors; the notes that differ between windows, with their window."""
-    from msdc.pipeline.evaluate.accuracy import error_bands
     from msdc.pipeline.evaluate.scorecard import judge
 
     preset = checked.preset
@@ -606,10 +605,9 @@ def _pooled_sensor(checked: EvaluateChecked, sensor_id: str, span) -> tuple[Sens
     rows = [judge(o, preset.requirements[index], preset, sensor_id, name)
             for (name, _, index), o in outcomes.items()]
     bands = dict(span.bands)
-    errors = span.judged_errors()
+    errors = span.error_bands()
     if errors is not None:
-        bands["error_range"] = error_bands(errors)
-    del errors
+        bands["error_range"] = errors
     notes, differing = span.common_notes()
     points = pd.concat(span.map_points, ignore_index=True) if span.map_points else pd.DataFrame()
     result = SensorResult(sensor_id, span.kind, rows, span.per_aircraft, bands, span.polar, span.vertical,

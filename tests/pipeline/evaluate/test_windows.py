@@ -104,11 +104,19 @@ def test_a_pooled_percentiles_interval_is_that_of_the_windows_values_and_aircraf
     assert math.isfinite(out.ci_low) and "6 aircraft" in out.notes
 
 
-def test_a_span_that_keeps_its_values_on_disk_pools_them_as_together(tmp_path):
+@pytest.mark.parametrize("held", [None, 0], ids=["read-back", "in-passes"])
+def test_a_span_that_keeps_its_values_on_disk_pools_them_as_together(tmp_path, monkeypatch, held):
     """A sensor's span with a spill folder: each window's percentile values written there as they come (the
     span holds none), the pooled percentile and interval those of the values and aircraft together
-    (statistics.clustered_interval on the texts), the judged errors by range read back whole, in order."""
+    (statistics.clustered_interval on the texts), the judged errors by range read back whole, in order, and
+    their bands those of one frame (accuracy.error_bands); read back together, or in passes when they are
+    more than the span reads at once (none here)."""
+    from msdc.pipeline.evaluate import windows
+    from msdc.pipeline.evaluate.accuracy import error_bands
     from msdc.pipeline.evaluate.windows import SensorSpan, SpilledValues
+
+    if held is not None:
+        monkeypatch.setattr(windows, "VALUES_HELD", held)
 
     rng = np.random.default_rng(8)
     a, b = rng.gamma(2.0, 40.0, 180), rng.gamma(3.0, 30.0, 120)
@@ -126,6 +134,11 @@ def test_a_span_that_keeps_its_values_on_disk_pools_them_as_together(tmp_path):
     assert out.evidence is None  # the pooled span keeps no values
     whole = span.judged_errors()
     assert whole["error_m"].tolist() == [*a, *b] and whole["aircraft"].astype(str).tolist() == [*ac_a, *ac_b]
+    frame = pd.DataFrame({"range_nm": np.concatenate([a, b]) / 10.0,
+                          "aircraft": np.concatenate([ac_a, ac_b]), "error_m": np.concatenate([a, b])})
+    bands, direct = span.error_bands(), error_bands(frame)
+    pd.testing.assert_frame_equal(bands.drop(columns="rms_m"), direct.drop(columns="rms_m"), check_exact=True)
+    assert np.allclose(bands["rms_m"], direct["rms_m"], rtol=1e-13, atol=0.0) and len(bands) == 3
 
 
 def test_a_span_that_keeps_its_tables_on_disk_sums_each_aircraft_as_together(tmp_path):

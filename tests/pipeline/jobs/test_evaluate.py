@@ -572,3 +572,40 @@ def test_a_span_keeps_its_error_values_in_a_temporary_folder_it_removes(recordin
     with pytest.raises(RuntimeError, match="pooling failed"):
         evaluate_job(options)
     assert list(temporary.iterdir()) == []
+
+
+def test_a_span_pooled_from_disk_in_passes_gives_the_figures_of_its_values_read_back(recording, tmp_path,
+                                                                                    monkeypatch):
+    """A span's percentile, its interval and the error bands pooled in passes over the files (as when they
+    hold more values than the span reads at once: here with that limit 0) are those of the values read back
+    together, each figure; the bands' RMS to within the order of summation."""
+    from msdc.pipeline.evaluate import windows
+
+    sim, folder = recording
+    preset = tmp_path / "preset.toml"
+    preset.write_text(_preset(sim) + _requirement("p95_m", 1000.0, "<=", {}))
+    options = _options(folder, preset=str(preset), from_time="08:00", to_time="08:30", window_minutes=10.0)
+    together = evaluate_job(options)
+    monkeypatch.setattr(windows, "VALUES_HELD", 0)
+    called: list[str] = []
+
+    def spied(name):
+        original = getattr(windows, name)
+
+        def spy(*args, **kw):
+            called.append(name)
+            return original(*args, **kw)
+        return spy
+
+    for name in ("streamed_interval", "streamed_error_bands"):
+        monkeypatch.setattr(windows, name, spied(name))
+    passes = evaluate_job(options)
+    assert called.count("streamed_error_bands") == 1 and called.count("streamed_interval") >= 1
+    columns = ["sensor", "sector", "requirement", "value", "ci_low", "ci_high", "n", "verdict"]
+    pd.testing.assert_frame_equal(passes.scorecard[columns], together.scorecard[columns], check_exact=True)
+    p95 = together.scorecard[together.scorecard["requirement"] == "p95_m"]
+    assert p95.set_index("sector").loc["global", ["ci_low", "ci_high"]].notna().all()
+    title = "Position error per range band"
+    a, b = passes.tables[title], together.tables[title]
+    pd.testing.assert_frame_equal(a.drop(columns="rms_m"), b.drop(columns="rms_m"), check_exact=True)
+    assert np.allclose(a["rms_m"], b["rms_m"], rtol=1e-13, atol=0.0) and len(a) > 3
