@@ -11,6 +11,8 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import stats
 
+from msdc.pipeline.evaluate.ranks import Parts, lowest_reaching
+
 DIRECTIONS = (">=", ">", "<=", "<")
 VERDICTS = ("pass", "fail", "inconclusive")
 N_BOOT = 2000
@@ -18,7 +20,7 @@ N_BOOT = 2000
 # (benchmarks/evaluate_statistics.py: RMS 0.88-0.92 over 10-20 aircraft, tail percentiles far less)
 FEW_AIRCRAFT = 30
 _PERCENTILE = re.compile(r"p(\d{1,2}(?:\.\d+)?)")
-_CHUNK_CELLS = 4_000_000  # bootstrap replicates x reports held at once by the percentile bootstrap
+_CHUNK_CELLS = 4_000_000  # bootstrap replicates x aircraft drawn at once
 
 
 @dataclass(frozen=True)
@@ -127,18 +129,6 @@ def _percentile_level(statistic: str) -> float | None:
     return float(match.group(1))
 
 
-def _weighted_inverted_cdf(sorted_values: np.ndarray, weights: np.ndarray, q: float) -> np.ndarray:
-    """Per row of whole-number weights, the smallest sorted value whose cumulative weight reaches the share
-    q of the row's total: the inverted-CDF percentile of the sample the row describes (numpy's
-    method='inverted_cdf'), in exact integer sums."""
-    cum = np.cumsum(weights, axis=1, dtype=np.int64 if weights.dtype == np.int64 else np.int32)
-    total = cum[:, -1].astype(float)
-    target = np.ceil(q * total - 1e-9 * total)  # q * total within rounding of a whole number is that number
-    index = np.fromiter((np.searchsorted(row, t) for row, t in zip(cum, target, strict=True)), np.int64,
-                        count=cum.shape[0])
-    return sorted_values[np.minimum(index, sorted_values.size - 1)]
-
-
 def _point(values: np.ndarray, statistic: str, level: float | None) -> float:
     """The statistic on the whole sample (percentiles by the inverted-CDF definition, as the bootstrap)."""
     if statistic == "rms":
@@ -176,27 +166,36 @@ def clustered_interval(values, clusters, statistic: str, confidence: float = 0.9
     if n_clusters < 2:
         return ClusteredInterval(statistic, value, math.nan, math.nan, int(x.size), 1,
                                  "one aircraft: no interval over aircraft")
-    rng = np.random.default_rng(seed)
     counts = np.bincount(cluster_of, minlength=n_clusters).astype(float)
     if level is None:
         sums = np.bincount(cluster_of, weights=x, minlength=n_clusters)
         squares = np.bincount(cluster_of, weights=x**2, minlength=n_clusters)
-        replicates = _moment_replicates(rng, counts, sums, squares, statistic, n_boot)
+        replicates = _moment_replicates(np.random.default_rng(seed), counts, sums, squares, statistic, n_boot)
         return _finished(statistic, value, replicates, alpha, int(x.size), n_clusters)
-    order = np.argsort(x, kind="stable")
-    sorted_x, sorted_cluster = x[order], cluster_of[order]
-    # replicates in chunks, so the draws (replicates x aircraft) and weights (x reports) stay bounded
-    rows = max(1, _CHUNK_CELLS // (n_clusters + x.size))
-    # a replicate's total weight is at most every draw on the largest aircraft
-    wide = np.int32 if n_clusters * counts.max() < 2**31 - 1 else np.int64
-    replicates = []
-    for start in range(0, n_boot, rows):
-        # how many times each aircraft is drawn in each replicate
-        draws = rng.multinomial(n_clusters, np.full(n_clusters, 1.0 / n_clusters),
-                                size=min(rows, n_boot - start))
-        weights = draws.astype(wide)[:, sorted_cluster]
-        replicates.append(_weighted_inverted_cdf(sorted_x, weights, level / 100.0))
-    return _finished(statistic, value, np.concatenate(replicates), alpha, int(x.size), n_clusters)
+    replicates = percentile_replicates(lambda: iter([(x, cluster_of)]), counts, level, n_boot, seed)
+    return _finished(statistic, value, replicates, alpha, int(x.size), n_clusters)
+
+
+def percentile_replicates(parts: Parts, counts: np.ndarray, level: float, n_boot: int,
+                          seed: int) -> np.ndarray:
+    """A percentile's bootstrap replicates over clusters (``counts`` values each; ``parts`` give the values
+    and their cluster's index): each replicate draws as many clusters as there are, with replacement, and
+    takes the inverted-CDF percentile of the values so weighted (ranks.lowest_reaching: the draws made
+    again, in chunks, for each of its passes)."""
+    n_clusters = counts.size
+    rows = max(1, _CHUNK_CELLS // n_clusters)
+
+    def draws():
+        rng = np.random.default_rng(seed)
+        for start in range(0, n_boot, rows):
+            yield rng.multinomial(n_clusters, np.full(n_clusters, 1.0 / n_clusters),
+                                  size=min(rows, n_boot - start)).astype(float)
+
+    total = np.concatenate([d @ counts for d in draws()])
+    # the smallest value whose weight reaches the share q of the total (q * total within rounding of a whole
+    # number is that number)
+    q = level / 100.0
+    return lowest_reaching(parts, n_clusters, draws, np.ceil(q * total - 1e-9 * total))
 
 
 def _check_boot(n_boot: int) -> None:

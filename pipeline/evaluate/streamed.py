@@ -18,6 +18,7 @@ from msdc.pipeline.evaluate.statistics import (
     _check_confidence,
     _finished,
     _percentile_level,
+    percentile_replicates,
 )
 
 
@@ -25,7 +26,7 @@ def streamed_interval(parts: Callable[[], Iterator[tuple[np.ndarray, np.ndarray]
                       confidence: float = 0.95, n_boot: int = N_BOOT, seed: int = 0) -> ClusteredInterval:
     """statistics.clustered_interval of a percentile over every part's values (each part: values and their
     aircraft's labels) without holding them together: the same value and interval, bit for bit, from the
-    aircraft's counts and passes of lowest_reaching (the bootstrap's draws made again for each pass)."""
+    aircraft's counts and passes of ranks.lowest_reaching."""
     alpha = _check_confidence(confidence)
     level = _percentile_level(statistic)
     if level is None:
@@ -55,23 +56,12 @@ def streamed_interval(parts: Callable[[], Iterator[tuple[np.ndarray, np.ndarray]
             known = index.get_indexer(np.asarray(c.categories, dtype=object))
             yield np.asarray(values, dtype=float), known[c.codes]
 
-    q = level / 100.0
-    rows = max(1, 4_000_000 // n_clusters)
-
-    def draws() -> Iterator[np.ndarray]:
-        rng = np.random.default_rng(seed)
-        for start in range(0, n_boot, rows):
-            yield rng.multinomial(n_clusters, np.full(n_clusters, 1.0 / n_clusters),
-                                  size=min(rows, n_boot - start)).astype(float)
-
     point = float(lowest_reaching(grouped, n_clusters, lambda: iter([np.ones((1, n_clusters))]),
                                   np.array([inverted_cdf_rank(n, np.true_divide(level, 100)) + 1.0]))[0])
     if n_clusters < 2:
         return ClusteredInterval(statistic, point, math.nan, math.nan, n, 1,
                                  "one aircraft: no interval over aircraft")
-    total = np.concatenate([d @ counts for d in draws()])
-    targets = np.ceil(q * total - 1e-9 * total)
-    replicates = lowest_reaching(grouped, n_clusters, draws, targets)
+    replicates = percentile_replicates(grouped, counts, level, n_boot, seed)
     return _finished(statistic, point, replicates, alpha, n, n_clusters)
 
 

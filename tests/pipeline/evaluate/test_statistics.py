@@ -11,7 +11,6 @@ import pytest
 from scipy import stats
 
 from msdc.pipeline.evaluate.statistics import (
-    _weighted_inverted_cdf,
     clustered_interval,
     magnitude_interval,
     poisson_rate,
@@ -144,16 +143,23 @@ def test_point_values_by_their_definitions():
     assert clustered_interval(x, clusters, "p99").value == 20.0
 
 
-@pytest.mark.parametrize("q", [0.5, 0.95, 0.99, 0.01, 1.0])
-def test_a_replicate_percentile_is_the_percentile_of_the_resampled_reports(q):
-    """Each replicate's percentile equals numpy's inverted-CDF percentile of the sample written out in full
-    (every report repeated as often as its aircraft was drawn)."""
-    rng = np.random.default_rng(5)
-    x = np.sort(rng.rayleigh(40.0, 120))
-    weights = rng.integers(0, 4, (30, x.size)).astype(np.int32)
-    weights[:, 0] += 1  # no empty replicate
-    expected = [np.percentile(np.repeat(x, w), 100 * q, method="inverted_cdf") for w in weights]
-    assert np.array_equal(_weighted_inverted_cdf(x, weights, q), expected)
+@pytest.mark.parametrize("statistic", ["p95", "p99", "p50"])
+def test_a_percentiles_interval_is_that_of_the_resampled_reports_written_out(statistic):
+    """The bootstrap written out in full: the same draws of aircraft (numpy's multinomial, all at once), each
+    replicate every report repeated as often as its aircraft was drawn, numpy's inverted-CDF percentile of
+    it, the interval the replicates' 2.5 and 97.5 % quantiles (numpy's); and the value numpy's percentile of the
+    reports. Tied values (rounded to 5 m) included."""
+    rng = np.random.default_rng(21)
+    clusters = rng.integers(0, 35, 900)
+    x = np.round((rng.gamma(2.0, 30.0, 35)[clusters] + rng.rayleigh(20.0, clusters.size)) / 5.0) * 5.0
+    level = float(statistic[1:])
+    got = clustered_interval(x, clusters, statistic, n_boot=400, seed=9)
+    draws = np.random.default_rng(9).multinomial(35, np.full(35, 1 / 35), size=400)
+    replicates = [np.percentile(np.repeat(x, d[clusters]), level, method="inverted_cdf") for d in draws]
+    alpha = 1 - 0.95  # in floating point, as the confidence level is given
+    low, high = np.quantile(replicates, [alpha / 2, 1 - alpha / 2])
+    assert (got.value, got.ci_low, got.ci_high) == (np.percentile(x, level, method="inverted_cdf"), low, high)
+    assert got.ci_low < got.ci_high and got.n == 900 and got.n_clusters == 35
 
 
 def test_reproducible_with_a_seed():
