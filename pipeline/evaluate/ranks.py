@@ -25,6 +25,20 @@ Parts = Callable[[], Iterator[tuple[np.ndarray, np.ndarray]]]
 Weights = Callable[[], Iterator[np.ndarray]]
 
 
+class KeyRange:
+    """The smallest and largest key of values seen part by part, and how many there were."""
+
+    def __init__(self) -> None:
+        self.low, self.high, self.n = 0, 0, 0
+
+    def add(self, values: np.ndarray) -> None:
+        if len(values):
+            keys = float_keys(values)
+            low, high = int(keys.min()), int(keys.max())
+            self.low, self.high = (low, high) if not self.n else (min(self.low, low), max(self.high, high))
+            self.n += len(values)
+
+
 def float_keys(values: np.ndarray) -> np.ndarray:
     """Whole numbers ordered as the finite floats ``values`` are (-0.0 as 0.0): their bits, the negative
     ones' magnitude bits flipped."""
@@ -38,14 +52,20 @@ def key_values(keys: np.ndarray) -> np.ndarray:
     return np.where(keys < 0, keys ^ _LOW_BITS, keys).view(np.float64)
 
 
-def lowest_reaching(parts: Parts, n_groups: int, weights: Weights, targets: np.ndarray) -> np.ndarray:
+def lowest_reaching(parts: Parts, n_groups: int, weights: Weights, targets: np.ndarray,
+                    keys: KeyRange | None = None) -> np.ndarray:
     """Per row r of the weights, the smallest value v of the parts' at which the weights of the values up to
     v (W[r, group of the value]) add up to targets[r] (> 0, at most the row's total): the order statistic
     an inverted CDF picks. Each pass cuts every row's range of keys into BINS and keeps the bin it ends in,
-    until the range holds one value or at most COLLECT_VALUES, then sorts those."""
+    until the range holds one value or at most COLLECT_VALUES, then sorts those. ``keys``, when the caller
+    has read them, saves the first pass."""
     targets = np.asarray(targets, dtype=float)
     rows = targets.size
-    low, high, n = _key_range(parts)
+    if keys is None:
+        keys = KeyRange()
+        for values, _ in parts():
+            keys.add(values)
+    low, high, n = keys.low, keys.high, keys.n
     if n == 0:
         raise ValueError("no values to take an order statistic of")
     lo = np.full(rows, low, dtype=np.int64)
@@ -77,18 +97,6 @@ def lowest_reaching(parts: Parts, n_groups: int, weights: Weights, targets: np.n
         if offset != rows:
             raise ValueError(f"the weights have {offset} rows, the targets {rows}")
     return key_values(answer)
-
-
-def _key_range(parts: Parts) -> tuple[int, int, int]:
-    """The smallest and largest key of the values, and how many there are (one pass)."""
-    low, high, n = None, None, 0
-    for values, _ in parts():
-        if len(values):
-            keys = float_keys(values)
-            low = int(keys.min()) if low is None else min(low, int(keys.min()))
-            high = int(keys.max()) if high is None else max(high, int(keys.max()))
-            n += len(values)
-    return (low or 0), (high or 0), n
 
 
 class _Jobs:
@@ -229,5 +237,5 @@ def interpolated(a: float, b: float, t: float) -> float:
     return b - diff * (1 - t) if t >= 0.5 else a + diff * t
 
 
-__all__ = ["BINS", "COLLECT_VALUES", "Parts", "Weights", "float_keys", "interpolated", "inverted_cdf_rank",
-           "key_values", "linear_ranks", "lowest_reaching"]
+__all__ = ["BINS", "COLLECT_VALUES", "KeyRange", "Parts", "Weights", "float_keys", "interpolated",
+           "inverted_cdf_rank", "key_values", "linear_ranks", "lowest_reaching"]

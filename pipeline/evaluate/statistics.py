@@ -11,7 +11,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import stats
 
-from msdc.pipeline.evaluate.ranks import Parts, lowest_reaching
+from msdc.pipeline.evaluate.ranks import KeyRange, Parts, inverted_cdf_rank, lowest_reaching
 
 DIRECTIONS = (">=", ">", "<=", "<")
 VERDICTS = ("pass", "fail", "inconclusive")
@@ -176,16 +176,19 @@ def clustered_interval(values, clusters, statistic: str, confidence: float = 0.9
     return _finished(statistic, value, replicates, alpha, int(x.size), n_clusters)
 
 
-def percentile_replicates(parts: Parts, counts: np.ndarray, level: float, n_boot: int,
-                          seed: int) -> np.ndarray:
+def percentile_replicates(parts: Parts, counts: np.ndarray, level: float, n_boot: int, seed: int,
+                          keys: KeyRange | None = None, with_point: bool = False) -> np.ndarray:
     """A percentile's bootstrap replicates over clusters (``counts`` values each; ``parts`` give the values
     and their cluster's index): each replicate draws as many clusters as there are, with replacement, and
     takes the inverted-CDF percentile of the values so weighted (ranks.lowest_reaching: the draws made
-    again, in chunks, for each of its passes)."""
+    again, in chunks, for each of its passes). ``with_point``: the percentile of the values themselves
+    first, found in the same passes."""
     n_clusters = counts.size
     rows = max(1, _CHUNK_CELLS // n_clusters)
 
     def draws():
+        if with_point:
+            yield np.ones((1, n_clusters))
         rng = np.random.default_rng(seed)
         for start in range(0, n_boot, rows):
             yield rng.multinomial(n_clusters, np.full(n_clusters, 1.0 / n_clusters),
@@ -193,9 +196,12 @@ def percentile_replicates(parts: Parts, counts: np.ndarray, level: float, n_boot
 
     total = np.concatenate([d @ counts for d in draws()])
     # the smallest value whose weight reaches the share q of the total (q * total within rounding of a whole
-    # number is that number)
+    # number is that number); the point's as numpy's percentile takes it
     q = level / 100.0
-    return lowest_reaching(parts, n_clusters, draws, np.ceil(q * total - 1e-9 * total))
+    targets = np.ceil(q * total - 1e-9 * total)
+    if with_point:
+        targets[0] = inverted_cdf_rank(int(counts.sum()), np.true_divide(level, 100)) + 1
+    return lowest_reaching(parts, n_clusters, draws, targets, keys)
 
 
 def _check_boot(n_boot: int) -> None:

@@ -10,7 +10,13 @@ from collections.abc import Callable, Iterator
 import numpy as np
 import pandas as pd
 
-from msdc.pipeline.evaluate.ranks import interpolated, inverted_cdf_rank, linear_ranks, lowest_reaching
+from msdc.pipeline.evaluate.ranks import (
+    KeyRange,
+    interpolated,
+    inverted_cdf_rank,
+    linear_ranks,
+    lowest_reaching,
+)
 from msdc.pipeline.evaluate.statistics import (
     N_BOOT,
     ClusteredInterval,
@@ -34,11 +40,13 @@ def streamed_interval(parts: Callable[[], Iterator[tuple[np.ndarray, np.ndarray]
                          "aircraft's sums)")
     _check_boot(n_boot)
     per_label = pd.Series(dtype=float)
+    keys = KeyRange()
     for values, labels in parts():
         x = np.asarray(values, dtype=float)
         if not np.all(np.isfinite(x)):
             raise ValueError(f"values hold {int(np.sum(~np.isfinite(x)))} NaN or infinite errors: drop them "
                              "first")
+        keys.add(x)
         c = pd.Categorical(labels)
         counted = pd.Series(np.bincount(c.codes, minlength=len(c.categories)).astype(float),
                             index=pd.Index(np.asarray(c.categories, dtype=object), dtype=object))
@@ -56,13 +64,13 @@ def streamed_interval(parts: Callable[[], Iterator[tuple[np.ndarray, np.ndarray]
             known = index.get_indexer(np.asarray(c.categories, dtype=object))
             yield np.asarray(values, dtype=float), known[c.codes]
 
-    point = float(lowest_reaching(grouped, n_clusters, lambda: iter([np.ones((1, n_clusters))]),
-                                  np.array([inverted_cdf_rank(n, np.true_divide(level, 100)) + 1.0]))[0])
     if n_clusters < 2:
-        return ClusteredInterval(statistic, point, math.nan, math.nan, n, 1,
+        point = lowest_reaching(grouped, 1, lambda: iter([np.ones((1, 1))]),
+                                np.array([inverted_cdf_rank(n, np.true_divide(level, 100)) + 1.0]), keys)
+        return ClusteredInterval(statistic, float(point[0]), math.nan, math.nan, n, 1,
                                  "one aircraft: no interval over aircraft")
-    replicates = percentile_replicates(grouped, counts, level, n_boot, seed)
-    return _finished(statistic, point, replicates, alpha, n, n_clusters)
+    found = percentile_replicates(grouped, counts, level, n_boot, seed, keys, with_point=True)
+    return _finished(statistic, float(found[0]), found[1:], alpha, n, n_clusters)
 
 
 def streamed_error_bands(parts: Callable[[], Iterator[pd.DataFrame]], step_nm: float) -> pd.DataFrame:
@@ -74,9 +82,11 @@ def streamed_error_bands(parts: Callable[[], Iterator[pd.DataFrame]], step_nm: f
     squares: dict[int, float] = {}
     largest: dict[int, float] = {}
     seen: set[tuple[int, str]] = set()
+    keys = KeyRange()
     for frame in parts():
         band = np.floor(frame["range_nm"].to_numpy(float) / step_nm).astype(np.int64)
         error = frame["error_m"].to_numpy(float)
+        keys.add(error)
         by = pd.DataFrame({"band": band, "square": error**2, "error": error})
         summed = by.groupby("band").agg(n=("error", "size"), square=("square", "sum"), top=("error", "max"))
         for k, row in summed.iterrows():
@@ -97,7 +107,7 @@ def streamed_error_bands(parts: Callable[[], Iterator[pd.DataFrame]], step_nm: f
 
     one_hot = np.repeat(np.eye(bands.size), 2, axis=0)
     targets = np.array([r + 1.0 for a, b, _ in ranks for r in (a, b)])
-    ends = lowest_reaching(grouped, bands.size, lambda: iter([one_hot]), targets).reshape(-1, 2)
+    ends = lowest_reaching(grouped, bands.size, lambda: iter([one_hot]), targets, keys).reshape(-1, 2)
     aircraft = pd.Series([b for b, _ in seen]).value_counts()
     rows = [(k * step_nm, (k + 1) * step_nm, reports[k], int(aircraft[k]),
              math.sqrt(squares[k] / reports[k]), interpolated(a, b, t), largest[k])

@@ -147,8 +147,8 @@ def test_point_values_by_their_definitions():
 def test_a_percentiles_interval_is_that_of_the_resampled_reports_written_out(statistic):
     """The bootstrap written out in full: the same draws of aircraft (numpy's multinomial, all at once), each
     replicate every report repeated as often as its aircraft was drawn, numpy's inverted-CDF percentile of
-    it, the interval the replicates' 2.5 and 97.5 % quantiles (numpy's); and the value numpy's percentile of the
-    reports. Tied values (rounded to 5 m) included."""
+    it, the interval the replicates' 2.5 and 97.5 % quantiles (numpy's); and the value numpy's percentile
+    of the reports. Tied values (rounded to 5 m) included."""
     rng = np.random.default_rng(21)
     clusters = rng.integers(0, 35, 900)
     x = np.round((rng.gamma(2.0, 30.0, 35)[clusters] + rng.rayleigh(20.0, clusters.size)) / 5.0) * 5.0

@@ -65,3 +65,17 @@ def test_error_bands_in_passes_are_those_of_one_frame(cuts):
     pd.testing.assert_frame_equal(got[exact], direct[exact], check_exact=True)
     assert np.allclose(got["rms_m"], direct["rms_m"], rtol=1e-13, atol=0.0)  # summed in another order
     assert len(direct) == 10
+
+
+def test_values_read_whole_in_one_range_take_two_passes_the_point_with_the_replicates():
+    """Fewer values than a range reads whole: one pass counts the aircraft (and the values' range), one more
+    sorts them and finds the percentile and every replicate together."""
+    windows = _windows(np.random.default_rng(7))
+    passes = []
+
+    def parts():
+        passes.append(1)
+        return iter(windows)
+
+    streamed.streamed_interval(parts, "p95")
+    assert len(passes) == 2
