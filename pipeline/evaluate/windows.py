@@ -39,7 +39,7 @@ DRIFT_P = 0.01
 Z975 = stats.norm.ppf(0.975)
 # a spilled span pools a percentile, or its error bands, from more values than this in passes over the files
 # (streamed: the same figures, memory bounded by a window's values) instead of reading them back together
-VALUES_HELD = 20_000_000
+VALUES_HELD = 5_000_000
 
 
 def combine_outcomes(requirement: Requirement, outcomes: Sequence[Outcome]) -> Outcome:
