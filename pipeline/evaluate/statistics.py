@@ -21,6 +21,7 @@ N_BOOT = 2000
 FEW_AIRCRAFT = 30
 _PERCENTILE = re.compile(r"p(\d{1,2}(?:\.\d+)?)")
 _CHUNK_CELLS = 4_000_000  # bootstrap replicates x aircraft drawn at once
+_DRAWS_HELD = 64_000_000  # replicates x aircraft of a percentile's draws kept between passes (2 bytes each)
 
 
 @dataclass(frozen=True)
@@ -180,19 +181,27 @@ def percentile_replicates(parts: Parts, counts: np.ndarray, level: float, n_boot
                           keys: KeyRange | None = None, with_point: bool = False) -> np.ndarray:
     """A percentile's bootstrap replicates over clusters (``counts`` values each; ``parts`` give the values
     and their cluster's index): each replicate draws as many clusters as there are, with replacement, and
-    takes the inverted-CDF percentile of the values so weighted (ranks.lowest_reaching: the draws made
-    again, in chunks, for each of its passes). ``with_point``: the percentile of the values themselves
-    first, found in the same passes."""
+    takes the inverted-CDF percentile of the values so weighted (ranks.lowest_reaching, passing the draws
+    in chunks). ``with_point``: the percentile of the values themselves first, found in the same passes."""
     n_clusters = counts.size
     rows = max(1, _CHUNK_CELLS // n_clusters)
+
+    def drawn():
+        rng = np.random.default_rng(seed)
+        for start in range(0, n_boot, rows):
+            yield rng.multinomial(n_clusters, np.full(n_clusters, 1.0 / n_clusters),
+                                  size=min(rows, n_boot - start))
+
+    # the draws kept between passes when they fit _DRAWS_HELD (as 16-bit counts: an aircraft is drawn at
+    # most n_clusters times), else made again for each pass
+    small = n_boot * n_clusters <= _DRAWS_HELD and n_clusters < 2**16
+    kept = [d.astype(np.uint16) for d in drawn()] if small else None
 
     def draws():
         if with_point:
             yield np.ones((1, n_clusters))
-        rng = np.random.default_rng(seed)
-        for start in range(0, n_boot, rows):
-            yield rng.multinomial(n_clusters, np.full(n_clusters, 1.0 / n_clusters),
-                                  size=min(rows, n_boot - start)).astype(float)
+        for d in kept if kept is not None else drawn():
+            yield d.astype(float)
 
     total = np.concatenate([d @ counts for d in draws()])
     # the smallest value whose weight reaches the share q of the total (q * total within rounding of a whole

@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 from scipy import stats
 
+from msdc.pipeline.evaluate import statistics
 from msdc.pipeline.evaluate.statistics import (
     clustered_interval,
     magnitude_interval,
@@ -143,12 +144,16 @@ def test_point_values_by_their_definitions():
     assert clustered_interval(x, clusters, "p99").value == 20.0
 
 
+@pytest.mark.parametrize("held", [None, 0], ids=["draws-kept", "draws-made-again"])
 @pytest.mark.parametrize("statistic", ["p95", "p99", "p50"])
-def test_a_percentiles_interval_is_that_of_the_resampled_reports_written_out(statistic):
+def test_a_percentiles_interval_is_that_of_the_resampled_reports_written_out(statistic, held, monkeypatch,
+                                                                              cuts):
     """The bootstrap written out in full: the same draws of aircraft (numpy's multinomial, all at once), each
     replicate every report repeated as often as its aircraft was drawn, numpy's inverted-CDF percentile of
     it, the interval the replicates' 2.5 and 97.5 % quantiles (numpy's); and the value numpy's percentile
-    of the reports. Tied values (rounded to 5 m) included."""
+    of the reports. Tied values (rounded to 5 m) included; the draws kept between passes or made again."""
+    if held is not None:
+        monkeypatch.setattr(statistics, "_DRAWS_HELD", held)
     rng = np.random.default_rng(21)
     clusters = rng.integers(0, 35, 900)
     x = np.round((rng.gamma(2.0, 30.0, 35)[clusters] + rng.rayleigh(20.0, clusters.size)) / 5.0) * 5.0
