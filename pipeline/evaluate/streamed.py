@@ -86,6 +86,8 @@ def streamed_error_bands(parts: Callable[[], Iterator[pd.DataFrame]], step_nm: f
     for frame in parts():
         band = np.floor(frame["range_nm"].to_numpy(float) / step_nm).astype(np.int64)
         error = frame["error_m"].to_numpy(float)
+        if not np.all(np.isfinite(error)):
+            raise ValueError(f"judged errors hold {int(np.sum(~np.isfinite(error)))} NaN or infinite values")
         keys.add(error)
         by = pd.DataFrame({"band": band, "square": error**2, "error": error})
         summed = by.groupby("band").agg(n=("error", "size"), square=("square", "sum"), top=("error", "max"))

@@ -79,3 +79,9 @@ def test_values_read_whole_in_one_range_take_two_passes_the_point_with_the_repli
 
     streamed.streamed_interval(parts, "p95")
     assert len(passes) == 2
+
+
+def test_error_bands_refuse_values_they_cannot_order():
+    frame = pd.DataFrame({"range_nm": [5.0, 15.0], "aircraft": ["a", "b"], "error_m": [3.0, np.nan]})
+    with pytest.raises(ValueError, match="1 NaN or infinite"):
+        streamed.streamed_error_bands(lambda: iter([frame]), 10.0)
