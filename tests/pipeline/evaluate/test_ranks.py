@@ -74,9 +74,9 @@ def test_each_rows_value_is_where_its_weights_reach_the_target(cuts, ties):
     assert got.tolist() == _by_sorting(parts, weights, targets).tolist()
 
 
-def test_one_value_many_times_is_found_in_one_pass_and_no_value_is_an_error(cuts):
+def test_one_value_many_times_is_that_value_and_no_value_is_an_error(cuts):
     parts = [(np.full(500, 12.5), np.zeros(500, dtype=int))]
     assert ranks.lowest_reaching(lambda: iter(parts), 1, lambda: iter([np.ones((2, 1))]),
-                                    np.array([1.0, 500.0])).tolist() == [12.5, 12.5]
+                                 np.array([1.0, 500.0])).tolist() == [12.5, 12.5]
     with pytest.raises(ValueError, match="no values"):
         ranks.lowest_reaching(lambda: iter([]), 1, lambda: iter([np.ones((1, 1))]), np.array([1.0]))
