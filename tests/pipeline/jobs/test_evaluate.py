@@ -584,7 +584,7 @@ def test_a_span_pooled_from_disk_in_passes_gives_the_figures_of_its_values_read_
     sim, folder = recording
     preset = tmp_path / "preset.toml"
     preset.write_text(_preset(sim) + _requirement("p95_m", 1000.0, "<=", {}))
-    options = _options(folder, preset=str(preset), from_time="08:00", to_time="08:30", window_minutes=10.0)
+    options = _options(folder, preset=str(preset), from_time="08:00", to_time="08:20", window_minutes=10.0)
     together = evaluate_job(options)
     monkeypatch.setattr(windows, "VALUES_HELD", 0)
     called: list[str] = []
