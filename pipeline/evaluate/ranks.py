@@ -124,8 +124,8 @@ class _Jobs:
         return np.searchsorted(self.lo, lo)
 
     def read(self, parts: Parts, n_groups: int) -> list:
-        """One pass: per job, its bins' counts per group (sparse, bins x groups) or its values whole (keys
-        sorted, with their groups)."""
+        """One pass: per job, its bins' counts per group (sparse, bins x groups; ``in_bin`` the values of
+        each bin) or its values whole (keys sorted, with their groups)."""
         codes: list[tuple[np.ndarray, np.ndarray]] = []
         kept: list[tuple[np.ndarray, np.ndarray, np.ndarray]] = []
         collect_bin = self.collect[self.job_of_bin]
@@ -144,23 +144,22 @@ class _Jobs:
             if sum(c.size for c, _ in codes) > _CODES_HELD:
                 codes = [_merged(codes)]
         code, counted = _merged(codes)
-        bins = sparse.csr_matrix((counted.astype(float), (code // n_groups, code % n_groups)),
+        row = code // n_groups
+        self.in_bin = np.bincount(row, weights=counted, minlength=self.lowers.size).astype(np.int64)
+        bins = sparse.csr_matrix((counted.astype(float), (row, code % n_groups)),
                                  shape=(self.lowers.size, n_groups))
         out: list = [None] * self.lo.size
         for job in np.flatnonzero(~self.collect):
             out[job] = bins[self.first[job]:self.first[job + 1]]
-        if kept:
-            job = np.concatenate([k[0] for k in kept])
-            keys = np.concatenate([k[1] for k in kept])
-            groups = np.concatenate([k[2] for k in kept])
-            order = np.lexsort((keys, job))
-            job, keys, groups = job[order], keys[order], groups[order]
-            cuts = np.searchsorted(job, np.arange(self.lo.size + 1))
-            for j in np.flatnonzero(self.collect):
-                out[j] = (keys[cuts[j]:cuts[j + 1]], groups[cuts[j]:cuts[j + 1]])
+        empty = np.zeros(0, dtype=np.int64)
+        job = np.concatenate([empty, *(k[0] for k in kept)])
+        keys = np.concatenate([empty, *(k[1] for k in kept)])
+        groups = np.concatenate([empty, *(k[2] for k in kept)])
+        order = np.lexsort((keys, job))
+        job, keys, groups = job[order], keys[order], groups[order]
+        cuts = np.searchsorted(job, np.arange(self.lo.size + 1))
         for j in np.flatnonzero(self.collect):
-            if out[j] is None:
-                out[j] = (np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int64))
+            out[j] = (keys[cuts[j]:cuts[j + 1]], groups[cuts[j]:cuts[j + 1]])
         return out
 
 
@@ -210,7 +209,7 @@ def _narrowed(jobs: _Jobs, counts: sparse.csr_matrix, job: int, w: np.ndarray, m
     base[mine] = cum[at, np.arange(mine.size)] - reach[at, np.arange(mine.size)]
     first = jobs.first[job]
     lo[mine], hi[mine] = jobs.lowers[first + at], jobs.uppers[first + at]
-    count[mine] = np.asarray(counts.sum(axis=1)).ravel()[at].astype(np.int64)
+    count[mine] = jobs.in_bin[first + at]
 
 
 def inverted_cdf_rank(n: int, q: float) -> int:
