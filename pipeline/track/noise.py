@@ -24,11 +24,10 @@ from typing import NamedTuple
 
 import numpy as np
 import pandas as pd
-from scipy.stats import chi2
 
 from msdc.pipeline.parallel import map_ordered
 
-from .config import TrackerConfig, default_modes
+from .config import TrackerConfig, chi2_quantile, default_modes
 from .frame import Plane
 from .plane import estimate, filter_plane
 
@@ -40,8 +39,8 @@ from .plane import estimate, filter_plane
 SURFACE_SPEED_KT = 50.0
 KT_PER_M_S = 3600.0 / 1852.0
 
-CHI2_1_MEDIAN = float(chi2.median(1))  # median of a squared standard normal, 0.4549
-CHI2_2_MEDIAN = float(chi2.median(2))  # 2 ln 2
+CHI2_1_MEDIAN = chi2_quantile(0.5, 1)  # median of a squared standard normal, 0.4549
+CHI2_2_MEDIAN = chi2_quantile(0.5, 2)  # 2 ln 2
 GROSS_SIGMAS = 30.0  # residuals beyond this many robust sigmas are gross errors, not noise
 POSITION, RANGE, AZIMUTH = "position", "range", "azimuth"
 SCALE_LIMITS = (0.02, 50.0)  # sigma factors are clipped to this per pass
@@ -119,14 +118,14 @@ def variance_ratio(q: np.ndarray, dof: int) -> float:
 def _below_gross(q: np.ndarray, dof: int) -> np.ndarray:
     """The finite q whose q / dof lies within GROSS_SIGMAS^2 times its robust (median-based) level."""
     q = q[np.isfinite(q)]
-    level = np.median(q / dof) / (float(chi2.median(dof)) / dof)
+    level = np.median(q / dof) / (chi2_quantile(0.5, dof) / dof)
     return q[q / dof <= GROSS_SIGMAS**2 * level]
 
 
 def _tail(q: np.ndarray, dof: int) -> float:
     """The factor on the variance that leaves GATE_SHARE_MAX of q beyond the GATE_PROBABILITY quantile
     of chi-square(dof) (below 1 where fewer lie beyond it already)."""
-    return float(np.quantile(q, 1.0 - GATE_SHARE_MAX) / float(chi2.ppf(GATE_PROBABILITY, dof)))
+    return float(np.quantile(q, 1.0 - GATE_SHARE_MAX) / chi2_quantile(GATE_PROBABILITY, dof))
 
 
 def aircraft_tail(q: np.ndarray, dof: int) -> float:
@@ -228,7 +227,7 @@ def fit_timing(res_uw: np.ndarray, hph_uw: np.ndarray, speed_m_s: np.ndarray, va
     if t2 <= 0.0:
         s2, t2 = b[0] / a[0, 0], 0.0
     s2 = max(float(s2), 1e-6 * var_m2)
-    gate = chi2.ppf(GATE_PROBABILITY, 2)
+    gate = chi2_quantile(GATE_PROBABILITY, 2)
     if t2 == 0.0:
         return _smallest_factor(lambda g: float(np.mean((y_along + y_across) / (g * s2) > gate)),
                                 GATE_SHARE_MAX) * s2, 0.0

@@ -67,6 +67,17 @@ def test_the_stats_check_sees_a_step_import():
     assert "msdc.pipeline.correlate.correlation" in loaded and "msdc.pipeline.model.jumps" in loaded
 
 
+def test_track_with_estimated_noise_does_not_import_scipy_stats(tmp_path):
+    """scipy.stats is ~45 MB a process and 0.3-1 s of import: the tracker and its noise estimate take the
+    chi-square quantiles from scipy.special (the run's memory while figures are drawn beside it, issue 26)."""
+    out, loaded = _loaded("track", "fixtures/radar.ast", "fixtures/adsb.ast", "--sensors",
+                          "fixtures/sensors.toml", "--date", "2019-03-01", "--all", "--json",
+                          str(tmp_path / "t.json"),
+                          heavy=("scipy.stats", "scipy.special", "matplotlib"))
+    assert "Measurement noise estimated" in out  # the default --noise estimate ran
+    assert loaded == ["scipy.special"]  # the probe sees what the run does import
+
+
 _NUMBA_AFTER = """
 import numpy as np
 from numba import njit

@@ -295,3 +295,25 @@ def test_gate_is_the_chi_square_quantile_with_two_degrees_of_freedom(p):
     assert gate == float(chi2.ppf(p, 2))
     assert gate == pytest.approx(-2.0 * np.log1p(-p), rel=1e-12)
     assert TrackerConfig(gate_probability=1.0).kernel_args()["gate_d2"] == np.inf
+
+
+@pytest.mark.parametrize(("p", "dof", "expected"), [
+    (0.5, 1, 0.6744897501960817**2),  # a squared standard normal's median: the normal's 75 % point squared
+    (0.95, 1, 1.959963984540054**2),
+    (0.999, 1, 3.2905267314919255**2),
+    (0.5, 2, 2.0 * np.log(2.0)),  # chi-square(2) is exponential with mean 2
+    (0.999, 2, -2.0 * np.log(0.001)),
+    (0.5, 4, 3.356693980033322),  # solves e^(-x/2) (1 + x/2) = 1/2 (chi-square(4) survival), bisected
+])
+def test_chi2_quantile_matches_closed_forms_and_scipy_stats(p, dof, expected):
+    """The quantile without scipy.stats (noise estimation's gates and medians): closed forms for 1, 2 and
+    4 degrees of freedom, and scipy.stats.chi2.ppf's bits."""
+    from scipy.stats import chi2
+
+    from msdc.pipeline.track.config import chi2_quantile
+
+    q = chi2_quantile(p, dof)
+    assert q == pytest.approx(expected, rel=1e-12)
+    assert q == float(chi2.ppf(p, dof))
+    if dof == 4:
+        assert np.exp(-q / 2.0) * (1.0 + q / 2.0) == pytest.approx(1.0 - p, rel=1e-12)
