@@ -5,9 +5,13 @@ listed with commands that really draw them."""
 from __future__ import annotations
 
 import datetime as dt
+import gc
 import io
 import json
 import shlex
+import subprocess
+import sys
+import weakref
 from dataclasses import replace
 from pathlib import Path
 
@@ -22,6 +26,7 @@ from msdc.pipeline.jobs.common import NOT_DRAWN, JobError, OptionError, choose
 from msdc.pipeline.jobs.options import command_args, from_args
 from msdc.pipeline.jobs.track import TrackOptions
 from msdc.pipeline.progress import Progress
+from msdc.pipeline.report import figure_pool
 from msdc.pipeline.report.figure_pool import FigureError, FigureTask, render
 from msdc.pipeline.report.track_figures import aircraft_figure, figure_names
 
@@ -168,3 +173,41 @@ def test_figure_choices_need_figures(extra, tmp_path, capsys):
     assert main(["track", *BASE, "--all", "-o", str(tmp_path / "t.csv"), *extra]) == 2
     err = capsys.readouterr().err
     assert f"{extra[0]} {extra[1]}: only with --figures DIR" in err and list(tmp_path.iterdir()) == []
+
+
+class _Held:
+    """An object a test can watch die (weakref) held in a reference cycle, as a figure's artists are."""
+
+
+def _draw_a_cycle(path: Path, seen: list) -> Path:
+    held = _Held()
+    held.me = held
+    seen.append(weakref.ref(held))
+    return path
+
+
+def test_a_worker_collects_each_figures_garbage_after_drawing_it(tmp_path):
+    """A figure's artists refer to each other: freed only by the collector, whose oldest generation runs
+    rarely; the worker collects after each figure so that its memory is one figure's (issue 26 item 5)."""
+    seen: list = []
+    task = FigureTask("cycle.png", _draw_a_cycle, {"path": tmp_path / "cycle.png", "seen": seen})
+    gc.disable()  # only the worker's own collection may free it
+    try:
+        figure_pool._run(task)
+        assert seen[-1]() is not None  # drawn alone, the cycle stays
+        assert figure_pool._run_and_collect(task) == tmp_path / "cycle.png"
+        assert seen[-1]() is None
+    finally:
+        gc.enable()
+
+
+def test_the_fork_server_freezes_what_it_loaded_last():
+    """figure_server, last of the fork server's preloads, moves the loaded objects out of the collector's
+    reach (gc.freeze), so that workers' collections do not copy the pages they share with the server."""
+    assert figure_pool.PRELOAD[-1] == "msdc.pipeline.report.figure_server"
+    probe = ("import gc, importlib; before = gc.get_freeze_count(); "
+             "importlib.import_module('msdc.pipeline.report.figure_server'); "
+             "print(before, gc.get_freeze_count())")
+    done = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True, timeout=60)
+    before, after = map(int, done.stdout.split())
+    assert before == 0 and after > 1000  # the interpreter's own objects at least
