@@ -889,7 +889,9 @@ def scan(buf, blk_start, blk_len, parts, n_frn, n_slots, rel_off, rel_len, rec_o
     return counts, fail_at, i
 
 
-GATHER_CHUNK = 4096  # records per pass: their part table rows stay in cache across all fields
+# records per pass: their rows of rel_off and rel_len (4 bytes a slot) stay in cache across all fields;
+# CAT062's 69 slots take 283 KB at 1024 (4096 records, 1.1 MB, decoded CAT062 18 % slower; CAT048 alike)
+GATHER_CHUNK = 1024
 
 
 @njit(cache=True, nogil=True)
