@@ -80,26 +80,45 @@ def empty_column(col: Column, n: int):
 
 
 def empty_columns(cols: list[Column], n: int) -> dict[str, object]:
-    """All-absent columns (``empty_column``'s) for several columns at once: the float and integer ones as rows
-    of one matrix per dtype (one allocation each rather than one per column), text ones empty categoricals;
-    an ``icao`` column with its ``_hex`` beside it."""
+    """All-absent columns (``empty_column``'s) for several columns at once: one array per dtype, the same
+    object for every column of that dtype (a wide edition's absent columns cost one column's memory and
+    fill, not one each; ``frame_of`` makes the frame's columns copy on write), text ones one empty
+    categorical; an ``icao`` column with its ``_hex`` beside it."""
     out: dict[str, object] = {}
     floats = [c for c in cols if c.kind in ("float", "bds")]
     ints = [c for c in cols if c.kind in _INT_DTYPES]
     if floats:
-        matrix = np.full((len(floats), n), np.nan)
-        out |= {c.name: matrix[i] for i, c in enumerate(floats)}
+        nan = np.full(n, np.nan)
+        out |= {c.name: nan for c in floats}
     for dtype in {_INT_DTYPES[c.kind] for c in ints}:
-        same = [c for c in ints if _INT_DTYPES[c.kind] == dtype]
-        values, mask = np.zeros((len(same), n), dtype), np.ones((len(same), n), bool)
-        out |= {c.name: pd.arrays.IntegerArray(values[i], mask[i]) for i, c in enumerate(same)}
-    nothing = pd.Index([], dtype=object)
-    for c in cols:
-        if c.name not in out:  # text: categorical codes -1
-            out[c.name] = pd.Categorical.from_codes(np.full(n, -1, np.int8), categories=nothing)
+        absent = pd.arrays.IntegerArray(np.zeros(n, dtype), np.ones(n, bool))
+        out |= {c.name: absent for c in ints if _INT_DTYPES[c.kind] == dtype}
+    texts = [c for c in cols if c.name not in out]
+    if texts:  # categorical codes -1
+        none = pd.Categorical.from_codes(np.full(n, -1, np.int8), categories=pd.Index([], dtype=object))
+        for c in texts:
+            out[c.name] = none
             if c.kind == "icao":
-                out[f"{c.name}_hex"] = pd.Categorical.from_codes(np.full(n, -1, np.int8), categories=nothing)
+                out[f"{c.name}_hex"] = none
     return out
+
+
+def frame_of(cols: dict[str, object]) -> pd.DataFrame:
+    """A DataFrame of these columns without copying them; an array given for several columns (the absent
+    ones: ``empty_columns``) goes in as views whose writes copy first (pandas' copy on write), so that
+    setting a value in one column never shows in another."""
+    uses: dict[int, int] = {}
+    for v in cols.values():
+        uses[id(v)] = uses.get(id(v), 0) + 1
+    shared: dict[int, pd.Series] = {}
+    data = {}
+    for name, v in cols.items():
+        if uses[id(v)] > 1:
+            base = shared.setdefault(id(v), pd.Series(v, copy=False))
+            data[name] = base.copy(deep=False)
+        else:
+            data[name] = v
+    return pd.DataFrame(data, copy=False)
 
 
 def code_list_column(buf: np.ndarray, rec_off: np.ndarray, rel_off: np.ndarray, rel_len: np.ndarray

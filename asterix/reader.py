@@ -21,7 +21,7 @@ from .columns import FAMILIES
 from .containers import Segments, read_segments, readonly
 from .errors import REASONS, ContentWarning, DecodeError, EditionWarning, UnreadableInput, UntimedWarning
 from .families import AUTO, edition_families, edition_span, family_name, family_of, with_defaults
-from .frames import code_list_column, empty_columns, icao_columns, typed_column
+from .frames import code_list_column, empty_columns, frame_of, icao_columns, typed_column
 from .framing import Progress, alike_framings, held, release_pages, segment_modes, survey
 from .layout import OUT_FLOAT, OUT_INT, OUT_WIDE, Layout, compile_layout
 from .plausible import BOUNDS, Implausible, count_implausible, implausible
@@ -460,7 +460,7 @@ def _build(cols: dict[str, object]) -> pd.DataFrame:
     """One DataFrame in schema order (identity and time first, provenance last), built once."""
     order = [*LEADING, *(c for c in cols if c not in LEADING and c not in ("block", "offset")), "block",
              "offset"]
-    return pd.DataFrame({c: cols[c] for c in order}, copy=False)
+    return frame_of({c: cols[c] for c in order})
 
 
 @cache

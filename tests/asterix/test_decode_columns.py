@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import numpy as np
 import pandas as pd
 import pytest
 
@@ -40,3 +41,25 @@ def test_measurements_from_the_selected_columns_equal_those_from_every_column():
     assert len(part[0][48].columns) < len(full[0][48].columns) / 2
     pd.testing.assert_frame_equal(build_measurements(part[0][48], part[1][21], sensors),
                                   build_measurements(full[0][48], full[1][21], sensors))
+
+
+def test_absent_columns_share_one_array_and_a_write_stays_in_its_column():
+    """An edition's columns no record carries are all missing; the float ones are one array (a wide
+    edition's absent columns cost one column's memory), yet a value set in one never shows in another,
+    in the frame or in a copy taken before (copy on write), whatever the column's dtype."""
+    frame = asterix.read(RADAR, date="2019-03-01").frames[48]
+    absent = [c for c in frame.columns if frame[c].isna().all()]
+    by_dtype: dict[str, list[str]] = {}
+    for c in absent:
+        by_dtype.setdefault(str(frame[c].dtype), []).append(c)
+    floats = by_dtype["float64"]
+    assert len(floats) >= 3
+    assert np.shares_memory(frame[floats[0]].to_numpy(), frame[floats[1]].to_numpy())
+    for dtype, value in (("float64", 1.5), ("Int8", 1), ("Int16", 7)):
+        first, second, third = by_dtype[dtype][:3]
+        frame.loc[0, first] = value  # no other frame refers to these columns
+        assert frame.loc[0, first] == value and frame[second].isna().all()
+        before = frame.copy(deep=False)
+        frame.loc[1, second] = value
+        assert before[second].isna().all() and frame[third].isna().all()
+    assert frame[floats[3]].isna().all() and frame[floats[3]].dtype == np.float64
