@@ -233,6 +233,15 @@ def build_mixed(path: Path, cat048_path: Path, other_share: float = 0.30) -> Non
     path.write_bytes(bytes(out))
 
 
+def _rss_mb() -> float:
+    """This process's resident memory now (Linux /proc; 0 elsewhere)."""
+    try:
+        with open("/proc/self/status") as f:
+            return next(int(line.split()[1]) for line in f if line.startswith("VmRSS")) / 1024
+    except (OSError, StopIteration):
+        return 0.0
+
+
 def measure(path: Path, repeat: int, category: int, pin: str = "") -> dict:
     """In this (fresh) process: warm up on a prefix, then the peak-memory decode and best-of-repeat
     (``pin``: the category's edition pinned instead of its default)."""
@@ -247,10 +256,14 @@ def measure(path: Path, repeat: int, category: int, pin: str = "") -> dict:
         kw = {"editions": {category: pin}} if pin else {}
         asterix.read(tiny.name, categories=[category], **kw)  # loads the cached kernel and pandas machinery
     base_rss_mb = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+    gc.collect()
+    base_now_mb = _rss_mb()
     t0 = time.perf_counter()
     rec = asterix.read(path, categories=[category], **kw)
     first_s = time.perf_counter() - t0
     peak_rss_mb = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+    gc.collect()
+    held_mb = _rss_mb() - base_now_mb  # what the frames really hold (absent columns share one array)
     n = sum(len(f) for f in rec.frames.values())
     frame_mb = sum(f.memory_usage(deep=True).sum() for f in rec.frames.values()) / 1e6
     values = sum(int(f.notna().to_numpy().sum()) for f in rec.frames.values())  # present cells
@@ -263,7 +276,7 @@ def measure(path: Path, repeat: int, category: int, pin: str = "") -> dict:
         times.append(time.perf_counter() - t0)
     return {"records": n, "first_s": first_s, "best_s": min(times), "records_per_s": n / min(times),
             "peak_rss_mb": peak_rss_mb, "rss_before_mb": base_rss_mb, "frame_mb": frame_mb,
-            "values_per_record": values / max(n, 1),
+            "held_mb": held_mb, "values_per_record": values / max(n, 1),
             "file_mb": path.stat().st_size / 1e6}
 
 
@@ -339,7 +352,8 @@ def main() -> int:
         print(f"{label}: {m['values_per_record']:.1f} present values a record, "
               f"{value_rates[label]:,.0f} values/s{value_versus}")
         print(f"{label}: peak RSS {m['peak_rss_mb']:.0f} MB, of which the decode added {grow_mb:.0f} MB"
-              f" (imports and kernel before it: {m['rss_before_mb']:.0f} MB); frames {m['frame_mb']:.0f} MB,"
+              f" (imports and kernel before it: {m['rss_before_mb']:.0f} MB); frames {m['frame_mb']:.0f} MB"
+              f" (columns summed; held after the decode: {m['held_mb']:.0f} MB),"
               f" file {m['file_mb']:.0f} MB;"
               f" added/(frames+file) = {grow_mb / (m['frame_mb'] + m['file_mb']):.2f}")
         if label == "CAT021":  # the cost of 'auto' (CAT021's default) against the edition it chooses
