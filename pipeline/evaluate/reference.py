@@ -192,9 +192,7 @@ def associate(reports: pd.DataFrame, reference: pd.DataFrame,
     different levels keep their plots. Codes are judged apart from it: a wrong Mode C with a single
     aircraft in the gate still goes to that aircraft."""
     _check_columns(reports, REPORTS_REQUIRED, "the test reports")
-    gate_m = float(parameter(parameters, "gate_m", DEFAULT_GATE_M))
-    vertical_ft = float(parameter(parameters, "vertical_gate_ft", DEFAULT_VERTICAL_GATE_FT))
-    max_gap_s = float(parameter(parameters, "reference_max_gap_s", DEFAULT_REFERENCE_GAP_S))
+    gate_m, vertical_ft, max_gap_s = association_gates(parameters)
     ref = check_reference(reference)
     t = reports["t_s"].to_numpy(float)
     lat, lon = reports["latitude"].to_numpy(float), reports["longitude"].to_numpy(float)
@@ -235,6 +233,14 @@ def associate(reports: pd.DataFrame, reference: pd.DataFrame,
     labels = np.array([tr.label for tr in trajs] + [None], dtype=object)
     out["ref_aircraft"] = pd.Series(labels[index], index=out.index, dtype=object)
     return out
+
+
+def association_gates(parameters: Mapping | None) -> tuple[float, float, float]:
+    """What associate takes from the parameters: gate_m, vertical_gate_ft and reference_max_gap_s (their
+    defaults where absent); two parameter sets with the same gates associate alike."""
+    return (float(parameter(parameters, "gate_m", DEFAULT_GATE_M)),
+            float(parameter(parameters, "vertical_gate_ft", DEFAULT_VERTICAL_GATE_FT)),
+            float(parameter(parameters, "reference_max_gap_s", DEFAULT_REFERENCE_GAP_S)))
 
 
 def associated(reports: pd.DataFrame, reference: pd.DataFrame, parameters: Mapping | None) -> pd.DataFrame:

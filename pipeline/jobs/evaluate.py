@@ -287,17 +287,24 @@ def _map_points(sensor_id: str, reports: pd.DataFrame, reference: pd.DataFrame,
     return out[ok].reset_index(drop=True)
 
 
-def _coverage(reports: pd.DataFrame, reference: pd.DataFrame, sensor, preset) -> tuple[dict, object, object]:
+def _coverage(reports: pd.DataFrame, reference: pd.DataFrame, sensor, preset,
+              linked: pd.DataFrame | None = None) -> tuple[dict, object, object]:
     """PD per band (range, azimuth, flight level, surface/airborne) and on the polar and vertical grids,
     from the expected updates under the preset's first pd requirement's parameters, the field monitors left
-    out."""
+    out. ``linked``: the reports already associated with this reference under the preset's gate, used as
+    they are when that association is the one needed here (no field monitor, the same gates)."""
     from msdc.pipeline.evaluate.bins import detection_bands, polar_grid, vertical_grid
     from msdc.pipeline.evaluate.detection import expected_updates
+    from msdc.pipeline.evaluate.reference import association_gates
 
     params = {**next((dict(r.parameters) for r in preset.requirements if r.id == "pd"), {}),
               **preset.association()}
-    if "field_monitor" in reference.columns:
-        reference = reference[~reference["field_monitor"].to_numpy(bool)]
+    monitors = (reference["field_monitor"].to_numpy(bool) if "field_monitor" in reference.columns
+                else np.zeros(len(reference), bool))
+    if monitors.any():
+        reference = reference[~monitors]
+    elif linked is not None and association_gates(params) == association_gates(preset.association()):
+        reports = linked
     try:
         table, _, _ = expected_updates(reports, reference, params, sensor)
     except ValueError:
@@ -341,10 +348,10 @@ def _sensor(options, checked, loaded, meas, builders, sensor_id, kind, gates, ep
     notes += score.notes
     pd_outcome = next((o for (name, rid, _), o in score.outcomes.items() if rid == "pd" and name == "global"),
                       None)
-    bands, polar, vertical = ({}, None, None) if reference.empty else _coverage(reports, reference, sensor,
-                                                                                 checked.preset)
     gate = checked.preset.association()
     linked = score.reports  # associated once, with the preset's gate: reused below
+    bands, polar, vertical = ({}, None, None) if reference.empty else _coverage(reports, reference, sensor,
+                                                                                 checked.preset, linked)
     per = _per_aircraft(sensor_id, linked, reference, pd_outcome, gate) if len(reference) else pd.DataFrame()
     points = _map_points(sensor_id, linked, reference, gate) if len(reference) else pd.DataFrame()
     errors = range_errors(linked, reference, sensor, gate) if len(reference) else None

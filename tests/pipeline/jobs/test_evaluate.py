@@ -140,6 +140,39 @@ def test_per_aircraft_and_per_band_tables(evaluated):
     assert abs(total - INJECTED.pd) < 0.03
 
 
+def test_coverage_from_the_scorecards_association_equals_associating_again(recording, monkeypatch):
+    """The coverage bands and grids take the scorecard's associated reports when the association they need
+    is the same (no field monitor, the preset's gate): the figures of associating the reports afresh."""
+    import msdc.pipeline.jobs.evaluate as job
+    from msdc.pipeline.evaluate import reference as ref_module
+
+    _, folder = recording
+    coverage, pairs = job._coverage, []
+    calls = {"associate": 0}
+    associate = ref_module.associate
+
+    def counted(*args, **kwargs):
+        calls["associate"] += 1
+        return associate(*args, **kwargs)
+
+    def both(reports, reference, sensor, preset, linked=None):
+        before = calls["associate"]
+        reused = coverage(reports, reference, sensor, preset, linked)
+        pairs.append((reused, coverage(reports, reference, sensor, preset), calls["associate"] - before))
+        return reused
+
+    monkeypatch.setattr(ref_module, "associate", counted)
+    monkeypatch.setattr(job, "_coverage", both)
+    evaluate_job(_options(folder, test_sensors=(RADAR_ID,)))
+    (reused, fresh, associations), = pairs
+    assert associations == 1  # the fresh one only
+    for name, band in fresh[0].items():
+        pd.testing.assert_frame_equal(reused[0][name], band)
+    assert fresh[0] and fresh[1] is not None and fresh[2] is not None
+    for a, b in zip(reused[1:], fresh[1:], strict=True):
+        pd.testing.assert_frame_equal(a, b)
+
+
 def test_the_cli_writes_the_three_outputs(recording, tmp_path):
     sim, folder = recording
     out = tmp_path / "out"
