@@ -45,6 +45,9 @@ REQUIRED = ("time", "sensor_id", "sensor_kind", "aircraft_id", "latitude", "long
 # and quality --reference track do not use)
 FILTER_INPUTS = ("time", "sensor_id", "latitude", "longitude", "flight_level", "cov_ee_m2", "cov_en_m2",
                  "cov_nn_m2", "ground_speed_kt", "heading_deg", "nucr_nacv")
+# what an aircraft's task reads (filter, counts, gated reports; file and offset name it on failure):
+# only these columns are split per aircraft, so that each split copies no column it does not use
+TASK_COLUMNS = (*REQUIRED, *FILTER_INPUTS, "on_ground", "file", "offset")
 M_PER_S_PER_KT = 1852.0 / 3600.0
 FT_PER_FL = 100.0
 MAX_RANGE_M = 3_000_000.0  # reports farther than this from the aircraft's median position are garbage
@@ -160,7 +163,7 @@ def track(measurements: pd.DataFrame, *, step_s: float = 1.0, max_coast_s: float
     frame, unidentified = _identified(measurements)
     finite = usable_rows(frame)
     invalid = frame.loc[~finite].groupby(["aircraft_id", "sensor_id", "sensor_kind"], observed=True).size()
-    frame = frame.loc[finite]
+    frame = frame.loc[finite, list(dict.fromkeys(c for c in TASK_COLUMNS if c in frame.columns))]
     parameters = {**_parameters(config, step_s, smooth, smoother), "unidentified_reports": unidentified}
     empty = TrackResult(_empty_tracks(names), _empty_sensors(invalid), pd.DataFrame(), pd.DataFrame(),
                         parameters)
