@@ -613,23 +613,23 @@ def _sensor_table(aircraft_id: str, group: pd.DataFrame, filtered: FilteredRepor
     and reports out of range."""
     run, far = filtered.run, filtered.far
     status, accepted = run.status, run.accepted
-    sensor = filtered.rows["sensor_id"].to_numpy(str)
     all_sensors = group["sensor_id"].to_numpy(str)
-    all_kinds = group["sensor_kind"].to_numpy(str)
+    sids, first = np.unique(all_sensors, return_index=True)
+    at = np.searchsorted(sids, filtered.rows["sensor_id"].to_numpy(str))  # each usable report's sensor
     updated = status == STATUS_UPDATED
-    rows = []
-    for sid in np.unique(all_sensors):
-        sel = sensor == sid
-        n_far = int(far.get(sid, 0))
-        rows.append({"sensor_id": sid, "sensor_kind": all_kinds[all_sensors == sid][0],
-                     "reports": int(sel.sum()) + n_far,
-                     "updates": int((accepted & sel).sum()), "gated": int((sel & ~accepted).sum()),
-                     "segments_started": int((sel & (status == STATUS_STARTED)).sum()),
-                     "nis_mean": float(run.nis[sel & updated].mean()) if (sel & updated).any() else np.nan,
-                     "out_of_range": n_far})
-    sensors = pd.DataFrame(rows)
-    sensors.insert(0, "aircraft_id", aircraft_id)
-    return sensors
+    n_far = np.array([int(far.get(sid, 0)) for sid in sids], np.int64)
+
+    def per_sensor(mask: np.ndarray) -> np.ndarray:
+        return np.bincount(at[mask], minlength=len(sids)).astype(np.int64)
+
+    nis = np.array([float(run.nis[(at == k) & updated].mean()) if ((at == k) & updated).any() else np.nan
+                    for k in range(len(sids))])
+    return pd.DataFrame({
+        "aircraft_id": pd.array([aircraft_id] * len(sids), dtype="str"), "sensor_id": list(sids),
+        "sensor_kind": list(group["sensor_kind"].to_numpy(str)[first]),
+        "reports": per_sensor(np.ones(len(at), bool)) + n_far, "updates": per_sensor(accepted),
+        "gated": per_sensor(~accepted), "segments_started": per_sensor(status == STATUS_STARTED),
+        "nis_mean": nis, "out_of_range": n_far})
 
 
 def _aircraft_row(aircraft_id: str, filtered: FilteredReports, updates: Updates, spans: SegmentSpans,
@@ -647,11 +647,11 @@ def _aircraft_row(aircraft_id: str, filtered: FilteredReports, updates: Updates,
 
 def _rejected(aircraft_id: str, filtered: FilteredReports) -> pd.DataFrame:
     """The reports the gate rejected, with their NIS."""
-    accepted = filtered.run.accepted
-    rej = filtered.rows.loc[~accepted, ["time", "sensor_id", "latitude", "longitude"]].assign(
-        nis=filtered.run.nis[~accepted])
-    rej.insert(0, "aircraft_id", aircraft_id)
-    return rej.reset_index(drop=True)
+    gated = ~filtered.run.accepted
+    rows = filtered.rows
+    return pd.DataFrame({"aircraft_id": pd.array([aircraft_id] * int(gated.sum()), dtype="str"),
+                         **{c: rows[c].array[gated] for c in ("time", "sensor_id", "latitude", "longitude")},
+                         "nis": filtered.run.nis[gated]})
 
 
 def _final_state(aircraft_id: str, filtered: FilteredReports, updates: Updates, epoch: pd.Timestamp,
