@@ -403,9 +403,11 @@ class FilteredReports:
 def filter_reports(group: pd.DataFrame, epoch: pd.Timestamp, config: TrackerConfig) -> FilteredReports:
     """Run the IMM forward over one aircraft's reports (finite positions and covariances; ``track``'s
     schema), in the plane around their median, counting seconds from ``epoch``."""
-    g = group.assign(_t=(group["time"] - epoch).dt.total_seconds().to_numpy())
-    g = g.sort_values(["_t", "sensor_id"], kind="stable")
-    t = g["_t"].to_numpy(float)
+    t = (group["time"] - epoch).dt.total_seconds().to_numpy(float)
+    g = group.assign(_t=t)
+    if not (t.size < 2 or (np.diff(t) > 0.0).all()):  # times all increasing (nearly always): in order already
+        g = g.sort_values(["_t", "sensor_id"], kind="stable")
+        t = g["_t"].to_numpy(float)
     velocity = {"ground_speed_kt", "heading_deg"} <= set(g.columns)
     plane, near, run = filter_columns(
         config, t, *(g[c].to_numpy(float) for c in ("latitude", "longitude", "cov_ee_m2", "cov_en_m2",
@@ -415,6 +417,8 @@ def filter_reports(group: pd.DataFrame, epoch: pd.Timestamp, config: TrackerConf
         nucr_nacv=(g["nucr_nacv"].to_numpy(float, na_value=np.nan) if velocity and "nucr_nacv" in g.columns
                    else None),
         on_ground=ground_said(g))
+    if near.all():  # every report within range of the plane (nearly always): nothing to drop or count
+        return FilteredReports(g, t, plane, run, pd.Series(dtype=np.int64))
     far = g.loc[~near, "sensor_id"].value_counts()
     return FilteredReports(g[near], t[near], plane, run, far)
 
