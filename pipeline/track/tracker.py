@@ -608,7 +608,14 @@ def _update_sources(qt: np.ndarray, is_update: np.ndarray, updates: Updates) -> 
     """Per output time, the sensors whose updates it holds (comma-joined), "" for a coasted one."""
     src = _sources_by_time(updates.t, updates.sensor)
     sources = np.full(len(qt), "", dtype=object)
-    sources[is_update] = src.reindex(qt[is_update]).to_numpy()
+    times, names = src.index.to_numpy(float), src.to_numpy(object)
+    wanted = qt[is_update]
+    at = np.searchsorted(times, wanted)
+    found = at < len(times)
+    found[found] = times[at[found]] == wanted[found]
+    picked = np.full(len(wanted), np.nan, dtype=object)  # NaN where no update is at that time, as reindex
+    picked[found] = names[at[found]]
+    sources[is_update] = picked
     return sources
 
 

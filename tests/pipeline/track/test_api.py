@@ -310,3 +310,15 @@ def test_a_segment_started_by_a_jump_is_withdrawn(jump_at_s):
     assert res.aircraft["segments"].iloc[0] == 2 and sorted(res.tracks["segment"].unique()) == [0, 1]
     assert int(res.sensors["gated"].iloc[0]) == 3 and int(res.sensors["updates"].iloc[0]) == len(secs) - 3
     assert _offsets(res.tracks, lambda s: 0.0 * s).max() < 2000.0
+
+
+def test_each_output_time_names_the_sensors_that_updated_it():
+    """Sources per output time, written out: two sensors updating at one time are joined in name order,
+    a coasted time has none; an update time the updates do not hold (none in practice) is missing."""
+    from msdc.pipeline.track.tracker import Updates, _update_sources
+
+    updates = Updates(rows=np.arange(3), t=np.array([1.0, 1.0, 2.0]), segment=np.zeros(3, int),
+                      sensor=np.array(["048:25/2", "021:0/1", "021:0/1"]))
+    qt = np.array([0.5, 1.0, 1.5, 2.0, 3.0])
+    got = _update_sources(qt, np.array([False, True, False, True, True]), updates)
+    assert list(got[:4]) == ["", "021:0/1,048:25/2", "", "021:0/1"] and pd.isna(got[4])
