@@ -633,12 +633,16 @@ def _sensor_table(aircraft_id: str, group: pd.DataFrame, filtered: FilteredRepor
     def per_sensor(mask: np.ndarray) -> np.ndarray:
         return np.bincount(at[mask], minlength=len(sids)).astype(np.int64)
 
-    nis = np.array([float(run.nis[(at == k) & updated].mean()) if ((at == k) & updated).any() else np.nan
-                    for k in range(len(sids))])
+    nis = np.full(len(sids), np.nan)
+    for k in range(len(sids)):
+        mine = (at == k) & updated
+        if mine.any():
+            nis[k] = float(run.nis[mine].mean())
     return pd.DataFrame({
         "aircraft_id": pd.array([aircraft_id] * len(sids), dtype="str"), "sensor_id": list(sids),
         "sensor_kind": list(group["sensor_kind"].to_numpy(str)[first]),
-        "reports": per_sensor(np.ones(len(at), bool)) + n_far, "updates": per_sensor(accepted),
+        "reports": np.bincount(at, minlength=len(sids)).astype(np.int64) + n_far,
+        "updates": per_sensor(accepted),
         "gated": per_sensor(~accepted), "segments_started": per_sensor(status == STATUS_STARTED),
         "nis_mean": nis, "out_of_range": n_far})
 
