@@ -15,10 +15,10 @@ from msdc.pipeline.evaluate.outcome import ErrorEvidence, Outcome, withheld
 from msdc.pipeline.evaluate.reference import (
     DEFAULT_REFERENCE_GAP_S,
     associated,
-    check_reference,
+    checked_trajectories,
     parameter,
     reference_values,
-    trajectories,
+    rows_by_index,
 )
 from msdc.pipeline.evaluate.statistics import cluster_sums, clustered_interval
 from msdc.pipeline.evaluate.velocity import _east_north_m, reference_velocity
@@ -41,8 +41,10 @@ def position_errors(reports: pd.DataFrame, reference: pd.DataFrame, parameters: 
     t, idx = rep["t_s"].to_numpy(float), rep["ref_index"].to_numpy()
     de, dn = np.full(len(rep), np.nan), np.full(len(rep), np.nan)
     lat, lon = rep["latitude"].to_numpy(float), rep["longitude"].to_numpy(float)
-    for k, tr in enumerate(trajectories(check_reference(reference))):
-        rows = np.flatnonzero(idx == k)
+    trajs = checked_trajectories(reference)[1]
+    groups = rows_by_index(idx, len(trajs))
+    for k, tr in enumerate(trajs):
+        rows = groups[k]
         if len(rows):
             r_lat, r_lon, _, _ = tr.at(t[rows], max_gap_s)
             de[rows], dn[rows] = _east_north_m(r_lat, r_lon, lat[rows], lon[rows])

@@ -18,9 +18,9 @@ from msdc.pipeline.evaluate.outcome import ErrorEvidence, FitEvidence, Outcome, 
 from msdc.pipeline.evaluate.reference import (
     DEFAULT_REFERENCE_GAP_S,
     associated,
-    check_reference,
+    checked_trajectories,
     parameter,
-    trajectories,
+    rows_by_index,
 )
 from msdc.pipeline.evaluate.reference_gates import reference_at, self_referenced
 from msdc.pipeline.evaluate.statistics import cluster_sums, clustered_interval
@@ -61,8 +61,10 @@ def bias_errors(reports: pd.DataFrame, reference: pd.DataFrame, parameters: Mapp
             raise ValueError(f"the radar reports lack the column {col}: biases need slant range and azimuth")
     t, idx = rep["t_s"].to_numpy(float), rep["ref_index"].to_numpy()
     state = {k: np.full(len(rep), np.nan) for k in ("lat", "lon", "h", "ve", "vn", "vu")}
-    for k, tr in enumerate(trajectories(check_reference(reference))):
-        rows = np.flatnonzero(idx == k)
+    trajs = checked_trajectories(reference)[1]
+    groups = rows_by_index(idx, len(trajs))
+    for k, tr in enumerate(trajs):
+        rows = groups[k]
         if not rows.size:
             continue
         lat, lon, h, _ = tr.at(t[rows], max_gap_s)

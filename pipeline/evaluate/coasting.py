@@ -10,7 +10,12 @@ import numpy as np
 import pandas as pd
 
 from msdc.pipeline.evaluate.outcome import Outcome, share, withheld
-from msdc.pipeline.evaluate.reference import associated, check_reference, parameter, trajectories
+from msdc.pipeline.evaluate.reference import (
+    associated,
+    checked_trajectories,
+    parameter,
+    rows_by_index,
+)
 
 DEFAULT_WINDOW_S = 10.0  # about two scans of a 4-5 s radar: a track older than this is coasting
 UPDATED = "updated"  # reference column: True where a reference sensor's report updated it at that time
@@ -34,14 +39,15 @@ def coasting_correct(reports: pd.DataFrame, reference: pd.DataFrame, parameters:
     cst = pd.to_numeric(rep["cst"], errors="coerce").to_numpy(float)
     judged = (rep["ref_index"].to_numpy() >= 0) & np.isfinite(cst)
     rep, cst = rep[judged], cst[judged]
-    ref = check_reference(reference)
+    ref, trajs = checked_trajectories(reference)
     own = (ref["self_reference"].astype(bool).to_numpy() if "self_reference" in ref
            else np.zeros(len(ref), bool))
     updated = ref[UPDATED].astype(bool).to_numpy() & ~own  # a sensor cannot vouch for its own detections
     t, idx = rep["t_s"].to_numpy(float), rep["ref_index"].to_numpy()
     seen = np.zeros(len(rep), bool)
-    for k, tr in enumerate(trajectories(ref)):
-        rows = np.flatnonzero(idx == k)
+    groups = rows_by_index(idx, len(trajs))
+    for k, tr in enumerate(trajs):
+        rows = groups[k]
         if not rows.size:
             continue
         t_upd = tr.t_s[updated[tr.rows]]

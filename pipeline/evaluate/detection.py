@@ -14,9 +14,8 @@ from msdc.pipeline.evaluate.outcome import Outcome, share, withheld
 from msdc.pipeline.evaluate.reference import (
     DEFAULT_REFERENCE_GAP_S,
     associated,
-    check_reference,
+    checked_trajectories,
     parameter,
-    trajectories,
 )
 from msdc.pipeline.evaluate.scans import period_from_markers, period_from_plots, update_groups
 from msdc.pipeline.evaluate.statistics import proportion
@@ -84,13 +83,13 @@ def expected_updates(reports: pd.DataFrame, reference: pd.DataFrame, parameters:
     step = float(interval) if interval is not None else period
     if not math.isfinite(step) or step <= 0:
         raise ValueError(f"sensor {sensor.name!r}: no update interval ({said})")
-    ref = check_reference(reference)
+    ref, trajs = checked_trajectories(reference)
     t_all, idx = rep["t_s"].to_numpy(float), rep["ref_index"].to_numpy()
     names = ("aircraft", "stretch", "t_s", "detected", "lat", "lon", "height_m", "altitude_ft")
     cols: dict[str, list] = {c: [] for c in names}
     order = np.lexsort((t_all, idx))  # each reference aircraft's report times, sorted, one after the other
     t_sorted, idx_sorted = t_all[order], idx[order]
-    for k, tr in enumerate(trajectories(ref)):  # the expected updates; where the sensor saw them, at once
+    for k, tr in enumerate(trajs):  # the expected updates; where the sensor saw them, at once
         mine = t_sorted[np.searchsorted(idx_sorted, k, "left"):np.searchsorted(idx_sorted, k, "right")]
         for s, (a, b) in enumerate(tr.stretches(max_gap_s)):
             times = mine[(mine >= a) & (mine <= b)]

@@ -4,7 +4,9 @@ nearest reference aircraft."""
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Iterator, Mapping
+from contextlib import contextmanager
+from contextvars import ContextVar
 from dataclasses import dataclass
 
 import numpy as np
@@ -136,6 +138,50 @@ def trajectories(reference: pd.DataFrame) -> list[Trajectory]:
     return out
 
 
+# within `shared_references`: per reference frame given (by identity; the frame itself kept, so that its id
+# is not reused), its checked frame and trajectories
+_SHARED: ContextVar[dict[int, tuple[pd.DataFrame, tuple[pd.DataFrame, list[Trajectory]]]] | None] = \
+    ContextVar("msdc_shared_references", default=None)
+
+
+@contextmanager
+def shared_references() -> Iterator[None]:
+    """Within it, a reference frame is checked and cut into trajectories once however many requirements
+    read it (a sensor's scorecard reads one frame some fifteen times). The frames must not change in place
+    inside it: the requirements are pure functions of their frames."""
+    if _SHARED.get() is not None:  # inside another: its memo serves both
+        yield
+        return
+    token = _SHARED.set({})
+    try:
+        yield
+    finally:
+        _SHARED.reset(token)
+
+
+def checked_trajectories(reference: pd.DataFrame) -> tuple[pd.DataFrame, list[Trajectory]]:
+    """``check_reference(reference)`` and its ``trajectories`` (the arrays are shared: read, never
+    written); inside `shared_references`, computed once per frame."""
+    memo = _SHARED.get()
+    hit = memo.get(id(reference)) if memo is not None else None
+    if hit is not None and hit[0] is reference:
+        return hit[1]
+    ref = check_reference(reference)
+    out = (ref, trajectories(ref))
+    if memo is not None:
+        memo[id(reference)] = (reference, out)
+    return out
+
+
+def rows_by_index(idx: np.ndarray, n: int) -> list[np.ndarray]:
+    """Per k in range(n), the rows where idx == k, ascending: ``np.flatnonzero(idx == k)`` for every
+    aircraft of a reference from one sort, instead of a pass over every report per aircraft."""
+    idx = np.asarray(idx)
+    order = np.argsort(idx, kind="stable")
+    bounds = np.searchsorted(idx[order], np.arange(n + 1), side="left")
+    return [order[bounds[k]:bounds[k + 1]] for k in range(n)]
+
+
 def _box_bound_m(lat_deg: np.ndarray, lon_deg: np.ndarray, box: tuple[float, float, float, float] | None
                  ) -> np.ndarray:
     """Per point, a distance (m) no point of the box (south, north, west, east, deg) is nearer than by
@@ -193,7 +239,7 @@ def associate(reports: pd.DataFrame, reference: pd.DataFrame,
     aircraft in the gate still goes to that aircraft."""
     _check_columns(reports, REPORTS_REQUIRED, "the test reports")
     gate_m, vertical_ft, max_gap_s = association_gates(parameters)
-    ref = check_reference(reference)
+    _, trajs = checked_trajectories(reference)
     t = reports["t_s"].to_numpy(float)
     lat, lon = reports["latitude"].to_numpy(float), reports["longitude"].to_numpy(float)
     mode_c_ft = (pd.to_numeric(reports["flight_level"], errors="coerce").to_numpy(float) * 100.0
@@ -202,7 +248,6 @@ def associate(reports: pd.DataFrame, reference: pd.DataFrame,
     ts = t[order]
     best, level_best = np.full(t.size, np.inf), np.full(t.size, np.inf)
     index, level_index = np.full(t.size, -1, dtype=np.int64), np.full(t.size, -1, dtype=np.int64)
-    trajs = trajectories(ref)
     spans = [order[np.searchsorted(ts, tr.t_s[0], "left"):np.searchsorted(ts, tr.t_s[-1], "right")]
              for tr in trajs]
     # Per report, the nearest aircraft (and the nearest within the vertical gate), the smallest k on equal
@@ -258,12 +303,13 @@ def reference_values(reports: pd.DataFrame, reference: pd.DataFrame, column: str
     out = np.full(len(reports), None, dtype=object)
     if column not in reference.columns:
         return out
-    ref = check_reference(reference)
+    ref, trajs = checked_trajectories(reference)
     values = ref[column].to_numpy(object)
     t = reports["t_s"].to_numpy(float)
     idx = reports["ref_index"].to_numpy()
-    for k, tr in enumerate(trajectories(ref)):
-        rows = np.flatnonzero(idx == k)
+    groups = rows_by_index(idx, len(trajs))
+    for k, tr in enumerate(trajs):
+        rows = groups[k]
         if rows.size:
             i = np.clip(np.searchsorted(tr.t_s, t[rows], side="right") - 1, 0, tr.t_s.size - 1)
             out[rows] = values[tr.rows[i]]
@@ -278,8 +324,10 @@ def reference_altitude_ft(reports: pd.DataFrame, reference: pd.DataFrame,
     out = np.full(len(reports), np.nan)
     t = reports["t_s"].to_numpy(float)
     idx = reports["ref_index"].to_numpy()
-    for k, tr in enumerate(trajectories(check_reference(reference))):
-        rows = np.flatnonzero(idx == k)
+    trajs = checked_trajectories(reference)[1]
+    groups = rows_by_index(idx, len(trajs))
+    for k, tr in enumerate(trajs):
+        rows = groups[k]
         if rows.size:
             out[rows] = tr.at(t[rows], max_gap_s)[3]
     return out

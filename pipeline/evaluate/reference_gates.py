@@ -13,9 +13,9 @@ import pandas as pd
 from msdc.pipeline.evaluate.reference import (
     DEFAULT_REFERENCE_GAP_S,
     associated,
-    check_reference,
+    checked_trajectories,
     parameter,
-    trajectories,
+    rows_by_index,
 )
 from msdc.pipeline.quality.checks import check_indicator
 from msdc.pipeline.quality.filters import FILTER_KEYS, apply_filters
@@ -64,15 +64,16 @@ def reference_at(reports: pd.DataFrame, reference: pd.DataFrame, column: str,
     interpolated linearly at the report's time; NaN where not associated, outside the reference's stretches
     (the reference_max_gap_s rule) or where the reference lacks the column."""
     out = np.full(len(reports), np.nan)
-    ref = check_reference(reference)
+    ref, trajs = checked_trajectories(reference)
     if column not in ref.columns:
         return out
     max_gap_s = float(parameter(parameters, "reference_max_gap_s", DEFAULT_REFERENCE_GAP_S))
     values = pd.to_numeric(ref[column], errors="coerce").to_numpy(float)
     t = reports["t_s"].to_numpy(float)
     idx = reports["ref_index"].to_numpy()
-    for k, tr in enumerate(trajectories(ref)):
-        rows = np.flatnonzero(idx == k)
+    groups = rows_by_index(idx, len(trajs))
+    for k, tr in enumerate(trajs):
+        rows = groups[k]
         if not rows.size:
             continue
         v = values[tr.rows]

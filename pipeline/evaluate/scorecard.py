@@ -24,8 +24,9 @@ from msdc.pipeline.evaluate.reference import (
     DEFAULT_REFERENCE_GAP_S,
     associate,
     associated,
-    check_reference,
-    trajectories,
+    checked_trajectories,
+    rows_by_index,
+    shared_references,
 )
 from msdc.pipeline.evaluate.reference_gates import reference_at, sigma_gate
 from msdc.pipeline.evaluate.requirements import REQUIREMENTS
@@ -145,8 +146,10 @@ def reference_positions(reports: pd.DataFrame, reference: pd.DataFrame,
     n = len(reports)
     lat, lon, fl = np.full(n, np.nan), np.full(n, np.nan), np.full(n, np.nan)
     t, idx = reports["t_s"].to_numpy(float), reports["ref_index"].to_numpy()
-    for k, tr in enumerate(trajectories(check_reference(reference))):
-        rows = np.flatnonzero(idx == k)
+    trajs = checked_trajectories(reference)[1]
+    groups = rows_by_index(idx, len(trajs))
+    for k, tr in enumerate(trajs):
+        rows = groups[k]
         if rows.size:
             a, b, _, alt = tr.at(t[rows], max_gap_s)
             lat[rows], lon[rows], fl[rows] = a, b, alt / 100.0
@@ -185,7 +188,7 @@ def cut(reports: pd.DataFrame, reference: pd.DataFrame, masks: Sequence[Mask],
             keep |= np.asarray(m(*columns), bool)
         return keep
 
-    ref = check_reference(reference)
+    ref = checked_trajectories(reference)[0]
     alt = ref["altitude_ft"].to_numpy(float) / 100.0 if "altitude_ft" in ref else np.full(len(ref), np.nan)
     ref_in = ref[inside(ref["latitude"].to_numpy(float), ref["longitude"].to_numpy(float), alt,
                         ground_flags(ref))]
@@ -245,7 +248,14 @@ def _regions_for(requirement: Requirement, regions: Sequence[Region], monitors: 
 def score_sensor(preset: Preset, sensor_id: str, reports: pd.DataFrame, reference: pd.DataFrame,
                  sensor: Sensor, regions: Sequence[Region] = ()) -> SensorScore:
     """Every requirement of the preset measured on the sensor's reports against the reference, globally and
-    per region, judged into scorecard rows."""
+    per region, judged into scorecard rows (each reference frame's trajectories cut once)."""
+    with shared_references():
+        return _score(preset, sensor_id, reports, reference, sensor, regions)
+
+
+def _score(preset: Preset, sensor_id: str, reports: pd.DataFrame, reference: pd.DataFrame,
+           sensor: Sensor, regions: Sequence[Region]) -> SensorScore:
+    """`score_sensor`'s work."""
     score = SensorScore(sensor_id)
     regions = [*surface_regions(reference), *regions]
     monitors = any(r.name == MONITORS for r in regions)

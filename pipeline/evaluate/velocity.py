@@ -12,9 +12,9 @@ from msdc.pipeline.evaluate.outcome import Outcome, share, withheld
 from msdc.pipeline.evaluate.reference import (
     DEFAULT_REFERENCE_GAP_S,
     associated,
-    check_reference,
+    checked_trajectories,
     parameter,
-    trajectories,
+    rows_by_index,
 )
 from msdc.pipeline.model.geodesy import A_M, E2
 
@@ -56,8 +56,10 @@ def reference_velocity(rep: pd.DataFrame, reference: pd.DataFrame,
     max_gap_s = float(parameter(parameters, "reference_max_gap_s", DEFAULT_REFERENCE_GAP_S))
     vx, vy = np.full(len(rep), np.nan), np.full(len(rep), np.nan)
     t, idx = rep["t_s"].to_numpy(float), rep["ref_index"].to_numpy()
-    for k, tr in enumerate(trajectories(check_reference(reference))):
-        rows = np.flatnonzero(idx == k)
+    trajs = checked_trajectories(reference)[1]
+    groups = rows_by_index(idx, len(trajs))
+    for k, tr in enumerate(trajs):
+        rows = groups[k]
         if not len(rows):
             continue
         lat0, lon0, _, _ = tr.at(t[rows] - STEP_S, max_gap_s)

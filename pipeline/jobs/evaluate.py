@@ -316,7 +316,17 @@ def _coverage(reports: pd.DataFrame, reference: pd.DataFrame, sensor, preset,
 
 def _sensor(options, checked, loaded, meas, builders, sensor_id, kind, gates, epoch, external, monitors,
             cache: dict | None = None) -> SensorResult:
-    """Everything about one sensor under test."""
+    """Everything about one sensor under test, its reference's trajectories cut once for all of it."""
+    from msdc.pipeline.evaluate.reference import shared_references
+
+    with shared_references():
+        return _sensor_result(options, checked, loaded, meas, builders, sensor_id, kind, gates, epoch,
+                              external, monitors, cache)
+
+
+def _sensor_result(options, checked, loaded, meas, builders, sensor_id, kind, gates, epoch, external,
+                   monitors, cache: dict | None = None) -> SensorResult:
+    """`_sensor`'s work."""
     from msdc.pipeline.evaluate.accuracy import error_bands, range_errors
     from msdc.pipeline.evaluate.scorecard import score_sensor
     from msdc.pipeline.evaluate.sensor_reports import (
