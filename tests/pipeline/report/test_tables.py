@@ -29,6 +29,19 @@ def result():
     return correlate.correlate_job(options)
 
 
+@pytest.fixture(scope="module")
+def written_xlsx(result, tmp_path_factory) -> dict[str, Path]:
+    """The run written once with --tables xlsx, to r.xlsx in a folder of its own (the tests only read it)."""
+    return _write(result, tmp_path_factory.mktemp("xlsx") / "r.xlsx", "xlsx")
+
+
+@pytest.fixture(scope="module")
+def written_parquet(result, tmp_path_factory) -> dict[str, Path]:
+    """The run written once with --tables parquet, to r.xlsx in a folder of its own (the tests only read
+    it)."""
+    return _write(result, tmp_path_factory.mktemp("parquet") / "r.xlsx", "parquet")
+
+
 def _write(result, out: Path, tables: str) -> dict[str, Path]:
     options = correlate.CorrelateOptions(**{**result.options.__dict__, "output": str(out), "tables": tables})
     checked = correlate.validate(options)
@@ -61,13 +74,13 @@ def _same(sheet_values, parquet_values, name):
             assert a == b, (name, a, b)
 
 
-def test_parquet_equals_the_workbook_sheets(result, tmp_path):
-    xlsx = _write(result, tmp_path / "book.xlsx", "xlsx")
+def test_parquet_equals_the_workbook_sheets(written_xlsx, written_parquet):
+    xlsx, pq = written_xlsx, written_parquet
     assert set(xlsx) == {"report", "figure"}  # xlsx: no Parquet
-    assert not list(tmp_path.glob("*.parquet"))
-    pq = _write(result, tmp_path / "pq.xlsx", "parquet")
-    assert pq["table slots"] == tmp_path / "pq_slots.parquet"
-    assert pq["table correlation"] == tmp_path / "pq_correlation.parquet"
+    assert not list(xlsx["report"].parent.glob("*.parquet"))
+    folder = pq["report"].parent
+    assert pq["table slots"] == folder / "r_slots.parquet"
+    assert pq["table correlation"] == folder / "r_correlation.parquet"
     wb = load_workbook(xlsx["report"])
     for sheet, path in (("Slots", pq["table slots"]), ("Correlation", pq["table correlation"])):
         table = pd.read_parquet(path)
@@ -78,11 +91,10 @@ def test_parquet_equals_the_workbook_sheets(result, tmp_path):
             _same(values, table[column].astype(object).tolist(), column)
 
 
-def test_parquet_tables_against_the_run(result, tmp_path):
+def test_parquet_tables_against_the_run(result, written_parquet):
     """Independent of the writers: one slot row per slot of each window, 2N - 1 lags per window at 10 s a
     slot, the sensors of each window as its summary names them."""
-    written = _write(result, tmp_path / "r.xlsx", "parquet")
-    slots, lags = (pd.read_parquet(written[f"table {n}"]) for n in ("slots", "correlation"))
+    slots, lags = (pd.read_parquet(written_parquet[f"table {n}"]) for n in ("slots", "correlation"))
     windows = result.run.windows
     assert len(slots) == sum(w.summary["slots"] for w in windows)
     assert len(lags) == sum(2 * w.summary["slots"] - 1 for w in windows)
@@ -101,8 +113,8 @@ def test_parquet_tables_against_the_run(result, tmp_path):
         start += n
 
 
-def test_workbook_names_the_files_and_charts_read_the_excerpt(result, tmp_path):
-    written = _write(result, tmp_path / "r.xlsx", "parquet")
+def test_workbook_names_the_files_and_charts_read_the_excerpt(written_parquet):
+    written = written_parquet
     wb = load_workbook(written["report"])
     for sheet, name, data in (("Slots", "slots", "Slot chart data"), ("Correlation", "correlation",
                                                                       "Lag chart data")):
@@ -226,13 +238,12 @@ def test_farthest_point_is_the_largest_geodesic_distance():
 
 
 @pytest.mark.parametrize("tables", ["xlsx", "parquet"])
-def test_chart_series_read_the_columns_they_name(result, tmp_path, tables):
+def test_chart_series_read_the_columns_they_name(request, tables):
     """Every chart series' x and y references point at the data sheet's columns of that name (lag and a
     coefficient; slot time and a position), rows of the charted window."""
     from openpyxl.utils import column_index_from_string
 
-    written = _write(result, tmp_path / "c.xlsx", tables)
-    wb = load_workbook(written["report"])
+    wb = load_workbook(request.getfixturevalue(f"written_{tables}")["report"])
     wanted = {"Lag charts": ("lag", {"NCC lat": "ncc_lat", "NCC lon": "ncc_lon", "Pearson lat": "pearson_lat",
                                      "Pearson lon": "pearson_lon"}),
               "Slot charts": ("time_utc", None)}
@@ -291,16 +302,14 @@ def test_lag_frame_is_in_increasing_lag_whatever_the_order_given():
     assert tables_mod.lag_frame(WindowResult({}, pd.DataFrame(), no_lag)) is no_lag
 
 
-def test_charts_sharing_their_parts_come_out_alike_and_as_described(result, tmp_path):
+def test_charts_sharing_their_parts_come_out_alike_and_as_described(result, written_xlsx, tmp_path):
     """Chart parts made once and shared (axis titles, lines, markers) give the same chart XML in a second
     workbook written by this process, and each lag chart's series look as its sheet says: NCC solid,
     Pearson dashed; latitude blue (1F77B4), longitude green (2CA02C)."""
     import re
     import zipfile
 
-    (tmp_path / "a").mkdir()
-    (tmp_path / "b").mkdir()
-    first, second = (_write(result, tmp_path / d / "r.xlsx", "xlsx") for d in "ab")
+    first, second = written_xlsx, _write(result, tmp_path / "r.xlsx", "xlsx")  # the second here
     a, b = zipfile.ZipFile(first["report"]), zipfile.ZipFile(second["report"])
     charts = [n for n in a.namelist() if n.startswith("xl/charts/chart")]
     assert charts and all(a.read(n) == b.read(n) for n in charts)
