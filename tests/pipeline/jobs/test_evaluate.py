@@ -22,6 +22,9 @@ from msdc.pipeline.jobs.options import OptionError
 INJECTED = RadarEffects(pd=0.9, full_range_nm=140.0, max_range_nm=180.0, cone_elevation_deg=40.0,
                         mode3a_garble=0.03, mode3a_error=0.01, modec_garble=0.02, modec_error=0.015,
                         false_per_scan=2.0, split=0.03)
+# one worker runs the module: the recording, its evaluation and the windows' are made once (split between
+# the workers, each made them, and again whenever a worker came back to the module)
+pytestmark = pytest.mark.xdist_group("evaluate_windows")
 RADAR_ID = "048:25/201"
 DATE = "2020-01-01"  # the simulator's recordings carry no date
 
@@ -354,7 +357,6 @@ def test_a_window_keeps_the_north_markers_of_its_margin(recording):
 
 
 HALVES = (("08:00", "08:30"), ("08:30", "09:00"))
-WINDOWED = pytest.mark.xdist_group("evaluate_windows")  # one worker evaluates the windows once
 
 
 @pytest.fixture(scope="module")
@@ -376,7 +378,6 @@ def _key(card: pd.DataFrame) -> pd.DataFrame:
     return card.set_index(["sector", "requirement", "parameters"])
 
 
-@WINDOWED
 def test_each_window_is_evaluated_as_its_own_from_and_to(windowed):
     span, halves = windowed
     per = span.tables["Scorecard per window"]
@@ -396,7 +397,6 @@ def test_each_window_is_evaluated_as_its_own_from_and_to(windowed):
         in span.parameters["notes"]
 
 
-@WINDOWED
 def test_the_span_pools_the_windows_counts_and_errors(windowed):
     """Worked out from the two halves' own outputs: successes and trials (value x n) added, the
     Clopper-Pearson interval from beta quantiles, the RMS from the halves' mean squares, the maximum the
@@ -435,7 +435,6 @@ def test_the_span_pools_the_windows_counts_and_errors(windowed):
     assert "combined by inverse variance" in pooled["notes"]
 
 
-@WINDOWED
 def test_the_span_is_the_hour_evaluated_at_once_but_at_the_windows_edge(windowed, evaluated):
     """The detection and code figures of the pooled halves equal those of the hour evaluated at once (the
     north markers fix the scan period; the reference is cut at 08:30 only); a gap across 08:30 is in
@@ -468,7 +467,6 @@ def test_window_options_are_checked_before_decoding(recording, change, message):
     assert message in str(caught.value)
 
 
-@WINDOWED
 def test_every_column_of_the_evaluation_tables_has_a_workbook_header(windowed):
     """The tables a windowed run writes (every table of a run, and those per window): no column would
     print its snake_case name in the workbook."""
@@ -479,7 +477,6 @@ def test_every_column_of_the_evaluation_tables_has_a_workbook_header(windowed):
     assert sorted({c for t in span.tables.values() for c in t.columns if not has_header(c)}) == []
 
 
-@WINDOWED
 def test_a_windowed_runs_outputs_hold_the_windows(windowed, tmp_path):
     """The workbook and the JSON hold every row per window; the HTML report the global ones."""
     import openpyxl
@@ -512,7 +509,6 @@ def test_a_windowed_runs_outputs_hold_the_windows(windowed, tmp_path):
     assert (per["sector"] != "global").any()
 
 
-@WINDOWED
 def test_windows_without_reports_are_named_and_the_others_pooled(recording, windowed):
     """07:00-08:30 in 30-minute windows: the recording starts at 08:00, so the first two windows hold no
     report and are named in the notes; the span's figures are the third window's, which is the first half
@@ -537,7 +533,6 @@ def test_windows_without_reports_are_named_and_the_others_pooled(recording, wind
         evaluate_job(_options(folder, preset=preset, from_time="06:00", to_time="07:00", window_minutes=30.0))
 
 
-@WINDOWED
 def test_the_spans_errors_per_range_band_pool_the_windows(windowed):
     """Per sensor and band, from the halves' own tables: the reports added, the RMS from their mean squares,
     the maximum the larger, the aircraft at least the most of either and at most both; the 95th percentile
@@ -557,21 +552,20 @@ def test_the_spans_errors_per_range_band_pool_the_windows(windowed):
         assert min(g["p95_m"] for g in given) <= row["p95_m"] <= row["max_m"], key
 
 
-def test_a_span_keeps_its_error_values_in_a_temporary_folder_it_removes(recording, tmp_path, monkeypatch):
-    """The windows' judged errors by range and the values of a percentile or maximum wait for the pooling in
-    files under the system's temporary folder (one a window, per sensor and requirement), which is gone
-    after the run, and after a run that fails while pooling."""
+@pytest.fixture(scope="module")
+def span_watched(recording, tmp_path_factory):
+    """08:00 to 08:20 in 10-minute windows, with the p95 and maximum requirements added to the preset,
+    evaluated once with the system's temporary folder moved to a folder of its own and the files under it
+    listed when the pooling starts: the options, the run, the files seen (per folder) and that folder."""
     import tempfile
 
     import msdc.pipeline.jobs.evaluate as job
 
     sim, folder = recording
-    preset = tmp_path / "preset.toml"
+    preset = tmp_path_factory.mktemp("span") / "preset.toml"
     preset.write_text(_preset(sim) + _requirement("p95_m", 1000.0, "<=", {})
                       + _requirement("max_m", 5000.0, "<=", {}))
-    temporary = tmp_path / "tmp"
-    temporary.mkdir()
-    monkeypatch.setattr(tempfile, "tempdir", str(temporary))
+    temporary = tmp_path_factory.mktemp("tmp")
     seen: list[dict[str, list[str]]] = []
     pooled = job._pooled_sensor
 
@@ -582,9 +576,23 @@ def test_a_span_keeps_its_error_values_in_a_temporary_folder_it_removes(recordin
         seen.append(files)
         return pooled(checked, sensor_id, span)
 
-    monkeypatch.setattr(job, "_pooled_sensor", watching)
     options = _options(folder, preset=str(preset), from_time="08:00", to_time="08:20", window_minutes=10.0)
-    run = evaluate_job(options)
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(tempfile, "tempdir", str(temporary))
+        mp.setattr(job, "_pooled_sensor", watching)
+        run = evaluate_job(options)
+    return options, run, seen, temporary
+
+
+def test_a_span_keeps_its_error_values_in_a_temporary_folder_it_removes(span_watched, tmp_path, monkeypatch):
+    """The windows' judged errors by range and the values of a percentile or maximum wait for the pooling in
+    files under the system's temporary folder (one a window, per sensor and requirement), which is gone
+    after the run, and after a run that fails while pooling."""
+    import tempfile
+
+    import msdc.pipeline.jobs.evaluate as job
+
+    options, run, seen, temporary = span_watched
     assert run.scorecard["sensor"].nunique() == 1
     two = ["0000000.parquet", "0000001.parquet"]  # two windows
     assert seen[0]["errors-by-range"] == two
@@ -601,24 +609,23 @@ def test_a_span_keeps_its_error_values_in_a_temporary_folder_it_removes(recordin
     def failing(*_):
         raise RuntimeError("pooling failed")
 
+    temporary = tmp_path / "tmp"
+    temporary.mkdir()
+    monkeypatch.setattr(tempfile, "tempdir", str(temporary))
     monkeypatch.setattr(job, "_pooled_sensor", failing)
     with pytest.raises(RuntimeError, match="pooling failed"):
         evaluate_job(options)
     assert list(temporary.iterdir()) == []
 
 
-def test_a_span_pooled_from_disk_in_passes_gives_the_figures_of_its_values_read_back(recording, tmp_path,
+def test_a_span_pooled_from_disk_in_passes_gives_the_figures_of_its_values_read_back(span_watched,
                                                                                     monkeypatch):
     """A span's percentile, its interval and the error bands pooled in passes over the files (as when they
     hold more values than the span reads at once: here with that limit 0) are those of the values read back
     together, each figure; the bands' RMS to within the order of summation."""
     from msdc.pipeline.evaluate import windows
 
-    sim, folder = recording
-    preset = tmp_path / "preset.toml"
-    preset.write_text(_preset(sim) + _requirement("p95_m", 1000.0, "<=", {}))
-    options = _options(folder, preset=str(preset), from_time="08:00", to_time="08:20", window_minutes=10.0)
-    together = evaluate_job(options)
+    options, together, _, _ = span_watched  # the values read back together
     monkeypatch.setattr(windows, "VALUES_HELD", 0)
     called: list[str] = []
 
