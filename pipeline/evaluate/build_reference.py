@@ -210,17 +210,21 @@ def reconstruct(reports: pd.DataFrame, epoch: pd.Timestamp, *, step_s: float = 1
     return out.sort_values(["aircraft", "t_s"], kind="stable", ignore_index=True)
 
 
-def _uncovered(own: pd.DataFrame, independent: pd.DataFrame, max_gap_s: float) -> pd.DataFrame:
+def rows_of(frame: pd.DataFrame) -> dict:
+    """Per aircraft of a reference (or probe) frame, its row numbers."""
+    return frame.groupby(frame["aircraft"].astype(str).to_numpy(object), sort=False).indices
+
+
+def _uncovered(own: pd.DataFrame, independent: pd.DataFrame, max_gap_s: float,
+               ind_rows: dict | None = None) -> pd.DataFrame:
     """The rows of the sensor's own track at times no independent reference stretch of the same aircraft
-    covers (stretches: runs of samples at most max_gap_s apart)."""
+    covers (stretches: runs of samples at most max_gap_s apart). ind_rows: ``rows_of(independent)``, when
+    known (one reference serves ten radars)."""
     if own.empty or independent.empty:
         return own
     keep = np.ones(len(own), bool)
     ind_t = independent["t_s"].to_numpy(float)
-    def rows_of(frame: pd.DataFrame) -> dict:
-        return frame.groupby(frame["aircraft"].astype(str).to_numpy(object), sort=False).indices
-
-    ind_rows = rows_of(independent)
+    ind_rows = rows_of(independent) if ind_rows is None else ind_rows
     for aircraft, rows in rows_of(own).items():
         t_ind = ind_t[ind_rows[aircraft]] if aircraft in ind_rows else ind_t[:0]
         if not t_ind.size:
@@ -236,7 +240,7 @@ def _uncovered(own: pd.DataFrame, independent: pd.DataFrame, max_gap_s: float) -
 
 
 def _needing_fallback(own: pd.DataFrame, independent: pd.DataFrame, epoch: pd.Timestamp,
-                      max_gap_s: float) -> np.ndarray:
+                      max_gap_s: float, ind_rows: dict | None = None) -> np.ndarray:
     """Per report of the sensor, whether its aircraft has a report the independent reference does not
     cover (_uncovered's rule at report times): only those aircraft need the sensor's own track, which is
     the costly part of a leave-one-out reference where ADS-B sees every aircraft."""
@@ -244,7 +248,7 @@ def _needing_fallback(own: pd.DataFrame, independent: pd.DataFrame, epoch: pd.Ti
         return np.ones(len(own), bool)
     t_s = (own["time"].astype("datetime64[ns, UTC]").array.asi8 - epoch.value) / 1e9
     probe = pd.DataFrame({"aircraft": own["aircraft_id"].astype(str).to_numpy(object), "t_s": t_s})
-    left = _uncovered(probe.sort_values(["aircraft", "t_s"], kind="stable"), independent, max_gap_s)
+    left = _uncovered(probe.sort_values(["aircraft", "t_s"], kind="stable"), independent, max_gap_s, ind_rows)
     return probe["aircraft"].isin(set(left["aircraft"])).to_numpy(bool)
 
 
@@ -260,22 +264,26 @@ def _reference(meas: pd.DataFrame, builders: np.ndarray, sensor_id: str | None, 
     key = (frozenset(str(v) for v in meas.loc[builders, "sensor_id"].unique()), repr(gates), epoch, step_s,
            max_coast_s)
     if cache is not None and key in cache:
-        built, counts = cache[key]
+        built, counts, shared = cache[key]
     else:
         gated, counts = gate_reports(meas[builders], gates)
         built = (reconstruct(gated, epoch, step_s=step_s, max_coast_s=max_coast_s) if epoch is not None
                  else _empty())
+        shared = {}  # what the sensors' fallbacks read of it: its rows per aircraft, once
         if cache is not None:  # the latest only: leave-one-out never builds the same twice
             cache.clear()
-            cache[key] = (built, counts)
+            cache[key] = (built, counts, shared)
     frames = [built]
     if fallback and sensor_id is not None and epoch is not None:
         own_reports = meas[equals_text(meas["sensor_id"], sensor_id)]
         if (own_reports["sensor_kind"] == "adsb").any():
             own_reports, _ = gate_reports(own_reports, gates)
-        own_reports = own_reports[_needing_fallback(own_reports, built, epoch, max_gap_s)]
+        if "rows" not in shared and len(built):
+            shared["rows"] = rows_of(built)
+        ind_rows = shared.get("rows")
+        own_reports = own_reports[_needing_fallback(own_reports, built, epoch, max_gap_s, ind_rows)]
         own = reconstruct(own_reports, epoch, step_s=step_s, max_coast_s=max_coast_s, self_reference=True)
-        own = _uncovered(own, built, max_gap_s)
+        own = _uncovered(own, built, max_gap_s, ind_rows)
         if len(own):
             notes.append(f"{own['aircraft'].nunique()} aircraft judged in part or whole against "
                          f"{sensor_id}'s own track ({len(own)} self-reference rows): not for position "

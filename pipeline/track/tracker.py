@@ -173,9 +173,7 @@ def track(measurements: pd.DataFrame, *, step_s: float = 1.0, max_coast_s: float
     tracks, sensors, aircraft, rejected, finals, runs = [], [], [], [], {}, {}
     groups = frame.groupby("aircraft_id", sort=True, observed=True)
     def one(item: tuple) -> tuple:  # the filter run travels back (a cluster's worker) only when kept
-        out = _track_one(str(item[0]), item[1], epoch, config, args, names, step_s, smooth, smoother)
-        if columns is not None:
-            out = replace(out, tracks=out.tracks[list(columns)])
+        out = _track_one(str(item[0]), item[1], epoch, config, args, names, step_s, smooth, smoother, columns)
         return item[0], (out if keep_states else replace(out, plane=None, run=None))
 
     outs = map_ordered(one, groups, distributable=True, label=aircraft_label)
@@ -398,16 +396,34 @@ class FilteredReports:
     plane: Plane
     run: PlaneRun
     far: pd.Series
+    sensors: np.ndarray  # the rows' sensor_id
+    ground: np.ndarray | None  # the rows' ground_said
+
+
+def in_report_order(t: np.ndarray, sensors: np.ndarray) -> bool:
+    """Whether reports are already in the filter's order (time, then sensor), as a stable sort by both
+    would leave them; False for a time that is NaN (the sort puts those last)."""
+    if t.size < 2:
+        return bool(np.isfinite(t).all())
+    d = np.diff(t)
+    if (d > 0.0).all():  # times all increasing: nearly always
+        return True
+    if not np.isfinite(t).all() or (d < 0.0).any():
+        return False
+    tie = d == 0.0  # one time from two sensors (two ADS-B ground stations relaying one report)
+    return bool((sensors[:-1][tie] <= sensors[1:][tie]).all())
 
 
 def filter_reports(group: pd.DataFrame, epoch: pd.Timestamp, config: TrackerConfig) -> FilteredReports:
     """Run the IMM forward over one aircraft's reports (finite positions and covariances; ``track``'s
     schema), in the plane around their median, counting seconds from ``epoch``."""
     t = (group["time"] - epoch).dt.total_seconds().to_numpy(float)
-    g = group.assign(_t=t)
-    if not (t.size < 2 or (np.diff(t) > 0.0).all()):  # times all increasing (nearly always): in order already
-        g = g.sort_values(["_t", "sensor_id"], kind="stable")
-        t = g["_t"].to_numpy(float)
+    sensors = group["sensor_id"].to_numpy(str)
+    g = group
+    if not in_report_order(t, sensors):
+        order = np.lexsort((sensors, t))  # by time, then sensor, stable (NaN times last)
+        g, t, sensors = group.take(order), t[order], sensors[order]
+    said = ground_said(g)
     velocity = {"ground_speed_kt", "heading_deg"} <= set(g.columns)
     plane, near, run = filter_columns(
         config, t, *(g[c].to_numpy(float) for c in ("latitude", "longitude", "cov_ee_m2", "cov_en_m2",
@@ -416,11 +432,12 @@ def filter_reports(group: pd.DataFrame, epoch: pd.Timestamp, config: TrackerConf
         heading_deg=g["heading_deg"].to_numpy(float) if velocity else None,
         nucr_nacv=(g["nucr_nacv"].to_numpy(float, na_value=np.nan) if velocity and "nucr_nacv" in g.columns
                    else None),
-        on_ground=ground_said(g))
+        on_ground=said)
     if near.all():  # every report within range of the plane (nearly always): nothing to drop or count
-        return FilteredReports(g, t, plane, run, pd.Series(dtype=np.int64))
+        return FilteredReports(g, t, plane, run, pd.Series(dtype=np.int64), sensors, said)
     far = g.loc[~near, "sensor_id"].value_counts()
-    return FilteredReports(g[near], t[near], plane, run, far)
+    return FilteredReports(g[near], t[near], plane, run, far, sensors[near],
+                           None if said is None else said[near])
 
 
 def ground_said(reports: pd.DataFrame) -> np.ndarray | None:
@@ -508,15 +525,17 @@ class SegmentSpans:
 
 
 def _track_one(aircraft_id: str, group: pd.DataFrame, epoch: pd.Timestamp, config: TrackerConfig, args: dict,
-               names: list[str], step_s: float, smooth: bool, smoother: str = "rts") -> AircraftTrack:
-    """Track one aircraft (``track``'s steps): filter its reports, estimate at its output times, count."""
+               names: list[str], step_s: float, smooth: bool, smoother: str = "rts",
+               columns: tuple[str, ...] | None = None) -> AircraftTrack:
+    """Track one aircraft (``track``'s steps): filter its reports, estimate at its output times, count;
+    columns: only these of its tracks table."""
     filtered = filter_reports(group, epoch, config)
     updates = _updates(filtered)
     spans = _segment_spans(updates, config.max_coast_s)
     qt = _output_times(updates, spans, step_s)
     est = estimate(filtered.run, qt, smooth=smooth, smoother=smoother)
     return AircraftTrack(
-        tracks=_track_table(aircraft_id, filtered, updates, qt, est, epoch, args, names, smooth),
+        tracks=_track_table(aircraft_id, filtered, updates, qt, est, epoch, args, names, smooth, columns),
         sensors=_sensor_table(aircraft_id, group, filtered),
         aircraft=_aircraft_row(aircraft_id, filtered, updates, spans, epoch),
         rejected=_rejected(aircraft_id, filtered),
@@ -527,8 +546,7 @@ def _track_one(aircraft_id: str, group: pd.DataFrame, epoch: pd.Timestamp, confi
 def _updates(filtered: FilteredReports) -> Updates:
     """The filter's accepted updates."""
     rows = np.flatnonzero(filtered.run.accepted)
-    return Updates(rows, filtered.t[rows], filtered.run.segment[rows],
-                   filtered.rows["sensor_id"].to_numpy(str)[rows])
+    return Updates(rows, filtered.t[rows], filtered.run.segment[rows], filtered.sensors[rows])
 
 
 def _segment_spans(updates: Updates, max_coast_s: float) -> SegmentSpans:
@@ -555,8 +573,9 @@ def _output_times(updates: Updates, spans: SegmentSpans, step_s: float) -> np.nd
 
 def _track_table(aircraft_id: str, filtered: FilteredReports, updates: Updates, qt: np.ndarray,
                  est: Estimates, epoch: pd.Timestamp, args: dict, names: list[str],
-                 smooth: bool) -> pd.DataFrame:
-    """One aircraft's rows of ``track``'s table: the estimates at the output times qt, in local terms."""
+                 smooth: bool, columns: tuple[str, ...] | None = None) -> pd.DataFrame:
+    """One aircraft's rows of ``track``'s table: the estimates at the output times qt, in local terms
+    (only ``columns``, in their order, when given)."""
     plane, segment, xc = filtered.plane, filtered.run.segment, est.x
     out_lat, out_lon = plane.inverse(xc[:, 0], xc[:, 3])
     v_loc, a_loc, pos = _local_motion(plane, est, out_lat, out_lon)
@@ -579,7 +598,9 @@ def _track_table(aircraft_id: str, filtered: FilteredReports, updates: Updates, 
     for j, name in enumerate(names):
         out[f"mode_{name}"] = est.mu[:, j]
     out.update({"coasted": ~is_update, "age_s": est.age_s, "sources": _update_sources(qt, is_update, updates),
-                "on_ground": _ground_at(ground_said(filtered.rows), filtered.run.accepted, segment, est.row)})
+                "on_ground": _ground_at(filtered.ground, filtered.run.accepted, segment, est.row)})
+    if columns is not None:
+        out = {c: out[c] for c in columns}
     return pd.DataFrame(out, copy=False)  # one block per column: `_concat_by_column` frees them one by one
 
 
@@ -626,7 +647,7 @@ def _sensor_table(aircraft_id: str, group: pd.DataFrame, filtered: FilteredRepor
     status, accepted = run.status, run.accepted
     all_sensors = group["sensor_id"].to_numpy(str)
     sids, first = np.unique(all_sensors, return_index=True)
-    at = np.searchsorted(sids, filtered.rows["sensor_id"].to_numpy(str))  # each usable report's sensor
+    at = np.searchsorted(sids, filtered.sensors)  # each usable report's sensor
     updated = status == STATUS_UPDATED
     n_far = np.array([int(far.get(sid, 0)) for sid in sids], np.int64)
 
