@@ -12,10 +12,13 @@ import pandas as pd
 from msdc.pipeline.evaluate.coverage import Coverage, Sensor, coverage
 from msdc.pipeline.evaluate.outcome import Outcome, share, withheld
 from msdc.pipeline.evaluate.reference import (
+    ASSOCIATION_COLUMNS,
     DEFAULT_REFERENCE_GAP_S,
     associated,
+    association_gates,
     checked_trajectories,
     parameter,
+    shared,
 )
 from msdc.pipeline.evaluate.scans import period_from_markers, period_from_plots, update_groups
 from msdc.pipeline.evaluate.statistics import proportion
@@ -75,8 +78,19 @@ def expected_updates(reports: pd.DataFrame, reference: pd.DataFrame, parameters:
     ``interval_s`` the updates are whole intervals tiling each reference stretch; else one per scan period,
     the detected ones at their report times and the missed ones spread over the gaps."""
     max_gap_s = float(parameter(parameters, "reference_max_gap_s", DEFAULT_REFERENCE_GAP_S))
-    rep = associated(reports, reference, parameters)
     interval = parameter(parameters, "interval_s", None)
+    # what the table depends on besides the frames: the association's gates only where it is made here
+    gates = None if all(c in reports.columns for c in ASSOCIATION_COLUMNS) else association_gates(parameters)
+    return shared(("expected_updates", id(reports), id(reference), id(sensor), max_gap_s, interval, gates),
+                  (reports, reference, sensor),
+                  lambda: _expected_updates(reports, reference, parameters, sensor, max_gap_s, interval))
+
+
+def _expected_updates(reports: pd.DataFrame, reference: pd.DataFrame, parameters: Mapping | None,
+                      sensor: Sensor, max_gap_s: float, interval) -> tuple[pd.DataFrame, Coverage,
+                                                                           tuple[str, ...]]:
+    """`expected_updates`' work."""
+    rep = associated(reports, reference, parameters)
     period, said = update_period(rep, sensor)
     if interval is not None:
         said = f"intervals of {float(interval):g} s"

@@ -4,10 +4,11 @@ nearest reference aircraft."""
 
 from __future__ import annotations
 
-from collections.abc import Iterator, Mapping
+from collections.abc import Callable, Iterator, Mapping
 from contextlib import contextmanager
 from contextvars import ContextVar
 from dataclasses import dataclass
+from typing import TypeVar
 
 import numpy as np
 import pandas as pd
@@ -17,6 +18,7 @@ from msdc.pipeline.model.geodesy import A_M, E2, M_PER_FT
 REFERENCE_REQUIRED = ("aircraft", "t_s", "latitude", "longitude")
 REFERENCE_OPTIONAL = ("altitude_ft", "height_m", "mode3a", "address", "callsign")
 REPORTS_REQUIRED = ("t_s", "latitude", "longitude")
+T = TypeVar("T")
 DEFAULT_GATE_M = 3704.0  # 2 NM: a report further than this from every reference aircraft is not associated
 DEFAULT_REFERENCE_GAP_S = 30.0  # reference samples further apart than this leave the aircraft unknown between
 # a report's Mode C this far from an aircraft's altitude prefers another aircraft within the gate, if any:
@@ -138,17 +140,16 @@ def trajectories(reference: pd.DataFrame) -> list[Trajectory]:
     return out
 
 
-# within `shared_references`: per reference frame given (by identity; the frame itself kept, so that its id
-# is not reused), its checked frame and trajectories
-_SHARED: ContextVar[dict[int, tuple[pd.DataFrame, tuple[pd.DataFrame, list[Trajectory]]]] | None] = \
-    ContextVar("msdc_shared_references", default=None)
+# within `shared_references`: per key, the objects its ids name (kept, so that no id is reused) and the value
+_SHARED: ContextVar[dict[tuple, tuple[tuple, object]] | None] = ContextVar("msdc_shared_references",
+                                                                           default=None)
 
 
 @contextmanager
 def shared_references() -> Iterator[None]:
     """Within it, a reference frame is checked and cut into trajectories once however many requirements
-    read it (a sensor's scorecard reads one frame some fifteen times). The frames must not change in place
-    inside it: the requirements are pure functions of their frames."""
+    read it (a sensor's scorecard reads one frame some fifteen times), and `shared` values are computed
+    once. The frames must not change in place inside it: the requirements are pure functions of them."""
     if _SHARED.get() is not None:  # inside another: its memo serves both
         yield
         return
@@ -159,18 +160,29 @@ def shared_references() -> Iterator[None]:
         _SHARED.reset(token)
 
 
+def shared(key: tuple, objects: tuple, compute: Callable[[], T]) -> T:
+    """``compute()``, once per key inside `shared_references` (every call outside it); key holds the ids of
+    ``objects`` (the frames it is computed from) and the values that change the result. The value is shared:
+    read, never written."""
+    memo = _SHARED.get()
+    if memo is None:
+        return compute()
+    hit = memo.get(key)
+    if hit is not None and all(a is b for a, b in zip(hit[0], objects, strict=True)):
+        return hit[1]  # type: ignore[return-value]
+    value = compute()
+    memo[key] = (objects, value)
+    return value
+
+
 def checked_trajectories(reference: pd.DataFrame) -> tuple[pd.DataFrame, list[Trajectory]]:
     """``check_reference(reference)`` and its ``trajectories`` (the arrays are shared: read, never
     written); inside `shared_references`, computed once per frame."""
-    memo = _SHARED.get()
-    hit = memo.get(id(reference)) if memo is not None else None
-    if hit is not None and hit[0] is reference:
-        return hit[1]
-    ref = check_reference(reference)
-    out = (ref, trajectories(ref))
-    if memo is not None:
-        memo[id(reference)] = (reference, out)
-    return out
+    def cut() -> tuple[pd.DataFrame, list[Trajectory]]:
+        ref = check_reference(reference)
+        return ref, trajectories(ref)
+
+    return shared(("trajectories", id(reference)), (reference,), cut)
 
 
 def rows_by_index(idx: np.ndarray, n: int) -> list[np.ndarray]:

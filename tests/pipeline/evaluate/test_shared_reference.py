@@ -49,3 +49,30 @@ def test_the_trajectories_are_cut_once_per_frame_inside_the_scope(monkeypatch):
     assert len(calls) == 4
     checked_trajectories(frame)
     assert len(calls) == 5  # the scope ended: nothing is kept
+
+
+def test_the_expected_updates_are_made_once_per_frames_and_parameters_inside_the_scope():
+    """The pd requirement, long gaps and the coverage maps of one sensor ask for the same expected updates:
+    inside the scope they are made once for the same frames, sensor and parameters that change them, and
+    again for another interval; the table equals the one made outside the scope."""
+    from msdc.pipeline.evaluate.coverage import Sensor
+    from msdc.pipeline.evaluate.detection import expected_updates
+    from msdc.pipeline.model.geodesy import polar_to_geodetic
+
+    t = np.arange(0.0, 41.0, 1.0)
+    lat, lon, _ = polar_to_geodetic(0.0, 0.0, 0.0, 30.0 + 0.1 * t, 0.0, 0.0)
+    ref = pd.DataFrame({"aircraft": "A", "t_s": t, "latitude": lat, "longitude": lon, "height_m": 0.0})
+    seen = np.arange(0.0, 41.0, 4.0)[[0, 1, 2, 4, 5, 6, 8, 9]]  # scans every 4 s: 12, 28 and 40 s missed
+    rep = pd.DataFrame({"t_s": seen, "latitude": lat[seen.astype(int)], "longitude": lon[seen.astype(int)]})
+    markers = -2.0 + 4.0 * np.arange(12)
+    sensor = Sensor(0.0, 0.0, 0.0, name="hand", max_range_nm=100.0, north_markers_s=markers)
+    alone = expected_updates(rep, ref, {}, sensor)[0]
+    assert int(alone["detected"].sum()) == 8 and len(alone) == 11  # 11 scans from 0 to 40 s, 8 seen
+    with shared_references():
+        first = expected_updates(rep, ref, {}, sensor)
+        # a parameter it does not read
+        assert expected_updates(rep, ref, {"scope": "global"}, sensor) is first
+        windows = expected_updates(rep, ref, {"interval_s": 8.0}, sensor)
+        assert windows is not first and len(windows[0]) == 5  # 40 s in whole 8 s intervals
+        assert expected_updates(rep.copy(), ref, {}, sensor) is not first
+    pd.testing.assert_frame_equal(first[0], alone)
