@@ -19,6 +19,9 @@ from msdc.pipeline.model.load import load
 from msdc.pipeline.model.measurements import build_measurements
 from msdc.pipeline.model.sensors import read_sensors
 
+# one worker runs the module: the runs made once, not on each worker
+pytestmark = pytest.mark.xdist_group("fill")
+
 FIX = Path(__file__).resolve().parents[3] / "fixtures"
 BASE = [str(FIX / "radar.ast"), str(FIX / "adsb.ast"), "--sensors", str(FIX / "sensors.toml"),
         "--date", "2019-03-01", "--all"]

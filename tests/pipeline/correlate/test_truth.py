@@ -48,6 +48,9 @@ from msdc.pipeline.model.measurements import build_measurements, radar_measureme
 from msdc.pipeline.model.sensors import read_sensors
 from msdc.pipeline.model.time import with_clock
 
+# one worker runs the module: the simulated cases made once, not on each worker
+pytestmark = pytest.mark.xdist_group("truth")
+
 FIX = Path(__file__).resolve().parents[3] / "fixtures"
 SLOT_S = 10.0
 QUIET = dict(adsb_jump_fraction=0.0, adsb_short_dropouts_per_hour=0.0, adsb_low_quality_episodes=0)

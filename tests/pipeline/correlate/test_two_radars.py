@@ -16,6 +16,9 @@ from msdc.pipeline.model.load import load
 from msdc.pipeline.model.measurements import build_measurements
 from msdc.pipeline.model.sensors import read_sensors
 
+# one worker runs the module: the two-radar run made once, not on each worker
+pytestmark = pytest.mark.xdist_group("two_radars")
+
 R1, R2, ADSB = "048:25/201", "048:25/202", "021:0/1"
 LSB = 128  # ToD units per second
 SLOT_S = 10.0

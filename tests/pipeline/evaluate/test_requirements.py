@@ -13,6 +13,9 @@ from msdc.pipeline.evaluate.reference import associate
 from msdc.pipeline.evaluate.requirements import REQUIREMENTS, radar_reports
 from msdc.pipeline.model.geodesy import polar_to_geodetic
 
+# one worker runs the module: the simulated recording made once, not on each worker
+pytestmark = pytest.mark.xdist_group("requirements")
+
 MARKERS = -2.0 + 4.0 * np.arange(40)  # north markers every 4 s
 NEAR = Sensor(0.0, 0.0, 0.0, name="hand", max_range_nm=100.0, north_markers_s=MARKERS)
 

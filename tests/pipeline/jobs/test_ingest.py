@@ -36,6 +36,9 @@ import msdc.asterix as asterix
 from msdc.pipeline.cli import main
 from msdc.pipeline.report.record_schema import record_schema
 
+# one worker runs the module: the fixtures' dataset made once, not on each worker
+pytestmark = pytest.mark.xdist_group("ingest")
+
 TRUTH = json.loads((FIX / "truth.json").read_text())
 
 

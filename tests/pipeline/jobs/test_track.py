@@ -19,6 +19,9 @@ from msdc.pipeline.jobs.common import OptionError
 from msdc.pipeline.jobs.track import TRACK_COLUMNS, TrackOptions
 from msdc.pipeline.track.feasibility import track_rows
 
+# one worker runs the module: the tracked fixtures made once, not on each worker
+pytestmark = pytest.mark.xdist_group("track")
+
 FIX = Path(__file__).resolve().parents[3] / "fixtures"
 RADAR, ADSB, SENSORS = str(FIX / "radar.ast"), str(FIX / "adsb.ast"), str(FIX / "sensors.toml")
 TRUTH = json.loads((FIX / "truth.json").read_text())

@@ -17,6 +17,9 @@ from msdc.pipeline.model.marks import mark_once
 from msdc.pipeline.model.measurements import build_measurements
 from msdc.pipeline.model.sensors import read_sensors
 
+# one worker runs the module: the fixtures' measurements made once, not on each worker
+pytestmark = pytest.mark.xdist_group("marks")
+
 ROOT = Path(__file__).resolve().parents[3]
 
 

@@ -9,6 +9,9 @@ from fixtures.simulate import simulate
 from msdc.pipeline.model.measurements import adsb_measurements
 from msdc.pipeline.quality.filters import FILTER_KEYS, apply_filters, filter_warnings
 
+# one worker runs the module: the simulation made once, not on each worker
+pytestmark = pytest.mark.xdist_group("filters")
+
 
 @pytest.fixture(scope="module")
 def sim():

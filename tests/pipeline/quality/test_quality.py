@@ -26,6 +26,9 @@ from msdc.pipeline.quality.tables import (
 from msdc.pipeline.report.headers import column_name
 from msdc.pipeline.report.quality_figures import interval_histogram_figure, slotting_figure
 
+# one worker runs the module: the simulation and its tables made once, not on each worker
+pytestmark = pytest.mark.xdist_group("quality")
+
 DAY0 = pd.Timestamp("2019-06-14", tz="UTC")
 
 

@@ -19,6 +19,9 @@ from msdc.pipeline.model.measurements import build_measurements
 from msdc.pipeline.model.sensors import REQUIRED_COLUMNS as SENSOR_COLUMNS
 from msdc.pipeline.quality.quality_run import quality_run
 
+# one worker runs the module: the measurements made once, not on each worker
+pytestmark = pytest.mark.xdist_group("without_reference")
+
 FIX = Path(__file__).resolve().parents[3] / "fixtures"
 RADAR, SENSORS = str(FIX / "radar.ast"), str(FIX / "sensors.toml")
 NEEDS = "the Radar accuracy and Radar biases sheets need a reference (ADS-B)"

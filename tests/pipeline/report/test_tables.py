@@ -17,6 +17,9 @@ from msdc.pipeline.jobs import correlate
 from msdc.pipeline.report import tables as tables_mod
 from msdc.pipeline.report.headers import column_name
 
+# one worker runs the module: the correlation and its workbooks made once, not on each worker
+pytestmark = pytest.mark.xdist_group("tables")
+
 FIX = Path(__file__).resolve().parents[3] / "fixtures"
 EXCEL_EPOCH = dt.datetime(1899, 12, 30)
 

@@ -28,6 +28,9 @@ from msdc.pipeline.report.files import write_json
 from msdc.pipeline.report.headers import column_name
 from msdc.pipeline.report.summary import LEAD_WINDOW_KEYS, run_to_json, summary_table
 
+# one worker runs the module: the outputs made once, not on each worker
+pytestmark = pytest.mark.xdist_group("writers")
+
 EVIL = "=cmd|' /C calc'!A0"
 T0 = pd.Timestamp("2019-03-01 10:00:00.500", tz="UTC")
 PNG_MAGIC = b"\x89PNG\r\n\x1a\n"

@@ -10,6 +10,9 @@ import fixtures.track_e2e_data as d
 from msdc.pipeline.track import track
 from msdc.pipeline.track.tracker import track_angle_rate
 
+# one worker runs the module: the turning simulation made once, not on each worker
+pytestmark = pytest.mark.xdist_group("turn_rate")
+
 
 def test_track_angle_rate_by_hand():
     t = np.arange(0.0, 30.0, 1.0)
