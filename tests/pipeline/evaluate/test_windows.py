@@ -250,6 +250,25 @@ def test_per_aircraft_tables_folded_window_by_window_equal_them_pooled_at_once()
     assert at_once.loc[0, "surface_share"] == pytest.approx(75 / 450)
 
 
+def test_the_builders_of_each_aircraft_are_every_windows_sensors_sorted_and_joined():
+    """The pooled ``built_by`` of each aircraft, against the rule written as a pandas aggregation per group
+    (every window's sensors split at " | ", blanks and missing ones left out, sorted and joined), on random
+    tables whose aircraft come in no order, with missing builders and multi-sensor ones."""
+    rng = np.random.default_rng(4)
+    names = np.array(["021:0/1", "021:0/2", "048:20/1 + 021:0/1", "048:1/2 | 021:0/2", "", None], object)
+    n = 300
+    aircraft = rng.choice(list("QWERTYUIOP"), n)
+    whole = pd.DataFrame({"sensor": rng.choice(["s1", "s2"], n), "aircraft": aircraft,
+                          "built_by": names[rng.integers(0, len(names), n)], "self_reference_share": 0.0,
+                          "surface_share": 0.0, "reference_samples": 10, "reports": 1})
+    out = combine_per_aircraft([whole.iloc[:150], whole.iloc[150:]])
+    rule = whole.groupby(["sensor", "aircraft"], sort=False)["built_by"].agg(
+        lambda s: " | ".join(sorted({p for v in s.dropna() for p in str(v).split(" | ") if p})))
+    assert list(zip(out["sensor"], out["aircraft"], strict=True)) == list(rule.index)  # first seen first
+    assert list(out["built_by"]) == list(rule)
+    assert out["built_by"].str.contains("048:1/2").any() and (out["built_by"] != "").all()
+
+
 def test_a_note_every_window_gave_is_marked_as_each_windows_and_one_window_is_its_own_figure():
     """Two windows of 2 aircraft each ("2 aircraft" in both), 3 aircraft together: the pooled row says 3,
     and the windows' "2 aircraft" only as every window's. One window's outcome is its own, notes and all."""
