@@ -242,28 +242,6 @@ def test_workers_2_a_failed_input_leaves_the_dataset_one_process_leaves(tmp_path
     same_dataset(tmp_path / "ds1", tmp_path / "ds2")
 
 
-def test_a_resumed_ingest_cuts_its_inputs_as_the_whole_command_did(tmp_path):
-    """Three inputs on two workers are each ingested whole (one part per partition); a rerun of the same
-    command after a kill that left only the last input to do writes it whole too, not in windows as a
-    command of that one input would: the dataset of the uninterrupted run (seen once in the kill test above,
-    when a kill fell after the first two inputs' commits)."""
-    from msdc.pipeline.dataset import manifest as mf
-
-    rec = tmp_path / "midnight.ast"
-    midnight_recording(rec, 12000)
-    inputs = [str(rec), str(RADAR), str(ADSB), "--date", DAY, "--chunk-mb", "0.1", "--workers", "2"]
-    reference, resumed = tmp_path / "reference", tmp_path / "resumed"
-    assert ingest(*inputs, "--dataset", str(reference)) == 0
-    shutil.copytree(reference, resumed)
-    manifest = mf.load(resumed)
-    last = next(d for d, r in manifest.inputs.items() if Path(r["path"]).name == ADSB.name)
-    for part in manifest.inputs.pop(last)["parts"]:  # as if killed before the last input's commit
-        (resumed / part["path"]).unlink()
-    mf.save(resumed, manifest)
-    assert ingest(*inputs, "--dataset", str(resumed)) == 0
-    same_dataset(reference, resumed)
-
-
 def _run(args: list[str]) -> subprocess.Popen:
     return subprocess.Popen([sys.executable, "-m", "msdc.pipeline.cli", "ingest", *args],
                             stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
@@ -276,20 +254,56 @@ def _started(root: Path, proc: subprocess.Popen) -> float:
     return time.monotonic()
 
 
+@pytest.fixture(scope="module")
+def uninterrupted(tmp_path_factory):
+    """The kill tests' command (a recording across midnight, the radar's and the ADS-B fixtures) run whole
+    in a subprocess, once per --workers asked: its arguments but --dataset, its dataset, and how long its
+    work took (from its dataset folder made to its end)."""
+    folder = tmp_path_factory.mktemp("uninterrupted")
+    rec = folder / "midnight.ast"
+    midnight_recording(rec, 12000)
+    runs: dict[str, tuple[list[str], Path, float]] = {}
+
+    def run(workers: str) -> tuple[list[str], Path, float]:
+        if workers not in runs:
+            inputs = [str(rec), str(RADAR), str(ADSB), "--date", DAY, "--chunk-mb", "0.1", "--workers",
+                      workers]
+            reference = folder / f"reference{workers}"
+            proc = _run([*inputs, "--dataset", str(reference)])
+            start = _started(reference, proc)
+            assert proc.wait(timeout=120) == 0
+            runs[workers] = inputs, reference, time.monotonic() - start
+        return runs[workers]
+
+    return run
+
+
+def test_a_resumed_ingest_cuts_its_inputs_as_the_whole_command_did(uninterrupted, tmp_path):
+    """Three inputs on two workers are each ingested whole (one part per partition); a rerun of the same
+    command after a kill that left only the last input to do writes it whole too, not in windows as a
+    command of that one input would: the dataset of the uninterrupted run (seen once in the kill test below,
+    when a kill fell after the first two inputs' commits)."""
+    from msdc.pipeline.dataset import manifest as mf
+
+    inputs, reference, _ = uninterrupted("2")
+    resumed = tmp_path / "resumed"
+    shutil.copytree(reference, resumed)
+    manifest = mf.load(resumed)
+    last = next(d for d, r in manifest.inputs.items() if Path(r["path"]).name == ADSB.name)
+    for part in manifest.inputs.pop(last)["parts"]:  # as if killed before the last input's commit
+        (resumed / part["path"]).unlink()
+    mf.save(resumed, manifest)
+    assert ingest(*inputs, "--dataset", str(resumed)) == 0
+    same_dataset(reference, resumed)
+
+
 @pytest.mark.parametrize("workers", ["1", "2"])
-def test_an_ingest_killed_at_any_moment_resumes_to_the_same_dataset(tmp_path, workers):
+def test_an_ingest_killed_at_any_moment_resumes_to_the_same_dataset(uninterrupted, tmp_path, workers):
     """SIGKILL at a random moment of the work (seeded, one in each third of it), then the same command
     again: the dataset of a run never killed, part by part and row by row, nothing else left. With two
     workers each input is ingested whole by a pool process (three inputs), and the pool's processes die
     with the main one: none goes on writing parts the rerun writes again."""
-    rec = tmp_path / "midnight.ast"
-    midnight_recording(rec, 12000)
-    inputs = [str(rec), str(RADAR), str(ADSB), "--date", DAY, "--chunk-mb", "0.1", "--workers", workers]
-    reference = tmp_path / "reference"
-    proc = _run([*inputs, "--dataset", str(reference)])
-    start = _started(reference, proc)
-    assert proc.wait(timeout=120) == 0
-    work_s = time.monotonic() - start
+    inputs, reference, work_s = uninterrupted(workers)
     for seed in range(3):
         root = tmp_path / f"killed{seed}"
         proc = _run([*inputs, "--dataset", str(root)])
@@ -301,57 +315,3 @@ def test_an_ingest_killed_at_any_moment_resumes_to_the_same_dataset(tmp_path, wo
             proc.wait()
         assert ingest(*inputs, "--dataset", root) == 0
         same_dataset(reference, root)
-
-
-def test_what_an_interrupted_ingest_left_is_removed(fixtures_dataset, tmp_path, capsys):
-    """Every state a kill can leave, made by hand: a part renamed but its input not in the manifest, a part
-    still under its temporary name, a temporary manifest."""
-    root = tmp_path / "ds"
-    shutil.copytree(fixtures_dataset, root)
-    doc = manifest(root)
-    adsb = doc["inputs"].pop()
-    (root / "manifest.json").write_text(json.dumps(doc))  # the ADS-B input's record never written
-    part = root / adsb["parts"][0]["path"]
-    shutil.copy(part, part.with_name(".part-d37f30c9f33a4be7-00001.tmp"))
-    stray = root / f"date={DAY}/category=048/sensor=25_201/.part-0123456789abcdef-00000.tmp"
-    stray.write_bytes(b"PAR1")
-    (root / ".manifest.json.tmp").write_text("{")
-    capsys.readouterr()
-    assert ingest(RADAR, ADSB, "--dataset", root, "--date", DAY) == 0
-    assert "removed 4 file(s) an interrupted ingest left" in capsys.readouterr().err
-    same_dataset(fixtures_dataset, root)
-
-
-def test_an_undated_input_is_refused_and_the_inputs_before_it_stay(tmp_path, capsys):
-    root = tmp_path / "ds"
-    assert ingest(RADAR, "--dataset", root) == 1  # a raw stream carries no date
-    err = capsys.readouterr().err
-    assert f"{RADAR}: a raw recording carries no date: give --date" in err and "Traceback" not in err
-    assert not root.exists()  # the folder this run made is gone: as it was
-    assert ingest(RADAR, "--dataset", root, "--date", DAY) == 0
-    before = on_disk(root)
-    assert ingest(ADSB, "--dataset", root) == 1
-    assert on_disk(root) == before == listed_parts(root)  # the radar input stays, nothing of the ADS-B one
-
-
-@pytest.mark.parametrize("args,says", [
-    (["--dataset", "{file}"], "is a file, not a folder"),
-    (["--dataset", "{tmp}/no/such/ds"], "does not exist"),
-    (["--dataset", "{tmp}/ds", "--workers", "0"], "--workers"),
-])
-def test_bad_options_exit_2_with_a_message(tmp_path, capsys, args, says):
-    file = tmp_path / "f.txt"
-    file.write_text("x")
-    argv = [RADAR, "--date", DAY] + [a.format(file=file, tmp=tmp_path) for a in args]
-    assert ingest(*argv) == 2
-    err = capsys.readouterr().err
-    assert says in err and "Traceback" not in err
-
-
-def test_an_input_that_is_not_asterix_writes_nothing(tmp_path, capsys):
-    junk = tmp_path / "notes.ast"
-    junk.write_text("these are not data blocks at all, " * 200)
-    root = tmp_path / "ds"
-    assert ingest(RADAR, junk, "--dataset", root, "--date", DAY) == 1
-    assert "nothing ingested" in capsys.readouterr().err
-    assert not root.exists()
