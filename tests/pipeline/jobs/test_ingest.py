@@ -315,3 +315,57 @@ def test_an_ingest_killed_at_any_moment_resumes_to_the_same_dataset(uninterrupte
             proc.wait()
         assert ingest(*inputs, "--dataset", root) == 0
         same_dataset(reference, root)
+
+
+def test_what_an_interrupted_ingest_left_is_removed(fixtures_dataset, tmp_path, capsys):
+    """Every state a kill can leave, made by hand: a part renamed but its input not in the manifest, a part
+    still under its temporary name, a temporary manifest."""
+    root = tmp_path / "ds"
+    shutil.copytree(fixtures_dataset, root)
+    doc = manifest(root)
+    adsb = doc["inputs"].pop()
+    (root / "manifest.json").write_text(json.dumps(doc))  # the ADS-B input's record never written
+    part = root / adsb["parts"][0]["path"]
+    shutil.copy(part, part.with_name(".part-d37f30c9f33a4be7-00001.tmp"))
+    stray = root / f"date={DAY}/category=048/sensor=25_201/.part-0123456789abcdef-00000.tmp"
+    stray.write_bytes(b"PAR1")
+    (root / ".manifest.json.tmp").write_text("{")
+    capsys.readouterr()
+    assert ingest(RADAR, ADSB, "--dataset", root, "--date", DAY) == 0
+    assert "removed 4 file(s) an interrupted ingest left" in capsys.readouterr().err
+    same_dataset(fixtures_dataset, root)
+
+
+def test_an_undated_input_is_refused_and_the_inputs_before_it_stay(tmp_path, capsys):
+    root = tmp_path / "ds"
+    assert ingest(RADAR, "--dataset", root) == 1  # a raw stream carries no date
+    err = capsys.readouterr().err
+    assert f"{RADAR}: a raw recording carries no date: give --date" in err and "Traceback" not in err
+    assert not root.exists()  # the folder this run made is gone: as it was
+    assert ingest(RADAR, "--dataset", root, "--date", DAY) == 0
+    before = on_disk(root)
+    assert ingest(ADSB, "--dataset", root) == 1
+    assert on_disk(root) == before == listed_parts(root)  # the radar input stays, nothing of the ADS-B one
+
+
+@pytest.mark.parametrize("args,says", [
+    (["--dataset", "{file}"], "is a file, not a folder"),
+    (["--dataset", "{tmp}/no/such/ds"], "does not exist"),
+    (["--dataset", "{tmp}/ds", "--workers", "0"], "--workers"),
+])
+def test_bad_options_exit_2_with_a_message(tmp_path, capsys, args, says):
+    file = tmp_path / "f.txt"
+    file.write_text("x")
+    argv = [RADAR, "--date", DAY] + [a.format(file=file, tmp=tmp_path) for a in args]
+    assert ingest(*argv) == 2
+    err = capsys.readouterr().err
+    assert says in err and "Traceback" not in err
+
+
+def test_an_input_that_is_not_asterix_writes_nothing(tmp_path, capsys):
+    junk = tmp_path / "notes.ast"
+    junk.write_text("these are not data blocks at all, " * 200)
+    root = tmp_path / "ds"
+    assert ingest(RADAR, junk, "--dataset", root, "--date", DAY) == 1
+    assert "nothing ingested" in capsys.readouterr().err
+    assert not root.exists()
