@@ -400,9 +400,20 @@ class FilteredReports:
     ground: np.ndarray | None  # the rows' ground_said
 
 
-def in_report_order(t: np.ndarray, sensors: np.ndarray) -> bool:
-    """Whether reports are already in the filter's order (time, then sensor), as a stable sort by both
-    would leave them; False for a time that is NaN (the sort puts those last)."""
+def sensor_rank(sensor_id: pd.Series) -> np.ndarray:
+    """Per report, its sensor's place in the order reports of one time are filtered in: a categorical's
+    category order, else the names' alphabetical order; a missing sensor last (as pandas sorts them)."""
+    if isinstance(sensor_id.dtype, pd.CategoricalDtype):
+        codes, n = sensor_id.cat.codes.to_numpy(np.int64), len(sensor_id.cat.categories)
+    else:
+        codes, uniques = pd.factorize(sensor_id, sort=True)
+        codes, n = codes.astype(np.int64), len(uniques)
+    return np.where(codes < 0, n, codes)
+
+
+def in_report_order(t: np.ndarray, rank: np.ndarray) -> bool:
+    """Whether reports are already in the filter's order (time, then the sensor's rank: `sensor_rank`), as
+    a stable sort by both would leave them; False for a time that is NaN (the sort puts those last)."""
     if t.size < 2:
         return bool(np.isfinite(t).all())
     d = np.diff(t)
@@ -411,7 +422,7 @@ def in_report_order(t: np.ndarray, sensors: np.ndarray) -> bool:
     if not np.isfinite(t).all() or (d < 0.0).any():
         return False
     tie = d == 0.0  # one time from two sensors (two ADS-B ground stations relaying one report)
-    return bool((sensors[:-1][tie] <= sensors[1:][tie]).all())
+    return bool((rank[:-1][tie] <= rank[1:][tie]).all())
 
 
 def filter_reports(group: pd.DataFrame, epoch: pd.Timestamp, config: TrackerConfig) -> FilteredReports:
@@ -420,9 +431,12 @@ def filter_reports(group: pd.DataFrame, epoch: pd.Timestamp, config: TrackerConf
     t = (group["time"] - epoch).dt.total_seconds().to_numpy(float)
     sensors = group["sensor_id"].to_numpy(str)
     g = group
-    if not in_report_order(t, sensors):
-        order = np.lexsort((sensors, t))  # by time, then sensor, stable (NaN times last)
-        g, t, sensors = group.take(order), t[order], sensors[order]
+    diff = np.diff(t)
+    if not (diff > 0.0).all():  # times all increasing (nearly always): in order already
+        rank = sensor_rank(group["sensor_id"])
+        if not in_report_order(t, rank):
+            order = np.lexsort((rank, t))  # by time, then sensor, stable (NaN times last)
+            g, t, sensors = group.take(order), t[order], sensors[order]
     said = ground_said(g)
     velocity = {"ground_speed_kt", "heading_deg"} <= set(g.columns)
     plane, near, run = filter_columns(

@@ -325,11 +325,16 @@ def test_each_output_time_names_the_sensors_that_updated_it():
 
 
 def test_the_filter_order_is_time_then_sensor_whatever_order_the_rows_come_in():
-    """Reports in time order are taken as they are; ties in time go by sensor name, and rows in any other
-    order are sorted so: two ground stations relaying the same times, given shuffled, track as given in
-    order (every table the same, the rows' order written out by hand)."""
-    from msdc.pipeline.track.tracker import in_report_order
+    """Reports in time order are taken as they are; ties in time go by the sensor's rank (a categorical's
+    category order, else its name), and rows in any other order are sorted so: two ground stations
+    relaying the same times, given shuffled, track as given in order (every table the same, the rows'
+    order written out by hand)."""
+    from msdc.pipeline.track.tracker import in_report_order, sensor_rank
 
+    names = pd.Series(["021:0/2", "021:0/1", None, "021:0/1"])
+    np.testing.assert_array_equal(sensor_rank(names), [1, 0, 2, 0])  # alphabetical, a missing one last
+    reversed_order = pd.Series(pd.Categorical(names, categories=["021:0/2", "021:0/1"]))
+    np.testing.assert_array_equal(sensor_rank(reversed_order), [0, 1, 2, 1])  # the categories' order
     assert in_report_order(np.array([0.0, 1.0, 2.0]), np.array(["b", "a", "c"]))  # times increasing
     assert in_report_order(np.array([0.0, 1.0, 1.0]), np.array(["z", "a", "b"]))  # a tie in name order
     assert not in_report_order(np.array([0.0, 1.0, 1.0]), np.array(["a", "b", "a"]))  # a tie out of order
