@@ -31,10 +31,21 @@ def pytest_configure(config) -> None:
     config._msdc_prewarm = proc
 
 
+# the groups of tests pinned to one worker that are long units of work (15-30 s), run first: one that
+# starts last leaves the other worker idle at the end (the wheel group, collected last, did). Not the short
+# groups (a module's fixtures made once), nor those whose first test compiles the tracker's kernels: at the
+# start they compiled them beside tests/prewarm.py (the track group's first setup took 23 s so)
+LONG_GROUPS = ("dask", "wheel", "print_workbooks", "ingest")
+
+
 def pytest_collection_modifyitems(config, items) -> None:
-    """The tests pinned to one worker (xdist_group) first: each group is one long unit of work, and a group
-    that starts last leaves the other worker idle at the end (the wheel group, collected last, did)."""
-    items.sort(key=lambda item: item.get_closest_marker("xdist_group") is None)  # stable: order kept
+    """The long groups' tests first (LONG_GROUPS), the others in their order."""
+    def short(item) -> bool:
+        marker = item.get_closest_marker("xdist_group")
+        name = (marker.kwargs.get("name") or (marker.args[0] if marker.args else None)) if marker else None
+        return name not in LONG_GROUPS
+
+    items.sort(key=short)  # stable: order kept
 
 
 def pytest_unconfigure(config) -> None:
