@@ -82,6 +82,14 @@ def _kernels_compiled() -> None:
 
 
 @pytest.fixture(scope="session")
+def every_kernel_compiled() -> None:
+    """Wait for tests/prewarm.py's "all" (every command's kernels compiled): a module fixture running a whole
+    tracking command early in the run would otherwise compile the same kernels beside it (on a fresh
+    checkout, the track module's fixture took 23 s so, 2 s after the prewarm)."""
+    _wait_for_prewarm("all")
+
+
+@pytest.fixture(scope="session")
 def msdc_wheel(tmp_path_factory) -> Path:
     """msdc's wheel, built from a copy of the checkout as pip builds it for an install.
 

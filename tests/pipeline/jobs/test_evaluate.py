@@ -73,7 +73,7 @@ def _options(folder: Path, **kw) -> EvaluateOptions:
 
 
 @pytest.fixture(scope="module")
-def evaluated(recording):
+def evaluated(recording, every_kernel_compiled):
     sim, folder = recording
     return sim, evaluate_job(_options(folder))
 

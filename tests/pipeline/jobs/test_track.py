@@ -95,7 +95,7 @@ def test_cli_unknown_callsign_names_the_closest(tmp_path, capsys):
 
 
 @pytest.fixture(scope="module")
-def mas72(tmp_path_factory):
+def mas72(tmp_path_factory, every_kernel_compiled):
     d = tmp_path_factory.mktemp("track")
     assert main(["track", *BASE, "--callsign", "mas 72", "-o", str(d / "t.parquet"), "--json",
                  str(d / "t.json"), "--figures", str(d / "figs")]) == 0
