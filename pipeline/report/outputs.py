@@ -45,8 +45,12 @@ class Background:
                 message = pipe.read()
         finally:  # closed, even when interrupted: cancel() must not close it again
             self._read = -1
-        _, status = os.waitpid(self._pid, 0)
-        self._pid = 0
+        pid, self._pid = self._pid, 0  # reaped below: cancel() must not wait for it again
+        try:
+            _, status = os.waitpid(pid, 0)
+        except BaseException:  # a signal's exception before the child was reaped: cancel() reaps it
+            self._pid = pid
+            raise
         try:
             sent = pickle.loads(message) if message else None
         except Exception:  # noqa: BLE001 - cut short: the child died while sending
@@ -180,10 +184,12 @@ def _run_and_send(fn: Callable[..., object], args: tuple, fd: int) -> int:
 
 
 def _stop(pid: int) -> None:
-    """Kill a child and reap it."""
+    """Kill a child and reap it; one reaped already (a signal's exception can land between a wait's reaping
+    and its bookkeeping) is left as it is, so that the signal, not ECHILD, ends the run."""
     with contextlib.suppress(ProcessLookupError):
         os.kill(pid, signal.SIGKILL)
-    os.waitpid(pid, 0)
+    with contextlib.suppress(ChildProcessError):
+        os.waitpid(pid, 0)
 
 
 def _received(data: int, size: int) -> tuple:

@@ -161,6 +161,28 @@ def test_cancel_after_an_interrupted_wait_closes_nothing_twice(tmp_path, monkeyp
     assert not (tmp_path / "late.txt").exists()
 
 
+@forking
+def test_a_signal_landing_once_the_child_is_reaped_is_not_turned_into_an_error(tmp_path, monkeypatch):
+    """SIGTERM's exception raised just after wait() reaped the child (the handler runs between two
+    statements): cancel() then finds no child to reap, and the signal, not ECHILD ("No child processes",
+    seen once in a signalled correlate run), is what the run ends with."""
+    job = Background(_write, tmp_path / "done.txt", "x")
+    child, reap = job._pid, os.waitpid
+
+    def reaped_then_signalled(pid, options):
+        reap(pid, options)
+        raise KeyboardInterrupt  # as the signal's handler would, once waitpid has returned
+
+    with monkeypatch.context() as m:
+        m.setattr(os, "waitpid", reaped_then_signalled)
+        with pytest.raises(KeyboardInterrupt):
+            job.wait()
+    job.cancel()  # the child is gone: nothing to reap, and no ChildProcessError
+    assert (tmp_path / "done.txt").read_text() == "x"
+    with pytest.raises(ChildProcessError):  # what cancel() met before: the child reaped already
+        os.waitpid(child, 0)
+
+
 class _Interrupting:
     """A pipe reader interrupted (Ctrl-C) while waiting; closes the descriptor as a real one would."""
 
