@@ -431,8 +431,7 @@ def filter_reports(group: pd.DataFrame, epoch: pd.Timestamp, config: TrackerConf
     t = (group["time"] - epoch).dt.total_seconds().to_numpy(float)
     sensors = group["sensor_id"].to_numpy(str)
     g = group
-    diff = np.diff(t)
-    if not (diff > 0.0).all():  # times all increasing (nearly always): in order already
+    if not (np.diff(t) > 0.0).all():  # times all increasing (nearly always): in order, no rank needed
         rank = sensor_rank(group["sensor_id"])
         if not in_report_order(t, rank):
             order = np.lexsort((rank, t))  # by time, then sensor, stable (NaN times last)
