@@ -22,6 +22,7 @@ Rows without a finite position or covariance are counted (`invalid`) and skipped
 
 from __future__ import annotations
 
+from collections.abc import Iterator
 from dataclasses import dataclass, field, replace
 
 import numpy as np
@@ -171,17 +172,16 @@ def track(measurements: pd.DataFrame, *, step_s: float = 1.0, max_coast_s: float
         return empty
     epoch = frame["time"].min().floor("D") if epoch is None else epoch
     tracks, sensors, aircraft, rejected, finals, runs = [], [], [], [], {}, {}
-    groups = frame.groupby("aircraft_id", sort=True, observed=True)
     def one(item: tuple) -> tuple:  # the filter run travels back (a cluster's worker) only when kept
         out = _track_one(str(item[0]), item[1], epoch, config, args, names, step_s, smooth, smoother, columns)
         return item[0], (out if keep_states else replace(out, plane=None, run=None))
 
-    outs = map_ordered(one, groups, distributable=True, label=aircraft_label)
+    outs = map_ordered(one, per_aircraft(frame, epoch), distributable=True, label=aircraft_label)
     for aircraft_id, out in outs:
         tracks.append(out.tracks)
         sensors.append(out.sensors)
         aircraft.append(out.aircraft)
-        rejected.append(out.rejected)
+        rejected.append((str(aircraft_id), out.rejected))
         finals[str(aircraft_id)] = out.final
         if keep_states:
             runs[str(aircraft_id)] = (out.plane, out.run, epoch)
@@ -192,8 +192,8 @@ def track(measurements: pd.DataFrame, *, step_s: float = 1.0, max_coast_s: float
     for c in ("invalid", "out_of_range"):
         aircraft_df.insert(aircraft_df.columns.get_loc("gated") + 1, c,
                            aircraft_df["aircraft_id"].map(counts[c]).astype(int))
-    return TrackResult(_concat_by_column(tracks), sensors_df, aircraft_df,
-                       pd.concat(rejected, ignore_index=True), parameters, finals, runs, epoch)
+    return TrackResult(_concat_by_column(tracks), sensors_df, aircraft_df, _rejected_table(frame, rejected),
+                       parameters, finals, runs, epoch)
 
 
 SENSOR_COUNTS = ("reports", "updates", "gated", "segments_started", "invalid", "out_of_range")
@@ -217,11 +217,74 @@ def _identified(measurements: pd.DataFrame) -> tuple[pd.DataFrame, dict[str, int
 
 def aircraft_label(item: tuple) -> str:
     """An aircraft's task named for progress and failure messages: its identity and first report's place."""
-    aircraft_id, group = item
-    where = ""
-    if len(group) and "file" in group and "offset" in group:
-        where = f" (from {group['file'].iloc[0]} offset {group['offset'].iloc[0]})"
+    aircraft_id, reports = item
+    where = f" (from {reports.first_place[0]} offset {reports.first_place[1]})" if reports.first_place else ""
     return f"aircraft {aircraft_id}{where}"
+
+
+@dataclass
+class AircraftReports:
+    """One aircraft's usable reports as arrays, in the frame's order (what its task reads and what is
+    shipped to a cluster's worker): their rows in the usable frame, seconds since the epoch, sensor and
+    kind names, the filter's inputs (``track``'s schema; the optional ones None when absent), the sensors'
+    `sensor_rank` where some of the frame's times repeat, and the first report's file and offset."""
+
+    rows: np.ndarray
+    t: np.ndarray
+    sensors: np.ndarray
+    kinds: np.ndarray
+    columns: dict[str, np.ndarray]
+    said: np.ndarray | None
+    rank: np.ndarray | None
+    first_place: tuple | None
+
+    def take(self, order: np.ndarray) -> AircraftReports:
+        """The reports in ``order`` (positions, or a mask)."""
+        return AircraftReports(self.rows[order], self.t[order], self.sensors[order], self.kinds[order],
+                               {c: v[order] for c, v in self.columns.items()}, _part(self.said, order),
+                               _part(self.rank, order), self.first_place)
+
+
+def _part(values: np.ndarray | None, which) -> np.ndarray | None:
+    """values[which], None for None."""
+    return None if values is None else values[which]
+
+
+def per_aircraft(frame: pd.DataFrame, epoch: pd.Timestamp) -> Iterator[tuple]:
+    """(aircraft_id, AircraftReports) per aircraft, in the order of a sorted groupby by aircraft_id, each
+    aircraft's reports in the frame's order: the frame's columns converted once, not per aircraft."""
+    if frame.empty:
+        return
+    codes = frame.groupby("aircraft_id", sort=True, observed=True).ngroup().to_numpy(np.int64)
+    order = np.argsort(codes, kind="stable")
+    bounds = np.flatnonzero(np.diff(codes[order])) + 1
+    starts, ends = np.r_[0, bounds], np.r_[bounds, len(order)]
+    t = (frame["time"] - epoch).dt.total_seconds().to_numpy(float)[order]
+    sensors = frame["sensor_id"].to_numpy(str)[order]
+    kinds = frame["sensor_kind"].to_numpy(str)[order]
+    names = ["latitude", "longitude", "cov_ee_m2", "cov_en_m2", "cov_nn_m2", "flight_level"]
+    if {"ground_speed_kt", "heading_deg"} <= set(frame.columns):
+        names += ["ground_speed_kt", "heading_deg"]
+    columns = {c: frame[c].to_numpy(float)[order] for c in names}
+    if "heading_deg" in columns and "nucr_nacv" in frame.columns:
+        columns["nucr_nacv"] = frame["nucr_nacv"].to_numpy(float, na_value=np.nan)[order]
+    said = _part(ground_said(frame), order)
+    rank = None
+    inside = np.ones(max(len(t) - 1, 0), bool)  # the steps between two rows of one aircraft
+    inside[bounds - 1] = False
+    if not (np.diff(t)[inside] > 0.0).all():  # times repeat (or are out of order) somewhere: ties need it
+        rank = sensor_rank(frame["sensor_id"])[order]
+    ids = frame["aircraft_id"].to_numpy(object)[order[starts]]
+    places = [None] * len(starts)
+    if "file" in frame.columns and "offset" in frame.columns:
+        first = order[starts]
+        places = list(zip(frame["file"].iloc[first].tolist(), frame["offset"].iloc[first].tolist(),
+                          strict=True))
+    for k, (a, b) in enumerate(zip(starts, ends, strict=True)):
+        part = slice(a, b)
+        yield ids[k], AircraftReports(order[part], t[part], sensors[part], kinds[part],
+                                      {c: v[part] for c, v in columns.items()}, _part(said, part),
+                                      _part(rank, part), places[k])
 
 
 def usable_rows(frame: pd.DataFrame) -> np.ndarray:
@@ -391,7 +454,7 @@ class FilteredReports:
     """One aircraft's reports as the filter saw them: the rows kept (sorted by time, then sensor), their
     seconds since the epoch, the plane, the filter's run over them, and per sensor the rows out of range."""
 
-    rows: pd.DataFrame
+    rows: np.ndarray  # the reports' rows in the usable frame
     t: np.ndarray
     plane: Plane
     run: PlaneRun
@@ -425,32 +488,25 @@ def in_report_order(t: np.ndarray, rank: np.ndarray) -> bool:
     return bool((rank[:-1][tie] <= rank[1:][tie]).all())
 
 
-def filter_reports(group: pd.DataFrame, epoch: pd.Timestamp, config: TrackerConfig) -> FilteredReports:
+def filter_reports(reports: AircraftReports, config: TrackerConfig) -> FilteredReports:
     """Run the IMM forward over one aircraft's reports (finite positions and covariances; ``track``'s
-    schema), in the plane around their median, counting seconds from ``epoch``."""
-    t = (group["time"] - epoch).dt.total_seconds().to_numpy(float)
-    sensors = group["sensor_id"].to_numpy(str)
-    g = group
-    if not (np.diff(t) > 0.0).all():  # times all increasing (nearly always): in order, no rank needed
-        rank = sensor_rank(group["sensor_id"])
-        if not in_report_order(t, rank):
-            order = np.lexsort((rank, t))  # by time, then sensor, stable (NaN times last)
-            g, t, sensors = group.take(order), t[order], sensors[order]
-    said = ground_said(g)
-    velocity = {"ground_speed_kt", "heading_deg"} <= set(g.columns)
+    schema, as `per_aircraft` gives them), in the plane around their median."""
+    r = reports
+    if not (np.diff(r.t) > 0.0).all():  # times all increasing (nearly always): in order, no rank needed
+        if not in_report_order(r.t, r.rank):
+            r = r.take(np.lexsort((r.rank, r.t)))  # by time, then sensor, stable (NaN times last)
+    c = r.columns
+    velocity = "heading_deg" in c
     plane, near, run = filter_columns(
-        config, t, *(g[c].to_numpy(float) for c in ("latitude", "longitude", "cov_ee_m2", "cov_en_m2",
-                                                     "cov_nn_m2", "flight_level")),
-        ground_speed_kt=g["ground_speed_kt"].to_numpy(float) if velocity else None,
-        heading_deg=g["heading_deg"].to_numpy(float) if velocity else None,
-        nucr_nacv=(g["nucr_nacv"].to_numpy(float, na_value=np.nan) if velocity and "nucr_nacv" in g.columns
-                   else None),
-        on_ground=said)
+        config, r.t, *(c[n] for n in ("latitude", "longitude", "cov_ee_m2", "cov_en_m2", "cov_nn_m2",
+                                       "flight_level")),
+        ground_speed_kt=c["ground_speed_kt"] if velocity else None,
+        heading_deg=c["heading_deg"] if velocity else None, nucr_nacv=c.get("nucr_nacv"), on_ground=r.said)
     if near.all():  # every report within range of the plane (nearly always): nothing to drop or count
-        return FilteredReports(g, t, plane, run, pd.Series(dtype=np.int64), sensors, said)
-    far = g.loc[~near, "sensor_id"].value_counts()
-    return FilteredReports(g[near], t[near], plane, run, far, sensors[near],
-                           None if said is None else said[near])
+        return FilteredReports(r.rows, r.t, plane, run, pd.Series(dtype=np.int64), r.sensors, r.said)
+    far = pd.Series(r.sensors[~near]).value_counts()
+    return FilteredReports(r.rows[near], r.t[near], plane, run, far, r.sensors[near],
+                           None if r.said is None else r.said[near])
 
 
 def ground_said(reports: pd.DataFrame) -> np.ndarray | None:
@@ -509,7 +565,7 @@ class AircraftTrack:
     tracks: pd.DataFrame
     sensors: pd.DataFrame
     aircraft: dict
-    rejected: pd.DataFrame
+    rejected: tuple[np.ndarray, np.ndarray]  # the gated reports' rows in the usable frame, their NIS
     final: ImmState
     plane: Plane | None
     run: PlaneRun | None
@@ -537,21 +593,21 @@ class SegmentSpans:
     end: np.ndarray
 
 
-def _track_one(aircraft_id: str, group: pd.DataFrame, epoch: pd.Timestamp, config: TrackerConfig, args: dict,
-               names: list[str], step_s: float, smooth: bool, smoother: str = "rts",
+def _track_one(aircraft_id: str, reports: AircraftReports, epoch: pd.Timestamp, config: TrackerConfig,
+               args: dict, names: list[str], step_s: float, smooth: bool, smoother: str = "rts",
                columns: tuple[str, ...] | None = None) -> AircraftTrack:
     """Track one aircraft (``track``'s steps): filter its reports, estimate at its output times, count;
     columns: only these of its tracks table."""
-    filtered = filter_reports(group, epoch, config)
+    filtered = filter_reports(reports, config)
     updates = _updates(filtered)
     spans = _segment_spans(updates, config.max_coast_s)
     qt = _output_times(updates, spans, step_s)
     est = estimate(filtered.run, qt, smooth=smooth, smoother=smoother)
     return AircraftTrack(
         tracks=_track_table(aircraft_id, filtered, updates, qt, est, epoch, args, names, smooth, columns),
-        sensors=_sensor_table(aircraft_id, group, filtered),
+        sensors=_sensor_table(aircraft_id, reports, filtered),
         aircraft=_aircraft_row(aircraft_id, filtered, updates, spans, epoch),
-        rejected=_rejected(aircraft_id, filtered),
+        rejected=_rejected(filtered),
         final=_final_state(aircraft_id, filtered, updates, epoch, config),
         plane=filtered.plane, run=filtered.run)
 
@@ -653,12 +709,12 @@ def _update_sources(qt: np.ndarray, is_update: np.ndarray, updates: Updates) -> 
     return sources
 
 
-def _sensor_table(aircraft_id: str, group: pd.DataFrame, filtered: FilteredReports) -> pd.DataFrame:
+def _sensor_table(aircraft_id: str, reports: AircraftReports, filtered: FilteredReports) -> pd.DataFrame:
     """Per sensor of the aircraft's usable reports: reports, updates, gated, segments started, NIS mean
     and reports out of range."""
     run, far = filtered.run, filtered.far
     status, accepted = run.status, run.accepted
-    all_sensors = group["sensor_id"].to_numpy(str)
+    all_sensors = reports.sensors
     sids, first = np.unique(all_sensors, return_index=True)
     at = np.searchsorted(sids, filtered.sensors)  # each usable report's sensor
     updated = status == STATUS_UPDATED
@@ -674,7 +730,7 @@ def _sensor_table(aircraft_id: str, group: pd.DataFrame, filtered: FilteredRepor
             nis[k] = float(run.nis[mine].mean())
     return pd.DataFrame({
         "aircraft_id": pd.array([aircraft_id] * len(sids), dtype="str"), "sensor_id": list(sids),
-        "sensor_kind": list(group["sensor_kind"].to_numpy(str)[first]),
+        "sensor_kind": list(reports.kinds[first]),
         "reports": np.bincount(at, minlength=len(sids)).astype(np.int64) + n_far,
         "updates": per_sensor(accepted),
         "gated": per_sensor(~accepted), "segments_started": per_sensor(status == STATUS_STARTED),
@@ -694,13 +750,21 @@ def _aircraft_row(aircraft_id: str, filtered: FilteredReports, updates: Updates,
             "update_interval_s": interval_s}
 
 
-def _rejected(aircraft_id: str, filtered: FilteredReports) -> pd.DataFrame:
-    """The reports the gate rejected, with their NIS."""
+def _rejected(filtered: FilteredReports) -> tuple[np.ndarray, np.ndarray]:
+    """The reports the gate rejected: their rows in the usable frame and their NIS."""
     gated = ~filtered.run.accepted
-    rows = filtered.rows
-    return pd.DataFrame({"aircraft_id": pd.array([aircraft_id] * int(gated.sum()), dtype="str"),
-                         **{c: rows[c].array[gated] for c in ("time", "sensor_id", "latitude", "longitude")},
-                         "nis": filtered.run.nis[gated]})
+    return filtered.rows[gated], filtered.run.nis[gated]
+
+
+def _rejected_table(frame: pd.DataFrame, rejected: list[tuple[str, tuple[np.ndarray, np.ndarray]]]
+                    ) -> pd.DataFrame:
+    """Every aircraft's gated reports (`_rejected`, with its aircraft_id), as one table from the frame."""
+    rows = np.concatenate([r for _, (r, _) in rejected]) if rejected else np.zeros(0, np.int64)
+    ids = [aircraft_id for aircraft_id, (r, _) in rejected for _ in range(len(r))]
+    return pd.DataFrame({"aircraft_id": pd.array(ids, dtype="str"),
+                         **{c: frame[c].array.take(rows) for c in ("time", "sensor_id", "latitude",
+                                                                    "longitude")},
+                         "nis": np.concatenate([n for _, (_, n) in rejected]) if rejected else np.zeros(0)})
 
 
 def _final_state(aircraft_id: str, filtered: FilteredReports, updates: Updates, epoch: pd.Timestamp,
