@@ -353,3 +353,32 @@ def test_the_filter_order_is_time_then_sensor_whatever_order_the_rows_come_in():
     for name in ("tracks", "sensors", "aircraft", "rejected"):
         pd.testing.assert_frame_equal(getattr(a, name), getattr(b, name))
     np.testing.assert_array_equal(a.runs["A1"][1].x, b.runs["A1"][1].x)
+
+
+def test_each_aircraft_task_gets_its_reports_in_the_frames_order_and_is_named_by_the_first():
+    """per_aircraft, written out on five rows: aircraft in sorted order (a categorical's category order),
+    each one's rows in the frame's order, seconds from the epoch, and the task's label naming the first
+    report's file and offset; the rank is made only where times repeat within an aircraft."""
+    from msdc.pipeline.track.tracker import aircraft_label, per_aircraft
+
+    t0 = pd.Timestamp("2024-05-10T00:00:00Z")
+    frame = pd.DataFrame({
+        "time": t0 + pd.to_timedelta([5.0, 1.0, 2.0, 9.0, 3.0], unit="s"),
+        "sensor_id": ["s2", "s1", "s1", "s2", "s1"], "sensor_kind": ["adsb"] * 5,
+        "aircraft_id": ["B", "A", "B", "A", "B"], "latitude": [1.0, 2.0, 3.0, 4.0, 5.0],
+        "longitude": 0.0, "flight_level": np.nan, "cov_ee_m2": 1.0, "cov_en_m2": 0.0, "cov_nn_m2": 1.0,
+        "file": ["f.ast"] * 5, "offset": [50, 10, 20, 90, 30]})
+    items = list(per_aircraft(frame, t0))
+    assert [k for k, _ in items] == ["A", "B"]
+    a, b = items[0][1], items[1][1]
+    np.testing.assert_array_equal(a.rows, [1, 3])
+    np.testing.assert_array_equal(b.rows, [0, 2, 4])  # B's rows as the frame holds them: 5 s, 2 s, 3 s
+    np.testing.assert_array_equal(b.t, [5.0, 2.0, 3.0])
+    np.testing.assert_array_equal(b.columns["latitude"], [1.0, 3.0, 5.0])
+    assert list(b.sensors) == ["s2", "s1", "s1"] and b.said is None and "heading_deg" not in b.columns
+    assert b.rank is not None  # B's times go back (5 s, then 2 s): its filter sorts them
+    assert aircraft_label(items[1]) == "aircraft B (from f.ast offset 50)"
+    in_order = frame.iloc[[1, 3, 2, 4]].assign(time=t0 + pd.to_timedelta([1.0, 9.0, 2.0, 3.0], unit="s"))
+    assert all(r.rank is None for _, r in per_aircraft(in_order, t0))  # every aircraft's times increase
+    cats = frame.astype({"aircraft_id": pd.CategoricalDtype(["B", "A"])})
+    assert [k for k, _ in per_aircraft(cats, t0)] == ["B", "A"]
