@@ -180,7 +180,7 @@ def reconstruct(reports: pd.DataFrame, epoch: pd.Timestamp, *, step_s: float = 1
     if reports.empty:
         return _empty()
     tr = track(reports, step_s=step_s, max_coast_s=max_coast_s, smooth=True, epoch=epoch,
-               columns=TRACK_INPUTS).tracks  # what the reference rows are made of, kept in each task
+               columns=TRACK_INPUTS, summaries=False).tracks  # what the reference rows are made of
     if tr.empty:
         return _empty()
     tr = tr.assign(built_by=_built_by(tr))

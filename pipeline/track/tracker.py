@@ -132,8 +132,8 @@ def _check(measurements: pd.DataFrame) -> pd.DataFrame:
 def track(measurements: pd.DataFrame, *, step_s: float = 1.0, max_coast_s: float = 60.0,
           tpm: str | None = None, smooth: bool = False, config: TrackerConfig | None = None,
           turn_rate_dps: float = 3.0, with_ca: bool = False, keep_states: bool = False,
-          smoother: str = "rts", epoch: pd.Timestamp | None = None, columns: tuple[str, ...] | None = None
-          ) -> TrackResult:
+          smoother: str = "rts", epoch: pd.Timestamp | None = None, columns: tuple[str, ...] | None = None,
+          summaries: bool = True) -> TrackResult:
     """Track every aircraft: estimates on a regular grid of step_s (aligned to whole multiples of step_s
     since UTC midnight) and at every accepted report, coasted up to max_coast_s after the last update,
     smoothed backwards when smooth. tpm: 'dynamic[:A,B]', 'fixed:P' or 'expm:TAU[,TAU2]' (default:
@@ -143,7 +143,8 @@ def track(measurements: pd.DataFrame, *, step_s: float = 1.0, max_coast_s: float
     seconds from (default: that of the earliest usable report; `TrackResult.epoch`), so that a subset of
     the aircraft tracked again gives the same numbers. columns: only these columns of the tracks table are
     kept, in each aircraft's task (what a caller reads: less to send back from a cluster's worker and to
-    hold)."""
+    hold). summaries False: the tracks alone, the sensors, aircraft and gated-report tables and the final
+    states left empty (for a caller that reads only the tracks, as the evaluation's reference)."""
     measurements = _check(measurements)
     if smoother not in SMOOTHERS:
         raise ValueError(f"smoother {smoother!r}: expected one of {', '.join(SMOOTHERS)}")
@@ -173,7 +174,8 @@ def track(measurements: pd.DataFrame, *, step_s: float = 1.0, max_coast_s: float
     epoch = frame["time"].min().floor("D") if epoch is None else epoch
     tracks, sensors, aircraft, rejected, finals, runs = [], [], [], [], {}, {}
     def one(item: tuple) -> tuple:  # the filter run travels back (a cluster's worker) only when kept
-        out = _track_one(str(item[0]), item[1], epoch, config, args, names, step_s, smooth, smoother, columns)
+        out = _track_one(str(item[0]), item[1], epoch, config, args, names, step_s, smooth, smoother, columns,
+                         summaries)
         return item[0], (out if keep_states else replace(out, plane=None, run=None))
 
     outs = map_ordered(one, per_aircraft(frame, epoch), distributable=True, label=aircraft_label)
@@ -185,6 +187,9 @@ def track(measurements: pd.DataFrame, *, step_s: float = 1.0, max_coast_s: float
         finals[str(aircraft_id)] = out.final
         if keep_states:
             runs[str(aircraft_id)] = (out.plane, out.run, epoch)
+    if not summaries:
+        return TrackResult(_concat_by_column(tracks), pd.DataFrame(), pd.DataFrame(), pd.DataFrame(),
+                           parameters, {}, runs, epoch)
     sensors_df = _with_invalid(pd.concat(sensors, ignore_index=True), invalid)
     aircraft_df = pd.DataFrame(aircraft)
     counts = sensors_df.groupby("aircraft_id", sort=False)[["reports", "invalid", "out_of_range"]].sum()
@@ -563,10 +568,10 @@ class AircraftTrack:
     IMM posterior after its last update, and its plane and filter run (kept with keep_states)."""
 
     tracks: pd.DataFrame
-    sensors: pd.DataFrame
-    aircraft: dict
-    rejected: tuple[np.ndarray, np.ndarray]  # the gated reports' rows in the usable frame, their NIS
-    final: ImmState
+    sensors: pd.DataFrame | None  # None (and the three after it) when only the tracks are asked for
+    aircraft: dict | None
+    rejected: tuple[np.ndarray, np.ndarray] | None  # the gated reports' rows in the usable frame, their NIS
+    final: ImmState | None
     plane: Plane | None
     run: PlaneRun | None
 
@@ -595,16 +600,19 @@ class SegmentSpans:
 
 def _track_one(aircraft_id: str, reports: AircraftReports, epoch: pd.Timestamp, config: TrackerConfig,
                args: dict, names: list[str], step_s: float, smooth: bool, smoother: str = "rts",
-               columns: tuple[str, ...] | None = None) -> AircraftTrack:
+               columns: tuple[str, ...] | None = None, summaries: bool = True) -> AircraftTrack:
     """Track one aircraft (``track``'s steps): filter its reports, estimate at its output times, count;
-    columns: only these of its tracks table."""
+    columns: only these of its tracks table; summaries False: the tracks alone."""
     filtered = filter_reports(reports, config)
     updates = _updates(filtered)
     spans = _segment_spans(updates, config.max_coast_s)
     qt = _output_times(updates, spans, step_s)
     est = estimate(filtered.run, qt, smooth=smooth, smoother=smoother)
+    tracks = _track_table(aircraft_id, filtered, updates, qt, est, epoch, args, names, smooth, columns)
+    if not summaries:
+        return AircraftTrack(tracks, None, None, None, None, filtered.plane, filtered.run)
     return AircraftTrack(
-        tracks=_track_table(aircraft_id, filtered, updates, qt, est, epoch, args, names, smooth, columns),
+        tracks=tracks,
         sensors=_sensor_table(aircraft_id, reports, filtered),
         aircraft=_aircraft_row(aircraft_id, filtered, updates, spans, epoch),
         rejected=_rejected(filtered),

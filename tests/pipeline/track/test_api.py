@@ -382,3 +382,16 @@ def test_each_aircraft_task_gets_its_reports_in_the_frames_order_and_is_named_by
     assert all(r.rank is None for _, r in per_aircraft(in_order, t0))  # every aircraft's times increase
     cats = frame.astype({"aircraft_id": pd.CategoricalDtype(["B", "A"])})
     assert [k for k, _ in per_aircraft(cats, t0)] == ["B", "A"]
+
+
+def test_the_tracks_alone_are_the_tracks_of_the_full_run():
+    """summaries=False (the evaluation's reference reads only the tracks): the same tracks table, the
+    other tables and the final states empty."""
+    rng = np.random.default_rng(11)
+    truth = fly((0, 0), 45.0, 220.0, [(90, 0, 0), (60, 3.0, 0)])
+    m = _adsb(truth, np.arange(0.0, 150.0, 1.0), rng)
+    full = track(m, smooth=True, columns=("aircraft_id", "time", "latitude", "sources"))
+    alone = track(m, smooth=True, columns=("aircraft_id", "time", "latitude", "sources"), summaries=False)
+    pd.testing.assert_frame_equal(alone.tracks, full.tracks)
+    assert len(full.sensors) == 1 and len(full.aircraft) == 1 and full.final_states
+    assert alone.sensors.empty and alone.aircraft.empty and alone.rejected.empty and not alone.final_states
