@@ -188,7 +188,7 @@ def track(measurements: pd.DataFrame, *, step_s: float = 1.0, max_coast_s: float
         if keep_states:
             runs[str(aircraft_id)] = (out.plane, out.run, epoch)
     if not summaries:
-        return TrackResult(_concat_by_column(tracks), pd.DataFrame(), pd.DataFrame(), pd.DataFrame(),
+        return TrackResult(_tracks_table(tracks, epoch), pd.DataFrame(), pd.DataFrame(), pd.DataFrame(),
                            parameters, {}, runs, epoch)
     sensors_df = _with_invalid(pd.concat(sensors, ignore_index=True), invalid)
     aircraft_df = pd.DataFrame(aircraft)
@@ -197,8 +197,8 @@ def track(measurements: pd.DataFrame, *, step_s: float = 1.0, max_coast_s: float
     for c in ("invalid", "out_of_range"):
         aircraft_df.insert(aircraft_df.columns.get_loc("gated") + 1, c,
                            aircraft_df["aircraft_id"].map(counts[c]).astype(int))
-    return TrackResult(_concat_by_column(tracks), sensors_df, aircraft_df, _rejected_table(frame, rejected),
-                       parameters, finals, runs, epoch)
+    return TrackResult(_tracks_table(tracks, epoch), sensors_df, aircraft_df,
+                       _rejected_table(frame, rejected), parameters, finals, runs, epoch)
 
 
 SENSOR_COUNTS = ("reports", "updates", "gated", "segments_started", "invalid", "out_of_range")
@@ -346,16 +346,30 @@ def _parameters(config: TrackerConfig, step_s: float, smooth: bool, smoother: st
             "modes": [m.__dict__ for m in config.modes]}
 
 
-def _concat_by_column(frames: list[pd.DataFrame]) -> pd.DataFrame:
-    """pd.concat of the aircraft's tables (each one block per column), joined one column at a time and each
-    part's column released once joined, so the peak holds one extra column instead of a second copy of the
-    whole table; one table is returned as it is."""
-    if len(frames) == 1:
-        return frames[0]
-    names = list(frames[0].columns)
-    parts = [{name: f[name] for name in names} for f in frames]  # the columns' blocks, without the frames
-    frames.clear()
-    return concat_columns(parts)
+def _tracks_table(parts: list[tuple[int, dict]], epoch: pd.Timestamp) -> pd.DataFrame:
+    """The aircraft's rows (`_track_table`'s row counts and arrays) joined into ``track``'s table, a column
+    at a time and each aircraft's arrays let go once joined (the parts and the whole are not held at once):
+    the names repeated and the times made from the epoch once for all, the text and boolean columns typed
+    once, not per aircraft."""
+    lengths = [n for n, _ in parts]
+    arrays = [a for _, a in parts]
+    parts.clear()
+    columns = {}
+    for name in list(arrays[0]):
+        pieces = [a.pop(name) for a in arrays]
+        if name == "aircraft_id":
+            columns[name] = pd.array(np.repeat(np.array(pieces, dtype=object), lengths), dtype="str")
+        elif name == "time":
+            columns[name] = epoch + pd.to_timedelta(np.concatenate(pieces), unit="s")
+        elif name == "on_ground":
+            columns[name] = pd.arrays.BooleanArray(np.concatenate([v for v, _ in pieces]),
+                                                   np.concatenate([m for _, m in pieces]))
+        elif name == "sources":
+            columns[name] = pd.array(np.concatenate(pieces), dtype="str")
+        else:
+            columns[name] = np.concatenate(pieces)
+        del pieces
+    return pd.DataFrame(columns, copy=False)
 
 
 def concat_columns(parts: list[dict[str, pd.Series]]) -> pd.DataFrame:
@@ -379,16 +393,17 @@ def _empty_tracks(names: list[str]) -> pd.DataFrame:
 
 
 def _ground_at(said: np.ndarray | None, accepted: np.ndarray, segment: np.ndarray,
-               gov: np.ndarray) -> pd.api.extensions.ExtensionArray:
+               gov: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Per output row, what the last accepted report of its segment (up to the row's governing report)
-    that said anything said about the surface: True (on the ground), False (airborne), <NA> (none said)."""
+    that said anything said about the surface: True (on the ground), False (airborne), <NA> (none said),
+    as a boolean array's values and mask."""
     if said is None:
         said = np.full(len(accepted), np.nan)
     known = accepted & np.isfinite(said)
     last = np.maximum.accumulate(np.where(known, np.arange(len(said)), -1)) if len(said) else np.zeros(0, int)
     ok = (last >= 0) & (segment[np.maximum(last, 0)] == segment)
     value = np.where(ok, said[np.maximum(last, 0)], np.nan)[gov]
-    return pd.arrays.BooleanArray(value == 1.0, ~np.isfinite(value))
+    return value == 1.0, ~np.isfinite(value)
 
 
 def _inv2(m: np.ndarray) -> np.ndarray:
@@ -415,13 +430,14 @@ def _ellipse(cov: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     return major, minor, orientation
 
 
-def _sources_by_time(times: np.ndarray, sensors: np.ndarray) -> pd.Series:
-    """Comma-joined distinct sensors per time (times sorted); single-sensor times without a Python join."""
+def _sources_by_time(times: np.ndarray, sensors: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The distinct times (times sorted) and at each the comma-joined distinct sensors; single-sensor times
+    without a Python join."""
     uniq, start, count = np.unique(times, return_index=True, return_counts=True)
     out = sensors[start].astype(object)
     for i in np.flatnonzero(count > 1):
         out[i] = ",".join(sorted(set(sensors[start[i]:start[i] + count[i]])))
-    return pd.Series(out, index=uniq)
+    return uniq, out
 
 
 def track_angle_rate(t: np.ndarray, track_deg: np.ndarray, segment: np.ndarray, window_s: float,
@@ -567,7 +583,7 @@ class AircraftTrack:
     """One aircraft's share of a TrackResult: its estimates, per-sensor counts, summary row, gated reports,
     IMM posterior after its last update, and its plane and filter run (kept with keep_states)."""
 
-    tracks: pd.DataFrame
+    tracks: tuple[int, dict]  # its rows of the tracks table: their count and columns (`_track_table`)
     sensors: pd.DataFrame | None  # None (and the three after it) when only the tracks are asked for
     aircraft: dict | None
     rejected: tuple[np.ndarray, np.ndarray] | None  # the gated reports' rows in the usable frame, their NIS
@@ -650,9 +666,11 @@ def _output_times(updates: Updates, spans: SegmentSpans, step_s: float) -> np.nd
 
 def _track_table(aircraft_id: str, filtered: FilteredReports, updates: Updates, qt: np.ndarray,
                  est: Estimates, epoch: pd.Timestamp, args: dict, names: list[str],
-                 smooth: bool, columns: tuple[str, ...] | None = None) -> pd.DataFrame:
-    """One aircraft's rows of ``track``'s table: the estimates at the output times qt, in local terms
-    (only ``columns``, in their order, when given)."""
+                 smooth: bool, columns: tuple[str, ...] | None = None) -> tuple[int, dict]:
+    """One aircraft's rows of ``track``'s table: their count and the columns as arrays (only ``columns``, in
+    their order, when given):
+    the estimates at the output times qt, in local terms. ``aircraft_id`` and ``time`` are made for every
+    aircraft at once (`_tracks_table`): here the aircraft's name and its times in seconds."""
     plane, segment, xc = filtered.plane, filtered.run.segment, est.x
     out_lat, out_lon = plane.inverse(xc[:, 0], xc[:, 3])
     v_loc, a_loc, pos = _local_motion(plane, est, out_lat, out_lon)
@@ -661,8 +679,7 @@ def _track_table(aircraft_id: str, filtered: FilteredReports, updates: Updates, 
     ccw = _ccw_turn_rate(est.mu, args, v_loc, a_loc, speed)
     is_update = est.age_s == 0.0
     out = {
-        "aircraft_id": aircraft_id, "segment": segment[est.row],
-        "time": epoch + pd.to_timedelta(qt, unit="s"), "time_of_day": qt,
+        "aircraft_id": aircraft_id, "segment": segment[est.row], "time": qt, "time_of_day": qt,
         "latitude": out_lat, "longitude": out_lon, "flight_level": est.zv[:, 0],
         "vertical_rate_fpm": est.zv[:, 1] * FT_PER_FL * 60.0,
         "speed_kt": speed / M_PER_S_PER_KT,
@@ -678,7 +695,7 @@ def _track_table(aircraft_id: str, filtered: FilteredReports, updates: Updates, 
                 "on_ground": _ground_at(filtered.ground, filtered.run.accepted, segment, est.row)})
     if columns is not None:
         out = {c: out[c] for c in columns}
-    return pd.DataFrame(out, copy=False)  # one block per column: `_concat_by_column` frees them one by one
+    return len(qt), out
 
 
 def _local_motion(plane: Plane, est: Estimates, lat: np.ndarray,
@@ -704,9 +721,8 @@ def _ccw_turn_rate(mu: np.ndarray, args: dict, v_loc: np.ndarray, a_loc: np.ndar
 
 def _update_sources(qt: np.ndarray, is_update: np.ndarray, updates: Updates) -> np.ndarray:
     """Per output time, the sensors whose updates it holds (comma-joined), "" for a coasted one."""
-    src = _sources_by_time(updates.t, updates.sensor)
+    times, names = _sources_by_time(updates.t, updates.sensor)
     sources = np.full(len(qt), "", dtype=object)
-    times, names = src.index.to_numpy(float), src.to_numpy(object)
     wanted = qt[is_update]
     at = np.searchsorted(times, wanted)
     found = at < len(times)
