@@ -59,16 +59,21 @@ def _empty() -> pd.DataFrame:
                                       else "boolean" if c == "on_ground" else float) for c in BUILT_COLUMNS})
 
 
-def _built_by(tracks: pd.DataFrame) -> pd.Series:
-    """Per track row, the sensors whose reports updated its segment, sorted and joined."""
-    aircraft, _ = pd.factorize(tracks["aircraft_id"].astype(str).to_numpy(object))
-    segment = tracks["segment"].to_numpy(np.int64)
-    group, groups = pd.factorize(aircraft.astype(np.int64) * (int(segment.max(initial=0)) + 1) + segment)
-    sensors: list[set[str]] = [set() for _ in groups]
-    for g, sources in set(zip(group.tolist(), tracks["sources"].astype(str).to_numpy(object), strict=True)):
-        sensors[g].update(p.strip() for p in sources.split(",") if p.strip())
+def _built_by(group: np.ndarray, n_groups: int, sources: np.ndarray) -> np.ndarray:
+    """Per track row, the sensors whose reports updated its segment (``group``: the row's segment among
+    ``n_groups``; ``sources``: the rows' comma-joined sensors), sorted and joined."""
+    sensors: list[set[str]] = [set() for _ in range(n_groups)]
+    for g, text in set(zip(group.tolist(), sources.tolist(), strict=True)):
+        sensors[g].update(p.strip() for p in text.split(",") if p.strip())
     joined = np.array([BUILT_BY_SEPARATOR.join(sorted(s)) for s in sensors] or [""], dtype=object)
-    return pd.Series(joined[group], index=tracks.index)
+    return joined[group]
+
+
+def _segments(aircraft: np.ndarray, segment: np.ndarray) -> tuple[np.ndarray, int]:
+    """Per track row, a number for its (aircraft, segment), and how many there are."""
+    codes, _ = pd.factorize(aircraft)
+    group, groups = pd.factorize(codes.astype(np.int64) * (int(segment.max(initial=0)) + 1) + segment)
+    return group, len(groups)
 
 
 def _latest_at(left_key: np.ndarray, left_t: np.ndarray, right_key: np.ndarray, right_t: np.ndarray
@@ -99,20 +104,17 @@ def _keyed(aircraft: pd.Series, time: pd.Series) -> tuple[np.ndarray, np.ndarray
     return (aircraft.astype(str).to_numpy(object), time.astype("datetime64[ns, UTC]").array.asi8)
 
 
-def _identity(reference: pd.DataFrame, reports: pd.DataFrame, established: bool = False) -> pd.DataFrame:
-    """The reference with each identity column taken from the reports that built it: per aircraft, the
-    latest value reported at or before the row's time (before the first, the first). With ``established``
-    (a sensor's own track judging that sensor's codes), only values the aircraft's previous report also
-    gave count: otherwise each report's own code, wrong or garbled, would be its reference and never false."""
-    out = reference.copy(deep=False)  # the identity columns added to a view, not to the caller's frame
-    left_key, left_t = _keyed(out["aircraft_id"], out["time"])  # per row: the rows' order is no matter
-    rep_key, rep_t = _keyed(reports["aircraft_id"], reports["time"])
-    # the ids as integer codes (one code per id, both sides): sorting and matching compare numbers, not texts
-    codes, _ = pd.factorize(np.concatenate([left_key, rep_key]))
-    left_key, rep_key = codes[:len(left_key)], codes[len(left_key):]
+def _identity(left_key: np.ndarray, left_t: np.ndarray, rep_key: np.ndarray, rep_t: np.ndarray,
+              reports: pd.DataFrame, established: bool = False) -> dict[str, np.ndarray]:
+    """Per reference row (its aircraft's code and time in ns), each identity column taken from the reports
+    that built it (their aircraft's codes, of the same numbering, and times): per aircraft, the latest value
+    reported at or before the row's time (before the first, the first). With ``established`` (a sensor's own
+    track judging that sensor's codes), only values the aircraft's previous report also gave count: otherwise
+    each report's own code, wrong or garbled, would be its reference and never false."""
+    out = {}
     for col in IDENTITY_COLUMNS:
         if col not in reports.columns:
-            out[col] = None
+            out[col] = np.full(len(left_key), None, object)
             continue
         given = reports[col].notna().to_numpy(bool)
         value = reports.loc[given, col].astype(str).to_numpy(object)
@@ -126,46 +128,49 @@ def _identity(reference: pd.DataFrame, reports: pd.DataFrame, established: bool 
             same[1:] = (key[1:] == key[:-1]) & (value[1:] == value[:-1])
             value, key, t = value[same], key[same], t[same]
         if not len(value):
-            out[col] = None
+            out[col] = np.full(len(left_key), None, object)
             continue
         at = _latest_at(left_key, left_t, key, t)
-        col_out = np.full(len(out), np.nan, object)
+        col_out = np.full(len(left_key), np.nan, object)
         col_out[at >= 0] = value[at[at >= 0]]
         out[col] = col_out
     return out
 
 
-def _level_between_updates(tracks: pd.DataFrame, updated: pd.Series) -> np.ndarray:
-    """The tracks' flight level with the rows between two updates of a segment interpolated linearly in time
-    between the levels filtered at those updates: the vertical filter is not smoothed, so between updates it
-    flies the last vertical rate on and jumps at the next update (a descent begun in an ADS-B gap left the
-    reference 350-1,650 ft above the aircraft in simulation)."""
-    level = tracks["flight_level"].to_numpy(float).copy()
-    t = tracks["time"].astype("datetime64[ns, UTC]").array.asi8.astype(float)
-    upd = updated.reindex(tracks.index).to_numpy(bool)
-    for rows in tracks.groupby(["aircraft_id", "segment"], sort=False).indices.values():
+def _level_between_updates(level: np.ndarray, t: np.ndarray, upd: np.ndarray, group: np.ndarray
+                           ) -> np.ndarray:
+    """The tracks' flight level with the rows between two updates of a segment (``group``: the rows'
+    segment) interpolated linearly in time between the levels filtered at those updates: the vertical
+    filter is not smoothed, so between updates it flies the last vertical rate on and jumps at the next
+    update (a descent begun in an ADS-B gap left the reference 350-1,650 ft above the aircraft in
+    simulation). ``t``: the rows' times (any unit), ``upd``: the rows a report updated."""
+    level = level.copy()
+    order = np.argsort(group, kind="stable")
+    bounds = np.flatnonzero(np.diff(group[order])) + 1
+    for rows in np.split(order, bounds) if len(order) else []:
         known = rows[upd[rows] & np.isfinite(level[rows])]
         if known.size < 2:
             continue
-        order = known[np.argsort(t[known], kind="stable")]
-        inside = rows[(t[rows] > t[order[0]]) & (t[rows] < t[order[-1]]) & ~upd[rows]]
-        level[inside] = np.interp(t[inside], t[order], level[order])
+        by_time = known[np.argsort(t[known], kind="stable")]
+        inside = rows[(t[rows] > t[by_time[0]]) & (t[rows] < t[by_time[-1]]) & ~upd[rows]]
+        level[inside] = np.interp(t[inside], t[by_time], level[by_time])
     return level
 
 
-def _on_ground(reference: pd.DataFrame, reports: pd.DataFrame) -> pd.Series:
-    """Per reference row, whether the aircraft is on the surface by its latest report at or before the row's
-    time (before the first, the first): the report's own say (GBS, STAT, a field monitor's RAB), else below
-    50 kt (quality.surface.on_surface, the rule of quality and conflicts)."""
+def _on_ground(key_ref: np.ndarray, t_ref: np.ndarray, key: np.ndarray, t: np.ndarray, reports: pd.DataFrame
+               ) -> pd.api.extensions.ExtensionArray:
+    """Per reference row (its aircraft's code and time in ns; the reports' of the same numbering), whether the
+    aircraft is on the surface by its latest report at or before the row's time (before the first, the first):
+    the report's own say (GBS, STAT, a field monitor's RAB), else below 50 kt (quality.surface.on_surface, the
+    rule of quality and conflicts)."""
     from msdc.pipeline.quality.surface import on_surface
 
-    key, t = _keyed(reports["aircraft_id"], reports["time"])
     ground = np.asarray(on_surface(reports), bool)
     order = np.lexsort((t, key))
-    at = _latest_at(*_keyed(reference["aircraft_id"], reference["time"]), key[order], t[order])
+    at = _latest_at(key_ref, t_ref, key[order], t[order])
     flag = pd.array(ground[order][np.maximum(at, 0)], dtype="boolean")
     flag[at < 0] = pd.NA
-    return pd.Series(flag, index=reference.index)
+    return flag
 
 
 def reconstruct(reports: pd.DataFrame, epoch: pd.Timestamp, *, step_s: float = 1.0,
@@ -183,27 +188,39 @@ def reconstruct(reports: pd.DataFrame, epoch: pd.Timestamp, *, step_s: float = 1
                columns=TRACK_INPUTS, summaries=False).tracks  # what the reference rows are made of
     if tr.empty:
         return _empty()
-    tr = tr.assign(built_by=_built_by(tr))
+    # per row as arrays, the texts made objects once: what follows is done for every aircraft at once
+    aircraft = tr["aircraft_id"].to_numpy(object)
+    sources = tr["sources"].to_numpy(object)
+    t_ns = tr["time"].astype("datetime64[ns, UTC]").array.asi8
+    group, n_groups = _segments(aircraft, tr["segment"].to_numpy(np.int64))
+    built_by = _built_by(group, n_groups, sources)
+    updated = sources != ""
     # a smoothed segment is supported between its first and last update; rows coasted beyond the last
     # update are a prediction, not a reconstruction
-    updated = tr["sources"].astype(str) != ""
-    t_upd = tr["time"].where(updated)
-    keys = [tr["aircraft_id"], tr["segment"]]
-    first, last = tr["time"].groupby(keys).transform("min"), t_upd.groupby(keys).transform("max")
-    tr = tr[(tr["time"] >= first) & (tr["time"] <= last)]
-    tr = tr.assign(flight_level=_level_between_updates(tr, updated))
-    tr = _identity(tr, reports, established=self_reference)
-    tr["on_ground"] = _on_ground(tr, reports)
+    first = np.full(n_groups, np.iinfo(np.int64).max)
+    last = np.full(n_groups, np.iinfo(np.int64).min)  # a segment without an update keeps no row
+    np.minimum.at(first, group, t_ns)
+    np.maximum.at(last, group[updated], t_ns[updated])
+    keep = (t_ns >= first[group]) & (t_ns <= last[group])
+    aircraft, t_ns, group, updated, built_by = (v[keep] for v in (aircraft, t_ns, group, updated, built_by))
+    level = _level_between_updates(tr["flight_level"].to_numpy(float)[keep], t_ns.astype(float), updated,
+                                   group)
+    # the ids as integer codes (one per id, both sides): sorting and matching compare numbers, not texts
+    rep_key, rep_t = _keyed(reports["aircraft_id"], reports["time"])
+    codes, _ = pd.factorize(np.concatenate([aircraft, rep_key]))
+    key, rep_key = codes[:len(aircraft)], codes[len(aircraft):]
+    identity = _identity(key, t_ns, rep_key, rep_t, reports, established=self_reference)
+    on_ground = _on_ground(key, t_ns, rep_key, rep_t, reports)
     out = pd.DataFrame({
-        "aircraft": tr["aircraft_id"].astype(str).to_numpy(object),
-        "t_s": (tr["time"] - epoch).dt.total_seconds().to_numpy(float),
-        "latitude": tr["latitude"].to_numpy(float), "longitude": tr["longitude"].to_numpy(float),
-        "altitude_ft": tr["flight_level"].to_numpy(float) * 100.0,
-        **{c: tr[c].to_numpy(object) for c in IDENTITY_COLUMNS},
-        "sigma_m": tr["sigma_major_m"].to_numpy(float), "built_by": tr["built_by"].to_numpy(object),
-        "self_reference": np.full(len(tr), self_reference),
-        "updated": (tr["sources"].astype(str) != "").to_numpy(bool),
-        "on_ground": tr["on_ground"].astype("boolean").to_numpy()})
+        "aircraft": aircraft,
+        "t_s": (tr["time"][keep] - epoch).dt.total_seconds().to_numpy(float),
+        "latitude": tr["latitude"].to_numpy(float)[keep], "longitude": tr["longitude"].to_numpy(float)[keep],
+        "altitude_ft": level * 100.0,
+        **identity,
+        "sigma_m": tr["sigma_major_m"].to_numpy(float)[keep], "built_by": built_by,
+        "self_reference": np.full(len(aircraft), self_reference),
+        "updated": updated,
+        "on_ground": on_ground.to_numpy()})
     del tr
     if in_order(out["aircraft"], out["t_s"].to_numpy(float)):
         return out  # as the tracker gives them, most often: the sort would copy every column for nothing

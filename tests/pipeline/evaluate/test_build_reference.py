@@ -303,11 +303,12 @@ def test_the_reference_level_between_updates_is_interpolated_not_predicted():
     hand: 240 at 0 s, 220 at 40 s, so 235 at 10 s), whatever the vertical filter predicted there."""
     from msdc.pipeline.evaluate.build_reference import _level_between_updates
 
-    t = pd.Timestamp("2019-03-01", tz="UTC") + pd.to_timedelta([0.0, 10.0, 20.0, 40.0, 41.0], unit="s")
-    tracks = pd.DataFrame({"aircraft_id": "A", "segment": 0, "time": t,
-                           "flight_level": [240.0, 239.0, 238.0, 220.0, 219.9]})
-    updated = pd.Series([True, False, False, True, True])
-    np.testing.assert_allclose(_level_between_updates(tracks, updated), [240.0, 235.0, 230.0, 220.0, 219.9])
+    t = np.array([0.0, 10.0, 20.0, 40.0, 41.0, 10.0, 20.0, 30.0])
+    level = np.array([240.0, 239.0, 238.0, 220.0, 219.9, 100.0, 120.0, 140.0])
+    updated = np.array([True, False, False, True, True, True, False, False])
+    segment = np.array([0, 0, 0, 0, 0, 1, 1, 1])  # the second segment has one update: nothing to join
+    np.testing.assert_allclose(_level_between_updates(level, t, updated, segment),
+                               [240.0, 235.0, 230.0, 220.0, 219.9, 100.0, 120.0, 140.0])
 
 
 def test_the_adsb_reference_of_two_radars_is_built_once(two_radars, monkeypatch):
