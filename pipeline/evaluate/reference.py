@@ -316,7 +316,7 @@ def reference_values(reports: pd.DataFrame, reference: pd.DataFrame, column: str
     if column not in reference.columns:
         return out
     ref, trajs = checked_trajectories(reference)
-    values = ref[column].to_numpy(object)
+    values = shared(("object_column", id(ref), column), (ref,), lambda: ref[column].to_numpy(object))
     t = reports["t_s"].to_numpy(float)
     idx = reports["ref_index"].to_numpy()
     groups = rows_by_index(idx, len(trajs))
@@ -325,8 +325,8 @@ def reference_values(reports: pd.DataFrame, reference: pd.DataFrame, column: str
         if rows.size:
             i = np.clip(np.searchsorted(tr.t_s, t[rows], side="right") - 1, 0, tr.t_s.size - 1)
             out[rows] = values[tr.rows[i]]
-    return np.array([None if v is None or v is pd.NA or (isinstance(v, float) and np.isnan(v)) else v
-                     for v in out], dtype=object)
+    out[pd.isna(out)] = None  # a missing value of any kind (NaN, <NA>) is None
+    return out
 
 
 def reference_altitude_ft(reports: pd.DataFrame, reference: pd.DataFrame,
