@@ -51,7 +51,9 @@ def sensor_reports(meas: pd.DataFrame, sensor_id: str, epoch: pd.Timestamp,
     out.insert(0, "t_s", seconds_since(rows["time"], epoch))
     extra = [c for c in RADAR_EXTRA_COLUMNS if radar_frame is not None and c in radar_frame.columns]
     if extra and {"file", "offset"} <= set(out.columns) and {"file", "offset"} <= set(radar_frame.columns):
-        right = radar_frame[["file", "offset", *extra]].copy()
+        # the decoded records at the sensor's offsets only (the frame holds every radar's): the same join
+        mine = radar_frame["offset"].isin(out["offset"].dropna().unique()).to_numpy(bool)
+        right = radar_frame.loc[mine, ["file", "offset", *extra]].copy()
         right["file"] = right["file"].astype(str)
         right = right.drop_duplicates(["file", "offset"])
         left = out.assign(file=out["file"].astype(str), offset=out["offset"].astype("int64"))
