@@ -69,10 +69,10 @@ def _built_by(group: np.ndarray, n_groups: int, sources: np.ndarray) -> np.ndarr
     return joined[group]
 
 
-def _segments(aircraft: np.ndarray, segment: np.ndarray) -> tuple[np.ndarray, int]:
-    """Per track row, a number for its (aircraft, segment), and how many there are."""
-    codes, _ = pd.factorize(aircraft)
-    group, groups = pd.factorize(codes.astype(np.int64) * (int(segment.max(initial=0)) + 1) + segment)
+def _segments(key: np.ndarray, segment: np.ndarray) -> tuple[np.ndarray, int]:
+    """Per track row, a number for its (aircraft, segment) from the aircraft's code (``key``, from 0), and
+    how many there are."""
+    group, groups = pd.factorize(key.astype(np.int64) * (int(segment.max(initial=0)) + 1) + segment)
     return group, len(groups)
 
 
@@ -192,7 +192,12 @@ def reconstruct(reports: pd.DataFrame, epoch: pd.Timestamp, *, step_s: float = 1
     aircraft = tr["aircraft_id"].to_numpy(object)
     sources = tr["sources"].to_numpy(object)
     t_ns = tr["time"].astype("datetime64[ns, UTC]").array.asi8
-    group, n_groups = _segments(aircraft, tr["segment"].to_numpy(np.int64))
+    # the ids as integer codes (one per id, the reports' too): grouping, sorting and matching compare
+    # numbers, not texts
+    rep_key, rep_t = _keyed(reports["aircraft_id"], reports["time"])
+    codes, _ = pd.factorize(np.concatenate([aircraft, rep_key]))
+    key, rep_key = codes[:len(aircraft)], codes[len(aircraft):]
+    group, n_groups = _segments(key, tr["segment"].to_numpy(np.int64))
     built_by = _built_by(group, n_groups, sources)
     updated = sources != ""
     # a smoothed segment is supported between its first and last update; rows coasted beyond the last
@@ -202,13 +207,10 @@ def reconstruct(reports: pd.DataFrame, epoch: pd.Timestamp, *, step_s: float = 1
     np.minimum.at(first, group, t_ns)
     np.maximum.at(last, group[updated], t_ns[updated])
     keep = (t_ns >= first[group]) & (t_ns <= last[group])
-    aircraft, t_ns, group, updated, built_by = (v[keep] for v in (aircraft, t_ns, group, updated, built_by))
+    aircraft, key, t_ns, group, updated, built_by = (v[keep] for v in (aircraft, key, t_ns, group, updated,
+                                                                        built_by))
     level = _level_between_updates(tr["flight_level"].to_numpy(float)[keep], t_ns.astype(float), updated,
                                    group)
-    # the ids as integer codes (one per id, both sides): sorting and matching compare numbers, not texts
-    rep_key, rep_t = _keyed(reports["aircraft_id"], reports["time"])
-    codes, _ = pd.factorize(np.concatenate([aircraft, rep_key]))
-    key, rep_key = codes[:len(aircraft)], codes[len(aircraft):]
     identity = _identity(key, t_ns, rep_key, rep_t, reports, established=self_reference)
     on_ground = _on_ground(key, t_ns, rep_key, rep_t, reports)
     out = pd.DataFrame({
