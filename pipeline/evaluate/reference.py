@@ -13,6 +13,7 @@ from typing import TypeVar
 import numpy as np
 import pandas as pd
 
+from msdc.pipeline.evaluate.interpolation import interpolate
 from msdc.pipeline.model.geodesy import A_M, E2, M_PER_FT
 
 REFERENCE_REQUIRED = ("aircraft", "t_s", "latitude", "longitude")
@@ -96,23 +97,9 @@ class Trajectory:
     def at(self, t_s: np.ndarray, max_gap_s: float) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """Latitude, longitude, height (m) and pressure altitude (ft) interpolated linearly at t_s; NaN
         before the first sample, after the last, and between samples more than max_gap_s apart."""
-        t = np.asarray(t_s, dtype=float)
-        last = self.t_s.size - 1
-        i = np.searchsorted(self.t_s, t, side="right") - 1
-        j = np.clip(i, 0, max(last - 1, 0))
-        k = np.minimum(j + 1, last)
-        span = self.t_s[k] - self.t_s[j]
-        at = np.clip(i, 0, last)
-        exact = (i >= 0) & (t == self.t_s[at])  # on a sample: its value, whatever the gaps around it
-        ok = ((i >= 0) & (i < last) & (span <= max_gap_s)) | exact
-        w = (t - self.t_s[j]) / np.where(span > 0, span, 1.0)
-        out = []
-        for v, wrap in ((self.latitude, False), (self.longitude, True), (self.height_m, False),
-                        (self.altitude_ft, False)):
-            d = v[k] - v[j]
-            d = (d + 180.0) % 360.0 - 180.0 if wrap else d
-            out.append(np.where(exact, v[at], np.where(ok, v[j] + w * d, np.nan)))
-        return tuple(out)  # type: ignore[return-value]
+        out = interpolate(self.t_s, self.latitude, self.longitude, self.height_m, self.altitude_ft,
+                          np.asarray(t_s, dtype=float), float(max_gap_s))
+        return out[0], out[1], out[2], out[3]
 
     def stretches(self, max_gap_s: float) -> list[tuple[float, float]]:
         """Spans (first, last sample time) of the reference, cut where samples are more than max_gap_s
