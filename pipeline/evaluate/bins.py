@@ -89,19 +89,58 @@ def azimuth_edges(step_deg: float) -> np.ndarray:
 
 def surface_airborne(table: pd.DataFrame, reference: pd.DataFrame) -> np.ndarray:
     """Per expected update: 'surface' or 'airborne' from the reference's ``on_ground`` (its latest sample
-    of that aircraft at or before the update), 'unknown' where the reference has no such column or value:
-    a pressure altitude cannot tell (an airport's ground level is its elevation, and QNH moves it)."""
+    of that aircraft at or before the update; of samples at one time, the last in the reference's order),
+    'unknown' where the reference has no such column or value: a pressure altitude cannot tell (an
+    airport's ground level is its elevation, and QNH moves it)."""
     out = np.full(len(table), "unknown", dtype=object)
     if "on_ground" not in reference.columns or table.empty:
         return out
-    ref = reference[["aircraft", "t_s", "on_ground"]].dropna(subset=["t_s"]).sort_values("t_s", kind="stable")
-    left = pd.DataFrame({"aircraft": table["aircraft"].to_numpy(), "t_s": table["t_s"].to_numpy(float),
-                         "row": np.arange(len(table))}).sort_values("t_s", kind="stable")
-    got = pd.merge_asof(left, ref, on="t_s", by="aircraft", direction="backward")
-    flag = got["on_ground"].astype("boolean")
-    known, ground = flag.notna().to_numpy(bool), flag.fillna(False).to_numpy(bool)
-    out[got["row"].to_numpy()] = np.where(known, np.where(ground, "surface", "airborne"), "unknown")
+    latest = _latest_sample(table["aircraft"], table["t_s"].to_numpy(float), reference["aircraft"],
+                            reference["t_s"].to_numpy(float))
+    flag = reference["on_ground"].astype("boolean").array
+    found = latest >= 0
+    known = found & ~flag.isna()[np.where(found, latest, 0)]
+    ground = flag.fillna(False).to_numpy(bool)[np.where(found, latest, 0)]
+    out[known] = np.where(ground[known], "surface", "airborne")
     return out
+
+
+def _latest_sample(aircraft, t_s: np.ndarray, ref_aircraft, ref_t_s: np.ndarray) -> np.ndarray:
+    """Per (aircraft, t_s), the row of the reference's latest sample of that aircraft at or before t_s (of
+    samples at one time, the last in the reference's order), -1 where none: a backward as-of join on the
+    aircraft's integer codes, without sorting the reference's text (already in aircraft and time order
+    when built by evaluate, sorted here otherwise)."""
+    codes, names = pd.factorize(ref_aircraft)
+    codes[np.isnan(ref_t_s)] = -1  # no time: never the latest
+    n = len(names)
+    if bool(np.all(np.diff(codes) >= 0)) and _times_ascend(codes, ref_t_s):
+        order = None  # codes ascend by first appearance: already grouped, each group in time order
+    else:
+        order = np.lexsort((ref_t_s, codes))  # stable: equal times keep the reference's order
+    sorted_codes = codes if order is None else codes[order]
+    sorted_t = ref_t_s if order is None else ref_t_s[order]
+    bounds = np.searchsorted(sorted_codes, np.arange(n + 1), side="left")
+    wanted = pd.Index(names).get_indexer(pd.Index(aircraft))
+    out = np.full(len(t_s), -1, dtype=np.int64)
+    present = np.flatnonzero(wanted >= 0)
+    by_group = np.argsort(wanted[present], kind="stable")
+    rows = present[by_group]
+    cuts = np.searchsorted(wanted[rows], np.arange(n + 1), side="left")
+    for g in np.flatnonzero(np.diff(cuts)):
+        mine = rows[cuts[g]:cuts[g + 1]]
+        lo, hi = bounds[g], bounds[g + 1]
+        i = lo + np.searchsorted(sorted_t[lo:hi], t_s[mine], side="right") - 1
+        out[mine] = np.where((i >= lo) & ~np.isnan(t_s[mine]), i, -1)  # a missing time: none
+    if order is not None:
+        out = np.where(out >= 0, order[np.maximum(out, 0)], -1)
+    return out
+
+
+def _times_ascend(codes: np.ndarray, t_s: np.ndarray) -> bool:
+    """Whether ``t_s`` ascends within each run of equal ``codes`` (a missing time's code is -1)."""
+    same = codes[1:] == codes[:-1]
+    with np.errstate(invalid="ignore"):
+        return bool(np.all(~same | (t_s[1:] >= t_s[:-1]) | (codes[1:] < 0)))
 
 
 def detection_bands(table: pd.DataFrame, reference: pd.DataFrame, *, range_step_nm: float = RANGE_BAND_NM,

@@ -88,6 +88,16 @@ def test_a_grid_counts_each_cell_and_x_varies_slowest():
     assert inside["expected"].tolist() == [2, 0, 1, 0]
 
 
+def test_surface_and_airborne_from_a_reference_out_of_order_with_repeated_and_missing_times():
+    ref = pd.DataFrame({"aircraft": ["B", "A", "A", "A", "B", "B"],
+                        "t_s": [4.0, 1.0, 0.0, 1.0, np.nan, 3.5],
+                        "on_ground": [True, False, True, True, False, False]})
+    # A at 0: its sample at 0; at 1 and 2: of its two samples at 1 the later row (on the ground); B at 3:
+    # no sample at or before it (the one without a time counts for none); at 4 and 5: its sample at 4
+    assert bins.surface_airborne(HAND, ref).tolist() == ["surface", "surface", "surface", "unknown",
+                                                         "surface", "surface"]
+
+
 def test_surface_and_airborne_from_the_reference_flag():
     ref = pd.DataFrame({"aircraft": ["A", "A", "B"], "t_s": [0.0, 2.5, 0.0],
                         "on_ground": [True, False, None]})
