@@ -13,6 +13,7 @@ from typing import TypeVar
 import numpy as np
 import pandas as pd
 
+from msdc.pipeline.evaluate.candidates import candidate_pairs, latitude_reach_deg
 from msdc.pipeline.evaluate.interpolation import interpolate
 from msdc.pipeline.model.geodesy import A_M, E2, M_PER_FT
 
@@ -27,6 +28,7 @@ DEFAULT_REFERENCE_GAP_S = 30.0  # reference samples further apart than this leav
 # one anything, so only a gross one with another aircraft in the gate at that level can mislead it)
 DEFAULT_VERTICAL_GATE_FT = 3000.0
 ASSOCIATION_COLUMNS = ("ref_index", "ref_aircraft", "ref_distance_m")
+FAR_BATCH_AIRCRAFT = 32  # aircraft tried at once beyond the gate, the nearest found so far updated between
 
 
 def _check_columns(frame: pd.DataFrame, required: tuple[str, ...], what: str) -> None:
@@ -181,39 +183,6 @@ def rows_by_index(idx: np.ndarray, n: int) -> list[np.ndarray]:
     return [order[bounds[k]:bounds[k + 1]] for k in range(n)]
 
 
-def _box_bound_m(lat_deg: np.ndarray, lon_deg: np.ndarray, box: tuple[float, float, float, float] | None
-                 ) -> np.ndarray:
-    """Per point, a distance (m) no point of the box (south, north, west, east, deg) is nearer than by
-    local_distance_m: its latitude and longitude gaps on the least radii of curvature (the meridian's and
-    the parallel's at the equator, the latter shrunk by the cosine of the highest latitude involved), less
-    a thousandth and a millimetre for rounding; 0 for a box that cannot bound (None: see Trajectory.box)."""
-    if box is None:
-        return np.zeros(len(lat_deg))
-    south, north, west, east = box
-    dlat = np.maximum(np.maximum(south - lat_deg, lat_deg - north), 0.0)
-    gap = np.maximum(np.maximum(west - lon_deg, lon_deg - east), 0.0)  # along the line, to the nearer edge
-    dlon = np.maximum(np.minimum(gap, 360.0 - gap - (east - west)), 0.0)  # or round the other way
-    top = np.maximum(np.abs(lat_deg), max(abs(south), abs(north)))
-    bound = np.hypot(np.radians(dlat) * A_M * (1.0 - E2),
-                     np.radians(dlon) * A_M * np.cos(np.radians(np.minimum(top, 90.0))))
-    return np.maximum(0.999 * bound - 0.001, 0.0)
-
-
-def _may_hold(lat_deg: np.ndarray, lon_deg: np.ndarray, box, limit_m) -> np.ndarray:
-    """Per point, whether _box_bound_m lets the box hold a point within ``limit_m`` (a scalar or one per
-    point) of it; False without a position. The latitude gap alone rules most points out before the
-    whole bound is worked out for the rest."""
-    limit_m = np.broadcast_to(np.asarray(limit_m, float), lat_deg.shape)
-    if box is None:
-        return np.isfinite(lat_deg) & np.isfinite(lon_deg)
-    south, north = box[0], box[1]
-    dlat = np.maximum(np.maximum(south - lat_deg, lat_deg - north), 0.0)
-    out = 0.999 * np.radians(dlat) * A_M * (1.0 - E2) - 0.001 <= limit_m  # a bound of the bound: NaN False
-    near = np.flatnonzero(out)
-    out[near] = _box_bound_m(lat_deg[near], lon_deg[near], box) <= limit_m[near]
-    return out
-
-
 def local_distance_m(lat1_deg, lon1_deg, lat2_deg, lon2_deg) -> np.ndarray:
     """Horizontal distance (m) between nearby points on the WGS-84 ellipsoid's local radii of curvature:
     within 0.1 % of the geodesic below 20 km, which is all an association gate needs."""
@@ -243,33 +212,57 @@ def associate(reports: pd.DataFrame, reference: pd.DataFrame,
     lat, lon = reports["latitude"].to_numpy(float), reports["longitude"].to_numpy(float)
     mode_c_ft = (pd.to_numeric(reports["flight_level"], errors="coerce").to_numpy(float) * 100.0
                  if "flight_level" in reports.columns else np.full(t.size, np.nan))
-    order = np.argsort(t, kind="stable")
-    ts = t[order]
+    t_first = np.array([tr.t_s[0] for tr in trajs], dtype=float)
+    t_last = np.array([tr.t_s[-1] for tr in trajs], dtype=float)
+    boxes = [tr.box for tr in trajs]
+    bounded = np.array([b is not None for b in boxes], dtype=bool)
+    boxes = np.array([b if b is not None else (0.0, 0.0, 0.0, 0.0) for b in boxes], float).reshape(-1, 4)
+
+    def pairs(aircraft: np.ndarray, order: np.ndarray, first: np.ndarray, stop: np.ndarray,
+              limit_m: np.ndarray) -> tuple[np.ndarray, ...]:
+        """The (aircraft, report) pairs the boxes may hold within limit_m, of the reports order[first[k]:
+        stop[k]] per aircraft k: aircraft, row, distance (inf where the reference is not known then) and
+        the reference's altitude."""
+        ks, rows = candidate_pairs(aircraft, order, first, stop, t_first, t_last, boxes, bounded, t, lat,
+                                   lon, limit_m)
+        r_lat, r_lon, r_alt = (np.empty(ks.size) for _ in range(3))
+        cuts = np.flatnonzero(np.diff(ks)) + 1
+        for a, b in zip(np.r_[0, cuts], np.r_[cuts, ks.size], strict=True):
+            if b > a:
+                r_lat[a:b], r_lon[a:b], _, r_alt[a:b] = trajs[ks[a]].at(t[rows[a:b]], max_gap_s)
+        d = np.nan_to_num(local_distance_m(lat[rows], lon[rows], r_lat, r_lon), nan=np.inf)
+        return ks, rows, d, r_alt
+
+    # Per report, the nearest aircraft (and the nearest within the vertical gate), the smallest k on equal
+    # distances. An aircraft is measured only against the reports its box of samples may hold nearer
+    # (candidates.candidate_pairs): first every aircraft against the reports it may hold within the gate,
+    # those of its latitudes (so the association within the gate is whole); then the reports left with
+    # none within the gate, for the distance to the nearest aircraft beyond it, against each batch of
+    # aircraft that may hold them nearer than the nearest found so far. An aircraft left out is farther
+    # than the nearest found, so the nearest and its k are those of every aircraft measured against every
+    # report.
     best, level_best = np.full(t.size, np.inf), np.full(t.size, np.inf)
     index, level_index = np.full(t.size, -1, dtype=np.int64), np.full(t.size, -1, dtype=np.int64)
-    spans = [order[np.searchsorted(ts, tr.t_s[0], "left"):np.searchsorted(ts, tr.t_s[-1], "right")]
-             for tr in trajs]
-    # Per report, the nearest aircraft (and the nearest within the vertical gate), the smallest k on equal
-    # distances, as a pass over every aircraft in order finds them. An aircraft is measured only against
-    # the reports its box of samples may hold nearer: first those it may hold within the gate (every
-    # aircraft within the gate of a report is measured against it there, so the association is whole),
-    # then, for the distance to the nearest aircraft beyond the gate, those it may hold nearer than the
-    # nearest found.
-    for near in (True, False):
-        for k, (tr, rows) in enumerate(zip(trajs, spans, strict=True)):
-            rows = rows[_may_hold(lat[rows], lon[rows], tr.box, gate_m if near else best[rows])]
-            if not rows.size:
-                continue
-            r_lat, r_lon, _, r_alt = tr.at(t[rows], max_gap_s)
-            d = np.nan_to_num(local_distance_m(lat[rows], lon[rows], r_lat, r_lon), nan=np.inf)
-            closer = (d < best[rows]) | ((d == best[rows]) & (k < index[rows]))
-            best[rows[closer]] = d[closer]
-            index[rows[closer]] = k
-            with np.errstate(invalid="ignore"):
-                apart = np.abs(mode_c_ft[rows] - r_alt) > vertical_ft  # False where either is unknown
-            closer = ~apart & ((d < level_best[rows]) | ((d == level_best[rows]) & (k < level_index[rows])))
-            level_best[rows[closer]] = d[closer]
-            level_index[rows[closer]] = k
+    every = np.arange(len(trajs), dtype=np.int64)
+    by_lat = np.argsort(lat, kind="stable")
+    lats = lat[by_lat]
+    reach = latitude_reach_deg(gate_m)
+    first = np.where(bounded, np.searchsorted(lats, boxes[:, 0] - reach, "left"), 0).astype(np.int64)
+    stop = np.where(bounded, np.searchsorted(lats, boxes[:, 1] + reach, "right"), t.size).astype(np.int64)
+    ks, rows, d, r_alt = pairs(every, by_lat, first, stop, np.full(t.size, gate_m))
+    _nearer(best, index, ks, rows, d)
+    with np.errstate(invalid="ignore"):
+        apart = np.abs(mode_c_ft[rows] - r_alt) > vertical_ft  # False where either is unknown
+    _nearer(level_best, level_index, ks[~apart], rows[~apart], d[~apart])
+    beyond = np.flatnonzero(~(best <= gate_m))  # within it, no aircraft beyond the gate can be nearer
+    if beyond.size:
+        by_time = beyond[np.argsort(t[beyond], kind="stable")]
+        ts = t[by_time]
+        first = np.searchsorted(ts, t_first, "left").astype(np.int64)
+        stop = np.searchsorted(ts, t_last, "right").astype(np.int64)
+        for batch in np.array_split(every, max(1, len(trajs) // FAR_BATCH_AIRCRAFT)):
+            ks, rows, d, _ = pairs(batch, by_time, first, stop, best)
+            _nearer(best, index, ks, rows, d)
     out = reports.copy()
     out["ref_distance_m"] = np.where(np.isfinite(lat) & np.isfinite(lon), best, np.nan)
     index = np.where(level_best <= gate_m, level_index, np.where(best <= gate_m, index, -1))
@@ -277,6 +270,20 @@ def associate(reports: pd.DataFrame, reference: pd.DataFrame,
     labels = np.array([tr.label for tr in trajs] + [None], dtype=object)
     out["ref_aircraft"] = pd.Series(labels[index], index=out.index, dtype=object)
     return out
+
+
+def _nearer(best: np.ndarray, index: np.ndarray, ks: np.ndarray, rows: np.ndarray, d: np.ndarray) -> None:
+    """Per row of the pairs, its nearest aircraft among them (the smallest k of equal distances) where it is
+    nearer than ``best`` (or as near with a smaller k than ``index``): best and index updated in place."""
+    finite = np.isfinite(d)  # an unknown distance never makes an aircraft the nearest
+    ks, rows, d = ks[finite], rows[finite], d[finite]
+    order = np.lexsort((ks, d, rows))
+    rows, d, ks = rows[order], d[order], ks[order]
+    head = np.r_[True, rows[1:] != rows[:-1]] if rows.size else np.zeros(0, bool)
+    rows, d, ks = rows[head], d[head], ks[head]
+    closer = (d < best[rows]) | ((d == best[rows]) & (ks < index[rows]))
+    best[rows[closer]] = d[closer]
+    index[rows[closer]] = ks[closer]
 
 
 def association_gates(parameters: Mapping | None) -> tuple[float, float, float]:

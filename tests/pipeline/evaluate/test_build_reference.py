@@ -387,7 +387,8 @@ def _brute_association(reports: pd.DataFrame, reference: pd.DataFrame, gate_m: f
     return index, np.where(np.isfinite(lat) & np.isfinite(lon), best, np.nan)
 
 
-def test_association_equals_the_exhaustive_search():
+@pytest.mark.parametrize("gate_m", [3704.0, 500.0, 20000.0])
+def test_association_equals_the_exhaustive_search(gate_m):
     """The pruned association (aircraft measured only against the reports their box may hold nearer) gives
     exactly the exhaustive search's aircraft and distances: aircraft close together at different levels,
     two aircraft flying the same samples (the first of equals wins), one across the antimeridian, reports
@@ -417,11 +418,12 @@ def test_association_equals_the_exhaustive_search():
     reports.loc[::11, "flight_level"] = np.nan
     reports.loc[::13, "latitude"] += 3.0  # far from every aircraft
     reports.loc[::17, ["latitude", "longitude"]] = pick.loc[::17, ["latitude", "longitude"]].to_numpy()
-    params = {"gate_m": 3704.0, "vertical_gate_ft": 3000.0, "reference_max_gap_s": 30.0}
+    params = {"gate_m": gate_m, "vertical_gate_ft": 3000.0, "reference_max_gap_s": 30.0}
     got = associate(reports, reference, params)
-    index, distance = _brute_association(reports, reference, 3704.0, 3000.0, 30.0)
+    index, distance = _brute_association(reports, reference, gate_m, 3000.0, 30.0)
     assert got["ref_index"].tolist() == index.tolist()
     np.testing.assert_array_equal(got["ref_distance_m"].to_numpy(float), distance)
     assert 50 < (index >= 0).sum() < n and (np.isinf(distance)).sum() > 0
+    assert (distance[index < 0] > gate_m).sum() > 20  # reports beyond the gate, measured to the nearest
     labels = sorted(reference["aircraft"].unique())
     assert "A05b" not in set(got["ref_aircraft"].dropna()) and labels.index("A05") in set(index)
