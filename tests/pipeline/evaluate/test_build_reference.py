@@ -427,3 +427,23 @@ def test_association_equals_the_exhaustive_search(gate_m):
     assert (distance[index < 0] > gate_m).sum() > 20  # reports beyond the gate, measured to the nearest
     labels = sorted(reference["aircraft"].unique())
     assert "A05b" not in set(got["ref_aircraft"].dropna()) and labels.index("A05") in set(index)
+
+
+def test_a_sensors_own_track_goes_in_where_a_sort_of_both_would_put_it():
+    """The reference with a sensor's own track merged in (build_reference._merged) is the two frames one
+    after the other sorted stably by aircraft and time (pandas' sort): own rows after the reconstruction's
+    of the same aircraft and time, aircraft the reconstruction lacks between its others, at either end."""
+    from msdc.pipeline.evaluate.build_reference import _blocks, _merged
+
+    built = pd.DataFrame({"aircraft": pd.array(["B", "B", "B", "D", "D"], dtype="str"),
+                          "t_s": [0.0, 5.0, 10.0, 1.0, 2.0], "self_reference": False})
+    own = pd.DataFrame({"aircraft": pd.array(["A", "B", "B", "B", "C", "D", "E"], dtype="str"),
+                        "t_s": [3.0, 5.0, 6.0, 11.0, 0.0, 2.0, 9.0], "self_reference": True})
+    got = _merged(built, own, _blocks(built, {}))
+    assert list(zip(got["aircraft"], got["t_s"], got["self_reference"], strict=True)) == [
+        ("A", 3.0, True), ("B", 0.0, False), ("B", 5.0, False), ("B", 5.0, True), ("B", 6.0, True),
+        ("B", 10.0, False), ("B", 11.0, True), ("C", 0.0, True), ("D", 1.0, False), ("D", 2.0, False),
+        ("D", 2.0, True), ("E", 9.0, True)]
+    both = pd.concat([built, own], ignore_index=True).sort_values(["aircraft", "t_s"], kind="stable",
+                                                                   ignore_index=True)
+    pd.testing.assert_frame_equal(got, both, check_exact=True)
