@@ -108,6 +108,7 @@ STAT_ON_GROUND = (1, 3)
 # DO-260B NACp: 95 % horizontal position accuracy bound (EPU) in metres; 0 = unknown
 NACP_95_M = {11: 3.0, 10: 10.0, 9: 30.0, 8: 92.6, 7: 185.2, 6: 555.6, 5: 926.0, 4: 1852.0, 3: 3704.0,
              2: 7408.0, 1: 18520.0}
+_NACP_95_BY_CODE = np.array([NACP_95_M.get(k, np.nan) for k in range(16)])  # NaN: 0 and codes 12-15
 # 95 % of a circular 2-D Gaussian lies within sqrt(-2 ln 0.05) = 2.4477 sigma (the Rayleigh 95th percentile);
 # every 95 % bound (NACp, NACv / NUCr) becomes a per-axis sigma by it, here and in pipeline.track.covariance
 CIRCULAR_95_PER_SIGMA = math.sqrt(-2.0 * math.log(0.05))
@@ -258,8 +259,11 @@ def _radar_rows(cat048: pd.DataFrame, sensors: pd.DataFrame, date: dt.date | Non
 
 def nacp_sigma_m(nacp) -> np.ndarray:
     """1-sigma horizontal error per axis (m) from NACp: its 95 % bound / 2.4477; NaN when absent or 0."""
-    values = pd.Series(nacp).astype("Int64")
-    return values.map(NACP_95_M).astype("float64").to_numpy() / CIRCULAR_95_PER_SIGMA
+    codes = pd.Series(nacp).astype("Int64").to_numpy(dtype=np.int64, na_value=-1)
+    bound = np.full(len(codes), np.nan)
+    listed = (codes >= 0) & (codes < len(_NACP_95_BY_CODE))
+    bound[listed] = _NACP_95_BY_CODE[codes[listed]]  # a table lookup: a Series.map took 0.3 s a million
+    return bound / CIRCULAR_95_PER_SIGMA
 
 
 def _adsb_rows(cat021: pd.DataFrame, date: dt.date | None, adsb_sigma_m: float | None = None) -> pd.DataFrame:
