@@ -118,10 +118,13 @@ def sensor_id(category: int, sac, sic) -> pd.Series:
     """Sensor ids "CCC:SAC/SIC" (e.g. "048:25/201"; SAC/SIC missing shows as "?") as the schema's
     categorical text, formatted once per distinct pair."""
     sac, sic = pd.Series(sac).astype("Int64"), pd.Series(sic).astype("Int64")
-    pairs = pd.DataFrame({"sac": sac.to_numpy(), "sic": sic.to_numpy()})
-    row_pair = pairs.groupby(["sac", "sic"], dropna=False, sort=False).ngroup().to_numpy()
-    first = pairs.drop_duplicates()
-    labels = [source_id(category, a, b) for a, b in zip(first["sac"], first["sic"], strict=True)]
+    a = sac.to_numpy(dtype=np.int64, na_value=-1)
+    b = sic.to_numpy(dtype=np.int64, na_value=-1)
+    if len(a) and (a.min() < -1 or a.max() >= 1 << 20 or b.min() < -1 or b.max() >= 1 << 20):
+        a, b = pd.factorize(a)[0], pd.factorize(b)[0]  # beyond any SAC/SIC: numbered to fit the key
+    # one integer per pair (a missing SAC or SIC its own value), each pair formatted once
+    _, first, row_pair = np.unique((a + 1) * (1 << 21) + (b + 1), return_index=True, return_inverse=True)
+    labels = [source_id(category, sac.iloc[i], sic.iloc[i]) for i in first]
     return pd.Series(coded_text(row_pair, labels), index=sac.index)
 
 

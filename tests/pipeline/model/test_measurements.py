@@ -267,3 +267,13 @@ def test_radar_offsets_match_the_same_aircraft_within_a_second():
     assert abs(float(got["offset_median_m"].iloc[0]) - expected_m) < 0.5
     late = mine.assign(time=np.where(np.arange(n) < 11, times + pd.Timedelta(seconds=2), mine["time"]))
     assert radar_offsets(pd.concat([plots, late, other], ignore_index=True)).empty
+
+
+def test_sensor_ids_stay_whole_numbers_when_some_report_lacks_its_sac_or_sic():
+    """A missing SAC or SIC shows as "?" in its own report's id; the other reports' ids stay "021:1/2" (a
+    missing value once turned every pair into floats: "021:1.0/2.0")."""
+    from msdc.pipeline.model.measurements import sensor_id
+
+    sac = pd.Series([1, None, 1, 7], dtype="Int64")
+    ids = sensor_id(21, sac, pd.Series([2, 2, None, 129], dtype="Int64"))
+    assert ids.astype(str).tolist() == ["021:1/2", "021:?/2", "021:1/?", "021:7/129"]
