@@ -76,6 +76,33 @@ def _segments(key: np.ndarray, segment: np.ndarray) -> tuple[np.ndarray, int]:
     return group, len(groups)
 
 
+def _codes(right_key: np.ndarray, left_key: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Both sides' keys as integer codes of one numbering (integer keys from 0, as reconstruct numbers the
+    aircraft, are their own codes)."""
+    if (right_key.dtype.kind in "iu" and left_key.dtype.kind in "iu" and right_key.min() >= 0
+            and (not len(left_key) or left_key.min() >= 0)):
+        return right_key.astype(np.int64), left_key.astype(np.int64)
+    codes, _ = pd.factorize(np.concatenate([right_key, left_key]))
+    return codes[:len(right_key)].astype(np.int64), codes[len(right_key):].astype(np.int64)
+
+
+def _combined(r_code: np.ndarray, right_t: np.ndarray, l_code: np.ndarray, left_t: np.ndarray
+              ) -> tuple[np.ndarray, np.ndarray]:
+    """(key, time) of both sides as one integer each, in the order of key then time: key * width + the
+    time's offset from the earliest where the integer times allow it, else key * span + the time's rank."""
+    times = np.concatenate([right_t, left_t])
+    if times.dtype.kind == "i" and len(times):
+        lo, hi = int(times.min()), int(times.max())
+        width = hi - lo + 1
+        top = int(max(r_code.max(initial=0), l_code.max(initial=0))) + 1
+        if top * width < 2**62:
+            return (r_code * width + (right_t.astype(np.int64) - lo),
+                    l_code * width + (left_t.astype(np.int64) - lo))
+    times = np.unique(times)
+    span = len(times) + 1
+    return r_code * span + np.searchsorted(times, right_t), l_code * span + np.searchsorted(times, left_t)
+
+
 def _latest_at(left_key: np.ndarray, left_t: np.ndarray, right_key: np.ndarray, right_t: np.ndarray
                ) -> np.ndarray:
     """Per left row, the index into the right rows of the same key's latest row at or before the left
@@ -83,12 +110,8 @@ def _latest_at(left_key: np.ndarray, left_t: np.ndarray, right_key: np.ndarray, 
     no right row. The right rows must be sorted by key, then time (stably)."""
     if not len(right_key):
         return np.full(len(left_key), -1, np.int64)
-    codes, _ = pd.factorize(np.concatenate([right_key, left_key]))
-    r_code, l_code = codes[:len(right_key)].astype(np.int64), codes[len(right_key):].astype(np.int64)
-    times = np.unique(np.concatenate([right_t, left_t]))
-    span = len(times) + 1  # (key, time) as one integer: key code * span + the time's rank
-    r_comb = r_code * span + np.searchsorted(times, right_t)
-    l_comb = l_code * span + np.searchsorted(times, left_t)
+    r_code, l_code = _codes(right_key, left_key)
+    r_comb, l_comb = _combined(r_code, right_t, l_code, left_t)
     order = np.argsort(r_comb, kind="stable")  # the codes' order, equal (key, time) rows as given
     r_sorted, r_code_sorted = r_comb[order], r_code[order]
     at = np.searchsorted(r_sorted, l_comb, "right") - 1

@@ -331,17 +331,23 @@ def test_the_adsb_reference_of_two_radars_is_built_once(two_radars, monkeypatch)
     assert len(calls) == 3
 
 
-def test_latest_at_is_the_latest_row_at_or_before_else_the_first_of_the_key():
-    """_latest_at (the reference's identity and on-ground rule) against its definition, row by row."""
+@pytest.mark.parametrize("keys, times", [("text", "int"), ("codes", "int"), ("codes", "float"),
+                                          ("codes", "nanoseconds")])
+def test_latest_at_is_the_latest_row_at_or_before_else_the_first_of_the_key(keys, times):
+    """_latest_at (the reference's identity and on-ground rule) against its definition, row by row: with
+    text keys or integer codes (reconstruct's), and times as integers, floats or a day's nanoseconds."""
     from msdc.pipeline.evaluate.build_reference import _latest_at
 
     rng = np.random.default_rng(1)
+    names = np.array(list("abcde"), dtype=object) if keys == "text" else np.arange(5)
+    scale = {"int": 1, "float": 0.5, "nanoseconds": 60_000_000_000}[times]
+    base = 1_764_288_000_000_000_000 if times == "nanoseconds" else 0
     for _ in range(200):
         nr, nl = rng.integers(0, 30), rng.integers(0, 30)
-        rk, rt = rng.choice(list("abcd"), nr).astype(object), rng.integers(0, 10, nr)
+        rk, rt = rng.choice(names[:4], nr), base + rng.integers(0, 10, nr) * scale
         order = np.lexsort((rt, rk))
         rk, rt = rk[order], rt[order]
-        lk, lt = rng.choice(list("abcde"), nl).astype(object), rng.integers(-2, 12, nl)
+        lk, lt = rng.choice(names, nl), base + rng.integers(-2, 12, nl) * scale
         got = _latest_at(lk, lt, rk, rt)
         for i in range(nl):
             same = [j for j in range(nr) if rk[j] == lk[i]]
