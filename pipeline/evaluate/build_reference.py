@@ -60,13 +60,12 @@ def _empty() -> pd.DataFrame:
 
 
 def _built_by(group: np.ndarray, n_groups: int, sources: np.ndarray) -> np.ndarray:
-    """Per track row, the sensors whose reports updated its segment (``group``: the row's segment among
-    ``n_groups``; ``sources``: the rows' comma-joined sensors), sorted and joined."""
+    """Per segment (``group``: each track row's segment among ``n_groups``; ``sources``: the rows'
+    comma-joined sensors), the sensors whose reports updated it, sorted and joined."""
     sensors: list[set[str]] = [set() for _ in range(n_groups)]
     for g, text in set(zip(group.tolist(), sources.tolist(), strict=True)):
         sensors[g].update(p.strip() for p in text.split(",") if p.strip())
-    joined = np.array([BUILT_BY_SEPARATOR.join(sorted(s)) for s in sensors] or [""], dtype=object)
-    return joined[group]
+    return np.array([BUILT_BY_SEPARATOR.join(sorted(s)) for s in sensors] or [""], dtype=object)
 
 
 def _segments(key: np.ndarray, segment: np.ndarray) -> tuple[np.ndarray, int]:
@@ -128,22 +127,22 @@ def _keyed(aircraft: pd.Series, time: pd.Series) -> tuple[np.ndarray, np.ndarray
 
 
 def _identity(left_key: np.ndarray, left_t: np.ndarray, rep_key: np.ndarray, rep_t: np.ndarray,
-              reports: pd.DataFrame, established: bool = False) -> dict[str, np.ndarray]:
+              reports: pd.DataFrame, established: bool = False) -> dict[str, object]:
     """Per reference row (its aircraft's code and time in ns), each identity column taken from the reports
     that built it (their aircraft's codes, of the same numbering, and times): per aircraft, the latest value
     reported at or before the row's time (before the first, the first). With ``established`` (a sensor's own
     track judging that sensor's codes), only values the aircraft's previous report also gave count: otherwise
-    each report's own code, wrong or garbled, would be its reference and never false."""
-    out = {}
+    each report's own code, wrong or garbled, would be its reference and never false. The values are
+    worked on as integer codes of their texts and made text once, per column."""
+    out: dict[str, object] = {}
     for col in IDENTITY_COLUMNS:
         if col not in reports.columns:
             out[col] = np.full(len(left_key), None, object)
             continue
-        given = reports[col].notna().to_numpy(bool)
-        value = reports.loc[given, col].astype(str).to_numpy(object)
-        key, t = rep_key[given], rep_t[given]
-        keep = value != ""
-        value, key, t = value[keep], key[keep], t[keep]
+        value, labels = _text_codes(reports[col])
+        keep = value >= 0
+        keep[keep] = labels[value[keep]] != ""  # an empty text says nothing
+        value, key, t = value[keep], rep_key[keep], rep_t[keep]
         order = np.lexsort((t, key))  # by aircraft, then time; stable among equal times
         value, key, t = value[order], key[order], t[order]
         if established:  # the aircraft's previous report gave the same value
@@ -154,10 +153,37 @@ def _identity(left_key: np.ndarray, left_t: np.ndarray, rep_key: np.ndarray, rep
             out[col] = np.full(len(left_key), None, object)
             continue
         at = _latest_at(left_key, left_t, key, t)
-        col_out = np.full(len(left_key), np.nan, object)
-        col_out[at >= 0] = value[at[at >= 0]]
-        out[col] = col_out
+        out[col] = _text_column(labels, np.where(at >= 0, value[np.maximum(at, 0)], -1))
     return out
+
+
+def _text_codes(values: pd.Series) -> tuple[np.ndarray, np.ndarray]:
+    """A column's values as integer codes (-1: missing) into its distinct texts (``str`` of each value,
+    equal texts one code), the texts an object array."""
+    if isinstance(values.dtype, pd.CategoricalDtype):
+        codes, labels = values.cat.codes.to_numpy(np.int64), values.cat.categories.to_numpy(object)
+    else:
+        codes, labels = pd.factorize(values)
+        codes, labels = np.asarray(codes, np.int64), np.asarray(labels, object)
+    texts, merged = np.unique(np.array([str(v) for v in labels], dtype=object), return_inverse=True)
+    return np.where(codes >= 0, merged.reshape(-1)[np.maximum(codes, 0)] if len(labels) else -1, -1), texts
+
+
+# the dtype pandas gives a column of texts with missing values (Arrow-backed "str" from pandas 3, else object)
+_INFERRED_TEXT = pd.Series(np.array(["", np.nan], dtype=object)).dtype
+
+
+def _text_column(labels: np.ndarray, codes: np.ndarray):
+    """``labels[codes]`` (-1: missing, NaN) as the column a frame would make of that object array, built
+    from the labels and codes without an object per row where pandas keeps text in Arrow."""
+    if isinstance(_INFERRED_TEXT, np.dtype) or not (codes >= 0).any():
+        out = np.full(len(codes), np.nan, object)
+        out[codes >= 0] = labels[codes[codes >= 0]]
+        return out
+    import pyarrow as pa
+
+    taken = pa.array(labels, type=pa.large_string()).take(pa.array(codes, mask=codes < 0))
+    return pd.array(taken, dtype=_INFERRED_TEXT)
 
 
 def _level_between_updates(level: np.ndarray, t: np.ndarray, upd: np.ndarray, group: np.ndarray
@@ -218,10 +244,10 @@ def reconstruct(reports: pd.DataFrame, epoch: pd.Timestamp, *, step_s: float = 1
     # the ids as integer codes (one per id, the reports' too): grouping, sorting and matching compare
     # numbers, not texts
     rep_key, rep_t = _keyed(reports["aircraft_id"], reports["time"])
-    codes, _ = pd.factorize(np.concatenate([aircraft, rep_key]))
+    codes, names = pd.factorize(np.concatenate([aircraft, rep_key]))
     key, rep_key = codes[:len(aircraft)], codes[len(aircraft):]
     group, n_groups = _segments(key, tr["segment"].to_numpy(np.int64))
-    built_by = _built_by(group, n_groups, sources)
+    built_by = _built_by(group, n_groups, sources)  # per segment
     updated = sources != ""
     # a smoothed segment is supported between its first and last update; rows coasted beyond the last
     # update are a prediction, not a reconstruction
@@ -230,20 +256,19 @@ def reconstruct(reports: pd.DataFrame, epoch: pd.Timestamp, *, step_s: float = 1
     np.minimum.at(first, group, t_ns)
     np.maximum.at(last, group[updated], t_ns[updated])
     keep = (t_ns >= first[group]) & (t_ns <= last[group])
-    aircraft, key, t_ns, group, updated, built_by = (v[keep] for v in (aircraft, key, t_ns, group, updated,
-                                                                        built_by))
+    key, t_ns, group, updated = (v[keep] for v in (key, t_ns, group, updated))
     level = _level_between_updates(tr["flight_level"].to_numpy(float)[keep], t_ns.astype(float), updated,
                                    group)
     identity = _identity(key, t_ns, rep_key, rep_t, reports, established=self_reference)
     on_ground = _on_ground(key, t_ns, rep_key, rep_t, reports)
     out = pd.DataFrame({
-        "aircraft": aircraft,
+        "aircraft": _text_column(np.asarray(names, object), key),
         "t_s": (tr["time"][keep] - epoch).dt.total_seconds().to_numpy(float),
         "latitude": tr["latitude"].to_numpy(float)[keep], "longitude": tr["longitude"].to_numpy(float)[keep],
         "altitude_ft": level * 100.0,
         **identity,
-        "sigma_m": tr["sigma_major_m"].to_numpy(float)[keep], "built_by": built_by,
-        "self_reference": np.full(len(aircraft), self_reference),
+        "sigma_m": tr["sigma_major_m"].to_numpy(float)[keep], "built_by": _text_column(built_by, group),
+        "self_reference": np.full(len(key), self_reference),
         "updated": updated,
         "on_ground": on_ground.to_numpy()})
     del tr

@@ -453,3 +453,29 @@ def test_a_sensors_own_track_goes_in_where_a_sort_of_both_would_put_it():
     both = pd.concat([built, own], ignore_index=True).sort_values(["aircraft", "t_s"], kind="stable",
                                                                    ignore_index=True)
     pd.testing.assert_frame_equal(got, both, check_exact=True)
+
+
+@pytest.mark.parametrize("established", [False, True])
+def test_a_reference_rows_identity_is_its_aircrafts_latest_reported_text(established):
+    """build_reference._identity by hand: per row the aircraft's latest value at or before it (before the
+    first, the first), empty and missing values saying nothing, an aircraft without any: missing; with
+    ``established``, a value counts only where the aircraft's previous report gave it too."""
+    from msdc.pipeline.evaluate.build_reference import _identity
+
+    reports = pd.DataFrame({
+        "callsign": np.array(["AB1", "", None, "XY"], dtype=object),
+        "mode3a": pd.Categorical(["1234", "1234", "7000", None])})
+    rep_key, rep_t = np.array([0, 0, 0, 1]), np.array([0, 10, 20, 5])
+    left_key, left_t = np.array([0, 0, 0, 1, 2]), np.array([-5, 5, 25, 6, 0])
+    got = _identity(left_key, left_t, rep_key, rep_t, reports, established=established)
+
+    def texts(column) -> list:
+        return [None if pd.isna(v) else v for v in pd.Series(column).tolist()]
+
+    if established:  # only aircraft 0's second 1234 repeats its previous report's value
+        assert texts(got["callsign"]) == [None] * 5
+        assert texts(got["mode3a"]) == ["1234", "1234", "1234", None, None]
+    else:
+        assert texts(got["callsign"]) == ["AB1", "AB1", "AB1", "XY", None]
+        assert texts(got["mode3a"]) == ["1234", "1234", "7000", None, None]
+    assert texts(got["address"]) == [None] * 5  # no such column in the reports
