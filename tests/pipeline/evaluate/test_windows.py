@@ -15,6 +15,8 @@ from msdc.pipeline.evaluate.outcome import ErrorEvidence, FitEvidence, Outcome, 
 from msdc.pipeline.evaluate.presets import Requirement
 from msdc.pipeline.evaluate.statistics import cluster_sums, clustered_interval
 from msdc.pipeline.evaluate.windows import (
+    _same_keys,
+    combine_counts,
     combine_grid,
     combine_outcomes,
     combine_per_aircraft,
@@ -207,6 +209,39 @@ def test_grids_of_windows_cover_the_whole_rectangle_their_bands_make():
     assert out.loc[(10, 2000), "expected"] == 0 and math.isnan(out.loc[(10, 2000), "pd"])
     assert out.loc[(0, 0), "ci_low"] == pytest.approx(stats.beta.ppf(0.025, 47, 4))
     assert bool(out.loc[(0, 0), "enough"]) and not bool(out.loc[(10, 0), "enough"])
+
+
+def test_grids_and_bands_on_the_same_cells_add_their_counts_as_the_whole_combination_does():
+    """A window's grid on the cells the pooled grid has (most windows: the same bands) is added row by row;
+    it gives what combining through the whole rectangle gives (a third window of nothing expected forces
+    that way), counts by hand, PD and interval worked out again; bands likewise."""
+    def grid(counts):
+        rows = [(x, x + 10, y, y + 2000, *c) for (x, y), c in zip([(0, 0), (0, 2000), (10, 0), (10, 2000)],
+                                                                   counts, strict=True)]
+        cells = pd.DataFrame(rows, columns=["x_low", "x_high", "y_low", "y_high", "expected", "detected"])
+        return cells.assign(pd=np.nan, ci_low=np.nan, ci_high=np.nan, enough=False)
+
+    one = combine_grid([grid([(30, 27), (0, 0), (10, 5), (4, 4)])])
+    two = grid([(20, 20), (25, 24), (0, 0), (16, 1)])
+    nothing = grid([(0, 0)] * 4)
+    assert _same_keys([one, two], ["x_low", "x_high", "y_low", "y_high"])  # the row-by-row way is taken
+    added = combine_grid([one, two])
+    assert added["expected"].tolist() == [50, 25, 10, 20] and added["detected"].tolist() == [47, 24, 5, 5]
+    assert added["ci_low"].iloc[0] == pytest.approx(stats.beta.ppf(0.025, 47, 4))
+    assert added["enough"].tolist() == [True, True, False, True]
+    pd.testing.assert_frame_equal(added, combine_grid([one, two, nothing]), check_exact=True)
+
+    def band(counts):
+        return pd.DataFrame({"low": [0.0, 10.0], "high": [10.0, 20.0], "expected": [c[0] for c in counts],
+                             "detected": [c[1] for c in counts], "pd": np.nan, "ci_low": np.nan,
+                             "ci_high": np.nan, "enough": False})
+
+    first = combine_counts([band([(30, 27), (3, 1)])], ["low", "high"])
+    added = combine_counts([first, band([(1, 1), (40, 39)])], ["low", "high"])
+    assert added["expected"].tolist() == [31, 43] and added["detected"].tolist() == [28, 40]
+    pd.testing.assert_frame_equal(added, combine_counts([first, band([(1, 1), (40, 39)]),
+                                                         band([(0, 0), (0, 0)])], ["low", "high"]),
+                                  check_exact=True)
 
 
 def test_per_aircraft_rows_of_windows_add_up():
