@@ -123,8 +123,16 @@ def trajectories(reference: pd.DataFrame) -> list[Trajectory]:
         h = np.nan_to_num(alt * M_PER_FT, nan=0.0)
     t = reference["t_s"].to_numpy(float)
     lat, lon = reference["latitude"].to_numpy(float), reference["longitude"].to_numpy(float)
+    codes, labels = pd.factorize(reference["aircraft"], sort=True)  # -1: no label, in no trajectory
+    if len(codes) and bool(np.all(np.diff(codes) >= 0)):  # sorted by aircraft (a checked reference)
+        starts = np.searchsorted(codes, np.arange(len(labels) + 1), side="left")
+        return [Trajectory(label, t[a:b], lat[a:b], lon[a:b], h[a:b], alt[a:b], np.arange(a, b))
+                for label, a, b in zip(labels, starts[:-1], starts[1:], strict=True)]  # views, not copies
+    order = np.argsort(codes, kind="stable")
+    starts = np.searchsorted(codes[order], np.arange(len(labels) + 1), side="left")
     out = []
-    for label, rows in reference.groupby("aircraft", sort=True).indices.items():
+    for label, a, b in zip(labels, starts[:-1], starts[1:], strict=True):
+        rows = order[a:b]
         out.append(Trajectory(label, t[rows], lat[rows], lon[rows], h[rows], alt[rows], rows))
     return out
 
