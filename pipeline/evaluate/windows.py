@@ -22,6 +22,7 @@ from scipy import stats
 
 from msdc.pipeline.evaluate.accuracy import ERROR_RANGE_BAND_NM, error_bands, error_notes
 from msdc.pipeline.evaluate.catalogue import CATALOGUE, ERROR, PROPORTION, RATE, SIGNED
+from msdc.pipeline.evaluate.count_fold import GRID_KEYS, CountFold
 from msdc.pipeline.evaluate.detection import per_target
 from msdc.pipeline.evaluate.outcome import ErrorEvidence, FitEvidence, Outcome, rate, share, withheld
 from msdc.pipeline.evaluate.presets import Requirement
@@ -172,8 +173,6 @@ def combine_counts(frames: Sequence[pd.DataFrame], keys: list[str]) -> pd.DataFr
     frames = [f for f in frames if f is not None and len(f)]
     if not frames:
         return pd.DataFrame()
-    if _same_keys(frames, keys):  # a window's table on the keys the pooled one has: the counts added
-        return _added(frames[0], frames[1], keys)
     whole = pd.concat(frames, ignore_index=True)
     out = whole.groupby(keys, sort=False, dropna=False)[["expected", "detected"]].sum().reset_index()
     if keys == ["low", "high"]:
@@ -192,9 +191,6 @@ def combine_grid(frames: Sequence[pd.DataFrame]) -> pd.DataFrame:
     frames = [f for f in frames if f is not None and len(f)]
     if not frames:
         return pd.DataFrame()
-    cell = ["x_low", "x_high", "y_low", "y_high"]
-    if _same_keys(frames, cell):  # a window's grid on the pooled one's cells: the counts added
-        return _added(frames[0], frames[1], cell)
     whole = pd.concat(frames, ignore_index=True)
     xs = whole[["x_low", "x_high"]].drop_duplicates().sort_values("x_low", ignore_index=True)
     ys = whole[["y_low", "y_high"]].drop_duplicates().sort_values("y_low", ignore_index=True)
@@ -202,48 +198,6 @@ def combine_grid(frames: Sequence[pd.DataFrame]) -> pd.DataFrame:
     empty = cells.assign(expected=0, detected=0)
     table = combine_counts([empty, *frames], ["x_low", "x_high", "y_low", "y_high"])
     return cells.merge(table, on=["x_low", "x_high", "y_low", "y_high"], how="left")
-
-
-def _same_keys(frames: Sequence[pd.DataFrame], keys: list[str]) -> bool:
-    """Whether two tables (the pooled one first, a combination's own output) have the same columns and the
-    same keys in the same order, each key once, in the order the combination gives (bands by their lower
-    end, cells x then y): adding their counts row by row is then what the combination would give."""
-    if len(frames) != 2:
-        return False
-    pooled, window = frames
-    if list(pooled.columns) != list(window.columns) or len(pooled) != len(window):
-        return False
-    if not all(pooled[c].dtype.kind in "iuf" and window[c].dtype.kind in "iuf" for c in ("expected",
-                                                                                        "detected")):
-        return False
-    if not pooled[keys].reset_index(drop=True).equals(window[keys].reset_index(drop=True)):
-        return False
-    if pooled.duplicated(keys).any():
-        return False
-    if keys == ["low", "high"]:
-        return bool(np.all(np.diff(pooled["low"].to_numpy(float)) > 0))
-    if keys == ["x_low", "x_high", "y_low", "y_high"]:
-        x, y = pooled["x_low"].to_numpy(float), pooled["y_low"].to_numpy(float)
-        return bool(np.all((np.diff(x) > 0) | ((np.diff(x) == 0) & (np.diff(y) > 0))))
-    return True
-
-
-def _added(pooled: pd.DataFrame, window: pd.DataFrame, keys: list[str]) -> pd.DataFrame:
-    """``pooled`` with ``window``'s counts added row by row, PD and its interval (and ``enough``) worked
-    out again: the columns and their order as combine_counts and combine_grid give them."""
-    from msdc.pipeline.evaluate.bins import MIN_EXPECTED
-
-    counts = ("expected", "detected")
-    out = pooled[keys].reset_index(drop=True)
-    for c in counts:
-        out[c] = pooled[c].to_numpy() + window[c].to_numpy()
-    p = proportion(out["detected"].to_numpy(np.int64), out["expected"].to_numpy(np.int64))
-    out["pd"], out["ci_low"], out["ci_high"] = p.value, p.ci_low, p.ci_high
-    if "enough" in pooled.columns:
-        out["enough"] = out["expected"].to_numpy() >= MIN_EXPECTED
-    first = [*keys, *counts] if keys[0] == "x_low" else []  # a grid's cells and counts lead
-    rest = [c for c in pooled.columns if c in out.columns and c not in first]
-    return out[[*first, *rest, *(c for c in ("pd", "ci_low", "ci_high") if c not in pooled.columns)]]
 
 
 def _joined_builders(group: np.ndarray, built_by: np.ndarray, n: int) -> list[str]:
@@ -355,9 +309,9 @@ class SensorSpan:
     outcomes: list[dict] = field(default_factory=list)
     notes: list[list[str]] = field(default_factory=list)
     per_aircraft: pd.DataFrame = field(default_factory=pd.DataFrame)
-    bands: dict[str, pd.DataFrame] = field(default_factory=dict)
-    polar: pd.DataFrame | None = None
-    vertical: pd.DataFrame | None = None
+    bands: dict[str, CountFold] = field(default_factory=dict)
+    polar: CountFold = field(default_factory=lambda: CountFold(GRID_KEYS, grid=True))
+    vertical: CountFold = field(default_factory=lambda: CountFold(GRID_KEYS, grid=True))
     range_errors: list[pd.DataFrame] | SpilledFrames = field(default_factory=list)
     map_points: list[pd.DataFrame] = field(default_factory=list)
     values: dict[tuple, SpilledFrames] = field(default_factory=dict, repr=False)  # with spill, per outcome
@@ -378,16 +332,24 @@ class SensorSpan:
         for key, table in bands.items():
             if key == "error_range":
                 continue
-            on = ["class"] if key == "surface" else ["low", "high"]
-            self.bands[key] = combine_counts([self.bands.get(key), table], on)
-        if polar is not None:
-            self.polar = combine_grid([self.polar, polar])
-        if vertical is not None:
-            self.vertical = combine_grid([self.vertical, vertical])
+            if key not in self.bands:
+                self.bands[key] = CountFold(["class"] if key == "surface" else ["low", "high"])
+            self.bands[key].add(table)
+        self.polar.add(polar)
+        self.vertical.add(vertical)
         if range_errors is not None:
             self.range_errors.append(range_errors)
         if len(map_points):
             self.map_points.append(map_points)
+
+    def band_tables(self) -> dict[str, pd.DataFrame]:
+        """Each detection band's table over the span (as combine_counts of every window's)."""
+        return {key: fold.table() for key, fold in self.bands.items()}
+
+    def grids(self) -> tuple[pd.DataFrame | None, pd.DataFrame | None]:
+        """The polar and vertical PD grids over the span (as combine_grid of every window's; None when no
+        window gave one)."""
+        return tuple(fold.table() if fold.sums else None for fold in (self.polar, self.vertical))
 
     def judged_errors(self) -> pd.DataFrame | None:
         """Every window's judged errors by range as one frame (None when no window gave any)."""

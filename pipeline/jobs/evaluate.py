@@ -621,14 +621,15 @@ def _pooled_sensor(checked: EvaluateChecked, sensor_id: str, span) -> tuple[Sens
     outcomes = span.pooled(preset.requirements)
     rows = [judge(o, preset.requirements[index], preset, sensor_id, name)
             for (name, _, index), o in outcomes.items()]
-    bands = dict(span.bands)
+    bands = span.band_tables()
     errors = span.error_bands()
     if errors is not None:
         bands["error_range"] = errors
     notes, differing = span.common_notes()
     points = pd.concat(span.map_points, ignore_index=True) if span.map_points else pd.DataFrame()
-    result = SensorResult(sensor_id, span.kind, rows, span.per_aircraft, bands, span.polar, span.vertical,
-                          points, notes, span.site, outcomes, None)
+    polar, vertical = span.grids()
+    result = SensorResult(sensor_id, span.kind, rows, span.per_aircraft, bands, polar, vertical, points,
+                          notes, span.site, outcomes, None)
     return result, [(a, b, sensor_id, n) for (a, b), n in differing]
 
 

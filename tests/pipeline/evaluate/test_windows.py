@@ -15,7 +15,6 @@ from msdc.pipeline.evaluate.outcome import ErrorEvidence, FitEvidence, Outcome, 
 from msdc.pipeline.evaluate.presets import Requirement
 from msdc.pipeline.evaluate.statistics import cluster_sums, clustered_interval
 from msdc.pipeline.evaluate.windows import (
-    _same_keys,
     combine_counts,
     combine_grid,
     combine_outcomes,
@@ -211,37 +210,54 @@ def test_grids_of_windows_cover_the_whole_rectangle_their_bands_make():
     assert bool(out.loc[(0, 0), "enough"]) and not bool(out.loc[(10, 0), "enough"])
 
 
-def test_grids_and_bands_on_the_same_cells_add_their_counts_as_the_whole_combination_does():
-    """A window's grid on the cells the pooled grid has (most windows: the same bands) is added row by row;
-    it gives what combining through the whole rectangle gives (a third window of nothing expected forces
-    that way), counts by hand, PD and interval worked out again; bands likewise."""
-    def grid(counts):
-        rows = [(x, x + 10, y, y + 2000, *c) for (x, y), c in zip([(0, 0), (0, 2000), (10, 0), (10, 2000)],
-                                                                   counts, strict=True)]
-        cells = pd.DataFrame(rows, columns=["x_low", "x_high", "y_low", "y_high", "expected", "detected"])
+def test_a_spans_bands_and_grids_folded_window_by_window_are_every_windows_combined():
+    """The span's folds (evaluate.count_fold.CountFold: sums per key, a table at the end) give what
+    combining every window's table at once gives: counts by hand, PD and interval worked out again, a
+    grid on the whole rectangle of its windows' bands, bands by their lower end, classes as first seen."""
+    from msdc.pipeline.evaluate.count_fold import GRID_KEYS, CountFold
+
+    def grid(rows):
+        cells = pd.DataFrame(rows, columns=[*GRID_KEYS, "expected", "detected"])
         return cells.assign(pd=np.nan, ci_low=np.nan, ci_high=np.nan, enough=False)
 
-    one = combine_grid([grid([(30, 27), (0, 0), (10, 5), (4, 4)])])
-    two = grid([(20, 20), (25, 24), (0, 0), (16, 1)])
-    nothing = grid([(0, 0)] * 4)
-    assert _same_keys([one, two], ["x_low", "x_high", "y_low", "y_high"])  # the row-by-row way is taken
-    added = combine_grid([one, two])
-    assert added["expected"].tolist() == [50, 25, 10, 20] and added["detected"].tolist() == [47, 24, 5, 5]
-    assert added["ci_low"].iloc[0] == pytest.approx(stats.beta.ppf(0.025, 47, 4))
-    assert added["enough"].tolist() == [True, True, False, True]
-    pd.testing.assert_frame_equal(added, combine_grid([one, two, nothing]), check_exact=True)
+    windows = [grid([(0, 10, 0, 2000, 30, 27), (10, 20, 0, 2000, 10, 5)]),
+               grid([(0, 10, 0, 2000, 20, 20), (0, 10, 2000, 4000, 25, 24)]),
+               grid([(0, 10, 0, 2000, 1, 0), (0, 10, 2000, 4000, 0, 0), (10, 20, 0, 2000, 4, 4),
+                     (10, 20, 2000, 4000, 3, 1)])]
+    fold = CountFold(GRID_KEYS, grid=True)
+    for w in windows:
+        fold.add(w)
+    folded = fold.table()
+    assert folded[["x_low", "y_low"]].to_numpy().tolist() == [[0, 0], [0, 2000], [10, 0], [10, 2000]]
+    assert folded["expected"].tolist() == [51, 25, 14, 3] and folded["detected"].tolist() == [47, 24, 9, 1]
+    assert folded["ci_low"].iloc[0] == pytest.approx(stats.beta.ppf(0.025, 47, 5))
+    assert folded["enough"].tolist() == [True, True, False, False]
+    pd.testing.assert_frame_equal(folded, combine_grid(windows), check_exact=True)
+    stepwise = None
+    for w in windows:
+        stepwise = combine_grid([stepwise, w])
+    pd.testing.assert_frame_equal(folded, stepwise, check_exact=True)
 
-    def band(counts):
-        return pd.DataFrame({"low": [0.0, 10.0], "high": [10.0, 20.0], "expected": [c[0] for c in counts],
-                             "detected": [c[1] for c in counts], "pd": np.nan, "ci_low": np.nan,
-                             "ci_high": np.nan, "enough": False})
+    def band(lows, counts):
+        return pd.DataFrame({"low": np.array(lows, float), "high": np.array(lows, float) + 10.0,
+                             "expected": [c[0] for c in counts], "detected": [c[1] for c in counts],
+                             "pd": np.nan, "ci_low": np.nan, "ci_high": np.nan, "enough": False})
 
-    first = combine_counts([band([(30, 27), (3, 1)])], ["low", "high"])
-    added = combine_counts([first, band([(1, 1), (40, 39)])], ["low", "high"])
-    assert added["expected"].tolist() == [31, 43] and added["detected"].tolist() == [28, 40]
-    pd.testing.assert_frame_equal(added, combine_counts([first, band([(1, 1), (40, 39)]),
-                                                         band([(0, 0), (0, 0)])], ["low", "high"]),
-                                  check_exact=True)
+    bands = [band([10, 20], [(30, 27), (3, 1)]), band([0, 10], [(1, 1), (40, 39)]), band([20], [(5, 5)])]
+    fold = CountFold(["low", "high"])
+    for b in bands:
+        fold.add(b)
+    folded = fold.table()
+    assert folded["low"].tolist() == [0, 10, 20] and folded["expected"].tolist() == [1, 70, 8]
+    pd.testing.assert_frame_equal(folded, combine_counts(bands, ["low", "high"]), check_exact=True)
+    classes = [pd.DataFrame({"class": ["airborne", "surface", "unknown"], "expected": [3, 4, 5],
+                             "detected": [1, 2, 3]}), pd.DataFrame({"class": ["unknown", "airborne"],
+                                                                    "expected": [2, 2], "detected": [2, 0]})]
+    fold = CountFold(["class"])
+    for c in classes:
+        fold.add(c)
+    pd.testing.assert_frame_equal(fold.table(), combine_counts(classes, ["class"]), check_exact=True)
+    assert fold.table()["expected"].tolist() == [5, 4, 7]
 
 
 def test_per_aircraft_rows_of_windows_add_up():
