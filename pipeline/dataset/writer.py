@@ -16,6 +16,10 @@ import pandas as pd
 from msdc.pipeline.dataset.layout import part_name, partition_dir, relative, sensor_key, temp_path
 
 ROW_GROUP_BYTES = 16 << 20  # Arrow bytes of a partition's rows gathered into one Parquet row group
+# ... and at most this span of record timestamps (UTC slots from midnight): a job reading a time window (a
+# 10-minute window and its margins read 40 minutes) reads the row groups of those minutes only; a radar's
+# 16 MB held 15-19 hours, so every window of a day read most of each radar's day to keep 40 minutes of it
+ROW_GROUP_SPAN_NS = 20 * 60 * 10**9
 HELD_BYTES = 64 << 20  # all partitions' rows held at most this much: past it the largest is written out
 PART_ROWS = 8_000_000  # a part holding this many rows is closed and the partition's next rows start another
 # Parquet min/max statistics are written for these columns only (those a query filters on): statistics of
@@ -44,6 +48,7 @@ class _Open:
     rows: int = 0
     offset_min: int = -1
     offset_max: int = -1
+    slot: int = -1  # the latest time slot (ROW_GROUP_SPAN_NS) of the rows held; -1: none yet
 
 
 @cache
@@ -53,6 +58,13 @@ def arrow_schema(category: int):
     from msdc.pipeline.report.record_schema import record_schema
 
     return record_schema(category).arrow()
+
+
+def time_slots(timestamps: pd.Series) -> np.ndarray:
+    """Each record's ROW_GROUP_SPAN_NS slot of the UTC timeline (-1: no timestamp)."""
+    ns = pd.DatetimeIndex(timestamps).as_unit("ns").asi8
+    known = ns != np.iinfo(np.int64).min
+    return np.where(known, ns // ROW_GROUP_SPAN_NS, -1)
 
 
 class Undated(ValueError):
@@ -109,6 +121,7 @@ class InputWriter:
         sic = rows["sic"].astype("Int64").fillna(-1).to_numpy(np.int64)
         day = dates.astype("datetime64[D]").astype(np.int64)
         offsets = rows["offset"].to_numpy()
+        slots = time_slots(rows["timestamp"]) if "timestamp" in rows.columns else np.full(len(rows), -1)
         if (day == day[0]).all() and (sac == sac[0]).all() and (sic == sic[0]).all():
             groups = {(day[0], sac[0], sic[0]): None}  # one partition (a sensor's own recording): no copy
         else:
@@ -117,11 +130,31 @@ class InputWriter:
         for (d, a, c), idx in groups.items():
             sensor = sensor_key(None if a < 0 else a, None if c < 0 else c)
             date = dt.date(1970, 1, 1) + dt.timedelta(days=int(d))
-            part = table if idx is None else table.take(pa.array(np.sort(idx)))
+            idx = None if idx is None else np.sort(idx)
+            part = table if idx is None else table.take(pa.array(idx))
             held = offsets if idx is None else offsets[idx]
-            self._hold((date, category, sensor), part, int(held.min()), int(held.max()))
+            self._hold_slots((date, category, sensor), part, held, slots if idx is None else slots[idx])
         while self.held_bytes > HELD_BYTES:  # the partition holding most is written out
             self._flush(max(self.open.values(), key=lambda o: o.held_bytes))
+
+    def _hold_slots(self, key: tuple[dt.date, int, str], part, offsets: np.ndarray, slots: np.ndarray
+                    ) -> None:
+        """Hold a partition's rows, a row group written before each row of a later time slot than those
+        held (a record out of time order, or without a timestamp, stays in the group it comes in)."""
+        o = self.open.get(key) or self._start(key)
+        reach = np.maximum.accumulate(np.maximum(slots, o.slot))  # the latest slot so far, row by row
+        later = np.flatnonzero(reach > np.r_[o.slot, reach[:-1]])
+        start = 0
+        for i in (int(k) for k in later):
+            if i > start:
+                self._hold(key, part.slice(start, i - start), int(offsets[start:i].min()),
+                           int(offsets[start:i].max()))
+                start = i
+            o = self.open.get(key) or self._start(key)  # a part closed for its rows starts another
+            self._flush(o)
+            o.slot = int(reach[i])
+        if start < part.num_rows:
+            self._hold(key, part.slice(start), int(offsets[start:].min()), int(offsets[start:].max()))
 
     def _hold(self, key: tuple[dt.date, int, str], part, offset_min: int, offset_max: int) -> None:
         o = self.open.get(key) or self._start(key)
