@@ -102,6 +102,15 @@ def is_missing(value: Any) -> bool:
 def json_value(value: Any) -> Any:
     """``value`` as plain JSON types: NaN, NaT, NA and infinities None, times ISO 8601 UTC to the millisecond
     with Z (``utc_text``), mappings and sequences item by item, anything else as text."""
+    kind = type(value)
+    if kind is str or kind is int or kind is bool or value is None:  # already JSON (most of a document)
+        return value
+    if kind is float:
+        return value if math.isfinite(value) else None
+    if kind is dict:
+        return {str(k): json_value(v) for k, v in value.items()}
+    if kind is list:
+        return [json_value(v) for v in value]
     if is_missing(value):
         return None
     if isinstance(value, bool | np.bool_):
