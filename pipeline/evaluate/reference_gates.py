@@ -94,9 +94,10 @@ def self_referenced(reports: pd.DataFrame, reference: pd.DataFrame, parameters: 
     self-reference row (``self_reference`` True); False otherwise, and where the reference has no flag."""
     if "self_reference" not in reference.columns:
         return np.zeros(len(reports), bool)
-    flag = reference.assign(self_reference=reference["self_reference"].astype(float))
+    # the flag read as numbers by reference_at (True 1, False 0), on the reference's own trajectories:
+    # a copy of the frame with the flag as floats was checked and cut again for every sensor
     with np.errstate(invalid="ignore"):
-        return np.nan_to_num(reference_at(reports, flag, "self_reference", parameters), nan=0.0) > 0.0
+        return np.nan_to_num(reference_at(reports, reference, "self_reference", parameters), nan=0.0) > 0.0
 
 
 def independent_reference(reference: pd.DataFrame) -> pd.DataFrame:
