@@ -120,8 +120,8 @@ def sensor_id(category: int, sac, sic) -> pd.Series:
     sac, sic = pd.Series(sac).astype("Int64"), pd.Series(sic).astype("Int64")
     a = sac.to_numpy(dtype=np.int64, na_value=-1)
     b = sic.to_numpy(dtype=np.int64, na_value=-1)
-    if len(a) and (a.min() < -1 or a.max() >= 1 << 20 or b.min() < -1 or b.max() >= 1 << 20):
-        a, b = pd.factorize(a)[0], pd.factorize(b)[0]  # beyond any SAC/SIC: numbered to fit the key
+    if ((sac < 0) | (sac >= 1 << 20) | (sic < 0) | (sic >= 1 << 20)).any():  # beyond any SAC/SIC byte
+        a, b = pd.factorize(sac)[0], pd.factorize(sic)[0]  # numbered to fit the key, a missing one -1
     # one integer per pair (a missing SAC or SIC its own value), each pair formatted once
     _, first, row_pair = np.unique((a + 1) * (1 << 21) + (b + 1), return_index=True, return_inverse=True)
     labels = [source_id(category, sac.iloc[i], sic.iloc[i]) for i in first]

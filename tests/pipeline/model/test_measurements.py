@@ -277,3 +277,6 @@ def test_sensor_ids_stay_whole_numbers_when_some_report_lacks_its_sac_or_sic():
     sac = pd.Series([1, None, 1, 7], dtype="Int64")
     ids = sensor_id(21, sac, pd.Series([2, 2, None, 129], dtype="Int64"))
     assert ids.astype(str).tolist() == ["021:1/2", "021:?/2", "021:1/?", "021:7/129"]
+    # a value no SAC byte holds stays itself, not taken for a missing one
+    odd = sensor_id(21, pd.Series([-1, None], dtype="Int64"), pd.Series([2, 2], dtype="Int64"))
+    assert odd.astype(str).tolist() == ["021:-1/2", "021:?/2"]
