@@ -398,9 +398,11 @@ def _merged(built: pd.DataFrame, own: pd.DataFrame, blocks: tuple[np.ndarray, np
     j = np.searchsorted(names, labels, side="left")
     found = (j < len(names)) & (names[np.minimum(j, len(names) - 1)] == labels)
     at = starts[j].copy()  # an aircraft built has none of: before the first label after it
-    for k in np.flatnonzero(found):
-        lo, hi = starts[j[k]], starts[j[k] + 1]
-        at[k] = lo + np.searchsorted(t[lo:hi], own_t[k], side="right")
+    runs = np.flatnonzero(np.r_[True, labels[1:] != labels[:-1]])  # own's rows come aircraft by aircraft
+    for a, b in zip(runs, np.r_[runs[1:], len(own)], strict=True):
+        if found[a]:
+            lo, hi = starts[j[a]], starts[j[a] + 1]
+            at[a:b] = lo + np.searchsorted(t[lo:hi], own_t[a:b], side="right")
     cuts = np.flatnonzero(np.r_[True, at[1:] != at[:-1]])
     pieces, done = [], 0
     for a, b in zip(cuts, np.r_[cuts[1:], len(own)], strict=True):
