@@ -165,39 +165,22 @@ def _fits(rid: str, given: Sequence[Outcome]) -> Outcome:
 
 
 def combine_counts(frames: Sequence[pd.DataFrame], keys: list[str]) -> pd.DataFrame:
-    """Tables of ``expected`` and ``detected`` updates per key (aircraft, band, cell) summed over windows, PD
+    """Tables of ``expected`` and ``detected`` updates per key (aircraft, band, class) summed over windows, PD
     and its Clopper-Pearson interval worked out again (and ``enough`` where the tables have it, from
-    bins.MIN_EXPECTED). Key order: first seen, bands by their lower end."""
-    from msdc.pipeline.evaluate.bins import MIN_EXPECTED
-
-    frames = [f for f in frames if f is not None and len(f)]
-    if not frames:
-        return pd.DataFrame()
-    whole = pd.concat(frames, ignore_index=True)
-    out = whole.groupby(keys, sort=False, dropna=False)[["expected", "detected"]].sum().reset_index()
-    if keys == ["low", "high"]:
-        out = out.sort_values("low", ignore_index=True)
-    p = proportion(out["detected"].to_numpy(np.int64), out["expected"].to_numpy(np.int64))
-    out["pd"], out["ci_low"], out["ci_high"] = p.value, p.ci_low, p.ci_high
-    if "enough" in whole.columns:
-        out["enough"] = out["expected"].to_numpy() >= MIN_EXPECTED
-    return out[[*(c for c in whole.columns if c in out.columns),
-                *(c for c in ("pd", "ci_low", "ci_high") if c not in whole.columns)]]
+    bins.MIN_EXPECTED). Key order: first seen, bands by their lower end (count_fold.CountFold)."""
+    fold = CountFold(keys)
+    for frame in frames:
+        fold.add(frame)
+    return fold.table()
 
 
 def combine_grid(frames: Sequence[pd.DataFrame]) -> pd.DataFrame:
     """PD grids (bins.detection_grid) of several windows as one: every cell of any window's grid, on the
     whole rectangle their bands make (a cell no window reached: nothing expected), x varying slowest."""
-    frames = [f for f in frames if f is not None and len(f)]
-    if not frames:
-        return pd.DataFrame()
-    whole = pd.concat(frames, ignore_index=True)
-    xs = whole[["x_low", "x_high"]].drop_duplicates().sort_values("x_low", ignore_index=True)
-    ys = whole[["y_low", "y_high"]].drop_duplicates().sort_values("y_low", ignore_index=True)
-    cells = xs.merge(ys, how="cross")
-    empty = cells.assign(expected=0, detected=0)
-    table = combine_counts([empty, *frames], ["x_low", "x_high", "y_low", "y_high"])
-    return cells.merge(table, on=["x_low", "x_high", "y_low", "y_high"], how="left")
+    fold = CountFold(GRID_KEYS, grid=True)
+    for frame in frames:
+        fold.add(frame)
+    return fold.table()
 
 
 def _joined_builders(group: np.ndarray, built_by: np.ndarray, n: int) -> list[str]:
