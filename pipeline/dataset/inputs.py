@@ -204,7 +204,7 @@ class DatasetInputs:
         frame = table.to_pandas(memory_pool=pool)
         for name in frame.columns:  # text labels as decoding gives them (object, not Arrow's str)
             if isinstance(frame[name].dtype, pd.CategoricalDtype):
-                cats = pd.Index(list(frame[name].cat.categories), dtype=object)
+                cats = pd.Index(frame[name].cat.categories.to_numpy(dtype=object), dtype=object)
                 frame[name] = pd.Categorical.from_codes(frame[name].cat.codes, categories=cats)
         offset = frame["offset"].to_numpy(np.int64)
         if bool(np.all(offset[1:] >= offset[:-1])):  # the parts as written, in file order: no copy

@@ -169,12 +169,20 @@ def _joined(recs: list[Recording], labels: list[str], date: dt.date | None
     for label, rec in zip(labels, recs, strict=True):
         spans.append(time_spans(rec.frames, date))
         for cat, frame in rec.frames.items():
-            by_cat.setdefault(cat, []).append(frame.assign(file=pd.Categorical([label] * len(frame))))
+            by_cat.setdefault(cat, []).append(frame.assign(file=_label_column(label, len(frame))))
         rec.frames = {}
     frames = {cat: _concat(parts) for cat, parts in by_cat.items()}
     del by_cat
     release_free_memory()
     return frames, spans
+
+
+def _label_column(label: str, n: int) -> pd.Categorical:
+    """``n`` rows of one text label as a categorical, from codes (no list of ``n`` strings to factorize);
+    no rows: no category, as pandas makes of an empty list."""
+    if not n:
+        return pd.Categorical([])
+    return pd.Categorical.from_codes(np.zeros(n, np.int8), categories=pd.Index([label]))
 
 
 def _load_dataset(dataset, categories, columns, progress: Progress | None) -> Loaded:

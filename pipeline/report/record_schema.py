@@ -55,18 +55,26 @@ class RecordSchema:
                              for name, kind in self.dtypes.items()}, index=frame.index, copy=False)
 
     def arrow(self):
-        """The Arrow schema (with pandas' metadata: nullable integers and categories read back as such)."""
-        import pyarrow as pa
+        """The Arrow schema (with pandas' metadata: nullable integers and categories read back as such),
+        made once per schema (a dataset's window reads it for every input and category)."""
+        return _arrow_schema(self.category, tuple(self.dtypes.items()))
 
-        template = self.conform(pd.DataFrame(index=pd.RangeIndex(0)))
-        schema = pa.Schema.from_pandas(template, preserve_index=False)
-        for name, kind in self.dtypes.items():
-            i = schema.get_field_index(name)
-            if kind == "text":
-                schema = schema.set(i, pa.field(name, pa.dictionary(pa.int32(), pa.string())))
-            elif kind == "timestamp":
-                schema = schema.set(i, pa.field(name, pa.timestamp("ns", tz="UTC")))
-        return schema
+
+@cache
+def _arrow_schema(category: int, dtypes: tuple[tuple[str, str], ...]):
+    """RecordSchema.arrow of the schema of these columns (an Arrow schema is immutable: shared)."""
+    import pyarrow as pa
+
+    words = dict(dtypes)
+    template = RecordSchema(category, words).conform(pd.DataFrame(index=pd.RangeIndex(0)))
+    schema = pa.Schema.from_pandas(template, preserve_index=False)
+    for name, kind in words.items():
+        i = schema.get_field_index(name)
+        if kind == "text":
+            schema = schema.set(i, pa.field(name, pa.dictionary(pa.int32(), pa.string())))
+        elif kind == "timestamp":
+            schema = schema.set(i, pa.field(name, pa.timestamp("ns", tz="UTC")))
+    return schema
 
 
 def absent(kind: str, n: int):
