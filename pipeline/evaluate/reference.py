@@ -318,15 +318,17 @@ def reference_values(reports: pd.DataFrame, reference: pd.DataFrame, column: str
     if column not in reference.columns:
         return out
     ref, trajs = checked_trajectories(reference)
-    values = shared(("object_column", id(ref), column), (ref,), lambda: ref[column].to_numpy(object))
     t = reports["t_s"].to_numpy(float)
     idx = reports["ref_index"].to_numpy()
     groups = rows_by_index(idx, len(trajs))
+    at = np.full(len(reports), -1, np.int64)  # per report, the reference row whose value it takes
     for k, tr in enumerate(trajs):
         rows = groups[k]
         if rows.size:
             i = np.clip(np.searchsorted(tr.t_s, t[rows], side="right") - 1, 0, tr.t_s.size - 1)
-            out[rows] = values[tr.rows[i]]
+            at[rows] = tr.rows[i]
+    taken = at >= 0  # only those rows' values made objects, not the whole reference's column
+    out[taken] = ref[column].iloc[at[taken]].to_numpy(object)
     out[pd.isna(out)] = None  # a missing value of any kind (NaN, <NA>) is None
     return out
 

@@ -156,8 +156,11 @@ def _under_test(meas: pd.DataFrame, preset, tests: tuple, trackers: list[str] = 
     sensors and the CAT062 ``trackers``), narrowed by --test."""
     from msdc.pipeline.evaluate.sensor_reports import judged_by
     from msdc.pipeline.model.report_selection import sensor_parts
+    from msdc.pipeline.model.schema import first_rows
 
-    pairs = meas[["sensor_id", "sensor_kind"]].astype(str).drop_duplicates().sort_values("sensor_id")
+    pairs = meas[["sensor_id", "sensor_kind"]]  # each distinct pair's first row, then as text
+    pairs = pairs.iloc[first_rows(pairs, ["sensor_id", "sensor_kind"])].astype(str).drop_duplicates()
+    pairs = pairs.sort_values("sensor_id")
     present = [*zip(pairs["sensor_id"], pairs["sensor_kind"], strict=True),
                *((t, "tracker") for t in trackers)]
     fits = [(s, k) for s, k in present if judged_by(k, preset.sensor_types)]
@@ -261,20 +264,28 @@ def _per_aircraft(sensor_id: str, reports: pd.DataFrame, reference: pd.DataFrame
     return out
 
 
+def _every_kth(rows: np.ndarray, limit: int) -> np.ndarray:
+    """Every k-th of the row positions ``rows`` so that about ``limit`` remain (all when fewer)."""
+    step = max(1, math.ceil(len(rows) / limit)) if limit > 0 else 1
+    return rows[::step]
+
+
 def _thinned(frame: pd.DataFrame, limit: int) -> pd.DataFrame:
     """Every k-th row so that about ``limit`` remain (all when fewer)."""
-    step = max(1, math.ceil(len(frame) / limit)) if limit > 0 else 1
-    return frame.iloc[::step]
+    return frame.iloc[_every_kth(np.arange(len(frame)), limit)]
 
 
 def _map_points(sensor_id: str, reports: pd.DataFrame, reference: pd.DataFrame,
                 association: dict) -> pd.DataFrame:
-    """The associated reports and the reference, per aircraft, thinned for the HTML map."""
+    """The associated reports and the reference, per aircraft, thinned for the HTML map (the rows chosen
+    first, then only the four columns the map shows taken of them)."""
     from msdc.pipeline.evaluate.reference import associated
 
     rep = associated(reports, reference, association)
-    rep = _thinned(rep[rep["ref_index"] >= 0], MAP_POINTS_PER_SENSOR)
-    ref = _thinned(reference, MAP_POINTS_PER_SENSOR)
+    kept = _every_kth(np.flatnonzero(rep["ref_index"].to_numpy() >= 0), MAP_POINTS_PER_SENSOR)
+    rep = rep[["ref_aircraft", "latitude", "longitude"]].iloc[kept]
+    ref = reference[["aircraft", "latitude", "longitude"]].iloc[_every_kth(np.arange(len(reference)),
+                                                                          MAP_POINTS_PER_SENSOR)]
     parts = [pd.DataFrame({"aircraft": rep["ref_aircraft"].astype(str).to_numpy(object), "source": "report",
                            "sensor": sensor_id, "latitude": rep["latitude"].to_numpy(float),
                            "longitude": rep["longitude"].to_numpy(float)}),
