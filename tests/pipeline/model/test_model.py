@@ -246,3 +246,17 @@ def test_equals_text_reads_as_the_text_column_does():
             assert not equals_text(s, "nan").any() and not equals_text(s, "048:20/2").any()
     codes = pd.Series([25, 201, 25]).astype("category")  # a categorical of numbers, read as their text
     assert equals_text(codes, "25").tolist() == [True, False, True]
+
+
+def test_first_rows_are_those_where_each_combination_first_appears():
+    from msdc.pipeline.model.schema import first_rows
+
+    sensor = ["048:20/1", "021:0/1", "048:20/1", None, "048:20/2", None, "021:0/1"]
+    kind = ["radar", "adsb", "radar", "radar", "radar", "radar", "mlat"]
+    for dtype in ("category", object, "string"):
+        frame = pd.DataFrame({"sensor_id": pd.Series(sensor, dtype=dtype),
+                              "kind": pd.Series(kind, dtype=dtype)})
+        # by hand: rows 0, 1 new; 2 repeats 0; 3 (missing, radar) new; 4 new; 5 repeats 3; 6 1's id, new kind
+        assert first_rows(frame, ["sensor_id", "kind"]).tolist() == [0, 1, 3, 4, 6]
+        assert first_rows(frame, ["sensor_id"]).tolist() == [0, 1, 3, 4]
+    assert first_rows(pd.DataFrame({"a": pd.Series([], dtype=object)}), ["a"]).tolist() == []
