@@ -211,7 +211,8 @@ def aircraft_labels(meas: pd.DataFrame) -> pd.DataFrame:
     for column in ("callsign", "address"):
         first, second = _most_common_by(adsb, column), _most_common_by(known, column)
         label = out["aircraft_id"].map(first)
-        out[column] = label.where(label.notna() & (label != ""), out["aircraft_id"].map(second)).fillna("")
+        label = label.where(label.notna() & (label != ""), out["aircraft_id"].map(second))
+        out[column] = label.astype(object).fillna("")  # all missing is float64, which "" cannot fill
     columns = ["aircraft_id", "callsign", "address"]  # built from lists: the dtypes pandas infers for text
     return pd.DataFrame({c: out[c].tolist() for c in columns}, columns=columns)
 

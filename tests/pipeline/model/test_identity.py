@@ -23,3 +23,15 @@ def test_labels_by_hand(dtype):
     got = aircraft_labels(meas)
     assert got.to_dict("list") == {"aircraft_id": ["A", "B", "C"], "callsign": ["AAA", "RAD", ""],
                                    "address": ["AAAAAA", "BBBBBB", "CCCCCC"]}
+
+
+@pytest.mark.filterwarnings("error")
+def test_an_aircraft_with_no_label_of_a_kind_reads_empty_without_a_warning():
+    # no call sign anywhere (a pandas 3 FutureWarning, a pandas 4 error, when "" filled a float column)
+    meas = pd.DataFrame({"aircraft_id": pd.Series(["M3A:1200", "40621D"], dtype="category"),
+                         "sensor_kind": pd.Series(["radar", "radar"], dtype="category"),
+                         "callsign": pd.Series([None, None], dtype=object),
+                         "address": pd.Series([None, "40621D"], dtype=object)})
+    got = aircraft_labels(meas)
+    assert got.to_dict("list") == {"aircraft_id": ["40621D", "M3A:1200"], "callsign": ["", ""],
+                                   "address": ["40621D", ""]}
