@@ -77,6 +77,13 @@ def enu_basis(lat_deg, lon_deg):
     return east, north, up
 
 
+def up_vector(lat_deg, lon_deg):
+    """The unit normal (``up`` of enu_basis, the same arithmetic) alone, shape (..., 3)."""
+    lat, lon = np.radians(lat_deg), np.radians(lon_deg)
+    cl = np.cos(lat)
+    return np.stack(np.broadcast_arrays(cl * np.cos(lon), cl * np.sin(lon), np.sin(lat)), axis=-1)
+
+
 def ecef_to_enu(x_m, y_m, z_m, lat0_deg, lon0_deg, h0_m):
     """Local east, north, up (m) of ECEF points relative to the origin (lat0, lon0, h0)."""
     ox, oy, oz = geodetic_to_ecef(lat0_deg, lon0_deg, h0_m)
@@ -104,7 +111,7 @@ def _solve_height(site_ecef, along, across_fn, target_alt_m, start):
     for _ in range(_NEWTON_STEPS):
         p, dp = across_fn(s)
         lat, lon, h = ecef_to_geodetic(p[..., 0], p[..., 1], p[..., 2])
-        _, _, normal = enu_basis(lat, lon)
+        normal = up_vector(lat, lon)  # east and north are not needed: a third of enu_basis's work
         slope = (dp * normal).sum(-1)
         err = h - target_alt_m
         with np.errstate(divide="ignore", invalid="ignore"):

@@ -163,3 +163,18 @@ def test_distance_vectorised_and_symmetric():
     assert np.all(d12 >= chord - 1e-6)
     assert np.all(d12 - chord <= d12**3 / (24 * 6.33e6**2) + 1e-3)
     assert np.isnan(distance_m(np.nan, 0.0, 0.0, 0.0))
+
+
+def test_up_vector_is_the_ellipsoid_normal():
+    from msdc.pipeline.model.geodesy import enu_basis, up_vector
+
+    # by hand: on the equator at longitude 0 and 90 E the normal is the ECEF x and y axis; at a pole, z
+    assert up_vector(0.0, 0.0).tolist() == [1.0, 0.0, 0.0]
+    assert np.allclose(up_vector(0.0, 90.0), [0.0, 1.0, 0.0], atol=1e-16)
+    assert np.allclose(up_vector(90.0, 33.0), [0.0, 0.0, 1.0], atol=1e-16)
+    c = np.sqrt(0.5)  # 45 N 45 E: cos 45 cos 45, cos 45 sin 45, sin 45
+    assert np.allclose(up_vector(45.0, 45.0), [0.5, 0.5, c], rtol=1e-15)
+    rng = np.random.default_rng(11)  # and enu_basis's up to the bit, NaN where a coordinate is missing
+    lat, lon = rng.uniform(-90, 90, 5000), rng.uniform(-400, 400, 5000)
+    lat[::50] = np.nan
+    assert np.array_equal(up_vector(lat, lon), enu_basis(lat, lon)[2], equal_nan=True)
