@@ -18,7 +18,6 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 from pandas.api.types import union_categoricals
-from scipy import stats
 
 from msdc.pipeline.evaluate.accuracy import ERROR_RANGE_BAND_NM, error_bands, error_notes
 from msdc.pipeline.evaluate.catalogue import CATALOGUE, ERROR, PROPORTION, RATE, SIGNED
@@ -28,6 +27,8 @@ from msdc.pipeline.evaluate.outcome import ErrorEvidence, FitEvidence, Outcome, 
 from msdc.pipeline.evaluate.presets import Requirement
 from msdc.pipeline.evaluate.spill import SpilledFrames
 from msdc.pipeline.evaluate.statistics import (
+    Z975,
+    chi2_sf,
     clustered_interval,
     interval_from_sums,
     pooled_sums,
@@ -37,7 +38,6 @@ from msdc.pipeline.evaluate.streamed import streamed_error_bands, streamed_inter
 
 # below this p-value the windows' fits of one bias disagree beyond their standard errors
 DRIFT_P = 0.01
-Z975 = stats.norm.ppf(0.975)
 # a spilled span pools a percentile, or its error bands, from more values than this in passes over the files
 # (streamed: the same figures, memory bounded by a window's values) instead of reading them back together
 VALUES_HELD = 5_000_000
@@ -150,7 +150,7 @@ def _fits(rid: str, given: Sequence[Outcome]) -> Outcome:
     value = float(np.sum(w * v) / np.sum(w))
     se = float(1.0 / np.sqrt(np.sum(w)))
     q = float(np.sum(w * (v - value) ** 2))
-    p = float(stats.chi2.sf(q, len(fits) - 1))
+    p = chi2_sf(q, len(fits) - 1)
     unit = fits[0].unit
     n = int(sum(f.n_reports for f in fits))
     notes = [f"the {len(fits)} windows' fits combined by inverse variance (a fit over the whole span may "

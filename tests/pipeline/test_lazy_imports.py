@@ -110,3 +110,15 @@ def test_correlate_and_quality_start_numba_without_scipy(tmp_path):
     assert "MAS72" in out and loaded == []
     out, loaded = _loaded("quality", *inputs, heavy=("scipy.linalg",))
     assert out and loaded == []
+
+
+def test_evaluate_takes_its_intervals_without_scipy_stats(tmp_path):
+    """evaluate's exact binomial and Poisson intervals and its bias-drift test come from scipy.special (the
+    functions scipy.stats evaluates for them): a worker restarted between windows imports no scipy.stats."""
+    out = tmp_path / "e.json"
+    _, loaded = _loaded("evaluate", "fixtures/radar.ast", "fixtures/adsb.ast", "--sensors",
+                        "fixtures/sensors.toml", "--preset", "eurocontrol-1997-ssr", "--date", "2019-03-01",
+                        "--json", str(out),
+                        heavy=("scipy.stats", "scipy.special"))
+    assert out.stat().st_size > 0  # the evaluation ran and wrote its intervals
+    assert loaded == ["scipy.special"]

@@ -331,3 +331,14 @@ def test_cluster_sums_refuse_a_percentile_and_say_so_for_one_or_no_aircraft():
     alone = interval_from_sums(one, "rms")
     assert alone.value == pytest.approx(np.sqrt(12.5)) and np.isnan(alone.ci_low) and alone.n_clusters == 1
     assert interval_from_sums(pooled_sums([]), "mean").reason == "no reports"
+
+
+def test_chi2_tail_and_normal_point_are_scipy_stats_values():
+    from msdc.pipeline.evaluate.statistics import Z975, chi2_sf
+
+    assert Z975 == pytest.approx(1.959963984540054, abs=1e-15)  # published: the normal's 97.5 % point
+    for dof in (1, 2, 7, 30):
+        for q in (0.0, 0.4, 3.84, 25.0):
+            assert chi2_sf(q, dof) == pytest.approx(float(stats.chi2.sf(q, dof)), rel=1e-14, abs=1e-300)
+    assert chi2_sf(3.84, 1) == pytest.approx(0.05, abs=1e-4)  # by table: chi2(1) 95 % point 3.84
+    assert math.isnan(chi2_sf(2.0, 0))  # one window's fit: no degree of freedom, no test
