@@ -174,10 +174,14 @@ def equals_text(values: pd.Series, text: str) -> np.ndarray:
 def first_rows(frame: pd.DataFrame, columns: list[str]) -> np.ndarray:
     """The positions, ascending, of the first row of each distinct combination of ``columns`` (missing
     values equal to one another), found on integer codes: no text made per row."""
-    key = np.zeros(len(frame), np.int64)
+    key, distinct = np.zeros(len(frame), np.int64), 1
     for c in columns:
         codes, uniques = pd.factorize(frame[c])
+        if distinct * (len(uniques) + 1) >= 2**62:  # renumbered before the packed key could overflow
+            _, key = np.unique(key, return_inverse=True)
+            distinct = int(key.max()) + 1 if len(key) else 1
         key = key * (len(uniques) + 1) + codes + 1
+        distinct *= len(uniques) + 1
     _, first = np.unique(key, return_index=True)
     return np.sort(first)
 

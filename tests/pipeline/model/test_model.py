@@ -260,3 +260,8 @@ def test_first_rows_are_those_where_each_combination_first_appears():
         assert first_rows(frame, ["sensor_id", "kind"]).tolist() == [0, 1, 3, 4, 6]
         assert first_rows(frame, ["sensor_id"]).tolist() == [0, 1, 3, 4]
     assert first_rows(pd.DataFrame({"a": pd.Series([], dtype=object)}), ["a"]).tolist() == []
+    # many columns of many values (a packed key past 2**62 is renumbered first): as pandas' duplicated
+    rng = np.random.default_rng(4)
+    wide = pd.DataFrame({f"c{i}": rng.integers(0, 3000, 400) for i in range(8)})
+    wide.iloc[200:] = wide.iloc[:200].to_numpy()  # every row of the second half repeats one of the first
+    assert first_rows(wide, list(wide.columns)).tolist() == np.flatnonzero(~wide.duplicated()).tolist()
