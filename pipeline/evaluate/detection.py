@@ -20,12 +20,12 @@ from msdc.pipeline.evaluate.reference import (
     parameter,
     shared,
 )
-from msdc.pipeline.evaluate.scans import period_from_markers, period_from_plots, update_groups
+from msdc.pipeline.evaluate.scans import period_from_markers, period_from_plots
 from msdc.pipeline.evaluate.statistics import proportion
+from msdc.pipeline.evaluate.update_times import aircraft_updates
 
 EXPECTED_COLUMNS = ["aircraft", "stretch", "t_s", "detected", "in_coverage", "rho_nm", "elevation_deg",
                     "azimuth_deg", "altitude_ft", "height_m"]
-EDGE_SLACK = 0.05  # of a period: a missed update this close outside a reference stretch still counts
 
 
 def update_period(reports: pd.DataFrame, sensor: Sensor) -> tuple[float, str]:
@@ -37,37 +37,6 @@ def update_period(reports: pd.DataFrame, sensor: Sensor) -> tuple[float, str]:
     mine = reports[reports["ref_index"] >= 0]
     period = period_from_plots(mine["t_s"].to_numpy(float), mine["ref_index"].to_numpy())
     return period, f"scan period {period:.4g} s estimated from the plots (no north markers)"
-
-
-def _missed_times(times: np.ndarray, start_s: float, end_s: float, period_s: float) -> np.ndarray:
-    """Times of the updates missed in a reference stretch with the given update times: in a gap g between
-    updates, round(g / T) - 1 evenly spaced; before the first and after the last, every T back to the
-    stretch's start and on to its end; with no update at all, every T from half a period after the start."""
-    if not times.size:
-        k = int(np.floor((end_s - start_s) / period_s + EDGE_SLACK))
-        return start_s + period_s * (np.arange(k) + 0.5)
-    before = int(np.floor((times[0] - start_s) / period_s + EDGE_SLACK))
-    after = int(np.floor((end_s - times[-1]) / period_s + EDGE_SLACK))
-    out = [times[0] - period_s * np.arange(before, 0, -1), times[-1] + period_s * np.arange(1, after + 1)]
-    gaps = np.diff(times)
-    for a, g in zip(times[:-1], gaps, strict=True):
-        m = int(round(g / period_s)) - 1
-        if m > 0:
-            out.append(a + g * np.arange(1, m + 1) / (m + 1))
-    return np.sort(np.concatenate(out))
-
-
-def _window_updates(times: np.ndarray, start_s: float, end_s: float,
-                    interval_s: float) -> tuple[np.ndarray, np.ndarray]:
-    """Whole intervals tiling a reference stretch from its start (a last partial one left out): each one's
-    middle time and whether it holds a report."""
-    k = int(np.floor((end_s - start_s) / interval_s + 1e-9))
-    edges = start_s + interval_s * np.arange(k + 1)
-    held = np.zeros(k, dtype=bool)
-    if k and times.size:
-        idx = np.searchsorted(edges, times, side="right") - 1
-        held[np.unique(idx[(idx >= 0) & (idx < k)])] = True
-    return edges[:-1] + 0.5 * interval_s, held
 
 
 def expected_updates(reports: pd.DataFrame, reference: pd.DataFrame, parameters: Mapping | None,
@@ -103,23 +72,15 @@ def _expected_updates(reports: pd.DataFrame, reference: pd.DataFrame, parameters
     cols: dict[str, list] = {c: [] for c in names}
     order = np.lexsort((t_all, idx))  # each reference aircraft's report times, sorted, one after the other
     t_sorted, idx_sorted = t_all[order], idx[order]
-    for k, tr in enumerate(trajs):  # the expected updates; where the sensor saw them, at once
-        mine = t_sorted[np.searchsorted(idx_sorted, k, "left"):np.searchsorted(idx_sorted, k, "right")]
-        for s, (a, b) in enumerate(tr.stretches(max_gap_s)):
-            times = mine[(mine >= a) & (mine <= b)]
-            if interval is not None:
-                t_exp, held = _window_updates(times, a, b, step)
-            else:
-                groups = update_groups(times, step)
-                first = times[np.concatenate([[True], np.diff(groups) > 0])] if times.size else times
-                missed = _missed_times(first, a, b, step)
-                t_exp = np.concatenate([first, missed])
-                held = np.concatenate([np.ones(first.size, bool), np.zeros(missed.size, bool)])
-            lat, lon, h, alt = tr.at(np.clip(t_exp, a, b), max_gap_s)
-            for c, v in (("aircraft", np.full(t_exp.size, tr.label, object)),
-                         ("stretch", np.full(t_exp.size, s, np.int64)), ("t_s", t_exp), ("detected", held),
-                         ("lat", lat), ("lon", lon), ("height_m", h), ("altitude_ft", alt)):
-                cols[c].append(v)
+    bounds = np.searchsorted(idx_sorted, np.arange(len(trajs) + 1), "left")
+    for k, tr in enumerate(trajs):  # the expected updates, stretch by stretch; where the sensor saw them
+        mine = t_sorted[bounds[k]:bounds[k + 1]]
+        stretch, t_exp, held, clipped = aircraft_updates(tr.t_s, mine, max_gap_s, step, interval is not None)
+        lat, lon, h, alt = tr.at(clipped, max_gap_s)
+        for c, v in (("aircraft", np.full(t_exp.size, tr.label, object)), ("stretch", stretch),
+                     ("t_s", t_exp), ("detected", held), ("lat", lat), ("lon", lon), ("height_m", h),
+                     ("altitude_ft", alt)):
+            cols[c].append(v)
     if cols["t_s"]:
         whole = {c: np.concatenate(v) for c, v in cols.items()}
         rho, az, el = sensor.polar_azimuth(whole.pop("lat"), whole.pop("lon"), whole["height_m"])
