@@ -31,12 +31,12 @@ def _stretch_bounds(t_ref: np.ndarray, max_gap_s: float) -> tuple[np.ndarray, np
 
 
 @njit(cache=True, nogil=True)
-def _scan_updates(times: np.ndarray, a: float, b: float, period_s: float, t_out: np.ndarray,
+def _scan_updates(mine: np.ndarray, i0: int, i1: int, a: float, b: float, period_s: float, t_out: np.ndarray,
                   held: np.ndarray, at: int, count_only: bool) -> int:
-    """One stretch's updates by scans: the first report of each update (a report less than half a period
-    after the previous one is the same update), then the missed ones sorted (detection._missed_times);
-    written from ``at`` unless ``count_only``; returns how many."""
-    n = times.size
+    """One stretch's updates by scans (its reports ``mine[i0:i1]``): the first report of each update (a
+    report less than half a period after the previous one is the same update), then the missed ones sorted
+    (detection._missed_times); written from ``at`` unless ``count_only``; returns how many."""
+    n = i1 - i0
     if n == 0:
         k = int(math.floor((b - a) / period_s + EDGE_SLACK))
         if not count_only:
@@ -46,10 +46,10 @@ def _scan_updates(times: np.ndarray, a: float, b: float, period_s: float, t_out:
         return k
     first = np.empty(n)
     nf = 1
-    first[0] = times[0]
-    for i in range(1, n):
-        if times[i] - times[i - 1] > 0.5 * period_s:
-            first[nf] = times[i]
+    first[0] = mine[i0]
+    for i in range(i0 + 1, i1):
+        if mine[i] - mine[i - 1] > 0.5 * period_s:
+            first[nf] = mine[i]
             nf += 1
     before = int(math.floor((first[0] - a) / period_s + EDGE_SLACK))
     after = int(math.floor((b - first[nf - 1]) / period_s + EDGE_SLACK))
@@ -63,32 +63,32 @@ def _scan_updates(times: np.ndarray, a: float, b: float, period_s: float, t_out:
     for i in range(nf):
         t_out[at + i] = first[i]
         held[at + i] = True
-    missed = np.empty(n_missed)
-    j = 0
+    # the missed ones in ascending order as they are made (no sort): those before the first update, those
+    # of each gap (inside it, gap after gap), those after the last
+    j = at + nf
     for r in range(before, 0, -1):
-        missed[j] = first[0] - period_s * r
-        j += 1
-    for r in range(1, after + 1):
-        missed[j] = first[nf - 1] + period_s * r
+        t_out[j] = first[0] - period_s * r
         j += 1
     for i in range(nf - 1):
         g = first[i + 1] - first[i]
         m = int(np.rint(g / period_s)) - 1
         for r in range(1, m + 1):
-            missed[j] = first[i] + g * r / (m + 1)
+            t_out[j] = first[i] + g * r / (m + 1)
             j += 1
-    missed.sort()
-    for i in range(n_missed):
-        t_out[at + nf + i] = missed[i]
-        held[at + nf + i] = False
+    for r in range(1, after + 1):
+        t_out[j] = first[nf - 1] + period_s * r
+        j += 1
+    for i in range(at + nf, j):
+        held[i] = False
     return nf + n_missed
 
 
 @njit(cache=True, nogil=True)
-def _interval_updates(times: np.ndarray, a: float, b: float, interval_s: float, t_out: np.ndarray,
-                      held: np.ndarray, at: int, count_only: bool) -> int:
-    """One stretch's whole intervals from its start, each one's middle time and whether it holds a report
-    (detection._window_updates); written from ``at`` unless ``count_only``; returns how many."""
+def _interval_updates(mine: np.ndarray, i0: int, i1: int, a: float, b: float, interval_s: float,
+                      t_out: np.ndarray, held: np.ndarray, at: int, count_only: bool) -> int:
+    """One stretch's whole intervals from its start (its reports ``mine[i0:i1]``), each one's middle time
+    and whether it holds a report (detection._window_updates); written from ``at`` unless ``count_only``;
+    returns how many."""
     k = int(math.floor((b - a) / interval_s + 1e-9))
     if count_only:
         return k
@@ -98,11 +98,13 @@ def _interval_updates(times: np.ndarray, a: float, b: float, interval_s: float, 
     for i in range(k):
         t_out[at + i] = edges[i] + 0.5 * interval_s
         held[at + i] = False
-    if k and times.size:
-        idx = np.searchsorted(edges, times, side="right") - 1
-        for i in range(idx.size):
-            if 0 <= idx[i] < k:
-                held[at + idx[i]] = True
+    if k:
+        j = 0  # the reports are sorted: each one's interval (edges up to and including it, less one)
+        for i in range(i0, i1):
+            while j <= k and edges[j] <= mine[i]:
+                j += 1
+            if 0 <= j - 1 < k:
+                held[at + j - 1] = True
     return k
 
 
@@ -114,26 +116,32 @@ def aircraft_updates(t_ref: np.ndarray, mine: np.ndarray, max_gap_s: float, step
     to the stretch (where the reference is read), stretch by stretch as detection's table lists them."""
     lo, hi = _stretch_bounds(t_ref, max_gap_s)
     empty_t, empty_h = np.empty(0), np.empty(0, np.bool_)
-    spans = np.empty((lo.size, 2), np.int64)  # each stretch's reports: mine[spans[s, 0]:spans[s, 1]]
+    spans = np.zeros((lo.size, 2), np.int64)  # each stretch's reports: mine[spans[s, 0]:spans[s, 1]]
     total = 0
     for s in range(lo.size):
-        keep = np.flatnonzero((mine >= lo[s]) & (mine <= hi[s]))
-        spans[s, 0] = keep[0] if keep.size else 0
-        spans[s, 1] = keep[-1] + 1 if keep.size else 0
-        times = mine[spans[s, 0]:spans[s, 1]]
+        first, n = -1, 0
+        for i in range(mine.size):  # sorted (a missing time last): those within the stretch are a run
+            if mine[i] >= lo[s] and mine[i] <= hi[s]:
+                if first < 0:
+                    first = i
+                n += 1
+        if n:
+            spans[s, 0], spans[s, 1] = first, first + n
         if by_interval:
-            total += _interval_updates(times, lo[s], hi[s], step_s, empty_t, empty_h, 0, True)
+            total += _interval_updates(mine, spans[s, 0], spans[s, 1], lo[s], hi[s], step_s, empty_t,
+                                       empty_h, 0, True)
         else:
-            total += _scan_updates(times, lo[s], hi[s], step_s, empty_t, empty_h, 0, True)
+            total += _scan_updates(mine, spans[s, 0], spans[s, 1], lo[s], hi[s], step_s, empty_t, empty_h, 0,
+                                   True)
     stretch = np.empty(total, np.int64)
     t_out, held, clipped = np.empty(total), np.empty(total, np.bool_), np.empty(total)
     at = 0
     for s in range(lo.size):
-        times = mine[spans[s, 0]:spans[s, 1]]
         if by_interval:
-            n = _interval_updates(times, lo[s], hi[s], step_s, t_out, held, at, False)
+            n = _interval_updates(mine, spans[s, 0], spans[s, 1], lo[s], hi[s], step_s, t_out, held, at,
+                                  False)
         else:
-            n = _scan_updates(times, lo[s], hi[s], step_s, t_out, held, at, False)
+            n = _scan_updates(mine, spans[s, 0], spans[s, 1], lo[s], hi[s], step_s, t_out, held, at, False)
         for i in range(at, at + n):
             stretch[i] = s
             clipped[i] = min(max(t_out[i], lo[s]), hi[s])
