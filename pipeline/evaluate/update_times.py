@@ -1,6 +1,7 @@
-"""The updates a sensor should have made of one reference aircraft, in one compiled pass: the arithmetic of
-``detection._missed_times`` and ``detection._window_updates`` over every stretch of the aircraft (the same
-values, operation for operation), without a numpy call per stretch (some 5,000 a window at the peak)."""
+"""The updates a sensor should have made of one reference aircraft (detection.expected_updates), in one
+compiled pass over every stretch of the aircraft: the arithmetic of the numpy formulation it replaced,
+operation for operation (kept as the reference of tests/pipeline/evaluate/test_update_times.py), without a
+numpy call per stretch (some 5,000 a window at the peak)."""
 
 from __future__ import annotations
 
@@ -35,7 +36,9 @@ def _scan_updates(mine: np.ndarray, i0: int, i1: int, a: float, b: float, period
                   held: np.ndarray, at: int, count_only: bool) -> int:
     """One stretch's updates by scans (its reports ``mine[i0:i1]``): the first report of each update (a
     report less than half a period after the previous one is the same update), then the missed ones sorted
-    (detection._missed_times); written from ``at`` unless ``count_only``; returns how many."""
+    (in a gap g, round(g / T) - 1 evenly spaced; before the first and after the last, every T back to the
+    stretch's start and on to its end; with none, every T from T/2); written from ``at`` unless
+    ``count_only``; returns how many."""
     n = i1 - i0
     if n == 0:
         k = int(math.floor((b - a) / period_s + EDGE_SLACK))
@@ -86,8 +89,8 @@ def _scan_updates(mine: np.ndarray, i0: int, i1: int, a: float, b: float, period
 @njit(cache=True, nogil=True)
 def _interval_updates(mine: np.ndarray, i0: int, i1: int, a: float, b: float, interval_s: float,
                       t_out: np.ndarray, held: np.ndarray, at: int, count_only: bool) -> int:
-    """One stretch's whole intervals from its start (its reports ``mine[i0:i1]``), each one's middle time
-    and whether it holds a report (detection._window_updates); written from ``at`` unless ``count_only``;
+    """One stretch's whole intervals from its start (its reports ``mine[i0:i1]``; a last partial one left
+    out), each one's middle time and whether it holds a report; written from ``at`` unless ``count_only``;
     returns how many."""
     k = int(math.floor((b - a) / interval_s + 1e-9))
     if count_only:
