@@ -135,9 +135,10 @@ def _stream(path: Path, label: str, settings: IngestSettings, root: Path, iid: s
             cats: list[int], pool, seen: _Seen, on_chunk) -> list[dict]:
     """The input streamed in chunks (asterix.iter_read) into one writer: its parts' records."""
     import msdc.asterix as asterix
-    from msdc.pipeline.dataset.writer import InputWriter, arrow_schema
+    from msdc.pipeline.dataset.writer import InputWriter
+    from msdc.pipeline.report.record_schema import record_schema
 
-    writer = InputWriter(root, iid, {c: arrow_schema(c) for c in cats})
+    writer = InputWriter(root, iid, {c: record_schema(c).arrow() for c in cats})
     bar = (lambda done, total, what: on_chunk(done, total, f"{path.name}: {what}")) if on_chunk else None
     try:
         for rec in asterix.iter_read(path, chunk=settings.chunk_bytes,

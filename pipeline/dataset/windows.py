@@ -6,7 +6,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from msdc.pipeline.dataset.writer import InputWriter, arrow_schema
+from msdc.pipeline.dataset.writer import InputWriter
+from msdc.pipeline.report.record_schema import record_schema
 
 KEPT_COLUMNS = ("day", "time_of_day", "offset")  # what the main process's tallies read of a window's records
 
@@ -18,7 +19,7 @@ def write_window(path: str, plan, window, label: str, root: Path, input_id: str,
     from msdc.asterix.stream import decode_window
 
     rec = decode_window(path, plan, window)
-    schemas = {c: arrow_schema(c) for c in categories}
+    schemas = {c: record_schema(c).arrow() for c in categories}
     writer = InputWriter(root, f"{input_id}-{window.index:05d}", schemas)
     try:
         rows = writer.add_recording(rec, label)

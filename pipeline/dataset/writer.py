@@ -7,7 +7,6 @@ from __future__ import annotations
 import datetime as dt
 import os
 from dataclasses import dataclass, field
-from functools import cache
 from pathlib import Path
 
 import numpy as np
@@ -49,15 +48,6 @@ class _Open:
     offset_min: int = -1
     offset_max: int = -1
     slot: int = -1  # the latest time slot (ROW_GROUP_SPAN_NS) of the rows held; -1: none yet
-
-
-@cache
-def arrow_schema(category: int):
-    """The Arrow schema of a category's parts (record_schema's), built once per process: building it takes
-    about 0.2 s, which every input and every window paid."""
-    from msdc.pipeline.report.record_schema import record_schema
-
-    return record_schema(category).arrow()
 
 
 def time_slots(timestamps: pd.Series) -> np.ndarray:

@@ -6,7 +6,7 @@ import numpy as np
 import pandas as pd
 import pyarrow.parquet as pq
 
-from msdc.pipeline.dataset.writer import ROW_GROUP_SPAN_NS, InputWriter, arrow_schema
+from msdc.pipeline.dataset.writer import ROW_GROUP_SPAN_NS, InputWriter
 from msdc.pipeline.report.record_schema import record_schema
 
 
@@ -26,7 +26,7 @@ def test_row_groups_hold_one_time_slot_each_and_every_row_in_file_order(tmp_path
     minutes = np.concatenate([np.arange(0, 30, 0.5), [5.0], np.arange(30, 50, 0.5)]) * span_min / 20
     rows = _plots(minutes)
     rows.loc[70, "timestamp"] = pd.NaT
-    writer = InputWriter(tmp_path, "abc", {48: arrow_schema(48)})
+    writer = InputWriter(tmp_path, "abc", {48: record_schema(48).arrow()})
     dates = np.full(len(rows), np.datetime64("2026-11-28"), "datetime64[D]")
     for part in np.array_split(np.arange(len(rows)), 3):
         writer.add(48, rows.iloc[part], dates[part])
