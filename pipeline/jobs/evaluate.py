@@ -264,15 +264,14 @@ def _per_aircraft(sensor_id: str, reports: pd.DataFrame, reference: pd.DataFrame
     return out
 
 
-def _every_kth(rows: np.ndarray, limit: int) -> np.ndarray:
-    """Every k-th of the row positions ``rows`` so that about ``limit`` remain (all when fewer)."""
-    step = max(1, math.ceil(len(rows) / limit)) if limit > 0 else 1
-    return rows[::step]
+def _step(n: int, limit: int) -> int:
+    """k such that every k-th of ``n`` rows leaves about ``limit`` (1: all, when fewer)."""
+    return max(1, math.ceil(n / limit)) if limit > 0 else 1
 
 
 def _thinned(frame: pd.DataFrame, limit: int) -> pd.DataFrame:
     """Every k-th row so that about ``limit`` remain (all when fewer)."""
-    return frame.iloc[_every_kth(np.arange(len(frame)), limit)]
+    return frame.iloc[::_step(len(frame), limit)]
 
 
 def _map_points(sensor_id: str, reports: pd.DataFrame, reference: pd.DataFrame,
@@ -282,10 +281,9 @@ def _map_points(sensor_id: str, reports: pd.DataFrame, reference: pd.DataFrame,
     from msdc.pipeline.evaluate.reference import associated
 
     rep = associated(reports, reference, association)
-    kept = _every_kth(np.flatnonzero(rep["ref_index"].to_numpy() >= 0), MAP_POINTS_PER_SENSOR)
-    rep = rep[["ref_aircraft", "latitude", "longitude"]].iloc[kept]
-    ref = reference[["aircraft", "latitude", "longitude"]].iloc[_every_kth(np.arange(len(reference)),
-                                                                          MAP_POINTS_PER_SENSOR)]
+    kept = np.flatnonzero(rep["ref_index"].to_numpy() >= 0)
+    rep = rep[["ref_aircraft", "latitude", "longitude"]].iloc[kept[::_step(len(kept), MAP_POINTS_PER_SENSOR)]]
+    ref = _thinned(reference[["aircraft", "latitude", "longitude"]], MAP_POINTS_PER_SENSOR)
     parts = [pd.DataFrame({"aircraft": rep["ref_aircraft"].astype(str).to_numpy(object), "source": "report",
                            "sensor": sensor_id, "latitude": rep["latitude"].to_numpy(float),
                            "longitude": rep["longitude"].to_numpy(float)}),
