@@ -7,6 +7,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 import pytest
+from frames import assert_frame_equal
 
 import msdc.asterix as asterix
 from msdc.pipeline.model.measurements import DECODED_COLUMNS, build_measurements
@@ -23,7 +24,7 @@ def test_selected_columns_equal_the_full_decode(path, cat):
     part = asterix.read(path, date="2019-03-01", columns=["address", "callsign_hex", "flight_level"])
     got = part.frames[cat]
     assert set(got.columns) == {*BASE, "address", "callsign", "callsign_hex", "flight_level"}
-    pd.testing.assert_frame_equal(got, full[got.columns])
+    assert_frame_equal(got, full[got.columns])
     streamed = pd.concat([r.frames[cat] for r in asterix.iter_read(path, chunk=20_000, columns=["address"])],
                          ignore_index=True)
     assert set(streamed.columns) == {*BASE, "address"} and len(streamed) == len(full)
@@ -39,7 +40,7 @@ def test_measurements_from_the_selected_columns_equal_those_from_every_column():
     full = [asterix.read(p, date="2019-03-01").frames for p in (RADAR, ADSB)]
     part = [asterix.read(p, date="2019-03-01", columns=DECODED_COLUMNS).frames for p in (RADAR, ADSB)]
     assert len(part[0][48].columns) < len(full[0][48].columns) / 2
-    pd.testing.assert_frame_equal(build_measurements(part[0][48], part[1][21], sensors),
+    assert_frame_equal(build_measurements(part[0][48], part[1][21], sensors),
                                   build_measurements(full[0][48], full[1][21], sensors))
 
 

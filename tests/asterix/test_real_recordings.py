@@ -7,6 +7,7 @@ import numpy as np
 import pandas as pd
 import pytest
 from asterix_bytes import SHARED
+from frames import assert_frame_equal
 
 import msdc.asterix as asterix
 
@@ -80,7 +81,7 @@ def test_unpinned_0_23_decodes_as_the_pinned_edition():
     rec = asterix.read(path)
     assert rec.editions == {21: "0.23"} and rec.errors.empty
     assert "chose 0.23" in rec.edition_choice[21] and not pinned.edition_choice
-    pd.testing.assert_frame_equal(rec.frames[21], pinned.frames[21])
+    assert_frame_equal(rec.frames[21], pinned.frames[21])
 
 
 def test_0_23_pinned_to_2_7_names_its_edition_and_decodes_no_wrong_value():

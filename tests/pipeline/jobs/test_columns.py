@@ -9,6 +9,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 import pytest
+from frames import assert_frame_equal
 
 from msdc.pipeline.jobs import correlate
 from msdc.pipeline.jobs import quality as quality_jobs
@@ -63,7 +64,7 @@ def test_narrow_measurements_are_the_full_ones_columns(sensors):
     _, full = load_measurements(INPUTS, sensors)
     for columns in (["time", "aircraft_id", "sigma_major_m"], ["sensor_id", "rho_nm", "nacp"]):
         _, narrow = load_measurements(INPUTS, sensors, columns=columns, chunk=40_000)  # many chunks joined
-        pd.testing.assert_frame_equal(narrow, full[columns])
+        assert_frame_equal(narrow, full[columns])
 
 
 @pytest.mark.parametrize("bounds", [("2024-01-01T08:40:00Z", "2024-01-01T09:00:00Z"), ("08:40", "09:00")],
@@ -88,7 +89,7 @@ def test_the_window_margin_is_the_same_in_chunks_whole_and_from_frames(sensors, 
     got.append((meas, cut.reports, cut.left_out))
     _, whole = load_measurements(INPUTS, sensors, date=day)
     for meas, reports, left_out in got:
-        pd.testing.assert_frame_equal(meas, got[0][0])
+        assert_frame_equal(meas, got[0][0])
         assert (reports, left_out) == (got[0][1], got[0][2]) == (len(whole) - len(meas), {"time": reports})
     t = got[0][0]["time"]
     assert t.min() >= pd.Timestamp(f"{day}T08:25Z") and t.max() <= pd.Timestamp(f"{day}T09:15Z")
@@ -120,8 +121,8 @@ def _assert_same_windows(narrow, full) -> None:
     assert len(narrow.windows) == len(full.windows) > 0
     for (s_n, slots_n, lags_n), (s_f, slots_f, lags_f) in zip(_windows(narrow), _windows(full), strict=True):
         assert s_n == s_f
-        pd.testing.assert_frame_equal(slots_n, slots_f)
-        pd.testing.assert_frame_equal(lags_n, lags_f)
+        assert_frame_equal(slots_n, slots_f)
+        assert_frame_equal(lags_n, lags_f)
 
 
 @pytest.mark.parametrize("kw", [{}, {"drop_jumps": True, "min_nic": 5, "min_nacp": 7},
@@ -144,7 +145,7 @@ def test_mark_once_with_the_jump_flag_alone(sensors):
     full, flag = mark_once(meas), mark_once(meas, flags=["jump"])
     assert "jump" in flag and not {"jump_size_m", "fit_latitude", "fit_longitude"} & set(flag)
     assert np.array_equal(flag["jump"].to_numpy(), full["jump"].to_numpy()) and flag["jump"].any()
-    pd.testing.assert_frame_equal(flag, full.drop(columns=["jump_size_m", "fit_latitude", "fit_longitude"]))
+    assert_frame_equal(flag, full.drop(columns=["jump_size_m", "fit_latitude", "fit_longitude"]))
 
 
 def quality(**kw) -> QualityOptions:
@@ -182,9 +183,9 @@ def test_quality_on_the_narrow_frame_equals_the_full_frame(kw, monkeypatch):
     assert "cov_ee_m2" in seen[1] and "mode3a" in seen[1]
     assert list(narrow.quality.sheets) == list(full.quality.sheets)
     for name, table in full.quality.sheets.items():
-        pd.testing.assert_frame_equal(narrow.quality.sheets[name], table, check_exact=True)
+        assert_frame_equal(narrow.quality.sheets[name], table, check_exact=True)
     assert len(narrow.quality.errors) > 0 and len(narrow.quality.sheets["Jumps"]) > 0
-    pd.testing.assert_frame_equal(narrow.quality.errors, full.quality.errors, check_exact=True)
+    assert_frame_equal(narrow.quality.errors, full.quality.errors, check_exact=True)
 
 
 def test_correlate_quality_on_the_narrow_frame_equals_the_full_frame(monkeypatch):
@@ -199,7 +200,7 @@ def test_correlate_quality_on_the_narrow_frame_equals_the_full_frame(monkeypatch
     _assert_same_windows(narrow.run, full.run)
     assert list(narrow.quality.sheets) == list(full.quality.sheets) and "Jumps" in full.quality.sheets
     for name, table in full.quality.sheets.items():
-        pd.testing.assert_frame_equal(narrow.quality.sheets[name], table, check_exact=True)
+        assert_frame_equal(narrow.quality.sheets[name], table, check_exact=True)
     assert len(narrow.quality.errors) > 0 and len(narrow.quality.sheets["Jumps"]) > 0
-    pd.testing.assert_frame_equal(narrow.quality.errors, full.quality.errors, check_exact=True)
+    assert_frame_equal(narrow.quality.errors, full.quality.errors, check_exact=True)
     assert narrow.run.extra_sheets.keys() == full.run.extra_sheets.keys()

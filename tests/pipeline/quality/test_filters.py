@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import pandas as pd
 import pytest
+from frames import assert_frame_equal
 
 from fixtures.simulate import simulate
 from msdc.pipeline.model.measurements import adsb_measurements
@@ -31,7 +32,7 @@ def truth(sim):
 def test_off_by_default(adsb):
     kept, removed = apply_filters(adsb)
     assert list(removed) == FILTER_KEYS and not any(removed.values())
-    pd.testing.assert_frame_equal(kept, adsb.reset_index(drop=True))
+    assert_frame_equal(kept, adsb.reset_index(drop=True))
 
 
 def test_low_nic_and_low_nacp_counts_equal_the_injected_episodes(sim, adsb, truth):
