@@ -11,6 +11,10 @@ the simulator's: per rate, the share of runs whose draws' interval holds it, and
 missed although the draws held.
 
     python benchmarks/evaluate_endtoend.py [--runs 100] [--seed0 1] [--effects issue|low] [--truth-draws]
+        [--rows RUNS.csv]
+
+``--rows`` writes each run's figures (seed, requirement, held, value, n, held by the truth's own draws), so
+that seed ranges can be compared afterwards without running them again.
 """
 
 from __future__ import annotations
@@ -121,17 +125,23 @@ def main() -> None:
     parser.add_argument("--effects", choices=sorted(EFFECTS), default="issue")
     parser.add_argument("--truth-draws", action="store_true",
                         help="also the coverage of the simulator's own realised code draws")
+    parser.add_argument("--rows", type=Path, help="write each run's figures to this CSV file")
     args = parser.parse_args()
     eff = EFFECTS[args.effects]
     rows: dict[str, list] = {}
+    runs: list[dict] = []
     seconds = []
     with tempfile.TemporaryDirectory() as tmp:
         for seed in range(args.seed0, args.seed0 + args.runs):
             start = time.perf_counter()
             for ident, got in one_run(eff, seed, Path(tmp), args.truth_draws).items():
                 rows.setdefault(ident, []).append(got)
+                runs.append({"seed": seed, "requirement": ident, "held": got[0], "value": got[1], "n": got[2],
+                             "truth_draws_held": got[3]})
             seconds.append(time.perf_counter() - start)
             print(f"seed {seed}: {seconds[-1]:.1f} s", file=sys.stderr, flush=True)
+    if args.rows:
+        pd.DataFrame(runs).to_csv(args.rows, index=False)
     truths = expected_rates(eff, 4.8)
     last = args.seed0 + args.runs - 1
     print(f"msdc evaluate end to end, effects '{args.effects}' ({eff}), seeds {args.seed0}-{last}: "
@@ -147,7 +157,7 @@ def main() -> None:
         own = [g[3] for g in got if g[3] is not None]
         # own misses: runs the evaluation's interval missed although the truth's own draws' interval held
         own_misses = sum(1 for g in got if g[3] and not g[0])
-        own_col = (f" {np.mean(own):11.2f} {own_misses:10d}" if own else f" {'':11s} {'':10s}") \
+        own_col = (f" {np.mean(own):11.3f} {own_misses:10d}" if own else f" {'':11s} {'':10s}") \
             if args.truth_draws else ""
         print(f"{ident:24s} {truth:>9s} {f'{held.sum()}/{held.size}':>10s} "
               f"{np.mean([g[1] for g in got]):14.5f} {np.mean([g[2] for g in got]):8.0f}{own_col}")
