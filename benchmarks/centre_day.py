@@ -20,8 +20,8 @@ waypoint flight around the centre, flown by its exact segment kinematics, evalua
 an hour at once; positions go to WGS-84 and to each sensor's slant range and azimuth with
 ``fixtures.geodesy``, values are quantised to the ASTERIX LSBs as ``fixtures.simulate`` does, and the frames
 are encoded with ``msdc.asterix.encode``. A radar reports an aircraft once per scan, when its beam crosses
-it (with 70 m / 0.08 deg noise, 97 % detection, within its range); an ADS-B station reports every aircraft
-within 250 NM every 0.5-1 s.
+it (with 70 m / 0.08 deg noise, 97 % detection, within its range and above -1 deg of elevation, both
+declared in the sensor file); an ADS-B station reports every aircraft within 250 NM every 0.5-1 s.
 
 The ingest measurements are those of ``benchmarks/ingest.py`` (a fresh process per run into an empty
 dataset; peak RSS of the main process and of the largest worker; CPU of the process tree).
@@ -73,6 +73,7 @@ ADSB_INTERVAL_S = (0.5, 1.0)  # 1-2 Hz
 ADSB_RANGE_NM = 250.0
 ADSB_SIGMA_M = 5.0
 DETECTION = 0.97
+MIN_ELEVATION_DEG = -1.0  # a radar sees no aircraft below this elevation from its site (the Earth's bulge)
 SIGMA_RANGE_M, SIGMA_AZIMUTH_DEG = 70.0, 0.08
 RECORDS_PER_BLOCK = 25
 GENERATOR = 2  # recordings made by an earlier version are made again (2: one plot per crossing)
@@ -241,7 +242,7 @@ def radar_frame(fleet: Fleet, radar: Radar, t0: float, t1: float, rng: np.random
     az, slant, el, st = azimuth(t)
     # a crossing belongs to the scan whose turn it falls in: an aircraft on the north azimuth solves to the
     # end of one scan and the start of the next, the same crossing twice
-    keep = ((t >= t0) & (t < t1) & (t >= fleet.start[k]) & (t <= fleet.end[k]) & (el > -1.0)
+    keep = ((t >= t0) & (t < t1) & (t >= fleet.start[k]) & (t <= fleet.end[k]) & (el > MIN_ELEVATION_DEG)
             & (t >= north) & (t < north + period)
             & (slant <= radar.range_nm * geo.M_PER_NM) & (rng.uniform(size=len(t)) < DETECTION))
     k, t, az, slant = k[keep], t[keep], az[keep], slant[keep]
@@ -355,10 +356,7 @@ def generate(out: Path, hours: int, peak: int, seed: int, date: str = DATE) -> d
     finally:
         for fh in files.values():
             fh.close()
-    toml = "".join(sensors_toml(r.site) + f"sigma_range_m = {SIGMA_RANGE_M!r}\n"
-                   f"sigma_azimuth_deg = {SIGMA_AZIMUTH_DEG!r}\nmax_range_nm = {r.range_nm!r}\n\n"
-                   for r in radars)
-    (tmp / "sensors.toml").write_text(toml)
+    (tmp / "sensors.toml").write_text(sensors_text(radars))
     meta = {"generator": GENERATOR, "hours": hours, "peak": peak, "seed": seed, "date": date,
             "from_tod_s": t0, "to_tod_s": t1,
             "airborne_peak_seen": peak_seen,
@@ -373,8 +371,16 @@ def generate(out: Path, hours: int, peak: int, seed: int, date: str = DATE) -> d
     return meta
 
 
+def sensors_text(radars: list[Radar]) -> str:
+    """The sensor file of the radars: site, noise and coverage as simulated (range and lowest elevation)."""
+    return "".join(sensors_toml(r.site) + f"sigma_range_m = {SIGMA_RANGE_M!r}\n"
+                   f"sigma_azimuth_deg = {SIGMA_AZIMUTH_DEG!r}\nmax_range_nm = {r.range_nm!r}\n"
+                   f"min_elevation_deg = {MIN_ELEVATION_DEG!r}\n\n" for r in radars)
+
+
 def recordings(base: Path, hours: int, peak: int, seed: int, date: str = DATE) -> tuple[Path, dict]:
-    """The window's folder and scenario, generated unless a previous run left them for these parameters."""
+    """The window's folder and scenario, generated unless a previous run left them for these parameters
+    (their sensor file written again: it describes the simulation, whichever version wrote the folder)."""
     name = f"centre-{hours}h-seed{seed}" if peak == 450 else f"centre-{hours}h-peak{peak}-seed{seed}"
     out = base / (name if date == DATE else f"{name}-{date}")
     meta_path = out / "scenario.json"
@@ -382,6 +388,7 @@ def recordings(base: Path, hours: int, peak: int, seed: int, date: str = DATE) -
         meta = json.loads(meta_path.read_text())
         wanted = (GENERATOR, hours, peak, seed, date)
         if (meta.get("generator"), meta["hours"], meta["peak"], meta["seed"], meta["date"]) == wanted:
+            (out / "sensors.toml").write_text(sensors_text(sensors(seed)[0]))
             return out, meta
     print(f"generating {out} ...", flush=True)
     return out, generate(out, hours, peak, seed, date)
