@@ -26,6 +26,9 @@ from msdc.pipeline.evaluate.update_times import aircraft_updates
 
 EXPECTED_COLUMNS = ["aircraft", "stretch", "t_s", "detected", "in_coverage", "rho_nm", "elevation_deg",
                     "azimuth_deg", "altitude_ft", "height_m"]
+# with no minimum elevation declared, the expected updates inside coverage below the lowest elevation the
+# sensor detected (all missed, perhaps below a radar's horizon) are said once they are this share or more
+BELOW_DETECTIONS_SHARE = 0.01
 
 
 def update_period(reports: pd.DataFrame, sensor: Sensor) -> tuple[float, str]:
@@ -94,7 +97,26 @@ def _expected_updates(reports: pd.DataFrame, reference: pd.DataFrame, parameters
     det = table["detected"].to_numpy(bool)
     cov = coverage(sensor, table["rho_nm"].to_numpy(float)[det], table["elevation_deg"].to_numpy(float)[det])
     table["in_coverage"] = cov.inside(table["rho_nm"], table["elevation_deg"])
-    return table[EXPECTED_COLUMNS], cov, (said, cov.source)
+    below = _below_detections(table) if sensor.min_elevation_deg is None else None
+    return table[EXPECTED_COLUMNS], cov, (said, cov.source, *([below] if below else []))
+
+
+def _below_detections(table: pd.DataFrame) -> str | None:
+    """A note when BELOW_DETECTIONS_SHARE or more of the expected updates inside coverage lie below the
+    lowest elevation of the detected ones: a radar's horizon, undeclared, counts them all as missed."""
+    inside = table["in_coverage"].to_numpy(bool)
+    elevation = table["elevation_deg"].to_numpy(float)
+    detected = inside & table["detected"].to_numpy(bool) & np.isfinite(elevation)
+    if not detected.any():
+        return None
+    lowest = float(elevation[detected].min())
+    below = int((inside & (elevation < lowest)).sum())
+    share = below / int(inside.sum())
+    if share < BELOW_DETECTIONS_SHARE:
+        return None
+    return (f"{below} expected updates inside coverage ({100 * share:.1f} %) lie below the lowest elevation "
+            f"the sensor detected ({lowest:.2f} deg), all missed: no min_elevation_deg is declared; if that "
+            "is the radar's horizon, declare it in the sensor file")
 
 
 def _per_aircraft(table: pd.DataFrame) -> pd.DataFrame:

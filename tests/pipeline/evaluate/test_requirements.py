@@ -76,6 +76,24 @@ def test_an_aircraft_leaving_coverage_is_not_expected_outside():
     assert counts(run("pd", reports([0, 4, 8]), reference())) == (3, 6)
 
 
+def test_missed_updates_below_every_detection_are_said_when_no_minimum_elevation_is_declared():
+    # flying out at height 0 the aircraft sinks below the site's horizon: the three missed updates (12, 16,
+    # 20 s) lie lower than the lowest detection (30.8 NM, 8 s). On the ellipsoid along the equator's
+    # meridian, a surface point at chord c is at elevation -asin(c / 2M), M = a (1 - e^2) = 6,335,439 m:
+    # -0.258 deg at 30.8 NM
+    lowest = -np.degrees(np.arcsin(30.8 * 1852.0 / (2 * 6_335_439.0)))
+    out = run("pd", reports([0, 4, 8]), reference())
+    assert counts(out) == (3, 6)
+    said = [n for n in out.notes if "below the lowest elevation" in n]
+    assert said == [f"3 expected updates inside coverage (50.0 %) lie below the lowest elevation the sensor "
+                    f"detected ({lowest:.2f} deg), all missed: no min_elevation_deg is declared; if that is "
+                    "the radar's horizon, declare it in the sensor file"]
+    # declared, the minimum is the user's: nothing said; a missed update above the lowest detection: nothing
+    declared = Sensor(0.0, 0.0, 0.0, max_range_nm=100.0, min_elevation_deg=-5.0, north_markers_s=MARKERS)
+    assert not [n for n in run("pd", reports([0, 4, 8]), reference(), declared).notes if "lowest" in n]
+    assert not [n for n in run("pd", reports([0, 4, 8, 16, 20]), reference()).notes if "lowest" in n]
+
+
 def test_two_plots_in_one_scan_are_one_update():
     times = [0, 4, 4, 8]
     rep = reports(times)
