@@ -13,7 +13,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from msdc.pipeline.jobs.common import Checked, JobError, OptionError, check_decoding, nonempty_path
-from msdc.pipeline.jobs.options import DEFAULT_CATEGORIES, DecodingOptions, IngestOptions, check_declared
+from msdc.pipeline.jobs.options import INGEST_CATEGORIES, DecodingOptions, IngestOptions, check_declared
 
 # what the pool's processes import (about 0.6 s of CPU each), imported once by the forkserver they fork from,
 # then the decoder's compiled kernels loaded there (dataset.warm: about 1 s of CPU each)
@@ -94,7 +94,7 @@ def ingest_job(options: IngestOptions, *, on_chunk: Callable[[int, int, str], No
                 manifest = mf.load(root)
             except mf.ManifestError as exc:
                 raise JobError(str(exc), 2) from None
-            settings = IngestSettings(sorted(set(options.categories or DEFAULT_CATEGORIES)),
+            settings = IngestSettings(sorted(set(options.categories or INGEST_CATEGORIES)),
                                       max(int(options.chunk_mb * 1e6), 1), checked.editions,
                                       list(options.editions), options.date, options.format, options.lenient,
                                       options.workers)

@@ -48,6 +48,11 @@ class OptionError(ValueError):
 
 CATEGORIES = tuple(sorted(DECODABLE))  # decode --category: any category msdc decodes
 DEFAULT_CATEGORIES = tuple(sorted(MEASUREMENT_CATEGORIES))  # decoded when no --category is given
+# ingested when no --category is given: every one but CAT001, the jobs on a dataset reading theirs (evaluate:
+# the CAT034/CAT002 north markers for the scan period, the CAT062 tracks under test). CAT001 plots take their
+# time from the CAT002 messages before them, so asking for them decodes a raw stream in one pass, not in
+# windows on --workers (asterix.stream.can_pool): --category 1 asks
+INGEST_CATEGORIES = tuple(c for c in CATEGORIES if c != 1)
 CHUNK_RANGE_MB = (0.1, 4096.0)
 GAP_RANGE_S = (0.1, 86400.0)
 SLOT_RANGE_S = (0.1, 3600.0)  # below 0.1 s the slot count and the lag tables explode
@@ -816,10 +821,11 @@ class IngestOptions:
                                "else a raw recording's windows are decoded in parallel (the rows are those "
                                "of one process)")
     categories: tuple[int, ...] = option((), "--category", repeat=True, choices=CATEGORIES,
-                                         help="only this category (repeatable; default: the measurement "
-                                              "categories 48, 21, 10 and 20)",
-                                         doc="ingest only this category, any msdc decodes (repeatable); "
-                                             "without it CAT048, CAT021, CAT010 and CAT020 are ingested")
+                                         help="only this category (repeatable; default: every category "
+                                              "msdc decodes but CAT001)",
+                                         doc="ingest only this category (repeatable); without it every "
+                                             "category msdc decodes but CAT001 is ingested, the service "
+                                             "messages and system tracks the jobs on a dataset read included")
     lenient: bool = option(False, "--lenient",
                            help="ingest what decodes even when an input is mostly not ASTERIX (said as a "
                                 "warning; else an error and that input is not ingested)")

@@ -277,3 +277,28 @@ def test_a_run_lists_and_dates_only_the_inputs_it_reads(tmp_path):
     earlier = hashlib.sha256(rec.read_bytes()).hexdigest()
     assert [i["sha256"] for i in both["inputs"]] == [earlier, *fixtures]
     assert both["parameters"]["date"] == "2026-11-20"
+
+
+def test_a_default_ingest_keeps_the_north_markers_evaluate_reads(tmp_path):
+    """A radar recording with CAT034 north markers, ingested with no --category: the dataset holds them, and
+    evaluate on it takes the scan period from them and gives the recordings' JSON (with only the measurement
+    categories ingested, the period was estimated from the plots, another figure)."""
+    from fixtures.radar_effects import RadarEffects, simulate_effects
+    from msdc.asterix.encode import encode_frame
+
+    sim = simulate_effects(effects=RadarEffects(pd=0.9), seed=3)
+    radar, adsb, sensors = tmp_path / "radar.ast", tmp_path / "adsb.ast", tmp_path / "sensors.toml"
+    radar.write_bytes(encode_frame(48, sim.radar) + encode_frame(34, sim.north_markers))
+    adsb.write_bytes(encode_frame(21, sim.sim.adsb))
+    sensors.write_text(sim.sensors_toml(coverage=True))
+    root = tmp_path / "data"
+    assert main(["ingest", str(radar), str(adsb), "--dataset", str(root), "--date", "2020-01-01"]) == 0
+    stored = {p.name for p in (root / "date=2020-01-01").iterdir()}
+    assert stored == {"category=021", "category=034", "category=048"}
+    command = ["--sensors", str(sensors), "--preset", "eurocontrol-1997-ssr"]
+    files = _json(tmp_path, "files", ["evaluate", str(radar), str(adsb), "--date", "2020-01-01", *command])
+    on_dataset = _json(tmp_path, "dataset", ["evaluate", "--dataset", str(root), *command,
+                                             "--scheduler", "none"])
+    pd_notes = [r["notes"] for r in on_dataset["results"] if r["requirement"] == "pd"]
+    assert any(" north markers; " in n for n in pd_notes)  # the per-scan pd row (the other: 5 s intervals)
+    assert on_dataset == files
