@@ -121,15 +121,9 @@ def aircraft_updates(t_ref: np.ndarray, mine: np.ndarray, max_gap_s: float, step
     empty_t, empty_h = np.empty(0), np.empty(0, np.bool_)
     spans = np.zeros((lo.size, 2), np.int64)  # each stretch's reports: mine[spans[s, 0]:spans[s, 1]]
     total = 0
-    for s in range(lo.size):
-        first, n = -1, 0
-        for i in range(mine.size):  # sorted (a missing time last): those within the stretch are a run
-            if mine[i] >= lo[s] and mine[i] <= hi[s]:
-                if first < 0:
-                    first = i
-                n += 1
-        if n:
-            spans[s, 0], spans[s, 1] = first, first + n
+    for s in range(lo.size):  # mine sorted (a missing time last): those within the stretch are a run
+        spans[s, 0] = np.searchsorted(mine, lo[s], side="left")
+        spans[s, 1] = max(np.searchsorted(mine, hi[s], side="right"), spans[s, 0])
         if by_interval:
             total += _interval_updates(mine, spans[s, 0], spans[s, 1], lo[s], hi[s], step_s, empty_t,
                                        empty_h, 0, True)
