@@ -330,6 +330,57 @@ def _chained_inside(buf, q, end, stop, framing, memo):
 
 
 @njit(cache=True, nogil=True)
+def _met_chain(buf, r, stop, seen, framing, memo):
+    """The chain from r holds for two blocks at least (LOOKAHEAD at most, to the end or a truncated tail),
+    every block of a category already met and each decoded one walking exactly: a stretch of real blocks
+    (a chain of chance headers meets a category not met within a block or two)."""
+    base = framing[0]
+    x = r
+    k = 0
+    while k < LOOKAHEAD and x < stop:
+        n = _header(buf, x, stop)
+        if n < 0:
+            return k >= 2 and _cut_tail(buf, x, stop, seen)
+        c = buf[x]
+        if seen[c] == 0 or (base[c] >= 0 and not _walks_at(buf, x, n, c, framing, memo)):
+            return False
+        x += n
+        k += 1
+    return k >= 2
+
+
+@njit(cache=True, nogil=True)
+def _proven_inside(buf, q, end, stop, seen, framing, memo):
+    """Real blocks lie inside (q, end): a block of a met category not decoded starts a _met_chain there, or
+    a chain from there reaches a decoded block that walks and is followed by two blocks that prove
+    themselves (_next_proves) or by the end. Real blocks a damaged LEN swallows come one after another;
+    bytes inside a large block of another category read as a short walking block by chance are followed by
+    more such bytes. What a block whose own next block proves its LEN must hide to lose it."""
+    base = framing[0]
+    for r in range(q + 1, end):
+        if seen[buf[r]] == 1 and base[buf[r]] < 0 and _met_chain(buf, r, stop, seen, framing, memo):
+            return True
+        x = r
+        while x < end:
+            n = _header(buf, x, stop)
+            if n < 0:
+                break
+            c = buf[x]
+            if base[c] >= 0:
+                if _walks_at(buf, x, n, c, framing, memo):
+                    y = x + n
+                    if y == stop:
+                        return True
+                    if _next_proves(buf, y, stop, seen, framing, memo):
+                        m = _header(buf, y, stop)
+                        if m < 0 or _next_proves(buf, y + m, stop, seen, framing, memo):
+                            return True  # a truncated tail, or a second proving block after the first
+                break
+            x += n
+    return False
+
+
+@njit(cache=True, nogil=True)
 def _hides_decoded(buf, q, end, framing):
     """A block of a walked category that walks exactly lies inside (q, end): cheap check of a block of
     another category before its LEN is trusted (a damaged LEN there can swallow real blocks)."""
@@ -567,11 +618,25 @@ def frame_window(buf, seg_start, seg_stop, seg_mode, framing, st, seen, memo, se
                             ok = ((q + n == stop or _anchored(buf, q + n, stop, seen, framing, memo))
                                   and not _chained_inside(buf, q, q + n, stop, framing, memo))
                     elif seen[c] == 1:
-                        ok = (_next_ok(buf, q + n, stop, seen, framing, memo)
-                              and not _chained_inside(buf, q, q + n, stop, framing, memo))
-                    else:  # a category not met yet: its chain must be anchored, and hide no real blocks
-                        ok = ((q + n == stop or _anchored(buf, q, stop, seen, framing, memo))
-                              and not _chained_inside(buf, q, q + n, stop, framing, memo))
+                        # a met category's block whose next block proves its LEN keeps it unless real
+                        # blocks lie inside it (_proven_inside): inside a large block (a tracker's 25
+                        # track messages) some bytes read as a short walking block by chance
+                        if _next_proves(buf, q + n, stop, seen, framing, memo):
+                            ok = not _proven_inside(buf, q, q + n, stop, seen, framing, memo)
+                        else:
+                            ok = (_next_ok(buf, q + n, stop, seen, framing, memo)
+                                  and not _chained_inside(buf, q, q + n, stop, framing, memo))
+                    else:  # a category not met yet: its chain must be anchored, and hide no real blocks,
+                        # unless the blocks after it prove its LEN as they would a met category's
+                        seen[c] = 1
+                        proven = _next_proves(buf, q + n, stop, seen, framing, memo)
+                        hides = proven and _proven_inside(buf, q, q + n, stop, seen, framing, memo)
+                        seen[c] = 0
+                        if proven:
+                            ok = not hides
+                        else:
+                            ok = ((q + n == stop or _anchored(buf, q, stop, seen, framing, memo))
+                                  and not _chained_inside(buf, q, q + n, stop, framing, memo))
                 if ok:
                     if nb == b_start.shape[0]:
                         b_start, b_len, b_seg, b_cat = _grow4(b_start, b_len, b_seg, b_cat)

@@ -10,6 +10,7 @@ count as ASTERIX: msdc cannot check them.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -140,8 +141,9 @@ def recorder_words(path, skipped_blocks: int, fmt: str) -> str:
 def not_asterix_text(name: str, tally: Tally, head: bytes, sampled: int = 0) -> str:
     """'NAME is not ASTERIX', what reading it found and what its first bytes are; ``sampled``: the bytes
     read when the account is of windows of a larger file (sniff)."""
-    of = (f"of {sampled} bytes read at its start, middle and end, {tally.undecoded_share:.0%}" if sampled else
-          f"{tally.undecoded_share:.0%} of its {tally.payload} bytes")
+    share = f"{math.floor(100 * tally.undecoded_share)}%"  # 100% only when no byte decodes
+    of = (f"of {sampled} bytes read at its start, middle and end, {share}" if sampled else
+          f"{share} of its {tally.payload} bytes")
     return (f"{name} is not ASTERIX: read as {tally.format or 'raw'}, {of} frame into no data block that "
             f"decodes ({tally._where()}); {head_words(head)}")
 
