@@ -78,7 +78,15 @@ class DecodeResult:
             return ", ".join(f"CAT{c:03d} ({n} block(s))" for c, n in sorted(cats.items())) or "no data block"
 
         holds = "; ".join(f"{path} holds {listed(cats)}" for path, cats in self.held.items())
-        return f"nothing could be decoded{asked}" + (f": {holds}" if holds else "")
+        from msdc.pipeline.jobs.options import CATEGORIES, DEFAULT_CATEGORIES
+
+        asked_for = categories or DEFAULT_CATEGORIES
+        others = sorted({c for cats in self.held.values() for c in cats if c in CATEGORIES} - set(asked_for))
+        hint = ("; msdc decodes " + ", ".join(f"CAT{c:03d}" for c in others) + " with "
+                + " ".join(f"--category {c}" for c in others)
+                + ("" if categories else " (without --category: the measurement categories "
+                   + ", ".join(f"CAT{c:03d}" for c in DEFAULT_CATEGORIES) + ")")) if others else ""
+        return f"nothing could be decoded{asked}" + (f": {holds}" if holds else "") + hint
 
 
 def decode_job(options: DecodeOptions, *, on_chunk: Callable[[int, int, str], None] | None = None,

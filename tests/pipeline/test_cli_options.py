@@ -294,7 +294,30 @@ def test_a_category_the_input_lacks_is_named_with_what_it_holds(tmp_path, capsys
     out.mkdir()
     status, _, err = _run(["decode", str(radar), "--category", "21", "-o", str(out / "x.csv")], capsys)
     assert status == 1 and "Traceback" not in err
-    assert (f"msdc: nothing could be decoded with --category 21: {radar} holds CAT048 ({blocks} block(s))"
+    assert (f"msdc: nothing could be decoded with --category 21: {radar} holds CAT048 ({blocks} block(s)); "
+            "msdc decodes CAT048 with --category 48" in err)
+    assert _contents(out) == set()
+
+
+def test_a_trackers_recording_decoded_with_the_defaults_names_the_category_to_ask(tmp_path, capsys):
+    """A recording of CAT062 system tracks alone, decoded without --category (the measurement categories):
+    nothing decodes, and the message names the --category that decodes it, not a list of bytes read as
+    CAT010 records (which the framer made of the track messages before it stepped over their blocks)."""
+    import pandas as pd
+
+    from msdc.asterix.encode import encode_frame
+
+    frame = pd.DataFrame({"sac": 25, "sic": 100, "time_of_day": [float(t) for t in range(100)],
+                          "latitude": 41.3, "longitude": 2.1, "track_number": list(range(100)),
+                          "flight_level": 350.0, "x_m": 1000.0, "y_m": -2000.0, "vx_ms": 200.0, "vy_ms": 0.0})
+    path = tmp_path / "tracks.ast"
+    path.write_bytes(encode_frame(62, frame, records_per_block=25))
+    out = tmp_path / "out"
+    out.mkdir()
+    status, _, err = _run(["decode", str(path), "-o", str(out / "x.csv")], capsys)
+    assert status == 1 and "Traceback" not in err
+    assert (f"msdc: nothing could be decoded: {path} holds CAT062 (4 block(s)); msdc decodes CAT062 with "
+            "--category 62 (without --category: the measurement categories CAT010, CAT020, CAT021, CAT048)"
             in err)
     assert _contents(out) == set()
 
