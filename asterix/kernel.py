@@ -330,53 +330,46 @@ def _chained_inside(buf, q, end, stop, framing, memo):
 
 
 @njit(cache=True, nogil=True)
-def _met_chain(buf, r, stop, seen, framing, memo):
-    """The chain from r holds for two blocks at least (LOOKAHEAD at most, to the end or a truncated tail),
-    every block of a category already met and each decoded one walking exactly: a stretch of real blocks
-    (a chain of chance headers meets a category not met within a block or two)."""
-    base = framing[0]
-    x = r
-    k = 0
-    while k < LOOKAHEAD and x < stop:
-        n = _header(buf, x, stop)
-        if n < 0:
-            return k >= 2 and _cut_tail(buf, x, stop, seen)
-        c = buf[x]
-        if seen[c] == 0 or (base[c] >= 0 and not _walks_at(buf, x, n, c, framing, memo)):
-            return False
-        x += n
-        k += 1
-    return k >= 2
+def _proves_len(buf, x, stop, seen, framing, memo):
+    """_next_proves without its truncated tail: the end itself, a decoded block that walks exactly, or a
+    met category's anchored chain at x (a header whose LEN runs past the end is met by chance near the end
+    of any data, so it proves no LEN of a block not walked)."""
+    if x == stop:
+        return True
+    n = _header(buf, x, stop)
+    if n < 0:
+        return False
+    return _next_proves(buf, x, stop, seen, framing, memo)
 
 
 @njit(cache=True, nogil=True)
 def _proven_inside(buf, q, end, stop, seen, framing, memo):
-    """Real blocks lie inside (q, end): a block of a met category not decoded starts a _met_chain there, or
-    a chain from there reaches a decoded block that walks and is followed by two blocks that prove
-    themselves (_next_proves) or by the end. Real blocks a damaged LEN swallows come one after another;
-    bytes inside a large block of another category read as a short walking block by chance are followed by
-    more such bytes. What a block whose own next block proves its LEN must hide to lose it."""
+    """Real blocks lie inside (q, end): from some offset there a chain of blocks of categories already met
+    (each decoded one walking exactly) lands exactly on ``end``, two blocks or more, or one decoded block
+    that walks. The real blocks a damaged LEN swallows run on to the real block that LEN lands on; a chance
+    reading inside a large block of another category (bytes of a tracker's 25 track messages read as a
+    short CAT010 block that walks) runs off elsewhere. What a block whose next block proves its LEN (so that
+    ``end`` starts a real block) must hide to lose it."""
     base = framing[0]
     for r in range(q + 1, end):
-        if seen[buf[r]] == 1 and base[buf[r]] < 0 and _met_chain(buf, r, stop, seen, framing, memo):
-            return True
         x = r
+        k = 0
+        walked = False
         while x < end:
             n = _header(buf, x, stop)
             if n < 0:
                 break
             c = buf[x]
-            if base[c] >= 0:
-                if _walks_at(buf, x, n, c, framing, memo):
-                    y = x + n
-                    if y == stop:
-                        return True
-                    if _next_proves(buf, y, stop, seen, framing, memo):
-                        m = _header(buf, y, stop)
-                        if m < 0 or _next_proves(buf, y + m, stop, seen, framing, memo):
-                            return True  # a truncated tail, or a second proving block after the first
+            if seen[c] == 0 and base[c] < 0:
                 break
+            if base[c] >= 0:
+                if not _walks_at(buf, x, n, c, framing, memo):
+                    break
+                walked = True
             x += n
+            k += 1
+        if x == end and (k >= 2 or walked):
+            return True
     return False
 
 
@@ -618,10 +611,11 @@ def frame_window(buf, seg_start, seg_stop, seg_mode, framing, st, seen, memo, se
                             ok = ((q + n == stop or _anchored(buf, q + n, stop, seen, framing, memo))
                                   and not _chained_inside(buf, q, q + n, stop, framing, memo))
                     elif seen[c] == 1:
-                        # a met category's block whose next block proves its LEN keeps it unless real
-                        # blocks lie inside it (_proven_inside): inside a large block (a tracker's 25
-                        # track messages) some bytes read as a short walking block by chance
-                        if _next_proves(buf, q + n, stop, seen, framing, memo):
+                        # a met category's block whose next block proves its LEN keeps it unless a chain
+                        # of real blocks inside it lands on that next block (_proven_inside): inside a
+                        # large block (a tracker's 25 track messages) some bytes read as a short walking
+                        # block by chance
+                        if _proves_len(buf, q + n, stop, seen, framing, memo):
                             ok = not _proven_inside(buf, q, q + n, stop, seen, framing, memo)
                         else:
                             ok = (_next_ok(buf, q + n, stop, seen, framing, memo)
@@ -629,7 +623,7 @@ def frame_window(buf, seg_start, seg_stop, seg_mode, framing, st, seen, memo, se
                     else:  # a category not met yet: its chain must be anchored, and hide no real blocks,
                         # unless the blocks after it prove its LEN as they would a met category's
                         seen[c] = 1
-                        proven = _next_proves(buf, q + n, stop, seen, framing, memo)
+                        proven = _proves_len(buf, q + n, stop, seen, framing, memo)
                         hides = proven and _proven_inside(buf, q, q + n, stop, seen, framing, memo)
                         seen[c] = 0
                         if proven:
