@@ -331,15 +331,18 @@ def _chained_inside(buf, q, end, stop, framing, memo):
 
 @njit(cache=True, nogil=True)
 def _proves_len(buf, x, stop, seen, framing, memo):
-    """_next_proves without its truncated tail: the end itself, a decoded block that walks exactly, or a
-    met category's anchored chain at x (a header whose LEN runs past the end is met by chance near the end
-    of any data, so it proves no LEN of a block not walked)."""
+    """The blocks at x prove the LEN of a block not walked that ends there: the end itself, or two blocks in
+    a row each proving itself as in _next_proves (a decoded block walking exactly, a met category's anchored
+    chain), the second possibly ending the data. Not a truncated tail, which a header near the end of any
+    data reads as; not one short decoded block, which bytes inside real data read as by chance (a CAT010
+    record is a few bytes), but two in a row are not met by chance."""
     if x == stop:
         return True
     n = _header(buf, x, stop)
-    if n < 0:
+    if n < 0 or not _next_proves(buf, x, stop, seen, framing, memo):
         return False
-    return _next_proves(buf, x, stop, seen, framing, memo)
+    y = x + n
+    return y == stop or (_header(buf, y, stop) > 0 and _next_proves(buf, y, stop, seen, framing, memo))
 
 
 @njit(cache=True, nogil=True)
