@@ -349,15 +349,16 @@ def _proves_len(buf, x, stop, seen, framing, memo):
 def _proven_inside(buf, q, end, stop, seen, framing, memo):
     """Real blocks lie inside (q, end): from some offset there a chain of blocks of categories already met
     (each decoded one walking exactly) lands exactly on ``end``, two blocks or more, or one decoded block
-    that walks. The real blocks a damaged LEN swallows run on to the real block that LEN lands on; a chance
-    reading inside a large block of another category (bytes of a tracker's 25 track messages read as a
-    short CAT010 block that walks) runs off elsewhere. What a block whose next block proves its LEN (so that
-    ``end`` starts a real block) must hide to lose it."""
+    that walks; or holds LOOKAHEAD decoded blocks that walk, wherever it ends (``end`` proven by chance in
+    the middle of real data). The real blocks a damaged LEN swallows run on to the real block that LEN
+    lands on; a chance reading inside a large block of another category (bytes of a tracker's 25 track
+    messages read as a short CAT010 block that walks) runs off elsewhere. What a block whose next blocks
+    prove its LEN must hide to lose it."""
     base = framing[0]
     for r in range(q + 1, end):
         x = r
         k = 0
-        walked = False
+        walked = 0
         while x < end:
             n = _header(buf, x, stop)
             if n < 0:
@@ -368,10 +369,12 @@ def _proven_inside(buf, q, end, stop, seen, framing, memo):
             if base[c] >= 0:
                 if not _walks_at(buf, x, n, c, framing, memo):
                     break
-                walked = True
+                walked += 1
+                if walked == LOOKAHEAD:  # real decoded blocks, wherever ``end`` is
+                    return True
             x += n
             k += 1
-        if x == end and (k >= 2 or walked):
+        if x == end and (k >= 2 or walked > 0):
             return True
     return False
 
