@@ -346,6 +346,29 @@ def _proves_len(buf, x, stop, seen, framing, memo):
 
 
 @njit(cache=True, nogil=True)
+def _kin_chain(buf, x, stop, c, framing, memo):
+    """The blocks from x, LOOKAHEAD of them or to the end, are each of category c or a decoded block that
+    walks exactly, and of c twice at least or never: what proves the LEN of a block of a category not met
+    yet (a tracker's first CAT062 block, followed by more of them or by the radars' plots). One chance header
+    of c whose LEN lands on a real block start is not enough; two are not met by chance."""
+    base = framing[0]
+    k = 0
+    kin = 0
+    while k < LOOKAHEAD and x < stop:
+        n = _header(buf, x, stop)
+        if n < 0:
+            return False
+        d = buf[x]
+        if d == c:
+            kin += 1
+        elif base[d] < 0 or not _walks_at(buf, x, n, d, framing, memo):
+            return False
+        x += n
+        k += 1
+    return (k == LOOKAHEAD or (k >= 1 and x == stop)) and kin != 1
+
+
+@njit(cache=True, nogil=True)
 def _proven_inside(buf, q, end, stop, seen, framing, memo):
     """Real blocks lie inside (q, end): from some offset there a chain of blocks of categories already met
     (each decoded one walking exactly) lands exactly on ``end``, two blocks or more, or one decoded block
@@ -627,9 +650,9 @@ def frame_window(buf, seg_start, seg_stop, seg_mode, framing, st, seen, memo, se
                             ok = (_next_ok(buf, q + n, stop, seen, framing, memo)
                                   and not _chained_inside(buf, q, q + n, stop, framing, memo))
                     else:  # a category not met yet: its chain must be anchored, and hide no real blocks,
-                        # unless the blocks after it prove its LEN as they would a met category's
-                        seen[c] = 1
-                        proven = _proves_len(buf, q + n, stop, seen, framing, memo)
+                        # unless the blocks after it are of its category or decoded ones that walk
+                        proven = q + n == stop or _kin_chain(buf, q + n, stop, c, framing, memo)
+                        seen[c] = 1  # real blocks of its own category inside it count as met
                         hides = proven and _proven_inside(buf, q, q + n, stop, seen, framing, memo)
                         seen[c] = 0
                         if proven:
