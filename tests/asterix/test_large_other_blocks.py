@@ -13,42 +13,24 @@ from pathlib import Path
 
 import numpy as np
 import pandas as pd
+from live_bytes import raw_blocks
 
 import msdc.asterix as asterix
 from msdc.asterix.encode import encode_frame
 
 RECORDS_PER_BLOCK = 25
-CALLSIGNS = np.array(["MAS72", "AXM123", "SIA305", "DLH65A", "BAW22", "EZS14ZH", "KLM1605", "UAE343"])
 
 
 def _tracks(n: int, rng: np.random.Generator) -> pd.DataFrame:
-    """System track messages with the items a tracker sends on nearly every update."""
-    ac = rng.integers(0, len(CALLSIGNS), n)
-    return pd.DataFrame({
-        "sac": 25, "sic": 100, "service_id": 1, "time_of_day": np.sort(rng.uniform(0, 86000, n)).round(7),
-        "latitude": rng.uniform(-10, 10, n), "longitude": rng.uniform(95, 115, n),
-        "x_m": rng.uniform(-4e5, 4e5, n).round(), "y_m": rng.uniform(-4e5, 4e5, n).round(),
-        "vx_ms": rng.uniform(-250, 250, n), "vy_ms": rng.uniform(-250, 250, n),
-        "mode3a": pd.Series(rng.integers(0, 4096, n)).map(lambda v: f"{v:04o}"),
-        "callsign": CALLSIGNS[ac], "address": pd.Series(0x750000 + ac).map(lambda v: f"{v:06X}"),
-        "track_number": rng.integers(0, 65536, n), "track_age_s": 0.25, "ssr_age_s": 2.5,
-        "flight_level": rng.integers(0, 1600, n) / 4, "accuracy_x_m": 50.0, "accuracy_y_m": 50.0,
-    })
+    """System track messages as the decode benchmark makes them (the items a tracker sends on nearly every
+    update)."""
+    return _bench_decode().cat062_frame(n, rng)
 
 
 def _plots(n: int, rng: np.random.Generator) -> pd.DataFrame:
     return pd.DataFrame({"sac": 20, "sic": 1, "time_of_day": np.sort(rng.uniform(0, 86000, n)).round(2),
                          "rho_nm": rng.uniform(1, 200, n).round(2),
                          "theta_deg": rng.uniform(0, 359, n).round(2)})
-
-
-def _blocks(data: bytes) -> list[bytes]:
-    out, pos = [], 0
-    while pos < len(data):
-        n = int.from_bytes(data[pos + 1:pos + 3], "big")
-        out.append(data[pos:pos + n])
-        pos += n
-    return out
 
 
 def _read(path: Path, **kw) -> asterix.Recording:
@@ -59,9 +41,9 @@ def _read(path: Path, **kw) -> asterix.Recording:
 
 def test_a_trackers_blocks_beside_radar_plots_are_stepped_over(tmp_path):
     rng = np.random.default_rng(62)
-    tracks = _blocks(encode_frame(62, _tracks(100 * RECORDS_PER_BLOCK, rng),
-                                  records_per_block=RECORDS_PER_BLOCK))
-    plots = _blocks(encode_frame(48, _plots(100 * 4, rng), records_per_block=4))
+    tracks = raw_blocks(encode_frame(62, _tracks(100 * RECORDS_PER_BLOCK, rng),
+                                     records_per_block=RECORDS_PER_BLOCK))
+    plots = raw_blocks(encode_frame(48, _plots(100 * 4, rng), records_per_block=4))
     assert len(tracks) == len(plots) == 100
     path = tmp_path / "centre.ast"
     path.write_bytes(b"".join(p + t for p, t in zip(plots, tracks, strict=True)))
@@ -122,7 +104,7 @@ def test_every_category_beside_every_other_decodes_as_alone(tmp_path):
     for c in cats:
         path = tmp_path / f"c{c}.ast"
         bench.build(path, c, 1000)
-        streams[c] = _blocks(path.read_bytes())[:40]
+        streams[c] = raw_blocks(path.read_bytes())[:40]
     failures = []
     for a in cats:
         for b in cats:
