@@ -98,8 +98,10 @@ def _apply_gain(C, Pbar_inv, xf, Pf, xs_next, Ps_next, xbar, Pbar, G, tmp, xs, P
 @njit(cache=True, nogil=True)
 def smooth_rows(acc_t, acc_seg, mu_a, x_a, P_a, kinds, omegas, qs, tpm_kind, tpm_param, tpm_param2,
                 q_acc, q_dt, xf_q, Pf_q, xs_q, Ps_q):
-    """Smoothed combined estimate at every query q (q_acc: index of its governing accepted update,
-    q_dt: time after it). Queries after a segment's last update keep their forward prediction."""
+    """Smoothed combined estimate at every query q (q_acc: index of its governing accepted update, in
+    ascending order; q_dt: time after it). Queries after a segment's last update keep their forward
+    prediction. The queries between two updates are smoothed in the backward pass, from the same joint
+    law of the interval (and its inverse) as the update they follow."""
     na = acc_t.shape[0]
     r = kinds.shape[0]
     xs = np.empty((na, NX))
@@ -122,13 +124,15 @@ def smooth_rows(acc_t, acc_seg, mu_a, x_a, P_a, kinds, omegas, qs, tpm_kind, tpm
     Pbar_inv = np.empty((NX, NX))
     xbar = np.empty(NX)
     Pbar = np.empty((NX, NX))
+    Pbar_k = np.empty((NX, NX))
     xk = np.empty(NX)
     Pk = np.empty((NX, NX))
     xt = np.empty((r, NX))
     Pt = np.empty((r, NX, NX))
     xtc = np.empty(NX)
     Ptc = np.empty((NX, NX))
-    # backward pass over accepted updates
+    q = q_acc.shape[0] - 1  # the last query not yet smoothed (queries go back with the updates)
+    # backward pass over accepted updates, and the queries inside each interval
     for k in range(na - 1, -1, -1):
         combine_into(mu_a[k], x_a[k], P_a[k], r, xs[k], Ps[k])
         if k == na - 1 or acc_seg[k + 1] != acc_seg[k]:
@@ -137,67 +141,82 @@ def smooth_rows(acc_t, acc_seg, mu_a, x_a, P_a, kinds, omegas, qs, tpm_kind, tpm
             xk[a] = xs[k, a]
             for b in range(NX):
                 Pk[a, b] = Ps[k, a, b]
-        _joint(kinds, omegas, qs, tpm_kind, tpm_param, tpm_param2, acc_t[k + 1] - acc_t[k], r, mu_a[k],
-               x_a[k], P_a[k], xk, PI, cbar, x0, P0, xp, Pp, Ft, Qt, Cj, C, tmp, xbar, Pbar)
-        _inverse(Pbar, Pbar_inv, work)
-        _apply_gain(C, Pbar_inv, xk, Pk, xs[k + 1], Ps[k + 1], xbar, Pbar, G, tmp, xs[k], Ps[k])
-    # queries
-    for q in range(q_acc.shape[0]):
-        k = q_acc[q]
-        a = q_dt[q]
-        if a == 0.0:
-            xs_q[q] = xs[k]
-            Ps_q[q] = Ps[k]
-            continue
-        if k == na - 1 or acc_seg[k + 1] != acc_seg[k]:
-            xs_q[q] = xf_q[q]
-            Ps_q[q] = Pf_q[q]
-            continue
         t = acc_t[k + 1] - acc_t[k]
-        combine_into(mu_a[k], x_a[k], P_a[k], r, xk, Pk)
         _joint(kinds, omegas, qs, tpm_kind, tpm_param, tpm_param2, t, r, mu_a[k], x_a[k], P_a[k], xk, PI,
                cbar, x0, P0, xp, Pp, Ft, Qt, Cj, C, tmp, xbar, Pbar)
-        # the output time's marginal and its cross-covariance with x_k+1, per target mode
-        for j in range(r):
-            transition_into(kinds[j], omegas[j], qs[j], a, Fa, Qa)
-            transition_into(kinds[j], omegas[j], qs[j], t, Ft, Qt)
-            for i1 in range(NX):
+        _inverse(Pbar, Pbar_inv, work)
+        for a in range(NX):
+            for b in range(NX):
+                Pbar_k[a, b] = Pbar[a, b]  # _apply_gain leaves Ps_next - Pbar in Pbar
+        _apply_gain(C, Pbar_inv, xk, Pk, xs[k + 1], Ps[k + 1], xbar, Pbar, G, tmp, xs[k], Ps[k])
+        while q >= 0 and q_acc[q] > k:
+            q -= 1
+        while q >= 0 and q_acc[q] == k:
+            a = q_dt[q]
+            if a != 0.0:
+                _query_between(kinds, omegas, qs, a, t, r, cbar, x0, P0, xp, xbar, Pbar_k, Pbar_inv,
+                               xs[k + 1], Ps[k + 1], Fa, Qa, Ft, Qt, Cj, C, G, tmp, xt, Pt, xtc, Ptc, Pbar,
+                               xs_q[q], Ps_q[q])
+            q -= 1
+    # queries at an update, and after a segment's last one
+    for q in range(q_acc.shape[0]):
+        k = q_acc[q]
+        if q_dt[q] == 0.0:
+            xs_q[q] = xs[k]
+            Ps_q[q] = Ps[k]
+        elif k == na - 1 or acc_seg[k + 1] != acc_seg[k]:
+            xs_q[q] = xf_q[q]
+            Ps_q[q] = Pf_q[q]
+
+
+@njit(cache=True, nogil=True)
+def _query_between(kinds, omegas, qs, a, t, r, cbar, x0, P0, xp, xbar, Pbar_k, Pbar_inv, xs_next, Ps_next,
+                   Fa, Qa, Ft, Qt, Cj, C, G, tmp, xt, Pt, xtc, Ptc, Pbar, x_out, P_out):
+    """The smoothed state a s after an update, t s before the next: the output time's marginal and its
+    cross-covariance with x_k+1 per target mode, from the interval's mixed priors (cbar, x0, P0), predicted
+    mixture (xp, xbar, Pbar_k) and its inverse, then one RTS step to the next update's smoothed state."""
+    for j in range(r):
+        transition_into(kinds[j], omegas[j], qs[j], a, Fa, Qa)
+        transition_into(kinds[j], omegas[j], qs[j], t, Ft, Qt)
+        for i1 in range(NX):
+            acc = 0.0
+            for k1 in range(NX):
+                acc += Fa[i1, k1] * x0[j, k1]
+            xt[j, i1] = acc
+            for j1 in range(NX):
                 acc = 0.0
                 for k1 in range(NX):
-                    acc += Fa[i1, k1] * x0[j, k1]
-                xt[j, i1] = acc
-                for j1 in range(NX):
-                    acc = 0.0
-                    for k1 in range(NX):
-                        acc += Fa[i1, k1] * P0[j, k1, j1]
-                    tmp[i1, j1] = acc
+                    acc += Fa[i1, k1] * P0[j, k1, j1]
+                tmp[i1, j1] = acc
+        for i1 in range(NX):
+            for j1 in range(NX):
+                acc_p = Qa[i1, j1]
+                for k1 in range(NX):
+                    acc_p += tmp[i1, k1] * Fa[j1, k1]
+                Pt[j, i1, j1] = acc_p
+        _gamma_cross(kinds[j], qs[j], a, t, Cj)
+        for i1 in range(NX):
+            for j1 in range(NX):
+                acc = 0.0
+                for k1 in range(NX):
+                    acc += tmp[i1, k1] * Ft[j1, k1]
+                Cj[i1, j1] += acc
+        if j == 0:
             for i1 in range(NX):
                 for j1 in range(NX):
-                    acc_p = Qa[i1, j1]
-                    for k1 in range(NX):
-                        acc_p += tmp[i1, k1] * Fa[j1, k1]
-                    Pt[j, i1, j1] = acc_p
-            _gamma_cross(kinds[j], qs[j], a, t, Cj)
-            for i1 in range(NX):
-                for j1 in range(NX):
-                    acc = 0.0
-                    for k1 in range(NX):
-                        acc += tmp[i1, k1] * Ft[j1, k1]
-                    Cj[i1, j1] += acc
-            if j == 0:
-                for i1 in range(NX):
-                    for j1 in range(NX):
-                        C[i1, j1] = 0.0
-            for i1 in range(NX):
-                for j1 in range(NX):
-                    C[i1, j1] += cbar[j] * Cj[i1, j1]
-        combine_into(cbar, xt, Pt, r, xtc, Ptc)
-        for j in range(r):
-            for i1 in range(NX):
-                for j1 in range(NX):
-                    C[i1, j1] += cbar[j] * (xt[j, i1] - xtc[i1]) * (xp[j, j1] - xbar[j1])
-        _inverse(Pbar, Pbar_inv, work)
-        _apply_gain(C, Pbar_inv, xtc, Ptc, xs[k + 1], Ps[k + 1], xbar, Pbar, G, tmp, xs_q[q], Ps_q[q])
+                    C[i1, j1] = 0.0
+        for i1 in range(NX):
+            for j1 in range(NX):
+                C[i1, j1] += cbar[j] * Cj[i1, j1]
+    combine_into(cbar, xt, Pt, r, xtc, Ptc)
+    for j in range(r):
+        for i1 in range(NX):
+            for j1 in range(NX):
+                C[i1, j1] += cbar[j] * (xt[j, i1] - xtc[i1]) * (xp[j, j1] - xbar[j1])
+    for i1 in range(NX):
+        for j1 in range(NX):
+            Pbar[i1, j1] = Pbar_k[i1, j1]
+    _apply_gain(C, Pbar_inv, xtc, Ptc, xs_next, Ps_next, xbar, Pbar, G, tmp, x_out, P_out)
 
 
 @njit(cache=True, nogil=True)
