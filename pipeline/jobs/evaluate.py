@@ -637,8 +637,8 @@ def _pooled_sensor(checked: EvaluateChecked, sensor_id: str, span) -> tuple[Sens
     notes, differing = span.common_notes()
     points = pd.concat(span.map_points, ignore_index=True) if span.map_points else pd.DataFrame()
     polar, vertical = span.grids()
-    result = SensorResult(sensor_id, span.kind, rows, span.per_aircraft, bands, polar, vertical, points,
-                          notes, span.site, outcomes, None)
+    result = SensorResult(sensor_id, span.kind, rows, span.per_aircraft_table(), bands, polar, vertical,
+                          points, notes, span.site, outcomes, None)
     return result, [(a, b, sensor_id, n) for (a, b), n in differing]
 
 

@@ -306,6 +306,42 @@ def test_per_aircraft_tables_folded_window_by_window_equal_them_pooled_at_once()
     assert at_once.loc[0, "surface_share"] == pytest.approx(75 / 450)
 
 
+def test_a_span_folds_its_windows_per_aircraft_tables_in_batches_equal_to_them_pooled_at_once(monkeypatch):
+    """120 windows of 20 aircraft each (2 new a window, the others seen before) added to a span: its table
+    is every window's pooled at once (counts exactly, shares and RMS to rounding), and the windows are
+    folded in batches as large as the table before them (a few dozen folds, not one per window: each fold
+    reads the whole table, so one per window costs time growing with the span's square)."""
+    import msdc.pipeline.evaluate.windows as windows_module
+    from msdc.pipeline.evaluate.windows import SensorSpan
+
+    rng = np.random.default_rng(8)
+    tables = []
+    for w in range(120):
+        n = 20
+        tables.append(pd.DataFrame({
+            "sensor": "s", "aircraft": [f"A{(2 * w + k) % 400:03d}" for k in range(n)], "built_by": "021:0/1",
+            "self_reference_share": rng.random(n), "surface_share": rng.random(n),
+            "reference_samples": rng.integers(1, 600, n), "reports": rng.integers(0, 60, n),
+            "expected_updates": rng.integers(1, 60, n), "detected_updates": rng.integers(0, 2, n),
+            "pd": 0.0, "ci_low": 0.0, "ci_high": 1.0, "rms_error_m": rng.random(n) * 100,
+            "errors_judged": rng.integers(1, 50, n)}))
+    folds = []
+    combine = windows_module.combine_per_aircraft
+    monkeypatch.setattr(windows_module, "combine_per_aircraft",
+                        lambda frames: folds.append(1) or combine(frames))
+    span = SensorSpan("radar")
+    for w, table in enumerate(tables):
+        span.add((str(w), str(w + 1)), {}, [], table, {}, None, None, None, pd.DataFrame())
+    out = span.per_aircraft_table()
+    at_once = combine(tables)
+    pd.testing.assert_frame_equal(out, at_once, check_exact=False, rtol=1e-12)
+    exact = ["sensor", "aircraft", "built_by", "reference_samples", "reports", "expected_updates",
+             "detected_updates", "errors_judged", "windows"]
+    pd.testing.assert_frame_equal(out[exact], at_once[exact], check_exact=True)
+    assert len(out) == 258 and out["windows"].sum() == 120 * 20
+    assert len(folds) <= 30, len(folds)
+
+
 def test_the_builders_of_each_aircraft_are_every_windows_sensors_sorted_and_joined():
     """The pooled ``built_by`` of each aircraft, against the rule written as a pandas aggregation per group
     (every window's sensors split at " | ", blanks and missing ones left out, sorted and joined), on random
