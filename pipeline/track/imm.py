@@ -493,18 +493,44 @@ def run_filter(t, ze, zn, ree, ren, rnn, ve0, vn0, var_v0, fl, ground, kinds, om
 
 
 @njit(cache=True, nogil=True)
-def predict_rows(gov, dt, kinds, omegas, qs, tpm_kind, tpm_param, tpm_param2, q_fl, substep_s, mu_h,
-                 x_h, P_h, zv_h, Pv_h, xc_out, Pc_out, mu_out, zv_out, Pv_out):
+def coast_modes(g, d, g_c, t_c, cycle_s, tol, mu_h, tpm_kind, tpm_param, tpm_param2, r, mu_c, PI, cbar):
+    """coast_chain's mode probabilities alone (mu <- PI^T mu each cycle, the same cycles and arithmetic):
+    for a query whose state is not wanted, only its mode probabilities."""
+    if g != g_c or d < t_c:
+        g_c = g
+        t_c = 0.0
+        for j in range(r):
+            mu_c[j] = mu_h[g, j]
+    while t_c < d - tol:
+        h = min(cycle_s, d - t_c)
+        tpm_into(tpm_kind, tpm_param, tpm_param2, h, r, PI)
+        for j in range(r):
+            acc = 0.0
+            for i in range(r):
+                acc += PI[i, j] * mu_c[i]
+            cbar[j] = acc
+        for j in range(r):
+            mu_c[j] = cbar[j]
+        t_c += h
+    return g_c, t_c
+
+
+@njit(cache=True, nogil=True)
+def predict_rows(gov, dt, want_state, kinds, omegas, qs, tpm_kind, tpm_param, tpm_param2, q_fl, substep_s,
+                 mu_h, x_h, P_h, zv_h, Pv_h, xc_out, Pc_out, mu_out, zv_out, Pv_out):
     """Combined estimate at query q: the posterior of row gov[q] predicted dt[q] s ahead (dt 0: the
     posterior itself) by IMM cycles without measurement of at most substep_s each (mixing, mode-matched
     prediction, mu <- PI^T mu), combined with the spread of the mode means. Consecutive queries with the
-    same governing row continue one chain, so a coasted gap costs one cycle per substep."""
+    same governing row continue one chain, so a coasted gap costs one cycle per substep. Where
+    want_state[q] is False (a smoother replaces that state) only the mode probabilities are predicted and
+    the state is NaN; it must be the same for every query of one governing row."""
     r = kinds.shape[0]
     m = gov.shape[0]
     PI, F, Q, tmp, cbar, x0, P0, xp, Pp = cycle_scratch(r)
     mu_c, x_c, P_c = chain_scratch(r)
     g_c = -1
     t_c = 0.0
+    whole = True  # the chain carries states too, not only mode probabilities
     for q in range(m):
         g = gov[q]
         d = dt[q]
@@ -512,13 +538,26 @@ def predict_rows(gov, dt, kinds, omegas, qs, tpm_kind, tpm_param, tpm_param2, q_
             for j in range(r):
                 mu_out[q, j] = mu_h[g, j]
             combine_into(mu_h[g], x_h[g], P_h[g], r, xc_out[q], Pc_out[q])
-        else:
+        elif want_state[q]:
+            if not whole:
+                g_c = -1  # its states were not carried: start again from the posterior
             g_c, t_c = coast_chain(g, d, g_c, t_c, substep_s, 0.0, mu_h, x_h, P_h, kinds, omegas, qs,
                                    tpm_kind, tpm_param, tpm_param2, r, mu_c, x_c, P_c,
                                    PI, F, Q, tmp, cbar, x0, P0, xp, Pp)
+            whole = True
             for j in range(r):
                 mu_out[q, j] = mu_c[j]
             combine_into(mu_c, x_c, P_c, r, xc_out[q], Pc_out[q])
+        else:
+            g_c, t_c = coast_modes(g, d, g_c, t_c, substep_s, 0.0, mu_h, tpm_kind, tpm_param, tpm_param2, r,
+                                   mu_c, PI, cbar)
+            whole = False
+            for j in range(r):
+                mu_out[q, j] = mu_c[j]
+            for a in range(NX):
+                xc_out[q, a] = np.nan
+                for b in range(NX):
+                    Pc_out[q, a, b] = np.nan
         zv_out[q, 0] = zv_h[g, 0] + d * zv_h[g, 1]
         zv_out[q, 1] = zv_h[g, 1]
         Pv_out[q, 0, 0] = (Pv_h[g, 0, 0] + 2.0 * d * Pv_h[g, 0, 1] + d * d * Pv_h[g, 1, 1]

@@ -128,9 +128,15 @@ def estimate(run: PlaneRun, times, *, smooth: bool = False, smoother: str = "rts
     mu = np.empty((nq, r))
     zv = np.empty((nq, 2))
     Pv = np.empty((nq, 2, 2))
-    predict_rows(gov, dt, args["kinds"], args["omegas"], args["qs"], args["tpm_kind"], args["tpm_param"],
-                 args["tpm_param2"], args["q_fl"], args["coast_substep_s"], run.mu, run.x, run.P, run.zv,
-                 run.Pv, xc, Pc, mu, zv, Pv)
+    if smooth:  # the smoothers replace every forward state but those after a segment's last update
+        seg = run.segment[acc_idx]
+        last = np.r_[seg[1:] != seg[:-1], True] if len(seg) else np.zeros(0, bool)
+        want = last[k] & (dt != 0.0)
+    else:
+        want = np.ones(nq, bool)
+    predict_rows(gov, dt, want, args["kinds"], args["omegas"], args["qs"], args["tpm_kind"],
+                 args["tpm_param"], args["tpm_param2"], args["q_fl"], args["coast_substep_s"], run.mu, run.x,
+                 run.P, run.zv, run.Pv, xc, Pc, mu, zv, Pv)
     if run.t_fl is not None:
         _forget_stale_levels(qt, run.t_fl[gov], run.config.max_coast_s, zv, Pv)
     if smooth:

@@ -155,3 +155,31 @@ def test_track_smoother_option():
     assert np.allclose(res.tracks[["mode_cv", "mode_turn_left", "mode_turn_right"]].sum(axis=1), 1.0)
     with pytest.raises(ValueError, match="smoother 'kim'"):
         track(frame, smooth=True, smoother="kim")
+
+
+def test_after_a_segments_last_update_both_smoothers_keep_the_forward_prediction():
+    """Two stretches of plots 200 s apart (two segments) and output times every 0.5 s through both and up to
+    50 s after each one's last plot: after a segment's last update both smoothers give the forward
+    prediction itself (state, covariance and, for RTS, mode probabilities, which it never smooths), while
+    between updates they differ from it; RTS's mode probabilities are the forward ones at every time."""
+    t1, e1, n1, var1 = _plots(3)
+    t2, e2, n2, var2 = _plots(4)
+    t = np.r_[t1, t2 + 264.0]
+    e, n, var = np.r_[e1, e2 + 20_000.0], np.r_[n1, n2], np.r_[var1, var2]
+    run = filter_plane(TrackerConfig(), t, e, n, var, 0 * var, var)
+    seg = run.segment[run.accepted]
+    assert len(np.unique(seg)) == 2
+    ends = run.t[run.accepted][np.r_[seg[1:] != seg[:-1], True]]
+    grid = np.unique(np.r_[np.arange(t[0], ends[0] + 50.0, 0.5),
+                           np.arange(t2[0] + 264.0, ends[1] + 50.0, 0.5)])
+    after = (grid > ends[0]) & (grid < t2[0] + 264.0) | (grid > ends[1])
+    forward = estimate(run, grid)
+    for smoother in ("rts", "imm"):
+        got = estimate(run, grid, smooth=True, smoother=smoother)
+        np.testing.assert_array_equal(got.x[after], forward.x[after])
+        np.testing.assert_array_equal(got.P[after], forward.P[after])
+        assert np.isfinite(got.x).all() and np.isfinite(got.P).all()
+        between = ~after & (forward.age_s > 0)
+        assert between.sum() > 100 and (np.abs(got.x[between] - forward.x[between]).max(axis=1) > 1e-6).all()
+        if smoother == "rts":
+            np.testing.assert_array_equal(got.mu, forward.mu)
