@@ -332,7 +332,7 @@ class SensorSpan:
         """The per-aircraft table over the windows so far (combine_per_aircraft of them all). The windows'
         tables are folded in once they hold as many rows as the table folded before them, not one by one:
         folding a table of every aircraft seen so far at every window cost time growing with the span's
-        square (144 windows of 450 aircraft: 2.1 CPU-s a sensor, 4 days 23 CPU-s)."""
+        square (144 windows of 450 aircraft: 2.0 CPU-s a sensor, 576 windows 21.8 CPU-s)."""
         if self.pending:
             self.per_aircraft = combine_per_aircraft([self.per_aircraft, *self.pending])
             self.pending.clear()
