@@ -21,7 +21,10 @@ an hour at once; positions go to WGS-84 and to each sensor's slant range and azi
 ``fixtures.geodesy``, values are quantised to the ASTERIX LSBs as ``fixtures.simulate`` does, and the frames
 are encoded with ``msdc.asterix.encode``. A radar reports an aircraft once per scan, when its beam crosses
 it (with 70 m / 0.08 deg noise, 97 % detection, within its range and above -1 deg of elevation, both
-declared in the sensor file); an ADS-B station reports every aircraft within 250 NM every 0.5-1 s.
+declared in the sensor file); each aircraft sends its ADS-B position every 0.5-1 s and each ground station
+relays the messages of the aircraft within 250 NM of it, so where the two stations overlap they relay the
+same messages, as real ground stations do (before generator 3 each station drew its own 1-2 Hz, as if an
+aircraft seen by both sent 2-4 positions a second).
 
 The ingest measurements are those of ``benchmarks/ingest.py`` (a fresh process per run into an empty
 dataset; peak RSS of the main process and of the largest worker; CPU of the process tree).
@@ -76,7 +79,8 @@ DETECTION = 0.97
 MIN_ELEVATION_DEG = -1.0  # a radar sees no aircraft below this elevation from its site (the Earth's bulge)
 SIGMA_RANGE_M, SIGMA_AZIMUTH_DEG = 70.0, 0.08
 RECORDS_PER_BLOCK = 25
-GENERATOR = 2  # recordings made by an earlier version are made again (2: one plot per crossing)
+GENERATOR = 3  # recordings made by an earlier version are made again (2: one plot per crossing; 3: the
+# ground stations relay the same ADS-B messages, 1-2 Hz an aircraft, not 1-2 Hz each drawn apart)
 # (east NM, north NM of the centre, scan period s, range NM): approach radars turn fast and see less
 RADARS = [(-200, -100, 10.0, 250.0), (-200, 100, 12.0, 250.0), (-70, -180, 8.0, 200.0), (-40, 10, 4.0, 80.0),
           (-70, 180, 8.0, 200.0), (70, -180, 6.0, 200.0), (50, -20, 5.0, 100.0), (70, 180, 10.0, 250.0),
@@ -176,9 +180,21 @@ def _identity(ids: np.ndarray) -> dict[str, np.ndarray]:
             "mode3a": np.array([f"{i % 4096:04o}" for i in flights], dtype=object)[rows]}
 
 
-def adsb_frame(fleet: Fleet, station: RadarSite, t0: float, t1: float, rng: np.random.Generator
-               ) -> pd.DataFrame:
-    """CAT021 reports of the station in [t0, t1): each flight every 0.5-1 s while within 250 NM."""
+@dataclass
+class AdsbMessages:
+    """The fleet's ADS-B position messages in a time span, as every ground station in range receives them:
+    flight index k, time t (s of the day), the true state and the reported (noisy) position."""
+
+    k: np.ndarray
+    t: np.ndarray
+    state: dict[str, np.ndarray]
+    latitude: np.ndarray
+    longitude: np.ndarray
+
+
+def adsb_messages(fleet: Fleet, t0: float, t1: float, rng: np.random.Generator) -> AdsbMessages:
+    """Each flight's ADS-B position messages in [t0, t1): one every 0.5-1 s (1-2 Hz), its position with the
+    aircraft's navigation error drawn once per message (every station that receives it relays the same)."""
     lo = np.maximum(fleet.start, t0)
     hi = np.minimum(fleet.end, t1)
     room = np.maximum(hi - lo, 0.0)
@@ -191,16 +207,24 @@ def adsb_frame(fleet: Fleet, station: RadarSite, t0: float, t1: float, rng: np.r
     t = _q(lo[k] + t, TOD_LSB_S)
     keep = t < hi[k]
     k, t = k[keep], t[keep]
-    st = fleet.state(k, t)
-    slant_m, _, _ = geo.polar_from_site(st["latitude"], st["longitude"], st["height_m"], station.latitude,
-                                        station.longitude, station.altitude_m)
-    seen = slant_m <= ADSB_RANGE_NM * geo.M_PER_NM
-    k, t, st = k[seen], t[seen], {c: v[seen] for c, v in st.items()}
     order = np.lexsort((k, t))
-    k, t, st = k[order], t[order], {c: v[order] for c, v in st.items()}
+    k, t = k[order], t[order]
+    st = fleet.state(k, t)
     n = len(t)
     lat, lon = geo.offset_geodetic(st["latitude"], st["longitude"], st["height_m"],
                                    rng.normal(0.0, ADSB_SIGMA_M, n), rng.normal(0.0, ADSB_SIGMA_M, n))
+    return AdsbMessages(k, t, st, lat, lon)
+
+
+def adsb_frame(fleet: Fleet, messages: AdsbMessages, station: RadarSite) -> pd.DataFrame:
+    """CAT021 reports of the station: the messages of the flights within 250 NM of it."""
+    st = messages.state
+    slant_m, _, _ = geo.polar_from_site(st["latitude"], st["longitude"], st["height_m"], station.latitude,
+                                        station.longitude, station.altitude_m)
+    seen = slant_m <= ADSB_RANGE_NM * geo.M_PER_NM
+    k, t, st = messages.k[seen], messages.t[seen], {c: v[seen] for c, v in st.items()}
+    lat, lon = messages.latitude[seen], messages.longitude[seen]
+    n = len(t)
     ident = _identity(fleet.ids[k])
     return pd.DataFrame({
         "sac": np.full(n, station.sac), "sic": np.full(n, station.sic), "time_of_day": t,
@@ -340,8 +364,9 @@ def generate(out: Path, hours: int, peak: int, seed: int, date: str = DATE) -> d
             for i in [i for i in cache if starts[i] + durations[i] <= h0]:
                 del cache[i]
             rng = np.random.default_rng(np.random.SeedSequence([seed, 3, int(h0)]))
+            messages = adsb_messages(fleet, h0, h1, rng)
             for s in stations:
-                frame = adsb_frame(fleet, s, h0, h1, rng)
+                frame = adsb_frame(fleet, messages, s)
                 tod = np.mod(frame["time_of_day"], DAY_S)
                 files[f"a{s.sic}"].write(encode_frame(21, frame.assign(time_of_day=tod),
                                                       records_per_block=RECORDS_PER_BLOCK))
