@@ -138,13 +138,19 @@ def fx_into(F, x, out):
 
 
 @njit(cache=True, nogil=True)
-def mix_into(PI, mu, x, P, r, cbar, x0, P0):
-    """IMM interaction: predicted mode probabilities cbar and mixed initial conditions x0, P0."""
+def predicted_modes_into(PI, mu, r, cbar):
+    """cbar = PI^T mu: the mode probabilities after one transition."""
     for j in range(r):
         acc = 0.0
         for i in range(r):
             acc += PI[i, j] * mu[i]
         cbar[j] = acc
+
+
+@njit(cache=True, nogil=True)
+def mix_into(PI, mu, x, P, r, cbar, x0, P0):
+    """IMM interaction: predicted mode probabilities cbar and mixed initial conditions x0, P0."""
+    predicted_modes_into(PI, mu, r, cbar)
     for j in range(r):
         for a in range(NX):
             x0[j, a] = 0.0
@@ -504,11 +510,7 @@ def coast_modes(g, d, g_c, t_c, cycle_s, tol, mu_h, tpm_kind, tpm_param, tpm_par
     while t_c < d - tol:
         h = min(cycle_s, d - t_c)
         tpm_into(tpm_kind, tpm_param, tpm_param2, h, r, PI)
-        for j in range(r):
-            acc = 0.0
-            for i in range(r):
-                acc += PI[i, j] * mu_c[i]
-            cbar[j] = acc
+        predicted_modes_into(PI, mu_c, r, cbar)
         for j in range(r):
             mu_c[j] = cbar[j]
         t_c += h

@@ -16,7 +16,17 @@ import math
 import numpy as np
 from numba import njit
 
-from .imm import CA, NX, combine_into, fpft_q, fx_into, mix_into, tpm_into, transition_into
+from .imm import (
+    CA,
+    NX,
+    combine_into,
+    fpft_q,
+    fx_into,
+    mix_into,
+    predicted_modes_into,
+    tpm_into,
+    transition_into,
+)
 
 
 @njit(cache=True, nogil=True)
@@ -572,11 +582,7 @@ def _pair_weights(tpm_kind, tpm_param, tpm_param2, t, r, mu, mus_next, PI, cbar,
     """w[i, j] = P(mode i at k, mode j at k+1 | all data) = PI_ij mu_i mus_next_j / cbar_j (Kim's
     approximation: the mode at k given the mode at k+1 does not depend on later data)."""
     tpm_into(tpm_kind, tpm_param, tpm_param2, t, r, PI)
-    for j in range(r):
-        acc = 0.0
-        for i in range(r):
-            acc += PI[i, j] * mu[i]
-        cbar[j] = acc
+    predicted_modes_into(PI, mu, r, cbar)
     total = 0.0
     for i in range(r):
         for j in range(r):
