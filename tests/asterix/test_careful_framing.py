@@ -30,6 +30,15 @@ def _real_blocks(n: int) -> list[bytes]:
     return [plot(1, 2 * i, 2560 + i, 1000 * i) for i in range(n)]
 
 
+def _junk_header(real: list[bytes], category: int, into: int) -> tuple[list[bytes], int]:
+    """The real blocks with a 3-byte junk header of ``category`` inserted after the third, its LEN landing
+    four bytes into real[into] (counted after the inserted bytes); the pieces and the junk's offset."""
+    junk_at = sum(len(p) for p in real[:3])
+    land = sum(len(p) for p in real[:into]) + 3 + 4
+    junk = bytes([category]) + (land - junk_at).to_bytes(2, "big")
+    return [*real[:3], junk, *real[3:]], junk_at
+
+
 def test_a_cut_block_ending_a_byte_into_the_next_does_not_swallow_it(tmp_path):
     """The cut block: header, FSPEC of I048/010 alone, one byte of its own, and for its last byte the real
     block's category: it walks exactly and ends one byte into the real block, where a zero follows."""
@@ -79,10 +88,7 @@ def test_a_len_landing_on_a_chance_block_inside_a_real_one_does_not_swallow_the_
     surface radar file: 1,707 records lost after 2,852 inserted bytes)."""
     real = _real_blocks(10)
     real[6] = plot(48, 0, (10 << 8) | 0x90, 4321)
-    junk_at = sum(len(p) for p in real[:3])
-    land = sum(len(p) for p in real[:6]) + 3 + 4  # four bytes into real[6], after the 3 inserted bytes
-    junk = bytes([0x77]) + (land - junk_at).to_bytes(2, "big")
-    pieces = [*real[:3], junk, *real[3:]]
+    pieces, junk_at = _junk_header(real, 0x77, 6)  # four bytes into real[6]
     rec = _stream(tmp_path, pieces)
     whole = _stream(tmp_path, real)
     assert len(rec.frames[48]) == len(whole.frames[48])
@@ -99,10 +105,7 @@ def test_a_len_proven_by_chance_headers_inside_real_data_does_not_swallow_the_re
     real = _real_blocks(22)
     for i in (12, 14, 16, 18, 20):
         real[i] = plot(0x77, 0, (20 << 8) | 7, 1000 * i)
-    junk_at = sum(len(p) for p in real[:3])
-    land = sum(len(p) for p in real[:12]) + 3 + 4  # four bytes into real[12], after the 3 inserted bytes
-    junk = bytes([0x77]) + (land - junk_at).to_bytes(2, "big")
-    pieces = [*real[:3], junk, *real[3:]]
+    pieces, junk_at = _junk_header(real, 0x77, 12)  # four bytes into real[12]
     rec = _stream(tmp_path, pieces)
     assert len(rec.frames[48]) == len(_stream(tmp_path, real).frames[48]) == 22
     assert rec.errors[["offset", "length"]].values.tolist() == [[junk_at, 3]]
@@ -116,10 +119,7 @@ def test_a_len_landing_on_one_chance_header_of_its_own_category_does_not_swallow
     slice of the ADS-B fixture: 20 of 4,540 records lost after two deletions)."""
     real = _real_blocks(12)
     real[5] = plot(0x16, 0, (16 << 8) | 7, 4321)
-    junk_at = sum(len(p) for p in real[:3])
-    land = sum(len(p) for p in real[:5]) + 3 + 4  # four bytes into real[5], after the 3 inserted bytes
-    junk = bytes([0x16]) + (land - junk_at).to_bytes(2, "big")
-    pieces = [*real[:3], junk, *real[3:]]
+    pieces, junk_at = _junk_header(real, 0x16, 5)  # four bytes into real[5]
     rec = _stream(tmp_path, pieces)
     assert len(rec.frames[48]) == len(_stream(tmp_path, real).frames[48]) == 12
     assert rec.errors[["offset", "length"]].values.tolist() == [[junk_at, 3]]
