@@ -131,32 +131,15 @@ def polar_to_geodetic(site_lat_deg, site_lon_deg, site_alt_m, rho_nm, theta_deg,
     (the plot lies on the site's horizontal plane) and h_m is the resulting height. Heights that the
     range cannot reach (|target - site| > rho) give the nearest reachable point (elevation +-90 deg).
     """
-    site_lat, site_lon, site_alt, rho_m, theta, target = np.broadcast_arrays(
-        *(np.asarray(v, dtype=float) for v in (site_lat_deg, site_lon_deg, site_alt_m, rho_nm,
-                                               theta_deg, target_alt_m)))
-    rho_m = rho_m * M_PER_NM
-    site = np.stack(geodetic_to_ecef(site_lat, site_lon, site_alt), -1)
-    east, north, up = enu_basis(site_lat, site_lon)
-    t = np.radians(theta)[..., None]
-    horiz = np.sin(t) * east + np.cos(t) * north
-    r = rho_m[..., None]
+    from .geodesy_kernel import polar_plots  # compiled: each plot's iteration stops when it has converged
 
-    def point(elev):
-        ce, se = np.cos(elev)[..., None], np.sin(elev)[..., None]
-        return site + r * (ce * horiz + se * up), r * (-se * horiz + ce * up)
-
-    # start from the spherical law of cosines with the local mean radius
-    radius = np.sqrt(A_M * B_M) + site_alt
-    known = np.isfinite(target)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        sin_e = ((radius - site_alt + target) ** 2 - radius**2 - rho_m**2) / (2.0 * radius * rho_m)
-    elev0 = np.where(known, np.arcsin(np.clip(np.nan_to_num(sin_e), -1.0, 1.0)), 0.0)
-    half_pi = np.pi / 2
-    elev = _solve_height(site, lambda e: np.clip(e, -half_pi, half_pi), point,
-                         np.where(known, target, np.nan), elev0)
-    elev = np.where(known, elev, 0.0)
-    p, _ = point(elev)
-    return ecef_to_geodetic(p[..., 0], p[..., 1], p[..., 2])
+    arrays = np.broadcast_arrays(*(np.asarray(v, dtype=float) for v in (
+        site_lat_deg, site_lon_deg, site_alt_m, rho_nm, theta_deg, target_alt_m)))
+    shape = arrays[0].shape
+    site_lat, site_lon, site_alt, rho_nm, theta, target = (np.ascontiguousarray(a).ravel() for a in arrays)
+    lat, lon, h = (np.empty(site_lat.size) for _ in range(3))
+    polar_plots(site_lat, site_lon, site_alt, rho_nm * M_PER_NM, theta, target, lat, lon, h)
+    return lat.reshape(shape), lon.reshape(shape), h.reshape(shape)
 
 
 def plane_to_geodetic(site_lat_deg, site_lon_deg, site_alt_m, x_nm, y_nm, target_alt_m):

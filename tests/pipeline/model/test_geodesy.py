@@ -129,6 +129,21 @@ def test_polar_unknown_height_uses_zero_elevation():
     assert np.linalg.norm(d, axis=1) == pytest.approx([60 * 1852.0, 200 * 1852.0], abs=1e-3)
 
 
+def test_polar_out_of_reach_missing_and_broadcast():
+    # 1 NM of slant range cannot reach 10 km above a site at 0 m: the nearest reachable point is straight
+    # up (elevation 90 deg), 1852 m above the site; a missing range or azimuth places nothing
+    rho = np.array([[1.0, np.nan, 100.0], [1.0, 100.0, 100.0]])
+    theta = np.array([[0.0, 0.0, 90.0], [0.0, 90.0, np.nan]])
+    lat, lon, h = polar_to_geodetic(0.0, 0.0, 0.0, rho, theta, np.array([10000.0, 0.0, 0.0]))
+    assert lat.shape == lon.shape == h.shape == (2, 3)
+    assert (lat[0, 0], lon[0, 0], h[0, 0]) == pytest.approx((0.0, 0.0, 1852.0), abs=1e-6)
+    assert np.isnan([lat[0, 1], lon[0, 1], h[0, 1], lat[1, 2], lon[1, 2], h[1, 2]]).all()
+    # the hand case due east above, in any cell it sits in
+    assert lon[0, 2] == lon[1, 1] == pytest.approx(1.66374, abs=1e-5)
+    scalar = polar_to_geodetic(0.0, 0.0, 0.0, 100.0, 90.0, 0.0)
+    assert all(np.shape(v) == () for v in scalar)
+
+
 def test_plane_to_geodetic():
     # x = y = 0 at height 3000 m: straight above the site
     lat, lon, h = plane_to_geodetic(1.35, 103.9, 20.0, 0.0, 0.0, 3000.0)
