@@ -148,10 +148,11 @@ def test_point_values_by_their_definitions():
 @pytest.mark.parametrize("statistic", ["p95", "p99", "p50"])
 def test_a_percentiles_interval_is_that_of_the_resampled_reports_written_out(statistic, held, monkeypatch,
                                                                               cuts):
-    """The bootstrap written out in full: the same draws of aircraft (numpy's multinomial, all at once), each
-    replicate every report repeated as often as its aircraft was drawn, numpy's inverted-CDF percentile of
-    it, the interval the replicates' 2.5 and 97.5 % quantiles (numpy's); and the value numpy's percentile
-    of the reports. Tied values (rounded to 5 m) included; the draws kept between passes or made again."""
+    """The bootstrap written out in full: the same draws of aircraft (per replicate 35 drawn uniformly with
+    replacement, all at once, counted one replicate at a time), each replicate every report repeated as
+    often as its aircraft was drawn, numpy's inverted-CDF percentile of it, the interval the replicates'
+    2.5 and 97.5 % quantiles (numpy's); and the value numpy's percentile of the reports. Tied values
+    (rounded to 5 m) included; the draws kept between passes or made again."""
     if held is not None:
         monkeypatch.setattr(statistics, "_DRAWS_HELD", held)
     rng = np.random.default_rng(21)
@@ -159,7 +160,8 @@ def test_a_percentiles_interval_is_that_of_the_resampled_reports_written_out(sta
     x = np.round((rng.gamma(2.0, 30.0, 35)[clusters] + rng.rayleigh(20.0, clusters.size)) / 5.0) * 5.0
     level = float(statistic[1:])
     got = clustered_interval(x, clusters, statistic, n_boot=400, seed=9)
-    draws = np.random.default_rng(9).multinomial(35, np.full(35, 1 / 35), size=400)
+    picks = np.random.default_rng(9).integers(0, 35, (400, 35))
+    draws = [np.bincount(picked, minlength=35) for picked in picks]
     replicates = [np.percentile(np.repeat(x, d[clusters]), level, method="inverted_cdf") for d in draws]
     alpha = 1 - 0.95  # in floating point, as the confidence level is given
     low, high = np.quantile(replicates, [alpha / 2, 1 - alpha / 2])
@@ -342,3 +344,15 @@ def test_chi2_tail_and_normal_point_are_scipy_stats_values():
             assert chi2_sf(q, dof) == pytest.approx(float(stats.chi2.sf(q, dof)), rel=1e-14, abs=1e-300)
     assert chi2_sf(3.84, 1) == pytest.approx(0.05, abs=1e-4)  # by table: chi2(1) 95 % point 3.84
     assert math.isnan(chi2_sf(2.0, 0))  # one window's fit: no degree of freedom, no test
+
+
+def test_cluster_draws_are_a_uniform_multinomial():
+    """Each replicate draws as many aircraft as there are, uniformly with replacement: the counts sum to k,
+    and each count has the multinomial's mean 1, variance 1 - 1/k and covariance -1/k with another."""
+    k, rows = 8, 200_000
+    draws = statistics.cluster_draws(np.random.default_rng(5), k, rows)
+    assert draws.shape == (rows, k) and (draws.sum(axis=1) == k).all() and draws.min() >= 0
+    cov = np.cov(draws, rowvar=False)
+    assert draws.mean(axis=0) == pytest.approx(np.ones(k), abs=0.01)
+    assert np.diag(cov) == pytest.approx(np.full(k, 1 - 1 / k), abs=0.015)
+    assert cov[~np.eye(k, dtype=bool)] == pytest.approx(np.full(k * k - k, -1 / k), abs=0.015)
