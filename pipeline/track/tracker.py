@@ -668,45 +668,62 @@ def _track_table(aircraft_id: str, filtered: FilteredReports, updates: Updates, 
                  est: Estimates, epoch: pd.Timestamp, args: dict, names: list[str],
                  smooth: bool, columns: tuple[str, ...] | None = None) -> tuple[int, dict]:
     """One aircraft's rows of ``track``'s table: their count and the columns as arrays (only ``columns``, in
-    their order, when given):
+    their order, when given, and only what they need computed):
     the estimates at the output times qt, in local terms. ``aircraft_id`` and ``time`` are made for every
     aircraft at once (`_tracks_table`): here the aircraft's name and its times in seconds."""
     plane, segment, xc = filtered.plane, filtered.run.segment, est.x
+    wanted = set(_TABLE_COLUMNS if columns is None else columns)
     out_lat, out_lon = plane.inverse(xc[:, 0], xc[:, 3])
-    v_loc, a_loc, pos = _local_motion(plane, est, out_lat, out_lon)
-    sigma_major, sigma_minor, orientation = _ellipse(pos)
-    speed = np.hypot(v_loc[:, 0], v_loc[:, 1])
-    ccw = _ccw_turn_rate(est.mu, args, v_loc, a_loc, speed)
-    is_update = est.age_s == 0.0
-    out = {
-        "aircraft_id": aircraft_id, "segment": segment[est.row], "time": qt, "time_of_day": qt,
-        "latitude": out_lat, "longitude": out_lon, "flight_level": est.zv[:, 0],
-        "vertical_rate_fpm": est.zv[:, 1] * FT_PER_FL * 60.0,
-        "speed_kt": speed / M_PER_S_PER_KT,
-        "track_deg": np.degrees(np.arctan2(v_loc[:, 0], v_loc[:, 1])) % 360,
-        "turn_rate_dps": (_smoothed_turn_rate(qt, v_loc, segment[est.row], -np.degrees(ccw), speed) if smooth
-                          else -np.degrees(ccw)),
-        "sigma_major_m": sigma_major, "sigma_minor_m": sigma_minor,
-        "ellipse_orientation_deg": orientation,
-    }
+    motion = bool(wanted & {"speed_kt", "track_deg", "turn_rate_dps"})
+    ellipse = bool(wanted & {"sigma_major_m", "sigma_minor_m", "ellipse_orientation_deg"})
+    minv = _inv2(plane.local_to_plane(out_lat, out_lon)) if motion or ellipse else None
+    out = {"aircraft_id": aircraft_id, "segment": segment[est.row], "time": qt, "time_of_day": qt,
+           "latitude": out_lat, "longitude": out_lon, "flight_level": est.zv[:, 0],
+           "vertical_rate_fpm": est.zv[:, 1] * FT_PER_FL * 60.0}
+    if motion:
+        v_loc, a_loc = _local_motion(minv, est)
+        speed = np.hypot(v_loc[:, 0], v_loc[:, 1])
+        ccw = _ccw_turn_rate(est.mu, args, v_loc, a_loc, speed)
+        out.update({
+            "speed_kt": speed / M_PER_S_PER_KT,
+            "track_deg": np.degrees(np.arctan2(v_loc[:, 0], v_loc[:, 1])) % 360,
+            "turn_rate_dps": (_smoothed_turn_rate(qt, v_loc, segment[est.row], -np.degrees(ccw), speed)
+                              if smooth else -np.degrees(ccw))})
+    if ellipse:
+        sigma_major, sigma_minor, orientation = _ellipse(_local_position_covariance(minv, est))
+        out.update({"sigma_major_m": sigma_major, "sigma_minor_m": sigma_minor,
+                    "ellipse_orientation_deg": orientation})
     for j, name in enumerate(names):
         out[f"mode_{name}"] = est.mu[:, j]
-    out.update({"coasted": ~is_update, "age_s": est.age_s, "sources": _update_sources(qt, is_update, updates),
-                "on_ground": _ground_at(filtered.ground, filtered.run.accepted, segment, est.row)})
+    is_update = est.age_s == 0.0
+    out["coasted"], out["age_s"] = ~is_update, est.age_s
+    if "sources" in wanted:
+        out["sources"] = _update_sources(qt, is_update, updates)
+    if "on_ground" in wanted:
+        out["on_ground"] = _ground_at(filtered.ground, filtered.run.accepted, segment, est.row)
     if columns is not None:
         out = {c: out[c] for c in columns}
     return len(qt), out
 
 
-def _local_motion(plane: Plane, est: Estimates, lat: np.ndarray,
-                  lon: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """The estimates' velocity and acceleration (n, 2) and position covariance (n, 2, 2) turned from the
-    plane's axes into local east/north at their positions."""
-    minv = _inv2(plane.local_to_plane(lat, lon))
+# every column of the tracks table `_track_table` makes (the modes' own added after these)
+_TABLE_COLUMNS = ("aircraft_id", "segment", "time", "time_of_day", "latitude", "longitude",
+                          "flight_level", "vertical_rate_fpm", "speed_kt", "track_deg", "turn_rate_dps",
+                          "sigma_major_m", "sigma_minor_m", "ellipse_orientation_deg", "coasted", "age_s",
+                          "sources", "on_ground")
+
+
+def _local_motion(minv: np.ndarray, est: Estimates) -> tuple[np.ndarray, np.ndarray]:
+    """The estimates' velocity and acceleration (n, 2) turned from the plane's axes into local east/north
+    (minv: per estimate, the plane-to-local matrix at its position)."""
     v_loc = np.einsum("nij,nj->ni", minv, est.x[:, [1, 4]])
     a_loc = np.einsum("nij,nj->ni", minv, est.x[:, [2, 5]])
-    pos = minv @ est.P[:, [0, 3]][:, :, [0, 3]] @ np.swapaxes(minv, 1, 2)
-    return v_loc, a_loc, pos
+    return v_loc, a_loc
+
+
+def _local_position_covariance(minv: np.ndarray, est: Estimates) -> np.ndarray:
+    """The estimates' position covariance (n, 2, 2) turned from the plane's axes into local east/north."""
+    return minv @ est.P[:, [0, 3]][:, :, [0, 3]] @ np.swapaxes(minv, 1, 2)
 
 
 def _ccw_turn_rate(mu: np.ndarray, args: dict, v_loc: np.ndarray, a_loc: np.ndarray,
