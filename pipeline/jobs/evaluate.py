@@ -255,7 +255,7 @@ def _per_aircraft(sensor_id: str, reports: pd.DataFrame, reference: pd.DataFrame
         table = table.join(per.rename(columns=names), how="left")
     errors = position_errors(rep, reference, association)
     if len(errors):
-        rms = errors.groupby("aircraft")["error_m"].agg(lambda e: float(np.sqrt(np.mean(np.square(e)))))
+        rms = np.sqrt(errors["error_m"].pow(2).groupby(errors["aircraft"]).mean())
         table = table.join(rms.rename("rms_error_m"), how="left")
         table = table.join(errors.groupby("aircraft").size().rename("errors_judged"), how="left")
     table.index.name = "aircraft"
