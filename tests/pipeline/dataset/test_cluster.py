@@ -115,6 +115,30 @@ def test_local_workers_keep_glibcs_own_heap_trimming(monkeypatch):
         engine.close()
 
 
+def _hugepage_state(_) -> tuple[str | None, bool]:
+    from numpy._core.multiarray import _get_madvise_hugepage
+
+    return os.environ.get("NUMPY_MADVISE_HUGEPAGE"), bool(_get_madvise_hugepage())
+
+
+def test_local_workers_do_not_mark_numpys_arrays_for_huge_pages(monkeypatch):
+    """A local worker's numpy starts with NUMPY_MADVISE_HUGEPAGE=0 (its arrays not marked for transparent
+    huge pages, as numpy reports it in the worker), unless the user exports a value, which wins."""
+    pytest.importorskip("distributed", reason="dask's distributed scheduler is not installed")
+    monkeypatch.delenv("NUMPY_MADVISE_HUGEPAGE", raising=False)
+    engine = DaskDistributor(workers=1)
+    try:
+        assert list(engine.map_ordered(_hugepage_state, [0])) == [("0", False)]
+    finally:
+        engine.close()
+    monkeypatch.setenv("NUMPY_MADVISE_HUGEPAGE", "1")
+    engine = DaskDistributor(workers=1)
+    try:
+        assert list(engine.map_ordered(_hugepage_state, [0])) == [("1", True)]
+    finally:
+        engine.close()
+
+
 def test_scheduler_and_workers_are_checked():
     for good in ("local", "none", "tcp://127.0.0.1:8786", "tls://sched.example:8786"):
         check_scheduler(TrackOptions(scheduler=good))
