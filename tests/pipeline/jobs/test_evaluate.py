@@ -649,3 +649,26 @@ def test_a_span_pooled_from_disk_in_passes_gives_the_figures_of_its_values_read_
     a, b = passes.tables[title], together.tables[title]
     pd.testing.assert_frame_equal(a.drop(columns="rms_m"), b.drop(columns="rms_m"), check_exact=True)
     assert np.allclose(a["rms_m"], b["rms_m"], rtol=1e-13, atol=0.0) and len(a) > 3
+
+
+def test_per_aircraft_rms_error_is_that_of_its_reports_errors():
+    """The per-aircraft table's RMS position error, by hand: a reference aircraft standing at 50 N 4 E and
+    two reports 30 m and 40 m north of it give sqrt((30^2 + 40^2) / 2) = 35.355 m over 2 errors; the other
+    aircraft, 20 NM away, has no report (no RMS, 0 reports)."""
+    from msdc.pipeline.jobs.evaluate import _per_aircraft
+
+    # metres per degree of latitude at 50 N: the WGS-84 meridian radius of curvature a (1 - e2) / (1 - e2
+    # sin^2)^1.5 = 6,373,784 m, so 111,244 m a degree
+    a, e2 = 6378137.0, 0.00669437999014
+    m_per_deg = np.radians(1.0) * a * (1 - e2) / (1 - e2 * np.sin(np.radians(50.0)) ** 2) ** 1.5
+    t = np.arange(0.0, 101.0, 10.0)
+    reference = pd.DataFrame({"aircraft": ["A"] * 11 + ["B"] * 11, "t_s": np.r_[t, t],
+                              "latitude": np.r_[np.full(11, 50.0), np.full(11, 50.0 + 20 * 1852 / m_per_deg)],
+                              "longitude": 4.0, "altitude_ft": 30000.0, "built_by": "021:0/1",
+                              "self_reference": False, "on_ground": False})
+    reports = pd.DataFrame({"t_s": [20.0, 50.0], "latitude": 50.0 + np.array([30.0, 40.0]) / m_per_deg,
+                            "longitude": 4.0, "flight_level": 300.0})
+    table = _per_aircraft("048:20/1", reports, reference, None, {}).set_index("aircraft")
+    assert table.loc["A", "rms_error_m"] == pytest.approx(np.sqrt((30.0**2 + 40.0**2) / 2), rel=1e-4)
+    assert table.loc["A", "errors_judged"] == 2 and table.loc["A", "reports"] == 2
+    assert np.isnan(table.loc["B", "rms_error_m"]) and table.loc["B", "reports"] == 0
