@@ -188,11 +188,8 @@ def _query_between(kinds, omegas, qs, a, t, r, cbar, x0, P0, xp, xbar, Pbar_k, P
     for j in range(r):
         transition_into(kinds[j], omegas[j], qs[j], a, Fa, Qa)
         transition_into(kinds[j], omegas[j], qs[j], t, Ft, Qt)
+        fx_into(Fa, x0[j], xt[j])
         for i1 in range(NX):
-            acc = 0.0
-            for k1 in range(NX):
-                acc += Fa[i1, k1] * x0[j, k1]
-            xt[j, i1] = acc
             for j1 in range(NX):
                 acc = 0.0
                 for k1 in range(NX):
@@ -215,14 +212,9 @@ def _query_between(kinds, omegas, qs, a, t, r, cbar, x0, P0, xp, xbar, Pbar_k, P
             for i1 in range(NX):
                 for j1 in range(NX):
                     C[i1, j1] = 0.0
-        for i1 in range(NX):
-            for j1 in range(NX):
-                C[i1, j1] += cbar[j] * Cj[i1, j1]
+        _add_scaled(cbar[j], Cj, C)
     combine_into(cbar, xt, Pt, r, xtc, Ptc)
-    for j in range(r):
-        for i1 in range(NX):
-            for j1 in range(NX):
-                C[i1, j1] += cbar[j] * (xt[j, i1] - xtc[i1]) * (xp[j, j1] - xbar[j1])
+    _add_spread(cbar, xt, xtc, xp, xbar, r, C)
     for i1 in range(NX):
         for j1 in range(NX):
             Pbar[i1, j1] = Pbar_k[i1, j1]
@@ -257,14 +249,27 @@ def _joint(kinds, omegas, qs, tpm_kind, tpm_param, tpm_param2, dt, r, mu, x, P, 
                 for k in range(NX):
                     acc += F[a, k] * Cj[k, b]
                 Pp[j, a, b] = acc
-        for a in range(NX):
-            for b in range(NX):
-                C[a, b] += cbar[j] * Cj[a, b]
+        _add_scaled(cbar[j], Cj, C)
     combine_into(cbar, xp, Pp, r, xbar, Pbar)
+    _add_spread(cbar, x0, xk, xp, xbar, r, C)
+
+
+@njit(cache=True, nogil=True)
+def _add_scaled(w, M, C):
+    """C += w M (6x6)."""
+    for a in range(NX):
+        for b in range(NX):
+            C[a, b] += w * M[a, b]
+
+
+@njit(cache=True, nogil=True)
+def _add_spread(cbar, xa, ma, xb, mb, r, C):
+    """C += sum_j cbar_j (xa_j - ma)(xb_j - mb)^T: the spread of the modes' means in a mixture's
+    cross-covariance."""
     for j in range(r):
         for a in range(NX):
             for b in range(NX):
-                C[a, b] += cbar[j] * (x0[j, a] - xk[a]) * (xp[j, b] - xbar[b])
+                C[a, b] += cbar[j] * (xa[j, a] - ma[a]) * (xb[j, b] - mb[b])
 
 
 @njit(cache=True, nogil=True)
