@@ -672,10 +672,14 @@ def _track_table(aircraft_id: str, filtered: FilteredReports, updates: Updates, 
     the estimates at the output times qt, in local terms. ``aircraft_id`` and ``time`` are made for every
     aircraft at once (`_tracks_table`): here the aircraft's name and its times in seconds."""
     plane, segment, xc = filtered.plane, filtered.run.segment, est.x
-    wanted = set(_TABLE_COLUMNS if columns is None else columns)
+    wanted = None if columns is None else set(columns)
+
+    def needs(*names: str) -> bool:
+        return wanted is None or not wanted.isdisjoint(names)
+
     out_lat, out_lon = plane.inverse(xc[:, 0], xc[:, 3])
-    motion = bool(wanted & {"speed_kt", "track_deg", "turn_rate_dps"})
-    ellipse = bool(wanted & {"sigma_major_m", "sigma_minor_m", "ellipse_orientation_deg"})
+    motion = needs("speed_kt", "track_deg", "turn_rate_dps")
+    ellipse = needs("sigma_major_m", "sigma_minor_m", "ellipse_orientation_deg")
     minv = _inv2(plane.local_to_plane(out_lat, out_lon)) if motion or ellipse else None
     out = {"aircraft_id": aircraft_id, "segment": segment[est.row], "time": qt, "time_of_day": qt,
            "latitude": out_lat, "longitude": out_lon, "flight_level": est.zv[:, 0],
@@ -697,20 +701,13 @@ def _track_table(aircraft_id: str, filtered: FilteredReports, updates: Updates, 
         out[f"mode_{name}"] = est.mu[:, j]
     is_update = est.age_s == 0.0
     out["coasted"], out["age_s"] = ~is_update, est.age_s
-    if "sources" in wanted:
+    if needs("sources"):
         out["sources"] = _update_sources(qt, is_update, updates)
-    if "on_ground" in wanted:
+    if needs("on_ground"):
         out["on_ground"] = _ground_at(filtered.ground, filtered.run.accepted, segment, est.row)
     if columns is not None:
         out = {c: out[c] for c in columns}
     return len(qt), out
-
-
-# every column of the tracks table `_track_table` makes (the modes' own added after these)
-_TABLE_COLUMNS = ("aircraft_id", "segment", "time", "time_of_day", "latitude", "longitude",
-                          "flight_level", "vertical_rate_fpm", "speed_kt", "track_deg", "turn_rate_dps",
-                          "sigma_major_m", "sigma_minor_m", "ellipse_orientation_deg", "coasted", "age_s",
-                          "sources", "on_ground")
 
 
 def _local_motion(minv: np.ndarray, est: Estimates) -> tuple[np.ndarray, np.ndarray]:
