@@ -122,21 +122,42 @@ def _part_len(buf, pos, end, sp, P, ext_sizes, ext_fx):
 def walks(buf, q, n, p0, n_frn, parts):
     """True when the block at q (LEN n) walks record by record exactly to its end under the layout whose
     parts start at row p0 of parts.P (framing's consistency check; the decode itself is ``scan``)."""
+    return walk_records(buf, q, n, p0, n_frn, parts, False) > 0
+
+
+@njit(cache=True, nogil=True, inline="always")
+def walk_records(buf, q, n, p0, n_frn, parts, one_source):
+    """The records of the block at q (LEN n) when it walks exactly to its end under the layout whose parts
+    start at row p0 of parts.P, else -1; with ``one_source``, -1 too unless every record's FSPEC sets FRN 1
+    (the data source identifier, I0xx/010, in every category) with the first record's two bytes there.
+    Inlined, so ``walks`` passes a constant and pays nothing for the check (called, framing damaged
+    recordings took 12-19 % longer)."""
     P, ext_sizes, ext_fx, sub_parts = parts
     pos = q + 3
     end = q + n
     if pos >= end:
-        return False
+        return -1
+    records = 0
+    source = -1
     while pos < end:
         fs = pos
         base = p0  # FRN rows of the record's UAP: block 0 until a selector chooses (K_SEL_*)
         while True:
             if pos >= end:
-                return False
+                return -1
             pos += 1
             if buf[pos - 1] & 1 == 0:
                 break
         fs_end = pos
+        if one_source:
+            if buf[fs] & 0x80 == 0 or pos + 2 > end:
+                return -1
+            here = (np.int64(buf[pos]) << 8) | buf[pos + 1]
+            if source < 0:
+                source = here
+            elif here != source:
+                return -1
+        records += 1
         any_item = False
         for fq in range(fs, fs_end):
             byte = buf[fq]
@@ -146,12 +167,12 @@ def walks(buf, q, n, p0, n_frn, parts):
                 any_item = True
                 f = (fq - fs) * 7 + bit
                 if f >= n_frn or P[base + f, K_KIND] == ABSENT:
-                    return False
+                    return -1
                 p = base + f
                 if P[p, K_KIND] == FIXED:  # fast path: most items (a call per item cost 3/4 of the walk)
                     pos += P[p, K_SIZE]
                     if pos > end:
-                        return False
+                        return -1
                     if P[p, K_SEL_MASK] != 0:
                         v = (np.int64(buf[pos - P[p, K_SIZE] + P[p, K_SEL_BYTE]]) >> P[p, K_SEL_SHIFT]) \
                             & P[p, K_SEL_MASK]
@@ -160,7 +181,7 @@ def walks(buf, q, n, p0, n_frn, parts):
                 if P[p, K_KIND] != COMPOUND:
                     m = _part_len(buf, pos, end, p, P, ext_sizes, ext_fx)
                     if m < 0:
-                        return False
+                        return -1
                     if P[p, K_SEL_MASK] != 0:
                         v = (np.int64(buf[pos + P[p, K_SEL_BYTE]]) >> P[p, K_SEL_SHIFT]) & P[p, K_SEL_MASK]
                         base = p0 + (v + 1) * n_frn
@@ -169,7 +190,7 @@ def walks(buf, q, n, p0, n_frn, parts):
                 cs = pos
                 while True:
                     if pos >= end:
-                        return False
+                        return -1
                     pos += 1
                     if buf[pos - 1] & 1 == 0:
                         break
@@ -180,20 +201,20 @@ def walks(buf, q, n, p0, n_frn, parts):
                             continue
                         si = (cq - cs) * 7 + cbit
                         if si >= P[p, K_SUB_COUNT] or sub_parts[P[p, K_SUB_START] + si] < 0:
-                            return False
+                            return -1
                         sp = sub_parts[P[p, K_SUB_START] + si]
                         if P[sp, K_KIND] == FIXED:
                             pos += P[sp, K_SIZE]
                             if pos > end:
-                                return False
+                                return -1
                             continue
                         m = _part_len(buf, pos, end, sp, P, ext_sizes, ext_fx)
                         if m < 0:
-                            return False
+                            return -1
                         pos += m
         if not any_item:
-            return False
-    return pos == end
+            return -1
+    return records if pos == end else -1
 
 
 @njit(cache=True, nogil=True)
