@@ -478,6 +478,60 @@ def _next_proves(buf, x, stop, seen, framing, memo):
     return seen[c] == 1 and _anchored(buf, x, stop, seen, framing, memo)
 
 
+# Data sources met (frame_window's ``seen`` after its 256 categories): one bit per category and SAC/SIC of a
+# decoded block framing accepted walking exactly, by its first record's I0xx/010. Kept for the whole framing.
+SOURCES_AT = 256
+SEEN_SLOTS = SOURCES_AT + (256 << 13)
+STRANDED_RECORDS = 2  # records a stranded block must hold, each naming a data source met in its category
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _first_source(buf, q, n):
+    """The two bytes after the first record's FSPEC when it sets FRN 1 (the data source identifier in every
+    category), else -1."""
+    end = q + n
+    pos = q + 3
+    if pos >= end or buf[pos] & 0x80 == 0:
+        return np.int64(-1)
+    while pos < end and buf[pos] & 1:
+        pos += 1
+    if pos + 3 > end:
+        return np.int64(-1)
+    return (np.int64(buf[pos + 1]) << 8) | buf[pos + 2]
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _source_met(seen, c, source):
+    """Whether a block of category c from this SAC/SIC was accepted before (its bit in ``seen``)."""
+    i = SOURCES_AT + (np.int64(c) << 13) + (source >> 3)
+    return seen[i] >> (source & 7) & 1 == 1
+
+
+@njit(cache=True, nogil=True)
+def _note_source(buf, q, n, seen):
+    """Mark the first record's data source of the accepted walking block at q as met in its category."""
+    source = _first_source(buf, q, n)
+    if source >= 0:
+        i = SOURCES_AT + (np.int64(buf[q]) << 13) + (source >> 3)
+        seen[i] |= np.uint8(1 << (source & 7))
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _stranded_block(buf, r, m, seen, framing, memo):
+    """The block at r (LEN m, its header complete) is a real one even though no chain anchors it: a block
+    of a decoded category walking exactly, of STRANDED_RECORDS records or more, each naming one data source
+    already met in that category (an intact block alone between two damages; chance bytes that walk name a
+    met source with a chance of about (sources met / 65536) per record)."""
+    base, nfrn, parts = framing
+    c = buf[r]
+    if base[c] < 0:
+        return False
+    source = _first_source(buf, r, m)
+    if source < 0 or not _source_met(seen, c, source) or not _walks_at(buf, r, m, c, framing, memo):
+        return False  # the walk through _walks_at: logged, as alike_framings compares the walks logged
+    return walk_records(buf, r, m, base[c], nfrn[c], parts, True) >= STRANDED_RECORDS
+
+
 # Framing modes of a payload segment (frame_window's seg_mode).
 MODE_EXACT = 0  # a container payload: it tiles into data blocks exactly, or it is skipped whole
 MODE_CHAIN = 1  # a raw stream whose block chain holds from start to end (chain_step said so): taken as it is
@@ -546,15 +600,16 @@ def frame_window(buf, seg_start, seg_stop, seg_mode, framing, st, seen, memo, se
     """Frame payload segments into data blocks of any category, from where ``st`` left off, until a
     decision would start at or past ``byte_limit`` or segment ``seg_limit`` is reached (one decision at
     least is made per call). Returns (blk_start, blk_len, blk_cat, blk_seg, err_off, err_len, err_cat,
-    err_code) for what was settled; ``st`` and ``seen`` (categories met, uint8[256]) carry the framing
-    between calls, so any windows give the blocks and errors of one call over everything, in its order;
-    ``memo`` (new_memo) keeps walk results for the calls of one framing, and its log (which pauses the
-    window when nearly full).
+    err_code) for what was settled; ``st`` and ``seen`` (new_state: categories and data sources met) carry
+    the framing between calls, so any windows give the blocks and errors of one call over everything, in
+    its order; ``memo`` (new_memo) keeps walk results for the calls of one framing, and its log (which
+    pauses the window when nearly full).
 
     MODE_EXACT segments must tile into blocks, else they are skipped whole (E_NO_FRAME); MODE_CHAIN ones are
     followed header by header; MODE_CAREFUL ones accept a block when it is consistent with what follows
     (walked categories, framing.base[cat] >= 0, must walk exactly), and where the chain breaks, framing
-    resumes at the next offset whose chain is anchored (_anchored). Decisions read ahead of byte_limit by
+    resumes at the next offset whose chain is anchored (_anchored) or that starts a stranded real block
+    (_stranded_block: a real block stranded between two damages). Decisions read ahead of byte_limit by
     a few blocks at most (LOOKAHEAD blocks of up to 65535 bytes, and one block's length more).
     """
     base, nfrn, parts = framing
@@ -583,7 +638,7 @@ def frame_window(buf, seg_start, seg_stop, seg_mode, framing, st, seen, memo, se
                 break
             q = start
             if mode == MODE_CAREFUL:
-                seen[:] = 0
+                seen[:SOURCES_AT] = 0  # categories met: per segment; data sources: the whole framing
         if mode == MODE_EXACT:
             nb0 = nb
             while q < stop:
@@ -645,10 +700,12 @@ def frame_window(buf, seg_start, seg_stop, seg_mode, framing, st, seen, memo, se
                 moved = True
                 n = _header(buf, q, stop)
                 ok = False
+                walked = False
                 if n > 0:
                     c = buf[q]
                     if base[c] >= 0:
-                        if _walks_at(buf, q, n, c, framing, memo):
+                        walked = _walks_at(buf, q, n, c, framing, memo)
+                        if walked:
                             # walking exactly to its LEN is the block's own evidence, unless what follows
                             # is not anchored and a walking chain starts inside it: a damaged block that
                             # walks by chance, swallowing the head of a real one (a plausible header after
@@ -690,6 +747,8 @@ def frame_window(buf, seg_start, seg_stop, seg_mode, framing, st, seen, memo, se
                     b_seg[nb] = s
                     nb += 1
                     seen[buf[q]] = 1
+                    if walked:
+                        _note_source(buf, q, n, seen)
                     q += n
                     continue
                 # the chain breaks here: search for the next offset whose chain is anchored
@@ -700,6 +759,7 @@ def frame_window(buf, seg_start, seg_stop, seg_mode, framing, st, seen, memo, se
             bq = st[ST_BREAK_AT]
             bn = st[ST_BREAK_LEN]
             r = st[ST_SCAN]
+            stranded = np.int64(-1)  # LEN of the stranded real block (_stranded_block) the search stopped at
             while r < stop:
                 # pause only once it is settled whether a complete block ends before the resumption point
                 if moved and ((r >= byte_limit and (bn <= 0 or r > bq + bn)) or _log_full(memo)):
@@ -710,9 +770,14 @@ def frame_window(buf, seg_start, seg_stop, seg_mode, framing, st, seen, memo, se
                 # fail them, and a call per offset cost 10-20 times the tests
                 if buf[r] != 0 and r + 3 <= stop:
                     m = (np.int64(buf[r + 1]) << 8) | buf[r + 2]
-                    if (m >= 3 and r + m <= stop and _may_anchor(buf, r, stop, seen, base)
-                            and _candidate(buf, r, stop, seen, framing, memo)):
-                        break
+                    if m >= 3 and r + m <= stop:
+                        if (_may_anchor(buf, r, stop, seen, base)
+                                and _candidate(buf, r, stop, seen, framing, memo)):
+                            break
+                        if (m > 3 and base[buf[r]] >= 0 and buf[r + 3] & 0x80
+                                and _stranded_block(buf, r, m, seen, framing, memo)):
+                            stranded = m
+                            break
                 r += 1
             if paused:
                 st[ST_SCAN] = r
@@ -740,6 +805,16 @@ def frame_window(buf, seg_start, seg_stop, seg_mode, framing, st, seen, memo, se
             e_code[ne] = E_BAD_LEN if bad_len else E_GARBAGE
             ne += 1
             q = r
+            if stranded > 0:  # taken as it is (its own evidence); what follows it is the next decision
+                if nb == b_start.shape[0]:
+                    b_start, b_len, b_seg, b_cat = _grow4(b_start, b_len, b_seg, b_cat)
+                b_start[nb] = q
+                b_len[nb] = stranded
+                b_cat[nb] = buf[q]
+                b_seg[nb] = s
+                nb += 1
+                seen[buf[q]] = 1
+                q += stranded
         if not paused:
             s += 1
             q = -1
@@ -763,10 +838,10 @@ def block_walks(buf, blk_start, blk_len, blk_cat, framing):
 
 
 def new_state() -> tuple[np.ndarray, np.ndarray]:
-    """A fresh frame_window state and its set of categories met."""
+    """A fresh frame_window state and its ``seen``: categories met, then data sources met (SOURCES_AT)."""
     st = np.zeros(STATE_SLOTS, np.int64)
     st[ST_POS] = -1
-    return st, np.zeros(256, np.uint8)
+    return st, np.zeros(SEEN_SLOTS, np.uint8)
 
 
 def segment_modes(buf, seg_start, seg_stop, exact, careful, framing) -> np.ndarray:
