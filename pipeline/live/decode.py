@@ -27,11 +27,18 @@ RECORD_REASONS = tuple(REASONS[code] for code in (
 # plots, CAT002 with CAT001, CAT019 with CAT020 multilateration, CAT023 with CAT021 ADS-B, CAT065 with
 # CAT062 tracks); CAT025 and CAT063 are counted under their own id only
 STATUS_OF = {34: 48, 2: 1, 19: 20, 23: 21, 65: 62, 25: None, 63: None}
+# CAT010 records by kind (sorted; "": status messages and reports of kinds msdc does not measure, counted as
+# "010:SAC/SIC", which gives its kinds' panels their last status and no panel of its own)
+CAT010_KINDS = np.array(["", "mlat", "smr"])
 # the decoded columns the live counters and the recent reports need (all of a category when it has them)
 COLUMNS = ("sac", "sic", "time_of_day", "mode3a", "mode3a_v", "flight_level", "flight_level_v", "rho_nm",
            "theta_deg", "latitude", "longitude", "address", "callsign", "track_number", "ground_speed_kt",
            "gbs", "flight_status", "rab", "nacp", "nucp_nic", "geometric_height_ft", "track_angle_deg",
-           "heading_deg")
+           "heading_deg", "message_type", "typ", "rho_m", "x_m", "y_m", "vx_ms", "vy_ms", "sigma_x_m",
+           "sigma_y_m")
+# the categories whose reports become measurement rows (the recent reports, the sensors' figures, the map);
+# the records of the others are counted (CAT001 plots, CAT062 system tracks)
+MEASURED = (48, 21, 10, 20)
 
 
 @dataclass(frozen=True)
@@ -91,8 +98,9 @@ class BatchDecoder:
                 counts[self.feeds[f]] = {"decode_errors": int((feed == f).sum())}
             self.state.decoded(counts, None, {})
             return
-        counts: dict[str, dict] = {name: {"unframed": 0, "decode_errors": 0, "records": {}}
-                                   for name in {self.feeds[f] for f in np.unique(feed)}}
+        counts: dict[str, dict] = {
+            name: {"unframed": 0, "decode_errors": 0, "records": {}, "last_record_wall_s": {}}
+            for name in {self.feeds[f] for f in np.unique(feed)}}
         self._errors(rec.errors, stop, feed, counts)
         status: dict[str, float] = {}
         parts = []
@@ -100,11 +108,17 @@ class BatchDecoder:
             if not len(frame):
                 continue
             row_dgram = np.searchsorted(stop, frame["offset"].to_numpy(np.int64), side="right")
-            self._count(cat, frame, feed[row_dgram], counts)
+            self._count(cat, frame, feed[row_dgram], wall[row_dgram], counts)
             self.records += len(frame)
+            if cat == 10 and "message_type" in frame:  # its status messages, under "010:SAC/SIC"
+                from msdc.pipeline.model.multilateration import TARGET_REPORT
+
+                said = (frame["message_type"] != TARGET_REPORT).fillna(False).to_numpy(bool)
+                if said.any():
+                    self._status(cat, frame[said], wall[row_dgram][said], status)
             if cat in STATUS_OF:
                 self._status(cat, frame, wall[row_dgram], status)
-            elif self.reports and cat in (48, 21):
+            elif self.reports and cat in MEASURED:
                 rows = report_rows(cat, frame.reset_index(drop=True), self.sensors, rec.date)
                 if rows is not None and len(rows):
                     at = row_dgram[rows.index.to_numpy()]
@@ -126,17 +140,31 @@ class BatchDecoder:
         for f, n in zip(*np.unique(feed[unframed], return_counts=True), strict=True):
             counts[self.feeds[f]]["unframed"] += int(n)
 
-    def _count(self, cat: int, frame: pd.DataFrame, row_feed: np.ndarray, counts: dict) -> None:
-        """Records per feed and sensor ("CCC:SAC/SIC"; "?" for a missing SAC or SIC)."""
+    def _count(self, cat: int, frame: pd.DataFrame, row_feed: np.ndarray, row_wall: np.ndarray,
+               counts: dict) -> None:
+        """Records per feed and sensor ("CCC:SAC/SIC"; "?" for a missing SAC or SIC), and when the latest
+        of them arrived: a sensor whose reports make no measurement rows is still heard."""
         none = np.full(len(frame), np.nan)
         sac = frame["sac"].to_numpy("float64", na_value=np.nan) if "sac" in frame else none
         sic = frame["sic"].to_numpy("float64", na_value=np.nan) if "sic" in frame else none
-        key = row_feed * 1_000_000 + np.nan_to_num(sac, nan=999) * 1000 + np.nan_to_num(sic, nan=999)
-        for k, n in zip(*np.unique(key.astype(np.int64), return_counts=True), strict=True):
-            f, a, b = int(k) // 1_000_000, int(k) // 1000 % 1000, int(k) % 1000
+        kind = np.zeros(len(frame), np.int64)  # CAT010: its measurements' sensor id, as report_rows makes it
+        if cat == 10:
+            from msdc.pipeline.model.multilateration import report_kinds
+
+            kind = np.searchsorted(CAT010_KINDS, report_kinds(frame, 10)[0].astype(str))
+        key = (row_feed * 10_000_000 + kind * 1_000_000 + np.nan_to_num(sac, nan=999) * 1000
+               + np.nan_to_num(sic, nan=999))
+        keys, inverse, n = np.unique(key.astype(np.int64), return_inverse=True, return_counts=True)
+        latest = np.full(len(keys), -np.inf)
+        np.maximum.at(latest, inverse, row_wall)
+        for k, count, t in zip(keys.tolist(), n.tolist(), latest.tolist(), strict=True):
+            f, a, b = k // 10_000_000, k // 1000 % 1000, k % 1000
             sensor = f"{cat:03d}:{'?' if a == 999 else a}/{'?' if b == 999 else b}"
-            records = counts[self.feeds[f]]["records"]
-            records[sensor] = records.get(sensor, 0) + int(n)
+            if k // 1_000_000 % 10:
+                sensor += f":{CAT010_KINDS[k // 1_000_000 % 10]}"
+            feed = counts[self.feeds[f]]
+            feed["records"][sensor] = feed["records"].get(sensor, 0) + count
+            feed["last_record_wall_s"][sensor] = max(t, feed["last_record_wall_s"].get(sensor, -np.inf))
 
     @staticmethod
     def _status(cat: int, frame: pd.DataFrame, row_wall: np.ndarray, status: dict[str, float]) -> None:
@@ -145,7 +173,7 @@ class BatchDecoder:
             return
         pairs = pd.DataFrame({"sac": frame["sac"].to_numpy(), "sic": frame["sic"].to_numpy(), "w": row_wall})
         for (sac, sic), w in pairs.groupby(["sac", "sic"])["w"].max().items():
-            for c in (cat, STATUS_OF[cat]):
+            for c in (cat, STATUS_OF.get(cat)):
                 if c is not None:
                     key = f"{c:03d}:{int(sac)}/{int(sic)}"
                     status[key] = max(status.get(key, float("-inf")), float(w))
@@ -154,12 +182,27 @@ class BatchDecoder:
 def report_rows(cat: int, frame: pd.DataFrame, sensors: pd.DataFrame | None, date) -> pd.DataFrame | None:
     """The measurement rows of one decoded frame, indexed by the frame's rows (those without a time, or an
     ADS-B report without a position, have none); CAT048 plots of radars not in ``sensors`` get no position
-    but keep their other columns. With mode3a_valid and modec_valid: CAT048 the V bits of I048/070 and
-    I048/090 clear -> valid, set -> not; <NA> where the report does not say (CAT021 never does)."""
+    but keep their other columns; CAT010/CAT020 reports with only Cartesian or polar positions need their
+    sensor's reference point in ``sensors`` (without it they have no row, and are counted only). With
+    mode3a_valid and modec_valid: the V bits of the Mode 3/A code and flight level (I048/070 and I048/090,
+    I010/060 and I010/090, I020/070 and I020/090) clear -> valid, set -> not; <NA> where the report does
+    not say (CAT021 never does)."""
     from msdc.pipeline.model.measurements import measurement_rows, sensor_id
     from msdc.pipeline.model.schema import conform
     from msdc.pipeline.model.time import absolute_time
 
+    if cat in (10, 20):  # placed by their WGS-84 position or the sensor file's reference point
+        from msdc.pipeline.model.measurements import local_measurement_rows
+
+        local = local_measurement_rows(frame if cat == 10 else None, frame if cat == 20 else None, sensors,
+                                       date=date)
+        if not local.parts:
+            return None
+        rows = local.parts[0]
+        source = frame.loc[rows.index]
+        rows["mode3a_valid"] = _valid(source, "mode3a_v")
+        rows["modec_valid"] = _valid(source, "flight_level_v")
+        return rows
     if cat == 21:
         _, rows = measurement_rows(None, frame, date=date)
         if rows is None:

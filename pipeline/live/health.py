@@ -39,6 +39,10 @@ MAX_FIGURE_REPORTS = 5000
 # categories of status messages (north markers, sector crossings, service status): their senders are not
 # sensors of target reports, their times come through status_times
 STATUS_CATEGORIES = frozenset({"002", "019", "023", "025", "034", "063", "065"})
+# categories of reports whose records are counted and dated by arrival but make no measurement rows live
+# (pipeline.live.decode.MEASURED), with what they are
+COUNTED_ONLY = {"001": "monoradar plots and tracks: their time of day needs the radar's CAT002",
+                "062": "system tracks, which msdc evaluate scores as tracks under test"}
 # the validity figures: requirement id, the report's code column, its 'not validated' column, the live
 # state's boolean 'valid' column, the threshold's field
 VALIDITY = {
@@ -240,6 +244,21 @@ def lookback_s(thresholds: Thresholds) -> float:
     return max(thresholds.window_s, thresholds.silent_s)
 
 
+def _cat010_status(sensor_id: str) -> bool:
+    """A CAT010 id without a kind ("010:SAC/SIC"): its status messages and the reports of kinds not measured,
+    which give the last status of its kinds' sensors ("010:SAC/SIC:mlat", ":smr"), no panel of their own."""
+    return sensor_id.startswith("010:") and sensor_id.count(":") == 1
+
+
+def _status_time(sensor_id: str, status_times: dict) -> float | None:
+    """The last status message of a sensor, a CAT010 sensor's under its SAC/SIC without the kind."""
+    if sensor_id in status_times:
+        return status_times[sensor_id]
+    if sensor_id.startswith("010:") and sensor_id.count(":") == 2:
+        return status_times.get(sensor_id.rsplit(":", 1)[0])
+    return None
+
+
 def _kind(sensor_id: str, rows: pd.DataFrame) -> str | None:
     if len(rows) and "sensor_kind" in rows.columns:
         k = rows["sensor_kind"].dropna()
@@ -264,7 +283,7 @@ def sensor_figures(sensor_id: str, rows: pd.DataFrame, window: pd.DataFrame, cou
     total = sum(int((counters.get(f, {}).get("records") or {}).get(sensor_id, 0)) for f in feeds)
     measured, sampled = figure_sample(window)
     period = update_interval_s(measured) if len(measured) else math.nan
-    status = status_times.get(sensor_id)
+    status = _status_time(sensor_id, status_times)
     panel = {
         "sensor_id": sensor_id, "kind": _kind(sensor_id, rows), "feeds": feeds, "records_total": total,
         "reports_in_window": int(len(window)),
@@ -280,6 +299,14 @@ def sensor_figures(sensor_id: str, rows: pd.DataFrame, window: pd.DataFrame, cou
     }
     for req, (*_, threshold) in VALIDITY.items():
         panel[req] = judged(live_validity(measured, req), getattr(thresholds, threshold))
+    category = sensor_id.split(":", 1)[0]
+    if category in COUNTED_ONLY:  # no report rows: say so, not "too few intervals"
+        why = f"CAT{category} records are counted, not measured, live ({COUNTED_ONLY[category]})"
+        panel["update_interval_note"] = why
+        panel["reports_per_s"] = None  # its records arrive; none is a report of the map and the figures
+        panel["pd"] = judged(withheld("pd", why), thresholds.min_pd)
+        for req, (*_, threshold) in VALIDITY.items():
+            panel[req] = judged(withheld(req, why), getattr(thresholds, threshold))
     alarms = []
     age = panel["last_report_age_s"]
     if age is None or age >= thresholds.silent_s:
@@ -402,8 +429,11 @@ def snapshot(frame: pd.DataFrame, counters: dict, status_times: dict, now_wall_s
         in_window = wall >= window_start
     else:
         sid, in_window = np.zeros(0, object), np.zeros(0, bool)
+    for c in counters.values():  # records arrived, whether or not they make reports (CAT062 tracks)
+        for s, t in (c.get("last_record_wall_s") or {}).items():
+            last_heard[s] = max(float(t), last_heard.get(s, -math.inf))
     known = {s for s in set(last_heard) | {s for c in counters.values() for s in (c.get("records") or {})}
-             if s.split(":", 1)[0] not in STATUS_CATEGORIES}
+             if s.split(":", 1)[0] not in STATUS_CATEGORIES and not _cat010_status(s)}
     rate_window = min(thresholds.window_s, now_wall_s - started_wall_s)
     sensors, alarms = [], []
     for s in sorted(known):
@@ -415,7 +445,7 @@ def snapshot(frame: pd.DataFrame, counters: dict, status_times: dict, now_wall_s
         alarms += raised
     feeds, samples = [], {}
     for f in sorted(counters):
-        counter = {k: v for k, v in counters[f].items() if k != "records"}
+        counter = {k: v for k, v in counters[f].items() if k not in ("records", "last_record_wall_s")}
         kept = [(t, c) for t, c in memory.feed_samples.get(f, []) if t >= window_start]
         panel, warned = feed_figures(f, counter, kept, now_wall_s, thresholds.window_s)
         feeds.append(panel)

@@ -28,12 +28,14 @@ class FeedCounters:
     decode_errors: int = 0  # data blocks that frame but whose records do not decode (or a failed batch)
     dropped: int = 0  # datagrams dropped because msdc's own queue was full
     records: dict[str, int] = field(default_factory=dict)  # sensor_id ("048:20/129") -> records
+    last_record_wall_s: dict[str, float] = field(default_factory=dict)  # sensor_id -> last arrival
     last_packet_wall_s: float | None = None
 
     def as_dict(self) -> dict:
         """The protocol's dict (a copy)."""
         return {"packets": self.packets, "bytes": self.bytes, "unframed": self.unframed,
                 "decode_errors": self.decode_errors, "dropped": self.dropped, "records": dict(self.records),
+                "last_record_wall_s": dict(self.last_record_wall_s),
                 "last_packet_wall_s": self.last_packet_wall_s}
 
 
@@ -103,8 +105,9 @@ class LiveState:
 
     def decoded(self, feed_counts: dict[str, dict], reports: pd.DataFrame | None,
                 status: dict[str, float]) -> None:
-        """Fold one decoded batch: per feed its "unframed", "decode_errors" and "records" (sensor_id ->
-        count), the reports for recent() (with wall_s), the status messages' times."""
+        """Fold one decoded batch: per feed its "unframed", "decode_errors", "records" (sensor_id -> count)
+        and "last_record_wall_s" (sensor_id -> the latest arrival of its records), the reports for recent()
+        (with wall_s), the status messages' times."""
         now = self._clock()
         with self._lock:
             for feed, counts in feed_counts.items():
@@ -113,6 +116,8 @@ class LiveState:
                 c.decode_errors += counts.get("decode_errors", 0)
                 for sensor, n in counts.get("records", {}).items():
                     c.records[sensor] = c.records.get(sensor, 0) + n
+                for sensor, t in counts.get("last_record_wall_s", {}).items():
+                    c.last_record_wall_s[sensor] = max(t, c.last_record_wall_s.get(sensor, float("-inf")))
             if reports is not None and len(reports):
                 self._recent.append((float(reports["wall_s"].max()), reports))
             while self._recent and self._recent[0][0] < now - self._keep_s:

@@ -69,7 +69,7 @@ def _int(frame: pd.DataFrame, name: str) -> np.ndarray:
     return frame[name].astype("Int64").fillna(-1).to_numpy(np.int64)
 
 
-def _kinds(frame: pd.DataFrame, category: int) -> tuple[np.ndarray, dict[int, int]]:
+def report_kinds(frame: pd.DataFrame, category: int) -> tuple[np.ndarray, dict[int, int]]:
     """Per report its kind ("mlat", "smr" or "" when no measurement) and the CAT010 target reports of
     other kinds counted by TYP; CAT010 status messages are no reports (not counted)."""
     if category == 20:
@@ -140,7 +140,7 @@ def _one(frame: pd.DataFrame, category: int, sensors: pd.DataFrame | None, date:
     """The rows of one category's frame, its unplaced reports and its other kinds (LocalRows' parts)."""
     from msdc.pipeline.model.measurements import _common, _labels  # one way of making the shared columns
 
-    kind, other = _kinds(frame, category)
+    kind, other = report_kinds(frame, category)
     keep = kind != ""
     frame, kind = frame[keep], kind[keep]
     if not len(frame):

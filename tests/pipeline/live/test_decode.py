@@ -1,17 +1,21 @@
 """Batches of datagrams decoded into the LiveState (pipeline.live.decode, pipeline.live.state), on records
-built by hand from the CAT048 and CAT034 specifications: what is counted where, what a damaged datagram
-keeps, status messages and the recent reports' validity flags."""
+built by hand from the CAT048 and CAT034 specifications (and CAT010/CAT020/CAT062 by msdc's encoder): what is
+counted where, what a damaged datagram keeps, status messages and the recent reports' validity flags."""
 
 from __future__ import annotations
 
 import math
 
+import numpy as np
 import pandas as pd
 from asterix_bytes import block
 from live_bytes import cat034_north_marker, cat048_record
+from pyproj import Geod
 
+from msdc.asterix.encode import encode_frame
 from msdc.pipeline.jobs.common import sensor_table
 from msdc.pipeline.live.decode import BatchDecoder, Datagram
+from msdc.pipeline.live.health import Thresholds, lookback_s, snapshot
 from msdc.pipeline.live.state import LiveState
 from msdc.pipeline.model.schema import MEASUREMENT_COLUMNS
 
@@ -98,3 +102,83 @@ def test_old_reports_leave_the_ring():
     now[0] = WALL + 11
     decoder.decode([Datagram(0, WALL + 11, block(48, cat048_record(25, 201, 80011.0)))])
     assert len(state.recent(3600.0)) == 1 and state.counters()[FEEDS[0]]["records"] == {"048:25/201": 2}
+
+
+def _snapshot(state: LiveState, now: float) -> dict:
+    thresholds = Thresholds()
+    frame = state.recent(lookback_s(thresholds))
+    snap, _ = snapshot(frame, state.counters(), state.status_times(), now, WALL - 10, thresholds)
+    return snap
+
+
+def test_a_tracker_feed_is_heard_though_its_tracks_make_no_reports():
+    """CAT062 system tracks are counted, not measured, live: their sensor is heard by their arrival (it
+    raised a 'silent' alarm while its tracks arrived) and its figures say why they are withheld."""
+    tracks = pd.DataFrame({"sac": [1] * 3, "sic": [2] * 3, "time_of_day": [79990.0, 79991.0, 79992.0],
+                           "latitude": [45.0, 45.001, 45.002], "longitude": [5.0] * 3,
+                           "track_number": [7] * 3})
+    now = [WALL + 1]
+    state = LiveState(FEEDS, clock=lambda: now[0])
+    BatchDecoder(state, FEEDS).decode([Datagram(0, WALL - 0.4, encode_frame(62, tracks))])
+    snap = _snapshot(state, now[0])
+    (panel,) = snap["sensors"]
+    assert (panel["sensor_id"], panel["records_total"], panel["reports_in_window"]) == ("062:1/2", 3, 0)
+    assert math.isclose(panel["last_report_age_s"], 1.4, abs_tol=1e-6)
+    assert snap["alarms"] == [] and panel["reports_per_s"] is None
+    assert panel["pd"]["state"] == "withheld" and "counted, not measured" in panel["pd"]["note"]
+    now[0] = WALL - 0.4 + Thresholds().silent_s + 1  # then nothing more for longer than silent_s
+    assert [a["kind"] for a in _snapshot(state, now[0])["alarms"]] == ["silent"]
+
+
+SENSOR_FILE = """
+[[sensor]]
+name = "SMR"
+category = 10
+kind = "smr"
+sac = 0
+sic = 7
+latitude = 45.0
+longitude = 5.0
+altitude_m = 0.0
+"""
+
+
+def test_multilateration_and_surface_radar_reports_are_measured_live(tmp_path):
+    """CAT020 reports placed by their WGS-84 position, CAT010 surface radar reports by x/y from the sensor
+    file's reference point (checked with pyproj's geodesic), each with its sensor's panel, its validity bits
+    and its targets on the map; a CAT010 status message gives the surface radar its last status."""
+    path = tmp_path / "sensors.toml"
+    path.write_text(SENSOR_FILE)
+    wam = pd.DataFrame({"sac": [25] * 3, "sic": [10] * 3, "time_of_day": [79990.0, 79991.0, 79992.0],
+                        "latitude": [45.0, 45.01, 45.02], "longitude": [5.5] * 3, "track_number": [7] * 3,
+                        "mode3a": ["1234"] * 3, "mode3a_v": [0, 1, 0]})
+    smr = pd.DataFrame({"sac": [0] * 3, "sic": [7] * 3, "message_type": [1] * 3, "typ": [3] * 3,
+                        "time_of_day": [79990.0, 79991.0, 79992.0], "x_m": [1000.0, 1010.0, 1020.0],
+                        "y_m": [2000.0] * 3, "track_number": [12] * 3})
+    status = pd.DataFrame({"sac": [0], "sic": [7], "message_type": [3], "time_of_day": [79992.5]})
+    state = LiveState(FEEDS, clock=lambda: WALL + 1)
+    decoder = BatchDecoder(state, FEEDS, sensors=sensor_table(path))
+    decoder.decode([Datagram(0, WALL - 0.5, encode_frame(20, wam)),
+                    Datagram(1, WALL - 0.3, encode_frame(10, smr)),
+                    Datagram(1, WALL - 0.2, encode_frame(10, status))])
+    recent = state.recent(60.0)
+    assert sorted(recent["sensor_id"].astype(str)) == ["010:0/7:smr"] * 3 + ["020:25/10"] * 3
+    by = {k: g.sort_values("time") for k, g in recent.groupby(recent["sensor_id"].astype(str))}
+    assert by["020:25/10"]["sensor_kind"].astype(str).tolist() == ["mlat"] * 3
+    assert by["010:0/7:smr"]["sensor_kind"].astype(str).tolist() == ["smr"] * 3
+    lsb = 180 / 2**25  # I020/041
+    assert np.allclose(by["020:25/10"]["latitude"], [45.0, 45.01, 45.02], atol=lsb)
+    assert by["020:25/10"]["mode3a_valid"].tolist() == [True, False, True]
+    geod = Geod(ellps="WGS84")
+    for (x, y), (lat, lon) in zip(smr[["x_m", "y_m"]].to_numpy(),
+                                  by["010:0/7:smr"][["latitude", "longitude"]].to_numpy(), strict=True):
+        want_lon, want_lat, _ = geod.fwd(5.0, 45.0, math.degrees(math.atan2(x, y)), math.hypot(x, y))
+        assert abs(lat - want_lat) < 1e-6 and abs(lon - want_lon) < 1e-6  # 0.1 m
+    snap = _snapshot(state, WALL + 1)
+    panels = {p["sensor_id"]: p for p in snap["sensors"]}
+    assert set(panels) == {"020:25/10", "010:0/7:smr"}  # the status message makes no panel of its own
+    assert panels["010:0/7:smr"]["records_total"] == 3 and panels["010:0/7:smr"]["kind"] == "smr"
+    assert math.isclose(panels["010:0/7:smr"]["last_status_age_s"], 1.2, abs_tol=1e-6)
+    assert panels["020:25/10"]["reports_in_window"] == 3 and panels["020:25/10"]["kind"] == "mlat"
+    assert {t["sensor_id"] for t in snap["targets"]} == {"020:25/10", "010:0/7:smr"}
+    assert snap["alarms"] == []
