@@ -74,8 +74,10 @@ def track_keys(frame: pd.DataFrame) -> np.ndarray:
     Mode S address where it has one), else "T<n>" from the sensor's track number, else None (a plot that
     cannot be followed). A frame that carries them already (``_track_key``, set once by snapshot) gives
     those."""
-    if "_track_key" in frame.columns:
-        return frame["_track_key"].to_numpy(object)
+    if "_track_key" in frame.columns:  # pandas may keep a missing key as NaN in a column of text
+        keys = frame["_track_key"].to_numpy(object)
+        keys[pd.isna(keys)] = None
+        return keys
     n = len(frame)
     out = np.full(n, None, dtype=object)
     if "track_number" in frame.columns:

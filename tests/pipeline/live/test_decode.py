@@ -182,3 +182,22 @@ def test_multilateration_and_surface_radar_reports_are_measured_live(tmp_path):
     assert panels["020:25/10"]["reports_in_window"] == 3 and panels["020:25/10"]["kind"] == "mlat"
     assert {t["sensor_id"] for t in snap["targets"]} == {"020:25/10", "010:0/7:smr"}
     assert snap["alarms"] == []
+
+
+def test_reports_without_a_track_beside_tracked_ones_leave_the_figures_standing(tmp_path):
+    """A sensor whose reports carry no track number (here CAT020 without I020/161; the real CAT021 0.23
+    ADS-B feed of LEBL) beside one whose reports do: its reports cannot be followed and its figures are
+    withheld, the other's are measured (the snapshot failed on the mix: a missing key read back as NaN)."""
+    path = tmp_path / "sensors.toml"
+    path.write_text(SENSOR_FILE)
+    times = [79990.0 + i for i in range(12)]
+    wam = pd.DataFrame({"sac": 25, "sic": 10, "time_of_day": times, "latitude": 45.0, "longitude": 5.5})
+    smr = pd.DataFrame({"sac": 0, "sic": 7, "message_type": 1, "typ": 3, "time_of_day": times,
+                        "x_m": [1000.0 + 10 * i for i in range(12)], "y_m": 2000.0, "track_number": 12})
+    state = LiveState(FEEDS, clock=lambda: WALL + 1)
+    BatchDecoder(state, FEEDS, sensors=sensor_table(path)).decode(
+        [Datagram(0, WALL - 0.5, encode_frame(20, wam)), Datagram(1, WALL - 0.3, encode_frame(10, smr))])
+    panels = {p["sensor_id"]: p for p in _snapshot(state, WALL + 1)["sensors"]}
+    assert panels["020:25/10"]["pd"]["state"] == "withheld"
+    assert panels["020:25/10"]["update_interval_s"] is None
+    assert math.isclose(panels["010:0/7:smr"]["update_interval_s"], 1.0, rel_tol=1e-3)  # one report a second
