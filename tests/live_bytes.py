@@ -11,15 +11,15 @@ from asterix_bytes import block, fspec
 
 def cat048_record(sac: int, sic: int, tod_s: float, *, mode3a_v: int = 0, modec_v: int = 0,
                   code: int = 0o1234, fl: float = 350.0, rho_nm: float = 50.0,
-                  theta_deg: float = 90.0) -> bytes:
+                  theta_deg: float = 90.0, mode3a_g: int = 0, modec_g: int = 0) -> bytes:
     """A CAT048 record (UAP FRN 1-6): I048/010 SAC/SIC, I048/140 time of day (1/128 s), I048/020 (TYP 2,
-    no extension), I048/040 rho (1/256 NM) and theta (360/2^16 deg), I048/070 Mode 3/A (V bit 16, code
-    in 12 bits), I048/090 flight level (V bit 16, 1/4 FL in 14 bits)."""
+    no extension), I048/040 rho (1/256 NM) and theta (360/2^16 deg), I048/070 Mode 3/A (V bit 16, G bit
+    15, code in 12 bits), I048/090 flight level (V bit 16, G bit 15, 1/4 FL in 14 bits)."""
     tod = round(tod_s * 128)
     return (fspec(1, 2, 3, 4, 5, 6) + bytes([sac, sic]) + tod.to_bytes(3, "big") + bytes([0x40])
             + struct.pack(">HH", round(rho_nm * 256), round(theta_deg / 360 * 65536) % 65536)
-            + struct.pack(">H", (mode3a_v << 15) | code)
-            + struct.pack(">H", (modec_v << 15) | (round(fl * 4) & 0x3FFF)))
+            + struct.pack(">H", (mode3a_v << 15) | (mode3a_g << 14) | code)
+            + struct.pack(">H", (modec_v << 15) | (modec_g << 14) | (round(fl * 4) & 0x3FFF)))
 
 
 def cat034_north_marker(sac: int, sic: int, tod_s: float) -> bytes:

@@ -31,7 +31,8 @@ STATUS_OF = {34: 48, 2: 1, 19: 20, 23: 21, 65: 62, 25: None, 63: None}
 # "010:SAC/SIC", which gives its kinds' panels their last status and no panel of its own)
 CAT010_KINDS = np.array(["", "mlat", "smr"])
 # the decoded columns the live counters and the recent reports need (all of a category when it has them)
-COLUMNS = ("sac", "sic", "time_of_day", "mode3a", "mode3a_v", "flight_level", "flight_level_v", "rho_nm",
+COLUMNS = ("sac", "sic", "time_of_day", "mode3a", "mode3a_v", "mode3a_g", "flight_level", "flight_level_v",
+           "flight_level_g", "rho_nm",
            "theta_deg", "latitude", "longitude", "address", "callsign", "track_number", "ground_speed_kt",
            "gbs", "flight_status", "rab", "nacp", "nucp_nic", "geometric_height_ft", "track_angle_deg",
            "heading_deg", "message_type", "typ", "rho_m", "x_m", "y_m", "vx_ms", "vy_ms", "sigma_x_m",
@@ -184,9 +185,9 @@ def report_rows(cat: int, frame: pd.DataFrame, sensors: pd.DataFrame | None, dat
     ADS-B report without a position, have none); CAT048 plots of radars not in ``sensors`` get no position
     but keep their other columns; CAT010/CAT020 reports with only Cartesian or polar positions need their
     sensor's reference point in ``sensors`` (without it they have no row, and are counted only). With
-    mode3a_valid and modec_valid: the V bits of the Mode 3/A code and flight level (I048/070 and I048/090,
-    I010/060 and I010/090, I020/070 and I020/090) clear -> valid, set -> not; <NA> where the report does
-    not say (CAT021 never does)."""
+    mode3a_valid and modec_valid: the V and G bits of the Mode 3/A code and flight level (I048/070 and
+    I048/090, I010/060 and I010/090, I020/070 and I020/090) clear -> valid, either set -> not; <NA> where
+    the report does not say (CAT021 never does)."""
     from msdc.pipeline.model.measurements import measurement_rows, sensor_id
     from msdc.pipeline.model.schema import conform
     from msdc.pipeline.model.time import absolute_time
@@ -200,8 +201,8 @@ def report_rows(cat: int, frame: pd.DataFrame, sensors: pd.DataFrame | None, dat
             return None
         rows = local.parts[0]
         source = frame.loc[rows.index]
-        rows["mode3a_valid"] = _valid(source, "mode3a_v")
-        rows["modec_valid"] = _valid(source, "flight_level_v")
+        rows["mode3a_valid"] = _valid(source, "mode3a")
+        rows["modec_valid"] = _valid(source, "flight_level")
         return rows
     if cat == 21:
         _, rows = measurement_rows(None, frame, date=date)
@@ -233,16 +234,20 @@ def report_rows(cat: int, frame: pd.DataFrame, sensors: pd.DataFrame | None, dat
         return None
     rows = pd.concat(parts).sort_index() if len(parts) > 1 else parts[0]
     source = frame.loc[rows.index]
-    rows["mode3a_valid"] = _valid(source, "mode3a_v")
-    rows["modec_valid"] = _valid(source, "flight_level_v")
+    rows["mode3a_valid"] = _valid(source, "mode3a")
+    rows["modec_valid"] = _valid(source, "flight_level")
     return rows
 
 
-def _valid(frame: pd.DataFrame, v_bit: str) -> pd.arrays.BooleanArray:
-    """V bit clear -> True, set -> False; <NA> where the item is absent."""
+def _valid(frame: pd.DataFrame, code: str) -> pd.arrays.BooleanArray:
+    """The code validated and not garbled (its V and G bits clear, as the evaluation's ``mode3a_valid`` and
+    ``modec_valid`` judge it) -> True, either bit set -> False; <NA> where the item is absent."""
+    v_bit, g_bit = f"{code}_v", f"{code}_g"
     if v_bit not in frame:
         return pd.array([pd.NA] * len(frame), dtype="boolean")
     v = frame[v_bit].astype("Int64").to_numpy(dtype="float64", na_value=np.nan)
-    out = pd.array(v == 0, dtype="boolean")
+    g = (frame[g_bit].astype("Int64").to_numpy(dtype="float64", na_value=0.0) if g_bit in frame
+         else np.zeros(len(frame)))
+    out = pd.array((v == 0) & (g == 0), dtype="boolean")
     out[np.isnan(v)] = pd.NA
     return out

@@ -201,3 +201,16 @@ def test_reports_without_a_track_beside_tracked_ones_leave_the_figures_standing(
     assert panels["020:25/10"]["pd"]["state"] == "withheld"
     assert panels["020:25/10"]["update_interval_s"] is None
     assert math.isclose(panels["010:0/7:smr"]["update_interval_s"], 1.0, rel_tol=1e-3)  # one report a second
+
+
+def test_a_garbled_code_is_not_valid_live_as_in_the_evaluation():
+    """I048/070 and I048/090 bit 15 (G, garbled) set with V clear: not valid, as the evaluation's
+    mode3a_valid and modec_valid count it ("validated and not garbled")."""
+    records = [cat048_record(25, 201, 80000.0, mode3a_g=1), cat048_record(25, 201, 80001.0, modec_g=1),
+               cat048_record(25, 201, 80002.0)]
+    state, decoder = _state_and_decoder()
+    decoder.decode([Datagram(0, WALL - 0.5, block(48, *records))])
+    recent = state.recent(60.0)
+    assert list(recent["mode3a_valid"]) == [False, True, True]
+    assert list(recent["modec_valid"]) == [True, False, True]
+    assert list(recent["mode3a"].astype(str)) == ["1234"] * 3  # the code itself still read
