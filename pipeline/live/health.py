@@ -22,6 +22,7 @@ from msdc.pipeline.evaluate.detection import pd_requirement
 from msdc.pipeline.evaluate.outcome import Outcome, withheld
 from msdc.pipeline.evaluate.scans import MIN_DIFFS, period_from_plots
 from msdc.pipeline.live.monitor import Thresholds
+from msdc.pipeline.model.coverage import out_of_coverage
 
 SCHEMA = "msdc-live-monitor/1"  # the JSON snapshot's version (docs/guide/live-monitor.md)
 MIN_UPDATES = 10  # expected updates in the window below which the live probability of update is withheld
@@ -75,7 +76,7 @@ def track_keys(frame: pd.DataFrame) -> np.ndarray:
     cannot be followed). A frame that carries them already (``_track_key``, set once by snapshot) gives
     those."""
     if "_track_key" in frame.columns:  # pandas may keep a missing key as NaN in a column of text
-        keys = frame["_track_key"].to_numpy(object)
+        keys = frame["_track_key"].to_numpy(object, copy=True)
         keys[pd.isna(keys)] = None
         return keys
     n = len(frame)
@@ -363,16 +364,24 @@ def arrival_period_s(wall_s: np.ndarray, key: np.ndarray) -> float:
 
 
 def targets(window: pd.DataFrame, now_wall_s: float) -> list[dict]:
-    """The targets of the window for the map: per sensor and track, its trail (latest TRAIL_POINTS
-    positions, oldest first, as [latitude, longitude]), its latest call sign, Mode 3/A and flight level,
+    """The targets of the window for the map: per sensor and track (or Mode S address, for reports without
+    a track: the map follows them, the figures do not), its trail (latest TRAIL_POINTS positions, oldest
+    first, as [latitude, longitude]; ADS-B positions outside their source's coverage left out, as the
+    measurements leave them out), its latest call sign, Mode 3/A and flight level,
     its age and whether it is stale (not updated for STALE_PERIODS of its sensor's update periods, measured
     on arrival times: a replay faster than real time updates faster)."""
     if not len(window):
         return []
-    key = track_keys(window)
+    key = track_keys(window).copy()
+    if "address" in window.columns:  # a report without a track is drawn by its Mode S address (ADS-B 0.23)
+        address = window["address"].astype("string")
+        by_address = np.array([k is None for k in key], bool) & address.notna().to_numpy(bool)
+        key[by_address] = ("A:" + address[by_address]).to_numpy(object)
     lat = pd.to_numeric(window["latitude"], errors="coerce").to_numpy(float)
     lon = pd.to_numeric(window["longitude"], errors="coerce").to_numpy(float)
     ok = np.isfinite(lat) & np.isfinite(lon) & np.array([k is not None for k in key], bool)
+    far, _ = out_of_coverage(window)  # ADS-B positions no ground station receives (the measurements' rule)
+    ok &= ~far
     w = window.loc[ok, [c for c in ("sensor_id", "sensor_kind", "wall_s", "callsign", "mode3a",
                                     "flight_level") if c in window.columns]].copy()
     w["key"], w["lat"], w["lon"] = key[ok], lat[ok], lon[ok]

@@ -186,21 +186,25 @@ def test_multilateration_and_surface_radar_reports_are_measured_live(tmp_path):
 
 def test_reports_without_a_track_beside_tracked_ones_leave_the_figures_standing(tmp_path):
     """A sensor whose reports carry no track number (here CAT020 without I020/161; the real CAT021 0.23
-    ADS-B feed of LEBL) beside one whose reports do: its reports cannot be followed and its figures are
-    withheld, the other's are measured (the snapshot failed on the mix: a missing key read back as NaN)."""
+    ADS-B feed of LEBL) beside one whose reports do: its figures are withheld, the other's are measured
+    (the snapshot failed on the mix: a missing key read back as NaN); the map draws both."""
     path = tmp_path / "sensors.toml"
     path.write_text(SENSOR_FILE)
     times = [79990.0 + i for i in range(12)]
-    wam = pd.DataFrame({"sac": 25, "sic": 10, "time_of_day": times, "latitude": 45.0, "longitude": 5.5})
+    wam = pd.DataFrame({"sac": 25, "sic": 10, "time_of_day": times, "latitude": 45.0, "longitude": 5.5,
+                        "address": "4CA123"})
     smr = pd.DataFrame({"sac": 0, "sic": 7, "message_type": 1, "typ": 3, "time_of_day": times,
                         "x_m": [1000.0 + 10 * i for i in range(12)], "y_m": 2000.0, "track_number": 12})
     state = LiveState(FEEDS, clock=lambda: WALL + 1)
     BatchDecoder(state, FEEDS, sensors=sensor_table(path)).decode(
         [Datagram(0, WALL - 0.5, encode_frame(20, wam)), Datagram(1, WALL - 0.3, encode_frame(10, smr))])
-    panels = {p["sensor_id"]: p for p in _snapshot(state, WALL + 1)["sensors"]}
+    snap = _snapshot(state, WALL + 1)
+    panels = {p["sensor_id"]: p for p in snap["sensors"]}
     assert panels["020:25/10"]["pd"]["state"] == "withheld"
     assert panels["020:25/10"]["update_interval_s"] is None
     assert math.isclose(panels["010:0/7:smr"]["update_interval_s"], 1.0, rel_tol=1e-3)  # one report a second
+    # the map follows the untracked reports by their Mode S address, the tracked ones by their track
+    assert sorted(t["id"] for t in snap["targets"]) == ["010:0/7:smr|T12", "020:25/10|A:4CA123"]
 
 
 def test_a_garbled_code_is_not_valid_live_as_in_the_evaluation():
@@ -214,3 +218,22 @@ def test_a_garbled_code_is_not_valid_live_as_in_the_evaluation():
     assert list(recent["mode3a_valid"]) == [False, True, True]
     assert list(recent["modec_valid"]) == [True, False, True]
     assert list(recent["mode3a"].astype(str)) == ["1234"] * 3  # the code itself still read
+
+
+def test_the_map_leaves_out_an_adsb_position_no_ground_station_receives():
+    """The real LEBL ADS-B hour holds a few positions 1,000-2,400 NM away (IBK2PU at FL315); drawn, they
+    set the map's scale to rings of 1,000 NM. As the measurements do (model.coverage: beyond 500 NM and
+    three times the source's 99th percentile distance from its median position), the map leaves them out."""
+    n = 200  # 20 aircraft near Barcelona, 10 reports each, and one report from 60 N 40 E (about 1,700 NM)
+    times = [80000.0 + i / 10 for i in range(n)]
+    near = pd.DataFrame({"sac": 0, "sic": 107, "time_reception_position": times,
+                         "latitude": [41.3 + (i % 20) * 0.01 for i in range(n)], "longitude": 2.08,
+                         "address": [f"3451{i % 20:02X}" for i in range(n)]})
+    stray = pd.DataFrame({"sac": 0, "sic": 107, "time_reception_position": [80020.0], "latitude": [60.0],
+                          "longitude": [40.0], "address": ["3451FF"]})
+    state, decoder = _state_and_decoder()
+    decoder.decode([Datagram(0, WALL - 0.5, encode_frame(21, pd.concat([near, stray], ignore_index=True)))])
+    snap = _snapshot(state, WALL + 1)
+    drawn = {t["track"] for t in snap["targets"]}
+    assert drawn == {f"A:3451{k:02X}" for k in range(20)}
+    assert abs(snap["centre"]["latitude"] - 41.395) < 0.01 and abs(snap["centre"]["longitude"] - 2.08) < 1e-4
