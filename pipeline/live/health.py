@@ -40,6 +40,10 @@ MAX_FIGURE_REPORTS = 5000
 # categories of status messages (north markers, sector crossings, service status): their senders are not
 # sensors of target reports, their times come through status_times
 STATUS_CATEGORIES = frozenset({"002", "019", "023", "025", "034", "063", "065"})
+# why an ADS-B sensor's probability of update is shown, not judged against min_pd
+ADSB_PD_NOTE = ("ADS-B reports follow the squitters received, not periodic updates: the share of updates "
+                "at the measured interval, not judged against the radar threshold (no ADS-B standard here "
+                "sets one)")
 # categories of reports whose records are counted and dated by arrival but make no measurement rows live
 # (pipeline.live.decode.MEASURED), with what they are
 COUNTED_ONLY = {"001": "monoradar plots and tracks: their time of day needs the radar's CAT002",
@@ -239,6 +243,11 @@ def judged(outcome: Outcome, threshold: float) -> dict:
     return out
 
 
+def unjudged(figure: dict, why: str) -> dict:
+    """A measured figure shown without a verdict (state "unjudged", no alarm), its note saying why."""
+    return {**figure, "state": "unjudged", "note": "; ".join(n for n in (figure["note"], why) if n)}
+
+
 # ------------------------------------------------------------------------------------------- snapshot
 
 def lookback_s(thresholds: Thresholds) -> float:
@@ -300,6 +309,8 @@ def sensor_figures(sensor_id: str, rows: pd.DataFrame, window: pd.DataFrame, cou
         "pd": judged(live_pd(measured, sensor_id, thresholds.window_s), thresholds.min_pd),
         "figures_sample": sampled,
     }
+    if panel["kind"] == "adsb" and panel["pd"]["value"] is not None:
+        panel["pd"] = unjudged(panel["pd"], ADSB_PD_NOTE)
     for req, (*_, threshold) in VALIDITY.items():
         panel[req] = judged(live_validity(measured, req), getattr(thresholds, threshold))
     category = sensor_id.split(":", 1)[0]

@@ -237,3 +237,23 @@ def test_the_map_leaves_out_an_adsb_position_no_ground_station_receives():
     drawn = {t["track"] for t in snap["targets"]}
     assert drawn == {f"A:3451{k:02X}" for k in range(20)}
     assert abs(snap["centre"]["latitude"] - 41.395) < 0.01 and abs(snap["centre"]["longitude"] - 2.08) < 1e-4
+
+
+def test_an_adsb_probability_of_update_is_shown_not_judged():
+    """ADS-B reports follow the squitters a station receives (the real LEBL feed keyed by address: a 0.55 s
+    'period' and 71 % of its updates): against the radar threshold that was a standing 'degraded' alarm.
+    Ten tracks at 0.5 s with every fourth report lost: a figure below the threshold, shown unjudged, no
+    alarm."""
+    t = np.arange(0.0, 30.0, 0.5)
+    kept = t[np.arange(len(t)) % 4 != 3]
+    adsb = pd.DataFrame({"sac": 0, "sic": 1, "time_reception_position": np.tile(79970.0 + kept, 10),
+                         "track_number": np.repeat(np.arange(1, 11), len(kept)),
+                         "latitude": np.repeat(41.0 + np.arange(10) * 0.1, len(kept)), "longitude": 2.0,
+                         "address": np.repeat([f"3400{k:02X}" for k in range(10)], len(kept))})
+    state, decoder = _state_and_decoder()
+    decoder.decode([Datagram(0, WALL - 0.5, encode_frame(21, adsb))])
+    snap = _snapshot(state, WALL + 1)
+    (panel,) = snap["sensors"]
+    assert panel["kind"] == "adsb" and panel["pd"]["state"] == "unjudged"
+    assert panel["pd"]["value"] < 0.97 <= panel["pd"]["threshold"]  # below the radar threshold: no alarm
+    assert "not judged" in panel["pd"]["note"] and snap["alarms"] == [] and panel["alarms"] == []

@@ -32,6 +32,7 @@
   const figure = (f) => {
     if (!f || f.value === null) return ["–", "withheld", f ? f.note : "no figure"];
     const text = `${pct(f.value)} [${pct(f.ci_low)}–${pct(f.ci_high)}] n=${f.n}`;
+    if (f.state === "unjudged") return [text, "unjudged", `${f.count} of ${f.n}; ${f.note}`];
     const says = {ok: "at or above", low: "below (not yet shown by the sample)", degraded: "wholly below"};
     return [text, f.state, `${f.count} of ${f.n}; 95 % interval ${says[f.state]} the threshold ` +
             `${pct(f.threshold)}${f.note ? "; " + f.note : ""}`];
