@@ -60,12 +60,16 @@ class _Version(argparse.Action):
         parser.exit()
 
 
+DESCRIPTION = ("Multi-Sensor Data Correlator: ASTERIX decoding (radar, ADS-B, multilateration, surface "
+               "radar, system tracks, status), sensor correlation, quality, IMM reference tracks, conflicts "
+               "and evaluation against the surveillance standards, recorded or live.")
 COMMAND_HELP = {
     "decode": "decode recordings to CSV or Parquet",
     "stats": "what the recordings hold",
-    "correlate": "correlate radar against ADS-B per aircraft (thesis algorithm)",
-    "quality": "sensor data quality and radar accuracy against ADS-B",
-    "track": "fused IMM tracks per aircraft from every radar and ADS-B report",
+    "correlate": "correlate two sensors per aircraft, radar against ADS-B by default (thesis algorithm; "
+                 "radar pairs, multilateration, surface radar)",
+    "quality": "sensor data quality, radar accuracy and biases against ADS-B, reference points",
+    "track": "fused IMM tracks per aircraft from radar, ADS-B, multilateration and surface radar reports",
     "conflicts": "conflict probability from IMM-predicted tracks: alerts, losses of separation, warning "
                  "times, false alerts",
     "evaluate": "every sensor against a surveillance standard's requirements: scorecard with intervals and "
@@ -80,8 +84,7 @@ COMMAND_HELP = {
 def build_parser() -> argparse.ArgumentParser:
     """The msdc argument parser: one subcommand per job, its options those its options dataclass declares
     (pipeline.jobs.options)."""
-    parser = argparse.ArgumentParser(prog="msdc", description="Multi-Sensor Data Correlator: ASTERIX "
-                                     "CAT048/CAT021 decoding and radar/ADS-B correlation.")
+    parser = argparse.ArgumentParser(prog="msdc", description=DESCRIPTION)
     parser.add_argument("--version", action=_Version)
     sub = parser.add_subparsers(dest="command", required=True)
     for command, summary in COMMAND_HELP.items():
