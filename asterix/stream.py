@@ -25,8 +25,13 @@ from .reader import (
     selected_columns,
 )
 from .timeline import (
+    ANCHOR_FOLLOWERS,
     ANCHOR_REPORTS,
+    DayClock,
     _file_order,
+    _steps,
+    agreed_run,
+    count_days,
     file_order_days,
     first_report_day,
     known_captures,
@@ -63,7 +68,7 @@ def iter_read(path, *, chunk: int = 1_000_000, editions=None, date=None, categor
             raise UnreadableInput(f"{path}: {exc}") from exc
         release_pages(buf, 0, len(buf))  # finding the payloads of a container read the whole file
         plan = plan_recording(buf, seg, eds, categories, progress)  # 'auto' chosen over the whole file
-        clock = None  # a raw stream's (day, time of day) at the end of the chunks before; None: not anchored
+        clock = None  # a raw stream's DayClock after the chunks before; None: day 0 not anchored yet
         pending: list[Recording] = []  # a raw stream's first chunks, held until day 0 is anchored
         seen = np.zeros(0)  # their valid times of day in file order (the first ANCHOR_REPORTS)
         held = 0  # their payload bytes
@@ -83,15 +88,15 @@ def iter_read(path, *, chunk: int = 1_000_000, editions=None, date=None, categor
                 held += covered
                 if len(seen) < ANCHOR_REPORTS and held < HOLD_BYTES:
                     continue
-                clock = (first_report_day(seen), np.nan)
+                clock = DayClock(first_report_day(seen))
                 for held_rec in pending:
-                    clock = file_order_days(held_rec.frames, *clock)
+                    clock = file_order_days(held_rec.frames, clock)
                     restamp(held_rec.frames, first_date)
                     yield held_rec
                 pending = []
                 continue
             if seg.format in UNTIMED:
-                clock = file_order_days(rec.frames, *clock)
+                clock = file_order_days(rec.frames, clock)
                 restamp(rec.frames, first_date)
             elif rec.day0 is not None and day0 is None:
                 day0, first_date = rec.day0, rec.date  # a dated container's date wins over date=
@@ -102,9 +107,9 @@ def iter_read(path, *, chunk: int = 1_000_000, editions=None, date=None, categor
                 restamp(rec.frames, first_date)
                 rec.date, rec.day0 = first_date, day0
             yield rec
-        clock = (first_report_day(seen), np.nan)
+        clock = DayClock(first_report_day(seen))
         for held_rec in pending:  # a short file: fewer valid times of day than settle day 0
-            clock = file_order_days(held_rec.frames, *clock)
+            clock = file_order_days(held_rec.frames, clock)
             restamp(held_rec.frames, first_date)
             yield held_rec
 
@@ -208,14 +213,13 @@ def _sub_segments(seg: Segments, start, stop, idx) -> Segments:
 @dataclass(frozen=True)
 class Window:
     """One chunk of a raw stream, framed and clocked in file order, to decode on its own (decode_window):
-    its framed blocks, the data blocks before it, and the clock (day, last valid time of day) the reports
-    before it leave, on the recording's ``date``."""
+    its framed blocks, the data blocks before it, and the DayClock the reports before it leave, on the
+    recording's ``date``."""
 
     index: int
     framed: tuple
     blocks_before: int
-    day: int
-    last_tod_s: float
+    clock: DayClock
     date: dt.date | None
 
 
@@ -248,33 +252,50 @@ def plan_windows(path, pool: Executor, *, chunk: int, editions=None, date=None, 
         held += covered
         if len(seen) >= ANCHOR_REPORTS or held >= HOLD_BYTES:
             break
-    day, last_tod = first_report_day(seen), np.nan
+    day_clock = DayClock(first_report_day(seen))
     windows, blocks = [], 0
     for i, ((f, _), clock) in enumerate(zip(framed, timed, strict=True)):
-        windows.append(Window(i, f, blocks, day, last_tod, first_date))
-        day, last_tod = clock.after(day, last_tod)
+        windows.append(Window(i, f, blocks, day_clock, first_date))
+        day_clock = clock.after(day_clock)
         blocks += clock.blocks
     return plan, windows
 
 
 @dataclass(frozen=True)
 class WindowClock:
-    """What a window's times of day tell the windows after it (file order, valid times only): the first
-    ANCHOR_REPORTS of them, the first and last, and the midnights between them (+1 for a drop of more than
-    12 h, -1 for a rise of more than 12 h), with its data blocks. A few numbers, whatever the window."""
+    """What a window's valid times of day (file order) tell the windows after it, a few numbers whatever the
+    window: its first ANCHOR_REPORTS and last ANCHOR_FOLLOWERS times, how many; and of its reports after the
+    first ANCHOR_FOLLOWERS (whose agreeing depends on no earlier window) those that agree with the ones
+    before them: the first and last time and the midnights between them; its last time; its data blocks."""
 
     head: np.ndarray
-    first_s: float
-    last_s: float
+    tail: np.ndarray
+    count: int
+    agreed_first_s: float
+    agreed_last_s: float
     midnights: int
+    last_s: float
     blocks: int
 
-    def after(self, day: int, last_tod_s: float) -> tuple[int, float]:
+    @classmethod
+    def of(cls, valid: np.ndarray, blocks: int) -> WindowClock:
+        """The WindowClock of a window's valid times of day (file order) and its data blocks."""
+        first_s, last_s, midnights = agreed_run(valid[ANCHOR_FOLLOWERS:], valid[:ANCHOR_FOLLOWERS])
+        return cls(valid[:ANCHOR_REPORTS].copy(), valid[-ANCHOR_FOLLOWERS:].copy(), len(valid), first_s,
+                   last_s, midnights, float(valid[-1]) if len(valid) else np.nan, blocks)
+
+    def after(self, clock: DayClock) -> DayClock:
         """The clock after the window from the clock before it: timeline.file_order_days's, exactly."""
-        if not len(self.head):
-            return day, last_tod_s
-        step = 0.0 if np.isnan(last_tod_s) else self.first_s - last_tod_s
-        return day + int(step < -43200) - int(step > 43200) + self.midnights, self.last_s
+        if not self.count:
+            return clock
+        _, clock = count_days(self.head[:ANCHOR_FOLLOWERS], clock)
+        if self.count <= ANCHOR_FOLLOWERS:
+            return clock
+        day, ref_s = clock.day, clock.ref_tod_s
+        if np.isfinite(self.agreed_first_s):
+            step = np.array([self.agreed_first_s - ref_s])
+            day, ref_s = day + int(_steps(step)[0]) + self.midnights, self.agreed_last_s
+        return DayClock(day, ref_s, self.tail, day + int(_steps(np.array([self.last_s - ref_s]))[0]))
 
 
 def _window_times(args: tuple) -> WindowClock:
@@ -284,12 +305,7 @@ def _window_times(args: tuple) -> WindowClock:
         rec = decode_framed(buf, plan, framed, path=path, selected=selected_columns(["time_of_day"]))
     parts = [f for f in rec.frames.values() if len(f["offset"])]
     t = _file_order(parts)[1] if parts else np.zeros(0)
-    valid = t[np.isfinite(t)]
-    if not len(valid):
-        return WindowClock(valid, np.nan, np.nan, 0, rec.blocks)
-    d = np.diff(valid)
-    return WindowClock(valid[:ANCHOR_REPORTS].copy(), float(valid[0]), float(valid[-1]),
-                       int((d < -43200).sum() - (d > 43200).sum()), rec.blocks)
+    return WindowClock.of(t[np.isfinite(t)], rec.blocks)
 
 
 def decode_window(path, plan: Plan, window: Window, *, strict: bool = False, columns=None) -> Recording:
@@ -300,6 +316,6 @@ def decode_window(path, plan: Plan, window: Window, *, strict: bool = False, col
                             selected=selected_columns(columns))
     for f in rec.frames.values():
         f["block"] += window.blocks_before
-    file_order_days(rec.frames, window.day, window.last_tod_s)
+    file_order_days(rec.frames, window.clock)
     restamp(rec.frames, window.date)
     return rec

@@ -7,9 +7,11 @@ containers with capture times put each report on the day nearest its capture tim
 from __future__ import annotations
 
 import datetime as dt
+from dataclasses import dataclass, field
 
 import numpy as np
 import pandas as pd
+from numba import njit
 
 from .containers import UNTIMED, Segments
 
@@ -105,29 +107,122 @@ def first_report_day(tod_s: np.ndarray) -> int:
     return -int((d < -43200).sum() - (d > 43200).sum())
 
 
-def file_order_days(frames: dict[int, dict], day: int | None = None,
-                    last_tod: float = np.nan) -> tuple[int, float]:
-    """Set each category's ``day`` by counting midnights in file order from the clock ``(day, last_tod)``
-    the reports before them left (a drop of more than 12 h is a new day, a rise of more than 12 h a late
-    report from the day before); return the clock after them, so that chunks continue it exactly.
-    ``day`` None: these are the whole file's first reports, day 0 anchored by ``first_report_day``."""
+# Counting midnights in file order, a report at a time, dates each report against the last report that
+# agreed with those before it (within ANCHOR_AGREE_S of at least half of the ANCHOR_FOLLOWERS valid times
+# of day before it): damaged records that walk (random bytes read as times of day) neither count a midnight
+# nor become what the next reports are dated against (one such run moved 2,230 reports of intact blocks to
+# the next day: benchmarks/fuzz_reader.py, seed 99).
+HALF_DAY_S = 43200.0
+
+
+@dataclass(frozen=True)
+class DayClock:
+    """Where counting midnights in file order stands after some reports, for the reports after them: the day
+    and time of day of the last report that agreed with those before it (the reference the next ones are
+    dated against), the last ANCHOR_FOLLOWERS valid times of day (what the next ones must agree with), and
+    the day of the last valid report (what the reports without a valid time after it take)."""
+
+    day: int
+    ref_tod_s: float = np.nan
+    recent_s: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    last_day: int | None = None
+
+
+def _steps(step_s: np.ndarray) -> np.ndarray:
+    """Midnights crossed by each step between two times of day: +1 for a drop of more than 12 h, -1 for a
+    rise of more than 12 h (a late report from the day before), 0 otherwise or for NaN."""
+    return (step_s < -HALF_DAY_S).astype(np.int64) - (step_s > HALF_DAY_S).astype(np.int64)
+
+
+@njit(cache=True, nogil=True)
+def _day_count(tod_s, recent_s, ref_s, day):
+    """count_days's pass over valid times of day in file order: (each one's day, the day and time of the last
+    agreeing one after them, the first agreeing one's time, NaN when none agreed)."""
+    k = ANCHOR_FOLLOWERS
+    ring = np.empty(k)
+    held = 0
+    for x in recent_s[-k:]:
+        ring[held % k] = x
+        held += 1
+    days = np.empty(tod_s.shape[0], np.int64)
+    first_s = np.nan
+    for i in range(tod_s.shape[0]):
+        t = tod_s[i]
+        known = min(held, k)
+        close = 0
+        for j in range(known):  # on the 24 h clock: valid times are 0-86400 s, so one fold is enough
+            apart = abs(t - ring[j])
+            if min(apart, 86400.0 - apart) <= ANCHOR_AGREE_S:
+                close += 1
+                if 2 * close >= known:
+                    break
+        d = day
+        if ref_s == ref_s:  # not NaN: the day nearest the last agreeing report
+            if t - ref_s < -HALF_DAY_S:
+                d += 1
+            elif t - ref_s > HALF_DAY_S:
+                d -= 1
+        if known == 0 or 2 * close >= known:  # agrees: midnights counted from it on
+            day, ref_s = d, t
+            if first_s != first_s:
+                first_s = t
+        days[i] = d
+        ring[held % k] = t
+        held += 1
+    return days, day, ref_s, first_s
+
+
+def count_days(tod_s: np.ndarray, clock: DayClock) -> tuple[np.ndarray, DayClock]:
+    """The day of each valid time of day (file order) after ``clock``, and the clock after them: the reports
+    that agree with the ANCHOR_FOLLOWERS before them (within ANCHOR_AGREE_S of at least half) count midnights
+    between them (a drop or rise of more than 12 h); every report takes the day that puts it nearest the last
+    agreeing report at or before it."""
+    tod_s = np.ascontiguousarray(tod_s, dtype=float)
+    recent = np.ascontiguousarray(clock.recent_s, dtype=float)
+    days, day, ref_s, _ = _day_count(tod_s, recent, float(clock.ref_tod_s), int(clock.day))
+    after = DayClock(int(day), float(ref_s), np.concatenate([recent, tod_s])[-ANCHOR_FOLLOWERS:].copy(),
+                     int(days[-1]) if len(days) else clock.last_day)
+    return days, after
+
+
+def agreed_run(tod_s: np.ndarray, before_s: np.ndarray) -> tuple[float, float, int]:
+    """Of these valid times of day, after ``before_s`` and no agreeing report: the first and last that agree
+    with those before them and the midnights between them (what stream.WindowClock keeps of a window)."""
+    _, day, last_s, first_s = _day_count(np.ascontiguousarray(tod_s, dtype=float),
+                                         np.ascontiguousarray(before_s, dtype=float), np.nan, 0)
+    return float(first_s), float(last_s), int(day)
+
+
+def file_order_days(frames: dict[int, dict], clock: DayClock | None = None) -> DayClock:
+    """Set each category's ``day`` by counting midnights in file order after ``clock`` (count_days; a report
+    without a valid time of day takes the day of the valid one before it, at the very start the one after
+    it); return the clock after them, so that chunks continue it exactly. ``clock`` None: these are the whole
+    file's first reports, day 0 anchored by ``first_report_day``."""
     parts = [f for f in frames.values() if len(f["offset"])]
     if not parts:
-        return (0 if day is None else day), last_tod
+        return clock if clock is not None else DayClock(0)
     order, t = _file_order(parts)
-    if day is None:
-        day = first_report_day(t[np.isfinite(t)])
-    t = pd.Series(np.concatenate([[last_tod], t])).ffill().bfill().to_numpy()
-    d = np.diff(t)
-    day_sorted = day + np.cumsum(d < -43200) - np.cumsum(d > 43200)
-    days = np.empty_like(day_sorted)
-    days[order] = day_sorted
+    valid = np.isfinite(t)
+    if clock is None:
+        clock = DayClock(first_report_day(t[valid]))
+    valid_days, after = count_days(t[valid], clock)
+    if valid.all():
+        day_sorted = valid_days
+    else:
+        day_sorted = np.full(len(t), np.nan)
+        day_sorted[valid] = valid_days
+        filled = pd.Series(day_sorted).ffill()
+        if clock.last_day is not None:
+            filled = filled.fillna(clock.last_day)
+        day_sorted = filled.bfill().fillna(clock.day).to_numpy()
+    days = np.empty(len(t), np.int64)
+    days[order] = day_sorted.astype(np.int64)
     i = 0
     for f in parts:
         n = len(f["offset"])
-        f["day"] = days[i:i + n].astype(np.int64)
+        f["day"] = days[i:i + n]
         i += n
-    return int(day_sorted[-1]), float(t[-1])
+    return after
 
 
 def timestamp_index(day, tod, date: dt.date | None) -> pd.DatetimeIndex:
