@@ -470,8 +470,8 @@ def _next_proves(buf, x, stop, seen, framing, memo):
     if x == stop:
         return True
     n = _header(buf, x, stop)
-    if n < 0:
-        return _cut_tail(buf, x, stop, seen)
+    if n < 0:  # a truncated tail, unless real blocks follow it: then it is bytes inside one, read as a header
+        return _cut_tail(buf, x, stop, seen) and not _chained_inside(buf, x, stop, stop, framing, memo)
     c = buf[x]
     if framing.base[c] >= 0:
         return _walks_at(buf, x, n, c, framing, memo)

@@ -123,3 +123,24 @@ def test_a_len_landing_on_one_chance_header_of_its_own_category_does_not_swallow
     rec = _stream(tmp_path, pieces)
     assert len(rec.frames[48]) == len(_stream(tmp_path, real).frames[48]) == 12
     assert rec.errors[["offset", "length"]].values.tolist() == [[junk_at, 3]]
+
+
+def test_a_cut_block_landing_on_a_false_truncated_tail_does_not_swallow_the_next(tmp_path):
+    """The cut block (header, FSPEC of I048/010 and I048/040, one byte) walks over the next block's first
+    five bytes and lands on its SIC and RHO, which read 48, 0xF0, 0x00: a CAT048 header whose LEN (61,440)
+    runs past the end of the data, as a file's truncated last block would. Real blocks follow it, so it is
+    no truncated tail and proves nothing: the next block decodes with its values (benchmarks/fuzz_reader.py
+    found it on the real ADS-B 0.23 file, seed 99: one record lost after a copied stretch)."""
+    real = _real_blocks(8)
+    nxt = plot(3, 48, 0xF000, 0x4000)
+    cut = bytes([48, 0, 10, 0x90, 1])  # + nxt's first five bytes: I048/010 (1, 48), I048/040 (0, 10, 0x90, 3)
+    pieces = [*real[:4], cut, nxt, *real[4:]]
+    rec = _stream(tmp_path, pieces)
+    at = sum(len(p) for p in pieces[:5])
+    got = rec.frames[48].set_index("offset")
+    assert at + 3 in got.index, "the block after the cut one is lost"
+    row = got.loc[at + 3]
+    assert (int(row["sac"]), int(row["sic"])) == (3, 48)
+    assert np.isclose(row["rho_nm"], 0xF000 / 256) and np.isclose(row["theta_deg"], 90.0)
+    assert len(rec.frames[48]) == 9  # the eight real blocks' plots and nxt's, none of the cut one's
+    assert rec.errors[["offset", "length"]].values.tolist() == [[sum(len(p) for p in pieces[:4]), 5]]
