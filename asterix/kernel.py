@@ -595,6 +595,19 @@ def chain_step(buf, start, stop, framing, q, byte_limit):
     return q, 1
 
 
+@njit(cache=True, nogil=True, inline="always")
+def _keep_block(b_start, b_len, b_seg, b_cat, nb, q, n, c, s):
+    """The framed blocks with one more (start q, LEN n, category c, segment s), grown when full, and their
+    count."""
+    if nb == b_start.shape[0]:
+        b_start, b_len, b_seg, b_cat = _grow4(b_start, b_len, b_seg, b_cat)
+    b_start[nb] = q
+    b_len[nb] = n
+    b_cat[nb] = c
+    b_seg[nb] = s
+    return b_start, b_len, b_seg, b_cat, nb + 1
+
+
 @njit(cache=True, nogil=True)
 def frame_window(buf, seg_start, seg_stop, seg_mode, framing, st, seen, memo, seg_limit, byte_limit):
     """Frame payload segments into data blocks of any category, from where ``st`` left off, until a
@@ -649,13 +662,8 @@ def frame_window(buf, seg_start, seg_stop, seg_mode, framing, st, seen, memo, se
                         n = -1
                 if n < 0:
                     break
-                if nb == b_start.shape[0]:
-                    b_start, b_len, b_seg, b_cat = _grow4(b_start, b_len, b_seg, b_cat)
-                b_start[nb] = q
-                b_len[nb] = n
-                b_cat[nb] = buf[q]
-                b_seg[nb] = s
-                nb += 1
+                b_start, b_len, b_seg, b_cat, nb = _keep_block(b_start, b_len, b_seg, b_cat, nb, q, n,
+                                                               buf[q], s)
                 q += n
             if q != stop:  # the payload does not tile: skipped whole
                 nb = nb0
@@ -678,13 +686,8 @@ def frame_window(buf, seg_start, seg_stop, seg_mode, framing, st, seen, memo, se
                 n = _header(buf, q, stop)
                 if n < 0:
                     raise ValueError("frame_window: MODE_CHAIN on a block chain that breaks")
-                if nb == b_start.shape[0]:
-                    b_start, b_len, b_seg, b_cat = _grow4(b_start, b_len, b_seg, b_cat)
-                b_start[nb] = q
-                b_len[nb] = n
-                b_cat[nb] = buf[q]
-                b_seg[nb] = s
-                nb += 1
+                b_start, b_len, b_seg, b_cat, nb = _keep_block(b_start, b_len, b_seg, b_cat, nb, q, n,
+                                                               buf[q], s)
                 q += n
                 moved = True
             if not paused:
@@ -739,13 +742,8 @@ def frame_window(buf, seg_start, seg_stop, seg_mode, framing, st, seen, memo, se
                             ok = ((q + n == stop or _anchored(buf, q, stop, seen, framing, memo))
                                   and not _chained_inside(buf, q, q + n, stop, framing, memo))
                 if ok:
-                    if nb == b_start.shape[0]:
-                        b_start, b_len, b_seg, b_cat = _grow4(b_start, b_len, b_seg, b_cat)
-                    b_start[nb] = q
-                    b_len[nb] = n
-                    b_cat[nb] = buf[q]
-                    b_seg[nb] = s
-                    nb += 1
+                    b_start, b_len, b_seg, b_cat, nb = _keep_block(b_start, b_len, b_seg, b_cat, nb, q, n,
+                                                                   buf[q], s)
                     seen[buf[q]] = 1
                     if walked:
                         _note_source(buf, q, n, seen)
@@ -787,13 +785,8 @@ def frame_window(buf, seg_start, seg_stop, seg_mode, framing, st, seen, memo, se
             if bn > 0 and q + bn < r:
                 # a complete block ends before the resumption point: keep it (a decoded one that does
                 # not walk is reported by the walk); only the bytes after it are unaccounted for
-                if nb == b_start.shape[0]:
-                    b_start, b_len, b_seg, b_cat = _grow4(b_start, b_len, b_seg, b_cat)
-                b_start[nb] = q
-                b_len[nb] = bn
-                b_cat[nb] = buf[q]
-                b_seg[nb] = s
-                nb += 1
+                b_start, b_len, b_seg, b_cat, nb = _keep_block(b_start, b_len, b_seg, b_cat, nb, q, bn,
+                                                               buf[q], s)
                 seen[buf[q]] = 1
                 q += bn
             if ne == e_off.shape[0]:
@@ -806,13 +799,8 @@ def frame_window(buf, seg_start, seg_stop, seg_mode, framing, st, seen, memo, se
             ne += 1
             q = r
             if stranded > 0:  # taken as it is (its own evidence); what follows it is the next decision
-                if nb == b_start.shape[0]:
-                    b_start, b_len, b_seg, b_cat = _grow4(b_start, b_len, b_seg, b_cat)
-                b_start[nb] = q
-                b_len[nb] = stranded
-                b_cat[nb] = buf[q]
-                b_seg[nb] = s
-                nb += 1
+                b_start, b_len, b_seg, b_cat, nb = _keep_block(b_start, b_len, b_seg, b_cat, nb, q, stranded,
+                                                               buf[q], s)
                 seen[buf[q]] = 1
                 q += stranded
         if not paused:
