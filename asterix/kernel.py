@@ -295,11 +295,49 @@ def _cut_tail(buf, x, stop, seen):
     return n >= 3 and x + n > stop
 
 
+KINDRED = 12  # blocks a chain of categories not decoded must hold to anchor on its own (_kindred_chain)
+
+
+@njit(cache=True, nogil=True)
+def _kindred_chain(buf, x, stop, base):
+    """The block chain from x holds for KINDRED blocks of at most three categories, none of them walked:
+    how a recording of only categories not decoded (a radar's CAT001 plots between its CAT002 sector
+    messages, a tracker's CAT062 tracks with its CAT063 and CAT065 status) anchors before any of its
+    categories is met. Chance headers name 255 categories: twelve in a row among three are never met by
+    chance (each after the third has a chance of 3/256)."""
+    a = np.int64(-1)  # the chain's categories, in the order met
+    b = np.int64(-1)
+    d = np.int64(-1)
+    k = 0
+    while k < KINDRED:
+        if x + 3 > stop or buf[x] == 0:
+            return False
+        n = (np.int64(buf[x + 1]) << 8) | buf[x + 2]
+        if n < 3 or x + n > stop:
+            return False
+        c = np.int64(buf[x])
+        if base[c] >= 0:
+            return False
+        if c != a and c != b and c != d:
+            if a < 0:
+                a = c
+            elif b < 0:
+                b = c
+            elif d < 0:
+                d = c
+            else:
+                return False
+        x += n
+        k += 1
+    return True
+
+
 @njit(cache=True, nogil=True)
 def _anchored(buf, r, stop, seen, framing, memo):
     """The block chain from r holds for LOOKAHEAD blocks (or to the end of the data) and is anchored:
     one of its blocks is of a decoded category and walks exactly, or all its categories were already
-    met, or it reaches the end in two blocks or more (one LEN landing on the end proves little).
+    met, or it reaches the end in two blocks or more (one LEN landing on the end proves little), or it
+    runs on as a chain of few categories not decoded (_kindred_chain).
     Every decoded block in it must walk exactly, but for a chain that meets damage after two blocks or
     more, one of them walking: it anchors as a chain that breaks there does (real blocks before damage)."""
     base = framing[0]
@@ -326,7 +364,7 @@ def _anchored(buf, r, stop, seen, framing, memo):
         k += 1
     if k == 0:
         return False
-    return walked or all_seen or (k >= 2 and (ended or x == stop))
+    return walked or all_seen or (k >= 2 and (ended or x == stop)) or _kindred_chain(buf, r, stop, base)
 
 
 @njit(cache=True, nogil=True)
@@ -367,37 +405,56 @@ def _proves_len(buf, x, stop, seen, framing, memo):
 
 
 @njit(cache=True, nogil=True)
-def _kin_chain(buf, x, stop, c, framing, memo):
-    """The blocks from x, LOOKAHEAD of them or to the end, are each of category c or a decoded block that
-    walks exactly, and of c twice at least or never: what proves the LEN of a block of a category not met
-    yet (a tracker's first CAT062 block, followed by more of them or by the radars' plots). One chance header
-    of c whose LEN lands on a real block start is not enough; two are not met by chance."""
+def _kin_chain(buf, x, stop, c, seen, framing, memo):
+    """The blocks from x, LOOKAHEAD of them or to the end, are each of category c, a decoded block that
+    walks exactly, or a block of a category already met or occurring twice in them, and of c twice at
+    least, or never with every one a decoded block that walks: what proves the LEN of a block of a category
+    not met yet (a tracker's first CAT062 block, followed by more of them or by the radars' plots; a CAT001
+    radar's first plot block, between its CAT002 sector messages). One chance header of c whose LEN lands
+    on a real block start is not enough; two are not met by chance, nor is another category twice."""
     base = framing[0]
+    cats = np.empty(LOOKAHEAD, np.int64)
     k = 0
     kin = 0
+    undecoded = 0
     while k < LOOKAHEAD and x < stop:
         n = _header(buf, x, stop)
         if n < 0:
             return False
         d = buf[x]
+        cats[k] = d
         if d == c:
             kin += 1
-        elif base[d] < 0 or not _walks_at(buf, x, n, d, framing, memo):
-            return False
+        elif base[d] >= 0:
+            if not _walks_at(buf, x, n, d, framing, memo):
+                return False
+        else:
+            undecoded += 1
         x += n
         k += 1
-    return (k == LOOKAHEAD or (k >= 1 and x == stop)) and kin != 1
+    if not (k == LOOKAHEAD or (k >= 1 and x == stop)):
+        return False
+    if undecoded == 0:
+        return kin != 1
+    if kin < 2:
+        return False
+    for i in range(k):  # a category not decoded: met before, or twice in the chain
+        d = cats[i]
+        if d != c and base[d] < 0 and seen[d] == 0 and (cats[:k] == d).sum() < 2:
+            return False
+    return True
 
 
 @njit(cache=True, nogil=True)
 def _proven_inside(buf, q, end, stop, seen, framing, memo):
     """Real blocks lie inside (q, end): from some offset there a chain of blocks of categories already met
     (each decoded one walking exactly) lands exactly on ``end``, two blocks or more, or one decoded block
-    that walks; or holds LOOKAHEAD decoded blocks that walk, wherever it ends (``end`` proven by chance in
-    the middle of real data). The real blocks a damaged LEN swallows run on to the real block that LEN
-    lands on; a chance reading inside a large block of another category (bytes of a tracker's 25 track
-    messages read as a short CAT010 block that walks) runs off elsewhere. What a block whose next blocks
-    prove its LEN must hide to lose it."""
+    that walks and names (_first_source) a data source met in its category; or holds LOOKAHEAD decoded
+    blocks that walk, wherever it ends (``end`` proven by chance in the middle of real data). The real
+    blocks a damaged LEN swallows run on to the real block that LEN lands on; a chance reading inside a
+    large block of another category (bytes of a tracker's 25 track messages read as a short CAT010 block
+    that walks) runs off elsewhere, or, once in some 40,000 blocks, lands on the next block: its sources
+    are chance bytes. What a block whose next blocks prove its LEN must hide to lose it."""
     base = framing[0]
     for r in range(q + 1, end):
         x = r
@@ -418,7 +475,7 @@ def _proven_inside(buf, q, end, stop, seen, framing, memo):
                     return True
             x += n
             k += 1
-        if x == end and (k >= 2 or walked > 0):
+        if x == end and (k >= 2 or (walked > 0 and _source_met(seen, buf[r], _first_source(buf, r, x - r)))):
             return True
     return False
 
@@ -452,14 +509,18 @@ def _candidate(buf, r, stop, seen, framing, memo):
 @njit(cache=True, nogil=True)
 def _next_ok(buf, x, stop, seen, framing, memo):
     """What follows a block that does not prove itself: the end, a truncated tail, a header of a decoded
-    or already met category, or an anchored chain."""
+    or already met category, an anchored chain, or a block whose next two blocks prove its LEN."""
     if x == stop:
         return True
     n = _header(buf, x, stop)
     if n < 0:
         return _cut_tail(buf, x, stop, seen)
     c = buf[x]
-    return framing.base[c] >= 0 or seen[c] == 1 or _anchored(buf, x, stop, seen, framing, memo)
+    if framing.base[c] >= 0 or seen[c] == 1 or _anchored(buf, x, stop, seen, framing, memo):
+        return True
+    # a block of a category not met yet whose next two blocks prove its LEN (a status category's first
+    # block among a tracker's CAT062 blocks, none decoded)
+    return x + n < stop and _proves_len(buf, x + n, stop, seen, framing, memo)
 
 
 @njit(cache=True, nogil=True)
@@ -555,6 +616,10 @@ def _may_anchor(buf, r, stop, seen, base):
     x = r
     maybe = False  # a block of a walked category (it may walk)
     all_seen = True
+    repeats = False  # a category twice among the blocks read: a kindred chain may follow (_kindred_chain)
+    c0 = np.int64(-1)
+    c1 = np.int64(-1)
+    c2 = np.int64(-1)
     k = 0
     while k < LOOKAHEAD and x < stop:
         if buf[x] == 0 or x + 3 > stop:
@@ -565,14 +630,17 @@ def _may_anchor(buf, r, stop, seen, base):
                 n = -1
         if n < 0:
             return (k > 0 and _cut_tail(buf, x, stop, seen)) or (maybe and k >= 2)
-        c = buf[x]
+        c = np.int64(buf[x])
         if base[c] >= 0:
             maybe = True
         elif seen[c] == 0:
             all_seen = False
+        repeats = repeats or c == c0 or c == c1 or c == c2
+        c0, c1, c2 = c, c0, c1
         x += n
         k += 1
-    return maybe or all_seen or (k >= 2 and x == stop)
+    return (maybe or all_seen or (k >= 2 and x == stop)
+            or (repeats and k == LOOKAHEAD and _kindred_chain(buf, r, stop, base)))
 
 
 @njit(cache=True, nogil=True)
@@ -732,7 +800,8 @@ def frame_window(buf, seg_start, seg_stop, seg_mode, framing, st, seen, memo, se
                                   and not _chained_inside(buf, q, q + n, stop, framing, memo))
                     else:  # a category not met yet: its chain must be anchored, and hide no real blocks,
                         # unless the blocks after it are of its category or decoded ones that walk
-                        proven = q + n == stop or _kin_chain(buf, q + n, stop, c, framing, memo)
+                        proven = (q + n == stop or _kin_chain(buf, q + n, stop, c, seen, framing, memo)
+                                  or _proves_len(buf, q + n, stop, seen, framing, memo))
                         seen[c] = 1  # real blocks of its own category inside it count as met
                         hides = proven and _proven_inside(buf, q, q + n, stop, seen, framing, memo)
                         seen[c] = 0

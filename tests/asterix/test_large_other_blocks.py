@@ -13,6 +13,7 @@ from pathlib import Path
 
 import numpy as np
 import pandas as pd
+import pytest
 from live_bytes import raw_blocks
 
 import msdc.asterix as asterix
@@ -118,4 +119,105 @@ def test_every_category_beside_every_other_decodes_as_alone(tmp_path):
             if got != expected or not rec.errors.empty or set(rec.frames) - {a}:
                 failures.append(f"CAT{a:03d} beside CAT{b:03d}: {got} records for {expected}, "
                                 f"{len(rec.errors)} errors")
+    assert not failures, failures
+
+
+def _chance_cat010(sources: list[tuple[int, int]]) -> bytes:
+    """Bytes that read as a CAT010 block walking exactly: one record per source, each I010/010 alone (FSPEC
+    0x80, then SAC and SIC: FRN 1 of the I010 layout)."""
+    body = b"".join(bytes([0x80, sac, sic]) for sac, sic in sources)
+    return bytes([10]) + (3 + len(body)).to_bytes(2, "big") + body
+
+
+def _with_special_purpose(block: bytes, sp_data: bytes) -> bytes:
+    """A CAT062 block with one more record at its end: I062/010 (SAC 9, SIC 9) and I062/SP (FRN 35: FSPEC
+    0x81 0x01 0x01 0x01 0x02, then a length byte counting itself), its data ``sp_data``; LEN made whole."""
+    record = bytes([0x81, 1, 1, 1, 0x02, 9, 9, 1 + len(sp_data)]) + sp_data
+    body = block[3:] + record
+    return bytes([62]) + (3 + len(body)).to_bytes(2, "big") + body
+
+
+def test_a_trackers_block_ending_in_bytes_that_read_as_a_short_walking_block_is_stepped_over(tmp_path):
+    """A track message whose last bytes read as a CAT010 block that walks exactly and ends where the next
+    real block starts (seven records of data sources met nowhere), the 'block' behind a CAT031 header: a
+    chance reading that the decode benchmark's 40,000 tracker blocks met once, decoding 7 CAT010 'reports'
+    and losing the block with an error. One short walking block names a data source already met before it
+    counts against a LEN its next blocks prove; the tracker's blocks are stepped over."""
+    rng = np.random.default_rng(5)
+    blocks = raw_blocks(encode_frame(62, _tracks(8 * RECORDS_PER_BLOCK, rng),
+                                     records_per_block=RECORDS_PER_BLOCK))
+    chance = _chance_cat010([(54, 212), (117, 0), (72, 1), (3, 100), (0, 100), (88, 7), (201, 33)])
+    blocks[4] = _with_special_purpose(blocks[4], bytes([31, 0, 40]) + bytes(37) + chance)
+    path = tmp_path / "tracks.ast"
+    path.write_bytes(b"".join(blocks))
+    rec = _read(path)  # the default categories: CAT010 among them, CAT062 not
+    assert not any(len(f) for f in rec.frames.values()), {c: len(f) for c, f in rec.frames.items()}
+    assert rec.errors.empty, rec.errors.head().to_string()
+    assert rec.ignored_blocks == {62: 8}
+    tracks = _read(path, categories=[62])  # the block with the extra record is a whole CAT062 block
+    assert tracks.errors.empty and len(tracks.frames[62]) == 8 * RECORDS_PER_BLOCK + 1
+
+
+def test_a_len_swallowing_one_block_of_a_met_source_still_yields_it(tmp_path):
+    """The other side of the rule above: a block of a category not decoded, met before (CAT034), whose LEN
+    is damaged to run exactly over the next real block, a CAT048 block of the radar met before: that block
+    walks, names a met source and lands on the next real block, so it decodes and the damaged block is
+    reported. Plots: I048/010 and I048/040 (FSPEC 0x90), RHO in 1/256 NM, THETA in 360/2^16 degrees."""
+    def plots(k: int) -> bytes:
+        body = b"".join(bytes([0x90, 20, 1, 10, k, 0x40, k]) for _ in range(2))
+        return bytes([48, 0, 3 + len(body)]) + body
+
+    north = bytes([34, 0, 7, 0xC0, 20, 1, 1])  # I034/010 SAC 20 SIC 1, I034/000 message type 1 (north marker)
+    swallowed = plots(7)
+    damaged = north[:1] + (len(north) + len(swallowed)).to_bytes(2, "big") + north[3:]
+    pieces = [north, plots(1), north, plots(2), damaged, swallowed, plots(3), north, plots(4), plots(5)]
+    path = tmp_path / "radar.ast"
+    path.write_bytes(b"".join(pieces))
+    rec = _read(path, categories=[48])
+    got = rec.frames[48].set_index("offset")
+    at = sum(len(p) for p in pieces[:5])
+    assert [at + 3, at + 10] == [o for o in got.index if at <= o < at + len(swallowed)]
+    assert np.allclose(got.loc[[at + 3, at + 10], "rho_nm"], (10 * 256 + 7) / 256)
+    assert len(rec.frames[48]) == 6 * 2
+    assert rec.errors["offset"].tolist() == [sum(len(p) for p in pieces[:4])]
+
+
+@pytest.mark.parametrize("damage", ["zeros before the first block", "the last block cut short"])
+def test_streams_of_categories_not_decoded_alone_are_stepped_over_whole(tmp_path, damage):
+    """Recordings holding only categories the default read leaves out, interleaved block for block (a CAT001
+    radar's plot blocks between its CAT002 sector messages, as the decode benchmark builds it; a tracker's
+    CAT062 tracks with CAT063 sensor status, or with CAT002; CAT063 with the CAT001 radar: three categories),
+    with damage that makes them framed carefully: every block is stepped over, no record is decoded, and the
+    damage is the one error. Before, the first block of a category not met yet and followed by a block of
+    another such category was taken for damage, and with no decoded block to anchor a chain framing never
+    resumed: the benchmark's CAT001 recording read with the default categories gave 24 errors and 83 CAT010,
+    CAT020 and CAT048 'records' made of plot bytes."""
+    bench = _bench_decode()
+    streams = {}
+    for c in (1, 62, 63, 2):
+        path = tmp_path / f"c{c}.ast"
+        bench.build(path, c, 1000)
+        streams[c] = raw_blocks(path.read_bytes())[:40]
+    failures = []
+    for pieces in ([streams[1]], [streams[62], streams[63]], [streams[62], streams[2]],
+                   [streams[63], streams[1]]):
+        blocks = [blk for pair in zip(*pieces, strict=True) for blk in pair]
+        whole = b"".join(blocks)
+        if damage == "zeros before the first block":
+            data, error = bytes(5) + whole, [0, 5]
+            kept = blocks
+        else:
+            data, error = whole[:-7], [len(whole) - len(blocks[-1]), len(blocks[-1]) - 7]
+            kept = blocks[:-1]
+        expected: dict[int, int] = {}
+        for blk in kept:
+            expected[blk[0]] = expected.get(blk[0], 0) + 1
+        path = tmp_path / "mixed.ast"
+        path.write_bytes(data)
+        rec = _read(path)
+        decoded = {c: len(f) for c, f in rec.frames.items() if len(f)}
+        errors = rec.errors[["offset", "length"]].values.tolist()
+        if decoded or errors != [error] or rec.ignored_blocks != expected:
+            failures.append(f"{sorted(expected)}: {decoded} decoded, errors {errors[:4]}, "
+                            f"{rec.ignored_blocks} stepped over")
     assert not failures, failures
