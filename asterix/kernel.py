@@ -368,24 +368,48 @@ def _anchored(buf, r, stop, seen, framing, memo):
 
 
 @njit(cache=True, nogil=True)
-def _chained_inside(buf, q, end, stop, framing, memo):
+def _real_chain_inside(buf, q, end, stop, seen, need_source, met_chain, framing, memo):
     """A chain of blocks starting inside (q, end) reaches a decoded block that walks and starts before end
     (it may run past end, its header too: a cut block may end a byte into the real one after the cut):
-    the block at q is then probably a false header swallowing real blocks."""
+    the block at q is then probably a false header swallowing real blocks. With ``need_source`` the walking
+    block must name a data source met in its category (inside a block of a met category not decoded, a
+    tracker's 1-2 KB of track messages, a short CAT010 or CAT020 block walks by chance now and then). With
+    ``met_chain`` a chain of LOOKAHEAD blocks of met categories not decoded counts too, wherever it ends:
+    the real blocks of a recording of categories not decoded (a chance header's category is met with a
+    chance of (categories met / 256) a block)."""
     base = framing[0]
     for r in range(q + 1, end):
         x = r
-        while x < end:
+        met = 0  # blocks of met categories not decoded, in a row from r
+        run = met_chain
+        while x < end or (run and met > 0):  # past end only to finish such a row
             n = _header(buf, x, stop)
             if n < 0:
                 break
             c = buf[x]
             if base[c] >= 0:
-                if _walks_at(buf, x, n, c, framing, memo):
+                if x < end and _walks_at(buf, x, n, c, framing, memo) and (
+                        not need_source or _source_met(seen, c, _first_source(buf, x, n))):
                     return True
                 break
+            if run:
+                if seen[c] == 1:
+                    met += 1
+                    if met == LOOKAHEAD:
+                        return True
+                else:
+                    run = False
+                    if x >= end:
+                        break
             x += n
     return False
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _chained_inside(buf, q, end, stop, seen, framing, memo):
+    """_real_chain_inside's first test alone: a chain from inside (q, end) reaches a decoded block that
+    walks, whatever source it names."""
+    return _real_chain_inside(buf, q, end, stop, seen, False, False, framing, memo)
 
 
 @njit(cache=True, nogil=True)
@@ -495,15 +519,33 @@ def _hides_decoded(buf, q, end, framing):
     return False
 
 
+@njit(cache=True, nogil=True, inline="always")
+def _met_inside(buf, r, m, bq, seen, base):
+    """A resumption point r inside the block at bq where the chain broke (before its LEN's end) is a block of
+    a met category, one of a decoded category naming a met data source, or the broken block is not one of
+    a met category not decoded: a real block starts inside a met block only when that block's LEN is
+    damaged, and the real blocks after it are of the recording's categories and sources; the bytes of a
+    tracker's track message before damage read as a short CAT010 or CAT020 block now and then."""
+    if bq < 0 or seen[buf[bq]] == 0 or base[buf[bq]] >= 0:
+        return True
+    c = buf[r]
+    if base[c] < 0:
+        return seen[c] == 1
+    return _source_met(seen, c, _first_source(buf, r, m))
+
+
 @njit(cache=True, nogil=True)
 def _candidate(buf, r, stop, seen, framing, memo):
     """Framing may resume at r: its chain is anchored, and a block of a category not walked hides no
-    walking chain (a false header there would swallow real blocks)."""
+    walking chain (for a met category, none naming a met data source) nor a chain of blocks of met
+    categories not walked (a false header there would swallow real blocks)."""
     n = _header(buf, r, stop)
     if n < 0 or not _anchored(buf, r, stop, seen, framing, memo):
         return False
     base = framing.base
-    return base[buf[r]] >= 0 or not _chained_inside(buf, r, r + n, stop, framing, memo)
+    c = buf[r]
+    return base[c] >= 0 or not _real_chain_inside(buf, r, r + n, stop, seen, seen[c] == 1, True, framing,
+                                                  memo)
 
 
 @njit(cache=True, nogil=True)
@@ -532,7 +574,8 @@ def _next_proves(buf, x, stop, seen, framing, memo):
         return True
     n = _header(buf, x, stop)
     if n < 0:  # a truncated tail, unless real blocks follow it: then it is bytes inside one, read as a header
-        return _cut_tail(buf, x, stop, seen) and not _chained_inside(buf, x, stop, stop, framing, memo)
+        return (_cut_tail(buf, x, stop, seen)
+                and not _chained_inside(buf, x, stop, stop, seen, framing, memo))
     c = buf[x]
     if framing.base[c] >= 0:
         return _walks_at(buf, x, n, c, framing, memo)
@@ -782,12 +825,12 @@ def frame_window(buf, seg_start, seg_stop, seg_mode, framing, st, seen, memo, se
                             # walks by chance, swallowing the head of a real one (a plausible header after
                             # it is no evidence: the bytes there are the real block's)
                             ok = (_next_proves(buf, q + n, stop, seen, framing, memo)
-                                  or not _chained_inside(buf, q, q + n, stop, framing, memo))
+                                  or not _chained_inside(buf, q, q + n, stop, seen, framing, memo))
                         else:
                             # a block that does not walk keeps its LEN only if what follows is anchored
                             # (and hides no walking chain: a damaged LEN that happens to land on a block)
                             ok = ((q + n == stop or _anchored(buf, q + n, stop, seen, framing, memo))
-                                  and not _chained_inside(buf, q, q + n, stop, framing, memo))
+                                  and not _chained_inside(buf, q, q + n, stop, seen, framing, memo))
                     elif seen[c] == 1:
                         # a met category's block whose next block proves its LEN keeps it unless a chain
                         # of real blocks inside it lands on that next block (_proven_inside): inside a
@@ -797,7 +840,7 @@ def frame_window(buf, seg_start, seg_stop, seg_mode, framing, st, seen, memo, se
                             ok = not _proven_inside(buf, q, q + n, stop, seen, framing, memo)
                         else:
                             ok = (_next_ok(buf, q + n, stop, seen, framing, memo)
-                                  and not _chained_inside(buf, q, q + n, stop, framing, memo))
+                                  and not _chained_inside(buf, q, q + n, stop, seen, framing, memo))
                     else:  # a category not met yet: its chain must be anchored, and hide no real blocks,
                         # unless the blocks after it are of its category or decoded ones that walk
                         proven = (q + n == stop or _kin_chain(buf, q + n, stop, c, seen, framing, memo)
@@ -809,7 +852,8 @@ def frame_window(buf, seg_start, seg_stop, seg_mode, framing, st, seen, memo, se
                             ok = not hides
                         else:
                             ok = ((q + n == stop or _anchored(buf, q, stop, seen, framing, memo))
-                                  and not _chained_inside(buf, q, q + n, stop, framing, memo))
+                                  and not _real_chain_inside(buf, q, q + n, stop, seen, False, True, framing,
+                                                             memo))
                 if ok:
                     b_start, b_len, b_seg, b_cat, nb = _keep_block(b_start, b_len, b_seg, b_cat, nb, q, n,
                                                                    buf[q], s)
@@ -839,6 +883,7 @@ def frame_window(buf, seg_start, seg_stop, seg_mode, framing, st, seen, memo, se
                     m = (np.int64(buf[r + 1]) << 8) | buf[r + 2]
                     if m >= 3 and r + m <= stop:
                         if (_may_anchor(buf, r, stop, seen, base)
+                                and (r >= bq + bn or _met_inside(buf, r, m, bq, seen, base))
                                 and _candidate(buf, r, stop, seen, framing, memo)):
                             break
                         if (m > 3 and base[buf[r]] >= 0 and buf[r + 3] & 0x80

@@ -182,7 +182,8 @@ def test_a_len_swallowing_one_block_of_a_met_source_still_yields_it(tmp_path):
     assert rec.errors["offset"].tolist() == [sum(len(p) for p in pieces[:4])]
 
 
-@pytest.mark.parametrize("damage", ["zeros before the first block", "the last block cut short"])
+@pytest.mark.parametrize("damage", ["zeros before the first block", "zeros after the 30th block",
+                                    "the last block cut short"])
 def test_streams_of_categories_not_decoded_alone_are_stepped_over_whole(tmp_path, damage):
     """Recordings holding only categories the default read leaves out, interleaved block for block (a CAT001
     radar's plot blocks between its CAT002 sector messages, as the decode benchmark builds it; a tracker's
@@ -191,7 +192,9 @@ def test_streams_of_categories_not_decoded_alone_are_stepped_over_whole(tmp_path
     damage is the one error. Before, the first block of a category not met yet and followed by a block of
     another such category was taken for damage, and with no decoded block to anchor a chain framing never
     resumed: the benchmark's CAT001 recording read with the default categories gave 24 errors and 83 CAT010,
-    CAT020 and CAT048 'records' made of plot bytes."""
+    CAT020 and CAT048 'records' made of plot bytes. Damage after a block: the block before it has no next
+    block to prove its LEN, and the bytes of its records or of the block after the damage read as a short
+    walking CAT010 or CAT020 block now and then, which framing resumed at."""
     bench = _bench_decode()
     streams = {}
     for c in (1, 62, 63, 2):
@@ -205,6 +208,10 @@ def test_streams_of_categories_not_decoded_alone_are_stepped_over_whole(tmp_path
         whole = b"".join(blocks)
         if damage == "zeros before the first block":
             data, error = bytes(5) + whole, [0, 5]
+            kept = blocks
+        elif damage == "zeros after the 30th block":
+            at = sum(len(blk) for blk in blocks[:30])
+            data, error = whole[:at] + bytes(5) + whole[at:], [at, 5]
             kept = blocks
         else:
             data, error = whole[:-7], [len(whole) - len(blocks[-1]), len(blocks[-1]) - 7]
