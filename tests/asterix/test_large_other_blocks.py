@@ -228,3 +228,24 @@ def test_streams_of_categories_not_decoded_alone_are_stepped_over_whole(tmp_path
             failures.append(f"{sorted(expected)}: {decoded} decoded, errors {errors[:4]}, "
                             f"{rec.ignored_blocks} stepped over")
     assert not failures, failures
+
+
+def test_a_false_header_does_not_swallow_blocks_of_categories_not_decoded(tmp_path):
+    """Damage inserted before a block of a CAT001/CAT002 recording (read with the default categories): 23
+    bytes starting with a header of a category met nowhere (CAT013) whose LEN, 31,493, runs over some 120
+    real blocks and lands inside one. Those blocks are stepped over, not swallowed: a chain of four blocks of
+    met categories inside a block not decoded is real blocks its LEN would swallow. The inserted bytes are
+    the one error."""
+    bench = _bench_decode()
+    path = tmp_path / "c1.ast"
+    bench.build(path, 1, 5000)
+    blocks = raw_blocks(path.read_bytes())[:300]
+    junk = bytes([13, 0x7B, 0x05]) + bytes(range(100, 120))
+    at = sum(len(blk) for blk in blocks[:40])
+    assert at + 0x7B05 < sum(len(blk) for blk in blocks)
+    damaged = tmp_path / "damaged.ast"
+    damaged.write_bytes(b"".join(blocks[:40]) + junk + b"".join(blocks[40:]))
+    rec = _read(damaged)
+    assert not any(len(f) for f in rec.frames.values()), {c: len(f) for c, f in rec.frames.items()}
+    assert rec.errors[["offset", "length"]].values.tolist() == [[at, len(junk)]]
+    assert rec.ignored_blocks == {1: 150, 2: 150}
