@@ -51,21 +51,23 @@ def held(buf: np.ndarray) -> np.ndarray:
 def segment_modes(buf: np.ndarray, seg: Segments, tables: kernel.Framing,
                   progress: Progress | None = None) -> np.ndarray:
     """Each segment's framing mode, as kernel.frame_blocks settles it without ``careful``: container
-    payloads exact, a raw stream taken as a chain when its chain holds from start to end (checked a window
-    at a time, its pages dropped behind), else framed carefully."""
+    payloads exact, a raw stream taken as a chain when its chain holds from start to end and no block of a
+    category not walked hides a walking block naming a data source of the chain (checked a window at a
+    time, its pages dropped behind), else framed carefully."""
     if seg.exact:
         return np.full(len(seg.start), kernel.MODE_EXACT, np.int8)
     modes = np.full(len(seg.start), kernel.MODE_CAREFUL, np.int8)
     total = int(len(buf))
     for s, (start, stop) in enumerate(zip(seg.start.tolist(), seg.stop.tolist(), strict=True)):
         q, status = start, 0
+        sources = kernel.new_chain_sources()
         while status == 0:
             at = q
-            q, status = kernel.chain_step(buf, start, stop, tables, q, q + WINDOW_BYTES)
+            q, status = kernel.chain_step(buf, start, stop, tables, q, q + WINDOW_BYTES, sources)
             release_pages(buf, at, q)
             if progress:
                 progress(q, total, "checking the block chain")
-        if status == 1:
+        if status == 1 and not kernel.hides_real(sources):
             modes[s] = kernel.MODE_CHAIN
     return modes
 

@@ -504,10 +504,25 @@ def _proven_inside(buf, q, end, stop, seen, framing, memo):
     return False
 
 
+CHAIN_SOURCES = 256 << 13  # bytes of a bitset of one bit per category and SAC/SIC (chain_step's ``sources``)
+
+
+def new_chain_sources() -> np.ndarray:
+    """chain_step's two bitsets, zeroed: the sources of the chain's walked blocks, then those of the walking
+    blocks hidden inside its other blocks."""
+    return np.zeros(2 * CHAIN_SOURCES, np.uint8)
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _mark_source(sources, at, c, source):
+    i = at + (np.int64(c) << 13) + (source >> 3)
+    sources[i] |= np.uint8(1 << (source & 7))
+
+
 @njit(cache=True, nogil=True)
-def _hides_decoded(buf, q, end, framing):
-    """A block of a walked category that walks exactly lies inside (q, end): cheap check of a block of
-    another category before its LEN is trusted (a damaged LEN there can swallow real blocks)."""
+def _note_hidden(buf, q, end, framing, sources):
+    """Mark the data source (first record's I0xx/010) of every block of a walked category that walks
+    exactly inside (q, end), a block of another category whose LEN a damage may have made swallow it."""
     base, nfrn, parts = framing
     for r in range(q + 1, end - 2):
         c = buf[r]
@@ -515,6 +530,18 @@ def _hides_decoded(buf, q, end, framing):
             continue
         n = (np.int64(buf[r + 1]) << 8) | buf[r + 2]
         if n >= 3 and r + n <= end and walks(buf, r, n, base[c], nfrn[c], parts):
+            source = _first_source(buf, r, n)
+            if source >= 0:
+                _mark_source(sources, CHAIN_SOURCES, c, source)
+
+
+@njit(cache=True, nogil=True)
+def hides_real(sources):
+    """A walking block hidden inside a block of a category not walked names a data source of the chain's
+    own walked blocks of its category: a real block a damaged LEN swallowed. Chance bytes that walk (a short
+    CAT010 or CAT020 block in a tracker's track messages) name one with a chance of (sources / 65536)."""
+    for i in range(CHAIN_SOURCES):
+        if sources[i] & sources[CHAIN_SOURCES + i]:
             return True
     return False
 
@@ -687,10 +714,12 @@ def _may_anchor(buf, r, stop, seen, base):
 
 
 @njit(cache=True, nogil=True)
-def chain_step(buf, start, stop, framing, q, byte_limit):
+def chain_step(buf, start, stop, framing, q, byte_limit, sources):
     """Follow a raw segment's block chain from q: (where it got to, status), status 0 when it paused at
-    byte_limit (call again from there), 1 when the chain runs exactly to ``stop`` and no block of a category
-    not walked hides a walking block (frame_blocks then takes the chain as it is), 2 when it does not."""
+    byte_limit (call again from there), 1 when the chain runs exactly to ``stop``, 2 when it breaks. On the
+    way, ``sources`` (new_chain_sources) gathers the data sources of the chain's walked blocks and of the
+    walking blocks hidden in its other blocks: the chain is taken as it is when it runs to the end and
+    hides_real(sources) is False."""
     base = framing[0]
     moved = False
     while q < stop:
@@ -699,8 +728,13 @@ def chain_step(buf, start, stop, framing, q, byte_limit):
         n = _header(buf, q, stop)
         if n < 0:
             return q, 2
-        if base[buf[q]] < 0 and _hides_decoded(buf, q, q + n, framing):
-            return q, 2
+        c = buf[q]
+        if base[c] >= 0:
+            source = _first_source(buf, q, n)
+            if source >= 0:
+                _mark_source(sources, 0, c, source)
+        else:
+            _note_hidden(buf, q, q + n, framing, sources)
         q += n
         moved = True
     return q, 1
@@ -952,8 +986,13 @@ def segment_modes(buf, seg_start, seg_stop, exact, careful, framing) -> np.ndarr
         return np.full(len(seg_start), MODE_EXACT, np.int8)
     if careful:
         return np.full(len(seg_start), MODE_CAREFUL, np.int8)
-    return np.array([MODE_CHAIN if chain_step(buf, int(a), int(b), framing, int(a), NO_LIMIT)[1] == 1
-                     else MODE_CAREFUL for a, b in zip(seg_start, seg_stop, strict=True)], np.int8)
+    modes = np.full(len(seg_start), MODE_CAREFUL, np.int8)
+    for s, (a, b) in enumerate(zip(seg_start, seg_stop, strict=True)):
+        sources = new_chain_sources()
+        held = chain_step(buf, int(a), int(b), framing, int(a), NO_LIMIT, sources)[1] == 1
+        if held and not hides_real(sources):
+            modes[s] = MODE_CHAIN
+    return modes
 
 
 def frame_blocks(buf, seg_start, seg_stop, exact, careful, framing):

@@ -116,8 +116,10 @@ def test_a_len_landing_on_one_chance_header_of_its_own_category_does_not_swallow
     whose SAC, SIC and RHO read 0x16, 0, 16: a 0x16 'block' of 16 bytes, which lands on the start of the
     real block two on, and real blocks follow. One header of its own category, met by chance, is no proof of
     the junk's LEN: the two real blocks it would swallow decode (benchmarks/fuzz_reader.py found it on a
-    slice of the ADS-B fixture: 20 of 4,540 records lost after two deletions)."""
-    real = _real_blocks(12)
+    slice of the ADS-B fixture: 20 of 4,540 records lost after two deletions). The real blocks are one
+    radar's (1/2), as a recording's blocks are: the chain here holds from end to end, and a walking block
+    hidden in another block makes it framed carefully when it names a data source of the chain's."""
+    real = [plot(1, 2, 2560 + i, 1000 * i) for i in range(12)]
     real[5] = plot(0x16, 0, (16 << 8) | 7, 4321)
     pieces, junk_at = _junk_header(real, 0x16, 5)  # four bytes into real[5]
     rec = _stream(tmp_path, pieces)
