@@ -310,10 +310,8 @@ def _kindred_chain(buf, x, stop, base):
     d = np.int64(-1)
     k = 0
     while k < KINDRED:
-        if x + 3 > stop or buf[x] == 0:
-            return False
-        n = (np.int64(buf[x + 1]) << 8) | buf[x + 2]
-        if n < 3 or x + n > stop:
+        n = _header(buf, x, stop)
+        if n < 0:
             return False
         c = np.int64(buf[x])
         if base[c] >= 0:
@@ -930,21 +928,22 @@ def frame_window(buf, seg_start, seg_stop, seg_mode, framing, st, seen, memo, se
                 break
             st[ST_PENDING] = 0
             q = bq
-            if bn > 0 and q + bn < r:
-                # a complete block ends before the resumption point: keep it (a decoded one that does
-                # not walk is reported by the walk); only the bytes after it are unaccounted for
+            if bn > 0 and q + bn <= r:
+                # a complete block ends at or before the resumption point: keep it (a decoded one that
+                # does not walk is reported by the walk); only the bytes after it are unaccounted for
                 b_start, b_len, b_seg, b_cat, nb = _keep_block(b_start, b_len, b_seg, b_cat, nb, q, bn,
                                                                buf[q], s)
                 seen[buf[q]] = 1
                 q += bn
-            if ne == e_off.shape[0]:
-                e_off, e_len, e_cat, e_code = _grow4(e_off, e_len, e_cat, e_code)
-            e_off[ne] = q
-            e_len[ne] = r - q
-            bad_len = q + 3 <= stop and (seen[buf[q]] or base[buf[q]] >= 0)
-            e_cat[ne] = buf[q] if bad_len else -1  # garbage: its first byte names no category
-            e_code[ne] = E_BAD_LEN if bad_len else E_GARBAGE
-            ne += 1
+            if q < r:
+                if ne == e_off.shape[0]:
+                    e_off, e_len, e_cat, e_code = _grow4(e_off, e_len, e_cat, e_code)
+                e_off[ne] = q
+                e_len[ne] = r - q
+                bad_len = q + 3 <= stop and (seen[buf[q]] or base[buf[q]] >= 0)
+                e_cat[ne] = buf[q] if bad_len else -1  # garbage: its first byte names no category
+                e_code[ne] = E_BAD_LEN if bad_len else E_GARBAGE
+                ne += 1
             q = r
             if stranded > 0:  # taken as it is (its own evidence); what follows it is the next decision
                 b_start, b_len, b_seg, b_cat, nb = _keep_block(b_start, b_len, b_seg, b_cat, nb, q, stranded,

@@ -289,3 +289,26 @@ def test_a_chain_hiding_only_chance_blocks_is_taken_as_it_is(tmp_path):
         tracks[3], bytes(20) + hidden(54, 212))] + tracks[4:], strict=True)))
     rec = _read(path)  # taken as it is: the radar's 24 plots, the tracker's 6 blocks stepped over
     assert rec.errors.empty and rec.ignored_blocks == {62: 6} and len(rec.frames[48]) == 24
+
+
+def test_a_first_block_whose_len_lands_where_framing_resumes_is_kept(tmp_path):
+    """A centre's recording that starts with a CAT063 sensor status block followed by blocks of other
+    categories not met yet (CAT002, CAT062) and of decoded ones (CAT020), with damage later so that it is
+    framed carefully: nothing proves the first block's LEN, and framing resumes exactly where it ends, so
+    it is kept as a block (before, its 478 bytes were reported as bytes that start no block)."""
+    bench = _bench_decode()
+    streams = {}
+    for c in (63, 2, 62, 20):
+        path = tmp_path / f"c{c}.ast"
+        bench.build(path, c, 1000)
+        streams[c] = iter(raw_blocks(path.read_bytes()))
+    order = [63, 2, 63, 62, 20, 2, 63, 20, 62, 2, 63, 20, 62, 2, 20, 63]
+    blocks = [next(streams[c]) for c in order]
+    at = sum(len(blk) for blk in blocks[:12])
+    data = b"".join(blocks[:12]) + bytes(5) + b"".join(blocks[12:])
+    path = tmp_path / "centre.ast"
+    path.write_bytes(data)
+    rec = _read(path)
+    assert rec.errors[["offset", "length"]].values.tolist() == [[at, 5]]
+    assert rec.ignored_blocks == {63: 5, 2: 4, 62: 3}
+    assert len(rec.frames[20]) == 4 * RECORDS_PER_BLOCK
