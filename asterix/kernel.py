@@ -520,7 +520,8 @@ def _mark_source(sources, at, c, source):
 @njit(cache=True, nogil=True)
 def _note_hidden(buf, q, end, framing, sources):
     """Mark the data source (first record's I0xx/010) of every block of a walked category that walks
-    exactly inside (q, end), a block of another category whose LEN a damage may have made swallow it."""
+    exactly inside (q, end), a block of another category whose LEN a damage may have made swallow it; True
+    as soon as one names a source the chain's walked blocks named before (hides_real is then settled)."""
     base, nfrn, parts = framing
     for r in range(q + 1, end - 2):
         c = buf[r]
@@ -531,6 +532,10 @@ def _note_hidden(buf, q, end, framing, sources):
             source = _first_source(buf, r, n)
             if source >= 0:
                 _mark_source(sources, CHAIN_SOURCES, c, source)
+                i = (np.int64(c) << 13) + (source >> 3)
+                if sources[i] >> (source & 7) & 1:
+                    return True
+    return False
 
 
 @njit(cache=True, nogil=True)
@@ -714,10 +719,11 @@ def _may_anchor(buf, r, stop, seen, base):
 @njit(cache=True, nogil=True)
 def chain_step(buf, start, stop, framing, q, byte_limit, sources):
     """Follow a raw segment's block chain from q: (where it got to, status), status 0 when it paused at
-    byte_limit (call again from there), 1 when the chain runs exactly to ``stop``, 2 when it breaks. On the
-    way, ``sources`` (new_chain_sources) gathers the data sources of the chain's walked blocks and of the
-    walking blocks hidden in its other blocks: the chain is taken as it is when it runs to the end and
-    hides_real(sources) is False."""
+    byte_limit (call again from there), 1 when the chain runs exactly to ``stop``, 2 when it breaks or a
+    walking block hidden in a block not walked names a data source of the chain's walked blocks before it.
+    On the way, ``sources`` (new_chain_sources) gathers the data sources of the chain's walked blocks and
+    of the walking blocks hidden in its other blocks: the chain is taken as it is when it runs to the end
+    and hides_real(sources) is False (a hidden block naming a source met only later)."""
     base = framing[0]
     moved = False
     while q < stop:
@@ -731,8 +737,8 @@ def chain_step(buf, start, stop, framing, q, byte_limit, sources):
             source = _first_source(buf, q, n)
             if source >= 0:
                 _mark_source(sources, 0, c, source)
-        else:
-            _note_hidden(buf, q, q + n, framing, sources)
+        elif _note_hidden(buf, q, q + n, framing, sources):
+            return q, 2  # taken carefully: no need to follow the chain further
         q += n
         moved = True
     return q, 1
