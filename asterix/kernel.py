@@ -936,10 +936,13 @@ def frame_window(buf, seg_start, seg_stop, seg_mode, framing, st, seen, memo, se
             q = bq
             if bn > 0 and q + bn <= r:
                 # a complete block ends at or before the resumption point: keep it (a decoded one that
-                # does not walk is reported by the walk); only the bytes after it are unaccounted for
+                # does not walk is reported by the walk); only the bytes after it are unaccounted for.
+                # Ending exactly there is no evidence for its category, which stays as met as it was
+                # (random bytes: headers of many categories land on a chain that anchors)
                 b_start, b_len, b_seg, b_cat, nb = _keep_block(b_start, b_len, b_seg, b_cat, nb, q, bn,
                                                                buf[q], s)
-                seen[buf[q]] = 1
+                if q + bn < r:
+                    seen[buf[q]] = 1
                 q += bn
             if q < r:
                 if ne == e_off.shape[0]:
