@@ -502,19 +502,27 @@ def _proven_inside(buf, q, end, stop, seen, framing, memo):
     return False
 
 
-CHAIN_SOURCES = 256 << 13  # bytes of a bitset of one bit per category and SAC/SIC (chain_step's ``sources``)
+SOURCE_BITSET = 256 << 13  # bytes of a bitset of one bit per category and SAC/SIC (65,536 each)
 
 
 def new_chain_sources() -> np.ndarray:
     """chain_step's two bitsets, zeroed: the sources of the chain's walked blocks, then those of the walking
     blocks hidden inside its other blocks."""
-    return np.zeros(2 * CHAIN_SOURCES, np.uint8)
+    return np.zeros(2 * SOURCE_BITSET, np.uint8)
 
 
 @njit(cache=True, nogil=True, inline="always")
-def _mark_source(sources, at, c, source):
+def _mark_source(bits, at, c, source):
+    """Set the bit of category c and SAC/SIC ``source`` in the bitset that starts at ``at`` in ``bits``."""
     i = at + (np.int64(c) << 13) + (source >> 3)
-    sources[i] |= np.uint8(1 << (source & 7))
+    bits[i] |= np.uint8(1 << (source & 7))
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _has_source(bits, at, c, source):
+    """Whether the bit of category c and SAC/SIC ``source`` is set in the bitset at ``at`` in ``bits``."""
+    i = at + (np.int64(c) << 13) + (source >> 3)
+    return bits[i] >> (source & 7) & 1 == 1
 
 
 @njit(cache=True, nogil=True)
@@ -531,9 +539,8 @@ def _note_hidden(buf, q, end, framing, sources):
         if n >= 3 and r + n <= end and walks(buf, r, n, base[c], nfrn[c], parts):
             source = _first_source(buf, r, n)
             if source >= 0:
-                _mark_source(sources, CHAIN_SOURCES, c, source)
-                i = (np.int64(c) << 13) + (source >> 3)
-                if sources[i] >> (source & 7) & 1:
+                _mark_source(sources, SOURCE_BITSET, c, source)
+                if _has_source(sources, 0, c, source):
                     return True
     return False
 
@@ -543,8 +550,8 @@ def hides_real(sources):
     """A walking block hidden inside a block of a category not walked names a data source of the chain's
     own walked blocks of its category: a real block a damaged LEN swallowed. Chance bytes that walk (a short
     CAT010 or CAT020 block in a tracker's track messages) name one with a chance of (sources / 65536)."""
-    for i in range(CHAIN_SOURCES):
-        if sources[i] & sources[CHAIN_SOURCES + i]:
+    for i in range(SOURCE_BITSET):
+        if sources[i] & sources[SOURCE_BITSET + i]:
             return True
     return False
 
@@ -615,7 +622,7 @@ def _next_proves(buf, x, stop, seen, framing, memo):
 # Data sources met (frame_window's ``seen`` after its 256 categories): one bit per category and SAC/SIC of a
 # decoded block framing accepted walking exactly, by its first record's I0xx/010. Kept for the whole framing.
 SOURCES_AT = 256
-SEEN_SLOTS = SOURCES_AT + (256 << 13)
+SEEN_SLOTS = SOURCES_AT + SOURCE_BITSET
 STRANDED_RECORDS = 2  # records a stranded block must hold, each naming a data source met in its category
 
 
@@ -637,8 +644,7 @@ def _first_source(buf, q, n):
 @njit(cache=True, nogil=True, inline="always")
 def _source_met(seen, c, source):
     """Whether a block of category c from this SAC/SIC was accepted before (its bit in ``seen``)."""
-    i = SOURCES_AT + (np.int64(c) << 13) + (source >> 3)
-    return seen[i] >> (source & 7) & 1 == 1
+    return _has_source(seen, SOURCES_AT, c, source)
 
 
 @njit(cache=True, nogil=True)
@@ -646,8 +652,7 @@ def _note_source(buf, q, n, seen):
     """Mark the first record's data source of the accepted walking block at q as met in its category."""
     source = _first_source(buf, q, n)
     if source >= 0:
-        i = SOURCES_AT + (np.int64(buf[q]) << 13) + (source >> 3)
-        seen[i] |= np.uint8(1 << (source & 7))
+        _mark_source(seen, SOURCES_AT, buf[q], source)
 
 
 @njit(cache=True, nogil=True, inline="always")
