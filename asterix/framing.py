@@ -58,9 +58,9 @@ def segment_modes(buf: np.ndarray, seg: Segments, tables: kernel.Framing,
         return np.full(len(seg.start), kernel.MODE_EXACT, np.int8)
     modes = np.full(len(seg.start), kernel.MODE_CAREFUL, np.int8)
     total = int(len(buf))
+    sources = kernel.new_chain_sources()
     for s, (start, stop) in enumerate(zip(seg.start.tolist(), seg.stop.tolist(), strict=True)):
         q, status = start, 0
-        sources = kernel.new_chain_sources()
         while status == 0:
             at = q
             q, status = kernel.chain_step(buf, start, stop, tables, q, q + WINDOW_BYTES, sources)
@@ -69,6 +69,7 @@ def segment_modes(buf: np.ndarray, seg: Segments, tables: kernel.Framing,
                 progress(q, total, "checking the block chain")
         if status == 1 and not kernel.hides_real(sources):
             modes[s] = kernel.MODE_CHAIN
+        kernel.clear_hidden(sources)
     return modes
 
 

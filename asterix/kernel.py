@@ -505,10 +505,21 @@ def _proven_inside(buf, q, end, stop, seen, framing, memo):
 SOURCE_BITSET = 256 << 13  # bytes of a bitset of one bit per category and SAC/SIC (65,536 each)
 
 
+HIDDEN_MARKED = 2 * SOURCE_BITSET  # chain_step's ``sources``: 1 once a hidden block's source was marked
+
+
 def new_chain_sources() -> np.ndarray:
     """chain_step's two bitsets, zeroed: the sources of the chain's walked blocks, then those of the walking
-    blocks hidden inside its other blocks."""
-    return np.zeros(2 * SOURCE_BITSET, np.uint8)
+    blocks hidden inside its other blocks, then a byte set when the second has a mark. One serves every
+    segment of a recording (a live batch is a segment a datagram): the chain's sources are the recording's,
+    and the hidden ones are cleared (clear_hidden) after a segment that marked one."""
+    return np.zeros(2 * SOURCE_BITSET + 1, np.uint8)
+
+
+def clear_hidden(sources: np.ndarray) -> None:
+    """Forget the hidden blocks' sources (after a segment that marked one), keeping the chain's."""
+    if sources[HIDDEN_MARKED]:
+        sources[SOURCE_BITSET:] = 0
 
 
 @njit(cache=True, nogil=True, inline="always")
@@ -540,6 +551,7 @@ def _note_hidden(buf, q, end, framing, sources):
             source = _first_source(buf, r, n)
             if source >= 0:
                 _mark_source(sources, SOURCE_BITSET, c, source)
+                sources[HIDDEN_MARKED] = 1
                 if _has_source(sources, 0, c, source):
                     return True
     return False
@@ -550,6 +562,8 @@ def hides_real(sources):
     """A walking block hidden inside a block of a category not walked names a data source of the chain's
     own walked blocks of its category: a real block a damaged LEN swallowed. Chance bytes that walk (a short
     CAT010 or CAT020 block in a tracker's track messages) name one with a chance of (sources / 65536)."""
+    if sources[HIDDEN_MARKED] == 0:
+        return False
     for i in range(SOURCE_BITSET):
         if sources[i] & sources[SOURCE_BITSET + i]:
             return True
@@ -1000,11 +1014,12 @@ def segment_modes(buf, seg_start, seg_stop, exact, careful, framing) -> np.ndarr
     if careful:
         return np.full(len(seg_start), MODE_CAREFUL, np.int8)
     modes = np.full(len(seg_start), MODE_CAREFUL, np.int8)
+    sources = new_chain_sources()
     for s, (a, b) in enumerate(zip(seg_start, seg_stop, strict=True)):
-        sources = new_chain_sources()
         held = chain_step(buf, int(a), int(b), framing, int(a), NO_LIMIT, sources)[1] == 1
         if held and not hides_real(sources):
             modes[s] = MODE_CHAIN
+        clear_hidden(sources)
     return modes
 
 
