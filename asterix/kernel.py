@@ -374,9 +374,16 @@ def _real_chain_inside(buf, q, end, stop, seen, need_source, met_chain, framing,
     tracker's 1-2 KB of track messages, a short CAT010 or CAT020 block walks by chance now and then). With
     ``met_chain`` a chain of LOOKAHEAD blocks of met categories not decoded counts too, wherever it ends:
     the real blocks of a recording of categories not decoded (a chance header's category is met with a
-    chance of (categories met / 256) a block)."""
+    chance of (categories met / 256) a block), and so does a kindred chain of them, met or not yet (a false
+    header at a tracker recording's start swallowing its first blocks)."""
     base = framing[0]
     for r in range(q + 1, end):
+        if met_chain and base[buf[r]] < 0:
+            # two of the kindred chain's blocks inside at least: one header whose LEN lands on ``end``,
+            # then the real blocks after it, is chance in any block
+            m = _header(buf, r, stop)
+            if m > 0 and r + m < end and _kindred_chain(buf, r, stop, base):
+                return True
         x = r
         met = 0  # blocks of met categories not decoded, in a row from r
         run = met_chain
