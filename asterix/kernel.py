@@ -118,18 +118,26 @@ def _part_len(buf, pos, end, sp, P, ext_sizes, ext_fx):
     return n if pos + n <= end else np.int64(-1)
 
 
+# What walk_records asks of each record's FSPEC besides walking exactly: nothing; that it sets FRN 1 (the data
+# source identifier, I0xx/010, mandatory in every category); that, and one source for the whole block.
+ANY_RECORD = 0
+SOURCED = 1
+ONE_SOURCE = 2
+
+
 @njit(cache=True, nogil=True)
 def walks(buf, q, n, p0, n_frn, parts):
     """True when the block at q (LEN n) walks record by record exactly to its end under the layout whose
     parts start at row p0 of parts.P (framing's consistency check; the decode itself is ``scan``)."""
-    return walk_records(buf, q, n, p0, n_frn, parts, False) > 0
+    return walk_records(buf, q, n, p0, n_frn, parts, ANY_RECORD) > 0
 
 
 @njit(cache=True, nogil=True, inline="always")
-def walk_records(buf, q, n, p0, n_frn, parts, one_source):
+def walk_records(buf, q, n, p0, n_frn, parts, sources):
     """The records of the block at q (LEN n) when it walks exactly to its end under the layout whose parts
-    start at row p0 of parts.P, else -1; with ``one_source``, -1 too unless every record's FSPEC sets FRN 1
-    (the data source identifier, I0xx/010, in every category) with the first record's two bytes there.
+    start at row p0 of parts.P, else -1; with ``sources`` SOURCED, -1 too unless every record's FSPEC sets
+    FRN 1 (the data source identifier, I0xx/010, in every category), ONE_SOURCE with the first record's two
+    bytes there.
     Inlined, so ``walks`` passes a constant and pays nothing for the check (called, framing damaged
     recordings took 12-19 % longer)."""
     P, ext_sizes, ext_fx, sub_parts = parts
@@ -149,14 +157,15 @@ def walk_records(buf, q, n, p0, n_frn, parts, one_source):
             if buf[pos - 1] & 1 == 0:
                 break
         fs_end = pos
-        if one_source:
+        if sources != ANY_RECORD:
             if buf[fs] & 0x80 == 0 or pos + 2 > end:
                 return -1
-            here = (np.int64(buf[pos]) << 8) | buf[pos + 1]
-            if source < 0:
-                source = here
-            elif here != source:
-                return -1
+            if sources == ONE_SOURCE:
+                here = (np.int64(buf[pos]) << 8) | buf[pos + 1]
+                if source < 0:
+                    source = here
+                elif here != source:
+                    return -1
         records += 1
         any_item = False
         for fq in range(fs, fs_end):
@@ -279,6 +288,15 @@ def _walks_at(buf, x, n, c, framing, memo):
 
 
 @njit(cache=True, nogil=True, inline="always")
+def _sourced(buf, x, n, c, framing):
+    """Every record of the walking block at x sets FRN 1, the data source identifier (I0xx/010, mandatory in
+    every category): what makes a walking block evidence where chance alone would do (bytes of other data
+    read as a short CAT010 or CAT020 block walk now and then; each record naming a source halves that)."""
+    base, nfrn, parts = framing
+    return walk_records(buf, x, n, base[c], nfrn[c], parts, SOURCED) > 0
+
+
+@njit(cache=True, nogil=True, inline="always")
 def _log_full(memo):
     """The walk log has no room left for another decision: the window pauses for it to be read."""
     return memo[LOG_CAT] >= 0 and memo[LOG_COUNT] > LOG_SLOTS - LOG_RESERVE
@@ -333,11 +351,12 @@ def _kindred_chain(buf, x, stop, base):
 @njit(cache=True, nogil=True)
 def _anchored(buf, r, stop, seen, framing, memo):
     """The block chain from r holds for LOOKAHEAD blocks (or to the end of the data) and is anchored:
-    one of its blocks is of a decoded category and walks exactly, or all its categories were already
-    met, or it reaches the end in two blocks or more (one LEN landing on the end proves little), or it
-    runs on as a chain of few categories not decoded (_kindred_chain).
-    Every decoded block in it must walk exactly, but for a chain that meets damage after two blocks or
-    more, one of them walking: it anchors as a chain that breaks there does (real blocks before damage)."""
+    one of its blocks is of a decoded category and walks exactly, every record naming a data source
+    (_sourced), or all its categories were already met, or it reaches the end in two blocks or more (one
+    LEN landing on the end proves little), or it runs on as a chain of few categories not decoded
+    (_kindred_chain). Every decoded block in it must walk exactly, but for a chain that meets damage after
+    two blocks or more, one of them walking with its sources: it anchors as a chain that breaks there does
+    (real blocks before damage)."""
     base = framing[0]
     x = r
     walked = False
@@ -355,7 +374,7 @@ def _anchored(buf, r, stop, seen, framing, memo):
         if base[c] >= 0:
             if not _walks_at(buf, x, n, c, framing, memo):
                 return walked and k >= 2
-            walked = True
+            walked = walked or _sourced(buf, x, n, c, framing)
         elif seen[c] == 0:
             all_seen = False
         x += n
@@ -393,8 +412,8 @@ def _real_chain_inside(buf, q, end, stop, seen, need_source, met_chain, framing,
                 break
             c = buf[x]
             if base[c] >= 0:
-                if x < end and _walks_at(buf, x, n, c, framing, memo) and (
-                        not need_source or _source_met(seen, c, _first_source(buf, x, n))):
+                if (x < end and _walks_at(buf, x, n, c, framing, memo) and _sourced(buf, x, n, c, framing)
+                        and (not need_source or _source_met(seen, c, _first_source(buf, x, n)))):
                     return True
                 break
             if run:
@@ -499,7 +518,8 @@ def _proven_inside(buf, q, end, stop, seen, framing, memo):
             if base[c] >= 0:
                 if not _walks_at(buf, x, n, c, framing, memo):
                     break
-                walked += 1
+                if _sourced(buf, x, n, c, framing):
+                    walked += 1
                 if walked == LOOKAHEAD:  # real decoded blocks, wherever ``end`` is
                     return True
             x += n
@@ -689,7 +709,7 @@ def _stranded_block(buf, r, m, seen, framing, memo):
     source = _first_source(buf, r, m)
     if source < 0 or not _source_met(seen, c, source) or not _walks_at(buf, r, m, c, framing, memo):
         return False  # the walk through _walks_at: logged, as alike_framings compares the walks logged
-    return walk_records(buf, r, m, base[c], nfrn[c], parts, True) >= STRANDED_RECORDS
+    return walk_records(buf, r, m, base[c], nfrn[c], parts, ONE_SOURCE) >= STRANDED_RECORDS
 
 
 # Framing modes of a payload segment (frame_window's seg_mode).

@@ -1,6 +1,7 @@
 """What counts as evidence when framing resumes after damage in a recording of categories not decoded (a
 tracker's CAT062 blocks, read with the default categories): a chain of such blocks hidden inside a false
-header's LEN is real blocks, whether their category was met or not.
+header's LEN is real blocks, whether their category was met or not; a short walking block of a decoded
+category is evidence only when every record names a data source (I0xx/010, mandatory in every category).
 Found by benchmarks/fuzz_undecoded.py (seed 1: 107 records made of track bytes, 258 intact blocks lost over
 200 damaged slices). The streams are built with msdc's encoder; what is expected follows from how they are
 built (the blocks written and where the damage is), not from the decoder."""
@@ -11,6 +12,7 @@ import warnings
 from pathlib import Path
 
 import numpy as np
+from asterix_bytes import block
 from live_bytes import raw_blocks
 
 import msdc.asterix as asterix
@@ -54,3 +56,49 @@ def test_a_false_header_does_not_swallow_a_trackers_blocks_not_met_yet(tmp_path)
     assert not any(len(f) for f in rec.frames.values())
     assert rec.errors[["offset", "length"]].values.tolist() == [[0, len(junk)], [last, len(blocks[39]) - 7]]
     assert rec.ignored_blocks == {62: 39}
+
+
+def test_a_short_walking_block_without_data_sources_anchors_nothing(tmp_path):
+    """Damage between two blocks of a tracker's recording: bytes that read as a header of a category met
+    nowhere (CAT237) whose LEN lands on three records that walk as a CAT010 block with no I010/010 (FSPEC
+    0x40: I010/000 message type alone), then zeros to the next real block. Before, that chain of two
+    anchored framing: three CAT010 'reports' made of damage. The data source is mandatory in every record
+    of every category, so a walking block without it is no evidence; the inserted bytes are the error and
+    every real block is stepped over."""
+    blocks = _tracker_blocks(24, 5)
+    chance = block(10, *([bytes([0x40, 1])] * 3))
+    assert chance == bytes([10, 0, 9, 0x40, 1, 0x40, 1, 0x40, 1])
+    false = bytes([237]) + (3 + 20).to_bytes(2, "big") + bytes(range(20))
+    damage = false + chance + bytes(50)
+    at = sum(len(b) for b in blocks[:11])
+    path = tmp_path / "tracks.ast"
+    path.write_bytes(b"".join(blocks[:11]) + damage + b"".join(blocks[11:]))
+    rec = _read(path)
+    assert not any(len(f) for f in rec.frames.values()), {c: len(f) for c, f in rec.frames.items()}
+    assert rec.ignored_blocks == {62: 24}
+    assert rec.errors[["offset", "length"]].values.tolist() == [[at, len(damage)]]
+
+
+def test_a_damaged_recording_whose_records_lack_the_data_source_still_decodes(tmp_path):
+    """The other side of the rule: a CAT048 recording whose records carry no I048/010 (FSPEC 0x40: the
+    time of day alone; not as the standard asks, as a simulator may write it), 500 random bytes inserted
+    after its 200th block. Its blocks walk and its category is met, which anchors framing: every one of its
+    1,200 records decodes, the inserted bytes the one error (a walking block without sources is no
+    evidence on its own, but it is not damage either)."""
+    rng = np.random.default_rng(3)
+    blocks, tod = [], 0
+    for _ in range(400):
+        records = []
+        for _ in range(3):
+            tod += 128  # I048/140 in 1/128 s: one second a record
+            records.append(bytes([0x40]) + tod.to_bytes(3, "big"))
+        blocks.append(block(48, *records))
+    at = sum(len(b) for b in blocks[:200])
+    path = tmp_path / "radar.ast"
+    path.write_bytes(b"".join(blocks[:200]) + rng.integers(0, 256, 500, dtype=np.uint8).tobytes()
+                     + b"".join(blocks[200:]))
+    rec = _read(path)
+    assert rec.errors[["offset", "length"]].values.tolist() == [[at, 500]]
+    got = rec.frames[48]
+    assert len(got) == 1200 and got["sac"].isna().all()
+    assert np.array_equal(got["time_of_day"].to_numpy(), np.arange(1, 1201, dtype=float))
