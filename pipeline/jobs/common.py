@@ -777,13 +777,21 @@ def _no_records(exc: NoRecords) -> JobError:
     if exc.category not in QUALITY_WITHOUT:  # a multilateration or surface radar category the job needs
         names = " or ".join(f"CAT{c:03d}" for c in exc.alternatives)
         nouns = "multilateration" if len(exc.alternatives) > 1 else REGISTRY[exc.category].noun
-        return JobError(f"no {nouns} ({names}) records in the inputs")
+        return JobError(f"no {nouns} ({names}) records in the inputs{unread_inputs(exc.loaded)}")
     absent = absent_categories(exc.loaded) or [exc.category]
     failed = {cat: why[2:] for cat in absent if (why := _all_failed(exc.loaded, cat))}
     absent.sort(key=lambda cat: cat not in failed)
     names = " or ".join(f"{REGISTRY[cat].noun} (CAT{cat:03d})" for cat in absent)
     why = f": {'; '.join(failed.values())}" if failed else ""
-    return JobError(f"no {names} records in the inputs{why}")
+    return JobError(f"no {names} records in the inputs{why}{unread_inputs(exc.loaded)}")
+
+
+def unread_inputs(loaded: Loaded) -> str:
+    """The inputs holding categories the command does not read, a line each, said after an error for what
+    the inputs lack (a CAT001 radar given where CAT048 is read), or ''."""
+    pairs = zip(loaded.inputs, _unread_of(loaded), strict=True)
+    said = [f"{info['path']}: {words}" for info, ignored in pairs if (words := _not_read(ignored))]
+    return "".join(f"\n  {line}" for line in said)
 
 
 def absent_categories(loaded: Loaded) -> list[int]:
@@ -824,9 +832,39 @@ def _empty_inputs(loaded: Loaded, dataset: DatasetInputs | None = None) -> list[
     category): the run goes on with the others, but it should not be silent. Of a dataset, an input whose
     records the partition pruning left out (its manifest lists rows) is not said."""
     held = set() if dataset is None else {rec["path"] for rec in dataset.records if any(rec["rows"].values())}
-    return [f"{info['path']}: no record decoded ({info['skipped_blocks']} block(s) skipped; 'msdc stats' "
-            "lists them)" if info["skipped_blocks"] else f"{info['path']}: no CAT021 or CAT048 record in it"
-            for info in loaded.inputs if not any(info["records"].values()) and info["path"] not in held]
+    said = []
+    for info, ignored in zip(loaded.inputs, _unread_of(loaded), strict=True):
+        if any(info["records"].values()) or info["path"] in held:
+            continue
+        if unread := _not_read(ignored):
+            said.append(f"{info['path']}: {unread}")
+        elif info["skipped_blocks"]:
+            said.append(f"{info['path']}: no record decoded ({info['skipped_blocks']} block(s) skipped; "
+                        "'msdc stats' lists them)")
+        else:
+            said.append(f"{info['path']}: no CAT021 or CAT048 record in it")
+    return said
+
+
+def _unread_of(loaded: Loaded) -> list[dict[int, int]]:
+    """Loaded.unread, or no block for each input when the load did not say (a dataset's)."""
+    return loaded.unread if len(loaded.unread) == len(loaded.inputs) else [{} for _ in loaded.inputs]
+
+
+def _not_read(held: dict[int, int]) -> str:
+    """What an input holds of categories the command does not read (``held``: blocks per category, as
+    Loaded.unread), 'it holds CAT001 (4,000 blocks) and CAT002 (4,000 blocks), which ...', or '': a radar's
+    CAT001 plots or a tracker's CAT062 tracks given where CAT048 and CAT021 are read should not look like an
+    empty file."""
+    if not held:
+        return ""
+    parts = [f"CAT{c:03d} ({n:,} block{'' if n == 1 else 's'})" for c, n in held.items()]
+    listed = parts[0] if len(parts) == 1 else ", ".join(parts[:-1]) + " and " + parts[-1]
+    decoded = [c for c in held if c in REGISTRY]
+    how = (" ('msdc decode' and 'msdc stats' decode "
+           f"{'them' if len(decoded) == len(held) else ', '.join(f'CAT{c:03d}' for c in decoded)})"
+           if decoded else " (categories msdc does not decode)")
+    return f"it holds {listed}, which this command does not read{how}"
 
 
 def _wrong_editions(loaded: Loaded, but: list[int] | tuple[int, ...] = ()) -> list[str]:

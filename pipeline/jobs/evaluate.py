@@ -34,6 +34,7 @@ from msdc.pipeline.jobs.common import (
     spare_inputs,
     tracked_reports,
     undated_warning,
+    unread_inputs,
 )
 from msdc.pipeline.jobs.options import EvaluateOptions, OptionError, check_declared
 from msdc.pipeline.model.load import Loaded
@@ -150,10 +151,11 @@ class EvaluateResult:
     warnings: list[str] = field(default_factory=list)
 
 
-def _under_test(meas: pd.DataFrame, preset, tests: tuple, trackers: list[str] = ()
+def _under_test(meas: pd.DataFrame, preset, tests: tuple, trackers: list[str] = (), unread: str = ""
                 ) -> tuple[list[tuple[str, str]], list[str]]:
     """The (sensor id, kind) pairs to judge: those of a kind the preset applies to (the measurements'
-    sensors and the CAT062 ``trackers``), narrowed by --test."""
+    sensors and the CAT062 ``trackers``), narrowed by --test; ``unread`` ends the error when none is
+    (unread_inputs: inputs of categories the command does not read)."""
     from msdc.pipeline.evaluate.sensor_reports import judged_by
     from msdc.pipeline.model.report_selection import sensor_parts
     from msdc.pipeline.model.schema import first_rows
@@ -180,7 +182,7 @@ def _under_test(meas: pd.DataFrame, preset, tests: tuple, trackers: list[str] = 
     if not fits:
         raise JobError(f"no sensor in the inputs is of a kind the preset {preset.name} applies to "
                        f"({', '.join(preset.sensor_types)}); present: "
-                       f"{', '.join(f'{s} ({k})' for s, k in present) or 'none'}")
+                       f"{', '.join(f'{s} ({k})' for s, k in present) or 'none'}{unread}")
     left = [f"{s} ({k})" for s, k in present if (s, k) not in fits]
     if left:
         notes.append(f"not judged by {preset.name}: {', '.join(left)} (they still build the reference)")
@@ -460,7 +462,7 @@ def _evaluate_window(options: EvaluateOptions, checked: EvaluateChecked, progres
     if meas.empty:
         raise JobError("no report in the inputs to evaluate")
     trackers = tracker_ids(loaded.frames.get(TRACKER_CATEGORY)) if wants_tracks else []
-    tests, notes = _under_test(meas, checked.preset, checked.tests, trackers)
+    tests, notes = _under_test(meas, checked.preset, checked.tests, trackers, unread_inputs(loaded))
     builders = tracked_reports(meas, options.max_coast_s)
     epoch = midnight(meas["time"])
     external = _external(options, epoch)

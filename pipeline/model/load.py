@@ -47,6 +47,9 @@ class Loaded:
     # the reports cut beyond the window's margin before the measurements were finished (report_selection.
     # MarginCut), None when no time window was given
     cut: object | None = None
+    # per input (as ``inputs``): blocks per category of the file that the load did not decode (a CAT001
+    # radar's plots given to a command reading CAT048), {} for a dataset's input
+    unread: list[dict[int, int]] = field(default_factory=list)
 
     @property
     def errors(self) -> pd.DataFrame:
@@ -135,6 +138,7 @@ def load(paths: list[str | Path] | str | Path, *, editions=None, date=None, form
     paths = input_paths(paths)
     recs: list[Recording] = []
     inputs: list[dict] = []
+    unread: list[dict[int, int]] = []
     warnings: list[str] = []
     digests = _digests(paths)
     labels = file_labels(paths)
@@ -153,10 +157,11 @@ def load(paths: list[str | Path] | str | Path, *, editions=None, date=None, form
         inputs.append({"path": str(p), "sha256": digests[i], "bytes": rec.size_bytes, "format": rec.format,
                        "records": {int(c): len(f) for c, f in rec.frames.items()},
                        "skipped_blocks": len(rec.errors), "editions": dict(rec.editions)})
+        unread.append(dict(sorted((int(c), int(n)) for c, n in rec.ignored_blocks.items())))
     dates = [r.date for r in recs if r.date is not None]
     first = min(dates) if dates else None
     frames, spans = _joined(recs, labels, first)
-    return Loaded(frames, recs, inputs, first, spans, warnings=warnings)
+    return Loaded(frames, recs, inputs, first, spans, warnings=warnings, unread=unread)
 
 
 def _joined(recs: list[Recording], labels: list[str], date: dt.date | None
@@ -283,6 +288,7 @@ def load_measurements(paths: list[str | Path], sensors: pd.DataFrame, *, edition
 
     recs: list[Recording] = []
     inputs: list[dict] = []
+    unread: list[dict[int, int]] = []  # Loaded.unread
     off_earth: list[pd.DataFrame] = []  # the CAT021 reports with a position off the Earth (damaged bytes)
     spans: list[dict[str, Span]] = []
     dates: list[dt.date | None] = []
@@ -306,6 +312,7 @@ def load_measurements(paths: list[str | Path], sensors: pd.DataFrame, *, edition
             progress.step(f"{p.name} ({i + 1}/{len(paths)})")
         info = {"path": str(p), "sha256": digests[i], "bytes": 0, "format": None, "records": {},
                 "skipped_blocks": 0, "editions": {}}
+        ignored: dict[int, int] = {}
         by_source: dict[str, Span] = {}
         first = True
         tally = FirstDayTally()
@@ -325,6 +332,8 @@ def load_measurements(paths: list[str | Path], sensors: pd.DataFrame, *, edition
                 info["records"][int(cat)] = info["records"].get(int(cat), 0) + len(frame)
             info["skipped_blocks"] += len(rec.errors)
             info["editions"].update(rec.editions)
+            for cat, n in rec.ignored_blocks.items():
+                ignored[int(cat)] = ignored.get(int(cat), 0) + int(n)
             # undated records are placed on UNDATED_DAY here and moved to Loaded.date below
             by_source = widen_spans(by_source, time_spans(rec.frames, None))
             frames, rec.frames = rec.frames, {}
@@ -352,6 +361,7 @@ def load_measurements(paths: list[str | Path], sensors: pd.DataFrame, *, edition
         info["records"] = dict(sorted(info["records"].items()))
         info["editions"] = dict(sorted(info["editions"].items()))
         inputs.append(info)
+        unread.append(dict(sorted(ignored.items())))
         spans.append(by_source)
     known = [d for d in dates if d is not None]
     first_date = min(known) if known else None
@@ -366,7 +376,7 @@ def load_measurements(paths: list[str | Path], sensors: pd.DataFrame, *, edition
     held = {cat for info in inputs for cat, n in info["records"].items() if n}
     absent = [group for group in needs if not held & set(group)]
     if absent and not (either and len(absent) < len(needs)):
-        raise NoRecords(absent[0][0], Loaded({}, recs, inputs, first_date, spans), absent[0])
+        raise NoRecords(absent[0][0], Loaded({}, recs, inputs, first_date, spans, unread=unread), absent[0])
     if timed:  # every row now on its day: the rows an early cut kept pass again untouched
         cut = cut or MarginCut(selection, first_date)
         radar, adsb, local = ([(i, cut.keep(part)) for i, part in group] for group in (radar, adsb, local))
@@ -381,7 +391,8 @@ def load_measurements(paths: list[str | Path], sensors: pd.DataFrame, *, edition
     warnings = early_start + impossible_positions(damaged)
     stray_radar = _stray_table(stray)
     unplaced_table = _unplaced_table(unplaced)
-    return Loaded({}, recs, inputs, first_date, spans, warnings, stray_radar, unplaced_table, cut=cut), meas
+    return Loaded({}, recs, inputs, first_date, spans, warnings, stray_radar, unplaced_table, cut=cut,
+                  unread=unread), meas
 
 
 def _dataset_chunks(dataset, i: int, columns):

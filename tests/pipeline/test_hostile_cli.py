@@ -437,3 +437,30 @@ def test_a_date_nanosecond_timestamps_cannot_hold_is_refused(command, date, tmp_
     assert err.strip() == (f"msdc {command}: --date {date}: outside the days msdc can time (1678-01-01 to "
                            f"2261-12-31: nanosecond UTC timestamps); give the UTC day of the recording")
     assert list(out.iterdir()) == []
+
+
+def test_a_radar_of_categories_the_jobs_do_not_read_is_named(tmp_path, capsys):
+    """An older radar's recording (CAT001 plots between CAT002 north markers) given to correlate, track and
+    evaluate, which take CAT048 plots: correlate said only "no radar (CAT048) records in the inputs" and
+    track that the file held no CAT021 or CAT048 record, as for an empty file. Each now says what the file
+    holds. Blocks by hand: CAT001 I001/010 SAC 20 SIC 1 and I001/020 (FSPEC 0xC0, a plot: TYP 0); CAT002
+    I002/010 and I002/000 message type 1 (north marker)."""
+    plot = bytes([1, 0, 7, 0xC0, 20, 1, 0x20])
+    north = bytes([2, 0, 7, 0xC0, 20, 1, 1])
+    old = tmp_path / "old_radar.ast"
+    old.write_bytes(north + plot + plot + north + plot)
+    holds = (f"{old}: it holds CAT001 (3 blocks) and CAT002 (2 blocks), which this command does not read "
+             "('msdc decode' and 'msdc stats' decode them)")
+    out = tmp_path / "out"
+    out.mkdir()
+    status, _, err = _run(["correlate", old, ADSB, "--sensors", SENSORS, "--all", "--date", "2019-03-01",
+                           "-o", out / "r.xlsx"], capsys)
+    assert status == 1 and f"msdc correlate: no radar (CAT048) records in the inputs\n  {holds}\n" in err
+    status, _, err = _run(["track", old, ADSB, "--all", "-o", out / "t.parquet"], capsys)
+    assert status == 0 and (out / "t.parquet").exists()  # the ADS-B tracks: the warning says the rest
+    assert f"msdc track: warning: {holds}\n" in err and "no CAT021 or CAT048 record" not in err
+    status, _, err = _run(["evaluate", old, ADSB, "--sensors", SENSORS, "--preset", "eurocontrol-1997-ssr",
+                           "--date", "2019-03-01"], capsys)
+    # evaluate reads CAT002 (a radar's north markers give its scan period): only CAT001 is left unread
+    assert status == 1 and (f"present: 021:0/1 (adsb)\n  {old}: it holds CAT001 (3 blocks), which this "
+                            "command does not read") in err
