@@ -118,26 +118,18 @@ def _part_len(buf, pos, end, sp, P, ext_sizes, ext_fx):
     return n if pos + n <= end else np.int64(-1)
 
 
-# What walk_records asks of each record's FSPEC besides walking exactly: nothing; that it sets FRN 1 (the data
-# source identifier, I0xx/010, mandatory in every category); that, and one source for the whole block.
-ANY_RECORD = 0
-SOURCED = 1
-ONE_SOURCE = 2
-
-
 @njit(cache=True, nogil=True)
 def walks(buf, q, n, p0, n_frn, parts):
     """True when the block at q (LEN n) walks record by record exactly to its end under the layout whose
     parts start at row p0 of parts.P (framing's consistency check; the decode itself is ``scan``)."""
-    return walk_records(buf, q, n, p0, n_frn, parts, ANY_RECORD) > 0
+    return walk_records(buf, q, n, p0, n_frn, parts, False) > 0
 
 
 @njit(cache=True, nogil=True, inline="always")
-def walk_records(buf, q, n, p0, n_frn, parts, sources):
+def walk_records(buf, q, n, p0, n_frn, parts, one_source):
     """The records of the block at q (LEN n) when it walks exactly to its end under the layout whose parts
-    start at row p0 of parts.P, else -1; with ``sources`` SOURCED, -1 too unless every record's FSPEC sets
-    FRN 1 (the data source identifier, I0xx/010, in every category), ONE_SOURCE with the first record's two
-    bytes there.
+    start at row p0 of parts.P, else -1; with ``one_source``, -1 too unless every record's FSPEC sets FRN 1
+    (the data source identifier, I0xx/010, in every category) with the first record's two bytes there.
     Inlined, so ``walks`` passes a constant and pays nothing for the check (called, framing damaged
     recordings took 12-19 % longer)."""
     P, ext_sizes, ext_fx, sub_parts = parts
@@ -157,15 +149,14 @@ def walk_records(buf, q, n, p0, n_frn, parts, sources):
             if buf[pos - 1] & 1 == 0:
                 break
         fs_end = pos
-        if sources != ANY_RECORD:
+        if one_source:
             if buf[fs] & 0x80 == 0 or pos + 2 > end:
                 return -1
-            if sources == ONE_SOURCE:
-                here = (np.int64(buf[pos]) << 8) | buf[pos + 1]
-                if source < 0:
-                    source = here
-                elif here != source:
-                    return -1
+            here = (np.int64(buf[pos]) << 8) | buf[pos + 1]
+            if source < 0:
+                source = here
+            elif here != source:
+                return -1
         records += 1
         any_item = False
         for fq in range(fs, fs_end):
@@ -289,11 +280,12 @@ def _walks_at(buf, x, n, c, framing, memo):
 
 @njit(cache=True, nogil=True, inline="always")
 def _sourced(buf, x, n, c, framing):
-    """Every record of the walking block at x sets FRN 1, the data source identifier (I0xx/010, mandatory in
-    every category): what makes a walking block evidence where chance alone would do (bytes of other data
-    read as a short CAT010 or CAT020 block walk now and then; each record naming a source halves that)."""
+    """Every record of the walking block at x names one data source (I0xx/010, FRN 1 of every category and
+    mandatory in each), as a sensor's block does: what makes a walking block evidence where chance alone
+    would do (bytes of other data read as a short CAT010 or CAT020 block walk now and then; each record
+    naming a source halves that, naming the first one's makes it 1 in 65,536)."""
     base, nfrn, parts = framing
-    return walk_records(buf, x, n, base[c], nfrn[c], parts, SOURCED) > 0
+    return walk_records(buf, x, n, base[c], nfrn[c], parts, True) > 0
 
 
 @njit(cache=True, nogil=True, inline="always")
@@ -351,11 +343,11 @@ def _kindred_chain(buf, x, stop, base):
 @njit(cache=True, nogil=True)
 def _anchored(buf, r, stop, seen, framing, memo):
     """The block chain from r holds for LOOKAHEAD blocks (or to the end of the data) and is anchored:
-    one of its blocks is of a decoded category and walks exactly, every record naming a data source
+    one of its blocks is of a decoded category and walks exactly, every record naming one data source
     (_sourced), or all its categories were already met, or it reaches the end in two blocks or more (one
     LEN landing on the end proves little), or it runs on as a chain of few categories not decoded
     (_kindred_chain). Every decoded block in it must walk exactly, but for a chain that meets damage after
-    two blocks or more, one of them walking with its sources: it anchors as a chain that breaks there does
+    two blocks or more, one of them walking with its source: it anchors as a chain that breaks there does
     (real blocks before damage)."""
     base = framing[0]
     x = r
@@ -709,7 +701,7 @@ def _stranded_block(buf, r, m, seen, framing, memo):
     source = _first_source(buf, r, m)
     if source < 0 or not _source_met(seen, c, source) or not _walks_at(buf, r, m, c, framing, memo):
         return False  # the walk through _walks_at: logged, as alike_framings compares the walks logged
-    return walk_records(buf, r, m, base[c], nfrn[c], parts, ONE_SOURCE) >= STRANDED_RECORDS
+    return walk_records(buf, r, m, base[c], nfrn[c], parts, True) >= STRANDED_RECORDS
 
 
 # Framing modes of a payload segment (frame_window's seg_mode).

@@ -1,7 +1,8 @@
 """What counts as evidence when framing resumes after damage in a recording of categories not decoded (a
 tracker's CAT062 blocks, read with the default categories): a chain of such blocks hidden inside a false
 header's LEN is real blocks, whether their category was met or not; a short walking block of a decoded
-category is evidence only when every record names a data source (I0xx/010, mandatory in every category).
+category is evidence only when every record names one data source (I0xx/010, mandatory in every category),
+as a sensor's block does.
 Found by benchmarks/fuzz_undecoded.py (seed 1: 107 records made of track bytes, 258 intact blocks lost over
 200 damaged slices). The streams are built with msdc's encoder; what is expected follows from how they are
 built (the blocks written and where the damage is), not from the decoder."""
@@ -79,6 +80,25 @@ def test_a_short_walking_block_without_data_sources_anchors_nothing(tmp_path):
     assert rec.errors[["offset", "length"]].values.tolist() == [[at, len(damage)]]
 
 
+def test_a_short_walking_block_naming_two_sources_anchors_nothing(tmp_path):
+    """As above, the false header's LEN landing on two records that walk as a CAT020 block, each I020/010
+    alone (FSPEC 0x80), naming 54/212 and 117/0: bytes met in the track messages of the decode benchmark's
+    tracker (its aircraft addresses are 0x7500xx), what was left of the made-up records of fuzz_undecoded
+    seeds 1 and 2 once every record had to name a source (2 and 6 records). A sensor's block names one
+    source; a block naming two is no evidence, and no CAT020 'report' is made of the damage."""
+    blocks = _tracker_blocks(24, 9)
+    chance = block(20, bytes([0x80, 54, 212]), bytes([0x80, 117, 0]))
+    false = bytes([237]) + (3 + 20).to_bytes(2, "big") + bytes(range(20))
+    damage = false + chance + bytes(50)
+    at = sum(len(b) for b in blocks[:7])
+    path = tmp_path / "tracks.ast"
+    path.write_bytes(b"".join(blocks[:7]) + damage + b"".join(blocks[7:]))
+    rec = _read(path)
+    assert not any(len(f) for f in rec.frames.values()), {c: len(f) for c, f in rec.frames.items()}
+    assert rec.ignored_blocks == {62: 24}
+    assert rec.errors[["offset", "length"]].values.tolist() == [[at, len(damage)]]
+
+
 def test_a_damaged_recording_whose_records_lack_the_data_source_still_decodes(tmp_path):
     """The other side of the rule: a CAT048 recording whose records carry no I048/010 (FSPEC 0x40: the
     time of day alone; not as the standard asks, as a simulator may write it), 500 random bytes inserted
@@ -102,3 +122,34 @@ def test_a_damaged_recording_whose_records_lack_the_data_source_still_decodes(tm
     got = rec.frames[48]
     assert len(got) == 1200 and got["sac"].isna().all()
     assert np.array_equal(got["time_of_day"].to_numpy(), np.arange(1, 1201, dtype=float))
+
+
+def _two_radar_blocks(n: int) -> list[bytes]:
+    """n CAT048 blocks of four plots each, the records naming 20/1 and 20/2 in turn (a block of two sources:
+    not what a radar sends, but nothing forbids it); I048/010 and I048/040 (FSPEC 0x90), RHO 10 + i/256
+    NM."""
+    out = []
+    for i in range(n):
+        body = b"".join(bytes([0x90, 20, 1 + k % 2, 10, i % 256, 0x40, k]) for k in range(4))
+        out.append(bytes([48]) + (3 + len(body)).to_bytes(2, "big") + body)
+    return out
+
+
+def test_blocks_naming_two_sources_still_frame_after_damage(tmp_path):
+    """Blocks whose records name two sources are no evidence, but no damage either: 400 of them with 500
+    random bytes inserted before the first, after the 200th or before the last, and with a false header
+    (category 162) whose LEN swallows five of them, decode every plot, the inserted bytes the errors."""
+    blocks = _two_radar_blocks(400)
+    junk = np.random.default_rng(3).integers(0, 256, 500, dtype=np.uint8).tobytes()
+    path = tmp_path / "radar.ast"
+    for at in (0, 200, 399):
+        path.write_bytes(b"".join(blocks[:at]) + junk + b"".join(blocks[at:]))
+        rec = _read(path)
+        assert len(rec.frames[48]) == 1600, at
+        assert rec.errors[["offset", "length"]].values.tolist() == [[31 * at, 500]], at
+    swallowed = sum(len(b) for b in blocks[200:205])
+    false = bytes([162]) + (8 + swallowed).to_bytes(2, "big") + bytes(5)
+    path.write_bytes(b"".join(blocks[:200]) + false + b"".join(blocks[200:]) + blocks[0][:10])
+    rec = _read(path)
+    assert len(rec.frames[48]) == 1600
+    assert rec.errors[["offset", "length"]].values.tolist() == [[31 * 200, 8], [31 * 400 + 8, 10]]

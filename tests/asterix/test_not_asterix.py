@@ -35,8 +35,8 @@ def random_bytes(n: int, seed: int = 25) -> bytes:
 def test_random_bytes_are_not_asterix(tmp_path, capsys):
     """1 MB of random bytes decoded to a hundred CAT021 'records' (latitude 99, longitude 196), exit 0.
     Now: not ASTERIX, said at once with the share and offsets; decode writes nothing (exit 1), nor with
-    --lenient, for none of it decodes: a chance block that walks is evidence only when every record names a
-    data source (I0xx/010, mandatory in every category); stats says it and decodes nothing from it."""
+    --lenient, for none of it decodes: a chance block that walks is evidence only when every record names
+    one data source (I0xx/010, mandatory in every category); stats says it and decodes nothing from it."""
     path = write(tmp_path, "random.bin", random_bytes(1_000_000))
     with pytest.warns(asterix.ContentWarning, match="random.bin is not ASTERIX: read as raw, 100% of its "
                                                     "1000000 bytes frame into no data block that decodes"):
