@@ -13,6 +13,7 @@ import warnings
 from pathlib import Path
 
 import numpy as np
+import pytest
 from asterix_bytes import block
 from live_bytes import raw_blocks
 
@@ -59,40 +60,30 @@ def test_a_false_header_does_not_swallow_a_trackers_blocks_not_met_yet(tmp_path)
     assert rec.ignored_blocks == {62: 39}
 
 
-def test_a_short_walking_block_without_data_sources_anchors_nothing(tmp_path):
+# Bytes that walk as a short block of a decoded category: three CAT010 records with no I010/010 (FSPEC 0x40:
+# I010/000 message type alone); two CAT020 records, each I020/010 alone (FSPEC 0x80), naming 54/212 and
+# 117/0, bytes met in the decode benchmark's track messages (its aircraft addresses are 0x7500xx): what was
+# left of the made-up records of fuzz_undecoded seeds 1 and 2 once every record had to name a source.
+CHANCE_BLOCKS = {"no data source": bytes([10, 0, 9, 0x40, 1, 0x40, 1, 0x40, 1]),
+                 "two data sources": bytes([20, 0, 9, 0x80, 54, 212, 0x80, 117, 0])}
+
+
+@pytest.mark.parametrize("kind", list(CHANCE_BLOCKS))
+def test_a_short_walking_block_not_naming_one_source_anchors_nothing(tmp_path, kind):
     """Damage between two blocks of a tracker's recording: bytes that read as a header of a category met
-    nowhere (CAT237) whose LEN lands on three records that walk as a CAT010 block with no I010/010 (FSPEC
-    0x40: I010/000 message type alone), then zeros to the next real block. Before, that chain of two
-    anchored framing: three CAT010 'reports' made of damage. The data source is mandatory in every record
-    of every category, so a walking block without it is no evidence; the inserted bytes are the error and
-    every real block is stepped over."""
+    nowhere (CAT237) whose LEN lands on a short walking block (CHANCE_BLOCKS), then zeros to the next real
+    block. Before, that chain of two anchored framing: CAT010 or CAT020 'reports' made of damage. The data
+    source is mandatory in every record of every category, and a sensor's block names its own: a walking
+    block whose records do not name one source is no evidence; the inserted bytes are the error and every
+    real block is stepped over."""
+    chance = CHANCE_BLOCKS[kind]
+    assert chance[:3] == block(chance[0], chance[3:])[:3]  # the header's LEN counts the records given
     blocks = _tracker_blocks(24, 5)
-    chance = block(10, *([bytes([0x40, 1])] * 3))
-    assert chance == bytes([10, 0, 9, 0x40, 1, 0x40, 1, 0x40, 1])
     false = bytes([237]) + (3 + 20).to_bytes(2, "big") + bytes(range(20))
     damage = false + chance + bytes(50)
     at = sum(len(b) for b in blocks[:11])
     path = tmp_path / "tracks.ast"
     path.write_bytes(b"".join(blocks[:11]) + damage + b"".join(blocks[11:]))
-    rec = _read(path)
-    assert not any(len(f) for f in rec.frames.values()), {c: len(f) for c, f in rec.frames.items()}
-    assert rec.ignored_blocks == {62: 24}
-    assert rec.errors[["offset", "length"]].values.tolist() == [[at, len(damage)]]
-
-
-def test_a_short_walking_block_naming_two_sources_anchors_nothing(tmp_path):
-    """As above, the false header's LEN landing on two records that walk as a CAT020 block, each I020/010
-    alone (FSPEC 0x80), naming 54/212 and 117/0: bytes met in the track messages of the decode benchmark's
-    tracker (its aircraft addresses are 0x7500xx), what was left of the made-up records of fuzz_undecoded
-    seeds 1 and 2 once every record had to name a source (2 and 6 records). A sensor's block names one
-    source; a block naming two is no evidence, and no CAT020 'report' is made of the damage."""
-    blocks = _tracker_blocks(24, 9)
-    chance = block(20, bytes([0x80, 54, 212]), bytes([0x80, 117, 0]))
-    false = bytes([237]) + (3 + 20).to_bytes(2, "big") + bytes(range(20))
-    damage = false + chance + bytes(50)
-    at = sum(len(b) for b in blocks[:7])
-    path = tmp_path / "tracks.ast"
-    path.write_bytes(b"".join(blocks[:7]) + damage + b"".join(blocks[7:]))
     rec = _read(path)
     assert not any(len(f) for f in rec.frames.values()), {c: len(f) for c, f in rec.frames.items()}
     assert rec.ignored_blocks == {62: 24}
