@@ -144,3 +144,31 @@ def test_blocks_naming_two_sources_still_frame_after_damage(tmp_path):
     rec = _read(path)
     assert len(rec.frames[48]) == 1600
     assert rec.errors[["offset", "length"]].values.tolist() == [[31 * 200, 8], [31 * 400 + 8, 10]]
+
+
+def test_a_real_block_hiding_chance_headers_that_jump_onto_later_blocks_is_kept(tmp_path):
+    """A tracker's block right after damage (5 zeros after the 15th block) whose last record (I062/SP, FRN
+    35) holds bytes that read as a header of CAT182 (LEN 16) and then one of CAT115 whose LEN jumps to the
+    start of a real block four blocks later: a chain of three categories not decoded that runs on over the
+    eleven real blocks after it. Such chance headers lie inside 2,051 of the decode benchmark's 40,000 CAT062 blocks; only
+    two of the chain's blocks are inside this one, and the real blocks a false LEN swallows are four or
+    more, so the block is kept where framing resumes (the first version of the rule took it for a false
+    header and lost it)."""
+    blocks = _tracker_blocks(30, 7)
+    zeros, k = 5, 15
+    start = sum(len(b) for b in blocks[:k]) + zeros  # where the block after the damage starts
+    grown = len(blocks[k]) + 8 + 40  # the SP record: FSPEC 0x81 01 01 01 02, I062/010, length byte, 40
+    first = start + len(blocks[k]) + 8  # the chance headers, at the start of the SP data
+    target = start + grown + sum(len(b) for b in blocks[k + 1:k + 4])  # the start of the 4th block after
+    sp = bytes([182, 0, 16]) + bytes(13) + bytes([115]) + (target - (first + 16)).to_bytes(2, "big")
+    sp += bytes(40 - len(sp))
+    body = blocks[k][3:] + bytes([0x81, 1, 1, 1, 0x02, 9, 9, 1 + len(sp)]) + sp
+    blocks[k] = bytes([62]) + (3 + len(body)).to_bytes(2, "big") + body
+    assert len(blocks[k]) == grown
+    path = tmp_path / "tracks.ast"
+    path.write_bytes(b"".join(blocks[:k]) + bytes(zeros) + b"".join(blocks[k:]))
+    rec = _read(path)
+    assert not any(len(f) for f in rec.frames.values())
+    assert rec.errors[["offset", "length"]].values.tolist() == [[start - zeros, zeros]]
+    assert rec.ignored_blocks == {62: 30}
+    assert len(_read(path, categories=[62]).frames[62]) == 30 * RECORDS_PER_BLOCK + 1
