@@ -315,47 +315,30 @@ def _kindred_chain(buf, x, stop, base):
     messages, a tracker's CAT062 tracks with its CAT063 and CAT065 status) anchors before any of its
     categories is met. Chance headers name 255 categories: twelve in a row among three are never met by
     chance (each after the third has a chance of 3/256)."""
-    a = np.int64(-1)  # the chain's categories, in the order met
-    b = np.int64(-1)
-    d = np.int64(-1)
-    k = 0
-    while k < KINDRED:
-        n = _header(buf, x, stop)
-        if n < 0:
-            return False
-        c = np.int64(buf[x])
-        if base[c] >= 0:
-            return False
-        if c != a and c != b and c != d:
-            if a < 0:
-                a = c
-            elif b < 0:
-                b = c
-            elif d < 0:
-                d = c
-            else:
-                return False
-        x += n
-        k += 1
-    return True
+    return _kindred_from(buf, x, x, stop, base, 0)
 
 
 @njit(cache=True, nogil=True, inline="always")
 def _kindred_inside(buf, r, end, stop, base):
-    """The chain from r, inside a block that ends at ``end``, holds KINDRED blocks of at most three categories
-    not decoded (_kindred_chain, counting those past ``end``), LOOKAHEAD of them or more starting before
-    ``end``: real blocks that the block's false LEN swallows, landing on one of them or inside one. Chance
-    headers inside real blocks chain by short hops (small 16-bit values are common in track messages) and
-    then jump onto a later real block now and then: such a kindred chain with two blocks inside was found
-    in 2,051 of the decode benchmark's 40,000 CAT062 blocks, with three in 3, with four in none (nor in its
-    80,000 CAT001 and CAT002 blocks or 40,000 CAT063 blocks)."""
+    """A kindred chain (_kindred_chain) from r, inside a block that ends at ``end``, LOOKAHEAD of its blocks
+    or more starting before ``end``: real blocks that the block's false LEN swallows, landing on one of
+    them or inside one. Chance headers inside real blocks chain by short hops (small 16-bit values are
+    common in track messages) and then jump onto a later real block now and then: such a kindred chain with
+    two blocks inside was found in 2,051 of the decode benchmark's 40,000 CAT062 blocks, with three in 3,
+    with four in none (nor in its 80,000 CAT001 and CAT002 blocks or 40,000 CAT063 blocks)."""
+    return _kindred_from(buf, r, end, stop, base, LOOKAHEAD)
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _kindred_from(buf, x, end, stop, base, inside):
+    """The chain from x holds KINDRED blocks of at most three categories not walked, ``inside`` of them at
+    least starting before ``end``."""
     a = np.int64(-1)  # the chain's categories, in the order met
     b = np.int64(-1)
     d = np.int64(-1)
     k = 0
-    x = r
     while k < KINDRED:
-        if x >= end and k < LOOKAHEAD:
+        if x >= end and k < inside:
             return False
         n = _header(buf, x, stop)
         if n < 0:
