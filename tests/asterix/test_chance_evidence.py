@@ -150,10 +150,10 @@ def test_a_real_block_hiding_chance_headers_that_jump_onto_later_blocks_is_kept(
     """A tracker's block right after damage (5 zeros after the 15th block) whose last record (I062/SP, FRN
     35) holds bytes that read as a header of CAT182 (LEN 16) and then one of CAT115 whose LEN jumps to the
     start of a real block four blocks later: a chain of three categories not decoded that runs on over the
-    eleven real blocks after it. Such chance headers lie inside 2,051 of the decode benchmark's 40,000 CAT062 blocks; only
-    two of the chain's blocks are inside this one, and the real blocks a false LEN swallows are four or
-    more, so the block is kept where framing resumes (the first version of the rule took it for a false
-    header and lost it)."""
+    eleven real blocks after it. Such chance headers lie inside 2,051 of the decode benchmark's 40,000
+    CAT062 blocks; only two of the chain's blocks are inside this one, and the real blocks a false LEN
+    swallows are four or more, so the block is kept where framing resumes (the first version of the rule
+    took it for a false header and lost it)."""
     blocks = _tracker_blocks(30, 7)
     zeros, k = 5, 15
     start = sum(len(b) for b in blocks[:k]) + zeros  # where the block after the damage starts
