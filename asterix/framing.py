@@ -67,9 +67,7 @@ def segment_modes(buf: np.ndarray, seg: Segments, tables: kernel.Framing,
             release_pages(buf, at, q)
             if progress:
                 progress(q, total, "checking the block chain")
-        if status == 1 and not kernel.hides_real(sources):
-            modes[s] = kernel.MODE_CHAIN
-        kernel.clear_hidden(sources)
+        modes[s] = kernel.settled_mode(status, sources)
     return modes
 
 

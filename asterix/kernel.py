@@ -1052,11 +1052,18 @@ def segment_modes(buf, seg_start, seg_stop, exact, careful, framing) -> np.ndarr
     modes = np.full(len(seg_start), MODE_CAREFUL, np.int8)
     sources = new_chain_sources()
     for s, (a, b) in enumerate(zip(seg_start, seg_stop, strict=True)):
-        held = chain_step(buf, int(a), int(b), framing, int(a), NO_LIMIT, sources)[1] == 1
-        if held and not hides_real(sources):
-            modes[s] = MODE_CHAIN
-        clear_hidden(sources)
+        _, status = chain_step(buf, int(a), int(b), framing, int(a), NO_LIMIT, sources)
+        modes[s] = settled_mode(status, sources)
     return modes
+
+
+def settled_mode(status: int, sources: np.ndarray) -> int:
+    """A raw segment's mode once chain_step has finished with it (``status`` 1 or 2): MODE_CHAIN when its
+    chain runs to the end hiding no real block (hides_real), else MODE_CAREFUL; its hidden blocks' sources
+    are then forgotten for the next segment (clear_hidden)."""
+    mode = MODE_CHAIN if status == 1 and not hides_real(sources) else MODE_CAREFUL
+    clear_hidden(sources)
+    return mode
 
 
 def frame_blocks(buf, seg_start, seg_stop, exact, careful, framing):
