@@ -114,7 +114,7 @@ def groups(buf: np.ndarray, rec_off: np.ndarray, rel_off: np.ndarray, rel_len: n
            ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Every repetition of the item in every record, in wire order: record index, 56-bit MB (uint64) and
     BDS1/BDS2 byte. The walker has checked the item's length (1 + 8 x count) against the record."""
-    present = np.flatnonzero(rel_off != 0xFFFF)
+    present = np.flatnonzero(rel_len != 0)
     start = rec_off[present].astype(np.int64) + rel_off[present].astype(np.int64)
     count = (rel_len[present].astype(np.int64) - 1) // GROUP_BYTES
     rec = np.repeat(present, count)

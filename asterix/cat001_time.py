@@ -173,11 +173,10 @@ def _service_times(buf: np.ndarray, starts: np.ndarray, lens: np.ndarray, editio
     lay = compile_layout(SERVICE_CATEGORY, edition, ("time_of_day",))
     cap = int(lens.sum()) // 2 + 1  # a record is at least 2 bytes (an FSPEC and a one-byte item)
     slots = max(lay.n_slots, 1)
-    rel_off = np.full((cap, slots), 0xFFFF, np.uint16)
-    rel_len = np.zeros((cap, slots), np.uint16)
+    rel_off, rel_len = np.empty((cap, slots), np.uint16), np.zeros((cap, slots), np.uint16)
     rec_off, rec_blk = np.empty(cap, np.int64), np.empty(cap, np.int64)
     n = kernel.scan(buf, starts, lens, lay.parts, lay.n_frn, lay.n_slots, rel_off, rel_len, rec_off,
-                    rec_blk)[2]
+                    rec_blk, np.zeros(slots, np.uint8))[2]
     assert n >= 0, "record arrays sized for the smallest records"
     fl = np.full((len(lay.out_names_float), n), np.nan)
     it = np.full((len(lay.out_names_int), n), -1, np.int32)

@@ -127,7 +127,7 @@ def code_list_column(buf: np.ndarray, rec_off: np.ndarray, rel_off: np.ndarray, 
     joined by ',' ('3', '1,3'); <NA> where the record lacks the item. Each distinct item is read once."""
     n = rec_off.shape[0]
     codes = np.full(n, -1, np.int64)
-    present = np.flatnonzero(rel_off != 0xFFFF)
+    present = np.flatnonzero(rel_len != 0)
     labels: list[str] = []
     if len(present):
         lens = rel_len[present].astype(np.int64)

@@ -1091,13 +1091,16 @@ def _grow4(a, b, c, d):
 
 
 @njit(cache=True, nogil=True)
-def scan(buf, blk_start, blk_len, parts, n_frn, n_slots, rel_off, rel_len, rec_off, rec_blk):
+def scan(buf, blk_start, blk_len, parts, n_frn, n_slots, rel_off, rel_len, rec_off, rec_blk, carried):
     """Walk every block record by record, all or nothing per block, in one pass.
 
     Returns counts (records per block, or minus an error code), fail_at (where a bad walk
     failed) and n, the records of good blocks written to the caller's arrays: where each part
-    lies (rel_off/rel_len rows, offset from the record start and length; rel_off must come filled
-    with 0xFFFF), record offsets and block indices. n is -1 when the arrays are too small.
+    lies (rel_off/rel_len rows, offset from the record start and length; rel_len must come filled
+    with 0, a part's absence, and rel_off is only read where rel_len is not 0), record offsets and
+    block indices; carried[s] is set for every slot a walked record set, kept or not (exact when
+    every block is good). n is -1 when the arrays are too small. Parts are written into the
+    record's row as they are walked (a row per record and a loop over all slots cost more).
     The caller allocates (numpy's allocator reuses huge pages; page faults cost more than the walk),
     and the walk is written out in one body: calls passing arrays cost more than the walk itself.
     """
@@ -1106,8 +1109,6 @@ def scan(buf, blk_start, blk_len, parts, n_frn, n_slots, rel_off, rel_len, rec_o
     counts = np.zeros(nblk, np.int64)
     fail_at = np.full(nblk, -1, np.int64)
     cap = rec_off.shape[0]
-    part_off = np.empty(max(n_slots, 1), np.int64)
-    part_len = np.empty(max(n_slots, 1), np.int64)
     work = np.empty(64, np.int64)
     i = 0
     for b in range(nblk):
@@ -1119,8 +1120,8 @@ def scan(buf, blk_start, blk_len, parts, n_frn, n_slots, rel_off, rel_len, rec_o
         while pos < end and err == 0:
             rec_start = pos
             base = 0  # FRN rows of the record's UAP: block 0 until a selector chooses (K_SEL_*)
-            for s in range(n_slots):
-                part_off[s] = -1
+            if i == cap:
+                return counts, fail_at, -1
             fs = pos
             while True:
                 if pos >= end:
@@ -1153,8 +1154,9 @@ def scan(buf, blk_start, blk_len, parts, n_frn, n_slots, rel_off, rel_len, rec_o
                             break
                         s = P[p, K_SLOT]
                         if s >= 0:
-                            part_off[s] = pos
-                            part_len[s] = n
+                            rel_off[i, s] = pos - rec_start
+                            rel_len[i, s] = n
+                            carried[s] = 1
                         pos += n
                         continue
                     item_start = pos
@@ -1241,15 +1243,17 @@ def scan(buf, blk_start, blk_len, parts, n_frn, n_slots, rel_off, rel_len, rec_o
                             break
                         s = P[sp, K_SLOT]
                         if s >= 0:
-                            part_off[s] = pos
-                            part_len[s] = n
+                            rel_off[i, s] = pos - rec_start
+                            rel_len[i, s] = n
+                            carried[s] = 1
                         pos += n
                     if err:
                         break
                     s = P[p, K_SLOT]
                     if s >= 0:
-                        part_off[s] = item_start
-                        part_len[s] = pos - item_start
+                        rel_off[i, s] = item_start - rec_start
+                        rel_len[i, s] = pos - item_start
+                        carried[s] = 1
                     if P[p, K_SEL_MASK] != 0:  # the record's UAP: by the selector field's value
                         v = np.int64(buf[item_start + P[p, K_SEL_BYTE]]) >> P[p, K_SEL_SHIFT]
                         base = ((v & P[p, K_SEL_MASK]) + 1) * n_frn
@@ -1261,20 +1265,13 @@ def scan(buf, blk_start, blk_len, parts, n_frn, n_slots, rel_off, rel_len, rec_o
                 fail_at[b] = rec_start
                 break
             nrec += 1
-            if i == cap:
-                return counts, fail_at, -1
             rec_off[i] = rec_start
             rec_blk[i] = b
-            for sl in range(n_slots):
-                if part_off[sl] >= 0:
-                    rel_off[i, sl] = part_off[sl] - rec_start
-                    rel_len[i, sl] = part_len[sl]
             i += 1
         if err or nrec == 0:
             # all or nothing: forget this block's records
-            for j in range(first_i, i):
+            for j in range(first_i, min(i + 1, cap)):
                 for sl in range(n_slots):
-                    rel_off[j, sl] = 0xFFFF
                     rel_len[j, sl] = 0
             i = first_i
             counts[b] = -err if err else -E_EMPTY_BLOCK
@@ -1311,9 +1308,9 @@ def gather(buf, rec_off, rel_off, rel_len, F, f_mult, fl, it, wd):
             skip = bit0 >> 3
             fallback = F[f, 6]
             for i in range(c0, c1):
-                r = rel_off[i, sl]
-                if r == 0xFFFF or rel_len[i, sl] < need:
+                if rel_len[i, sl] < need:  # absent (0) or too short
                     continue
+                r = rel_off[i, sl]
                 if fallback:
                     if kind == 1:
                         if not np.isnan(fl[o, i]):

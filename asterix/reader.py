@@ -221,10 +221,9 @@ def _record_guess(buf, starts, lens, lay: Layout) -> int:
     k = k[:max(1, int(np.searchsorted(np.cumsum(lens[k]), SIZE_SAMPLE_BYTES, side="right")))]
     cap = int(lens[k].sum()) // 8 + 16  # records past it: the blocks walked before are enough to judge
     slots = max(lay.n_slots, 1)
-    rel_off = np.full((cap, slots), 0xFFFF, np.uint16)
-    counts, _, _ = kernel.scan(buf, starts[k], lens[k], lay.parts, lay.n_frn, lay.n_slots, rel_off,
-                               np.zeros((cap, slots), np.uint16), np.empty(cap, np.int64),
-                               np.empty(cap, np.int64))
+    counts, _, _ = kernel.scan(buf, starts[k], lens[k], lay.parts, lay.n_frn, lay.n_slots,
+                               np.empty((cap, slots), np.uint16), np.zeros((cap, slots), np.uint16),
+                               np.empty(cap, np.int64), np.empty(cap, np.int64), np.zeros(slots, np.uint8))
     good = counts > 0
     if not good.any():
         return int(lens.sum()) // REGISTRY[lay.category].record_bytes + 16
@@ -234,17 +233,20 @@ def _record_guess(buf, starts, lens, lay: Layout) -> int:
 
 def _scan(buf, starts, lens, lay: Layout):
     """One walk over the blocks: records per block (minus an error code for a bad block), where
-    bad walks failed, and where each part of each good record lies (arrays sized by numpy)."""
+    bad walks failed, where each part of each good record lies (arrays sized by numpy; rel_len 0 where
+    a record lacks the part) and which parts some good record carries."""
     cap = _record_guess(buf, starts, lens, lay)  # doubled until it fits
     slots = max(lay.n_slots, 1)
     while True:
-        rel_off = np.full((cap, slots), 0xFFFF, np.uint16)
-        rel_len = np.zeros((cap, slots), np.uint16)
+        rel_off, rel_len = np.empty((cap, slots), np.uint16), np.zeros((cap, slots), np.uint16)
         rec_off, rec_blk = np.empty(cap, np.int64), np.empty(cap, np.int64)
+        carried = np.zeros(slots, np.uint8)
         counts, fail_at, n = kernel.scan(buf, starts, lens, lay.parts, lay.n_frn, lay.n_slots, rel_off,
-                                         rel_len, rec_off, rec_blk)
+                                         rel_len, rec_off, rec_blk, carried)
         if n >= 0:
-            return counts, fail_at, rel_off, rel_len, rec_off, rec_blk, n
+            if (counts <= 0).any():  # a bad block's records set slots too: only the good ones count
+                carried = (rel_len[:n] != 0).any(axis=0)
+            return counts, fail_at, rel_off, rel_len, rec_off, rec_blk, carried.astype(bool), n
         cap *= 2
 
 
@@ -398,11 +400,10 @@ def _extract(buf, scanned, lay: Layout):
     """Gather every field of the scanned records into column matrices: only the fields of parts some
     record carries, into rows for their columns alone (a wide edition's other columns, absent from every
     record, cost neither a pass nor memory here: ``_columns`` builds them empty)."""
-    _, _, rel_off, rel_len, rec_off, rec_blk, n = scanned
+    _, _, rel_off, rel_len, rec_off, rec_blk, carried, n = scanned
     F, mult = lay.F, lay.f_mult
     if len(F):
-        carried = (rel_off[:n] != 0xFFFF).any(axis=0) if n else np.zeros(rel_off.shape[1], bool)
-        keep = carried[F[:, 0]]
+        keep = carried[F[:, 0]] if n else np.zeros(len(F), bool)
         if not keep.all():
             F, mult = F[keep], mult[keep]
     F = np.array(F, np.int64, copy=True)
