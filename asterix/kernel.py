@@ -1288,13 +1288,13 @@ GATHER_CHUNK = 1024
 
 
 @njit(cache=True, nogil=True)
-def gather(buf, rec_off, rel_off, rel_len, F, f_mult, fl, it, wd):
-    """Fill the caller's column matrices field by field: float64 (LSB-scaled; come filled with NaN),
-    int32 and int64 for fields over 31 bits (come filled with -1). A column fed by several sources
-    takes the first source present (F rows are in source order; later ones are flagged fallbacks)."""
-    n_rec = rec_off.shape[0]
-    for c0 in range(0, n_rec, GATHER_CHUNK):
-        c1 = min(c0 + GATHER_CHUNK, n_rec)
+def gather(buf, rec_off, rel_off, rel_len, F, f_mult, fl, it, wd, start, stop):
+    """Fill columns start..stop of the caller's column matrices field by field: float64 (LSB-scaled; come
+    filled with NaN), int32 and int64 for fields over 31 bits (come filled with -1). A column fed by several
+    sources takes the first source present (F rows are in source order; later ones are flagged fallbacks).
+    Threads may fill disjoint ranges of the same matrices at once."""
+    for c0 in range(start, stop, GATHER_CHUNK):
+        c1 = min(c0 + GATHER_CHUNK, stop)
         for f in range(F.shape[0]):
             sl, bit0, nbits, signed, o, kind = F[f, 0], F[f, 1], F[f, 2], F[f, 3], F[f, 4], F[f, 5]
             lead = bit0 & 7

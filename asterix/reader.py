@@ -14,7 +14,7 @@ from functools import cache, partial
 import numpy as np
 import pandas as pd
 
-from . import bds, kernel, sampling
+from . import bds, kernel, sampling, threads
 from .cat001_time import PLOT_CATEGORY, UNTIMED_COLUMNS, SectorClock, time_cat001, untimed_advice
 from .categories import DECODABLE, MEASUREMENT_CATEGORIES, REGISTRY
 from .columns import FAMILIES
@@ -417,8 +417,9 @@ def _extract(buf, scanned, lay: Layout):
     it = np.full((len(rows[OUT_INT]), n), -1, np.int32)
     fl = np.full((len(rows[OUT_FLOAT]), n), np.nan)
     wd = np.full((len(rows[OUT_WIDE]), n), -1, np.int64)
-    kernel.gather(buf, rec_off[:n], rel_off[:n], rel_len[:n], np.ascontiguousarray(F),
-                  np.ascontiguousarray(mult), fl, it, wd)
+    F, mult = np.ascontiguousarray(F), np.ascontiguousarray(mult)
+    threads.over_ranges(lambda a, b: kernel.gather(buf, rec_off, rel_off, rel_len, F, mult, fl, it, wd, a, b),
+                        n)
     matrices = {OUT_INT: it, OUT_FLOAT: fl, OUT_WIDE: wd}
     where = {names[k][r]: (matrices[k], i) for k in names for i, r in enumerate(rows[k])}
     texts = {name: code_list_column(buf, rec_off[:n], rel_off[:n, s], rel_len[:n, s])
