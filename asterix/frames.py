@@ -60,8 +60,8 @@ def typed_column(col: Column, values: np.ndarray):
         return values
     if col.kind in _FORMATS:
         return _text_column(values, _FORMATS[col.kind])
-    dtype = _INT_DTYPES[col.kind]
-    return pd.arrays.IntegerArray(values.astype(dtype), values < 0)
+    dtype = _INT_DTYPES[col.kind]  # flags come as int8 and ints as int32 rows: kept, not copied
+    return pd.arrays.IntegerArray(values.astype(dtype, copy=False), values < 0)
 
 
 def icao_columns(values: np.ndarray) -> tuple[pd.Categorical, pd.Categorical]:

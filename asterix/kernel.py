@@ -1288,11 +1288,11 @@ GATHER_CHUNK = 1024
 
 
 @njit(cache=True, nogil=True)
-def gather(buf, rec_off, rel_off, rel_len, F, f_mult, fl, it, wd, start, stop):
+def gather(buf, rec_off, rel_off, rel_len, F, f_mult, fl, it, wd, fg, start, stop):
     """Fill columns start..stop of the caller's column matrices field by field: float64 (LSB-scaled; come
-    filled with NaN), int32 and int64 for fields over 31 bits (come filled with -1). A column fed by several
-    sources takes the first source present (F rows are in source order; later ones are flagged fallbacks).
-    Threads may fill disjoint ranges of the same matrices at once."""
+    filled with NaN), int32, int64 for fields over 31 bits and int8 for flags (come filled with -1). A column
+    fed by several sources takes the first source present (F rows are in source order; later ones are
+    flagged fallbacks). Threads may fill disjoint ranges of the same matrices at once."""
     for c0 in range(start, stop, GATHER_CHUNK):
         c1 = min(c0 + GATHER_CHUNK, stop)
         for f in range(F.shape[0]):
@@ -1318,6 +1318,9 @@ def gather(buf, rec_off, rel_off, rel_len, F, f_mult, fl, it, wd, start, stop):
                     elif kind == 0:
                         if it[o, i] >= 0:
                             continue
+                    elif kind == 3:
+                        if fg[o, i] >= 0:
+                            continue
                     elif wd[o, i] >= 0:
                         continue
                 x = rec_off[i] + r + skip
@@ -1338,5 +1341,7 @@ def gather(buf, rec_off, rel_off, rel_len, F, f_mult, fl, it, wd, start, stop):
                     fl[o, i] = v * mult
                 elif kind == 0:
                     it[o, i] = np.int32(v)
+                elif kind == 3:
+                    fg[o, i] = np.int8(v)
                 else:
                     wd[o, i] = v

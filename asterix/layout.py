@@ -17,7 +17,8 @@ from .kernel import ABSENT, COMPOUND, EXPLICIT, EXTENDED, FIXED, REP_COUNT, REP_
 from .tables import load_table, resolve_edition, uaps
 
 # Output kinds of a field.
-OUT_INT, OUT_FLOAT, OUT_WIDE = 0, 1, 2  # int32 matrix, float64 matrix, int64 matrix
+OUT_INT, OUT_FLOAT, OUT_WIDE, OUT_FLAG = 0, 1, 2, 3  # int32, float64, int64 and int8 (flags) matrices
+FLAG_BITS = 7  # the widest field a flag column (int8, -1 absent) holds
 
 
 def fixed_bits(node: dict) -> int | None:
@@ -52,11 +53,12 @@ class Layout:
     f_bits: np.ndarray  # int32 width
     f_signed: np.ndarray  # bool
     f_out: np.ndarray  # int32 output row
-    f_kind: np.ndarray  # int32 OUT_INT / OUT_FLOAT (LSB-scaled) / OUT_WIDE (raw over 31 bits)
+    f_kind: np.ndarray  # int32 OUT_INT / OUT_FLOAT (LSB-scaled) / OUT_WIDE (raw over 31 bits) / OUT_FLAG
     f_mult: np.ndarray  # float64 LSB * column scale
     out_names_float: tuple[str, ...]
     out_names_int: tuple[str, ...]
     out_names_wide: tuple[str, ...]
+    out_names_flag: tuple[str, ...]
     item_frn: dict  # item id -> FRN (1-based; of the first UAP that has it)
     selected: tuple[str, ...] | None = None  # the columns compiled (None: all of the edition's)
     code_slots: tuple[tuple[str, int], ...] = ()  # "codes" columns: (name, slot of their repetitive item)
@@ -317,6 +319,7 @@ def compile_layout(category: int, edition: str | None = None,
     names_float: list[str] = []
     names_int: list[str] = []
     names_wide: list[str] = []
+    names_flag: list[str] = []
     code_slots: list[tuple[str, int]] = []
     bds_slots: list[tuple[str, int, tuple[str, ...]]] = []
     for col in columns:
@@ -331,8 +334,9 @@ def compile_layout(category: int, edition: str | None = None,
                 code_slots.append((col.name, use(p)))
             continue
         is_float = col.kind == "float"
-        out_kind = OUT_FLOAT if is_float else OUT_WIDE if col.kind == "icao" else OUT_INT
-        names = {OUT_FLOAT: names_float, OUT_INT: names_int, OUT_WIDE: names_wide}[out_kind]
+        out_kind = {"float": OUT_FLOAT, "icao": OUT_WIDE, "flag": OUT_FLAG}.get(col.kind, OUT_INT)
+        names = {OUT_FLOAT: names_float, OUT_INT: names_int, OUT_WIDE: names_wide,
+                 OUT_FLAG: names_flag}[out_kind]
         out = len(names)
         names.append(col.name)
         for item_id, path in col.sources:
@@ -357,6 +361,9 @@ def compile_layout(category: int, edition: str | None = None,
             if loc is None:
                 continue
             bit, elem = loc
+            if out_kind == OUT_FLAG and elem["bits"] > FLAG_BITS:
+                raise ValueError(f"CAT{category:03d} {edition} {col.name}: a flag column of {elem['bits']} "
+                                 f"bits (at most {FLAG_BITS})")
             lsb = elem.get("lsb", 1.0) if is_float else 1.0
             fields.append((use(p), bit, elem["bits"], bool(elem.get("signed", False)), out, out_kind,
                            lsb * col.scale))
@@ -374,6 +381,7 @@ def compile_layout(category: int, edition: str | None = None,
         f_signed=np.array(f[3], np.bool_), f_out=np.array(f[4], i32), f_kind=np.array(f[5], i32),
         f_mult=np.array(f[6], np.float64),
         out_names_float=tuple(names_float), out_names_int=tuple(names_int), out_names_wide=tuple(names_wide),
+        out_names_flag=tuple(names_flag),
         item_frn=item_frn, selected=selected, code_slots=tuple(code_slots),
         bds_slots=tuple(bds_slots),
         sel_byte=sel_byte, sel_shift=sel_shift, sel_mask=sel_mask,

@@ -23,7 +23,7 @@ from .errors import REASONS, ContentWarning, DecodeError, EditionWarning, Unread
 from .families import AUTO, edition_families, edition_span, family_name, family_of, with_defaults
 from .frames import code_list_column, empty_columns, frame_of, icao_columns, typed_column
 from .framing import Progress, alike_framings, held, release_pages, segment_modes, survey
-from .layout import OUT_FLOAT, OUT_INT, OUT_WIDE, Layout, compile_layout
+from .layout import OUT_FLAG, OUT_FLOAT, OUT_INT, OUT_WIDE, Layout, compile_layout
 from .plausible import BOUNDS, Implausible, count_implausible, implausible
 from .stretches import Stretch, describe, foreign_spans
 from .tables import available, resolve_edition
@@ -407,7 +407,8 @@ def _extract(buf, scanned, lay: Layout):
         if not keep.all():
             F, mult = F[keep], mult[keep]
     F = np.array(F, np.int64, copy=True)
-    names = {OUT_INT: lay.out_names_int, OUT_FLOAT: lay.out_names_float, OUT_WIDE: lay.out_names_wide}
+    names = {OUT_INT: lay.out_names_int, OUT_FLOAT: lay.out_names_float, OUT_WIDE: lay.out_names_wide,
+             OUT_FLAG: lay.out_names_flag}
     rows = {k: sorted(set(F[F[:, 5] == k, 4].tolist())) for k in names}
     for k in names:  # the kept columns' rows, numbered afresh per output kind
         renumber = np.full(len(names[k]) + 1, -1, np.int64)
@@ -417,10 +418,11 @@ def _extract(buf, scanned, lay: Layout):
     it = np.full((len(rows[OUT_INT]), n), -1, np.int32)
     fl = np.full((len(rows[OUT_FLOAT]), n), np.nan)
     wd = np.full((len(rows[OUT_WIDE]), n), -1, np.int64)
+    fg = np.full((len(rows[OUT_FLAG]), n), -1, np.int8)
     F, mult = np.ascontiguousarray(F), np.ascontiguousarray(mult)
-    threads.over_ranges(lambda a, b: kernel.gather(buf, rec_off, rel_off, rel_len, F, mult, fl, it, wd, a, b),
-                        n)
-    matrices = {OUT_INT: it, OUT_FLOAT: fl, OUT_WIDE: wd}
+    threads.over_ranges(lambda a, b: kernel.gather(buf, rec_off, rel_off, rel_len, F, mult, fl, it, wd, fg, a,
+                                                   b), n)
+    matrices = {OUT_INT: it, OUT_FLOAT: fl, OUT_WIDE: wd, OUT_FLAG: fg}
     where = {names[k][r]: (matrices[k], i) for k in names for i, r in enumerate(rows[k])}
     texts = {name: code_list_column(buf, rec_off[:n], rel_off[:n, s], rel_len[:n, s])
              for name, s in lay.code_slots}
