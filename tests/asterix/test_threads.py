@@ -1,6 +1,6 @@
 """A large decode's records split over threads (asterix/threads.py): the ranges cover every record once, the
-thread count follows the CPUs and OMP_NUM_THREADS, and a decode split into ranges that do not fall on the
-kernel's chunks gives every value the encoder was given."""
+thread count follows the CPUs and OMP_NUM_THREADS, a decode split into ranges that do not fall on the
+kernel's chunks gives every value the encoder was given, and flags (gathered into int8) are at most 7 bits."""
 
 from __future__ import annotations
 
@@ -64,3 +64,15 @@ def test_a_decode_split_over_threads_keeps_every_value(monkeypatch) -> None:
         np.testing.assert_array_equal(got[name].to_numpy(float), truth[name].to_numpy(float), err_msg=name)
     for name in ("track_number", "mon", "spi", "cnf"):
         assert got[name].astype("int64").tolist() == truth[name].tolist(), name
+
+
+def test_a_flag_column_wider_than_its_int8_matrix_is_refused(monkeypatch) -> None:
+    """Flags are gathered into int8 (-1 absent): a table giving a flag column the 8 bits of I048/010 SAC
+    would wrap 200 to -56, so the layout is refused, naming the column and its width."""
+    from msdc.asterix import layout
+    from msdc.asterix.columns.base import Column
+
+    wide = Column("sac", (("010", ("SAC",)),), "flag")
+    monkeypatch.setattr(layout, "columns_for", lambda _cat, _ed: (wide,))
+    with pytest.raises(ValueError, match=r"sac: a flag column of 8 bits \(at most 7\)"):
+        layout.compile_layout.__wrapped__(48, "1.32", None)
