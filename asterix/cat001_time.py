@@ -182,7 +182,7 @@ def _service_times(buf: np.ndarray, starts: np.ndarray, lens: np.ndarray, editio
     it = np.full((len(lay.out_names_int), n), -1, np.int32)
     wd = np.full((len(lay.out_names_wide), n), -1, np.int64)
     fg = np.full((len(lay.out_names_flag), n), -1, np.int8)
-    kernel.gather(buf, rec_off, rel_off, rel_len, lay.F, lay.f_mult, fl, it, wd, fg, 0, n)
+    kernel.gather(buf, rec_off, rel_off, rel_len, lay.F, lay.f_mult, fl, it, wd, fg, 0, n, 0)
     sac, sic = it[lay.out_names_int.index("sac")], it[lay.out_names_int.index("sic")]
     key = np.where((sac >= 0) & (sic >= 0), sac.astype(np.int64) * 256 + sic, -1)
     return rec_off[:n].copy(), key, fl[lay.out_names_float.index("time_of_day")]

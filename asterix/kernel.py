@@ -1288,11 +1288,11 @@ GATHER_CHUNK = 1024
 
 
 @njit(cache=True, nogil=True)
-def gather(buf, rec_off, rel_off, rel_len, F, f_mult, fl, it, wd, fg, start, stop):
-    """Fill columns start..stop of the caller's column matrices field by field: float64 (LSB-scaled; come
-    filled with NaN), int32, int64 for fields over 31 bits and int8 for flags (come filled with -1). A column
-    fed by several sources takes the first source present (F rows are in source order; later ones are
-    flagged fallbacks). Threads may fill disjoint ranges of the same matrices at once."""
+def gather(buf, rec_off, rel_off, rel_len, F, f_mult, fl, it, wd, fg, start, stop, out0):
+    """Fill the caller's column matrices from records start..stop, into their columns start + out0 on, field
+    by field: float64 (LSB-scaled; come filled with NaN), int32, int64 for fields over 31 bits and int8 for
+    flags (come filled with -1). A column fed by several sources takes the first source present (F rows are
+    in source order; later ones are flagged fallbacks). Threads may fill disjoint columns at once."""
     for c0 in range(start, stop, GATHER_CHUNK):
         c1 = min(c0 + GATHER_CHUNK, stop)
         for f in range(F.shape[0]):
@@ -1313,15 +1313,15 @@ def gather(buf, rec_off, rel_off, rel_len, F, f_mult, fl, it, wd, fg, start, sto
                 r = rel_off[i, sl]
                 if fallback:
                     if kind == 1:
-                        if not np.isnan(fl[o, i]):
+                        if not np.isnan(fl[o, i + out0]):
                             continue
                     elif kind == 0:
-                        if it[o, i] >= 0:
+                        if it[o, i + out0] >= 0:
                             continue
                     elif kind == 3:
-                        if fg[o, i] >= 0:
+                        if fg[o, i + out0] >= 0:
                             continue
-                    elif wd[o, i] >= 0:
+                    elif wd[o, i + out0] >= 0:
                         continue
                 x = rec_off[i] + r + skip
                 if nbytes == 1:
@@ -1338,10 +1338,10 @@ def gather(buf, rec_off, rel_off, rel_len, F, f_mult, fl, it, wd, fg, start, sto
                 if kind == 1:
                     if signed and v >= half:
                         v -= full
-                    fl[o, i] = v * mult
+                    fl[o, i + out0] = v * mult
                 elif kind == 0:
-                    it[o, i] = np.int32(v)
+                    it[o, i + out0] = np.int32(v)
                 elif kind == 3:
-                    fg[o, i] = np.int8(v)
+                    fg[o, i + out0] = np.int8(v)
                 else:
-                    wd[o, i] = v
+                    wd[o, i + out0] = v

@@ -231,11 +231,54 @@ def _record_guess(buf, starts, lens, lay: Layout) -> int:
     return int(per_byte * int(lens.sum()) * 1.05) + 16
 
 
-def _scan(buf, starts, lens, lay: Layout):
-    """One walk over the blocks: records per block (minus an error code for a bad block), where
-    bad walks failed, where each part of each good record lies (arrays sized by numpy; rel_len 0 where
-    a record lacks the part) and which parts some good record carries."""
-    cap = _record_guess(buf, starts, lens, lay)  # doubled until it fits
+@dataclass
+class _Piece:
+    """The part table of one group of blocks' good records (rows 0..n), the first of them being record
+    ``first`` of all the groups'."""
+
+    first: int
+    n: int
+    rel_off: np.ndarray
+    rel_len: np.ndarray
+    rec_off: np.ndarray
+
+
+@dataclass
+class _Scanned:
+    """One walk over a category's blocks: records per block (minus an error code for a bad block), where bad
+    walks failed, the good records' offsets and block indices, the parts some good record carries, and
+    where each part of each record lies, in pieces walked side by side (rel_len 0 where a record lacks it)."""
+
+    counts: np.ndarray
+    fail_at: np.ndarray
+    rec_off: np.ndarray
+    rec_blk: np.ndarray
+    carried: np.ndarray
+    pieces: list[_Piece]
+
+    @property
+    def n(self) -> int:
+        return len(self.rec_off)
+
+    def part(self, slot: int) -> tuple[np.ndarray, np.ndarray]:
+        """Offsets and lengths of one part in every record, in record order."""
+        if not self.pieces:
+            return np.zeros(0, np.uint16), np.zeros(0, np.uint16)
+        if len(self.pieces) == 1:
+            p = self.pieces[0]
+            return p.rel_off[:p.n, slot], p.rel_len[:p.n, slot]
+        return (np.concatenate([p.rel_off[:p.n, slot] for p in self.pieces]),
+                np.concatenate([p.rel_len[:p.n, slot] for p in self.pieces]))
+
+    def none_kept(self) -> _Scanned:
+        """The same walk with no record kept."""
+        return _Scanned(self.counts, self.fail_at, self.rec_off[:0], self.rec_blk[:0], self.carried, [])
+
+
+def _scan_group(buf, starts, lens, lay: Layout):
+    """kernel.scan over one group of blocks, its arrays sized by numpy from a guess doubled until it fits;
+    the parts carried by its good records."""
+    cap = _record_guess(buf, starts, lens, lay)
     slots = max(lay.n_slots, 1)
     while True:
         rel_off, rel_len = np.empty((cap, slots), np.uint16), np.zeros((cap, slots), np.uint16)
@@ -246,8 +289,26 @@ def _scan(buf, starts, lens, lay: Layout):
         if n >= 0:
             if (counts <= 0).any():  # a bad block's records set slots too: only the good ones count
                 carried = (rel_len[:n] != 0).any(axis=0)
-            return counts, fail_at, rel_off, rel_len, rec_off, rec_blk, carried.astype(bool), n
+            return counts, fail_at, rel_off, rel_len, rec_off[:n], rec_blk[:n], carried.astype(bool)
         cap *= 2
+
+
+def _scan(buf, starts, lens, lay: Layout) -> _Scanned:
+    """One walk over the blocks (all or nothing per block), in groups of blocks walked side by side on the
+    decode's threads when they hold enough records."""
+    groups = threads.byte_groups(lens, int(lens.sum()) // REGISTRY[lay.category].record_bytes)
+    walked = threads.run_all([partial(_scan_group, buf, starts[g], lens[g], lay) for g in groups])
+    pieces, first = [], 0
+    for _, _, rel_off, rel_len, rec_off, _, _ in walked:
+        pieces.append(_Piece(first, len(rec_off), rel_off, rel_len, rec_off))
+        first += len(rec_off)
+    if len(walked) == 1:
+        counts, fail_at, _, _, rec_off, rec_blk, carried = walked[0]
+        return _Scanned(counts, fail_at, rec_off, rec_blk, carried, pieces)
+    return _Scanned(np.concatenate([w[0] for w in walked]), np.concatenate([w[1] for w in walked]),
+                    np.concatenate([w[4] for w in walked]),
+                    np.concatenate([w[5] + g.start for w, g in zip(walked, groups, strict=True)]),
+                    np.logical_or.reduce([w[6] for w in walked]), pieces)
 
 
 def _editions_oldest_first(category: int) -> list[str]:
@@ -388,22 +449,22 @@ def _plausible_share(buf, s, n, category: int, ed: str, limit: int = 400) -> flo
         k = k[_spread(len(k), max(1, PLAUSIBLE_SAMPLE_BYTES * len(k) // int(n[k].sum())))]
     lay = compile_layout(category, ed, _scanned_columns(()))
     scanned = _scan(buf, s[k], n[k], lay)
-    if not (scanned[0] > 0).any():
+    if not (scanned.counts > 0).any():
         return 0.0
     where, _, _, _ = _extract(buf, scanned, lay)
     bounded = {nm: where[nm][0][where[nm][1]] for nm in BOUNDS if nm in where}
-    ok = ~implausible(bounded) if bounded else np.ones(int(scanned[-1]), bool)
+    ok = ~implausible(bounded) if bounded else np.ones(scanned.n, bool)
     return float(np.mean(ok)) if len(ok) else 0.0
 
 
-def _extract(buf, scanned, lay: Layout):
+def _extract(buf, scanned: _Scanned, lay: Layout):
     """Gather every field of the scanned records into column matrices: only the fields of parts some
     record carries, into rows for their columns alone (a wide edition's other columns, absent from every
     record, cost neither a pass nor memory here: ``_columns`` builds them empty)."""
-    _, _, rel_off, rel_len, rec_off, rec_blk, carried, n = scanned
+    n = scanned.n
     F, mult = lay.F, lay.f_mult
     if len(F):
-        keep = carried[F[:, 0]] if n else np.zeros(len(F), bool)
+        keep = scanned.carried[F[:, 0]] if n else np.zeros(len(F), bool)
         if not keep.all():
             F, mult = F[keep], mult[keep]
     F = np.array(F, np.int64, copy=True)
@@ -420,16 +481,23 @@ def _extract(buf, scanned, lay: Layout):
     wd = np.full((len(rows[OUT_WIDE]), n), -1, np.int64)
     fg = np.full((len(rows[OUT_FLAG]), n), -1, np.int8)
     F, mult = np.ascontiguousarray(F), np.ascontiguousarray(mult)
-    threads.over_ranges(lambda a, b: kernel.gather(buf, rec_off, rel_off, rel_len, F, mult, fl, it, wd, fg, a,
-                                                   b), n)
+
+    def gather(p: _Piece, a: int, b: int) -> None:
+        kernel.gather(buf, p.rec_off, p.rel_off, p.rel_len, F, mult, fl, it, wd, fg, a, b, p.first)
+
+    pieces = scanned.pieces
+    if len(pieces) == 1:  # one walk: its records in ranges on the decode's threads
+        threads.over_ranges(partial(gather, pieces[0]), n)
+    else:  # walks side by side: each piece's records in a thread of its own
+        threads.run_all([partial(gather, p, 0, p.n) for p in pieces])
     matrices = {OUT_INT: it, OUT_FLOAT: fl, OUT_WIDE: wd, OUT_FLAG: fg}
     where = {names[k][r]: (matrices[k], i) for k in names for i, r in enumerate(rows[k])}
-    texts = {name: code_list_column(buf, rec_off[:n], rel_off[:n, s], rel_len[:n, s])
-             for name, s in lay.code_slots}
+    rec_off = scanned.rec_off
+    texts = {name: code_list_column(buf, rec_off, *scanned.part(s)) for name, s in lay.code_slots}
     for s in sorted({s for _, s, _ in lay.bds_slots}):  # Mode S register fields, one pass per item
-        texts |= bds.decode(buf, rec_off[:n], rel_off[:n, s], rel_len[:n, s],
+        texts |= bds.decode(buf, rec_off, *scanned.part(s),
                             {name: path for name, slot, path in lay.bds_slots if slot == s})
-    return where, texts, rec_off[:n].copy(), rec_blk[:n].copy()
+    return where, texts, rec_off, scanned.rec_blk
 
 
 def _columns(lay: Layout, where: dict, texts: dict, rec_off, rec_blk) -> dict[str, object]:
@@ -598,7 +666,7 @@ def _gathered(buf: np.ndarray, starts: np.ndarray, release, batch: int = 256
     return data, np.concatenate([[0], np.cumsum(length)[:-1]]).astype(np.int64), length
 
 
-def _scan_decoded(buf: np.ndarray, framed, plan, selected) -> dict[int, tuple]:
+def _scan_decoded(buf: np.ndarray, framed, plan, selected) -> dict[int, tuple[np.ndarray, Layout, _Scanned]]:
     """Walk the framed blocks of each decoded category under the plan's edition: {cat: (block indices,
     layout, scan)}."""
     b_start, b_len, b_cat = framed[:3]
@@ -636,13 +704,14 @@ def find_stretches(buf: np.ndarray, starts: np.ndarray, lens: np.ndarray, failed
     return out
 
 
-def _judge_edition(starts: np.ndarray, lens: np.ndarray, scanned, cat: int, edition: str, plan) -> _Judged:
+def _judge_edition(starts: np.ndarray, lens: np.ndarray, scanned: _Scanned, cat: int, edition: str, plan
+                   ) -> _Judged:
     """Report the blocks that failed to walk, and apply the plan's judgement of the edition (settled over
     the whole recording): blocks in stretches of another edition family are withheld, each reported as such
     (the part of a stretch among these blocks is reported as a Stretch of them, ``opens``/``closes`` saying
     it goes on before or after); a wrong edition throughout withholds the blocks that walk under it anyway
     (they would give wrong values)."""
-    counts, fail_at = scanned[0], scanned[1]
+    counts, fail_at = scanned.counts, scanned.fail_at
     failed = counts < 0
     why_failed = {int(j): f"{REASONS[int(-counts[j])]} (record at offset {int(fail_at[j])})"
                   for j in np.flatnonzero(failed)}
@@ -691,7 +760,7 @@ def decode_buffer(buf: np.ndarray, seg: Segments, *, path: str = "", editions: d
     plan = plan_recording(buf, seg, dict(editions or {}), categories, assume_walking=True)
     framed = plan.framer(buf).window()
     scans = _scan_decoded(buf, framed, plan, _scanned_columns(selected))
-    if plan.assumed and any((scan[2][0] < 0).any() for scan in scans.values()):
+    if plan.assumed and any((scan[2].counts < 0).any() for scan in scans.values()):
         del scans  # a decoded block does not walk: the plan is settled again, walking every block
         plan = plan_recording(buf, seg, dict(editions or {}), categories)
         framed, scans = plan.framer(buf).window(), None
@@ -747,14 +816,14 @@ def decode_framed(buf: np.ndarray, plan, framed, *, path: str = "", date: dt.dat
         errors += judged.errors
         if judged.stretches:
             stretches[cat] = judged.stretches
-        counts = scanned[0]
+        counts = scanned.counts
         if judged.keep is not None and not judged.keep.any():
-            scanned = (*scanned[:-1], 0)
+            scanned = scanned.none_kept()
             counts = np.full_like(counts, -1)
         elif judged.keep is not None:  # stretches withheld: the rest walked again on its own
             sel, starts, lens = sel[judged.keep], starts[judged.keep], lens[judged.keep]
             scanned = _scan(buf, starts, lens, lay)
-            counts = scanned[0]
+            counts = scanned.counts
         decoded_bytes += int(lens[counts > 0].sum())
         decoded_blocks[cat] = int((counts > 0).sum())
         where, texts, rec_off, rec_blk = _extract(buf, scanned, lay)

@@ -7,9 +7,12 @@ from __future__ import annotations
 import os
 from collections.abc import Callable
 from concurrent.futures import ThreadPoolExecutor
+from functools import partial
+from typing import TypeVar
 
 import numpy as np
 
+T = TypeVar("T")
 MIN_RECORDS_PER_THREAD = 50_000  # below this a thread's start costs more than its share of the work
 
 
@@ -30,12 +33,27 @@ def ranges(n: int, threads: int | None = None) -> list[tuple[int, int]]:
     return [(int(a), int(b)) for a, b in zip(cuts[:-1], cuts[1:], strict=True)]
 
 
+def run_all(calls: list[Callable[[], T]]) -> list[T]:
+    """The calls' results in order, each call in a thread of its own when there are several; their
+    exceptions propagate."""
+    if len(calls) <= 1:
+        return [c() for c in calls]
+    with ThreadPoolExecutor(len(calls), thread_name_prefix="msdc-decode") as pool:
+        futures = [pool.submit(c) for c in calls]
+        return [f.result() for f in futures]
+
+
 def over_ranges(fn: Callable[[int, int], object], n: int, threads: int | None = None) -> None:
     """fn(start, stop) over ``ranges(n)``, in threads when there are several; fn's exceptions propagate."""
-    parts = ranges(n, threads)
-    if len(parts) == 1:
-        fn(*parts[0])
-        return
-    with ThreadPoolExecutor(len(parts), thread_name_prefix="msdc-decode") as pool:
-        for f in [pool.submit(fn, a, b) for a, b in parts]:
-            f.result()
+    run_all([partial(fn, a, b) for a, b in ranges(n, threads)])
+
+
+def byte_groups(lens: np.ndarray, records: int, threads: int | None = None) -> list[slice]:
+    """Contiguous groups of blocks of about equal bytes, one per range of ``ranges(records)`` (records: a
+    guess of the blocks' records); one group for a small decode."""
+    k = min(len(ranges(records, threads)), max(len(lens), 1))
+    if k == 1:
+        return [slice(0, len(lens))]
+    ends = np.cumsum(lens)
+    cuts = [0, *np.searchsorted(ends, ends[-1] * np.arange(1, k) / k, side="right").tolist(), len(lens)]
+    return [slice(a, b) for a, b in zip(cuts[:-1], cuts[1:], strict=True) if b > a]

@@ -33,12 +33,14 @@ def test_omp_num_threads_caps_the_threads(monkeypatch, value: str, expected: int
     assert threads.decode_threads() == expected
 
 
-def test_a_decode_split_over_threads_keeps_every_value(monkeypatch) -> None:
-    """3,001 CAT062 tracks in three ranges of about 1,000 records (the kernel works 1,024 at a time, so the
-    ranges end inside its chunks); every seventh record without I062/136 and every fifth without I062/105."""
-    n = 3_001
-    i = np.arange(n)
-    truth = pd.DataFrame({
+N = 3_001
+PER_BLOCK = 17
+
+
+def _tracks() -> pd.DataFrame:
+    """CAT062 tracks on their items' LSB grids; every seventh without I062/136, every fifth without /105."""
+    i = np.arange(N)
+    return pd.DataFrame({
         "sac": 25, "sic": 100, "time_of_day": i / 128,  # I062/070 LSB 1/128 s
         "track_number": i % 4096,
         "flight_level": np.where(i % 7 == 0, np.nan, (i % 1600) / 4),  # I062/136 LSB 1/4 FL
@@ -47,23 +49,61 @@ def test_a_decode_split_over_threads_keeps_every_value(monkeypatch) -> None:
         "x_m": (i - 1500) * 0.5, "y_m": (1500 - i) * 0.5,  # I062/100 LSB 0.5 m
         "mon": i % 2, "spi": (i // 2) % 2, "cnf": (i // 3) % 2,
     })
-    data = encode_frame(62, truth, records_per_block=17)
+
+
+def _decode_counting_gathers(monkeypatch, data: bytes):
+    """The CAT062 decode of data with 3 threads, and the records each kernel.gather call filled."""
     calls: list[tuple[int, int]] = []
     gather = kernel.gather
 
-    def counting(*args):
-        calls.append((args[-2], args[-1]))
+    def counting(*args):  # (..., start, stop, out0): records start..stop into columns from start + out0
+        calls.append((args[-3] + args[-1], args[-2] + args[-1]))
         return gather(*args)
 
     monkeypatch.setattr(kernel, "gather", counting)
-    monkeypatch.setattr(threads, "MIN_RECORDS_PER_THREAD", 1_000)
     monkeypatch.setattr(threads, "decode_threads", lambda: 3)
-    got = decode_bytes(data, categories=[62]).frames[62]
-    assert sorted(calls) == [(0, 1_000), (1_000, 2_000), (2_000, 3_001)]
+    return decode_bytes(data, categories=[62]), sorted(calls)
+
+
+def _assert_values(got: pd.DataFrame, truth: pd.DataFrame) -> None:
     for name in ("time_of_day", "flight_level", "latitude", "longitude", "x_m", "y_m"):
         np.testing.assert_array_equal(got[name].to_numpy(float), truth[name].to_numpy(float), err_msg=name)
     for name in ("track_number", "mon", "spi", "cnf"):
         assert got[name].astype("int64").tolist() == truth[name].tolist(), name
+
+
+def test_a_decode_gathered_in_ranges_keeps_every_value(monkeypatch) -> None:
+    """The blocks walked in one piece, its 3,001 records gathered in three ranges of about 1,000 (the
+    kernel works 1,024 at a time, so the ranges end inside its chunks)."""
+    truth = _tracks()
+    monkeypatch.setattr(threads, "MIN_RECORDS_PER_THREAD", 1_000)
+    monkeypatch.setattr(threads, "byte_groups", lambda lens, _records: [slice(0, len(lens))])
+    rec, calls = _decode_counting_gathers(monkeypatch, encode_frame(62, truth, records_per_block=PER_BLOCK))
+    assert calls == [(0, 1_000), (1_000, 2_000), (2_000, 3_001)]
+    _assert_values(rec.frames[62], truth)
+
+
+def test_blocks_walked_in_groups_side_by_side_keep_every_value_and_error(monkeypatch) -> None:
+    """The 177 blocks walked in three groups of about equal bytes, each group's records gathered in a thread
+    of its own; block 100 (in the second group) has an empty FSPEC as its first record: that block alone is
+    lost and reported, the others' 2,984 records keep their values."""
+    truth = _tracks()
+    data = bytearray(encode_frame(62, truth, records_per_block=PER_BLOCK))
+    starts = [0]
+    while starts[-1] < len(data):
+        starts.append(starts[-1] + int.from_bytes(data[starts[-1] + 1:starts[-1] + 3], "big"))
+    starts.pop()
+    assert len(starts) == 177
+    data[starts[100] + 3] = 0x00  # the first record's FSPEC
+    monkeypatch.setattr(threads, "MIN_RECORDS_PER_THREAD", 300)
+    rec, calls = _decode_counting_gathers(monkeypatch, bytes(data))
+    assert len(calls) == 3 and calls[0][0] == 0 and calls[-1][1] == N - PER_BLOCK
+    assert all(a[1] == b[0] for a, b in zip(calls, calls[1:], strict=False))  # contiguous, none twice
+    kept = truth.drop(index=range(100 * PER_BLOCK, 101 * PER_BLOCK)).reset_index(drop=True)
+    _assert_values(rec.frames[62], kept)
+    blocks = np.delete(np.arange(N) // PER_BLOCK, range(100 * PER_BLOCK, 101 * PER_BLOCK))
+    assert rec.frames[62]["block"].tolist() == blocks.tolist()  # each record's block in the recording
+    assert rec.errors["offset"].tolist() == [starts[100]]  # the block lost
 
 
 def test_a_flag_column_wider_than_its_int8_matrix_is_refused(monkeypatch) -> None:
