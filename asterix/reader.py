@@ -275,40 +275,41 @@ class _Scanned:
         return _Scanned(self.counts, self.fail_at, self.rec_off[:0], self.rec_blk[:0], self.carried, [])
 
 
-def _scan_group(buf, starts, lens, lay: Layout):
-    """kernel.scan over one group of blocks, its arrays sized by numpy from a guess doubled until it fits;
-    the parts carried by its good records."""
-    cap = _record_guess(buf, starts, lens, lay)
-    slots = max(lay.n_slots, 1)
-    while True:
-        rel_off, rel_len = np.empty((cap, slots), np.uint16), np.zeros((cap, slots), np.uint16)
-        rec_off, rec_blk = np.empty(cap, np.int64), np.empty(cap, np.int64)
-        carried = np.zeros(slots, np.uint8)
-        counts, fail_at, n = kernel.scan(buf, starts, lens, lay.parts, lay.n_frn, lay.n_slots, rel_off,
-                                         rel_len, rec_off, rec_blk, carried)
-        if n >= 0:
-            if (counts <= 0).any():  # a bad block's records set slots too: only the good ones count
-                carried = (rel_len[:n] != 0).any(axis=0)
-            return counts, fail_at, rel_off, rel_len, rec_off[:n], rec_blk[:n], carried.astype(bool)
-        cap *= 2
+def _walk_arrays(cap: int, slots: int) -> tuple[np.ndarray, ...]:
+    """kernel.scan's output arrays for up to cap records (made on the calling thread: memory a decode
+    thread allocates stays in its own heap when freed, which held 20-60 MB more after small-record
+    decodes)."""
+    return (np.empty((cap, slots), np.uint16), np.zeros((cap, slots), np.uint16), np.empty(cap, np.int64),
+            np.empty(cap, np.int64), np.zeros(slots, np.uint8))
 
 
 def _scan(buf, starts, lens, lay: Layout) -> _Scanned:
     """One walk over the blocks (all or nothing per block), in groups of blocks walked side by side on the
-    decode's threads when they hold enough records."""
+    decode's threads when they hold enough records; each group's arrays sized from a guess, doubled for a
+    group they are too small for, which is walked again."""
     groups = threads.byte_groups(lens, int(lens.sum()) // REGISTRY[lay.category].record_bytes)
-    walked = threads.run_all([partial(_scan_group, buf, starts[g], lens[g], lay) for g in groups])
+    slots = max(lay.n_slots, 1)
+    arrays: list = [_walk_arrays(_record_guess(buf, starts[g], lens[g], lay), slots) for g in groups]
+    walked: list = [None] * len(groups)
+    while todo := [i for i, w in enumerate(walked) if w is None]:
+        done = threads.run_all([partial(kernel.scan, buf, starts[groups[i]], lens[groups[i]], lay.parts,
+                                        lay.n_frn, lay.n_slots, *arrays[i]) for i in todo])
+        for i, (counts, fail_at, n) in zip(todo, done, strict=True):
+            if n < 0:
+                arrays[i] = _walk_arrays(2 * len(arrays[i][2]), slots)
+                continue
+            rel_off, rel_len, rec_off, rec_blk, carried = arrays[i]
+            if (counts <= 0).any():  # a bad block's records set slots too: only the good ones count
+                carried = (rel_len[:n] != 0).any(axis=0)
+            walked[i] = (counts, fail_at, rec_off[:n], rec_blk[:n] + groups[i].start, carried.astype(bool))
     pieces, first = [], 0
-    for _, _, rel_off, rel_len, rec_off, _, _ in walked:
+    for (_, _, rec_off, _, _), (rel_off, rel_len, *_) in zip(walked, arrays, strict=True):
         pieces.append(_Piece(first, len(rec_off), rel_off, rel_len, rec_off))
         first += len(rec_off)
     if len(walked) == 1:
-        counts, fail_at, _, _, rec_off, rec_blk, carried = walked[0]
-        return _Scanned(counts, fail_at, rec_off, rec_blk, carried, pieces)
-    return _Scanned(np.concatenate([w[0] for w in walked]), np.concatenate([w[1] for w in walked]),
-                    np.concatenate([w[4] for w in walked]),
-                    np.concatenate([w[5] + g.start for w, g in zip(walked, groups, strict=True)]),
-                    np.logical_or.reduce([w[6] for w in walked]), pieces)
+        return _Scanned(*walked[0], pieces)
+    return _Scanned(*(np.concatenate([w[k] for w in walked]) for k in range(4)),
+                    np.logical_or.reduce([w[4] for w in walked]), pieces)
 
 
 def _editions_oldest_first(category: int) -> list[str]:
