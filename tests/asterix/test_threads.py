@@ -116,3 +116,26 @@ def test_a_flag_column_wider_than_its_int8_matrix_is_refused(monkeypatch) -> Non
     monkeypatch.setattr(layout, "columns_for", lambda _cat, _ed: (wide,))
     with pytest.raises(ValueError, match=r"sac: a flag column of 8 bits \(at most 7\)"):
         layout.compile_layout.__wrapped__(48, "1.32", None)
+
+
+def test_groups_whose_arrays_are_too_small_are_walked_again(monkeypatch) -> None:
+    """Record arrays sized for 8 records: each group's walk stops short and is walked again with twice the
+    room until it fits (eight walks a group of about 1,000 records: room for 8, 16, ... 1,024), and every
+    value is kept."""
+    from msdc.asterix import reader
+
+    truth = _tracks()
+    monkeypatch.setattr(reader, "_record_guess", lambda *_args: 8)
+    monkeypatch.setattr(threads, "MIN_RECORDS_PER_THREAD", 300)
+    walks: list[int] = []
+    scan = kernel.scan
+
+    def counting(*args):
+        out = scan(*args)
+        walks.append(out[2])
+        return out
+
+    monkeypatch.setattr(kernel, "scan", counting)
+    rec, calls = _decode_counting_gathers(monkeypatch, encode_frame(62, truth, records_per_block=PER_BLOCK))
+    assert len(calls) == 3 and walks.count(-1) == 3 * 7  # 8 -> 16 -> ... -> 1,024: seven walks too small
+    _assert_values(rec.frames[62], truth)
