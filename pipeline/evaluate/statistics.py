@@ -86,6 +86,56 @@ def proportion(successes, trials, confidence: float = 0.95) -> Proportion:
     return Proportion(value, low, high, n.astype(np.int64))
 
 
+@dataclass(frozen=True)
+class ShareClusters:
+    """Sums over the clusters (groups of trials that are not independent: the reports of one aircraft in one
+    update) that a proportion's design effect needs, additive over disjoint sets of clusters: the sums of
+    m_c^2, y_c * m_c and y_c^2 (m_c trials and y_c successes of cluster c) and the number of clusters."""
+
+    sum_m2: float
+    sum_ym: float
+    sum_y2: float
+    clusters: int
+
+    def __add__(self, other: ShareClusters) -> ShareClusters:
+        return ShareClusters(self.sum_m2 + other.sum_m2, self.sum_ym + other.sum_ym,
+                             self.sum_y2 + other.sum_y2, self.clusters + other.clusters)
+
+
+def share_clusters(success: np.ndarray, cluster: np.ndarray) -> ShareClusters:
+    """The ShareClusters of trials (``success``: bool per trial) grouped by ``cluster`` (a key per trial)."""
+    if not len(success):
+        return ShareClusters(0.0, 0.0, 0.0, 0)
+    _, inverse = np.unique(np.asarray(cluster), return_inverse=True)
+    m = np.bincount(inverse).astype(float)
+    y = np.bincount(inverse, weights=np.asarray(success, float))
+    return ShareClusters(float(m @ m), float(y @ m), float(y @ y), len(m))
+
+
+def design_effect(successes: int, trials: int, sums: ShareClusters) -> float:
+    """How much more a proportion varies over these clusters than over independent trials: the sum over
+    clusters of (y_c - p m_c)^2 over that of the trials (n p (1 - p)), at least 1 (1 for single-trial
+    clusters, 2 when every trial is doubled; 1 at p = 0 or 1)."""
+    if trials <= 0 or successes <= 0 or successes >= trials:
+        return 1.0
+    p = successes / trials
+    spread = sums.sum_y2 - 2.0 * p * sums.sum_ym + p * p * sums.sum_m2
+    return max(1.0, spread / (trials * p * (1.0 - p)))
+
+
+def effective_proportion(successes: int, trials: int, deff: float, confidence: float = 0.95) -> Proportion:
+    """successes/trials with the Clopper-Pearson interval of the effective sample (successes / deff of
+    trials / deff: Korn and Graubard 1998), exactly ``proportion``'s at a design effect of 1."""
+    if deff == 1.0:
+        return proportion(successes, trials, confidence)
+    alpha = _check_confidence(confidence)
+    base = proportion(successes, trials, confidence)  # checks the counts
+    k, n = successes / deff, trials / deff
+    low = float(betaincinv(k, n - k + 1, alpha / 2)) if successes > 0 else 0.0
+    high = float(betaincinv(k + 1, n - k, 1 - alpha / 2)) if successes < trials else 1.0
+    return Proportion(base.value, low, high, base.n)
+
+
 # The quantiles and tail below are scipy.special's functions that scipy.stats' beta.ppf, chi2.ppf, chi2.sf and
 # norm.ppf evaluate (the same values, checked to the bit): scipy.stats costs 0.5-1 s to import in every
 # process, a restarted worker's too.
