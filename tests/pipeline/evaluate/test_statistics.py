@@ -356,3 +356,66 @@ def test_cluster_draws_are_a_uniform_multinomial():
     assert draws.mean(axis=0) == pytest.approx(np.ones(k), abs=0.01)
     assert np.diag(cov) == pytest.approx(np.full(k, 1 - 1 / k), abs=0.015)
     assert cov[~np.eye(k, dtype=bool)] == pytest.approx(np.full(k * k - k, -1 / k), abs=0.015)
+
+
+def _clusters(m: list[int], y: list[int]) -> statistics.ShareClusters:
+    """ShareClusters of trials grouped m[c] to a cluster, y[c] of them successes."""
+    success = np.concatenate([np.arange(mc) < yc for mc, yc in zip(m, y, strict=True)])
+    cluster = np.repeat(np.arange(len(m)), m)
+    return statistics.share_clusters(success, cluster)
+
+
+def test_design_effect_worked_by_hand():
+    """Clusters (trials, successes) (2, 2), (1, 0), (1, 1), (2, 0): p = 3/6; the squares of y - p m are 1,
+    1/4, 1/4 and 1, their sum 2.5 over n p (1 - p) = 1.5 gives 5/3."""
+    sums = _clusters([2, 1, 1, 2], [2, 0, 1, 0])
+    assert (sums.sum_m2, sums.sum_ym, sums.sum_y2, sums.clusters) == (10.0, 5.0, 5.0, 4)
+    assert statistics.design_effect(3, 6, sums) == pytest.approx(5 / 3)
+    # pooled from two parts as from the whole: the sums add
+    assert _clusters([2, 1], [2, 0]) + _clusters([1, 2], [1, 0]) == sums
+
+
+@pytest.mark.parametrize(("k", "n"), [(0, 40), (40, 40)])
+def test_no_design_effect_at_zero_or_all(k, n):
+    sums = _clusters([2] * (n // 2), [2 if k else 0] * (n // 2))
+    assert statistics.design_effect(k, n, sums) == 1.0
+
+
+def test_single_trial_clusters_give_the_clopper_pearson_interval():
+    sums = _clusters([1] * 50, [1] * 37 + [0] * 13)
+    assert statistics.design_effect(37, 50, sums) == 1.0
+    p = statistics.effective_proportion(37, 50, 1.0)
+    assert (p.ci_low, p.ci_high) == (pytest.approx(stats.beta.ppf(0.025, 37, 14)),
+                                     pytest.approx(stats.beta.ppf(0.975, 38, 13)))
+
+
+def test_every_trial_doubled_gives_the_interval_of_the_trials_once():
+    """Each of 50 trials (37 successes) counted twice: a design effect of exactly 2, and the interval of the
+    50 trials (scipy's beta quantiles), where the plain interval of 100 would be too narrow."""
+    sums = _clusters([2] * 50, [2] * 37 + [0] * 13)
+    deff = statistics.design_effect(74, 100, sums)
+    assert deff == pytest.approx(2.0)
+    p = statistics.effective_proportion(74, 100, deff)
+    assert p.value == 0.74 and p.n == 100
+    assert p.ci_low == pytest.approx(stats.beta.ppf(0.025, 37, 14), rel=1e-9)
+    assert p.ci_high == pytest.approx(stats.beta.ppf(0.975, 38, 13), rel=1e-9)
+
+
+def test_the_effective_interval_covers_where_the_plain_one_does_not():
+    """2,000 samples of 300 aircraft updates, each a report and, one time in three, its split repeating the
+    report's outcome (p = 0.9): the plain interval of the reports holds p less often than 95 % (89-91 % on
+    seeds 7-9), the interval of the effective trials at least 95 % (seeded; the binomial SD of a coverage over
+    2,000 samples is 0.5 %)."""
+    rng = np.random.default_rng(7)
+    plain = effective = 0
+    for _ in range(2000):
+        m = np.where(rng.uniform(size=300) < 1 / 3, 2, 1)
+        y = np.where(rng.uniform(size=300) < 0.9, m, 0)
+        k, n = int(y.sum()), int(m.sum())
+        sums = statistics.ShareClusters(float(m @ m), float(y @ m), float(y @ y), 300)
+        p0 = statistics.proportion(k, n)
+        p1 = statistics.effective_proportion(k, n, statistics.design_effect(k, n, sums))
+        plain += p0.ci_low <= 0.9 <= p0.ci_high
+        effective += p1.ci_low <= 0.9 <= p1.ci_high
+    assert plain / 2000 < 0.945
+    assert effective / 2000 >= 0.95
