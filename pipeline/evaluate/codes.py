@@ -3,11 +3,14 @@ call sign correct and false; each over the test reports associated with a refere
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping
 
 import numpy as np
 import pandas as pd
 
+from msdc.pipeline.evaluate.coverage import Sensor
+from msdc.pipeline.evaluate.detection import update_period
 from msdc.pipeline.evaluate.outcome import Outcome, share, withheld
 from msdc.pipeline.evaluate.reference import (
     associated,
@@ -15,6 +18,8 @@ from msdc.pipeline.evaluate.reference import (
     reference_altitude_ft,
     reference_values,
 )
+from msdc.pipeline.evaluate.scans import update_groups
+from msdc.pipeline.evaluate.statistics import share_clusters
 
 # per code: the report's column, the reference's, and the report's 'not validated' and 'garbled' bits
 MODE3A = ("mode3a", "mode3a", "mode3a_v", "mode3a_g")
@@ -46,20 +51,51 @@ def _mine(reports: pd.DataFrame, reference: pd.DataFrame, parameters: Mapping | 
     return rep[rep["ref_index"].to_numpy() >= 0].reset_index(drop=True)
 
 
+def _update_keys(rep: pd.DataFrame, parameters: Mapping | None, sensor: Sensor | None) -> np.ndarray | None:
+    """Each associated report's aircraft update (its reports less than half an update interval apart, the
+    interval being interval_s else the scan period: a plot and its split share their replies, so their
+    codes are not independent trials); None without an update interval."""
+    interval = parameter(parameters, "interval_s", None)
+    period = float(interval) if interval is not None else (
+        update_period(rep, sensor)[0] if sensor is not None else math.nan)
+    if not math.isfinite(period) or period <= 0:
+        return None
+    keys = np.zeros(len(rep), np.int64)
+    t = rep["t_s"].to_numpy(float)
+    first = 0
+    for idx in rep.groupby("ref_index", sort=True).indices.values():
+        order = idx[np.argsort(t[idx], kind="stable")]
+        groups = update_groups(t[order], period)
+        keys[order] = first + groups
+        first += int(groups[-1]) + 1 if len(groups) else 0
+    return keys
+
+
+def _share(requirement: str, success: np.ndarray, trial: np.ndarray, keys: np.ndarray | None,
+           notes: tuple[str, ...] = ()) -> Outcome:
+    """The share of successes among the trials (bool masks over the associated reports), its interval over
+    their aircraft updates when ``keys`` gives them."""
+    clusters = share_clusters(success[trial], keys[trial]) if keys is not None else None
+    return share(requirement, int((success & trial).sum()), int(trial.sum()), notes, clusters=clusters)
+
+
 def _code_outcome(requirement: str, reports: pd.DataFrame, reference: pd.DataFrame,
-                  parameters: Mapping | None, code: tuple[str, str, str, str]) -> Outcome:
+                  parameters: Mapping | None, code: tuple[str, str, str, str], sensor: Sensor | None
+                  ) -> Outcome:
     """Present / valid / correct / false of Mode 3/A or Mode C, by the rule the docs give."""
     col, ref_col, v_col, g_col = code
     what = requirement.rsplit("_", 1)[1]
     rep = _mine(reports, reference, parameters)
+    keys = _update_keys(rep, parameters, sensor)
+    every = np.ones(len(rep), bool)
     have = _present(rep[col]) if col in rep.columns else np.zeros(len(rep), bool)
     if what == "present":
-        return share(requirement, int(have.sum()), len(rep))
+        return _share(requirement, have, every, keys)
     valid = _validated(rep, v_col, g_col)
     if what == "valid":
         if valid is None:
             return withheld(requirement, f"the reports carry no {v_col}/{g_col} bits")
-        return share(requirement, int((have & valid).sum()), int(have.sum()))
+        return _share(requirement, valid, have, keys)
     valid = np.ones(len(rep), bool) if valid is None else valid
     notes = () if v_col in rep.columns or g_col in rep.columns else (
         f"no {v_col}/{g_col} bits: every code taken as validated",)
@@ -82,14 +118,15 @@ def _code_outcome(requirement: str, reports: pd.DataFrame, reference: pd.DataFra
         return withheld(requirement, f"the reference gives no {ref_col} for the associated reports")
     used = have & valid & known
     if what == "correct":
-        return share(requirement, int((used & equal).sum()), int(known.sum()), notes)
-    return share(requirement, int((used & ~equal).sum()), int(used.sum()), notes)
+        return _share(requirement, used & equal, known, keys, notes)
+    return _share(requirement, ~equal, used, keys, notes)
 
 
 def _identity_outcome(requirement: str, reports: pd.DataFrame, reference: pd.DataFrame,
-                      parameters: Mapping | None, column: str) -> Outcome:
+                      parameters: Mapping | None, column: str, sensor: Sensor | None) -> Outcome:
     """Correct / false Mode S address or call sign: as Mode 3/A, without validity bits."""
     rep = _mine(reports, reference, parameters)
+    keys = _update_keys(rep, parameters, sensor)
     truth = reference_values(rep, reference, column, parameters)
     known = _present(pd.Series(truth, dtype=object))
     if not known.any():
@@ -100,15 +137,15 @@ def _identity_outcome(requirement: str, reports: pd.DataFrame, reference: pd.Dat
                       for a, b in zip(got, truth, strict=True)], dtype=bool)
     used = have & known
     if requirement.endswith("_correct"):
-        return share(requirement, int((used & equal).sum()), int(known.sum()))
-    return share(requirement, int((used & ~equal).sum()), int(used.sum()))
+        return _share(requirement, used & equal, known, keys)
+    return _share(requirement, ~equal, used, keys)
 
 
 def _code(requirement: str, code: tuple[str, str, str, str]):
     """The requirement function of one Mode 3/A or Mode C id."""
     def fn(reports: pd.DataFrame, reference: pd.DataFrame, parameters: Mapping | None = None,
            sensor=None) -> Outcome:
-        return _code_outcome(requirement, reports, reference, parameters, code)
+        return _code_outcome(requirement, reports, reference, parameters, code, sensor)
     fn.__name__ = requirement
     fn.__doc__ = f"``{requirement}`` (rule: docs/methods/evaluate.md)."
     return fn
@@ -118,7 +155,7 @@ def _identity(requirement: str, column: str):
     """The requirement function of one address or call sign id."""
     def fn(reports: pd.DataFrame, reference: pd.DataFrame, parameters: Mapping | None = None,
            sensor=None) -> Outcome:
-        return _identity_outcome(requirement, reports, reference, parameters, column)
+        return _identity_outcome(requirement, reports, reference, parameters, column, sensor)
     fn.__name__ = requirement
     fn.__doc__ = f"``{requirement}`` (rule: docs/methods/evaluate.md)."
     return fn

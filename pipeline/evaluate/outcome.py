@@ -8,7 +8,13 @@ from dataclasses import dataclass, field
 import numpy as np
 import pandas as pd
 
-from msdc.pipeline.evaluate.statistics import ClusterSums, poisson_rate, proportion
+from msdc.pipeline.evaluate.statistics import (
+    ClusterSums,
+    ShareClusters,
+    design_effect,
+    effective_proportion,
+    poisson_rate,
+)
 
 
 @dataclass(frozen=True)
@@ -50,14 +56,21 @@ class Outcome:
     count: int
     notes: tuple[str, ...] = ()
     per_aircraft: pd.DataFrame | None = field(default=None, compare=False)
-    evidence: ErrorEvidence | FitEvidence | None = field(default=None, compare=False)
+    evidence: ErrorEvidence | FitEvidence | ShareClusters | None = field(default=None, compare=False)
 
 
 def share(requirement: str, count: int, n: int, notes: tuple[str, ...] = (),
-          per_aircraft: pd.DataFrame | None = None) -> Outcome:
-    """A proportion count / n with its Clopper-Pearson interval (NaN when n is 0)."""
-    p = proportion(int(count), int(n))
-    return Outcome(requirement, p.value, p.ci_low, p.ci_high, int(n), int(count), notes, per_aircraft)
+          per_aircraft: pd.DataFrame | None = None, clusters: ShareClusters | None = None) -> Outcome:
+    """A proportion count / n with its Clopper-Pearson interval (NaN when n is 0); with ``clusters`` (trials
+    that are not independent, grouped) the interval is that of the effective sample, n over the design
+    effect, and a note says so where the effect is over 1 (kept as the outcome's evidence, to pool)."""
+    deff = design_effect(int(count), int(n), clusters) if clusters is not None else 1.0
+    p = effective_proportion(int(count), int(n), deff)
+    if deff > 1.0:
+        notes = (*notes, f"interval of {int(n) / deff:,.0f} effective trials: {int(n):,} in "
+                         f"{clusters.clusters:,} groups that are not independent (design effect {deff:.3f})")
+    return Outcome(requirement, p.value, p.ci_low, p.ci_high, int(n), int(count), notes, per_aircraft,
+                   clusters)
 
 
 def rate(requirement: str, events: int, exposure: float, notes: tuple[str, ...] = ()) -> Outcome:

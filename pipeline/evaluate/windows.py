@@ -28,6 +28,7 @@ from msdc.pipeline.evaluate.presets import Requirement
 from msdc.pipeline.evaluate.spill import SpilledFrames
 from msdc.pipeline.evaluate.statistics import (
     Z975,
+    ShareClusters,
     chi2_sf,
     clustered_interval,
     interval_from_sums,
@@ -95,7 +96,9 @@ def _proportion(requirement: Requirement, given: Sequence[Outcome]) -> Outcome:
                                          ["aircraft"]))
     per = [o.per_aircraft for o in given if o.per_aircraft is not None] if rid == "pd" else []
     table = combine_counts(per, ["aircraft"]) if per and len(per) == len(given) else None
-    return share(rid, sum(o.count for o in given), int(sum(o.n for o in given)), (), table)
+    grouped = [o.evidence for o in given]  # the windows' cluster sums, where every window's trials had them
+    clusters = sum(grouped[1:], grouped[0]) if all(isinstance(e, ShareClusters) for e in grouped) else None
+    return share(rid, sum(o.count for o in given), int(sum(o.n for o in given)), (), table, clusters)
 
 
 def _rate(rid: str, given: Sequence[Outcome]) -> Outcome:

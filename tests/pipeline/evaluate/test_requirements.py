@@ -171,6 +171,30 @@ def test_mode3a_present_valid_correct_false():
     assert counts(run("mode3a_false", rep, ref)) == (1, 2)
 
 
+def test_a_split_repeating_its_plots_code_widens_the_interval_by_the_design_effect():
+    """One report a 4 s scan, right, wrong, right, right, wrong, right, and a split at 4 s and at 12 s
+    repeating its plot's code: 5 correct of 8. The updates (reports, correct) are (1, 1), (2, 0), (1, 1),
+    (2, 2), (1, 0), (1, 1); with p = 5/8 the squares of y - p m sum to 2.9375, over n p (1 - p) = 1.875 a
+    design effect of 1.5667, and the interval is Clopper-Pearson's of 5 / 1.5667 in 8 / 1.5667 trials.
+    Without the splits, 4 of 6 with the plain interval and no note."""
+    from scipy import stats
+
+    ref = reference(mode3a="1234")
+    codes = {0: "1234", 4: "1235", 8: "1234", 12: "1234", 16: "1235", 20: "1234"}
+    times = [0, 4, 4, 8, 12, 12, 16, 20]
+    out = run("mode3a_correct", reports(times, mode3a=[codes[t] for t in times]), ref)
+    assert counts(out) == (5, 8)
+    deff = 2.9375 / 1.875
+    assert out.ci_low == pytest.approx(stats.beta.ppf(0.025, 5 / deff, 3 / deff + 1), rel=1e-9)
+    assert out.ci_high == pytest.approx(stats.beta.ppf(0.975, 5 / deff + 1, 3 / deff), rel=1e-9)
+    assert "8 in 6 groups that are not independent (design effect 1.567)" in out.notes[-1]
+    alone = run("mode3a_correct", reports(list(codes), mode3a=list(codes.values())), ref)
+    assert counts(alone) == (4, 6)
+    assert (alone.ci_low, alone.ci_high) == (pytest.approx(stats.beta.ppf(0.025, 4, 3), rel=1e-12),
+                                             pytest.approx(stats.beta.ppf(0.975, 5, 2), rel=1e-12))
+    assert not any("design effect" in n for n in alone.notes)
+
+
 def test_mode3a_follows_a_code_change_in_the_reference():
     ref = reference(mode3a=["1234"] * 10 + ["7000"] * 11)
     rep = reports([0, 4, 8, 12, 16], mode3a=["1234", "1234", "1234", "7000", "1234"])

@@ -399,8 +399,10 @@ def test_each_window_is_evaluated_as_its_own_from_and_to(windowed):
 
 def test_the_span_pools_the_windows_counts_and_errors(windowed):
     """Worked out from the two halves' own outputs: successes and trials (value x n) added, the
-    Clopper-Pearson interval from beta quantiles, the RMS from the halves' mean squares, the maximum the
-    larger, a fitted bias the inverse-variance mean of the halves' (standard errors from their notes)."""
+    Clopper-Pearson interval from beta quantiles (of the effective trials where the span's note gives a
+    design effect: split plots share their update's codes), the RMS from the halves' mean squares, the
+    maximum the larger, a fitted bias the inverse-variance mean of the halves' (standard errors from their
+    notes)."""
     import re
 
     from scipy import stats
@@ -408,6 +410,7 @@ def test_the_span_pools_the_windows_counts_and_errors(windowed):
     span, halves = windowed
     card = _key(span.scorecard[span.scorecard["sector"] == "global"])
     parts = [_key(h.scorecard[h.scorecard["sector"] == "global"]) for h in halves]
+    effects = 0
     for key, row in card.iterrows():
         if key[1] not in ("mode3a_valid", "modec_correct", "split_reports", "pd", "false_reports"):
             continue
@@ -415,7 +418,12 @@ def test_the_span_pools_the_windows_counts_and_errors(windowed):
         k = [round(p.loc[key, "value"] * p.loc[key, "n"]) for p in parts]
         assert row["n"] == sum(n), key
         assert row["value"] == pytest.approx(sum(k) / sum(n)), key
-        assert row["ci_low"] == pytest.approx(stats.beta.ppf(0.025, sum(k), sum(n) - sum(k) + 1)), key
+        effect = re.search(r"design effect ([0-9.]+)\)", row["notes"])
+        deff = float(effect.group(1)) if effect else 1.0  # printed to 3 decimals: the bound to 1e-4
+        low = stats.beta.ppf(0.025, sum(k) / deff, (sum(n) - sum(k)) / deff + 1)
+        assert row["ci_low"] == pytest.approx(low, abs=1e-4 if effect else 1e-9), key
+        effects += bool(effect)
+    assert effects == 2  # mode3a_valid and modec_correct: the test radar's split plots repeat its codes
     rms = card.xs("rms_m", level=1).iloc[0]
     halves_rms = [p.xs("rms_m", level=1).iloc[0] for p in parts]
     assert rms["n"] == sum(h["n"] for h in halves_rms)
