@@ -277,7 +277,7 @@ class _Scanned:
 
 def _walk_arrays(cap: int, slots: int) -> tuple[np.ndarray, ...]:
     """kernel.scan's output arrays for up to cap records (made on the calling thread: memory a decode
-    thread allocates stays in its own heap when freed, which held 20-60 MB more after small-record
+    thread allocates stays in its own heap when freed, which held 20-80 MB more after small-record
     decodes)."""
     return (np.empty((cap, slots), np.uint16), np.zeros((cap, slots), np.uint16), np.empty(cap, np.int64),
             np.empty(cap, np.int64), np.zeros(slots, np.uint8))

@@ -1,6 +1,6 @@
-"""The threads a decode's kernels run on: the kernels release the GIL, so a large decode's records are split
-into contiguous ranges, one per CPU this process may run on (at most OMP_NUM_THREADS when it is set: Dask's
-workers set it to 1, one process per core already)."""
+"""The threads a decode's kernels run on: the kernels release the GIL, so a large decode's blocks are walked
+in groups, and its records gathered in ranges, side by side, one per CPU this process may run on (at most
+OMP_NUM_THREADS when it is set: Dask's workers set it to 1, one process per core already)."""
 
 from __future__ import annotations
 

@@ -24,6 +24,16 @@ def test_ranges_cover_the_records_once(n: int, k: int, expected: list) -> None:
     assert threads.ranges(n, k) == expected
 
 
+def test_byte_groups_split_the_blocks_by_their_bytes() -> None:
+    """Ten blocks, the first five of 100 bytes and the rest of 25 (625 bytes): two groups cut before the block
+    that passes half of them (block 3 ends at 400 > 312.5), of 300 and 325 bytes; one group for a small
+    decode or a single block."""
+    lens = np.array([100] * 5 + [25] * 5)
+    assert threads.byte_groups(lens, 100_000, 2) == [slice(0, 3), slice(3, 10)]
+    assert threads.byte_groups(lens, 99_999, 2) == [slice(0, 10)]
+    assert threads.byte_groups(lens[:1], 1_000_000, 4) == [slice(0, 1)]
+
+
 @pytest.mark.parametrize(("value", "expected"), [("1", 1), ("2", 2), ("", 64), ("0", 64), ("two", 64)])
 def test_omp_num_threads_caps_the_threads(monkeypatch, value: str, expected: int) -> None:
     """Dask's workers set OMP_NUM_THREADS=1 (one process per core already); a value that is not a positive
