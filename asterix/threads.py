@@ -16,9 +16,14 @@ T = TypeVar("T")
 MIN_RECORDS_PER_THREAD = 50_000  # below this a thread's start costs more than its share of the work
 
 
+def process_cpus() -> int:
+    """The CPUs this process may run on (taskset; all of the machine's where that cannot be asked)."""
+    return len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else (os.cpu_count() or 1)
+
+
 def decode_threads() -> int:
-    """The CPUs this process may run on (taskset), at most OMP_NUM_THREADS when that is a positive number."""
-    cpus = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else (os.cpu_count() or 1)
+    """The CPUs this process may run on, at most OMP_NUM_THREADS when that is a positive number."""
+    cpus = process_cpus()
     cap = os.environ.get("OMP_NUM_THREADS", "").strip()
     if cap.isdigit() and int(cap) > 0:
         cpus = min(cpus, int(cap))

@@ -3,7 +3,6 @@ on a cluster when a job installed a distributor (``distributed_by``; pipeline.da
 
 from __future__ import annotations
 
-import os
 import threading
 from collections import deque
 from collections.abc import Callable, Iterable, Iterator
@@ -11,6 +10,8 @@ from concurrent.futures import ThreadPoolExecutor
 from contextlib import contextmanager
 from contextvars import ContextVar
 from typing import Protocol, TypeVar
+
+from msdc.asterix.threads import process_cpus
 
 T = TypeVar("T")
 R = TypeVar("R")
@@ -48,8 +49,7 @@ def distributed_now() -> bool:
 def thread_count() -> int:
     """The threads per-aircraft work uses: the CPUs this process may run on (taskset), at most
     MAX_THREADS."""
-    cpus = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else (os.cpu_count() or 1)
-    return max(1, min(cpus, MAX_THREADS))
+    return max(1, min(process_cpus(), MAX_THREADS))
 
 
 def map_ordered(fn: Callable[[T], R], items: Iterable[T], threads: int | None = None, *,

@@ -14,6 +14,7 @@ from collections.abc import Callable, Iterable, Iterator
 from dataclasses import dataclass, field
 from typing import Any, TypeVar
 
+from msdc.asterix.threads import process_cpus
 from msdc.pipeline.progress import Progress
 
 T = TypeVar("T")
@@ -67,7 +68,7 @@ def scheduler_problem(value: str) -> str | None:
 
 def machine_workers() -> int:
     """The local cluster's default size: the CPUs this process may run on."""
-    return len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else (os.cpu_count() or 1)
+    return process_cpus()
 
 
 @dataclass

@@ -8,13 +8,13 @@ from __future__ import annotations
 import concurrent.futures as cf
 import gc
 import multiprocessing
-import os
 import signal
 import time
 from collections.abc import Callable, Iterable, Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from msdc.asterix.threads import process_cpus
 from msdc.pipeline.progress import Progress
 
 # matplotlib and the drawing modules loaded once in the fork server: workers forked from it start in
@@ -45,11 +45,7 @@ class FigureTask:
 
 def cores() -> int:
     """The figure workers: one per CPU this process may run on (taskset), at most MAX_WORKERS."""
-    try:
-        cpus = len(os.sched_getaffinity(0))
-    except AttributeError:  # not on Linux
-        cpus = os.cpu_count() or 1
-    return max(1, min(cpus, MAX_WORKERS))
+    return max(1, min(process_cpus(), MAX_WORKERS))
 
 
 def _context() -> multiprocessing.context.BaseContext:
