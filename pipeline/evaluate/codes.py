@@ -10,7 +10,7 @@ import numpy as np
 import pandas as pd
 
 from msdc.pipeline.evaluate.coverage import Sensor
-from msdc.pipeline.evaluate.detection import update_period
+from msdc.pipeline.evaluate.detection import update_interval
 from msdc.pipeline.evaluate.outcome import Outcome, share, withheld
 from msdc.pipeline.evaluate.reference import (
     associated,
@@ -18,7 +18,7 @@ from msdc.pipeline.evaluate.reference import (
     reference_altitude_ft,
     reference_values,
 )
-from msdc.pipeline.evaluate.scans import update_groups
+from msdc.pipeline.evaluate.scans import update_numbers
 from msdc.pipeline.evaluate.statistics import share_clusters
 
 # per code: the report's column, the reference's, and the report's 'not validated' and 'garbled' bits
@@ -52,23 +52,12 @@ def _mine(reports: pd.DataFrame, reference: pd.DataFrame, parameters: Mapping | 
 
 
 def _update_keys(rep: pd.DataFrame, parameters: Mapping | None, sensor: Sensor | None) -> np.ndarray | None:
-    """Each associated report's aircraft update (its reports less than half an update interval apart, the
-    interval being interval_s else the scan period: a plot and its split share their replies, so their
-    codes are not independent trials); None without an update interval."""
-    interval = parameter(parameters, "interval_s", None)
-    period = float(interval) if interval is not None else (
-        update_period(rep, sensor)[0] if sensor is not None else math.nan)
+    """Each associated report's aircraft update (a plot and its split share their replies, so their codes
+    are not independent trials: scans.update_numbers); None without an update interval."""
+    period, _ = update_interval(rep, parameters, sensor)
     if not math.isfinite(period) or period <= 0:
         return None
-    keys = np.zeros(len(rep), np.int64)
-    t = rep["t_s"].to_numpy(float)
-    first = 0
-    for idx in rep.groupby("ref_index", sort=True).indices.values():
-        order = idx[np.argsort(t[idx], kind="stable")]
-        groups = update_groups(t[order], period)
-        keys[order] = first + groups
-        first += int(groups[-1]) + 1 if len(groups) else 0
-    return keys
+    return update_numbers(rep["ref_index"].to_numpy(), rep["t_s"].to_numpy(float), period)
 
 
 def _share(requirement: str, success: np.ndarray, trial: np.ndarray, keys: np.ndarray | None,

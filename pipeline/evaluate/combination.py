@@ -14,7 +14,7 @@ from msdc.pipeline.evaluate.coverage import Sensor
 from msdc.pipeline.evaluate.detection import update_period
 from msdc.pipeline.evaluate.outcome import Outcome, share, withheld
 from msdc.pipeline.evaluate.reference import associated
-from msdc.pipeline.evaluate.scans import update_groups
+from msdc.pipeline.evaluate.scans import update_numbers
 
 # I048/020 TYP (asterix-specs, CAT048): 1 single PSR, 2 single SSR, 3 SSR + PSR, 4 Mode S all-call,
 # 5 Mode S roll-call, 6 Mode S all-call + PSR, 7 Mode S roll-call + PSR; 0 no detection
@@ -53,9 +53,7 @@ def psr_ssr_association(reports: pd.DataFrame, reference: pd.DataFrame, paramete
                           "t_s": rep["t_s"].to_numpy(float), "psr_only": np.isin(typ, TYP_PSR_ONLY),
                           "ssr_only": np.isin(typ, TYP_SSR_ONLY), "combined": np.isin(typ, TYP_COMBINED)})
     frame = frame.sort_values(["aircraft", "t_s"], kind="stable", ignore_index=True)
-    frame["update"] = np.concatenate([update_groups(g["t_s"].to_numpy(), period)
-                                      for _, g in frame.groupby("aircraft", sort=False)]) \
-        if len(frame) else np.zeros(0, np.int64)
+    frame["update"] = update_numbers(frame["aircraft"].to_numpy(object), frame["t_s"].to_numpy(float), period)
     per = frame.groupby(["aircraft", "update"], sort=True)[["psr_only", "ssr_only", "combined"]].any()
     both = per["combined"] | (per["psr_only"] & per["ssr_only"])
     if not both.any():

@@ -42,6 +42,18 @@ def update_period(reports: pd.DataFrame, sensor: Sensor) -> tuple[float, str]:
     return period, f"scan period {period:.4g} s estimated from the plots (no north markers)"
 
 
+def update_interval(reports: pd.DataFrame, parameters: Mapping | None, sensor: Sensor | None
+                    ) -> tuple[float, str]:
+    """The interval that groups a sensor's reports into updates, and where it came from: ``interval_s``
+    when given, else the scan period (update_period); NaN without either."""
+    interval = parameter(parameters, "interval_s", None)
+    if interval is not None:
+        return float(interval), f"intervals of {float(interval):g} s"
+    if sensor is None:
+        return math.nan, "no sensor, so no scan period"
+    return update_period(reports, sensor)
+
+
 def expected_updates(reports: pd.DataFrame, reference: pd.DataFrame, parameters: Mapping | None,
                      sensor: Sensor) -> tuple[pd.DataFrame, Coverage, tuple[str, ...]]:
     """Every update the sensor should have made of each reference aircraft, whether it did, and whether the

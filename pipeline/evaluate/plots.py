@@ -10,10 +10,10 @@ import numpy as np
 import pandas as pd
 
 from msdc.pipeline.evaluate.coverage import Sensor
-from msdc.pipeline.evaluate.detection import update_period
+from msdc.pipeline.evaluate.detection import update_interval, update_period
 from msdc.pipeline.evaluate.outcome import Outcome, rate, share
 from msdc.pipeline.evaluate.reference import DEFAULT_GATE_M, associated, parameter
-from msdc.pipeline.evaluate.scans import update_groups
+from msdc.pipeline.evaluate.scans import update_numbers
 
 SPLIT_PLOT_CODE = 3  # I048/030: split plot
 _CODE_3 = rf"(?:^|,)\s*{SPLIT_PLOT_CODE}\s*(?:,|$)"
@@ -63,30 +63,22 @@ def update_table(reports: pd.DataFrame, reference: pd.DataFrame, parameters: Map
     apart, the interval being interval_s else the scan period): how many reports it holds, how many of
     them are exact repeats (same time and position as another), and whether one carries I048/030 code 3."""
     rep = associated(reports, reference, parameters)
-    interval = parameter(parameters, "interval_s", None)
-    period, said = update_period(rep, sensor) if interval is None else (float(interval),
-                                                                        f"intervals of {float(interval):g} s")
+    period, said = update_interval(rep, parameters, sensor)
     if not math.isfinite(period) or period <= 0:
         raise ValueError(f"sensor {sensor.name!r}: no update interval ({said})")
     mine = rep[rep["ref_index"].to_numpy() >= 0]
     code3 = (mine["warning_codes"].astype("string").str.contains(_CODE_3, regex=True, na=False).to_numpy(bool)
              if "warning_codes" in mine.columns else np.zeros(len(mine), bool))
-    rows = []
-    for _, idx in mine.groupby("ref_index", sort=True).indices.items():
-        one = mine.iloc[idx]
-        order = np.argsort(one["t_s"].to_numpy(float), kind="stable")
-        t = one["t_s"].to_numpy(float)[order]
-        key = pd.DataFrame({"t": t, "lat": one["latitude"].to_numpy(float)[order],
-                            "lon": one["longitude"].to_numpy(float)[order]})
-        repeat = key.duplicated().to_numpy()
-        g = update_groups(t, period)
-        per = pd.DataFrame({"group": g, "repeat": repeat, "code3": code3[idx][order]}).groupby("group")
-        agg = per.agg(reports=("repeat", "size"), repeats=("repeat", "sum"), code3=("code3", "any"))
-        agg.insert(0, "aircraft", one["ref_aircraft"].iloc[0])
-        agg.insert(1, "t_s", t[np.searchsorted(g, agg.index.to_numpy())])
-        rows.append(agg.reset_index(drop=True))
-    table = pd.concat(rows, ignore_index=True) if rows else pd.DataFrame(
-        {"aircraft": [], "t_s": [], "reports": [], "repeats": [], "code3": []})
+    t = mine["t_s"].to_numpy(float)
+    frame = pd.DataFrame({"update": update_numbers(mine["ref_index"].to_numpy(), t, period),
+                          "ref": mine["ref_index"].to_numpy(), "t": t,
+                          "lat": mine["latitude"].to_numpy(float), "lon": mine["longitude"].to_numpy(float),
+                          "aircraft": mine["ref_aircraft"].to_numpy(object), "code3": code3})
+    frame = frame.sort_values(["update", "t"], kind="stable")
+    frame["repeat"] = frame.duplicated(["ref", "t", "lat", "lon"]).to_numpy()
+    table = frame.groupby("update", sort=True).agg(
+        aircraft=("aircraft", "first"), t_s=("t", "first"), reports=("repeat", "size"),
+        repeats=("repeat", "sum"), code3=("code3", "any")).reset_index(drop=True)
     return table, (said,)
 
 

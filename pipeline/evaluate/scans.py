@@ -41,10 +41,17 @@ def period_from_plots(t_s: np.ndarray, aircraft: np.ndarray) -> float:
     return _whole_periods(d)
 
 
-def update_groups(t_s: np.ndarray, period_s: float) -> np.ndarray:
-    """Group numbers of one aircraft's sorted report times: a report less than half a period after the
-    previous one belongs to the same update (a split plot, a duplicate), a later one starts the next."""
+def update_numbers(aircraft: np.ndarray, t_s: np.ndarray, period_s: float) -> np.ndarray:
+    """Each report's update, numbered over every aircraft (in the aircraft's sorted order, then by time): a
+    report less than half a period after its aircraft's previous one belongs to the same update (a split
+    plot, a duplicate), a later one starts the next."""
     t = np.asarray(t_s, float)
     if not t.size:
         return np.zeros(0, dtype=np.int64)
-    return np.concatenate([[0], np.cumsum(np.diff(t) > 0.5 * period_s)]).astype(np.int64)
+    key = np.unique(np.asarray(aircraft), return_inverse=True)[1].ravel()
+    order = np.lexsort((t, key))
+    new = np.ones(t.size, bool)
+    new[1:] = (np.diff(key[order]) != 0) | (np.diff(t[order]) > 0.5 * period_s)
+    out = np.empty(t.size, np.int64)
+    out[order] = np.cumsum(new) - 1
+    return out

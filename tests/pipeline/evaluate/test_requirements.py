@@ -171,6 +171,17 @@ def test_mode3a_present_valid_correct_false():
     assert counts(run("mode3a_false", rep, ref)) == (1, 2)
 
 
+def test_update_numbers_run_over_every_aircraft_at_once():
+    """Reports of B at 0 and 5 s and of A at 0, 1.5 and 4.5 s, a 4 s scan: A's first two are one update
+    (1.5 s apart, under half a scan), its third the next (3 s on); B's two are two updates, numbered
+    after A's."""
+    from msdc.pipeline.evaluate.scans import update_numbers
+
+    got = update_numbers(np.array(["B", "A", "A", "B", "A"], object), np.array([0, 0, 1.5, 5, 4.5]), 4.0)
+    assert got.tolist() == [2, 0, 0, 3, 1]
+    assert update_numbers(np.array([], object), np.array([]), 4.0).tolist() == []
+
+
 def test_a_split_repeating_its_plots_code_widens_the_interval_by_the_design_effect():
     """One report a 4 s scan, right, wrong, right, right, wrong, right, and a split at 4 s and at 12 s
     repeating its plot's code: 5 correct of 8. The updates (reports, correct) are (1, 1), (2, 0), (1, 1),
