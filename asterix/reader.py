@@ -486,11 +486,10 @@ def _extract(buf, scanned: _Scanned, lay: Layout):
     def gather(p: _Piece, a: int, b: int) -> None:
         kernel.gather(buf, p.rec_off, p.rel_off, p.rel_len, F, mult, fl, it, wd, fg, a, b, p.first)
 
-    pieces = scanned.pieces
-    if len(pieces) == 1:  # one walk: its records in ranges on the decode's threads
-        threads.over_ranges(partial(gather, pieces[0]), n)
-    else:  # walks side by side: each piece's records in a thread of its own
-        threads.run_all([partial(gather, p, 0, p.n) for p in pieces])
+    # each piece's records in ranges, the decode's threads shared among the pieces (one range each when the
+    # blocks were walked side by side, one per thread when in one piece)
+    share = max(1, threads.decode_threads() // max(len(scanned.pieces), 1))
+    threads.run_all([partial(gather, p, a, b) for p in scanned.pieces for a, b in threads.ranges(p.n, share)])
     matrices = {OUT_INT: it, OUT_FLOAT: fl, OUT_WIDE: wd, OUT_FLAG: fg}
     where = {names[k][r]: (matrices[k], i) for k in names for i, r in enumerate(rows[k])}
     rec_off = scanned.rec_off

@@ -7,7 +7,6 @@ from __future__ import annotations
 import os
 from collections.abc import Callable
 from concurrent.futures import ThreadPoolExecutor
-from functools import partial
 from typing import TypeVar
 
 import numpy as np
@@ -46,11 +45,6 @@ def run_all(calls: list[Callable[[], T]]) -> list[T]:
     with ThreadPoolExecutor(len(calls), thread_name_prefix="msdc-decode") as pool:
         futures = [pool.submit(c) for c in calls]
         return [f.result() for f in futures]
-
-
-def over_ranges(fn: Callable[[int, int], object], n: int, threads: int | None = None) -> None:
-    """fn(start, stop) over ``ranges(n)``, in threads when there are several; fn's exceptions propagate."""
-    run_all([partial(fn, a, b) for a, b in ranges(n, threads)])
 
 
 def byte_groups(lens: np.ndarray, records: int, threads: int | None = None) -> list[slice]:
