@@ -32,6 +32,9 @@ class Sensor:
     north_markers_s: np.ndarray | None = None
     sigma_range_m: float | None = None  # declared 1-sigma plot noise (radars): the bias fit's goodness of fit
     sigma_azimuth_deg: float | None = None
+    # the scan period settled for the whole sensor and what it came from (detection.update_period): a
+    # sector's requirements use it, where its own few plots would estimate another or none
+    scan_period: tuple[float, str] | None = None
 
     def __post_init__(self) -> None:
         for key in ("latitude", "longitude", "altitude_m", *LIMITS, *SIGMAS):

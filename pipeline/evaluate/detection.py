@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping
+from typing import Protocol
 
 import numpy as np
 import pandas as pd
@@ -25,14 +26,26 @@ from msdc.pipeline.evaluate.statistics import proportion
 from msdc.pipeline.evaluate.update_times import aircraft_updates
 
 EXPECTED_COLUMNS = ["aircraft", "stretch", "t_s", "detected", "in_coverage", "rho_nm", "elevation_deg",
-                    "azimuth_deg", "altitude_ft", "height_m"]
+                    "azimuth_deg", "altitude_ft", "height_m", "t_ref_s"]
+
+
+class Within(Protocol):
+    """A region the expected updates are counted in: its name, and per expected update (a table of
+    EXPECTED_COLUMNS) whether it lies there."""
+
+    name: str
+
+    def __call__(self, table: pd.DataFrame) -> np.ndarray: ...
 # with no minimum elevation declared, the expected updates inside coverage below the lowest elevation the
 # sensor detected (all missed, perhaps below a radar's horizon) are said once they are this share or more
 BELOW_DETECTIONS_SHARE = 0.01
 
 
 def update_period(reports: pd.DataFrame, sensor: Sensor) -> tuple[float, str]:
-    """The sensor's scan period and where it came from: its north markers when given, else the plots."""
+    """The sensor's scan period and where it came from: the one settled for the whole sensor when given
+    (Sensor.scan_period), else its north markers, else the plots."""
+    if sensor.scan_period is not None:
+        return sensor.scan_period
     if sensor.north_markers_s is not None and len(sensor.north_markers_s) >= 2:
         period = period_from_markers(sensor.north_markers_s)
         if math.isfinite(period):
@@ -58,9 +71,10 @@ def expected_updates(reports: pd.DataFrame, reference: pd.DataFrame, parameters:
                      sensor: Sensor) -> tuple[pd.DataFrame, Coverage, tuple[str, ...]]:
     """Every update the sensor should have made of each reference aircraft, whether it did, and whether the
     aircraft was then inside coverage, where it then was (slant range, elevation, azimuth from the site; the
-    reference's pressure altitude and height), with the coverage and notes on what was used. With
-    ``interval_s`` the updates are whole intervals tiling each reference stretch; else one per scan period,
-    the detected ones at their report times and the missed ones spread over the gaps."""
+    reference's pressure altitude and height; ``t_ref_s``, the time that place was read at: the update's
+    own, clipped into its stretch), with the coverage and notes on what was used. With ``interval_s`` the
+    updates are whole intervals tiling each reference stretch; else one per scan period, the detected ones
+    at their report times and the missed ones spread over the gaps."""
     max_gap_s = float(parameter(parameters, "reference_max_gap_s", DEFAULT_REFERENCE_GAP_S))
     interval = parameter(parameters, "interval_s", None)
     # what the table depends on besides the frames: the association's gates only where it is made here
@@ -83,7 +97,7 @@ def _expected_updates(reports: pd.DataFrame, reference: pd.DataFrame, parameters
         raise ValueError(f"sensor {sensor.name!r}: no update interval ({said})")
     ref, trajs = checked_trajectories(reference)
     t_all, idx = rep["t_s"].to_numpy(float), rep["ref_index"].to_numpy()
-    names = ("aircraft", "stretch", "t_s", "detected", "lat", "lon", "height_m", "altitude_ft")
+    names = ("aircraft", "stretch", "t_s", "detected", "lat", "lon", "height_m", "altitude_ft", "t_ref_s")
     cols: dict[str, list] = {c: [] for c in names}
     order = np.lexsort((t_all, idx))  # each reference aircraft's report times, sorted, one after the other
     t_sorted, idx_sorted = t_all[order], idx[order]
@@ -94,7 +108,7 @@ def _expected_updates(reports: pd.DataFrame, reference: pd.DataFrame, parameters
         lat, lon, h, alt = tr.at(clipped, max_gap_s)
         for c, v in (("aircraft", np.full(t_exp.size, tr.label, object)), ("stretch", stretch),
                      ("t_s", t_exp), ("detected", held), ("lat", lat), ("lon", lon), ("height_m", h),
-                     ("altitude_ft", alt)):
+                     ("altitude_ft", alt), ("t_ref_s", clipped)):
             cols[c].append(v)
     if cols["t_s"]:
         whole = {c: np.concatenate(v) for c, v in cols.items()}
@@ -102,7 +116,7 @@ def _expected_updates(reports: pd.DataFrame, reference: pd.DataFrame, parameters
         table = pd.DataFrame({"aircraft": whole["aircraft"], "stretch": whole["stretch"], "t_s": whole["t_s"],
                               "detected": whole["detected"], "rho_nm": rho, "elevation_deg": el,
                               "azimuth_deg": az, "altitude_ft": whole["altitude_ft"],
-                              "height_m": whole["height_m"]})
+                              "height_m": whole["height_m"], "t_ref_s": whole["t_ref_s"]})
     else:
         table = pd.DataFrame({c: [] for c in EXPECTED_COLUMNS if c != "in_coverage"})
     table = table.sort_values(["aircraft", "stretch", "t_s"], kind="stable", ignore_index=True)
@@ -142,10 +156,15 @@ def _per_aircraft(table: pd.DataFrame) -> pd.DataFrame:
 
 
 def pd_requirement(reports: pd.DataFrame, reference: pd.DataFrame, parameters: Mapping | None,
-                   sensor: Sensor) -> Outcome:
-    """``pd``: detected expected updates inside coverage over all expected ones. Scope 'global' pools every
-    update; 'per_target' gives the aircraft whose interval reaches lowest (every aircraft must meet it)."""
+                   sensor: Sensor, within: Within | None = None) -> Outcome:
+    """``pd``: detected expected updates inside coverage over all expected ones (``within``: only those in a
+    region). Scope 'global' pools every update; 'per_target' gives the aircraft whose interval reaches lowest
+    (every aircraft must meet it)."""
     table, _, notes = expected_updates(reports, reference, parameters, sensor)
+    if within is not None:
+        table = table[np.asarray(within(table), bool)]
+        if table.empty:
+            return withheld("pd", f"no expected update inside {within.name!r}")
     inside = table[table["in_coverage"]]
     per = _per_aircraft(table)
     if parameter(parameters, "scope", "global") == "per_target":
@@ -164,20 +183,27 @@ def per_target(per: pd.DataFrame, notes: tuple[str, ...] = ()) -> Outcome:
 
 
 def long_gaps(reports: pd.DataFrame, reference: pd.DataFrame, parameters: Mapping | None,
-              sensor: Sensor) -> Outcome:
+              sensor: Sensor, within: Within | None = None) -> Outcome:
     """``long_gaps``: of the intervals between successive updates of an aircraft in one reference stretch
-    with every update between them expected inside coverage (scan updates, whatever interval_s says),
-    the share with min_gap_s <= gap < max_gap_s."""
+    with every update between them expected inside coverage (and ``within`` a region: in it; scan updates,
+    whatever interval_s says), the share with min_gap_s <= gap < max_gap_s."""
     lo = parameter(parameters, "min_gap_s", None)
     if lo is None:
         raise ValueError("long_gaps needs the parameter min_gap_s")
     hi = float(parameter(parameters, "max_gap_s", math.inf))
     scans = {k: v for k, v in (parameters or {}).items() if k != "interval_s"}
     table, _, notes = expected_updates(reports, reference, scans, sensor)
+    counted = table["in_coverage"].to_numpy(bool)
+    if within is not None:
+        region = np.asarray(within(table), bool)
+        if not region.any():
+            return withheld("long_gaps", f"no expected update inside {within.name!r}")
+        counted = counted & region
     gaps = []
-    for _, one in table.groupby(["aircraft", "stretch"], sort=False):
+    for rows in table.groupby(["aircraft", "stretch"], sort=False).indices.values():
+        one = table.iloc[rows]
         det = one["detected"].to_numpy(bool)
-        t, inside = one["t_s"].to_numpy(float), one["in_coverage"].to_numpy(bool)
+        t, inside = one["t_s"].to_numpy(float), counted[rows]
         at = np.flatnonzero(det)
         if at.size < 2:
             continue

@@ -29,7 +29,7 @@ def period_from_markers(north_marker_t_s: np.ndarray) -> float:
 
 def period_from_plots(t_s: np.ndarray, aircraft: np.ndarray) -> float:
     """The scan period estimated from the intervals between successive reports of each aircraft: their
-    median (most intervals are one scan while the probability of detection is above one half), refined as
+    median (most intervals are one scan while the probability of detection is above one half), refined
     as the summed intervals over their whole numbers of scans. NaN with too few intervals."""
     t, a = np.asarray(t_s, float), np.asarray(aircraft)
     order = np.lexsort((t, a))

@@ -4,20 +4,22 @@ and on its preset area) and judged into the scorecard's rows (scorecard_schema.S
 Sectors are regions: a name, an optional preset area and a mask function of (latitude, longitude, flight
 level, on ground: 1, 0 or NaN unknown). Besides the sector file's, "surface" and "airborne" are regions of
 their own when the reference has aircraft on the surface. A report belongs to a region where its reference
-aircraft is inside it at the report's time (an unassociated report: where the report itself is); the
-reference is cut to its samples inside the region, so no update is expected of an aircraft outside it."""
+aircraft is inside it at the report's time (an unassociated report: where the report itself is), and so
+does an expected update (pd, long_gaps) at its time; the other requirements read the reference cut to its
+samples inside the region. The scan period and coverage are the sensor's, from all of its plots."""
 
 from __future__ import annotations
 
 import math
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 import pandas as pd
 
 from msdc.pipeline.evaluate.catalogue import CATALOGUE, ERROR, SIGNED
 from msdc.pipeline.evaluate.coverage import Sensor
+from msdc.pipeline.evaluate.detection import Within, update_period
 from msdc.pipeline.evaluate.outcome import Outcome, withheld
 from msdc.pipeline.evaluate.presets import Preset, Requirement
 from msdc.pipeline.evaluate.reference import (
@@ -26,6 +28,7 @@ from msdc.pipeline.evaluate.reference import (
     associated,
     checked_trajectories,
     rows_by_index,
+    shared,
     shared_references,
 )
 from msdc.pipeline.evaluate.reference_gates import reference_at, sigma_gate
@@ -37,6 +40,10 @@ SURFACE, AIRBORNE, MONITORS = "surface", "airborne", "field monitors"
 MONITOR_CODE = 2.0  # the on-ground channel's value for a field monitor
 # (lat deg, lon deg, FL, on ground 1/0/NaN) -> inside
 Mask = Callable[[np.ndarray, np.ndarray, np.ndarray, np.ndarray], np.ndarray]
+# measured per region on the sensor's expected updates, each placed where its reference aircraft then was,
+# not on frames cut to the region: a cut reference would bridge an aircraft's short excursions out of the
+# region (its stretches), and a cut of the plots would estimate coverage limits of its own
+REGIONAL = ("pd", "long_gaps")
 
 
 @dataclass(frozen=True)
@@ -68,9 +75,10 @@ def _is_position(requirement: Requirement) -> bool:
 
 
 def measure(requirement: Requirement, reports: pd.DataFrame, reference: pd.DataFrame,
-            sensor: Sensor) -> Outcome:
+            sensor: Sensor, within: Within | None = None) -> Outcome:
     """The requirement's outcome; a position requirement judges only the reports the sigma gate passes (its
-    counts in the notes); a requirement the data cannot support is withheld with the reason."""
+    counts in the notes); a requirement the data cannot support is withheld with the reason. ``within``
+    (the REGIONAL requirements, on the whole frames): only the expected updates in a region count."""
     function = REQUIREMENTS.get(requirement.id)
     if function is None:
         return withheld(requirement.id, "not measured by this version of msdc")
@@ -88,7 +96,8 @@ def measure(requirement: Requirement, reports: pd.DataFrame, reference: pd.DataF
     elif "distance_m" in params and len(reports) and len(reference):
         rep, notes = _gate_false(reports, reference, float(params["distance_m"]), params)
     try:
-        out = function(rep, reference, params, sensor)
+        out = (function(rep, reference, params, sensor) if within is None
+               else function(rep, reference, params, sensor, within=within))
     except ValueError as exc:
         return withheld(requirement.id, str(exc))
     return Outcome(out.requirement, out.value, out.ci_low, out.ci_high, out.n, out.count,
@@ -207,6 +216,36 @@ def cut(reports: pd.DataFrame, reference: pd.DataFrame, masks: Sequence[Mask],
     return rep_in, ref_in
 
 
+@dataclass(frozen=True, eq=False)
+class Placed:
+    """A region's expected updates (detection.Within): those whose reference aircraft was in the union of
+    ``masks`` at the update (``t_ref_s``), by the rule that places the reports (reference_positions)."""
+
+    name: str
+    masks: Sequence[Mask]
+    reference: pd.DataFrame = field(repr=False)
+    max_gap_s: float = DEFAULT_REFERENCE_GAP_S
+
+    def __call__(self, table: pd.DataFrame) -> np.ndarray:
+        lat, lon, fl, ground = shared(("update places", id(table), id(self.reference), self.max_gap_s),
+                                      (table, self.reference),
+                                      lambda: update_places(table, self.reference, self.max_gap_s))
+        keep = np.zeros(len(table), bool)
+        for m in self.masks:
+            keep |= np.asarray(m(lat, lon, fl, ground), bool)
+        return keep
+
+
+def update_places(table: pd.DataFrame, reference: pd.DataFrame, max_gap_s: float = DEFAULT_REFERENCE_GAP_S
+                  ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Per expected update (detection.EXPECTED_COLUMNS), its reference aircraft's latitude, longitude,
+    flight level and on-ground flag at ``t_ref_s``, as reference_positions gives a report's."""
+    labels = pd.Index([tr.label for tr in checked_trajectories(reference)[1]])
+    at = pd.DataFrame({"t_s": table["t_ref_s"].to_numpy(float),
+                       "ref_index": labels.get_indexer(pd.Index(table["aircraft"]))})
+    return reference_positions(at, reference, max_gap_s)
+
+
 def surface_regions(reference: pd.DataFrame) -> list[Region]:
     """"surface" and "airborne" as regions, when the reference has aircraft on the surface (else the
     airborne row would repeat the global one), and "field monitors" when it has any (fixed transponders:
@@ -262,6 +301,8 @@ def _score(preset: Preset, sensor_id: str, reports: pd.DataFrame, reference: pd.
     rep = associate(reports, reference, preset.association()) if len(reference) else reports.assign(
         ref_index=-1, ref_aircraft=None, ref_distance_m=np.inf)
     score.reports = rep
+    if sensor.scan_period is None:  # one scan period for every region: a sector's plots estimate none
+        sensor = replace(sensor, scan_period=update_period(rep, sensor))
     cuts: dict[str, tuple[pd.DataFrame, pd.DataFrame]] = {} if monitors else {GLOBAL: (rep, reference)}
     where = None
     for i, req in enumerate(preset.requirements):
@@ -271,19 +312,23 @@ def _score(preset: Preset, sensor_id: str, reports: pd.DataFrame, reference: pd.
                                "not measured")
             continue
         for name, masks in spots:
-            if name not in cuts:
-                if where is None:
-                    lat, lon, fl, ground = reference_positions(rep, reference)
-                    own = ~np.isfinite(lat)
-                    where = (np.where(own, rep["latitude"].to_numpy(float), lat),
-                             np.where(own, rep["longitude"].to_numpy(float), lon),
-                             np.where(own, _report_fl(rep), fl), np.where(own, np.nan, ground))
-                cuts[name] = cut(rep, reference, masks, where)
-            r, ref = cuts[name]
-            if r.empty and ref.empty:
-                outcome = withheld(req.id, f"no report and no reference inside {name!r}")
+            if req.id in REGIONAL and masks:
+                gap_s = float(req.parameters.get("reference_max_gap_s") or DEFAULT_REFERENCE_GAP_S)
+                outcome = measure(req, rep, reference, sensor, Placed(name, masks, reference, gap_s))
             else:
-                outcome = measure(req, r, ref, sensor)
+                if name not in cuts:
+                    if where is None:
+                        lat, lon, fl, ground = reference_positions(rep, reference)
+                        own = ~np.isfinite(lat)
+                        where = (np.where(own, rep["latitude"].to_numpy(float), lat),
+                                 np.where(own, rep["longitude"].to_numpy(float), lon),
+                                 np.where(own, _report_fl(rep), fl), np.where(own, np.nan, ground))
+                    cuts[name] = cut(rep, reference, masks, where)
+                r, ref = cuts[name]
+                if r.empty and ref.empty:
+                    outcome = withheld(req.id, f"no report and no reference inside {name!r}")
+                else:
+                    outcome = measure(req, r, ref, sensor)
             score.outcomes[(name, req.id, i)] = outcome
             score.rows.append(judge(outcome, req, preset, sensor_id, name))
     return score

@@ -26,7 +26,8 @@ def hand_table(rows: list[tuple]) -> pd.DataFrame:
     frame = pd.DataFrame(rows, columns=["aircraft", "detected", "in_coverage", "rho_nm", "azimuth_deg",
                                         "altitude_ft"])
     n = len(frame)
-    return frame.assign(stretch=0, t_s=np.arange(n, dtype=float), elevation_deg=1.0,
+    t = np.arange(n, dtype=float)
+    return frame.assign(stretch=0, t_s=t, t_ref_s=t, elevation_deg=1.0,
                         height_m=frame["altitude_ft"] * M_PER_FT)[EXPECTED_COLUMNS]
 
 

@@ -94,3 +94,60 @@ def test_the_preset_association_gate_decides_which_reports_an_aircraft_has():
     tight = score_sensor(narrow, "R", rep, ref, Sensor(0.0, 0.0, 0.0))
     assert wide.rows[0]["value"] == pytest.approx(500.0, rel=0.01)
     assert math.isnan(tight.rows[0]["value"])
+
+
+def flight(label: str, t_end: float = 200.0, east_m: float = 0.0, north_m_per_s: float = 100.0
+           ) -> pd.DataFrame:
+    """A reference aircraft flying north from latitude 0, ``east_m`` east of the site, sampled each second."""
+    ref = track(int(t_end) + 1, label=label)
+    return ref.assign(latitude=north_m_per_s * ref["t_s"] / M_PER_DEG_LAT, longitude=east_m / M_PER_DEG_LAT)
+
+
+def plots(ref: pd.DataFrame, times) -> pd.DataFrame:
+    """Reports exactly on the reference at the given times (whole seconds, so on its samples)."""
+    at = ref.set_index("t_s").loc[np.asarray(times, float)]
+    return pd.DataFrame({"t_s": at.index.to_numpy(float), "latitude": at["latitude"].to_numpy(),
+                         "longitude": at["longitude"].to_numpy()})
+
+
+def sector_rows(rep, ref, *regions, **parameters) -> dict:
+    score = score_sensor(preset(requirement("pd", 0.5, ">=", **parameters)), "R", rep, ref,
+                         Sensor(0.0, 0.0, 0.0), list(regions))
+    return {r["sector"]: r for r in score.rows}
+
+
+SCANS = np.arange(0.0, 201.0, 4.0)  # a 4 s radar seeing the aircraft at 0, 4, ..., 200 s: 51 scans
+
+
+def test_an_aircraft_briefly_out_of_a_region_is_expected_there_only_while_inside():
+    """The aircraft leaves the region for 20 s (10,000-12,000 m north: 100-120 s), less than the reference's
+    30 s gap, and every scan sees it. Inside, 51 scans less the six at 100, 104, ..., 120 s: 45, all
+    detected (a reference cut to the region would bridge the 20 s and count those six as missed)."""
+    ref = flight("A")
+    out = Region("out of the band", lambda la, lo, fl, g: np.abs(la * M_PER_DEG_LAT - 11_000.0) > 1_000.0)
+    rows = sector_rows(plots(ref, SCANS), ref, out)
+    assert (rows["global"]["n"], rows["global"]["value"]) == (51, 1.0)
+    assert (rows["out of the band"]["n"], rows["out of the band"]["value"]) == (45, 1.0)
+    # gaps between successive updates inside: 0-96 s and 124-200 s, 24 and 19 of 4 s, none long (the
+    # 28 s from 96 to 124 s passes outside)
+    gaps = score_sensor(preset(requirement("long_gaps", 0.5, min_gap_s=12.0)), "R", plots(ref, SCANS), ref,
+                        Sensor(0.0, 0.0, 0.0), [out]).outcomes[("out of the band", "long_gaps", 0)]
+    assert (gaps.count, gaps.n) == (0, 43)
+
+
+def test_a_region_is_judged_with_the_sensors_coverage_and_scan_period():
+    """A is seen on every scan out to 30 km (150 m/s for 200 s); B, 11 km east, only up to 100 s and then
+    never, while the reference follows it to 200 s, well inside the range A was seen at. The east region
+    holds B alone: 26 of its 51 scans detected (coverage estimated from B's plots alone would end at its
+    last one and call it 26 of 26). A region of A's first 20 s holds five plots, too few to estimate a scan
+    period of their own: the sensor's 4 s counts five updates there."""
+    a, b = flight("A", north_m_per_s=150.0), flight("B", east_m=11_000.0)
+    rep = pd.concat([plots(a, SCANS), plots(b, SCANS[SCANS <= 100.0])], ignore_index=True)
+    east = Region("east", lambda la, lo, fl, g: lo * M_PER_DEG_LAT > 5_000.0)
+    start = Region("start",
+                   lambda la, lo, fl, g: (lo * M_PER_DEG_LAT < 5_000.0) & (la * M_PER_DEG_LAT < 3_000.0))
+    rows = sector_rows(rep, pd.concat([a, b], ignore_index=True), east, start)
+    assert (rows["global"]["n"], rows["global"]["value"]) == (102, pytest.approx(77 / 102))
+    assert (rows["east"]["n"], rows["east"]["value"]) == (51, pytest.approx(26 / 51))
+    assert (rows["start"]["n"], rows["start"]["value"]) == (5, 1.0)  # 0, 4, ..., 16 s: below 3,000 m
+    assert "scan period 4 s" in rows["start"]["notes"]

@@ -284,7 +284,7 @@ def test_sectors_cut_the_figures(recording, tmp_path):
     assert card.loc[("all", 0.6), "n"] == card.loc[("global", 0.6), "n"]
     assert 0 < card.loc[("high", 0.6), "n"] < card.loc[("global", 0.6), "n"]
     assert np.isnan(card.loc[("elsewhere", 0.6), "value"])
-    assert "no report and no reference inside 'elsewhere'" in card.loc[("elsewhere", 0.6), "notes"]
+    assert "no expected update inside 'elsewhere'" in card.loc[("elsewhere", 0.6), "notes"]
 
 
 TRACKER_NOISE_M = 50.0  # per axis: a horizontal RMS of 50 * sqrt(2) = 70.7 m
