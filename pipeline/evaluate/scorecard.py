@@ -189,8 +189,10 @@ def _report_fl(reports: pd.DataFrame) -> np.ndarray:
 def cut(reports: pd.DataFrame, reference: pd.DataFrame, masks: Sequence[Mask],
         where: tuple[np.ndarray, ...]) -> tuple[pd.DataFrame, pd.DataFrame]:
     """The associated reports and the reference inside the union of ``masks``: reports by ``where`` (their
-    reference position, else their own), the reference by its samples; each report's ``ref_index``
-    renumbered to the cut reference's aircraft (a report whose aircraft has no sample inside is left out)."""
+    reference position, else their own), the reference by its samples with each one's neighbours (so that a
+    report inside near the edge is interpolated between the samples it lies between, not across the time
+    its aircraft spent outside); each report's ``ref_index`` renumbered to the cut reference's aircraft (a
+    report whose aircraft has no sample inside is left out)."""
     def inside(*columns) -> np.ndarray:
         keep = np.zeros(len(columns[0]), bool)
         for m in masks:
@@ -199,8 +201,9 @@ def cut(reports: pd.DataFrame, reference: pd.DataFrame, masks: Sequence[Mask],
 
     ref = checked_trajectories(reference)[0]
     alt = ref["altitude_ft"].to_numpy(float) / 100.0 if "altitude_ft" in ref else np.full(len(ref), np.nan)
-    ref_in = ref[inside(ref["latitude"].to_numpy(float), ref["longitude"].to_numpy(float), alt,
-                        ground_flags(ref))]
+    lat, lon = ref["latitude"].to_numpy(float), ref["longitude"].to_numpy(float)
+    samples = inside(lat, lon, alt, ground_flags(ref))
+    ref_in = ref[with_neighbours(samples, ref["aircraft"])]
     ref_in = ref_in.reset_index(drop=True)
     rep_in = reports[inside(*where)]
     labels = np.array(sorted(ref_in["aircraft"].unique()), dtype=object)
@@ -214,6 +217,18 @@ def cut(reports: pd.DataFrame, reference: pd.DataFrame, masks: Sequence[Mask],
     rep_in = rep_in.assign(ref_index=pos)
     rep_in = rep_in[pos != -2].reset_index(drop=True)
     return rep_in, ref_in
+
+
+def with_neighbours(keep: np.ndarray, aircraft: pd.Series) -> np.ndarray:
+    """``keep`` widened by one row either side within each aircraft (rows sorted by aircraft, then time)."""
+    keep = np.asarray(keep, bool)
+    same = np.zeros(keep.size, bool)
+    if keep.size > 1:
+        same[1:] = (aircraft.to_numpy(object)[1:] == aircraft.to_numpy(object)[:-1])
+    out = keep.copy()
+    out[1:] |= keep[:-1] & same[1:]   # the row after a kept one
+    out[:-1] |= keep[1:] & same[1:]   # the row before one
+    return out
 
 
 @dataclass(frozen=True, eq=False)

@@ -151,3 +151,17 @@ def test_a_region_is_judged_with_the_sensors_coverage_and_scan_period():
     assert (rows["east"]["n"], rows["east"]["value"]) == (51, pytest.approx(26 / 51))
     assert (rows["start"]["n"], rows["start"]["value"]) == (5, 1.0)  # 0, 4, ..., 16 s: below 3,000 m
     assert "scan period 4 s" in rows["start"]["notes"]
+
+
+def test_a_report_near_the_edge_of_a_region_is_judged_against_the_samples_either_side():
+    """South of 1,000 m the reference's samples run from 0 to 9 s; a report at 9.5 s (the aircraft at 950 m,
+    inside) lies between the samples at 9 and 10 s: judged 30 m off, as the one at 5 s is judged 10 m off
+    (a reference cut to its samples inside would end at 9 s and leave the report unjudged)."""
+    ref = track()
+    rep = pd.DataFrame({"t_s": [5.0, 9.5], "latitude": [500.0 / M_PER_DEG_LAT, 950.0 / M_PER_DEG_LAT],
+                        "longitude": [10.0 / M_PER_DEG_LAT, 30.0 / M_PER_DEG_LAT]})
+    south = Region("south", lambda la, lo, fl, g: la * M_PER_DEG_LAT < 1000.0)
+    score = score_sensor(preset(requirement("max_m", 1000.0)), "R", rep, ref, Sensor(0.0, 0.0, 0.0), [south])
+    rows = {r["sector"]: r for r in score.rows}
+    assert rows["south"]["n"] == 2
+    assert rows["south"]["value"] == pytest.approx(30.0, rel=0.01)
