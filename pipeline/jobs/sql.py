@@ -13,6 +13,8 @@ from msdc.pipeline.jobs.common import JobError, OptionError, nonempty_path, outp
 from msdc.pipeline.jobs.options import SqlOptions, check_declared
 from msdc.pipeline.report.transaction import OutputTransaction, staged
 
+CSV_BATCH_ROWS = 100_000  # rows fetched and written at a time to a CSV output
+
 
 @dataclass
 class SqlResult:
@@ -70,14 +72,35 @@ def sql_job(options: SqlOptions, *, tx: OutputTransaction | None = None) -> SqlR
             return SqlResult(views, head, more=len(rows) > options.limit)
         with staged(tx) as stage:
             target = stage.path(out)
-            kind = "PARQUET" if out.suffix.lower() == ".parquet" else "CSV, HEADER"
-            quoted = str(target).replace("'", "''")
-            n = con.execute(f"COPY ({query}) TO '{quoted}' (FORMAT {kind})").fetchone()[0]  # rows copied
+            if out.suffix.lower() == ".parquet":
+                quoted = str(target).replace("'", "''")
+                n = con.execute(f"COPY ({query}) TO '{quoted}' (FORMAT PARQUET)").fetchone()[0]  # rows copied
+            else:
+                n = _csv(con.sql(query), target)
         return SqlResult(views, output=out, rows_written=int(n))
     except duckdb.Error as exc:
         raise JobError(f"the query failed: {str(exc).splitlines()[0]} (views: {shown})", 2) from None
     finally:
         con.close()
+
+
+def _csv(relation, target: Path) -> int:
+    """The query's rows written to ``target`` batch by batch through report.files.write_csv, so that they
+    follow every CSV output's rules (formula-like text guarded, times ISO 8601 UTC with a Z), which DuckDB's
+    own CSV writer does not; the number of rows."""
+    from msdc.pipeline.report.files import write_csv
+
+    if relation is None:
+        raise JobError("the query returns no rows to write (it is not a SELECT)", 2)
+    batches = getattr(relation, "to_arrow_reader", None) or relation.fetch_arrow_reader  # DuckDB 2, else 1
+    reader = batches(CSV_BATCH_ROWS)
+    n = 0
+    for batch in reader:
+        write_csv(batch.to_pandas(), target, append=n > 0)
+        n += batch.num_rows
+    if n == 0:
+        write_csv(reader.schema.empty_table().to_pandas(), target)
+    return n
 
 
 __all__ = ["SqlOptions", "SqlResult", "sql_job", "validate"]

@@ -67,6 +67,36 @@ def test_reports_per_hour_equal_asterix_read(dataset):
     assert got["n"].sum() == TRUTH["radar"]["rows"]
 
 
+def test_a_csv_follows_every_csv_outputs_rules(dataset, tmp_path):
+    """Formula-like text behind an apostrophe and times as ISO 8601 UTC to the microsecond with a Z
+    (guide/index.md, "Outputs"), in every batch; a query of no rows writes the header alone."""
+    import msdc.asterix as asterix
+
+    out = tmp_path / "rules.csv"
+    q = ("SELECT '=HYPERLINK(1)' AS x, timestamp FROM cat048 WHERE sensor = '25_201' ORDER BY timestamp "
+         "LIMIT 3")
+    assert main(["sql", "--dataset", str(dataset), q, "-o", str(out)]) == 0
+    first = asterix.read(RADAR, date=DAY).frames[48]["timestamp"].sort_values().iloc[:3]
+    lines = out.read_text().splitlines()
+    assert lines[0] == "x,timestamp"
+    assert lines[1:] == [f"'=HYPERLINK(1),{t:%Y-%m-%dT%H:%M:%S.%f}Z" for t in first]
+    empty = tmp_path / "empty.csv"
+    assert main(["sql", "--dataset", str(dataset), "SELECT callsign FROM cat048 WHERE false", "-o",
+                 str(empty)]) == 0
+    assert empty.read_text() == "callsign\n"
+
+
+def test_a_csv_of_many_batches_holds_every_row_once(dataset, tmp_path, monkeypatch):
+    import msdc.pipeline.jobs.sql as sql
+
+    monkeypatch.setattr(sql, "CSV_BATCH_ROWS", 1000)
+    out = tmp_path / "all.csv"
+    q = "SELECT time_of_day FROM cat048 ORDER BY time_of_day"
+    assert main(["sql", "--dataset", str(dataset), q, "-o", str(out)]) == 0
+    got = pd.read_csv(out)
+    assert len(got) == TRUTH["radar"]["rows"] and got["time_of_day"].is_monotonic_increasing
+
+
 @pytest.mark.parametrize("args,says", [
     (["SELECT * FROM cat099"], "cat099"),
     (["SELEKT 1"], "the query failed"),
