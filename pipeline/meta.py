@@ -5,6 +5,9 @@ that take them (pipeline.jobs.options declares those)."""
 from __future__ import annotations
 
 FORMATS = ("raw", "pcap", "pcapng", "final", "gps", "oradis")
+# replay: the containers it sends, each datagram at its recorded time (raw: block by block; ORADIS has no
+# capture times to pace them by)
+REPLAYED_FORMATS = ("raw", "pcap", "pcapng", "final", "gps")
 # correlate: the sensor pairs correlated per aircraft ("all": radar-adsb and radar-radar)
 PAIRS = ("radar-adsb", "radar-radar", "mlat-adsb", "smr-mlat", "all")
 FILLS = ("hold", "predict")  # correlate: empty slots hold the previous one or take the tracker's prediction

@@ -29,6 +29,7 @@ from msdc.pipeline.meta import (
     METHODS,
     PAIRS,
     REFERENCES,
+    REPLAYED_FORMATS,
     SMOOTHERS,
     TABLE_MODES,
 )
@@ -184,7 +185,7 @@ def _argparse_keywords(f: dataclasses.Field, spec: Spec, kind: type) -> dict[str
     """add_argument's keywords for one field."""
     if not spec.flags:  # the positional argument: one or more values (or none: Spec.optional)
         return {"nargs": "*" if spec.optional else "+", "metavar": spec.metavar, "help": spec.help or None}
-    kw: dict[str, object] = {"dest": f.name, "help": spec.help}
+    kw: dict[str, object] = {"dest": f.name, "help": _with_default(spec.help, f.default)}
     if kind is bool:
         return kw | {"action": "store_true"}
     value_type = spec.parse or (kind if kind in (int, float) else None)
@@ -199,6 +200,16 @@ def _argparse_keywords(f: dataclasses.Field, spec: Spec, kind: type) -> dict[str
     if spec.repeat:
         kw["action"] = "append"
     return kw
+
+
+def _with_default(text: str | None, default: object) -> str | None:
+    """An option's help with its default, where it has one worth saying and the help does not say it."""
+    if not text or default in (None, False, (), dataclasses.MISSING):
+        return text
+    shown = f"{default:g}" if isinstance(default, float) else str(default)
+    if "default" in text or text.endswith(f"({shown})"):
+        return text
+    return f"{text} (default: {shown})"
 
 
 def from_args(options_cls: type, args: argparse.Namespace, **extra: object) -> typing.Any:
@@ -955,7 +966,7 @@ class ReplayOptions:
     duration_s: float | None = option(
         None, "--duration", metavar="SECONDS", range=DURATION_RANGE_S, unit="s",
         help="stop after this many seconds (default: at the end of the recordings, or never with --loop)")
-    format: str | None = option(None, "--format", choices=FORMATS, section="reading",
+    format: str | None = option(None, "--format", choices=REPLAYED_FORMATS, section="reading",
                                 help="container format (default: detected)",
                                 doc="container format (default: detected; "
                                     "[Containers](../decoding/containers.md))")

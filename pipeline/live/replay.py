@@ -20,11 +20,11 @@ from pathlib import Path
 import numpy as np
 
 from msdc.pipeline.live.receive import Endpoint
+from msdc.pipeline.meta import REPLAYED_FORMATS
 
 SECONDS_PER_DAY = 86400
 HALF_DAY_S = 43200
-TIMED_FORMATS = ("pcap", "pcapng", "final", "gps")
-REPLAYED_FORMATS = ("raw", *TIMED_FORMATS)
+TIMED_FORMATS = tuple(f for f in REPLAYED_FORMATS if f != "raw")  # each datagram with its capture time
 SLEEP_MIN_S = 0.0005  # datagrams due within this are sent at once (the OS sleeps no finer)
 
 

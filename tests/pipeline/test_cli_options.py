@@ -481,3 +481,26 @@ def test_an_input_that_decodes_nothing_is_named(tmp_path: Path, capsys) -> None:
     assert f"{text}: no record decoded (" in err and f"{empty}: no CAT021 or CAT048 record in it" in err
     assert main(["track", *args, "-o", str(tmp_path / "t.csv")]) == 0
     assert f"{text}: no record decoded (" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("command,flag,default", [
+    ("decode", "--chunk-mb", "64"), ("ingest", "--chunk-mb", "8"), ("ingest", "--workers", "1"),
+    ("sql", "--limit", "50"), ("listen", "--rotate", "1h"), ("listen", "--queue", "50000"),
+    ("replay", "--ttl", "1"), ("replay", "--speed", "1"),
+])
+def test_help_gives_each_options_default(command, flag, default, capsys):
+    """docs/guide/index.md: "msdc COMMAND --help lists each command's options with their defaults" (the
+    defaults of the guide's options tables)."""
+    with pytest.raises(SystemExit):
+        main([command, "--help"])
+    text = " ".join(capsys.readouterr().out.split())
+    entry = text[text.index(f" {flag} "):]
+    entry = entry[:entry.index(" --", 3)] if " --" in entry[3:] else entry
+    assert f"(default: {default})" in entry
+
+
+def test_replay_refuses_a_format_it_cannot_send_in_its_usage(capsys):
+    with pytest.raises(SystemExit) as stop:
+        main(["replay", "x.ast", "--to", "127.0.0.1:9", "--format", "oradis"])
+    assert stop.value.code == 2
+    assert "invalid choice: 'oradis'" in capsys.readouterr().err
