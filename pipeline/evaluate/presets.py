@@ -10,7 +10,7 @@ from dataclasses import dataclass, field
 from importlib import resources
 from pathlib import Path
 
-from msdc.pipeline.evaluate.catalogue import CATALOGUE
+from msdc.pipeline.evaluate.catalogue import CATALOGUE, ERROR, SIGNED
 from msdc.pipeline.evaluate.statistics import DIRECTIONS
 
 PRESET_KEYS = {"name": str, "title": str, "standard": str, "sensor_types": list, "source": str,
@@ -21,6 +21,9 @@ REQUIREMENT_KEYS = {"id": str, "threshold": float, "direction": str, "clause": s
                     "note": str}
 REQUIREMENT_REQUIRED = ("id", "threshold", "direction", "clause", "checked", "source", "stated")
 SENSOR_TYPES = ("ssr", "mode_s", "psr", "mlat", "wam", "smr", "adsb", "tracker")
+# the scorecard's own sector names: an area or sector named so would pass for them
+RESERVED_SECTORS = ("global", "surface", "airborne", "field monitors")
+MIN_INTERVAL_S = 0.1  # the shortest update interval a preset may ask for (an ADS-B report rate is 0.5 s)
 
 
 @dataclass(frozen=True)
@@ -134,6 +137,9 @@ def _requirement(where: str, table, areas: dict[str, str]) -> Requirement:
         raise ValueError(f"{where}: key 'direction' must be one of {', '.join(DIRECTIONS)}, "
                          f"got {values['direction']!r}")
     kind = CATALOGUE[values["id"]]
+    if kind.kind in (ERROR, SIGNED) and not values["threshold"] > 0.0:
+        raise ValueError(f"{where}: key 'threshold' must be a positive number of {kind.unit} for "
+                         f"{values['id']}, got {values['threshold']!r}")
     if kind.unit == "fraction" and not 0.0 <= values["threshold"] <= 1.0:
         raise ValueError(f"{where}: key 'threshold' is a fraction between 0 and 1 for {values['id']}, "
                          f"got {values['threshold']!r} (write 97 % as 0.97)")
@@ -141,9 +147,16 @@ def _requirement(where: str, table, areas: dict[str, str]) -> Requirement:
     _check_keys(f"{where} parameters", params, kind.parameters, kind.required)
     values["parameters"] = {k: _typed(f"{where} parameters", k, v, kind.parameters[k])
                             for k, v in params.items()}
-    for key, value in values["parameters"].items():
+    checked = values["parameters"]
+    for key, value in checked.items():
         if isinstance(value, float) and value <= 0.0:
             raise ValueError(f"{where} parameters: key {key!r} must be > 0, got {value!r}")
+    if checked.get("interval_s", MIN_INTERVAL_S) < MIN_INTERVAL_S:
+        raise ValueError(f"{where} parameters: key 'interval_s' must be at least {MIN_INTERVAL_S:g} s, got "
+                         f"{checked['interval_s']!r}")
+    if checked.get("min_gap_s", 0.0) >= checked.get("max_gap_s", math.inf):
+        raise ValueError(f"{where} parameters: min_gap_s {checked['min_gap_s']!r} must be below max_gap_s "
+                         f"{checked['max_gap_s']!r} (the gaps counted are min_gap_s <= gap < max_gap_s)")
     if "area" in values and values["area"] not in areas:
         raise ValueError(f"{where}: key 'area' names {values['area']!r}, not among the preset's [areas] "
                          f"({', '.join(areas) or 'none declared'}){_hint(values['area'], areas)}")
@@ -151,9 +164,10 @@ def _requirement(where: str, table, areas: dict[str, str]) -> Requirement:
 
 
 def _parse(label: str, text: str) -> Preset:
-    """A preset from its TOML text; label names the file in every message."""
+    """A preset from its TOML text (a leading byte-order mark allowed); label names the file in every
+    message."""
     try:
-        data = tomllib.loads(text)
+        data = tomllib.loads(text.removeprefix("\ufeff"))
     except tomllib.TOMLDecodeError as exc:
         raise ValueError(f"{label}: not valid TOML: {exc}") from None
     _check_keys(label, data, {"preset": dict, "requirement": list}, ("preset", "requirement"))
@@ -167,12 +181,18 @@ def _parse(label: str, text: str) -> Preset:
             raise ValueError(f"{label} [preset]: key 'sensor_types' holds {kind!r}"
                              f"{_hint(str(kind), SENSOR_TYPES)}; known types: {', '.join(SENSOR_TYPES)}")
     meta["sensor_types"] = tuple(meta["sensor_types"])
+    if not meta["sensor_types"]:
+        raise ValueError(f"{label} [preset]: key 'sensor_types' names no sensor type; known types: "
+                         f"{', '.join(SENSOR_TYPES)}")
     if "gate_m" in meta and not meta["gate_m"] > 0.0:
         raise ValueError(f"{label} [preset]: key 'gate_m' must be a positive number of metres, "
                          f"got {meta['gate_m']!r}")
     areas = meta.get("areas", {})
     for area, description in areas.items():
         _typed(f"{label} [preset.areas]", area, description, str)
+        if area in RESERVED_SECTORS:
+            raise ValueError(f"{label} [preset.areas]: the area name {area!r} is the scorecard's own; "
+                             f"{', '.join(map(repr, RESERVED_SECTORS))} cannot name an area")
     rows = data["requirement"]
     if not isinstance(rows, list) or not rows:
         raise ValueError(f"{label}: no [[requirement]] tables")
@@ -192,6 +212,8 @@ def load_preset(name_or_path: str | Path) -> Preset:
     """A shipped preset by name (see available_presets()) or a user's TOML file by path."""
     files = _preset_files()
     name = str(name_or_path)
+    if not name.strip():
+        raise ValueError("the preset is empty: give a shipped preset's name or a .toml file's path")
     if name in files:
         return _parse(f"preset {name}", files[name].read_text(encoding="utf-8"))
     path = Path(name)

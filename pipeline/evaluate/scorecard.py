@@ -21,7 +21,7 @@ from msdc.pipeline.evaluate.catalogue import CATALOGUE, ERROR, SIGNED
 from msdc.pipeline.evaluate.coverage import Sensor
 from msdc.pipeline.evaluate.detection import Within, update_period
 from msdc.pipeline.evaluate.outcome import Outcome, withheld
-from msdc.pipeline.evaluate.presets import Preset, Requirement
+from msdc.pipeline.evaluate.presets import RESERVED_SECTORS, Preset, Requirement
 from msdc.pipeline.evaluate.reference import (
     DEFAULT_REFERENCE_GAP_S,
     associate,
@@ -35,8 +35,7 @@ from msdc.pipeline.evaluate.reference_gates import reference_at, sigma_gate
 from msdc.pipeline.evaluate.requirements import REQUIREMENTS
 from msdc.pipeline.evaluate.statistics import magnitude_interval, verdict
 
-GLOBAL = "global"
-SURFACE, AIRBORNE, MONITORS = "surface", "airborne", "field monitors"
+GLOBAL, SURFACE, AIRBORNE, MONITORS = RESERVED_SECTORS
 MONITOR_CODE = 2.0  # the on-ground channel's value for a field monitor
 # (lat deg, lon deg, FL, on ground 1/0/NaN) -> inside
 Mask = Callable[[np.ndarray, np.ndarray, np.ndarray, np.ndarray], np.ndarray]

@@ -16,6 +16,7 @@ from pathlib import Path
 
 import numpy as np
 
+from msdc.pipeline.evaluate.presets import RESERVED_SECTORS
 from msdc.pipeline.model.polygons import POLYGON_TYPES, geometry_polygons, inside_any, read_geojson
 
 PROPERTIES = ("name", "area", "min_fl", "max_fl")
@@ -84,6 +85,9 @@ def _sector(path: Path, index: int, feature) -> Sector:
     if isinstance(name, str) and name.strip():
         where = f"{where} ({name.strip()!r})"
     name = _text(where, "name", name, required=True)
+    if name in RESERVED_SECTORS:
+        raise ValueError(f"{where}: the name {name!r} is the scorecard's own; "
+                         f"{', '.join(map(repr, RESERVED_SECTORS))} cannot name a sector")
     _check_keys(where, properties)
     area = _text(where, "area", properties.get("area"), required=False)
     min_fl = _level(where, "min_fl", properties.get("min_fl"))

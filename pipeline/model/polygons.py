@@ -53,6 +53,8 @@ def read_geojson(path: Path) -> object:
     except json.JSONDecodeError as exc:
         raise ValueError(f"{path}: not a GeoJSON file (JSON error at line {exc.lineno}, column {exc.colno}: "
                          f"{exc.msg})") from None
+    except RecursionError:
+        raise ValueError(f"{path}: not a GeoJSON file (nested too deeply to read)") from None
 
 
 def geometry_polygons(path: Path, where: str, geometry: dict) -> list[tuple[np.ndarray, ...]]:
@@ -92,10 +94,10 @@ def _rings(path: Path, where: str, rings: object) -> tuple[np.ndarray, ...]:
     out = []
     for j, ring in enumerate(rings):
         name = f"{where}, ring {j + 1}"
-        try:
-            xy = np.array([[float(q[0]), float(q[1])] for q in ring], dtype=float)
-        except (TypeError, ValueError, IndexError):
-            raise ValueError(f"{path}: {name}: positions must be [longitude, latitude] numbers") from None
+        if not isinstance(ring, list) or not all(isinstance(q, list) and len(q) >= 2 and all(
+                isinstance(v, int | float) and not isinstance(v, bool) for v in q[:2]) for q in ring):
+            raise ValueError(f"{path}: {name}: positions must be [longitude, latitude] numbers")
+        xy = np.array([[float(q[0]), float(q[1])] for q in ring], dtype=float)
         if len(xy) < 3 or not np.isfinite(xy).all():
             raise ValueError(f"{path}: {name}: a ring needs at least 3 finite positions")
         if (np.abs(xy[:, 1]) > 90).any() or (np.abs(xy[:, 0]) > 180).any():

@@ -243,6 +243,15 @@ def test_a_user_preset_loads_by_path(tmp_path):
      "unknown key 'requirements' (did you mean 'requirement'?)"),
     ('threshold = 150', 'threshold = 150\nmin_sample = 0', "key 'min_sample' must be a whole number >= 1"),
     ('stated = "150 m"', 'stated = "150 m"\nstated = "x"', "not valid TOML"),
+    ('threshold = 150', 'threshold = 0',
+     "requirement 2 (rms_m): key 'threshold' must be a positive number of m"),
+    ('interval_s = 5', 'interval_s = 1e-9',
+     "requirement 1 (pd) parameters: key 'interval_s' must be at least 0.1 s"),
+    ('id = "rms_m"\nthreshold = 150', 'id = "long_gaps"\nthreshold = 0.01\nparameters = { min_gap_s = 10, '
+     'max_gap_s = 5 }', "requirement 2 (long_gaps) parameters: min_gap_s 10.0 must be below max_gap_s 5.0"),
+    ('tma = "the TMA"', 'global = "everywhere"',
+     "[preset.areas]: the area name 'global' is the scorecard's own"),
+    ('sensor_types = ["ssr"]', 'sensor_types = []', "[preset]: key 'sensor_types' names no sensor type"),
 ])
 def test_bad_presets_are_refused_naming_file_requirement_and_key(tmp_path, old, new, message):
     assert old in GOOD
@@ -250,6 +259,14 @@ def test_bad_presets_are_refused_naming_file_requirement_and_key(tmp_path, old, 
     with pytest.raises(ValueError) as refused:
         load_preset(path)
     assert str(refused.value).startswith(str(path)) and message in str(refused.value)
+
+
+def test_a_byte_order_mark_is_read_and_an_empty_name_refused(tmp_path):
+    path = tmp_path / "bom.toml"
+    path.write_bytes(b"\xef\xbb\xbf" + GOOD.encode())
+    assert load_preset(path).name == "mine"
+    with pytest.raises(ValueError, match="the preset is empty"):
+        load_preset("")
 
 
 def test_a_repeated_requirement_is_refused(tmp_path):

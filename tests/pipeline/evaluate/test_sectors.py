@@ -151,6 +151,13 @@ BAD = [
      "feature 1 ('M') has no coordinates"),
     ("multipolygon ring", collection(feature("M", [[square(0, 0, 1, 1)], [[[0, 0]]]], kind="MultiPolygon")),
      "feature 1 ('M'), polygon 2, ring 1: a ring needs at least 3 finite positions"),
+    ("text position", collection(feature("R", [[["0", "0"], ["1", "0"], ["1", "1"], ["0", "0"]]])),
+     "feature 1 ('R'), ring 1: positions must be [longitude, latitude] numbers"),
+    ("named global", collection(feature("global", [square(0, 0, 1, 1)])),
+     "feature 1 ('global'): the name 'global' is the scorecard's own"),
+    ("named surface", collection(feature("surface", [square(0, 0, 1, 1)])),
+     "feature 1 ('surface'): the name 'surface' is the scorecard's own"),
+    ("too deep", "[" * 100_000 + "]" * 100_000, "not a GeoJSON file (nested too deeply to read)"),
 ]
 
 
