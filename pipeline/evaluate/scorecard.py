@@ -132,6 +132,9 @@ def judge(outcome: Outcome, requirement: Requirement, preset: Preset, sensor_id:
         low, high = magnitude_interval(low, high)
         notes.append(f"judged by its magnitude, in [{low:.4g}, {high:.4g}]")
     n = outcome.n
+    if CATALOGUE[requirement.id].statistic == "max" and math.isfinite(outcome.value):
+        # the largest error judged bounds the true maximum from below: [value, inf) holds it for sure
+        low, high = float(outcome.value), math.inf
     v = verdict(low, high, requirement.threshold, requirement.direction,
                 int(n) if math.isfinite(n) else None, preset.minimum_sample(requirement))
     if v.reason and (not math.isnan(outcome.value) or not notes):

@@ -44,6 +44,16 @@ def test_a_signed_bias_is_judged_by_its_magnitude():
     assert judge(across, req, preset(req), "R", "global")["verdict"] == "inconclusive"
 
 
+def test_a_maximum_above_its_threshold_fails_and_one_below_stays_open():
+    """The largest error judged is a lower bound of the true maximum: above a '<=' threshold it fails for
+    sure; below it, more reports could still exceed it."""
+    req = requirement("max_m", 1000.0)
+    above = Outcome("max_m", 1296.8, math.nan, math.nan, 3046, 3046)
+    below = Outcome("max_m", 800.0, math.nan, math.nan, 3046, 3046)
+    assert judge(above, req, preset(req), "R", "global")["verdict"] == "fail"
+    assert judge(below, req, preset(req), "R", "global")["verdict"] == "inconclusive"
+
+
 def test_parameters_are_written_as_the_preset_gives_them():
     assert parameters_text(requirement("pd", 0.97, ">=", interval_s=5.0, scope="global")) == \
         "interval_s = 5, scope = global"
