@@ -17,7 +17,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 import pandas as pd
 
-from msdc.pipeline.evaluate.catalogue import CATALOGUE, ERROR, SIGNED
+from msdc.pipeline.evaluate.catalogue import CATALOGUE, ERROR, PROPORTION, RATE, SIGNED
 from msdc.pipeline.evaluate.coverage import Sensor
 from msdc.pipeline.evaluate.detection import Within, update_period
 from msdc.pipeline.evaluate.outcome import Outcome, withheld
@@ -31,7 +31,7 @@ from msdc.pipeline.evaluate.reference import (
     shared,
     shared_references,
 )
-from msdc.pipeline.evaluate.reference_gates import reference_at, sigma_gate
+from msdc.pipeline.evaluate.reference_gates import reference_at, self_referenced, sigma_gate
 from msdc.pipeline.evaluate.requirements import REQUIREMENTS
 from msdc.pipeline.evaluate.statistics import magnitude_interval, verdict
 
@@ -115,6 +115,17 @@ def _gate_false(reports: pd.DataFrame, reference: pd.DataFrame, distance_m: floa
     note = (f"sigma gate at {distance_m:g} m: {dropped} of {len(rep)} reports left out, near an aircraft "
             "whose reference sigma is unknown or too large") if dropped else ""
     return rep[keep].reset_index(drop=True), (note,) if note else ()
+
+
+def self_reference_note(reports: pd.DataFrame, reference: pd.DataFrame, sensor_id: str) -> str:
+    """How many of a region's associated reports were judged against the sensor's own track (their aircraft
+    seen by no other sensor then): said on every detection, code, identity and count row; '' when none."""
+    linked = reports[reports["ref_index"].to_numpy() >= 0]
+    own = int(self_referenced(linked, reference, None).sum()) if len(linked) else 0
+    if not own:
+        return ""
+    return (f"self-reference: {own:,} of {len(linked):,} associated reports judged against {sensor_id}'s own "
+            "track (no other sensor saw their aircraft then)")
 
 
 def parameters_text(requirement: Requirement) -> str:
@@ -321,7 +332,22 @@ def _score(preset: Preset, sensor_id: str, reports: pd.DataFrame, reference: pd.
     if sensor.scan_period is None:  # one scan period for every region: a sector's plots estimate none
         sensor = replace(sensor, scan_period=update_period(rep, sensor))
     cuts: dict[str, tuple[pd.DataFrame, pd.DataFrame]] = {} if monitors else {GLOBAL: (rep, reference)}
-    where = None
+    where: tuple[np.ndarray, ...] | None = None
+    marks: dict[str, str] = {}
+
+    def region(name: str, masks: list[Mask]) -> tuple[pd.DataFrame, pd.DataFrame]:
+        """The reports and reference of a region, cut once."""
+        nonlocal where
+        if name not in cuts:
+            if where is None:
+                lat, lon, fl, ground = reference_positions(rep, reference)
+                own = ~np.isfinite(lat)
+                where = (np.where(own, rep["latitude"].to_numpy(float), lat),
+                         np.where(own, rep["longitude"].to_numpy(float), lon),
+                         np.where(own, _report_fl(rep), fl), np.where(own, np.nan, ground))
+            cuts[name] = cut(rep, reference, masks, where)
+        return cuts[name]
+
     for i, req in enumerate(preset.requirements):
         spots = _regions_for(req, regions, monitors)
         if not spots:
@@ -333,19 +359,14 @@ def _score(preset: Preset, sensor_id: str, reports: pd.DataFrame, reference: pd.
                 gap_s = float(req.parameters.get("reference_max_gap_s") or DEFAULT_REFERENCE_GAP_S)
                 outcome = measure(req, rep, reference, sensor, Placed(name, masks, reference, gap_s))
             else:
-                if name not in cuts:
-                    if where is None:
-                        lat, lon, fl, ground = reference_positions(rep, reference)
-                        own = ~np.isfinite(lat)
-                        where = (np.where(own, rep["latitude"].to_numpy(float), lat),
-                                 np.where(own, rep["longitude"].to_numpy(float), lon),
-                                 np.where(own, _report_fl(rep), fl), np.where(own, np.nan, ground))
-                    cuts[name] = cut(rep, reference, masks, where)
-                r, ref = cuts[name]
-                if r.empty and ref.empty:
-                    outcome = withheld(req.id, f"no report and no reference inside {name!r}")
-                else:
-                    outcome = measure(req, r, ref, sensor)
+                r, ref = region(name, masks)
+                outcome = (withheld(req.id, f"no report and no reference inside {name!r}") if r.empty and
+                           ref.empty else measure(req, r, ref, sensor))
+            if CATALOGUE[req.id].kind in (PROPORTION, RATE):  # position figures never use the sensor's own
+                if name not in marks:
+                    marks[name] = self_reference_note(*region(name, masks), sensor_id)
+                if marks[name]:
+                    outcome = replace(outcome, notes=(*outcome.notes, marks[name]))
             score.outcomes[(name, req.id, i)] = outcome
             score.rows.append(judge(outcome, req, preset, sensor_id, name))
     return score
