@@ -807,9 +807,10 @@ class EvaluateOptions(ReferenceFilterOptions, DatasetOptions, DecodingOptions):
                                 help="the workbook (.xlsx): the scorecard first, then the tables",
                                 doc="the workbook (`.xlsx`): the scorecard first, then the tables "
                                     "([Outputs](evaluate-outputs.md))")
-    json: str | None = option(None, "--json", section="output", help="results, tables and map points as JSON",
-                              doc="the results, tables and map points as JSON ([JSON]"
-                                  "(evaluate-outputs.md#json))")
+    json: str | None = option(None, "--json", section="output",
+                              help="the results and the tables as JSON (the map: --html)",
+                              doc="the results and the tables as JSON, the map points left to the HTML "
+                                  "report ([JSON](evaluate-outputs.md#json))")
     html: str | None = option(None, "--html", section="output",
                               help="one self-contained HTML report (works offline)",
                               doc="one self-contained HTML report, working offline ([HTML]"
