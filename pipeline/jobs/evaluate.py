@@ -392,6 +392,7 @@ class WindowRun:
     loaded: Loaded
     external: bool
     windows: list[dict] = field(default_factory=list)  # a span's windows: bounds and reports kept
+    site_faults: dict[str, str] = field(default_factory=dict)  # radars whose site is wrong: the warning
 
 
 def evaluate_job(options: EvaluateOptions, *, progress: Progress | None = None,
@@ -402,17 +403,38 @@ def evaluate_job(options: EvaluateOptions, *, progress: Progress | None = None,
     checked = checked or validate(options)
     with carrying(checked.warnings) as warnings:
         if options.window_minutes is None:
-            run = _evaluate_window(options, checked, progress, warnings)
-            card, tables, points = _assemble(run.results)
+            run, per_window = _evaluate_window(options, checked, progress, warnings), {}
         else:
             run, per_window = _evaluate_span(options, checked, progress, warnings)
-            card, tables, points = _assemble(run.results)
-            tables = {**per_window, **tables}
+        _no_verdict_on_a_wrong_site(run)
+        card, tables, points = _assemble(run.results)
+        tables = {**per_window, **tables}
         params = _parameters(options, checked, run, started, command)
         if run.windows:
             params["windows"] = run.windows
         return EvaluateResult(options, checked, card, tables, points, run.results, params, run.loaded,
                               warnings)
+
+
+def _no_verdict_on_a_wrong_site(run: WindowRun) -> None:
+    """A radar whose plots lie far from ADS-B (its site in the sensor file is wrong, model.site_check) gets
+    no verdict: its plots are placed wrong, so its reference, coverage and association are too. Every row
+    of it is inconclusive, the warning in its notes, its figures kept."""
+    for result in run.results:
+        said = run.site_faults.get(result.sensor)
+        if said is None:
+            continue
+        result.rows = _no_verdict(result.rows, said)
+        result.notes.append(f"no verdict: {said}")
+
+
+def _no_verdict(rows: list[dict], said: str | None) -> list[dict]:
+    """Scorecard rows made inconclusive, ``said`` in their notes (as they were without it)."""
+    if said is None:
+        return rows
+    why = f"no verdict: {said}"
+    return [{**row, "verdict": "inconclusive", "notes": "; ".join(x for x in (row["notes"], why) if x)}
+            for row in rows]
 
 
 def _parameters(options: EvaluateOptions, checked: EvaluateChecked, run: WindowRun, started: float,
@@ -441,7 +463,7 @@ def _evaluate_window(options: EvaluateOptions, checked: EvaluateChecked, progres
         tracker_ids,
     )
     from msdc.pipeline.model.heap import release_free_memory
-    from msdc.pipeline.model.site_check import site_warnings
+    from msdc.pipeline.model.site_check import far_sites
     from msdc.pipeline.model.time import midnight
 
     if progress:
@@ -457,7 +479,8 @@ def _evaluate_window(options: EvaluateOptions, checked: EvaluateChecked, progres
     meas, said = source_measurements(loaded, checked, options)
     warnings += said
     within_margin(loaded, (TRACKER_CATEGORY, *SERVICE_CATEGORIES))
-    warnings += site_warnings(meas, checked.sensors, str(sensors_path(options)))
+    faults = far_sites(meas, checked.sensors, str(sensors_path(options)))
+    warnings += faults.values()
     warnings += undated_warning(loaded, "the reports and the reference")
     if meas.empty:
         raise JobError("no report in the inputs to evaluate")
@@ -481,7 +504,7 @@ def _evaluate_window(options: EvaluateOptions, checked: EvaluateChecked, progres
                                external, monitors, cache))
         release_free_memory()  # a reference's transient copies, handed back before the next sensor's
     loaded.drop_frames()
-    return WindowRun(results, notes, loaded, external is not None)
+    return WindowRun(results, notes, loaded, external is not None, site_faults=faults)
 
 
 PER_WINDOW = "Scorecard per window"
@@ -514,6 +537,7 @@ def _span(options: EvaluateOptions, checked: EvaluateChecked, progress: Progress
 
     spans: dict[str, SensorSpan] = {}
     runs: list[tuple[tuple[str, str], list[str]]] = []  # each window's label and run notes
+    runs_faults: list[tuple[tuple[str, str], dict[str, str]]] = []  # and its radars with a wrong site
     reads: list[Loaded] = []  # the first window's, then each one's inputs and selection alone
     rows, refused, external = [], [], False
     points = max(1, MAP_POINTS_PER_SENSOR // len(windows))  # the span's map keeps about as many points
@@ -528,8 +552,10 @@ def _span(options: EvaluateOptions, checked: EvaluateChecked, progress: Progress
             span = spans[r.sensor]
             span.add(label, r.outcomes, r.notes, r.per_aircraft, r.bands, r.polar, r.vertical, r.range_errors,
                      r.map_points)
-            rows += [{"window_from": label[0], "window_to": label[1], **row} for row in r.rows]
+            rows += [{"window_from": label[0], "window_to": label[1], **row}
+                     for row in _no_verdict(r.rows, run.site_faults.get(r.sensor))]
         runs.append((label, run.notes))
+        runs_faults.append((label, run.site_faults))
         reads.append(run.loaded if not reads else Loaded({}, [], run.loaded.inputs, run.loaded.date,
                                                          selection=run.loaded.selection))
         external = run.external
@@ -538,6 +564,7 @@ def _span(options: EvaluateOptions, checked: EvaluateChecked, progress: Progress
                        + "; ".join(refused[:3]) + (f"; and {len(refused) - 3} more" if len(refused) > 3
                                                    else "") + ")")
     warnings[:] = list(dict.fromkeys(warnings))  # each window says the same of the same inputs
+    faults = {k: v for _, run in runs_faults for k, v in run.items()}
     results, noted = [], []
     for sensor_id, span in spans.items():
         result, differing = _pooled_sensor(checked, sensor_id, span)
@@ -552,7 +579,7 @@ def _span(options: EvaluateOptions, checked: EvaluateChecked, progress: Progress
         notes.append(f"{len(noted)} notes differ between windows: in the table {NOTES_PER_WINDOW!r}")
     kept = [{"from": a, "to": b, "kept": (loaded.selection or {}).get("kept")}
             for ((a, b), _), loaded in zip(runs, reads, strict=True)]
-    return WindowRun(results, notes, _pooled_loaded(checked, reads), external, kept), tables
+    return WindowRun(results, notes, _pooled_loaded(checked, reads), external, kept, faults), tables
 
 
 def _window_runs(options: EvaluateOptions, checked: EvaluateChecked, windows: list, map_points: int,

@@ -73,12 +73,17 @@ def far_separations(summaries: list[dict], meas: pd.DataFrame, sensors: pd.DataF
 
 
 def site_warnings(meas: pd.DataFrame, sensors: pd.DataFrame, sensors_path: str) -> list[str]:
-    """far_separations for the jobs without correlation windows (quality, track, conflicts): each radar's
-    plots against the same aircraft's ADS-B report nearest in time (radar_offsets)."""
+    """far_separations for the jobs without correlation windows (quality, track, conflicts, evaluate):
+    each radar's plots against the same aircraft's ADS-B report nearest in time (radar_offsets)."""
+    return list(far_sites(meas, sensors, sensors_path).values())
+
+
+def far_sites(meas: pd.DataFrame, sensors: pd.DataFrame, sensors_path: str) -> dict[str, str]:
+    """site_warnings by radar: its sensor id and the warning."""
     margin_m = MATCH_TOLERANCE_S * FAST_AIRCRAFT_MPS  # how far an aircraft flies between plot and report
-    return [w for row in radar_offsets(meas).itertuples() if np.isfinite(row.rho_p95_nm)
+    return {str(row.sensor_id): w for row in radar_offsets(meas).itertuples() if np.isfinite(row.rho_p95_nm)
             for w in _far_site(str(row.sensor_id), float(row.offset_median_m), float(row.rho_p95_nm), sensors,
-                               sensors_path, margin_m)]
+                               sensors_path, margin_m)}
 
 
 def _far_site(sensor_id: str, sep_m: float, far_nm: float, sensors: pd.DataFrame, sensors_path: str,

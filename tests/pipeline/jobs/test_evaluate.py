@@ -235,6 +235,22 @@ def test_a_preset_for_other_sensors_is_refused_with_what_is_present(recording, t
     assert sorted(tmp_path.iterdir()) == before
 
 
+def test_a_radar_whose_site_is_wrong_gets_no_verdict(recording, tmp_path):
+    """The sensor file puts the radar 0.5 degrees (55 km) north of its site: its plots lie far from ADS-B,
+    so every row of it is inconclusive, saying why, where the right site gives passes and fails."""
+    sim, folder = recording
+    site = sim.declared_site
+    moved = tmp_path / "moved.toml"
+    moved.write_text(sim.sensors_toml().replace(f"latitude = {site.latitude!r}",
+                                                f"latitude = {site.latitude + 0.5!r}"))
+    assert moved.read_text() != sim.sensors_toml()
+    result = evaluate_job(_options(folder, sensors=str(moved)))
+    card = result.scorecard
+    assert len(card) and set(card["verdict"]) == {"inconclusive"}
+    assert card["notes"].str.contains(f"no verdict: radar {RADAR_ID}: its plots lie a median").all()
+    assert any("its plots lie a median" in w for w in result.warnings)
+
+
 def test_an_unknown_test_sensor_is_refused(recording):
     _, folder = recording
     from msdc.pipeline.jobs.common import JobError
