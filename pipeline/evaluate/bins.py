@@ -82,6 +82,13 @@ def _edges(top: float, step: float) -> np.ndarray:
     return step * np.arange(n + 1)
 
 
+def _finite(reduce, values) -> float:
+    """``reduce`` (np.max or np.min) of the finite values and 0 (an edge of every grid), without the warning
+    numpy's nan-functions give where every value is NaN."""
+    v = np.asarray(values, float)
+    return float(reduce(v[np.isfinite(v)], initial=0.0))
+
+
 def azimuth_edges(step_deg: float) -> np.ndarray:
     """0, step, ... and 360 (a last narrower sector where step does not divide 360)."""
     return np.append(np.arange(0.0, 360.0 - 1e-9, step_deg), 360.0)
@@ -151,12 +158,12 @@ def detection_bands(table: pd.DataFrame, reference: pd.DataFrame, *, range_step_
     inside = _rows(table, True)
     fl = flight_level(inside)
     bands = {
-        "range_nm": detection_by(table, "rho_nm", _edges(float(np.nanmax(inside["rho_nm"], initial=0.0)),
-                                                         range_step_nm), min_expected=min_expected),
+        "range_nm": detection_by(table, "rho_nm", _edges(_finite(np.max, inside["rho_nm"]), range_step_nm),
+                                 min_expected=min_expected),
         "azimuth_deg": detection_by(table, "azimuth_deg", azimuth_edges(sector_deg),
                                     min_expected=min_expected),
         "flight_level": detection_by(table, flight_level(table), _edges(
-            float(np.nanmax(fl, initial=0.0)) if np.isfinite(fl).any() else 0.0, fl_step),
+            _finite(np.max, fl), fl_step),
             min_expected=min_expected),
     }
     cls = surface_airborne(table, reference)
@@ -189,7 +196,7 @@ def polar_grid(table: pd.DataFrame, range_edges_nm=None, azimuth_edges_deg=None,
     """PD on slant range (x, NM) by azimuth (y, deg): the polar coverage map. Default: 10 NM by 10 deg out to
     the farthest expected update."""
     if range_edges_nm is None:
-        range_edges_nm = _edges(float(np.nanmax(table["rho_nm"], initial=0.0)), RANGE_BAND_NM)
+        range_edges_nm = _edges(_finite(np.max, table["rho_nm"]), RANGE_BAND_NM)
     if azimuth_edges_deg is None:
         azimuth_edges_deg = azimuth_edges(MAP_AZIMUTH_DEG)
     return detection_grid(table, table["rho_nm"].to_numpy(float), range_edges_nm,
@@ -201,10 +208,10 @@ def vertical_grid(table: pd.DataFrame, range_edges_nm=None, height_edges_ft=None
     the cone of silence is the empty wedge above the site. Default: 5 NM by 2,000 ft."""
     h = height_ft(table)
     if range_edges_nm is None:
-        range_edges_nm = _edges(float(np.nanmax(table["rho_nm"], initial=0.0)), VERTICAL_RANGE_NM)
+        range_edges_nm = _edges(_finite(np.max, table["rho_nm"]), VERTICAL_RANGE_NM)
     if height_edges_ft is None:  # from 0, or lower where an aircraft is below the ellipsoid (the Dead Sea)
-        lowest_ft = float(np.nanmin(h, initial=0.0))
+        lowest_ft = _finite(np.min, h)
         bottom = VERTICAL_HEIGHT_FT * min(float(np.floor(lowest_ft / VERTICAL_HEIGHT_FT)), 0.0)
-        height_edges_ft = bottom + _edges(float(np.nanmax(h, initial=0.0)) - bottom, VERTICAL_HEIGHT_FT)
+        height_edges_ft = bottom + _edges(_finite(np.max, h) - bottom, VERTICAL_HEIGHT_FT)
     return detection_grid(table, table["rho_nm"].to_numpy(float), range_edges_nm, h, height_edges_ft,
                           **kwargs)

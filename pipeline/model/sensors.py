@@ -123,7 +123,11 @@ def _check_entry(path: Path, i: int, entry: object) -> dict:
 
 
 def _check_coverage(where: str, entry: dict) -> None:
-    """Refuse coverage limits whose minimum is not below their maximum (no position would be inside)."""
+    """Refuse coverage limits whose minimum is not below their maximum, or a maximum range of 0 (no position
+    would be inside)."""
+    if entry["max_range_nm"] is not None and not entry["max_range_nm"] > 0.0:
+        raise ValueError(f"{where} ({entry['name']!r}): max_range_nm = {entry['max_range_nm']!r}: no "
+                         "position would be inside the coverage")
     for lo, hi in (("min_range_nm", "max_range_nm"), ("min_elevation_deg", "max_elevation_deg")):
         if entry[lo] is not None and entry[hi] is not None and not entry[lo] < entry[hi]:
             raise ValueError(f"{where} ({entry['name']!r}): {lo} = {entry[lo]!r} is not below {hi} = "

@@ -68,6 +68,7 @@ def test_all_four_limits_are_read(tmp_path):
     ("min_range_nm = 50\nmax_range_nm = 50", ["'Hill'", "min_range_nm = 50", "not below max_range_nm = 50"]),
     ("min_elevation_deg = 10\nmax_elevation_deg = 5", ["min_elevation_deg = 10", "max_elevation_deg = 5"]),
     ("max_rang_nm = 200", ["unknown key 'max_rang_nm'", "did you mean max_range_nm"]),
+    ("max_range_nm = 0", ["'Hill'", "max_range_nm = 0", "no position would be inside the coverage"]),
 ])
 def test_bad_limits_are_refused_naming_file_entry_and_value(tmp_path, extra, words):
     path = tmp_path / "sensors.toml"
