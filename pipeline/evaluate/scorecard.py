@@ -351,7 +351,8 @@ def _score(preset: Preset, sensor_id: str, reports: pd.DataFrame, reference: pd.
     for i, req in enumerate(preset.requirements):
         spots = _regions_for(req, regions, monitors)
         if not spots:
-            score.notes.append(f"{req.id} on area {req.area!r}: no sector of that area in the sector file, "
+            what = f"{req.id} ({parameters_text(req)})" if req.parameters else req.id
+            score.notes.append(f"{what} on area {req.area!r}: no sector of that area in the sector file, "
                                "not measured")
             continue
         for name, masks in spots:

@@ -825,16 +825,16 @@ def coverage(result: EvaluateResult) -> dict[str, bytes]:
 
 
 def text(result: EvaluateResult) -> str:
-    """The scorecard for the terminal: the global, surface/airborne and preset-area rows (the per-sector rows
-    are in the outputs), with the notes."""
-    from msdc.pipeline.evaluate.scorecard import AIRBORNE, GLOBAL, SURFACE
+    """The scorecard for the terminal: the global, surface/airborne, field-monitor and preset-area rows (the
+    per-sector rows are in the outputs), with the notes."""
+    from msdc.pipeline.evaluate.presets import RESERVED_SECTORS
     from msdc.pipeline.report.summary import frame_text
 
     card = result.scorecard
     if card.empty:
         return "Scorecard: no row (see the notes)"
     areas = {r.area for r in result.checked.preset.requirements if r.area is not None}
-    shown = card[card["sector"].isin({GLOBAL, SURFACE, AIRBORNE, *areas})]
+    shown = card[card["sector"].isin({*RESERVED_SECTORS, *areas})]  # global, surface, airborne, monitors
     cols = ["sensor", "sector", "requirement", "parameters", "value", "ci_low", "ci_high", "threshold",
             "verdict", "n"]
     out = "Scorecard (" + result.checked.preset.title + "):\n" + frame_text(shown[cols])

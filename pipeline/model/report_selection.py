@@ -326,7 +326,8 @@ def parse_window(text: str, name: str = "--area") -> SensorWindow:
     if not 0.0 <= r_lo < r_hi <= RANGE_MAX_NM:
         raise ValueError(f"{name} {text!r}: range {parts[1]} must run from a lower to a higher slant range "
                          f"within 0-{RANGE_MAX_NM:g} NM")
-    if not (0.0 <= a_lo <= 360.0 and 0.0 <= a_hi <= 360.0) or a_lo == a_hi:
+    same = a_lo % 360.0 == a_hi % 360.0 and a_hi - a_lo != 360.0  # 360-0deg as 0-0deg; 0-360deg is all
+    if not (0.0 <= a_lo <= 360.0 and 0.0 <= a_hi <= 360.0) or same:
         raise ValueError(f"{name} {text!r}: azimuth {parts[2]} must be two different angles from 0 to 360 "
                          "deg (from C clockwise to D; 300-60deg wraps through north)")
     return SensorWindow(str(text).strip(), sensor, (r_lo, r_hi), (a_lo, a_hi))

@@ -110,7 +110,8 @@ def test_sensor_names_refused(text):
 
 
 @pytest.mark.parametrize("text", ["20/129:0-60:30-120deg", "20/129:60-0nm:30-120deg", "20/129:0-60nm",
-                                  "20/129:0-60nm:30-400deg", "20/129:0-60nm:30-30deg", "x:0-60nm:0-90deg"])
+                                  "20/129:0-60nm:30-400deg", "20/129:0-60nm:30-30deg", "x:0-60nm:0-90deg",
+                                  "20/129:0-60nm:360-0deg"])
 def test_sensor_windows_refused(text):
     with pytest.raises(ValueError, match=f"--area {text!r}"):
         rs.parse_window(text)
