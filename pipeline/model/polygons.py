@@ -108,6 +108,9 @@ def _rings(path: Path, where: str, rings: object) -> tuple[np.ndarray, ...]:
                              "crosses the antimeridian, which is not supported)")
         if not np.array_equal(xy[0], xy[-1]):
             xy = np.vstack([xy, xy[:1]])
+        if len(np.unique(xy, axis=0)) < 3:
+            raise ValueError(f"{path}: {name}: a ring needs at least 3 different positions (it encloses "
+                             "nothing)")
         out.append(xy)
     return tuple(out)
 

@@ -158,6 +158,8 @@ BAD = [
     ("named surface", collection(feature("surface", [square(0, 0, 1, 1)])),
      "feature 1 ('surface'): the name 'surface' is the scorecard's own"),
     ("too deep", "[" * 100_000 + "]" * 100_000, "not a GeoJSON file (nested too deeply to read)"),
+    ("flat ring", collection(feature("R", [[[0, 0], [1, 1], [0, 0]]])),
+     "feature 1 ('R'), ring 1: a ring needs at least 3 different positions"),
 ]
 
 
