@@ -242,9 +242,11 @@ def _per_aircraft(sensor_id: str, reports: pd.DataFrame, reference: pd.DataFrame
 
     rep = associated(reports, reference, association)
     counts = rep[rep["ref_index"] >= 0].groupby("ref_aircraft").size().rename("reports")
-    from msdc.pipeline.evaluate.scorecard import ground_flags
+    from msdc.pipeline.evaluate.scorecard import MONITOR_CODE, ground_flags
 
-    ref = reference.assign(surface=ground_flags(reference)).groupby("aircraft").agg(
+    ground = ground_flags(reference)
+    ground[ground == MONITOR_CODE] = 1.0  # a field monitor stands on the surface (not a share of 200 %)
+    ref = reference.assign(surface=ground).groupby("aircraft").agg(
         built_by=("built_by", lambda s: " | ".join(sorted(set(map(str, s.unique()))))),
         self_reference_share=("self_reference", "mean"), surface_share=("surface", "mean"),
         reference_samples=("built_by", "size"))

@@ -191,3 +191,16 @@ def test_a_row_resting_partly_on_the_sensors_own_track_says_how_much():
     codes, rms = score.rows
     assert "self-reference: 3 of 5 associated reports judged against R's own track" in codes["notes"]
     assert "self-reference" not in rms["notes"]
+
+
+def test_a_field_monitor_is_judged_in_its_own_row_and_left_out_of_the_others():
+    """A fixed transponder (field_monitor) at 5 km east, seen every 4 s for 200 s, 51 of 51, beside an
+    aircraft seen on 26 of its 51 scans: the monitor's row holds its 51 updates alone, the global row the
+    aircraft's 51 alone (pooled, the global PD would read 77 of 102)."""
+    aircraft = flight("A")
+    monitor = flight("M", east_m=5_000.0, north_m_per_s=0.0).assign(field_monitor=True, on_ground=True)
+    ref = pd.concat([aircraft.assign(field_monitor=False, on_ground=False), monitor], ignore_index=True)
+    rep = pd.concat([plots(aircraft, SCANS[::2]), plots(monitor, SCANS)], ignore_index=True)
+    rows = sector_rows(rep, ref)
+    assert (rows["field monitors"]["n"], rows["field monitors"]["value"]) == (51, 1.0)
+    assert (rows["global"]["n"], rows["global"]["value"]) == (51, pytest.approx(26 / 51))

@@ -696,3 +696,19 @@ def test_per_aircraft_rms_error_is_that_of_its_reports_errors():
     assert table.loc["A", "rms_error_m"] == pytest.approx(np.sqrt((30.0**2 + 40.0**2) / 2), rel=1e-4)
     assert table.loc["A", "errors_judged"] == 2 and table.loc["A", "reports"] == 2
     assert np.isnan(table.loc["B", "rms_error_m"]) and table.loc["B", "reports"] == 0
+
+
+def test_a_field_monitors_surface_share_is_whole():
+    """The per-aircraft table's surface share: a field monitor stands on the surface (1, not its code 2),
+    an aircraft half on the surface 0.5."""
+    from msdc.pipeline.jobs.evaluate import _per_aircraft
+
+    t = np.arange(4.0)
+    reference = pd.DataFrame({"aircraft": ["M"] * 4 + ["A"] * 4, "t_s": np.r_[t, t],
+                              "latitude": 0.0, "longitude": np.r_[np.zeros(4), np.full(4, 0.1)],
+                              "built_by": "x", "self_reference": False,
+                              "on_ground": [True] * 4 + [True, True, False, False],
+                              "field_monitor": [True] * 4 + [False] * 4})
+    reports = pd.DataFrame({"t_s": [1.0], "latitude": [0.0], "longitude": [0.0]})
+    table = _per_aircraft("R", reports, reference, None, {}).set_index("aircraft")
+    assert table.loc["M", "surface_share"] == 1.0 and table.loc["A", "surface_share"] == 0.5
