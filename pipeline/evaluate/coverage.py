@@ -10,6 +10,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from msdc.pipeline.evaluate.reference import DEFAULT_REFERENCE_GAP_S, checked_trajectories, rows_by_index
 from msdc.pipeline.model.geodesy import slant_range_azimuth
 
 LIMITS = ("min_range_nm", "max_range_nm", "min_elevation_deg", "max_elevation_deg")
@@ -35,6 +36,9 @@ class Sensor:
     # the scan period settled for the whole sensor and what it came from (detection.update_period): a
     # sector's requirements use it, where its own few plots would estimate another or none
     scan_period: tuple[float, str] | None = None
+    # and its coverage, estimated once from all its associated reports (coverage_of): every requirement
+    # and region then counts the same expected updates as inside
+    settled_coverage: Coverage | None = None
 
     def __post_init__(self) -> None:
         for key in ("latitude", "longitude", "altitude_m", *LIMITS, *SIGMAS):
@@ -103,6 +107,19 @@ def coverage(sensor: Sensor, detected_rho_nm: np.ndarray, detected_elev_deg: np.
     if estimated:
         parts.append("estimated from the sensor's own detections: " + ", ".join(estimated))
     return Coverage(**values, source="coverage " + "; ".join(parts))
+
+
+def coverage_of(sensor: Sensor, reports, reference) -> Coverage:
+    """The sensor's coverage from the reference positions at its associated reports (``ref_index`` >= 0):
+    the limits ``coverage`` estimates where the sensor file declares none."""
+    t, idx = reports["t_s"].to_numpy(float), reports["ref_index"].to_numpy()
+    trajs = checked_trajectories(reference)[1] if len(reference) else []
+    lat, lon, h = (np.full(len(reports), np.nan) for _ in range(3))
+    for k, rows in enumerate(rows_by_index(idx, len(trajs))):
+        if rows.size:
+            lat[rows], lon[rows], h[rows], _ = trajs[k].at(t[rows], DEFAULT_REFERENCE_GAP_S)
+    rho, elev = sensor.polar(lat, lon, h)
+    return coverage(sensor, rho, elev)
 
 
 def sensor_from_entry(entry: Mapping, north_markers_s: np.ndarray | None = None) -> Sensor:

@@ -121,7 +121,8 @@ def _expected_updates(reports: pd.DataFrame, reference: pd.DataFrame, parameters
         table = pd.DataFrame({c: [] for c in EXPECTED_COLUMNS if c != "in_coverage"})
     table = table.sort_values(["aircraft", "stretch", "t_s"], kind="stable", ignore_index=True)
     det = table["detected"].to_numpy(bool)
-    cov = coverage(sensor, table["rho_nm"].to_numpy(float)[det], table["elevation_deg"].to_numpy(float)[det])
+    cov = sensor.settled_coverage or coverage(sensor, table["rho_nm"].to_numpy(float)[det],
+                                              table["elevation_deg"].to_numpy(float)[det])
     table["in_coverage"] = cov.inside(table["rho_nm"], table["elevation_deg"])
     below = _below_detections(table) if sensor.min_elevation_deg is None else None
     return table[EXPECTED_COLUMNS], cov, (said, cov.source, *([below] if below else []))

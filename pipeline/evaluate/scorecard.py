@@ -18,7 +18,7 @@ import numpy as np
 import pandas as pd
 
 from msdc.pipeline.evaluate.catalogue import CATALOGUE, ERROR, PROPORTION, RATE, SIGNED
-from msdc.pipeline.evaluate.coverage import Sensor
+from msdc.pipeline.evaluate.coverage import Sensor, coverage_of
 from msdc.pipeline.evaluate.detection import Within, update_period
 from msdc.pipeline.evaluate.outcome import Outcome, withheld
 from msdc.pipeline.evaluate.presets import RESERVED_SECTORS, Preset, Requirement
@@ -331,6 +331,8 @@ def _score(preset: Preset, sensor_id: str, reports: pd.DataFrame, reference: pd.
     score.reports = rep
     if sensor.scan_period is None:  # one scan period for every region: a sector's plots estimate none
         sensor = replace(sensor, scan_period=update_period(rep, sensor))
+    if sensor.settled_coverage is None and len(reference):  # and one coverage for every requirement
+        sensor = replace(sensor, settled_coverage=coverage_of(sensor, rep[rep["ref_index"] >= 0], reference))
     cuts: dict[str, tuple[pd.DataFrame, pd.DataFrame]] = {} if monitors else {GLOBAL: (rep, reference)}
     where: tuple[np.ndarray, ...] | None = None
     marks: dict[str, str] = {}

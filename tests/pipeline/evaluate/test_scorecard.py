@@ -204,3 +204,16 @@ def test_a_field_monitor_is_judged_in_its_own_row_and_left_out_of_the_others():
     rows = sector_rows(rep, ref)
     assert (rows["field monitors"]["n"], rows["field monitors"]["value"]) == (51, 1.0)
     assert (rows["global"]["n"], rows["global"]["value"]) == (51, pytest.approx(26 / 51))
+
+
+def test_every_requirement_of_a_sensor_reads_one_coverage_estimate():
+    """Estimated once from the reference at the sensor's associated reports: A's last, 30 km north at
+    10,000 ft (3,048 m), is sqrt(30,000^2 + 3,048^2) = 30,154 m = 16.28 NM away (to the 0.5 % of
+    M_PER_DEG_LAT), whether PD counts scans or 8 s intervals (each counted its own, from its detected
+    updates' places)."""
+    a, b = flight("A", north_m_per_s=150.0), flight("B", east_m=11_000.0)
+    rep = pd.concat([plots(a, SCANS), plots(b, SCANS[SCANS <= 100.0])], ignore_index=True)
+    score = score_sensor(preset(requirement("pd", 0.5, ">="), requirement("pd", 0.5, ">=", interval_s=8.0)),
+                         "R", rep, pd.concat([a, b], ignore_index=True), Sensor(0.0, 0.0, 0.0))
+    said = {row["notes"].split("max_range_nm ")[1].split(",")[0] for row in score.rows}
+    assert len(said) == 1 and float(said.pop()) == pytest.approx(16.28, rel=0.01)
