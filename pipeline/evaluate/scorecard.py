@@ -352,10 +352,13 @@ def _score(preset: Preset, sensor_id: str, reports: pd.DataFrame, reference: pd.
 
     for i, req in enumerate(preset.requirements):
         spots = _regions_for(req, regions, monitors)
-        if not spots:
+        if not spots:  # a row all the same: a requirement of the preset is never silently absent
             what = f"{req.id} ({parameters_text(req)})" if req.parameters else req.id
-            score.notes.append(f"{what} on area {req.area!r}: no sector of that area in the sector file, "
-                               "not measured")
+            why = f"on area {req.area!r}: no sector of that area in the sector file, not measured"
+            score.notes.append(f"{what} {why}")
+            outcome = withheld(req.id, f"not measured {why.removesuffix(', not measured')}")
+            score.outcomes[(str(req.area), req.id, i)] = outcome
+            score.rows.append(judge(outcome, req, preset, sensor_id, str(req.area)))
             continue
         for name, masks in spots:
             if req.id in REGIONAL and masks:

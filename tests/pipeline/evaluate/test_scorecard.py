@@ -217,3 +217,13 @@ def test_every_requirement_of_a_sensor_reads_one_coverage_estimate():
                          "R", rep, pd.concat([a, b], ignore_index=True), Sensor(0.0, 0.0, 0.0))
     said = {row["notes"].split("max_range_nm ")[1].split(",")[0] for row in score.rows}
     assert len(said) == 1 and float(said.pop()) == pytest.approx(16.28, rel=0.01)
+
+
+def test_a_requirement_on_an_area_no_sector_provides_keeps_its_row():
+    req = Requirement("pd", 0.9, ">=", "clause", True, "hand", "stated", area="stands")
+    score = score_sensor(preset(req), "R", plots(flight("A"), SCANS), flight("A"), Sensor(0.0, 0.0, 0.0))
+    (row,) = score.rows
+    assert (row["sector"], row["requirement"], row["verdict"]) == ("stands", "pd", "inconclusive")
+    assert row["n"] == 0
+    assert math.isnan(row["value"])
+    assert "not measured on area 'stands': no sector of that area in the sector file" in row["notes"]
