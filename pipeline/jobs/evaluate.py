@@ -826,6 +826,21 @@ def coverage(result: EvaluateResult) -> dict[str, bytes]:
     return images
 
 
+def _in_units(card: pd.DataFrame) -> pd.DataFrame:
+    """The scorecard's numbers as the workbook shows them: each in its requirement's unit (a proportion as a
+    percentage, to the decimals its size needs), ``n`` a count."""
+    from msdc.pipeline.evaluate.catalogue import CATALOGUE
+    from msdc.pipeline.report.evaluation_formats import sample_text, unit_text
+
+    out = card.copy()
+    units = [CATALOGUE[r].unit for r in card["requirement"]]
+    for col in ("value", "ci_low", "ci_high", "threshold"):
+        out[col] = ["-" if pd.isna(v) else unit_text(float(v), u)
+                    for v, u in zip(card[col], units, strict=True)]
+    out["n"] = [sample_text(float(v)) for v in card["n"]]
+    return out
+
+
 def text(result: EvaluateResult) -> str:
     """The scorecard for the terminal: the global, surface/airborne, field-monitor and preset-area rows (the
     per-sector rows are in the outputs), with the notes."""
@@ -839,7 +854,7 @@ def text(result: EvaluateResult) -> str:
     shown = card[card["sector"].isin({*RESERVED_SECTORS, *areas})]  # global, surface, airborne, monitors
     cols = ["sensor", "sector", "requirement", "parameters", "value", "ci_low", "ci_high", "threshold",
             "verdict", "n"]
-    out = "Scorecard (" + result.checked.preset.title + "):\n" + frame_text(shown[cols])
+    out = "Scorecard (" + result.checked.preset.title + "):\n" + frame_text(_in_units(shown[cols]))
     if len(shown) < len(card):
         out += (f"\n  ... and {len(card) - len(shown)} rows per sector of --sectors (in the outputs)")
     counts = card["verdict"].value_counts()

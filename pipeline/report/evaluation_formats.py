@@ -41,10 +41,24 @@ def proportion_columns(frame: pd.DataFrame) -> set[str]:
     return out | {c for c in SHARE_COLUMNS if c in frame.columns}
 
 
+def percent_decimals(value: float) -> int:
+    """Decimals of a proportion shown as a percentage: 2, and below 1 % enough for three significant
+    digits (a false-report share of 0.0146 % beside its threshold of 0.01 % would both read 0.01 %)."""
+    pct = abs(100.0 * value)
+    if not math.isfinite(pct) or pct == 0.0 or pct >= 1.0:
+        return 2
+    return max(2, 2 - math.floor(math.log10(pct)))
+
+
+def percent_format(value: float) -> str:
+    """The workbook's number format of a proportion (percent_decimals)."""
+    return "0." + "0" * percent_decimals(value) + "%"
+
+
 def unit_text(value: float, unit: str) -> str:
     """A number in a requirement's unit as the scorecard shows it: a fraction as a percentage."""
     if unit == "fraction":
-        return f"{100.0 * value:.2f} %"
+        return f"{100.0 * value:.{percent_decimals(value)}f} %"
     return f"{value:,.{UNIT_DECIMALS[unit]}f}"
 
 

@@ -41,7 +41,12 @@ from msdc.pipeline.report.cells import (
     text_cell,
     write_table,
 )
-from msdc.pipeline.report.evaluation_formats import PROPORTION_FORMAT, proportion_columns
+from msdc.pipeline.report.evaluation_formats import (
+    PROPORTION_FORMAT,
+    percent_decimals,
+    percent_format,
+    proportion_columns,
+)
 from msdc.pipeline.report.excel import _discard, _write_figures, sheet_name, write_parameters
 from msdc.pipeline.report.headers import workbook_header
 from msdc.pipeline.report.saving import save
@@ -98,6 +103,14 @@ def _cell(ws: WriteOnlyWorksheet, value, number_format: str | None = None, *, fo
     return cell
 
 
+def _number_format(row: dict, value) -> str:
+    """A scorecard number's format: its row's unit's, a proportion's decimals by its size (percent_format)."""
+    fmt = str(row["_format"])
+    if fmt.endswith("%") and isinstance(value, float) and not math.isnan(value):
+        return percent_format(value)
+    return fmt
+
+
 def _display(value, number_format: str | None) -> str:
     """The text a number shows under the scorecard's formats (for the column widths)."""
     if isinstance(value, str):
@@ -105,7 +118,7 @@ def _display(value, number_format: str | None) -> str:
     if value is None or (isinstance(value, float) and math.isnan(value)):
         return ""
     if number_format and number_format.endswith("%"):
-        return f"{100 * value:.2f}%"
+        return f"{100 * value:.{percent_decimals(value)}f}%"
     decimals = len(number_format.split(".")[1]) if number_format and "." in number_format else 0
     return f"{value:,.{decimals}f}"
 
@@ -156,15 +169,14 @@ def _write_scorecard(wb: Workbook, card: pd.DataFrame, title: str = SCORECARD_SH
             ws.row_dimensions[i].height = lines * ROW_HEIGHT_PT
     ws.append(header_cells(ws, headers))
     for row in rows:
-        fmt = str(row["_format"])
         cells = []
         for key, _ in keys:
             value = row[key]
             if key in ("value", "ci_low", "ci_high"):
-                cells.append(_cell(ws, value, fmt))
+                cells.append(_cell(ws, value, _number_format(row, value)))
             elif key == "threshold":
                 italic = None if row["checked"] == "yes" else Font(italic=True)
-                cells.append(_cell(ws, value, fmt, font=italic))
+                cells.append(_cell(ws, value, _number_format(row, value), font=italic))
             elif key == "verdict":
                 cells.append(_cell(ws, value, font=VERDICT_FONTS[value], fill=VERDICT_FILLS[value]))
             elif key == "n":  # a count with thousands separated; an exposure (a rate's) to one decimal

@@ -113,6 +113,28 @@ def test_verdicts_are_coloured_and_unchecked_thresholds_marked(workbook: Path) -
     assert "not checked against the standard's own text" in notes
 
 
+@pytest.mark.parametrize("value, text, number_format", [
+    (0.9832, "98.32 %", "0.00%"), (0.0001, "0.0100 %", "0.0000%"), (0.000146, "0.0146 %", "0.0000%"),
+    (0.00397, "0.397 %", "0.000%"), (0.0, "0.00 %", "0.00%"), (1.0, "100.00 %", "0.00%"),
+])
+def test_a_small_proportion_keeps_three_significant_digits(value, text, number_format) -> None:
+    """A false-report share of 0.0146 % beside its threshold of 0.01 % must not both read 0.01 %."""
+    from msdc.pipeline.report.evaluation_formats import percent_format, unit_text
+
+    assert unit_text(value, "fraction") == text and percent_format(value) == number_format
+
+
+def test_a_small_proportion_in_the_workbook_keeps_its_digits(tmp_path: Path) -> None:
+    card = scorecard()
+    card.loc[1, ["requirement", "value", "ci_low", "ci_high", "threshold"]] = [
+        "false_reports", 0.000146, 0.0000397, 0.000373, 0.0001]
+    path = tmp_path / "small.xlsx"
+    write_evaluation_xlsx(card, path, tables())
+    ws = load_workbook(path)["Scorecard"]
+    assert (ws.cell(3, 5).number_format, ws.cell(3, 9).number_format) == ("0.0000%", "0.0000%")
+    assert ws.cell(2, 5).number_format == "0.00%"
+
+
 def test_every_sheet_is_set_up_to_print(workbook: Path) -> None:
     for ws in load_workbook(workbook).worksheets:
         assert ws.page_setup.orientation == "landscape", ws.title
