@@ -743,6 +743,16 @@ def _external(options: EvaluateOptions, epoch) -> pd.DataFrame | None:
 BAND_TITLES = {"range_nm": "PD per range band", "azimuth_deg": "PD per azimuth sector",
                "flight_level": "PD per flight-level band", "surface": "PD surface and airborne",
                "error_range": "Position error per range band"}
+# the output tables' bin edges named with their units (the workbook's and the HTML's headers and formats)
+_RANGE = {"x_low": "range_from_nm", "x_high": "range_to_nm"}
+EDGE_COLUMNS = {
+    "PD per range band": {"low": "range_from_nm", "high": "range_to_nm"},
+    "PD per azimuth sector": {"low": "azimuth_from_deg", "high": "azimuth_to_deg"},
+    "PD per flight-level band": {"low": "fl_from", "high": "fl_to"},
+    "Position error per range band": {"low_nm": "range_from_nm", "high_nm": "range_to_nm"},
+    "PD range x azimuth": {**_RANGE, "y_low": "azimuth_from_deg", "y_high": "azimuth_to_deg"},
+    "PD range x height": {**_RANGE, "y_low": "height_from_ft", "y_high": "height_to_ft"},
+}
 
 
 def _assemble(results: list[SensorResult]) -> tuple[pd.DataFrame, dict[str, pd.DataFrame], pd.DataFrame]:
@@ -766,6 +776,7 @@ def _assemble(results: list[SensorResult]) -> tuple[pd.DataFrame, dict[str, pd.D
             frame = pd.concat(parts, ignore_index=True)
             frame = frame[frame["expected"] > 0].reset_index(drop=True)
             tables[title] = frame[["sensor", *[c for c in frame.columns if c != "sensor"]]]
+    tables = {k: t.rename(columns=EDGE_COLUMNS.get(k, {})) for k, t in tables.items()}
     points = [r.map_points for r in results if len(r.map_points)]
     return card, tables, pd.concat(points, ignore_index=True) if points else None
 

@@ -33,6 +33,10 @@ UNITS: dict[str, Unit] = {
     "bytes": Unit("#,##0", 0, "bytes"),
     "fl": Unit("0.00", 2, "FL"),
     "tod": Unit("[hh]:mm:ss.000", 3, "UTC"),  # seconds since midnight, shown as a clock time
+    # the edges of bins (evaluate's range bands, azimuth sectors, flight-level bands): round numbers
+    "edge_nm": Unit("0.0", 1, "NM"),
+    "edge_deg": Unit("0.0", 1, "deg"),
+    "edge_fl": Unit("0", 0, "FL"),
 }
 
 COLUMN_UNITS: dict[str, str] = {
@@ -47,6 +51,8 @@ COLUMN_UNITS: dict[str, str] = {
     "lag_s": "s", "time_bias_s": "s", "time_bias_se_s": "s",
     "range_gain_ppm": "ppm", "range_gain_se_ppm": "ppm",
     "flight_level": "fl", "flight_level_a": "fl", "flight_level_b": "fl",
+    "range_from_nm": "edge_nm", "range_to_nm": "edge_nm", "azimuth_from_deg": "edge_deg",
+    "azimuth_to_deg": "edge_deg", "fl_from": "edge_fl", "fl_to": "edge_fl",
     "bytes": "bytes", "size_bytes": "bytes", "length": "bytes", "offset": "bytes", "first_offset": "bytes",
 }
 

@@ -105,10 +105,13 @@ LABELS: dict[str, str] = {
     "self_reference_share": "Self-reference share", "surface_share": "Surface share",
     "reference_samples": "Reference samples", "errors_judged": "Errors judged",
     "rms_error_m": "RMS position error", "windows": "Windows", "window_from": "Window from",
-    "window_to": "Window to", "expected": "Expected", "detected": "Detected", "enough": "Enough to show",
+    "window_to": "Window to", "expected": "Expected", "detected": "Detected",
     "class": "Class", "low": "Band from", "high": "Band to", "low_nm": "Band from", "high_nm": "Band to",
     "rms_m": "RMS error", "p95_m": "95th percentile error", "max_m": "Maximum error", "x_low": "x from",
     "x_high": "x to", "y_low": "y from", "y_high": "y to",
+    "enough": "Enough to show (20 expected or more)", "azimuth_from_deg": "Azimuth from",
+    "azimuth_to_deg": "Azimuth to", "fl_from": "Flight level from", "fl_to": "Flight level to",
+    "height_from_ft": "Height from", "height_to_ft": "Height to",
 }
 
 _DATETIMES = ("start", "end", "time_utc", "first_utc", "last_utc", "gap_start_utc", "gap_end_utc", "utc",

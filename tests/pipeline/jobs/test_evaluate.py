@@ -138,7 +138,7 @@ def test_per_aircraft_and_per_band_tables(evaluated):
     assert len(per) == seen["aircraft"].nunique()
     assert per["reports"].sum() == len(seen)
     band = result.tables["PD per range band"]
-    inside = band[band["high"] <= INJECTED.full_range_nm]
+    inside = band[band["range_to_nm"] <= INJECTED.full_range_nm]
     total = inside["detected"].sum() / inside["expected"].sum()
     assert abs(total - INJECTED.pd) < 0.03
 
@@ -563,8 +563,8 @@ def test_the_spans_errors_per_range_band_pool_the_windows(windowed):
     at least the lower half's and at most the larger maximum. Every band of a half is in the span's."""
     span, halves = windowed
     title = "Position error per range band"
-    whole = span.tables[title].set_index(["sensor", "low_nm"])
-    parts = [h.tables[title].set_index(["sensor", "low_nm"]) for h in halves]
+    whole = span.tables[title].set_index(["sensor", "range_from_nm"])
+    parts = [h.tables[title].set_index(["sensor", "range_from_nm"]) for h in halves]
     assert len(whole) > 3 and set().union(*(p.index for p in parts)) == set(whole.index)
     for key, row in whole.iterrows():
         given = [p.loc[key] for p in parts if key in p.index]

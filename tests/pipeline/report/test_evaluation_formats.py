@@ -34,7 +34,7 @@ def test_proportions_are_the_requirement_named_columns_and_their_interval() -> N
 def test_each_kind_of_column_as_the_workbook_shows_it() -> None:
     shares = {"pd"}
     assert number_text(148 / 150, "pd", shares) == "98.67 %"
-    assert number_text(50.0, "range_from_nm", shares) == "50.000"  # NM: 3 decimals (formats.UNITS)
+    assert number_text(50.0, "range_from_nm", shares) == "50.0"  # a bin edge in NM: 1 decimal (formats.UNITS)
     assert number_text(120.45, "error_m", shares) == "120.5"  # metres: 1 decimal
     assert number_text(3725.5, "time_of_day", shares) == "01:02:05.500"  # a clock time
     assert number_text(0.975, "value", shares, "fraction") == "97.50 %"  # beside requirement pd

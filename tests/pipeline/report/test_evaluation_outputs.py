@@ -229,8 +229,8 @@ def test_the_html_tables_show_numbers_as_the_workbook() -> None:
     text = evaluation_html(scorecard(), tables())
     band = text.split("<h2>PD per range band</h2>")[1]
     cells = re.findall(r"<td[^>]*>([^<]*)</td>", band)
-    assert cells == ["SSR1", "0.000", "50.000", "150", "148", "98.67 %",
-                     "SSR1", "50.000", "100.000", "0", "0", ""]
+    assert cells == ["SSR1", "0.0", "50.0", "150", "148", "98.67 %",
+                     "SSR1", "50.0", "100.0", "0", "0", ""]
     first = text.split("<h2>PD per aircraft</h2>")[1].split("</table>")[0]
     aircraft = re.findall(r"<td[^>]*>([^<]*)</td>", first)
     assert aircraft == ["MAS72", "SSR1", "120", "118", "98.33 %", "IBE3150", "SSR1", "80", "80", "100.00 %"]
