@@ -43,6 +43,10 @@ Mask = Callable[[np.ndarray, np.ndarray, np.ndarray, np.ndarray], np.ndarray]
 # not on frames cut to the region: a cut reference would bridge an aircraft's short excursions out of the
 # region (its stretches), and a cut of the plots would estimate coverage limits of its own
 REGIONAL = ("pd", "long_gaps")
+# the sigma gate's counts of reports left out (reference_gates.SIGMA_GATE_KEYS), in words
+GATE_WORDS = {"no_reference": "with no reference aircraft", "self_reference": "on the sensor's own track",
+              "sigma_unknown": "where the reference's sigma is unknown",
+              "sigma_too_large": "where the reference's sigma is too large for the tolerance"}
 
 
 @dataclass(frozen=True)
@@ -90,8 +94,8 @@ def measure(requirement: Requirement, reports: pd.DataFrame, reference: pd.DataF
         rep = reports[gate.judged].reset_index(drop=True)
         left = {k: v for k, v in c.items() if k not in ("reports", "judged") and v}
         notes = (f"sigma gate at {requirement.threshold:g} m: {c['judged']} of {c['reports']} reports judged"
-                 + (" (" + ", ".join(f"{k.replace('_', ' ')} {v}" for k, v in left.items()) + ")"
-                    if left else ""),)
+                 + (" (left out: " + ", ".join(f"{v} {GATE_WORDS.get(k, k.replace('_', ' '))}"
+                                               for k, v in left.items()) + ")" if left else ""),)
     elif "distance_m" in params and len(reports) and len(reference):
         rep, notes = _gate_false(reports, reference, float(params["distance_m"]), params)
     try:

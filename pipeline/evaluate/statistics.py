@@ -309,8 +309,8 @@ def _finished(statistic: str, value: float, replicates: np.ndarray, alpha: float
               n_clusters: int) -> ClusteredInterval:
     """The interval from the replicates' quantiles, marked too narrow below FEW_AIRCRAFT clusters."""
     low, high = np.quantile(replicates, [alpha / 2, 1 - alpha / 2])
-    few = (f"{n_clusters} aircraft: below {FEW_AIRCRAFT} the interval over aircraft is too narrow "
-           "(covers clearly less than 95 %)") if n_clusters < FEW_AIRCRAFT else ""
+    few = (f"with fewer than {FEW_AIRCRAFT} aircraft the interval over aircraft is too narrow (covers "
+           "clearly less than 95 %)") if n_clusters < FEW_AIRCRAFT else ""
     return ClusteredInterval(statistic, value, float(low), float(high), n, int(n_clusters), few)
 
 
