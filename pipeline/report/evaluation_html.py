@@ -24,20 +24,24 @@ from msdc.pipeline.evaluate.scorecard_schema import (
     validate_scorecard,
     validate_tables,
 )
-from msdc.pipeline.report.evaluation_formats import number_text, proportion_columns, sample_text
+from msdc.pipeline.report.evaluation_formats import number_text, proportion_columns, sample_text, unit_text
 from msdc.pipeline.report.evaluation_xlsx import SCORECARD_HEADERS, UNCHECKED_NOTE, UNIT_WORDS
 from msdc.pipeline.report.files import named
 from msdc.pipeline.report.headers import workbook_header
 
+# one colour per aircraft, repeating past twenty: ten strong ones, then their light tints
 PALETTE = ("#1f77b4", "#d62728", "#2ca02c", "#9467bd", "#ff7f0e", "#8c564b", "#e377c2", "#17becf",
-           "#7f7f7f", "#bcbd22")  # one colour per aircraft, repeating past ten
-_DECIMALS = {"m": 1, "s": 3, "deg": 4, "ppm": 1, "per scan": 3, "per aircraft": 3}
+           "#7f7f7f", "#bcbd22", "#aec7e8", "#ff9896", "#98df8a", "#c5b0d5", "#ffbb78", "#c49c94", "#f7b6d2",
+           "#9edae5", "#c7c7c7", "#dbdb8d")
+LEGEND_COLUMNS = 8  # the map's legend below it: one entry per aircraft, this many to a row
+LEGEND_ROW_PX = 24  # the height a row of the legend takes
 _STYLE = """
 body { font-family: sans-serif; margin: 1.5em; color: #222; }
 table { border-collapse: collapse; margin: 0.5em 0 1.5em; font-size: 0.9em; }
 th, td { border: 1px solid #bbb; padding: 0.25em 0.5em; vertical-align: top; }
 th { background: #d9e1f2; text-align: left; }
-td.num { text-align: right; font-variant-numeric: tabular-nums; }
+td.num { text-align: right; font-variant-numeric: tabular-nums; white-space: nowrap; }
+span.kv { white-space: nowrap; }
 td.pass { background: #c6efce; color: #006100; font-weight: bold; }
 td.fail { background: #ffc7ce; color: #9c0006; font-weight: bold; }
 td.inconclusive { background: #ffeb9c; color: #9c5700; font-weight: bold; }
@@ -47,15 +51,6 @@ figure.coverage { margin: 0.5em 0 1.5em; }
 figure.coverage img { max-width: 100%; height: auto; border: 1px solid #ddd; }
 figure.coverage figcaption { font-weight: bold; margin-bottom: 0.3em; }
 """
-
-
-def _number(value: float, unit: str) -> str:
-    """A scorecard number as text in its row's unit: a proportion as a percentage, '' when missing."""
-    if value is None or math.isnan(value):
-        return ""
-    if unit == "fraction":
-        return f"{100.0 * value:.2f} %"
-    return f"{value:,.{_DECIMALS[unit]}f}"
 
 
 def _scorecard_table(card: pd.DataFrame) -> str:
@@ -69,11 +64,15 @@ def _scorecard_table(card: pd.DataFrame) -> str:
             "unit": html.escape(UNIT_WORDS[unit]),
             "checked": "yes" if rec["checked"] else "no",
             "n": sample_text(n),
+            "parameters": ", ".join(f'<span class="kv">{html.escape(kv)}</span>'
+                                    for kv in str(rec.get("parameters") or "").split(", ") if kv),
         }
         out = []
         for key, _ in SCORECARD_HEADERS:
             if key in ("value", "ci_low", "ci_high", "threshold"):
-                out.append(f'<td class="num">{_number(rec[key], unit)}</td>')
+                value = rec[key]
+                shown = "" if value is None or math.isnan(value) else unit_text(value, unit)
+                out.append(f'<td class="num">{shown}</td>')
             elif key == "n":
                 out.append(f'<td class="num">{cells["n"]}</td>')
             elif key == "verdict":
@@ -137,9 +136,10 @@ def _source(frame: pd.DataFrame):
 
 def _map(points: pd.DataFrame):
     """The Bokeh map: per aircraft its reference as a line and its reports as dots, in one colour; the
-    legend hides an entry on click. Axes in degrees, scaled so that a degree of longitude and of latitude
-    show their true ground lengths at the mean latitude."""
-    from bokeh.models import HoverTool
+    legend, below the map in columns (one entry per aircraft, whatever their number), hides an aircraft on
+    click. Axes in degrees, scaled so that a degree of longitude and of latitude show their true ground
+    lengths at the mean latitude."""
+    from bokeh.models import HoverTool, Legend, LegendItem
     from bokeh.plotting import figure
 
     mean_lat = float(points["latitude"].mean())
@@ -148,21 +148,25 @@ def _map(points: pd.DataFrame):
                  aspect_scale=max(0.05, math.cos(math.radians(mean_lat))),
                  tools="pan,wheel_zoom,box_zoom,reset,save", active_scroll="wheel_zoom",
                  output_backend="canvas")
+    items = []
     for i, (aircraft, group) in enumerate(points.groupby("aircraft", sort=True)):
         colour = PALETTE[i % len(PALETTE)]
         ref = group[group["source"] == "reference"]
         rep = group[group["source"] == "report"]
+        drawn = []
         if not ref.empty:
-            fig.line("longitude", "latitude", source=_source(ref), color=colour, line_width=2,
-                     legend_label=f"{aircraft} reference")
+            drawn.append(fig.line("longitude", "latitude", source=_source(ref), color=colour, line_width=2))
         if not rep.empty:
-            fig.scatter("longitude", "latitude", source=_source(rep), color=colour, size=6,
-                        fill_alpha=0.6, legend_label=f"{aircraft} reports")
+            drawn.append(fig.scatter("longitude", "latitude", source=_source(rep), color=colour, size=6,
+                                     fill_alpha=0.6))
+        items.append(LegendItem(label=str(aircraft), renderers=drawn))
     fig.add_tools(HoverTool(tooltips=[
         ("aircraft", "@aircraft"), ("source", "@source"), ("sensor", "@sensor"),
         ("latitude", "@latitude{0.00000}"), ("longitude", "@longitude{0.00000}")]))
-    fig.legend.click_policy = "hide"
-    fig.legend.location = "top_left"
+    legend = Legend(items=items, ncols=LEGEND_COLUMNS, click_policy="hide",
+                    title="aircraft (line: reference, dots: reports; click to hide)")
+    fig.add_layout(legend, "below")
+    fig.height += LEGEND_ROW_PX * (math.ceil(len(items) / LEGEND_COLUMNS) + 1)  # the map keeps its height
     return fig
 
 
