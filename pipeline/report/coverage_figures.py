@@ -15,6 +15,7 @@ import pandas as pd
 from matplotlib.colors import ListedColormap
 from matplotlib.figure import Figure
 from matplotlib.patches import Patch
+from matplotlib.ticker import FuncFormatter
 
 from msdc.pipeline.model.geodesy import M_PER_FT, M_PER_NM
 from msdc.pipeline.report.canvas import new_figure, save_png
@@ -46,11 +47,14 @@ def grid_arrays(grid: pd.DataFrame) -> tuple[np.ndarray, np.ndarray, np.ndarray,
     return xe, ye, value, few
 
 
-def _legend_too_few(ax, min_expected: int | None) -> None:
+def _legend_too_few(ax, min_expected: int | None, below: float = -0.08) -> None:
+    """The legend of the grey and white cells (and of the lines drawn), below the plot, off the data."""
     what = f"fewer than {min_expected} expected updates" if min_expected else "too few expected updates"
-    ax.legend(handles=[Patch(facecolor=TOO_FEW_COLOR, edgecolor="0.5", label=what),
-                       Patch(facecolor="white", edgecolor="0.5", label="none expected")],
-              loc="upper left", bbox_to_anchor=(0.0, -0.08), fontsize=8, frameon=False, ncol=2)
+    handles = [*ax.get_legend_handles_labels()[0],
+               Patch(facecolor=TOO_FEW_COLOR, edgecolor="0.5", label=what),
+               Patch(facecolor="white", edgecolor="0.5", label="none expected")]
+    ax.legend(handles=handles, loc="upper left", bbox_to_anchor=(0.0, below), fontsize=8, frameon=False,
+              ncol=2)
 
 
 def polar_pd_map(grid: pd.DataFrame, title: str = "", min_expected: int | None = None) -> Figure:
@@ -67,6 +71,7 @@ def polar_pd_map(grid: pd.DataFrame, title: str = "", min_expected: int | None =
                   cmap=ListedColormap([TOO_FEW_COLOR]), vmin=0.0, vmax=1.0, shading="flat")
     ax.set_ylim(0.0, float(r_edges[-1]))
     ax.set_rlabel_position(22.5)
+    ax.yaxis.set_major_formatter(FuncFormatter(lambda v, _: f"{v:g} NM"))
     ax.grid(True, color="0.5", lw=0.4, alpha=0.6)
     ax.set_title(title or "Probability of detection by range (NM) and azimuth", fontsize=10)
     fig.colorbar(mesh, ax=ax, shrink=0.7, pad=0.08, label="probability of detection")
@@ -99,9 +104,7 @@ def vertical_coverage(grid: pd.DataFrame, title: str = "", min_expected: int | N
     ax.set_ylabel("height above the WGS-84 ellipsoid (ft)")
     ax.set_title(title or "Vertical coverage: probability of detection by range and height", fontsize=10)
     fig.colorbar(mesh, ax=ax, label="probability of detection")
-    handles = [Patch(facecolor=TOO_FEW_COLOR, edgecolor="0.5", label=(
-        f"fewer than {min_expected} expected updates" if min_expected else "too few expected updates"))]
-    ax.legend(handles=[*ax.get_legend_handles_labels()[0], *handles], loc="upper right", fontsize=8)
+    _legend_too_few(ax, min_expected, below=-0.12)
     return fig
 
 
