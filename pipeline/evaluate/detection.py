@@ -200,17 +200,15 @@ def long_gaps(reports: pd.DataFrame, reference: pd.DataFrame, parameters: Mappin
         if not region.any():
             return withheld("long_gaps", f"no expected update inside {within.name!r}")
         counted = counted & region
-    gaps = []
-    for rows in table.groupby(["aircraft", "stretch"], sort=False).indices.values():
-        one = table.iloc[rows]
-        det = one["detected"].to_numpy(bool)
-        t, inside = one["t_s"].to_numpy(float), counted[rows]
-        at = np.flatnonzero(det)
-        if at.size < 2:
-            continue
-        out_before = np.concatenate([[0], np.cumsum(~inside)])  # outside-coverage updates before each row
-        ok = (out_before[at[1:] + 1] - out_before[at[:-1]]) == 0
-        gaps.append(np.diff(t[at])[ok])
-    g = np.concatenate(gaps) if gaps else np.zeros(0)
+    # the table runs aircraft by aircraft, stretch by stretch, in time: successive detected updates of one
+    # stretch with no update between them (both included) that is not counted
+    aircraft, stretch = table["aircraft"].to_numpy(object), table["stretch"].to_numpy()
+    group = np.cumsum(np.r_[True, (aircraft[1:] != aircraft[:-1]) | (stretch[1:] != stretch[:-1])])
+    at = np.flatnonzero(table["detected"].to_numpy(bool))
+    out_before = np.concatenate([[0], np.cumsum(~counted)])  # updates not counted before each row
+    a, b = at[:-1], at[1:]
+    ok = (group[a] == group[b]) & ((out_before[b + 1] - out_before[a]) == 0)
+    t = table["t_s"].to_numpy(float)
+    g = (t[b] - t[a])[ok]
     count = int(np.sum((g >= float(lo)) & (g < hi)))
     return share("long_gaps", count, g.size, (*notes, f"{g.size} gaps inside coverage"))

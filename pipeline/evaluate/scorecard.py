@@ -220,7 +220,8 @@ def cut(reports: pd.DataFrame, reference: pd.DataFrame, masks: Sequence[Mask],
     alt = ref["altitude_ft"].to_numpy(float) / 100.0 if "altitude_ft" in ref else np.full(len(ref), np.nan)
     lat, lon = ref["latitude"].to_numpy(float), ref["longitude"].to_numpy(float)
     samples = inside(lat, lon, alt, ground_flags(ref))
-    ref_in = ref[with_neighbours(samples, ref["aircraft"])]
+    same = shared(("same aircraft", id(ref)), (ref,), lambda: same_aircraft(ref["aircraft"]))
+    ref_in = ref[with_neighbours(samples, same)]
     ref_in = ref_in.reset_index(drop=True)
     rep_in = reports[inside(*where)]
     labels = np.array(sorted(ref_in["aircraft"].unique()), dtype=object)
@@ -236,12 +237,18 @@ def cut(reports: pd.DataFrame, reference: pd.DataFrame, masks: Sequence[Mask],
     return rep_in, ref_in
 
 
-def with_neighbours(keep: np.ndarray, aircraft: pd.Series) -> np.ndarray:
-    """``keep`` widened by one row either side within each aircraft (rows sorted by aircraft, then time)."""
+def same_aircraft(aircraft: pd.Series) -> np.ndarray:
+    """Per row, whether it is of the previous row's aircraft (the first row: False)."""
+    ids = aircraft.to_numpy(object)
+    same = np.zeros(ids.size, bool)
+    same[1:] = ids[1:] == ids[:-1]
+    return same
+
+
+def with_neighbours(keep: np.ndarray, same: np.ndarray) -> np.ndarray:
+    """``keep`` widened by one row either side within each aircraft (rows sorted by aircraft, then time;
+    ``same``: same_aircraft of them)."""
     keep = np.asarray(keep, bool)
-    same = np.zeros(keep.size, bool)
-    if keep.size > 1:
-        same[1:] = (aircraft.to_numpy(object)[1:] == aircraft.to_numpy(object)[:-1])
     out = keep.copy()
     out[1:] |= keep[:-1] & same[1:]   # the row after a kept one
     out[:-1] |= keep[1:] & same[1:]   # the row before one
@@ -341,18 +348,31 @@ def _score(preset: Preset, sensor_id: str, reports: pd.DataFrame, reference: pd.
     where: tuple[np.ndarray, ...] | None = None
     marks: dict[str, str] = {}
 
+    def places() -> tuple[np.ndarray, ...]:
+        """Where each report is: its reference aircraft's place at its time, else its own (made once)."""
+        nonlocal where
+        if where is None:
+            lat, lon, fl, ground = reference_positions(rep, reference)
+            own = ~np.isfinite(lat)
+            where = (np.where(own, rep["latitude"].to_numpy(float), lat),
+                     np.where(own, rep["longitude"].to_numpy(float), lon),
+                     np.where(own, _report_fl(rep), fl), np.where(own, np.nan, ground))
+        return where
+
     def region(name: str, masks: list[Mask]) -> tuple[pd.DataFrame, pd.DataFrame]:
         """The reports and reference of a region, cut once."""
-        nonlocal where
         if name not in cuts:
-            if where is None:
-                lat, lon, fl, ground = reference_positions(rep, reference)
-                own = ~np.isfinite(lat)
-                where = (np.where(own, rep["latitude"].to_numpy(float), lat),
-                         np.where(own, rep["longitude"].to_numpy(float), lon),
-                         np.where(own, _report_fl(rep), fl), np.where(own, np.nan, ground))
-            cuts[name] = cut(rep, reference, masks, where)
+            cuts[name] = cut(rep, reference, masks, places())
         return cuts[name]
+
+    def mark(name: str, masks: list[Mask]) -> str:
+        """The region's self-reference note, from its reports against the whole reference (made once)."""
+        if name not in marks:
+            inside = np.zeros(len(rep), bool) if masks else np.ones(len(rep), bool)
+            for m in masks:
+                inside |= np.asarray(m(*places()), bool)
+            marks[name] = self_reference_note(rep[inside], reference, sensor_id)
+        return marks[name]
 
     for i, req in enumerate(preset.requirements):
         spots = _regions_for(req, regions, monitors)
@@ -372,11 +392,8 @@ def _score(preset: Preset, sensor_id: str, reports: pd.DataFrame, reference: pd.
                 r, ref = region(name, masks)
                 outcome = (withheld(req.id, f"no report and no reference inside {name!r}") if r.empty and
                            ref.empty else measure(req, r, ref, sensor))
-            if CATALOGUE[req.id].kind in (PROPORTION, RATE):  # position figures never use the sensor's own
-                if name not in marks:
-                    marks[name] = self_reference_note(*region(name, masks), sensor_id)
-                if marks[name]:
-                    outcome = replace(outcome, notes=(*outcome.notes, marks[name]))
+            if CATALOGUE[req.id].kind in (PROPORTION, RATE) and mark(name, masks):  # never position figures
+                outcome = replace(outcome, notes=(*outcome.notes, marks[name]))
             score.outcomes[(name, req.id, i)] = outcome
             score.rows.append(judge(outcome, req, preset, sensor_id, name))
     return score
