@@ -210,20 +210,14 @@ def cut(reports: pd.DataFrame, reference: pd.DataFrame, masks: Sequence[Mask],
     report inside near the edge is interpolated between the samples it lies between, not across the time
     its aircraft spent outside); each report's ``ref_index`` renumbered to the cut reference's aircraft (a
     report whose aircraft has no sample inside is left out)."""
-    def inside(*columns) -> np.ndarray:
-        keep = np.zeros(len(columns[0]), bool)
-        for m in masks:
-            keep |= np.asarray(m(*columns), bool)
-        return keep
-
     ref = checked_trajectories(reference)[0]
     alt = ref["altitude_ft"].to_numpy(float) / 100.0 if "altitude_ft" in ref else np.full(len(ref), np.nan)
     lat, lon = ref["latitude"].to_numpy(float), ref["longitude"].to_numpy(float)
-    samples = inside(lat, lon, alt, ground_flags(ref))
+    samples = union(masks, lat, lon, alt, ground_flags(ref))
     same = shared(("same aircraft", id(ref)), (ref,), lambda: same_aircraft(ref["aircraft"]))
     ref_in = ref[with_neighbours(samples, same)]
     ref_in = ref_in.reset_index(drop=True)
-    rep_in = reports[inside(*where)]
+    rep_in = reports[union(masks, *where)]
     labels = np.array(sorted(ref_in["aircraft"].unique()), dtype=object)
     linked = rep_in["ref_index"].to_numpy() >= 0
     names = rep_in["ref_aircraft"].to_numpy(object)
@@ -235,6 +229,14 @@ def cut(reports: pd.DataFrame, reference: pd.DataFrame, masks: Sequence[Mask],
     rep_in = rep_in.assign(ref_index=pos)
     rep_in = rep_in[pos != -2].reset_index(drop=True)
     return rep_in, ref_in
+
+
+def union(masks: Sequence[Mask], lat, lon, fl, ground) -> np.ndarray:
+    """Whether each place (latitude, longitude, flight level, on-ground flag) lies in any of ``masks``."""
+    keep = np.zeros(len(lat), bool)
+    for m in masks:
+        keep |= np.asarray(m(lat, lon, fl, ground), bool)
+    return keep
 
 
 def same_aircraft(aircraft: pd.Series) -> np.ndarray:
@@ -269,10 +271,7 @@ class Placed:
         lat, lon, fl, ground = shared(("update places", id(table), id(self.reference), self.max_gap_s),
                                       (table, self.reference),
                                       lambda: update_places(table, self.reference, self.max_gap_s))
-        keep = np.zeros(len(table), bool)
-        for m in self.masks:
-            keep |= np.asarray(m(lat, lon, fl, ground), bool)
-        return keep
+        return union(self.masks, lat, lon, fl, ground)
 
 
 def update_places(table: pd.DataFrame, reference: pd.DataFrame, max_gap_s: float = DEFAULT_REFERENCE_GAP_S
@@ -368,9 +367,7 @@ def _score(preset: Preset, sensor_id: str, reports: pd.DataFrame, reference: pd.
     def mark(name: str, masks: list[Mask]) -> str:
         """The region's self-reference note, from its reports against the whole reference (made once)."""
         if name not in marks:
-            inside = np.zeros(len(rep), bool) if masks else np.ones(len(rep), bool)
-            for m in masks:
-                inside |= np.asarray(m(*places()), bool)
+            inside = union(masks, *places()) if masks else np.ones(len(rep), bool)
             marks[name] = self_reference_note(rep[inside], reference, sensor_id)
         return marks[name]
 
