@@ -28,6 +28,10 @@ from msdc.pipeline.evaluate.update_times import aircraft_updates
 EXPECTED_COLUMNS = ["aircraft", "stretch", "t_s", "detected", "in_coverage", "rho_nm", "elevation_deg",
                     "azimuth_deg", "altitude_ft", "height_m", "t_ref_s"]
 
+# with no minimum elevation declared, the expected updates inside coverage below the lowest elevation the
+# sensor detected (all missed, perhaps below a radar's horizon) are said once they are this share or more
+BELOW_DETECTIONS_SHARE = 0.01
+
 
 class Within(Protocol):
     """A region the expected updates are counted in: its name, and per expected update (a table of
@@ -36,9 +40,6 @@ class Within(Protocol):
     name: str
 
     def __call__(self, table: pd.DataFrame) -> np.ndarray: ...
-# with no minimum elevation declared, the expected updates inside coverage below the lowest elevation the
-# sensor detected (all missed, perhaps below a radar's horizon) are said once they are this share or more
-BELOW_DETECTIONS_SHARE = 0.01
 
 
 def update_period(reports: pd.DataFrame, sensor: Sensor) -> tuple[float, str]:

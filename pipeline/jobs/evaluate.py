@@ -539,7 +539,7 @@ def _span(options: EvaluateOptions, checked: EvaluateChecked, progress: Progress
 
     spans: dict[str, SensorSpan] = {}
     runs: list[tuple[tuple[str, str], list[str]]] = []  # each window's label and run notes
-    runs_faults: list[tuple[tuple[str, str], dict[str, str]]] = []  # and its radars with a wrong site
+    faults: dict[str, str] = {}  # the radars any window found with a wrong site: the warning
     reads: list[Loaded] = []  # the first window's, then each one's inputs and selection alone
     rows, refused, external = [], [], False
     points = max(1, MAP_POINTS_PER_SENSOR // len(windows))  # the span's map keeps about as many points
@@ -557,7 +557,7 @@ def _span(options: EvaluateOptions, checked: EvaluateChecked, progress: Progress
             rows += [{"window_from": label[0], "window_to": label[1], **row}
                      for row in _no_verdict(r.rows, run.site_faults.get(r.sensor))]
         runs.append((label, run.notes))
-        runs_faults.append((label, run.site_faults))
+        faults.update(run.site_faults)
         reads.append(run.loaded if not reads else Loaded({}, [], run.loaded.inputs, run.loaded.date,
                                                          selection=run.loaded.selection))
         external = run.external
@@ -566,7 +566,6 @@ def _span(options: EvaluateOptions, checked: EvaluateChecked, progress: Progress
                        + "; ".join(refused[:3]) + (f"; and {len(refused) - 3} more" if len(refused) > 3
                                                    else "") + ")")
     warnings[:] = list(dict.fromkeys(warnings))  # each window says the same of the same inputs
-    faults = {k: v for _, run in runs_faults for k, v in run.items()}
     results, noted = [], []
     for sensor_id, span in spans.items():
         result, differing = _pooled_sensor(checked, sensor_id, span)
