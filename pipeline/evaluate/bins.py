@@ -96,13 +96,14 @@ def azimuth_edges(step_deg: float) -> np.ndarray:
 
 def surface_airborne(table: pd.DataFrame, reference: pd.DataFrame) -> np.ndarray:
     """Per expected update: 'surface' or 'airborne' from the reference's ``on_ground`` (its latest sample
-    of that aircraft at or before the update; of samples at one time, the last in the reference's order),
+    of that aircraft at or before the update's ``t_ref_s``; of samples at one time, the last in the
+    reference's order: the scorecard's surface and airborne rows place them alike),
     'unknown' where the reference has no such column or value: a pressure altitude cannot tell (an
     airport's ground level is its elevation, and QNH moves it)."""
     out = np.full(len(table), "unknown", dtype=object)
     if "on_ground" not in reference.columns or table.empty:
         return out
-    latest = _latest_sample(table["aircraft"], table["t_s"].to_numpy(float), reference["aircraft"],
+    latest = _latest_sample(table["aircraft"], table["t_ref_s"].to_numpy(float), reference["aircraft"],
                             reference["t_s"].to_numpy(float))
     flag = reference["on_ground"].astype("boolean").array
     found = latest >= 0

@@ -31,7 +31,7 @@ from msdc.pipeline.evaluate.reference import (
     shared,
     shared_references,
 )
-from msdc.pipeline.evaluate.reference_gates import reference_at, self_referenced, sigma_gate
+from msdc.pipeline.evaluate.reference_gates import self_referenced, sigma_gate
 from msdc.pipeline.evaluate.requirements import REQUIREMENTS
 from msdc.pipeline.evaluate.statistics import magnitude_interval, verdict
 
@@ -167,22 +167,25 @@ def judge(outcome: Outcome, requirement: Requirement, preset: Preset, sensor_id:
 def reference_positions(reports: pd.DataFrame, reference: pd.DataFrame,
                         max_gap_s: float = DEFAULT_REFERENCE_GAP_S
                         ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """Per associated report, its reference aircraft's latitude, longitude, flight level and on-ground flag
-    (1, 0) at the report's time (NaN where not associated or the reference does not know)."""
+    """Per associated report, its reference aircraft's latitude, longitude and flight level at the report's
+    time (interpolated), and its on-ground flag (ground_flags) of the latest sample at or before it, as the
+    bins' surface and airborne classes take it (NaN where not associated or the reference does not know)."""
     n = len(reports)
-    lat, lon, fl = np.full(n, np.nan), np.full(n, np.nan), np.full(n, np.nan)
+    lat, lon, fl, ground = (np.full(n, np.nan) for _ in range(4))
     t, idx = reports["t_s"].to_numpy(float), reports["ref_index"].to_numpy()
-    trajs = checked_trajectories(reference)[1]
+    ref, trajs = checked_trajectories(reference)
+    flags = (ground_flags(ref) if "on_ground" in ref.columns or "field_monitor" in ref.columns
+             else None)
     groups = rows_by_index(idx, len(trajs))
     for k, tr in enumerate(trajs):
         rows = groups[k]
         if rows.size:
             a, b, _, alt = tr.at(t[rows], max_gap_s)
             lat[rows], lon[rows], fl[rows] = a, b, alt / 100.0
-    ground = np.full(n, np.nan)
-    if ("on_ground" in reference.columns or "field_monitor" in reference.columns) and n:
-        flag = reference.assign(on_ground=ground_flags(reference))
-        ground = np.rint(reference_at(reports, flag, "on_ground", {"reference_max_gap_s": max_gap_s}))
+            if flags is not None:
+                latest = np.searchsorted(tr.t_s, t[rows], side="right") - 1  # the last of equal times
+                known = latest >= 0
+                ground[rows[known]] = flags[tr.rows[latest[known]]]
     return lat, lon, fl, ground
 
 

@@ -227,3 +227,17 @@ def test_a_requirement_on_an_area_no_sector_provides_keeps_its_row():
     assert row["n"] == 0
     assert math.isnan(row["value"])
     assert "not measured on area 'stands': no sector of that area in the sector file" in row["notes"]
+
+
+def test_a_report_is_on_the_surface_while_the_latest_reference_sample_says_so():
+    """The reference says 'on the ground' at 0 s and 'airborne' at 10 s: a report at 6 s is a surface
+    report (the latest sample's state, as the bins' surface class takes it; the nearest sample would say
+    airborne), one at 12 s an airborne one."""
+    t = np.array([0.0, 10.0, 20.0])
+    ref = pd.DataFrame({"aircraft": "A", "t_s": t, "latitude": 100.0 * t / M_PER_DEG_LAT, "longitude": 0.0,
+                        "altitude_ft": 0.0, "sigma_m": 5.0, "on_ground": [True, False, False]})
+    rep = pd.DataFrame({"t_s": [6.0, 12.0], "latitude": [600.0 / M_PER_DEG_LAT, 1200.0 / M_PER_DEG_LAT],
+                        "longitude": 0.0})
+    rows = {r["sector"]: r for r in score_sensor(preset(requirement("max_m", 1000.0)), "R", rep, ref,
+                                                 Sensor(0.0, 0.0, 0.0)).rows}
+    assert (rows["surface"]["n"], rows["airborne"]["n"], rows["global"]["n"]) == (1, 1, 2)
