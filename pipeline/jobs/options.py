@@ -197,9 +197,19 @@ def _argparse_keywords(f: dataclasses.Field, spec: Spec, kind: type) -> dict[str
         kw["metavar"] = spec.value_name
     if spec.required:
         kw["required"] = True
-    if spec.repeat:
-        kw["action"] = "append"
+    kw["action"] = "append" if spec.repeat else _Once
     return kw
+
+
+class _Once(argparse.Action):
+    """An option that takes one value: given twice it is refused (``--area A --area B`` is not their union,
+    and keeping the last silently would evaluate another area than the user meant)."""
+
+    def __call__(self, parser, namespace, values, option_string=None):
+        before = getattr(namespace, self.dest, None)
+        if before is not None:
+            parser.error(f"{option_string} given twice ({before!r} and {values!r}): give it once")
+        setattr(namespace, self.dest, values)
 
 
 def _with_default(text: str | None, default: object) -> str | None:

@@ -504,3 +504,17 @@ def test_replay_refuses_a_format_it_cannot_send_in_its_usage(capsys):
         main(["replay", "x.ast", "--to", "127.0.0.1:9", "--format", "oradis"])
     assert stop.value.code == 2
     assert "invalid choice: 'oradis'" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("argv", [
+    ["decode", "x.ast", "--area", "25/201:0-60nm:0-90deg", "--area", "25/201:0-60nm:90-180deg"],
+    ["evaluate", "x.ast", "--sensors", "s.toml", "--preset", "ed117a", "--fl", "100:200", "--fl", "300:"],
+    ["stats", "x.ast", "--from", "08:00", "--from", "09:00"],
+])
+def test_an_option_of_one_value_given_twice_is_refused(argv, capsys):
+    """Not their union, and not the last silently (``--sensor`` and ``--edition`` are repeatable)."""
+    with pytest.raises(SystemExit) as stop:
+        main(argv)
+    assert stop.value.code == 2
+    err = capsys.readouterr().err
+    assert f"{argv[-2]} given twice" in err and "give it once" in err
