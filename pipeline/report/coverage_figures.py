@@ -12,7 +12,8 @@ from pathlib import Path
 
 import numpy as np
 import pandas as pd
-from matplotlib.colors import ListedColormap
+from matplotlib import colormaps
+from matplotlib.colors import BoundaryNorm, ListedColormap
 from matplotlib.figure import Figure
 from matplotlib.patches import Patch
 from matplotlib.ticker import FuncFormatter
@@ -21,6 +22,8 @@ from msdc.pipeline.model.geodesy import M_PER_FT, M_PER_NM
 from msdc.pipeline.report.canvas import new_figure, save_png
 
 PD_CMAP = "RdYlGn"  # red (none detected) to green (all): a fixed 0-1 scale, so maps compare
+# its bands: finer near 1, where the standards set their thresholds (a 95 % cell and a 99 % one differ)
+PD_BANDS = (0.0, 0.5, 0.8, 0.9, 0.95, 0.97, 0.99, 1.0)
 TOO_FEW_COLOR = "0.78"
 GRID_COLUMNS = ("x_low", "x_high", "y_low", "y_high", "expected", "pd", "enough")
 
@@ -47,6 +50,19 @@ def grid_arrays(grid: pd.DataFrame) -> tuple[np.ndarray, np.ndarray, np.ndarray,
     return xe, ye, value, few
 
 
+def _pd_scale() -> tuple[ListedColormap, BoundaryNorm]:
+    """The PD colour scale: one colour per band of PD_BANDS, 1 itself in the top band."""
+    cmap = colormaps[PD_CMAP].resampled(len(PD_BANDS) - 1)
+    cmap = cmap.with_extremes(over=cmap(cmap.N - 1))
+    return cmap, BoundaryNorm(PD_BANDS, cmap.N)
+
+
+def _pd_colorbar(fig, mesh, ax, **kw) -> None:
+    """The colour bar of the PD bands, ticked at their edges in percent."""
+    bar = fig.colorbar(mesh, ax=ax, ticks=PD_BANDS, label="probability of detection", **kw)
+    bar.ax.set_yticklabels([f"{100 * b:g} %" for b in PD_BANDS])
+
+
 def _legend_too_few(ax, min_expected: int | None, below: float = -0.08) -> None:
     """The legend of the grey and white cells (and of the lines drawn), below the plot, off the data."""
     what = f"fewer than {min_expected} expected updates" if min_expected else "too few expected updates"
@@ -65,8 +81,8 @@ def polar_pd_map(grid: pd.DataFrame, title: str = "", min_expected: int | None =
     ax.set_theta_zero_location("N")
     ax.set_theta_direction(-1)
     theta = np.radians(az_edges)
-    mesh = ax.pcolormesh(theta, r_edges, np.ma.masked_invalid(value), cmap=PD_CMAP, vmin=0.0, vmax=1.0,
-                         shading="flat")
+    cmap, norm = _pd_scale()
+    mesh = ax.pcolormesh(theta, r_edges, np.ma.masked_invalid(value), cmap=cmap, norm=norm, shading="flat")
     ax.pcolormesh(theta, r_edges, np.ma.masked_where(~few, np.ones_like(value)),
                   cmap=ListedColormap([TOO_FEW_COLOR]), vmin=0.0, vmax=1.0, shading="flat")
     ax.set_ylim(0.0, float(r_edges[-1]))
@@ -74,7 +90,7 @@ def polar_pd_map(grid: pd.DataFrame, title: str = "", min_expected: int | None =
     ax.yaxis.set_major_formatter(FuncFormatter(lambda v, _: f"{v:g} NM"))
     ax.grid(True, color="0.5", lw=0.4, alpha=0.6)
     ax.set_title(title or "Probability of detection by range (NM) and azimuth", fontsize=10)
-    fig.colorbar(mesh, ax=ax, shrink=0.7, pad=0.08, label="probability of detection")
+    _pd_colorbar(fig, mesh, ax, shrink=0.7, pad=0.08)
     _legend_too_few(ax, min_expected)
     return fig
 
@@ -87,7 +103,8 @@ def vertical_coverage(grid: pd.DataFrame, title: str = "", min_expected: int | N
     x_edges, y_edges, value, few = grid_arrays(grid)
     fig = new_figure(10, 5.5)
     ax = fig.add_subplot()
-    mesh = ax.pcolormesh(x_edges, y_edges, np.ma.masked_invalid(value).T, cmap=PD_CMAP, vmin=0.0, vmax=1.0,
+    cmap, norm = _pd_scale()
+    mesh = ax.pcolormesh(x_edges, y_edges, np.ma.masked_invalid(value).T, cmap=cmap, norm=norm,
                          shading="flat")
     ax.pcolormesh(x_edges, y_edges, np.ma.masked_where(~few, np.ones_like(value)).T,
                   cmap=ListedColormap([TOO_FEW_COLOR]), vmin=0.0, vmax=1.0, shading="flat")
@@ -103,7 +120,7 @@ def vertical_coverage(grid: pd.DataFrame, title: str = "", min_expected: int | N
     ax.set_xlabel("slant range (NM)")
     ax.set_ylabel("height above the WGS-84 ellipsoid (ft)")
     ax.set_title(title or "Vertical coverage: probability of detection by range and height", fontsize=10)
-    fig.colorbar(mesh, ax=ax, label="probability of detection")
+    _pd_colorbar(fig, mesh, ax)
     _legend_too_few(ax, min_expected, below=-0.12)
     return fig
 
