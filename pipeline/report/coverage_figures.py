@@ -118,7 +118,8 @@ def vertical_coverage(grid: pd.DataFrame, title: str = "", min_expected: int | N
     ax.set_xlim(float(x_edges[0]), float(x_edges[-1]))
     ax.set_ylim(float(y_edges[0]), float(y_edges[-1]))
     ax.set_xlabel("slant range (NM)")
-    ax.set_ylabel("height above the WGS-84 ellipsoid (ft)")
+    ax.set_ylabel("height (ft): above the WGS-84 ellipsoid,\n"
+                  "or the pressure altitude without a geometric one")
     ax.set_title(title or "Vertical coverage: probability of detection by range and height", fontsize=10)
     _pd_colorbar(fig, mesh, ax)
     _legend_too_few(ax, min_expected, below=-0.12)
