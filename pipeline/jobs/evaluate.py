@@ -840,14 +840,13 @@ def _in_units(card: pd.DataFrame) -> pd.DataFrame:
     """The scorecard's numbers as the workbook shows them: each in its requirement's unit (a proportion as a
     percentage, to the decimals its size needs), ``n`` a count."""
     from msdc.pipeline.evaluate.catalogue import CATALOGUE
-    from msdc.pipeline.report.evaluation_formats import sample_text, unit_text
+    from msdc.pipeline.report.evaluation_formats import number_text
 
     out = card.copy()
     units = [CATALOGUE[r].unit for r in card["requirement"]]
-    for col in ("value", "ci_low", "ci_high", "threshold"):
-        out[col] = ["-" if pd.isna(v) else unit_text(float(v), u)
+    for col in ("value", "ci_low", "ci_high", "threshold", "n"):  # the HTML report's text, "-" for none
+        out[col] = [number_text(float(v), col, set(), u) or "-"
                     for v, u in zip(card[col], units, strict=True)]
-    out["n"] = [sample_text(float(v)) for v in card["n"]]
     return out
 
 

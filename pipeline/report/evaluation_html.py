@@ -24,7 +24,7 @@ from msdc.pipeline.evaluate.scorecard_schema import (
     validate_scorecard,
     validate_tables,
 )
-from msdc.pipeline.report.evaluation_formats import number_text, proportion_columns, sample_text, unit_text
+from msdc.pipeline.report.evaluation_formats import number_text, proportion_columns, sample_text
 from msdc.pipeline.report.evaluation_xlsx import SCORECARD_HEADERS, UNCHECKED_NOTE, UNIT_WORDS
 from msdc.pipeline.report.files import named
 from msdc.pipeline.report.headers import workbook_header
@@ -70,9 +70,7 @@ def _scorecard_table(card: pd.DataFrame) -> str:
         out = []
         for key, _ in SCORECARD_HEADERS:
             if key in ("value", "ci_low", "ci_high", "threshold"):
-                value = rec[key]
-                shown = "" if value is None or math.isnan(value) else unit_text(value, unit)
-                out.append(f'<td class="num">{shown}</td>')
+                out.append(f'<td class="num">{number_text(float(rec[key]), key, set(), unit)}</td>')
             elif key == "n":
                 out.append(f'<td class="num">{cells["n"]}</td>')
             elif key == "verdict":
