@@ -266,7 +266,7 @@ def sensor_table(path: str | Path | None, *, required: bool = True) -> pd.DataFr
     except OSError as exc:
         raise OptionError(f"--sensors {p}: cannot be read ({exc.strerror})") from None
     except ValueError as exc:
-        raise OptionError(str(exc).replace("\n", " "), status=1) from None
+        raise OptionError(str(exc).replace("\n", " ")) from None
 
 
 def check_figures_dir(path, *, writable: bool = False) -> None:

@@ -112,7 +112,7 @@ def test_printed_sensor_template_pasted_unedited_is_refused(tmp_path, capsys):
     sensors = tmp_path / "todo.toml"
     sensors.write_text(template)
     out = tmp_path / "q.xlsx"
-    assert main(["quality", str(RADAR), "--sensors", str(sensors), "--all", "-o", str(out)]) == 1
+    assert main(["quality", str(RADAR), "--sensors", str(sensors), "--all", "-o", str(out)]) == 2
     err = capsys.readouterr().err
     assert f"{sensors}: [[sensor]] entry 1 ('radar SAC 25 SIC 201', SAC 25 SIC 201)" in err
     assert "latitude 0, longitude 0 is no radar site" in err and "Traceback" not in err

@@ -92,7 +92,7 @@ ERRORS = [
     ("address-7-digits", CORR[:-2] + ["--address", "1234567"], 2, ["--address", "6 hex digits"]),
     ("callsign-punctuation", CORR[:-2] + ["--callsign", "MAS-72"], 2, ["--callsign", "letters and digits"]),
     ("two-aircraft-selections", CORR + ["--all"], 2, ["--all", "--callsign"]),
-    ("sensors-malformed", ["correlate", "{R}", "{A}", "--sensors", "{BAD}", "--all"], 1, ["{BAD}"]),
+    ("sensors-malformed", ["correlate", "{R}", "{A}", "--sensors", "{BAD}", "--all"], 2, ["{BAD}"]),
     ("sensors-missing", ["correlate", "{R}", "{A}", "--sensors", "{O}/none.toml", "--all"], 2,
      ["--sensors", "does not exist"]),
     ("sensors-directory", ["correlate", "{R}", "{A}", "--sensors", "{O}", "--all"], 2,
@@ -191,7 +191,7 @@ def test_bad_option_fails_before_decoding(argv, status, words, paths, capsys, no
 
 def test_malformed_sensor_file_is_named_once(paths, capsys, no_decoding):
     status, _, err = _run(_fill(["quality", "{R}", "{A}", "--sensors", "{BAD}", "--all"], paths), capsys)
-    assert status == 1
+    assert status == 2
     assert err.count(paths["BAD"]) == 1, err
 
 

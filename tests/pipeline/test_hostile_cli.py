@@ -163,7 +163,7 @@ def test_a_sensor_altitude_that_is_no_height_is_refused_by_name(altitude, tmp_pa
     sensors = tmp_path / "s.toml"
     sensors.write_text(SENSORS.read_text().replace("altitude_m = 40.0", f"altitude_m = {altitude}"))
     status, _, err = _run(["correlate", RADAR, ADSB, "--sensors", sensors, "--callsign", "MAS72"], capsys)
-    assert status == 1
+    assert status == 2
     value = repr(float(altitude))
     assert err.strip() == (f"msdc correlate: {sensors}: [[sensor]] entry 1: altitude_m = {value} is outside "
                            "-100000.0..100000.0")
@@ -175,7 +175,7 @@ def test_a_sensor_file_that_is_not_utf8_is_named(tmp_path, capsys):
     sensors.write_bytes(SENSORS.read_bytes().replace(b"KLIA MSSR", b"Barcelona Montseny \xe9"))
     status, _, err = _run(["correlate", RADAR, ADSB, "--sensors", sensors, "--callsign", "MAS72"], capsys)
     at = SENSORS.read_bytes().index(b"KLIA MSSR") + len(b"Barcelona Montseny ")
-    assert status == 1
+    assert status == 2
     assert err.strip() == (f"msdc correlate: {sensors}: not valid TOML: byte {at} is not UTF-8 "
                            "(invalid continuation byte)")
 
@@ -187,7 +187,7 @@ def test_a_misspelt_sensor_key_is_refused_not_ignored(tmp_path, capsys):
     sensors.write_text(SENSORS.read_text() + "sigma_range = 30.0\n")
     argv = ["track", RADAR, ADSB, "--sensors", sensors, "--all", "--json", tmp_path / "t.json"]
     status, _, err = _run(argv, capsys)
-    assert status == 1
+    assert status == 2
     assert err.strip() == (f"msdc track: {sensors}: [[sensor]] entry 1: unknown key 'sigma_range' (did you "
                            "mean sigma_range_m? allowed: name, sac, sic, latitude, longitude, altitude_m, "
                            "sigma_range_m, sigma_azimuth_deg, category, kind, sigma_m, min_range_nm, "

@@ -46,7 +46,7 @@ def test_deep_nesting_is_refused_with_the_reason_not_a_recursion_error(tmp_path,
 def test_a_deeply_nested_sensor_file_ends_the_command_in_one_line(tmp_path, capsys):
     path = written(tmp_path, SENSORS.read_bytes() + b"x = " + b"[" * 5000 + b"]" * 5000 + b"\n")
     assert main(["track", str(FIX / "radar.ast"), "--sensors", str(path), "--all", "--json",
-                 str(tmp_path / "t.json")]) == 1
+                 str(tmp_path / "t.json")]) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "nested too deeply" in err and "Traceback" not in err
     assert not (tmp_path / "t.json").exists()
