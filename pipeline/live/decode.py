@@ -35,7 +35,7 @@ COLUMNS = ("sac", "sic", "time_of_day", "mode3a", "mode3a_v", "mode3a_g", "fligh
            "flight_level_g", "rho_nm",
            "theta_deg", "latitude", "longitude", "address", "callsign", "track_number", "ground_speed_kt",
            "gbs", "flight_status", "rab", "nacp", "nucp_nic", "geometric_height_ft", "track_angle_deg",
-           "heading_deg", "message_type", "typ", "rho_m", "x_m", "y_m", "vx_ms", "vy_ms", "sigma_x_m",
+           "heading_deg", "message_type", "typ", "sim", "rho_m", "x_m", "y_m", "vx_ms", "vy_ms", "sigma_x_m",
            "sigma_y_m")
 # the categories whose reports become measurement rows (the recent reports, the sensors' figures, the map);
 # the records of the others are counted (CAT001 plots, CAT062 system tracks)
@@ -188,7 +188,7 @@ def report_rows(cat: int, frame: pd.DataFrame, sensors: pd.DataFrame | None, dat
     mode3a_valid and modec_valid: the V and G bits of the Mode 3/A code and flight level (I048/070 and
     I048/090, I010/060 and I010/090, I020/070 and I020/090) clear -> valid, either set -> not; <NA> where
     the report does not say (CAT021 never does)."""
-    from msdc.pipeline.model.measurements import measurement_rows, sensor_id
+    from msdc.pipeline.model.measurements import measurement_rows, no_plot, sensor_id
     from msdc.pipeline.model.schema import conform
     from msdc.pipeline.model.time import absolute_time
 
@@ -220,8 +220,9 @@ def report_rows(cat: int, frame: pd.DataFrame, sensors: pd.DataFrame | None, dat
         rows, _ = measurement_rows(frame[known], None, sensors, date=date)
         if rows is not None:
             parts.append(rows)
-    if (~known).any():
-        bare = frame[~known]
+    unknown = ~known & ~no_plot(frame, 48)  # a radar tracker's own updates and simulated plots: no rows
+    if unknown.any():
+        bare = frame[unknown]
         cols = {"time": absolute_time(bare, date), "sac": bare["sac"], "sic": bare["sic"],
                 "sensor_id": sensor_id(48, bare["sac"], bare["sic"]).set_axis(bare.index),
                 "sensor_kind": pd.Series("radar", index=bare.index)}

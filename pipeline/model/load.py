@@ -317,6 +317,7 @@ def load_measurements(paths: list[str | Path], sensors: pd.DataFrame, *, edition
         first = True
         tally = FirstDayTally()
         other_kinds = {}
+        no_plots: dict = {}  # records measuring no real aircraft, per input (measurements.no_plot_counts)
         content = Tally(str(p))
         chunks = (asterix.iter_read(p, chunk=chunk, editions=editions, date=date, format=format,
                                     columns=DECODED_COLUMNS) if dataset is None
@@ -337,7 +338,7 @@ def load_measurements(paths: list[str | Path], sensors: pd.DataFrame, *, edition
             # undated records are placed on UNDATED_DAY here and moved to Loaded.date below
             by_source = widen_spans(by_source, time_spans(rec.frames, None))
             frames, rec.frames = rec.frames, {}
-            r, a = _rows(frames, labels[i], sensors, adsb_sigma_m, stray, off_earth, columns)
+            r, a = _rows(frames, labels[i], sensors, adsb_sigma_m, stray, off_earth, no_plots, columns)
             more = _local_rows(frames, sensors, unplaced, other_kinds, columns)
             del frames
             if timed and selection.placed and dates[-1] is not None:  # an undated input's times move below
@@ -354,6 +355,9 @@ def load_measurements(paths: list[str | Path], sensors: pd.DataFrame, *, edition
         from msdc.pipeline.model.multilateration import other_kinds_warning
 
         early_start += other_kinds_warning(labels[i], other_kinds)
+        from msdc.pipeline.model.measurements import no_plot_warning
+
+        early_start += no_plot_warning(no_plots, labels[i])
         if dataset is None:  # a dataset's were said when it was ingested
             early_start += content.warnings(head_of(p), hint=False, detected=format is None)
         else:
@@ -442,12 +446,13 @@ def _stray_table(parts: list[pd.DataFrame]) -> pd.DataFrame:
 
 
 def _rows(frames: dict[int, pd.DataFrame], name: str, sensors: pd.DataFrame, adsb_sigma_m: float | None,
-          stray: list[pd.DataFrame], off_earth: list[pd.DataFrame], columns=None
+          stray: list[pd.DataFrame], off_earth: list[pd.DataFrame], no_plots: dict, columns=None
           ) -> tuple[pd.DataFrame | None, pd.DataFrame | None]:
     """Measurement rows of one decoded chunk, undated records on UNDATED_DAY; the records of radars the
     sensor table lacks are left out and their undeclared_radars table added to ``stray``, CAT021 reports
-    with a position off the Earth (left out of the rows) to ``off_earth``."""
-    from msdc.pipeline.model.measurements import measurement_rows, off_earth_rows
+    with a position off the Earth (left out of the rows) to ``off_earth``, the records measuring no real
+    aircraft counted in ``no_plots``."""
+    from msdc.pipeline.model.measurements import measurement_rows, no_plot_counts, off_earth_rows
     from msdc.pipeline.model.sensors import undeclared_radars
 
     for frame in frames.values():
@@ -462,4 +467,5 @@ def _rows(frames: dict[int, pd.DataFrame], name: str, sensors: pd.DataFrame, ads
             stray.append(unknown)
             keys = pd.MultiIndex.from_arrays([cat048["sac"].astype("Int64"), cat048["sic"].astype("Int64")])
             cat048 = cat048[keys.isin(pd.MultiIndex.from_frame(sensors[["sac", "sic"]].astype("Int64")))]
+    no_plot_counts(frames.get(21), 21, no_plot_counts(cat048, 48, no_plots))
     return measurement_rows(cat048, frames.get(21), sensors, adsb_sigma_m=adsb_sigma_m, columns=columns)

@@ -63,8 +63,8 @@ __all__ = ["DECODED_COLUMNS", "IdentityWarning", "LeftOutWarning", "NACP_95_M", 
 DECODED_COLUMNS = ("flight_level", "ground_speed_kt", "callsign", "address", "mode3a", "track_number",
                    "heading_deg", "rho_nm", "theta_deg", "x_nm", "y_nm", "track_angle_deg", "latitude",
                    "longitude", "nucp_nic", "fom_pa", "nacp", "nucr_nacv", "sil", "mops_version",
-                   "geometric_height_ft", "gbs", "flight_status", "rab", "message_type", "typ", "rho_m",
-                   "x_m", "y_m", "vx_ms", "vy_ms", "sigma_x_m", "sigma_y_m")
+                   "geometric_height_ft", "gbs", "flight_status", "rab", "message_type", "typ", "sim",
+                   "rho_m", "x_m", "y_m", "vx_ms", "vy_ms", "sigma_x_m", "sigma_y_m")
 
 # Columns worked out over the whole run by finish_measurements, and the built columns each is made from
 DERIVED_INPUTS = {"aircraft_id": ("address", "callsign", "mode3a", "time", "latitude", "longitude",
@@ -86,7 +86,8 @@ class OutOfCoverageWarning(UserWarning):
 
 class LeftOutWarning(UserWarning):
     """build_measurements left out CAT010 target reports of another kind than multilateration or surface
-    radar, or CAT010/CAT020 reports of a sensor without reference point (too few to stop the run: damage)."""
+    radar, CAT010/CAT020 reports of a sensor without reference point (too few to stop the run: damage), or
+    records that measure no real aircraft (NO_PLOT_REASONS)."""
 
 
 class IdentityWarning(UserWarning):
@@ -104,6 +105,58 @@ _POSITION_COLUMNS = {48: (("rho_nm", "theta_deg"), ("x_nm", "y_nm")), 21: (("lat
 # 4 and 5 "airborne or on ground", 6 unassigned, 7 "unknown" say nothing
 STAT_AIRBORNE = (0, 2)
 STAT_ON_GROUND = (1, 3)
+
+# Records that measure no real aircraft: I048/020 TYP 0 "no detection" (an update of the radar's own tracker,
+# a coasted or primary-only track, with no plot behind it) and SIM 1 (I048/020, I021/040: a simulated target
+# report). Left out of the measurements and counted (no_plot_counts), as CAT010's other kinds are.
+NO_PLOT_REASONS = {"typ0": "without a plot (I048/020 TYP 0, no detection: the radar tracker's own updates)",
+                   "sim": "simulated (SIM 1)"}
+
+
+def no_plot_masks(frame: pd.DataFrame, category: int) -> dict[str, np.ndarray]:
+    """Per NO_PLOT_REASONS key, the records of a decoded CAT048 or CAT021 frame it leaves out."""
+    def flag(name: str, value: int) -> np.ndarray:
+        if name not in frame:
+            return np.zeros(len(frame), bool)
+        return frame[name].astype("Int64").eq(value).fillna(False).to_numpy(bool)
+
+    typ0 = flag("typ", 0) if category == 48 else np.zeros(len(frame), bool)
+    return {"typ0": typ0, "sim": flag("sim", 1) & ~typ0}
+
+
+def no_plot(frame: pd.DataFrame, category: int) -> np.ndarray:
+    """The records of a decoded CAT048 or CAT021 frame that measure no real aircraft (NO_PLOT_REASONS)."""
+    masks = no_plot_masks(frame, category)
+    return masks["typ0"] | masks["sim"]
+
+
+def no_plot_counts(frame: pd.DataFrame | None, category: int, counts: dict | None = None) -> dict:
+    """``counts`` (a new dict when None) with the frame's left-out records added, keyed (file, category,
+    reason): the file by the frame's ``file`` column, None without one."""
+    counts = {} if counts is None else counts
+    if frame is None or not len(frame):
+        return counts
+    files = frame["file"].astype(str).to_numpy() if "file" in frame else np.full(len(frame), None, object)
+    for reason, mask in no_plot_masks(frame, category).items():
+        if mask.any():
+            for name, n in pd.Series(files[mask]).value_counts(dropna=False, sort=False).items():
+                key = (name, category, reason)
+                counts[key] = counts.get(key, 0) + int(n)
+    return counts
+
+
+def no_plot_warning(counts: dict, name: str = "the inputs") -> list[str]:
+    """Per file, the warning naming its records left out for being no plot of a real target
+    (no_plot_counts; ``name`` for those of no file)."""
+    by_file: dict = {}
+    order = list(NO_PLOT_REASONS)
+    for (file, cat, reason), n in sorted(counts.items(), key=lambda kv: (str(kv[0][0]), kv[0][1],
+                                                                          order.index(kv[0][2]))):
+        records = f"record{'s' * (n != 1)}"
+        by_file.setdefault(file, []).append(f"{n:,} CAT{cat:03d} {records} {NO_PLOT_REASONS[reason]}")
+    return [f"{name if file is None else file}: {' and '.join(parts)} left out of the measurements: they are "
+            "no plot of a real target" for file, parts in by_file.items()]
+
 
 # DO-260B NACp: 95 % horizontal position accuracy bound (EPU) in metres; 0 = unknown
 NACP_95_M = {11: 3.0, 10: 10.0, 9: 30.0, 8: 92.6, 7: 185.2, 6: 555.6, 5: 926.0, 4: 1852.0, 3: 3704.0,
@@ -234,7 +287,7 @@ def _radar_rows(cat048: pd.DataFrame, sensors: pd.DataFrame, date: dt.date | Non
     x_nm, y_nm = _column(cat048, "x_nm"), _column(cat048, "y_nm")
     polar = (out["rho_nm"].notna() & out["theta_deg"].notna()).to_numpy()
     plane = ~polar & (x_nm.notna() & y_nm.notna()).to_numpy()
-    keep = (polar | plane) & out["time"].notna().to_numpy()
+    keep = (polar | plane) & out["time"].notna().to_numpy() & ~no_plot(cat048, 48)
     out, polar, plane = _rows_of(out, keep), polar[keep], plane[keep]
     index = cat048.index[keep]
     x_nm, y_nm = x_nm[keep].to_numpy(), y_nm[keep].to_numpy()
@@ -295,7 +348,7 @@ def _adsb_rows(cat021: pd.DataFrame, date: dt.date | None, adsb_sigma_m: float |
         out[name] = pd.Series(values, index=index)
     keep = (out["time"].notna() & out["latitude"].notna() & out["longitude"].notna()
             & out["latitude"].abs().le(90.0) & out["longitude"].abs().le(180.0)).to_numpy(bool)
-    return pd.DataFrame(_rows_of(out, keep), copy=False)
+    return pd.DataFrame(_rows_of(out, keep & ~no_plot(cat021, 21)), copy=False)
 
 
 def _on_earth(frame: pd.DataFrame) -> pd.Series:
@@ -512,6 +565,8 @@ def build_measurements(cat048: pd.DataFrame | None = None, cat021: pd.DataFrame 
     parts = measurement_rows(cat048, cat021, sensors, date=date, adsb_sigma_m=adsb_sigma_m)
     for text in impossible_positions(cat021):
         warnings.warn(text, OffEarthWarning, stacklevel=2)
+    for text in no_plot_warning(no_plot_counts(cat021, 21, no_plot_counts(cat048, 48))):
+        warnings.warn(text, LeftOutWarning, stacklevel=2)
     parts = [p for p in parts if p is not None]
     if (cat010 is not None and len(cat010)) or (cat020 is not None and len(cat020)):
         from msdc.pipeline.model.multilateration import other_kinds_warning

@@ -251,6 +251,38 @@ def test_a_radar_whose_site_is_wrong_gets_no_verdict(recording, tmp_path):
     assert any("its plots lie a median" in w for w in result.warnings)
 
 
+def test_a_radars_track_updates_without_a_plot_are_no_reports(recording, evaluated, tmp_path):
+    """I048/020 TYP 0 ("no detection") records are the radar tracker's own updates, SIM 1 ones simulated
+    plots: neither is a report. Each plot is copied a scan later (into the next scan, often a missed one),
+    0.05 NM out and without codes, once as TYP 0 and once as SIM 1: the scorecard is the one without them,
+    and every plot of the truth, no copy, is a trial of false_reports."""
+    sim, result = evaluated
+    _, original = recording
+    folder = tmp_path
+    later = sim.radar.assign(time_of_day=sim.radar["time_of_day"] + sim.scan_period_s,
+                             rho_nm=sim.radar["rho_nm"] + 0.05, mode3a=None, flight_level=np.nan,
+                             address=None, callsign=None, mode3a_v=pd.NA, mode3a_g=pd.NA,
+                             flight_level_v=pd.NA, flight_level_g=pd.NA)
+    tracker, simulated = later.assign(typ=0), later.assign(sim=1)
+    radar = pd.concat([sim.radar.assign(sim=0), tracker, simulated]).sort_values("time_of_day", kind="stable")
+    (folder / "radar.ast").write_bytes(encode_frame(48, radar.reset_index(drop=True))
+                                       + encode_frame(34, sim.north_markers))
+    for name in ("adsb.ast", "sensors.toml", "preset.toml"):
+        (folder / name).write_bytes((original / name).read_bytes())
+    again = evaluate_job(_options(folder))
+    keys = ["sensor", "sector", "requirement", "threshold"]
+    both = result.scorecard.merge(again.scorecard, on=keys, suffixes=("", "_again"))
+    assert len(both) == len(result.scorecard) == len(again.scorecard)
+    for column in ("value", "n", "ci_low", "ci_high", "verdict"):
+        assert both[column].equals(both[f"{column}_again"]), column
+    false_row = again.scorecard[again.scorecard["requirement"] == "false_reports"].iloc[0]
+    assert false_row["n"] == len(sim.radar)
+    said = [w for w in again.warnings if "left out of the measurements" in w]
+    assert said == [f"radar.ast: {len(sim.radar):,} CAT048 records without a plot (I048/020 TYP 0, no "
+                    f"detection: the radar tracker's own updates) and {len(sim.radar):,} CAT048 records "
+                    "simulated (SIM 1) left out of the measurements: they are no plot of a real target"]
+
+
 def test_an_unknown_test_sensor_is_refused(recording):
     _, folder = recording
     from msdc.pipeline.jobs.common import JobError

@@ -3,6 +3,7 @@
 import datetime as dt
 import math
 import tomllib
+from pathlib import Path
 
 import numpy as np
 import pandas as pd
@@ -280,3 +281,59 @@ def test_sensor_ids_stay_whole_numbers_when_some_report_lacks_its_sac_or_sic():
     # a value no SAC byte holds stays itself, not taken for a missing one
     odd = sensor_id(21, pd.Series([-1, None], dtype="Int64"), pd.Series([2, 2], dtype="Int64"))
     assert odd.astype(str).tolist() == ["021:-1/2", "021:?/2"]
+
+
+def test_records_that_are_no_plot_of_a_real_target_are_left_out_and_said(tmp_path):
+    """I048/020 TYP 0 (no detection: the radar tracker's own update), SIM 1 in I048/020 or I021/040
+    (a simulated report): no measurement, whichever way the frames are read, each counted once per file.
+    TYP 0 with SIM 1 is counted as TYP 0."""
+    import warnings
+
+    import msdc.asterix as asterix
+    from msdc.asterix.encode import encode_frame
+    from msdc.pipeline.model.load import load_measurements
+    from msdc.pipeline.model.measurements import LeftOutWarning, build_measurements
+
+    fix = Path(__file__).resolve().parents[3] / "fixtures"
+    sensors = read_sensors(fix / "sensors.toml")
+    radar = asterix.read(fix / "radar.ast").frames[48].drop(columns=["file"], errors="ignore")
+    adsb = asterix.read(fix / "adsb.ast").frames[21].drop(columns=["file"], errors="ignore")
+    radar_path, adsb_path = tmp_path / "r.ast", tmp_path / "a.ast"
+    typ = radar["typ"].astype("Int64").to_numpy().copy()
+    sim = radar["sim"].astype("Int64").to_numpy().copy()
+    typ[[0, 5, 9]] = 0
+    sim[[5, 20]] = 1
+    marked = radar.assign(typ=pd.array(typ, dtype="Int8"), sim=pd.array(sim, dtype="Int8"))
+    adsb_sim = adsb["sim"].astype("Int64").to_numpy().copy()
+    adsb_sim[[3]] = 1
+    radar_path.write_bytes(encode_frame(48, marked))
+    adsb_path.write_bytes(encode_frame(21, adsb.assign(sim=pd.array(adsb_sim, dtype="Int8"))))
+    kept_radar = np.ones(len(radar), bool)
+    kept_radar[[0, 5, 9, 20]] = False
+    kept_adsb = np.ones(len(adsb), bool)
+    kept_adsb[3] = False
+
+    loaded, meas = load_measurements([radar_path, adsb_path], sensors, date="2019-03-01")
+    plain_loaded, plain = load_measurements([fix / "radar.ast", fix / "adsb.ast"], sensors, date="2019-03-01")
+    by_kind = meas["sensor_kind"].astype(str)
+    plain_kind = plain["sensor_kind"].astype(str)
+    for kind, kept in (("radar", kept_radar), ("adsb", kept_adsb)):  # the same reports bar those marked
+        for column in ("time", "latitude", "longitude"):
+            assert meas.loc[by_kind == kind, column].tolist() == \
+                plain.loc[plain_kind == kind, column].to_numpy()[kept].tolist(), (kind, column)
+    said = [w for w in loaded.warnings if "left out of the measurements" in w]
+    tail = " left out of the measurements: they are no plot of a real target"
+    assert said == ["r.ast: 3 CAT048 records without a plot (I048/020 TYP 0, no detection: the radar "
+                    "tracker's own updates) and 1 CAT048 record simulated (SIM 1)" + tail,
+                    "a.ast: 1 CAT021 record simulated (SIM 1)" + tail]
+    assert not [w for w in plain_loaded.warnings if "left out of the measurements" in w]
+
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        built = build_measurements(asterix.read(radar_path).frames[48], asterix.read(adsb_path).frames[21],
+                                   sensors, date="2019-03-01")
+    assert len(built) == len(meas)
+    texts = [str(w.message) for w in caught if issubclass(w.category, LeftOutWarning)]
+    assert texts == ["the inputs: 1 CAT021 record simulated (SIM 1) and 3 CAT048 records without a plot "
+                     "(I048/020 TYP 0, no detection: the radar tracker's own updates) and 1 CAT048 record "
+                     "simulated (SIM 1)" + tail]
