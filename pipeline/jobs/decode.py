@@ -32,7 +32,7 @@ from msdc.pipeline.jobs.options import (
 )
 from msdc.pipeline.model import editions as edition_notes
 from msdc.pipeline.model.report_selection import describe, recorded
-from msdc.pipeline.report.files import named, write_csv
+from msdc.pipeline.report.files import named, write_csv, write_json
 from msdc.pipeline.report.transaction import OutputTransaction, side_pattern, staged
 
 SKIPPED_SHOWN = 20  # skipped blocks decode lists one per line, per input; the rest are counted
@@ -206,14 +206,13 @@ def selection_output(out: Path) -> Path:
 
 
 def _write_selection(path: Path, record: dict, options: DecodeOptions) -> None:
-    """The selection file: the software, the command's selection and what it kept and left out."""
-    import json
-
+    """The selection file (written as every JSON output: report.files.write_json): the software, the
+    command's selection and what it kept and left out."""
     from msdc.pipeline.meta import software_version
 
     doc = {"software": f"msdc {software_version()}", "inputs": [str(p) for p in options.inputs],
            "report_selection": record}
-    path.write_text(json.dumps(doc, indent=1) + "\n", encoding="utf-8")
+    write_json(doc, path)
 
 
 def category_output(out: Path, cat: int) -> Path:

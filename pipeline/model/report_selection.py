@@ -40,6 +40,7 @@ import numpy as np
 import pandas as pd
 
 from msdc.pipeline.model.polygons import Polygons, inside
+from msdc.pipeline.model.time import utc_text
 
 SELECTION_INPUTS = ("time", "sensor_id", "sac", "sic", "latitude", "longitude", "height_m", "flight_level",
                     "rho_nm", "theta_deg")  # the measurement columns select_reports reads
@@ -164,18 +165,20 @@ class ReportSelection:
         return (None if lo is None else lo - READING_MARGIN, None if hi is None else hi + READING_MARGIN)
 
     def parameters(self, day: dt.date | None = None) -> dict:
-        """The selection as given, and the window's instants when the day is known."""
+        """The options as given; the flight-level band applied (an open bound as FL_RANGE's) and the window's
+        instants (msdc's JSON time text) when the day is known."""
         out: dict = {"from": self.start.text if self.start else None,
                      "to": self.end.text if self.end else None, "area": self.area_text,
-                     "fl": list(self.fl) if self.fl else None,
+                     "fl": self.fl_text or (f"{self.fl[0]:g}:{self.fl[1]:g}" if self.fl else None),
+                     "fl_bounds": list(self.fl) if self.fl else None,
                      "sensors": [s.text for s in self.sensors]}
         try:
             lo, hi = self.window(day)
         except ValueError:
             lo = hi = None
         if lo is not None or hi is not None:
-            out["from_utc"] = lo.isoformat() if lo is not None else None
-            out["to_utc"] = hi.isoformat() if hi is not None else None
+            out["from_utc"] = utc_text(lo) if lo is not None else None
+            out["to_utc"] = utc_text(hi) if hi is not None else None
         return out
 
 
@@ -501,8 +504,8 @@ def recorded(selection: ReportSelection, day: dt.date | None, reports: int, kept
 def describe(record: dict) -> str:
     """One line for the terminal: what was given and how many reports were kept."""
     given = [f"--{k} {record[k]}" for k in ("from", "to", "area") if record.get(k)]
-    if record.get("fl"):
-        given.append(f"--fl {record['fl'][0]:g}:{record['fl'][1]:g}")
+    if record.get("fl_bounds"):  # the band applied: "--fl 100:" reads as --fl 100:1000
+        given.append(f"--fl {record['fl_bounds'][0]:g}:{record['fl_bounds'][1]:g}")
     given += [f"--sensor {s}" for s in record.get("sensors") or ()]
     why = ", ".join(f"{v} by {k.replace('_', ' ')}" for k, v in record.get("left_out", {}).items() if v)
     windows = record.get("windows")

@@ -83,8 +83,9 @@ def test_every_command_reads_only_the_selected_reports(command, tmp_path, capsys
     said = out if command in ("decode", "stats") else err  # the terminal says it too
     assert f": {kept} of {total} re" in next(x for x in said.splitlines() if "selection --from 08:10" in x)
     if command != "stats":
-        assert record["from_utc"] == f"{DAY}T08:10:00+00:00" and record["to_utc"] == f"{DAY}T08:16:00+00:00"
-        assert record["fl"] == [100.0, 300.0] and record["sensors"] == ["25/201", "021:0/1"]
+        assert record["from_utc"] == f"{DAY}T08:10:00.000Z" and record["to_utc"] == f"{DAY}T08:16:00.000Z"
+        assert record["fl"] == "100:300" and record["fl_bounds"] == [100.0, 300.0]
+        assert record["sensors"] == ["25/201", "021:0/1"]
     if command == "track":  # tracked from the selected reports only: no row before 08:10, none past the last
         times = pd.to_datetime(pd.read_csv(tmp_path / "t.csv")["time"], utc=True)  # report's coast (60 s)
         assert times.min() >= pd.Timestamp(f"{DAY}T08:10Z")
@@ -105,6 +106,15 @@ def test_decode_writes_only_the_selected_records(tmp_path, capsys, decoded):
         inside = ((t >= pd.Timestamp(f"{DAY}T08:10Z")) & (t < pd.Timestamp(f"{DAY}T08:16Z"))
                   & fl.between(100, 300))
         assert written[cat]["offset"].tolist() == frame.loc[inside, "offset"].tolist()
+
+
+def test_decode_s_selection_file_is_json_as_every_output_s(tmp_path, capsys):
+    """Indented by 2 as the guide says every JSON output is, its times ISO 8601 UTC to the millisecond
+    with Z."""
+    assert main(["decode", *INPUTS, *WINDOW, "-o", str(tmp_path / "out.csv")]) == 0
+    text = (tmp_path / "out_selection.json").read_text(encoding="utf-8")
+    assert text.startswith('{\n  "software": "msdc ') and text.endswith("\n}\n")
+    assert f'\n    "from_utc": "{DAY}T08:10:00.000Z",\n' in text
 
 
 def test_a_polygon_keeps_the_adsb_reports_inside_it(tmp_path, capsys, decoded):

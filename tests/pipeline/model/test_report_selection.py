@@ -317,3 +317,21 @@ def test_a_span_is_cut_into_consecutive_windows_the_last_shorter():
                                                           ("08:21", "08:25:30")]
     assert [w.start.time_of_day_s for w in day] == [28800.0, 29430.0, 30060.0]
     assert len(span_windows(span, 65)) == 1 and len(span_windows(span, 64.99)) == 2
+
+
+# ---------------------------------------------------------------------------------------------------------
+# What the outputs record
+
+
+def test_the_record_holds_the_options_as_given_the_instants_and_the_band_applied():
+    """--from 08:10 --to 08:40 --fl 100: on 2 May 2023: the texts as typed, the instants as msdc's JSON
+    writes every time (ISO 8601 UTC to the millisecond, Z), and the open band's bounds (FL 100 to FL 1000,
+    the highest --fl takes); the terminal line gives the band applied, as an option that selects alike."""
+    sel = rs.ReportSelection(start=rs.parse_time("08:10", "--from"), end=rs.parse_time("08:40", "--to"),
+                             fl=rs.parse_fl("100:"), fl_text="100:")
+    record = rs.recorded(sel, DAY, 44, 11, {"time": 22, "flight_level": 23})
+    assert {k: record[k] for k in ("from", "to", "fl", "fl_bounds", "from_utc", "to_utc")} == {
+        "from": "08:10", "to": "08:40", "fl": "100:", "fl_bounds": [100.0, 1000.0],
+        "from_utc": "2023-05-02T08:10:00.000Z", "to_utc": "2023-05-02T08:40:00.000Z"}
+    line = rs.describe(record)
+    assert line.startswith("selection --from 08:10 --to 08:40 --fl 100:1000: 11 of 44 reports kept")
