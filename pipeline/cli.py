@@ -159,8 +159,10 @@ def cmd_decode(args) -> int:
         print(f"msdc: {len(result.skipped)} block(s) skipped", file=sys.stderr)
     if result.selection is not None:
         print(_selection_line(result.selection).replace(" reports ", " records "))
-    _list_written("decode", {f"CAT{cat:03d} records": p for cat, p in result.outputs.items()}, tx.written,
-                  decode.side_files(result.output))
+    kinds = {f"CAT{cat:03d} records": p for cat, p in result.outputs.items()}
+    if result.selection_file is not None:
+        kinds["selection record"] = result.selection_file
+    _list_written("decode", kinds, tx.written, decode.side_files(result.output))
     if sum(result.counts.values()) == 0:
         print(f"msdc: {result.nothing_decoded(options.categories)}", file=sys.stderr)
         return 1

@@ -70,6 +70,7 @@ class DecodeResult:
     held: dict[str, dict[int, int]] = field(default_factory=dict)  # per input: data blocks per category
     output: Path | None = None  # -o as validated
     selection: dict | None = None  # what the report selection kept and left out (report_selection.recorded)
+    selection_file: Path | None = None  # where it is recorded (selection_output), as -o is given
 
     def nothing_decoded(self, categories: tuple[int, ...] = ()) -> str:
         """Why no record decoded, naming what each input holds (a --category the inputs lack, most often)."""
@@ -189,15 +190,17 @@ def decode_job(options: DecodeOptions, *, on_chunk: Callable[[int, int, str], No
                 files[cat].rename(stage.path(out))
         if content and not options.lenient:
             raise JobError("; ".join(content) + "; nothing written (--lenient writes what decodes anyway)")
+        side = None
         if record is not None and out is not None and files:
-            side = stage.path(out).with_name(selection_output(out).name)
-            _write_selection(side, record, options)
-            notes.append(f"selection recorded in {stage.final(side)}")
+            staged_side = stage.path(out).with_name(selection_output(out).name)
+            _write_selection(staged_side, record, options)
+            side = stage.final(staged_side)  # named as the data files are
+            notes.append(f"selection recorded in {side}")
     held = {} if sum(counts.values()) else {str(p): categories_in(p, format=options.format)
                                               for p in checked.inputs}
     warnings = checked.warnings + content + early_start + edition_notes.warnings(failed)
     counts = {cat: n for cat, n in counts.items() if n or selection is None}
-    return DecodeResult(counts, outputs, skipped, warnings, notes, held, out, record)
+    return DecodeResult(counts, outputs, skipped, warnings, notes, held, out, record, side)
 
 
 def selection_output(out: Path) -> Path:

@@ -117,6 +117,14 @@ def test_decode_s_selection_file_is_json_as_every_output_s(tmp_path, capsys):
     assert f'\n    "from_utc": "{DAY}T08:10:00.000Z",\n' in text
 
 
+def test_decode_lists_its_selection_file_as_its_data_file(tmp_path, capsys, monkeypatch):
+    """-o out.csv given relative: the selection file is listed relative too, saying what it is."""
+    monkeypatch.chdir(tmp_path)
+    assert main(["decode", *INPUTS, *WINDOW, "--category", "48", "-o", "out.csv"]) == 0
+    assert capsys.readouterr().err.endswith("msdc decode: 2 file(s) written:\n  out.csv (CAT048 records)\n"
+                                            "  out_selection.json (selection record)\n")
+
+
 def test_a_polygon_keeps_the_adsb_reports_inside_it(tmp_path, capsys, decoded):
     """A triangle over part of the traffic; the CAT021 positions inside it by matplotlib's test."""
     adsb = decoded[21]
