@@ -31,6 +31,7 @@ from msdc.pipeline.jobs.common import (
     JobError,
     OptionError,
     carrying,
+    check_beside,
     check_decoding,
     check_figure_options,
     check_figures_dir,
@@ -103,9 +104,9 @@ def validate(options: ConflictOptions) -> Checked:
     if checked.output is None:
         raise OptionError("-o: give the output, conflicts.csv or conflicts.xlsx")
     csv = checked.output.suffix.lower() == ".csv"
-    beside = companion_paths(real_output(checked.output)).values() if csv else ()
-    for extra in beside:
-        output_path("-o", extra, (".csv",))
+    companions = companion_paths(real_output(checked.output)) if csv else {}
+    check_beside("-o", checked.output, [(COMPANION_NOUNS[kind], path) for kind, path in companions.items()])
+    beside = companions.values()
     spare_inputs(options.inputs, [(f"-o {checked.output}", p) for p in (checked.output, *beside)]
                  + [(f"--json {checked.json}", checked.json)])
     if options.figures is not None:
@@ -113,6 +114,9 @@ def validate(options: ConflictOptions) -> Checked:
     check_figure_options(options)
     checked.sensors = sensor_table(options.sensors, required=False)
     return checked
+
+
+COMPANION_NOUNS = {"losses": "losses table", "warnings": "warning times table"}  # as messages name them
 
 
 def companion_paths(csv: Path) -> dict[str, Path]:

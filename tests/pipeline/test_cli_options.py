@@ -28,6 +28,7 @@ TRUTH = json.loads((FIX / "truth.json").read_text())
 # that cannot be written, {BAD} a malformed sensor file, {X} a tiny raw file
 CORR = ["correlate", "{R}", "{A}", "--sensors", "{S}", "--callsign", "MAS72"]
 QUAL = ["quality", "{R}", "{A}", "--sensors", "{S}", "--callsign", "MAS72"]
+CONF = ["conflicts", "{R}", "{A}", "--sensors", "{S}"]
 TRACK = ["track", "{R}", "{A}", "--sensors", "{S}", "--callsign", "MAS72", "--json", "{O}/t.json"]
 
 # (id, argv, exit status, words the one-line message must contain)
@@ -67,6 +68,11 @@ ERRORS = [
     ("out-table-is-directory", CORR + ["-o", "{O}/tab.xlsx"], 2, ["-o", "tab_slots.parquet is a directory"]),
     ("out-table-is-directory-parquet", CORR + ["-o", "{O}/tab.xlsx", "--tables", "parquet"], 2,
      ["-o", "tab_slots.parquet is a directory"]),
+    # the conflict tables beside a CSV output: -o named as given, then the file beside it
+    ("conflicts-losses-is-directory", CONF + ["-o", "{O}/c.csv"], 2,
+     ["msdc conflicts: -o {O}/c.csv: its losses table {O}/c_losses.csv is a directory"]),
+    ("conflicts-warning-times-is-directory", CONF + ["-o", "{O}/w.csv"], 2,
+     ["msdc conflicts: -o {O}/w.csv: its warning times table {O}/w_warning_times.csv is a directory"]),
     ("tables-unknown", CORR + ["--tables", "csv"], 2, ["--tables", "auto"]),
     ("tables-parquet-no-output", CORR + ["--tables", "parquet"], 2, ["--tables parquet", "needs -o"]),
     ("out-txt", CORR + ["-o", "{O}/report.txt"], 2, ["-o", ".xlsx"]),
@@ -134,7 +140,8 @@ def paths(tmp_path):
     out = tmp_path / "out"
     out.mkdir()
     for name in ("dir.xlsx", "dir.json", "dir.csv", "fig_tracks.png", "tab_slots.parquet",
-                 "q_radar_errors_25_201.png", "i_intervals.png", "c_lags_3.png"):
+                 "q_radar_errors_25_201.png", "i_intervals.png", "c_lags_3.png", "c_losses.csv",
+                 "w_warning_times.csv"):
         (out / name).mkdir()
     ro = tmp_path / "readonly"
     ro.mkdir()
