@@ -30,7 +30,7 @@ LABELS: dict[str, str] = {
     "matched_sep_rms_m": "Report separation RMS", "matched_sep_p95_m": "Report separation 95th percentile",
     "matched_along_mean_m": "Along-track mean", "matched_along_se_m": "Along-track SE",
     "matched_cross_mean_m": "Cross-track mean", "matched_cross_se_m": "Cross-track SE",
-    "matched_time_offset_s": "Time offset", "quality_reports": "Reports with errors",
+    "matched_time_offset_s": "Time offset", "quality_reports": "Reports compared with ADS-B",
     # Summary: the thesis's measures
     "slots": "Slots", "radar_before": "Radar before", "radar_after": "Radar after",
     "adsb_before": "ADS-B before", "adsb_after": "ADS-B after", "radar_duplicates": "Radar duplicates",

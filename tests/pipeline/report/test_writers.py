@@ -573,6 +573,8 @@ def test_quality_numbers_lead_the_summary(run: CorrelationRun, tmp_path: Path) -
     summary = load_workbook(tmp_path / "q.xlsx")["Summary"]
     row, col = _block(summary, "What each window shows")
     assert list(col)[-5:] == WINDOW_QUALITY_KEYS
+    # quality_reports counts the radar reports compared with ADS-B, as the Radar biases sheet's count
+    assert summary.cell(row, col["quality_reports"]).value == "Reports compared with ADS-B"
     assert summary.cell(row + 1, col["range_error_std_m"]).value == 66.0
     assert summary.cell(row + 1, col["matched_sep_rms_m"]).value == 250.7
     verdicts = next(c.row for c in summary["A"] if c.value == "Verdicts (2)")
