@@ -86,6 +86,43 @@ def field_monitors(meas: pd.DataFrame, frames: dict[int, pd.DataFrame]) -> set[s
     return set(hit.astype(str))
 
 
+# A fixed test transponder whose records do not set RAB (the real Barcelona hour's 344045: 899 plots, RAB 0)
+# is known by its Mode 3/A code 7777 (ICAO Annex 10 Vol IV and Doc 4444 reserve it for transponders on the
+# ground used to monitor the radar) and by standing still: an aircraft squawking 7777 in flight (a military
+# interception) moves, a parked one squawks its own code. Barcelona's monitor: 95 % of plots within 3.1 m.
+MONITOR_MODE3A = "7777"
+MONITOR_SPREAD_M = 50.0  # 95 % of its reports within this of their median position
+MONITOR_MIN_REPORTS = 10
+
+
+def fixed_7777(meas: pd.DataFrame) -> dict[str, float]:
+    """The aircraft ids of field monitors that do not set RAB: every report that carries a Mode 3/A code
+    says 7777, at least MONITOR_MIN_REPORTS of them, 95 % within MONITOR_SPREAD_M of their median
+    position; each with that 95 % distance (m)."""
+    from msdc.pipeline.model.geodesy import distance_m
+
+    if not {"aircraft_id", "mode3a", "latitude", "longitude"} <= set(meas.columns) or meas.empty:
+        return {}
+    code = meas["mode3a"].astype("string")
+    ids = meas["aircraft_id"].astype("string")
+    coded = code.notna() & ids.notna()
+    seven = code.eq(MONITOR_MODE3A).fillna(False)
+    all_seven = seven[coded].groupby(ids[coded]).agg(["all", "size"])
+    candidates = all_seven.index[all_seven["all"] & all_seven["size"].ge(MONITOR_MIN_REPORTS)]
+    out = {}
+    for aid in candidates:
+        rows = meas[ids.eq(aid).fillna(False).to_numpy(bool)]
+        lat, lon = rows["latitude"].to_numpy(float), rows["longitude"].to_numpy(float)
+        fine = np.isfinite(lat) & np.isfinite(lon)
+        if fine.sum() < MONITOR_MIN_REPORTS:
+            continue
+        d = distance_m(np.median(lat[fine]), np.median(lon[fine]), lat[fine], lon[fine])
+        p95 = float(np.percentile(d, 95))
+        if p95 <= MONITOR_SPREAD_M:
+            out[str(aid)] = p95
+    return out
+
+
 def tracker_ids(frame: pd.DataFrame | None) -> list[str]:
     """The sensor ids (062:SAC/SIC) of the trackers in a decoded CAT062 frame."""
     if frame is None or not len(frame):

@@ -457,11 +457,13 @@ def _evaluate_window(options: EvaluateOptions, checked: EvaluateChecked, progres
     every sensor under test; warnings added to ``warnings``."""
     from msdc.pipeline.evaluate.reference_gates import Gates
     from msdc.pipeline.evaluate.sensor_reports import (
+        MONITOR_MODE3A,
         RADAR_EXTRA_COLUMNS,
         SERVICE_CATEGORIES,
         TRACKER_CATEGORY,
         TRACKER_COLUMNS,
         field_monitors,
+        fixed_7777,
         tracker_ids,
     )
     from msdc.pipeline.model.heap import release_free_memory
@@ -491,11 +493,16 @@ def _evaluate_window(options: EvaluateOptions, checked: EvaluateChecked, progres
     builders = tracked_reports(meas, options.max_coast_s)
     epoch = midnight(meas["time"])
     external = _external(options, epoch)
-    monitors = field_monitors(meas, loaded.frames)
+    flagged = field_monitors(meas, loaded.frames)
+    standing = {k: v for k, v in fixed_7777(meas).items() if k not in flagged}
+    monitors = flagged | set(standing)
     _keep_frames(loaded, (48, TRACKER_CATEGORY, *SERVICE_CATEGORIES))  # what each sensor's part reads
     if monitors:
-        notes.append(f"field monitors (fixed transponders, RAB set): {', '.join(sorted(monitors))}; "
-                     "judged in their own rows, left out of the others")
+        said = [f"{a} (RAB set)" for a in sorted(flagged)]
+        said += [f"{a} (Mode 3/A {MONITOR_MODE3A} on every report, 95 % within {p95:.3g} m of one point)"
+                 for a, p95 in sorted(standing.items())]
+        notes.append(f"field monitors (fixed transponders): {', '.join(said)}; judged in their own rows, "
+                     "left out of the others")
     gates = Gates(min_nacp=options.min_nacp, min_nic=options.min_nic, min_sil=options.min_sil,
                   drop_jumps=options.drop_jumps)
     results, cache = [], {}  # the latest reference, reused by the next sensor built from the same

@@ -283,6 +283,34 @@ def test_a_radars_track_updates_without_a_plot_are_no_reports(recording, evaluat
                     "simulated (SIM 1) left out of the measurements: they are no plot of a real target"]
 
 
+def test_a_fixed_7777_transponder_without_rab_is_a_field_monitor(recording, evaluated, tmp_path):
+    """A transponder at 4 NM / 100 deg, Mode 3/A 7777 on each of 300 scans and RAB clear (as the real
+    Barcelona hour's monitor): it gets the field monitors' rows, its 300 expected updates all detected, and
+    the note names it; the traffic's global rows are the run's without it."""
+    sim, result = evaluated
+    _, original = recording
+    scans = sim.north_markers["time_of_day"].to_numpy()[:300] + 1.0
+    monitor = pd.DataFrame({"sac": 25, "sic": 201, "time_of_day": scans, "day": 0, "typ": 5, "rho_nm": 4.0,
+                            "theta_deg": 100.0, "mode3a": "7777", "flight_level": 0.0, "address": "3C0FFE",
+                            "callsign": None, "mode3a_v": 0, "mode3a_g": 0, "flight_level_v": 0,
+                            "flight_level_g": 0})
+    radar = pd.concat([sim.radar, monitor]).sort_values("time_of_day", kind="stable", ignore_index=True)
+    (tmp_path / "radar.ast").write_bytes(encode_frame(48, radar) + encode_frame(34, sim.north_markers))
+    for name in ("adsb.ast", "sensors.toml", "preset.toml"):
+        (tmp_path / name).write_bytes((original / name).read_bytes())
+    again = evaluate_job(_options(tmp_path))
+    notes = again.parameters["notes"]
+    assert any("3C0FFE (Mode 3/A 7777 on every report, 95 % within" in n for n in notes), notes
+    card = again.scorecard
+    monitor_pd = card[(card["sector"] == "field monitors") & (card["requirement"] == "pd")]
+    assert len(monitor_pd) and (monitor_pd["value"] == 1.0).all()
+    assert (monitor_pd["n"] >= 299).all() and (monitor_pd["n"] <= 300).all()  # the first scan may open it
+    keys = ["sensor", "sector", "requirement", "threshold"]
+    before = result.scorecard[result.scorecard["sector"] == "global"].set_index(keys)
+    after = card[card["sector"] == "global"].set_index(keys).loc[before.index]
+    assert after["n"].equals(before["n"]) and after["value"].equals(before["value"])
+
+
 def test_an_unknown_test_sensor_is_refused(recording):
     _, folder = recording
     from msdc.pipeline.jobs.common import JobError
