@@ -351,15 +351,25 @@ def _score(preset: Preset, sensor_id: str, reports: pd.DataFrame, reference: pd.
     marks: dict[str, str] = {}
 
     def places() -> tuple[np.ndarray, ...]:
-        """Where each report is: its reference aircraft's place at its time, else its own (made once)."""
+        """Where each report is: its reference aircraft's place at its time, else its own, on the surface or
+        airborne as it says itself (GBS, STAT: a false report has no aircraft to say it) (made once)."""
         nonlocal where
         if where is None:
             lat, lon, fl, ground = reference_positions(rep, reference)
             own = ~np.isfinite(lat)
             where = (np.where(own, rep["latitude"].to_numpy(float), lat),
                      np.where(own, rep["longitude"].to_numpy(float), lon),
-                     np.where(own, _report_fl(rep), fl), np.where(own, np.nan, ground))
+                     np.where(own, _report_fl(rep), fl), np.where(own, ground_flags(rep), ground))
         return where
+
+    def unplaced(name: str, req: Requirement) -> str:
+        """On a surface or airborne row of a false-report count: the reports of no aircraft that say
+        neither, so lie in neither row (only in the global one)."""
+        if name not in (SURFACE, AIRBORNE) or "distance_m" not in req.parameters:
+            return ""
+        n = int(((rep["ref_index"].to_numpy() < 0) & np.isnan(places()[3])).sum())
+        return (f"{n:,} reports of no reference aircraft that do not say whether they are on the surface "
+                "are in neither the surface nor the airborne row (only in the global one)") if n else ""
 
     def region(name: str, masks: list[Mask]) -> tuple[pd.DataFrame, pd.DataFrame]:
         """The reports and reference of a region, cut once."""
@@ -394,6 +404,8 @@ def _score(preset: Preset, sensor_id: str, reports: pd.DataFrame, reference: pd.
                            ref.empty else measure(req, r, ref, sensor))
             if CATALOGUE[req.id].kind in (PROPORTION, RATE) and mark(name, masks):  # never position figures
                 outcome = replace(outcome, notes=(*outcome.notes, marks[name]))
+            if said := unplaced(name, req):
+                outcome = replace(outcome, notes=(*outcome.notes, said))
             score.outcomes[(name, req.id, i)] = outcome
             score.rows.append(judge(outcome, req, preset, sensor_id, name))
     return score

@@ -241,3 +241,25 @@ def test_a_report_is_on_the_surface_while_the_latest_reference_sample_says_so():
     rows = {r["sector"]: r for r in score_sensor(preset(requirement("max_m", 1000.0)), "R", rep, ref,
                                                  Sensor(0.0, 0.0, 0.0)).rows}
     assert (rows["surface"]["n"], rows["airborne"]["n"], rows["global"]["n"]) == (1, 1, 2)
+
+
+def test_a_false_report_is_on_the_surface_or_airborne_as_it_says_itself():
+    """Three reports 4 km from an airborne aircraft and 11 km from one on the ground: one saying 'on the
+    ground', one 'airborne', one nothing. With no aircraft to place them, the surface row counts the first
+    false, the airborne row the second (beside the airborne aircraft's own report, not false), the global row
+    all three; the third is in neither sector row, and both say so."""
+    ref = pd.concat([track().assign(on_ground=False),
+                     track(label="B").assign(latitude=0.0, longitude=0.1, on_ground=True)], ignore_index=True)
+    far = 5_000.0 / M_PER_DEG_LAT
+    rep = pd.DataFrame({"t_s": [5.0, 5.0, 6.0, 7.0], "latitude": [500.0 / M_PER_DEG_LAT, far, far, far],
+                        "longitude": 0.0,
+                        "on_ground": pd.array([False, True, False, pd.NA], dtype="boolean")})
+    score = score_sensor(preset(requirement("false_reports", 0.01, distance_m=100.0)), "R", rep, ref,
+                         Sensor(0.0, 0.0, 0.0))
+    rows = {r["sector"]: r for r in score.rows}
+    assert (rows["global"]["value"] * rows["global"]["n"], rows["global"]["n"]) == (3, 4)
+    assert (rows["surface"]["value"] * rows["surface"]["n"], rows["surface"]["n"]) == (1, 1)
+    assert (rows["airborne"]["value"] * rows["airborne"]["n"], rows["airborne"]["n"]) == (1, 2)
+    for sector in ("surface", "airborne"):
+        assert "1 reports of no reference aircraft that do not say whether" in rows[sector]["notes"]
+    assert "do not say whether" not in rows["global"]["notes"]
