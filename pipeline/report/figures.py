@@ -18,7 +18,7 @@ from matplotlib.text import Text
 from msdc.pipeline.correlate.correlation import peak_lag, pearson_max_lag, pearson_search_limit
 from msdc.pipeline.correlate.results import CorrelationRun, WindowResult
 from msdc.pipeline.report.canvas import new_figure, save_png  # noqa: F401 - importable here too
-from msdc.pipeline.report.summary import printable, slot_seconds, window_label
+from msdc.pipeline.report.summary import aircraft_name, printable, slot_seconds, window_label
 
 RADAR_COLOR = "#d62728"
 ADSB_COLOR = "#ffd400"
@@ -97,11 +97,11 @@ def _legend_handles(any_filled: bool, labels: dict[str, str] = _LABEL) -> list[L
 
 
 def _window_label(window: WindowResult) -> str:
-    return f"{_text(window.summary.get('callsign')) or '?'} #{_text(window.summary.get('window'))}"
+    return f"{_text(aircraft_name(window.summary))} #{_text(window.summary.get('window'))}"
 
 
 def _callsign_title(windows: list[WindowResult]) -> str:
-    names = list(dict.fromkeys(_text(w.summary.get("callsign")) or "?" for w in windows))
+    names = list(dict.fromkeys(_text(aircraft_name(w.summary)) for w in windows))
     shown = ", ".join(names[:_MAX_TITLE_CALLSIGNS])
     more = len(names) - _MAX_TITLE_CALLSIGNS
     return shown + (f" +{more} more" if more > 0 else "")

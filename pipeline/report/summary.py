@@ -145,6 +145,11 @@ def printable(text: Any) -> str:
     return "".join(c if c.isprintable() else c.encode("unicode_escape").decode("ascii") for c in str(text))
 
 
+def aircraft_name(summary: Mapping[str, Any], none: str = "?") -> str:
+    """Who a window or skipped window is of, as people name it: its call sign, else its address."""
+    return printable(summary.get("callsign")) or printable(summary.get("address")) or none
+
+
 def sensor_pair(summary: Mapping[str, Any]) -> str:
     """A window's sensors as "radar vs reference" (``048:25/201 vs 021:0/1``); "" when it names none."""
     radar, reference = printable(summary.get("radar_sensor")), printable(summary.get("reference_sensor"))
@@ -154,7 +159,7 @@ def sensor_pair(summary: Mapping[str, Any]) -> str:
 def window_label(summary: Mapping[str, Any]) -> str:
     """A window as people read it: call sign (else address), number and sensor pair, e.g. ``TST0000 window 1
     (048:25/201 vs 021:0/1)``: window numbers restart for every sensor pair of an aircraft."""
-    who = printable(summary.get("callsign")) or printable(summary.get("address")) or "?"
+    who = aircraft_name(summary)
     pair = sensor_pair(summary)
     return f"{who} window {printable(summary.get('window'))}" + (f" ({pair})" if pair else "")
 
@@ -264,7 +269,7 @@ def _table_row(s: Mapping[str, Any]) -> list[str]:
         if key is None:
             cells.append(f"{_count(s.get('radar_filled_slots'))}/{_count(s.get('adsb_filled_slots'))}")
         elif key == "callsign":
-            cells.append(printable(s.get("callsign")) or printable(s.get("address")) or "-")
+            cells.append(aircraft_name(s, "-"))
         elif key == "sensors":
             cells.append(sensor_pair(s) or "- vs -")
         elif key == "start":
@@ -311,7 +316,7 @@ def _plus_minus(s: Mapping[str, Any], key: str, se_key: str) -> str:
 
 # the lead table: (header, cell of a window summary, right-aligned); with --quality the _QUALITY_TABLE too
 _LEAD_TABLE = [
-    ("call sign", lambda s: printable(s.get("callsign")) or printable(s.get("address")) or "-", False),
+    ("call sign", lambda s: aircraft_name(s, "-"), False),
     ("win", lambda s: _count(s.get("window")), True),
     ("sensors", lambda s: sensor_pair(s) or "- vs -", False),
     ("start (UTC)", lambda s: clock_text(s.get("start"), s.get("start_tod")), False),
@@ -383,7 +388,7 @@ def summary_table(run: CorrelationRun) -> str:
         lines += thesis_limits()
     lines.append(f"{len(run.windows)} window(s) correlated, {len(run.skipped)} skipped")
     for skipped in run.skipped:
-        who = printable(skipped.callsign) or printable(skipped.address) or "?"
+        who = aircraft_name(vars(skipped))
         pair = sensor_pair(vars(skipped))
         span = f"{clock_text(None, skipped.start_tod)}-{clock_text(None, skipped.end_tod)}"
         lines.append(f"  skipped {who}{f' ({pair})' if pair else ''} {span}: {printable(skipped.reason)}")

@@ -44,3 +44,19 @@ def test_peak_labels_cover_no_mark_and_no_other_label(tmp_path, monkeypatch):
     assert all(not a.overlaps(b) for i, a in enumerate(labels) for b in labels[i + 1:])
     assert {t.get_text() for ax in fig.axes for t in ax.texts} == {"+0", "+10: search limit, no estimate"}
 
+
+
+def test_an_aircraft_without_a_call_sign_is_named_by_its_address():
+    """Two surface vehicles without call signs (the LEBL hour's 4CA1C3 and 4CA548) were both '? #1' on the
+    map and in its title; they are named as the terminal names them, by address."""
+    from msdc.pipeline.report.summary import window_label
+
+    def window(callsign, address, number):
+        return WindowResult({"callsign": callsign, "address": address, "window": number}, pd.DataFrame(),
+                            pd.DataFrame())
+
+    windows = [window(None, "4CA1C3", 1), window(None, "4CA548", 1), window("AFL2513", "4242AA", 2),
+               window(None, None, 3)]
+    assert [figures._window_label(w) for w in windows] == ["4CA1C3 #1", "4CA548 #1", "AFL2513 #2", "? #3"]
+    assert figures._callsign_title(windows) == "4CA1C3, 4CA548, AFL2513, ?"
+    assert window_label(windows[0].summary) == "4CA1C3 window 1"
