@@ -556,7 +556,7 @@ def _correlate_pair(ac: tuple[str, str], run: CorrelationRun, pair: tuple[str, _
         matched = matched_summary(matched_pairs(r_in, adsb.clean_inside(start_s, end_s), start_s, end_s,
                                                 slot_s))
         matched["verdict"] = window_verdict({**matched, "adsb_jumps": jumps},
-                                            "ADS-B" if adsb.is_adsb else ref_id)
+                                            "ADS-B" if adsb.is_adsb else ref_id, radar_id)
         run.windows.append(_window_result(ac, number, start_s, end_s, r_in, a_in, dups, slot_s, reference,
                                           sensors, jumps, predictors, matched))
     return None

@@ -19,6 +19,10 @@ from msdc.pipeline.correlate.matched import MIN_SPEED_MS
 
 MIN_MATCHED_REPORTS = 10
 CAUSES = "a time-stamp, range or azimuth error: the radar's biases (--quality) tell which"
+# a multilateration system or surface radar under test: --quality fits no biases of its (CAT048 radars only)
+OTHER_CAUSES = ("a time-stamp or position error of either sensor (--quality fits biases for CAT048 radars "
+                "only)")
+RADAR_PREFIX = "048:"  # the sensor ids of CAT048 radars
 OFFSET_SE = 3.0  # a mean offset is named past this many standard errors (0.3 % of noise-only windows)
 
 
@@ -39,13 +43,17 @@ def _stands_out(mean: float, se: float) -> bool:
     return math.isfinite(mean) and math.isfinite(se) and abs(mean) > OFFSET_SE * se
 
 
-def window_verdict(summary: Mapping[str, Any], reference: str = "ADS-B") -> str:
+def window_verdict(summary: Mapping[str, Any], reference: str = "ADS-B", tested: str = RADAR_PREFIX) -> str:
     """The verdict of a window from its summary's matched keys; ``reference`` names the reference sensor
-    in the text ("ADS-B", or the other radar's id)."""
+    in the text ("ADS-B", or the other radar's id), ``tested`` is the tested sensor's id (a CAT048 radar's
+    offsets point to its bias fit; another kind's do not)."""
+    radar = tested.startswith(RADAR_PREFIX)
     n = int(_number(summary, "matched_reports")) if math.isfinite(_number(summary, "matched_reports")) else 0
     if n < MIN_MATCHED_REPORTS:
-        return (f"no verdict: {n} radar report{'s' if n != 1 else ''} matched to {reference} at their own "
-                f"time (at least {MIN_MATCHED_REPORTS} needed)")
+        reports = f"report{'s' if n != 1 else ''}"
+        who = f"radar {reports}" if radar else f"{reports} of {tested}"
+        return (f"no verdict: {n} {who} matched to {reference} at their own time (at least "
+                f"{MIN_MATCHED_REPORTS} needed)")
     along, along_se = _number(summary, "matched_along_mean_m"), _number(summary, "matched_along_se_m")
     cross, cross_se = _number(summary, "matched_cross_mean_m"), _number(summary, "matched_cross_se_m")
     offsets = []
@@ -65,7 +73,7 @@ def window_verdict(summary: Mapping[str, Any], reference: str = "ADS-B") -> str:
     rms = _number(summary, "matched_sep_rms_m")
     text = f"{head}; {_metres(rms)} RMS from {reference} over {n} reports"
     if offsets:
-        text += f"; {CAUSES}"
+        text += f"; {CAUSES if radar else OTHER_CAUSES}"
     jumps = _number(summary, "adsb_jumps")
     if reference == "ADS-B" and math.isfinite(jumps) and jumps > 0:
         text += f"; {int(jumps)} ADS-B position jump{'s' if jumps != 1 else ''} left out"

@@ -262,6 +262,12 @@ def test_verdict_wording():
         "systematic offset: 6,900 m behind 048:25/202 along track (30.0 s of flight); 45 m right of the "
         "048:25/202 track; 312 m RMS from 048:25/202 over 200 reports; a time-stamp, range or azimuth "
         "error: the radar's biases (--quality) tell which")
+    # multilateration against ADS-B: --quality fits no bias of it, so the verdict does not point there
+    assert window_verdict(late, "ADS-B", "010:0/107:mlat").endswith(
+        "312 m RMS from ADS-B over 200 reports; a time-stamp or position error of either sensor (--quality "
+        "fits biases for CAT048 radars only)")
+    assert window_verdict({"matched_reports": 4}, "ADS-B", "010:0/107:mlat") == (
+        "no verdict: 4 reports of 010:0/107:mlat matched to ADS-B at their own time (at least 10 needed)")
 
 
 def test_window_accuracy_takes_the_radar_errors_of_its_radar_aircraft_and_time():
