@@ -29,6 +29,13 @@ TRACK_INPUTS = ("aircraft_id", "segment", "time", "latitude", "longitude", "flig
 BUILT_COLUMNS = ("aircraft", "t_s", "latitude", "longitude", "altitude_ft", *IDENTITY_COLUMNS, "sigma_m",
                  "built_by", "self_reference", "updated", "on_ground")
 BUILT_BY_SEPARATOR = " + "
+# a segment of a sensor's own track is a self-reference when updated at least this often, or when its one
+# update has another of the same aircraft within 30 s: a lone report would judge itself (Barcelona's lone
+# M3A:4445 plot, 39 NM from that code's aircraft, was associated to its own one-row track and never false).
+# One-report segments beside others are kept: the tracker starts one at each plot its gate rejects, and
+# where a reflection alternates with the aircraft's plots every plot is such a segment (dropping them made
+# 36 of the aircraft's own plots false there)
+MIN_OWN_UPDATES = 2
 
 
 @dataclass
@@ -222,6 +229,25 @@ def _on_ground(key_ref: np.ndarray, t_ref: np.ndarray, key: np.ndarray, t: np.nd
     return flag
 
 
+def _supported(key: np.ndarray, t_ns: np.ndarray, group: np.ndarray, updated: np.ndarray, n_groups: int,
+               max_gap_s: float = 30.0) -> np.ndarray:
+    """Per segment of a sensor's own track, whether it is a reference: updated at least MIN_OWN_UPDATES
+    times, or its one update has another update of the same aircraft within max_gap_s."""
+    counts = np.bincount(group[updated], minlength=n_groups)
+    ok = counts >= MIN_OWN_UPDATES
+    k, t, g = key[updated], t_ns[updated], group[updated]
+    order = np.lexsort((t, k))
+    k, t, g = k[order], t[order], g[order]
+    near = np.zeros(len(t), bool)
+    gap = max_gap_s * 1e9
+    same_prev = np.r_[False, k[1:] == k[:-1]]
+    near[1:] |= same_prev[1:] & (t[1:] - t[:-1] <= gap)
+    near[:-1] |= same_prev[1:] & (t[1:] - t[:-1] <= gap)
+    lone = counts[g] == 1
+    ok[g[lone & near]] = True
+    return ok
+
+
 def reconstruct(reports: pd.DataFrame, epoch: pd.Timestamp, *, step_s: float = 1.0,
                 max_coast_s: float = 60.0, self_reference: bool = False) -> pd.DataFrame:
     """The smoothed IMM reconstruction (pipeline.track.track, RTS) of these reports as reference rows:
@@ -256,6 +282,8 @@ def reconstruct(reports: pd.DataFrame, epoch: pd.Timestamp, *, step_s: float = 1
     np.minimum.at(first, group, t_ns)
     np.maximum.at(last, group[updated], t_ns[updated])
     keep = (t_ns >= first[group]) & (t_ns <= last[group])
+    if self_reference:  # a sensor's own segment of one report is that report judging itself: no reference
+        keep &= _supported(key, t_ns, group, updated, n_groups)[group]
     key, t_ns, group, updated = (v[keep] for v in (key, t_ns, group, updated))
     level = _level_between_updates(tr["flight_level"].to_numpy(float)[keep], t_ns.astype(float), updated,
                                    group)

@@ -479,3 +479,38 @@ def test_a_reference_rows_identity_is_its_aircrafts_latest_reported_text(establi
         assert texts(got["callsign"]) == ["AB1", "AB1", "AB1", "XY", None]
         assert texts(got["mode3a"]) == ["1234", "1234", "7000", None, None]
     assert texts(got["address"]) == [None] * 5  # no such column in the reports
+
+
+def test_a_lone_report_of_the_sensor_is_no_reference_of_itself(two_radars):
+    """One plot of another identity 30 km off the aircraft (a false plot with its own code): the sensor's
+    own track of it would be one row at the plot itself, which would never let it count as false. It gets
+    no self-reference row; the aircraft's own track keeps all of its rows."""
+    m, meas = two_radars
+    alone = meas[meas["sensor_id"] == RADAR_A].sort_values("time").reset_index(drop=True)
+    lone = alone.iloc[[len(alone) // 2]].copy()
+    lone["aircraft_id"] = "M3A:4445"
+    lone["mode3a"] = "4445"
+    lone["latitude"] = lone["latitude"] + 30_000.0 / 111_320.0
+    with_lone = pd.concat([alone, lone], ignore_index=True).sort_values("time", kind="stable")
+    ref = leave_one_out(with_lone, RADAR_A, epoch=EPOCH).frame
+    before = leave_one_out(alone, RADAR_A, epoch=EPOCH).frame
+    assert "M3A:4445" not in set(ref["aircraft"].astype(str))
+    assert len(ref) == len(before)
+    t_s = (lone["time"] - EPOCH).dt.total_seconds().to_numpy()
+    reports = pd.DataFrame({"t_s": t_s, "latitude": lone["latitude"].to_numpy(),
+                            "longitude": lone["longitude"].to_numpy()})
+    assert (associate(reports, ref)["ref_index"] < 0).all()  # no aircraft within the 2 NM gate: false
+
+
+def test_a_one_report_segment_beside_others_of_its_aircraft_stays_a_reference():
+    """Segments (group) of own-track rows (updated or not): A's one-report segment 1 lies 4 s after A's
+    segment 0 (the tracker starts one at each plot its gate rejects): kept. B's lone report and C's two
+    reports 40 s apart (over the 30 s gap) are each alone: no reference."""
+    from msdc.pipeline.evaluate.build_reference import _supported
+
+    s = 1_000_000_000
+    key = np.array([0, 0, 0, 0, 0, 1, 2, 2])
+    t_ns = np.array([0, 4, 8, 9, 12, 100, 200, 240]) * s
+    group = np.array([0, 0, 0, 0, 1, 2, 3, 4])
+    updated = np.array([True, True, True, False, True, True, True, True])
+    assert _supported(key, t_ns, group, updated, 5).tolist() == [True, True, False, False, False]
