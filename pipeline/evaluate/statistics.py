@@ -116,8 +116,8 @@ def design_effect(successes: int, trials: int, sums: ShareClusters) -> float:
     """How much more a proportion varies over these clusters than over independent trials: the sum over
     clusters of (y_c - p m_c)^2 over that of the trials (n p (1 - p)), at least 1 (1 for single-trial
     clusters, 2 when every trial is doubled; 1 at p = 0 or 1)."""
-    if trials <= 0 or successes <= 0 or successes >= trials:
-        return 1.0
+    if trials <= 0 or successes <= 0 or successes >= trials or sums.clusters >= trials:
+        return 1.0  # (as many clusters as trials: each of one trial, where rounding gave 1 + 1e-15)
     p = successes / trials
     spread = sums.sum_y2 - 2.0 * p * sums.sum_ym + p * p * sums.sum_m2
     return max(1.0, spread / (trials * p * (1.0 - p)))

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 from scipy import stats
 
-from msdc.pipeline.evaluate import statistics
+from msdc.pipeline.evaluate import outcome, statistics
 from msdc.pipeline.evaluate.statistics import (
     clustered_interval,
     magnitude_interval,
@@ -388,6 +388,16 @@ def test_single_trial_clusters_give_the_clopper_pearson_interval():
     p = statistics.effective_proportion(37, 50, 1.0)
     assert (p.ci_low, p.ci_high) == (pytest.approx(stats.beta.ppf(0.025, 37, 14)),
                                      pytest.approx(stats.beta.ppf(0.975, 38, 13)))
+
+
+@pytest.mark.parametrize(("k", "n"), [(10_748, 10_779), (3, 7), (41_237, 43_006)])
+def test_single_trial_clusters_have_no_design_effect_whatever_the_rounding(k, n):
+    """One trial per cluster: the spread is n p (1 - p) exactly, but in floating point it came out
+    1 + 2e-15 times that at these counts (Barcelona's surface Mode 3/A presence), and the scorecard said
+    "10,779 in 10,779 groups that are not independent (design effect 1.000)"."""
+    sums = _clusters([1] * n, [1] * k + [0] * (n - k))
+    assert statistics.design_effect(k, n, sums) == 1.0
+    assert not outcome.share("x", k, n, clusters=sums).notes
 
 
 def test_every_trial_doubled_gives_the_interval_of_the_trials_once():
