@@ -414,6 +414,7 @@ def evaluate_job(options: EvaluateOptions, *, progress: Progress | None = None,
         params = _parameters(options, checked, run, started, command)
         if run.windows:
             params["windows"] = run.windows
+        params["warnings"] = list(dict.fromkeys(warnings))  # the outputs keep what the terminal said
         return EvaluateResult(options, checked, card, tables, points, run.results, params, run.loaded,
                               warnings)
 

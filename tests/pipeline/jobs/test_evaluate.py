@@ -281,6 +281,7 @@ def test_a_radars_track_updates_without_a_plot_are_no_reports(recording, evaluat
     assert said == [f"radar.ast: {len(sim.radar):,} CAT048 records without a plot (I048/020 TYP 0, no "
                     f"detection: the radar tracker's own updates) and {len(sim.radar):,} CAT048 records "
                     "simulated (SIM 1) left out of the measurements: they are no plot of a real target"]
+    assert said[0] in again.parameters["warnings"]  # the outputs record it (the JSON and Parameters sheet)
 
 
 def test_a_fixed_7777_transponder_without_rab_is_a_field_monitor(recording, evaluated, tmp_path):
