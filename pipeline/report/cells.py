@@ -23,7 +23,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 from openpyxl.cell import WriteOnlyCell
-from openpyxl.cell.cell import ILLEGAL_CHARACTERS_RE
+from openpyxl.cell.cell import ILLEGAL_CHARACTERS_RE, Cell
 from openpyxl.styles import Alignment, Border, Font, PatternFill, Side
 from openpyxl.utils import get_column_letter
 from openpyxl.worksheet._write_only import WriteOnlyWorksheet
@@ -55,6 +55,11 @@ MAX_SLOT_CHART_WINDOWS = 10
 EXCEL_MAX_ROWS = 1_048_576
 EXCEL_MAX_TEXT = 32_767
 MIN_WIDTH, MAX_WIDTH = 6.0, 66.0
+# A column is as wide as its widest content with a character's gap either side (GAP_CHARS). A text column
+# right of a numeric one is indented one level: a number flush with its column's right edge would otherwise
+# touch the text flush with the next column's left edge (1.6 | 2 printed as "1.62"); the indent, about 1.5
+# characters in LibreOffice (1 in Excel), is that column's gap on its left
+GAP_CHARS, INDENT_CHARS = 1.0, 1.5
 _WIDTH_SAMPLE_ROWS = 5000
 FAST_ROWS = True  # table rows through pipeline.report.rows (False: openpyxl's append, cell by cell)
 _ISO_DATE = re.compile(r"\d{4}-\d{2}-\d{2}\Z")
@@ -69,7 +74,9 @@ NOTE_FONT = Font(italic=True, color="595959")
 HEADER_FILL = PatternFill("solid", fgColor="D9E1F2")
 _BLOCK_FILLS = ["EDEDED", "E2EFDA", "DDEBF7", "FCE4D6"]
 _HEADER_BORDER = Border(bottom=Side(style="thin", color="808080"))
-_HEADER_ALIGN = Alignment(vertical="center", wrap_text=True)
+_HEADER_ALIGN = {indent: Alignment(horizontal="left" if indent else None, indent=int(indent),
+                                   vertical="center", wrap_text=True) for indent in (False, True)}
+INDENTED = Alignment(horizontal="left", indent=1)  # an indented column's text (INDENT_CHARS)
 
 # A4 landscape, margins, fixed row height: the page grid charts and figures are placed on
 PAPER_A4 = 9
@@ -183,6 +190,7 @@ class Column:
     text: bool = False  # values may hold text, which must be checked for formula-like starts
     bools: bool = False  # values may hold booleans, written with rows.BOOL_FORMAT
     wrap: int | None = None  # text longer than this many characters wraps inside its cell (write_table)
+    indent: bool = False  # its text indented one level (INDENT_CHARS: a text column right of a numeric one)
 
 
 def _datetime_serials(series: pd.Series) -> list[Any]:
@@ -266,6 +274,7 @@ def table_rows(ws: WriteOnlyWorksheet, columns: list[Column], start: int = 0,
     texts = [(j, c.number_format) for j, c in enumerate(columns) if c.text]
     flags = [j for j, c in enumerate(columns) if c.bools and not c.text]
     wraps = _wraps(columns)
+    indents = [j for j, c in enumerate(columns) if c.indent]
     for row in islice(zip(*(c.values for c in columns), strict=True), start, stop):
         out = list(row)
         for j, cell in styled:
@@ -282,26 +291,41 @@ def table_rows(ws: WriteOnlyWorksheet, columns: list[Column], start: int = 0,
                 out[j] = cell_for(ws, value, fmt)
         if wraps:
             _wrap_long(ws, out, wraps)
+        for j in indents:
+            _indent(ws, out, j)
         yield out
 
 
-_WRAPPED = Alignment(wrap_text=True)  # bottom-aligned, as the row's other cells
+_WRAPPED = {False: Alignment(wrap_text=True),  # bottom-aligned, as the row's other cells
+            True: Alignment(horizontal="left", indent=1, wrap_text=True)}  # and indented (Column.indent)
 
 
-def _wraps(columns: list[Column]) -> list[tuple[int, int]]:
-    """(index, characters) of the text columns whose long text wraps."""
-    return [(j, c.wrap) for j, c in enumerate(columns) if c.text and c.wrap]
+def _wraps(columns: list[Column]) -> list[tuple[int, int, bool]]:
+    """(index, characters, indented) of the text columns whose long text wraps."""
+    return [(j, c.wrap, c.indent) for j, c in enumerate(columns) if c.text and c.wrap]
 
 
-def _wrap_long(ws: WriteOnlyWorksheet, row: list[Any], wraps: list[tuple[int, int]]) -> None:
+def _wrap_long(ws: WriteOnlyWorksheet, row: list[Any], wraps: list[tuple[int, int, bool]]) -> None:
     """Text longer than its column's ``wrap`` as a cell that wraps (cleaned as text_cell does): it would
     otherwise run on to the right, and the printed page, fitted to the widest row, would shrink to it."""
-    for j, chars in wraps:
+    for j, chars, indent in wraps:
         value = row[j]
         if value.__class__ is str and len(value) > chars:
             cell = text_cell(ws, clean_text(value))
-            cell.alignment = _WRAPPED
+            cell.alignment = _WRAPPED[indent]
             row[j] = cell
+
+
+def _indent(ws: WriteOnlyWorksheet, row: list[Any], j: int) -> None:
+    """The text of an indented column (Column.indent) as an indented cell, a text cell made elsewhere
+    (formula-like text, wrapped text) indented as it is; numbers and dates stay right-aligned."""
+    value = row[j]
+    if value.__class__ is str:
+        cell = WriteOnlyCell(ws, value)
+        cell.alignment = INDENTED
+        row[j] = cell
+    elif isinstance(value, Cell) and value.data_type == "s" and not value.alignment.indent:
+        value.alignment = INDENTED
 
 
 def raw_rows(ws: WriteOnlyWorksheet, columns: list[Column], start: int = 0,
@@ -316,6 +340,8 @@ def raw_rows(ws: WriteOnlyWorksheet, columns: list[Column], start: int = 0,
             value = out[j]
             if value is not None and not (value.__class__ is str and not value.startswith(FORMULA_START)):
                 out[j] = cell_for(ws, value, fmt)
+                if columns[j].indent:  # plain text the writer indents itself (RowStyles.aligns)
+                    _indent(ws, out, j)
         if wraps:
             _wrap_long(ws, out, wraps)
         yield out
@@ -378,14 +404,20 @@ def _widest(values: Iterable[Any], number_format: str | None) -> list[Any]:
 
 
 def column_width(header: str, values: Iterable[Any], number_format: str | None,
-                 label: str | None = None) -> float:
+                 label: str | None = None, indent: bool = False) -> float:
     """Column width (characters) fitting the longest word of the header printed (``label``, else
-    ``header``) and the widest values, within limits."""
+    ``header``) and the widest values, GAP_CHARS either side, the left one INDENT_CHARS for an ``indent``
+    (Column.indent), within limits."""
     longest = max([max(len(word) for word in (label or header).split(" ")),
                    *(display_len(v, number_format) for v in _widest(values, number_format))])
     if header in _DATETIME_HEADERS:
         longest = max(longest, display_len(None, number_format) or len(DATETIME_FORMAT))
-    return min(MAX_WIDTH, max(MIN_WIDTH, longest + 2.0))
+    return min(MAX_WIDTH, max(MIN_WIDTH, left_space(indent) + longest + GAP_CHARS))
+
+
+def left_space(indent: bool) -> float:
+    """The space left of a column's content: its indent (INDENT_CHARS) or the gap (GAP_CHARS)."""
+    return INDENT_CHARS if indent else GAP_CHARS
 
 
 def set_widths(ws: WriteOnlyWorksheet, widths: list[float]) -> None:
@@ -394,13 +426,34 @@ def set_widths(ws: WriteOnlyWorksheet, widths: list[float]) -> None:
         ws.column_dimensions[get_column_letter(i)].width = round(width, 1)
 
 
-def header_cells(ws: WriteOnlyWorksheet, headers: list[str], fill: PatternFill = HEADER_FILL) -> list[Any]:
-    """Bold, filled, bordered and wrapped header cells."""
+def aligned_right(values: Iterable[Any], number_format: str | None = None) -> bool:
+    """Whether a column's cells print right-aligned: every value a number, a date or time (a number to a
+    spreadsheet) or a boolean; any text makes it a text column, aligned left. A column without values: by
+    its number format (a numeric column's)."""
+    seen = False
+    for value in values:
+        if isinstance(value, str):
+            return False
+        seen = seen or value is not None
+    return seen or number_format is not None
+
+
+def indented(right: list[bool]) -> list[bool]:
+    """Per column, whether it is indented (INDENT_CHARS): a left-aligned column right of a right-aligned
+    one (``right``: aligned_right per column)."""
+    return [j > 0 and right[j - 1] and not r for j, r in enumerate(right)]
+
+
+def header_cells(ws: WriteOnlyWorksheet, headers: list[str], fill: PatternFill = HEADER_FILL,
+                 right: list[bool] | None = None) -> list[Any]:
+    """Bold, filled, bordered and wrapped header cells; a header over an indented column (indented, from
+    ``right``: aligned_right per column) indented as its cells."""
+    indent = indented(right) if right else [False] * len(headers)
     cells = []
-    for header in headers:
+    for j, header in enumerate(headers):
         cell = text_cell(ws, clean_text(str(header)), font=BOLD, fill=fill)
         cell.border = _HEADER_BORDER
-        cell.alignment = _HEADER_ALIGN
+        cell.alignment = _HEADER_ALIGN[indent[j]]
         cells.append(cell)
     return cells
 
@@ -485,11 +538,14 @@ def write_table(ws: WriteOnlyWorksheet, columns: list[Column], *, freeze: str = 
     n_rows = len(columns[0].values) if columns else 0
     sample = [c.values[:_WIDTH_SAMPLE_ROWS] for c in columns]
     labels = [workbook_header(c.header) for c in columns]
-    widths = [column_width(c.header, v, c.number_format, label)
+    right = [aligned_right(v, c.number_format) for c, v in zip(columns, sample, strict=True)]
+    for c, indent in zip(columns, indented(right), strict=True):
+        c.indent = indent
+    widths = [column_width(c.header, v, c.number_format, label, c.indent)
               for c, v, label in zip(columns, sample, labels, strict=True)]
     for c, width in zip(columns, widths, strict=True):
         if c.text and width >= MAX_WIDTH:
-            c.wrap = int(width) - 2
+            c.wrap = int(width - left_space(c.indent) - GAP_CHARS)
     _wrapped_heights(ws, columns, min(n_rows, EXCEL_MAX_ROWS - 1))
     set_widths(ws, widths)
     ws.freeze_panes = freeze
@@ -499,8 +555,9 @@ def write_table(ws: WriteOnlyWorksheet, columns: list[Column], *, freeze: str = 
     if kept < n_rows:
         note = f"{note} Rows cut at Excel's limit: {kept} of {n_rows} written.".strip()
     ws.row_dimensions[1].height = header_height(labels, widths)
-    ws.append(header_cells(ws, labels))
-    styles = RowStyles(ws, [None if c.styled is None or c.text else c.number_format for c in columns])
+    ws.append(header_cells(ws, labels, right=right))
+    styles = RowStyles(ws, [None if c.styled is None or c.text else c.number_format for c in columns],
+                       [INDENTED if c.indent else None for c in columns])
     if FAST_ROWS and install(ws, styles):
         append_rows(ws, raw_rows(ws, columns, 0, kept), kept)
     else:  # openpyxl's public path: a styled cell per formatted number

@@ -28,11 +28,16 @@ from msdc.pipeline.evaluate.scorecard_schema import (
 )
 from msdc.pipeline.report.cells import (
     BOLD,
+    GAP_CHARS,
     MAX_WIDTH,
     ROW_HEIGHT_PT,
+    aligned_right,
     clean_text,
+    column_width,
     header_cells,
     header_height,
+    indented,
+    left_space,
     make_column,
     note_lines,
     note_text_cell,
@@ -77,8 +82,10 @@ UNCHECKED_NOTE = ("Threshold checked against the standard 'no': the preset marks
                   "pass against it is not compliance with the standard.")
 # long text wraps inside these widths (characters)
 _WRAP_COLUMNS = {"clause": 28, "notes": 44, "parameters": 22}
-_WRAP = Alignment(wrap_text=True, vertical="top")
-_TOP = Alignment(vertical="top")
+# a cell's alignment by (wraps, indented: cells.indented, a text column right of a numeric one)
+_ALIGN = {(wrap, indent): Alignment(horizontal="left" if indent else None, indent=int(indent), vertical="top",
+                                    wrap_text=wrap or None)
+          for wrap in (False, True) for indent in (False, True)}
 
 
 def unit_words(requirement: str) -> str:
@@ -87,8 +94,9 @@ def unit_words(requirement: str) -> str:
 
 
 def _cell(ws: WriteOnlyWorksheet, value, number_format: str | None = None, *, font: Font | None = None,
-          fill: PatternFill | None = None, wrap: bool = False) -> WriteOnlyCell | None:
-    """One scorecard cell: text never a formula, NaN an empty cell, numbers in the row's unit format."""
+          fill: PatternFill | None = None, wrap: bool = False, indent: bool = False) -> WriteOnlyCell | None:
+    """One scorecard cell: text never a formula, NaN an empty cell, numbers in the row's unit format; text
+    of an ``indent``-ed column indented (cells.indented)."""
     if isinstance(value, str):
         cell = text_cell(ws, clean_text(value), font=font, fill=fill)
     elif value is None or (isinstance(value, float) and math.isnan(value)):
@@ -99,7 +107,7 @@ def _cell(ws: WriteOnlyWorksheet, value, number_format: str | None = None, *, fo
             cell.number_format = number_format
         if font is not None:
             cell.font = font
-    cell.alignment = _WRAP if wrap else _TOP
+    cell.alignment = _ALIGN[wrap, indent and isinstance(value, str)]
     return cell
 
 
@@ -136,16 +144,23 @@ def _scorecard_rows(card: pd.DataFrame) -> list[dict[str, object]]:
 
 def _widths(rows: list[dict[str, object]], headers: tuple[tuple[str, str], ...] = SCORECARD_HEADERS
             ) -> list[float]:
-    """Each column's width: its header's longest word and its widest value, the wrapped columns capped."""
+    """Each column's width: cells.column_width of its header and the text of its values, the wrapped
+    columns capped (their indent on top)."""
+    indents = _indents(rows, headers)
     widths = []
-    for key, header in headers:
+    for (key, header), indent in zip(headers, indents, strict=True):
         numeric = key in ("value", "ci_low", "ci_high", "threshold")
         texts = [_display(r[key], r["_format"] if numeric else "#,##0.0" if key == "n" else None)
                  for r in rows]
-        longest = max([max(len(w) for w in header.split(" ")), *(len(t) for t in texts)])
-        cap = _WRAP_COLUMNS.get(key, MAX_WIDTH)
-        widths.append(min(cap, max(6.0, longest + 2.0)))
+        width = column_width(header, texts, None, indent=indent)
+        cap = _WRAP_COLUMNS.get(key, MAX_WIDTH) + left_space(indent) - GAP_CHARS
+        widths.append(min(cap, width))
     return widths
+
+
+def _indents(rows: list[dict[str, object]], headers: tuple[tuple[str, str], ...]) -> list[bool]:
+    """The indented columns (cells.indented) of the scorecard's ``rows`` under ``headers``."""
+    return indented([aligned_right([r[key] for r in rows]) for key, _ in headers])
 
 
 def _write_scorecard(wb: Workbook, card: pd.DataFrame, title: str = SCORECARD_SHEET,
@@ -162,15 +177,17 @@ def _write_scorecard(wb: Workbook, card: pd.DataFrame, title: str = SCORECARD_SH
     ws.freeze_panes = f"{get_column_letter(len(leading) + 4)}2"
     page_setup(ws)  # one page wide, header row repeated on every page
     ws.row_dimensions[1].height = header_height(headers, widths)
+    indents = _indents(rows, keys)
+    chars = [int(w - left_space(indent) - GAP_CHARS) for w, indent in zip(widths, indents, strict=True)]
     for i, row in enumerate(rows, start=2):
-        lines = max([1, *(len(textwrap.wrap(str(row[k]), width=int(widths[j]) - 2) or [""])
+        lines = max([1, *(len(textwrap.wrap(str(row[k]), width=chars[j]) or [""])
                           for j, (k, _) in enumerate(keys) if k in _WRAP_COLUMNS)])
         if lines > 1:
             ws.row_dimensions[i].height = lines * ROW_HEIGHT_PT
-    ws.append(header_cells(ws, headers))
+    ws.append(header_cells(ws, headers, right=[aligned_right([r[k] for r in rows]) for k, _ in keys]))
     for row in rows:
         cells = []
-        for key, _ in keys:
+        for (key, _), indent in zip(keys, indents, strict=True):
             value = row[key]
             if key in ("value", "ci_low", "ci_high"):
                 cells.append(_cell(ws, value, _number_format(row, value)))
@@ -178,13 +195,14 @@ def _write_scorecard(wb: Workbook, card: pd.DataFrame, title: str = SCORECARD_SH
                 italic = None if row["checked"] == "yes" else Font(italic=True)
                 cells.append(_cell(ws, value, _number_format(row, value), font=italic))
             elif key == "verdict":
-                cells.append(_cell(ws, value, font=VERDICT_FONTS[value], fill=VERDICT_FILLS[value]))
+                cells.append(_cell(ws, value, font=VERDICT_FONTS[value], fill=VERDICT_FILLS[value],
+                                   indent=indent))
             elif key == "n":  # a count with thousands separated; an exposure (a rate's) to one decimal
                 cells.append(_cell(ws, value, "#,##0" if isinstance(value, int) else "#,##0.0"))
             elif key == "checked":
-                cells.append(_cell(ws, value, font=BOLD if value == "no" else None))
+                cells.append(_cell(ws, value, font=BOLD if value == "no" else None, indent=indent))
             else:
-                cells.append(_cell(ws, value, wrap=key in _WRAP_COLUMNS))
+                cells.append(_cell(ws, value, wrap=key in _WRAP_COLUMNS, indent=indent))
         ws.append(cells)
     notes = ["Values, intervals and thresholds are in the row's unit; a proportion is shown as a "
              "percentage. Verdict: pass when the whole 95 % interval meets the threshold, fail when the "

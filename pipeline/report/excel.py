@@ -26,7 +26,7 @@ import pandas as pd
 from openpyxl import Workbook
 from openpyxl.cell import WriteOnlyCell
 from openpyxl.drawing.image import Image
-from openpyxl.styles import Alignment, PatternFill
+from openpyxl.styles import PatternFill
 from openpyxl.worksheet._write_only import WriteOnlyWorksheet
 from openpyxl.worksheet.pagebreak import Break
 
@@ -41,11 +41,13 @@ from msdc.pipeline.correlate.results import (
 from msdc.pipeline.report.cells import (
     BOLD,
     CLOCK_FORMAT,
+    INDENTED,
     NOTE_FONT,
     ROW_HEIGHT_PT,
     SUMMARY_DATETIME_FORMAT,
     TITLE_FONT,
     Column,
+    aligned_right,
     cell_for,
     clean_text,
     column_width,
@@ -53,6 +55,7 @@ from msdc.pipeline.report.cells import (
     fixed_rows,
     header_cells,
     header_height,
+    indented,
     is_number,
     iso_time,
     make_column,
@@ -150,9 +153,6 @@ def summary_header(key: str) -> str:
     return workbook_header(key)
 
 
-_INDENT = Alignment(horizontal="left", indent=1)
-
-
 def _summary_time_cell(ws: WriteOnlyWorksheet, value: Any) -> Any:
     """A Summary start/end: UTC date-time to the second, or ("tod", seconds) as a clock time."""
     if isinstance(value, tuple):
@@ -181,18 +181,20 @@ def _summary_block(ws: WriteOnlyWorksheet, summaries: list[dict[str, Any]], titl
     next free row. ``widths``: the sheet's column widths, which the header row's height is made for."""
     row += _wrapped(ws, title, chars) - 1
     headers = [summary_header(k) for k in keys]
-    ws.row_dimensions[row + 1].height = header_height(headers, widths)
-    ws.append(header_cells(ws, headers, PatternFill("solid", fgColor=fill)))
     rows = [[_summary_value(values, k) for k in keys] for values in summaries]
     formats = [number_format_for(k, [r[j] for r in rows]) for j, k in enumerate(keys)]
+    right = [aligned_right([r[j] for r in rows], formats[j]) for j in range(len(keys))]
+    ws.row_dimensions[row + 1].height = header_height(headers, widths)
+    ws.append(header_cells(ws, headers, PatternFill("solid", fgColor=fill), right))
     for values in rows:
         cells = []
-        for value, fmt in zip(values, formats, strict=True):
+        for value, fmt, indent in zip(values, formats, indented(right), strict=True):
             if isinstance(value, tuple | dt.datetime):
                 cells.append(_summary_time_cell(ws, value))
-            elif isinstance(value, str):  # indented: never glued to the number on its left
+            elif isinstance(value, str):  # indented right of a number: never glued to it
                 cell = cell_for(ws, value, None)
-                cell.alignment = _INDENT
+                if indent:
+                    cell.alignment = INDENTED
                 cells.append(cell)
             else:
                 cells.append(cell_for(ws, value, fmt))
@@ -215,10 +217,10 @@ def _text_rows(ws: WriteOnlyWorksheet, title: str, lines: list[tuple[dict[str, A
     ws.append([text_cell(ws, title, font=BOLD)])
     for values, text in lines:
         cell = note_text_cell(ws, text)
-        cell.alignment = _INDENT
+        cell.alignment = INDENTED
         pair = cell_for(ws, values.get("sensors"), None)
         if pair is not None:
-            pair.alignment = _INDENT
+            pair.alignment = INDENTED
         ws.append([cell_for(ws, values.get("callsign"), None), cell_for(ws, values.get("window"), None), pair,
                    _summary_time_cell(ws, _summary_value(values, "start")), cell])
     if not lines:
@@ -238,9 +240,11 @@ def _write_summary(wb: Workbook, run: CorrelationRun) -> None:
     widths: dict[int, float] = {}
 
     def widen(headers: list[str], rows: list[list[Any]], formats: list[str | None]) -> None:
+        columns = [[r[j] for r in rows] for j in range(len(headers))]
+        indents = indented([aligned_right(v, fmt) for v, fmt in zip(columns, formats, strict=True)])
         for j, header in enumerate(headers):
-            values = [r[j] for r in rows]
-            widths[j] = max(widths.get(j, 0.0), column_width(header, values, formats[j]))
+            width = column_width(header, columns[j], formats[j], indent=indents[j])
+            widths[j] = max(widths.get(j, 0.0), width)
 
     for _title, keys in blocks:  # widths first: write-only sheets take them before any row
         rows = [[values.get(k) for k in keys] for values in summaries]
@@ -287,12 +291,17 @@ def _write_summary(wb: Workbook, run: CorrelationRun) -> None:
                       "needs a warning")
     ws.append([text_cell(ws, f"Skipped windows ({len(skipped)})", font=BOLD)])
     if skipped:
+        right = [aligned_right([r[j] for r in skipped]) for j in range(len(SKIPPED_HEADERS))]
         ws.append(header_cells(ws, [summary_header(k) for k in SKIPPED_HEADERS],
-                               PatternFill("solid", fgColor=_BLOCK_FILLS[3])))
+                               PatternFill("solid", fgColor=_BLOCK_FILLS[3]), right))
         for row in skipped:
-            ws.append([*(cell_for(ws, v, None) for v in row[:3]),
-                       *(cell_for(ws, v, CLOCK_FORMAT if is_number(v) else None) for v in row[3:5]),
-                       cell_for(ws, row[5], None)])
+            cells = [*(cell_for(ws, v, None) for v in row[:3]),
+                     *(cell_for(ws, v, CLOCK_FORMAT if is_number(v) else None) for v in row[3:5]),
+                     cell_for(ws, row[5], None)]
+            for cell, value, indent in zip(cells, row, indented(right), strict=True):
+                if indent and isinstance(value, str):
+                    cell.alignment = INDENTED
+            ws.append(cells)
     else:
         ws.append([note_text_cell(ws, "none")])
 

@@ -18,6 +18,7 @@ from typing import Any
 from lxml.etree import XMLParser, fromstring
 from openpyxl.cell import WriteOnlyCell
 from openpyxl.cell.cell import ERROR_CODES, ILLEGAL_CHARACTERS_RE, Cell
+from openpyxl.styles import Alignment
 from openpyxl.utils import get_column_letter
 from openpyxl.xml import LXML
 
@@ -34,11 +35,14 @@ class RawRow(list):
 
 class RowStyles:
     """Per column: the number format plain numbers take there (None: General) and its style id, looked up
-    the first time the column writes a styled number, as openpyxl does when it writes the cell."""
+    the first time the column writes a styled number, as openpyxl does when it writes the cell; and the
+    alignment plain text takes there (``aligns``; None: none), its style id looked up the same way."""
 
-    def __init__(self, ws, formats: Sequence[str | None]):
+    def __init__(self, ws, formats: Sequence[str | None], aligns: Sequence[Alignment | None] | None = None):
         self.ws, self.formats = ws, list(formats)
+        self.aligns = [None] * len(self.formats) if aligns is None else list(aligns)
         self.ids: list[str | None] = [None] * len(self.formats)
+        self.text_ids: list[str | None] = [None] * len(self.formats)
         self.letters = [get_column_letter(j + 1) for j in range(len(self.formats))]
         self._bool_id: str | None = None
 
@@ -56,6 +60,17 @@ class RowStyles:
             cell = WriteOnlyCell(self.ws, 0.0)
             cell.number_format = self.formats[j]
             sid = self.ids[j] = f"{cell.style_id}"
+        return sid
+
+    def text_style(self, j: int) -> str:
+        """The ``s`` attribute of plain text in column j: its alignment's style id, or nothing."""
+        if self.aligns[j] is None:
+            return ""
+        sid = self.text_ids[j]
+        if sid is None:
+            cell = WriteOnlyCell(self.ws, "")
+            cell.alignment = self.aligns[j]
+            sid = self.text_ids[j] = f' s="{cell.style_id}"'
         return sid
 
     def letter(self, j: int) -> str:
@@ -135,7 +150,7 @@ def _write_many(xf, ws, block: RawRows, row_idx: int, styles: RowStyles, to_row,
         text = None if ws.row_dimensions.get(idx) else _row_text(values, idx, styles)
         if text is None:
             flush()
-            write_row(xf, to_row(openpyxl_values(ws, values, styles.formats), idx), idx)
+            write_row(xf, to_row(openpyxl_values(ws, values, styles.formats, styles.aligns), idx), idx)
         else:
             pending.append(text)
             if len(pending) >= CHUNK_ROWS:
@@ -153,7 +168,7 @@ def _write(xf, ws, values: RawRow, row_idx: int, styles: RowStyles, to_row, writ
     dims = ws.row_dimensions.get(row_idx)
     text = None if dims else _row_text(values, row_idx, styles)
     if text is None:  # a row with its own height or style, or a cell only openpyxl writes: its own way
-        write_row(xf, to_row(openpyxl_values(ws, values, styles.formats), row_idx), row_idx)
+        write_row(xf, to_row(openpyxl_values(ws, values, styles.formats, styles.aligns), row_idx), row_idx)
         return
     xf.write(fromstring(text, _PARSER))
 
@@ -178,11 +193,12 @@ def _row_text(values: RawRow, row_idx: int, styles: RowStyles) -> str | None:
             parts.append(f'<c r="{styles.letter(j)}{r}" s="{styles.bool_id()}" t="b"><v>{1 if value else 0}'
                          '</v></c>')
         elif kind is str and formats[j] is None and _plain_text(value):
+            style = styles.text_style(j)
             if not value:  # openpyxl writes "" as an element without content
-                parts.append(f'<c r="{styles.letter(j)}{r}" t="inlineStr"/>')
+                parts.append(f'<c r="{styles.letter(j)}{r}"{style} t="inlineStr"/>')
             else:
                 space = ' xml:space="preserve"' if value != value.strip() else ""
-                parts.append(f'<c r="{styles.letter(j)}{r}" t="inlineStr"><is><t{space}>'
+                parts.append(f'<c r="{styles.letter(j)}{r}"{style} t="inlineStr"><is><t{space}>'
                              f'{value.translate(_ESCAPE)}</t></is></c>')
         else:
             return None
@@ -194,13 +210,19 @@ _ESCAPE = str.maketrans({"&": "&amp;", "<": "&lt;", ">": "&gt;", "\r": "&#13;"})
 _PARSER = XMLParser(resolve_entities=False, huge_tree=True, remove_blank_text=False)
 
 
-def openpyxl_values(ws, values: Sequence[Any], formats: Sequence[str | None]) -> list[Any]:
+def openpyxl_values(ws, values: Sequence[Any], formats: Sequence[str | None],
+                    aligns: Sequence[Alignment | None] | None = None) -> list[Any]:
     """The row as openpyxl's append takes it: numbers under a column format as cells carrying it (the
-    public path, one cell per value), everything else as it is."""
+    public path, one cell per value), text in an aligned column (``aligns``) as a cell so aligned,
+    everything else as it is."""
     out = list(values)
     for j, value in enumerate(out):
         if value.__class__ is bool:
             out[j] = bool_cell(ws, value)
+        elif value.__class__ is str and aligns is not None and aligns[j] is not None:
+            cell = WriteOnlyCell(ws, value)
+            cell.alignment = aligns[j]
+            out[j] = cell
         elif formats[j] is not None and value is not None and not isinstance(value, Cell):
             cell = WriteOnlyCell(ws, value)
             cell.number_format = formats[j]

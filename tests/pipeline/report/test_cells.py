@@ -88,8 +88,8 @@ def _workbook(tmp_path, name: str, fast: bool, monkeypatch) -> list[list[tuple]]
     cells.write_table(ws, columns, note="a note")
     wb.save(tmp_path / name)
     book = openpyxl.load_workbook(tmp_path / name)
-    return [[(c.value, c.data_type, c.number_format, c.quotePrefix) for c in row]
-            for row in book["T"].iter_rows()]
+    return [[(c.value, c.data_type, c.number_format, c.quotePrefix, c.alignment.horizontal,
+              c.alignment.indent) for c in row] for row in book["T"].iter_rows()]
 
 
 def test_raw_rows_write_the_cells_openpyxl_writes(tmp_path, monkeypatch):
@@ -98,9 +98,10 @@ def test_raw_rows_write_the_cells_openpyxl_writes(tmp_path, monkeypatch):
     assert fast == slow
     # by hand, from the cell rules: text as text (formula-like with a quote prefix), numbers formatted
     by_header = dict(zip([column_name(c[0]) for c in slow[0]], zip(*slow[1:12], strict=True), strict=True))
-    assert by_header["callsign"][0] == ("MAS72", "s", "General", False)
-    assert by_header["callsign"][3] == ("a&b<c>d", "s", "General", False)
-    assert by_header["callsign"][5] == ("=1+1", "s", "General", True)
+    # call sign follows a column of booleans (aligned right): its text indented, formula-like text too
+    assert by_header["callsign"][0] == ("MAS72", "s", "General", False, "left", 1)
+    assert by_header["callsign"][3] == ("a&b<c>d", "s", "General", False, "left", 1)
+    assert by_header["callsign"][5] == ("=1+1", "s", "General", True, "left", 1)
     assert by_header["lat"][1][0] == 0.0 and by_header["lat"][1][2] == "0.0000"
     assert by_header["lat"][5][0] == "inf"
     assert by_header["flag"][0][:2] == (True, "b")

@@ -1,0 +1,105 @@
+"""The layout rules every workbook table shares (pipeline.report.cells), read back with openpyxl: a text
+column right of a numeric one is indented, so that a number flush with its column's right edge never
+touches the text that starts the next column."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import evaluation_sample
+import pandas as pd
+import pytest
+from openpyxl import Workbook, load_workbook
+
+from msdc.pipeline.correlate.results import CorrelationRun, WindowResult
+from msdc.pipeline.report import cells
+from msdc.pipeline.report.evaluation_xlsx import write_evaluation_xlsx
+from msdc.pipeline.report.excel import write_report
+from msdc.pipeline.report.headers import column_name
+
+# the Quality sheet's last columns as msdc quality writes them: percentages, then the MOPS versions as text
+QUALITY = pd.DataFrame({
+    "callsign": ["(all)", "AXM123", "MAS136"], "sensor": ["adsb", "adsb", "radar"],
+    "on_surface": [False, False, True], "reports": [14986, 3124, 641],
+    "low_integrity_pct": [1.6, 0.0, 2.9], "mops_versions": ["2", "2", None],
+})
+RADAR = {"radar": "KLIA MSSR", "radar_sensor": "048:25/201", "n_reports": 2922,
+         "horizontal_error_rms_m": 275.3, "range_error_std_m": 70.4, "azimuth_error_std_deg": 0.079,
+         "range_bias_m": 6.3, "range_bias_se_m": 4.3, "range_gain_ppm": -27.0, "range_gain_se_ppm": 22.4,
+         "azimuth_bias_deg": 0.0036, "azimuth_bias_se_deg": 0.0015, "time_bias_s": -0.019,
+         "time_bias_se_s": 0.015}
+
+
+def _table(tmp_path: Path, frame: pd.DataFrame):
+    """``frame`` written by write_table, read back."""
+    wb = Workbook(write_only=True)
+    ws = wb.create_sheet("T")
+    cells.write_table(ws, [cells.make_column(ws, str(h), frame[h]) for h in frame.columns])
+    wb.save(tmp_path / "t.xlsx")
+    return load_workbook(tmp_path / "t.xlsx")["T"]
+
+
+def _indents(row) -> dict[str, int]:
+    """Indent level by column name of a header row."""
+    return {column_name(c.value): int(c.alignment.indent) for c in row if c.value is not None}
+
+
+@pytest.mark.parametrize("fast", [True, False])
+def test_text_right_of_a_number_is_indented_and_its_column_wider(tmp_path: Path, monkeypatch, fast) -> None:
+    """By hand: the MOPS versions (text) follow the low-integrity percentages (numbers flush right): header
+    and cells indented one level, the column 8 characters ('versions') plus the indent (1.5) plus a
+    character's gap wide; call sign (first) and sensor (after text) are not indented. Both row writers."""
+    monkeypatch.setattr(cells, "FAST_ROWS", fast)
+    ws = _table(tmp_path, QUALITY)
+    assert _indents(ws[1]) == {"callsign": 0, "sensor": 0, "on_surface": 0, "reports": 0,
+                               "low_integrity_pct": 0, "mops_versions": 1}
+    assert [c.value for c in ws["F"][1:]] == ["2", "2", None]
+    assert ws["F2"].alignment.indent == ws["F3"].alignment.indent == 1
+    assert ws["A2"].alignment.indent == ws["B2"].alignment.indent == 0
+    assert ws.column_dimensions["F"].width >= len("versions") + 1.5 + 1
+    assert ws.column_dimensions["E"].width == len("integrity") + 2  # a numeric column: a character each side
+
+
+def test_long_and_formula_like_text_of_an_indented_column_is_indented(tmp_path: Path) -> None:
+    """Text the writer makes a cell of its own (formula-like, quote-prefixed; too long, wrapped) is
+    indented as the column's plain text."""
+    long = "x " * 60
+    ws = _table(tmp_path, pd.DataFrame({"reports": [1, 2, 3], "note": ["=1+1", long, "plain"]}))
+    assert [c.alignment.indent for c in ws["B"]] == [1, 1, 1, 1]
+    assert ws["B2"].quotePrefix and ws["B3"].alignment.wrap_text
+
+
+def test_summary_blocks_indent_the_text_right_of_a_number(tmp_path: Path) -> None:
+    """The Summary's blocks share their columns: in the radar block 'Radar sensor' follows 'Radar' (text)
+    and is not indented; in a window block 'Sensors' follows 'Window' (a number) and is."""
+    t0 = pd.Timestamp("2019-03-01 08:05:02", tz="UTC")
+    summary = {"callsign": "AXM123", "address": "75008A", "window": 1, "start": t0,
+               "end": t0 + pd.Timedelta(minutes=12), "start_tod": 29102.0, "end_tod": 29822.0,
+               "radar_sensor": "048:25/201", "reference_sensor": "021:0/1", "matched_reports": 151,
+               "matched_sep_rms_m": 250.7}
+    run = CorrelationRun(windows=[WindowResult(summary, pd.DataFrame(), pd.DataFrame())],
+                         parameters={"date": "2019-03-01"}, radars=[RADAR])
+    write_report(run, tmp_path / "r.xlsx")
+    ws = load_workbook(tmp_path / "r.xlsx")["Summary"]
+    radar = next(c.row for c in ws["A"] if c.value == "Radar")
+    assert _indents(ws[radar])["radar_sensor"] == 0
+    assert ws.cell(radar + 1, 2).value == "048:25/201" and ws.cell(radar + 1, 2).alignment.indent == 0
+    window = next(c.row for c in ws["A"] if c.value == "Call sign")
+    indents = _indents(ws[window])
+    assert indents["sensors"] == 1 and indents["callsign"] == indents["window"] == 0
+    pair = ws.cell(window + 1, 3)
+    assert pair.value == "048:25/201 vs 021:0/1" and pair.alignment.indent == 1
+    assert ws.cell(window + 1, 1).value == "AXM123" and ws.cell(window + 1, 1).alignment.indent == 0
+
+
+def test_the_scorecard_indents_its_text_right_of_a_number(tmp_path: Path) -> None:
+    """The scorecard: Unit follows the interval's high end, Verdict the threshold, Clause the sample size:
+    indented, header and cells; Sensor, Requirement and Notes (after text) are not."""
+    sample = evaluation_sample
+    write_evaluation_xlsx(sample.scorecard(), tmp_path / "e.xlsx", sample.tables())
+    ws = load_workbook(tmp_path / "e.xlsx")["Scorecard"]
+    header = {c.value: c for c in ws[1]}
+    indented = {h for h, c in header.items() if c.alignment.indent}
+    assert indented == {"Unit", "Verdict", "Clause"}
+    verdict = header["Verdict"].column_letter
+    assert all(c.alignment.indent == 1 for c in ws[verdict][1:len(sample.ROWS) + 1])
