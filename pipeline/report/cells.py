@@ -74,8 +74,10 @@ NOTE_FONT = Font(italic=True, color="595959")
 HEADER_FILL = PatternFill("solid", fgColor="D9E1F2")
 _BLOCK_FILLS = ["EDEDED", "E2EFDA", "DDEBF7", "FCE4D6"]
 _HEADER_BORDER = Border(bottom=Side(style="thin", color="808080"))
-_HEADER_ALIGN = {indent: Alignment(horizontal="left" if indent else None, indent=int(indent),
-                                   vertical="center", wrap_text=True) for indent in (False, True)}
+# a header's alignment by (right, indented): aligned as its column's values (aligned_right, indented)
+_HEADER_ALIGN = {(right, indent): Alignment(horizontal="right" if right else "left", indent=int(indent),
+                                            vertical="center", wrap_text=True)
+                 for right in (False, True) for indent in (False, True)}
 INDENTED = Alignment(horizontal="left", indent=1)  # an indented column's text (INDENT_CHARS)
 
 # A4 landscape, margins, fixed row height: the page grid charts and figures are placed on
@@ -446,14 +448,15 @@ def indented(right: list[bool]) -> list[bool]:
 
 def header_cells(ws: WriteOnlyWorksheet, headers: list[str], fill: PatternFill = HEADER_FILL,
                  right: list[bool] | None = None) -> list[Any]:
-    """Bold, filled, bordered and wrapped header cells; a header over an indented column (indented, from
-    ``right``: aligned_right per column) indented as its cells."""
-    indent = indented(right) if right else [False] * len(headers)
+    """Bold, filled, bordered and wrapped header cells, each aligned as its column's values (``right``:
+    aligned_right per column; None: all text), a numeric column's header right (a number prints under its
+    own header, not nearer the next column's), an indented column's indented (indented)."""
+    right = right or [False] * len(headers)
     cells = []
-    for j, header in enumerate(headers):
+    for j, (header, indent) in enumerate(zip(headers, indented(right), strict=True)):
         cell = text_cell(ws, clean_text(str(header)), font=BOLD, fill=fill)
         cell.border = _HEADER_BORDER
-        cell.alignment = _HEADER_ALIGN[indent[j]]
+        cell.alignment = _HEADER_ALIGN[right[j], indent]
         cells.append(cell)
     return cells
 

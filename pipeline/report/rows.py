@@ -49,9 +49,7 @@ class RowStyles:
     def bool_id(self) -> str:
         """The style id of BOOL_FORMAT, looked up once."""
         if self._bool_id is None:
-            cell = WriteOnlyCell(self.ws, True)
-            cell.number_format = BOOL_FORMAT
-            self._bool_id = f"{cell.style_id}"
+            self._bool_id = f"{bool_cell(self.ws, True).style_id}"
         return self._bool_id
 
     def style_id(self, j: int) -> str:
@@ -231,10 +229,15 @@ def openpyxl_values(ws, values: Sequence[Any], formats: Sequence[str | None],
 
 
 def bool_cell(ws, value: bool) -> WriteOnlyCell:
-    """A boolean cell that reads TRUE or FALSE in every spreadsheet (BOOL_FORMAT)."""
+    """A boolean cell that reads TRUE or FALSE in every spreadsheet (BOOL_FORMAT), aligned right as
+    LibreOffice aligns it (Excel centres a boolean), under its header (aligned as numbers are)."""
     cell = WriteOnlyCell(ws, value)
     cell.number_format = BOOL_FORMAT
+    cell.alignment = _RIGHT
     return cell
+
+
+_RIGHT = Alignment(horizontal="right")
 
 
 def _plain_text(value: str) -> bool:

@@ -1,9 +1,11 @@
-"""The layout rules every workbook table shares (pipeline.report.cells), read back with openpyxl: a text
-column right of a numeric one is indented, so that a number flush with its column's right edge never
-touches the text that starts the next column."""
+"""The layout rules every workbook table shares (pipeline.report.cells), read back with openpyxl: a header
+is aligned as its column's values, so that a number prints under its own header; a text column right of a
+numeric one is indented, so that a number flush with its column's right edge never touches the text that
+starts the next column."""
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
 
 import evaluation_sample
@@ -103,3 +105,79 @@ def test_the_scorecard_indents_its_text_right_of_a_number(tmp_path: Path) -> Non
     assert indented == {"Unit", "Verdict", "Clause"}
     verdict = header["Verdict"].column_letter
     assert all(c.alignment.indent == 1 for c in ws[verdict][1:len(sample.ROWS) + 1])
+
+
+def _alignment(cell) -> str:
+    return cell.alignment.horizontal or "general"
+
+
+def test_a_numeric_header_is_aligned_right_as_its_values(tmp_path: Path) -> None:
+    """By hand: the percentages, counts and booleans print right-aligned, so do their headers; call sign,
+    sensor and the MOPS versions (text) are left-aligned, headers and cells."""
+    ws = _table(tmp_path, QUALITY)
+    header = {column_name(c.value): _alignment(c) for c in ws[1]}
+    assert header == {"callsign": "left", "sensor": "left", "on_surface": "right", "reports": "right",
+                      "low_integrity_pct": "right", "mops_versions": "left"}
+    # a boolean is aligned right in every spreadsheet (Excel would centre it), as its header
+    assert ws["C2"].value is False and _alignment(ws["C2"]) == "right"
+
+
+def test_summary_headers_are_aligned_as_their_block_s_values(tmp_path: Path) -> None:
+    """The Summary's blocks share their columns: the radar block's 'Reports compared' (a count) sits in the
+    windows' Sensors column (text), its 'Radar sensor' (text) in their Window column (numbers). Each
+    header is aligned as the values under it in its own block."""
+    t0 = pd.Timestamp("2019-03-01 08:05:02", tz="UTC")
+    summary = {"callsign": "AXM123", "address": "75008A", "window": 1, "start": t0,
+               "end": t0 + pd.Timedelta(minutes=12), "start_tod": 29102.0, "end_tod": 29822.0,
+               "radar_sensor": "048:25/201", "reference_sensor": "021:0/1", "matched_reports": 151}
+    run = CorrelationRun(windows=[WindowResult(summary, pd.DataFrame(), pd.DataFrame())],
+                         parameters={"date": "2019-03-01"}, radars=[RADAR])
+    write_report(run, tmp_path / "r.xlsx")
+    ws = load_workbook(tmp_path / "r.xlsx")["Summary"]
+    radar = next(c.row for c in ws["A"] if c.value == "Radar")
+    header = {column_name(c.value): _alignment(c) for c in ws[radar] if c.value is not None}
+    assert header["radar"] == header["radar_sensor"] == "left"
+    assert header["n_reports"] == header["horizontal_error_rms_m"] == header["time_bias_se_s"] == "right"
+    assert ws.cell(radar, 3).value == "Reports compared" and ws.cell(radar + 1, 3).value == 2922
+    window = next(c.row for c in ws["A"] if c.value == "Call sign")
+    header = {column_name(c.value): _alignment(c) for c in ws[window] if c.value is not None}
+    assert header["callsign"] == header["sensors"] == "left"
+    assert header["window"] == header["matched_reports"] == header["start"] == "right"
+
+
+def test_every_header_of_a_correlation_workbook_is_aligned_as_its_cells(tmp_path: Path) -> None:
+    """Generally: in every table sheet (header in row 1) a header is right-aligned exactly when no cell
+    under it holds text, as read back (numbers, dates and booleans print right-aligned)."""
+    stamps = pd.to_datetime(["2019-03-01 08:05:02", "2019-03-01 08:05:06"], utc=True)
+    slots = pd.DataFrame({"slot": [0, 1], "time_of_day": [29102.0, 29106.0], "timestamp": stamps,
+                          "radar_lat": [3.1, 3.2], "radar_lon": [101.6, 101.7], "adsb_lat": [3.1, 3.2],
+                          "adsb_lon": [101.6, 101.7], "radar_count": [1, 1], "adsb_count": [2, 2],
+                          "radar_filled": [False, True], "adsb_filled": [False, False],
+                          "sep_m": [40.0, math.nan]})
+    lags = pd.DataFrame({"lag": [-1, 0, 1], "ncc_lat": [0.9, 1.0, 0.9], "ncc_lon": [0.9, 1.0, 0.9],
+                         "pearson_lat": [0.5, 0.9, 0.5], "pearson_lon": [0.5, 0.9, 0.5]})
+    summary = {"callsign": "AXM123", "address": "75008A", "window": 1, "start_tod": 29102.0,
+               "end_tod": 29106.0, "slots": 2}
+    run = CorrelationRun(windows=[WindowResult(summary, slots, lags)], parameters={"date": "2019-03-01"},
+                         extra_sheets={"Quality": QUALITY})
+    write_report(run, tmp_path / "r.xlsx")
+    checked = 0
+    for ws in load_workbook(tmp_path / "r.xlsx").worksheets:
+        if ws.title in ("Summary", "Lag charts", "Slot charts"):
+            continue
+        for col in ws.iter_cols(min_row=1, max_row=_last_row(ws)):
+            header, values = col[0], [c for c in col[1:] if c.value is not None]
+            if header.value is None or not values:
+                continue
+            text = any(c.data_type == "s" for c in values)
+            assert _alignment(header) == ("left" if text else "right"), (ws.title, header.value)
+            checked += 1
+    assert checked >= 20
+
+
+def _last_row(ws) -> int:
+    """A table's last row: the row before the blank row that parts it from its note (or the last row)."""
+    for row in range(2, ws.max_row + 1):
+        if all(c.value is None for c in ws[row]):
+            return row - 1
+    return ws.max_row
