@@ -60,6 +60,16 @@ MIN_WIDTH, MAX_WIDTH = 6.0, 66.0
 # touch the text flush with the next column's left edge (1.6 | 2 printed as "1.62"); the indent, about 1.5
 # characters in LibreOffice (1 in Excel), is that column's gap on its left
 GAP_CHARS, INDENT_CHARS = 1.0, 1.5
+# A header is bold, and a bold word is wider than its letters: 'Maximum' 8.8 characters, which LibreOffice
+# broke as 'Maximu|m' in a column of 9. Per character, its width in the unit of column widths (the digit
+# of the body font): the wider of DejaVu Sans Bold and DejaVu Serif Bold (LibreOffice's headers where
+# Calibri is missing) against DejaVu Sans's digit, rounded up to 0.05 (Calibri Bold against Calibri's digit
+# is within that); any other character 1.25
+_BOLD_WIDTHS = {char: width for width, chars in {
+    0.5: "'", 0.55: " ", 0.6: "ijl,./\\|", 0.65: ":;", 0.7: "f-", 0.75: "IJ!()[]", 0.8: "t_`\u00b0",
+    0.85: 'r"*', 0.95: "sz?", 1.0: "c", 1.05: "vxy", 1.1: "0123456789aeko$", 1.15: "bdghnpquFLSYZ{}",
+    1.2: "EPT\u00b5", 1.25: "AVX", 1.3: "C", 1.35: "BGR#+<=>^~\u00b1", 1.4: "DKOQU", 1.45: "N&", 1.5: "wH",
+    1.6: "%@", 1.7: "m", 1.75: "M", 1.8: "W"}.items() for char in chars}
 _WIDTH_SAMPLE_ROWS = 5000
 FAST_ROWS = True  # table rows through pipeline.report.rows (False: openpyxl's append, cell by cell)
 _ISO_DATE = re.compile(r"\d{4}-\d{2}-\d{2}\Z")
@@ -409,12 +419,20 @@ def column_width(header: str, values: Iterable[Any], number_format: str | None,
                  label: str | None = None, indent: bool = False) -> float:
     """Column width (characters) fitting the longest word of the header printed (``label``, else
     ``header``) and the widest values, GAP_CHARS either side, the left one INDENT_CHARS for an ``indent``
-    (Column.indent), within limits."""
-    longest = max([max(len(word) for word in (label or header).split(" ")),
+    (Column.indent), within limits; a header word also as printed in bold (bold_width) with GAP_CHARS to
+    spare, after the indent."""
+    words = (label or header).split(" ")
+    longest = max([max(len(word) for word in words),
                    *(display_len(v, number_format) for v in _widest(values, number_format))])
     if header in _DATETIME_HEADERS:
         longest = max(longest, display_len(None, number_format) or len(DATETIME_FORMAT))
-    return min(MAX_WIDTH, max(MIN_WIDTH, left_space(indent) + longest + GAP_CHARS))
+    bold = max(bold_width(word) for word in words) + (INDENT_CHARS if indent else 0.0) + GAP_CHARS
+    return min(MAX_WIDTH, max(MIN_WIDTH, left_space(indent) + longest + GAP_CHARS, bold))
+
+
+def bold_width(text: str) -> float:
+    """Printed width of bold header text in characters of column width (_BOLD_WIDTHS)."""
+    return sum(_BOLD_WIDTHS.get(char, 1.25) for char in text)
 
 
 def left_space(indent: bool) -> float:
@@ -461,12 +479,29 @@ def header_cells(ws: WriteOnlyWorksheet, headers: list[str], fill: PatternFill =
     return cells
 
 
-def header_height(headers: list[str], widths: list[float]) -> float:
+def header_height(headers: list[str], widths: list[float], right: list[bool] | None = None) -> float:
     """Height (points) of a header row whose headers wrap at their spaces into columns of ``widths``
-    characters: the lines of the longest, set explicitly (spreadsheet programs do not all fit it)."""
-    lines = [len(textwrap.wrap(h, width=max(1, int(w) - 1), break_long_words=False) or [h])
-             for h, w in zip(headers, widths, strict=False)]
+    characters (less an indented column's indent: ``right``, aligned_right per column): the lines of the
+    longest, as many as its letters or its bold words (bold_width) take, whichever is more, set explicitly
+    (spreadsheet programs do not all fit it)."""
+    indents = indented(right) if right else [False] * len(headers)
+    lines = [max(len(textwrap.wrap(h, width=max(1, int(w) - 1), break_long_words=False) or [h]),
+                 _bold_lines(h, w - (INDENT_CHARS if indent else 0.0)))
+             for h, w, indent in zip(headers, widths, indents, strict=False)]
     return max([1, *lines]) * ROW_HEIGHT_PT
+
+
+def _bold_lines(header: str, width: float) -> int:
+    """The lines a bold header takes wrapped at its spaces in ``width`` characters (a word to a line at
+    least)."""
+    lines, line = 1, 0.0
+    for word in header.split(" "):
+        size = bold_width(word)
+        if line and line + bold_width(" ") + size > width:
+            lines, line = lines + 1, size
+        else:
+            line += (bold_width(" ") if line else 0.0) + size
+    return lines
 
 
 def note_text_cell(ws: WriteOnlyWorksheet, text: str) -> WriteOnlyCell:
@@ -557,7 +592,7 @@ def write_table(ws: WriteOnlyWorksheet, columns: list[Column], *, freeze: str = 
     kept = min(n_rows, EXCEL_MAX_ROWS - 1)
     if kept < n_rows:
         note = f"{note} Rows cut at Excel's limit: {kept} of {n_rows} written.".strip()
-    ws.row_dimensions[1].height = header_height(labels, widths)
+    ws.row_dimensions[1].height = header_height(labels, widths, right)
     ws.append(header_cells(ws, labels, right=right))
     styles = RowStyles(ws, [None if c.styled is None or c.text else c.number_format for c in columns],
                        [INDENTED if c.indent else None for c in columns])

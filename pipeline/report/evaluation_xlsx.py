@@ -176,7 +176,8 @@ def _write_scorecard(wb: Workbook, card: pd.DataFrame, title: str = SCORECARD_SH
     set_widths(ws, widths)
     ws.freeze_panes = f"{get_column_letter(len(leading) + 4)}2"
     page_setup(ws)  # one page wide, header row repeated on every page
-    ws.row_dimensions[1].height = header_height(headers, widths)
+    right = [aligned_right([r[k] for r in rows]) for k, _ in keys]
+    ws.row_dimensions[1].height = header_height(headers, widths, right)
     indents = _indents(rows, keys)
     chars = [int(w - left_space(indent) - GAP_CHARS) for w, indent in zip(widths, indents, strict=True)]
     for i, row in enumerate(rows, start=2):
@@ -184,7 +185,7 @@ def _write_scorecard(wb: Workbook, card: pd.DataFrame, title: str = SCORECARD_SH
                           for j, (k, _) in enumerate(keys) if k in _WRAP_COLUMNS)])
         if lines > 1:
             ws.row_dimensions[i].height = lines * ROW_HEIGHT_PT
-    ws.append(header_cells(ws, headers, right=[aligned_right([r[k] for r in rows]) for k, _ in keys]))
+    ws.append(header_cells(ws, headers, right=right))
     for row in rows:
         cells = []
         for (key, _), indent in zip(keys, indents, strict=True):

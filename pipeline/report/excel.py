@@ -184,7 +184,7 @@ def _summary_block(ws: WriteOnlyWorksheet, summaries: list[dict[str, Any]], titl
     rows = [[_summary_value(values, k) for k in keys] for values in summaries]
     formats = [number_format_for(k, [r[j] for r in rows]) for j, k in enumerate(keys)]
     right = [aligned_right([r[j] for r in rows], formats[j]) for j in range(len(keys))]
-    ws.row_dimensions[row + 1].height = header_height(headers, widths)
+    ws.row_dimensions[row + 1].height = header_height(headers, widths, right)
     ws.append(header_cells(ws, headers, PatternFill("solid", fgColor=fill), right))
     for values in rows:
         cells = []

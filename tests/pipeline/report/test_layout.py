@@ -181,3 +181,56 @@ def _last_row(ws) -> int:
         if all(c.value is None for c in ws[row]):
             return row - 1
     return ws.max_row
+
+
+def _printed_bold(word: str) -> float:
+    """A header word's printed width in characters of column width, measured from the fonts matplotlib
+    ships: the wider of DejaVu Sans Bold and DejaVu Serif Bold (LibreOffice's header fonts where Calibri
+    is missing) at 11 pt, against the digit 0 of DejaVu Sans at 11 pt (the unit of column widths)."""
+    import os
+
+    import matplotlib
+    from PIL import ImageFont
+
+    fonts = os.path.join(matplotlib.get_data_path(), "fonts", "ttf")
+
+    def font(name: str):
+        return ImageFont.truetype(os.path.join(fonts, name), 1100)
+
+    digit = font("DejaVuSans.ttf").getlength("0")
+    return max(font(name).getlength(word) for name in ("DejaVuSans-Bold.ttf", "DejaVuSerif-Bold.ttf")) / digit
+
+
+def test_every_header_word_fits_its_column_printed_in_bold() -> None:
+    """Every word of every header the workbooks print fits its column as printed in bold, with a
+    character to spare (LibreOffice broke 'Maximum' as 'Maximu|m' in a column of 9: 8.8 characters bold,
+    and a cell's margins), and after the indent in an indented column."""
+    from msdc.pipeline.report.headers import LABELS, workbook_header
+
+    short = []
+    for name in LABELS:
+        header = workbook_header(name)
+        for indent in (False, True):
+            width = cells.column_width(name, [], None, header, indent)
+            for word in header.split(" "):
+                if width < _printed_bold(word) + 1.0 + (cells.INDENT_CHARS if indent else 0.0):
+                    short.append((header, word, indent, width))
+    assert short == []
+
+
+def test_the_position_error_table_prints_maximum_whole(tmp_path: Path) -> None:
+    """The evaluation's position error per range band (its last column 'Maximum error (m)', values of 5
+    characters): the column holds 'Maximum' in bold, a character to spare, not only its 7 letters."""
+    frame = pd.DataFrame({"sensor": ["010:0/107:mlat"] * 2, "range_from_nm": [0.0, 10.0],
+                          "range_to_nm": [10.0, 20.0], "reports": [17624, 1571], "aircraft": [27, 16],
+                          "rms_m": [34.4, 78.7], "p95_m": [84.0, 132.4], "max_m": [149.8, 149.6]})
+    ws = _table(tmp_path, frame)
+    assert ws["H1"].value == "Maximum error (m)"
+    assert ws.column_dimensions["H"].width >= _printed_bold("Maximum") + 1.0 > len("Maximum") + 2
+
+
+def test_a_header_row_is_as_tall_as_its_bold_lines() -> None:
+    """'MMMM WWW' is 8 letters, one line of a 10-character column by its letters, two in bold (M and W
+    print about 1.7 characters wide): the row is two lines tall."""
+    assert len("MMMM WWW") <= 10 - 2 and _printed_bold("MMMM WWW") > 10.0
+    assert cells.header_height(["MMMM WWW"], [10.0]) == 2 * cells.ROW_HEIGHT_PT
