@@ -36,7 +36,7 @@ from msdc.pipeline.jobs.common import (
     undated_warning,
     unread_inputs,
 )
-from msdc.pipeline.jobs.options import EvaluateOptions, OptionError, check_declared
+from msdc.pipeline.jobs.options import EvaluateOptions, OptionError, check_declared, check_installed
 from msdc.pipeline.model.load import Loaded
 from msdc.pipeline.progress import Progress
 from msdc.pipeline.report.transaction import OutputTransaction, staged
@@ -68,6 +68,8 @@ def validate(options: EvaluateOptions) -> EvaluateChecked:
     checked.output = output_path("-o", options.output, (".xlsx",))
     checked.json = output_path("--json", options.json, (".json",))
     checked.html = output_path("--html", options.html, (".html", ".htm"))
+    if checked.html is not None:
+        check_installed(f"--html {checked.html}", "the HTML report's map", ("bokeh",), "html")
     outs = [(f"-o {checked.output}", checked.output), (f"--json {checked.json}", checked.json),
             (f"--html {checked.html}", checked.html)]
     given = [p for _, p in outs if p is not None]

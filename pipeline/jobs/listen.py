@@ -17,7 +17,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from msdc.pipeline.jobs.common import JobError, nonempty_path, pinned_editions, sensor_table
-from msdc.pipeline.jobs.options import ListenOptions, OptionError, check_declared
+from msdc.pipeline.jobs.options import ListenOptions, OptionError, check_declared, check_installed
 
 if TYPE_CHECKING:
     from msdc.pipeline.live.state import LiveState
@@ -112,6 +112,8 @@ def validate(options: ListenOptions) -> Checked:
                                                         "window_s") if getattr(options, name) is not None}
     if options.http is not None:
         http = parse_http(options.http)
+        check_installed(f"--http {options.http}", "the live monitor's web server", ("starlette", "uvicorn"),
+                        "live")
         thresholds = monitor_thresholds(asked)
     elif asked:
         warnings.append("--alarm-* and --window set the monitor page's alarms: ignored without --http")

@@ -291,6 +291,18 @@ def _one_of(choices: tuple) -> str:
     return " or ".join(names) if len(names) == 2 else f"one of {', '.join(names)}"
 
 
+def check_installed(option: str, what: str, modules: tuple[str, ...], extra: str) -> None:
+    """OptionError naming ``option`` when a package ``what`` needs is not installed (looked up, not
+    imported), before anything is read: an optional extra found missing after decoding cost the run."""
+    import importlib.util
+
+    missing = [m for m in modules if importlib.util.find_spec(m) is None]
+    if missing:
+        verb = "is" if len(missing) == 1 else "are"
+        raise OptionError(f"{option}: {what} needs {' and '.join(missing)}, which {verb} not installed: "
+                          f"pip install 'msdc[{extra}]'")
+
+
 def check_number(name: str, value: float | None, lo: float, hi: float, unit: str = "") -> None:
     """A finite number within [lo, hi], else OptionError naming the option."""
     if value is None:

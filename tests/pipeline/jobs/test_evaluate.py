@@ -223,6 +223,25 @@ def test_bad_options_are_refused_before_decoding(recording, change, message):
     assert message in str(caught.value)
 
 
+def test_html_without_bokeh_is_refused_before_decoding(recording, tmp_path, capsys, monkeypatch):
+    """Without the html extra the run decoded and evaluated, then ended in a traceback and wrote nothing;
+    --html is refused first, naming the extra, and nothing is written."""
+    import importlib.util
+
+    _, folder = recording
+    real = importlib.util.find_spec
+    monkeypatch.setattr(importlib.util, "find_spec", lambda name, *a: None if name == "bokeh" else
+                        real(name, *a))
+    html = tmp_path / "e.html"
+    status = main(["evaluate", str(folder / "radar.ast"), "--sensors", str(folder / "sensors.toml"),
+                   "--preset", str(folder / "preset.toml"), "--date", DATE, "-o", str(tmp_path / "e.xlsx"),
+                   "--html", str(html)])
+    assert status == 2
+    assert capsys.readouterr().err.strip() == (f"msdc evaluate: --html {html}: the HTML report's map needs "
+                                               "bokeh, which is not installed: pip install 'msdc[html]'")
+    assert not list(tmp_path.iterdir())
+
+
 def test_a_preset_for_other_sensors_is_refused_with_what_is_present(recording, tmp_path, capsys):
     _, folder = recording
     before = sorted(tmp_path.iterdir())

@@ -95,3 +95,17 @@ def test_ctrl_c_ends_listen_with_a_complete_recording(tmp_path, capsys):
     stats = capsys.readouterr().out
     row = next(line.split() for line in stats.splitlines() if line.split()[:3] == ["48", "25", "201"])
     assert row[3] == "10"  # records of 048 25/201: 5 datagrams of 2
+
+
+def test_http_without_the_live_extra_is_refused_before_listening(capsys, monkeypatch):
+    """Without uvicorn the monitor's thread died with a traceback and listen went on without it; --http is
+    now refused, naming the extra, before a socket is opened."""
+    import importlib.util
+
+    real = importlib.util.find_spec
+    monkeypatch.setattr(importlib.util, "find_spec", lambda name, *a: None if name == "uvicorn" else
+                        real(name, *a))
+    assert main(["listen", "--udp", f"127.0.0.1:{free_port()}", "--http", "127.0.0.1:18081"]) == 2
+    err = capsys.readouterr().err
+    assert err.strip() == ("msdc listen: --http 127.0.0.1:18081: the live monitor's web server needs "
+                           "uvicorn, which is not installed: pip install 'msdc[live]'")
