@@ -154,7 +154,7 @@ def conflict_job(options: ConflictOptions, *, progress: Progress | None = None,
     from msdc.pipeline.conflict.surface import on_surface
     from msdc.pipeline.model.selection import identity_timeline, selected_samples
     from msdc.pipeline.track import Plane, track
-    from msdc.pipeline.track.feasibility import untrackable
+    from msdc.pipeline.track.feasibility import untrackable, unused_adsb
     from msdc.pipeline.track.noise import SURFACE_SPEED_KT
 
     started = time.monotonic()
@@ -177,6 +177,7 @@ def conflict_job(options: ConflictOptions, *, progress: Progress | None = None,
         tracks = result.tracks
         if tracks.empty:
             raise JobError(untrackable(meas))
+        warnings += unused_adsb(meas)
         grid_at = np.flatnonzero(on_grid(tracks, step))  # the tracker's report-time rows are not the grid
         plane = Plane.around(tracks["latitude"].to_numpy(float), tracks["longitude"].to_numpy(float))
         epoch, tracker_parameters = result.epoch, result.parameters

@@ -138,7 +138,7 @@ def track_job(options: TrackOptions, *, progress: Progress | None = None, checke
     """Validate, decode, build measurements, select, track; nothing is written."""
     from msdc.pipeline.model.identity import aircraft_labels
     from msdc.pipeline.track import track
-    from msdc.pipeline.track.feasibility import untrackable
+    from msdc.pipeline.track.feasibility import untrackable, unused_adsb
 
     started = time.monotonic()
     checked = checked or validate(options)
@@ -159,6 +159,7 @@ def track_job(options: TrackOptions, *, progress: Progress | None = None, checke
                        tpm=options.tpm, smooth=options.smooth, smoother=options.smoother)
         if result.tracks.empty:
             raise JobError(untrackable(meas))
+        warnings += unused_adsb(meas)
         labels = aircraft_labels(meas)
         tracks = with_labels(result.tracks, labels)
         params = {**run_parameters(options, loaded, started, command), **result.parameters,

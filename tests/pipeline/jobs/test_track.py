@@ -511,3 +511,32 @@ def test_a_max_coast_below_every_sensor_interval_is_warned():
     assert result.result.aircraft["segments"].sum() > 1000
     usual = track.track_job(opts(output=None, json="t.json", noise="declared", date="2019-03-01"))
     assert not [w for w in usual.warnings if "--max-coast" in w]
+
+
+def test_adsb_without_an_accuracy_is_said_when_the_radar_alone_is_tracked(tmp_path, capsys):
+    """ADS-B reports of unknown accuracy (NACp 0 here; without NACp, as CAT021 0.2x, and no --adsb-sigma,
+    alike): the tracks are made of the radar's plots alone. That was silent (the LEBL hour's 49,296 ADS-B
+    reports went unused); it is a warning naming the count and why, and the ADS-B updates none of the
+    tracks."""
+    from dataclasses import replace
+
+    from fixtures.scenario import default_scenario
+    from fixtures.simulate import sensors_toml, simulate
+    from msdc.asterix.encode import encode_frame
+    from msdc.pipeline.cli import main
+
+    sc = default_scenario()
+    sim = simulate(replace(sc, aircraft=sc.aircraft[:2]), seed=3)
+    (tmp_path / "a.ast").write_bytes(encode_frame(21, sim.adsb.assign(nacp=0)))
+    (tmp_path / "r.ast").write_bytes(encode_frame(48, sim.radar))
+    (tmp_path / "s.toml").write_text(sensors_toml(sc.radar))
+    code = main(["track", str(tmp_path / "r.ast"), str(tmp_path / "a.ast"), "--sensors",
+                 str(tmp_path / "s.toml"), "--all", "-o", str(tmp_path / "t.csv"), "--json",
+                 str(tmp_path / "t.json")])
+    err = capsys.readouterr().err
+    assert code == 0, err
+    found = re.search(r"warning: (\d+) of (\d+) ADS-B reports have no usable accuracy \((\d+) have NACp 0 "
+                      r"\(unknown\) or no position\): not used in the tracks", err)
+    assert found and found[1] == found[2] == found[3] and 0.9 * len(sim.adsb) < int(found[1]) <= len(sim.adsb)
+    tracks = pd.read_csv(tmp_path / "t.csv")
+    assert not tracks["sources"].fillna("").str.contains("021:").any()
