@@ -18,10 +18,10 @@ import pandas as pd
 
 import msdc.asterix as asterix
 from msdc.pipeline.correlate.correlation import correlate
+from msdc.pipeline.model.dedup import deduplicate
 from msdc.pipeline.model.measurements import build_measurements
 from msdc.pipeline.model.sensors import read_sensors
 from msdc.pipeline.quality.reference_offset import SURFACE_SPEED_KT, reference_offsets
-from msdc.pipeline.quality.tables import quality_tables
 
 ARP = (41.2969, 2.0785)
 GUESS = f"""
@@ -83,6 +83,25 @@ def contents(mlat: pd.DataFrame, smr: pd.DataFrame) -> None:
           f"{np.abs((motion - tra + 180) % 360 - 180).median():.1f} deg ({int(ok.sum()):,} steps)")
 
 
+def update_table(meas: pd.DataFrame, gap_s: float = 180.0) -> pd.DataFrame:
+    """Per sensor, every aircraft pooled (in the air and on the surface: the Quality sheet splits them):
+    its reports (of no identity too, as the Quality sheet's "reports"), then after de-duplication the
+    median and 95th percentile of the intervals up to gap_s between one aircraft's consecutive reports, the
+    gaps beyond it and the longest."""
+    rows = []
+    for sensor, every in meas.groupby("sensor_id", observed=True, sort=True):
+        part, _ = deduplicate(every[every["aircraft_id"].notna()])
+        t = part["time"].astype("datetime64[ns, UTC]").array.asi8 / 1e9
+        order = np.lexsort((t, part["aircraft_id"].astype(str).to_numpy()))
+        ids, t = part["aircraft_id"].astype(str).to_numpy()[order], t[order]
+        dt_s = np.diff(t)[ids[1:] == ids[:-1]]
+        inside = dt_s[dt_s <= gap_s]
+        rows.append({"sensor": sensor, "reports": len(every), "interval_median_s": np.median(inside),
+                     "interval_p95_s": np.percentile(inside, 95), "gaps": int((dt_s > gap_s).sum()),
+                     "longest_gap_s": dt_s.max() if (dt_s > gap_s).any() else np.nan})
+    return pd.DataFrame(rows)
+
+
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__)
     ap.add_argument("real", nargs="?", default=str(Path(__file__).resolve().parents[2] / "shared" / "real"))
@@ -103,9 +122,7 @@ def main() -> int:
     kinds = meas["sensor_kind"].astype(str)
     print("measurements:", kinds.value_counts().to_dict(), "; surface radar reports joined to an aircraft:",
           f"{meas.loc[kinds == 'smr', 'aircraft_id'].notna().mean():.1%}")
-    q = quality_tables(meas)["Quality"]
-    keep = ["sensor", "sac", "sic", "reports", "interval_median_s", "interval_p95_s", "gaps", "longest_gap_s"]
-    print(q[q["callsign"] == "(all)"][keep].to_string(index=False))
+    print(update_table(meas).to_string(index=False))
     print("reference points (surface reports below", SURFACE_SPEED_KT, "kt):")
     print(reference_offsets(meas, sensors).to_string(index=False))
     for pairs in ("mlat-adsb", "smr-mlat"):
