@@ -85,6 +85,7 @@ from msdc.pipeline.report.summary import (
     THESIS_LIMITS,
     THESIS_TEXT,
     THESIS_TITLE,
+    aircraft_name,
     has_quality,
     sensor_pair,
     window_notes,
@@ -103,24 +104,25 @@ from msdc.pipeline.report.tables import (
     write_table_parquet,
 )
 
-# Summary: stacked blocks that each fit a landscape page; every window block starts with call sign, window and
-# sensor pair ("048:25/201 vs 021:0/1": window numbers restart for every pair of an aircraft). The lead block
-# comes first (what each window shows, then with --quality the radar's errors in it), then the thesis's
-LEAD_BLOCK_KEYS = ["callsign", "window", "sensors", "start", "end", *MATCHED_KEYS]
+# Summary: stacked blocks that each fit a landscape page; every window block starts with the aircraft (call
+# sign, else address), window and sensor pair ("048:25/201 vs 021:0/1": window numbers restart for every
+# pair of an aircraft). The lead block comes first (what each window shows, then with --quality the radar's
+# errors in it), then the thesis's
+LEAD_BLOCK_KEYS = ["aircraft", "window", "sensors", "start", "end", *MATCHED_KEYS]
 SUMMARY_BLOCKS: list[tuple[str, list[str]]] = [
     (f"{THESIS_LIMITS['counts'][0]} ({THESIS_LIMITS['counts'][1]})",
-     ["callsign", "window", "sensors", "start", "end", "address", "slots",
+     ["aircraft", "window", "sensors", "start", "end", "address", "slots",
       "radar_before", "radar_after", "adsb_before", "adsb_after", "radar_duplicates", "adsb_duplicates",
       "adsb_jumps", "radar_filled_slots", "adsb_filled_slots"]),
     (f"{THESIS_LIMITS['coefficients'][0]} ({THESIS_LIMITS['coefficients'][1]}; Pearson where at least "
      f"{PEARSON_MIN_OVERLAP} slots overlap, its peak searched over |lag| <= N/2)",
-     ["callsign", "window", "sensors", "start", "end", "ncc0_lat", "ncc0_lon", "ncc_peak_lag_lat",
+     ["aircraft", "window", "sensors", "start", "end", "ncc0_lat", "ncc0_lon", "ncc_peak_lag_lat",
       "ncc_peak_lag_lon", "pearson0_lat", "pearson0_lon", "pearson_peak_lag_lat", "pearson_peak_lag_lon",
       "pearson_peak_at_limit_lat", "pearson_peak_at_limit_lon", "pearson_lag_unidentified_lat",
       "pearson_lag_unidentified_lon"]),
     (f"{THESIS_LIMITS['separation'][0]} (m; {THESIS_LIMITS['separation'][1]}); sep rms all m: every slot, "
      "filled ones included",
-     ["callsign", "window", "sensors", "start", "end", "sep_mean_m", "sep_median_m", "sep_rms_m", "sep_p95_m",
+     ["aircraft", "window", "sensors", "start", "end", "sep_mean_m", "sep_median_m", "sep_rms_m", "sep_p95_m",
       "sep_max_m", "sep_slots", "sep_rms_all_m"]),
 ]
 SKIPPED_HEADERS = ["callsign", "address", "sensors", "start", "end", "reason"]
@@ -134,7 +136,8 @@ IMAGE_MAX_W_PX, IMAGE_MAX_H_PX = 1000, 620  # one figure per printed page
 def _summary_values(run: CorrelationRun) -> list[dict[str, Any]]:
     """Each window's summary as Excel values (excel_value), worked out once for the Summary's passes."""
     return [{**{key: excel_value(value) for key, value in w.summary.items()},
-             "sensors": sensor_pair(w.summary) or None} for w in run.windows]
+             "aircraft": aircraft_name(w.summary, "") or None, "sensors": sensor_pair(w.summary) or None}
+            for w in run.windows]
 
 
 def _summary_value(values: dict[str, Any], key: str) -> Any:
@@ -221,7 +224,7 @@ def _text_rows(ws: WriteOnlyWorksheet, title: str, lines: list[tuple[dict[str, A
         pair = cell_for(ws, values.get("sensors"), None)
         if pair is not None:
             pair.alignment = INDENTED
-        ws.append([cell_for(ws, values.get("callsign"), None), cell_for(ws, values.get("window"), None), pair,
+        ws.append([cell_for(ws, values.get("aircraft"), None), cell_for(ws, values.get("window"), None), pair,
                    _summary_time_cell(ws, _summary_value(values, "start")), cell])
     if not lines:
         ws.append([note_text_cell(ws, none)])

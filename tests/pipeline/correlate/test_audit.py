@@ -105,7 +105,7 @@ def test_every_window_names_its_sensor_pair(tmp_path):
     titles = [c.title.tx.rich.p[0].r[0].t for c in wb["Lag charts"]._charts]
     assert sorted(titles) == sorted(f"MAS72 window 1 ({r} vs {ref}), N = 20" for r, ref, _ in pairs)
     summary = list(wb["Summary"].iter_rows(values_only=True))
-    header = next(i for i, r in enumerate(summary) if r[:3] == ("Call sign", "Window", "Sensors"))
+    header = next(i for i, r in enumerate(summary) if r[:3] == ("Aircraft", "Window", "Sensors"))
     assert sorted(r[2] for r in summary[header + 1: header + 4]) == sorted(f"{r} vs {ref}"
                                                                           for r, ref, _ in pairs)
 

@@ -86,9 +86,9 @@ def test_summary_blocks_indent_the_text_right_of_a_number(tmp_path: Path) -> Non
     radar = next(c.row for c in ws["A"] if c.value == "Radar")
     assert _indents(ws[radar])["radar_sensor"] == 0
     assert ws.cell(radar + 1, 2).value == "048:25/201" and ws.cell(radar + 1, 2).alignment.indent == 0
-    window = next(c.row for c in ws["A"] if c.value == "Call sign")
+    window = next(c.row for c in ws["A"] if c.value == "Aircraft")
     indents = _indents(ws[window])
-    assert indents["sensors"] == 1 and indents["callsign"] == indents["window"] == 0
+    assert indents["sensors"] == 1 and indents["aircraft"] == indents["window"] == 0
     pair = ws.cell(window + 1, 3)
     assert pair.value == "048:25/201 vs 021:0/1" and pair.alignment.indent == 1
     assert ws.cell(window + 1, 1).value == "AXM123" and ws.cell(window + 1, 1).alignment.indent == 0
@@ -139,9 +139,9 @@ def test_summary_headers_are_aligned_as_their_block_s_values(tmp_path: Path) -> 
     assert header["radar"] == header["radar_sensor"] == "left"
     assert header["n_reports"] == header["horizontal_error_rms_m"] == header["time_bias_se_s"] == "right"
     assert ws.cell(radar, 3).value == "Reports compared" and ws.cell(radar + 1, 3).value == 2922
-    window = next(c.row for c in ws["A"] if c.value == "Call sign")
+    window = next(c.row for c in ws["A"] if c.value == "Aircraft")
     header = {column_name(c.value): _alignment(c) for c in ws[window] if c.value is not None}
-    assert header["callsign"] == header["sensors"] == "left"
+    assert header["aircraft"] == header["sensors"] == "left"
     assert header["window"] == header["matched_reports"] == header["start"] == "right"
 
 

@@ -114,7 +114,7 @@ def _header_index(row: tuple) -> dict[str, int]:
 def _block(ws, title_start: str) -> tuple[int, dict[str, int]]:
     """Row of a Summary block's header and its column index by key (headers.workbook_header's)."""
     row = next(c.row for c in ws["A"] if isinstance(c.value, str) and c.value.startswith(title_start))
-    row = next(r for r in range(row + 1, row + 4) if ws.cell(r, 1).value in ("Call sign", "Radar"))
+    row = next(r for r in range(row + 1, row + 4) if ws.cell(r, 1).value in ("Aircraft", "Radar"))
     return row, _header_index(ws[row])
 
 
@@ -135,13 +135,14 @@ def test_sheets_headers_and_freeze(outputs: dict[str, Path]) -> None:
                   "Separation between the slot means"):
         row, col = _block(summary, start)
         # every block names its window: aircraft, number and sensor pair (numbers restart for every pair)
-        assert list(col)[:5] == ["callsign", "window", "sensors", "start", "end"]
+        assert list(col)[:5] == ["aircraft", "window", "sensors", "start", "end"]
         assert all(summary.cell(row, c).font.b for c in col.values())
         keys |= set(col)
     # clock times live in start/end, the sensor pair in "sensors"; the verdict has its own rows, and the
     # quality step's numbers a block of their own with --quality only
-    assert keys == (set(SUMMARY_KEYS) - {"start_tod", "end_tod", "radar_sensor", "reference_sensor",
-                                         "verdict", *WINDOW_QUALITY_KEYS}) | {"sensors"}
+    # ... and the call sign in "aircraft" (else the address, which has its own column too)
+    shown_apart = {"start_tod", "end_tod", "radar_sensor", "reference_sensor", "verdict", "callsign"}
+    assert keys == (set(SUMMARY_KEYS) - shown_apart - set(WINDOW_QUALITY_KEYS)) | {"sensors", "aircraft"}
     assert summary.freeze_panes == "C2"
     assert [c.value for c in wb["Correlation"][1]][:11] == [
         "Window", "Call sign", "Address", "Radar sensor", "Reference sensor", "Lag (slots)", "Lag (s)",
@@ -587,3 +588,23 @@ def test_quality_numbers_lead_the_summary(run: CorrelationRun, tmp_path: Path) -
     assert lead["radars"][0]["time_bias_s"] == -0.019
     text = summary_table(quality)
     assert "range SD m" in text and "KLIA MSSR  048:25/201" in text and "6.3 +- 4.3" in text
+
+
+def test_a_window_of_an_aircraft_without_a_call_sign_is_named_by_its_address(tmp_path) -> None:
+    """Two LEBL vehicles without call signs were two rows of blank call sign in the Summary's blocks and its
+    Verdicts; their Aircraft cell is the address, as the terminal names them."""
+    from msdc.pipeline.correlate.results import CorrelationRun, WindowResult
+
+    def window(callsign, address, number):
+        summary = {"callsign": callsign, "address": address, "window": number,
+                   "radar_sensor": "010:0/107:mlat", "reference_sensor": "021:0/107",
+                   "verdict": f"verdict {number}"}
+        return WindowResult(summary, pd.DataFrame(), pd.DataFrame())
+
+    run = CorrelationRun(windows=[window(None, "4CA1C3", 1), window("AFL2513", "4242AA", 2)])
+    write_report(run, tmp_path / "r.xlsx")
+    ws = load_workbook(tmp_path / "r.xlsx")["Summary"]
+    row, col = _block(ws, "What each window shows")
+    assert [ws.cell(row + k, col["aircraft"]).value for k in (1, 2)] == ["4CA1C3", "AFL2513"]
+    verdicts = next(c.row for c in ws["A"] if isinstance(c.value, str) and c.value.startswith("Verdicts ("))
+    assert [ws.cell(verdicts + k, 1).value for k in (1, 2)] == ["4CA1C3", "AFL2513"]
