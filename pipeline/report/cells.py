@@ -24,7 +24,7 @@ import numpy as np
 import pandas as pd
 from openpyxl.cell import WriteOnlyCell
 from openpyxl.cell.cell import ILLEGAL_CHARACTERS_RE, Cell
-from openpyxl.styles import Alignment, Border, Font, PatternFill, Side
+from openpyxl.styles import DEFAULT_FONT, Alignment, Border, Font, PatternFill, Side
 from openpyxl.utils import get_column_letter
 from openpyxl.worksheet._write_only import WriteOnlyWorksheet
 from openpyxl.xml import LXML
@@ -78,9 +78,12 @@ _DATETIME_HEADERS = {"time_utc", "start", "end", "timestamp", "run_time"}
 _DATE_CODES = re.compile(r"yy|hh")  # a number format showing a date or a time
 _FORMAT_SYNTAX = re.compile(r'[\[\]"]')  # what a number format has that its text does not
 
-BOLD = Font(bold=True)
-TITLE_FONT = Font(bold=True, size=12)
-NOTE_FONT = Font(italic=True, color="595959")
+# every font named as the body's (openpyxl's default, Calibri): a font without a name printed in LibreOffice's
+# default serif face, so headers, titles and notes did not match the cells under them
+BODY_FONT = DEFAULT_FONT.name
+BOLD = Font(name=BODY_FONT, bold=True)
+TITLE_FONT = Font(name=BODY_FONT, bold=True, size=12)
+NOTE_FONT = Font(name=BODY_FONT, italic=True, color="595959")
 HEADER_FILL = PatternFill("solid", fgColor="D9E1F2")
 _BLOCK_FILLS = ["EDEDED", "E2EFDA", "DDEBF7", "FCE4D6"]
 _HEADER_BORDER = Border(bottom=Side(style="thin", color="808080"))

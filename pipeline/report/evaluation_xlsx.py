@@ -27,6 +27,7 @@ from msdc.pipeline.evaluate.scorecard_schema import (
     validate_tables,
 )
 from msdc.pipeline.report.cells import (
+    BODY_FONT,
     BOLD,
     GAP_CHARS,
     MAX_WIDTH,
@@ -75,8 +76,9 @@ VERDICT_FILLS: dict[str, PatternFill] = {  # Excel's own good / bad / neutral co
     "pass": PatternFill("solid", fgColor="C6EFCE"), "fail": PatternFill("solid", fgColor="FFC7CE"),
     "inconclusive": PatternFill("solid", fgColor="FFEB9C")}
 VERDICT_FONTS: dict[str, Font] = {
-    "pass": Font(bold=True, color="006100"), "fail": Font(bold=True, color="9C0006"),
-    "inconclusive": Font(bold=True, color="9C5700")}
+    "pass": Font(name=BODY_FONT, bold=True, color="006100"),
+    "fail": Font(name=BODY_FONT, bold=True, color="9C0006"),
+    "inconclusive": Font(name=BODY_FONT, bold=True, color="9C5700")}
 UNCHECKED_NOTE = ("Threshold checked against the standard 'no': the preset marks the figure as not checked "
                   "against the standard's own text (checked = false); it is a configurable default, and a "
                   "pass against it is not compliance with the standard.")
@@ -193,7 +195,7 @@ def _write_scorecard(wb: Workbook, card: pd.DataFrame, title: str = SCORECARD_SH
             if key in ("value", "ci_low", "ci_high"):
                 cells.append(_cell(ws, value, _number_format(row, value)))
             elif key == "threshold":
-                italic = None if row["checked"] == "yes" else Font(italic=True)
+                italic = None if row["checked"] == "yes" else Font(name=BODY_FONT, italic=True)
                 cells.append(_cell(ws, value, _number_format(row, value), font=italic))
             elif key == "verdict":
                 cells.append(_cell(ws, value, font=VERDICT_FONTS[value], fill=VERDICT_FILLS[value],

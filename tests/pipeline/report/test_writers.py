@@ -608,3 +608,13 @@ def test_a_window_of_an_aircraft_without_a_call_sign_is_named_by_its_address(tmp
     assert [ws.cell(row + k, col["aircraft"]).value for k in (1, 2)] == ["4CA1C3", "AFL2513"]
     verdicts = next(c.row for c in ws["A"] if isinstance(c.value, str) and c.value.startswith("Verdicts ("))
     assert [ws.cell(verdicts + k, 1).value for k in (1, 2)] == ["4CA1C3", "AFL2513"]
+
+
+def test_headers_titles_and_notes_print_in_the_cells_face(outputs: dict[str, Path]) -> None:
+    """A bold or italic font without a name printed in LibreOffice's default serif face, headers and notes
+    unlike the cells under them: every styled cell names the face the workbook's plain cells have."""
+    wb = load_workbook(outputs["xlsx"])
+    plain = wb["Correlation"].cell(2, 1).font.name  # a number cell, in the workbook's default face
+    styled = [(ws.title, c.coordinate, c.font.name) for ws in wb.worksheets for row in ws.iter_rows()
+              for c in row if c.value is not None and (c.font.b or c.font.i)]
+    assert len(styled) > 50 and {name for *_, name in styled} == {plain}, styled[:5]
