@@ -107,7 +107,10 @@ def _callsign_title(windows: list[WindowResult]) -> str:
     return shown + (f" +{more} more" if more > 0 else "")
 
 
-RING_STEP_NM = 50.0
+# range rings: the smallest of these steps that rings the farthest slot in at most MAX_RINGS (an airport's
+# tracks within 25 NM got one 50 NM ring, which set the map's scale: the traffic filled a quarter of it)
+RING_STEPS_NM = (1.0, 2.0, 5.0, 10.0, 25.0, 50.0, 100.0)
+MAX_RINGS = 5
 _NM_M = 1852.0
 
 
@@ -142,25 +145,52 @@ def farthest_m(geod, lat: float, lon: float, lats: np.ndarray, lons: np.ndarray)
     return float(np.max(dist_m))
 
 
-def _draw_sites(ax: Axes, sensors: pd.DataFrame | None, lats: np.ndarray, lons: np.ndarray) -> None:
-    """Radar sites (triangle and name) and range rings every RING_STEP_NM out to the farthest slot."""
+def _window_sites(sensors: pd.DataFrame | None, run: CorrelationRun) -> pd.DataFrame | None:
+    """The sensor file's entries of the sensors the windows correlate (a CAT048 radar; a CAT010 entry by
+    its kind): the LEBL multilateration's map drew the surface radar's point and rings too, not in the
+    pair. Every entry when none of them is (a hand-made run)."""
+    if sensors is None or sensors.empty or not run.windows:
+        return sensors
+    from msdc.pipeline.model.report_selection import sensor_parts
+
+    ids = {str(w.summary.get(k)) for w in run.windows for k in ("radar_sensor", "reference_sensor")}
+    wanted = {(int(c), int(a), int(b), k if c == 10 else None)
+              for c, a, b, k in sensor_parts(sorted(ids)).itertuples(index=False) if c >= 0}
+    kind = sensors["kind"] if "kind" in sensors else pd.Series(None, index=sensors.index)
+    category = sensors["category"] if "category" in sensors else pd.Series(48, index=sensors.index)
+    keys = [(int(c), int(a), int(b), k if c == 10 else None)
+            for c, a, b, k in zip(category, sensors["sac"], sensors["sic"], kind, strict=True)]
+    mine = sensors[[key in wanted for key in keys]]
+    return mine if len(mine) else sensors
+
+
+def ring_step_nm(far_nm: float) -> float:
+    """The rings' step: the smallest of RING_STEPS_NM that reaches ``far_nm`` in at most MAX_RINGS rings."""
+    return next((step for step in RING_STEPS_NM if far_nm <= MAX_RINGS * step), RING_STEPS_NM[-1])
+
+
+def _draw_sites(ax: Axes, sensors: pd.DataFrame | None, lats: np.ndarray, lons: np.ndarray) -> float | None:
+    """Radar sites (triangle and name) and range rings out to the farthest slot, every ring_step_nm of the
+    farthest; the step (None without sites)."""
     if sensors is None or sensors.empty:
-        return
+        return None
     from pyproj import Geod
 
     geod = Geod(ellps="WGS84")
     ok = np.isfinite(lats) & np.isfinite(lons)
-    for row in sensors.itertuples(index=False):
-        lat, lon = float(row.latitude), float(row.longitude)
-        far_nm = farthest_m(geod, lat, lon, lats[ok], lons[ok]) / _NM_M
-        for k in range(1, max(1, math.ceil(far_nm / RING_STEP_NM)) + 1):
-            ring_lon, ring_lat = range_ring(lat, lon, k * RING_STEP_NM)
+    sites = [(float(row.latitude), float(row.longitude)) for row in sensors.itertuples(index=False)]
+    far = [farthest_m(geod, lat, lon, lats[ok], lons[ok]) / _NM_M for lat, lon in sites]
+    step = ring_step_nm(max(far))
+    for (lat, lon), far_nm, row in zip(sites, far, sensors.itertuples(index=False), strict=True):
+        for k in range(1, max(1, math.ceil(far_nm / step)) + 1):
+            ring_lon, ring_lat = range_ring(lat, lon, k * step)
             ax.plot(ring_lon, ring_lat, color="0.55", lw=0.7, ls=":", zorder=1)
-            _label(ax, f"{k * RING_STEP_NM:g} NM", (ring_lon[0], ring_lat[0]), fontsize=7, color="0.4",
+            _label(ax, f"{k * step:g} NM", (ring_lon[0], ring_lat[0]), fontsize=7, color="0.4",
                    zorder=2, gid=_RING_LABEL)
         ax.plot(lon, lat, marker="^", ms=10, color="black", mfc="#4d4d4d", ls="none", zorder=7)
         _label(ax, _text(getattr(row, "name", "radar")), (lon, lat), fontsize=8, fontweight="bold", zorder=7,
                gid=_SITE_LABEL)
+    return step
 
 
 def _clock_label(slots: pd.DataFrame, k: int) -> str:
@@ -289,8 +319,8 @@ def track_map(run: CorrelationRun, sensors: pd.DataFrame | None = None) -> Figur
             _draw_sensor(ax, lon, lat, filled.astype(bool), sensor, markers)
     all_lat = np.concatenate(lats) if lats else np.array([])
     all_lon = np.concatenate(lons) if lons else np.array([])
-    if sensors is not None and len(sensors) and run.windows:
-        _draw_sites(ax, sensors, all_lat, all_lon)  # every site in the file: each tells where coverage is
+    sensors = _window_sites(sensors, run)
+    step = _draw_sites(ax, sensors, all_lat, all_lon) if run.windows else None
     finite_lat = all_lat[np.isfinite(all_lat)]
     if finite_lat.size:
         coslat = math.cos(math.radians(float(np.mean(finite_lat))))
@@ -298,11 +328,11 @@ def track_map(run: CorrelationRun, sensors: pd.DataFrame | None = None) -> Figur
             ax.set_aspect(1.0 / coslat, adjustable="datalim")
         pairs = str(run.parameters.get("pairs", ""))
         handles = _legend_handles(any_filled, _PAIR_LABELS.get(pairs, _LABEL))
-        if sensors is not None and len(sensors):
+        if step is not None:
             handles.append(Line2D([], [], marker="^", ms=9, color="black", mfc="#4d4d4d", ls="none",
                                   label="reference point" if pairs in _PAIR_LABELS else "radar site"))
             handles.append(Line2D([], [], color="0.55", lw=0.7, ls=":",
-                                  label=f"range ring every {RING_STEP_NM:g} NM"))
+                                  label=f"range ring every {step:g} NM"))
         handles.append(Line2D([], [], marker=r"$\rightarrow$", ms=10, color="black", ls="none",
                               label="direction of flight; times UTC"))
         # inside the axes wherever "best" puts it, so it cannot move the constrained layout: left out of

@@ -60,3 +60,32 @@ def test_an_aircraft_without_a_call_sign_is_named_by_its_address():
     assert [figures._window_label(w) for w in windows] == ["4CA1C3 #1", "4CA548 #1", "AFL2513 #2", "? #3"]
     assert figures._callsign_title(windows) == "4CA1C3, 4CA548, AFL2513, ?"
     assert window_label(windows[0].summary) == "4CA1C3 window 1"
+
+
+def test_the_map_draws_the_sites_of_the_sensors_its_windows_correlate():
+    """A multilateration-against-ADS-B run with the LEBL sensor file (multilateration and surface radar,
+    both CAT010 0/...): the surface radar's reference point is not in the pair, so not drawn; a radar-radar
+    run draws both radars and no other; a run whose sensors the file lacks keeps every entry."""
+    sensors = pd.DataFrame({"name": ["LEBL MLAT", "LEBL SMR", "R1", "R2", "R3"], "sac": [0, 0, 25, 25, 25],
+                            "sic": [107, 7, 201, 202, 203], "latitude": 41.3, "longitude": 2.08,
+                            "category": [10, 10, 48, 48, 48],
+                            "kind": ["mlat", "smr", "radar", "radar", "radar"]})
+
+    def run(radar, reference):
+        from msdc.pipeline.correlate.results import CorrelationRun
+
+        summary = {"radar_sensor": radar, "reference_sensor": reference, "window": 1}
+        return CorrelationRun(windows=[WindowResult(summary, pd.DataFrame(), pd.DataFrame())])
+
+    names = lambda r: list(figures._window_sites(sensors, r)["name"])  # noqa: E731
+    assert names(run("010:0/107:mlat", "021:0/107")) == ["LEBL MLAT"]
+    assert names(run("010:0/7:smr", "010:0/107:mlat")) == ["LEBL MLAT", "LEBL SMR"]
+    assert names(run("048:25/201", "048:25/203")) == ["R1", "R3"]
+    assert names(run("048:30/1", "021:0/1")) == ["LEBL MLAT", "LEBL SMR", "R1", "R2", "R3"]
+
+
+def test_range_rings_step_to_ring_the_farthest_slot_in_five_at_most():
+    """An airport's tracks within 22 NM got one 50 NM ring; the step is the smallest of 1, 2, 5, 10, 25, 50
+    and 100 NM reaching the farthest slot in five rings: 22 NM -> 5 NM (5 rings), 150 NM -> 50 (3), 4.9 ->
+    1 (5), 5.1 -> 2 (3), 600 -> 100 (6, the largest step)."""
+    assert [figures.ring_step_nm(x) for x in (22.0, 150.0, 4.9, 5.1, 600.0)] == [5.0, 50.0, 1.0, 2.0, 100.0]
