@@ -13,6 +13,7 @@ row comes from the sensor's own track: detection, codes and identity may use it,
 
 from __future__ import annotations
 
+import re
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -30,12 +31,15 @@ BUILT_COLUMNS = ("aircraft", "t_s", "latitude", "longitude", "altitude_ft", *IDE
                  "built_by", "self_reference", "updated", "on_ground")
 BUILT_BY_SEPARATOR = " + "
 # a segment of a sensor's own track is a self-reference when updated at least this often, or when its one
-# update has another of the same aircraft within 30 s: a lone report would judge itself (Barcelona's lone
-# M3A:4445 plot, 39 NM from that code's aircraft, was associated to its own one-row track and never false).
-# One-report segments beside others are kept: the tracker starts one at each plot its gate rejects, and
-# where a reflection alternates with the aircraft's plots every plot is such a segment (dropping them made
-# 36 of the aircraft's own plots false there)
+# update has another of the same aircraft within 30 s, or when its aircraft is known by its Mode S address:
+# a lone report of a Mode 3/A code would judge itself (Barcelona's lone M3A:4445 plot, 39 NM from that
+# code's aircraft, was associated to its own one-row track and never false). One-report segments beside
+# others are kept: the tracker starts one at each plot its gate rejects, and where a reflection alternates
+# with the aircraft's plots every plot is such a segment (dropping them made 36 of the aircraft's own plots
+# false there). So are an addressed aircraft's: a parked aircraft a Mode S radar hears every 48-96 s is
+# real, and without its own plots went to its neighbours on the apron as wrong addresses
 MIN_OWN_UPDATES = 2
+MODE_S_ADDRESS = re.compile(r"[0-9A-F]{6}")  # an aircraft id that is an address (model.identity)
 
 
 @dataclass
@@ -283,7 +287,10 @@ def reconstruct(reports: pd.DataFrame, epoch: pd.Timestamp, *, step_s: float = 1
     np.maximum.at(last, group[updated], t_ns[updated])
     keep = (t_ns >= first[group]) & (t_ns <= last[group])
     if self_reference:  # a sensor's own segment of one report is that report judging itself: no reference
-        keep &= _supported(key, t_ns, group, updated, n_groups)[group]
+        addressed = np.array([bool(MODE_S_ADDRESS.fullmatch(str(n))) for n in names], bool)
+        segment_key = np.zeros(n_groups, np.int64)
+        segment_key[group] = key  # a segment is one aircraft's
+        keep &= (_supported(key, t_ns, group, updated, n_groups) | addressed[segment_key])[group]
     key, t_ns, group, updated = (v[keep] for v in (key, t_ns, group, updated))
     level = _level_between_updates(tr["flight_level"].to_numpy(float)[keep], t_ns.astype(float), updated,
                                    group)

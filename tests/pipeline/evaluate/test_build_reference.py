@@ -482,9 +482,9 @@ def test_a_reference_rows_identity_is_its_aircrafts_latest_reported_text(establi
 
 
 def test_a_lone_report_of_the_sensor_is_no_reference_of_itself(two_radars):
-    """One plot of another identity 30 km off the aircraft (a false plot with its own code): the sensor's
-    own track of it would be one row at the plot itself, which would never let it count as false. It gets
-    no self-reference row; the aircraft's own track keeps all of its rows."""
+    """One plot of another Mode 3/A identity 30 km off the aircraft (a false plot with its own code): the
+    sensor's own track of it would be one row at the plot itself, which would never let it count as false.
+    It gets no self-reference row; the aircraft's own track keeps all of its rows."""
     m, meas = two_radars
     alone = meas[meas["sensor_id"] == RADAR_A].sort_values("time").reset_index(drop=True)
     lone = alone.iloc[[len(alone) // 2]].copy()
@@ -500,6 +500,11 @@ def test_a_lone_report_of_the_sensor_is_no_reference_of_itself(two_radars):
     reports = pd.DataFrame({"t_s": t_s, "latitude": lone["latitude"].to_numpy(),
                             "longitude": lone["longitude"].to_numpy()})
     assert (associate(reports, ref)["ref_index"] < 0).all()  # no aircraft within the 2 NM gate: false
+    # the same lone plot of an aircraft known by its Mode S address (a parked aircraft the radar hears once a
+    # minute) is its own reference: real, and not a neighbour's report with a wrong address
+    addressed = pd.concat([alone, lone.assign(aircraft_id="3C0FFE", address="3C0FFE")], ignore_index=True)
+    ref = leave_one_out(addressed.sort_values("time", kind="stable"), RADAR_A, epoch=EPOCH).frame
+    assert (ref["aircraft"].astype(str) == "3C0FFE").sum() == 1 and len(ref) == len(before) + 1
 
 
 def test_a_one_report_segment_beside_others_of_its_aircraft_stays_a_reference():
