@@ -216,9 +216,10 @@ def test_thresholds_refuse_values_naming_the_field(field: str, value: float) -> 
 
 
 def test_a_large_window_is_measured_on_whole_tracks_in_a_fixed_order(monkeypatch) -> None:
-    """12 tracks of 10 scans (120 reports) with MAX_FIGURE_REPORTS 45: the figures are measured on the 4
-    tracks whose keys have the lowest CRC-32 (40 reports; a fifth would pass 45), and the panel says so;
-    each of those tracks misses scans 3 and 6, so PD is 8 of 10 per track: 32 of 40."""
+    """12 tracks of 10 scans (odd ones 10 reports, even ones 8: 108) with MAX_FIGURE_REPORTS 45: the figures
+    are measured on whole tracks in the order of their keys' CRC-32, each that still fits (after one that
+    does not, a smaller one may), and the panel says so. PD is that of the tracks taken, shown without a
+    verdict: the interval of a sample of whole tracks is too narrow to raise an alarm."""
     import zlib
 
     from msdc.pipeline.live import health
@@ -230,10 +231,9 @@ def test_a_large_window_is_measured_on_whole_tracks_in_a_fixed_order(monkeypatch
     sizes = {f"A:AC{t}": 10 if t % 2 else 8 for t in range(1, 13)}
     order = sorted(sizes, key=lambda k: zlib.crc32(k.encode()))
     total, chosen = 0, []
-    for k in order:  # whole tracks in CRC-32 order while they fit
-        if total + sizes[k] > 45:
-            break
-        total, chosen = total + sizes[k], [*chosen, k]
+    for k in order:  # whole tracks in CRC-32 order, each that still fits
+        if total + sizes[k] <= 45:
+            total, chosen = total + sizes[k], [*chosen, k]
     sample, said = health.figure_sample(window)
     assert said == {"tracks": len(chosen), "of_tracks": 12, "reports": total, "of_reports": len(window)}
     assert set("A:" + sample["aircraft_id"].astype(str)) == set(chosen)
@@ -244,4 +244,26 @@ def test_a_large_window_is_measured_on_whole_tracks_in_a_fixed_order(monkeypatch
     updates = sum(10 for k in chosen)
     detected = sum(sizes[k] for k in chosen)
     assert (panel["pd"]["value"]) == pytest.approx(detected / updates)
+    assert panel["pd"]["state"] == "unjudged"
+    assert f"measured on {len(chosen)} of 12 tracks" in panel["pd"]["note"]
     assert health.figure_sample(window.iloc[:40])[1] is None  # up to the cap: every report
+
+
+def test_a_large_window_without_tracks_is_measured_whole(monkeypatch) -> None:
+    """ADS-B 0.23 carries no track numbers, nor do these reports an address: over the cap, the window was
+    sampled by track with none to take, and every snapshot failed (IndexError) while the page showed its
+    last figures as live; under it, the map's targets failed alike (no report to draw). It is measured
+    whole: PD withheld (no track), no target, the snapshot made."""
+    from msdc.pipeline.live import health
+
+    monkeypatch.setattr(health, "MAX_FIGURE_REPORTS", 45)
+    window = pd.concat([reports("021:0/107", t, range(10)) for t in range(1, 7)], ignore_index=True)
+    window["aircraft_id"] = None
+    window["track_number"] = pd.array([pd.NA] * len(window), dtype="Int64")
+    sample, said = health.figure_sample(window)
+    assert said is None and len(sample) == len(window) == 60
+    counters = {"udp:239.1.2.3:8600": {"records": {"021:0/107": len(window)}, "decode_errors": 0}}
+    snap, _ = snapshot(window, counters, {}, NOW, NOW - 120.0, Thresholds(window_s=120.0))
+    (panel,) = snap["sensors"]
+    assert panel["reports_in_window"] == 60 and panel["pd"]["state"] == "withheld"
+    assert snap["targets"] == []
