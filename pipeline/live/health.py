@@ -450,6 +450,30 @@ def targets(window: pd.DataFrame, now_wall_s: float) -> list[dict]:
     return out[:MAX_TARGETS]
 
 
+def _without_figures(sensor_id: str, rows: pd.DataFrame, window: pd.DataFrame, counters: dict,
+                     status_times: dict, now_wall_s: float, rate_window_s: float,
+                     last_heard_wall_s: float | None, thresholds: Thresholds, exc: Exception
+                     ) -> tuple[dict, list[dict]]:
+    """A sensor whose figures failed: its panel made from no report (figures withheld, its silence still
+    judged), its reports still counted, and a warning naming the failure (the traceback in the log)."""
+    import logging
+
+    logging.getLogger("msdc.live").exception("figures of %s failed", sensor_id)
+    why = f"figures not computed: {type(exc).__name__}: {exc}"
+    panel, raised = sensor_figures(sensor_id, rows, window.iloc[:0], counters, status_times, now_wall_s,
+                                   rate_window_s, last_heard_wall_s, thresholds)
+    panel["reports_in_window"] = int(len(window))
+    if panel["reports_per_s"] is not None:
+        panel["reports_per_s"] = len(window) / rate_window_s
+    for req in ("pd", *VALIDITY):
+        panel[req] = {**panel[req], "note": why}
+    panel["update_interval_note"] = why
+    warning = {"level": "warning", "kind": "figures_failed", "sensor_id": sensor_id,
+               "message": f"{sensor_id}: {why}"}
+    panel["alarms"] = [*panel["alarms"], warning["kind"]]
+    return panel, [*raised, warning]
+
+
 def snapshot(frame: pd.DataFrame, counters: dict, status_times: dict, now_wall_s: float,
              started_wall_s: float, thresholds: Thresholds,
              memory: Memory | None = None) -> tuple[dict, Memory]:
@@ -478,8 +502,12 @@ def snapshot(frame: pd.DataFrame, counters: dict, status_times: dict, now_wall_s
     for s in sorted(known):
         rows = frame.loc[sid == s] if len(frame) else frame
         window = frame.loc[(sid == s) & in_window] if len(frame) else frame
-        panel, raised = sensor_figures(s, rows, window, counters, status_times, now_wall_s, rate_window,
-                                       last_heard.get(s), thresholds)
+        try:
+            panel, raised = sensor_figures(s, rows, window, counters, status_times, now_wall_s, rate_window,
+                                           last_heard.get(s), thresholds)
+        except Exception as exc:  # one sensor's data never stops the page: its figures withheld, it said
+            panel, raised = _without_figures(s, rows, window, counters, status_times, now_wall_s, rate_window,
+                                             last_heard.get(s), thresholds, exc)
         sensors.append(panel)
         alarms += raised
     feeds, samples = [], {}

@@ -267,3 +267,33 @@ def test_a_large_window_without_tracks_is_measured_whole(monkeypatch) -> None:
     (panel,) = snap["sensors"]
     assert panel["reports_in_window"] == 60 and panel["pd"]["state"] == "withheld"
     assert snap["targets"] == []
+
+
+def test_a_sensor_whose_figures_fail_keeps_its_panel_and_the_others_theirs(monkeypatch) -> None:
+    """One sensor's figures raising (as a window without tracks over the sample's cap once did) ended the
+    whole snapshot: the page froze and no sensor's silence was judged. Now that sensor's panel shows its
+    reports and silence with its figures withheld and a warning naming the failure; the other sensor's
+    figures are measured as before (16 of 20 updates)."""
+    from msdc.pipeline.live import health
+
+    real = health.live_pd
+
+    def failing(rows, sensor_id, window_s):  # on this sensor's data: none gives nothing to fail on
+        if sensor_id == "021:0/1" and len(rows):
+            raise ValueError("broken on purpose")
+        return real(rows, sensor_id, window_s)
+
+    monkeypatch.setattr(health, "live_pd", failing)
+    th = Thresholds(silent_s=30.0)
+    frame = pd.concat([two_tracks_with_misses(), reports("021:0/1", 5, [0], wall0=NOW - 31.0)],
+                      ignore_index=True)
+    snap, _ = snapshot(frame, _counters({"048:25/201": 16, "021:0/1": 1}), {}, NOW, NOW - 300.0, th)
+    bad, good = _sensor(snap, "021:0/1"), _sensor(snap, "048:25/201")
+    assert bad["pd"]["value"] is None and bad["pd"]["note"] == ("figures not computed: ValueError: broken on "
+                                                                "purpose")
+    assert bad["reports_in_window"] == 1 and set(bad["alarms"]) == {"silent", "figures_failed"}
+    assert (good["pd"]["count"], good["pd"]["n"]) == (16, 20)
+    alone, _ = snapshot(two_tracks_with_misses(), _counters({"048:25/201": 16}), {}, NOW, NOW - 300.0, th)
+    assert good == _sensor(alone, "048:25/201")  # as if the failing sensor were not there
+    assert [(a["kind"], a["sensor_id"]) for a in snap["alarms"] if a["sensor_id"] == "021:0/1"] == [
+        ("silent", "021:0/1"), ("figures_failed", "021:0/1")]
