@@ -13,7 +13,6 @@ row comes from the sensor's own track: detection, codes and identity may use it,
 
 from __future__ import annotations
 
-import re
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -21,6 +20,7 @@ import pandas as pd
 
 from msdc.pipeline.evaluate.reference import in_order
 from msdc.pipeline.evaluate.reference_gates import Gates, gate_reports
+from msdc.pipeline.model.identity import known_by_address
 from msdc.pipeline.model.schema import equals_text
 
 IDENTITY_COLUMNS = ("mode3a", "address", "callsign")
@@ -39,7 +39,6 @@ BUILT_BY_SEPARATOR = " + "
 # false there). So are an addressed aircraft's: a parked aircraft a Mode S radar hears every 48-96 s is
 # real, and without its own plots went to its neighbours on the apron as wrong addresses
 MIN_OWN_UPDATES = 2
-MODE_S_ADDRESS = re.compile(r"[0-9A-F]{6}")  # an aircraft id that is an address (model.identity)
 
 
 @dataclass
@@ -287,7 +286,7 @@ def reconstruct(reports: pd.DataFrame, epoch: pd.Timestamp, *, step_s: float = 1
     np.maximum.at(last, group[updated], t_ns[updated])
     keep = (t_ns >= first[group]) & (t_ns <= last[group])
     if self_reference:  # a sensor's own segment of one report is that report judging itself: no reference
-        addressed = np.array([bool(MODE_S_ADDRESS.fullmatch(str(n))) for n in names], bool)
+        addressed = known_by_address(names)
         segment_key = np.zeros(n_groups, np.int64)
         segment_key[group] = key  # a segment is one aircraft's
         keep &= (_supported(key, t_ns, group, updated, n_groups) | addressed[segment_key])[group]

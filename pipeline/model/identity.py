@@ -27,6 +27,15 @@ from msdc.pipeline.model.geodesy import great_circle_nm
 from msdc.pipeline.model.schema import coded_text, text_categorical
 from msdc.pipeline.model.time import iso_utc
 
+# the labels of aircraft known without a Mode S address (rules 3 and 4 above); any other id is an address
+CALLSIGN_PREFIX, MODE_A_PREFIX = "CS:", "M3A:"
+
+
+def known_by_address(ids) -> np.ndarray:
+    """Per aircraft id, whether it is the aircraft's Mode S address (not a call-sign or Mode 3/A label)."""
+    s = pd.Series(ids, dtype="string")
+    return (s.notna() & ~s.str.startswith((CALLSIGN_PREFIX, MODE_A_PREFIX))).fillna(False).to_numpy(bool)
+
 # Rule 4's reach gate: faster than any civil aircraft's ground speed (an airliner in the jet stream makes
 # about 700 kt), and a margin for radar plot error (0.35 NM is 1 sigma of 0.08 deg at 250 NM) and site error
 M3A_REACH_SPEED_KT = 1000.0
@@ -102,14 +111,14 @@ def identify(meas: pd.DataFrame) -> tuple[pd.Series, pd.DataFrame]:
     triples = pd.DataFrame({c: p.iloc[first].astype("string").reset_index(drop=True)
                             for c, p in zip(("address", "callsign", "mode3a"), parts, strict=True)})
     ident = triples["address"].fillna(_unique_address(triples, "callsign"))
-    ident = ident.fillna("CS:" + triples["callsign"])
+    ident = ident.fillna(CALLSIGN_PREFIX + triples["callsign"])
     by_code = _unique_address(triples, "mode3a").where(ident.isna())
-    ident = ident.fillna(by_code).fillna("M3A:" + triples["mode3a"])
+    ident = ident.fillna(by_code).fillna(MODE_A_PREFIX + triples["mode3a"])
     refused = _out_of_reach(meas, parts[0], row_combo, by_code)
     codes = row_combo.copy()
     codes[refused["row"].to_numpy(np.int64)] += len(triples)  # the refused rows take their own code's label
     labels = np.concatenate([ident.to_numpy(dtype=object, na_value=None),
-                             ("M3A:" + triples["mode3a"]).to_numpy(dtype=object, na_value=None)])
+                             (MODE_A_PREFIX + triples["mode3a"]).to_numpy(dtype=object, na_value=None)])
     ids = pd.Series(coded_text(codes, labels), index=meas.index, name="aircraft_id")
     refused["mode3a"] = triples["mode3a"].to_numpy(dtype=object)[row_combo[refused["row"].to_numpy(np.int64)]]
     return ids, refused[REFUSED_COLUMNS]

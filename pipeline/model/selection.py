@@ -18,7 +18,9 @@ from dataclasses import dataclass
 import numpy as np
 import pandas as pd
 
-MODE_A_ONLY_PREFIX = "M3A:"
+from msdc.pipeline.model.identity import MODE_A_PREFIX
+
+MODE_A_ONLY_PREFIX = MODE_A_PREFIX
 IDENTITY_COLUMNS = ("callsign", "mode3a")
 _CODE = re.compile(r"[0-7]{4}")
 

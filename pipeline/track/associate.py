@@ -11,11 +11,13 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
+from msdc.pipeline.model.identity import MODE_A_PREFIX
+
 
 def join_by_track_number(meas: pd.DataFrame, max_gap_s: float = 60.0) -> tuple[pd.DataFrame, int]:
     """The measurements with radar plots joined by (sensor_id, track_number); and how many were joined."""
     ident = meas["aircraft_id"].astype("string")
-    weak = (ident.isna() | ident.str.startswith("M3A:").fillna(False)).to_numpy(bool)
+    weak = (ident.isna() | ident.str.startswith(MODE_A_PREFIX).fillna(False)).to_numpy(bool)
     radar = (meas["sensor_kind"] == "radar").to_numpy(bool)
     has_tn = (meas["track_number"].notna().to_numpy(bool) if "track_number" in meas
               else np.zeros(len(meas), bool))
