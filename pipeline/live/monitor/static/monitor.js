@@ -4,10 +4,16 @@
 (() => {
   const PALETTE = ["#4fa3ff", "#ffb347", "#7fd17f", "#ff7eb6", "#c9a0ff", "#5ee0d6", "#f2e86d", "#ff8a65"];
   const STALE = "#5c6670";
+  // no snapshot for this long (the server pushes one every 1-2.5 s): the connection is taken for lost, the
+  // figures marked stale and the stream opened again (a half-open connection never reports an error)
+  const SILENT_STREAM_MS = 10000;
+  const RETRY_MS = 2000;  // a stream the browser gave up on is opened again this long after
   const $ = (id) => document.getElementById(id);
   const colours = new Map();
   let last = null;
   let snapshots = 0;
+  let lastMessageMs = Date.now();  // when the latest message of the stream arrived (the browser's clock)
+  let source = null;
 
   const colour = (sensorId) => {
     if (!colours.has(sensorId)) colours.set(sensorId, PALETTE[colours.size % PALETTE.length]);
@@ -25,6 +31,7 @@
     if (s < 3600) return `${Math.floor(s / 60)} min ${Math.floor(s % 60)} s ago`;
     return `${(s / 3600).toFixed(1)} h ago`;
   };
+  const utc = (wallS) => new Date(wallS * 1000).toISOString().slice(11, 19) + " UTC";
   const num = (v, digits, unit) => (v === null || v === undefined ? "–" : `${v.toFixed(digits)}${unit || ""}`);
   const pct = (v) => `${(100 * v).toFixed(1)} %`;
 
@@ -186,7 +193,7 @@
     err.hidden = !snap.error;
     err.textContent = snap.error || "";
     if (!snap.thresholds) return;  // no snapshot computed yet: only the error to show
-    $("clock").textContent = new Date(snap.now_wall_s * 1000).toISOString().slice(11, 19) + " UTC";
+    $("clock").textContent = utc(snap.now_wall_s);
     $("uptime").textContent = `up ${Math.round(snap.uptime_s)} s`;
     const th = snap.thresholds;
     $("thresholds").textContent = `Window ${th.window_s} s; alarms: silent after ${th.silent_s} s, ` +
@@ -199,12 +206,59 @@
     drawMap(snap);
   };
 
-  const source = new EventSource("events");
-  source.onopen = () => { $("connection").textContent = "live"; $("connection").className = "up"; };
-  source.onerror = () => { $("connection").textContent = "reconnecting…"; $("connection").className = "down"; };
-  source.onmessage = (event) => {
-    const snap = JSON.parse(event.data);
-    if (!snap.pending) update(snap);
+  // the connection lost: said, with the time of the last snapshot received, and its figures greyed
+  const connectionLost = (why) => {
+    document.body.classList.add("stale");
+    $("connection").textContent = "connection lost, reconnecting…";
+    $("connection").className = "down";
+    const lost = $("lost");
+    lost.hidden = false;
+    if (last && last.now_wall_s) {
+      const since = utc(last.now_wall_s);
+      $("clock").textContent = `last update ${since}`;
+      lost.textContent = `Connection to msdc lost (${why}): no snapshot since ${since}, the last one ` +
+        `received. The figures below are stale, as of ${since}. Reconnecting…`;
+    } else {
+      lost.textContent = `Connection to msdc lost (${why}) before any snapshot arrived. Reconnecting…`;
+    }
   };
+
+  // a message arrived: the connection is live again, the figures current
+  const connectionLive = () => {
+    lastMessageMs = Date.now();
+    document.body.classList.remove("stale");
+    $("lost").hidden = true;
+    $("connection").textContent = "live";
+    $("connection").className = "up";
+  };
+
+  // the event stream; the browser reconnects by itself after a drop, and this page after the browser gives up
+  const connect = () => {
+    source = new EventSource("events");
+    source.onerror = () => {
+      connectionLost("the event stream dropped");
+      if (source.readyState === EventSource.CLOSED) setTimeout(connect, RETRY_MS);
+    };
+    source.onmessage = (event) => {
+      connectionLive();
+      const snap = JSON.parse(event.data);
+      if (!snap.pending) update(snap);
+    };
+  };
+
+  // an open stream that brings nothing: lost all the same, and opened again
+  const watchStream = () => {
+    const silentMs = Date.now() - lastMessageMs;
+    if (silentMs < SILENT_STREAM_MS) return;
+    connectionLost(`no snapshot for ${Math.round(silentMs / 1000)} s`);
+    if (source.readyState === EventSource.OPEN) {
+      source.close();
+      lastMessageMs = Date.now();  // the new stream gets its own SILENT_STREAM_MS
+      connect();
+    }
+  };
+
+  connect();
+  setInterval(watchStream, 1000);
   window.addEventListener("resize", () => { if (last) drawMap(last); });
 })();

@@ -5,12 +5,13 @@ a page that goes away leaves the server serving the next one."""
 
 from __future__ import annotations
 
+import json
 import os
 import shutil
 import time
 
 import pytest
-from live_fake_state import ReplayState, fixture_measurements, running
+from live_fake_state import ReplayState, fixture_measurements, running, synthetic_measurements
 
 from msdc.pipeline.live.monitor import Thresholds
 
@@ -107,3 +108,88 @@ def test_the_monitor_page_in_chromium_offline() -> None:
     assert server_alive
     assert refused == []
     assert [m for m in messages if m[0] in ("error", "warning")] == []
+
+
+def _withheld(note: str) -> dict:
+    return {"value": None, "ci_low": None, "ci_high": None, "count": 0, "n": 0, "threshold": 0.97,
+            "state": "withheld", "note": note}
+
+
+def _snapshot_at(now_wall_s: float, uptime_s: float) -> dict:
+    """A snapshot written by hand (schema msdc-live-monitor/1): one radar heard 2 s ago, 90 reports in the
+    window, no target, made at now_wall_s."""
+    radar = {"sensor_id": RADAR, "kind": "radar", "feeds": ["udp:239.1.2.3:8600"], "records_total": 90,
+             "reports_in_window": 90, "reports_per_s": 2.0, "figures_sample": None, "update_interval_s": None,
+             "update_interval_note": "too few", "last_report_age_s": 2.0, "last_status_age_s": None,
+             "decode_errors": 0, "pd": _withheld("too few"), "mode3a_valid": _withheld("too few"),
+             "modec_valid": _withheld("too few"), "alarms": []}
+    thresholds = {"silent_s": 30.0, "min_pd": 0.97, "min_mode3a_valid": 0.98, "min_modec_valid": 0.96,
+                  "window_s": 120.0}
+    return {"schema": "msdc-live-monitor/1", "now_wall_s": now_wall_s,
+            "started_wall_s": now_wall_s - uptime_s,
+            "uptime_s": uptime_s, "alarms": [], "sensors": [radar], "feeds": [], "centre": None,
+            "targets": [], "thresholds": thresholds}
+
+
+def _lost_state(page) -> dict:
+    """What the page shows of its connection: the lost banner (None when hidden), whether its figures are
+    marked stale, how opaque the figures are drawn, and its clock."""
+    return page.evaluate("""() => ({
+        lost: document.getElementById('lost').hidden ? null : document.getElementById('lost').textContent,
+        stale: document.body.classList.contains('stale'),
+        opacity: Number(getComputedStyle(document.querySelector('main')).opacity),
+        clock: document.getElementById('clock').textContent})""")
+
+
+@pytest.mark.slow  # Chromium's start, then about 10 s of streams dropped and restored
+def test_a_page_that_loses_its_connection_says_since_when_and_greys_its_figures() -> None:
+    """The page froze on "reconnecting…" with its last figures looking current after listen stopped. Its
+    stream is first one snapshot made at 1,800,000,000 s (2027-01-15 08:00:00 UTC: 20,833 days and 28,800 s),
+    then refused: the page says the connection is lost since 08:00:00 UTC and greys its figures. Let through
+    to the real server, it is live again; when the server stops, it is lost again since its last snapshot."""
+    sync_playwright = _browser()
+    mode = {"events": "written"}  # the event stream: the snapshot written here, refused, or the server's
+    written = "retry: 300\nid: 1\ndata: " + json.dumps(_snapshot_at(1_800_000_000.0, 45.0)) + "\n\n"
+    errors: list[str] = []
+    state = ReplayState(synthetic_measurements(), speed=20.0, start_wall_s=time.time() - 10.0)
+    with running(state, Thresholds(window_s=30.0)) as (url, thread, stop), sync_playwright() as p:
+        browser = p.chromium.launch(executable_path=CHROMIUM, args=["--no-sandbox", "--disable-gpu"])
+        try:
+            context = browser.new_context(viewport={"width": 1200, "height": 720})
+
+            def route(r) -> None:
+                if r.request.url != url + "events" or mode["events"] == "server":
+                    r.continue_() if r.request.url.startswith(url) else r.abort()
+                elif mode["events"] == "written":
+                    mode["events"] = "refused"  # the stream ends after its one snapshot, then is refused
+                    r.fulfill(status=200, headers={"Content-Type": "text/event-stream"}, body=written)
+                else:
+                    r.abort("connectionrefused")
+
+            context.route("**/*", route)
+            page = context.new_page()
+            page.on("pageerror", lambda e: errors.append(str(e)))
+            page.goto(url)
+            page.wait_for_function("() => !document.getElementById('lost').hidden", timeout=5000)
+            lost = _lost_state(page)
+            mode["events"] = "server"
+            page.wait_for_function("() => document.getElementById('lost').hidden", timeout=8000)
+            live = _lost_state(page)
+            stop.set()
+            stopped_wall_s = time.time()
+            thread.join(5.0)
+            page.wait_for_function("() => !document.getElementById('lost').hidden", timeout=8000)
+            gone = _lost_state(page)
+        finally:
+            browser.close()
+    assert "Connection to msdc lost" in lost["lost"] and "no snapshot since 08:00:00 UTC" in lost["lost"]
+    assert "stale" in lost["lost"] and lost["clock"] == "last update 08:00:00 UTC"
+    assert lost["stale"] and lost["opacity"] == pytest.approx(0.45)
+    assert live["lost"] is None and not live["stale"] and live["opacity"] == 1.0
+    assert live["clock"] != "08:00:00 UTC" and live["clock"].endswith(" UTC")
+    # lost again once the server stopped: since its last snapshot, made within the 1.5 s before it stopped
+    # (a snapshot a second; the clock read to the second)
+    said = gone["lost"].split("no snapshot since ")[1][:8]
+    last_s = [time.strftime("%H:%M:%S", time.gmtime(stopped_wall_s - d)) for d in (0.0, 1.0, 2.0)]
+    assert gone["stale"] and said in last_s and gone["clock"] == f"last update {said} UTC"
+    assert errors == []
