@@ -53,6 +53,9 @@ ADSB_PD_NOTE = ("ADS-B reports follow the squitters received, not periodic updat
 # (pipeline.live.decode.MEASURED), with what they are
 COUNTED_ONLY = {"001": "monoradar plots and tracks: their time of day needs the radar's CAT002",
                 "062": "system tracks, which msdc evaluate scores as tracks under test"}
+# the sensor kind of the measured categories' reports (CAT010's is in its sensor id: "010:0/7:smr"), as the
+# measurement rows give it (msdc.pipeline.model.schema.SENSOR_KINDS)
+MEASURED_KINDS = {"048": "radar", "021": "adsb", "020": "mlat"}
 # the validity figures: requirement id, the report's code column, its 'not validated' column, the live
 # state's boolean 'valid' column, the threshold's field
 VALIDITY = {
@@ -282,12 +285,23 @@ def _status_time(sensor_id: str, status_times: dict) -> float | None:
     return None
 
 
+def kind_of_id(sensor_id: str) -> str | None:
+    """The measurements' sensor kind a sensor id implies ("048:..." radar, "021:..." adsb, "020:..." mlat,
+    "010:SAC/SIC:smr" smr): a sensor gone silent keeps its kind with no report left to say it."""
+    category, _, rest = sensor_id.partition(":")
+    if category == "010":
+        kind = rest.partition(":")[2]
+        return kind if kind in ("mlat", "smr") else None
+    return MEASURED_KINDS.get(category)
+
+
 def _kind(sensor_id: str, rows: pd.DataFrame) -> str | None:
+    """The kind its latest report gives, else the one its id implies (no report in the lookback)."""
     if len(rows) and "sensor_kind" in rows.columns:
         k = rows["sensor_kind"].dropna()
         if len(k):
             return str(k.iloc[-1])
-    return None
+    return kind_of_id(sensor_id)
 
 
 def _feeds_of(sensor_id: str, rows: pd.DataFrame, counters: dict) -> list[str]:

@@ -297,3 +297,20 @@ def test_a_sensor_whose_figures_fail_keeps_its_panel_and_the_others_theirs(monke
     assert good == _sensor(alone, "048:25/201")  # as if the failing sensor were not there
     assert [(a["kind"], a["sensor_id"]) for a in snap["alarms"] if a["sensor_id"] == "021:0/1"] == [
         ("silent", "021:0/1"), ("figures_failed", "021:0/1")]
+
+
+def test_a_silent_sensor_keeps_its_kind() -> None:
+    """A sensor gone from the lookback lost its kind: its panel read "048:25/201" with no "(radar)". Heard
+    only in the counters now, each keeps the kind its category (and CAT010 its id's suffix) gives its
+    reports: CAT048 radar, CAT021 ADS-B, CAT020 and CAT010 TYP 1 multilateration, CAT010 TYP 3 surface
+    radar; CAT062 system tracks make no reports and have none."""
+    th = Thresholds(silent_s=10.0, window_s=20.0)
+    first, memory = snapshot(reports("048:25/201", 1, [0], wall0=NOW - 5.0), _counters({"048:25/201": 1}), {},
+                             NOW, NOW - 100.0, th)
+    assert _sensor(first, "048:25/201")["kind"] == "radar"
+    kinds = {"048:25/201": "radar", "021:0/1": "adsb", "020:25/10": "mlat", "010:0/7:smr": "smr",
+             "010:0/107:mlat": "mlat", "062:25/1": None}
+    later, _ = snapshot(pd.DataFrame(), _counters(dict.fromkeys(kinds, 1)), {}, NOW + 60.0, NOW - 100.0, th,
+                        memory)
+    assert {s["sensor_id"]: s["kind"] for s in later["sensors"]} == kinds
+    assert {a["sensor_id"] for a in later["alarms"]} == set(kinds)  # every one of them silent
