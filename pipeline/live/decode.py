@@ -94,15 +94,14 @@ class BatchDecoder:
                                     columns=self.columns)
         except Exception as exc:  # the kernel's own failure: counted and said, never the end of listening
             log.error("a batch of %d datagrams could not be decoded: %s", len(batch), exc)
-            counts = {}
-            for f in np.unique(feed):
-                counts[self.feeds[f]] = {"decode_errors": int((feed == f).sum())}
-            self.state.decoded(counts, None, {})
+            self.state.decoded(failed_batch_counts(feed, lens, self.feeds), None, {})
             return
         counts: dict[str, dict] = {
-            name: {"unframed": 0, "decode_errors": 0, "records": {}, "last_record_wall_s": {}}
+            name: {"framed": 0, "unframed": 0, "empty": 0, "decode_errors": 0, "records": {},
+                   "last_record_wall_s": {}}
             for name in {self.feeds[f] for f in np.unique(feed)}}
-        self._errors(rec.errors, stop, feed, counts)
+        unframed = self._errors(rec.errors, stop, feed, counts)
+        self._datagrams(lens, unframed, feed, counts)
         status: dict[str, float] = {}
         parts = []
         for cat, frame in rec.frames.items():
@@ -129,10 +128,11 @@ class BatchDecoder:
         reports = pd.concat(parts, ignore_index=True) if len(parts) > 1 else (parts[0] if parts else None)
         self.state.decoded(counts, reports, status)
 
-    def _errors(self, errors: pd.DataFrame, stop: np.ndarray, feed: np.ndarray, counts: dict) -> None:
-        """Unframed datagrams (each counted once) and blocks whose records do not decode, per feed."""
+    def _errors(self, errors: pd.DataFrame, stop: np.ndarray, feed: np.ndarray, counts: dict) -> np.ndarray:
+        """Unframed datagrams (each counted once) and blocks whose records do not decode, per feed; the
+        unframed datagrams' places in the batch."""
         if not len(errors):
-            return
+            return np.zeros(0, np.int64)
         at = np.searchsorted(stop, errors["offset"].to_numpy(np.int64), side="right")
         in_record = errors["reason"].astype(str).str.startswith(RECORD_REASONS).to_numpy()
         for f, n in zip(*np.unique(feed[at[in_record]], return_counts=True), strict=True):
@@ -140,6 +140,17 @@ class BatchDecoder:
         unframed = np.unique(at[~in_record])
         for f, n in zip(*np.unique(feed[unframed], return_counts=True), strict=True):
             counts[self.feeds[f]]["unframed"] += int(n)
+        return unframed
+
+    def _datagrams(self, lens: np.ndarray, unframed: np.ndarray, feed: np.ndarray, counts: dict) -> None:
+        """Each datagram of the batch counted once per feed: empty (no byte), else unframed (counted by
+        _errors), else framed; so that a feed's packets add up."""
+        empty = lens == 0
+        framed = ~empty
+        framed[unframed] = False
+        for key, which in (("empty", empty), ("framed", framed)):
+            for f, n in zip(*np.unique(feed[which], return_counts=True), strict=True):
+                counts[self.feeds[f]][key] += int(n)
 
     def _count(self, cat: int, frame: pd.DataFrame, row_feed: np.ndarray, row_wall: np.ndarray,
                counts: dict) -> None:
@@ -178,6 +189,18 @@ class BatchDecoder:
                 if c is not None:
                     key = f"{c:03d}:{int(sac)}/{int(sic)}"
                     status[key] = max(status.get(key, float("-inf")), float(w))
+
+
+def failed_batch_counts(feed: np.ndarray, lens: np.ndarray, names: list[str]) -> dict[str, dict]:
+    """The counts of a batch the decoder failed on, per feed: each datagram a decode error and, not framed,
+    unframed (an empty one: empty only), so that the feed's packets still add up."""
+    counts = {}
+    for f in np.unique(feed):
+        here = feed == f
+        empty = int((here & (lens == 0)).sum())
+        counts[names[f]] = {"decode_errors": int(here.sum()) - empty, "unframed": int(here.sum()) - empty,
+                            "empty": empty}
+    return counts
 
 
 def report_rows(cat: int, frame: pd.DataFrame, sensors: pd.DataFrame | None, date) -> pd.DataFrame | None:

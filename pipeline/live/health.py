@@ -377,11 +377,12 @@ def feed_figures(feed: str, counter: dict, samples: list[tuple[float, dict]], no
     first_t, first = inside[0] if inside else (now_wall_s, counter)
     span = now_wall_s - first_t
     last_packet = counter.get("last_packet_wall_s")
-    panel = {"feed": feed, **{k: int(counter.get(k, 0)) for k in ("packets", "bytes", "unframed",
-                                                                     "decode_errors", "dropped")},
+    panel = {"feed": feed, **{k: int(counter.get(k, 0)) for k in ("packets", "bytes", "framed", "unframed",
+                                                                     "empty", "decode_errors", "dropped")},
              "packets_per_s": ((int(counter.get("packets", 0)) - int(first.get("packets", 0))) / span
                                if span >= MIN_RATE_WINDOW_S else None),
              "last_packet_age_s": None if last_packet is None else max(0.0, now_wall_s - float(last_packet))}
+    panel["waiting"] = waiting_datagrams(panel)
     warnings = []
     for key, what in (("decode_errors", "decode errors"), ("dropped", "datagrams dropped (queue full)"),
                       ("unframed", "datagrams that do not frame into data blocks")):
@@ -391,6 +392,13 @@ def feed_figures(feed: str, counter: dict, samples: list[tuple[float, dict]], no
             warnings.append({"level": "warning", "kind": key, "feed": feed,
                              "message": f"{feed}: {new} {what} in the last {span:.0f} s"})
     return panel, warnings
+
+
+def waiting_datagrams(feed: dict) -> int:
+    """The feed's datagrams received but not decoded yet (in its queue or the batch being decoded): its
+    packets less those framed, unframed, empty and dropped, which each datagram is exactly one of once
+    decoded."""
+    return feed["packets"] - sum(feed[k] for k in ("framed", "unframed", "empty", "dropped"))
 
 
 def arrival_period_s(wall_s: np.ndarray, key: np.ndarray) -> float:

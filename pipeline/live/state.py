@@ -15,7 +15,9 @@ from dataclasses import dataclass, field
 import pandas as pd
 
 KEEP_S = 300.0  # the recent reports are kept this long (wall clock): the monitor's windows are shorter
-COUNTER_KEYS = ("packets", "bytes", "unframed", "decode_errors", "dropped")
+# every datagram received (packets) is exactly one of: framed, unframed, empty, dropped, or still waiting
+# in its queue to be decoded (packets less the other four); decode_errors count data blocks, not datagrams
+COUNTER_KEYS = ("packets", "bytes", "framed", "unframed", "empty", "decode_errors", "dropped")
 
 
 @dataclass
@@ -24,7 +26,9 @@ class FeedCounters:
 
     packets: int = 0
     bytes: int = 0
+    framed: int = 0  # datagrams whose bytes frame exactly into ASTERIX data blocks
     unframed: int = 0  # datagrams that do not frame exactly into ASTERIX data blocks
+    empty: int = 0  # datagrams of no byte: no data block, no garbage (neither framed nor unframed)
     decode_errors: int = 0  # data blocks that frame but whose records do not decode (or a failed batch)
     dropped: int = 0  # datagrams dropped because msdc's own queue was full
     records: dict[str, int] = field(default_factory=dict)  # sensor_id ("048:20/129") -> records
@@ -33,8 +37,9 @@ class FeedCounters:
 
     def as_dict(self) -> dict:
         """The protocol's dict (a copy)."""
-        return {"packets": self.packets, "bytes": self.bytes, "unframed": self.unframed,
-                "decode_errors": self.decode_errors, "dropped": self.dropped, "records": dict(self.records),
+        return {"packets": self.packets, "bytes": self.bytes, "framed": self.framed,
+                "unframed": self.unframed, "empty": self.empty, "decode_errors": self.decode_errors,
+                "dropped": self.dropped, "records": dict(self.records),
                 "last_record_wall_s": dict(self.last_record_wall_s),
                 "last_packet_wall_s": self.last_packet_wall_s}
 
@@ -57,8 +62,8 @@ class LiveState:
     # ------------------------------------------------------------------ the monitor's protocol
 
     def counters(self) -> dict[str, dict]:
-        """Per feed (by its name as given): packets, bytes, unframed, decode_errors, dropped, records per
-        sensor_id and last_packet_wall_s (time.time() of the last datagram); a copy."""
+        """Per feed (by its name as given): packets, bytes, framed, unframed, empty, decode_errors, dropped,
+        records per sensor_id and last_packet_wall_s (time.time() of the last datagram); a copy."""
         with self._lock:
             return {name: c.as_dict() for name, c in self._feeds.items()}
 
@@ -105,14 +110,16 @@ class LiveState:
 
     def decoded(self, feed_counts: dict[str, dict], reports: pd.DataFrame | None,
                 status: dict[str, float]) -> None:
-        """Fold one decoded batch: per feed its "unframed", "decode_errors", "records" (sensor_id -> count)
-        and "last_record_wall_s" (sensor_id -> the latest arrival of its records), the reports for recent()
-        (with wall_s), the status messages' times."""
+        """Fold one decoded batch: per feed its "framed", "unframed", "empty", "decode_errors", "records"
+        (sensor_id -> count) and "last_record_wall_s" (sensor_id -> the latest arrival of its records), the
+        reports for recent() (with wall_s), the status messages' times."""
         now = self._clock()
         with self._lock:
             for feed, counts in feed_counts.items():
                 c = self._feeds.setdefault(feed, FeedCounters())
+                c.framed += counts.get("framed", 0)
                 c.unframed += counts.get("unframed", 0)
+                c.empty += counts.get("empty", 0)
                 c.decode_errors += counts.get("decode_errors", 0)
                 for sensor, n in counts.get("records", {}).items():
                     c.records[sensor] = c.records.get(sensor, 0) + n

@@ -45,6 +45,46 @@ def test_damaged_datagrams_are_counted_and_what_frames_is_kept():
     assert c[FEEDS[0]]["decode_errors"] == c[FEEDS[1]]["decode_errors"] == 0
 
 
+def test_an_empty_datagram_is_counted_empty_and_the_packets_add_up():
+    """An empty datagram counted as a packet but as neither unframed nor framed nor an error: a feed's
+    packets did not add up. Each of these 5 datagrams is one of framed (2 whole blocks), unframed (the cut
+    one, the garbage) or empty (1)."""
+    good = block(48, cat048_record(25, 201, 80000.0))
+    batch = [Datagram(0, WALL, good), Datagram(0, WALL, b""), Datagram(0, WALL, good + good[:-4]),
+             Datagram(1, WALL, good), Datagram(1, WALL, b"not ASTERIX")]
+    state, decoder = _state_and_decoder()
+    for d in batch:  # as the receiving threads count them
+        state.received(FEEDS[d.feed], len(d.data), d.wall_s)
+    _, memory = snapshot(state.recent(60.0), state.counters(), {}, WALL, WALL - 10, Thresholds())
+    decoder.decode(batch)
+    c = state.counters()
+    split = {f: {k: c[f][k] for k in ("packets", "framed", "unframed", "empty", "dropped", "decode_errors")}
+             for f in FEEDS}
+    assert split == {FEEDS[0]: {"packets": 3, "framed": 1, "unframed": 1, "empty": 1, "dropped": 0,
+                                "decode_errors": 0},
+                     FEEDS[1]: {"packets": 2, "framed": 1, "unframed": 1, "empty": 0, "dropped": 0,
+                                "decode_errors": 0}}
+    assert c[FEEDS[0]]["records"] == {"048:25/201": 2}
+    snap, _ = snapshot(state.recent(60.0), c, {}, WALL + 1, WALL - 10, Thresholds(), memory)
+    assert [(f["empty"], f["waiting"]) for f in snap["feeds"]] == [(1, 0), (0, 0)]
+    assert [a["kind"] for a in snap["alarms"] if "feed" in a] == ["unframed", "unframed"]  # empty: no warning
+
+
+def test_a_batch_the_decoder_fails_on_still_adds_up(monkeypatch):
+    """A batch the kernel raises on: each of its 2 datagrams with bytes is a decode error and, never framed,
+    unframed; the empty one is empty."""
+    import msdc.asterix
+
+    def broken(*args, **kwargs):
+        raise RuntimeError("broken on purpose")
+
+    monkeypatch.setattr(msdc.asterix, "decode_buffer", broken)
+    state, decoder = _state_and_decoder()
+    decoder.decode([Datagram(0, WALL, b"\x30\x00\x03"), Datagram(0, WALL, b""), Datagram(0, WALL, b"x")])
+    c = state.counters()[FEEDS[0]]
+    assert (c["decode_errors"], c["unframed"], c["empty"], c["framed"]) == (2, 2, 1, 0)
+
+
 def test_a_block_that_frames_but_does_not_decode_is_a_decode_error():
     # FSPEC with FRN 1 only (SAC/SIC), then one byte where two are due: the record runs past its block
     bad = block(48, bytes([0x80, 25]))

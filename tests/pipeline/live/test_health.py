@@ -190,6 +190,15 @@ def test_feed_rates_and_decode_errors_over_the_window() -> None:
     assert [(a["level"], a["kind"]) for a in snap["alarms"]] == [("warning", "decode_errors")]
 
 
+def test_a_feeds_packets_are_framed_unframed_empty_dropped_or_waiting() -> None:
+    """100 packets: 90 framed, 3 unframed, 2 empty, 1 dropped, so 4 still waiting to be decoded."""
+    snap, _ = snapshot(pd.DataFrame(), _counters({}, framed=90, unframed=3, empty=2, dropped=1), {}, NOW,
+                       NOW - 100.0, Thresholds())
+    feed = snap["feeds"][0]
+    assert {k: feed[k] for k in ("packets", "framed", "unframed", "empty", "dropped", "waiting")} == {
+        "packets": 100, "framed": 90, "unframed": 3, "empty": 2, "dropped": 1, "waiting": 4}
+
+
 def test_targets_trails_labels_and_staleness() -> None:
     window = pd.concat([reports("048:25/201", 101, [0, 1, 2], wall0=NOW - 8.0),
                         reports("048:25/201", 102, [0], wall0=NOW - 20.0)], ignore_index=True)

@@ -128,6 +128,23 @@ def test_a_feed_that_stops_and_resumes():
         listener.stop()
 
 
+def test_an_empty_datagram_on_the_wire_is_counted_empty():
+    """A UDP datagram of no byte, received for real: one packet, counted empty; with a whole block and
+    garbage, the 3 packets are 1 framed + 1 unframed + 1 empty."""
+    port = parse_endpoint(f"127.0.0.1:{free_port()}", "--udp")
+    state = LiveState([port.name])
+    listener = Listener([port], state, BatchDecoder(state, [port.name], reports=False), batch_s=0.05)
+    listener.start()
+    try:
+        send_all([b"", block(48, cat048_record(25, 201, 1.0)), b"garbage"], port.port)
+        _wait(lambda: sum(state.counters()[port.name][k] for k in ("framed", "unframed", "empty")) == 3)
+        c = state.counters()[port.name]
+        assert (c["packets"], c["bytes"]) == (3, 0 + len(block(48, cat048_record(25, 201, 1.0))) + 7)
+        assert (c["framed"], c["unframed"], c["empty"], c["dropped"]) == (1, 1, 1, 0)
+    finally:
+        listener.stop()
+
+
 def test_a_full_queue_drops_and_counts_never_silently():
     port = parse_endpoint(f"127.0.0.1:{free_port()}", "--udp")
     state = LiveState([port.name])

@@ -87,10 +87,17 @@
   const renderFeeds = (feeds) => {
     $("feeds").tBodies[0].replaceChildren(...feeds.map((f) => {
       const tr = el("tr", null, {"data-feed": f.feed});
-      tr.append(el("td", f.feed), el("td", num(f.packets_per_s, 1)), el("td", String(f.packets)),
+      // every packet is one of these (docs/guide/live.md, Counters)
+      const parts = `framed ${f.framed} + unframed ${f.unframed} + empty ${f.empty} + dropped ${f.dropped}` +
+        ` + waiting to be decoded ${f.waiting}`;
+      tr.append(el("td", f.feed), el("td", num(f.packets_per_s, 1)),
+                el("td", String(f.packets), {"data-counter": "packets", title: parts}),
                 el("td", `${f.decode_errors} (+${f.decode_errors_in_window})`,
-                        {title: "since start (in the window)"}),
-                el("td", String(f.unframed)), el("td", String(f.dropped)), el("td", num(f.last_packet_age_s, 1, " s"), {title: "since the last packet"}));
+                        {title: "data blocks whose records do not decode, since start (in the window)"}),
+                el("td", String(f.unframed), {"data-counter": "unframed"}),
+                el("td", String(f.empty), {"data-counter": "empty", title: "datagrams of no byte"}),
+                el("td", String(f.dropped), {"data-counter": "dropped"}),
+                el("td", num(f.last_packet_age_s, 1, " s"), {title: "since the last packet"}));
       return tr;
     }));
   };
