@@ -1,5 +1,6 @@
 """``velocity_correct``: a report's velocity (ground speed and heading, or vx/vy) against the reference's,
-differenced from the reference positions around the report's time."""
+differenced from the reference positions around the report's time. As a position, a velocity is judged
+against an independent reference only: a sensor's own smoothed track would judge its own velocity."""
 
 from __future__ import annotations
 
@@ -14,12 +15,14 @@ from msdc.pipeline.evaluate.reference import (
     associated,
     checked_trajectories,
     parameter,
+    reference_values,
     rows_by_index,
 )
 from msdc.pipeline.model.geodesy import A_M, E2
 
 MPS_PER_KT = 1852.0 / 3600.0
 STEP_S = 1.0  # the reference velocity is the displacement from t - STEP_S to t + STEP_S over 2 STEP_S
+SELF_LEFT_OUT = "independent reference only"  # opens the note of the reports left out on the own track
 
 
 def _east_north_m(lat1, lon1, lat2, lon2) -> tuple[np.ndarray, np.ndarray]:
@@ -71,20 +74,29 @@ def reference_velocity(rep: pd.DataFrame, reference: pd.DataFrame,
 
 def velocity_correct(reports: pd.DataFrame, reference: pd.DataFrame, parameters: Mapping | None = None,
                      sensor=None) -> Outcome:
-    """Of the associated reports with a velocity where the reference's is known, those whose velocity
-    vector lies within the larger of tolerance_mps and tolerance_fraction x the reference speed."""
+    """Of the associated reports with a velocity where an independent reference's is known, those whose
+    velocity vector lies within the larger of tolerance_mps and tolerance_fraction x the reference speed;
+    the reports on the sensor's own track are left out and counted in a note."""
     tol_mps = parameter(parameters, "tolerance_mps", None)
     if tol_mps is None:
         raise ValueError("velocity_correct needs the parameter tolerance_mps")
     fraction = float(parameter(parameters, "tolerance_fraction", 0.0))
     rep = associated(reports, reference, parameters)
     rep = rep[rep["ref_index"].to_numpy() >= 0].reset_index(drop=True)
+    own = np.zeros(len(rep), bool)
+    if "self_reference" in reference.columns and len(rep):
+        own = np.array([bool(x) if x is not None else False
+                        for x in reference_values(rep, reference, "self_reference", parameters)], bool)
     vx, vy = report_velocity(rep)
     rx, ry = reference_velocity(rep, reference, parameters)
-    known = np.isfinite(vx) & np.isfinite(vy) & np.isfinite(rx) & np.isfinite(ry)
+    known = np.isfinite(vx) & np.isfinite(vy)
+    left = int((known & own).sum())
+    note = (f"{SELF_LEFT_OUT}: {left:,} of {int(known.sum()):,} reports with a velocity were on "
+            "the sensor's own track") if left else ""
+    known &= ~own & np.isfinite(rx) & np.isfinite(ry)
     if not known.any():
-        return withheld("velocity_correct",
-                        "no associated report has a velocity where the reference's is known")
+        return withheld("velocity_correct", "no associated report has a velocity where an independent "
+                        "reference's is known" + (f" ({note})" if note else ""))
     error = np.hypot(vx - rx, vy - ry)[known]
     tol = np.maximum(float(tol_mps), fraction * np.hypot(rx, ry)[known])
-    return share("velocity_correct", int((error <= tol).sum()), int(known.sum()))
+    return share("velocity_correct", int((error <= tol).sum()), int(known.sum()), (note,) if note else ())

@@ -179,18 +179,24 @@ def test_a_report_near_the_edge_of_a_region_is_judged_against_the_samples_either
 
 def test_a_row_resting_partly_on_the_sensors_own_track_says_how_much():
     """A is known only from the sensor's own track (self_reference), B from another sensor: of the five
-    reports, three lie on A; the code row says so, the accuracy row (which never uses A) does not."""
+    reports, three lie on A; the code row says so, the accuracy and velocity rows (which never use A) do
+    not, the velocity row judging B's two reports and counting A's three it left out."""
     ref = pd.concat([track(label="A").assign(self_reference=True),
                      track(label="B").assign(longitude=0.1, self_reference=False)], ignore_index=True)
     rep = pd.DataFrame({"t_s": [2.0, 6.0, 10.0, 4.0, 8.0],
                         "latitude": [200.0, 600.0, 1000.0, 400.0, 800.0] / np.float64(M_PER_DEG_LAT),
-                        "longitude": [0.0, 0.0, 0.0, 0.1, 0.1], "mode3a": [0o1234] * 5})
+                        "longitude": [0.0, 0.0, 0.0, 0.1, 0.1], "mode3a": [0o1234] * 5,
+                        "ground_speed_kt": 100.0 * 3600.0 / 1852.0, "heading_deg": 0.0})
     ref["mode3a"] = 0o1234
-    score = score_sensor(preset(requirement("mode3a_correct", 0.5, ">="), requirement("rms_m", 100.0)), "R",
+    score = score_sensor(preset(requirement("mode3a_correct", 0.5, ">="), requirement("rms_m", 100.0),
+                                requirement("velocity_correct", 0.5, ">=", tolerance_mps=5.0)), "R",
                          rep, ref, Sensor(0.0, 0.0, 0.0))
-    codes, rms = score.rows
+    codes, rms, velocity = score.rows
     assert "self-reference: 3 of 5 associated reports judged against R's own track" in codes["notes"]
     assert "self-reference" not in rms["notes"]
+    assert (velocity["n"], velocity["value"]) == (2, 1.0)
+    assert "self-reference" not in velocity["notes"]
+    assert "3 of 5 reports with a velocity were on the sensor's own track" in velocity["notes"]
 
 
 def test_a_field_monitor_is_judged_in_its_own_row_and_left_out_of_the_others():

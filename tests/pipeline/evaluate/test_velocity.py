@@ -46,3 +46,16 @@ def test_tolerance_is_required_and_no_velocity_is_withheld():
         REQUIREMENTS["velocity_correct"](reports, reference, {})
     bare = reports.drop(columns=["ground_speed_kt", "heading_deg"])
     assert np.isnan(REQUIREMENTS["velocity_correct"](bare, reference, {"tolerance_mps": 10.0}).value)
+
+
+def test_a_sensors_own_track_never_judges_its_velocity():
+    reports, reference = _case()
+    fn = REQUIREMENTS["velocity_correct"]
+    # from 20 s the reference is the sensor's own track: the reports at 20..40 s (6, one without velocity)
+    own = reference.assign(self_reference=reference["t_s"] >= 20.0)
+    out = fn(reports, own, {"tolerance_mps": 10.0})
+    # left: the reports at 4, 8, 12, 16 s, the 16 s one with the 100 deg heading
+    assert (out.count, out.n) == (3, 4)
+    assert any("5 of 9 reports with a velocity" in n for n in out.notes)
+    every = fn(reports, reference.assign(self_reference=True), {"tolerance_mps": 10.0})
+    assert np.isnan(every.value) and "independent" in every.notes[0]
