@@ -325,6 +325,7 @@ def sensor_figures(sensor_id: str, rows: pd.DataFrame, window: pd.DataFrame, cou
         "sensor_id": sensor_id, "kind": _kind(sensor_id, rows), "feeds": feeds, "records_total": total,
         "reports_in_window": int(len(window)),
         "reports_per_s": (len(window) / rate_window_s) if rate_window_s >= MIN_RATE_WINDOW_S else None,
+        "rate_window_s": round(rate_window_s, 2),
         "update_interval_s": _number(period),
         "update_interval_note": "" if math.isfinite(period) else
         f"fewer than {MIN_DIFFS} intervals between successive reports of a track in the window",
@@ -372,7 +373,8 @@ def sensor_figures(sensor_id: str, rows: pd.DataFrame, window: pd.DataFrame, cou
 def feed_figures(feed: str, counter: dict, samples: list[tuple[float, dict]], now_wall_s: float,
                  window_s: float) -> tuple[dict, list[dict]]:
     """One feed's panel (its counters, packets per second and decode errors over the window, from the
-    counters remembered at earlier snapshots) and its warnings."""
+    counters remembered at earlier snapshots, with the seconds they span: less than the window while the
+    monitor is younger) and its warnings."""
     inside = [(t, c) for t, c in samples if t >= now_wall_s - window_s]
     first_t, first = inside[0] if inside else (now_wall_s, counter)
     span = now_wall_s - first_t
@@ -381,6 +383,7 @@ def feed_figures(feed: str, counter: dict, samples: list[tuple[float, dict]], no
                                                                      "empty", "decode_errors", "dropped")},
              "packets_per_s": ((int(counter.get("packets", 0)) - int(first.get("packets", 0))) / span
                                if span >= MIN_RATE_WINDOW_S else None),
+             "rate_window_s": round(span, 2),
              "last_packet_age_s": None if last_packet is None else max(0.0, now_wall_s - float(last_packet))}
     panel["waiting"] = waiting_datagrams(panel)
     warnings = []

@@ -178,6 +178,25 @@ def test_report_rate_status_age_and_degraded_alarm() -> None:
     json.dumps(snap, allow_nan=False)  # plain JSON: no NaN anywhere
 
 
+def test_every_rate_says_the_window_it_was_measured_over() -> None:
+    """A rate over less than its nominal window was unlabelled. 16 reports 45 s after the start of a 120 s
+    window: 16 / 45 per second over 45 s; 300 s after it, 16 / 120 over 120 s. A feed counted at snapshots
+    20 s and 10 s ago, in a 15 s window: the 30 packets since the one 10 s ago, over 10 s."""
+    th = Thresholds(window_s=120.0)
+    young, _ = snapshot(two_tracks_with_misses(), _counters({"048:25/201": 16}), {}, NOW, NOW - 45.0, th)
+    radar = _sensor(young, "048:25/201")
+    assert (radar["reports_per_s"], radar["rate_window_s"]) == (pytest.approx(16 / 45.0), 45.0)
+    old, _ = snapshot(two_tracks_with_misses(), _counters({"048:25/201": 16}), {}, NOW, NOW - 300.0, th)
+    radar = _sensor(old, "048:25/201")
+    assert (radar["reports_per_s"], radar["rate_window_s"]) == (pytest.approx(16 / 120.0), 120.0)
+    short = Thresholds(window_s=15.0)
+    _, memory = snapshot(pd.DataFrame(), _counters({}, packets=10), {}, NOW - 20.0, NOW - 21.0, short)
+    _, memory = snapshot(pd.DataFrame(), _counters({}, packets=70), {}, NOW - 10.0, NOW - 21.0, short, memory)
+    snap, _ = snapshot(pd.DataFrame(), _counters({}, packets=100), {}, NOW, NOW - 21.0, short, memory)
+    feed = snap["feeds"][0]
+    assert (feed["packets_per_s"], feed["rate_window_s"]) == (pytest.approx(3.0), 10.0)
+
+
 def test_feed_rates_and_decode_errors_over_the_window() -> None:
     th = Thresholds(window_s=30.0)
     empty = reports("048:25/201", 1, [])[:0]

@@ -34,6 +34,9 @@
   const utc = (wallS) => new Date(wallS * 1000).toISOString().slice(11, 19) + " UTC";
   const num = (v, digits, unit) => (v === null || v === undefined ? "–" : `${v.toFixed(digits)}${unit || ""}`);
   const pct = (v) => `${(100 * v).toFixed(1)} %`;
+  // a rate with the window it was measured over (shorter than the nominal window while uptime is)
+  const rate = (v, digits, windowS) => (v === null || v === undefined ? "–"
+    : `${v.toFixed(digits)} over ${Math.round(windowS)} s`);
 
   // one figure (probability of update, validity): its value and 95 % interval, or "–" with the reason
   const figure = (f) => {
@@ -59,7 +62,8 @@
       div.style.borderLeftColor = colour(s.sensor_id);
       div.append(el("h3", `${s.sensor_id}${s.kind ? " (" + s.kind + ")" : ""}`));
       const rows = [
-        ["reports per second", num(s.reports_per_s, 2), "rate", "", ""],
+        ["reports per second", rate(s.reports_per_s, 2, s.rate_window_s), "rate", "",
+         `reports in the last ${Math.round(s.rate_window_s)} s (the window, or the time since the start)`],
         ["reports in window / records", `${s.reports_in_window} / ${s.records_total}`, "records", "", ""],
         ["figures measured on", s.figures_sample ? `${s.figures_sample.tracks} of ${s.figures_sample.of_tracks} tracks` : "every track", "sample", "", ""],
         ["update interval", num(s.update_interval_s, 2, " s"), "interval",
@@ -90,10 +94,11 @@
       // every packet is one of these (docs/guide/live.md, Counters)
       const parts = `framed ${f.framed} + unframed ${f.unframed} + empty ${f.empty} + dropped ${f.dropped}` +
         ` + waiting to be decoded ${f.waiting}`;
-      tr.append(el("td", f.feed), el("td", num(f.packets_per_s, 1)),
+      const over = `over the last ${Math.round(f.rate_window_s)} s`;
+      tr.append(el("td", f.feed), el("td", rate(f.packets_per_s, 1, f.rate_window_s), {"data-counter": "rate"}),
                 el("td", String(f.packets), {"data-counter": "packets", title: parts}),
                 el("td", `${f.decode_errors} (+${f.decode_errors_in_window})`,
-                        {title: "data blocks whose records do not decode, since start (in the window)"}),
+                        {title: `data blocks whose records do not decode, since start (+ ${over})`}),
                 el("td", String(f.unframed), {"data-counter": "unframed"}),
                 el("td", String(f.empty), {"data-counter": "empty", title: "datagrams of no byte"}),
                 el("td", String(f.dropped), {"data-counter": "dropped"}),

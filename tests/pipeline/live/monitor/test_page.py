@@ -116,18 +116,24 @@ def _withheld(note: str) -> dict:
 
 
 def _snapshot_at(now_wall_s: float, uptime_s: float) -> dict:
-    """A snapshot written by hand (schema msdc-live-monitor/1): one radar heard 2 s ago, 90 reports in the
-    window, no target, made at now_wall_s."""
+    """A snapshot written by hand (schema msdc-live-monitor/1) made at now_wall_s, uptime_s after the start:
+    one radar heard 2 s ago, 90 reports in the window (2 a second over the uptime), one feed of 550 packets
+    (12.5 a second over the uptime less 1 s, since its first snapshot), no target."""
     radar = {"sensor_id": RADAR, "kind": "radar", "feeds": ["udp:239.1.2.3:8600"], "records_total": 90,
-             "reports_in_window": 90, "reports_per_s": 2.0, "figures_sample": None, "update_interval_s": None,
+             "reports_in_window": 90, "reports_per_s": 2.0, "rate_window_s": uptime_s,
+             "figures_sample": None, "update_interval_s": None,
              "update_interval_note": "too few", "last_report_age_s": 2.0, "last_status_age_s": None,
              "decode_errors": 0, "pd": _withheld("too few"), "mode3a_valid": _withheld("too few"),
              "modec_valid": _withheld("too few"), "alarms": []}
+    feed = {"feed": "udp:239.1.2.3:8600", "packets": 550, "bytes": 33000, "framed": 550, "unframed": 0,
+            "empty": 0, "decode_errors": 0, "dropped": 0, "waiting": 0, "packets_per_s": 12.5,
+            "rate_window_s": uptime_s - 1.0, "decode_errors_in_window": 0, "dropped_in_window": 0,
+            "unframed_in_window": 0, "last_packet_age_s": 0.5}
     thresholds = {"silent_s": 30.0, "min_pd": 0.97, "min_mode3a_valid": 0.98, "min_modec_valid": 0.96,
                   "window_s": 120.0}
     return {"schema": "msdc-live-monitor/1", "now_wall_s": now_wall_s,
             "started_wall_s": now_wall_s - uptime_s,
-            "uptime_s": uptime_s, "alarms": [], "sensors": [radar], "feeds": [], "centre": None,
+            "uptime_s": uptime_s, "alarms": [], "sensors": [radar], "feeds": [feed], "centre": None,
             "targets": [], "thresholds": thresholds}
 
 
@@ -172,6 +178,7 @@ def test_a_page_that_loses_its_connection_says_since_when_and_greys_its_figures(
             page.goto(url)
             page.wait_for_function("() => !document.getElementById('lost').hidden", timeout=5000)
             lost = _lost_state(page)
+            rates = [_figure(page, RADAR, "rate"), page.text_content('#feeds td[data-counter="rate"]')]
             mode["events"] = "server"
             page.wait_for_function("() => document.getElementById('lost').hidden", timeout=8000)
             live = _lost_state(page)
@@ -185,6 +192,8 @@ def test_a_page_that_loses_its_connection_says_since_when_and_greys_its_figures(
     assert "Connection to msdc lost" in lost["lost"] and "no snapshot since 08:00:00 UTC" in lost["lost"]
     assert "stale" in lost["lost"] and lost["clock"] == "last update 08:00:00 UTC"
     assert lost["stale"] and lost["opacity"] == pytest.approx(0.45)
+    # each rate says the time it was measured over: 45 s of uptime, shorter than the 120 s window
+    assert rates == ["2.00 over 45 s", "12.5 over 44 s"]
     assert live["lost"] is None and not live["stale"] and live["opacity"] == 1.0
     assert live["clock"] != "08:00:00 UTC" and live["clock"].endswith(" UTC")
     # lost again once the server stopped: since its last snapshot, made within the 1.5 s before it stopped
