@@ -18,6 +18,7 @@ from msdc.pipeline.evaluate.reference import (
     reference_altitude_ft,
     reference_values,
 )
+from msdc.pipeline.evaluate.reference_gates import own_by_address, own_track_words, self_referenced
 from msdc.pipeline.evaluate.scans import update_numbers
 from msdc.pipeline.evaluate.statistics import share_clusters
 
@@ -61,11 +62,15 @@ def _update_keys(rep: pd.DataFrame, parameters: Mapping | None, sensor: Sensor |
 
 
 def _share(requirement: str, success: np.ndarray, trial: np.ndarray, keys: np.ndarray | None,
-           notes: tuple[str, ...] = ()) -> Outcome:
+           notes: tuple[str, ...] = (), own: np.ndarray | None = None) -> Outcome:
     """The share of successes among the trials (bool masks over the associated reports), its interval over
-    their aircraft updates when ``keys`` gives them."""
+    their aircraft updates when ``keys`` gives them; ``own`` (the reports on the sensor's own track) counted
+    among the trials in a note."""
     clusters = share_clusters(success[trial], keys[trial]) if keys is not None else None
-    return share(requirement, int((success & trial).sum()), int(trial.sum()), notes, clusters=clusters)
+    if own is not None:
+        notes = (*notes, own_track_words(int((own & trial).sum()), int(trial.sum())))
+    return share(requirement, int((success & trial).sum()), int(trial.sum()), tuple(n for n in notes if n),
+                 clusters=clusters)
 
 
 def _code_outcome(requirement: str, reports: pd.DataFrame, reference: pd.DataFrame,
@@ -76,15 +81,16 @@ def _code_outcome(requirement: str, reports: pd.DataFrame, reference: pd.DataFra
     what = requirement.rsplit("_", 1)[1]
     rep = _mine(reports, reference, parameters)
     keys = _update_keys(rep, parameters, sensor)
+    own = self_referenced(rep, reference, parameters)
     every = np.ones(len(rep), bool)
     have = _present(rep[col]) if col in rep.columns else np.zeros(len(rep), bool)
     if what == "present":
-        return _share(requirement, have, every, keys)
+        return _share(requirement, have, every, keys, own=own)
     valid = _validated(rep, v_col, g_col)
     if what == "valid":
         if valid is None:
             return withheld(requirement, f"the reports carry no {v_col}/{g_col} bits")
-        return _share(requirement, valid, have, keys)
+        return _share(requirement, valid, have, keys, own=own)
     valid = np.ones(len(rep), bool) if valid is None else valid
     notes = () if v_col in rep.columns or g_col in rep.columns else (
         f"no {v_col}/{g_col} bits: every code taken as validated",)
@@ -107,17 +113,30 @@ def _code_outcome(requirement: str, reports: pd.DataFrame, reference: pd.DataFra
         return withheld(requirement, f"the reference gives no {ref_col} for the associated reports")
     used = have & valid & known
     if what == "correct":
-        return _share(requirement, used & equal, known, keys, notes)
-    return _share(requirement, ~equal, used, keys, notes)
+        return _share(requirement, used & equal, known, keys, notes, own)
+    return _share(requirement, ~equal, used, keys, notes, own)
 
 
 def _identity_outcome(requirement: str, reports: pd.DataFrame, reference: pd.DataFrame,
                       parameters: Mapping | None, column: str, sensor: Sensor | None) -> Outcome:
-    """Correct / false Mode S address or call sign: as Mode 3/A, without validity bits."""
+    """Correct / false Mode S address or call sign: as Mode 3/A, without validity bits. An address is not
+    judged on the sensor's own track of an aircraft known by its address (that track is keyed by the very
+    address judged: it could fail only by association); those reports are counted in a note."""
     rep = _mine(reports, reference, parameters)
     keys = _update_keys(rep, parameters, sensor)
+    own = self_referenced(rep, reference, parameters)
     truth = reference_values(rep, reference, column, parameters)
     known = _present(pd.Series(truth, dtype=object))
+    notes: tuple[str, ...] = ()
+    if column == "address" and (keyed := own_by_address(rep, reference, parameters) & known).any():
+        n_keyed = int(keyed.sum())
+        they = "they report" if n_keyed > 1 else "it reports"
+        notes = (f"{n_keyed:,} report{'s' if n_keyed > 1 else ''} on the sensor's own track, which is keyed "
+                 f"by the address {they}, not judged",)
+        known &= ~keyed
+        if not known.any():
+            return withheld(requirement, "every report lies on the sensor's own track, keyed by the address "
+                            "it reports: an address is judged only against another sensor's track")
     if not known.any():
         return withheld(requirement, f"the reference gives no {column} for the associated reports")
     have = _present(rep[column]) if column in rep.columns else np.zeros(len(rep), bool)
@@ -126,8 +145,8 @@ def _identity_outcome(requirement: str, reports: pd.DataFrame, reference: pd.Dat
                       for a, b in zip(got, truth, strict=True)], dtype=bool)
     used = have & known
     if requirement.endswith("_correct"):
-        return _share(requirement, used & equal, known, keys)
-    return _share(requirement, ~equal, used, keys)
+        return _share(requirement, used & equal, known, keys, notes, own)
+    return _share(requirement, ~equal, used, keys, notes, own)
 
 
 def _code(requirement: str, code: tuple[str, str, str, str]):

@@ -17,6 +17,7 @@ from msdc.pipeline.evaluate.reference import (
     parameter,
     rows_by_index,
 )
+from msdc.pipeline.model.identity import known_by_address
 from msdc.pipeline.quality.checks import check_indicator
 from msdc.pipeline.quality.filters import FILTER_KEYS, apply_filters
 
@@ -98,6 +99,27 @@ def self_referenced(reports: pd.DataFrame, reference: pd.DataFrame, parameters: 
     # a copy of the frame with the flag as floats was checked and cut again for every sensor
     with np.errstate(invalid="ignore"):
         return np.nan_to_num(reference_at(reports, reference, "self_reference", parameters), nan=0.0) > 0.0
+
+
+SELF_REFERENCE = "self-reference"  # opens every note that counts what rests on the sensor's own track
+
+
+def own_track_words(own: int, total: int, what: str = "trials") -> str:
+    """The note of a row of which ``own`` of ``total`` trials were judged against the sensor's own track;
+    '' when none."""
+    if not own:
+        return ""
+    return (f"{SELF_REFERENCE}: {own:,} of {total:,} {what} judged against the sensor's own track (no other "
+            "sensor saw their aircraft then)")
+
+
+def own_by_address(reports: pd.DataFrame, reference: pd.DataFrame, parameters: Mapping | None) -> np.ndarray:
+    """Per associated report, whether it lies on the sensor's own track of an aircraft known by its Mode S
+    address: that track is keyed by the address the sensor reports, so its address cannot be judged there."""
+    own = self_referenced(reports, reference, parameters)
+    if not own.any() or "ref_aircraft" not in reports.columns:
+        return own & False
+    return own & known_by_address(reports["ref_aircraft"].to_numpy(object))
 
 
 def independent_reference(reference: pd.DataFrame) -> pd.DataFrame:

@@ -18,6 +18,7 @@ import numpy as np
 import pandas as pd
 
 from msdc.pipeline.evaluate.catalogue import CATALOGUE, ERROR, PROPORTION, RATE, SIGNED
+from msdc.pipeline.evaluate.codes import CODE_REQUIREMENTS
 from msdc.pipeline.evaluate.coverage import Sensor, coverage_of
 from msdc.pipeline.evaluate.detection import Within, update_period
 from msdc.pipeline.evaluate.outcome import Outcome, withheld
@@ -43,9 +44,11 @@ Mask = Callable[[np.ndarray, np.ndarray, np.ndarray, np.ndarray], np.ndarray]
 # not on frames cut to the region: a cut reference would bridge an aircraft's short excursions out of the
 # region (its stretches), and a cut of the plots would estimate coverage limits of its own
 REGIONAL = ("pd", "long_gaps")
-# proportions judged on an independent reference only (the own-track reports left out and counted in the
-# outcome's note), so the region's self-reference note does not apply to them
-INDEPENDENT_ONLY = ("velocity_correct",)
+# proportions whose own notes count their trials on the sensor's own track (velocity: judged on an independent
+# reference only, the own-track reports left out and counted; codes and identity: the own-track trials among
+# theirs), so the region's count of associated reports would mislead on them
+OWN_NOTE = frozenset({"velocity_correct", "identification_correct", "identification_false",
+                      *CODE_REQUIREMENTS})
 # the sigma gate's counts of reports left out (reference_gates.SIGMA_GATE_KEYS), in words
 GATE_WORDS = {"no_reference": "with no reference aircraft", "self_reference": "on the sensor's own track",
               "sigma_unknown": "where the reference's sigma is unknown",
@@ -405,7 +408,7 @@ def _score(preset: Preset, sensor_id: str, reports: pd.DataFrame, reference: pd.
                 r, ref = region(name, masks)
                 outcome = (withheld(req.id, f"no report and no reference inside {name!r}") if r.empty and
                            ref.empty else measure(req, r, ref, sensor))
-            if (CATALOGUE[req.id].kind in (PROPORTION, RATE) and req.id not in INDEPENDENT_ONLY
+            if (CATALOGUE[req.id].kind in (PROPORTION, RATE) and req.id not in OWN_NOTE
                     and mark(name, masks)):  # never position figures
                 outcome = replace(outcome, notes=(*outcome.notes, marks[name]))
             if said := unplaced(name, req):

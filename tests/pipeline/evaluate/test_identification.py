@@ -46,3 +46,18 @@ def test_no_identity_the_reference_knows_is_withheld():
     out = REQUIREMENTS["identification_correct"](reports, reference.drop(columns=["address", "callsign",
                                                                                  "mode3a"]), {})
     assert np.isnan(out.value) and "no associated report carries an identity" in out.notes[0]
+
+
+def test_an_address_on_the_sensors_own_track_keyed_by_it_is_not_compared():
+    """On the sensor's own track of AAA001 (keyed by its address) a wrong address is not compared (the
+    track takes the address the sensor reports); the call sign and code still are. B's two reports and an
+    added one on A with only a wrong address ('AAA009') carry nothing else: not judged. Left: A's six right,
+    the wrong call sign, the garbled code's report (its call sign right) and the wrong validated code, 7 of
+    9 right, all nine on the own track."""
+    reports, reference = _case()
+    reference = reference.assign(aircraft=reference["address"], self_reference=True)
+    reports.loc[len(reports)] = dict(address="AAA009", callsign=None, mode3a=None, t_s=19.0, latitude=0.0,
+                                     longitude=0.19, mode3a_g=0, mode3a_v=0)
+    right = REQUIREMENTS["identification_correct"](reports, reference, {})
+    assert (right.count, right.n) == (7, 9)
+    assert any("self-reference: 9 of 9 trials" in n for n in right.notes)

@@ -245,6 +245,35 @@ def test_address_and_callsign():
     assert np.isnan(run("callsign_correct", rep, reference()).value)
 
 
+def test_an_address_is_not_judged_on_the_sensors_own_track_keyed_by_it():
+    """Two aircraft on the sensor's own track: ABC123 is keyed by its address (whatever address the sensor
+    reports, its track carries it), CS:AFR34 by its call sign. Of the four reports on ABC123 none is judged
+    for its address (counted in a note); the two on AFR34's track are (one right, one wrong). The call sign
+    is judged on both, its note counting the six own-track trials. All on ABC123's track: withheld."""
+    keyed = reference(label="ABC123", address="ABC123", callsign="AFR12").assign(self_reference=True)
+    by_cs = reference(label="CS:AFR34", azimuth_deg=90.0, address="DEF456", callsign="AFR34").assign(
+        self_reference=True)
+    ref = pd.concat([keyed, by_cs], ignore_index=True)
+    rep = pd.concat([reports([0, 4, 8, 12], address="ABC123", callsign="AFR12"),
+                     reports([2, 6], azimuth_deg=90.0, address=["DEF456", "DEF457"], callsign="AFR34")],
+                    ignore_index=True)
+    out = run("address_correct", rep, ref)
+    assert counts(out) == (1, 2)
+    assert any(n.startswith("4 reports on the sensor's own track, which is keyed by the address")
+               for n in out.notes)
+    assert "self-reference: 2 of 2 trials judged against the sensor's own track" in " ".join(out.notes)
+    assert counts(run("address_false", rep, ref)) == (1, 2)
+    call = run("callsign_correct", rep, ref)
+    assert counts(call) == (6, 6)
+    assert "self-reference: 6 of 6 trials" in " ".join(call.notes)
+    one = run("address_correct", rep.iloc[[0, 4, 5]], ref)
+    assert counts(one) == (1, 2)
+    assert ("1 report on the sensor's own track, which is keyed by the address it reports, not judged"
+            in one.notes)
+    alone = run("address_correct", rep.iloc[:4], keyed)
+    assert np.isnan(alone.value) and "keyed by the address it reports" in alone.notes[0]
+
+
 # ---------------------------------------------------------------------------------------------------------
 # False reports, association, bad input
 

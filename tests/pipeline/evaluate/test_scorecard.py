@@ -179,8 +179,8 @@ def test_a_report_near_the_edge_of_a_region_is_judged_against_the_samples_either
 
 def test_a_row_resting_partly_on_the_sensors_own_track_says_how_much():
     """A is known only from the sensor's own track (self_reference), B from another sensor: of the five
-    reports, three lie on A; the code row says so, the accuracy and velocity rows (which never use A) do
-    not, the velocity row judging B's two reports and counting A's three it left out."""
+    reports, three lie on A; the code row says so of its trials, the accuracy and velocity rows (which never
+    use A) do not, the velocity row judging B's two reports and counting A's three it left out."""
     ref = pd.concat([track(label="A").assign(self_reference=True),
                      track(label="B").assign(longitude=0.1, self_reference=False)], ignore_index=True)
     rep = pd.DataFrame({"t_s": [2.0, 6.0, 10.0, 4.0, 8.0],
@@ -192,11 +192,31 @@ def test_a_row_resting_partly_on_the_sensors_own_track_says_how_much():
                                 requirement("velocity_correct", 0.5, ">=", tolerance_mps=5.0)), "R",
                          rep, ref, Sensor(0.0, 0.0, 0.0))
     codes, rms, velocity = score.rows
-    assert "self-reference: 3 of 5 associated reports judged against R's own track" in codes["notes"]
+    assert "self-reference: 3 of 5 trials judged against the sensor's own track" in codes["notes"]
+    assert "associated reports" not in codes["notes"]
     assert "self-reference" not in rms["notes"]
     assert (velocity["n"], velocity["value"]) == (2, 1.0)
     assert "self-reference" not in velocity["notes"]
     assert "3 of 5 reports with a velocity were on the sensor's own track" in velocity["notes"]
+
+
+def test_a_code_row_counts_its_own_trials_on_the_sensors_own_track_not_the_regions_reports():
+    """Only A's track (the sensor's own) knows a Mode 3/A code, B's (another sensor's) none: the three
+    reports on A are all the code row's trials, all on the own track (the region's 3 of 5 associated
+    reports would understate it); the detection row keeps the region's count."""
+    ref = pd.concat([track(label="A").assign(self_reference=True, mode3a="1234"),
+                     track(label="B").assign(longitude=0.1, self_reference=False, mode3a=None)],
+                    ignore_index=True)
+    rep = pd.DataFrame({"t_s": [2.0, 6.0, 10.0, 4.0, 8.0],
+                        "latitude": [200.0, 600.0, 1000.0, 400.0, 800.0] / np.float64(M_PER_DEG_LAT),
+                        "longitude": [0.0, 0.0, 0.0, 0.1, 0.1], "mode3a": ["1234"] * 5})
+    codes = preset(requirement("mode3a_correct", 0.5, ">="), requirement("mode3a_present", 0.5, ">="))
+    score = score_sensor(codes, "R", rep, ref, Sensor(0.0, 0.0, 0.0))
+    correct, present = score.rows
+    assert (correct["n"], correct["value"]) == (3, 1.0)
+    assert "self-reference: 3 of 3 trials judged against the sensor's own track" in correct["notes"]
+    assert (present["n"], present["value"]) == (5, 1.0)
+    assert "self-reference: 3 of 5 trials judged against the sensor's own track" in present["notes"]
 
 
 def test_a_field_monitor_is_judged_in_its_own_row_and_left_out_of_the_others():
