@@ -73,6 +73,20 @@ def _share(requirement: str, success: np.ndarray, trial: np.ndarray, keys: np.nd
                  clusters=clusters)
 
 
+def _misses(known: np.ndarray, have: np.ndarray, valid: np.ndarray, used: np.ndarray, equal: np.ndarray,
+            what: str, differ: str = "") -> str:
+    """The note splitting a ``*_correct`` row's misses by why: no {what} in the report, one not validated or
+    garbled, or one that differs from the reference's (``differ``: how, in words); '' when none missed."""
+    missed = known & ~(used & equal)
+    if not missed.any():
+        return ""
+    parts = [(int((missed & ~have).sum()), f"carry no {what}"),
+             (int((missed & have & ~valid).sum()), f"carry a {what} not validated or garbled"),
+             (int((missed & used & ~equal).sum()), differ or f"carry a different {what}")]
+    said = "; ".join(f"{n:,} {words}" for n, words in parts if n)
+    return f"of the {int(missed.sum()):,} misses: {said}"
+
+
 def _code_outcome(requirement: str, reports: pd.DataFrame, reference: pd.DataFrame,
                   parameters: Mapping | None, code: tuple[str, str, str, str], sensor: Sensor | None
                   ) -> Outcome:
@@ -113,6 +127,9 @@ def _code_outcome(requirement: str, reports: pd.DataFrame, reference: pd.DataFra
         return withheld(requirement, f"the reference gives no {ref_col} for the associated reports")
     used = have & valid & known
     if what == "correct":
+        notes = (*notes, _misses(known, have, valid, used, equal, "code", "carry a different code")
+                 if col == "mode3a" else _misses(known, have, valid, used, equal, "Mode C",
+                                                 "carry a Mode C outside the tolerance"))
         return _share(requirement, used & equal, known, keys, notes, own)
     return _share(requirement, ~equal, used, keys, notes, own)
 
@@ -145,6 +162,8 @@ def _identity_outcome(requirement: str, reports: pd.DataFrame, reference: pd.Dat
                       for a, b in zip(got, truth, strict=True)], dtype=bool)
     used = have & known
     if requirement.endswith("_correct"):
+        what = "address" if column == "address" else "call sign"
+        notes = (*notes, _misses(known, have, have, used, equal, what))
         return _share(requirement, used & equal, known, keys, notes, own)
     return _share(requirement, ~equal, used, keys, notes, own)
 

@@ -167,7 +167,11 @@ def test_mode3a_present_valid_correct_false():
     ref = reference(mode3a="1234")
     assert counts(run("mode3a_present", rep, ref)) == (3, 4)
     assert counts(run("mode3a_valid", rep, ref)) == (2, 3)
-    assert counts(run("mode3a_correct", rep, ref)) == (1, 4)
+    correct = run("mode3a_correct", rep, ref)
+    assert counts(correct) == (1, 4)
+    # the three misses, one for each reason
+    assert ("of the 3 misses: 1 carry no code; 1 carry a code not validated or garbled; 1 carry a different "
+            "code") in correct.notes
     assert counts(run("mode3a_false", rep, ref)) == (1, 2)
 
 
@@ -227,7 +231,10 @@ def test_modec_within_the_tolerance():
     ref = reference(altitude_ft=10_000.0)
     assert counts(run("modec_present", rep, ref)) == (4, 4)
     assert counts(run("modec_valid", rep, ref)) == (3, 4)
-    assert counts(run("modec_correct", rep, ref, tolerance_ft=300.0)) == (2, 4)
+    correct = run("modec_correct", rep, ref, tolerance_ft=300.0)
+    assert counts(correct) == (2, 4)
+    assert ("of the 2 misses: 1 carry a Mode C not validated or garbled; 1 carry a Mode C outside the "
+            "tolerance") in correct.notes
     assert counts(run("modec_false", rep, ref, tolerance_ft=300.0)) == (1, 3)
     assert counts(run("modec_correct", rep, ref, tolerance_ft=500.0)) == (3, 4)
     with pytest.raises(ValueError, match="tolerance_ft"):
@@ -238,7 +245,9 @@ def test_address_and_callsign():
     rep = reports([0, 4, 8, 12], address=["ABC123", "ABC124", None, "abc123"],
                   callsign=["AFR12 ", "AFR12", "AFR21", None])
     ref = reference(address="ABC123", callsign="AFR12")
-    assert counts(run("address_correct", rep, ref)) == (2, 4)
+    address = run("address_correct", rep, ref)
+    assert counts(address) == (2, 4)
+    assert "of the 2 misses: 1 carry no address; 1 carry a different address" in address.notes
     assert counts(run("address_false", rep, ref)) == (1, 3)
     assert counts(run("callsign_correct", rep, ref)) == (2, 4)
     assert counts(run("callsign_false", rep, ref)) == (1, 3)
