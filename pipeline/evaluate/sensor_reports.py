@@ -13,9 +13,19 @@ from msdc.pipeline.evaluate.coverage import Sensor, sensor_from_entry
 from msdc.pipeline.model.schema import equals_text
 from msdc.pipeline.model.time import absolute_time, seconds_since
 
-# decoded CAT048 columns the requirements read besides the measurements: Mode 3/A and Mode C validity and
-# garble bits, I048/030 warning codes (split plots), the detection type (PSR/SSR)
-RADAR_EXTRA_COLUMNS = ("mode3a_v", "mode3a_g", "flight_level_v", "flight_level_g", "warning_codes", "typ")
+# decoded columns the requirements read besides the measurements: Mode 3/A and Mode C validity and garble
+# bits (CAT001, 010, 020 and 048 carry them), and of CAT048 only its I048/030 warning codes (split plots)
+# and detection type (PSR/SSR): other categories' warning codes and TYP mean other things
+VALIDITY_COLUMNS = ("mode3a_v", "mode3a_g", "flight_level_v", "flight_level_g")
+RADAR_EXTRA_COLUMNS = (*VALIDITY_COLUMNS, "warning_codes", "typ")
+RADAR_CATEGORY = 48
+
+
+def joined_columns(category: int) -> tuple[str, ...]:
+    """The decoded columns joined to a sensor's reports of this category."""
+    return RADAR_EXTRA_COLUMNS if category == RADAR_CATEGORY else VALIDITY_COLUMNS
+
+
 # measurement columns the requirements read
 REPORT_COLUMNS = ("sensor_id", "sensor_kind", "aircraft_id", "latitude", "longitude", "height_m",
                   "flight_level", "mode3a", "address", "callsign", "track_number", "ground_speed_kt",
@@ -37,10 +47,11 @@ def judged_by(kind: str, sensor_types: tuple[str, ...]) -> bool:
 
 
 def sensor_reports(meas: pd.DataFrame, sensor_id: str, epoch: pd.Timestamp,
-                   radar_frame: pd.DataFrame | None = None) -> pd.DataFrame:
-    """The sensor's reports with ``t_s`` (seconds from ``epoch``) and, for a radar, RADAR_EXTRA_COLUMNS
-    joined from its decoded frame by file and offset (absent columns stay absent: then validity is not
-    judged)."""
+                   radar_frame: pd.DataFrame | None = None,
+                   columns: tuple[str, ...] = RADAR_EXTRA_COLUMNS) -> pd.DataFrame:
+    """The sensor's reports with ``t_s`` (seconds from ``epoch``) and ``columns`` joined from its decoded
+    frame (``radar_frame``, of the sensor's category) by file and offset (absent columns stay absent: then
+    validity is not judged)."""
     rows = meas[equals_text(meas["sensor_id"], sensor_id)]
     cols = [c for c in REPORT_COLUMNS if c in rows.columns]
     out = pd.DataFrame({c: rows[c].to_numpy() if c != "aircraft_id" else rows[c].astype(object).to_numpy()
@@ -49,7 +60,7 @@ def sensor_reports(meas: pd.DataFrame, sensor_id: str, epoch: pd.Timestamp,
         if c in out:
             out[c] = out[c].astype(object).where(out[c].notna(), None)
     out.insert(0, "t_s", seconds_since(rows["time"], epoch))
-    extra = [c for c in RADAR_EXTRA_COLUMNS if radar_frame is not None and c in radar_frame.columns]
+    extra = [c for c in columns if radar_frame is not None and c in radar_frame.columns]
     if extra and {"file", "offset"} <= set(out.columns) and {"file", "offset"} <= set(radar_frame.columns):
         # the decoded records at the sensor's offsets only (the frame holds every radar's): the same join
         mine = radar_frame["offset"].isin(out["offset"].dropna().unique()).to_numpy(bool)

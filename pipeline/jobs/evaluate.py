@@ -347,6 +347,7 @@ def _sensor_result(options, checked, loaded, meas, builders, sensor_id, kind, ga
     from msdc.pipeline.evaluate.sensor_reports import (
         TRACKER_CATEGORY,
         evaluation_sensor,
+        joined_columns,
         north_markers_s,
         sensor_reports,
         tracker_reports,
@@ -355,13 +356,14 @@ def _sensor_result(options, checked, loaded, meas, builders, sensor_id, kind, ga
 
     built = _reference(options, builders, sensor_id, gates, epoch, external, cache)
     reference = built.frame.assign(field_monitor=built.frame["aircraft"].astype(str).isin(monitors))
-    radar = loaded.frames.get(48) if kind == "radar" else None
+    part = sensor_parts([sensor_id]).iloc[0]
     if kind == "tracker":
         reports = _selected(tracker_reports(loaded.frames[TRACKER_CATEGORY], sensor_id, loaded.date, epoch),
                             checked, loaded.date)
-    else:
-        reports = sensor_reports(meas, sensor_id, epoch, radar)
-    part = sensor_parts([sensor_id]).iloc[0]
+    else:  # the decoded frame of the sensor's category gives its validity bits (a radar's: more)
+        category = int(part["category"])
+        reports = sensor_reports(meas, sensor_id, epoch, loaded.frames.get(category),
+                                 joined_columns(category))
     markers = (north_markers_s(loaded.frames, int(part["sac"]), int(part["sic"]), loaded.date, epoch)
                if kind == "radar" else None)
     sensor, said = evaluation_sensor(sensor_id, reports, _entry(checked.sensors, sensor_id), markers)
@@ -499,7 +501,7 @@ def _evaluate_window(options: EvaluateOptions, checked: EvaluateChecked, progres
     flagged = field_monitors(meas, loaded.frames)
     standing = {k: v for k, v in fixed_7777(meas).items() if k not in flagged}
     monitors = flagged | set(standing)
-    _keep_frames(loaded, (48, TRACKER_CATEGORY, *SERVICE_CATEGORIES))  # what each sensor's part reads
+    _keep_frames(loaded, tests)  # what each sensor's part reads
     if monitors:
         said = [f"{a} (RAB set)" for a in sorted(flagged)]
         said += [f"{a} (Mode 3/A {MONITOR_MODE3A} on every report, 95 % within {p95:.3g} m of one point)"
@@ -728,12 +730,31 @@ def within_margin(loaded: Loaded, categories: tuple[int, ...]) -> None:
             loaded.frames[cat] = frame[inside].reset_index(drop=True)
 
 
-def _keep_frames(loaded: Loaded, categories: tuple[int, ...]) -> None:
-    """Let go the decoded frames of the other categories once the measurements are built from them (the
-    ADS-B frame, the largest, is no more read: its reports are in the measurements)."""
+def _keep_frames(loaded: Loaded, tests: list[tuple[str, str]]) -> None:
+    """Keep of the decoded frames, once the measurements are built from them, what each sensor's part reads:
+    the radar, tracker and service categories whole, and of the other tested sensors' categories (CAT001,
+    010, 020) their validity bits by file and offset (the ADS-B frame, the largest, is no more read: its
+    reports are in the measurements)."""
+    from msdc.pipeline.evaluate.sensor_reports import (
+        RADAR_CATEGORY,
+        SERVICE_CATEGORIES,
+        TRACKER_CATEGORY,
+        joined_columns,
+    )
     from msdc.pipeline.model.heap import release_free_memory
+    from msdc.pipeline.model.report_selection import sensor_parts
 
-    loaded.frames = {c: f for c, f in loaded.frames.items() if c in categories}
+    whole = {RADAR_CATEGORY, TRACKER_CATEGORY, *SERVICE_CATEGORIES}
+    tested = {int(c) for c in sensor_parts([s for s, _ in tests])["category"]} if tests else set()
+    kept = {}
+    for cat, frame in loaded.frames.items():
+        if cat in whole:
+            kept[cat] = frame
+        elif cat in tested:
+            columns = [c for c in ("file", "offset", *joined_columns(cat)) if c in frame.columns]
+            if len(columns) > 2:
+                kept[cat] = frame[columns]
+    loaded.frames = kept
     release_free_memory()
 
 

@@ -142,3 +142,28 @@ def test_quality_of_one_aircraft_no_radar_saw(files, tmp_path, capsys):
         ("RYR1AB", "adsb"), ("RYR1AB", "mlat"), ("(all surface)", "adsb"), ("(all)", "mlat")}
     status, _, err = _run([*both, "--callsign", "XYZ99", "--json", tmp_path / "n.json"], capsys)
     assert status == 1 and "XYZ99" in err
+
+
+def test_evaluate_reads_a_multilaterations_validity_bits(files, tmp_path, capsys):
+    """The multilateration's CAT010 I010/060 'not validated' bits reach mode3a_correct: 40 of its 300 codes
+    flagged not validated fail the row (260 of 300 correct), where before its reports were said to carry
+    no bits and every code was taken as validated."""
+    lon, lat, _ = GEOD.fwd(np.full(T.size, REF[1]), np.full(T.size, REF[0]), np.where(NORTH >= 0, 0.0, 180.0),
+                           np.abs(NORTH))
+    files["adsb"].write_bytes(encode_frame(21, pd.DataFrame(
+        {"sac": 0, "sic": 107, "time_of_day": T, "latitude": lat, "longitude": lon, "address": "4CA1B2",
+         "callsign": "RYR1AB", "mode3a": "1234", "nacp": 10, "ground_speed_kt": 9.7}), edition="2.7"))
+    files["mlat"].write_bytes(encode_frame(10, pd.DataFrame(
+        {"sac": 0, "sic": 107, "message_type": 1, "typ": 1, "time_of_day": T, "x_m": 20.0,
+         "y_m": np.round(NORTH), "address": "4CA1B2", "callsign": "RYR1AB", "track_number": 9,
+         "mode3a": "1234", "mode3a_v": (np.arange(T.size) < 40).astype(int), "mode3a_g": 0,
+         "vx_ms": 0.0, "vy_ms": 5.0})))
+    out = tmp_path / "e.json"
+    status, _, err = _run(["evaluate", files["adsb"], files["mlat"], "--sensors", files["sensors"],
+                           "--preset", "ed117a", "--date", "2016-05-10", "--json", out], capsys)
+    assert status == 0, err
+    (row,) = [r for r in json.loads(out.read_text())["results"]
+              if r["requirement"] == "mode3a_correct" and r["sector"] == "global"]
+    assert (row["n"], row["value"]) == (300, pytest.approx(260 / 300))
+    assert "of the 40 misses: 40 carry a code not validated or garbled" in row["notes"]
+    assert "no mode3a_v" not in row["notes"]
