@@ -1,0 +1,55 @@
+"""The LEBL multilateration's reports without a call sign, against what the same aircraft's ADS-B sent
+around them: whether an identification was there to relay (the check of docs/methods/evaluate.md's
+call-sign paragraph by another method than `msdc evaluate`: no reference, no association, by address).
+
+Run by hand: ``python benchmarks/lebl_mlat_callsigns.py [../shared/real]``.
+"""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+from lebl_pd_independent import DAY, ROOT, seconds
+
+import msdc.asterix as asterix
+
+WINDOWS_S = (15.0, 30.0)
+
+
+def named(frame: pd.DataFrame) -> pd.DataFrame:
+    """Address, time (s of the day) and whether a non-blank call sign is carried."""
+    frame = frame[frame["address"].notna()]
+    call = frame["callsign"].astype("string").str.strip()
+    return pd.DataFrame({"address": frame["address"].astype(str).to_numpy(), "t": seconds(frame),
+                         "has": (call.notna() & (call != "")).to_numpy(bool)})
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("real", nargs="?", type=Path, default=ROOT.parent / "shared" / "real")
+    a = ap.parse_args()
+    adsb = named(asterix.read(a.real / "adsb_v023_160510-lebl-220001.ast", date=DAY,
+                              editions={21: "0.23"}).frames[21])
+    mlat = asterix.read(a.real / "mlat_160510-lebl-220001.ast", date=DAY).frames[10]
+    mlat = named(mlat[mlat["typ"] == 1])
+    missing = mlat[~mlat["has"]]
+    seen = missing["address"].isin(set(adsb["address"]))
+    print(f"multilateration target reports with an address: {len(mlat):,}; without a call sign: "
+          f"{len(missing):,}, of which {int((~seen).sum()):,} of aircraft or vehicles with no ADS-B at all "
+          f"and {int(seen.sum()):,} of aircraft with ADS-B")
+    called = adsb[adsb["has"]].groupby("address")["t"].apply(np.sort)
+    for w in WINDOWS_S:
+        none = 0
+        for address, g in missing[seen].groupby("address"):
+            times = called.get(address, np.empty(0))
+            t = g["t"].to_numpy()
+            none += int((np.searchsorted(times, t + w) == np.searchsorted(times, t - w)).sum())
+        print(f"  of those {int(seen.sum()):,}: {none:,} ({100 * none / seen.sum():.0f} %) with no ADS-B "
+              f"call sign of the aircraft within {w:g} s either")
+
+
+if __name__ == "__main__":
+    main()
