@@ -21,8 +21,10 @@ from msdc.pipeline.evaluate.reference import (
     rows_by_index,
 )
 from msdc.pipeline.evaluate.statistics import cluster_sums, clustered_interval
+from msdc.pipeline.evaluate.timing import timing_note
 from msdc.pipeline.evaluate.velocity import _east_north_m, reference_velocity
 
+THRESHOLD_PARAMETER = "threshold_m"  # the requirement's tolerance, given by the scorecard to the timing note
 MIN_SPEED_MPS = 5.0  # below this the reference has no track direction: along/across and latency not judged
 
 
@@ -30,8 +32,9 @@ def position_errors(reports: pd.DataFrame, reference: pd.DataFrame, parameters: 
                     ) -> pd.DataFrame:
     """Per associated report judged against an independent reference: ``aircraft``, ``error_m`` (horizontal),
     ``along_m`` (positive ahead of the reference), ``across_m`` (positive to the right of its track),
-    ``latency_s`` (-along / speed: positive when the report lags), and the report's ``latitude`` and
-    ``longitude``; NaN along/across/latency where the reference moves slower than MIN_SPEED_MPS."""
+    ``latency_s`` (-along / speed: positive when the report lags), the reference's ``speed_mps``, and the
+    report's ``latitude`` and ``longitude``; NaN along/across/latency/speed where the reference moves slower
+    than MIN_SPEED_MPS."""
     max_gap_s = float(parameter(parameters, "reference_max_gap_s", DEFAULT_REFERENCE_GAP_S))
     rep = associated(reports, reference, parameters)
     rep = rep[rep["ref_index"].to_numpy() >= 0].reset_index(drop=True)
@@ -57,7 +60,8 @@ def position_errors(reports: pd.DataFrame, reference: pd.DataFrame, parameters: 
     across = de * uy - dn * ux  # to the right of the track is positive
     out = pd.DataFrame({"aircraft": rep["ref_aircraft"].to_numpy(object), "t_s": t,
                         "error_m": np.hypot(de, dn), "along_m": along, "across_m": across,
-                        "latency_s": -along / safe, "latitude": lat, "longitude": lon})
+                        "latency_s": -along / safe, "speed_mps": np.where(moving, speed, np.nan),
+                        "latitude": lat, "longitude": lon})
     return out[np.isfinite(out["error_m"].to_numpy())].reset_index(drop=True)
 
 
@@ -78,7 +82,11 @@ def _statistic(requirement: str, column: str, statistic: str):
                            int(values.size), ("a maximum has no interval",),
                            evidence=ErrorEvidence(statistic, seed, values=values.max(keepdims=True)))
         ci = clustered_interval(values, clusters, statistic, seed=seed)
-        return Outcome(requirement, ci.value, ci.ci_low, ci.ci_high, ci.n, ci.n, error_notes(ci),
+        notes = error_notes(ci)
+        if column == "error_m":  # a clock, not the sensor's scatter, can make the errors at speed
+            threshold = parameter(parameters, THRESHOLD_PARAMETER, None)
+            notes = (*notes, timing_note(errors, None if threshold is None else float(threshold)))
+        return Outcome(requirement, ci.value, ci.ci_low, ci.ci_high, ci.n, ci.n, tuple(n for n in notes if n),
                        evidence=error_evidence(values, clusters, statistic, seed))
     fn.__name__ = requirement
     fn.__doc__ = f"``{requirement}``: {statistic} of {column} over aircraft (docs/methods/evaluate.md)."

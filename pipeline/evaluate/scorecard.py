@@ -17,6 +17,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 import pandas as pd
 
+from msdc.pipeline.evaluate.accuracy import THRESHOLD_PARAMETER
 from msdc.pipeline.evaluate.catalogue import CATALOGUE, ERROR, PROPORTION, RATE, SIGNED
 from msdc.pipeline.evaluate.codes import CODE_REQUIREMENTS
 from msdc.pipeline.evaluate.coverage import Sensor, coverage_of
@@ -102,6 +103,7 @@ def measure(requirement: Requirement, reports: pd.DataFrame, reference: pd.DataF
         notes = (f"sigma gate at {requirement.threshold:g} m: {c['judged']} of {c['reports']} reports judged"
                  + (" (left out: " + ", ".join(f"{v} {GATE_WORDS.get(k, k.replace('_', ' '))}"
                                                for k, v in left.items()) + ")" if left else ""),)
+        params[THRESHOLD_PARAMETER] = requirement.threshold  # the timing note counts the errors over it
     elif "distance_m" in params and len(reports) and len(reference):
         rep, notes = _gate_false(reports, reference, float(params["distance_m"]), params)
     try:

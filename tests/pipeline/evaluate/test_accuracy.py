@@ -4,6 +4,7 @@ method) at a chosen offset behind and to the right of the reference, so every st
 from __future__ import annotations
 
 import math
+import re
 
 import numpy as np
 import pandas as pd
@@ -59,3 +60,37 @@ def test_offsets_per_aircraft_against_numpy_and_the_self_reference_left_out():
     assert out.value == pytest.approx(math.sqrt(np.mean(behind[:11] ** 2)), rel=2e-3)
     only = reference.assign(self_reference=True)
     assert np.isnan(REQUIREMENTS["rms_m"](reports, only, {}).value)
+
+
+def _accelerating(leads_s, seed: int) -> tuple[pd.DataFrame, pd.DataFrame]:
+    """12 aircraft due east, 0.5 deg of latitude apart, accelerating from 10 to 80 m/s over 120 s (a
+    take-off run); each report placed (pyproj) where the aircraft is leads_s[k] later, plus 3 m of noise
+    along and across the track."""
+    rng = np.random.default_rng(seed)
+    refs, reps = [], []
+    for k, lead in enumerate(leads_s):
+        t = np.arange(0.0, 121.0)
+        s = 10.0 * t + 0.5 * (70.0 / 120.0) * t**2
+        lon, lat, _ = GEOD.fwd(np.zeros(t.size), np.full(t.size, 0.5 * k), np.full(t.size, 90.0), s)
+        refs.append(pd.DataFrame({"aircraft": f"A{k}", "t_s": t, "latitude": lat, "longitude": lon}))
+        tr = np.arange(2.0, 118.0)
+        tl = tr + lead
+        along = 10.0 * tl + 0.5 * (70.0 / 120.0) * tl**2 + rng.normal(0.0, 3.0, tr.size)
+        plon, plat, _ = GEOD.fwd(np.zeros(tr.size), np.full(tr.size, 0.5 * k), np.full(tr.size, 90.0), along)
+        plon, plat, _ = GEOD.fwd(plon, plat, np.full(tr.size, 180.0), rng.normal(0.0, 3.0, tr.size))
+        reps.append(pd.DataFrame({"t_s": tr, "latitude": plat, "longitude": plon}))
+    return pd.concat(reps, ignore_index=True), pd.concat(refs, ignore_index=True)
+
+
+def test_a_late_reference_of_two_aircraft_is_named_on_the_accuracy_rows():
+    """A0 and A1's reference lags their reports by 1 s: their errors at speed are up to 80 m along the
+    track. The p95 row's note names them (leads within 0.1 s of 1 s) and no other aircraft; with every lead
+    zero the note is silent."""
+    reports, reference = _accelerating([1.0, 1.0] + [0.0] * 10, seed=7)
+    out = REQUIREMENTS["p95_m"](reports, reference, {"threshold_m": 12.0})
+    (note,) = [n for n in out.notes if n.startswith("timing:")]
+    assert note.startswith("timing: 2 of 12 aircraft lead or lag the reference unlike the others (A0 +")
+    named = dict(re.findall(r"(A\d+) ([+-]\d\.\d\d) s", note.split("; the others")[0]))
+    assert named.keys() == {"A0", "A1"} and all(abs(float(v) - 1.0) < 0.1 for v in named.values())
+    reports, reference = _accelerating([0.0] * 12, seed=8)
+    assert not [n for n in REQUIREMENTS["p95_m"](reports, reference, {}).notes if n.startswith("timing:")]
