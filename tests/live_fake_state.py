@@ -88,9 +88,10 @@ class ReplayState:
         ok = self._arrived(now)
         records = pd.Series(self._sensor[ok]).value_counts().to_dict() if ok.any() else {}
         last = float(self._wall[ok].max()) if ok.any() else None
-        return {self.feed: {"packets": int(ok.sum()), "bytes": 60 * int(ok.sum()), "unframed": 0,
-                            "decode_errors": 0, "dropped": 0, "records": {str(k): int(v) for k, v in
-                                                                          records.items()},
+        # every datagram of the replay frames (one row each): the protocol's parts add up to the packets
+        return {self.feed: {"packets": int(ok.sum()), "bytes": 60 * int(ok.sum()), "framed": int(ok.sum()),
+                            "unframed": 0, "empty": 0, "decode_errors": 0, "dropped": 0,
+                            "records": {str(k): int(v) for k, v in records.items()},
                             "last_packet_wall_s": last}}
 
     def recent(self, window_s: float) -> pd.DataFrame:

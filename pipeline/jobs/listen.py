@@ -328,10 +328,16 @@ def _watch(listener, state, recorder, duration_s, stop, say, started) -> None:
 
 
 def status_line(name: str, c: dict) -> str:
-    """One feed's counters in a line."""
+    """One feed's counters in a line; its packets' parts add up to them (framed, unframed, empty, dropped
+    and, while decoding goes on, waiting)."""
+    from msdc.pipeline.live.health import waiting_datagrams
+
     records = sum(c["records"].values())
-    return (f"{name}: {c['packets']} packets, {c['bytes']} bytes, {records} records, {c['unframed']} "
-            f"unframed, {c['decode_errors']} decode errors, {c['dropped']} dropped")
+    waiting = waiting_datagrams(c)
+    parts = ", ".join([f"{c['framed']} framed", f"{c['unframed']} unframed", f"{c['empty']} empty",
+                       f"{c['dropped']} dropped", *([f"{waiting} waiting"] if waiting else [])])
+    return (f"{name}: {c['packets']} packets ({parts}), {c['bytes']} bytes, {records} records, "
+            f"{c['decode_errors']} decode errors")
 
 
 def _start_monitor(state, checked: Checked, stop: threading.Event) -> threading.Thread:

@@ -15,6 +15,7 @@ from asterix_bytes import block
 from live_bytes import cat048_record, free_port, send_all
 
 from msdc.pipeline.cli import main
+from msdc.pipeline.jobs.listen import status_line
 
 ROOT = Path(__file__).resolve().parents[3]
 
@@ -87,7 +88,8 @@ def test_ctrl_c_ends_listen_with_a_complete_recording(tmp_path, capsys):
     finally:
         proc.kill()
     assert proc.returncode == 0, err
-    assert "Traceback" not in err and f"127.0.0.1:{port}: 5 packets" in out
+    assert "Traceback" not in err
+    assert f"127.0.0.1:{port}: 5 packets (5 framed, 0 unframed, 0 empty, 0 dropped), " in out
     (path,) = folder.iterdir()
     assert path.suffix == ".pcapng"  # closed and renamed: no .part left
     capsys.readouterr()
@@ -109,3 +111,13 @@ def test_http_without_the_live_extra_is_refused_before_listening(capsys, monkeyp
     err = capsys.readouterr().err
     assert err.strip() == ("msdc listen: --http 127.0.0.1:18081: the live monitor's web server needs "
                            "uvicorn, which is not installed: pip install 'msdc[live]'")
+
+
+def test_a_feeds_status_line_shows_its_packets_parts():
+    """100 packets: 90 framed, 3 unframed, 2 empty, 1 dropped, so 4 still waiting to be decoded; with none
+    waiting, no 'waiting'."""
+    c = {"packets": 100, "bytes": 5000, "framed": 90, "unframed": 3, "empty": 2, "dropped": 1,
+         "decode_errors": 1, "records": {"048:25/201": 7, "021:0/107": 5}}
+    assert status_line("radar", c) == ("radar: 100 packets (90 framed, 3 unframed, 2 empty, 1 dropped, "
+                                       "4 waiting), 5000 bytes, 12 records, 1 decode errors")
+    assert "waiting" not in status_line("radar", {**c, "framed": 94})
