@@ -83,6 +83,11 @@ def test_the_monitor_page_in_chromium_offline() -> None:
             alarms = page.eval_on_selector_all("#alarms li",
                                                "ls => ls.map(l => [l.dataset.kind, l.dataset.sensor])")
             radar_pd = _figure(page, RADAR, "pd")
+            # every column of the feeds table in view at 1,200 px: none pushed past the side panel's edge
+            assert page.evaluate("""() => {
+                const side = document.querySelector('#side').getBoundingClientRect();
+                const cells = [...document.querySelectorAll('#feeds th')];
+                return cells.every(c => c.getBoundingClientRect().right <= side.right + 0.5); }""")
             if os.environ.get("MSDC_LIVE_MONITOR_SHOT"):  # the docs' picture: MSDC_LIVE_MONITOR_SHOT=path
                 page.wait_for_timeout(1500)
                 page.screenshot(path=os.environ["MSDC_LIVE_MONITOR_SHOT"])
