@@ -205,7 +205,13 @@
     err.hidden = !snap.error;
     err.textContent = snap.error || "";
     if (!snap.thresholds) return;  // no snapshot computed yet: only the error to show
-    $("clock").textContent = utc(snap.now_wall_s);
+    // a failed snapshot brings the last good one again: its figures greyed, as of its time
+    const failed = Boolean(snap.error);
+    document.body.classList.toggle("stale", failed);
+    if (failed) {
+      err.textContent += `. The figures below are the last good snapshot's, as of ${utc(snap.now_wall_s)}.`;
+    }
+    $("clock").textContent = failed ? `last update ${utc(snap.now_wall_s)}` : utc(snap.now_wall_s);
     $("uptime").textContent = `up ${Math.round(snap.uptime_s)} s`;
     const th = snap.thresholds;
     $("thresholds").textContent = `Window ${th.window_s} s; alarms: silent after ${th.silent_s} s, ` +

@@ -207,3 +207,42 @@ def test_a_page_that_loses_its_connection_says_since_when_and_greys_its_figures(
     last_s = [time.strftime("%H:%M:%S", time.gmtime(stopped_wall_s - d)) for d in (0.0, 1.0, 2.0)]
     assert gone["stale"] and said in last_s and gone["clock"] == f"last update {said} UTC"
     assert errors == []
+
+
+class FailingAfterFirst(ReplayState):
+    """A state whose first snapshot is made, every later one fails."""
+
+    def __init__(self, *args, **kwargs):
+        super().__init__(*args, **kwargs)
+        self.calls = 0
+
+    def recent(self, window_s: float):
+        self.calls += 1
+        if self.calls > 1:
+            raise RuntimeError("the state broke")
+        return super().recent(window_s)
+
+
+def test_a_failed_snapshot_greys_the_last_good_figures_and_says_as_of_when() -> None:
+    """After a failed snapshot the server sends the last good one again with its error: the page showed
+    those figures as current. Now it greys them, its clock and the error say the good snapshot's time, and
+    the connection stays live (nothing is lost but the figures' freshness)."""
+    sync_playwright = _browser()
+    state = FailingAfterFirst(synthetic_measurements(), speed=20.0, start_wall_s=time.time() - 10.0)
+    errors: list[str] = []
+    with running(state, Thresholds(window_s=30.0)) as (url, _, _), sync_playwright() as p:
+        browser = p.chromium.launch(executable_path=CHROMIUM, args=["--no-sandbox", "--disable-gpu"])
+        try:
+            page = browser.new_context(viewport={"width": 1200, "height": 720}).new_page()
+            page.on("pageerror", lambda e: errors.append(str(e)))
+            page.goto(url)
+            page.wait_for_function("() => !document.getElementById('error').hidden", timeout=8000)
+            shown = _lost_state(page)
+            said = page.text_content("#error")
+        finally:
+            browser.close()
+    assert "snapshot failed" in said and "the state broke" in said
+    as_of = said.split("as of ")[1].rstrip(".")
+    assert shown["clock"] == f"last update {as_of}" and as_of.endswith(" UTC")
+    assert shown["stale"] and shown["opacity"] == pytest.approx(0.45) and shown["lost"] is None
+    assert errors == []
