@@ -35,7 +35,28 @@ def false_reports(reports: pd.DataFrame, reference: pd.DataFrame, parameters: Ma
     reports with a position."""
     rep = associated(reports, reference, parameters)
     positioned = ~np.isnan(rep["ref_distance_m"].to_numpy(float))
-    return share("false_reports", int(_false(rep, reference, parameters).sum()), int(positioned.sum()))
+    false = _false(rep, reference, parameters)
+    return share("false_reports", int(false.sum()), int(positioned.sum()),
+                 _late_reference(rep, reference, parameters, false))
+
+
+def _late_reference(rep: pd.DataFrame, reference: pd.DataFrame, parameters: Mapping | None,
+                    false: np.ndarray) -> tuple[str, ...]:
+    """A note when false reports lie near aircraft whose reference is early or late (evaluate.timing: their
+    lead stands out from the other aircraft's), as a report ahead of a late reference looks false."""
+    from msdc.pipeline.evaluate.accuracy import position_errors
+    from msdc.pipeline.evaluate.timing import late_aircraft
+
+    if not false.any():
+        return ()
+    late = late_aircraft(position_errors(rep, reference, parameters))
+    near = false & pd.Series(rep["ref_aircraft"], dtype=object).astype(str).isin(late).to_numpy(bool)
+    if not near.any():
+        return ()
+    named = ", ".join(late[:6]) + (f" and {len(late) - 6} more" if len(late) > 6 else "")
+    return (f"timing: {int(near.sum()):,} of the {int(false.sum()):,} false reports lie near an aircraft "
+            f"whose reference leads or lags unlike the others' ({named}: see the accuracy rows); that "
+            "reference is early or late, so these reports may be true",)
 
 
 def false_reports_per_scan(reports: pd.DataFrame, reference: pd.DataFrame, parameters: Mapping | None,

@@ -113,6 +113,12 @@ def outlying(leads: pd.DataFrame) -> list[str]:
     return list(leads.index[flagged])
 
 
+def late_aircraft(errors: pd.DataFrame) -> list[str]:
+    """The aircraft of ``errors`` (accuracy.position_errors) whose lead stands out (outlying)."""
+    leads = aircraft_leads(errors)
+    return outlying(leads) if len(leads) else []
+
+
 def timing_note(errors: pd.DataFrame, limit_m: float | None = None) -> str:
     """The accuracy rows' note on time offsets in ``errors`` (accuracy.position_errors), or '': aircraft
     whose offset stands out (how many of the errors beyond ``limit_m`` they hold), else a common offset."""

@@ -94,3 +94,17 @@ def test_a_late_reference_of_two_aircraft_is_named_on_the_accuracy_rows():
     assert named.keys() == {"A0", "A1"} and all(abs(float(v) - 1.0) < 0.1 for v in named.values())
     reports, reference = _accelerating([0.0] * 12, seed=8)
     assert not [n for n in REQUIREMENTS["p95_m"](reports, reference, {}).notes if n.startswith("timing:")]
+
+
+def test_false_reports_ahead_of_a_late_reference_are_said_to_be_maybe_true():
+    """The same two late references: their reports lie 1 s of travel ahead, over 40 m once the aircraft
+    passes 40 m/s (t > 51 s: 67 reports each, a few either side by the 3 m noise), so they count as false
+    beyond 40 m; the note says all of them lie near the two aircraft the timing finds late."""
+    reports, reference = _accelerating([1.0, 1.0] + [0.0] * 10, seed=7)
+    out = REQUIREMENTS["false_reports"](reports, reference, {"distance_m": 40.0})
+    assert 130 <= out.count <= 138
+    (note,) = [n for n in out.notes if n.startswith("timing:")]
+    assert note.startswith(f"timing: {out.count} of the {out.count} false reports lie near an aircraft")
+    assert "(A0, A1: see the accuracy rows)" in note
+    reports, reference = _accelerating([0.0] * 12, seed=8)
+    assert REQUIREMENTS["false_reports"](reports, reference, {"distance_m": 40.0}).notes == ()
