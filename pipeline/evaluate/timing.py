@@ -37,6 +37,31 @@ def _slope(n, sv, sa, svv, sva):
     return (sva - sv * sa / n) / (svv - sv * sv / n)
 
 
+def _block_fits(group: np.ndarray, along_m: np.ndarray, speed_mps: np.ndarray, t_s: np.ndarray
+                ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Per group (codes 0..k-1): the lead, its jackknife standard error over BLOCK_S blocks, the reports
+    and the blocks, all groups at once (sums per block, each block left out of its group's in turn)."""
+    k = int(group.max(initial=-1)) + 1
+    number = np.floor(t_s / BLOCK_S).astype(np.int64)  # blocks on the clock's 10 s, whatever the row
+    pair = group.astype(np.int64) * (1 << 32) + (number - (number.min() if number.size else 0))
+    keys, block = np.unique(pair, return_inverse=True)
+    owner = (keys >> 32).astype(np.int64)  # each block's group
+    a, v = along_m, speed_mps
+    sums = np.stack([np.bincount(block, weights=w, minlength=keys.size)
+                     for w in (np.ones_like(a), v, a, v * v, v * a)])
+    totals = np.stack([np.bincount(owner, weights=row, minlength=k) for row in sums])
+    blocks = np.bincount(owner, minlength=k).astype(float)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        lead = _slope(*totals)
+        left_out = _slope(*(totals[:, owner] - sums))
+        finite = np.where(np.isfinite(left_out), left_out, 0.0)
+        mean = np.bincount(owner, weights=finite, minlength=k) / blocks
+        squares = np.bincount(owner, weights=(left_out - mean[owner]) ** 2, minlength=k)
+        se = np.sqrt((blocks - 1) / blocks * squares)  # NaN where a left-out fit had no spread of speed
+    few = blocks < MIN_BLOCKS
+    return np.where(few, np.nan, lead), np.where(few, np.nan, se), totals[0], blocks
+
+
 def fit_lead(along_m: np.ndarray, speed_mps: np.ndarray, t_s: np.ndarray | None = None) -> Offset:
     """along = offset + lead * speed + noise, by least squares: the constant offset takes what does not grow
     with speed (the two antennas' places on the aircraft, a bias), the lead what does (a clock). Successive
@@ -44,33 +69,20 @@ def fit_lead(along_m: np.ndarray, speed_mps: np.ndarray, t_s: np.ndarray | None 
     turn); NaN with fewer than MIN_BLOCKS blocks or no spread of speed."""
     a, v = np.asarray(along_m, float), np.asarray(speed_mps, float)
     t = np.arange(a.size) * BLOCK_S if t_s is None else np.asarray(t_s, float)
-    blocks = np.unique(np.floor(t / BLOCK_S), return_inverse=True)[1]
-    g = int(blocks.max(initial=-1)) + 1
-    if g < MIN_BLOCKS or float(np.ptp(v)) <= 0:
-        return Offset(np.nan, np.nan, int(a.size))
-    sums = np.stack([np.bincount(blocks, weights=w, minlength=g)
-                     for w in (np.ones_like(a), v, a, v * v, v * a)])
-    lead = float(_slope(*sums.sum(axis=1)))
-    with np.errstate(divide="ignore", invalid="ignore"):
-        left_out = _slope(*(sums.sum(axis=1, keepdims=True) - sums))
-    if not np.isfinite(left_out).all():  # a block holding every spread of speed: no jackknife
-        return Offset(lead, np.nan, int(a.size))
-    return Offset(lead, float(np.sqrt((g - 1) / g * np.sum((left_out - left_out.mean()) ** 2))), int(a.size))
+    lead, se, n, _ = _block_fits(np.zeros(a.size, np.int64), a, v, t)
+    return Offset(float(lead[0]), float(se[0]), int(n[0]))
 
 
 def aircraft_leads(errors: pd.DataFrame) -> pd.DataFrame:
-    """Per aircraft with MIN_MOVING_REPORTS moving reports or more (``along_m`` and ``speed_mps`` finite):
-    ``lead_s``, ``se_s``, ``n``; indexed by aircraft."""
-    moving = errors[np.isfinite(errors["along_m"].to_numpy(float))
-                    & np.isfinite(errors["speed_mps"].to_numpy(float))]
-    rows = {}
-    for aircraft, g in moving.groupby(moving["aircraft"].astype(str), sort=True):
-        if len(g) >= MIN_MOVING_REPORTS:
-            fit = fit_lead(g["along_m"].to_numpy(float), g["speed_mps"].to_numpy(float),
-                           g["t_s"].to_numpy(float))
-            if np.isfinite(fit.se_s) and fit.se_s > 0:
-                rows[aircraft] = (fit.lead_s, fit.se_s, fit.n)
-    return pd.DataFrame.from_dict(rows, orient="index", columns=["lead_s", "se_s", "n"])
+    """Per aircraft with MIN_MOVING_REPORTS moving reports or more (``along_m`` and ``speed_mps`` finite) and
+    a finite standard error: ``lead_s``, ``se_s``, ``n``; indexed by aircraft."""
+    along, speed = errors["along_m"].to_numpy(float), errors["speed_mps"].to_numpy(float)
+    moving = np.isfinite(along) & np.isfinite(speed)
+    codes, names = pd.factorize(errors["aircraft"].astype(str).to_numpy()[moving], sort=True)
+    lead, se, n, _ = _block_fits(codes, along[moving], speed[moving], errors["t_s"].to_numpy(float)[moving])
+    keep = (n >= MIN_MOVING_REPORTS) & np.isfinite(se) & (se > 0)
+    return pd.DataFrame({"lead_s": lead[keep], "se_s": se[keep], "n": n[keep].astype(int)},
+                        index=pd.Index(np.asarray(names)[keep], dtype=object))
 
 
 def _weighted(leads: pd.DataFrame, tau2: float = 0.0) -> tuple[float, float]:
@@ -121,7 +133,8 @@ def late_aircraft(errors: pd.DataFrame) -> list[str]:
 
 def timing_note(errors: pd.DataFrame, limit_m: float | None = None) -> str:
     """The accuracy rows' note on time offsets in ``errors`` (accuracy.position_errors), or '': aircraft
-    whose offset stands out (how many of the errors beyond ``limit_m`` they hold), else a common offset."""
+    whose offset stands out (how many of the errors beyond ``limit_m`` they hold; none: no note), else a
+    common offset."""
     leads = aircraft_leads(errors)
     if leads.empty:
         return ""
@@ -129,7 +142,10 @@ def timing_note(errors: pd.DataFrame, limit_m: float | None = None) -> str:
     if late:
         mine = errors["aircraft"].astype(str).isin(late).to_numpy()
         held = ""
-        if limit_m is not None and (beyond := errors["error_m"].to_numpy(float) > limit_m).any():
+        if limit_m is not None:
+            beyond = errors["error_m"].to_numpy(float) > limit_m
+            if not (beyond & mine).any():  # they hold no error over the threshold: nothing to explain
+                return ""
             held = (f", holding {int((beyond & mine).sum()):,} of the {int(beyond.sum()):,} errors over "
                     f"{limit_m:.3g} m")
         shown = ", ".join(f"{a} {leads.at[a, 'lead_s']:+.2f} s" for a in late[:6])

@@ -80,3 +80,15 @@ def test_no_note_without_a_clock(offsets_m):
     errors = pd.concat([_aircraft(f"A{i}", 0.0, rng, offset_m=o, speeds=(3.0, 15.0))
                         for i, o in enumerate(offsets_m)], ignore_index=True)
     assert timing_note(errors, 12.0) == ""
+
+
+def test_late_aircraft_holding_no_error_over_the_threshold_get_no_note():
+    """A reference 1 s late on an aircraft taxiing at 3-12 m/s: its errors (12 m at most, with 0.5 m of
+    noise) stay under a 20 m threshold, so the row has nothing to explain; without a threshold it is named."""
+    rng = np.random.default_rng(9)
+    errors = pd.concat([_aircraft(f"OK{i}", 0.0, rng, noise_m=0.5, speeds=(3.0, 12.0)) for i in range(6)]
+                       + [_aircraft("LATE", 1.0, rng, noise_m=0.5, speeds=(3.0, 12.0))], ignore_index=True)
+    assert errors.loc[errors["aircraft"] == "LATE", "error_m"].max() < 20.0
+    assert timing_note(errors, 20.0) == ""
+    named = re.search(r"\((LATE) ([+-]\d\.\d\d) s;", timing_note(errors))
+    assert named is not None and float(named.group(2)) == pytest.approx(1.0, abs=0.05)
