@@ -42,11 +42,15 @@ STRIPS = [
 ]
 # (name, area, corners (lon, lat)): rough outlines of the stands and their taxilanes
 APRONS = [
-    ("Apron T1", "apron", [(2.07400, 41.28500), (2.08350, 41.28800), (2.08170, 41.29600),
-                           (2.07120, 41.29150)]),
-    ("Apron T2", "apron", [(2.06500, 41.29610), (2.09050, 41.30480), (2.08880, 41.30900),
+    ("Apron T1", "apron", [(2.07400, 41.28500), (2.08350, 41.28800), (2.08245, 41.28813), (2.08175, 41.28831),
+                           (2.08287, 41.29070), (2.08170, 41.29600), (2.07120, 41.29150)]),
+    ("Apron T2", "apron", [(2.06500, 41.29610), (2.08938, 41.30442), (2.09005, 41.30585), (2.08880, 41.30900),
                            (2.06330, 41.30060)]),
 ]
+# (the aprons stop about a metre short of the TWY 02/20 parallel strip: Apron T1 goes round its southern end
+# and up its western edge, Apron T2's eastern corner, inside the strip, is replaced by the two points where
+# its edges cross the western edge. A standard's areas do not overlap; until 2026-12-02 the aprons reached
+# over the taxiway, and 3,473 reports were judged as both manoeuvring and apron)
 MONITORS = {"342383", "342384", "342385", "342386", "342387"}  # fixed field transponders (lebl-hour.md)
 RUNWAY_SPEED_KT = 50.0  # on the ground this fast: a take-off or landing roll
 MOVING_KT = 5.0  # on the ground and this fast: taxiing (or a vehicle driving)
@@ -142,6 +146,16 @@ def check(meas: pd.DataFrame) -> None:
         longitude=("longitude", "median"), speed_kt=("ground_speed_kt", "median"))
     print("multilateration on-ground reports outside every area, by target (over 200 reports):")
     print(who[who["reports"] > 200].sort_values("reports", ascending=False).to_string())
+    on = (kind == "mlat") & ~monitor & ground & np.isfinite(lat)
+    fixed = who.index[who["speed_kt"].fillna(0.0) == 0.0].intersection(who.index[who["callsign"].isna()])
+    vehicle = meas["callsign"].astype("string").str.fullmatch(r"F\d\d").fillna(False).to_numpy(bool)
+    not_fixed = on & ~meas["aircraft_id"].astype(str).isin(fixed.astype(str)).to_numpy(bool)
+    print(f"outside every area: fixed transponders without call sign ({', '.join(map(str, fixed))}) "
+          f"{int((out & ~not_fixed).sum()):,}, vehicles (call signs F and two digits) "
+          f"{int((out & vehicle).sum()):,} of their {int((on & vehicle).sum()):,}; in some area without the "
+          "fixed transponders "
+          f"{100 * anywhere[not_fixed].mean():.1f} %, without the vehicles too "
+          f"{100 * anywhere[not_fixed & ~vehicle].mean():.1f} %")
     for k in ("mlat", "adsb"):
         on = (kind == k) & ~monitor & ground & np.isfinite(lat)
         per = {n: int(m[on].sum()) for n, m in masks.items()}

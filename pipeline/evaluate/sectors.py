@@ -180,5 +180,27 @@ def check_preset_areas(preset, sectors: list[Sector]) -> list[str]:
     return warnings
 
 
-__all__ = ["PROPERTIES", "Sector", "area_of", "check_preset_areas", "read_sectors", "sector_mask",
-           "sectors_for_area"]
+def area_overlaps(masks: list[tuple[str, str, np.ndarray]], what: str = "reports") -> str:
+    """A note when sectors of different areas overlap where positions lie (``masks``: per sector its name,
+    its area and whether each position lies in it), or '': such positions are judged under both areas'
+    requirements, which a standard's areas (manoeuvring area, apron, stands) are not meant to share."""
+    pairs: dict[tuple[str, str], int] = {}
+    both = None
+    for i, (name_a, area_a, mask_a) in enumerate(masks):
+        for name_b, area_b, mask_b in masks[i + 1:]:
+            if area_a == area_b:
+                continue
+            shared = mask_a & mask_b
+            if shared.any():
+                key = (f"{name_a!r} ({area_a})", f"{name_b!r} ({area_b})")
+                pairs[key] = int(shared.sum())
+                both = shared if both is None else both | shared
+    if both is None:
+        return ""
+    listed = "; ".join(f"{a} and {b}: {n:,}" for (a, b), n in sorted(pairs.items(), key=lambda kv: -kv[1]))
+    return (f"sectors of different areas overlap where {int(both.sum()):,} of the {what} lie ({listed}): "
+            "those are judged under both areas' requirements; draw the areas apart")
+
+
+__all__ = ["PROPERTIES", "Sector", "area_of", "area_overlaps", "check_preset_areas", "read_sectors",
+           "sector_mask", "sectors_for_area"]

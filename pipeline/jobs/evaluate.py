@@ -508,6 +508,8 @@ def _evaluate_window(options: EvaluateOptions, checked: EvaluateChecked, progres
                  for a, p95 in sorted(standing.items())]
         notes.append(f"field monitors (fixed transponders): {', '.join(said)}; judged in their own rows, "
                      "left out of the others")
+    if overlap := _area_overlap(checked, meas):
+        notes.append(overlap)
     gates = Gates(min_nacp=options.min_nacp, min_nic=options.min_nic, min_sil=options.min_sil,
                   drop_jumps=options.drop_jumps)
     results, cache = [], {}  # the latest reference, reused by the next sensor built from the same
@@ -728,6 +730,22 @@ def within_margin(loaded: Loaded, categories: tuple[int, ...]) -> None:
         inside = loaded.cut.inside(absolute_time(frame, loaded.date))
         if not inside.all():
             loaded.frames[cat] = frame[inside].reset_index(drop=True)
+
+
+def _area_overlap(checked: EvaluateChecked, meas: pd.DataFrame) -> str:
+    """The note on sectors of different preset areas overlapping where the inputs' reports lie ('' when they
+    do not, or when the preset has no area requirement)."""
+    from msdc.pipeline.evaluate.sectors import area_overlaps
+
+    areas = {r.area for r in checked.preset.requirements if r.area is not None}
+    regions = [r for r in checked.regions if r.area in areas]
+    if len({r.area for r in regions}) < 2 or meas.empty:
+        return ""
+    lat, lon = meas["latitude"].to_numpy(float), meas["longitude"].to_numpy(float)
+    fl = (pd.to_numeric(meas["flight_level"], errors="coerce").to_numpy(float, na_value=np.nan)
+          if "flight_level" in meas.columns else None)
+    return area_overlaps([(r.name, r.area, r.mask(lat, lon, fl, None)) for r in regions],
+                         "inputs' reports")
 
 
 def _keep_frames(loaded: Loaded, tests: list[tuple[str, str]]) -> None:

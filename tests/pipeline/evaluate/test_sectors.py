@@ -14,6 +14,7 @@ import pytest
 from msdc.pipeline.evaluate.presets import load_preset
 from msdc.pipeline.evaluate.sectors import (
     Sector,
+    area_overlaps,
     check_preset_areas,
     read_sectors,
     sector_mask,
@@ -202,3 +203,27 @@ def test_an_example_file_reads(tmp_path: Path) -> None:
     sectors = read_sectors(example)
     assert {s.area for s in sectors} <= {"manoeuvring", "apron", "stands"}
     assert np.all([len(s.polygons) >= 1 for s in sectors])
+    # its areas do not overlap: a 3 m grid over the airport falls in sectors of one area at most
+    lon, lat = np.meshgrid(np.arange(2.055, 2.105, 3.0 / 83_760.0),
+                           np.arange(41.280, 41.312, 3.0 / 111_132.0))
+    lat, lon = lat.ravel(), lon.ravel()
+    area_of_point = {}
+    for s in sectors:
+        for k in np.flatnonzero(sector_mask(s, lat, lon)):
+            area_of_point.setdefault(int(k), set()).add(s.area)
+    assert area_of_point and max(len(a) for a in area_of_point.values()) == 1
+
+
+def test_sectors_of_two_areas_sharing_reports_are_noted() -> None:
+    """Two squares of different areas overlapping by a quarter, a third of the same area as the first: of
+    nine points, one lies in the overlap of the two areas, one only in the two same-area sectors."""
+    x = np.array([0.5, 1.5, 2.5, 0.5, 1.5, 2.5, 0.5, 1.5, 2.5])
+    y = np.array([0.5, 0.5, 0.5, 1.5, 1.5, 1.5, 2.5, 2.5, 2.5])
+    a = (x < 2) & (y < 2)  # [0, 2) x [0, 2)
+    b = (x > 1) & (y > 1)  # (1, 3] x (1, 3]: shares (1.5, 1.5) with a
+    c = (x < 1) & (y < 1)  # inside a, same area
+    note = area_overlaps([("A", "apron", a), ("B", "manoeuvring", b), ("C", "apron", c)], "reports")
+    assert note == ("sectors of different areas overlap where 1 of the reports lie ('A' (apron) and 'B' "
+                    "(manoeuvring): 1): those are judged under both areas' requirements; draw the areas "
+                    "apart")
+    assert area_overlaps([("A", "apron", a), ("C", "apron", c)]) == ""
