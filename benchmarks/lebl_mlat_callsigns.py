@@ -7,14 +7,9 @@ Run by hand: ``python benchmarks/lebl_mlat_callsigns.py [../shared/real]``.
 
 from __future__ import annotations
 
-import argparse
-from pathlib import Path
-
 import numpy as np
 import pandas as pd
-from lebl_pd_independent import DAY, ROOT, seconds
-
-import msdc.asterix as asterix
+from lebl_pd_independent import lebl_frames, real_folder, seconds
 
 WINDOWS_S = (15.0, 30.0)
 
@@ -28,13 +23,8 @@ def named(frame: pd.DataFrame) -> pd.DataFrame:
 
 
 def main() -> None:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("real", nargs="?", type=Path, default=ROOT.parent / "shared" / "real")
-    a = ap.parse_args()
-    adsb = named(asterix.read(a.real / "adsb_v023_160510-lebl-220001.ast", date=DAY,
-                              editions={21: "0.23"}).frames[21])
-    mlat = asterix.read(a.real / "mlat_160510-lebl-220001.ast", date=DAY).frames[10]
-    mlat = named(mlat[mlat["typ"] == 1])
+    adsb, mlat, _ = lebl_frames(real_folder(__doc__))
+    adsb, mlat = named(adsb), named(mlat[mlat["typ"] == 1])
     missing = mlat[~mlat["has"]]
     seen = missing["address"].isin(set(adsb["address"]))
     print(f"multilateration target reports with an address: {len(mlat):,}; without a call sign: "

@@ -16,14 +16,19 @@ Run by hand: ``python benchmarks/lebl_mlat_speed.py [../shared/real]``.
 
 from __future__ import annotations
 
-import argparse
-from pathlib import Path
-
 import numpy as np
 import pandas as pd
-from lebl_pd_independent import DAY, ORIGINS, ROOT, inside, manoeuvring, plane, reference, seconds
-
-import msdc.asterix as asterix
+from lebl_pd_independent import (
+    ORIGINS,
+    ROOT,
+    inside,
+    lebl_frames,
+    manoeuvring,
+    plane,
+    real_folder,
+    reference,
+    seconds,
+)
 
 FALSE_M = 60.0  # ED-117A's manoeuvring-area false-report distance
 SLOW_MPS = 15.0  # taxiing below, take-off and landing runs above
@@ -75,12 +80,7 @@ def describe(label: str, e: pd.DataFrame) -> None:
 
 
 def main() -> None:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("real", nargs="?", type=Path, default=ROOT.parent / "shared" / "real")
-    a = ap.parse_args()
-    adsb = asterix.read(a.real / "adsb_v023_160510-lebl-220001.ast", date=DAY,
-                        editions={21: "0.23"}).frames[21]
-    mlat = asterix.read(a.real / "mlat_160510-lebl-220001.ast", date=DAY).frames[10]
+    adsb, mlat, _ = lebl_frames(real_folder(__doc__))
     mlat = mlat[(mlat["typ"] == 1) & mlat["address"].notna() & mlat["x_m"].notna()]
     e = errors(mlat, reference(adsb))
     e = e[inside(e["x"].to_numpy(), e["y"].to_numpy(),

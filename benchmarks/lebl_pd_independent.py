@@ -154,14 +154,23 @@ def share(k: int, n: int) -> str:
     return f"{k:,} of {n:,} = {100 * k / n:.2f} % ({100 * lo:.2f}-{100 * hi:.2f} %)"
 
 
-def main() -> None:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+def real_folder(doc: str) -> Path:
+    """The folder of the real recordings, the command line's one argument (default ../shared/real)."""
+    ap = argparse.ArgumentParser(description=doc.splitlines()[0])
     ap.add_argument("real", nargs="?", type=Path, default=ROOT.parent / "shared" / "real")
-    a = ap.parse_args()
-    adsb = asterix.read(a.real / "adsb_v023_160510-lebl-220001.ast", date=DAY,
-                        editions={21: "0.23"}).frames[21]
-    mlat = asterix.read(a.real / "mlat_160510-lebl-220001.ast", date=DAY).frames[10]
-    smr = asterix.read(a.real / "smr_160510-lebl-220001.ast", date=DAY).frames[10]
+    return ap.parse_args().real
+
+
+def lebl_frames(real: Path) -> tuple[pd.DataFrame, pd.DataFrame, pd.DataFrame]:
+    """The LEBL hour decoded: ADS-B (CAT021 0.23), multilateration and surface radar (CAT010) frames."""
+    adsb = asterix.read(real / "adsb_v023_160510-lebl-220001.ast", date=DAY, editions={21: "0.23"}).frames[21]
+    mlat = asterix.read(real / "mlat_160510-lebl-220001.ast", date=DAY).frames[10]
+    smr = asterix.read(real / "smr_160510-lebl-220001.ast", date=DAY).frames[10]
+    return adsb, mlat, smr
+
+
+def main() -> None:
+    adsb, mlat, smr = lebl_frames(real_folder(__doc__))
     mlat = mlat[(mlat["typ"] == 1) & mlat["address"].notna()]
     smr = smr[smr["x_m"].notna()]
     ref = reference(adsb)
