@@ -85,12 +85,19 @@ def _statistic(requirement: str, column: str, statistic: str):
         notes = error_notes(ci)
         if column == "error_m":  # a clock, not the sensor's scatter, can make the errors at speed
             threshold = parameter(parameters, THRESHOLD_PARAMETER, None)
-            notes = (*notes, timing_note(errors, None if threshold is None else float(threshold)))
+            notes = (*notes, timing_note(errors, None if threshold is None else float(threshold),
+                                         adsb=is_adsb(reports)))
         return Outcome(requirement, ci.value, ci.ci_low, ci.ci_high, ci.n, ci.n, tuple(n for n in notes if n),
                        evidence=error_evidence(values, clusters, statistic, seed))
     fn.__name__ = requirement
     fn.__doc__ = f"``{requirement}``: {statistic} of {column} over aircraft (docs/methods/evaluate.md)."
     return fn
+
+
+def is_adsb(reports: pd.DataFrame) -> bool:
+    """Whether the reports are an ADS-B sensor's (each aircraft then keeps its own clock)."""
+    return ("sensor_kind" in reports.columns and len(reports) > 0
+            and str(reports["sensor_kind"].iloc[0]) == "adsb")
 
 
 def error_notes(ci) -> tuple[str, ...]:

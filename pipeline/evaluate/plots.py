@@ -44,10 +44,10 @@ def _late_reference(rep: pd.DataFrame, reference: pd.DataFrame, parameters: Mapp
                     false: np.ndarray) -> tuple[str, ...]:
     """A note when false reports lie near aircraft whose reference is early or late (evaluate.timing: their
     lead stands out from the other aircraft's), as a report ahead of a late reference looks false."""
-    from msdc.pipeline.evaluate.accuracy import position_errors
+    from msdc.pipeline.evaluate.accuracy import is_adsb, position_errors
     from msdc.pipeline.evaluate.timing import late_aircraft
 
-    if not false.any():
+    if not false.any() or is_adsb(rep):  # an ADS-B aircraft's own latency makes its reports wrong, not true
         return ()
     late = late_aircraft(position_errors(rep, reference, parameters))
     near = false & pd.Series(rep["ref_aircraft"], dtype=object).astype(str).isin(late).to_numpy(bool)

@@ -131,10 +131,11 @@ def late_aircraft(errors: pd.DataFrame) -> list[str]:
     return outlying(leads) if len(leads) else []
 
 
-def timing_note(errors: pd.DataFrame, limit_m: float | None = None) -> str:
+def timing_note(errors: pd.DataFrame, limit_m: float | None = None, adsb: bool = False) -> str:
     """The accuracy rows' note on time offsets in ``errors`` (accuracy.position_errors), or '': aircraft
     whose offset stands out (how many of the errors beyond ``limit_m`` they hold; none: no note), else a
-    common offset."""
+    common offset. With ``adsb`` (the sensor under test is ADS-B: a clock per aircraft) the outlying
+    aircraft's offsets are the sensor's own, not the reference's."""
     leads = aircraft_leads(errors)
     if leads.empty:
         return ""
@@ -151,10 +152,11 @@ def timing_note(errors: pd.DataFrame, limit_m: float | None = None) -> str:
         shown = ", ".join(f"{a} {leads.at[a, 'lead_s']:+.2f} s" for a in late[:6])
         more = f" and {len(late) - 6} more" if len(late) > 6 else ""
         rest, _ = _weighted(leads.drop(index=late))
+        why = ("ADS-B under test: each aircraft's transponder has a latency of its own, so these are its "
+               "reports' own errors" if adsb else "One sensor clock serves every aircraft: their reference "
+               "is early or late (an ADS-B latency), and so are their errors along the track at speed")
         return (f"timing: {len(late)} of {len(leads)} aircraft lead or lag the reference unlike the others "
-                f"({shown}{more}; the others {rest:+.2f} s){held}. One sensor clock serves every aircraft: "
-                "their reference is early or late (an ADS-B latency), and so are their errors along the "
-                "track at speed")
+                f"({shown}{more}; the others {rest:+.2f} s){held}. {why}")
     if len(leads) < MIN_AIRCRAFT_COMMON:
         return ""
     common, se = common_lead(leads)

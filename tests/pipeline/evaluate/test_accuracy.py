@@ -108,3 +108,16 @@ def test_false_reports_ahead_of_a_late_reference_are_said_to_be_maybe_true():
     assert "(A0, A1: see the accuracy rows)" in note
     reports, reference = _accelerating([0.0] * 12, seed=8)
     assert REQUIREMENTS["false_reports"](reports, reference, {"distance_m": 40.0}).notes == ()
+
+
+def test_an_adsb_sensor_under_test_owns_its_aircrafts_latencies():
+    """The same two aircraft 1 s ahead, the reports an ADS-B sensor's: each transponder keeps its own clock,
+    so the note calls the lead the reports' own error, and the false reports are not said to be maybe
+    true."""
+    reports, reference = _accelerating([1.0, 1.0] + [0.0] * 10, seed=7)
+    reports = reports.assign(sensor_kind="adsb")
+    (note,) = [n for n in REQUIREMENTS["p95_m"](reports, reference, {"threshold_m": 12.0}).notes
+               if n.startswith("timing:")]
+    assert "ADS-B under test" in note and "their reference is early or late" not in note
+    out = REQUIREMENTS["false_reports"](reports, reference, {"distance_m": 40.0})
+    assert out.count > 100 and not [n for n in out.notes if n.startswith("timing:")]
