@@ -46,6 +46,7 @@ td.pass { background: #c6efce; color: #006100; font-weight: bold; }
 td.fail { background: #ffc7ce; color: #9c0006; font-weight: bold; }
 td.inconclusive { background: #ffeb9c; color: #9c5700; font-weight: bold; }
 td.unchecked { font-weight: bold; }
+td.notes { min-width: 28em; max-width: 48em; }
 p.note { font-style: italic; color: #595959; max-width: 60em; }
 figure.coverage { margin: 0.5em 0 1.5em; }
 figure.coverage img { max-width: 100%; height: auto; border: 1px solid #ddd; }
@@ -78,6 +79,8 @@ def _scorecard_table(card: pd.DataFrame) -> str:
             elif key == "checked":
                 cls = "" if rec["checked"] else ' class="unchecked"'
                 out.append(f"<td{cls}>{cells['checked']}</td>")
+            elif key == "notes":  # the longest text: given room, not squeezed to a word a line
+                out.append(f'<td class="notes">{html.escape(str(rec[key]))}</td>')
             else:
                 out.append(f"<td>{cells[key] if key in cells else html.escape(str(rec[key]))}</td>")
         rows.append("<tr>" + "".join(out) + "</tr>")

@@ -299,6 +299,8 @@ def test_the_html_report_works_offline_in_chromium(tmp_path: Path) -> None:
             verdict_colour = page.eval_on_selector(
                 "#scorecard tbody tr:nth-child(2) td:nth-child(10)",
                 "c => getComputedStyle(c).backgroundColor")
+            notes_px = page.eval_on_selector("#scorecard tbody tr:nth-child(3) td:nth-child(14)",
+                                             "c => c.getBoundingClientRect().width")
             figures = page.eval_on_selector_all(
                 "#coverage img", "is => is.map(i => [i.alt, i.complete, i.naturalWidth, i.naturalHeight])")
             page_messages = list(messages)  # before the test's own pixel reads (Chromium warns of those)
@@ -321,6 +323,8 @@ def test_the_html_report_works_offline_in_chromium(tmp_path: Path) -> None:
          "no", "=withheld: no report where the reference's sigma is below the tolerance"],
     ]
     assert verdict_colour == "rgb(255, 199, 206)"  # fail: #ffc7ce
+    # the notes get room (28em of the table's 0.9em text, 403 px), not a word a line beside the others
+    assert notes_px >= 28 * 0.9 * 16
     # the coverage figures load from the page itself, at the sizes the sample's PNGs were written with
     assert figures == [["SSR1: polar map", True, 400, 300], ["SSR1: vertical coverage", True, 320, 200]]
     assert blue > 50 and red > 50, (blue, red)  # both aircraft's lines and dots drawn
