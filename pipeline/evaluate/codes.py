@@ -80,10 +80,10 @@ def _misses(known: np.ndarray, have: np.ndarray, valid: np.ndarray, used: np.nda
     missed = known & ~(used & equal)
     if not missed.any():
         return ""
-    parts = [(int((missed & ~have).sum()), f"carry no {what}"),
-             (int((missed & have & ~valid).sum()), f"carry a {what} not validated or garbled"),
-             (int((missed & used & ~equal).sum()), differ or f"carry a different {what}")]
-    said = "; ".join(f"{n:,} {words}" for n, words in parts if n)
+    parts = [(int((missed & ~have).sum()), f"no {what}"),
+             (int((missed & have & ~valid).sum()), f"a {what} not validated or garbled"),
+             (int((missed & used & ~equal).sum()), differ or f"a different {what}")]
+    said = "; ".join(f"{n:,} {'carries' if n == 1 else 'carry'} {words}" for n, words in parts if n)
     return f"of the {int(missed.sum()):,} misses: {said}"
 
 
@@ -127,9 +127,9 @@ def _code_outcome(requirement: str, reports: pd.DataFrame, reference: pd.DataFra
         return withheld(requirement, f"the reference gives no {ref_col} for the associated reports")
     used = have & valid & known
     if what == "correct":
-        notes = (*notes, _misses(known, have, valid, used, equal, "code", "carry a different code")
+        notes = (*notes, _misses(known, have, valid, used, equal, "code", "a different code")
                  if col == "mode3a" else _misses(known, have, valid, used, equal, "Mode C",
-                                                 "carry a Mode C outside the tolerance"))
+                                                 "a Mode C outside the tolerance"))
         return _share(requirement, used & equal, known, keys, notes, own)
     return _share(requirement, ~equal, used, keys, notes, own)
 

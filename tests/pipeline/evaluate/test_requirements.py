@@ -170,8 +170,8 @@ def test_mode3a_present_valid_correct_false():
     correct = run("mode3a_correct", rep, ref)
     assert counts(correct) == (1, 4)
     # the three misses, one for each reason
-    assert ("of the 3 misses: 1 carry no code; 1 carry a code not validated or garbled; 1 carry a different "
-            "code") in correct.notes
+    assert ("of the 3 misses: 1 carries no code; 1 carries a code not validated or garbled; 1 carries a "
+            "different code") in correct.notes
     assert counts(run("mode3a_false", rep, ref)) == (1, 2)
 
 
@@ -233,7 +233,7 @@ def test_modec_within_the_tolerance():
     assert counts(run("modec_valid", rep, ref)) == (3, 4)
     correct = run("modec_correct", rep, ref, tolerance_ft=300.0)
     assert counts(correct) == (2, 4)
-    assert ("of the 2 misses: 1 carry a Mode C not validated or garbled; 1 carry a Mode C outside the "
+    assert ("of the 2 misses: 1 carries a Mode C not validated or garbled; 1 carries a Mode C outside the "
             "tolerance") in correct.notes
     assert counts(run("modec_false", rep, ref, tolerance_ft=300.0)) == (1, 3)
     assert counts(run("modec_correct", rep, ref, tolerance_ft=500.0)) == (3, 4)
@@ -247,7 +247,7 @@ def test_address_and_callsign():
     ref = reference(address="ABC123", callsign="AFR12")
     address = run("address_correct", rep, ref)
     assert counts(address) == (2, 4)
-    assert "of the 2 misses: 1 carry no address; 1 carry a different address" in address.notes
+    assert "of the 2 misses: 1 carries no address; 1 carries a different address" in address.notes
     assert counts(run("address_false", rep, ref)) == (1, 3)
     assert counts(run("callsign_correct", rep, ref)) == (2, 4)
     assert counts(run("callsign_false", rep, ref)) == (1, 3)
