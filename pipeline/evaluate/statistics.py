@@ -158,6 +158,16 @@ class Rate:
     n: np.ndarray | int
 
 
+def inverse_variance(values, se, tau2: float = 0.0) -> tuple[float, float, float]:
+    """Estimates with standard errors ``se`` combined by inverse variance: their mean, its standard error
+    1 / sqrt(sum of weights), and Cochran's Q of their agreement; ``tau2`` (a variance between them, random
+    effects) is added to each one's."""
+    v = np.asarray(values, float)
+    w = 1.0 / (np.square(np.asarray(se, float)) + tau2)
+    mean = float(np.sum(w * v) / np.sum(w))
+    return mean, float(1.0 / np.sqrt(np.sum(w))), float(np.sum(w * (v - mean) ** 2))
+
+
 def poisson_rate(events, exposure, confidence: float = 0.95) -> Rate:
     """Rate events/exposure with the exact (Garwood) Poisson interval from chi-square quantiles: lower end
     exactly 0 at no events; an exposure of 0 gives NaN. For counts such as false reports per scan, where

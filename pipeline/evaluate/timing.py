@@ -11,7 +11,7 @@ from dataclasses import dataclass
 import numpy as np
 import pandas as pd
 
-from msdc.pipeline.evaluate.statistics import chi2_sf
+from msdc.pipeline.evaluate.statistics import chi2_sf, inverse_variance
 
 MIN_MOVING_REPORTS = 20  # an aircraft's offset is fitted from this many moving reports or more
 BLOCK_S = 10.0  # successive errors are correlated: the standard error treats each 10 s as one draw
@@ -88,13 +88,12 @@ def aircraft_leads(errors: pd.DataFrame) -> pd.DataFrame:
 def _weighted(leads: pd.DataFrame, tau2: float = 0.0) -> tuple[float, float]:
     """The inverse-variance mean of the aircraft's leads and its standard error (``tau2``: the variance of
     the leads between aircraft, added to each one's)."""
-    w = 1.0 / (leads["se_s"].to_numpy(float) ** 2 + tau2)
-    return float(np.sum(w * leads["lead_s"].to_numpy(float)) / w.sum()), float(np.sqrt(1.0 / w.sum()))
+    mean, se, _ = inverse_variance(leads["lead_s"], leads["se_s"], tau2)
+    return mean, se
 
 
 def _cochran_q(leads: pd.DataFrame) -> float:
-    mean, _ = _weighted(leads)
-    return float(np.sum(((leads["lead_s"] - mean) / leads["se_s"]) ** 2))
+    return inverse_variance(leads["lead_s"], leads["se_s"])[2]
 
 
 def common_lead(leads: pd.DataFrame) -> tuple[float, float]:

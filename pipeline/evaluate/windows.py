@@ -32,6 +32,7 @@ from msdc.pipeline.evaluate.statistics import (
     chi2_sf,
     clustered_interval,
     interval_from_sums,
+    inverse_variance,
     pooled_sums,
     proportion,
 )
@@ -149,10 +150,7 @@ def _fits(rid: str, given: Sequence[Outcome]) -> Outcome:
     if not all(isinstance(f, FitEvidence) and f.se > 0 and math.isfinite(f.se) for f in fits):
         return withheld(rid, "a window's fit kept no standard error to combine")
     v = np.array([f.value for f in fits])
-    w = 1.0 / np.square([f.se for f in fits])
-    value = float(np.sum(w * v) / np.sum(w))
-    se = float(1.0 / np.sqrt(np.sum(w)))
-    q = float(np.sum(w * (v - value) ** 2))
+    value, se, q = inverse_variance(v, [f.se for f in fits])
     p = chi2_sf(q, len(fits) - 1)
     unit = fits[0].unit
     n = int(sum(f.n_reports for f in fits))

@@ -13,6 +13,7 @@ from scipy import stats
 from msdc.pipeline.evaluate import outcome, statistics
 from msdc.pipeline.evaluate.statistics import (
     clustered_interval,
+    inverse_variance,
     magnitude_interval,
     poisson_rate,
     proportion,
@@ -430,3 +431,12 @@ def test_the_effective_interval_covers_where_the_plain_one_does_not():
         effective += p1.ci_low <= 0.9 <= p1.ci_high
     assert plain / 2000 < 0.945
     assert effective / 2000 >= 0.95
+
+
+def test_inverse_variance_by_hand():
+    """1 and 3, each +- 1: mean 2, standard error 1/sqrt(2), Q = 1 + 1; with a variance 1 between them the
+    weights halve: standard error 1, Q 1. Unequal errors: 0 +- 1 and 4 +- 2 weigh 1 and 1/4: mean 0.8."""
+    assert inverse_variance([1.0, 3.0], [1.0, 1.0]) == pytest.approx((2.0, 2 ** -0.5, 2.0))
+    assert inverse_variance([1.0, 3.0], [1.0, 1.0], tau2=1.0) == pytest.approx((2.0, 1.0, 1.0))
+    mean, se, q = inverse_variance([0.0, 4.0], [1.0, 2.0])
+    assert (mean, se, q) == pytest.approx((0.8, 1.25 ** -0.5, 0.64 + 0.25 * 3.2 ** 2))
