@@ -297,24 +297,30 @@ def test_a_resumed_ingest_cuts_its_inputs_as_the_whole_command_did(uninterrupted
     same_dataset(reference, resumed)
 
 
-@pytest.mark.parametrize("workers", ["1", "2"])
-def test_an_ingest_killed_at_any_moment_resumes_to_the_same_dataset(uninterrupted, tmp_path, workers):
-    """SIGKILL at a random moment of the work (seeded, one in each third of it), then the same command
+# a kill in each third of the work for each --workers; the default run kills once per --workers, in the
+# middle third with one worker and the last with two (the first third: -m validation), 4.5 s a kill here
+KILLS = [pytest.param(workers, third, marks=() if (workers, third) in (("1", 1), ("2", 2))
+                      else pytest.mark.validation, id=f"{workers}-third{third}")
+         for workers in ("1", "2") for third in range(3)]
+
+
+@pytest.mark.parametrize(("workers", "third"), KILLS)
+def test_an_ingest_killed_at_any_moment_resumes_to_the_same_dataset(uninterrupted, tmp_path, workers, third):
+    """SIGKILL at a random moment of the work (seeded, within the given third of it), then the same command
     again: the dataset of a run never killed, part by part and row by row, nothing else left. With two
     workers each input is ingested whole by a pool process (three inputs), and the pool's processes die
     with the main one: none goes on writing parts the rerun writes again."""
     inputs, reference, work_s = uninterrupted(workers)
-    for seed in range(3):
-        root = tmp_path / f"killed{seed}"
-        proc = _run([*inputs, "--dataset", str(root)])
-        _started(root, proc)
-        try:
-            proc.wait(timeout=(seed + random.Random(seed).random()) / 3 * work_s)  # a third of it each
-        except subprocess.TimeoutExpired:
-            proc.send_signal(signal.SIGKILL)
-            proc.wait()
-        assert ingest(*inputs, "--dataset", root) == 0
-        same_dataset(reference, root)
+    root = tmp_path / "killed"
+    proc = _run([*inputs, "--dataset", str(root)])
+    _started(root, proc)
+    try:
+        proc.wait(timeout=(third + random.Random(third).random()) / 3 * work_s)
+    except subprocess.TimeoutExpired:
+        proc.send_signal(signal.SIGKILL)
+        proc.wait()
+    assert ingest(*inputs, "--dataset", root) == 0
+    same_dataset(reference, root)
 
 
 def test_what_an_interrupted_ingest_left_is_removed(fixtures_dataset, tmp_path, capsys):
