@@ -46,7 +46,9 @@ td.pass { background: #c6efce; color: #006100; font-weight: bold; }
 td.fail { background: #ffc7ce; color: #9c0006; font-weight: bold; }
 td.inconclusive { background: #ffeb9c; color: #9c5700; font-weight: bold; }
 td.unchecked { font-weight: bold; }
-td.notes { min-width: 28em; max-width: 48em; }
+tbody.result tr.has-notes td { border-bottom: none; }
+tr.notes td { border-top: none; padding: 0 0.5em 0.4em 2em; color: #444; font-size: 0.95em; }
+tr.notes td::before { content: "Notes: "; font-weight: bold; color: #595959; }
 p.note { font-style: italic; color: #595959; max-width: 60em; }
 figure.coverage { margin: 0.5em 0 1.5em; }
 figure.coverage img { max-width: 100%; height: auto; border: 1px solid #ddd; }
@@ -55,21 +57,23 @@ figure.coverage figcaption { font-weight: bold; margin-bottom: 0.3em; }
 
 
 def _scorecard_table(card: pd.DataFrame) -> str:
-    """The scorecard as an HTML table, one row per sensor, sector and requirement."""
-    head = "".join(f"<th>{html.escape(h)}</th>" for _, h in SCORECARD_HEADERS)
-    rows = []
+    """The scorecard as an HTML table, a body per sensor, sector and requirement: its figures in a row, its
+    notes (the longest text) in a row below across the whole width, so that the table fits a screen and
+    the notes read as lines, not a word a line in a last column pushed out of view."""
+    columns = [(key, title) for key, title in SCORECARD_HEADERS if key != "notes"]
+    head = "".join(f"<th>{html.escape(h)}</th>" for _, h in columns)
+    bodies = []
     for rec in card.to_dict("records"):
         unit = CATALOGUE[rec["requirement"]].unit
-        n = rec["n"]
         cells = {
             "unit": html.escape(UNIT_WORDS[unit]),
             "checked": "yes" if rec["checked"] else "no",
-            "n": sample_text(n),
+            "n": sample_text(rec["n"]),
             "parameters": ", ".join(f'<span class="kv">{html.escape(kv)}</span>'
                                     for kv in str(rec.get("parameters") or "").split(", ") if kv),
         }
         out = []
-        for key, _ in SCORECARD_HEADERS:
+        for key, _ in columns:
             if key in ("value", "ci_low", "ci_high", "threshold"):
                 out.append(f'<td class="num">{number_text(float(rec[key]), key, set(), unit)}</td>')
             elif key == "n":
@@ -79,12 +83,15 @@ def _scorecard_table(card: pd.DataFrame) -> str:
             elif key == "checked":
                 cls = "" if rec["checked"] else ' class="unchecked"'
                 out.append(f"<td{cls}>{cells['checked']}</td>")
-            elif key == "notes":  # the longest text: given room, not squeezed to a word a line
-                out.append(f'<td class="notes">{html.escape(str(rec[key]))}</td>')
             else:
                 out.append(f"<td>{cells[key] if key in cells else html.escape(str(rec[key]))}</td>")
-        rows.append("<tr>" + "".join(out) + "</tr>")
-    return (f'<table id="scorecard"><thead><tr>{head}</tr></thead><tbody>{"".join(rows)}</tbody></table>')
+        notes = str(rec.get("notes") or "")
+        if notes:
+            bodies.append(f'<tbody class="result"><tr class="has-notes">{"".join(out)}</tr><tr class="notes">'
+                          f'<td colspan="{len(columns)}">{html.escape(notes)}</td></tr></tbody>')
+        else:
+            bodies.append(f'<tbody class="result"><tr>{"".join(out)}</tr></tbody>')
+    return f'<table id="scorecard"><thead><tr>{head}</tr></thead>{"".join(bodies)}</table>'
 
 
 def _frame_table(name: str, frame: pd.DataFrame) -> str:
