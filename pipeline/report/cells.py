@@ -70,6 +70,15 @@ _BOLD_WIDTHS = {char: width for width, chars in {
     0.85: 'r"*', 0.95: "sz?", 1.0: "c", 1.05: "vxy", 1.1: "0123456789aeko$", 1.15: "bdghnpquFLSYZ{}",
     1.2: "EPT\u00b5", 1.25: "AVX", 1.3: "C", 1.35: "BGR#+<=>^~\u00b1", 1.4: "DKOQU", 1.45: "N&", 1.5: "wH",
     1.6: "%@", 1.7: "m", 1.75: "M", 1.8: "W"}.items() for char in chars}
+# The same for the body's regular text: DejaVu Sans Book against its digit (LibreOffice's face where Calibri
+# is missing, and the wider: Calibri's letters against its digit are within 0.05 of these), rounded up to
+# 0.05; any other character 1.25. Wrapped text's lines are counted with these: counted as characters, a
+# line of a scorecard's notes held 54 where 43 were counted, and its rows printed half again too tall
+_REGULAR_WIDTHS = {char: width for width, chars in {
+    0.45: "ijl'", 0.5: "IJ,. ", 0.55: "/:;\\|", 0.6: "f-", 0.65: "rt!()[]", 0.75: '"', 0.8: "*_`\u00b0\u2013",
+    0.85: "sz?", 0.9: "cL", 0.95: "kvxyFP", 1.0: "abdeghnopquESTY0123456789${}\u00b5", 1.05: "K",
+    1.1: "ABCRVXZ", 1.2: "HNU", 1.25: "DGOQ&", 1.3: "w", 1.35: "#+<=>^~\u00b1", 1.4: "M", 1.5: "%",
+    1.55: "m", 1.6: "W@"}.items() for char in chars}
 _WIDTH_SAMPLE_ROWS = 5000
 FAST_ROWS = True  # table rows through pipeline.report.rows (False: openpyxl's append, cell by cell)
 _ISO_DATE = re.compile(r"\d{4}-\d{2}-\d{2}\Z")
@@ -438,6 +447,30 @@ def bold_width(text: str) -> float:
     return sum(_BOLD_WIDTHS.get(char, 1.25) for char in text)
 
 
+def text_width(text: str, bold: bool = False) -> float:
+    """Printed width of text in characters of column width (_REGULAR_WIDTHS, or _BOLD_WIDTHS when bold)."""
+    widths = _BOLD_WIDTHS if bold else _REGULAR_WIDTHS
+    return sum(widths.get(char, 1.25) for char in text)
+
+
+def wrapped_lines(text: str, width: float, bold: bool = False) -> int:
+    """The lines a cell shows of ``text`` wrapped at its spaces and line breaks into ``width`` characters of
+    column width (text_width); a word wider than the line is broken where it reaches the edge."""
+    space = text_width(" ", bold)
+    width = max(width, 1.0)
+    lines = 0
+    for paragraph in text.split("\n"):
+        lines, line = lines + 1, 0.0
+        for word in paragraph.split(" "):
+            size = text_width(word, bold)
+            if line and line + space + size > width:
+                lines, line = lines + 1, 0.0
+            line += (space if line else 0.0) + size
+            while line > width:  # a word longer than a line runs on to the next
+                lines, line = lines + 1, line - width
+    return lines
+
+
 def left_space(indent: bool) -> float:
     """The space left of a column's content: its indent (INDENT_CHARS) or the gap (GAP_CHARS)."""
     return INDENT_CHARS if indent else GAP_CHARS
@@ -489,22 +522,9 @@ def header_height(headers: list[str], widths: list[float], right: list[bool] | N
     (spreadsheet programs do not all fit it)."""
     indents = indented(right) if right else [False] * len(headers)
     lines = [max(len(textwrap.wrap(h, width=max(1, int(w) - 1), break_long_words=False) or [h]),
-                 _bold_lines(h, w - (INDENT_CHARS if indent else 0.0)))
+                 wrapped_lines(h, w - (INDENT_CHARS if indent else 0.0), bold=True))
              for h, w, indent in zip(headers, widths, indents, strict=False)]
     return max([1, *lines]) * ROW_HEIGHT_PT
-
-
-def _bold_lines(header: str, width: float) -> int:
-    """The lines a bold header takes wrapped at its spaces in ``width`` characters (a word to a line at
-    least)."""
-    lines, line = 1, 0.0
-    for word in header.split(" "):
-        size = bold_width(word)
-        if line and line + bold_width(" ") + size > width:
-            lines, line = lines + 1, size
-        else:
-            line += (bold_width(" ") if line else 0.0) + size
-    return lines
 
 
 def note_text_cell(ws: WriteOnlyWorksheet, text: str) -> WriteOnlyCell:
@@ -621,7 +641,7 @@ def _wrapped_heights(ws: WriteOnlyWorksheet, columns: list[Column], kept: int) -
             continue
         for i, value in enumerate(c.values[:kept]):
             if value.__class__ is str and len(value) > c.wrap:
-                lines = len(textwrap.wrap(value, width=c.wrap)) or 1
+                lines = wrapped_lines(value, c.wrap)
                 heights[i + 2] = max(heights.get(i + 2, 1), lines)
     for row, lines in heights.items():
         ws.row_dimensions[row].height = lines * ROW_HEIGHT_PT

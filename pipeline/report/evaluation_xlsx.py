@@ -8,7 +8,6 @@ from __future__ import annotations
 
 import math
 import os
-import textwrap
 from collections.abc import Mapping
 
 import pandas as pd
@@ -45,6 +44,7 @@ from msdc.pipeline.report.cells import (
     page_setup,
     set_widths,
     text_cell,
+    wrapped_lines,
     write_table,
 )
 from msdc.pipeline.report.evaluation_formats import (
@@ -181,9 +181,9 @@ def _write_scorecard(wb: Workbook, card: pd.DataFrame, title: str = SCORECARD_SH
     right = [aligned_right([r[k] for r in rows]) for k, _ in keys]
     ws.row_dimensions[1].height = header_height(headers, widths, right)
     indents = _indents(rows, keys)
-    chars = [int(w - left_space(indent) - GAP_CHARS) for w, indent in zip(widths, indents, strict=True)]
+    room = [w - left_space(indent) - GAP_CHARS for w, indent in zip(widths, indents, strict=True)]
     for i, row in enumerate(rows, start=2):
-        lines = max([1, *(len(textwrap.wrap(str(row[k]), width=chars[j]) or [""])
+        lines = max([1, *(wrapped_lines(str(row[k]), room[j])
                           for j, (k, _) in enumerate(keys) if k in _WRAP_COLUMNS)])
         if lines > 1:
             ws.row_dimensions[i].height = lines * ROW_HEIGHT_PT

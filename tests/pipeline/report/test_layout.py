@@ -234,3 +234,44 @@ def test_a_header_row_is_as_tall_as_its_bold_lines() -> None:
     print about 1.7 characters wide): the row is two lines tall."""
     assert len("MMMM WWW") <= 10 - 2 and _printed_bold("MMMM WWW") > 10.0
     assert cells.header_height(["MMMM WWW"], [10.0]) == 2 * cells.ROW_HEIGHT_PT
+
+
+def _printed_regular(text: str) -> float:
+    """Body text's printed width in characters of column width, measured from DejaVu Sans as matplotlib
+    ships it (LibreOffice's body font where Calibri is missing) at 11 pt, against its digit 0."""
+    import os
+
+    import matplotlib
+    from PIL import ImageFont
+
+    font = ImageFont.truetype(os.path.join(matplotlib.get_data_path(), "fonts", "ttf", "DejaVuSans.ttf"), 1100)
+    return font.getlength(text) / font.getlength("0")
+
+
+NOTES = [  # a scorecard's notes as msdc writes them, every printable ASCII letter and the units' signs
+    "sigma gate at 12 m: 5906 of 11761 reports judged (left out: 5851 on the sensor's own track, 4 where the "
+    "reference's sigma is too large for the tolerance); 25 aircraft",
+    "timing: 116 of the 116 false reports lie near an aircraft whose reference leads or lags (343386, 3443D2)",
+    "interval [0.983297, 1] straddles 0.99; threshold not checked against the standard's text",
+    "ABCDEFGHIJKLMNOPQRSTUVWXYZ abcdefghijklmnopqrstuvwxyz 0123456789 !\"#$%&'()*+,-./:;<=>?@[\\]^_`{|}~",
+    "\u00b1 0.5 \u00b0 \u00b5s \u2013 at 1.3 NM",
+]
+
+
+@pytest.mark.parametrize("text", NOTES)
+def test_body_text_is_never_counted_narrower_than_it_prints(text: str) -> None:
+    """A wrapped cell's lines are counted from cells.text_width: never narrower than the text prints (a row
+    too short cuts its last line off), and within 8 % of it (rows half again too tall, as counted by
+    letters, waste pages)."""
+    printed = _printed_regular(text)
+    assert printed <= cells.text_width(text) <= 1.08 * printed
+
+
+def test_wrapped_lines_by_hand() -> None:
+    """Widths from _printed_regular's font: a, b, c, d 0.9-1.0, space 0.5; m 1.55."""
+    assert cells.wrapped_lines("abde abde", 8.5) == 1  # 4 + 0.5 + 4
+    assert cells.wrapped_lines("abde abde", 8.4) == 2
+    assert cells.wrapped_lines("abde abde abde", 8.5) == 2
+    assert cells.wrapped_lines("m" * 10, 5.0) == 4  # 15.5 wide: broken at the edge, 5 + 5 + 5 + 0.5
+    assert cells.wrapped_lines("ab\ncd", 40.0) == 2
+    assert cells.wrapped_lines("", 10.0) == 1
