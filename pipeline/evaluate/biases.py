@@ -122,7 +122,7 @@ def sensor_fit(reports: pd.DataFrame, reference: pd.DataFrame, parameters: Mappi
 def _refusal(fit: dict) -> str:
     """Why a fit gives no figure ("" when it gives one)."""
     if fit["n_reports"] < MIN_BIAS_REPORTS:
-        return (f"{fit['n_reports']} plots judged against an independent reference: fewer than "
+        return (f"{fit['n_reports']:,} plots judged against an independent reference: fewer than "
                 f"{MIN_BIAS_REPORTS}, too few to fit the radar biases")
     if not np.all(np.isfinite(fit["params"])):
         return ("the plots do not separate range bias, gain, azimuth bias and time bias (too little "
@@ -139,8 +139,8 @@ def _refusal(fit: dict) -> str:
 def _fit_notes(fit: dict) -> tuple[str, ...]:
     """What the fit rests on: plots, aircraft, goodness of fit, site-offset check."""
     trusted, _ = fit_trust(fit)
-    notes = [f"{fit['n_reports']} plots ({fit['n_rejected']} clipped as outliers, {fit['n_overhead']} "
-             f"azimuths overhead left out) of {fit['aircraft']} aircraft"]
+    notes = [f"{fit['n_reports']:,} plots ({fit['n_rejected']:,} clipped as outliers, {fit['n_overhead']:,} "
+             f"azimuths overhead left out) of {fit['aircraft']:,} aircraft"]
     chi2 = fit["chi2_per_dof"]
     notes.append(f"chi-square per degree of freedom {chi2:.2f} against the declared sigmas"
                  if np.isfinite(chi2)
@@ -208,8 +208,9 @@ def _random(requirement: str):
         clusters = aircraft_codes(errors.iloc[fit["rows"]])[kept]
         seed = int(parameter(parameters, "seed", 0))
         ci = clustered_interval(values, clusters, "sd", seed=seed)
-        notes = (f"{what} residuals after removing the four fitted biases: {ci.n} plots of {ci.n_clusters} "
-                 "aircraft (outliers clipped by the fit left out); the reference's own error is in them",
+        notes = (f"{what} residuals after removing the four fitted biases: {ci.n:,} plots of "
+                 f"{ci.n_clusters:,} aircraft (outliers clipped by the fit left out); the reference's own "
+                 "error is in them",
                  *((ci.reason,) if ci.reason else ()), *_fit_notes(fit)[1:])
         labels = aircraft_labels(errors.iloc[fit["rows"]])[kept]
         return Outcome(requirement, ci.value, ci.ci_low, ci.ci_high, ci.n, ci.n, notes,

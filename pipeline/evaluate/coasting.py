@@ -59,4 +59,4 @@ def coasting_correct(reports: pd.DataFrame, reference: pd.DataFrame, parameters:
         return withheld(rid, "no associated track report carries a coasting flag")
     correct = (cst == 1.0) != seen
     return share(rid, int(correct.sum()), len(rep),
-                 (f"window {window_s:g} s; {int((cst == 1).sum())} reports flagged coasting",))
+                 (f"window {window_s:g} s; {int((cst == 1).sum()):,} reports flagged coasting",))

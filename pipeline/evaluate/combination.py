@@ -61,5 +61,5 @@ def psr_ssr_association(reports: pd.DataFrame, reference: pd.DataFrame, paramete
     table = pd.DataFrame({"both": both, "combined": per["combined"] & both}).groupby(level="aircraft").sum()
     table = table.rename(columns={"both": "updates_both", "combined": "updates_combined"}).reset_index()
     return share(rid, int(per["combined"][both].sum()), int(both.sum()),
-                 (said, f"{int(both.sum())} updates of {len(table)} aircraft seen by both PSR and SSR"),
+                 (said, f"{int(both.sum()):,} updates of {len(table):,} aircraft seen by both PSR and SSR"),
                  per_aircraft=table)

@@ -180,7 +180,7 @@ def per_target(per: pd.DataFrame, notes: tuple[str, ...] = ()) -> Outcome:
     if per.empty:
         return withheld("pd", "no expected update inside coverage")
     worst = per.iloc[int(np.argmin(per["ci_high"].to_numpy()))]
-    notes = (*notes, f"per target: the aircraft {worst['aircraft']!r} of {len(per)} reaches lowest")
+    notes = (*notes, f"per target: the aircraft {worst['aircraft']!r} of {len(per):,} reaches lowest")
     return share("pd", int(worst["detected"]), int(worst["expected"]), notes, per)
 
 
@@ -212,4 +212,4 @@ def long_gaps(reports: pd.DataFrame, reference: pd.DataFrame, parameters: Mappin
     t = table["t_s"].to_numpy(float)
     g = (t[b] - t[a])[ok]
     count = int(np.sum((g >= float(lo)) & (g < hi)))
-    return share("long_gaps", count, g.size, (*notes, f"{g.size} gaps inside coverage"))
+    return share("long_gaps", count, g.size, (*notes, f"{g.size:,} gaps inside coverage"))

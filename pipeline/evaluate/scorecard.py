@@ -100,8 +100,9 @@ def measure(requirement: Requirement, reports: pd.DataFrame, reference: pd.DataF
         c = gate.counts
         rep = reports[gate.judged].reset_index(drop=True)
         left = {k: v for k, v in c.items() if k not in ("reports", "judged") and v}
-        notes = (f"sigma gate at {requirement.threshold:g} m: {c['judged']} of {c['reports']} reports judged"
-                 + (" (left out: " + ", ".join(f"{v} {GATE_WORDS.get(k, k.replace('_', ' '))}"
+        notes = (f"sigma gate at {requirement.threshold:g} m: {c['judged']:,} of {c['reports']:,} reports "
+                 "judged"
+                 + (" (left out: " + ", ".join(f"{v:,} {GATE_WORDS.get(k, k.replace('_', ' '))}"
                                                for k, v in left.items()) + ")" if left else ""),)
         params[THRESHOLD_PARAMETER] = requirement.threshold  # the timing note counts the errors over it
     elif "distance_m" in params and len(reports) and len(reference):
@@ -124,7 +125,7 @@ def _gate_false(reports: pd.DataFrame, reference: pd.DataFrame, distance_m: floa
     gate = sigma_gate(rep, reference, distance_m, params, independent=False)
     keep = (rep["ref_index"].to_numpy() < 0) | gate.judged
     dropped = int((~keep).sum())
-    note = (f"sigma gate at {distance_m:g} m: {dropped} of {len(rep)} reports left out, near an aircraft "
+    note = (f"sigma gate at {distance_m:g} m: {dropped:,} of {len(rep):,} reports left out, near an aircraft "
             "whose reference sigma is unknown or too large") if dropped else ""
     return rep[keep].reset_index(drop=True), (note,) if note else ()
 
