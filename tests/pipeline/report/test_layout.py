@@ -244,14 +244,16 @@ def _printed_regular(text: str) -> float:
     import matplotlib
     from PIL import ImageFont
 
-    font = ImageFont.truetype(os.path.join(matplotlib.get_data_path(), "fonts", "ttf", "DejaVuSans.ttf"), 1100)
+    path = os.path.join(matplotlib.get_data_path(), "fonts", "ttf", "DejaVuSans.ttf")
+    font = ImageFont.truetype(path, 1100)
     return font.getlength(text) / font.getlength("0")
 
 
 NOTES = [  # a scorecard's notes as msdc writes them, every printable ASCII letter and the units' signs
-    "sigma gate at 12 m: 5906 of 11761 reports judged (left out: 5851 on the sensor's own track, 4 where the "
+    "sigma gate at 12 m: 5,906 of 11,761 reports judged (left out: 5,851 on the sensor's own track, 4 where "
+    "the "
     "reference's sigma is too large for the tolerance); 25 aircraft",
-    "timing: 116 of the 116 false reports lie near an aircraft whose reference leads or lags (343386, 3443D2)",
+    "timing: 116 of the 116 false reports lie near an aircraft whose reference leads or lags (343386, 3443D2",
     "interval [0.983297, 1] straddles 0.99; threshold not checked against the standard's text",
     "ABCDEFGHIJKLMNOPQRSTUVWXYZ abcdefghijklmnopqrstuvwxyz 0123456789 !\"#$%&'()*+,-./:;<=>?@[\\]^_`{|}~",
     "\u00b1 0.5 \u00b0 \u00b5s \u2013 at 1.3 NM",
