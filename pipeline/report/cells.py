@@ -70,15 +70,15 @@ _BOLD_WIDTHS = {char: width for width, chars in {
     0.85: 'r"*', 0.95: "sz?", 1.0: "c", 1.05: "vxy", 1.1: "0123456789aeko$", 1.15: "bdghnpquFLSYZ{}",
     1.2: "EPT\u00b5", 1.25: "AVX", 1.3: "C", 1.35: "BGR#+<=>^~\u00b1", 1.4: "DKOQU", 1.45: "N&", 1.5: "wH",
     1.6: "%@", 1.7: "m", 1.75: "M", 1.8: "W"}.items() for char in chars}
-# The same for the body's regular text: DejaVu Sans Book against its digit (LibreOffice's face where Calibri
-# is missing, and the wider: Calibri's letters against its digit are within 0.05 of these), rounded up to
-# 0.05; any other character 1.25. Wrapped text's lines are counted with these: counted as characters, a
-# line of a scorecard's notes held 54 where 43 were counted, and its rows printed half again too tall
+# The same for the body's regular text: the wider of DejaVu Sans Book (LibreOffice's face where Calibri is
+# missing) and Carlito (Calibri's metrics), each against its own digit, rounded up to 0.05; any other
+# character 1.25. Wrapped text's lines are counted with these: counted as characters, a line of a
+# scorecard's notes held 54 where 43 were counted, and its rows printed half again too tall
 _REGULAR_WIDTHS = {char: width for width, chars in {
-    0.45: "ijl'", 0.5: "IJ,. ", 0.55: "/:;\\|", 0.6: "f-", 0.65: "rt!()[]", 0.75: '"', 0.8: "*_`\u00b0\u2013",
-    0.85: "sz?", 0.9: "cL", 0.95: "kvxyFP", 1.0: "abdeghnopquESTY0123456789${}\u00b5", 1.05: "K",
-    1.1: "ABCRVXZ", 1.2: "HNU", 1.25: "DGOQ&", 1.3: "w", 1.35: "#+<=>^~\u00b1", 1.4: "M", 1.5: "%",
-    1.55: "m", 1.6: "W@"}.items() for char in chars}
+    0.45: "'", 0.5: "ijlI,. ", 0.55: ":;", 0.65: "fJ!()-[]", 0.7: "rt", 0.8: '"/\\`\u00b0', 0.85: "sz",
+    0.9: "cL", 0.95: "kvxyF?|", 1.0: "aegESTY0123456789$*_{}\u2013", 1.05: "bdhnopquKP",
+    1.1: "BCRXZ\u00b5", 1.15: "AV", 1.25: "DGH", 1.3: "NU", 1.35: "OQ#&+<=>^~\u00b1", 1.45: "w", 1.5: "%",
+    1.6: "m", 1.7: "M", 1.8: "W@"}.items() for char in chars}
 _WIDTH_SAMPLE_ROWS = 5000
 FAST_ROWS = True  # table rows through pipeline.report.rows (False: openpyxl's append, cell by cell)
 _ISO_DATE = re.compile(r"\d{4}-\d{2}-\d{2}\Z")
