@@ -48,6 +48,9 @@ COLUMN_UNITS: dict[str, str] = {
     "ncc_peak_lag_lat": "count", "ncc_peak_lag_lon": "count", "pearson_peak_lag_lat": "count",
     "pearson_peak_lag_lon": "count", "n_reports": "count", "reports": "count", "intervals": "count",
     "gaps": "count", "jumps": "count", "blocks": "count", "records": "count", "track_number": "count",
+    # the evaluation's counts, floats where a left join leaves an aircraft without them (171, not 171.0)
+    "expected": "count", "detected": "count", "expected_updates": "count", "detected_updates": "count",
+    "errors_judged": "count", "reference_samples": "count",
     "lag_s": "s", "time_bias_s": "s", "time_bias_se_s": "s",
     "range_gain_ppm": "ppm", "range_gain_se_ppm": "ppm",
     "flight_level": "fl", "flight_level_a": "fl", "flight_level_b": "fl",

@@ -60,3 +60,14 @@ def test_a_scorecard_rows_sample_reads_as_the_scorecard_shows_it() -> None:
     assert number_text(2904.0, "n", set(), "fraction") == "2,904"
     assert number_text(2500.4, "n", set(), "per scan") == "2,500.4"
     assert number_text(874.0, "n", set()) == "874.0"
+
+
+def test_counts_left_as_floats_by_a_join_read_as_counts() -> None:
+    """The per-aircraft table's errors judged is a float where an aircraft without reports leaves NaN:
+    171.0 reads 171 and 1025.0 reads 1025, as the workbook's count format 0 shows them (they read 171.0 and
+    1,025 as other floats); the bins' expected and detected updates alike."""
+    assert number_text(171.0, "errors_judged", set()) == "171"
+    assert number_text(1025.0, "errors_judged", set()) == "1025"
+    assert number_text(7260.0, "expected_updates", set()) == "7260"
+    assert number_text(27255.0, "expected", set()) == "27255"
+    assert number_text(math.nan, "detected_updates", set()) == ""
