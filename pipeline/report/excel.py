@@ -469,7 +469,8 @@ def parameter_rows(run: CorrelationRun, windows: bool = True) -> list[list[Any]]
 
 def run_rows(run: CorrelationRun, windows: bool = True) -> list[list[Any]]:
     """The run's record as section, key, value rows (values as the JSON has them): each input, the
-    parameters (a mapping's items under its name), the filters; ``windows``: the window counts."""
+    parameters (a mapping's items under its name; a list of texts, such as the notes and warnings, a row
+    per text under its key, not one cell of JSON), the filters; ``windows``: the window counts."""
     rows: list[list[Any]] = []
     for i, item in enumerate(run.inputs, start=1):
         order = ["path", "format", "bytes", "sha256"]
@@ -478,6 +479,8 @@ def run_rows(run: CorrelationRun, windows: bool = True) -> list[list[Any]]:
     for key, value in run.parameters.items():
         if isinstance(value, Mapping):
             rows += [[str(key), k, v] for k, v in _flatten("", value)]
+        elif isinstance(value, list | tuple) and value and all(isinstance(v, str) for v in value):
+            rows += [["parameters", str(key), v] for v in value]
         else:
             rows.append(["parameters", str(key), value])
     rows += [["filters", str(k), v] for k, v in run.filters.items()]

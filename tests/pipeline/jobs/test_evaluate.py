@@ -192,6 +192,7 @@ def test_the_cli_writes_the_three_outputs(recording, tmp_path):
     assert (out / "e.xlsx").stat().st_size > 0 and "<table" in (out / "e.html").read_text()
     # every output says what it was made from and how: the inputs' SHA-256, the preset, the reference
     import hashlib
+    import html
 
     import openpyxl
 
@@ -203,10 +204,14 @@ def test_the_cli_writes_the_three_outputs(recording, tmp_path):
     assert (params["preset"], params["reference"]) == ("test-radar", "leave-one-out")
     assert params["date"] == DATE and params["software"].startswith("msdc ")
     ws = openpyxl.load_workbook(out / "e.xlsx", read_only=True)["Parameters"]
-    rows = {(r[0], r[1]): r[2] for r in ws.iter_rows(values_only=True) if len(r) >= 3}
+    listed = [r for r in ws.iter_rows(values_only=True) if len(r) >= 3]
+    rows = {(r[0], r[1]): r[2] for r in listed}
     assert rows[("input 1", "sha256")] == digests[0] and rows[("parameters", "preset")] == "test-radar"
+    # the run's notes a row each, as the JSON lists them (not one cell of JSON text)
+    assert params["notes"] and [r[2] for r in listed if r[:2] == ("parameters", "notes")] == params["notes"]
     page = (out / "e.html").read_text()
     assert '<h2>Run</h2>' in page and all(d in page for d in digests)
+    assert all(f"<td>{html.escape(note)}</td>" in page for note in params["notes"])
 
 
 @pytest.mark.parametrize(("change", "message"), [
