@@ -63,7 +63,7 @@ def _scorecard_table(card: pd.DataFrame) -> str:
     columns = [(key, title) for key, title in SCORECARD_HEADERS if key != "notes"]
     head = "".join(f"<th>{html.escape(h)}</th>" for _, h in columns)
     bodies = []
-    for rec in card.to_dict("records"):
+    for i, rec in enumerate(card.to_dict("records")):
         unit = CATALOGUE[rec["requirement"]].unit
         cells = {
             "unit": html.escape(UNIT_WORDS[unit]),
@@ -87,11 +87,34 @@ def _scorecard_table(card: pd.DataFrame) -> str:
                 out.append(f"<td>{cells[key] if key in cells else html.escape(str(rec[key]))}</td>")
         notes = str(rec.get("notes") or "")
         if notes:
-            bodies.append(f'<tbody class="result"><tr class="has-notes">{"".join(out)}</tr><tr class="notes">'
-                          f'<td colspan="{len(columns)}">{html.escape(notes)}</td></tr></tbody>')
+            bodies.append(f'<tbody class="result" id="row{i}"><tr class="has-notes">{"".join(out)}</tr>'
+                          f'<tr class="notes"><td colspan="{len(columns)}">{html.escape(notes)}</td></tr>'
+                          "</tbody>")
         else:
-            bodies.append(f'<tbody class="result"><tr>{"".join(out)}</tr></tbody>')
+            bodies.append(f'<tbody class="result" id="row{i}"><tr>{"".join(out)}</tr></tbody>')
     return f'<table id="scorecard"><thead><tr>{head}</tr></thead>{"".join(bodies)}</table>'
+
+
+def _verdicts_table(card: pd.DataFrame) -> str:
+    """Per sensor, its verdicts counted (the inconclusive ones without a value apart: nothing measured) and
+    its failed requirements with their sectors, each linked to its scorecard row: what a reader acts on
+    first."""
+    rows = []
+    for sensor, rows_of in card.reset_index(drop=True).groupby("sensor", sort=False):
+        counts = rows_of["verdict"].value_counts()
+        empty = int(((rows_of["verdict"] == "inconclusive") & rows_of["value"].isna()).sum())
+        fails = rows_of[rows_of["verdict"] == "fail"]
+        failed = "; ".join(
+            f"{html.escape(str(requirement))}: "
+            + ", ".join(f'<a href="#row{i}">{html.escape(str(sector))}</a>' for i, sector in group.items())
+            for requirement, group in fails.groupby("requirement", sort=False)["sector"])
+        rows.append(f"<tr><td>{html.escape(str(sensor))}</td>"
+                    + "".join(f'<td class="num">{int(counts.get(v, 0)):,}</td>'
+                              for v in ("pass", "fail", "inconclusive"))
+                    + f'<td class="num">{empty:,}</td><td>{failed or "none"}</td></tr>')
+    head = "".join(f"<th>{h}</th>" for h in ("Sensor", "Pass", "Fail", "Inconclusive",
+                                              "Of which not measured (no value)", "Failed requirements"))
+    return f'<table id="verdicts"><thead><tr>{head}</tr></thead><tbody>{"".join(rows)}</tbody></table>'
 
 
 def _frame_table(name: str, frame: pd.DataFrame) -> str:
@@ -188,7 +211,8 @@ def evaluation_html(scorecard: pd.DataFrame, tables: Mapping[str, pd.DataFrame] 
     frames = validate_tables(tables)
     points = validate_map(map_points)
     figures = validate_images(images)
-    parts = [f"<h1>{html.escape(title)}</h1>", "<h2>Scorecard</h2>", _scorecard_table(card),
+    parts = [f"<h1>{html.escape(title)}</h1>", "<h2>Verdicts</h2>", _verdicts_table(card),
+             "<h2>Scorecard</h2>", _scorecard_table(card),
              "<p class=\"note\">Values, intervals and thresholds are in the row's unit. Verdict: pass when "
              "the "
              "whole 95 % interval meets the threshold, fail when the whole interval misses it, inconclusive "

@@ -338,3 +338,19 @@ def test_the_html_report_works_offline_in_chromium(tmp_path: Path) -> None:
     assert refused == []
     assert [m for m in page_messages if m[0] in ("error", "warning")] == []
     assert any("bokeh" in text.lower() for _, text in page_messages)  # the console was listened to
+
+
+def test_the_html_opens_on_each_sensors_verdicts_and_links_its_failures() -> None:
+    """The sample scorecard by hand: SSR1 passes pd and rms_m, fails mode3a_correct (global, its second
+    row), is inconclusive on modec_correct (a value); ADSB1 is inconclusive on p95_m with no value (not
+    measured). The failure links to its own row of the scorecard."""
+    from lxml import html as lhtml
+
+    page = lhtml.fromstring(evaluation_html(scorecard(), tables(), map_points(), images=images()))
+    rows = [[c.text_content() for c in tr.xpath("./td")]
+            for tr in page.xpath('//table[@id="verdicts"]/tbody/tr')]
+    assert rows == [["SSR1", "2", "1", "1", "0", "mode3a_correct: global"],
+                    ["ADSB1", "0", "0", "1", "1", "none"]]
+    (link,) = page.xpath('//table[@id="verdicts"]//a')
+    target = page.get_element_by_id(link.get("href").lstrip("#"))
+    assert [c.text_content() for c in target.xpath("./tr[1]/td")][:3] == ["SSR1", "global", "mode3a_correct"]
