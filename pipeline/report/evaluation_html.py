@@ -11,6 +11,7 @@ import html
 import json
 import math
 import os
+import re
 from collections.abc import Mapping
 from pathlib import Path
 
@@ -35,6 +36,7 @@ PALETTE = ("#1f77b4", "#d62728", "#2ca02c", "#9467bd", "#ff7f0e", "#8c564b", "#e
            "#9edae5", "#c7c7c7", "#dbdb8d")
 LEGEND_COLUMNS = 8  # the map's legend below it: one entry per aircraft, this many to a row
 LEGEND_ROW_PX = 24  # the height a row of the legend takes
+LONG_TABLE_ROWS = 60  # a table longer than this is folded under its heading (a click shows it)
 _STYLE = """
 body { font-family: sans-serif; margin: 1.5em; color: #222; }
 table { border-collapse: collapse; margin: 0.5em 0 1.5em; font-size: 0.9em; }
@@ -49,6 +51,8 @@ td.unchecked { font-weight: bold; }
 tbody.result tr.has-notes td { border-bottom: none; }
 tr.notes td { border-top: none; padding: 0 0.5em 0.4em 2em; color: #444; font-size: 0.95em; }
 tr.notes td::before { content: "Notes: "; font-weight: bold; color: #595959; }
+nav#contents { margin: -0.5em 0 1em; line-height: 1.6; }
+details > summary { cursor: pointer; color: #1f4e79; margin: 0.3em 0; }
 p.note { font-style: italic; color: #595959; max-width: 60em; }
 figure.coverage { margin: 0.5em 0 1.5em; }
 figure.coverage img { max-width: 100%; height: auto; border: 1px solid #ddd; }
@@ -142,8 +146,11 @@ def _frame_table(name: str, frame: pd.DataFrame) -> str:
             else:
                 cells.append(f"<td>{html.escape(str(value))}</td>")
         body.append("<tr>" + "".join(cells) + "</tr>")
-    return (f"<h2>{html.escape(name)}</h2><table class=\"evaluation-table\"><thead><tr>{head}</tr></thead>"
-            f"<tbody>{''.join(body)}</tbody></table>")
+    table = (f"<table class=\"evaluation-table\"><thead><tr>{head}</tr></thead>"
+             f"<tbody>{''.join(body)}</tbody></table>")
+    if len(body) > LONG_TABLE_ROWS:  # folded: a bin table of hundreds of rows is pages of scrolling
+        table = f"<details><summary>{len(body):,} rows: show them</summary>{table}</details>"
+    return f"<h2>{html.escape(name)}</h2>{table}"
 
 
 def _figures(images: Mapping[str, bytes]) -> str:
@@ -240,7 +247,21 @@ def evaluation_html(scorecard: pd.DataFrame, tables: Mapping[str, pd.DataFrame] 
         parts.append(_run_table(run))
     return ("<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\">"
             f"<title>{html.escape(title)}</title><style>{_STYLE}</style>{head}</head>"
-            f"<body>{''.join(parts)}</body></html>\n")
+            f"<body>{_with_contents(parts[0], ''.join(parts[1:]))}</body></html>\n")
+
+
+def _with_contents(heading: str, body: str) -> str:
+    """The page's heading, a line of links to its sections (each h2 given an id), then the sections."""
+    titles: list[str] = []
+
+    def anchored(match: re.Match) -> str:
+        titles.append(match.group(1))
+        return f'<h2 id="section{len(titles)}">{match.group(1)}</h2>'
+
+    body = re.sub(r"<h2>(.*?)</h2>", anchored, body)
+    links = " · ".join(f'<a href="#section{k}">{t}</a>' for k, t in enumerate(titles, start=1))
+    return f'{heading}<nav id="contents">{links}</nav>{body}'
+
 
 
 def _run_table(run: Mapping) -> str:

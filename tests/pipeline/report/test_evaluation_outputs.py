@@ -227,11 +227,11 @@ def test_the_html_tables_show_numbers_as_the_workbook() -> None:
     """Proportions as the scorecard's percentages (148 / 150 = 98.67 %, not 0.986667), NM to 3 decimals,
     counts whole, NaN empty."""
     text = evaluation_html(scorecard(), tables())
-    band = text.split("<h2>PD per range band</h2>")[1]
+    band = re.split(r"<h2[^>]*>PD per range band</h2>", text)[1]
     cells = re.findall(r"<td[^>]*>([^<]*)</td>", band)
     assert cells == ["SSR1", "0.0", "50.0", "150", "148", "98.67 %",
                      "SSR1", "50.0", "100.0", "0", "0", ""]
-    first = text.split("<h2>PD per aircraft</h2>")[1].split("</table>")[0]
+    first = re.split(r"<h2[^>]*>PD per aircraft</h2>", text)[1].split("</table>")[0]
     aircraft = re.findall(r"<td[^>]*>([^<]*)</td>", first)
     assert aircraft == ["MAS72", "SSR1", "120", "118", "98.33 %", "IBE3150", "SSR1", "80", "80", "100.00 %"]
 
@@ -354,3 +354,22 @@ def test_the_html_opens_on_each_sensors_verdicts_and_links_its_failures() -> Non
     (link,) = page.xpath('//table[@id="verdicts"]//a')
     target = page.get_element_by_id(link.get("href").lstrip("#"))
     assert [c.text_content() for c in target.xpath("./tr[1]/td")][:3] == ["SSR1", "global", "mode3a_correct"]
+
+
+def test_the_html_lists_its_sections_and_folds_long_tables() -> None:
+    """A line of links under the title, one per section heading, each to that heading; a table of 61 rows
+    folded under its heading ('61 rows: show them'), one of 60 shown as it is."""
+    from lxml import html as lhtml
+
+    frames = {"Sixty": pd.DataFrame({"bin": range(60)}), "Sixty-one": pd.DataFrame({"bin": range(61)})}
+    page = lhtml.fromstring(evaluation_html(scorecard(), frames, map_points()))
+    links = page.xpath('//nav[@id="contents"]/a')
+    headings = page.xpath("//h2")
+    assert [a.text_content() for a in links] == [h.text_content() for h in headings] == [
+        "Verdicts", "Scorecard", "Map", "Sixty", "Sixty-one"]
+    assert [a.get("href") for a in links] == ["#" + h.get("id") for h in headings]
+    sixty, sixty_one = (h.getnext() for h in headings[3:])
+    assert sixty.tag == "table" and len(sixty.xpath("./tbody/tr")) == 60
+    assert sixty_one.tag == "details"
+    assert sixty_one.xpath("./summary")[0].text_content() == "61 rows: show them"
+    assert len(sixty_one.xpath("./table/tbody/tr")) == 61
