@@ -263,7 +263,6 @@ def _with_contents(heading: str, body: str) -> str:
     return f'{heading}<nav id="contents">{links}</nav>{body}'
 
 
-
 def _run_table(run: Mapping) -> str:
     """The Run section: what was read (paths, SHA-256) and how, a row per item as the JSON has it."""
     from msdc.pipeline.correlate.results import CorrelationRun
