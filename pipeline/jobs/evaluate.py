@@ -903,6 +903,7 @@ def text(result: EvaluateResult) -> str:
     """The scorecard for the terminal: the global, surface/airborne, field-monitor and preset-area rows (the
     per-sector rows are in the outputs), with the notes."""
     from msdc.pipeline.evaluate.presets import RESERVED_SECTORS
+    from msdc.pipeline.evaluate.verdicts import verdicts_text
     from msdc.pipeline.report.summary import frame_text
 
     card = result.scorecard
@@ -915,9 +916,7 @@ def text(result: EvaluateResult) -> str:
     out = "Scorecard (" + result.checked.preset.title + "):\n" + frame_text(_in_units(shown[cols]))
     if len(shown) < len(card):
         out += (f"\n  ... and {len(card) - len(shown)} rows per sector of --sectors (in the outputs)")
-    counts = card["verdict"].value_counts()
-    out += "\nVerdicts: " + ", ".join(f"{v} {int(counts.get(v, 0))}"
-                                      for v in ("pass", "fail", "inconclusive"))
+    out += "\n" + verdicts_text(card)
     notes = result.parameters.get("notes", [])
     if notes:
         out += "\n\nNotes:\n" + "\n".join(f"  {n}" for n in notes)

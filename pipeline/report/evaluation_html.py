@@ -25,6 +25,7 @@ from msdc.pipeline.evaluate.scorecard_schema import (
     validate_scorecard,
     validate_tables,
 )
+from msdc.pipeline.evaluate.verdicts import VERDICTS, sensor_verdicts
 from msdc.pipeline.report.evaluation_formats import number_text, proportion_columns, sample_text
 from msdc.pipeline.report.evaluation_xlsx import SCORECARD_HEADERS, UNCHECKED_NOTE, UNIT_WORDS
 from msdc.pipeline.report.files import named
@@ -102,20 +103,16 @@ def _scorecard_table(card: pd.DataFrame) -> str:
 def _verdicts_table(card: pd.DataFrame) -> str:
     """Per sensor, its verdicts counted (the inconclusive ones without a value apart: nothing measured) and
     its failed requirements with their sectors, each linked to its scorecard row: what a reader acts on
-    first."""
+    first (evaluate.verdicts)."""
     rows = []
-    for sensor, rows_of in card.reset_index(drop=True).groupby("sensor", sort=False):
-        counts = rows_of["verdict"].value_counts()
-        empty = int(((rows_of["verdict"] == "inconclusive") & rows_of["value"].isna()).sum())
-        fails = rows_of[rows_of["verdict"] == "fail"]
+    for s in sensor_verdicts(card):
         failed = "; ".join(
-            f"{html.escape(str(requirement))}: "
-            + ", ".join(f'<a href="#row{i}">{html.escape(str(sector))}</a>' for i, sector in group.items())
-            for requirement, group in fails.groupby("requirement", sort=False)["sector"])
-        rows.append(f"<tr><td>{html.escape(str(sensor))}</td>"
-                    + "".join(f'<td class="num">{int(counts.get(v, 0)):,}</td>'
-                              for v in ("pass", "fail", "inconclusive"))
-                    + f'<td class="num">{empty:,}</td><td>{failed or "none"}</td></tr>')
+            f"{html.escape(requirement)}: "
+            + ", ".join(f'<a href="#row{i}">{html.escape(sector)}</a>' for sector, i in where)
+            for requirement, where in s.failed.items())
+        rows.append(f"<tr><td>{html.escape(s.sensor)}</td>"
+                    + "".join(f'<td class="num">{s.counts[v]:,}</td>' for v in VERDICTS)
+                    + f'<td class="num">{s.not_measured:,}</td><td>{failed or "none"}</td></tr>')
     head = "".join(f"<th>{h}</th>" for h in ("Sensor", "Pass", "Fail", "Inconclusive",
                                               "Of which not measured (no value)", "Failed requirements"))
     return f'<table id="verdicts"><thead><tr>{head}</tr></thead><tbody>{"".join(rows)}</tbody></table>'
