@@ -444,7 +444,7 @@ def column_width(header: str, values: Iterable[Any], number_format: str | None,
 
 def bold_width(text: str) -> float:
     """Printed width of bold header text in characters of column width (_BOLD_WIDTHS)."""
-    return sum(_BOLD_WIDTHS.get(char, 1.25) for char in text)
+    return text_width(text, bold=True)
 
 
 def text_width(text: str, bold: bool = False) -> float:
