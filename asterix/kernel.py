@@ -284,8 +284,15 @@ def _sourced(buf, x, n, c, framing):
     mandatory in each), as a sensor's block does: what makes a walking block evidence where chance alone
     would do (bytes of other data read as a short CAT010 or CAT020 block walk now and then; each record
     naming a source halves that, naming the first one's makes it 1 in 65,536)."""
+    return _sourced_records(buf, x, n, c, framing) > 0
+
+
+@njit(cache=True, nogil=True)
+def _sourced_records(buf, x, n, c, framing):
+    """The records of the block at x when it walks with every record naming one data source, else -1.
+    Called, not inlined: each inlined copy of the walk cost its caller seconds of compilation."""
     base, nfrn, parts = framing
-    return walk_records(buf, x, n, base[c], nfrn[c], parts, True) > 0
+    return walk_records(buf, x, n, base[c], nfrn[c], parts, True)
 
 
 @njit(cache=True, nogil=True, inline="always")
@@ -407,7 +414,7 @@ def _real_chain_inside(buf, q, end, stop, seen, need_source, met_chain, framing,
     the real blocks of a recording of categories not decoded (a chance header's category is met with a
     chance of (categories met / 256) a block), and so does a kindred chain of them, met or not yet, with
     LOOKAHEAD blocks inside (_kindred_inside: a false header at a tracker recording's start swallowing its
-    first blocks)."""
+    first blocks). Callers pass the flags as np.bool_: numba compiles a copy per literal True/False."""
     base = framing[0]
     for r in range(q + 1, end):
         if met_chain and _kindred_inside(buf, r, end, stop, base):
@@ -442,7 +449,7 @@ def _real_chain_inside(buf, q, end, stop, seen, need_source, met_chain, framing,
 def _chained_inside(buf, q, end, stop, seen, framing, memo):
     """_real_chain_inside's first test alone: a chain from inside (q, end) reaches a decoded block that
     walks, whatever source it names."""
-    return _real_chain_inside(buf, q, end, stop, seen, False, False, framing, memo)
+    return _real_chain_inside(buf, q, end, stop, seen, np.bool_(False), np.bool_(False), framing, memo)
 
 
 @njit(cache=True, nogil=True)
@@ -631,8 +638,8 @@ def _candidate(buf, r, stop, seen, framing, memo):
         return False
     base = framing.base
     c = buf[r]
-    return base[c] >= 0 or not _real_chain_inside(buf, r, r + n, stop, seen, seen[c] == 1, True, framing,
-                                                  memo)
+    return base[c] >= 0 or not _real_chain_inside(buf, r, r + n, stop, seen, seen[c] == 1, np.bool_(True),
+                                                  framing, memo)
 
 
 @njit(cache=True, nogil=True)
@@ -711,14 +718,14 @@ def _stranded_block(buf, r, m, seen, framing, memo):
     of a decoded category walking exactly, of STRANDED_RECORDS records or more, each naming one data source
     already met in that category (an intact block alone between two damages; chance bytes that walk name a
     met source with a chance of about (sources met / 65536) per record)."""
-    base, nfrn, parts = framing
+    base = framing[0]
     c = buf[r]
     if base[c] < 0:
         return False
     source = _first_source(buf, r, m)
     if source < 0 or not _source_met(seen, c, source) or not _walks_at(buf, r, m, c, framing, memo):
         return False  # the walk through _walks_at: logged, as alike_framings compares the walks logged
-    return walk_records(buf, r, m, base[c], nfrn[c], parts, True) >= STRANDED_RECORDS
+    return _sourced_records(buf, r, m, c, framing) >= STRANDED_RECORDS
 
 
 # Framing modes of a payload segment (frame_window's seg_mode).
@@ -945,8 +952,8 @@ def frame_window(buf, seg_start, seg_stop, seg_mode, framing, st, seen, memo, se
                             ok = not hides
                         else:
                             ok = ((q + n == stop or _anchored(buf, q, stop, seen, framing, memo))
-                                  and not _real_chain_inside(buf, q, q + n, stop, seen, False, True, framing,
-                                                             memo))
+                                  and not _real_chain_inside(buf, q, q + n, stop, seen, np.bool_(False),
+                                                             np.bool_(True), framing, memo))
                 if ok:
                     b_start, b_len, b_seg, b_cat, nb = _keep_block(b_start, b_len, b_seg, b_cat, nb, q, n,
                                                                    buf[q], s)
@@ -1078,15 +1085,18 @@ def frame_blocks(buf, seg_start, seg_stop, exact, careful, framing):
 
 @njit(cache=True, nogil=True)
 def _grow4(a, b, c, d):
-    n = a.shape[0] * 2
-    a2 = np.empty(n, a.dtype)
-    b2 = np.empty(n, b.dtype)
-    c2 = np.empty(n, c.dtype)
-    d2 = np.empty(n, d.dtype)
-    a2[: a.shape[0]] = a
-    b2[: b.shape[0]] = b
-    c2[: c.shape[0]] = c
-    d2[: d.shape[0]] = d
+    """The four arrays (of one length) twice as long, their values first. Copied by a loop: a slice
+    assignment compiles numba's shape-mismatch error message, seconds on a cold cache."""
+    n = a.shape[0]
+    a2 = np.empty(2 * n, a.dtype)
+    b2 = np.empty(2 * n, b.dtype)
+    c2 = np.empty(2 * n, c.dtype)
+    d2 = np.empty(2 * n, d.dtype)
+    for i in range(n):
+        a2[i] = a[i]
+        b2[i] = b[i]
+        c2[i] = c[i]
+        d2[i] = d[i]
     return a2, b2, c2, d2
 
 
