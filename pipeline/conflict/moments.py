@@ -114,7 +114,7 @@ def predict_batch(gov, dt, kinds, omegas, qs, tpm_kind, tpm_param, tpm_param2, c
     P_c = np.empty((r, NX, NX))
     s = np.empty(r * (1 + NX + NX * NX))
     mean = np.empty(NX)
-    g_c = -1
+    g_c = np.int64(-1)
     t_c = 0.0
     for q in range(m):
         g = gov[q]

@@ -120,25 +120,26 @@ def aircraft_updates(t_ref: np.ndarray, mine: np.ndarray, max_gap_s: float, step
     lo, hi = _stretch_bounds(t_ref, max_gap_s)
     empty_t, empty_h = np.empty(0), np.empty(0, np.bool_)
     spans = np.zeros((lo.size, 2), np.int64)  # each stretch's reports: mine[spans[s, 0]:spans[s, 1]]
-    total = 0
+    total = 0  # the flags and start passed as numpy scalars: numba compiles a copy per literal argument
     for s in range(lo.size):  # mine sorted (a missing time last): those within the stretch are a run
         spans[s, 0] = np.searchsorted(mine, lo[s], side="left")
         spans[s, 1] = max(np.searchsorted(mine, hi[s], side="right"), spans[s, 0])
         if by_interval:
             total += _interval_updates(mine, spans[s, 0], spans[s, 1], lo[s], hi[s], step_s, empty_t,
-                                       empty_h, 0, True)
+                                       empty_h, np.int64(0), np.bool_(True))
         else:
-            total += _scan_updates(mine, spans[s, 0], spans[s, 1], lo[s], hi[s], step_s, empty_t, empty_h, 0,
-                                   True)
+            total += _scan_updates(mine, spans[s, 0], spans[s, 1], lo[s], hi[s], step_s, empty_t, empty_h,
+                                   np.int64(0), np.bool_(True))
     stretch = np.empty(total, np.int64)
     t_out, held, clipped = np.empty(total), np.empty(total, np.bool_), np.empty(total)
-    at = 0
+    at = np.int64(0)
     for s in range(lo.size):
         if by_interval:
             n = _interval_updates(mine, spans[s, 0], spans[s, 1], lo[s], hi[s], step_s, t_out, held, at,
-                                  False)
+                                  np.bool_(False))
         else:
-            n = _scan_updates(mine, spans[s, 0], spans[s, 1], lo[s], hi[s], step_s, t_out, held, at, False)
+            n = _scan_updates(mine, spans[s, 0], spans[s, 1], lo[s], hi[s], step_s, t_out, held, at,
+                              np.bool_(False))
         for i in range(at, at + n):
             stretch[i] = s
             clipped[i] = min(max(t_out[i], lo[s]), hi[s])

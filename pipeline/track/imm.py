@@ -316,9 +316,9 @@ def run_filter(t, ze, zn, ree, ren, rnn, ve0, vn0, var_v0, fl, ground, kinds, om
     t_last = -1e300
     seg = -1
     rejections = 0
-    last_rejected = -1
+    last_rejected = np.int64(-1)
     accepted = 0
-    seg_first = -1  # the report that started the current segment
+    seg_first = np.int64(-1)  # the report that started the current segment
     seg_updates = 0  # accepted reports in the current segment
     for i in range(n):
         start = seg < 0 or t[i] - t_last > max_coast_s
@@ -530,7 +530,7 @@ def predict_rows(gov, dt, want_state, kinds, omegas, qs, tpm_kind, tpm_param, tp
     m = gov.shape[0]
     PI, F, Q, tmp, cbar, x0, P0, xp, Pp = cycle_scratch(r)
     mu_c, x_c, P_c = chain_scratch(r)
-    g_c = -1
+    g_c = np.int64(-1)
     t_c = 0.0
     whole = True  # the chain carries states too, not only mode probabilities
     for q in range(m):
@@ -542,7 +542,7 @@ def predict_rows(gov, dt, want_state, kinds, omegas, qs, tpm_kind, tpm_param, tp
             combine_into(mu_h[g], x_h[g], P_h[g], r, xc_out[q], Pc_out[q])
         elif want_state[q]:
             if not whole:
-                g_c = -1  # its states were not carried: start again from the posterior
+                g_c = np.int64(-1)  # its states were not carried: start again from the posterior
             g_c, t_c = coast_chain(g, d, g_c, t_c, substep_s, 0.0, mu_h, x_h, P_h, kinds, omegas, qs,
                                    tpm_kind, tpm_param, tpm_param2, r, mu_c, x_c, P_c,
                                    PI, F, Q, tmp, cbar, x0, P0, xp, Pp)

@@ -172,11 +172,19 @@ def smooth_rows(acc_t, acc_seg, mu_a, x_a, P_a, kinds, omegas, qs, tpm_kind, tpm
     for q in range(q_acc.shape[0]):
         k = q_acc[q]
         if q_dt[q] == 0.0:
-            xs_q[q] = xs[k]
-            Ps_q[q] = Ps[k]
+            _copy_state(xs[k], Ps[k], xs_q[q], Ps_q[q])
         elif k == na - 1 or acc_seg[k + 1] != acc_seg[k]:
-            xs_q[q] = xf_q[q]
-            Ps_q[q] = Pf_q[q]
+            _copy_state(xf_q[q], Pf_q[q], xs_q[q], Ps_q[q])
+
+
+@njit(cache=True, nogil=True)
+def _copy_state(x, P, x_out, P_out):
+    """x and P into x_out and P_out, element by element: a slice assignment would compile numba's
+    shape-mismatch message, about a second on a cold cache."""
+    for a in range(x.shape[0]):
+        x_out[a] = x[a]
+        for b in range(x.shape[0]):
+            P_out[a, b] = P[a, b]
 
 
 @njit(cache=True, nogil=True)
