@@ -4,11 +4,12 @@ most (decode, track, evaluate, conflicts, correlate with quality) on the bundled
     python tests/prewarm.py DONE_FILE
 
 Started by tests/conftest.py beside the xdist workers' collection. The decoder's kernels first (``msdc
-stats``, about 15 s on a cold cache, under the workers' 20 s of collection), then DONE_FILE, which each
-worker waits for before its first test; then the tracker's and the others' (about 35 s more), while the
-workers run their first tests: a test needing one of them before compiles it itself, as without this. Then
-the file "all" beside DONE_FILE once the dataset jobs' kernels are (the Dask cluster's fixture waits for
-it: its processes compile apart), then the conflicts' kernels."""
+stats``, about 20 s on a cold cache, about the workers' collection), then DONE_FILE, which each worker
+waits for before its first test; then the tracker's and the others' (about 20 s more), while the workers
+run their first tests: a test needing one of them before compiles it itself, as without this. Then the
+file "all" beside DONE_FILE once the dataset jobs' kernels are (the Dask cluster's fixture waits for it:
+its processes compile apart), then the conflicts' kernels. tests/test_prewarm.py checks the commands
+parse (a failing one is swallowed here)."""
 
 from __future__ import annotations
 
@@ -22,23 +23,31 @@ ROOT = Path(__file__).resolve().parents[1]
 FIX = ROOT / "fixtures"
 
 
+def commands(tmp: str) -> list[list[str]]:
+    """The commands run after the decode, outputs in the folder ``tmp``: evaluate and correlate with quality
+    (what the dataset jobs run: track, quality, evaluate), then conflicts."""
+    inputs = [str(FIX / "radar.ast"), str(FIX / "adsb.ast")]
+    sensors = ["--sensors", str(FIX / "sensors.toml")]
+    return [["evaluate", *inputs, *sensors, "--preset", "eurocontrol-1997-ssr", "--json", f"{tmp}/e.json"],
+            ["correlate", *inputs, *sensors, "--all", "--quality", "--json", f"{tmp}/q.json"],
+            ["conflicts", *inputs, *sensors, "-o", f"{tmp}/c.xlsx"]]
+
+
 def main(done: Path) -> None:
-    """Decode (DONE_FILE written after it, whatever happened), then run the commands (outputs thrown away)."""
+    """Decode (DONE_FILE written after it, whatever happened), then run the commands (outputs thrown away),
+    the file "all" written before conflicts."""
     from msdc.pipeline import cli
 
-    inputs = [str(FIX / "radar.ast"), str(FIX / "adsb.ast")]
     try:
-        _quietly(cli.main, ["stats", *inputs])
+        _quietly(cli.main, ["stats", str(FIX / "radar.ast"), str(FIX / "adsb.ast")])
     finally:
         done.write_text("done\n")
-    sensors = ["--sensors", str(FIX / "sensors.toml")]
     with tempfile.TemporaryDirectory() as tmp:
-        preset = ["--preset", "eurocontrol-1997-ssr"]
-        for argv in (["evaluate", *inputs, *sensors, *preset, "--json", f"{tmp}/e.json"],
-                     ["correlate", *inputs, *sensors, "--all", "--quality", "--json", f"{tmp}/q.json"]):
+        *dataset_jobs, conflicts = commands(tmp)
+        for argv in dataset_jobs:
             _quietly(cli.main, argv)
-        done.with_name("all").write_text("done\n")  # what the dataset jobs run (track, quality, evaluate)
-        _quietly(cli.main, ["conflicts", *inputs, *sensors, "--json", f"{tmp}/c.json"])
+        done.with_name("all").write_text("done\n")
+        _quietly(cli.main, conflicts)
 
 
 def _quietly(fn, argv: list[str]) -> None:
