@@ -8,8 +8,8 @@ stats``, about 20 s on a cold cache, about the workers' collection), then DONE_F
 waits for before its first test; then the tracker's and the others' (about 20 s more), while the workers
 run their first tests: a test needing one of them before compiles it itself, as without this. Then the
 file "all" beside DONE_FILE once the dataset jobs' kernels are (the Dask cluster's fixture waits for it:
-its processes compile apart), then the conflicts' kernels. tests/test_prewarm.py checks the commands
-parse (a failing one is swallowed here)."""
+its processes compile apart), then the conflicts' kernels and the IMM smoother's. tests/test_prewarm.py
+checks the commands parse (a failing one is swallowed here)."""
 
 from __future__ import annotations
 
@@ -25,17 +25,18 @@ FIX = ROOT / "fixtures"
 
 def commands(tmp: str) -> list[list[str]]:
     """The commands run after the decode, outputs in the folder ``tmp``: evaluate and correlate with quality
-    (what the dataset jobs run: track, quality, evaluate), then conflicts."""
+    (what the dataset jobs run: track, quality, evaluate), then conflicts and the IMM smoother's track."""
     inputs = [str(FIX / "radar.ast"), str(FIX / "adsb.ast")]
     sensors = ["--sensors", str(FIX / "sensors.toml")]
     return [["evaluate", *inputs, *sensors, "--preset", "eurocontrol-1997-ssr", "--json", f"{tmp}/e.json"],
             ["correlate", *inputs, *sensors, "--all", "--quality", "--json", f"{tmp}/q.json"],
-            ["conflicts", *inputs, *sensors, "-o", f"{tmp}/c.xlsx"]]
+            ["conflicts", *inputs, *sensors, "-o", f"{tmp}/c.xlsx"],
+            ["track", *inputs, *sensors, "--address", "750312", "--smoother", "imm", "-o", f"{tmp}/t.csv"]]
 
 
 def main(done: Path) -> None:
     """Decode (DONE_FILE written after it, whatever happened), then run the commands (outputs thrown away),
-    the file "all" written before conflicts."""
+    the file "all" written after the first two."""
     from msdc.pipeline import cli
 
     try:
@@ -43,11 +44,12 @@ def main(done: Path) -> None:
     finally:
         done.write_text("done\n")
     with tempfile.TemporaryDirectory() as tmp:
-        *dataset_jobs, conflicts = commands(tmp)
-        for argv in dataset_jobs:
+        later = commands(tmp)
+        for argv in later[:2]:
             _quietly(cli.main, argv)
         done.with_name("all").write_text("done\n")
-        _quietly(cli.main, conflicts)
+        for argv in later[2:]:
+            _quietly(cli.main, argv)
 
 
 def _quietly(fn, argv: list[str]) -> None:

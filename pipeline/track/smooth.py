@@ -576,9 +576,9 @@ def imm_smooth_rows(acc_t, acc_seg, mu_a, x_a, P_a, kinds, omegas, qs, tpm_kind,
             combine_into(mus[k], xs[k], Ps[k], r, xs_q[q], Ps_q[q])
             continue
         if k == na - 1 or acc_seg[k + 1] != acc_seg[k]:
-            xs_q[q] = xf_q[q]
-            Ps_q[q] = Pf_q[q]
-            mus_q[q] = muf_q[q]
+            _copy_state(xf_q[q], Pf_q[q], xs_q[q], Ps_q[q])
+            for j in range(r):
+                mus_q[q, j] = muf_q[q, j]
             continue
         t = acc_t[k + 1] - acc_t[k]
         tpm_into(tpm_kind, tpm_param, tpm_param2, t, r, PI)
