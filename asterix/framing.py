@@ -77,6 +77,7 @@ class Framer:
     def __init__(self, buf: np.ndarray, seg: Segments, modes: np.ndarray, tables: kernel.Framing,
                  log_cat: int = -1):
         self.buf, self.seg, self.modes, self.tables = buf, seg, modes, tables
+        self.careful = np.flatnonzero(modes == kernel.MODE_CAREFUL)  # segments framed with the search
         self.state, self.seen = kernel.new_state()
         self.memo = kernel.new_memo(log_cat)
         self.released = 0  # pages below this offset were dropped
@@ -108,6 +109,10 @@ class Framer:
         seg = self.seg
         self.release(self.position)
         limit = len(seg.start) if seg_limit is None else seg_limit
+        first = np.searchsorted(self.careful, self.state[kernel.ST_SEG])
+        if first == len(self.careful) or self.careful[first] >= limit:  # frame_plain: a smaller kernel
+            return kernel.frame_plain(self.buf, seg.start, seg.stop, self.modes, self.state, limit,
+                                      byte_limit)
         return kernel.frame_window(self.buf, seg.start, seg.stop, self.modes, self.tables, self.state,
                                    self.seen, self.memo, limit, byte_limit)
 

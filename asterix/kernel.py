@@ -820,49 +820,25 @@ def _keep_block(b_start, b_len, b_seg, b_cat, nb, q, n, c, s):
 
 
 @njit(cache=True, nogil=True)
-def frame_window(buf, seg_start, seg_stop, seg_mode, framing, st, seen, memo, seg_limit, byte_limit):
-    """Frame payload segments into data blocks of any category, from where ``st`` left off, until a
-    decision would start at or past ``byte_limit`` or segment ``seg_limit`` is reached (one decision at
-    least is made per call). Returns (blk_start, blk_len, blk_cat, blk_seg, err_off, err_len, err_cat,
-    err_code) for what was settled; ``st`` and ``seen`` (new_state: categories and data sources met) carry
-    the framing between calls, so any windows give the blocks and errors of one call over everything, in
-    its order; ``memo`` (new_memo) keeps walk results for the calls of one framing, and its log (which
-    pauses the window when nearly full).
-
-    MODE_EXACT segments must tile into blocks, else they are skipped whole (E_NO_FRAME); MODE_CHAIN ones are
-    followed header by header; MODE_CAREFUL ones accept a block when it is consistent with what follows
-    (walked categories, framing.base[cat] >= 0, must walk exactly), and where the chain breaks, framing
-    resumes at the next offset whose chain is anchored (_anchored) or that starts a stranded real block
-    (_stranded_block: a real block stranded between two damages). Decisions read ahead of byte_limit by
-    a few blocks at most (LOOKAHEAD blocks of up to 65535 bytes, and one block's length more).
-    """
-    base, nfrn, parts = framing
-    cap = 16
-    b_start = np.empty(cap, np.int64)
-    b_len = np.empty(cap, np.int64)
-    b_cat = np.empty(cap, np.int16)
-    b_seg = np.empty(cap, np.int64)
-    e_off = np.empty(cap, np.int64)
-    e_len = np.empty(cap, np.int64)
-    e_cat = np.empty(cap, np.int16)
-    e_code = np.empty(cap, np.int16)
-    nb = 0
-    ne = 0
+def _plain_run(buf, seg_start, seg_stop, seg_mode, st, nseg, byte_limit, moved, b_start, b_len, b_seg, b_cat,
+               nb, e_off, e_len, e_cat, e_code, ne):
+    """frame_window's MODE_EXACT and MODE_CHAIN segments from ``st`` on, until a MODE_CAREFUL one (left at its
+    start), segment ``nseg`` or a pause at ``byte_limit`` once ``moved``: the framed blocks and errors
+    appended, their counts, ``moved`` and whether it paused."""
     s = st[ST_SEG]
     q = st[ST_POS]
-    moved = False
     paused = False
-    nseg = min(seg_limit, seg_start.shape[0])
     while s < nseg and not paused:
         start = seg_start[s]
         stop = seg_stop[s]
         mode = seg_mode[s]
         if q < 0:
+            if mode == MODE_CAREFUL:
+                break
             if moved and start >= byte_limit:
+                paused = True
                 break
             q = start
-            if mode == MODE_CAREFUL:
-                seen[:SOURCES_AT] = 0  # categories met: per segment; data sources: the whole framing
         if mode == MODE_EXACT:
             nb0 = nb
             while q < stop:
@@ -889,21 +865,90 @@ def frame_window(buf, seg_start, seg_stop, seg_mode, framing, st, seen, memo, se
             s += 1
             q = -1
             continue
-        if mode == MODE_CHAIN:
-            while q < stop:
-                if moved and q >= byte_limit:
-                    paused = True
-                    break
-                n = _header(buf, q, stop)
-                if n < 0:
-                    raise ValueError("frame_window: MODE_CHAIN on a block chain that breaks")
-                b_start, b_len, b_seg, b_cat, nb = _keep_block(b_start, b_len, b_seg, b_cat, nb, q, n,
-                                                               buf[q], s)
-                q += n
-                moved = True
-            if not paused:
-                s += 1
-                q = -1
+        while q < stop:  # MODE_CHAIN
+            if moved and q >= byte_limit:
+                paused = True
+                break
+            n = _header(buf, q, stop)
+            if n < 0:
+                raise ValueError("frame_window: MODE_CHAIN on a block chain that breaks")
+            b_start, b_len, b_seg, b_cat, nb = _keep_block(b_start, b_len, b_seg, b_cat, nb, q, n, buf[q], s)
+            q += n
+            moved = True
+        if not paused:
+            s += 1
+            q = -1
+    st[ST_SEG] = s
+    st[ST_POS] = q
+    return b_start, b_len, b_seg, b_cat, nb, e_off, e_len, e_cat, e_code, ne, moved, paused
+
+
+@njit(cache=True, nogil=True)
+def frame_plain(buf, seg_start, seg_stop, seg_mode, st, seg_limit, byte_limit):
+    """frame_window over segments none of which is MODE_CAREFUL before ``seg_limit`` (container payloads,
+    raw chains that hold): the same blocks, errors and state, without compiling the careful search, so the
+    first decode of intact recordings on a new installation compiles half the kernels."""
+    b_start, b_len, b_seg, b_cat, e_off, e_len, e_cat, e_code = _new_framed()
+    b_start, b_len, b_seg, b_cat, nb, e_off, e_len, e_cat, e_code, ne, _, _ = _plain_run(
+        buf, seg_start, seg_stop, seg_mode, st, min(seg_limit, seg_start.shape[0]), byte_limit, False,
+        b_start, b_len, b_seg, b_cat, 0, e_off, e_len, e_cat, e_code, 0)
+    return (b_start[:nb], b_len[:nb], b_cat[:nb], b_seg[:nb], e_off[:ne], e_len[:ne], e_cat[:ne],
+            e_code[:ne])
+
+
+@njit(cache=True, nogil=True)
+def _new_framed():
+    """Empty arrays for framed blocks (start, LEN, segment, category) and errors (offset, length, category,
+    code), grown by _grow4 as they fill."""
+    cap = 16
+    i64, i16 = np.empty(cap, np.int64), np.empty(cap, np.int16)
+    return i64, i64.copy(), i64.copy(), i16, i64.copy(), i64.copy(), i16.copy(), i16.copy()
+
+
+@njit(cache=True, nogil=True)
+def frame_window(buf, seg_start, seg_stop, seg_mode, framing, st, seen, memo, seg_limit, byte_limit):
+    """Frame payload segments into data blocks of any category, from where ``st`` left off, until a
+    decision would start at or past ``byte_limit`` or segment ``seg_limit`` is reached (one decision at
+    least is made per call). Returns (blk_start, blk_len, blk_cat, blk_seg, err_off, err_len, err_cat,
+    err_code) for what was settled; ``st`` and ``seen`` (new_state: categories and data sources met) carry
+    the framing between calls, so any windows give the blocks and errors of one call over everything, in
+    its order; ``memo`` (new_memo) keeps walk results for the calls of one framing, and its log (which
+    pauses the window when nearly full).
+
+    MODE_EXACT segments must tile into blocks, else they are skipped whole (E_NO_FRAME); MODE_CHAIN ones are
+    followed header by header; MODE_CAREFUL ones accept a block when it is consistent with what follows
+    (walked categories, framing.base[cat] >= 0, must walk exactly), and where the chain breaks, framing
+    resumes at the next offset whose chain is anchored (_anchored) or that starts a stranded real block
+    (_stranded_block: a real block stranded between two damages). Decisions read ahead of byte_limit by
+    a few blocks at most (LOOKAHEAD blocks of up to 65535 bytes, and one block's length more).
+    """
+    base, nfrn, parts = framing
+    b_start, b_len, b_seg, b_cat, e_off, e_len, e_cat, e_code = _new_framed()
+    nb = 0
+    ne = 0
+    s = st[ST_SEG]
+    q = st[ST_POS]
+    moved = False
+    paused = False
+    nseg = min(seg_limit, seg_start.shape[0])
+    while s < nseg and not paused:
+        start = seg_start[s]
+        stop = seg_stop[s]
+        mode = seg_mode[s]
+        if q < 0:
+            if moved and start >= byte_limit:
+                break
+            q = start
+            if mode == MODE_CAREFUL:
+                seen[:SOURCES_AT] = 0  # categories met: per segment; data sources: the whole framing
+        if mode != MODE_CAREFUL:
+            st[ST_SEG] = s
+            st[ST_POS] = q
+            b_start, b_len, b_seg, b_cat, nb, e_off, e_len, e_cat, e_code, ne, moved, paused = _plain_run(
+                buf, seg_start, seg_stop, seg_mode, st, nseg, byte_limit, moved, b_start, b_len, b_seg, b_cat,
+                nb, e_off, e_len, e_cat, e_code, ne)
+            s = st[ST_SEG]
+            q = st[ST_POS]
             continue
         # MODE_CAREFUL
         while q < stop:
@@ -1079,6 +1124,8 @@ def frame_blocks(buf, seg_start, seg_stop, exact, careful, framing):
     (blk_start, blk_len, blk_cat, blk_seg, err_off, err_len, err_cat, err_code)."""
     modes = segment_modes(buf, seg_start, seg_stop, exact, careful, framing)
     st, seen = new_state()
+    if not (modes == MODE_CAREFUL).any():
+        return frame_plain(buf, seg_start, seg_stop, modes, st, len(seg_start), NO_LIMIT)
     return frame_window(buf, seg_start, seg_stop, modes, framing, st, seen, new_memo(), len(seg_start),
                         NO_LIMIT)
 
