@@ -85,3 +85,45 @@ def test_sample_keeps_every_kth_block_whatever_the_windows() -> None:
     for smp in (one, many):
         kept, lens = smp.arrays()
         assert smp.k == 4 and np.array_equal(kept, starts[::4]) and np.array_equal(lens, kept + 1)
+
+
+def test_segments_of_every_mode_in_one_framing_frame_as_built() -> None:
+    """Four segments: container payloads (one tiling into blocks, one that does not), a raw stream with
+    random bytes between two of its blocks (framed carefully) and a raw chain that holds. In windows of any
+    size, framing gives the blocks each segment was built of and the errors put in, as built: the careful
+    segment's search and the plain segments' shortcut (kernel.frame_plain) share one framing."""
+    whole = (FIXTURES / "radar.ast").read_bytes()
+    starts, lens = clean_blocks(whole)
+    blocks = [whole[a:a + n] for a, n in zip(starts[:12].tolist(), lens[:12].tolist(), strict=True)]
+    junk = np.random.default_rng(5).integers(0, 256, 300, np.uint8).tobytes()
+    payloads = [b"".join(blocks[0:3]), b"".join(blocks[3:5]) + b"\x30\x00",
+                b"".join(blocks[5:8]) + junk + b"".join(blocks[8:10]), b"".join(blocks[10:12])]
+    modes = np.array([kernel.MODE_EXACT, kernel.MODE_EXACT, kernel.MODE_CAREFUL, kernel.MODE_CHAIN], np.int8)
+    buf = np.frombuffer(b"".join(payloads), np.uint8)
+    stop = np.cumsum([len(p) for p in payloads])
+    seg = read_segments(buf, "raw")
+    seg.start, seg.stop = np.concatenate([[0], stop[:-1]]).astype(np.int64), stop.astype(np.int64)
+    seg.capture_day, seg.capture_tod = np.full(4, -1), np.full(4, np.nan)
+    # built: each block's offset and segment, the undivided payload and the random bytes as errors
+    offsets, segments = [], []
+    for s, (first, last) in enumerate([(0, 3), (3, 5), (5, 10), (10, 12)]):
+        at = int(seg.start[s])
+        for b in range(first, last):
+            if s == 1:  # skipped whole
+                continue
+            offsets.append(at)
+            segments.append(s)
+            at += len(blocks[b]) + (len(junk) if b == 7 else 0)
+    junk_at = int(seg.start[2]) + sum(len(b) for b in blocks[5:8])
+    errors = [(int(seg.start[1]), len(payloads[1]), kernel.E_NO_FRAME),
+              (junk_at, len(junk), kernel.E_GARBAGE)]
+    tables = tables_for({48: None})
+    rng = np.random.default_rng(1)
+    for largest in (1, 500, 5_000, 100_000):
+        framer = Framer(buf, seg, modes, tables)
+        parts = []
+        while not framer.done:
+            parts.append(framer.window(framer.position + int(rng.integers(1, largest + 1))))
+        got = [np.concatenate([p[i] for p in parts]) for i in range(8)]
+        assert got[0].tolist() == offsets and got[3].tolist() == segments, largest
+        assert list(zip(got[4].tolist(), got[5].tolist(), got[7].tolist(), strict=True)) == errors, largest
