@@ -58,6 +58,9 @@ p.note { font-style: italic; color: #595959; max-width: 60em; }
 figure.coverage { margin: 0.5em 0 1.5em; }
 figure.coverage img { max-width: 100%; height: auto; border: 1px solid #ddd; }
 figure.coverage figcaption { font-weight: bold; margin-bottom: 0.3em; }
+@media (max-width: 1250px) {  /* a laptop's 1,024-1,250 px: the scorecard's 13 columns without scrolling */
+  body { margin: 1em; } table { font-size: 0.8em; } th, td { padding: 0.2em 0.3em; }
+}
 """
 
 
@@ -76,6 +79,8 @@ def _scorecard_table(card: pd.DataFrame) -> str:
             "n": sample_text(rec["n"]),
             "parameters": ", ".join(f'<span class="kv">{html.escape(kv)}</span>'
                                     for kv in str(rec.get("parameters") or "").split(", ") if kv),
+            "clause": " ".join(f'<span class="kv">{html.escape(word)}</span>'  # not "Table 3-" / "1"
+                               for word in str(rec["clause"]).split()),
         }
         out = []
         for key, _ in columns:

@@ -269,6 +269,11 @@ _PAINTED = """([r, g, b]) => {
 def test_the_html_report_works_offline_in_chromium(tmp_path: Path) -> None:
     sync_playwright = _browser()
     path = write_evaluation_html(scorecard(), tmp_path / "e.html", tables(), map_points(), images=images())
+    # the widest cells of the real LEBL ED-117A scorecard: it needed 1,193 px before the narrow layout
+    wide = scorecard().assign(sensor="010:0/107:mlat", sector="manoeuvring", parameters="distance_m = 100",
+                              clause="ED-117A Table 3-1")
+    wide.loc[wide["n"] > 0, "n"] = 11_761
+    wide_path = write_evaluation_html(wide, tmp_path / "wide.html", tables())
     url = path.as_uri()
     refused: list[str] = []
     messages: list[tuple[str, str]] = []
@@ -280,7 +285,7 @@ def test_the_html_report_works_offline_in_chromium(tmp_path: Path) -> None:
             context = browser.new_context(offline=True)
 
             def route(request_route) -> None:
-                if request_route.request.url == url:
+                if request_route.request.url in (url, wide_path.as_uri()):
                     request_route.continue_()
                 else:
                     refused.append(request_route.request.url)
@@ -310,6 +315,14 @@ def test_the_html_report_works_offline_in_chromium(tmp_path: Path) -> None:
             page_messages = list(messages)  # before the test's own pixel reads (Chromium warns of those)
             blue = page.evaluate(_PAINTED, [0x1F, 0x77, 0xB4])  # IBE3150, the first aircraft by name
             red = page.evaluate(_PAINTED, [0xD6, 0x27, 0x28])  # MAS72
+            narrow = context.new_page()
+            narrow.set_viewport_size({"width": 1024, "height": 768})
+            narrow.goto(wide_path.as_uri())
+            narrow_scroll = narrow.evaluate("() => [document.documentElement.scrollWidth, window.innerWidth]")
+            clause_lines = narrow.eval_on_selector(  # the lines 'ED-117A Table 3-1' takes (their tops)
+                "#scorecard tbody td:nth-child(12)", """c => { const r = document.createRange();
+                r.selectNodeContents(c);
+                return new Set([...r.getClientRects()].map(x => Math.round(x.top))).size; }""")
         finally:
             browser.close()
     assert rows == [
@@ -332,6 +345,8 @@ def test_the_html_report_works_offline_in_chromium(tmp_path: Path) -> None:
     label, notes_px, table_px = notes_shown
     assert label == '"Notes: "' and notes_px == pytest.approx(table_px, abs=2.0)
     assert scroll[0] <= scroll[1]
+    assert narrow_scroll[0] <= narrow_scroll[1] == 1024  # nor in a 1,024 px window, with LEBL's widest cells
+    assert clause_lines == 2
     # the coverage figures load from the page itself, at the sizes the sample's PNGs were written with
     assert figures == [["SSR1: polar map", True, 400, 300], ["SSR1: vertical coverage", True, 320, 200]]
     assert blue > 50 and red > 50, (blue, red)  # both aircraft's lines and dots drawn
