@@ -9,6 +9,9 @@ from pathlib import Path
 
 import pytest
 
+# one worker runs the module: parsing every source file costs about 3 s a process
+pytestmark = pytest.mark.xdist_group("import_direction")
+
 ROOT = Path(__file__).resolve().parents[2]
 AREAS = ("correlate", "quality", "report", "track", "conflict", "evaluate", "live")
 FRONT = ("msdc.pipeline.jobs", "msdc.pipeline.cli")
