@@ -104,10 +104,12 @@ def msdc_wheel(tmp_path_factory) -> Path:
     return next(out.glob("msdc-*.whl"))
 
 
-@pytest.fixture(scope="session")
+@pytest.fixture(scope="module")
 def dask_scheduler():
-    """The address of a 2-process Dask LocalCluster on the loopback (one per xdist worker), for the jobs'
-    --scheduler: started once, as a user's running cluster would be."""
+    """The address of a 2-process Dask LocalCluster on the loopback, for the jobs' --scheduler: started once
+    for the module that asks for it, as a user's running cluster would be. Not kept for the session: idle,
+    its scheduler and workers still took about 30 s of CPU over the rest of the run (heartbeats, dask's
+    sampling profiler)."""
     import logging
 
     distributed = pytest.importorskip("distributed", reason="dask's distributed scheduler is not installed")
