@@ -113,10 +113,24 @@ def _xcorr(x: np.ndarray, y: np.ndarray) -> np.ndarray:
     return full[: 2 * n - 1]  # index j holds lag j - (N - 1)
 
 
+# Slot means of one held position can differ in their last bit (the real LEBL hour's parked 4CA1C3: its
+# multilateration latitude 41.29832531 in 71 slots and one unit in the last place above it in the last):
+# values within this share of the series' magnitude are one value, so that a Pearson coefficient is never
+# the correlation of rounding. 1e-12 of 41 deg is 4e-11 deg (5 micrometres), far below any sensor's
+# resolution (the finest CAT021 position LSB, 180/2^30 deg, is 2 cm).
+SAME_VALUE_REL = 1e-12
+
+
 def _constant_run(v: np.ndarray) -> int:
-    """Length of the longest run of equal values at the end of ``v`` (exact, no tolerance)."""
-    change = np.flatnonzero(v[1:] != v[:-1])
-    return v.size - (int(change[-1]) + 1 if change.size else 0)
+    """Length of the longest run at the end of ``v`` whose values lie within rounding of one another
+    (SAME_VALUE_REL of the series' largest magnitude, at least of 1); a NaN ends the run."""
+    if v.size == 0:
+        return 0
+    finite = np.abs(v[np.isfinite(v)])
+    tol = SAME_VALUE_REL * max(1.0, float(finite.max()) if finite.size else 1.0)
+    tail = v[::-1]
+    spread = np.maximum.accumulate(tail) - np.minimum.accumulate(tail)  # NaN from the first NaN on
+    return int(np.count_nonzero(spread <= tol))
 
 
 def ncc(x, y) -> tuple[np.ndarray, np.ndarray]:
@@ -142,7 +156,7 @@ def pearson_by_lag(x, y, min_overlap: int = 2) -> tuple[np.ndarray, np.ndarray]:
     lags = _lags(n)
     if n < 2:
         return lags, np.full(lags.size, np.nan)
-    # exact constancy of a side (on the raw values): its overlap is a suffix or prefix of the series
+    # constancy of a side (raw values, within rounding): its overlap is a suffix or prefix of the series
     x_tail, x_head = _constant_run(x), _constant_run(x[::-1])
     y_tail, y_head = _constant_run(y), _constant_run(y[::-1])
     x, y = x - x.mean(), y - y.mean()  # shifts leave r unchanged and keep the sums small

@@ -8,6 +8,7 @@ import pytest
 from measurement_frames import meas_frame
 
 from msdc.pipeline.correlate.correlation import (
+    PEARSON_MIN_OVERLAP,
     NoOverlap,
     NoSuchAircraft,
     correlate,
@@ -70,6 +71,23 @@ def test_pearson_hand_values_and_nan():
     _, p = pearson_by_lag([1.0, 1.0, 1.0], [1.0, 2.0, 4.0])
     assert np.isnan(p).all()
     assert peak_lag(lags, p) is None
+
+
+def test_a_side_constant_but_for_rounding_has_no_pearson_coefficient():
+    """A parked aircraft's held position whose slot means differ in their last bit (the real LEBL hour's
+    4CA1C3 gave a Pearson "peak" at +4 slots, 0.13, from one unit in the last place): no coefficient at
+    any lag, as for an exactly constant side; a step at a sensor's finest resolution is still a signal."""
+    n = 72
+    y = 41.298337 + 2.1e-5 * np.random.default_rng(5).integers(0, 3, n)  # ADS-B, jittering by its LSB
+    x = np.full(n, 41.29832531)
+    x[-1] = np.nextafter(x[-1], np.inf)  # one unit in the last place
+    lags, p = pearson_by_lag(x, y, PEARSON_MIN_OVERLAP)
+    assert np.isnan(p).all() and peak_lag(lags, p) is None
+    x[-1] = x[0] + 180.0 / 2**30  # CAT021's finest latitude LSB: a real (if tiny) movement
+    _, p = pearson_by_lag(x, y, PEARSON_MIN_OVERLAP)
+    for d in (0, 5):  # overlaps x[d:] holding the moved slot: np.corrcoef of the pairs
+        assert p[lags == d][0] == pytest.approx(np.corrcoef(x[d:], y[: n - d])[0, 1], abs=1e-9)
+    assert np.isnan(p[lags == -5][0])  # x[:67] leaves the moved slot out: constant
 
 
 def test_ncc_rejects_unequal_lengths():
@@ -282,15 +300,12 @@ def test_fft_correlations_match_a_direct_computation(n):
     assert peak_lag(lags, p, pearson_max_lag(n)) == peak_lag(lags, p_ref, pearson_max_lag(n))
 
 
-def test_fft_correlations_scale_to_long_series():
-    """10^5 slots: the O(N^2) loop took minutes; the FFT path is a fraction of a second."""
-    import time
-
+def test_fft_correlations_hold_on_long_series():
+    """10^5 slots (the O(N^2) loop took minutes; its speed is benchmarks' business, not a test's): the
+    delay found and its coefficient 1, with no cancellation over the long sums."""
     s = np.cumsum(np.random.default_rng(3).normal(size=100_005))
     x, y = s[:-5], s[5:]  # y[i - 5] = s[i] = x[i]: radar 5 slots behind
-    t0 = time.perf_counter()
     lags, p = pearson_by_lag(x, y)
-    assert time.perf_counter() - t0 < 5.0
     assert peak_lag(lags, p, pearson_max_lag(x.size)) == 5
     assert p[lags == 5][0] == pytest.approx(1.0)
 
