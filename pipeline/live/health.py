@@ -23,6 +23,7 @@ from msdc.pipeline.evaluate.outcome import Outcome, withheld
 from msdc.pipeline.evaluate.scans import MIN_DIFFS, period_from_plots
 from msdc.pipeline.live.monitor import Thresholds
 from msdc.pipeline.model.coverage import out_of_coverage
+from msdc.pipeline.model.sources import kind_of_id
 
 SCHEMA = "msdc-live-monitor/1"  # the JSON snapshot's version (docs/guide/live-monitor.md)
 MIN_UPDATES = 10  # expected updates in the window below which the live probability of update is withheld
@@ -53,9 +54,6 @@ ADSB_PD_NOTE = ("ADS-B reports follow the squitters received, not periodic updat
 # (pipeline.live.decode.MEASURED), with what they are
 COUNTED_ONLY = {"001": "monoradar plots and tracks: their time of day needs the radar's CAT002",
                 "062": "system tracks, which msdc evaluate scores as tracks under test"}
-# the sensor kind of the measured categories' reports (CAT010's is in its sensor id: "010:0/7:smr"), as the
-# measurement rows give it (msdc.pipeline.model.schema.SENSOR_KINDS)
-MEASURED_KINDS = {"048": "radar", "021": "adsb", "020": "mlat"}
 # the validity figures: requirement id, the report's code column, its 'not validated' column, the live
 # state's boolean 'valid' column, the threshold's field
 VALIDITY = {
@@ -283,16 +281,6 @@ def _status_time(sensor_id: str, status_times: dict) -> float | None:
     if sensor_id.startswith("010:") and sensor_id.count(":") == 2:
         return status_times.get(sensor_id.rsplit(":", 1)[0])
     return None
-
-
-def kind_of_id(sensor_id: str) -> str | None:
-    """The measurements' sensor kind a sensor id implies ("048:..." radar, "021:..." adsb, "020:..." mlat,
-    "010:SAC/SIC:smr" smr): a sensor gone silent keeps its kind with no report left to say it."""
-    category, _, rest = sensor_id.partition(":")
-    if category == "010":
-        kind = rest.partition(":")[2]
-        return kind if kind in ("mlat", "smr") else None
-    return MEASURED_KINDS.get(category)
 
 
 def _kind(sensor_id: str, rows: pd.DataFrame) -> str | None:

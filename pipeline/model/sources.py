@@ -1,5 +1,5 @@
-"""Data sources: a sensor's SAC/SIC pair as one integer code, its id as the measurements show it, and an
-input file's label."""
+"""Data sources: a sensor's SAC/SIC pair as one integer code, its id as the measurements show it (and the
+kind it implies), and an input file's label."""
 
 from __future__ import annotations
 
@@ -8,6 +8,10 @@ from pathlib import Path
 
 import numpy as np
 import pandas as pd
+
+# the sensor kind of the measured categories' reports (CAT010's is in its sensor id: "010:0/7:smr"), as the
+# measurement rows give it (msdc.pipeline.model.schema.SENSOR_KINDS)
+MEASURED_KINDS = {"048": "radar", "021": "adsb", "020": "mlat"}
 
 
 def file_labels(paths) -> list[str]:
@@ -34,3 +38,13 @@ def source_id(category: int, sac, sic) -> str:
     """"CCC:SAC/SIC" (e.g. "048:25/201"), "?" for a missing SAC or SIC: the measurements' sensor_id."""
     sac, sic = ("?" if v is None or pd.isna(v) else v for v in (sac, sic))
     return f"{category:03d}:{sac}/{sic}"
+
+
+def kind_of_id(sensor_id: str) -> str | None:
+    """The measurements' sensor kind a sensor id implies ("048:..." radar, "021:..." adsb, "020:..." mlat,
+    "010:SAC/SIC:smr" smr): a sensor gone silent keeps its kind with no report left to say it."""
+    category, _, rest = sensor_id.partition(":")
+    if category == "010":
+        kind = rest.partition(":")[2]
+        return kind if kind in ("mlat", "smr") else None
+    return MEASURED_KINDS.get(category)
