@@ -20,6 +20,7 @@ from matplotlib.ticker import FuncFormatter, MultipleLocator, NullFormatter
 from msdc.pipeline.correlate.results import WindowResult
 from msdc.pipeline.correlate.windows import in_window
 from msdc.pipeline.model.measurements import matching_aircraft
+from msdc.pipeline.model.sources import kind_of_id
 from msdc.pipeline.model.time import midnight, with_clock
 from msdc.pipeline.quality.accuracy import MAX_AZIMUTH_ELEVATION_DEG, elevation_deg
 from msdc.pipeline.report.figures import new_figure, save_png
@@ -29,6 +30,7 @@ RADAR_COLOR = "#d62728"
 ADSB_COLOR = "#e6b800"
 _SENSOR_LABEL = {"radar": "Radar (CAT048)", "adsb": "ADS-B (CAT021)", "mlat": "Multilateration",
                  "smr": "Surface radar (CAT010)"}
+_KIND_WORD = {"radar": "Radar", "adsb": "ADS-B", "mlat": "Multilateration", "smr": "Surface radar"}
 _TICK_STEPS_S = (10, 30, 60, 120, 300, 600, 900, 1800, 3600, 7200, 14400)  # whole minutes from 60 s
 MAX_ERROR_POINTS = 50_000  # reports drawn per radar error figure: more only overplot, and cost seconds
 MAX_LEGEND_AIRCRAFT = 20  # aircraft named in the radar error legend; past it, colours only
@@ -270,28 +272,35 @@ def _none_if_blank(value) -> str | None:
     return None if value is None or (not isinstance(value, str) and pd.isna(value)) or value == "" else value
 
 
-def _raw_in_window(window: WindowResult, meas: pd.DataFrame, other: pd.DataFrame) -> pd.DataFrame:
-    """The window aircraft's raw reports of one sensor inside the window."""
+def _raw_in_window(window: WindowResult, frames: list[pd.DataFrame]) -> pd.DataFrame:
+    """The window aircraft's raw reports of every sensor in ``frames`` inside the window."""
     s = window.summary
     cs, addr = _none_if_blank(s.get("callsign")), _none_if_blank(s.get("address"))
     if cs is None and addr is None:
-        return meas.iloc[:0]
-    # select() over both frames joined, without joining them whole: the aircraft matched over both, then
+        return frames[0].iloc[:0]
+    # select() over the frames joined, without joining them whole: the aircraft matched over all, then
     # only their rows joined
-    ids = matching_aircraft([meas, other], cs, addr)
-    chosen = [f[f["aircraft_id"].isin(ids).fillna(False).to_numpy(bool)] for f in (meas, other)]
-    start = midnight(pd.concat([meas["time"], other["time"]], ignore_index=True))
+    ids = matching_aircraft(frames, cs, addr)
+    chosen = [f[f["aircraft_id"].isin(ids).fillna(False).to_numpy(bool)] for f in frames]
+    start = midnight(pd.concat([f["time"] for f in frames], ignore_index=True))
     rows = with_clock(pd.concat(chosen, ignore_index=True), start)
-    rows = rows[(rows["sensor_kind"] == meas["sensor_kind"].iloc[0]).to_numpy(bool)] if len(meas) else rows
     return rows[in_window(rows["time_of_day"], s["start_tod"], s["end_tod"])]
 
 
-def _of_sensors(rows: pd.DataFrame, sensors: str) -> pd.DataFrame:
-    """The rows of the window's sensor ``sensors`` (a sensor_id, ADS-B ground stations joined by "+"): with
-    several radars, a window's pair is one radar against one reference; all rows when either is unknown."""
-    if not sensors or "sensor_id" not in rows:
-        return rows
-    return rows[rows["sensor_id"].astype(str).isin(sensors.split("+")).to_numpy(bool)]
+def _side(rows: pd.DataFrame, sensors: str, kind: str) -> pd.DataFrame:
+    """The rows of one side of a window: its sensor ``sensors`` (a sensor_id, ADS-B ground stations joined by
+    "+"; with several radars, a window's pair is one radar against one reference), else (unknown) of
+    ``kind``. By id, not by the frame a row came in: a surface radar's reference is multilateration."""
+    if sensors and "sensor_id" in rows:
+        return rows[rows["sensor_id"].astype(str).isin(sensors.split("+")).to_numpy(bool)]
+    return rows[(rows["sensor_kind"] == kind).to_numpy(bool)]
+
+
+def _side_kind(sensors: str, kind: str) -> str:
+    """The kind a side's sensor ids imply (ADS-B ground stations joined by "+"), ``kind`` where they do not
+    say or disagree."""
+    kinds = {kind_of_id(s) for s in sensors.split("+")} if sensors else set()
+    return kinds.pop() if len(kinds) == 1 and None not in kinds else kind
 
 
 def track_span(values: np.ndarray, pad: float = 0.08) -> tuple[float, float] | None:
@@ -307,18 +316,22 @@ def track_span(values: np.ndarray, pad: float = 0.08) -> tuple[float, float] | N
 
 def slotting_figure(window: WindowResult, radar_meas: pd.DataFrame, adsb_meas: pd.DataFrame,
                     path: str | os.PathLike[str]) -> Path:
-    """Latitude and longitude against time of one window: raw reports (left) and 10 s slots (right)."""
+    """slotting written as PNG."""
+    return save_png(slotting(window, radar_meas, adsb_meas), path)
+
+
+def slotting(window: WindowResult, radar_meas: pd.DataFrame, adsb_meas: pd.DataFrame) -> Figure:
+    """Latitude and longitude against time of one window: raw reports (left) and 10 s slots (right); each
+    side's reports are its sensors' (by id, whichever frame holds them), named by the kind they are."""
     fig = new_figure(12, 6.5)
     axes = fig.subplots(2, 2, sharex=True, sharey="row")
     s = window.summary
-    radar_id, reference = str(s.get("radar_sensor") or ""), str(s.get("reference_sensor") or "")
-    reference_is_radar = reference.startswith("048:")  # --pairs radar-radar: the second radar
-    raw = {"radar": _of_sensors(_raw_in_window(window, radar_meas, adsb_meas), radar_id),
-           "adsb": _of_sensors(_raw_in_window(window, *((radar_meas, adsb_meas) if reference_is_radar
-                                                         else (adsb_meas, radar_meas))), reference)}
-    labels = {"radar": f"Radar {radar_id}" if radar_id else _SENSOR_LABEL["radar"],
-              "adsb": f"{'Radar' if reference_is_radar else 'ADS-B'} {reference}" if reference
-              else _SENSOR_LABEL["adsb"]}
+    ids = {"radar": str(s.get("radar_sensor") or ""), "adsb": str(s.get("reference_sensor") or "")}
+    rows = _raw_in_window(window, [radar_meas, adsb_meas])
+    raw = {side: _side(rows, ids[side], side) for side in ids}
+    kinds = {side: _side_kind(ids[side], side) for side in ids}
+    labels = {side: f"{_KIND_WORD.get(kinds[side], kinds[side])} {ids[side]}" if ids[side]
+              else _SENSOR_LABEL.get(side, side) for side in ids}
     slots = window.slots
     for row, (axis, name) in enumerate((("lat", "latitude"), ("lon", "longitude"))):
         for sensor, color in (("adsb", ADSB_COLOR), ("radar", RADAR_COLOR)):
@@ -337,8 +350,10 @@ def slotting_figure(window: WindowResult, radar_meas: pd.DataFrame, adsb_meas: p
             y = raw["adsb"][name].to_numpy(float)
             outside = int(((y < span[0]) | (y > span[1])).sum())
             if outside:
-                axes[row, 0].text(0.01, 0.02, f"{outside} ADS-B report(s) off the axis (position jumps)",
-                                  transform=axes[row, 0].transAxes, fontsize=8, color="0.3")
+                why = " (position jumps)" if kinds["adsb"] == "adsb" else ""
+                axes[row, 0].text(0.01, 0.02, f"{outside} {_KIND_WORD.get(kinds['adsb'], 'reference')} "
+                                  f"report(s) off the axis{why}", transform=axes[row, 0].transAxes,
+                                  fontsize=8, color="0.3")
         for ax in axes[row]:
             ax.ticklabel_format(axis="y", useOffset=False)
             _grid(ax)
@@ -348,4 +363,4 @@ def slotting_figure(window: WindowResult, radar_meas: pd.DataFrame, adsb_meas: p
     for ax in axes[1]:
         _time_axis(ax, slots["time_of_day"])
     fig.suptitle(f"Latitude and longitude before and after slotting: {window_label(s)}", fontsize=12)
-    return save_png(fig, path)
+    return fig

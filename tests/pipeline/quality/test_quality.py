@@ -300,8 +300,8 @@ def test_interval_labels_never_overlap_and_the_largest_count_is_labelled():
 
 
 def test_slotting_figure_rows_equal_a_selection_over_both_sensors_joined(frames):
-    """The figure's raw reports of one sensor are found without joining both sensors' frames: the same
-    rows, values and clock as select() over the two joined (also with one sensor empty)."""
+    """The figure's raw reports are found without joining both sensors' frames: the same rows, values and
+    clock as select() over the two joined (also with one sensor empty)."""
     from msdc.pipeline.correlate.windows import in_window
     from msdc.pipeline.model.measurements import select
     from msdc.pipeline.model.time import midnight, with_clock
@@ -313,12 +313,33 @@ def test_slotting_figure_rows_equal_a_selection_over_both_sensors_joined(frames)
     for meas, other in ((radar, adsb), (adsb, radar), (radar.iloc[:0], adsb)):
         both = pd.concat([meas, other], ignore_index=True)
         want = with_clock(select(both, s["callsign"], s["address"]), midnight(both["time"]))
-        if len(meas):
-            want = want[(want["sensor_kind"] == meas["sensor_kind"].iloc[0]).to_numpy(bool)]
         want = want[in_window(want["time_of_day"], s["start_tod"], s["end_tod"])]
-        got = _raw_in_window(window, meas, other)
+        got = _raw_in_window(window, [meas, other])
         assert len(got) > 0
         pd.testing.assert_frame_equal(got, want, check_exact=True)
+
+
+def test_slotting_figure_of_a_surface_radar_draws_its_multilateration_reference(frames):
+    """--pairs smr-mlat: both sides' reports drawn and named by their kind. The radar and ADS-B reports of
+    MAS72 relabelled as a surface radar and a multilateration, with the ADS-B left beside them and first
+    in the frame: the figure drew no reference reports and called the multilateration "ADS-B"."""
+    from msdc.pipeline.report.quality_figures import slotting
+
+    def relabelled(rows: pd.DataFrame, kind: str, sensor: str) -> pd.DataFrame:
+        return rows.assign(sensor_kind=kind, sensor_id=sensor)
+
+    radar, adsb = frames[frames["sensor_kind"] == "radar"], frames[frames["sensor_kind"] == "adsb"]
+    smr, mlat = relabelled(radar, "smr", "010:0/7:smr"), relabelled(adsb, "mlat", "010:0/107:mlat")
+    others = pd.concat([adsb, smr, mlat], ignore_index=True)  # the job's non-radar frame, ADS-B first
+    others = others.astype({"sensor_kind": "category", "sensor_id": "category"})
+    window = correlate(others, callsign="MAS72", pairs="smr-mlat").windows[0]
+    s = window.summary
+    assert (s["radar_sensor"], s["reference_sensor"]) == ("010:0/7:smr", "010:0/107:mlat")
+    fig = slotting(window, others.iloc[:0], others)
+    drawn = {line.get_label(): len(line.get_xdata()) for line in fig.axes[0].get_lines()}
+    for rows, label in ((smr, "Surface radar 010:0/7:smr"), (mlat, "Multilateration 010:0/107:mlat")):
+        ours = rows[(rows["callsign"] == "MAS72") & rows["time"].between(s["start"], s["end"])]
+        assert drawn[label] == len(ours) > 0
 
 
 def _sheet(ws) -> pd.DataFrame:
