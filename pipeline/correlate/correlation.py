@@ -389,10 +389,13 @@ def _span(times: np.ndarray) -> tuple[float, float]:
 class _Columns:
     """The columns correlate() reads, as arrays over the rows of a measurement frame (read once per run,
     not per aircraft or sensor pair); ``dup`` and ``jump`` are None when the frame does not carry the
-    job-wide flags (pipeline.model.marks.mark_once), which are then worked out per source as before."""
+    job-wide flags (pipeline.model.marks.mark_once), which are then worked out per source as before.
+    ``adsb_reference``: whether the reference role's rows are ADS-B (in_roles renames a multilateration
+    reference to that role: its verdicts then name its id, and it has no ADS-B jumps)."""
 
-    def __init__(self, meas: pd.DataFrame):
+    def __init__(self, meas: pd.DataFrame, adsb_reference: bool = True):
         self.meas = meas
+        self.adsb_reference = adsb_reference
         self.time_ns = meas["time"].array.asi8  # (a view: nothing of the run's size is copied but flags)
         self.tod = meas["time_of_day"].to_numpy(float)
         self.lat, self.lon = meas["latitude"].to_numpy(float), meas["longitude"].to_numpy(float)
@@ -455,13 +458,13 @@ class _Source:
         self.dup_t = cols.tod[order[dup]]
         self.t, self.lat, self.lon = cols.tod[kept], cols.lat[kept], cols.lon[kept]
         self.jump = np.zeros(kept.size, bool)
-        if kept.size and cols.is_adsb[kept].all():  # jumps are an ADS-B notion
+        self.is_adsb = cols.adsb_reference and bool(kept.size) and bool(cols.is_adsb[kept].all())
+        if self.is_adsb:  # jumps are an ADS-B notion
             if cols.jump is not None:
                 self.jump = cols.jump[kept]
             else:
                 self.jump = detect_jumps(meas.iloc[kept].reset_index(drop=True)).to_numpy(bool)
         self.jump_t = self.t[self.jump]
-        self.is_adsb = bool(kept.size) and bool(cols.is_adsb[kept].all())
         self._track = (cols, kept) if track else None
         self._predictor: tuple | None = None
 
@@ -625,6 +628,7 @@ def correlate(meas: pd.DataFrame, *, callsign: str | None = None, address: str |
         meas = meas.assign(time=meas["time"].dt.as_unit("ns"))
     reference = midnight(meas["time"])
     tested, against = (ROLE_NOUNS[k] for k in PAIR_KINDS[pairs])
+    adsb_reference = PAIR_KINDS[pairs][1] == "adsb"
     if reference is None:
         raise NoSuchAircraft("any aircraft", [tested, against], [], "there are no measurements")
     if "sensor_kind" in meas:
@@ -643,7 +647,7 @@ def correlate(meas: pd.DataFrame, *, callsign: str | None = None, address: str |
     role_pairs = pairs if pairs in ("radar-radar", "all") else "radar-adsb"  # the pairs of the two roles
     need_adsb = role_pairs == "radar-adsb"
     if all_aircraft:  # one aircraft's rows at a time (aircraft_rows), not a second copy of the run
-        cols = _Columns(meas)
+        cols = _Columns(meas, adsb_reference)
         targets = aircraft_rows(meas, need_adsb=need_adsb)
         first = next(targets, None)
         if first is None:
@@ -662,7 +666,7 @@ def correlate(meas: pd.DataFrame, *, callsign: str | None = None, address: str |
             text = str(exc).replace("radar or ADS-B", " or ".join(missing)).replace(
                 " by radar", f" by {tested}").replace(" by ADS-B", f" by {against}")
             raise NoSuchAircraft(exc.wanted, missing, exc.closest, text) from None
-        cols = _Columns(pd.concat([ac.radar, ac.adsb], ignore_index=True))
+        cols = _Columns(pd.concat([ac.radar, ac.adsb], ignore_index=True), adsb_reference)
         targets = iter([(ac.callsign, ac.address, ac.aircraft_id, np.arange(len(ac.radar)),
                          np.arange(len(ac.radar), len(ac.radar) + len(ac.adsb)))])
         del ac

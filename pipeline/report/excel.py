@@ -78,7 +78,6 @@ from msdc.pipeline.report.charts import (
 from msdc.pipeline.report.headers import workbook_header
 from msdc.pipeline.report.saving import get_ready, save
 from msdc.pipeline.report.summary import (
-    LEAD_TEXT,
     LEAD_TITLE,
     RADARS_TEXT,
     RADARS_TITLE,
@@ -87,6 +86,7 @@ from msdc.pipeline.report.summary import (
     THESIS_TITLE,
     aircraft_name,
     has_quality,
+    lead_text,
     sensor_pair,
     window_notes,
 )
@@ -239,7 +239,7 @@ def _write_summary(wb: Workbook, run: CorrelationRun) -> None:
     radar_keys = [k for k in RADAR_KEYS if k != "note"]  # (each radar's note on rows of its own)
     skipped = [[excel_value(s.callsign), excel_value(s.address), sensor_pair(vars(s)) or None,
                 excel_value(s.start_tod), excel_value(s.end_tod), excel_value(s.reason)] for s in run.skipped]
-    blocks = [(f"{LEAD_TITLE}: {LEAD_TEXT}", _lead_keys(run)), *SUMMARY_BLOCKS]
+    blocks = [(f"{LEAD_TITLE}: {lead_text(run)}", _lead_keys(run)), *SUMMARY_BLOCKS]
     widths: dict[int, float] = {}
 
     def widen(headers: list[str], rows: list[list[Any]], formats: list[str | None]) -> None:

@@ -11,7 +11,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from msdc.pipeline.correlate.correlation import pearson_search_limit
+from msdc.pipeline.correlate.correlation import PAIR_KINDS, ROLE_NOUNS, pearson_search_limit
 from msdc.pipeline.correlate.results import (
     MATCHED_KEYS,
     RADAR_KEYS,
@@ -68,6 +68,14 @@ LEAD_TITLE = "What each window shows"
 LEAD_TEXT = ("every radar report against the reference's position at the report's own time (interpolated "
              "between the reference reports on either side), over the slots where both sensors reported, "
              "ADS-B position jumps left out: no slot mean and no filled slot is read")
+
+
+def lead_text(run: CorrelationRun) -> str:
+    """LEAD_TEXT in the words of the run's --pairs: "every multilateration report", and no ADS-B jumps
+    where the reference is not ADS-B (a surface radar's is multilateration)."""
+    tested, reference = PAIR_KINDS.get(run.parameters.get("pairs") or "radar-adsb", ("radar", "adsb"))
+    text = LEAD_TEXT.replace("every radar report", f"every {ROLE_NOUNS[tested]} report")
+    return text if reference == "adsb" else text.replace(", ADS-B position jumps left out", "")
 RADARS_TITLE = "Radars against ADS-B over the run"
 RADARS_TEXT = ("--quality: each radar's accuracy (RMS distance, range and azimuth error SD) and the biases "
                "fitted over every aircraft, with their standard errors (the Radar biases sheet)")
@@ -99,7 +107,7 @@ def lead_json(run: CorrelationRun) -> dict[str, Any]:
     are left out), the radars' accuracy and biases (--quality), and the thesis's measures' limits."""
     summaries = [window_summary(w) for w in run.windows]
     keys = [k for k in LEAD_WINDOW_KEYS if k not in WINDOW_QUALITY_KEYS or has_quality(run)]
-    return {"about": f"{LEAD_TITLE}: {LEAD_TEXT}",
+    return {"about": f"{LEAD_TITLE}: {lead_text(run)}",
             "windows": [{k: s.get(k) for k in keys} for s in summaries],
             "radars": [{k: json_value(r.get(k)) for k in RADAR_KEYS} for r in run.radars],
             "thesis_measures": {name: f"{title}: {limit}" for name, (title, limit) in THESIS_LIMITS.items()}}
@@ -354,7 +362,7 @@ def lead_table(run: CorrelationRun) -> list[str]:
     if not run.windows:
         return []
     spec = _LEAD_TABLE + (_QUALITY_TABLE if has_quality(run) else [])
-    lines = [f"{LEAD_TITLE}: {LEAD_TEXT}"]
+    lines = [f"{LEAD_TITLE}: {lead_text(run)}"]
     lines += _fixed_width([h for h, _, _ in spec], [[cell(w.summary) for _, cell, _ in spec]
                                                      for w in run.windows], [r for _, _, r in spec])
     lines += [f"Verdict: {window_label(w.summary)}: {printable(w.summary.get('verdict')) or '-'}"

@@ -52,3 +52,24 @@ def test_an_aircraft_not_seen_by_the_pair_is_named_in_its_terms():
         correlate(meas, callsign=None, address="4CA1B2", pairs="mlat-adsb")
     with pytest.raises(NoSuchAircraft, match="surface radar and multilateration"):
         correlate(meas, all_aircraft=True, pairs="smr-mlat")
+
+
+@pytest.mark.parametrize(("pairs", "named", "phrase"), [
+    ("smr-mlat", "010:0/7:smr", "from 010:0/107:mlat"),
+    ("mlat-adsb", "010:0/107:mlat", "from ADS-B"),
+])
+def test_a_verdict_names_the_reference_it_was_measured_against(pairs, named, phrase):
+    """The surface radar's verdict against multilateration said "RMS from ADS-B" (its reference takes the
+    ADS-B role's columns, not its name), and what each window shows began "every radar report"."""
+    from msdc.pipeline.report.summary import lead_json
+
+    run = correlate(MEAS, all_aircraft=True, pairs=pairs)
+    (window,) = run.windows
+    verdict = window.summary["verdict"]
+    assert window.summary["radar_sensor"] == named
+    assert f"m RMS {phrase} over" in verdict
+    about = lead_json(run)["about"]
+    noun = {"smr-mlat": "surface radar", "mlat-adsb": "multilateration"}[pairs]
+    assert about.startswith(f"What each window shows: every {noun} report against the reference's position")
+    if pairs == "smr-mlat":
+        assert "ADS-B" not in verdict and "ADS-B" not in about
