@@ -27,7 +27,7 @@ from openpyxl.utils.units import cm_to_EMU
 from openpyxl.worksheet._write_only import WriteOnlyWorksheet
 from openpyxl.worksheet.pagebreak import Break
 
-from msdc.pipeline.correlate.correlation import pearson_max_lag
+from msdc.pipeline.correlate.correlation import PAIR_KINDS, ROLE_NOUNS, pearson_max_lag
 from msdc.pipeline.correlate.results import LAG_COLUMNS, SLOT_COLUMNS, CorrelationRun, WindowResult
 from msdc.pipeline.report.cells import (
     EXCEL_MAX_ROWS,
@@ -42,7 +42,7 @@ from msdc.pipeline.report.cells import (
     page_setup,
     text_cell,
 )
-from msdc.pipeline.report.summary import utc_naive, window_label
+from msdc.pipeline.report.summary import side_words, utc_naive, window_label
 from msdc.pipeline.report.tables import lag_frame
 
 # every row names its window: number, aircraft and sensor pair (numbers restart for every pair)
@@ -259,6 +259,15 @@ class _SheetRef:
 
 
 
+def _pair_nouns(pairs: str | None) -> tuple[str, str]:
+    """The sensor correlated and its reference in words, by --pairs (radar against ADS-B by default; with a
+    second radar as reference, both named)."""
+    if pairs in ("radar-radar", "all"):
+        return "radar", "the reference (ADS-B or the second radar)"
+    tested, reference = PAIR_KINDS.get(pairs or "radar-adsb", ("radar", "adsb"))
+    return ROLE_NOUNS[tested], ROLE_NOUNS[reference]
+
+
 def write_slot_charts(wb: Workbook, run: CorrelationRun, data_sheet: str = "Slots",
                       frames: list[pd.DataFrame] | None = None, headers: list[str] | None = None) -> None:
     """Two charts per window (latitude, longitude against time). ``frames``: each window's slots as
@@ -269,8 +278,9 @@ def write_slot_charts(wb: Workbook, run: CorrelationRun, data_sheet: str = "Slot
     charted = [i for i, w in enumerate(run.windows) if len(w.slots)]
     shown = charted[:MAX_SLOT_CHART_WINDOWS]
     more = _first_of(len(shown), len(charted))
+    tested, reference = _pair_nouns(run.parameters.get("pairs"))
     heading = ("Slotted latitude and longitude against time (UTC)",
-               f"ADS-B yellow (solid, wide), radar red (dashed, on top); data on the {data_sheet} "
+               f"{reference} yellow (solid, wide), {tested} red (dashed, on top); data on the {data_sheet} "
                f"sheet{more}.")
     ws = chart_sheet(wb, "Slot charts", heading, 2 * len(shown))
     ref = _SheetRef(data_sheet)
@@ -289,14 +299,16 @@ def write_slot_charts(wb: Workbook, run: CorrelationRun, data_sheet: str = "Slot
             times = [v / 86400.0 for v in pd.to_numeric(slots["time_of_day"], errors="coerce").tolist()]
         x_span = axis_limits(times, pad=0.0)
         markers = len(slots) <= 40
+        words = side_words(w.summary)  # "Surface radar" and "Multilateration" for --pairs smr-mlat
         for k, (axis, name) in enumerate((("lat", "latitude"), ("lon", "longitude"))):
             chart = scatter_chart(f"{window_title(w, i)}: {name}", "time (UTC)", f"{name} (deg)")
             # LibreOffice draws the first series on top: radar first, so the wide ADS-B line never hides it
-            chart.series.append(xy_series(ref, col["time_utc"], col[f"radar_{axis}"], (first, last), "Radar",
-                                           RADAR_RGB, dash="dash", width_pt=1.5,
+            chart.series.append(xy_series(ref, col["time_utc"], col[f"radar_{axis}"], (first, last),
+                                           words["radar"], RADAR_RGB, dash="dash", width_pt=1.5,
                                            marker="triangle" if markers else None))
-            chart.series.append(xy_series(ref, col["time_utc"], col[f"adsb_{axis}"], (first, last), "ADS-B",
-                                           ADSB_RGB, width_pt=3.0, marker="circle" if markers else None))
+            chart.series.append(xy_series(ref, col["time_utc"], col[f"adsb_{axis}"], (first, last),
+                                           words["adsb"], ADSB_RGB, width_pt=3.0,
+                                           marker="circle" if markers else None))
             chart.x_axis.number_format = "hh:mm"
             chart.y_axis.number_format = "0.00"
             if x_span:

@@ -20,17 +20,15 @@ from matplotlib.ticker import FuncFormatter, MultipleLocator, NullFormatter
 from msdc.pipeline.correlate.results import WindowResult
 from msdc.pipeline.correlate.windows import in_window
 from msdc.pipeline.model.measurements import matching_aircraft
-from msdc.pipeline.model.sources import kind_of_id
 from msdc.pipeline.model.time import midnight, with_clock
 from msdc.pipeline.quality.accuracy import MAX_AZIMUTH_ELEVATION_DEG, elevation_deg
 from msdc.pipeline.report.figures import new_figure, save_png
-from msdc.pipeline.report.summary import window_label
+from msdc.pipeline.report.summary import side_words, window_label
 
 RADAR_COLOR = "#d62728"
 ADSB_COLOR = "#e6b800"
 _SENSOR_LABEL = {"radar": "Radar (CAT048)", "adsb": "ADS-B (CAT021)", "mlat": "Multilateration",
                  "smr": "Surface radar (CAT010)"}
-_KIND_WORD = {"radar": "Radar", "adsb": "ADS-B", "mlat": "Multilateration", "smr": "Surface radar"}
 _TICK_STEPS_S = (10, 30, 60, 120, 300, 600, 900, 1800, 3600, 7200, 14400)  # whole minutes from 60 s
 MAX_ERROR_POINTS = 50_000  # reports drawn per radar error figure: more only overplot, and cost seconds
 MAX_LEGEND_AIRCRAFT = 20  # aircraft named in the radar error legend; past it, colours only
@@ -296,13 +294,6 @@ def _side(rows: pd.DataFrame, sensors: str, kind: str) -> pd.DataFrame:
     return rows[(rows["sensor_kind"] == kind).to_numpy(bool)]
 
 
-def _side_kind(sensors: str, kind: str) -> str:
-    """The kind a side's sensor ids imply (ADS-B ground stations joined by "+"), ``kind`` where they do not
-    say or disagree."""
-    kinds = {kind_of_id(s) for s in sensors.split("+")} if sensors else set()
-    return kinds.pop() if len(kinds) == 1 and None not in kinds else kind
-
-
 def track_span(values: np.ndarray, pad: float = 0.08) -> tuple[float, float] | None:
     """y range of a coordinate panel: the radar reports' range, padded by ``pad`` of it (at least 0.01 deg);
     None when there is no finite value."""
@@ -329,9 +320,8 @@ def slotting(window: WindowResult, radar_meas: pd.DataFrame, adsb_meas: pd.DataF
     ids = {"radar": str(s.get("radar_sensor") or ""), "adsb": str(s.get("reference_sensor") or "")}
     rows = _raw_in_window(window, [radar_meas, adsb_meas])
     raw = {side: _side(rows, ids[side], side) for side in ids}
-    kinds = {side: _side_kind(ids[side], side) for side in ids}
-    labels = {side: f"{_KIND_WORD.get(kinds[side], kinds[side])} {ids[side]}" if ids[side]
-              else _SENSOR_LABEL.get(side, side) for side in ids}
+    words = side_words(s)
+    labels = {side: f"{words[side]} {ids[side]}" if ids[side] else _SENSOR_LABEL[side] for side in ids}
     slots = window.slots
     for row, (axis, name) in enumerate((("lat", "latitude"), ("lon", "longitude"))):
         for sensor, color in (("adsb", ADSB_COLOR), ("radar", RADAR_COLOR)):
@@ -350,10 +340,9 @@ def slotting(window: WindowResult, radar_meas: pd.DataFrame, adsb_meas: pd.DataF
             y = raw["adsb"][name].to_numpy(float)
             outside = int(((y < span[0]) | (y > span[1])).sum())
             if outside:
-                why = " (position jumps)" if kinds["adsb"] == "adsb" else ""
-                axes[row, 0].text(0.01, 0.02, f"{outside} {_KIND_WORD.get(kinds['adsb'], 'reference')} "
-                                  f"report(s) off the axis{why}", transform=axes[row, 0].transAxes,
-                                  fontsize=8, color="0.3")
+                why = " (position jumps)" if words["adsb"] == "ADS-B" else ""
+                axes[row, 0].text(0.01, 0.02, f"{outside} {words['adsb']} report(s) off the axis{why}",
+                                  transform=axes[row, 0].transAxes, fontsize=8, color="0.3")
         for ax in axes[row]:
             ax.ticklabel_format(axis="y", useOffset=False)
             _grid(ax)

@@ -20,6 +20,7 @@ from msdc.pipeline.correlate.results import (
     CorrelationRun,
     WindowResult,
 )
+from msdc.pipeline.model.sources import kind_of_id
 from msdc.pipeline.model.time import iso_utc
 from msdc.pipeline.report.files import is_missing, json_value
 from msdc.pipeline.report.formats import decimals
@@ -68,6 +69,22 @@ LEAD_TITLE = "What each window shows"
 LEAD_TEXT = ("every radar report against the reference's position at the report's own time (interpolated "
              "between the reference reports on either side), over the slots where both sensors reported, "
              "ADS-B position jumps left out: no slot mean and no filled slot is read")
+
+
+KIND_WORDS = {"radar": "Radar", "adsb": "ADS-B", "mlat": "Multilateration", "smr": "Surface radar"}
+
+
+def side_words(summary: Mapping[str, Any]) -> dict[str, str]:
+    """What a window's two sides are, by the kind their sensor ids imply ("radar": the sensor correlated,
+    "adsb": its reference; ADS-B ground stations joined by "+"): "Surface radar" and "Multilateration" for
+    --pairs smr-mlat, "Radar" for a second radar; the role's own word where the ids do not say."""
+    words = {}
+    for side, key in (("radar", "radar_sensor"), ("adsb", "reference_sensor")):
+        ids = str(summary.get(key) or "")
+        kinds = {kind_of_id(s) for s in ids.split("+")} if ids else set()
+        kind = kinds.pop() if len(kinds) == 1 and None not in kinds else side
+        words[side] = KIND_WORDS[kind]
+    return words
 
 
 def lead_text(run: CorrelationRun) -> str:

@@ -73,3 +73,18 @@ def test_a_verdict_names_the_reference_it_was_measured_against(pairs, named, phr
     assert about.startswith(f"What each window shows: every {noun} report against the reference's position")
     if pairs == "smr-mlat":
         assert "ADS-B" not in verdict and "ADS-B" not in about
+
+
+def test_the_slot_charts_name_a_surface_radar_and_its_multilateration(tmp_path):
+    """The workbook's slot charts called the two sides "Radar" and "ADS-B" whatever --pairs was."""
+    from openpyxl import Workbook, load_workbook
+
+    from msdc.pipeline.report.charts import write_slot_charts
+
+    wb = Workbook(write_only=True)
+    write_slot_charts(wb, correlate(MEAS, all_aircraft=True, pairs="smr-mlat"))
+    wb.save(tmp_path / "c.xlsx")
+    ws = load_workbook(tmp_path / "c.xlsx")["Slot charts"]
+    names = [[s.tx.v for s in chart.series] for chart in ws._charts]
+    assert names == [["Surface radar", "Multilateration"]] * 2  # latitude, longitude
+    assert ws["A2"].value.startswith("multilateration yellow (solid, wide), surface radar red (dashed")
