@@ -27,7 +27,7 @@ from openpyxl.utils.units import cm_to_EMU
 from openpyxl.worksheet._write_only import WriteOnlyWorksheet
 from openpyxl.worksheet.pagebreak import Break
 
-from msdc.pipeline.correlate.correlation import PAIR_KINDS, ROLE_NOUNS, pearson_max_lag
+from msdc.pipeline.correlate.correlation import pearson_max_lag
 from msdc.pipeline.correlate.results import LAG_COLUMNS, SLOT_COLUMNS, CorrelationRun, WindowResult
 from msdc.pipeline.report.cells import (
     EXCEL_MAX_ROWS,
@@ -42,7 +42,7 @@ from msdc.pipeline.report.cells import (
     page_setup,
     text_cell,
 )
-from msdc.pipeline.report.summary import side_words, utc_naive, window_label
+from msdc.pipeline.report.summary import pair_nouns, side_words, utc_naive, window_label
 from msdc.pipeline.report.tables import lag_frame
 
 # every row names its window: number, aircraft and sensor pair (numbers restart for every pair)
@@ -259,15 +259,6 @@ class _SheetRef:
 
 
 
-def _pair_nouns(pairs: str | None) -> tuple[str, str]:
-    """The sensor correlated and its reference in words, by --pairs (radar against ADS-B by default; with a
-    second radar as reference, both named)."""
-    if pairs in ("radar-radar", "all"):
-        return "radar", "the reference (ADS-B or the second radar)"
-    tested, reference = PAIR_KINDS.get(pairs or "radar-adsb", ("radar", "adsb"))
-    return ROLE_NOUNS[tested], ROLE_NOUNS[reference]
-
-
 def write_slot_charts(wb: Workbook, run: CorrelationRun, data_sheet: str = "Slots",
                       frames: list[pd.DataFrame] | None = None, headers: list[str] | None = None) -> None:
     """Two charts per window (latitude, longitude against time). ``frames``: each window's slots as
@@ -278,7 +269,7 @@ def write_slot_charts(wb: Workbook, run: CorrelationRun, data_sheet: str = "Slot
     charted = [i for i, w in enumerate(run.windows) if len(w.slots)]
     shown = charted[:MAX_SLOT_CHART_WINDOWS]
     more = _first_of(len(shown), len(charted))
-    tested, reference = _pair_nouns(run.parameters.get("pairs"))
+    tested, reference = pair_nouns(run.parameters.get("pairs"))
     heading = ("Slotted latitude and longitude against time (UTC)",
                f"{reference} yellow (solid, wide), {tested} red (dashed, on top); data on the {data_sheet} "
                f"sheet{more}.")

@@ -87,6 +87,7 @@ from msdc.pipeline.report.summary import (
     aircraft_name,
     has_quality,
     lead_text,
+    pair_nouns,
     sensor_pair,
     window_notes,
 )
@@ -318,13 +319,16 @@ def _scaled_image(png: str | os.PathLike[str] | bytes) -> Image:
     return image
 
 
-def _write_map(wb: Workbook) -> WriteOnlyWorksheet:
-    """The Map sheet's title; its figure is added just before saving (it may still be being drawn)."""
+def _write_map(wb: Workbook, pairs: str | None) -> WriteOnlyWorksheet:
+    """The Map sheet's title in the words of ``pairs``; its figure is added just before saving (it may still
+    be being drawn)."""
     ws = wb.create_sheet("Map")
     page_setup(ws, None, fit_height=1)
     fixed_rows(ws)
-    ws.append([text_cell(ws, "Slotted tracks: radar (red) and ADS-B (yellow), every correlated window",
-                         font=TITLE_FONT)])
+    # a radar-radar pair's second radar is drawn red on the map too (figures.track_map)
+    tested, reference = pair_nouns(pairs) if pairs in ("mlat-adsb", "smr-mlat") else ("radar", "ADS-B")
+    title = f"Slotted tracks: {tested} (red) and {reference} (yellow), every correlated window"
+    ws.append([text_cell(ws, title, font=TITLE_FONT)])
     return ws
 
 
@@ -583,7 +587,7 @@ def write_report(run: CorrelationRun, path_xlsx: str | os.PathLike[str], *,
     taken = {name.lower() for name in _CORE_SHEETS}
     _write_summary(wb, run)
     try:
-        map_sheet = _write_map(wb) if figure_png is not None else None
+        map_sheet = _write_map(wb, run.parameters.get("pairs")) if figure_png is not None else None
         waiting = _write_tables(wb, run, parquet, tables)
         for name, frame in run.extra_sheets.items():
             _write_frame(wb, sheet_name(name, taken), frame)

@@ -87,6 +87,15 @@ def side_words(summary: Mapping[str, Any]) -> dict[str, str]:
     return words
 
 
+def pair_nouns(pairs: str | None) -> tuple[str, str]:
+    """The sensor correlated and its reference in words, by --pairs (radar against ADS-B by default; with a
+    second radar as reference, both named)."""
+    if pairs in ("radar-radar", "all"):
+        return "radar", "the reference (ADS-B or the second radar)"
+    tested, reference = PAIR_KINDS.get(pairs or "radar-adsb", ("radar", "adsb"))
+    return ROLE_NOUNS[tested], ROLE_NOUNS[reference]
+
+
 def lead_text(run: CorrelationRun) -> str:
     """LEAD_TEXT in the words of the run's --pairs: "every multilateration report", and no ADS-B jumps
     where the reference is not ADS-B (a surface radar's is multilateration)."""

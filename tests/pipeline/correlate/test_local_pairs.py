@@ -88,3 +88,20 @@ def test_the_slot_charts_name_a_surface_radar_and_its_multilateration(tmp_path):
     names = [[s.tx.v for s in chart.series] for chart in ws._charts]
     assert names == [["Surface radar", "Multilateration"]] * 2  # latitude, longitude
     assert ws["A2"].value.startswith("multilateration yellow (solid, wide), surface radar red (dashed")
+
+
+@pytest.mark.parametrize(("pairs", "title"), [
+    ("smr-mlat", "Slotted tracks: surface radar (red) and multilateration (yellow), every correlated window"),
+    ("radar-adsb", "Slotted tracks: radar (red) and ADS-B (yellow), every correlated window"),
+])
+def test_the_map_sheet_names_the_pair_it_draws(tmp_path, pairs, title):
+    """The Map sheet's title said "radar (red) and ADS-B (yellow)" whatever --pairs was."""
+    from matplotlib import pyplot as plt
+    from openpyxl import load_workbook
+
+    from msdc.pipeline.report.excel import write_report
+
+    png = tmp_path / "map.png"
+    plt.imsave(png, np.zeros((4, 4)))
+    write_report(correlate(MEAS, all_aircraft=True, pairs=pairs), tmp_path / "r.xlsx", figure_png=png)
+    assert load_workbook(tmp_path / "r.xlsx", read_only=True)["Map"]["A1"].value == title
