@@ -321,7 +321,7 @@ def _none_if_nan(v):
 def _window_result(ac: tuple[str, str], number: int, start_s: float, end_s: float,
                    radar: tuple[np.ndarray, ...], adsb: tuple[np.ndarray, ...],
                    dups: tuple[int, int], slot_s: float, reference: pd.Timestamp, sensors: dict[str, str],
-                   adsb_jumps: int = 0, predictors: tuple = (None, None), matched: dict | None = None
+                   adsb_jumps: int | None = 0, predictors: tuple = (None, None), matched: dict | None = None
                    ) -> WindowResult:
     """Slot, correlate and summarise one window of one aircraft (call sign, address) from each side's
     reports in it (time of day, latitude, longitude arrays); with predictors (``--fill predict``), empty
@@ -569,7 +569,8 @@ def _correlate_pair(ac: tuple[str, str], run: CorrelationRun, pair: tuple[str, _
         number += 1
         dups = (int(in_window(radar.dup_t, start_s, end_s).sum()),
                 int(in_window(adsb.dup_t, start_s, end_s).sum()))
-        jumps = int(in_window(adsb.jump_t, start_s, end_s).sum())
+        # jumps are looked for in ADS-B only: none where the reference is multilateration, not zero
+        jumps = int(in_window(adsb.jump_t, start_s, end_s).sum()) if adsb.is_adsb else None
         matched = matched_summary(matched_pairs(r_in, adsb.clean_inside(start_s, end_s), start_s, end_s,
                                                 slot_s))
         matched["verdict"] = window_verdict({**matched, "adsb_jumps": jumps},

@@ -105,3 +105,27 @@ def test_the_map_sheet_names_the_pair_it_draws(tmp_path, pairs, title):
     plt.imsave(png, np.zeros((4, 4)))
     write_report(correlate(MEAS, all_aircraft=True, pairs=pairs), tmp_path / "r.xlsx", figure_png=png)
     assert load_workbook(tmp_path / "r.xlsx", read_only=True)["Map"]["A1"].value == title
+
+
+def test_jumps_are_not_counted_where_the_reference_is_not_adsb(tmp_path):
+    """A surface radar's multilateration reference is not searched for ADS-B position jumps: its windows
+    said "0 jumps", a count of what was never looked for; ADS-B's jumps are still counted (one here)."""
+    import json
+
+    from msdc.pipeline.report.excel import write_report
+    from msdc.pipeline.report.summary import run_to_json, summary_table
+
+    jumped = MEAS.copy()
+    at = np.flatnonzero((jumped["sensor_kind"] == "adsb").to_numpy() & (jumped["time_of_day"] == 300.0))
+    jumped.loc[at, "latitude"] += 0.05  # 5.6 km north for one report: an ADS-B position jump
+    (adsb_window,) = correlate(jumped, all_aircraft=True, pairs="mlat-adsb").windows
+    assert adsb_window.summary["adsb_jumps"] == 1
+    run = correlate(jumped, all_aircraft=True, pairs="smr-mlat")
+    assert run.windows[0].summary["adsb_jumps"] is None
+    doc = json.loads(json.dumps(run_to_json(run)))
+    assert doc["windows"][0]["adsb_jumps"] is None
+    table = summary_table(run).splitlines()
+    header = next(line for line in table if line.startswith("call sign") and "jumps" in line)
+    row = table[table.index(header) + 2]
+    assert row[header.index("jumps"):].split()[0] == "-"
+    write_report(run, tmp_path / "r.xlsx")  # a window with no jump count is written, not refused
