@@ -11,8 +11,9 @@ pipeline.model.primary_tracks), with every moving reference report (MIN_SPEED_KT
 MAX_OFFSET_M. The offset is the peak of the displacements' histogram (BIN_M bins: the one vector that
 lines most pairs up; stationary and crossing traffic spread over the rest), refined by the median of the
 pairs within REFINE_M of the peak, with a small rotation fitted about the sensor-file point (a north
-misalignment) and the pairs' scatter about the fit. ``corrected_latitude``/``corrected_longitude`` is the
-sensor-file point moved by minus the offset: where the point should be for the two sensors to agree.
+misalignment) and the pairs' scatter about the fit. ``point_latitude``/``point_longitude`` is the sensor
+file's point, ``corrected_latitude``/``corrected_longitude`` that point moved by minus the offset: where
+the point should be for the two sensors to agree.
 """
 
 from __future__ import annotations
@@ -31,7 +32,8 @@ REFINE_M = 40.0
 MIN_PAIRS = 30  # fewer pairs near the peak say nothing
 REFERENCE_KIND = {"mlat": ("adsb",), "smr": ("mlat", "adsb")}  # first kind present is the reference
 OFFSET_COLUMNS = ["sensor_id", "reference", "pairs", "east_offset_m", "north_offset_m", "rotation_deg",
-                  "scatter_m", "latitude", "longitude", "corrected_latitude", "corrected_longitude"]
+                  "scatter_m", "point_latitude", "point_longitude", "corrected_latitude",
+                  "corrected_longitude"]
 OFFSET_INPUTS = ["time", "sensor_kind", "sensor_id", "sac", "sic", "aircraft_id", "latitude", "longitude",
                  "ground_speed_kt"]
 
@@ -108,7 +110,7 @@ def reference_offsets(meas: pd.DataFrame, sensors: pd.DataFrame | None = None) -
         row = dict.fromkeys(OFFSET_COLUMNS, np.nan) | {"sensor_id": sensor_id, "reference": reference,
                                                        "pairs": 0}
         if point is not None:
-            row["latitude"], row["longitude"] = point[0], point[1]
+            row["point_latitude"], row["point_longitude"] = point[0], point[1]
         origin = point or (float(np.median(meas.loc[mine, "latitude"])),
                            float(np.median(meas.loc[mine, "longitude"])), 0.0)
         if reference is not None:

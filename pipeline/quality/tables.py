@@ -344,6 +344,10 @@ def _as_utc(frame: pd.DataFrame, columns: list[str]) -> pd.DataFrame:
     return frame.assign(**{c: pd.to_datetime(frame[c], utc=True).astype(UTC_DTYPE) for c in columns})
 
 
+NO_ADSB_NOTE = ("No ADS-B (CAT021) report in the input: position jumps and quality indicators are looked "
+                "for in ADS-B only.")
+
+
 def quality_tables(meas: pd.DataFrame, *, gap_s: float = 180.0,
                    jump_kw: dict | None = None) -> dict[str, pd.DataFrame]:
     """Sheets "Quality", "Update intervals", "Gaps", "Jumps", "ADS-B quality" and "ADS-B quality over time"
@@ -358,6 +362,7 @@ def quality_tables(meas: pd.DataFrame, *, gap_s: float = 180.0,
     at = np.flatnonzero(adsb_rows.to_numpy(bool))
     at = at[_deduplicated_rows(both[[*by, *(c for c in DEDUP_COLUMNS if c in both)]].iloc[at], by)]
     adsb = both[[c for c in both if c not in ADSB_UNREAD]].iloc[at].reset_index(drop=True)  # taken once
+    no_adsb = adsb.empty
     jumps = jump_table(adsb, **(jump_kw or {}))
     jump_rows = adsb.loc[jumps["row"].to_numpy()] if len(jumps) else adsb.iloc[:0]
     jumps_by_aircraft = jump_rows["aircraft"].value_counts()
@@ -401,6 +406,9 @@ def quality_tables(meas: pd.DataFrame, *, gap_s: float = 180.0,
                                                   "jump_size_m")}}, columns=JUMP_COLUMNS)
     quality = _as_utc(pd.DataFrame(summary, columns=QUALITY_COLUMNS).astype({"jumps": "Int64"}),
                       ["first_utc", "last_utc"])
+    if no_adsb:  # an empty sheet would read as none found: nothing was looked at
+        for sheet in (jump_sheet, adsb_quality, adsb_over_time):
+            sheet.attrs["note"] = NO_ADSB_NOTE
     return {
         "Quality": quality,
         "Update intervals": (pd.concat(hist, ignore_index=True) if hist

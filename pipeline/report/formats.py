@@ -21,6 +21,7 @@ class Unit:
 
 UNITS: dict[str, Unit] = {
     "deg": Unit("0.0000", 4, "deg"),          # angles and WGS-84 coordinates
+    "point_deg": Unit("0.0000000", 7, "deg"), # a sensor's reference point, to the centimetre it is typed in
     "coef": Unit("0.000000", 6, ""),          # correlation coefficients
     "m": Unit("0.0", 1, "m"),                 # distances
     "nm": Unit("0.000", 3, "NM"),
@@ -50,12 +51,14 @@ COLUMN_UNITS: dict[str, str] = {
     "gaps": "count", "jumps": "count", "blocks": "count", "records": "count", "track_number": "count",
     # the evaluation's counts, floats where a left join leaves an aircraft without them (171, not 171.0)
     "expected": "count", "detected": "count", "expected_updates": "count", "detected_updates": "count",
-    "errors_judged": "count", "reference_samples": "count",
+    "errors_judged": "count", "reference_samples": "count", "pairs": "count",
     "lag_s": "s", "time_bias_s": "s", "time_bias_se_s": "s",
     "range_gain_ppm": "ppm", "range_gain_se_ppm": "ppm",
     "flight_level": "fl", "flight_level_a": "fl", "flight_level_b": "fl",
     "range_from_nm": "edge_nm", "range_to_nm": "edge_nm", "azimuth_from_deg": "edge_deg",
     "azimuth_to_deg": "edge_deg", "fl_from": "edge_fl", "fl_to": "edge_fl",
+    "point_latitude": "point_deg", "point_longitude": "point_deg", "corrected_latitude": "point_deg",
+    "corrected_longitude": "point_deg",
     "bytes": "bytes", "size_bytes": "bytes", "length": "bytes", "offset": "bytes", "first_offset": "bytes",
 }
 
@@ -63,7 +66,7 @@ COLUMN_UNITS: dict[str, str] = {
 _UNIT_PATTERNS: list[tuple[re.Pattern[str], str]] = [
     (re.compile(p), u) for p, u in (
         (r"(^|_)(time_of_day|tod)($|_s$)|_tod(_s)?$", "tod"),
-        (r"ncc|pearson|(^|_)(corr|coef)", "coef"),
+        (r"ncc|pearson|(^|_)(corr|coef|coefficient)($|_)", "coef"),  # not "corrected_", "_correct"
         (r"_pct$|(^|_)share", "pct"),
         (r"_ppm$", "ppm"),
         (r"_deg$|(^|_)(lat|lon|latitude|longitude)($|_|\d)", "deg"),

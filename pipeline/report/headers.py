@@ -112,6 +112,12 @@ LABELS: dict[str, str] = {
     "enough": "Enough to show (20 expected or more)", "azimuth_from_deg": "Azimuth from",
     "azimuth_to_deg": "Azimuth to", "fl_from": "Flight level from", "fl_to": "Flight level to",
     "height_from_ft": "Height from", "height_to_ft": "Height to",
+    # quality: where a multilateration's or surface radar's reference point lies (Reference points)
+    "sensor_id": "Sensor id", "reference": "Measured against", "pairs": "Report pairs",
+    "east_offset_m": "East offset", "north_offset_m": "North offset", "rotation_deg": "Rotation",
+    "scatter_m": "Scatter about the fit", "point_latitude": "Sensor-file point latitude",
+    "point_longitude": "Sensor-file point longitude", "corrected_latitude": "Corrected point latitude",
+    "corrected_longitude": "Corrected point longitude",
 }
 
 _DATETIMES = ("start", "end", "time_utc", "first_utc", "last_utc", "gap_start_utc", "gap_end_utc", "utc",

@@ -167,3 +167,28 @@ def test_evaluate_reads_a_multilaterations_validity_bits(files, tmp_path, capsys
     assert (row["n"], row["value"]) == (300, pytest.approx(260 / 300))
     assert "of the 40 misses: 40 carry a code not validated or garbled" in row["notes"]
     assert "no mode3a_v" not in row["notes"]
+
+
+def test_a_quality_workbook_without_adsb_says_so_and_gives_reference_points_to_the_centimetre(
+        files, tmp_path, capsys):
+    """The Reference points sheet printed snake_case headers, its corrected point as a correlation
+    coefficient ("corrected" read as "corr") and the sensor-file point to 0.0001 deg (11 m); with no ADS-B
+    in the input the ADS-B sheets were empty with nothing to say nothing was looked at."""
+    from openpyxl import load_workbook
+
+    out = tmp_path / "q.xlsx"
+    status, _, err = _run(["quality", files["mlat"], files["smr"], "--sensors", files["sensors"], "--all",
+                           "--date", "2016-05-10", "-o", out], capsys)
+    assert status == 0, err
+    wb = load_workbook(out)
+    ws = wb["Reference points"]
+    header = {c.value: c.column for c in ws[1]}
+    (smr,) = [r for r in range(2, ws.max_row + 1) if ws.cell(r, 1).value == "010:0/7:smr"]  # measured
+    for name in ("Sensor-file point latitude (deg)", "Sensor-file point longitude (deg)",
+                 "Corrected point latitude (deg)", "Corrected point longitude (deg)"):
+        assert ws.cell(smr, header[name]).number_format == "0.0000000", name
+    assert {"Sensor id", "Measured against", "Report pairs", "East offset (m)", "North offset (m)"} <= set(
+        header)
+    for sheet in ("Jumps", "ADS-B quality", "ADS-B quality over time"):
+        texts = [c.value for row in wb[sheet].iter_rows() for c in row if isinstance(c.value, str)]
+        assert any(t.startswith("No ADS-B (CAT021) report in the input") for t in texts), sheet

@@ -71,4 +71,4 @@ def test_too_few_pairs_measure_nothing():
                                 ignore_index=True))
     row = reference_offsets(meas, ENTRIES).iloc[0]
     assert row["sensor_id"] == "010:0/107:mlat" and np.isnan(row["east_offset_m"])
-    assert row["latitude"] == REF[0] and np.isnan(row["corrected_latitude"])
+    assert row["point_latitude"] == REF[0] and np.isnan(row["corrected_latitude"])

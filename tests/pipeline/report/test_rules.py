@@ -128,6 +128,9 @@ def test_note_in_json_and_stdout_from_the_fixtures(tmp_path, capsys):
     ("start_tod", "tod", "[hh]:mm:ss.000", 3), ("gap_start_tod_s", "tod", "[hh]:mm:ss.000", 3),
     ("time_of_day", "tod", "[hh]:mm:ss.000", 3), ("speed_missing_or_zero_pct", "pct", "0.0", 1),
     ("ground_speed_kt", "kt", "0.0", 1),
+    # a reference point is typed into the sensor file to the centimetre (1e-7 deg is 1.1 cm); "corrected"
+    # is not a correlation coefficient
+    ("corrected_latitude", "point_deg", "0.0000000", 7), ("point_longitude", "point_deg", "0.0000000", 7),
 ])
 def test_unit_table(name, unit, fmt, places):
     assert column_unit(name) == unit
