@@ -85,6 +85,7 @@ LABELS: dict[str, str] = {
     "indicator": "Indicator", "share_pct": "Share", "bin_start_tod": "Bin start time of day",
     "bin_start_utc": "Bin start", "nucp_nic_median": "NUCp/NIC median", "nacp_median": "NACp median",
     "nucr_nacv_median": "NUCr/NACv median", "sil_median": "SIL median",
+    "fom_pa_median": "Figure of merit PA median",
     # conflicts: alerts, losses of separation, warning times
     "aircraft_a": "Aircraft A", "callsign_a": "Call sign A", "mode3a_a": "Mode 3/A A",
     "aircraft_b": "Aircraft B", "callsign_b": "Call sign B", "mode3a_b": "Mode 3/A B",

@@ -75,6 +75,7 @@ def test_the_column_lists_of_the_tables_have_headers() -> None:
     from msdc.pipeline.quality.accuracy import BIAS_COLUMNS
     from msdc.pipeline.quality.reference_offset import OFFSET_COLUMNS
     from msdc.pipeline.quality.tables import (
+        ADSB_INDICATORS,
         GAP_COLUMNS,
         HISTOGRAM_COLUMNS,
         JUMP_COLUMNS,
@@ -88,7 +89,8 @@ def test_the_column_lists_of_the_tables_have_headers() -> None:
     lists = [ALERT_COLUMNS, LOSS_COLUMNS, WARNING_COLUMNS, MATCHED_KEYS, RADAR_KEYS, WINDOW_QUALITY_KEYS,
              [k for k in SUMMARY_KEYS if k not in shown_elsewhere], BIAS_COLUMNS, GAP_COLUMNS,
              HISTOGRAM_COLUMNS, JUMP_COLUMNS, QUALITY_COLUMNS, VALUE_COUNT_COLUMNS, CORRELATION_HEADERS,
-             SLOTS_HEADERS, SKIPPED_HEADERS, OFFSET_COLUMNS, *(keys for _, keys in SUMMARY_BLOCKS)]
+             SLOTS_HEADERS, SKIPPED_HEADERS, OFFSET_COLUMNS, [f"{c}_median" for c in ADSB_INDICATORS],
+             *(keys for _, keys in SUMMARY_BLOCKS)]
     assert sorted({c for names in lists for c in names if not has_header(c)}) == []
 
 
