@@ -271,8 +271,8 @@ def write_slot_charts(wb: Workbook, run: CorrelationRun, data_sheet: str = "Slot
     more = _first_of(len(shown), len(charted))
     tested, reference = pair_nouns(run.parameters.get("pairs"))
     heading = ("Slotted latitude and longitude against time (UTC)",
-               f"{reference} yellow (solid, wide), {tested} red (dashed, on top); data on the {data_sheet} "
-               f"sheet{more}.")
+               f"{reference[:1].upper()}{reference[1:]} yellow (solid, wide), {tested} red (dashed, on top); "
+               f"data on the {data_sheet} sheet{more}.")
     ws = chart_sheet(wb, "Slot charts", heading, 2 * len(shown))
     ref = _SheetRef(data_sheet)
     starts = np.concatenate([[2], 2 + np.cumsum(lengths)]).astype(int)

@@ -87,7 +87,7 @@ def test_the_slot_charts_name_a_surface_radar_and_its_multilateration(tmp_path):
     ws = load_workbook(tmp_path / "c.xlsx")["Slot charts"]
     names = [[s.tx.v for s in chart.series] for chart in ws._charts]
     assert names == [["Surface radar", "Multilateration"]] * 2  # latitude, longitude
-    assert ws["A2"].value.startswith("multilateration yellow (solid, wide), surface radar red (dashed")
+    assert ws["A2"].value.startswith("Multilateration yellow (solid, wide), surface radar red (dashed")
 
 
 @pytest.mark.parametrize(("pairs", "title"), [
