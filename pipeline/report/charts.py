@@ -301,15 +301,23 @@ def write_slot_charts(wb: Workbook, run: CorrelationRun, data_sheet: str = "Slot
                                            words["adsb"], ADSB_RGB, width_pt=3.0,
                                            marker="circle" if markers else None))
             chart.x_axis.number_format = "hh:mm"
-            chart.y_axis.number_format = "0.00"
             if x_span:
                 chart.x_axis.scaling.min, chart.x_axis.scaling.max = x_span
                 chart.x_axis.majorUnit = _time_step_days(x_span[1] - x_span[0])
             y_values = [*column_values(slots[f"radar_{axis}"]), *column_values(slots[f"adsb_{axis}"])]
             y_span = axis_limits(y_values)
+            chart.y_axis.number_format = degree_format(y_span)
             if y_span:
                 chart.y_axis.scaling.min, chart.y_axis.scaling.max = y_span
             ws.add_chart(chart, chart_anchor(2 * n + k, chart))
+
+
+def degree_format(limits: tuple[float, float] | None) -> str:
+    """A coordinate axis's number format with the decimals that tell its ticks apart (about five over the
+    span): 0.00 deg for an airborne track, 0.0000 for an aircraft taxiing 300 m (0.00 printed 41.30 twice)."""
+    span = (limits[1] - limits[0]) if limits else 0.0
+    places = math.ceil(-math.log10(span / 5.0)) if span > 0 else 2
+    return "0." + "0" * min(6, max(2, places))
 
 
 def _time_step_days(span_days: float) -> float:

@@ -129,3 +129,24 @@ def test_jumps_are_not_counted_where_the_reference_is_not_adsb(tmp_path):
     row = table[table.index(header) + 2]
     assert row[header.index("jumps"):].split()[0] == "-"
     write_report(run, tmp_path / "r.xlsx")  # a window with no jump count is written, not refused
+
+
+def test_slot_chart_axes_tell_a_taxiing_aircrafts_ticks_apart(tmp_path):
+    """A surface window's latitude axis printed 0.00 deg ticks (1.1 km): two ticks read 41.30. 300 m of
+    taxiing north is 0.0027 deg, five ticks 0.00054 deg apart: four decimals tell them apart; the 6 km of
+    the module's track (0.054 deg, ticks 0.011 apart) keep two."""
+    from openpyxl import Workbook, load_workbook
+
+    from msdc.pipeline.report.charts import write_slot_charts
+
+    taxi = 0.5 * T - 150.0  # north at 0.5 m/s: 300 m in 600 s
+    meas = meas_frame(pd.concat([rows("mlat", "010:0/107:mlat", T, 20.0, taxi),
+                                 rows("smr", "010:0/7:smr", T, 20.0, taxi + 15.0)], ignore_index=True))
+    formats = {}
+    for name, frame in (("taxi", meas), ("module", MEAS)):
+        wb = Workbook(write_only=True)
+        write_slot_charts(wb, correlate(frame, all_aircraft=True, pairs="smr-mlat"))
+        wb.save(tmp_path / f"{name}.xlsx")
+        (lat_chart, _) = load_workbook(tmp_path / f"{name}.xlsx")["Slot charts"]._charts
+        formats[name] = lat_chart.y_axis.number_format.formatCode
+    assert formats == {"taxi": "0.0000", "module": "0.00"}
