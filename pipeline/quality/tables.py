@@ -162,10 +162,12 @@ def _group_rows(group: pd.DataFrame, gap_s: float,
              "gap_start_utc": stamps.iloc[i], "gap_end_utc": stamps.iloc[i + 1],
              "gap_duration_s": t[i + 1] - t[i], "reappeared_after_1h": bool(t[i + 1] - t[i] > REAPPEARANCE_S)}
             for i in gap]
+    # every report may repeat another aircraft's (a damaged address copies a relayed report): no times left
+    ends = (t[0], t[-1], stamps.iloc[0], stamps.iloc[-1]) if t.size else (np.nan, np.nan, pd.NaT, pd.NaT)
     row = {**ident, "on_surface": mostly_surface(on_surface(clean)), "reports": len(group),
            "duplicates_removed": dups, "reports_after_dedup": len(clean),
-           "first_tod": t[0], "last_tod": t[-1], "first_utc": stamps.iloc[0],
-           "last_utc": stamps.iloc[-1], **_interval_stats(within, float(dt.max()) if dt.size else np.nan),
+           **dict(zip(("first_tod", "last_tod", "first_utc", "last_utc"), ends, strict=True)),
+           **_interval_stats(within, float(dt.max()) if dt.size else np.nan),
            "gaps": len(gaps),
            "longest_gap_s": float(dt[gap].max()) if gap.size else np.nan,
            "reappearances": sum(g["reappeared_after_1h"] for g in gaps),
@@ -201,8 +203,10 @@ def _pooled_row(rows: list[dict], intervals: list[np.ndarray], sensor_id: tuple,
               "speed_missing", "speed_zero", "speed_missing_or_zero"):
         row[c] = int(frame[c].sum())
     row["first_tod"], row["last_tod"] = frame["first_tod"].min(), frame["last_tod"].max()
-    first, last = frame["first_tod"].idxmin(), frame["last_tod"].idxmax()
-    row["first_utc"], row["last_utc"] = frame.loc[first, "first_utc"], frame.loc[last, "last_utc"]
+    row["first_utc"] = row["last_utc"] = pd.NaT
+    if frame["first_tod"].notna().any():  # else no aircraft kept a report past de-duplication
+        first, last = frame["first_tod"].idxmin(), frame["last_tod"].idxmax()
+        row["first_utc"], row["last_utc"] = frame.loc[first, "first_utc"], frame.loc[last, "last_utc"]
     row |= _interval_stats(np.concatenate(intervals) if intervals else np.array([]),
                            frame["interval_max_s"].max())
     row["longest_gap_s"] = frame["longest_gap_s"].max()

@@ -584,3 +584,26 @@ def test_radar_error_legend_covers_no_panel(tmp_path, monkeypatch):
     assert not any(ax.get_legend() for ax in fig.axes) and len(fig.legends) == 1
     legend = fig.legends[0].get_window_extent(renderer)
     assert not any(legend.overlaps(ax.get_window_extent(renderer)) for ax in fig.axes)
+
+
+def test_an_aircraft_whose_every_report_repeats_another_is_counted_not_fatal(sim):
+    """One ADS-B report relayed by a second ground station with its address damaged: the job marks it a
+    repeat (ADS-B is one source whatever the station), so its aircraft, and that station, keep no report
+    past de-duplication. quality_tables raised IndexError; the rows count it, with no times."""
+    from msdc.pipeline.model.marks import mark_once
+
+    sensors = pd.DataFrame([asdict(sim.scenario.radar)])[SENSOR_COLUMNS]
+    relayed = sim.adsb.iloc[[100]].assign(address="ABCDEF", callsign="DAMAGED",
+                                           sic=int(sim.adsb["sic"].max()) + 1)
+    meas = mark_once(build_measurements(sim.radar, pd.concat([sim.adsb, relayed], ignore_index=True),
+                                        sensors, date=DAY0.date()))
+    q = quality_tables(meas)["Quality"]
+    station = q[(q["sensor"] == "adsb") & (q["sic"] == relayed["sic"].iloc[0])]
+    for callsign in ("DAMAGED", "(all)"):
+        row = station[station["callsign"] == callsign].iloc[0]
+        assert (row["reports"], row["duplicates_removed"], row["reports_after_dedup"]) == (1, 1, 0)
+        assert np.isnan(row["first_tod"]) and pd.isna(row["first_utc"]) and row["intervals"] == 0
+    # the first copy is kept: the first station's rows are those of the recording without the relay
+    before = quality_tables(mark_once(build_measurements(sim.radar, sim.adsb, sensors, date=DAY0.date())))
+    pd.testing.assert_frame_equal(q[q["sic"] != relayed["sic"].iloc[0]].reset_index(drop=True),
+                                  before["Quality"])
