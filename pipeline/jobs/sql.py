@@ -59,7 +59,7 @@ def sql_job(options: SqlOptions, *, tx: OutputTransaction | None = None) -> SqlR
     except ManifestError as exc:
         raise JobError(str(exc), 2) from None
     except duckdb.Error as exc:
-        raise JobError(f"--dataset {root}: its parts cannot be read: {exc}") from None
+        raise JobError(f"--dataset {root}: its parts cannot be read: {str(exc).splitlines()[0]}", 2) from None
     shown = ", ".join(views) or "none: the dataset holds no record"
     try:
         if out is None:

@@ -169,6 +169,20 @@ def test_sensor_prunes_partitions(tmp_path, dataset, capsys):
     assert "part-" in capsys.readouterr().err
 
 
+@pytest.mark.parametrize("command", [["stats"], ["sql", "SELECT count(*) FROM cat048"]])
+def test_a_damaged_part_is_said_by_every_command_with_status_2(tmp_path, dataset, capsys, command):
+    """msdc stats printed a traceback (UnreadablePart) where quality said the part cannot be read, exit 2
+    (docs/guide/large-recordings.md); sql exited 1 with DuckDB's three-line message."""
+    root = tmp_path / "data"
+    shutil.copytree(dataset, root)
+    _corrupt(root, 48)
+    assert main([command[0], "--dataset", str(root), *command[1:]]) == 2
+    err = capsys.readouterr().err
+    assert f"msdc {command[0]}: " in err and "cannot be read" in err and "Traceback" not in err
+    assert len([line for line in err.splitlines() if line.startswith("msdc ")]) == 1
+    assert len(err.strip().splitlines()) <= 2  # "Processing data files..." and the message
+
+
 def test_days_and_sensors_prune_the_parts_read(dataset):
     import datetime as dt
 
