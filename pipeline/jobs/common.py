@@ -279,7 +279,7 @@ def check_figures_dir(path, *, writable: bool = False) -> None:
     parent = d if d.exists() else (d.parent if str(d.parent) else Path("."))
     if not parent.is_dir():
         raise OptionError(f"--figures {d}: directory {d.parent} does not exist")
-    if writable and not os.access(parent, os.W_OK):
+    if writable and not (os.access(parent, os.W_OK) and _can_create(parent)):  # root: a real probe too
         raise OptionError(f"--figures {d}: directory {parent} is not writable")
 
 

@@ -89,7 +89,7 @@ def validate(options: TrackOptions, *, require_output: bool = False) -> Checked:
     spare_inputs(options.inputs, [(f"-o {checked.output}", checked.output),
                                   (f"--json {checked.json}", checked.json)])
     if options.figures is not None:
-        check_figures_dir(options.figures)
+        check_figures_dir(options.figures, writable=True)
     check_figure_options(options)
     if require_output and checked.output is None and checked.json is None and options.figures is None:
         raise OptionError("give at least one output: -o tracks.csv|tracks.parquet, --json or --figures")

@@ -128,6 +128,10 @@ ERRORS = [
     ("track-out-readonly", TRACK + ["-o", "{RO}/t.csv"], 2, ["-o", "not writable"]),
     ("track-json-dir", TRACK[:-2] + ["--json", "{O}/dir.json"], 2, ["--json", "is a directory"]),
     ("track-figures-file", TRACK + ["--figures", "{S}"], 2, ["--figures", "not a directory"]),
+    # a folder that cannot be made: track drew every figure's track first and failed at the end, exit 1
+    ("track-figures-readonly", TRACK + ["--figures", "{RO}/fig"], 2, ["--figures", "is not writable"]),
+    ("conflicts-figures-readonly", CONF + ["-o", "{O}/c.xlsx", "--figures", "{RO}/fig"], 2,
+     ["--figures", "is not writable"]),
     ("track-no-output", TRACK[:-2], 2, ["at least one output"]),
     ("track-gap-nan", TRACK + ["--address", "ABC"], 2, ["--address", "--callsign"]),
 ]
