@@ -186,10 +186,18 @@ def cmd_stats(args) -> int:
             print(f"{info['path']}: CAT{cat:03d} edition auto {why}")
     if not result.records:
         left = result.selection is not None and result.selection["reports"]
-        print("msdc: the selection left no record" if left else "msdc: nothing could be decoded",
-              file=sys.stderr)
+        read = ", ".join(_size_said(info) for info in result.inputs)
+        said = "the selection left no record" if left else "nothing could be decoded" + (
+            f" from {read}" if read else "")
+        print(f"msdc stats: {said}", file=sys.stderr)
         return 1
     return 0
+
+
+def _size_said(info: dict) -> str:
+    """An input and its size, for a run that decoded nothing from it: "radar.ast (empty)"."""
+    size = int(info.get("bytes") or 0)
+    return f"{info['path']} ({f'{size:,} bytes' if size else 'empty'})"
 
 
 def _selection_line(record: dict) -> str:

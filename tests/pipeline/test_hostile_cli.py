@@ -207,7 +207,15 @@ def test_stats_with_a_category_whose_every_block_failed(capsys):
     assert "none" not in skipped and "21" in skipped
     status, out, err = _run(["stats", ADSB, "--edition", "21=0.26"], capsys)
     assert status == 1 and "Traceback" not in err
-    assert err.strip().endswith("msdc: nothing could be decoded")
+    size = os.path.getsize(ADSB)  # the input and its size named ('msdc: nothing could be decoded' before)
+    assert err.strip().endswith(f"msdc stats: nothing could be decoded from {ADSB} ({size:,} bytes)")
+
+
+def test_stats_of_an_empty_file_names_it(tmp_path, capsys):
+    empty = tmp_path / "empty.ast"
+    empty.write_bytes(b"")
+    status, _, err = _run(["stats", str(empty)], capsys)
+    assert status == 1 and err.strip().endswith(f"msdc stats: nothing could be decoded from {empty} (empty)")
 
 
 def test_two_different_pins_of_one_category_are_refused(tmp_path, capsys):
