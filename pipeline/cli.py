@@ -450,6 +450,9 @@ def _run_job(name: str, validate, job, options, progress: Progress):
         raise
     if cluster is not None and cluster.summary():
         print(f"msdc {name}: {cluster.summary()}", file=sys.stderr)
+    if cluster is not None and not cluster.used and getattr(options, "scheduler", None) is not None:
+        print(f"msdc {name}: warning: --scheduler {options.scheduler}: not used: this run had no "
+              "per-aircraft or per-partition work to distribute", file=sys.stderr)
     _warn(name, result.warnings[seen:])
     _report_skipped(result.loaded.errors)
     if result.loaded.selection is not None:

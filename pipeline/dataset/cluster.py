@@ -111,6 +111,11 @@ class DaskDistributor:
             raise ClusterUnavailable(f"{where}: cannot be reached or started ({exc})") from None
         return self._client
 
+    @property
+    def used(self) -> bool:
+        """Whether the run asked for the cluster (started or connected to it)."""
+        return self._client is not None
+
     def worker_count(self) -> int:
         """Workers the scheduler knows now (at least 1)."""
         return max(1, len(self.client().scheduler_info().get("workers", {})))

@@ -529,3 +529,16 @@ def test_an_option_of_one_value_given_twice_is_refused(argv, capsys):
     assert stop.value.code == 2
     err = capsys.readouterr().err
     assert f"{argv[-2]} given twice" in err and "give it once" in err
+
+
+def test_a_scheduler_the_run_never_needed_is_said_unused(tmp_path, capsys):
+    """correlate distributes nothing: a scheduler given to it (here one nothing listens at) was accepted in
+    silence, as if the run had gone there."""
+    argv = _fill(CORR, {"R": str(RADAR), "A": str(ADSB), "S": str(SENSORS)})
+    status, _, err = _run([*argv, "--json", str(tmp_path / "c.json"), "--scheduler", "tcp://127.0.0.1:1"],
+                          capsys)
+    assert status == 0, err
+    assert ("msdc correlate: warning: --scheduler tcp://127.0.0.1:1: not used: this run had no per-aircraft "
+            "or per-partition work to distribute") in err
+    status, _, err = _run([*argv, "--json", str(tmp_path / "c.json"), "--scheduler", "none"], capsys)
+    assert status == 0 and "--scheduler" not in err  # nothing to say where no cluster was asked for
