@@ -123,7 +123,8 @@ def ingest_job(options: IngestOptions, *, on_chunk: Callable[[int, int, str], No
             for path, digest in skipped:
                 rec = manifest.inputs[digest]
                 result.skipped.append((str(path), f"already in the dataset (same SHA-256 as {rec['file']}, "
-                                                  f"ingested {rec['ingested_at']}): nothing to do"))
+                                                  f"ingested {rec['ingested_at']}): nothing to do"
+                                                  + _options_not_applied(rec, settings)))
     except BaseException as exc:
         if made and not any(root.glob("date=*")) and not (root / mf.MANIFEST).exists():
             _remove_made(root)  # the folder this run made, holding nothing: as it was, absent
@@ -131,6 +132,29 @@ def ingest_job(options: IngestOptions, *, on_chunk: Callable[[int, int, str], No
             raise JobError(str(exc), exc.status) from None
         raise
     return result
+
+
+_OPTION_FLAGS = {"date": "--date", "format": "--format", "editions": "--edition", "categories": "--category"}
+
+
+def _options_not_applied(record: dict, settings) -> str:
+    """What an input skipped as already ingested was given now that its ingest was not (its manifest
+    record's options): the rows keep the options they were ingested with, which the skip would hide."""
+    now = {"date": None if settings.date is None else str(settings.date), "format": settings.format,
+           "editions": list(settings.edition_args), "categories": list(settings.categories)}
+    then = record.get("options") or {}
+
+    def shown(key: str, value) -> str:
+        if value is None or value == []:
+            return "none" if key != "format" else "auto"
+        return ",".join(map(str, value)) if isinstance(value, list) else str(value)
+
+    differ = [f"{_OPTION_FLAGS[k]} {shown(k, now[k])} now, {shown(k, then.get(k))} then"
+              for k in now if k in then and now[k] != then.get(k)]
+    if not differ:
+        return ""
+    return (f"; its rows keep the options it was ingested with ({'; '.join(differ)}): to apply these, "
+            "ingest it into another dataset")
 
 
 def _refuse(said: str | None, options: IngestOptions) -> None:

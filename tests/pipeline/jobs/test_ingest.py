@@ -142,6 +142,21 @@ def test_ingesting_the_same_input_again_does_nothing(fixtures_dataset, tmp_path,
     out = capsys.readouterr().out
     assert out.count("already in the dataset") == 2 and "nothing to do" in out
     assert {p: p.read_bytes() for p in root.rglob("*") if p.is_file()} == before
+    assert "its rows keep the options" not in out  # the same options: nothing more to say
+
+
+def test_an_input_skipped_as_ingested_says_the_options_it_was_not_given(fixtures_dataset, tmp_path, capsys):
+    """Ingested again with another --date, the input was skipped with 'nothing to do' alone: the new --date
+    was silently not applied."""
+    root = tmp_path / "copy"
+    shutil.copytree(fixtures_dataset, root)
+    before = {p: p.read_bytes() for p in root.rglob("*") if p.is_file()}
+    capsys.readouterr()
+    assert ingest(RADAR, "--dataset", root, "--date", "2020-01-02") == 0
+    out = capsys.readouterr().out
+    assert (f"nothing to do; its rows keep the options it was ingested with (--date 2020-01-02 now, {DAY} "
+            "then): to apply these, ingest it into another dataset") in out
+    assert {p: p.read_bytes() for p in root.rglob("*") if p.is_file()} == before
 
 
 def test_workers_2_on_one_input_write_the_rows_workers_1_writes(tmp_path):
