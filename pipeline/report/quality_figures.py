@@ -307,7 +307,7 @@ def track_span(values: np.ndarray, pad: float = 0.08) -> tuple[float, float] | N
 
 def slotting_figure(window: WindowResult, radar_meas: pd.DataFrame, adsb_meas: pd.DataFrame,
                     path: str | os.PathLike[str]) -> Path:
-    """slotting written as PNG."""
+    """One window's slotting figure (``slotting``) saved as a PNG at ``path``."""
     return save_png(slotting(window, radar_meas, adsb_meas), path)
 
 
