@@ -244,6 +244,9 @@ def _rows_of(columns: dict[str, pd.Series], keep: np.ndarray) -> dict[str, pd.Se
 # 10x (elevation above 84.3 deg) the plot says almost nothing about its horizontal position along the
 # line of sight, and its covariance is too ill-conditioned to invert, so it is NaN (unknown).
 MAX_RANGE_STRETCH = 10.0
+# A plot within a metre of the site on the ground (range 0: a damaged or test plot; CAT048's range LSB is
+# 1/256 NM, 7 m) has no azimuth error to speak of: its covariance is singular to rounding, so NaN too.
+MIN_GROUND_M = 1.0
 
 
 def _radar_covariance(site: pd.DataFrame, lat, lon, h_m) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -252,7 +255,8 @@ def _radar_covariance(site: pd.DataFrame, lat, lon, h_m) -> tuple[np.ndarray, np
     The slant-range error moves the plot along the horizontal radial by sigma_r * r / g (r slant, g
     horizontal distance: the height is fixed by the flight level), the azimuth error across it by
     g * sigma_theta; the radial direction is taken in the plot's own east/north frame. NaN where r / g
-    exceeds MAX_RANGE_STRETCH (almost overhead).
+    exceeds MAX_RANGE_STRETCH (almost overhead), the plot lies within MIN_GROUND_M of the site (range 0) or
+    the matrix is not positive definite.
     """
     site_ecef = np.stack(geodetic_to_ecef(site["latitude"].to_numpy(float), site["longitude"].to_numpy(float),
                                           site["altitude_m"].to_numpy(float)), -1)
@@ -268,7 +272,8 @@ def _radar_covariance(site: pd.DataFrame, lat, lon, h_m) -> tuple[np.ndarray, np
         var_radial = (site["sigma_range_m"].to_numpy(float) * r / g) ** 2
         cov = (var_radial * sa**2 + var_tangential * ca**2, (var_radial - var_tangential) * sa * ca,
                var_radial * ca**2 + var_tangential * sa**2)
-    placeable = (g > 0) & (r <= MAX_RANGE_STRETCH * g)
+        positive = (cov[0] > 0) & (cov[2] > 0) & (cov[0] * cov[2] - cov[1] ** 2 > 0)
+    placeable = (g >= MIN_GROUND_M) & (r <= MAX_RANGE_STRETCH * g) & positive
     return tuple(np.where(placeable, c, np.nan) for c in cov)
 
 

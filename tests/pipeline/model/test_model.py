@@ -227,6 +227,22 @@ def test_radar_plot_almost_overhead_has_no_horizontal_covariance():
     assert math.sqrt(meas["cov_nn_m2"].iloc[1]) == pytest.approx(70.0 * r / g, rel=0.02)  # due north: radial
 
 
+def test_a_plot_at_range_zero_has_no_covariance_and_is_not_tracked():
+    """A damaged plot at range 0 without a flight level sat on the site: its covariance was singular to
+    rounding (0.08 deg of azimuth at ~0 m), so the tracker's positive-definiteness check raised and msdc
+    track printed a traceback (the real Barcelona hour with two range bytes zeroed). NaN: the plot is
+    counted invalid, the others tracked."""
+    from msdc.pipeline.track.tracker import usable_rows
+
+    # 0, 2 micrometres (the round trip through the earth's frame leaves the zero plot about that far from
+    # the site: it raised), 2 mm (a covariance of rank one to rounding), then a plot 20 NM out
+    rho = [0.0, 1e-9, 1e-6, 20.0]
+    meas = build_measurements(radar_frame(rho, [45.0] * 4, [np.nan] * 4), None, SENSORS)
+    cov = meas[["cov_ee_m2", "cov_en_m2", "cov_nn_m2"]].to_numpy()
+    assert np.isnan(cov[:3]).all() and np.isfinite(cov[3]).all()
+    assert usable_rows(meas).tolist() == [False, False, False, True]
+
+
 def test_adsb_sigma_from_nacp():
     # DO-260B bounds: NACp 8 < 92.6 m, 11 < 3 m; 0 (unknown) and absent give NaN
     got = nacp_sigma_m(pd.array([8, 11, 0, pd.NA], dtype="Int64"))
