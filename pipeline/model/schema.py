@@ -94,7 +94,8 @@ MEASUREMENT_SCHEMA: tuple[Column, ...] = (
            "(NACp 95 % bound / 2.4477)^2 (2.4477 = sqrt(-2 ln 0.05), the 95 % radius of a circular "
            "Gaussian; NACp 11: 1.50 m^2); multilateration and surface radar: I010/500 or I020/500 standard "
            "deviations squared, else the sensor file's sigma_m squared; NaN when unknown, and for radar "
-           "plots almost overhead (slant range over 10 x ground distance from the site)"),
+           "plots almost overhead (slant range over 10 x ground distance from the site) or within 1 m of "
+           "the site on the ground (a range of 0: its azimuth error vanishes and the matrix is singular)"),
     Column("cov_en_m2", "float64", "m^2", "Horizontal position covariance, east-north"),
     Column("cov_nn_m2", "float64", "m^2", "Horizontal position covariance, north-north"),
     Column("sigma_major_m", "float64", "m", "Standard deviation along the error ellipse's major axis"),
