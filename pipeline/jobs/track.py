@@ -205,15 +205,19 @@ def summary(result: TrackJobResult) -> dict:
 
 def sensor_totals(sensors: pd.DataFrame) -> pd.DataFrame:
     """The tracker's per-aircraft sensor table summed per sensor: aircraft, reports, updates, gated, invalid,
-    out_of_range, and the NIS mean over every update (each aircraft's mean weighted by its updates)."""
-    s = sensors.assign(nis_sum=sensors["nis_mean"].fillna(0.0) * sensors["updates"])
+    out_of_range, and the NIS mean over the updates that have one (each aircraft's mean weighted by its
+    updates; NaN where no aircraft has one)."""
+    # an aircraft without a NIS (its updates started the track: no innovation yet) weighs nothing, not a 0
+    weight = sensors["updates"].where(sensors["nis_mean"].notna(), 0)
+    s = sensors.assign(nis_sum=sensors["nis_mean"].fillna(0.0) * weight, nis_weight=weight)
     out = s.groupby("sensor_id", sort=True).agg(
         aircraft=("aircraft_id", "nunique"), reports=("reports", "sum"), updates=("updates", "sum"),
         gated=("gated", "sum"), invalid=("invalid", "sum"), out_of_range=("out_of_range", "sum"),
-        nis_sum=("nis_sum", "sum")).reset_index()
+        nis_sum=("nis_sum", "sum"), nis_weight=("nis_weight", "sum")).reset_index()
     with np.errstate(invalid="ignore", divide="ignore"):
-        nis = out["nis_sum"].to_numpy(float) / out["updates"].to_numpy(float)
-    return out.drop(columns="nis_sum").assign(nis_mean=np.where(out["updates"] > 0, nis, np.nan))
+        nis = out["nis_sum"].to_numpy(float) / out["nis_weight"].to_numpy(float)
+    return out.drop(columns=["nis_sum", "nis_weight"]).assign(
+        nis_mean=np.where(out["nis_weight"] > 0, nis, np.nan))
 
 
 def write_tracks(result: TrackJobResult, *, tx: OutputTransaction | None = None,
@@ -278,10 +282,10 @@ def text(result: TrackJobResult) -> str:
     ac = res.aircraft.merge(result.labels, on="aircraft_id", how="left")
     cols = [c for c in ("aircraft_id", "callsign", "segments", "reports", "updates", "gated", "invalid",
                         "out_of_range", "tracked_s", "update_interval_s", "coasted_s") if c in ac]
-    out = ("Tracks:\n" + ac[cols].to_string(index=False, float_format=lambda v: f"{v:.1f}")
+    out = ("Tracks:\n" + ac[cols].to_string(index=False, float_format=lambda v: f"{v:.1f}", na_rep="-")
            + "\n" + TRACK_LEGEND
            + "\n\nSensors:\n" + sensor_totals(res.sensors).to_string(
-               index=False, float_format=lambda v: f"{v:.2f}"))
+               index=False, float_format=lambda v: f"{v:.2f}", na_rep="-"))
     return out + noise_text(result.noise)
 
 

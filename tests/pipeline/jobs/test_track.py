@@ -360,6 +360,14 @@ def test_sensor_totals_by_hand():
     assert out.loc["R", "nis_mean"] == pytest.approx(2.5)
     assert out.loc["S", ["aircraft", "reports", "updates", "gated"]].tolist() == [1, 4, 0, 4]
     assert np.isnan(out.loc["S", "nis_mean"])
+    # an aircraft whose one update started its track has no NIS: it weighs nothing (it pooled in as 0: the
+    # mean read 0.00 where no aircraft had one, and (2 + 18) / 9 = 2.22 beside R's two)
+    started = pd.DataFrame({"aircraft_id": ["A", "B", "C"], "sensor_id": ["R", "R", "R"],
+                            "reports": [3, 9, 1], "updates": [2, 6, 1], "gated": [0, 0, 0],
+                            "invalid": [0, 0, 0], "out_of_range": [0, 0, 0], "nis_mean": [1.0, 3.0, np.nan]})
+    assert track.sensor_totals(started)["nis_mean"].iloc[0] == pytest.approx(2.5)
+    alone = started.iloc[[2]]
+    assert np.isnan(track.sensor_totals(alone)["nis_mean"].iloc[0])
 
 
 def test_stdout_sums_each_sensor_over_the_aircraft(tmp_path, capsys):
