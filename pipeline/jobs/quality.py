@@ -158,7 +158,8 @@ def text(result: QualityJobResult) -> str:
                              "site_offset_m", "fit_trusted") if c in b]
     from msdc.pipeline.report.summary import frame_text
 
-    out = "Quality:\n" + frame_text(q[keep])
+    out = "Quality:\n" + (frame_text(q[keep]) if len(q) else
+                           "  none: no report with a position in the inputs (status messages only, or none)")
     removed = result.parameters.get("filters", {}).get("removed", {})
     if removed:
         out += "\n\nADS-B filters (radar accuracy and biases use what they leave): " + ", ".join(

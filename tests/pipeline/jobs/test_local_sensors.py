@@ -192,3 +192,18 @@ def test_a_quality_workbook_without_adsb_says_so_and_gives_reference_points_to_t
     for sheet in ("Jumps", "ADS-B quality", "ADS-B quality over time"):
         texts = [c.value for row in wb[sheet].iter_rows() for c in row if isinstance(c.value, str)]
         assert any(t.startswith("No ADS-B (CAT021) report in the input") for t in texts), sheet
+
+
+def test_quality_of_status_messages_only_says_no_report(files, tmp_path, capsys):
+    """A CAT010 file of one status message (I010/000 type 2: no position) printed pandas' 'Empty DataFrame /
+    Columns: [...] / Index: []' as its Quality table."""
+    time = bytes.fromhex("465040")  # I010/140: 36000.5 s x 128
+    # FSPEC D1 01 04: I010/010, /000, /140 | | /550; SAC 0 SIC 107; message type 2; a status octet
+    record = bytes.fromhex("D10104") + bytes([0, 107]) + b"\x02" + time + b"\x68"
+    status_only = tmp_path / "status.ast"
+    status_only.write_bytes(bytes([10]) + (len(record) + 3).to_bytes(2, "big") + record)
+    status, text, err = _run(["quality", status_only, "--sensors", files["sensors"], "--all", "--date",
+                              "2016-05-10"], capsys)
+    assert status == 0, err
+    assert "Quality:\n  none: no report with a position in the inputs" in text
+    assert "Empty DataFrame" not in text
