@@ -664,9 +664,14 @@ def correlate(meas: pd.DataFrame, *, callsign: str | None = None, address: str |
                 raise
             names = {"radar": tested, "ADS-B": against}
             missing = [names.get(m, m) for m in exc.missing_in]
+            # the closest names say which role saw them: "(radar only)" is the sensor correlated's
+            closest = [c.replace("(radar only)", f"({tested} only)").replace(
+                "(ADS-B only)", f"({against} only)") for c in exc.closest]
             text = str(exc).replace("radar or ADS-B", " or ".join(missing)).replace(
                 " by radar", f" by {tested}").replace(" by ADS-B", f" by {against}")
-            raise NoSuchAircraft(exc.wanted, missing, exc.closest, text) from None
+            for said, meant in zip(exc.closest, closest, strict=True):
+                text = text.replace(said, meant)
+            raise NoSuchAircraft(exc.wanted, missing, closest, text) from None
         cols = _Columns(pd.concat([ac.radar, ac.adsb], ignore_index=True), adsb_reference)
         targets = iter([(ac.callsign, ac.address, ac.aircraft_id, np.arange(len(ac.radar)),
                          np.arange(len(ac.radar), len(ac.radar) + len(ac.adsb)))])

@@ -52,6 +52,14 @@ def test_an_aircraft_not_seen_by_the_pair_is_named_in_its_terms():
         correlate(meas, callsign=None, address="4CA1B2", pairs="mlat-adsb")
     with pytest.raises(NoSuchAircraft, match="surface radar and multilateration"):
         correlate(meas, all_aircraft=True, pairs="smr-mlat")
+    # seen by multilateration alone: the closest name said "(radar only)" against ADS-B and "(ADS-B only)"
+    # against a surface radar, the roles' words
+    alone = MEAS[(MEAS["sensor_kind"] == "mlat").to_numpy()].reset_index(drop=True)
+    for pairs, missing in (("mlat-adsb", "ADS-B"), ("smr-mlat", "surface radar")):
+        with pytest.raises(NoSuchAircraft) as caught:
+            correlate(alone, address="4CA1B2", pairs=pairs)
+        assert str(caught.value) == (f"address 4CA1B2 not seen by {missing}; closest present: 4CA1B2 "
+                                     "(multilateration only)")
 
 
 @pytest.mark.parametrize(("pairs", "named", "phrase"), [
