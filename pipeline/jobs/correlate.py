@@ -52,8 +52,8 @@ if TYPE_CHECKING:
 
 
 FIGURE_WINDOWS = 6  # correlate --quality: slotting and lag figures of the first windows only
-# the categories a --pairs value needs, one of each group (radar pairs: CAT048 and CAT021, the default)
-NEEDS = {"mlat-adsb": ((10, 20), (21,)), "smr-mlat": ((10,),)}
+# the categories a --pairs value needs, one of each group (CAT048 and CAT021 by default; two radars: CAT048)
+NEEDS = {"mlat-adsb": ((10, 20), (21,)), "smr-mlat": ((10,),), "radar-radar": ((48,),)}
 
 
 def validate(options: CorrelateOptions) -> Checked:

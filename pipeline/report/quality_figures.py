@@ -274,8 +274,8 @@ def _raw_in_window(window: WindowResult, frames: list[pd.DataFrame]) -> pd.DataF
     """The window aircraft's raw reports of every sensor in ``frames`` inside the window."""
     s = window.summary
     cs, addr = _none_if_blank(s.get("callsign")), _none_if_blank(s.get("address"))
-    if cs is None and addr is None:
-        return frames[0].iloc[:0]
+    if cs is None and addr is None:  # (a radar pair's aircraft known by neither): its slots alone
+        return frames[0].iloc[:0].assign(time_of_day=np.array([], float))
     # select() over the frames joined, without joining them whole: the aircraft matched over all, then
     # only their rows joined
     ids = matching_aircraft(frames, cs, addr)
@@ -334,6 +334,10 @@ def slotting(window: WindowResult, radar_meas: pd.DataFrame, adsb_meas: pd.DataF
                               label=labels[sensor])
             axes[row, 1].plot(t[filled], y[filled], "o", ms=4, mfc="white", mec=color, mew=0.9)
         axes[row, 0].set_ylabel(f"{name} (deg)")
+        if not len(rows):  # said, not an empty panel that reads as no report
+            axes[row, 0].text(0.5, 0.5, "reports not drawn: the aircraft has no call sign or address\n"
+                              "to find them by (its slots, right, are the window's)", ha="center",
+                              va="center", transform=axes[row, 0].transAxes, fontsize=9, color="0.35")
         span = track_span(raw["radar"][name].to_numpy(float))
         if span is not None:  # ADS-B position jumps (up to degrees away) would flatten the track
             axes[row, 0].set_ylim(*span)

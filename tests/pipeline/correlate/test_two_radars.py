@@ -206,3 +206,27 @@ def test_two_unbiased_radars_lead_with_their_noise_not_the_slotting(two):
         assert w["sep_median_m"] > w["matched_sep_median_m"]
     medians = [w.summary["sep_median_m"] for w in run.windows]
     assert 450.0 < min(medians) and max(medians) < 1300.0
+
+
+def test_two_radars_without_adsb_are_correlated_by_the_command(two, tmp_path, capsys):
+    """--pairs radar-radar needs no ADS-B: the command refused two radars alone ("no ADS-B (CAT021) records
+    in the inputs"); it now gives the pairs the same frame with its ADS-B gives."""
+    import json
+
+    from msdc.pipeline.cli import main
+
+    m, meas = two
+    radar = pd.concat([m.sim.radar, m.radar2], ignore_index=True)
+    radar = radar.iloc[np.lexsort((radar["sic"], radar["time_of_day"] + 86400 * radar["day"]))]
+    (tmp_path / "radar.ast").write_bytes(encode_frame(48, radar, edition=None))
+    (tmp_path / "sensors.toml").write_text(m.sensors_toml())
+    out = tmp_path / "rr.json"
+    assert main(["correlate", str(tmp_path / "radar.ast"), "--sensors", str(tmp_path / "sensors.toml"),
+                 "--date", "2019-03-01", "--all", "--pairs", "radar-radar", "--json", str(out)]) == 0, \
+        capsys.readouterr().err
+    got = [(w["callsign"], w["radar_sensor"], w["reference_sensor"], w["slots"])
+           for w in json.loads(out.read_text())["windows"]]
+    keys = ("callsign", "radar_sensor", "reference_sensor", "slots")
+    want = [tuple(w.summary[k] for k in keys)
+            for w in correlate(meas, all_aircraft=True, pairs="radar-radar").windows]
+    assert got == want and got

@@ -607,3 +607,20 @@ def test_an_aircraft_whose_every_report_repeats_another_is_counted_not_fatal(sim
     before = quality_tables(mark_once(build_measurements(sim.radar, sim.adsb, sensors, date=DAY0.date())))
     pd.testing.assert_frame_equal(q[q["sic"] != relayed["sic"].iloc[0]].reset_index(drop=True),
                                   before["Quality"])
+
+
+def test_slotting_figure_of_an_aircraft_without_identity_says_why_it_draws_no_report(frames):
+    """--pairs radar-radar --quality on a radar hour: a window of an aircraft with neither call sign nor
+    address (a Mode A/C target) raised KeyError 'time_of_day' (a traceback from msdc correlate)."""
+    from msdc.pipeline.report.quality_figures import slotting
+
+    mas72 = frames[(frames["sensor_kind"] == "radar") & (frames["callsign"] == "MAS72")]
+    second = mas72.assign(sensor_id="048:25/202", sic=202)
+    two = pd.concat([mas72, second], ignore_index=True).assign(callsign=None, address=None)
+    two = two.astype({"sensor_id": "category"})
+    window = correlate(two, all_aircraft=True, pairs="radar-radar").windows[0]
+    assert not window.summary["callsign"] and not window.summary["address"]  # blank: no identity
+    fig = slotting(window, two, two.iloc[:0])
+    said = [t.get_text() for t in fig.axes[0].texts]
+    assert said and said[0].startswith("reports not drawn: the aircraft has no call sign or address")
+    assert all(len(line.get_xdata()) == 0 for line in fig.axes[0].get_lines())
