@@ -134,6 +134,12 @@ def _code_outcome(requirement: str, reports: pd.DataFrame, reference: pd.DataFra
     return _share(requirement, ~equal, used, keys, notes, own)
 
 
+def unread_callsigns(values) -> np.ndarray:
+    """Where a call sign holds a character outside the ICAO set (decoded as "?"): unread, not a call sign
+    to compare a report's with."""
+    return np.array([isinstance(v, str) and "?" in v for v in values], dtype=bool)
+
+
 def _identity_outcome(requirement: str, reports: pd.DataFrame, reference: pd.DataFrame,
                       parameters: Mapping | None, column: str, sensor: Sensor | None) -> Outcome:
     """Correct / false Mode S address or call sign: as Mode 3/A, without validity bits. An address is not
@@ -154,6 +160,13 @@ def _identity_outcome(requirement: str, reports: pd.DataFrame, reference: pd.Dat
         if not known.any():
             return withheld(requirement, "every report lies on the sensor's own track, keyed by the address "
                             "it reports: an address is judged only against another sensor's track")
+    if column == "callsign":  # a character outside the ICAO set ("?" as decoded): the reference's is unread
+        unread = known & unread_callsigns(truth)
+        if unread.any():
+            n_unread = int(unread.sum())
+            notes = (*notes, f"{n_unread:,} report{'s' if n_unread > 1 else ''} whose reference call sign "
+                             "holds a character outside the ICAO set (shown '?'), not judged")
+            known &= ~unread
     if not known.any():
         return withheld(requirement, f"the reference gives no {column} for the associated reports")
     have = _present(rep[column]) if column in rep.columns else np.zeros(len(rep), bool)

@@ -10,7 +10,7 @@ from collections.abc import Mapping
 import numpy as np
 import pandas as pd
 
-from msdc.pipeline.evaluate.codes import MODE3A, _present, _validated
+from msdc.pipeline.evaluate.codes import MODE3A, _present, _validated, unread_callsigns
 from msdc.pipeline.evaluate.outcome import Outcome, share, withheld
 from msdc.pipeline.evaluate.reference import associated, reference_values
 from msdc.pipeline.evaluate.reference_gates import own_by_address, own_track_words, self_referenced
@@ -42,6 +42,8 @@ def identity_table(reports: pd.DataFrame, reference: pd.DataFrame,
             used &= True if valid is None else valid
         if column == "address":
             used &= ~keyed
+        if column == "callsign":  # the reference's unread (a character outside the ICAO set): not compared
+            used &= ~unread_callsigns(truth)
         got = rep[column].to_numpy(object)
         wrong = np.array([u and not _same(a, b) for u, a, b in zip(used, got, truth, strict=True)], bool)
         compared += used

@@ -254,6 +254,25 @@ def test_address_and_callsign():
     assert np.isnan(run("callsign_correct", rep, reference()).value)
 
 
+def test_a_reference_call_sign_unread_judges_nothing():
+    """The reference's call sign with characters outside the ICAO set (decoded "?", a damaged CAT021 item):
+    the sensor's right call sign counted wrong (the LEBL hour with one aircraft's ADS-B call sign damaged:
+    the multilateration's airborne callsign_correct fell from 100 % to 78 %). Those reports are not judged;
+    a report whose own call sign is unread is still wrong against a readable reference."""
+    from msdc.pipeline.evaluate.identification import identification_false
+
+    ref = reference(times=range(9), callsign=["?????YA"] * 4 + ["RYR75YA"] * 5)  # unread for 0-3 s
+    rep = reports([0, 1, 2, 5, 6, 7], callsign=["RYR75YA", "RYR75YA", "RYR75YA", "RYR75YA", "RYR75YA",
+                                                "??R75YA"])
+    out = run("callsign_correct", rep, ref)
+    assert counts(out) == (2, 3)  # the 3 reports while the reference read ?????YA not judged
+    assert ("3 reports whose reference call sign holds a character outside the ICAO set (shown '?'), not "
+            "judged") in out.notes
+    assert counts(run("callsign_false", rep, ref)) == (1, 3)
+    ident = identification_false(rep, ref)
+    assert (ident.count, ident.n) == (1, 3)
+
+
 def test_an_address_is_not_judged_on_the_sensors_own_track_keyed_by_it():
     """Two aircraft on the sensor's own track: ABC123 is keyed by its address (whatever address the sensor
     reports, its track carries it), CS:AFR34 by its call sign. Of the four reports on ABC123 none is judged
