@@ -903,13 +903,14 @@ def marked_measurements(options: AircraftOptions, checked: Checked, progress: Pr
     _load_measurements). ``stage`` is the progress stage shown once the inputs are read; ``columns`` and
     ``flags``: only those measurement columns and jump columns (every one when None); ``needs``: the
     categories the job needs (load_measurements)."""
+    from msdc.pipeline.model.dedup import repeated_aircraft
     from msdc.pipeline.model.marks import mark_once
 
     loaded, meas, warnings = _load_measurements(options, checked, progress, stage, either=either,
                                                 columns=columns, needs=needs)
     meas = mark_once(meas, split_adsb=split_adsb, flags=flags)
     release_free_memory()
-    return loaded, meas, warnings
+    return loaded, meas, warnings + repeated_aircraft(meas, meas["duplicate"].to_numpy(bool))
 
 
 def tracker_inputs(options: TrackOptions, checked: Checked, progress: Progress | None, times: str
@@ -939,21 +940,23 @@ def tracker_measurements(loaded, checked: Checked, options: TrackOptions) -> tup
     the warnings about them (stray radar records, coverage, identity)."""
     meas, warnings = source_measurements(loaded, checked, options)
     out = tracked_reports(meas, options.max_coast_s)
-    return out, warnings + short_coast(out, options.max_coast_s)
+    return out, warnings + out.attrs.get("repeated", []) + short_coast(out, options.max_coast_s)
 
 
 def tracked_reports(meas: pd.DataFrame, max_coast_s: float) -> pd.DataFrame:
     """What the tracker takes of the measurements: reports joined by track number, repeats and reports no
     identity places on an aircraft left out (counted in attrs)."""
-    from msdc.pipeline.model.dedup import duplicate_mask
+    from msdc.pipeline.model.dedup import duplicate_mask, repeated_aircraft
     from msdc.pipeline.track.associate import join_by_track_number
 
     meas, joined = join_by_track_number(meas, max_gap_s=float(max_coast_s))
     dup = duplicate_mask(meas.sort_values("time", kind="stable")).reindex(meas.index).to_numpy(bool)
     known = meas["aircraft_id"].notna().to_numpy(bool)
+    repeated = repeated_aircraft(meas, dup)
     out = meas[~dup & known].reset_index(drop=True)
     out.attrs["joined_by_track_number"] = joined
     out.attrs["unidentified"] = int((~dup & ~known).sum())
+    out.attrs["repeated"] = repeated
     return out
 
 

@@ -122,3 +122,22 @@ def repeat_groups(meas: pd.DataFrame, keys: list[str], rows: np.ndarray | None =
             same |= np.isnan(s[1:]) & np.isnan(s[:-1])
         new[1:] |= ~same
     return order, np.cumsum(new) - 1
+
+
+def repeated_aircraft(meas: pd.DataFrame, dup: np.ndarray, limit: int = 5) -> list[str]:
+    """A warning naming the aircraft every one of whose reports repeats another's (same source kind, time,
+    position, speed and heading) and so is left out whole: the repeats are of another aircraft (an address
+    damaged in a relayed copy), since an aircraft's own first report is never a repeat. [] if none."""
+    if not len(meas) or "aircraft_id" not in meas:
+        return []
+    ids = meas["aircraft_id"].astype(object).to_numpy()
+    frame = pd.DataFrame({"aircraft": ids, "dup": np.asarray(dup, bool)})
+    frame = frame[pd.notna(frame["aircraft"])]
+    counts = frame.groupby("aircraft", sort=True)["dup"].agg(["all", "size"])
+    whole = counts[counts["all"]]
+    if whole.empty:
+        return []
+    named = ", ".join(f"{a} ({n} report{'s' if n > 1 else ''})" for a, n in whole["size"].head(limit).items())
+    more = f" and {len(whole) - limit} more" if len(whole) > limit else ""
+    return [f"{len(whole)} aircraft left out whole: every report of {named}{more} repeats another aircraft's "
+            "(same time, position, speed and heading): a damaged identity in a copied report, most likely"]

@@ -103,3 +103,21 @@ def test_shared_rows_are_the_rows_that_share_time_and_latitude():
     assert shared_rows(frame).tolist() == [0, 1, 3, 4, 5, 6]
     assert shared_rows(frame, np.array([1, 2, 4, 5, 6, 7])).tolist() == [5, 6]
     assert shared_rows(frame.drop(columns="latitude")) is None
+
+
+def test_an_aircraft_whose_every_report_is_a_repeat_is_named():
+    """Every report of B repeats one of A's (a relayed copy with a damaged address): B is left out whole,
+    which the jobs said nowhere (track counted one aircraft fewer). A, with repeats of its own, is not
+    named; nor is C, whose one report is its own."""
+    from msdc.pipeline.model.dedup import repeated_aircraft
+
+    meas = pd.DataFrame({"aircraft_id": ["A", "A", "A", "B", "B", "C", None]})
+    dup = np.array([False, True, False, True, True, False, True])
+    assert repeated_aircraft(meas, dup) == [
+        "1 aircraft left out whole: every report of B (2 reports) repeats another aircraft's (same time, "
+        "position, speed and heading): a damaged identity in a copied report, most likely"]
+    assert repeated_aircraft(meas, np.zeros(7, bool)) == []
+    many = pd.DataFrame({"aircraft_id": [f"X{i}" for i in range(7)]})
+    said = repeated_aircraft(many, np.ones(7, bool), limit=5)[0]
+    assert said.startswith("7 aircraft left out whole: every report of X0 (1 report), X1 (1 report)")
+    assert "X4 (1 report) and 2 more repeats" in said

@@ -598,6 +598,9 @@ def test_an_aircraft_whose_every_report_repeats_another_is_counted_not_fatal(sim
     meas = mark_once(build_measurements(sim.radar, pd.concat([sim.adsb, relayed], ignore_index=True),
                                         sensors, date=DAY0.date()))
     q = quality_tables(meas)["Quality"]
+    from msdc.pipeline.model.dedup import repeated_aircraft
+
+    assert "every report of ABCDEF (1 report) repeats" in repeated_aircraft(meas, meas["duplicate"])[0]
     station = q[(q["sensor"] == "adsb") & (q["sic"] == relayed["sic"].iloc[0])]
     for callsign in ("DAMAGED", "(all)"):
         row = station[station["callsign"] == callsign].iloc[0]
