@@ -108,6 +108,9 @@ def _deduplicated_rows(frame: pd.DataFrame, by: list[str]) -> np.ndarray:
     return np.concatenate(rows) if rows else np.zeros(0, np.int64)
 
 
+MIN_P95_INTERVALS = 20  # the fewest intervals of which one in twenty can lie above a 95th percentile
+
+
 def _interval_stats(intervals_s: np.ndarray, longest_s: float = np.nan) -> dict:
     """Count, min, median, 95th percentile and maximum of the intervals within the gap rule, and
     ``interval_max_s`` the longest interval between successive reports, gaps included (``longest_s``)."""
@@ -116,7 +119,9 @@ def _interval_stats(intervals_s: np.ndarray, longest_s: float = np.nan) -> dict:
                 "interval_p95_s": np.nan, "interval_max_s": longest_s, "interval_max_within_gap_s": np.nan}
     return {"intervals": int(intervals_s.size), "interval_min_s": float(intervals_s.min()),
             "interval_median_s": float(np.median(intervals_s)),
-            "interval_p95_s": float(np.percentile(intervals_s, 95)),
+            # withheld below MIN_P95_INTERVALS: of fewer, a "95th percentile" is the largest ones interpolated
+            "interval_p95_s": (float(np.percentile(intervals_s, 95)) if intervals_s.size >= MIN_P95_INTERVALS
+                               else np.nan),
             "interval_max_s": float(np.fmax(intervals_s.max(), longest_s)),
             "interval_max_within_gap_s": float(intervals_s.max())}
 

@@ -627,3 +627,15 @@ def test_slotting_figure_of_an_aircraft_without_identity_says_why_it_draws_no_re
     said = [t.get_text() for t in fig.axes[0].texts]
     assert said and said[0].startswith("reports not drawn: the aircraft has no call sign or address")
     assert all(len(line.get_xdata()) == 0 for line in fig.axes[0].get_lines())
+
+
+def test_a_95th_percentile_needs_twenty_intervals():
+    """quality --from 22:02:00 --to 22:02:01 printed a 95th percentile of one interval (0.398 s, its
+    median too). With 19 intervals none can lie above a 95th percentile: withheld; with 20 it is numpy's
+    (19 ones and a 3: 1 + 0.05 x 2 = 1.1 s, interpolated between the 19th and 20th values)."""
+    from msdc.pipeline.quality.tables import _interval_stats
+
+    assert np.isnan(_interval_stats(np.array([0.398]))["interval_p95_s"])
+    assert np.isnan(_interval_stats(np.ones(19))["interval_p95_s"])
+    assert _interval_stats(np.r_[np.ones(19), 3.0])["interval_p95_s"] == pytest.approx(1.1)
+    assert _interval_stats(np.array([0.398]))["interval_median_s"] == pytest.approx(0.398)
