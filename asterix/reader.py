@@ -187,9 +187,20 @@ def check_categories(categories) -> tuple[int, ...] | None:
     return tuple(out)
 
 
+def check_path(path) -> None:
+    """TypeError unless ``path`` names a file (str or os.PathLike): open() takes an int as a descriptor,
+    which it reads and then closes (the caller's, stdout for 1 or True), and bytes as a path."""
+    if isinstance(path, str | os.PathLike):
+        return
+    hint = (" (bytes in memory: msdc.asterix.decode_buffer decodes them)"
+            if isinstance(path, bytes | bytearray | memoryview) else "")
+    raise TypeError(f"path: a file path (str or os.PathLike), not {type(path).__name__} {path!r:.40}{hint}")
+
+
 @contextmanager
 def _mapped(path) -> Iterator[np.ndarray]:
     """The file as a read-only uint8 array, memory-mapped while the block runs."""
+    check_path(path)
     try:
         with open(path, "rb") as fh:
             size = os.fstat(fh.fileno()).st_size

@@ -261,3 +261,24 @@ def test_bit_flipped_and_truncated_real_blocks(named, data):
     assert accounted(rec) == cut
     for frame in rec.frames.values():  # whatever decodes comes with a place in the file
         assert frame["offset"].between(0, cut - 1).all()
+
+
+@pytest.mark.parametrize("bad", [1, True, None, 3.5, b"\x30\x00\x03"])
+def test_a_path_that_is_no_path_is_a_type_error_and_closes_nothing(bad, tmp_path):
+    """open() takes an int as a file descriptor: read(1) decoded nothing and closed the caller's stdout
+    (read(fd) read the file and closed the caller's descriptor); bytes were taken for a path ('embedded
+    null byte'). Each is a TypeError naming the argument; a descriptor stays open."""
+    import os
+
+    with pytest.raises(TypeError, match=r"^path: a file path \(str or os\.PathLike\), not "):
+        asterix.read(bad)
+    path = tmp_path / "r.ast"
+    path.write_bytes(block(48, rec048(1)))
+    fd = os.open(path, os.O_RDONLY)
+    try:
+        with pytest.raises(TypeError, match="not int"):
+            asterix.read(fd)
+        os.fstat(fd)  # still open: raises OSError (EBADF) if read closed it
+    finally:
+        os.close(fd)
+    assert len(asterix.read(path).frames[48]) == 1
