@@ -149,6 +149,9 @@ def track(measurements: pd.DataFrame, *, step_s: float = 1.0, max_coast_s: float
     if smoother not in SMOOTHERS:
         raise ValueError(f"smoother {smoother!r}: expected one of {', '.join(SMOOTHERS)}")
     step_s = finite_number("step_s", step_s)
+    turn_rate_dps = finite_number("turn_rate_dps", turn_rate_dps, "degrees per second")
+    if config is not None and not isinstance(config, TrackerConfig):
+        raise TypeError(f"config {config!r:.40}: a TrackerConfig, not {type(config).__name__}")
     # coasting less than one step would end every gap before the next grid time (the CLI's --max-coast rule)
     max_coast_s = finite_number("max_coast_s", max_coast_s, at_least=step_s, at_least_name="step_s")
     if config is None:
@@ -706,6 +709,10 @@ def _track_table(aircraft_id: str, filtered: FilteredReports, updates: Updates, 
     if needs("on_ground"):
         out["on_ground"] = _ground_at(filtered.ground, filtered.run.accepted, segment, est.row)
     if columns is not None:
+        unknown = [c for c in columns if c not in out]
+        if unknown:
+            raise ValueError(f"columns: {', '.join(map(repr, unknown))} not in the tracks table (its "
+                             f"columns: {', '.join(out)})")
         out = {c: out[c] for c in columns}
     return len(qt), out
 

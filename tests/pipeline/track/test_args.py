@@ -186,3 +186,20 @@ def test_coasted_time_is_time_beyond_the_update_interval():
     a = track(pd.concat([radar, one], ignore_index=True), max_coast_s=60.0).aircraft.set_index("aircraft_id")
     assert a.loc["A1", ["tracked_s", "update_interval_s", "coasted_s"]].tolist() == [116.0, 4.0, 8.0]
     assert a.loc["B", ["tracked_s", "coasted_s"]].tolist() == [0.0, 0.0]
+
+
+@pytest.mark.parametrize(("kwargs", "error", "said"), [
+    ({"turn_rate_dps": float("nan")}, ValueError, "turn_rate_dps nan: must be a finite number of degrees per "
+                                                  "second > 0"),
+    ({"turn_rate_dps": float("inf")}, ValueError, "turn_rate_dps inf"),
+    ({"turn_rate_dps": -5.0}, ValueError, "turn_rate_dps -5.0"),
+    ({"config": "x"}, TypeError, "config 'x': a TrackerConfig, not str"),
+    ({"columns": ("time", "nosuch")}, ValueError, "columns: 'nosuch' not in the tracks table"),
+])
+def test_bad_model_arguments_are_named(kwargs, error, said):
+    """turn_rate_dps was taken as given (nan: a turn-rate column of NaN; inf: fewer rows, NaN positions;
+    negative: the turn modes swapped); config 'x' and an unknown column failed deep inside (AttributeError,
+    KeyError)."""
+    with pytest.raises(error) as caught:
+        track(_adsb(), **kwargs)
+    assert str(caught.value).startswith(said)
