@@ -45,6 +45,9 @@ PEARSON_MIN_OVERLAP = 10
 CORRELATION_INPUTS = ["time", "time_of_day", "sensor_id", "sensor_kind", "aircraft_id", "callsign",
                       "address", "latitude", "longitude", "ground_speed_kt", "heading_deg", "duplicate",
                       *JUMP_FLAG_COLUMNS]
+# what a frame must hold (the duplicate and jump flags, speed and heading are worked out or left out without)
+REQUIRED_INPUTS = ("time", "latitude", "longitude", "sensor_kind", "sensor_id", "aircraft_id", "callsign",
+                   "address")
 # Per --pairs value, the sensor kind correlated (the "radar" role of the slot and summary tables) and the
 # kind it is correlated against (the "adsb" role: the reference); radar-radar and all correlate radars with
 # each other too. Rows of other kinds are left out of the run.
@@ -624,6 +627,16 @@ def correlate(meas: pd.DataFrame, *, callsign: str | None = None, address: str |
     if not isinstance(meas, pd.DataFrame) or "time" not in meas:
         raise TypeError("meas must be a measurement frame (pipeline.model.schema) with a 'time' column, got "
                         + (type(meas).__name__ if not isinstance(meas, pd.DataFrame) else "no 'time' column"))
+    missing = [c for c in REQUIRED_INPUTS if c not in meas]
+    if missing:
+        raise ValueError(f"meas: lacks the column(s) {', '.join(missing)} (a measurement frame: "
+                         "pipeline.model.schema)")
+    for c in ("latitude", "longitude"):
+        inf = np.isinf(pd.to_numeric(meas[c], errors="coerce").to_numpy(float))
+        if inf.any():
+            first = meas.index[int(np.flatnonzero(inf)[0])]
+            raise ValueError(f"meas: {int(inf.sum())} row(s) with an infinite {c}, the first at index "
+                             f"{first}: a position is finite, or NaN where unknown")
     meas = utc_frame(meas, ["time"], "meas")  # aware times of any zone as UTC; naive ones refused
     if str(meas["time"].dtype) != "datetime64[ns, UTC]":
         meas = meas.assign(time=meas["time"].dt.as_unit("ns"))

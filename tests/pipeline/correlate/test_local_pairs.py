@@ -158,3 +158,16 @@ def test_slot_chart_axes_tell_a_taxiing_aircrafts_ticks_apart(tmp_path):
         (lat_chart, _) = load_workbook(tmp_path / f"{name}.xlsx")["Slot charts"]._charts
         formats[name] = lat_chart.y_axis.number_format.formatCode
     assert formats == {"taxi": "0.0000", "module": "0.00"}
+
+
+def test_a_frame_without_a_needed_column_or_with_infinite_positions_is_refused():
+    """A frame without latitude (or call sign, or sensor kind) raised pandas' bare KeyError; infinite
+    latitudes ran on, with numpy's warnings, and the separations came out None with nothing said."""
+    for column in ("latitude", "callsign", "sensor_kind"):
+        with pytest.raises(ValueError, match=rf"^meas: lacks the column\(s\) {column} \(a measurement frame"):
+            correlate(MEAS.drop(columns=column), all_aircraft=True, pairs="mlat-adsb")
+    bad = MEAS.copy()
+    bad.loc[bad.index[[5, 9]], "latitude"] = np.inf
+    with pytest.raises(ValueError, match=rf"^meas: 2 row\(s\) with an infinite latitude, the first at index "
+                                         rf"{bad.index[5]}: a position is finite, or NaN where unknown"):
+        correlate(bad, all_aircraft=True, pairs="mlat-adsb")
