@@ -69,6 +69,9 @@ def replay_job(options: ReplayOptions, *, stop: Callable[[], bool] = lambda: Fal
         raise JobError(f"--to {options.to}: sending failed: {exc.strerror or exc}") from None
     finally:
         sock.close()
+    if sent.refused:
+        warnings = [*warnings, f"--to {options.to}: nothing was listening there {sent.refused} time(s) "
+                    "(ICMP port unreachable); the datagrams were sent regardless (UDP needs no receiver)"]
     return ReplayResult(sent.datagrams, sent.bytes, sent.passes, sent.wall_s, sched.span_s, len(sched),
                         float(sent.late_s), warnings)
 

@@ -184,6 +184,18 @@ class Sent:
     passes: int = 0  # times the schedule was gone through (--loop)
     wall_s: float = 0.0
     late_s: float = 0.0  # the most a datagram went out after its scaled time
+    refused: int = 0  # ICMP port-unreachable notices (no receiver yet): the datagram is sent again, once
+
+
+def _send(sock: socket.socket, data: bytes, out: Sent) -> None:
+    """One datagram. A connected UDP socket reports an earlier datagram's ICMP port unreachable (nothing
+    listening at the destination, yet or any more) on a later send, which then sends nothing: counted and
+    sent again (the notice is consumed), so a receiver started late or restarted loses nothing more."""
+    try:
+        sock.send(data)
+    except ConnectionRefusedError:
+        out.refused += 1
+        sock.send(data)
 
 
 def send(sched: Schedule, sock: socket.socket, *, speed: float = 1.0, loop: bool = False,
@@ -217,7 +229,7 @@ def send(sched: Schedule, sock: socket.socket, *, speed: float = 1.0, loop: bool
             j = max(j, i + 1)
             for k in range(i, j):
                 d = sched.data[k]
-                sock.send(d)
+                _send(sock, d, out)
                 out.bytes += len(d)
             out.datagrams += j - i
             out.late_s = max(out.late_s, now - due)

@@ -94,3 +94,27 @@ def test_send_scales_the_times_and_loops_until_the_duration():
     out = send(sched, sock2, speed=2.0, loop=True, duration_s=3.0, clock=clock, sleep=clock.sleep)
     assert [t for t, _ in sock2.sent] == [0.0, 0.5, 0.5, 1.5, 2.0, 2.5, 2.5]
     assert out.datagrams == 7 and out.passes == 1
+
+
+def test_nothing_listening_does_not_stop_the_replay():
+    """UDP needs no receiver, but a connected socket reports the port unreachable of an earlier datagram
+    on a later send, which fails: replay stopped ('sending failed: Connection refused', exit 1) when it
+    started before its listener or the listener ended. Every datagram is sent, on a real socket to a
+    localhost port nothing listens on, and the notices counted."""
+    import socket
+
+    from msdc.pipeline.live.receive import Endpoint
+    from msdc.pipeline.live.replay import sending_socket
+
+    probe = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+    probe.bind(("127.0.0.1", 0))
+    port = probe.getsockname()[1]
+    probe.close()  # a free port: nothing listens there
+    sock = sending_socket(Endpoint("127.0.0.1", port), None, 1)
+    try:
+        sched = Schedule(np.arange(20) * 0.01, [bytes([48, 0, 3])] * 20)
+        out = send(sched, sock, speed=1.0)
+    finally:
+        sock.close()
+    assert (out.datagrams, out.bytes) == (20, 60)
+    assert out.refused >= 1  # loopback answers with ICMP port unreachable at once
