@@ -46,8 +46,10 @@ def parse_http(text: str) -> tuple[str, int]:
     """--http HOST:PORT (a bare PORT serves on 127.0.0.1)."""
     host, sep, port = str(text).strip().rpartition(":")
     host = host if sep else "127.0.0.1"
-    if not port.isdigit() or not 1 <= int(port) <= 65535 or not host:
+    if not port.isdigit() or not host:
         raise OptionError(f"--http {text!r}: expected HOST:PORT, e.g. 127.0.0.1:8080")
+    if not 1 <= int(port) <= 65535:
+        raise OptionError(f"--http {text!r}: the port must be a number from 1 to 65535")
     return host, int(port)
 
 
@@ -103,6 +105,8 @@ def validate(options: ListenOptions) -> Checked:
         if record.exists() and not record.is_dir():
             raise OptionError(f"--record {record}: not a folder")
         parent = record if record.exists() else next((p for p in record.parents if p.exists()), Path("."))
+        if not parent.is_dir():  # a file where a folder of the path should be
+            raise OptionError(f"--record {record}: {parent} is a file, not a folder")
         if not os.access(parent, os.W_OK | os.X_OK):
             raise OptionError(f"--record {record}: cannot write in {parent} (permission denied)")
     http = thresholds = None

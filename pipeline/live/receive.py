@@ -104,7 +104,9 @@ class Listener:
                 self.sockets.append(open_socket(e, self.iface))
             except OSError as exc:
                 self.close_sockets()
-                raise OSError(exc.errno, f"{e.host}:{e.port}: cannot receive: {exc.strerror or exc}") from exc
+                where = f" (--iface {self.iface})" if self.iface and e.multicast else ""
+                raise OSError(exc.errno, f"{e.host}:{e.port}: cannot receive{where}: {exc.strerror or exc}"
+                              ) from exc
 
     def start(self) -> None:
         """Open the sockets (if not yet) and start the threads."""

@@ -31,6 +31,12 @@ ROOT = Path(__file__).resolve().parents[3]
     (["replay", "nowhere.ast", "--to", "127.0.0.1:8600"], "nowhere.ast: input file does not exist"),
     (["replay", "fixtures/radar.ast", "--to", "127.0.0.1"], "--to '127.0.0.1': expected ADDR:PORT"),
     (["replay", "fixtures/radar.ast", "--to", "127.0.0.1:8600", "--speed", "0"], "--speed 0.0: must be a"),
+    # it said "expected HOST:PORT" for a port out of range, and "cannot write in fixtures/radar.ast
+    # (permission denied)" for a file where a folder should be
+    (["listen", "--udp", "127.0.0.1:8600", "--http", "127.0.0.1:99999"],
+     "--http '127.0.0.1:99999': the port must be a number from 1 to 65535"),
+    (["listen", "--udp", "127.0.0.1:8600", "--record", "fixtures/radar.ast/sub"],
+     "--record fixtures/radar.ast/sub: fixtures/radar.ast is a file, not a folder"),
 ])
 def test_bad_options_are_one_line(argv, message, capsys, monkeypatch):
     monkeypatch.chdir(ROOT)
