@@ -619,6 +619,10 @@ def correlate(meas: pd.DataFrame, *, callsign: str | None = None, address: str |
     finite_number("gap_s", gap_s, above=None, at_least=0.0)
     if pairs not in PAIRS:
         raise ValueError(f"pairs must be one of {', '.join(PAIRS)}, got {pairs!r}")
+    for name, value in (("callsign", callsign), ("address", address)):
+        if value is not None and not isinstance(value, str):  # 0x750312 is the int 7668498, not "750312"
+            raise TypeError(f"{name} {value!r}: a string (an address as 6 hex digits, e.g. '750312'), not "
+                            f"{type(value).__name__}")
     if all_aircraft and (callsign is not None or address is not None):
         given = ", ".join(f"{k}={v!r}" for k, v in (("callsign", callsign), ("address", address))
                           if v is not None)

@@ -171,3 +171,11 @@ def test_a_frame_without_a_needed_column_or_with_infinite_positions_is_refused()
     with pytest.raises(ValueError, match=rf"^meas: 2 row\(s\) with an infinite latitude, the first at index "
                                          rf"{bad.index[5]}: a position is finite, or NaN where unknown"):
         correlate(bad, all_aircraft=True, pairs="mlat-adsb")
+
+
+def test_an_address_given_as_a_number_is_a_type_error():
+    """address=0x750312 is the int 7668498: it was looked for as "7668498" ("not seen")."""
+    with pytest.raises(TypeError, match=r"^address 7668498: a string \(an address as 6 hex digits"):
+        correlate(MEAS, address=0x750312)
+    with pytest.raises(TypeError, match=r"^callsign 72: a string"):
+        correlate(MEAS, callsign=72)
