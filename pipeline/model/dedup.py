@@ -130,14 +130,19 @@ def repeated_aircraft(meas: pd.DataFrame, dup: np.ndarray, limit: int = 5) -> li
     damaged in a relayed copy), since an aircraft's own first report is never a repeat. [] if none."""
     if not len(meas) or "aircraft_id" not in meas:
         return []
-    ids = meas["aircraft_id"].astype(object).to_numpy()
-    frame = pd.DataFrame({"aircraft": ids, "dup": np.asarray(dup, bool)})
-    frame = frame[pd.notna(frame["aircraft"])]
-    counts = frame.groupby("aircraft", sort=True)["dup"].agg(["all", "size"])
-    whole = counts[counts["all"]]
-    if whole.empty:
+    ids = meas["aircraft_id"]  # counted on its codes (a job's millions of rows: no object copy, no grouping)
+    if isinstance(ids.dtype, pd.CategoricalDtype):
+        codes, names = ids.cat.codes.to_numpy(), ids.cat.categories
+    else:
+        codes, names = pd.factorize(ids, sort=True)
+    known = codes >= 0
+    size = np.bincount(codes[known], minlength=len(names))
+    repeats = np.bincount(codes[known], weights=np.asarray(dup, bool)[known], minlength=len(names))
+    whole = [(str(names[i]), int(size[i])) for i in np.flatnonzero((size > 0) & (repeats == size))]
+    if not whole:
         return []
-    named = ", ".join(f"{a} ({n} report{'s' if n > 1 else ''})" for a, n in whole["size"].head(limit).items())
+    whole.sort()
+    named = ", ".join(f"{a} ({n} report{'s' if n > 1 else ''})" for a, n in whole[:limit])
     more = f" and {len(whole) - limit} more" if len(whole) > limit else ""
     return [f"{len(whole)} aircraft left out whole: every report of {named}{more} repeats another aircraft's "
             "(same time, position, speed and heading): a damaged identity in a copied report, most likely"]
