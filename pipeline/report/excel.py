@@ -87,7 +87,7 @@ from msdc.pipeline.report.summary import (
     aircraft_name,
     has_quality,
     lead_text,
-    pair_nouns,
+    map_nouns,
     sensor_pair,
     window_notes,
 )
@@ -325,8 +325,7 @@ def _write_map(wb: Workbook, pairs: str | None) -> WriteOnlyWorksheet:
     ws = wb.create_sheet("Map")
     page_setup(ws, None, fit_height=1)
     fixed_rows(ws)
-    # a radar-radar pair's second radar is drawn red on the map too (figures.track_map)
-    tested, reference = pair_nouns(pairs) if pairs in ("mlat-adsb", "smr-mlat") else ("radar", "ADS-B")
+    tested, reference = map_nouns(pairs)
     title = f"Slotted tracks: {tested} (red) and {reference} (yellow), every correlated window"
     ws.append([text_cell(ws, title, font=TITLE_FONT)])
     return ws

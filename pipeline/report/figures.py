@@ -18,7 +18,7 @@ from matplotlib.text import Text
 from msdc.pipeline.correlate.correlation import peak_lag, pearson_max_lag, pearson_search_limit
 from msdc.pipeline.correlate.results import CorrelationRun, WindowResult
 from msdc.pipeline.report.canvas import new_figure, save_png  # noqa: F401 - importable here too
-from msdc.pipeline.report.summary import aircraft_name, printable, slot_seconds, window_label
+from msdc.pipeline.report.summary import aircraft_name, map_nouns, printable, slot_seconds, window_label
 
 RADAR_COLOR = "#d62728"
 ADSB_COLOR = "#ffd400"
@@ -349,9 +349,7 @@ def track_map(run: CorrelationRun, sensors: pd.DataFrame | None = None) -> Figur
     ax.set_ylabel("Latitude (deg, WGS-84)")
     fig.suptitle(f"Slotted tracks: {_callsign_title(run.windows) or 'none'}", fontsize=13, fontweight="bold")
     unmarked = "" if markers else f"; {n_slots:,} slots: lines only, no slot markers"
-    roles = _PAIR_LABELS.get(str(run.parameters.get("pairs", "")))
-    first, second = (roles["radar"].split(" (")[0].lower(), roles["adsb"].split(" (")[0]) if roles else (
-        "radar", "ADS-B")
+    first, second = map_nouns(run.parameters.get("pairs"))  # the Map sheet's title says the same
     ax.set_title(f"{first} (red) over {second} (yellow), {len(run.windows)} window(s), equal-distance aspect"
                  f"{unmarked}", fontsize=9, color="0.35")
     missed = place_labels(fig, ax)

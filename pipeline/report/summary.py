@@ -71,7 +71,7 @@ LEAD_TEXT = ("every radar report against the reference's position at the report'
              "ADS-B position jumps left out: no slot mean and no filled slot is read")
 
 
-KIND_WORDS = {"radar": "Radar", "adsb": "ADS-B", "mlat": "Multilateration", "smr": "Surface radar"}
+KIND_WORDS = {kind: noun[:1].upper() + noun[1:] for kind, noun in ROLE_NOUNS.items()}  # "Surface radar"
 
 
 def side_words(summary: Mapping[str, Any]) -> dict[str, str]:
@@ -94,6 +94,12 @@ def pair_nouns(pairs: str | None) -> tuple[str, str]:
         return "radar", "the reference (ADS-B or the second radar)"
     tested, reference = PAIR_KINDS.get(pairs or "radar-adsb", ("radar", "adsb"))
     return ROLE_NOUNS[tested], ROLE_NOUNS[reference]
+
+
+def map_nouns(pairs: str | None) -> tuple[str, str]:
+    """The sensor drawn red on the map and the one drawn yellow: pair_nouns for --pairs mlat-adsb and
+    smr-mlat; else radar and ADS-B (a radar-radar pair's second radar is red too)."""
+    return pair_nouns(pairs) if pairs in ("mlat-adsb", "smr-mlat") else ("radar", "ADS-B")
 
 
 def lead_text(run: CorrelationRun) -> str:
