@@ -5,10 +5,15 @@ A primary surface radar's reports carry no address, call sign or Mode 3/A code, 
 aircraft. Rule, applied after identity: the reports of one surface radar track (its sensor and track number,
 split where the track is silent for more than TRACK_GAP_S) each vote for the aircraft whose identified report
 of another sensor (multilateration, ADS-B, radar) lies nearest, within MATCH_WINDOW_S and MATCH_DISTANCE_M;
-the track joins the aircraft with the most votes when it has at least MIN_VOTES of them and more than half
-of the track's votes. Tracks of vehicles without a transponder, and those near no identified report, stay
-unidentified. The gate limits which reports vote, not which reports join: every report of a joined track
-joins, so its far reports still count in any comparison made afterwards.
+the track joins the aircraft with the most votes when it has at least MIN_VOTES of them, more than half
+of the track's votes, and the aircraft's own reports do not deny it: where that aircraft has identified
+reports bracketing a track report within MATCH_WINDOW_S either side, the report agrees when within
+MATCH_DISTANCE_M of the aircraft's position interpolated between them and disagrees when beyond
+CONTRARY_DISTANCE_M, and a track with disagreeing reports joins only when more of its reports agree (a
+vehicle's track that passes an aircraft for a few reports, then drives on 500 m from it, gets that
+aircraft's votes and nobody else's). Tracks of vehicles without a transponder, and those near no identified
+report, stay unidentified. The gate limits which reports vote, not which reports join: every report of a
+joined track joins, so its far reports still count in any comparison made afterwards.
 """
 
 from __future__ import annotations
@@ -23,6 +28,9 @@ TRACK_GAP_S = 30.0  # a track number silent this long starts another track (numb
 MATCH_WINDOW_S = 1.0  # a vote's report and the aircraft's report at most this far apart in time
 MATCH_DISTANCE_M = 50.0  # and in position (aircraft on the apron stand about 40-80 m apart)
 MIN_VOTES = 3
+CONTRARY_DISTANCE_M = 100.0  # a report this far from its aircraft's interpolated position disagrees (twice
+# the gate: two sensors' time stamps a few tenths of a second apart on a fast aircraft, or a long one's echo
+# centroid, put agreeing reports a few tens of metres off)
 INPUTS = ("time", "latitude", "longitude", "sensor_kind", "sensor_id", "track_number", "aircraft_id")
 _EARTH_M = 6371008.8
 
@@ -50,6 +58,26 @@ def _segments(meas: pd.DataFrame, rows: np.ndarray) -> np.ndarray:
     return out
 
 
+def _distance_to_candidate(t_k: np.ndarray, xy_k: np.ndarray, code_k: np.ndarray, t_p: np.ndarray,
+                           xy_p: np.ndarray, candidate: np.ndarray) -> np.ndarray:
+    """Per primary report (time ``t_p``, plane position ``xy_p``), the distance (m) from its ``candidate``
+    aircraft's position interpolated between the identified reports of that aircraft (``code_k``) before and
+    after it, each within MATCH_WINDOW_S; NaN where it has no candidate or no such bracketing reports."""
+    span = float(max(t_k.max(), t_p.max()) - min(t_k.min(), t_p.min())) + 10.0
+    origin = float(min(t_k.min(), t_p.min()))
+    key = code_k * span + (t_k - origin)  # sorted by aircraft, then time
+    order = np.argsort(key, kind="stable")
+    key, tk, xyk, ck = key[order], t_k[order], xy_k[order], code_k[order]
+    after = np.searchsorted(key, np.maximum(candidate, 0) * span + (t_p - origin))
+    nxt, prv = np.clip(after, 0, len(key) - 1), np.clip(after - 1, 0, len(key) - 1)
+    ok = ((candidate >= 0) & (after > 0) & (after < len(key)) & (ck[prv] == candidate)
+          & (ck[nxt] == candidate) & (t_p - tk[prv] <= MATCH_WINDOW_S) & (tk[nxt] - t_p <= MATCH_WINDOW_S))
+    gap = tk[nxt] - tk[prv]
+    w = np.where(gap > 0, (t_p - tk[prv]) / np.where(gap > 0, gap, 1.0), 0.0)
+    at = xyk[prv] + w[:, None] * (xyk[nxt] - xyk[prv])
+    return np.where(ok, np.hypot(*(xy_p - at).T), np.nan)
+
+
 def join_primary_tracks(meas: pd.DataFrame) -> tuple[pd.Series, int]:
     """``meas``'s aircraft_id with the surface radar tracks joined to aircraft (see the module docstring),
     and how many reports were joined; unchanged when there is no unidentified primary report."""
@@ -67,8 +95,9 @@ def join_primary_tracks(meas: pd.DataFrame) -> tuple[pd.Series, int]:
     lat0, lon0 = float(np.median(lat[p_rows])), float(np.median(lon[p_rows]))
     t0 = float(t[p_rows].min())
     scale = MATCH_DISTANCE_M / MATCH_WINDOW_S  # a second of time counts as much as this many metres
-    points = np.column_stack([_plane(lat[k_rows], lon[k_rows], lat0, lon0), (t[k_rows] - t0) * scale])
-    query = np.column_stack([_plane(lat[p_rows], lon[p_rows], lat0, lon0), (t[p_rows] - t0) * scale])
+    xy_k, xy_p = _plane(lat[k_rows], lon[k_rows], lat0, lon0), _plane(lat[p_rows], lon[p_rows], lat0, lon0)
+    points = np.column_stack([xy_k, (t[k_rows] - t0) * scale])
+    query = np.column_stack([xy_p, (t[p_rows] - t0) * scale])
     dist, at = cKDTree(points).query(query, k=4, distance_upper_bound=MATCH_DISTANCE_M * 2.0)
     found = at < len(k_rows)
     safe = np.where(found, at, 0)
@@ -86,6 +115,13 @@ def join_primary_tracks(meas: pd.DataFrame) -> tuple[pd.Series, int]:
     cast = votes.groupby("segment")["n"].transform("sum")
     top = votes.sort_values(["segment", "n"], ascending=[True, False]).drop_duplicates("segment")
     top = top[(top["n"] >= MIN_VOTES) & (top["n"] * 2 > cast.loc[top.index])]
+    candidate = pd.Series(segment).map(pd.Series(top["vote"].to_numpy(), index=top["segment"].to_numpy()))
+    away = _distance_to_candidate(t[k_rows], xy_k, codes[k_rows].astype(np.int64), t[p_rows], xy_p,
+                                  candidate.fillna(-1).to_numpy(np.int64))
+    evidence = pd.DataFrame({"agree": away <= MATCH_DISTANCE_M, "against": away > CONTRARY_DISTANCE_M})
+    said = evidence.groupby(segment).sum()
+    denied = said.index[(said["against"] > 0) & (said["against"] >= said["agree"])]
+    top = top[~top["segment"].isin(denied)]
     joined = pd.Series(top["vote"].to_numpy(), index=top["segment"].to_numpy())
     new_codes = pd.Series(segment).map(joined).fillna(-1).to_numpy(np.int64)
     out = codes.copy()

@@ -59,3 +59,28 @@ def test_a_track_split_between_two_aircraft_joins_neither():
     meas = meas_frame(pd.concat([one, two, between], ignore_index=True))
     ident, joined = join_primary_tracks(meas)
     assert joined == 0 and ident[(meas["sensor_kind"] == "smr").to_numpy()].isna().all()
+
+
+def test_a_vehicle_crossing_an_aircraft_is_not_joined_to_it():
+    """A vehicle drives north across the taxiway 0.3 s after each of the aircraft's multilateration
+    reports: within 50 m of it for t = 17..23 s only (14.1 m per second from the crossing at t = 20 s), so
+    those 7 reports all vote for the aircraft; but where the aircraft's reports bracket the vehicle's, 45 of
+    them lie beyond 100 m of its interpolated position (|t - 20.3| > 7.07 s) against 7 within 50 m."""
+    t = np.arange(60.0)
+    mlat = rows("mlat", "010:0/107:mlat", t, 10.0 * t, 0.0, address="4CA1B2")
+    vehicle = rows("smr", "010:0/7:smr", t + 0.3, 203.0, 10.0 * (t + 0.3 - 20.3), track_number=9)
+    meas = meas_frame(pd.concat([mlat, vehicle], ignore_index=True))
+    ident, joined = join_primary_tracks(meas)
+    assert joined == 0 and ident[(meas["sensor_kind"] == "smr").to_numpy()].isna().all()
+
+
+def test_two_echoes_of_one_aircraft_both_join_it():
+    """A long aircraft's two echoes, tracked at once 5 m north and 30 m south of its multilateration
+    position, agree with it (within 50 m): both tracks join."""
+    t = np.arange(40.0)
+    mlat = rows("mlat", "010:0/107:mlat", t, 8.0 * t, 0.0, address="4CA1B2")
+    nose = rows("smr", "010:0/7:smr", t + 0.5, 8.0 * (t + 0.5), 5.0, track_number=3)
+    tail = rows("smr", "010:0/7:smr", t + 0.5, 8.0 * (t + 0.5), -30.0, track_number=4)
+    meas = meas_frame(pd.concat([mlat, nose, tail], ignore_index=True))
+    ident, joined = join_primary_tracks(meas)
+    assert joined == 80 and (ident == "4CA1B2").all()
