@@ -52,11 +52,11 @@ def ingest_input(path: Path, digest: str, label: str, settings: IngestSettings, 
     from msdc.pipeline.dataset.writer import Undated
     from msdc.pipeline.meta import software_version
     from msdc.pipeline.model import editions as edition_notes
-    from msdc.pipeline.model.time import FirstDayTally
+    from msdc.pipeline.model.time import DayTally
 
     cats = settings.categories
     size = path.stat().st_size
-    seen = _Seen(FirstDayTally(), Tally(str(path)), {})
+    seen = _Seen(DayTally(), Tally(str(path)), {})
     iid = input_id(digest)
     futures: list = []
     try:

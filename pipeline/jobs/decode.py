@@ -104,11 +104,11 @@ def decode_job(options: DecodeOptions, *, on_chunk: Callable[[int, int, str], No
     from msdc.asterix.reader import categories_in
     from msdc.asterix.verdict import Tally, head_of, sniff
     from msdc.pipeline.model.sources import file_labels
-    from msdc.pipeline.model.time import FirstDayTally
+    from msdc.pipeline.model.time import DayTally
 
     checked = validate(options)
     out = checked.output
-    early_start: list[str] = []  # FirstDayTally's warnings
+    early_start: list[str] = []  # DayTally's warnings
     counts: dict[int, int] = {}
     outputs: dict[int, Path] = {}
     skipped: list[tuple[str, int, str]] = []
@@ -139,7 +139,7 @@ def decode_job(options: DecodeOptions, *, on_chunk: Callable[[int, int, str], No
             for path, label in zip(checked.inputs, file_labels(checked.inputs), strict=True):
                 size = path.stat().st_size
                 chunk = max(int(options.chunk_mb * 1e6), 1)
-                tally, date, fmt, chosen, account = FirstDayTally(), None, None, {}, Tally(str(path))
+                tally, date, fmt, chosen, account = DayTally(), None, None, {}, Tally(str(path))
                 bar = (lambda done, total, what, name=path.name: on_chunk(done, total, f"{name}: {what}")
                        ) if on_chunk else None
                 for rec in asterix.iter_read(path, chunk=chunk, editions=checked.editions or None,

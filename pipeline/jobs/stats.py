@@ -63,7 +63,7 @@ def stats_job(options: StatsOptions, *, progress: Progress | None = None) -> Sta
     from msdc.asterix.errors import UnreadableInput
     from msdc.asterix.verdict import Tally, head_of, sniff
     from msdc.pipeline.model.sources import file_labels
-    from msdc.pipeline.model.time import UNDATED_DAY, FirstDayTally
+    from msdc.pipeline.model.time import UNDATED_DAY, DayTally
     from msdc.pipeline.quality.inventory import STATS_COLUMNS, StatsAccumulator
 
     checked = validate(options)
@@ -76,7 +76,7 @@ def stats_job(options: StatsOptions, *, progress: Progress | None = None) -> Sta
     inputs: list[dict] = []
     spans: list[dict[int, tuple[pd.Timestamp, pd.Timestamp]]] = []
     chunk = max(int(options.chunk_mb * 1e6), 1)
-    early_start: list[str] = []  # FirstDayTally's warnings
+    early_start: list[str] = []  # DayTally's warnings
     labels = file_labels(checked.inputs)
     content: list[str] = []  # what the inputs turned out to be, when not sound (asterix.verdict)
     selection = checked.selection if checked.selection is not None and checked.selection.active else None
@@ -98,7 +98,7 @@ def stats_job(options: StatsOptions, *, progress: Progress | None = None) -> Sta
         info = {"path": str(path), "bytes": 0, "format": None, "records": {}, "skipped_blocks": 0,
                 "editions": {}, "edition_choice": {}, "date": None}
         by_source: dict[str, tuple[pd.Timestamp, pd.Timestamp]] = {}
-        tally = FirstDayTally()
+        tally = DayTally()
         bar = (lambda done, total, what, name=path.name: progress.bar(done, total, f"{name}: {what}")
                ) if progress else None
         try:

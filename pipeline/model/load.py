@@ -15,7 +15,7 @@ from msdc.asterix.reader import Recording
 from msdc.asterix.verdict import Tally, head_of
 from msdc.pipeline.model.heap import release_free_memory
 from msdc.pipeline.model.sources import file_labels, pair_codes, pair_of, source_id
-from msdc.pipeline.model.time import NAT_NS, UNDATED_DAY, FirstDayTally, absolute_time
+from msdc.pipeline.model.time import NAT_NS, UNDATED_DAY, DayTally, absolute_time
 from msdc.pipeline.progress import Progress
 
 # Measurement jobs decode their inputs in chunks of about this many bytes: the decoded columns of one chunk
@@ -151,7 +151,7 @@ def load(paths: list[str | Path] | str | Path, *, editions=None, date=None, form
         content = Tally(str(p))
         content.add(rec)
         warnings += content.warnings(head_of(p), hint=False, detected=format is None)
-        tally = FirstDayTally()
+        tally = DayTally()
         tally.add(rec.frames)
         warnings += tally.warning(labels[i], rec.date, rec.format)
         inputs.append({"path": str(p), "sha256": digests[i], "bytes": rec.size_bytes, "format": rec.format,
@@ -298,7 +298,7 @@ def load_measurements(paths: list[str | Path], sensors: pd.DataFrame, *, edition
     unplaced: list[pd.DataFrame] = []  # their reports without a reference point, per chunk
     other_kinds: dict[int, int] = {}  # CAT010 target reports of other kinds, per input (reset below)
     stray: list[pd.DataFrame] = []  # undeclared_radars' table per chunk
-    early_start: list[str] = []  # FirstDayTally's warnings
+    early_start: list[str] = []  # DayTally's warnings
     timed = selection is not None and selection.timed
     cut: MarginCut | None = None  # made at the first dated chunk when the window is given as instants
     if dataset is None:
@@ -315,7 +315,7 @@ def load_measurements(paths: list[str | Path], sensors: pd.DataFrame, *, edition
         ignored: dict[int, int] = {}
         by_source: dict[str, Span] = {}
         first = True
-        tally = FirstDayTally()
+        tally = DayTally()
         other_kinds = {}
         no_plots: dict = {}  # records measuring no real aircraft, per input (measurements.no_plot_counts)
         content = Tally(str(p))

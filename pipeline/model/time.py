@@ -105,7 +105,7 @@ EARLY_START_SHARE = 0.01  # and at most this share of the input's reports
 
 
 @dataclass
-class FirstDayTally:
+class DayTally:
     """Per input, chunk by chunk: the reports before the file's first midnight (day <= 0), the earliest
     time of day among them, and the reports after it, to tell a day 0 that is only a few late plots."""
 

@@ -12,7 +12,7 @@ from asterix_bytes import SHARED
 
 from msdc.asterix.encode import encode_frame
 from msdc.pipeline.cli import main
-from msdc.pipeline.model.time import FirstDayTally
+from msdc.pipeline.model.time import DayTally
 
 SENSORS = "fixtures/sensors.toml"  # radar 25/201
 
@@ -28,7 +28,7 @@ def _daily(path, first_tods, n_after: int = 300) -> str:
 
 
 def test_tally_by_hand():
-    tally = FirstDayTally()
+    tally = DayTally()
     tally.add({48: pd.DataFrame({"day": [0, 0, 1, 1, 1], "time_of_day": [86399.5, 86398.0, 0.1, 1.0, 2.0]})})
     tally.add({21: pd.DataFrame({"day": [-1, 1], "time_of_day": [86397.0, 3.0]})})
     assert (tally.before, tally.after, tally.earliest_tod_s) == (3, 4, 86397.0)
