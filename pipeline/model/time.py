@@ -11,7 +11,7 @@ here, exactly for times that are multiples of 1/128 s (the ASTERIX time LSB).
 from __future__ import annotations
 
 import datetime as dt
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 import pandas as pd
@@ -102,6 +102,35 @@ def with_clock(meas: pd.DataFrame, reference: pd.Timestamp | None = None) -> pd.
 # first few plots are stamped just before it starts the day before, and --date then names that day.
 EARLY_START_S = 300.0  # reports before the file's first midnight all within this of it
 EARLY_START_SHARE = 0.01  # and at most this share of the input's reports
+JUMP_SAMPLE = 64  # every this many reports of a category one is kept for the time line (a month's input
+# keeps ~1/64 of its reports' times)
+JUMP_SMOOTH = 5  # the kept times in file order, each the median of this many in a row: damaged records read
+# as random times of day stand alone and move no median
+# a step of the median time in file order said: a silence this long (the bundled fixtures' 2 h is not: a
+# night's silence of an ADS-B station is), or going back this far (late plots are seconds late; parts of a
+# recording laid out of order)
+JUMP_FORWARD_S = 6 * 3600.0
+JUMP_BACK_S = 600.0
+JUMPS_LISTED = 3
+
+
+def _hm(time_s: float) -> str:
+    """A time of day to the minute (the medians of report groups stand for them only to the minute)."""
+    t = int(time_s) % 86400
+    return f"{t // 3600:02d}:{t % 3600 // 60:02d}"
+
+
+def _jump_words(step_s: float, fmt: str) -> str:
+    """What a step of ``step_s`` in a raw stream's time line means, and what else it could be (about: from
+    the medians of report groups)."""
+    hours, other = abs(step_s) / 3600.0, (86400.0 - abs(step_s)) / 3600.0
+    undated = f"a {fmt} recording carries no date, so had"
+    if step_s > 0:
+        return (f"read as about {hours:.1f} h later (a silence); {undated} its parts been laid out of order "
+                f"(about {other:.1f} h earlier) or the silence been about {hours + 24:.1f} h, the later "
+                "reports' day is wrong")
+    return (f"read as about {hours:.1f} h earlier (reports laid out of order); {undated} it been silent for "
+            f"about {other:.1f} h instead, the later reports' day is wrong")
 
 
 @dataclass
@@ -112,6 +141,9 @@ class DayTally:
     before: int = 0
     earliest_tod_s: float = np.inf
     after: int = 0
+    # the time line: every JUMP_SAMPLE-th report's byte offset and time (s from day 0), chunk by chunk
+    sample_offsets: list[np.ndarray] = field(default_factory=list)
+    sample_times_s: list[np.ndarray] = field(default_factory=list)
 
     def add(self, frames: dict) -> None:
         for frame in frames.values():
@@ -124,10 +156,49 @@ class DayTally:
             self.after += int((~first).sum())
             if first.any():
                 self.earliest_tod_s = min(self.earliest_tod_s, float(np.nanmin(tod[first], initial=np.inf)))
+            if "offset" in frame:
+                times = day[::JUMP_SAMPLE] * 86400.0 + tod[::JUMP_SAMPLE]
+                keep = np.isfinite(times)
+                self.sample_offsets.append(np.asarray(frame["offset"])[::JUMP_SAMPLE][keep].astype(np.int64))
+                self.sample_times_s.append(times[keep])
+
+    def jumps(self) -> pd.DataFrame:
+        """Steps of the time line in file order (chunks may come in any order: ingest's workers) over
+        JUMP_FORWARD_S, or back over JUMP_BACK_S: the byte offset of the first kept report after the step,
+        the smoothed times (s from day 0) before and after it, and the step."""
+        if not self.sample_offsets:
+            return pd.DataFrame(columns=["offset", "from_s", "to_s", "step_s"])
+        offsets, times = np.concatenate(self.sample_offsets), np.concatenate(self.sample_times_s)
+        order = np.argsort(offsets, kind="stable")
+        offsets, times = offsets[order], times[order]
+        if len(times) >= JUMP_SMOOTH:
+            padded = np.pad(times, JUMP_SMOOTH // 2, mode="reflect")  # a damaged first one stays alone
+            times = np.median(np.lib.stride_tricks.sliding_window_view(padded, JUMP_SMOOTH), axis=1)
+        step = np.diff(times)
+        at = np.flatnonzero((step > JUMP_FORWARD_S) | (step < -JUMP_BACK_S))
+        return pd.DataFrame({"offset": offsets[at + 1], "from_s": times[at], "to_s": times[at + 1],
+                             "step_s": step[at]})
+
+    def jump_warnings(self, name: str, fmt: str | None) -> list[str]:
+        """Per step of a raw stream's (or ORADIS file's) time line (jumps): where, and the other reading
+        the day rule (a drop over 12 h is a midnight, a rise a day back) could not tell it from."""
+        if fmt not in ("raw", "oradis"):
+            return []
+        found = self.jumps()
+        out = [f"{name}: the time of day jumps from about {_hm(r.from_s)} to about {_hm(r.to_s)} near byte "
+               f"{r.offset}: "
+               f"{_jump_words(r.step_s, fmt)}" for r in found.head(JUMPS_LISTED).itertuples()]
+        if len(found) > JUMPS_LISTED:
+            out.append(f"{name}: and {len(found) - JUMPS_LISTED} more such jump(s) of its time of day")
+        return out
 
     def warning(self, name: str, date: dt.date | None, fmt: str | None) -> list[str]:
-        """A warning when ``date`` (given for a raw stream or ORADIS file) names a first day that holds only
-        a few plots stamped in the last minutes before midnight, the rest of the recording the day after."""
+        """The time line's jumps (jump_warnings), and a warning when ``date`` (given for a raw stream or
+        ORADIS file) names a first day that holds only a few plots stamped in the last minutes before
+        midnight, the rest of the recording the day after."""
+        return [*self.jump_warnings(name, fmt), *self._first_day_warning(name, date, fmt)]
+
+    def _first_day_warning(self, name: str, date: dt.date | None, fmt: str | None) -> list[str]:
         if date is None or fmt not in ("raw", "oradis") or not self.before or not self.after:
             return []
         if self.earliest_tod_s < 86400.0 - EARLY_START_S or self.before > EARLY_START_SHARE * (
