@@ -86,6 +86,17 @@ class Layout:
         return _packed(self, "fields")
 
 
+def column_resolution(category: int, column: str, edition: str | None = None) -> tuple[float, ...]:
+    """The steps (LSB times the column's scale, in the column's unit) of a float column's source fields, in
+    the order the decoder tries them (e.g. I021/131 then /130); () for a column the edition lacks."""
+    lay = compile_layout(category, edition, (column,))
+    if column not in lay.out_names_float:
+        return ()
+    row = lay.out_names_float.index(column)
+    fields = (lay.f_out == row) & (lay.f_kind == OUT_FLOAT)
+    return tuple(float(m) for m in lay.f_mult[fields])
+
+
 def _fallback(lay: Layout) -> np.ndarray:
     """1 for a field that feeds a column already fed by an earlier field (first present wins)."""
     seen: set[tuple[bool, int]] = set()
