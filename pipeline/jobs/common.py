@@ -1175,7 +1175,7 @@ def estimated_noise(meas: pd.DataFrame, sensors: pd.DataFrame, options: TrackOpt
     declared against estimated sigmas (radar range m and azimuth deg from the sensor file; ADS-B m per
     NACp level, and its along-track timing sigma s, declared 0)."""
     from msdc.pipeline.model.measurements import sensor_id
-    from msdc.pipeline.track.noise import AZIMUTH, POSITION, RANGE, TIMING, estimate_noise
+    from msdc.pipeline.track.noise import AZIMUTH, RANGE, TIMING, estimate_noise
 
     ids = sensor_id(48, sensors["sac"], sensors["sic"]).to_numpy()
     sites = {str(i): (float(r.latitude), float(r.longitude))
@@ -1191,11 +1191,6 @@ def estimated_noise(meas: pd.DataFrame, sensors: pd.DataFrame, options: TrackOpt
         if site is not None and row["component"] in (RANGE, AZIMUTH):
             declared = site.sigma_range_m if row["component"] == RANGE else site.sigma_azimuth_deg
             table.loc[i, ["declared_sigma", "unit"]] = [declared, "m" if row["component"] == RANGE else "deg"]
-    local = table["sensor_id"].astype(str).str.match(r"0(10|20):") & (table["component"] == POSITION)
-    if local.any():  # multilateration, surface radar: their reports' own sigma (I010/500, I020/500, sigma_m)
-        sigma = pd.Series(meas["cov_ee_m2"].to_numpy(float)) ** 0.5
-        median = sigma.groupby(meas["sensor_id"].astype(str).to_numpy()).median()
-        table.loc[local, "declared_sigma"] = table.loc[local, "sensor_id"].astype(str).map(median).to_numpy()
     table["estimated_sigma"] = table["declared_sigma"] * table["scale"]
     timing = table["component"] == TIMING  # the ADS-B along-track time-stamp sigma, declared as none
     table.loc[timing, ["unit", "declared_sigma"]] = ["s", 0.0]
@@ -1212,8 +1207,13 @@ def noise_text(noise) -> str:
         return ""
     cols = [c for c in ("sensor_id", "component", "motion", "unit", "declared_from", "declared_sigma",
                         "estimated_sigma", "residuals", "estimated") if c in noise]
+    if "at_resolution" in noise and noise["at_resolution"].any():  # the column only where it says something
+        cols.append("at_resolution")
     text = (f"\n\nMeasurement noise estimated from the residuals ({noise.attrs.get('passes')} passes):\n"
             + noise[cols].to_string(index=False, float_format=lambda v: f"{v:.4g}"))
+    if "at_resolution" in cols:
+        text += ("\nat_resolution: the estimate stopped at the rounding of the item the positions are "
+                 "written in\n(its step / sqrt(12)); the residuals say only that the noise is no larger")
     raised = pd.DataFrame(noise.attrs.get("aircraft", []))
     if len(raised):
         shown = raised.sort_values("estimated_sigma_m", ascending=False).head(RAISED_SHOWN)

@@ -651,7 +651,9 @@ class TrackOptions(AircraftOptions):
              "extra passes), timing (the same, and an ADS-B along-track time-stamp sigma) or declared (the "
              "sensor file's sigmas, ADS-B from NACp)",
         doc="`estimate`: each sensor's sigmas measured from the tracker's own residuals before the final "
-            "pass (ADS-B on the surface, below 50 kt, apart from airborne; raised where the gate would "
+            "pass (ADS-B on the surface, below 50 kt, apart from airborne; multilateration and surface radar "
+            "also stationary, below 1 kt, apart; never below the rounding of the item the positions are "
+            "written in; raised where the gate would "
             "reject more than 1 % of the residuals, per class and, on the surface, per aircraft); `timing`: "
             "the same, and for ADS-B an along-track time-stamp sigma (R = σ²I + σₜ² v vᵀ, v the report's own "
             "ground vector; fewer gated reports and track segments on the real recording, gap predictions "

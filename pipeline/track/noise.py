@@ -12,6 +12,10 @@ real data (a smaller sigma gates more of the tail, which gives a smaller sigma).
 (the smoothed covariance depends on the R in use). ADS-B on the surface (ground speed below
 SURFACE_SPEED_KT: the reported one, else the first pass's smoothed speed) and airborne are separate
 classes: pooled, the many near-stationary surface reports pulled the sigma far below the airborne scatter.
+Multilateration and surface radar reports have a third class, stationary (below STATIONARY_SPEED_KT): such a
+system repeats a parked transponder's position to the last bit, and those zero residuals pooled with the
+moving ones put the sigma under a metre and gated the taxiing aircraft. No sigma is estimated below the
+rounding of the item a position was written in (pipeline.model.resolution: step / sqrt(12) per axis).
 An ADS-B class fast enough gets R = sigma^2 I + sigma_t^2 v v^T, v the report's ground vector: time-stamp
 errors move the reported position along the motion by v times the error, so the along-track scatter grows
 with speed while the across-track one does not (fit_timing fits both from the residuals along and across).
@@ -25,6 +29,7 @@ from typing import NamedTuple
 import numpy as np
 import pandas as pd
 
+from msdc.pipeline.model.resolution import position_step_m
 from msdc.pipeline.parallel import map_ordered
 
 from .config import TrackerConfig, chi2_quantile, default_modes
@@ -37,6 +42,11 @@ from .plane import estimate, filter_plane
 # flight level (on the surface); the surface residuals (~1 m) are a tenth of the airborne ones, whose
 # along-track error grows with speed (time-stamp jitter), so one pooled sigma gated good airborne reports.
 SURFACE_SPEED_KT = 50.0
+# Multilateration and surface radar reports slower than this are a class of their own (motion "stationary"):
+# on the real LEBL hour 65 % of the multilateration reports give a ground speed of exactly 0 (four field
+# monitors and parked aircraft, positions repeated to the metre), while its taxiing aircraft give 5-30 kt.
+STATIONARY_SPEED_KT = 1.0
+LOCAL_KINDS = ("mlat", "smr")  # the sensor kinds with a stationary class
 KT_PER_M_S = 3600.0 / 1852.0
 
 CHI2_1_MEDIAN = chi2_quantile(0.5, 1)  # median of a squared standard normal, 0.4549
@@ -65,7 +75,7 @@ VELOCITY_HOLD_S = 5.0
 # predictions through gaps worse (docs/tracker.md). Only aircraft with at least MIN_AIRCRAFT_RESIDUALS
 # residuals in the class: fewer cannot place a 1 % tail.
 MIN_AIRCRAFT_RESIDUALS = 100
-AIRCRAFT_GUARD = ("surface",)
+AIRCRAFT_GUARD = ("surface", "stationary")
 AIRCRAFT_COLUMNS = ["aircraft_id", "sensor_id", "motion", "declared_sigma_m", "class_sigma_m",
                     "estimated_sigma_m", "residuals"]
 
@@ -107,19 +117,37 @@ def rescale(cov: np.ndarray, k_along, k_across, radial: np.ndarray | None) -> np
     return A @ cov @ np.swapaxes(A, 1, 2)
 
 
-def variance_ratio(q: np.ndarray, dof: int) -> float:
+def variance_ratio(q: np.ndarray, dof: int, level_min: float = 0.0) -> float:
     """The factor by which the variance in use should be multiplied: the mean of q / dof after the
-    gross-error cut (q / dof above GROSS_SIGMAS^2 times its robust level), raised where needed so that
-    at most GATE_SHARE_MAX of the q kept lie beyond the GATE_PROBABILITY quantile of chi-square(dof)."""
-    q = _below_gross(q, dof)
+    gross-error cut (q / dof above GROSS_SIGMAS^2 times its robust level, at least level_min), raised where
+    needed so that at most GATE_SHARE_MAX of the q kept lie beyond the GATE_PROBABILITY quantile of
+    chi-square(dof)."""
+    q = _below_gross(q, dof, level_min)
     return float(max(np.mean(q / dof), _tail(q, dof)))
 
 
-def _below_gross(q: np.ndarray, dof: int) -> np.ndarray:
-    """The finite q whose q / dof lies within GROSS_SIGMAS^2 times its robust (median-based) level."""
+def _below_gross(q: np.ndarray, dof: int, level_min: float = 0.0) -> np.ndarray:
+    """The finite q whose q / dof lies within GROSS_SIGMAS^2 times its robust (median-based) level, taken as
+    at least level_min (the level residuals at the positions' rounding would have: see rounding_levels)."""
     q = q[np.isfinite(q)]
-    level = np.median(q / dof) / (chi2_quantile(0.5, dof) / dof)
+    level = max(np.median(q / dof) / (chi2_quantile(0.5, dof) / dof), level_min)
     return q[q / dof <= GROSS_SIGMAS**2 * level]
+
+
+def rounding_levels(cov: np.ndarray, floor_m2: np.ndarray) -> np.ndarray:
+    """Per row, the rounding variance over the minor variance of the covariance in use (n, 2, 2): the robust
+    level residuals at the positions' rounding would have, below which a class's residuals say nothing
+    (their median is the least level of the gross-error cut; 0 without rounding). A multilateration system
+    repeats a parked transponder's position, the smoother then fits it to a micrometre, and a level from
+    those residuals would cut its real jumps of metres as gross errors."""
+    with np.errstate(invalid="ignore", divide="ignore"):
+        return np.asarray(floor_m2, float) / minor_variance(cov)
+
+
+def finite_median(values: np.ndarray) -> float:
+    """The median of the finite values, 0 where there is none."""
+    values = values[np.isfinite(values)]
+    return float(np.median(values)) if len(values) else 0.0
 
 
 def _tail(q: np.ndarray, dof: int) -> float:
@@ -128,9 +156,9 @@ def _tail(q: np.ndarray, dof: int) -> float:
     return float(np.quantile(q, 1.0 - GATE_SHARE_MAX) / chi2_quantile(GATE_PROBABILITY, dof))
 
 
-def aircraft_tail(q: np.ndarray, dof: int) -> float:
+def aircraft_tail(q: np.ndarray, dof: int, level_min: float = 0.0) -> float:
     """The gate-share factor of one aircraft's q in a class: `_tail` below the gross-error cut."""
-    return _tail(_below_gross(q, dof), dof)
+    return _tail(_below_gross(q, dof, level_min), dof)
 
 
 def smoothed_at_reports(run) -> tuple[np.ndarray, np.ndarray]:
@@ -249,20 +277,55 @@ def _smallest_factor(share, share_max: float, top: float = 1e4) -> float:
     return float(np.exp(hi))
 
 
-def _scaled(cov0, k_along, k_across, var_t, vv, site, radial) -> np.ndarray:
+def _scaled(cov0, k_along, k_across, var_t, vv, site, radial, floor_m2) -> np.ndarray:
     """The covariances in use: cov0 rescaled per row (radars with a site along and across the line of
-    sight, the rest isotropically) plus the ADS-B timing term var_t v v^T."""
+    sight, the rest isotropically) plus the ADS-B timing term var_t v v^T, each raised to at least
+    floor_m2 (per row) in every direction."""
     cov = rescale(cov0, k_along, k_across, None) + var_t[:, None, None] * vv
     cov[site] = rescale(cov0[site], k_along[site], k_across[site], radial[site])
-    return cov
+    return floored(cov, floor_m2)
+
+
+def minor_variance(cov: np.ndarray) -> np.ndarray:
+    """The smaller eigenvalue of each symmetric 2 x 2 matrix (n, 2, 2): the variance along the ellipse's
+    minor axis."""
+    half_trace = 0.5 * (cov[:, 0, 0] + cov[:, 1, 1])
+    return half_trace - np.hypot(0.5 * (cov[:, 0, 0] - cov[:, 1, 1]), cov[:, 0, 1])
+
+
+def floored(cov: np.ndarray, floor_m2: np.ndarray) -> np.ndarray:
+    """cov (n, 2, 2) with floor_m2 - minor variance added to the diagonal where the minor variance is below
+    it: then no direction's variance is below floor_m2 (rounding noise that every report carries)."""
+    add = np.maximum(np.asarray(floor_m2, float) - minor_variance(cov), 0.0)
+    if not (add > 0).any():
+        return cov
+    out = cov.copy()
+    out[:, 0, 0] += add
+    out[:, 1, 1] += add
+    return out
+
+
+def floor_factors(cov0: np.ndarray, floor_m2: np.ndarray, codes: np.ndarray, keys: list[tuple]) -> np.ndarray:
+    """Per class, the smallest sigma factor allowed: SCALE_LIMITS' lower one, raised for an isotropic class
+    with rounding steps to the factor at which its least rounded row (floor over declared minor variance)
+    reaches its floor: below it every report of the class would have a sigma under its own rounding."""
+    out = np.full(len(keys), SCALE_LIMITS[0])
+    with np.errstate(invalid="ignore", divide="ignore"):
+        ratio = np.sqrt(np.asarray(floor_m2, float) / minor_variance(cov0))
+    for c, key in enumerate(keys):
+        own = ratio[(codes == c) & np.isfinite(ratio) & (np.asarray(floor_m2) > 0)]
+        if not key[2] and len(own):
+            out[c] = float(np.clip(own.min(), *SCALE_LIMITS))
+    return out
 
 
 def _raise_aircraft(q: np.ndarray, in_class: np.ndarray, ident: np.ndarray, raised: np.ndarray,
-                    min_rows: int, tol: float) -> float:
+                    min_rows: int, tol: float, level: np.ndarray) -> float:
     """Raise (in place) the sigma factor over the class of each aircraft's rows in `in_class` whose finite
     q number at least min_rows, so that at most GATE_SHARE_MAX of them lie beyond the gate; the factor
     never falls (recomputed from scratch it flipped between two values as gating decisions changed), and
     a raise of tol or less is none (an aircraft alone in its class already meets the class's guard).
+    level: per row, the rounding level of the gross-error cut (rounding_levels; the aircraft's median).
     Returns the largest relative move."""
     rows = np.flatnonzero(in_class)
     order = rows[np.argsort(ident[rows], kind="stable")]
@@ -272,7 +335,7 @@ def _raise_aircraft(q: np.ndarray, in_class: np.ndarray, ident: np.ndarray, rais
         if np.isfinite(own).sum() < min_rows:
             continue
         old = raised[part[0]]
-        factor = np.sqrt(aircraft_tail(own, 2))
+        factor = np.sqrt(aircraft_tail(own, 2, finite_median(level[part])))
         new = old * factor if factor > 1.0 + tol else old
         raised[part] = new
         moved = max(moved, abs(new / old - 1.0))
@@ -281,15 +344,17 @@ def _raise_aircraft(q: np.ndarray, in_class: np.ndarray, ident: np.ndarray, rais
 
 @dataclass
 class NoiseEstimate:
-    """measurements: the input with its covariances rescaled; sensors: one row per sensor and component
+    """measurements: the input with its covariances rescaled; sensors: one row per class and component
     (sensor_id, sensor_kind, component "position" | "timing" | "range" | "azimuth", motion "surface" |
-    "airborne" for ADS-B ("" for radars: see SURFACE_SPEED_KT), declared_sigma_m for ADS-B position
-    rows, scale = estimated / declared sigma, residuals used, estimated: False when too few residuals,
-    so the declared sigma was kept (timing: no term fitted, 0 s), declared_from "nacp" | "declared"
-    (ADS-B without NACp) | "sensor" (radar), estimated_sigma_m, estimated_sigma_s: the timing row's
-    sigma_t (s), NaN on the others); passes run; aircraft: one row per aircraft and class whose sigma the
-    per-aircraft guard raised (aircraft_id, sensor_id, motion, declared_sigma_m, class_sigma_m,
-    estimated_sigma_m, residuals)."""
+    "airborne" for ADS-B, also "stationary" for multilateration and surface radar, "" for radars (see
+    motions), declared_sigma_m of position rows (ADS-B: the class's; multilateration and surface radar:
+    the median of its reports' own), scale = estimated / declared sigma, residuals used, estimated: False
+    when too few residuals, so the declared sigma was kept (timing: no term fitted, 0 s), declared_from
+    "nacp" | "declared" (ADS-B without NACp) | "sensor", at_resolution: the estimate stopped at the
+    rounding of the positions' item (pipeline.model.resolution: the residuals say only that the noise is
+    no larger), estimated_sigma_m, estimated_sigma_s: the timing row's sigma_t (s), NaN on the others);
+    passes run; aircraft: one row per aircraft and class whose sigma the per-aircraft guard raised
+    (aircraft_id, sensor_id, motion, declared_sigma_m, class_sigma_m, estimated_sigma_m, residuals)."""
 
     measurements: pd.DataFrame
     sensors: pd.DataFrame
@@ -366,20 +431,20 @@ def _radials(meas: pd.DataFrame, sites: dict[str, tuple[float, float]] | None) -
     return out
 
 
-def _classes(meas: pd.DataFrame, radial: np.ndarray, surface: np.ndarray) -> tuple[np.ndarray, list[tuple]]:
+def _classes(meas: pd.DataFrame, radial: np.ndarray, motion: np.ndarray) -> tuple[np.ndarray, list[tuple]]:
     """Class number per row and the class keys (sensor_id, kind, has_site, declared variance or NaN,
     declared_from, motion): ADS-B by source, NACp level, whether the sigma came from NACp ("nacp") or was
     declared for reports without it ("declared"; also every ADS-B row of a frame without a nacp
-    column), so a declared sigma equal to a NACp level's is still its own class, and motion ("surface"
-    where `surface`, else "airborne"); radars ("sensor", motion "") by sensor (with a site: separate
-    range and azimuth factors; without: one isotropic factor)."""
+    column), so a declared sigma equal to a NACp level's is still its own class; every sensor by the
+    row's `motion` (see motions: "" for radars); radars ("sensor") with a site get separate range and
+    azimuth factors, the rest one isotropic factor."""
     sid = meas["sensor_id"].astype(str).to_numpy()
     kind = meas["sensor_kind"].astype(str).to_numpy()
     has_site = np.isfinite(radial[:, 0])
     declared = np.where(kind == "adsb", np.round(meas["cov_ee_m2"].to_numpy(float), 3), np.nan)
     has_nacp = meas["nacp"].notna().to_numpy(bool) if "nacp" in meas else np.zeros(len(meas), bool)
     source = np.where(kind == "adsb", np.where(has_nacp, "nacp", "declared"), "sensor")
-    motion = np.where(kind == "adsb", np.where(surface, "surface", "airborne"), "")
+    motion = np.asarray(motion, dtype=object).astype(str)
     label = (pd.Series(sid, dtype=object) + "|" + kind + "|" + has_site.astype(str) + "|"
              + declared.astype(str) + "|" + source + "|" + motion)
     codes, uniques = pd.factorize(label, sort=True)
@@ -494,14 +559,20 @@ def ground_velocity(meas: pd.DataFrame, hold_s: float = VELOCITY_HOLD_S) -> np.n
     return out
 
 
-def surface_mask(meas: pd.DataFrame, speed_m_s: np.ndarray) -> np.ndarray:
-    """ADS-B rows moving slower than SURFACE_SPEED_KT: the reported ground speed where there is one, else
-    the tracker's smoothed speed; a row with neither counts as airborne."""
+def motions(meas: pd.DataFrame, speed_m_s: np.ndarray) -> np.ndarray:
+    """Each row's motion class by its speed (the reported ground speed where there is one, else the tracker's
+    smoothed speed; a row with neither counts as airborne): ADS-B "surface" below SURFACE_SPEED_KT, else
+    "airborne"; multilateration and surface radar the same, and "stationary" below STATIONARY_SPEED_KT;
+    radars "" (one class)."""
     reported = (meas["ground_speed_kt"].to_numpy(float) if "ground_speed_kt" in meas
                 else np.full(len(meas), np.nan))
     speed_kt = np.where(np.isfinite(reported), reported, np.asarray(speed_m_s, float) * KT_PER_M_S)
+    kind = meas["sensor_kind"].astype(str).to_numpy()
     with np.errstate(invalid="ignore"):
-        return (meas["sensor_kind"].astype(str).to_numpy() == "adsb") & (speed_kt < SURFACE_SPEED_KT)
+        moving = np.where(speed_kt < SURFACE_SPEED_KT, "surface", "airborne")
+        local = np.isin(kind, LOCAL_KINDS)
+        moving = np.where(local & (speed_kt < STATIONARY_SPEED_KT), "stationary", moving)
+    return np.where((kind == "adsb") | local, moving, "").astype(object)
 
 
 def estimate_noise(measurements: pd.DataFrame, *, sites: dict[str, tuple[float, float]] | None = None,
@@ -518,8 +589,9 @@ def estimate_noise(measurements: pd.DataFrame, *, sites: dict[str, tuple[float, 
     its declared covariance. timing: ADS-B classes with
     at least min_residuals reports faster than SURFACE_SPEED_KT also get an along-track timing term
     sigma_t^2 v v^T (fit_timing; v from ground_velocity); False (default): isotropic only. Stops after
-    `passes` passes, or once no sigma moves by more than tol. aircraft_guard: the ADS-B motions ("surface",
-    "airborne") whose isotropic classes then get the per-aircraft gate-share guard, for aircraft with at
+    `passes` passes, or once no sigma moves by more than tol. aircraft_guard: the motions ("surface",
+    "airborne", "stationary") whose ADS-B, multilateration and surface radar classes then get the
+    per-aircraft gate-share guard, for aircraft with at
     least min_aircraft_residuals residuals in the class (up to `passes` more passes; () turns it off).
     config / tpm / max_coast_s as for `track`."""
     if passes < 1:
@@ -529,6 +601,7 @@ def estimate_noise(measurements: pd.DataFrame, *, sites: dict[str, tuple[float, 
     meas = measurements.reset_index(drop=True)
     sites = check_sites(meas, sites)
     cov0 = _matrices(meas["cov_ee_m2"], meas["cov_en_m2"], meas["cov_nn_m2"])
+    floor_m2 = np.nan_to_num(position_step_m(meas) ** 2 / 12.0)  # rounding to the item's step, per axis
     radial = _radials(meas, sites)
     site = np.isfinite(radial[:, 0])
     sid = meas["sensor_id"].astype(str).to_numpy()
@@ -545,10 +618,11 @@ def estimate_noise(measurements: pd.DataFrame, *, sites: dict[str, tuple[float, 
         q = fp.q
         done += 1
         if codes is None:  # the classes need a speed: the first pass's smoothed one where none is reported
-            codes, keys = _classes(meas, radial, surface_mask(meas, fp.smoothed_speed_m_s))
+            codes, keys = _classes(meas, radial, motions(meas, fp.smoothed_speed_m_s))
             k_along, k_across = np.ones(len(keys)), np.ones(len(keys))
             var_t = np.zeros(len(keys))
             used = np.zeros(len(keys), int)
+            k_min = floor_factors(cov0, floor_m2, codes, keys)
             estimated = np.zeros(len(keys), bool)
             fast = fp.speed_m_s * KT_PER_M_S >= SURFACE_SPEED_KT
             timed = np.array([timing and key[1] == "adsb" and not key[2]
@@ -570,27 +644,29 @@ def estimate_noise(measurements: pd.DataFrame, *, sites: dict[str, tuple[float, 
                 before = np.sqrt([k_along[c] ** 2 * key[3], k_along[c] ** 2 * key[3] + var_t[c] * v_ref**2])
                 var_m2, var_t[c] = fit_timing(fp.res_uw[sel], fp.hph_uw[sel], fp.speed_m_s[sel],
                                               k_along[c] ** 2 * key[3], var_t[c])
-                k_along[c] = k_across[c] = np.clip(np.sqrt(var_m2 / key[3]), *SCALE_LIMITS)
+                k_along[c] = k_across[c] = np.clip(np.sqrt(var_m2 / key[3]), k_min[c], SCALE_LIMITS[1])
                 after = np.sqrt([k_along[c] ** 2 * key[3], k_along[c] ** 2 * key[3] + var_t[c] * v_ref**2])
                 moved = max(moved, float(np.max(np.abs(after / before - 1.0))))
                 estimated[c] = True
                 continue
             if used[c] >= min_residuals:
                 d = int(dof[sel][0])
-                ratio = (variance_ratio(q[sel, 0], d), variance_ratio(q[sel, 1], d))
+                low = finite_median(rounding_levels(cov[sel], floor_m2[sel])) if not key[2] else 0.0
+                ratio = (variance_ratio(q[sel, 0], d, low), variance_ratio(q[sel, 1], d, low))
             elif pooled[key[0]] is not None:
                 ratio = pooled[key[0]]
             else:
                 continue
             estimated[c] = True
-            new_along = np.clip(k_along[c] * np.sqrt(ratio[0]), *SCALE_LIMITS)
-            new_across = np.clip(k_across[c] * np.sqrt(ratio[1]), *SCALE_LIMITS)
+            new_along = np.clip(k_along[c] * np.sqrt(ratio[0]), k_min[c], SCALE_LIMITS[1])
+            new_across = np.clip(k_across[c] * np.sqrt(ratio[1]), k_min[c], SCALE_LIMITS[1])
             moved = max(moved, abs(new_along / k_along[c] - 1.0), abs(new_across / k_across[c] - 1.0))
             k_along[c], k_across[c] = new_along, new_across
-        cov = _scaled(cov0, k_along[codes], k_across[codes], var_t[codes], vv, site, radial)
+        cov = _scaled(cov0, k_along[codes], k_across[codes], var_t[codes], vv, site, radial, floor_m2)
         if moved <= tol:
             break
-    own = [c for c, key in enumerate(keys) if key[1] == "adsb" and not key[2] and key[5] in aircraft_guard
+    own = [c for c, key in enumerate(keys) if key[1] in ("adsb", *LOCAL_KINDS) and not key[2]
+           and key[5] in aircraft_guard
            and not timed[c] and used[c] >= min_residuals]
     used_rows = np.zeros(len(meas), bool)
     in_own = np.bincount(ident[np.isin(codes, own)], minlength=ident.max(initial=0) + 1)
@@ -599,36 +675,51 @@ def estimate_noise(measurements: pd.DataFrame, *, sites: dict[str, tuple[float, 
         q = _forms(guarded, len(meas), cov, config).q
         used_rows = np.isfinite(q[:, 0])
         done += 1
-        moved = max(_raise_aircraft(q[:, 0], codes == c, ident, raised, min_aircraft_residuals, tol)
+        level = rounding_levels(cov, floor_m2)
+        moved = max(_raise_aircraft(q[:, 0], codes == c, ident, raised, min_aircraft_residuals, tol, level)
                     for c in own)
-        cov = _scaled(cov0, k_along[codes] * raised, k_across[codes], var_t[codes], vv, site, radial)
+        cov = _scaled(cov0, k_along[codes] * raised, k_across[codes], var_t[codes], vv, site, radial,
+                      floor_m2)
         if moved <= tol:
             break
+    declared_var = _declared_variances(cov0, codes, keys)
     rows = []
-    for c, (s, kind, has_site, var, source, motion) in enumerate(keys):
+    for c, (s, kind, has_site, _, source, motion) in enumerate(keys):
         base = {"sensor_id": s, "sensor_kind": kind, "motion": motion, "residuals": int(used[c]),
-                "estimated": bool(estimated[c]), "declared_from": source}
+                "estimated": bool(estimated[c]), "declared_from": source,
+                "at_resolution": bool(k_min[c] > SCALE_LIMITS[0] and k_along[c] <= k_min[c] * (1.0 + 1e-9))}
         if has_site:
             for component, k in ((RANGE, k_along[c]), (AZIMUTH, k_across[c])):
                 rows.append({**base, "component": component, "declared_sigma_m": np.nan, "scale": float(k)})
         else:
-            rows.append({**base, "component": POSITION, "declared_sigma_m": float(np.sqrt(var)),
+            rows.append({**base, "component": POSITION, "declared_sigma_m": float(np.sqrt(declared_var[c])),
                          "scale": float(k_along[c])})
         if kind == "adsb" and not has_site and timing:
             rows.append({**base, "component": TIMING, "declared_sigma_m": np.nan, "scale": np.nan,
                          "estimated": bool(timed[c]), "sigma_s": float(np.sqrt(var_t[c]))})
     sensors = pd.DataFrame(rows, columns=["sensor_id", "sensor_kind", "component", "motion",
                                           "declared_sigma_m", "scale", "residuals", "estimated",
-                                          "declared_from", "sigma_s"])
+                                          "declared_from", "at_resolution", "sigma_s"])
     sensors["estimated_sigma_m"] = sensors["declared_sigma_m"] * sensors["scale"]
     sensors = sensors.rename(columns={"sigma_s": "estimated_sigma_s"})
     sensors = sensors[[c for c in sensors.columns if c != "estimated_sigma_s"] + ["estimated_sigma_s"]]
     out = meas.assign(cov_ee_m2=cov[:, 0, 0], cov_en_m2=cov[:, 0, 1], cov_nn_m2=cov[:, 1, 1])
     return NoiseEstimate(out.set_axis(measurements.index), sensors, done,
-                         _raised_table(meas, codes, keys, k_along, raised, used_rows))
+                         _raised_table(meas, codes, keys, declared_var, k_along, raised, used_rows))
 
 
-def _raised_table(meas: pd.DataFrame, codes, keys, k_along, raised, used_rows) -> pd.DataFrame:
+def _declared_variances(cov0: np.ndarray, codes: np.ndarray, keys: list[tuple]) -> np.ndarray:
+    """Per class, the declared per-axis variance: an ADS-B class's own, the median of a multilateration or
+    surface radar class's reports' own (I010/500, I020/500, sigma_m); NaN for radars (one per plot)."""
+    out = np.array([k[3] for k in keys], float)
+    for c, key in enumerate(keys):
+        if key[1] in LOCAL_KINDS:
+            own = cov0[codes == c, 0, 0]
+            out[c] = finite_median(own) if np.isfinite(own).any() else np.nan
+    return out
+
+
+def _raised_table(meas: pd.DataFrame, codes, keys, declared_var, k_along, raised, used_rows) -> pd.DataFrame:
     """NoiseEstimate.aircraft: the aircraft and classes the per-aircraft guard raised."""
     sel = raised > 1.0
     if not sel.any():
@@ -638,7 +729,7 @@ def _raised_table(meas: pd.DataFrame, codes, keys, k_along, raised, used_rows) -
     out = frame.groupby(["aircraft_id", "code"], sort=True).agg(raised=("raised", "first"),
                                                                residuals=("used", "sum")).reset_index()
     key = [keys[c] for c in out["code"]]
-    declared = np.sqrt([k[3] for k in key])
+    declared = np.sqrt(declared_var[out["code"].to_numpy()])
     out["class_sigma_m"] = declared * k_along[out["code"].to_numpy()]
     out = out.assign(sensor_id=[k[0] for k in key], motion=[k[5] for k in key], declared_sigma_m=declared,
                      estimated_sigma_m=out["class_sigma_m"] * out["raised"],

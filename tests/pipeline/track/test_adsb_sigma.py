@@ -97,11 +97,11 @@ def test_noise_classes_keep_declared_apart_from_the_same_nacp_sigma():
     var = float(nacp_sigma_m([9])[0]) ** 2
     meas = pd.DataFrame({"sensor_id": ["021:0/1"] * 3, "sensor_kind": ["adsb"] * 3,
                          "cov_ee_m2": [var] * 3, "nacp": pd.array([9, pd.NA, 9], dtype="Int64")})
-    codes, keys = _classes(meas, np.full((3, 2), np.nan), np.zeros(3, bool))
+    codes, keys = _classes(meas, np.full((3, 2), np.nan), np.array(["airborne"] * 3))
     assert codes[0] == codes[2] != codes[1]
     assert sorted(k[4] for k in keys) == ["declared", "nacp"]
     # the same report on the surface is a class of its own too
-    codes, keys = _classes(meas, np.full((3, 2), np.nan), np.array([False, False, True]))
+    codes, keys = _classes(meas, np.full((3, 2), np.nan), np.array(["airborne", "airborne", "surface"]))
     assert len(set(codes)) == 3 and sorted(k[5] for k in keys) == ["airborne", "airborne", "surface"]
 
 

@@ -483,3 +483,127 @@ def test_cli_noise_timing_reports_the_timing_sigma_and_bad_choices_are_named(tmp
     assert main(args + ["--noise", "isotropic"]) != 0
     err = capsys.readouterr().err
     assert "--noise 'isotropic'" in err and "timing" in err and not out.exists()
+
+
+def _parked_and_taxiing_mlat(rng) -> tuple[pd.DataFrame, float]:
+    """Multilateration (CAT010 I010/042 x/y, LSB 1 m; declared 3 m): 4 parked transponders whose every
+    report repeats one position (a ground speed of 0, 1 Hz, 3,000 reports each, as the real LEBL system's
+    field monitors) and 2 aircraft taxiing straight at 8 m/s with 5 m noise per axis (1 Hz, 1,500 each),
+    every position rounded to the metre. Returns the frame and the taxiing reports' per-axis sigma, noise
+    and rounding together: sqrt(5^2 + 1/12)."""
+    lat0, m_per_deg = 41.3, 111_320.0
+    frames = []
+    for k in range(6):
+        moving = k >= 4
+        t = np.arange(1500.0 if moving else 3000.0)
+        if moving:
+            e, n = 500.0 * k + 8.0 * t + rng.normal(0.0, 5.0, len(t)), 300.0 + rng.normal(0.0, 5.0, len(t))
+        else:
+            e, n = np.full(len(t), 137.4 * k), np.full(len(t), -52.6)
+        e, n = np.round(e), np.round(n)  # the item's 1 m step
+        frames.append(pd.DataFrame({
+            "time": pd.Timestamp("2016-05-10T22:00:00Z") + pd.to_timedelta(t + 0.37 * k, unit="s"),
+            "sensor_id": "010:0/107:mlat", "sensor_kind": "mlat", "aircraft_id": f"T{k}",
+            "latitude": lat0 + n / m_per_deg, "longitude": 2.08 + e / (m_per_deg * np.cos(np.radians(lat0))),
+            "flight_level": np.nan, "ground_speed_kt": 8.0 * 3600 / 1852 if moving else 0.0,
+            "position_item": "042", "cov_ee_m2": 9.0, "cov_en_m2": 0.0, "cov_nn_m2": 9.0}))
+    return pd.concat(frames, ignore_index=True), float(np.sqrt(25.0 + 1.0 / 12.0))
+
+
+def test_parked_multilateration_targets_neither_shrink_the_moving_sigma_nor_fall_below_rounding():
+    # Pooled, 12,000 zero residuals against 3,000 of 5 m: over half the residuals are zero, the robust
+    # level 0, and every nonzero residual was cut as gross: the sigma ended at the 0.02 clip (0.06 m) and
+    # the taxiing aircraft's reports were gated. Parked reports are now a class of their own, estimated
+    # no finer than the 1 m step's rounding, 1 / sqrt(12) m (at_resolution); the taxiing ones recover
+    # their own scatter and are tracked whole.
+    from msdc.pipeline.track import track
+
+    meas, moving_m = _parked_and_taxiing_mlat(np.random.default_rng(11))
+    est = estimate_noise(meas)
+    s = est.sensors.set_index("motion")
+    assert sorted(s.index) == ["stationary", "surface"]
+    assert s.loc["stationary", "declared_sigma_m"] == 3.0  # the median of its reports' own
+    assert s.loc["stationary", "estimated_sigma_m"] == pytest.approx(1.0 / np.sqrt(12.0), rel=1e-9)
+    assert s.loc["stationary", "at_resolution"] and not s.loc["surface", "at_resolution"]
+    assert s.loc["surface", "estimated_sigma_m"] == pytest.approx(moving_m, rel=0.1)
+    parked = est.measurements["aircraft_id"].isin(["T0", "T1", "T2", "T3"])
+    np.testing.assert_allclose(est.measurements.loc[parked, ["cov_ee_m2", "cov_nn_m2"]], 1.0 / 12.0,
+                               rtol=1e-9)
+    res = track(est.measurements).sensors.set_index("aircraft_id")
+    assert res.loc[["T4", "T5"], "gated"].sum() < 0.01 * res.loc[["T4", "T5"], "reports"].sum()
+
+
+def test_the_gross_cut_is_no_finer_than_the_rounding_level():
+    # 60 residuals the smoother fits to a micrometre (q = 1e-12), 40 of q = 2 and one of 1e6 (1 dof). From
+    # the median alone the level is ~2e-12 and every q = 2 is cut as gross: the mean is ~0. With the least
+    # level 1 (residuals at the rounding), the cut is at 30^2 * 1 = 900: the 2s stay, 1e6 goes, and the
+    # mean of what stays is (60e-12 + 40 * 2) / 100 = 0.8.
+    q = np.concatenate([np.full(60, 1e-12), np.full(40, 2.0), [1e6]])
+    assert variance_ratio(q, 1) < 1e-10
+    assert variance_ratio(q, 1, level_min=1.0) == pytest.approx(0.8)
+
+
+def test_per_aircraft_guard_raises_a_jumping_parked_transponder_alone():
+    # Five parked multilateration targets (I010/042, 1 m step, 1 Hz, 2,000 reports each); one (JMP) jumps
+    # 4 m east in 3 % of its reports. The class stays at the rounding; at its sigma JMP's jumps lie beyond
+    # the gate (q = 16 / sigma^2 over chi2(2) 99.9 % = 13.8 below sigma = 4 / sqrt(13.8) = 1.077 m), 3 %
+    # of its reports. Raised until at most 1 % lie beyond, JMP's sigma becomes about that 1.077 m, less
+    # what the smoother's pull toward each jump takes off its residual, and no other target is raised.
+    rng = np.random.default_rng(5)
+    lat0, m_per_deg = 41.3, 111_320.0
+    frames = []
+    for k in range(5):
+        t = np.arange(2000.0)
+        e = np.full(len(t), 90.0 * k) + np.where((k == 4) & (rng.random(len(t)) < 0.03), 4.0, 0.0)
+        frames.append(pd.DataFrame({
+            "time": pd.Timestamp("2016-05-10T22:00:00Z") + pd.to_timedelta(t + 0.21 * k, unit="s"),
+            "sensor_id": "010:0/107:mlat", "sensor_kind": "mlat", "aircraft_id": "JMP" if k == 4 else f"P{k}",
+            "latitude": lat0 + 40.0 / m_per_deg,
+            "longitude": 2.08 + e / (m_per_deg * np.cos(np.radians(lat0))),
+            "flight_level": np.nan, "ground_speed_kt": 0.0, "position_item": "042",
+            "cov_ee_m2": 9.0, "cov_en_m2": 0.0, "cov_nn_m2": 9.0}))
+    est = estimate_noise(pd.concat(frames, ignore_index=True))
+    assert est.sensors["motion"].tolist() == ["stationary"]
+    assert est.aircraft["aircraft_id"].tolist() == ["JMP"]
+    assert est.aircraft["motion"].tolist() == ["stationary"]
+    assert est.aircraft["declared_sigma_m"].iloc[0] == 3.0
+    assert 0.9 < est.aircraft["estimated_sigma_m"].iloc[0] < 1.2
+
+
+def test_floored_raises_the_minor_axis_to_the_floor_and_leaves_the_rest():
+    from msdc.pipeline.track.noise import floored
+
+    rot = np.array([[np.cos(0.6), -np.sin(0.6)], [np.sin(0.6), np.cos(0.6)]])
+    tilted = rot @ np.diag([16.0, 0.01]) @ rot.T  # sigma 4 m and 0.1 m, tilted
+    cov = np.stack([tilted, np.diag([4.0, 2.0])])
+    out = floored(cov, np.array([1.0, 1.0]))
+    # an independent check by eigenvalues: the tilted one's minor axis now 1 m^2 and its major 16.99 m^2
+    np.testing.assert_allclose(np.linalg.eigvalsh(out[0]), [1.0, 16.99], rtol=1e-12)
+    np.testing.assert_array_equal(out[1], cov[1])  # both variances already above the floor
+
+
+MLAT_HOUR = REAL.parent / "mlat_160510-lebl-220001.ast"
+
+
+@pytest.mark.skipif(not MLAT_HOUR.exists(), reason=f"{MLAT_HOUR} not present: real-recording case skipped")
+def test_real_multilateration_tail_is_tracked_whole(tmp_path):
+    # The LEBL multilateration's last 31 minutes (23:30 on): five field monitors and two parked aircraft
+    # repeat their positions to the metre, with now and then a jump of metres; MLD898 (504E2E) lands and
+    # taxies. Pooled, the estimate fell to 0.06 m and the tracker gated 2,459 of the 13,030 reports (458
+    # of MLD898's 886, in 89 segments). With a stationary class (its gross-error cut no finer than the
+    # 1 m step's rounding) and the per-aircraft guard, no aircraft has more than the few per cent of gated
+    # reports a real tail leaves (the gate's nominal share is 0.1 %, the guard's 1 %).
+    sensors = tmp_path / "s.toml"
+    sensors.write_text('[[sensor]]\nname = "MLAT"\ncategory = 10\nkind = "mlat"\nsac = 0\nsic = 107\n'
+                       'latitude = 41.297074\nlongitude = 2.078480\naltitude_m = 53.0\n')
+    out = tmp_path / "t.json"
+    assert main(["track", str(MLAT_HOUR), "--sensors", str(sensors), "--date", "2016-05-10",
+                 "--sources", "mlat", "--from", "2016-05-10T23:30:00", "--all", "--json", str(out)]) == 0
+    doc = json.loads(out.read_text())
+    noise = {r["motion"]: r for r in doc["noise"]["sensors"]}
+    assert sorted(noise) == ["airborne", "stationary", "surface"]
+    assert noise["stationary"]["estimated_sigma"] >= 1.0 / np.sqrt(12.0)
+    for a in doc["aircraft"]:
+        assert a["gated"] < 0.05 * a["reports"], a["aircraft_id"]
+    landing = next(a for a in doc["aircraft"] if a["aircraft_id"] == "504E2E")
+    assert landing["segments"] <= 10
