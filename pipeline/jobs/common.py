@@ -905,12 +905,14 @@ def marked_measurements(options: AircraftOptions, checked: Checked, progress: Pr
     categories the job needs (load_measurements)."""
     from msdc.pipeline.model.dedup import repeated_aircraft
     from msdc.pipeline.model.marks import mark_once
+    from msdc.pipeline.model.mixed import mixed_warnings
 
     loaded, meas, warnings = _load_measurements(options, checked, progress, stage, either=either,
                                                 columns=columns, needs=needs)
     meas = mark_once(meas, split_adsb=split_adsb, flags=flags)
     release_free_memory()
-    return loaded, meas, warnings + repeated_aircraft(meas, meas["duplicate"].to_numpy(bool))
+    dup = meas["duplicate"].to_numpy(bool)
+    return loaded, meas, warnings + repeated_aircraft(meas, dup) + mixed_warnings(meas[~dup])
 
 
 def tracker_inputs(options: TrackOptions, checked: Checked, progress: Progress | None, times: str
@@ -940,13 +942,16 @@ def tracker_measurements(loaded, checked: Checked, options: TrackOptions) -> tup
     the warnings about them (stray radar records, coverage, identity)."""
     meas, warnings = source_measurements(loaded, checked, options)
     out = tracked_reports(meas, options.max_coast_s)
-    return out, warnings + out.attrs.get("repeated", []) + short_coast(out, options.max_coast_s)
+    return out, (warnings + out.attrs.get("repeated", []) + out.attrs.get("mixed", [])
+                 + short_coast(out, options.max_coast_s))
 
 
 def tracked_reports(meas: pd.DataFrame, max_coast_s: float) -> pd.DataFrame:
     """What the tracker takes of the measurements: reports joined by track number, repeats and reports no
-    identity places on an aircraft left out (counted in attrs)."""
+    identity places on an aircraft left out (counted in attrs, with the warnings about aircraft left out
+    whole, "repeated", and about two targets under one identity, "mixed")."""
     from msdc.pipeline.model.dedup import duplicate_mask, repeated_aircraft
+    from msdc.pipeline.model.mixed import mixed_warnings
     from msdc.pipeline.track.associate import join_by_track_number
 
     meas, joined = join_by_track_number(meas, max_gap_s=float(max_coast_s))
@@ -957,6 +962,7 @@ def tracked_reports(meas: pd.DataFrame, max_coast_s: float) -> pd.DataFrame:
     out.attrs["joined_by_track_number"] = joined
     out.attrs["unidentified"] = int((~dup & ~known).sum())
     out.attrs["repeated"] = repeated
+    out.attrs["mixed"] = mixed_warnings(out)
     return out
 
 

@@ -496,7 +496,7 @@ def _evaluate_window(options: EvaluateOptions, checked: EvaluateChecked, progres
     trackers = tracker_ids(loaded.frames.get(TRACKER_CATEGORY)) if wants_tracks else []
     tests, notes = _under_test(meas, checked.preset, checked.tests, trackers, unread_inputs(loaded))
     builders = tracked_reports(meas, options.max_coast_s)
-    warnings += builders.attrs.get("repeated", [])
+    warnings += builders.attrs.get("repeated", []) + builders.attrs.get("mixed", [])
     epoch = midnight(meas["time"])
     external = _external(options, epoch)
     flagged = field_monitors(meas, loaded.frames)

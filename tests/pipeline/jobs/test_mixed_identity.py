@@ -1,0 +1,44 @@
+"""Two aircraft under one address (one's reports re-encoded with the other's address and call sign): every
+kind of job says so (pipeline.model.mixed), naming the address and the sensor."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+
+import msdc.asterix as asterix
+from msdc.asterix.encode import encode_frame
+from msdc.pipeline.cli import main
+
+FIX = Path(__file__).resolve().parents[3] / "fixtures"
+SAID = "1 aircraft's reports switch back and forth between two places: 750312 on 021:0/1 ("
+
+
+@pytest.fixture(scope="module")
+def readdressed(tmp_path_factory) -> Path:
+    """The fixture's ADS-B with AXM123 (75008A, 08:05-09:00) sent as MAS72 (750312, 08:00-09:00)."""
+    frame = asterix.read(FIX / "adsb.ast").frames[21].copy()
+    axm = frame["address"] == "75008A"
+    frame.loc[axm, "address"], frame.loc[axm, "callsign"] = "750312", "MAS72"
+    path = tmp_path_factory.mktemp("mixed") / "adsb.ast"
+    path.write_bytes(encode_frame(21, frame))
+    return path
+
+
+def test_track_quality_and_evaluate_say_two_targets_share_an_address(readdressed, tmp_path, capsys):
+    assert main(["track", str(readdressed), "--all", "-o", str(tmp_path / "t.csv")]) == 0
+    assert SAID in capsys.readouterr().err
+    inputs = [str(FIX / "radar.ast"), str(readdressed), "--sensors", str(FIX / "sensors.toml")]
+    assert main(["quality", *inputs, "--all", "--json", str(tmp_path / "q.json")]) == 0
+    assert SAID in capsys.readouterr().err
+    assert main(["evaluate", *inputs, "--preset", "eurocontrol-1997-ssr",
+                 "--json", str(tmp_path / "e.json")]) == 0
+    assert SAID in capsys.readouterr().err
+    assert any(SAID in w for w in json.loads((tmp_path / "e.json").read_text())["parameters"]["warnings"])
+
+
+def test_the_unaltered_fixtures_say_nothing_of_it(tmp_path, capsys):
+    assert main(["track", str(FIX / "adsb.ast"), "--all", "-o", str(tmp_path / "t.csv")]) == 0
+    assert "switch back and forth" not in capsys.readouterr().err
