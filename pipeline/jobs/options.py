@@ -14,6 +14,7 @@ import argparse
 import dataclasses
 import datetime as dt
 import math
+import os
 import sys
 import typing
 from collections.abc import Callable, Iterator
@@ -273,10 +274,15 @@ def check_declared(options: object) -> None:
     the option. Unset (None) options are not checked."""
     for f, spec, kind in declared(type(options)):
         value = getattr(options, f.name)
-        if value is None:
+        if value is None or isinstance(value, dict):  # a dict: editions as {category: edition}
             continue
         items = value if isinstance(value, tuple | list) else (value,)
         for item in items:
+            if kind is bool and not isinstance(item, bool):  # "no" would read as true
+                raise OptionError(f"{spec.name} {item!r}: must be True or False, not {type(item).__name__}")
+            if kind is str and not isinstance(item, str | os.PathLike):
+                raise OptionError(f"{spec.name} {item!r}: expected text (a path, a name or a value), not "
+                                  f"{type(item).__name__}")
             if spec.range is not None and kind is int:
                 check_integer(spec.name, item, int(spec.range[0]), int(spec.range[1]))
             elif spec.range is not None:

@@ -121,6 +121,13 @@ def _digests(paths: list[Path]) -> list[str]:
     return digests
 
 
+def check_dataset(dataset: object) -> None:
+    """TypeError for a ``dataset`` argument that is not a dataset's inputs (read by its records and parts)."""
+    if not (hasattr(dataset, "records") and hasattr(dataset, "touched")):
+        raise TypeError(f"dataset {dataset!r:.40}: not a dataset's inputs ({type(dataset).__name__}); give "
+                        "pipeline.dataset.inputs.open_inputs(folder) of a folder msdc ingest wrote")
+
+
 def load(paths: list[str | Path] | str | Path, *, editions=None, date=None, format: str | None = None,
          categories=None, columns=None, progress: Progress | None = None, dataset=None) -> Loaded:
     """Decode every input into one frame per category, each row tagged with its file (``columns``: only
@@ -194,6 +201,7 @@ def _load_dataset(dataset, categories, columns, progress: Progress | None) -> Lo
     """``load`` of a dataset's inputs (pipeline.dataset.inputs.DatasetInputs): those with a part the run
     reads (an input of other days, sensors or categories is neither listed in the outputs nor dates the
     run; all of them when none has), in ingest order."""
+    check_dataset(dataset)
     read = [i for i in range(len(dataset.records)) if dataset.touched(i, categories)]
     read = read or list(range(len(dataset.records)))
     paths, recs, inputs = dataset.paths, [], []
@@ -306,6 +314,7 @@ def load_measurements(paths: list[str | Path], sensors: pd.DataFrame, *, edition
         digests = _digests(paths)
         labels = file_labels(paths)
     else:
+        check_dataset(dataset)
         paths, digests, labels = dataset.paths, dataset.digests, dataset.labels
     for i, p in enumerate(paths):
         if progress:

@@ -42,9 +42,9 @@ from msdc.pipeline.model.schema import (
     validate,
 )
 from msdc.pipeline.model.sensors import (
-    REQUIRED_COLUMNS,
     UnknownRadar,
     UnknownReferencePoint,
+    check_table,
     read_sensors,
     sensor_sites,
 )
@@ -418,13 +418,7 @@ def measurement_rows(cat048: pd.DataFrame | None = None, cat021: pd.DataFrame | 
     if cat048 is not None and len(cat048):
         if sensors is None:
             raise ValueError("radar measurements need the sensor table (radar sites)")
-        if not isinstance(sensors, pd.DataFrame):
-            raise TypeError(f"sensors: a {type(sensors).__name__}, not the sensor table; give "
-                            "read_sensors(path)'s DataFrame or the TOML file's path")
-        lacking = [c for c in REQUIRED_COLUMNS[1:] if c not in sensors]
-        if lacking:
-            raise ValueError(f"sensors: the table lacks {', '.join(lacking)} (read it with read_sensors)")
-        radar = conform(_radar_rows(cat048, sensors, date), keep)
+        radar = conform(_radar_rows(cat048, check_table(sensors), date), keep)
     if cat021 is not None and len(cat021):
         adsb = conform(_adsb_rows(cat021, date, adsb_sigma_m), keep)
     return (radar if radar is not None and len(radar) else None,
@@ -476,10 +470,7 @@ def local_measurement_rows(cat010: pd.DataFrame | None, cat020: pd.DataFrame | N
     date = parse_date(date)
     _check_frame(cat010, 10, "cat010")
     _check_frame(cat020, 20, "cat020")
-    if sensors is not None and not isinstance(sensors, pd.DataFrame):
-        raise TypeError(f"sensors: a {type(sensors).__name__}, not the sensor table; give "
-                        "read_sensors(path)'s DataFrame or the TOML file's path")
-    local = local_rows(cat010, cat020, sensors, date=date)
+    local = local_rows(cat010, cat020, None if sensors is None else check_table(sensors), date=date)
     keep = row_columns(columns)
     local.parts = [conform(p, keep) for p in local.parts if len(p)]
     return local

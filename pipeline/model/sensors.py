@@ -225,6 +225,32 @@ _DTYPES = {"name": "category", "sac": "int64", "sic": "int64"} | dict.fromkeys(R
     | dict.fromkeys(COVERAGE_COLUMNS, "float64")
 
 
+def check_table(sensors: object) -> pd.DataFrame:
+    """A sensor table given as a DataFrame (not through read_sensors) checked as a file's entries are:
+    TypeError for another type; ValueError naming the row for a missing column or a site (latitude,
+    longitude, altitude_m) that is not a finite number within its range."""
+    if not isinstance(sensors, pd.DataFrame):
+        raise TypeError(f"sensors: a {type(sensors).__name__}, not the sensor table; give "
+                        "read_sensors(path)'s DataFrame or the TOML file's path")
+    lacking = [c for c in REQUIRED_COLUMNS[1:] if c not in sensors]
+    if lacking:
+        raise ValueError(f"sensors: the table lacks {', '.join(lacking)} (read it with read_sensors)")
+    for column in ("latitude", "longitude", "altitude_m"):
+        values = pd.to_numeric(sensors[column], errors="coerce").to_numpy(float)
+        low, high = _RANGES[column]
+        with np.errstate(invalid="ignore"):
+            bad = np.flatnonzero(~(np.isfinite(values) & (values >= low) & (values <= high)))
+        if len(bad):
+            i = int(bad[0])
+            row = sensors.iloc[i]
+            name = f"{row['name']!r}, " if "name" in sensors else ""
+            raw = sensors[column].iloc[i]
+            raw = raw.item() if hasattr(raw, "item") else raw
+            raise ValueError(f"sensors: row {i} ({name}SAC {row['sac']} SIC {row['sic']}) {column} "
+                             f"{raw!r}: expected a number within {low:g}..{high:g}")
+    return sensors
+
+
 def _typed(frame: pd.DataFrame) -> pd.DataFrame:
     return frame.astype(_DTYPES)
 

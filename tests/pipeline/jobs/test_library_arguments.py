@@ -132,6 +132,19 @@ def test_the_job_options_take_what_read_takes(tmp_path):
         track.validate(TrackOptions(inputs=ADSB, callsign="MAS72", editions={21: "9.9"}))
 
 
+@pytest.mark.parametrize(("changed", "words"), [
+    ({"smooth": "no"}, "--smooth 'no': must be True or False, not str"),  # "no" was taken as true
+    ({"all_aircraft": 1, "callsign": None}, "--all 1: must be True or False, not int"),
+    # the next failed in os.fspath with a TypeError naming no option
+    ({"sensors": 5}, "--sensors 5: expected text (a path, a name or a value), not int"),
+    ({"address": 0x750312}, "--address 7668498: expected text"),
+])
+def test_job_options_of_the_wrong_type_are_named(changed, words):
+    options = TrackOptions(**{"inputs": ADSB, "callsign": "MAS72", **changed})
+    with pytest.raises(OptionError, match="^" + words.replace("(", r"\(").replace(")", r"\)")):
+        track.validate(options)
+
+
 def test_track_job_returns_the_table_without_an_output(adsb, tmp_path):
     """The guide's notebook use (docs/guide/python.md): track_job returns the table; only the command needs
     an output."""
@@ -251,6 +264,16 @@ def test_iter_read_chunk_is_checked(chunk, error):
         next(asterix.iter_read(ADSB, chunk=chunk))
 
 
+def test_a_dataset_argument_that_is_not_one_is_named():
+    """load(dataset=5) failed with AttributeError 'int' object has no attribute 'records'."""
+    from msdc.pipeline.model.load import load_measurements
+
+    with pytest.raises(TypeError, match=r"^dataset 5: not a dataset's inputs \(int\); give "):
+        load([ADSB], dataset=5)
+    with pytest.raises(TypeError, match=r"^dataset 'data': not a dataset's inputs \(str\)"):
+        load_measurements([ADSB], read_sensors(SENSORS), dataset="data")
+
+
 def test_the_sensor_table_or_its_path(radar):
     """A path is read with read_sensors; a dict is refused naming the argument (it failed on .duplicated)."""
     by_path = build_measurements(radar, None, SENSORS)
@@ -260,6 +283,15 @@ def test_the_sensor_table_or_its_path(radar):
         build_measurements(radar, None, {"sac": 25})
     with pytest.raises(ValueError, match="sensors: the table lacks latitude"):
         build_measurements(radar, None, pd.DataFrame({"sac": [25], "sic": [201]}))
+    # a site the file reader would refuse: it failed as the measurement schema's "latitude" column
+    table = read_sensors(SENSORS)
+    for column, value, want in (("latitude", float("nan"), "latitude nan"),
+                                ("longitude", 200.0, "longitude 200.0"),
+                                ("altitude_m", float("inf"), "altitude_m inf")):
+        bad = table.assign(**{column: value})
+        row = r"^sensors: row 0 \('KLIA MSSR', SAC 25 SIC 201\) "
+        with pytest.raises(ValueError, match=row + want + ": expected "):
+            build_measurements(radar, None, bad)
 
 
 @pytest.fixture(scope="module")
