@@ -76,5 +76,25 @@ def window_verdict(summary: Mapping[str, Any], reference: str = "ADS-B", tested:
         text += f"; {CAUSES if radar else OTHER_CAUSES}"
     jumps = _number(summary, "adsb_jumps")
     if reference == "ADS-B" and math.isfinite(jumps) and jumps > 0:
-        text += f"; {int(jumps)} ADS-B position jump{'s' if jumps != 1 else ''} left out"
+        text += f"; {int(jumps):,} ADS-B position jump{'s' if jumps != 1 else ''} left out"
     return text
+
+
+def mention_mixed(summaries: list[dict], mixed) -> int:
+    """Append to the verdict of each window whose aircraft (its address, else ``CS:`` call sign) is, on one
+    of the window's two sensors, in ``mixed`` (pipeline.model.mixed.mixed_identities: aircraft_id,
+    sensor_id) that two targets may share the identity there; in place. Returns how many were."""
+    pairs = set(zip(mixed["aircraft_id"].astype(str), mixed["sensor_id"].astype(str), strict=True))
+    if not pairs:
+        return 0
+    said = 0
+    for summary in summaries:
+        ident = summary.get("address") or (f"CS:{summary['callsign']}" if summary.get("callsign") else None)
+        sensors = [s for s in (summary.get("radar_sensor"), summary.get("reference_sensor"))
+                   if (str(ident), str(s)) in pairs]
+        if ident and sensors and summary.get("verdict"):
+            where = " and ".join(map(str, sensors))
+            summary["verdict"] += (f"; two targets may share this identity on {where} (its reports switch "
+                                   "between two places): these numbers mix both")
+            said += 1
+    return said

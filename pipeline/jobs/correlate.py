@@ -117,17 +117,18 @@ SLOTTING_FIGURE_INPUTS = ["time", "sensor_kind", "sensor_id", "aircraft_id", "ca
 
 def correlate_columns(options: CorrelateOptions) -> list[str]:
     """The measurement columns a correlate job builds, in schema order: what correlate, mark_once, the
-    filters asked for and far_separations read, with ``fill`` "predict" what the tracker reads, and with
-    ``quality`` what the quality step (``quality_columns``) and its slotting figures read. Half the bytes
-    of a row on a large recording."""
+    filters asked for, far_separations and the two-targets check (pipeline.model.mixed) read, with ``fill``
+    "predict" what the tracker reads, and with ``quality`` what the quality step (``quality_columns``) and
+    its slotting figures read. Half the bytes of a row on a large recording."""
     from msdc.pipeline.correlate.correlation import CORRELATION_INPUTS
     from msdc.pipeline.model.dedup import DEDUP_KEYS
     from msdc.pipeline.model.jumps import JUMP_INPUTS
+    from msdc.pipeline.model.mixed import MIXED_INPUTS
     from msdc.pipeline.model.schema import MEASUREMENT_COLUMNS, column_names
     from msdc.pipeline.model.site_check import FAR_SEPARATION_INPUTS
 
     need = {*CORRELATION_INPUTS, *DEDUP_KEYS, "sensor_kind", "sensor_id", *JUMP_INPUTS,
-            *FAR_SEPARATION_INPUTS}
+            *FAR_SEPARATION_INPUTS, *MIXED_INPUTS}
     if options.fill == "predict":
         from msdc.pipeline.track.tracker import FILTER_INPUTS
 
@@ -143,7 +144,9 @@ def correlate_job(options: CorrelateOptions, *, progress: Progress | None = None
                   checked: Checked | None = None, command: str = "correlate") -> CorrelateResult:
     """Validate, decode, build measurements, filter, correlate (and assess quality); nothing is written."""
     from msdc.pipeline.correlate.correlation import NoOverlap, TooManySlots, correlate
+    from msdc.pipeline.correlate.verdict import mention_mixed
     from msdc.pipeline.model.aircraft import NoSuchAircraft
+    from msdc.pipeline.model.mixed import mixed_identities
     from msdc.pipeline.model.site_check import far_separations
     from msdc.pipeline.quality.filters import apply_filters, filter_warnings
     from msdc.pipeline.quality.tables import workbook_sheets
@@ -175,6 +178,8 @@ def correlate_job(options: CorrelateOptions, *, progress: Progress | None = None
         except TooManySlots as exc:
             raise OptionError(f"--slot {options.slot_s:g}: the overlap windows would need more than "
                               f"{exc.limit:,} slots (at least {exc.slots:,}); use a longer --slot") from exc
+        mention_mixed([w.summary for w in run.windows],
+                      mixed_identities(meas_all[~meas_all["duplicate"].to_numpy(bool)]))
         run.inputs = loaded.inputs
         run.filters = filters_removed(options, removed)
         warnings += filter_warnings(removed, options.min_nic, options.min_nacp)

@@ -69,12 +69,14 @@ class QualityJobResult:
 
 def quality_columns(options: QualityOptions) -> list[str]:
     """The measurement columns a quality job builds, in schema order: what the quality tables, the radar
-    errors against the reference (with ``reference="track"`` the tracker's inputs), mark_once and the
-    aircraft selection read. Two thirds of the bytes of a row with the ADS-B reference."""
+    errors against the reference (with ``reference="track"`` the tracker's inputs), mark_once, the aircraft
+    selection and the two-targets check (pipeline.model.mixed) read. Two thirds of the bytes of a row with
+    the ADS-B reference."""
+    from msdc.pipeline.model.mixed import MIXED_INPUTS
     from msdc.pipeline.model.schema import MEASUREMENT_COLUMNS, column_names
     from msdc.pipeline.model.site_check import SITE_CHECK_INPUTS
 
-    need = set(quality_inputs(options.reference)) | set(SITE_CHECK_INPUTS)
+    need = set(quality_inputs(options.reference)) | set(SITE_CHECK_INPUTS) | set(MIXED_INPUTS)
     return column_names(need & set(MEASUREMENT_COLUMNS))  # the job-wide flags are added by mark_once
 
 

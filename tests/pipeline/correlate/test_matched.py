@@ -296,3 +296,22 @@ def test_window_accuracy_takes_the_radar_errors_of_its_radar_aircraft_and_time()
                               address=["750312"] * 4 + ["76CDA3", "750312"])
     (got,) = window_accuracy([{**window, "callsign": ""}], anonymous)
     assert got["quality_reports"] == 3
+
+
+def test_a_window_of_an_aircraft_with_two_targets_says_so():
+    import pandas as pd
+
+    from msdc.pipeline.correlate.verdict import mention_mixed
+
+    mixed = pd.DataFrame({"aircraft_id": ["750312", "CS:ABC"], "sensor_id": ["021:0/1", "048:25/201"]})
+    windows = [{"address": "750312", "callsign": "MAS72", "radar_sensor": "048:25/201",
+                "reference_sensor": "021:0/1", "verdict": "no systematic offset beyond the noise"},
+               {"address": None, "callsign": "ABC", "radar_sensor": "048:25/201",
+                "reference_sensor": "021:0/1", "verdict": "v"},
+               {"address": "750312", "callsign": "MAS72", "radar_sensor": "048:25/202",
+                "reference_sensor": "021:0/2", "verdict": "v"}]
+    assert mention_mixed(windows, mixed) == 2
+    assert windows[0]["verdict"] == ("no systematic offset beyond the noise; two targets may share this "
+                                     "identity on 021:0/1 (its reports switch between two places): these "
+                                     "numbers mix both")
+    assert "on 048:25/201 (" in windows[1]["verdict"] and windows[2]["verdict"] == "v"

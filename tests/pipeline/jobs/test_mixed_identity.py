@@ -39,6 +39,16 @@ def test_track_quality_and_evaluate_say_two_targets_share_an_address(readdressed
     assert any(SAID in w for w in json.loads((tmp_path / "e.json").read_text())["parameters"]["warnings"])
 
 
+def test_correlate_says_it_in_that_aircrafts_window_verdicts_alone(readdressed, tmp_path, capsys):
+    out = tmp_path / "c.json"
+    assert main(["correlate", str(FIX / "radar.ast"), str(readdressed), "--sensors",
+                 str(FIX / "sensors.toml"), "--all", "--json", str(out)]) == 0
+    assert SAID in capsys.readouterr().err
+    windows = json.loads(out.read_text())["windows"]
+    said = {w["address"] for w in windows if "two targets may share this identity on 021:0/1" in w["verdict"]}
+    assert said == {"750312"} and len({w["address"] for w in windows}) > 1
+
+
 def test_the_unaltered_fixtures_say_nothing_of_it(tmp_path, capsys):
     assert main(["track", str(FIX / "adsb.ast"), "--all", "-o", str(tmp_path / "t.csv")]) == 0
     assert "switch back and forth" not in capsys.readouterr().err
