@@ -13,8 +13,8 @@ real data (a smaller sigma gates more of the tail, which gives a smaller sigma).
 SURFACE_SPEED_KT: the reported one, else the first pass's smoothed speed) and airborne are separate
 classes: pooled, the many near-stationary surface reports pulled the sigma far below the airborne scatter.
 Multilateration and surface radar reports have a third class, stationary (below STATIONARY_SPEED_KT): such a
-system repeats a parked transponder's position to the last bit, and those zero residuals pooled with the
-moving ones put the sigma under a metre and gated the taxiing aircraft. No sigma is estimated below the
+system repeats a parked transponder's position to the last bit, and those near-zero residuals pooled with
+the moving ones put the sigma under a metre and gated the taxiing aircraft. No sigma is estimated below the
 rounding of the item a position was written in (pipeline.model.resolution: step / sqrt(12) per axis).
 An ADS-B class fast enough gets R = sigma^2 I + sigma_t^2 v v^T, v the report's ground vector: time-stamp
 errors move the reported position along the motion by v times the error, so the along-track scatter grows
@@ -43,7 +43,7 @@ from .plane import estimate, filter_plane
 # along-track error grows with speed (time-stamp jitter), so one pooled sigma gated good airborne reports.
 SURFACE_SPEED_KT = 50.0
 # Multilateration and surface radar reports slower than this are a class of their own (motion "stationary"):
-# on the real LEBL hour 65 % of the multilateration reports give a ground speed of exactly 0 (four field
+# on the real LEBL hour 65 % of the multilateration reports give a ground speed of exactly 0 (five field
 # monitors and parked aircraft, positions repeated to the metre), while its taxiing aircraft give 5-30 kt.
 STATIONARY_SPEED_KT = 1.0
 LOCAL_KINDS = ("mlat", "smr")  # the sensor kinds with a stationary class
@@ -608,7 +608,7 @@ def estimate_noise(measurements: pd.DataFrame, *, sites: dict[str, tuple[float, 
     velocity = ground_velocity(meas)
     vv = np.einsum("ni,nj->nij", velocity, velocity)
     codes = keys = None
-    cov = cov0
+    cov = floored(cov0, floor_m2)
     aircraft = _aircraft(meas, cov0, radial, velocity)
     ident = pd.factorize(meas["aircraft_id"].astype(str), sort=True)[0]
     raised = np.ones(len(meas))  # per row: an aircraft's sigma factor over its ADS-B class's (>= 1)
