@@ -145,6 +145,15 @@ def test_job_options_of_the_wrong_type_are_named(changed, words):
         track.validate(options)
 
 
+def test_a_time_window_as_datetimes_is_still_taken():
+    """The text check is for numbers given where text belongs: --from/--to also take datetimes."""
+    window = dict(from_time=dt.datetime(2019, 3, 1, 8, 10, tzinfo=dt.UTC),
+                  to_time=pd.Timestamp("2019-03-01T08:20Z"))
+    checked = track.validate(TrackOptions(inputs=ADSB, callsign="MAS72", date="2019-03-01", **window))
+    assert checked.selection.start.instant == pd.Timestamp("2019-03-01T08:10Z")
+    assert checked.selection.end.instant == pd.Timestamp("2019-03-01T08:20Z")
+
+
 def test_track_job_returns_the_table_without_an_output(adsb, tmp_path):
     """The guide's notebook use (docs/guide/python.md): track_job returns the table; only the command needs
     an output."""
