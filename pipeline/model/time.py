@@ -141,12 +141,14 @@ class DayTally:
     before: int = 0
     earliest_tod_s: float = np.inf
     after: int = 0
-    # the time line: every JUMP_SAMPLE-th report's byte offset and time (s from day 0), chunk by chunk
+    # each category's time line: every JUMP_SAMPLE-th report's byte offset and time (s from day 0), chunk
+    # by chunk (a category apiece: one file may hold one recording's categories one after the other)
+    sample_categories: list[np.ndarray] = field(default_factory=list)
     sample_offsets: list[np.ndarray] = field(default_factory=list)
     sample_times_s: list[np.ndarray] = field(default_factory=list)
 
     def add(self, frames: dict) -> None:
-        for frame in frames.values():
+        for category, frame in frames.items():
             if not len(frame) or "day" not in frame:
                 continue
             day = np.asarray(frame["day"])
@@ -159,25 +161,33 @@ class DayTally:
             if "offset" in frame:
                 times = day[::JUMP_SAMPLE] * 86400.0 + tod[::JUMP_SAMPLE]
                 keep = np.isfinite(times)
+                self.sample_categories.append(np.full(int(keep.sum()), int(category)))
                 self.sample_offsets.append(np.asarray(frame["offset"])[::JUMP_SAMPLE][keep].astype(np.int64))
                 self.sample_times_s.append(times[keep])
 
     def jumps(self) -> pd.DataFrame:
-        """Steps of the time line in file order (chunks may come in any order: ingest's workers) over
-        JUMP_FORWARD_S, or back over JUMP_BACK_S: the byte offset of the first kept report after the step,
-        the smoothed times (s from day 0) before and after it, and the step."""
+        """Steps of each category's time line in file order (chunks may come in any order: ingest's
+        workers) over JUMP_FORWARD_S, or back over JUMP_BACK_S, in file order: the category, the byte offset
+        of the first kept report after the step, the smoothed times (s from day 0) before and after it, and
+        the step. Per category: a file of one hour's CAT048 then the same hour's CAT021 has no jump."""
+        columns = ["category", "offset", "from_s", "to_s", "step_s"]
         if not self.sample_offsets:
-            return pd.DataFrame(columns=["offset", "from_s", "to_s", "step_s"])
+            return pd.DataFrame(columns=columns)
+        categories = np.concatenate(self.sample_categories)
         offsets, times = np.concatenate(self.sample_offsets), np.concatenate(self.sample_times_s)
-        order = np.argsort(offsets, kind="stable")
-        offsets, times = offsets[order], times[order]
-        if len(times) >= JUMP_SMOOTH:
-            padded = np.pad(times, JUMP_SMOOTH // 2, mode="reflect")  # a damaged first one stays alone
-            times = np.median(np.lib.stride_tricks.sliding_window_view(padded, JUMP_SMOOTH), axis=1)
-        step = np.diff(times)
-        at = np.flatnonzero((step > JUMP_FORWARD_S) | (step < -JUMP_BACK_S))
-        return pd.DataFrame({"offset": offsets[at + 1], "from_s": times[at], "to_s": times[at + 1],
-                             "step_s": step[at]})
+        parts = []
+        for category in np.unique(categories):
+            own = categories == category
+            order = np.argsort(offsets[own], kind="stable")
+            at_offset, line = offsets[own][order], times[own][order]
+            if len(line) >= JUMP_SMOOTH:
+                padded = np.pad(line, JUMP_SMOOTH // 2, mode="reflect")  # a damaged first one stays alone
+                line = np.median(np.lib.stride_tricks.sliding_window_view(padded, JUMP_SMOOTH), axis=1)
+            step = np.diff(line)
+            at = np.flatnonzero((step > JUMP_FORWARD_S) | (step < -JUMP_BACK_S))
+            parts.append(pd.DataFrame({"category": int(category), "offset": at_offset[at + 1],
+                                       "from_s": line[at], "to_s": line[at + 1], "step_s": step[at]}))
+        return pd.concat(parts, ignore_index=True).sort_values("offset", kind="stable").reset_index(drop=True)
 
     def jump_warnings(self, name: str, fmt: str | None) -> list[str]:
         """Per step of a raw stream's (or ORADIS file's) time line (jumps): where, and the other reading
@@ -185,8 +195,8 @@ class DayTally:
         if fmt not in ("raw", "oradis"):
             return []
         found = self.jumps()
-        out = [f"{name}: the time of day jumps from about {_hm(r.from_s)} to about {_hm(r.to_s)} near byte "
-               f"{r.offset}: "
+        out = [f"{name}: the time of day of its CAT{r.category:03d} reports jumps from about {_hm(r.from_s)} "
+               f"to about {_hm(r.to_s)} near byte {r.offset}: "
                f"{_jump_words(r.step_s, fmt)}" for r in found.head(JUMPS_LISTED).itertuples()]
         if len(found) > JUMPS_LISTED:
             out.append(f"{name}: and {len(found) - JUMPS_LISTED} more such jump(s) of its time of day")

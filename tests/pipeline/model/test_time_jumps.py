@@ -44,7 +44,8 @@ def test_a_silence_of_ten_hours_is_said(tmp_path, capsys, job):
     320's 06:01:20 (108,080 s), 9.74 h later."""
     tods = np.r_[72000.0 + 4 * np.arange(300), 21600.0 + 4 * np.arange(300)]
     err = _run(job, _raw(tmp_path / "r.ast", tods), tmp_path, capsys)
-    assert "r.ast: the time of day jumps from about 20:17 to about 06:01 near byte" in err
+    assert ("r.ast: the time of day of its CAT048 reports jumps from about 20:17 to about 06:01 near byte"
+            in err)
     assert "read as about 9.7 h later (a silence)" in err and "or the silence been about 33.7 h" in err
 
 
@@ -89,3 +90,21 @@ def test_chunks_in_any_order_find_the_same_jump():
         parts.add({48: frame.iloc[lo:lo + 128]})
     assert whole.jumps()["offset"].tolist() == parts.jumps()["offset"].tolist() == [640 * 12]  # 10th kept
     assert whole.jump_warnings("x", "pcap") == []  # a container's capture times date its reports
+
+
+def test_each_categorys_time_line_is_its_own(tmp_path, capsys):
+    """One hour's CAT048 plots (10:00:00-10:19:56), then the same hour's CAT021 reports: the file's times go
+    back 20 min where the CAT021 reports begin, yet neither category's own line jumps (a recording written
+    a category after the other). Then a second CAT048 part from 09:00:00 after the first: CAT048's line
+    goes back 0.98 h (as in test_parts_laid_out_of_order_are_said) and is said, naming the category."""
+    tods = 36000.0 + 4 * np.arange(300)
+    adsb = pd.DataFrame({"sac": 0, "sic": 1, "time_of_day": tods, "latitude": 2.7, "longitude": 101.7,
+                         "address": "750312", "callsign": "MAS72", "flight_level": 300.0})
+    path = tmp_path / "r.ast"
+    path.write_bytes(open(_raw(tmp_path / "a.ast", tods), "rb").read() + encode_frame(21, adsb))
+    assert "jumps" not in _run(["stats"], str(path), tmp_path, capsys)
+    both = np.r_[tods, 32400.0 + 4 * np.arange(300)]
+    path.write_bytes(open(_raw(tmp_path / "a.ast", both), "rb").read() + encode_frame(21, adsb))
+    err = _run(["stats"], str(path), tmp_path, capsys)
+    assert "r.ast: the time of day of its CAT048 reports jumps from about 10:08 to about 09:09" in err
+    assert "CAT021 reports jumps" not in err
