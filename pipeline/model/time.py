@@ -187,6 +187,8 @@ class DayTally:
             at = np.flatnonzero((step > JUMP_FORWARD_S) | (step < -JUMP_BACK_S))
             parts.append(pd.DataFrame({"category": int(category), "offset": at_offset[at + 1],
                                        "from_s": line[at], "to_s": line[at + 1], "step_s": step[at]}))
+        if not parts:  # chunks whose sampled reports had no time
+            return pd.DataFrame(columns=columns)
         return pd.concat(parts, ignore_index=True).sort_values("offset", kind="stable").reset_index(drop=True)
 
     def jump_warnings(self, name: str, fmt: str | None) -> list[str]:

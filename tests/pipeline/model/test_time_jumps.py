@@ -108,3 +108,13 @@ def test_each_categorys_time_line_is_its_own(tmp_path, capsys):
     err = _run(["stats"], str(path), tmp_path, capsys)
     assert "r.ast: the time of day of its CAT048 reports jumps from about 10:08 to about 09:09" in err
     assert "CAT021 reports jumps" not in err
+
+
+def test_a_chunk_without_a_time_has_no_jump():
+    """Reports whose times were all unreadable leave empty samples: no jump, not a failed concatenation."""
+    from msdc.pipeline.model.time import DayTally
+
+    tally = DayTally()
+    tally.add({48: pd.DataFrame({"day": np.zeros(3, int), "time_of_day": np.full(3, np.nan),
+                                 "offset": [0, 12, 24]})})
+    assert tally.jumps().empty and tally.jump_warnings("x", "raw") == []
