@@ -221,16 +221,17 @@ def concat_columns(parts: list[pd.DataFrame]) -> pd.DataFrame:
     differing categories into objects)."""
     if len(parts) == 1:
         return parts[0].reset_index(drop=True)
+    held = [dict(p.items()) for p in parts]
+    for p in parts:  # emptied at once (a column deleted at a time cost 0.3 ms each, most of a join)
+        p.drop(columns=p.columns, inplace=True)
     out = {}
-    for name in list(parts[0].columns):
-        columns = [p[name] for p in parts]
+    for name in list(held[0]):
+        columns = [h.pop(name) for h in held]  # each part's column now held only here
         if isinstance(columns[0].dtype, pd.CategoricalDtype):
             out[name] = pd.Series(union_categoricals(columns, sort_categories=True))
         else:
             out[name] = pd.concat(columns, ignore_index=True)
         del columns
-        for p in parts:
-            del p[name]
     return pd.DataFrame(out, copy=False)
 
 
