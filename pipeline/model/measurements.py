@@ -505,8 +505,9 @@ def unplaced_verdict(unplaced: pd.DataFrame, reports: dict[int, int]) -> list[st
 
 
 def finish_measurements(parts: list[pd.DataFrame], columns=None) -> pd.DataFrame:
-    """Parts from ``measurement_rows`` joined in order (column by column, see schema.concat_columns), with
-    the identity rule applied over all of them and each row's error-ellipse major axis; validated.
+    """Parts from ``measurement_rows`` joined in order (column by column, the list emptied: see
+    schema.concat_columns), with the identity rule applied over all of them and each row's error-ellipse
+    major axis; validated.
     ``columns`` (as given to ``measurement_rows``): only those columns, in schema order."""
     if not parts:
         return empty_measurements(columns)
@@ -573,6 +574,7 @@ def build_measurements(cat048: pd.DataFrame | None = None, cat021: pd.DataFrame 
         for text in said:
             warnings.warn(text, LeftOutWarning, stacklevel=2)
         parts += local.parts
+        local.parts.clear()  # the join frees each part's columns as it goes: held nowhere else
     if cut is not None:
         parts = [cut.keep(p) for p in parts]
         release_free_memory()  # the rows beyond the margin (most of a short window's read) go back at once

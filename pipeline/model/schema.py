@@ -215,18 +215,17 @@ def conform(frame: pd.DataFrame, columns=None) -> pd.DataFrame:
 
 
 def concat_columns(parts: list[pd.DataFrame]) -> pd.DataFrame:
-    """Frames with the same columns end to end (index reset), built column by column and emptying the
-    parts as it goes (each part loses a column once it is copied), so the join never holds the parts and
-    the result whole at once. Categorical text keeps one sorted set of categories (pd.concat would turn
-    differing categories into objects)."""
+    """Frames with the same columns end to end (index reset), built column by column: the list is emptied
+    first (pass frames held nowhere else), each part's column then held only here and freed once joined,
+    so the join never holds the parts and the result whole at once. Categorical text keeps one sorted set of
+    categories (pd.concat would turn differing categories into objects)."""
     if len(parts) == 1:
         return parts[0].reset_index(drop=True)
     held = [dict(p.items()) for p in parts]
-    for p in parts:  # emptied at once (a column deleted at a time cost 0.3 ms each, most of a join)
-        p.drop(columns=p.columns, inplace=True)
+    parts.clear()  # not a column deleted at a time from each frame: 0.3 ms each, most of a small join
     out = {}
     for name in list(held[0]):
-        columns = [h.pop(name) for h in held]  # each part's column now held only here
+        columns = [h.pop(name) for h in held]
         if isinstance(columns[0].dtype, pd.CategoricalDtype):
             out[name] = pd.Series(union_categoricals(columns, sort_categories=True))
         else:
