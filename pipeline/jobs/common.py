@@ -899,20 +899,23 @@ def marked_measurements(options: AircraftOptions, checked: Checked, progress: Pr
                         *, split_adsb: bool = False, either: bool = False, columns=None,
                         flags: list[str] | None = None, needs=None) -> tuple[Loaded, pd.DataFrame, list[str]]:
     """The inputs and their measurements with the duplicate and jump flags (once per job; correlate counts
-    each window's jumps), and the warnings about them; decoded columns are held one chunk at a time (see
-    _load_measurements). ``stage`` is the progress stage shown once the inputs are read; ``columns`` and
-    ``flags``: only those measurement columns and jump columns (every one when None); ``needs``: the
-    categories the job needs (load_measurements)."""
+    each window's jumps; ``attrs["mixed_pairs"]``: the aircraft and sensors whose reports switch between
+    two places, pipeline.model.mixed), and the warnings about them; decoded columns are held one chunk at a
+    time (see _load_measurements). ``stage`` is the progress stage shown once the inputs are read;
+    ``columns`` and ``flags``: only those measurement columns and jump columns (every one when None);
+    ``needs``: the categories the job needs (load_measurements)."""
     from msdc.pipeline.model.dedup import repeated_aircraft
     from msdc.pipeline.model.marks import mark_once
-    from msdc.pipeline.model.mixed import mixed_warnings
+    from msdc.pipeline.model.mixed import mixed_identities, mixed_pairs, mixed_text
 
     loaded, meas, warnings = _load_measurements(options, checked, progress, stage, either=either,
                                                 columns=columns, needs=needs)
     meas = mark_once(meas, split_adsb=split_adsb, flags=flags)
     release_free_memory()
     dup = meas["duplicate"].to_numpy(bool)
-    return loaded, meas, warnings + repeated_aircraft(meas, dup) + mixed_warnings(meas[~dup])
+    found = mixed_identities(meas[~dup])
+    meas.attrs["mixed_pairs"] = mixed_pairs(found)  # correlate's window verdicts say them too
+    return loaded, meas, warnings + repeated_aircraft(meas, dup) + mixed_text(found)
 
 
 def tracker_inputs(options: TrackOptions, checked: Checked, progress: Progress | None, times: str

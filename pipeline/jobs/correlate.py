@@ -146,7 +146,6 @@ def correlate_job(options: CorrelateOptions, *, progress: Progress | None = None
     from msdc.pipeline.correlate.correlation import NoOverlap, TooManySlots, correlate
     from msdc.pipeline.correlate.verdict import mention_mixed
     from msdc.pipeline.model.aircraft import NoSuchAircraft
-    from msdc.pipeline.model.mixed import mixed_identities
     from msdc.pipeline.model.site_check import far_separations
     from msdc.pipeline.quality.filters import apply_filters, filter_warnings
     from msdc.pipeline.quality.tables import workbook_sheets
@@ -178,8 +177,7 @@ def correlate_job(options: CorrelateOptions, *, progress: Progress | None = None
         except TooManySlots as exc:
             raise OptionError(f"--slot {options.slot_s:g}: the overlap windows would need more than "
                               f"{exc.limit:,} slots (at least {exc.slots:,}); use a longer --slot") from exc
-        mention_mixed([w.summary for w in run.windows],
-                      mixed_identities(meas_all[~meas_all["duplicate"].to_numpy(bool)]))
+        mention_mixed([w.summary for w in run.windows], meas_all.attrs.get("mixed_pairs", ()))
         run.inputs = loaded.inputs
         run.filters = filters_removed(options, removed)
         warnings += filter_warnings(removed, options.min_nic, options.min_nacp)

@@ -101,7 +101,17 @@ def short_distance_m(lat1_deg, lon1_deg, lat2_deg, lon2_deg) -> np.ndarray:
 def mixed_warnings(meas: pd.DataFrame, limit: int = 5) -> list[str]:
     """One warning naming the aircraft and sensors whose reports switch between two places (at most
     ``limit`` named): their figures mix two targets."""
-    found = mixed_identities(meas)
+    return mixed_text(mixed_identities(meas), limit)
+
+
+def mixed_pairs(found: pd.DataFrame) -> tuple[tuple[str, str], ...]:
+    """The (aircraft_id, sensor_id) of a mixed_identities table, as text: what a frame's attrs can carry
+    (a table there would break pandas' attrs comparison in concat)."""
+    return tuple(zip(found["aircraft_id"].astype(str), found["sensor_id"].astype(str), strict=True))
+
+
+def mixed_text(found: pd.DataFrame, limit: int = 5) -> list[str]:
+    """mixed_warnings of a mixed_identities table already made."""
     if found.empty:
         return []
     named = "; ".join(f"{r.aircraft_id} on {r.sensor_id} ({r.switches:,} of {r.judged:,} reports, "

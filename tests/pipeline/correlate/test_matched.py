@@ -315,3 +315,7 @@ def test_a_window_of_an_aircraft_with_two_targets_says_so():
                                      "identity on 021:0/1 (its reports switch between two places): these "
                                      "numbers mix both")
     assert "on 048:25/201 (" in windows[1]["verdict"] and windows[2]["verdict"] == "v"
+    # the pairs a job's measurements carry (attrs["mixed_pairs"]) say the same
+    again = [{**w, "verdict": "v"} for w in windows]
+    assert mention_mixed(again, (("750312", "021:0/1"), ("CS:ABC", "048:25/201"))) == 2
+    assert [w["verdict"] == "v" for w in again] == [False, False, True]
