@@ -952,9 +952,10 @@ def tracker_measurements(loaded, checked: Checked, options: TrackOptions) -> tup
 def tracked_reports(meas: pd.DataFrame, max_coast_s: float) -> pd.DataFrame:
     """What the tracker takes of the measurements: reports joined by track number, repeats and reports no
     identity places on an aircraft left out (counted in attrs, with the warnings about aircraft left out
-    whole, "repeated", and about two targets under one identity, "mixed")."""
+    whole, "repeated", and about two targets under one identity, "mixed", whose aircraft and sensors are
+    "mixed_pairs")."""
     from msdc.pipeline.model.dedup import duplicate_mask, repeated_aircraft
-    from msdc.pipeline.model.mixed import mixed_warnings
+    from msdc.pipeline.model.mixed import mixed_identities, mixed_pairs, mixed_text
     from msdc.pipeline.track.associate import join_by_track_number
 
     meas, joined = join_by_track_number(meas, max_gap_s=float(max_coast_s))
@@ -965,7 +966,9 @@ def tracked_reports(meas: pd.DataFrame, max_coast_s: float) -> pd.DataFrame:
     out.attrs["joined_by_track_number"] = joined
     out.attrs["unidentified"] = int((~dup & ~known).sum())
     out.attrs["repeated"] = repeated
-    out.attrs["mixed"] = mixed_warnings(out)
+    found = mixed_identities(out)
+    out.attrs["mixed"] = mixed_text(found)
+    out.attrs["mixed_pairs"] = mixed_pairs(found)
     return out
 
 

@@ -399,6 +399,7 @@ class WindowRun:
     external: bool
     windows: list[dict] = field(default_factory=list)  # a span's windows: bounds and reports kept
     site_faults: dict[str, str] = field(default_factory=dict)  # radars whose site is wrong: the warning
+    mixed: frozenset = frozenset()  # (aircraft_id, sensor_id) whose reports switch between two places
 
 
 def evaluate_job(options: EvaluateOptions, *, progress: Progress | None = None,
@@ -414,6 +415,8 @@ def evaluate_job(options: EvaluateOptions, *, progress: Progress | None = None,
             run, per_window = _evaluate_span(options, checked, progress, warnings)
         _no_verdict_on_a_wrong_site(run)
         card, tables, points = _assemble(run.results)
+        if "Per aircraft" in tables:
+            tables["Per aircraft"] = mark_two_targets(tables["Per aircraft"], run.mixed)
         tables = {**per_window, **tables}
         params = _parameters(options, checked, run, started, command)
         if run.windows:
@@ -421,6 +424,22 @@ def evaluate_job(options: EvaluateOptions, *, progress: Progress | None = None,
         params["warnings"] = list(dict.fromkeys(warnings))  # the outputs keep what the terminal said
         return EvaluateResult(options, checked, card, tables, points, run.results, params, run.loaded,
                               warnings)
+
+
+def mark_two_targets(per_aircraft: pd.DataFrame, mixed) -> pd.DataFrame:
+    """The per-aircraft table with ``two_targets_on``: the sensors (of the one under test and those that
+    built its reference) whose reports of that aircraft switch between two places (``mixed``: pairs of
+    aircraft_id and sensor_id, pipeline.model.mixed), joined by " | "; empty where none do. Such a row's
+    figures mix two targets."""
+    by_aircraft: dict[str, set[str]] = {}
+    for aircraft, sensor in mixed:
+        by_aircraft.setdefault(str(aircraft), set()).add(str(sensor))
+    marks = []
+    columns = (per_aircraft[c].astype(str) for c in ("aircraft", "sensor", "built_by"))
+    for aircraft, sensor, built_by in zip(*columns, strict=True):
+        involved = {sensor, *built_by.split(" | ")}
+        marks.append(" | ".join(sorted(by_aircraft.get(aircraft, set()) & involved)))
+    return per_aircraft.assign(two_targets_on=pd.Series(marks, index=per_aircraft.index, dtype="str"))
 
 
 def _no_verdict_on_a_wrong_site(run: WindowRun) -> None:
@@ -521,7 +540,8 @@ def _evaluate_window(options: EvaluateOptions, checked: EvaluateChecked, progres
                                external, monitors, cache))
         release_free_memory()  # a reference's transient copies, handed back before the next sensor's
     loaded.drop_frames()
-    return WindowRun(results, notes, loaded, external is not None, site_faults=faults)
+    return WindowRun(results, notes, loaded, external is not None, site_faults=faults,
+                     mixed=frozenset(builders.attrs.get("mixed_pairs", ())))
 
 
 PER_WINDOW = "Scorecard per window"
@@ -555,6 +575,7 @@ def _span(options: EvaluateOptions, checked: EvaluateChecked, progress: Progress
     spans: dict[str, SensorSpan] = {}
     runs: list[tuple[tuple[str, str], list[str]]] = []  # each window's label and run notes
     faults: dict[str, str] = {}  # the radars any window found with a wrong site: the warning
+    mixed: frozenset = frozenset()  # what any window found with two targets under one identity
     reads: list[Loaded] = []  # the first window's, then each one's inputs and selection alone
     rows, refused, external = [], [], False
     points = max(1, MAP_POINTS_PER_SENSOR // len(windows))  # the span's map keeps about as many points
@@ -573,6 +594,7 @@ def _span(options: EvaluateOptions, checked: EvaluateChecked, progress: Progress
                      for row in _no_verdict(r.rows, run.site_faults.get(r.sensor))]
         runs.append((label, run.notes))
         faults.update(run.site_faults)
+        mixed |= run.mixed
         reads.append(run.loaded if not reads else Loaded({}, [], run.loaded.inputs, run.loaded.date,
                                                          selection=run.loaded.selection))
         external = run.external
@@ -595,7 +617,7 @@ def _span(options: EvaluateOptions, checked: EvaluateChecked, progress: Progress
         notes.append(f"{len(noted)} notes differ between windows: in the table {NOTES_PER_WINDOW!r}")
     kept = [{"from": a, "to": b, "kept": (loaded.selection or {}).get("kept")}
             for ((a, b), _), loaded in zip(runs, reads, strict=True)]
-    return WindowRun(results, notes, _pooled_loaded(checked, reads), external, kept, faults), tables
+    return WindowRun(results, notes, _pooled_loaded(checked, reads), external, kept, faults, mixed), tables
 
 
 def _window_runs(options: EvaluateOptions, checked: EvaluateChecked, windows: list, map_points: int,

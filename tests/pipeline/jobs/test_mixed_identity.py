@@ -36,7 +36,26 @@ def test_track_quality_and_evaluate_say_two_targets_share_an_address(readdressed
     assert main(["evaluate", *inputs, "--preset", "eurocontrol-1997-ssr",
                  "--json", str(tmp_path / "e.json")]) == 0
     assert SAID in capsys.readouterr().err
-    assert any(SAID in w for w in json.loads((tmp_path / "e.json").read_text())["parameters"]["warnings"])
+    doc = json.loads((tmp_path / "e.json").read_text())
+    assert any(SAID in w for w in doc["parameters"]["warnings"])
+    _two_targets_marked(doc)
+
+
+def _two_targets_marked(doc: dict) -> None:
+    """The radar's per-aircraft rows: 750312's reference was built with the ADS-B that holds both targets
+    (marked so), every other aircraft's row unmarked."""
+    rows = {r["aircraft"]: r for r in doc["tables"]["Per aircraft"] if r["sensor"] == "048:25/201"}
+    assert "021:0/1" in rows["750312"]["built_by"] and rows["750312"]["two_targets_on"] == "021:0/1"
+    assert len(rows) > 1 and all(r["two_targets_on"] == "" for a, r in rows.items() if a != "750312")
+
+
+def test_a_windowed_evaluation_marks_the_aircraft_too(readdressed, tmp_path, capsys):
+    """--window: the windows' findings pooled with the span's per-aircraft table."""
+    span = ["--date", "2019-03-01", "--from", "08:00", "--to", "09:00", "--window", "30"]
+    assert main(["evaluate", str(FIX / "radar.ast"), str(readdressed), "--sensors", str(FIX / "sensors.toml"),
+                 "--preset", "eurocontrol-1997-ssr", *span, "--json", str(tmp_path / "e.json")]) == 0
+    assert SAID in capsys.readouterr().err
+    _two_targets_marked(json.loads((tmp_path / "e.json").read_text()))
 
 
 def test_correlate_says_it_in_that_aircrafts_window_verdicts_alone(readdressed, tmp_path, capsys):
@@ -52,3 +71,17 @@ def test_correlate_says_it_in_that_aircrafts_window_verdicts_alone(readdressed, 
 def test_the_unaltered_fixtures_say_nothing_of_it(tmp_path, capsys):
     assert main(["track", str(FIX / "adsb.ast"), "--all", "-o", str(tmp_path / "t.csv")]) == 0
     assert "switch back and forth" not in capsys.readouterr().err
+
+
+def test_a_row_is_marked_by_the_sensors_it_involves_alone():
+    """By hand: A's reports mix on S1 (its reference's builder) and S9 (no part of the row), B's on the
+    sensor under test; C is not mixed anywhere."""
+    import pandas as pd
+
+    from msdc.pipeline.jobs.evaluate import mark_two_targets
+
+    table = pd.DataFrame({"sensor": ["T", "T", "T"], "aircraft": ["A", "B", "C"],
+                          "built_by": ["S1 | S2", "S1", "S1 | S2"]})
+    marked = mark_two_targets(table, {("A", "S1"), ("A", "S9"), ("B", "T"), ("D", "S1")})
+    assert marked["two_targets_on"].tolist() == ["S1", "T", ""]
+    assert mark_two_targets(table, frozenset())["two_targets_on"].tolist() == ["", "", ""]
