@@ -16,11 +16,11 @@ import pandas as pd
 
 from msdc.asterix.layout import column_resolution
 from msdc.asterix.tables import available
+from msdc.pipeline.model.geodesy import M_PER_NM
 
 # Metres per degree of latitude (the mean meridian degree, 111.13-111.69 km from the equator to the poles):
 # a step's size to well under 1 %, which is all a floor needs
 M_PER_DEG_LATITUDE = 111_320.0
-M_PER_NM = 1852.0
 # (category, position_item) -> the column whose step the position has and that column's metres per unit.
 # Polar radar plots (I048/040) have none: their step lies along range and azimuth (7.2 m and
 # 360/2^16 deg), not the same in every direction, and far below any radar's noise.
