@@ -82,11 +82,10 @@ def window_verdict(summary: Mapping[str, Any], reference: str = "ADS-B", tested:
 
 def mention_mixed(summaries: list[dict], mixed) -> int:
     """Append to the verdict of each window whose aircraft (its address, else ``CS:`` call sign) is, on one
-    of the window's two sensors, in ``mixed`` (a pipeline.model.mixed.mixed_identities table, or its
-    mixed_pairs: aircraft_id and sensor_id as text) that two targets may share the identity there; in place.
-    Returns how many were."""
-    pairs = set(mixed) if isinstance(mixed, tuple | list | set) else set(
-        zip(mixed["aircraft_id"].astype(str), mixed["sensor_id"].astype(str), strict=True))
+    of the window's two sensors, in ``mixed`` (pairs of aircraft_id and sensor_id as text:
+    pipeline.model.mixed.mixed_pairs) that two targets may share the identity there; in place. Returns how
+    many were."""
+    pairs = set(mixed)
     if not pairs:
         return 0
     said = 0

@@ -302,8 +302,10 @@ def test_a_window_of_an_aircraft_with_two_targets_says_so():
     import pandas as pd
 
     from msdc.pipeline.correlate.verdict import mention_mixed
+    from msdc.pipeline.model.mixed import mixed_pairs
 
-    mixed = pd.DataFrame({"aircraft_id": ["750312", "CS:ABC"], "sensor_id": ["021:0/1", "048:25/201"]})
+    mixed = mixed_pairs(pd.DataFrame({"aircraft_id": ["750312", "CS:ABC"],
+                                      "sensor_id": ["021:0/1", "048:25/201"]}))
     windows = [{"address": "750312", "callsign": "MAS72", "radar_sensor": "048:25/201",
                 "reference_sensor": "021:0/1", "verdict": "no systematic offset beyond the noise"},
                {"address": None, "callsign": "ABC", "radar_sensor": "048:25/201",
@@ -315,7 +317,7 @@ def test_a_window_of_an_aircraft_with_two_targets_says_so():
                                      "identity on 021:0/1 (its reports switch between two places): these "
                                      "numbers mix both")
     assert "on 048:25/201 (" in windows[1]["verdict"] and windows[2]["verdict"] == "v"
-    # the pairs a job's measurements carry (attrs["mixed_pairs"]) say the same
+    # the pairs as written by hand say the same
     again = [{**w, "verdict": "v"} for w in windows]
     assert mention_mixed(again, (("750312", "021:0/1"), ("CS:ABC", "048:25/201"))) == 2
     assert [w["verdict"] == "v" for w in again] == [False, False, True]
