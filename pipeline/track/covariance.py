@@ -69,3 +69,11 @@ def nacv_variance(nucr_nacv):
     for level, b in NACV_95_M_S.items():
         bound[values == level] = b
     return (bound * SIGMA_PER_95_BOUND) ** 2
+
+
+def principal_variances(cov: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The larger and smaller eigenvalues of each symmetric 2 x 2 covariance (n, 2, 2), in closed form: the
+    variances along the error ellipse's major and minor axes (m^2; unclipped)."""
+    a, b, c = cov[:, 0, 0], 0.5 * (cov[:, 0, 1] + cov[:, 1, 0]), cov[:, 1, 1]
+    mean, half = 0.5 * (a + c), np.hypot(0.5 * (a - c), b)
+    return mean + half, mean - half

@@ -33,6 +33,7 @@ from msdc.pipeline.model.resolution import position_step_m
 from msdc.pipeline.parallel import map_ordered
 
 from .config import TrackerConfig, chi2_quantile, default_modes
+from .covariance import principal_variances
 from .frame import Plane
 from .plane import estimate, filter_plane
 
@@ -288,9 +289,8 @@ def _scaled(cov0, k_along, k_across, var_t, vv, site, radial, floor_m2) -> np.nd
 
 def minor_variance(cov: np.ndarray) -> np.ndarray:
     """The smaller eigenvalue of each symmetric 2 x 2 matrix (n, 2, 2): the variance along the ellipse's
-    minor axis."""
-    half_trace = 0.5 * (cov[:, 0, 0] + cov[:, 1, 1])
-    return half_trace - np.hypot(0.5 * (cov[:, 0, 0] - cov[:, 1, 1]), cov[:, 0, 1])
+    minor axis (covariance.principal_variances, the tracker's ellipse's)."""
+    return principal_variances(cov)[1]
 
 
 def floored(cov: np.ndarray, floor_m2: np.ndarray) -> np.ndarray:

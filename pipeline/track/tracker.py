@@ -34,7 +34,7 @@ from msdc.pipeline.model.time import utc_frame
 from msdc.pipeline.parallel import map_ordered
 
 from .config import TrackerConfig, default_modes
-from .covariance import nacv_variance
+from .covariance import nacv_variance, principal_variances
 from .frame import Plane
 from .imm import STATUS_STARTED, STATUS_UPDATED
 from .plane import SMOOTHERS, Estimates, PlaneRun, estimate, filter_plane
@@ -424,10 +424,8 @@ def _ellipse(cov: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """1-sigma semi-axes and major-axis orientation (deg clockwise from north, 0-180) of (n, 2, 2)
     east/north covariances, in closed form."""
     a, b, c = cov[:, 0, 0], 0.5 * (cov[:, 0, 1] + cov[:, 1, 0]), cov[:, 1, 1]
-    mean = 0.5 * (a + c)
-    half = np.hypot(0.5 * (a - c), b)
-    major = np.sqrt(np.maximum(mean + half, 0.0))
-    minor = np.sqrt(np.maximum(mean - half, 0.0))
+    major_var, minor_var = principal_variances(cov)
+    major, minor = np.sqrt(np.maximum(major_var, 0.0)), np.sqrt(np.maximum(minor_var, 0.0))
     # the major axis angle from east is 0.5 atan2(2b, a - c); as an azimuth from north, 90 minus that
     orientation = (90.0 - 0.5 * np.degrees(np.arctan2(2.0 * b, a - c))) % 180.0
     return major, minor, orientation
