@@ -84,6 +84,7 @@ class DaskDistributor:
     failed: list[str] = field(default_factory=list)
     _client: Any = None
     _cluster: Any = None
+    _reached: bool = False  # the cluster was started or connected to (stays true once closed)
 
     def client(self):
         """The Dask client, the cluster started (or connected to) on first use; ClusterUnavailable if not."""
@@ -105,6 +106,7 @@ class DaskDistributor:
                 self._client = Client(self._cluster)
             else:
                 self._client = Client(self.address, timeout=f"{CONNECT_TIMEOUT_S}s")
+            self._reached = True
         except (OSError, TimeoutError, RuntimeError) as exc:  # RuntimeError: a nanny that failed to start
             self.close()
             where = "the local Dask cluster" if self.address == LOCAL else f"--scheduler {self.address}"
@@ -113,8 +115,8 @@ class DaskDistributor:
 
     @property
     def used(self) -> bool:
-        """Whether the run asked for the cluster (started or connected to it)."""
-        return self._client is not None
+        """Whether the run asked for the cluster (started or connected to it), also once it is closed."""
+        return self._reached
 
     def worker_count(self) -> int:
         """Workers the scheduler knows now (at least 1)."""

@@ -72,6 +72,7 @@ def test_dataset_gives_the_recordings_results(tmp_path, dataset, command, dask_s
     err = capsys.readouterr().err
     if command[0] != "quality":  # quality's reference interpolation is no per-aircraft task
         assert f"task(s) on the Dask scheduler at {dask_scheduler}, none failed" in err
+        assert "not used" not in err  # the run that used the cluster was said not to (closed before asked)
 
 
 WINDOW = ("08:40:00", "09:00:00")
@@ -129,6 +130,7 @@ def test_windows_on_a_cluster_are_the_windows_one_after_the_other(tmp_path, data
     err = capsys.readouterr().err
     assert "Evaluating 2 windows, each a task on the cluster" in err
     assert f"2 task(s) on the Dask scheduler at {dask_scheduler}, none failed" in err  # windows, not aircraft
+    assert "not used" not in err
 
 
 @pytest.mark.filterwarnings("error::pytest.PytestUnraisableExceptionWarning")  # tasks left behind
