@@ -127,8 +127,11 @@ def dask_scheduler():
 
     distributed = pytest.importorskip("distributed", reason="dask's distributed scheduler is not installed")
     _wait_for_prewarm("all")  # its worker processes load every kernel from the cache, not compile it again
+    from msdc.pipeline.dataset.cluster import QUIET_SCHEDULER
+
     cluster = distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, host="127.0.0.1",
-                                       dashboard_address=None, silence_logs=logging.ERROR)
+                                       dashboard_address=None, silence_logs=logging.ERROR,
+                                       scheduler_kwargs=QUIET_SCHEDULER)
     yield cluster.scheduler_address
     cluster.close()
 

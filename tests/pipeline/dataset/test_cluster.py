@@ -6,7 +6,9 @@ from __future__ import annotations
 
 import io
 import os
+import socket
 import time
+import warnings
 from pathlib import Path
 
 import pytest
@@ -113,6 +115,30 @@ def test_local_workers_keep_glibcs_own_heap_trimming(monkeypatch):
         assert list(engine.map_ordered(_trim_threshold, [0])) == ["1048576"]
     finally:
         engine.close()
+
+
+def test_a_local_cluster_leaves_dasks_dashboard_port_alone():
+    """With Dask's dashboard port 8787 taken (here by the test, as by a notebook's cluster or another msdc
+    run), the local cluster starts without distributed's "Port 8787 is already in use" warning, which reached
+    the command's output, and its scheduler listens on the loopback only."""
+    pytest.importorskip("distributed", reason="dask's distributed scheduler is not installed")
+    holder = socket.socket()
+    try:
+        holder.bind(("127.0.0.1", 8787))  # taken already (another worker's cluster): as good
+        holder.listen()
+    except OSError:
+        pass
+    engine = DaskDistributor(workers=1)
+    try:
+        with warnings.catch_warnings(record=True) as seen:
+            warnings.simplefilter("always")
+            assert list(engine.map_ordered(_slow_square, [3])) == [9]
+        assert not [w for w in seen if "8787" in str(w.message)], [str(w.message) for w in seen]
+        http = engine._cluster.scheduler.http_server
+        assert http.port != 8787 and http.address == "127.0.0.1"
+    finally:
+        engine.close()
+        holder.close()
 
 
 def _hugepage_state(_) -> tuple[str | None, bool]:
