@@ -1099,14 +1099,15 @@ def quality_inputs(reference: str) -> list[str]:
 def quality_step(meas: pd.DataFrame, sensors: pd.DataFrame, options: CorrelateOptions | QualityOptions,
                  reference_meas: pd.DataFrame | None = None) -> QualityResult:
     """The quality tables and radar accuracy of the selected aircraft (quality_run), the reference built from
-    ``reference_meas`` (the ADS-B filters applied) when given; JobError when no sensor saw the aircraft."""
+    ``reference_meas`` (the ADS-B filters applied) when given, two targets under one identity as
+    marked_measurements found them; JobError when no sensor saw the aircraft."""
     from msdc.pipeline.model.aircraft import NoSuchAircraft
     from msdc.pipeline.quality.quality_run import quality_run
 
     try:
         return quality_run(meas, sensors, callsign=options.callsign, address=options.address,
                            gap_s=options.gap_s, reference=getattr(options, "reference", "adsb"),
-                           reference_meas=reference_meas)
+                           reference_meas=reference_meas, mixed=meas.attrs.get("mixed_pairs"))
     except NoSuchAircraft as exc:
         raise JobError(str(exc) + selection_note(options)) from exc
 

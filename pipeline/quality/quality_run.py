@@ -4,6 +4,7 @@ by pipeline.jobs); with multilateration or surface radar reports, where their re
 
 from __future__ import annotations
 
+from collections.abc import Collection
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -60,11 +61,12 @@ def _same_aircraft(reference_meas: pd.DataFrame, callsign: str | None, address: 
 def quality_run(meas: pd.DataFrame, sensors: pd.DataFrame, *, callsign: str | None = None,
                 address: str | None = None, gap_s: float = 180.0,
                 jump_kw: dict | None = None, reference: str = "adsb",
-                reference_meas: pd.DataFrame | None = None) -> QualityResult:
+                reference_meas: pd.DataFrame | None = None,
+                mixed: Collection[tuple[str, str]] | None = None) -> QualityResult:
     """Quality tables per aircraft and sensor, radar error statistics and per-radar bias estimates.
     ``reference_meas``: the measurements with the ADS-B filters applied (pipeline.quality.filters), which
     radar accuracy, biases and reference points use; the quality sheets describe every report of ``meas``.
-    """
+    ``mixed``: two targets under one identity already found (quality_tables)."""
     check_frame("meas", meas, MEASUREMENT_INPUTS)  # all checked before the tables are worked out
     check_sensors(sensors, meas)
     check_seconds("gap_s", gap_s)
@@ -74,7 +76,7 @@ def quality_run(meas: pd.DataFrame, sensors: pd.DataFrame, *, callsign: str | No
         check_frame("reference_meas", reference_meas, MEASUREMENT_INPUTS)
     meas = select_aircraft(meas, callsign=callsign, address=address)
     ref = meas if reference_meas is None else _same_aircraft(reference_meas, callsign, address)
-    sheets = quality_tables(meas, gap_s=gap_s, jump_kw=jump_kw)
+    sheets = quality_tables(meas, gap_s=gap_s, jump_kw=jump_kw, mixed=mixed)
     errors = radar_errors(ref, sensors, jump_kw=jump_kw, reference=reference)
     sheets["Radar accuracy"] = error_stats(errors)
     biases = estimate_biases(errors)

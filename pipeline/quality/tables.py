@@ -10,7 +10,9 @@ all, gaps included); longer ones are gaps (listed with their start and end;
 "reappeared_after_1h" when longer than an hour). An aircraft known by its Mode 3/A code alone is
 labelled with it ("M3A:7052"); reports of no aircraft (no address, call sign or Mode 3/A) get one row
 per sensor labelled "(no identity)", counted but with no intervals or gaps: they are many targets, and
-time between them measures nothing.
+time between them measures nothing. ``two_targets`` marks an aircraft whose reports from that sensor switch
+back and forth between two places (pipeline.model.mixed): its intervals and gaps mix two targets; a pooled
+row is marked when one of its aircraft is.
 Columns ending ``_utc`` (and the jumps' ``utc``) are instants, datetime64[ns, UTC], NaT when the
 recording is undated (its ``*_tod`` columns then give the time of day); JSON writes them as ISO 8601.
 Columns ending ``_tod`` are times of day in seconds since midnight UTC, like ``time_of_day``; the workbook
@@ -20,7 +22,7 @@ shows them as clock times (hh:mm:ss.000), hence no ``_s`` in their names.
 from __future__ import annotations
 
 import itertools
-from collections.abc import Iterator
+from collections.abc import Collection, Iterator
 
 import numpy as np
 import pandas as pd
@@ -49,7 +51,7 @@ QUALITY_COLUMNS = [
     "first_utc", "last_utc", "intervals", "interval_min_s", "interval_median_s", "interval_p95_s",
     "interval_max_s", "interval_max_within_gap_s", "gaps", "longest_gap_s", "reappearances", "speed_missing",
     "speed_zero", "speed_missing_or_zero", "speed_missing_or_zero_pct", "jumps", "nucp_below_5_pct",
-    "nic_below_6_pct", "low_integrity_pct", "mops_versions",
+    "nic_below_6_pct", "low_integrity_pct", "mops_versions", "two_targets",
 ]
 HISTOGRAM_COLUMNS = [*SENSOR_KEYS, "bin_start_s", "bin_end_s", "intervals"]
 GAP_COLUMNS = [*ID_KEYS, "gap_start_tod", "gap_end_tod", "gap_start_utc", "gap_end_utc", "gap_duration_s",
@@ -220,7 +222,17 @@ def _pooled_row(rows: list[dict], intervals: list[np.ndarray], sensor_id: tuple,
     if sensor_id[0] == "adsb":
         row["jumps"] = int(frame["jumps"].sum())
         row |= integrity_shares(pd.concat(clean, ignore_index=True))
+    row["two_targets"] = bool(frame["two_targets"].any())
     return row
+
+
+def _mixed_pairs(meas: pd.DataFrame) -> tuple[tuple[str, str], ...]:
+    """The (aircraft_id, sensor_id) pairs of two targets under one identity among the reports that are no
+    duplicates, as the jobs find them (pipeline.jobs.common.marked_measurements)."""
+    from msdc.pipeline.model.mixed import mixed_identities, mixed_pairs
+
+    kept = ~meas["duplicate"].to_numpy(bool) if "duplicate" in meas else slice(None)
+    return mixed_pairs(mixed_identities(meas[kept]))
 
 
 def _indicators(adsb: pd.DataFrame) -> list[str]:
@@ -357,13 +369,15 @@ NO_ADSB_NOTE = ("No ADS-B (CAT021) report in the input: position jumps and quali
                 "for in ADS-B only.")
 
 
-def quality_tables(meas: pd.DataFrame, *, gap_s: float = 180.0,
-                   jump_kw: dict | None = None) -> dict[str, pd.DataFrame]:
+def quality_tables(meas: pd.DataFrame, *, gap_s: float = 180.0, jump_kw: dict | None = None,
+                   mixed: Collection[tuple[str, str]] | None = None) -> dict[str, pd.DataFrame]:
     """Sheets "Quality", "Update intervals", "Gaps", "Jumps", "ADS-B quality" and "ADS-B quality over time"
-    (see the module docstring) of a measurement frame holding radar and/or ADS-B."""
+    (see the module docstring) of a measurement frame holding radar and/or ADS-B. ``mixed``: the (aircraft_id,
+    sensor_id) pairs of two targets under one identity when already found (None: found here)."""
     check_frame("meas", meas, ("sensor_kind", "time"))
     check_seconds("gap_s", gap_s)
     check_options("jump_kw", jump_kw)
+    mixed = set(_mixed_pairs(meas) if mixed is None else mixed)
     both = _aircraft_labels(meas)
     adsb_rows = both["sensor"] == "adsb"
 
@@ -389,6 +403,8 @@ def quality_tables(meas: pd.DataFrame, *, gap_s: float = 180.0,
         for key, g in groups:
             sensor_id = key[1:1 + len(SENSOR_KEYS)]
             row, within, g_gaps, g_clean = _group_rows(g, gap_s, jumps_by_aircraft)
+            sensors = g["sensor_id"].astype(str).unique() if "sensor_id" in g else ()
+            row["two_targets"] = key[-1] != UNIDENTIFIED and any((key[-1], s) in mixed for s in sensors)
             if key[-1] == UNIDENTIFIED:  # reports of many targets: no interval or gap between them means much
                 within, g_gaps = within[:0], []
                 row |= _interval_stats(within) | {"gaps": np.nan, "longest_gap_s": np.nan, "reappearances": 0}

@@ -104,7 +104,7 @@ LABELS: dict[str, str] = {
     "pd": "Probability of detection", "range_from_nm": "Range from", "range_to_nm": "Range to",
     "parameters": "Parameters", "built_by": "Reference built by",
     "self_reference_share": "Self-reference share", "surface_share": "Surface share",
-    "two_targets_on": "Two targets on",
+    "two_targets_on": "Two targets on", "two_targets": "Two targets",
     "reference_samples": "Reference samples", "errors_judged": "Errors judged",
     "rms_error_m": "RMS position error", "windows": "Windows", "window_from": "Window from",
     "window_to": "Window to", "expected": "Expected", "detected": "Detected",

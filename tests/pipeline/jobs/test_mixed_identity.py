@@ -33,6 +33,7 @@ def test_track_quality_and_evaluate_say_two_targets_share_an_address(readdressed
     inputs = [str(FIX / "radar.ast"), str(readdressed), "--sensors", str(FIX / "sensors.toml")]
     assert main(["quality", *inputs, "--all", "--json", str(tmp_path / "q.json")]) == 0
     assert SAID in capsys.readouterr().err
+    _quality_rows_marked(json.loads((tmp_path / "q.json").read_text())["tables"]["Quality"])
     assert main(["evaluate", *inputs, "--preset", "eurocontrol-1997-ssr",
                  "--json", str(tmp_path / "e.json")]) == 0
     assert SAID in capsys.readouterr().err
@@ -47,6 +48,25 @@ def _two_targets_marked(doc: dict) -> None:
     rows = {r["aircraft"]: r for r in doc["tables"]["Per aircraft"] if r["sensor"] == "048:25/201"}
     assert "021:0/1" in rows["750312"]["built_by"] and rows["750312"]["two_targets_on"] == "021:0/1"
     assert len(rows) > 1 and all(r["two_targets_on"] == "" for a, r in rows.items() if a != "750312")
+
+
+def _quality_rows_marked(rows: list[dict]) -> None:
+    """MAS72's ADS-B row and the ADS-B's pooled row marked; the radar's MAS72 (one target) and every other
+    row not."""
+    marked = {(r["callsign"], r["sensor"]) for r in rows if r["two_targets"]}
+    assert marked == {("MAS72", "adsb"), ("(all)", "adsb")}
+    assert {("MAS72", "radar"), ("MXD1202", "adsb")} <= {(r["callsign"], r["sensor"]) for r in rows}
+
+
+def test_correlate_with_quality_marks_the_quality_rows(readdressed):
+    from msdc.pipeline.jobs.correlate import correlate_job
+    from msdc.pipeline.jobs.options import CorrelateOptions
+
+    result = correlate_job(CorrelateOptions(inputs=(str(FIX / "radar.ast"), str(readdressed)),
+                                            sensors=str(FIX / "sensors.toml"), callsign="MAS72", quality=True))
+    rows = result.quality.sheets["Quality"].to_dict("records")
+    marked = {(r["callsign"], r["sensor"]) for r in rows if r["two_targets"]}
+    assert marked == {("MAS72", "adsb"), ("(all)", "adsb")}  # --callsign: MAS72's rows alone
 
 
 def test_a_windowed_evaluation_marks_the_aircraft_too(readdressed, tmp_path, capsys):
