@@ -13,12 +13,12 @@ import pandas as pd
 
 from msdc.pipeline.conflict.geometry import FT_PER_FL, M_PER_NM, surface_ecef_m
 from msdc.pipeline.conflict.pairs import _require
+from msdc.pipeline.model.geodesy import M_PER_S_PER_KT
 from msdc.pipeline.model.time import utc_frame
 
 APPROACH_COLUMNS = ["time_to_cpa_s", "cpa_time", "cpa_horizontal_nm", "cpa_vertical_ft"]
 TRACK_COLUMNS = ["aircraft_id", "time", "latitude", "longitude", "flight_level", "speed_kt", "track_deg",
                  "vertical_rate_fpm"]
-M_PER_S_PER_KT = M_PER_NM / 3600.0
 
 
 def closest_approach(alerts: pd.DataFrame, tracks: pd.DataFrame) -> pd.DataFrame:

@@ -10,9 +10,8 @@ import pandas as pd
 
 from msdc.pipeline.evaluate.outcome import Outcome, share, withheld
 from msdc.pipeline.evaluate.reference import associated, parameter
-from msdc.pipeline.model.geodesy import A_M
+from msdc.pipeline.model.geodesy import A_M, M_PER_S_PER_KT
 
-MPS_PER_KT = 1852.0 / 3600.0
 LIMITS = {"max_speed_kt": 1333.0, "max_accel_mps2": 29.0, "max_turn_dps": 30.0, "max_vertical_ftps": 1000.0}
 # reports of one aircraft closer in time than this are not compared (split plots of one scan, repeats)
 MIN_INTERVAL_S = 1.0
@@ -56,15 +55,16 @@ def dubious_flags(reports: pd.DataFrame, parameters: Mapping | None = None) -> p
     speed = _distance_m(lat[j], lon[j], lat[i], lon[i]) / dt
     fl = col("flight_level")
     vertical = np.abs(fl[i] - fl[j]) * 100.0 / dt
-    gs = col("ground_speed_kt") * MPS_PER_KT
+    gs = col("ground_speed_kt") * M_PER_S_PER_KT
     accel = np.abs(gs[i] - gs[j]) / dt
     hdg = col("heading_deg")
     turn = np.abs((hdg[i] - hdg[j] + 180.0) % 360.0 - 180.0) / dt
     with np.errstate(invalid="ignore"):
         out = pd.DataFrame({
             "index": rep.index.to_numpy()[i], "ref_aircraft": same[i], "t_s": t[i], "interval_s": dt,
-            "speed_kt": speed / MPS_PER_KT, "accel_mps2": accel, "turn_dps": turn, "vertical_ftps": vertical,
-            "too_fast": speed > limits["max_speed_kt"] * MPS_PER_KT,
+            "speed_kt": speed / M_PER_S_PER_KT, "accel_mps2": accel, "turn_dps": turn,
+            "vertical_ftps": vertical,
+            "too_fast": speed > limits["max_speed_kt"] * M_PER_S_PER_KT,
             "too_sudden": accel > limits["max_accel_mps2"], "turns_too_fast": turn > limits["max_turn_dps"],
             "climbs_too_fast": vertical > limits["max_vertical_ftps"]})
     out["dubious"] = out[["too_fast", "too_sudden", "turns_too_fast", "climbs_too_fast"]].any(axis=1)

@@ -18,9 +18,8 @@ from msdc.pipeline.evaluate.reference import (
     reference_values,
     rows_by_index,
 )
-from msdc.pipeline.model.geodesy import A_M, E2
+from msdc.pipeline.model.geodesy import A_M, E2, M_PER_S_PER_KT
 
-MPS_PER_KT = 1852.0 / 3600.0
 STEP_S = 1.0  # the reference velocity is the displacement from t - STEP_S to t + STEP_S over 2 STEP_S
 SELF_LEFT_OUT = "independent reference only"  # opens the note of the reports left out on the own track
 
@@ -44,7 +43,7 @@ def report_velocity(rep: pd.DataFrame) -> tuple[np.ndarray, np.ndarray]:
 
     vx, vy = column("vx_ms"), column("vy_ms")
     if {"ground_speed_kt", "heading_deg"} <= set(rep.columns):
-        gs = pd.to_numeric(rep["ground_speed_kt"], errors="coerce").to_numpy(float) * MPS_PER_KT
+        gs = pd.to_numeric(rep["ground_speed_kt"], errors="coerce").to_numpy(float) * M_PER_S_PER_KT
         hdg = np.radians(pd.to_numeric(rep["heading_deg"], errors="coerce").to_numpy(float))
         missing = ~np.isfinite(vx) | ~np.isfinite(vy)
         vx = np.where(missing, gs * np.sin(hdg), vx)

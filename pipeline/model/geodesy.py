@@ -23,6 +23,7 @@ B_M = A_M * (1.0 - F)
 E2 = F * (2.0 - F)  # first eccentricity squared
 EP2 = E2 / (1.0 - E2)  # second eccentricity squared
 M_PER_NM = 1852.0
+M_PER_S_PER_KT = M_PER_NM / 3600.0  # a knot in metres per second
 M_PER_FT = 0.3048
 EARTH_RADIUS_NM = 6371008.8 / M_PER_NM  # the mean radius (IUGG): a sphere is within 0.5 % of the geodesic at
 #                                         the hundreds of NM great_circle_nm judges

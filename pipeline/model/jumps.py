@@ -24,10 +24,9 @@ import numpy as np
 import pandas as pd
 from numba import njit
 
-from msdc.pipeline.model.geodesy import distance_m, wrap180
+from msdc.pipeline.model.geodesy import M_PER_S_PER_KT, distance_m, wrap180
 from msdc.pipeline.model.time import midnight, seconds_since, with_clock
 
-KT_TO_MS = 1852.0 / 3600.0
 SPEED_SLACK_M = 300.0  # allowance added to max speed * dt: position noise (NACp 6) and time quantisation
 TURN_ACCEL_MS2 = 15.0  # lateral acceleration bound (3.5 deg/s at 480 kt) for the fit's curvature allowance
 SEGMENT_GAP_S = 120.0  # neighbours are never taken across a longer gap
@@ -289,7 +288,7 @@ def _detect(adsb_meas: pd.DataFrame, max_speed_kt: float, robust_window: int,
     cuts = starts[np.r_[True, np.diff(starts // JUMP_BATCH_REPORTS) > 0]]
     for a, b in zip(cuts, np.r_[cuts[1:], pos.size], strict=True):
         tracks = _Tracks(t[a:b], lat[a:b], unwrapped[a:b], seg[a:b], (robust_window - 1) // 2)
-        jump, fit_lat, fit_lon = tracks.search(max_speed_kt * KT_TO_MS, robust_threshold_m)
+        jump, fit_lat, fit_lon = tracks.search(max_speed_kt * M_PER_S_PER_KT, robust_threshold_m)
         del tracks
         at = pos[a:b]
         cols["jump"][at], cols["fit_latitude"][at], cols["fit_longitude"][at] = jump, fit_lat, fit_lon

@@ -10,7 +10,7 @@ import math
 import numpy as np
 import pandas as pd
 
-from msdc.pipeline.model.geodesy import distance_m
+from msdc.pipeline.model.geodesy import M_PER_NM, distance_m
 from msdc.pipeline.model.sensors import radar_entries
 
 SITE_CHECK_INPUTS = ["time", "sensor_kind", "sensor_id", "address", "latitude", "longitude", "rho_nm"]
@@ -100,7 +100,7 @@ def _far_site(sensor_id: str, sep_m: float, far_nm: float, sensors: pd.DataFrame
     site = sensors[(sensors["sac"] == sac) & (sensors["sic"] == sic)]
     if site.empty:
         return []
-    far_m = far_nm * 1852.0
+    far_m = far_nm * M_PER_NM
     sigma_m = math.hypot(float(site["sigma_range_m"].iloc[0]),
                          far_m * math.radians(float(site["sigma_azimuth_deg"].iloc[0])))
     if sep_m <= FAR_SEPARATION_FACTOR * sigma_m + margin_m:

@@ -21,6 +21,7 @@ from msdc.pipeline.model.aircraft import aircraft_rows
 from msdc.pipeline.model.dedup import DEDUP_KEYS, deduplicate
 from msdc.pipeline.model.geodesy import (
     M_PER_NM,
+    M_PER_S_PER_KT,
     distance_m,
     ecef_to_enu,
     enu_basis,
@@ -30,7 +31,7 @@ from msdc.pipeline.model.geodesy import (
     slant_range_azimuth,
     wrap180,
 )
-from msdc.pipeline.model.jumps import JUMP_INPUTS, KT_TO_MS, detect_jumps
+from msdc.pipeline.model.jumps import JUMP_INPUTS, detect_jumps
 from msdc.pipeline.model.measurements import NACP_95_M
 from msdc.pipeline.model.sensors import sensor_sites
 from msdc.pipeline.model.time import midnight, with_clock
@@ -115,7 +116,7 @@ def _adsb_track(adsb: pd.DataFrame) -> pd.DataFrame:
     a = adsb.sort_values("time_of_day", kind="stable")
     lon = np.unwrap(a["longitude"].to_numpy(float), period=360.0)
     trk = np.radians(a["heading_deg"].to_numpy(float))
-    gs_ms = a["ground_speed_kt"].to_numpy(float) * KT_TO_MS
+    gs_ms = a["ground_speed_kt"].to_numpy(float) * M_PER_S_PER_KT
     h, geometric = reference_height_m(a)
     frame = pd.DataFrame({"t": a["time_of_day"].to_numpy(float), "lat": a["latitude"].to_numpy(float),
                           "lon": lon, "h": h, "geo": geometric.astype(float),

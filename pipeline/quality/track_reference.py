@@ -12,13 +12,12 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
-from msdc.pipeline.model.geodesy import M_PER_FT, wrap180
+from msdc.pipeline.model.geodesy import M_PER_FT, M_PER_S_PER_KT, wrap180
 
 STEP_S = 0.5
 # the measurement columns read here besides the tracker's (pipeline.track.tracker REQUIRED and FILTER_INPUTS)
 TRACK_REFERENCE_INPUTS = ["time", "nacp"]
 _FPM_TO_MS = M_PER_FT / 60.0
-_KT_TO_MS = 1852.0 / 3600.0
 
 
 def track_reference(adsb: pd.DataFrame, t_s: np.ndarray, max_gap_s: float) -> dict[str, np.ndarray]:
@@ -48,7 +47,7 @@ def track_reference(adsb: pd.DataFrame, t_s: np.ndarray, max_gap_s: float) -> di
     tt = tr["time_of_day"].to_numpy(float) + offset
     lon_unwrapped = np.unwrap(tr["longitude"].to_numpy(float), period=360.0)
     trk = np.radians(tr["track_deg"].to_numpy(float))
-    speed = tr["speed_kt"].to_numpy(float) * _KT_TO_MS
+    speed = tr["speed_kt"].to_numpy(float) * M_PER_S_PER_KT
     series = {"lat": tr["latitude"].to_numpy(float), "lon": lon_unwrapped,
               "h": tr["flight_level"].to_numpy(float) * 100.0 * M_PER_FT,
               "ve": speed * np.sin(trk), "vn": speed * np.cos(trk),

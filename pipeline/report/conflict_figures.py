@@ -12,6 +12,7 @@ import numpy as np
 import pandas as pd
 from matplotlib.patches import Ellipse
 
+from msdc.pipeline.model.geodesy import M_PER_NM
 from msdc.pipeline.report.canvas import FIGURE_PNG_COMPRESS_LEVEL, new_figure, save_png
 
 CHI2_95_2D = 5.991464547107979  # 95 % quantile of chi-square with 2 degrees of freedom
@@ -65,7 +66,7 @@ def _ellipse(ax, e_nm: float, n_nm: float, var_e: float, cov_en: float, var_n: f
     if not np.isfinite(cov).all() or not np.isfinite([e_nm, n_nm]).all():
         return
     vals, vecs = np.linalg.eigh(cov)
-    width, height = 2.0 * np.sqrt(np.maximum(vals, 0.0) * CHI2_95_2D) / 1852.0
+    width, height = 2.0 * np.sqrt(np.maximum(vals, 0.0) * CHI2_95_2D) / M_PER_NM
     angle = math.degrees(math.atan2(vecs[1, 0], vecs[0, 0]))
     ax.add_patch(Ellipse((e_nm, n_nm), width, height, angle=angle, fill=False, **style))
 

@@ -17,6 +17,7 @@ from matplotlib.text import Text
 
 from msdc.pipeline.correlate.correlation import peak_lag, pearson_max_lag, pearson_search_limit
 from msdc.pipeline.correlate.results import CorrelationRun, WindowResult
+from msdc.pipeline.model.geodesy import M_PER_NM
 from msdc.pipeline.report.canvas import new_figure, save_png  # noqa: F401 - importable here too
 from msdc.pipeline.report.summary import aircraft_name, map_nouns, printable, slot_seconds, window_label
 
@@ -111,7 +112,6 @@ def _callsign_title(windows: list[WindowResult]) -> str:
 # tracks within 25 NM got one 50 NM ring, which set the map's scale: the traffic filled a quarter of it)
 RING_STEPS_NM = (1.0, 2.0, 5.0, 10.0, 25.0, 50.0, 100.0)
 MAX_RINGS = 5
-_NM_M = 1852.0
 
 
 def range_ring(lat: float, lon: float, radius_nm: float, points: int = 181) -> tuple[np.ndarray, np.ndarray]:
@@ -120,7 +120,7 @@ def range_ring(lat: float, lon: float, radius_nm: float, points: int = 181) -> t
 
     azimuths = np.linspace(0.0, 360.0, points)
     lons, lats, _ = Geod(ellps="WGS84").fwd(np.full(points, lon), np.full(points, lat), azimuths,
-                                             np.full(points, radius_nm * _NM_M))
+                                             np.full(points, radius_nm * M_PER_NM))
     return np.asarray(lons), np.asarray(lats)
 
 
@@ -179,7 +179,7 @@ def _draw_sites(ax: Axes, sensors: pd.DataFrame | None, lats: np.ndarray, lons: 
     geod = Geod(ellps="WGS84")
     ok = np.isfinite(lats) & np.isfinite(lons)
     sites = [(float(row.latitude), float(row.longitude)) for row in sensors.itertuples(index=False)]
-    far = [farthest_m(geod, lat, lon, lats[ok], lons[ok]) / _NM_M for lat, lon in sites]
+    far = [farthest_m(geod, lat, lon, lats[ok], lons[ok]) / M_PER_NM for lat, lon in sites]
     step = ring_step_nm(max(far))
     for (lat, lon), far_nm, row in zip(sites, far, sensors.itertuples(index=False), strict=True):
         for k in range(1, max(1, math.ceil(far_nm / step)) + 1):

@@ -19,6 +19,7 @@ from matplotlib.ticker import FuncFormatter, MultipleLocator, NullFormatter
 
 from msdc.pipeline.correlate.results import WindowResult
 from msdc.pipeline.correlate.windows import in_window
+from msdc.pipeline.model.geodesy import M_PER_NM
 from msdc.pipeline.model.measurements import matching_aircraft
 from msdc.pipeline.model.time import midnight, with_clock
 from msdc.pipeline.quality.accuracy import MAX_AZIMUTH_ELEVATION_DEG, elevation_deg
@@ -216,7 +217,7 @@ def radar_error_figure(errors: pd.DataFrame, path: str | os.PathLike[str],
         for ax in axes.ravel():
             _empty(ax, "No matched reports")
         return save_png(fig, path)
-    range_nm = errors["slant_range_m"].to_numpy(float) / 1852.0
+    range_nm = errors["slant_range_m"].to_numpy(float) / M_PER_NM
     step = max(1, -(-len(errors) // MAX_ERROR_POINTS))  # every step-th report of each aircraft is drawn
     groups = list(errors.groupby(errors["callsign"].fillna(errors["address"]).fillna("?"), sort=True))
     labelled = len(groups) <= MAX_LEGEND_AIRCRAFT
@@ -241,7 +242,7 @@ def radar_error_figure(errors: pd.DataFrame, path: str | os.PathLike[str],
     if biases is not None and len(biases):
         b = biases.iloc[0]
         r = np.linspace(np.nanmin(range_nm), np.nanmax(range_nm), 50)
-        axes[0, 0].plot(r, b["range_bias_m"] + b["range_gain_ppm"] * 1e-6 * r * 1852.0, "k-", lw=1.5,
+        axes[0, 0].plot(r, b["range_bias_m"] + b["range_gain_ppm"] * 1e-6 * r * M_PER_NM, "k-", lw=1.5,
                         label="bias + gain fit")
         axes[1, 0].axhline(b["azimuth_bias_deg"], color="k", lw=1.5, label="azimuth bias fit")
     for ax in axes.ravel():

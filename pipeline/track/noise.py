@@ -29,6 +29,7 @@ from typing import NamedTuple
 import numpy as np
 import pandas as pd
 
+from msdc.pipeline.model.geodesy import M_PER_NM
 from msdc.pipeline.model.resolution import position_step_m
 from msdc.pipeline.parallel import map_ordered
 
@@ -48,7 +49,7 @@ SURFACE_SPEED_KT = 50.0
 # monitors and parked aircraft, positions repeated to the metre), while its taxiing aircraft give 5-30 kt.
 STATIONARY_SPEED_KT = 1.0
 LOCAL_KINDS = ("mlat", "smr")  # the sensor kinds with a stationary class
-KT_PER_M_S = 3600.0 / 1852.0
+KT_PER_M_S = 3600.0 / M_PER_NM
 
 CHI2_1_MEDIAN = chi2_quantile(0.5, 1)  # median of a squared standard normal, 0.4549
 CHI2_2_MEDIAN = chi2_quantile(0.5, 2)  # 2 ln 2

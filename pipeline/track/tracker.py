@@ -30,6 +30,7 @@ import pandas as pd
 
 from msdc.pipeline.model.arguments import finite_number
 from msdc.pipeline.model.coasting import MISSED_UPDATE_FACTOR, coasted_time  # noqa: F401 - importable here too
+from msdc.pipeline.model.geodesy import M_PER_S_PER_KT
 from msdc.pipeline.model.time import utc_frame
 from msdc.pipeline.parallel import map_ordered
 
@@ -49,7 +50,6 @@ FILTER_INPUTS = ("time", "sensor_id", "latitude", "longitude", "flight_level", "
 # what an aircraft's task reads (filter, counts, gated reports; file and offset name it on failure):
 # only these columns are split per aircraft, so that each split copies no column it does not use
 TASK_COLUMNS = (*REQUIRED, *FILTER_INPUTS, "on_ground", "file", "offset")
-M_PER_S_PER_KT = 1852.0 / 3600.0
 FT_PER_FL = 100.0
 MAX_RANGE_M = 3_000_000.0  # reports farther than this from the aircraft's median position are garbage
 # smoothed turn rate: least-squares slope of the smoothed track angle over a centred 8 s window of output

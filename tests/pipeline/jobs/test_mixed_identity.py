@@ -62,8 +62,9 @@ def test_correlate_with_quality_marks_the_quality_rows(readdressed):
     from msdc.pipeline.jobs.correlate import correlate_job
     from msdc.pipeline.jobs.options import CorrelateOptions
 
-    result = correlate_job(CorrelateOptions(inputs=(str(FIX / "radar.ast"), str(readdressed)),
-                                            sensors=str(FIX / "sensors.toml"), callsign="MAS72", quality=True))
+    options = CorrelateOptions(inputs=(str(FIX / "radar.ast"), str(readdressed)),
+                               sensors=str(FIX / "sensors.toml"), callsign="MAS72", quality=True)
+    result = correlate_job(options)
     rows = result.quality.sheets["Quality"].to_dict("records")
     marked = {(r["callsign"], r["sensor"]) for r in rows if r["two_targets"]}
     assert marked == {("MAS72", "adsb"), ("(all)", "adsb")}  # --callsign: MAS72's rows alone
