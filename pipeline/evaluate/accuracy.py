@@ -22,7 +22,8 @@ from msdc.pipeline.evaluate.reference import (
 )
 from msdc.pipeline.evaluate.statistics import cluster_sums, clustered_interval
 from msdc.pipeline.evaluate.timing import timing_note
-from msdc.pipeline.evaluate.velocity import _east_north_m, reference_velocity
+from msdc.pipeline.evaluate.velocity import reference_velocity
+from msdc.pipeline.model.geodesy import east_north_m
 
 THRESHOLD_PARAMETER = "threshold_m"  # the requirement's tolerance, given by the scorecard to the timing note
 MIN_SPEED_MPS = 5.0  # below this the reference has no track direction: along/across and latency not judged
@@ -50,7 +51,7 @@ def position_errors(reports: pd.DataFrame, reference: pd.DataFrame, parameters: 
         rows = groups[k]
         if len(rows):
             r_lat, r_lon, _, _ = tr.at(t[rows], max_gap_s)
-            de[rows], dn[rows] = _east_north_m(r_lat, r_lon, lat[rows], lon[rows])
+            de[rows], dn[rows] = east_north_m(r_lat, r_lon, lat[rows], lon[rows])
     vx, vy = reference_velocity(rep, reference, parameters)
     speed = np.hypot(vx, vy)
     moving = speed >= MIN_SPEED_MPS

@@ -24,8 +24,7 @@ from msdc.pipeline.evaluate.reference import (
 )
 from msdc.pipeline.evaluate.reference_gates import reference_at, self_referenced
 from msdc.pipeline.evaluate.statistics import cluster_sums, clustered_interval
-from msdc.pipeline.evaluate.velocity import _east_north_m
-from msdc.pipeline.model.geodesy import M_PER_NM, wrap180
+from msdc.pipeline.model.geodesy import M_PER_NM, east_north_m, wrap180
 from msdc.pipeline.quality.accuracy import (
     MIN_BIAS_REPORTS,
     MIN_SE_AIRCRAFT,
@@ -70,7 +69,7 @@ def bias_errors(reports: pd.DataFrame, reference: pd.DataFrame, parameters: Mapp
         lat, lon, h, _ = tr.at(t[rows], max_gap_s)
         lat0, lon0, h0, _ = tr.at(t[rows] - STEP_S, max_gap_s)
         lat1, lon1, h1, _ = tr.at(t[rows] + STEP_S, max_gap_s)
-        de, dn = _east_north_m(lat0, lon0, lat1, lon1)
+        de, dn = east_north_m(lat0, lon0, lat1, lon1)
         for key, v in (("lat", lat), ("lon", lon), ("h", h), ("ve", de / (2 * STEP_S)),
                        ("vn", dn / (2 * STEP_S)), ("vu", (h1 - h0) / (2 * STEP_S))):
             state[key][rows] = v

@@ -18,20 +18,10 @@ from msdc.pipeline.evaluate.reference import (
     reference_values,
     rows_by_index,
 )
-from msdc.pipeline.model.geodesy import A_M, E2, M_PER_S_PER_KT
+from msdc.pipeline.model.geodesy import M_PER_S_PER_KT, east_north_m
 
 STEP_S = 1.0  # the reference velocity is the displacement from t - STEP_S to t + STEP_S over 2 STEP_S
 SELF_LEFT_OUT = "independent reference only"  # opens the note of the reports left out on the own track
-
-
-def _east_north_m(lat1, lon1, lat2, lon2) -> tuple[np.ndarray, np.ndarray]:
-    """Signed east and north displacement (m) between nearby points on the ellipsoid's local radii."""
-    s = np.sin(np.radians(0.5 * (lat1 + lat2)))
-    w = np.sqrt(1.0 - E2 * s**2)
-    dn = np.radians(lat2 - lat1) * A_M * (1.0 - E2) / w**3
-    dlon = (lon2 - lon1 + 180.0) % 360.0 - 180.0
-    de = np.radians(dlon) * A_M / w * np.cos(np.radians(0.5 * (lat1 + lat2)))
-    return de, dn
 
 
 def report_velocity(rep: pd.DataFrame) -> tuple[np.ndarray, np.ndarray]:
@@ -66,7 +56,7 @@ def reference_velocity(rep: pd.DataFrame, reference: pd.DataFrame,
             continue
         lat0, lon0, _, _ = tr.at(t[rows] - STEP_S, max_gap_s)
         lat1, lon1, _, _ = tr.at(t[rows] + STEP_S, max_gap_s)
-        de, dn = _east_north_m(lat0, lon0, lat1, lon1)
+        de, dn = east_north_m(lat0, lon0, lat1, lon1)
         vx[rows], vy[rows] = de / (2 * STEP_S), dn / (2 * STEP_S)
     return vx, vy
 

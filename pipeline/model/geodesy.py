@@ -214,6 +214,16 @@ def wrap180(deg):
     return (np.asarray(deg, dtype=float) + 180.0) % 360.0 - 180.0
 
 
+def east_north_m(lat1_deg, lon1_deg, lat2_deg, lon2_deg) -> tuple[np.ndarray, np.ndarray]:
+    """Signed east and north displacement (m) from the first points to the second, nearby ones, on the
+    ellipsoid's meridian and prime-vertical radii at their mean latitude (flat over a few km)."""
+    s = np.sin(np.radians(0.5 * (lat1_deg + lat2_deg)))
+    w = np.sqrt(1.0 - E2 * s**2)
+    dn = np.radians(lat2_deg - lat1_deg) * A_M * (1.0 - E2) / w**3
+    de = np.radians(wrap180(lon2_deg - lon1_deg)) * A_M / w * np.cos(np.radians(0.5 * (lat1_deg + lat2_deg)))
+    return de, dn
+
+
 def flight_level_to_m(flight_level):
     """Flight level to metres (FL x 100 ft), taken as height above the ellipsoid where a height is needed."""
     return np.asarray(flight_level, dtype=float) * 100.0 * M_PER_FT
