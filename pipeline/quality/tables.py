@@ -404,7 +404,7 @@ def quality_tables(meas: pd.DataFrame, *, gap_s: float = 180.0, jump_kw: dict | 
             sensor_id = key[1:1 + len(SENSOR_KEYS)]
             row, within, g_gaps, g_clean = _group_rows(g, gap_s, jumps_by_aircraft)
             sensors = g["sensor_id"].astype(str).unique() if "sensor_id" in g else ()
-            row["two_targets"] = key[-1] != UNIDENTIFIED and any((key[-1], s) in mixed for s in sensors)
+            row["two_targets"] = key[-1] != UNIDENTIFIED and any((str(key[-1]), s) in mixed for s in sensors)
             if key[-1] == UNIDENTIFIED:  # reports of many targets: no interval or gap between them means much
                 within, g_gaps = within[:0], []
                 row |= _interval_stats(within) | {"gaps": np.nan, "longest_gap_s": np.nan, "reappearances": 0}
