@@ -219,9 +219,14 @@ def check_beside(option: str, out: Path, files: Iterable[tuple[str, Path]]) -> N
             raise OptionError(f"{option} {out}: its {noun} {path} {problem}")
 
 
-def spare_inputs(inputs, outputs: list[tuple[str, Path | None]]) -> None:
-    """OptionError when an output (a ``(what, path)`` pair: the option and the file it writes) is one of the
-    inputs, by any path or link: writing it would destroy the recording before or while it is read."""
+def spare_inputs(options, outputs: list[tuple[str, Path | None]]) -> None:
+    """OptionError when an output (a ``(what, path)`` pair: the option and the file or folder it writes) is
+    one of the options' inputs, by any path or link (writing it would destroy the recording before or while
+    it is read), or lies inside their ``--dataset`` folder (it would overwrite the manifest or a part)."""
+    dataset = getattr(options, "dataset", None)
+    if dataset is not None:
+        spare_dataset(dataset, outputs)
+    inputs = options.inputs
     inputs = [inputs] if isinstance(inputs, str | Path) else inputs  # one path is one input
     given = [Path(p) for p in inputs if Path(p).is_file()]
     for what, out in outputs:
@@ -231,6 +236,16 @@ def spare_inputs(inputs, outputs: list[tuple[str, Path | None]]) -> None:
             if os.path.samefile(out, p):
                 also = "" if what.endswith(str(out)) else f" (it writes {out})"
                 raise OptionError(f"{what}{also}: is the input {p}; writing it would destroy the recording")
+
+
+def spare_dataset(dataset: str | Path, outputs: list[tuple[str, Path | None]]) -> None:
+    """OptionError when an output lies inside the dataset folder, by any path or link: it could overwrite
+    the manifest or a part (the dataset's folder is ingest's alone)."""
+    root = Path(dataset).resolve()
+    for what, out in outputs:
+        if out is not None and Path(out).resolve().is_relative_to(root):
+            raise OptionError(f"{what}: is inside the dataset {dataset}; writing there would change the "
+                              "dataset: write it elsewhere")
 
 
 def _can_create(directory: Path) -> bool:
@@ -522,8 +537,8 @@ def check_workbook(options: AircraftOptions, checked: Checked, *, figure_windows
         check_beside("-o", out, [("figure", png) for png in figures])
         beside = [base.with_name(f"{base.stem}_tracks.png"), *(parquet_path(base, n) for n in TABLE_FILES),
                   *figures]
-        spare_inputs(options.inputs, [(f"-o {out}", out)] + [(f"-o {out}", p) for p in beside])
-    spare_inputs(options.inputs, [(f"--json {checked.json}", checked.json)])
+        spare_inputs(options, [(f"-o {out}", out)] + [(f"-o {out}", p) for p in beside])
+    spare_inputs(options, [(f"--json {checked.json}", checked.json)])
     return implausible_altitudes(checked.sensors, options.sensors)
 
 

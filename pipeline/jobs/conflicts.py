@@ -107,10 +107,11 @@ def validate(options: ConflictOptions) -> Checked:
     companions = companion_paths(real_output(checked.output)) if csv else {}
     check_beside("-o", checked.output, [(COMPANION_NOUNS[kind], path) for kind, path in companions.items()])
     beside = companions.values()
-    spare_inputs(options.inputs, [(f"-o {checked.output}", p) for p in (checked.output, *beside)]
+    spare_inputs(options, [(f"-o {checked.output}", p) for p in (checked.output, *beside)]
                  + [(f"--json {checked.json}", checked.json)])
     if options.figures is not None:
         check_figures_dir(options.figures, writable=True)
+        spare_inputs(options, [(f"--figures {options.figures}", Path(options.figures))])
     check_figure_options(options)
     checked.sensors = sensor_table(options.sensors, required=False)
     return checked

@@ -45,14 +45,14 @@ def validate(options: DecodeOptions) -> Checked:
     checked.output = output_path("-o", options.output, (".csv", ".parquet"))
     if checked.output is not None:
         out, base = checked.output, real_output(checked.output)
-        spare_inputs(options.inputs, [(f"-o {out}", p) for p in (
+        spare_inputs(options, [(f"-o {out}", p) for p in (
             out, *(category_output(base, c) for c in CATEGORIES))])
         cats = sorted(set(options.categories or DEFAULT_CATEGORIES))
         # written when several categories decode
         check_beside("-o", out, [(f"CAT{cat:03d} file", category_output(base, cat)) for cat in cats
                                  if len(cats) > 1])
         if checked.selection is not None and checked.selection.active:
-            spare_inputs(options.inputs, [(f"-o {out}", selection_output(base))])
+            spare_inputs(options, [(f"-o {out}", selection_output(base))])
             check_beside("-o", out, [("selection file", selection_output(base))])
     checked.sensors = None if options.sensors is None else sensor_table(options.sensors)  # for --area
     return checked

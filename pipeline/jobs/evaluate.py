@@ -75,7 +75,7 @@ def validate(options: EvaluateOptions) -> EvaluateChecked:
     given = [p for _, p in outs if p is not None]
     if len({str(p.resolve()) for p in given}) < len(given):
         raise OptionError("-o, --json and --html name the same file")
-    spare_inputs(options.inputs, outs)
+    spare_inputs(options, outs)
     checked.sensors = sensor_table(options.sensors)
     try:
         checked.preset = load_preset(options.preset)

@@ -9,7 +9,7 @@ from pathlib import Path
 
 import pandas as pd
 
-from msdc.pipeline.jobs.common import JobError, OptionError, nonempty_path, output_path
+from msdc.pipeline.jobs.common import JobError, OptionError, nonempty_path, output_path, spare_dataset
 from msdc.pipeline.jobs.options import SqlOptions, check_declared
 from msdc.pipeline.report.transaction import OutputTransaction, staged
 
@@ -38,6 +38,7 @@ def validate(options: SqlOptions) -> tuple[str, Path, Path | None]:
         raise OptionError("--dataset is required")
     nonempty_path("--dataset", options.dataset)
     out = output_path("-o", options.output, (".csv", ".parquet"))
+    spare_dataset(options.dataset, [(f"-o {out}", out)])
     return query, Path(options.dataset), out
 
 

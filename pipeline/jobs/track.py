@@ -86,10 +86,11 @@ def validate(options: TrackOptions, *, require_output: bool = False) -> Checked:
     parse_sources(options.sources)
     checked.output = output_path("-o", options.output, (".csv", ".parquet"))
     checked.json = output_path("--json", options.json, (".json",))
-    spare_inputs(options.inputs, [(f"-o {checked.output}", checked.output),
+    spare_inputs(options, [(f"-o {checked.output}", checked.output),
                                   (f"--json {checked.json}", checked.json)])
     if options.figures is not None:
         check_figures_dir(options.figures, writable=True)
+        spare_inputs(options, [(f"--figures {options.figures}", Path(options.figures))])
     check_figure_options(options)
     if require_output and checked.output is None and checked.json is None and options.figures is None:
         raise OptionError("give at least one output: -o tracks.csv|tracks.parquet, --json or --figures")

@@ -321,3 +321,34 @@ def test_a_default_ingest_keeps_the_north_markers_evaluate_reads(tmp_path):
     # category's own time line jumps, so neither run warns of it
     assert files["parameters"]["warnings"] == on_dataset["parameters"]["warnings"] == []
     assert on_dataset == files
+
+
+def _files(root: Path) -> dict[str, bytes]:
+    return {str(p.relative_to(root)): p.read_bytes() for p in sorted(root.rglob("*")) if p.is_file()}
+
+
+@pytest.mark.parametrize("command", [
+    ["track", "--sensors", str(SENSORS), "--all", "--json", "{manifest}"],
+    ["track", "--sensors", str(SENSORS), "--all", "-o", "{part}"],
+    ["track", "--sensors", str(SENSORS), "--all", "-o", "{outside}/t.csv", "--figures", "{root}/figs"],
+    ["quality", "--sensors", str(SENSORS), "--all", "-o", "{root}/q.xlsx"],
+    ["evaluate", "--sensors", str(SENSORS), "--preset", "eurocontrol-1997-ssr", "--json", "{link}/e.json"],
+    ["conflicts", "--sensors", str(SENSORS), "-o", "{root}/k.csv"],
+    ["correlate", "--sensors", str(SENSORS), "--all", "--json", "{root}/c.json"],
+    ["sql", "-o", "{part}", "SELECT 1 AS x"],
+], ids=["manifest", "part", "figures", "quality", "link", "conflicts", "correlate", "sql"])
+def test_an_output_inside_the_dataset_is_refused(tmp_path, dataset, command, capsys):
+    """An output inside the dataset's folder, by any path or link, overwrote its manifest or a part (a track
+    table in place of the CAT048 part, read afterwards as radar plots): refused before anything is read,
+    the dataset left byte for byte."""
+    link = tmp_path / "link"
+    link.symlink_to(dataset)
+    part = next(dataset.rglob("*.parquet"))
+    names = {"manifest": dataset / "manifest.json", "part": part, "root": dataset, "link": link,
+             "outside": tmp_path}
+    argv = [command[0], "--dataset", str(dataset), *(a.format(**names) for a in command[1:])]
+    before = _files(dataset)
+    assert main(argv) == 2
+    err = capsys.readouterr().err
+    assert f"is inside the dataset {dataset}; writing there would change the dataset" in err
+    assert _files(dataset) == before
