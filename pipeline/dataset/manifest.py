@@ -64,7 +64,46 @@ def load(root: Path) -> Manifest:
             [p["path"] for p in rec["parts"]]  # noqa: B018 - every part listed with its path
     except (KeyError, TypeError) as exc:
         raise ManifestError(f"{path}: an input record lacks {exc}") from None
+    for rec in inputs.values():
+        problem = _record_problem(rec)
+        if problem:
+            raise ManifestError(f"{path}: the input {rec.get('file', rec['sha256'])!r}: {problem}")
     return Manifest(inputs, str(doc.get("msdc", "")))
+
+
+def _record_problem(rec: dict) -> str | None:
+    """What makes an input record unreadable (its date, or a part's date, category, sensor, rows or path):
+    the readers would fail on it later, with no file named. None when it reads."""
+    from msdc.asterix.categories import DECODABLE
+
+    if rec.get("date") is not None and _no_date(rec["date"]):
+        return f"date {rec['date']!r} is no date (YYYY-MM-DD)"
+    if not isinstance(rec.get("rows", {}), dict):
+        return f"rows {rec['rows']!r} is no table of rows per category"
+    for part in rec["parts"]:
+        where = f"part {part.get('path')!r}"
+        inside = isinstance(part["path"], str) and not Path(part["path"]).is_absolute()
+        if not inside or ".." in Path(part["path"]).parts:
+            return f"{where}: no path inside the dataset"
+        if _no_date(part.get("date")):
+            return f"{where}: date {part.get('date')!r} is no date (YYYY-MM-DD)"
+        if type(part.get("category")) is not int or part["category"] not in DECODABLE:
+            return f"{where}: category {part.get('category')!r} is none msdc decodes"
+        if not isinstance(part.get("sensor"), str):
+            return f"{where}: sensor {part.get('sensor')!r} is no SAC_SIC text"
+        if type(part.get("rows")) is not int or part["rows"] < 0:
+            return f"{where}: rows {part.get('rows')!r} is no count"
+    return None
+
+
+def _no_date(text) -> bool:
+    import datetime as dt
+
+    try:
+        dt.date.fromisoformat(text)
+    except (TypeError, ValueError):
+        return True
+    return False
 
 
 def save(root: Path, manifest: Manifest) -> None:

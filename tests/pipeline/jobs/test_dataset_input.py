@@ -352,3 +352,29 @@ def test_an_output_inside_the_dataset_is_refused(tmp_path, dataset, command, cap
     err = capsys.readouterr().err
     assert f"is inside the dataset {dataset}; writing there would change the dataset" in err
     assert _files(dataset) == before
+
+
+@pytest.mark.parametrize("damage, said", [
+    (lambda rec, part: rec.update(date="2019-13-45"), "date '2019-13-45' is no date (YYYY-MM-DD)"),
+    (lambda rec, part: part.update(date="xx"), "date 'xx' is no date (YYYY-MM-DD)"),
+    (lambda rec, part: part.update(category=999), "category 999 is none msdc decodes"),
+    (lambda rec, part: part.update(category="48"), "category '48' is none msdc decodes"),
+    (lambda rec, part: part.update(rows=-1), "rows -1 is no count"),
+    (lambda rec, part: part.update(sensor=None), "sensor None is no SAC_SIC text"),
+    (lambda rec, part: part.update(path="../elsewhere.parquet"), "no path inside the dataset"),
+], ids=["input-date", "part-date", "category", "category-text", "rows", "sensor", "path"])
+@pytest.mark.parametrize("command", [["track", "--sensors", str(SENSORS), "--all", "--json", "{out}"],
+                                     ["stats"]], ids=["track", "stats"])
+def test_a_manifest_value_no_reader_can_use_is_said_by_name(tmp_path, dataset, damage, said, command, capsys):
+    """A date, category, sensor, row count or path in the manifest that no reader can use ended in a
+    traceback (ValueError, KeyError) once the job read it: now status 2 naming the manifest and the value."""
+    copy = tmp_path / "copy"
+    shutil.copytree(dataset, copy)
+    doc = json.loads((copy / "manifest.json").read_text())
+    damage(doc["inputs"][0], doc["inputs"][0]["parts"][0])
+    (copy / "manifest.json").write_text(json.dumps(doc))
+    argv = [command[0], "--dataset", str(copy), *(a.format(out=tmp_path / "t.json") for a in command[1:])]
+    assert main(argv) == 2
+    err = capsys.readouterr().err
+    assert "Traceback" not in err and f"{copy / 'manifest.json'}: the input " in err and said in err, err
+    assert not (tmp_path / "t.json").exists()
