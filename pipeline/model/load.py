@@ -202,8 +202,7 @@ def _load_dataset(dataset, categories, columns, progress: Progress | None) -> Lo
     reads (an input of other days, sensors or categories is neither listed in the outputs nor dates the
     run; all of them when none has), in ingest order."""
     check_dataset(dataset)
-    read = [i for i in range(len(dataset.records)) if dataset.touched(i, categories)]
-    read = read or list(range(len(dataset.records)))
+    read = _touched(dataset, categories)
     paths, recs, inputs = dataset.paths, [], []
     for n, i in enumerate(read):
         if progress:
@@ -214,6 +213,13 @@ def _load_dataset(dataset, categories, columns, progress: Progress | None) -> Lo
     first = min(dates) if dates else None
     frames, spans = _joined(recs, [dataset.labels[i] for i in read], first)
     return Loaded(frames, recs, inputs, first, spans)
+
+
+def _touched(dataset, categories=None) -> list[int]:
+    """The dataset's inputs with a part the run reads, in ingest order (all of them when none has: an
+    input of other days, sensors or categories is neither listed in the outputs nor dates the run)."""
+    read = [i for i in range(len(dataset.records)) if dataset.touched(i, categories)]
+    return read or list(range(len(dataset.records)))
 
 
 def dataset_info(dataset, i: int, rec: Recording) -> dict:
@@ -313,12 +319,15 @@ def load_measurements(paths: list[str | Path], sensors: pd.DataFrame, *, edition
         paths = input_paths(paths)
         digests = _digests(paths)
         labels = file_labels(paths)
+        order = list(range(len(paths)))
     else:
         check_dataset(dataset)
         paths, digests, labels = dataset.paths, dataset.digests, dataset.labels
-    for i, p in enumerate(paths):
+        order = _touched(dataset)
+    for n, i in enumerate(order):  # n: the input's place in the outputs, i: its place in paths
+        p = paths[i]
         if progress:
-            progress.step(f"{p.name} ({i + 1}/{len(paths)})")
+            progress.step(f"{p.name} ({n + 1}/{len(order)})")
         info = {"path": str(p), "sha256": digests[i], "bytes": 0, "format": None, "records": {},
                 "skipped_blocks": 0, "editions": {}}
         ignored: dict[int, int] = {}
@@ -354,9 +363,9 @@ def load_measurements(paths: list[str | Path], sensors: pd.DataFrame, *, edition
                 cut = cut or MarginCut(selection, dates[-1])
                 r, a = (None if x is None else cut.keep(x) for x in (r, a))
                 more = [cut.keep(x) for x in more]
-            radar += [(i, r)] if r is not None else []
-            adsb += [(i, a)] if a is not None else []
-            local += [(i, part) for part in more]
+            radar += [(n, r)] if r is not None else []
+            adsb += [(n, a)] if a is not None else []
+            local += [(n, part) for part in more]
             recs.append(rec)
         if first:  # nothing at all in the file: iter_read yields no chunk
             dates.append(None)

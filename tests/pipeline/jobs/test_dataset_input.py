@@ -293,6 +293,14 @@ def test_a_run_lists_and_dates_only_the_inputs_it_reads(tmp_path):
     earlier = hashlib.sha256(rec.read_bytes()).hexdigest()
     assert [i["sha256"] for i in both["inputs"]] == [earlier, *fixtures]
     assert both["parameters"]["date"] == "2026-11-20"
+    # quality and correlate decode in chunks (load.load_measurements): they listed the input of the other
+    # day, or the ADS-B with --sensor of the radar, as read with 0 bytes
+    quality = ["quality", "--sensors", str(SENSORS), "--all", "--dataset", str(root)]
+    window = _json(tmp_path, "q-window", [*quality, "--from", f"{DAY}T08:40Z", "--to", f"{DAY}T09:00Z"])
+    assert [i["sha256"] for i in window["inputs"]] == fixtures
+    assert [i["bytes"] for i in window["inputs"]] == [RADAR.stat().st_size, ADSB.stat().st_size]
+    radar = _json(tmp_path, "q-radar", [*quality, "--sensor", "048:25/201"])
+    assert [(i["sha256"], i["bytes"]) for i in radar["inputs"]] == [(fixtures[0], RADAR.stat().st_size)]
 
 
 def test_a_default_ingest_keeps_the_north_markers_evaluate_reads(tmp_path):
