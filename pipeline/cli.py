@@ -176,7 +176,10 @@ def cmd_stats(args) -> int:
 
     _numba_without_scipy()
     options = from_args(stats.StatsOptions, args)
-    result = stats.stats_job(options, progress=Progress())
+    progress = Progress()
+    with common.distributed(options, progress) as cluster:  # a dataset's partitions are its tasks
+        result = stats.stats_job(options, progress=progress)
+    _said_cluster("stats", options, cluster)
     _warn("stats", result.warnings)
     if result.selection is not None:
         print(_selection_line(result.selection).replace(" reports ", " records "))
@@ -448,16 +451,21 @@ def _run_job(name: str, validate, job, options, progress: Progress):
     except (CliError, common.OptionError, common.JobError, asterix_errors.AsterixError, OSError) as exc:
         _warn(name, getattr(exc, "job_warnings", [])[seen:])  # main() prints the error after them
         raise
-    if cluster is not None and cluster.summary():
-        print(f"msdc {name}: {cluster.summary()}", file=sys.stderr)
-    if cluster is not None and not cluster.used and getattr(options, "scheduler", None) is not None:
-        print(f"msdc {name}: warning: --scheduler {options.scheduler}: not used: this run had no "
-              "per-aircraft or per-partition work to distribute", file=sys.stderr)
+    _said_cluster(name, options, cluster)
     _warn(name, result.warnings[seen:])
     _report_skipped(result.loaded.errors)
     if result.loaded.selection is not None:
         print(f"msdc {name}: {_selection_line(result.loaded.selection)}", file=sys.stderr)
     return result
+
+
+def _said_cluster(name: str, options, cluster) -> None:
+    """What ran on the Dask cluster, or that a --scheduler given was not used (nothing was distributed)."""
+    if cluster is not None and cluster.summary():
+        print(f"msdc {name}: {cluster.summary()}", file=sys.stderr)
+    if cluster is not None and not cluster.used and getattr(options, "scheduler", None) is not None:
+        print(f"msdc {name}: warning: --scheduler {options.scheduler}: not used: this run had no "
+              "per-aircraft or per-partition work to distribute", file=sys.stderr)
 
 
 COMMANDS = {"decode": cmd_decode, "stats": cmd_stats, "correlate": cmd_correlate, "quality": cmd_quality,

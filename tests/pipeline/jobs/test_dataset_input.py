@@ -232,10 +232,13 @@ def test_refusals(tmp_path, dataset, capsys):
     assert main(["quality", "--sensors", str(SENSORS), "--all"]) == 2  # neither INPUT nor --dataset
 
 
-def _stats_lines(capsys, args: list[str]) -> list[str]:
+def _stats_lines(capsys, args: list[str], said: list[str] | None = None) -> list[str]:
+    """The lines stats prints (its stderr appended to ``said``)."""
     assert main(["stats", *args]) == 0
-    out = capsys.readouterr().out.splitlines()
-    return [line for line in out if "edition auto" not in line]  # the ingest chose it, and said so
+    out, err = capsys.readouterr()
+    if said is not None:
+        said.append(err)
+    return [line for line in out.splitlines() if "edition auto" not in line]  # the ingest chose it, said so
 
 
 @pytest.mark.parametrize("selection", [[], ["--sensor", f"{TRUTH['adsb']['sac']}/{TRUTH['adsb']['sic']}",
@@ -245,7 +248,12 @@ def test_stats_on_a_dataset_are_the_recordings(dataset, capsys, dask_scheduler, 
     """Each partition's stats a task on the cluster, folded per input: the tables printed are the
     recordings' (records, blocks, spans, distinct addresses and call signs per sensor and aircraft)."""
     files = _stats_lines(capsys, [str(RADAR), str(ADSB), "--date", DAY, *selection])
-    on_dataset = _stats_lines(capsys, ["--dataset", str(dataset), "--scheduler", dask_scheduler, *selection])
+    err = []
+    on_dataset = _stats_lines(capsys, ["--dataset", str(dataset), "--scheduler", dask_scheduler, *selection],
+                              err)
+    # the partitions ran as tasks there (stats ran them on threads, whatever --scheduler said)
+    assert f"task(s) on the Dask scheduler at {dask_scheduler}, none failed" in err[0]
+    assert "not used" not in err[0]
     if selection:  # the radar's partition is never read: its records are not counted as left out
         import re
 
