@@ -11,7 +11,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from msdc.pipeline.dataset.inputs import DatasetInputs, Pruning
+from msdc.pipeline.dataset.inputs import DatasetInputs, Pruning, UnreadablePart
 
 
 @dataclass(frozen=True)
@@ -37,7 +37,9 @@ class PartitionTask:
 @dataclass
 class PartitionStats:
     """What a partition adds to the stats: the accumulator, the distinct data block numbers per category,
-    the records read and kept per category, the left-out counts and the time span per data source."""
+    the records read and kept per category, the left-out counts and the time span per data source; or only
+    why its part cannot be read (``unreadable``: a result, not an error, so that a cluster does not retry it
+    and the job says it as without one)."""
 
     accumulator: object
     blocks: dict[int, np.ndarray]
@@ -45,6 +47,7 @@ class PartitionStats:
     records: dict[int, int]
     left_out: dict[str, int]
     spans: dict
+    unreadable: str | None = None
 
 
 def partitions(root: Path, records: list[dict], pruning: Pruning) -> list[tuple[int, str, int, str]]:
@@ -67,7 +70,10 @@ def partition_stats(task: PartitionTask) -> PartitionStats:
     day = dt.date.fromisoformat(task.date)
     source = DatasetInputs(task.root, [task.record],
                            Pruning(day, day, ((task.category, task.sensor),), (task.category,)))
-    rec = source.read(0, columns=task.columns)
+    try:
+        rec = source.read(0, columns=task.columns)
+    except UnreadablePart as exc:  # damaged or removed since the ingest
+        return PartitionStats(None, {}, 0, {}, {}, {}, unreadable=str(exc))
     read = sum(len(f) for f in rec.frames.values())
     left_out: dict[str, int] = {}
     if task.selection is not None:

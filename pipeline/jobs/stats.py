@@ -145,7 +145,6 @@ def _dataset_stats(options: StatsOptions, checked: Checked, progress: Progress |
     job's distributor, folded per input in the order of the manifest and the partitions: the tables equal
     the recordings' but for what a dataset does not keep (the skipped bytes' account, the categories not
     ingested), which the warnings say."""
-    from msdc.pipeline.dataset.inputs import UnreadablePart
     from msdc.pipeline.dataset.partition_stats import PartitionTask, partition_stats, partitions
     from msdc.pipeline.model.decoded_reports import VIEW_COLUMNS
     from msdc.pipeline.parallel import map_ordered
@@ -171,19 +170,18 @@ def _dataset_stats(options: StatsOptions, checked: Checked, progress: Progress |
     left_out: dict[str, int] = {}
     n_read = 0
     parts = map_ordered(partition_stats, tasks, distributable=True, label=PartitionTask.label)
-    try:
-        for (i, _, _, _), part in zip(keys, parts, strict=True):
-            acc.merge(part.accumulator)
-            for cat, ids in part.blocks.items():
-                blocks.setdefault((i, cat), []).append(ids)
-            for cat, n in part.records.items():
-                inputs[i]["records"][cat] = inputs[i]["records"].get(cat, 0) + n
-            for why, n in part.left_out.items():
-                left_out[why] = left_out.get(why, 0) + n
-            n_read += part.read
-            spans[i] = widen_spans(spans[i], part.spans)
-    except UnreadablePart as exc:  # a part damaged or removed since the ingest: said as the other commands do
-        raise JobError(str(exc), 2) from None
+    for (i, _, _, _), part in zip(keys, parts, strict=True):
+        if part.unreadable:  # a part damaged or removed since the ingest: said as the other commands do
+            raise JobError(part.unreadable, 2)
+        acc.merge(part.accumulator)
+        for cat, ids in part.blocks.items():
+            blocks.setdefault((i, cat), []).append(ids)
+        for cat, n in part.records.items():
+            inputs[i]["records"][cat] = inputs[i]["records"].get(cat, 0) + n
+        for why, n in part.left_out.items():
+            left_out[why] = left_out.get(why, 0) + n
+        n_read += part.read
+        spans[i] = widen_spans(spans[i], part.spans)
     counts: dict[int, int] = {}
     for (_, cat), ids in blocks.items():  # a block split over partitions (midnight, two sensors) counts once
         counts[cat] = counts.get(cat, 0) + len(np.unique(np.concatenate(ids)))
