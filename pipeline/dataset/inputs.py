@@ -160,10 +160,10 @@ class DatasetInputs:
 
         rec = self.records[i]
         prune = replace(self.pruning, categories=_narrower(self.pruning.categories, categories))
-        by_cat: dict[int, list[Path]] = {}
+        by_cat: dict[int, dict[Path, int]] = {}  # each category's parts, with the rows the manifest lists
         for part in rec["parts"]:
             if prune.keeps(part):
-                by_cat.setdefault(int(part["category"]), []).append(self.root / part["path"])
+                by_cat.setdefault(int(part["category"]), {})[self.root / part["path"]] = int(part["rows"])
         editions = {int(c): e for c, e in rec.get("editions", {}).items()}
         frames = {}
         for cat, files in sorted(by_cat.items()):
@@ -176,10 +176,11 @@ class DatasetInputs:
         return Recording(frames, errors, {c: e for c, e in editions.items() if c in frames}, path=rec["path"],
                          format=rec.get("format") or "", date=self.date(i), size_bytes=int(rec["size_bytes"]))
 
-    def _frame(self, files: list[Path], category: int, edition: str | None, columns, prune: Pruning
+    def _frame(self, files: dict[Path, int], category: int, edition: str | None, columns, prune: Pruning
                ) -> pd.DataFrame:
-        """One category's records of one input from its part files: the partition filter and the columns
-        pushed down to pyarrow.dataset, then put in file order."""
+        """One category's records of one input from its part files (with the rows the manifest lists: a
+        part that holds other rows was changed since the ingest, UnreadablePart): the partition filter and
+        the columns pushed down to pyarrow.dataset, then put in file order."""
         import pyarrow as pa
         import pyarrow.dataset as ds
 
@@ -199,7 +200,16 @@ class DatasetInputs:
             names = [n for n in names if n in data.schema.names]
             fragments = list(data.get_fragments(filter=prune.expression()))
             self.read_parts += [Path(f.path) for f in fragments]
+            for f in fragments:  # the footer's count, read before the rows
+                held, listed = f.metadata.num_rows, files.get(Path(f.path))
+                if listed is not None and held != listed:
+                    raise UnreadablePart(f"{self.root}: a part of CAT{category:03d} holds {held:,} rows "
+                                         f"where the manifest lists {listed:,} (changed since the ingest): "
+                                         f"{f.path}")
             table = data.to_table(columns=names, filter=prune.expression(), memory_pool=pool)
+        except FileNotFoundError as exc:
+            raise UnreadablePart(f"{self.root}: a part of CAT{category:03d} is missing (the manifest lists "
+                                 f"it): {exc}") from None
         except (OSError, pa.ArrowException) as exc:
             raise UnreadablePart(f"{self.root}: a part of CAT{category:03d} cannot be read: {exc}") from None
         frame = table.to_pandas(memory_pool=pool)

@@ -394,3 +394,31 @@ def test_a_manifest_value_no_reader_can_use_is_said_by_name(tmp_path, dataset, d
     err = capsys.readouterr().err
     assert "Traceback" not in err and f"{copy / 'manifest.json'}: the input " in err and said in err, err
     assert not (tmp_path / "t.json").exists()
+
+
+@pytest.mark.parametrize("change, said", [
+    ("remove", "a part of CAT048 is missing (the manifest lists it): "),
+    ("swap", "a part of CAT048 holds {adsb:,} rows where the manifest lists {radar:,} (changed since the "
+             "ingest): "),
+], ids=["missing", "swapped"])
+@pytest.mark.parametrize("command", [["track", "--sensors", str(SENSORS), "--all", "--json", "{out}"],
+                                     ["stats"]], ids=["track", "stats"])
+def test_a_part_removed_or_replaced_since_the_ingest_is_said(tmp_path, dataset, change, said, command,
+                                                            capsys):
+    """A removed part was said "cannot be read" and its path, no reason; the ADS-B part copied over the
+    radar's was read as radar plots (stats counted 14,986 CAT048 records; track asked for radar 0/1 in the
+    sensor file): the rows each part holds are the manifest's, else status 2 naming the part."""
+    copy = tmp_path / "copy"
+    shutil.copytree(dataset, copy)
+    radar = next(copy.glob("date=*/category=048/sensor=*/part-*.parquet"))
+    if change == "remove":
+        radar.unlink()
+    else:
+        shutil.copy(next(copy.glob("date=*/category=021/sensor=*/part-*.parquet")), radar)
+    argv = [command[0], "--dataset", str(copy), "--scheduler", "none",
+            *(a.format(out=tmp_path / "t.json") for a in command[1:])]
+    assert main(argv) == 2
+    err = capsys.readouterr().err
+    expected = said.format(adsb=TRUTH["adsb"]["rows"], radar=TRUTH["radar"]["rows"])
+    assert f"{copy}: {expected}" in err and radar.name in err and "Traceback" not in err, err
+    assert not (tmp_path / "t.json").exists()
