@@ -15,6 +15,8 @@ class NotADataset(ValueError):
 
 def open_manifest(root: Path) -> Manifest:
     """The manifest of the dataset at ``root``; NotADataset when the folder or its manifest is missing."""
+    if root.exists() and not root.is_dir():
+        raise NotADataset(f"{root}: is a file, not a folder (a dataset is the folder 'msdc ingest' made)")
     if not root.is_dir():
         raise NotADataset(f"{root}: no such folder")
     if not (root / MANIFEST).is_file():

@@ -227,6 +227,10 @@ def test_refusals(tmp_path, dataset, capsys):
     assert str(tmp_path) in err and "manifest.json" in err
     assert main(["track", "--dataset", str(tmp_path / "nope"), "--sensors", str(SENSORS), "--all"]) == 2
     assert "no such folder" in capsys.readouterr().err
+    (tmp_path / "file").write_text("")
+    for command in (["track", "--sensors", str(SENSORS), "--all"], ["stats"], ["sql", "SELECT 1"]):
+        assert main([command[0], "--dataset", str(tmp_path / "file"), *command[1:]]) == 2
+        assert f"{tmp_path / 'file'}: is a file, not a folder" in capsys.readouterr().err  # not "no such"
     assert main(["track", "--dataset", str(dataset), "--sensors", str(SENSORS), "--all", "--date", DAY]) == 2
     assert "with --date" in capsys.readouterr().err  # the ingest decoded it
     assert main(["quality", "--sensors", str(SENSORS), "--all"]) == 2  # neither INPUT nor --dataset
