@@ -689,7 +689,7 @@ def _load_measurements(options: AircraftOptions, checked: Checked, progress: Pro
     except NoRecords as exc:
         if progress:
             progress.stage(stage)
-        raise _no_records(exc) from exc
+        raise _no_records(exc, lambda cats: in_the_inputs(options, checked, cats)) from exc
     if progress:
         progress.stage(stage)
     meas, warnings = selected_reports(meas, checked, loaded)
@@ -706,7 +706,8 @@ def _load_measurements(options: AircraftOptions, checked: Checked, progress: Pro
         warnings += unplaced_warnings(loaded, options)
     warnings += _empty_inputs(loaded, checked.dataset)
     warnings += _wrong_editions(loaded, but=absent_categories(loaded))
-    warnings += [f"no {REGISTRY[cat].noun} (CAT{cat:03d}) records in the inputs{_all_failed(loaded, cat)}: "
+    warnings += [f"no {REGISTRY[cat].noun} (CAT{cat:03d}) records {in_the_inputs(options, checked, (cat,))}"
+                 f"{_all_failed(loaded, cat)}: "
                  f"{QUALITY_WITHOUT[cat]}" for cat in absent_categories(loaded)
                  if needs is None or any(cat in group for group in needs)]
     warnings += order_warnings(read_paths(checked, loaded), loaded.spans)
@@ -785,20 +786,20 @@ def unknown_reference_error(missing: list[tuple[int, str, int, int]], path: str 
                     f"\n\n{lines}")
 
 
-def _no_records(exc: NoRecords) -> JobError:
+def _no_records(exc: NoRecords, where=lambda categories: "in the inputs") -> JobError:
     """The user-facing error for inputs without radar or ADS-B records: every absent category, those whose
     blocks failed to decode first, with how many failed and the edition to pin (an ADS-B recording under a
-    wrong edition is why there is no record at all, not a missing radar)."""
+    wrong edition is why there is no record at all, not a missing radar). ``where``: in_the_inputs."""
     if exc.category not in QUALITY_WITHOUT:  # a multilateration or surface radar category the job needs
         names = " or ".join(f"CAT{c:03d}" for c in exc.alternatives)
         nouns = "multilateration" if len(exc.alternatives) > 1 else REGISTRY[exc.category].noun
-        return JobError(f"no {nouns} ({names}) records in the inputs{unread_inputs(exc.loaded)}")
+        return JobError(f"no {nouns} ({names}) records {where(exc.alternatives)}{unread_inputs(exc.loaded)}")
     absent = absent_categories(exc.loaded) or [exc.category]
     failed = {cat: why[2:] for cat in absent if (why := _all_failed(exc.loaded, cat))}
     absent.sort(key=lambda cat: cat not in failed)
     names = " or ".join(f"{REGISTRY[cat].noun} (CAT{cat:03d})" for cat in absent)
     why = f": {'; '.join(failed.values())}" if failed else ""
-    return JobError(f"no {names} records in the inputs{why}{unread_inputs(exc.loaded)}")
+    return JobError(f"no {names} records {where(absent)}{why}{unread_inputs(exc.loaded)}")
 
 
 def unread_inputs(loaded: Loaded) -> str:
@@ -1018,7 +1019,8 @@ def source_measurements(loaded, checked: Checked, options) -> tuple[pd.DataFrame
         wanted = " or ".join(names[s] for s in sources)
         failed = "; ".join(why[2:] for cat in dict.fromkeys(c for s in sources for c in cats[s])
                            if (why := _all_failed(loaded, cat)))
-        raise JobError(f"no {wanted} records in the inputs (--sources {','.join(sources)})"
+        where = in_the_inputs(options, checked, [c for s in sources for c in cats[s]])
+        raise JobError(f"no {wanted} records {where} (--sources {','.join(sources)})"
                        + (f": {failed}" if failed else ""))
     try:
         radar, stray = declared_radar(radar, checked.sensors, sensors_path(options))
@@ -1133,6 +1135,18 @@ def selection_note(options: DecodingOptions) -> str:
                                       ("--area", options.area), ("--fl", options.fl),
                                       ("--sensor", options.sensor_ids)) if value]
     return (f" (among the reports the selection keeps: {', '.join(given)})" if given else "")
+
+
+def in_the_inputs(options: DecodingOptions, checked: Checked, categories) -> str:
+    """Where no record of ``categories`` was found: "in the inputs", or, on a dataset that holds some but
+    not in the partitions the report selection keeps, those partitions (the selection is why)."""
+    source = checked.dataset
+    held = 0 if source is None else sum(int(n) for rec in source.records
+                                        for c, n in rec.get("rows", {}).items() if int(c) in set(categories))
+    if not held:
+        return "in the inputs"
+    given = selection_note(options).removeprefix(" (among the reports the selection keeps: ").rstrip(")")
+    return f"in the dataset's partitions the report selection keeps ({given}; it holds {held:,})"
 
 
 def filters_asked(options: ReferenceFilterOptions) -> bool:

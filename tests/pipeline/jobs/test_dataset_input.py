@@ -426,3 +426,17 @@ def test_a_part_removed_or_replaced_since_the_ingest_is_said(tmp_path, dataset, 
     expected = said.format(adsb=TRUTH["adsb"]["rows"], radar=TRUTH["radar"]["rows"])
     assert f"{copy}: {expected}" in err and radar.name in err and "Traceback" not in err, err
     assert not (tmp_path / "t.json").exists()
+
+
+def test_partitions_the_selection_prunes_away_are_said_not_the_inputs(dataset, tmp_path, capsys):
+    """--from/--to or --sensor keeping no partition with the records a job needs: the error said "no ...
+    records in the inputs", which the dataset holds (the recordings' run says the selection kept none)."""
+    adsb, radar = TRUTH["adsb"]["rows"], TRUTH["radar"]["rows"]
+    early = ["--from", f"{DAY}T05:00", "--to", f"{DAY}T06:00"]
+    base = ["--dataset", str(dataset), "--sensors", str(SENSORS), "--all", "--scheduler", "none"]
+    assert main(["track", *base, *early, "-o", str(tmp_path / "t.csv")]) == 1
+    assert ("no radar (CAT048) or ADS-B (CAT021) records in the dataset's partitions the report selection "
+            f"keeps (--from, --to; it holds {adsb + radar:,})") in capsys.readouterr().err
+    assert main(["correlate", *base, "--sensor", "048:25/201", "--json", str(tmp_path / "c.json")]) == 1
+    assert ("no ADS-B (CAT021) records in the dataset's partitions the report selection keeps (--sensor; it "
+            f"holds {adsb:,})") in capsys.readouterr().err
