@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import argparse
 import atexit
+import contextlib
 import functools
 import gc
 import importlib
@@ -395,17 +396,38 @@ def cmd_listen(args) -> int:
     options = from_args(listen.ListenOptions, args)
     names = ", ".join(options.udp)
     line = f"msdc listen: receiving {names} (Ctrl-C ends)"
-    result = listen.listen_job(options, ready=lambda state: print(line, file=sys.stderr, flush=True),
-                               ingest=_ingester(options.dataset, options.editions))
-    _warn("listen", result.warnings)
-    for line in listen.summary_lines(result):
-        print(line)
-    if result.recording_error:
-        print(f"msdc listen: --record: {result.recording_error}", file=sys.stderr)
-    if result.decoding_failure:
-        print(f"msdc listen: decoding stopped: {result.decoding_failure}", file=sys.stderr)
-        return 1
+    with _live_log_said("listen"):
+        result = listen.listen_job(options, ready=lambda state: print(line, file=sys.stderr, flush=True),
+                                   ingest=_ingester(options.dataset, options.editions))
+    with listen.signals_held():  # the counts said whole, whatever signal follows the one that ended it
+        _warn("listen", result.warnings)
+        for line in listen.summary_lines(result):
+            print(line)
+        if result.decoding_failure:
+            print(f"msdc listen: decoding stopped: {result.decoding_failure}", file=sys.stderr)
+            return 1
     return 0
+
+
+@contextlib.contextmanager
+def _live_log_said(name: str):
+    """The live package's log lines (a feed's socket failing, a batch that would not decode, the monitor's
+    failures) said on stderr as msdc's warnings, a line each, inside the block: without a handler Python's
+    fallback printed them bare, and a traceback with them."""
+    import logging
+
+    class Line(logging.Formatter):
+        def format(self, record: logging.LogRecord) -> str:
+            return f"msdc {name}: warning: {record.getMessage()}"
+
+    handler = logging.StreamHandler(sys.stderr)
+    handler.setFormatter(Line())
+    logger = logging.getLogger("msdc.live")
+    logger.addHandler(handler)
+    try:
+        yield
+    finally:
+        logger.removeHandler(handler)
 
 
 def _ingester(dataset: str | None, editions: tuple[str, ...]):

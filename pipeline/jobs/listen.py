@@ -4,9 +4,10 @@ feed brings, record it as pcapng and serve the monitor page (pipeline.live). Run
 
 from __future__ import annotations
 
-import logging
+import contextlib
 import os
 import re
+import signal
 import sys
 import tempfile
 import threading
@@ -235,17 +236,21 @@ def listen_job(options: ListenOptions, *, stop: threading.Event | None = None,
         ready(state)
     started = time.monotonic()
     interrupted = False
+    said: set[str] = set()  # what _watch has said once: the recording's failure
     try:
-        _watch(listener, state, recorder, options.duration_s, stop, say, started)
+        _watch(listener, state, recorder, options.duration_s, stop, say, started, said)
     except (KeyboardInterrupt, Terminated):
         interrupted = True
     finally:
-        stop.set()
-        _stop_quietly(listener)
-        if server is not None:
-            server.join(timeout=5)
-        if ingesting is not None:
-            ingesting.finish()
+        with signals_held():  # a second Ctrl-C, SIGTERM or SIGHUP must not cut the drain short
+            stop.set()
+            listener.stop()
+            if server is not None:
+                server.join(timeout=5)
+            if ingesting is not None:
+                ingesting.finish()
+            if recorder is not None and recorder.error and "record" not in said:  # it failed as it closed
+                say(f"msdc listen: --record {recorder.folder}: {recorder.error}")
     failure = listener.failure
     result = ListenResult(state.counters(), list(recorder.files) if recorder else [],
                         recorder.error if recorder else None, state.clashes(), time.monotonic() - started,
@@ -273,14 +278,9 @@ class Ingesting:
         self.paths.put(path)
 
     def finish(self) -> None:
-        """Ingest what is left, then end the thread (a second Ctrl-C meanwhile is ignored)."""
+        """Ingest what is left, then end the thread."""
         self.paths.put(None)
-        while True:
-            try:
-                self.thread.join()
-                return
-            except KeyboardInterrupt:
-                continue
+        self.thread.join()
 
     def _run(self) -> None:
         while (path := self.paths.get()) is not None:
@@ -292,21 +292,28 @@ class Ingesting:
                 self.say(f"msdc listen: --dataset: {path} not ingested: {exc}")
 
 
-def _stop_quietly(listener) -> None:
-    """Stop the listener; a second Ctrl-C while it drains is ignored (the recording must be closed)."""
-    while True:
-        try:
-            listener.stop()
-            return
-        except KeyboardInterrupt:
-            continue
+@contextlib.contextmanager
+def signals_held():
+    """SIGINT, SIGTERM and SIGHUP ignored inside the block (from the main thread; elsewhere they cannot
+    reach it), their handlers back after: the queues are drained and the recording closed whole. A second
+    Ctrl-C was caught and the stop begun again, which could close the recording under the decoding thread
+    or leave it a 0-byte .part file (a SIGTERM); one arriving then is dropped, as the docs say."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    held = [getattr(signal, name) for name in ("SIGINT", "SIGTERM", "SIGHUP") if hasattr(signal, name)]
+    previous = {sig: signal.signal(sig, signal.SIG_IGN) for sig in held}
+    try:
+        yield
+    finally:
+        for sig, handler in previous.items():
+            signal.signal(sig, handler)
 
 
-def _watch(listener, state, recorder, duration_s, stop, say, started) -> None:
-    """Wait for the end, saying drops (at once), the recording's failure (once) and a status line every
-    STATUS_S."""
+def _watch(listener, state, recorder, duration_s, stop, say, started, said: set[str]) -> None:
+    """Wait for the end, saying drops (at once), the recording's failure (once: "record" put in ``said``)
+    and a status line every STATUS_S."""
     dropped_said = 0
-    error_said = False
     next_status = started + STATUS_S
     while not stop.wait(0.1):
         now = time.monotonic()
@@ -318,12 +325,11 @@ def _watch(listener, state, recorder, duration_s, stop, say, started) -> None:
             per_feed = ", ".join(f"{name} {c['dropped']}" for name, c in counters.items() if c["dropped"])
             say(f"msdc listen: warning: {dropped - dropped_said} datagram(s) dropped: msdc's queue was full "
                 f"(decoding cannot keep up; dropped so far: {per_feed})")
-            logging.getLogger("msdc.live").warning("%d datagrams dropped", dropped - dropped_said)
             dropped_said = dropped
             stop.wait(DROP_NOTE_S)
-        if recorder is not None and recorder.error and not error_said:
+        if recorder is not None and recorder.error and "record" not in said:
             say(f"msdc listen: --record {recorder.folder}: {recorder.error}")
-            error_said = True
+            said.add("record")
         if listener.failure is not None:
             raise JobError(f"decoding stopped: {listener.failure}")
         if now >= next_status:
@@ -334,7 +340,7 @@ def _watch(listener, state, recorder, duration_s, stop, say, started) -> None:
 def status_line(name: str, c: dict) -> str:
     """One feed's counters in a line; its packets' parts add up to them (framed, unframed, empty, dropped
     and, while decoding goes on, waiting)."""
-    from msdc.pipeline.live.health import waiting_datagrams
+    from msdc.pipeline.live.state import waiting_datagrams
 
     records = sum(c["records"].values())
     waiting = waiting_datagrams(c)

@@ -22,6 +22,7 @@ from msdc.pipeline.evaluate.detection import pd_requirement
 from msdc.pipeline.evaluate.outcome import Outcome, withheld
 from msdc.pipeline.evaluate.scans import MIN_DIFFS, period_from_plots
 from msdc.pipeline.live.monitor import Thresholds
+from msdc.pipeline.live.state import waiting_datagrams
 from msdc.pipeline.model.coverage import out_of_coverage
 from msdc.pipeline.model.sources import kind_of_id
 
@@ -383,13 +384,6 @@ def feed_figures(feed: str, counter: dict, samples: list[tuple[float, dict]], no
             warnings.append({"level": "warning", "kind": key, "feed": feed,
                              "message": f"{feed}: {new} {what} in the last {span:.0f} s"})
     return panel, warnings
-
-
-def waiting_datagrams(feed: dict) -> int:
-    """The feed's datagrams received but not decoded yet (in its queue or the batch being decoded): its
-    packets less those framed, unframed, empty and dropped, which each datagram is exactly one of once
-    decoded."""
-    return feed["packets"] - sum(feed[k] for k in ("framed", "unframed", "empty", "dropped"))
 
 
 def arrival_period_s(wall_s: np.ndarray, key: np.ndarray) -> float:

@@ -193,9 +193,8 @@ class Listener:
                     batch = self.take() if stopping else []
                 if stopping:
                     return
-        except BaseException as exc:  # said by the job; receiving goes on counting what arrives
+        except BaseException as exc:  # said by the job (listen_job); receiving goes on counting what arrives
             self.failure = exc
-            log.exception("the decoding thread failed")
 
     def handle(self, batch: list[Datagram]) -> None:
         """Record a batch, then decode it."""

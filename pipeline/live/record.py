@@ -9,14 +9,11 @@ and synced, so a reader never sees half a file under the final name; a new file 
 from __future__ import annotations
 
 import datetime as dt
-import logging
 import os
 import socket
 import struct
 from collections.abc import Callable
 from pathlib import Path
-
-log = logging.getLogger("msdc.live")
 
 LINKTYPE_IPV4 = 228
 SHB_TYPE, IDB_TYPE, EPB_TYPE = 0x0A0D0D0A, 1, 6
@@ -206,7 +203,6 @@ class Recorder:
                 kept = f"; {part} holds what was written before (possibly cut short)"
         why = exc.strerror or str(exc)
         self.error = f"recording stopped: {why} (writing in {self.folder}){kept}; receiving goes on"
-        log.error("--record: %s", self.error)
 
     def _sync_folder(self) -> None:
         try:

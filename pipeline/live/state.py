@@ -20,6 +20,13 @@ KEEP_S = 300.0  # the recent reports are kept this long (wall clock): the monito
 COUNTER_KEYS = ("packets", "bytes", "framed", "unframed", "empty", "decode_errors", "dropped")
 
 
+def waiting_datagrams(feed: dict) -> int:
+    """The feed's datagrams received but not decoded yet (in its queue or the batch being decoded): its
+    packets less those framed, unframed, empty and dropped, which each datagram is exactly one of once
+    decoded."""
+    return feed["packets"] - sum(feed[k] for k in ("framed", "unframed", "empty", "dropped"))
+
+
 @dataclass
 class FeedCounters:
     """One feed's counts since listening started."""

@@ -105,6 +105,48 @@ def test_ctrl_c_ends_listen_with_a_complete_recording(tmp_path, capsys):
     assert row[3] == "10"  # records of 048 25/201: 5 datagrams of 2
 
 
+def _packet_blocks(path: Path) -> int:
+    """Enhanced packet blocks (type 6) in a pcapng file, walked by their lengths (pcapng's own layout)."""
+    import struct
+
+    data, at, n = path.read_bytes(), 0, 0
+    while at < len(data):
+        kind, length = struct.unpack_from("<II", data, at)
+        n += kind == 6
+        at += length
+    return n
+
+
+@pytest.mark.parametrize("second", ["SIGINT", "SIGTERM"])
+def test_a_second_signal_while_listen_drains_is_ignored(tmp_path, second):
+    """Ctrl-C, then another Ctrl-C or a SIGTERM 50 ms later, as a user pressing twice: the second one was
+    caught and the stop begun again (or, a SIGTERM, cut it short): no counts said, exit 130 or 143, a
+    recording a datagram short or a 0-byte .part file. Now ignored: status 0, the counts, every datagram
+    received in the closed recording."""
+    port = free_port()
+    folder = tmp_path / "rec"
+    argv = [sys.executable, "-m", "msdc.pipeline.cli", "listen", "--udp", f"127.0.0.1:{port}", "--record",
+            str(folder)]
+    proc = subprocess.Popen(argv, cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                            preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
+    try:
+        assert "receiving 127.0.0.1:" in proc.stderr.readline()
+        send_all([block(48, cat048_record(25, 201, 100.0 + i * 0.01)) for i in range(3000)], port)
+        proc.send_signal(signal.SIGINT)
+        time.sleep(0.05)
+        proc.send_signal(getattr(signal, second))
+        out, err = proc.communicate(timeout=60)
+    finally:
+        proc.kill()
+    assert proc.returncode == 0, err
+    assert "Traceback" not in err
+    line = next(line for line in out.splitlines() if line.startswith(f"udp:127.0.0.1:{port}: "))
+    packets = int(line.split(": ")[1].split()[0])
+    assert f"{packets} packets ({packets} framed, 0 unframed, 0 empty, 0 dropped)" in line  # none waiting
+    (path,) = folder.iterdir()
+    assert path.suffix == ".pcapng" and _packet_blocks(path) == packets
+
+
 def test_http_without_the_live_extra_is_refused_before_listening(capsys, monkeypatch):
     """Without uvicorn the monitor's thread died with a traceback and listen went on without it; --http is
     now refused, naming the extra, before a socket is opened."""
@@ -127,3 +169,41 @@ def test_a_feeds_status_line_shows_its_packets_parts():
     assert status_line("radar", c) == ("radar: 100 packets (90 framed, 3 unframed, 2 empty, 1 dropped, "
                                        "4 waiting), 5000 bytes, 12 records, 1 decode errors")
     assert "waiting" not in status_line("radar", {**c, "framed": 94})
+
+
+def test_a_full_queue_is_said_once_as_msdcs_warning(tmp_path):
+    """--queue 1 under a burst: each drop note said as msdc's warning, not followed by Python logging's
+    bare copy ("513 datagrams dropped"), and no other line that is not msdc's."""
+    port = free_port()
+    argv = [sys.executable, "-m", "msdc.pipeline.cli", "listen", "--udp", f"127.0.0.1:{port}", "--queue", "1",
+            "--duration", "3"]
+    proc = subprocess.Popen(argv, cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    try:
+        assert "receiving 127.0.0.1:" in proc.stderr.readline()
+        send_all([block(48, cat048_record(25, 201, 100.0 + i * 0.01)) for i in range(3000)], port)
+        out, err = proc.communicate(timeout=60)
+    finally:
+        proc.kill()
+    assert proc.returncode == 0, err
+    assert "datagram(s) dropped: msdc's queue was full" in err
+    assert [line for line in err.splitlines() if not line.startswith("msdc listen: ")] == []
+
+
+def test_the_live_packages_log_lines_are_said_as_msdcs_warnings(capsys):
+    """A feed's socket failing or the monitor failing is logged by pipeline.live; without a handler Python
+    printed the bare message, and a traceback with an exception's."""
+    import logging
+
+    from msdc.pipeline.cli import _live_log_said
+
+    with _live_log_said("listen"):
+        try:
+            raise OSError("boom")
+        except OSError:
+            logging.getLogger("msdc.live.monitor").exception("live monitor: snapshot failed")
+        logging.getLogger("msdc.live").error("%s: receiving failed: %s", "udp:1.2.3.4:5", "gone")
+    logging.getLogger("msdc.live").error("after the block")  # the handler removed: not said here
+    err = capsys.readouterr().err.splitlines()
+    assert err[:2] == ["msdc listen: warning: live monitor: snapshot failed",
+                       "msdc listen: warning: udp:1.2.3.4:5: receiving failed: gone"]
+    assert "Traceback" not in "\n".join(err) and "msdc listen: warning: after the block" not in err
