@@ -51,7 +51,7 @@ def validate(options: ReplayOptions):
 def replay_job(options: ReplayOptions, *, stop: Callable[[], bool] = lambda: False) -> ReplayResult:
     """Read the recordings' datagrams and times, then send them to --to at --speed (--loop, --duration)
     until done or ``stop()``; Ctrl-C ends it with what was sent so far."""
-    from msdc.pipeline.live.replay import ReplayError, schedule, send, sending_socket
+    from msdc.pipeline.live.replay import InterfaceError, ReplayError, schedule, send, sending_socket
 
     to, paths, warnings = validate(options)
     try:
@@ -60,6 +60,9 @@ def replay_job(options: ReplayOptions, *, stop: Callable[[], bool] = lambda: Fal
         raise JobError(str(exc), 2) from None
     try:
         sock = sending_socket(to, options.iface, options.ttl)
+    except InterfaceError as exc:
+        raise OptionError(f"--iface {options.iface}: cannot send from it (to {options.to}): "
+                          f"{exc.strerror or exc}") from None
     except OSError as exc:
         raise OptionError(f"--to {options.to}: cannot send there ({exc.strerror or exc})") from None
     try:

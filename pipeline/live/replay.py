@@ -150,9 +150,14 @@ def schedule(paths: list[str | Path], fmt: str | None = None) -> Schedule:
     return Schedule(t - t[0], [data[i] for i in order])
 
 
+class InterfaceError(OSError):
+    """The ``iface`` address cannot send (not an address of this machine): its fault, not the
+    destination's."""
+
+
 def sending_socket(to: Endpoint, iface: str | None, ttl: int) -> socket.socket:
     """A UDP socket sending to ``to``: multicast out of ``iface`` (default: the kernel's route) with ``ttl``
-    and loop-back on (a listener on this machine hears it)."""
+    and loop-back on (a listener on this machine hears it). InterfaceError when ``iface`` cannot be used."""
     sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM, socket.IPPROTO_UDP)
     try:
         try:
@@ -162,12 +167,15 @@ def sending_socket(to: Endpoint, iface: str | None, ttl: int) -> socket.socket:
         if to.multicast:
             sock.setsockopt(socket.IPPROTO_IP, socket.IP_MULTICAST_TTL, ttl)
             sock.setsockopt(socket.IPPROTO_IP, socket.IP_MULTICAST_LOOP, 1)
-            if iface:
-                sock.setsockopt(socket.IPPROTO_IP, socket.IP_MULTICAST_IF, socket.inet_aton(iface))
         else:
             sock.setsockopt(socket.IPPROTO_IP, socket.IP_TTL, max(ttl, 1))
         if iface:
-            sock.bind((iface, 0))
+            try:
+                if to.multicast:
+                    sock.setsockopt(socket.IPPROTO_IP, socket.IP_MULTICAST_IF, socket.inet_aton(iface))
+                sock.bind((iface, 0))
+            except OSError as exc:
+                raise InterfaceError(exc.errno, exc.strerror) from None
         sock.connect((to.host, to.port))
     except OSError:
         sock.close()

@@ -31,6 +31,11 @@ ROOT = Path(__file__).resolve().parents[3]
     (["replay", "nowhere.ast", "--to", "127.0.0.1:8600"], "nowhere.ast: input file does not exist"),
     (["replay", "fixtures/radar.ast", "--to", "127.0.0.1"], "--to '127.0.0.1': expected ADDR:PORT"),
     (["replay", "fixtures/radar.ast", "--to", "127.0.0.1:8600", "--speed", "0"], "--speed 0.0: must be a"),
+    # an address not of this machine (TEST-NET-1, RFC 5737) was blamed on --to: "cannot send there"
+    (["replay", "fixtures/radar.ast", "--to", "127.0.0.1:8600", "--iface", "192.0.2.1"],
+     "--iface 192.0.2.1: cannot send from it (to 127.0.0.1:8600): "),
+    (["replay", "fixtures/radar.ast", "--to", "239.1.2.3:8600", "--iface", "192.0.2.1"],
+     "--iface 192.0.2.1: cannot send from it (to 239.1.2.3:8600): "),
     # it said "expected HOST:PORT" for a port out of range, and "cannot write in fixtures/radar.ast
     # (permission denied)" for a file where a folder should be
     (["listen", "--udp", "127.0.0.1:8600", "--http", "127.0.0.1:99999"],
