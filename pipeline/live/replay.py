@@ -25,6 +25,7 @@ from msdc.pipeline.meta import REPLAYED_FORMATS
 SECONDS_PER_DAY = 86400
 HALF_DAY_S = 43200
 TIMED_FORMATS = tuple(f for f in REPLAYED_FORMATS if f != "raw")  # each datagram with its capture time
+ABSOLUTE_FORMATS = ("pcap", "pcapng")  # ...a dated one (final and gps: times of day, as raw)
 SLEEP_MIN_S = 0.0005  # datagrams due within this are sent at once (the OS sleeps no finer)
 
 
@@ -47,9 +48,9 @@ class Schedule:
         return len(self.data)
 
 
-def recording_datagrams(path: str | Path, fmt: str | None = None) -> tuple[np.ndarray, list[bytes]]:
-    """(time in seconds, non-decreasing, file order; datagram bytes) of one recording; ReplayError when it
-    cannot be replayed."""
+def recording_datagrams(path: str | Path, fmt: str | None = None) -> tuple[np.ndarray, list[bytes], str]:
+    """(time in seconds, non-decreasing, file order; datagram bytes; the recording's format) of one
+    recording; ReplayError when it cannot be replayed."""
     from msdc.asterix.containers import read_segments
 
     path = Path(path)
@@ -62,7 +63,7 @@ def recording_datagrams(path: str | Path, fmt: str | None = None) -> tuple[np.nd
     except ValueError as exc:
         raise ReplayError(f"{path}: {exc}") from exc
     if seg.format == "raw":
-        return _raw_blocks(path, data, fmt)
+        return (*_raw_blocks(path, data, fmt), "raw")
     if seg.format not in TIMED_FORMATS:
         sent = ", ".join(REPLAYED_FORMATS)
         raise ReplayError(f"{path}: a {seg.format} recording; msdc replay sends {sent} recordings")
@@ -72,7 +73,7 @@ def recording_datagrams(path: str | Path, fmt: str | None = None) -> tuple[np.nd
     if seg.format in ("final", "gps"):  # a day number (or none): times of day only, unwrapped in file order
         times = _unwrap(seg.capture_tod)
     payloads = [data[a:b] for a, b in zip(seg.start.tolist(), seg.stop.tolist(), strict=True)]
-    return _monotonic(times), payloads
+    return _monotonic(times), payloads, seg.format
 
 
 def _raw_blocks(path: Path, data: bytes, fmt: str | None) -> tuple[np.ndarray, list[bytes]]:
@@ -138,12 +139,18 @@ def _monotonic(t: np.ndarray) -> np.ndarray:
 def schedule(paths: list[str | Path], fmt: str | None = None) -> Schedule:
     """Every recording's datagrams merged by time (a stable merge: each file's order kept), as seconds from
     the first datagram. Recordings that do not overlap in time are replayed one after the other only if
-    their times say so: their absolute times are kept (a raw file's are times of day)."""
-    times, data = [], []
+    their times say so: their absolute times are kept (a raw file's are times of day). ReplayError when a
+    capture (pcap, pcapng: dated capture times) is given with a recording of times of day alone (raw, final,
+    gps): their clocks cannot be merged (the schedule spanned 57 years, and replay waited in silence)."""
+    times, data, clocks = [], [], {}
     for p in paths:
-        t, d = recording_datagrams(p, fmt)
+        t, d, kind = recording_datagrams(p, fmt)
         times.append(t)
         data.extend(d)
+        clocks.setdefault(kind in ABSOLUTE_FORMATS, p)
+    if len(clocks) == 2:
+        raise ReplayError(f"{clocks[True]} (a capture, dated by its capture times) and {clocks[False]} "
+                          "(times of day, no date) cannot be merged by time: replay them one at a time")
     t = np.concatenate(times)
     order = np.argsort(t, kind="stable")
     t = t[order]

@@ -52,6 +52,18 @@ def test_several_recordings_are_merged_by_time(tmp_path):
     assert sched.data == [a[0], b[0], a[1], b[1]] and list(sched.time_s) == [0.0, 1.0, 2.0, 3.0]
 
 
+def test_a_capture_and_a_raw_file_are_not_merged(tmp_path):
+    """A capture's times are dated (epoch seconds), a raw file's are times of day: merged, the schedule
+    spanned 57 years and replay waited in silence. Refused, naming both."""
+    data, _ = pcap_file([(1_700_000_000, 0, udp_frame(block(48, cat048_record(25, 201, 10.0))))])
+    (tmp_path / "c.pcap").write_bytes(data)
+    (tmp_path / "r.ast").write_bytes(block(48, cat048_record(25, 201, 11.0)))
+    with pytest.raises(ReplayError, match=r"c.pcap \(a capture, dated by its capture times\) and .*r.ast "
+                                          r"\(times of day, no date\) cannot be merged by time"):
+        schedule([tmp_path / "c.pcap", tmp_path / "r.ast"])
+    assert len(schedule([tmp_path / "c.pcap", tmp_path / "c.pcap"])) == 2  # two captures merge
+
+
 def test_a_broken_raw_chain_is_refused_naming_the_offset(tmp_path):
     good = block(48, cat048_record(25, 201, 10.0))
     (tmp_path / "cut.ast").write_bytes(good + good[:-1])
