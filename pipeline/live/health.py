@@ -362,9 +362,11 @@ def sensor_figures(sensor_id: str, rows: pd.DataFrame, window: pd.DataFrame, cou
 def feed_figures(feed: str, counter: dict, samples: list[tuple[float, dict]], now_wall_s: float,
                  window_s: float) -> tuple[dict, list[dict]]:
     """One feed's panel (its counters, packets per second and decode errors over the window, from the
-    counters remembered at earlier snapshots, with the seconds they span: less than the window while the
-    monitor is younger) and its warnings."""
-    inside = [(t, c) for t, c in samples if t >= now_wall_s - window_s]
+    counters remembered at earlier snapshots, with the seconds they span: from the first snapshot in the
+    window, less than the window while the monitor is younger; from the last one before it when none
+    is in it) and its warnings."""
+    kept = window_samples(samples, now_wall_s - window_s)
+    inside = [(t, c) for t, c in kept if t >= now_wall_s - window_s] or kept[:1]
     first_t, first = inside[0] if inside else (now_wall_s, counter)
     span = now_wall_s - first_t
     last_packet = counter.get("last_packet_wall_s")
@@ -384,6 +386,14 @@ def feed_figures(feed: str, counter: dict, samples: list[tuple[float, dict]], no
             warnings.append({"level": "warning", "kind": key, "feed": feed,
                              "message": f"{feed}: {new} {what} in the last {span:.0f} s"})
     return panel, warnings
+
+
+def window_samples(samples: list[tuple[float, dict]], start_wall_s: float) -> list[tuple[float, dict]]:
+    """The counters remembered at or after ``start_wall_s``, led by the last one before it (kept for when
+    none is inside: with snapshots as far apart as the window, --window 1, none fell inside it and the
+    feed's rate and warnings were silent)."""
+    before = [i for i, (t, _) in enumerate(samples) if t < start_wall_s]
+    return samples[before[-1]:] if before else list(samples)
 
 
 def arrival_period_s(wall_s: np.ndarray, key: np.ndarray) -> float:
@@ -520,7 +530,7 @@ def snapshot(frame: pd.DataFrame, counters: dict, status_times: dict, now_wall_s
     feeds, samples = [], {}
     for f in sorted(counters):
         counter = {k: v for k, v in counters[f].items() if k not in ("records", "last_record_wall_s")}
-        kept = [(t, c) for t, c in memory.feed_samples.get(f, []) if t >= window_start]
+        kept = window_samples(memory.feed_samples.get(f, []), window_start)
         panel, warned = feed_figures(f, counter, kept, now_wall_s, thresholds.window_s)
         feeds.append(panel)
         alarms += warned

@@ -209,6 +209,21 @@ def test_feed_rates_and_decode_errors_over_the_window() -> None:
     assert [(a["level"], a["kind"]) for a in snap["alarms"]] == [("warning", "decode_errors")]
 
 
+def test_a_window_as_short_as_the_snapshots_still_counts_the_feed() -> None:
+    """--window 1 with snapshots a second apart: the snapshot before is just outside the window, so no
+    counter was remembered inside it, and packets per second and the unframed warning were silent. The
+    change since that snapshot is what came within the window: 7 unframed over 1.02 s."""
+    th = Thresholds(window_s=1.0)
+    _, memory = snapshot(pd.DataFrame(), _counters({}, packets=50, unframed=2), {}, NOW - 2.04, NOW - 9.0, th)
+    _, memory = snapshot(pd.DataFrame(), _counters({}, packets=60, unframed=4), {}, NOW - 1.02, NOW - 9.0, th,
+                         memory)
+    snap, _ = snapshot(pd.DataFrame(), _counters({}, packets=90, unframed=11), {}, NOW, NOW - 9.0, th, memory)
+    feed = snap["feeds"][0]
+    assert (feed["packets_per_s"], feed["rate_window_s"]) == (pytest.approx(30 / 1.02), 1.02)
+    assert feed["unframed_in_window"] == 7
+    assert [a["kind"] for a in snap["alarms"]] == ["unframed"]
+
+
 def test_a_feeds_packets_are_framed_unframed_empty_dropped_or_waiting() -> None:
     """100 packets: 90 framed, 3 unframed, 2 empty, 1 dropped, so 4 still waiting to be decoded."""
     snap, _ = snapshot(pd.DataFrame(), _counters({}, framed=90, unframed=3, empty=2, dropped=1), {}, NOW,
