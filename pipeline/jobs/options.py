@@ -1046,8 +1046,9 @@ def _values(spec: Spec, kind: type) -> str:
         return "flag"
     if spec.choices is not None:
         values = ", ".join(f"`{c}`" for c in spec.choices)
-    elif spec.range is not None:
-        values = f"{spec.range[0]:g} to {spec.range[1]:g}{unit}"
+    elif spec.range is not None:  # an integer's bounds in digits: "1e+07" is no value --queue takes
+        lo, hi = spec.range
+        values = f"{lo} to {hi}{unit}" if kind is int else f"{lo:g} to {hi:g}{unit}"
     elif kind in (float, int):
         values = _NUMBERS[kind] + (f" ({spec.unit})" if spec.unit else "")
     else:

@@ -330,6 +330,11 @@ def test_the_guide_shows_the_declared_options(command):
 
 
 def test_a_table_row_says_what_the_option_takes():
+    from msdc.pipeline.jobs.options import ListenOptions
+
+    # an integer's bounds in digits: "1 to 1e+07" was refused as written ("invalid int value: '1e7'")
+    assert any(row.startswith("| `--queue` | 1 to 10000000 |") for row in opts.options_table(ListenOptions)
+               .splitlines())
     table = opts.options_table(CorrelateOptions).splitlines()
     assert "| `--slot` | 0.1 to 3600 s | `10` | slot width D in seconds |" in table
     assert "| `--sensors` | SENSORS | required | the radars' positions ([the sensor file](sensors.md)) |" \
