@@ -111,15 +111,19 @@ def _live_sensor(rows: pd.DataFrame, sensor_id: str) -> Sensor:
                   max_elevation_deg=90.0)
 
 
-def self_reference(rows: pd.DataFrame) -> tuple[pd.DataFrame, pd.DataFrame]:
+def self_reference(rows: pd.DataFrame, positions: bool = True) -> tuple[pd.DataFrame, pd.DataFrame]:
     """One sensor's reports with each track as its own reference: the reports with ``t_s`` and the
     association columns set (ref_index: the track's place among the sorted track keys), and the reference
-    (aircraft, t_s, latitude, longitude). Reports without a time, position or track are left out."""
+    (aircraft, t_s, latitude, longitude). Reports without a time or track are left out, and without a
+    position unless ``positions`` is False (the update interval and the codes' validity need none: a radar
+    feed heard without --sensors has no positions)."""
     t = report_times_s(rows)
     key = track_keys(rows)
     lat = pd.to_numeric(rows["latitude"], errors="coerce").to_numpy(float)
     lon = pd.to_numeric(rows["longitude"], errors="coerce").to_numpy(float)
-    ok = np.isfinite(t) & np.isfinite(lat) & np.isfinite(lon) & np.array([k is not None for k in key], bool)
+    ok = np.isfinite(t) & np.array([k is not None for k in key], bool)
+    if positions:
+        ok &= np.isfinite(lat) & np.isfinite(lon)
     rep = rows.loc[ok].reset_index(drop=True).copy()
     rep["t_s"] = t[ok]
     labels = np.array(sorted(set(key[ok])), dtype=object)
@@ -166,7 +170,7 @@ def update_interval_s(rows: pd.DataFrame) -> float:
     """The sensor's update period measured on the window (scans.period_from_plots over its tracks: the
     median interval between successive reports of a track, refined over whole periods); NaN with fewer
     than MIN_DIFFS intervals."""
-    rep, _ = self_reference(rows)
+    rep, _ = self_reference(rows, positions=False)
     if not len(rep):
         return math.nan
     return period_from_plots(rep["t_s"].to_numpy(float), rep["ref_index"].to_numpy())
@@ -179,7 +183,10 @@ def live_pd(rows: pd.DataFrame, sensor_id: str, window_s: float) -> Outcome:
         return withheld("pd", "no report in the window")
     rep, reference = self_reference(rows)
     if not len(rep):
-        return withheld("pd", "no report with a time, a position and a track number or identity")
+        placed = len(self_reference(rows, positions=False)[0]) == 0
+        return withheld("pd", "no report with a time, a position and a track number or identity" if placed
+                        else "the reports carry no position (a radar's plots are placed from its site: give "
+                             "--sensors)")
     period = period_from_plots(rep["t_s"].to_numpy(float), rep["ref_index"].to_numpy())
     if not math.isfinite(period):
         return withheld("pd", f"update period not measurable: fewer than {MIN_DIFFS} intervals between "
@@ -215,7 +222,7 @@ def live_validity(rows: pd.DataFrame, requirement: str) -> Outcome:
     code, v_col, valid_col, _ = VALIDITY[requirement]
     if not len(rows):
         return withheld(requirement, "no report in the window")
-    rep, reference = self_reference(rows)
+    rep, reference = self_reference(rows, positions=False)
     rep = _validity_frame(rep, code, v_col, valid_col) if code in rep.columns else None
     if rep is None:
         return withheld(requirement, f"the reports do not say whether their {code} is validated")

@@ -64,6 +64,20 @@ def test_pd_of_two_tracks_missing_two_scans_each_is_16_of_20() -> None:
     assert hi == pytest.approx(0.9427, abs=1e-4)
 
 
+def test_a_radar_heard_without_sensors_still_has_its_interval_and_codes() -> None:
+    """listen without --sensors: radar plots have no position. Their update interval and codes' validity
+    need none, yet were withheld with false reasons ("fewer than 10 intervals", "no report states whether
+    its mode3a is validated"); the PD, which places the reports, now says why it is withheld."""
+    window = two_tracks_with_misses().assign(latitude=np.nan, longitude=np.nan,
+                                             mode3a_valid=pd.array([True] * 15 + [False], "boolean"))
+    assert update_interval_s(window) == pytest.approx(4.0)  # (9 scans x 4 s) x 2 / 18 scans, as placed
+    out = live_validity(window, "mode3a_valid")
+    assert (out.count, out.n) == (15, 16)
+    pd_out = live_pd(window, "048:25/201", 120.0)
+    assert np.isnan(pd_out.value) and "the reports carry no position" in pd_out.notes[0]
+    assert "give --sensors" in pd_out.notes[0]
+
+
 def test_pd_is_degraded_only_when_its_whole_interval_is_below_the_threshold() -> None:
     out = live_pd(two_tracks_with_misses(), "048:25/201", 120.0)  # 0.8, interval up to 0.943
     assert judged(out, 0.97)["state"] == "degraded"
