@@ -50,6 +50,9 @@ def worker_start(stop, progress) -> None:
 
     global _stop, _progress
     _stop, _progress = stop, progress
+    # Ctrl-C reaches the terminal's whole process group: the main process stops this one through ``stop``
+    # (at its next chunk); ended by KeyboardInterrupt it printed multiprocessing's traceback
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
     progress.cancel_join_thread()  # progress left unsent never holds a process's exit
     main = multiprocessing.parent_process()  # the process that asked for this one: its sentinel ends with it
     if main is not None:

@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import datetime as dt
 import json
+import os
 import random
 import shutil
 import signal
@@ -336,6 +337,33 @@ def test_an_ingest_killed_at_any_moment_resumes_to_the_same_dataset(uninterrupte
         proc.wait()
     assert ingest(*inputs, "--dataset", root) == 0
     same_dataset(reference, root)
+
+
+def test_ctrl_c_ends_a_pooled_ingest_without_a_traceback(tmp_path):
+    """Ctrl-C reaches the terminal's whole process group: each pool process ended by its KeyboardInterrupt
+    printed multiprocessing's traceback ("Process ForkServerProcess-2: Traceback ...", at some moments)
+    and the new dataset folder was left with its lock file and partition folders. The pool's processes
+    leave it to the main one (they stop at their next chunk): status 130, no traceback, no folder."""
+    big = tmp_path / "big.ast"
+    big.write_bytes(ADSB.read_bytes() * 40)  # long enough to be decoding when the signal comes
+    root = tmp_path / "ds"
+    proc = subprocess.Popen([sys.executable, "-m", "msdc.pipeline.cli", "ingest", str(big), str(RADAR),
+                             "--dataset", str(root), "--date", DAY, "--chunk-mb", "0.5", "--workers", "2"],
+                            stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
+                            start_new_session=True,
+                            preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
+    try:
+        deadline = time.monotonic() + 60
+        while not list(root.glob("date=*/category=*/sensor=*/.part-*.tmp")) and proc.poll() is None \
+                and time.monotonic() < deadline:  # a pool process is writing
+            time.sleep(0.005)
+        assert proc.poll() is None, "the ingest ended before a pool process wrote"
+        os.killpg(proc.pid, signal.SIGINT)  # as the terminal sends it
+        out, _ = proc.communicate(timeout=60)
+    finally:
+        proc.kill()
+    assert proc.returncode == 130, out
+    assert "Traceback" not in out and not root.exists()
 
 
 def test_what_an_interrupted_ingest_left_is_removed(fixtures_dataset, tmp_path, capsys):
