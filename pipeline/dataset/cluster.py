@@ -24,6 +24,7 @@ R = TypeVar("R")
 # well-known 8787, whose owner (a notebook's cluster, another msdc run) made distributed warn "Port 8787 is
 # already in use. Perhaps you already have a cluster running?" into msdc's output.
 QUIET_SCHEDULER = {"dashboard": False, "dashboard_address": "127.0.0.1:0"}
+WORKER_START = "msdc.pipeline.dataset.worker_start"  # preloaded by each local worker: Ctrl-C ignored
 LOCAL = "local"  # --scheduler local: a LocalCluster of --workers processes
 NONE = "none"  # --scheduler none: threads in this process, as without --dataset
 RETRIES = 2  # a failed task is tried this many times more before the run reports it
@@ -107,7 +108,7 @@ class DaskDistributor:
                     self._cluster = LocalCluster(n_workers=self.workers or machine_workers(),
                                                  threads_per_worker=1, processes=True, host="127.0.0.1",
                                                  dashboard_address=None, silence_logs=logging.ERROR,
-                                                 scheduler_kwargs=QUIET_SCHEDULER)
+                                                 scheduler_kwargs=QUIET_SCHEDULER, preload=[WORKER_START])
                 self._client = Client(self._cluster)
             else:
                 self._client = Client(self.address, timeout=f"{CONNECT_TIMEOUT_S}s")

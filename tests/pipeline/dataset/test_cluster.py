@@ -141,6 +141,23 @@ def test_a_local_cluster_leaves_dasks_dashboard_port_alone():
         holder.close()
 
 
+def _sigint_ignored(_) -> bool:
+    import signal
+
+    return signal.getsignal(signal.SIGINT) is signal.SIG_IGN
+
+
+def test_local_workers_leave_ctrl_c_to_the_main_process():
+    """Ctrl-C reaches the terminal's whole process group: a local worker ended by its own KeyboardInterrupt
+    printed a traceback. Each ignores it (the main process closes the cluster)."""
+    pytest.importorskip("distributed", reason="dask's distributed scheduler is not installed")
+    engine = DaskDistributor(workers=1)
+    try:
+        assert list(engine.map_ordered(_sigint_ignored, [0])) == [True]
+    finally:
+        engine.close()
+
+
 def _hugepage_state(_) -> tuple[str | None, bool]:
     from numpy._core.multiarray import _get_madvise_hugepage
 
