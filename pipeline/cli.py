@@ -191,8 +191,12 @@ def cmd_stats(args) -> int:
     if not result.records:
         left = result.selection is not None and result.selection["reports"]
         read = ", ".join(_size_said(info) for info in result.inputs)
-        said = "the selection left no record" if left else "nothing could be decoded" + (
-            f" from {read}" if read else "")
+        if left:
+            said = "the selection left no record"
+        elif options.dataset is not None:  # the ingest decoded them: the dataset kept none of theirs
+            said = f"--dataset {options.dataset} holds no record" + (f" of {read}" if read else "")
+        else:
+            said = "nothing could be decoded" + (f" from {read}" if read else "")
         print(f"msdc stats: {said}", file=sys.stderr)
         return 1
     return 0

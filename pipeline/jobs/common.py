@@ -854,6 +854,11 @@ def _empty_inputs(loaded: Loaded, dataset: DatasetInputs | None = None) -> list[
             continue
         if unread := _not_read(ignored):
             said.append(f"{info['path']}: {unread}")
+        elif dataset is not None:  # what the dataset kept of it, not the recording, which it may not be
+            kept = next((rec.get("options", {}).get("categories") for rec in dataset.records
+                         if rec["path"] == info["path"]), None)
+            asked = f" (its ingest kept {', '.join(f'CAT{int(c):03d}' for c in kept)})" if kept else ""
+            said.append(f"{info['path']}: the dataset holds no CAT021 or CAT048 record of it{asked}")
         elif info["skipped_blocks"]:
             said.append(f"{info['path']}: no record decoded ({info['skipped_blocks']} block(s) skipped; "
                         "'msdc stats' lists them)")
@@ -1138,13 +1143,14 @@ def selection_note(options: DecodingOptions) -> str:
 
 
 def in_the_inputs(options: DecodingOptions, checked: Checked, categories) -> str:
-    """Where no record of ``categories`` was found: "in the inputs", or, on a dataset that holds some but
-    not in the partitions the report selection keeps, those partitions (the selection is why)."""
+    """Where no record of ``categories`` was found: "in the inputs" (on a dataset, "in the dataset"), or, on
+    a dataset that holds some but not in the partitions the report selection keeps, those partitions (the
+    selection is why)."""
     source = checked.dataset
     held = 0 if source is None else sum(int(n) for rec in source.records
                                         for c, n in rec.get("rows", {}).items() if int(c) in set(categories))
     if not held:
-        return "in the inputs"
+        return "in the inputs" if source is None else "in the dataset"
     given = selection_note(options).removeprefix(" (among the reports the selection keeps: ").rstrip(")")
     return f"in the dataset's partitions the report selection keeps ({given}; it holds {held:,})"
 

@@ -440,3 +440,20 @@ def test_partitions_the_selection_prunes_away_are_said_not_the_inputs(dataset, t
     assert main(["correlate", *base, "--sensor", "048:25/201", "--json", str(tmp_path / "c.json")]) == 1
     assert ("no ADS-B (CAT021) records in the dataset's partitions the report selection keeps (--sensor; it "
             f"holds {adsb:,})") in capsys.readouterr().err
+
+
+def test_a_dataset_without_the_categories_a_job_needs_says_so_of_itself(tmp_path, capsys):
+    """The fixtures ingested with --category 62 alone: the jobs said of each recording "no CAT021 or CAT048
+    record in it" and stats "nothing could be decoded from" it, though each holds thousands: it is the
+    dataset that holds none."""
+    root = tmp_path / "only62"
+    assert main(["ingest", str(RADAR), str(ADSB), "--dataset", str(root), "--date", DAY,
+                 "--category", "62"]) == 0
+    capsys.readouterr()
+    assert main(["track", "--dataset", str(root), "--sensors", str(SENSORS), "--all", "--scheduler", "none",
+                 "-o", str(tmp_path / "t.csv")]) == 1
+    err = capsys.readouterr().err
+    assert f"{RADAR}: the dataset holds no CAT021 or CAT048 record of it (its ingest kept CAT062)" in err
+    assert "no radar (CAT048) or ADS-B (CAT021) records in the dataset" in err and "in it" not in err
+    assert main(["stats", "--dataset", str(root), "--scheduler", "none"]) == 1
+    assert f"msdc stats: --dataset {root} holds no record of {RADAR} (" in capsys.readouterr().err
