@@ -93,6 +93,7 @@ def _csv(relation, target: Path) -> int:
 
     if relation is None:
         raise JobError("the query returns no rows to write (it is not a SELECT)", 2)
+    relation = _nested_as_text(relation)
     batches = getattr(relation, "to_arrow_reader", None) or relation.fetch_arrow_reader  # DuckDB 2, else 1
     reader = batches(CSV_BATCH_ROWS)
     n = 0
@@ -102,6 +103,21 @@ def _csv(relation, target: Path) -> int:
     if n == 0:
         write_csv(reader.schema.empty_table().to_pandas(), target)
     return n
+
+
+def _nested_as_text(relation):
+    """The relation with its LIST, ARRAY, STRUCT, MAP and UNION columns as DuckDB's text of them ("[AXM123,
+    MAS72]", as the terminal's table shows them): pandas wrote numpy's form ("['AXM123' 'MAS72']")."""
+    columns, nested = [], False
+    for name, kind in zip(relation.columns, relation.types, strict=True):
+        quoted = '"' + name.replace('"', '""') + '"'
+        text = str(kind)
+        if text.endswith("]") or text.startswith(("STRUCT", "MAP", "UNION")):
+            columns.append(f"CAST({quoted} AS VARCHAR) AS {quoted}")
+            nested = True
+        else:
+            columns.append(quoted)
+    return relation.project(", ".join(columns)) if nested else relation
 
 
 __all__ = ["SqlOptions", "SqlResult", "sql_job", "validate"]

@@ -86,6 +86,18 @@ def test_a_csv_follows_every_csv_outputs_rules(dataset, tmp_path):
     assert empty.read_text() == "callsign\n"
 
 
+def test_a_csvs_lists_and_structs_are_written_as_the_terminal_shows_them(dataset, tmp_path, capsys):
+    """A LIST column was written in numpy's form ("['AXM123' 'MAS136' ...]"); now as DuckDB's text of it,
+    as the terminal's table shows it. The call signs by hand: the fixture's five radar aircraft."""
+    truth = json.loads((FIX / "truth.json").read_text())
+    names = sorted({a["callsign"] for a in truth["aircraft"]})
+    out = tmp_path / "lists.csv"
+    q = ("SELECT list(DISTINCT callsign ORDER BY callsign) AS cs, {'n': 1, 'v': [1, 2]} AS st "
+         "FROM cat048 WHERE sensor = '25_201'")
+    assert main(["sql", "--dataset", str(dataset), q, "-o", str(out)]) == 0
+    assert out.read_text().splitlines() == ["cs,st", f'"[{", ".join(names)}]","{{\'n\': 1, \'v\': [1, 2]}}"']
+
+
 def test_a_csv_of_many_batches_holds_every_row_once(dataset, tmp_path, monkeypatch):
     import msdc.pipeline.jobs.sql as sql
 
