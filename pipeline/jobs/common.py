@@ -238,6 +238,20 @@ def spare_inputs(options, outputs: list[tuple[str, Path | None]]) -> None:
                 raise OptionError(f"{what}{also}: is the input {p}; writing it would destroy the recording")
 
 
+def writable_dataset(dataset: str | Path) -> Path:
+    """The --dataset folder an ingest writes (made if missing): OptionError when it is a file, its parent
+    folder is missing or it cannot be written."""
+    root = Path(dataset)
+    if root.exists() and not root.is_dir():
+        raise OptionError(f"--dataset {root}: is a file, not a folder")
+    parent = root if root.exists() else root.parent
+    if not parent.is_dir():
+        raise OptionError(f"--dataset {root}: folder {parent} does not exist")
+    if not os.access(parent, os.W_OK):
+        raise OptionError(f"--dataset {root}: not writable")
+    return root
+
+
 def spare_dataset(dataset: str | Path, outputs: list[tuple[str, Path | None]]) -> None:
     """OptionError when an output lies inside the dataset folder, by any path or link: it could overwrite
     the manifest or a part (the dataset's folder is ingest's alone)."""

@@ -12,7 +12,14 @@ from contextlib import contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from msdc.pipeline.jobs.common import Checked, JobError, OptionError, check_decoding, nonempty_path
+from msdc.pipeline.jobs.common import (
+    Checked,
+    JobError,
+    OptionError,
+    check_decoding,
+    nonempty_path,
+    writable_dataset,
+)
 from msdc.pipeline.jobs.options import INGEST_CATEGORIES, DecodingOptions, IngestOptions, check_declared
 
 # what the pool's processes import (about 0.6 s of CPU each), imported once by the forkserver they fork from,
@@ -31,14 +38,7 @@ def validate(options: IngestOptions) -> tuple[Checked, Path]:
     nonempty_path("--dataset", options.dataset)
     checked = check_decoding(DecodingOptions(inputs=options.inputs, editions=options.editions,
                                              date=options.date, format=options.format))
-    root = Path(options.dataset)
-    if root.exists() and not root.is_dir():
-        raise OptionError(f"--dataset {root}: is a file, not a folder")
-    parent = root if root.exists() else root.parent
-    if not parent.is_dir():
-        raise OptionError(f"--dataset {root}: folder {parent} does not exist")
-    if not os.access(parent, os.W_OK):
-        raise OptionError(f"--dataset {root}: not writable")
+    root = writable_dataset(options.dataset)
     for p in checked.inputs:
         if root.resolve() in p.resolve().parents:
             raise OptionError(f"{p}: an input inside the dataset folder {root}")

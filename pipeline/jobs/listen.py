@@ -17,7 +17,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from msdc.pipeline.jobs.common import JobError, nonempty_path, pinned_editions, sensor_table
+from msdc.pipeline.jobs.common import JobError, nonempty_path, pinned_editions, sensor_table, writable_dataset
 from msdc.pipeline.jobs.options import ListenOptions, OptionError, check_declared, check_installed
 
 if TYPE_CHECKING:
@@ -97,8 +97,9 @@ def validate(options: ListenOptions) -> Checked:
     if options.dataset is not None and options.record is None:
         raise OptionError(f"--dataset {options.dataset}: needs --record (the recordings are what is "
                           "ingested)")
-    if options.dataset is not None:
+    if options.dataset is not None:  # refused now, not when the first recording closes (up to --rotate)
         nonempty_path("--dataset", options.dataset)
+        writable_dataset(options.dataset)
     record = None
     if options.record is not None:
         nonempty_path("--record", options.record)

@@ -212,3 +212,15 @@ def test_the_live_packages_log_lines_are_said_as_msdcs_warnings(capsys):
     assert err[:2] == ["msdc listen: warning: live monitor: snapshot failed",
                        "msdc listen: warning: udp:1.2.3.4:5: receiving failed: gone"]
     assert "Traceback" not in "\n".join(err) and "msdc listen: warning: after the block" not in err
+
+
+def test_a_dataset_that_is_a_file_is_refused_before_listening(tmp_path, capsys):
+    """It was accepted, and said only when the first recording closed (up to an hour later with the
+    default --rotate): "not ingested: --dataset ...: is a file, not a folder"."""
+    (tmp_path / "afile").write_text("x")
+    argv = ["listen", "--udp", f"127.0.0.1:{free_port()}", "--record", str(tmp_path / "rec"), "--dataset",
+            str(tmp_path / "afile"), "--duration", "0.1"]
+    assert main(argv) == 2
+    said = capsys.readouterr().err.strip()
+    assert said == f"msdc listen: --dataset {tmp_path / 'afile'}: is a file, not a folder"
+    assert not (tmp_path / "rec").exists()
