@@ -457,10 +457,11 @@ def cmd_replay(args) -> int:
     options = from_args(replay.ReplayOptions, args)
     result = replay.replay_job(options)
     _warn("replay", result.warnings)
+    ended = "" if result.interrupted is None else f"; {str(result.interrupted) or 'interrupted by Ctrl-C'}"
     print(f"{result.datagrams} datagrams ({result.bytes} bytes) sent to {options.to} in "
           f"{result.wall_s:.2f} s ({result.passes} pass(es) over {result.scheduled} datagrams spanning "
-          f"{result.span_s:.1f} s of recording; at most {result.late_s * 1000:.1f} ms late)")
-    return 0
+          f"{result.span_s:.1f} s of recording; at most {result.late_s * 1000:.1f} ms late{ended})")
+    return 0 if result.interrupted is None else _interrupted(result.interrupted)
 
 
 def _run_job(name: str, validate, job, options, progress: Progress):

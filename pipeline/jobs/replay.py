@@ -24,6 +24,7 @@ class ReplayResult:
     scheduled: int  # datagrams in one pass
     late_s: float
     warnings: list[str]
+    interrupted: BaseException | None = None  # the Ctrl-C (KeyboardInterrupt) or SIGTERM that ended it
 
 
 def validate(options: ReplayOptions):
@@ -50,8 +51,12 @@ def validate(options: ReplayOptions):
 
 def replay_job(options: ReplayOptions, *, stop: Callable[[], bool] = lambda: False) -> ReplayResult:
     """Read the recordings' datagrams and times, then send them to --to at --speed (--loop, --duration)
-    until done or ``stop()``; Ctrl-C ends it with what was sent so far."""
-    from msdc.pipeline.live.replay import InterfaceError, ReplayError, schedule, send, sending_socket
+    until done or ``stop()``; Ctrl-C (or SIGTERM, SIGHUP) ends it with what was sent so far, in
+    ``interrupted``."""
+    import time
+
+    from msdc.pipeline.live.replay import InterfaceError, ReplayError, Sent, schedule, send, sending_socket
+    from msdc.pipeline.report.transaction import Terminated
 
     to, paths, warnings = validate(options)
     try:
@@ -65,9 +70,12 @@ def replay_job(options: ReplayOptions, *, stop: Callable[[], bool] = lambda: Fal
                           f"{exc.strerror or exc}") from None
     except OSError as exc:
         raise OptionError(f"--to {options.to}: cannot send there ({exc.strerror or exc})") from None
+    sent, interrupted, started = Sent(), None, time.monotonic()
     try:
-        sent = send(sched, sock, speed=options.speed, loop=options.loop, duration_s=options.duration_s,
-                    stop=stop)
+        send(sched, sock, speed=options.speed, loop=options.loop, duration_s=options.duration_s, stop=stop,
+             out=sent)
+    except (KeyboardInterrupt, Terminated) as exc:  # what was sent so far is said, as at the end
+        interrupted, sent.wall_s = exc, time.monotonic() - started
     except OSError as exc:
         raise JobError(f"--to {options.to}: sending failed: {exc.strerror or exc}") from None
     finally:
@@ -76,7 +84,7 @@ def replay_job(options: ReplayOptions, *, stop: Callable[[], bool] = lambda: Fal
         warnings = [*warnings, f"--to {options.to}: nothing was listening there {sent.refused} time(s) "
                     "(ICMP port unreachable); the datagrams were sent regardless (UDP needs no receiver)"]
     return ReplayResult(sent.datagrams, sent.bytes, sent.passes, sent.wall_s, sched.span_s, len(sched),
-                        float(sent.late_s), warnings)
+                        float(sent.late_s), warnings, interrupted)
 
 
 __all__ = ["ReplayOptions", "ReplayResult", "replay_job", "validate"]

@@ -215,11 +215,13 @@ def _send(sock: socket.socket, data: bytes, out: Sent) -> None:
 
 def send(sched: Schedule, sock: socket.socket, *, speed: float = 1.0, loop: bool = False,
          duration_s: float | None = None, stop: Callable[[], bool] = lambda: False,
-         clock: Callable[[], float] = time.monotonic, sleep: Callable[[float], None] = time.sleep) -> Sent:
+         clock: Callable[[], float] = time.monotonic, sleep: Callable[[float], None] = time.sleep,
+         out: Sent | None = None) -> Sent:
     """Send the schedule, each datagram at its time / ``speed`` from the start; again and again with
     ``loop`` (the next pass starts one mean datagram interval after the last, 1 s of recording when there
-    is no interval); until ``duration_s`` (wall) or ``stop()``."""
-    out = Sent()
+    is no interval); until ``duration_s`` (wall) or ``stop()``. Counted in ``out`` (a new Sent when None),
+    which holds what was sent when an exception (Ctrl-C) ends it."""
+    out = Sent() if out is None else out
     if not len(sched):
         return out
     gap_s = sched.span_s / (len(sched) - 1) if len(sched) > 1 and sched.span_s > 0 else 1.0

@@ -224,3 +224,31 @@ def test_a_dataset_that_is_a_file_is_refused_before_listening(tmp_path, capsys):
     said = capsys.readouterr().err.strip()
     assert said == f"msdc listen: --dataset {tmp_path / 'afile'}: is a file, not a folder"
     assert not (tmp_path / "rec").exists()
+
+
+@pytest.mark.parametrize(("sig", "status", "said"), [("SIGINT", 130, "interrupted by Ctrl-C"),
+                                                      ("SIGTERM", 143, "terminated by signal 15")])
+def test_replay_ended_by_a_signal_says_what_it_sent(tmp_path, sig, status, said):
+    """Its docstring promised "Ctrl-C ends it with what was sent so far", yet it printed nothing: the count
+    is said, with what ended it, and the status is the signal's. Two datagrams 100 s apart at speed 1: the
+    signal comes after the first."""
+    import socket
+
+    rec = tmp_path / "two.ast"
+    rec.write_bytes(block(48, cat048_record(25, 201, 100.0)) + block(48, cat048_record(25, 201, 200.0)))
+    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as receiver:
+        receiver.bind(("127.0.0.1", 0))
+        receiver.settimeout(60)
+        argv = [sys.executable, "-m", "msdc.pipeline.cli", "replay", str(rec), "--to",
+                f"127.0.0.1:{receiver.getsockname()[1]}"]
+        proc = subprocess.Popen(argv, cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                                preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
+        try:
+            receiver.recv(65535)  # the first datagram: sending has begun
+            proc.send_signal(getattr(signal, sig))
+            out, err = proc.communicate(timeout=30)
+        finally:
+            proc.kill()
+    assert proc.returncode == status, err
+    assert out.startswith(f"1 datagrams ({len(block(48, cat048_record(25, 201, 100.0)))} bytes) sent to ")
+    assert out.rstrip().endswith(f"; {said})") and "Traceback" not in err
