@@ -79,17 +79,25 @@ def test_a_raw_file_whose_chain_breaks_is_not_replayed(tmp_path, capsys):
     assert f"cut.ast: offset {len(one)}: the raw chain of data blocks breaks" in capsys.readouterr().err
 
 
+def _listening(port: int, *options: str) -> subprocess.Popen:
+    """``msdc listen --udp 127.0.0.1:PORT OPTIONS`` in a process of its own, once it receives. The child
+    gets the SIGINT handling a shell gives a foreground command: a suite started in the background (SIGINT
+    ignored, inherited) would otherwise leave listen deaf to Ctrl-C."""
+    argv = [sys.executable, "-m", "msdc.pipeline.cli", "listen", "--udp", f"127.0.0.1:{port}", *options]
+    proc = subprocess.Popen(argv, cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                            preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
+    line = proc.stderr.readline()
+    if "receiving 127.0.0.1:" not in line:
+        proc.kill()
+        raise AssertionError(line + proc.stderr.read())
+    return proc
+
+
 def test_ctrl_c_ends_listen_with_a_complete_recording(tmp_path, capsys):
     port = free_port()
     folder = tmp_path / "rec"
-    argv = [sys.executable, "-m", "msdc.pipeline.cli", "listen", "--udp", f"127.0.0.1:{port}", "--record",
-            str(folder)]
-    # the child gets the SIGINT handling a shell gives a foreground command: a suite started in the
-    # background (SIGINT ignored, inherited) would otherwise leave listen deaf to Ctrl-C
-    proc = subprocess.Popen(argv, cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-                            preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
+    proc = _listening(port, "--record", str(folder))
     try:
-        assert "receiving 127.0.0.1:" in proc.stderr.readline()
         datagrams = [block(48, cat048_record(25, 201, 100.0 + i), cat048_record(25, 201, 100.5 + i))
                      for i in range(5)]
         send_all(datagrams, port)
@@ -130,12 +138,8 @@ def test_a_second_signal_while_listen_drains_is_ignored(tmp_path, second):
     received in the closed recording."""
     port = free_port()
     folder = tmp_path / "rec"
-    argv = [sys.executable, "-m", "msdc.pipeline.cli", "listen", "--udp", f"127.0.0.1:{port}", "--record",
-            str(folder)]
-    proc = subprocess.Popen(argv, cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-                            preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
+    proc = _listening(port, "--record", str(folder))
     try:
-        assert "receiving 127.0.0.1:" in proc.stderr.readline()
         send_all([block(48, cat048_record(25, 201, 100.0 + i * 0.01)) for i in range(3000)], port)
         proc.send_signal(signal.SIGINT)
         time.sleep(0.05)
@@ -180,11 +184,8 @@ def test_a_full_queue_is_said_once_as_msdcs_warning(tmp_path):
     """--queue 1 under a burst: each drop note said as msdc's warning, not followed by Python logging's
     bare copy ("513 datagrams dropped"), and no other line that is not msdc's."""
     port = free_port()
-    argv = [sys.executable, "-m", "msdc.pipeline.cli", "listen", "--udp", f"127.0.0.1:{port}", "--queue", "1",
-            "--duration", "3"]
-    proc = subprocess.Popen(argv, cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    proc = _listening(port, "--queue", "1", "--duration", "3")
     try:
-        assert "receiving 127.0.0.1:" in proc.stderr.readline()
         send_all([block(48, cat048_record(25, 201, 100.0 + i * 0.01)) for i in range(3000)], port)
         out, err = proc.communicate(timeout=60)
     finally:
@@ -245,6 +246,7 @@ def test_replay_ended_by_a_signal_says_what_it_sent(tmp_path, sig, status, said)
                                 preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
         try:
             receiver.recv(65535)  # the first datagram: sending has begun
+            time.sleep(0.3)  # ... and replay waits for the second, due 100 s later
             proc.send_signal(getattr(signal, sig))
             out, err = proc.communicate(timeout=30)
         finally:
