@@ -1148,11 +1148,16 @@ def quality_step(meas: pd.DataFrame, sensors: pd.DataFrame, options: CorrelateOp
         raise JobError(str(exc) + selection_note(options)) from exc
 
 
+def selection_flags(options: DecodingOptions) -> list[str]:
+    """The report selection's options given (--from, --to, --area, --fl, --sensor)."""
+    return [flag for flag, value in (("--from", options.from_time), ("--to", options.to_time),
+                                     ("--area", options.area), ("--fl", options.fl),
+                                     ("--sensor", options.sensor_ids)) if value]
+
+
 def selection_note(options: DecodingOptions) -> str:
     """What to add to "not seen" when a report selection was given: it may be why."""
-    given = [flag for flag, value in (("--from", options.from_time), ("--to", options.to_time),
-                                      ("--area", options.area), ("--fl", options.fl),
-                                      ("--sensor", options.sensor_ids)) if value]
+    given = selection_flags(options)
     return (f" (among the reports the selection keeps: {', '.join(given)})" if given else "")
 
 
@@ -1165,7 +1170,7 @@ def in_the_inputs(options: DecodingOptions, checked: Checked, categories) -> str
                                         for c, n in rec.get("rows", {}).items() if int(c) in set(categories))
     if not held:
         return "in the inputs" if source is None else "in the dataset"
-    given = selection_note(options).removeprefix(" (among the reports the selection keeps: ").rstrip(")")
+    given = ", ".join(selection_flags(options))
     return f"in the dataset's partitions the report selection keeps ({given}; it holds {held:,})"
 
 
