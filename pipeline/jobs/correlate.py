@@ -110,6 +110,33 @@ def _filtered_away(exc, meas_all: pd.DataFrame, options: CorrelateOptions) -> st
     return f"{text}; lower the filter or leave it out"
 
 
+def _filtered_aircraft(meas_all: pd.DataFrame, meas: pd.DataFrame, options: CorrelateOptions) -> list[str]:
+    """--all with ADS-B filters: a warning naming the aircraft seen by radar and ADS-B whose ADS-B reports
+    the filters removed all of (they were left out of the run in silence; --callsign says it as an error)."""
+    asked = [f for f, on in ((f"--min-nic {options.min_nic}", options.min_nic is not None),
+                             (f"--min-nacp {options.min_nacp}", options.min_nacp is not None),
+                             ("--drop-jumps", options.drop_jumps)) if on]
+    if not options.all_aircraft or not asked:
+        return []
+
+    def both(frame: pd.DataFrame) -> set:
+        kinds = frame[["aircraft_id", "sensor_kind"]].dropna().astype(str).drop_duplicates()
+        return set(kinds.loc[kinds["sensor_kind"] == "radar", "aircraft_id"]) & \
+            set(kinds.loc[kinds["sensor_kind"] == "adsb", "aircraft_id"])
+
+    gone = sorted(both(meas_all) - both(meas))
+    if not gone:
+        return []
+    adsb = meas_all[(meas_all["sensor_kind"] == "adsb").to_numpy(bool)]
+    counts = adsb["aircraft_id"].astype(str).value_counts()
+    names = adsb.drop_duplicates("aircraft_id").set_index(adsb.drop_duplicates("aircraft_id")["aircraft_id"]
+                                                          .astype(str))["callsign"]
+    named = "; ".join(f"{names.get(a) if pd.notna(names.get(a)) else a} ({a}, {int(counts.get(a, 0)):,} "
+                      "reports)" for a in gone)
+    return [f"{' and '.join(asked)} removed all ADS-B reports of {len(gone)} aircraft seen by radar and "
+            f"ADS-B, which are not correlated: {named}"]
+
+
 # the measurement columns correlate --quality's slotting figures read (pipeline.report.quality_figures)
 SLOTTING_FIGURE_INPUTS = ["time", "sensor_kind", "sensor_id", "aircraft_id", "callsign", "address",
                           "latitude", "longitude"]
@@ -181,8 +208,12 @@ def correlate_job(options: CorrelateOptions, *, progress: Progress | None = None
         run.inputs = loaded.inputs
         run.filters = filters_removed(options, removed)
         warnings += filter_warnings(removed, options.min_nic, options.min_nacp)
+        gone = _filtered_aircraft(meas_all, meas, options)
+        warnings += gone
         run.parameters = {**run.parameters, **run_parameters(options, loaded, started, command),
                           "filters": filter_parameters(options, removed)}
+        if gone:  # the outputs say it too: the aircraft is in none of their tables
+            run.parameters["notes"] = [*run.parameters.get("notes", []), *gone]
         warnings += far_separations([w.summary for w in run.windows], meas, checked.sensors,
                                     str(options.sensors))
         warnings += _nothing_correlated(run, options)

@@ -94,3 +94,20 @@ def test_quality_records_and_says_what_the_filters_removed():
     assert result.parameters["filters"]["removed"]["nacp_below_min"] == below == 3038
     said = text(result)
     assert "ADS-B filters (radar accuracy and biases use what they leave): nacp_below_min 3038" in said
+
+
+def test_correlate_all_names_an_aircraft_the_filter_removed_whole():
+    """SIA305 flies with NACp 8 (the truth): under --min-nacp 9 every ADS-B report of it goes, and --all
+    left it out of every table in silence (--callsign SIA305 says it as an error). Its count, by the truth's
+    reports: those of SIA305's address in the ADS-B fixture."""
+    truth = json.loads((FIX / "truth.json").read_text())
+    sia = next(a for a in truth["aircraft"] if a["callsign"] == "SIA305")
+    assert sia["adsb_quality"]["nacp"] < 9
+    frame = asterix.read(ADSB).frames[21]
+    n = int((frame["address"] == sia["address"]).sum())
+    result = correlate_job(CorrelateOptions(inputs=(RADAR, ADSB), sensors=SENSORS, all_aircraft=True,
+                                            min_nacp=9))
+    said = ("--min-nacp 9 removed all ADS-B reports of 1 aircraft seen by radar and ADS-B, which are not "
+            f"correlated: SIA305 ({sia['address']}, {n:,} reports)")
+    assert said in result.warnings and said in result.run.parameters["notes"]
+    assert "SIA305" not in {w.summary["callsign"] for w in result.run.windows}
