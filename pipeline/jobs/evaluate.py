@@ -517,7 +517,7 @@ def _evaluate_window(options: EvaluateOptions, checked: EvaluateChecked, progres
     builders = tracked_reports(meas, options.max_coast_s)
     warnings += builders.attrs.get("repeated", []) + builders.attrs.get("mixed", [])
     epoch = midnight(meas["time"])
-    external = _external(options, epoch)
+    external = _selected_reference(_external(options, epoch), checked, epoch, loaded.date)
     flagged = field_monitors(meas, loaded.frames)
     standing = {k: v for k, v in fixed_7777(meas).items() if k not in flagged}
     monitors = flagged | set(standing)
@@ -809,6 +809,32 @@ def _external(options: EvaluateOptions, epoch) -> pd.DataFrame | None:
         return read_external_reference(options.reference_file, epoch)
     except ValueError as exc:
         raise OptionError(f"--reference-file: {exc}") from None
+
+
+def _selected_reference(external: pd.DataFrame | None, checked: EvaluateChecked, epoch, day
+                        ) -> pd.DataFrame | None:
+    """The external reference cut by the report selection's time window, area and flight levels, as the
+    sensors' reports are (--sensor selects sensors, not the reference): kept whole, its samples outside
+    the window expected updates of a sensor whose plots there were cut, every one a miss (PD 44 % where
+    the built reference gives 98 %). A sample without an altitude is outside any --fl band."""
+    from dataclasses import replace
+
+    from msdc.pipeline.model.geodesy import M_PER_FT
+    from msdc.pipeline.model.report_selection import select_reports
+
+    selection = checked.selection
+    if external is None or selection is None or not selection.active:
+        return external
+    altitude_ft = pd.to_numeric(external["altitude_ft"], errors="coerce").to_numpy(float)
+    samples = pd.DataFrame({"time": epoch + pd.to_timedelta(external["t_s"].to_numpy(float), unit="s"),
+                            "latitude": external["latitude"].to_numpy(float),
+                            "longitude": external["longitude"].to_numpy(float),
+                            "flight_level": altitude_ft / 100.0, "height_m": altitude_ft * M_PER_FT})
+    try:
+        keep, _ = select_reports(samples, replace(selection, sensors=()), day)
+    except ValueError as exc:
+        raise OptionError(str(exc)) from None
+    return external[keep].reset_index(drop=True)
 
 
 BAND_TITLES = {"range_nm": "PD per range band", "azimuth_deg": "PD per azimuth sector",
