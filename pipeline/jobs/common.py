@@ -228,14 +228,22 @@ def spare_inputs(options, outputs: list[tuple[str, Path | None]]) -> None:
         spare_dataset(dataset, outputs)
     inputs = options.inputs
     inputs = [inputs] if isinstance(inputs, str | Path) else inputs  # one path is one input
-    given = [Path(p) for p in inputs if Path(p).is_file()]
+    given = [(Path(p), "the input", "the recording") for p in inputs if Path(p).is_file()]
+    for flag in OPTION_FILES:  # the files other options read (a sectors file overwritten by --json)
+        value = getattr(options, flag.removeprefix("--").replace("-", "_"), None)
+        if isinstance(value, str | Path) and Path(value).is_file():
+            given.append((Path(value), f"the {flag} file", "it"))
     for what, out in outputs:
         if out is None or not Path(out).is_file():
             continue
-        for p in given:
+        for p, role, lost in given:
             if os.path.samefile(out, p):
                 also = "" if what.endswith(str(out)) else f" (it writes {out})"
-                raise OptionError(f"{what}{also}: is the input {p}; writing it would destroy the recording")
+                raise OptionError(f"{what}{also}: is {role} {p}; writing it would destroy {lost}")
+
+
+# options naming a file a job reads besides its recordings (a preset or an area given by name is no file)
+OPTION_FILES = ("--sensors", "--sectors", "--reference-file", "--area", "--preset")
 
 
 def writable_dataset(dataset: str | Path) -> Path:

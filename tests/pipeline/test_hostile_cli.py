@@ -472,3 +472,26 @@ def test_a_radar_of_categories_the_jobs_do_not_read_is_named(tmp_path, capsys):
     # evaluate reads CAT002 (a radar's north markers give its scan period): only CAT001 is left unread
     assert status == 1 and (f"present: 021:0/1 (adsb)\n  {old}: it holds CAT001 (3 blocks), which this "
                             "command does not read") in err
+
+
+@pytest.mark.parametrize("option", ["--sensors", "--sectors", "--reference-file", "--preset"])
+def test_an_output_that_is_a_file_another_option_reads_is_refused(option, tmp_path, capsys):
+    """--json naming the sectors (or sensors, reference, preset) file replaced it with the evaluation: a
+    recording given as an output was refused, those files were not. The file is left byte for byte."""
+    import shutil
+
+    sources = {"--sensors": SENSORS, "--sectors": None, "--reference-file": None, "--preset": None}
+    target = tmp_path / "in.json"
+    if sources[option] is not None:
+        shutil.copy(sources[option], target)
+    else:
+        target.write_text("{}")  # never read: the outputs are checked first
+    argv = ["evaluate", RADAR, ADSB, "--sensors", target if option == "--sensors" else SENSORS, "--date",
+            "2019-03-01", "--preset", target if option == "--preset" else "eurocontrol-1997-ssr"]
+    if option not in ("--sensors", "--preset"):
+        argv += [option, target]
+    before = target.read_bytes()
+    status, _, err = _run([*argv, "--json", target], capsys)
+    assert status == 2, err
+    assert f"--json {target}: is the {option} file {target}; writing it would destroy it" in err
+    assert target.read_bytes() == before
