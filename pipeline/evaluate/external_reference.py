@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import csv
 import math
+import re
 from pathlib import Path
 
 import numpy as np
@@ -131,7 +132,7 @@ def read_external_reference(path: str | Path, epoch: pd.Timestamp, *,
         if all(math.isnan(cols[c][-1]) for c in EXTERNAL_ALTITUDES):
             raise ExternalReferenceError(f"{path}:{line}: no altitude (altitude_ft or height_m)")
         for c in ("mode3a", "address", "callsign"):
-            cols[c].append(f[c].strip() or None if c in names else None)
+            cols[c].append(_identity(path, line, c, f[c]) if c in names else None)
     frame = pd.DataFrame(cols)
     _check_order(path, frame)
     if sigma_m is not None:
@@ -144,6 +145,22 @@ def read_external_reference(path: str | Path, epoch: pd.Timestamp, *,
     extra = ["height_m"] if "height_m" in names else []
     return frame[list(BUILT_COLUMNS) + extra].sort_values(["aircraft", "t_s"], kind="stable",
                                                           ignore_index=True)
+
+
+IDENTITY_FORMS = {"mode3a": (re.compile(r"[0-7]{4}"), "four octal digits, 0000 to 7777"),
+                  "address": (re.compile(r"[0-9A-Fa-f]{6}"), "six hexadecimal digits (a 24-bit address)")}
+
+
+def _identity(path: Path, line: int, column: str, text: str) -> str | None:
+    """An optional identity value (None when blank); a Mode 3/A code or address that is none refused: a
+    code "9999" judged every report's code wrong (mode3a_correct 0 %, a fail)."""
+    text = text.strip()
+    if not text:
+        return None
+    form = IDENTITY_FORMS.get(column)
+    if form is not None and not form[0].fullmatch(text):
+        raise ExternalReferenceError(f"{path}:{line}: {column} {text!r} is not {form[1]}")
+    return text.upper() if column == "address" else text
 
 
 def _check_order(path: Path, frame: pd.DataFrame) -> None:

@@ -237,6 +237,11 @@ def test_external_reference_reads_a_good_file(tmp_path):
     ("aircraft,time,latitude,longitude,height_m\nA,2019-03-01T08:00:02Z,3,101,1\nB,2019-03-01T08:00:00Z,3,101,1\n"
      "A,2019-03-01T08:00:02Z,3,101,1\n", 4, "aircraft A's time does not increase"),
     ("aircraft,time,latitude,longitude,height_m\nA,2019-03-01T08:00:00Z,3,101,nan\n", 2, "height_m 'nan'"),
+    # a code no transponder sends judged every report's code wrong (mode3a_correct 0 %, a fail)
+    ("aircraft,time,latitude,longitude,height_m,mode3a\nA,2019-03-01T08:00:00Z,3,101,1,9999\n", 2,
+     "mode3a '9999' is not four octal digits"),
+    ("aircraft,time,latitude,longitude,height_m,address\nA,2019-03-01T08:00:00Z,3,101,1,75031\n", 2,
+     "address '75031' is not six hexadecimal digits"),
 ])
 def test_external_reference_refuses_a_bad_file(tmp_path, text, line, reason):
     path = tmp_path / "gps.csv"
