@@ -455,11 +455,12 @@ def _no_verdict_on_a_wrong_site(run: WindowRun) -> None:
 
 
 def _no_verdict(rows: list[dict], said: str | None) -> list[dict]:
-    """Scorecard rows made inconclusive, ``said`` in their notes (as they were without it)."""
+    """Scorecard rows made inconclusive, their notes starting with ``said`` (as the docs say: the reason
+    first), then what they said without it."""
     if said is None:
         return rows
     why = f"no verdict: {said}"
-    return [{**row, "verdict": "inconclusive", "notes": "; ".join(x for x in (row["notes"], why) if x)}
+    return [{**row, "verdict": "inconclusive", "notes": "; ".join(x for x in (why, row["notes"]) if x)}
             for row in rows]
 
 
