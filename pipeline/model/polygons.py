@@ -97,6 +97,11 @@ def _rings(path: Path, where: str, rings: object) -> tuple[np.ndarray, ...]:
         if not isinstance(ring, list) or not all(isinstance(q, list) and len(q) >= 2 and all(
                 isinstance(v, int | float) and not isinstance(v, bool) for v in q[:2]) for q in ring):
             raise ValueError(f"{path}: {name}: positions must be [longitude, latitude] numbers")
+        raised = next((q[2] for q in ring if len(q) > 2 and q[2] != 0), None)
+        if raised is not None:  # read as two numbers, an altitude would seem to band the sector, and not
+            raise ValueError(f"{path}: {name}: a position carries an altitude ({raised!r}); msdc reads "
+                             "longitude and latitude only: band the area with min_fl and max_fl in its "
+                             "properties")
         xy = np.array([[float(q[0]), float(q[1])] for q in ring], dtype=float)
         if len(xy) < 3 or not np.isfinite(xy).all():
             raise ValueError(f"{path}: {name}: a ring needs at least 3 finite positions")

@@ -161,6 +161,9 @@ BAD = [
     ("too deep", "[" * 100_000 + "]" * 100_000, "not a GeoJSON file (nested too deeply to read)"),
     ("flat ring", collection(feature("R", [[[0, 0], [1, 1], [0, 0]]])),
      "feature 1 ('R'), ring 1: a ring needs at least 3 different positions"),
+    # read as two numbers, the altitude seemed to band the sector and did not
+    ("altitude", collection(feature("R", [[[0, 0, 100.0], [1, 0, 100.0], [1, 1, 100.0], [0, 0, 100.0]]])),
+     "feature 1 ('R'), ring 1: a position carries an altitude (100.0); msdc reads longitude and latitude"),
 ]
 
 
@@ -227,3 +230,10 @@ def test_sectors_of_two_areas_sharing_reports_are_noted() -> None:
                     "(manoeuvring): 1): those are judged under both areas' requirements; draw the areas "
                     "apart")
     assert area_overlaps([("A", "apron", a), ("C", "apron", c)]) == ""
+
+
+def test_a_zero_altitude_as_map_editors_write_it_is_read(tmp_path: Path) -> None:
+    ring = [[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 0, 0]]
+    (sector,) = read_sectors(write(tmp_path, collection(feature("R", [ring]))))
+    flat = read_sectors(write(tmp_path, collection(feature("R", [[q[:2] for q in ring]]))))[0]
+    assert str(sector) == str(flat)
