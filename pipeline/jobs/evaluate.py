@@ -85,6 +85,9 @@ def validate(options: EvaluateOptions) -> EvaluateChecked:
     checked.warnings += said
     if options.reference_file is not None:
         path = Path(options.reference_file)
+        if options.reference != "leave-one-out":  # one reference or the other, not both in silence
+            raise OptionError(f"--reference {options.reference} and --reference-file {path}: give one "
+                              "(the file is an external reference, --reference builds one)")
         if not path.is_file():
             raise OptionError(f"--reference-file {path}: {'not a file' if path.exists() else 'no such file'}")
     try:

@@ -220,6 +220,9 @@ def test_the_cli_writes_the_three_outputs(recording, tmp_path):
                                      "'eurocontrol-1997-ssr'?)"),
     ({"output": "e.csv"}, "-o"),
     ({"reference_file": "nowhere.csv"}, "--reference-file nowhere.csv: no such file"),
+    # the file was taken and --reference adsb dropped in silence
+    ({"reference_file": "nowhere.csv", "reference": "adsb"},
+     "--reference adsb and --reference-file nowhere.csv: give one"),
     ({"test_sensors": ("25-201",)}, "--test"),
 ])
 def test_bad_options_are_refused_before_decoding(recording, change, message):
