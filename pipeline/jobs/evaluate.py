@@ -156,11 +156,12 @@ class EvaluateResult:
     warnings: list[str] = field(default_factory=list)
 
 
-def _under_test(meas: pd.DataFrame, preset, tests: tuple, trackers: list[str] = (), unread: str = ""
-                ) -> tuple[list[tuple[str, str]], list[str]]:
+def _under_test(meas: pd.DataFrame, preset, tests: tuple, trackers: list[str] = (), unread: str = "",
+                reference: str = "leave-one-out") -> tuple[list[tuple[str, str]], list[str]]:
     """The (sensor id, kind) pairs to judge: those of a kind the preset applies to (the measurements'
     sensors and the CAT062 ``trackers``), narrowed by --test; ``unread`` ends the error when none is
-    (unread_inputs: inputs of categories the command does not read)."""
+    (unread_inputs: inputs of categories the command does not read). The note on the sensors not judged
+    says which build the ``reference`` (leave-one-out: all; adsb: the ADS-B; external: none)."""
     from msdc.pipeline.evaluate.sensor_reports import judged_by
     from msdc.pipeline.model.report_selection import sensor_parts
     from msdc.pipeline.model.schema import first_rows
@@ -188,9 +189,14 @@ def _under_test(meas: pd.DataFrame, preset, tests: tuple, trackers: list[str] = 
         raise JobError(f"no sensor in the inputs is of a kind the preset {preset.name} applies to "
                        f"({', '.join(preset.sensor_types)}); present: "
                        f"{', '.join(f'{s} ({k})' for s, k in present) or 'none'}{unread}")
-    left = [f"{s} ({k})" for s, k in present if (s, k) not in fits]
+    left = [(s, k) for s, k in present if (s, k) not in fits]
     if left:
-        notes.append(f"not judged by {preset.name}: {', '.join(left)} (they still build the reference)")
+        builders = {"external": [], "adsb": [(s, k) for s, k in left if k == "adsb"]}.get(reference, left)
+        role = ("they still build the reference" if builders == left else
+                f"{', '.join(f'{s} ({k})' for s, k in builders)} still build the reference" if builders else
+                "none builds the reference: " + ("it is the external file" if reference == "external"
+                                                 else "it is built from ADS-B alone"))
+        notes.append(f"not judged by {preset.name}: {', '.join(f'{s} ({k})' for s, k in left)} ({role})")
     return fits, notes
 
 
@@ -517,7 +523,8 @@ def _evaluate_window(options: EvaluateOptions, checked: EvaluateChecked, progres
     if meas.empty:
         raise JobError("no report in the inputs to evaluate")
     trackers = tracker_ids(loaded.frames.get(TRACKER_CATEGORY)) if wants_tracks else []
-    tests, notes = _under_test(meas, checked.preset, checked.tests, trackers, unread_inputs(loaded))
+    tests, notes = _under_test(meas, checked.preset, checked.tests, trackers, unread_inputs(loaded),
+                               "external" if options.reference_file is not None else options.reference)
     builders = tracked_reports(meas, options.max_coast_s)
     warnings += builders.attrs.get("repeated", []) + builders.attrs.get("mixed", [])
     epoch = midnight(meas["time"])

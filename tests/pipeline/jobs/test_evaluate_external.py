@@ -66,7 +66,10 @@ def test_false_reports_are_withheld_against_an_external_reference(tmp_path):
     inputs = [str(FIX / "radar.ast"), str(FIX / "adsb.ast"), "--sensors", str(FIX / "sensors.toml")]
     assert main(["evaluate", *inputs, "--date", DAY, "--preset", str(tmp_path / "p.toml"), "--reference-file",
                  str(_reference_csv(tmp_path / "ref.csv")), "--json", str(out)]) == 0
-    row = next(r for r in json.loads(out.read_text())["results"]
-               if r["requirement"] == "false_reports" and r["sector"] == "global")
+    doc = json.loads(out.read_text())
+    row = next(r for r in doc["results"] if r["requirement"] == "false_reports" and r["sector"] == "global")
     assert row["value"] is None and row["verdict"] != "fail"
     assert "an external reference lists the aircraft it was made for" in row["notes"]
+    # the ADS-B the preset does not judge was said to "still build the reference": the file is it
+    assert ("not judged by eurocontrol-1997-ssr: 021:0/1 (adsb) (none builds the reference: it is the "
+            "external file)") in doc["parameters"]["notes"]
