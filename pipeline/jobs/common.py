@@ -1015,6 +1015,13 @@ def tracked_reports(meas: pd.DataFrame, max_coast_s: float) -> pd.DataFrame:
     return out
 
 
+def _has_flag(options, flag: str) -> bool:
+    """Whether the options' command line has ``flag`` (evaluate reads every source, with no --sources)."""
+    import dataclasses
+
+    return any(flag in getattr(f.metadata.get("option"), "flags", ()) for f in dataclasses.fields(options))
+
+
 def source_measurements(loaded, checked: Checked, options) -> tuple[pd.DataFrame, list[str]]:
     """Every measurement of the requested sources (``options.sources``; one must be present) after the
     report selection, repeats and unidentified reports kept, and the warnings about them (stray radar
@@ -1047,8 +1054,8 @@ def source_measurements(loaded, checked: Checked, options) -> tuple[pd.DataFrame
         failed = "; ".join(why[2:] for cat in dict.fromkeys(c for s in sources for c in cats[s])
                            if (why := _all_failed(loaded, cat)))
         where = in_the_inputs(options, checked, [c for s in sources for c in cats[s]])
-        raise JobError(f"no {wanted} records {where} (--sources {','.join(sources)})"
-                       + (f": {failed}" if failed else ""))
+        given = f" (--sources {','.join(sources)})" if _has_flag(options, "--sources") else ""
+        raise JobError(f"no {wanted} records {where}{given}" + (f": {failed}" if failed else ""))
     try:
         radar, stray = declared_radar(radar, checked.sensors, sensors_path(options))
     except UnknownRadar as exc:

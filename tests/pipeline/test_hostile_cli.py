@@ -495,3 +495,15 @@ def test_an_output_that_is_a_file_another_option_reads_is_refused(option, tmp_pa
     assert status == 2, err
     assert f"--json {target}: is the {option} file {target}; writing it would destroy it" in err
     assert target.read_bytes() == before
+
+
+def test_evaluate_without_sensor_records_names_no_option_it_lacks(tmp_path, capsys):
+    """It ended "(--sources radar,adsb,mlat,smr)": evaluate has no --sources (it reads every sensor kind),
+    and the user who tried it was refused."""
+    empty = tmp_path / "empty.ast"
+    empty.write_bytes(b"")
+    status, _, err = _run(["evaluate", empty, "--sensors", SENSORS, "--preset", "eurocontrol-1997-ssr",
+                           "--date", "2019-03-01"], capsys)
+    assert status == 1 and "records in the inputs" in err and "--sources" not in err, err
+    status, _, err = _run(["track", empty, "--sensors", SENSORS, "--all", "-o", tmp_path / "t.csv"], capsys)
+    assert "(--sources radar,adsb)" in err  # track has it
