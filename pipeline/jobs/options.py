@@ -209,8 +209,19 @@ class _Once(argparse.Action):
     def __call__(self, parser, namespace, values, option_string=None):
         before = getattr(namespace, self.dest, None)
         if before is not None:
-            parser.error(f"{option_string} given twice ({before!r} and {values!r}): give it once")
+            parser.error(f"{option_string} given twice ({_shown(before)} and {_shown(values)}): give it once")
         setattr(namespace, self.dest, values)
+
+
+def _shown(value: object) -> str:
+    """A parsed option value as a user would write it: a date as 2019-03-01, not datetime.date(2019, 3, 1);
+    text quoted."""
+    if isinstance(value, str):
+        return repr(value)
+    if isinstance(value, float):
+        return f"{value:g}"
+    iso = getattr(value, "isoformat", None)
+    return iso() if callable(iso) else str(value)
 
 
 def _with_default(text: str | None, default: object) -> str | None:

@@ -531,6 +531,13 @@ def test_an_option_of_one_value_given_twice_is_refused(argv, capsys):
     assert f"{argv[-2]} given twice" in err and "give it once" in err
 
 
+def test_a_date_given_twice_is_said_as_written(capsys):
+    """It was said in Python's spelling: "(datetime.date(2019, 3, 1) and datetime.date(2019, 3, 2))"."""
+    with pytest.raises(SystemExit):
+        main(["stats", "x.ast", "--date", "2019-03-01", "--date", "2019-03-02"])
+    assert "--date given twice (2019-03-01 and 2019-03-02): give it once" in capsys.readouterr().err
+
+
 def test_a_scheduler_the_run_never_needed_is_said_unused(tmp_path, capsys):
     """correlate distributes nothing: a scheduler given to it (here one nothing listens at) was accepted in
     silence, as if the run had gone there."""
