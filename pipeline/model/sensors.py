@@ -103,7 +103,10 @@ def _check_entry(path: Path, i: int, entry: object) -> dict:
         if isinstance(value, bool) or not isinstance(value, types):
             kind = " or ".join("integer" if t is int else "float" if t is float else "string" for t in types)
             article = "an" if kind[0] in "aeiou" else "a"
-            raise ValueError(f"{where}: {key} = {value!r} should be {article} {kind}")
+            raise ValueError(f"{where}: {key} = {_as_toml(value)} should be {article} {kind}")
+    if not entry["name"].strip():  # it labels the radar's rows: a blank one labelled them with nothing
+        raise ValueError(f"{where} (SAC {entry['sac']} SIC {entry['sic']}): name is empty; give the sensor "
+                         "a name (it labels figures, workbook rows and messages)")
     if len(entry["name"]) > NAME_MAX_CHARS:
         raise ValueError(f"{where} (SAC {entry['sac']} SIC {entry['sic']}): name is {len(entry['name']):,} "
                          f"characters long; a name may have up to {NAME_MAX_CHARS} (it labels figures, "
@@ -156,6 +159,13 @@ def _toml(path: Path) -> dict:
 
 
 KIND_NOUN = {"radar": "radar", "mlat": "multilateration", "smr": "surface movement radar"}
+
+
+def _as_toml(value: object) -> str:
+    """A value as TOML writes it (true, not Python's True), for messages about the file."""
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    return repr(value)
 
 
 def _kind_of(where: str, entry: dict) -> dict:

@@ -70,7 +70,9 @@ def test_read_sensors(tmp_path):
 @pytest.mark.parametrize(("text", "words"), [
     (GOOD.replace("altitude_m = 20\n", ""), ["entry 2", "altitude_m"]),
     (GOOD.replace("sac = 1\nsic = 3", 'sac = "1"\nsic = 3'), ["sac", "'1'", "integer"]),
-    (GOOD.replace("latitude = 1.35", "latitude = true"), ["latitude", "True"]),
+    (GOOD.replace("latitude = 1.35", "latitude = true"), ["latitude = true should be"]),  # TOML's spelling
+    # a blank name labelled the radar's rows with nothing
+    (GOOD.replace('name = "Changi"', 'name = " "'), ["entry 2", "SAC 1 SIC 3", "name is empty"]),
     (GOOD.replace("sic = 3", "sic = 2"), ["SAC 1 SIC 2", "twice"]),
     (GOOD.replace("latitude = 1.35", "latitude = 91.0"), ["latitude", "outside"]),
     (GOOD.replace("altitude_m = 20", "altitude_m = 20\nsigma_range_m = 0"), ["sigma_range_m", "outside"]),
