@@ -529,6 +529,7 @@ def _evaluate_window(options: EvaluateOptions, checked: EvaluateChecked, progres
     warnings += builders.attrs.get("repeated", []) + builders.attrs.get("mixed", [])
     epoch = midnight(meas["time"])
     external = _selected_reference(_external(options, epoch), checked, epoch, loaded.date)
+    warnings += _reference_outside(external, meas, epoch, options.reference_file)
     flagged = field_monitors(meas, loaded.frames)
     standing = {k: v for k, v in fixed_7777(meas).items() if k not in flagged}
     monitors = flagged | set(standing)
@@ -820,6 +821,26 @@ def _external(options: EvaluateOptions, epoch) -> pd.DataFrame | None:
         return read_external_reference(options.reference_file, epoch)
     except ValueError as exc:
         raise OptionError(f"--reference-file: {exc}") from None
+
+
+def _reference_outside(external: pd.DataFrame | None, meas: pd.DataFrame, epoch, path) -> list[str]:
+    """A warning when no sample of the external reference lies within the reports' time span (another
+    day's file: every figure withheld with no word why)."""
+    if external is None:
+        return []
+    t = (meas["time"] - epoch).dt.total_seconds()
+    lo, hi = float(t.min()), float(t.max())
+    ref_t = external["t_s"].to_numpy(float)
+    if len(ref_t) and ((ref_t >= lo) & (ref_t <= hi)).any():
+        return []
+    when = "%Y-%m-%d %H:%M:%S"
+    span = f"{meas['time'].min():{when}} to {meas['time'].max():{when}} UTC"
+    held = "the report selection keeps none of its samples"
+    if len(ref_t):
+        first, last = (epoch + pd.Timedelta(seconds=float(v)) for v in (ref_t.min(), ref_t.max()))
+        held = f"its {len(ref_t):,} samples lie from {first:{when}} to {last:{when}} UTC"
+    return [f"--reference-file {path}: no sample within the reports' time ({span}): {held}; is it the "
+            "recordings' day? Every figure that needs it is withheld"]
 
 
 def _selected_reference(external: pd.DataFrame | None, checked: EvaluateChecked, epoch, day

@@ -73,3 +73,15 @@ def test_false_reports_are_withheld_against_an_external_reference(tmp_path):
     # the ADS-B the preset does not judge was said to "still build the reference": the file is it
     assert ("not judged by eurocontrol-1997-ssr: 021:0/1 (adsb) (none builds the reference: it is the "
             "external file)") in doc["parameters"]["notes"]
+
+
+def test_a_reference_of_another_day_is_said(tmp_path, capsys):
+    """The fixture's ADS-B as a reference dated a day late: every figure was withheld with no word why."""
+    ref = _reference_csv(tmp_path / "ref.csv")
+    ref.write_text(ref.read_text().replace(f"{DAY}T", "2019-03-02T"))
+    inputs = [str(FIX / "radar.ast"), str(FIX / "adsb.ast"), "--sensors", str(FIX / "sensors.toml")]
+    assert main(["evaluate", *inputs, "--date", DAY, "--preset", "eurocontrol-1997-ssr", "--reference-file",
+                 str(ref), "--json", str(tmp_path / "e.json")]) == 0
+    err = capsys.readouterr().err
+    assert (f"--reference-file {ref}: no sample within the reports' time (2019-03-01 08:00:00 to "
+            "2019-03-01 11:19:5") in err and "lie from 2019-03-02 08:00:0" in err
