@@ -183,10 +183,10 @@ def live_pd(rows: pd.DataFrame, sensor_id: str, window_s: float) -> Outcome:
         return withheld("pd", "no report in the window")
     rep, reference = self_reference(rows)
     if not len(rep):
-        placed = len(self_reference(rows, positions=False)[0]) == 0
-        return withheld("pd", "no report with a time, a position and a track number or identity" if placed
-                        else "the reports carry no position (a radar's plots are placed from its site: give "
-                             "--sensors)")
+        followed = len(self_reference(rows, positions=False)[0]) > 0  # timed and tracked, yet unplaced
+        return withheld("pd", "the reports carry no position (a radar's plots are placed from its site: give "
+                              "--sensors)" if followed else
+                        "no report with a time, a position and a track number or identity")
     period = period_from_plots(rep["t_s"].to_numpy(float), rep["ref_index"].to_numpy())
     if not math.isfinite(period):
         return withheld("pd", f"update period not measurable: fewer than {MIN_DIFFS} intervals between "
