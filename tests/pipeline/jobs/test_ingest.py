@@ -345,7 +345,7 @@ def test_ctrl_c_ends_a_pooled_ingest_without_a_traceback(tmp_path):
     and the new dataset folder was left with its lock file and partition folders. The pool's processes
     leave it to the main one (they stop at their next chunk): status 130, no traceback, no folder."""
     big = tmp_path / "big.ast"
-    big.write_bytes(ADSB.read_bytes() * 40)  # long enough to be decoding when the signal comes
+    big.write_bytes(ADSB.read_bytes() * 20)  # long enough to be decoding when the signal comes
     root = tmp_path / "ds"
     proc = subprocess.Popen([sys.executable, "-m", "msdc.pipeline.cli", "ingest", str(big), str(RADAR),
                              "--dataset", str(root), "--date", DAY, "--chunk-mb", "0.5", "--workers", "2"],

@@ -184,7 +184,7 @@ def test_a_full_queue_is_said_once_as_msdcs_warning(tmp_path):
     """--queue 1 under a burst: each drop note said as msdc's warning, not followed by Python logging's
     bare copy ("513 datagrams dropped"), and no other line that is not msdc's."""
     port = free_port()
-    proc = _listening(port, "--queue", "1", "--duration", "3")
+    proc = _listening(port, "--queue", "1", "--duration", "1.5")
     try:
         send_all([block(48, cat048_record(25, 201, 100.0 + i * 0.01)) for i in range(3000)], port)
         out, err = proc.communicate(timeout=60)
