@@ -95,9 +95,7 @@ def _filtered_away(exc, meas_all: pd.DataFrame, options: CorrelateOptions) -> st
     """The message when the aircraft's ADS-B reports exist but the quality filters removed them all."""
     from msdc.pipeline.model.measurements import select
 
-    asked = [f for f, on in ((f"--min-nic {options.min_nic}", options.min_nic is not None),
-                             (f"--min-nacp {options.min_nacp}", options.min_nacp is not None),
-                             ("--drop-jumps", options.drop_jumps)) if on]
+    asked = _filters_given(options)
     if "ADS-B" not in exc.missing_in or not asked:
         return None
     chosen = select(meas_all, options.callsign, options.address)
@@ -110,12 +108,17 @@ def _filtered_away(exc, meas_all: pd.DataFrame, options: CorrelateOptions) -> st
     return f"{text}; lower the filter or leave it out"
 
 
+def _filters_given(options: CorrelateOptions) -> list[str]:
+    """The ADS-B filters given, as written on the command line."""
+    return [f for f, on in ((f"--min-nic {options.min_nic}", options.min_nic is not None),
+                            (f"--min-nacp {options.min_nacp}", options.min_nacp is not None),
+                            ("--drop-jumps", options.drop_jumps)) if on]
+
+
 def _filtered_aircraft(meas_all: pd.DataFrame, meas: pd.DataFrame, options: CorrelateOptions) -> list[str]:
     """--all with ADS-B filters: a warning naming the aircraft seen by radar and ADS-B whose ADS-B reports
     the filters removed all of (they were left out of the run in silence; --callsign says it as an error)."""
-    asked = [f for f, on in ((f"--min-nic {options.min_nic}", options.min_nic is not None),
-                             (f"--min-nacp {options.min_nacp}", options.min_nacp is not None),
-                             ("--drop-jumps", options.drop_jumps)) if on]
+    asked = _filters_given(options)
     if not options.all_aircraft or not asked:
         return []
 
@@ -129,10 +132,10 @@ def _filtered_aircraft(meas_all: pd.DataFrame, meas: pd.DataFrame, options: Corr
         return []
     adsb = meas_all[(meas_all["sensor_kind"] == "adsb").to_numpy(bool)]
     counts = adsb["aircraft_id"].astype(str).value_counts()
-    names = adsb.drop_duplicates("aircraft_id").set_index(adsb.drop_duplicates("aircraft_id")["aircraft_id"]
-                                                          .astype(str))["callsign"]
-    named = "; ".join(f"{names.get(a) if pd.notna(names.get(a)) else a} ({a}, {int(counts.get(a, 0)):,} "
-                      "reports)" for a in gone)
+    first = adsb.drop_duplicates("aircraft_id")
+    names = dict(zip(first["aircraft_id"].astype(str), first["callsign"], strict=True))
+    named = "; ".join(f"{names[a] if pd.notna(names.get(a)) else a} ({a}, {int(counts.get(a, 0)):,} reports)"
+                      for a in gone)
     return [f"{' and '.join(asked)} removed all ADS-B reports of {len(gone)} aircraft seen by radar and "
             f"ADS-B, which are not correlated: {named}"]
 
