@@ -100,8 +100,8 @@ def _rings(path: Path, where: str, rings: object) -> tuple[np.ndarray, ...]:
         raised = next((q[2] for q in ring if len(q) > 2 and q[2] != 0), None)
         if raised is not None:  # read as two numbers, an altitude would seem to band the sector, and not
             raise ValueError(f"{path}: {name}: a position carries an altitude ({raised!r}); msdc reads "
-                             "longitude and latitude only: band the area with min_fl and max_fl in its "
-                             "properties")
+                             "longitude and latitude only: give a flight-level band as the sector's min_fl "
+                             "and max_fl (with --area: --fl)")
         xy = np.array([[float(q[0]), float(q[1])] for q in ring], dtype=float)
         if len(xy) < 3 or not np.isfinite(xy).all():
             raise ValueError(f"{path}: {name}: a ring needs at least 3 finite positions")
