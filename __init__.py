@@ -2,7 +2,8 @@
 
 The repository root is the installed package ``msdc``: ``msdc.asterix`` decodes, ``msdc.pipeline`` analyses.
 Its public face is small and loaded on first use, so ``import msdc`` costs nothing until a name is needed:
-``msdc.read`` and ``msdc.iter_read`` decode recordings into frames, the ``*_job`` functions run the commands.
+``msdc.read`` and ``msdc.iter_read`` decode recordings into frames, the ``*_job`` functions run the commands
+(one for each command; their options classes are in ``msdc.pipeline.jobs.<command>``).
 """
 
 from __future__ import annotations
@@ -21,6 +22,11 @@ _PUBLIC = {
     "quality_job": ("msdc.pipeline.jobs.quality", "quality_job"),
     "track_job": ("msdc.pipeline.jobs.track", "track_job"),
     "conflict_job": ("msdc.pipeline.jobs.conflicts", "conflict_job"),
+    "evaluate_job": ("msdc.pipeline.jobs.evaluate", "evaluate_job"),
+    "ingest_job": ("msdc.pipeline.jobs.ingest", "ingest_job"),
+    "sql_job": ("msdc.pipeline.jobs.sql", "sql_job"),
+    "listen_job": ("msdc.pipeline.jobs.listen", "listen_job"),
+    "replay_job": ("msdc.pipeline.jobs.replay", "replay_job"),
 }
 
 __all__ = sorted(_PUBLIC)

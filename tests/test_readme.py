@@ -117,13 +117,19 @@ def test_the_encoder_example_prints_what_the_page_shows(monkeypatch, tmp_path):
 
 
 def test_the_library_examples_run(monkeypatch, tmp_path):
-    """From Python: the jobs example (it writes report.xlsx: run in a folder of its own) and the steps."""
+    """From Python: the jobs examples (they write report.xlsx and evaluation.xlsx: run in a folder of its
+    own) and the steps."""
     page = "docs/guide/python.md"
     (tmp_path / "fixtures").symlink_to(ROOT / "fixtures", target_is_directory=True)
     monkeypatch.chdir(tmp_path)
     jobs = {}
     exec(_block_after(page, "writing is a separate call", "python"), jobs)
     assert (tmp_path / "report.xlsx").is_file() and (tmp_path / "report_tracks.png").is_file()
+    evaluation = {}
+    exec(_block_after(page, "The evaluation, for instance", "python"), evaluation)
+    assert (tmp_path / "evaluation.xlsx").is_file()
+    card = evaluation["card"]
+    assert {"048:25/201", "021:0/107"} >= set(card["sensor"]) and "pd" in set(card["requirement"])
     steps = {}
     exec(_block_after(page, "plain functions on DataFrames", "python"), steps)
     assert [w.summary["window"] for w in steps["run"].windows] == [1, 2]
