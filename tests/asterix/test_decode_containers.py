@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import datetime as dt
 import struct
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -348,18 +349,26 @@ def test_format_detection_and_override(tmp_path: Path) -> None:
         assert len(rec.frames[48]) > 0
         assert accounted(rec) == sizes[fmt]
         assert asterix.read(path, format=fmt).format == fmt
-    # forcing another format: read as told, every byte still accounted for
+    # forcing another format: read as told, every byte still accounted for; a wrong one that leaves most bytes
+    # undecoded is said, naming the file
     for fmt, path in files.items():
         for forced in ("raw", "pcap", "final"):
-            rec = asterix.read(path, format=forced)
+            with warnings.catch_warnings(record=True) as said:
+                warnings.simplefilter("always")
+                rec = asterix.read(path, format=forced)
             assert rec.format == forced
             assert accounted(rec) == sizes[fmt]
+            if forced == fmt:
+                assert not said
+            for w in said:
+                assert issubclass(w.category, asterix.ContentWarning) and path.name in str(w.message)
     # a raw file forced as pcap has no pcap magic: nothing decoded, the whole file is a problem
     rec = asterix.read(files["raw"], format="pcap")
     assert rec.frames == {} and rec.decoded_bytes == 0
     assert rec.errors.length.sum() == sizes["raw"] and "magic" in rec.errors.reason.iloc[0]
     # the final frames' payloads are exact: forced raw, the headers and trailers become errors
-    rec = asterix.read(files["final"], format="raw")
+    with pytest.warns(asterix.ContentWarning, match="b.bin: 82% of its 261 bytes did not decode"):
+        rec = asterix.read(files["final"], format="raw")
     assert not rec.errors.empty and rec.container_bytes == 0
     with pytest.raises(asterix.UnreadableInput, match="format"):
         asterix.read(files["raw"], format="pcapx")
@@ -518,9 +527,13 @@ def test_auto_tells_0_23_from_0_24(tmp_path: Path) -> None:
     r24 = asterix.read(write(tmp_path, "b.ast", d24), editions={21: "auto"})
     assert (r23.editions[21], r24.editions[21]) == ("0.23", "0.26")
     # read under the other edition, neither walks cleanly
-    wrong = asterix.read(write(tmp_path, "a.ast", d23), editions={21: "0.24"})
+    with pytest.warns(asterix.EditionWarning, match=r"decoded under edition 0\.24; every one sampled decodes "
+                                                   r"under 0\.23: pin it with editions=\{21: '0\.23'\}"):
+        wrong = asterix.read(write(tmp_path, "a.ast", d23), editions={21: "0.24"})
     assert not wrong.errors.empty
-    wrong = asterix.read(write(tmp_path, "b.ast", d24), editions={21: "0.23"})
+    with pytest.warns(asterix.EditionWarning, match=r"decoded under edition 0\.23; every one sampled decodes "
+                                                   r"under 0\.24, 0\.25, 0\.26"):
+        wrong = asterix.read(write(tmp_path, "b.ast", d24), editions={21: "0.23"})
     assert not wrong.errors.empty
 
 

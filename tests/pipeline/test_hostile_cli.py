@@ -151,7 +151,10 @@ def test_measurements_leave_out_adsb_positions_off_the_earth(tmp_path):
 
     frame = asterix.read(_mas72(tmp_path, 21, {3: 91.0})).frames[21]
     frame.loc[7, "longitude"] = -180.5
-    meas = build_measurements(None, frame, date=None)
+    from msdc.pipeline.model.measurements import OffEarthWarning
+
+    with pytest.warns(OffEarthWarning, match="2 CAT021 report"):
+        meas = build_measurements(None, frame, date=None)
     assert len(meas) == len(frame) - 2
     assert set(meas["offset"]) == set(frame["offset"]) - {frame["offset"].iloc[3], frame["offset"].iloc[7]}
 
