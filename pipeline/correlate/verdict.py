@@ -5,8 +5,10 @@ OFFSET_SE standard errors out of the noise (that of the window's own reports), w
 track, the seconds of flight it amounts to; not its cause, which one window cannot tell (a time-stamp
 error and a range or azimuth bias both move plots along track; the bias fit of --quality, over every
 aircraft, tells them apart: the verdict points there). Otherwise the window shows no systematic offset,
-and the distance is the two sensors' noise together. A window with fewer than MIN_MATCHED_REPORTS
-matched reports gets no verdict, only the count.
+and the distance is the two sensors' noise together, unless its RMS is past NOISE_RMS_LIMIT_M, which no
+sensor's noise reaches: then an error that changes along the flight (a wrong site, a bias seen from a
+turning flight) is said instead. A window with fewer than MIN_MATCHED_REPORTS matched reports gets no
+verdict, only the count.
 """
 
 from __future__ import annotations
@@ -24,6 +26,11 @@ OTHER_CAUSES = ("a time-stamp or position error of either sensor (--quality fits
                 "only)")
 RADAR_PREFIX = "048:"  # the sensor ids of CAT048 radars
 OFFSET_SE = 3.0  # a mean offset is named past this many standard errors (0.3 % of noise-only windows)
+# an RMS distance past this is no sensor's noise: four times the loosest horizontal RMS a standard asks of a
+# sensor (ESASSP Annex D R3, 500 m for 5 NM separation, primary radar)
+NOISE_RMS_LIMIT_M = 2000.0
+CHANGING = ("an error that changes along the flight, such as a wrong sensor site or a bias seen from a "
+            "turning flight")
 
 
 def _number(summary: Mapping[str, Any], key: str) -> float:
@@ -71,7 +78,14 @@ def window_verdict(summary: Mapping[str, Any], reference: str = "ADS-B", tested:
         head = (f"offsets not judged (too few reports moving faster than {MIN_SPEED_MS:g} m/s for a "
                 "direction of travel)")
     rms = _number(summary, "matched_sep_rms_m")
+    beyond = not offsets and math.isfinite(rms) and rms > NOISE_RMS_LIMIT_M
+    if beyond and (math.isfinite(along_se) or math.isfinite(cross_se)):
+        head = "no constant offset along or across track"
     text = f"{head}; {_metres(rms)} RMS from {reference} over {n} reports"
+    if beyond:
+        text += (f", far beyond any sensor's noise (past {_metres(NOISE_RMS_LIMIT_M)}): {CHANGING}; "
+                 f"{'the radar' if radar else 'either sensor'}'s site and biases are to be checked"
+                 f"{' (--quality fits the biases)' if radar else ''}")
     if offsets:
         text += f"; {CAUSES if radar else OTHER_CAUSES}"
     jumps = _number(summary, "adsb_jumps")

@@ -64,6 +64,7 @@ def coverage_warnings(table: pd.DataFrame | None) -> list[str]:
         out.append(f"ADS-B {source}: {len(rows)} report(s) of {aircraft} aircraft lie {span} NM "
                    f"from the median position of the source's reports (beyond "
                    f"{first['limit_nm']:.0f} NM, out of any ground station's reach: a position the "
-                   f"ground station or the aircraft got wrong, as the bytes say), left out of the measurements; the first: {where}latitude "
+                   f"ground station or the aircraft got wrong, as the bytes say), left out of the "
+                   f"measurements; the first: {where}latitude "
                    f"{first['latitude']:.4f}, longitude {first['longitude']:.4f}")
     return out

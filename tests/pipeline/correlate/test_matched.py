@@ -268,6 +268,45 @@ def test_verdict_wording():
         "fits biases for CAT048 radars only)")
     assert window_verdict({"matched_reports": 4}, "ADS-B", "010:0/107:mlat") == (
         "no verdict: 4 reports of 010:0/107:mlat matched to ADS-B at their own time (at least 10 needed)")
+    # no mean offset stands out, but a 55 km RMS is no sensor's noise (four times ESASSP R3's 500 m is 2 km)
+    far = {**quiet, "matched_sep_rms_m": 55281.0, "matched_along_se_m": 4000.0, "matched_cross_se_m": 3000.0,
+           "adsb_jumps": 0}
+    assert window_verdict(far) == (
+        "no constant offset along or across track; 55,281 m RMS from ADS-B over 200 reports, far beyond "
+        "any sensor's noise (past 2,000 m): an error that changes along the flight, such as a wrong sensor "
+        "site or a bias seen from a turning flight; the radar's site and biases are to be checked (--quality "
+        "fits the biases)")
+    assert window_verdict({**far, "matched_sep_rms_m": 1999.0}).startswith("no systematic offset beyond the "
+                                                                            "noise; 1,999 m RMS")
+    assert "either sensor's site and biases are to be checked; " in window_verdict(
+        {**far, "adsb_jumps": 1}, "ADS-B", "010:0/107:mlat")
+    # parked far away: offsets not judged, and the distance still said to be no noise
+    assert window_verdict({**parked, "matched_sep_rms_m": 55281.0}).startswith(
+        "offsets not judged (too few reports moving faster than 20 m/s for a direction of travel); 55,281 m "
+        "RMS from ADS-B over 200 reports, far beyond any sensor's noise")
+
+
+def test_a_radar_placed_55_km_off_is_never_said_to_agree_within_the_noise(tmp_path):
+    """The bundled recordings with the radar's site given 0.5 deg north of where it is (55.6 km on the
+    ellipsoid: the plots land about that far from the aircraft): every window names a systematic offset or
+    says the distance is far beyond any sensor's noise; none says it is noise (a turning flight's along and
+    cross offsets average out: MAS72's second window did)."""
+    site = (FIX / "sensors.toml").read_text()
+    moved = tmp_path / "moved.toml"
+    moved.write_text(site.replace("latitude = 2.7456", "latitude = 3.2456"))
+    assert moved.read_text() != site
+    loaded = load([FIX / "radar.ast", FIX / "adsb.ast"])
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", OutOfCoverageWarning)
+        meas = with_clock(build_measurements(loaded.frames[48], loaded.frames[21], read_sensors(moved),
+                                             date=loaded.date))
+    verdicts = [w.summary["verdict"] for w in correlate(meas, all_aircraft=True).windows]
+    assert len(verdicts) == 10
+    for v in verdicts:
+        rms = float(re.search(r"([\d,]+) m RMS", v).group(1).replace(",", ""))
+        assert 50_000 < rms < 60_000, v
+        assert v.startswith("systematic offset: ") or "far beyond any sensor's noise" in v, v
+    assert sum("far beyond any sensor's noise" in v for v in verdicts) >= 1
 
 
 def test_window_accuracy_takes_the_radar_errors_of_its_radar_aircraft_and_time():
