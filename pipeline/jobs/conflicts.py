@@ -101,13 +101,16 @@ def validate(options: ConflictOptions) -> Checked:
     parse_sources(options.sources)
     checked.output = output_path("-o", options.output, (".csv", ".xlsx"))
     checked.json = output_path("--json", options.json, (".json",))
-    if checked.output is None:
-        raise OptionError("-o: give the output, conflicts.csv or conflicts.xlsx")
-    csv = checked.output.suffix.lower() == ".csv"
-    companions = companion_paths(real_output(checked.output)) if csv else {}
-    check_beside("-o", checked.output, [(COMPANION_NOUNS[kind], path) for kind, path in companions.items()])
-    beside = companions.values()
-    spare_inputs(options, [(f"-o {checked.output}", p) for p in (checked.output, *beside)]
+    if (options.callsign, options.address, options.all_aircraft) != (None, None, True):
+        raise OptionError("callsign, address, all_aircraft: msdc conflicts tracks every aircraft (their "
+                          "pairs are the point); leave them out")
+    beside = []
+    if checked.output is not None:  # the command requires -o; from Python, whatever is given is written
+        csv = checked.output.suffix.lower() == ".csv"
+        companions = companion_paths(real_output(checked.output)) if csv else {}
+        check_beside("-o", checked.output, [(COMPANION_NOUNS[k], path) for k, path in companions.items()])
+        beside = [checked.output, *companions.values()]
+    spare_inputs(options, [(f"-o {checked.output}", p) for p in beside]
                  + [(f"--json {checked.json}", checked.json)])
     if options.figures is not None:
         check_figures_dir(options.figures, writable=True)
@@ -422,15 +425,17 @@ def text(result: ConflictJobResult) -> str:
 def write_conflicts(result: ConflictJobResult, *, tx: OutputTransaction | None = None,
                     progress: Progress | None = None, workers: int | None = None) -> dict[str, Path]:
     """Write the tables (CSV: alerts at -o, losses and warning times beside it; xlsx: one workbook), the
-    JSON and one figure per alert (--figures, its folder made only when there is one), staged in ``tx``
-    (committed by the caller; without one, the files are committed together here); the figures on
-    ``workers`` processes (None: every core). Returns the final paths, by kind."""
+    JSON and one figure per alert (--figures, its folder made only when there is one), each when given,
+    staged in ``tx`` (committed by the caller; without one, the files are committed together here); the
+    figures on ``workers`` processes (None: every core). Returns the final paths, by kind."""
     from msdc.pipeline.report.conflict_excel import write_conflict_workbook
 
     out, js = result.checked.output, result.checked.json
     targets: dict[str, Path] = {}
     with staged(tx) as stage:
-        if out.suffix.lower() == ".csv":
+        if out is None:
+            pass
+        elif out.suffix.lower() == ".csv":
             targets["alerts"] = out
             write_csv(result.alerts, stage.path(out))
             for kind, path in companion_paths(stage.path(out)).items():

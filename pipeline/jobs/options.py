@@ -282,9 +282,13 @@ def _arg_text(value: object) -> str:
 
 def check_declared(options: object) -> None:
     """Every declared range and choice of ``options`` holds (each item of a tuple), else OptionError naming
-    the option. Unset (None) options are not checked."""
+    the option. Unset (None) options are not checked, but None for one that cannot be unset is refused."""
+    hints = typing.get_type_hints(type(options))
     for f, spec, kind in declared(type(options)):
         value = getattr(options, f.name)
+        if value is None and f.default is not None and type(None) not in typing.get_args(hints[f.name]):
+            raise OptionError(f"{spec.name} None: must be given a value (leave it out for the default "
+                              f"{_shown(f.default)})")
         if value is None or isinstance(value, dict):  # a dict: editions as {category: edition}
             continue
         items = value if isinstance(value, tuple | list) else (value,)
@@ -337,6 +341,28 @@ def check_integer(name: str, value: int | None, lo: int, hi: int) -> None:
 # ---------------------------------------------------------------------------------------------------------
 # The options of each command
 
+class OneOrMany:
+    """Base of every options class: a repeatable or positional option given one value (a path, a query, an
+    id, a category number) is that value alone, and a tuple option given None or a list its default or the
+    list's tuple, as ``read()`` takes them (a string was read letter by letter: --udp '1')."""
+
+    def __post_init__(self) -> None:
+        for f in dataclasses.fields(self):
+            spec = f.metadata.get("option")
+            if spec is None or not isinstance(f.default, tuple):
+                continue
+            value = getattr(self, f.name)
+            one = spec.repeat or not spec.flags  # else a text is comma-separated (--sources, --horizon)
+            if value is None:
+                value = f.default
+            elif isinstance(value, list):
+                value = tuple(value)
+            elif isinstance(value, numbers.Number) or (one and isinstance(value, str | Path | dt.date)):
+                value = (value,)
+            object.__setattr__(self, f.name, value)
+
+
+
 SENSORS_HELP = "sensor positions (TOML [[sensor]] tables)"
 SENSORS_OPTIONAL_HELP = ("sensor positions (TOML [[sensor]] tables); needed when radar plots are used, "
                          "not for ADS-B alone")
@@ -354,7 +380,7 @@ def adsb_sigma_option(used: str, doc: str = "") -> typing.Any:
 
 
 @dataclass(frozen=True)
-class DecodingOptions:
+class DecodingOptions(OneOrMany):
     """How to read the inputs (shared by every job)."""
 
     inputs: tuple[str, ...] = option((), metavar="INPUT", section="selection",
@@ -437,7 +463,7 @@ class DecodeOptions(DecodingOptions):
 
 
 @dataclass(frozen=True)
-class DatasetOptions:
+class DatasetOptions(OneOrMany):
     """--dataset: a dataset made by ``msdc ingest`` as the input instead of recordings, declared once for
     the commands that read one (listed first among a command's bases, so that its inputs keep their place;
     ``jobs.common.check_decoding`` opens it)."""
@@ -496,7 +522,7 @@ ADSB_SIGMA_DOC = ("ADS-B sigma for reports without NACp, used by {used} "
 
 
 @dataclass(frozen=True)
-class ReferenceFilterOptions:
+class ReferenceFilterOptions(OneOrMany):
     """The ADS-B report filters (pipeline.quality.filters), declared once for the commands that take them:
     correlate (before slotting) and quality (the reference of radar accuracy and biases). Listed first
     among a command's bases, so that its inputs keep their place."""
@@ -684,7 +710,7 @@ class TrackOptions(AircraftOptions):
 
 
 @dataclass(frozen=True)
-class SelectionOptions:
+class SelectionOptions(OneOrMany):
     """Which aircraft samples an analysis counts (``pipeline.model.selection``), declared once: ``msdc
     conflicts`` takes them, and a command that analyses the same traffic inherits them (listed first among
     its bases, so that its inputs keep their place). ``jobs.common.check_selection`` makes the Selection."""
@@ -863,7 +889,7 @@ class EvaluateOptions(ReferenceFilterOptions, DatasetOptions, DecodingOptions):
 
 
 @dataclass(frozen=True)
-class IngestOptions:
+class IngestOptions(OneOrMany):
     """Everything ``ingest_job`` needs."""
 
     inputs: tuple[str, ...] = option((), metavar="INPUT", section="selection", doc="the recordings")
@@ -900,7 +926,7 @@ class IngestOptions:
 
 
 @dataclass(frozen=True)
-class SqlOptions:
+class SqlOptions(OneOrMany):
     """Everything ``sql_job`` needs."""
 
     query: tuple[str, ...] = option((), metavar="SQL", section="selection",
@@ -924,7 +950,7 @@ _T = Thresholds  # the monitor's alarm thresholds: their defaults are said in th
 
 
 @dataclass(frozen=True)
-class ListenOptions:
+class ListenOptions(OneOrMany):
     """Everything ``listen_job`` needs (docs/guide/live.md)."""
 
     udp: tuple[str, ...] = option(
@@ -989,7 +1015,7 @@ class ListenOptions:
 
 
 @dataclass(frozen=True)
-class ReplayOptions:
+class ReplayOptions(OneOrMany):
     """Everything ``replay_job`` needs (docs/guide/live.md)."""
 
     inputs: tuple[str, ...] = option((), metavar="RECORDING", section="selection",

@@ -61,7 +61,6 @@ BAD = [
     (opts(tpm="banana"), "--tpm 'banana'"),
     (opts(tpm="dynamic:-1,2"), "--tpm 'dynamic:-1,2': p(T) = min(0.995, -1 - 2 T) is -1 at T = 0 s"),
     (opts(output="c.parquet"), "-o c.parquet: must end in .csv or .xlsx"),
-    (opts(output=None), "-o: give the output"),
     (opts(json="c.txt"), "--json c.txt"),
     (opts(sensors="/nonexistent/s.toml"), "--sensors /nonexistent/s.toml"),
     (opts(vertical="probable"), "--vertical 'probable'"),
@@ -325,3 +324,16 @@ def test_a_batch_of_untrackable_aircraft_predicts_nothing(monkeypatch):
     parts = conflicts._predictions(meas, result.epoch, plane, (20.0, 60.0), options)
     assert set(parts["aircraft_id"]) == {"A"} and isinstance(parts["time"].dtype, pd.DatetimeTZDtype)
     pd.testing.assert_frame_equal(parts, whole, check_exact=True)
+
+
+def test_from_python_the_job_needs_no_table_and_writes_only_what_is_given(crossing, tmp_path):
+    """Only the command requires -o: the job ran without it refused "-o: give the output" though it writes
+    nothing; write_conflicts then writes the JSON alone (the crossing's one loss in it)."""
+    d = crossing
+    options = ConflictOptions(inputs=(str(d / "r.ast"), str(d / "a.ast")), sensors=str(d / "s.toml"),
+                              date=dt.date(2019, 3, 1), json=str(tmp_path / "c.json"), step_s=5.0)
+    result = conflicts.conflict_job(options)
+    assert len(result.losses) == 1
+    assert conflicts.write_conflicts(result) == {"json": tmp_path / "c.json"}
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["c.json"]
+    assert len(json.loads((tmp_path / "c.json").read_text())["losses"]) == 1

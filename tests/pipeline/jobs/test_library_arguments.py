@@ -394,3 +394,53 @@ def test_an_output_that_is_the_one_input_is_refused(tmp_path):
     rec.write_bytes(Path(ADSB).read_bytes())
     with pytest.raises(OptionError, match="is the input"):
         track.validate(TrackOptions(inputs=str(rec), callsign="MAS72", output=str(rec)))
+
+
+def test_one_value_of_a_repeatable_option_is_that_value(tmp_path):
+    """A string given to a repeatable or positional option is one value, as ``inputs`` takes it (the query,
+    the feed, the recording and the sensor under test were read letter by letter: "--udp '1'", "--test
+    '0'", "f: input file does not exist", a query "S E L E C T"); a number is one value; None or a list is
+    the default or the list's tuple; a comma-separated option (--sources) keeps its text."""
+    from msdc.pipeline.jobs import conflicts, decode, evaluate, ingest, listen, replay, sql
+
+    dataset = tmp_path / "ds"
+    dataset.mkdir()
+    assert sql.validate(sql.SqlOptions(query="SELECT 1", dataset=str(dataset)))[0] == "SELECT 1"
+    assert listen.ListenOptions(udp="127.0.0.1:50998").udp == ("127.0.0.1:50998",)
+    assert listen.validate(listen.ListenOptions(udp="127.0.0.1:50998", duration_s=1))
+    assert replay.ReplayOptions(inputs=RADAR).inputs == (RADAR,)
+    assert replay.validate(replay.ReplayOptions(inputs=RADAR, to="127.0.0.1:50999"))
+    assert evaluate.EvaluateOptions(test_sensors="048:25/201").test_sensors == ("048:25/201",)
+    assert decode.DecodeOptions(inputs=RADAR, categories=48).categories == (48,)
+    assert ingest.IngestOptions(inputs=Path(RADAR), categories=[48, 21]).categories == (48, 21)
+    assert ingest.IngestOptions(inputs=Path(RADAR)).inputs == (Path(RADAR),)
+    assert decode.DecodeOptions(inputs=None, categories=None, editions=None).editions == ()
+    assert conflicts.ConflictOptions(horizons_s=60).horizons_s == (60,)
+    assert conflicts.ConflictOptions(sources="radar,adsb").sources == "radar,adsb"
+    assert decode.DecodeOptions(editions={21: "0.26"}).editions == {21: "0.26"}
+
+
+def test_none_for_an_option_that_cannot_be_unset_is_named():
+    """chunk_mb=None failed as "unsupported operand type(s) for *: 'NoneType' and 'float'"."""
+    from msdc.pipeline.jobs import decode, ingest
+
+    with pytest.raises(OptionError, match=r"^--chunk-mb None: must be given a value \(leave it out for the "
+                                          r"default 8\)"):
+        ingest.validate(ingest.IngestOptions(inputs=RADAR, dataset="ds", date="2019-03-01", chunk_mb=None))
+    with pytest.raises(OptionError, match=r"^--chunk-mb None"):
+        decode.validate(decode.DecodeOptions(inputs=RADAR, chunk_mb=None))
+
+
+def test_conflicts_from_python_refuses_an_aircraft_selection_and_needs_no_table(tmp_path):
+    """ConflictOptions inherits callsign/address/all_aircraft, which the job ignored (every aircraft was
+    tracked, said nowhere): refused. Without -o (the command requires it) the job validates, and
+    write_conflicts writes only what is given."""
+    from msdc.pipeline.jobs import conflicts
+
+    base = dict(inputs=(RADAR, ADSB), sensors=SENSORS, date="2019-03-01")
+    for changed in ({"callsign": "MAS72", "all_aircraft": False},
+                    {"address": "750312", "all_aircraft": False}, {"all_aircraft": False}):
+        with pytest.raises(OptionError, match="^callsign, address, all_aircraft: msdc conflicts tracks"):
+            conflicts.validate(conflicts.ConflictOptions(**base, json=str(tmp_path / "c.json"), **changed))
+    checked = conflicts.validate(conflicts.ConflictOptions(**base, json=str(tmp_path / "c.json")))
+    assert checked.output is None and checked.json == tmp_path / "c.json"
