@@ -25,8 +25,8 @@ from msdc.pipeline.model.schema import equals_text
 
 IDENTITY_COLUMNS = ("mode3a", "address", "callsign")
 # the tracker's columns a reconstruction reads (reconstruct)
-TRACK_INPUTS = ("aircraft_id", "segment", "time", "latitude", "longitude", "flight_level", "sigma_major_m",
-                "sources")
+TRACK_INPUTS = ("aircraft_id", "segment", "time", "latitude", "longitude", "flight_level", "speed_kt",
+                "sigma_major_m", "sources")
 BUILT_COLUMNS = ("aircraft", "t_s", "latitude", "longitude", "altitude_ft", *IDENTITY_COLUMNS, "sigma_m",
                  "built_by", "self_reference", "updated", "on_ground")
 BUILT_BY_SEPARATOR = " + "
@@ -216,18 +216,22 @@ def _level_between_updates(level: np.ndarray, t: np.ndarray, upd: np.ndarray, gr
     return level
 
 
-def _on_ground(key_ref: np.ndarray, t_ref: np.ndarray, key: np.ndarray, t: np.ndarray, reports: pd.DataFrame
-               ) -> pd.api.extensions.ExtensionArray:
+def _on_ground(key_ref: np.ndarray, t_ref: np.ndarray, key: np.ndarray, t: np.ndarray, reports: pd.DataFrame,
+               speed_kt: np.ndarray) -> pd.api.extensions.ExtensionArray:
     """Per reference row (its aircraft's code and time in ns; the reports' of the same numbering), whether the
-    aircraft is on the surface by its latest report at or before the row's time (before the first, the first):
-    the report's own say (GBS, STAT, a field monitor's RAB), else below 50 kt (quality.surface.on_surface, the
-    rule of quality and conflicts)."""
-    from msdc.pipeline.quality.surface import on_surface
+    aircraft is on the surface: its latest report's own say at or before the row's time (GBS, STAT, a field
+    monitor's RAB; before the first report, the first's), else the row's tracked ``speed_kt`` below 50 kt,
+    the rule of conflicts (a radar plot's reported speed of 0 at FL 180 made an airborne aircraft
+    "surface"); unknown for an aircraft without reports."""
+    from msdc.pipeline.quality.surface import SURFACE_SPEED_KT
 
-    ground = np.asarray(on_surface(reports), bool)
+    said = (reports["on_ground"].astype("boolean").to_numpy(dtype=object, na_value=None)
+            if "on_ground" in reports else np.full(len(reports), None, object))
     order = np.lexsort((t, key))
     at = _latest_at(key_ref, t_ref, key[order], t[order])
-    flag = pd.array(ground[order][np.maximum(at, 0)], dtype="boolean")
+    latest = said[order][np.maximum(at, 0)]
+    slow = np.asarray(speed_kt, float) < SURFACE_SPEED_KT  # NaN: not slow
+    flag = pd.array(np.where(pd.isna(latest), slow, latest).astype(bool), dtype="boolean")
     flag[at < 0] = pd.NA
     return flag
 
@@ -294,7 +298,7 @@ def reconstruct(reports: pd.DataFrame, epoch: pd.Timestamp, *, step_s: float = 1
     level = _level_between_updates(tr["flight_level"].to_numpy(float)[keep], t_ns.astype(float), updated,
                                    group)
     identity = _identity(key, t_ns, rep_key, rep_t, reports, established=self_reference)
-    on_ground = _on_ground(key, t_ns, rep_key, rep_t, reports)
+    on_ground = _on_ground(key, t_ns, rep_key, rep_t, reports, tr["speed_kt"].to_numpy(float)[keep])
     out = pd.DataFrame({
         "aircraft": _text_column(np.asarray(names, object), key),
         "t_s": (tr["time"][keep] - epoch).dt.total_seconds().to_numpy(float),

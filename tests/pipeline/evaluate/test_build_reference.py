@@ -524,3 +524,20 @@ def test_a_one_report_segment_beside_others_of_its_aircraft_stays_a_reference():
     group = np.array([0, 0, 0, 0, 1, 2, 3, 4])
     updated = np.array([True, True, True, False, True, True, True, True])
     assert _supported(key, t_ns, group, updated, 5).tolist() == [True, True, False, False, False]
+
+
+def test_a_reference_row_is_on_the_surface_by_a_report_s_say_else_by_its_tracked_speed():
+    """build_reference._on_ground by hand: aircraft 0's latest report says nothing and gives 0 kt (a radar's
+    zero speed at FL 180: the bundled radar fixture has 86 such plots), its track flies at 250 kt: airborne
+    (the reported 0 kt made it "surface"); aircraft 1's latest report says on the ground (GBS) at 120 kt
+    tracked: surface, and so is its row before its first report (the first's say); aircraft 2 says nothing
+    and its track moves at 12 kt: surface; aircraft 3 has no report: unknown."""
+    from msdc.pipeline.evaluate.build_reference import _on_ground
+
+    reports = pd.DataFrame({"on_ground": pd.array([pd.NA, pd.NA, True, pd.NA], dtype="boolean"),
+                            "ground_speed_kt": [250.0, 0.0, 120.0, np.nan]})
+    key, t = np.array([0, 0, 1, 2]), np.array([0, 10, 20, 0])
+    key_ref, t_ref = np.array([0, 1, 1, 2, 3]), np.array([15, 5, 25, 5, 5])
+    speed_kt = np.array([250.0, 120.0, 120.0, 12.0, 10.0])
+    got = _on_ground(key_ref, t_ref, key, t, reports, speed_kt)
+    assert [None if pd.isna(v) else bool(v) for v in got] == [False, True, True, True, None]
