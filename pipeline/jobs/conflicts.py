@@ -204,7 +204,8 @@ def conflict_job(options: ConflictOptions, *, progress: Progress | None = None,
         counts = {"aircraft": int(grid["aircraft_id"].nunique()), **tables.counts,
                   "selection": {"active": selection.active, "samples": len(grid),
                                 "left_out": int((~grid["selected"]).sum()), **left_out,
-                                "losses_without": tables.losses_without},
+                                "losses_without": (tables.losses_without if tables.losses_without is not None
+                                                   or not selection.active else len(tables.losses))},
                   "surface": _surface_counts(grid, by_speed, tables.at_surface, tables.lost, tables.events,
                                              options, tables.pc)}
         params = {**run_parameters(options, loaded, started, command), **tracker_parameters,
@@ -231,7 +232,7 @@ class _Tables:
     events: dict  # the alert events with and without the surface pairs (airborne, all)
     pc: pd.DataFrame  # the selected samples' PC
     at_surface: np.ndarray  # per row of pc: an aircraft on the surface
-    losses_without: int | None  # losses without the selection (None: no selection)
+    losses_without: int | None  # losses without the selection (None: it left no sample out)
 
 
 def _tables(grid: pd.DataFrame, reports: pd.DataFrame, pc: pd.DataFrame, timeline: pd.DataFrame,

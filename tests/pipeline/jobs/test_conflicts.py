@@ -337,3 +337,16 @@ def test_from_python_the_job_needs_no_table_and_writes_only_what_is_given(crossi
     assert conflicts.write_conflicts(result) == {"json": tmp_path / "c.json"}
     assert sorted(p.name for p in tmp_path.iterdir()) == ["c.json"]
     assert len(json.loads((tmp_path / "c.json").read_text())["losses"]) == 1
+
+
+def test_a_selection_that_leaves_nothing_out_says_the_losses_it_has(crossing):
+    """--exclude-codes 7777 (neither aircraft squawks it: CONA 1001, CONB 1002) leaves no sample out: the
+    selection line said "without it None loss(es)"; it is the crossing's one loss."""
+    d = crossing
+    options = ConflictOptions(inputs=(str(d / "r.ast"), str(d / "a.ast")), sensors=str(d / "s.toml"),
+                              date=dt.date(2019, 3, 1), output=str(d / "none.csv"), step_s=5.0,
+                              exclude_codes="7777")
+    result = conflicts.conflict_job(options)
+    sel = result.counts["selection"]
+    assert sel["active"] and sel["left_out"] == 0 and sel["losses_without"] == len(result.losses) == 1
+    assert "without it 1 loss(es)" in conflicts.text(result) and "None" not in conflicts.text(result)
