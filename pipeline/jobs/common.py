@@ -1099,16 +1099,23 @@ def short_coast(meas: pd.DataFrame, max_coast_s: float) -> list[str]:
     """A warning when --max-coast is below every sensor's median update interval (track.feasibility): a
     track segment then ends at each gap between reports, and an aircraft falls apart into segments of one
     report (--max-coast 0.001 made 3,281 of one aircraft)."""
+    return below_updates(meas, "--max-coast", max_coast_s, "a track segment ends at each gap between "
+                         "reports, so nearly every report starts a segment of its own", 60.0)
+
+
+def below_updates(meas: pd.DataFrame, flag: str, value_s: float, consequence: str, default_s: float
+                  ) -> list[str]:
+    """A warning when an option's seconds are below every sensor's median update interval
+    (track.feasibility), saying the ``consequence`` and what to give."""
     from msdc.pipeline.track.feasibility import update_intervals
 
     intervals = update_intervals(meas)
-    if intervals.empty or max_coast_s >= intervals.iloc[0]:
+    if intervals.empty or value_s >= intervals.iloc[0]:
         return []
     fastest, slowest = intervals.index[0], intervals.index[-1]
-    return [f"--max-coast {max_coast_s:g} s is below every sensor's median update interval (the shortest: "
-            f"{fastest}, {intervals.iloc[0]:.3g} s): a track segment ends at each gap between reports, so "
-            f"nearly every report starts a segment of its own; give more than the slowest sensor's interval "
-            f"({slowest}, {intervals.iloc[-1]:.3g} s; default 60 s)"]
+    return [f"{flag} {value_s:g} s is below every sensor's median update interval (the shortest: "
+            f"{fastest}, {intervals.iloc[0]:.3g} s): {consequence}; give more than the slowest sensor's "
+            f"interval ({slowest}, {intervals.iloc[-1]:.3g} s; default {default_s:g} s)"]
 
 
 # ---------------------------------------------------------------------------------------------------------

@@ -30,6 +30,7 @@ from msdc.pipeline.jobs.common import (
     FigureChoice,
     JobError,
     OptionError,
+    below_updates,
     carrying,
     check_beside,
     check_decoding,
@@ -170,6 +171,10 @@ def conflict_job(options: ConflictOptions, *, progress: Progress | None = None,
         loaded, meas, said = tracker_inputs(options, checked, progress,
                                             "the times of the alerts, losses and tracks")
         warnings += said
+        warnings += below_updates(meas, "--max-report-gap", float(options.max_report_gap_s),
+                                  "no two reports of an aircraft are that close, so no time is reported "
+                                  "for both aircraft of a pair: no loss can be found and every alert counts "
+                                  "as false", 15.0)
         check_output_rows(meas, options)
         # predictions start from the grid rows only, not from the report times
         check_output_rows(meas, options, len(horizons),

@@ -350,3 +350,19 @@ def test_a_selection_that_leaves_nothing_out_says_the_losses_it_has(crossing):
     sel = result.counts["selection"]
     assert sel["active"] and sel["left_out"] == 0 and sel["losses_without"] == len(result.losses) == 1
     assert "without it 1 loss(es)" in conflicts.text(result) and "None" not in conflicts.text(result)
+
+
+def test_a_report_gap_below_every_update_interval_is_said(crossing):
+    """--max-report-gap below every sensor's median update interval (the crossing's ADS-B reports about every
+    second, the radar every scan) leaves no time reported for both aircraft: the loss vanished and the run
+    said nothing; now a warning names the option, the intervals and the default."""
+    d = crossing
+    options = ConflictOptions(inputs=(str(d / "r.ast"), str(d / "a.ast")), sensors=str(d / "s.toml"),
+                              date=dt.date(2019, 3, 1), output=str(d / "gap.csv"), step_s=5.0,
+                              max_report_gap_s=0.2)
+    result = conflicts.conflict_job(options)
+    assert result.losses.empty
+    said = [w for w in result.warnings if w.startswith("--max-report-gap 0.2 s is below every sensor")]
+    assert len(said) == 1 and "no loss can be found" in said[0] and "default 15 s" in said[0], result.warnings
+    quiet = conflicts.conflict_job(replace(options, max_report_gap_s=15.0))
+    assert len(quiet.losses) == 1 and not any("--max-report-gap" in w for w in quiet.warnings)
