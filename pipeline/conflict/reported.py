@@ -15,7 +15,12 @@ a departure's estimates lay up to 150 m behind its plots in the take-off roll, a
 with a departure 0.08 NM below the plots'). The level is the tracker's at the report (the vertical filter
 holds it across plots without Mode C and on the surface). Linear interpolation between reports 15 s
 apart (the default) of an aircraft at 250 kt turning at 3 deg/s strays at most 190 m (0.1 NM) from its
-arc; an aircraft reported by several sensors zigzags between them by their disagreement.
+arc. An aircraft reported by several sensors would zigzag between them by their disagreement (a radar
+plot 155 NM out lies some 300 m across the beam, the ADS-B reports a second either side 5 m off: one loss
+fell apart into five and its minimum came out 0.25 NM short), so where two reports of the aircraft's
+finest sensor (the lowest median sigma_major_m) at most ``max_gap_s`` apart bracket a report of a sensor
+more than FINER times coarser, that report is not one the loss is measured on: a coarser sensor counts
+where the finest is silent.
 """
 
 from __future__ import annotations
@@ -27,32 +32,71 @@ from msdc.pipeline.conflict.pairs import _require, time_key
 from msdc.pipeline.model.arguments import finite_number
 
 MAX_GAP_S = 15.0
+FINER = 2.0  # a sensor whose median sigma is more than this times the finest's yields where that reports
 REPORT_COLUMNS = ["aircraft_id", "time", "latitude", "longitude", "flight_level"]
 _TOLERANCE_NS = 1000  # grid and report times are whole nanoseconds of float seconds: 1 us either side
 
 
 def report_rows(tracks: pd.DataFrame, measurements: pd.DataFrame | None = None,
-                rejected: pd.DataFrame | None = None) -> pd.DataFrame:
+                rejected: pd.DataFrame | None = None, max_gap_s: float = MAX_GAP_S) -> pd.DataFrame:
     """The accepted reports of every aircraft: REPORT_COLUMNS sorted by aircraft and time, at the
     tracker's rows at accepted reports (`coasted` False), with the level there and the position of the
-    report itself, from `measurements` (`aircraft_id, time, sensor_id, latitude, longitude`) less the
-    tracker's `rejected` ones; without measurements, the tracker's estimate there."""
+    report itself, from `measurements` (`aircraft_id, time, sensor_id, latitude, longitude`, optional
+    `sigma_major_m`) less the tracker's `rejected` ones, and without the reports of a coarser sensor that
+    the aircraft's finest one brackets within max_gap_s (the module's rule); without measurements, the
+    tracker's estimate there."""
     _require(tracks, REPORT_COLUMNS + ["coasted"], "tracks")
     rows = tracks.loc[~tracks["coasted"].to_numpy(bool), REPORT_COLUMNS]
     rows = rows.assign(aircraft_id=rows["aircraft_id"].astype(str))
-    if measurements is not None:
-        rows = _report_positions(rows, measurements, rejected)
-    return rows.sort_values(["aircraft_id", "time"], kind="stable").reset_index(drop=True)
+    if measurements is None:
+        return rows.sort_values(["aircraft_id", "time"], kind="stable").reset_index(drop=True)
+    max_gap_s = finite_number("max_gap_s", max_gap_s, "s")
+    rows, sensor, sigma = _report_positions(rows, measurements, rejected)
+    rows = rows.assign(_sensor=sensor, _sigma=sigma).sort_values(["aircraft_id", "time"], kind="stable")
+    keep = ~_bracketed(pd.factorize(rows["aircraft_id"])[0], time_key(rows["time"]),
+                       rows["_sensor"].to_numpy(np.int64), rows["_sigma"].to_numpy(float), max_gap_s)
+    return rows.loc[keep, REPORT_COLUMNS].reset_index(drop=True)
+
+
+def _bracketed(code: np.ndarray, t: np.ndarray, sensor: np.ndarray, sigma: np.ndarray, max_gap_s: float
+               ) -> np.ndarray:
+    """Per report (sorted by aircraft, then time; its aircraft's code, its sensor's code, -1 unknown, and
+    its sigma_major_m), whether two reports of its aircraft's finest sensor at most max_gap_s apart bracket
+    it while its own sensor is more than FINER times coarser (median sigmas of the aircraft's reports)."""
+    n = len(code)
+    known = (sensor >= 0) & np.isfinite(sigma)
+    if not known.any():
+        return np.zeros(n, bool)
+    median = pd.DataFrame({"code": code[known], "sensor": sensor[known], "sigma": sigma[known]}).groupby(
+        ["code", "sensor"], sort=True)["sigma"].median()
+    finest = median.groupby(level="code").min()
+    at_min = median.to_numpy() == finest.reindex(median.index.get_level_values("code")).to_numpy()
+    best = median.index[at_min]
+    best = best[~best.get_level_values("code").duplicated()]  # one finest sensor an aircraft
+    pair = pd.MultiIndex.from_arrays([code, sensor])
+    fine = pair.isin(best)
+    coarse = median.reindex(pair).to_numpy(float) > FINER * finest.reindex(code).to_numpy(float)
+    idx = np.arange(n)
+    prev = np.maximum.accumulate(np.where(fine, idx, -1))
+    nxt = np.minimum.accumulate(np.where(fine, idx, n)[::-1])[::-1]
+    p, q = np.clip(prev, 0, n - 1), np.clip(nxt, 0, n - 1)
+    around = (prev >= 0) & (nxt < n) & (code[p] == code) & (code[q] == code)
+    return coarse & ~fine & around & (t[q] - t[p] <= max_gap_s * 1e9 + _TOLERANCE_NS)
 
 
 def _report_positions(rows: pd.DataFrame, measurements: pd.DataFrame, rejected: pd.DataFrame | None
-                      ) -> pd.DataFrame:
+                      ) -> tuple[pd.DataFrame, np.ndarray, np.ndarray]:
     """rows with latitude and longitude of the measurement of the same aircraft at the same time (to
-    _TOLERANCE_NS) that the tracker did not reject; a row without one keeps the tracker's."""
+    _TOLERANCE_NS) that the tracker did not reject (a row without one keeps the tracker's), and per row
+    that measurement's sensor code (-1: none) and sigma_major_m (NaN: none, or not given)."""
     ids = pd.Categorical(measurements["aircraft_id"])  # the measurements' own categories: no text per row
     code = ids.codes.astype(np.int64)
     t = time_key(measurements["time"])
     lat, lon = measurements["latitude"].to_numpy(float), measurements["longitude"].to_numpy(float)
+    sensor = (pd.factorize(measurements["sensor_id"].astype(str))[0] if "sensor_id" in measurements
+              else np.zeros(len(measurements), np.int64))
+    sigma = (measurements["sigma_major_m"].to_numpy(float) if "sigma_major_m" in measurements
+             else np.full(len(measurements), np.nan))
     usable = (code >= 0) & np.isfinite(lat) & np.isfinite(lon)
     if rejected is not None and len(rejected):
         # the few measurements at a rejected report's time, then exactly by aircraft, time and sensor
@@ -62,7 +106,8 @@ def _report_positions(rows: pd.DataFrame, measurements: pd.DataFrame, rejected: 
         at = pd.MultiIndex.from_arrays([np.asarray(ids.categories.astype(str))[code[maybe]], t[maybe],
                                         measurements["sensor_id"].astype(str).to_numpy()[maybe]])
         usable[maybe[at.isin(gated)]] = False
-    meas = pd.DataFrame({"code": code[usable], "t": t[usable], "lat": lat[usable], "lon": lon[usable]})
+    meas = pd.DataFrame({"code": code[usable], "t": t[usable], "lat": lat[usable], "lon": lon[usable],
+                         "sensor": sensor[usable], "sigma": sigma[usable]})
     row_code = pd.Categorical(rows["aircraft_id"], categories=ids.categories).codes.astype(np.int64)
     left = pd.DataFrame({"code": row_code, "t": time_key(rows["time"]), "row": np.arange(len(rows))})
     found = pd.merge_asof(left.sort_values("t"), meas.sort_values("t"), on="t", by="code",
@@ -72,7 +117,10 @@ def _report_positions(rows: pd.DataFrame, measurements: pd.DataFrame, rejected: 
     at_rows = found["row"].to_numpy()[hit]
     out.iloc[at_rows, out.columns.get_loc("latitude")] = found["lat"].to_numpy()[hit]
     out.iloc[at_rows, out.columns.get_loc("longitude")] = found["lon"].to_numpy()[hit]
-    return out
+    row_sensor, row_sigma = np.full(len(rows), -1, np.int64), np.full(len(rows), np.nan)
+    row_sensor[at_rows] = found["sensor"].to_numpy()[hit].astype(np.int64)
+    row_sigma[at_rows] = found["sigma"].to_numpy(float)[hit]
+    return out, row_sensor, row_sigma
 
 
 def reported_samples(grid: pd.DataFrame, reports: pd.DataFrame, max_gap_s: float = MAX_GAP_S

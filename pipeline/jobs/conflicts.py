@@ -191,7 +191,7 @@ def conflict_job(options: ConflictOptions, *, progress: Progress | None = None,
         plane = Plane.around(tracks["latitude"].to_numpy(float), tracks["longitude"].to_numpy(float))
         epoch, tracker_parameters = result.epoch, result.parameters
         # where each aircraft is reported: the accepted reports a loss is measured between
-        reports = report_rows(tracks, meas, result.rejected)
+        reports = report_rows(tracks, meas, result.rejected, float(options.max_report_gap_s))
         del result
         # the grid rows are what follows needs: the full table (~0.35 GB on a day at 1 s) freed as they are
         # taken

@@ -144,3 +144,30 @@ def test_a_departure_flagged_as_it_becomes_airborne_inside_the_minimum_began_ins
     losses, _ = losses_on_reports([a, b])
     assert len(losses) == 1 and losses.iloc[0]["began_inside"]
     assert losses.iloc[0]["start"] == T0 + pd.Timedelta(seconds=20)
+
+
+def test_a_coarser_sensor_counts_only_where_the_finest_is_silent():
+    """Aircraft A: ADS-B (sigma 5 m) every 2 s over 0-10 s and 40-50 s, radar (sigma 300 m, 60 times
+    coarser) every 4 s from 1 s; reports 10 s apart at most bracket one another (max_gap_s 10). The radar
+    plots at 1, 5 and 9 s lie between ADS-B reports 2 s apart, and 41, 45, 49 s too: left out; 13-37 s have
+    ADS-B reports 30 s apart around them, 53 and 57 s none after: kept. Aircraft B: ADS-B (5 m) and
+    multilateration (8 m, less than twice as coarse): both kept. Aircraft C: no sigma given: every report
+    kept."""
+    adsb_s = [0, 2, 4, 6, 8, 10, 40, 42, 44, 46, 48, 50]
+    radar_s = list(range(1, 61, 4))
+    times = sorted(set(adsb_s) | set(radar_s))
+    rows = tracker_rows("A", times, [], lambda t: 0.1 * t, lambda t: 100.0)
+    rows_b = tracker_rows("B", [0, 1, 2, 3], [], lambda t: 0.1 * t, lambda t: 200.0)
+    rows_c = tracker_rows("C", [0, 4], [], lambda t: 0.1 * t, lambda t: 300.0)
+    meas = pd.DataFrame({
+        "aircraft_id": ["A"] * (len(adsb_s) + len(radar_s)) + ["B"] * 4 + ["C"] * 2,
+        "sensor_id": ["adsb"] * len(adsb_s) + ["radar"] * len(radar_s) + ["adsb", "mlat"] * 2 + ["r", "r"],
+        "time": [T0 + pd.Timedelta(seconds=t) for t in [*adsb_s, *radar_s, 0, 1, 2, 3, 0, 4]],
+        "latitude": 0.0, "longitude": 0.0,
+        "sigma_major_m": [5.0] * len(adsb_s) + [300.0] * len(radar_s) + [5.0, 8.0] * 2 + [np.nan] * 2})
+    tracks = pd.concat([rows, rows_b, rows_c], ignore_index=True)
+    got = report_rows(tracks, meas, max_gap_s=10.0)
+    seconds = lambda name: [(t - T0).total_seconds() for t in got.loc[got["aircraft_id"] == name, "time"]]  # noqa: E731
+    kept_radar = [13, 17, 21, 25, 29, 33, 37, 53, 57]
+    assert seconds("A") == sorted(set(adsb_s) | set(kept_radar))
+    assert seconds("B") == [0, 1, 2, 3] and seconds("C") == [0, 4]
