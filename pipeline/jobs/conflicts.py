@@ -121,6 +121,24 @@ def validate(options: ConflictOptions) -> Checked:
     return checked
 
 
+def _without_lone_reports(meas: pd.DataFrame) -> tuple[pd.DataFrame, list[str]]:
+    """The measurements without the aircraft reported once in the whole run, and a warning naming them: one
+    report gives no velocity to predict from, and a damaged address makes such a ghost beside its aircraft
+    (a one-report '3D0312' under MAS72's call sign alerted against MAS72 with a PC of 1)."""
+    counts = meas["aircraft_id"].astype(str).value_counts()
+    lone = counts.index[counts.to_numpy() == 1]
+    if not len(lone) or len(lone) == len(counts):
+        return meas, []
+    gone = meas["aircraft_id"].astype(str).isin(lone).to_numpy(bool)
+    named = meas.loc[gone, ["aircraft_id", "callsign"]].astype(str).to_numpy() if "callsign" in meas else [
+        (a, "") for a in meas.loc[gone, "aircraft_id"].astype(str)]
+    shown = ", ".join(f"{a} ({c})" if c not in ("", "nan", "<NA>", "None") else a for a, c in named[:5])
+    more = f" and {len(lone) - 5} more" if len(lone) > 5 else ""
+    return meas[~gone].reset_index(drop=True), [
+        f"{len(lone)} aircraft reported once in the run left out: one report gives no velocity to predict "
+        f"or measure a loss on, and a damaged address makes such a ghost beside its aircraft: {shown}{more}"]
+
+
 COMPANION_NOUNS = {"losses": "losses table", "warnings": "warning times table"}  # as messages name them
 
 
@@ -175,6 +193,8 @@ def conflict_job(options: ConflictOptions, *, progress: Progress | None = None,
                                   "no two reports of an aircraft are that close, so no time is reported "
                                   "for both aircraft of a pair: no loss can be found and every alert counts "
                                   "as false", 15.0)
+        meas, said = _without_lone_reports(meas)
+        warnings += said
         check_output_rows(meas, options)
         # predictions start from the grid rows only, not from the report times
         check_output_rows(meas, options, len(horizons),

@@ -396,3 +396,25 @@ def test_a_loss_seen_by_radar_and_adsb_is_one_with_the_truth_s_minimum():
     assert pair["min_horizontal_nm"].iloc[0] == pytest.approx(np.nanmin(chord_nm), abs=0.01)
     start_s = (pair["start"].iloc[0] - pd.Timestamp("2019-03-01", tz="UTC")).total_seconds()
     assert abs(start_s - inside[0]) < 1.5
+
+
+def test_an_aircraft_reported_once_is_left_out_and_named(crossing, tmp_path):
+    """The crossing with one CONA ADS-B report's address damaged (710001 -> 710009: a ghost beside its
+    aircraft, the report no copy of another's): that one-report track alerted against CONA (same place: PC
+    1) and could make a loss of its own. It is left out with a warning naming it; the crossing's one loss
+    stays."""
+    import msdc.asterix as asterix
+
+    d = crossing
+    adsb = asterix.read(d / "a.ast").frames[21]
+    at = adsb.index[adsb["address"] == "710001"][300]
+    adsb["address"] = adsb["address"].astype(object)
+    adsb.loc[at, "address"] = "710009"
+    (tmp_path / "a.ast").write_bytes(encode_frame(21, adsb))
+    options = ConflictOptions(inputs=(str(d / "r.ast"), str(tmp_path / "a.ast")), sensors=str(d / "s.toml"),
+                              date=dt.date(2019, 3, 1), step_s=5.0)
+    result = conflicts.conflict_job(options)
+    said = [w for w in result.warnings if "reported once in the run left out" in w]
+    assert len(said) == 1 and said[0].startswith("1 aircraft") and "710009 (CONA)" in said[0], result.warnings
+    assert "710009" not in set(result.alerts[["aircraft_a", "aircraft_b"]].astype(str).to_numpy().ravel())
+    assert len(result.losses) == 1 and result.counts["aircraft"] == 2
