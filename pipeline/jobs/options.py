@@ -760,7 +760,8 @@ class ConflictOptions(SelectionOptions, TrackOptions):
     smoother: str = "rts"
     tpm: str | None = option(None, "--tpm", section="tracking",
                              help="mode transition law of the IMM (default expm:150,20)",
-                             doc="mode transition law of the IMM (as [track's](track.md#options))")
+                             doc="mode transition law of the IMM: `expm:150,20` (default: mean 150 s in CV, "
+                                 "20 s in a turn) or another, as [track's](track.md#options)")
     noise: str = option(  # the conflict validations used declared noise; "estimate" as msdc track
         "declared", "--noise", choices=NOISE, parser_choices=False, section="tracking",
         help="measurement noise: declared (default: the sensor file's sigmas, ADS-B from NACp or "
