@@ -70,10 +70,11 @@ def markdown_schema() -> str:
              "blocks of every category counted from 0, whatever the chunk size `iter_read` decodes in) "
              "and `offset` (byte offset of the record in the file).",
              "",
-             "Identification text (`icao` columns: `callsign`) holds the 6-bit ICAO characters A-Z, space "
-             "and 0-9, trailing spaces stripped. All-zero codes (code 0 is no character) and all spaces are "
-             "absent (`<NA>`); any other code outside that set shows as `?`, never as a letter. Beside it, "
-             "`callsign_hex` (text, categorical) keeps the item's raw 48 bits as 12 upper-case hex digits "
+             "Identification text (`icao` columns: `callsign`, CAT025's `service_designator`) holds the "
+             "6-bit ICAO characters A-Z, space and 0-9, trailing spaces stripped. All-zero codes (code 0 is "
+             "no character) and all spaces are absent (`<NA>`); any other code outside that set shows as "
+             "`?`, never as a letter. Beside each, `callsign_hex` or `service_designator_hex` (text, "
+             "categorical, not in the tables below) keeps the item's raw 48 bits as 12 upper-case hex digits "
              "whenever the record carries the item.", "",
              "Code lists (`codes` columns: `warning_codes`, I048/030 and I020/030) hold every code of a "
              "repetitive item "

@@ -51,7 +51,9 @@ SCORECARD_COLUMNS: tuple[str, ...] = tuple(f.name for f in SCORECARD)
 MAY_BE_EMPTY = ("notes", "parameters")  # text columns that may hold ''
 
 MAP: tuple[Field, ...] = (
-    Field("aircraft", "text", False, "the aircraft's label (call sign, else address or track)"),
+    Field("aircraft", "text", False, "the aircraft's id as the measurements assign it: its 24-bit address "
+          "when known (750312, call sign or not), else 'CS:' and the call sign, else 'M3A:' and the Mode 3/A "
+          "code"),
     Field("source", "text", False, "'report' (the sensor under test) or 'reference'"),
     Field("sensor", "text", False, "the reporting sensor; the reference's own label for reference points"),
     Field("latitude", "number", False, "WGS-84 latitude (deg)"),

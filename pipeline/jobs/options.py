@@ -524,8 +524,9 @@ ADSB_SIGMA_DOC = ("ADS-B sigma for reports without NACp, used by {used} "
 @dataclass(frozen=True)
 class ReferenceFilterOptions(OneOrMany):
     """The ADS-B report filters (pipeline.quality.filters), declared once for the commands that take them:
-    correlate (before slotting) and quality (the reference of radar accuracy and biases). Listed first
-    among a command's bases, so that its inputs keep their place."""
+    correlate (before slotting) and quality (the reference of radar accuracy and biases); evaluate
+    redeclares --drop-jumps's doc (its reference gates). Listed first among a command's bases, so that its
+    inputs keep their place."""
 
     drop_jumps: bool = option(False, "--drop-jumps", section="measurements",
                               help="remove detected ADS-B position jumps first",
@@ -759,7 +760,8 @@ class ConflictOptions(SelectionOptions, TrackOptions):
     smoother: str = "rts"
     tpm: str | None = option(None, "--tpm", section="tracking",
                              help="mode transition law of the IMM (default expm:150,20)",
-                             doc="mode transition law of the IMM (as [track's](track.md#options))")
+                             doc="mode transition law of the IMM: `expm:150,20` (default: mean 150 s in CV, "
+                                 "20 s in a turn) or another, as [track's](track.md#options)")
     noise: str = option(  # the conflict validations used declared noise; "estimate" as msdc track
         "declared", "--noise", choices=NOISE, parser_choices=False, section="tracking",
         help="measurement noise: declared (default: the sensor file's sigmas, ADS-B from NACp or "
@@ -867,6 +869,11 @@ class EvaluateOptions(ReferenceFilterOptions, DatasetOptions, DecodingOptions):
             "memory stays about that of one window over a day; on a Dask cluster each window is a task of "
             "its own, the windows side by side; the outputs add a scorecard per window "
             "([A long span, window by window](#a-long-span-window-by-window))")
+    drop_jumps: bool = option(False, "--drop-jumps", section="measurements",
+                              help="remove detected ADS-B position jumps first",
+                              doc="leave detected ADS-B position jumps out of the reference (the reports "
+                                  "under test keep theirs; [reference gates](../methods/evaluate.md#how-"
+                                  "msdc-builds-the-reference))")
     min_sil: int | None = option(None, "--min-sil", range=SIL_RANGE, section="measurements",
                                  help="leave ADS-B reports with SIL below N out of the reference",
                                  doc="leave ADS-B reports with SIL below N out of the reference")
