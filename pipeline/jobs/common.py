@@ -424,6 +424,17 @@ def check_dataset(root, inputs: list, selection: ReportSelection) -> DatasetInpu
     return source
 
 
+def no_sensor_kind(selection: ReportSelection | None, command: str) -> None:
+    """OptionError for a --sensor naming a CAT010 kind in a command that reads records before their kind is
+    worked out (decode, stats): it kept nothing, said only as "the selection left no record"."""
+    for ref in () if selection is None else selection.sensors:
+        if ref.kind is not None:
+            plain = ref.text.rsplit(":", 1)[0]
+            raise OptionError(f"--sensor {ref.text}: {command} reads CAT010 records before their kind "
+                              f"({ref.kind}) is worked out (when measurements are built): name the sensor "
+                              f"without it, --sensor {plain}")
+
+
 def check_report_selection(o: DecodingOptions) -> ReportSelection:
     """--from, --to, --area, --fl and --sensor as a ReportSelection (pipeline.model.report_selection), the
     polygon file read and a sensor window's site looked up in --sensors; OptionError naming the option and

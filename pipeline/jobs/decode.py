@@ -18,6 +18,7 @@ from msdc.pipeline.jobs.common import (
     check_decoding,
     date_ignored,
     format_hints,
+    no_sensor_kind,
     output_path,
     real_output,
     select_chunk,
@@ -42,6 +43,7 @@ def validate(options: DecodeOptions) -> Checked:
     """Check every option and the output paths before any decoding; OptionError if bad."""
     check_declared(options)
     checked = check_decoding(options)
+    no_sensor_kind(checked.selection, "decode")
     checked.output = output_path("-o", options.output, (".csv", ".parquet"))
     if checked.output is not None:
         out, base = checked.output, real_output(checked.output)

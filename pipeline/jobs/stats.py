@@ -17,6 +17,7 @@ from msdc.pipeline.jobs.common import (
     check_decoding,
     date_ignored,
     format_hints,
+    no_sensor_kind,
     order_warnings,
     select_chunk,
     sensor_table,
@@ -34,6 +35,7 @@ def validate(options: StatsOptions) -> Checked:
     bad."""
     check_declared(options)
     checked = check_decoding(options)
+    no_sensor_kind(checked.selection, "stats")
     checked.sensors = None if options.sensors is None else sensor_table(options.sensors)  # for --area
     return checked
 
