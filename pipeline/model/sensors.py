@@ -113,7 +113,8 @@ def _check_entry(path: Path, i: int, entry: object) -> dict:
                          "workbook rows and messages)")
     for key, (lo, hi) in _RANGES.items():
         if entry[key] is not None and not lo <= entry[key] <= hi:  # (NaN is outside too)
-            raise ValueError(f"{where}: {key} = {entry[key]!r} is outside {lo}..{hi}")
+            raise ValueError(f"{where} ({entry['name']!r}, SAC {entry['sac']} SIC {entry['sic']}): {key} = "
+                             f"{entry[key]!r} is outside {lo}..{hi}")
     _check_coverage(where, entry)
     if entry["latitude"] == 0 and entry["longitude"] == 0:
         what = ("radar site" if entry["kind"] == "radar" else

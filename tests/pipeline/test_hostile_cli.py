@@ -162,14 +162,15 @@ def test_measurements_leave_out_adsb_positions_off_the_earth(tmp_path):
 @pytest.mark.parametrize("altitude", ["nan", "inf", "-inf", "1e300", "-100001.0"])
 def test_a_sensor_altitude_that_is_no_height_is_refused_by_name(altitude, tmp_path, capsys):
     """A NaN, infinite or absurd antenna height used to put every plot at NaN and end in a traceback after
-    decoding; it is refused with the file, the entry and the value before anything is decoded."""
+    decoding; it is refused with the file, the entry, the sensor and the value before anything is
+    decoded (docs/guide/sensors.md: "naming the file, the entry, the radar and the value")."""
     sensors = tmp_path / "s.toml"
     sensors.write_text(SENSORS.read_text().replace("altitude_m = 40.0", f"altitude_m = {altitude}"))
     status, _, err = _run(["correlate", RADAR, ADSB, "--sensors", sensors, "--callsign", "MAS72"], capsys)
     assert status == 2
     value = repr(float(altitude))
-    assert err.strip() == (f"msdc correlate: {sensors}: [[sensor]] entry 1: altitude_m = {value} is outside "
-                           "-100000.0..100000.0")
+    assert err.strip() == (f"msdc correlate: {sensors}: [[sensor]] entry 1 ('KLIA MSSR', SAC 25 SIC 201): "
+                           f"altitude_m = {value} is outside -100000.0..100000.0")
 
 
 def test_a_sensor_file_that_is_not_utf8_is_named(tmp_path, capsys):
