@@ -94,6 +94,17 @@ def test_the_column_lists_of_the_tables_have_headers() -> None:
     assert sorted({c for names in lists for c in names if not has_header(c)}) == []
 
 
+def test_the_summary_block_titles_name_columns_by_their_headers() -> None:
+    """A Summary block's title reads as its headers do: no column's snake_case name in it, with or without
+    its underscores ("sep rms all m: every slot" named the header "Slot separation RMS, every slot (m)")."""
+    from msdc.pipeline.report.excel import SUMMARY_BLOCKS
+
+    for title, keys in SUMMARY_BLOCKS:
+        for name in keys:
+            if "_" in name:
+                assert name not in title and name.replace("_", " ") not in title.lower(), (title, name)
+
+
 def test_headers_are_distinct_and_read_back_to_their_names() -> None:
     """No two columns print the same header (a reader could not tell them apart), so column_name inverts
     workbook_header; a name without a label is its own header."""
