@@ -60,9 +60,17 @@ def validate(options: EvaluateOptions) -> EvaluateChecked:
     """Check every option, the sensor file, the preset, the sectors and the output paths, before any
     decoding; OptionError if bad."""
     from msdc.pipeline.evaluate.presets import load_preset
+    from msdc.pipeline.model.arguments import finite_number
     from msdc.pipeline.model.report_selection import parse_sensor, span_windows
 
     check_declared(options)
+    if options.preset is None:
+        raise OptionError("--preset is required: a shipped preset by name (eurocontrol-1997-ssr, ed117a, "
+                          "...) or a TOML file of your own")
+    try:  # no flag: the reference tracker's, from Python only (its step is 1 s)
+        finite_number("max_coast_s", options.max_coast_s, at_least=1.0, at_least_name="the reference's step")
+    except (TypeError, ValueError) as exc:
+        raise OptionError(str(exc)) from None
     base = check_decoding(options)
     checked = EvaluateChecked(**vars(base))
     checked.output = output_path("-o", options.output, (".xlsx",))

@@ -460,3 +460,16 @@ def test_a_cat010_kind_is_refused_where_records_have_none_yet(command):
     with pytest.raises(OptionError, match=words):
         module.validate(options_cls(inputs=RADAR, sensor_ids="010:0/107:mlat"))
     assert module.validate(options_cls(inputs=RADAR, sensor_ids="010:0/107")).selection.active
+
+
+def test_evaluate_s_library_only_options_are_checked_first():
+    """EvaluateOptions without a preset said "unknown preset 'None'"; max_coast_s=-1 (no flag: the reference
+    tracker's) failed after decoding, from the tracker: both OptionErrors before anything is read."""
+    from msdc.pipeline.jobs import evaluate
+
+    base = dict(inputs=(RADAR, ADSB), sensors=SENSORS, date="2019-03-01")
+    with pytest.raises(OptionError, match="^--preset is required"):
+        evaluate.validate(evaluate.EvaluateOptions(**base))
+    with pytest.raises(OptionError, match=r"^max_coast_s -1: must be a finite number of seconds > 0 and >= "
+                                          r"the reference's step \(1\)"):
+        evaluate.validate(evaluate.EvaluateOptions(**base, preset="eurocontrol-1997-ssr", max_coast_s=-1))
