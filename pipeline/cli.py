@@ -105,10 +105,11 @@ def _warn(command: str, warnings: list[str]) -> None:
         print(f"msdc {command}: warning: {w}", file=sys.stderr)
 
 
-def _report_skipped(loaded_errors: pd.DataFrame) -> None:
+def _report_skipped(name: str, loaded_errors: pd.DataFrame) -> None:
     if len(loaded_errors):
-        print(f"msdc: {len(loaded_errors)} block(s) skipped ({int(loaded_errors['length'].sum())} bytes); "
-              "'msdc stats' lists them", file=sys.stderr)
+        skipped = int(loaded_errors["length"].sum())
+        print(f"msdc {name}: {len(loaded_errors)} block(s) skipped ({skipped} bytes); 'msdc stats' lists "
+              "them", file=sys.stderr)
 
 
 def _numba_without_scipy() -> None:
@@ -148,7 +149,7 @@ def cmd_decode(args) -> int:
     except asterix_errors.DecodeError as exc:
         raise CliError(f"strict: {exc}") from exc
     for line in result.notes + decode.skipped_lines(result):
-        print(f"msdc: {line}", file=sys.stderr)
+        print(f"msdc decode: {line}", file=sys.stderr)
     _warn("decode", result.warnings)  # after the skipped blocks: a wrong edition's advice stays in view
     if not result.outputs:
         for cat, n in sorted(result.counts.items()):
@@ -157,7 +158,7 @@ def cmd_decode(args) -> int:
         for cat, p in sorted(result.outputs.items()):
             print(f"CAT{cat:03d}: {result.counts.get(cat, 0)} records -> {p}")
     if result.skipped:
-        print(f"msdc: {len(result.skipped)} block(s) skipped", file=sys.stderr)
+        print(f"msdc decode: {len(result.skipped)} block(s) skipped", file=sys.stderr)
     if result.selection is not None:
         print(_selection_line(result.selection).replace(" reports ", " records "))
     kinds = {f"CAT{cat:03d} records": p for cat, p in result.outputs.items()}
@@ -165,7 +166,7 @@ def cmd_decode(args) -> int:
         kinds["selection record"] = result.selection_file
     _list_written("decode", kinds, tx.written, decode.side_files(result.output))
     if sum(result.counts.values()) == 0:
-        print(f"msdc: {result.nothing_decoded(options.categories)}", file=sys.stderr)
+        print(f"msdc decode: {result.nothing_decoded(options.categories)}", file=sys.stderr)
         return 1
     return 0
 
@@ -480,7 +481,7 @@ def _run_job(name: str, validate, job, options, progress: Progress):
         raise
     _said_cluster(name, options, cluster)
     _warn(name, result.warnings[seen:])
-    _report_skipped(result.loaded.errors)
+    _report_skipped(name, result.loaded.errors)
     if result.loaded.selection is not None:
         print(f"msdc {name}: {_selection_line(result.loaded.selection)}", file=sys.stderr)
     return result

@@ -305,8 +305,8 @@ def test_a_category_the_input_lacks_is_named_with_what_it_holds(tmp_path, capsys
     out.mkdir()
     status, _, err = _run(["decode", str(radar), "--category", "21", "-o", str(out / "x.csv")], capsys)
     assert status == 1 and "Traceback" not in err
-    assert (f"msdc: nothing could be decoded with --category 21: {radar} holds CAT048 ({blocks} block(s)); "
-            "msdc decodes CAT048 with --category 48" in err)
+    assert (f"msdc decode: nothing could be decoded with --category 21: {radar} holds CAT048 ({blocks} "
+            "block(s)); msdc decodes CAT048 with --category 48" in err)
     assert _contents(out) == set()
 
 
@@ -327,9 +327,9 @@ def test_a_trackers_recording_decoded_with_the_defaults_names_the_category_to_as
     out.mkdir()
     status, _, err = _run(["decode", str(path), "-o", str(out / "x.csv")], capsys)
     assert status == 1 and "Traceback" not in err
-    assert (f"msdc: nothing could be decoded: {path} holds CAT062 (4 block(s)); msdc decodes CAT062 with "
-            "--category 62 (without --category: the measurement categories CAT010, CAT020, CAT021, CAT048)"
-            in err)
+    assert (f"msdc decode: nothing could be decoded: {path} holds CAT062 (4 block(s)); msdc decodes CAT062 "
+            "with --category 62 (without --category: the measurement categories CAT010, CAT020, CAT021, "
+            "CAT048)" in err)
     assert _contents(out) == set()
 
 

@@ -393,8 +393,8 @@ def test_a_0_23_recording_pinned_to_2_7_is_named_in_every_job(adsb_0_23, tmp_pat
     assert status == 1 and f"msdc decode: warning: adsb023.ast: {advice}" in err
     assert "not ASTERIX" not in err  # blocks of another edition are ASTERIX
     # one line per skipped block for the first 20, then a count
-    assert err.count(f"msdc: {adsb_0_23}: offset ") == 20
-    assert f"msdc: {adsb_0_23}: 380 more skipped block(s)" in err
+    assert err.count(f"msdc decode: {adsb_0_23}: offset ") == 20
+    assert f"msdc decode: {adsb_0_23}: 380 more skipped block(s)" in err
     status, _, err = _run(["track", adsb_0_23, "--all", "-o", tmp_path / "t.parquet", *wrong], capsys)
     assert status == 1 and f"records in the inputs (--sources radar,adsb): {advice} ('msdc stats'" in err
     status, _, err = _run(["correlate", RADAR, adsb_0_23, "--sensors", SENSORS, "--all", "--date",

@@ -241,7 +241,7 @@ def test_a_truncated_final_block_says_how_far_it_runs_past_the_end(tmp_path, cap
     assert rec.frames[21]["offset"].tolist() == kept["offset"].tolist()
     assert rec.decoded_bytes == offset and rec.decoded_bytes + 7 == rec.size_bytes
     assert main(["decode", str(path)]) == 0
-    assert f"msdc: {path}: offset {offset}: {reason}" in capsys.readouterr().err
+    assert f"msdc decode: {path}: offset {offset}: {reason}" in capsys.readouterr().err
 
 
 def test_a_len_below_3_is_named_with_its_value(tmp_path):
