@@ -121,8 +121,8 @@ SUMMARY_BLOCKS: list[tuple[str, list[str]]] = [
       "ncc_peak_lag_lon", "pearson0_lat", "pearson0_lon", "pearson_peak_lag_lat", "pearson_peak_lag_lon",
       "pearson_peak_at_limit_lat", "pearson_peak_at_limit_lon", "pearson_lag_unidentified_lat",
       "pearson_lag_unidentified_lon"]),
-    (f"{THESIS_LIMITS['separation'][0]} (m; {THESIS_LIMITS['separation'][1]}); sep rms all m: every slot, "
-     "filled ones included",
+    (f"{THESIS_LIMITS['separation'][0]} (m; {THESIS_LIMITS['separation'][1]}); "
+     f"{workbook_header('sep_rms_all_m')}: filled slots included",
      ["aircraft", "window", "sensors", "start", "end", "sep_mean_m", "sep_median_m", "sep_rms_m", "sep_p95_m",
       "sep_max_m", "sep_slots", "sep_rms_all_m"]),
 ]
