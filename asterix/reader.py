@@ -102,9 +102,15 @@ def selected_columns(columns) -> tuple[str, ...] | None:
     ValueError naming a column no category has."""
     if columns is None:
         return None
+    if not isinstance(columns, str) and not hasattr(columns, "__iter__"):
+        raise TypeError(f"columns {columns!r}: give a column name or a sequence of them, e.g. "
+                        f"('address', 'callsign')")
     known = KNOWN_COLUMNS
     names = set()
     for name in ([columns] if isinstance(columns, str) else columns):
+        if not isinstance(name, str):
+            raise TypeError(f"columns {columns!r:.80}: {name!r} is not a column name (a str; see "
+                            f"docs/columns.md)")
         base = name[:-4] if name.endswith("_hex") and name[:-4] in known else name
         if base not in known and base not in _ALWAYS:
             raise ValueError(f"columns: no decoded column is named {name!r} (see docs/columns.md)")
@@ -185,6 +191,13 @@ def check_categories(categories) -> tuple[int, ...] | None:
                              f"counted in Recording.ignored)")
         out.append(int(c))
     return tuple(out)
+
+
+def check_strict(strict) -> bool:
+    """``strict`` as a bool; TypeError for anything else (the text "False" is true, and turned it on)."""
+    if not isinstance(strict, bool | np.bool_):
+        raise TypeError(f"strict {strict!r}: must be True or False (a bool), not {type(strict).__name__}")
+    return bool(strict)
 
 
 def check_path(path) -> None:
@@ -766,6 +779,7 @@ def decode_buffer(buf: np.ndarray, seg: Segments, *, path: str = "", editions: d
 
     buf = readonly(buf)
     selected = selected_columns(columns)
+    strict = check_strict(strict)
     date = parse_date(date)
     categories = check_categories(categories)
     plan = plan_recording(buf, seg, dict(editions or {}), categories, assume_walking=True)
@@ -923,6 +937,7 @@ def read(path, *, editions=None, date=None, categories=None, format: str | None 
     of a large recording holds only them. Every block is still walked and accounted alike.
     """
     selected_columns(columns)
+    strict = check_strict(strict)
     date, categories = parse_date(date), check_categories(categories)
     eds = reading_editions(editions, categories)
     with _mapped(path) as buf:

@@ -19,6 +19,7 @@ from .reader import (
     Recording,
     _mapped,
     check_categories,
+    check_strict,
     decode_framed,
     parse_date,
     reading_editions,
@@ -59,6 +60,7 @@ def iter_read(path, *, chunk: int = 1_000_000, editions=None, date=None, categor
     if chunk <= 0:
         raise ValueError(f"chunk {chunk!r}: must be a positive number of bytes")
     selected = selected_columns(columns)
+    strict = check_strict(strict)
     first_date, categories = parse_date(date), check_categories(categories)
     eds = reading_editions(editions, categories)
     with _mapped(path) as buf:
@@ -311,6 +313,7 @@ def _window_times(args: tuple) -> WindowClock:
 def decode_window(path, plan: Plan, window: Window, *, strict: bool = False, columns=None) -> Recording:
     """One window of plan_windows decoded: the records, days, timestamps and block numbers iter_read gives
     them."""
+    strict = check_strict(strict)
     with _mapped(path) as buf:
         rec = decode_framed(buf, plan, window.framed, path=str(path), date=window.date, strict=strict,
                             selected=selected_columns(columns))

@@ -7,6 +7,7 @@ test."""
 from __future__ import annotations
 
 import datetime as dt
+import re
 import warnings
 from pathlib import Path
 
@@ -257,6 +258,36 @@ def test_categories_are_checked(categories, error, words):
         with pytest.raises(error) as info:
             call()
         assert str(info.value).startswith("categories ") and words in str(info.value)
+
+
+@pytest.mark.parametrize("strict", ["False", 0, 1, None], ids=repr)
+def test_strict_is_a_bool(strict, tmp_path):
+    """strict="False" turned strict mode on (a non-empty text is true): a truncated recording then raised
+    at its cut block instead of decoding the blocks before it."""
+    cut = tmp_path / "cut.ast"
+    cut.write_bytes(Path(RADAR).read_bytes()[:100_000])
+    for call in (lambda: asterix.read(cut, strict=strict),
+                 lambda: next(asterix.iter_read(cut, strict=strict))):
+        with pytest.raises(TypeError, match=rf"^strict {re.escape(repr(strict))}: must be True or False "
+                                            rf"\(a bool\), not {type(strict).__name__}$"):
+            call()
+    # a numpy bool is a bool: the 3200 records of the whole blocks (docs/decoding/bad-input.md), the cut
+    # block reported
+    rec = asterix.read(cut, strict=np.False_)
+    assert len(rec.frames[48]) == 3200 and len(rec.errors) == 1
+
+
+@pytest.mark.parametrize(("columns", "words"), [
+    ([1], "columns [1]: 1 is not a column name (a str; see docs/columns.md)"),
+    (("address", b"callsign"), "b'callsign' is not a column name"),
+    (5, "columns 5: give a column name or a sequence of them")])
+def test_columns_are_names(columns, words):
+    """columns=[1] failed with AttributeError 'int' object has no attribute 'endswith'."""
+    for call in (lambda: asterix.read(ADSB, columns=columns),
+                 lambda: next(asterix.iter_read(ADSB, columns=columns))):
+        with pytest.raises(TypeError) as info:
+            call()
+        assert words in str(info.value)
 
 
 def test_one_category_is_a_category(adsb):
