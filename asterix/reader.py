@@ -6,7 +6,7 @@ import datetime as dt
 import mmap
 import os
 import warnings
-from collections.abc import Iterator
+from collections.abc import Iterator, Mapping
 from contextlib import contextmanager
 from dataclasses import dataclass, field
 from functools import cache, partial
@@ -186,7 +186,8 @@ def check_categories(categories) -> tuple[int, ...] | None:
         if isinstance(c, bool) or not isinstance(c, int | np.integer):
             raise TypeError(f"categories {categories!r}: {c!r} is not a category number (an int)")
         if int(c) not in DECODABLE:
-            raise ValueError(f"categories {categories!r}: msdc does not decode CAT{int(c):03d}; it decodes "
+            asked = f"CAT{int(c):03d}" if c >= 0 else f"category {int(c)}"  # not CAT-01
+            raise ValueError(f"categories {categories!r}: msdc does not decode {asked}; it decodes "
                              f"{', '.join(f'CAT{d:03d}' for d in DECODABLE)} (other categories' blocks are "
                              f"counted in Recording.ignored)")
         out.append(int(c))
@@ -782,12 +783,13 @@ def decode_buffer(buf: np.ndarray, seg: Segments, *, path: str = "", editions: d
     strict = check_strict(strict)
     date = parse_date(date)
     categories = check_categories(categories)
-    plan = plan_recording(buf, seg, dict(editions or {}), categories, assume_walking=True)
+    editions = _parse_editions(editions)
+    plan = plan_recording(buf, seg, dict(editions), categories, assume_walking=True)
     framed = plan.framer(buf).window()
     scans = _scan_decoded(buf, framed, plan, _scanned_columns(selected))
     if plan.assumed and any((scan[2].counts < 0).any() for scan in scans.values()):
         del scans  # a decoded block does not walk: the plan is settled again, walking every block
-        plan = plan_recording(buf, seg, dict(editions or {}), categories)
+        plan = plan_recording(buf, seg, dict(editions), categories)
         framed, scans = plan.framer(buf).window(), None
     return decode_framed(buf, plan, framed, path=path, date=date, strict=strict, selected=selected,
                          sector_clock=sector_clock, scans=scans)
@@ -903,16 +905,39 @@ def framing_reason(buf: np.ndarray, seg: Segments, offset: int, code: int) -> st
 
 
 def _parse_editions(editions) -> dict[int, str]:
-    """Accept {21: "0.26"} or ["21=0.26", ...] or "21=0.26"."""
+    """Accept {21: "0.26"} or ["21=0.26", ...] or "21=0.26"; TypeError for another form, or an edition that
+    is not text (a float cannot hold 1.30), ValueError for a text that is not CAT=EDITION."""
     if editions is None:
         return {}
     if isinstance(editions, str):
         editions = [editions]
-    if isinstance(editions, dict):
-        return {int(k): str(v) for k, v in editions.items()}
+    if isinstance(editions, Mapping):
+        pairs = list(editions.items())
+    elif isinstance(editions, bytes | bytearray) or not hasattr(editions, "__iter__"):
+        raise TypeError(f"editions {editions!r:.80}: give a mapping such as {{21: '0.26'}} or 'CAT=EDITION' "
+                        f"texts such as '21=0.26'")
+    else:
+        pairs = []
+        for item in editions:
+            if not isinstance(item, str):
+                raise TypeError(f"editions {editions!r:.80}: {item!r} is not a 'CAT=EDITION' text; give a "
+                                f"mapping such as {{21: '0.26'}} or texts such as '21=0.26'")
+            cat, eq, ed = item.partition("=")
+            if not eq or not cat.strip().isdigit():
+                raise ValueError(f"editions {editions!r:.80}: {item!r} is not 'CAT=EDITION' text such as "
+                                 f"'21=0.26'")
+            pairs.append((int(cat), ed.strip()))
     out = {}
-    for item in editions:
-        cat, _, ed = str(item).partition("=")
+    for cat, ed in pairs:
+        if isinstance(cat, str) and cat.strip().isdigit():  # {"21": "0.26"}, as the texts give it
+            cat = int(cat)
+        if isinstance(cat, bool) or not isinstance(cat, int | np.integer):
+            raise TypeError(f"editions {editions!r:.80}: category {cat!r} is not a category number (an int)")
+        if not isinstance(ed, str):
+            tables = ", ".join(available().get(int(cat), [])) or "none"
+            raise TypeError(f"editions {editions!r:.80}: CAT{int(cat):03d} edition {ed!r} is a "
+                            f"{type(ed).__name__}; give it as text, as the tables name it ('1.30': a float "
+                            f"cannot hold 1.30; tables: {tables})")
         out[int(cat)] = ed
     return out
 

@@ -114,6 +114,9 @@ def _editions(editions: list[str] | dict | None) -> dict[int, str]:
             raise OptionError(f"--edition {cat}={ed}: category must be one of "
                               f"{', '.join(str(c) for c in sorted(available()))}")
         cat = int(cat)
+        if not isinstance(ed, str):  # {48: 1.30} is 1.3, and 2.7 no table name
+            raise OptionError(f"--edition {cat}={ed!r}: a {type(ed).__name__}; give the edition as text, as "
+                              "the tables name it ('1.30': a float cannot hold 1.30)")
         if ed != "auto":
             try:
                 resolve_edition(cat, ed)

@@ -290,6 +290,43 @@ def test_columns_are_names(columns, words):
         assert words in str(info.value)
 
 
+@pytest.mark.parametrize(("editions", "error", "words"), [
+    # 2.7 is a table, but a float: refused as one, not 'not supported'; 1.30 is read as 1.3
+    ({21: 2.7}, TypeError, "editions {21: 2.7}: CAT021 edition 2.7 is a float; give it as text"),
+    ({48: 1.30}, TypeError, "editions {48: 1.3}: CAT048 edition 1.3 is a float; give it as text, as the "
+                            "tables name it ('1.30': a float cannot hold 1.30; tables: 1.27, 1.28, 1.29, "
+                            "1.30"),
+    ([21], TypeError, "editions [21]: 21 is not a 'CAT=EDITION' text; give a mapping such as {21: '0.26'}"),
+    (21, TypeError, "editions 21: give a mapping such as {21: '0.26'} or 'CAT=EDITION' texts"),
+    (["21"], ValueError, "editions ['21']: '21' is not 'CAT=EDITION' text such as '21=0.26'"),
+    ({21.0: "2.7"}, TypeError, "editions {21.0: '2.7'}: category 21.0 is not a category number")])
+def test_editions_are_a_mapping_or_texts_of_text_editions(editions, error, words):
+    """editions={48: 1.30} said "edition '1.3' is not supported", {21: 2.7} was taken, and editions=[21]
+    said "CAT021 edition '' is not supported"."""
+    for call in (lambda: asterix.read(RADAR, editions=editions),
+                 lambda: next(asterix.iter_read(RADAR, editions=editions))):
+        with pytest.raises(error) as info:
+            call()
+        assert str(info.value).startswith(words)
+
+
+def test_every_form_of_editions_pins_the_edition():
+    """The forms read documents, a category key given as text, and spaces after '=' ('48= 1.30' was
+    'edition \' 1.30\' is not supported'); a job's options refuse a float edition as read does (they said
+    {21: 2.7} was 'not supported')."""
+    for editions in ({48: "1.30"}, {"48": "1.30"}, ["48=1.30"], "48=1.30", ("48= 1.30",)):
+        assert asterix.read(RADAR, editions=editions).editions == {48: "1.30"}, editions
+    with pytest.raises(OptionError, match=r"^--edition 21=2\.7: a float; give the edition as text"):
+        track.validate(TrackOptions(inputs=ADSB, callsign="MAS72", editions={21: 2.7}))
+
+
+def test_a_negative_category_is_named_as_given():
+    """categories=-1 said 'msdc does not decode CAT-01'."""
+    with pytest.raises(ValueError, match=r"^categories -1: msdc does not decode category -1; it decodes "
+                                         r"CAT001"):
+        asterix.read(ADSB, categories=-1)
+
+
 def test_one_category_is_a_category(adsb):
     rec = asterix.read(RADAR, categories=48)
     assert list(rec.frames) == [48] and 21 not in rec.frames
