@@ -600,6 +600,8 @@ def load_inputs(options: DecodingOptions, checked: Checked, progress: Progress |
         with python_warnings.catch_warnings():  # a wrong edition is said below, with its --edition; what
             python_warnings.simplefilter("ignore", EditionWarning)  # the inputs are, in loaded.warnings
             python_warnings.simplefilter("ignore", ContentWarning)
+            python_warnings.filterwarnings("ignore", r".*: date=\S+ ignored, the capture time dates",
+                                           UserWarning)  # date_ignored says it, naming --date
             loaded = load(checked.inputs, editions=checked.editions or None, date=options.date,
                           format=options.format, columns=(*DECODED_COLUMNS, *extra_columns),
                           categories=(sorted({*MEASUREMENT_CATEGORIES, *extra_categories})

@@ -14,6 +14,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 import pytest
+from container_bytes import pcap_file, udp_frame
 
 import msdc.asterix as asterix
 from msdc.pipeline.jobs import common, correlate, quality, track
@@ -325,6 +326,35 @@ def test_a_negative_category_is_named_as_given():
     with pytest.raises(ValueError, match=r"^categories -1: msdc does not decode category -1; it decodes "
                                          r"CAT001"):
         asterix.read(ADSB, categories=-1)
+
+
+def radar_pcap(tmp_path: Path) -> Path:
+    """The radar fixture's first 10 data blocks (CAT, then a 2-byte LEN counting the header) in UDP packets
+    captured on 2019-03-01 at 08:00 UTC: 17956 days after 1970-01-01 (1551398400 s) + 28800 s."""
+    data, blocks, at = Path(RADAR).read_bytes(), [], 0
+    while len(blocks) < 10:
+        n = int.from_bytes(data[at + 1:at + 3], "big")
+        blocks.append(data[at:at + n])
+        at += n
+    pcap, _ = pcap_file([(1_551_398_400 + 28_800 + i, 0, udp_frame(b)) for i, b in enumerate(blocks)])
+    path = tmp_path / "radar.pcap"
+    path.write_bytes(pcap)
+    return path
+
+
+def test_a_date_a_pcap_capture_overrides_is_said(tmp_path):
+    """read(pcap, date="2020-01-01") dated the records by the capture time and said nothing of the date
+    given (the command warns '--date ignored'); said now, naming the file and both days."""
+    path = radar_pcap(tmp_path)
+    with pytest.warns(UserWarning) as said:
+        rec = asterix.read(path, date="2020-01-01")
+    assert [str(w.message) for w in said] == [
+        f"{path}: date=2020-01-01 ignored, the capture time dates a pcap file (day 0 2019-03-01)"]
+    assert rec.date == dt.date(2019, 3, 1)
+    assert (rec.frames[48].timestamp.dt.date == dt.date(2019, 3, 1)).all()
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        asterix.read(path)  # no date given: nothing to say
 
 
 def test_one_category_is_a_category(adsb):
