@@ -972,7 +972,7 @@ def read(path, *, editions=None, date=None, categories=None, format: str | None 
             raise UnreadableInput(f"{path}: {exc}") from exc
         rec = decode_buffer(held(buf), seg, path=str(path), editions=eds, categories=categories, date=date,
                             strict=strict, columns=columns)
-    if date is not None and rec.format in ("pcap", "pcapng") and rec.day0 is not None:
+    if date is not None and rec.format in ("pcap", "pcapng") and rec.day0 is not None and rec.date != date:
         warnings.warn(f"{path}: date={date.isoformat()} ignored, the capture time dates a {rec.format} file "
                       f"(day 0 {rec.date})", UserWarning, stacklevel=2)
     for text in edition_advice(rec):

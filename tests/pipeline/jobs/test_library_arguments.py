@@ -355,6 +355,7 @@ def test_a_date_a_pcap_capture_overrides_is_said(tmp_path):
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         asterix.read(path)  # no date given: nothing to say
+        asterix.read(path, date="2019-03-01")  # the capture day itself: nothing ignored
 
 
 def test_one_category_is_a_category(adsb):
