@@ -211,6 +211,17 @@ def check_path(path) -> None:
     raise TypeError(f"path: a file path (str or os.PathLike), not {type(path).__name__} {path!r:.40}{hint}")
 
 
+def check_readable(path) -> None:
+    """check_path, then UnreadableInput unless the file opens for reading (missing, a folder, no
+    permission)."""
+    check_path(path)
+    try:
+        with open(path, "rb"):
+            pass
+    except OSError as exc:
+        raise UnreadableInput(f"{path}: cannot read: {exc.strerror or exc}") from exc
+
+
 @contextmanager
 def _mapped(path) -> Iterator[np.ndarray]:
     """The file as a read-only uint8 array, memory-mapped while the block runs."""

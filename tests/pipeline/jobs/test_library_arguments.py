@@ -365,11 +365,41 @@ def test_one_category_is_a_category(adsb):
 
 
 @pytest.mark.parametrize(("chunk", "error"), [("64", TypeError), (64.0, TypeError), (0, ValueError),
-                                              (-5, ValueError), (True, TypeError)])
+                                              (-5, ValueError), (True, TypeError), (2**70, ValueError)])
 def test_iter_read_chunk_is_checked(chunk, error):
-    """chunk="64" failed deep in numpy; 0 and -5 ran one block per chunk with an empty first one."""
+    """chunk="64" failed deep in numpy; 0 and -5 ran one block per chunk with an empty first one; 2**70 failed
+    with OverflowError 'int too big to convert'."""
     with pytest.raises(error, match=r"^chunk "):
         next(asterix.iter_read(ADSB, chunk=chunk))
+
+
+def test_iter_read_chunk_bounds_are_named_and_the_largest_reads_the_file_at_once():
+    with pytest.raises(ValueError, match=r"^chunk 1180591620717411303424: must be a positive number of "
+                                         r"bytes, at most 4611686018427387904 \(2\*\*62"):
+        asterix.iter_read(ADSB, chunk=2**70)
+    chunks = list(asterix.iter_read(RADAR, chunk=2**62))
+    assert len(chunks) == 1 and len(chunks[0].frames[48]) == len(asterix.read(RADAR).frames[48])
+
+
+@pytest.mark.parametrize(("changed", "error", "words"), [
+    ({"progress": 5}, TypeError, "progress 5: must be a function progress(done, total, what) or None, "
+                                 "not int"),
+    ({"pool": 5}, TypeError, "pool 5: must be a concurrent.futures.Executor (a ProcessPoolExecutor) or None, "
+                             "not int"),
+    ({"chunk": 0}, ValueError, "chunk 0: must be a positive number of bytes"),
+    ({"categories": 8}, ValueError, "categories 8: msdc does not decode CAT008"),
+    ({"strict": "no"}, TypeError, "strict 'no': must be True or False"),
+    ({"format": "pcapx"}, asterix.UnreadableInput, "unknown container format 'pcapx'"),
+    ({"path": "no/such.ast"}, asterix.UnreadableInput,
+     "no/such.ast: cannot read: No such file or directory")])
+def test_iter_read_checks_its_arguments_when_called(changed, error, words):
+    """progress=5 failed with "'int' object is not callable" and pool=5 with AttributeError 'submit', both
+    at the first chunk, as every argument error and a missing file did: now each is refused, named, by the
+    call itself, before anything is read."""
+    kw = {"path": ADSB, **changed}
+    with pytest.raises(error) as info:
+        asterix.iter_read(kw.pop("path"), **kw)
+    assert words in str(info.value)
 
 
 def test_a_dataset_argument_that_is_not_one_is_named():
