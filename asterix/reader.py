@@ -46,9 +46,27 @@ ERROR_COLUMNS = ["file", "offset", "length", "category", "reason"]
 OVERSIZED_BLOCK_BYTES = 8192  # a longer block of a category not decoded counts as unlike a recording's
 
 
-@dataclass
+@dataclass(eq=False)  # two Recordings are equal when they are the same one: frames have no truth value
 class Recording:
-    """Decoded recording: frames by category, the error account, and how it was read."""
+    """Decoded recording: frames by category, the error account, and how it was read.
+
+    - ``frames``: one DataFrame per decoded category (``rec[48]`` is ``rec.frames[48]``); ``errors``: what
+      was skipped (file, offset, length, category, reason); ``editions``: the edition each category was
+      decoded under; ``edition_choice``: how ``'auto'`` chose it, in words.
+    - ``path``, ``format`` (raw, pcap, pcapng, final, gps, oradis), ``date`` (the UTC day of day 0, None
+      when unknown), ``day0`` (the container's day number of day 0: days since 1970 for a pcap, the day
+      byte for a final file; None for a raw stream).
+    - The byte account, ``size_bytes = decoded_bytes + errors.length.sum() + container_bytes +
+      ignored_bytes``: ``ignored_bytes`` in blocks of categories not decoded, per category
+      ``ignored_category_bytes`` and ``ignored_blocks`` (``ignored``: the three as a table), of them
+      ``oversized_bytes`` in blocks over 8 KB (unlike a recording's: text and random bytes).
+    - ``blocks``: data blocks framed, of every category (the ``block`` column numbers them);
+      ``decoded_blocks``: per category, the blocks whose records decoded.
+    - ``edition_fits``: a category most of whose blocks fail under its edition, and the editions every
+      one sampled walks under; ``edition_stretches``: stretches of another edition family, withheld;
+      ``implausible``: per category, the records holding values no real report carries; ``untimed``:
+      CAT001 records no CAT002 message timed (offset, category, sac, sic, reason).
+    """
 
     frames: dict[int, pd.DataFrame]
     errors: pd.DataFrame
@@ -90,7 +108,16 @@ class Recording:
                             columns=["category", "blocks", "bytes"])
 
     def __getitem__(self, category: int) -> pd.DataFrame:
-        return self.frames[category]
+        """The frame of a category; KeyError naming the categories decoded (and why not this one)."""
+        try:
+            return self.frames[category]
+        except (KeyError, TypeError):
+            pass
+        held = ", ".join(f"CAT{c:03d}" for c in sorted(self.frames)) or "none"
+        why = ("a category is a number (an int)" if not isinstance(category, int | np.integer) else
+               "its blocks were not decoded (give categories=)" if category in self.ignored_blocks else
+               "the recording holds none")
+        raise KeyError(f"{category!r}: no frame of this category ({why}); frames: {held}") from None
 
 
 _ALWAYS = ("day", "timestamp", "block", "offset")  # built for every frame
