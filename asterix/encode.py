@@ -7,7 +7,7 @@ column names of ``asterix/columns/`` so that encode -> decode gives back the sam
 from __future__ import annotations
 
 import math
-from collections.abc import Iterable, Mapping
+from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from functools import cache
 from typing import Any
@@ -240,8 +240,31 @@ def _uap_of(category: int, edition: str, value: int | None, later: bool, where: 
     return sel.uap[value]
 
 
+def _check_category(category: Any) -> int:
+    """``category`` as an int the encoder has tables for; TypeError for another type, ValueError for a
+    category without tables, each naming the categories it encodes."""
+    encoded = ", ".join(str(c) for c in sorted(EDITIONS))
+    if isinstance(category, bool) or not isinstance(category, int | np.integer):
+        raise TypeError(f"category {category!r}: a category number (an int), not {type(category).__name__}; "
+                        f"the encoder encodes categories {encoded}")
+    if int(category) not in EDITIONS:
+        raise ValueError(f"category {category!r}: no edition table to encode it with; the encoder encodes "
+                         f"categories {encoded}")
+    return int(category)
+
+
+def _check_edition(category: int, edition: Any) -> str:
+    """The table name of ``edition`` (None: the default); TypeError for one that is not text."""
+    if edition is not None and not isinstance(edition, str):
+        raise TypeError(f"edition {edition!r}: a {type(edition).__name__}; give it as text, as the tables "
+                        f"name it ('1.30': a float cannot hold 1.30; CAT{category:03d} tables: "
+                        f"{', '.join(EDITIONS[category])})")
+    return resolve_edition(category, edition)
+
+
 def _item(category: int, edition: str | None, item_id: str) -> Item:
-    ed = resolve_edition(category, edition)
+    category = _check_category(category)
+    ed = _check_edition(category, edition)
     items = _items(category, ed)
     key = item_id.removeprefix(f"I{category:03d}/").removeprefix("I")
     if key not in items:
@@ -879,7 +902,8 @@ def encode_record(category: int, values: Mapping[str, Any], edition: str | None 
     unless another column already wrote the same value to one of their sources. `extra` replaces an item
     built from the values.
     """
-    ed = resolve_edition(category, edition)
+    category = _check_category(category)
+    ed = _check_edition(category, edition)
     cols = _columns(category, ed)
     unknown = [k for k in values if k not in cols]
     if unknown:
@@ -929,10 +953,21 @@ def _record_uap(category: int, edition: str, raw_items: dict[str, bytes]) -> str
     return _uap_of(category, edition, value, later, "record")
 
 
-def encode_block(category: int, records: list[bytes]) -> bytes:
-    """A data block: CAT, LEN (big-endian, counting the 3 header bytes), records."""
+def encode_block(category: int, records: Sequence[bytes]) -> bytes:
+    """A data block: CAT, LEN (big-endian, counting the 3 header bytes), records (a sequence of encoded
+    records, as encode_record gives them)."""
+    if isinstance(category, bool) or not isinstance(category, int | np.integer):
+        raise TypeError(f"category {category!r}: a category number (an int), not {type(category).__name__}")
     if not 0 <= category <= 255:
         raise ValueError(f"category {category} does not fit a byte")
+    if isinstance(records, bytes | bytearray | memoryview | str) or not isinstance(records, Iterable):
+        raise TypeError(f"records {records!r:.40}: a sequence of encoded records (bytes each, as "
+                        f"encode_record gives them), not {type(records).__name__}; one record is [record]")
+    records = list(records)
+    for i, record in enumerate(records):
+        if not isinstance(record, bytes | bytearray | memoryview):
+            raise TypeError(f"records[{i}] {record!r:.40}: an encoded record (bytes), not "
+                            f"{type(record).__name__}")
     body = b"".join(records)
     if len(body) + 3 > MAX_BLOCK:
         raise ValueError(f"data block of {len(body) + 3} bytes exceeds {MAX_BLOCK}")
@@ -956,9 +991,17 @@ def encode_frame(category: int, frame: pd.DataFrame, edition: str | None = None,
     bytes per block. Frame columns that are not in the category's schema, derived on decoding (CAT001
     time_of_day: write truncated_time_of_day and CAT002 messages) or read from I048/250 Mode S registers
     (their groups are written as zeros, bds_count of them) are ignored."""
+    category = _check_category(category)
+    if not isinstance(frame, pd.DataFrame):
+        raise TypeError(f"frame: a pandas DataFrame (one row per record, columns named as decoding names "
+                        f"them), not {type(frame).__name__}; pd.DataFrame(rows) makes one of a list of dicts")
+    if isinstance(records_per_block, bool) or not isinstance(records_per_block, int | np.integer):
+        raise TypeError(f"records_per_block {records_per_block!r}: a positive integer (an int), not "
+                        f"{type(records_per_block).__name__}")
     if records_per_block < 1:
-        raise ValueError("records_per_block must be at least 1")
-    ed = resolve_edition(category, edition)
+        raise ValueError(f"records_per_block {records_per_block!r}: must be a positive integer (at least 1)")
+    records_per_block = int(records_per_block)
+    ed = _check_edition(category, edition)
     # derived columns (CAT001 time_of_day, made whole from CAT002 on decoding) have no item to write
     # Mode S register columns (I048/250 contents, kind "bds") are not written: bds_count writes the count
     names = [c for c, col in _columns(category, ed).items()
