@@ -74,7 +74,9 @@ def markdown_schema() -> str:
              "and 0-9, trailing spaces stripped. All-zero codes (code 0 is no character) and all spaces are "
              "absent (`<NA>`); any other code outside that set shows as `?`, never as a letter. Beside it, "
              "`callsign_hex` (text, categorical) keeps the item's raw 48 bits as 12 upper-case hex digits "
-             "whenever the record carries the item.", "",
+             "whenever the record carries the item; the encoder writes the item from those bits where the "
+             "column is given (an all-zero or all-space identification comes back, not left out), from the "
+             "text elsewhere, and refuses a row whose two disagree.", "",
              "Code lists (`codes` columns: `warning_codes`, I048/030 and I020/030) hold every code of a "
              "repetitive item "
              "in wire order, as decimal numbers joined by `,` (`3`, `1,3`), `<NA>` when the record lacks the "
