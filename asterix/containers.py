@@ -87,6 +87,12 @@ def detect_format(head: bytes) -> str:
     return "final" if second_bytes >= FINAL_MIN_FRAME_BYTES else "raw"
 
 
+def check_format(fmt) -> None:
+    """ValueError unless ``fmt`` is None (detect) or one of FORMATS."""
+    if fmt is not None and fmt not in FORMATS:
+        raise ValueError(f"unknown container format {fmt!r}; expected one of {FORMATS}")
+
+
 def readonly(buf: np.ndarray) -> np.ndarray:
     """``buf`` as a read-only array (a view when it was writable): the kernels then compile once, for the
     read-only bytes a mapped file gives, not again for a writable copy (about 6 s of a first run)."""
@@ -99,8 +105,7 @@ def readonly(buf: np.ndarray) -> np.ndarray:
 
 def read_segments(data: bytes | memoryview | np.ndarray, fmt: str | None = None) -> Segments:
     """Locate the ASTERIX payloads of a recording held in memory; fmt=None detects the format."""
-    if fmt is not None and fmt not in FORMATS:
-        raise ValueError(f"unknown container format {fmt!r}; expected one of {FORMATS}")
+    check_format(fmt)
     if isinstance(data, np.ndarray):
         buf = readonly(np.ascontiguousarray(data).reshape(-1).view(np.uint8))
     else:

@@ -7,6 +7,7 @@ column names of ``asterix/columns/`` so that encode -> decode gives back the sam
 from __future__ import annotations
 
 import math
+import string
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from functools import cache
@@ -17,6 +18,7 @@ import pandas as pd
 from bitstring import BitArray, Bits, pack
 
 from msdc.asterix.columns import BDS_KINDS, Column, columns_for
+from msdc.asterix.frames import icao_text
 from msdc.asterix.tables import available, load_table, resolve_edition, uaps
 
 __all__ = [
@@ -905,11 +907,15 @@ def encode_record(category: int, values: Mapping[str, Any], edition: str | None 
     category = _check_category(category)
     ed = _check_edition(category, edition)
     cols = _columns(category, ed)
-    unknown = [k for k in values if k not in cols]
+    hexes = {k: np.array([values[k]], dtype=object) for k in values
+             if k.endswith(HEX) and k.removesuffix(HEX) in _identity_columns(category, ed)}
+    unknown = [k for k in values if k not in cols and k not in hexes]
     if unknown:
         raise ValueError(f"unknown column(s) for CAT{category:03d} edition {ed}: {unknown}")
     data = {}
     for k, v in values.items():
+        if k in hexes:
+            continue
         if v is None or v is pd.NA or (isinstance(v, float) and math.isnan(v)):
             continue
         if cols[k].kind in ("float", "int", "flag", "count"):
@@ -919,6 +925,8 @@ def encode_record(category: int, values: Mapping[str, Any], edition: str | None 
                 raise ValueError(f"column {k!r}: {v!r} is not a number") from None
         else:
             data[k] = np.array([v], dtype=object)
+    _raw_identities(category, ed, data, hexes)
+    data = {k: v for k, v in data.items() if not pd.isna(v[0])}
     parts, _ = _item_parts(category, ed, data, 1, prefer)
     raw_items = {item_id: bytes(mat[0, : length[0]]) for item_id, (present, length, mat) in parts.items()
                  if present[0]}
@@ -985,6 +993,51 @@ def _frame_arrays(frame: pd.DataFrame, names: Iterable[str]) -> dict[str, np.nda
     return out
 
 
+HEX = "_hex"  # suffix of the column holding an identification item's raw bits (asterix.frames.icao_columns)
+
+
+def _identity_columns(category: int, edition: str) -> dict[str, int]:
+    """The identification columns (``icao``) an edition writes, with the hex digits of their raw bits."""
+    targets = _targets(category, edition)
+    return {name: targets[name][0].node.bits // 4 for name, col in _columns(category, edition).items()
+            if col.kind == "icao" and targets[name] and isinstance(targets[name][0].node, Field)}
+
+
+def _raw_identities(category: int, edition: str, data: dict[str, np.ndarray], hexes: Mapping[str, np.ndarray]
+                    ) -> None:
+    """Each identification column written from its ``NAME_hex`` raw bits where given (the exact bytes: an
+    all-zero or all-space identification decodes to no text, and was lost), from its text elsewhere. A
+    row giving both must agree (the hex read as text is the text): an edited text is not overwritten."""
+    for name, digits in _identity_columns(category, edition).items():
+        if name + HEX not in hexes:
+            continue
+        raw = hexes[name + HEX]
+        text = np.asarray(data.get(name, np.full(len(raw), None, dtype=object)), dtype=object)
+        codes, uniques = pd.factorize(raw)  # each distinct value read once; -1 where not given
+        exact = []
+        for j, h in enumerate(uniques):
+            if not isinstance(h, str) or len(h) != digits or not all(c in string.hexdigits for c in h):
+                row = int(np.flatnonzero(codes == j)[0])
+                raise ValueError(f"column {name + HEX!r} row {row}: {h!r} is not {digits} hex digits (the "
+                                 f"item's {digits * 4} bits)")
+            exact.append(bytes.fromhex(h))
+        given = codes >= 0
+        both = given & ~pd.isna(text)
+        pairs = pd.DataFrame({"code": codes[both], "text": text[both]}).drop_duplicates()
+        for j, t in pairs.itertuples(index=False):
+            if icao_text(int(uniques[j], 16)) != str(t).upper().rstrip():
+                row = int(np.flatnonzero(both & (codes == j) & (text == t))[0])
+                reads = icao_text(int(uniques[j], 16))
+                raise ValueError(f"row {row}: {name} {t!r} and {name + HEX} {uniques[j]!r} (which reads "
+                                 f"{reads!r}) disagree: drop {name + HEX} to write the text, or make them "
+                                 "agree")
+        out = text.copy()
+        holder = np.empty(len(exact), dtype=object)
+        holder[:] = exact
+        out[given] = holder[codes[given]]
+        data[name] = out
+
+
 def encode_frame(category: int, frame: pd.DataFrame, edition: str | None = None, records_per_block: int = 20,
                  prefer: Mapping[str, str] | None = None) -> bytes:
     """Data blocks for a frame (one record per row, in order), at most records_per_block records and 65535
@@ -1006,6 +1059,7 @@ def encode_frame(category: int, frame: pd.DataFrame, edition: str | None = None,
     # Mode S register columns (I048/250 contents, kind "bds") are not written: bds_count writes the count
     names = [c for c, col in _columns(category, ed).items()
              if c in frame.columns and col.sources and col.kind not in BDS_KINDS]
+    hexed = [c + HEX for c in _identity_columns(category, ed) if c + HEX in frame.columns]
     n = len(frame)
     if n == 0:
         return b""
@@ -1013,7 +1067,9 @@ def encode_frame(category: int, frame: pd.DataFrame, edition: str | None = None,
     for start in range(0, n, _CHUNK):
         chunk = frame.iloc[start:start + _CHUNK]
         try:
-            length, flat = _records(category, ed, _frame_arrays(chunk, names), len(chunk), prefer)
+            arrays = _frame_arrays(chunk, names)
+            _raw_identities(category, ed, arrays, {h: chunk[h].to_numpy(dtype=object) for h in hexed})
+            length, flat = _records(category, ed, arrays, len(chunk), prefer)
         except ValueError as exc:
             raise ValueError(f"{exc} (rows counted from {start})" if start else str(exc)) from None
         lengths.append(length)

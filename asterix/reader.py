@@ -6,7 +6,7 @@ import datetime as dt
 import mmap
 import os
 import warnings
-from collections.abc import Iterator
+from collections.abc import Iterator, Mapping
 from contextlib import contextmanager
 from dataclasses import dataclass, field
 from functools import cache, partial
@@ -46,9 +46,27 @@ ERROR_COLUMNS = ["file", "offset", "length", "category", "reason"]
 OVERSIZED_BLOCK_BYTES = 8192  # a longer block of a category not decoded counts as unlike a recording's
 
 
-@dataclass
+@dataclass(eq=False)  # two Recordings are equal when they are the same one: frames have no truth value
 class Recording:
-    """Decoded recording: frames by category, the error account, and how it was read."""
+    """Decoded recording: frames by category, the error account, and how it was read.
+
+    - ``frames``: one DataFrame per decoded category (``rec[48]`` is ``rec.frames[48]``); ``errors``: what
+      was skipped (file, offset, length, category, reason); ``editions``: the edition each category was
+      decoded under; ``edition_choice``: how ``'auto'`` chose it, in words.
+    - ``path``, ``format`` (raw, pcap, pcapng, final, gps, oradis), ``date`` (the UTC day of day 0, None
+      when unknown), ``day0`` (the container's day number of day 0: days since 1970 for a pcap, the day
+      byte for a final file; None for a raw stream).
+    - The byte account, ``size_bytes = decoded_bytes + errors.length.sum() + container_bytes +
+      ignored_bytes``: ``ignored_bytes`` in blocks of categories not decoded, per category
+      ``ignored_category_bytes`` and ``ignored_blocks`` (``ignored``: the three as a table), of them
+      ``oversized_bytes`` in blocks over 8 KB (unlike a recording's: text and random bytes).
+    - ``blocks``: data blocks framed, of every category (the ``block`` column numbers them);
+      ``decoded_blocks``: per category, the blocks whose records decoded.
+    - ``edition_fits``: a category most of whose blocks fail under its edition, and the editions every
+      one sampled walks under; ``edition_stretches``: stretches of another edition family, withheld;
+      ``implausible``: per category, the records holding values no real report carries; ``untimed``:
+      CAT001 records no CAT002 message timed (offset, category, sac, sic, reason).
+    """
 
     frames: dict[int, pd.DataFrame]
     errors: pd.DataFrame
@@ -90,7 +108,16 @@ class Recording:
                             columns=["category", "blocks", "bytes"])
 
     def __getitem__(self, category: int) -> pd.DataFrame:
-        return self.frames[category]
+        """The frame of a category; KeyError naming the categories decoded (and why not this one)."""
+        try:
+            return self.frames[category]
+        except (KeyError, TypeError):
+            pass
+        held = ", ".join(f"CAT{c:03d}" for c in sorted(self.frames)) or "none"
+        why = ("a category is a number (an int)" if not isinstance(category, int | np.integer) else
+               "its blocks were not decoded (give categories=)" if category in self.ignored_blocks else
+               "the recording holds none")
+        raise KeyError(f"{category!r}: no frame of this category ({why}); frames: {held}") from None
 
 
 _ALWAYS = ("day", "timestamp", "block", "offset")  # built for every frame
@@ -102,9 +129,15 @@ def selected_columns(columns) -> tuple[str, ...] | None:
     ValueError naming a column no category has."""
     if columns is None:
         return None
+    if not isinstance(columns, str) and not hasattr(columns, "__iter__"):
+        raise TypeError(f"columns {columns!r}: give a column name or a sequence of them, e.g. "
+                        f"('address', 'callsign')")
     known = KNOWN_COLUMNS
     names = set()
     for name in ([columns] if isinstance(columns, str) else columns):
+        if not isinstance(name, str):
+            raise TypeError(f"columns {columns!r:.80}: {name!r} is not a column name (a str; see "
+                            f"docs/columns.md)")
         base = name[:-4] if name.endswith("_hex") and name[:-4] in known else name
         if base not in known and base not in _ALWAYS:
             raise ValueError(f"columns: no decoded column is named {name!r} (see docs/columns.md)")
@@ -180,11 +213,19 @@ def check_categories(categories) -> tuple[int, ...] | None:
         if isinstance(c, bool) or not isinstance(c, int | np.integer):
             raise TypeError(f"categories {categories!r}: {c!r} is not a category number (an int)")
         if int(c) not in DECODABLE:
-            raise ValueError(f"categories {categories!r}: msdc does not decode CAT{int(c):03d}; it decodes "
+            asked = f"CAT{int(c):03d}" if c >= 0 else f"category {int(c)}"  # not CAT-01
+            raise ValueError(f"categories {categories!r}: msdc does not decode {asked}; it decodes "
                              f"{', '.join(f'CAT{d:03d}' for d in DECODABLE)} (other categories' blocks are "
                              f"counted in Recording.ignored)")
         out.append(int(c))
     return tuple(out)
+
+
+def check_strict(strict) -> bool:
+    """``strict`` as a bool; TypeError for anything else (the text "False" is true, and turned it on)."""
+    if not isinstance(strict, bool | np.bool_):
+        raise TypeError(f"strict {strict!r}: must be True or False (a bool), not {type(strict).__name__}")
+    return bool(strict)
 
 
 def check_path(path) -> None:
@@ -195,6 +236,17 @@ def check_path(path) -> None:
     hint = (" (bytes in memory: msdc.asterix.decode_buffer decodes them)"
             if isinstance(path, bytes | bytearray | memoryview) else "")
     raise TypeError(f"path: a file path (str or os.PathLike), not {type(path).__name__} {path!r:.40}{hint}")
+
+
+def check_readable(path) -> None:
+    """check_path, then UnreadableInput unless the file opens for reading (missing, a folder, no
+    permission)."""
+    check_path(path)
+    try:
+        with open(path, "rb"):
+            pass
+    except OSError as exc:
+        raise UnreadableInput(f"{path}: cannot read: {exc.strerror or exc}") from exc
 
 
 @contextmanager
@@ -766,14 +818,16 @@ def decode_buffer(buf: np.ndarray, seg: Segments, *, path: str = "", editions: d
 
     buf = readonly(buf)
     selected = selected_columns(columns)
+    strict = check_strict(strict)
     date = parse_date(date)
     categories = check_categories(categories)
-    plan = plan_recording(buf, seg, dict(editions or {}), categories, assume_walking=True)
+    editions = _parse_editions(editions)
+    plan = plan_recording(buf, seg, dict(editions), categories, assume_walking=True)
     framed = plan.framer(buf).window()
     scans = _scan_decoded(buf, framed, plan, _scanned_columns(selected))
     if plan.assumed and any((scan[2].counts < 0).any() for scan in scans.values()):
         del scans  # a decoded block does not walk: the plan is settled again, walking every block
-        plan = plan_recording(buf, seg, dict(editions or {}), categories)
+        plan = plan_recording(buf, seg, dict(editions), categories)
         framed, scans = plan.framer(buf).window(), None
     return decode_framed(buf, plan, framed, path=path, date=date, strict=strict, selected=selected,
                          sector_clock=sector_clock, scans=scans)
@@ -889,16 +943,39 @@ def framing_reason(buf: np.ndarray, seg: Segments, offset: int, code: int) -> st
 
 
 def _parse_editions(editions) -> dict[int, str]:
-    """Accept {21: "0.26"} or ["21=0.26", ...] or "21=0.26"."""
+    """Accept {21: "0.26"} or ["21=0.26", ...] or "21=0.26"; TypeError for another form, or an edition that
+    is not text (a float cannot hold 1.30), ValueError for a text that is not CAT=EDITION."""
     if editions is None:
         return {}
     if isinstance(editions, str):
         editions = [editions]
-    if isinstance(editions, dict):
-        return {int(k): str(v) for k, v in editions.items()}
+    if isinstance(editions, Mapping):
+        pairs = list(editions.items())
+    elif isinstance(editions, bytes | bytearray) or not hasattr(editions, "__iter__"):
+        raise TypeError(f"editions {editions!r:.80}: give a mapping such as {{21: '0.26'}} or 'CAT=EDITION' "
+                        f"texts such as '21=0.26'")
+    else:
+        pairs = []
+        for item in editions:
+            if not isinstance(item, str):
+                raise TypeError(f"editions {editions!r:.80}: {item!r} is not a 'CAT=EDITION' text; give a "
+                                f"mapping such as {{21: '0.26'}} or texts such as '21=0.26'")
+            cat, eq, ed = item.partition("=")
+            if not eq or not cat.strip().isdigit():
+                raise ValueError(f"editions {editions!r:.80}: {item!r} is not 'CAT=EDITION' text such as "
+                                 f"'21=0.26'")
+            pairs.append((int(cat), ed.strip()))
     out = {}
-    for item in editions:
-        cat, _, ed = str(item).partition("=")
+    for cat, ed in pairs:
+        if isinstance(cat, str) and cat.strip().isdigit():  # {"21": "0.26"}, as the texts give it
+            cat = int(cat)
+        if isinstance(cat, bool) or not isinstance(cat, int | np.integer):
+            raise TypeError(f"editions {editions!r:.80}: category {cat!r} is not a category number (an int)")
+        if not isinstance(ed, str):
+            tables = ", ".join(available().get(int(cat), [])) or "none"
+            raise TypeError(f"editions {editions!r:.80}: CAT{int(cat):03d} edition {ed!r} is a "
+                            f"{type(ed).__name__}; give it as text, as the tables name it ('1.30': a float "
+                            f"cannot hold 1.30; tables: {tables})")
         out[int(cat)] = ed
     return out
 
@@ -923,6 +1000,7 @@ def read(path, *, editions=None, date=None, categories=None, format: str | None 
     of a large recording holds only them. Every block is still walked and accounted alike.
     """
     selected_columns(columns)
+    strict = check_strict(strict)
     date, categories = parse_date(date), check_categories(categories)
     eds = reading_editions(editions, categories)
     with _mapped(path) as buf:
@@ -932,6 +1010,9 @@ def read(path, *, editions=None, date=None, categories=None, format: str | None 
             raise UnreadableInput(f"{path}: {exc}") from exc
         rec = decode_buffer(held(buf), seg, path=str(path), editions=eds, categories=categories, date=date,
                             strict=strict, columns=columns)
+    if date is not None and rec.format in ("pcap", "pcapng") and rec.day0 is not None and rec.date != date:
+        warnings.warn(f"{path}: date={date.isoformat()} ignored, the capture time dates a {rec.format} file "
+                      f"(day 0 {rec.date})", UserWarning, stacklevel=2)
     for text in edition_advice(rec):
         warnings.warn(text, EditionWarning, stacklevel=2)
     for text in untimed_advice(rec.path, rec.untimed):

@@ -11,7 +11,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .cat001_time import PLOT_CATEGORY, SectorClock
-from .containers import UNTIMED, Segments, read_segments
+from .containers import UNTIMED, Segments, check_format, read_segments
 from .errors import UnreadableInput
 from .framing import Progress, release_pages
 from .plan import Plan, plan_recording
@@ -19,6 +19,8 @@ from .reader import (
     Recording,
     _mapped,
     check_categories,
+    check_readable,
+    check_strict,
     decode_framed,
     parse_date,
     reading_editions,
@@ -40,6 +42,7 @@ from .timeline import (
 )
 
 HOLD_BYTES = 1 << 22  # a raw stream's first chunks held at most until day 0 is anchored (payload bytes)
+MAX_CHUNK = 1 << 62  # bytes: any file is smaller, and a position plus a chunk still fits an int64
 
 
 def iter_read(path, *, chunk: int = 1_000_000, editions=None, date=None, categories=None,
@@ -52,15 +55,37 @@ def iter_read(path, *, chunk: int = 1_000_000, editions=None, date=None, categor
     The records, errors, days, timestamps and ``block`` index are those ``read`` gives, whatever the chunk
     size: the framing, the editions and the verdicts on them are settled over the whole file first. Memory
     follows the chunk size, not the file (but for a container's table of packets, 32 bytes a packet).
+    The arguments, and that the file can be read, are checked when iter_read is called, not at the first
+    chunk.
     """
     if isinstance(chunk, bool) or not isinstance(chunk, int | np.integer):
         raise TypeError(f"chunk {chunk!r}: must be a whole number of bytes (an int), not a "
                         f"{type(chunk).__name__}")
-    if chunk <= 0:
-        raise ValueError(f"chunk {chunk!r}: must be a positive number of bytes")
+    if not 0 < chunk <= MAX_CHUNK:
+        raise ValueError(f"chunk {chunk!r}: must be a positive number of bytes, at most {MAX_CHUNK} (2**62; "
+                         f"a chunk the size of the file decodes it at once)")
+    if progress is not None and not callable(progress):
+        raise TypeError(f"progress {progress!r:.60}: must be a function progress(done, total, what) or "
+                        f"None, not {type(progress).__name__}")
+    if pool is not None and not callable(getattr(pool, "submit", None)):
+        raise TypeError(f"pool {pool!r:.60}: must be a concurrent.futures.Executor (a ProcessPoolExecutor) "
+                        f"or None, not {type(pool).__name__}")
     selected = selected_columns(columns)
+    strict = check_strict(strict)
     first_date, categories = parse_date(date), check_categories(categories)
     eds = reading_editions(editions, categories)
+    check_readable(path)
+    try:
+        check_format(format)
+    except ValueError as exc:  # as read() says it
+        raise UnreadableInput(f"{path}: {exc}") from exc
+    return _iter_read(path, chunk, eds, first_date, categories, format, strict, selected, progress, pool)
+
+
+def _iter_read(path, chunk: int, eds: dict[int, str], first_date: dt.date | None, categories,
+               format: str | None, strict: bool, selected, progress: Progress | None,
+               pool: Executor | None) -> Iterator[Recording]:
+    """iter_read's chunks, from its arguments checked."""
     with _mapped(path) as buf:
         try:
             seg = read_segments(buf, format)
@@ -311,6 +336,7 @@ def _window_times(args: tuple) -> WindowClock:
 def decode_window(path, plan: Plan, window: Window, *, strict: bool = False, columns=None) -> Recording:
     """One window of plan_windows decoded: the records, days, timestamps and block numbers iter_read gives
     them."""
+    strict = check_strict(strict)
     with _mapped(path) as buf:
         rec = decode_framed(buf, plan, window.framed, path=str(path), date=window.date, strict=strict,
                             selected=selected_columns(columns))

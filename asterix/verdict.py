@@ -4,12 +4,14 @@ its records are plausible; said as warnings, and as 'not ASTERIX' for a file non
 Bytes count as undecoded when they were skipped (not ASTERIX, damaged) or lie in oversized blocks of
 categories msdc does not decode (what text and random bytes frame into); blocks withheld or skipped as
 another edition's are ASTERIX and do not count, nor does damaged container structure (a packet of a link
-type msdc does not read: its own error says so). Blocks of other categories that could be a recording's
-count as ASTERIX: msdc cannot check them.
+type msdc does not read: its own error says so), but for a format forced on a file that detection reads as
+another (a raw stream read as pcap: its damage is the file not being one). Blocks of other categories that
+could be a recording's count as ASTERIX: msdc cannot check them.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -41,6 +43,10 @@ class Tally:
     skipped_runs: int = 0
     records: dict[int, int] = field(default_factory=dict)
     implausible: dict[int, Implausible] = field(default_factory=dict)
+    damaged: int = 0  # bytes of damaged container structure (counted in ``container`` too)
+    damage: list[str] = field(default_factory=list)  # its first distinct reasons
+    # the format detection gives a file read under another (forced) one: its damage counts as undecoded
+    misread: str = ""
 
     def add(self, rec) -> None:
         """Fold one decoded Recording (or chunk) of the input in."""
@@ -52,8 +58,14 @@ class Tally:
         if len(errors):
             # container damage (a packet msdc cannot read) is no evidence either way: set aside with the
             # container bytes, as are blocks of another edition (ASTERIX, said by edition warnings)
-            boxed = errors["reason"].astype(str).str.startswith("container:").to_numpy()
-            self.container += int(errors["length"].to_numpy()[boxed].sum())
+            reasons = errors["reason"].astype(str)
+            boxed = reasons.str.startswith("container:").to_numpy()
+            damaged = int(errors["length"].to_numpy()[boxed].sum())
+            self.container += damaged
+            self.damaged += damaged
+            for why in reasons[boxed].str.removeprefix("container: "):
+                if why not in self.damage and len(self.damage) < SHOWN:
+                    self.damage.append(why)
             other = {c for c, fits in rec.edition_fits.items() if fits} | set(rec.edition_stretches)
             cats = errors["category"].astype("float64").to_numpy()
             mine = ~np.isin(cats, list(other)) & ~boxed
@@ -67,14 +79,20 @@ class Tally:
             self.implausible[cat] = self.implausible.get(cat, Implausible(0, ())) + odd
 
     @property
+    def _misread_bytes(self) -> int:
+        """Damaged container bytes that count as undecoded: those of a misread file (``misread``)."""
+        return self.damaged if self.misread else 0
+
+    @property
     def payload(self) -> int:
-        """Bytes that are not container structure."""
-        return max(self.size - self.container, 0)
+        """Bytes that are not container structure (a misread file's damage is not structure)."""
+        return max(self.size - self.container + self._misread_bytes, 0)
 
     @property
     def undecoded_share(self) -> float:
-        """Share of the payload skipped or in oversized blocks (module doc)."""
-        return (self.skipped + self.oversized) / self.payload if self.payload else 0.0
+        """Share of the payload skipped or in oversized blocks, or damage of a misread file (module doc)."""
+        undecoded = self.skipped + self.oversized + self._misread_bytes
+        return undecoded / self.payload if self.payload else 0.0
 
     def not_asterix(self) -> bool:
         """Nothing, or next to nothing, of the input is ASTERIX."""
@@ -84,7 +102,14 @@ class Tally:
         """What to tell the user: the input is not ASTERIX (``head``: its first bytes, DETECT_BYTES of them
         to look for a recorder file), most of it is not, or a category's records are implausible; none for
         a sound input. A file read as raw that is a recorder file but for its first frame (``detected``: the
-        format was not given) is said to be one instead (``hint``; the jobs' format_hints say it else)."""
+        format was not given) is said to be one instead (``hint``; the jobs' format_hints say it else); a
+        format given that detection reads the head otherwise counts the container damage as undecoded."""
+        if not detected and head and not self.misread:
+            from .containers import detect_format
+
+            found = detect_format(head)
+            if self.format and found != self.format:
+                return dataclasses.replace(self, misread=found).warnings(head, hint=hint, detected=detected)
         name = Path(self.path).name
         out = []
         recorder = self._recorder(head) if detected and self.undecoded_share >= MOSTLY_UNDECODED else None
@@ -95,7 +120,7 @@ class Tally:
             return [not_asterix_text(name, self, head)]
         elif self.undecoded_share >= MOSTLY_UNDECODED:
             out.append(f"{name}: {self.undecoded_share:.0%} of its {self.payload} bytes did not decode "
-                       f"({self._where()}): most of it is not ASTERIX")
+                       f"({self._where()}): most of it is not ASTERIX{self._detected_words()}")
         for cat, odd in sorted(self.implausible.items()):
             n = self.records.get(cat, 0)
             if n and odd.records >= IMPLAUSIBLE_SHARE * n:
@@ -128,7 +153,16 @@ class Tally:
         if self.oversized:
             parts.append(f"{self.oversized} bytes in blocks over 8 KB of categories not decoded, "
                          "unlike a recording's")
+        if self._misread_bytes:
+            parts.append(f"{self.damaged} bytes that do not read as {self.format}: {'; '.join(self.damage)}")
         return "; ".join(parts)
+
+    def _detected_words(self) -> str:
+        """What detection would read a misread file as (a damaged recording of the format told may be
+        no longer recognised: which is wrong, the format or the file, is the user's to judge)."""
+        if not self.misread:
+            return ""
+        return f"; read as {self.format} as told (detection would read it as {self.misread})"
 
 
 def recorder_words(path, skipped_blocks: int, fmt: str) -> str:
@@ -145,7 +179,7 @@ def not_asterix_text(name: str, tally: Tally, head: bytes, sampled: int = 0) -> 
     of = (f"of {sampled} bytes read at its start, middle and end, {share}" if sampled else
           f"{share} of its {tally.payload} bytes")
     return (f"{name} is not ASTERIX: read as {tally.format or 'raw'}, {of} frame into no data block that "
-            f"decodes ({tally._where()}); {head_words(head)}")
+            f"decodes ({tally._where()}); {head_words(head)}{tally._detected_words()}")
 
 
 def head_words(head: bytes) -> str:

@@ -75,7 +75,9 @@ def markdown_schema() -> str:
              "no character) and all spaces are absent (`<NA>`); any other code outside that set shows as "
              "`?`, never as a letter. Beside each, `callsign_hex` or `service_designator_hex` (text, "
              "categorical, not in the tables below) keeps the item's raw 48 bits as 12 upper-case hex digits "
-             "whenever the record carries the item.", "",
+             "whenever the record carries the item; the encoder writes a call sign item from "
+             "`callsign_hex` where given (an all-zero or all-space identification comes back, not left "
+             "out), from `callsign` elsewhere, and refuses a row whose two disagree.", "",
              "Code lists (`codes` columns: `warning_codes`, I048/030 and I020/030) hold every code of a "
              "repetitive item "
              "in wire order, as decimal numbers joined by `,` (`3`, `1,3`), `<NA>` when the record lacks the "

@@ -17,12 +17,17 @@ DEFAULT_EDITION = {c: info.default_edition for c, info in REGISTRY.items()}
 
 
 def available() -> dict[int, list[str]]:
-    """Editions shipped as tables, by category."""
+    """Editions shipped as tables, by category, each category's in version order (1.9 before 1.10)."""
     out: dict[int, list[str]] = {}
     for p in sorted(HERE.glob("cat*_*.json")):
         cat, ed = p.stem[3:].split("_")
         out.setdefault(int(cat), []).append(ed)
-    return out
+    return {cat: sorted(eds, key=version) for cat, eds in out.items()}
+
+
+def version(edition: str) -> tuple[int, ...]:
+    """An edition's number as a tuple of ints, to order by ("1.10" after "1.9")."""
+    return tuple(int(part) for part in edition.split("."))
 
 
 def resolve_edition(category: int, edition: str | None) -> str:

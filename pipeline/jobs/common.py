@@ -114,6 +114,9 @@ def _editions(editions: list[str] | dict | None) -> dict[int, str]:
             raise OptionError(f"--edition {cat}={ed}: category must be one of "
                               f"{', '.join(str(c) for c in sorted(available()))}")
         cat = int(cat)
+        if not isinstance(ed, str):  # {48: 1.30} is 1.3, and 2.7 no table name
+            raise OptionError(f"--edition {cat}={ed!r}: a {type(ed).__name__}; give the edition as text, as "
+                              "the tables name it ('1.30': a float cannot hold 1.30)")
         if ed != "auto":
             try:
                 resolve_edition(cat, ed)
@@ -608,6 +611,8 @@ def load_inputs(options: DecodingOptions, checked: Checked, progress: Progress |
         with python_warnings.catch_warnings():  # a wrong edition is said below, with its --edition; what
             python_warnings.simplefilter("ignore", EditionWarning)  # the inputs are, in loaded.warnings
             python_warnings.simplefilter("ignore", ContentWarning)
+            python_warnings.filterwarnings("ignore", r".*: date=\S+ ignored, the capture time dates",
+                                           UserWarning)  # date_ignored says it, naming --date
             loaded = load(checked.inputs, editions=checked.editions or None, date=options.date,
                           format=options.format, columns=(*DECODED_COLUMNS, *extra_columns),
                           categories=(sorted({*MEASUREMENT_CATEGORIES, *extra_categories})

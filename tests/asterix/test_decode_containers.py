@@ -362,8 +362,9 @@ def test_format_detection_and_override(tmp_path: Path) -> None:
                 assert not said
             for w in said:
                 assert issubclass(w.category, asterix.ContentWarning) and path.name in str(w.message)
-    # a raw file forced as pcap has no pcap magic: nothing decoded, the whole file is a problem
-    rec = asterix.read(files["raw"], format="pcap")
+    # a raw file forced as pcap has no pcap magic: nothing decoded, the whole file is a problem, said
+    with pytest.warns(asterix.ContentWarning, match="c.bin is not ASTERIX: read as pcap"):
+        rec = asterix.read(files["raw"], format="pcap")
     assert rec.frames == {} and rec.decoded_bytes == 0
     assert rec.errors.length.sum() == sizes["raw"] and "magic" in rec.errors.reason.iloc[0]
     # the final frames' payloads are exact: forced raw, the headers and trailers become errors
@@ -372,6 +373,49 @@ def test_format_detection_and_override(tmp_path: Path) -> None:
     assert not rec.errors.empty and rec.container_bytes == 0
     with pytest.raises(asterix.UnreadableInput, match="format"):
         asterix.read(files["raw"], format="pcapx")
+
+
+@pytest.mark.parametrize(("forced", "reason"), [
+    ("pcap", "bad pcap magic"),  # the first four bytes are a CAT048 block header, not a pcap magic
+    ("pcapng", "missing section header"),  # nor the pcapng section header 0A 0D 0D 0A
+    # a final frame's first two bytes are its length: 30 00 (a CAT048 block under 256 bytes) is 12288,
+    # longer than the file
+    ("final", "impossible frame length")])
+def test_a_container_format_forced_on_a_raw_stream_is_said(tmp_path: Path, forced: str, reason: str) -> None:
+    """format="pcap" (pcapng, final) on a raw stream returned no frame and no warning, the reason only in
+    .errors, where gps and oradis warned: now a ContentWarning names the file, the format and the reason,
+    and that detection reads it as raw."""
+    data, _ = midnight_raw()
+    assert data[0] == 48 and data[1] == 0 and len(data) < 12288
+    path = write(tmp_path, "c.ast", data)
+    with pytest.warns(asterix.ContentWarning) as said:
+        rec = asterix.read(path, format=forced)
+    assert rec.frames == {} and len(said) == 1
+    text = str(said[0].message)
+    assert text.startswith(f"c.ast is not ASTERIX: read as {forced}, 100% of its {len(data)} bytes frame "
+                           f"into no data block that decodes ({len(data)} bytes that do not read as "
+                           f"{forced}: {reason})")
+    assert text.endswith(f"; read as {forced} as told (detection would read it as raw)")
+
+
+def test_a_final_format_forced_on_a_mostly_raw_file_is_said(tmp_path: Path) -> None:
+    """Raw blocks, then one final frame: read as final, the raw head is one damaged run and the frame's
+    records decode; the head being most of the payload, the file is mostly not ASTERIX as read."""
+    head = cat048([10.0 + i for i in range(6)], per_block=6)
+    frame, data_at = final_file([(0, 20.0, cat048([20.0, 21.0], first_track=7))])
+    data = head + frame
+    assert data[1] == 0 and len(data) < 12288  # a first frame length of 0x30xx: past the end
+    payload = len(data) - 12  # the frame's 8 header and 4 trailer bytes are container
+    share = len(head) / payload
+    assert 0.5 <= share < 0.9
+    path = write(tmp_path, "m.ast", data)
+    with pytest.warns(asterix.ContentWarning) as said:
+        rec = asterix.read(path, format="final")
+    assert rec.frames[48].track_number.tolist() == [7, 8]
+    assert [str(w.message) for w in said] == [
+        f"m.ast: {share:.0%} of its {payload} bytes did not decode ({len(head)} bytes that do not read as "
+        "final: impossible frame length): most of it is not ASTERIX; read as final as told (detection "
+        "would read it as raw)"]
 
 
 # ---------------------------------------------------------------------------------------------------------
@@ -459,7 +503,8 @@ def test_iter_read_pcap(tmp_path: Path) -> None:
     for chunk in (1, 60, 100):  # chunk sizes count payload bytes: 291 here
         assert_chunks_equal_read(path, chunk)
         assert_chunks_equal_read(path, chunk, date="2019-03-01")
-        assert_chunks_equal_read(path, chunk, date="2018-12-31")  # a capture's own date wins over date=
+        with pytest.warns(UserWarning, match="midnight.pcap: date=2018-12-31 ignored, the capture time"):
+            assert_chunks_equal_read(path, chunk, date="2018-12-31")  # a capture's own date wins over date=
 
 
 def test_iter_read_final(tmp_path: Path) -> None:

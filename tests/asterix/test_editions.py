@@ -7,6 +7,7 @@ import numpy as np
 import pytest
 from asterix_bytes import block, decode_bytes
 
+from msdc.asterix import tables as asterix_tables
 from msdc.asterix.layout import compile_layout
 
 V2 = ["2.1", "2.2", "2.3", "2.4", "2.5", "2.6", "2.7"]
@@ -122,6 +123,16 @@ def test_every_edition_has_its_own_table():
     assert tables[21] == ["0.23", "0.24", "0.25", "0.26", *V2]
     assert tables[48] == ["1.27", "1.28", "1.29", "1.30", "1.31", "1.32"]
     assert resolve_edition(21, "2.2") == "2.2" and resolve_edition(48, "1.23") == "1.27"
+
+
+def test_available_editions_are_in_version_order():
+    """available_editions()[20] was ['1.10', '1.11', '1.9'] (text order); CAT020 1.9, 1.10 and 1.11 ship
+    (docs/decoding/editions.md), and 1.9 is the oldest."""
+    from msdc.asterix import available_editions
+
+    assert available_editions()[20] == ["1.9", "1.10", "1.11"]
+    with pytest.raises(ValueError, match=r"tables: 1\.9, 1\.10, 1\.11\)"):
+        asterix_tables.resolve_edition(20, "1.8")
 
 
 # --- editions={21: "auto"} chooses an edition, not a family ------------------------------------------

@@ -304,6 +304,74 @@ def test_out_of_range_record_and_frame() -> None:
 
 
 # ---------------------------------------------------------------------------------------------------------
+# Arguments: refused naming the argument and the value
+
+# the categories whose tables ship (test_edition_aliases lists them)
+ENCODED = "the encoder encodes categories 1, 2, 10, 19, 20, 21, 23, 25, 34, 48, 62, 63, 65"
+
+
+@pytest.mark.parametrize(("category", "error", "words"), [
+    (8, ValueError, "category 8: no edition table to encode it with; " + ENCODED),
+    ("48", TypeError, "category '48': a category number (an int), not str; " + ENCODED),
+    (48.0, TypeError, "category 48.0: a category number (an int), not float; " + ENCODED)])
+def test_a_category_without_tables_is_named(category, error, words) -> None:
+    """encode_record(8, ...) and encode_record("48", ...) raised a bare KeyError (8, '48')."""
+    for call in (lambda: encode_record(category, {"sac": 1}),
+                 lambda: encode_frame(category, pd.DataFrame({"sac": [1], "sic": [2]})),
+                 lambda: encode_item(category, None, "010", {"SAC": 1, "SIC": 2})):
+        with pytest.raises(error) as info:
+            call()
+        assert str(info.value) == words
+
+
+def test_a_frame_is_a_dataframe() -> None:
+    """encode_frame(48, [{...}]) failed with AttributeError 'list' object has no attribute 'columns'."""
+    with pytest.raises(TypeError, match=r"^frame: a pandas DataFrame \(one row per record, columns named as "
+                                        r"decoding names them\), not list; pd.DataFrame\(rows\) makes one"):
+        encode_frame(48, [{"sac": 1, "sic": 2}])
+
+
+@pytest.mark.parametrize(("per_block", "error", "words"), [
+    (1.5, TypeError, "records_per_block 1.5: a positive integer (an int), not float"),
+    ("5", TypeError, "records_per_block '5': a positive integer (an int), not str"),
+    (True, TypeError, "records_per_block True: a positive integer (an int), not bool"),
+    (0, ValueError, "records_per_block 0: must be a positive integer (at least 1)"),
+    (-2, ValueError, "records_per_block -2: must be a positive integer (at least 1)")])
+def test_records_per_block_is_a_positive_integer(per_block, error, words) -> None:
+    """records_per_block=1.5 was taken for one row and raised IndexError for three; "5" failed comparing."""
+    frame = pd.DataFrame({"sac": [1, 1, 1], "sic": [2, 2, 2]})
+    for rows in (frame.iloc[:1], frame):
+        with pytest.raises(error) as info:
+            encode_frame(48, rows, records_per_block=per_block)
+        assert str(info.value) == words
+    # a numpy integer is an integer: 3 records of FSPEC 0x80 + I048/010 (3 bytes), 2 per block
+    out = encode_frame(48, frame, records_per_block=np.int64(2))
+    assert out == b"\x30\x00\x09" + b"\x80\x01\x02" * 2 + b"\x30\x00\x06\x80\x01\x02"
+
+
+@pytest.mark.parametrize(("records", "words"), [
+    (b"\x01\x02", "records b'\\x01\\x02': a sequence of encoded records (bytes each, as encode_record gives "
+                  "them), not bytes; one record is [record]"),
+    ([b"\x80\x01\x02", 7], "records[1] 7: an encoded record (bytes), not int")])
+def test_a_block_takes_a_sequence_of_records(records, words) -> None:
+    """encode_block(48, b"\x01\x02") failed with 'sequence item 0: expected a bytes-like object, int found'
+    (bytes are a sequence of ints)."""
+    with pytest.raises(TypeError) as info:
+        encode_block(48, records)
+    assert str(info.value) == words
+    assert encode_block(48, (b"\x80\x01\x02",)) == b"\x30\x00\x06\x80\x01\x02"  # a tuple is a sequence
+
+
+def test_an_edition_is_text() -> None:
+    """encode_record(48, ..., edition=1.30) said "edition '1.3' is not supported" (a float cannot hold
+    1.30)."""
+    with pytest.raises(TypeError, match=r"^edition 1\.3: a float; give it as text, as the tables name it "
+                                        r"\('1\.30': a float cannot hold 1\.30; CAT048 tables: 1\.27, "):
+        encode_record(48, {"sac": 1}, edition=1.30)
+    assert encode_record(48, {"sac": 1}, edition="1.30") == b"\x80\x01\x00"
+
+
+# ---------------------------------------------------------------------------------------------------------
 # Frames
 
 

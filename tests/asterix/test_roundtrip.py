@@ -18,6 +18,7 @@ from dataclasses import dataclass
 import numpy as np
 import pandas as pd
 import pytest
+from asterix_bytes import SHARED
 from budget import examples
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
@@ -25,7 +26,8 @@ from hypothesis import strategies as st
 from msdc.asterix import decode_buffer
 from msdc.asterix.columns import BDS_KINDS, Column, columns_for
 from msdc.asterix.containers import read_segments
-from msdc.asterix.encode import encode_frame
+from msdc.asterix.encode import encode_frame, encode_record
+from msdc.asterix.frames import icao_text
 from msdc.asterix.layout import compile_layout
 from msdc.asterix.tables import load_table
 
@@ -36,6 +38,7 @@ EDITIONS = [(48, "1.27"), (48, "1.31"), (48, "1.32"),
 V2 = [(c, e) for c, e in EDITIONS if c == 21 and e.startswith("2.")]
 # service messages (no call sign nor Mode 3/A): only the generic tests
 CAT034 = [(34, "1.27"), (34, "1.28"), (34, "1.29"), (2, "1.2")]
+REAL = SHARED / "real"  # ../shared/real beside the repository root
 SERVICE = (2, 34)  # I0xx/020 feeds two columns: sector_number and sector_azimuth_deg
 CAT062 = [(62, f"1.{m}") for m in range(16, 22)]
 STATUS = [(19, "1.3"), (23, "1.3"), (25, "1.5"), (63, "1.6"), (65, "1.5")]
@@ -399,6 +402,72 @@ def test_callsigns_with_digits_and_spaces(category: int, edition: str) -> None:
     decoded = round_trip(category, edition, frame)
     assert decoded.callsign.tolist()[:-1] == [c.rstrip() for c in CALLSIGNS]
     assert pd.isna(decoded.callsign.iloc[-1])
+
+
+# An identification of all zeros (code 0 is no character) or all spaces (the 6-bit IA-5 code of a space is
+# 0b100000: 100000 x 8 = 0x820820820820) decodes to no text; callsign_hex keeps its bits, and the encoder
+# writes them back (it left the item out, or wrote zeros for spaces).
+ALL_ZERO, ALL_SPACE = "000000000000", "820820820820"
+
+
+def test_identification_bits_are_written_from_callsign_hex() -> None:
+    """Worked by hand from the specs (Cat_021_0_23.txt FRN 18 I021/170: 48 bits; Cat_010_1_1.txt FRN 14
+    I010/245: STI 2 bits, spare 6, CHR 48 bits). CAT021 0.23, FRNs 1 and 18: FSPEC 81 01 10, SAC/SIC 01 02,
+    then the six bytes; CAT010 1.1, FRNs 1 and 14: FSPEC 81 02, 01 02, STI byte 00, then the six bytes."""
+    adsb = pd.DataFrame({"sac": [1, 1], "sic": [2, 2], "callsign": [None, "MAS72"],
+                         "callsign_hex": [ALL_ZERO, None]})
+    data = encode_frame(21, adsb, edition="0.23", records_per_block=1)
+    assert data[:14] == bytes.fromhex("15000e" "810110" "0102" + ALL_ZERO)  # LEN 3 + 3 + 2 + 6 = 14
+    mlat = pd.DataFrame({"sac": [1], "sic": [2], "callsign_hex": [ALL_SPACE]})  # no callsign column at all
+    assert encode_frame(10, mlat, edition="1.1") == bytes.fromhex(
+        "0a000e" "8102" "0102" "00" + ALL_SPACE)  # LEN 3 + 2 + 2 + 7 = 14
+    for category, edition, frame in ((21, "0.23", adsb), (10, "1.1", mlat)):
+        back = round_trip(category, edition, frame)
+        assert back.callsign_hex.tolist()[:1] == frame.callsign_hex.tolist()[:1]
+        assert pd.isna(back.callsign.iloc[0])
+    assert back_text(round_trip(21, "0.23", adsb)) == [None, "MAS72"]  # no hex: written from the text
+    assert encode_record(21, {"sac": 1, "sic": 2, "callsign_hex": ALL_ZERO}, edition="0.23") == bytes.fromhex(
+        "810110" "0102" + ALL_ZERO)
+
+
+def back_text(frame: pd.DataFrame) -> list:
+    return frame.callsign.astype(object).where(frame.callsign.notna(), None).tolist()
+
+
+def test_a_callsign_and_its_hex_that_disagree_are_refused() -> None:
+    """An edited callsign is not overwritten by the hex decoding left beside it, silently."""
+    frame = pd.DataFrame({"sac": [1, 1], "sic": [2, 2], "callsign": ["MAS72", "ABC"],
+                          "callsign_hex": ["3414F7CA0820", ALL_ZERO]})
+    # M 001101 A 000001 S 010011 7 110111 2 110010, then 3 spaces 100000: 0x3414F7CA0820, the first row agrees
+    assert icao_text(0x3414F7CA0820) == "MAS72"
+    with pytest.raises(ValueError, match=r"^row 1: callsign 'ABC' and callsign_hex '000000000000' \(which "
+                                         r"reads ''\) disagree: drop callsign_hex to write the text"):
+        encode_frame(21, frame, edition="0.23")
+    with pytest.raises(ValueError, match=r"^column 'callsign_hex' row 0: '0000' is not 12 hex digits"):
+        encode_frame(21, pd.DataFrame({"sac": [1], "callsign_hex": ["0000"]}), edition="0.23")
+
+
+@pytest.mark.skipif(not REAL.is_dir(), reason=f"{REAL} not present: real-recording round trip skipped")
+@pytest.mark.parametrize(("name", "category", "edition", "blank"), [
+    ("adsb_v023_160510-lebl-220001.ast", 21, "0.23", {ALL_ZERO: 5891}),
+    ("mlat_160510-lebl-220001.ast", 10, "1.1", {ALL_SPACE: 9})])
+def test_a_real_recording_keeps_every_identification(name, category, edition, blank) -> None:
+    """The real LEBL ADS-B (CAT021 0.23) has 5,891 records whose I021/170 is all zeros, the MLAT 9 whose
+    I010/245 is all spaces: decode -> encode -> decode gave them no item (ADS-B) or zeros (MLAT)."""
+    frame = decode_buffer(*_mapped_raw(REAL / name), editions={category: edition},
+                          categories=[category]).frames[category]
+    hexes = frame.callsign_hex.astype(object).where(frame.callsign_hex.notna(), None)
+    assert {h: int((hexes == h).sum()) for h in blank} == blank
+    back = round_trip(category, edition, frame, records_per_block=100)
+    for column in ("callsign_hex", "callsign"):
+        before = frame[column].astype(object).where(frame[column].notna(), None).tolist()
+        after = back[column].astype(object).where(back[column].notna(), None).tolist()
+        assert after == before, column
+
+
+def _mapped_raw(path) -> tuple:
+    buf = np.frombuffer(path.read_bytes(), np.uint8)
+    return buf, read_segments(buf, "raw")
 
 
 @pytest.mark.parametrize(("category", "edition"), [(c, e) for c, e in EDITIONS if (c, e) not in

@@ -7,12 +7,14 @@ test."""
 from __future__ import annotations
 
 import datetime as dt
+import re
 import warnings
 from pathlib import Path
 
 import numpy as np
 import pandas as pd
 import pytest
+from container_bytes import pcap_file, udp_frame
 
 import msdc.asterix as asterix
 from msdc.pipeline.jobs import common, correlate, quality, track
@@ -259,6 +261,103 @@ def test_categories_are_checked(categories, error, words):
         assert str(info.value).startswith("categories ") and words in str(info.value)
 
 
+@pytest.mark.parametrize("strict", ["False", 0, 1, None], ids=repr)
+def test_strict_is_a_bool(strict, tmp_path):
+    """strict="False" turned strict mode on (a non-empty text is true): a truncated recording then raised
+    at its cut block instead of decoding the blocks before it."""
+    cut = tmp_path / "cut.ast"
+    cut.write_bytes(Path(RADAR).read_bytes()[:100_000])
+    for call in (lambda: asterix.read(cut, strict=strict),
+                 lambda: next(asterix.iter_read(cut, strict=strict))):
+        with pytest.raises(TypeError, match=rf"^strict {re.escape(repr(strict))}: must be True or False "
+                                            rf"\(a bool\), not {type(strict).__name__}$"):
+            call()
+    # a numpy bool is a bool: the 3200 records of the whole blocks (docs/decoding/bad-input.md), the cut
+    # block reported
+    rec = asterix.read(cut, strict=np.False_)
+    assert len(rec.frames[48]) == 3200 and len(rec.errors) == 1
+
+
+@pytest.mark.parametrize(("columns", "words"), [
+    ([1], "columns [1]: 1 is not a column name (a str; see docs/columns.md)"),
+    (("address", b"callsign"), "b'callsign' is not a column name"),
+    (5, "columns 5: give a column name or a sequence of them")])
+def test_columns_are_names(columns, words):
+    """columns=[1] failed with AttributeError 'int' object has no attribute 'endswith'."""
+    for call in (lambda: asterix.read(ADSB, columns=columns),
+                 lambda: next(asterix.iter_read(ADSB, columns=columns))):
+        with pytest.raises(TypeError) as info:
+            call()
+        assert words in str(info.value)
+
+
+@pytest.mark.parametrize(("editions", "error", "words"), [
+    # 2.7 is a table, but a float: refused as one, not 'not supported'; 1.30 is read as 1.3
+    ({21: 2.7}, TypeError, "editions {21: 2.7}: CAT021 edition 2.7 is a float; give it as text"),
+    ({48: 1.30}, TypeError, "editions {48: 1.3}: CAT048 edition 1.3 is a float; give it as text, as the "
+                            "tables name it ('1.30': a float cannot hold 1.30; tables: 1.27, 1.28, 1.29, "
+                            "1.30"),
+    ([21], TypeError, "editions [21]: 21 is not a 'CAT=EDITION' text; give a mapping such as {21: '0.26'}"),
+    (21, TypeError, "editions 21: give a mapping such as {21: '0.26'} or 'CAT=EDITION' texts"),
+    (["21"], ValueError, "editions ['21']: '21' is not 'CAT=EDITION' text such as '21=0.26'"),
+    ({21.0: "2.7"}, TypeError, "editions {21.0: '2.7'}: category 21.0 is not a category number")])
+def test_editions_are_a_mapping_or_texts_of_text_editions(editions, error, words):
+    """editions={48: 1.30} said "edition '1.3' is not supported", {21: 2.7} was taken, and editions=[21]
+    said "CAT021 edition '' is not supported"."""
+    for call in (lambda: asterix.read(RADAR, editions=editions),
+                 lambda: next(asterix.iter_read(RADAR, editions=editions))):
+        with pytest.raises(error) as info:
+            call()
+        assert str(info.value).startswith(words)
+
+
+def test_every_form_of_editions_pins_the_edition():
+    """The forms read documents, a category key given as text, and spaces after '=' ('48= 1.30' was
+    'edition \' 1.30\' is not supported'); a job's options refuse a float edition as read does (they said
+    {21: 2.7} was 'not supported')."""
+    for editions in ({48: "1.30"}, {"48": "1.30"}, ["48=1.30"], "48=1.30", ("48= 1.30",)):
+        assert asterix.read(RADAR, editions=editions).editions == {48: "1.30"}, editions
+    with pytest.raises(OptionError, match=r"^--edition 21=2\.7: a float; give the edition as text"):
+        track.validate(TrackOptions(inputs=ADSB, callsign="MAS72", editions={21: 2.7}))
+
+
+def test_a_negative_category_is_named_as_given():
+    """categories=-1 said 'msdc does not decode CAT-01'."""
+    with pytest.raises(ValueError, match=r"^categories -1: msdc does not decode category -1; it decodes "
+                                         r"CAT001"):
+        asterix.read(ADSB, categories=-1)
+
+
+def radar_pcap(tmp_path: Path) -> Path:
+    """The radar fixture's first 10 data blocks (CAT, then a 2-byte LEN counting the header) in UDP packets
+    captured on 2019-03-01 at 08:00 UTC: 17956 days after 1970-01-01 (1551398400 s) + 28800 s."""
+    data, blocks, at = Path(RADAR).read_bytes(), [], 0
+    while len(blocks) < 10:
+        n = int.from_bytes(data[at + 1:at + 3], "big")
+        blocks.append(data[at:at + n])
+        at += n
+    pcap, _ = pcap_file([(1_551_398_400 + 28_800 + i, 0, udp_frame(b)) for i, b in enumerate(blocks)])
+    path = tmp_path / "radar.pcap"
+    path.write_bytes(pcap)
+    return path
+
+
+def test_a_date_a_pcap_capture_overrides_is_said(tmp_path):
+    """read(pcap, date="2020-01-01") dated the records by the capture time and said nothing of the date
+    given (the command warns '--date ignored'); said now, naming the file and both days."""
+    path = radar_pcap(tmp_path)
+    with pytest.warns(UserWarning) as said:
+        rec = asterix.read(path, date="2020-01-01")
+    assert [str(w.message) for w in said] == [
+        f"{path}: date=2020-01-01 ignored, the capture time dates a pcap file (day 0 2019-03-01)"]
+    assert rec.date == dt.date(2019, 3, 1)
+    assert (rec.frames[48].timestamp.dt.date == dt.date(2019, 3, 1)).all()
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        asterix.read(path)  # no date given: nothing to say
+        asterix.read(path, date="2019-03-01")  # the capture day itself: nothing ignored
+
+
 def test_one_category_is_a_category(adsb):
     rec = asterix.read(RADAR, categories=48)
     assert list(rec.frames) == [48] and 21 not in rec.frames
@@ -266,11 +365,41 @@ def test_one_category_is_a_category(adsb):
 
 
 @pytest.mark.parametrize(("chunk", "error"), [("64", TypeError), (64.0, TypeError), (0, ValueError),
-                                              (-5, ValueError), (True, TypeError)])
+                                              (-5, ValueError), (True, TypeError), (2**70, ValueError)])
 def test_iter_read_chunk_is_checked(chunk, error):
-    """chunk="64" failed deep in numpy; 0 and -5 ran one block per chunk with an empty first one."""
+    """chunk="64" failed deep in numpy; 0 and -5 ran one block per chunk with an empty first one; 2**70 failed
+    with OverflowError 'int too big to convert'."""
     with pytest.raises(error, match=r"^chunk "):
         next(asterix.iter_read(ADSB, chunk=chunk))
+
+
+def test_iter_read_chunk_bounds_are_named_and_the_largest_reads_the_file_at_once():
+    with pytest.raises(ValueError, match=r"^chunk 1180591620717411303424: must be a positive number of "
+                                         r"bytes, at most 4611686018427387904 \(2\*\*62"):
+        asterix.iter_read(ADSB, chunk=2**70)
+    chunks = list(asterix.iter_read(RADAR, chunk=2**62))
+    assert len(chunks) == 1 and len(chunks[0].frames[48]) == len(asterix.read(RADAR).frames[48])
+
+
+@pytest.mark.parametrize(("changed", "error", "words"), [
+    ({"progress": 5}, TypeError, "progress 5: must be a function progress(done, total, what) or None, "
+                                 "not int"),
+    ({"pool": 5}, TypeError, "pool 5: must be a concurrent.futures.Executor (a ProcessPoolExecutor) or None, "
+                             "not int"),
+    ({"chunk": 0}, ValueError, "chunk 0: must be a positive number of bytes"),
+    ({"categories": 8}, ValueError, "categories 8: msdc does not decode CAT008"),
+    ({"strict": "no"}, TypeError, "strict 'no': must be True or False"),
+    ({"format": "pcapx"}, asterix.UnreadableInput, "unknown container format 'pcapx'"),
+    ({"path": "no/such.ast"}, asterix.UnreadableInput,
+     "no/such.ast: cannot read: No such file or directory")])
+def test_iter_read_checks_its_arguments_when_called(changed, error, words):
+    """progress=5 failed with "'int' object is not callable" and pool=5 with AttributeError 'submit', both
+    at the first chunk, as every argument error and a missing file did: now each is refused, named, by the
+    call itself, before anything is read."""
+    kw = {"path": ADSB, **changed}
+    with pytest.raises(error) as info:
+        asterix.iter_read(kw.pop("path"), **kw)
+    assert words in str(info.value)
 
 
 def test_a_dataset_argument_that_is_not_one_is_named():
