@@ -557,6 +557,8 @@ def run() -> None:
     sixth of a short run). Every output is closed by then; if the standard streams cannot be flushed,
     Python exits the usual way and says so."""
     gc.set_threshold(GC_THRESHOLD, *gc.get_threshold()[1:])
+    with contextlib.suppress(AttributeError, ValueError):  # a file name's bytes that are not UTF-8: escaped
+        sys.stdout.reconfigure(errors="backslashreplace")
     status = main()
     try:
         sys.stdout.flush()

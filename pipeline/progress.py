@@ -6,6 +6,8 @@ import sys
 import time
 from typing import TextIO
 
+from msdc.pipeline.model.sources import escaped
+
 
 class Progress:
     """Prints "Stage..." lines; on a terminal, redraws one line with a bar for counted work."""
@@ -20,12 +22,12 @@ class Progress:
     def stage(self, name: str) -> None:
         """Announce a pipeline stage ("Processing data files", "Slotting data", ...)."""
         if self.enabled:
-            print(f"{name}...", file=self.stream, flush=True)
+            print(f"{escaped(name)}...", file=self.stream, flush=True)
 
     def step(self, text: str) -> None:
         """A sub-step of the current stage (one input file, one aircraft)."""
         if self.enabled:
-            print(f"  {text}", file=self.stream, flush=True)
+            print(f"  {escaped(text)}", file=self.stream, flush=True)
 
     def bar(self, done: int, total: int, label: str = "", *, unit: str = "MB",
             since: float | None = None) -> None:

@@ -169,6 +169,7 @@ def _plan(paths: list[Path], digests: list[str], manifest) -> tuple[list, list[t
     or its resolved path when an input of another content has that name) and those skipped (path, SHA-256):
     already in the dataset, or the same bytes as an input before them."""
     from msdc.pipeline.dataset.parallel import Todo
+    from msdc.pipeline.model.sources import path_text
 
     labels = manifest.labels()
     todo, skipped, planned = [], [], set()
@@ -176,7 +177,8 @@ def _plan(paths: list[Path], digests: list[str], manifest) -> tuple[list, list[t
         if digest in manifest.inputs or digest in planned:
             skipped.append((path, digest))
             continue
-        label = path.name if labels.get(path.name, digest) == digest else str(path.resolve())
+        name = path_text(path.name)
+        label = name if labels.get(name, digest) == digest else path_text(path.resolve())
         labels[label] = digest
         planned.add(digest)
         todo.append(Todo(index, path, digest, label, path.stat().st_size))

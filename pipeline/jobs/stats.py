@@ -64,7 +64,7 @@ def stats_job(options: StatsOptions, *, progress: Progress | None = None) -> Sta
     from msdc.asterix.categories import DECODABLE
     from msdc.asterix.errors import UnreadableInput
     from msdc.asterix.verdict import Tally, head_of, sniff
-    from msdc.pipeline.model.sources import file_labels
+    from msdc.pipeline.model.sources import file_labels, path_text
     from msdc.pipeline.model.time import UNDATED_DAY, DayTally
     from msdc.pipeline.quality.inventory import STATS_COLUMNS, StatsAccumulator
 
@@ -97,7 +97,7 @@ def stats_job(options: StatsOptions, *, progress: Progress | None = None) -> Sta
             content.append(said)
             continue
         account = Tally(str(path))
-        info = {"path": str(path), "bytes": 0, "format": None, "records": {}, "skipped_blocks": 0,
+        info = {"path": path_text(path), "bytes": 0, "format": None, "records": {}, "skipped_blocks": 0,
                 "editions": {}, "edition_choice": {}, "date": None}
         by_source: dict[str, tuple[pd.Timestamp, pd.Timestamp]] = {}
         tally = DayTally()

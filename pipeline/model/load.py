@@ -14,7 +14,7 @@ import msdc.asterix as asterix
 from msdc.asterix.reader import Recording
 from msdc.asterix.verdict import Tally, head_of
 from msdc.pipeline.model.heap import release_free_memory
-from msdc.pipeline.model.sources import file_labels, pair_codes, pair_of, source_id
+from msdc.pipeline.model.sources import file_labels, pair_codes, pair_of, path_text, source_id
 from msdc.pipeline.model.time import NAT_NS, UNDATED_DAY, DayTally, absolute_time
 from msdc.pipeline.progress import Progress
 
@@ -161,8 +161,8 @@ def load(paths: list[str | Path] | str | Path, *, editions=None, date=None, form
         tally = DayTally()
         tally.add(rec.frames)
         warnings += tally.warning(labels[i], rec.date, rec.format)
-        inputs.append({"path": str(p), "sha256": digests[i], "bytes": rec.size_bytes, "format": rec.format,
-                       "records": {int(c): len(f) for c, f in rec.frames.items()},
+        inputs.append({"path": path_text(p), "sha256": digests[i], "bytes": rec.size_bytes,
+                       "format": rec.format, "records": {int(c): len(f) for c, f in rec.frames.items()},
                        "skipped_blocks": len(rec.errors), "editions": dict(rec.editions)})
         unread.append(dict(sorted((int(c), int(n)) for c, n in rec.ignored_blocks.items())))
     dates = [r.date for r in recs if r.date is not None]
@@ -328,7 +328,7 @@ def load_measurements(paths: list[str | Path], sensors: pd.DataFrame, *, edition
         p = paths[i]
         if progress:
             progress.step(f"{p.name} ({n + 1}/{len(order)})")
-        info = {"path": str(p), "sha256": digests[i], "bytes": 0, "format": None, "records": {},
+        info = {"path": path_text(p), "sha256": digests[i], "bytes": 0, "format": None, "records": {},
                 "skipped_blocks": 0, "editions": {}}
         ignored: dict[int, int] = {}
         by_source: dict[str, Span] = {}

@@ -3,6 +3,7 @@ kind it implies), and an input file's label."""
 
 from __future__ import annotations
 
+import re
 from collections import Counter
 from pathlib import Path
 
@@ -16,10 +17,29 @@ MEASURED_KINDS = {"048": "radar", "021": "adsb", "020": "mlat"}
 
 def file_labels(paths) -> list[str]:
     """Each input's label in the ``file`` column and in messages: its name, or its path as given where two
-    inputs share a name (so that ``file`` and ``offset`` always identify a record)."""
+    inputs share a name (so that ``file`` and ``offset`` always identify a record), as text every output
+    can hold (path_text)."""
     names = [Path(p).name for p in paths]
     shared = {n for n, k in Counter(names).items() if k > 1}
-    return [str(p) if n in shared else n for p, n in zip(paths, names, strict=True)]
+    return [path_text(p if n in shared else n) for p, n in zip(paths, names, strict=True)]
+
+
+def path_text(path) -> str:
+    """A path as valid UTF-8 text: bytes of a name that are not UTF-8 (Python holds them as lone
+    surrogates, which no CSV, Parquet or JSON writer takes) shown as \\xNN escapes."""
+    return escaped(str(path))
+
+
+_SURROGATE = re.compile("[\ud800-\udfff]")
+
+
+def escaped(text: str, backslash: str = "\\") -> str:
+    """``text`` with each lone surrogate as an escape: ``backslash`` then xNN for a byte that was not UTF-8
+    (surrogateescape's U+DC80-U+DCFF), else uNNNN; ``backslash`` is two characters inside JSON text."""
+    if not _SURROGATE.search(text):
+        return text
+    return _SURROGATE.sub(lambda m: backslash + (f"x{ord(m[0]) - 0xDC00:02x}" if 0xDC80 <= ord(m[0]) <= 0xDCFF
+                                                 else f"u{ord(m[0]):04x}"), text)
 
 
 def pair_codes(sac, sic) -> np.ndarray:

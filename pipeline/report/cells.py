@@ -29,6 +29,7 @@ from openpyxl.utils import get_column_letter
 from openpyxl.worksheet._write_only import WriteOnlyWorksheet
 from openpyxl.xml import LXML
 
+from msdc.pipeline.model.sources import escaped
 from msdc.pipeline.report.formats import UNITS, column_unit, excel_format
 from msdc.pipeline.report.headers import workbook_header
 from msdc.pipeline.report.rows import RawRow, RowStyles, append_rows, bool_cell, install
@@ -153,8 +154,9 @@ def iso_time(text: str) -> dt.datetime | dt.date | None:
 
 
 def clean_text(text: str) -> str:
-    """Text Excel can hold: XML-illegal control characters replaced, cut at Excel's cell limit."""
-    return ILLEGAL_CHARACTERS_RE.sub("\ufffd", text)[:EXCEL_MAX_TEXT]
+    """Text Excel can hold: XML-illegal control characters replaced, a lone surrogate (a file name's bytes
+    that are not UTF-8) as its escape, cut at Excel's cell limit."""
+    return escaped(ILLEGAL_CHARACTERS_RE.sub("\ufffd", text))[:EXCEL_MAX_TEXT]
 
 
 def text_cell(ws: WriteOnlyWorksheet, text: str, *, font: Font | None = None,

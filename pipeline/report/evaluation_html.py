@@ -289,5 +289,5 @@ def write_evaluation_html(scorecard: pd.DataFrame, path: str | os.PathLike[str],
     text = evaluation_html(scorecard, tables, map_points, title, images, run)
     path = Path(path)
     with named(path):
-        path.write_text(text, encoding="utf-8")
+        path.write_text(text, encoding="utf-8", errors="backslashreplace")  # a lone surrogate: its escape
     return path

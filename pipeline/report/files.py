@@ -17,6 +17,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
+from msdc.pipeline.model.sources import escaped
 from msdc.pipeline.model.time import utc_text
 from msdc.pipeline.report.textguard import guard_frame
 
@@ -46,6 +47,7 @@ def write_json(doc: Any, path: str | os.PathLike[str]) -> Path:
     """``doc`` as strict JSON (``json_value``: no NaN, times ISO 8601 UTC to the millisecond with Z), UTF-8,
     indented by 2, with a final newline; an error names ``path``. Returns ``path``."""
     text = json.dumps(json_value(doc), indent=2, ensure_ascii=False, allow_nan=False) + "\n"
+    text = escaped(text, "\\\\")  # a lone surrogate (a file name's bytes that are not UTF-8) as its escape
     path = Path(path)
     with named(path):
         path.write_text(text, encoding="utf-8")
@@ -63,7 +65,8 @@ def write_csv(frame: pd.DataFrame, path: str | os.PathLike[str], *, append: bool
     out = guard_frame(frame).assign(**times)
     path = Path(path)
     with named(path):
-        rounded(out, decimals or {}).to_csv(path, mode="a" if append else "w", header=not append, index=False)
+        rounded(out, decimals or {}).to_csv(path, mode="a" if append else "w", header=not append, index=False,
+                                            errors="backslashreplace")
     return path
 
 

@@ -511,3 +511,33 @@ def test_evaluate_without_sensor_records_names_no_option_it_lacks(tmp_path, caps
     assert status == 1 and "records in the inputs" in err and "--sources" not in err, err
     status, _, err = _run(["track", empty, "--sensors", SENSORS, "--all", "-o", tmp_path / "t.csv"], capsys)
     assert "(--sources radar,adsb)" in err  # track has it
+
+
+def test_an_input_name_that_is_not_utf8_is_written_as_its_escape(tmp_path, capsys):
+    """A file name with the byte 0xFF (not UTF-8; Python holds it as the lone surrogate U+DCFF) ended decode,
+    correlate, quality, track, conflicts, evaluate and ingest in a UnicodeEncodeError traceback: no CSV,
+    Parquet, JSON or workbook writer takes it. The name is written as the text we\\xffird.ast."""
+    import json
+
+    import pandas as pd
+    from openpyxl import load_workbook
+
+    name = os.fsdecode(b"we\xffird.ast")
+    radar = tmp_path / name
+    radar.write_bytes(RADAR.read_bytes())
+    out = tmp_path / "out"
+    out.mkdir()
+    status, _, err = _run(["decode", radar, "--date", "2019-03-01", "-o", out / "d.parquet"], capsys)
+    assert status == 0 and "Traceback" not in err
+    assert set(pd.read_parquet(out / "d.parquet")["file"].astype(str)) == {"we\\xffird.ast"}
+    status, _, err = _run(["correlate", radar, ADSB, "--sensors", SENSORS, "--date", "2019-03-01",
+                           "--callsign", "MAS72", "-o", out / "c.xlsx", "--json", out / "c.json"], capsys)
+    assert status == 0 and "Traceback" not in err
+    doc = json.loads((out / "c.json").read_text(encoding="utf-8"))
+    assert doc["inputs"][0]["path"] == str(tmp_path / "we\\xffird.ast")
+    cells = [c for row in load_workbook(out / "c.xlsx")["Parameters"].iter_rows(values_only=True) for c in row]
+    assert str(tmp_path / "we\\xffird.ast") in cells
+    status, _, err = _run(["ingest", "--dataset", out / "ds", radar, "--date", "2019-03-01"], capsys)
+    assert status == 0 and "Traceback" not in err
+    manifest = json.loads((out / "ds" / "manifest.json").read_text(encoding="utf-8"))
+    assert manifest["inputs"][0]["file"] == "we\\xffird.ast"
