@@ -6,8 +6,6 @@ import sys
 import time
 from typing import TextIO
 
-from msdc.pipeline.model.sources import escaped
-
 
 class Progress:
     """Prints "Stage..." lines; on a terminal, redraws one line with a bar for counted work."""
@@ -22,12 +20,12 @@ class Progress:
     def stage(self, name: str) -> None:
         """Announce a pipeline stage ("Processing data files", "Slotting data", ...)."""
         if self.enabled:
-            print(f"{escaped(name)}...", file=self.stream, flush=True)
+            print(f"{_escaped(name)}...", file=self.stream, flush=True)
 
     def step(self, text: str) -> None:
         """A sub-step of the current stage (one input file, one aircraft)."""
         if self.enabled:
-            print(f"  {escaped(text)}", file=self.stream, flush=True)
+            print(f"  {_escaped(text)}", file=self.stream, flush=True)
 
     def bar(self, done: int, total: int, label: str = "", *, unit: str = "MB",
             since: float | None = None) -> None:
@@ -63,3 +61,13 @@ def eta_text(seconds: float) -> str:
     if s < 3600:
         return f"{s // 60} min {s % 60:02d} s"
     return f"{s // 3600} h {s % 3600 // 60:02d} min"
+
+
+def _escaped(text: str) -> str:
+    """``text`` with a file name's bytes that are not UTF-8 as escapes (model.sources.escaped, imported only
+    then: this module stays light for the pool processes that report through it)."""
+    if text.isascii():
+        return text
+    from msdc.pipeline.model.sources import escaped
+
+    return escaped(text)

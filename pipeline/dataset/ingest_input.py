@@ -9,8 +9,6 @@ from collections import deque
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from msdc.pipeline.model.sources import path_text
-
 
 class IngestFailed(RuntimeError):
     """An input that cannot be ingested (the message names it and why; ``status`` 2 when it cannot be read,
@@ -95,6 +93,8 @@ def ingest_input(path: Path, digest: str, label: str, settings: IngestSettings, 
     if not seen.rows:
         warnings.append(f"{path}: no record of {', '.join(f'CAT{c:03d}' for c in cats)} decoded; "
                                "recorded as ingested, with no part")
+    from msdc.pipeline.model.sources import path_text
+
     record = {"sha256": digest, "file": label, "path": path_text(path.resolve()), "size_bytes": size,
             "format": seen.fmt, "date": None if seen.date is None else seen.date.isoformat(),
             "editions": {f"{c:03d}": e for c, e in sorted(seen.editions.items()) if c in seen.rows},

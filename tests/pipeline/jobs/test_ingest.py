@@ -363,7 +363,8 @@ def test_ctrl_c_ends_a_pooled_ingest_without_a_traceback(tmp_path):
     finally:
         proc.kill()
     assert proc.returncode == 130, out
-    assert "Traceback" not in out and not root.exists()
+    assert "Traceback" not in out, out
+    assert not root.exists(), sorted(str(p.relative_to(root)) for p in root.rglob("*"))
 
 
 def test_what_an_interrupted_ingest_left_is_removed(fixtures_dataset, tmp_path, capsys):
