@@ -297,13 +297,19 @@ def load_measurements(paths: list[str | Path], sensors: pd.DataFrame, *, edition
     kept (report_selection.MarginCut, in ``Loaded.cut``): chunk by chunk when the window is given as
     instants, so a long recording's rows beyond it are never held; WindowError when it cannot be placed.
     """
-    from msdc.pipeline.model.measurements import DECODED_COLUMNS, finish_measurements, impossible_positions
+    from msdc.pipeline.model.measurements import (
+        DECODED_COLUMNS,
+        finish_measurements,
+        impossible_positions,
+        impossible_times,
+    )
     from msdc.pipeline.model.report_selection import MarginCut
 
     recs: list[Recording] = []
     inputs: list[dict] = []
     unread: list[dict[int, int]] = []  # Loaded.unread
     off_earth: list[pd.DataFrame] = []  # the CAT021 reports with a position off the Earth (damaged bytes)
+    untimely: list[pd.DataFrame] = []  # records with a time of day outside 0-24 h (damaged bytes)
     spans: list[dict[str, Span]] = []
     dates: list[dt.date | None] = []
     radar: list[tuple[int, pd.DataFrame]] = []  # (input number, rows)
@@ -356,7 +362,8 @@ def load_measurements(paths: list[str | Path], sensors: pd.DataFrame, *, edition
             # undated records are placed on UNDATED_DAY here and moved to Loaded.date below
             by_source = widen_spans(by_source, time_spans(rec.frames, None))
             frames, rec.frames = rec.frames, {}
-            r, a = _rows(frames, labels[i], sensors, adsb_sigma_m, stray, off_earth, no_plots, columns)
+            r, a = _rows(frames, labels[i], sensors, adsb_sigma_m, stray, off_earth, no_plots, columns,
+                         untimely)
             more = _local_rows(frames, sensors, unplaced, other_kinds, columns)
             del frames
             if timed and selection.placed and dates[-1] is not None:  # an undated input's times move below
@@ -410,7 +417,8 @@ def load_measurements(paths: list[str | Path], sensors: pd.DataFrame, *, edition
     meas = finish_measurements(parts, columns)
     release_free_memory()
     damaged = pd.concat(off_earth, ignore_index=True) if off_earth else None
-    warnings = early_start + impossible_positions(damaged)
+    warnings = early_start + impossible_positions(damaged) + impossible_times(
+        pd.concat(untimely, ignore_index=True) if untimely else None)
     stray_radar = _stray_table(stray)
     unplaced_table = _unplaced_table(unplaced)
     return Loaded({}, recs, inputs, first_date, spans, warnings, stray_radar, unplaced_table, cut=cut,
@@ -464,13 +472,20 @@ def _stray_table(parts: list[pd.DataFrame]) -> pd.DataFrame:
 
 
 def _rows(frames: dict[int, pd.DataFrame], name: str, sensors: pd.DataFrame, adsb_sigma_m: float | None,
-          stray: list[pd.DataFrame], off_earth: list[pd.DataFrame], no_plots: dict, columns=None
-          ) -> tuple[pd.DataFrame | None, pd.DataFrame | None]:
+          stray: list[pd.DataFrame], off_earth: list[pd.DataFrame], no_plots: dict, columns=None,
+          untimely: list[pd.DataFrame] | None = None) -> tuple[pd.DataFrame | None, pd.DataFrame | None]:
     """Measurement rows of one decoded chunk, undated records on UNDATED_DAY; the records of radars the
     sensor table lacks are left out and their undeclared_radars table added to ``stray``, CAT021 reports
-    with a position off the Earth (left out of the rows) to ``off_earth``, the records measuring no real
-    aircraft counted in ``no_plots``."""
-    from msdc.pipeline.model.measurements import measurement_rows, no_plot_counts, off_earth_rows
+    with a position off the Earth (left out of the rows) to ``off_earth``, records of any category with a
+    time of day outside 0-24 h to ``untimely``, the records measuring no real aircraft counted in
+    ``no_plots``."""
+    untimely = [] if untimely is None else untimely
+    from msdc.pipeline.model.measurements import (
+        impossible_time_rows,
+        measurement_rows,
+        no_plot_counts,
+        off_earth_rows,
+    )
     from msdc.pipeline.model.sensors import undeclared_radars
 
     for frame in frames.values():
@@ -478,6 +493,10 @@ def _rows(frames: dict[int, pd.DataFrame], name: str, sensors: pd.DataFrame, ads
     bad = off_earth_rows(frames.get(21))
     if len(bad):
         off_earth.append(bad)
+    for cat, frame in frames.items():
+        late = impossible_time_rows(frame, int(cat))
+        if len(late):
+            untimely.append(late)
     cat048 = frames.get(48)
     if cat048 is not None and len(cat048):
         unknown = undeclared_radars(cat048, sensors)

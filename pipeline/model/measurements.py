@@ -53,7 +53,8 @@ from msdc.pipeline.model.time import absolute_time
 
 __all__ = ["DECODED_COLUMNS", "IdentityWarning", "LeftOutWarning", "NACP_95_M", "OffEarthWarning",
            "OutOfCoverageWarning", "UnknownRadar", "UnknownReferencePoint", "adsb_measurements",
-           "build_measurements", "finish_measurements", "impossible_positions", "local_measurement_rows",
+           "build_measurements", "finish_measurements", "impossible_positions", "impossible_time_rows",
+           "impossible_times", "local_measurement_rows",
            "measurement_rows",
            "nacp_sigma_m", "normalise_address", "normalise_callsign", "off_earth_rows", "on_ground",
            "radar_measurements", "select", "sensor_id"]
@@ -385,6 +386,34 @@ def impossible_positions(cat021: pd.DataFrame | None) -> list[str]:
     return out
 
 
+def impossible_time_rows(frame: pd.DataFrame | None, category: int) -> pd.DataFrame:
+    """The records whose time of day lies outside 0-24 h (damaged bytes; model.time.absolute_time gives
+    them no time, so no measurement): category, file, offset, time_of_day."""
+    from msdc.pipeline.model.time import impossible_time_of_day
+
+    cols = ["category", *(c for c in ("file", "offset", "time_of_day") if frame is not None and c in frame)]
+    if frame is None or "time_of_day" not in frame or not len(frame):
+        return pd.DataFrame(columns=cols)
+    bad = impossible_time_of_day(frame["time_of_day"].to_numpy(float))
+    return frame.loc[bad, cols[1:]].assign(category=category)[cols]
+
+
+def impossible_times(rows: pd.DataFrame | None) -> list[str]:
+    """One warning per input file with records whose time of day lies outside 0-24 h
+    (impossible_time_rows): how many of which categories, and the first one's offset and value."""
+    if rows is None or not len(rows):
+        return []
+    files = rows["file"] if "file" in rows else pd.Series("the inputs", index=rows.index)
+    out = []
+    for name, group in rows.groupby(files.astype(str).to_numpy(), sort=False):
+        first = group.iloc[0]
+        cats = ", ".join(f"CAT{int(c):03d}" for c in sorted(set(group["category"])))
+        offset = f"offset {int(first['offset'])}: " if "offset" in group and pd.notna(first["offset"]) else ""
+        out.append(f"{name}: {len(group)} {cats} record(s) with a time of day outside 0-24 h (first at "
+                   f"{offset}{first['time_of_day']:,.3f} s): damaged data, left out of the measurements")
+    return out
+
+
 def row_columns(columns=None) -> list[str] | None:
     """The columns ``measurement_rows`` keeps so that ``finish_measurements`` can give ``columns`` (None:
     every column): those named, less the derived ones, plus what the derived ones named are made from, and
@@ -562,6 +591,10 @@ def build_measurements(cat048: pd.DataFrame | None = None, cat021: pd.DataFrame 
     parts = measurement_rows(cat048, cat021, sensors, date=date, adsb_sigma_m=adsb_sigma_m)
     for text in impossible_positions(cat021):
         warnings.warn(text, OffEarthWarning, stacklevel=2)
+    untimely = [impossible_time_rows(f, c)
+                for c, f in ((48, cat048), (21, cat021), (10, cat010), (20, cat020))]
+    for text in impossible_times(pd.concat(untimely, ignore_index=True)):
+        warnings.warn(text, LeftOutWarning, stacklevel=2)
     for text in no_plot_warning(no_plot_counts(cat021, 21, no_plot_counts(cat048, 48))):
         warnings.warn(text, LeftOutWarning, stacklevel=2)
     parts = [p for p in parts if p is not None]

@@ -24,8 +24,11 @@ NAT_NS = np.iinfo("int64").min  # NaT as int64 nanoseconds
 
 def absolute_time(frame: pd.DataFrame, fallback_date: dt.date | None = None) -> pd.Series:
     """UTC instant of each decoded record: its ``timestamp``, else ``day``/``time_of_day`` counted from
-    ``fallback_date`` (else from ``UNDATED_DAY``); NaT where the record has no time."""
+    ``fallback_date`` (else from ``UNDATED_DAY``); NaT where the record has no time, or a time of day
+    outside 0-24 h (damaged bytes: 130,000 s made a time the next day, stretching every span)."""
     tod = frame["time_of_day"].to_numpy(float) if "time_of_day" in frame else np.full(len(frame), np.nan)
+    bad = impossible_time_of_day(tod)
+    tod = np.where(bad, np.nan, tod)
     day = frame["day"].to_numpy(float) if "day" in frame else np.zeros(len(frame))
     base = UNDATED_DAY if fallback_date is None else pd.Timestamp(fallback_date, tz="UTC")
     seconds = day * 86400.0 + tod
@@ -34,8 +37,15 @@ def absolute_time(frame: pd.DataFrame, fallback_date: dt.date | None = None) -> 
     ns[ok] = np.rint(seconds[ok] * 1e9).astype("int64") + base.value
     if "timestamp" in frame:  # int64 nanoseconds throughout: no object array of Timestamps
         stamps = pd.DatetimeIndex(pd.to_datetime(frame["timestamp"], utc=True)).as_unit("ns").asi8
-        ns = np.where(stamps != NAT_NS, stamps, ns)
+        ns = np.where((stamps != NAT_NS) & ~bad, stamps, ns)
     return pd.Series(pd.DatetimeIndex(ns.view("datetime64[ns]")).tz_localize("UTC"), index=frame.index)
+
+
+def impossible_time_of_day(tod_s: np.ndarray) -> np.ndarray:
+    """Whether each time of day (s; NaN: none) lies outside 0-24 h, which no real report's does."""
+    tod_s = np.asarray(tod_s, float)
+    with np.errstate(invalid="ignore"):
+        return (tod_s < 0.0) | (tod_s >= 86400.0)
 
 
 def midnight(times: pd.Series) -> pd.Timestamp | None:

@@ -535,9 +535,43 @@ def test_an_input_name_that_is_not_utf8_is_written_as_its_escape(tmp_path, capsy
     assert status == 0 and "Traceback" not in err
     doc = json.loads((out / "c.json").read_text(encoding="utf-8"))
     assert doc["inputs"][0]["path"] == str(tmp_path / "we\\xffird.ast")
-    cells = [c for row in load_workbook(out / "c.xlsx")["Parameters"].iter_rows(values_only=True) for c in row]
+    sheet = load_workbook(out / "c.xlsx")["Parameters"]
+    cells = [c for row in sheet.iter_rows(values_only=True) for c in row]
     assert str(tmp_path / "we\\xffird.ast") in cells
     status, _, err = _run(["ingest", "--dataset", out / "ds", radar, "--date", "2019-03-01"], capsys)
     assert status == 0 and "Traceback" not in err
     manifest = json.loads((out / "ds" / "manifest.json").read_text(encoding="utf-8"))
     assert manifest["inputs"][0]["file"] == "we\\xffird.ast"
+
+
+def test_a_time_of_day_past_24_h_is_no_time(tmp_path):
+    """One MAS72 ADS-B report's I021/071 damaged to 130,000 s (the item holds up to 131,072 s; a time of day
+    is below 86,400 s): it made a time the next day at 12:06:40, a third track segment there and every span
+    a day long. The report gets no time, is left out of the measurements, and a warning names it (a frame
+    read by asterix.read has no file column: "the inputs")."""
+    import warnings as python_warnings
+
+    import pandas as pd
+
+    import msdc.asterix as asterix
+    from msdc.asterix.encode import encode_frame
+    from msdc.pipeline.model.measurements import LeftOutWarning, build_measurements
+    from msdc.pipeline.model.time import absolute_time
+
+    adsb = asterix.read(ADSB).frames[21]
+    at = adsb.index[adsb["callsign"] == "MAS72"][10]
+    adsb.loc[at, ["time_of_day", "time_applicability_position"]] = 130_000.0  # both I021/071
+    path = tmp_path / "tod.ast"
+    path.write_bytes(encode_frame(21, adsb.drop(columns=["timestamp", "day"], errors="ignore")))
+    frame = asterix.read(path, date="2019-03-01").frames[21]
+    assert frame["time_of_day"].max() == 130_000.0  # decoded as the bytes say
+    times = absolute_time(frame)
+    assert times.isna().sum() == 1 and times.max() < pd.Timestamp("2019-03-02", tz="UTC")
+    with python_warnings.catch_warnings(record=True) as said:
+        python_warnings.simplefilter("always")
+        meas = build_measurements(None, frame, date=None)
+    texts = [str(w.message) for w in said if issubclass(w.category, LeftOutWarning)]
+    offset = int(frame.loc[frame["time_of_day"] == 130_000.0, "offset"].iloc[0])
+    assert texts == [f"the inputs: 1 CAT021 record(s) with a time of day outside 0-24 h (first at offset "
+                     f"{offset}: 130,000.000 s): damaged data, left out of the measurements"]
+    assert len(meas) == len(frame) - 1 and meas["time"].max() < pd.Timestamp("2019-03-02", tz="UTC")
