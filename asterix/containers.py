@@ -34,6 +34,7 @@ _PCAP_MAGICS = {  # first four file bytes -> (big endian, nanosecond timestamps)
     b"\xa1\xb2\x3c\x4d": (True, True),
 }
 _PCAP_HEADER_BYTES = 24
+_PCAP_MAX_PACKET_BYTES = 262144  # a captured length above this and the snapshot length is damage
 _PCAPNG_SHB = b"\x0a\x0d\x0d\x0a"
 _PCAPNG_BYTE_ORDERS = {b"\x1a\x2b\x3c\x4d": ">", b"\x4d\x3c\x2b\x1a": "<"}
 
@@ -271,21 +272,105 @@ def _classify(buf, pkt_start, pkt_stop, link):
 
 
 @njit(cache=True)
-def _walk_pcap(buf, big, fill, pkt_start, pkt_stop, ts_s, ts_frac):
-    """Walk classic pcap records, filling the arrays when fill. Returns (packets, offset where it stopped)."""
-    pos, count = 24, 0
-    while pos + 16 <= buf.size:
-        captured_bytes = _u32(buf, pos + 8, big)
-        if pos + 16 + captured_bytes > buf.size:
-            break
+def _pcap_header_code(buf, pos, big, units_per_s, snap_limit):
+    """0 if the 16-byte pcap record header at pos is plausible and its packet ends in the file, else why not:
+    1 fewer than 16 bytes left, 3 timestamp fraction of a second too large, 4 captured length above the
+    snapshot limit, 5 captured length above the original length, 2 packet runs past the end of the file."""
+    if buf.size - pos < 16:
+        return 1
+    captured_bytes, original_bytes = _u32(buf, pos + 8, big), _u32(buf, pos + 12, big)
+    if _u32(buf, pos + 4, big) >= units_per_s:
+        return 3
+    if captured_bytes > snap_limit:
+        return 4
+    if captured_bytes > original_bytes:
+        return 5
+    if pos + 16 + captured_bytes > buf.size:
+        return 2
+    return 0
+
+
+@njit(cache=True)
+def _pcap_close(buf, pos, big, ref_s):
+    """True when the record at pos has a capture second within CAPTURE_JUMP_S of ref_s (or ref_s < 0)."""
+    return ref_s < 0 or abs(_u32(buf, pos, big) - ref_s) <= CAPTURE_JUMP_S
+
+
+@njit(cache=True)
+def _pcap_strong(buf, pos, big, units_per_s, snap_limit, ref_s):
+    """True when three plausible records chain from pos (fewer if the file ends exactly after them), each
+    captured within CAPTURE_JUMP_S of the one before, the first within it of ref_s (unless ref_s < 0)."""
+    for _ in range(3):
+        if _pcap_header_code(buf, pos, big, units_per_s, snap_limit) != 0:
+            return False
+        if not _pcap_close(buf, pos, big, ref_s):
+            return False
+        ref_s = _u32(buf, pos, big)
+        pos += 16 + _u32(buf, pos + 8, big)
+        if pos == buf.size:
+            return True
+    return True
+
+
+@njit(cache=True)
+def _pcap_resync(buf, start, stop, big, units_per_s, snap_limit, ref_s):
+    """First offset in [start, stop) where a strong record chain starts (see _pcap_strong), else stop."""
+    for pos in range(start, min(stop, buf.size - 15)):
+        if _pcap_strong(buf, pos, big, units_per_s, snap_limit, ref_s):
+            return pos
+    return stop
+
+
+@njit(cache=True)
+def _walk_pcap(buf, big, units_per_s, snap_limit, fill, pkt_start, pkt_stop, ts_s, ts_frac, bad):
+    """Walk classic pcap records, resynchronising after damage; fills the arrays when fill.
+
+    A record is kept when its header is plausible (_pcap_header_code) and either the next record header
+    is plausible and captured within CAPTURE_JUMP_S of it, or no strong chain (_pcap_strong) starts inside
+    it (else its captured length is wrong). Damage is reported from the damaged header up to the next
+    strong chain: bad rows (offset, bytes, code, detail: the offset of the chain found inside the record
+    for code 6, bytes past the end for code 2; offset of the record before when it did not chain, or -1).
+    Returns (packets, bad rows).
+    """
+    pos, count, problems = 24, 0, 0
+    ref_s = np.int64(-1)  # capture second of the last record kept
+    before = np.int64(-1)  # offset of the last record kept when its next record header was not plausible
+    while pos < buf.size:
+        code = _pcap_header_code(buf, pos, big, units_per_s, snap_limit)
+        captured_bytes = _u32(buf, pos + 8, big) if buf.size - pos >= 16 else np.int64(0)
+        detail = np.int64(0)
+        nxt = pos + 16 + captured_bytes
+        if code == 0 or code == 2:
+            chains = nxt == buf.size or (
+                code == 0 and _pcap_header_code(buf, nxt, big, units_per_s, snap_limit) == 0
+                and _pcap_close(buf, nxt, big, _u32(buf, pos, big)))
+            inside = buf.size if chains else _pcap_resync(buf, pos + 1, min(nxt, buf.size), big, units_per_s,
+                                                          snap_limit, _u32(buf, pos, big))
+            if inside < min(nxt, buf.size):
+                code, detail = 6, inside
+            elif code == 0:
+                if fill:
+                    pkt_start[count], pkt_stop[count] = pos + 16, nxt
+                    ts_s[count], ts_frac[count] = _u32(buf, pos, big), _u32(buf, pos + 4, big)
+                count += 1
+                ref_s = _u32(buf, pos, big)
+                before = -1 if chains else pos
+                pos = nxt
+                continue
+            else:
+                detail = nxt - buf.size
+        resume = buf.size
+        if code != 1 and code != 2:
+            resume = _pcap_resync(buf, pos + 1, buf.size, big, units_per_s, snap_limit, ref_s)
+        if code == 1 or (code != 3 and _pcap_close(buf, pos, big, ref_s)):
+            before = -1  # a record header but for its damage: the record before is not in question
         if fill:
-            pkt_start[count] = pos + 16
-            pkt_stop[count] = pos + 16 + captured_bytes
-            ts_s[count] = _u32(buf, pos, big)
-            ts_frac[count] = _u32(buf, pos + 4, big)
-        count += 1
-        pos += 16 + captured_bytes
-    return count, pos
+            bad[problems, 0], bad[problems, 1], bad[problems, 2] = pos, resume - pos, code
+            bad[problems, 3], bad[problems, 4] = detail, before
+        problems += 1
+        before = -1
+        pos = resume
+    return count, problems
 
 
 @njit(cache=True)
@@ -418,14 +503,45 @@ def _read_pcap(buf: np.ndarray) -> Segments:
         return _empty("pcap", buf.size, [(0, buf.size, "truncated pcap file header")])
     big, nano = _PCAP_MAGICS[magic]
     link = struct.unpack_from(">I" if big else "<I", buf, 20)[0] & 0xFFFF
-    none = np.zeros(0, np.int64)
-    count, _ = _walk_pcap(buf, big, False, none, none, none, none)
+    units_per_s = 10**9 if nano else 10**6
+    snap_bytes = struct.unpack_from(">I" if big else "<I", buf, 16)[0]
+    snap_limit = max(snap_bytes, _PCAP_MAX_PACKET_BYTES)
+    none, no_bad = np.zeros(0, np.int64), np.zeros((0, 5), np.int64)
+    count, bad = _walk_pcap(buf, big, units_per_s, snap_limit, False, none, none, none, none, no_bad)
     pkt_start, pkt_stop, ts_s, ts_frac = (np.zeros(count, np.int64) for _ in range(4))
-    _, end = _walk_pcap(buf, big, True, pkt_start, pkt_stop, ts_s, ts_frac)
-    problems = [(int(end), int(buf.size - end), "truncated packet record")] if end < buf.size else []
-    day, tod = _day_tod(ts_s, ts_frac, 10**9 if nano else 10**6)
+    bad_rows = np.zeros((bad, 5), np.int64)
+    _walk_pcap(buf, big, units_per_s, snap_limit, True, pkt_start, pkt_stop, ts_s, ts_frac, bad_rows)
+    problems = [(int(row[0]), int(row[1]), _pcap_reason(buf, big, row, units_per_s, snap_bytes))
+                for row in bad_rows]
+    day, tod = _day_tod(ts_s, ts_frac, units_per_s)
     return _packet_segments("pcap", buf, pkt_start, pkt_stop, np.full(count, link, np.int64), day, tod,
                             problems)
+
+
+def _pcap_reason(buf: np.ndarray, big: bool, row: np.ndarray, units_per_s: int, snap_bytes: int) -> str:
+    """Why the pcap bytes of a _walk_pcap bad row were skipped, and where reading resumes."""
+    pos, length, code, detail, before = (int(v) for v in row)
+    end = pos + length
+    if code == 1:
+        return f"truncated packet record header ({length} of its 16 bytes)"
+    frac, captured, original = struct.unpack_from(">III" if big else "<III", buf, pos + 4)
+    if code == 2:
+        return (f"truncated packet record (captured length {captured}, {detail} bytes past the end of the "
+                "file)")
+    why = {
+        3: f"implausible packet record header (timestamp fraction {frac}, not below {units_per_s})",
+        4: f"captured length {captured} exceeds the snapshot length {snap_bytes}",
+        5: f"captured length {captured} exceeds the original length {original}",
+        6: f"captured length {captured} runs past the packet record at offset {detail}",
+    }[code]
+    if before >= 0:
+        why = (f"implausible packet record header ({why.removeprefix('implausible packet record header (')})"
+               if code != 3 else why)
+        why += (f", where the captured length of the record at offset {before} leads: that length may be the "
+                "damage")
+    if end < buf.size:
+        return why + f"; reading resumes at the next plausible packet record, offset {end}"
+    return why + "; no plausible packet record follows"
 
 
 def _idb_options(raw: memoryview, order: str, pos: int, end: int) -> tuple[int, int]:

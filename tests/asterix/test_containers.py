@@ -173,7 +173,8 @@ def test_pcap_fragments_and_truncated_record() -> None:
     assert seg.problems == [
         (offset_2, len(first_fragment), "IPv4 fragment (not reassembled)"),
         (offset_3, len(later_fragment), "IPv4 fragment (not reassembled)"),
-        (len(data) - len(truncated), len(truncated), "truncated packet record"),
+        (len(data) - len(truncated), len(truncated),
+         "truncated packet record (captured length 100, 80 bytes past the end of the file)"),  # 100 - 20
     ]
     problem_bytes = len(first_fragment) + len(later_fragment) + len(truncated)
     assert seg.container_bytes == len(data) - len(P1) - problem_bytes

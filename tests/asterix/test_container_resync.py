@@ -1,0 +1,113 @@
+"""Damaged container framing in the middle of a recording: the damaged packet or frame is reported at its own
+offset with a true reason, every skipped byte is an error, and reading resumes at the next intact one.
+
+Recordings are hand-built (tests/container_bytes.py, struct from the format descriptions) around CAT048
+blocks from the encoder; what must be kept is the undamaged recording's own decode minus the damaged unit's
+reports, and offsets are worked out from the lengths written here.
+"""
+
+from __future__ import annotations
+
+import struct
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+from container_bytes import ETH_IP_UDP, PCAP_RECORD, pcap_file, udp_frame
+
+import msdc.asterix as asterix
+from msdc.asterix.encode import encode_frame
+
+TS_10H = 1_551_434_400  # 2019-03-01 10:00:00 UTC
+PCAP_HEADER = 24
+N_PACKETS, DAMAGED = 12, 5
+COLUMNS = ["time_of_day", "track_number", "rho_nm", "theta_deg"]
+
+
+def block(i: int) -> bytes:
+    """One CAT048 block of 3 reports, tracks 3i..3i+2, 10:00:00 + i s."""
+    tods = [36000.0 + i + k / 8 for k in range(3)]
+    return encode_frame(48, pd.DataFrame({
+        "sac": 25, "sic": 1, "time_of_day": tods, "rho_nm": [10.0 + i, 11.0 + i, 12.0 + i],
+        "theta_deg": [3.0 * i, 3.0 * i + 1, 3.0 * i + 2], "track_number": [3 * i, 3 * i + 1, 3 * i + 2],
+    }), records_per_block=3)
+
+
+def accounted(rec: asterix.Recording) -> int:
+    return rec.decoded_bytes + int(rec.errors["length"].sum()) + rec.container_bytes + rec.ignored_bytes
+
+
+def reports(rec: asterix.Recording) -> pd.DataFrame:
+    return rec.frames[48][COLUMNS].reset_index(drop=True)
+
+
+def read(tmp_path: Path, name: str, data: bytes) -> asterix.Recording:
+    path = tmp_path / name
+    path.write_bytes(data)
+    return asterix.read(path)
+
+
+# ---------------------------------------------------------------- pcap
+
+def good_pcap() -> tuple[bytes, list[int]]:
+    """The recording and the file offset of each packet record header."""
+    data, payload_at = pcap_file([(TS_10H + i, 0, udp_frame(block(i))) for i in range(N_PACKETS)])
+    return data, [at - ETH_IP_UDP - PCAP_RECORD for at in payload_at]
+
+
+@pytest.mark.parametrize(("captured", "original", "reason"), [
+    (+4, 0, "captured length {c} exceeds the original length {o}"),
+    (0xFFFF, None, "captured length {c} exceeds the original length {o}"),
+    (0x7FFFFFFF, None, "captured length {c} exceeds the snapshot length 65535"),
+    (+4, +4, "captured length {c} runs past the packet record at offset {next}"),  # original length too
+    (+700, +700, "captured length {c} runs past the packet record at offset {next}"),
+])
+def test_pcap_one_bad_captured_length_loses_only_its_packet(tmp_path: Path, captured: int,
+                                                            original: int | None, reason: str) -> None:
+    data, record_at = good_pcap()
+    whole = reports(read(tmp_path, "good.pcap", data))
+    assert len(whole) == 3 * N_PACKETS
+    at, size = record_at[DAMAGED], record_at[DAMAGED + 1] - record_at[DAMAGED] - PCAP_RECORD
+    c = size + captured if captured < 0x100 else captured
+    o = size + original if original is not None else size
+    damaged = bytearray(data)
+    struct.pack_into("<II", damaged, at + 8, c, o)
+    rec = read(tmp_path, "damaged.pcap", bytes(damaged))
+    want = whole.drop(index=range(3 * DAMAGED, 3 * DAMAGED + 3)).reset_index(drop=True)
+    pd.testing.assert_frame_equal(reports(rec), want)
+    assert len(rec.errors) == 1
+    err = rec.errors.iloc[0]
+    nxt = record_at[DAMAGED + 1]
+    assert (err.offset, err.length) == (at, nxt - at)  # the whole damaged record, up to the next one
+    assert reason.format(c=c, o=o, next=nxt) in err.reason
+    assert err.reason.endswith(f"reading resumes at the next plausible packet record, offset {nxt}")
+    assert accounted(rec) == len(data) == rec.size_bytes
+
+
+def test_pcap_short_captured_length_keeps_the_rest(tmp_path: Path) -> None:
+    # packet 5 said 4 bytes short: its payload no longer frames (skipped as such); its last 4 bytes and the
+    # next record header then read as an implausible header, reported where the short length leads
+    data, record_at = good_pcap()
+    whole = reports(read(tmp_path, "good.pcap", data))
+    at, nxt = record_at[DAMAGED], record_at[DAMAGED + 1]
+    damaged = bytearray(data)
+    struct.pack_into("<I", damaged, at + 8, nxt - at - PCAP_RECORD - 4)
+    rec = read(tmp_path, "damaged.pcap", bytes(damaged))
+    want = whole.drop(index=range(3 * DAMAGED, 3 * DAMAGED + 3)).reset_index(drop=True)
+    pd.testing.assert_frame_equal(reports(rec), want)
+    header = rec.errors[rec.errors.reason.str.contains("packet record header")]
+    assert header[["offset", "length"]].values.tolist() == [[nxt - 4, 4]]
+    assert f"where the captured length of the record at offset {at} leads" in header.reason.iloc[0]
+    assert accounted(rec) == len(data) == rec.size_bytes
+
+
+def test_pcap_damaged_capture_time_is_not_framing_damage(tmp_path: Path) -> None:
+    # a timestamp far off breaks no framing: the packet is kept (its time reported by the capture-time check)
+    data, record_at = good_pcap()
+    damaged = bytearray(data)
+    struct.pack_into("<I", damaged, record_at[DAMAGED], TS_10H - 2**30)
+    rec = read(tmp_path, "damaged.pcap", bytes(damaged))
+    assert rec.frames[48].track_number.tolist() == list(range(3 * N_PACKETS))
+    assert rec.errors.offset.tolist() == [record_at[DAMAGED]]
+    assert np.all(rec.errors.length == 8)
