@@ -37,6 +37,9 @@ _PCAP_HEADER_BYTES = 24
 _PCAP_MAX_PACKET_BYTES = 262144  # a captured length above this and the snapshot length is damage
 _PCAPNG_SHB = b"\x0a\x0d\x0d\x0a"
 _PCAPNG_BYTE_ORDERS = {b"\x1a\x2b\x3c\x4d": ">", b"\x4d\x3c\x2b\x1a": "<"}
+# section header, interface description, packet, simple packet, name resolution, interface statistics,
+# enhanced packet, IRIG timestamp, ARINC 429, systemd journal export, decryption secrets, custom blocks
+_PCAPNG_BLOCK_TYPES = (0x0A0D0D0A, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 0xBAD, 0x40000BAD)
 
 # Packet classes returned by _classify; codes >= 2 are problems.
 _PKT_IGNORED, _PKT_UDP, _PKT_LINK, _PKT_FAMILY = 0, 1, 7, 8
@@ -610,6 +613,44 @@ def _walk_pcapng(buf, pos, big, interfaces, snap_bytes, fill, packets, bad):
     return count, problems, pos
 
 
+@njit(cache=True)
+def _pcapng_block_ok(buf, pos, big):
+    """Offset just past the pcapng block at pos when its type is a known one (_PCAPNG_BLOCK_TYPES) and its
+    leading and trailing lengths agree, else -1."""
+    if buf.size - pos < 12:
+        return -1
+    block_type, block_bytes = _u32(buf, pos, big), _u32(buf, pos + 4, big)
+    known = False
+    for kind in _PCAPNG_BLOCK_TYPES:
+        known = known or block_type == kind
+    if not known or block_bytes < 12 or block_bytes % 4 != 0 or block_bytes > buf.size - pos:
+        return -1
+    if _u32(buf, pos + block_bytes - 4, big) != block_bytes:
+        return -1
+    return pos + block_bytes
+
+
+@njit(cache=True)
+def _pcapng_resync(buf, start, big):
+    """First offset >= start of a block that _pcapng_block_ok takes and that ends the file or is followed by
+    another it takes (a chain of two), else the buffer size."""
+    for pos in range(start, buf.size - 11):
+        nxt = _pcapng_block_ok(buf, pos, big)
+        if nxt >= 0 and (nxt == buf.size or _pcapng_block_ok(buf, nxt, big) >= 0):
+            return pos
+    return buf.size
+
+
+def _pcapng_damage(buf: np.ndarray, pos: int, order: str, why: str) -> tuple[int, tuple[int, int, str]]:
+    """(where reading resumes, the problem) for the pcapng block at pos whose framing is broken (why)."""
+    resume = int(_pcapng_resync(buf, pos + 1, order == ">"))
+    if resume < buf.size:
+        why += f"; reading resumes at the next block whose lengths agree, offset {resume}"
+    else:
+        why += "; no block whose lengths agree follows"
+    return resume, (pos, resume - pos, why)
+
+
 def _read_pcapng(buf: np.ndarray) -> Segments:
     """pcapng: walk blocks by their lengths; packets come from EPB, SPB and obsolete packet blocks.
 
@@ -649,11 +690,16 @@ def _read_pcapng(buf: np.ndarray) -> Segments:
             break
         block_type, block_bytes = struct.unpack_from(order + "II", raw, pos)
         if block_bytes < 12 or block_bytes % 4 or block_bytes > n - pos:
-            problems.append((pos, n - pos, "bad block length"))
-            break
-        if struct.unpack_from(order + "I", raw, pos + block_bytes - 4)[0] != block_bytes:
-            problems.append((pos, n - pos, "block length mismatch"))
-            break
+            past = f", {block_bytes - (n - pos)} bytes past the end of the file" * (block_bytes > n - pos)
+            pos, problem = _pcapng_damage(buf, pos, order, f"bad block length ({block_bytes}{past})")
+            problems.append(problem)
+            continue
+        trailing = struct.unpack_from(order + "I", raw, pos + block_bytes - 4)[0]
+        if trailing != block_bytes:
+            why = f"block length mismatch (leading length {block_bytes}, trailing length {trailing})"
+            pos, problem = _pcapng_damage(buf, pos, order, why)
+            problems.append(problem)
+            continue
         if block_type == 0x0A0D0D0A and block_bytes < 28:
             problems.append((pos, block_bytes, "bad section header block"))
         elif block_type == 1 and block_bytes < 20:

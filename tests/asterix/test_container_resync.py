@@ -14,7 +14,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 import pytest
-from container_bytes import ETH_IP_UDP, PCAP_RECORD, pcap_file, udp_frame
+from container_bytes import ETH_IP_UDP, PCAP_RECORD, pcap_file, png_epb, png_idb, png_shb, udp_frame
 
 import msdc.asterix as asterix
 from msdc.asterix.encode import encode_frame
@@ -111,3 +111,55 @@ def test_pcap_damaged_capture_time_is_not_framing_damage(tmp_path: Path) -> None
     assert rec.frames[48].track_number.tolist() == list(range(3 * N_PACKETS))
     assert rec.errors.offset.tolist() == [record_at[DAMAGED]]
     assert np.all(rec.errors.length == 8)
+
+
+# ---------------------------------------------------------------- pcapng
+
+def good_pcapng() -> tuple[bytes, list[int]]:
+    """The recording (SHB, IDB of link type 1, one EPB per packet) and the file offset of each EPB."""
+    data, epb_at = png_shb("<") + png_idb("<", 1), []
+    for i in range(N_PACKETS):
+        epb_at.append(len(data))
+        data += png_epb("<", 0, (TS_10H + i) * 10**6, udp_frame(block(i)))
+    return data, epb_at
+
+
+def damage_trailer(data: bytes, at: int, nxt: int) -> tuple[bytes, str]:
+    size = nxt - at
+    return (data[:nxt - 4] + struct.pack("<I", 12345) + data[nxt:],
+            f"block length mismatch (leading length {size}, trailing length 12345)")
+
+
+def damage_leading(data: bytes, at: int, nxt: int) -> tuple[bytes, str]:
+    # the trailing length is then read from the next block's first 4 bytes: its type, 6 (an EPB)
+    size = nxt - at
+    return (data[:at + 4] + struct.pack("<I", size + 4) + data[at + 8:],
+            f"block length mismatch (leading length {size + 4}, trailing length 6)")
+
+
+def cut_packet(data: bytes, at: int, nxt: int) -> tuple[bytes, str]:
+    # the EPB loses its last 40 bytes (its trailing length, 36 of the packet): the trailing length read
+    # where its leading one says is 36 bytes into the next EPB, 8 into its Ethernet frame: source MAC
+    # bytes 22 33 44 55 (udp_frame), little-endian 0x55443322
+    size = nxt - at
+    return (data[:nxt - 40] + data[nxt:],
+            f"block length mismatch (leading length {size}, trailing length {0x55443322})")
+
+
+@pytest.mark.parametrize("damage", [damage_trailer, damage_leading, cut_packet])
+def test_pcapng_one_broken_block_loses_only_its_packet(tmp_path: Path, damage) -> None:
+    data, epb_at = good_pcapng()
+    whole = reports(read(tmp_path, "good.pcapng", data))
+    assert len(whole) == 3 * N_PACKETS
+    at, nxt = epb_at[DAMAGED], epb_at[DAMAGED + 1]
+    damaged, reason = damage(data, at, nxt)
+    resume = nxt - (len(data) - len(damaged))  # where the next EPB now starts
+    rec = read(tmp_path, "damaged.pcapng", damaged)
+    want = whole.drop(index=range(3 * DAMAGED, 3 * DAMAGED + 3)).reset_index(drop=True)
+    pd.testing.assert_frame_equal(reports(rec), want)
+    assert len(rec.errors) == 1
+    err = rec.errors.iloc[0]
+    assert (err.offset, err.length) == (at, resume - at)
+    assert err.reason == (f"container: {reason}; reading resumes at the next block whose lengths agree, "
+                          f"offset {resume}")
+    assert accounted(rec) == len(damaged) == rec.size_bytes

@@ -347,7 +347,9 @@ def test_pcapng_damage() -> None:
     assert seg.capture_day.tolist() == [0] and seg.capture_tod.tolist() == [0.0]
     assert seg.problems == [
         (len(good) + 28, len(packet), "packet for unknown interface"),
-        (len(good) + len(unknown_interface), len(bad_length), "bad block length"),
+        (len(good) + len(unknown_interface), len(bad_length),  # 0x7FFFFFF0 = 2147483632, 20 bytes left
+         "bad block length (2147483632, 2147483612 bytes past the end of the file); no block whose lengths "
+         "agree follows"),
     ]
     assert_accounted(seg, len(data))
     no_section = read_segments(png_idb("<", 1), "pcapng")
