@@ -12,7 +12,15 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit
 
-from .recorders import GPS_HEADER_BYTES, ORADIS_HEADER_BYTES, detect_recorder, read_gps, read_oradis
+from .recorders import (
+    ANY_CATEGORY,
+    GPS_HEADER_BYTES,
+    ORADIS_HEADER_BYTES,
+    _tiles,
+    detect_recorder,
+    read_gps,
+    read_oradis,
+)
 
 FORMATS = ("raw", "pcap", "pcapng", "final", "gps", "oradis")
 UNTIMED = ("raw", "oradis")  # no capture time: midnights are counted in file order from the reports' times
@@ -22,6 +30,9 @@ FINAL_HEADER_BYTES = 8
 FINAL_TRAILER = b"\xa5\xa5\xa5\xa5"
 FINAL_MIN_FRAME_BYTES = FINAL_HEADER_BYTES + len(FINAL_TRAILER)
 FINAL_TOD_UNIT_S = 0.01
+FINAL_TOD_LIMIT = 86400 * 100  # header times of day at or past 24 h are damage
+FINAL_MAX_STEP = 600 * 100  # chained frames: times of day at most 10 minutes on...
+FINAL_MAX_BACK = 100  # ... or at most 1 s back (as GPS frames chain)
 # A capture time further than this from most of the packets around it is damage: from 12 h on, it would put
 # its reports on another day (each goes on the day nearest its capture) and could re-date the recording.
 CAPTURE_JUMP_S = 43200
@@ -52,7 +63,13 @@ _PKT_REASONS = {
 }
 _LINKS_READ = "Ethernet 1, Linux SLL 113, Linux SLL2 276, raw IP 12, 101, 228, BSD loopback 0, 108"
 _LOOPBACK_FAMILIES = (2, 10, 24, 28, 30)  # AF_INET; AF_INET6 of Linux, NetBSD/OpenBSD, FreeBSD, macOS
-_FINAL_REASONS = {1: "impossible frame length", 2: "bad frame trailer"}
+_FINAL_REASONS = {
+    1: "impossible frame length",
+    2: "bad frame trailer",
+    3: "frame time of day at or past 24 h",
+    4: "frame length does not lead to the next frame (damaged length)",
+    5: "bytes after a frame that do not start a final frame",
+}
 _PCAPNG_REASONS = {1: "bad packet block", 2: "packet for unknown interface"}
 
 
@@ -391,39 +408,106 @@ def _final_frame_error(buf, pos):
 
 
 @njit(cache=True)
+def _final_tod(buf, pos):
+    """Time of day (10 ms units) in the header of the frame at pos."""
+    return (np.int64(buf[pos + 5]) << 16) | _be16(buf, pos + 6)
+
+
+@njit(cache=True)
+def _final_plausible(buf, pos):
+    """A well-formed final frame at pos whose time of day is below 24 h."""
+    return pos < buf.size and _final_frame_error(buf, pos) == 0 and _final_tod(buf, pos) < FINAL_TOD_LIMIT
+
+
+@njit(cache=True)
+def _final_chained(buf, pos, nxt):
+    """A plausible frame at nxt whose time of day follows that of the frame at pos (as GPS frames chain)."""
+    if not _final_plausible(buf, nxt):
+        return False
+    step = (_final_tod(buf, nxt) - _final_tod(buf, pos)) % FINAL_TOD_LIMIT
+    return step <= FINAL_MAX_STEP or step >= FINAL_TOD_LIMIT - FINAL_MAX_BACK
+
+
+@njit(cache=True)
+def _final_ends(buf, pos):
+    """True at the end of the file or where the rest is a frame cut by it (a truncated tail)."""
+    return buf.size - pos < FINAL_MIN_FRAME_BYTES or pos + _be16(buf, pos) > buf.size
+
+
+@njit(cache=True)
+def _final_strong(buf, pos, end_ok):
+    """Three chained frames from pos (two if the end follows; one if end_ok and the end follows); the end
+    includes a frame cut by it. The first frame's data must be data blocks end to end (so that a false frame
+    inside damaged data, whose length happens to reach a true frame, is not taken)."""
+    if not _final_plausible(buf, pos):
+        return False
+    if not _tiles(buf, pos + FINAL_HEADER_BYTES, pos + _be16(buf, pos) - 4, ANY_CATEGORY):
+        return False
+    n1 = pos + _be16(buf, pos)
+    if _final_ends(buf, n1):
+        return end_ok
+    if not _final_chained(buf, pos, n1):
+        return False
+    n2 = n1 + _be16(buf, n1)
+    return _final_ends(buf, n2) or _final_chained(buf, n1, n2)
+
+
+@njit(cache=True)
+def _final_first_strong(buf, pos, stop, end_ok):
+    """First offset in [pos, stop) where a strong frame starts, else stop."""
+    for r in range(pos, stop):
+        if _final_strong(buf, r, end_ok):
+            return r
+    return stop
+
+
+@njit(cache=True)
 def _final_resync(buf, pos):
-    """First offset >= pos where a well-formed final frame starts, else the buffer size."""
-    for start in range(pos, buf.size - 11):
-        end = start + ((np.int64(buf[start]) << 8) | buf[start + 1])
-        if end - start >= 12 and end <= buf.size and buf[end - 1] == 0xA5 and buf[end - 2] == 0xA5:
-            if buf[end - 3] == 0xA5 and buf[end - 4] == 0xA5:
-                return start
+    """Where the walk resumes from pos: the first strong frame, unless one starts inside it (its length then
+    reached a true frame by coincidence: take the inner one, and so on); the end if none."""
+    r = _final_first_strong(buf, pos, buf.size, True)
+    while r < buf.size:
+        inner_stop = min(r + _be16(buf, r), buf.size)
+        inner = _final_first_strong(buf, r + 1, inner_stop, False)
+        if inner == inner_stop:
+            return r
+        r = inner
     return buf.size
 
 
 @njit(cache=True)
 def _walk_final(buf, fill, seg_start, seg_stop, seg_day, seg_tod, bad_start, bad_stop, bad_code):
-    """Walk final frames, resynchronising after damage; fills arrays when fill. Returns (frames, problems)."""
-    pos, frames, problems = 0, 0, 0
+    """Walk final frames as recorders.py walks GPS frames (only from trusted positions; a frame that does not
+    chain is kept unless a strong frame starts inside it; resynchronise on three chained frames); fills
+    the arrays when fill. Returns (frames, problems)."""
+    pos, frames, problems, trusted = np.int64(0), 0, 0, True
     while pos < buf.size:
         code = _final_frame_error(buf, pos)
-        if code == 0:
+        if code == 0 and _final_tod(buf, pos) >= FINAL_TOD_LIMIT:
+            code = 3
+        if trusted and code == 0:
             frame_bytes = _be16(buf, pos)
-            if frame_bytes > 12:
-                if fill:
-                    seg_start[frames] = pos + 8
-                    seg_stop[frames] = pos + frame_bytes - 4
-                    seg_day[frames] = buf[pos + 4]
-                    tod_units = (np.int64(buf[pos + 5]) << 16) | _be16(buf, pos + 6)
-                    seg_tod[frames] = tod_units * FINAL_TOD_UNIT_S
-                frames += 1
-            pos += frame_bytes
-        else:
-            resume = _final_resync(buf, pos + 1)
+            nxt = pos + frame_bytes
+            chains = _final_ends(buf, nxt) or _final_chained(buf, pos, nxt)
+            # the first frame has no predecessor vouching for its start: it must not hide a chained frame
+            if chains and frames + problems > 0 or _final_first_strong(buf, pos + 1, nxt, False) == nxt:
+                if frame_bytes > 12:
+                    if fill:
+                        seg_start[frames] = pos + 8
+                        seg_stop[frames] = nxt - 4
+                        seg_day[frames] = buf[pos + 4]
+                        seg_tod[frames] = _final_tod(buf, pos) * FINAL_TOD_UNIT_S
+                    frames += 1
+                pos, trusted = nxt, chains
+                continue
+            code = 4
+        resume = _final_resync(buf, pos + (1 if trusted else 0))
+        if resume > pos:
             if fill:
-                bad_start[problems], bad_stop[problems], bad_code[problems] = pos, resume, code
+                bad_start[problems], bad_stop[problems] = pos, resume
+                bad_code[problems] = code if code != 0 else 5
             problems += 1
-            pos = resume
+        pos, trusted = resume, True
     return frames, problems
 
 

@@ -163,3 +163,41 @@ def test_pcapng_one_broken_block_loses_only_its_packet(tmp_path: Path, damage) -
     assert err.reason == (f"container: {reason}; reading resumes at the next block whose lengths agree, "
                           f"offset {resume}")
     assert accounted(rec) == len(damaged) == rec.size_bytes
+
+
+# ---------------------------------------------------------------- final (IOSS)
+
+RADAR = Path(__file__).resolve().parents[2] / "fixtures" / "radar.ast"
+
+
+def radar_final() -> tuple[bytes, list[int]]:
+    """fixtures/radar.ast's data blocks, one per final frame (length, 2 bytes, day, 3-byte time of day in
+    10 ms, block, A5A5A5A5), 20 s apart from 08:00; and the offset of each frame."""
+    data, blocks, at = RADAR.read_bytes(), [], 0
+    while at < len(data):
+        n = int.from_bytes(data[at + 1:at + 3], "big")
+        blocks.append(data[at:at + n])
+        at += n
+    frames = [struct.pack(">HBBB", 12 + len(b), 0, 0, 0) + ((28800 + 20 * i) * 100).to_bytes(3, "big") + b
+              + b"\xa5" * 4 for i, b in enumerate(blocks)]
+    return b"".join(frames), [sum(map(len, frames[:i])) for i in range(len(frames))]
+
+
+@pytest.mark.parametrize("frame", [10, 50, 120])
+def test_final_length_one_too_large_loses_only_its_frame(tmp_path: Path, frame: int) -> None:
+    # the trailer is then looked for one byte late (A5 A5 A5 and the next frame's first byte): bad trailer;
+    # resynchronising on any well-formed frame took a false one inside the damaged frame's data
+    data, frame_at = radar_final()
+    whole = read(tmp_path, "good.final", data)
+    at, nxt = frame_at[frame], frame_at[frame + 1]
+    damaged = bytearray(data)
+    struct.pack_into(">H", damaged, at, nxt - at + 1)
+    path = tmp_path / "damaged.final"
+    path.write_bytes(bytes(damaged))
+    rec = asterix.read(path, date=whole.date)
+    lost = whole.frames[48].offset.between(at, nxt)
+    pd.testing.assert_frame_equal(reports(rec), whole.frames[48][~lost][COLUMNS].reset_index(drop=True))
+    assert lost.sum() > 0
+    assert rec.errors[["offset", "length", "reason"]].values.tolist() == [[at, nxt - at,
+                                                                           "container: bad frame trailer"]]
+    assert accounted(rec) == len(data) == rec.size_bytes
