@@ -53,7 +53,7 @@ _PCAPNG_BYTE_ORDERS = {b"\x1a\x2b\x3c\x4d": ">", b"\x4d\x3c\x2b\x1a": "<"}
 _PCAPNG_BLOCK_TYPES = (0x0A0D0D0A, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 0xBAD, 0x40000BAD)
 
 # Packet classes returned by _classify; codes >= 2 are problems.
-_PKT_IGNORED, _PKT_UDP, _PKT_LINK, _PKT_FAMILY = 0, 1, 7, 8
+_PKT_IGNORED, _PKT_UDP, _PKT_LINK, _PKT_FAMILY, _PKT_IPV6, _PKT_NOT_IP = 0, 1, 7, 8, 9, 10
 _PKT_REASONS = {
     2: "IPv4 fragment (not reassembled)",
     3: "bad IPv4 header",
@@ -211,9 +211,11 @@ def _u32(buf, pos, big):
 
 
 @njit(cache=True)
-def _ipv4_offset(buf, start, stop, link):
-    """File offset of the IPv4 header inside a link-layer packet; -1 if it carries no IPv4, -2 for a link type
-    msdc does not read, -3 for a loopback header whose address family is none of _LOOPBACK_FAMILIES."""
+def _ip_offset(buf, start, stop, link):
+    """(file offset of the IP header inside a link-layer packet, 4 or 6: its version), or (0, code) with
+    code -1 if it carries no IP, -2 for a link type msdc does not read, -3 for a loopback header whose
+    address family is none of _LOOPBACK_FAMILIES, -4 for a raw IP packet (link type 101 or 12) that starts
+    with neither an IPv4 nor an IPv6 header."""
     if link == 1:  # Ethernet
         pos, type_pos = start + 14, start + 12
     elif link == 113:  # Linux cooked SLL
@@ -221,39 +223,52 @@ def _ipv4_offset(buf, start, stop, link):
     elif link == 276:  # Linux cooked SLL2
         pos, type_pos = start + 20, start
     elif link == 228:  # raw IPv4
-        return start
+        return start, 4
     elif link == 101 or link == 12:  # raw IP: v4 or v6
-        return start if stop > start and buf[start] >> 4 == 4 else -1
+        if stop <= start:
+            return 0, -1
+        version = buf[start] >> 4
+        return (start, np.int64(version)) if version == 4 or version == 6 else (0, -4)
     elif link == 0 or link == 108:  # BSD loopback: 4-byte address family, AF_INET = 2 in either order
         if stop - start < 4:
-            return -1
+            return 0, -1
         little, big = _u32(buf, start, False), _u32(buf, start, True)
         if little == 2 or big == 2:
-            return start + 4
+            return start + 4, 4
         for family in _LOOPBACK_FAMILIES:
             if little == family or big == family:
-                return -1
-        return -3
+                return start + 4, 6
+        return 0, -3
     else:
-        return -2
+        return 0, -2
     if pos > stop:
-        return -1
+        return 0, -1
     ethertype = _be16(buf, type_pos)
     while (ethertype == 0x8100 or ethertype == 0x88A8 or ethertype == 0x9100) and pos + 4 <= stop:
         ethertype = _be16(buf, pos + 2)  # VLAN tag: 2-byte TCI, then the next ethertype
         pos += 4
-    return pos if ethertype == 0x0800 else -1
+    if ethertype == 0x0800:
+        return pos, 4
+    if ethertype == 0x86DD:
+        return pos, 6
+    return 0, -1
 
 
 @njit(cache=True)
 def _classify_packet(buf, start, stop, link):
     """(class, payload start, payload stop) of one captured packet; see _PKT_REASONS."""
-    ip = _ipv4_offset(buf, start, stop, link) if stop > start else -1
-    if ip == -2:
+    ip, version = _ip_offset(buf, start, stop, link) if stop > start else (0, -1)
+    if version == -2:
         return _PKT_LINK, 0, 0
-    if ip == -3:
+    if version == -3:
         return _PKT_FAMILY, 0, 0
-    if ip < 0:
+    if version == -4:
+        return _PKT_NOT_IP, 0, 0
+    if version == 6:  # IPv6: a UDP datagram (next header 17) is reported as not read, anything else ignored
+        if stop - ip >= 40 and buf[ip] >> 4 == 6 and buf[ip + 6] == 17:
+            return _PKT_IPV6, 0, 0
+        return _PKT_IGNORED, 0, 0
+    if version < 0:
         return _PKT_IGNORED, 0, 0
     if stop - ip < 20:
         return 4, 0, 0
@@ -526,7 +541,10 @@ def _packet_segments(fmt: str, buf: np.ndarray, pkt_start: np.ndarray, pkt_stop:
     for code, reason in _PKT_REASONS.items():
         for i in np.flatnonzero(kind == code):
             problems.append((int(pkt_start[i]), int(pkt_stop[i] - pkt_start[i]), reason))
-    for i in np.flatnonzero((kind == _PKT_LINK) | (kind == _PKT_FAMILY)):
+    for i in np.flatnonzero(kind == _PKT_IPV6):
+        problems.append((int(pkt_start[i]), int(pkt_stop[i] - pkt_start[i]),
+                         "IPv6 UDP packet: not read (msdc reads IPv4 only)"))
+    for i in np.flatnonzero((kind == _PKT_LINK) | (kind == _PKT_FAMILY) | (kind == _PKT_NOT_IP)):
         why = _link_reason(int(link[i]), int(kind[i]))
         problems.append((int(pkt_start[i]), int(pkt_stop[i] - pkt_start[i]), why))
     keep = (kind == _PKT_UDP) & (pay_stop > pay_start)
@@ -546,6 +564,9 @@ def _link_reason(link: int, kind: int) -> str:
     """Why a packet of a link type msdc does not read, or a loopback packet of no known family, is skipped."""
     if kind == _PKT_LINK:
         return f"packet of link type {link}, which msdc does not read (it reads {_LINKS_READ})"
+    if kind == _PKT_NOT_IP:
+        return (f"packet of link type {link} (raw IP) that starts with neither an IPv4 nor an IPv6 header: "
+                "a wrong link type (an Ethernet capture?) or a damaged packet")
     return (f"packet of link type {link} (BSD loopback) whose address family is neither IPv4 nor IPv6: "
             "a wrong link type or a damaged packet")
 

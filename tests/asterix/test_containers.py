@@ -498,3 +498,27 @@ def test_mutated_containers_accounted(kind: str, draw: st.DataObject) -> None:
             del data[position:]
     for fmt in (None, kind):
         assert_accounted(read_segments(bytes(data), fmt), len(data))
+
+
+def test_ipv6_udp_and_non_ip_raw_packets_are_reported() -> None:
+    # an IPv6/UDP datagram (next header 17 at byte 6 of the 40-byte IPv6 header) is not read: reported, not
+    # passed over; other IPv6 (here ICMPv6, 58) stays ignored. On link type 101 (raw IP) an Ethernet frame
+    # (first nibble 0) is reported as neither IPv4 nor IPv6.
+    def ipv6(next_header: int, body: bytes) -> bytes:
+        return struct.pack(">IHBB16s16s", 6 << 28, len(body), next_header, 64, bytes(16), bytes(16)) + body
+
+    udp6, icmp6 = eth(0x86DD, ipv6(17, udp(P2))), eth(0x86DD, ipv6(58, b"\x80\x00\x00\x00"))
+    v4 = eth(0x0800, ipv4(17, udp(P1)))
+    data = pcap([(TS_S, 0, v4), (TS_S, 0, udp6), (TS_S, 0, icmp6), (TS_S, 0, v4)])
+    seg = read_segments(data)
+    assert payloads(data, seg) == [P1, P1]
+    at_udp6 = 24 + 16 + len(v4) + 16
+    assert seg.problems == [(at_udp6, len(udp6), "IPv6 UDP packet: not read (msdc reads IPv4 only)")]
+    assert_accounted(seg, len(data))
+    raw = pcap([(TS_S, 0, v4), (TS_S, 0, ipv4(17, udp(P2)))], link=101)
+    seg = read_segments(raw)
+    assert payloads(raw, seg) == [P2]
+    assert seg.problems == [(40, len(v4), "packet of link type 101 (raw IP) that starts with neither an IPv4 "
+                                          "nor an IPv6 header: a wrong link type (an Ethernet capture?) or a "
+                                          "damaged packet")]
+    assert_accounted(seg, len(raw))
