@@ -12,7 +12,15 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit
 
-from .recorders import GPS_HEADER_BYTES, ORADIS_HEADER_BYTES, detect_recorder, read_gps, read_oradis
+from .recorders import (
+    ANY_CATEGORY,
+    GPS_HEADER_BYTES,
+    ORADIS_HEADER_BYTES,
+    _tiles,
+    detect_recorder,
+    read_gps,
+    read_oradis,
+)
 
 FORMATS = ("raw", "pcap", "pcapng", "final", "gps", "oradis")
 UNTIMED = ("raw", "oradis")  # no capture time: midnights are counted in file order from the reports' times
@@ -22,6 +30,9 @@ FINAL_HEADER_BYTES = 8
 FINAL_TRAILER = b"\xa5\xa5\xa5\xa5"
 FINAL_MIN_FRAME_BYTES = FINAL_HEADER_BYTES + len(FINAL_TRAILER)
 FINAL_TOD_UNIT_S = 0.01
+FINAL_TOD_LIMIT = 86400 * 100  # header times of day at or past 24 h are damage
+FINAL_MAX_STEP = 600 * 100  # chained frames: times of day at most 10 minutes on...
+FINAL_MAX_BACK = 100  # ... or at most 1 s back (as GPS frames chain)
 # A capture time further than this from most of the packets around it is damage: from 12 h on, it would put
 # its reports on another day (each goes on the day nearest its capture) and could re-date the recording.
 CAPTURE_JUMP_S = 43200
@@ -34,11 +45,15 @@ _PCAP_MAGICS = {  # first four file bytes -> (big endian, nanosecond timestamps)
     b"\xa1\xb2\x3c\x4d": (True, True),
 }
 _PCAP_HEADER_BYTES = 24
+_PCAP_MAX_PACKET_BYTES = 262144  # a captured length above this and the snapshot length is damage
 _PCAPNG_SHB = b"\x0a\x0d\x0d\x0a"
 _PCAPNG_BYTE_ORDERS = {b"\x1a\x2b\x3c\x4d": ">", b"\x4d\x3c\x2b\x1a": "<"}
+# section header, interface description, packet, simple packet, name resolution, interface statistics,
+# enhanced packet, IRIG timestamp, ARINC 429, systemd journal export, decryption secrets, custom blocks
+_PCAPNG_BLOCK_TYPES = (0x0A0D0D0A, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 0xBAD, 0x40000BAD)
 
 # Packet classes returned by _classify; codes >= 2 are problems.
-_PKT_IGNORED, _PKT_UDP, _PKT_LINK, _PKT_FAMILY = 0, 1, 7, 8
+_PKT_IGNORED, _PKT_UDP, _PKT_LINK, _PKT_FAMILY, _PKT_IPV6, _PKT_NOT_IP = 0, 1, 7, 8, 9, 10
 _PKT_REASONS = {
     2: "IPv4 fragment (not reassembled)",
     3: "bad IPv4 header",
@@ -48,7 +63,13 @@ _PKT_REASONS = {
 }
 _LINKS_READ = "Ethernet 1, Linux SLL 113, Linux SLL2 276, raw IP 12, 101, 228, BSD loopback 0, 108"
 _LOOPBACK_FAMILIES = (2, 10, 24, 28, 30)  # AF_INET; AF_INET6 of Linux, NetBSD/OpenBSD, FreeBSD, macOS
-_FINAL_REASONS = {1: "impossible frame length", 2: "bad frame trailer"}
+_FINAL_REASONS = {
+    1: "impossible frame length",
+    2: "bad frame trailer",
+    3: "frame time of day at or past 24 h",
+    4: "frame length does not lead to the next frame (damaged length)",
+    5: "bytes after a frame that do not start a final frame",
+}
 _PCAPNG_REASONS = {1: "bad packet block", 2: "packet for unknown interface"}
 
 
@@ -195,9 +216,11 @@ def _u32(buf, pos, big):
 
 
 @njit(cache=True)
-def _ipv4_offset(buf, start, stop, link):
-    """File offset of the IPv4 header inside a link-layer packet; -1 if it carries no IPv4, -2 for a link type
-    msdc does not read, -3 for a loopback header whose address family is none of _LOOPBACK_FAMILIES."""
+def _ip_offset(buf, start, stop, link):
+    """(file offset of the IP header inside a link-layer packet, 4 or 6: its version), or (0, code) with
+    code -1 if it carries no IP, -2 for a link type msdc does not read, -3 for a loopback header whose
+    address family is none of _LOOPBACK_FAMILIES, -4 for a raw IP packet (link type 101 or 12) that starts
+    with neither an IPv4 nor an IPv6 header."""
     if link == 1:  # Ethernet
         pos, type_pos = start + 14, start + 12
     elif link == 113:  # Linux cooked SLL
@@ -205,39 +228,52 @@ def _ipv4_offset(buf, start, stop, link):
     elif link == 276:  # Linux cooked SLL2
         pos, type_pos = start + 20, start
     elif link == 228:  # raw IPv4
-        return start
+        return start, 4
     elif link == 101 or link == 12:  # raw IP: v4 or v6
-        return start if stop > start and buf[start] >> 4 == 4 else -1
+        if stop <= start:
+            return 0, -1
+        version = buf[start] >> 4
+        return (start, np.int64(version)) if version == 4 or version == 6 else (0, -4)
     elif link == 0 or link == 108:  # BSD loopback: 4-byte address family, AF_INET = 2 in either order
         if stop - start < 4:
-            return -1
+            return 0, -1
         little, big = _u32(buf, start, False), _u32(buf, start, True)
         if little == 2 or big == 2:
-            return start + 4
+            return start + 4, 4
         for family in _LOOPBACK_FAMILIES:
             if little == family or big == family:
-                return -1
-        return -3
+                return start + 4, 6
+        return 0, -3
     else:
-        return -2
+        return 0, -2
     if pos > stop:
-        return -1
+        return 0, -1
     ethertype = _be16(buf, type_pos)
     while (ethertype == 0x8100 or ethertype == 0x88A8 or ethertype == 0x9100) and pos + 4 <= stop:
         ethertype = _be16(buf, pos + 2)  # VLAN tag: 2-byte TCI, then the next ethertype
         pos += 4
-    return pos if ethertype == 0x0800 else -1
+    if ethertype == 0x0800:
+        return pos, 4
+    if ethertype == 0x86DD:
+        return pos, 6
+    return 0, -1
 
 
 @njit(cache=True)
 def _classify_packet(buf, start, stop, link):
     """(class, payload start, payload stop) of one captured packet; see _PKT_REASONS."""
-    ip = _ipv4_offset(buf, start, stop, link) if stop > start else -1
-    if ip == -2:
+    ip, version = _ip_offset(buf, start, stop, link) if stop > start else (0, -1)
+    if version == -2:
         return _PKT_LINK, 0, 0
-    if ip == -3:
+    if version == -3:
         return _PKT_FAMILY, 0, 0
-    if ip < 0:
+    if version == -4:
+        return _PKT_NOT_IP, 0, 0
+    if version == 6:  # IPv6: a UDP datagram (next header 17) is reported as not read, anything else ignored
+        if stop - ip >= 40 and buf[ip] >> 4 == 6 and buf[ip + 6] == 17:
+            return _PKT_IPV6, 0, 0
+        return _PKT_IGNORED, 0, 0
+    if version < 0:
         return _PKT_IGNORED, 0, 0
     if stop - ip < 20:
         return 4, 0, 0
@@ -276,21 +312,105 @@ def _classify(buf, pkt_start, pkt_stop, link):
 
 
 @njit(cache=True)
-def _walk_pcap(buf, big, fill, pkt_start, pkt_stop, ts_s, ts_frac):
-    """Walk classic pcap records, filling the arrays when fill. Returns (packets, offset where it stopped)."""
-    pos, count = 24, 0
-    while pos + 16 <= buf.size:
-        captured_bytes = _u32(buf, pos + 8, big)
-        if pos + 16 + captured_bytes > buf.size:
-            break
+def _pcap_header_code(buf, pos, big, units_per_s, snap_limit):
+    """0 if the 16-byte pcap record header at pos is plausible and its packet ends in the file, else why not:
+    1 fewer than 16 bytes left, 3 timestamp fraction of a second too large, 4 captured length above the
+    snapshot limit, 5 captured length above the original length, 2 packet runs past the end of the file."""
+    if buf.size - pos < 16:
+        return 1
+    captured_bytes, original_bytes = _u32(buf, pos + 8, big), _u32(buf, pos + 12, big)
+    if _u32(buf, pos + 4, big) >= units_per_s:
+        return 3
+    if captured_bytes > snap_limit:
+        return 4
+    if captured_bytes > original_bytes:
+        return 5
+    if pos + 16 + captured_bytes > buf.size:
+        return 2
+    return 0
+
+
+@njit(cache=True)
+def _pcap_close(buf, pos, big, ref_s):
+    """True when the record at pos has a capture second within CAPTURE_JUMP_S of ref_s (or ref_s < 0)."""
+    return ref_s < 0 or abs(_u32(buf, pos, big) - ref_s) <= CAPTURE_JUMP_S
+
+
+@njit(cache=True)
+def _pcap_strong(buf, pos, big, units_per_s, snap_limit, ref_s):
+    """True when three plausible records chain from pos (fewer if the file ends exactly after them), each
+    captured within CAPTURE_JUMP_S of the one before, the first within it of ref_s (unless ref_s < 0)."""
+    for _ in range(3):
+        if _pcap_header_code(buf, pos, big, units_per_s, snap_limit) != 0:
+            return False
+        if not _pcap_close(buf, pos, big, ref_s):
+            return False
+        ref_s = _u32(buf, pos, big)
+        pos += 16 + _u32(buf, pos + 8, big)
+        if pos == buf.size:
+            return True
+    return True
+
+
+@njit(cache=True)
+def _pcap_resync(buf, start, stop, big, units_per_s, snap_limit, ref_s):
+    """First offset in [start, stop) where a strong record chain starts (see _pcap_strong), else stop."""
+    for pos in range(start, min(stop, buf.size - 15)):
+        if _pcap_strong(buf, pos, big, units_per_s, snap_limit, ref_s):
+            return pos
+    return stop
+
+
+@njit(cache=True)
+def _walk_pcap(buf, big, units_per_s, snap_limit, fill, pkt_start, pkt_stop, ts_s, ts_frac, bad):
+    """Walk classic pcap records, resynchronising after damage; fills the arrays when fill.
+
+    A record is kept when its header is plausible (_pcap_header_code) and either the next record header
+    is plausible and captured within CAPTURE_JUMP_S of it, or no strong chain (_pcap_strong) starts inside
+    it (else its captured length is wrong). Damage is reported from the damaged header up to the next
+    strong chain: bad rows (offset, bytes, code, detail: the offset of the chain found inside the record
+    for code 6, bytes past the end for code 2; offset of the record before when it did not chain, or -1).
+    Returns (packets, bad rows).
+    """
+    pos, count, problems = 24, 0, 0
+    ref_s = np.int64(-1)  # capture second of the last record kept
+    before = np.int64(-1)  # offset of the last record kept when its next record header was not plausible
+    while pos < buf.size:
+        code = _pcap_header_code(buf, pos, big, units_per_s, snap_limit)
+        captured_bytes = _u32(buf, pos + 8, big) if buf.size - pos >= 16 else np.int64(0)
+        detail = np.int64(0)
+        nxt = pos + 16 + captured_bytes
+        if code == 0 or code == 2:
+            chains = nxt == buf.size or (
+                code == 0 and _pcap_header_code(buf, nxt, big, units_per_s, snap_limit) == 0
+                and _pcap_close(buf, nxt, big, _u32(buf, pos, big)))
+            inside = buf.size if chains else _pcap_resync(buf, pos + 1, min(nxt, buf.size), big, units_per_s,
+                                                          snap_limit, _u32(buf, pos, big))
+            if inside < min(nxt, buf.size):
+                code, detail = 6, inside
+            elif code == 0:
+                if fill:
+                    pkt_start[count], pkt_stop[count] = pos + 16, nxt
+                    ts_s[count], ts_frac[count] = _u32(buf, pos, big), _u32(buf, pos + 4, big)
+                count += 1
+                ref_s = _u32(buf, pos, big)
+                before = -1 if chains else pos
+                pos = nxt
+                continue
+            else:
+                detail = nxt - buf.size
+        resume = buf.size
+        if code != 1 and code != 2:
+            resume = _pcap_resync(buf, pos + 1, buf.size, big, units_per_s, snap_limit, ref_s)
+        if code == 1 or (code != 3 and _pcap_close(buf, pos, big, ref_s)):
+            before = -1  # a record header but for its damage: the record before is not in question
         if fill:
-            pkt_start[count] = pos + 16
-            pkt_stop[count] = pos + 16 + captured_bytes
-            ts_s[count] = _u32(buf, pos, big)
-            ts_frac[count] = _u32(buf, pos + 4, big)
-        count += 1
-        pos += 16 + captured_bytes
-    return count, pos
+            bad[problems, 0], bad[problems, 1], bad[problems, 2] = pos, resume - pos, code
+            bad[problems, 3], bad[problems, 4] = detail, before
+        problems += 1
+        before = -1
+        pos = resume
+    return count, problems
 
 
 @njit(cache=True)
@@ -308,39 +428,106 @@ def _final_frame_error(buf, pos):
 
 
 @njit(cache=True)
+def _final_tod(buf, pos):
+    """Time of day (10 ms units) in the header of the frame at pos."""
+    return (np.int64(buf[pos + 5]) << 16) | _be16(buf, pos + 6)
+
+
+@njit(cache=True)
+def _final_plausible(buf, pos):
+    """A well-formed final frame at pos whose time of day is below 24 h."""
+    return pos < buf.size and _final_frame_error(buf, pos) == 0 and _final_tod(buf, pos) < FINAL_TOD_LIMIT
+
+
+@njit(cache=True)
+def _final_chained(buf, pos, nxt):
+    """A plausible frame at nxt whose time of day follows that of the frame at pos (as GPS frames chain)."""
+    if not _final_plausible(buf, nxt):
+        return False
+    step = (_final_tod(buf, nxt) - _final_tod(buf, pos)) % FINAL_TOD_LIMIT
+    return step <= FINAL_MAX_STEP or step >= FINAL_TOD_LIMIT - FINAL_MAX_BACK
+
+
+@njit(cache=True)
+def _final_ends(buf, pos):
+    """True at the end of the file or where the rest is a frame cut by it (a truncated tail)."""
+    return buf.size - pos < FINAL_MIN_FRAME_BYTES or pos + _be16(buf, pos) > buf.size
+
+
+@njit(cache=True)
+def _final_strong(buf, pos, end_ok):
+    """Three chained frames from pos (two if the end follows; one if end_ok and the end follows); the end
+    includes a frame cut by it. The first frame's data must be data blocks end to end (so that a false frame
+    inside damaged data, whose length happens to reach a true frame, is not taken)."""
+    if not _final_plausible(buf, pos):
+        return False
+    if not _tiles(buf, pos + FINAL_HEADER_BYTES, pos + _be16(buf, pos) - 4, ANY_CATEGORY):
+        return False
+    n1 = pos + _be16(buf, pos)
+    if _final_ends(buf, n1):
+        return end_ok
+    if not _final_chained(buf, pos, n1):
+        return False
+    n2 = n1 + _be16(buf, n1)
+    return _final_ends(buf, n2) or _final_chained(buf, n1, n2)
+
+
+@njit(cache=True)
+def _final_first_strong(buf, pos, stop, end_ok):
+    """First offset in [pos, stop) where a strong frame starts, else stop."""
+    for r in range(pos, stop):
+        if _final_strong(buf, r, end_ok):
+            return r
+    return stop
+
+
+@njit(cache=True)
 def _final_resync(buf, pos):
-    """First offset >= pos where a well-formed final frame starts, else the buffer size."""
-    for start in range(pos, buf.size - 11):
-        end = start + ((np.int64(buf[start]) << 8) | buf[start + 1])
-        if end - start >= 12 and end <= buf.size and buf[end - 1] == 0xA5 and buf[end - 2] == 0xA5:
-            if buf[end - 3] == 0xA5 and buf[end - 4] == 0xA5:
-                return start
+    """Where the walk resumes from pos: the first strong frame, unless one starts inside it (its length then
+    reached a true frame by coincidence: take the inner one, and so on); the end if none."""
+    r = _final_first_strong(buf, pos, buf.size, True)
+    while r < buf.size:
+        inner_stop = min(r + _be16(buf, r), buf.size)
+        inner = _final_first_strong(buf, r + 1, inner_stop, False)
+        if inner == inner_stop:
+            return r
+        r = inner
     return buf.size
 
 
 @njit(cache=True)
 def _walk_final(buf, fill, seg_start, seg_stop, seg_day, seg_tod, bad_start, bad_stop, bad_code):
-    """Walk final frames, resynchronising after damage; fills arrays when fill. Returns (frames, problems)."""
-    pos, frames, problems = 0, 0, 0
+    """Walk final frames as recorders.py walks GPS frames (only from trusted positions; a frame that does not
+    chain is kept unless a strong frame starts inside it; resynchronise on three chained frames); fills
+    the arrays when fill. Returns (frames, problems)."""
+    pos, frames, problems, trusted = np.int64(0), 0, 0, True
     while pos < buf.size:
         code = _final_frame_error(buf, pos)
-        if code == 0:
+        if code == 0 and _final_tod(buf, pos) >= FINAL_TOD_LIMIT:
+            code = 3
+        if trusted and code == 0:
             frame_bytes = _be16(buf, pos)
-            if frame_bytes > 12:
-                if fill:
-                    seg_start[frames] = pos + 8
-                    seg_stop[frames] = pos + frame_bytes - 4
-                    seg_day[frames] = buf[pos + 4]
-                    tod_units = (np.int64(buf[pos + 5]) << 16) | _be16(buf, pos + 6)
-                    seg_tod[frames] = tod_units * FINAL_TOD_UNIT_S
-                frames += 1
-            pos += frame_bytes
-        else:
-            resume = _final_resync(buf, pos + 1)
+            nxt = pos + frame_bytes
+            chains = _final_ends(buf, nxt) or _final_chained(buf, pos, nxt)
+            # the first frame has no predecessor vouching for its start: it must not hide a chained frame
+            if chains and frames + problems > 0 or _final_first_strong(buf, pos + 1, nxt, False) == nxt:
+                if frame_bytes > 12:
+                    if fill:
+                        seg_start[frames] = pos + 8
+                        seg_stop[frames] = nxt - 4
+                        seg_day[frames] = buf[pos + 4]
+                        seg_tod[frames] = _final_tod(buf, pos) * FINAL_TOD_UNIT_S
+                    frames += 1
+                pos, trusted = nxt, chains
+                continue
+            code = 4
+        resume = _final_resync(buf, pos + (1 if trusted else 0))
+        if resume > pos:
             if fill:
-                bad_start[problems], bad_stop[problems], bad_code[problems] = pos, resume, code
+                bad_start[problems], bad_stop[problems] = pos, resume
+                bad_code[problems] = code if code != 0 else 5
             problems += 1
-            pos = resume
+        pos, trusted = resume, True
     return frames, problems
 
 
@@ -359,7 +546,10 @@ def _packet_segments(fmt: str, buf: np.ndarray, pkt_start: np.ndarray, pkt_stop:
     for code, reason in _PKT_REASONS.items():
         for i in np.flatnonzero(kind == code):
             problems.append((int(pkt_start[i]), int(pkt_stop[i] - pkt_start[i]), reason))
-    for i in np.flatnonzero((kind == _PKT_LINK) | (kind == _PKT_FAMILY)):
+    for i in np.flatnonzero(kind == _PKT_IPV6):
+        problems.append((int(pkt_start[i]), int(pkt_stop[i] - pkt_start[i]),
+                         "IPv6 UDP packet: not read (msdc reads IPv4 only)"))
+    for i in np.flatnonzero((kind == _PKT_LINK) | (kind == _PKT_FAMILY) | (kind == _PKT_NOT_IP)):
         why = _link_reason(int(link[i]), int(kind[i]))
         problems.append((int(pkt_start[i]), int(pkt_stop[i] - pkt_start[i]), why))
     keep = (kind == _PKT_UDP) & (pay_stop > pay_start)
@@ -379,6 +569,9 @@ def _link_reason(link: int, kind: int) -> str:
     """Why a packet of a link type msdc does not read, or a loopback packet of no known family, is skipped."""
     if kind == _PKT_LINK:
         return f"packet of link type {link}, which msdc does not read (it reads {_LINKS_READ})"
+    if kind == _PKT_NOT_IP:
+        return (f"packet of link type {link} (raw IP) that starts with neither an IPv4 nor an IPv6 header: "
+                "a wrong link type (an Ethernet capture?) or a damaged packet")
     return (f"packet of link type {link} (BSD loopback) whose address family is neither IPv4 nor IPv6: "
             "a wrong link type or a damaged packet")
 
@@ -423,14 +616,45 @@ def _read_pcap(buf: np.ndarray) -> Segments:
         return _empty("pcap", buf.size, [(0, buf.size, "truncated pcap file header")])
     big, nano = _PCAP_MAGICS[magic]
     link = struct.unpack_from(">I" if big else "<I", buf, 20)[0] & 0xFFFF
-    none = np.zeros(0, np.int64)
-    count, _ = _walk_pcap(buf, big, False, none, none, none, none)
+    units_per_s = 10**9 if nano else 10**6
+    snap_bytes = struct.unpack_from(">I" if big else "<I", buf, 16)[0]
+    snap_limit = max(snap_bytes, _PCAP_MAX_PACKET_BYTES)
+    none, no_bad = np.zeros(0, np.int64), np.zeros((0, 5), np.int64)
+    count, bad = _walk_pcap(buf, big, units_per_s, snap_limit, False, none, none, none, none, no_bad)
     pkt_start, pkt_stop, ts_s, ts_frac = (np.zeros(count, np.int64) for _ in range(4))
-    _, end = _walk_pcap(buf, big, True, pkt_start, pkt_stop, ts_s, ts_frac)
-    problems = [(int(end), int(buf.size - end), "truncated packet record")] if end < buf.size else []
-    day, tod = _day_tod(ts_s, ts_frac, 10**9 if nano else 10**6)
+    bad_rows = np.zeros((bad, 5), np.int64)
+    _walk_pcap(buf, big, units_per_s, snap_limit, True, pkt_start, pkt_stop, ts_s, ts_frac, bad_rows)
+    problems = [(int(row[0]), int(row[1]), _pcap_reason(buf, big, row, units_per_s, snap_bytes))
+                for row in bad_rows]
+    day, tod = _day_tod(ts_s, ts_frac, units_per_s)
     return _packet_segments("pcap", buf, pkt_start, pkt_stop, np.full(count, link, np.int64), day, tod,
                             problems)
+
+
+def _pcap_reason(buf: np.ndarray, big: bool, row: np.ndarray, units_per_s: int, snap_bytes: int) -> str:
+    """Why the pcap bytes of a _walk_pcap bad row were skipped, and where reading resumes."""
+    pos, length, code, detail, before = (int(v) for v in row)
+    end = pos + length
+    if code == 1:
+        return f"truncated packet record header ({length} of its 16 bytes)"
+    frac, captured, original = struct.unpack_from(">III" if big else "<III", buf, pos + 4)
+    if code == 2:
+        return (f"truncated packet record (captured length {captured}, {detail} bytes past the end of the "
+                "file)")
+    why = {
+        3: f"implausible packet record header (timestamp fraction {frac}, not below {units_per_s})",
+        4: f"captured length {captured} exceeds the snapshot length {snap_bytes}",
+        5: f"captured length {captured} exceeds the original length {original}",
+        6: f"captured length {captured} runs past the packet record at offset {detail}",
+    }[code]
+    if before >= 0:
+        why = (f"implausible packet record header ({why.removeprefix('implausible packet record header (')})"
+               if code != 3 else why)
+        why += (f", where the captured length of the record at offset {before} leads: that length may be the "
+                "damage")
+    if end < buf.size:
+        return why + f"; reading resumes at the next plausible packet record, offset {end}"
+    return why + "; no plausible packet record follows"
 
 
 def _idb_options(raw: memoryview, order: str, pos: int, end: int) -> tuple[int, int]:
@@ -499,6 +723,44 @@ def _walk_pcapng(buf, pos, big, interfaces, snap_bytes, fill, packets, bad):
     return count, problems, pos
 
 
+@njit(cache=True)
+def _pcapng_block_ok(buf, pos, big):
+    """Offset just past the pcapng block at pos when its type is a known one (_PCAPNG_BLOCK_TYPES) and its
+    leading and trailing lengths agree, else -1."""
+    if buf.size - pos < 12:
+        return -1
+    block_type, block_bytes = _u32(buf, pos, big), _u32(buf, pos + 4, big)
+    known = False
+    for kind in _PCAPNG_BLOCK_TYPES:
+        known = known or block_type == kind
+    if not known or block_bytes < 12 or block_bytes % 4 != 0 or block_bytes > buf.size - pos:
+        return -1
+    if _u32(buf, pos + block_bytes - 4, big) != block_bytes:
+        return -1
+    return pos + block_bytes
+
+
+@njit(cache=True)
+def _pcapng_resync(buf, start, big):
+    """First offset >= start of a block that _pcapng_block_ok takes and that ends the file or is followed by
+    another it takes (a chain of two), else the buffer size."""
+    for pos in range(start, buf.size - 11):
+        nxt = _pcapng_block_ok(buf, pos, big)
+        if nxt >= 0 and (nxt == buf.size or _pcapng_block_ok(buf, nxt, big) >= 0):
+            return pos
+    return buf.size
+
+
+def _pcapng_damage(buf: np.ndarray, pos: int, order: str, why: str) -> tuple[int, tuple[int, int, str]]:
+    """(where reading resumes, the problem) for the pcapng block at pos whose framing is broken (why)."""
+    resume = int(_pcapng_resync(buf, pos + 1, order == ">"))
+    if resume < buf.size:
+        why += f"; reading resumes at the next block whose lengths agree, offset {resume}"
+    else:
+        why += "; no block whose lengths agree follows"
+    return resume, (pos, resume - pos, why)
+
+
 def _read_pcapng(buf: np.ndarray) -> Segments:
     """pcapng: walk blocks by their lengths; packets come from EPB, SPB and obsolete packet blocks.
 
@@ -538,11 +800,16 @@ def _read_pcapng(buf: np.ndarray) -> Segments:
             break
         block_type, block_bytes = struct.unpack_from(order + "II", raw, pos)
         if block_bytes < 12 or block_bytes % 4 or block_bytes > n - pos:
-            problems.append((pos, n - pos, "bad block length"))
-            break
-        if struct.unpack_from(order + "I", raw, pos + block_bytes - 4)[0] != block_bytes:
-            problems.append((pos, n - pos, "block length mismatch"))
-            break
+            past = f", {block_bytes - (n - pos)} bytes past the end of the file" * (block_bytes > n - pos)
+            pos, problem = _pcapng_damage(buf, pos, order, f"bad block length ({block_bytes}{past})")
+            problems.append(problem)
+            continue
+        trailing = struct.unpack_from(order + "I", raw, pos + block_bytes - 4)[0]
+        if trailing != block_bytes:
+            why = f"block length mismatch (leading length {block_bytes}, trailing length {trailing})"
+            pos, problem = _pcapng_damage(buf, pos, order, why)
+            problems.append(problem)
+            continue
         if block_type == 0x0A0D0D0A and block_bytes < 28:
             problems.append((pos, block_bytes, "bad section header block"))
         elif block_type == 1 and block_bytes < 20:

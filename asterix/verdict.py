@@ -172,14 +172,36 @@ def recorder_words(path, skipped_blocks: int, fmt: str) -> str:
             f"--format {fmt}")
 
 
+COMPRESSED = (  # (magic bytes, what, the command that decompresses it)
+    (b"\x1f\x8b", "gzip", "gunzip"),
+    (b"BZh", "bzip2", "bunzip2"),
+    (b"\xfd7zXZ\x00", "xz", "unxz"),
+    (b"\x28\xb5\x2f\xfd", "zstd", "unzstd"),
+    (b"PK\x03\x04", "zip", "unzip"),
+)
+
+
+def compressed(head: bytes) -> str | None:
+    """'gzip-compressed: decompress it first (gunzip)' (or bzip2, xz, zstd, zip) for a head that starts
+    with that compressor's magic bytes, else None. msdc reads no compressed file."""
+    for magic, what, tool in COMPRESSED:
+        if head.startswith(magic):
+            return f"{what}-compressed: decompress it first ({tool})"
+    return None
+
+
 def not_asterix_text(name: str, tally: Tally, head: bytes, sampled: int = 0) -> str:
     """'NAME is not ASTERIX', what reading it found and what its first bytes are; ``sampled``: the bytes
     read when the account is of windows of a larger file (sniff)."""
     share = f"{math.floor(100 * tally.undecoded_share)}%"  # 100% only when no byte decodes
     of = (f"of {sampled} bytes read at its start, middle and end, {share}" if sampled else
           f"{share} of its {tally.payload} bytes")
-    return (f"{name} is not ASTERIX: read as {tally.format or 'raw'}, {of} frame into no data block that "
-            f"decodes ({tally._where()}); {head_words(head)}{tally._detected_words()}")
+    said = (f"read as {tally.format or 'raw'}, {of} frame into no data block that decodes "
+            f"({tally._where()}); {head_words(head)}{tally._detected_words()}")
+    packed = compressed(head)
+    if packed:
+        return f"{name} is not ASTERIX but {packed} ({said})"
+    return f"{name} is not ASTERIX: {said}"
 
 
 def head_words(head: bytes) -> str:

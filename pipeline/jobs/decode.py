@@ -104,7 +104,7 @@ def decode_job(options: DecodeOptions, *, on_chunk: Callable[[int, int, str], No
     import msdc.asterix as asterix
     from msdc.asterix.errors import UnreadableInput
     from msdc.asterix.reader import categories_in
-    from msdc.asterix.verdict import Tally, head_of, sniff
+    from msdc.asterix.verdict import Tally, compressed, head_of, sniff
     from msdc.pipeline.model.sources import file_labels
     from msdc.pipeline.model.time import DayTally
 
@@ -130,6 +130,8 @@ def decode_job(options: DecodeOptions, *, on_chunk: Callable[[int, int, str], No
         except UnreadableInput as exc:
             raise JobError(str(exc), 2) from exc
         if said and not options.lenient:
+            if compressed(head_of(path)):  # decoding it anyway is no help: decompressing it is
+                raise JobError(f"{said}; nothing written")
             raise JobError(f"{said}; nothing written (--lenient decodes it anyway)")
         if said:
             content.append(said)

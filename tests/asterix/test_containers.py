@@ -173,7 +173,8 @@ def test_pcap_fragments_and_truncated_record() -> None:
     assert seg.problems == [
         (offset_2, len(first_fragment), "IPv4 fragment (not reassembled)"),
         (offset_3, len(later_fragment), "IPv4 fragment (not reassembled)"),
-        (len(data) - len(truncated), len(truncated), "truncated packet record"),
+        (len(data) - len(truncated), len(truncated),
+         "truncated packet record (captured length 100, 80 bytes past the end of the file)"),  # 100 - 20
     ]
     problem_bytes = len(first_fragment) + len(later_fragment) + len(truncated)
     assert seg.container_bytes == len(data) - len(P1) - problem_bytes
@@ -346,7 +347,9 @@ def test_pcapng_damage() -> None:
     assert seg.capture_day.tolist() == [0] and seg.capture_tod.tolist() == [0.0]
     assert seg.problems == [
         (len(good) + 28, len(packet), "packet for unknown interface"),
-        (len(good) + len(unknown_interface), len(bad_length), "bad block length"),
+        (len(good) + len(unknown_interface), len(bad_length),  # 0x7FFFFFF0 = 2147483632, 20 bytes left
+         "bad block length (2147483632, 2147483612 bytes past the end of the file); no block whose lengths "
+         "agree follows"),
     ]
     assert_accounted(seg, len(data))
     no_section = read_segments(png_idb("<", 1), "pcapng")
@@ -495,3 +498,27 @@ def test_mutated_containers_accounted(kind: str, draw: st.DataObject) -> None:
             del data[position:]
     for fmt in (None, kind):
         assert_accounted(read_segments(bytes(data), fmt), len(data))
+
+
+def test_ipv6_udp_and_non_ip_raw_packets_are_reported() -> None:
+    # an IPv6/UDP datagram (next header 17 at byte 6 of the 40-byte IPv6 header) is not read: reported, not
+    # passed over; other IPv6 (here ICMPv6, 58) stays ignored. On link type 101 (raw IP) an Ethernet frame
+    # (first nibble 0) is reported as neither IPv4 nor IPv6.
+    def ipv6(next_header: int, body: bytes) -> bytes:
+        return struct.pack(">IHBB16s16s", 6 << 28, len(body), next_header, 64, bytes(16), bytes(16)) + body
+
+    udp6, icmp6 = eth(0x86DD, ipv6(17, udp(P2))), eth(0x86DD, ipv6(58, b"\x80\x00\x00\x00"))
+    v4 = eth(0x0800, ipv4(17, udp(P1)))
+    data = pcap([(TS_S, 0, v4), (TS_S, 0, udp6), (TS_S, 0, icmp6), (TS_S, 0, v4)])
+    seg = read_segments(data)
+    assert payloads(data, seg) == [P1, P1]
+    at_udp6 = 24 + 16 + len(v4) + 16
+    assert seg.problems == [(at_udp6, len(udp6), "IPv6 UDP packet: not read (msdc reads IPv4 only)")]
+    assert_accounted(seg, len(data))
+    raw = pcap([(TS_S, 0, v4), (TS_S, 0, ipv4(17, udp(P2)))], link=101)
+    seg = read_segments(raw)
+    assert payloads(raw, seg) == [P2]
+    assert seg.problems == [(40, len(v4), "packet of link type 101 (raw IP) that starts with neither an IPv4 "
+                                          "nor an IPv6 header: a wrong link type (an Ethernet capture?) or a "
+                                          "damaged packet")]
+    assert_accounted(seg, len(raw))

@@ -151,3 +151,18 @@ def test_sound_recordings_say_nothing():
         for name in ("radar.ast", "adsb.ast"):
             rec = asterix.read(FIXTURES / name)
             assert not rec.implausible and rec.oversized_bytes == 0
+
+
+def test_gzip_input_is_said_to_be_compressed(tmp_path, capsys):
+    """A gzip-compressed recording was 'not ASTERIX ... starts with bytes 1f 8b' with --lenient suggested,
+    which cannot help: it is said to be gzip-compressed, to decompress first, and --lenient is not offered."""
+    import gzip
+
+    path = write(tmp_path, "radar.ast.gz", gzip.compress((FIXTURES / "radar.ast").read_bytes()))
+    out = tmp_path / "r.csv"
+    assert main(["decode", str(path), "-o", str(out)]) == 1
+    err = capsys.readouterr().err
+    assert "radar.ast.gz is not ASTERIX but gzip-compressed: decompress it first (gunzip)" in err
+    assert "--lenient" not in err and not out.exists()
+    with pytest.warns(asterix.ContentWarning, match="gzip-compressed: decompress it first"):
+        asterix.read(path)
