@@ -1007,7 +1007,8 @@ def _raw_identities(category: int, edition: str, data: dict[str, np.ndarray], he
                     ) -> None:
     """Each identification column written from its ``NAME_hex`` raw bits where given (the exact bytes: an
     all-zero or all-space identification decodes to no text, and was lost), from its text elsewhere. A
-    row giving both must agree (the hex read as text is the text): an edited text is not overwritten."""
+    row giving both must agree (the hex read as text is the text; no text, a hex that reads as none): an
+    edited or removed text is not overwritten."""
     for name, digits in _identity_columns(category, edition).items():
         if name + HEX not in hexes:
             continue
@@ -1031,6 +1032,14 @@ def _raw_identities(category: int, edition: str, data: dict[str, np.ndarray], he
                 raise ValueError(f"row {row}: {name} {t!r} and {name + HEX} {uniques[j]!r} (which reads "
                                  f"{reads!r}) disagree: drop {name + HEX} to write the text, or make them "
                                  "agree")
+        absent = given & pd.isna(text)  # no text: the hex must read as none (all zero or all spaces)
+        for j in np.unique(codes[absent]):
+            reads = icao_text(int(uniques[j], 16))
+            if reads:
+                row = int(np.flatnonzero(absent & (codes == j))[0])
+                raise ValueError(f"row {row}: {name} absent and {name + HEX} {uniques[j]!r} (which reads "
+                                 f"{reads!r}) disagree: drop {name + HEX} to leave the item out, or make "
+                                 "them agree")
         out = text.copy()
         holder = np.empty(len(exact), dtype=object)
         holder[:] = exact

@@ -443,6 +443,14 @@ def test_a_callsign_and_its_hex_that_disagree_are_refused() -> None:
     with pytest.raises(ValueError, match=r"^row 1: callsign 'ABC' and callsign_hex '000000000000' \(which "
                                          r"reads ''\) disagree: drop callsign_hex to write the text"):
         encode_frame(21, frame, edition="0.23")
+    # a removed call sign beside the hex of MAS72: refused too (the hex would put MAS72 back); beside the
+    # all-zero hex, no text agrees
+    removed = frame.assign(callsign=[None, None])
+    words = (r"^row 0: callsign absent and callsign_hex '3414F7CA0820' \(which reads 'MAS72'\) disagree: "
+             r"drop callsign_hex to leave the item out")
+    with pytest.raises(ValueError, match=words):
+        encode_frame(21, removed, edition="0.23")
+    assert encode_frame(21, removed.iloc[[1]], edition="0.23")
     with pytest.raises(ValueError, match=r"^column 'callsign_hex' row 0: '0000' is not 12 hex digits"):
         encode_frame(21, pd.DataFrame({"sac": [1], "callsign_hex": ["0000"]}), edition="0.23")
 

@@ -23,7 +23,7 @@ def readdressed(tmp_path_factory) -> Path:
     axm = frame["address"] == "75008A"
     frame.loc[axm, "address"], frame.loc[axm, "callsign"] = "750312", "MAS72"
     path = tmp_path_factory.mktemp("mixed") / "adsb.ast"
-    path.write_bytes(encode_frame(21, frame))
+    path.write_bytes(encode_frame(21, frame.drop(columns="callsign_hex")))  # the call sign from its text
     return path
 
 
