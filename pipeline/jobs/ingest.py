@@ -126,7 +126,7 @@ def ingest_job(options: IngestOptions, *, on_chunk: Callable[[int, int, str], No
                                                   f"ingested {rec['ingested_at']}): nothing to do"
                                                   + _options_not_applied(rec, settings)))
     except BaseException as exc:
-        if made and not any(root.glob("date=*")) and not (root / mf.MANIFEST).exists():
+        if made and not _holds_files(root):
             _remove_made(root)  # the folder this run made, holding nothing: as it was, absent
         if isinstance(exc, IngestFailed):
             raise JobError(str(exc), exc.status) from None
@@ -252,6 +252,15 @@ def _forkserver():
     finally:
         os.environ.pop(WARM_ENV, None)
     return ctx
+
+
+def _holds_files(root: Path) -> bool:
+    """Whether the dataset folder holds a file besides its lock: a manifest or a part, finished or not
+    (partition folders a stopped run made before its first part, empty, hold nothing: a Ctrl-C then left
+    the folder, its lock and those folders behind)."""
+    from msdc.pipeline.dataset.layout import LOCK
+
+    return any(p.is_file() and p.name != LOCK for p in root.rglob("*"))
 
 
 def _remove_made(root: Path) -> None:

@@ -419,3 +419,22 @@ def test_an_input_that_is_not_asterix_writes_nothing(tmp_path, capsys):
     assert ingest(RADAR, junk, "--dataset", root, "--date", DAY) == 1
     assert "nothing ingested" in capsys.readouterr().err
     assert not root.exists()
+
+
+def test_a_stop_before_the_first_part_leaves_no_folder(tmp_path, monkeypatch):
+    """An ingest stopped after it made a partition folder but before any part file was in it left the new
+    dataset folder behind, with its lock and the empty partition folders (the pooled Ctrl-C test, 1 run in
+    ~10 under load): the folder it made, holding no file, is removed, as when nothing was made at all."""
+    import msdc.pipeline.dataset.ingest_input as step
+    from msdc.pipeline.jobs import ingest
+
+    root = tmp_path / "ds"
+
+    def stopped(*args, **kwargs):
+        (root / "date=2019-03-01" / "category=048" / "sensor=25_201").mkdir(parents=True)
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(step, "ingest_input", stopped)  # the job imports it when it runs
+    with pytest.raises(KeyboardInterrupt):
+        ingest.ingest_job(ingest.IngestOptions(inputs=(str(RADAR),), dataset=str(root), date=DAY))
+    assert not root.exists()
