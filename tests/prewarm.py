@@ -71,7 +71,8 @@ def main(done: Path) -> None:
 
 def careful_framing(path: Path) -> None:
     """Frame the recording at ``path`` carefully, window by window, as a decode does (kernel.frame_window
-    and the resynchronisation search compiled with a decode's argument types: a later decode loads them)."""
+    and the resynchronisation search compiled with a decode's argument types: a later decode loads them),
+    then walk captures of its first block (capture_walkers)."""
     import numpy as np
 
     from msdc.asterix import kernel
@@ -84,6 +85,22 @@ def careful_framing(path: Path) -> None:
     framer = Framer(buf, seg, np.full(len(seg.start), kernel.MODE_CAREFUL, np.int8), tables_for({48: None}))
     while not framer.done:
         framer.window()
+    capture_walkers(bytes(buf[:int.from_bytes(buf[1:3].tobytes(), "big")]))
+
+
+def capture_walkers(block: bytes) -> None:
+    """Walk a pcap and a pcapng capture of ``block``: their walkers and resynchronisation (about 3 s of
+    compiling on a cold cache, else paid by the first container test of each worker)."""
+    import numpy as np
+    from container_bytes import pcap_file, png_epb, png_idb, png_shb, udp_frame
+
+    from msdc.asterix.containers import read_segments
+
+    pcap, _ = pcap_file([(1_551_427_200 + i, 0, udp_frame(block)) for i in range(3)])
+    read_segments(np.frombuffer(pcap, np.uint8), "pcap")
+    pcapng = png_shb("<") + png_idb("<", 1) + b"".join(png_epb("<", 0, 10**6 * i, udp_frame(block))
+                                                       for i in range(3))
+    read_segments(np.frombuffer(pcapng, np.uint8), "pcapng")
 
 
 def _quietly(fn, argv: list[str]) -> None:

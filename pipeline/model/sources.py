@@ -36,7 +36,7 @@ _SURROGATE = re.compile("[\ud800-\udfff]")
 def escaped(text: str, backslash: str = "\\") -> str:
     """``text`` with each lone surrogate as an escape: ``backslash`` then xNN for a byte that was not UTF-8
     (surrogateescape's U+DC80-U+DCFF), else uNNNN; ``backslash`` is two characters inside JSON text."""
-    if not _SURROGATE.search(text):
+    if text.isascii() or not _SURROGATE.search(text):  # isascii: a flag, no scan
         return text
     return _SURROGATE.sub(lambda m: backslash + (f"x{ord(m[0]) - 0xDC00:02x}" if 0xDC80 <= ord(m[0]) <= 0xDCFF
                                                  else f"u{ord(m[0]):04x}"), text)
