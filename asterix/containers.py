@@ -16,7 +16,7 @@ from .recorders import (
     ANY_CATEGORY,
     GPS_HEADER_BYTES,
     ORADIS_HEADER_BYTES,
-    _tiles,
+    blocks_tile,
     detect_recorder,
     read_gps,
     read_oradis,
@@ -461,7 +461,7 @@ def _final_strong(buf, pos, end_ok):
     inside damaged data, whose length happens to reach a true frame, is not taken)."""
     if not _final_plausible(buf, pos):
         return False
-    if not _tiles(buf, pos + FINAL_HEADER_BYTES, pos + _be16(buf, pos) - 4, ANY_CATEGORY):
+    if not blocks_tile(buf, pos + FINAL_HEADER_BYTES, pos + _be16(buf, pos) - 4, ANY_CATEGORY):
         return False
     n1 = pos + _be16(buf, pos)
     if _final_ends(buf, n1):

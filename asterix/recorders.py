@@ -235,7 +235,7 @@ def _first_block_ok(buf, pos, cats):
 
 
 @njit(cache=True)
-def _tiles(buf, start, stop, cats):
+def blocks_tile(buf, start, stop, cats):
     """The bytes [start, stop) are data blocks of categories in cats, end to end."""
     q = start
     while q < stop:
@@ -270,7 +270,7 @@ def _oradis_strong(buf, pos, end_ok, cats):
     if _oradis_error(buf, pos) != 0:
         return False
     nxt = pos + _be16(buf, pos)
-    if not _tiles(buf, pos + ORADIS_HEADER_BYTES, nxt, cats):
+    if not blocks_tile(buf, pos + ORADIS_HEADER_BYTES, nxt, cats):
         return False
     return (end_ok or nxt < buf.size) and _oradis_follows(buf, nxt, cats)
 
@@ -309,7 +309,7 @@ def _walk_oradis(buf, cats, fill, seg_start, seg_stop, bad_start, bad_stop, bad_
             chains = _oradis_follows(buf, nxt, cats)
             # a packet that chains is kept unless its payload does not frame and a strong packet starts
             # inside it (its length is wrong); a packet that does not chain only if none starts inside
-            good = chains and _tiles(buf, pos + ORADIS_HEADER_BYTES, nxt, cats)
+            good = chains and blocks_tile(buf, pos + ORADIS_HEADER_BYTES, nxt, cats)
             if good or _oradis_first_strong(buf, pos + 1, nxt, True, cats) == nxt:
                 if fill:
                     seg_start[packets], seg_stop[packets] = pos + ORADIS_HEADER_BYTES, nxt
@@ -401,7 +401,7 @@ def _oradis_head(head: bytes, whole: bool) -> bool:
             return False
         if pos + packet_bytes > len(head):
             return count > 0 and not whole
-        if not _tiles(buf, pos + ORADIS_HEADER_BYTES, pos + packet_bytes, ANY_CATEGORY):
+        if not blocks_tile(buf, pos + ORADIS_HEADER_BYTES, pos + packet_bytes, ANY_CATEGORY):
             return False
         pos += packet_bytes
         count += 1
