@@ -362,7 +362,6 @@ class OneOrMany:
             object.__setattr__(self, f.name, value)
 
 
-
 SENSORS_HELP = "sensor positions (TOML [[sensor]] tables)"
 SENSORS_OPTIONAL_HELP = ("sensor positions (TOML [[sensor]] tables); needed when radar plots are used, "
                          "not for ADS-B alone")
