@@ -1047,12 +1047,23 @@ def _raw_identities(category: int, edition: str, data: dict[str, np.ndarray], he
         data[name] = out
 
 
+def _source_changes(frame: pd.DataFrame) -> np.ndarray:
+    """The rows where the data source (sac, sic) differs from the row before, then the row count."""
+    n = len(frame)
+    key = np.zeros(n, np.int64)
+    for name in ("sac", "sic"):
+        if name in frame.columns:
+            key = key * 512 + pd.to_numeric(frame[name], errors="coerce").fillna(-1).to_numpy(np.int64)
+    return np.append(np.flatnonzero(key[1:] != key[:-1]) + 1, n)
+
+
 def encode_frame(category: int, frame: pd.DataFrame, edition: str | None = None, records_per_block: int = 20,
                  prefer: Mapping[str, str] | None = None) -> bytes:
     """Data blocks for a frame (one record per row, in order), at most records_per_block records and 65535
-    bytes per block. Frame columns that are not in the category's schema, derived on decoding (CAT001
-    time_of_day: write truncated_time_of_day and CAT002 messages) or read from I048/250 Mode S registers
-    (their groups are written as zeros, bds_count of them) are ignored."""
+    bytes per block, each of one data source (a new block where sac or sic changes, as a recorder's).
+    Frame columns that are not in the category's schema, derived on decoding (CAT001 time_of_day: write
+    truncated_time_of_day and CAT002 messages) or read from I048/250 Mode S registers (their groups are
+    written as zeros, bds_count of them) are ignored."""
     category = _check_category(category)
     if not isinstance(frame, pd.DataFrame):
         raise TypeError(f"frame: a pandas DataFrame (one row per record, columns named as decoding names "
@@ -1090,11 +1101,12 @@ def encode_frame(category: int, frame: pd.DataFrame, edition: str | None = None,
         raise ValueError(f"row {row}: record of {int(length[row])} bytes cannot fit a data block")
     ends = np.cumsum(length)
     starts = ends - length
+    cuts = _source_changes(frame)
     out = []
     i = 0
     head = bytes([category])
     while i < n:
-        j = min(i + records_per_block, n)
+        j = min(i + records_per_block, n, int(cuts[np.searchsorted(cuts, i, side="right")]))
         while ends[j - 1] - starts[i] + 3 > MAX_BLOCK:
             j -= 1
         size = int(ends[j - 1] - starts[i]) + 3

@@ -376,7 +376,7 @@ def test_an_edition_is_text() -> None:
 
 
 def test_frame_blocks() -> None:
-    frame = pd.DataFrame({"sac": 25, "sic": np.arange(45) % 256, "time_of_day": np.arange(45) * 4.0})
+    frame = pd.DataFrame({"sac": 25, "sic": 7, "time_of_day": np.arange(45) * 4.0})
     out = encode_frame(48, frame)
     rec_len = 1 + 2 + 3  # FSPEC 0xC0, 010, 140
     sizes = [20, 20, 5]
@@ -530,8 +530,13 @@ def test_frame_matches_item_encoder(rows: list[dict]) -> None:
         present = {k: v for k, v in row.items()
                    if v is not None and not (isinstance(v, float) and math.isnan(v))}
         expected.append(reference_record(48, "1.32", present))
-    assert encode_frame(48, frame, records_per_block=3) == b"".join(
-        encode_block(48, expected[i:i + 3]) for i in range(0, len(expected), 3))
+    blocks: list[list[bytes]] = []  # at most 3 records a block, a new one where the data source changes
+    for i, record in enumerate(expected):
+        if not blocks or len(blocks[-1]) == 3 or (rows[i]["sac"], rows[i]["sic"]) != (rows[i - 1]["sac"],
+                                                                                          rows[i - 1]["sic"]):
+            blocks.append([])
+        blocks[-1].append(record)
+    assert encode_frame(48, frame, records_per_block=3) == b"".join(encode_block(48, b) for b in blocks)
 
 
 # ---------------------------------------------------------------------------------------------------------
