@@ -24,7 +24,7 @@ from .families import AUTO, edition_families, edition_span, family_name, family_
 from .frames import code_list_column, empty_columns, frame_of, icao_columns, typed_column
 from .framing import Progress, alike_framings, held, release_pages, segment_modes, survey
 from .layout import OUT_FLAG, OUT_FLOAT, OUT_INT, OUT_WIDE, Layout, compile_layout
-from .plausible import BOUNDS, Implausible, count_implausible, implausible
+from .plausible import BOUNDS, Implausible, count_implausible, count_odd_sources, implausible
 from .stretches import Stretch, describe, foreign_spans
 from .tables import available, resolve_edition
 from .timeline import assign_days, timestamp_index
@@ -64,7 +64,8 @@ class Recording:
       ``decoded_blocks``: per category, the blocks whose records decoded.
     - ``edition_fits``: a category most of whose blocks fail under its edition, and the editions every
       one sampled walks under; ``edition_stretches``: stretches of another edition family, withheld;
-      ``implausible``: per category, the records holding values no real report carries; ``untimed``:
+      ``implausible``: per category, the records holding values no real report carries; ``odd_sources``:
+      per category, the records naming another data source than the rest of their block; ``untimed``:
       CAT001 records no CAT002 message timed (offset, category, sac, sic, reason).
     """
 
@@ -95,6 +96,9 @@ class Recording:
     decoded_blocks: dict[int, int] = field(default_factory=dict)  # blocks per category whose records decoded
     # per category, the decoded records holding a value no real report carries (plausible.BOUNDS)
     implausible: dict[int, Implausible] = field(default_factory=dict)
+    # per category, the records naming another data source (SAC/SIC) than most of their block's (damage
+    # inside a block that still walks: plausible.odd_sources)
+    odd_sources: dict[int, Implausible] = field(default_factory=dict)
     # bytes in blocks of categories not decoded longer than OVERSIZED_BLOCK_BYTES: what text and random bytes
     # frame into (printable text makes every LEN at least 0x2020 = 8224), rarely what a recorder writes
     oversized_bytes: int = 0
@@ -906,9 +910,11 @@ def decode_framed(buf: np.ndarray, plan, framed, *, path: str = "", date: dt.dat
         date = dt.date(1970, 1, 1) + dt.timedelta(days=first_day)
     frames: dict[int, pd.DataFrame] = {}
     odd: dict[int, Implausible] = {}
+    mixed: dict[int, Implausible] = {}
     for cat in list(columns):
         cols = columns.pop(cat)
         odd[cat] = count_implausible(cols, cols["offset"])
+        mixed[cat] = count_odd_sources(cols)
         for extra in () if asked is None else set(selected) - set(asked) - set(LEADING):
             cols.pop(extra, None)
         cols["timestamp"] = timestamp_index(cols["day"], cols["time_of_day"], date)
@@ -924,6 +930,7 @@ def decode_framed(buf: np.ndarray, plan, framed, *, path: str = "", date: dt.dat
                      edition_fits=dict(plan.fits), blocks=int(len(b_start)), untimed=untimed,
                      edition_stretches=stretches,
                      decoded_blocks=decoded_blocks, implausible={c: v for c, v in odd.items() if v.records},
+                     odd_sources={c: v for c, v in mixed.items() if v.records},
                      oversized_bytes=oversized_bytes)
 
 
@@ -1019,7 +1026,7 @@ def read(path, *, editions=None, date=None, categories=None, format: str | None 
         warnings.warn(text, UntimedWarning, stacklevel=2)
     content = Tally(str(path))
     content.add(rec)
-    for text in content.warnings(head_of(path), detected=format is None):
+    for text in content.warnings(head_of(path), detected=format is None) + content.notes():
         warnings.warn(text, ContentWarning, stacklevel=2)
     return rec
 

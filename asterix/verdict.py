@@ -26,6 +26,9 @@ IMPLAUSIBLE_SHARE = 0.1  # of a category's records: its records are not what the
 SHOWN = 5  # offsets given in a warning
 SNIFF_BYTES = 1 << 20  # bytes of each of the three windows sniff decodes
 BOUNDS_WORDS = "a position off the Earth or a time of day outside 0-24 h"
+DOUBTED = "bytes that are not what they are read as (not ASTERIX, damage, or another edition)"
+ODD_SOURCE_WORDS = ("name another data source (SAC/SIC) than most records of their data block, or none, "
+                    "which no real recording's block does")
 
 
 @dataclass
@@ -43,6 +46,7 @@ class Tally:
     skipped_runs: int = 0
     records: dict[int, int] = field(default_factory=dict)
     implausible: dict[int, Implausible] = field(default_factory=dict)
+    odd_sources: dict[int, Implausible] = field(default_factory=dict)  # plausible.odd_sources, per category
     damaged: int = 0  # bytes of damaged container structure (counted in ``container`` too)
     damage: list[str] = field(default_factory=list)  # its first distinct reasons
     # the format detection gives a file read under another (forced) one: its damage counts as undecoded
@@ -77,6 +81,8 @@ class Tally:
             self.records[cat] = self.records.get(cat, 0) + len(frame)
         for cat, odd in rec.implausible.items():
             self.implausible[cat] = self.implausible.get(cat, Implausible(0, ())) + odd
+        for cat, odd in rec.odd_sources.items():
+            self.odd_sources[cat] = self.odd_sources.get(cat, Implausible(0, ())) + odd
 
     @property
     def _misread_bytes(self) -> int:
@@ -121,14 +127,28 @@ class Tally:
         elif self.undecoded_share >= MOSTLY_UNDECODED:
             out.append(f"{name}: {self.undecoded_share:.0%} of its {self.payload} bytes did not decode "
                        f"({self._where()}): most of it is not ASTERIX{self._detected_words()}")
-        for cat, odd in sorted(self.implausible.items()):
+        return out + self._odd_records(name, many=True)
+
+    def notes(self) -> list[str]:
+        """Records no real report would be, too few to doubt the input (under IMPLAUSIBLE_SHARE of their
+        category's): said, not failing a decode; their values are kept as the bytes say."""
+        return self._odd_records(Path(self.path).name, many=False)
+
+    def _odd_records(self, name: str, *, many: bool) -> list[str]:
+        """Per category, its implausible records and those naming another data source than their block:
+        those at least IMPLAUSIBLE_SHARE of the category's (``many``) or those under it."""
+        out = []
+        for cat in sorted(set(self.implausible) | set(self.odd_sources)):
             n = self.records.get(cat, 0)
-            if n and odd.records >= IMPLAUSIBLE_SHARE * n:
+            for odd, what in ((self.implausible.get(cat), f"hold {BOUNDS_WORDS}, which no real report does"),
+                              (self.odd_sources.get(cat), ODD_SOURCE_WORDS)):
+                if not n or odd is None or not odd.records or (odd.records >= IMPLAUSIBLE_SHARE * n) != many:
+                    continue
                 more = ", ..." if odd.records > len(odd.offsets) else ""
-                out.append(f"{name}: {odd.records} of its {n} CAT{cat:03d} records ({odd.records / n:.0%}) "
-                           f"hold {BOUNDS_WORDS}, which no real report does (offsets "
-                           f"{', '.join(str(o) for o in odd.offsets)}{more}): bytes that are not what they "
-                           "are read as (not ASTERIX, damage, or another edition)")
+                said = (f"{name}: {odd.records} of its {n} CAT{cat:03d} records"
+                        f"{f' ({odd.records / n:.0%})' if many else ''} {what} (offsets "
+                        f"{', '.join(str(o) for o in odd.offsets)}{more}): ")
+                out.append(said + (DOUBTED if many else "likely damaged; kept as the bytes say"))
         return out
 
     def _recorder(self, head: bytes) -> str | None:

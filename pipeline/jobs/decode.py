@@ -124,6 +124,7 @@ def decode_job(options: DecodeOptions, *, on_chunk: Callable[[int, int, str], No
     day = None  # the first dated input's day, recorded with the selection
     content: list[str] = []  # what the inputs turned out to be, when not sound (asterix.verdict)
     sniffed = set()  # inputs said to be not ASTERIX at once (decoded with --lenient)
+    odd_records: list[str] = []  # records no real report would be, too few to doubt an input (Tally.notes)
     for path in checked.inputs:  # a file that is not ASTERIX at all is said at once
         try:
             said = sniff(path, options.format)
@@ -173,6 +174,7 @@ def decode_job(options: DecodeOptions, *, on_chunk: Callable[[int, int, str], No
                 if path not in sniffed:
                     content += account.warnings(head_of(path), hint=False,  # format_hints says that
                                                 detected=options.format is None)
+                    odd_records += account.notes()
                 early_start += format_hints(options, [{"path": path, "format": fmt, "skipped_blocks": sum(
                     1 for p, _, _ in skipped if p == str(path))}])
         except UnreadableInput as exc:
@@ -202,7 +204,7 @@ def decode_job(options: DecodeOptions, *, on_chunk: Callable[[int, int, str], No
             notes.append(f"selection recorded in {side}")
     held = {} if sum(counts.values()) else {str(p): categories_in(p, format=options.format)
                                               for p in checked.inputs}
-    warnings = checked.warnings + content + early_start + edition_notes.warnings(failed)
+    warnings = checked.warnings + content + odd_records + early_start + edition_notes.warnings(failed)
     counts = {cat: n for cat, n in counts.items() if n or selection is None}
     return DecodeResult(counts, outputs, skipped, warnings, notes, held, out, record, side)
 

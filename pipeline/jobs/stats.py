@@ -128,6 +128,7 @@ def stats_job(options: StatsOptions, *, progress: Progress | None = None) -> Sta
             raise JobError(str(exc), 2) from exc
         early_start += tally.warning(labels[i], info["date"], info["format"])
         content += account.warnings(head_of(path), hint=False, detected=options.format is None)
+        content += account.notes()  # records no real report would be, too few to doubt the input
         inputs.append(info)
         spans.append(by_source)
     dates = [info["date"] for info in inputs if info["date"] is not None]

@@ -14,6 +14,7 @@ import msdc.asterix as asterix
 from msdc.asterix.reader import Recording
 from msdc.asterix.verdict import Tally, head_of
 from msdc.pipeline.model.heap import release_free_memory
+from msdc.pipeline.model.odd_sources import drop_odd_sources, odd_source_texts
 from msdc.pipeline.model.sources import file_labels, pair_codes, pair_of, path_text, source_id
 from msdc.pipeline.model.time import NAT_NS, UNDATED_DAY, DayTally, absolute_time
 from msdc.pipeline.progress import Progress
@@ -167,18 +168,23 @@ def load(paths: list[str | Path] | str | Path, *, editions=None, date=None, form
         unread.append(dict(sorted((int(c), int(n)) for c, n in rec.ignored_blocks.items())))
     dates = [r.date for r in recs if r.date is not None]
     first = min(dates) if dates else None
-    frames, spans = _joined(recs, labels, first)
+    unsourced: list[pd.DataFrame] = []
+    frames, spans = _joined(recs, labels, first, unsourced)
+    warnings += odd_source_texts(pd.concat(unsourced, ignore_index=True) if unsourced else None)
     return Loaded(frames, recs, inputs, first, spans, warnings=warnings, unread=unread)
 
 
-def _joined(recs: list[Recording], labels: list[str], date: dt.date | None
+def _joined(recs: list[Recording], labels: list[str], date: dt.date | None,
+            unsourced: list[pd.DataFrame] | None = None
             ) -> tuple[dict[int, pd.DataFrame], list[dict[str, Span]]]:
     """Each category's records of every input in one frame (its ``file`` column added) and each input's
     time spans (time_spans, undated records on ``date``); each recording's frames are let go once copied,
-    so the records are held once, not twice (its errors, editions and counts stay)."""
+    so the records are held once, not twice (its errors, editions and counts stay). Records naming another
+    data source than their block are left out, their rows added to ``unsourced`` (odd_sources)."""
     by_cat: dict[int, list[pd.DataFrame]] = {}
     spans = []
     for label, rec in zip(labels, recs, strict=True):
+        drop_odd_sources(rec.frames, label, [] if unsourced is None else unsourced)
         spans.append(time_spans(rec.frames, date))
         for cat, frame in rec.frames.items():
             by_cat.setdefault(cat, []).append(frame.assign(file=_label_column(label, len(frame))))
@@ -310,6 +316,7 @@ def load_measurements(paths: list[str | Path], sensors: pd.DataFrame, *, edition
     unread: list[dict[int, int]] = []  # Loaded.unread
     off_earth: list[pd.DataFrame] = []  # the CAT021 reports with a position off the Earth (damaged bytes)
     untimely: list[pd.DataFrame] = []  # records with a time of day outside 0-24 h (damaged bytes)
+    unsourced: list[pd.DataFrame] = []  # records naming another data source than their block (damaged bytes)
     spans: list[dict[str, Span]] = []
     dates: list[dt.date | None] = []
     radar: list[tuple[int, pd.DataFrame]] = []  # (input number, rows)
@@ -359,9 +366,10 @@ def load_measurements(paths: list[str | Path], sensors: pd.DataFrame, *, edition
             info["editions"].update(rec.editions)
             for cat, n in rec.ignored_blocks.items():
                 ignored[int(cat)] = ignored.get(int(cat), 0) + int(n)
-            # undated records are placed on UNDATED_DAY here and moved to Loaded.date below
-            by_source = widen_spans(by_source, time_spans(rec.frames, None))
             frames, rec.frames = rec.frames, {}
+            drop_odd_sources(frames, labels[i], unsourced)
+            # undated records are placed on UNDATED_DAY here and moved to Loaded.date below
+            by_source = widen_spans(by_source, time_spans(frames, None))
             r, a = _rows(frames, labels[i], sensors, adsb_sigma_m, stray, off_earth, no_plots, columns,
                          untimely)
             more = _local_rows(frames, sensors, unplaced, other_kinds, columns)
@@ -418,7 +426,8 @@ def load_measurements(paths: list[str | Path], sensors: pd.DataFrame, *, edition
     release_free_memory()
     damaged = pd.concat(off_earth, ignore_index=True) if off_earth else None
     warnings = early_start + impossible_positions(damaged) + impossible_times(
-        pd.concat(untimely, ignore_index=True) if untimely else None)
+        pd.concat(untimely, ignore_index=True) if untimely else None) + odd_source_texts(
+        pd.concat(unsourced, ignore_index=True) if unsourced else None)
     stray_radar = _stray_table(stray)
     unplaced_table = _unplaced_table(unplaced)
     return Loaded({}, recs, inputs, first_date, spans, warnings, stray_radar, unplaced_table, cut=cut,

@@ -28,6 +28,7 @@ def test_every_record_and_field(name, category, edition, records):
                            keep_default_na=False, na_values=[""])
     rec = asterix.read(path, editions={category: edition} if edition else None)
     assert rec.errors.empty, rec.errors.head()
+    assert not rec.odd_sources and not rec.implausible  # one sensor's records per block, all on the Earth
     got = rec.frames[category]
     assert len(got) == len(expected) == records
     assert np.array_equal(got["offset"].to_numpy(), expected["offset"].to_numpy())

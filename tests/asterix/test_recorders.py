@@ -200,7 +200,7 @@ def mixed_oradis() -> tuple[bytes, list[int]]:
     return oradis_file([
         block(48, r048(1, 100.0)) + block(34, r034(1, 100.5)),  # 9 + 10 = 19 bytes -> packet of 25
         block(21, r021(5, 101.0)),                              # 9 -> 15
-        block(48, r048(2, 101.5), r048(3, 102.0)),              # 15 -> 21
+        block(48, r048(2, 101.5), r048(2, 102.0)),              # 15 -> 21 (one sensor's block)
         block(34, r034(1, 102.5, 2)) + block(21, r021(6, 103.0)),  # 10 + 9 -> 25
     ])
 
@@ -212,7 +212,7 @@ def test_oradis_mixed_categories(tmp_path) -> None:
     assert rec.format == "oradis" and rec.errors.empty
     assert rec.container_bytes == 4 * 6 and rec.decoded_bytes == 86 - 24
     f48, f34, f21 = rec.frames[48], rec.frames[34], rec.frames[21]
-    assert list(f48.sic) == [1, 2, 3] and list(f48.offset) == [6 + 3, 46 + 3, 46 + 9]
+    assert list(f48.sic) == [1, 2, 2] and list(f48.offset) == [6 + 3, 46 + 3, 46 + 9]
     assert list(f34.message_type) == [1, 2] and list(f34.offset) == [15 + 3, 67 + 3]
     assert list(f21.time_of_day) == [101.0, 103.0]
     assert f21.timestamp.iloc[1] == pd.Timestamp("2019-03-01 00:01:43", tz="UTC")
@@ -440,7 +440,7 @@ def test_cli_reads_recorder_files(tmp_path, capsys) -> None:
     opath.write_bytes(oradis)
     assert main(["decode", str(opath), "-o", str(tmp_path / "out.csv")]) == 0
     assert (tmp_path / "out_cat048.csv").exists() and (tmp_path / "out_cat021.csv").exists()
-    assert pd.read_csv(tmp_path / "out_cat048.csv").sic.tolist() == [1, 2, 3]
+    assert pd.read_csv(tmp_path / "out_cat048.csv").sic.tolist() == [1, 2, 2]
 
 
 # ---------------------------------------------------------------- a damaged first frame: detection says raw
