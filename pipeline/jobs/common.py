@@ -727,7 +727,9 @@ def _load_measurements(options: AircraftOptions, checked: Checked, progress: Pro
     except NoRecords as exc:
         if progress:
             progress.stage(stage)
-        raise _no_records(exc, lambda cats: in_the_inputs(options, checked, cats)) from exc
+        error = _no_records(exc, lambda cats: in_the_inputs(options, checked, cats))
+        error.job_warnings = inputs_said(options, exc.loaded, checked.dataset)  # said before the error
+        raise error from exc
     if progress:
         progress.stage(stage)
     meas, warnings = selected_reports(meas, checked, loaded)
@@ -742,7 +744,7 @@ def _load_measurements(options: AircraftOptions, checked: Checked, progress: Pro
                                       leave_out="by giving the ADS-B recordings alone") from exc
     if len(loaded.unplaced):
         warnings += unplaced_warnings(loaded, options)
-    warnings += _empty_inputs(loaded, checked.dataset)
+    warnings += inputs_said(options, loaded, checked.dataset)
     warnings += _wrong_editions(loaded, but=absent_categories(loaded))
     warnings += [f"no {REGISTRY[cat].noun} (CAT{cat:03d}) records {in_the_inputs(options, checked, (cat,))}"
                  f"{_all_failed(loaded, cat)}: "
@@ -750,11 +752,15 @@ def _load_measurements(options: AircraftOptions, checked: Checked, progress: Pro
                  if needs is None or any(cat in group for group in needs)]
     warnings += order_warnings(read_paths(checked, loaded), loaded.spans)
     warnings += date_ignored(options, loaded.inputs)
-    warnings += format_hints(options, loaded.inputs)
-    warnings += loaded.warnings
     warnings += list(meas.attrs.get("coverage_warnings", ()))
     warnings += list(meas.attrs.get("identity_warnings", ()))
     return loaded, meas, warnings
+
+
+def inputs_said(options: DecodingOptions, loaded: Loaded, dataset: DatasetInputs | None) -> list[str]:
+    """What the inputs turned out to be, each named, said before what they lack: those of which no record
+    decoded, a recorder file read as raw (its --format), and what reading found (not ASTERIX at all...)."""
+    return [*_empty_inputs(loaded, dataset), *format_hints(options, loaded.inputs), *loaded.warnings]
 
 
 def selected_reports(meas: pd.DataFrame, checked: Checked, loaded: Loaded) -> tuple[pd.DataFrame, list[str]]:

@@ -63,6 +63,7 @@ def replay_job(options: ReplayOptions, *, stop: Callable[[], bool] = lambda: Fal
         sched = schedule([Path(p) for p in paths], options.format)
     except ReplayError as exc:
         raise JobError(str(exc), 2) from None
+    warnings = [*warnings, *sched.warnings]
     try:
         sock = sending_socket(to, options.iface, options.ttl)
     except InterfaceError as exc:

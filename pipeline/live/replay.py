@@ -1,6 +1,7 @@
 """Replaying recordings as UDP: the datagrams of pcap and pcapng captures (and the frames of final and GPS
-recordings) as they were captured, a raw recording one data block per datagram; each sent at its original
-time, scaled by ``speed``.
+recordings) as they were captured, a raw recording one data block per datagram (framed as msdc decode frames
+it: pipeline.live.raw_blocks; the bytes it skips are said, not sent); each sent at its original time, scaled
+by ``speed``.
 
 Times: a capture's own capture times; a raw file has none, so each block goes out at the time of day of its
 first record that has one (I048/140, I021/073...: what msdc decodes as time_of_day), a block without one
@@ -14,7 +15,7 @@ import math
 import socket
 import time
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -27,6 +28,7 @@ HALF_DAY_S = 43200
 TIMED_FORMATS = tuple(f for f in REPLAYED_FORMATS if f != "raw")  # each datagram with its capture time
 ABSOLUTE_FORMATS = ("pcap", "pcapng")  # ...a dated one (final and gps: times of day, as raw)
 SLEEP_MIN_S = 0.0005  # datagrams due within this are sent at once (the OS sleeps no finer)
+SKIPPED_SHOWN = 20  # runs of skipped bytes said one per line, per raw recording (as msdc decode lists them)
 
 
 class ReplayError(ValueError):
@@ -35,10 +37,12 @@ class ReplayError(ValueError):
 
 @dataclass
 class Schedule:
-    """The datagrams of one or more recordings in sending order: seconds from the first, and their bytes."""
+    """The datagrams of one or more recordings in sending order: seconds from the first, and their bytes;
+    the warnings about the recordings' bytes (a raw file's bytes skipped, not sent)."""
 
     time_s: np.ndarray  # float64, non-decreasing, 0 for the first datagram
     data: list[bytes]
+    warnings: list[str] = field(default_factory=list)
 
     @property
     def span_s(self) -> float:
@@ -48,68 +52,63 @@ class Schedule:
         return len(self.data)
 
 
-def recording_datagrams(path: str | Path, fmt: str | None = None) -> tuple[np.ndarray, list[bytes], str]:
-    """(time in seconds, non-decreasing, file order; datagram bytes; the recording's format) of one
-    recording; ReplayError when it cannot be replayed."""
+def recording_datagrams(path: str | Path, fmt: str | None = None
+                        ) -> tuple[np.ndarray, list[bytes], str, list[str]]:
+    """(time in seconds, non-decreasing, file order; datagram bytes; the recording's format; warnings about
+    its bytes) of one recording; ReplayError when it cannot be replayed."""
     from msdc.asterix.containers import read_segments
+    from msdc.pipeline.model.sources import path_text
 
     path = Path(path)
     try:
         data = path.read_bytes()
     except OSError as exc:
-        raise ReplayError(f"{path}: cannot read: {exc.strerror or exc}") from exc
+        raise ReplayError(f"{path_text(path)}: cannot read: {exc.strerror or exc}") from exc
     try:
         seg = read_segments(data, fmt)
     except ValueError as exc:
-        raise ReplayError(f"{path}: {exc}") from exc
+        raise ReplayError(f"{path_text(path)}: {exc}") from exc
     if seg.format == "raw":
-        return (*_raw_blocks(path, data, fmt), "raw")
+        times, blocks, said = _raw_blocks(path_text(path), data, seg)
+        return times, blocks, "raw", said
     if seg.format not in TIMED_FORMATS:
         sent = ", ".join(REPLAYED_FORMATS)
-        raise ReplayError(f"{path}: a {seg.format} recording; msdc replay sends {sent} recordings")
+        raise ReplayError(f"{path_text(path)}: a {seg.format} recording; msdc replay sends {sent} recordings")
     if not len(seg.start):
-        raise ReplayError(f"{path}: no ASTERIX payload found in this {seg.format} recording")
+        raise ReplayError(f"{path_text(path)}: no ASTERIX payload found in this {seg.format} recording")
     times = seg.capture_day.astype(np.float64) * SECONDS_PER_DAY + seg.capture_tod
     if seg.format in ("final", "gps"):  # a day number (or none): times of day only, unwrapped in file order
         times = _unwrap(seg.capture_tod)
     payloads = [data[a:b] for a, b in zip(seg.start.tolist(), seg.stop.tolist(), strict=True)]
-    return _monotonic(times), payloads, seg.format
+    return _monotonic(times), payloads, seg.format, []
 
 
-def _raw_blocks(path: Path, data: bytes, fmt: str | None) -> tuple[np.ndarray, list[bytes]]:
-    """A raw recording's data blocks (its chain of CAT, LEN headers) and each one's time (module doc)."""
-    import msdc.asterix as asterix
-    from msdc.asterix.categories import DECODABLE
+def _raw_blocks(name: str, data: bytes, seg) -> tuple[np.ndarray, list[bytes], list[str]]:
+    """A raw recording's data blocks as msdc decode frames them (pipeline.live.raw_blocks), each one's time
+    (module doc), and the bytes framing skipped (not sent), said as decode says them; ``name``: the path as
+    text."""
+    from msdc.pipeline.live.raw_blocks import raw_blocks
 
-    starts, pos = [], 0
-    while pos < len(data):
-        length = int.from_bytes(data[pos + 1:pos + 3], "big") if pos + 3 <= len(data) else 0
-        if length < 3 or pos + length > len(data):
-            raise ReplayError(f"{path}: offset {pos}: the raw chain of data blocks breaks (LEN {length}); "
-                              "msdc replay sends a raw recording whose blocks follow each other exactly "
-                              "('msdc stats' lists what is wrong)")
-        starts.append(pos)
-        pos += length
-    if not starts:
-        raise ReplayError(f"{path}: empty recording")
-    try:
-        rec = asterix.read(path, categories=DECODABLE, columns=["time_of_day"], format=fmt)
-    except asterix.AsterixError as exc:
-        raise ReplayError(f"{path}: {exc}") from exc
-    block_s = np.full(len(starts), np.nan)
-    for frame in rec.frames.values():
-        if len(frame) and "time_of_day" in frame:
-            b = frame["block"].to_numpy(np.int64)
-            t = frame["time_of_day"].to_numpy(np.float64)
-            ok = np.isfinite(t) & (b < len(starts))
-            first = np.full(len(starts), np.nan)
-            order = np.argsort(b[ok], kind="stable")[::-1]  # the first record of each block wins
-            first[b[ok][order]] = t[ok][order]
-            block_s = np.where(np.isnan(block_s), first, block_s)
-    if np.isnan(block_s).all():
-        raise ReplayError(f"{path}: no record with a time of day: nothing to time the blocks by")
-    stops = [*starts[1:], len(data)]
-    return _monotonic(_unwrap(_carry(block_s))), [data[a:b] for a, b in zip(starts, stops, strict=True)]
+    if not data:
+        raise ReplayError(f"{name}: empty recording")
+    found = raw_blocks(name, np.frombuffer(data, np.uint8), seg)
+    if found.not_asterix:
+        raise ReplayError(f"{found.not_asterix}; nothing sent")
+    if not np.isfinite(found.time_s).any():
+        raise ReplayError(f"{name}: no record with a time of day: nothing to time the blocks by")
+    blocks = [data[a:b] for a, b in zip(found.start.tolist(), found.stop.tolist(), strict=True)]
+    return _monotonic(_unwrap(_carry(found.time_s))), blocks, _skipped_words(name, found.skipped)
+
+
+def _skipped_words(name: str, skipped: list[tuple[int, int, str]]) -> list[str]:
+    """A warning per run of bytes skipped (offset, reason, as msdc decode lists them), SKIPPED_SHOWN at
+    most, then how many more."""
+    said = [f"{name}: offset {at}: {why}: {n} bytes skipped, not sent"
+            for at, n, why in skipped[:SKIPPED_SHOWN]]
+    if len(skipped) > SKIPPED_SHOWN:
+        said.append(f"{name}: {len(skipped) - SKIPPED_SHOWN} more run(s) of bytes skipped, not sent "
+                    "('msdc stats' groups them by reason)")
+    return said
 
 
 def _carry(t: np.ndarray) -> np.ndarray:
@@ -142,11 +141,12 @@ def schedule(paths: list[str | Path], fmt: str | None = None) -> Schedule:
     their times say so: their absolute times are kept (a raw file's are times of day). ReplayError when a
     capture (pcap, pcapng: dated capture times) is given with a recording of times of day alone (raw, final,
     gps): their clocks cannot be merged (the schedule spanned 57 years, and replay waited in silence)."""
-    times, data, clocks = [], [], {}
+    times, data, clocks, said = [], [], {}, []
     for p in paths:
-        t, d, kind = recording_datagrams(p, fmt)
+        t, d, kind, warnings = recording_datagrams(p, fmt)
         times.append(t)
         data.extend(d)
+        said += warnings
         clocks.setdefault(kind in ABSOLUTE_FORMATS, p)
     if len(clocks) == 2:
         raise ReplayError(f"{clocks[True]} (a capture, dated by its capture times) and {clocks[False]} "
@@ -154,7 +154,7 @@ def schedule(paths: list[str | Path], fmt: str | None = None) -> Schedule:
     t = np.concatenate(times)
     order = np.argsort(t, kind="stable")
     t = t[order]
-    return Schedule(t - t[0], [data[i] for i in order])
+    return Schedule(t - t[0], [data[i] for i in order], said)
 
 
 class InterfaceError(OSError):

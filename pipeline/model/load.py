@@ -413,7 +413,8 @@ def load_measurements(paths: list[str | Path], sensors: pd.DataFrame, *, edition
     held = {cat for info in inputs for cat, n in info["records"].items() if n}
     absent = [group for group in needs if not held & set(group)]
     if absent and not (either and len(absent) < len(needs)):
-        raise NoRecords(absent[0][0], Loaded({}, recs, inputs, first_date, spans, unread=unread), absent[0])
+        raise NoRecords(absent[0][0], Loaded({}, recs, inputs, first_date, spans, early_start, unread=unread),
+                        absent[0])
     if timed:  # every row now on its day: the rows an early cut kept pass again untouched
         cut = cut or MarginCut(selection, first_date)
         radar, adsb, local = ([(i, cut.keep(part)) for i, part in group] for group in (radar, adsb, local))

@@ -575,3 +575,53 @@ def test_a_time_of_day_past_24_h_is_no_time(tmp_path):
     assert texts == [f"the inputs: 1 CAT021 record(s) with a time of day outside 0-24 h (first at offset "
                      f"{offset}: 130,000.000 s): damaged data, left out of the measurements"]
     assert len(meas) == len(frame) - 1 and meas["time"].max() < pd.Timestamp("2019-03-02", tz="UTC")
+
+
+NOT_ASTERIX = {  # a file that is not a recording at all: its name and bytes
+    "text": ("notes.txt", b"the radar was switched off at noon\n" * 50),
+    "jpeg": ("photo.jpg", b"\xff\xd8\xff\xe0\x00\x10JFIF\x00\x01\x01" + bytes(range(256)) * 8 + b"\xff\xd9"),
+    "random": ("noise.bin", np.random.default_rng(7).integers(0, 256, 3000, np.uint8).tobytes()),
+}
+ANALYSES = {  # each analysis command's argv after the input, with the outputs it needs
+    "correlate": ["--sensors", SENSORS, "--all"],
+    "quality": ["--sensors", SENSORS, "--all"],
+    "track": ["--sensors", SENSORS, "--all", "--json", "{D}/t.json"],
+    "conflicts": ["--sensors", SENSORS, "-o", "{D}/c.xlsx"],
+    "evaluate": ["--sensors", SENSORS, "--preset", "eurocontrol-1997-ssr"],
+    "stats": [],
+}
+
+
+def _not_asterix_said(command: str, name: str, data: bytes, err: str) -> None:
+    """The input is named as not ASTERIX, with its size, as decode says it, ahead of any other line about
+    what the inputs lack."""
+    said = (f"msdc {command}: warning: {name} is not ASTERIX: read as raw, 100% of its {len(data)} bytes "
+            "frame into no data block that decodes")
+    assert said in err, err
+    lacking = [line for line in err.splitlines() if " records in the inputs" in line]
+    assert all(err.index(said) < err.index(line) for line in lacking)
+
+
+@pytest.mark.parametrize("kind", sorted(NOT_ASTERIX))
+@pytest.mark.parametrize("command", sorted(ANALYSES))
+def test_an_input_that_is_not_asterix_is_named_by_every_analysis(command, kind, tmp_path, capsys):
+    """correlate and quality said only 'no radar (CAT048) or ADS-B (CAT021) records in the inputs' of a text
+    file, a JPEG or random bytes; every analysis now names the file as not ASTERIX, as decode does."""
+    name, data = NOT_ASTERIX[kind]
+    (tmp_path / name).write_bytes(data)
+    argv = [command, tmp_path / name, *(str(a).replace("{D}", str(tmp_path)) for a in ANALYSES[command])]
+    status, _, err = _run(argv, capsys)
+    assert status == 1 and "Traceback" not in err
+    _not_asterix_said(command, name, data, err)
+
+
+@pytest.mark.parametrize("command", ["correlate", "quality"])
+def test_an_input_that_is_not_asterix_beside_a_radar_is_named_before_what_is_missing(command, tmp_path,
+                                                                                      capsys):
+    """Beside the radar fixture, correlate failed with 'no ADS-B (CAT021) records in the inputs', naming
+    neither the text file nor what it is; quality warned so, and said nothing of the file either."""
+    name, data = NOT_ASTERIX["text"]
+    (tmp_path / name).write_bytes(data)
+    status, _, err = _run([command, tmp_path / name, RADAR, *ANALYSES[command]], capsys)
+    assert status == (1 if command == "correlate" else 0) and "Traceback" not in err
+    _not_asterix_said(command, name, data, err)

@@ -72,11 +72,20 @@ def test_an_http_port_taken_is_refused(capsys, monkeypatch):
         capsys.readouterr().err
 
 
-def test_a_raw_file_whose_chain_breaks_is_not_replayed(tmp_path, capsys):
+def test_a_raw_file_whose_chain_breaks_sends_its_whole_blocks_and_names_the_break(tmp_path, capsys):
+    """The truncated block is named as msdc decode names it (offset, LEN read, bytes past the end); the
+    whole block before it is sent."""
     one = block(48, cat048_record(25, 201, 10.0))
     (tmp_path / "cut.ast").write_bytes(one + one[:5])
-    assert main(["replay", str(tmp_path / "cut.ast"), "--to", f"127.0.0.1:{free_port()}"]) == 2
-    assert f"cut.ast: offset {len(one)}: the raw chain of data blocks breaks" in capsys.readouterr().err
+    assert main(["replay", str(tmp_path / "cut.ast"), "--to", f"127.0.0.1:{free_port()}"]) == 0
+    out, err = capsys.readouterr()
+    said = (f"msdc replay: warning: {tmp_path / 'cut.ast'}: offset {len(one)}: data block runs past the end "
+            f"of the data (LEN {len(one)}, {len(one) - 5} bytes past the end): 5 bytes skipped, not sent")
+    assert said in err
+    assert out.startswith(f"1 datagrams ({len(one)} bytes) sent")
+    assert main(["decode", str(tmp_path / "cut.ast")]) == 0  # decode names it alike
+    assert f"cut.ast: offset {len(one)}: data block runs past the end of the data (LEN {len(one)}, " \
+           f"{len(one) - 5} bytes past the end)" in capsys.readouterr().err
 
 
 def _listening(port: int, *options: str) -> subprocess.Popen:

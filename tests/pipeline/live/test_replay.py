@@ -64,11 +64,56 @@ def test_a_capture_and_a_raw_file_are_not_merged(tmp_path):
     assert len(schedule([tmp_path / "c.pcap", tmp_path / "c.pcap"])) == 2  # two captures merge
 
 
-def test_a_broken_raw_chain_is_refused_naming_the_offset(tmp_path):
+def _radar_blocks(n: int) -> list[bytes]:
+    """n CAT048 blocks of 3 records of one radar, block i at 100 + i s (all of one length)."""
+    return [block(48, *(cat048_record(25, 201, 100.0 + i + r / 10, rho_nm=40.0 + r) for r in range(3)))
+            for i in range(n)]
+
+
+def test_a_len_overwritten_is_named_at_its_offset_and_every_other_block_sent(tmp_path):
+    """A LEN overwritten with a value landing inside a later block: replay followed the chain on through
+    the bytes after it and named a later offset and a LEN read from inside a block, sending nothing. Framed
+    as msdc decode frames it, the damage is named where it is, with the LEN written there, and the other
+    blocks go."""
+    blocks = _radar_blocks(8)
+    n = len(blocks[0])
+    data = bytearray(b"".join(blocks))
+    data[3 * n + 1:3 * n + 3] = (2 * n + 7).to_bytes(2, "big")  # block 3's LEN: 7 bytes into block 5
+    (tmp_path / "len.ast").write_bytes(data)
+    sched = schedule([tmp_path / "len.ast"])
+    assert sched.warnings == [f"{tmp_path / 'len.ast'}: offset {3 * n}: data block LEN does not fit the "
+                              f"block chain (LEN {2 * n + 7}): {n} bytes skipped, not sent"]
+    assert sched.data == blocks[:3] + blocks[4:]
+    assert list(sched.time_s) == [0.0, 1.0, 2.0, 4.0, 5.0, 6.0, 7.0]
+
+
+def test_bytes_flipped_at_a_block_are_named_at_its_offset_and_every_other_block_sent(tmp_path):
+    blocks = _radar_blocks(8)
+    n = len(blocks[0])
+    data = bytearray(b"".join(blocks))
+    data[2 * n:2 * n + 3] = b"\xff\xff\xff"  # block 2's CAT and LEN
+    (tmp_path / "flip.ast").write_bytes(data)
+    sched = schedule([tmp_path / "flip.ast"])
+    assert sched.warnings == [f"{tmp_path / 'flip.ast'}: offset {2 * n}: bytes that do not start a plausible "
+                              f"ASTERIX data block: {n} bytes skipped, not sent"]
+    assert sched.data == blocks[:2] + blocks[3:]
+
+
+def test_a_truncated_last_block_is_named_and_the_whole_ones_sent(tmp_path):
     good = block(48, cat048_record(25, 201, 10.0))
     (tmp_path / "cut.ast").write_bytes(good + good[:-1])
-    with pytest.raises(ReplayError, match=rf"cut.ast: offset {len(good)}: the raw chain of data blocks"):
-        schedule([tmp_path / "cut.ast"])
+    sched = schedule([tmp_path / "cut.ast"])
+    assert sched.data == [good]
+    assert sched.warnings == [f"{tmp_path / 'cut.ast'}: offset {len(good)}: data block runs past the end of "
+                              f"the data (LEN {len(good)}, 1 bytes past the end): {len(good) - 1} bytes "
+                              "skipped, not sent"]
+
+
+def test_a_file_that_is_not_asterix_is_refused_as_decode_says_it(tmp_path):
+    (tmp_path / "notes.txt").write_text("the radar was switched off at noon\n" * 50)
+    with pytest.raises(ReplayError, match=r"^notes.txt is not ASTERIX: read as raw, 100% of its 1750 bytes "
+                                          r"frame into no data block that decodes .*; nothing sent$"):
+        schedule([tmp_path / "notes.txt"])
 
 
 class _Clock:
