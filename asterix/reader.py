@@ -921,7 +921,8 @@ def decode_framed(buf: np.ndarray, plan, framed, *, path: str = "", date: dt.dat
         frames[cat] = _build(cols)
         del cols
     err = pd.DataFrame(errors, columns=["offset", "length", "category", "reason"])
-    err.insert(0, "file", path)
+    # object, not pandas' str: a file name that is not UTF-8 (surrogate escapes) is kept as given
+    err.insert(0, "file", pd.Series([path] * len(err), index=err.index, dtype=object))
     err["category"] = err["category"].astype("Int16").where(err["category"] >= 0)
     return Recording(frames=frames, errors=err, editions=chosen, path=path, format=seg.format, date=date,
                      size_bytes=int(len(buf)), container_bytes=int(part.container_bytes),

@@ -47,6 +47,7 @@ from msdc.pipeline.model.load import (
     load_measurements,
     sha256,
 )
+from msdc.pipeline.model.sources import path_text
 from msdc.pipeline.model.time import utc_text
 from msdc.pipeline.progress import Progress
 from msdc.pipeline.report.transaction import output_problem, side_pattern, target
@@ -622,7 +623,8 @@ def load_inputs(options: DecodingOptions, checked: Checked, progress: Progress |
         raise JobError(str(exc), 2) from exc
     return loaded, [*_empty_inputs(loaded, checked.dataset), *_wrong_editions(loaded),
                     *order_warnings(read_paths(checked, loaded), loaded.spans),
-                    *date_ignored(options, loaded.inputs), *format_hints(options, loaded.inputs),
+                    *date_ignored(options, loaded.inputs),
+                    *format_hints(options, loaded.inputs, read_paths(checked, loaded)),
                     *impossible_positions(loaded.frames.get(21)), *loaded.warnings]
 
 
@@ -665,11 +667,14 @@ def order_warnings(paths: list[Path], spans: list[dict[str, tuple[pd.Timestamp, 
     return warnings
 
 
-def format_hints(options: DecodingOptions, inputs: list[dict]) -> list[str]:
-    """format_hint for each input, unless --format was given."""
+def format_hints(options: DecodingOptions, inputs: list[dict], paths: list[Path] | None = None) -> list[str]:
+    """format_hint for each input, unless --format was given; ``paths``: the inputs' files (their ``path``
+    is text, a name that is not UTF-8 escaped: no file of that name), else their ``path``."""
     if options.format is not None:
         return []
-    hints = (format_hint(info["path"], info["format"], info["skipped_blocks"]) for info in inputs)
+    paths = [info["path"] for info in inputs] if paths is None else paths
+    hints = (format_hint(p, info["format"], info["skipped_blocks"])
+             for p, info in zip(paths, inputs, strict=True))
     return [hint for hint in hints if hint]
 
 
@@ -681,9 +686,12 @@ def format_hint(path, fmt: str | None, skipped_blocks: int) -> str:
 
     if fmt != "raw" or not skipped_blocks:
         return ""
-    with open(path, "rb") as file:
-        guess = recorder_hint(file.read(DETECT_BYTES))
-    return "" if guess is None else recorder_words(path, skipped_blocks, guess)
+    try:
+        with open(path, "rb") as file:
+            guess = recorder_hint(file.read(DETECT_BYTES))
+    except OSError:  # a dataset's input, moved since it was ingested: no hint
+        return ""
+    return "" if guess is None else recorder_words(path_text(path), skipped_blocks, guess)
 
 
 def date_ignored(options: DecodingOptions, inputs: list[dict]) -> list[str]:
@@ -728,7 +736,7 @@ def _load_measurements(options: AircraftOptions, checked: Checked, progress: Pro
         if progress:
             progress.stage(stage)
         error = _no_records(exc, lambda cats: in_the_inputs(options, checked, cats))
-        error.job_warnings = inputs_said(options, exc.loaded, checked.dataset)  # said before the error
+        error.job_warnings = inputs_said(options, checked, exc.loaded)  # said before the error
         raise error from exc
     if progress:
         progress.stage(stage)
@@ -744,7 +752,7 @@ def _load_measurements(options: AircraftOptions, checked: Checked, progress: Pro
                                       leave_out="by giving the ADS-B recordings alone") from exc
     if len(loaded.unplaced):
         warnings += unplaced_warnings(loaded, options)
-    warnings += inputs_said(options, loaded, checked.dataset)
+    warnings += inputs_said(options, checked, loaded)
     warnings += _wrong_editions(loaded, but=absent_categories(loaded))
     warnings += [f"no {REGISTRY[cat].noun} (CAT{cat:03d}) records {in_the_inputs(options, checked, (cat,))}"
                  f"{_all_failed(loaded, cat)}: "
@@ -757,10 +765,11 @@ def _load_measurements(options: AircraftOptions, checked: Checked, progress: Pro
     return loaded, meas, warnings
 
 
-def inputs_said(options: DecodingOptions, loaded: Loaded, dataset: DatasetInputs | None) -> list[str]:
+def inputs_said(options: DecodingOptions, checked: Checked, loaded: Loaded) -> list[str]:
     """What the inputs turned out to be, each named, said before what they lack: those of which no record
     decoded, a recorder file read as raw (its --format), and what reading found (not ASTERIX at all...)."""
-    return [*_empty_inputs(loaded, dataset), *format_hints(options, loaded.inputs), *loaded.warnings]
+    return [*_empty_inputs(loaded, checked.dataset),
+            *format_hints(options, loaded.inputs, read_paths(checked, loaded)), *loaded.warnings]
 
 
 def selected_reports(meas: pd.DataFrame, checked: Checked, loaded: Loaded) -> tuple[pd.DataFrame, list[str]]:

@@ -33,6 +33,7 @@ from msdc.pipeline.jobs.options import (
 )
 from msdc.pipeline.model import editions as edition_notes
 from msdc.pipeline.model.report_selection import describe, recorded
+from msdc.pipeline.model.sources import path_text
 from msdc.pipeline.report.files import named, write_csv, write_json
 from msdc.pipeline.report.transaction import OutputTransaction, side_pattern, staged
 
@@ -312,7 +313,8 @@ def skipped_lines(result: DecodeResult) -> list[str]:
     """The skipped blocks, one line each (path, offset, reason) up to SKIPPED_SHOWN per input, then how many
     more per input."""
     lines, shown = [], {}
-    for path, offset, reason in result.skipped:
+    for name, offset, reason in result.skipped:
+        path = path_text(name)  # a name that is not UTF-8 as its escape, as every output writes it
         shown[path] = shown.get(path, 0) + 1
         if shown[path] <= SKIPPED_SHOWN:
             lines.append(f"{path}: offset {offset}: {reason}")

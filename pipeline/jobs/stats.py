@@ -76,6 +76,7 @@ def stats_job(options: StatsOptions, *, progress: Progress | None = None) -> Sta
     acc = StatsAccumulator()
     failed: dict[tuple[str, int], edition_notes.Failed] = {}
     inputs: list[dict] = []
+    decoded: list[Path] = []  # the files of ``inputs`` (their "path" is text: a name not UTF-8 escaped)
     spans: list[dict[int, tuple[pd.Timestamp, pd.Timestamp]]] = []
     chunk = max(int(options.chunk_mb * 1e6), 1)
     early_start: list[str] = []  # DayTally's warnings
@@ -130,6 +131,7 @@ def stats_job(options: StatsOptions, *, progress: Progress | None = None) -> Sta
         content += account.warnings(head_of(path), hint=False, detected=options.format is None)
         content += account.notes()  # records no real report would be, too few to doubt the input
         inputs.append(info)
+        decoded.append(path)
         spans.append(by_source)
     dates = [info["date"] for info in inputs if info["date"] is not None]
     if dates:  # undated inputs are dated by the earliest known date, as load() does
@@ -138,7 +140,7 @@ def stats_job(options: StatsOptions, *, progress: Progress | None = None) -> Sta
                  for info, s in zip(inputs, spans, strict=True)]
     read = [Path(info["path"]) for info in inputs]  # the inputs decoded: not those said to be not ASTERIX
     warnings = [*checked.warnings, *content, *edition_notes.warnings(failed), *order_warnings(read, spans),
-                *date_ignored(options, inputs), *format_hints(options, inputs), *early_start]
+                *date_ignored(options, inputs), *format_hints(options, inputs, decoded), *early_start]
     record = recorded(selection, day, n_read, kept, left_out) if selection is not None else None
     return StatsResult(acc.tables(), inputs, warnings, record)
 

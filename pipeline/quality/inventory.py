@@ -13,7 +13,7 @@ import re
 import numpy as np
 import pandas as pd
 
-from msdc.pipeline.model.sources import file_labels
+from msdc.pipeline.model.sources import file_labels, path_text
 from msdc.pipeline.model.time import clock
 
 # "(record at offset 1234)", "at offset 0x1f": the place, not the reason; "(LEN 40, 36 bytes past the
@@ -188,7 +188,7 @@ class StatsAccumulator:
                     self._distinct[(level, value)] = seen
         if errors is not None and len(errors):
             kinds = errors.assign(reason=errors["reason"].map(reason_kind),
-                                  file=errors["file"].astype(str) if "file" in errors else "")
+                                  file=errors["file"].map(path_text).astype(str) if "file" in errors else "")
             for name in kinds["file"].unique():  # input order, for the rows of one reason
                 self._files.setdefault(name, len(self._files))
             new = (kinds.groupby(["file", "category", "reason"], dropna=False)

@@ -544,6 +544,25 @@ def test_an_input_name_that_is_not_utf8_is_written_as_its_escape(tmp_path, capsy
     assert manifest["inputs"][0]["file"] == "we\\xffird.ast"
 
 
+@pytest.mark.parametrize("command", ["decode", "stats", "track", "quality"])
+def test_a_damaged_input_whose_name_is_not_utf8_is_said_with_its_escape(tmp_path, capsys, command):
+    """Its skipped blocks' table put the name (lone surrogate U+DCFF) into a pandas str column: a
+    UnicodeEncodeError traceback in every command; stats' --format hint then opened the escaped text, a
+    file of another name ("No such file or directory")."""
+    name = os.fsdecode(b"we\xffird.ast")
+    radar = tmp_path / name
+    data = RADAR.read_bytes()
+    radar.write_bytes(data[:100] + b"\x00\x00\x01" + data[100:])  # three bytes no block starts with
+    argv = {"decode": ["-o", tmp_path / "d.csv"], "stats": [],
+            "track": ["--sensors", SENSORS, "--all", "-o", tmp_path / "t.csv"],
+            "quality": ["--sensors", SENSORS, "--all", "-o", tmp_path / "q.xlsx"]}[command]
+    status, out, err = _run([command, radar, "--date", "2019-03-01", *argv], capsys)
+    assert "Traceback" not in err and "No such file" not in err, err
+    assert status == 0, err
+    if command == "stats":
+        assert "we\\xffird.ast" in out.split("Skipped blocks by reason:")[1]
+
+
 def test_a_time_of_day_past_24_h_is_no_time(tmp_path):
     """One MAS72 ADS-B report's I021/071 damaged to 130,000 s (the item holds up to 131,072 s; a time of day
     is below 86,400 s): it made a time the next day at 12:06:40, a third track segment there and every span
