@@ -382,6 +382,7 @@ def cmd_sql(args) -> int:
     options = from_args(sql.SqlOptions, args)
     with transaction.staged() as tx:
         result = sql.sql_job(options, tx=tx)
+    _warn("sql", result.warnings)
     if result.output is not None:
         print(f"{result.rows_written} row(s) -> {result.output}")
     elif result.head is not None:
