@@ -367,7 +367,9 @@ def cmd_ingest(args) -> int:
     if result.discarded:
         print(f"msdc ingest: removed {len(result.discarded)} file(s) an interrupted ingest left in "
               f"{result.dataset} (its inputs are ingested again now)", file=sys.stderr)
-    _warn("ingest", result.warnings)
+    for line in ingest.skipped_lines(result):
+        print(f"msdc ingest: {line}", file=sys.stderr)
+    _warn("ingest", result.warnings)  # after the skipped blocks, as msdc decode says them
     for line in ingest.summary_lines(result):
         print(line)
     if not result.ingested:
@@ -446,7 +448,7 @@ def _ingester(dataset: str | None, editions: tuple[str, ...]):
     def run(path) -> list[str]:
         result = ingest.ingest_job(ingest.IngestOptions(inputs=(str(path),), dataset=dataset, lenient=True,
                                                         editions=editions))
-        return [*result.warnings, *ingest.summary_lines(result)]
+        return [*ingest.skipped_lines(result), *result.warnings, *ingest.summary_lines(result)]
 
     return run
 

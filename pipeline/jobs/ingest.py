@@ -47,11 +47,13 @@ def validate(options: IngestOptions) -> tuple[Checked, Path]:
 
 @dataclass
 class IngestResult:
-    """What an ingest did: the inputs ingested now (their manifest records), those already in the dataset
-    (path, why), the files of an interrupted ingest removed first, and the warnings."""
+    """What an ingest did: the inputs ingested now (their manifest records) and the blocks they skipped as
+    damaged, those already in the dataset (path, why), the files of an interrupted ingest removed first, and
+    the warnings."""
 
     dataset: Path
     ingested: list[dict] = field(default_factory=list)
+    damaged: list = field(default_factory=list)  # dataset.ingest_input.SkippedBlocks of each input ingested
     skipped: list[tuple[str, str]] = field(default_factory=list)
     discarded: list[Path] = field(default_factory=list)
     warnings: list[str] = field(default_factory=list)
@@ -105,8 +107,9 @@ def ingest_job(options: IngestOptions, *, on_chunk: Callable[[int, int, str], No
             result.discarded = mf.discard_unlisted(root, manifest)
             todo, skipped = _plan(checked.inputs, digests, manifest)
 
-            def commit(record: dict, warnings: list[str]) -> None:
+            def commit(record: dict, warnings: list[str], skipped) -> None:
                 result.warnings += warnings
+                result.damaged.append(skipped)
                 manifest.inputs[record["sha256"]] = record
                 manifest.msdc = record["msdc"]
                 mf.save(root, manifest)  # last: the input is in the dataset from now on
@@ -279,6 +282,21 @@ def _remove_made(root: Path) -> None:
         pass
 
 
+def skipped_lines(result: IngestResult) -> list[str]:
+    """The blocks each input ingested skipped as damaged (stderr): one line each (path, offset, reason) as
+    msdc decode lists them, how many more, then their count and bytes."""
+    lines = []
+    for s in result.damaged:
+        lines += [f"{s.path}: offset {offset}: {reason}" for offset, reason in s.blocks]
+        if s.count > len(s.blocks):
+            lines.append(f"{s.path}: {s.count - len(s.blocks)} more skipped block(s) ('msdc stats' groups "
+                         "them by reason)")
+        if s.count:
+            lines.append(f"{s.path}: {s.count} block(s) skipped ({s.length_bytes} bytes): their records are "
+                         "not in the dataset")
+    return lines
+
+
 def summary_lines(result: IngestResult) -> list[str]:
     """What the ingest did, a line per input."""
     lines = []
@@ -289,4 +307,4 @@ def summary_lines(result: IngestResult) -> list[str]:
     return lines
 
 
-__all__ = ["IngestOptions", "IngestResult", "ingest_job", "summary_lines", "validate"]
+__all__ = ["IngestOptions", "IngestResult", "ingest_job", "skipped_lines", "summary_lines", "validate"]
