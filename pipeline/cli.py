@@ -367,7 +367,9 @@ def cmd_ingest(args) -> int:
     if result.discarded:
         print(f"msdc ingest: removed {len(result.discarded)} file(s) an interrupted ingest left in "
               f"{result.dataset} (its inputs are ingested again now)", file=sys.stderr)
-    _warn("ingest", result.warnings)
+    for line in ingest.skipped_lines(result):
+        print(f"msdc ingest: {line}", file=sys.stderr)
+    _warn("ingest", result.warnings)  # after the skipped blocks, as msdc decode says them
     for line in ingest.summary_lines(result):
         print(line)
     if not result.ingested:
@@ -382,6 +384,7 @@ def cmd_sql(args) -> int:
     options = from_args(sql.SqlOptions, args)
     with transaction.staged() as tx:
         result = sql.sql_job(options, tx=tx)
+    _warn("sql", result.warnings)
     if result.output is not None:
         print(f"{result.rows_written} row(s) -> {result.output}")
     elif result.head is not None:
@@ -445,7 +448,7 @@ def _ingester(dataset: str | None, editions: tuple[str, ...]):
     def run(path) -> list[str]:
         result = ingest.ingest_job(ingest.IngestOptions(inputs=(str(path),), dataset=dataset, lenient=True,
                                                         editions=editions))
-        return [*result.warnings, *ingest.summary_lines(result)]
+        return [*ingest.skipped_lines(result), *result.warnings, *ingest.summary_lines(result)]
 
     return run
 

@@ -9,6 +9,8 @@ from collections import deque
 from dataclasses import dataclass, field
 from pathlib import Path
 
+BLOCKS_KEPT = 20  # skipped blocks of an input kept to be listed (msdc decode lists as many); the rest counted
+
 
 class IngestFailed(RuntimeError):
     """An input that cannot be ingested (the message names it and why; ``status`` 2 when it cannot be read,
@@ -21,6 +23,17 @@ class IngestFailed(RuntimeError):
     def __reduce__(self):
         """Pickled with its status (raised in a pool process, re-raised in the main one)."""
         return type(self), (str(self), self.status)
+
+
+@dataclass
+class SkippedBlocks:
+    """An input's data blocks skipped as damaged: its path (as text, escaped), the first BLOCKS_KEPT (offset,
+    reason), and how many there were and their bytes."""
+
+    path: str
+    blocks: list[tuple[int, str]] = field(default_factory=list)
+    count: int = 0
+    length_bytes: int = 0
 
 
 @dataclass(frozen=True)
@@ -40,9 +53,9 @@ class IngestSettings:
 
 
 def ingest_input(path: Path, digest: str, label: str, settings: IngestSettings, root: Path,
-                 pool, on_chunk) -> tuple[dict, list[str]]:
-    """Decode one input into its parts: its manifest record and its warnings; every file of it removed on
-    failure.
+                 pool, on_chunk) -> tuple[dict, list[str], SkippedBlocks]:
+    """Decode one input into its parts: its manifest record, its warnings and its skipped blocks; every file
+    of it removed on failure.
     With a pool, a raw recording's windows are decoded and written in the pool's processes (_windows);
     anything else streams here (its chunks decoded in the pool when it is a raw stream)."""
     from msdc.asterix.errors import UnreadableInput
@@ -52,11 +65,12 @@ def ingest_input(path: Path, digest: str, label: str, settings: IngestSettings, 
     from msdc.pipeline.dataset.writer import Undated
     from msdc.pipeline.meta import software_version
     from msdc.pipeline.model import editions as edition_notes
+    from msdc.pipeline.model.sources import path_text
     from msdc.pipeline.model.time import DayTally
 
     cats = settings.categories
     size = path.stat().st_size
-    seen = _Seen(DayTally(), Tally(str(path)), {})
+    seen = _Seen(DayTally(), Tally(str(path)), {}, SkippedBlocks(path_text(path)))
     iid = input_id(digest)
     futures: list = []
     try:
@@ -93,39 +107,43 @@ def ingest_input(path: Path, digest: str, label: str, settings: IngestSettings, 
     if not seen.rows:
         warnings.append(f"{path}: no record of {', '.join(f'CAT{c:03d}' for c in cats)} decoded; "
                                "recorded as ingested, with no part")
-    from msdc.pipeline.model.sources import path_text
-
     record = {"sha256": digest, "file": label, "path": path_text(path.resolve()), "size_bytes": size,
             "format": seen.fmt, "date": None if seen.date is None else seen.date.isoformat(),
             "editions": {f"{c:03d}": e for c, e in sorted(seen.editions.items()) if c in seen.rows},
-            "rows": {f"{c:03d}": n for c, n in sorted(seen.rows.items())}, "skipped_blocks": seen.skipped,
+            "rows": {f"{c:03d}": n for c, n in sorted(seen.rows.items())},
+            "skipped_blocks": seen.skipped.count,
             "parts": sorted(parts, key=lambda p: p["path"].rsplit("/", 1)[1]), "msdc": software_version(),
             "ingested_at": dt.datetime.now(dt.UTC).isoformat(timespec="seconds"),
             "options": {"categories": cats, "editions": settings.edition_args,
                         "date": None if settings.date is None else str(settings.date),
                         "format": settings.format}}
-    return record, warnings
+    return record, warnings, seen.skipped
 
 
 @dataclass
 class _Seen:
-    """What the main process folds of an input's decoded chunks: the warnings' tallies, rows, editions."""
+    """What the main process folds of an input's decoded chunks: the warnings' tallies, rows, editions and
+    skipped blocks."""
 
     tally: object
     account: object
     failed: dict
+    skipped: SkippedBlocks
     rows: dict[int, int] = field(default_factory=dict)
     editions: dict[int, str] = field(default_factory=dict)
     fmt: str | None = None
     date: dt.date | None = None
-    skipped: int = 0
 
     def fold(self, rec, rows: dict[int, int]) -> None:
         from msdc.pipeline.model import editions as edition_notes
 
         self.fmt, self.date = rec.format, self.date or rec.date
         self.editions.update({int(c): e for c, e in rec.editions.items() if e})
-        self.skipped += len(rec.errors)
+        s = self.skipped
+        s.count += len(rec.errors)
+        s.length_bytes += int(rec.errors["length"].sum()) if len(rec.errors) else 0
+        kept = rec.errors.iloc[:max(BLOCKS_KEPT - len(s.blocks), 0)]
+        s.blocks += [(int(o), str(r)) for o, r in zip(kept["offset"], kept["reason"], strict=True)]
         self.tally.add(rec.frames)
         self.account.add(rec)
         edition_notes.fold(self.failed, rec)
@@ -189,4 +207,4 @@ def _windows(path: Path, label: str, settings: IngestSettings, root: Path, iid: 
     return parts
 
 
-__all__ = ["IngestFailed", "IngestSettings", "ingest_input"]
+__all__ = ["IngestFailed", "IngestSettings", "SkippedBlocks", "ingest_input"]

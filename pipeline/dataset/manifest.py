@@ -1,5 +1,6 @@
 """The dataset's manifest (``manifest.json``): msdc's version and, per input completely ingested, its
-SHA-256, size, format, editions, rows per category and the parts written with their rows and byte ranges.
+SHA-256, size, format, editions, rows per category and the parts written with their rows, byte ranges, sizes
+and CRC-32s.
 
 An input is in the manifest only once every part of it is in place: the manifest is rewritten (to a temporary
 file renamed over the old one) after its parts, so a part the manifest does not list belongs to an ingest
@@ -72,9 +73,10 @@ def load(root: Path) -> Manifest:
 
 
 def _record_problem(rec: dict) -> str | None:
-    """What makes an input record unreadable (its date, or a part's date, category, sensor, rows or path):
-    the readers would fail on it later, with no file named. None when it reads."""
+    """What makes an input record unreadable (its date, or a part's date, category, sensor, rows, path, size
+    or CRC-32): the readers would fail on it later, with no file named. None when it reads."""
     from msdc.asterix.categories import DECODABLE
+    from msdc.pipeline.dataset.integrity import record_problem
 
     if rec.get("date") is not None and _no_date(rec["date"]):
         return f"date {rec['date']!r} is no date (YYYY-MM-DD)"
@@ -93,6 +95,9 @@ def _record_problem(rec: dict) -> str | None:
             return f"{where}: sensor {part.get('sensor')!r} is no SAC_SIC text"
         if type(part.get("rows")) is not int or part["rows"] < 0:
             return f"{where}: rows {part.get('rows')!r} is no count"
+        checksum = record_problem(part)
+        if checksum:
+            return f"{where}: {checksum}"
     return None
 
 

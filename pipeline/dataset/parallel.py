@@ -14,7 +14,7 @@ from concurrent.futures import FIRST_COMPLETED, wait
 from dataclasses import dataclass
 from pathlib import Path
 
-from msdc.pipeline.dataset.ingest_input import IngestFailed, IngestSettings
+from msdc.pipeline.dataset.ingest_input import IngestFailed, IngestSettings, SkippedBlocks
 
 NO_STOP = 2**62  # the stop index while no input failed: no input's index is above it
 POLL_S = 0.2  # how often the main process folds the pool's progress while it waits
@@ -73,9 +73,9 @@ def check_input(path: str, format: str | None) -> str | None:
     return sniff(path, format)
 
 
-def ingest_whole(todo: Todo, settings: IngestSettings, root: Path) -> tuple[dict, list[str]]:
+def ingest_whole(todo: Todo, settings: IngestSettings, root: Path) -> tuple[dict, list[str], SkippedBlocks]:
     """One input ingested whole in a pool process (streamed, its memory bounded by --chunk-mb): its
-    manifest record and warnings; Stopped when an input before it failed."""
+    manifest record, warnings and skipped blocks; Stopped when an input before it failed."""
     from msdc.pipeline.dataset.ingest_input import ingest_input
 
     def on_chunk(done: int, total: int, what: str) -> None:
@@ -104,11 +104,11 @@ def check_inputs(pool, paths: list[Path], format: str | None, refuse: Callable[[
 
 
 def ingest_all(todo: list[Todo], settings: IngestSettings, root: Path, pool, stop, progress,
-               commit: Callable[[dict, list[str]], None], on_chunk) -> None:
+               commit: Callable[[dict, list[str], SkippedBlocks], None], on_chunk) -> None:
     """Ingest every input of ``todo`` (in input order) whole in the pool, the largest first, committing
-    each (``commit(record, warnings)``) once those before it are. When one fails, the inputs after it stop
-    and those before it end and are committed (the dataset a single process leaves), then its error is
-    raised; whatever is not committed is removed."""
+    each (``commit(record, warnings, skipped)``) once those before it are. When one fails, the inputs after
+    it stop and those before it end and are committed (the dataset a single process leaves), then its error
+    is raised; whatever is not committed is removed."""
     from msdc.pipeline.dataset.layout import input_files, input_id
     from msdc.pipeline.dataset.manifest import prune_empty
 
@@ -118,7 +118,7 @@ def ingest_all(todo: list[Todo], settings: IngestSettings, root: Path, pool, sto
     stop.value = NO_STOP
     futures = {pool.submit(ingest_whole, t, settings, root): t
                for t in sorted(todo, key=lambda t: (-t.size_bytes, t.index))}
-    finished: dict[int, tuple[dict, list[str]]] = {}
+    finished: dict[int, tuple[dict, list[str], SkippedBlocks]] = {}
     failed: dict[int, BaseException] = {}
     committed = 0  # the inputs of todo committed, in order
     pending = set(futures)

@@ -39,15 +39,19 @@ def view_name(category: int) -> str:
     return f"cat{category:03d}"
 
 
-def duckdb_views(root: Path, connection=None):
-    """A DuckDB connection (``connection`` or a new in-memory one) with a view per category over its parts,
-    the partition keys ``date`` (DATE), ``category`` (INTEGER) and ``sensor`` (VARCHAR) read from the
-    folder names; the connection and the views made."""
+def duckdb_views(root: Path, connection=None, manifest: Manifest | None = None,
+                 categories: set[int] | None = None):
+    """A DuckDB connection (``connection`` or a new in-memory one) with a view per category (of
+    ``categories``; None: all) over its parts (those ``manifest`` lists: the dataset's when None), the
+    partition keys ``date`` (DATE), ``category`` (INTEGER) and ``sensor`` (VARCHAR) read from the folder
+    names; the connection and the views made."""
     import duckdb
 
     con = duckdb.connect() if connection is None else connection
     made = []
-    for category, files in category_parts(root).items():
+    for category, files in category_parts(root, manifest).items():
+        if categories is not None and category not in categories:
+            continue
         listed = ", ".join("'" + str(f).replace("'", "''") + "'" for f in files)
         con.execute(f"CREATE OR REPLACE VIEW {view_name(category)} AS SELECT * FROM read_parquet([{listed}], "
                     "hive_partitioning = true, hive_types = {'date': DATE, 'category': INTEGER, "

@@ -12,6 +12,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from msdc.pipeline.dataset.integrity import part_checksum
 from msdc.pipeline.dataset.layout import part_name, partition_dir, relative, sensor_key, temp_path
 
 ROW_GROUP_BYTES = 16 << 20  # Arrow bytes of a partition's rows gathered into one Parquet row group
@@ -206,16 +207,18 @@ class InputWriter:
         self._flush(o)
         self._drain()
         o.writer.close()
+        size_bytes, crc = part_checksum(o.tmp)  # what a query checks the part against (dataset.integrity)
         os.replace(o.tmp, o.final)
         del self.open[o.key]
         date, category, sensor = o.key
         self.done.append({"path": relative(self.root, o.final), "date": date.isoformat(),
                           "category": category, "sensor": sensor, "rows": o.rows, "offset_min": o.offset_min,
-                          "offset_max": o.offset_max})
+                          "offset_max": o.offset_max, "size_bytes": size_bytes, "crc32": crc})
 
     def finish(self) -> list[dict]:
         """Close every part still open (in the order they were started) and return all the parts' records:
-        path (relative to the root), date, category, sensor, rows and the first and last record's offset."""
+        path (relative to the root), date, category, sensor, rows, the first and last record's offset, and
+        the file's size and CRC-32."""
         for o in sorted(self.open.values(), key=lambda o: o.final.name):
             self._flush(o)
         self._drain()

@@ -264,6 +264,43 @@ def writable_dataset(dataset: str | Path) -> Path:
     return root
 
 
+# A folder a run made (ingest's --dataset, listen's --record) is removed again when the run ends holding no
+# file in it: a stopped or failed run leaves the output folder as it was, absent.
+def first_missing(folder: Path) -> Path | None:
+    """The outermost folder of ``folder``'s path that does not exist yet (what ``mkdir(parents=True)`` makes
+    first); None when ``folder`` exists."""
+    if folder.exists():
+        return None
+    made = folder
+    while not made.parent.exists() and made.parent != made:
+        made = made.parent
+    return made
+
+
+def holds_files(root: Path, besides: tuple[str, ...] = ()) -> bool:
+    """Whether the folder holds a file, at any depth, but those named in ``besides`` (ingest's lock)."""
+    return any(p.is_file() and p.name not in besides for p in root.rglob("*"))
+
+
+def remove_if_empty(root: Path | None, besides: tuple[str, ...] = ()) -> None:
+    """Remove the folder a run made (None: it made none) when it holds no file but ``besides``: those files,
+    then its folders, deepest first; one holding anything else stays."""
+    if root is None or not root.is_dir() or holds_files(root, besides):
+        return
+    for name in besides:
+        for p in root.rglob(name):
+            p.unlink(missing_ok=True)
+    for d in sorted((p for p in root.rglob("*") if p.is_dir()), key=lambda p: len(p.parts), reverse=True):
+        try:
+            d.rmdir()
+        except OSError:
+            return
+    try:
+        root.rmdir()
+    except OSError:
+        pass
+
+
 def spare_dataset(dataset: str | Path, outputs: list[tuple[str, Path | None]]) -> None:
     """OptionError when an output lies inside the dataset folder, by any path or link: it could overwrite
     the manifest or a part (the dataset's folder is ingest's alone)."""

@@ -17,7 +17,9 @@ from msdc.pipeline.jobs.common import (
     JobError,
     OptionError,
     check_decoding,
+    first_missing,
     nonempty_path,
+    remove_if_empty,
     writable_dataset,
 )
 from msdc.pipeline.jobs.options import INGEST_CATEGORIES, DecodingOptions, IngestOptions, check_declared
@@ -47,11 +49,13 @@ def validate(options: IngestOptions) -> tuple[Checked, Path]:
 
 @dataclass
 class IngestResult:
-    """What an ingest did: the inputs ingested now (their manifest records), those already in the dataset
-    (path, why), the files of an interrupted ingest removed first, and the warnings."""
+    """What an ingest did: the inputs ingested now (their manifest records) and the blocks they skipped as
+    damaged, those already in the dataset (path, why), the files of an interrupted ingest removed first, and
+    the warnings."""
 
     dataset: Path
     ingested: list[dict] = field(default_factory=list)
+    damaged: list = field(default_factory=list)  # dataset.ingest_input.SkippedBlocks of each input ingested
     skipped: list[tuple[str, str]] = field(default_factory=list)
     discarded: list[Path] = field(default_factory=list)
     warnings: list[str] = field(default_factory=list)
@@ -72,6 +76,7 @@ def ingest_job(options: IngestOptions, *, on_chunk: Callable[[int, int, str], No
     from msdc.asterix.verdict import sniff
     from msdc.pipeline.dataset import manifest as mf
     from msdc.pipeline.dataset.ingest_input import IngestFailed, IngestSettings, ingest_input
+    from msdc.pipeline.dataset.layout import LOCK
     from msdc.pipeline.dataset.parallel import check_inputs, ingest_all
     from msdc.pipeline.model.load import sha256
 
@@ -86,7 +91,7 @@ def ingest_job(options: IngestOptions, *, on_chunk: Callable[[int, int, str], No
             except UnreadableInput as exc:
                 raise JobError(str(exc), 2) from exc
             _refuse(said, options)
-    made = not root.exists()
+    made = first_missing(root)  # the folder itself: validate found its parent
     result = IngestResult(root, warnings=list(checked.warnings))
     try:
         with _locked(root), _pool(options.workers) as pool:
@@ -105,8 +110,9 @@ def ingest_job(options: IngestOptions, *, on_chunk: Callable[[int, int, str], No
             result.discarded = mf.discard_unlisted(root, manifest)
             todo, skipped = _plan(checked.inputs, digests, manifest)
 
-            def commit(record: dict, warnings: list[str]) -> None:
+            def commit(record: dict, warnings: list[str], skipped) -> None:
                 result.warnings += warnings
+                result.damaged.append(skipped)
                 manifest.inputs[record["sha256"]] = record
                 manifest.msdc = record["msdc"]
                 mf.save(root, manifest)  # last: the input is in the dataset from now on
@@ -126,8 +132,9 @@ def ingest_job(options: IngestOptions, *, on_chunk: Callable[[int, int, str], No
                                                   f"ingested {rec['ingested_at']}): nothing to do"
                                                   + _options_not_applied(rec, settings)))
     except BaseException as exc:
-        if made and not _holds_files(root):
-            _remove_made(root)  # the folder this run made, holding nothing: as it was, absent
+        # the folder this run made, holding nothing but its lock (and partition folders a run stopped before
+        # its first part made): as it was, absent
+        remove_if_empty(made, besides=(LOCK,))
         if isinstance(exc, IngestFailed):
             raise JobError(str(exc), exc.status) from None
         raise
@@ -254,29 +261,19 @@ def _forkserver():
     return ctx
 
 
-def _holds_files(root: Path) -> bool:
-    """Whether the dataset folder holds a file besides its lock: a manifest or a part, finished or not
-    (partition folders a stopped run made before its first part, empty, hold nothing: a Ctrl-C then left
-    the folder, its lock and those folders behind)."""
-    from msdc.pipeline.dataset.layout import LOCK
-
-    return any(p.is_file() and p.name != LOCK for p in root.rglob("*"))
-
-
-def _remove_made(root: Path) -> None:
-    """Remove the dataset folder this run made, when it holds only the lock and empty folders."""
-    from msdc.pipeline.dataset.layout import LOCK
-
-    (root / LOCK).unlink(missing_ok=True)
-    for d in sorted((p for p in root.rglob("*") if p.is_dir()), key=lambda p: len(p.parts), reverse=True):
-        try:
-            d.rmdir()
-        except OSError:
-            return
-    try:
-        root.rmdir()
-    except OSError:
-        pass
+def skipped_lines(result: IngestResult) -> list[str]:
+    """The blocks each input ingested skipped as damaged (stderr): one line each (path, offset, reason) as
+    msdc decode lists them, how many more, then their count and bytes."""
+    lines = []
+    for s in result.damaged:
+        lines += [f"{s.path}: offset {offset}: {reason}" for offset, reason in s.blocks]
+        if s.count > len(s.blocks):
+            lines.append(f"{s.path}: {s.count - len(s.blocks)} more skipped block(s) ('msdc stats' groups "
+                         "them by reason)")
+        if s.count:
+            lines.append(f"{s.path}: {s.count} block(s) skipped ({s.length_bytes} bytes): their records are "
+                         "not in the dataset")
+    return lines
 
 
 def summary_lines(result: IngestResult) -> list[str]:
@@ -289,4 +286,4 @@ def summary_lines(result: IngestResult) -> list[str]:
     return lines
 
 
-__all__ = ["IngestOptions", "IngestResult", "ingest_job", "summary_lines", "validate"]
+__all__ = ["IngestOptions", "IngestResult", "ingest_job", "skipped_lines", "summary_lines", "validate"]

@@ -17,7 +17,15 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from msdc.pipeline.jobs.common import JobError, nonempty_path, pinned_editions, sensor_table, writable_dataset
+from msdc.pipeline.jobs.common import (
+    JobError,
+    first_missing,
+    nonempty_path,
+    pinned_editions,
+    remove_if_empty,
+    sensor_table,
+    writable_dataset,
+)
 from msdc.pipeline.jobs.options import ListenOptions, OptionError, check_declared, check_installed
 
 if TYPE_CHECKING:
@@ -190,14 +198,26 @@ def listen_job(options: ListenOptions, *, stop: threading.Event | None = None,
     --duration has passed or Ctrl-C (KeyboardInterrupt, or SIGTERM's Terminated) arrives; then drain the
     queues, close the recording and return the counts. ``say`` prints status lines and drop notes;
     ``ready`` is called with the LiveState once every socket listens; ``ingest`` (with --dataset) is given
-    each recording file once closed, in a thread of its own, and returns lines to say."""
+    each recording file once closed, in a thread of its own, and returns lines to say. A --record folder it
+    made and recorded no file in is removed at the end, however the run ends."""
+    checked = validate(options)
+    made = None if checked.record is None else first_missing(checked.record)
+    try:
+        return _listen(options, checked, stop, say, ready, ingest)
+    finally:
+        remove_if_empty(made)
+
+
+def _listen(options: ListenOptions, checked: Checked, stop: threading.Event | None,
+            say: Callable[[str], None] | None, ready: Callable[[LiveState], None] | None,
+            ingest: Callable[[Path], list[str]] | None) -> ListenResult:
+    """listen_job's run, its options checked."""
     from msdc.pipeline.live.decode import BatchDecoder
     from msdc.pipeline.live.receive import Listener
     from msdc.pipeline.live.record import Recorder
     from msdc.pipeline.live.state import LiveState
     from msdc.pipeline.report.transaction import Terminated
 
-    checked = validate(options)
     say = say or (lambda line: print(line, file=sys.stderr, flush=True))
     names = [e.name for e in checked.endpoints]
     state = LiveState(names)

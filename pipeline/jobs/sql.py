@@ -4,6 +4,7 @@ or Parquet (all or nothing: report.transaction)."""
 
 from __future__ import annotations
 
+import re
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -14,6 +15,10 @@ from msdc.pipeline.jobs.options import SqlOptions, check_declared
 from msdc.pipeline.report.transaction import OutputTransaction, staged
 
 CSV_BATCH_ROWS = 100_000  # rows fetched and written at a time to a CSV output
+# the views a query names (cat048...): only they are made, their parts checked before it runs; a name in a
+# string counts too (query_table('cat048') reads the view): one it does not read costs a check, never a miss
+VIEW_NAMED = re.compile(r"cat(\d{3})", re.IGNORECASE)
+DAMAGED_SHOWN = 5  # damaged parts named in the error, at most
 
 
 @dataclass
@@ -26,6 +31,7 @@ class SqlResult:
     output: Path | None = None
     rows_written: int | None = None
     notes: list[str] = field(default_factory=list)
+    warnings: list[str] = field(default_factory=list)  # said on stderr before the rows
 
 
 def validate(options: SqlOptions) -> tuple[str, Path, Path | None]:
@@ -45,7 +51,7 @@ def validate(options: SqlOptions) -> tuple[str, Path, Path | None]:
 def sql_job(options: SqlOptions, *, tx: OutputTransaction | None = None) -> SqlResult:
     """Run the query; JobError when DuckDB is missing or refuses the query (its message, and the views)."""
     from msdc.pipeline.dataset.manifest import ManifestError
-    from msdc.pipeline.dataset.reader import NotADataset, duckdb_views
+    from msdc.pipeline.dataset.reader import NotADataset, duckdb_views, open_manifest, view_name
 
     query, root, out = validate(options)
     try:
@@ -54,7 +60,11 @@ def sql_job(options: SqlOptions, *, tx: OutputTransaction | None = None) -> SqlR
         raise JobError("msdc sql needs DuckDB: pip install 'msdc[dataset]' (or pip install duckdb)",
                        2) from None
     try:
-        con, views = duckdb_views(root)
+        manifest = open_manifest(root)
+        categories = _categories(manifest, query)
+        warnings = _checked_parts(root, manifest, categories)  # before DuckDB reads a part
+        con, _ = duckdb_views(root, manifest=manifest, categories=categories)
+        views = [view_name(c) for c in sorted(_held(manifest))]
     except NotADataset as exc:
         raise OptionError(f"--dataset {exc}") from None
     except ManifestError as exc:
@@ -66,11 +76,11 @@ def sql_job(options: SqlOptions, *, tx: OutputTransaction | None = None) -> SqlR
         if out is None:
             cursor = con.execute(query)
             if cursor.description is None:
-                return SqlResult(views, None)
+                return SqlResult(views, None, warnings=warnings)
             names = [d[0] for d in cursor.description]
             rows = cursor.fetchmany(options.limit + 1)
             head = pd.DataFrame.from_records(rows[:options.limit], columns=names)
-            return SqlResult(views, head, more=len(rows) > options.limit)
+            return SqlResult(views, head, more=len(rows) > options.limit, warnings=warnings)
         with staged(tx) as stage:
             target = stage.path(out)
             if out.suffix.lower() == ".parquet":
@@ -78,11 +88,42 @@ def sql_job(options: SqlOptions, *, tx: OutputTransaction | None = None) -> SqlR
                 n = con.execute(f"COPY ({query}) TO '{quoted}' (FORMAT PARQUET)").fetchone()[0]  # rows copied
             else:
                 n = _csv(con.sql(query), target)
-        return SqlResult(views, output=out, rows_written=int(n))
+        return SqlResult(views, output=out, rows_written=int(n), warnings=warnings)
     except duckdb.Error as exc:
         raise JobError(f"the query failed: {str(exc).splitlines()[0]} (views: {shown})", 2) from None
     finally:
         con.close()
+
+
+def _categories(manifest, query: str) -> set[int]:
+    """The categories whose views the query names (every one when it names none): the views made, and the
+    parts checked; a view the query reads without naming it does not exist, so no part is read unchecked."""
+    return (_held(manifest) & {int(c) for c in VIEW_NAMED.findall(query)}) or _held(manifest)
+
+
+def _held(manifest) -> set[int]:
+    """The categories the dataset's parts hold (a view each)."""
+    return {int(p["category"]) for rec in manifest.inputs.values() for p in rec["parts"]}
+
+
+def _checked_parts(root: Path, manifest, categories: set[int]) -> list[str]:
+    """Check the parts of ``categories`` (dataset.integrity): JobError naming the damaged ones, the query
+    not run; else the warnings (parts ingested without a checksum)."""
+    from msdc.pipeline.dataset.integrity import check_parts
+
+    checked = check_parts(root, list(manifest.inputs.values()), categories)
+    if checked.damaged:
+        said = [f"{p['path']} ({p['rows']:,} CAT{int(p['category']):03d} records of {p['input']}): {why}"
+                for p, why in checked.damaged[:DAMAGED_SHOWN]]
+        more = len(checked.damaged) - DAMAGED_SHOWN
+        raise JobError(f"--dataset {root}: {len(checked.damaged)} damaged part(s) cannot be read as ingest "
+                       "wrote them, the query was not run: " + "; ".join(said)
+                       + (f"; and {more} more" if more > 0 else "") + " (restore the part(s) from a backup, "
+                       "or ingest their inputs again into a new dataset)", 2)
+    if not checked.unverified:
+        return []
+    return [f"{checked.unverified} part(s) the query may read carry no checksum (ingested before msdc "
+            "recorded them): read unchecked, a damaged one would go unnoticed"]
 
 
 def _csv(relation, target: Path) -> int:

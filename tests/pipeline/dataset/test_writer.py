@@ -44,3 +44,19 @@ def test_row_groups_hold_one_time_slot_each_and_every_row_in_file_order(tmp_path
     # 5 that came after them and the one without a time (60 + 1 rows); slot 2's 20 rows (40-49.5)
     assert groups == [(40, [0]), (41, [0, 1]), (20, [2])]
     assert done["date"] == dt.date(2026, 11, 28).isoformat() and done["rows"] == len(rows)
+
+
+def test_each_part_is_recorded_with_its_size_and_crc32(tmp_path):
+    """The part's record carries the size and CRC-32 of the file renamed into place (read back whole here:
+    what a query checks it against), in two parts of two days."""
+    import zlib
+
+    rows = _plots(np.arange(40.0))
+    dates = np.repeat(np.array(["2026-11-28", "2026-11-29"], "datetime64[D]"), 20)
+    writer = InputWriter(tmp_path, "abc", {48: record_schema(48).arrow()})
+    writer.add(48, rows, dates)
+    done = writer.finish()
+    assert [d["date"] for d in done] == ["2026-11-28", "2026-11-29"]
+    for d in done:
+        data = (tmp_path / d["path"]).read_bytes()
+        assert d["size_bytes"] == len(data) and d["crc32"] == f"{zlib.crc32(data):08x}"

@@ -438,3 +438,51 @@ def test_a_stop_before_the_first_part_leaves_no_folder(tmp_path, monkeypatch):
     with pytest.raises(KeyboardInterrupt):
         ingest.ingest_job(ingest.IngestOptions(inputs=(str(RADAR),), dataset=str(root), date=DAY))
     assert not root.exists()
+
+
+def _damaged_radar(path: Path, every: int, count: int) -> list[tuple[int, int]]:
+    """The radar fixture with ``count`` data blocks (every ``every``-th from the 10th) made undecodable: their
+    bodies all 0xFF, an FSPEC that never ends; the (offset, length) of each, found by walking the blocks' LEN
+    fields."""
+    data = bytearray(RADAR.read_bytes())
+    blocks, offset = [], 0
+    while offset < len(data):
+        length = int.from_bytes(data[offset + 1:offset + 3], "big")
+        blocks.append((offset, length))
+        offset += length
+    damaged = blocks[10::every][:count]
+    for start, length in damaged:
+        data[start + 3:start + length] = b"\xff" * (length - 3)
+    path.write_bytes(bytes(data))
+    return damaged
+
+
+@pytest.mark.parametrize("workers", ["1", "2"])
+def test_blocks_skipped_as_damaged_are_said_on_stderr(tmp_path, capsys, workers):
+    """Each skipped block of a damaged recording is said as msdc decode says it (file, offset, reason), the
+    first 20, then how many more, their count and bytes; the manifest counts the same. Said nothing before."""
+    path = tmp_path / "radar.ast"
+    damaged = _damaged_radar(path, 3, 23)
+    assert ingest(path, "--dataset", tmp_path / "ds", "--date", DAY, "--workers", workers, "--chunk-mb",
+                  "0.1") == 0
+    err = capsys.readouterr().err.splitlines()
+    said = [line for line in err if line.startswith(f"msdc ingest: {path}: ")]
+    reason = "an FSPEC or item runs past the end of its data block"
+    assert said == [*(f"msdc ingest: {path}: offset {start}: {reason} (record at offset {start + 3})"
+                      for start, _ in damaged[:20]),
+                    f"msdc ingest: {path}: 3 more skipped block(s) ('msdc stats' groups them by reason)",
+                    f"msdc ingest: {path}: 23 block(s) skipped ({sum(n for _, n in damaged)} bytes): their "
+                    "records are not in the dataset"]
+    assert manifest(tmp_path / "ds")["inputs"][0]["skipped_blocks"] == 23
+
+
+@pytest.mark.xfail(strict=True, reason="asterix.reader builds its errors' file column from the path, which "
+                   "pyarrow refuses when the name is not UTF-8 (UnicodeEncodeError; msdc decode alike): "
+                   "asterix/ is another change's")
+def test_a_damaged_input_with_a_name_not_utf8_is_said_escaped(tmp_path, capsys):
+    path = Path(os.fsdecode(tmp_path / "radar") + os.fsdecode(b"\xff.ast"))
+    (start, length), = _damaged_radar(path, 1, 1)
+    assert ingest(path, "--dataset", tmp_path / "ds", "--date", DAY) == 0
+    err = capsys.readouterr().err
+    assert f"msdc ingest: {tmp_path}/radar\\xff.ast: offset {start}: " in err
+    assert f"msdc ingest: {tmp_path}/radar\\xff.ast: 1 block(s) skipped ({length} bytes)" in err

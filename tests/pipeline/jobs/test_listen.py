@@ -263,3 +263,42 @@ def test_replay_ended_by_a_signal_says_what_it_sent(tmp_path, sig, status, said)
     assert proc.returncode == status, err
     assert out.startswith(f"1 datagrams ({len(block(48, cat048_record(25, 201, 100.0)))} bytes) sent to ")
     assert out.rstrip().endswith(f"; {said})") and "Traceback" not in err
+
+
+def test_ctrl_c_before_any_recording_removes_the_record_folder_it_made(tmp_path):
+    """listen --record rec/day --dataset ds, stopped by Ctrl-C before a datagram came: the folders it made
+    for the recording (rec and rec/day) were left behind, empty; now the run leaves tmp_path as it was."""
+    proc = _listening(free_port(), "--record", str(tmp_path / "rec" / "day"), "--dataset",
+                      str(tmp_path / "ds"))
+    try:
+        proc.send_signal(signal.SIGINT)
+        out, err = proc.communicate(timeout=60)
+    finally:
+        proc.kill()
+    assert proc.returncode == 0, err
+    assert "Traceback" not in err
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_a_run_failing_after_it_made_the_record_folder_removes_it(tmp_path):
+    """A failure once the --record folder is made (here listen_job called with --dataset but no ingest to run)
+    leaves the output folder as it was: absent, parents it made included; a folder that was there stays."""
+    from msdc.pipeline.jobs.listen import ListenOptions, OptionError, listen_job
+
+    for record in (tmp_path / "rec" / "day", tmp_path):
+        options = ListenOptions(udp=(f"127.0.0.1:{free_port()}",), record=str(record),
+                                dataset=str(tmp_path / "ds"))
+        with pytest.raises(OptionError, match="listen_job needs ``ingest``"):
+            listen_job(options)
+        assert tmp_path.is_dir() and list(tmp_path.iterdir()) == []
+
+
+def test_a_duration_ending_with_nothing_recorded_leaves_no_folder_and_one_with_a_file_keeps_it(tmp_path):
+    argv = ["listen", "--udp", f"127.0.0.1:{free_port()}", "--record", str(tmp_path / "rec"), "--duration",
+            "0.2"]
+    assert main(argv) == 0
+    assert not (tmp_path / "rec").exists()
+    (tmp_path / "rec").mkdir()
+    (tmp_path / "rec" / "notes.txt").write_text("kept")
+    assert main(argv) == 0
+    assert [p.name for p in (tmp_path / "rec").iterdir()] == ["notes.txt"]
