@@ -103,7 +103,8 @@ def ingest_input(path: Path, digest: str, label: str, settings: IngestSettings, 
         raise
     if on_chunk:
         on_chunk(size, size, f"{path.name}: decoding")
-    warnings = content + seen.tally.warning(label, seen.date, seen.fmt) + edition_notes.warnings(seen.failed)
+    warnings = (content + seen.account.notes() + seen.tally.warning(label, seen.date, seen.fmt)
+                + edition_notes.warnings(seen.failed))
     if not seen.rows:
         warnings.append(f"{path}: no record of {', '.join(f'CAT{c:03d}' for c in cats)} decoded; "
                                "recorded as ingested, with no part")

@@ -217,8 +217,10 @@ def _load_dataset(dataset, categories, columns, progress: Progress | None) -> Lo
         inputs.append(dataset_info(dataset, i, recs[-1]))
     dates = [r.date for r in recs if r.date is not None]
     first = min(dates) if dates else None
-    frames, spans = _joined(recs, [dataset.labels[i] for i in read], first)
-    return Loaded(frames, recs, inputs, first, spans)
+    unsourced: list[pd.DataFrame] = []
+    frames, spans = _joined(recs, [dataset.labels[i] for i in read], first, unsourced)
+    warnings = odd_source_texts(pd.concat(unsourced, ignore_index=True) if unsourced else None)
+    return Loaded(frames, recs, inputs, first, spans, warnings=warnings)
 
 
 def _touched(dataset, categories=None) -> list[int]:

@@ -18,6 +18,7 @@ import msdc.asterix as asterix
 from msdc.asterix.encode import encode_frame
 from msdc.asterix.plausible import Implausible, odd_sources
 from msdc.pipeline.cli import main
+from msdc.pipeline.dataset.inputs import open_inputs
 from msdc.pipeline.model.load import load
 
 FIXTURES = Path(__file__).resolve().parents[2] / "fixtures"
@@ -98,6 +99,13 @@ def test_a_record_naming_another_source_is_counted_and_said(tmp_path, capsys):
     assert written.loc[written.offset == odd[0], ["sac", "sic"]].values.tolist() == [[7, 9]]
     assert main(["stats", str(path), "--edition", "21=0.23"]) == 0
     assert said in capsys.readouterr().err
+    dataset = tmp_path / "ds"
+    assert main(["ingest", "--dataset", str(dataset), str(path), "--edition", "21=0.23", "--date",
+                 "2019-03-01"]) == 0
+    assert said in capsys.readouterr().err
+    # a dataset's read puts an input's records back in file order, its block numbers with them
+    loaded = load([], dataset=open_inputs(dataset))
+    assert len(loaded.frames[21]) == 38 and any("left out of the measurements" in w for w in loaded.warnings)
 
 
 def test_many_records_naming_other_sources_fail_decode(tmp_path, capsys):

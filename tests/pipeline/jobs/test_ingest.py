@@ -476,9 +476,6 @@ def test_blocks_skipped_as_damaged_are_said_on_stderr(tmp_path, capsys, workers)
     assert manifest(tmp_path / "ds")["inputs"][0]["skipped_blocks"] == 23
 
 
-@pytest.mark.xfail(strict=True, reason="asterix.reader builds its errors' file column from the path, which "
-                   "pyarrow refuses when the name is not UTF-8 (UnicodeEncodeError; msdc decode alike): "
-                   "asterix/ is another change's")
 def test_a_damaged_input_with_a_name_not_utf8_is_said_escaped(tmp_path, capsys):
     path = Path(os.fsdecode(tmp_path / "radar") + os.fsdecode(b"\xff.ast"))
     (start, length), = _damaged_radar(path, 1, 1)
