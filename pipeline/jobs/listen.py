@@ -251,14 +251,15 @@ def _listen(options: ListenOptions, checked: Checked, stop: threading.Event | No
         listener.close_sockets()
         raise
     stop = stop or threading.Event()
-    server = _start_monitor(state, checked, stop) if checked.http is not None else None
-    listener.start()
-    if ready is not None:
-        ready(state)
+    server = None
     started = time.monotonic()
     interrupted = False
     said: set[str] = set()  # what _watch has said once: the recording's failure
-    try:
+    try:  # a Ctrl-C from the moment the threads start (the user sees "receiving") ends the run as any other
+        server = _start_monitor(state, checked, stop) if checked.http is not None else None
+        listener.start()
+        if ready is not None:
+            ready(state)
         _watch(listener, state, recorder, options.duration_s, stop, say, started, said)
     except (KeyboardInterrupt, Terminated):
         interrupted = True

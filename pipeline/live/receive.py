@@ -122,9 +122,10 @@ class Listener:
     def stop(self) -> None:
         """Stop receiving, then decode and record what is queued, and close the sockets and recording."""
         self.stopping.set()
-        for t in self.threads:
-            t.join()
-        self.decoding.join()
+        decoding = getattr(self, "decoding", None)
+        for t in (*self.threads, *([decoding] if decoding is not None else [])):
+            if t.ident is not None:  # started (a Ctrl-C may come as start() starts them)
+                t.join()
         self.close_sockets()
         if self.recorder is not None:
             self.recorder.close()

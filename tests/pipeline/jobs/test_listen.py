@@ -280,6 +280,19 @@ def test_ctrl_c_before_any_recording_removes_the_record_folder_it_made(tmp_path)
     assert list(tmp_path.iterdir()) == []
 
 
+def test_ctrl_c_as_listen_says_it_receives_ends_the_run_as_any_other(tmp_path):
+    """A Ctrl-C arriving while ``ready`` runs (the command line prints "receiving" there) escaped the run's
+    stop: the KeyboardInterrupt went up past the drain (exit 130 in a loaded suite); it ends the run."""
+    from msdc.pipeline.jobs.listen import ListenOptions, listen_job
+
+    def ready(state):
+        raise KeyboardInterrupt
+
+    result = listen_job(ListenOptions(udp=(f"127.0.0.1:{free_port()}",), record=str(tmp_path / "rec")),
+                        ready=ready)
+    assert result.interrupted and result.recordings == [] and list(tmp_path.iterdir()) == []
+
+
 def test_a_run_failing_after_it_made_the_record_folder_removes_it(tmp_path):
     """A failure once the --record folder is made (here listen_job called with --dataset but no ingest to run)
     leaves the output folder as it was: absent, parents it made included; a folder that was there stays."""
