@@ -90,7 +90,7 @@ def test_gps_header_worked_by_hand() -> None:
 
 def midnight_gps() -> tuple[bytes, list[int], list[bytes]]:
     blocks = [
-        block(48, r048(1, 86399.0), r048(2, 86399.25)),  # 3 + 6 + 6 = 15 bytes, recorded 23:59:59.5
+        block(48, r048(1, 86399.0), r048(1, 86399.25)),  # 3 + 6 + 6 = 15 bytes, recorded 23:59:59.5
         block(34, r034(1, 86399.75)),                   # 3 + 7 = 10 bytes, recorded 23:59:59.875
         block(21, r021(5, 0.5)),                        # 9 bytes, recorded 00:00:00.75 (next day)
         block(48, r048(3, 86399.5)),                    # a late report, recorded 00:00:01
