@@ -176,7 +176,7 @@ class InputWriter:
         floats = [f.name for f in schema if pa.types.is_floating(f.type)]
         o = _Open(pq.ParquetWriter(tmp, schema, write_statistics=stats, compression=COMPRESSION,
                                    compression_level=COMPRESSION_LEVEL, use_dictionary=text,
-                                   use_byte_stream_split=floats), tmp, final, key)
+                                   use_byte_stream_split=floats, write_page_checksum=True), tmp, final, key)
         self.open[key] = o
         return o
 

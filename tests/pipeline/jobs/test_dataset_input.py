@@ -185,6 +185,32 @@ def test_a_damaged_part_is_said_by_every_command_with_status_2(tmp_path, dataset
     assert len(err.strip().splitlines()) <= 2  # "Processing data files..." and the message
 
 
+def test_bytes_damaged_inside_a_page_are_refused_not_read_as_other_values(tmp_path, dataset):
+    """16 zero bytes in the middle of the CAT048 part's rho_nm column chunk (placed from the part's own
+    footer) decoded into other ranges without a word; ingest writes each page's CRC-32 and the read checks
+    it: the read is refused, naming the part."""
+    import pyarrow.parquet as pq
+
+    from msdc.pipeline.dataset.inputs import UnreadablePart
+
+    root = tmp_path / "data"
+    shutil.copytree(dataset, root)
+    part, = root.glob("date=*/category=048/sensor=*/part-*.parquet")
+    groups = pq.ParquetFile(part).metadata
+    chunks = [groups.row_group(g).column(c) for g in range(groups.num_row_groups)
+              for c in range(groups.num_columns) if groups.row_group(g).column(c).path_in_schema == "rho_nm"]
+    chunk = max(chunks, key=lambda c: c.total_compressed_size)
+    data = bytearray(part.read_bytes())
+    at = chunk.data_page_offset + chunk.total_compressed_size // 2
+    data[at:at + 16] = bytes(16)
+    part.write_bytes(data)
+    src = open_inputs(root)
+    radar = next(i for i in range(2) if src.records[i]["rows"].get("048"))
+    said = rf"cannot be read \({part}\): .*CRC checksum verification failed"
+    with pytest.raises(UnreadablePart, match=said):
+        src.read(radar)
+
+
 def test_days_and_sensors_prune_the_parts_read(dataset):
     import datetime as dt
 
