@@ -459,8 +459,14 @@ def cmd_replay(args) -> int:
 
     _numba_without_scipy()
     options = from_args(replay.ReplayOptions, args)
-    result = replay.replay_job(options)
-    _warn("replay", result.warnings)
+    early: list[str] = []
+
+    def said(warnings: list[str]) -> None:  # before the first datagram goes: a long replay's start
+        early.extend(warnings)
+        _warn("replay", warnings)
+
+    result = replay.replay_job(options, before_sending=said)
+    _warn("replay", result.warnings[len(early):])
     ended = "" if result.interrupted is None else f"; {str(result.interrupted) or 'interrupted by Ctrl-C'}"
     print(f"{result.datagrams} datagrams ({result.bytes} bytes) sent to {options.to} in "
           f"{result.wall_s:.2f} s ({result.passes} pass(es) over {result.scheduled} datagrams spanning "

@@ -49,10 +49,13 @@ def validate(options: ReplayOptions):
     return to, paths, warnings
 
 
-def replay_job(options: ReplayOptions, *, stop: Callable[[], bool] = lambda: False) -> ReplayResult:
+def replay_job(options: ReplayOptions, *, stop: Callable[[], bool] = lambda: False,
+               before_sending: Callable[[list[str]], None] | None = None) -> ReplayResult:
     """Read the recordings' datagrams and times, then send them to --to at --speed (--loop, --duration)
     until done or ``stop()``; Ctrl-C (or SIGTERM, SIGHUP) ends it with what was sent so far, in
-    ``interrupted``."""
+    ``interrupted``. ``before_sending`` is given the warnings known before the first datagram goes (the
+    options', the recordings' skipped bytes): a long replay says them at its start; the result has them
+    all."""
     import time
 
     from msdc.pipeline.live.replay import InterfaceError, ReplayError, Sent, schedule, send, sending_socket
@@ -71,6 +74,8 @@ def replay_job(options: ReplayOptions, *, stop: Callable[[], bool] = lambda: Fal
                           f"{exc.strerror or exc}") from None
     except OSError as exc:
         raise OptionError(f"--to {options.to}: cannot send there ({exc.strerror or exc})") from None
+    if before_sending is not None:
+        before_sending(warnings)
     sent, interrupted, started = Sent(), None, time.monotonic()
     try:
         send(sched, sock, speed=options.speed, loop=options.loop, duration_s=options.duration_s, stop=stop,

@@ -57,6 +57,25 @@ def test_a_record_folder_that_cannot_be_written_is_refused_before_listening(tmp_
     assert (tmp_path / "file").read_text() == "x"
 
 
+def test_a_raw_file_s_skipped_bytes_are_said_before_the_first_datagram_goes(tmp_path, capsys, monkeypatch):
+    """They were said once sending ended: after an hour's replay at --speed 1."""
+    from msdc.pipeline.live import replay
+
+    one = block(48, cat048_record(25, 201, 10.0))
+    (tmp_path / "cut.ast").write_bytes(one + one[:5])
+    seen: list[str] = []
+    real_send = replay.send
+
+    def send(*args, **kwargs):
+        seen.append(capsys.readouterr().err)  # what was said when sending began
+        return real_send(*args, **kwargs)
+
+    monkeypatch.setattr(replay, "send", send)
+    assert main(["replay", str(tmp_path / "cut.ast"), "--to", f"127.0.0.1:{free_port()}"]) == 0
+    assert "5 bytes skipped, not sent" in seen[0]
+    assert "skipped" not in capsys.readouterr().err  # said once
+
+
 def test_an_http_port_taken_is_refused(capsys, monkeypatch):
     import socket
 
