@@ -54,7 +54,7 @@ TRACK_COLUMNS = ["aircraft_id", "callsign", "address", "time", "time_of_day", "l
 # (turn rates of 1.7e-17) and 17-digit floats do not reach the file; mode_* columns take MODE_DECIMALS
 CSV_DECIMALS = {"time_of_day": 6, "latitude": 7, "longitude": 7, "flight_level": 2, "vertical_rate_fpm": 1,
                 "speed_kt": 2, "track_deg": 3, "turn_rate_dps": 4, "sigma_major_m": 2, "sigma_minor_m": 2,
-                "ellipse_orientation_deg": 2, "age_s": 6}
+                "ellipse_orientation_deg": 2, "sigma_speed_kt": 2, "age_s": 6}
 MODE_DECIMALS = 4
 
 

@@ -388,7 +388,7 @@ def concat_columns(parts: list[dict[str, pd.Series]]) -> pd.DataFrame:
 def _empty_tracks(names: list[str]) -> pd.DataFrame:
     cols = ["aircraft_id", "segment", "time", "time_of_day", "latitude", "longitude", "flight_level",
             "vertical_rate_fpm", "speed_kt", "track_deg", "turn_rate_dps", "sigma_major_m",
-            "sigma_minor_m", "ellipse_orientation_deg"] + [f"mode_{n}" for n in names] + [
+            "sigma_minor_m", "ellipse_orientation_deg", "sigma_speed_kt"] + [f"mode_{n}" for n in names] + [
             "coasted", "age_s", "sources"]
     out = pd.DataFrame({c: [] for c in cols})
     out["on_ground"] = pd.Series(dtype="boolean")
@@ -679,7 +679,7 @@ def _track_table(aircraft_id: str, filtered: FilteredReports, updates: Updates, 
         return wanted is None or not wanted.isdisjoint(names)
 
     out_lat, out_lon = plane.inverse(xc[:, 0], xc[:, 3])
-    motion = needs("speed_kt", "track_deg", "turn_rate_dps")
+    motion = needs("speed_kt", "track_deg", "turn_rate_dps", "sigma_speed_kt")
     ellipse = needs("sigma_major_m", "sigma_minor_m", "ellipse_orientation_deg")
     minv = _inv2(plane.local_to_plane(out_lat, out_lon)) if motion or ellipse else None
     out = {"aircraft_id": aircraft_id, "segment": segment[est.row], "time": qt, "time_of_day": qt,
@@ -698,6 +698,8 @@ def _track_table(aircraft_id: str, filtered: FilteredReports, updates: Updates, 
         sigma_major, sigma_minor, orientation = _ellipse(_local_position_covariance(minv, est))
         out.update({"sigma_major_m": sigma_major, "sigma_minor_m": sigma_minor,
                     "ellipse_orientation_deg": orientation})
+    if motion:
+        out["sigma_speed_kt"] = _speed_sigma_mps(minv, est, v_loc, speed) / M_PER_S_PER_KT
     for j, name in enumerate(names):
         out[f"mode_{name}"] = est.mu[:, j]
     is_update = est.age_s == 0.0
@@ -721,6 +723,18 @@ def _local_motion(minv: np.ndarray, est: Estimates) -> tuple[np.ndarray, np.ndar
     v_loc = np.einsum("nij,nj->ni", minv, est.x[:, [1, 4]])
     a_loc = np.einsum("nij,nj->ni", minv, est.x[:, [2, 5]])
     return v_loc, a_loc
+
+
+def _speed_sigma_mps(minv: np.ndarray, est: Estimates, v_loc: np.ndarray, speed: np.ndarray) -> np.ndarray:
+    """1-sigma of each estimate's speed: its velocity covariance along the velocity (below 1 m/s, where the
+    direction is not known, along the covariance's major axis). A segment started on two reports a few
+    seconds apart reads its speed from them: this says how little that speed is worth."""
+    cov = minv @ est.P[:, [1, 4]][:, :, [1, 4]] @ np.swapaxes(minv, 1, 2)
+    moving = speed > 1.0
+    u = np.where(moving[:, None], v_loc / np.where(moving, speed, 1.0)[:, None], 0.0)
+    along = np.einsum("ni,nij,nj->n", u, cov, u)
+    major = np.linalg.eigvalsh(cov)[:, -1] if len(cov) else np.zeros(0)
+    return np.sqrt(np.maximum(np.where(moving, along, major), 0.0))
 
 
 def _local_position_covariance(minv: np.ndarray, est: Estimates) -> np.ndarray:

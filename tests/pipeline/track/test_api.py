@@ -397,3 +397,29 @@ def test_the_tracks_alone_are_the_tracks_of_the_full_run():
     pd.testing.assert_frame_equal(alone.tracks, full.tracks)
     assert len(full.sensors) == 1 and len(full.aircraft) == 1 and full.final_states
     assert alone.sensors.empty and alone.aircraft.empty and alone.rejected.empty and not alone.final_states
+
+
+def test_the_speed_sigma_covers_the_speed_error_and_marks_a_young_segment():
+    """A straight 200 m/s (388.8 kt) flight seen by a 4 s radar of 60 m per axis, five seeds: once settled,
+    the speed error (against the simulator's truth) lies within 2 sigma_speed_kt in at least 95 % of updates,
+    the sigma no more than 4 times the error's RMS (the filter keeps room for manoeuvres: on this line about
+    7 kt against 2.5 kt); a segment's first updates, its speed read off two plots 4 s apart, say so with a
+    sigma many times the settled one."""
+    truth_kt = 200.0 / 0.514444
+    errors, sigmas, young, settled = [], [], [], []
+    for seed in range(5):
+        rng = np.random.default_rng(100 + seed)
+        truth = fly((20000.0, 20000.0), 60.0, 200.0, [(400, 0, 0)])
+        m = _adsb(truth, np.arange(0.0, 400.0, 4.0), rng, sigma=60.0).assign(
+            sensor_id="048:25/201", sensor_kind="radar")
+        out = track(m, step_s=4.0, max_coast_s=8.0).tracks
+        updates = out[~out["coasted"]]
+        age = (updates["time"] - updates["time"].iloc[0]).dt.total_seconds()
+        errors += list((updates["speed_kt"] - truth_kt)[age > 120])
+        sigmas += list(updates["sigma_speed_kt"][age > 120])
+        young.append(updates["sigma_speed_kt"].iloc[1])
+        settled.append(updates["sigma_speed_kt"][age > 120].median())
+    errors, sigmas = np.array(errors), np.array(sigmas)
+    assert np.mean(np.abs(errors) < 2 * sigmas) >= 0.95
+    assert 1.0 <= np.sqrt(np.mean(sigmas**2)) / np.sqrt(np.mean(errors**2)) <= 4.0
+    assert min(young) > 5 * max(settled), (young, settled)
