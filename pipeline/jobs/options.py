@@ -524,8 +524,8 @@ ADSB_SIGMA_DOC = ("ADS-B sigma for reports without NACp, used by {used} "
 class ReferenceFilterOptions(OneOrMany):
     """The ADS-B report filters (pipeline.quality.filters), declared once for the commands that take them:
     correlate (before slotting) and quality (the reference of radar accuracy and biases); evaluate
-    redeclares --drop-jumps's doc (its reference gates). Listed first among a command's bases, so that its
-    inputs keep their place."""
+    redeclares their help (its reference gates: the reports under test keep theirs). Listed first among a
+    command's bases, so that its inputs keep their place."""
 
     drop_jumps: bool = option(False, "--drop-jumps", section="measurements",
                               help="remove detected ADS-B position jumps first",
@@ -869,10 +869,20 @@ class EvaluateOptions(ReferenceFilterOptions, DatasetOptions, DecodingOptions):
             "its own, the windows side by side; the outputs add a scorecard per window "
             "([A long span, window by window](#a-long-span-window-by-window))")
     drop_jumps: bool = option(False, "--drop-jumps", section="measurements",
-                              help="remove detected ADS-B position jumps first",
+                              help="leave detected ADS-B position jumps out of the reference",
                               doc="leave detected ADS-B position jumps out of the reference (the reports "
                                   "under test keep theirs; [reference gates](../methods/evaluate.md#how-"
                                   "msdc-builds-the-reference))")
+    min_nic: int | None = option(None, "--min-nic", range=INDICATOR_RANGE, section="measurements",
+                                 help="leave ADS-B reports with NUCp/NIC below N out of the reference",
+                                 doc="leave ADS-B reports with NUCp/NIC below N out of the reference (the "
+                                     "reports under test keep theirs; [reference gates](../methods/"
+                                     "evaluate.md#how-msdc-builds-the-reference))")
+    min_nacp: int | None = option(None, "--min-nacp", range=INDICATOR_RANGE, section="measurements",
+                                  help="leave ADS-B reports with NACp below N out of the reference",
+                                  doc="leave ADS-B reports with NACp below N out of the reference (the "
+                                      "reports under test keep theirs; [reference gates](../methods/"
+                                      "evaluate.md#how-msdc-builds-the-reference))")
     min_sil: int | None = option(None, "--min-sil", range=SIL_RANGE, section="measurements",
                                  help="leave ADS-B reports with SIL below N out of the reference",
                                  doc="leave ADS-B reports with SIL below N out of the reference")
