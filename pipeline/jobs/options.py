@@ -520,6 +520,19 @@ ADSB_SIGMA_DOC = ("ADS-B sigma for reports without NACp, used by {used} "
                   "([track](track.md#ads-b-without-nacp-adsb-sigma))")
 
 
+def _indicator_gate(flag: str, indicator: str, *, reference_only: bool = False) -> typing.Any:
+    """An ADS-B quality-indicator minimum (0 to 11): reports below it dropped (correlate, quality), or only
+    left out of the reference (evaluate: the reports under test keep theirs)."""
+    if not reference_only:
+        said = f"drop ADS-B reports with {indicator} below N"
+        return option(None, flag, range=INDICATOR_RANGE, section="measurements", help=said,
+                      doc=f"{said} ([filters](quality.md#filters))")
+    said = f"leave ADS-B reports with {indicator} below N out of the reference"
+    return option(None, flag, range=INDICATOR_RANGE, section="measurements", help=said,
+                  doc=f"{said} (the reports under test keep theirs; [reference gates](../methods/evaluate.md"
+                      "#how-msdc-builds-the-reference))")
+
+
 @dataclass(frozen=True)
 class ReferenceFilterOptions(OneOrMany):
     """The ADS-B report filters (pipeline.quality.filters), declared once for the commands that take them:
@@ -532,13 +545,8 @@ class ReferenceFilterOptions(OneOrMany):
                               doc="remove detected ADS-B position jumps (correlate: before slotting; "
                                   "quality: from the reference) (off by default, so the thesis numbers stay "
                                   "reproducible; [filters](quality.md#filters))")
-    min_nic: int | None = option(None, "--min-nic", range=INDICATOR_RANGE, section="measurements",
-                                 help="drop ADS-B reports with NUCp/NIC below N",
-                                 doc="drop ADS-B reports with NUCp/NIC below N "
-                                     "([filters](quality.md#filters))")
-    min_nacp: int | None = option(None, "--min-nacp", range=INDICATOR_RANGE, section="measurements",
-                                  help="drop ADS-B reports with NACp below N",
-                                  doc="drop ADS-B reports with NACp below N ([filters](quality.md#filters))")
+    min_nic: int | None = _indicator_gate("--min-nic", "NUCp/NIC")
+    min_nacp: int | None = _indicator_gate("--min-nacp", "NACp")
 
 
 @dataclass(frozen=True)
@@ -873,16 +881,8 @@ class EvaluateOptions(ReferenceFilterOptions, DatasetOptions, DecodingOptions):
                               doc="leave detected ADS-B position jumps out of the reference (the reports "
                                   "under test keep theirs; [reference gates](../methods/evaluate.md#how-"
                                   "msdc-builds-the-reference))")
-    min_nic: int | None = option(None, "--min-nic", range=INDICATOR_RANGE, section="measurements",
-                                 help="leave ADS-B reports with NUCp/NIC below N out of the reference",
-                                 doc="leave ADS-B reports with NUCp/NIC below N out of the reference (the "
-                                     "reports under test keep theirs; [reference gates](../methods/"
-                                     "evaluate.md#how-msdc-builds-the-reference))")
-    min_nacp: int | None = option(None, "--min-nacp", range=INDICATOR_RANGE, section="measurements",
-                                  help="leave ADS-B reports with NACp below N out of the reference",
-                                  doc="leave ADS-B reports with NACp below N out of the reference (the "
-                                      "reports under test keep theirs; [reference gates](../methods/"
-                                      "evaluate.md#how-msdc-builds-the-reference))")
+    min_nic: int | None = _indicator_gate("--min-nic", "NUCp/NIC", reference_only=True)
+    min_nacp: int | None = _indicator_gate("--min-nacp", "NACp", reference_only=True)
     min_sil: int | None = option(None, "--min-sil", range=SIL_RANGE, section="measurements",
                                  help="leave ADS-B reports with SIL below N out of the reference",
                                  doc="leave ADS-B reports with SIL below N out of the reference")

@@ -121,21 +121,27 @@ def _listening(port: int, *options: str) -> subprocess.Popen:
     return proc
 
 
-def test_ctrl_c_ends_listen_with_a_complete_recording(tmp_path, capsys):
-    port = free_port()
-    folder = tmp_path / "rec"
-    proc = _listening(port, "--record", str(folder))
+def _ctrl_c(proc: subprocess.Popen) -> tuple[str, str]:
+    """Ctrl-C to a listening process: it ends with status 0 and no traceback; what it printed."""
     try:
-        datagrams = [block(48, cat048_record(25, 201, 100.0 + i), cat048_record(25, 201, 100.5 + i))
-                     for i in range(5)]
-        send_all(datagrams, port)
-        time.sleep(0.3)  # received; the decoding thread may still hold them when the signal comes
         proc.send_signal(signal.SIGINT)
         out, err = proc.communicate(timeout=60)
     finally:
         proc.kill()
     assert proc.returncode == 0, err
     assert "Traceback" not in err
+    return out, err
+
+
+def test_ctrl_c_ends_listen_with_a_complete_recording(tmp_path, capsys):
+    port = free_port()
+    folder = tmp_path / "rec"
+    proc = _listening(port, "--record", str(folder))
+    datagrams = [block(48, cat048_record(25, 201, 100.0 + i), cat048_record(25, 201, 100.5 + i))
+                 for i in range(5)]
+    send_all(datagrams, port)
+    time.sleep(0.3)  # received; the decoding thread may still hold them when the signal comes
+    out, err = _ctrl_c(proc)
     assert f"127.0.0.1:{port}: 5 packets (5 framed, 0 unframed, 0 empty, 0 dropped), " in out
     (path,) = folder.iterdir()
     assert path.suffix == ".pcapng"  # closed and renamed: no .part left
@@ -289,13 +295,7 @@ def test_ctrl_c_before_any_recording_removes_the_record_folder_it_made(tmp_path)
     for the recording (rec and rec/day) were left behind, empty; now the run leaves tmp_path as it was."""
     proc = _listening(free_port(), "--record", str(tmp_path / "rec" / "day"), "--dataset",
                       str(tmp_path / "ds"))
-    try:
-        proc.send_signal(signal.SIGINT)
-        out, err = proc.communicate(timeout=60)
-    finally:
-        proc.kill()
-    assert proc.returncode == 0, err
-    assert "Traceback" not in err
+    _ctrl_c(proc)
     assert list(tmp_path.iterdir()) == []
 
 
