@@ -105,6 +105,7 @@ class BatchDecoder:
         status: dict[str, float] = {}
         parts = []
         for cat, frame in rec.frames.items():
+            frame = self._without_odd_sources(frame, stop, feed, counts)
             if not len(frame):
                 continue
             row_dgram = np.searchsorted(stop, frame["offset"].to_numpy(np.int64), side="right")
@@ -127,6 +128,22 @@ class BatchDecoder:
                     parts.append(rows.reset_index(drop=True))
         reports = pd.concat(parts, ignore_index=True) if len(parts) > 1 else (parts[0] if parts else None)
         self.state.decoded(counts, reports, status)
+
+    def _without_odd_sources(self, frame: pd.DataFrame, stop: np.ndarray, feed: np.ndarray,
+                             counts: dict) -> pd.DataFrame:
+        """The frame without the records naming another data source than their block (and those after them
+        in it: model.odd_sources), which damage inside a block makes; each such block counted as a decode
+        error of its feed (its made-up sensors would have panels of their own)."""
+        from msdc.pipeline.model.odd_sources import odd_source_mask
+
+        odd = odd_source_mask(frame)
+        if not odd.any():
+            return frame
+        damaged = frame.loc[odd].drop_duplicates("block")
+        at = np.searchsorted(stop, damaged["offset"].to_numpy(np.int64), side="right")
+        for f, n in zip(*np.unique(feed[at], return_counts=True), strict=True):
+            counts[self.feeds[f]]["decode_errors"] += int(n)
+        return frame[~odd]
 
     def _errors(self, errors: pd.DataFrame, stop: np.ndarray, feed: np.ndarray, counts: dict) -> np.ndarray:
         """Unframed datagrams (each counted once) and blocks whose records do not decode, per feed; the

@@ -94,6 +94,17 @@ def test_a_block_that_frames_but_does_not_decode_is_a_decode_error():
     assert c["decode_errors"] == 1 and c["unframed"] == 0 and c["records"] == {"048:25/201": 1}
 
 
+def test_records_naming_a_made_up_sensor_are_no_sensor_of_the_page():
+    """A block of three plots of 25/201 whose last record names 7/9 (no block's sensor: damage inside the
+    block): 7/9 got counters of its own, a sensor no feed has. The record is left out and its block counted
+    as a decode error; the two plots before it are kept."""
+    odd = block(48, cat048_record(25, 201, 100.0), cat048_record(25, 201, 100.5), cat048_record(7, 9, 101.0))
+    state, decoder = _state_and_decoder()
+    decoder.decode([Datagram(0, WALL, odd), Datagram(0, WALL, block(48, cat048_record(25, 201, 102.0)))])
+    c = state.counters()[FEEDS[0]]
+    assert c["records"] == {"048:25/201": 3} and c["decode_errors"] == 1
+
+
 def test_two_feeds_with_the_same_sac_sic_are_kept_apart():
     one = block(48, cat048_record(25, 201, 100.0))
     state, decoder = _state_and_decoder()
@@ -117,7 +128,8 @@ def test_recent_reports_carry_the_validity_bits_and_positions():
                cat048_record(30, 1, 80000.0)]
     for sensors, placed in ((None, [False, False, False]), (sensor_table(SENSORS), [True, True, False])):
         state, decoder = _state_and_decoder(sensors=sensors)
-        decoder.decode([Datagram(1, WALL - 0.5, block(48, *records))])
+        decoder.decode([Datagram(1, WALL - 0.5, block(48, *records[:2])),  # a block per radar, as radars send
+                        Datagram(1, WALL - 0.5, block(48, records[2]))])
         recent = state.recent(60.0)
         assert set(MEASUREMENT_COLUMNS) <= set(recent.columns)
         assert list(recent["sensor_id"].astype(str)) == ["048:25/201", "048:25/201", "048:30/1"]
